@@ -1,0 +1,153 @@
+// pybind11 bindings of the native core (module dacrt._core). The public API, dtype checks and
+// argument conversion live in the Python package (dacrt/__init__.py); this layer checks what it
+// relies on (sizes, contiguity, finiteness, index ranges), releases the GIL while validating and
+// tracing, and turns problems into ValueError / RuntimeError.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "dispatch.h"
+#include "ray_check.h"
+#include "triangles.h"
+
+namespace py = pybind11;
+using namespace dacrt;
+
+namespace {
+
+class NativeScene {
+public:
+    NativeScene(py::array_t<float, py::array::c_style> vertices, py::array_t<uint32_t, py::array::c_style> triangles) {
+        if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
+        if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw py::value_error("triangles must have shape (M, 3)");
+        const size_t V = size_t(vertices.shape(0)), M = size_t(triangles.shape(0));
+        const float* v = vertices.data();
+        const uint32_t* t = triangles.data();
+        std::string err;
+        {
+            py::gil_scoped_release nogil;
+            for (size_t i = 0; i < 3 * V && err.empty(); ++i)
+                if (!std::isfinite(v[i]))
+                    err = "vertices[" + std::to_string(i / 3) + "] has a non-finite coordinate (" + std::to_string(v[i]) + ")";
+            for (size_t i = 0; i < 3 * M && err.empty(); ++i)
+                if (t[i] >= V)
+                    err = "triangles[" + std::to_string(i / 3) + "] refers to vertex " + std::to_string(t[i]) +
+                          " but there are only " + std::to_string(V) + " vertices";
+            if (err.empty()) ts_ = std::make_unique<TriangleSet>(v, V, t, M);
+        }
+        if (!err.empty()) throw py::value_error(err);
+    }
+
+    size_t num_triangles() const { return ts_->boxes.size(); }
+    size_t num_degenerate() const { return ts_->num_degenerate; }
+    py::tuple bounds() const {
+        const Bounds3& b = ts_->bounds;
+        return py::make_tuple(py::make_tuple(b.lo[0], b.lo[1], b.lo[2]), py::make_tuple(b.hi[0], b.hi[1], b.hi[2]));
+    }
+
+    py::dict intersect(py::array rays, py::array hits, int threads, const std::string& isa, int partition,
+                       int leaf_size, float sah_ratio) {
+        Ray* r = check_rays(rays);
+        const size_t n = size_t(rays.shape(0));
+        check_out(hits, n, sizeof(Hit), "hits");
+        Hit* h = static_cast<Hit*>(hits.mutable_data());
+        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio), Query::Closest, h, nullptr, 0.0f};
+        return run(r, n, job, threads, isa, [&](float& oam) { return validate_rays(r, n, h, oam); });
+    }
+
+    py::dict occluded(py::array rays, py::array out, int threads, const std::string& isa, int partition,
+                      int leaf_size, float sah_ratio) {
+        Ray* r = check_rays(rays);
+        const size_t n = size_t(rays.shape(0));
+        check_out(out, n, 1, "occluded");
+        uint8_t* o = static_cast<uint8_t*>(out.mutable_data());
+        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio), Query::Any, nullptr, o, 0.0f};
+        return run(r, n, job, threads, isa, [&](float& oam) { return validate_rays(r, n, o, oam); });
+    }
+
+private:
+    std::unique_ptr<TriangleSet> ts_;
+
+    static Config config(int partition, int leaf_size, float sah_ratio) {
+        if (partition < 0 || partition > 2) throw py::value_error("partition must be 0 (adaptive), 1 (median) or 2 (sah)");
+        if (leaf_size < 1) throw py::value_error("leaf_size must be >= 1");
+        if (!(sah_ratio >= 0.0f) || !std::isfinite(sah_ratio)) throw py::value_error("sah_ratio must be a finite number >= 0");
+        Config c;
+        c.partition = Partition(partition);
+        c.leaf_size = leaf_size;
+        c.sah_ratio = sah_ratio;
+        return c;
+    }
+    static Ray* check_rays(py::array& rays) {
+        if (rays.ndim() != 1) throw py::value_error("rays must be a 1-D array");
+        if (rays.itemsize() != 32) throw py::value_error("rays must have 32-byte records (dacrt.RAY_DTYPE)");
+        if (!(rays.flags() & py::array::c_style)) throw py::value_error("rays must be C-contiguous");
+        if (!rays.writeable()) throw py::value_error("rays must be writeable (they are reordered in place)");
+        return static_cast<Ray*>(rays.mutable_data());
+    }
+    static void check_out(py::array& a, size_t n, size_t itemsize, const char* what) {
+        if (a.ndim() != 1 || size_t(a.shape(0)) != n || size_t(a.itemsize()) != itemsize ||
+            !(a.flags() & py::array::c_style) || !a.writeable())
+            throw py::value_error(std::string("internal: bad ") + what + " output array");
+    }
+    template <class Validate>
+    py::dict run(Ray* r, size_t n, TraceJob& job, int threads, const std::string& isa_req, Validate validate) {
+        if (threads < 0) throw py::value_error("threads must be >= 0 (0 = all cores)");
+        Isa isa;
+        try {
+            isa = resolve_isa(isa_req);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(e.what());
+        }
+        std::string err;
+        TraceResult res;
+        {
+            py::gil_scoped_release nogil;
+            err = validate(job.origin_abs_max);
+            if (err.empty()) res = trace(*ts_, r, n, job, threads, isa);
+        }
+        if (!err.empty()) throw py::value_error(err);
+        py::dict d;
+        d["rays"] = res.stats.rays;
+        d["box_tests"] = res.stats.box_tests;
+        d["tri_tests"] = res.stats.tri_tests;
+        d["partition_steps"] = res.stats.partition_steps;
+        d["median_steps"] = res.stats.median_steps;
+        d["sah_steps"] = res.stats.sah_steps;
+        d["leaves"] = res.stats.leaves;
+        d["double_fallbacks"] = res.stats.double_fallbacks;
+        d["max_depth"] = res.stats.max_depth;
+        d["threads"] = res.threads;
+        d["isa"] = isa_name(isa);
+        d["seconds"] = res.seconds;
+        return d;
+    }
+};
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+    m.doc() = "DACRT native core: divide-and-conquer ray tracing without acceleration structures";
+    m.def("supported_isas", &supported_isas, "ISAs this CPU can run, weakest first");
+    m.def("best_isa", []() { return isa_name(resolve_isa("")); });
+    m.def("check_isa", [](const std::string& s) { return isa_name(resolve_isa(s)); },
+          "Resolve an ISA request ('' = best); raises RuntimeError if the CPU lacks it");
+    m.def("hardware_threads", &hardware_threads);
+#ifdef DACRT_NONROBUST
+    m.attr("ROBUST") = false;
+#else
+    m.attr("ROBUST") = true;
+#endif
+    py::class_<NativeScene>(m, "NativeScene")
+        .def(py::init<py::array_t<float, py::array::c_style>, py::array_t<uint32_t, py::array::c_style>>(),
+             py::arg("vertices"), py::arg("triangles"))
+        .def_property_readonly("num_triangles", &NativeScene::num_triangles)
+        .def_property_readonly("num_degenerate", &NativeScene::num_degenerate)
+        .def_property_readonly("bounds", &NativeScene::bounds)
+        .def("intersect", &NativeScene::intersect)
+        .def("occluded", &NativeScene::occluded);
+}

@@ -1,0 +1,23 @@
+// The DACRT kernel compiled for the avx512 instruction set (16 rays per SIMD step).
+#include <immintrin.h>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+
+#include "kernel.h"
+
+namespace dacrt {
+namespace avx512 {
+#include "simd/avx512.h"
+#include "filter.h"
+#include "partition.h"
+#include "leaf.h"
+#include "trace.h"
+
+void trace_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
+    trace_chunk_w<16>(job, rays, n, ids, st);
+}
+}  // namespace avx512
+}  // namespace dacrt

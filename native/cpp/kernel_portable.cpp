@@ -1,0 +1,23 @@
+// The DACRT kernel compiled for the portable instruction set (8 rays per SIMD step).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+
+#include "kernel.h"
+
+namespace dacrt {
+namespace portable {
+#include "simd/portable.h"
+#include "filter.h"
+#include "partition.h"
+#include "leaf.h"
+#include "trace.h"
+
+void trace_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
+    trace_chunk_w<8>(job, rays, n, ids, st);
+}
+}  // namespace portable
+}  // namespace dacrt

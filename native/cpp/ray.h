@@ -1,0 +1,57 @@
+// Ray and hit records shared by every layer of the native core.
+//
+// The ray record is exactly 32 bytes (one AVX register), as in Afra 2012: filtering moves whole
+// records, so it must stay small. No reciprocal direction is stored; filtering computes it in
+// registers. tfar doubles as the current closest-hit distance during traversal.
+#pragma once
+#include <cstdint>
+
+namespace dacrt {
+
+struct alignas(4) Ray {
+    float org[3];
+    float dir[3];
+    float tfar;
+    uint32_t id;
+};
+static_assert(sizeof(Ray) == 32, "ray record must be 32 bytes");
+
+struct Hit {
+    float t;
+    int32_t prim;  // -1 = miss
+    float u, v;    // barycentric weights of vertices 1 and 2
+};
+static_assert(sizeof(Hit) == 16, "hit record must be 16 bytes");
+
+// tfar written into a ray that an occlusion query has found blocked: the box test rejects it
+// from then on, which is the early termination of found rays.
+constexpr float kOccludedTfar = -1.0f;
+
+enum class Partition : int { Adaptive = 0, Median = 1, Sah = 2 };
+enum class Query : int { Closest = 0, Any = 1 };
+
+struct Config {
+    Partition partition = Partition::Adaptive;
+    int leaf_size = 8;
+    float sah_ratio = 2.0f;  // adaptive: SAH where active rays / triangles exceeds this
+};
+
+struct Stats {
+    uint64_t rays = 0;
+    uint64_t box_tests = 0;
+    uint64_t tri_tests = 0;
+    uint64_t partition_steps = 0;
+    uint64_t median_steps = 0;
+    uint64_t sah_steps = 0;
+    uint64_t leaves = 0;
+    uint64_t double_fallbacks = 0;
+    uint64_t max_depth = 0;
+    void add(const Stats& o) {
+        rays += o.rays; box_tests += o.box_tests; tri_tests += o.tri_tests;
+        partition_steps += o.partition_steps; median_steps += o.median_steps;
+        sah_steps += o.sah_steps; leaves += o.leaves; double_fallbacks += o.double_fallbacks;
+        if (o.max_depth > max_depth) max_depth = o.max_depth;
+    }
+};
+
+}  // namespace dacrt

@@ -1,0 +1,16 @@
+// Validation of a ray batch before tracing.
+#pragma once
+#include <string>
+
+#include "ray.h"
+
+namespace dacrt {
+
+// Return "" when the batch is valid, else a message naming the first bad ray and field. The
+// output array (indexed by ray id) doubles as the mark array that finds repeated ids, so
+// validation allocates nothing; on success it holds all misses / all unoccluded.
+// origin_abs_max receives the largest |origin coordinate| (used to pad boxes).
+std::string validate_rays(const Ray* rays, size_t n, Hit* hits, float& origin_abs_max);
+std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, float& origin_abs_max);
+
+}  // namespace dacrt

@@ -1,0 +1,79 @@
+// AVX2 8-wide vectors (Afra's width). Included inside namespace dacrt::avx2.
+#pragma once
+
+template <int W> struct vbool;
+template <int W> struct vfloat;
+template <int W> struct vint;
+template <> struct vbool<8> { __m256 m; };
+template <> struct vfloat<8> { __m256 v; };
+template <> struct vint<8> { __m256i v; };
+using vb8 = vbool<8>; using vf8 = vfloat<8>; using vi8 = vint<8>;
+
+inline uint32_t bits(vb8 a) { return uint32_t(_mm256_movemask_ps(a.m)); }
+inline bool any(vb8 a) { return _mm256_movemask_ps(a.m) != 0; }
+inline vb8 operator&(vb8 a, vb8 b) { return {_mm256_and_ps(a.m, b.m)}; }
+inline vb8 operator|(vb8 a, vb8 b) { return {_mm256_or_ps(a.m, b.m)}; }
+inline vb8 andnot(vb8 a, vb8 b) { return {_mm256_andnot_ps(a.m, b.m)}; }
+template <int W> vbool<W> from_bits(uint32_t m);
+template <> inline vb8 from_bits<8>(uint32_t m) {
+    const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    const __m256i x = _mm256_and_si256(_mm256_set1_epi32(int(m)), bit);
+    return {_mm256_castsi256_ps(_mm256_cmpeq_epi32(x, bit))};
+}
+
+template <int W> vfloat<W> splat(float x);
+template <> inline vf8 splat<8>(float x) { return {_mm256_set1_ps(x)}; }
+template <int W> vfloat<W> loadu(const float* p);
+template <> inline vf8 loadu<8>(const float* p) { return {_mm256_loadu_ps(p)}; }
+inline void storeu(float* p, vf8 a) { _mm256_storeu_ps(p, a.v); }
+inline vf8 operator+(vf8 a, vf8 b) { return {_mm256_add_ps(a.v, b.v)}; }
+inline vf8 operator-(vf8 a, vf8 b) { return {_mm256_sub_ps(a.v, b.v)}; }
+inline vf8 operator*(vf8 a, vf8 b) { return {_mm256_mul_ps(a.v, b.v)}; }
+inline vf8 operator/(vf8 a, vf8 b) { return {_mm256_div_ps(a.v, b.v)}; }
+inline vf8 vmin(vf8 a, vf8 b) { return {_mm256_min_ps(a.v, b.v)}; }
+inline vf8 vmax(vf8 a, vf8 b) { return {_mm256_max_ps(a.v, b.v)}; }
+inline vf8 vabs(vf8 a) { return {_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)}; }
+inline vb8 cmplt(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ)}; }
+inline vb8 cmple(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ)}; }
+inline vb8 cmpeq(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_EQ_OQ)}; }
+inline vb8 cmpunord(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_UNORD_Q)}; }
+inline vf8 select(vb8 m, vf8 a, vf8 b) { return {_mm256_blendv_ps(b.v, a.v, m.m)}; }
+inline vf8 nan_where(vb8 m, vf8 a) { return {_mm256_or_ps(a.v, m.m)}; }  // all-ones bits are a NaN
+inline vf8 xorsign(vf8 a, vf8 s) { return {_mm256_xor_ps(a.v, _mm256_and_ps(s.v, _mm256_set1_ps(-0.0f)))}; }
+
+template <int W> vint<W> splati(int32_t x);
+template <> inline vi8 splati<8>(int32_t x) { return {_mm256_set1_epi32(x)}; }
+inline vb8 cmpeqi(vi8 a, vi8 b) { return {_mm256_castsi256_ps(_mm256_cmpeq_epi32(a.v, b.v))}; }
+inline vi8 selecti(vb8 m, vi8 a, vi8 b) {
+    return {_mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(b.v), _mm256_castsi256_ps(a.v), m.m))};
+}
+inline void storei(int32_t* p, vi8 a) { _mm256_storeu_si256((__m256i*)p, a.v); }
+inline vf8 permute(const float* table4, vi8 idx) {
+    return {_mm256_permutevar8x32_ps(_mm256_castps128_ps256(_mm_loadu_ps(table4)), idx.v)};
+}
+
+// 8x8 transpose of 8 consecutive 32-byte records: loads and shuffles, as in the paper.
+inline void transpose8(const float* rec, __m256 out[8]) {
+    const __m256 r0 = _mm256_loadu_ps(rec + 0), r1 = _mm256_loadu_ps(rec + 8);
+    const __m256 r2 = _mm256_loadu_ps(rec + 16), r3 = _mm256_loadu_ps(rec + 24);
+    const __m256 r4 = _mm256_loadu_ps(rec + 32), r5 = _mm256_loadu_ps(rec + 40);
+    const __m256 r6 = _mm256_loadu_ps(rec + 48), r7 = _mm256_loadu_ps(rec + 56);
+    const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+    const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+    const __m256 t4 = _mm256_unpacklo_ps(r4, r5), t5 = _mm256_unpackhi_ps(r4, r5);
+    const __m256 t6 = _mm256_unpacklo_ps(r6, r7), t7 = _mm256_unpackhi_ps(r6, r7);
+    const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+    const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xEE);
+    const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xEE);
+    const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xEE);
+    out[0] = _mm256_permute2f128_ps(s0, s4, 0x20); out[1] = _mm256_permute2f128_ps(s1, s5, 0x20);
+    out[2] = _mm256_permute2f128_ps(s2, s6, 0x20); out[3] = _mm256_permute2f128_ps(s3, s7, 0x20);
+    out[4] = _mm256_permute2f128_ps(s0, s4, 0x31); out[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
+    out[6] = _mm256_permute2f128_ps(s2, s6, 0x31); out[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
+}
+template <int W> void load_rays(const float* rec, vfloat<W> out[8]);
+template <> inline void load_rays<8>(const float* rec, vf8 out[8]) {
+    __m256 o[8];
+    transpose8(rec, o);
+    for (int f = 0; f < 8; ++f) out[f].v = o[f];
+}

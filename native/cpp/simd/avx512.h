@@ -1,0 +1,52 @@
+// AVX-512 16-wide vectors with mask registers. Included inside namespace dacrt::avx512.
+#pragma once
+#include "simd/avx2.h"  // transpose8 for the two halves of a 16-ray load
+
+template <> struct vbool<16> { __mmask16 m; };
+template <> struct vfloat<16> { __m512 v; };
+template <> struct vint<16> { __m512i v; };
+using vb16 = vbool<16>; using vf16 = vfloat<16>; using vi16 = vint<16>;
+
+inline uint32_t bits(vb16 a) { return uint32_t(a.m); }
+inline bool any(vb16 a) { return a.m != 0; }
+inline vb16 operator&(vb16 a, vb16 b) { return {__mmask16(a.m & b.m)}; }
+inline vb16 operator|(vb16 a, vb16 b) { return {__mmask16(a.m | b.m)}; }
+inline vb16 andnot(vb16 a, vb16 b) { return {__mmask16(~a.m & b.m)}; }
+template <> inline vb16 from_bits<16>(uint32_t m) { return {__mmask16(m)}; }
+
+template <> inline vf16 splat<16>(float x) { return {_mm512_set1_ps(x)}; }
+template <> inline vf16 loadu<16>(const float* p) { return {_mm512_loadu_ps(p)}; }
+inline void storeu(float* p, vf16 a) { _mm512_storeu_ps(p, a.v); }
+inline vf16 operator+(vf16 a, vf16 b) { return {_mm512_add_ps(a.v, b.v)}; }
+inline vf16 operator-(vf16 a, vf16 b) { return {_mm512_sub_ps(a.v, b.v)}; }
+inline vf16 operator*(vf16 a, vf16 b) { return {_mm512_mul_ps(a.v, b.v)}; }
+inline vf16 operator/(vf16 a, vf16 b) { return {_mm512_div_ps(a.v, b.v)}; }
+inline vf16 vmin(vf16 a, vf16 b) { return {_mm512_min_ps(a.v, b.v)}; }
+inline vf16 vmax(vf16 a, vf16 b) { return {_mm512_max_ps(a.v, b.v)}; }
+inline vf16 vabs(vf16 a) { return {_mm512_abs_ps(a.v)}; }
+inline vb16 cmplt(vf16 a, vf16 b) { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ)}; }
+inline vb16 cmple(vf16 a, vf16 b) { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ)}; }
+inline vb16 cmpeq(vf16 a, vf16 b) { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ)}; }
+inline vb16 cmpunord(vf16 a, vf16 b) { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_UNORD_Q)}; }
+inline vf16 select(vb16 m, vf16 a, vf16 b) { return {_mm512_mask_blend_ps(m.m, b.v, a.v)}; }
+inline vf16 nan_where(vb16 m, vf16 a) { return {_mm512_mask_mov_ps(a.v, m.m, _mm512_set1_ps(NAN))}; }
+inline vf16 xorsign(vf16 a, vf16 s) {
+    return {_mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(a.v),
+            _mm512_and_si512(_mm512_castps_si512(s.v), _mm512_set1_epi32(int(0x80000000u)))))};
+}
+
+template <> inline vi16 splati<16>(int32_t x) { return {_mm512_set1_epi32(x)}; }
+inline vb16 cmpeqi(vi16 a, vi16 b) { return {_mm512_cmpeq_epi32_mask(a.v, b.v)}; }
+inline vi16 selecti(vb16 m, vi16 a, vi16 b) { return {_mm512_mask_blend_epi32(m.m, b.v, a.v)}; }
+inline void storei(int32_t* p, vi16 a) { _mm512_storeu_si512(p, a.v); }
+inline vf16 permute(const float* table4, vi16 idx) {
+    return {_mm512_permutexvar_ps(idx.v, _mm512_castps128_ps512(_mm_loadu_ps(table4)))};
+}
+
+template <> inline void load_rays<16>(const float* rec, vf16 out[8]) {
+    __m256 a[8], b[8];
+    transpose8(rec, a);
+    transpose8(rec + 64, b);
+    for (int f = 0; f < 8; ++f)
+        out[f].v = _mm512_insertf32x8(_mm512_castps256_ps512(a[f]), b[f], 1);
+}

@@ -1,0 +1,60 @@
+// Per-frame triangle data in the layout the tracer reads.
+//
+// Two arrays, both indexed by the caller's triangle index:
+//  - boxes: the triangle's AABB as lo[4], hi[4] (32 bytes, one AVX load), used by partitioning;
+//  - tris:  the compact triangle, Afra's trick: each AABB already holds 6 of the 9 vertex
+//           coordinates (per axis the smallest and largest), so only the middle coordinate per
+//           axis and which vertex holds min/max/mid are stored (16 bytes).
+// plus the id array of non-degenerate triangles that every trace call copies and reorders.
+#pragma once
+#include <cstdint>
+#include <cstddef>
+#include <vector>
+
+namespace dacrt {
+
+struct alignas(32) Box {
+    float lo[4];
+    float hi[4];
+};
+
+struct CompactTri {
+    float mid[3];
+    // Per axis a (4 bits at 4*a): bits 0-1 = vertex holding the minimum, bits 2-3 = the maximum.
+    uint32_t code;
+};
+
+struct Bounds3 {
+    float lo[3], hi[3];
+};
+
+struct TriangleSet {
+    std::vector<Box> boxes;
+    std::vector<CompactTri> tris;
+    std::vector<uint32_t> valid_ids;  // non-degenerate triangles, the root of every trace
+    Bounds3 bounds{};                 // AABB of the valid triangles
+    Bounds3 centroid_bounds{};        // AABB of their box centres
+    float abs_max = 0.0f;             // largest |coordinate| of any valid vertex
+    size_t num_degenerate = 0;
+
+    // vertices: V x 3 floats (finite, checked by the caller); indices: M x 3, each < V.
+    TriangleSet(const float* vertices, size_t num_vertices, const uint32_t* indices, size_t num_tris);
+};
+
+// Box centre, in a form that cannot overflow for coordinates near the float limits.
+inline float centre(float lo, float hi) { return lo * 0.5f + hi * 0.5f; }
+
+// Rebuild the three vertices of triangle i (x, y, z, 0 each) from its box and compact record.
+inline void reconstruct(const Box& b, const CompactTri& c, float v[3][4]) {
+    for (int a = 0; a < 3; ++a) {
+        const unsigned code = (c.code >> (4 * a)) & 15u;
+        const unsigned imin = code & 3u, imax = code >> 2;
+        const unsigned imid = 3u - imin - imax;
+        v[imin][a] = b.lo[a];
+        v[imax][a] = b.hi[a];
+        v[imid][a] = c.mid[a];
+    }
+    v[0][3] = v[1][3] = v[2][3] = 0.0f;
+}
+
+}  // namespace dacrt

@@ -1,0 +1,199 @@
+"""DACRT: divide-and-conquer ray tracing of incoherent ray batches, no acceleration structure.
+
+The algorithm of Afra, "Incoherent Ray Tracing without Acceleration Structures" (EG 2012):
+ray filtering that reorders 32-byte ray records in place, object partitioning of a triangle id
+array (spatial median or binned SAH, chosen by the ray/triangle ratio), W rays x 1 triangle
+watertight leaf tests, SIMD kernels per instruction set chosen at run time.
+
+This module owns the public Python API and its argument checks; the work happens in `_core`.
+Nothing built for tracing outlives a Scene object: a frame builds one, traces, drops it.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["RAY_DTYPE", "HIT_DTYPE", "Scene", "make_rays", "isa", "supported_isas", "PARTITIONS"]
+
+RAY_DTYPE = np.dtype([("org", "<f4", (3,)), ("dir", "<f4", (3,)), ("tfar", "<f4"), ("id", "<u4")])
+HIT_DTYPE = np.dtype([("t", "<f4"), ("prim", "<i4"), ("u", "<f4"), ("v", "<f4")])
+assert RAY_DTYPE.itemsize == 32 and HIT_DTYPE.itemsize == 16
+
+PARTITIONS = ("adaptive", "median", "sah")
+ROBUST = _core.ROBUST
+
+
+def supported_isas() -> list:
+    """Instruction sets this CPU can run, weakest first (e.g. ['portable', 'avx2', 'avx512'])."""
+    return list(_core.supported_isas())
+
+
+def _requested_isa() -> str:
+    return os.environ.get("DACRT_ISA", "").strip().lower()
+
+
+def isa() -> str:
+    """The instruction set the next trace call uses: DACRT_ISA if set (checked), else the best."""
+    return _core.check_isa(_requested_isa())
+
+
+def make_rays(org, dir, tfar=np.inf) -> np.ndarray:
+    """Build a RAY_DTYPE array from (N,3) origins and directions; ids are 0..N-1."""
+    org = np.asarray(org, dtype=np.float32)
+    dir = np.asarray(dir, dtype=np.float32)
+    if org.ndim != 2 or org.shape[1] != 3 or dir.shape != org.shape:
+        raise ValueError(f"org and dir must both have shape (N, 3); got {org.shape} and {dir.shape}")
+    rays = np.empty(len(org), RAY_DTYPE)
+    rays["org"] = org
+    rays["dir"] = dir
+    rays["tfar"] = tfar
+    rays["id"] = np.arange(len(org), dtype=np.uint32)
+    return rays
+
+
+def _as_vertices(vertices) -> np.ndarray:
+    v = np.asarray(vertices)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ValueError(f"vertices must have shape (V, 3); got {v.shape}")
+    if v.dtype.kind != "f":
+        raise ValueError(f"vertices must be a floating-point array (float32 preferred); got dtype {v.dtype}")
+    if v.dtype != np.float32:
+        with np.errstate(over="ignore"):
+            v32 = v.astype(np.float32)
+        bad = np.isfinite(v).all(axis=1) & ~np.isfinite(v32).all(axis=1)
+        if bad.any():
+            raise ValueError(f"vertices[{int(np.argmax(bad))}] is too large to be represented in float32")
+        v = v32
+    return np.ascontiguousarray(v)
+
+
+def _as_triangles(triangles, num_vertices: int) -> np.ndarray:
+    t = np.asarray(triangles)
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise ValueError(f"triangles must have shape (M, 3); got {t.shape}")
+    if t.dtype.kind not in "iu":
+        raise ValueError(f"triangles must be an integer array of vertex indices; got dtype {t.dtype}")
+    if t.size:
+        lo, hi = t.min(), t.max()
+        if lo < 0:
+            row = int(np.argmax((t < 0).any(axis=1)))
+            raise ValueError(f"triangles[{row}] has a negative vertex index ({t[row].tolist()})")
+        if hi >= num_vertices:
+            row = int(np.argmax((t >= num_vertices).any(axis=1)))
+            raise ValueError(f"triangles[{row}] refers to vertex {int(t[row].max())} "
+                             f"but there are only {num_vertices} vertices")
+    return np.ascontiguousarray(t, dtype=np.uint32)
+
+
+def _check_rays(rays) -> None:
+    if not isinstance(rays, np.ndarray):
+        raise ValueError(f"rays must be a numpy array of dtype dacrt.RAY_DTYPE; got {type(rays).__name__}")
+    if rays.dtype != RAY_DTYPE:
+        raise ValueError(f"rays must have dtype dacrt.RAY_DTYPE {RAY_DTYPE.descr}; got {rays.dtype}")
+    if rays.ndim != 1:
+        raise ValueError(f"rays must be a 1-D array; got shape {rays.shape}")
+    if not rays.flags.c_contiguous:
+        raise ValueError("rays must be C-contiguous (they are reordered in place; pass np.ascontiguousarray(rays))")
+    if not rays.flags.writeable:
+        raise ValueError("rays must be writeable (they are reordered in place)")
+
+
+def _check_threads(threads) -> int:
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)):
+        raise ValueError(f"threads must be an integer (0 = all cores); got {threads!r}")
+    if threads < 0:
+        raise ValueError(f"threads must be >= 0 (0 = all cores); got {threads}")
+    return int(threads)
+
+
+class Scene:
+    """A triangle soup ready to be traced. Building it costs one pass over the triangles.
+
+    vertices: (V,3) float array; triangles: (M,3) integer vertex indices. Both are copied into
+    the tracer's own layout; degenerate (zero-area) triangles are accepted and never hit.
+    """
+
+    def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 8,
+                 sah_ratio: float = 2.0):
+        v = _as_vertices(vertices)
+        t = _as_triangles(triangles, len(v))
+        self._core = _core.NativeScene(v, t)
+        self.partition = partition
+        self.leaf_size = leaf_size
+        self.sah_ratio = sah_ratio
+        self.last_stats: dict = {}
+
+    # Settings, checked on assignment so a typo fails where it is made.
+    @property
+    def partition(self) -> str:
+        return self._partition
+
+    @partition.setter
+    def partition(self, value: str) -> None:
+        if not isinstance(value, str) or value.lower() not in PARTITIONS:
+            raise ValueError(f"partition must be one of {PARTITIONS}; got {value!r}")
+        self._partition = value.lower()
+
+    @property
+    def leaf_size(self) -> int:
+        return self._leaf_size
+
+    @leaf_size.setter
+    def leaf_size(self, value: int) -> None:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"leaf_size must be an integer >= 1; got {value!r}")
+        self._leaf_size = int(value)
+
+    @property
+    def sah_ratio(self) -> float:
+        return self._sah_ratio
+
+    @sah_ratio.setter
+    def sah_ratio(self, value: float) -> None:
+        value = float(value)
+        if not np.isfinite(value) or value < 0:
+            raise ValueError(f"sah_ratio must be a finite number >= 0; got {value!r}")
+        self._sah_ratio = value
+
+    @property
+    def num_triangles(self) -> int:
+        return self._core.num_triangles
+
+    @property
+    def num_degenerate(self) -> int:
+        return self._core.num_degenerate
+
+    @property
+    def bounds(self):
+        """((xmin, ymin, zmin), (xmax, ymax, zmax)) of the non-degenerate triangles."""
+        return self._core.bounds
+
+    def _args(self, threads):
+        return (_check_threads(threads), _requested_isa(), PARTITIONS.index(self._partition),
+                self._leaf_size, self._sah_ratio)
+
+    def intersect(self, rays: np.ndarray, threads: int = 0) -> np.ndarray:
+        """Closest hit with t in (0, tfar] for every ray; returns HIT_DTYPE indexed by ray id.
+
+        rays is reordered in place and each hit ray's tfar becomes its hit distance. Ties at
+        equal t go to the lowest triangle index.
+        """
+        _check_rays(rays)
+        args = self._args(threads)
+        hits = np.empty(len(rays), HIT_DTYPE)
+        self.last_stats = self._core.intersect(rays, hits, *args)
+        return hits
+
+    def occluded(self, rays: np.ndarray, threads: int = 0) -> np.ndarray:
+        """True for every ray (by id) that hits anything with t in (0, tfar).
+
+        rays is reordered in place; the tfar of occluded rays is overwritten (negative).
+        """
+        _check_rays(rays)
+        args = self._args(threads)
+        out = np.empty(len(rays), np.uint8)
+        self.last_stats = self._core.occluded(rays, out, *args)
+        return out.view(np.bool_)
