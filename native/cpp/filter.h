@@ -4,24 +4,27 @@
 // AoS -> SoA by loads and shuffles. Included inside an ISA namespace.
 #pragma once
 
-// Robust slab test. No reciprocal is stored: 1/d is computed in registers (an IEEE division, so
-// all ISAs agree). Zero direction components give +-inf, and 0 * inf = NaN when the origin lies
-// on a slab plane; such a slab is marked NaN and ignored by the NaN-ordered max/min, so a ray
-// that runs inside a plane of the box is kept. The exit distance is widened by 1 + 2*gamma(3)
-// (Ize 2013) so rounding never culls a ray that hits the exact box.
+// Robust slab test. No reciprocal is stored: 1/d is computed in registers, with the hardware's
+// approximate reciprocal on AVX (a division would dominate the filter); the interval is then
+// widened by a relative 2^-10, far more than the approximation error (<= 1.5 * 2^-12) plus
+// rounding (Ize 2013's 1 + 2*gamma(3)), so the test never culls a ray that hits the exact box.
+// Culling may differ by ISA at that margin; hits cannot, since leaves decide them exactly.
+// Zero direction components give +-inf, and 0 * inf = NaN when the origin lies on a slab plane;
+// such a slab is marked NaN and ignored by the NaN-ordered max/min, so a ray that runs inside a
+// plane of the box is kept.
 template <int W>
 inline vbool<W> box_test(const vfloat<W> r[8], const float lo[3], const float hi[3]) {
-    constexpr float kGamma3x2 = 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0f * 0x1p-24f);
+    constexpr float kWiden = 0x1p-10f;
     vfloat<W> tmin = splat<W>(0.0f), tmax = r[6];
     for (int a = 0; a < 3; ++a) {
-        const vfloat<W> inv = splat<W>(1.0f) / r[3 + a];
+        const vfloat<W> inv = rcp(r[3 + a]);
         const vfloat<W> t0 = (splat<W>(lo[a]) - r[a]) * inv;
         const vfloat<W> t1 = (splat<W>(hi[a]) - r[a]) * inv;
         const vbool<W> nan = cmpunord(t0, t1);
         tmin = vmax(nan_where(nan, vmin(t0, t1)), tmin);  // NaN first operand -> tmin kept
         tmax = vmin(nan_where(nan, vmax(t0, t1)), tmax);
     }
-    return cmple(tmin, tmax * splat<W>(1.0f + kGamma3x2));
+    return cmple(tmin * splat<W>(1.0f - kWiden), tmax * splat<W>(1.0f + kWiden));
 }
 
 inline void swap_records(Ray* a, Ray* b) {
@@ -31,38 +34,27 @@ inline void swap_records(Ray* a, Ray* b) {
     std::memcpy(b, &t, sizeof(Ray));
 }
 
-// Returns the number of active rays, now rays[0, result). dir_votes[a] counts active rays going
-// +a minus those going -a: the majority decides which child is visited first.
 template <int W>
-size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], int64_t dir_votes[3],
-                   Stats& st) {
-    st.box_tests += n;
-    dir_votes[0] = dir_votes[1] = dir_votes[2] = 0;
-    size_t w = 0;  // next slot for an active ray
-    const uint32_t full = W == 32 ? 0xFFFFFFFFu : ((1u << W) - 1u);
+inline uint32_t block_active(const Ray* rays, const float lo[3], const float hi[3]) {
+    vfloat<W> r[8];
+    load_rays<W>(reinterpret_cast<const float*>(rays), r);
+    return bits(box_test<W>(r, lo, hi));
+}
+
+// Lomuto partition of a short range (< 3W rays) with a padded last block.
+template <int W>
+size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
     alignas(64) Ray tail[W];
+    size_t w = 0;
     for (size_t i = 0; i < n; i += W) {
-        vfloat<W> r[8];
-        uint32_t valid = full;
+        uint32_t m;
         if (i + W <= n) {
-            load_rays<W>(reinterpret_cast<const float*>(rays + i), r);
-        } else {  // last partial block: pad with rays that can never be active
+            m = block_active<W>(rays + i, lo, hi);
+        } else {  // pad with rays that can never be active
             const size_t k = n - i;
             std::memcpy(tail, rays + i, k * sizeof(Ray));
             for (size_t j = k; j < size_t(W); ++j) tail[j] = Ray{{0, 0, 0}, {1, 0, 0}, kOccludedTfar, 0};
-            load_rays<W>(reinterpret_cast<const float*>(tail), r);
-            valid = (1u << k) - 1u;
-        }
-        const vbool<W> act = box_test<W>(r, lo, hi) & from_bits<W>(valid);
-        uint32_t m = bits(act);
-        for (int a = 0; a < 3; ++a) {
-            const vfloat<W> zero = splat<W>(0.0f);
-            dir_votes[a] += __builtin_popcount(bits(cmplt(zero, r[3 + a]) & act)) -
-                            __builtin_popcount(bits(cmplt(r[3 + a], zero) & act));
-        }
-        if (m == full && w == i) {  // whole block active and already in place
-            w += W;
-            continue;
+            m = block_active<W>(tail, lo, hi) & ((1u << k) - 1u);
         }
         while (m) {
             const size_t src = i + size_t(__builtin_ctz(m));
@@ -72,4 +64,37 @@ size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], in
         }
     }
     return w;
+}
+
+// Returns the number of active rays, now rays[0, result). Hoare-style on blocks of W rays from
+// both ends: an inactive ray in a left block swaps with an active ray in a right block, so only
+// misplaced records move (about p(1-p)n swaps for an active fraction p, against pn for a
+// one-sided sweep).
+template <int W>
+size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], Stats& st) {
+    st.box_tests += n;
+    const uint32_t full = W == 32 ? 0xFFFFFFFFu : ((1u << W) - 1u);
+    size_t i = 0, j = n;    // [0, i) settled active (but a pending left block), [j, n) inactive
+    size_t li = 0, rj = 0;  // pending blocks
+    uint32_t ml = 0, mr = 0;  // inactive lanes of the left block, active lanes of the right block
+    for (;;) {
+        while (ml == 0 && j - i >= size_t(W)) {
+            ml = ~block_active<W>(rays + i, lo, hi) & full;
+            li = i;
+            i += W;
+        }
+        while (mr == 0 && j - i >= size_t(W)) {
+            j -= W;
+            mr = block_active<W>(rays + j, lo, hi);
+            rj = j;
+        }
+        if (ml == 0 || mr == 0) break;
+        do {
+            swap_records(rays + li + __builtin_ctz(ml), rays + rj + __builtin_ctz(mr));
+            ml &= ml - 1;
+            mr &= mr - 1;
+        } while (ml && mr);
+    }
+    const size_t b = ml ? li : i, e = mr ? rj + W : j;
+    return b + filter_small<W>(rays + b, e - b, lo, hi);
 }

@@ -32,6 +32,7 @@ inline vf8 operator*(vf8 a, vf8 b) { return {_mm256_mul_ps(a.v, b.v)}; }
 inline vf8 operator/(vf8 a, vf8 b) { return {_mm256_div_ps(a.v, b.v)}; }
 inline vf8 vmin(vf8 a, vf8 b) { return {_mm256_min_ps(a.v, b.v)}; }
 inline vf8 vmax(vf8 a, vf8 b) { return {_mm256_max_ps(a.v, b.v)}; }
+inline vf8 rcp(vf8 a) { return {_mm256_rcp_ps(a.v)}; }  // |rel err| <= 1.5 * 2^-12, +-0 -> +-inf
 inline vf8 vabs(vf8 a) { return {_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)}; }
 inline vb8 cmplt(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ)}; }
 inline vb8 cmple(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ)}; }

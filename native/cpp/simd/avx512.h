@@ -1,6 +1,6 @@
 // AVX-512 16-wide vectors with mask registers. Included inside namespace dacrt::avx512.
 #pragma once
-#include "simd/avx2.h"  // transpose8 for the two halves of a 16-ray load
+#include "simd/avx2.h"  // the 8-wide types and declarations
 
 template <> struct vbool<16> { __mmask16 m; };
 template <> struct vfloat<16> { __m512 v; };
@@ -23,6 +23,7 @@ inline vf16 operator*(vf16 a, vf16 b) { return {_mm512_mul_ps(a.v, b.v)}; }
 inline vf16 operator/(vf16 a, vf16 b) { return {_mm512_div_ps(a.v, b.v)}; }
 inline vf16 vmin(vf16 a, vf16 b) { return {_mm512_min_ps(a.v, b.v)}; }
 inline vf16 vmax(vf16 a, vf16 b) { return {_mm512_max_ps(a.v, b.v)}; }
+inline vf16 rcp(vf16 a) { return {_mm512_rcp14_ps(a.v)}; }  // |rel err| <= 2^-14, +-0 -> +-inf
 inline vf16 vabs(vf16 a) { return {_mm512_abs_ps(a.v)}; }
 inline vb16 cmplt(vf16 a, vf16 b) { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ)}; }
 inline vb16 cmple(vf16 a, vf16 b) { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ)}; }
@@ -43,10 +44,23 @@ inline vf16 permute(const float* table4, vi16 idx) {
     return {_mm512_permutexvar_ps(idx.v, _mm512_castps128_ps512(_mm_loadu_ps(table4)))};
 }
 
+// 16 records -> 8 vectors in 24 shuffles: the AVX2 in-lane transpose stages applied to zmm
+// rows that each hold two records, then one two-source permute per field restores ray order.
 template <> inline void load_rays<16>(const float* rec, vf16 out[8]) {
-    __m256 a[8], b[8];
-    transpose8(rec, a);
-    transpose8(rec + 64, b);
-    for (int f = 0; f < 8; ++f)
-        out[f].v = _mm512_insertf32x8(_mm512_castps256_ps512(a[f]), b[f], 1);
+    __m512 z[8];
+    for (int k = 0; k < 8; ++k) z[k] = _mm512_loadu_ps(rec + 16 * k);
+    __m512 t[8], s[8];
+    for (int h = 0; h < 2; ++h) {
+        const int b = 4 * h;
+        t[b + 0] = _mm512_unpacklo_ps(z[b + 0], z[b + 1]); t[b + 1] = _mm512_unpackhi_ps(z[b + 0], z[b + 1]);
+        t[b + 2] = _mm512_unpacklo_ps(z[b + 2], z[b + 3]); t[b + 3] = _mm512_unpackhi_ps(z[b + 2], z[b + 3]);
+        s[b + 0] = _mm512_shuffle_ps(t[b + 0], t[b + 2], 0x44); s[b + 1] = _mm512_shuffle_ps(t[b + 0], t[b + 2], 0xEE);
+        s[b + 2] = _mm512_shuffle_ps(t[b + 1], t[b + 3], 0x44); s[b + 3] = _mm512_shuffle_ps(t[b + 1], t[b + 3], 0xEE);
+    }
+    const __m512i lo = _mm512_setr_epi32(0, 8, 1, 9, 2, 10, 3, 11, 16, 24, 17, 25, 18, 26, 19, 27);
+    const __m512i hi = _mm512_add_epi32(lo, _mm512_set1_epi32(4));
+    for (int f = 0; f < 4; ++f) {
+        out[f].v = _mm512_permutex2var_ps(s[f], lo, s[f + 4]);
+        out[f + 4].v = _mm512_permutex2var_ps(s[f], hi, s[f + 4]);
+    }
 }

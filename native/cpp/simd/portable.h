@@ -27,6 +27,8 @@ DACRT_BIN(+) DACRT_BIN(-) DACRT_BIN(*) DACRT_BIN(/)
 // x86 semantics: the second operand is returned when either is NaN.
 template <int W> inline vfloat<W> vmin(vfloat<W> a, vfloat<W> b) { vfloat<W> r; DACRT_LANES r.v[i] = a.v[i] < b.v[i] ? a.v[i] : b.v[i]; return r; }
 template <int W> inline vfloat<W> vmax(vfloat<W> a, vfloat<W> b) { vfloat<W> r; DACRT_LANES r.v[i] = a.v[i] > b.v[i] ? a.v[i] : b.v[i]; return r; }
+// Reciprocal for the box test; exact here, approximate on AVX (the box test widens for it).
+template <int W> inline vfloat<W> rcp(vfloat<W> a) { vfloat<W> r; DACRT_LANES r.v[i] = 1.0f / a.v[i]; return r; }
 template <int W> inline vfloat<W> vabs(vfloat<W> a) { vfloat<W> r; DACRT_LANES r.v[i] = std::fabs(a.v[i]); return r; }
 #define DACRT_CMP(name, expr) \
     template <int W> inline vbool<W> name(vfloat<W> a, vfloat<W> b) { \
