@@ -50,29 +50,29 @@ public:
     }
 
     py::dict intersect(py::array rays, py::array hits, int threads, const std::string& isa, int partition,
-                       int leaf_size, float sah_ratio) {
+                       int leaf_size, float sah_ratio, size_t chunk_rays) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(hits, n, sizeof(Hit), "hits");
         Hit* h = static_cast<Hit*>(hits.mutable_data());
-        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio), Query::Closest, h, nullptr, 0.0f};
+        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Closest, h, nullptr, 0.0f, nullptr};
         return run(r, n, job, threads, isa, [&](float& oam) { return validate_rays(r, n, h, oam); });
     }
 
     py::dict occluded(py::array rays, py::array out, int threads, const std::string& isa, int partition,
-                      int leaf_size, float sah_ratio) {
+                      int leaf_size, float sah_ratio, size_t chunk_rays) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(out, n, 1, "occluded");
         uint8_t* o = static_cast<uint8_t*>(out.mutable_data());
-        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio), Query::Any, nullptr, o, 0.0f};
+        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Any, nullptr, o, 0.0f, nullptr};
         return run(r, n, job, threads, isa, [&](float& oam) { return validate_rays(r, n, o, oam); });
     }
 
 private:
     std::unique_ptr<TriangleSet> ts_;
 
-    static Config config(int partition, int leaf_size, float sah_ratio) {
+    static Config config(int partition, int leaf_size, float sah_ratio, size_t chunk_rays) {
         if (partition < 0 || partition > 2) throw py::value_error("partition must be 0 (adaptive), 1 (median) or 2 (sah)");
         if (leaf_size < 1) throw py::value_error("leaf_size must be >= 1");
         if (!(sah_ratio >= 0.0f) || !std::isfinite(sah_ratio)) throw py::value_error("sah_ratio must be a finite number >= 0");
@@ -80,6 +80,7 @@ private:
         c.partition = Partition(partition);
         c.leaf_size = leaf_size;
         c.sah_ratio = sah_ratio;
+        c.chunk_rays = chunk_rays;
         return c;
     }
     static Ray* check_rays(py::array& rays) {

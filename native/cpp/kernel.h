@@ -1,6 +1,7 @@
 // Entry points of the per-ISA kernels. Each is the same template code (filter, partition, leaf,
 // trace) compiled in its own translation unit with its own instruction set and namespace.
 #pragma once
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 
@@ -9,6 +10,32 @@
 
 namespace dacrt {
 
+// Bounds of a set of triangles during partitioning.
+struct NodeBounds {
+    float lo[3], hi[3];    // box of the triangles
+    float clo[3], chi[3];  // box of their centres
+};
+
+// The top levels of the recursion, shared by all threads of one call. The paper's threads
+// repeat the top partitioning steps per ray batch; here the first thread to reach a top node
+// partitions the shared id array once and publishes the split, the others reuse it. Deeper
+// nodes are traced on a private copy of their triangle ids. A top node's ids are only read for
+// a leaf when the node cannot be split further, so no thread ever reads a range that another
+// is reordering. Lives for one call only.
+struct SharedNode {
+    std::atomic<int> state{0};  // 0 untouched, 1 being partitioned, 2 split published
+    uint32_t k = 0;             // left child = ids[0, k)
+    int axis = 0;
+    NodeBounds L{}, R{};
+};
+struct SharedTop {
+    uint32_t* ids = nullptr;
+    SharedNode* nodes = nullptr;  // heap order: root 1, children 2h and 2h + 1
+    int levels = 0;               // nodes at depth < levels are shared
+    size_t min_tris = 0;          // smaller nodes are traced privately
+    float ray_scale = 1.0f;       // total rays / chunk rays: the adaptive choice at shared nodes
+};
+
 struct TraceJob {
     const TriangleSet* ts;
     Config cfg;
@@ -16,9 +43,10 @@ struct TraceJob {
     Hit* hits;            // Closest: output by ray id
     uint8_t* occluded;    // Any: output by ray id
     float origin_abs_max; // largest |origin coordinate| over the batch (box padding)
+    SharedTop* top;       // shared top levels of this call
 };
 
-// Trace rays[0, n) against all valid triangles; ids: a scratch copy of ts.valid_ids.
+// Trace rays[0, n) against all valid triangles; ids: the thread's scratch of ts.valid_ids.size().
 using ChunkFn = void (*)(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
 namespace portable { void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&); }
 namespace avx2 { void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&); }

@@ -6,11 +6,6 @@
 // Included inside an ISA namespace.
 #pragma once
 
-struct NodeBounds {
-    float lo[3], hi[3];    // box of the triangles
-    float clo[3], chi[3];  // box of their centres
-};
-
 inline void nb_empty(NodeBounds& b) {
     for (int a = 0; a < 3; ++a) {
         b.lo[a] = b.clo[a] = INFINITY;

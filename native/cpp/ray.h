@@ -34,6 +34,7 @@ struct Config {
     Partition partition = Partition::Adaptive;
     int leaf_size = 8;
     float sah_ratio = 2.0f;  // adaptive: SAH where active rays / triangles exceeds this
+    size_t chunk_rays = 0;   // rays per independently traced chunk; 0 = automatic
 };
 
 struct Stats {

@@ -2,8 +2,9 @@
 // stop at a leaf when rays or triangles fall under the threshold, otherwise partition the
 // triangles and recurse into both halves with the same (filtered) rays, nearer half first so
 // closest-hit rays shorten tfar before the farther half filters them.
-// Memory: nothing per ray; the caller provides the triangle id array it reorders. The stack
-// holds O(depth) frames; the depth is bounded by switching to object-median splits deep down.
+// The top levels are partitioned once per call and shared by all threads (see SharedTop).
+// Memory: nothing per ray; a triangle id array per thread plus the shared one. The stack holds
+// O(depth) frames; depth is bounded by switching to object-median splits deep down.
 // Included inside an ISA namespace.
 #pragma once
 
@@ -27,9 +28,12 @@ struct Tracer {
     uint8_t* occluded;
     Config cfg;
     float origin_abs_max;
+    SharedTop* top;
+    uint32_t* priv;  // this thread's id scratch
     Stats st;
 
-    void node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth) {
+    // Filter against nb's (padded) box; returns the active count.
+    size_t filter(Ray* rays, size_t n, const NodeBounds& nb, uint64_t depth) {
         if (depth > st.max_depth) st.max_depth = depth;
         float lo[3], hi[3];
 #ifndef DACRT_NONROBUST
@@ -42,7 +46,25 @@ struct Tracer {
         const float pad = 0.0f;
 #endif
         for (int a = 0; a < 3; ++a) { lo[a] = nb.lo[a] - pad; hi[a] = nb.hi[a] + pad; }
-        const size_t na = filter_rays<W>(rays, n, lo, hi, st);
+        return filter_rays<W>(rays, n, lo, hi, st);
+    }
+
+    size_t split(uint32_t* ids, size_t nt, const NodeBounds& nb, float rays, uint64_t depth,
+                 NodeBounds& L, NodeBounds& R, int& axis) {
+        ++st.partition_steps;
+        size_t k = 0;
+        const bool sah = cfg.partition == Partition::Sah ||
+                         (cfg.partition == Partition::Adaptive && rays > cfg.sah_ratio * float(nt));
+        if (depth < 64) {
+            if (sah) { ++st.sah_steps; k = split_sah(ids, nt, boxes, nb, L, R, axis); }
+            else { ++st.median_steps; k = split_median(ids, nt, boxes, nb, L, R, axis); }
+        }
+        if (k == 0 || k == nt) k = split_object_median(ids, nt, boxes, nb, L, R, axis);
+        return k;
+    }
+
+    void node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth) {
+        const size_t na = filter(rays, n, nb, depth);
         if (na == 0) return;
         const size_t leaf = size_t(cfg.leaf_size);
         if (nt <= leaf || na <= leaf) {
@@ -51,15 +73,7 @@ struct Tracer {
         }
         NodeBounds L, R;
         int axis = 0;
-        size_t k = 0;
-        ++st.partition_steps;
-        const bool sah = cfg.partition == Partition::Sah ||
-                         (cfg.partition == Partition::Adaptive && float(na) > cfg.sah_ratio * float(nt));
-        if (depth < 64) {
-            if (sah) { ++st.sah_steps; k = split_sah(ids, nt, boxes, nb, L, R, axis); }
-            else { ++st.median_steps; k = split_median(ids, nt, boxes, nb, L, R, axis); }
-        }
-        if (k == 0 || k == nt) k = split_object_median(ids, nt, boxes, nb, L, R, axis);
+        const size_t k = split(ids, nt, nb, float(na), depth, L, R, axis);
         if (majority_positive(rays, na, axis)) {
             node(rays, na, ids, k, L, depth + 1);
             node(rays, na, ids + k, nt - k, R, depth + 1);
@@ -68,18 +82,56 @@ struct Tracer {
             node(rays, na, ids, k, L, depth + 1);
         }
     }
+
+    // A node of the shared top: its split is made once, by whichever thread arrives first.
+    void shared_node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, size_t h) {
+        const size_t na = filter(rays, n, nb, depth);
+        if (na == 0) return;
+        if (nt <= size_t(cfg.leaf_size)) {  // never split, so its ids never move
+            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, st);
+            return;
+        }
+        SharedNode& sn = top->nodes[h];
+        if (sn.state.load(std::memory_order_acquire) != 2) {
+            int expected = 0;
+            if (sn.state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
+                sn.k = uint32_t(split(ids, nt, nb, float(na) * top->ray_scale, depth, sn.L, sn.R, sn.axis));
+                sn.state.store(2, std::memory_order_release);
+            } else {
+                while (sn.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
+            }
+        }
+        const size_t k = sn.k;
+        if (majority_positive(rays, na, sn.axis)) {
+            child(rays, na, ids, k, sn.L, depth + 1, 2 * h);
+            child(rays, na, ids + k, nt - k, sn.R, depth + 1, 2 * h + 1);
+        } else {
+            child(rays, na, ids + k, nt - k, sn.R, depth + 1, 2 * h + 1);
+            child(rays, na, ids, k, sn.L, depth + 1, 2 * h);
+        }
+    }
+
+    void child(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, size_t h) {
+        if (depth < uint64_t(top->levels) && nt > top->min_tris) {
+            shared_node(rays, n, ids, nt, nb, depth, h);
+        } else {  // leave the shared top: continue on a private copy of the ids
+            std::memcpy(priv, ids, nt * sizeof(uint32_t));
+            node(rays, n, priv, nt, nb, depth);
+        }
+    }
 };
 
 template <int W, Query Q>
 void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
     const TriangleSet& ts = *job.ts;
-    Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), job.hits, job.occluded, job.cfg, job.origin_abs_max, Stats{}};
+    Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), job.hits, job.occluded, job.cfg, job.origin_abs_max,
+                    job.top, ids, Stats{}};
     NodeBounds root;
     for (int a = 0; a < 3; ++a) {
         root.lo[a] = ts.bounds.lo[a]; root.hi[a] = ts.bounds.hi[a];
         root.clo[a] = ts.centroid_bounds.lo[a]; root.chi[a] = ts.centroid_bounds.hi[a];
     }
-    tr.node(rays, n, ids, ts.valid_ids.size(), root, 0);
+    tr.child(rays, n, job.top->ids, ts.valid_ids.size(), root, 0, 1);
     st.add(tr.st);
 }
 

@@ -117,13 +117,14 @@ class Scene:
     """
 
     def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 8,
-                 sah_ratio: float = 2.0):
+                 sah_ratio: float = 2.0, chunk_rays: int = 0):
         v = _as_vertices(vertices)
         t = _as_triangles(triangles, len(v))
         self._core = _core.NativeScene(v, t)
         self.partition = partition
         self.leaf_size = leaf_size
         self.sah_ratio = sah_ratio
+        self.chunk_rays = chunk_rays
         self.last_stats: dict = {}
 
     # Settings, checked on assignment so a typo fails where it is made.
@@ -159,6 +160,17 @@ class Scene:
         self._sah_ratio = value
 
     @property
+    def chunk_rays(self) -> int:
+        """Rays per independently traced chunk (0 = automatic: one or two per thread): a tuning knob."""
+        return self._chunk_rays
+
+    @chunk_rays.setter
+    def chunk_rays(self, value: int) -> None:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+            raise ValueError(f"chunk_rays must be an integer >= 0 (0 = automatic); got {value!r}")
+        self._chunk_rays = int(value)
+
+    @property
     def num_triangles(self) -> int:
         return self._core.num_triangles
 
@@ -173,7 +185,7 @@ class Scene:
 
     def _args(self, threads):
         return (_check_threads(threads), _requested_isa(), PARTITIONS.index(self._partition),
-                self._leaf_size, self._sah_ratio)
+                self._leaf_size, self._sah_ratio, self._chunk_rays)
 
     def intersect(self, rays: np.ndarray, threads: int = 0) -> np.ndarray:
         """Closest hit with t in (0, tfar] for every ray; returns HIT_DTYPE indexed by ray id.
