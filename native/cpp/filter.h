@@ -13,7 +13,7 @@
 // such a slab is marked NaN and ignored by the NaN-ordered max/min, so a ray that runs inside a
 // plane of the box is kept.
 template <int W>
-inline vbool<W> box_test(const vfloat<W> r[8], const float lo[3], const float hi[3]) {
+__attribute__((always_inline)) inline vbool<W> box_test(const vfloat<W> r[8], const float lo[3], const float hi[3]) {
     constexpr float kWiden = 0x1p-10f;
     vfloat<W> tmin = splat<W>(0.0f), tmax = r[6];
     for (int a = 0; a < 3; ++a) {
@@ -35,7 +35,7 @@ inline void swap_records(Ray* a, Ray* b) {
 }
 
 template <int W>
-inline uint32_t block_active(const Ray* rays, const float lo[3], const float hi[3]) {
+__attribute__((always_inline)) inline uint32_t block_active(const Ray* rays, const float lo[3], const float hi[3]) {
     vfloat<W> r[8];
     load_rays<W>(reinterpret_cast<const float*>(rays), r);
     return bits(box_test<W>(r, lo, hi));
