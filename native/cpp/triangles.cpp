@@ -6,19 +6,23 @@
 
 namespace dacrt {
 
-// Zero area in exact arithmetic on the float inputs. Differences of floats and products of those
-// differences are formed in long double (64-bit mantissa on x86), exact for all but extreme
-// exponent spreads; a triangle flagged here can never be hit, anything else is tested.
-static bool degenerate(const float* a, const float* b, const float* c) {
-    long double e1[3], e2[3];
+// Zero area in exact arithmetic on the float inputs. In double, differences of floats and their
+// products are exact unless the exponents are far apart, so a nonzero double cross product
+// means a real triangle; only a zero one is confirmed in long double (64-bit mantissa).
+// A triangle flagged here can never be hit; anything else is left to the watertight test.
+template <class T>
+static bool zero_cross(const float* a, const float* b, const float* c) {
+    T e1[3], e2[3];
     for (int k = 0; k < 3; ++k) {
-        e1[k] = (long double)b[k] - (long double)a[k];
-        e2[k] = (long double)c[k] - (long double)a[k];
+        e1[k] = T(b[k]) - T(a[k]);
+        e2[k] = T(c[k]) - T(a[k]);
     }
-    const long double nx = e1[1] * e2[2] - e1[2] * e2[1];
-    const long double ny = e1[2] * e2[0] - e1[0] * e2[2];
-    const long double nz = e1[0] * e2[1] - e1[1] * e2[0];
-    return nx == 0 && ny == 0 && nz == 0;
+    return e1[1] * e2[2] - e1[2] * e2[1] == 0 && e1[2] * e2[0] - e1[0] * e2[2] == 0 &&
+           e1[0] * e2[1] - e1[1] * e2[0] == 0;
+}
+
+static bool degenerate(const float* a, const float* b, const float* c) {
+    return zero_cross<double>(a, b, c) && zero_cross<long double>(a, b, c);
 }
 
 TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I, size_t M)
