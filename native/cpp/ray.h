@@ -40,6 +40,7 @@ struct Config {
 struct Stats {
     uint64_t rays = 0;
     uint64_t box_tests = 0;
+    uint64_t box_hits = 0;  // rays kept active by the box tests
     uint64_t tri_tests = 0;
     uint64_t partition_steps = 0;
     uint64_t median_steps = 0;
@@ -48,7 +49,7 @@ struct Stats {
     uint64_t double_fallbacks = 0;
     uint64_t max_depth = 0;
     void add(const Stats& o) {
-        rays += o.rays; box_tests += o.box_tests; tri_tests += o.tri_tests;
+        rays += o.rays; box_tests += o.box_tests; box_hits += o.box_hits; tri_tests += o.tri_tests;
         partition_steps += o.partition_steps; median_steps += o.median_steps;
         sah_steps += o.sah_steps; leaves += o.leaves; double_fallbacks += o.double_fallbacks;
         if (o.max_depth > max_depth) max_depth = o.max_depth;

@@ -46,7 +46,9 @@ struct Tracer {
         const float pad = 0.0f;
 #endif
         for (int a = 0; a < 3; ++a) { lo[a] = nb.lo[a] - pad; hi[a] = nb.hi[a] + pad; }
-        return filter_rays<W>(rays, n, lo, hi, st);
+        const size_t na = filter_rays<W>(rays, n, lo, hi, st);
+        st.box_hits += na;
+        return na;
     }
 
     size_t split(uint32_t* ids, size_t nt, const NodeBounds& nb, float rays, uint64_t depth,
