@@ -1,0 +1,1 @@
+"""Tests of the native tracer `dacrt` against an independent float64 brute-force reference."""

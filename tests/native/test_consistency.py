@@ -1,0 +1,155 @@
+"""Determinism and the API's data contract: bit-identical results across thread counts, ISAs,
+partition modes and leaf sizes; rays returned as a permutation of the input records; the
+dtypes, make_rays, input conversions and Scene properties as the API describes them."""
+
+import itertools
+
+import dacrt
+import numpy as np
+import pytest
+
+from . import harness, scenes
+from .cases import build_case
+from .rays import HIT_DTYPE, RAY_DTYPE, make_rays
+
+ISAS = dacrt.supported_isas()
+
+# Fixed cases covering the scene and ray kinds (built once, shared by the tests below).
+FIXED = [("soup_dirty", 1, 6, "random", "mixed", 4000, 1),
+         ("nested", 2, 4, "bounce", "inf", 4000, 2),
+         ("cube", 3, 6, "axis", "mixed", 4000, 3),
+         ("grid", 4, 6, "camera", "inf", 4000, 4),
+         ("torus", 5, 6, "bounce", "finite", 4000, 5),
+         ("soup_far", 6, 6, "camera", "mixed", 4000, 6)]
+
+
+def results(case, isa, threads, partition="adaptive", leaf_size=8, monkeypatch=None):
+    monkeypatch.setenv("DACRT_ISA", isa)
+    scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy(), partition=partition,
+                        leaf_size=leaf_size)
+    hits = harness.intersect(scene, case.org, case.dirs, case.tfar, threads=threads,
+                             shuffle_seed=threads)
+    mask = harness.occluded(scene, case.org, case.dirs, case.tfar, threads=threads,
+                            shuffle_seed=threads + 7)
+    return hits, mask
+
+
+def assert_identical(a, b, what):
+    ha, ma = a
+    hb, mb = b
+    diff = np.flatnonzero(np.any(ha.view(np.uint32).reshape(len(ha), 4) !=
+                                 hb.view(np.uint32).reshape(len(hb), 4), axis=1))
+    assert len(diff) == 0, (f"{what}: hits differ bit-for-bit on {len(diff)} rays, e.g. id "
+                            f"{diff[0]}: {ha[diff[0]]} vs {hb[diff[0]]}")
+    assert np.array_equal(ma, mb), f"{what}: occluded masks differ on {np.sum(ma != mb)} rays"
+
+
+@pytest.mark.parametrize("key", FIXED, ids=[k[0] + "-" + k[3] for k in FIXED])
+def test_identical_across_isas_and_threads(monkeypatch, key):
+    case = build_case(*key)
+    base = results(case, "portable", 1, monkeypatch=monkeypatch)
+    assert (base[0]["prim"] >= 0).any()
+    for isa, threads in itertools.product(ISAS, [1, 2, 0]):
+        if (isa, threads) != ("portable", 1):
+            assert_identical(base, results(case, isa, threads, monkeypatch=monkeypatch),
+                             f"{key}: portable/1 thread vs {isa}/{threads} threads")
+
+
+@pytest.mark.parametrize("key", FIXED, ids=[k[0] + "-" + k[3] for k in FIXED])
+def test_identical_across_partition_modes_and_leaf_sizes(monkeypatch, key):
+    """The closest hit is a function of the triangle set; conservative box tests and a
+    deterministic tie rule make it independent of how the set is split."""
+    case = build_case(*key)
+    isa = ISAS[-1]
+    base = results(case, isa, 2, "adaptive", 8, monkeypatch)
+    for partition, leaf in itertools.product(["adaptive", "median", "sah"], [1, 3, 8, 32, 10**6]):
+        if (partition, leaf) != ("adaptive", 8):
+            assert_identical(base, results(case, isa, 2, partition, leaf, monkeypatch),
+                             f"{key}: adaptive/8 vs {partition}/{leaf}")
+
+
+def test_dtypes_match_the_spec():
+    assert dacrt.RAY_DTYPE == RAY_DTYPE and dacrt.RAY_DTYPE.itemsize == 32
+    assert dacrt.HIT_DTYPE == HIT_DTYPE and dacrt.HIT_DTYPE.itemsize == 16
+
+
+def test_make_rays():
+    rng = np.random.default_rng(0)
+    o, d = rng.normal(size=(2, 50, 3))
+    r = dacrt.make_rays(o, d)
+    assert r.dtype == RAY_DTYPE and r.shape == (50,) and r.flags.c_contiguous
+    np.testing.assert_array_equal(r["id"], np.arange(50))
+    np.testing.assert_array_equal(r["org"], o.astype(np.float32))
+    np.testing.assert_array_equal(r["dir"], d.astype(np.float32))
+    assert np.all(np.isposinf(r["tfar"]))
+    assert np.all(dacrt.make_rays(o, d, 2.5)["tfar"] == 2.5)
+    tf = rng.uniform(0, 3, 50)
+    np.testing.assert_array_equal(dacrt.make_rays(o, d, tf)["tfar"], tf.astype(np.float32))
+    assert dacrt.make_rays(np.zeros((0, 3)), np.zeros((0, 3))).shape == (0,)
+
+
+def test_rays_are_a_permutation_and_ids_need_not_be_positions():
+    case = build_case("sphere", 1, 3, "random", "mixed", 2000, 11)
+    scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy())
+    base = harness.intersect(scene, case.org, case.dirs, case.tfar, shuffle_seed=None)
+    for seed in (1, 2, 3):  # the harness checks the permutation and tfar contract each time
+        np.testing.assert_array_equal(
+            harness.intersect(scene, case.org, case.dirs, case.tfar, shuffle_seed=seed), base)
+        harness.occluded(scene, case.org, case.dirs, case.tfar, shuffle_seed=seed)
+
+
+def test_scene_copies_its_inputs_and_converts_types():
+    case = build_case("torus", 2, 4, "camera", "inf", 2000, 12)
+    v, t = case.vertices.copy(), case.triangles.copy()
+    scene = dacrt.Scene(v, t)
+    base = harness.intersect(scene, case.org, case.dirs, case.tfar)
+    v[:] = 1e6
+    t[:] = 0  # the scene must not look at the caller's arrays any more
+    del v, t
+    np.testing.assert_array_equal(harness.intersect(scene, case.org, case.dirs, case.tfar), base)
+    variants = {
+        "float64 vertices": (case.vertices.astype(np.float64), case.triangles),
+        "uint32 triangles": (case.vertices, case.triangles.astype(np.uint32)),
+        "int64 triangles": (case.vertices, case.triangles.astype(np.int64)),
+        "read-only inputs": (case.vertices, case.triangles),  # the cached arrays are read-only
+        "Fortran-ordered inputs": (np.asfortranarray(case.vertices),
+                                   np.asfortranarray(case.triangles)),
+    }
+    for name, (vv, tt) in variants.items():
+        got = harness.intersect(dacrt.Scene(vv, tt), case.org, case.dirs, case.tfar)
+        np.testing.assert_array_equal(got, base, err_msg=name)
+
+
+def test_scene_properties():
+    v, t = scenes.make_scene("soup_dirty", 5, 2)
+    zero_area = np.linalg.norm(np.cross(v[t[:, 1]].astype(float) - v[t[:, 0]],
+                                        v[t[:, 2]].astype(float) - v[t[:, 0]]), axis=1) == 0
+    scene = dacrt.Scene(v, t)
+    assert scene.num_triangles == len(t)
+    assert scene.num_degenerate == zero_area.sum() > 0
+    assert (scene.partition, scene.leaf_size) == ("adaptive", 8)
+    assert scene.sah_ratio == pytest.approx(2.0)
+    o, d, tf = make_rays("random", "inf", v, t, 1000, 1)
+    base = harness.intersect(scene, o, d, tf)
+    for mode in ("median", "sah", "adaptive"):
+        scene.partition = mode
+        assert scene.partition == mode
+        np.testing.assert_array_equal(harness.intersect(scene, o, d, tf), base)
+    scene.leaf_size = 3
+    scene.sah_ratio = 0.5
+    assert (scene.leaf_size, scene.sah_ratio) == (3, 0.5)
+    np.testing.assert_array_equal(harness.intersect(scene, o, d, tf), base)
+
+
+def test_degenerate_triangles_are_never_hit():
+    v, t = scenes.make_scene("soup_dirty", 8, 4)
+    area = np.linalg.norm(np.cross(v[t[:, 1]].astype(float) - v[t[:, 0]],
+                                   v[t[:, 2]].astype(float) - v[t[:, 0]]), axis=1)
+    # rays aimed exactly at vertices of the degenerate triangles
+    targets = v[t[area == 0].ravel()].astype(np.float64)
+    rng = np.random.default_rng(3)
+    d = rng.normal(size=targets.shape)
+    o = targets - d * 2
+    hits = harness.intersect(dacrt.Scene(v, t), o, d, np.inf)
+    hit = hits["prim"] >= 0
+    assert not np.any(area[hits["prim"][hit]] == 0), "a zero-area triangle was hit"

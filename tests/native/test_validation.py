@@ -1,0 +1,155 @@
+"""Bad input gets a ValueError naming the problem, raised before any ray is touched: every
+validation rule of the native API, for Scene construction, Scene properties, intersect() and
+occluded()."""
+
+import re
+
+import dacrt
+import numpy as np
+import pytest
+
+from .rays import RAY_DTYPE, to_rays
+
+V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float32)
+T = np.array([[0, 1, 2], [0, 1, 3]], np.int32)
+
+
+def raises(pattern, fn, *args, **kw):
+    with pytest.raises(ValueError) as info:
+        fn(*args, **kw)
+    msg = str(info.value)
+    assert re.search(pattern, msg, re.I), f"message {msg!r} does not mention /{pattern}/"
+
+
+SCENE_ERRORS = {
+    "vertices (V,2)": (np.zeros((4, 2), np.float32), T, "vert"),
+    "vertices 1-D": (np.zeros(12, np.float32), T, "vert"),
+    "vertices (V,3,1)": (np.zeros((4, 3, 1), np.float32), T, "vert"),
+    "vertices integer": (V.astype(np.int32), T, "vert"),
+    "vertices NaN": (np.where(np.arange(12).reshape(4, 3) == 5, np.nan, V).astype(np.float32),
+                     T, "finite|nan"),
+    "vertices inf": (np.where(np.arange(12).reshape(4, 3) == 0, np.inf, V).astype(np.float32),
+                     T, "finite|inf"),
+    "vertices -inf float64": (np.where(np.arange(12).reshape(4, 3) == 11, -np.inf, V), T,
+                              "finite|inf"),
+    "triangles (M,2)": (V, T[:, :2], "triang"),
+    "triangles (M,4)": (V, np.zeros((2, 4), np.int32), "triang"),
+    "triangles 1-D": (V, T.ravel(), "triang"),
+    "triangles float": (V, T.astype(np.float32), "triang|integer"),
+    "triangle index -1": (V, np.array([[0, 1, 2], [0, -1, 3]], np.int32), "triang.*vert|index|range|bound"),
+    "triangle index == V": (V, np.array([[0, 1, 4]], np.int64), "triang.*vert|index|range|bound"),
+    "triangle index huge uint32": (V, np.array([[0, 1, 2**32 - 1]], np.uint32),
+                                   "triang.*vert|index|range|bound"),
+}
+
+
+@pytest.mark.parametrize("name", list(SCENE_ERRORS))
+def test_scene_rejects(name):
+    v, t, pattern = SCENE_ERRORS[name]
+    raises(pattern, dacrt.Scene, v, t)
+
+
+def test_scene_rejects_bad_settings():
+    raises("partition", dacrt.Scene, V, T, partition="octree")
+    raises("leaf", dacrt.Scene, V, T, leaf_size=0)
+    raises("leaf", dacrt.Scene, V, T, leaf_size=-3)
+    scene = dacrt.Scene(V, T)
+    with pytest.raises(ValueError, match="(?i)partition"):
+        scene.partition = "bvh"
+    with pytest.raises(ValueError, match="(?i)leaf"):
+        scene.leaf_size = 0
+    assert (scene.partition, scene.leaf_size) == ("adaptive", 8)  # unchanged after the errors
+
+
+def good_rays(n=16):
+    rng = np.random.default_rng(1)
+    return to_rays(rng.normal(size=(n, 3)) + [0.2, 0.2, 3], rng.normal(size=(n, 3)) * 0.1
+                   + [0, 0, -1], np.inf)
+
+
+def _set(field, index, value):
+    def edit(r):
+        r[field][index] = value
+        return r
+    return edit
+
+
+RAY_ERRORS = {
+    "NaN in org": (_set("org", (3, 1), np.nan), "finite|nan|org"),
+    "inf in org": (_set("org", (0, 0), np.inf), "finite|inf|org"),
+    "-inf in org": (_set("org", (15, 2), -np.inf), "finite|inf|org"),
+    "NaN in dir": (_set("dir", (7, 2), np.nan), "finite|nan|dir"),
+    "inf in dir": (_set("dir", (2, 0), np.inf), "finite|inf|dir"),
+    "all-zero dir": (_set("dir", 5, 0.0), "zero|dir"),
+    "all -0.0 dir": (_set("dir", 5, -0.0), "zero|dir"),
+    "NaN tfar": (_set("tfar", 4, np.nan), "tfar"),
+    "negative tfar": (_set("tfar", 9, -1.0), "tfar"),
+    "-inf tfar": (_set("tfar", 9, -np.inf), "tfar"),
+    "id == N": (_set("id", 3, 16), r"\bid"),
+    "id huge": (_set("id", 0, 2**32 - 1), r"\bid"),
+    "repeated id": (_set("id", 3, 4), r"\bid|duplicate|repeat"),
+}
+
+
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+@pytest.mark.parametrize("name", list(RAY_ERRORS))
+def test_rays_rejected_and_untouched(query, name):
+    edit, pattern = RAY_ERRORS[name]
+    scene = dacrt.Scene(V, T)
+    rays = edit(good_rays())
+    before = rays.copy()
+    raises(pattern, getattr(scene, query), rays)
+    assert rays.tobytes() == before.tobytes(), "the rays were modified by a failed call"
+
+
+def _wrong_arrays():
+    r = good_rays(16)
+    swapped = np.dtype([("dir", "<f4", (3,)), ("org", "<f4", (3,)), ("tfar", "<f4"),
+                        ("id", "<u4")])
+    big_endian = RAY_DTYPE.newbyteorder(">")
+    padded = np.dtype({"names": ["org", "dir", "tfar", "id"],
+                       "formats": [("<f4", (3,)), ("<f4", (3,)), "<f4", "<u4"],
+                       "offsets": [0, 12, 24, 28], "itemsize": 36})
+    return {
+        "float32 (N,8) array": (np.zeros((16, 8), np.float32), "dtype|ray"),
+        "fields in another order": (np.zeros(16, swapped), "dtype|ray"),
+        "big-endian fields": (r.astype(big_endian), "dtype|ray"),
+        "36-byte records": (np.zeros(16, padded), "dtype|ray"),
+        "2-D ray array": (r.reshape(4, 4), "1-d|dimension|shape|ndim"),
+        "non-contiguous": (r[::2], "contiguous"),
+        "a list": (list(r), "dtype|ray|array"),
+    }
+
+
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+@pytest.mark.parametrize("name", list(_wrong_arrays()))
+def test_wrong_ray_arrays_rejected(query, name):
+    arr, pattern = _wrong_arrays()[name]
+    before = arr.tobytes() if isinstance(arr, np.ndarray) else None  # raw bytes, padding too
+    with pytest.raises((ValueError, TypeError)) as info:
+        getattr(dacrt.Scene(V, T), query)(arr)
+    if isinstance(arr, np.ndarray):  # a list cannot be reordered in place: TypeError is fine
+        assert info.type is ValueError, f"{name}: expected ValueError, got {info.value!r}"
+        assert re.search(pattern, str(info.value), re.I), \
+            f"message {str(info.value)!r} does not mention /{pattern}/"
+        assert arr.tobytes() == before, "the array was modified by a failed call"
+
+
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+def test_negative_threads_rejected(query):
+    rays = good_rays()
+    before = rays.copy()
+    raises("thread", getattr(dacrt.Scene(V, T), query), rays, threads=-1)
+    assert rays.tobytes() == before.tobytes()
+
+
+def test_valid_edge_values_accepted():
+    """Not errors: tfar = +inf and 0, directions with -0.0 components, huge finite values."""
+    r = good_rays(8)
+    r["tfar"][:4] = [np.inf, 0.0, 1e30, np.finfo(np.float32).max]
+    r["dir"][5] = [-0.0, 0.0, -1.0]
+    r["org"][6] = [-0.0, 1e30, -1e30]
+    scene = dacrt.Scene(V, T)
+    hits = scene.intersect(r.copy())
+    assert hits.shape == (8,) and hits["prim"][1] == -1  # tfar = 0 never hits
+    assert scene.occluded(r.copy()).shape == (8,)
