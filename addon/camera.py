@@ -1,0 +1,138 @@
+"""Camera rays exactly as Cycles maps raster positions (reference blender-cycles.md section 1.8).
+
+Owns the raster -> ray mapping (perspective and orthographic, viewplane with shift, clip
+start/end), the render region (border, crop) and the inverse projection used to check it.
+Raster coordinates are full-frame pixels, x to the right and y up from the bottom edge; pixel
+(i, j) spans [i, i+1] x [j, j+1], so its centre is (i + 0.5, j + 0.5).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .scenedata import Camera
+
+
+class CameraModel:
+    """Validated camera with precomputed frame; generates rays for raster positions."""
+
+    def __init__(self, cam: Camera):
+        if cam.kind not in ('PERSP', 'ORTHO'):
+            raise ValueError(f"camera.kind {cam.kind!r} is not 'PERSP' or 'ORTHO'")
+        m = np.asarray(cam.matrix, np.float64)
+        if m.shape != (4, 4) or not np.isfinite(m).all():
+            raise ValueError("camera.matrix must be a finite 4x4 camera-to-world matrix")
+        self.width, self.height = int(cam.width), int(cam.height)
+        if self.width < 1 or self.height < 1:
+            raise ValueError(f"camera resolution {cam.width}x{cam.height} is empty")
+        vp = tuple(float(v) for v in cam.viewplane)
+        if len(vp) != 4 or not np.isfinite(vp).all() or vp[1] <= vp[0] or vp[3] <= vp[2]:
+            raise ValueError(f"camera.viewplane {cam.viewplane!r} must be finite (left < right, bottom < top)")
+        self.kind = cam.kind
+        self.left, self.right, self.bottom, self.top = vp
+        self.clip_start, self.clip_end = float(cam.clip_start), float(cam.clip_end)
+        if not (np.isfinite(self.clip_start) and self.clip_start >= 0.0 and self.clip_end > self.clip_start):
+            raise ValueError(f"camera clip range [{cam.clip_start}, {cam.clip_end}] is invalid")
+        self.tan_half_fov = float(cam.tan_half_fov)
+        if self.kind == 'PERSP' and not (np.isfinite(self.tan_half_fov) and self.tan_half_fov > 0):
+            raise ValueError(f"camera.tan_half_fov {cam.tan_half_fov!r} must be positive for PERSP")
+        rot = m[:3, :3]
+        # The matrix is documented as scale-free; normalise anyway so a stray scale cannot skew rays.
+        norms = np.linalg.norm(rot, axis=0)
+        if np.any(norms < 1e-12):
+            raise ValueError("camera.matrix has a degenerate rotation")
+        self.rot = rot / norms
+        self.pos = m[:3, 3].copy()
+        self.forward = -self.rot[:, 2]
+        self._rot32 = self.rot.astype(np.float32)
+        self._pos32 = self.pos.astype(np.float32)
+        self._init_region(cam)
+
+    def _init_region(self, cam: Camera):
+        x0, y0, x1, y1 = (int(v) for v in cam.border)
+        if (x0, y0, x1, y1) == (0, 0, 0, 0):
+            x0, y0, x1, y1 = 0, 0, self.width, self.height
+        if not (0 <= x0 < x1 <= self.width and 0 <= y0 < y1 <= self.height):
+            raise ValueError(f"camera.border {cam.border!r} is not a non-empty region inside "
+                             f"the {self.width}x{self.height} frame")
+        self.region = (x0, y0, x1, y1)
+        self.crop = bool(cam.crop)
+        # The film is the border only when cropping, otherwise the full frame.
+        self.film_origin = (x0, y0) if self.crop else (0, 0)
+        self.film_width = (x1 - x0) if self.crop else self.width
+        self.film_height = (y1 - y0) if self.crop else self.height
+
+    # --- pixels -------------------------------------------------------------------------------
+
+    def region_pixels(self):
+        """Film pixel indices (row-major, bottom row first) of every pixel to render, and the
+        matching full-frame pixel indices (stable across crop, used to key random numbers)."""
+        x0, y0, x1, y1 = self.region
+        xs = np.arange(x0, x1, dtype=np.int64)
+        ys = np.arange(y0, y1, dtype=np.int64)
+        fx, fy = np.meshgrid(xs, ys)
+        fx, fy = fx.ravel(), fy.ravel()
+        ox, oy = self.film_origin
+        film_index = ((fy - oy) * self.film_width + (fx - ox)).astype(np.int64)
+        frame_index = (fy * self.width + fx).astype(np.int64)
+        return film_index, frame_index
+
+    def frame_xy(self, frame_index: np.ndarray):
+        """Full-frame pixel (x, y) of full-frame pixel indices."""
+        return frame_index % self.width, frame_index // self.width
+
+    # --- rays ---------------------------------------------------------------------------------
+
+    def screen(self, rx, ry):
+        """Raster -> screen (viewplane) coordinates, float32."""
+        sx = np.float32(self.left) + np.asarray(rx, np.float32) * np.float32((self.right - self.left) / self.width)
+        sy = np.float32(self.bottom) + np.asarray(ry, np.float32) * np.float32((self.top - self.bottom) / self.height)
+        return sx, sy
+
+    def rays(self, rx, ry):
+        """Rays for full-frame raster positions: origins (3,n), unit directions (3,n) float32 and
+        tmax (n,) float32; origins lie on the clip-start plane, tmax reaches the clip-end plane."""
+        sx, sy = self.screen(rx, ry)
+        n = sx.shape[0]
+        r = self._rot32
+        if self.kind == 'ORTHO':
+            org = r[:, 0:1] * sx
+            org += r[:, 1:2] * sy
+            org += (self._pos32 - np.float32(self.clip_start) * r[:, 2])[:, None]
+            d = np.empty((3, n), np.float32)
+            d[:] = -r[:, 2:3]
+            tmax = np.full(n, self.clip_end - self.clip_start, np.float32)
+            return org, d, tmax
+        t = np.float32(self.tan_half_fov)
+        sx *= t
+        sy *= t
+        inv_len = np.float32(1.0) / np.sqrt(sx * sx + sy * sy + np.float32(1.0))  # d_cam.z
+        # world direction = R (sx, sy, -1) / |.|: R is orthonormal, so this is normalised
+        d = r[:, 0:1] * sx
+        d += r[:, 1:2] * sy
+        d -= r[:, 2:3]
+        d *= inv_len
+        # a plane at depth z is z / d_cam.z along the ray
+        org = d * (np.float32(self.clip_start) / inv_len)
+        org += self._pos32[:, None]
+        tmax = np.float32(self.clip_end - self.clip_start) / inv_len
+        return org, d, tmax
+
+    def z_depth(self, points: np.ndarray) -> np.ndarray:
+        """Distance of world points (3,n) along the view axis (Cycles' camera_z_depth)."""
+        f = -self._rot32[:, 2]
+        return f[0] * (points[0] - self._pos32[0]) + f[1] * (points[1] - self._pos32[1]) + \
+            f[2] * (points[2] - self._pos32[2])
+
+    def project(self, points: np.ndarray):
+        """World points (n,3) -> full-frame raster (rx, ry) float64 and z-depth; inverse of rays()."""
+        p = (np.asarray(points, np.float64) - self.pos) @ self.rot     # camera space (x right, y up, -z forward)
+        depth = -p[:, 2]
+        if self.kind == 'ORTHO':
+            sx, sy = p[:, 0], p[:, 1]
+        else:
+            with np.errstate(divide='ignore', invalid='ignore'):
+                sx = p[:, 0] / (depth * self.tan_half_fov)
+                sy = p[:, 1] / (depth * self.tan_half_fov)
+        rx = (sx - self.left) / (self.right - self.left) * self.width
+        ry = (sy - self.bottom) / (self.top - self.bottom) * self.height
+        return rx, ry, depth

@@ -1,0 +1,95 @@
+"""Headless rendering through the bpy module: `python -m addon.cli render [scene.blend] ...`.
+
+    python -m addon.cli render                       # the built-in demo -> render/demo.png + .exr
+    python -m addon.cli render scene.blend --samples 128 --out out/shot.png
+
+Registers the add-on, opens the .blend (or builds the demo scene), renders every enabled view
+layer with DACRT and writes a PNG (view transform applied) and a linear float EXR next to each
+other. `python3 build.py render ...` forwards here. Exit status 1 with the reason on failure.
+"""
+import argparse
+import os
+import sys
+
+import bpy
+
+from . import register
+
+
+def parse_args(argv):
+    parser = argparse.ArgumentParser(prog="python -m addon.cli",
+                                     description="Render with DACRT headless through bpy.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    render = sub.add_parser("render", help="render a .blend file, or the built-in demo scene")
+    render.add_argument("blend", nargs="?", help=".blend file (default: the built-in demo scene)")
+    render.add_argument("--samples", type=int, help="samples per pixel (default: the scene's)")
+    render.add_argument("--out", help="output image; a .png and a .exr are written side by side "
+                                      "(default: render/<scene>.png)")
+    render.add_argument("--frame", type=int, help="frame to render (default: the current frame)")
+    return parser.parse_args(argv)
+
+
+def output_paths(out, blend):
+    """(png, exr) paths: --out with or without an extension, else render/<name>."""
+    if out is None:
+        stem = os.path.splitext(os.path.basename(blend))[0] if blend else "demo"
+        out = os.path.join("render", stem)
+    base, ext = os.path.splitext(out)
+    if ext.lower() not in (".png", ".exr"):
+        base = out
+    return base + ".png", base + ".exr"
+
+
+def save_render(scene, png, exr):
+    image = bpy.data.images['Render Result']
+    settings = scene.render.image_settings
+    saved = (settings.file_format, settings.color_mode, settings.color_depth)
+    try:
+        for path, fmt, depth in ((png, 'PNG', '8'), (exr, 'OPEN_EXR', '32')):
+            os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+            settings.file_format = fmt
+            settings.color_mode = 'RGBA'
+            settings.color_depth = depth
+            image.save_render(filepath=os.path.abspath(path), scene=scene)
+    finally:
+        settings.file_format, settings.color_mode, settings.color_depth = saved
+
+
+def render(args):
+    if args.blend and not os.path.isfile(args.blend):
+        raise SystemExit(f"error: no such .blend file: {args.blend}")
+    if args.samples is not None and args.samples < 1:
+        raise SystemExit("error: --samples must be at least 1")
+    try:
+        register()
+    except ImportError as e:          # the native module does not load: say which Python it needs
+        raise SystemExit(f"error: {e}")
+    if args.blend:
+        bpy.ops.wm.open_mainfile(filepath=os.path.abspath(args.blend))
+        scene = bpy.context.scene
+    else:
+        from .demo import build_demo_scene
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        scene = build_demo_scene()
+    scene.render.engine = 'DACRT'
+    if args.samples is not None:
+        scene.dacrt.samples = args.samples
+    if args.frame is not None:
+        scene.frame_set(args.frame)
+    png, exr = output_paths(args.out, args.blend)
+    try:
+        bpy.ops.render.render(write_still=False, scene=scene.name)
+    except RuntimeError as e:     # the engine reported an ERROR: the render failed
+        raise SystemExit(f"error: render failed: {e}")
+    save_render(scene, png, exr)
+    print(f"DACRT: wrote {png} and {exr}")
+
+
+def main(argv=None):
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    if args.command == "render":
+        render(args)
+
+
+if __name__ == "__main__":
+    main()

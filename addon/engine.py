@@ -1,0 +1,175 @@
+"""The DACRT RenderEngine: orchestration only.
+
+Per view layer: export the depsgraph (export.py), integrate in passes (integrator.py), write
+Combined and the enabled Depth/Normal/DiffCol passes progressively, keep the status line,
+progress and memory stats current, honour cancel between steps, and report every message
+and error through `self.report` so nothing is only printed. Nothing outlives `render()`.
+"""
+import math
+import time
+import traceback
+
+import bpy
+import numpy as np
+
+from . import export
+
+# Extra passes: (scenedata/film name, view-layer toggle, channels, chan_id, type)
+EXTRA_PASSES = (('Depth', 'use_pass_z', 1, 'Z', 'VALUE'),
+                ('Normal', 'use_pass_normal', 3, 'XYZ', 'VECTOR'),
+                ('DiffCol', 'use_pass_diffuse_color', 3, 'RGB', 'COLOR'))
+# Blender's own names for these passes (what the compositor and multilayer EXR use). Blender
+# renamed the short "DiffCol" to "Diffuse Color" (5.0.1: "Diffuse Color", checked; 4.2: "DiffCol";
+# the 4.4 boundary follows the release history and is not checked here).
+RESULT_PASS_NAME = {'Depth': 'Depth', 'Normal': 'Normal',
+                    'DiffCol': 'Diffuse Color' if bpy.app.version >= (4, 4, 0) else 'DiffCol'}
+
+
+def _clock(seconds):
+    seconds = float(seconds)
+    if not math.isfinite(seconds):
+        return "--:--"
+    seconds = max(0.0, seconds)
+    m, s = divmod(seconds, 60.0)
+    return f"{int(m):02d}:{s:04.1f}"
+
+
+def _scene_bytes(scene_data):
+    g = scene_data.geometry
+    arrays = [g.vertices, g.triangles, g.material, g.normals, g.uvs, g.visibility, g.object_index]
+    arrays += [m.texture for m in scene_data.materials]
+    return sum(a.nbytes for a in arrays if a is not None)
+
+
+class DACRTRenderEngine(bpy.types.RenderEngine):
+    bl_idname = 'DACRT'
+    bl_label = 'DACRT'
+    bl_use_preview = False
+    bl_use_shading_nodes_custom = False    # users author with Cycles' shader nodes
+    bl_use_eevee_viewport = True           # Material Preview in the viewport uses EEVEE
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+
+    def cancel_requested(self):
+        """Esc / test_break: the one place the engine asks (polled between steps)."""
+        return self.test_break()
+
+    def update_render_passes(self, scene=None, renderlayer=None):
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
+        for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
+            if getattr(renderlayer, toggle, False):
+                self.register_pass(scene, renderlayer, RESULT_PASS_NAME[name], channels, chan_id, kind)
+
+    def render(self, depsgraph):
+        try:
+            self._render(depsgraph)
+        except export.ExportCancelled:
+            self.report({'INFO'}, "DACRT: render cancelled during scene export")
+        except Exception as e:          # reported in Blender, never only printed
+            traceback.print_exc()
+            self.report({'ERROR'}, f"DACRT render failed: {e}")
+
+    # ------------------------------------------------------------------------------------
+    def _render(self, depsgraph):
+        layer = depsgraph.view_layer.name
+        if not self._layer_enabled(layer):
+            return
+        t0 = time.perf_counter()
+        self.update_stats("", "DACRT | Exporting scene")
+        scene_data = export.export_scene(depsgraph, check_break=self.cancel_requested)
+        self._report_messages(scene_data.messages)
+        if self.cancel_requested():
+            return
+        self.update_stats("", "DACRT | Preparing")
+        from .integrator import Integrator
+        try:
+            integ = Integrator(scene_data)
+        except ValueError as e:
+            raise RuntimeError(str(e)) from None
+        camera = scene_data.camera
+        x0, y0, x1, y1 = camera.border
+        # begin_result coordinates are relative to the render border's rect
+        result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=layer)
+        try:
+            self._integrate(integ, result, scene_data, t0)
+        finally:
+            self.end_result(result)
+            self._report_messages(integ.messages)    # also when integration failed
+        self._report_summary(integ, scene_data)
+
+    def _layer_enabled(self, layer):
+        """Blender may call render for a layer it will not use (Render Single Layer)."""
+        probe = self.begin_result(0, 0, max(self.resolution_x, 1), max(self.resolution_y, 1), layer=layer)
+        if probe is None:
+            return True
+        enabled = layer in [l.name for l in probe.layers]
+        self.end_result(probe, cancel=True, do_merge_results=False)
+        return enabled
+
+    def _integrate(self, integ, result, scene_data, t0):
+        memory = _scene_bytes(scene_data) / 2 ** 20
+        self.update_memory_stats(memory_used=memory, memory_peak=memory)
+        steps = integ.passes()
+        try:
+            self._steps(steps, integ, result, scene_data, t0, memory)
+        finally:
+            steps.close()            # frees the tracer scenes now, also after a cancel
+
+    def _steps(self, steps, integ, result, scene_data, t0, memory):
+        """Progressive display, progress and status per step; poll cancel between steps."""
+        last_draw = 0.0
+        progress = None
+        for progress in steps:
+            now = time.perf_counter()
+            final = progress.samples_done >= progress.samples_total
+            if final or now - last_draw > 0.5:   # redraw at most twice a second
+                self._write(integ.film, result, scene_data)
+                self.update_result(result)
+                last_draw = now
+            fraction = getattr(progress, 'fraction', None)
+            if fraction is None:
+                fraction = progress.samples_done / max(progress.samples_total, 1)
+            self.update_progress(fraction)
+            self.update_stats(f"Mem:{memory:.1f}M", self._status(progress, now - t0))
+            if self.cancel_requested():
+                break
+        if progress is None or progress.samples_done < progress.samples_total or last_draw == 0:
+            self._write(integ.film, result, scene_data)   # partial (cancelled) image stays
+            self.update_result(result)
+
+    @staticmethod
+    def _status(p, elapsed):
+        return (f"DACRT | Sample {p.samples_done}/{p.samples_total} | {p.mrays_per_s:.2f} Mrays/s"
+                f" | Time {_clock(elapsed)} | Remaining {_clock(p.eta_seconds)}")
+
+    def _write(self, film, result, scene_data):
+        passes = result.layers[0].passes
+        self._set(passes, 'Combined', film.combined(), scene_data.camera)
+        for name in scene_data.settings.passes:
+            if RESULT_PASS_NAME[name] in passes:
+                self._set(passes, RESULT_PASS_NAME[name], film.pass_image(name), scene_data.camera)
+
+    @staticmethod
+    def _set(passes, name, image, camera):
+        """Copy an (H,W[,C]) film image into a result pass; crop a full-frame film to the border."""
+        render_pass = passes[name]
+        x0, y0, x1, y1 = camera.border
+        if image.shape[0] == camera.height and image.shape[1] == camera.width and \
+                (y1 - y0, x1 - x0) != (camera.height, camera.width):
+            image = image[y0:y1, x0:x1]
+        render_pass.rect.foreach_set(np.ascontiguousarray(image, np.float32).reshape(-1))
+
+    def _report_messages(self, messages):
+        for level, text in dict.fromkeys((lvl, txt) for lvl, txt in messages):
+            self.report({level if level in ('INFO', 'WARNING', 'ERROR') else 'INFO'}, f"DACRT: {text}")
+
+    def _report_summary(self, integ, scene_data):
+        s = integ.stats or {}
+        parts = [f"{len(scene_data.geometry.triangles)} triangles",
+                 f"{len(scene_data.lights)} lights"]
+        for key, fmt in (('samples_done', "{} samples"), ('mrays_per_s', "{:.2f} Mrays/s"),
+                         ('total_seconds', "{:.2f} s"), ('trace_share', "tracing {:.0%} of the time")):
+            if key in s:
+                parts.append(fmt.format(s[key]))
+        self.report({'INFO'}, "DACRT: " + ", ".join(parts))

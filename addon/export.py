@@ -1,0 +1,832 @@
+"""Scene export: the ONLY module that reads Blender scene data.
+
+`export_scene(depsgraph)` turns one evaluated depsgraph (one frame, one view layer) into a
+`scenedata.SceneData` of plain numpy arrays. Everything is read through `depsgraph.scene_eval`
+and evaluated objects, rebuilt per frame, and nothing is kept afterwards.
+
+Geometry: every `depsgraph.object_instances` entry Cycles would render (modifiers, Geometry
+Nodes and collection instances, particle instances); curves, surfaces, text and metaballs via
+the evaluated `to_mesh()`. Arrays come from `foreach_get` into numpy; a mesh shared by many
+instances is read once and transformed for all of its instances in one batch.
+
+Materials (what a diffuse renderer can represent exactly):
+- Diffuse BSDF colour and Principled BSDF Base Color, each constant or an Image Texture on
+  the UV map (pixels converted to float scene-linear);
+- Emission (colour x strength) and Principled emission (Emission Color x Emission Strength);
+- Add Shader and Mix Shader with a constant factor, combining the above linearly.
+Documented diffuse approximation of everything else: a shader node of another kind becomes a
+diffuse surface with its constant 'Color' (or 'Base Color') input, 0.8 grey without one; a
+linked input that is not an Image Texture (or RGB/Value node) uses the socket's own value; the
+Principled BSDF keeps only its diffuse base (no specular layer, metal, coat, sheen,
+transmission, subsurface or alpha); Diffuse roughness (Oren-Nayar) is treated as Lambert.
+Each approximated material says why in `Material.approximated`; the export reports them in
+one message.
+"""
+
+import numpy as np
+import bpy
+
+from . import scenedata as sd
+
+GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
+UNSUPPORTED_TYPES = {'CURVES': "hair curves", 'POINTCLOUD': "point cloud", 'VOLUME': "volume",
+                     'GREASEPENCIL': "Grease Pencil"}
+DEFAULT_ALBEDO = (0.8, 0.8, 0.8)          # Cycles' default surface: Diffuse BSDF 0.8 grey
+MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
+CHECK_EVERY = 64                          # instances between cancel checks
+
+
+class ExportError(Exception):
+    """The scene cannot be rendered; the message says why, for the user."""
+
+
+class ExportCancelled(Exception):
+    """The user cancelled (test_break) while the scene was being exported."""
+
+
+def export_scene(depsgraph, check_break=None):
+    """Build the frame's SceneData from an evaluated depsgraph.
+
+    check_break: optional callable returning True when the user cancelled; polled during the
+    export, which then raises ExportCancelled.
+    """
+    return _Exporter(depsgraph, check_break).run()
+
+
+# ----------------------------------------------------------------------------------------
+# Camera (reference blender-cycles.md 1.8, Cycles' blender_camera_viewplane)
+
+def export_camera(scene):
+    r = scene.render
+    width = r.resolution_x * r.resolution_percentage // 100
+    height = r.resolution_y * r.resolution_percentage // 100
+    if width < 1 or height < 1:
+        raise ExportError(f"render resolution {r.resolution_x}x{r.resolution_y} at "
+                          f"{r.resolution_percentage}% is less than one pixel")
+    cam_ob = scene.camera
+    if cam_ob is None:
+        raise ExportError("the scene has no active camera (Scene Properties > Camera)")
+    # A non-camera object as scene camera: Cycles uses its default camera parameters.
+    cam = cam_ob.data if cam_ob.type == 'CAMERA' else None
+    kind = cam.type if cam else 'PERSP'
+    if kind not in ('PERSP', 'ORTHO'):
+        raise ExportError(f"camera '{cam_ob.name}' is {kind.lower()}; DACRT renders perspective "
+                          "and orthographic cameras only")
+    lens = cam.lens if cam else 50.0
+    sensor_fit = cam.sensor_fit if cam else 'AUTO'
+    sensor_width = cam.sensor_width if cam else 36.0
+    sensor_height = cam.sensor_height if cam else 24.0
+    ortho_scale = cam.ortho_scale if cam else 6.0
+    shift = (cam.shift_x, cam.shift_y) if cam else (0.0, 0.0)
+    clip_start, clip_end = (cam.clip_start, cam.clip_end) if cam else (1e-5, 1e5)
+
+    xr = width * r.pixel_aspect_x
+    yr = height * r.pixel_aspect_y
+    if sensor_fit == 'AUTO':
+        horizontal, sensor = xr > yr, sensor_width
+    elif sensor_fit == 'HORIZONTAL':
+        horizontal, sensor = True, sensor_width
+    else:
+        horizontal, sensor = False, sensor_height
+    if horizontal:
+        ar = xr / yr
+        ax, ay = ar, 1.0
+    else:
+        ar = yr / xr
+        ax, ay = 1.0, ar
+    if kind == 'ORTHO':
+        ax *= ortho_scale / (ar * 2.0)
+        ay *= ortho_scale / (ar * 2.0)
+        ar = ortho_scale / 2.0
+    dx, dy = 2.0 * ar * shift[0], 2.0 * ar * shift[1]
+    viewplane = (-ax + dx, ax + dx, -ay + dy, ay + dy)
+    tan_half_fov = 0.5 * sensor / lens / ar
+
+    # Cycles clears the scale of the camera matrix (transform_clear_scale).
+    m = np.array(cam_ob.matrix_world, dtype=np.float64)
+    lengths = np.linalg.norm(m[:3, :3], axis=0)
+    if not np.all(lengths > 0) or not np.all(np.isfinite(m)):
+        raise ExportError(f"camera '{cam_ob.name}' has a zero or non-finite scale/transform")
+    m[:3, :3] /= lengths
+
+    border = (0, 0, width, height)
+    crop = False
+    if r.use_border:
+        border = (int(r.border_min_x * width), int(r.border_min_y * height),
+                  int(r.border_max_x * width), int(r.border_max_y * height))
+        if border[2] <= border[0] or border[3] <= border[1]:
+            raise ExportError("the render border is empty (less than one pixel wide or high)")
+        crop = bool(r.use_crop_to_border)
+    return sd.Camera(kind=kind, matrix=m, viewplane=viewplane, tan_half_fov=tan_half_fov,
+                     clip_start=float(clip_start), clip_end=float(clip_end), width=width,
+                     height=height, border=border, crop=crop)
+
+
+# ----------------------------------------------------------------------------------------
+# Lights (reference 2.1)
+
+def export_light(ob, matrix, messages):
+    """One light object (evaluated) at `matrix` -> scenedata.Light, in Cycles' units."""
+    light = ob.data
+    strength = np.array(light.color, np.float64) * light.energy
+    strength *= 2.0 ** getattr(light, 'exposure', 0.0)
+    if getattr(light, 'use_temperature', False):
+        strength *= np.array(light.temperature_color, np.float64)[:3]
+    shader = _light_shader_factor(light, ob.name, messages)
+    strength *= shader
+    cycles = getattr(light, 'cycles', None)
+    kw = dict(kind=light.type, strength=strength.astype(np.float32),
+              matrix=np.array(matrix, np.float64), normalize=bool(getattr(light, 'normalize', True)),
+              cast_shadow=bool(light.use_shadow),
+              use_mis=bool(getattr(cycles, 'use_multiple_importance_sampling', True)),
+              name=ob.name)
+    if light.type in ('POINT', 'SPOT'):
+        kw.update(radius=float(light.shadow_soft_size),
+                  soft_falloff=bool(getattr(light, 'use_soft_falloff', True)))
+        if light.type == 'SPOT':
+            kw.update(spot_size=float(light.spot_size), spot_blend=float(light.spot_blend))
+    elif light.type == 'SUN':
+        kw.update(angle=float(light.angle))
+    elif light.type == 'AREA':
+        two = light.shape in ('RECTANGLE', 'ELLIPSE')
+        kw.update(shape=light.shape, size_x=float(light.size),
+                  size_y=float(light.size_y if two else light.size), spread=float(light.spread))
+    else:
+        messages.append(('WARNING', f"light '{ob.name}' of type {light.type} is not supported; skipped"))
+        return None
+    return sd.Light(**kw)
+
+
+def _light_shader_factor(light, name, messages):
+    """The light's node tree (if used) as a constant RGB factor: Emission colour x strength."""
+    if not getattr(light, 'use_nodes', False) or light.node_tree is None:
+        return np.ones(3)
+    out = _output_node(light.node_tree)
+    if out is None or not out.inputs['Surface'].is_linked:
+        return np.ones(3)
+    node = _linked_node(out.inputs['Surface'])
+    if node is not None and node.type == 'EMISSION':
+        color, c_ok = _constant_color(node.inputs['Color'])
+        strength, s_ok = _constant_value(node.inputs['Strength'])
+        if c_ok and s_ok:
+            return np.array(color) * strength
+    messages.append(('WARNING', f"light '{name}': its node tree is not a constant Emission "
+                                "shader; rendered with the light's colour and power only"))
+    return np.ones(3)
+
+
+# ----------------------------------------------------------------------------------------
+# World
+
+def export_world(scene):
+    """Background radiance (3,) and a reason string if it had to be approximated."""
+    world = scene.world
+    if world is None:
+        return np.zeros(3, np.float32), ''
+    color = np.array(world.color, np.float32)[:3]
+    ntree = world.node_tree
+    if ntree is None or (bpy.app.version < (5, 0, 0) and not world.use_nodes):
+        return color, ''
+    out = _output_node(ntree)
+    if out is None or not out.inputs['Surface'].is_linked:
+        return np.zeros(3, np.float32), ''
+    node = _linked_node(out.inputs['Surface'])
+    if node is not None and node.type == 'BACKGROUND':
+        c, c_ok = _constant_color(node.inputs['Color'])
+        s, s_ok = _constant_value(node.inputs['Strength'])
+        reason = '' if (c_ok and s_ok) else "Background input driven by nodes; its own value used"
+        return (np.array(c, np.float32) * np.float32(s)), reason
+    kind = node.bl_label if node is not None else 'nothing'
+    return color, f"world surface is {kind}, not a Background node; world colour used"
+
+
+# ----------------------------------------------------------------------------------------
+# Node helpers
+
+def _output_node(ntree):
+    """The output node Cycles renders: target CYCLES, else ALL."""
+    return ntree.get_output_node('CYCLES') or ntree.get_output_node('ALL')
+
+
+def _linked_link(socket):
+    """The link feeding `socket`, through reroutes; None if unlinked or muted."""
+    seen = 0
+    while socket.is_linked and seen < 64:
+        link = socket.links[0]
+        if link.is_muted or not link.is_valid:
+            return None
+        if link.from_node.type == 'REROUTE':
+            socket = link.from_node.inputs[0]
+            seen += 1
+            continue
+        return link
+    return None
+
+
+def _linked_node(socket):
+    link = _linked_link(socket)
+    return link.from_node if link is not None else None
+
+
+def _constant_color(socket):
+    """(rgb, exact): the socket's constant colour, following RGB/Value nodes."""
+    link = _linked_link(socket)
+    if link is None:
+        v = socket.default_value
+        return (tuple(v[:3]) if hasattr(v, '__len__') else (v, v, v)), True
+    node = link.from_node
+    if node.type == 'RGB':
+        return tuple(node.outputs[0].default_value[:3]), True
+    if node.type == 'VALUE':
+        v = node.outputs[0].default_value
+        return (v, v, v), True
+    v = socket.default_value
+    return (tuple(v[:3]) if hasattr(v, '__len__') else (v, v, v)), False
+
+
+def _constant_value(socket):
+    """(value, exact): the socket's constant float, following a Value node."""
+    link = _linked_link(socket)
+    if link is None:
+        return float(socket.default_value), True
+    if link.from_node.type == 'VALUE':
+        return float(link.from_node.outputs[0].default_value), True
+    return float(socket.default_value), False
+
+
+def _input(node, *names):
+    for n in names:
+        s = node.inputs.get(n)
+        if s is not None:
+            return s
+    return None
+
+
+# ----------------------------------------------------------------------------------------
+# Materials
+
+class _Texture:
+    """An image texture as the shader graph uses it (pixels shared between materials)."""
+    def __init__(self, key, pixels, interpolation, extension):
+        self.key, self.pixels = key, pixels
+        self.interpolation, self.extension = interpolation, extension
+
+
+class _Closure:
+    """Linear combination of what a diffuse renderer keeps:
+    albedo = const + tex_weight * texture, emission constant."""
+    def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0)):
+        self.const = np.array(const, np.float64)
+        self.emission = np.array(emission, np.float64)
+        self.texture = texture
+        self.tex_weight = np.array(tex_weight, np.float64)
+
+    def scaled(self, f):
+        return _Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f)
+
+    def plus(self, other, reasons):
+        tex, w = self.texture, self.tex_weight
+        if other.texture is not None:
+            if tex is None or tex.key == other.texture.key:
+                tex, w = other.texture, w + other.tex_weight
+            else:   # two different images: keep the first, the other contributes its mean
+                reasons.append("two image textures mixed; the second as its average colour")
+                mean = other.texture.pixels[..., :3].reshape(-1, 3).mean(0)
+                return _Closure(self.const + other.const + other.tex_weight * mean,
+                                self.emission + other.emission, tex, w)
+        return _Closure(self.const + other.const, self.emission + other.emission, tex, w)
+
+
+class _MaterialBuilder:
+    """Evaluates Blender materials into scenedata.Material, one per material."""
+
+    def __init__(self):
+        self.materials = [sd.Material(name='(default)',
+                                      base_color=np.array(DEFAULT_ALBEDO, np.float32),
+                                      emission=np.zeros(3, np.float32))]
+        self._index = {}
+        self._images = {}
+        self.uses_texture = [False]
+
+    def index(self, mat):
+        """Global index of an (evaluated) material; None -> default material 0."""
+        if mat is None:
+            return 0
+        key = mat.as_pointer()
+        idx = self._index.get(key)
+        if idx is None:
+            idx = len(self.materials)
+            self.materials.append(self._build(mat))
+            self.uses_texture.append(self.materials[-1].texture is not None)
+            self._index[key] = idx
+        return idx
+
+    def _build(self, mat):
+        reasons = []
+        name = mat.original.name if mat.original else mat.name
+        ntree = mat.node_tree
+        if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
+            closure = _Closure(const=tuple(mat.diffuse_color[:3]))
+        else:
+            out = _output_node(ntree)
+            if out is None or not out.inputs['Surface'].is_linked:
+                closure = _Closure()    # Cycles: no surface shader renders black
+            else:
+                closure = self._shader(out.inputs['Surface'], reasons, 0)
+        base, texture, interp, ext = self._albedo(closure)
+        return sd.Material(name=name, base_color=base,
+                           emission=closure.emission.astype(np.float32), texture=texture,
+                           texture_interpolation=interp, texture_extension=ext,
+                           approximated='; '.join(dict.fromkeys(reasons)))
+
+    @staticmethod
+    def _albedo(c):
+        if c.texture is None or not np.any(c.tex_weight):
+            return c.const.astype(np.float32), None, 'Linear', 'REPEAT'
+        t = c.texture
+        if not np.any(c.const):
+            return c.tex_weight.astype(np.float32), t.pixels, t.interpolation, t.extension
+        baked = t.pixels.copy()
+        baked[..., :3] = t.pixels[..., :3] * c.tex_weight.astype(np.float32) + c.const.astype(np.float32)
+        return np.ones(3, np.float32), baked, t.interpolation, t.extension
+
+    def _shader(self, socket, reasons, depth):
+        node = _linked_node(socket)
+        if node is None:
+            return _Closure()
+        if depth > 32:
+            reasons.append("shader graph too deep")
+            return _Closure(const=DEFAULT_ALBEDO)
+        if node.mute:
+            reasons.append(f"muted node '{node.name}'")
+            return _Closure(const=DEFAULT_ALBEDO)
+        t = node.type
+        if t == 'BSDF_DIFFUSE':
+            rough, _ = _constant_value(node.inputs['Roughness'])
+            if rough > 1e-5:
+                reasons.append("Diffuse roughness (Oren-Nayar) as Lambert")
+            return self._color_closure(node.inputs['Color'], reasons)
+        if t == 'BSDF_PRINCIPLED':
+            return self._principled(node, reasons)
+        if t == 'EMISSION':
+            color, c_ok = _constant_color(node.inputs['Color'])
+            strength, s_ok = _constant_value(node.inputs['Strength'])
+            if not (c_ok and s_ok):
+                reasons.append("Emission driven by nodes; its own values used")
+            return _Closure(emission=np.array(color) * strength)
+        if t == 'ADD_SHADER':
+            a = self._shader(node.inputs[0], reasons, depth + 1)
+            b = self._shader(node.inputs[1], reasons, depth + 1)
+            return a.plus(b, reasons)
+        if t == 'MIX_SHADER':
+            fac, ok = _constant_value(node.inputs['Fac'])
+            if not ok:
+                reasons.append("Mix Shader factor driven by nodes; its own value used")
+            fac = min(max(fac, 0.0), 1.0)
+            a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
+            b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
+            return a.plus(b, reasons)
+        # Documented approximation: a diffuse surface of the node's constant colour.
+        reasons.append(f"{node.bl_label} as diffuse")
+        sock = _input(node, 'Color', 'Base Color')
+        if sock is not None and sock.type == 'RGBA':
+            color, _ = _constant_color(sock)
+            return _Closure(const=color)
+        return _Closure(const=DEFAULT_ALBEDO)
+
+    def _principled(self, node, reasons):
+        checks = (('Metallic', "metallic"), ('Transmission Weight', "transmission"),
+                  ('Coat Weight', "coat"), ('Sheen Weight', "sheen"),
+                  ('Subsurface Weight', "subsurface"), ('Specular IOR Level', "specular layer"),
+                  ('Diffuse Roughness', "diffuse roughness"))
+        for name, what in checks:
+            s = node.inputs.get(name)
+            if s is not None:
+                v, ok = _constant_value(s)
+                if v != 0.0 or not ok:
+                    reasons.append(f"Principled {what} ignored")
+        alpha = node.inputs.get('Alpha')
+        if alpha is not None:
+            a, ok = _constant_value(alpha)
+            if a != 1.0 or not ok:
+                reasons.append("Principled alpha ignored")
+        c = self._color_closure(node.inputs['Base Color'], reasons)
+        es = _input(node, 'Emission Strength')
+        ec = _input(node, 'Emission Color', 'Emission')
+        if es is not None and ec is not None:
+            color, c_ok = _constant_color(ec)
+            strength, s_ok = _constant_value(es)
+            if not (c_ok and s_ok):
+                reasons.append("Principled emission driven by nodes; its own values used")
+            c.emission = np.array(color, np.float64) * strength
+        return c
+
+    def _color_closure(self, socket, reasons):
+        """A diffuse colour input: constant, or an Image Texture on the UV map."""
+        link = _linked_link(socket)
+        if link is not None and link.from_node.type == 'TEX_IMAGE':
+            node = link.from_node
+            if link.from_socket.name != 'Color':
+                reasons.append("image alpha used as colour, read as its colour")
+            tex = self._texture(node, reasons)
+            if tex is None:
+                return _Closure(const=MISSING_IMAGE)
+            return _Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
+        color, ok = _constant_color(socket)
+        if not ok:
+            reasons.append(f"colour from '{link.from_node.bl_label}' node; its own value used")
+        return _Closure(const=color)
+
+    def _texture(self, node, reasons):
+        img = node.image
+        vec = _linked_node(node.inputs['Vector'])
+        if vec is not None:
+            if vec.type == 'UVMAP' and vec.uv_map:
+                reasons.append(f"UV Map '{vec.uv_map}' read as the active render UV map")
+            elif vec.type not in ('UVMAP', 'TEX_COORD'):
+                reasons.append(f"texture coordinates from '{vec.bl_label}' read as the UV map")
+        if node.projection != 'FLAT':
+            reasons.append(f"{node.projection.lower()} image projection as flat")
+        interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
+        if node.interpolation in ('Cubic', 'Smart'):
+            reasons.append(f"{node.interpolation.lower()} image interpolation as linear")
+        ext = node.extension if node.extension in ('REPEAT', 'EXTEND', 'CLIP') else 'REPEAT'
+        if node.extension not in ('REPEAT', 'EXTEND', 'CLIP'):
+            reasons.append(f"{node.extension.lower()} image extension as repeat")
+        if img is None:
+            reasons.append("Image Texture without an image (magenta, as Cycles)")
+            return None
+        pixels = self._images.get(img.as_pointer())
+        if pixels is None:
+            pixels = _image_pixels(img, reasons)
+            if pixels is None:
+                return None
+            self._images[img.as_pointer()] = pixels
+        return _Texture((img.as_pointer(), interp, ext), pixels, interp, ext)
+
+
+def _srgb_to_linear(c):
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
+def _image_pixels(img, reasons):
+    """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels."""
+    try:
+        w, h = img.size
+        ch = img.channels
+        n = w * h * ch
+        if n == 0:
+            raise ValueError
+        buf = np.empty(n, np.float32)
+        img.pixels.foreach_get(buf)
+    except (RuntimeError, ValueError, ReferenceError):
+        reasons.append(f"image '{img.name}' could not be loaded (magenta, as Cycles)")
+        return None
+    buf = buf.reshape(h, w, ch)
+    rgba = np.ones((h, w, 4), np.float32)
+    rgba[..., :min(ch, 4)] = buf[..., :4]
+    if ch < 3:     # grey (+alpha) images
+        rgba[..., 1] = rgba[..., 2] = buf[..., 0]
+        rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
+    if not img.is_float:   # byte buffers are in the image's colour space; float ones are linear
+        space = img.colorspace_settings.name
+        if space in ('sRGB', 'Filmic sRGB', 'AgX Base sRGB') or space.startswith('sRGB'):
+            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+            if space != 'sRGB':
+                reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
+        elif not (img.colorspace_settings.is_data or space.startswith('Linear')
+                  or space in ('Non-Color', 'Working Space')):
+            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+            reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
+    return rgba
+
+
+# ----------------------------------------------------------------------------------------
+# Meshes
+
+class _MeshArrays:
+    """One evaluated mesh in its local space, read once per unique mesh."""
+    __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normals', 'uvs', 'domain')
+
+    def __init__(self, me, want_uvs):
+        nv = len(me.vertices)
+        self.positions = np.empty(nv * 3, np.float32)
+        me.attributes['position'].data.foreach_get('vector', self.positions)
+        self.positions = self.positions.reshape(nv, 3)
+        nt = len(me.loop_triangles)
+        corners = np.empty(nt * 3, np.int32)
+        me.loop_triangles.foreach_get('loops', corners)
+        nl = len(me.loops)
+        corner_vert = np.empty(nl, np.int32)
+        cv_attr = me.attributes.get('.corner_vert')
+        if cv_attr is not None:
+            cv_attr.data.foreach_get('value', corner_vert)
+        else:
+            me.loops.foreach_get('vertex_index', corner_vert)
+        self.corners = corners.reshape(nt, 3)
+        self.triangles = corner_vert[self.corners]
+        tri_poly = np.empty(nt, np.int32)
+        me.loop_triangle_polygons.foreach_get('value', tri_poly)
+        self.slot = np.zeros(nt, np.int32)
+        mi = me.attributes.get('material_index')
+        if mi is not None and mi.domain == 'FACE' and mi.data_type == 'INT' and nt:
+            per_face = np.empty(len(me.polygons), np.int32)
+            mi.data.foreach_get('value', per_face)
+            self.slot = per_face[tri_poly]
+        self.domain = me.normals_domain
+        if self.domain == 'POINT':
+            vn = np.empty(nv * 3, np.float32)
+            me.vertex_normals.foreach_get('vector', vn)
+            self.normals = vn.reshape(nv, 3)[self.triangles]
+        elif self.domain == 'CORNER':
+            cn = np.empty(nl * 3, np.float32)
+            me.corner_normals.foreach_get('vector', cn)
+            self.normals = cn.reshape(nl, 3)[self.corners]
+        else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
+            self.normals = None
+        self.uvs = self._read_uvs(me) if want_uvs else None
+
+    def _read_uvs(self, me):
+        layer = next((l for l in me.uv_layers if l.active_render), None)
+        if layer is None:
+            return None
+        nl = len(me.loops)
+        uv = np.empty(nl * 2, np.float32)
+        attr = me.attributes.get(layer.name)
+        if attr is not None and attr.domain == 'CORNER' and attr.data_type == 'FLOAT2':
+            attr.data.foreach_get('vector', uv)
+        else:
+            layer.uv.foreach_get('vector', uv)
+        return uv.reshape(nl, 2)[self.corners]
+
+
+class _Placement:
+    """One instance of a mesh: where it is and how it is shaded."""
+    __slots__ = ('matrix', 'slot_map', 'visibility', 'object_index', 'name')
+
+    def __init__(self, matrix, slot_map, visibility, object_index, name):
+        self.matrix, self.slot_map = matrix, slot_map
+        self.visibility, self.object_index, self.name = visibility, object_index, name
+
+
+# ----------------------------------------------------------------------------------------
+
+class _Exporter:
+    def __init__(self, depsgraph, check_break):
+        self.depsgraph = depsgraph
+        self.scene = depsgraph.scene_eval
+        self.view_layer = depsgraph.view_layer
+        self.check_break = check_break or (lambda: False)
+        self.messages = []
+        self.materials = _MaterialBuilder()
+        self.object_names = []
+        self._object_index = {}
+        self.meshes = {}          # key -> _MeshArrays
+        self.placements = {}      # key -> [_Placement]
+        self.lights = []
+        self.skipped = {}         # reason -> [object names]
+
+    def run(self):
+        camera = export_camera(self.scene)
+        settings = self._settings()
+        self._walk_instances()
+        geometry = self._assemble()
+        world, world_reason = export_world(self.scene)
+        if world_reason:
+            self.messages.append(('WARNING', f"world approximated: {world_reason}"))
+        self._summarize(geometry, world)
+        return sd.SceneData(camera=camera, geometry=geometry, materials=self.materials.materials,
+                            lights=self.lights, world=world, settings=settings,
+                            object_names=self.object_names, messages=self.messages)
+
+    # -- settings ------------------------------------------------------------------------
+    def _settings(self):
+        scene, r, vl = self.scene, self.scene.render, self.view_layer
+        d = getattr(scene, 'dacrt', None)
+        if d is None:
+            raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
+        passes = tuple(name for name, on in (('Depth', vl.use_pass_z), ('Normal', vl.use_pass_normal),
+                                              ('DiffCol', vl.use_pass_diffuse_color)) if on)
+        return sd.Settings(samples=d.samples, max_bounces=d.max_bounces, filter_type=d.filter_type,
+                           filter_width=d.filter_width, seed=d.seed,
+                           threads=0 if r.threads_mode == 'AUTO' else r.threads,
+                           partition=d.partition.lower(), film_transparent=r.film_transparent,
+                           passes=passes)
+
+    # -- instances -----------------------------------------------------------------------
+    def _walk_instances(self):
+        override = self.view_layer.material_override
+        for n, inst in enumerate(self.depsgraph.object_instances):
+            if n % CHECK_EVERY == 0 and self.check_break():
+                raise ExportCancelled()
+            ob = inst.object
+            if ob.type == 'LIGHT':
+                light = self._light(inst, ob)
+                if light is not None:
+                    self.lights.append(light)
+                continue
+            if not inst.is_instance:
+                self._note_hair(ob)
+            if ob.type in UNSUPPORTED_TYPES:
+                self._skip(f"{UNSUPPORTED_TYPES[ob.type]} objects are not rendered", ob.name)
+                continue
+            if ob.type not in GEOMETRY_TYPES or not inst.show_self:
+                continue
+            parent = inst.parent if inst.is_instance and inst.parent is not None else ob
+            vis = self._visibility(ob, parent)
+            if vis == 0:
+                continue
+            key = self._read_geometry(ob)
+            if key is None:
+                continue
+            slots = [override] if override is not None else [s.material for s in ob.material_slots]
+            slot_map = np.array([self.materials.index(m) for m in slots] or [0], np.int32)
+            self.placements[key].append(_Placement(np.array(inst.matrix_world, np.float64),
+                                                   slot_map, vis, self._object_id(ob.name), ob.name))
+
+    def _light(self, inst, ob):
+        if not ob.visible_diffuse:
+            self._skip("lights with diffuse ray visibility off contribute nothing to a diffuse "
+                       "renderer", ob.name)
+            return None
+        return export_light(ob, inst.matrix_world, self.messages)
+
+    def _visibility(self, ob, parent):
+        """Ray visibility bits; instances also take their instancer's (as Cycles)."""
+        def bits(o):
+            return ((sd.VIS_CAMERA if o.visible_camera else 0)
+                    | (sd.VIS_DIFFUSE if o.visible_diffuse else 0)
+                    | (sd.VIS_SHADOW if o.visible_shadow else 0))
+        vis = bits(ob) & bits(parent)
+        if vis and (parent.is_holdout or self._holdout_collection(parent)):
+            vis |= sd.HOLDOUT
+        return vis
+
+    def _holdout_collection(self, ob):
+        try:
+            return ob.original.holdout_get(view_layer=self.view_layer)
+        except (RuntimeError, TypeError, ReferenceError):
+            return False
+
+    def _note_hair(self, ob):
+        for ps in getattr(ob, 'particle_systems', ()):
+            s = ps.settings
+            if s.type == 'HAIR' and s.render_type == 'PATH':
+                self._skip("hair particle strands are not rendered", f"{ob.name}/{ps.name}")
+
+    def _read_geometry(self, ob):
+        """Read (once) the evaluated geometry of `ob`; returns its cache key or None."""
+        if ob.type == 'MESH':
+            key = ('MESH', ob.data.as_pointer())
+        else:   # curves/text/metaballs: one evaluated mesh per (object, data)
+            key = (ob.type, ob.original.as_pointer(), ob.data.as_pointer() if ob.data else 0)
+        if key in self.meshes:
+            return key if self.meshes[key] is not None else None
+        want_uvs = True
+        if ob.type == 'MESH':
+            arrays = _MeshArrays(ob.data, want_uvs)
+        else:
+            try:
+                me = ob.to_mesh()
+            except RuntimeError as e:
+                self._skip(f"could not be converted to a mesh ({e})", ob.name)
+                self.meshes[key] = None
+                return None
+            try:
+                arrays = _MeshArrays(me, want_uvs) if me is not None else None
+            finally:
+                ob.to_mesh_clear()
+        if arrays is None or len(arrays.triangles) == 0:
+            self.meshes[key] = None
+            return None
+        self.meshes[key] = arrays
+        self.placements[key] = []
+        return key
+
+    def _object_id(self, name):
+        idx = self._object_index.get(name)
+        if idx is None:
+            idx = self._object_index[name] = len(self.object_names)
+            self.object_names.append(name)
+        return idx
+
+    def _skip(self, reason, name):
+        names = self.skipped.setdefault(reason, [])
+        if name not in names:
+            names.append(name)
+
+    # -- geometry assembly -----------------------------------------------------------------
+    def _assemble(self):
+        """Transform every unique mesh for all its instances at once and concatenate."""
+        parts = []
+        bad = {}          # object name -> [non-finite vertices, triangles dropped]
+        degenerate = 0
+        need_uvs = any(self.materials.uses_texture)
+        for key, places in self.placements.items():
+            if self.check_break():
+                raise ExportCancelled()
+            if not places:
+                continue
+            arrays = self.meshes[key]
+            part, nbad, ndeg = self._instance_batch(arrays, places, need_uvs)
+            degenerate += ndeg
+            for name, nv, nt in nbad:
+                acc = bad.setdefault(name, [0, 0])
+                acc[0] += nv
+                acc[1] += nt
+            parts.append(part)
+        for name, (nv, nt) in bad.items():
+            self.messages.append(('WARNING', f"object '{name}': {nv} vertices with NaN/inf "
+                                             f"coordinates; {nt} triangles using them skipped"))
+        if degenerate:
+            self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
+        if not parts:
+            return sd.Geometry.empty()
+        verts, tris, offset = [], [], 0
+        for p in parts:
+            verts.append(p['vertices'])
+            tris.append(p['triangles'] + offset)
+            offset += len(p['vertices'])
+        cat = lambda k: np.concatenate([p[k] for p in parts])
+        uvs = cat('uvs') if need_uvs else None
+        return sd.Geometry(vertices=np.concatenate(verts), triangles=np.concatenate(tris),
+                           material=cat('material'), normals=cat('normals'), uvs=uvs,
+                           visibility=cat('visibility'), object_index=cat('object_index'))
+
+    def _instance_batch(self, a, places, need_uvs):
+        k = len(places)
+        nv, nt = len(a.positions), len(a.triangles)
+        mats = np.stack([p.matrix for p in places])                # (k,4,4)
+        lin = mats[:, :3, :3]
+        pos = a.positions.astype(np.float64)
+        world = np.einsum('kij,vj->kvi', lin, pos) + mats[:, None, :3, 3]   # (k,nv,3)
+        world = world.astype(np.float32)
+        tris = a.triangles[None, :, :] + (np.arange(k, dtype=np.int32) * nv)[:, None, None]
+        world = world.reshape(k * nv, 3)
+        tris = tris.reshape(k * nt, 3)
+        keep = np.ones(k * nt, bool)
+        bad = []
+        finite = np.isfinite(world).all(axis=1)
+        if not finite.all():
+            tri_ok = finite[tris].all(axis=1)
+            for i, p in enumerate(places):
+                sl = slice(i * nt, (i + 1) * nt)
+                nb = int((~tri_ok[sl]).sum())
+                nvb = int((~finite[i * nv:(i + 1) * nv]).sum())
+                if nvb:
+                    bad.append((p.name, nvb, nb))
+            keep &= tri_ok
+            world = np.where(finite[:, None], world, 0.0).astype(np.float32)
+        # geometric normals in world space; objects with negative scale keep their outside
+        v0, v1, v2 = world[tris[:, 0]], world[tris[:, 1]], world[tris[:, 2]]
+        ng = np.cross(v1 - v0, v2 - v0)
+        flip = np.repeat(np.where(np.linalg.det(lin) < 0, -1.0, 1.0), nt).astype(np.float32)
+        ng *= flip[:, None]
+        length = np.linalg.norm(ng, axis=1)
+        good = length > 0
+        deg = int((keep & ~good).sum())
+        keep &= good
+        ng[good] /= length[good, None]
+        if a.normals is None:
+            normals = np.repeat(ng[:, None, :], 3, axis=1)
+        else:
+            inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin,
+                                         np.eye(3)))    # normals transform by the inverse transpose
+            n = np.einsum('tcj,kji->ktci', a.normals.astype(np.float64), inv)
+            n = n.reshape(k * nt, 3, 3).astype(np.float32)
+            nlen = np.linalg.norm(n, axis=2, keepdims=True)
+            ok = nlen[..., 0] > 1e-12
+            normals = np.where(ok[..., None], n / np.where(ok[..., None], nlen, 1.0),
+                               ng[:, None, :]).astype(np.float32)
+        slots = np.stack([p.slot_map[np.clip(a.slot, 0, len(p.slot_map) - 1)] for p in places])
+        part = dict(vertices=world, triangles=tris, normals=normals,
+                    material=slots.reshape(-1).astype(np.int32),
+                    visibility=np.repeat(np.array([p.visibility for p in places], np.uint8), nt),
+                    object_index=np.repeat(np.array([p.object_index for p in places], np.int32), nt))
+        if need_uvs:
+            part['uvs'] = (np.tile(a.uvs, (k, 1, 1)) if a.uvs is not None
+                           else np.zeros((k * nt, 3, 2), np.float32))
+        if not keep.all():
+            for name in ('triangles', 'normals', 'material', 'visibility', 'object_index', 'uvs'):
+                if name in part:
+                    part[name] = part[name][keep]
+        return part, bad, deg
+
+    # -- messages ----------------------------------------------------------------------------
+    def _summarize(self, geometry, world):
+        for reason, names in self.skipped.items():
+            self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
+        approx = [f"'{m.name}' ({m.approximated})" for m in self.materials.materials if m.approximated]
+        if approx:
+            self.messages.append(('WARNING', f"{len(approx)} material(s) approximated as diffuse: "
+                                             + "; ".join(approx)))
+        if len(geometry.triangles) == 0:
+            self.messages.append(('WARNING', "the scene has no renderable geometry; only the "
+                                             "world background is rendered"))
+        has_emission = any(np.any(m.emission > 0) for m in self.materials.materials)
+        if not self.lights and not np.any(world > 0) and not has_emission:
+            self.messages.append(('WARNING', "the scene has no lights, no emissive materials and "
+                                             "a black world: the image will be black"))
+        elif not self.lights:
+            self.messages.append(('INFO', "the scene has no light objects; lit by the world and "
+                                          "emissive materials only"))

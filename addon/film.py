@@ -1,0 +1,84 @@
+"""The film: per-pixel accumulation of samples and the passes read back by the engine.
+
+Owns the Combined sums (RGBA, premultiplied, linear), the optional Depth, Normal and DiffCol
+(albedo) passes, the per-pixel count of accepted samples and the count of samples dropped for
+being NaN or infinite. Pixel values are the plain mean of the samples that landed in the pixel
+(the pixel filter is applied by importance sampling the ray positions, see filter.py), so a
+dropped sample only lowers that pixel's count. Arrays are (height, width, channels), row 0 at
+the bottom, as Blender's render result expects.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3}
+BACKGROUND_DEPTH = 1e10    # what Cycles reports for pixels whose first sample saw no surface
+
+
+class Film:
+    def __init__(self, width: int, height: int, passes=()):
+        unknown = [p for p in passes if p not in PASS_CHANNELS]
+        if unknown:
+            raise ValueError(f"unknown pass(es) {unknown}; supported: {sorted(PASS_CHANNELS)}")
+        self.width, self.height = int(width), int(height)
+        npix = self.width * self.height
+        self._sum = np.zeros((4, npix), np.float64)
+        self._count = np.zeros(npix, np.int64)
+        self.passes = tuple(dict.fromkeys(passes))
+        self._pass_sum = {p: np.zeros((PASS_CHANNELS[p], npix), np.float64)
+                          for p in self.passes if p != 'Depth'}
+        self._depth = np.zeros(npix, np.float32) if 'Depth' in self.passes else None
+        self.nan_dropped = 0
+
+    @property
+    def num_pixels(self) -> int:
+        return self.width * self.height
+
+    def add_samples(self, pixels: np.ndarray, rgba: np.ndarray, data: dict | None = None) -> int:
+        """Accumulate a block of samples: pixels (P,) distinct film indices; rgba (4, P, S)
+        premultiplied, channel-major, S samples per pixel; data holds the averaged passes'
+        per-sample values ('Normal', 'DiffCol': (3, P, S)).
+
+        A sample with any non-finite Combined or pass value is dropped whole (counted in
+        nan_dropped, not in its pixel's sample count). Returns the number dropped."""
+        data = {k: v for k, v in (data or {}).items() if k in self._pass_sum}
+        ok = np.isfinite(rgba).all(axis=0)
+        for values in data.values():
+            ok &= np.isfinite(values).all(axis=0)
+        dropped = int(ok.size - np.count_nonzero(ok))
+        if dropped:
+            rgba = np.where(ok, rgba, 0.0)
+            data = {k: np.where(ok, v, 0.0) for k, v in data.items()}
+        self._count[pixels] += ok.sum(axis=1)
+        self._sum[:, pixels] += rgba.sum(axis=2, dtype=np.float64)
+        for name, values in data.items():
+            self._pass_sum[name][:, pixels] += values.sum(axis=2, dtype=np.float64)
+        self.nan_dropped += dropped
+        return dropped
+
+    def set_depth(self, pixels: np.ndarray, depth: np.ndarray):
+        """Depth is not averaged: it holds the z-depth seen by each pixel's sample 0 (as Cycles)."""
+        if self._depth is not None:
+            d = np.where(np.isfinite(depth), depth, BACKGROUND_DEPTH).astype(np.float32)
+            self._depth[pixels] = d
+
+    def _mean(self, sums: np.ndarray) -> np.ndarray:
+        with np.errstate(divide='ignore', invalid='ignore'):
+            mean = np.where(self._count > 0, sums / self._count, 0.0)
+        return mean.T.reshape(self.height, self.width, sums.shape[0]).astype(np.float32)
+
+    def combined(self) -> np.ndarray:
+        """(H, W, 4) float32 premultiplied linear RGBA; pixels without samples are 0."""
+        return self._mean(self._sum)
+
+    def pass_image(self, name: str) -> np.ndarray:
+        """(H, W, channels) float32 image of an enabled pass ('Depth', 'Normal', 'DiffCol')."""
+        if name not in self.passes:
+            raise KeyError(f"pass {name!r} was not requested (requested: {list(self.passes)})")
+        if name == 'Depth':
+            return self._depth.reshape(self.height, self.width, 1).copy()
+        return self._mean(self._pass_sum[name])
+
+    def sample_counts(self) -> np.ndarray:
+        """(H, W) number of accepted samples per pixel."""
+        return self._count.reshape(self.height, self.width).copy()

@@ -1,0 +1,811 @@
+"""Wavefront diffuse path tracing of one frame's SceneData with the native DACRT tracer.
+
+Owns the render loop: per pass it builds every camera ray of a block of (pixel, sample) paths,
+then traces each bounce as ONE batch (`dacrt.Scene.intersect`) and all shadow rays of that bounce
+as one batch (`dacrt.Scene.occluded`). Shading is Lambertian (albedo = base colour x texture),
+with next-event estimation and multiple importance sampling (power heuristic) against every
+emitter a BSDF ray can meet (emissive triangles, lamps with MIS, the world), Russian roulette
+and Cycles' bounce semantics: max_bounces K gives up to K+1 diffuse reflections, light sampling
+at vertices 0..K, and the last BSDF ray only collects emission (reference blender-cycles.md 2.5).
+
+Also owns the per-frame surface data the loop reads (triangle table, materials and textures,
+the self-intersection offset) and the tracer scenes, one per distinct ray-visibility subset
+(camera rays see VIS_CAMERA triangles, bounce rays VIS_DIFFUSE, shadow rays VIS_SHADOW), built
+in the constructor and dropped when rendering ends. Nothing here knows Blender.
+
+Per-ray data are (3, n) float32 structure-of-arrays; paths that end are compacted away after
+every vertex. Work that cannot change the image is not done: no shadow ray for a light sample
+that cannot contribute (behind the surface, outside a spot cone; counted in stats), no light
+sampling without lights, no last BSDF ray when nothing it could hit emits, paths end on black
+surfaces, passes that were not requested are not computed. Random numbers are keyed by
+(full-frame pixel, sample), so a scheduler that renders any subset of pixels (a border, or
+adaptive sampling's still-active pixels) leaves every other pixel's noise unchanged.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+import dacrt
+
+from .camera import CameraModel
+from .film import Film
+from .filter import PixelFilter
+from .lights import BackgroundLight, EmissiveTriangles, LightSet, make_lamp
+from .sampling import RandomStream, cosine_hemisphere, dot, max3, normalize, to_world
+from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
+
+F32 = np.float32
+INV_PI = F32(1.0 / np.pi)
+
+# Random dimension pairs: 0 = pixel filter; then per vertex k: light pick + roulette, light
+# position, BSDF direction (Cycles keeps the same split: PRNG_FILTER, PRNG_LIGHT, PRNG_SURFACE_BSDF...).
+_DIM_FILTER = 0
+_DIMS_PER_VERTEX = 3
+
+
+def _dim(vertex: int, slot: int) -> int:
+    return 1 + vertex * _DIMS_PER_VERTEX + slot
+
+
+# Pass sizing: a pass should take ~0.8 s (progressive updates, cancel within a second) while
+# keeping batches large enough for the tracer.
+_TARGET_PASS_SECONDS = 0.8
+_MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 21, 1 << 16
+
+# Ray Tracing Gems ch. 6 (Waechter & Binder) offset constants, identical to Cycles' ray_offset().
+_ORIGIN = F32(1.0 / 32.0)
+_FLOAT_SCALE = F32(1.0 / 65536.0)
+_INT_SCALE = F32(256.0)
+
+
+def offset_ray_origin(p: np.ndarray, n: np.ndarray, magnitude: np.ndarray | None = None) -> np.ndarray:
+    """Move points p (3,n) float32 off their surface along unit normals n (3,n) (toward the side
+    the new ray leaves from), Ray Tracing Gems ch. 6: int(256 n) ULPs per axis, or n/65536 where
+    the coordinate is within 1/32 of the origin and ULPs vanish. No epsilon tied to scene size.
+
+    The ULPs are taken at max(|p|, magnitude): `magnitude` (n,) is the largest vertex coordinate
+    of the triangle p lies on. A float32 ray/triangle test errs by a few ULPs of the triangle's
+    own coordinates, so a point near the origin on a huge triangle (a 2 km ground plane) needs the
+    triangle's ULPs, not its own, to never re-hit that triangle; elsewhere this is plain RTG.
+    For points on a triangle |p| <= magnitude, so the step is one vector per triangle:
+    see triangle_offsets(), which the render loop uses."""
+    a = np.abs(p)
+    if magnitude is not None:
+        np.maximum(a, magnitude, out=a)
+    near = a < _ORIGIN
+    step = _ulp(a)
+    step *= np.trunc(n * _INT_SCALE)
+    if near.any():
+        np.copyto(step, n * _FLOAT_SCALE, where=near)
+    step += p
+    return step
+
+
+def _ulp(a: np.ndarray) -> np.ndarray:
+    """ULP of non-negative normal float32 values (their exponent bits, 23 binades down); values
+    below 2**-103 give garbage, callers replace everything below 1/32 anyway. Overwrites a."""
+    bits = a.view(np.int32)
+    bits &= np.int32(0x7F800000)
+    bits -= np.int32(23 << 23)
+    return bits.view(F32)
+
+
+def triangle_offsets(corners: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Per-triangle offset_ray_origin step for points on the front side: corners (M,3,3)
+    float32, unit geometric normals (3,M) -> (3,M) float32; negate it for the back side."""
+    mag = np.abs(corners).max(axis=(1, 2)).astype(F32) if len(corners) else np.zeros(0, F32)
+    step = _ulp(mag.copy()) * np.trunc(normals * _INT_SCALE)
+    near = mag < _ORIGIN
+    step[:, near] = normals[:, near] * _FLOAT_SCALE
+    return step.astype(F32)
+
+
+@dataclass
+class Progress:
+    samples_done: int          # samples finished in every pixel
+    samples_total: int
+    rays_traced: int
+    trace_seconds: float
+    total_seconds: float
+    mrays_per_s: float
+    eta_seconds: float
+    fraction: float            # share of all (pixel, sample) paths done, 0..1
+
+
+class _Triangles:
+    """Per-triangle arrays the shading code gathers from, one float32 row per quantity."""
+
+    def __init__(self, geometry, messages: list):
+        v = np.asarray(geometry.vertices)
+        t = np.asarray(geometry.triangles, np.int64)
+        m = len(t)
+        bad_v = ~np.isfinite(v).all(axis=1)
+        if bad_v.any():
+            # a NaN vertex would poison the tracer: drop its triangles, park the vertex at 0
+            bad_t = bad_v[t].any(axis=1)
+            messages.append(('WARNING', f"skipped {int(bad_t.sum())} triangle(s) with non-finite vertex "
+                                        f"coordinates ({int(bad_v.sum())} vertices)"))
+            v = np.where(bad_v[:, None], 0.0, v)
+        else:
+            bad_t = np.zeros(m, bool)
+        self.vertices = np.ascontiguousarray(v, F32)
+        self.indices = np.ascontiguousarray(t, np.int32)
+        v64 = self.vertices.astype(np.float64)
+        p0, p1, p2 = v64[t[:, 0]], v64[t[:, 1]], v64[t[:, 2]]
+        e1, e2 = p1 - p0, p2 - p0
+        cr = np.cross(e1, e2)
+        length = np.linalg.norm(cr, axis=1)
+        with np.errstate(invalid='ignore', divide='ignore'):
+            ng = np.where(length[:, None] > 0, cr / length[:, None], 0.0)
+        self.area = np.where(bad_t, 0.0, 0.5 * length)
+        # self-intersection step off each triangle (front side), at the scale of its coordinates
+        off = triangle_offsets(self.vertices[t], ng.T.astype(F32))
+        # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), offset (12:15)
+        self.geo = np.ascontiguousarray(np.concatenate([p0.T, e1.T, e2.T, ng.T, off]), F32)
+        self.material = np.asarray(geometry.material, np.int32)
+        self.visibility = np.where(bad_t, 0, np.asarray(geometry.visibility, np.uint8)).astype(np.uint8)
+        normals = np.asarray(geometry.normals, F32)
+        # flat shading everywhere (corner normals == geometric normal) needs no interpolation
+        flat = not m or np.abs(normals - ng[:, None, :]).max() < 1e-6
+        # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
+        self.normals = None if flat else np.ascontiguousarray(np.concatenate(
+            [normals[:, 0].T, (normals[:, 1] - normals[:, 0]).T, (normals[:, 2] - normals[:, 0]).T]), F32)
+        uvs = geometry.uvs
+        self.uvs = None if uvs is None else np.ascontiguousarray(np.concatenate(
+            [uvs[:, 0].T, (uvs[:, 1] - uvs[:, 0]).T, (uvs[:, 2] - uvs[:, 0]).T]), F32)
+
+    def __len__(self):
+        return len(self.indices)
+
+
+def _wrap(i: np.ndarray, size: int, extension: str):
+    """Texel index -> valid index and in-range mask for Blender's extension modes."""
+    if extension == 'REPEAT':
+        return np.mod(i, size), None
+    if extension == 'EXTEND':
+        return np.clip(i, 0, size - 1), None
+    inside = (i >= 0) & (i < size)                   # CLIP: texels outside are transparent black
+    return np.clip(i, 0, size - 1), inside
+
+
+def texture_lookup(tex: np.ndarray, u: np.ndarray, v: np.ndarray, interpolation: str,
+                   extension: str) -> np.ndarray:
+    """RGB (3,n) of an (h,w,4) texture (row 0 at the bottom) at (u, v): 'Closest' or bilinear
+    'Linear' with texel centres at (i + 0.5)/w, as Cycles' image texture node samples."""
+    h, w = tex.shape[:2]
+    x = u * F32(w)
+    y = v * F32(h)
+    if interpolation == 'Closest':
+        ix, mx = _wrap(np.floor(x).astype(np.int64), w, extension)
+        iy, my = _wrap(np.floor(y).astype(np.int64), h, extension)
+        rgb = tex[iy, ix, :3].T.astype(F32)
+        if mx is not None:
+            rgb *= mx & my
+        return rgb
+    x -= F32(0.5)
+    y -= F32(0.5)
+    x0f, y0f = np.floor(x), np.floor(y)
+    fx, fy = x - x0f, y - y0f
+    x0, y0 = x0f.astype(np.int64), y0f.astype(np.int64)
+    out = np.zeros((3, len(u)), F32)
+    for dy, wy in ((0, 1.0 - fy), (1, fy)):
+        iy, my = _wrap(y0 + dy, h, extension)
+        for dx, wx in ((0, 1.0 - fx), (1, fx)):
+            ix, mx = _wrap(x0 + dx, w, extension)
+            wgt = wx * wy
+            if mx is not None:
+                wgt = wgt * (mx & my)
+            out += tex[iy, ix, :3].T * wgt
+    return out
+
+
+class _Materials:
+    def __init__(self, materials: list):
+        if not materials:
+            raise ValueError("scene has no materials (index 0 must be the default material)")
+        base, emit = [], []
+        self.textures = []          # (material index, texture, interpolation, extension)
+        for i, mat in enumerate(materials):
+            b = np.asarray(mat.base_color, np.float64)
+            e = np.asarray(mat.emission, np.float64)
+            for label, val in (('base_color', b), ('emission', e)):
+                if val.shape != (3,) or not np.isfinite(val).all() or (val < 0).any():
+                    raise ValueError(f"material {mat.name!r}: {label} must be 3 finite non-negative "
+                                     f"numbers, got {val!r}")
+            base.append(b)
+            emit.append(e)
+            if mat.texture is not None:
+                tex = np.asarray(mat.texture)
+                if tex.ndim != 3 or tex.shape[2] != 4 or tex.shape[0] < 1 or tex.shape[1] < 1:
+                    raise ValueError(f"material {mat.name!r}: texture must be (h, w, 4), got {tex.shape}")
+                if mat.texture_interpolation not in ('Closest', 'Linear'):
+                    raise ValueError(f"material {mat.name!r}: texture_interpolation "
+                                     f"{mat.texture_interpolation!r} is not 'Closest' or 'Linear'")
+                if mat.texture_extension not in ('REPEAT', 'EXTEND', 'CLIP'):
+                    raise ValueError(f"material {mat.name!r}: texture_extension "
+                                     f"{mat.texture_extension!r} is not REPEAT, EXTEND or CLIP")
+                self.textures.append((i, np.ascontiguousarray(tex, F32), mat.texture_interpolation,
+                                      mat.texture_extension))
+        self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
+        self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
+        self.emissive = self.emission.max(axis=0) > 0
+
+
+def _validate(sd: SceneData):
+    g = sd.geometry
+    m = len(np.asarray(g.triangles))
+    checks = [
+        (np.asarray(g.vertices).ndim == 2 and np.asarray(g.vertices).shape[1] == 3, "geometry.vertices must be (V,3)"),
+        (np.asarray(g.triangles).ndim == 2 and np.asarray(g.triangles).shape[1] == 3, "geometry.triangles must be (M,3)"),
+        (np.issubdtype(np.asarray(g.triangles).dtype, np.integer), "geometry.triangles must be integers"),
+        (np.asarray(g.material).shape == (m,), f"geometry.material must have one entry per triangle ({m})"),
+        (np.asarray(g.normals).shape == (m, 3, 3), f"geometry.normals must be ({m},3,3)"),
+        (np.asarray(g.visibility).shape == (m,), f"geometry.visibility must have one entry per triangle ({m})"),
+        (g.uvs is None or np.asarray(g.uvs).shape == (m, 3, 2), f"geometry.uvs must be None or ({m},3,2)"),
+    ]
+    for ok, msg in checks:
+        if not ok:
+            raise ValueError(msg)
+    nv = len(np.asarray(g.vertices))
+    tri = np.asarray(g.triangles)
+    if m and (tri.min() < 0 or tri.max() >= nv):
+        raise ValueError(f"geometry.triangles index a vertex outside 0..{nv - 1}")
+    mat = np.asarray(g.material)
+    if m and (mat.min() < 0 or mat.max() >= len(sd.materials)):
+        raise ValueError(f"geometry.material indexes a material outside 0..{len(sd.materials) - 1}")
+    w = np.asarray(sd.world, np.float64)
+    if w.shape != (3,) or not np.isfinite(w).all() or (w < 0).any():
+        raise ValueError(f"world must be 3 finite non-negative numbers, got {sd.world!r}")
+    s = sd.settings
+    if int(s.samples) < 1:
+        raise ValueError(f"settings.samples must be >= 1, got {s.samples!r}")
+    if int(s.max_bounces) < 0:
+        raise ValueError(f"settings.max_bounces must be >= 0, got {s.max_bounces!r}")
+    if int(s.threads) < 0:
+        raise ValueError(f"settings.threads must be >= 0 (0 = all cores), got {s.threads!r}")
+    if not 0 <= int(s.seed) < 2 ** 63:
+        raise ValueError(f"settings.seed must be a non-negative integer, got {s.seed!r}")
+
+
+class Integrator:
+    """Renders a SceneData progressively; see the module docstring and `passes()`.
+
+    paths_per_pass: fixed number of (pixel, sample) paths per pass instead of the timed
+    default (tests use it to show the image does not depend on blocking)."""
+
+    def __init__(self, scene_data: SceneData, *, paths_per_pass: int | None = None):
+        t_start = time.perf_counter()
+        _validate(scene_data)
+        self.messages: list = []
+        s = scene_data.settings
+        self.settings = s
+        self.max_bounces = int(s.max_bounces)
+        self.samples = int(s.samples)
+        self.threads = int(s.threads)
+        self.transparent = bool(s.film_transparent)
+        self.camera = CameraModel(scene_data.camera)
+        self.filter = PixelFilter(s.filter_type, s.filter_width)
+        self.rng = RandomStream(int(s.seed))
+        self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes))
+        self.tri = _Triangles(scene_data.geometry, self.messages)
+        self.mats = _Materials(scene_data.materials)
+        self._tri_emissive = self.mats.emissive[self.tri.material] & (self.tri.area > 0)
+        self._area32 = self.tri.area.astype(F32)
+        self._any_emissive = bool(self._tri_emissive.any())
+        self._build_lights(scene_data)
+        self._fixed_paths = None if paths_per_pass is None else max(1, int(paths_per_pass))
+        self._ids = np.zeros(0, np.uint32)
+        self._rays = {'camera': 0, 'bounce': 0, 'shadow': 0}
+        self._skipped_shadow = 0        # light samples that could not contribute: no ray traced
+        self._trace_seconds = 0.0
+        self._render_seconds = 0.0
+        self._paths_done = 0
+        self._samples_done = 0
+        self._passes = 0
+        t_build = time.perf_counter()
+        self._build_scenes()
+        self._build_seconds = time.perf_counter() - t_build
+        self._setup_seconds = time.perf_counter() - t_start
+
+    # --- setup ----------------------------------------------------------------------------------
+
+    def _build_lights(self, sd: SceneData):
+        lamps = [make_lamp(light) for light in sd.lights]
+        world = np.asarray(sd.world, F32)
+        if world.max() > 0:
+            lamps.append(BackgroundLight(world))
+        vis = self.tri.visibility
+        # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
+        # same emitters.
+        tris = EmissiveTriangles(self.tri.geo, self.tri.area, np.take(self.mats.emission, self.tri.material, axis=1),
+                                 self._tri_emissive & ((vis & VIS_DIFFUSE) != 0))
+        self.lights = LightSet(lamps, tris, len(self.tri))
+        if self.lights.skipped_lamps:
+            self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
+                                          f"strength: {', '.join(self.lights.skipped_lamps)}"))
+        self._lamp_mis = np.array([l.seen_by_bsdf for l in self.lights.lamps], bool)
+        tri_entries = self.lights.tri_prob[self.lights.triangles.index] if self.lights.triangles is not None \
+            else np.zeros(0, F32)
+        self._entry_prob = np.concatenate([self.lights.lamp_prob, tri_entries]).astype(F32)
+
+    def _build_scenes(self):
+        """One tracer scene per distinct visibility subset that some ray kind needs."""
+        vis = self.tri.visibility
+        self._bounce_rays = self.max_bounces > 0 or self.lights.seen_by_bsdf
+        wanted = {'camera': VIS_CAMERA}
+        if self._bounce_rays:
+            wanted['bounce'] = VIS_DIFFUSE
+        if self.lights:
+            wanted['shadow'] = VIS_SHADOW
+        self._scenes, self._maps = {}, {}
+        built = {}
+        for kind, bit in wanted.items():
+            mask = (vis & bit) != 0
+            key = mask.tobytes()
+            if key not in built:
+                everything = bool(mask.all())
+                sub = None if everything else np.flatnonzero(mask).astype(np.int32)
+                tris = self.tri.indices if everything else self.tri.indices[sub]
+                built[key] = (dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition), sub)
+            self._scenes[kind], self._maps[kind] = built[key]
+        self._num_scenes = len(built)
+
+    def close(self):
+        """Drop the tracer scenes (also done when passes() ends or is closed)."""
+        self._scenes = {}
+        self._maps = {}
+
+    # --- public ---------------------------------------------------------------------------------
+
+    @property
+    def stats(self) -> dict:
+        rays = dict(self._rays)
+        total_rays = sum(rays.values())
+        render = self._render_seconds
+        return {
+            'rays': rays,
+            'rays_total': total_rays,
+            'shadow_rays_skipped': self._skipped_shadow,
+            'trace_seconds': self._trace_seconds,
+            'python_seconds': render - self._trace_seconds,
+            'render_seconds': render,
+            'total_seconds': self._setup_seconds + render,
+            'trace_share': self._trace_seconds / render if render > 0 else 0.0,
+            'setup_seconds': self._setup_seconds,
+            'scene_build_seconds': self._build_seconds,
+            'tracer_scenes': self._num_scenes,
+            'mrays_per_s': total_rays / self._trace_seconds * 1e-6 if self._trace_seconds > 0 else 0.0,
+            'samples': self._samples_done,
+            'samples_done': self._samples_done,
+            'samples_total': self.samples,
+            'paths': self._paths_done,
+            'passes': self._passes,
+            'nan_dropped': self.film.nan_dropped,
+            'triangles': len(self.tri),
+            'emissive_triangles': len(self.lights.triangles) if self.lights.triangles is not None else 0,
+            'lights': len(self.lights.lamps),
+        }
+
+    def passes(self):
+        """Generator: renders one block of paths per step and yields a Progress.
+
+        A block is every region pixel for a few samples or, when one sample of the whole
+        region is too much for one step, a run of pixels for one sample. Block sizes follow the
+        measured speed so a step takes about _TARGET_PASS_SECONDS; results do not depend on them."""
+        if not self._scenes:
+            raise RuntimeError("this Integrator has finished (or was closed); make a new one to render again")
+        film_pix, frame_pix = self.camera.region_pixels()
+        npix = len(film_pix)
+        total = npix * self.samples
+        target = self._fixed_paths or min(_FIRST_PATHS, total)
+        sample, offset = 0, 0
+        t_render = time.perf_counter()
+        try:
+            while sample < self.samples:
+                t0 = time.perf_counter()
+                if offset == 0 and target >= npix:
+                    ns = int(min(max(target // npix, 1), self.samples - sample))
+                    self._render_block(film_pix, frame_pix, sample, ns)
+                    step = npix * ns
+                    sample += ns
+                else:
+                    stop = min(offset + target, npix)
+                    self._render_block(film_pix[offset:stop], frame_pix[offset:stop], sample, 1)
+                    step = stop - offset
+                    offset = 0 if stop == npix else stop
+                    sample += offset == 0
+                self._paths_done += step
+                self._samples_done = sample
+                self._passes += 1
+                if self._fixed_paths is None:
+                    rate = step / max(time.perf_counter() - t0, 1e-6)
+                    target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(_MAX_PATHS, 4 * step)))
+                self._render_seconds = time.perf_counter() - t_render
+                yield self._progress(self._paths_done / total)
+        finally:
+            self._render_seconds = time.perf_counter() - t_render
+            self.close()
+            if self.film.nan_dropped:
+                self.messages.append(('WARNING', f"dropped {self.film.nan_dropped} sample(s) that were "
+                                                 f"NaN or infinite (pixels average the others)"))
+
+    def _progress(self, fraction):
+        elapsed = self._render_seconds
+        rays = sum(self._rays.values())
+        eta = elapsed / fraction * (1.0 - fraction) if fraction > 0 else float('inf')
+        return Progress(self._samples_done, self.samples, rays, self._trace_seconds, elapsed,
+                        rays / elapsed * 1e-6 if elapsed > 0 else 0.0, eta, fraction)
+
+    # --- tracing --------------------------------------------------------------------------------
+
+    def _ray_array(self, O, D, tfar):
+        n = O.shape[1]
+        if len(self._ids) < n:
+            self._ids = np.arange(max(n, 2 * len(self._ids)), dtype=np.uint32)
+        rays = np.empty(n, dacrt.RAY_DTYPE)
+        rays['org'] = O.T
+        rays['dir'] = D.T
+        rays['tfar'] = tfar
+        rays['id'] = self._ids[:n]
+        return rays
+
+    def _intersect(self, kind, O, D, tfar):
+        rays = self._ray_array(O, D, tfar)
+        t0 = time.perf_counter()
+        hits = self._scenes[kind].intersect(rays, threads=self.threads)
+        self._trace_seconds += time.perf_counter() - t0
+        self._rays['camera' if kind == 'camera' else 'bounce'] += O.shape[1]
+        sub = self._maps[kind]
+        if sub is not None and len(sub):
+            prim = hits['prim']
+            hits['prim'] = np.where(prim >= 0, np.take(sub, np.maximum(prim, 0)), -1)
+        return hits
+
+    def _occluded(self, O, D, tfar):
+        rays = self._ray_array(O, D, tfar)
+        t0 = time.perf_counter()
+        occ = self._scenes['shadow'].occluded(rays, threads=self.threads)
+        self._trace_seconds += time.perf_counter() - t0
+        self._rays['shadow'] += O.shape[1]
+        return occ
+
+    # --- one block of paths ---------------------------------------------------------------------
+
+    def _render_block(self, film_pix, frame_pix, s0, ns):
+        n = len(film_pix) * ns
+        pix = np.repeat(film_pix, ns)
+        samp = np.tile(np.arange(s0, s0 + ns, dtype=np.int64), len(film_pix))
+        frame = np.repeat(frame_pix, ns)
+        keys = self.rng.path_keys(frame, samp)
+        # camera rays, positioned by importance-sampling the pixel filter
+        fu, fv = self.rng.uniform2(keys, _DIM_FILTER)
+        fx, fy = self.camera.frame_xy(frame)
+        rx = self.filter.offsets(fu)
+        rx += fx
+        ry = self.filter.offsets(fv)
+        ry += fy
+        del fu, fv, fx, fy, frame
+        O, D, tmax = self.camera.rays(rx, ry)
+        del rx, ry
+        rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
+        L, alpha = rgba[:3], rgba[3]
+        data = {}
+        path = _Paths(np.arange(n), keys, O, D, tmax, None, None)
+        for k in range(self.max_bounces + 2):
+            path = self._vertex(k, path, L, alpha, data, pix, samp)
+            if path is None:
+                break
+        shape = (-1, len(film_pix), ns)               # paths are pixel-major
+        self.film.add_samples(film_pix, rgba.reshape(shape), {k: v.reshape(shape) for k, v in data.items()})
+
+    def _vertex(self, k, path, L, alpha, data, pix, samp):
+        """Trace path segment k (k = 0: camera rays), gather what it sees, shade vertex k:
+        emission, Russian roulette, light sampling, BSDF sampling. Returns the paths that go on."""
+        K = self.max_bounces
+        camera = k == 0
+        hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax)
+        prim = hits['prim']
+        hit = prim >= 0
+        if self.lights.num_lamps:
+            self._gather_lamps(camera, path, np.where(hit, hits['t'], path.tmax), L)
+        miss = np.flatnonzero(~hit)
+        if len(miss):
+            if self.lights.num_lamps:
+                self._gather_infinite(camera, path, miss, L)
+            if camera and not self.transparent:
+                alpha[miss] = 1.0
+        if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
+            if camera and self.film.passes:
+                self._write_passes(path, hits, hit, data, pix, samp)
+            return None
+        if camera:
+            hold = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0)
+            if hold.any():
+                hit &= ~hold                          # holdout: transparent, nothing behind it
+            alpha[hit] = 1.0
+            if self.film.passes:
+                self._write_passes(path, hits, hit, data, pix, samp)
+        if self._any_emissive:
+            em = np.flatnonzero(hit & np.take(self._tri_emissive, prim))
+            if len(em):
+                self._gather_emission(camera, em, hits, path, L)
+        if k == K + 1:
+            return None
+        # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
+        # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)).
+        mat = np.take(self.tri.material, prim)        # misses read the last triangle: masked below
+        albedo = np.take(self.mats.base, mat, axis=1)
+        live = hit & (max3(albedo) > 0)
+        thr = path.thr
+        need_pick = self.lights.num_entries > 1
+        u_pick = None
+        if need_pick or k >= 2:
+            u_pick, u_rr = self.rng.uniform_pick(path.keys, _dim(k, 0))
+        if k >= 2:
+            q = np.minimum(np.sqrt(max3(thr)), F32(1.0))
+            live &= u_rr < q
+            thr = thr / np.where(q > 0, q, F32(1.0))
+        idx = np.flatnonzero(live)
+        if len(idx) == 0:
+            return None
+        take = _taker(None if len(idx) == len(live) else idx)
+        prim, u, v, mat = take(prim), take(hits['u']), take(hits['v']), take(mat)
+        pid, keys, D, thr, albedo = take(path.pid), take(path.keys), take(path.D), take(thr), take(albedo)
+        u_pick = take(u_pick) if need_pick else None
+        del hits, path
+        P, ng, ns, P_off = self._surface(prim, u, v, D, mat, albedo)
+        if self.lights:
+            self._next_event(k, P, P_off, ng, ns, albedo, thr, pid, keys, u_pick, L)
+        if k == K and not self.lights.seen_by_bsdf:
+            return None                               # the last BSDF ray could only find emission
+        # cosine-weighted BSDF sample around the shading normal; reject directions below the
+        # geometric surface (a diffuse BSDF only reflects)
+        u1, u2 = self.rng.uniform2(keys, _dim(k, 2))
+        local = cosine_hemisphere(u1, u2)
+        wi = to_world(local, ns)
+        thr = albedo if thr is None else albedo * thr
+        pdf = local[2] * INV_PI
+        ok = local[2] > 0
+        if ns is not ng:
+            ok &= dot(wi, ng) > 0
+        if not ok.all():
+            take = _taker(np.flatnonzero(ok))
+            P_off, wi, thr, pid, keys, pdf = (take(a) for a in (P_off, wi, thr, pid, keys, pdf))
+        if len(pid) == 0:
+            return None
+        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf)
+
+    # --- surfaces -------------------------------------------------------------------------------
+
+    def _surface(self, prim, u, v, D, mat, albedo):
+        """Hit points, geometric and shading normals facing the incoming rays, and the points
+        offset off the surface toward the ray's side (all (3,n)); multiplies textures into
+        albedo in place."""
+        g = np.take(self.tri.geo, prim, axis=1)
+        P = g[3:6] * u
+        P += g[6:9] * v
+        P += g[0:3]
+        ng = g[9:12]
+        flip = np.where(dot(ng, D) > 0, F32(-1.0), F32(1.0))
+        ng = ng * flip
+        P_off = g[12:15] * flip                       # offset_ray_origin(P, ng, magnitude)
+        P_off += P
+        if self.tri.normals is not None:
+            nn = np.take(self.tri.normals, prim, axis=1)
+            ns = nn[3:6] * u
+            ns += nn[6:9] * v
+            ns += nn[0:3]
+            ns, length = normalize(ns)
+            ns *= flip
+            bad = ~(length > 0)
+            if bad.any():
+                np.copyto(ns, ng, where=bad)
+        else:
+            ns = ng
+        for m, tex, interp, ext in self.mats.textures:
+            sel = np.flatnonzero(mat == m)
+            if len(sel) and self.tri.uvs is not None:
+                uvc = np.take(self.tri.uvs, np.take(prim, sel), axis=1)
+                us, vs = np.take(u, sel), np.take(v, sel)
+                tu = uvc[0] + uvc[2] * us + uvc[4] * vs
+                tv = uvc[1] + uvc[3] * us + uvc[5] * vs
+                albedo[:, sel] *= texture_lookup(tex, tu, tv, interp, ext)
+        return P, ng, ns, P_off
+
+    def _write_passes(self, path, hits, hit, data, pix, samp):
+        """Data passes from the first visible surface (holdouts and background stay 0)."""
+        n = len(hit)
+        idx = np.flatnonzero(hit)
+        want = self.film.passes
+        if len(idx):
+            prim = np.take(hits['prim'], idx)
+            mat = np.take(self.tri.material, prim)
+            albedo = np.take(self.mats.base, mat, axis=1)
+            P, ng, ns, _ = self._surface(prim, np.take(hits['u'], idx), np.take(hits['v'], idx),
+                                         np.take(path.D, idx, axis=1), mat, albedo)
+        else:
+            P = ns = albedo = np.zeros((3, 0), F32)
+        if 'Normal' in want:
+            data['Normal'] = np.zeros((3, n), F32)
+            data['Normal'][:, idx] = ns
+        if 'DiffCol' in want:
+            data['DiffCol'] = np.zeros((3, n), F32)
+            data['DiffCol'][:, idx] = albedo
+        if 'Depth' in want:
+            first = np.flatnonzero(samp == 0)       # Cycles writes depth from sample 0 only
+            if len(first):
+                depth = np.full(n, np.inf, F32)
+                depth[idx] = self.camera.z_depth(P)
+                self.film.set_depth(pix[first], depth[first])
+
+    # --- emission seen by rays ------------------------------------------------------------------
+
+    @staticmethod
+    def _mis_bsdf(pdf_bsdf, pdf_light):
+        """Power-heuristic weight of a BSDF-sampled hit against light sampling."""
+        with np.errstate(divide='ignore', invalid='ignore'):
+            r = pdf_light / pdf_bsdf
+            r *= r
+            r += F32(1.0)
+            return F32(1.0) / r
+
+    def _gather_emission(self, camera, em, hits, path, L):
+        """Emission of the triangles hit by rays em (two-sided), MIS-weighted for BSDF rays."""
+        p = np.take(hits['prim'], em)
+        Le = np.take(self.mats.emission, np.take(self.tri.material, p), axis=1)
+        if path.thr is not None:
+            Le *= np.take(path.thr, em, axis=1)
+        if not camera:
+            ng = np.take(self.tri.geo[9:12], p, axis=1)
+            cos_l = np.abs(dot(ng, np.take(path.D, em, axis=1)))
+            te = np.take(hits['t'], em)
+            with np.errstate(divide='ignore', invalid='ignore'):
+                pdf_l = np.take(self.lights.tri_prob, p) * te * te / (np.take(self._area32, p) * cos_l)
+            Le *= self._mis_bsdf(np.take(path.pdf, em), pdf_l)
+        L[:, np.take(path.pid, em)] += Le
+
+    def _gather_lamps(self, camera, path, t_surf, L):
+        """Finite lamps a ray passes before its surface hit (lamps are not geometry)."""
+        for j, lamp in enumerate(self.lights.lamps):
+            if lamp.at_infinity or not (lamp.seen_by_camera if camera else lamp.seen_by_bsdf):
+                continue
+            idx, Le, pdf_l = lamp.intersect(path.O, path.D, t_surf)
+            if len(idx):
+                self._add_lamp(camera, j, path, idx, Le, pdf_l, L)
+
+    def _gather_infinite(self, camera, path, miss, L):
+        D = None
+        for j, lamp in enumerate(self.lights.lamps):
+            if not lamp.at_infinity or not (lamp.seen_by_camera if camera else lamp.seen_by_bsdf):
+                continue
+            if camera and self.transparent and isinstance(lamp, BackgroundLight):
+                continue                              # transparent film: the world is not seen directly
+            if D is None:
+                D = np.take(path.D, miss, axis=1)
+            idx, Le, pdf_l = lamp.eval_miss(D)
+            if len(idx):
+                self._add_lamp(camera, j, path, np.take(miss, idx), Le, pdf_l, L)
+
+    def _add_lamp(self, camera, j, path, idx, Le, pdf_l, L):
+        if path.thr is not None:
+            Le = Le * np.take(path.thr, idx, axis=1)
+        if not camera:
+            Le *= self._mis_bsdf(np.take(path.pdf, idx), self.lights.lamp_prob[j] * pdf_l)
+        L[:, np.take(path.pid, idx)] += Le
+
+    # --- next-event estimation --------------------------------------------------------------------
+
+    def _next_event(self, k, P, P_off, ng, ns, albedo, thr, pid, keys, u_pick, L):
+        """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
+        batch. Light geometry is taken at the surface point P; shadow rays leave from P_off."""
+        lights = self.lights
+        n = P.shape[1]
+        u1, u2 = self.rng.uniform2(keys, _dim(k, 1))
+        nl = lights.num_lamps
+        if u_pick is None:
+            entry = np.zeros(n, np.int32)
+            groups = [0]                              # the only light (lamp 0 or the triangles)
+            bucket = None
+        else:
+            entry = lights.select(u_pick)
+            bucket = np.minimum(entry, nl)
+            counts = np.bincount(bucket, minlength=nl + 1)
+            groups = [j for j in range(nl + 1) if counts[j]]
+        shadow = None                                 # None: every sample casts a shadow ray
+        target = None
+        if len(groups) == 1:
+            ls = self._sample_group(groups[0], entry, P, u1, u2)
+            wi, dist, value, pdf, target = ls.wi, ls.dist, ls.value, ls.pdf, ls.target
+            if groups[0] < nl and not lights.lamps[groups[0]].cast_shadow:
+                shadow = np.zeros(n, bool)
+        else:
+            wi, value = np.empty((3, n), F32), np.empty((3, n), F32)
+            dist, pdf = np.empty(n, F32), np.empty(n, F32)
+            shadow = np.ones(n, bool)
+            for j in groups:
+                idx = np.flatnonzero(bucket == j)
+                take = _taker(idx)
+                ls = self._sample_group(j, take(entry), take(P), take(u1), take(u2))
+                wi[:, idx], dist[idx], value[:, idx], pdf[idx] = ls.wi, ls.dist, ls.value, ls.pdf
+                if ls.target is not None:
+                    if target is None:
+                        target = np.full((3, n), np.nan, F32)
+                    target[:, idx] = ls.target
+                if j < nl and not lights.lamps[j].cast_shadow:
+                    shadow[idx] = False
+        cos_s = dot(ns, wi)
+        p_sel = np.take(self._entry_prob, entry)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            r = cos_s * INV_PI                        # BSDF pdf
+            r /= p_sel * pdf
+            r *= r
+            r += F32(1.0)                             # power heuristic w = 1/r; delta lights: 1
+            scale = cos_s * INV_PI
+            scale /= r * p_sel
+        value *= albedo
+        if thr is not None:
+            value *= thr
+        value *= scale
+        ok = (cos_s > 0) & (max3(value) > 0)
+        if ns is not ng:
+            ok &= dot(ng, wi) > 0
+        send = np.flatnonzero(ok if shadow is None else ok & shadow)
+        self._skipped_shadow += n - int(np.count_nonzero(ok))
+        if len(send):
+            take = _taker(send)
+            O, sd, sl = take(P_off), take(wi), take(dist)
+            if target is not None:
+                # emitters that are geometry: aim exactly at the offset point in front of them
+                tg = take(target)
+                aim = ~np.isnan(tg[0])
+                if aim.all():
+                    sd, sl = normalize(tg - O)
+                elif aim.any():
+                    sda, sla = normalize(tg[:, aim] - O[:, aim])
+                    sd[:, aim], sl[aim] = sda, sla
+                good = sl > 0
+                if not good.all():
+                    O, sd, sl, send = O[:, good], sd[:, good], sl[good], send[good]
+            occ = self._occluded(O, sd, sl)
+            send = send[~occ]
+        if shadow is not None:
+            free = np.flatnonzero(ok & ~shadow)
+            if len(free):
+                send = np.concatenate([send, free])
+        if len(send):
+            L[:, np.take(pid, send)] += np.take(value, send, axis=1)
+
+    def _sample_group(self, j, entry, P, u1, u2):
+        lights = self.lights
+        if j < lights.num_lamps:
+            ls = lights.lamps[j].sample(P, u1, u2)
+            if not self._lamp_mis[j]:
+                ls.pdf = np.full(P.shape[1], np.inf, F32)      # NEE-only light: weight 1
+            return ls
+        return lights.triangles.sample(P, entry - lights.num_lamps, u1, u2)
+
+
+def _taker(idx):
+    """Compaction of per-path arrays ((n,) or (3,n)) to the columns idx; None keeps all."""
+    if idx is None:
+        return lambda a: a
+    def take(a):
+        if a is None:
+            return None
+        return np.take(a, idx, axis=a.ndim - 1)
+    return take
+
+
+@dataclass
+class _Paths:
+    """Live paths of one block between bounces (all arrays indexed alike; vectors (3,n))."""
+    pid: np.ndarray      # index into the block's per-path arrays (radiance, alpha, pixel)
+    keys: np.ndarray     # random-number keys (2,n) uint32
+    O: np.ndarray        # ray origins
+    D: np.ndarray        # unit directions
+    tmax: np.ndarray     # ray lengths
+    thr: np.ndarray | None   # throughput (None: 1, camera rays)
+    pdf: np.ndarray | None   # solid-angle pdf of D at the previous vertex (None for camera rays)

@@ -1,0 +1,28 @@
+"""The world background as a light: uniform radiance from every direction, sampled uniformly
+over the sphere (pdf 1/(4 pi)); rays that miss all geometry see it."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..sampling import uniform_sphere
+from .base import F32, Lamp, LightSample, outer
+
+INV_4PI = F32(1.0 / (4.0 * np.pi))
+
+
+class BackgroundLight(Lamp):
+    at_infinity = True
+
+    def __init__(self, color):
+        super().__init__(color=color)
+        self.emit = np.asarray(color, F32)
+
+
+    def sample(self, P, u1, u2):
+        n = P.shape[1]
+        return LightSample(uniform_sphere(u1, u2), np.full(n, np.inf, F32),
+                           outer(self.emit / INV_4PI, np.ones(n, F32)), np.full(n, INV_4PI, F32))
+
+    def eval_miss(self, D):
+        n = D.shape[1]
+        return np.arange(n), outer(self.emit, np.ones(n, F32)), np.full(n, INV_4PI, F32)

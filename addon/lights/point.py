@@ -1,0 +1,139 @@
+"""Point and spot lights (Cycles kernel/light/point.h, spot.h).
+
+radius 0: a delta light of intensity I = strength / (4 pi) (strength / pi unnormalised).
+radius r > 0: radiance L = strength / (4 pi^2 r^2) (strength / pi unnormalised), either
+- use_soft_falloff False: a sphere, sampled uniformly in the cone it subtends;
+- use_soft_falloff True (Blender's default): a disk of radius r through the centre that faces
+  the shading point, sampled uniformly by area (pdf = t^2 / (pi r^2 cos_l)).
+Spot lights multiply by smoothstep((z - cos(size/2)) / ((1 - cos(size/2)) blend)), z being the
+forward (-Z) component of the centre->point direction mapped through the inverse object transform
+(non-uniform scale makes the cone elliptical). No cone normalisation: on axis a spot equals a
+point light of the same power. Shading points inside the light's radius receive nothing.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..sampling import (concentric_disk, dot, normalize, one_minus_cos_from_sin2, orthonormal_basis,
+                        to_world, uniform_cone)
+from .base import F32, Lamp, LightSample, outer
+
+
+class PointLight(Lamp):
+    def __init__(self, light):
+        super().__init__(light)
+        m = np.asarray(light.matrix, np.float64)
+        self.center = m[:3, 3].astype(F32)
+        self.radius = float(light.radius)
+        if not (np.isfinite(self.radius) and self.radius >= 0):
+            raise ValueError(f"light {light.name!r}: radius {light.radius!r} must be >= 0")
+        self.delta = self.radius == 0.0
+        self.sphere = not light.soft_falloff
+        if self.delta:
+            fac = 1.0 / (4.0 * np.pi) if self.normalize else 1.0 / np.pi
+        else:
+            fac = 1.0 / (4.0 * np.pi ** 2 * self.radius ** 2) if self.normalize else 1.0 / np.pi
+        # intensity (delta) or radiance (finite): strength * eval_fac
+        self.emit = (self.color * fac).astype(F32)
+
+
+    def _attenuate(self, scale, P):
+        """Per-sample scalars times the light's angular factor seen from P (1 for points)."""
+        return scale
+
+    def sample(self, P, u1, u2):
+        n = P.shape[1]
+        axis, d = normalize(self.center[:, None] - P)
+        if self.delta:
+            with np.errstate(divide='ignore'):
+                scale = np.where(d > 0, F32(1.0) / (d * d), F32(0.0))
+            return LightSample(axis, d, outer(self.emit, self._attenuate(scale, P)), np.full(n, np.inf, F32))
+        r = F32(self.radius)
+        outside = d > r
+        if self.sphere:
+            sin2 = np.minimum((r * r) / np.maximum(d * d, F32(1e-30)), F32(1.0))
+            omc = one_minus_cos_from_sin2(sin2)
+            local, cos_t = uniform_cone(u1, u2, omc)
+            wi = to_world(local, axis)
+            b = d * cos_t                                  # distance to the near sphere surface
+            dist = b - np.sqrt(np.maximum(r * r - np.maximum(d * d - b * b, 0.0), 0.0))
+            with np.errstate(divide='ignore'):
+                pdf = np.where(outside, F32(1.0 / (2.0 * np.pi)) / omc, F32(0.0))
+                scale = np.where(outside, F32(2.0 * np.pi) * omc, F32(0.0))
+        else:
+            x, y = concentric_disk(u1, u2)                 # uniform point on the disk facing P
+            t1, t2 = orthonormal_basis(axis)
+            q = t1 * (r * x)
+            q += t2 * (r * y)
+            q += self.center[:, None]
+            wi, dist = normalize(q - P)
+            cos_l = dot(wi, axis)                          # disk normal (-axis) against -wi
+            good = outside & (cos_l > 0)
+            with np.errstate(divide='ignore', invalid='ignore'):
+                pdf = np.where(good, dist * dist / (F32(np.pi) * r * r * cos_l), F32(0.0))
+                scale = np.where(good, F32(1.0) / pdf, F32(0.0))
+        return LightSample(wi, dist, outer(self.emit, self._attenuate(scale, P)), pdf)
+
+    def intersect(self, O, D, tmax):
+        if self.delta:
+            return super().intersect(O, D, tmax)
+        r = F32(self.radius)
+        oc = self.center[:, None] - O
+        b = dot(oc, D)
+        d2 = dot(oc, oc)
+        outside = d2 > r * r
+        if self.sphere:
+            perp = oc - D * b
+            h2 = r * r - dot(perp, perp)
+            t = b - np.sqrt(np.maximum(h2, 0.0))
+            idx = np.flatnonzero(outside & (h2 >= 0) & (t > 0) & (t < tmax))
+            omc = one_minus_cos_from_sin2(np.minimum(r * r / d2[idx], F32(1.0)))
+            pdf = F32(1.0 / (2.0 * np.pi)) / omc
+        else:
+            # disk through the centre, facing the ray origin: plane at distance |oc| along oc
+            dist_c = np.sqrt(d2)
+            with np.errstate(divide='ignore', invalid='ignore'):
+                cos_l = b / dist_c                         # cos between D and the disk axis
+                t = dist_c / cos_l
+            rel = D * t - oc                               # hit point relative to the centre
+            idx = np.flatnonzero(outside & (cos_l > 0) & (t < tmax) & (dot(rel, rel) <= r * r))
+            t_i = t[idx]
+            pdf = t_i * t_i / (F32(np.pi) * r * r * cos_l[idx])
+        scale = self._attenuate(np.ones(len(idx), F32), O[:, idx])
+        return idx, outer(self.emit, scale), pdf.astype(F32)
+
+
+def _smoothstep(f: np.ndarray) -> np.ndarray:
+    f = np.clip(f, 0.0, 1.0)
+    return f * f * (3.0 - 2.0 * f)
+
+
+class SpotLight(PointLight):
+    def __init__(self, light):
+        super().__init__(light)
+        m3 = np.asarray(light.matrix, np.float64)[:3, :3]
+        if abs(np.linalg.det(m3)) < 1e-30:
+            raise ValueError(f"spot light {light.name!r}: object transform is singular")
+        self.inv_m3 = np.linalg.inv(m3).astype(F32)
+        size = float(light.spot_size)
+        blend = float(light.spot_blend)
+        if not (0.0 < size <= np.pi + 1e-6) or not (0.0 <= blend <= 1.0):
+            raise ValueError(f"spot light {light.name!r}: spot_size {size!r} must be in (0, pi], "
+                             f"spot_blend {blend!r} in [0, 1]")
+        self.cos_half = F32(np.cos(0.5 * size))
+        omc = 2.0 * np.sin(0.25 * size) ** 2            # 1 - cos(size/2) without cancellation
+        self.inv_smooth = F32(1.0 / (omc * blend)) if blend > 0 else None
+
+    def _attenuate(self, scale, P):
+        scale *= self.attenuation(normalize(P - self.center[:, None])[0])
+        return scale
+
+    def attenuation(self, from_light):
+        """Cone factor for unit centre->point directions (3,n)."""
+        local = self.inv_m3 @ from_light
+        length = np.sqrt(dot(local, local))
+        with np.errstate(divide='ignore', invalid='ignore'):
+            z = np.where(length > 0, -local[2] / length, F32(-1.0))
+        if self.inv_smooth is None:                   # blend 0: hard edge
+            return (z > self.cos_half).astype(F32)
+        return _smoothstep((z - self.cos_half) * self.inv_smooth)

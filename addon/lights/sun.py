@@ -1,0 +1,56 @@
+"""Sun (distant) light (Cycles kernel/light/distant.h).
+
+strength is the irradiance E (W/m^2) at normal incidence. angle 0: a delta direction. angle > 0:
+uniform radiance L = E / (pi sin^2(angle/2)) inside the cone of half-angle angle/2 around the
+object's +Z (light travels along -Z); unnormalised, L = strength.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..sampling import dot, to_world, uniform_cone
+from .base import F32, Lamp, LightSample, outer
+
+
+class SunLight(Lamp):
+    at_infinity = True
+
+    def __init__(self, light):
+        super().__init__(light)
+        z = np.asarray(light.matrix, np.float64)[:3, 2]
+        length = np.linalg.norm(z)
+        if not length > 0:
+            raise ValueError(f"sun light {light.name!r}: object transform has no Z axis")
+        self.to_sun = (z / length).astype(F32)
+        half = 0.5 * float(light.angle)
+        if not (0.0 <= half <= 0.5 * np.pi):
+            raise ValueError(f"sun light {light.name!r}: angle {light.angle!r} must be in [0, pi]")
+        self.delta = half == 0.0
+        self.omc = F32(2.0 * np.sin(0.5 * half) ** 2)     # 1 - cos(half)
+        self.cos_half = F32(1.0) - self.omc
+        if self.delta:
+            self.emit = self.color.astype(F32)                     # irradiance
+        else:
+            fac = 1.0 / (np.pi * np.sin(half) ** 2) if self.normalize else 1.0
+            self.emit = (self.color * fac).astype(F32)             # radiance
+        self.pdf = F32(np.inf if self.delta else 1.0 / (2.0 * np.pi * float(self.omc)))
+
+
+    def sample(self, P, u1, u2):
+        n = P.shape[1]
+        dist = np.full(n, np.inf, F32)
+        ones = np.ones(n, F32)
+        if self.delta:
+            wi = np.empty((3, n), F32)
+            wi[:] = self.to_sun[:, None]
+            return LightSample(wi, dist, outer(self.emit, ones), np.full(n, np.inf, F32))
+        local, _ = uniform_cone(u1, u2, self.omc)
+        wi = to_world(local, self.to_sun)
+        return LightSample(wi, dist, outer(self.emit / self.pdf, ones), np.full(n, self.pdf, F32))
+
+    def eval_miss(self, D):
+        if self.delta:
+            return super().eval_miss(D)
+        idx = np.flatnonzero(dot(D, self.to_sun) >= self.cos_half)
+        k = len(idx)
+        return idx, outer(self.emit, np.ones(k, F32)), np.full(k, self.pdf, F32)

@@ -1,0 +1,55 @@
+"""Emissive triangles as lights: chosen by power (area x mean radiance), sampled uniformly by
+area, emitting the material's emission from both sides (Cycles' emissive_simple_eval)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..sampling import dot, normalize, uniform_triangle
+from .base import F32, LightSample
+
+
+class EmissiveTriangles:
+    """geo: (15, M) float32 rows v0, v1-v0, v2-v0, unit geometric normal, self-intersection
+    offset step of the front side; area (M,); emission (3, M) radiance per triangle;
+    eligible (M,) triangles that may act as lights."""
+
+    def __init__(self, geo, area, emission, eligible):
+        lum = emission.mean(axis=0)
+        self.index = np.flatnonzero(eligible & (lum > 0) & (area > 0))
+        self.power = (area[self.index] * lum[self.index] * 2.0 * np.pi).astype(np.float64)
+        self.geo = np.ascontiguousarray(geo[:, self.index])
+        self.area = area[self.index].astype(F32)
+        self.emission = np.ascontiguousarray(emission[:, self.index], F32)
+        # one emitter material (the common case) needs no per-sample gather
+        same = len(self.index) and np.all(self.emission == self.emission[:, :1])
+        self.uniform_emission = self.emission[:, 0].copy() if same else None
+
+    def __len__(self):
+        return len(self.index)
+
+    def sample(self, P, which, u1, u2):
+        """Points on triangles self.index[which] seen from the surface points P (3,n).
+
+        The shadow ray must end at a point pushed off the emitter toward P (LightSample.target)
+        instead of racing the emitter itself to the same t. Radiance and pdf use the exact points."""
+        g = np.take(self.geo, which, axis=1)
+        b1, b2 = uniform_triangle(u1, u2)
+        q = g[3:6] * b1
+        q += g[6:9] * b2
+        q += g[0:3]
+        wi, dist = normalize(q - P)
+        cos_l = dot(g[9:12], wi)
+        side = np.where(cos_l <= 0, F32(1.0), F32(-1.0))      # the emitter face that sees P
+        np.abs(cos_l, out=cos_l)
+        ok = (cos_l > 0) & (dist > 0)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            pdf = np.where(ok, dist * dist / (np.take(self.area, which) * cos_l), F32(0.0))
+            scale = np.where(ok, F32(1.0) / pdf, F32(0.0))
+        if self.uniform_emission is not None:
+            value = self.uniform_emission[:, None] * scale
+        else:
+            value = np.take(self.emission, which, axis=1)
+            value *= scale
+        target = g[12:15] * side
+        target += q
+        return LightSample(wi, dist, value, pdf, target)

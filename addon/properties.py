@@ -1,0 +1,53 @@
+"""DACRT's render settings: the `scene.dacrt` property group (like `scene.cycles`).
+
+Scripts drive the engine through these; export.py turns them into `scenedata.Settings`.
+Threads are not a setting of ours: they follow Blender's Render > Performance > Threads
+(`scene.render.threads_mode` / `threads`).
+"""
+import bpy
+from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+
+FILTER_ITEMS = (
+    ('BOX', "Box", "Box filter (width is always 1 pixel, as in Cycles)"),
+    ('GAUSSIAN', "Gaussian", "Gaussian filter, as Cycles"),
+    ('BLACKMAN_HARRIS', "Blackman-Harris", "Blackman-Harris filter, Cycles' default"),
+)
+
+PARTITION_ITEMS = (
+    ('ADAPTIVE', "Adaptive", "Let the tracer pick median or SAH splits per node"),
+    ('MEDIAN', "Median", "Split primitives at the median of the widest axis (fast to build)"),
+    ('SAH', "SAH", "Binned surface area heuristic splits (fewer tests per ray)"),
+)
+
+
+class DACRTSceneSettings(bpy.types.PropertyGroup):
+    samples: IntProperty(
+        name="Samples", description="Samples per pixel",
+        default=64, min=1, max=1 << 24, soft_max=4096)
+    max_bounces: IntProperty(
+        name="Max Bounces",
+        description="Diffuse bounces K, as Cycles counts them: paths have up to K+1 diffuse "
+                    "reflections; 0 is direct light only",
+        default=4, min=0, max=1024, soft_max=32)
+    filter_type: EnumProperty(
+        name="Filter Type", description="Pixel filter", items=FILTER_ITEMS,
+        default='BLACKMAN_HARRIS')
+    filter_width: FloatProperty(
+        name="Filter Width", description="Pixel filter width (ignored by Box, which is 1)",
+        default=1.5, min=0.01, max=10.0, subtype='PIXEL')
+    seed: IntProperty(
+        name="Seed", description="Random seed; the same seed gives the same image",
+        default=0, min=0)
+    partition: EnumProperty(
+        name="Partitioning", description="How the tracer splits primitives while it recurses",
+        items=PARTITION_ITEMS, default='ADAPTIVE')
+
+
+def register():
+    bpy.utils.register_class(DACRTSceneSettings)
+    bpy.types.Scene.dacrt = PointerProperty(type=DACRTSceneSettings, name="DACRT Settings")
+
+
+def unregister():
+    del bpy.types.Scene.dacrt
+    bpy.utils.unregister_class(DACRTSceneSettings)

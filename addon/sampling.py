@@ -1,0 +1,213 @@
+"""Random numbers and sample warps for the path tracer (numpy, vectorised).
+
+Owns the counter-based random number generator, the maps from the unit square to directions
+and points (cosine hemisphere, cones, spheres, disks, triangles) and the (3, n) vector helpers
+they use.
+
+Random numbers are a pure function of (seed, pixel, sample, dimension): no generator state is
+carried between calls, so an image depends only on the seed, never on how samples were grouped
+into passes, on ray order or on thread count. A path's key is a bijective 64-bit hash of
+(pixel, sample) keyed by the seed (distinct paths never share a key), kept as two 32-bit words;
+each dimension pair is a few 32-bit murmur3 mixes of those words (32-bit integer arithmetic is
+several times faster in numpy than 64-bit).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+_U64 = np.uint64
+_U32 = np.uint32
+_M64 = (1 << 64) - 1
+_M32 = (1 << 32) - 1
+_S8, _S13, _S16 = _U32(8), _U32(13), _U32(16)
+_C1, _C2 = _U32(0x85EBCA6B), _U32(0xC2B2AE35)
+_INV24 = np.float32(1.0 / (1 << 24))
+_INV32 = 1.0 / 2.0 ** 32
+
+
+def _mix64_scalar(x: int) -> int:
+    """splitmix64 finaliser on a Python int (a bijection of 64-bit words)."""
+    x &= _M64
+    x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _M64
+    x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _M64
+    return x ^ (x >> 31)
+
+
+def _mix64(x: np.ndarray) -> np.ndarray:
+    """splitmix64 finaliser, in place on a uint64 array."""
+    x ^= x >> _U64(30)
+    x *= _U64(0xBF58476D1CE4E5B9)
+    x ^= x >> _U64(27)
+    x *= _U64(0x94D049BB133111EB)
+    x ^= x >> _U64(31)
+    return x
+
+
+def _fmix32(x: np.ndarray) -> np.ndarray:
+    """murmur3 finaliser, in place on a uint32 array (a bijection of 32-bit words)."""
+    x ^= x >> _S16
+    x *= _C1
+    x ^= x >> _S13
+    x *= _C2
+    x ^= x >> _S16
+    return x
+
+
+def _to_unit24(x: np.ndarray) -> np.ndarray:
+    """Top 24 bits of uint32 words as float32 in [0, 1)."""
+    x >>= _S8
+    u = x.view(np.int32).astype(np.float32)
+    u *= _INV24
+    return u
+
+
+class RandomStream:
+    """Uniform random numbers indexed by (seed, pixel, sample, dimension)."""
+
+    def __init__(self, seed: int):
+        self.seed = int(seed)
+        self._k0 = _mix64_scalar(self.seed * 0x9E3779B97F4A7C15 + 0x632BE59BD9B4E019)
+        self._k1 = _mix64_scalar(self._k0 + 0xD1B54A32D192ED03)
+
+    def path_keys(self, pixel: np.ndarray, sample: np.ndarray) -> np.ndarray:
+        """(2, n) uint32 key words per path; pixel and sample must be in [0, 2**32)."""
+        key = np.asarray(pixel).astype(np.uint64) << _U64(32)
+        key |= np.asarray(sample).astype(np.uint64)
+        key ^= _U64(self._k0)
+        _mix64(key)
+        key += _U64(self._k1)
+        _mix64(key)
+        words = key.view(np.uint32).reshape(-1, 2)
+        return np.ascontiguousarray(words.T)
+
+    def _dim_keys(self, dim: int):
+        h = _mix64_scalar(self._k1 ^ _mix64_scalar(int(dim) + 0x2545F4914F6CDD1D))
+        return _U32(h & _M32), _U32(h >> 32)
+
+    def _words(self, keys: np.ndarray, dim: int):
+        """Two mixed uint32 words per key for dimension pair `dim`."""
+        ka, kb = self._dim_keys(dim)
+        a = keys[1] ^ ka
+        _fmix32(a)
+        a ^= keys[0]
+        _fmix32(a)                                   # bijective in keys[0] for a fixed keys[1]
+        b = a ^ kb
+        _fmix32(b)
+        return a, b
+
+    def uniform2(self, keys: np.ndarray, dim: int):
+        """Two independent float32 uniforms in [0, 1) per key for dimension pair `dim`."""
+        a, b = self._words(keys, dim)
+        return _to_unit24(a), _to_unit24(b)
+
+    def uniform_pick(self, keys: np.ndarray, dim: int):
+        """A float64 uniform with 32-bit resolution (a discrete choice among many lights) and a
+        float32 uniform, per key, for dimension pair `dim`."""
+        a, b = self._words(keys, dim)
+        fine = a.astype(np.float64)
+        fine *= _INV32
+        return fine, _to_unit24(b)
+
+
+# --- (3, n) vectors ---------------------------------------------------------------------------
+# Per-ray vectors are stored as (3, n) float32 (one contiguous row per axis): every operation
+# then runs over contiguous rows, which numpy does several times faster than over (n, 3) rows.
+
+def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per-column dot product of (3, n) vectors (b may also be a constant (3,) vector)."""
+    if b.ndim == 1:
+        return b @ a
+    return np.einsum('ij,ij->j', a, b)
+
+
+def normalize(v: np.ndarray):
+    """Unit columns and their lengths; zero columns stay zero."""
+    length = np.sqrt(dot(v, v))
+    with np.errstate(divide='ignore'):
+        inv = np.where(length > 0, np.float32(1.0) / length, np.float32(0.0))
+    return v * inv, length
+
+
+def max3(v: np.ndarray) -> np.ndarray:
+    """Largest component per column."""
+    return np.maximum(np.maximum(v[0], v[1]), v[2])
+
+
+# --- warps: unit square -> shapes ---------------------------------------------------------------
+
+def concentric_disk(u1: np.ndarray, u2: np.ndarray):
+    """Shirley-Chiu concentric map to the unit disk (low distortion, area preserving)."""
+    a = 2.0 * u1 - 1.0
+    b = 2.0 * u2 - 1.0
+    use_a = np.abs(a) > np.abs(b)
+    r = np.where(use_a, a, b)
+    num = np.where(use_a, b, a)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        q = num / r
+    q = np.where(r == 0, np.float32(0.0), q)
+    phi = np.where(use_a, np.float32(np.pi / 4) * q, np.float32(np.pi / 2) - np.float32(np.pi / 4) * q)
+    return r * np.cos(phi), r * np.sin(phi)
+
+
+def cosine_hemisphere(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    """Local directions (3, n) around +Z with pdf cos(theta)/pi (Malley: a uniform disk point
+    lifted to the hemisphere; polar map, the cheapest for independent random numbers)."""
+    r = np.sqrt(u1)
+    phi = np.float32(2.0 * np.pi) * u2
+    z = 1.0 - u1
+    np.maximum(z, 0.0, out=z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(z)])
+
+
+def uniform_sphere(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    """Uniform directions (3, n) on the unit sphere, pdf 1/(4 pi)."""
+    z = 1.0 - 2.0 * u1
+    r = np.sqrt(np.maximum(1.0 - z * z, 0.0))
+    phi = np.float32(2.0 * np.pi) * u2
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+def uniform_cone(u1: np.ndarray, u2: np.ndarray, one_minus_cos_max):
+    """Uniform directions (3, n) in the cone around +Z with 1 - cos(half angle) = one_minus_cos_max
+    (scalar or per sample). Written in terms of 1 - cos so tiny cones (the sun is 0.5 degrees)
+    keep their precision. pdf = 1/(2 pi one_minus_cos_max). Also returns cos(theta)."""
+    omc = u1 * np.asarray(one_minus_cos_max, np.float32)      # 1 - cos(theta)
+    cos_t = 1.0 - omc
+    sin_t = np.sqrt(np.maximum(omc * (2.0 - omc), 0.0))
+    phi = np.float32(2.0 * np.pi) * u2
+    return np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), cos_t]), cos_t
+
+
+def one_minus_cos_from_sin2(sin2):
+    """1 - sqrt(1 - s) without cancellation, for the half angle of a sphere seen from outside."""
+    sin2 = np.asarray(sin2)
+    return sin2 / (1.0 + np.sqrt(np.maximum(1.0 - sin2, 0.0)))
+
+
+def uniform_triangle(u1: np.ndarray, u2: np.ndarray):
+    """Barycentric weights (b1, b2) of vertices 1 and 2, uniform over the triangle area."""
+    su = np.sqrt(u1)
+    return u2 * su, 1.0 - su
+
+
+def orthonormal_basis(n: np.ndarray):
+    """Tangent frame (t, b) (3, n) for unit normals n (3, n), branchless (Duff et al. 2017)."""
+    nx, ny, nz = n
+    sign = np.where(nz >= 0, np.float32(1.0), np.float32(-1.0))
+    a = -1.0 / (sign + nz)
+    b = nx * ny * a
+    sxa = sign * nx * a
+    t = np.stack([1.0 + sxa * nx, sign * b, -sign * nx])
+    bb = np.stack([b, sign + ny * ny * a, -ny])
+    return t, bb
+
+
+def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Rotate local directions (3, n) (+Z = n) into the frame of the unit normals n (3, n) or (3,)."""
+    if n.ndim == 1:
+        n = np.broadcast_to(n[:, None], local.shape)
+    t, b = orthonormal_basis(n)
+    out = t * local[0]
+    out += b * local[1]
+    out += n * local[2]
+    return out

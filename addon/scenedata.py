@@ -1,0 +1,119 @@
+"""The per-frame scene snapshot: plain numpy arrays and small dataclasses.
+
+This is the one boundary between Blender and everything below it. `export.py` fills a
+`SceneData` from the depsgraph (the only module that reads bpy scene data); the integrator,
+camera, lights and film read it and never touch bpy. Nothing here outlives a frame.
+
+Conventions:
+- World space is Blender's (right-handed, Z up), float32 for geometry, float64 for transforms.
+- Colours are linear scene-referred RGB (3,) float32, already multiplied by their strengths.
+- Film/raster arrays are (height, width, channels) with row 0 at the BOTTOM of the image, the
+  order Blender's render result expects in `RenderPass.rect` / `foreach_set`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+# Per-triangle visibility bits (object ray visibility, as Cycles honours it).
+VIS_CAMERA = 1
+VIS_DIFFUSE = 2
+VIS_SHADOW = 4
+HOLDOUT = 8
+
+
+@dataclass
+class Camera:
+    """Camera exactly as Cycles maps it (reference blender-cycles.md section 1.8)."""
+    kind: str                      # 'PERSP' | 'ORTHO'
+    matrix: np.ndarray             # (4,4) float64 camera-to-world, scale removed; looks down -Z, +Y up
+    viewplane: tuple               # (left, right, bottom, top), shift included
+    tan_half_fov: float            # PERSP: d_cam = normalize(sx*t, sy*t, 1) before the -Z flip; ORTHO: unused
+    clip_start: float
+    clip_end: float
+    width: int                     # full frame in pixels (resolution x percentage // 100)
+    height: int
+    border: tuple = (0, 0, 0, 0)   # rendered region in full-frame pixels: (x0, y0, x1, y1), x1/y1 exclusive;
+                                   # (0, 0, width, height) when no border is used
+    crop: bool = False             # border with crop: the result is the border size only
+
+
+@dataclass
+class Light:
+    """One Blender light in Cycles' units (reference section 2.1/2.2)."""
+    kind: str                      # 'POINT' | 'SPOT' | 'SUN' | 'AREA'
+    strength: np.ndarray           # (3,) color * energy * 2**exposure (* temperature colour)
+    matrix: np.ndarray             # (4,4) float64 object-to-world, scale included (area size, spot cone)
+    radius: float = 0.0            # POINT/SPOT: shadow_soft_size
+    soft_falloff: bool = True      # POINT/SPOT: use_soft_falloff
+    spot_size: float = 0.0         # SPOT: full cone angle (radians)
+    spot_blend: float = 0.0        # SPOT
+    angle: float = 0.0             # SUN: full apex angle (radians)
+    shape: str = 'SQUARE'          # AREA: 'SQUARE' | 'RECTANGLE' | 'DISK' | 'ELLIPSE'
+    size_x: float = 1.0            # AREA: size   (object-local units; world size includes matrix scale)
+    size_y: float = 1.0            # AREA: size_y for RECTANGLE/ELLIPSE, else = size
+    spread: float = np.pi          # AREA
+    normalize: bool = True
+    cast_shadow: bool = True
+    use_mis: bool = True
+    name: str = ''
+    visible_camera: bool = True    # object ray visibility (Cycles: a light seen by camera rays)
+    visible_diffuse: bool = True   # object ray visibility (Cycles: BSDF rays collect the light)
+
+
+@dataclass
+class Material:
+    """What a diffuse renderer can take from a Blender material."""
+    name: str
+    base_color: np.ndarray                        # (3,) linear albedo (multiplies the texture if any)
+    emission: np.ndarray                          # (3,) colour x strength, two-sided radiance
+    texture: Optional[np.ndarray] = None          # (h, w, 4) float32 linear RGBA, row 0 at the bottom
+    texture_interpolation: str = 'Linear'         # 'Closest' | 'Linear'
+    texture_extension: str = 'REPEAT'             # 'REPEAT' | 'EXTEND' | 'CLIP'
+    approximated: str = ''                        # non-empty: why this is a diffuse approximation
+
+
+@dataclass
+class Geometry:
+    """All render-visible triangles of the frame, world space, concatenated over instances."""
+    vertices: np.ndarray           # (V,3) float32
+    triangles: np.ndarray          # (M,3) int32 indices into vertices
+    material: np.ndarray           # (M,) int32 index into SceneData.materials
+    normals: np.ndarray            # (M,3,3) float32 shading normal per triangle corner (unit, world)
+    uvs: Optional[np.ndarray]      # (M,3,2) float32 active UV map per corner, or None
+    visibility: np.ndarray         # (M,) uint8 bits VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW | HOLDOUT
+    object_index: np.ndarray       # (M,) int32 index into SceneData.object_names
+
+    @staticmethod
+    def empty() -> 'Geometry':
+        return Geometry(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.int32),
+                        np.zeros(0, np.int32), np.zeros((0, 3, 3), np.float32), None,
+                        np.zeros(0, np.uint8), np.zeros(0, np.int32))
+
+
+@dataclass
+class Settings:
+    """Render settings, from scene.dacrt and Blender's render settings."""
+    samples: int = 64
+    max_bounces: int = 4           # K: up to K+1 diffuse reflections (Cycles' semantics)
+    filter_type: str = 'BLACKMAN_HARRIS'   # 'BOX' | 'GAUSSIAN' | 'BLACKMAN_HARRIS'
+    filter_width: float = 1.5      # pixels; BOX is always 1
+    seed: int = 0
+    threads: int = 0               # 0 = all cores
+    partition: str = 'adaptive'    # native partitioning mode
+    film_transparent: bool = False
+    passes: tuple = ()             # extra passes wanted: any of 'Depth', 'Normal', 'DiffCol'
+
+
+@dataclass
+class SceneData:
+    camera: Camera
+    geometry: Geometry
+    materials: list                # [Material]; index 0 is always the default material
+    lights: list                   # [Light]
+    world: np.ndarray              # (3,) background radiance (colour x strength)
+    settings: Settings
+    object_names: list = field(default_factory=list)
+    messages: list = field(default_factory=list)   # (level, text): 'WARNING'/'INFO'/'ERROR' for RenderEngine.report

@@ -1,0 +1,178 @@
+"""DACRT's panels, and Blender's generic panels enabled for the engine.
+
+Generic panels (output, format/dimensions, colour management, world/light context, object
+visibility, spot shape, material slots ...) show for DACRT through their COMPAT_ENGINES sets
+(reference blender-cycles.md 1.6). What no generic panel draws — our settings, view-layer
+passes, the light in Cycles' units, material and world surface node views — has a small panel
+here, modelled on Cycles'.
+"""
+import bpy
+from bpy.types import Panel
+
+ENGINE = 'DACRT'
+# Generic panels we replace with our own (like Cycles does).
+EXCLUDE = {'VIEWLAYER_PT_filter', 'VIEWLAYER_PT_layer_passes', 'DATA_PT_light'}
+# Panels of other engines that are the generic UI for a concept (the material slot list).
+EXTRA_GENERIC = ('EEVEE_MATERIAL_PT_context_material',)
+
+
+def generic_panels():
+    panels = [p for p in bpy.types.Panel.__subclasses__()
+              if 'BLENDER_RENDER' in getattr(p, 'COMPAT_ENGINES', ()) and p.__name__ not in EXCLUDE]
+    panels += [getattr(bpy.types, name) for name in EXTRA_GENERIC if hasattr(bpy.types, name)]
+    return panels
+
+
+class DACRTPanel:
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    COMPAT_ENGINES = {ENGINE}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+
+def node_view(layout, ntree, input_name):
+    node = ntree.get_output_node('CYCLES') or ntree.get_output_node('ALL')
+    if node is None:
+        layout.label(text="No output node")
+        return
+    socket = node.inputs.get(input_name)
+    if socket is None:
+        layout.label(text="Incompatible output node")
+    else:
+        layout.template_node_view(ntree, node, socket)
+
+
+class RENDER_PT_dacrt(DACRTPanel, Panel):
+    bl_label = "DACRT"
+    bl_context = 'render'
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.scene.dacrt
+        render = context.scene.render
+        col = layout.column()
+        col.prop(settings, "samples")
+        col.prop(settings, "max_bounces")
+        col.prop(settings, "seed")
+        col = layout.column()
+        col.prop(settings, "filter_type")
+        sub = col.column()
+        sub.active = settings.filter_type != 'BOX'
+        sub.prop(settings, "filter_width")
+        col = layout.column()
+        col.prop(settings, "partition")
+        col.prop(render, "threads_mode")
+        sub = col.column()
+        sub.enabled = render.threads_mode == 'FIXED'
+        sub.prop(render, "threads")
+        layout.prop(render, "film_transparent")
+
+
+class VIEWLAYER_PT_dacrt_passes(DACRTPanel, Panel):
+    bl_label = "Passes"
+    bl_context = 'view_layer'
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        vl = context.view_layer
+        col = layout.column(heading="Include", align=True)
+        col.prop(vl, "use_pass_combined")
+        col.prop(vl, "use_pass_z")
+        col.prop(vl, "use_pass_normal")
+        col.prop(vl, "use_pass_diffuse_color", text="Diffuse Color")
+
+
+class DATA_PT_dacrt_light(DACRTPanel, Panel):
+    bl_label = "Light"
+    bl_context = 'data'
+
+    @classmethod
+    def poll(cls, context):
+        return context.light is not None and super().poll(context)
+
+    def draw(self, context):
+        layout = self.layout
+        light = context.light
+        layout.row().prop(light, "type", expand=True)
+        layout.use_property_split = True
+        col = layout.column()
+        col.prop(light, "color")
+        for prop in ("use_temperature", "temperature"):
+            if hasattr(light, prop):
+                col.prop(light, prop)
+        col.prop(light, "energy")
+        for prop in ("exposure", "normalize"):
+            if hasattr(light, prop):
+                col.prop(light, prop)
+        col = layout.column()
+        if light.type in {'POINT', 'SPOT'}:
+            col.prop(light, "shadow_soft_size", text="Radius")
+            col.prop(light, "use_soft_falloff")
+        elif light.type == 'SUN':
+            col.prop(light, "angle")
+        elif light.type == 'AREA':
+            col.prop(light, "shape")
+            if light.shape in {'SQUARE', 'DISK'}:
+                col.prop(light, "size")
+            else:
+                col.prop(light, "size", text="Size X")
+                col.prop(light, "size_y", text="Y")
+            col.prop(light, "spread")
+        layout.prop(light, "use_shadow", text="Cast Shadow")
+
+
+class MATERIAL_PT_dacrt_surface(DACRTPanel, Panel):
+    bl_label = "Surface"
+    bl_context = 'material'
+
+    @classmethod
+    def poll(cls, context):
+        return context.material is not None and super().poll(context)
+
+    def draw(self, context):
+        mat = context.material
+        if mat.node_tree is None:
+            self.layout.prop(mat, "diffuse_color", text="Color")
+        else:
+            node_view(self.layout, mat.node_tree, 'Surface')
+
+
+class WORLD_PT_dacrt_surface(DACRTPanel, Panel):
+    bl_label = "Surface"
+    bl_context = 'world'
+
+    @classmethod
+    def poll(cls, context):
+        return context.world is not None and super().poll(context)
+
+    def draw(self, context):
+        world = context.world
+        if world.node_tree is None:
+            self.layout.prop(world, "color")
+        else:
+            node_view(self.layout, world.node_tree, 'Surface')
+
+
+CLASSES = (RENDER_PT_dacrt, VIEWLAYER_PT_dacrt_passes, DATA_PT_dacrt_light,
+           MATERIAL_PT_dacrt_surface, WORLD_PT_dacrt_surface)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    for panel in generic_panels():
+        panel.COMPAT_ENGINES.add(ENGINE)
+
+
+def unregister():
+    for panel in generic_panels():
+        panel.COMPAT_ENGINES.discard(ENGINE)
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

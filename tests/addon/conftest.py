@@ -1,0 +1,57 @@
+"""Headless bpy set-up for the add-on tests: register the add-on once per session, start every
+test from a factory-empty scene with DACRT as its engine, and capture what the engine exports."""
+import pathlib
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402  (needs the repository root on sys.path first for `addon`)
+
+import addon  # noqa: E402
+from addon import export  # noqa: E402
+
+
+@pytest.fixture(scope='session', autouse=True)
+def dacrt_addon():
+    """Registered once; left alone if another test folder registered it in this session."""
+    mine = not hasattr(bpy.types.Scene, 'dacrt')
+    if mine:
+        addon.register()
+    yield addon
+    if mine and hasattr(bpy.types.Scene, 'dacrt'):
+        addon.unregister()
+
+
+@pytest.fixture(autouse=True)
+def scene(dacrt_addon):
+    """A factory-empty scene (registration survives the reset) rendering with DACRT."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.engine = 'DACRT'
+    sc.render.resolution_x, sc.render.resolution_y = 32, 24
+    return sc
+
+
+@pytest.fixture
+def exported(monkeypatch):
+    """`exported()` renders the context scene through the engine but stops right after the
+    export (cancelled), returning the SceneData the engine built from the render depsgraph."""
+    captured = []
+    real = export.export_scene
+
+    def capture(depsgraph, check_break=None):
+        captured.append(real(depsgraph, check_break))
+        raise export.ExportCancelled()
+
+    monkeypatch.setattr(export, 'export_scene', capture)
+
+    def run():
+        captured.clear()
+        bpy.ops.render.render()
+        assert len(captured) == 1, "the engine did not export exactly once"
+        return captured[0]
+    return run

@@ -1,0 +1,188 @@
+"""Scene-building helpers for the add-on tests (plain bpy data API, no operators' context)."""
+import math
+
+import bpy
+import numpy as np
+
+
+def link(ob, scene=None):
+    (scene or bpy.context.scene).collection.objects.link(ob)
+    return ob
+
+
+def camera(location=(0, 0, 5), rotation=(0, 0, 0), lens=50.0, kind='PERSP', ortho_scale=6.0,
+           scene=None, name="Camera"):
+    scene = scene or bpy.context.scene
+    cam = bpy.data.cameras.new(name)
+    cam.type, cam.lens, cam.ortho_scale = kind, lens, ortho_scale
+    ob = link(bpy.data.objects.new(name, cam), scene)
+    ob.location, ob.rotation_euler = location, rotation
+    scene.camera = ob
+    return ob
+
+
+def mesh(name, verts, faces, location=(0, 0, 0), materials=(), scene=None):
+    me = bpy.data.meshes.new(name)
+    me.from_pydata([tuple(v) for v in verts], [], [tuple(f) for f in faces])
+    for m in materials:
+        me.materials.append(m)
+    ob = link(bpy.data.objects.new(name, me), scene)
+    ob.location = location
+    return ob
+
+
+def plane(name="Plane", size=2.0, location=(0, 0, 0), materials=(), scene=None):
+    h = size / 2
+    return mesh(name, [(-h, -h, 0), (h, -h, 0), (h, h, 0), (-h, h, 0)], [(0, 1, 2, 3)],
+                location, materials, scene)
+
+
+def cube(name="Cube", size=2.0, location=(0, 0, 0), materials=(), scene=None):
+    h = size / 2
+    verts = [(x, y, z) for x in (-h, h) for y in (-h, h) for z in (-h, h)]
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    return mesh(name, verts, faces, location, materials, scene)
+
+
+def uv_sphere(name="Sphere", radius=1.0, segments=32, rings=16, location=(0, 0, 0), smooth=True,
+              flip=False, materials=(), scene=None):
+    """A UV sphere from code; flip=True turns its faces inwards (for a furnace)."""
+    verts = [(0, 0, radius)]
+    for i in range(1, rings):
+        th = math.pi * i / rings
+        for j in range(segments):
+            ph = 2 * math.pi * j / segments
+            verts.append((radius * math.sin(th) * math.cos(ph), radius * math.sin(th) * math.sin(ph),
+                          radius * math.cos(th)))
+    verts.append((0, 0, -radius))
+    bottom = len(verts) - 1
+    ring = lambda i, j: 1 + (i - 1) * segments + j % segments
+    faces = [(0, ring(1, j), ring(1, j + 1)) for j in range(segments)]
+    for i in range(1, rings - 1):
+        faces += [(ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1)) for j in range(segments)]
+    faces += [(ring(rings - 1, j + 1), ring(rings - 1, j), bottom) for j in range(segments)]
+    if flip:
+        faces = [tuple(reversed(f)) for f in faces]
+    ob = mesh(name, verts, faces, location, materials, scene)
+    if smooth:
+        ob.data.shade_smooth()
+    return ob
+
+
+def _material(name):
+    mat = bpy.data.materials.new(name)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new('ShaderNodeOutputMaterial')
+    return mat, nt, out
+
+
+def diffuse(name, color, roughness=0.0):
+    mat, nt, out = _material(name)
+    node = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    node.inputs['Color'].default_value = (*color, 1.0)
+    node.inputs['Roughness'].default_value = roughness
+    nt.links.new(node.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def emission(name, color, strength):
+    mat, nt, out = _material(name)
+    node = nt.nodes.new('ShaderNodeEmission')
+    node.inputs['Color'].default_value = (*color, 1.0)
+    node.inputs['Strength'].default_value = strength
+    nt.links.new(node.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def principled(name, base, emission_color=(0, 0, 0), emission_strength=0.0, specular=0.0,
+               metallic=0.0):
+    mat, nt, out = _material(name)
+    node = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    node.inputs['Base Color'].default_value = (*base, 1.0)
+    node.inputs['Emission Color'].default_value = (*emission_color, 1.0)
+    node.inputs['Emission Strength'].default_value = emission_strength
+    node.inputs['Specular IOR Level'].default_value = specular
+    node.inputs['Metallic'].default_value = metallic
+    nt.links.new(node.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def emissive_diffuse(name, albedo, emission_strength):
+    """Add Shader(Diffuse albedo, Emission white x strength): the furnace material."""
+    mat, nt, out = _material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    d.inputs['Color'].default_value = (albedo, albedo, albedo, 1.0)
+    e = nt.nodes.new('ShaderNodeEmission')
+    e.inputs['Strength'].default_value = emission_strength
+    add = nt.nodes.new('ShaderNodeAddShader')
+    nt.links.new(d.outputs[0], add.inputs[0])
+    nt.links.new(e.outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def light(kind, energy, location=(0, 0, 0), rotation=(0, 0, 0), scene=None, name=None, **props):
+    data = bpy.data.lights.new(name or kind.title(), kind)
+    data.energy = energy
+    for k, v in props.items():
+        setattr(data, k, v)
+    ob = link(bpy.data.objects.new(name or kind.title(), data), scene)
+    ob.location, ob.rotation_euler = location, rotation
+    return ob
+
+
+def world(color, strength=1.0, scene=None):
+    scene = scene or bpy.context.scene
+    w = bpy.data.worlds.new("World")
+    nt = w.node_tree
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    bg.inputs['Color'].default_value = (*color, 1.0)
+    bg.inputs['Strength'].default_value = strength
+    scene.world = w
+    return w
+
+
+def black_world(scene=None):
+    return world((0, 0, 0), 0.0, scene)
+
+
+def render_exr(path, scene=None, multilayer=False):
+    """Render the scene with bpy.ops.render.render and save the result as a float EXR."""
+    scene = scene or bpy.context.scene
+    bpy.ops.render.render()
+    s = scene.render.image_settings
+    if multilayer:
+        if hasattr(s, 'media_type'):
+            s.media_type = 'MULTI_LAYER_IMAGE'
+        s.file_format = 'OPEN_EXR_MULTILAYER'
+    else:
+        s.file_format = 'OPEN_EXR'
+        s.color_mode = 'RGBA'
+    s.color_depth = '32'
+    bpy.data.images['Render Result'].save_render(filepath=str(path), scene=scene)
+    return str(path)
+
+
+def read_exr(path):
+    """{channel name: (H, W) float32 array, row 0 at the BOTTOM} from an EXR file, every part
+    (Blender writes multilayer EXR as one part per pass)."""
+    import OpenImageIO as oiio
+    inp = oiio.ImageInput.open(str(path))
+    assert inp is not None, oiio.geterror()
+    channels = {}
+    try:
+        part = 0
+        while inp.seek_subimage(part, 0):
+            spec = inp.spec()
+            pixels = inp.read_image(part, 0, 0, spec.nchannels, 'float')
+            pixels = np.asarray(pixels).reshape(spec.height, spec.width, spec.nchannels)[::-1]
+            channels.update({name: pixels[..., i] for i, name in enumerate(spec.channelnames)})
+            part += 1
+    finally:
+        inp.close()
+    return channels
+
+
+def rgba(channels, prefix=''):
+    return np.stack([channels[prefix + c] for c in 'RGBA'], axis=-1)

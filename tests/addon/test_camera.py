@@ -1,0 +1,133 @@
+"""Camera export against the reference formulas (blender-cycles.md 1.8) and Blender's own
+projection (`Camera.view_frame`, `bpy_extras.object_utils.world_to_camera_view`)."""
+
+import bpy
+import numpy as np
+import pytest
+from bpy_extras.object_utils import world_to_camera_view
+from mathutils import Vector
+
+from addon import export
+
+from . import scenes
+
+CONFIGS = {
+    # name: (kind, res_x, res_y, pct, pixel aspect (x, y), sensor_fit, shift (x, y))
+    "auto_landscape": ('PERSP', 1920, 1080, 50, (1, 1), 'AUTO', (0, 0)),
+    "auto_portrait_200pct": ('PERSP', 80, 120, 200, (1, 1), 'AUTO', (0, 0)),
+    "horizontal_shift_y": ('PERSP', 80, 120, 100, (1, 1), 'HORIZONTAL', (0, 0.3)),
+    "vertical_square": ('PERSP', 100, 100, 100, (1, 1), 'VERTICAL', (0, 0)),
+    "auto_pixel_aspect": ('PERSP', 100, 80, 100, (2, 1), 'AUTO', (0.1, -0.2)),
+    "ortho_shift": ('ORTHO', 120, 80, 100, (1, 1), 'AUTO', (0.25, 0.1)),
+    "ortho_vertical_aspect": ('ORTHO', 64, 96, 100, (1, 1.5), 'VERTICAL', (0, 0.2)),
+    "rounding_333pct": ('PERSP', 90, 90, 333, (1, 1), 'AUTO', (0, 0)),
+}
+
+
+def make(scene, kind, rx, ry, pct, aspect, fit, shift):
+    r = scene.render
+    r.resolution_x, r.resolution_y, r.resolution_percentage = rx, ry, pct
+    r.pixel_aspect_x, r.pixel_aspect_y = aspect
+    cam = scenes.camera((1.0, -2.0, 3.0), (1.1, 0.2, 0.7), lens=35.0, kind=kind, ortho_scale=4.5)
+    cam.scale = (2.0, 0.5, 3.0)                       # object scale must not change the view
+    cam.data.sensor_fit, cam.data.sensor_width, cam.data.sensor_height = fit, 36.0, 20.0
+    cam.data.shift_x, cam.data.shift_y = shift
+    cam.data.clip_start, cam.data.clip_end = 0.25, 250.0
+    bpy.context.view_layer.update()                   # evaluate matrix_world
+    return cam
+
+
+def project(c, world_points):
+    """Raster (x, y) of world points through the exported camera, per the reference."""
+    inv = np.linalg.inv(c.matrix)
+    p = (world_points - c.matrix[:3, 3]) @ inv[:3, :3].T
+    left, right, bottom, top = c.viewplane
+    if c.kind == 'PERSP':
+        sx = p[:, 0] / -p[:, 2] / c.tan_half_fov
+        sy = p[:, 1] / -p[:, 2] / c.tan_half_fov
+    else:
+        sx, sy = p[:, 0], p[:, 1]
+    return np.stack([(sx - left) / (right - left), (sy - bottom) / (top - bottom)], axis=1)
+
+
+@pytest.mark.parametrize("name", CONFIGS)
+def test_projection_matches_blender(scene, name):
+    cam = make(scene, *CONFIGS[name])
+    c = export.export_camera(scene)
+    rx, ry, pct = CONFIGS[name][1:4]
+    assert (c.width, c.height) == (rx * pct // 100, ry * pct // 100)
+    assert c.kind == CONFIGS[name][0]
+    assert np.allclose(np.linalg.norm(c.matrix[:3, :3], axis=0), 1.0)
+    assert np.allclose(c.matrix[:3, 3], cam.matrix_world.translation)
+    assert (c.clip_start, c.clip_end) == (0.25, 250.0)
+    rng = np.random.default_rng(1)
+    fwd = -np.array(cam.matrix_world.normalized().col[2][:3])
+    pts = np.array(cam.matrix_world.translation) + fwd * rng.uniform(2, 20, (50, 1)) + rng.normal(0, 2, (50, 3))
+    ours = project(c, pts)
+    theirs = np.array([world_to_camera_view(scene, cam, Vector(p))[:2] for p in pts])
+    assert np.allclose(ours, theirs, atol=1e-5)
+
+
+@pytest.mark.parametrize("name", CONFIGS)
+def test_viewplane_matches_view_frame(scene, name):
+    cam = make(scene, *CONFIGS[name])
+    c = export.export_camera(scene)
+    frame = np.array([v[:] for v in cam.data.view_frame(scene=scene)])   # camera-space corners
+    if c.kind == 'PERSP':
+        xy = frame[:, :2] / -frame[:, 2:3] / c.tan_half_fov
+    else:
+        xy = frame[:, :2]
+    left, right, bottom, top = c.viewplane
+    assert np.allclose(sorted(set(np.round(xy[:, 0], 6))), [left, right], atol=1e-5)
+    assert np.allclose(sorted(set(np.round(xy[:, 1], 6))), [bottom, top], atol=1e-5)
+
+
+def test_hand_computed_full_hd(scene):
+    make(scene, 'PERSP', 1920, 1080, 100, (1, 1), 'AUTO', (0, 0))
+    scene.camera.data.lens = 50.0
+    c = export.export_camera(scene)
+    ar = 1920 / 1080
+    assert c.viewplane == pytest.approx((-ar, ar, -1, 1))
+    assert c.tan_half_fov == pytest.approx(36.0 / (2 * 50.0 * ar))
+    assert ar * c.tan_half_fov == pytest.approx(0.36)       # horizontal half angle: 18 mm / 50 mm
+
+
+def test_border_and_crop(scene):
+    make(scene, 'PERSP', 90, 90, 333, (1, 1), 'AUTO', (0, 0))
+    r = scene.render
+    r.use_border = True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.1, 0.55, 0.3, 0.95
+    c = export.export_camera(scene)
+    assert (c.width, c.height) == (299, 299)
+    assert c.border == (int(0.1 * 299), int(0.3 * 299), int(0.55 * 299), int(0.95 * 299))
+    assert c.crop is False
+    r.use_crop_to_border = True
+    assert export.export_camera(scene).crop is True
+    r.use_border = False
+    assert export.export_camera(scene).border == (0, 0, 299, 299)
+
+
+def test_bad_cameras_are_explained(scene):
+    with pytest.raises(export.ExportError, match="no active camera"):
+        export.export_camera(scene)
+    cam = scenes.camera()
+    cam.data.type = 'PANO'
+    with pytest.raises(export.ExportError, match="perspective and orthographic"):
+        export.export_camera(scene)
+    cam.data.type = 'PERSP'
+    cam.scale = (0, 1, 1)
+    bpy.context.view_layer.update()
+    with pytest.raises(export.ExportError, match="zero"):
+        export.export_camera(scene)
+
+
+def test_scene_camera_read_from_evaluated_depsgraph(scene, exported):
+    """Animated camera: the export reads the evaluated (current frame) transform."""
+    cam = scenes.camera((0, 0, 0))
+    cam.keyframe_insert("location", frame=1)
+    cam.location = (0, 0, 10)
+    cam.keyframe_insert("location", frame=11)
+    scene.frame_set(6)
+    data = exported()
+    assert data.camera.matrix[2, 3] == pytest.approx(cam.matrix_world.translation.z)
+    assert 0 < data.camera.matrix[2, 3] < 10

@@ -1,0 +1,525 @@
+"""Export correctness on scenes built in bpy: what the engine hands the integrator.
+
+Every test renders through the registered engine (render depsgraph, as F12 does) and checks
+the SceneData it exported (see conftest.exported)."""
+import math
+
+import bpy
+import numpy as np
+import pytest
+from mathutils import Euler, Vector
+
+from addon import scenedata as sd
+
+from . import scenes
+
+
+def tri_area(g, mask=None):
+    v = g.vertices[g.triangles if mask is None else g.triangles[mask]].astype(np.float64)
+    return 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum()
+
+
+def corners(g, mask=None):
+    """All triangle corner positions (N*3, 3), float64."""
+    return g.vertices[g.triangles if mask is None else g.triangles[mask]].reshape(-1, 3).astype(np.float64)
+
+
+def of_object(data, name):
+    return data.geometry.object_index == data.object_names.index(name)
+
+
+def setup(scene):
+    scenes.camera((0, -10, 0), (math.pi / 2, 0, 0))
+
+
+# -- geometry ------------------------------------------------------------------------------
+
+def test_array_modifier_world_positions(scene, exported):
+    setup(scene)
+    ob = scenes.cube("Cube")
+    ob.modifiers.new("Array", 'ARRAY').count = 3        # relative offset 1: copies 2 apart in x
+    ob.location = (1.0, 2.0, 3.0)
+    ob.rotation_euler = (0.0, 0.0, math.pi / 2)
+    data = exported()
+    g = data.geometry
+    assert len(g.triangles) == 3 * 12
+    assert tri_area(g) == pytest.approx(3 * 24.0, rel=1e-5)
+    M = np.array(ob.matrix_world)
+    local = np.array([(x + 2 * k, y, z) for k in range(3) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    expected = local @ M[:3, :3].T + M[:3, 3]
+    d = np.linalg.norm(corners(g)[:, None] - expected[None], axis=2).min(axis=1)
+    assert d.max() < 1e-5, "every exported corner is a corner of one of the three cubes"
+    # rotated by 90 degrees about z: the array runs along world +y from y=2-1 to y=2+5
+    assert g.vertices[:, 1].min() == pytest.approx(1.0, abs=1e-5)
+    assert g.vertices[:, 1].max() == pytest.approx(7.0, abs=1e-5)
+
+
+def test_collection_instances_read_mesh_once_and_transform_each(scene, exported):
+    setup(scene)
+    col = bpy.data.collections.new("Parts")
+    scene.collection.children.link(col)
+    sphere = scenes.uv_sphere("Ball", radius=1.0, segments=8, rings=4, smooth=False)
+    scene.collection.objects.unlink(sphere)
+    col.objects.link(sphere)
+    for name, loc, s in (("InstA", (10, 0, 0), 1.0), ("InstB", (20, 0, 0), 2.0)):
+        e = scenes.link(bpy.data.objects.new(name, None))
+        e.instance_type, e.instance_collection = 'COLLECTION', col
+        e.location, e.scale = loc, (s, s, s)
+    data = exported()
+    g = data.geometry
+    per = len(sphere.data.polygons) + len([p for p in sphere.data.polygons if len(p.vertices) == 4])
+    assert len(g.triangles) == 3 * per         # the original plus two instances
+    c = corners(g)
+    for x0, r in ((0, 1.0), (10, 1.0), (20, 2.0)):
+        sel = np.abs(c[:, 0] - x0) < 3
+        dist = np.linalg.norm(c[sel] - (x0, 0, 0), axis=1)
+        assert np.allclose(dist, r, atol=1e-5), f"instance at x={x0} has radius {r}"
+
+
+def _gn_instances(ob, points_x, points_y, size):
+    ng = bpy.data.node_groups.new("Scatter", 'GeometryNodeTree')
+    ng.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    out = ng.nodes.new('NodeGroupOutput')
+    grid = ng.nodes.new('GeometryNodeMeshGrid')
+    grid.inputs['Vertices X'].default_value = points_x
+    grid.inputs['Vertices Y'].default_value = points_y
+    grid.inputs['Size X'].default_value = size
+    grid.inputs['Size Y'].default_value = size
+    cone = ng.nodes.new('GeometryNodeMeshCone')
+    cone.inputs['Vertices'].default_value = 8
+    inst = ng.nodes.new('GeometryNodeInstanceOnPoints')
+    ng.links.new(grid.outputs['Mesh'], inst.inputs['Points'])
+    ng.links.new(cone.outputs['Mesh'], inst.inputs['Instance'])
+    ng.links.new(inst.outputs['Instances'], out.inputs[0])
+    mod = ob.modifiers.new("GN", 'NODES')
+    mod.node_group = ng
+
+
+def test_geometry_nodes_instances(scene, exported):
+    setup(scene)
+    ob = scenes.plane("Scatter")
+    _gn_instances(ob, 3, 2, 8.0)
+    ob.location = (0, 0, 1)
+    data = exported()
+    g = data.geometry
+    # one cone with 8 vertices: 8 side triangles + an 8-gon cap (6 triangles) = 14
+    assert len(g.triangles) == 6 * 14
+    c = corners(g)
+    # grid 3x2 of size 8: instance points at x in {-4, 0, 4}, y in {-4, 4}; cone radius 1
+    centre = np.round(c[:, :2] / 4) * 4
+    assert np.linalg.norm(c[:, :2] - centre, axis=1).max() <= 1 + 1e-5
+    keys, counts = np.unique(centre, axis=0, return_counts=True)
+    assert {tuple(k) for k in keys.tolist()} == {(x, y) for x in (-4.0, 0.0, 4.0) for y in (-4.0, 4.0)}
+    assert np.all(counts == 14 * 3)
+    assert c[:, 2].min() == pytest.approx(1.0, abs=1e-5)     # cone base on the points (z=1)
+    assert c[:, 2].max() == pytest.approx(3.0, abs=1e-5)     # depth 2
+
+
+def test_curve_text_and_metaball_become_triangles(scene, exported):
+    setup(scene)
+    curve = bpy.data.curves.new("Tube", 'CURVE')
+    curve.dimensions = '3D'
+    curve.bevel_depth = 0.1
+    spline = curve.splines.new('POLY')
+    spline.points.add(1)
+    spline.points[0].co = (-1, 0, 0, 1)
+    spline.points[1].co = (1, 0, 0, 1)
+    scenes.link(bpy.data.objects.new("Tube", curve))
+    text = bpy.data.curves.new("Label", 'FONT')
+    text.body = "DACRT"
+    scenes.link(bpy.data.objects.new("Label", text)).location = (0, 0, 2)
+    ball = bpy.data.metaballs.new("Blob")
+    ball.elements.new().radius = 1.0
+    scenes.link(bpy.data.objects.new("Blob", ball)).location = (0, 0, -3)
+    data = exported()
+    for name in ("Tube", "Label", "Blob"):
+        assert name in data.object_names
+        assert of_object(data, name).sum() > 8, f"{name} exported as triangles"
+    blob = corners(data.geometry, of_object(data, "Blob"))
+    assert np.abs(blob.mean(axis=0) - (0, 0, -3)).max() < 0.1
+
+
+def test_particle_instances_and_hair_report(scene, exported):
+    setup(scene)
+    emitter = scenes.plane("Emitter", size=4)
+    leaf = scenes.cube("Leaf", size=0.2, location=(50, 0, 0))
+    emitter.modifiers.new("ps", 'PARTICLE_SYSTEM')
+    ps = emitter.particle_systems[0].settings
+    ps.count, ps.frame_start, ps.frame_end = 10, 1, 1
+    ps.render_type, ps.instance_object = 'OBJECT', leaf
+    ps.particle_size, ps.physics_type = 1.0, 'NO'
+    emitter.modifiers.new("hair", 'PARTICLE_SYSTEM')
+    hair = emitter.particle_systems[1].settings
+    hair.type, hair.count = 'HAIR', 5
+    data = exported()
+    leaves = of_object(data, "Leaf")
+    assert leaves.sum() == 12 * 11       # the leaf object itself plus ten particle instances
+    assert of_object(data, "Emitter").sum() == 2
+    assert any("hair" in t and "Emitter" in t for _, t in data.messages)
+
+
+def test_material_slot_per_triangle(scene, exported):
+    setup(scene)
+    red, blue = scenes.diffuse("Red", (1, 0, 0)), scenes.diffuse("Blue", (0, 0, 1))
+    ob = scenes.cube("Cube", materials=(red, blue))
+    for p in ob.data.polygons:
+        p.material_index = 1 if p.normal.z > 0.5 else 0
+    data = exported()
+    names = [m.name for m in data.materials]
+    assert names[0] == '(default)'
+    g = data.geometry
+    nz = g.normals[:, 0, 2]
+    assert np.all(np.array(names)[g.material[nz > 0.5]] == "Blue")
+    assert np.all(np.array(names)[g.material[nz <= 0.5]] == "Red")
+    assert (nz > 0.5).sum() == 2
+
+
+def test_object_linked_slot_and_material_override(scene, exported):
+    setup(scene)
+    red, green = scenes.diffuse("Red", (1, 0, 0)), scenes.diffuse("Green", (0, 1, 0))
+    a = scenes.plane("A", materials=(red,))
+    b = scenes.link(bpy.data.objects.new("B", a.data))      # same mesh, object-linked material
+    b.location = (3, 0, 0)
+    b.material_slots[0].link = 'OBJECT'
+    b.material_slots[0].material = green
+    data = exported()
+    name_of = lambda obj: {data.materials[i].name for i in data.geometry.material[of_object(data, obj)]}
+    assert name_of("A") == {"Red"} and name_of("B") == {"Green"}
+    override = scenes.diffuse("Clay", (0.5, 0.5, 0.5))
+    bpy.context.view_layer.material_override = override
+    data = exported()
+    assert {data.materials[i].name for i in data.geometry.material} == {"Clay"}
+
+
+def test_missing_slot_material_uses_default(scene, exported):
+    setup(scene)
+    ob = scenes.plane("P")
+    ob.data.materials.append(None)
+    data = exported()
+    assert np.all(data.geometry.material == 0)
+    assert np.allclose(data.materials[0].base_color, 0.8)
+
+
+# -- normals -----------------------------------------------------------------------------
+
+def test_flat_normals_are_outward_face_normals_even_mirrored(scene, exported):
+    setup(scene)
+    ob = scenes.cube("Cube")
+    assert ob.data.normals_domain == 'FACE'
+    ob.scale = (-1.0, 2.0, 1.0)          # mirrored: outside must stay outside
+    data = exported()
+    g = data.geometry
+    centroid = g.vertices[g.triangles].mean(axis=1)
+    n = g.normals
+    assert np.allclose(n[:, 0], n[:, 1]) and np.allclose(n[:, 0], n[:, 2])
+    assert np.allclose(np.abs(n[:, 0]).max(axis=1), 1.0, atol=1e-6)      # axis aligned
+    assert np.all(np.einsum('ij,ij->i', n[:, 0], centroid) > 0), "normals point outwards"
+
+
+def test_smooth_normals_follow_inverse_transpose(scene, exported):
+    setup(scene)
+    ob = scenes.uv_sphere("Ball", radius=1.0, segments=48, rings=24, smooth=True)
+    assert ob.data.normals_domain == 'POINT'
+    ob.scale = (1.0, 1.0, 3.0)
+    data = exported()
+    g = data.geometry
+    p = g.vertices[g.triangles].astype(np.float64)            # (M,3,3) on the ellipsoid
+    expect = p / np.array([1.0, 1.0, 9.0])                    # gradient of x^2 + y^2 + z^2/9
+    expect /= np.linalg.norm(expect, axis=2, keepdims=True)
+    cos = np.einsum('ijk,ijk->ij', g.normals, expect)
+    assert np.all(np.abs(np.linalg.norm(g.normals, axis=2) - 1) < 1e-5)
+    assert cos.min() > 0.995
+    # smooth: corners of a triangle differ (unlike flat shading)
+    assert np.mean(np.abs(g.normals[:, 0] - g.normals[:, 1]).max(axis=1) > 1e-3) > 0.9
+
+
+def test_custom_normals_corner_domain(scene, exported):
+    setup(scene)
+    ob = scenes.plane("P")
+    custom = Vector((0.0, 0.6, 0.8))
+    ob.data.normals_split_custom_set([custom[:]] * len(ob.data.loops))
+    assert ob.data.normals_domain == 'CORNER'
+    ob.rotation_euler = (0.0, 0.0, math.pi / 2)
+    data = exported()
+    expected = Euler((0.0, 0.0, math.pi / 2)).to_matrix() @ custom
+    assert np.allclose(data.geometry.normals.reshape(-1, 3), expected, atol=1e-4)
+
+
+def test_sharp_edges_mixed_normals(scene, exported):
+    setup(scene)
+    ob = scenes.uv_sphere("Ball", segments=16, rings=8, smooth=True)
+    sharp = ob.data.attributes.new("sharp_face", 'BOOLEAN', 'FACE')
+    values = [p.center.z > 0 for p in ob.data.polygons]
+    sharp.data.foreach_set('value', values)
+    ob.data.update()
+    assert ob.data.normals_domain == 'CORNER'
+    data = exported()
+    g = data.geometry
+    centroid = g.vertices[g.triangles].mean(axis=1)
+    flat = np.all(np.isclose(g.normals[:, 0], g.normals[:, 1], atol=1e-6), axis=1) & \
+        np.all(np.isclose(g.normals[:, 0], g.normals[:, 2], atol=1e-6), axis=1)
+    assert flat[centroid[:, 2] > 0.05].all() and not flat[centroid[:, 2] < -0.05].any()
+
+
+# -- visibility --------------------------------------------------------------------------------
+
+def test_hidden_and_ray_visibility(scene, exported):
+    setup(scene)
+    scenes.plane("Shown")
+    scenes.plane("Hidden", location=(3, 0, 0)).hide_render = True
+    scenes.plane("NoCamera", location=(6, 0, 0)).visible_camera = False
+    no_shadow = scenes.plane("NoShadow", location=(9, 0, 0))
+    no_shadow.visible_shadow = False
+    held = scenes.plane("Held", location=(12, 0, 0))
+    held.is_holdout = True
+    gone = scenes.plane("Gone", location=(15, 0, 0))
+    gone.visible_camera = gone.visible_diffuse = gone.visible_shadow = False
+    data = exported()
+    assert "Hidden" not in data.object_names and "Gone" not in data.object_names
+    vis = {n: set(data.geometry.visibility[of_object(data, n)].tolist()) for n in data.object_names}
+    full = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
+    assert vis["Shown"] == {full}
+    assert vis["NoCamera"] == {sd.VIS_DIFFUSE | sd.VIS_SHADOW}
+    assert vis["NoShadow"] == {sd.VIS_CAMERA | sd.VIS_DIFFUSE}
+    assert vis["Held"] == {full | sd.HOLDOUT}
+
+
+def test_holdout_and_excluded_collections(scene, exported):
+    setup(scene)
+    held, excluded = bpy.data.collections.new("Held"), bpy.data.collections.new("Excluded")
+    for c in (held, excluded):
+        scene.collection.children.link(c)
+    a = scenes.plane("InHeld")
+    scene.collection.objects.unlink(a)
+    held.objects.link(a)
+    b = scenes.plane("InExcluded", location=(3, 0, 0))
+    scene.collection.objects.unlink(b)
+    excluded.objects.link(b)
+    layer = bpy.context.view_layer
+    layer.layer_collection.children["Held"].holdout = True
+    layer.layer_collection.children["Excluded"].exclude = True
+    data = exported()
+    assert data.object_names == ["InHeld"]
+    assert np.all(data.geometry.visibility & sd.HOLDOUT)
+
+
+def test_nan_vertices_dropped_with_message(scene, exported):
+    setup(scene)
+    ob = scenes.mesh("Broken", [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (float('nan'), 0, 0),
+                                (2, 0, float('inf'))],
+                     [(0, 1, 2), (0, 2, 3), (1, 4, 2), (1, 5, 2)])
+    scenes.plane("Fine", location=(5, 0, 0))
+    data = exported()
+    g = data.geometry
+    assert of_object(data, "Broken").sum() == 2 and of_object(data, "Fine").sum() == 2
+    assert np.isfinite(g.vertices[g.triangles]).all()
+    msgs = [t for lvl, t in data.messages if 'Broken' in t]
+    assert len(msgs) == 1 and "2 vertices" in msgs[0] and "2 triangles" in msgs[0]
+
+
+# -- UVs, materials, world ------------------------------------------------------------------
+
+def _image_material(name, image, interpolation='Closest'):
+    mat = bpy.data.materials.new(name)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new('ShaderNodeOutputMaterial')
+    bsdf = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    bsdf.inputs['Specular IOR Level'].default_value = 0.0
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.interpolation, tex.extension = image, interpolation, 'EXTEND'
+    nt.links.new(tex.outputs['Color'], bsdf.inputs['Base Color'])
+    nt.links.new(bsdf.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_image_texture_uvs_and_linear_pixels(scene, exported, tmp_path):
+    setup(scene)
+    img = bpy.data.images.new("Checker", 2, 2)
+    values = [0.5, 0.25, 1.0, 1.0,  0.0, 0.0, 0.0, 1.0,  1.0, 1.0, 1.0, 1.0,  0.2, 0.4, 0.6, 1.0]
+    img.pixels[:] = values
+    path = tmp_path / "checker.png"
+    img.filepath_raw, img.file_format = str(path), 'PNG'
+    img.save()
+    loaded = bpy.data.images.load(str(path))          # an sRGB 8-bit image on disk
+    ob = scenes.plane("P", materials=(_image_material("Tex", loaded),))
+    uv = ob.data.uv_layers.new(name="UVMap")
+    uv_values = np.array([[0.1, 0.2], [0.9, 0.2], [0.9, 0.8], [0.1, 0.8]], np.float32)
+    uv.uv.foreach_set('vector', uv_values.ravel())
+    data = exported()
+    mat = data.materials[data.geometry.material[0]]
+    assert mat.name == "Tex" and mat.texture is not None and mat.texture_extension == 'EXTEND'
+    assert mat.texture_interpolation == 'Closest' and not mat.approximated
+    srgb = np.round(np.array(values, np.float32).reshape(2, 2, 4) * 255) / 255
+    lin = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+    assert np.allclose(mat.texture[..., :3], lin[..., :3], atol=1e-4)
+    assert np.allclose(mat.texture[..., 3], 1.0)
+    corners_uv = data.geometry.uvs.reshape(-1, 2)
+    loops_uv = uv_values[np.array([l for t in ob.data.loop_triangles for l in t.loops])]
+    assert np.allclose(np.sort(corners_uv, axis=0), np.sort(loops_uv, axis=0))
+
+
+def test_material_table(scene, exported):
+    setup(scene)
+    mats = [scenes.diffuse("Diffuse", (0.2, 0.4, 0.6)),
+            scenes.principled("Principled", (0.1, 0.2, 0.3), (1.0, 0.5, 0.0), 4.0),
+            scenes.emission("Emission", (0.3, 0.3, 0.3), 5.0)]
+    mix = bpy.data.materials.new("Mix")
+    nt = mix.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new('ShaderNodeOutputMaterial')
+    a, b = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeBsdfDiffuse')
+    a.inputs['Color'].default_value = (1, 0, 0, 1)
+    b.inputs['Color'].default_value = (0, 0, 1, 1)
+    m = nt.nodes.new('ShaderNodeMixShader')
+    m.inputs['Fac'].default_value = 0.25
+    nt.links.new(a.outputs[0], m.inputs[1])
+    nt.links.new(b.outputs[0], m.inputs[2])
+    nt.links.new(m.outputs[0], out.inputs['Surface'])
+    mats.append(mix)
+    mats.append(scenes.emissive_diffuse("Furnace", 0.5, 1.0))
+    glass = bpy.data.materials.new("Glass")
+    g = glass.node_tree
+    g.nodes.clear()
+    gout = g.nodes.new('ShaderNodeOutputMaterial')
+    gnode = g.nodes.new('ShaderNodeBsdfGlass')
+    gnode.inputs['Color'].default_value = (0.9, 0.8, 0.7, 1)
+    g.links.new(gnode.outputs[0], gout.inputs['Surface'])
+    mats.append(glass)
+    mats.append(scenes.principled("Shiny", (0.5, 0.5, 0.5), specular=0.5, metallic=1.0))
+    for i, mat in enumerate(mats):
+        scenes.plane(mat.name, location=(3 * i, 0, 0), materials=(mat,))
+    data = exported()
+    table = {m.name: m for m in data.materials}
+    expect = {"Diffuse": ((0.2, 0.4, 0.6), (0, 0, 0)),
+              "Principled": ((0.1, 0.2, 0.3), (4.0, 2.0, 0.0)),
+              "Emission": ((0, 0, 0), (1.5, 1.5, 1.5)),
+              "Mix": ((0.75, 0, 0.25), (0, 0, 0)),
+              "Furnace": ((0.5, 0.5, 0.5), (1, 1, 1)),
+              "Glass": ((0.9, 0.8, 0.7), (0, 0, 0)),
+              "Shiny": ((0.5, 0.5, 0.5), (0, 0, 0))}
+    for name, (base, emit) in expect.items():
+        assert np.allclose(table[name].base_color, base, atol=1e-6), name
+        assert np.allclose(table[name].emission, emit, atol=1e-6), name
+    assert {n for n, m in table.items() if m.approximated} == {"Glass", "Shiny"}
+    assert "metallic" in table["Shiny"].approximated and "specular" in table["Shiny"].approximated
+    approx = [t for _, t in data.messages if "approximated" in t]
+    assert len(approx) == 1 and "'Glass'" in approx[0] and "'Shiny'" in approx[0]
+
+
+def test_world_background(scene, exported):
+    setup(scene)
+    scenes.world((0.5, 0.25, 1.0), 2.0)
+    assert np.allclose(exported().world, (1.0, 0.5, 2.0))
+    scene.world.node_tree.links.clear()                 # nothing on the Surface: black
+    assert np.allclose(exported().world, 0.0)
+    scene.world = None
+    assert np.allclose(exported().world, 0.0)
+
+
+# -- lights ------------------------------------------------------------------------------------
+
+def test_light_values_in_cycles_units(scene, exported):
+    setup(scene)
+    point = scenes.light('POINT', 1000.0, (1, 2, 3), color=(1.0, 0.5, 0.25), exposure=1.0,
+                         shadow_soft_size=0.5, use_soft_falloff=False)
+    spot = scenes.light('SPOT', 200.0, (0, 0, 4), spot_size=math.radians(45), spot_blend=0.5,
+                        shadow_soft_size=0.0)
+    spot.scale = (1.0, 2.0, 1.0)
+    sun = scenes.light('SUN', 3.0, rotation=(0.3, 0, 0), angle=math.radians(20), use_shadow=False)
+    warm = scenes.light('POINT', 10.0, name="Warm", use_temperature=True, temperature=3000.0)
+    rect = scenes.light('AREA', 100.0, (0, 0, 2), shape='RECTANGLE', size=2.0, size_y=0.5)
+    rect.scale = (3.0, 1.0, 1.0)
+    disk = scenes.light('AREA', 50.0, (0, 0, 3), name="Disk", shape='DISK', size=1.5, spread=1.0)
+    unseen = scenes.light('POINT', 10.0, name="Unseen")
+    unseen.visible_diffuse = False
+    data = exported()
+    L = {l.name: l for l in data.lights}
+    assert set(L) == {"Point", "Spot", "Sun", "Warm", "Area", "Disk"}
+    assert np.allclose(L["Point"].strength, (2000, 1000, 500))
+    assert L["Point"].kind == 'POINT' and L["Point"].radius == 0.5 and not L["Point"].soft_falloff
+    assert np.allclose(L["Point"].matrix[:3, 3], (1, 2, 3))
+    assert L["Spot"].spot_size == pytest.approx(math.radians(45)) and L["Spot"].spot_blend == 0.5
+    assert np.allclose(L["Spot"].matrix, np.array(spot.matrix_world))      # scale kept (cone shape)
+    assert np.allclose(L["Sun"].strength, 3.0) and L["Sun"].angle == pytest.approx(math.radians(20))
+    assert not L["Sun"].cast_shadow
+    assert np.allclose(L["Warm"].strength, 10.0 * np.array(warm.data.temperature_color)[:3])
+    assert L["Warm"].strength[0] > L["Warm"].strength[2]                   # 3000 K is reddish
+    assert (L["Area"].shape, L["Area"].size_x, L["Area"].size_y) == ('RECTANGLE', 2.0, 0.5)
+    assert np.allclose(np.linalg.norm(L["Area"].matrix[:3, 0]), 3.0)
+    assert (L["Disk"].shape, L["Disk"].size_x, L["Disk"].size_y) == ('DISK', 1.5, 1.5)
+    assert L["Disk"].spread == pytest.approx(1.0)
+    assert any("Unseen" in t for _, t in data.messages)
+
+
+def test_instanced_lights(scene, exported):
+    setup(scene)
+    col = bpy.data.collections.new("Lamps")
+    scene.collection.children.link(col)
+    lamp = scenes.light('POINT', 100.0, (0, 0, 1))
+    scene.collection.objects.unlink(lamp)
+    col.objects.link(lamp)
+    for x in (5, 10):
+        e = scenes.link(bpy.data.objects.new(f"E{x}", None))
+        e.instance_type, e.instance_collection, e.location = 'COLLECTION', col, (x, 0, 0)
+    data = exported()
+    xs = sorted(l.matrix[0, 3] for l in data.lights)
+    assert xs == [0, 5, 10]
+
+
+# -- settings ------------------------------------------------------------------------------------
+
+def test_settings_follow_scene_dacrt_and_blender(scene, exported):
+    setup(scene)
+    d = scene.dacrt
+    d.samples, d.max_bounces, d.filter_type, d.filter_width, d.seed, d.partition = \
+        17, 2, 'GAUSSIAN', 2.5, 99, 'SAH'
+    scene.render.threads_mode, scene.render.threads = 'FIXED', 1
+    scene.render.film_transparent = True
+    layer = bpy.context.view_layer
+    layer.use_pass_z = layer.use_pass_diffuse_color = True
+    s = exported().settings
+    assert (s.samples, s.max_bounces, s.filter_type, s.filter_width, s.seed, s.partition) == \
+        (17, 2, 'GAUSSIAN', 2.5, 99, 'sah')
+    assert s.threads == 1 and s.film_transparent and s.passes == ('Depth', 'DiffCol')
+    scene.render.threads_mode = 'AUTO'
+    assert exported().settings.threads == 0
+
+
+def test_empty_scene_exports_and_says_so(scene, exported):
+    setup(scene)
+    data = exported()
+    assert len(data.geometry.triangles) == 0 and data.lights == []
+    text = " ".join(t for _, t in data.messages)
+    assert "no renderable geometry" in text and "no lights" in text
+
+
+def test_light_node_tree_and_world_approximation_reported(scene, exported):
+    setup(scene)
+    lamp = scenes.light('POINT', 100.0)
+    lamp.data.use_nodes = True
+    emit = next(n for n in lamp.data.node_tree.nodes if n.type == 'EMISSION')
+    emit.inputs['Strength'].default_value = 2.0
+    emit.inputs['Color'].default_value = (1.0, 0.5, 1.0, 1.0)
+    w = scenes.world((0.2, 0.2, 0.2), 3.0)
+    sky = w.node_tree.nodes.new('ShaderNodeTexSky')
+    bg = next(n for n in w.node_tree.nodes if n.type == 'BACKGROUND')
+    w.node_tree.links.new(sky.outputs[0], bg.inputs['Color'])
+    data = exported()
+    assert np.allclose(data.lights[0].strength, (200.0, 100.0, 200.0))
+    assert np.allclose(data.world, 0.6)           # the Background's own colour x strength
+    assert any(lvl == 'WARNING' and "world approximated" in t for lvl, t in data.messages)
+
+
+def test_missing_image_is_magenta_like_cycles(scene, exported):
+    setup(scene)
+    empty_node = _image_material("NoImage", None)
+    broken = bpy.data.images.new("Gone", 4, 4)
+    broken.source, broken.filepath = 'FILE', "//does/not/exist.png"
+    scenes.plane("A", materials=(empty_node,))
+    scenes.plane("B", location=(3, 0, 0), materials=(_image_material("Broken", broken),))
+    data = exported()
+    table = {m.name: m for m in data.materials}
+    for name in ("NoImage", "Broken"):
+        assert table[name].texture is None and np.allclose(table[name].base_color, (1, 0, 1)), name
+        assert table[name].approximated, name

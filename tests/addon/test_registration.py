@@ -1,0 +1,187 @@
+"""Registration: the engine, scene.dacrt, panels; installed-extension import; refusal to
+register when the native binary does not match Blender's Python."""
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import bpy
+import pytest
+
+from . import conftest
+
+
+def test_engine_is_registered_and_selectable(scene):
+    engines = {getattr(e, 'bl_idname', ''): e for e in bpy.types.RenderEngine.__subclasses__()}
+    assert 'DACRT' in engines
+    e = engines['DACRT']
+    assert e.bl_label == 'DACRT' and e.bl_use_preview is False
+    assert e.bl_use_shading_nodes_custom is False
+    scene.render.engine = 'CYCLES'
+    scene.render.engine = 'DACRT'
+    assert scene.render.engine == 'DACRT'
+
+
+def test_scene_settings_defaults_and_validation(scene):
+    d = scene.dacrt
+    assert (d.samples, d.max_bounces, d.filter_type, d.filter_width, d.seed, d.partition) == \
+        (64, 4, 'BLACKMAN_HARRIS', 1.5, 0, 'ADAPTIVE')
+    assert {i.identifier for i in d.bl_rna.properties['filter_type'].enum_items} == \
+        {'BOX', 'GAUSSIAN', 'BLACKMAN_HARRIS'}
+    assert {i.identifier for i in d.bl_rna.properties['partition'].enum_items} == \
+        {'ADAPTIVE', 'MEDIAN', 'SAH'}
+    with pytest.raises(TypeError):
+        d.filter_type = 'MITCHELL'
+    d.samples = 0
+    assert d.samples == 1                     # clamped to the minimum
+    d.max_bounces = -3
+    assert d.max_bounces == 0
+    # saved with the file like scene.cycles
+    assert scene.bl_rna.properties['dacrt'].fixed_type.identifier == 'DACRTSceneSettings'
+
+
+def test_panels_shown_for_the_engine(scene):
+    assert 'DACRT' in bpy.context.engine or bpy.context.engine == 'DACRT'
+    assert bpy.types.RENDER_PT_dacrt.poll(bpy.context)
+    for name in ('RENDER_PT_format', 'RENDER_PT_output', 'RENDER_PT_color_management',
+                 'RENDER_PT_frame_range', 'DATA_PT_spot', 'DATA_PT_context_light',
+                 'WORLD_PT_context_world', 'EEVEE_MATERIAL_PT_context_material',
+                 'OBJECT_PT_visibility'):
+        assert 'DACRT' in getattr(bpy.types, name).COMPAT_ENGINES, name
+    for name in ('DATA_PT_dacrt_light', 'MATERIAL_PT_dacrt_surface', 'WORLD_PT_dacrt_surface',
+                 'VIEWLAYER_PT_dacrt_passes'):
+        assert hasattr(bpy.types, name), name
+    scene.render.engine = 'CYCLES'
+    assert not bpy.types.RENDER_PT_dacrt.poll(bpy.context)
+
+
+def run_python(code, tmp_path):
+    """Run code in a fresh interpreter (a second registration cannot share this process)."""
+    script = tmp_path / "script.py"
+    script.write_text(textwrap.dedent(code))
+    env = dict(os.environ, PYTHONPATH="")
+    return subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300, cwd=str(tmp_path), env=env)
+
+
+def test_installed_as_extension_with_relative_imports(tmp_path):
+    repo = tmp_path / "repo"
+    shutil.copytree(conftest.ROOT / "addon", repo / "dacrt",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    out = run_python(f"""
+        import bpy, addon_utils, sys
+        assert 'addon' not in sys.modules
+        bpy.context.preferences.extensions.repos.new(name="dev", module="dev",
+                                                     custom_directory={str(repo)!r}, source='USER')
+        addon_utils.enable("bl_ext.dev.dacrt", default_set=True, handle_error=None)
+        engines = [getattr(e, 'bl_idname', '') for e in bpy.types.RenderEngine.__subclasses__()]
+        assert 'DACRT' in engines, engines
+        assert 'addon' not in sys.modules, "no absolute import of the checkout package"
+        sc = bpy.context.scene
+        sc.render.engine = 'DACRT'
+        print("SAMPLES", sc.dacrt.samples)
+        addon_utils.disable("bl_ext.dev.dacrt", default_set=True, handle_error=None)
+        assert not hasattr(sc, 'dacrt')
+        try:
+            sc.render.engine = 'CYCLES'
+            sc.render.engine = 'DACRT'
+            print("STILL SELECTABLE")
+        except TypeError:
+            pass
+        print("OK")
+    """, tmp_path)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "SAMPLES 64" in out.stdout and "OK" in out.stdout
+
+
+def test_refuses_to_register_with_a_binary_for_another_python(tmp_path):
+    fake = tmp_path / "site"
+    fake.mkdir()
+    (fake / "dacrt.cpython-313-x86_64-linux-gnu.so").write_bytes(b"not for this python")
+    out = run_python(f"""
+        import sys
+        sys.modules['dacrt'] = None          # the matching binary is absent
+        sys.path[:0] = [{str(conftest.ROOT)!r}, {str(fake)!r}]
+        import bpy, addon
+        try:
+            addon.register()
+        except ImportError as e:
+            print("REFUSED:", e)
+        engines = [getattr(e, 'bl_idname', '') for e in bpy.types.RenderEngine.__subclasses__()]
+        print("REGISTERED" if 'DACRT' in engines or hasattr(bpy.types.Scene, 'dacrt') else "CLEAN")
+    """, tmp_path)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "REFUSED:" in out.stdout and "CLEAN" in out.stdout
+    line = next(l for l in out.stdout.splitlines() if l.startswith("REFUSED:"))
+    assert "Python 3.13" in line and f"Python {sys.version_info.major}.{sys.version_info.minor}" in line
+
+
+def test_unregister_then_register_again(tmp_path):
+    out = run_python(f"""
+        import sys
+        sys.path.insert(0, {str(conftest.ROOT)!r})
+        import bpy, addon
+        for _ in range(2):
+            addon.register()
+            assert hasattr(bpy.types.Scene, 'dacrt') and hasattr(bpy.types, 'RENDER_PT_dacrt')
+            addon.unregister()
+            assert not hasattr(bpy.types.Scene, 'dacrt')
+            assert 'DACRT' not in bpy.types.RENDER_PT_format.COMPAT_ENGINES
+        print("OK")
+    """, tmp_path)
+    assert out.returncode == 0 and "OK" in out.stdout, out.stdout + out.stderr
+
+
+class FakeLayout:
+    """Records what a panel draws; fails on properties the data does not have."""
+    def __init__(self):
+        self.drawn = []
+        self.use_property_split = self.use_property_decorate = False
+        self.active = self.enabled = True
+
+    def prop(self, data, name, **_):
+        assert hasattr(data, name), f"{type(data).__name__} has no property {name!r}"
+        self.drawn.append(name)
+
+    def template_node_view(self, ntree, node, socket):
+        assert socket.name == 'Surface' and node.bl_idname.startswith('ShaderNodeOutput')
+        self.drawn.append('node_view')
+
+    def label(self, **_):
+        self.drawn.append('label')
+
+    def row(self, **_):
+        return self
+
+    def column(self, **_):
+        return self
+
+
+def test_panels_draw_existing_properties(scene):
+    from . import scenes
+    from types import SimpleNamespace
+    light = scenes.light('AREA', 10.0).data
+    mat = scenes.diffuse("M", (1, 1, 1))
+    world = scenes.world((1, 1, 1))
+    ctx = SimpleNamespace(scene=scene, view_layer=bpy.context.view_layer, light=light,
+                          material=mat, world=world, engine='DACRT')
+    drawn = {}
+    for name in ('RENDER_PT_dacrt', 'VIEWLAYER_PT_dacrt_passes', 'DATA_PT_dacrt_light',
+                 'MATERIAL_PT_dacrt_surface', 'WORLD_PT_dacrt_surface'):
+        panel = getattr(bpy.types, name)
+        assert panel.poll(ctx)
+        layout = FakeLayout()
+        panel.draw(SimpleNamespace(layout=layout), ctx)
+        drawn[name] = layout.drawn
+    assert {'samples', 'max_bounces', 'filter_type', 'filter_width', 'seed', 'partition',
+            'threads_mode', 'threads'} <= set(drawn['RENDER_PT_dacrt'])
+    assert {'use_pass_z', 'use_pass_normal', 'use_pass_diffuse_color'} <= set(drawn['VIEWLAYER_PT_dacrt_passes'])
+    assert {'energy', 'color', 'shape', 'size', 'spread'} <= set(drawn['DATA_PT_dacrt_light'])
+    assert drawn['MATERIAL_PT_dacrt_surface'] == ['node_view'] == drawn['WORLD_PT_dacrt_surface']
+    for kind in ('POINT', 'SPOT', 'SUN'):
+        light.type = kind
+        ctx.light = bpy.data.lights[light.name]          # the RNA subtype follows the type
+        layout = FakeLayout()
+        bpy.types.DATA_PT_dacrt_light.draw(SimpleNamespace(layout=layout), ctx)
+        assert 'energy' in layout.drawn

@@ -1,0 +1,243 @@
+"""Rendering through Blender (bpy.ops.render.render) with the DACRT engine: images, passes,
+border, view layers, reports, memory, cancel, write_still and the headless CLI."""
+import math
+import os
+import subprocess
+import sys
+import time
+
+import bpy
+import numpy as np
+import pytest
+
+from addon import engine as engine_module
+from addon.demo import build_demo_scene
+
+from . import conftest, scenes
+
+
+def lit_plane_scene(scene, albedo=(0.2, 0.4, 0.6), size=(16, 12)):
+    """A camera 5 m above a large diffuse plane lit by a sun."""
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scenes.camera((0, 0, 5))
+    scenes.plane("Ground", size=100, materials=(scenes.diffuse("Ground", albedo),))
+    scenes.light('SUN', 3.0)
+    scene.dacrt.samples = 4
+
+
+def rss_mb():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
+
+
+def test_demo_scene_renders_a_plausible_image(scene, tmp_path):
+    build_demo_scene(scene, resolution=64, samples=16)
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "demo.exr")))
+    assert img.shape == (64, 64, 4)
+    assert np.isfinite(img).all()
+    assert np.allclose(img[..., 3], 1.0)
+    rgb = img[..., :3]
+    assert 0.05 < rgb.mean() < 5.0
+    # the camera sees the box's red wall on the left and green wall on the right
+    left, right = rgb[16:48, 2:10].mean(axis=(0, 1)), rgb[16:48, -10:-2].mean(axis=(0, 1))
+    assert left[0] > 2 * left[1] and right[1] > 1.5 * right[0]
+    # light falls off from the ceiling area light: upper half of the back wall is not black
+    assert rgb[40:56, 28:36].mean() > 0.05
+
+
+def test_passes_present_when_enabled(scene, tmp_path):
+    lit_plane_scene(scene)
+    exr = scenes.read_exr(scenes.render_exr(tmp_path / "plain.exr", multilayer=True))
+    assert not any(".Depth." in c or ".Normal." in c or ".Diffuse Color." in c for c in exr)
+    layer = bpy.context.view_layer
+    layer.use_pass_z = layer.use_pass_normal = layer.use_pass_diffuse_color = True
+    exr = scenes.read_exr(scenes.render_exr(tmp_path / "passes.exr", multilayer=True))
+    name = layer.name
+    depth = exr[f"{name}.Depth.Z"]
+    normal = np.stack([exr[f"{name}.Normal.{c}"] for c in "XYZ"], axis=-1)
+    albedo = np.stack([exr[f"{name}.{engine_module.RESULT_PASS_NAME['DiffCol']}.{c}"] for c in "RGB"],
+                      axis=-1)
+    assert depth.shape == (12, 16)
+    assert np.allclose(depth, 5.0, rtol=1e-4)                # z-depth of the plane
+    assert np.allclose(normal, (0, 0, 1), atol=1e-5)
+    assert np.allclose(albedo, (0.2, 0.4, 0.6), atol=1e-5)
+    combined = scenes.rgba(exr, f"{name}.Combined.")
+    assert combined[..., :3].mean() > 0
+
+
+def test_border_render_with_and_without_crop(scene, tmp_path):
+    lit_plane_scene(scene, size=(40, 20))
+    r = scene.render
+    r.use_border = True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.25, 0.75, 0.5, 1.0
+    r.use_crop_to_border = True
+    cropped = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "crop.exr")))
+    assert cropped.shape[:2] == (10, 20)
+    assert (cropped[..., :3] > 0).all()
+    r.use_crop_to_border = False
+    full = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "full.exr")))
+    assert full.shape[:2] == (20, 40)
+    inside = np.zeros((20, 40), bool)
+    inside[10:20, 10:30] = True
+    assert (full[inside][:, :3] > 0).all() and np.all(full[~inside] == 0)
+    assert np.allclose(full[10:20, 10:30], cropped, rtol=1e-6)
+
+
+def test_one_render_per_view_layer(scene, tmp_path, capfd):
+    lit_plane_scene(scene)
+    first = bpy.context.view_layer
+    second = scene.view_layers.new("Second")
+    third = scene.view_layers.new("Unused")
+    third.use = False
+    exr = scenes.read_exr(scenes.render_exr(tmp_path / "layers.exr", multilayer=True))
+    for layer in (first, second):
+        img = scenes.rgba(exr, f"{layer.name}.Combined.")
+        assert img[..., :3].mean() > 0, layer.name
+    assert not any(c.startswith("Unused.") for c in exr)
+    summaries = [l for l in capfd.readouterr().out.splitlines() if "triangles," in l and "lights" in l]
+    assert len(summaries) == 2, "rendered exactly once per enabled view layer"
+
+
+def test_empty_scene_renders_and_reports(scene, tmp_path, capfd):
+    scenes.camera()
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "empty.exr")))
+    assert np.isfinite(img).all() and np.all(img[..., :3] == 0)
+    out = capfd.readouterr().out
+    assert "no renderable geometry" in out and "no lights" in out
+
+
+def test_scene_without_lights_renders_black_and_reports(scene, tmp_path, capfd):
+    scenes.camera((0, 0, 5))
+    scenes.plane("Ground", size=100)
+    scenes.black_world()
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "dark.exr")))
+    assert np.isfinite(img).all() and np.all(img[..., :3] == 0) and np.allclose(img[..., 3], 1)
+    assert "no lights, no emissive materials and a black world" in capfd.readouterr().out
+
+
+def test_nan_vertices_are_skipped_and_the_rest_renders(scene, tmp_path, capfd):
+    lit_plane_scene(scene)
+    scenes.mesh("Broken", [(0, 0, 1), (1, 0, 1), (0, 1, float('nan'))], [(0, 1, 2)])
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "nan.exr")))
+    assert np.isfinite(img).all()
+    # sun 3 W/m^2 straight down on albedo 0.2/0.4/0.6: rho * E / pi
+    assert np.allclose(img[..., :3].mean(axis=(0, 1)), np.array([0.2, 0.4, 0.6]) * 3 / math.pi, rtol=1e-3)
+    out = capfd.readouterr().out
+    assert "Broken" in out and "NaN" in out
+
+
+def test_approximated_materials_reported_once(scene, capfd):
+    lit_plane_scene(scene)
+    glass = bpy.data.materials.new("Glassy")
+    nt = glass.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new('ShaderNodeOutputMaterial')
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfGlass').outputs[0], out.inputs['Surface'])
+    scenes.plane("A", location=(0, 0, 1), materials=(glass,))
+    scenes.plane("B", location=(3, 0, 1), materials=(glass,))
+    bpy.ops.render.render()
+    lines = [l for l in capfd.readouterr().out.splitlines() if "approximated as diffuse" in l]
+    assert len(lines) == 1 and "'Glassy'" in lines[0] and lines[0].startswith("Warning")
+
+
+def test_failed_render_reports_the_reason(scene):
+    lit_plane_scene(scene)
+    scene.camera.data.type = 'PANO'
+    with pytest.raises(RuntimeError, match="perspective and orthographic"):
+        bpy.ops.render.render()
+
+
+def test_rerendering_keeps_memory_flat(scene):
+    build_demo_scene(scene, resolution=96, samples=2)
+    # ~125k triangles: each render allocates tens of MB, so keeping any of it would show
+    bpy.data.objects["Suzanne"].modifiers["Subdivision"].render_levels = 3
+    usage = []
+    for _ in range(10):
+        bpy.ops.render.render()
+        usage.append(rss_mb())
+    growth = min(usage[-3:]) - min(usage[:3])       # robust to the allocator's transient peaks
+    assert growth < 10.0, f"RSS grew {growth:.1f} MB over 10 renders: {np.round(usage, 1)}"
+
+
+def _patched_break(monkeypatch, after_seconds):
+    """Make the engine's cancel check report Esc `after_seconds` after its first poll.
+
+    Blender's own test_break() cannot be made True headless (it reads the UI's break flag) and
+    RNA functions cannot be overridden from Python, so the patch sits on the engine's single
+    wrapper around it, `cancel_requested`, which every poll in export and render goes through."""
+    state = {'first': None, 'tripped': None, 'calls': 0}
+
+    def test_break(self):
+        now = time.perf_counter()
+        state['calls'] += 1
+        state['first'] = state['first'] or now
+        if now - state['first'] >= after_seconds:
+            state['tripped'] = state['tripped'] or now
+            return True
+        return False
+    monkeypatch.setattr(engine_module.DACRTRenderEngine, 'cancel_requested', test_break)
+    return state
+
+
+def test_cancel_stops_a_long_render_within_a_second(scene, tmp_path, monkeypatch, capfd):
+    build_demo_scene(scene, resolution=96, samples=1_000_000)       # would take hours
+    state = _patched_break(monkeypatch, after_seconds=2.0)
+    bpy.ops.render.render()
+    stopped = time.perf_counter()
+    assert state['tripped'] is not None, "the engine polled for cancel during the render"
+    assert stopped - state['tripped'] < 1.0, f"stopped {stopped - state['tripped']:.2f} s after Esc"
+    monkeypatch.undo()
+    path = tmp_path / "cancelled.exr"
+    scene.render.image_settings.file_format, scene.render.image_settings.color_depth = 'OPEN_EXR', '32'
+    bpy.data.images['Render Result'].save_render(filepath=str(path), scene=scene)
+    img = scenes.rgba(scenes.read_exr(path))
+    assert img[..., :3].mean() > 0.01, "the partial image is kept"
+    assert "1000000 samples" not in capfd.readouterr().out
+
+
+def test_cancel_during_export(scene, monkeypatch, capfd):
+    build_demo_scene(scene, resolution=32, samples=64)
+    state = _patched_break(monkeypatch, after_seconds=0.0)
+    bpy.ops.render.render()
+    assert state['calls'] >= 1
+    assert "cancelled" in capfd.readouterr().out
+
+
+def test_write_still_like_blender_b(scene, tmp_path):
+    lit_plane_scene(scene, size=(24, 16))
+    scene.render.filepath = str(tmp_path / "frame_")
+    scene.render.image_settings.file_format = 'PNG'
+    bpy.ops.render.render(write_still=True)
+    written = sorted(tmp_path.glob("frame_*.png"))
+    assert len(written) == 1
+    import OpenImageIO as oiio
+    buf = oiio.ImageBuf(str(written[0]))
+    assert (buf.spec().width, buf.spec().height) == (24, 16)
+    assert buf.get_pixels().mean() > 0
+
+
+def run_cli(args, cwd):
+    env = dict(os.environ, PYTHONPATH=str(conftest.ROOT))
+    return subprocess.run([sys.executable, "-m", "addon.cli", "render", *args], cwd=str(cwd),
+                          capture_output=True, text=True, timeout=600, env=env)
+
+
+def test_cli_renders_the_demo_to_png_and_exr(tmp_path):
+    out = run_cli(["--samples", "2", "--out", str(tmp_path / "shot.png")], tmp_path)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert (tmp_path / "shot.png").is_file()
+    img = scenes.rgba(scenes.read_exr(tmp_path / "shot.exr"))
+    assert img.shape == (256, 256, 4) and np.isfinite(img).all() and img[..., :3].mean() > 0.05
+
+
+def test_cli_renders_a_blend_file_and_explains_failures(scene, tmp_path):
+    lit_plane_scene(scene, size=(20, 10))
+    blend = tmp_path / "plane.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    out = run_cli([str(blend), "--samples", "1"], tmp_path)
+    assert out.returncode == 0, out.stdout + out.stderr
+    img = scenes.rgba(scenes.read_exr(tmp_path / "render" / "plane.exr"))
+    assert img.shape == (10, 20, 4) and img[..., :3].mean() > 0
+    assert (tmp_path / "render" / "plane.png").is_file()
+    missing = run_cli([str(tmp_path / "nope.blend")], tmp_path)
+    assert missing.returncode != 0 and "no such .blend file" in missing.stderr

@@ -1,0 +1,238 @@
+"""Light units against closed-form irradiance: a diffuse plane (albedo 0.8) seen from above by a
+tiny orthographic camera, pixel value = albedo * E / pi (reference blender-cycles.md 2.2, whose
+table also lists Cycles' own numbers for the same setups)."""
+import numpy as np
+import pytest
+
+from addon import scenedata as sd
+from addon.lights import make_lamp
+from addon.sampling import RandomStream
+
+from .scenes import light, material, ortho_down, pixel_stats, plane_scene, render, rotation_x, translation
+
+RHO = 0.8
+
+
+def check(integ, expected, rel=0.01):
+    mean, err = pixel_stats(integ)
+    assert err < 0.3 * rel * expected, f"too noisy to decide: stderr {err:.5f} for {expected:.5f}"
+    assert mean == pytest.approx(expected, rel=rel), f"got {mean:.5f}, expected {expected:.5f} (+-{err:.5f})"
+    return mean
+
+
+def lit(lights, samples=256, **kw):
+    return render(plane_scene(lights, samples=samples, **kw))
+
+
+@pytest.mark.parametrize('angle_deg', [0.0, 20.0])
+def test_sun_irradiance_at_normal_incidence(angle_deg):
+    sun = light('SUN', 3.0, np.eye(4), angle=np.radians(angle_deg))
+    mean = check(lit([sun], samples=64 if angle_deg == 0 else 256), RHO * 3.0 / np.pi)
+    assert mean == pytest.approx(0.76394, rel=0.01)            # Cycles 5.0.1: 0.76395 / 0.76393
+
+
+def test_sun_delta_is_exact_and_obeys_cosine():
+    tilt = np.radians(60.0)
+    sun = light('SUN', 3.0, rotation_x(tilt))
+    integ = lit([sun], samples=4)
+    assert integ.film.combined()[..., 0] == pytest.approx(RHO * 3.0 * np.cos(tilt) / np.pi, rel=1e-5)
+
+
+def test_point_light_radius_zero():
+    integ = lit([light('POINT', 1000.0, translation(z=2.0))], samples=4)
+    expected = RHO * 1000.0 / (4 * np.pi * 4.0) / np.pi
+    assert expected == pytest.approx(5.06606, rel=1e-5)
+    assert integ.film.combined()[..., 0] == pytest.approx(expected, rel=1e-5)
+
+
+def test_point_light_sphere_matches_point():
+    sphere = light('POINT', 1000.0, translation(z=2.0), radius=0.5, soft_falloff=False)
+    check(lit([sphere]), RHO * 1000.0 / (16 * np.pi) / np.pi)     # Cycles: 5.06604
+
+
+def test_point_light_soft_falloff_disk():
+    # disk of radius r facing the point, radiance Phi / (4 pi^2 r^2): E = Phi / (4 pi (r^2 + h^2))
+    soft = light('POINT', 1000.0, translation(z=2.0), radius=0.5, soft_falloff=True)
+    expected = RHO * 1000.0 / (4 * np.pi * (0.25 + 4.0)) / np.pi
+    assert expected == pytest.approx(4.76812, rel=1e-4)        # Cycles: 4.76785
+    check(lit([soft]), expected)
+
+
+def test_spot_on_axis_equals_point():
+    spot = light('SPOT', 1000.0, translation(z=2.0), spot_size=np.radians(45.0), spot_blend=0.5)
+    integ = lit([spot], samples=4)
+    assert integ.film.combined()[..., 0] == pytest.approx(5.06606, rel=1e-5)
+
+
+def test_spot_off_axis_smoothstep():
+    off = np.radians(20.0)
+    x = 2.0 * np.tan(off)
+    spot = light('SPOT', 1000.0, translation(z=2.0), spot_size=np.radians(45.0), spot_blend=0.5)
+    integ = render(plane_scene([spot], samples=4, camera=ortho_down(target=(x, 0.0))))
+    cos_half = np.cos(np.radians(22.5))
+    f = (np.cos(off) - cos_half) / ((1 - cos_half) * 0.5)
+    d2 = 4.0 + x * x
+    expected = RHO * 1000.0 * np.cos(off) / (4 * np.pi * d2) / np.pi * (3 * f * f - 2 * f ** 3)
+    assert expected == pytest.approx(1.57394, rel=1e-4)        # Cycles: 1.57389
+    # the 1 mm wide view spans a slope of the smoothstep: compare the mean
+    assert integ.film.combined()[..., 0].mean() == pytest.approx(expected, rel=1e-3)
+
+
+def test_spot_outside_cone_is_dark_and_sends_no_shadow_rays():
+    spot = light('SPOT', 1000.0, translation(z=2.0), spot_size=np.radians(30.0), spot_blend=0.2)
+    integ = render(plane_scene([spot], samples=4, camera=ortho_down(target=(3.0, 0.0))))
+    assert integ.film.combined()[..., 0].max() == 0.0
+    assert integ.stats['rays']['shadow'] == 0
+    assert integ.stats['shadow_rays_skipped'] == integ.stats['rays']['camera']
+
+
+def rect_irradiance(L, a, b, h):
+    """Irradiance below a corner of an a x b Lambertian rectangle at height h (radiance L)."""
+    A, B = a / np.hypot(a, h), b / np.hypot(b, h)
+    return 0.5 * L * (A * np.arctan(b / np.hypot(a, h)) + B * np.arctan(a / np.hypot(b, h)))
+
+
+def test_area_square():
+    area = light('AREA', 100.0, translation(z=1.0), shape='SQUARE', size_x=1.0)
+    L = 100.0 / (np.pi * 1.0)
+    expected = RHO * 4 * rect_irradiance(L, 0.5, 0.5, 1.0) / np.pi
+    assert expected == pytest.approx(6.09669, rel=2e-4)        # Cycles: 6.09866
+    check(lit([area], samples=512), expected)
+
+
+def test_area_rectangle_scaled_object():
+    m = translation(z=1.0) @ np.diag([2.0, 0.5, 1.0, 1.0])      # object scale enters the size
+    area = light('AREA', 50.0, m, shape='RECTANGLE', size_x=0.5, size_y=1.0)
+    L = 50.0 / (np.pi * 1.0 * 0.5)
+    check(lit([area], samples=512), RHO * 4 * rect_irradiance(L, 0.5, 0.25, 1.0) / np.pi)
+
+
+def test_area_disk():
+    area = light('AREA', 100.0, translation(z=1.0), shape='DISK', size_x=1.0)
+    L = 100.0 / (np.pi * np.pi / 4)
+    expected = RHO * L * 0.25 / (0.25 + 1.0)                    # E = pi L R^2 / (R^2 + h^2)
+    assert expected == pytest.approx(6.48505, rel=2e-4)         # Cycles: 6.48481
+    check(lit([area], samples=512), expected)
+
+
+def test_area_is_one_sided():
+    down = light('AREA', 100.0, translation(z=1.0) @ rotation_x(np.pi), size_x=1.0)   # emits +Z
+    integ = lit([down], samples=16)
+    assert integ.film.combined()[..., 0].max() == 0.0
+
+
+def test_area_unnormalized_radiance():
+    area = light('AREA', 10.0, translation(z=1.0), size_x=0.5, normalize=False)
+    check(lit([area], samples=512), RHO * 4 * rect_irradiance(10.0 / np.pi, 0.25, 0.25, 1.0) / np.pi)
+
+
+def test_area_spread_against_quadrature():
+    spread = np.radians(60.0)
+    area = light('AREA', 100.0, translation(z=1.0), size_x=1.0, spread=spread)
+    # independent 2-D midpoint quadrature of L f(theta) cos_l cos_r / t^2 over the square
+    k = 801
+    g = (np.arange(k) + 0.5) / k - 0.5
+    x, y = np.meshgrid(g, g)
+    t2 = x * x + y * y + 1.0
+    cos = 1.0 / np.sqrt(t2)
+    tan_t = np.sqrt(x * x + y * y)
+    h = spread / 2
+    f = np.maximum(np.tan(h) - tan_t, 0.0) / (np.tan(h) - h)
+    E = np.sum(100.0 / np.pi * f * cos * cos / t2) / (k * k)
+    check(lit([area], samples=4096), RHO * E / np.pi)
+
+
+def test_world_uniform():
+    integ = render(plane_scene(world=(1.0, 1.0, 1.0), samples=512))   # colour 0.5 x strength 2
+    check(integ, RHO * 1.0)                                           # Cycles: 0.80000
+
+
+def test_emission_seen_directly():
+    scene = plane_scene(samples=4)
+    scene.materials[1] = material('glow', (0.8,) * 3, (1.5, 1.5, 1.5))  # 0.3 x strength 5
+    integ = render(scene)
+    assert integ.film.combined()[..., 0] == pytest.approx(1.5, rel=1e-6)
+
+
+def test_several_lights_add_up():
+    lamps = [light('POINT', 1000.0, translation(z=2.0)), light('SUN', 3.0, np.eye(4)),
+             light('AREA', 100.0, translation(z=1.0), size_x=1.0)]
+    expected = RHO / np.pi * (1000.0 / (16 * np.pi) + 3.0 + 4 * rect_irradiance(100 / np.pi, 0.5, 0.5, 1.0))
+    check(lit(lamps, samples=1024), expected)
+
+
+def test_light_without_mis_is_counted_once():
+    area = light('AREA', 100.0, translation(z=1.0), size_x=1.0, use_mis=False)
+    check(lit([area], samples=1024), RHO * 4 * rect_irradiance(100 / np.pi, 0.5, 0.5, 1.0) / np.pi)
+
+
+@pytest.mark.parametrize('cast_shadow', [True, False])
+def test_cast_shadow(cast_shadow):
+    """A roof between the light and the plane: dark when the light casts shadows, else ignored."""
+    from .scenes import ALL_VIS, geometry, quad
+    scene = plane_scene([light('POINT', 1000.0, translation(z=2.0), cast_shadow=cast_shadow)], samples=4)
+    plane = quad((0.0, 0.0, 0.0), 1000.0, 1000.0)
+    roof = quad((0.0, 0.0, 1.5), 5.0, 5.0)
+    scene.geometry = geometry([(*plane, 1, ALL_VIS), (*roof, 1, sd.VIS_DIFFUSE | sd.VIS_SHADOW)])
+    value = render(scene).film.combined()[..., 0]
+    assert value == pytest.approx(0.0 if cast_shadow else 5.06606, rel=1e-5, abs=1e-6)
+
+
+LAMPS = [
+    ('POINT', dict(radius=0.3, soft_falloff=False)),
+    ('POINT', dict(radius=0.3, soft_falloff=True)),
+    ('SPOT', dict(radius=0.3, soft_falloff=True, spot_size=np.radians(120.0), spot_blend=0.3)),
+    ('AREA', dict(shape='RECTANGLE', size_x=0.7, size_y=0.4, spread=np.radians(100.0))),
+    ('AREA', dict(shape='ELLIPSE', size_x=0.7, size_y=0.4)),
+    ('SUN', dict(angle=np.radians(10.0))),
+]
+
+
+@pytest.mark.parametrize('kind,kw', LAMPS)
+def test_sampled_directions_hit_the_light_with_the_same_pdf(kind, kw):
+    """MIS needs one emitter seen two ways: a ray along each light sample must meet the light
+    (intersect / eval_miss) with the same radiance and pdf the sample reported."""
+    m = translation(0.2, -0.1, 1.5) @ rotation_x(0.3)
+    lamp = make_lamp(light(kind, 50.0, m, **kw))
+    n = 4000
+    rs = RandomStream(7)
+    keys = rs.path_keys(np.arange(n), np.zeros(n, np.int64))
+    u1, u2 = rs.uniform2(keys, 0)
+    P = np.zeros((3, n), np.float32)
+    P[0] = np.linspace(-0.5, 0.5, n)
+    ls = lamp.sample(P, u1, u2)
+    good = np.flatnonzero(ls.value.max(axis=0) > 0)
+    assert len(good) > n // 2
+    Ls = ls.value[:, good] * ls.pdf[good]                     # radiance of the sample
+    D = np.ascontiguousarray(ls.wi[:, good])
+    O = np.ascontiguousarray(P[:, good])
+    if lamp.at_infinity:
+        idx, Le, pdf = lamp.eval_miss(D)
+    else:
+        idx, Le, pdf = lamp.intersect(O, D, np.full(len(good), np.inf, np.float32))
+        # and not when the ray stops just short of the sampled point
+        short = lamp.intersect(O, D, ls.dist[good] * np.float32(0.999))[0]
+        assert len(short) <= 0.001 * len(good)
+    assert len(idx) >= 0.999 * len(good)
+    assert np.allclose(Le, Ls[:, idx], rtol=2e-3)
+    assert np.allclose(pdf, ls.pdf[good][idx], rtol=2e-3)
+
+
+def looking_up(lamp, **camera):
+    """The plane is black; an orthographic camera at z = 0.5 looks straight up at the lamp."""
+    cam = ortho_down(**camera)
+    cam.matrix = translation(z=0.5) @ rotation_x(np.pi)
+    return render(plane_scene([lamp], albedo=0.0, samples=16, camera=cam))
+
+
+def test_lights_seen_by_camera():
+    area = light('AREA', 100.0, translation(z=1.0), size_x=1.0)
+    assert looking_up(area).film.combined()[..., 0] == pytest.approx(100.0 / np.pi, rel=1e-5)
+    sphere = light('POINT', 1000.0, translation(z=2.0), radius=0.5, soft_falloff=False)
+    assert looking_up(sphere).film.combined()[..., 0] == pytest.approx(1000.0 / (4 * np.pi ** 2 * 0.25), rel=1e-5)
+    disk = light('POINT', 1000.0, translation(z=2.0), radius=0.5, soft_falloff=True)
+    assert looking_up(disk).film.combined()[..., 0] == pytest.approx(1000.0 / (4 * np.pi ** 2 * 0.25), rel=1e-5)
+    hidden = light('AREA', 100.0, translation(z=1.0), size_x=1.0, visible_camera=False)
+    assert looking_up(hidden).film.combined()[..., 0].max() == 0.0
+    back = light('AREA', 100.0, translation(z=1.0) @ rotation_x(np.pi), size_x=1.0)
+    assert looking_up(back).film.combined()[..., 0].max() == 0.0      # one-sided

@@ -1,0 +1,80 @@
+"""The counter-based random numbers and the warps built on them."""
+import numpy as np
+import pytest
+
+from addon.sampling import (RandomStream, concentric_disk, cosine_hemisphere, dot, orthonormal_basis,
+                            to_world, uniform_cone, uniform_sphere, uniform_triangle)
+
+N = 1 << 16
+
+
+def uniforms(seed=0, dim=0, n=N):
+    rs = RandomStream(seed)
+    keys = rs.path_keys(np.arange(n) // 16, np.arange(n) % 16)
+    return rs.uniform2(keys, dim)
+
+
+def test_pure_function_of_seed_pixel_sample_dimension():
+    rs = RandomStream(5)
+    keys = rs.path_keys(np.array([3, 3, 9]), np.array([0, 0, 2]))
+    assert keys.shape == (2, 3) and keys.dtype == np.uint32
+    assert np.array_equal(keys[:, 0], keys[:, 1]) and not np.array_equal(keys[:, 0], keys[:, 2])
+    a = rs.uniform2(keys, 4)
+    b = RandomStream(5).uniform2(RandomStream(5).path_keys(np.array([3, 3, 9]), np.array([0, 0, 2])), 4)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    assert not np.array_equal(uniforms(seed=1)[0], uniforms(seed=2)[0])
+
+
+def test_keys_never_collide():
+    rs = RandomStream(0)
+    pix, smp = np.meshgrid(np.arange(512), np.arange(512))
+    keys = rs.path_keys(pix.ravel(), smp.ravel())
+    assert len(np.unique(keys.T.copy().view(np.uint64))) == keys.shape[1]
+
+
+@pytest.mark.parametrize('dim', [0, 1, 7])
+def test_uniform_and_independent(dim):
+    u1, u2 = uniforms(dim=dim)
+    for u in (u1, u2):
+        assert u.dtype == np.float32 and u.min() >= 0.0 and u.max() < 1.0
+        hist = np.bincount((u * 64).astype(int), minlength=64)
+        chi2 = ((hist - N / 64) ** 2 / (N / 64)).sum()
+        assert chi2 < 130                                   # 63 dof: p ~ 1e-6
+    v1, v2 = uniforms(dim=dim + 1)
+    for a, b in ((u1, u2), (u1, v1), (u2, v2)):
+        assert abs(np.corrcoef(a, b)[0, 1]) < 0.02
+    pick, rr = RandomStream(0).uniform_pick(RandomStream(0).path_keys(np.arange(N), np.zeros(N, int)), dim)
+    assert pick.dtype == np.float64 and abs(np.corrcoef(pick, rr)[0, 1]) < 0.02
+
+
+def test_cosine_hemisphere():
+    d = cosine_hemisphere(*uniforms())
+    assert np.allclose(dot(d, d), 1.0, atol=1e-5) and d[2].min() >= 0
+    assert d[2].mean() == pytest.approx(2.0 / 3.0, abs=0.005)          # E[cos] under cos/pi
+    assert (d[2] ** 2).mean() == pytest.approx(0.5, abs=0.005)
+
+
+def test_sphere_disk_cone_triangle():
+    s = uniform_sphere(*uniforms())
+    assert np.allclose(dot(s, s), 1.0, atol=1e-5) and np.allclose(s.mean(axis=1), 0.0, atol=0.01)
+    x, y = concentric_disk(*uniforms())
+    assert (x * x + y * y).max() <= 1.0 + 1e-6 and (x * x + y * y).mean() == pytest.approx(0.5, abs=0.005)
+    omc = 1e-5                                                   # a sun-sized cone stays exact
+    d, cos_t = uniform_cone(*uniforms(), omc)
+    assert np.allclose(dot(d, d), 1.0, atol=1e-5)
+    sin_t = np.hypot(d[0].astype(np.float64), d[1])              # the angle is kept, not just cos
+    assert sin_t.max() <= np.sqrt(omc * (2 - omc)) * (1 + 1e-5)
+    assert (sin_t ** 2).mean() == pytest.approx(omc, rel=0.01)
+    b1, b2 = uniform_triangle(*uniforms())
+    assert b1.min() >= 0 and b2.min() >= 0 and (b1 + b2).max() <= 1.0 + 1e-6
+    assert b1.mean() == pytest.approx(1 / 3, abs=0.005) and b2.mean() == pytest.approx(1 / 3, abs=0.005)
+
+
+def test_frames_are_orthonormal():
+    n = uniform_sphere(*uniforms())
+    t, b = orthonormal_basis(n)
+    for a, c in ((t, b), (t, n), (b, n)):
+        assert np.abs(dot(a, c)).max() < 1e-5
+    assert np.allclose(dot(t, t), 1.0, atol=1e-5) and np.allclose(dot(b, b), 1.0, atol=1e-5)
+    local = np.array([0.0, 0.0, 1.0], np.float32)[:, None] * np.ones(N, np.float32)
+    assert np.allclose(to_world(local, n), n, atol=1e-6)
