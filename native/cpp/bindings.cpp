@@ -49,23 +49,25 @@ public:
         return py::make_tuple(py::make_tuple(b.lo[0], b.lo[1], b.lo[2]), py::make_tuple(b.hi[0], b.hi[1], b.hi[2]));
     }
 
-    py::dict intersect(py::array rays, py::array hits, int threads, const std::string& isa, int partition,
-                       int leaf_size, float sah_ratio, size_t chunk_rays) {
+    py::dict intersect(py::array rays, py::array hits, py::object skip, int threads, const std::string& isa,
+                       int partition, int leaf_size, float sah_ratio, size_t chunk_rays) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(hits, n, sizeof(Hit), "hits");
         Hit* h = static_cast<Hit*>(hits.mutable_data());
-        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Closest, h, nullptr, 0.0f, nullptr};
+        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Closest, h, nullptr,
+                     skip_ptr(skip, n), 0.0f, nullptr};
         return run(r, n, job, threads, isa, [&](float& oam) { return validate_rays(r, n, h, oam); });
     }
 
-    py::dict occluded(py::array rays, py::array out, int threads, const std::string& isa, int partition,
-                      int leaf_size, float sah_ratio, size_t chunk_rays) {
+    py::dict occluded(py::array rays, py::array out, py::object skip, int threads, const std::string& isa,
+                      int partition, int leaf_size, float sah_ratio, size_t chunk_rays) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(out, n, 1, "occluded");
         uint8_t* o = static_cast<uint8_t*>(out.mutable_data());
-        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Any, nullptr, o, 0.0f, nullptr};
+        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Any, nullptr, o,
+                     skip_ptr(skip, n), 0.0f, nullptr};
         return run(r, n, job, threads, isa, [&](float& oam) { return validate_rays(r, n, o, oam); });
     }
 
@@ -89,6 +91,14 @@ private:
         if (!(rays.flags() & py::array::c_style)) throw py::value_error("rays must be C-contiguous");
         if (!rays.writeable()) throw py::value_error("rays must be writeable (they are reordered in place)");
         return static_cast<Ray*>(rays.mutable_data());
+    }
+    // The Python layer hands a C-contiguous int32 array of n entries, or None.
+    static const int32_t* skip_ptr(py::object& skip, size_t n) {
+        if (skip.is_none()) return nullptr;
+        py::array a = skip.cast<py::array>();
+        if (a.ndim() != 1 || size_t(a.shape(0)) != n || a.itemsize() != 4 || !(a.flags() & py::array::c_style))
+            throw py::value_error("internal: bad skip array");
+        return static_cast<const int32_t*>(a.data());
     }
     static void check_out(py::array& a, size_t n, size_t itemsize, const char* what) {
         if (a.ndim() != 1 || size_t(a.shape(0)) != n || size_t(a.itemsize()) != itemsize ||

@@ -42,6 +42,7 @@ struct TraceJob {
     Query query;
     Hit* hits;            // Closest: output by ray id
     uint8_t* occluded;    // Any: output by ray id
+    const int32_t* skip;  // optional, by ray id: triangle the ray must ignore (-1: none)
     float origin_abs_max; // largest |origin coordinate| over the batch (box padding)
     SharedTop* top;       // shared top levels of this call
 };

@@ -87,7 +87,7 @@ inline void exact_edges(vfloat<W>& U, vfloat<W>& V, vfloat<W>& Wf, const vfloat<
 
 template <int W, Query Q>
 void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const Box* boxes,
-                    const CompactTri* tris, Hit* hits, uint8_t* occluded, Stats& st) {
+                    const CompactTri* tris, Hit* hits, uint8_t* occluded, const int32_t* skip, Stats& st) {
     constexpr size_t kChunk = 32;
     alignas(64) LeafTri lt[kChunk];
     st.leaves += 1;
@@ -135,7 +135,16 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
                 const vfloat<W> Tn = U * (g.S[2] * Pz[0]) + V * (g.S[2] * Pz[1]) + Wf * (g.S[2] * Pz[2]);
                 const vfloat<W> inv = splat<W>(1.0f) / det;
                 const vfloat<W> t = Tn * inv;
-                const vbool<W> ok = andnot(cmpeq(det, zero), inside) & cmplt(zero, t);
+                vbool<W> ok = andnot(cmpeq(det, zero), inside) & cmplt(zero, t);
+                if (skip) {  // a ray never hits the triangle it leaves (checked only on hits)
+                    uint32_t m = bits(ok), drop = 0;
+                    while (m) {
+                        const int l = __builtin_ctz(m);
+                        m &= m - 1;
+                        if (skip[g.id[l]] == T.prim) drop |= 1u << l;
+                    }
+                    if (drop) ok = andnot(from_bits<W>(drop), ok);
+                }
                 if (Q == Query::Any) {
                     const uint32_t hit = bits(ok & cmplt(t, g.tfar)) & ~done;
                     done |= hit;

@@ -26,6 +26,7 @@ struct Tracer {
     const CompactTri* tris;
     Hit* hits;
     uint8_t* occluded;
+    const int32_t* skip;
     Config cfg;
     float origin_abs_max;
     SharedTop* top;
@@ -70,7 +71,7 @@ struct Tracer {
         if (na == 0) return;
         const size_t leaf = size_t(cfg.leaf_size);
         if (nt <= leaf || na <= leaf) {
-            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, st);
+            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, skip, st);
             return;
         }
         NodeBounds L, R;
@@ -90,7 +91,7 @@ struct Tracer {
         const size_t na = filter(rays, n, nb, depth);
         if (na == 0) return;
         if (nt <= size_t(cfg.leaf_size)) {  // never split, so its ids never move
-            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, st);
+            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, skip, st);
             return;
         }
         SharedNode& sn = top->nodes[h];
@@ -126,7 +127,7 @@ struct Tracer {
 template <int W, Query Q>
 void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
     const TriangleSet& ts = *job.ts;
-    Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), job.hits, job.occluded, job.cfg, job.origin_abs_max,
+    Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), job.hits, job.occluded, job.skip, job.cfg, job.origin_abs_max,
                     job.top, ids, Stats{}};
     NodeBounds root;
     for (int a = 0; a < 3; ++a) {

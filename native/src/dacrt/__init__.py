@@ -187,25 +187,38 @@ class Scene:
         return (_check_threads(threads), _requested_isa(), PARTITIONS.index(self._partition),
                 self._leaf_size, self._sah_ratio, self._chunk_rays)
 
-    def intersect(self, rays: np.ndarray, threads: int = 0) -> np.ndarray:
+    def _skip(self, skip, n: int):
+        if skip is None:
+            return None
+        s = np.asarray(skip)
+        if s.shape != (n,) or s.dtype.kind not in "iu":
+            raise ValueError(f"skip must be an integer array of one triangle index per ray id (shape ({n},)); "
+                             f"got shape {s.shape} dtype {s.dtype}")
+        return np.ascontiguousarray(s, dtype=np.int32)
+
+    def intersect(self, rays: np.ndarray, threads: int = 0, skip=None) -> np.ndarray:
         """Closest hit with t in (0, tfar] for every ray; returns HIT_DTYPE indexed by ray id.
 
         rays is reordered in place and each hit ray's tfar becomes its hit distance. Ties at
-        equal t go to the lowest triangle index.
+        equal t go to the lowest triangle index. skip (optional, by ray id): a triangle index
+        the ray ignores, e.g. the one it leaves (-1: none), as Cycles skips the origin primitive.
         """
         _check_rays(rays)
         args = self._args(threads)
+        skip = self._skip(skip, len(rays))
         hits = np.empty(len(rays), HIT_DTYPE)
-        self.last_stats = self._core.intersect(rays, hits, *args)
+        self.last_stats = self._core.intersect(rays, hits, skip, *args)
         return hits
 
-    def occluded(self, rays: np.ndarray, threads: int = 0) -> np.ndarray:
+    def occluded(self, rays: np.ndarray, threads: int = 0, skip=None) -> np.ndarray:
         """True for every ray (by id) that hits anything with t in (0, tfar).
 
         rays is reordered in place; the tfar of occluded rays is overwritten (negative).
+        skip: as for intersect().
         """
         _check_rays(rays)
         args = self._args(threads)
+        skip = self._skip(skip, len(rays))
         out = np.empty(len(rays), np.uint8)
-        self.last_stats = self._core.occluded(rays, out, *args)
+        self.last_stats = self._core.occluded(rays, out, skip, *args)
         return out.view(np.bool_)
