@@ -14,8 +14,6 @@ Standard library only, so it runs under the system python3 before any venv exist
 Long logs go to build/logs/; their path is printed when a step fails.
 """
 
-from __future__ import annotations
-
 import ctypes.util
 import fcntl
 import hashlib
@@ -26,6 +24,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Dict, List, Optional
 
 ROOT = Path(__file__).resolve().parent
 VENV = ROOT / ".venv"
@@ -38,6 +37,7 @@ REQ_STAMP = VENV / ".dacrt-requirements.sha256"
 NATIVE_STAMP = VENV / ".dacrt-native.sha256"
 
 PYTHON_NEEDED = (3, 11)  # bpy 5.0.1 is built for CPython 3.11 only
+PY = "%d.%d" % PYTHON_NEEDED
 
 # Shared libraries the bpy 5.0.1 wheel loads from the system (found with ldd on its .so files and
 # by reading /proc/self/maps after `import bpy` and a Cycles render): soname -> Debian package.
@@ -68,7 +68,7 @@ def say(msg: str) -> None:
     print(f"[build.py] {msg}", flush=True)
 
 
-def run_logged(cmd: list[str], log_name: str, what: str, env: dict | None = None) -> None:
+def run_logged(cmd: List[str], log_name: str, what: str, env: Optional[dict] = None) -> None:
     """Run a noisy command with its output in build/logs/<log_name>; on failure show the tail."""
     LOGS.mkdir(parents=True, exist_ok=True)
     log = LOGS / log_name
@@ -83,12 +83,8 @@ def run_logged(cmd: list[str], log_name: str, what: str, env: dict | None = None
                          + "\n    ".join(tail) + f"\nFull log: {log}")
 
 
-def quiet_env(extra: dict | None = None) -> dict:
-    env = dict(os.environ)
-    env.update(PIP_DISABLE_PIP_VERSION_CHECK="1", PIP_NO_INPUT="1")
-    if extra:
-        env.update(extra)
-    return env
+def quiet_env() -> dict:
+    return dict(os.environ, PIP_DISABLE_PIP_VERSION_CHECK="1", PIP_NO_INPUT="1")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -105,36 +101,36 @@ def find_library(soname: str, ldconfig_text: str) -> bool:
 
 def check_prerequisites() -> None:
     """Collect every missing prerequisite, then fail once with the exact fix for each."""
-    problems: list[str] = []
-    apt: list[str] = []
+    problems: List[str] = []
+    apt: List[str] = []
 
     if sys.version_info[:2] != PYTHON_NEEDED:
         problems.append(
-            f"Python {PYTHON_NEEDED[0]}.{PYTHON_NEEDED[1]} is required (bpy 5.0.1 exists only for it); "
-            f"this is {sys.version.split()[0]} at {sys.executable}. Run build.py with a 3.11 "
-            f"interpreter, e.g. `python3.11 build.py ...`.")
-        apt += ["python3.11", "python3.11-venv", "python3.11-dev"]
+            f"Python {PY} is required (bpy 5.0.1 exists only for it); this is "
+            f"{sys.version.split()[0]} at {sys.executable}, and no python{PY} is on PATH.")
+        apt += [f"python{PY}", f"python{PY}-venv", f"python{PY}-dev"]
     else:
         if not VPY.exists():
             try:
                 import ensurepip  # noqa: F401  (Debian splits it out into python3.X-venv)
             except ImportError:
                 problems.append("the Python venv module cannot bootstrap pip (ensurepip missing).")
-                apt.append("python3.11-venv")
+                apt.append(f"python{PY}-venv")
         import sysconfig
         include = Path(sysconfig.get_paths()["include"]) / "Python.h"
         if not include.exists():
             problems.append(f"Python development headers are missing ({include}), "
                             "needed to compile the native module.")
-            apt.append("python3.11-dev")
+            apt.append(f"python{PY}-dev")
 
     if not (shutil.which("c++") or shutil.which("g++")):
         problems.append("no C++ compiler (`c++` or `g++`) on PATH.")
         apt.append("g++")
 
     try:
-        ldconfig = subprocess.run(["ldconfig", "-p"], capture_output=True, text=True,
-                                  stdin=subprocess.DEVNULL).stdout
+        ldconfig = subprocess.run(["ldconfig", "-p"], stdout=subprocess.PIPE,
+                                  stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
+                                  universal_newlines=True).stdout
     except OSError:
         ldconfig = ""
     missing = [so for so in BPY_SYSTEM_LIBS if not find_library(so, ldconfig)]
@@ -146,7 +142,8 @@ def check_prerequisites() -> None:
     if problems:
         msg = "Missing prerequisites:\n  - " + "\n  - ".join(problems)
         if apt:
-            msg += "\nInstall them with:\n    sudo apt-get install -y " + " ".join(dict.fromkeys(apt))
+            msg += ("\nInstall them with (as root, Debian/Ubuntu):\n    apt-get install -y "
+                    + " ".join(dict.fromkeys(apt)))
         raise SetupError(msg)
 
 
@@ -169,8 +166,8 @@ def ensure_venv() -> None:
         run_logged([sys.executable, "-m", "venv", str(VENV)], "venv.log", "creating .venv")
     version = venv_python_version()
     if tuple(int(x) for x in version.split(".")[:2]) != PYTHON_NEEDED:
-        raise SetupError(f"{VENV} runs Python {version}, but 3.11 is required (bpy 5.0.1). "
-                         f"Delete {VENV} and rerun with Python 3.11.")
+        raise SetupError(f"{VENV} runs Python {version}, but {PY} is required (bpy 5.0.1). "
+                         f"Delete {VENV} and rerun.")
 
 
 def requirements_hash() -> str:
@@ -217,7 +214,7 @@ def dacrt_installed() -> bool:
     return subprocess.call([str(VPY), "-c", code], stdin=subprocess.DEVNULL) == 0
 
 
-def native_config_settings(build_dir: Path, defines: dict[str, str]) -> list[str]:
+def native_config_settings(build_dir: Path, defines: Dict[str, str]) -> List[str]:
     # A persistent CMake build dir makes rebuilds incremental (scikit-build-core `build-dir`).
     args = [f"--config-settings=build-dir={build_dir}"]
     args += [f"--config-settings=cmake.define.{k}={v}" for k, v in defines.items()]
@@ -286,7 +283,7 @@ def sanitizer_preload() -> str:
                               stdin=subprocess.DEVNULL).stdout.strip()
         if not os.path.isabs(path) or not os.path.exists(path):
             raise SetupError(f"{lib} was not found for {cxx}. Install it with:\n"
-                             "    sudo apt-get install -y libasan8 libubsan1 libstdc++6")
+                             "    apt-get install -y libasan8 libubsan1 libstdc++6   (as root)")
         paths.append(os.path.realpath(path))
     return " ".join(paths)
 
@@ -332,7 +329,7 @@ def ensure_sanitized_native(req_digest: str) -> dict:
 # Commands
 
 
-def cmd_test(args: list[str]) -> int:
+def cmd_test(args: List[str]) -> int:
     stress = "--stress" in args
     sanitize = "--sanitize" in args
     rest = [a for a in args if a not in ("--stress", "--sanitize")]
@@ -352,21 +349,21 @@ def cmd_test(args: list[str]) -> int:
     return subprocess.call(cmd, cwd=ROOT, env=env)
 
 
-def run_module(module: str, module_path: Path, args: list[str], owner: str) -> int:
+def run_module(module: str, module_path: Path, args: List[str], owner: str) -> int:
     if not module_path.exists():
         raise SetupError(f"{module_path.relative_to(ROOT)} does not exist yet ({owner}); "
                          f"`python -m {module}` has nothing to run.")
     return subprocess.call([str(VPY), "-m", module, *args], cwd=ROOT)
 
 
-def cmd_render(args: list[str]) -> int:
+def cmd_render(args: List[str]) -> int:
     with SetupLock():
         setup()
     return run_module("addon.cli", ROOT / "addon" / "cli.py", ["render", *args],
                       "the add-on's command-line entry point")
 
 
-def cmd_bench(args: list[str]) -> int:
+def cmd_bench(args: List[str]) -> int:
     with SetupLock():
         setup()
     bench = ROOT / "tests" / "bench"
@@ -376,7 +373,7 @@ def cmd_bench(args: list[str]) -> int:
     return run_module("tests.bench", bench, args, "the benchmark package")
 
 
-def set_manifest_wheels(text: str, wheels: list[str]) -> str:
+def set_manifest_wheels(text: str, wheels: List[str]) -> str:
     """Return manifest text whose top-level `wheels` key lists exactly `wheels`."""
     line = "wheels = [" + ", ".join(f'"{w}"' for w in wheels) + "]\n"
     m = re.search(r"^wheels\s*=\s*\[.*?\][^\n]*\n?", text, re.M | re.S)
@@ -389,7 +386,7 @@ def set_manifest_wheels(text: str, wheels: list[str]) -> str:
     return text[:pos] + line + text[pos:]
 
 
-def cmd_package(args: list[str]) -> int:
+def cmd_package(args: List[str]) -> int:
     if args:
         raise SetupError(f"`package` takes no arguments (got {' '.join(args)}).")
     manifest = ROOT / "addon" / "blender_manifest.toml"
@@ -447,13 +444,26 @@ def cmd_package(args: list[str]) -> int:
 COMMANDS = {"test": cmd_test, "render": cmd_render, "bench": cmd_bench, "package": cmd_package}
 
 
-def main(argv: list[str]) -> int:
+def use_python_311(argv: List[str]) -> None:
+    """Re-run this script under python3.11 when started by another Python and one is on PATH."""
+    if sys.version_info[:2] == PYTHON_NEEDED or os.environ.get("DACRT_BUILD_REEXEC"):
+        return
+    other = shutil.which(f"python{PY}")
+    if other:
+        say(f"this is Python {sys.version.split()[0]}; bpy 5.0.1 needs {PY}: re-running with {other}")
+        os.environ["DACRT_BUILD_REEXEC"] = "1"
+        sys.stdout.flush()
+        os.execv(other, [other, str(Path(__file__).resolve()), *argv])
+
+
+def main(argv: List[str]) -> int:
     if not argv or argv[0] in ("-h", "--help", "help") or argv[0] not in COMMANDS:
         print(__doc__.strip())
         if argv and argv[0] not in ("-h", "--help", "help"):
             print(f"\nunknown command: {argv[0]}")
             return 2
         return 0 if argv else 2
+    use_python_311(argv)
     try:
         return COMMANDS[argv[0]](argv[1:])
     except SetupError as e:

@@ -23,7 +23,7 @@ FIXED = [("soup_dirty", 1, 6, "random", "mixed", 4000, 1),
          ("soup_far", 6, 6, "camera", "mixed", 4000, 6)]
 
 
-def results(case, isa, threads, partition="adaptive", leaf_size=8, monkeypatch=None):
+def results(monkeypatch, case, isa, threads, partition="adaptive", leaf_size=8):
     monkeypatch.setenv("DACRT_ISA", isa)
     scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy(), partition=partition,
                         leaf_size=leaf_size)
@@ -47,11 +47,11 @@ def assert_identical(a, b, what):
 @pytest.mark.parametrize("key", FIXED, ids=[k[0] + "-" + k[3] for k in FIXED])
 def test_identical_across_isas_and_threads(monkeypatch, key):
     case = build_case(*key)
-    base = results(case, "portable", 1, monkeypatch=monkeypatch)
+    base = results(monkeypatch, case, "portable", 1)
     assert (base[0]["prim"] >= 0).any()
     for isa, threads in itertools.product(ISAS, [1, 2, 0]):
         if (isa, threads) != ("portable", 1):
-            assert_identical(base, results(case, isa, threads, monkeypatch=monkeypatch),
+            assert_identical(base, results(monkeypatch, case, isa, threads),
                              f"{key}: portable/1 thread vs {isa}/{threads} threads")
 
 
@@ -61,10 +61,10 @@ def test_identical_across_partition_modes_and_leaf_sizes(monkeypatch, key):
     deterministic tie rule make it independent of how the set is split."""
     case = build_case(*key)
     isa = ISAS[-1]
-    base = results(case, isa, 2, "adaptive", 8, monkeypatch)
+    base = results(monkeypatch, case, isa, 2, "adaptive", 8)
     for partition, leaf in itertools.product(["adaptive", "median", "sah"], [1, 3, 8, 32, 10**6]):
         if (partition, leaf) != ("adaptive", 8):
-            assert_identical(base, results(case, isa, 2, partition, leaf, monkeypatch),
+            assert_identical(base, results(monkeypatch, case, isa, 2, partition, leaf),
                              f"{key}: adaptive/8 vs {partition}/{leaf}")
 
 
