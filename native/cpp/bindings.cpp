@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -116,9 +117,12 @@ private:
         }
         std::string err;
         TraceResult res;
+        double validate_s = 0.0;
         {
             py::gil_scoped_release nogil;
+            const auto v0 = std::chrono::steady_clock::now();
             err = validate(job.origin_abs_max);
+            validate_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - v0).count();
             if (err.empty()) res = trace(*ts_, r, n, job, threads, isa);
         }
         if (!err.empty()) throw py::value_error(err);
@@ -136,6 +140,7 @@ private:
         d["threads"] = res.threads;
         d["isa"] = isa_name(isa);
         d["seconds"] = res.seconds;
+        d["validate_seconds"] = validate_s;
         return d;
     }
 };

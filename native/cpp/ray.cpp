@@ -2,7 +2,9 @@
 // touched, so a rejected call leaves the array exactly as it was.
 #include "ray_check.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 namespace dacrt {
@@ -13,41 +15,62 @@ static std::string vec(const float* v) {
     return s.str();
 }
 
-// Mark: the slot type of the output array used to detect repeated ids.
+static bool finite(float x) {
+    uint32_t b;
+    std::memcpy(&b, &x, 4);
+    return (b & 0x7f800000u) != 0x7f800000u;
+}
+
+// The problem with ray k, or an empty string if its fields are fine and `repeated` is false.
+__attribute__((noinline, cold)) static std::string describe(const Ray* rays, size_t n, size_t k, bool repeated) {
+    const Ray& r = rays[k];
+    const std::string at = "rays[" + std::to_string(k) + "]";
+    for (int a = 0; a < 3; ++a)
+        if (!finite(r.org[a])) return at + ".org is not finite: " + vec(r.org);
+    for (int a = 0; a < 3; ++a)
+        if (!finite(r.dir[a])) return at + ".dir is not finite: " + vec(r.dir);
+    if (r.dir[0] == 0.0f && r.dir[1] == 0.0f && r.dir[2] == 0.0f) return at + ".dir is the zero vector";
+    if (std::isnan(r.tfar)) return at + ".tfar is NaN";
+    if (r.tfar < 0.0f) return at + ".tfar is negative (" + std::to_string(r.tfar) + ")";
+    if (r.id >= n)
+        return at + ".id = " + std::to_string(r.id) + " is out of range: ids must be 0.." + std::to_string(n - 1) +
+               " (a permutation of the ray indices)";
+    if (!repeated) return {};
+    return at + ".id = " + std::to_string(r.id) + " is repeated: ids must be unique";
+}
+
+// One pass: fields (x - x is 0 exactly for finite x, NaN otherwise, so one comparison covers all
+// six coordinates) and the id against the marks; a message is built only after a failure.
 template <class Mark>
 static std::string validate(const Ray* rays, size_t n, char* marks, size_t stride, Mark unseen, Mark seen,
                             float& origin_abs_max) {
-    origin_abs_max = 0.0f;
-    for (size_t k = 0; k < n; ++k) *reinterpret_cast<Mark*>(marks + k * stride) = unseen;
+    float oam[3] = {0, 0, 0};
     for (size_t k = 0; k < n; ++k) {
         const Ray& r = rays[k];
-        for (int a = 0; a < 3; ++a) {
-            if (!std::isfinite(r.org[a])) return "rays[" + std::to_string(k) + "].org is not finite: " + vec(r.org);
-            if (!std::isfinite(r.dir[a])) return "rays[" + std::to_string(k) + "].dir is not finite: " + vec(r.dir);
-            origin_abs_max = std::fmax(origin_abs_max, std::fabs(r.org[a]));
-        }
-        if (r.dir[0] == 0.0f && r.dir[1] == 0.0f && r.dir[2] == 0.0f)
-            return "rays[" + std::to_string(k) + "].dir is the zero vector";
-        if (std::isnan(r.tfar)) return "rays[" + std::to_string(k) + "].tfar is NaN";
-        if (r.tfar < 0.0f) return "rays[" + std::to_string(k) + "].tfar is negative (" + std::to_string(r.tfar) + ")";
-        if (r.id >= n)
-            return "rays[" + std::to_string(k) + "].id = " + std::to_string(r.id) + " is out of range: ids must be 0.." +
-                   std::to_string(n - 1) + " (a permutation of the ray indices)";
-        Mark& m = *reinterpret_cast<Mark*>(marks + size_t(r.id) * stride);
-        if (m != unseen) return "rays[" + std::to_string(k) + "].id = " + std::to_string(r.id) + " is repeated: ids must be unique";
+        const float z = ((r.org[0] - r.org[0]) + (r.org[1] - r.org[1])) + ((r.org[2] - r.org[2]) +
+                        (r.dir[0] - r.dir[0])) + ((r.dir[1] - r.dir[1]) + (r.dir[2] - r.dir[2]));
+        const bool fields = (z == 0.0f) & (r.tfar >= 0.0f) & ((r.dir[0] != 0.0f) | (r.dir[1] != 0.0f) | (r.dir[2] != 0.0f));
+        const uint32_t id = r.id;
+        if (!fields || id >= n) return describe(rays, n, k, false);
+        Mark& m = *reinterpret_cast<Mark*>(marks + size_t(id) * stride);
+        if (m != unseen) return describe(rays, n, k, true);
         m = seen;
+        for (int a = 0; a < 3; ++a) {
+            const float v = std::fabs(r.org[a]);
+            oam[a] = v > oam[a] ? v : oam[a];
+        }
     }
+    origin_abs_max = std::max(oam[0], std::max(oam[1], oam[2]));
     return {};
 }
 
 std::string validate_rays(const Ray* rays, size_t n, Hit* hits, float& origin_abs_max) {
-    std::string err = validate<int32_t>(rays, n, reinterpret_cast<char*>(&hits[0].prim), sizeof(Hit), -2, -1, origin_abs_max);
-    if (err.empty())
-        for (size_t k = 0; k < n; ++k) hits[k] = Hit{INFINITY, -1, 0.0f, 0.0f};
-    return err;
+    for (size_t k = 0; k < n; ++k) hits[k] = Hit{INFINITY, -2, 0.0f, 0.0f};
+    return validate<int32_t>(rays, n, reinterpret_cast<char*>(&hits[0].prim), sizeof(Hit), -2, -1, origin_abs_max);
 }
 
 std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, float& origin_abs_max) {
+    std::memset(occluded, 2, n);
     return validate<uint8_t>(rays, n, reinterpret_cast<char*>(occluded), 1, 2, 0, origin_abs_max);
 }
 
