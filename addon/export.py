@@ -139,7 +139,10 @@ def export_light(ob, matrix, messages):
               matrix=np.array(matrix, np.float64), normalize=bool(getattr(light, 'normalize', True)),
               cast_shadow=bool(light.use_shadow),
               use_mis=bool(getattr(cycles, 'use_multiple_importance_sampling', True)),
-              name=ob.name)
+              name=ob.name,
+              # object ray visibility (Object > Visibility > Ray Visibility; a new light object
+              # has Camera off): camera rays see the lamp, diffuse surfaces receive its light
+              visible_camera=bool(ob.visible_camera), visible_diffuse=bool(ob.visible_diffuse))
     if light.type in ('POINT', 'SPOT'):
         kw.update(radius=float(light.shadow_soft_size),
                   soft_falloff=bool(getattr(light, 'use_soft_falloff', True)))
@@ -645,11 +648,17 @@ class _Exporter:
                                                    slot_map, vis, self._object_id(ob.name), ob.name))
 
     def _light(self, inst, ob):
-        if not ob.visible_diffuse:
-            self._skip("lights with diffuse ray visibility off contribute nothing to a diffuse "
-                       "renderer", ob.name)
+        # instances also take their instancer's ray visibility (as Cycles)
+        parent = inst.parent if inst.is_instance and inst.parent is not None else ob
+        if not ((ob.visible_diffuse and parent.visible_diffuse) or (ob.visible_camera and parent.visible_camera)):
+            self._skip("lights with camera and diffuse ray visibility off contribute nothing to a "
+                       "diffuse renderer", ob.name)
             return None
-        return export_light(ob, inst.matrix_world, self.messages)
+        light = export_light(ob, inst.matrix_world, self.messages)
+        if light is not None and parent is not ob:
+            light.visible_camera = light.visible_camera and bool(parent.visible_camera)
+            light.visible_diffuse = light.visible_diffuse and bool(parent.visible_diffuse)
+        return light
 
     def _visibility(self, ob, parent):
         """Ray visibility bits; instances also take their instancer's (as Cycles)."""

@@ -9,7 +9,8 @@ and Cycles' bounce semantics: max_bounces K gives up to K+1 diffuse reflections,
 at vertices 0..K, and the last BSDF ray only collects emission (reference blender-cycles.md 2.5).
 
 Also owns the per-frame surface data the loop reads (triangle table, materials and textures,
-the self-intersection offset) and the tracer scenes, one per distinct ray-visibility subset
+self-intersection: every bounce and shadow ray skips the triangle it leaves and starts a few
+ULPs off it, see triangle_offsets) and the tracer scenes, one per distinct ray-visibility subset
 (camera rays see VIS_CAMERA triangles, bounce rays VIS_DIFFUSE, shadow rays VIS_SHADOW), built
 in the constructor and dropped when rendering ends. Nothing here knows Blender.
 
@@ -55,38 +56,28 @@ def _dim(vertex: int, slot: int) -> int:
 _TARGET_PASS_SECONDS = 0.8
 _MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 21, 1 << 16
 
-# Ray Tracing Gems ch. 6 (Waechter & Binder) offset constants, identical to Cycles' ray_offset().
-_ORIGIN = F32(1.0 / 32.0)
-_FLOAT_SCALE = F32(1.0 / 65536.0)
-_INT_SCALE = F32(256.0)
-
-
-def offset_ray_origin(p: np.ndarray, n: np.ndarray, magnitude: np.ndarray | None = None) -> np.ndarray:
-    """Move points p (3,n) float32 off their surface along unit normals n (3,n) (toward the side
-    the new ray leaves from), Ray Tracing Gems ch. 6: int(256 n) ULPs per axis, or n/65536 where
-    the coordinate is within 1/32 of the origin and ULPs vanish. No epsilon tied to scene size.
-
-    The ULPs are taken at max(|p|, magnitude): `magnitude` (n,) is the largest vertex coordinate
-    of the triangle p lies on. A float32 ray/triangle test errs by a few ULPs of the triangle's
-    own coordinates, so a point near the origin on a huge triangle (a 2 km ground plane) needs the
-    triangle's ULPs, not its own, to never re-hit that triangle; elsewhere this is plain RTG.
-    For points on a triangle |p| <= magnitude, so the step is one vector per triangle:
-    see triangle_offsets(), which the render loop uses."""
-    a = np.abs(p)
-    if magnitude is not None:
-        np.maximum(a, magnitude, out=a)
-    near = a < _ORIGIN
-    step = _ulp(a)
-    step *= np.trunc(n * _INT_SCALE)
-    if near.any():
-        np.copyto(step, n * _FLOAT_SCALE, where=near)
-    step += p
-    return step
+# Self-intersection (reference dacrt-anchors.md section 4). As Cycles, a bounce or shadow ray
+# never hits the triangle it leaves: the tracer skips it (`skip`, by ray id). What skip cannot
+# cover is a NEIGHBOUR across an edge or vertex at the hit point: a float32 ray/triangle test errs
+# by a few ULPs of the coordinates involved, and a point on a huge triangle (a 2 km ground plane)
+# can lie far closer to the origin than the shared edge's vertices, so the ULPs that matter are
+# those of the triangle's largest coordinate, not the point's. The origin therefore moves
+# _OFFSET_ULPS of those ULPs along the geometric normal: the Ray Tracing Gems ch. 6 integer-ULP
+# offset, evaluated at the triangle's scale, with 8 instead of RTG's 256 ULPs since the triangle
+# itself is skipped. (Measured over random tilted, subdivided, huge, tiny and distant planes and
+# convex folds: 2 ULPs already never re-hit a neighbour; 8 is the margin.) A 2 km plane so gets
+# a 0.5 mm step where the previous 256 ULPs gave 1.5 cm (which biased MIS toward nearby lights).
+_OFFSET_ULPS = F32(8.0)
+_TINY = F32(2.0 ** -100)     # floor keeping _ulp's input a normal float (an all-zero triangle is never hit)
+# A shadow ray that must end at an emitter triangle ends at a point pushed off it by the same
+# step, and a little short (the end of a float32 ray drifts by a few ULPs of its length; measured:
+# 2**-17 of the length always sufficed, 2**-18 did not).
+_END_SHORTEN = F32(1.0 - 2.0 ** -16)
 
 
 def _ulp(a: np.ndarray) -> np.ndarray:
-    """ULP of non-negative normal float32 values (their exponent bits, 23 binades down); values
-    below 2**-103 give garbage, callers replace everything below 1/32 anyway. Overwrites a."""
+    """ULP of non-negative normal float32 values (their exponent bits, 23 binades down); callers
+    keep the input >= _TINY. Overwrites a."""
     bits = a.view(np.int32)
     bits &= np.int32(0x7F800000)
     bits -= np.int32(23 << 23)
@@ -94,13 +85,22 @@ def _ulp(a: np.ndarray) -> np.ndarray:
 
 
 def triangle_offsets(corners: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """Per-triangle offset_ray_origin step for points on the front side: corners (M,3,3)
-    float32, unit geometric normals (3,M) -> (3,M) float32; negate it for the back side."""
-    mag = np.abs(corners).max(axis=(1, 2)).astype(F32) if len(corners) else np.zeros(0, F32)
-    step = _ulp(mag.copy()) * np.trunc(normals * _INT_SCALE)
-    near = mag < _ORIGIN
-    step[:, near] = normals[:, near] * _FLOAT_SCALE
+    """Per-triangle self-intersection step for points on the front side: corners (M,3,3)
+    float32, unit geometric normals (3,M) -> (3,M) float32, _OFFSET_ULPS ULPs of the triangle's
+    largest |coordinate| along the normal (see the comment above); negate it for the back side."""
+    if not len(corners):
+        return np.zeros((3, 0), F32)
+    mag = np.maximum(np.abs(corners).max(axis=(1, 2)).astype(F32), _TINY)
+    step = normals.astype(F32) * (_ulp(mag) * _OFFSET_ULPS)
     return step.astype(F32)
+
+
+def shadow_ray_to(O: np.ndarray, target: np.ndarray):
+    """Direction and length of shadow rays from O to points offset in front of an emitter
+    triangle (its triangle_offsets step), stopped _END_SHORTEN of the way."""
+    d, length = normalize(target - O)
+    length *= _END_SHORTEN
+    return d, length
 
 
 @dataclass
@@ -293,6 +293,9 @@ class Integrator:
         self.tri = _Triangles(scene_data.geometry, self.messages)
         self.mats = _Materials(scene_data.materials)
         self._tri_emissive = self.mats.emissive[self.tri.material] & (self.tri.area > 0)
+        # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
+        self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))
+        self._tri_live = max3(self._tri_albedo) > 0
         self._area32 = self.tri.area.astype(F32)
         self._any_emissive = bool(self._tri_emissive.any())
         self._build_lights(scene_data)
@@ -326,6 +329,10 @@ class Integrator:
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
                                           f"strength: {', '.join(self.lights.skipped_lamps)}"))
+        if self.lights.unseen_lamps:
+            self.messages.append(('INFO', f"skipped {len(self.lights.unseen_lamps)} light(s) that neither camera "
+                                          f"nor diffuse rays can see: {', '.join(self.lights.unseen_lamps)}"))
+        self._lamps_for_camera = bool(self.lights.num_lamps or self.lights.camera_lamps)
         self._lamp_mis = np.array([l.seen_by_bsdf for l in self.lights.lamps], bool)
         tri_entries = self.lights.tri_prob[self.lights.triangles.index] if self.lights.triangles is not None \
             else np.zeros(0, F32)
@@ -340,23 +347,29 @@ class Integrator:
             wanted['bounce'] = VIS_DIFFUSE
         if self.lights:
             wanted['shadow'] = VIS_SHADOW
-        self._scenes, self._maps = {}, {}
+        self._scenes, self._maps, self._local = {}, {}, {}
         built = {}
         for kind, bit in wanted.items():
             mask = (vis & bit) != 0
             key = mask.tobytes()
             if key not in built:
                 everything = bool(mask.all())
-                sub = None if everything else np.flatnonzero(mask).astype(np.int32)
+                sub = local = None
+                if not everything:
+                    sub = np.flatnonzero(mask).astype(np.int32)
+                    # global triangle -> this scene's index (-1: not in it), for skip
+                    local = np.full(len(self.tri), -1, np.int32)
+                    local[sub] = np.arange(len(sub), dtype=np.int32)
                 tris = self.tri.indices if everything else self.tri.indices[sub]
-                built[key] = (dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition), sub)
-            self._scenes[kind], self._maps[kind] = built[key]
+                built[key] = (dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition), sub, local)
+            self._scenes[kind], self._maps[kind], self._local[kind] = built[key]
         self._num_scenes = len(built)
 
     def close(self):
         """Drop the tracer scenes (also done when passes() ends or is closed)."""
         self._scenes = {}
         self._maps = {}
+        self._local = {}
 
     # --- public ---------------------------------------------------------------------------------
 
@@ -445,17 +458,28 @@ class Integrator:
         n = O.shape[1]
         if len(self._ids) < n:
             self._ids = np.arange(max(n, 2 * len(self._ids)), dtype=np.uint32)
-        rays = np.empty(n, dacrt.RAY_DTYPE)
-        rays['org'] = O.T
-        rays['dir'] = D.T
-        rays['tfar'] = tfar
-        rays['id'] = self._ids[:n]
-        return rays
+        # rows org, dir, tfar, id, then one transposing copy into RAY_DTYPE records (faster
+        # than filling the strided record fields one by one)
+        buf = np.empty((8, n), F32)
+        buf[0:3] = O
+        buf[3:6] = D
+        buf[6] = tfar
+        buf[7] = self._ids[:n].view(F32)
+        return np.ascontiguousarray(buf.T).view(dacrt.RAY_DTYPE).reshape(n)
 
-    def _intersect(self, kind, O, D, tfar):
+    def _skip(self, kind, prim):
+        """Per-ray triangle to ignore, in the tracer scene's own numbering (prim: global index
+        of the triangle each ray leaves, or None)."""
+        if prim is None:
+            return None
+        local = self._local[kind]
+        return prim if local is None else np.take(local, prim)
+
+    def _intersect(self, kind, O, D, tfar, skip=None):
         rays = self._ray_array(O, D, tfar)
+        skip = self._skip(kind, skip)
         t0 = time.perf_counter()
-        hits = self._scenes[kind].intersect(rays, threads=self.threads)
+        hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip)
         self._trace_seconds += time.perf_counter() - t0
         self._rays['camera' if kind == 'camera' else 'bounce'] += O.shape[1]
         sub = self._maps[kind]
@@ -464,10 +488,11 @@ class Integrator:
             hits['prim'] = np.where(prim >= 0, np.take(sub, np.maximum(prim, 0)), -1)
         return hits
 
-    def _occluded(self, O, D, tfar):
+    def _occluded(self, O, D, tfar, skip=None):
         rays = self._ray_array(O, D, tfar)
+        skip = self._skip('shadow', skip)
         t0 = time.perf_counter()
-        occ = self._scenes['shadow'].occluded(rays, threads=self.threads)
+        occ = self._scenes['shadow'].occluded(rays, threads=self.threads, skip=skip)
         self._trace_seconds += time.perf_counter() - t0
         self._rays['shadow'] += O.shape[1]
         return occ
@@ -493,7 +518,7 @@ class Integrator:
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
         L, alpha = rgba[:3], rgba[3]
         data = {}
-        path = _Paths(np.arange(n), keys, O, D, tmax, None, None)
+        path = _Paths(np.arange(n), keys, O, D, tmax, None, None, None)
         for k in range(self.max_bounces + 2):
             path = self._vertex(k, path, L, alpha, data, pix, samp)
             if path is None:
@@ -506,14 +531,15 @@ class Integrator:
         emission, Russian roulette, light sampling, BSDF sampling. Returns the paths that go on."""
         K = self.max_bounces
         camera = k == 0
-        hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax)
+        hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax, path.prim)
         prim = hits['prim']
         hit = prim >= 0
-        if self.lights.num_lamps:
+        lamps = self._lamps_for_camera if camera else self.lights.num_lamps
+        if lamps:
             self._gather_lamps(camera, path, np.where(hit, hits['t'], path.tmax), L)
         miss = np.flatnonzero(~hit)
         if len(miss):
-            if self.lights.num_lamps:
+            if lamps:
                 self._gather_infinite(camera, path, miss, L)
             if camera and not self.transparent:
                 alpha[miss] = 1.0
@@ -536,9 +562,7 @@ class Integrator:
             return None
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)).
-        mat = np.take(self.tri.material, prim)        # misses read the last triangle: masked below
-        albedo = np.take(self.mats.base, mat, axis=1)
-        live = hit & (max3(albedo) > 0)
+        live = hit & np.take(self._tri_live, prim)    # misses read the last triangle: masked here
         thr = path.thr
         need_pick = self.lights.num_entries > 1
         u_pick = None
@@ -552,13 +576,16 @@ class Integrator:
         if len(idx) == 0:
             return None
         take = _taker(None if len(idx) == len(live) else idx)
-        prim, u, v, mat = take(prim), take(hits['u']), take(hits['v']), take(mat)
-        pid, keys, D, thr, albedo = take(path.pid), take(path.keys), take(path.D), take(thr), take(albedo)
+        prim, u, v = take(prim), take(hits['u']), take(hits['v'])
+        pid, keys, D, thr = take(path.pid), take(path.keys), take(path.D), take(thr)
         u_pick = take(u_pick) if need_pick else None
         del hits, path
+        albedo = np.take(self._tri_albedo, prim, axis=1)
+        mat = np.take(self.tri.material, prim) if self.mats.textures else None
         P, ng, ns, P_off = self._surface(prim, u, v, D, mat, albedo)
+        thr = albedo if thr is None else albedo * thr     # throughput after this reflection
         if self.lights:
-            self._next_event(k, P, P_off, ng, ns, albedo, thr, pid, keys, u_pick, L)
+            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L)
         if k == K and not self.lights.seen_by_bsdf:
             return None                               # the last BSDF ray could only find emission
         # cosine-weighted BSDF sample around the shading normal; reject directions below the
@@ -566,17 +593,16 @@ class Integrator:
         u1, u2 = self.rng.uniform2(keys, _dim(k, 2))
         local = cosine_hemisphere(u1, u2)
         wi = to_world(local, ns)
-        thr = albedo if thr is None else albedo * thr
         pdf = local[2] * INV_PI
         ok = local[2] > 0
         if ns is not ng:
             ok &= dot(wi, ng) > 0
         if not ok.all():
             take = _taker(np.flatnonzero(ok))
-            P_off, wi, thr, pid, keys, pdf = (take(a) for a in (P_off, wi, thr, pid, keys, pdf))
+            P_off, wi, thr, pid, keys, pdf, prim = (take(a) for a in (P_off, wi, thr, pid, keys, pdf, prim))
         if len(pid) == 0:
             return None
-        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf)
+        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim)
 
     # --- surfaces -------------------------------------------------------------------------------
 
@@ -591,7 +617,7 @@ class Integrator:
         ng = g[9:12]
         flip = np.where(dot(ng, D) > 0, F32(-1.0), F32(1.0))
         ng = ng * flip
-        P_off = g[12:15] * flip                       # offset_ray_origin(P, ng, magnitude)
+        P_off = g[12:15] * flip                       # triangle_offsets() toward the ray's side
         P_off += P
         if self.tri.normals is not None:
             nn = np.take(self.tri.normals, prim, axis=1)
@@ -605,7 +631,7 @@ class Integrator:
                 np.copyto(ns, ng, where=bad)
         else:
             ns = ng
-        for m, tex, interp, ext in self.mats.textures:
+        for m, tex, interp, ext in self.mats.textures:       # (mat is None without textures)
             sel = np.flatnonzero(mat == m)
             if len(sel) and self.tri.uvs is not None:
                 uvc = np.take(self.tri.uvs, np.take(prim, sel), axis=1)
@@ -665,12 +691,20 @@ class Integrator:
             with np.errstate(divide='ignore', invalid='ignore'):
                 pdf_l = np.take(self.lights.tri_prob, p) * te * te / (np.take(self._area32, p) * cos_l)
             Le *= self._mis_bsdf(np.take(path.pdf, em), pdf_l)
-        L[:, np.take(path.pid, em)] += Le
+        _accumulate(L, np.take(path.pid, em), Le)
+
+    def _seen_lamps(self, camera):
+        """(index into lights.lamps, lamp) of the lamps camera or BSDF rays can meet; lamps that
+        only the camera sees carry index -1 (camera hits need no light-selection probability)."""
+        if not camera:
+            return [(j, l) for j, l in enumerate(self.lights.lamps) if l.seen_by_bsdf]
+        return ([(j, l) for j, l in enumerate(self.lights.lamps) if l.seen_by_camera]
+                + [(-1, l) for l in self.lights.camera_lamps])
 
     def _gather_lamps(self, camera, path, t_surf, L):
         """Finite lamps a ray passes before its surface hit (lamps are not geometry)."""
-        for j, lamp in enumerate(self.lights.lamps):
-            if lamp.at_infinity or not (lamp.seen_by_camera if camera else lamp.seen_by_bsdf):
+        for j, lamp in self._seen_lamps(camera):
+            if lamp.at_infinity:
                 continue
             idx, Le, pdf_l = lamp.intersect(path.O, path.D, t_surf)
             if len(idx):
@@ -678,8 +712,8 @@ class Integrator:
 
     def _gather_infinite(self, camera, path, miss, L):
         D = None
-        for j, lamp in enumerate(self.lights.lamps):
-            if not lamp.at_infinity or not (lamp.seen_by_camera if camera else lamp.seen_by_bsdf):
+        for j, lamp in self._seen_lamps(camera):
+            if not lamp.at_infinity:
                 continue
             if camera and self.transparent and isinstance(lamp, BackgroundLight):
                 continue                              # transparent film: the world is not seen directly
@@ -694,13 +728,14 @@ class Integrator:
             Le = Le * np.take(path.thr, idx, axis=1)
         if not camera:
             Le *= self._mis_bsdf(np.take(path.pdf, idx), self.lights.lamp_prob[j] * pdf_l)
-        L[:, np.take(path.pid, idx)] += Le
+        _accumulate(L, np.take(path.pid, idx), Le)
 
     # --- next-event estimation --------------------------------------------------------------------
 
-    def _next_event(self, k, P, P_off, ng, ns, albedo, thr, pid, keys, u_pick, L):
+    def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
-        batch. Light geometry is taken at the surface point P; shadow rays leave from P_off."""
+        batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
+        the surface point P; shadow rays leave from P_off and skip the triangle prim they leave."""
         lights = self.lights
         n = P.shape[1]
         u1, u2 = self.rng.uniform2(keys, _dim(k, 1))
@@ -745,9 +780,7 @@ class Integrator:
             r += F32(1.0)                             # power heuristic w = 1/r; delta lights: 1
             scale = cos_s * INV_PI
             scale /= r * p_sel
-        value *= albedo
-        if thr is not None:
-            value *= thr
+        value *= thr
         value *= scale
         ok = (cos_s > 0) & (max3(value) > 0)
         if ns is not ng:
@@ -756,27 +789,29 @@ class Integrator:
         self._skipped_shadow += n - int(np.count_nonzero(ok))
         if len(send):
             take = _taker(send)
-            O, sd, sl = take(P_off), take(wi), take(dist)
-            if target is not None:
-                # emitters that are geometry: aim exactly at the offset point in front of them
-                tg = take(target)
-                aim = ~np.isnan(tg[0])
-                if aim.all():
-                    sd, sl = normalize(tg - O)
-                elif aim.any():
-                    sda, sla = normalize(tg[:, aim] - O[:, aim])
-                    sd[:, aim], sl[aim] = sda, sla
+            O, sp = take(P_off), take(prim)
+            # emitters that are geometry: aim at the offset point in front of them and stop a
+            # little short (the tracer can skip only one triangle: the one left behind)
+            tg = None if target is None else take(target)
+            aim = None if tg is None else ~np.isnan(tg[0])
+            if aim is not None and aim.all():
+                sd, sl = shadow_ray_to(O, tg)
+            else:
+                sd, sl = take(wi), take(dist)
+                if aim is not None and aim.any():
+                    sd[:, aim], sl[aim] = shadow_ray_to(O[:, aim], tg[:, aim])
+            if tg is not None:
                 good = sl > 0
                 if not good.all():
-                    O, sd, sl, send = O[:, good], sd[:, good], sl[good], send[good]
-            occ = self._occluded(O, sd, sl)
+                    O, sd, sl, sp, send = O[:, good], sd[:, good], sl[good], sp[good], send[good]
+            occ = self._occluded(O, sd, sl, sp)
             send = send[~occ]
         if shadow is not None:
             free = np.flatnonzero(ok & ~shadow)
             if len(free):
                 send = np.concatenate([send, free])
         if len(send):
-            L[:, np.take(pid, send)] += np.take(value, send, axis=1)
+            _accumulate(L, np.take(pid, send), np.take(value, send, axis=1))
 
     def _sample_group(self, j, entry, P, u1, u2):
         lights = self.lights
@@ -786,6 +821,12 @@ class Integrator:
                 ls.pdf = np.full(P.shape[1], np.inf, F32)      # NEE-only light: weight 1
             return ls
         return lights.triangles.sample(P, entry - lights.num_lamps, u1, u2)
+
+
+def _accumulate(L, idx, values):
+    """L[:, idx] += values for distinct idx, one row at a time (faster than 2-D fancy indexing)."""
+    for c in range(3):
+        L[c, idx] += values[c]
 
 
 def _taker(idx):
@@ -809,3 +850,4 @@ class _Paths:
     tmax: np.ndarray     # ray lengths
     thr: np.ndarray | None   # throughput (None: 1, camera rays)
     pdf: np.ndarray | None   # solid-angle pdf of D at the previous vertex (None for camera rays)
+    prim: np.ndarray | None  # triangle the rays leave (global index; None for camera rays)

@@ -7,6 +7,7 @@ world counts as one) is equally likely, emissive triangles are chosen by power (
 radiance), and when both exist each group gets half. Lamps in different units (a sun's
 irradiance, a point's watts) are never compared. The selection probability of every light is
 known, so a BSDF ray that meets a light can be weighted against light sampling (MIS).
+Lamps with diffuse ray visibility off take no part in that choice (camera rays may see them).
 """
 from __future__ import annotations
 
@@ -41,8 +42,13 @@ class LightSet:
     """All light sources of a frame and the choice of one per shading point (see module doc)."""
 
     def __init__(self, lamps, triangles: EmissiveTriangles | None, num_triangles: int):
-        self.lamps = [l for l in lamps if not l.dark]
+        lit = [l for l in lamps if not l.dark]
         self.skipped_lamps = [l.name for l in lamps if l.dark]
+        # Cycles excludes a light with diffuse ray visibility off from diffuse surfaces
+        # altogether (light sampling and BSDF hits): only camera rays may still see it.
+        self.lamps = [l for l in lit if l.visible_diffuse]
+        self.camera_lamps = [l for l in lit if not l.visible_diffuse and l.seen_by_camera]
+        self.unseen_lamps = [l.name for l in lit if not l.visible_diffuse and not l.seen_by_camera]
         self.triangles = triangles if triangles is not None and len(triangles) else None
         lamp_w = np.ones(len(self.lamps)) / max(len(self.lamps), 1)
         tri_w = self.triangles.power / self.triangles.power.sum() if self.triangles is not None else np.zeros(0)

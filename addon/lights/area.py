@@ -87,7 +87,10 @@ class AreaLight(Lamp):
             t = (F32(self.center @ self.normal) - dot(O, self.normal)) / denom
         cand = np.flatnonzero((denom < 0) & (t > 0) & (t < tmax))
         tc = t[cand]
-        rel = O[:, cand] + D[:, cand] * tc - self.center[:, None]
+        rel = np.take(D, cand, axis=1)               # hit point relative to the centre
+        rel *= tc
+        rel += np.take(O, cand, axis=1)
+        rel -= self.center[:, None]
         lx, ly = dot(rel, self.inv_x), dot(rel, self.inv_y)
         inside = (lx * lx + ly * ly <= 0.25) if self.ellipse else ((np.abs(lx) <= 0.5) & (np.abs(ly) <= 0.5))
         idx, tc = cand[inside], tc[inside]

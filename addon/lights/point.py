@@ -6,8 +6,10 @@ radius r > 0: radiance L = strength / (4 pi^2 r^2) (strength / pi unnormalised),
 - use_soft_falloff True (Blender's default): a disk of radius r through the centre that faces
   the shading point, sampled uniformly by area (pdf = t^2 / (pi r^2 cos_l)).
 Spot lights multiply by smoothstep((z - cos(size/2)) / ((1 - cos(size/2)) blend)), z being the
-forward (-Z) component of the centre->point direction mapped through the inverse object transform
-(non-uniform scale makes the cone elliptical). No cone normalisation: on axis a spot equals a
+forward (-Z) component of the light->point direction mapped through the inverse object transform
+(non-uniform scale makes the cone elliptical). As in Cycles 5.0 (kernel/light/spot.h) that
+direction runs from the sampled point on the light (or along the ray that meets it), not from the
+centre, so the cone edge softens with the light's radius. No cone normalisation: on axis a spot equals a
 point light of the same power. Shading points inside the light's radius receive nothing.
 """
 from __future__ import annotations
@@ -37,8 +39,9 @@ class PointLight(Lamp):
         self.emit = (self.color * fac).astype(F32)
 
 
-    def _attenuate(self, scale, P):
-        """Per-sample scalars times the light's angular factor seen from P (1 for points)."""
+    def _attenuate(self, scale, to_light):
+        """Per-sample scalars times the light's angular factor for unit directions (3,n) from the
+        shading point toward the light sample (1 for points)."""
         return scale
 
     def sample(self, P, u1, u2):
@@ -47,7 +50,7 @@ class PointLight(Lamp):
         if self.delta:
             with np.errstate(divide='ignore'):
                 scale = np.where(d > 0, F32(1.0) / (d * d), F32(0.0))
-            return LightSample(axis, d, outer(self.emit, self._attenuate(scale, P)), np.full(n, np.inf, F32))
+            return LightSample(axis, d, outer(self.emit, self._attenuate(scale, axis)), np.full(n, np.inf, F32))
         r = F32(self.radius)
         outside = d > r
         if self.sphere:
@@ -72,7 +75,7 @@ class PointLight(Lamp):
             with np.errstate(divide='ignore', invalid='ignore'):
                 pdf = np.where(good, dist * dist / (F32(np.pi) * r * r * cos_l), F32(0.0))
                 scale = np.where(good, F32(1.0) / pdf, F32(0.0))
-        return LightSample(wi, dist, outer(self.emit, self._attenuate(scale, P)), pdf)
+        return LightSample(wi, dist, outer(self.emit, self._attenuate(scale, wi)), pdf)
 
     def intersect(self, O, D, tmax):
         if self.delta:
@@ -99,7 +102,7 @@ class PointLight(Lamp):
             idx = np.flatnonzero(outside & (cos_l > 0) & (t < tmax) & (dot(rel, rel) <= r * r))
             t_i = t[idx]
             pdf = t_i * t_i / (F32(np.pi) * r * r * cos_l[idx])
-        scale = self._attenuate(np.ones(len(idx), F32), O[:, idx])
+        scale = self._attenuate(np.ones(len(idx), F32), D[:, idx])
         return idx, outer(self.emit, scale), pdf.astype(F32)
 
 
@@ -124,12 +127,12 @@ class SpotLight(PointLight):
         omc = 2.0 * np.sin(0.25 * size) ** 2            # 1 - cos(size/2) without cancellation
         self.inv_smooth = F32(1.0 / (omc * blend)) if blend > 0 else None
 
-    def _attenuate(self, scale, P):
-        scale *= self.attenuation(normalize(P - self.center[:, None])[0])
+    def _attenuate(self, scale, to_light):
+        scale *= self.attenuation(-to_light)
         return scale
 
     def attenuation(self, from_light):
-        """Cone factor for unit centre->point directions (3,n)."""
+        """Cone factor for unit light->point directions (3,n)."""
         local = self.inv_m3 @ from_light
         length = np.sqrt(dot(local, local))
         with np.errstate(divide='ignore', invalid='ignore'):

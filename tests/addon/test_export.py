@@ -452,6 +452,41 @@ def test_light_values_in_cycles_units(scene, exported):
     assert any("Unseen" in t for _, t in data.messages)
 
 
+def test_light_ray_visibility(scene, exported):
+    """A light's Object > Visibility > Ray Visibility reaches SceneData.Light: Camera (off on a
+    new light object in Blender 5.0) and Diffuse; an instancer's visibility is inherited; a
+    light neither can see is skipped with a message."""
+    setup(scene)
+    default = scenes.light('AREA', 10.0, (0, 0, 2), name="Default")
+    seen = scenes.light('AREA', 10.0, (0, 0, 3), name="Seen")
+    seen.visible_camera = True
+    camera_only = scenes.light('AREA', 10.0, (0, 0, 4), name="CameraOnly")
+    camera_only.visible_camera, camera_only.visible_diffuse = True, False
+    ghost = scenes.light('POINT', 10.0, (0, 0, 5), name="Ghost")
+    ghost.visible_camera = ghost.visible_diffuse = False
+    # a camera-visible light instanced by an empty whose diffuse visibility is off
+    col = bpy.data.collections.new("Lamps")
+    scene.collection.children.link(col)
+    inst = bpy.data.objects.new("Inst", bpy.data.lights.new("Inst", 'AREA'))
+    inst.data.energy = 10.0
+    inst.visible_camera = True
+    col.objects.link(inst)
+    scene.collection.children.unlink(col)
+    empty = scenes.link(bpy.data.objects.new("Instancer", None))
+    empty.instance_type, empty.instance_collection, empty.location = 'COLLECTION', col, (5, 0, 0)
+    empty.visible_diffuse = False
+    assert not default.visible_camera and default.visible_diffuse          # Blender's defaults
+    data = exported()
+    L = {l.name: l for l in data.lights}
+    assert set(L) == {"Default", "Seen", "CameraOnly", "Inst"}
+    assert (L["Default"].visible_camera, L["Default"].visible_diffuse) == (False, True)
+    assert (L["Seen"].visible_camera, L["Seen"].visible_diffuse) == (True, True)
+    assert (L["CameraOnly"].visible_camera, L["CameraOnly"].visible_diffuse) == (True, False)
+    assert (L["Inst"].visible_camera, L["Inst"].visible_diffuse) == (True, False)
+    assert L["Inst"].matrix[0, 3] == pytest.approx(5.0)
+    assert any("Ghost" in t for _, t in data.messages)
+
+
 def test_instanced_lights(scene, exported):
     setup(scene)
     col = bpy.data.collections.new("Lamps")

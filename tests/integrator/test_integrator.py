@@ -5,7 +5,7 @@ import pytest
 
 import dacrt
 from addon import scenedata as sd
-from addon.integrator import Integrator, Progress, offset_ray_origin, texture_lookup, triangle_offsets
+from addon.integrator import Integrator, Progress, shadow_ray_to, texture_lookup
 
 from .scenes import (ALL_VIS, cornell_box, geometry, light, material, ortho_down, plane_scene, quad,
                      render, translation)
@@ -141,34 +141,165 @@ def test_bad_input_gets_a_clear_message(change, message):
 
 # --- self-intersection ------------------------------------------------------------------------
 
-@pytest.mark.parametrize('size,height', [(1000.0, 0.0), (1.0, 0.0), (0.01, 3000.0), (1e-4, 1e-5)])
-def test_offset_rays_never_rehit_their_triangle(size, height):
-    """Rays leaving a two-triangle plane (huge, tiny, or far from the origin) from random surface
-    points into the upper hemisphere must never hit the plane; nor may rays aimed at points on
-    it stop short (shadow rays end at an offset point in front of it)."""
-    v, t = quad((0.0, 0.0, height), size, size)
-    scene = dacrt.Scene(v.astype(np.float32), t.astype(np.int32))
+def _rotation(seed):
+    q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    return q
+
+
+def _grid(half, n):
+    """n x n quads (2n^2 triangles, shared vertices) covering [-half, half]^2 at z = 0."""
+    xs = np.linspace(-half, half, n + 1)
+    v = np.array([(x, y, 0.0) for y in xs for x in xs])
+    t = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            t += [(a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)]
+    return v, np.array(t)
+
+
+def _fold(half, angle):
+    """Triangle 0 at z = 0, x <= 0; triangles 1, 2 bend down by `angle` past the edge x = 0
+    (a convex edge seen from +z)."""
+    c, s = np.cos(angle), np.sin(angle)
+    v = np.array([(-half, -half, 0), (0, -half, 0), (0, half, 0), (half * c, -half, -half * s),
+                  (half * c, half, -half * s)], float)
+    return v, np.array([(0, 1, 2), (1, 3, 4), (1, 4, 2)])
+
+
+# name: ((vertices, triangles), seed of a random rotation (None: as built), shift, triangles the rays
+# leave (None: all))
+SURFACES = {
+    '2 km plane': (_grid(1000.0, 1), 1, (0, 0, 0), None),
+    '2 km plane, 8x8 grid': (_grid(1000.0, 8), 2, (0, 0, 0), None),
+    '2 km plane, axis-aligned': (_grid(1000.0, 1), None, (0, 0, 0), None),
+    '1 m plane': (_grid(0.5, 2), 3, (0, 0, 0), None),
+    '1 cm plane 3.9 km away': (_grid(0.005, 2), 4, (3000.0, -2000.0, 1500.0), None),
+    '0.2 mm plane near the origin': (_grid(1e-4, 2), 5, (0, 0, 1e-5), None),
+    '200 m 16x16 grid 600 m away': (_grid(100.0, 16), 6, (500.0, 300.0, -200.0), None),
+    'right-angle edge, 1 m': (_fold(1.0, np.pi / 2), 7, (0, 0, 0), [0]),
+    'nearly flat edge, 1 km': (_fold(1000.0, 1e-3), 8, (0, 0, 0), [0]),
+}
+
+
+def _surface_points(integ, tris, n, rng):
+    """Points on the given triangles as the render loop makes them (half of them within a
+    hair of an edge), arriving from the front; returns prim, P, P_off, ng."""
+    prim = rng.choice(tris, n).astype(np.int32)
+    r = rng.random((2, n))
+    su = np.sqrt(r[0])
+    u, v = r[1] * su, 1.0 - su
+    edge = rng.random(n) < 0.5
+    u = np.where(edge, rng.random(n) * 10.0 ** rng.uniform(-9, -3, n), u)
+    v = np.minimum(v, 1.0 - u)
+    ng = integ.tri.geo[9:12][:, prim]
+    albedo = np.ones((3, n), np.float32)
+    P, ng, _, P_off = integ._surface(prim, u.astype(np.float32), v.astype(np.float32), -ng, None, albedo)
+    return prim, P, P_off, ng
+
+
+def _directions(ng, rng, min_elevation=0.0):
+    """Unit directions in the hemisphere of ng: cosine-distributed, 30% grazing (down to 1e-5 rad:
+    a cosine-sampled bounce is that flat once in 10^10; flatter rays skim a 600 m distant plane
+    within float32 resolution of its coordinates for hundreds of metres)."""
+    n = ng.shape[1]
+    el = np.where(rng.random(n) < 0.3, 10.0 ** rng.uniform(-5, -0.2, n), np.arcsin(np.sqrt(rng.random(n))))
+    el = np.maximum(el, min_elevation)
+    phi = 2 * np.pi * rng.random(n)
+    nn = ng.astype(np.float64)
+    a = np.where(np.abs(nn[0:1]) > 0.9, [[0.0], [1.0], [0.0]], [[1.0], [0.0], [0.0]])
+    t = np.cross(nn.T, a.T).T
+    t /= np.linalg.norm(t, axis=0)
+    b = np.cross(nn.T, t.T).T
+    d = t * (np.cos(el) * np.cos(phi)) + b * (np.cos(el) * np.sin(phi)) + nn * np.sin(el)
+    return (d / np.linalg.norm(d, axis=0)).astype(np.float32)
+
+
+@pytest.mark.parametrize('name', list(SURFACES))
+def test_rays_leaving_a_surface_never_rehit_it(name):
+    """Bounce and shadow rays leave from the render loop's offset origins and skip the triangle
+    they leave: over huge, tiny, distant, subdivided and folded surfaces, at points hugging the
+    edges and in grazing directions, none may hit the surface (its own triangle or a neighbour
+    across a shared edge). A camera-only triangle listed first shifts the bounce and shadow
+    scenes' numbering, so skip must be translated. The step stays tiny (8 ULPs of the triangle's
+    largest coordinate; 256 ULPs biased lights near a huge plane)."""
+    (v, t), rot, shift, tris = SURFACES[name]
+    v = (v if rot is None else v @ _rotation(rot).T) + np.asarray(shift)
+    decoy = (np.array([(0, 0, 9e3), (1, 0, 9e3), (0, 1, 9e3)], float), np.array([(0, 1, 2)]))
+    scene = plane_scene([light('POINT', 1.0, translation(z=5.0))], samples=1)
+    scene.geometry = geometry([(*decoy, 1, sd.VIS_CAMERA), (v, t, 1, ALL_VIS)])
+    integ = Integrator(scene)
+    assert integ._local['bounce'] is not None and integ._local['shadow'] is not None
     rng = np.random.default_rng(0)
-    n = 20000
-    u = rng.random((2, n)).astype(np.float32)
-    vf = v.astype(np.float32)
-    P = (vf[0][:, None] + (vf[1] - vf[0])[:, None] * u[0] + (vf[3] - vf[0])[:, None] * u[1]).astype(np.float32)
-    ng = np.zeros((3, n), np.float32)
-    ng[2] = 1.0
-    mag = np.full(n, np.abs(vf).max(), np.float32)
-    O = offset_ray_origin(P, ng, mag)
-    # the render loop's per-triangle form gives the same points
-    step = triangle_offsets(vf[t], np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 1.0]], np.float32))
-    assert np.array_equal(P + step[:, :1], O)
-    d = rng.normal(size=(3, n))
-    d[2] = np.abs(d[2]) + 1e-3
-    d /= np.linalg.norm(d, axis=0)
-    assert not scene.occluded(dacrt.make_rays(O.T, d.T)).any()
-    # from above, aim at offset points on the plane: never occluded by the plane itself
-    src = P + np.float32(size) * d.astype(np.float32)
-    aim = O - src
-    dist = np.linalg.norm(aim, axis=0)
-    assert not scene.occluded(dacrt.make_rays(src.T, (aim / dist).T, dist.astype(np.float32))).any()
+    n = 60000
+    prim, P, P_off, ng = _surface_points(integ, np.arange(1, len(t) + 1) if tris is None else np.array(tris) + 1,
+                                         n, rng)
+    D = _directions(ng, rng)
+    hits = integ._intersect('bounce', P_off, D, np.full(n, np.inf, np.float32), prim)
+    assert np.count_nonzero(hits['prim'] >= 0) == 0
+    assert not integ._occluded(P_off, D, np.full(n, np.inf, np.float32), prim).any()
+    mag = np.abs(v).max()
+    step = np.linalg.norm((P_off - P).astype(np.float64), axis=0)
+    assert step.max() <= 8 * 2.0 ** -22 * max(mag, 2.0 ** -100)
+
+
+def test_skip_alone_keeps_rays_off_their_own_triangle(monkeypatch):
+    """With no offset at all, rays leaving exactly from the surface (tilted, so every coordinate
+    is rounded) away from any edge are kept off their own triangle by skip alone, in the bounce
+    and shadow scenes, whose numbering a camera-only triangle listed first has shifted."""
+    import addon.integrator as integrator
+    monkeypatch.setattr(integrator, '_OFFSET_ULPS', np.float32(0.0))
+    v, t = _grid(1.0, 4)
+    v = v @ _rotation(9).T
+    decoy = (np.array([(0, 0, 9e3), (1, 0, 9e3), (0, 1, 9e3)], float), np.array([(0, 1, 2)]))
+    scene = plane_scene([light('POINT', 1.0, translation(z=5.0))], samples=1)
+    scene.geometry = geometry([(*decoy, 1, sd.VIS_CAMERA), (v, t, 1, ALL_VIS)])
+    integ = Integrator(scene)
+    rng = np.random.default_rng(2)
+    n = 40000
+    prim = rng.integers(1, len(t) + 1, n).astype(np.int32)
+    b = rng.uniform(0.1, 0.45, (2, n)).astype(np.float32)        # well inside the triangle
+    P, ng, _, P_off = integ._surface(prim, b[0], b[1], -integ.tri.geo[9:12][:, prim], None,
+                                     np.ones((3, n), np.float32))
+    assert np.array_equal(P, P_off)
+    D = _directions(ng, rng, min_elevation=0.1)
+    inf = np.full(n, np.inf, np.float32)
+    assert np.count_nonzero(integ._intersect('bounce', P, D, inf, prim)['prim'] >= 0) == 0
+    assert not integ._occluded(P, D, inf, prim).any()
+    # without skip about half of these rays re-hit the triangle they leave
+    assert np.count_nonzero(integ._intersect('bounce', P, D, inf)['prim'] >= 0) > n // 10
+
+
+@pytest.mark.parametrize('name', list(SURFACES))
+def test_shadow_rays_reach_emitter_triangles(name):
+    """Shadow rays aimed at emitter triangles (points hugging the edges, from 0.1 to 10^4 times
+    the triangle size away, but at least 128 ULPs of its coordinates: nearer points cannot even
+    be told apart from the surface in float32) end in front of them and are never stopped by the
+    emitter itself or its neighbours."""
+    (v, t), rot, shift, tris = SURFACES[name]
+    v = (v if rot is None else v @ _rotation(rot).T) + np.asarray(shift)
+    scene = plane_scene(samples=1)
+    scene.materials[1] = material('glow', (0.5,) * 3, (1.0, 1.0, 1.0))
+    scene.geometry = geometry([(v, t, 1, ALL_VIS)])
+    integ = Integrator(scene)
+    emit = integ.lights.triangles
+    assert len(emit) == len(t)
+    rng = np.random.default_rng(1)
+    n = 60000
+    which = rng.choice(len(t) if tris is None else np.array(tris), n)
+    u1 = np.where(rng.random(n) < 0.5, 1.0 - 10.0 ** rng.uniform(-7, -2, n), rng.random(n)).astype(np.float32)
+    u2 = np.where(rng.random(n) < 0.5, 10.0 ** rng.uniform(-7, -2, n), rng.random(n)).astype(np.float32)
+    # shading points above the emitter, in front of its sampled points
+    ng = emit.geo[9:12][:, which]
+    size = np.linalg.norm(emit.geo[3:6][:, which], axis=0)
+    q = emit.geo[0:3][:, which] + emit.geo[3:6][:, which] * 0.3 + emit.geo[6:9][:, which] * 0.3
+    dist = np.maximum(size * 10.0 ** rng.uniform(-1, 4, n), 2.0 ** -16 * np.abs(v).max())
+    S = (q + _directions(ng, rng, 0.02) * dist).astype(np.float32)
+    ls = emit.sample(S, which, u1, u2)
+    assert (ls.value.max(axis=0) > 0).all()
+    d, length = shadow_ray_to(S, ls.target)
+    assert (length > 0).all()
+    assert not integ._occluded(S, d, length).any()
 
 
 # --- visibility, holdout, transparency --------------------------------------------------------

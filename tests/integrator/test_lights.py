@@ -92,12 +92,50 @@ def rect_irradiance(L, a, b, h):
     return 0.5 * L * (A * np.arctan(b / np.hypot(a, h)) + B * np.arctan(a / np.hypot(b, h)))
 
 
-def test_area_square():
-    area = light('AREA', 100.0, translation(z=1.0), shape='SQUARE', size_x=1.0)
-    L = 100.0 / (np.pi * 1.0)
-    expected = RHO * 4 * rect_irradiance(L, 0.5, 0.5, 1.0) / np.pi
-    assert expected == pytest.approx(6.09669, rel=2e-4)        # Cycles: 6.09866
-    check(lit([area], samples=512), expected)
+AREA_AT_1M = {
+    # E below the centre: square = 4 corner rectangles; disk: E = pi L R^2 / (R^2 + h^2)
+    'SQUARE': (RHO * 4 * rect_irradiance(100.0 / np.pi, 0.5, 0.5, 1.0) / np.pi, 6.09771),     # Cycles: 6.09866
+    'DISK': (RHO * 100.0 / (np.pi * np.pi / 4) * 0.25 / (0.25 + 1.0), 6.48456),               # Cycles: 6.48481
+}
+
+
+@pytest.mark.parametrize('use_mis', [True, False])
+@pytest.mark.parametrize('shape', list(AREA_AT_1M))
+def test_area_light_at_one_metre_is_unbiased(shape, use_mis):
+    """1 m square / disk light 1 m above the plane, within 0.15% of the closed form.
+
+    With MIS, BSDF rays that leave the plane find the light too, so they must start where light
+    sampling assumes the surface is: bounce origins pushed 1.5 cm up (256 ULPs of the 2 km
+    plane's coordinates) made these +0.45% / +0.33%. 32 x 32 independent pixels x 1024 samples
+    (fixed seed) give a standard error of about 0.018% (checked below to be at most 0.025%), so
+    0.15% is at least 6 standard errors: a correct renderer fails it with any seed at odds below
+    1e-9, while the old bias is over 10 standard errors outside it."""
+    expected, rounded = AREA_AT_1M[shape]
+    assert expected == pytest.approx(rounded, rel=1e-5)
+    area = light('AREA', 100.0, translation(z=1.0), shape=shape, size_x=1.0, use_mis=use_mis)
+    integ = render(plane_scene([area], samples=1024, seed=11, camera=ortho_down(width=32, px=32)))
+    mean, err = pixel_stats(integ)
+    assert err < 2.5e-4 * expected, f"too noisy to decide: stderr {err:.5f}"
+    assert mean == pytest.approx(expected, rel=1.5e-3), f"got {mean:.5f}, expected {expected:.5f} (+-{err:.5f})"
+
+
+def test_area_light_over_a_tilted_2km_plane():
+    """The same square light with the whole set-up turned by an arbitrary rotation: the plane's
+    coordinates now all carry rounding, so bounce and shadow rays rely on the offset and skip
+    (no acne, no leaks) while the origins must still stay close enough not to bias MIS."""
+    q, _ = np.linalg.qr(np.random.default_rng(3).normal(size=(3, 3)))
+    R = np.eye(4)
+    R[:3, :3] = q * np.sign(np.linalg.det(q))
+    scene = plane_scene([light('AREA', 100.0, R @ translation(z=1.0), size_x=1.0)], samples=1024, seed=5,
+                        camera=ortho_down(width=32, px=32))
+    scene.geometry.vertices = (scene.geometry.vertices.astype(np.float64) @ R[:3, :3].T).astype(np.float32)
+    scene.geometry.normals = (scene.geometry.normals.astype(np.float64) @ R[:3, :3].T).astype(np.float32)
+    scene.camera.matrix = R @ scene.camera.matrix
+    integ = render(scene)
+    expected = AREA_AT_1M['SQUARE'][0]
+    mean, err = pixel_stats(integ)
+    assert err < 2.5e-4 * expected
+    assert mean == pytest.approx(expected, rel=1.5e-3), f"got {mean:.5f}, expected {expected:.5f} (+-{err:.5f})"
 
 
 def test_area_rectangle_scaled_object():
@@ -107,12 +145,6 @@ def test_area_rectangle_scaled_object():
     check(lit([area], samples=512), RHO * 4 * rect_irradiance(L, 0.5, 0.25, 1.0) / np.pi)
 
 
-def test_area_disk():
-    area = light('AREA', 100.0, translation(z=1.0), shape='DISK', size_x=1.0)
-    L = 100.0 / (np.pi * np.pi / 4)
-    expected = RHO * L * 0.25 / (0.25 + 1.0)                    # E = pi L R^2 / (R^2 + h^2)
-    assert expected == pytest.approx(6.48505, rel=2e-4)         # Cycles: 6.48481
-    check(lit([area], samples=512), expected)
 
 
 def test_area_is_one_sided():
@@ -236,3 +268,21 @@ def test_lights_seen_by_camera():
     assert looking_up(hidden).film.combined()[..., 0].max() == 0.0
     back = light('AREA', 100.0, translation(z=1.0) @ rotation_x(np.pi), size_x=1.0)
     assert looking_up(back).film.combined()[..., 0].max() == 0.0      # one-sided
+
+
+def test_light_without_diffuse_visibility_lights_nothing():
+    """Cycles excludes a light whose diffuse ray visibility is off from diffuse surfaces (light
+    sampling and BSDF hits): only camera rays may still see it."""
+    kw = dict(size_x=1.0, visible_diffuse=False)
+    integ = lit([light('AREA', 100.0, translation(z=1.0), visible_camera=True, **kw)], samples=16)
+    assert integ.film.combined()[..., 0].max() == 0.0
+    assert integ.stats['rays']['shadow'] == 0
+    seen = looking_up(light('AREA', 100.0, translation(z=1.0), visible_camera=True, **kw))
+    assert seen.film.combined()[..., 0] == pytest.approx(100.0 / np.pi, rel=1e-5)
+    # with a light the diffuse rays do see, only that one lights the plane
+    both = lit([light('AREA', 100.0, translation(z=1.0), visible_camera=True, **kw),
+                light('SUN', 3.0, np.eye(4))], samples=4)
+    assert both.film.combined()[..., 0] == pytest.approx(RHO * 3.0 / np.pi, rel=1e-5)
+    unseen = lit([light('AREA', 100.0, translation(z=1.0), name='Ghost', visible_camera=False, **kw)], samples=4)
+    assert unseen.film.combined()[..., 0].max() == 0.0
+    assert any('Ghost' in text for _, text in unseen.messages)

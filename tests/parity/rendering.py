@@ -1,0 +1,122 @@
+"""Rendering a parity scene with Cycles or DACRT under the fair settings of reference
+blender-cycles.md section 2.7, and reading the result back as linear float pixels.
+
+Both engines go through `bpy.ops.render.render()`; the Combined result is saved as a 32-bit
+float single-layer EXR (scene-linear, no view transform: Blender applies the view transform
+only to display-referred formats) and read back with OpenImageIO. Per-seed images are stacked
+as (seeds, H, W, 4) float32, row 0 at the bottom as Blender stores them.
+"""
+import os
+import tempfile
+
+import bpy
+import numpy as np
+
+def build(spec):
+    """Reset to a factory-empty scene, build spec's scene and apply the shared settings."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    r = scene.render
+    r.resolution_x, r.resolution_y = spec.resolution
+    r.resolution_percentage = 100
+    spec.build()
+    r.pixel_aspect_x = r.pixel_aspect_y = 1.0
+    r.film_transparent = False
+    r.use_motion_blur = False
+    r.use_compositing = False
+    r.use_sequencer = False
+    r.threads_mode = 'AUTO'
+    vs = scene.view_settings
+    vs.view_transform, vs.look, vs.exposure, vs.gamma = 'Standard', 'None', 0.0, 1.0
+    for ob in bpy.data.objects:       # Cycles' terminator offset biases smooth low-poly shadows
+        ob.shadow_terminator_geometry_offset = 0.0
+        ob.shadow_terminator_shading_offset = 0.0
+        if hasattr(ob, 'cycles') and hasattr(ob.cycles, 'shadow_terminator_geometry_offset'):
+            ob.cycles.shadow_terminator_geometry_offset = 0.0     # the older home of the setting
+    return scene
+
+
+def set_cycles(scene, spec, seed):
+    scene.render.engine = 'CYCLES'
+    c = scene.cycles
+    c.device = 'CPU'
+    c.samples = spec.cycles_samples
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.max_bounces = c.diffuse_bounces = spec.bounces     # K: up to K+1 diffuse reflections
+    c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
+    c.light_sampling_threshold = 0.0
+    c.caustics_reflective = c.caustics_refractive = True
+    c.pixel_filter_type = spec.filter_type     # same identifiers as scene.dacrt.filter_type
+    c.filter_width = spec.filter_width
+    c.film_exposure = 1.0
+    c.sampling_pattern = 'TABULATED_SOBOL'
+    c.use_animated_seed = False
+    c.seed = seed
+    c.use_light_tree = True
+
+
+def set_dacrt(scene, spec, seed):
+    scene.render.engine = 'DACRT'
+    d = scene.dacrt
+    d.samples = spec.dacrt_samples
+    d.max_bounces = spec.bounces
+    d.filter_type = spec.filter_type
+    d.filter_width = spec.filter_width
+    d.seed = seed
+
+
+def render_combined(scene, path):
+    """Render with the scene's engine, save Combined as float32 EXR at `path`, return it as
+    (H, W, 4) float32 (row 0 at the bottom)."""
+    bpy.ops.render.render()
+    s = scene.render.image_settings
+    if hasattr(s, 'media_type'):
+        s.media_type = 'IMAGE'
+    s.file_format = 'OPEN_EXR'
+    s.color_mode = 'RGBA'
+    s.color_depth = '32'
+    s.exr_codec = 'ZIP'
+    result = bpy.data.images['Render Result']
+    if os.path.exists(path):
+        os.remove(path)
+    result.save_render(filepath=str(path), scene=scene)
+    if not os.path.exists(path):
+        raise RuntimeError(f"{scene.render.engine} produced no image (nothing saved to {path}); "
+                           "see the render's error report above")
+    return read_exr(path)
+
+
+def read_exr(path):
+    """(H, W, 4) float32 RGBA of a single-part EXR, row 0 at the bottom."""
+    import OpenImageIO as oiio
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise RuntimeError(f"cannot open {path}: {oiio.geterror()}")
+    try:
+        spec = inp.spec()
+        names = list(spec.channelnames)
+        pixels = np.asarray(inp.read_image(0, 0, 0, spec.nchannels, 'float'))
+    finally:
+        inp.close()
+    pixels = pixels.reshape(spec.height, spec.width, spec.nchannels)[::-1]
+    missing = [c for c in 'RGBA' if c not in names]
+    if missing:
+        raise RuntimeError(f"{path} has channels {names}, missing {missing}")
+    return np.stack([pixels[..., names.index(c)] for c in 'RGBA'], axis=-1).astype(np.float32)
+
+
+def render_seeds(spec, engine, seeds, workdir=None):
+    """Build spec's scene once and render it with `engine` ('CYCLES' or 'DACRT') for every
+    seed; returns (len(seeds), H, W, 4) float32."""
+    scene = build(spec)
+    configure = set_cycles if engine == 'CYCLES' else set_dacrt
+    images = []
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        for seed in seeds:
+            configure(scene, spec, seed)
+            images.append(render_combined(scene, os.path.join(tmp, f"{engine}-{seed}.exr")))
+    shapes = {im.shape for im in images}
+    if len(shapes) != 1:
+        raise RuntimeError(f"{engine} images of {spec.name} differ in size between seeds: {shapes}")
+    return np.stack(images)
