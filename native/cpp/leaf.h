@@ -22,6 +22,7 @@ struct RayGroup {
     vint<W> k[3];        // kx, ky, kz
     vfloat<W> S[3];      // shear: Sx, Sy, Sz
     vfloat<W> tfar;
+    vint<W> skip;        // triangle each lane ignores (-1: none)
     uint32_t id[W];
     uint32_t valid;      // lanes holding real rays
 };
@@ -32,7 +33,7 @@ inline vfloat<W> pick(vint<W> k, const vfloat<W> v[3]) {
 }
 
 template <int W>
-inline void load_group(const Ray* rays, size_t i, size_t na, RayGroup<W>& g) {
+inline void load_group(const Ray* rays, size_t i, size_t na, const int32_t* skip, RayGroup<W>& g) {
     vfloat<W> r[8];
     if (i + W <= na) {
         load_rays<W>(reinterpret_cast<const float*>(rays + i), r);
@@ -47,6 +48,11 @@ inline void load_group(const Ray* rays, size_t i, size_t na, RayGroup<W>& g) {
     }
     storeu(reinterpret_cast<float*>(g.id), r[7]);
     g.tfar = r[6];
+    if (skip) {  // gathered once per group, then one compare per triangle
+        alignas(64) int32_t sk[W];
+        for (int l = 0; l < W; ++l) sk[l] = (g.valid >> l & 1u) ? skip[g.id[l]] : -1;
+        g.skip = loadi<W>(sk);
+    }
     const vfloat<W> org[3] = {r[0], r[1], r[2]};
     const vfloat<W> dir[3] = {r[3], r[4], r[5]};
     const vfloat<W> ax = vabs(dir[0]), ay = vabs(dir[1]), az = vabs(dir[2]);
@@ -102,7 +108,7 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
         }
         for (size_t i = 0; i < na; i += W) {
             RayGroup<W> g;
-            load_group<W>(rays, i, na, g);
+            load_group<W>(rays, i, na, skip, g);
             const vbool<W> valid = from_bits<W>(g.valid);
             vfloat<W> best_t = g.tfar, best_u = zero, best_v = zero;
             vint<W> best_p = splati<W>(-2);  // -2: unknown (earlier leaves' best is in hits[id])
@@ -136,15 +142,7 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
                 const vfloat<W> inv = splat<W>(1.0f) / det;
                 const vfloat<W> t = Tn * inv;
                 vbool<W> ok = andnot(cmpeq(det, zero), inside) & cmplt(zero, t);
-                if (skip) {  // a ray never hits the triangle it leaves (checked only on hits)
-                    uint32_t m = bits(ok), drop = 0;
-                    while (m) {
-                        const int l = __builtin_ctz(m);
-                        m &= m - 1;
-                        if (skip[g.id[l]] == T.prim) drop |= 1u << l;
-                    }
-                    if (drop) ok = andnot(from_bits<W>(drop), ok);
-                }
+                if (skip) ok = andnot(cmpeqi(g.skip, splati<W>(T.prim)), ok);  // never the triangle it leaves
                 if (Q == Query::Any) {
                     const uint32_t hit = bits(ok & cmplt(t, g.tfar)) & ~done;
                     done |= hit;

@@ -49,6 +49,8 @@ inline vi8 selecti(vb8 m, vi8 a, vi8 b) {
     return {_mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(b.v), _mm256_castsi256_ps(a.v), m.m))};
 }
 inline void storei(int32_t* p, vi8 a) { _mm256_storeu_si256((__m256i*)p, a.v); }
+template <int W> vint<W> loadi(const int32_t* p);
+template <> inline vi8 loadi<8>(const int32_t* p) { return {_mm256_loadu_si256((const __m256i*)p)}; }
 inline vf8 permute(const float* table4, vi8 idx) {
     return {_mm256_permutevar8x32_ps(_mm256_castps128_ps256(_mm_loadu_ps(table4)), idx.v)};
 }

@@ -40,6 +40,7 @@ template <> inline vi16 splati<16>(int32_t x) { return {_mm512_set1_epi32(x)}; }
 inline vb16 cmpeqi(vi16 a, vi16 b) { return {_mm512_cmpeq_epi32_mask(a.v, b.v)}; }
 inline vi16 selecti(vb16 m, vi16 a, vi16 b) { return {_mm512_mask_blend_epi32(m.m, b.v, a.v)}; }
 inline void storei(int32_t* p, vi16 a) { _mm512_storeu_si512(p, a.v); }
+template <> inline vi16 loadi<16>(const int32_t* p) { return {_mm512_loadu_si512(p)}; }
 inline vf16 permute(const float* table4, vi16 idx) {
     return {_mm512_permutexvar_ps(idx.v, _mm512_castps128_ps512(_mm_loadu_ps(table4)))};
 }

@@ -45,6 +45,7 @@ template <int W> inline vint<W> splati(int32_t x) { vint<W> r; DACRT_LANES r.v[i
 template <int W> inline vbool<W> cmpeqi(vint<W> a, vint<W> b) { uint32_t m = 0; DACRT_LANES m |= uint32_t(a.v[i] == b.v[i]) << i; return {m}; }
 template <int W> inline vint<W> selecti(vbool<W> m, vint<W> a, vint<W> b) { vint<W> r; DACRT_LANES r.v[i] = (m.m >> i & 1) ? a.v[i] : b.v[i]; return r; }
 template <int W> inline void storei(int32_t* p, vint<W> a) { DACRT_LANES p[i] = a.v[i]; }
+template <int W> inline vint<W> loadi(const int32_t* p) { vint<W> r; DACRT_LANES r.v[i] = p[i]; return r; }
 // Per-lane element idx of a 4-float table (x, y, z, 0).
 template <int W> inline vfloat<W> permute(const float* table4, vint<W> idx) { vfloat<W> r; DACRT_LANES r.v[i] = table4[idx.v[i]]; return r; }
 
