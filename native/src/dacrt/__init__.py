@@ -161,7 +161,7 @@ class Scene:
 
     @property
     def chunk_rays(self) -> int:
-        """Rays per independently traced chunk (0 = automatic: one or two per thread): a tuning knob."""
+        """Rays per independently traced chunk (0 = automatic: one per thread): a tuning knob."""
         return self._chunk_rays
 
     @chunk_rays.setter
