@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .objfile import load_obj
+from ..objfile import load_obj
 
 REPO = Path(__file__).resolve().parents[2]
 SHARED_SCENES = REPO.parent / "shared" / "scenes"

@@ -1,5 +1,5 @@
 """Triangle scenes for the tracer tests: random soups, closed meshes, grids of tiny triangles,
-a ~100K-triangle mesh, and a small OBJ loader. Every generator returns (vertices float32 (V,3),
+a ~100K-triangle mesh (the OBJ loader is tests/objfile.py, shared with the benchmark). Every generator returns (vertices float32 (V,3),
 triangles int32 (M,3)) and is deterministic for a given numpy Generator / arguments."""
 
 from __future__ import annotations
@@ -7,6 +7,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+
+from ..objfile import load_obj
 
 REPO = Path(__file__).resolve().parents[2]
 SHARED = REPO.parent / "shared"  # sits beside the repository, not inside it
@@ -145,22 +147,6 @@ def transformed(rng: np.random.Generator, vertices, triangles, scale: float = 1.
     q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     v = np.asarray(vertices, np.float64) @ q.T * scale + rng.uniform(-shift, shift, 3)
     return _out(v, triangles)
-
-
-def load_obj(path) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and fan-triangulated faces of a Wavefront OBJ (v / f records only; handles
-    `f a/b/c` forms and negative indices)."""
-    verts, tris = [], []
-    with open(path) as fh:
-        for line in fh:
-            if line.startswith("v "):
-                verts.append(line.split()[1:4])
-            elif line.startswith("f "):
-                idx = [int(tok.split("/")[0]) for tok in line.split()[1:]]
-                nv = len(verts)
-                idx = [i - 1 if i > 0 else nv + i for i in idx]
-                tris.extend((idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1))
-    return _out(np.asarray(verts, dtype=np.float64), np.asarray(tris, dtype=np.int64))
 
 
 def generated_100k(seed: int = 7):

@@ -1,4 +1,5 @@
-"""Wavefront OBJ geometry loader for the benchmark: vertices and triangles only, into numpy.
+"""Wavefront OBJ geometry loader for the benchmark and the tracer tests: vertices and triangles
+only, into numpy.
 
 Reads `v` and `f` records and ignores everything else (normals, texture coordinates, groups,
 materials). Faces may use any index form (`v`, `v/vt`, `v//vn`, `v/vt/vn`) and negative
