@@ -58,7 +58,7 @@ public:
         Hit* h = static_cast<Hit*>(hits.mutable_data());
         TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Closest, h, nullptr,
                      skip_ptr(skip, n), 0.0f, nullptr};
-        return run(r, n, job, threads, isa, [&](float& oam) { return validate_rays(r, n, h, oam); });
+        return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, h, f, oam); });
     }
 
     py::dict occluded(py::array rays, py::array out, py::object skip, int threads, const std::string& isa,
@@ -69,7 +69,7 @@ public:
         uint8_t* o = static_cast<uint8_t*>(out.mutable_data());
         TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Any, nullptr, o,
                      skip_ptr(skip, n), 0.0f, nullptr};
-        return run(r, n, job, threads, isa, [&](float& oam) { return validate_rays(r, n, o, oam); });
+        return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, o, f, oam); });
     }
 
 private:
@@ -121,7 +121,7 @@ private:
         {
             py::gil_scoped_release nogil;
             const auto v0 = std::chrono::steady_clock::now();
-            err = validate(job.origin_abs_max);
+            err = validate(fields_fn(isa), job.origin_abs_max);
             validate_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - v0).count();
             if (err.empty()) res = trace(*ts_, r, n, job, threads, isa);
         }

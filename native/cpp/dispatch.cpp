@@ -59,6 +59,10 @@ Isa resolve_isa(const std::string& req) {
     throw std::runtime_error("unknown ISA '" + req + "' (expected portable, avx2 or avx512)");
 }
 
+FieldsFn fields_fn(Isa isa) {
+    return isa == Isa::Avx512 ? avx512::fields_valid : (isa == Isa::Avx2 ? avx2::fields_valid : portable::fields_valid);
+}
+
 int hardware_threads() {
     cpu_set_t set;
     if (sched_getaffinity(0, sizeof(set), &set) == 0) {

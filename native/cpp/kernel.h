@@ -49,8 +49,19 @@ struct TraceJob {
 
 // Trace rays[0, n) against all valid triangles; ids: the thread's scratch of ts.valid_ids.size().
 using ChunkFn = void (*)(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
-namespace portable { void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&); }
-namespace avx2 { void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&); }
-namespace avx512 { void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&); }
+// Whether every ray's fields are valid (validate.h); also the largest |origin coordinate|.
+using FieldsFn = bool (*)(const Ray*, size_t, float&);
+namespace portable {
+void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
+bool fields_valid(const Ray*, size_t, float&);
+}
+namespace avx2 {
+void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
+bool fields_valid(const Ray*, size_t, float&);
+}
+namespace avx512 {
+void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
+bool fields_valid(const Ray*, size_t, float&);
+}
 
 }  // namespace dacrt

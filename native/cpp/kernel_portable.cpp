@@ -16,9 +16,14 @@ namespace portable {
 #include "partition.h"
 #include "leaf.h"
 #include "trace.h"
+#include "validate.h"
 
 void trace_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
     trace_chunk_w<8>(job, rays, n, ids, st);
+}
+
+bool fields_valid(const Ray* rays, size_t n, float& origin_abs_max) {
+    return fields_valid_w<8>(rays, n, origin_abs_max);
 }
 }  // namespace portable
 }  // namespace dacrt

@@ -39,39 +39,35 @@ __attribute__((noinline, cold)) static std::string describe(const Ray* rays, siz
     return at + ".id = " + std::to_string(r.id) + " is repeated: ids must be unique";
 }
 
-// One pass: fields (x - x is 0 exactly for finite x, NaN otherwise, so one comparison covers all
-// six coordinates) and the id against the marks; a message is built only after a failure.
+// Fields by the ISA's SIMD check, then ids against the marks; a message is built only after a
+// failure (the scalar scan then names the first bad ray).
 template <class Mark>
 static std::string validate(const Ray* rays, size_t n, char* marks, size_t stride, Mark unseen, Mark seen,
-                            float& origin_abs_max) {
-    float oam[3] = {0, 0, 0};
+                            FieldsFn fields, float& origin_abs_max) {
+    if (!fields(rays, n, origin_abs_max))
+        for (size_t k = 0; k < n; ++k) {
+            std::string msg = describe(rays, n, k, false);
+            if (!msg.empty()) return msg;
+        }
     for (size_t k = 0; k < n; ++k) {
-        const Ray& r = rays[k];
-        const float z = ((r.org[0] - r.org[0]) + (r.org[1] - r.org[1])) + ((r.org[2] - r.org[2]) +
-                        (r.dir[0] - r.dir[0])) + ((r.dir[1] - r.dir[1]) + (r.dir[2] - r.dir[2]));
-        const bool fields = (z == 0.0f) & (r.tfar >= 0.0f) & ((r.dir[0] != 0.0f) | (r.dir[1] != 0.0f) | (r.dir[2] != 0.0f));
-        const uint32_t id = r.id;
-        if (!fields || id >= n) return describe(rays, n, k, false);
+        const uint32_t id = rays[k].id;
+        if (id >= n) return describe(rays, n, k, false);
         Mark& m = *reinterpret_cast<Mark*>(marks + size_t(id) * stride);
         if (m != unseen) return describe(rays, n, k, true);
         m = seen;
-        for (int a = 0; a < 3; ++a) {
-            const float v = std::fabs(r.org[a]);
-            oam[a] = v > oam[a] ? v : oam[a];
-        }
     }
-    origin_abs_max = std::max(oam[0], std::max(oam[1], oam[2]));
     return {};
 }
 
-std::string validate_rays(const Ray* rays, size_t n, Hit* hits, float& origin_abs_max) {
+std::string validate_rays(const Ray* rays, size_t n, Hit* hits, FieldsFn fields, float& origin_abs_max) {
     for (size_t k = 0; k < n; ++k) hits[k] = Hit{INFINITY, -2, 0.0f, 0.0f};
-    return validate<int32_t>(rays, n, reinterpret_cast<char*>(&hits[0].prim), sizeof(Hit), -2, -1, origin_abs_max);
+    return validate<int32_t>(rays, n, reinterpret_cast<char*>(&hits[0].prim), sizeof(Hit), -2, -1, fields,
+                             origin_abs_max);
 }
 
-std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, float& origin_abs_max) {
+std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, FieldsFn fields, float& origin_abs_max) {
     std::memset(occluded, 2, n);
-    return validate<uint8_t>(rays, n, reinterpret_cast<char*>(occluded), 1, 2, 0, origin_abs_max);
+    return validate<uint8_t>(rays, n, reinterpret_cast<char*>(occluded), 1, 2, 0, fields, origin_abs_max);
 }
 
 }  // namespace dacrt

@@ -2,7 +2,7 @@
 #pragma once
 #include <string>
 
-#include "ray.h"
+#include "kernel.h"
 
 namespace dacrt {
 
@@ -10,7 +10,8 @@ namespace dacrt {
 // output array (indexed by ray id) doubles as the mark array that finds repeated ids, so
 // validation allocates nothing; on success it holds all misses / all unoccluded.
 // origin_abs_max receives the largest |origin coordinate| (used to pad boxes).
-std::string validate_rays(const Ray* rays, size_t n, Hit* hits, float& origin_abs_max);
-std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, float& origin_abs_max);
+// fields: the ISA's SIMD field check (dispatch.h fields_fn).
+std::string validate_rays(const Ray* rays, size_t n, Hit* hits, FieldsFn fields, float& origin_abs_max);
+std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, FieldsFn fields, float& origin_abs_max);
 
 }  // namespace dacrt

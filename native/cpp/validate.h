@@ -1,0 +1,37 @@
+// SIMD check of the ray fields (finite origin and direction, non-zero direction, tfar >= 0 or
+// +inf) and the largest |origin coordinate|, W rays per step with the filter's transposed
+// loads. The exact message for a bad ray and the id checks are in ray.cpp (scalar, cold/cheap).
+// Included inside an ISA namespace.
+#pragma once
+
+template <int W>
+bool fields_valid_w(const Ray* rays, size_t n, float& origin_abs_max) {
+    const vfloat<W> zero = splat<W>(0.0f);
+    const vbool<W> all = cmpeq(zero, zero);
+    vbool<W> ok_all = all;
+    vfloat<W> oam = zero;
+    alignas(64) Ray tail[W];
+    for (size_t i = 0; i < n; i += W) {
+        vfloat<W> r[8];
+        if (i + W <= n) {
+            load_rays<W>(reinterpret_cast<const float*>(rays + i), r);
+        } else {  // pad with valid rays
+            const size_t k = n - i;
+            std::memcpy(tail, rays + i, k * sizeof(Ray));
+            for (size_t j = k; j < size_t(W); ++j) tail[j] = Ray{{0, 0, 0}, {1, 0, 0}, 0.0f, 0};
+            load_rays<W>(reinterpret_cast<const float*>(tail), r);
+        }
+        // x - x is exactly 0 for finite x and NaN for inf/NaN: one compare for six fields.
+        const vfloat<W> z = ((r[0] - r[0]) + (r[1] - r[1])) + ((r[2] - r[2]) + (r[3] - r[3])) +
+                            ((r[4] - r[4]) + (r[5] - r[5]));
+        const vbool<W> zero_dir = cmpeq(r[3], zero) & cmpeq(r[4], zero) & cmpeq(r[5], zero);
+        ok_all = ok_all & cmpeq(z, zero) & cmple(zero, r[6]) & andnot(zero_dir, all);
+        oam = vmax(oam, vmax(vabs(r[0]), vmax(vabs(r[1]), vabs(r[2]))));
+    }
+    alignas(64) float m[W];
+    storeu(m, oam);
+    float best = 0.0f;
+    for (int l = 0; l < W; ++l) best = m[l] > best ? m[l] : best;
+    origin_abs_max = best;
+    return bits(ok_all) == bits(all);
+}
