@@ -44,18 +44,11 @@ __attribute__((always_inline)) inline uint32_t block_active(const Ray* rays, con
 // Lomuto partition of a short range (< 3W rays) with a padded last block.
 template <int W>
 size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
-    alignas(64) Ray tail[W];
     size_t w = 0;
     for (size_t i = 0; i < n; i += W) {
-        uint32_t m;
-        if (i + W <= n) {
-            m = block_active<W>(rays + i, lo, hi);
-        } else {  // pad with rays that can never be active
-            const size_t k = n - i;
-            std::memcpy(tail, rays + i, k * sizeof(Ray));
-            for (size_t j = k; j < size_t(W); ++j) tail[j] = Ray{{0, 0, 0}, {1, 0, 0}, kOccludedTfar, 0};
-            m = block_active<W>(tail, lo, hi) & ((1u << k) - 1u);
-        }
+        vfloat<W> r[8];
+        const uint32_t valid = load_block<W>(rays, i, n, kInactiveRay, r);
+        uint32_t m = bits(box_test<W>(r, lo, hi)) & valid;
         while (m) {
             const size_t src = i + size_t(__builtin_ctz(m));
             m &= m - 1;
@@ -73,7 +66,7 @@ size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
 template <int W>
 size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], Stats& st) {
     st.box_tests += n;
-    const uint32_t full = W == 32 ? 0xFFFFFFFFu : ((1u << W) - 1u);
+    const uint32_t full = all_lanes<W>();
     size_t i = 0, j = n;    // [0, i) settled active (but a pending left block), [j, n) inactive
     size_t li = 0, rj = 0;  // pending blocks
     uint32_t ml = 0, mr = 0;  // inactive lanes of the left block, active lanes of the right block

@@ -12,6 +12,7 @@
 namespace dacrt {
 namespace avx2 {
 #include "simd/avx2.h"
+#include "rayblock.h"
 #include "filter.h"
 #include "partition.h"
 #include "leaf.h"

@@ -12,6 +12,7 @@
 namespace dacrt {
 namespace avx512 {
 #include "simd/avx512.h"
+#include "rayblock.h"
 #include "filter.h"
 #include "partition.h"
 #include "leaf.h"

@@ -12,6 +12,7 @@
 namespace dacrt {
 namespace portable {
 #include "simd/portable.h"
+#include "rayblock.h"
 #include "filter.h"
 #include "partition.h"
 #include "leaf.h"

@@ -35,17 +35,7 @@ inline vfloat<W> pick(vint<W> k, const vfloat<W> v[3]) {
 template <int W>
 inline void load_group(const Ray* rays, size_t i, size_t na, const int32_t* skip, RayGroup<W>& g) {
     vfloat<W> r[8];
-    if (i + W <= na) {
-        load_rays<W>(reinterpret_cast<const float*>(rays + i), r);
-        g.valid = W == 32 ? 0xFFFFFFFFu : ((1u << W) - 1u);
-    } else {
-        alignas(64) Ray tail[W];
-        const size_t k = na - i;
-        std::memcpy(tail, rays + i, k * sizeof(Ray));
-        for (size_t j = k; j < size_t(W); ++j) tail[j] = Ray{{0, 0, 0}, {0, 0, 1}, kOccludedTfar, 0};
-        load_rays<W>(reinterpret_cast<const float*>(tail), r);
-        g.valid = (1u << k) - 1u;
-    }
+    g.valid = load_block<W>(rays, i, na, kInactiveRay, r);
     storeu(reinterpret_cast<float*>(g.id), r[7]);
     g.tfar = r[6];
     if (skip) {  // gathered once per group, then one compare per triangle

@@ -10,17 +10,10 @@ bool fields_valid_w(const Ray* rays, size_t n, float& origin_abs_max) {
     const vbool<W> all = cmpeq(zero, zero);
     vbool<W> ok_all = all;
     vfloat<W> oam = zero;
-    alignas(64) Ray tail[W];
+    const Ray pad{{0, 0, 0}, {1, 0, 0}, 0.0f, 0};  // a valid ray
     for (size_t i = 0; i < n; i += W) {
         vfloat<W> r[8];
-        if (i + W <= n) {
-            load_rays<W>(reinterpret_cast<const float*>(rays + i), r);
-        } else {  // pad with valid rays
-            const size_t k = n - i;
-            std::memcpy(tail, rays + i, k * sizeof(Ray));
-            for (size_t j = k; j < size_t(W); ++j) tail[j] = Ray{{0, 0, 0}, {1, 0, 0}, 0.0f, 0};
-            load_rays<W>(reinterpret_cast<const float*>(tail), r);
-        }
+        load_block<W>(rays, i, n, pad, r);
         // x - x is exactly 0 for finite x and NaN for inf/NaN: one compare for six fields.
         const vfloat<W> z = ((r[0] - r[0]) + (r[1] - r[1])) + ((r[2] - r[2]) + (r[3] - r[3])) +
                             ((r[4] - r[4]) + (r[5] - r[5]));
