@@ -35,7 +35,7 @@ from .camera import CameraModel
 from .film import Film
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, LightSet, make_lamp
-from .sampling import RandomStream, cosine_hemisphere, dot, max3, normalize, to_world
+from .sampling import RandomStream, dot, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 
 F32 = np.float32
@@ -70,8 +70,8 @@ _MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 21, 1 << 16
 _OFFSET_ULPS = F32(8.0)
 _TINY = F32(2.0 ** -100)     # floor keeping _ulp's input a normal float (an all-zero triangle is never hit)
 # A shadow ray that must end at an emitter triangle ends at a point pushed off it by the same
-# step, and a little short (the end of a float32 ray drifts by a few ULPs of its length; measured:
-# 2**-17 of the length always sufficed, 2**-18 did not).
+# step, and a little short (dacrt.shading.shadow_rays; the end of a float32 ray drifts by a few
+# ULPs of its length; measured: 2**-17 of the length always sufficed, 2**-18 did not).
 _END_SHORTEN = F32(1.0 - 2.0 ** -16)
 
 
@@ -93,14 +93,6 @@ def triangle_offsets(corners: np.ndarray, normals: np.ndarray) -> np.ndarray:
     mag = np.maximum(np.abs(corners).max(axis=(1, 2)).astype(F32), _TINY)
     step = normals.astype(F32) * (_ulp(mag) * _OFFSET_ULPS)
     return step.astype(F32)
-
-
-def shadow_ray_to(O: np.ndarray, target: np.ndarray):
-    """Direction and length of shadow rays from O to points offset in front of an emitter
-    triangle (its triangle_offsets step), stopped _END_SHORTEN of the way."""
-    d, length = normalize(target - O)
-    length *= _END_SHORTEN
-    return d, length
 
 
 @dataclass
@@ -300,7 +292,6 @@ class Integrator:
         self._any_emissive = bool(self._tri_emissive.any())
         self._build_lights(scene_data)
         self._fixed_paths = None if paths_per_pass is None else max(1, int(paths_per_pass))
-        self._ids = np.zeros(0, np.uint32)
         self._rays = {'camera': 0, 'bounce': 0, 'shadow': 0}
         self._skipped_shadow = 0        # light samples that could not contribute: no ray traced
         self._trace_seconds = 0.0
@@ -454,18 +445,9 @@ class Integrator:
 
     # --- tracing --------------------------------------------------------------------------------
 
-    def _ray_array(self, O, D, tfar):
-        n = O.shape[1]
-        if len(self._ids) < n:
-            self._ids = np.arange(max(n, 2 * len(self._ids)), dtype=np.uint32)
-        # rows org, dir, tfar, id, then one transposing copy into RAY_DTYPE records (faster
-        # than filling the strided record fields one by one)
-        buf = np.empty((8, n), F32)
-        buf[0:3] = O
-        buf[3:6] = D
-        buf[6] = tfar
-        buf[7] = self._ids[:n].view(F32)
-        return np.ascontiguousarray(buf.T).view(dacrt.RAY_DTYPE).reshape(n)
+    @staticmethod
+    def _ray_array(O, D, tfar):
+        return dacrt.shading.pack_rays(O, D, tfar)
 
     def _skip(self, kind, prim):
         """Per-ray triangle to ignore, in the tracer scene's own numbering (prim: global index
@@ -489,12 +471,14 @@ class Integrator:
         return hits
 
     def _occluded(self, O, D, tfar, skip=None):
-        rays = self._ray_array(O, D, tfar)
+        return self._occluded_rays(self._ray_array(O, D, tfar), skip)
+
+    def _occluded_rays(self, rays, skip=None):
         skip = self._skip('shadow', skip)
         t0 = time.perf_counter()
         occ = self._scenes['shadow'].occluded(rays, threads=self.threads, skip=skip)
         self._trace_seconds += time.perf_counter() - t0
-        self._rays['shadow'] += O.shape[1]
+        self._rays['shadow'] += len(rays)
         return occ
 
     # --- one block of paths ---------------------------------------------------------------------
@@ -575,14 +559,15 @@ class Integrator:
         idx = np.flatnonzero(live)
         if len(idx) == 0:
             return None
-        take = _taker(None if len(idx) == len(live) else idx)
-        prim, u, v = take(prim), take(hits['u']), take(hits['v'])
-        pid, keys, D, thr = take(path.pid), take(path.keys), take(path.D), take(thr)
+        sel = None if len(idx) == len(live) else idx
+        take = _taker(sel)
+        P, ng, ns, P_off = self._surface(hits, sel, path.D)
+        prim, pid, keys, thr = take(prim), take(path.pid), take(path.keys), take(thr)
         u_pick = take(u_pick) if need_pick else None
-        del hits, path
         albedo = np.take(self._tri_albedo, prim, axis=1)
-        mat = np.take(self.tri.material, prim) if self.mats.textures else None
-        P, ng, ns, P_off = self._surface(prim, u, v, D, mat, albedo)
+        if self.mats.textures:
+            self._texture(prim, take(hits['u']), take(hits['v']), albedo)
+        del hits, path
         thr = albedo if thr is None else albedo * thr     # throughput after this reflection
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L)
@@ -590,13 +575,8 @@ class Integrator:
             return None                               # the last BSDF ray could only find emission
         # cosine-weighted BSDF sample around the shading normal; reject directions below the
         # geometric surface (a diffuse BSDF only reflects)
-        u1, u2 = self.rng.uniform2(keys, _dim(k, 2))
-        local = cosine_hemisphere(u1, u2)
-        wi = to_world(local, ns)
-        pdf = local[2] * INV_PI
-        ok = local[2] > 0
-        if ns is not ng:
-            ok &= dot(wi, ng) > 0
+        ka, kb = self.rng.dim_words(_dim(k, 2))
+        wi, pdf, ok = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng)
         if not ok.all():
             take = _taker(np.flatnonzero(ok))
             P_off, wi, thr, pid, keys, pdf, prim = (take(a) for a in (P_off, wi, thr, pid, keys, pdf, prim))
@@ -606,40 +586,24 @@ class Integrator:
 
     # --- surfaces -------------------------------------------------------------------------------
 
-    def _surface(self, prim, u, v, D, mat, albedo):
-        """Hit points, geometric and shading normals facing the incoming rays, and the points
-        offset off the surface toward the ray's side (all (3,n)); multiplies textures into
-        albedo in place."""
-        g = np.take(self.tri.geo, prim, axis=1)
-        P = g[3:6] * u
-        P += g[6:9] * v
-        P += g[0:3]
-        ng = g[9:12]
-        flip = np.where(dot(ng, D) > 0, F32(-1.0), F32(1.0))
-        ng = ng * flip
-        P_off = g[12:15] * flip                       # triangle_offsets() toward the ray's side
-        P_off += P
-        if self.tri.normals is not None:
-            nn = np.take(self.tri.normals, prim, axis=1)
-            ns = nn[3:6] * u
-            ns += nn[6:9] * v
-            ns += nn[0:3]
-            ns, length = normalize(ns)
-            ns *= flip
-            bad = ~(length > 0)
-            if bad.any():
-                np.copyto(ns, ng, where=bad)
-        else:
-            ns = ng
-        for m, tex, interp, ext in self.mats.textures:       # (mat is None without textures)
+    def _surface(self, hits, sel, D):
+        """Hit points P, geometric and shading normals facing the incoming rays, and the points
+        offset off the surface toward the ray's side (all (3,k)), of the rays sel (None: all)."""
+        return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D)
+
+    def _texture(self, prim, u, v, albedo):
+        """Multiply image textures (on the UV map) into albedo (3,k) in place."""
+        if self.tri.uvs is None:
+            return
+        mat = np.take(self.tri.material, prim)
+        for m, tex, interp, ext in self.mats.textures:
             sel = np.flatnonzero(mat == m)
-            if len(sel) and self.tri.uvs is not None:
+            if len(sel):
                 uvc = np.take(self.tri.uvs, np.take(prim, sel), axis=1)
                 us, vs = np.take(u, sel), np.take(v, sel)
                 tu = uvc[0] + uvc[2] * us + uvc[4] * vs
                 tv = uvc[1] + uvc[3] * us + uvc[5] * vs
                 albedo[:, sel] *= texture_lookup(tex, tu, tv, interp, ext)
-        return P, ng, ns, P_off
 
     def _write_passes(self, path, hits, hit, data, pix, samp):
         """Data passes from the first visible surface (holdouts and background stay 0)."""
@@ -648,10 +612,10 @@ class Integrator:
         want = self.film.passes
         if len(idx):
             prim = np.take(hits['prim'], idx)
-            mat = np.take(self.tri.material, prim)
-            albedo = np.take(self.mats.base, mat, axis=1)
-            P, ng, ns, _ = self._surface(prim, np.take(hits['u'], idx), np.take(hits['v'], idx),
-                                         np.take(path.D, idx, axis=1), mat, albedo)
+            albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1)
+            if self.mats.textures:
+                self._texture(prim, np.take(hits['u'], idx), np.take(hits['v'], idx), albedo)
+            P, ng, ns, _ = self._surface(hits, idx, path.D)
         else:
             P = ns = albedo = np.zeros((3, 0), F32)
         if 'Normal' in want:
@@ -771,41 +735,18 @@ class Integrator:
                     target[:, idx] = ls.target
                 if j < nl and not lights.lamps[j].cast_shadow:
                     shadow[idx] = False
-        cos_s = dot(ns, wi)
-        p_sel = np.take(self._entry_prob, entry)
-        with np.errstate(divide='ignore', invalid='ignore'):
-            r = cos_s * INV_PI                        # BSDF pdf
-            r /= p_sel * pdf
-            r *= r
-            r += F32(1.0)                             # power heuristic w = 1/r; delta lights: 1
-            scale = cos_s * INV_PI
-            scale /= r * p_sel
-        value *= thr
-        value *= scale
-        ok = (cos_s > 0) & (max3(value) > 0)
-        if ns is not ng:
-            ok &= dot(ng, wi) > 0
+        # value *= thr x cos/pi x MIS weight / p_sel (one native pass); ok: can contribute
+        value = np.ascontiguousarray(value, F32)
+        ok = dacrt.shading.nee_weight(ns, None if ns is ng else ng, wi, pdf, np.take(self._entry_prob, entry),
+                                      thr, value)
         send = np.flatnonzero(ok if shadow is None else ok & shadow)
         self._skipped_shadow += n - int(np.count_nonzero(ok))
         if len(send):
-            take = _taker(send)
-            O, sp = take(P_off), take(prim)
             # emitters that are geometry: aim at the offset point in front of them and stop a
             # little short (the tracer can skip only one triangle: the one left behind)
-            tg = None if target is None else take(target)
-            aim = None if tg is None else ~np.isnan(tg[0])
-            if aim is not None and aim.all():
-                sd, sl = shadow_ray_to(O, tg)
-            else:
-                sd, sl = take(wi), take(dist)
-                if aim is not None and aim.any():
-                    sd[:, aim], sl[aim] = shadow_ray_to(O[:, aim], tg[:, aim])
-            if tg is not None:
-                good = sl > 0
-                if not good.all():
-                    O, sd, sl, sp, send = O[:, good], sd[:, good], sl[good], sp[good], send[good]
-            occ = self._occluded(O, sd, sl, sp)
-            send = send[~occ]
+            rays, valid = dacrt.shading.shadow_rays(P_off, wi, dist, target, send, _END_SHORTEN)
+            occ = self._occluded_rays(rays, np.take(prim, send))
+            send = send[valid & ~occ]
         if shadow is not None:
             free = np.flatnonzero(ok & ~shadow)
             if len(free):
@@ -824,9 +765,8 @@ class Integrator:
 
 
 def _accumulate(L, idx, values):
-    """L[:, idx] += values for distinct idx, one row at a time (faster than 2-D fancy indexing)."""
-    for c in range(3):
-        L[c, idx] += values[c]
+    """L[:, idx] += values for distinct idx (one native pass)."""
+    dacrt.shading.accumulate(L, idx, values)
 
 
 def _taker(idx):

@@ -1,8 +1,9 @@
 """Random numbers and sample warps for the path tracer (numpy, vectorised).
 
 Owns the counter-based random number generator, the maps from the unit square to directions
-and points (cosine hemisphere, cones, spheres, disks, triangles) and the (3, n) vector helpers
-they use.
+and points the lights use (cones, spheres, disks) and the (3, n) vector helpers they use. The
+hot per-vertex warps (cosine-weighted bounces, points on emissive triangles) and the uniforms
+themselves run in the native kernels of dacrt.shading, which use this same hash (tested).
 
 Random numbers are a pure function of (seed, pixel, sample, dimension): no generator state is
 carried between calls, so an image depends only on the seed, never on how samples were grouped
@@ -13,6 +14,7 @@ several times faster in numpy than 64-bit).
 """
 from __future__ import annotations
 
+import dacrt
 import numpy as np
 
 _U64 = np.uint64
@@ -95,8 +97,19 @@ class RandomStream:
         _fmix32(b)
         return a, b
 
+    def dim_words(self, dim: int):
+        """The two 32-bit words that key dimension pair `dim` (for the native kernels, which
+        mix them with each path's key exactly as _words does)."""
+        return self._dim_keys(dim)
+
     def uniform2(self, keys: np.ndarray, dim: int):
-        """Two independent float32 uniforms in [0, 1) per key for dimension pair `dim`."""
+        """Two independent float32 uniforms in [0, 1) per key for dimension pair `dim`
+        (the native kernel: one pass instead of a dozen numpy passes; equal to uniform2_numpy)."""
+        ka, kb = self._dim_keys(dim)
+        return dacrt.shading.uniform2(keys, int(ka), int(kb))
+
+    def uniform2_numpy(self, keys: np.ndarray, dim: int):
+        """uniform2 in numpy: the definition the native kernel is tested against."""
         a, b = self._words(keys, dim)
         return _to_unit24(a), _to_unit24(b)
 
@@ -149,16 +162,6 @@ def concentric_disk(u1: np.ndarray, u2: np.ndarray):
     return r * np.cos(phi), r * np.sin(phi)
 
 
-def cosine_hemisphere(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
-    """Local directions (3, n) around +Z with pdf cos(theta)/pi (Malley: a uniform disk point
-    lifted to the hemisphere; polar map, the cheapest for independent random numbers)."""
-    r = np.sqrt(u1)
-    phi = np.float32(2.0 * np.pi) * u2
-    z = 1.0 - u1
-    np.maximum(z, 0.0, out=z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(z)])
-
-
 def uniform_sphere(u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
     """Uniform directions (3, n) on the unit sphere, pdf 1/(4 pi)."""
     z = 1.0 - 2.0 * u1
@@ -182,12 +185,6 @@ def one_minus_cos_from_sin2(sin2):
     """1 - sqrt(1 - s) without cancellation, for the half angle of a sphere seen from outside."""
     sin2 = np.asarray(sin2)
     return sin2 / (1.0 + np.sqrt(np.maximum(1.0 - sin2, 0.0)))
-
-
-def uniform_triangle(u1: np.ndarray, u2: np.ndarray):
-    """Barycentric weights (b1, b2) of vertices 1 and 2, uniform over the triangle area."""
-    su = np.sqrt(u1)
-    return u2 * su, 1.0 - su
 
 
 def orthonormal_basis(n: np.ndarray):

@@ -1,10 +1,11 @@
 """Emissive triangles as lights: chosen by power (area x mean radiance), sampled uniformly by
-area, emitting the material's emission from both sides (Cycles' emissive_simple_eval)."""
+area, emitting the material's emission from both sides (Cycles' emissive_simple_eval). The
+per-sample geometry runs in the native kernel dacrt.shading.sample_triangles."""
 from __future__ import annotations
 
+import dacrt
 import numpy as np
 
-from ..sampling import dot, normalize, uniform_triangle
 from .base import F32, LightSample
 
 
@@ -32,24 +33,12 @@ class EmissiveTriangles:
 
         The shadow ray must end at a point pushed off the emitter toward P (LightSample.target)
         instead of racing the emitter itself to the same t. Radiance and pdf use the exact points."""
-        g = np.take(self.geo, which, axis=1)
-        b1, b2 = uniform_triangle(u1, u2)
-        q = g[3:6] * b1
-        q += g[6:9] * b2
-        q += g[0:3]
-        wi, dist = normalize(q - P)
-        cos_l = dot(g[9:12], wi)
-        side = np.where(cos_l <= 0, F32(1.0), F32(-1.0))      # the emitter face that sees P
-        np.abs(cos_l, out=cos_l)
-        ok = (cos_l > 0) & (dist > 0)
-        with np.errstate(divide='ignore', invalid='ignore'):
-            pdf = np.where(ok, dist * dist / (np.take(self.area, which) * cos_l), F32(0.0))
-            scale = np.where(ok, F32(1.0) / pdf, F32(0.0))
+        wi, dist, pdf, target = dacrt.shading.sample_triangles(self.geo, self.area, which, P, u1, u2)
+        with np.errstate(divide='ignore'):
+            scale = np.where(pdf > 0, F32(1.0) / pdf, F32(0.0))
         if self.uniform_emission is not None:
             value = self.uniform_emission[:, None] * scale
         else:
             value = np.take(self.emission, which, axis=1)
             value *= scale
-        target = g[12:15] * side
-        target += q
         return LightSample(wi, dist, value, pdf, target)

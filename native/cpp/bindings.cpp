@@ -147,7 +147,10 @@ private:
 
 }  // namespace
 
+void register_shading(py::module_& m);  // bindings_shading.cpp
+
 PYBIND11_MODULE(_core, m) {
+    register_shading(m);
     m.doc() = "DACRT native core: divide-and-conquer ray tracing without acceleration structures";
     m.def("supported_isas", &supported_isas, "ISAs this CPU can run, weakest first");
     m.def("best_isa", []() { return isa_name(resolve_isa("")); });

@@ -5,7 +5,8 @@ import pytest
 
 import dacrt
 from addon import scenedata as sd
-from addon.integrator import Integrator, Progress, shadow_ray_to, texture_lookup
+import addon.integrator as integrator_module
+from addon.integrator import Integrator, Progress, texture_lookup
 
 from .scenes import (ALL_VIS, cornell_box, geometry, light, material, ortho_down, plane_scene, quad,
                      render, translation)
@@ -193,8 +194,9 @@ def _surface_points(integ, tris, n, rng):
     u = np.where(edge, rng.random(n) * 10.0 ** rng.uniform(-9, -3, n), u)
     v = np.minimum(v, 1.0 - u)
     ng = integ.tri.geo[9:12][:, prim]
-    albedo = np.ones((3, n), np.float32)
-    P, ng, _, P_off = integ._surface(prim, u.astype(np.float32), v.astype(np.float32), -ng, None, albedo)
+    hits = np.zeros(n, dacrt.HIT_DTYPE)
+    hits['prim'], hits['u'], hits['v'] = prim, u, v
+    P, ng, _, P_off = integ._surface(hits, None, np.ascontiguousarray(-ng))
     return prim, P, P_off, ng
 
 
@@ -259,8 +261,9 @@ def test_skip_alone_keeps_rays_off_their_own_triangle(monkeypatch):
     n = 40000
     prim = rng.integers(1, len(t) + 1, n).astype(np.int32)
     b = rng.uniform(0.1, 0.45, (2, n)).astype(np.float32)        # well inside the triangle
-    P, ng, _, P_off = integ._surface(prim, b[0], b[1], -integ.tri.geo[9:12][:, prim], None,
-                                     np.ones((3, n), np.float32))
+    hits = np.zeros(n, dacrt.HIT_DTYPE)
+    hits['prim'], hits['u'], hits['v'] = prim, b[0], b[1]
+    P, ng, _, P_off = integ._surface(hits, None, np.ascontiguousarray(-integ.tri.geo[9:12][:, prim]))
     assert np.array_equal(P, P_off)
     D = _directions(ng, rng, min_elevation=0.1)
     inf = np.full(n, np.inf, np.float32)
@@ -297,9 +300,9 @@ def test_shadow_rays_reach_emitter_triangles(name):
     S = (q + _directions(ng, rng, 0.02) * dist).astype(np.float32)
     ls = emit.sample(S, which, u1, u2)
     assert (ls.value.max(axis=0) > 0).all()
-    d, length = shadow_ray_to(S, ls.target)
-    assert (length > 0).all()
-    assert not integ._occluded(S, d, length).any()
+    rays, valid = dacrt.shading.shadow_rays(S, ls.wi, ls.dist, ls.target, np.arange(n), integrator_module._END_SHORTEN)
+    assert valid.all()
+    assert not integ._occluded_rays(rays).any()
 
 
 # --- visibility, holdout, transparency --------------------------------------------------------

@@ -222,3 +222,5 @@ class Scene:
         out = np.empty(len(rays), np.uint8)
         self.last_stats = self._core.occluded(rays, out, skip, *args)
         return out.view(np.bool_)
+
+from . import shading  # noqa: E402  (per-ray helper kernels; needs the names above)

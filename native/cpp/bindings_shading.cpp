@@ -1,0 +1,211 @@
+// pybind11 bindings of the shading-side helper kernels (shading.h), registered into dacrt._core
+// by register_shading(). Shapes and dtypes are checked here (the Python wrappers in
+// dacrt/shading.py convert arguments); the GIL is released while a kernel runs.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <string>
+
+#include "shading.h"
+
+namespace py = pybind11;
+using namespace dacrt;
+
+namespace {
+
+using F32Array = py::array_t<float, py::array::c_style>;
+using U32Array = py::array_t<uint32_t, py::array::c_style>;
+using I64Array = py::array_t<int64_t, py::array::c_style>;
+
+size_t rows_of(const py::array& a, py::ssize_t rows, const char* name) {
+    if (a.ndim() != 2 || a.shape(0) != rows)
+        throw py::value_error(std::string(name) + " must have shape (" + std::to_string(rows) + ", n)");
+    return size_t(a.shape(1));
+}
+
+void need_len(const py::array& a, size_t n, const char* name) {
+    if (a.ndim() != 1 || size_t(a.shape(0)) != n)
+        throw py::value_error(std::string(name) + " must have shape (" + std::to_string(n) + ",)");
+}
+
+void pack_rays_py(F32Array O, F32Array D, F32Array tfar, py::array out) {
+    size_t n = rows_of(O, 3, "O");
+    if (rows_of(D, 3, "D") != n) throw py::value_error("D must have the shape of O");
+    need_len(tfar, n, "tfar");
+    if (out.ndim() != 1 || size_t(out.shape(0)) != n || out.itemsize() != sizeof(Ray) || !(out.flags() & py::array::c_style))
+        throw py::value_error("out must be a contiguous (n,) array of 32-byte ray records");
+    Ray* r = static_cast<Ray*>(out.mutable_data());
+    py::gil_scoped_release nogil;
+    pack_rays(O.data(), D.data(), tfar.data(), n, r);
+}
+
+F32Array surface_py(F32Array geo, py::object normals, py::array hits, py::object idx, F32Array D) {
+    size_t M = rows_of(geo, 15, "geo");
+    const float* nrm = nullptr;
+    F32Array nrm_arr;
+    if (!normals.is_none()) {
+        nrm_arr = normals.cast<F32Array>();
+        if (rows_of(nrm_arr, 9, "normals") != M) throw py::value_error("normals must have shape (9, M) like geo");
+        nrm = nrm_arr.data();
+    }
+    size_t n = rows_of(D, 3, "D");
+    if (hits.ndim() != 1 || size_t(hits.shape(0)) != n || hits.itemsize() != sizeof(Hit) || !(hits.flags() & py::array::c_style))
+        throw py::value_error("hits must be a contiguous (n,) array of 16-byte hit records, n = D.shape[1]");
+    const int64_t* ix = nullptr;
+    size_t k = n;
+    I64Array idx_arr;
+    if (!idx.is_none()) {
+        idx_arr = idx.cast<I64Array>();
+        if (idx_arr.ndim() != 1) throw py::value_error("idx must be one-dimensional");
+        k = size_t(idx_arr.shape(0));
+        ix = idx_arr.data();
+        for (size_t j = 0; j < k; ++j)
+            if (ix[j] < 0 || size_t(ix[j]) >= n)
+                throw py::value_error("idx[" + std::to_string(j) + "] = " + std::to_string(ix[j]) +
+                                      " is outside 0.." + std::to_string(n ? n - 1 : 0));
+    }
+    F32Array out({py::ssize_t(nrm ? 12 : 9), py::ssize_t(k)});
+    const Hit* h = static_cast<const Hit*>(hits.data());
+    size_t bad;
+    {
+        py::gil_scoped_release nogil;
+        bad = surface(geo.data(), M, nrm, h, ix, k, D.data(), n, out.mutable_data());
+    }
+    if (bad) throw py::value_error(std::to_string(bad) + " selected hit(s) have no triangle (prim < 0 or >= " +
+                                   std::to_string(M) + ")");
+    return out;
+}
+
+py::tuple uniform2_py(U32Array keys, uint32_t ka, uint32_t kb) {
+    size_t n = rows_of(keys, 2, "keys");
+    F32Array u1{py::ssize_t(n)}, u2{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        uniform2_rows(keys.data(), n, ka, kb, u1.mutable_data(), u2.mutable_data());
+    }
+    return py::make_tuple(u1, u2);
+}
+
+py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns, py::object ng) {
+    size_t n = rows_of(keys, 2, "keys");
+    if (rows_of(ns, 3, "ns") != n) throw py::value_error("ns must have shape (3, n), n = keys.shape[1]");
+    const float* g = nullptr;
+    F32Array ng_arr;
+    if (!ng.is_none()) {
+        ng_arr = ng.cast<F32Array>();
+        if (rows_of(ng_arr, 3, "ng") != n) throw py::value_error("ng must have shape (3, n) like ns");
+        g = ng_arr.data();
+    }
+    F32Array wi({py::ssize_t(3), py::ssize_t(n)}), pdf{py::ssize_t(n)};
+    py::array_t<bool> ok{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        cosine_scatter(keys.data(), n, ka, kb, ns.data(), g, wi.mutable_data(), pdf.mutable_data(),
+                       reinterpret_cast<uint8_t*>(ok.mutable_data()));
+    }
+    return py::make_tuple(wi, pdf, ok);
+}
+
+py::tuple sample_triangles_py(F32Array geo, F32Array area, I64Array which, F32Array P, F32Array u1, F32Array u2) {
+    size_t M = rows_of(geo, 15, "geo");
+    need_len(area, M, "area");
+    size_t n = rows_of(P, 3, "P");
+    need_len(which, n, "which");
+    need_len(u1, n, "u1");
+    need_len(u2, n, "u2");
+    F32Array wi({py::ssize_t(3), py::ssize_t(n)}), target({py::ssize_t(3), py::ssize_t(n)});
+    F32Array dist{py::ssize_t(n)}, pdf{py::ssize_t(n)};
+    size_t bad;
+    {
+        py::gil_scoped_release nogil;
+        bad = sample_triangles(geo.data(), area.data(), M, which.data(), P.data(), u1.data(), u2.data(), n,
+                               wi.mutable_data(), dist.mutable_data(), pdf.mutable_data(), target.mutable_data());
+    }
+    if (bad) throw py::value_error(std::to_string(bad) + " entries of which are not triangles 0.." + std::to_string(M ? M - 1 : 0));
+    return py::make_tuple(wi, dist, pdf, target);
+}
+
+void check_index(const I64Array& idx, size_t limit, const char* name) {
+    const int64_t* ix = idx.data();
+    for (py::ssize_t j = 0; j < idx.shape(0); ++j)
+        if (ix[j] < 0 || size_t(ix[j]) >= limit)
+            throw py::value_error(std::string(name) + "[" + std::to_string(j) + "] = " + std::to_string(ix[j]) +
+                                  " is outside 0.." + std::to_string(limit ? limit - 1 : 0));
+}
+
+const float* optional_rows(const py::object& o, py::ssize_t rows, size_t n, const char* name, F32Array& keep) {
+    if (o.is_none()) return nullptr;
+    keep = o.cast<F32Array>();
+    if (rows_of(keep, rows, name) != n)
+        throw py::value_error(std::string(name) + " must have shape (" + std::to_string(rows) + ", " + std::to_string(n) + ")");
+    return keep.data();
+}
+
+py::array_t<bool> nee_weight_py(F32Array ns, py::object ng, F32Array wi, F32Array pdf, F32Array p_sel, py::object thr,
+                                F32Array value) {
+    size_t n = rows_of(ns, 3, "ns");
+    if (rows_of(wi, 3, "wi") != n || rows_of(value, 3, "value") != n)
+        throw py::value_error("wi and value must have shape (3, n) like ns");
+    need_len(pdf, n, "pdf");
+    need_len(p_sel, n, "p_sel");
+    F32Array ng_keep, thr_keep;
+    const float* g = optional_rows(ng, 3, n, "ng", ng_keep);
+    const float* t = optional_rows(thr, 3, n, "thr", thr_keep);
+    py::array_t<bool> ok{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        nee_weight(ns.data(), g, wi.data(), pdf.data(), p_sel.data(), t, value.mutable_data(), n,
+                   reinterpret_cast<uint8_t*>(ok.mutable_data()));
+    }
+    return ok;
+}
+
+py::array_t<bool> shadow_rays_py(F32Array O, F32Array wi, F32Array dist, py::object target, I64Array idx, float shorten,
+                                 py::array out) {
+    size_t n = rows_of(O, 3, "O");
+    if (rows_of(wi, 3, "wi") != n) throw py::value_error("wi must have shape (3, n) like O");
+    need_len(dist, n, "dist");
+    F32Array tg_keep;
+    const float* tg = optional_rows(target, 3, n, "target", tg_keep);
+    if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
+    check_index(idx, n, "idx");
+    size_t k = size_t(idx.shape(0));
+    if (out.ndim() != 1 || size_t(out.shape(0)) != k || out.itemsize() != sizeof(Ray) || !(out.flags() & py::array::c_style))
+        throw py::value_error("out must be a contiguous (k,) array of 32-byte ray records, k = len(idx)");
+    py::array_t<bool> valid{py::ssize_t(k)};
+    Ray* r = static_cast<Ray*>(out.mutable_data());
+    {
+        py::gil_scoped_release nogil;
+        shadow_rays(O.data(), wi.data(), dist.data(), tg, n, idx.data(), k, shorten, r,
+                    reinterpret_cast<uint8_t*>(valid.mutable_data()));
+    }
+    return valid;
+}
+
+void accumulate_py(py::array_t<float, py::array::c_style> L, I64Array idx, F32Array values) {
+    if (!L.writeable()) throw py::value_error("L must be writeable");
+    size_t N = rows_of(L, 3, "L");
+    if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
+    size_t k = size_t(idx.shape(0));
+    if (rows_of(values, 3, "values") != k) throw py::value_error("values must have shape (3, len(idx))");
+    check_index(idx, N, "idx");
+    py::gil_scoped_release nogil;
+    accumulate(L.mutable_data(), N, idx.data(), values.data(), k);
+}
+
+}  // namespace
+
+void register_shading(py::module_& m) {
+    m.def("pack_rays", &pack_rays_py, py::arg("O"), py::arg("D"), py::arg("tfar"), py::arg("out"));
+    m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"));
+    m.def("uniform2", &uniform2_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
+    m.def("cosine_scatter", &cosine_scatter_py, py::arg("keys"), py::arg("ka"), py::arg("kb"), py::arg("ns"),
+          py::arg("ng"));
+    m.def("sample_triangles", &sample_triangles_py, py::arg("geo"), py::arg("area"), py::arg("which"), py::arg("P"),
+          py::arg("u1"), py::arg("u2"));
+    m.def("nee_weight", &nee_weight_py, py::arg("ns"), py::arg("ng"), py::arg("wi"), py::arg("pdf"), py::arg("p_sel"),
+          py::arg("thr"), py::arg("value"));
+    m.def("shadow_rays", &shadow_rays_py, py::arg("O"), py::arg("wi"), py::arg("dist"), py::arg("target"), py::arg("idx"),
+          py::arg("shorten"), py::arg("out"));
+    m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
+}

@@ -1,0 +1,73 @@
+// Per-ray helper kernels for the renderer's shading side: the arithmetic that sits between two
+// traced batches (hit-point reconstruction, diffuse bounce directions, random numbers, ray
+// packing). Fused and threaded here because numpy spends one memory pass per operation and one
+// core on all of them, which made Python, not tracing, the bulk of a render.
+//
+// Vectors are structure-of-arrays: 3 rows of `stride` floats (numpy (3, n) C order).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "ray.h"
+
+namespace dacrt {
+
+// Ray records from rows O, D (stride n) and tfar; ids 0..n-1.
+void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray* out);
+
+// Hit points of rays idx[0..k) (all rays when idx is null): reads hits[i] and column i of D
+// (stride n). geo: 15 rows of M (v0, v1 - v0, v2 - v0, unit geometric normal, front-side
+// self-intersection step); normals: 9 rows of M (corner 0 normal, corner 1 - 0, corner 2 - 0)
+// or null for flat shading. out: rows P, ng, P_off, then ns when normals are given (stride k);
+// ng, ns face the incoming ray and P_off is P stepped off the surface toward the ray's side.
+// Returns the number of selected rays whose prim is not a triangle of geo (out stays unwritten
+// for them; callers raise).
+size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits, const int64_t* idx,
+               size_t k, const float* D, size_t n, float* out);
+
+// Two uniforms per path for keys (rows k0, k1; stride n) and dimension words ka, kb.
+void uniform2_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, float* u1, float* u2);
+
+// Cosine-weighted directions around the shading normals ns (3 rows, stride n), random numbers
+// from keys/ka/kb; pdf = cos / pi. ok[i] = 0 for directions below the geometric normal ng
+// (null: ns is ng) or at grazing cos = 0.
+void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
+                    float* wi, float* pdf, uint8_t* ok);
+
+}  // namespace dacrt
+
+namespace dacrt {
+
+// Points on triangles which[i] (uniform by area, random numbers u1, u2) seen from points P
+// (3 rows, stride n); geo as in surface(), area per triangle of geo. Writes the unit direction
+// wi toward the point, its distance dist, the solid-angle pdf (0 where the point cannot be
+// seen: edge-on or coincident) and target, the point stepped off the emitter toward P (where a
+// shadow ray must end). Returns how many which[i] are not triangles of geo (nothing written).
+size_t sample_triangles(const float* geo, const float* area, size_t M, const int64_t* which, const float* P,
+                        const float* u1, const float* u2, size_t n, float* wi, float* dist, float* pdf,
+                        float* target);
+
+}  // namespace dacrt
+
+namespace dacrt {
+
+// Next-event estimation weights: for light samples (unit wi toward the light, solid-angle pdf,
+// inf for delta lights; value = radiance / pdf) at points with shading normal ns (geometric ng,
+// null: same), light-selection probability p_sel and path throughput thr (null: 1), multiplies
+// value in place by thr x cos/pi x (power-heuristic MIS weight against the cosine BSDF) / p_sel.
+// ok[i]: the sample can contribute (cos > 0 on both normals, some positive channel).
+void nee_weight(const float* ns, const float* ng, const float* wi, const float* pdf, const float* p_sel,
+                const float* thr, float* value, size_t n, uint8_t* ok);
+
+// Shadow ray records for the samples idx[0..k): origin column idx[j] of O (stride n), and either
+// direction wi / length dist or, where target is given and not NaN, the direction toward target
+// and that distance times `shorten`. ids are 0..k-1. valid[j] = 0 for zero-length rays (their
+// record gets tfar 0: never occluded; callers discard them).
+void shadow_rays(const float* O, const float* wi, const float* dist, const float* target, size_t n,
+                 const int64_t* idx, size_t k, float shorten, Ray* out, uint8_t* valid);
+
+// L[:, idx[j]] += values[:, j] (idx distinct; L has stride N, values stride k).
+void accumulate(float* L, size_t N, const int64_t* idx, const float* values, size_t k);
+
+}  // namespace dacrt

@@ -1,0 +1,61 @@
+// Hit-point reconstruction for shading (see shading.h): the same arithmetic, in the same order,
+// as the numpy code it replaces, one pass per ray instead of one per operation.
+#include <atomic>
+#include <cmath>
+
+#include "parallel.h"
+#include "shading.h"
+
+namespace dacrt {
+
+size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits, const int64_t* idx,
+               size_t k, const float* D, size_t n, float* out) {
+    std::atomic<size_t> bad{0};
+    parallel_for(k, [&](size_t b, size_t e) {
+        size_t local_bad = 0;
+        for (size_t j = b; j < e; ++j) {
+            const size_t i = idx ? size_t(idx[j]) : j;
+            const Hit& h = hits[i];
+            if (h.prim < 0 || size_t(h.prim) >= M) {
+                ++local_bad;
+                continue;
+            }
+            const size_t p = size_t(h.prim);
+            const float u = h.u, v = h.v;
+            auto g = [&](int row) { return geo[size_t(row) * M + p]; };
+            float P[3], ng[3];
+            for (int a = 0; a < 3; ++a) {
+                float x = g(3 + a) * u;
+                x += g(6 + a) * v;
+                x += g(a);
+                P[a] = x;
+                ng[a] = g(9 + a);
+            }
+            const float dn = ng[0] * D[i] + ng[1] * D[n + i] + ng[2] * D[2 * n + i];
+            const float flip = dn > 0 ? -1.0f : 1.0f;
+            for (int a = 0; a < 3; ++a) {
+                out[size_t(a) * k + j] = P[a];
+                out[size_t(3 + a) * k + j] = ng[a] * flip;
+                out[size_t(6 + a) * k + j] = P[a] + g(12 + a) * flip;
+            }
+            if (normals) {
+                float s[3];
+                for (int a = 0; a < 3; ++a) {
+                    float x = normals[size_t(3 + a) * M + p] * u;
+                    x += normals[size_t(6 + a) * M + p] * v;
+                    x += normals[size_t(a) * M + p];
+                    s[a] = x;
+                }
+                const float len = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+                // a zero interpolated normal (opposite corner normals) falls back to ng
+                const bool good = len > 0 && std::isfinite(len);
+                const float inv = good ? flip / len : 0.0f;
+                for (int a = 0; a < 3; ++a) out[size_t(9 + a) * k + j] = good ? s[a] * inv : ng[a] * flip;
+            }
+        }
+        if (local_bad) bad += local_bad;
+    });
+    return bad.load();
+}
+
+}  // namespace dacrt

@@ -1,0 +1,127 @@
+"""Per-ray helper kernels for a renderer's shading side (native, threaded, GIL released).
+
+The arithmetic between two traced batches: packing rays, reconstructing hit points, random
+numbers and diffuse bounce directions. Vectors are (3, n) float32 structure-of-arrays (one
+contiguous row per axis). Each kernel is one pass over its rays instead of numpy's one pass per
+operation, so a renderer built on numpy keeps tracing, not array traffic, its main cost.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import _core
+from . import RAY_DTYPE, HIT_DTYPE
+
+__all__ = ["pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "nee_weight", "shadow_rays",
+           "accumulate"]
+
+_F32 = np.float32
+
+
+def _rows(a, rows: int, name: str, dtype=_F32) -> np.ndarray:
+    a = np.ascontiguousarray(a, dtype)
+    if a.ndim != 2 or a.shape[0] != rows:
+        raise ValueError(f"{name} must have shape ({rows}, n), got {a.shape}")
+    return a
+
+
+def pack_rays(O, D, tfar, out: np.ndarray | None = None) -> np.ndarray:
+    """RAY_DTYPE records from origins O and directions D (3, n) and lengths tfar (n,);
+    ids are 0..n-1. out: an (n,) RAY_DTYPE array to fill (reused between batches)."""
+    O = _rows(O, 3, "O")
+    D = _rows(D, 3, "D")
+    n = O.shape[1]
+    tfar = np.ascontiguousarray(np.broadcast_to(np.asarray(tfar, _F32), (n,)))
+    if out is None:
+        out = np.empty(n, RAY_DTYPE)
+    elif out.dtype != RAY_DTYPE or out.shape != (n,):
+        raise ValueError(f"out must be an ({n},) RAY_DTYPE array, got {out.dtype} {out.shape}")
+    _core.pack_rays(O, D, tfar, out)
+    return out
+
+
+def surface(geo, normals, hits, idx, D):
+    """Hit points of the rays idx (all when None) from their hits (HIT_DTYPE, n) and
+    directions D (3, n).
+
+    geo (15, M): rows v0, v1 - v0, v2 - v0, unit geometric normal, front-side offset step;
+    normals (9, M) (corner-0 normal, corner 1 - 0, corner 2 - 0) or None for flat shading.
+    Returns P, ng, ns, P_off (3, k): geometric and shading normals facing the incoming ray
+    (ns is ng when normals is None) and P stepped off the surface toward the ray's side."""
+    geo = _rows(geo, 15, "geo")
+    if normals is not None:
+        normals = _rows(normals, 9, "normals")
+    hits = np.asarray(hits)
+    if hits.dtype != HIT_DTYPE:
+        raise ValueError(f"hits must be a HIT_DTYPE array, got {hits.dtype}")
+    hits = np.ascontiguousarray(hits)
+    if idx is not None:
+        idx = np.ascontiguousarray(idx, np.int64)
+    out = _core.surface(geo, normals, hits, idx, _rows(D, 3, "D"))
+    P, ng, P_off = out[0:3], out[3:6], out[6:9]
+    ns = ng if normals is None else out[9:12]
+    return P, ng, ns, P_off
+
+
+def uniform2(keys, ka: int, kb: int):
+    """Two float32 uniforms in [0, 1) per path for key words keys (2, n) uint32 and the
+    dimension words ka, kb (see the renderer's RandomStream, which this matches bit for bit)."""
+    return _core.uniform2(_rows(keys, 2, "keys", np.uint32), int(ka), int(kb))
+
+
+def cosine_scatter(keys, ka: int, kb: int, ns, ng=None):
+    """Cosine-weighted directions around unit shading normals ns (3, n) from the random numbers
+    of (keys, ka, kb): returns wi (3, n), pdf (n,) = cos/pi and ok (n,) bool, false where the
+    direction is grazing or below the geometric normals ng (None: ns is the geometric normal)."""
+    keys = _rows(keys, 2, "keys", np.uint32)
+    ns = _rows(ns, 3, "ns")
+    if ng is not None:
+        ng = _rows(ng, 3, "ng")
+    return _core.cosine_scatter(keys, int(ka), int(kb), ns, ng)
+
+
+def sample_triangles(geo, area, which, P, u1, u2):
+    """Light samples on triangles which (n,) of geo (15, M) (rows as in surface(); area (M,)),
+    uniform by area from the uniforms u1, u2, seen from points P (3, n).
+
+    Returns wi (3, n) unit directions toward the sampled points, dist (n,), the solid-angle pdf
+    (n,) (0 where the point cannot be seen: edge-on or coincident) and target (3, n), the point
+    stepped off the emitter toward P by its offset row, where a shadow ray must end."""
+    geo = _rows(geo, 15, "geo")
+    P = _rows(P, 3, "P")
+    return _core.sample_triangles(geo, np.ascontiguousarray(area, _F32), np.ascontiguousarray(which, np.int64), P,
+                                  np.ascontiguousarray(u1, _F32), np.ascontiguousarray(u2, _F32))
+
+
+def nee_weight(ns, ng, wi, pdf, p_sel, thr, value):
+    """Next-event estimation weights, in place: value (3, n) (light radiance / pdf) becomes
+    thr x value x cos/pi x MIS / p_sel, with cos = ns.wi, the power heuristic against the cosine
+    BSDF (pdf (n,) solid angle, inf for delta lights: weight 1) and light-selection probability
+    p_sel (n,). thr (3, n) or None (1); ng (3, n) or None (ns is the geometric normal).
+    Returns ok (n,) bool: the sample can contribute (in front of both normals, some positive
+    channel); only those need a shadow ray."""
+    if value.dtype != _F32 or not value.flags.c_contiguous or value.ndim != 2:
+        raise ValueError("value must be a C-contiguous (3, n) float32 array (it is weighted in place)")
+    opt = lambda a, name: None if a is None else _rows(a, 3, name)
+    return _core.nee_weight(_rows(ns, 3, "ns"), opt(ng, "ng"), _rows(wi, 3, "wi"),
+                            np.ascontiguousarray(pdf, _F32), np.ascontiguousarray(p_sel, _F32), opt(thr, "thr"),
+                            value)
+
+
+def shadow_rays(O, wi, dist, target, idx, shorten: float = 1.0):
+    """RAY_DTYPE shadow rays for the samples idx (k,) (ids 0..k-1): from O[:, idx] along
+    wi / dist, or, where target (3, n) is given and not NaN, toward target over that distance
+    times shorten. Returns (rays, valid): valid[j] is False for zero-length rays (their record
+    has tfar 0 and is never occluded; discard them)."""
+    idx = np.ascontiguousarray(idx, np.int64)
+    out = np.empty(len(idx), RAY_DTYPE)
+    valid = _core.shadow_rays(_rows(O, 3, "O"), _rows(wi, 3, "wi"), np.ascontiguousarray(dist, _F32),
+                              None if target is None else _rows(target, 3, "target"), idx, float(shorten), out)
+    return out, valid
+
+
+def accumulate(L, idx, values) -> None:
+    """L[:, idx] += values for distinct idx (k,); L (3, N) float32 C-contiguous, values (3, k)."""
+    if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
+        raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
+    _core.accumulate(L, np.ascontiguousarray(idx, np.int64), _rows(values, 3, "values"))

@@ -1,0 +1,261 @@
+"""The shading-side helper kernels (dacrt.shading) against float64 numpy references: ray
+packing, hit-point reconstruction, random numbers, cosine-weighted directions, light samples on
+triangles, next-event weights, shadow rays and accumulation; and their argument checks."""
+
+import dacrt
+import numpy as np
+import pytest
+from dacrt import shading
+
+F32 = np.float32
+
+
+def _geo(rng, m, scale=1.0):
+    """A (15, m) triangle table as the renderer builds it (rows v0, e1, e2, unit normal, offset)."""
+    v = rng.normal(size=(m, 3, 3)) * scale
+    e1, e2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+    n = np.cross(e1, e2)
+    area = 0.5 * np.linalg.norm(n, axis=1)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    off = n * 1e-5 * scale
+    geo = np.concatenate([v[:, 0].T, e1.T, e2.T, n.T, off.T]).astype(F32)
+    return np.ascontiguousarray(geo), area.astype(F32)
+
+
+def _unit(rng, n):
+    d = rng.normal(size=(3, n))
+    return (d / np.linalg.norm(d, axis=0)).astype(F32)
+
+
+def test_pack_rays_fields_and_ids():
+    rng = np.random.default_rng(1)
+    n = 70_001                                  # more than one thread's share
+    O, D = rng.normal(size=(3, n)).astype(F32), _unit(rng, n)
+    tfar = rng.uniform(0, 10, n).astype(F32)
+    rays = shading.pack_rays(O, D, tfar)
+    assert rays.dtype == dacrt.RAY_DTYPE
+    np.testing.assert_array_equal(rays["org"], O.T)
+    np.testing.assert_array_equal(rays["dir"], D.T)
+    np.testing.assert_array_equal(rays["tfar"], tfar)
+    np.testing.assert_array_equal(rays["id"], np.arange(n))
+    # broadcast length and a reused output buffer
+    out = np.empty(n, dacrt.RAY_DTYPE)
+    assert shading.pack_rays(O, D, np.inf, out=out) is out
+    assert np.isinf(out["tfar"]).all()
+    with pytest.raises(ValueError, match="O must have shape"):
+        shading.pack_rays(O[:2], D, tfar)
+    with pytest.raises(ValueError, match="out must be"):
+        shading.pack_rays(O, D, tfar, out=np.empty(n - 1, dacrt.RAY_DTYPE))
+
+
+@pytest.mark.parametrize("smooth", [False, True])
+@pytest.mark.parametrize("select", [False, True])
+def test_surface_matches_float64(smooth, select):
+    rng = np.random.default_rng(2)
+    m, n = 50, 40_000
+    geo, _ = _geo(rng, m)
+    normals = None
+    if smooth:
+        c = _unit(rng, 3 * m).reshape(3, 3, m)          # corner normals (axis, corner, tri)
+        normals = np.concatenate([c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]]).astype(F32)
+    hits = np.zeros(n, dacrt.HIT_DTYPE)
+    hits["prim"] = rng.integers(0, m, n)
+    su = np.sqrt(rng.random(n))
+    hits["u"], hits["v"] = rng.random(n) * su, 1 - su
+    D = _unit(rng, n)
+    idx = np.sort(rng.choice(n, n // 3, replace=False)) if select else None
+    P, ng, ns, P_off = shading.surface(geo, normals, hits, idx, D)
+    sel = np.arange(n) if idx is None else idx
+    p, u, v = hits["prim"][sel], hits["u"][sel].astype(float), hits["v"][sel].astype(float)
+    g = geo.astype(float)[:, p]
+    np.testing.assert_allclose(P, g[0:3] + g[3:6] * u + g[6:9] * v, atol=2e-6 * np.abs(g).max())
+    flip = np.where(np.einsum("ij,ij->j", g[9:12], D[:, sel]) > 0, -1.0, 1.0)
+    np.testing.assert_array_equal(ng, (g[9:12] * flip).astype(F32))
+    np.testing.assert_allclose(P_off - P, g[12:15] * flip, atol=1e-6)
+    if smooth:
+        nn = normals.astype(float)[:, p]
+        s = nn[0:3] + nn[3:6] * u + nn[6:9] * v
+        s /= np.linalg.norm(s, axis=0)
+        np.testing.assert_allclose(ns, s * flip, atol=1e-5)
+    else:
+        assert ns is ng
+
+
+def test_surface_zero_shading_normal_falls_back_to_ng():
+    geo, _ = _geo(np.random.default_rng(3), 1)
+    normals = np.zeros((9, 1), F32)                   # opposite corner normals cancel: length 0
+    hits = np.zeros(4, dacrt.HIT_DTYPE)
+    D = np.tile(np.array([[0.0], [0.0], [1.0]], F32), 4)
+    P, ng, ns, _ = shading.surface(geo, normals, hits, None, D)
+    np.testing.assert_array_equal(ns, ng)
+
+
+def test_surface_rejects_misses_and_bad_indices():
+    geo, _ = _geo(np.random.default_rng(4), 3)
+    hits = np.zeros(5, dacrt.HIT_DTYPE)
+    hits["prim"][2] = -1
+    D = np.ones((3, 5), F32)
+    with pytest.raises(ValueError, match="1 selected hit"):
+        shading.surface(geo, None, hits, None, D)
+    shading.surface(geo, None, hits, np.array([0, 1, 3]), D)   # the miss is not selected
+    with pytest.raises(ValueError, match=r"idx\[1\] = 5 is outside 0..4"):
+        shading.surface(geo, None, hits, np.array([0, 5]), D)
+    with pytest.raises(ValueError, match="geo must have shape"):
+        shading.surface(geo[:14], None, hits, None, D)
+    with pytest.raises(ValueError, match="hits must be a HIT_DTYPE"):
+        shading.surface(geo, None, np.zeros(5, np.float32), None, D)
+
+
+def _fmix32(x):
+    x = x.astype(np.uint64)
+    M = np.uint64(0xFFFFFFFF)
+    x ^= x >> np.uint64(16)
+    x = (x * np.uint64(0x85EBCA6B)) & M
+    x ^= x >> np.uint64(13)
+    x = (x * np.uint64(0xC2B2AE35)) & M
+    x ^= x >> np.uint64(16)
+    return x
+
+
+def test_uniform2_is_the_documented_hash():
+    rng = np.random.default_rng(5)
+    keys = rng.integers(0, 2 ** 32, (2, 100_000), dtype=np.uint64).astype(np.uint32)
+    ka, kb = 0x12345678, 0x9ABCDEF0
+    u1, u2 = shading.uniform2(keys, ka, kb)
+    a = _fmix32(_fmix32(keys[1].astype(np.uint64) ^ np.uint64(ka)) ^ keys[0].astype(np.uint64))
+    b = _fmix32(a ^ np.uint64(kb))
+    np.testing.assert_array_equal(u1, (a >> np.uint64(8)).astype(np.float64) / 2 ** 24)
+    np.testing.assert_array_equal(u2, (b >> np.uint64(8)).astype(np.float64) / 2 ** 24)
+    assert u1.min() >= 0 and u1.max() < 1
+
+
+def test_cosine_scatter_distribution_and_checks():
+    rng = np.random.default_rng(6)
+    n = 400_000
+    keys = rng.integers(0, 2 ** 32, (2, n), dtype=np.uint64).astype(np.uint32)
+    ns = _unit(rng, n)
+    wi, pdf, ok = shading.cosine_scatter(keys, 7, 11, ns)
+    np.testing.assert_allclose(np.linalg.norm(wi, axis=0), 1.0, atol=3e-6)
+    cos = np.einsum("ij,ij->j", wi.astype(float), ns.astype(float))
+    np.testing.assert_allclose(pdf, cos / np.pi, atol=1e-6)
+    assert ok.mean() > 0.999 and (cos[ok] > 0).all()
+    # cosine-weighted: E[cos] = 2/3, E[cos^2] = 1/2 (standard error ~4e-4)
+    assert abs(cos.mean() - 2 / 3) < 2e-3 and abs((cos ** 2).mean() - 0.5) < 2e-3
+    # azimuth uniform around the normal: the tangential part averages to zero
+    tang = wi - ns * cos.astype(F32)
+    assert np.abs(tang.mean(axis=1)).max() < 3e-3
+    # geometric normal tilted away from ns: directions below it are refused
+    ng = _unit(rng, n)
+    wi2, _, ok2 = shading.cosine_scatter(keys, 7, 11, ns, ng)
+    np.testing.assert_array_equal(wi2, wi)
+    below = np.einsum("ij,ij->j", wi2, ng) <= 0
+    assert not ok2[below].any() and ok2[~below & ok].all()
+
+
+def test_sample_triangles_points_and_pdf():
+    rng = np.random.default_rng(7)
+    m, n = 20, 200_000
+    geo, area = _geo(rng, m)
+    which = rng.integers(0, m, n)
+    P = (rng.normal(size=(3, n)) * 3).astype(F32)
+    u1, u2 = rng.random(n).astype(F32), rng.random(n).astype(F32)
+    wi, dist, pdf, target = shading.sample_triangles(geo, area, which, P, u1, u2)
+    g = geo.astype(float)[:, which]
+    q = P + wi.astype(float) * dist                     # the sampled point
+    # barycentrics of q: inside the triangle, uniform by area (mean 1/3 each)
+    M2 = np.stack([g[3:6], g[6:9]], axis=1).transpose(2, 0, 1)            # (n, 3, 2)
+    bary = np.einsum("nij,nj->ni", np.linalg.pinv(M2), (q - g[0:3]).T)
+    assert bary.min() > -1e-3 and bary.sum(axis=1).max() < 1 + 1e-3
+    assert np.abs(bary.mean(axis=0) - 1 / 3).max() < 3e-3
+    cos_l = np.abs(np.einsum("ij,ij->j", g[9:12], wi))
+    steep = cos_l > 1e-3                              # near edge-on the float32 cosine is inexact
+    np.testing.assert_allclose(pdf[steep], (dist.astype(float) ** 2 / (area[which] * cos_l))[steep], rtol=1e-3)
+    assert (pdf > 0).all() and np.isfinite(pdf).all()
+    # target: the point stepped along the normal toward P's side
+    side = np.where(np.einsum("ij,ij->j", g[9:12], wi) <= 0, 1.0, -1.0)
+    np.testing.assert_allclose(target, q + g[12:15] * side, atol=1e-4)
+    with pytest.raises(ValueError, match="1 entries of which"):
+        shading.sample_triangles(geo, area, np.where(np.arange(n) == 5, m, which), P, u1, u2)
+
+
+def test_sample_triangles_edge_on_has_zero_pdf():
+    geo = np.zeros((15, 1), F32)
+    geo[3:6, 0] = (1, 0, 0)
+    geo[6:9, 0] = (0, 1, 0)
+    geo[11, 0] = 1.0                                  # triangle in z = 0, normal +z
+    P = np.array([[5.0], [0.2], [0.0]], F32)          # in its plane: sees it edge-on
+    _, _, pdf, _ = shading.sample_triangles(geo, np.array([0.5], F32), np.array([0]), P,
+                                            np.array([0.3], F32), np.array([0.3], F32))
+    assert pdf[0] == 0
+
+
+def test_nee_weight_matches_formula():
+    rng = np.random.default_rng(8)
+    n = 100_000
+    ns, ng, wi = _unit(rng, n), _unit(rng, n), _unit(rng, n)
+    pdf = rng.uniform(0.01, 10, n).astype(F32)
+    pdf[::7] = np.inf                                 # delta lights: MIS weight 1
+    p_sel = rng.uniform(0.1, 1, n).astype(F32)
+    thr = rng.random((3, n)).astype(F32)
+    value = rng.random((3, n)).astype(F32)
+    expect = value.astype(float) * thr
+    ok = shading.nee_weight(ns, ng, wi, pdf, p_sel, thr, value)
+    cos = np.einsum("ij,ij->j", ns.astype(float), wi)
+    bsdf = cos / np.pi
+    w = 1.0 / (1.0 + (bsdf / (p_sel * pdf.astype(float))) ** 2)
+    expect *= bsdf * w / p_sel
+    np.testing.assert_allclose(value, expect, rtol=2e-5, atol=1e-6)   # float32 cos of near-perpendicular pairs
+    below_g = np.einsum("ij,ij->j", ng, wi) <= 0
+    np.testing.assert_array_equal(ok, (cos > 0) & ~below_g & (expect.max(axis=0) > 0))
+    # NaN radiance never counts as a contribution
+    value = np.full((3, 1), np.nan, F32)
+    assert not shading.nee_weight(ns[:, :1], None, ns[:, :1], pdf[1:2], p_sel[:1], None, value)[0]
+    with pytest.raises(ValueError, match="value must be a C-contiguous"):
+        shading.nee_weight(ns, None, wi, pdf, p_sel, None, value.astype(np.float64))
+
+
+def test_shadow_rays_toward_targets_and_along_directions():
+    rng = np.random.default_rng(9)
+    n = 50_000
+    O = rng.normal(size=(3, n)).astype(F32)
+    wi, dist = _unit(rng, n), rng.uniform(0.5, 5, n).astype(F32)
+    target = (rng.normal(size=(3, n)) * 4).astype(F32)
+    target[:, ::3] = np.nan                           # these follow wi / dist
+    target[:, 1] = O[:, 1]                            # zero length: invalid
+    idx = np.sort(rng.choice(n, n // 2, replace=False))
+    idx[0] = 1
+    idx.sort()
+    rays, valid = shading.shadow_rays(O, wi, dist, target, idx, 0.5)
+    np.testing.assert_array_equal(rays["id"], np.arange(len(idx)))
+    np.testing.assert_array_equal(rays["org"], O[:, idx].T)
+    aim = ~np.isnan(target[0, idx])
+    d = (target[:, idx] - O[:, idx]).astype(float)
+    length = np.linalg.norm(d, axis=0)
+    good = aim & (length > 0)
+    np.testing.assert_allclose(rays["dir"][good], (d[:, good] / length[good]).T, atol=1e-6)
+    np.testing.assert_allclose(rays["tfar"][good], 0.5 * length[good], rtol=1e-6)
+    np.testing.assert_array_equal(rays["dir"][~aim], wi[:, idx[~aim]].T)
+    np.testing.assert_array_equal(rays["tfar"][~aim], dist[idx[~aim]])
+    np.testing.assert_array_equal(valid, ~aim | (length > 0))
+    assert not valid[0] and rays["tfar"][0] == 0
+    with pytest.raises(ValueError, match="idx"):
+        shading.shadow_rays(O, wi, dist, None, np.array([n]), 1.0)
+
+
+def test_accumulate_adds_into_columns():
+    rng = np.random.default_rng(10)
+    N = 300_000
+    L = rng.random((3, N)).astype(F32)
+    idx = rng.choice(N, N // 2, replace=False)
+    vals = rng.random((3, len(idx))).astype(F32)
+    expect = L.copy()
+    expect[:, idx] += vals
+    shading.accumulate(L, idx, vals)
+    np.testing.assert_array_equal(L, expect)
+    rgba = np.zeros((4, 10), F32)
+    shading.accumulate(rgba[:3], np.array([3]), np.ones((3, 1), F32))   # rows of a larger block
+    assert rgba[:3, 3].tolist() == [1, 1, 1] and rgba[3].sum() == 0
+    with pytest.raises(ValueError, match=r"idx\[0\] = 10 is outside"):
+        shading.accumulate(rgba[:3], np.array([10]), np.ones((3, 1), F32))
+    with pytest.raises(ValueError, match="L must be a C-contiguous"):
+        shading.accumulate(np.zeros((3, 10)), np.array([0]), np.ones((3, 1), F32))
