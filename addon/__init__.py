@@ -50,6 +50,14 @@ def native_module():
     return dacrt
 
 
+def last_render_stats() -> dict:
+    """Statistics of the latest DACRT render, per view layer name (the Integrator's stats:
+    rays, timings, trace share, samples, and 'skipped': the objects, materials, triangles,
+    lights, shadow and bounce rays and samples the render did not need). Empty before any."""
+    from . import engine
+    return {layer: dict(stats) for layer, stats in engine.LAST_RENDER_STATS.items()}
+
+
 def register():
     native_module()      # refuse to register without a loadable native core
     import bpy

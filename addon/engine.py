@@ -25,6 +25,11 @@ RESULT_PASS_NAME = {'Depth': 'Depth', 'Normal': 'Normal',
                     'DiffCol': 'Diffuse Color' if bpy.app.version >= (4, 4, 0) else 'DiffCol'}
 
 
+# Stats of the latest render per view layer, for scripts (addon.last_render_stats()); replaced
+# by each render, so nothing of a frame outlives the next one.
+LAST_RENDER_STATS = {}
+
+
 def _clock(seconds):
     seconds = float(seconds)
     if not math.isfinite(seconds):
@@ -96,7 +101,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         finally:
             self.end_result(result)
             self._report_messages(integ.messages)    # also when integration failed
-        self._report_summary(integ, scene_data)
+        self._report_summary(integ, scene_data, layer)
 
     def _layer_enabled(self, layer):
         """Blender may call render for a layer it will not use (Render Single Layer)."""
@@ -164,8 +169,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         for level, text in dict.fromkeys((lvl, txt) for lvl, txt in messages):
             self.report({level if level in ('INFO', 'WARNING', 'ERROR') else 'INFO'}, f"DACRT: {text}")
 
-    def _report_summary(self, integ, scene_data):
+    def _report_summary(self, integ, scene_data, layer):
         s = integ.stats or {}
+        LAST_RENDER_STATS[layer] = s
         parts = [f"{len(scene_data.geometry.triangles)} triangles",
                  f"{len(scene_data.lights)} lights"]
         for key, fmt in (('samples_done', "{} samples"), ('mrays_per_s', "{:.2f} Mrays/s"),
@@ -173,3 +179,22 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             if key in s:
                 parts.append(fmt.format(s[key]))
         self.report({'INFO'}, "DACRT: " + ", ".join(parts))
+        skipped = _skipped_text(s.get('skipped'))
+        if skipped:
+            self.report({'INFO'}, f"DACRT: skipped {skipped}")
+            self.update_stats("", f"DACRT | Done | skipped {skipped}")
+
+
+def _skipped_text(skipped) -> str:
+    """'3 objects, 1.2M shadow rays, ...' for the non-zero skip counters."""
+    if not skipped:
+        return ""
+    names = (('objects', "objects"), ('materials', "unused materials"), ('triangles', "triangles"),
+             ('lights', "lights"), ('shadow_rays', "shadow rays"), ('bounce_rays', "bounce rays"),
+             ('samples', "samples"))
+    parts = []
+    for key, label in names:
+        n = int(skipped.get(key, 0))
+        if n:
+            parts.append(f"{n / 1e6:.1f}M {label}" if n >= 10 ** 6 else f"{n} {label}")
+    return ", ".join(parts)

@@ -564,11 +564,13 @@ class _MeshArrays:
 
 
 class _Placement:
-    """One instance of a mesh: where it is and how it is shaded."""
-    __slots__ = ('matrix', 'slot_map', 'visibility', 'object_index', 'name')
+    """One instance of a mesh: where it is and how it is shaded. slots: its material slots'
+    materials; slot_map (slot -> global material index) is filled for the slots its mesh's
+    triangles use, so a material no triangle shows is never evaluated."""
+    __slots__ = ('matrix', 'slots', 'slot_map', 'visibility', 'object_index', 'name')
 
-    def __init__(self, matrix, slot_map, visibility, object_index, name):
-        self.matrix, self.slot_map = matrix, slot_map
+    def __init__(self, matrix, slots, visibility, object_index, name):
+        self.matrix, self.slots, self.slot_map = matrix, slots, None
         self.visibility, self.object_index, self.name = visibility, object_index, name
 
 
@@ -588,6 +590,10 @@ class _Exporter:
         self.placements = {}      # key -> [_Placement]
         self.lights = []
         self.skipped = {}         # reason -> [object names]
+        # work not done, for the render's stats: objects hidden from render or from every ray
+        # type, materials no exported triangle uses (never evaluated), triangles dropped
+        self.counts = dict(objects_hidden=0, objects_invisible=0, objects_unsupported=0,
+                           materials_unused=0, triangles_degenerate=0, triangles_nonfinite=0)
 
     def run(self):
         camera = export_camera(self.scene)
@@ -598,9 +604,11 @@ class _Exporter:
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
         self._summarize(geometry, world)
+        self.counts['objects_hidden'] = sum(1 for ob in self.scene.objects if ob.hide_render)
         return sd.SceneData(camera=camera, geometry=geometry, materials=self.materials.materials,
                             lights=self.lights, world=world, settings=settings,
-                            object_names=self.object_names, messages=self.messages)
+                            object_names=self.object_names, messages=self.messages,
+                            skipped=dict(self.counts))
 
     # -- settings ------------------------------------------------------------------------
     def _settings(self):
@@ -614,7 +622,8 @@ class _Exporter:
                            filter_width=d.filter_width, seed=d.seed,
                            threads=0 if r.threads_mode == 'AUTO' else r.threads,
                            partition=d.partition.lower(), film_transparent=r.film_transparent,
-                           passes=passes)
+                           passes=passes, use_adaptive_sampling=d.use_adaptive_sampling,
+                           adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
     # -- instances -----------------------------------------------------------------------
     def _walk_instances(self):
@@ -638,14 +647,14 @@ class _Exporter:
             parent = inst.parent if inst.is_instance and inst.parent is not None else ob
             vis = self._visibility(ob, parent)
             if vis == 0:
+                self.counts['objects_invisible'] += 1    # no ray type sees it
                 continue
             key = self._read_geometry(ob)
             if key is None:
                 continue
             slots = [override] if override is not None else [s.material for s in ob.material_slots]
-            slot_map = np.array([self.materials.index(m) for m in slots] or [0], np.int32)
             self.placements[key].append(_Placement(np.array(inst.matrix_world, np.float64),
-                                                   slot_map, vis, self._object_id(ob.name), ob.name))
+                                                   slots, vis, self._object_id(ob.name), ob.name))
 
     def _light(self, inst, ob):
         # instances also take their instancer's ray visibility (as Cycles)
@@ -720,6 +729,7 @@ class _Exporter:
         return idx
 
     def _skip(self, reason, name):
+        self.counts['objects_unsupported'] += 1
         names = self.skipped.setdefault(reason, [])
         if name not in names:
             names.append(name)
@@ -730,6 +740,7 @@ class _Exporter:
         parts = []
         bad = {}          # object name -> [non-finite vertices, triangles dropped]
         degenerate = 0
+        self._resolve_materials()
         need_uvs = any(self.materials.uses_texture)
         for key, places in self.placements.items():
             if self.check_break():
@@ -749,6 +760,8 @@ class _Exporter:
                                              f"coordinates; {nt} triangles using them skipped"))
         if degenerate:
             self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
+        self.counts['triangles_degenerate'] = degenerate
+        self.counts['triangles_nonfinite'] = sum(nt for _, nt in bad.values())
         if not parts:
             return sd.Geometry.empty()
         verts, tris, offset = [], [], 0
@@ -761,6 +774,26 @@ class _Exporter:
         return sd.Geometry(vertices=np.concatenate(verts), triangles=np.concatenate(tris),
                            material=cat('material'), normals=cat('normals'), uvs=uvs,
                            visibility=cat('visibility'), object_index=cat('object_index'))
+
+    def _resolve_materials(self):
+        """Evaluate the materials of the slots some triangle uses (per mesh: its slot indices,
+        clamped as Blender does); a material only on unused slots is never built."""
+        seen, built = set(), set()
+        for key, places in self.placements.items():
+            if not places:
+                continue
+            slots_used = np.unique(self.meshes[key].slot)
+            for p in places:
+                n = max(len(p.slots), 1)
+                used = np.unique(np.clip(slots_used, 0, n - 1))
+                p.slot_map = np.zeros(n, np.int32)
+                for i in used:
+                    if i < len(p.slots):
+                        p.slot_map[i] = self.materials.index(p.slots[i])
+                        if p.slots[i] is not None:
+                            built.add(p.slots[i].as_pointer())
+                seen.update(m.as_pointer() for m in p.slots if m is not None)
+        self.counts['materials_unused'] = len(seen - built)
 
     def _instance_batch(self, a, places, need_uvs):
         k = len(places)

@@ -1,8 +1,9 @@
 """The film: per-pixel accumulation of samples and the passes read back by the engine.
 
 Owns the Combined sums (RGBA, premultiplied, linear), the optional Depth, Normal and DiffCol
-(albedo) passes, the per-pixel count of accepted samples and the count of samples dropped for
-being NaN or infinite. Pixel values are the plain mean of the samples that landed in the pixel
+(albedo) passes, the per-pixel count of accepted samples, the count of samples dropped for
+being NaN or infinite and, for adaptive sampling, a second Combined sum of the odd-numbered
+samples (weighted 2, Cycles' adaptive auxiliary buffer) and the error estimate built from it. Pixel values are the plain mean of the samples that landed in the pixel
 (the pixel filter is applied by importance sampling the ray positions, see filter.py), so a
 dropped sample only lowers that pixel's count. Arrays are (height, width, channels), row 0 at
 the bottom, as Blender's render result expects.
@@ -16,7 +17,7 @@ BACKGROUND_DEPTH = 1e10    # what Cycles reports for pixels whose first sample s
 
 
 class Film:
-    def __init__(self, width: int, height: int, passes=()):
+    def __init__(self, width: int, height: int, passes=(), adaptive: bool = False):
         unknown = [p for p in passes if p not in PASS_CHANNELS]
         if unknown:
             raise ValueError(f"unknown pass(es) {unknown}; supported: {sorted(PASS_CHANNELS)}")
@@ -28,16 +29,19 @@ class Film:
         self._pass_sum = {p: np.zeros((PASS_CHANNELS[p], npix), np.float64)
                           for p in self.passes if p != 'Depth'}
         self._depth = np.zeros(npix, np.float32) if 'Depth' in self.passes else None
+        self._odd = np.zeros((3, npix), np.float64) if adaptive else None
         self.nan_dropped = 0
 
     @property
     def num_pixels(self) -> int:
         return self.width * self.height
 
-    def add_samples(self, pixels: np.ndarray, rgba: np.ndarray, data: dict | None = None) -> int:
+    def add_samples(self, pixels: np.ndarray, rgba: np.ndarray, data: dict | None = None,
+                    first_sample: int = 0) -> int:
         """Accumulate a block of samples: pixels (P,) distinct film indices; rgba (4, P, S)
-        premultiplied, channel-major, S samples per pixel; data holds the averaged passes'
-        per-sample values ('Normal', 'DiffCol': (3, P, S)).
+        premultiplied, channel-major, S samples per pixel with sample numbers first_sample ..
+        first_sample + S - 1; data holds the averaged passes' per-sample values ('Normal',
+        'DiffCol': (3, P, S)).
 
         A sample with any non-finite Combined or pass value is dropped whole (counted in
         nan_dropped, not in its pixel's sample count). Returns the number dropped."""
@@ -51,10 +55,26 @@ class Film:
             data = {k: np.where(ok, v, 0.0) for k, v in data.items()}
         self._count[pixels] += ok.sum(axis=1)
         self._sum[:, pixels] += rgba.sum(axis=2, dtype=np.float64)
+        if self._odd is not None:
+            odd = (first_sample + np.arange(rgba.shape[2])) % 2 == 1
+            if odd.any():
+                self._odd[:, pixels] += 2.0 * rgba[:3][:, :, odd].sum(axis=2, dtype=np.float64)
         for name, values in data.items():
             self._pass_sum[name][:, pixels] += values.sum(axis=2, dtype=np.float64)
         self.nan_dropped += dropped
         return dropped
+
+    def adaptive_error(self, pixels: np.ndarray) -> np.ndarray:
+        """Cycles' per-pixel error estimate (film_adaptive_sampling_convergence_check): the mean
+        absolute RGB difference between all samples and the odd-numbered ones (x2), over
+        1e-4 + sqrt of the mean RGB sum. Needs adaptive=True; pixels: film indices."""
+        if self._odd is None:
+            raise RuntimeError("this Film was made without adaptive=True")
+        n = np.maximum(self._count[pixels], 1).astype(np.float64)
+        total = self._sum[:3, pixels]
+        diff = np.abs(total - self._odd[:, pixels]).sum(axis=0) / n
+        norm = np.sqrt(np.maximum(total.sum(axis=0), 0.0) / n)
+        return diff / (1e-4 + norm)
 
     def set_depth(self, pixels: np.ndarray, depth: np.ndarray):
         """Depth is not averaged: it holds the z-depth seen by each pixel's sample 0 (as Cycles)."""

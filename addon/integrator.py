@@ -32,6 +32,7 @@ import numpy as np
 import dacrt
 
 from .camera import CameraModel
+from .adaptive import AdaptiveSampling
 from .film import Film
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, LightSet, make_lamp
@@ -50,6 +51,11 @@ _DIMS_PER_VERTEX = 3
 def _dim(vertex: int, slot: int) -> int:
     return 1 + vertex * _DIMS_PER_VERTEX + slot
 
+
+# Work that cannot change the image is skipped: paths end on black surfaces, light samples that
+# cannot contribute cast no shadow ray, the last BSDF ray is not cast when nothing it could hit
+# emits. False does all of that work anyway: the reference the tests compare the skips against.
+SKIP_WORK = True
 
 # Pass sizing: a pass should take ~0.8 s (progressive updates, cancel within a second) while
 # keeping batches large enough for the tracer.
@@ -123,6 +129,7 @@ class _Triangles:
             v = np.where(bad_v[:, None], 0.0, v)
         else:
             bad_t = np.zeros(m, bool)
+        self.num_nonfinite = int(np.count_nonzero(bad_t))
         self.vertices = np.ascontiguousarray(v, F32)
         self.indices = np.ascontiguousarray(t, np.int32)
         v64 = self.vertices.astype(np.float64)
@@ -281,7 +288,10 @@ class Integrator:
         self.camera = CameraModel(scene_data.camera)
         self.filter = PixelFilter(s.filter_type, s.filter_width)
         self.rng = RandomStream(int(s.seed))
-        self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes))
+        self.adaptive = (AdaptiveSampling(self.samples, s.adaptive_threshold, s.adaptive_min_samples)
+                         if s.use_adaptive_sampling else None)
+        self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes),
+                         adaptive=self.adaptive is not None)
         self.tri = _Triangles(scene_data.geometry, self.messages)
         self.mats = _Materials(scene_data.materials)
         self._tri_emissive = self.mats.emissive[self.tri.material] & (self.tri.area > 0)
@@ -294,6 +304,13 @@ class Integrator:
         self._fixed_paths = None if paths_per_pass is None else max(1, int(paths_per_pass))
         self._rays = {'camera': 0, 'bounce': 0, 'shadow': 0}
         self._skipped_shadow = 0        # light samples that could not contribute: no ray traced
+        self._samples_skipped = 0       # (pixel, sample) paths adaptive sampling did not take
+        # bounce rays not traced, by reason: the surface is black, Russian roulette, the last
+        # BSDF ray could only find emission and nothing emits, the direction is below the surface
+        self._ended = dict(black=0, roulette=0, last_bounce=0, below_surface=0)
+        self._export_skipped = dict(scene_data.skipped)
+        self._tris_nonfinite = self.tri.num_nonfinite
+        self._pixels_converged = 0
         self._trace_seconds = 0.0
         self._render_seconds = 0.0
         self._paths_done = 0
@@ -332,7 +349,7 @@ class Integrator:
     def _build_scenes(self):
         """One tracer scene per distinct visibility subset that some ray kind needs."""
         vis = self.tri.visibility
-        self._bounce_rays = self.max_bounces > 0 or self.lights.seen_by_bsdf
+        self._bounce_rays = self.max_bounces > 0 or self.lights.seen_by_bsdf or not SKIP_WORK
         wanted = {'camera': VIS_CAMERA}
         if self._bounce_rays:
             wanted['bounce'] = VIS_DIFFUSE
@@ -340,8 +357,10 @@ class Integrator:
             wanted['shadow'] = VIS_SHADOW
         self._scenes, self._maps, self._local = {}, {}, {}
         built = {}
+        needed = np.zeros(len(vis), bool)
         for kind, bit in wanted.items():
             mask = (vis & bit) != 0
+            needed |= mask
             key = mask.tobytes()
             if key not in built:
                 everything = bool(mask.all())
@@ -355,6 +374,9 @@ class Integrator:
                 built[key] = (dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition), sub, local)
             self._scenes[kind], self._maps[kind], self._local[kind] = built[key]
         self._num_scenes = len(built)
+        # triangles only rays that are never cast could meet (shadow-only ones without lights,
+        # diffuse-only ones without bounces) are in no tracer scene
+        self._tris_unreachable = int(np.count_nonzero(~needed & (vis != 0)))
 
     def close(self):
         """Drop the tracer scenes (also done when passes() ends or is closed)."""
@@ -391,14 +413,38 @@ class Integrator:
             'triangles': len(self.tri),
             'emissive_triangles': len(self.lights.triangles) if self.lights.triangles is not None else 0,
             'lights': len(self.lights.lamps),
+            'adaptive_threshold': self.adaptive.user_threshold if self.adaptive else None,
+            'adaptive_min_samples': self.adaptive.min_samples if self.adaptive else None,
+            'pixels_converged': self._pixels_converged,
+            'samples_skipped': self._samples_skipped,
+            'skipped': self._skip_summary(),
+        }
+
+    def _skip_summary(self) -> dict:
+        """Work not done because it could not change the image, by kind (export and render)."""
+        e = self._export_skipped
+        return {
+            'objects': e.get('objects_hidden', 0) + e.get('objects_invisible', 0) + e.get('objects_unsupported', 0),
+            'materials': e.get('materials_unused', 0),
+            'triangles': (e.get('triangles_degenerate', 0) + e.get('triangles_nonfinite', 0)
+                          + self._tris_nonfinite + self._tris_unreachable),
+            'lights': len(self.lights.skipped_lamps) + len(self.lights.unseen_lamps),
+            'shadow_rays': self._skipped_shadow,
+            'bounce_rays': sum(self._ended.values()),
+            'samples': self._samples_skipped,
+            'detail': dict(e, triangles_unreachable=self._tris_unreachable,
+                           triangles_nonfinite_render=self._tris_nonfinite,
+                           **{f'bounce_rays_{k}': v for k, v in self._ended.items()}),
         }
 
     def passes(self):
         """Generator: renders one block of paths per step and yields a Progress.
 
-        A block is every region pixel for a few samples or, when one sample of the whole
-        region is too much for one step, a run of pixels for one sample. Block sizes follow the
-        measured speed so a step takes about _TARGET_PASS_SECONDS; results do not depend on them."""
+        A block is every still-sampling region pixel for a few samples or, when one sample of
+        them is too much for one step, a run of pixels for one sample. Block sizes follow the
+        measured speed so a step takes about _TARGET_PASS_SECONDS; results do not depend on them.
+        With adaptive sampling, blocks end at the samples after which pixels are checked, and
+        pixels that converged drop out (every pixel still sampling has the same sample count)."""
         if not self._scenes:
             raise RuntimeError("this Integrator has finished (or was closed); make a new one to render again")
         film_pix, frame_pix = self.camera.region_pixels()
@@ -406,29 +452,43 @@ class Integrator:
         total = npix * self.samples
         target = self._fixed_paths or min(_FIRST_PATHS, total)
         sample, offset = 0, 0
+        adaptive = self.adaptive
         t_render = time.perf_counter()
         try:
-            while sample < self.samples:
+            while sample < self.samples and len(film_pix):
                 t0 = time.perf_counter()
-                if offset == 0 and target >= npix:
-                    ns = int(min(max(target // npix, 1), self.samples - sample))
+                nact = len(film_pix)
+                if offset == 0 and target >= nact:
+                    ns = int(min(max(target // nact, 1), self.samples - sample))
+                    if adaptive is not None:
+                        ns = adaptive.align(sample, ns)
                     self._render_block(film_pix, frame_pix, sample, ns)
-                    step = npix * ns
+                    step = nact * ns
                     sample += ns
                 else:
-                    stop = min(offset + target, npix)
+                    stop = min(offset + target, nact)
                     self._render_block(film_pix[offset:stop], frame_pix[offset:stop], sample, 1)
                     step = stop - offset
-                    offset = 0 if stop == npix else stop
+                    offset = 0 if stop == nact else stop
                     sample += offset == 0
                 self._paths_done += step
+                if adaptive is not None and offset == 0 and sample < self.samples \
+                        and adaptive.need_filter(sample - 1):
+                    keep = adaptive.keep_sampling(self.film, film_pix)
+                    if not keep.all():
+                        stopped = int(nact - np.count_nonzero(keep))
+                        self._pixels_converged += stopped
+                        self._samples_skipped += stopped * (self.samples - sample)
+                        film_pix, frame_pix = film_pix[keep], frame_pix[keep]
+                        if not len(film_pix):
+                            sample = self.samples           # every pixel has finished
                 self._samples_done = sample
                 self._passes += 1
                 if self._fixed_paths is None:
                     rate = step / max(time.perf_counter() - t0, 1e-6)
                     target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(_MAX_PATHS, 4 * step)))
                 self._render_seconds = time.perf_counter() - t_render
-                yield self._progress(self._paths_done / total)
+                yield self._progress((self._paths_done + self._samples_skipped) / max(total, 1))
         finally:
             self._render_seconds = time.perf_counter() - t_render
             self.close()
@@ -508,7 +568,8 @@ class Integrator:
             if path is None:
                 break
         shape = (-1, len(film_pix), ns)               # paths are pixel-major
-        self.film.add_samples(film_pix, rgba.reshape(shape), {k: v.reshape(shape) for k, v in data.items()})
+        self.film.add_samples(film_pix, rgba.reshape(shape), {k: v.reshape(shape) for k, v in data.items()},
+                              first_sample=s0)
 
     def _vertex(self, k, path, L, alpha, data, pix, samp):
         """Trace path segment k (k = 0: camera rays), gather what it sees, shade vertex k:
@@ -546,7 +607,11 @@ class Integrator:
             return None
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)).
-        live = hit & np.take(self._tri_live, prim)    # misses read the last triangle: masked here
+        live = hit & np.take(self._tri_live, prim) if SKIP_WORK else hit.copy()   # (misses read the
+                                                      # last triangle: masked by hit)
+        n_hit = int(np.count_nonzero(hit))
+        n_live = int(np.count_nonzero(live))
+        self._ended['black'] += n_hit - n_live
         thr = path.thr
         need_pick = self.lights.num_entries > 1
         u_pick = None
@@ -557,6 +622,7 @@ class Integrator:
             live &= u_rr < q
             thr = thr / np.where(q > 0, q, F32(1.0))
         idx = np.flatnonzero(live)
+        self._ended['roulette'] += n_live - len(idx)
         if len(idx) == 0:
             return None
         sel = None if len(idx) == len(live) else idx
@@ -571,13 +637,15 @@ class Integrator:
         thr = albedo if thr is None else albedo * thr     # throughput after this reflection
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L)
-        if k == K and not self.lights.seen_by_bsdf:
+        if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
+            self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
         # cosine-weighted BSDF sample around the shading normal; reject directions below the
         # geometric surface (a diffuse BSDF only reflects)
         ka, kb = self.rng.dim_words(_dim(k, 2))
         wi, pdf, ok = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng)
         if not ok.all():
+            self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
             take = _taker(np.flatnonzero(ok))
             P_off, wi, thr, pid, keys, pdf, prim = (take(a) for a in (P_off, wi, thr, pid, keys, pdf, prim))
         if len(pid) == 0:
@@ -739,6 +807,9 @@ class Integrator:
         value = np.ascontiguousarray(value, F32)
         ok = dacrt.shading.nee_weight(ns, None if ns is ng else ng, wi, pdf, np.take(self._entry_prob, entry),
                                       thr, value)
+        if not SKIP_WORK:                             # trace every sample's shadow ray; those that
+            value[:, ~ok] = 0.0                       # cannot contribute add zero
+            ok = np.ones(n, bool)
         send = np.flatnonzero(ok if shadow is None else ok & shadow)
         self._skipped_shadow += n - int(np.count_nonzero(ok))
         if len(send):

@@ -5,7 +5,7 @@ Threads are not a setting of ours: they follow Blender's Render > Performance > 
 (`scene.render.threads_mode` / `threads`).
 """
 import bpy
-from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 FILTER_ITEMS = (
     ('BOX', "Box", "Box filter (width is always 1 pixel, as in Cycles)"),
@@ -38,6 +38,20 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
     seed: IntProperty(
         name="Seed", description="Random seed; the same seed gives the same image",
         default=0, min=0)
+    use_adaptive_sampling: BoolProperty(
+        name="Adaptive Sampling",
+        description="Stop sampling pixels whose estimated noise is below the threshold "
+                    "(as Cycles: checked every 16 samples after the minimum)",
+        default=False)
+    adaptive_threshold: FloatProperty(
+        name="Noise Threshold",
+        description="Per-pixel relative noise at which a pixel stops sampling (Cycles' scale); "
+                    "0 picks one from the sample count",
+        default=0.01, min=0.0, max=1.0, soft_min=0.001, step=0.1, precision=4)
+    adaptive_min_samples: IntProperty(
+        name="Min Samples",
+        description="Samples every pixel takes before it may stop; 0 picks one from the threshold",
+        default=0, min=0, max=4096)
     partition: EnumProperty(
         name="Partitioning", description="How the tracer splits primitives while it recurses",
         items=PARTITION_ITEMS, default='ADAPTIVE')

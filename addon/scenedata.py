@@ -103,6 +103,9 @@ class Settings:
     seed: int = 0
     threads: int = 0               # 0 = all cores
     partition: str = 'adaptive'    # native partitioning mode
+    use_adaptive_sampling: bool = False
+    adaptive_threshold: float = 0.01   # Cycles' scale; 0 = automatic (from samples)
+    adaptive_min_samples: int = 0      # 0 = automatic (from the threshold)
     film_transparent: bool = False
     passes: tuple = ()             # extra passes wanted: any of 'Depth', 'Normal', 'DiffCol'
 
@@ -117,3 +120,4 @@ class SceneData:
     settings: Settings
     object_names: list = field(default_factory=list)
     messages: list = field(default_factory=list)   # (level, text): 'WARNING'/'INFO'/'ERROR' for RenderEngine.report
+    skipped: dict = field(default_factory=dict)    # export's counts of work not done (objects_hidden, ...)

@@ -59,6 +59,12 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
         col.prop(settings, "samples")
         col.prop(settings, "max_bounces")
         col.prop(settings, "seed")
+        col = layout.column(heading="Adaptive Sampling")
+        col.prop(settings, "use_adaptive_sampling", text="")
+        sub = col.column()
+        sub.active = settings.use_adaptive_sampling
+        sub.prop(settings, "adaptive_threshold")
+        sub.prop(settings, "adaptive_min_samples")
         col = layout.column()
         col.prop(settings, "filter_type")
         sub = col.column()

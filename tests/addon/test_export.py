@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from mathutils import Euler, Vector
 
+from addon import export
 from addon import scenedata as sd
 
 from . import scenes
@@ -276,6 +277,7 @@ def test_hidden_and_ray_visibility(scene, exported):
     gone.visible_camera = gone.visible_diffuse = gone.visible_shadow = False
     data = exported()
     assert "Hidden" not in data.object_names and "Gone" not in data.object_names
+    assert data.skipped['objects_hidden'] == 1 and data.skipped['objects_invisible'] == 1
     vis = {n: set(data.geometry.visibility[of_object(data, n)].tolist()) for n in data.object_names}
     full = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
     assert vis["Shown"] == {full}
@@ -519,6 +521,27 @@ def test_settings_follow_scene_dacrt_and_blender(scene, exported):
     assert s.threads == 1 and s.film_transparent and s.passes == ('Depth', 'DiffCol')
     scene.render.threads_mode = 'AUTO'
     assert exported().settings.threads == 0
+    assert not exported().settings.use_adaptive_sampling
+    d.use_adaptive_sampling, d.adaptive_threshold, d.adaptive_min_samples = True, 0.02, 12
+    s = exported().settings
+    assert s.use_adaptive_sampling and s.adaptive_threshold == pytest.approx(0.02) and s.adaptive_min_samples == 12
+
+
+def test_materials_no_triangle_uses_are_never_evaluated(scene, exported, monkeypatch):
+    setup(scene)
+    used, unused = scenes.diffuse("Used", (0.5, 0.5, 0.5)), scenes.diffuse("OnlyInAnUnusedSlot", (0.1, 0.9, 0.1))
+    scenes.plane("Plane", materials=(used, unused))              # every face uses slot 0
+    built = []
+    real = export._MaterialBuilder._build
+    monkeypatch.setattr(export._MaterialBuilder, '_build', lambda self, m: built.append(m.name) or real(self, m))
+    data = exported()
+    assert built == ["Used"] and [m.name for m in data.materials][1:] == ["Used"]
+    assert data.skipped['materials_unused'] == 1
+    # the same material used on a face of another object is evaluated once
+    scenes.plane("Other", location=(3, 0, 0), materials=(unused,))
+    built.clear()
+    data = exported()
+    assert sorted(built) == ["OnlyInAnUnusedSlot", "Used"] and data.skipped['materials_unused'] == 0
 
 
 def test_empty_scene_exports_and_says_so(scene, exported):

@@ -10,6 +10,7 @@ import bpy
 import numpy as np
 import pytest
 
+import addon
 from addon import engine as engine_module
 from addon.demo import build_demo_scene
 
@@ -241,3 +242,19 @@ def test_cli_renders_a_blend_file_and_explains_failures(scene, tmp_path):
     assert (tmp_path / "render" / "plane.png").is_file()
     missing = run_cli([str(tmp_path / "nope.blend")], tmp_path)
     assert missing.returncode != 0 and "no such .blend file" in missing.stderr
+
+
+def test_adaptive_sampling_and_skip_stats_for_scripts(scene, capfd):
+    lit_plane_scene(scene, size=(24, 16))
+    scenes.plane("Hidden", location=(0, 0, 1)).hide_render = True
+    scene.dacrt.samples = 200
+    scene.dacrt.use_adaptive_sampling = True
+    scene.dacrt.adaptive_threshold = 0.01
+    bpy.ops.render.render()
+    stats = addon.last_render_stats()[bpy.context.view_layer.name]
+    # a sunlit plane is noise-free: every pixel stops at the first check after 64 samples
+    assert stats['samples_done'] == 200 and stats['adaptive_min_samples'] == 64
+    assert stats['samples_skipped'] == 24 * 16 * (200 - 80) == stats['skipped']['samples']
+    assert stats['skipped']['objects'] == 1
+    out = capfd.readouterr().out
+    assert "skipped 1 objects" in out and "samples" in out

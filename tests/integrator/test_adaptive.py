@@ -1,0 +1,118 @@
+"""Adaptive sampling: Cycles' schedule, pixels that stop only when converged and only at the
+check points, the image unchanged within noise, and the samples saved counted."""
+import math
+
+import numpy as np
+import pytest
+
+from addon.adaptive import STEP, AdaptiveSampling
+from addon.integrator import Integrator
+
+from .scenes import cornell_box, light, plane_scene, render, translation
+
+
+def test_automatic_minimum_and_threshold_as_cycles():
+    # Cycles' comment: "Threshold 0.1 -> 32, 0.01 -> 64, 0.001 -> 128"
+    assert [AdaptiveSampling(1024, t, 0).min_samples for t in (0.1, 0.01, 0.001)] == [32, 64, 128]
+    assert AdaptiveSampling(1024, 0.01, 2).min_samples == 4          # never below 4
+    assert AdaptiveSampling(1024, 0.01, 100).min_samples == 100
+    assert AdaptiveSampling(500, 0.0, 0).user_threshold == pytest.approx(1 / 500)
+    assert AdaptiveSampling(1 << 20, 0.0, 0).user_threshold == 0.001
+    assert AdaptiveSampling(64, 0.02, 0).threshold == pytest.approx(0.1)   # Cycles scales by 5
+    for bad in (dict(threshold=-1.0, min_samples=0), dict(threshold=float('nan'), min_samples=0),
+                dict(threshold=0.01, min_samples=-3)):
+        with pytest.raises(ValueError):
+            AdaptiveSampling(64, **bad)
+
+
+@pytest.mark.parametrize('min_samples', [4, 40, 64, 100])
+def test_align_stops_exactly_at_the_checks(min_samples):
+    a = AdaptiveSampling(4096, 0.01, min_samples)
+    checks = [s for s in range(600) if a.need_filter(s)]
+    assert checks[0] > a.min_samples and all((s + 1) % STEP == 0 for s in checks)
+    assert all(b - c == STEP for c, b in zip(checks, checks[1:]))
+    # any blocking that honours align() lands on every check (Cycles' naive definition)
+    for want in (1, 7, 16, 50, 1000):
+        start, landed = 0, []
+        while start < 600:
+            n = a.align(start, min(want, 600 - start))
+            naive = 1
+            while not a.need_filter(start + naive - 1) and naive < min(want, 600 - start):
+                naive += 1
+            assert n == naive
+            start += n
+            if a.need_filter(start - 1):
+                landed.append(start - 1)
+        assert landed == checks
+
+
+def _scene(adaptive, samples=256, threshold=0.05, min_samples=0, **kw):
+    return cornell_box(40, 30, samples, 3, area_light=True, use_adaptive_sampling=adaptive,
+                       adaptive_threshold=threshold, adaptive_min_samples=min_samples, **kw)
+
+
+def test_converged_pixels_stop_and_the_image_stays_within_noise():
+    full = render(_scene(False))
+    fast = render(_scene(True))
+    counts = fast.film.sample_counts()
+    a = fast.adaptive
+    first = (a.min_samples + 1) | (STEP - 1)
+    # every pixel took at least the first check's samples, stopped only right after a check
+    # (or ran to the end), and many stopped early
+    assert counts.min() >= first + 1
+    stopped = counts[counts < 256]
+    assert np.all((stopped - (first + 1)) % STEP == 0)
+    assert counts.mean() < 0.7 * 256
+    s = fast.stats
+    assert s['samples_skipped'] == 40 * 30 * 256 - counts.sum() == s['skipped']['samples']
+    assert s['pixels_converged'] == np.count_nonzero(counts < 256)
+    assert s['rays_total'] < 0.75 * full.stats['rays_total']
+    # same random numbers per (pixel, sample): each pixel's value is the mean of a prefix of the
+    # full render's samples, so the images agree within that prefix's noise; the image means
+    # agree within 1%
+    img_a, img_f = fast.film.combined()[..., :3], full.film.combined()[..., :3]
+    assert img_a.mean() == pytest.approx(img_f.mean(), rel=0.01)
+    # per pixel: the difference is small relative to the estimated noise of the shorter run
+    err = np.abs(img_a - img_f).sum(axis=2) / (1e-4 + np.sqrt(img_f.sum(axis=2)))
+    assert np.percentile(err, 99) < 5 * a.threshold
+
+
+def test_flat_regions_stop_at_the_first_check():
+    # a plane under a sun with angle 0: every sample of a pixel has the same value
+    scene = plane_scene([light('SUN', 3.0, np.eye(4))], samples=512, max_bounces=0,
+                        use_adaptive_sampling=True, adaptive_threshold=0.01)
+    integ = render(scene)
+    counts = integ.film.sample_counts()
+    first = (integ.adaptive.min_samples + 1) | (STEP - 1)
+    assert (counts == first + 1).all()
+    assert integ.stats['samples_skipped'] == counts.size * (512 - first - 1)
+    assert integ.stats['samples_done'] == 512           # every pixel has finished
+
+
+def test_adaptive_images_do_not_depend_on_blocking():
+    a = Integrator(_scene(True, samples=160), paths_per_pass=997)
+    for _ in a.passes():
+        pass
+    b = render(_scene(True, samples=160))
+    assert np.array_equal(a.film.combined(), b.film.combined())
+    assert np.array_equal(a.film.sample_counts(), b.film.sample_counts())
+
+
+def test_fewer_samples_than_the_minimum_is_plain_sampling():
+    integ = render(_scene(True, samples=20))
+    assert (integ.film.sample_counts() == 20).all() and integ.stats['samples_skipped'] == 0
+
+
+def test_error_estimate_is_cycles_formula():
+    from addon.film import Film
+    f = Film(2, 1, adaptive=True)
+    rng = np.random.default_rng(1)
+    x = rng.random((4, 2, 32)).astype(np.float32)
+    f.add_samples(np.array([0, 1]), x[:, :, :16], first_sample=0)
+    f.add_samples(np.array([0, 1]), x[:, :, 16:], first_sample=16)
+    total = x[:3].sum(axis=2, dtype=np.float64)
+    odd = 2 * x[:3, :, 1::2].sum(axis=2, dtype=np.float64)
+    expect = np.abs(total - odd).sum(axis=0) / 32 / (1e-4 + np.sqrt(total.sum(axis=0) / 32))
+    np.testing.assert_allclose(f.adaptive_error(np.array([0, 1])), expect, rtol=1e-12)
+    with pytest.raises(RuntimeError):
+        Film(2, 1).adaptive_error(np.array([0]))
