@@ -15,12 +15,18 @@ ULPs off it, see triangle_offsets) and the tracer scenes, one per distinct ray-v
 in the constructor and dropped when rendering ends. Nothing here knows Blender.
 
 Per-ray data are (3, n) float32 structure-of-arrays; paths that end are compacted away after
-every vertex. Work that cannot change the image is not done: no shadow ray for a light sample
-that cannot contribute (behind the surface, outside a spot cone; counted in stats), no light
-sampling without lights, no last BSDF ray when nothing it could hit emits, paths end on black
-surfaces, passes that were not requested are not computed. Random numbers are keyed by
-(full-frame pixel, sample), so a scheduler that renders any subset of pixels (a border, or
-adaptive sampling's still-active pixels) leaves every other pixel's noise unchanged.
+every vertex. The per-vertex arithmetic that numpy would run as dozens of passes on one core
+(ray packing, hit points, bounce directions, samples on emissive triangles, next-event weights,
+shadow rays, accumulation, random numbers) runs in the native kernels of dacrt.shading, one
+threaded pass each. Work that cannot change the image is not done (SKIP_WORK; counted in
+stats['skipped']): no shadow ray for a light sample that cannot contribute (behind the surface,
+outside a spot cone), no light sampling without lights, no last BSDF ray when nothing it could
+hit emits, paths end on black surfaces, passes that were not requested are not computed,
+triangles only never-cast rays could meet are in no tracer scene, and with adaptive sampling
+(adaptive.py) converged pixels stop.
+Random numbers are keyed by (full-frame pixel, sample), so a scheduler that renders any subset
+of pixels (a border, or adaptive sampling's still-active pixels) leaves every other pixel's
+noise unchanged.
 """
 from __future__ import annotations
 
