@@ -76,10 +76,6 @@ class CameraModel:
         frame_index = (fy * self.width + fx).astype(np.int64)
         return film_index, frame_index
 
-    def frame_xy(self, frame_index: np.ndarray):
-        """Full-frame pixel (x, y) of full-frame pixel indices."""
-        return frame_index % self.width, frame_index // self.width
-
     # --- rays ---------------------------------------------------------------------------------
 
     def screen(self, rx, ry):

@@ -554,15 +554,13 @@ class Integrator:
         pix = np.repeat(film_pix, ns)
         samp = np.tile(np.arange(s0, s0 + ns, dtype=np.int64), len(film_pix))
         frame = np.repeat(frame_pix, ns)
-        keys = self.rng.path_keys(frame, samp)
-        # camera rays, positioned by importance-sampling the pixel filter
-        fu, fv = self.rng.uniform2(keys, _DIM_FILTER)
-        fx, fy = self.camera.frame_xy(frame)
-        rx = self.filter.offsets(fu)
-        rx += fx
-        ry = self.filter.offsets(fv)
-        ry += fy
-        del fu, fv, fx, fy, frame
+        # path keys and camera-ray positions importance-sampling the pixel filter, in one native
+        # pass (the same numbers as rng.path_keys, rng.uniform2 and filter.offsets)
+        k0, k1 = self.rng.seed_words
+        ka, kb = self.rng.dim_words(_DIM_FILTER)
+        keys, rx, ry = dacrt.shading.pixel_samples(frame, samp, self.camera.width, k0, k1, ka, kb,
+                                                   self.filter.table)
+        del frame
         O, D, tmax = self.camera.rays(rx, ry)
         del rx, ry
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path

@@ -97,6 +97,12 @@ class RandomStream:
         _fmix32(b)
         return a, b
 
+    @property
+    def seed_words(self):
+        """The two 64-bit words path_keys mixes (pixel << 32 | sample) with (for the native
+        kernel dacrt.shading.pixel_samples, which computes the same keys)."""
+        return self._k0, self._k1
+
     def dim_words(self, dim: int):
         """The two 32-bit words that key dimension pair `dim` (for the native kernels, which
         mix them with each path's key exactly as _words does)."""

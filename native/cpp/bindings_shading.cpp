@@ -193,6 +193,28 @@ void accumulate_py(py::array_t<float, py::array::c_style> L, I64Array idx, F32Ar
     accumulate(L.mutable_data(), N, idx.data(), values.data(), k);
 }
 
+py::tuple pixel_samples_py(I64Array pixel, I64Array sample, int64_t width, uint64_t k0, uint64_t k1, uint32_t ka,
+                           uint32_t kb, F32Array table) {
+    if (pixel.ndim() != 1) throw py::value_error("pixel must be one-dimensional");
+    size_t n = size_t(pixel.shape(0));
+    need_len(sample, n, "sample");
+    if (width < 1) throw py::value_error("width must be >= 1");
+    if (table.ndim() != 1 || table.shape(0) < 2) throw py::value_error("table must have at least 2 entries");
+    const int64_t* px = pixel.data();
+    const int64_t* sm = sample.data();
+    for (size_t i = 0; i < n; ++i)
+        if (px[i] < 0 || px[i] >= (int64_t(1) << 32) || sm[i] < 0 || sm[i] >= (int64_t(1) << 32))
+            throw py::value_error("pixel and sample must be in [0, 2**32); entry " + std::to_string(i) + " is not");
+    U32Array keys({py::ssize_t(2), py::ssize_t(n)});
+    F32Array rx{py::ssize_t(n)}, ry{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        pixel_samples(px, sm, n, width, k0, k1, ka, kb, table.data(), size_t(table.shape(0)), keys.mutable_data(),
+                      rx.mutable_data(), ry.mutable_data());
+    }
+    return py::make_tuple(keys, rx, ry);
+}
+
 }  // namespace
 
 void register_shading(py::module_& m) {
@@ -207,5 +229,7 @@ void register_shading(py::module_& m) {
           py::arg("thr"), py::arg("value"));
     m.def("shadow_rays", &shadow_rays_py, py::arg("O"), py::arg("wi"), py::arg("dist"), py::arg("target"), py::arg("idx"),
           py::arg("shorten"), py::arg("out"));
+    m.def("pixel_samples", &pixel_samples_py, py::arg("pixel"), py::arg("sample"), py::arg("width"), py::arg("k0"),
+          py::arg("k1"), py::arg("ka"), py::arg("kb"), py::arg("table"));
     m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
 }

@@ -71,3 +71,16 @@ void shadow_rays(const float* O, const float* wi, const float* dist, const float
 void accumulate(float* L, size_t N, const int64_t* idx, const float* values, size_t k);
 
 }  // namespace dacrt
+
+namespace dacrt {
+
+// Camera samples of (pixel, sample) pairs: the path key words (splitmix64 of
+// (pixel << 32 | sample) keyed by k0, k1; rows low, high word, stride n) and the raster position
+// of pixel (x = pixel % width, y = pixel / width) plus a pixel-filter offset per axis, drawn by
+// table lookup (linear interpolation of an inverse CDF of `table_size` entries) from the
+// uniforms of dimension words (ka, kb).
+void pixel_samples(const int64_t* pixel, const int64_t* sample, size_t n, int64_t width, uint64_t k0, uint64_t k1,
+                   uint32_t ka, uint32_t kb, const float* table, size_t table_size, uint32_t* keys, float* rx,
+                   float* ry);
+
+}  // namespace dacrt

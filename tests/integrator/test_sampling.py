@@ -78,3 +78,24 @@ def test_frames_are_orthonormal():
     assert np.allclose(dot(t, t), 1.0, atol=1e-5) and np.allclose(dot(b, b), 1.0, atol=1e-5)
     local = np.array([0.0, 0.0, 1.0], np.float32)[:, None] * np.ones(N, np.float32)
     assert np.allclose(to_world(local, n), n, atol=1e-6)
+
+
+@pytest.mark.parametrize('kind, width', [('BLACKMAN_HARRIS', 1.5), ('GAUSSIAN', 3.0), ('BOX', 1.0)])
+def test_native_pixel_samples_equal_keys_uniforms_and_filter_lookup(kind, width):
+    """The render loop draws path keys and filtered raster positions natively in one pass."""
+    import dacrt
+    from addon.filter import PixelFilter
+    rs, filt = RandomStream(123), PixelFilter(kind, width)
+    w = 1920
+    pixel = np.arange(0, w * 1080, 37, dtype=np.int64)
+    sample = (np.arange(len(pixel)) * 7919) % 4096
+    keys, rx, ry = dacrt.shading.pixel_samples(pixel, sample, w, *rs.seed_words, *rs.dim_words(0), filt.table)
+    ref = rs.path_keys(pixel, sample)
+    assert np.array_equal(keys, ref)
+    u1, u2 = rs.uniform2_numpy(ref, 0)
+    ex, ey = filt.offsets(u1), filt.offsets(u2)
+    ex += pixel % w
+    ey += pixel // w
+    assert np.array_equal(rx, ex) and np.array_equal(ry, ey)
+    with pytest.raises(ValueError, match="2\\*\\*32"):
+        dacrt.shading.pixel_samples(np.array([-1]), np.array([0]), w, 1, 2, 3, 4, filt.table)

@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "nee_weight", "shadow_rays",
+__all__ = ["pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "nee_weight", "shadow_rays",
            "accumulate"]
 
 _F32 = np.float32
@@ -125,3 +125,13 @@ def accumulate(L, idx, values) -> None:
     if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
         raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
     _core.accumulate(L, np.ascontiguousarray(idx, np.int64), _rows(values, 3, "values"))
+
+
+def pixel_samples(pixel, sample, width: int, k0: int, k1: int, ka: int, kb: int, table):
+    """Camera samples for (pixel, sample) pairs (n,) (pixel = y * width + x, both < 2**32):
+    the path keys (2, n) uint32 (splitmix64 of pixel << 32 | sample keyed by the 64-bit words
+    k0, k1) and the raster positions rx, ry (n,) = pixel corner + a pixel-filter offset per axis,
+    looked up in the inverse-CDF table (linear interpolation) with the uniforms of the key and
+    dimension words ka, kb."""
+    return _core.pixel_samples(np.ascontiguousarray(pixel, np.int64), np.ascontiguousarray(sample, np.int64),
+                               int(width), int(k0), int(k1), int(ka), int(kb), np.ascontiguousarray(table, _F32))

@@ -1,0 +1,54 @@
+// Camera samples (see shading.h): path keys, filter-distributed raster positions; the native
+// twin of RandomStream.path_keys + PixelFilter.offsets in the add-on (bit-identical, tested).
+#include <algorithm>
+
+#include "parallel.h"
+#include "random.h"
+#include "shading.h"
+
+namespace dacrt {
+
+namespace {
+
+inline uint64_t mix64(uint64_t x) {  // splitmix64 finaliser
+    x ^= x >> 30;
+    x *= 0xBF58476D1CE4E5B9ull;
+    x ^= x >> 27;
+    x *= 0x94D049BB133111EBull;
+    x ^= x >> 31;
+    return x;
+}
+
+inline float filter_offset(float u, const float* table, size_t size) {
+    float x = std::min(std::max(u, 0.0f), 1.0f) * float(size - 1);
+    int i = int(x);
+    i = std::min(i, int(size) - 2);
+    x -= float(i);
+    const float slope = table[i + 1] - table[i];
+    return table[i] + x * slope;
+}
+
+}  // namespace
+
+void pixel_samples(const int64_t* pixel, const int64_t* sample, size_t n, int64_t width, uint64_t k0, uint64_t k1,
+                   uint32_t ka, uint32_t kb, const float* table, size_t table_size, uint32_t* keys, float* rx,
+                   float* ry) {
+    parallel_for(n, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            uint64_t key = (uint64_t(pixel[i]) << 32) | (uint64_t(sample[i]) & 0xFFFFFFFFull);
+            key = mix64(key ^ k0) + k1;
+            key = mix64(key);
+            const uint32_t lo = uint32_t(key), hi = uint32_t(key >> 32);
+            keys[i] = lo;
+            keys[n + i] = hi;
+            const Uniform2 u = uniform2(lo, hi, ka, kb);
+            const int64_t x = pixel[i] % width, y = pixel[i] / width;
+            float fx = filter_offset(u.u1, table, table_size);
+            float fy = filter_offset(u.u2, table, table_size);
+            rx[i] = fx + float(x);
+            ry[i] = fy + float(y);
+        }
+    }, size_t(1) << 16);
+}
+
+}  // namespace dacrt
