@@ -121,7 +121,12 @@ class RandomStream:
 
     def uniform_pick(self, keys: np.ndarray, dim: int):
         """A float64 uniform with 32-bit resolution (a discrete choice among many lights) and a
-        float32 uniform, per key, for dimension pair `dim`."""
+        float32 uniform, per key, for dimension pair `dim` (native; equal to uniform_pick_numpy)."""
+        ka, kb = self._dim_keys(dim)
+        return dacrt.shading.uniform_pick(keys, int(ka), int(kb))
+
+    def uniform_pick_numpy(self, keys: np.ndarray, dim: int):
+        """uniform_pick in numpy: the definition the native kernel is tested against."""
         a, b = self._words(keys, dim)
         fine = a.astype(np.float64)
         fine *= _INV32

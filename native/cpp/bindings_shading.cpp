@@ -86,6 +86,17 @@ py::tuple uniform2_py(U32Array keys, uint32_t ka, uint32_t kb) {
     return py::make_tuple(u1, u2);
 }
 
+py::tuple uniform_pick_py(U32Array keys, uint32_t ka, uint32_t kb) {
+    size_t n = rows_of(keys, 2, "keys");
+    py::array_t<double> pick{py::ssize_t(n)};
+    F32Array u{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        uniform_pick_rows(keys.data(), n, ka, kb, pick.mutable_data(), u.mutable_data());
+    }
+    return py::make_tuple(pick, u);
+}
+
 py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns, py::object ng) {
     size_t n = rows_of(keys, 2, "keys");
     if (rows_of(ns, 3, "ns") != n) throw py::value_error("ns must have shape (3, n), n = keys.shape[1]");
@@ -221,6 +232,7 @@ void register_shading(py::module_& m) {
     m.def("pack_rays", &pack_rays_py, py::arg("O"), py::arg("D"), py::arg("tfar"), py::arg("out"));
     m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"));
     m.def("uniform2", &uniform2_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
+    m.def("uniform_pick", &uniform_pick_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("cosine_scatter", &cosine_scatter_py, py::arg("keys"), py::arg("ka"), py::arg("kb"), py::arg("ns"),
           py::arg("ng"));
     m.def("sample_triangles", &sample_triangles_py, py::arg("geo"), py::arg("area"), py::arg("which"), py::arg("P"),

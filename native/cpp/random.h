@@ -16,17 +16,25 @@ inline uint32_t fmix32(uint32_t x) {
     return x;
 }
 
+struct Words {
+    uint32_t a, b;
+};
+
+inline Words mix_words(uint32_t k0, uint32_t k1, uint32_t ka, uint32_t kb) {
+    uint32_t a = fmix32(k1 ^ ka);
+    a = fmix32(a ^ k0);
+    return {a, fmix32(a ^ kb)};
+}
+
 struct Uniform2 {
     float u1, u2;
 };
 
 // Two uniforms in [0, 1) (24-bit resolution) for key words (k0, k1) and dimension words (ka, kb).
 inline Uniform2 uniform2(uint32_t k0, uint32_t k1, uint32_t ka, uint32_t kb) {
-    uint32_t a = fmix32(k1 ^ ka);
-    a = fmix32(a ^ k0);
-    uint32_t b = fmix32(a ^ kb);
+    const Words w = mix_words(k0, k1, ka, kb);
     const float inv24 = 1.0f / float(1 << 24);
-    return {float(a >> 8) * inv24, float(b >> 8) * inv24};
+    return {float(w.a >> 8) * inv24, float(w.b >> 8) * inv24};
 }
 
 }  // namespace dacrt

@@ -17,6 +17,16 @@ void uniform2_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, flo
     }, size_t(1) << 16);
 }
 
+void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, double* pick, float* u) {
+    parallel_for(n, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            const Words w = mix_words(keys[i], keys[n + i], ka, kb);
+            pick[i] = double(w.a) * (1.0 / 4294967296.0);
+            u[i] = float(w.b >> 8) * (1.0f / float(1 << 24));
+        }
+    }, size_t(1) << 16);
+}
+
 void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
                     float* wi, float* pdf, uint8_t* ok) {
     const float two_pi = 6.283185307179586f, inv_pi = 0.3183098861837907f;

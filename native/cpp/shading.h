@@ -29,6 +29,10 @@ size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits
 // Two uniforms per path for keys (rows k0, k1; stride n) and dimension words ka, kb.
 void uniform2_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, float* u1, float* u2);
 
+// The same two words as uniform2_rows, as a double with 32-bit resolution (a choice among many
+// lights) and a float with 24.
+void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, double* pick, float* u);
+
 // Cosine-weighted directions around the shading normals ns (3 rows, stride n), random numbers
 // from keys/ka/kb; pdf = cos / pi. ok[i] = 0 for directions below the geometric normal ng
 // (null: ns is ng) or at grazing cos = 0.

@@ -55,6 +55,9 @@ def test_native_uniforms_equal_the_numpy_definition():
         a, b = rs.uniform2(keys, dim)
         c, d = rs.uniform2_numpy(keys, dim)
         assert np.array_equal(a, c) and np.array_equal(b, d)
+        a, b = rs.uniform_pick(keys, dim)
+        c, d = rs.uniform_pick_numpy(keys, dim)
+        assert a.dtype == c.dtype == np.float64 and np.array_equal(a, c) and np.array_equal(b, d)
 
 
 def test_sphere_disk_cone():

@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "nee_weight", "shadow_rays",
+__all__ = ["pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "nee_weight", "shadow_rays",
            "accumulate"]
 
 _F32 = np.float32
@@ -67,6 +67,12 @@ def uniform2(keys, ka: int, kb: int):
     """Two float32 uniforms in [0, 1) per path for key words keys (2, n) uint32 and the
     dimension words ka, kb (see the renderer's RandomStream, which this matches bit for bit)."""
     return _core.uniform2(_rows(keys, 2, "keys", np.uint32), int(ka), int(kb))
+
+
+def uniform_pick(keys, ka: int, kb: int):
+    """uniform2's two words as a float64 uniform with 32-bit resolution (a choice among many
+    lights) and a float32 one (Russian roulette), per path."""
+    return _core.uniform_pick(_rows(keys, 2, "keys", np.uint32), int(ka), int(kb))
 
 
 def cosine_scatter(keys, ka: int, kb: int, ns, ng=None):
