@@ -304,6 +304,7 @@ class Integrator:
         # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
         self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))
         self._tri_live = max3(self._tri_albedo) > 0
+        self._tri_any = np.ones(len(self.tri), bool)   # every triangle shades (SKIP_WORK off)
         self._area32 = self.tri.area.astype(F32)
         self._any_emissive = bool(self._tri_emissive.any())
         self._build_lights(scene_data)
@@ -610,35 +611,28 @@ class Integrator:
         if k == K + 1:
             return None
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
-        # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)).
-        live = hit & np.take(self._tri_live, prim) if SKIP_WORK else hit.copy()   # (misses read the
-                                                      # last triangle: masked by hit)
-        n_hit = int(np.count_nonzero(hit))
-        n_live = int(np.count_nonzero(live))
-        self._ended['black'] += n_hit - n_live
-        thr = path.thr
+        # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)),
+        # in one native pass; thr becomes albedo x thr / q, the throughput after this
+        # reflection (textures multiply in below)
         need_pick = self.lights.num_entries > 1
-        u_pick = None
+        u_pick = u_rr = None
         if need_pick or k >= 2:
             u_pick, u_rr = self.rng.uniform_pick(path.keys, _dim(k, 0))
-        if k >= 2:
-            q = np.minimum(np.sqrt(max3(thr)), F32(1.0))
-            live &= u_rr < q
-            thr = thr / np.where(q > 0, q, F32(1.0))
-        idx = np.flatnonzero(live)
-        self._ended['roulette'] += n_live - len(idx)
+        idx, thr, n_black, n_rr = dacrt.shading.continue_paths(
+            hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_albedo, path.thr,
+            u_rr if k >= 2 else None)
+        self._ended['black'] += n_black
+        self._ended['roulette'] += n_rr
         if len(idx) == 0:
             return None
-        sel = None if len(idx) == len(live) else idx
+        sel = None if len(idx) == len(hit) else idx
         take = _taker(sel)
         P, ng, ns, P_off = self._surface(hits, sel, path.D)
-        prim, pid, keys, thr = take(prim), take(path.pid), take(path.keys), take(thr)
+        prim, pid, keys = take(prim), take(path.pid), take(path.keys)
         u_pick = take(u_pick) if need_pick else None
-        albedo = np.take(self._tri_albedo, prim, axis=1)
         if self.mats.textures:
-            self._texture(prim, take(hits['u']), take(hits['v']), albedo)
+            self._texture(prim, take(hits['u']), take(hits['v']), thr)
         del hits, path
-        thr = albedo if thr is None else albedo * thr     # throughput after this reflection
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
@@ -664,7 +658,8 @@ class Integrator:
         return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D)
 
     def _texture(self, prim, u, v, albedo):
-        """Multiply image textures (on the UV map) into albedo (3,k) in place."""
+        """Multiply image textures (on the UV map) into albedo (3,k) (or a throughput that
+        includes it) in place."""
         if self.tri.uvs is None:
             return
         mat = np.take(self.tri.material, prim)

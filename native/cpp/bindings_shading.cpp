@@ -4,7 +4,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "shading.h"
 
@@ -226,6 +228,39 @@ py::tuple pixel_samples_py(I64Array pixel, I64Array sample, int64_t width, uint6
     return py::make_tuple(keys, rx, ry);
 }
 
+py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style> hit,
+                            py::array_t<bool, py::array::c_style> live, F32Array albedo, py::object thr,
+                            py::object u_rr) {
+    if (hits.ndim() != 1 || hits.itemsize() != sizeof(Hit) || !(hits.flags() & py::array::c_style))
+        throw py::value_error("hits must be a contiguous (n,) array of 16-byte hit records");
+    size_t n = size_t(hits.shape(0));
+    need_len(hit, n, "hit");
+    if (live.ndim() != 1) throw py::value_error("live must be one-dimensional");
+    size_t M = size_t(live.shape(0));
+    if (rows_of(albedo, 3, "albedo") != M) throw py::value_error("albedo must have shape (3, M), M = len(live)");
+    F32Array thr_keep, rr_keep;
+    const float* t = optional_rows(thr, 3, n, "thr", thr_keep);
+    const float* r = nullptr;
+    if (!u_rr.is_none()) {
+        rr_keep = u_rr.cast<F32Array>();
+        need_len(rr_keep, n, "u_rr");
+        r = rr_keep.data();
+    }
+    I64Array idx{py::ssize_t(n)};
+    std::vector<float> out(3 * n);
+    size_t k, black, rr;
+    {
+        py::gil_scoped_release nogil;
+        k = continue_paths(static_cast<const Hit*>(hits.data()), reinterpret_cast<const uint8_t*>(hit.data()), n,
+                           reinterpret_cast<const uint8_t*>(live.data()), albedo.data(), M, t, r, idx.mutable_data(),
+                           out.data(), &black, &rr);
+    }
+    F32Array thr_out({py::ssize_t(3), py::ssize_t(k)});
+    std::copy(out.begin(), out.begin() + 3 * k, thr_out.mutable_data());
+    idx.resize({py::ssize_t(k)});
+    return py::make_tuple(idx, thr_out, black, rr);
+}
+
 }  // namespace
 
 void register_shading(py::module_& m) {
@@ -243,5 +278,7 @@ void register_shading(py::module_& m) {
           py::arg("shorten"), py::arg("out"));
     m.def("pixel_samples", &pixel_samples_py, py::arg("pixel"), py::arg("sample"), py::arg("width"), py::arg("k0"),
           py::arg("k1"), py::arg("ka"), py::arg("kb"), py::arg("table"));
+    m.def("continue_paths", &continue_paths_py, py::arg("hits"), py::arg("hit"), py::arg("live"), py::arg("albedo"),
+          py::arg("thr"), py::arg("u_rr"));
     m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
 }

@@ -88,3 +88,16 @@ void pixel_samples(const int64_t* pixel, const int64_t* sample, size_t n, int64_
                    float* ry);
 
 }  // namespace dacrt
+
+namespace dacrt {
+
+// Which paths go on after a vertex: those whose ray hit (hit[i]) a triangle with live[prim] set
+// (not black) and, when u_rr is given, survive Russian roulette with probability
+// q = min(sqrt(max channel of thr), 1). Writes their indices to idx (returns how many) and their
+// throughput after this reflection, albedo[prim] x thr / q (thr null: 1), to thr_out (3 rows,
+// stride = the count; callers size it n). dead_black / dead_rr: paths ended by each reason.
+size_t continue_paths(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, const float* albedo,
+                      size_t M, const float* thr, const float* u_rr, int64_t* idx, float* thr_out,
+                      size_t* dead_black, size_t* dead_rr);
+
+}  // namespace dacrt

@@ -259,3 +259,34 @@ def test_accumulate_adds_into_columns():
         shading.accumulate(rgba[:3], np.array([10]), np.ones((3, 1), F32))
     with pytest.raises(ValueError, match="L must be a C-contiguous"):
         shading.accumulate(np.zeros((3, 10)), np.array([0]), np.ones((3, 1), F32))
+
+
+@pytest.mark.parametrize("roulette", [False, True])
+@pytest.mark.parametrize("with_thr", [False, True])
+def test_continue_paths_matches_numpy(roulette, with_thr):
+    rng = np.random.default_rng(11)
+    n, m = 100_000, 40
+    hits = np.zeros(n, dacrt.HIT_DTYPE)
+    hits["prim"] = rng.integers(-1, m, n)
+    hit = (hits["prim"] >= 0) & (rng.random(n) < 0.9)              # some hits are masked (holdout)
+    live = rng.random(m) < 0.8
+    albedo = rng.random((3, m)).astype(F32)
+    thr = rng.random((3, n)).astype(F32) ** 3 if with_thr else None
+    u_rr = rng.random(n).astype(F32) if roulette else None
+    idx, out, black, dead = shading.continue_paths(hits, hit, live, albedo, thr, u_rr)
+    p = np.maximum(hits["prim"], 0)
+    keep = hit & live[p]
+    assert black == np.count_nonzero(hit & ~live[p])
+    t = np.ones((3, n), F32) if thr is None else thr
+    if roulette:
+        q = np.minimum(np.sqrt(t.max(axis=0)), F32(1))
+        survive = keep & (u_rr < q)
+        assert dead == np.count_nonzero(keep & ~survive)
+        keep = survive
+        t = t * np.where(q > 0, F32(1) / q, F32(1))
+    else:
+        assert dead == 0
+    np.testing.assert_array_equal(idx, np.flatnonzero(keep))
+    np.testing.assert_allclose(out, albedo[:, p[idx]] * t[:, idx], rtol=1e-6)
+    with pytest.raises(ValueError, match="albedo must have shape"):
+        shading.continue_paths(hits, hit, live, albedo[:, :-1])

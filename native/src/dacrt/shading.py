@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "nee_weight", "shadow_rays",
+__all__ = ["pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
            "accumulate"]
 
 _F32 = np.float32
@@ -141,3 +141,21 @@ def pixel_samples(pixel, sample, width: int, k0: int, k1: int, ka: int, kb: int,
     dimension words ka, kb."""
     return _core.pixel_samples(np.ascontiguousarray(pixel, np.int64), np.ascontiguousarray(sample, np.int64),
                                int(width), int(k0), int(k1), int(ka), int(kb), np.ascontiguousarray(table, _F32))
+
+
+def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None):
+    """Which paths go on after a vertex, and with what throughput.
+
+    hits (n,) HIT_DTYPE; hit (n,) bool: the ray hit a surface that shades; live (M,) bool per
+    triangle: not black; albedo (3, M); thr (3, n) path throughput before this vertex (None: 1);
+    u_rr (n,) uniforms for Russian roulette (None: no roulette), survival probability
+    q = min(sqrt(max channel of thr), 1) as Cycles. Returns (idx (k,) int64 of the survivors,
+    their throughput albedo[prim] x thr / q (3, k), paths ended on black surfaces, paths ended
+    by roulette)."""
+    hits = np.asarray(hits)
+    if hits.dtype != HIT_DTYPE:
+        raise ValueError(f"hits must be a HIT_DTYPE array, got {hits.dtype}")
+    return _core.continue_paths(np.ascontiguousarray(hits), np.ascontiguousarray(hit, np.bool_),
+                                np.ascontiguousarray(live, np.bool_), _rows(albedo, 3, "albedo"),
+                                None if thr is None else _rows(thr, 3, "thr"),
+                                None if u_rr is None else np.ascontiguousarray(u_rr, _F32))
