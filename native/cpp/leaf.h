@@ -4,9 +4,15 @@
 // Watertightness: each ray is sheared so it becomes the +z axis of a per-ray frame (kz = largest
 // |dir| component); a shared vertex then gets bit-identical 2D coordinates in both triangles
 // that use it (same operations, no FMA contraction), so the edge function of a shared edge has
-// exactly opposite values in the two triangles. Where an edge function is exactly 0 it is
-// recomputed in double (exact for these float products) so its sign is exact too. A ray can
-// therefore never slip between two triangles that share an edge or a vertex.
+// exactly opposite values in the two triangles. A nonzero float edge function already has the
+// exact sign (rounding is monotonic); lanes where one is exactly 0 (on an edge or vertex, or
+// products below the float range) are decided in double, as are lanes whose determinant lies
+// outside [2^-64, 2^64] (tiny or huge triangles), where 1/det would lose precision or overflow,
+// and lanes where det is small against its products (needles, slivers, grazing views: float
+// cancellation would cost t its precision) -- see exact_lanes. A ray can therefore never slip
+// between two triangles that share an edge or a vertex, at any scale. In float,
+// t = (barycentrics . Pz) / dz cannot overflow before the division (|b| <= 1); a t beyond the
+// float range is not a hit.
 // Ties (equal t) go to the lowest triangle index, so results do not depend on traversal order,
 // thread count or ISA. Included inside an ISA namespace.
 #pragma once
@@ -20,7 +26,8 @@ template <int W>
 struct RayGroup {
     vfloat<W> ok[3];     // origin in the ray's permuted axes (kx, ky, kz)
     vint<W> k[3];        // kx, ky, kz
-    vfloat<W> S[3];      // shear: Sx, Sy, Sz
+    vfloat<W> S[2];      // shear: Sx = dir[kx] / dz, Sy = dir[ky] / dz
+    vfloat<W> dz;        // dir[kz] (t = sheared z / dz: no reciprocal, denormal dz still works)
     vfloat<W> tfar;
     vint<W> skip;        // triangle each lane ignores (-1: none)
     uint32_t id[W];
@@ -59,26 +66,54 @@ inline void load_group(const Ray* rays, size_t i, size_t na, const int32_t* skip
     g.k[0] = kx; g.k[1] = ky; g.k[2] = kz;
     g.S[0] = pick(kx, dir) / dz;
     g.S[1] = pick(ky, dir) / dz;
-    g.S[2] = splat<W>(1.0f) / dz;
+    g.dz = dz;
     for (int a = 0; a < 3; ++a) g.ok[a] = pick(g.k[a], org);
 }
 
-// Edge functions exactly 0 in float: recompute in double from the same sheared coordinates.
+// Lanes the float test cannot decide reliably (an edge function exactly 0, |det| outside
+// [2^-64, 2^64], or det small against its products): the inside test in double from the same
+// float sheared coordinates -- products of two floats are exact in double, so the signs are
+// exact and agree with the neighbouring triangle's float signs -- and u, v from those; t from
+// the triangle's plane in double on the unsheared inputs (exact differences of floats), which
+// stays accurate for slivers whose sheared vertices float rounding has moved across their
+// width. Returns the lanes that hit (t, u, v written).
 template <int W>
-inline void exact_edges(vfloat<W>& U, vfloat<W>& V, vfloat<W>& Wf, const vfloat<W>& Ax, const vfloat<W>& Ay,
-                        const vfloat<W>& Bx, const vfloat<W>& By, const vfloat<W>& Cx, const vfloat<W>& Cy,
-                        uint32_t lanes) {
-    alignas(64) float u[W], v[W], w[W], ax[W], ay[W], bx[W], by[W], cx[W], cy[W];
-    storeu(u, U); storeu(v, V); storeu(w, Wf);
-    storeu(ax, Ax); storeu(ay, Ay); storeu(bx, Bx); storeu(by, By); storeu(cx, Cx); storeu(cy, Cy);
+__attribute__((noinline, cold)) uint32_t exact_lanes(const vfloat<W> P[3][2], const Ray* rays, const LeafTri& T,
+                                                     uint32_t lanes, vfloat<W>& To, vfloat<W>& Uo, vfloat<W>& Vo) {
+    alignas(64) float p[3][2][W], t[W], u[W], v[W];
+    for (int q = 0; q < 3; ++q) { storeu(p[q][0], P[q][0]); storeu(p[q][1], P[q][1]); }
+    storeu(t, To); storeu(u, Uo); storeu(v, Vo);
+    double e1[3], e2[3], n[3];
+    for (int a = 0; a < 3; ++a) {
+        e1[a] = double(T.v[1][a]) - T.v[0][a];
+        e2[a] = double(T.v[2][a]) - T.v[0][a];
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    uint32_t hit = 0;
     while (lanes) {
         const int j = __builtin_ctz(lanes);
         lanes &= lanes - 1;
-        u[j] = float(double(cx[j]) * double(by[j]) - double(cy[j]) * double(bx[j]));
-        v[j] = float(double(ax[j]) * double(cy[j]) - double(ay[j]) * double(cx[j]));
-        w[j] = float(double(bx[j]) * double(ay[j]) - double(by[j]) * double(ax[j]));
+        const double ax = p[0][0][j], ay = p[0][1][j], bx = p[1][0][j], by = p[1][1][j];
+        const double cx = p[2][0][j], cy = p[2][1][j];
+        const double U = cx * by - cy * bx, V = ax * cy - ay * cx, Wd = bx * ay - by * ax;
+        if ((U < 0.0 || V < 0.0 || Wd < 0.0) && (U > 0.0 || V > 0.0 || Wd > 0.0)) continue;
+        const double det = U + V + Wd;
+        if (!(det != 0.0)) continue;  // ray in the triangle's plane (or out of range: NaN)
+        const Ray& r = rays[j];
+        double num = 0.0, den = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            num += n[a] * (double(T.v[0][a]) - r.org[a]);
+            den += n[a] * double(r.dir[a]);
+        }
+        t[j] = float(num / den);
+        u[j] = float(V / det);
+        v[j] = float(Wd / det);
+        hit |= 1u << j;
     }
-    U = loadu<W>(u); V = loadu<W>(v); Wf = loadu<W>(w);
+    To = loadu<W>(t); Uo = loadu<W>(u); Vo = loadu<W>(v);
+    return hit;
 }
 
 template <int W, Query Q>
@@ -113,25 +148,36 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
                     P[q][0] = x - g.S[0] * Pz[q];
                     P[q][1] = y - g.S[1] * Pz[q];
                 }
-                vfloat<W> U = P[2][0] * P[1][1] - P[2][1] * P[1][0];
-                vfloat<W> V = P[0][0] * P[2][1] - P[0][1] * P[2][0];
-                vfloat<W> Wf = P[1][0] * P[0][1] - P[1][1] * P[0][0];
-#ifndef DACRT_NONROBUST
-                const uint32_t zeros = bits((cmpeq(U, zero) | cmpeq(V, zero) | cmpeq(Wf, zero)) & valid);
-                if (zeros) {
-                    st.double_fallbacks += __builtin_popcount(zeros);
-                    exact_edges<W>(U, V, Wf, P[0][0], P[0][1], P[1][0], P[1][1], P[2][0], P[2][1], zeros);
-                }
-#endif
+                const vfloat<W> a0 = P[2][0] * P[1][1], b0 = P[2][1] * P[1][0];
+                const vfloat<W> a1 = P[0][0] * P[2][1], b1 = P[0][1] * P[2][0];
+                const vfloat<W> a2 = P[1][0] * P[0][1], b2 = P[1][1] * P[0][0];
+                const vfloat<W> U = a0 - b0, V = a1 - b1, Wf = a2 - b2;
                 const vbool<W> neg = cmplt(vmin(U, vmin(V, Wf)), zero);
                 const vbool<W> pos = cmplt(zero, vmax(U, vmax(V, Wf)));
-                const vbool<W> inside = andnot(neg & pos, valid);
+                vbool<W> inside = andnot(neg & pos, valid);  // nonzero signs are exact: mixed = outside
                 if (!any(inside)) continue;
                 const vfloat<W> det = U + V + Wf;
-                const vfloat<W> Tn = U * (g.S[2] * Pz[0]) + V * (g.S[2] * Pz[1]) + Wf * (g.S[2] * Pz[2]);
+#ifndef DACRT_NONROBUST
+                const vfloat<W> adet = vabs(det);
+                const vbool<W> zeros = cmpeq(U, zero) | cmpeq(V, zero) | cmpeq(Wf, zero);
+                const vbool<W> in_range = cmple(splat<W>(0x1p-64f), adet) & cmple(adet, splat<W>(0x1p64f));
+                // cancellation: sum |products| > 64 |det| would cost t more than ~2^-18 relative
+                const vfloat<W> mag = (vabs(a0) + vabs(b0)) + (vabs(a1) + vabs(b1)) + (vabs(a2) + vabs(b2));
+                const vbool<W> well = cmple(mag, adet * splat<W>(64.0f));
+                const uint32_t slow = bits(andnot(andnot(zeros, in_range & well), inside));
+#else
+                const uint32_t slow = 0;
+#endif
+                inside = andnot(from_bits<W>(slow), inside);
                 const vfloat<W> inv = splat<W>(1.0f) / det;
-                const vfloat<W> t = Tn * inv;
-                vbool<W> ok = andnot(cmpeq(det, zero), inside) & cmplt(zero, t);
+                vfloat<W> u = V * inv, v = Wf * inv;
+                vfloat<W> t = ((U * inv) * Pz[0] + u * Pz[1] + v * Pz[2]) / g.dz;
+                if (slow) {
+                    st.double_fallbacks += __builtin_popcount(slow);
+                    inside = inside | from_bits<W>(exact_lanes<W>(P, rays + i, T, slow, t, u, v));
+                }
+                // t in (0, inf): NaN (det 0 in the non-robust build) and overflowed t never hit
+                vbool<W> ok = inside & cmplt(zero, t) & cmplt(t, splat<W>(INFINITY));
                 if (skip) ok = andnot(cmpeqi(g.skip, splati<W>(T.prim)), ok);  // never the triangle it leaves
                 if (Q == Query::Any) {
                     const uint32_t hit = bits(ok & cmplt(t, g.tfar)) & ~done;
@@ -157,7 +203,6 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
                 const uint32_t tk = bits(take);
                 if (!tk) continue;
                 changed |= tk;
-                const vfloat<W> u = V * inv, v = Wf * inv;
                 best_t = select(take, t, best_t);
                 best_u = select(take, u, best_u);
                 best_v = select(take, v, best_v);

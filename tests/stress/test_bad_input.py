@@ -1,0 +1,158 @@
+"""Bad input through the public API, exhaustively: NaN, +inf and -inf in every coordinate of a
+vertex (first, middle, last; float32 and float64) and in every field component of a ray (first,
+middle, last record), wrong dtypes, shapes and memory layouts, repeated and out-of-range ids,
+bad skip arrays. Each must raise ValueError whose message names the problem (the field and the
+index), leave the rays untouched, and leave the process healthy; random byte garbage as rays
+either raises ValueError or gives the reference's answer for the rays it describes."""
+
+import re
+
+import dacrt
+import numpy as np
+import pytest
+
+from ..native import agreement, reference, scenes
+
+V, T = scenes.icosphere(1)
+BAD = {"nan": np.nan, "+inf": np.inf, "-inf": -np.inf}
+
+
+def good_rays(n=40, seed=0):
+    rng = np.random.default_rng(seed)
+    return dacrt.make_rays(rng.uniform(-0.3, 0.3, (n, 3)), rng.normal(size=(n, 3)))
+
+
+def expect_error(pattern, fn, *args, **kw):
+    with pytest.raises(ValueError) as info:
+        fn(*args, **kw)
+    msg = str(info.value)
+    assert re.search(pattern, msg, re.I), f"message {msg!r} does not match /{pattern}/"
+    return msg
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("value", list(BAD))
+def test_non_finite_vertex_coordinates(dtype, value):
+    for row in (0, len(V) // 2, len(V) - 1):
+        for axis in range(3):
+            v = V.astype(dtype)
+            v[row, axis] = BAD[value]
+            expect_error(rf"vertices\[{row}\].*(finite|nan|inf)", dacrt.Scene, v, T)
+    big = V.astype(np.float64)
+    big[3, 1] = 1e39  # finite in float64, not in float32
+    expect_error(r"vertices\[3\].*(float32|large|finite)", dacrt.Scene, big, T)
+
+
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+@pytest.mark.parametrize("value", list(BAD))
+def test_non_finite_ray_fields(query, value):
+    scene = dacrt.Scene(V, T)
+    for k in (0, 17, 39):
+        for field, comp in [("org", 0), ("org", 1), ("org", 2), ("dir", 0), ("dir", 1),
+                            ("dir", 2), ("tfar", None)]:
+            if field == "tfar" and value == "+inf":
+                continue  # tfar = +inf is the unbounded ray, valid
+            rays = good_rays()
+            if comp is None:
+                rays[field][k] = BAD[value]
+            else:
+                rays[field][k, comp] = BAD[value]
+            before = rays.tobytes()
+            expect_error(rf"rays\[{k}\]\.{field}", getattr(scene, query), rays)
+            assert rays.tobytes() == before, f"{field}[{k}] = {value}: rays modified"
+
+
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+def test_ids_and_directions(query):
+    scene = dacrt.Scene(V, T)
+    cases = [
+        (lambda r: r["id"].__setitem__(5, r["id"][9]), r"rays\[(5|9)\]\.id.*repeat"),
+        (lambda r: r["id"].__setitem__(39, 40), r"rays\[39\]\.id.*range"),
+        (lambda r: r["id"].__setitem__(0, 2**32 - 1), r"rays\[0\]\.id.*range"),
+        (lambda r: r["id"].__setitem__(slice(None), 0), r"\.id.*repeat"),
+        (lambda r: r["dir"].__setitem__(12, 0.0), r"rays\[12\]\.dir.*zero"),
+        (lambda r: r["dir"].__setitem__(12, -0.0), r"rays\[12\]\.dir.*zero"),
+        (lambda r: r["tfar"].__setitem__(3, -1e-45), r"rays\[3\]\.tfar.*negative"),
+        (lambda r: r["tfar"].__setitem__(3, -0.5), r"rays\[3\]\.tfar.*negative"),
+    ]
+    for edit, pattern in cases:
+        rays = good_rays()
+        edit(rays)
+        before = rays.tobytes()
+        expect_error(pattern, getattr(scene, query), rays)
+        assert rays.tobytes() == before
+
+
+def test_wrong_dtypes_shapes_and_layouts():
+    scene = dacrt.Scene(V, T)
+    r = good_rays(32)
+    for bad, pattern in [
+            (r.view(np.float32).reshape(32, 8), "dtype|ray"),
+            (r.view(np.uint8), "dtype|ray"),
+            (r.reshape(4, 8), "1-d|shape"),
+            (r[::2], "contiguous"),
+            (np.asfortranarray(r.reshape(4, 8)), "1-d|shape|contiguous"),
+            (r.astype(RAY_BE := dacrt.RAY_DTYPE.newbyteorder(">")), "dtype"),
+            (np.zeros(32, [("org", "<f8", (3,)), ("dir", "<f8", (3,)), ("tfar", "<f8"),
+                           ("id", "<u8")]), "dtype")]:
+        for query in (scene.intersect, scene.occluded):
+            expect_error(pattern, query, bad)
+    ro = good_rays(8)
+    ro.setflags(write=False)
+    expect_error("writeable", scene.intersect, ro)
+    for v, t, pattern in [
+            (V[:, :2], T, r"vertices.*shape"), (V.ravel(), T, r"vertices.*shape"),
+            (V[None], T, r"vertices.*shape"), (V.astype(np.int32), T, r"vertices.*float"),
+            (V.astype(np.complex64), T, r"vertices.*float"),
+            (V.astype(object), T, r"vertices.*float"),
+            (V, T[:, :2], r"triangles.*shape"), (V, T.astype(np.float32), r"triangles.*integer"),
+            (V, T.astype(bool), r"triangles.*integer"), (V, T - 1, r"triangles\[\d+\].*negative"),
+            (V, T + len(V) - T.min(), r"triangles\[0\].*vert")]:
+        expect_error(pattern, dacrt.Scene, v, t)
+    for bad_skip, pattern in [(np.zeros(31, np.int32), "skip"), (np.zeros(32), "skip"),
+                              (np.zeros((32, 1), np.int32), "skip")]:
+        expect_error(pattern, scene.intersect, good_rays(32), skip=bad_skip)
+    for threads, pattern in [(-1, "thread"), (1.5, "thread"), ("2", "thread"), (True, "thread")]:
+        expect_error(pattern, scene.intersect, good_rays(8), threads=threads)
+
+
+def test_non_contiguous_inputs_are_copied_not_rejected():
+    """Vertices and triangles are copied by the Scene, so any layout is fine."""
+    vs = np.repeat(V, 2, axis=1)[:, ::2]  # strided views of the same values
+    ts = np.repeat(T, 2, axis=1)[:, ::2]
+    assert not vs.flags.c_contiguous and not ts.flags.c_contiguous
+    a = dacrt.Scene(vs, ts).intersect(good_rays())
+    b = dacrt.Scene(V, T).intersect(good_rays())
+    assert np.array_equal(a, b)
+
+
+def test_random_garbage_rays_never_crash():
+    """Random bytes as ray records: a ValueError naming a field, or (when the bytes happen to
+    form valid rays) answers that agree with the reference."""
+    rng = np.random.default_rng(7)
+    scene = dacrt.Scene(V, T)
+    accepted = 0
+    for trial in range(300):
+        n = int(rng.integers(1, 50))
+        raw = rng.integers(0, 256, n * 32, dtype=np.uint8)
+        rays = raw.view(dacrt.RAY_DTYPE).copy()
+        if trial % 3:  # make most fields plausible so validation goes deeper
+            rays["id"] = rng.permutation(n)
+            f = rays["org"].view(np.uint32)
+            f &= np.uint32(0x3FFFFFFF)  # exponents below 1: finite
+            if trial % 3 == 2:
+                rays["dir"].view(np.uint32)[...] &= np.uint32(0xBFFFFFFF)
+                rays["tfar"] = np.abs(rays["tfar"])
+        before = rays.copy()
+        try:
+            hits = scene.intersect(rays)
+        except ValueError as e:
+            assert re.search(r"rays\[\d+\]\.(org|dir|tfar|id)", str(e)), str(e)
+            assert rays.tobytes() == before.tobytes()
+            continue
+        accepted += 1
+        b = before[np.argsort(before["id"])]
+        ref = reference.trace(V, T, b["org"], b["dir"], b["tfar"])
+        agreement.check_hits(V, T, b["org"], b["dir"], b["tfar"], hits, ref,
+                             context=f"garbage trial {trial}")
+    assert accepted > 20
