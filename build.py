@@ -4,7 +4,8 @@ and packaging.
 
     python3 build.py test [--stress] [--sanitize] [pytest args...]
     python3 build.py render [scene.blend] [--samples N] [--out file]
-    python3 build.py bench [what...]
+    python3 build.py bench [tracer|errortime|scaling|animation|partition|...] [options]
+    python3 build.py compare scene.blend [--samples N]
     python3 build.py package
 
 Every command first checks the machine's prerequisites, creates `.venv` at the repository root
@@ -325,6 +326,31 @@ def ensure_sanitized_native(req_digest: str) -> dict:
     return env
 
 
+# Non-robust build (CMake option DACRT_NONROBUST=ON: no box padding, no double-precision lanes)
+# into build/nonrobust/site, used only by `bench robustness` to measure what robustness costs.
+NONROBUST_DIR = BUILD / "nonrobust"
+NONROBUST_SITE = NONROBUST_DIR / "site"
+NONROBUST_STAMP = NONROBUST_DIR / "stamp.sha256"
+
+
+def ensure_nonrobust_native() -> Path:
+    """Build dacrt with DACRT_NONROBUST=ON into build/nonrobust/site when native/ changed;
+    returns that directory (it holds a `dacrt` package). Call it holding SetupLock, after
+    setup()."""
+    digest = native_sources_hash("nonrobust|" + requirements_hash())
+    if not (NONROBUST_STAMP.exists() and NONROBUST_STAMP.read_text().strip() == digest):
+        say("building the non-robust native tracer (DACRT_NONROBUST=ON) ...")
+        t0 = time.time()
+        run_logged([str(VPY), "-m", "pip", "install", "--no-deps", "--no-build-isolation",
+                    "--upgrade", "--target", str(NONROBUST_SITE),
+                    *native_config_settings(NONROBUST_DIR / "cmake", {"DACRT_NONROBUST": "ON"}),
+                    str(NATIVE)],
+                   "native-nonrobust.log", "building native/ with DACRT_NONROBUST=ON")
+        NONROBUST_STAMP.write_text(digest + "\n")
+        say(f"non-robust build done ({time.time() - t0:.0f} s)")
+    return NONROBUST_SITE
+
+
 # ---------------------------------------------------------------------------------------------
 # Commands
 
@@ -339,7 +365,8 @@ def cmd_test(args: List[str]) -> int:
         req = setup()
         if sanitize:
             env = ensure_sanitized_native(req)
-            paths = ["tests/native"]
+            # the tracer tests and the cheap (default) stress tests, not the renderer ones
+            paths = ["tests/native", "tests/stress", "--ignore=tests/stress/test_renderer.py"]
     if any(not a.startswith("-") and (ROOT / a.split("::")[0]).exists() for a in rest):
         paths = []  # the caller named what to run
     # Stress tests are deselected by tests/conftest.py unless --stress is given.
@@ -371,6 +398,13 @@ def cmd_bench(args: List[str]) -> int:
         raise SetupError("tests/bench/__main__.py does not exist yet (the benchmark package); "
                          "`python -m tests.bench` has nothing to run.")
     return run_module("tests.bench", bench, args, "the benchmark package")
+
+
+def cmd_compare(args: List[str]) -> int:
+    if not args or args[0].startswith("-"):
+        raise SetupError("usage: python3 build.py compare scene.blend [--samples N] "
+                         "(or a built-in scene: cornell, outdoor, dragon)")
+    return cmd_bench(["compare", *args])
 
 
 def set_manifest_wheels(text: str, wheels: List[str]) -> str:
@@ -441,7 +475,8 @@ def cmd_package(args: List[str]) -> int:
     return 0
 
 
-COMMANDS = {"test": cmd_test, "render": cmd_render, "bench": cmd_bench, "package": cmd_package}
+COMMANDS = {"test": cmd_test, "render": cmd_render, "bench": cmd_bench, "compare": cmd_compare,
+            "package": cmd_package}
 
 
 def use_python_311(argv: List[str]) -> None:

@@ -118,12 +118,20 @@ private:
         std::string err;
         TraceResult res;
         double validate_s = 0.0;
+        double seconds_per_tick = 0.0;  // phase_clock() calibrated against steady_clock over this call
         {
             py::gil_scoped_release nogil;
             const auto v0 = std::chrono::steady_clock::now();
             err = validate(fields_fn(isa), job.origin_abs_max);
             validate_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - v0).count();
-            if (err.empty()) res = trace(*ts_, r, n, job, threads, isa);
+            if (err.empty()) {
+                const auto t0 = std::chrono::steady_clock::now();
+                const uint64_t c0 = phase_clock();
+                res = trace(*ts_, r, n, job, threads, isa);
+                const uint64_t ticks = phase_clock() - c0;
+                const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                seconds_per_tick = ticks > 0 ? s / double(ticks) : 0.0;
+            }
         }
         if (!err.empty()) throw py::value_error(err);
         py::dict d;
@@ -141,6 +149,10 @@ private:
         d["isa"] = isa_name(isa);
         d["seconds"] = res.seconds;
         d["validate_seconds"] = validate_s;
+        // Thread-seconds (summed over threads) in each phase of the recursion.
+        d["filter_seconds"] = double(res.stats.filter_ticks) * seconds_per_tick;
+        d["partition_seconds"] = double(res.stats.partition_ticks) * seconds_per_tick;
+        d["leaf_seconds"] = double(res.stats.leaf_ticks) * seconds_per_tick;
         return d;
     }
 };

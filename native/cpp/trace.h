@@ -67,16 +67,21 @@ struct Tracer {
     }
 
     void node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth) {
+        const uint64_t c0 = phase_clock();
         const size_t na = filter(rays, n, nb, depth);
+        const uint64_t c1 = phase_clock();
+        st.filter_ticks += c1 - c0;
         if (na == 0) return;
         const size_t leaf = size_t(cfg.leaf_size);
         if (nt <= leaf || na <= leaf) {
             intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, skip, st);
+            st.leaf_ticks += phase_clock() - c1;
             return;
         }
         NodeBounds L, R;
         int axis = 0;
         const size_t k = split(ids, nt, nb, float(na), depth, L, R, axis);
+        st.partition_ticks += phase_clock() - c1;
         if (majority_positive(rays, na, axis)) {
             node(rays, na, ids, k, L, depth + 1);
             node(rays, na, ids + k, nt - k, R, depth + 1);
@@ -88,10 +93,14 @@ struct Tracer {
 
     // A node of the shared top: its split is made once, by whichever thread arrives first.
     void shared_node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, size_t h) {
+        const uint64_t c0 = phase_clock();
         const size_t na = filter(rays, n, nb, depth);
+        const uint64_t c1 = phase_clock();
+        st.filter_ticks += c1 - c0;
         if (na == 0) return;
         if (nt <= size_t(cfg.leaf_size)) {  // never split, so its ids never move
             intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, skip, st);
+            st.leaf_ticks += phase_clock() - c1;
             return;
         }
         SharedNode& sn = top->nodes[h];
@@ -104,6 +113,7 @@ struct Tracer {
                 while (sn.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
             }
         }
+        st.partition_ticks += phase_clock() - c1;  // includes waiting for another thread's split
         const size_t k = sn.k;
         if (majority_positive(rays, na, sn.axis)) {
             child(rays, na, ids, k, sn.L, depth + 1, 2 * h);

@@ -8,10 +8,21 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import tracer
+from . import animation, compare, errortime, partition, robustness, scaling, tracer
 
 BENCHMARKS = {
     "tracer": (tracer, "DACRT vs Embree Mrays/s on camera, diffuse-bounce and shadow rays"),
+    "robustness": (robustness, "robust vs non-robust (DACRT_NONROBUST) build: Mrays/s on the "
+                               "same rays, and leaks on the watertightness rays"),
+    "errortime": (errortime, "relMSE vs wall time of whole renders, DACRT vs Cycles, + breakdown"),
+    "animation": (animation, "a deforming ~1M-triangle wave grid over several frames, DACRT vs "
+                             "Cycles per-frame time"),
+    "scaling": (scaling, "DACRT vs Embree time versus triangle count (1K-2M) and ray count "
+                         "(64K-16M)"),
+    "partition": (partition, "adaptive partitioning: median vs SAH vs adaptive at several "
+                             "ray/triangle ratios"),
+    "compare": (compare, "one scene rendered by DACRT and Cycles: side-by-side, difference, "
+                         "times, error (also `python3 build.py compare`)"),
 }
 
 

@@ -49,6 +49,8 @@ def add_arguments(p) -> None:
     p.add_argument("--sah-ratio", type=float, default=None, help="DACRT adaptive SAH ratio")
     p.add_argument("--json", type=Path, default=None, metavar="PATH",
                    help="write every number here (default bench-out/tracer.json)")
+    p.add_argument("--update-readme", action="store_true",
+                   help="rewrite the README's tracer table from this run")
 
 
 def _cores() -> int:
@@ -287,4 +289,8 @@ def run(args) -> int:
     report.print_tracer(doc)
     report.write_json(doc, json_path)
     print(f"\nall numbers: {json_path}", flush=True)
+    if args.update_readme:
+        from . import readme
+        print(f"README block 'tracer' rewritten: "
+              f"{readme.update('tracer', report.tracer_markdown(doc))}")
     return 0

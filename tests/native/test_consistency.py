@@ -128,7 +128,7 @@ def test_scene_properties():
     assert scene.num_triangles == len(t)
     assert scene.num_degenerate == zero_area.sum() > 0
     assert (scene.partition, scene.leaf_size) == ("adaptive", 8)
-    assert scene.sah_ratio == pytest.approx(2.0)
+    assert scene.sah_ratio == pytest.approx(128.0)
     o, d, tf = make_rays("random", "inf", v, t, 1000, 1)
     base = harness.intersect(scene, o, d, tf)
     for mode in ("median", "sah", "adaptive"):

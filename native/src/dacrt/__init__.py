@@ -117,7 +117,7 @@ class Scene:
     """
 
     def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 8,
-                 sah_ratio: float = 2.0, chunk_rays: int = 0):
+                 sah_ratio: float = 128.0, chunk_rays: int = 0):
         v = _as_vertices(vertices)
         t = _as_triangles(triangles, len(v))
         self._core = _core.NativeScene(v, t)

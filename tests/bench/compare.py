@@ -1,0 +1,141 @@
+"""One scene, DACRT beside Cycles (`python3 build.py compare scene.blend [--samples N]`).
+
+Renders the scene (a .blend, or a built-in benchmark scene name: cornell, outdoor, dragon)
+with DACRT and with Cycles at matched settings (reference blender-cycles.md section 2.7, the
+same as the error-versus-time benchmark) and N samples, plus a second Cycles render with
+another seed. Writes to --out (default bench-out/compare/<scene>/):
+- side_by_side.png: DACRT | Cycles | difference, display-referred (sRGB, clipped);
+- difference.png: |DACRT - Cycles| averaged over RGB, x16 as Blender's render tests show it;
+- dacrt.exr, cycles.exr: the linear float renders;
+- compare.json: times, relMSE, mean ratio per channel.
+Error figures: relMSE(DACRT vs Cycles) ~ DACRT's noise + Cycles' noise + bias^2, beside
+relMSE(Cycles vs Cycles with another seed) ~ twice Cycles' noise: the same order means the
+engines differ by noise; a large multiple means more noise or a bias. The per-channel ratio of
+the image means shows a brightness or colour bias directly (compare it with Cycles' own
+seed-to-seed ratio).
+"""
+
+from __future__ import annotations
+
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import errorstats, report
+from .progress import Progress
+from .renderjobs import run_jobs
+from .renderspec import BUILTIN, scene_spec
+from .scenes import OUT
+
+
+def add_arguments(p) -> None:
+    p.add_argument("scene", help=f".blend file, or a built-in scene ({', '.join(BUILTIN)})")
+    p.add_argument("--samples", type=int, default=64, help="samples per pixel (default 64)")
+    p.add_argument("--bounces", type=int, default=None,
+                   help="diffuse bounces (default: the .blend's Cycles setting)")
+    p.add_argument("--seed", type=int, default=0, help="seed of both renders (default 0)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="output folder (default bench-out/compare/<scene>)")
+
+
+def to_display(linear: np.ndarray) -> np.ndarray:
+    """(H, W, >=3) linear, row 0 at the bottom -> (H, W, 3) uint8 sRGB, row 0 at the top."""
+    x = np.clip(np.asarray(linear, np.float64)[::-1, :, :3], 0.0, 1.0)
+    srgb = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    return np.round(srgb * 255).astype(np.uint8)
+
+
+def difference_image(a: np.ndarray, b: np.ndarray, gain: float = 16.0) -> np.ndarray:
+    """|a - b| averaged over RGB, times gain, as a grey (H, W, 3) uint8, row 0 at the top."""
+    d = np.abs(np.asarray(a, np.float64)[..., :3] - np.asarray(b, np.float64)[..., :3]).mean(-1)
+    g = np.round(np.clip(d * gain, 0, 1) * 255).astype(np.uint8)[::-1]
+    return np.repeat(g[..., None], 3, axis=-1)
+
+
+def _write_png(path: Path, rgb: np.ndarray) -> None:
+    from PIL import Image
+    Image.fromarray(rgb, "RGB").save(path)
+
+
+def _write_exr(path: Path, image: np.ndarray) -> None:
+    import OpenImageIO as oiio
+    img = np.ascontiguousarray(image[::-1], np.float32)
+    out = oiio.ImageOutput.create(str(path))
+    if out is None:
+        raise RuntimeError(f"cannot write {path}: {oiio.geterror()}")
+    spec = oiio.ImageSpec(img.shape[1], img.shape[0], img.shape[2], "float")
+    spec.channelnames = ("R", "G", "B", "A")[:img.shape[2]]
+    out.open(str(path), spec)
+    out.write_image(img)
+    out.close()
+
+
+def channel_mean_ratio(a: np.ndarray, b: np.ndarray) -> list[float]:
+    """mean(a) / mean(b) per RGB channel (nan where b's mean is 0)."""
+    ma = np.asarray(a, np.float64)[..., :3].mean(axis=(0, 1))
+    mb = np.asarray(b, np.float64)[..., :3].mean(axis=(0, 1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return [float(x) for x in np.where(mb > 0, ma / mb, np.nan)]
+
+
+def run(args) -> int:
+    if args.samples < 1:
+        raise ValueError("--samples must be >= 1")
+    spec = scene_spec(args.scene, args.bounces)
+    out = args.out or OUT / "compare" / spec.name
+    out.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix="compare-", dir=OUT))
+    progress = Progress(3)
+    other_seed = args.seed + 1
+    try:
+        item = lambda engine, seed: dict(spec=spec.as_dict(), samples=args.samples,  # noqa: E731
+                                         seed=seed, image=f"{engine}-{seed}.npy")
+        d = run_jobs("DACRT", [item("DACRT", args.seed)], work, progress)[0]
+        c = run_jobs("CYCLES", [item("CYCLES", args.seed), item("CYCLES", other_seed)],
+                     work, progress)
+        dimg = np.load(work / d["image"])
+        cimg, cimg2 = np.load(work / c[0]["image"]), np.load(work / c[1]["image"])
+    finally:
+        progress.close()
+        shutil.rmtree(work, ignore_errors=True)
+    if dimg.shape != cimg.shape:
+        raise RuntimeError(f"DACRT rendered {dimg.shape[1]}x{dimg.shape[0]} but Cycles "
+                           f"{cimg.shape[1]}x{cimg.shape[0]}")
+    rel = errorstats.relmse(dimg, cimg)
+    noise = errorstats.relmse(cimg2, cimg)
+    diff = difference_image(dimg, cimg)
+    gap = np.full((dimg.shape[0], 4, 3), 255, np.uint8)
+    _write_png(out / "side_by_side.png",
+               np.concatenate([to_display(dimg), gap, to_display(cimg), gap, diff], axis=1))
+    _write_png(out / "difference.png", diff)
+    _write_exr(out / "dacrt.exr", dimg)
+    _write_exr(out / "cycles.exr", cimg)
+    doc = dict(scene=spec.name, source=spec.blend or "built-in", samples=args.samples,
+               seed=args.seed, resolution=d["resolution"],
+               when=time.strftime("%Y-%m-%d %H:%M:%S"),
+               command=" ".join(["python -m tests.bench", *sys.argv[1:]]),
+               dacrt_seconds=d["seconds"], cycles_seconds=c[0]["seconds"],
+               cycles_other_seed_seconds=c[1]["seconds"],
+               relmse_dacrt_vs_cycles=rel, relmse_cycles_vs_cycles_other_seed=noise,
+               relmse_ratio=rel / noise if noise > 0 else float("inf"),
+               mean_ratio_rgb=channel_mean_ratio(dimg, cimg),
+               mean_ratio_rgb_cycles_seeds=channel_mean_ratio(cimg2, cimg),
+               dacrt_breakdown=d.get("breakdown"), dacrt_memory=d.get("memory"),
+               cycles_memory=c[0].get("memory"))
+    report.write_json(doc, out / "compare.json")
+    w, h = d["resolution"]
+    print(f"\n{spec.name}: {w}x{h}, {args.samples} spp, seed {args.seed}")
+    print(f"  DACRT  {d['seconds']:8.3f} s")
+    print(f"  Cycles {c[0]['seconds']:8.3f} s   (DACRT / Cycles time {d['seconds'] / c[0]['seconds']:.2f})")
+    print(f"  relMSE DACRT vs Cycles          {rel:.4e}")
+    print(f"  relMSE Cycles vs Cycles seed {other_seed:<3} {noise:.4e}   (noise alone; ratio "
+          f"{doc['relmse_ratio']:.2f}: same order = noise, a large multiple = noise or bias)")
+    print("  mean DACRT / Cycles per R,G,B  " + " ".join(f"{x:.4f}" for x in doc["mean_ratio_rgb"])
+          + "   (Cycles seed vs seed: " + " ".join(f"{x:.4f}" for x in
+                                                   doc["mean_ratio_rgb_cycles_seeds"]) + ")")
+    print(f"wrote {out}/side_by_side.png, difference.png, dacrt.exr, cycles.exr, compare.json")
+    return 0

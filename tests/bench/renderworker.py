@@ -1,0 +1,132 @@
+"""One bpy process that renders a list of jobs with one engine: `python -m tests.bench.renderworker
+JOB.json`, started by the rendering benchmarks (errortime, animation, compare), never by hand.
+
+The job file holds {"engine": "CYCLES" | "DACRT" | "DACRT_ADAPTIVE", "outdir": path,
+"results": path, "renders": [...]}; each render is {"spec": RenderSpec fields, "samples",
+"seed", "frame" (or null), "warmup" (bool), "image" (file name, or null to keep no image)}.
+Consecutive renders of the same spec share one scene build. A warm-up render (1 sample, not
+timed, not kept) precedes the first timed render of each scene so that one-off costs (Cycles'
+kernel loading, the add-on's first import of numpy paths) are not charged to the first point.
+
+Timed: `bpy.ops.render.render()` alone, the whole render as a user sees it (Cycles: scene sync,
+BVH build, path tracing; DACRT: export, tracer scene creation, integration). Saving the image
+as EXR and reading it back are not timed. Each finished render appends one JSON line to the
+results file (the parent follows it for its progress bar; {"unavailable": reason} when the
+engine asked for, DACRT with adaptive sampling, does not exist in this add-on); the image is stored as .npy
+(H, W, 4) float32, row 0 at the bottom. Any failure is written as {"error": ...} and exits 1.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+import traceback
+
+import bpy
+import numpy as np
+
+from ..parity import rendering as fair
+from . import renderscenes
+from .breakdown import Instrument, PeakMemory
+
+
+def _save_exr(scene, path):
+    s = scene.render.image_settings
+    if hasattr(s, 'media_type'):
+        s.media_type = 'IMAGE'
+    s.file_format, s.color_mode, s.color_depth, s.exr_codec = 'OPEN_EXR', 'RGBA', '32', 'ZIP'
+    if os.path.exists(path):
+        os.remove(path)
+    bpy.data.images['Render Result'].save_render(filepath=str(path), scene=scene)
+    if not os.path.exists(path):
+        raise RuntimeError(f"{scene.render.engine} produced no image (see its report above)")
+    return fair.read_exr(path)
+
+
+def _spec(d: dict) -> renderscenes.RenderSpec:
+    d = dict(d)
+    d["resolution"] = tuple(d["resolution"])
+    return renderscenes.RenderSpec(**d)
+
+
+def run(job: dict) -> None:
+    engine = job["engine"]
+    outdir = job["outdir"]
+    os.makedirs(outdir, exist_ok=True)
+    if engine.startswith("DACRT"):
+        import addon
+        addon.register()
+    results = open(job["results"], "a")
+    if engine == "DACRT_ADAPTIVE" and not renderscenes.has_dacrt_adaptive(bpy.context.scene):
+        results.write(json.dumps(dict(unavailable="the add-on has no scene.dacrt."
+                                                  "use_adaptive_sampling setting")) + "\n")
+        results.close()
+        return
+    instrument = Instrument() if engine.startswith("DACRT") else None
+    built_key, scene, spec = None, None, None
+    for i, item in enumerate(job["renders"]):
+        key = json.dumps(item["spec"], sort_keys=True)
+        if key != built_key:
+            spec = _spec(item["spec"])
+            t0 = time.perf_counter()
+            scene = renderscenes.build(spec)
+            build_s = time.perf_counter() - t0
+            built_key = key
+            if item.get("warmup", True):
+                renderscenes.configure(scene, spec, engine, 1, 999)
+                bpy.ops.render.render()
+        renderscenes.configure(scene, spec, engine, int(item["samples"]), int(item["seed"]))
+        frame_s = None
+        if item.get("frame") is not None:
+            t0 = time.perf_counter()
+            scene.frame_set(int(item["frame"]))
+            frame_s = time.perf_counter() - t0
+        with PeakMemory() as mem:
+            if instrument is not None:
+                with instrument:
+                    t0 = time.perf_counter()
+                    bpy.ops.render.render()
+                    wall = time.perf_counter() - t0
+            else:
+                t0 = time.perf_counter()
+                bpy.ops.render.render()
+                wall = time.perf_counter() - t0
+        record = dict(index=i, engine=engine, scene=spec.name, samples=int(item["samples"]),
+                      seed=int(item["seed"]), frame=item.get("frame"), seconds=wall,
+                      frame_change_seconds=frame_s, scene_build_seconds=build_s,
+                      resolution=list(spec.resolution), memory=mem.figures())
+        if instrument is not None:
+            record["breakdown"] = instrument.take(wall)
+        exr = os.path.join(outdir, f"render-{os.getpid()}.exr")
+        image = _save_exr(scene, exr)
+        os.remove(exr)
+        if not np.isfinite(image).all():
+            raise RuntimeError(f"{engine} render of {spec.name} holds NaN/inf pixels")
+        if item.get("image"):
+            np.save(os.path.join(outdir, item["image"]), image)
+            record["image"] = item["image"]
+        results.write(json.dumps(record) + "\n")
+        results.flush()
+    results.close()
+
+
+def main(argv):
+    if len(argv) != 1:
+        print("usage: python -m tests.bench.renderworker JOB.json", file=sys.stderr)
+        return 2
+    with open(argv[0]) as f:
+        job = json.load(f)
+    try:
+        run(job)
+    except Exception as exc:  # reported to the parent through the results file
+        traceback.print_exc()
+        with open(job["results"], "a") as f:
+            f.write(json.dumps(dict(error=f"{type(exc).__name__}: {exc}")) + "\n")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

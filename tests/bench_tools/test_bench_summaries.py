@@ -1,0 +1,56 @@
+"""Pure summaries of the benchmarks: partition scoring, error-vs-time aggregation, the display
+conversion of `compare`."""
+import numpy as np
+import pytest
+
+from tests.bench import compare, errortime, partition
+
+
+def _case(times):
+    return dict(configs={n: dict(min_s=t, median_s=t) for n, t in times.items()})
+
+
+def test_partition_score_is_the_geometric_mean_of_time_over_best():
+    cases = [_case({"median": 1.0, "sah": 2.0, "adaptive 2": 1.0}),
+             _case({"median": 4.0, "sah": 1.0, "adaptive 2": 2.0})]
+    s = partition.score(cases, ["median", "sah", "adaptive 2"])
+    assert s["median"] == pytest.approx(2.0)          # sqrt(1 * 4)
+    assert s["sah"] == pytest.approx(np.sqrt(2.0))    # sqrt(2 * 1)
+    assert s["adaptive 2"] == pytest.approx(np.sqrt(2.0))
+    name, ratio = partition.best_ratio({"median": 1.0, "adaptive 4": 1.2, "adaptive 0.5": 1.1})
+    assert (name, ratio) == ("adaptive 0.5", 0.5)
+    names = [c["name"] for c in partition.configs([1, 2.5])]
+    assert names == ["median", "sah", "adaptive 1", "adaptive 2.5"]
+
+
+def _rec(engine, spp, seed, seconds, rel):
+    return dict(scene="s", engine=engine, samples=spp, seed=seed, seconds=seconds, relmse=rel)
+
+
+def test_errortime_summary_means_efficiency_and_equal_error():
+    recs = []
+    for seed in range(2):
+        for spp in (4, 16):
+            recs.append(_rec("CYCLES", spp, seed, spp * 0.1, 1.0 / spp))
+            recs.append(_rec("DACRT", spp, seed, spp * 0.05, 1.0 / spp))  # twice as fast
+    s = errortime.summarise(recs, {})["s"]
+    cyc = s["CYCLES"]["points"]
+    assert [p["samples"] for p in cyc] == [4, 16]
+    assert cyc[0]["seconds"] == pytest.approx(0.4) and cyc[0]["relmse"] == pytest.approx(0.25)
+    assert cyc[0]["efficiency"] == pytest.approx(1 / (0.25 * 0.4))
+    assert s["CYCLES"]["slope"] == pytest.approx(-1.0)
+    ratios = [q["ratio"] for q in s["equal_error"] if q["engine"] == "DACRT"]
+    assert ratios == pytest.approx([0.5, 0.5])
+
+
+def test_display_conversion_and_difference():
+    lin = np.zeros((2, 1, 4))
+    lin[0, 0, :3] = 1.0          # bottom row white
+    lin[1, 0, :3] = 0.0018       # top row, linear segment of the sRGB curve
+    out = compare.to_display(lin)
+    assert out.dtype == np.uint8 and out.shape == (2, 1, 3)
+    assert out[1, 0].tolist() == [255, 255, 255]   # flipped: row 0 of the PNG is the top
+    assert out[0, 0, 0] == round(12.92 * 0.0018 * 255)
+    d = compare.difference_image(lin, np.zeros_like(lin), gain=16)
+    assert d[1, 0].tolist() == [255] * 3
+    assert compare.channel_mean_ratio(lin * 2 + 0.0, lin)[0] == pytest.approx(2.0)
