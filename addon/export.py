@@ -801,8 +801,9 @@ class _Exporter:
         mats = np.stack([p.matrix for p in places])                # (k,4,4)
         lin = mats[:, :3, :3]
         pos = a.positions.astype(np.float64)
+        # float64 world positions: a scene far from the origin keeps its precision until the
+        # renderer centres it (integrator.recentred) and rounds to float32
         world = np.einsum('kij,vj->kvi', lin, pos) + mats[:, None, :3, 3]   # (k,nv,3)
-        world = world.astype(np.float32)
         tris = a.triangles[None, :, :] + (np.arange(k, dtype=np.int32) * nv)[:, None, None]
         world = world.reshape(k * nv, 3)
         tris = tris.reshape(k * nt, 3)
@@ -818,11 +819,11 @@ class _Exporter:
                 if nvb:
                     bad.append((p.name, nvb, nb))
             keep &= tri_ok
-            world = np.where(finite[:, None], world, 0.0).astype(np.float32)
+            world = np.where(finite[:, None], world, 0.0)
         # geometric normals in world space; objects with negative scale keep their outside
         v0, v1, v2 = world[tris[:, 0]], world[tris[:, 1]], world[tris[:, 2]]
         ng = np.cross(v1 - v0, v2 - v0)
-        flip = np.repeat(np.where(np.linalg.det(lin) < 0, -1.0, 1.0), nt).astype(np.float32)
+        flip = np.repeat(np.where(np.linalg.det(lin) < 0, -1.0, 1.0), nt)
         ng *= flip[:, None]
         length = np.linalg.norm(ng, axis=1)
         good = length > 0
@@ -830,7 +831,7 @@ class _Exporter:
         keep &= good
         ng[good] /= length[good, None]
         if a.normals is None:
-            normals = np.repeat(ng[:, None, :], 3, axis=1)
+            normals = np.repeat(ng[:, None, :].astype(np.float32), 3, axis=1)
         else:
             inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin,
                                          np.eye(3)))    # normals transform by the inverse transpose

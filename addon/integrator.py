@@ -31,7 +31,7 @@ noise unchanged.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -239,6 +239,40 @@ class _Materials:
         self.emissive = self.emission.max(axis=0) > 0
 
 
+def recentred(sd: SceneData):
+    """The scene moved so its bounding box is centred on the origin, and that offset (float64),
+    when the scene lies away from the origin (further than its half-extent).
+
+    Shading works in float32 (hit points, self-intersection steps of a few ULPs of the
+    coordinates): a scene a few units across placed 1e5 from the origin would shade on a grid
+    of 2^-7 and step ~6% of its size off surfaces. A translation changes no image, so the
+    render uses coordinates centred on the scene (vertices, camera and lamp positions move;
+    directions do not). The vertices are shifted in float64 before rounding to float32, so
+    input given in float64 keeps its precision."""
+    v = np.asarray(sd.geometry.vertices)
+    finite = np.isfinite(v).all(axis=1) if v.ndim == 2 and len(v) else np.zeros(0, bool)
+    if not finite.any():
+        return sd, np.zeros(3)
+    v64 = v.astype(np.float64)
+    fv = v64[finite]
+    lo, hi = fv.min(axis=0), fv.max(axis=0)
+    origin = 0.5 * (lo + hi)
+    # only worth it when the scene lies off the origin: the largest coordinate then drops from
+    # |centre| + half-extent to half-extent (a scene around the origin keeps its coordinates)
+    if np.abs(origin).max() <= 0.5 * (hi - lo).max():
+        return sd, np.zeros(3)
+
+    def moved(matrix):
+        m = np.array(matrix, np.float64)
+        m[:3, 3] -= origin
+        return m
+
+    geometry = replace(sd.geometry, vertices=(v64 - origin).astype(F32))
+    camera = replace(sd.camera, matrix=moved(sd.camera.matrix))
+    lights = [replace(light, matrix=moved(light.matrix)) for light in sd.lights]
+    return replace(sd, geometry=geometry, camera=camera, lights=lights), origin
+
+
 def _validate(sd: SceneData):
     g = sd.geometry
     m = len(np.asarray(g.triangles))
@@ -284,6 +318,7 @@ class Integrator:
     def __init__(self, scene_data: SceneData, *, paths_per_pass: int | None = None):
         t_start = time.perf_counter()
         _validate(scene_data)
+        scene_data, self.origin = recentred(scene_data)
         self.messages: list = []
         s = scene_data.settings
         self.settings = s

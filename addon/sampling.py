@@ -1,16 +1,20 @@
 """Random numbers and sample warps for the path tracer (numpy, vectorised).
 
-Owns the counter-based random number generator, the maps from the unit square to directions
-and points the lights use (cones, spheres, disks) and the (3, n) vector helpers they use. The
-hot per-vertex warps (cosine-weighted bounces, points on emissive triangles) and the uniforms
-themselves run in the native kernels of dacrt.shading, which use this same hash (tested).
+Owns the random number generator, the maps from the unit square to directions and points the
+lights use (cones, spheres, disks) and the (3, n) vector helpers they use. The hot per-vertex
+warps (cosine-weighted bounces, points on emissive triangles) and the uniforms themselves run
+in the native kernels of dacrt.shading, which compute these same numbers (tested bit for bit).
 
 Random numbers are a pure function of (seed, pixel, sample, dimension): no generator state is
 carried between calls, so an image depends only on the seed, never on how samples were grouped
-into passes, on ray order or on thread count. A path's key is a bijective 64-bit hash of
-(pixel, sample) keyed by the seed (distinct paths never share a key), kept as two 32-bit words;
-each dimension pair is a few 32-bit murmur3 mixes of those words (32-bit integer arithmetic is
-several times faster in numpy than 64-bit).
+into passes, on ray order or on thread count. They are randomised quasi-Monte Carlo, as Cycles'
+default sampler: every dimension pair of a pixel (filter position, light choice and roulette,
+light position, bounce direction, per path vertex) is a 2D Sobol (0,2)-sequence over the
+pixel's sample index, Owen-scrambled and shuffled by hash per pixel and pair (Burley 2020,
+"Practical Hash-based Owen Scrambling"). A pixel's first N samples of a pair are thus
+stratified in both dimensions together, while pairs stay independent. On smooth direct light
+this cuts variance by one to two orders of magnitude against independent random numbers at
+~100 samples. A path's key is (the pixel's 32-bit seed, the sample index).
 """
 from __future__ import annotations
 
@@ -25,6 +29,7 @@ _S8, _S13, _S16 = _U32(8), _U32(13), _U32(16)
 _C1, _C2 = _U32(0x85EBCA6B), _U32(0xC2B2AE35)
 _INV24 = np.float32(1.0 / (1 << 24))
 _INV32 = 1.0 / 2.0 ** 32
+_REV8 = np.array([int(f"{i:08b}"[::-1], 2) for i in range(256)], np.uint32)
 
 
 def _mix64_scalar(x: int) -> int:
@@ -57,10 +62,38 @@ def _fmix32(x: np.ndarray) -> np.ndarray:
 
 def _to_unit24(x: np.ndarray) -> np.ndarray:
     """Top 24 bits of uint32 words as float32 in [0, 1)."""
-    x >>= _S8
+    x = x >> _S8
     u = x.view(np.int32).astype(np.float32)
     u *= _INV24
     return u
+
+
+def _reverse_bits(x: np.ndarray) -> np.ndarray:
+    x = x.astype(_U32)
+    return ((_REV8[x & _U32(255)] << _U32(24)) | (_REV8[(x >> _U32(8)) & _U32(255)] << _U32(16))
+            | (_REV8[(x >> _U32(16)) & _U32(255)] << _U32(8)) | _REV8[x >> _U32(24)])
+
+
+def _laine_karras(x: np.ndarray, seed: np.ndarray) -> np.ndarray:
+    """Burley's Laine-Karras permutation (uint32 arithmetic wraps, as in C)."""
+    x = x + seed
+    for c in (0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6):
+        x ^= x * _U32(c)
+    return x
+
+
+def _owen_scramble(x: np.ndarray, seed: np.ndarray) -> np.ndarray:
+    return _reverse_bits(_laine_karras(_reverse_bits(x), seed))
+
+
+def _sobol1(index: np.ndarray) -> np.ndarray:
+    """Second Sobol dimension (primitive polynomial x + 1)."""
+    r = np.zeros_like(index, _U32)
+    v = 1 << 31
+    for bit in range(32):
+        r ^= np.where((index >> _U32(bit)) & _U32(1), _U32(v), _U32(0))
+        v ^= v >> 1
+    return r
 
 
 class RandomStream:
@@ -72,45 +105,43 @@ class RandomStream:
         self._k1 = _mix64_scalar(self._k0 + 0xD1B54A32D192ED03)
 
     def path_keys(self, pixel: np.ndarray, sample: np.ndarray) -> np.ndarray:
-        """(2, n) uint32 key words per path; pixel and sample must be in [0, 2**32)."""
-        key = np.asarray(pixel).astype(np.uint64) << _U64(32)
-        key |= np.asarray(sample).astype(np.uint64)
-        key ^= _U64(self._k0)
+        """(2, n) uint32 keys per path: the pixel's seed and the sample index; pixel and
+        sample must be in [0, 2**32)."""
+        key = np.asarray(pixel).astype(np.uint64) ^ _U64(self._k0)
         _mix64(key)
         key += _U64(self._k1)
         _mix64(key)
-        words = key.view(np.uint32).reshape(-1, 2)
-        return np.ascontiguousarray(words.T)
+        seed = (key ^ (key >> _U64(32))).astype(_U32)
+        return np.stack([seed, np.asarray(sample).astype(_U32)])
 
     def _dim_keys(self, dim: int):
         h = _mix64_scalar(self._k1 ^ _mix64_scalar(int(dim) + 0x2545F4914F6CDD1D))
         return _U32(h & _M32), _U32(h >> 32)
 
     def _words(self, keys: np.ndarray, dim: int):
-        """Two mixed uint32 words per key for dimension pair `dim`."""
+        """The two uint32 sample words per key for dimension pair `dim`: a shuffled,
+        Owen-scrambled 2D Sobol point of the pixel's sequence for that pair."""
         ka, kb = self._dim_keys(dim)
-        a = keys[1] ^ ka
-        _fmix32(a)
-        a ^= keys[0]
-        _fmix32(a)                                   # bijective in keys[0] for a fixed keys[1]
-        b = a ^ kb
-        _fmix32(b)
+        seed = _fmix32(_fmix32(keys[0] ^ ka) ^ kb)
+        j = _owen_scramble(keys[1], seed)
+        a = _owen_scramble(_reverse_bits(j), _fmix32(seed ^ _U32(0x9E3779B9)))
+        b = _owen_scramble(_sobol1(j), _fmix32(seed ^ _U32(0x7F4A7C15)))
         return a, b
 
     @property
     def seed_words(self):
-        """The two 64-bit words path_keys mixes (pixel << 32 | sample) with (for the native
-        kernel dacrt.shading.pixel_samples, which computes the same keys)."""
+        """The two 64-bit words path_keys mixes the pixel index with (for the native kernel
+        dacrt.shading.pixel_samples, which computes the same keys)."""
         return self._k0, self._k1
 
     def dim_words(self, dim: int):
-        """The two 32-bit words that key dimension pair `dim` (for the native kernels, which
-        mix them with each path's key exactly as _words does)."""
+        """The two 32-bit words that name dimension pair `dim` (for the native kernels, which
+        turn them into sample words exactly as _words does)."""
         return self._dim_keys(dim)
 
     def uniform2(self, keys: np.ndarray, dim: int):
-        """Two independent float32 uniforms in [0, 1) per key for dimension pair `dim`
-        (the native kernel: one pass instead of a dozen numpy passes; equal to uniform2_numpy)."""
+        """Two float32 uniforms in [0, 1) per key for dimension pair `dim` (the native kernel:
+        one pass instead of a hundred numpy passes; equal to uniform2_numpy)."""
         ka, kb = self._dim_keys(dim)
         return dacrt.shading.uniform2(keys, int(ka), int(kb))
 

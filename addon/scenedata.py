@@ -78,7 +78,8 @@ class Material:
 @dataclass
 class Geometry:
     """All render-visible triangles of the frame, world space, concatenated over instances."""
-    vertices: np.ndarray           # (V,3) float32
+    vertices: np.ndarray           # (V,3) float64 world positions (float32 accepted; the renderer
+                                   # centres the scene before rounding to float32)
     triangles: np.ndarray          # (M,3) int32 indices into vertices
     material: np.ndarray           # (M,) int32 index into SceneData.materials
     normals: np.ndarray            # (M,3,3) float32 shading normal per triangle corner (unit, world)

@@ -15,7 +15,7 @@ class EmissiveTriangles:
     eligible (M,) triangles that may act as lights."""
 
     def __init__(self, geo, area, emission, eligible):
-        lum = emission.mean(axis=0)
+        lum = emission.astype(np.float64).mean(axis=0)      # float32 would overflow near 3e38
         self.index = np.flatnonzero(eligible & (lum > 0) & (area > 0))
         self.power = (area[self.index] * lum[self.index] * 2.0 * np.pi).astype(np.float64)
         self.geo = np.ascontiguousarray(geo[:, self.index])

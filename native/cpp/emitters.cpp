@@ -1,12 +1,28 @@
 // Light samples on emissive triangles (see shading.h): the same arithmetic, in the same order,
 // as the numpy code it replaces (addon/lights/triangles.py), without gathering 15 rows per ray.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 
 #include "parallel.h"
 #include "shading.h"
 
 namespace dacrt {
+
+namespace {
+
+// ULP of a positive normal float (its exponent, 23 binades down), as the add-on's _ulp.
+inline float ulp_of(float x) {
+    uint32_t b;
+    std::memcpy(&b, &x, 4);
+    b = (b & 0x7F800000u) - (23u << 23);
+    float u;
+    std::memcpy(&u, &b, 4);
+    return u;
+}
+
+}  // namespace
 
 size_t sample_triangles(const float* geo, const float* area, size_t M, const int64_t* which, const float* P,
                         const float* u1, const float* u2, size_t n, float* wi, float* dist, float* pdf,
@@ -40,9 +56,17 @@ size_t sample_triangles(const float* geo, const float* area, size_t M, const int
             cos_l = std::fabs(cos_l);
             const bool ok = cos_l > 0 && len > 0;
             const float p = ok ? len * len / (area[w] * cos_l) : 0.0f;
+            // The shadow ray must end in front of the emitter by more than where its end can
+            // drift: a few ULPs of its origin's coordinates and of its length, which can exceed
+            // the emitter's own step (a small emitter seen from afar). 8 ULPs of the larger.
+            float big = len;
+            for (int a = 0; a < 3; ++a) big = std::max(big, std::fabs(P[size_t(a) * n + i]));
+            const float own = std::sqrt(g(12) * g(12) + g(13) * g(13) + g(14) * g(14));
+            const float reach = 8.0f * ulp_of(std::max(big, 0x1p-100f));
+            const float scale = own >= reach || !(own > 0) ? side : side * (reach / own);
             for (int a = 0; a < 3; ++a) {
                 wi[size_t(a) * n + i] = d[a];
-                target[size_t(a) * n + i] = q[a] + g(12 + a) * side;
+                target[size_t(a) * n + i] = q[a] + g(12 + a) * scale;
             }
             dist[i] = len;
             pdf[i] = std::isfinite(p) ? p : 0.0f;

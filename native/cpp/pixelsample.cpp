@@ -1,5 +1,6 @@
 // Camera samples (see shading.h): path keys, filter-distributed raster positions; the native
-// twin of RandomStream.path_keys + PixelFilter.offsets in the add-on (bit-identical, tested).
+// twin of RandomStream.path_keys + uniform2 + PixelFilter.offsets in the add-on (bit-identical,
+// tested).
 #include <algorithm>
 
 #include "parallel.h"
@@ -9,15 +10,6 @@
 namespace dacrt {
 
 namespace {
-
-inline uint64_t mix64(uint64_t x) {  // splitmix64 finaliser
-    x ^= x >> 30;
-    x *= 0xBF58476D1CE4E5B9ull;
-    x ^= x >> 27;
-    x *= 0x94D049BB133111EBull;
-    x ^= x >> 31;
-    return x;
-}
 
 inline float filter_offset(float u, const float* table, size_t size) {
     float x = std::min(std::max(u, 0.0f), 1.0f) * float(size - 1);
@@ -35,13 +27,11 @@ void pixel_samples(const int64_t* pixel, const int64_t* sample, size_t n, int64_
                    float* ry) {
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
-            uint64_t key = (uint64_t(pixel[i]) << 32) | (uint64_t(sample[i]) & 0xFFFFFFFFull);
-            key = mix64(key ^ k0) + k1;
-            key = mix64(key);
-            const uint32_t lo = uint32_t(key), hi = uint32_t(key >> 32);
-            keys[i] = lo;
-            keys[n + i] = hi;
-            const Uniform2 u = uniform2(lo, hi, ka, kb);
+            const uint32_t seed = pixel_seed(uint64_t(pixel[i]), k0, k1);
+            const uint32_t s = uint32_t(sample[i]);
+            keys[i] = seed;
+            keys[n + i] = s;
+            const Uniform2 u = uniform2(seed, s, ka, kb);
             const int64_t x = pixel[i] % width, y = pixel[i] / width;
             float fx = filter_offset(u.u1, table, table_size);
             float fy = filter_offset(u.u2, table, table_size);

@@ -1,13 +1,16 @@
-// Counter-based random numbers of the path tracer, the native twin of addon/sampling.py's
-// RandomStream (bit-identical: tests compare them). A path's key is two 32-bit words; a
-// dimension pair mixes them with two per-dimension words (ka, kb) by murmur3 finalisers.
+// Random numbers of the path tracer, the native twin of addon/sampling.py's RandomStream
+// (bit-identical: tests compare them). Randomised quasi-Monte Carlo as Cycles' default sampler:
+// each dimension pair of a pixel is a 2D Sobol (0,2)-sequence, Owen-scrambled and shuffled by
+// hash (Burley 2020, "Practical Hash-based Owen Scrambling"), so a pixel's first N samples of
+// every pair are stratified in both dimensions at once, independently of the other pairs.
+// A path's key is (pixel seed, sample index); a pair is named by two dimension words (ka, kb).
 #pragma once
 
 #include <cstdint>
 
 namespace dacrt {
 
-inline uint32_t fmix32(uint32_t x) {
+inline uint32_t fmix32(uint32_t x) {  // murmur3 finaliser: a bijection of 32-bit words
     x ^= x >> 16;
     x *= 0x85EBCA6Bu;
     x ^= x >> 13;
@@ -16,25 +19,73 @@ inline uint32_t fmix32(uint32_t x) {
     return x;
 }
 
+inline uint32_t reverse_bits(uint32_t x) {
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+// Laine-Karras permutation as improved by Burley: each bit is flipped by a hash of the bits
+// below it (in bit-reversed order: above it), an Owen scramble of the reversed word.
+inline uint32_t laine_karras(uint32_t x, uint32_t seed) {
+    x += seed;
+    x ^= x * 0x6C50B47Cu;
+    x ^= x * 0xB82F1E52u;
+    x ^= x * 0xC7AFE638u;
+    x ^= x * 0x8D22F6E6u;
+    return x;
+}
+
+inline uint32_t owen_scramble(uint32_t x, uint32_t seed) {
+    return reverse_bits(laine_karras(reverse_bits(x), seed));
+}
+
+// Second Sobol dimension (primitive polynomial x + 1); the first is reverse_bits(index).
+inline uint32_t sobol1(uint32_t index) {
+    uint32_t r = 0;
+    for (uint32_t v = 1u << 31; index; index >>= 1, v ^= v >> 1)
+        if (index & 1) r ^= v;
+    return r;
+}
+
 struct Words {
     uint32_t a, b;
 };
 
-inline Words mix_words(uint32_t k0, uint32_t k1, uint32_t ka, uint32_t kb) {
-    uint32_t a = fmix32(k1 ^ ka);
-    a = fmix32(a ^ k0);
-    return {a, fmix32(a ^ kb)};
+// The two 32-bit sample words of dimension pair (ka, kb) for sample `sample` of the pixel with
+// seed `pixel`.
+inline Words mix_words(uint32_t pixel, uint32_t sample, uint32_t ka, uint32_t kb) {
+    const uint32_t seed = fmix32(fmix32(pixel ^ ka) ^ kb);        // per pixel and pair
+    const uint32_t j = owen_scramble(sample, seed);               // shuffled sample order
+    return {owen_scramble(reverse_bits(j), fmix32(seed ^ 0x9E3779B9u)),
+            owen_scramble(sobol1(j), fmix32(seed ^ 0x7F4A7C15u))};
 }
 
 struct Uniform2 {
     float u1, u2;
 };
 
-// Two uniforms in [0, 1) (24-bit resolution) for key words (k0, k1) and dimension words (ka, kb).
-inline Uniform2 uniform2(uint32_t k0, uint32_t k1, uint32_t ka, uint32_t kb) {
-    const Words w = mix_words(k0, k1, ka, kb);
+// Two uniforms in [0, 1) (24-bit resolution) for key words (pixel, sample), dimension words.
+inline Uniform2 uniform2(uint32_t pixel, uint32_t sample, uint32_t ka, uint32_t kb) {
+    const Words w = mix_words(pixel, sample, ka, kb);
     const float inv24 = 1.0f / float(1 << 24);
     return {float(w.a >> 8) * inv24, float(w.b >> 8) * inv24};
+}
+
+// The 32-bit pixel seed of `pixel` for the 64-bit seed words k0, k1 (splitmix64, folded).
+inline uint32_t pixel_seed(uint64_t pixel, uint64_t k0, uint64_t k1) {
+    auto mix64 = [](uint64_t x) {
+        x ^= x >> 30;
+        x *= 0xBF58476D1CE4E5B9ull;
+        x ^= x >> 27;
+        x *= 0x94D049BB133111EBull;
+        x ^= x >> 31;
+        return x;
+    };
+    const uint64_t key = mix64(mix64(pixel ^ k0) + k1);
+    return uint32_t(key ^ (key >> 32));
 }
 
 }  // namespace dacrt

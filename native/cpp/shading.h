@@ -47,7 +47,7 @@ namespace dacrt {
 // (3 rows, stride n); geo as in surface(), area per triangle of geo. Writes the unit direction
 // wi toward the point, its distance dist, the solid-angle pdf (0 where the point cannot be
 // seen: edge-on or coincident) and target, the point stepped off the emitter toward P (where a
-// shadow ray must end). Returns how many which[i] are not triangles of geo (nothing written).
+// shadow ray must end) by its offset row or, if longer, 8 ULPs of max(|P|, dist). Returns how many which[i] are not triangles of geo (nothing written).
 size_t sample_triangles(const float* geo, const float* area, size_t M, const int64_t* which, const float* P,
                         const float* u1, const float* u2, size_t n, float* wi, float* dist, float* pdf,
                         float* target);
@@ -78,8 +78,8 @@ void accumulate(float* L, size_t N, const int64_t* idx, const float* values, siz
 
 namespace dacrt {
 
-// Camera samples of (pixel, sample) pairs: the path key words (splitmix64 of
-// (pixel << 32 | sample) keyed by k0, k1; rows low, high word, stride n) and the raster position
+// Camera samples of (pixel, sample) pairs: the path keys (rows: the pixel's seed, see
+// random.h pixel_seed, and the sample index; stride n) and the raster position
 // of pixel (x = pixel % width, y = pixel / width) plus a pixel-filter offset per axis, drawn by
 // table lookup (linear interpolation of an inverse CDF of `table_size` entries) from the
 // uniforms of dimension words (ka, kb).

@@ -42,7 +42,7 @@ def geometry(parts) -> sd.Geometry:
         mats.append(np.full(len(t), m, np.int32))
         vis.append(np.full(len(t), bits, np.uint8))
         objs.append(np.full(len(t), i, np.int32))
-    v = np.concatenate(verts).astype(np.float32)
+    v = np.concatenate(verts)        # float64, as the export layer gives it (precision far away)
     t = np.concatenate(tris).astype(np.int32)
     return sd.Geometry(v, t, np.concatenate(mats), flat_normals(v, t), None,
                        np.concatenate(vis), np.concatenate(objs))

@@ -106,27 +106,82 @@ def test_surface_rejects_misses_and_bad_indices():
         shading.surface(geo, None, np.zeros(5, np.float32), None, D)
 
 
+M32 = 0xFFFFFFFF
+
+
 def _fmix32(x):
-    x = x.astype(np.uint64)
-    M = np.uint64(0xFFFFFFFF)
-    x ^= x >> np.uint64(16)
-    x = (x * np.uint64(0x85EBCA6B)) & M
-    x ^= x >> np.uint64(13)
-    x = (x * np.uint64(0xC2B2AE35)) & M
-    x ^= x >> np.uint64(16)
-    return x
+    x ^= x >> 16
+    x = (x * 0x85EBCA6B) & M32
+    x ^= x >> 13
+    x = (x * 0xC2B2AE35) & M32
+    return x ^ (x >> 16)
 
 
-def test_uniform2_is_the_documented_hash():
+def _rev(x):
+    return int(f"{x:032b}"[::-1], 2)
+
+
+def _owen(x, seed):
+    """Burley's nested uniform scramble, written from the paper with Python ints."""
+    x = _rev(x)
+    x = (x + seed) & M32
+    for c in (0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6):
+        x ^= (x * c) & M32
+    return _rev(x)
+
+
+def _sobol1(i):
+    r, v = 0, 1 << 31
+    while i:
+        if i & 1:
+            r ^= v
+        i >>= 1
+        v ^= v >> 1
+    return r
+
+
+def _words(pixel, sample, ka, kb):
+    seed = _fmix32(_fmix32(pixel ^ ka) ^ kb)
+    j = _owen(sample, seed)
+    return _owen(_rev(j), _fmix32(seed ^ 0x9E3779B9)), _owen(_sobol1(j), _fmix32(seed ^ 0x7F4A7C15))
+
+
+def test_uniform2_is_the_documented_owen_scrambled_sobol():
     rng = np.random.default_rng(5)
-    keys = rng.integers(0, 2 ** 32, (2, 100_000), dtype=np.uint64).astype(np.uint32)
+    keys = np.stack([rng.integers(0, 2 ** 32, 3000, dtype=np.uint64).astype(np.uint32),
+                     rng.integers(0, 5000, 3000).astype(np.uint32)])
     ka, kb = 0x12345678, 0x9ABCDEF0
     u1, u2 = shading.uniform2(keys, ka, kb)
-    a = _fmix32(_fmix32(keys[1].astype(np.uint64) ^ np.uint64(ka)) ^ keys[0].astype(np.uint64))
-    b = _fmix32(a ^ np.uint64(kb))
-    np.testing.assert_array_equal(u1, (a >> np.uint64(8)).astype(np.float64) / 2 ** 24)
-    np.testing.assert_array_equal(u2, (b >> np.uint64(8)).astype(np.float64) / 2 ** 24)
-    assert u1.min() >= 0 and u1.max() < 1
+    pick, u = shading.uniform_pick(keys, ka, kb)
+    for i in range(keys.shape[1]):
+        a, b = _words(int(keys[0, i]), int(keys[1, i]), ka, kb)
+        assert (u1[i], u2[i]) == ((a >> 8) / 2 ** 24, (b >> 8) / 2 ** 24)
+        assert (pick[i], u[i]) == (a / 2 ** 32, (b >> 8) / 2 ** 24)
+
+
+@pytest.mark.parametrize("m", [4, 8, 10])
+def test_a_pixels_first_2_to_the_m_samples_are_a_0_m_2_net(m):
+    """Every elementary box of area 2^-m (2^i x 2^(m-i) cells) holds exactly one of a pixel's
+    first 2^m samples of a dimension pair: stratified in both dimensions at once."""
+    n = 1 << m
+    for pixel, (ka, kb) in ((7, (1, 2)), (123456, (99, 1000)), (2 ** 31 + 5, (5, 5))):
+        keys = np.stack([np.full(n, pixel, np.uint32), np.arange(n, dtype=np.uint32)])
+        u1, u2 = shading.uniform2(keys, ka, kb)
+        for i in range(m + 1):
+            cx = (u1 * 2 ** i).astype(np.int64)
+            cy = (u2 * 2 ** (m - i)).astype(np.int64)
+            counts = np.bincount(cx * 2 ** (m - i) + cy, minlength=n)
+            assert (counts == 1).all(), (pixel, i)
+
+
+def test_pixels_and_pairs_get_independent_sequences():
+    n = 4096
+    idx = np.arange(n, dtype=np.uint32)
+    a = shading.uniform2(np.stack([np.full(n, 1, np.uint32), idx]), 3, 4)
+    b = shading.uniform2(np.stack([np.full(n, 2, np.uint32), idx]), 3, 4)      # another pixel
+    c = shading.uniform2(np.stack([np.full(n, 1, np.uint32), idx]), 5, 6)      # another pair
+    for x, y in ((a[0], b[0]), (a[1], b[1]), (a[0], c[0]), (a[0], c[1]), (a[0], a[1])):
+        assert abs(np.corrcoef(x, y)[0, 1]) < 0.06           # ~4 standard errors at n = 4096
 
 
 def test_cosine_scatter_distribution_and_checks():
@@ -171,9 +226,16 @@ def test_sample_triangles_points_and_pdf():
     steep = cos_l > 1e-3                              # near edge-on the float32 cosine is inexact
     np.testing.assert_allclose(pdf[steep], (dist.astype(float) ** 2 / (area[which] * cos_l))[steep], rtol=1e-3)
     assert (pdf > 0).all() and np.isfinite(pdf).all()
-    # target: the point stepped along the normal toward P's side
+    # target: the point stepped along the normal toward P's side, by the triangle's step or
+    # 8 ULPs of max(|P|, dist) if that is longer
     side = np.where(np.einsum("ij,ij->j", g[9:12], wi) <= 0, 1.0, -1.0)
-    np.testing.assert_allclose(target, q + g[12:15] * side, atol=1e-4)
+    own = np.linalg.norm(g[12:15], axis=0)
+    big = np.maximum(np.abs(P).max(axis=0), dist).astype(F32)
+    reach = 8.0 * 2.0 ** (np.floor(np.log2(big)) - 23)
+    step = np.maximum(own, reach)
+    np.testing.assert_allclose(target, q + g[12:15] / own * step * side, atol=1e-4)
+    off = np.einsum("ij,ij->j", (target - q), g[9:12] * side)
+    np.testing.assert_allclose(off, step, atol=2e-6)          # float32 target rounding
     with pytest.raises(ValueError, match="1 entries of which"):
         shading.sample_triangles(geo, area, np.where(np.arange(n) == 5, m, which), P, u1, u2)
 

@@ -93,20 +93,12 @@ def test_energy_never_exceeds_input():
 
 PLACEMENTS = [(1e-4, 0.0), (1e-2, 0.0), (1e2, 0.0), (1e4, 0.0), (1.0, 1e5), (1e2, 1e5),
               (1e4, 1e5)]  # scale, offset
-# Renderer limitation (addon/integrator.py, not the tracer): hit points are computed in float32
-# world space and moved off the surface by 8 ulps of the triangle's largest coordinate along its
-# normal. When a scene spans only ~100 .. 10^4 ulps (size 1 or 100 at 1e5: ulp 2^-7), a hit
-# on a wall next to the floor seam can round to just below the floor, and the step along the
-# wall's normal keeps it there: the bounce ray starts outside the enclosure and the bright
-# world leaks in; in the furnace, the rounding of hit points adds a positive (Jensen) bias to
-# the 1/distance^2 of light sampling. Strict xfail: these cases fail today, and must be
-# promoted to plain tests when the integrator is fixed.
-_RENDERER_PRECISION = pytest.mark.xfail(strict=True, reason=(
-    "integrator: float32 world-space hit points at 1e5 with a scene a few hundred ulps across "
-    "(bias / leaks at the floor seam); see the comment above"))
+# Scenes a few units across at 1e5 (ulp 2^-7) once failed here: hit points in float32 world
+# space rounded across the floor seam (the bright world leaked in) and biased the furnace's
+# 1/distance^2 by 0.7%. The renderer now centres such scenes before rounding to float32
+# (integrator.recentred), so every placement must match the untransformed image.
 SCENES = {"furnace": (furnace, 2, 4.0),
           "box_on_plane": (box_on_plane, 3, sum(0.5 ** k for k in range(5)))}
-KNOWN_BAD = {("furnace", 1.0, 1e5), ("box_on_plane", 1.0, 1e5), ("box_on_plane", 1e2, 1e5)}
 
 
 @lru_cache(maxsize=2)
@@ -117,9 +109,7 @@ def _untransformed(name):
     return _pixels(base)
 
 
-@pytest.mark.parametrize("name,scale,offset", [
-    pytest.param(n, sc, off, marks=[_RENDERER_PRECISION] if (n, sc, off) in KNOWN_BAD else [])
-    for n in SCENES for sc, off in PLACEMENTS])
+@pytest.mark.parametrize("name,scale,offset", [(n, sc, off) for n in SCENES for sc, off in PLACEMENTS])
 def test_same_image_at_every_scale_and_position(name, scale, offset):
     make, K, exact = SCENES[name]
     b = _untransformed(name)

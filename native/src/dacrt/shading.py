@@ -92,7 +92,8 @@ def sample_triangles(geo, area, which, P, u1, u2):
 
     Returns wi (3, n) unit directions toward the sampled points, dist (n,), the solid-angle pdf
     (n,) (0 where the point cannot be seen: edge-on or coincident) and target (3, n), the point
-    stepped off the emitter toward P by its offset row, where a shadow ray must end."""
+    stepped off the emitter toward P, where a shadow ray must end: along the offset row, by its
+    length or, if longer, 8 ULPs of max(|P|, dist) (where a ray from P can drift)."""
     geo = _rows(geo, 15, "geo")
     P = _rows(P, 3, "P")
     return _core.sample_triangles(geo, np.ascontiguousarray(area, _F32), np.ascontiguousarray(which, np.int64), P,
