@@ -10,7 +10,7 @@ at vertices 0..K, and the last BSDF ray only collects emission (reference blende
 
 Also owns the per-frame surface data the loop reads (triangle table, materials and textures,
 self-intersection: every bounce and shadow ray skips the triangle it leaves and starts a few
-ULPs off it, see triangle_offsets) and the tracer scenes, one per distinct ray-visibility subset
+ULPs off it, see _OFFSET_ULPS) and the tracer scenes, one per distinct ray-visibility subset
 (camera rays see VIS_CAMERA triangles, bounce rays VIS_DIFFUSE, shadow rays VIS_SHADOW), built
 in the constructor and dropped when rendering ends. Nothing here knows Blender.
 
@@ -80,31 +80,11 @@ _MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 21, 1 << 16
 # convex folds: 2 ULPs already never re-hit a neighbour; 8 is the margin.) A 2 km plane so gets
 # a 0.5 mm step where the previous 256 ULPs gave 1.5 cm (which biased MIS toward nearby lights).
 _OFFSET_ULPS = F32(8.0)
-_TINY = F32(2.0 ** -100)     # floor keeping _ulp's input a normal float (an all-zero triangle is never hit)
+_TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
 # A shadow ray that must end at an emitter triangle ends at a point pushed off it by the same
 # step, and a little short (dacrt.shading.shadow_rays; the end of a float32 ray drifts by a few
 # ULPs of its length; measured: 2**-17 of the length always sufficed, 2**-18 did not).
 _END_SHORTEN = F32(1.0 - 2.0 ** -16)
-
-
-def _ulp(a: np.ndarray) -> np.ndarray:
-    """ULP of non-negative normal float32 values (their exponent bits, 23 binades down); callers
-    keep the input >= _TINY. Overwrites a."""
-    bits = a.view(np.int32)
-    bits &= np.int32(0x7F800000)
-    bits -= np.int32(23 << 23)
-    return bits.view(F32)
-
-
-def triangle_offsets(corners: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """Per-triangle self-intersection step for points on the front side: corners (M,3,3)
-    float32, unit geometric normals (3,M) -> (3,M) float32, _OFFSET_ULPS ULPs of the triangle's
-    largest |coordinate| along the normal (see the comment above); negate it for the back side."""
-    if not len(corners):
-        return np.zeros((3, 0), F32)
-    mag = np.maximum(np.abs(corners).max(axis=(1, 2)).astype(F32), _TINY)
-    step = normals.astype(F32) * (_ulp(mag) * _OFFSET_ULPS)
-    return step.astype(F32)
 
 
 @dataclass
@@ -138,32 +118,32 @@ class _Triangles:
         self.num_nonfinite = int(np.count_nonzero(bad_t))
         self.vertices = np.ascontiguousarray(v, F32)
         self.indices = np.ascontiguousarray(t, np.int32)
-        v64 = self.vertices.astype(np.float64)
-        p0, p1, p2 = v64[t[:, 0]], v64[t[:, 1]], v64[t[:, 2]]
-        e1, e2 = p1 - p0, p2 - p0
-        cr = np.cross(e1, e2)
-        length = np.linalg.norm(cr, axis=1)
-        with np.errstate(invalid='ignore', divide='ignore'):
-            ng = np.where(length[:, None] > 0, cr / length[:, None], 0.0)
-        self.area = np.where(bad_t, 0.0, 0.5 * length)
-        # self-intersection step off each triangle (front side), at the scale of its coordinates
-        off = triangle_offsets(self.vertices[t], ng.T.astype(F32))
-        # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), offset (12:15)
-        self.geo = np.ascontiguousarray(np.concatenate([p0.T, e1.T, e2.T, ng.T, off]), F32)
+        # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), the
+        # self-intersection step off the front side (12:15, see _OFFSET_ULPS); one native pass
+        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, _OFFSET_ULPS, _TINY)
+        self.area = np.where(bad_t, 0.0, area)
         self.material = np.asarray(geometry.material, np.int32)
         self.visibility = np.where(bad_t, 0, np.asarray(geometry.visibility, np.uint8)).astype(np.uint8)
         normals = np.asarray(geometry.normals, F32)
         # flat shading everywhere (corner normals == geometric normal) needs no interpolation
-        flat = not m or np.abs(normals - ng[:, None, :]).max() < 1e-6
+        flat = not m or bool(np.abs(normals - self.geo[9:12].T[:, None, :]).max() < 1e-6)
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
-        self.normals = None if flat else np.ascontiguousarray(np.concatenate(
-            [normals[:, 0].T, (normals[:, 1] - normals[:, 0]).T, (normals[:, 2] - normals[:, 0]).T]), F32)
-        uvs = geometry.uvs
-        self.uvs = None if uvs is None else np.ascontiguousarray(np.concatenate(
-            [uvs[:, 0].T, (uvs[:, 1] - uvs[:, 0]).T, (uvs[:, 2] - uvs[:, 0]).T]), F32)
+        self.normals = None if flat else _corner_rows(normals)
+        self.uvs = None if geometry.uvs is None else _corner_rows(np.asarray(geometry.uvs, F32))
 
     def __len__(self):
         return len(self.indices)
+
+
+def _corner_rows(per_corner: np.ndarray) -> np.ndarray:
+    """(M, 3, c) per-corner values -> (3c, M) float32 rows: corner 0, corner 1 - corner 0,
+    corner 2 - corner 0 (what barycentric interpolation reads)."""
+    c = per_corner.shape[2]
+    rows = np.empty((3 * c, len(per_corner)), F32)
+    rows[:c] = per_corner[:, 0].T
+    np.subtract(per_corner[:, 1].T, per_corner[:, 0].T, out=rows[c:2 * c])
+    np.subtract(per_corner[:, 2].T, per_corner[:, 0].T, out=rows[2 * c:])
+    return rows
 
 
 def _wrap(i: np.ndarray, size: int, extension: str):

@@ -261,10 +261,31 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
     return py::make_tuple(idx, thr_out, black, rr);
 }
 
+py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
+                            float tiny) {
+    if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
+    if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw py::value_error("triangles must have shape (M, 3)");
+    const size_t V = size_t(vertices.shape(0)), M = size_t(triangles.shape(0));
+    const int32_t* t = triangles.data();
+    for (size_t i = 0; i < 3 * M; ++i)
+        if (t[i] < 0 || size_t(t[i]) >= V)
+            throw py::value_error("triangles[" + std::to_string(i / 3) + "] refers to vertex " + std::to_string(t[i]) +
+                                  " but there are " + std::to_string(V) + " vertices");
+    F32Array geo({py::ssize_t(15), py::ssize_t(M)});
+    py::array_t<double> area{py::ssize_t(M)};
+    {
+        py::gil_scoped_release nogil;
+        triangle_table(vertices.data(), t, M, offset_ulps, tiny, geo.mutable_data(), area.mutable_data());
+    }
+    return py::make_tuple(geo, area);
+}
+
 }  // namespace
 
 void register_shading(py::module_& m) {
     m.def("pack_rays", &pack_rays_py, py::arg("O"), py::arg("D"), py::arg("tfar"), py::arg("out"));
+    m.def("triangle_table", &triangle_table_py, py::arg("vertices"), py::arg("triangles"), py::arg("offset_ulps"),
+          py::arg("tiny"));
     m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"));
     m.def("uniform2", &uniform2_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("uniform_pick", &uniform_pick_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));

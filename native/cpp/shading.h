@@ -16,6 +16,14 @@ namespace dacrt {
 // Ray records from rows O, D (stride n) and tfar; ids 0..n-1.
 void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray* out);
 
+// The per-triangle table surface() reads, for M triangles of float32 vertices: rows v0,
+// v1 - v0, v2 - v0 (differences in double, rounded once), the unit geometric normal (double
+// cross product; 0 for zero area) and the front-side self-intersection step: offset_ulps ULPs of
+// the triangle's largest |coordinate| (at least `tiny`) along that normal. geo: 15 rows of M;
+// area: M doubles. Triangles must index existing vertices (callers check).
+void triangle_table(const float* vertices, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
+                    float* geo, double* area);
+
 // Hit points of rays idx[0..k) (all rays when idx is null): reads hits[i] and column i of D
 // (stride n). geo: 15 rows of M (v0, v1 - v0, v2 - v0, unit geometric normal, front-side
 // self-intersection step); normals: 9 rows of M (corner 0 normal, corner 1 - 0, corner 2 - 0)

@@ -1,12 +1,57 @@
 // Hit-point reconstruction for shading (see shading.h): the same arithmetic, in the same order,
 // as the numpy code it replaces, one pass per ray instead of one per operation.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 
 #include "parallel.h"
 #include "shading.h"
 
 namespace dacrt {
+
+namespace {
+
+inline float ulp_of(float x) {  // positive normal x: 2^(exponent - 23)
+    uint32_t b;
+    std::memcpy(&b, &x, 4);
+    b = (b & 0x7F800000u) - (23u << 23);
+    float u;
+    std::memcpy(&u, &b, 4);
+    return u;
+}
+
+}  // namespace
+
+void triangle_table(const float* vertices, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
+                    float* geo, double* area) {
+    parallel_for(M, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            const float* c[3];
+            for (int k = 0; k < 3; ++k) c[k] = vertices + 3 * size_t(triangles[3 * i + k]);
+            double e1[3], e2[3];
+            float mag = tiny;
+            for (int a = 0; a < 3; ++a) {
+                e1[a] = double(c[1][a]) - double(c[0][a]);
+                e2[a] = double(c[2][a]) - double(c[0][a]);
+                for (int k = 0; k < 3; ++k) mag = std::max(mag, std::fabs(c[k][a]));
+            }
+            const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                 e1[0] * e2[1] - e1[1] * e2[0]};
+            const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            area[i] = 0.5 * len;
+            const float step = ulp_of(mag) * offset_ulps;
+            for (int a = 0; a < 3; ++a) {
+                const float ng = len > 0 ? float(n[a] / len) : 0.0f;
+                geo[size_t(a) * M + i] = c[0][a];
+                geo[size_t(3 + a) * M + i] = float(e1[a]);
+                geo[size_t(6 + a) * M + i] = float(e2[a]);
+                geo[size_t(9 + a) * M + i] = ng;
+                geo[size_t(12 + a) * M + i] = ng * step;
+            }
+        }
+    });
+}
 
 size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits, const int64_t* idx,
                size_t k, const float* D, size_t n, float* out) {

@@ -352,3 +352,27 @@ def test_continue_paths_matches_numpy(roulette, with_thr):
     np.testing.assert_allclose(out, albedo[:, p[idx]] * t[:, idx], rtol=1e-6)
     with pytest.raises(ValueError, match="albedo must have shape"):
         shading.continue_paths(hits, hit, live, albedo[:, :-1])
+
+
+def test_triangle_table_matches_float64():
+    rng = np.random.default_rng(12)
+    v = (rng.normal(size=(500, 3)) * 10.0 ** rng.uniform(-3, 3, (500, 1))).astype(F32)
+    t = rng.integers(0, 500, (2000, 3)).astype(np.int32)
+    t[0] = (3, 3, 7)                                             # zero area
+    geo, area = shading.triangle_table(v, t, 8.0)
+    p = v.astype(np.float64)[t]
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    n = np.cross(e1, e2)
+    length = np.linalg.norm(n, axis=1)
+    np.testing.assert_allclose(area, 0.5 * length, rtol=1e-12)
+    assert area[0] == 0 and not geo[9:15, 0].any()
+    good = length > 0
+    np.testing.assert_array_equal(geo[0:3], v[t[:, 0]].T)
+    np.testing.assert_array_equal(geo[3:6], e1.T.astype(F32))
+    np.testing.assert_array_equal(geo[6:9], e2.T.astype(F32))
+    np.testing.assert_allclose(geo[9:12][:, good], (n[good] / length[good, None]).T, atol=1e-7)
+    mag = np.abs(v[t]).max(axis=(1, 2))
+    ulp = 2.0 ** (np.floor(np.log2(mag)) - 23)
+    np.testing.assert_allclose(np.linalg.norm(geo[12:15], axis=0)[good], 8 * ulp[good], rtol=1e-6)
+    with pytest.raises(ValueError, match="refers to vertex 500"):
+        shading.triangle_table(v, np.array([[0, 1, 500]]), 8.0)

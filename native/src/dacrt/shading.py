@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
+__all__ = ["triangle_table", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
            "accumulate"]
 
 _F32 = np.float32
@@ -38,6 +38,17 @@ def pack_rays(O, D, tfar, out: np.ndarray | None = None) -> np.ndarray:
         raise ValueError(f"out must be an ({n},) RAY_DTYPE array, got {out.dtype} {out.shape}")
     _core.pack_rays(O, D, tfar, out)
     return out
+
+
+def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100):
+    """The (15, M) float32 table surface() and sample_triangles() read, and the areas (M,)
+    float64, of triangles (M, 3) of vertices (V, 3): rows v0, v1 - v0, v2 - v0 (differences
+    in double, rounded once), the unit geometric normal (0 for zero area) and the front-side
+    self-intersection step, offset_ulps ULPs of the triangle's largest |coordinate| (at least
+    tiny) along the normal."""
+    v = np.ascontiguousarray(vertices, _F32)
+    t = np.ascontiguousarray(triangles, np.int32)
+    return _core.triangle_table(v, t, float(offset_ulps), float(tiny))
 
 
 def surface(geo, normals, hits, idx, D):
