@@ -52,8 +52,9 @@ def native_module():
 
 def last_render_stats() -> dict:
     """Statistics of the latest DACRT render, per view layer name (the Integrator's stats:
-    rays, timings, trace share, samples, and 'skipped': the objects, materials, triangles,
-    lights, shadow and bounce rays and samples the render did not need). Empty before any."""
+    rays, timings (export, setup, trace and the tracer's filter / partition / leaf phases,
+    Python), trace share, samples, and 'skipped': the objects, materials, triangles, lights,
+    shadow and bounce rays and samples the render did not need). Empty before any."""
     from . import engine
     return {layer: dict(stats) for layer, stats in engine.LAST_RENDER_STATS.items()}
 

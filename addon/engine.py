@@ -83,6 +83,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         t0 = time.perf_counter()
         self.update_stats("", "DACRT | Exporting scene")
         scene_data = export.export_scene(depsgraph, check_break=self.cancel_requested)
+        self._export_seconds = time.perf_counter() - t0
         self._report_messages(scene_data.messages)
         if self.cancel_requested():
             return
@@ -170,7 +171,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             self.report({level if level in ('INFO', 'WARNING', 'ERROR') else 'INFO'}, f"DACRT: {text}")
 
     def _report_summary(self, integ, scene_data, layer):
-        s = integ.stats or {}
+        s = dict(integ.stats or {}, export_seconds=getattr(self, '_export_seconds', 0.0))
         LAST_RENDER_STATS[layer] = s
         parts = [f"{len(scene_data.geometry.triangles)} triangles",
                  f"{len(scene_data.lights)} lights"]

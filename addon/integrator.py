@@ -334,6 +334,7 @@ class Integrator:
         self._tris_nonfinite = self.tri.num_nonfinite
         self._pixels_converged = 0
         self._trace_seconds = 0.0
+        self._phases = dict(filter=0.0, partition=0.0, leaf=0.0)
         self._render_seconds = 0.0
         self._paths_done = 0
         self._samples_done = 0
@@ -422,6 +423,11 @@ class Integrator:
             'render_seconds': render,
             'total_seconds': self._setup_seconds + render,
             'trace_share': self._trace_seconds / render if render > 0 else 0.0,
+            # the tracer's phases in thread-seconds (summed over its threads, so with 2 threads
+            # they can add up to twice trace_seconds)
+            'filter_seconds': self._phases['filter'],
+            'partition_seconds': self._phases['partition'],
+            'leaf_seconds': self._phases['leaf'],
             'setup_seconds': self._setup_seconds,
             'scene_build_seconds': self._build_seconds,
             'tracer_scenes': self._num_scenes,
@@ -545,12 +551,18 @@ class Integrator:
         t0 = time.perf_counter()
         hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip)
         self._trace_seconds += time.perf_counter() - t0
+        self._add_phases(self._scenes[kind].last_stats)
         self._rays['camera' if kind == 'camera' else 'bounce'] += O.shape[1]
         sub = self._maps[kind]
         if sub is not None and len(sub):
             prim = hits['prim']
             hits['prim'] = np.where(prim >= 0, np.take(sub, np.maximum(prim, 0)), -1)
         return hits
+
+    def _add_phases(self, native_stats):
+        """Sum the tracer's per-phase thread-seconds (filtering, partitioning, leaf tests)."""
+        for phase in self._phases:
+            self._phases[phase] += native_stats.get(f'{phase}_seconds', 0.0)
 
     def _occluded(self, O, D, tfar, skip=None):
         return self._occluded_rays(self._ray_array(O, D, tfar), skip)
@@ -560,6 +572,7 @@ class Integrator:
         t0 = time.perf_counter()
         occ = self._scenes['shadow'].occluded(rays, threads=self.threads, skip=skip)
         self._trace_seconds += time.perf_counter() - t0
+        self._add_phases(self._scenes['shadow'].last_stats)
         self._rays['shadow'] += len(rays)
         return occ
 

@@ -256,5 +256,7 @@ def test_adaptive_sampling_and_skip_stats_for_scripts(scene, capfd):
     assert stats['samples_done'] == 200 and stats['adaptive_min_samples'] == 64
     assert stats['samples_skipped'] == 24 * 16 * (200 - 80) == stats['skipped']['samples']
     assert stats['skipped']['objects'] == 1
+    assert stats['export_seconds'] > 0 and stats['trace_seconds'] > 0
+    assert 0 < stats['filter_seconds'] + stats['partition_seconds'] + stats['leaf_seconds']
     out = capfd.readouterr().out
     assert "skipped 1 objects" in out and "samples" in out

@@ -8,8 +8,8 @@ modules' attributes:
   (setup, tracer scene creation, trace seconds, Python seconds = ray generation + shading);
 - addon.integrator.dacrt.Scene: every tracer call's `last_stats`, summed (native per-phase
   thread-seconds: filter_seconds, partition_seconds, leaf_seconds; rays; tests).
-Nothing in the add-on changes; the wrappers only observe. The add-on could expose the same
-figures itself (a per-render stats dict for scripts, issue 6); until then this is the source.
+Nothing in the add-on changes; the wrappers only observe, so this is a measurement independent
+of the add-on's own accounting (addon.last_render_stats() reports the same figures from inside).
 
 Peak memory: the kernel's resident-set high-water mark (VmHWM) reset just before the render
 (/proc/self/clear_refs, "5"), so the figure is the process's peak during this render alone.
