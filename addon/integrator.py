@@ -341,6 +341,7 @@ class Integrator:
         self._passes = 0
         t_build = time.perf_counter()
         self._build_scenes()
+        self._weight_lights()
         self._build_seconds = time.perf_counter() - t_build
         self._setup_seconds = time.perf_counter() - t_start
 
@@ -365,9 +366,37 @@ class Integrator:
                                           f"nor diffuse rays can see: {', '.join(self.lights.unseen_lamps)}"))
         self._lamps_for_camera = bool(self.lights.num_lamps or self.lights.camera_lamps)
         self._lamp_mis = np.array([l.seen_by_bsdf for l in self.lights.lamps], bool)
+        self._selection_table()
+
+    def _selection_table(self):
+        """Selection probability per light entry (lamps, then emissive triangles)."""
         tri_entries = self.lights.tri_prob[self.lights.triangles.index] if self.lights.triangles is not None \
             else np.zeros(0, F32)
         self._entry_prob = np.concatenate([self.lights.lamp_prob, tri_entries]).astype(F32)
+
+    def _weight_lights(self, probes: int = 32):
+        """Let the light choice follow what each light delivers where the camera looks: a
+        probes x probes grid of camera rays (jittered by the seed) finds visible points, where
+        LightSet.reweight estimates every light group's unoccluded irradiance."""
+        if self.lights.num_entries < 2 or not len(self.tri):
+            return
+        x0, y0, x1, y1 = self.camera.region
+        rng = np.random.default_rng([int(self.settings.seed), 0x11847])
+        g = (np.arange(probes) + 0.5) / probes
+        rx = (x0 + (x1 - x0) * (g[None, :] + (rng.random((probes, probes)) - 0.5) / probes)).ravel()
+        ry = (y0 + (y1 - y0) * (g[:, None] + (rng.random((probes, probes)) - 0.5) / probes)).ravel()
+        O, D, tmax = self.camera.rays(rx.astype(F32), ry.astype(F32))
+        rays = dacrt.shading.pack_rays(O, D, tmax)
+        hits = self._scenes['camera'].intersect(rays, threads=self.threads)
+        sub = self._maps['camera']
+        if sub is not None and len(sub):
+            hits['prim'] = np.where(hits['prim'] >= 0, np.take(sub, np.maximum(hits['prim'], 0)), -1)
+        idx = np.flatnonzero(hits['prim'] >= 0)
+        if not len(idx):
+            return
+        _, _, ns, P_off = self._surface(hits, idx, D)
+        self.lights.reweight(P_off, ns, rng)
+        self._selection_table()
 
     def _build_scenes(self):
         """One tracer scene per distinct visibility subset that some ray kind needs."""

@@ -286,3 +286,32 @@ def test_light_without_diffuse_visibility_lights_nothing():
     unseen = lit([light('AREA', 100.0, translation(z=1.0), name='Ghost', visible_camera=False, **kw)], samples=4)
     assert unseen.film.combined()[..., 0].max() == 0.0
     assert any('Ghost' in text for _, text in unseen.messages)
+
+
+# --- choosing a light per shading point ---------------------------------------------------------
+
+def test_light_choice_follows_what_each_light_delivers():
+    """A bright sun and a dim world over a plane: the sun delivers ~95% of the irradiance, so
+    it gets most light samples (80% by estimate + its 10% uniform share), the world keeps its
+    uniform share; the probabilities stay a distribution and the image stays unbiased."""
+    from addon.integrator import Integrator
+    sun = light('SUN', 3.0, np.eye(4))
+    scene = plane_scene([sun], world=(0.05, 0.05, 0.05), samples=64, max_bounces=0)
+    integ = Integrator(scene)
+    p = integ.lights.lamp_prob
+    assert p.sum() == pytest.approx(1.0) and integ.lights.cdf[-1] == 1.0
+    # sun irradiance 3 (normal incidence) against the world's pi x 0.05 = 0.157
+    assert p[0] == pytest.approx(0.8 * 3 / (3 + np.pi * 0.05) + 0.1, abs=0.01)
+    assert p[1] >= 0.1
+    mean, err = pixel_stats(render(scene))
+    expected = 0.8 / np.pi * (3.0 + np.pi * 0.05)          # albedo/pi x irradiance
+    assert abs(mean - expected) < 4 * err + 1e-4 * expected
+
+
+def test_light_choice_keeps_uniform_shares_without_visible_surfaces():
+    """No camera ray lands on anything: nothing to estimate from, the default split stays."""
+    from addon.integrator import Integrator
+    scene = plane_scene([light('SUN', 3.0, np.eye(4))], world=(0.05, 0.05, 0.05), samples=4)
+    scene.camera.matrix[:3, 3] = (0.0, 0.0, -5.0)              # under the plane, looking down
+    integ = Integrator(scene)
+    np.testing.assert_allclose(integ.lights.lamp_prob, [0.5, 0.5])

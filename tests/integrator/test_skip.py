@@ -39,7 +39,9 @@ def test_light_samples_that_cannot_contribute_cast_no_shadow_ray(monkeypatch):
     scene = plane_scene(lights, samples=16, max_bounces=0)
     fast, slow = _both(scene, monkeypatch)
     assert np.array_equal(fast.film.combined(), slow.film.combined())
-    assert fast.stats['skipped']['shadow_rays'] > 0.4 * slow.stats['rays']['shadow']
+    # (the light choice favours the spot, which delivers; the point below still gets its
+    # uniform share of samples, none of which can contribute)
+    assert fast.stats['skipped']['shadow_rays'] > 0.05 * slow.stats['rays']['shadow']
     assert fast.stats['rays']['shadow'] + fast.stats['skipped']['shadow_rays'] == slow.stats['rays']['shadow']
 
 
