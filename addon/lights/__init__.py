@@ -4,13 +4,14 @@ Owns the translation of SceneData lights, the world and emissive triangles into 
 (one light type per module, like Cycles' kernel/light/), and the discrete distribution that
 picks one of them per shading point. By default every lamp (the world counts as one) is equally
 likely, emissive triangles are chosen by power (area x mean radiance), and when both exist
-each group gets half. `reweight` then replaces the split between the groups (each lamp, all
-emissive triangles) by their estimated unoccluded irradiance at points the camera sees, mixed
-with 20% of the uniform split: a global stand-in for Cycles' light tree that stops a dim world
-taking half the samples from a sun or an area light (the variance that put DACRT 5-7x behind
-Cycles on such scenes). Each lamp's estimate comes from its own sample(), so lamps in different
-units are compared in what they deliver. The selection probability of every light is known,
-so a BSDF ray that meets a light can be weighted against light sampling (MIS).
+each group gets half. `reweight` then tilts the split between the groups (each lamp, all
+emissive triangles) toward the lights BSDF sampling finds badly from points the camera sees:
+small lights over wide ones (the world), mixed with 20% of the uniform split. Under MIS the
+cosine-weighted bounces already sample a sky well; giving it half the light samples put DACRT
+3-7x behind Cycles on sun + sky and area light + world scenes. (Weighting by estimated
+irradiance was tried and dropped: it is global, and starved a spot light where it is the main
+light.) The selection probability of every light is known, so a BSDF ray that meets a light
+can be weighted against light sampling (MIS).
 Lamps with diffuse ray visibility off take no part in that choice (camera rays may see them).
 """
 from __future__ import annotations
@@ -89,35 +90,37 @@ class LightSet:
         return self.num_entries > 0
 
     def reweight(self, P: np.ndarray, N: np.ndarray, rng: np.random.Generator, uniform_mix: float = 0.2):
-        """Split the selection between the groups by their estimated unoccluded irradiance
-        at the points P with unit normals N ((3, n) float32, e.g. where camera rays land),
-        mixed with uniform_mix of the uniform split (every group keeps a share wherever the
-        estimate is off: occlusion, lights that matter only locally)."""
+        """Split the selection between the groups by how badly BSDF sampling would find each
+        group from the points P ((3, n) float32, e.g. where camera rays land): a sample's
+        weight is 1 - (the light's solid angle) / 2 pi, the solid angle taken as 1 / pdf (0
+        for delta lights). Under MIS a light as wide as the sky (the world) is found well by
+        the cosine-weighted bounces, so light samples are better spent on small lights. Mixed
+        with uniform_mix of the uniform split, so every group keeps a share. N is unused by
+        this measure and kept for callers that estimate differently."""
         groups = self.num_lamps + (self.triangles is not None)
         n = P.shape[1]
         if groups < 2 or n == 0:
             return
         u1, u2 = rng.random((2, n), np.float32)
-        energy = []
-        for lamp in self.lamps:
-            ls = lamp.sample(P, u1, u2)
-            energy.append(self._irradiance(ls.value, ls.wi, N))
+        narrow = [self._narrowness(lamp.sample(P, u1, u2).pdf) for lamp in self.lamps]
         if self.triangles is not None:
             power = self.triangles.power / self.triangles.power.sum()
             which = np.minimum(np.searchsorted(np.cumsum(power), rng.random(n)), len(power) - 1)
-            ls = self.triangles.sample(P, which, u1, u2)
-            energy.append(self._irradiance(ls.value / power[which].astype(F32), ls.wi, N))
-        e = np.nan_to_num(np.asarray(energy, np.float64), nan=0.0, posinf=0.0)
-        if not e.sum() > 0:
+            narrow.append(self._narrowness(self.triangles.sample(P, which, u1, u2).pdf))
+        w = np.asarray(narrow, np.float64)
+        if not w.sum() > 0:
             return
-        self._set_groups((1.0 - uniform_mix) * e / e.sum() + uniform_mix / groups)
+        self._set_groups((1.0 - uniform_mix) * w / w.sum() + uniform_mix / groups)
 
     @staticmethod
-    def _irradiance(value, wi, N):
-        """Mean over points of the mean RGB of value x cos (value = radiance / pdf)."""
-        cos = np.maximum(np.einsum('ij,ij->j', wi, N), 0.0)
-        with np.errstate(invalid='ignore', over='ignore'):
-            return float(np.mean(np.nan_to_num(value.astype(np.float64).mean(axis=0) * cos, nan=0.0)))
+    def _narrowness(pdf) -> float:
+        """Mean over the samples that reach a point of 1 - 1 / (2 pi pdf), clipped to [0, 1]."""
+        pdf = np.asarray(pdf, np.float64)
+        valid = pdf > 0
+        if not valid.any():
+            return 0.0
+        with np.errstate(divide='ignore'):
+            return float(np.clip(1.0 - 1.0 / (2.0 * np.pi * pdf[valid]), 0.0, 1.0).mean())
 
     @property
     def seen_by_bsdf(self) -> bool:
