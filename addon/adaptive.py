@@ -37,17 +37,29 @@ class AdaptiveSampling:
             self.min_samples = max(4, int(min_samples))
         self.threshold = threshold * 5.0       # Cycles' scale factor on the user's threshold
 
-    def need_filter(self, sample: int) -> bool:
-        """After 0-based sample index `sample`, are pixels checked?"""
-        return sample > self.min_samples and (sample & (STEP - 1)) == STEP - 1
+    def need_filter(self, sample: int, step: int = STEP) -> bool:
+        """After 0-based sample index `sample`, are pixels checked? (step: a power of two,
+        multiple of STEP, between checks)"""
+        return sample > self.min_samples and (sample & (step - 1)) == step - 1
 
-    def align(self, start: int, count: int) -> int:
+    def align(self, start: int, count: int, step: int = STEP) -> int:
         """How many of `count` samples from `start` to take before the next check."""
-        first = (self.min_samples + 1) | (STEP - 1)
+        first = (self.min_samples + 1) | (step - 1)
         if start + count <= first:
             return count
-        nxt = max(first, start | (STEP - 1))
+        nxt = max(first, start | (step - 1))
         return min(nxt - start + 1, count)
+
+    @staticmethod
+    def step_for(active_pixels: int, min_batch: int) -> int:
+        """Samples between checks: Cycles' 16, doubled until a block of the still-sampling
+        pixels holds min_batch paths. The tracer's cost per ray grows as batches shrink (each
+        batch partitions the scene anew), so checking every 16 samples of a few thousand pixels
+        cost more than the samples it saved (measured: 100K-triangle scene, 256 spp)."""
+        step = STEP
+        while active_pixels * step < min_batch and step < (1 << 20):
+            step *= 2
+        return step
 
     def keep_sampling(self, film, pixels: np.ndarray) -> np.ndarray:
         """Bool per film pixel index in `pixels`: still noisy, or next to a noisy pixel."""

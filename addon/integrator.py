@@ -67,6 +67,9 @@ SKIP_WORK = True
 # keeping batches large enough for the tracer.
 _TARGET_PASS_SECONDS = 0.8
 _MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 21, 1 << 16
+# Adaptive sampling checks pixels every 16 samples (Cycles), less often once so few pixels are
+# left that a block between two checks would hold fewer paths than this (AdaptiveSampling.step_for).
+_ADAPTIVE_MIN_BATCH = 1 << 19
 
 # Self-intersection (reference dacrt-anchors.md section 4). As Cycles, a bounce or shadow ray
 # never hits the triangle it leaves: the tracer skips it (`skip`, by ray id). What skip cannot
@@ -515,10 +518,12 @@ class Integrator:
             while sample < self.samples and len(film_pix):
                 t0 = time.perf_counter()
                 nact = len(film_pix)
+                if adaptive is not None:
+                    interval = adaptive.step_for(nact, _ADAPTIVE_MIN_BATCH)
                 if offset == 0 and target >= nact:
                     ns = int(min(max(target // nact, 1), self.samples - sample))
                     if adaptive is not None:
-                        ns = adaptive.align(sample, ns)
+                        ns = adaptive.align(sample, ns, interval)
                     self._render_block(film_pix, frame_pix, sample, ns)
                     step = nact * ns
                     sample += ns
@@ -530,7 +535,7 @@ class Integrator:
                     sample += offset == 0
                 self._paths_done += step
                 if adaptive is not None and offset == 0 and sample < self.samples \
-                        and adaptive.need_filter(sample - 1):
+                        and adaptive.need_filter(sample - 1, interval):
                     keep = adaptive.keep_sampling(self.film, film_pix)
                     if not keep.all():
                         stopped = int(nact - np.count_nonzero(keep))

@@ -244,7 +244,9 @@ def test_cli_renders_a_blend_file_and_explains_failures(scene, tmp_path):
     assert missing.returncode != 0 and "no such .blend file" in missing.stderr
 
 
-def test_adaptive_sampling_and_skip_stats_for_scripts(scene, capfd):
+def test_adaptive_sampling_and_skip_stats_for_scripts(scene, capfd, monkeypatch):
+    import addon.integrator
+    monkeypatch.setattr(addon.integrator, '_ADAPTIVE_MIN_BATCH', 0)   # a tiny image: Cycles' cadence
     lit_plane_scene(scene, size=(24, 16))
     scenes.plane("Hidden", location=(0, 0, 1)).hide_render = True
     scene.dacrt.samples = 200

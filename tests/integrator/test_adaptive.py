@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+import addon.integrator as integrator_module
 from addon.adaptive import STEP, AdaptiveSampling
 from addon.integrator import Integrator
 
@@ -46,12 +47,34 @@ def test_align_stops_exactly_at_the_checks(min_samples):
         assert landed == checks
 
 
+@pytest.fixture
+def cycles_cadence(monkeypatch):
+    """Checks every 16 samples however few pixels are left (these images are tiny)."""
+    monkeypatch.setattr(integrator_module, '_ADAPTIVE_MIN_BATCH', 0)
+
+
+def test_checks_spread_out_when_few_pixels_remain():
+    assert AdaptiveSampling.step_for(100_000, 1 << 19) == 16
+    assert AdaptiveSampling.step_for(20_000, 1 << 19) == 32
+    assert AdaptiveSampling.step_for(1000, 1 << 19) == 1024
+    assert AdaptiveSampling.step_for(5, 0) == 16
+    a = AdaptiveSampling(4096, 0.01, 64)
+    assert [s for s in range(400) if a.need_filter(s, 64)] == [127, 191, 255, 319, 383]
+    assert a.align(80, 1000, 64) == 48 and a.align(128, 1000, 64) == 64
+
+
+def test_large_check_interval_keeps_stops_on_its_grid():
+    integ = render(_scene(True, samples=512))            # 1,200 pixels: checks 512 apart
+    counts = integ.film.sample_counts()
+    assert (counts == 512).all() and integ.stats['samples_skipped'] == 0
+
+
 def _scene(adaptive, samples=256, threshold=0.05, min_samples=0, **kw):
     return cornell_box(40, 30, samples, 3, area_light=True, use_adaptive_sampling=adaptive,
                        adaptive_threshold=threshold, adaptive_min_samples=min_samples, **kw)
 
 
-def test_converged_pixels_stop_and_the_image_stays_within_noise():
+def test_converged_pixels_stop_and_the_image_stays_within_noise(cycles_cadence):
     full = render(_scene(False))
     fast = render(_scene(True))
     counts = fast.film.sample_counts()
@@ -77,7 +100,7 @@ def test_converged_pixels_stop_and_the_image_stays_within_noise():
     assert np.percentile(err, 99) < 5 * a.threshold
 
 
-def test_flat_regions_stop_at_the_first_check():
+def test_flat_regions_stop_at_the_first_check(cycles_cadence):
     # a plane under a sun with angle 0: every sample of a pixel has the same value
     scene = plane_scene([light('SUN', 3.0, np.eye(4))], samples=512, max_bounces=0,
                         use_adaptive_sampling=True, adaptive_threshold=0.01)
@@ -89,7 +112,7 @@ def test_flat_regions_stop_at_the_first_check():
     assert integ.stats['samples_done'] == 512           # every pixel has finished
 
 
-def test_adaptive_images_do_not_depend_on_blocking():
+def test_adaptive_images_do_not_depend_on_blocking(cycles_cadence):
     a = Integrator(_scene(True, samples=160), paths_per_pass=997)
     for _ in a.passes():
         pass
@@ -98,7 +121,7 @@ def test_adaptive_images_do_not_depend_on_blocking():
     assert np.array_equal(a.film.sample_counts(), b.film.sample_counts())
 
 
-def test_fewer_samples_than_the_minimum_is_plain_sampling():
+def test_fewer_samples_than_the_minimum_is_plain_sampling(cycles_cadence):
     integ = render(_scene(True, samples=20))
     assert (integ.film.sample_counts() == 20).all() and integ.stats['samples_skipped'] == 0
 
