@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import animation, compare, errortime, partition, robustness, scaling, tracer
+from . import animation, compare, errortime, partition, robustness, scaling, skips, tracer
 
 BENCHMARKS = {
     "tracer": (tracer, "DACRT vs Embree Mrays/s on camera, diffuse-bounce and shadow rays"),
@@ -21,6 +21,8 @@ BENCHMARKS = {
                          "(64K-16M)"),
     "partition": (partition, "adaptive partitioning: median vs SAH vs adaptive at several "
                              "ray/triangle ratios"),
+    "skips": (skips, "the work the renderer skips (shadow and bounce rays that cannot change the "
+                     "image) and the time it saves, against SKIP_WORK = False"),
     "compare": (compare, "one scene rendered by DACRT and Cycles: side-by-side, difference, "
                          "times, error (also `python3 build.py compare`)"),
 }

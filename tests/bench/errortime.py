@@ -11,7 +11,8 @@ relMSE against a high-sample Cycles reference (the mean of --ref-seeds renders o
 by scene source, settings, seeds and bpy version.
 
 When the add-on has adaptive sampling (scene.dacrt.use_adaptive_sampling), a third series
-"DACRT adaptive" renders with it on at the same sample counts (its maximum).
+"DACRT adaptive" renders with it on at the same sample counts (its maximum; automatic
+threshold 1/samples, minimum a quarter of the maximum: renderscenes.ADAPTIVE_*).
 
 Each engine renders in its own bpy worker process (renderworker.py). Outputs: a terminal
 table (seconds, relMSE, efficiency 1/(relMSE x s) per point; time-to-equal-error ratios),
@@ -50,8 +51,9 @@ def add_arguments(p) -> None:
     p.add_argument("--scenes", nargs="*", default=None, metavar="NAME",
                    help=f"built-in scenes ({', '.join(BUILTIN)}; default all; "
                         f"`--scenes` alone: none, only the .blend files)")
-    p.add_argument("--samples", nargs="+", type=int, default=[4, 16, 64], metavar="SPP",
-                   help="sample counts of the sweep (default 4 16 64)")
+    p.add_argument("--samples", nargs="+", type=int, default=[4, 16, 64, 256], metavar="SPP",
+                   help="sample counts of the sweep (default 4 16 64 256; adaptive sampling "
+                        "has room to act from 64)")
     p.add_argument("--seeds", type=int, default=3, help="seeds per point (default 3)")
     p.add_argument("--ref-samples", type=int, default=1024,
                    help="samples per Cycles reference render (default 1024)")
