@@ -270,7 +270,6 @@ def setup(build_native: bool = True) -> str:
 
 SAN_DIR = BUILD / "sanitize"
 SAN_SITE = SAN_DIR / "site"
-SAN_STAMP = SAN_DIR / "stamp.sha256"
 
 
 def sanitizer_preload() -> str:
@@ -289,28 +288,41 @@ def sanitizer_preload() -> str:
     return " ".join(paths)
 
 
+def build_native_variant(root: Path, option: str, label: str, digest: str, check=None) -> Path:
+    """Build dacrt with the CMake option `option`=ON into root/site (CMake tree root/cmake)
+    unless root/stamp.sha256 already holds `digest`; check(site) may refuse the result with a
+    SetupError before the stamp is written. Returns root/site."""
+    site, stamp = root / "site", root / "stamp.sha256"
+    if not (stamp.exists() and stamp.read_text().strip() == digest):
+        say(f"building the {label} native tracer ({option}=ON) ...")
+        t0 = time.time()
+        run_logged([str(VPY), "-m", "pip", "install", "--no-deps", "--no-build-isolation",
+                    "--upgrade", "--target", str(site),
+                    *native_config_settings(root / "cmake", {option: "ON"}), str(NATIVE)],
+                   f"native-{root.name}.log", f"building native/ with {option}=ON")
+        if check is not None:
+            check(site)
+        stamp.write_text(digest + "\n")
+        say(f"{label} build done ({time.time() - t0:.0f} s)")
+    return site
+
+
+def _check_links_asan(site: Path) -> None:
+    modules = [p for p in site.rglob("*.so")]
+    linked = any("libasan" in subprocess.run(["ldd", str(p)], capture_output=True,
+                                             text=True).stdout for p in modules)
+    if not linked:
+        raise SetupError("native/ was built with -C cmake.define.DACRT_SANITIZE=ON but the "
+                         f"module in {site} does not link libasan: native/CMakeLists.txt "
+                         "does not implement the DACRT_SANITIZE option yet.")
+
+
 def ensure_sanitized_native(req_digest: str) -> dict:
     """Build dacrt with -fsanitize=address,undefined (CMake option DACRT_SANITIZE=ON) into
     build/sanitize/site and return the environment that runs Python with it."""
     preload = sanitizer_preload()
-    digest = native_sources_hash("sanitize|" + req_digest)
-    if not (SAN_STAMP.exists() and SAN_STAMP.read_text().strip() == digest):
-        say("building the sanitized native tracer (ASan+UBSan) ...")
-        t0 = time.time()
-        run_logged([str(VPY), "-m", "pip", "install", "--no-deps", "--no-build-isolation",
-                    "--upgrade", "--target", str(SAN_SITE),
-                    *native_config_settings(SAN_DIR / "cmake", {"DACRT_SANITIZE": "ON"}),
-                    str(NATIVE)],
-                   "native-sanitize.log", "building native/ with DACRT_SANITIZE=ON")
-        modules = [p for p in SAN_SITE.rglob("*.so")]
-        linked = any("libasan" in subprocess.run(["ldd", str(p)], capture_output=True,
-                                                 text=True).stdout for p in modules)
-        if not linked:
-            raise SetupError("native/ was built with -C cmake.define.DACRT_SANITIZE=ON but the "
-                             f"module in {SAN_SITE} does not link libasan: native/CMakeLists.txt "
-                             "does not implement the DACRT_SANITIZE option yet.")
-        SAN_STAMP.write_text(digest + "\n")
-        say(f"sanitized build done ({time.time() - t0:.0f} s)")
+    build_native_variant(SAN_DIR, "DACRT_SANITIZE", "sanitized (ASan+UBSan)",
+                         native_sources_hash("sanitize|" + req_digest), _check_links_asan)
     env = dict(os.environ)
     env["PYTHONPATH"] = str(SAN_SITE) + (os.pathsep + env["PYTHONPATH"]
                                          if env.get("PYTHONPATH") else "")
@@ -329,26 +341,14 @@ def ensure_sanitized_native(req_digest: str) -> dict:
 # Non-robust build (CMake option DACRT_NONROBUST=ON: no box padding, no double-precision lanes)
 # into build/nonrobust/site, used only by `bench robustness` to measure what robustness costs.
 NONROBUST_DIR = BUILD / "nonrobust"
-NONROBUST_SITE = NONROBUST_DIR / "site"
-NONROBUST_STAMP = NONROBUST_DIR / "stamp.sha256"
 
 
 def ensure_nonrobust_native() -> Path:
     """Build dacrt with DACRT_NONROBUST=ON into build/nonrobust/site when native/ changed;
     returns that directory (it holds a `dacrt` package). Call it holding SetupLock, after
     setup()."""
-    digest = native_sources_hash("nonrobust|" + requirements_hash())
-    if not (NONROBUST_STAMP.exists() and NONROBUST_STAMP.read_text().strip() == digest):
-        say("building the non-robust native tracer (DACRT_NONROBUST=ON) ...")
-        t0 = time.time()
-        run_logged([str(VPY), "-m", "pip", "install", "--no-deps", "--no-build-isolation",
-                    "--upgrade", "--target", str(NONROBUST_SITE),
-                    *native_config_settings(NONROBUST_DIR / "cmake", {"DACRT_NONROBUST": "ON"}),
-                    str(NATIVE)],
-                   "native-nonrobust.log", "building native/ with DACRT_NONROBUST=ON")
-        NONROBUST_STAMP.write_text(digest + "\n")
-        say(f"non-robust build done ({time.time() - t0:.0f} s)")
-    return NONROBUST_SITE
+    return build_native_variant(NONROBUST_DIR, "DACRT_NONROBUST", "non-robust",
+                                native_sources_hash("nonrobust|" + requirements_hash()))
 
 
 # ---------------------------------------------------------------------------------------------

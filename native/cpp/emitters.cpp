@@ -3,26 +3,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstring>
 
 #include "parallel.h"
 #include "shading.h"
 
 namespace dacrt {
-
-namespace {
-
-// ULP of a positive normal float (its exponent, 23 binades down), as the add-on's _ulp.
-inline float ulp_of(float x) {
-    uint32_t b;
-    std::memcpy(&b, &x, 4);
-    b = (b & 0x7F800000u) - (23u << 23);
-    float u;
-    std::memcpy(&u, &b, 4);
-    return u;
-}
-
-}  // namespace
 
 size_t sample_triangles(const float* geo, const float* area, size_t M, const int64_t* which, const float* P,
                         const float* u1, const float* u2, size_t n, float* wi, float* dist, float* pdf,

@@ -8,10 +8,22 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "ray.h"
 
 namespace dacrt {
+
+// ULP of a positive normal float: 2^(its exponent - 23) (self-intersection steps are counted
+// in these, as the add-on documents).
+inline float ulp_of(float x) {
+    uint32_t b;
+    std::memcpy(&b, &x, 4);
+    b = (b & 0x7F800000u) - (23u << 23);
+    float u;
+    std::memcpy(&u, &b, 4);
+    return u;
+}
 
 // Ray records from rows O, D (stride n) and tfar; ids 0..n-1.
 void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray* out);

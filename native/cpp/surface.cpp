@@ -3,25 +3,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstring>
 
 #include "parallel.h"
 #include "shading.h"
 
 namespace dacrt {
-
-namespace {
-
-inline float ulp_of(float x) {  // positive normal x: 2^(exponent - 23)
-    uint32_t b;
-    std::memcpy(&b, &x, 4);
-    b = (b & 0x7F800000u) - (23u << 23);
-    float u;
-    std::memcpy(&u, &b, 4);
-    return u;
-}
-
-}  // namespace
 
 void triangle_table(const float* vertices, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     float* geo, double* area) {
