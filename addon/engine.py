@@ -83,7 +83,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         t0 = time.perf_counter()
         self.update_stats("", "DACRT | Exporting scene")
         scene_data = export.export_scene(depsgraph, check_break=self.cancel_requested)
-        self._export_seconds = time.perf_counter() - t0
+        export_seconds = time.perf_counter() - t0
         self._report_messages(scene_data.messages)
         if self.cancel_requested():
             return
@@ -102,7 +102,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         finally:
             self.end_result(result)
             self._report_messages(integ.messages)    # also when integration failed
-        self._report_summary(integ, scene_data, layer)
+        self._report_summary(integ, scene_data, layer, export_seconds)
 
     def _layer_enabled(self, layer):
         """Blender may call render for a layer it will not use (Render Single Layer)."""
@@ -170,8 +170,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         for level, text in dict.fromkeys((lvl, txt) for lvl, txt in messages):
             self.report({level if level in ('INFO', 'WARNING', 'ERROR') else 'INFO'}, f"DACRT: {text}")
 
-    def _report_summary(self, integ, scene_data, layer):
-        s = dict(integ.stats or {}, export_seconds=getattr(self, '_export_seconds', 0.0))
+    def _report_summary(self, integ, scene_data, layer, export_seconds):
+        s = dict(integ.stats or {}, export_seconds=export_seconds)
         LAST_RENDER_STATS[layer] = s
         parts = [f"{len(scene_data.geometry.triangles)} triangles",
                  f"{len(scene_data.lights)} lights"]

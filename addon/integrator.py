@@ -46,7 +46,6 @@ from .sampling import RandomStream, dot, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 
 F32 = np.float32
-INV_PI = F32(1.0 / np.pi)
 
 # Random dimension pairs: 0 = pixel filter; then per vertex k: light pick + roulette, light
 # position, BSDF direction (Cycles keeps the same split: PRNG_FILTER, PRNG_LIGHT, PRNG_SURFACE_BSDF...).
@@ -334,7 +333,6 @@ class Integrator:
         # BSDF ray could only find emission and nothing emits, the direction is below the surface
         self._ended = dict(black=0, roulette=0, last_bounce=0, below_surface=0)
         self._export_skipped = dict(scene_data.skipped)
-        self._tris_nonfinite = self.tri.num_nonfinite
         self._pixels_converged = 0
         self._trace_seconds = 0.0
         self._phases = dict(filter=0.0, partition=0.0, leaf=0.0)
@@ -378,9 +376,9 @@ class Integrator:
         self._entry_prob = np.concatenate([self.lights.lamp_prob, tri_entries]).astype(F32)
 
     def _weight_lights(self, probes: int = 32):
-        """Let the light choice follow what each light delivers where the camera looks: a
-        probes x probes grid of camera rays (jittered by the seed) finds visible points, where
-        LightSet.reweight estimates every light group's unoccluded irradiance."""
+        """Let the light choice follow where the camera looks: a probes x probes grid of camera
+        rays (jittered by the seed) finds visible points, from which LightSet.reweight judges
+        how narrow each light group looks (how badly BSDF sampling would find it)."""
         if self.lights.num_entries < 2 or not len(self.tri):
             return
         x0, y0, x1, y1 = self.camera.region
@@ -390,15 +388,12 @@ class Integrator:
         ry = (y0 + (y1 - y0) * (g[:, None] + (rng.random((probes, probes)) - 0.5) / probes)).ravel()
         O, D, tmax = self.camera.rays(rx.astype(F32), ry.astype(F32))
         rays = dacrt.shading.pack_rays(O, D, tmax)
-        hits = self._scenes['camera'].intersect(rays, threads=self.threads)
-        sub = self._maps['camera']
-        if sub is not None and len(sub):
-            hits['prim'] = np.where(hits['prim'] >= 0, np.take(sub, np.maximum(hits['prim'], 0)), -1)
+        hits = self._global_prims('camera', self._scenes['camera'].intersect(rays, threads=self.threads))
         idx = np.flatnonzero(hits['prim'] >= 0)
         if not len(idx):
             return
-        _, _, ns, P_off = self._surface(hits, idx, D)
-        self.lights.reweight(P_off, ns, rng)
+        _, _, _, P_off = self._surface(hits, idx, D)
+        self.lights.reweight(P_off, rng)
         self._selection_table()
 
     def _build_scenes(self):
@@ -487,13 +482,13 @@ class Integrator:
             'objects': e.get('objects_hidden', 0) + e.get('objects_invisible', 0) + e.get('objects_unsupported', 0),
             'materials': e.get('materials_unused', 0),
             'triangles': (e.get('triangles_degenerate', 0) + e.get('triangles_nonfinite', 0)
-                          + self._tris_nonfinite + self._tris_unreachable),
+                          + self.tri.num_nonfinite + self._tris_unreachable),
             'lights': len(self.lights.skipped_lamps) + len(self.lights.unseen_lamps),
             'shadow_rays': self._skipped_shadow,
             'bounce_rays': sum(self._ended.values()),
             'samples': self._samples_skipped,
             'detail': dict(e, triangles_unreachable=self._tris_unreachable,
-                           triangles_nonfinite_render=self._tris_nonfinite,
+                           triangles_nonfinite_render=self.tri.num_nonfinite,
                            **{f'bounce_rays_{k}': v for k, v in self._ended.items()}),
         }
 
@@ -587,6 +582,10 @@ class Integrator:
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['camera' if kind == 'camera' else 'bounce'] += O.shape[1]
+        return self._global_prims(kind, hits)
+
+    def _global_prims(self, kind, hits):
+        """hits of the `kind` tracer scene with prim renumbered to global triangle indices."""
         sub = self._maps[kind]
         if sub is not None and len(sub):
             prim = hits['prim']

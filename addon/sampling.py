@@ -114,14 +114,11 @@ class RandomStream:
         seed = (key ^ (key >> _U64(32))).astype(_U32)
         return np.stack([seed, np.asarray(sample).astype(_U32)])
 
-    def _dim_keys(self, dim: int):
-        h = _mix64_scalar(self._k1 ^ _mix64_scalar(int(dim) + 0x2545F4914F6CDD1D))
-        return _U32(h & _M32), _U32(h >> 32)
 
     def _words(self, keys: np.ndarray, dim: int):
         """The two uint32 sample words per key for dimension pair `dim`: a shuffled,
         Owen-scrambled 2D Sobol point of the pixel's sequence for that pair."""
-        ka, kb = self._dim_keys(dim)
+        ka, kb = self.dim_words(dim)
         seed = _fmix32(_fmix32(keys[0] ^ ka) ^ kb)
         j = _owen_scramble(keys[1], seed)
         a = _owen_scramble(_reverse_bits(j), _fmix32(seed ^ _U32(0x9E3779B9)))
@@ -137,12 +134,13 @@ class RandomStream:
     def dim_words(self, dim: int):
         """The two 32-bit words that name dimension pair `dim` (for the native kernels, which
         turn them into sample words exactly as _words does)."""
-        return self._dim_keys(dim)
+        h = _mix64_scalar(self._k1 ^ _mix64_scalar(int(dim) + 0x2545F4914F6CDD1D))
+        return _U32(h & _M32), _U32(h >> 32)
 
     def uniform2(self, keys: np.ndarray, dim: int):
         """Two float32 uniforms in [0, 1) per key for dimension pair `dim` (the native kernel:
         one pass instead of a hundred numpy passes; equal to uniform2_numpy)."""
-        ka, kb = self._dim_keys(dim)
+        ka, kb = self.dim_words(dim)
         return dacrt.shading.uniform2(keys, int(ka), int(kb))
 
     def uniform2_numpy(self, keys: np.ndarray, dim: int):
@@ -153,7 +151,7 @@ class RandomStream:
     def uniform_pick(self, keys: np.ndarray, dim: int):
         """A float64 uniform with 32-bit resolution (a discrete choice among many lights) and a
         float32 uniform, per key, for dimension pair `dim` (native; equal to uniform_pick_numpy)."""
-        ka, kb = self._dim_keys(dim)
+        ka, kb = self.dim_words(dim)
         return dacrt.shading.uniform_pick(keys, int(ka), int(kb))
 
     def uniform_pick_numpy(self, keys: np.ndarray, dim: int):

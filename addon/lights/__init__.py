@@ -73,7 +73,6 @@ class LightSet:
         w = np.concatenate([lamp_w, tri_w])
         total = w.sum()
         self.num_entries = len(w)
-        self.group_prob = np.asarray(group_p, np.float64)
         self.tri_prob = np.zeros(self._num_triangles, F32)   # selection probability per global triangle
         if total > 0:
             p = w / total
@@ -89,14 +88,13 @@ class LightSet:
     def __bool__(self):
         return self.num_entries > 0
 
-    def reweight(self, P: np.ndarray, N: np.ndarray, rng: np.random.Generator, uniform_mix: float = 0.2):
+    def reweight(self, P: np.ndarray, rng: np.random.Generator, uniform_mix: float = 0.2):
         """Split the selection between the groups by how badly BSDF sampling would find each
         group from the points P ((3, n) float32, e.g. where camera rays land): a sample's
         weight is 1 - (the light's solid angle) / 2 pi, the solid angle taken as 1 / pdf (0
         for delta lights). Under MIS a light as wide as the sky (the world) is found well by
         the cosine-weighted bounces, so light samples are better spent on small lights. Mixed
-        with uniform_mix of the uniform split, so every group keeps a share. N is unused by
-        this measure and kept for callers that estimate differently."""
+        with uniform_mix of the uniform split, so every group keeps a share."""
         groups = self.num_lamps + (self.triangles is not None)
         n = P.shape[1]
         if groups < 2 or n == 0:

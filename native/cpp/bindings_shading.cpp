@@ -4,9 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
-#include <algorithm>
 #include <string>
-#include <vector>
 
 #include "shading.h"
 
@@ -30,44 +28,59 @@ void need_len(const py::array& a, size_t n, const char* name) {
         throw py::value_error(std::string(name) + " must have shape (" + std::to_string(n) + ",)");
 }
 
+void check_index(const I64Array& idx, size_t limit, const char* name) {
+    const int64_t* ix = idx.data();
+    for (py::ssize_t j = 0; j < idx.shape(0); ++j)
+        if (ix[j] < 0 || size_t(ix[j]) >= limit)
+            throw py::value_error(std::string(name) + "[" + std::to_string(j) + "] = " + std::to_string(ix[j]) +
+                                  " is outside 0.." + std::to_string(limit ? limit - 1 : 0));
+}
+
+const float* optional_rows(const py::object& o, py::ssize_t rows, size_t n, const char* name, F32Array& keep) {
+    if (o.is_none()) return nullptr;
+    keep = o.cast<F32Array>();
+    if (rows_of(keep, rows, name) != n)
+        throw py::value_error(std::string(name) + " must have shape (" + std::to_string(rows) + ", " + std::to_string(n) + ")");
+    return keep.data();
+}
+
+// A contiguous (n,) array of Record-sized records (rays or hits), as a pointer to them.
+template <class Record>
+Record* records(const py::array& a, size_t n, const char* what) {
+    if (a.ndim() != 1 || size_t(a.shape(0)) != n || a.itemsize() != sizeof(Record) || !(a.flags() & py::array::c_style))
+        throw py::value_error(std::string(what) + " must be a contiguous (" + std::to_string(n) + ",) array of " +
+                              std::to_string(sizeof(Record)) + "-byte records");
+    return static_cast<Record*>(const_cast<void*>(a.data()));
+}
+
+// An optional one-dimensional index array, each entry in [0, limit); null when absent.
+const int64_t* optional_index(const py::object& o, size_t limit, const char* name, I64Array& keep) {
+    if (o.is_none()) return nullptr;
+    keep = o.cast<I64Array>();
+    if (keep.ndim() != 1) throw py::value_error(std::string(name) + " must be one-dimensional");
+    check_index(keep, limit, name);
+    return keep.data();
+}
+
 void pack_rays_py(F32Array O, F32Array D, F32Array tfar, py::array out) {
     size_t n = rows_of(O, 3, "O");
     if (rows_of(D, 3, "D") != n) throw py::value_error("D must have the shape of O");
     need_len(tfar, n, "tfar");
-    if (out.ndim() != 1 || size_t(out.shape(0)) != n || out.itemsize() != sizeof(Ray) || !(out.flags() & py::array::c_style))
-        throw py::value_error("out must be a contiguous (n,) array of 32-byte ray records");
-    Ray* r = static_cast<Ray*>(out.mutable_data());
+    Ray* r = records<Ray>(out, n, "out");
     py::gil_scoped_release nogil;
     pack_rays(O.data(), D.data(), tfar.data(), n, r);
 }
 
 F32Array surface_py(F32Array geo, py::object normals, py::array hits, py::object idx, F32Array D) {
     size_t M = rows_of(geo, 15, "geo");
-    const float* nrm = nullptr;
-    F32Array nrm_arr;
-    if (!normals.is_none()) {
-        nrm_arr = normals.cast<F32Array>();
-        if (rows_of(nrm_arr, 9, "normals") != M) throw py::value_error("normals must have shape (9, M) like geo");
-        nrm = nrm_arr.data();
-    }
+    F32Array nrm_keep;
+    const float* nrm = optional_rows(normals, 9, M, "normals", nrm_keep);
     size_t n = rows_of(D, 3, "D");
-    if (hits.ndim() != 1 || size_t(hits.shape(0)) != n || hits.itemsize() != sizeof(Hit) || !(hits.flags() & py::array::c_style))
-        throw py::value_error("hits must be a contiguous (n,) array of 16-byte hit records, n = D.shape[1]");
-    const int64_t* ix = nullptr;
-    size_t k = n;
-    I64Array idx_arr;
-    if (!idx.is_none()) {
-        idx_arr = idx.cast<I64Array>();
-        if (idx_arr.ndim() != 1) throw py::value_error("idx must be one-dimensional");
-        k = size_t(idx_arr.shape(0));
-        ix = idx_arr.data();
-        for (size_t j = 0; j < k; ++j)
-            if (ix[j] < 0 || size_t(ix[j]) >= n)
-                throw py::value_error("idx[" + std::to_string(j) + "] = " + std::to_string(ix[j]) +
-                                      " is outside 0.." + std::to_string(n ? n - 1 : 0));
-    }
+    const Hit* h = records<Hit>(hits, n, "hits");
+    I64Array idx_keep;
+    const int64_t* ix = optional_index(idx, n, "idx", idx_keep);
+    const size_t k = ix ? size_t(idx_keep.shape(0)) : n;
     F32Array out({py::ssize_t(nrm ? 12 : 9), py::ssize_t(k)});
-    const Hit* h = static_cast<const Hit*>(hits.data());
     size_t bad;
     {
         py::gil_scoped_release nogil;
@@ -102,13 +115,8 @@ py::tuple uniform_pick_py(U32Array keys, uint32_t ka, uint32_t kb) {
 py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns, py::object ng) {
     size_t n = rows_of(keys, 2, "keys");
     if (rows_of(ns, 3, "ns") != n) throw py::value_error("ns must have shape (3, n), n = keys.shape[1]");
-    const float* g = nullptr;
-    F32Array ng_arr;
-    if (!ng.is_none()) {
-        ng_arr = ng.cast<F32Array>();
-        if (rows_of(ng_arr, 3, "ng") != n) throw py::value_error("ng must have shape (3, n) like ns");
-        g = ng_arr.data();
-    }
+    F32Array ng_keep;
+    const float* g = optional_rows(ng, 3, n, "ng", ng_keep);
     F32Array wi({py::ssize_t(3), py::ssize_t(n)}), pdf{py::ssize_t(n)};
     py::array_t<bool> ok{py::ssize_t(n)};
     {
@@ -136,22 +144,6 @@ py::tuple sample_triangles_py(F32Array geo, F32Array area, I64Array which, F32Ar
     }
     if (bad) throw py::value_error(std::to_string(bad) + " entries of which are not triangles 0.." + std::to_string(M ? M - 1 : 0));
     return py::make_tuple(wi, dist, pdf, target);
-}
-
-void check_index(const I64Array& idx, size_t limit, const char* name) {
-    const int64_t* ix = idx.data();
-    for (py::ssize_t j = 0; j < idx.shape(0); ++j)
-        if (ix[j] < 0 || size_t(ix[j]) >= limit)
-            throw py::value_error(std::string(name) + "[" + std::to_string(j) + "] = " + std::to_string(ix[j]) +
-                                  " is outside 0.." + std::to_string(limit ? limit - 1 : 0));
-}
-
-const float* optional_rows(const py::object& o, py::ssize_t rows, size_t n, const char* name, F32Array& keep) {
-    if (o.is_none()) return nullptr;
-    keep = o.cast<F32Array>();
-    if (rows_of(keep, rows, name) != n)
-        throw py::value_error(std::string(name) + " must have shape (" + std::to_string(rows) + ", " + std::to_string(n) + ")");
-    return keep.data();
 }
 
 py::array_t<bool> nee_weight_py(F32Array ns, py::object ng, F32Array wi, F32Array pdf, F32Array p_sel, py::object thr,
@@ -183,10 +175,8 @@ py::array_t<bool> shadow_rays_py(F32Array O, F32Array wi, F32Array dist, py::obj
     if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
     check_index(idx, n, "idx");
     size_t k = size_t(idx.shape(0));
-    if (out.ndim() != 1 || size_t(out.shape(0)) != k || out.itemsize() != sizeof(Ray) || !(out.flags() & py::array::c_style))
-        throw py::value_error("out must be a contiguous (k,) array of 32-byte ray records, k = len(idx)");
+    Ray* r = records<Ray>(out, k, "out");
     py::array_t<bool> valid{py::ssize_t(k)};
-    Ray* r = static_cast<Ray*>(out.mutable_data());
     {
         py::gil_scoped_release nogil;
         shadow_rays(O.data(), wi.data(), dist.data(), tg, n, idx.data(), k, shorten, r,
@@ -231,9 +221,8 @@ py::tuple pixel_samples_py(I64Array pixel, I64Array sample, int64_t width, uint6
 py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style> hit,
                             py::array_t<bool, py::array::c_style> live, F32Array albedo, py::object thr,
                             py::object u_rr) {
-    if (hits.ndim() != 1 || hits.itemsize() != sizeof(Hit) || !(hits.flags() & py::array::c_style))
-        throw py::value_error("hits must be a contiguous (n,) array of 16-byte hit records");
-    size_t n = size_t(hits.shape(0));
+    const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
+    const Hit* h = records<Hit>(hits, n, "hits");
     need_len(hit, n, "hit");
     if (live.ndim() != 1) throw py::value_error("live must be one-dimensional");
     size_t M = size_t(live.shape(0));
@@ -247,17 +236,18 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
         r = rr_keep.data();
     }
     I64Array idx{py::ssize_t(n)};
-    std::vector<float> out(3 * n);
     size_t k, black, rr;
     {
         py::gil_scoped_release nogil;
-        k = continue_paths(static_cast<const Hit*>(hits.data()), reinterpret_cast<const uint8_t*>(hit.data()), n,
-                           reinterpret_cast<const uint8_t*>(live.data()), albedo.data(), M, t, r, idx.mutable_data(),
-                           out.data(), &black, &rr);
+        k = survivors(h, reinterpret_cast<const uint8_t*>(hit.data()), n, reinterpret_cast<const uint8_t*>(live.data()),
+                      M, t, r, idx.mutable_data(), &black, &rr);
     }
-    F32Array thr_out({py::ssize_t(3), py::ssize_t(k)});
-    std::copy(out.begin(), out.begin() + 3 * k, thr_out.mutable_data());
     idx.resize({py::ssize_t(k)});
+    F32Array thr_out({py::ssize_t(3), py::ssize_t(k)});
+    {
+        py::gil_scoped_release nogil;
+        survivor_throughput(h, n, albedo.data(), M, t, r != nullptr, idx.data(), k, thr_out.mutable_data());
+    }
     return py::make_tuple(idx, thr_out, black, rr);
 }
 

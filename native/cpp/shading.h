@@ -113,11 +113,14 @@ namespace dacrt {
 
 // Which paths go on after a vertex: those whose ray hit (hit[i]) a triangle with live[prim] set
 // (not black) and, when u_rr is given, survive Russian roulette with probability
-// q = min(sqrt(max channel of thr), 1). Writes their indices to idx (returns how many) and their
-// throughput after this reflection, albedo[prim] x thr / q (thr null: 1), to thr_out (3 rows,
-// stride = the count; callers size it n). dead_black / dead_rr: paths ended by each reason.
-size_t continue_paths(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, const float* albedo,
-                      size_t M, const float* thr, const float* u_rr, int64_t* idx, float* thr_out,
-                      size_t* dead_black, size_t* dead_rr);
+// q = min(sqrt(max channel of thr), 1) (thr null: 1). Writes their indices to idx (sized n) and
+// returns how many; dead_black / dead_rr: paths ended by each reason.
+size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, size_t M, const float* thr,
+                 const float* u_rr, int64_t* idx, size_t* dead_black, size_t* dead_rr);
+
+// Throughput after this reflection of the k survivors idx: albedo[prim] x thr / q (q as in
+// survivors() when roulette, else 1); thr_out: 3 rows of stride k.
+void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
+                         const int64_t* idx, size_t k, float* thr_out);
 
 }  // namespace dacrt

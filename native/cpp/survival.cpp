@@ -1,5 +1,5 @@
 // Path survival after a vertex (see shading.h): black surfaces and Russian roulette (Cycles'
-// survival probability), then the compacted indices and throughputs of the paths that go on.
+// survival probability), then the throughputs of the paths that go on.
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -10,12 +10,19 @@
 
 namespace dacrt {
 
-size_t continue_paths(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, const float* albedo,
-                      size_t M, const float* thr, const float* u_rr, int64_t* idx, float* thr_out,
-                      size_t* dead_black, size_t* dead_rr) {
-    // pass 1: keep flags and the roulette scale
+namespace {
+
+// Cycles' survival probability: min(sqrt(largest throughput channel), 1); thr null: 1.
+inline float survival(const float* thr, size_t n, size_t i) {
+    const float m = thr ? std::max(std::max(thr[i], thr[n + i]), thr[2 * n + i]) : 1.0f;
+    return std::min(std::sqrt(m), 1.0f);
+}
+
+}  // namespace
+
+size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, size_t M, const float* thr,
+                 const float* u_rr, int64_t* idx, size_t* dead_black, size_t* dead_rr) {
     std::vector<uint8_t> keep(n);
-    std::vector<float> inv_q(u_rr ? n : 0);
     std::atomic<size_t> black{0}, rr{0};
     parallel_for(n, [&](size_t b, size_t e) {
         size_t nb = 0, nr = 0;
@@ -26,14 +33,9 @@ size_t continue_paths(const Hit* hits, const uint8_t* hit, size_t n, const uint8
                 k = false;
                 ++nb;
             }
-            if (k && u_rr) {
-                float m = thr ? std::max(std::max(thr[i], thr[n + i]), thr[2 * n + i]) : 1.0f;
-                const float q = std::min(std::sqrt(m), 1.0f);
-                if (!(u_rr[i] < q)) {
-                    k = false;
-                    ++nr;
-                }
-                inv_q[i] = q > 0 ? 1.0f / q : 1.0f;
+            if (k && u_rr && !(u_rr[i] < survival(thr, n, i))) {
+                k = false;
+                ++nr;
             }
             keep[i] = k;
         }
@@ -45,19 +47,24 @@ size_t continue_paths(const Hit* hits, const uint8_t* hit, size_t n, const uint8
     size_t k = 0;
     for (size_t i = 0; i < n; ++i)
         if (keep[i]) idx[k++] = int64_t(i);
-    // pass 2: throughput of the survivors
+    return k;
+}
+
+void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
+                         const int64_t* idx, size_t k, float* thr_out) {
     parallel_for(k, [&](size_t b, size_t e) {
         for (size_t j = b; j < e; ++j) {
             const size_t i = size_t(idx[j]);
             const size_t p = size_t(hits[i].prim);
+            const float q = roulette ? survival(thr, n, i) : 1.0f;
+            const float inv_q = q > 0 ? 1.0f / q : 1.0f;
             for (int a = 0; a < 3; ++a) {
                 float t = thr ? thr[size_t(a) * n + i] : 1.0f;
-                if (u_rr) t = t * inv_q[i];
+                if (roulette) t = t * inv_q;
                 thr_out[size_t(a) * k + j] = albedo[size_t(a) * M + p] * t;
             }
         }
     });
-    return k;
 }
 
 }  // namespace dacrt
