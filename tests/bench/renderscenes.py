@@ -136,27 +136,13 @@ def build(spec: RenderSpec):
             spec.filter_type = (c.pixel_filter_type if c.pixel_filter_type in
                                 ('BOX', 'GAUSSIAN', 'BLACKMAN_HARRIS') else 'BLACKMAN_HARRIS')
             spec.filter_width = float(c.filter_width)
-        _shared_settings(scene)
+        fair.fair_scene_settings(scene)
         return scene
     if spec.grid:
         builder = lambda: build_wave(spec.grid)  # noqa: E731
     else:
         builder = BUILDERS[spec.name]
     return fair.build(_ParityView(spec, builder))
-
-
-def _shared_settings(scene):
-    """parity's fair.build settings, for a scene opened from a file rather than built."""
-    r = scene.render
-    r.pixel_aspect_x = r.pixel_aspect_y = 1.0
-    r.film_transparent = False
-    r.use_motion_blur = False
-    r.use_compositing = False
-    r.use_sequencer = False
-    r.threads_mode = 'AUTO'
-    for ob in bpy.data.objects:
-        ob.shadow_terminator_geometry_offset = 0.0
-        ob.shadow_terminator_shading_offset = 0.0
 
 
 class _ParityView:

@@ -7,6 +7,8 @@ import numpy as np
 
 from addon import scenedata as sd
 
+from ..native.scenes import unit_icosphere
+
 ALL_VIS = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
 
 
@@ -65,28 +67,9 @@ def quad(center, half_x, half_y, up=True):
 
 
 def icosphere(radius=1.0, subdiv=2, center=(0.0, 0.0, 0.0)):
-    """Closed triangulated sphere (outward winding)."""
-    p = (1 + 5 ** 0.5) / 2
-    v = [(-1, p, 0), (1, p, 0), (-1, -p, 0), (1, -p, 0), (0, -1, p), (0, 1, p), (0, -1, -p), (0, 1, -p),
-         (p, 0, -1), (p, 0, 1), (-p, 0, -1), (-p, 0, 1)]
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
-         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5),
-         (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
-    v = [np.array(x, np.float64) / np.linalg.norm(x) for x in v]
-    for _ in range(subdiv):
-        cache, nf = {}, []
-        def mid(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in cache:
-                m = v[a] + v[b]
-                v.append(m / np.linalg.norm(m))
-                cache[key] = len(v) - 1
-            return cache[key]
-        for a, b, c in f:
-            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
-            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        f = nf
-    return np.array(v) * radius + np.asarray(center), np.array(f, np.int64)
+    """Closed triangulated sphere (outward winding), float64."""
+    v, f = unit_icosphere(subdiv)
+    return v * radius + np.asarray(center), f
 
 
 def ortho_down(height=0.5, width=8, px=8, view=1e-3, target=(0.0, 0.0)) -> sd.Camera:

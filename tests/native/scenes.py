@@ -52,8 +52,9 @@ def add_degenerates_and_duplicates(rng, vertices, triangles, n_degenerate: int, 
     return _out(v, t)
 
 
-def icosphere(subdivisions: int = 2, radius: float = 1.0):
-    """Closed, watertight sphere: shared vertex indices between neighbouring triangles."""
+def unit_icosphere(subdivisions: int = 2):
+    """Closed, watertight unit sphere in float64: vertices (V,3), triangles (M,3) int64 sharing
+    vertex indices between neighbouring triangles, outward winding."""
     p = (1 + 5 ** 0.5) / 2
     verts = [(-1, p, 0), (1, p, 0), (-1, -p, 0), (1, -p, 0), (0, -1, p), (0, 1, p), (0, -1, -p),
              (0, 1, -p), (p, 0, -1), (p, 0, 1), (-p, 0, -1), (-p, 0, 1)]
@@ -78,7 +79,13 @@ def icosphere(subdivisions: int = 2, radius: float = 1.0):
             ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
             nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
         f = nf
-    return _out(np.asarray(v) * radius, np.asarray(f))
+    return np.asarray(v), np.asarray(f, np.int64)
+
+
+def icosphere(subdivisions: int = 2, radius: float = 1.0):
+    """Closed, watertight sphere: shared vertex indices between neighbouring triangles."""
+    v, f = unit_icosphere(subdivisions)
+    return _out(v * radius, f)
 
 
 def subdivided_cube(n: int = 4, half: float = 1.0):

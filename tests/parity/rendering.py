@@ -20,20 +20,27 @@ def build(spec):
     r.resolution_x, r.resolution_y = spec.resolution
     r.resolution_percentage = 100
     spec.build()
+    fair_scene_settings(scene)
+    vs = scene.view_settings
+    vs.view_transform, vs.look, vs.exposure, vs.gamma = 'Standard', 'None', 0.0, 1.0
+    return scene
+
+
+def fair_scene_settings(scene):
+    """The render and object settings both engines share (reference section 2.7), for a built
+    scene or one opened from a file."""
+    r = scene.render
     r.pixel_aspect_x = r.pixel_aspect_y = 1.0
     r.film_transparent = False
     r.use_motion_blur = False
     r.use_compositing = False
     r.use_sequencer = False
     r.threads_mode = 'AUTO'
-    vs = scene.view_settings
-    vs.view_transform, vs.look, vs.exposure, vs.gamma = 'Standard', 'None', 0.0, 1.0
     for ob in bpy.data.objects:       # Cycles' terminator offset biases smooth low-poly shadows
         ob.shadow_terminator_geometry_offset = 0.0
         ob.shadow_terminator_shading_offset = 0.0
         if hasattr(ob, 'cycles') and hasattr(ob.cycles, 'shadow_terminator_geometry_offset'):
             ob.cycles.shadow_terminator_geometry_offset = 0.0     # the older home of the setting
-    return scene
 
 
 def set_cycles(scene, spec, seed):
