@@ -169,7 +169,10 @@ class RandomStream:
 def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Per-column dot product of (3, n) vectors (b may also be a constant (3,) vector)."""
     if b.ndim == 1:
-        return b @ a
+        # spelled out: `b @ a` goes to OpenBLAS, whose threads then spin in sched_yield and
+        # take a core from the tracer's threads (measured: a third of a small render's CPU time)
+        b = b.astype(a.dtype, copy=False)
+        return b[0] * a[0] + b[1] * a[1] + b[2] * a[2]
     return np.einsum('ij,ij->j', a, b)
 
 

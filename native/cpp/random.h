@@ -20,11 +20,10 @@ inline uint32_t fmix32(uint32_t x) {  // murmur3 finaliser: a bijection of 32-bi
 }
 
 inline uint32_t reverse_bits(uint32_t x) {
+    x = __builtin_bswap32(x);  // bytes, then the bits inside each byte
     x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
-    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
-    return (x >> 16) | (x << 16);
+    return ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
 }
 
 // Laine-Karras permutation as improved by Burley: each bit is flipped by a hash of the bits
@@ -42,25 +41,33 @@ inline uint32_t owen_scramble(uint32_t x, uint32_t seed) {
     return reverse_bits(laine_karras(reverse_bits(x), seed));
 }
 
-// Second Sobol dimension (primitive polynomial x + 1); the first is reverse_bits(index).
-inline uint32_t sobol1(uint32_t index) {
-    uint32_t r = 0;
-    for (uint32_t v = 1u << 31; index; index >>= 1, v ^= v >> 1)
-        if (index & 1) r ^= v;
-    return r;
+// Second Sobol dimension (primitive polynomial x + 1), bit-reversed. Its generator matrix is
+// Pascal's triangle mod 2: by Lucas' theorem output bit i (from the top) is the XOR of the index
+// bits j with i a subset of j, a superset-XOR transform in five branch-free steps (the textbook
+// loop over set bits mispredicts on shuffled indices and cannot be vectorised).
+inline uint32_t sobol1_reversed(uint32_t index) {
+    index ^= (index >> 1) & 0x55555555u;
+    index ^= (index >> 2) & 0x33333333u;
+    index ^= (index >> 4) & 0x0F0F0F0Fu;
+    index ^= (index >> 8) & 0x00FF00FFu;
+    index ^= (index >> 16) & 0x0000FFFFu;
+    return index;
 }
+
+inline uint32_t sobol1(uint32_t index) { return reverse_bits(sobol1_reversed(index)); }
 
 struct Words {
     uint32_t a, b;
 };
 
 // The two 32-bit sample words of dimension pair (ka, kb) for sample `sample` of the pixel with
-// seed `pixel`.
+// seed `pixel`: j = owen(sample), a = owen(reverse(j)), b = owen(sobol1(j)), with the reversals
+// that cancel (owen(x) = reverse(laine_karras(reverse(x)))) left out.
 inline Words mix_words(uint32_t pixel, uint32_t sample, uint32_t ka, uint32_t kb) {
     const uint32_t seed = fmix32(fmix32(pixel ^ ka) ^ kb);        // per pixel and pair
     const uint32_t j = owen_scramble(sample, seed);               // shuffled sample order
-    return {owen_scramble(reverse_bits(j), fmix32(seed ^ 0x9E3779B9u)),
-            owen_scramble(sobol1(j), fmix32(seed ^ 0x7F4A7C15u))};
+    return {reverse_bits(laine_karras(j, fmix32(seed ^ 0x9E3779B9u))),
+            reverse_bits(laine_karras(sobol1_reversed(j), fmix32(seed ^ 0x7F4A7C15u)))};
 }
 
 struct Uniform2 {
