@@ -42,7 +42,7 @@ from .adaptive import AdaptiveSampling
 from .film import Film
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, LightSet, make_lamp
-from .sampling import RandomStream, dot, max3
+from .sampling import RandomStream, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 
 F32 = np.float32
@@ -324,6 +324,9 @@ class Integrator:
         self._tri_any = np.ones(len(self.tri), bool)   # every triangle shades (SKIP_WORK off)
         self._area32 = self.tri.area.astype(F32)
         self._any_emissive = bool(self._tri_emissive.any())
+        # radiance per triangle (3, M), gathered once: BSDF and camera rays read it per hit
+        self._tri_emission = np.ascontiguousarray(np.take(self.mats.emission, self.tri.material, axis=1)) \
+            if self._any_emissive else None
         self._build_lights(scene_data)
         self._fixed_paths = None if paths_per_pass is None else max(1, int(paths_per_pass))
         self._rays = {'camera': 0, 'bounce': 0, 'shadow': 0}
@@ -356,7 +359,8 @@ class Integrator:
         vis = self.tri.visibility
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
         # same emitters.
-        tris = EmissiveTriangles(self.tri.geo, self.tri.area, np.take(self.mats.emission, self.tri.material, axis=1),
+        emission = self._tri_emission if self._tri_emission is not None else np.zeros((3, len(self.tri)), F32)
+        tris = EmissiveTriangles(self.tri.geo, self.tri.area, emission,
                                  self._tri_emissive & ((vis & VIS_DIFFUSE) != 0))
         self.lights = LightSet(lamps, tris, len(self.tri))
         if self.lights.skipped_lamps:
@@ -666,9 +670,7 @@ class Integrator:
             if self.film.passes:
                 self._write_passes(path, hits, hit, data, pix, samp)
         if self._any_emissive:
-            em = np.flatnonzero(hit & np.take(self._tri_emissive, prim))
-            if len(em):
-                self._gather_emission(camera, em, hits, path, L)
+            self._gather_emission(camera, hit, hits, path, L)
         if k == K + 1:
             return None
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
@@ -770,20 +772,12 @@ class Integrator:
             r += F32(1.0)
             return F32(1.0) / r
 
-    def _gather_emission(self, camera, em, hits, path, L):
-        """Emission of the triangles hit by rays em (two-sided), MIS-weighted for BSDF rays."""
-        p = np.take(hits['prim'], em)
-        Le = np.take(self.mats.emission, np.take(self.tri.material, p), axis=1)
-        if path.thr is not None:
-            Le *= np.take(path.thr, em, axis=1)
-        if not camera:
-            ng = np.take(self.tri.geo[9:12], p, axis=1)
-            cos_l = np.abs(dot(ng, np.take(path.D, em, axis=1)))
-            te = np.take(hits['t'], em)
-            with np.errstate(divide='ignore', invalid='ignore'):
-                pdf_l = np.take(self.lights.tri_prob, p) * te * te / (np.take(self._area32, p) * cos_l)
-            Le *= self._mis_bsdf(np.take(path.pdf, em), pdf_l)
-        _accumulate(L, np.take(path.pid, em), Le)
+    def _gather_emission(self, camera, hit, hits, path, L):
+        """Emission of the triangles hit by rays `hit` (two-sided), MIS-weighted for BSDF rays
+        (one native pass)."""
+        dacrt.shading.gather_emission(hits, hit, self._tri_emission, self._tri_emissive,
+                                      None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
+                                      path.D, path.thr, path.pdf, path.pid, L)
 
     def _seen_lamps(self, camera):
         """(index into lights.lamps, lamp) of the lamps camera or BSDF rays can meet; lamps that

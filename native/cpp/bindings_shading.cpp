@@ -251,6 +251,41 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
     return py::make_tuple(idx, thr_out, black, rr);
 }
 
+size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> hit, F32Array emission,
+                          py::array_t<bool, py::array::c_style> emissive, py::object tri_prob, F32Array area,
+                          F32Array geo, F32Array D, py::object thr, py::object pdf, I64Array pid,
+                          py::array_t<float, py::array::c_style> L) {
+    const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
+    const Hit* h = records<Hit>(hits, n, "hits");
+    need_len(hit, n, "hit");
+    const size_t M = rows_of(geo, 15, "geo");
+    if (rows_of(emission, 3, "emission") != M) throw py::value_error("emission must have shape (3, M) like geo");
+    need_len(emissive, M, "emissive");
+    need_len(area, M, "area");
+    if (rows_of(D, 3, "D") != n) throw py::value_error("D must have shape (3, n), n = len(hits)");
+    F32Array thr_keep, prob_keep, pdf_keep;
+    const float* t = optional_rows(thr, 3, n, "thr", thr_keep);
+    const float* prob = nullptr;
+    const float* pd = nullptr;
+    if (!tri_prob.is_none()) {
+        if (pdf.is_none()) throw py::value_error("pdf (the BSDF pdf of each ray) is needed with tri_prob");
+        prob_keep = tri_prob.cast<F32Array>();
+        need_len(prob_keep, M, "tri_prob");
+        pdf_keep = pdf.cast<F32Array>();
+        need_len(pdf_keep, n, "pdf");
+        prob = prob_keep.data();
+        pd = pdf_keep.data();
+    }
+    need_len(pid, n, "pid");
+    if (!L.writeable()) throw py::value_error("L must be writeable");
+    const size_t N = rows_of(L, 3, "L");
+    check_index(pid, N, "pid");
+    py::gil_scoped_release nogil;
+    return gather_emission(h, reinterpret_cast<const uint8_t*>(hit.data()), n, emission.data(),
+                           reinterpret_cast<const uint8_t*>(emissive.data()), prob, area.data(), geo.data(), M,
+                           D.data(), t, pd, pid.data(), L.mutable_data(), N);
+}
+
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny) {
     if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
@@ -291,5 +326,8 @@ void register_shading(py::module_& m) {
           py::arg("k1"), py::arg("ka"), py::arg("kb"), py::arg("table"));
     m.def("continue_paths", &continue_paths_py, py::arg("hits"), py::arg("hit"), py::arg("live"), py::arg("albedo"),
           py::arg("thr"), py::arg("u_rr"));
+    m.def("gather_emission", &gather_emission_py, py::arg("hits"), py::arg("hit"), py::arg("emission"),
+          py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("D"), py::arg("thr"),
+          py::arg("pdf"), py::arg("pid"), py::arg("L"));
     m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
 }

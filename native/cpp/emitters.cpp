@@ -61,4 +61,38 @@ size_t sample_triangles(const float* geo, const float* area, size_t M, const int
     return bad.load();
 }
 
+size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
+                       const float* tri_prob, const float* area, const float* geo, size_t M, const float* D,
+                       const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N) {
+    std::atomic<size_t> count{0};
+    parallel_for(n, [&](size_t b, size_t e) {
+        size_t local = 0;
+        for (size_t i = b; i < e; ++i) {
+            const int32_t p = hits[i].prim;
+            if (!hit[i] || p < 0 || size_t(p) >= M || !emissive[p]) continue;
+            const size_t q = size_t(p);
+            float w = 1.0f;
+            if (tri_prob && tri_prob[q] > 0) {  // a BSDF ray: power heuristic against light sampling
+                const float cos_l = std::fabs(geo[9 * M + q] * D[i] + geo[10 * M + q] * D[n + i] +
+                                              geo[11 * M + q] * D[2 * n + i]);
+                const float t = hits[i].t;
+                float r = tri_prob[q] * t * t / (area[q] * cos_l);
+                r /= pdf[i];
+                r *= r;
+                r += 1.0f;
+                w = 1.0f / r;
+            }
+            const size_t j = size_t(pid[i]);
+            for (int a = 0; a < 3; ++a) {
+                float v = emission[size_t(a) * M + q];
+                if (thr) v *= thr[size_t(a) * n + i];
+                L[size_t(a) * N + j] += v * w;
+            }
+            ++local;
+        }
+        count += local;
+    });
+    return count.load();
+}
+
 }  // namespace dacrt

@@ -128,4 +128,15 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
 void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                          const int64_t* idx, size_t k, float* thr_out);
 
+// Emission that rays meet on emissive triangles (two-sided), added to L (3 rows, stride N) at
+// column pid[i] (distinct per ray). Rays with hit[i] set whose triangle has emissive[prim]:
+// emission (3 rows of M, radiance per triangle) x thr (3 rows, stride n; null = 1) x, for BSDF
+// rays (tri_prob non-null; triangles of tri_prob 0 are never light-sampled: weight 1), the power-heuristic weight against light sampling of that triangle:
+// 1 / (1 + (tri_prob t^2 / (area |cos|) / pdf)^2), cos between D and the normal (geo rows 9-11
+// of M). Returns the number of rays that met emission.
+size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
+                       const float* tri_prob, const float* area, const float* geo, size_t M, const float* D,
+                       const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N);
+
 }  // namespace dacrt
+

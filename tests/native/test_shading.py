@@ -376,3 +376,44 @@ def test_triangle_table_matches_float64():
     np.testing.assert_allclose(np.linalg.norm(geo[12:15], axis=0)[good], 8 * ulp[good], rtol=1e-6)
     with pytest.raises(ValueError, match="refers to vertex 500"):
         shading.triangle_table(v, np.array([[0, 1, 500]]), 8.0)
+
+
+def test_gather_emission_matches_the_numpy_definition():
+    rng = np.random.default_rng(21)
+    m, n, N = 12, 5000, 7000
+    geo, _ = _geo(rng, m)
+    area = rng.uniform(0.1, 2.0, m).astype(F32)
+    emission = rng.uniform(0, 5, (3, m)).astype(F32)
+    emissive = rng.random(m) < 0.6
+    emission[:, ~emissive] = 0
+    tri_prob = np.where(rng.random(m) < 0.8, rng.uniform(0.01, 0.2, m), 0).astype(F32)
+    hits = np.zeros(n, dacrt.HIT_DTYPE)
+    hits['prim'] = rng.integers(-1, m, n)
+    hits['t'] = rng.uniform(0.1, 5, n)
+    hit = (hits['prim'] >= 0) & (rng.random(n) < 0.9)           # some hits masked (holdouts)
+    D = _unit(rng, n)
+    thr = rng.uniform(0, 1, (3, n)).astype(F32)
+    pdf = rng.uniform(0.05, 0.3, n).astype(F32)
+    pid = rng.permutation(N)[:n].astype(np.int64)
+    for camera in (True, False):
+        L = rng.uniform(0, 1, (3, N)).astype(F32)
+        expect = L.astype(np.float64)
+        p = hits['prim']
+        sel = np.flatnonzero(hit & emissive[np.maximum(p, 0)])
+        q = p[sel]
+        Le = emission[:, q].astype(np.float64)
+        if not camera:
+            Le *= thr[:, sel]
+            cos_l = np.abs(np.einsum("ij,ij->j", geo[9:12, q].astype(float), D[:, sel].astype(float)))
+            pdf_l = tri_prob[q] * hits['t'][sel].astype(float) ** 2 / (area[q] * cos_l)
+            w = np.where(tri_prob[q] > 0, 1 / (1 + (pdf_l / pdf[sel]) ** 2), 1.0)
+            Le *= w
+        expect[:, pid[sel]] += Le
+        count = shading.gather_emission(hits, hit, emission, emissive, None if camera else tri_prob, area, geo, D,
+                                        None if camera else thr, None if camera else pdf, pid, L)
+        assert count == len(sel)
+        np.testing.assert_allclose(L, expect, rtol=2e-5, atol=1e-6)
+    with pytest.raises(ValueError, match="pdf"):
+        shading.gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, D, thr, None, pid, L)
+    with pytest.raises(ValueError, match="pid"):
+        shading.gather_emission(hits, hit, emission, emissive, None, area, geo, D, None, None, pid + N, L)
