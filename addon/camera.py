@@ -7,6 +7,7 @@ Raster coordinates are full-frame pixels, x to the right and y up from the botto
 """
 from __future__ import annotations
 
+import dacrt
 import numpy as np
 
 from .scenedata import Camera
@@ -45,6 +46,7 @@ class CameraModel:
         self.forward = -self.rot[:, 2]
         self._rot32 = self.rot.astype(np.float32)
         self._pos32 = self.pos.astype(np.float32)
+        self._frame = self._frame_floats()
         self._init_region(cam)
 
     def _init_region(self, cam: Camera):
@@ -78,40 +80,22 @@ class CameraModel:
 
     # --- rays ---------------------------------------------------------------------------------
 
-    def screen(self, rx, ry):
-        """Raster -> screen (viewplane) coordinates, float32."""
-        sx = np.float32(self.left) + np.asarray(rx, np.float32) * np.float32((self.right - self.left) / self.width)
-        sy = np.float32(self.bottom) + np.asarray(ry, np.float32) * np.float32((self.top - self.bottom) / self.height)
-        return sx, sy
-
     def rays(self, rx, ry):
         """Rays for full-frame raster positions: origins (3,n), unit directions (3,n) float32 and
-        tmax (n,) float32; origins lie on the clip-start plane, tmax reaches the clip-end plane."""
-        sx, sy = self.screen(rx, ry)
-        n = sx.shape[0]
+        tmax (n,) float32; origins lie on the clip-start plane, tmax reaches the clip-end plane.
+        Perspective: direction R (sx tan, sy tan, -1) / |.| for viewplane point (sx, sy), origin
+        at clip_start / d_cam.z along it; orthographic: origin R (sx, sy, -clip_start) + pos,
+        direction -R z. One native pass (dacrt.shading.camera_rays) on the frame below."""
+        return dacrt.shading.camera_rays(self.kind == 'ORTHO', self._frame, rx, ry)
+
+    def _frame_floats(self) -> np.ndarray:
+        """The float32 frame camera_rays reads (each value rounded once from float64)."""
         r = self._rot32
-        if self.kind == 'ORTHO':
-            org = r[:, 0:1] * sx
-            org += r[:, 1:2] * sy
-            org += (self._pos32 - np.float32(self.clip_start) * r[:, 2])[:, None]
-            d = np.empty((3, n), np.float32)
-            d[:] = -r[:, 2:3]
-            tmax = np.full(n, self.clip_end - self.clip_start, np.float32)
-            return org, d, tmax
-        t = np.float32(self.tan_half_fov)
-        sx *= t
-        sy *= t
-        inv_len = np.float32(1.0) / np.sqrt(sx * sx + sy * sy + np.float32(1.0))  # d_cam.z
-        # world direction = R (sx, sy, -1) / |.|: R is orthonormal, so this is normalised
-        d = r[:, 0:1] * sx
-        d += r[:, 1:2] * sy
-        d -= r[:, 2:3]
-        d *= inv_len
-        # a plane at depth z is z / d_cam.z along the ray
-        org = d * (np.float32(self.clip_start) / inv_len)
-        org += self._pos32[:, None]
-        tmax = np.float32(self.clip_end - self.clip_start) / inv_len
-        return org, d, tmax
+        base = self._pos32 - np.float32(self.clip_start) * r[:, 2]
+        raster = [self.left, (self.right - self.left) / self.width, self.bottom, (self.top - self.bottom) / self.height]
+        return np.concatenate([r.ravel(), self._pos32, base, np.asarray(raster, np.float32),
+                               np.asarray([self.tan_half_fov, self.clip_start, self.clip_end - self.clip_start],
+                                          np.float32)]).astype(np.float32)
 
     def z_depth(self, points: np.ndarray) -> np.ndarray:
         """Distance of world points (3,n) along the view axis (Cycles' camera_z_depth)."""

@@ -286,6 +286,29 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
                            D.data(), t, pd, pid.data(), L.mutable_data(), N);
 }
 
+py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry) {
+    if (frame.ndim() != 1 || frame.shape(0) != 22)
+        throw py::value_error("frame must hold 22 floats (rotation 9, position 3, ortho base 3, raster map 4, "
+                              "tan_half_fov, clip_start, clip_range)");
+    const float* f = frame.data();
+    CameraFrame c{};
+    c.ortho = ortho;
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) c.rot[a][b] = f[3 * a + b];
+    for (int a = 0; a < 3; ++a) c.pos[a] = f[9 + a], c.ortho_base[a] = f[12 + a];
+    c.sx0 = f[15], c.sx_scale = f[16], c.sy0 = f[17], c.sy_scale = f[18];
+    c.tan_half_fov = f[19], c.clip_start = f[20], c.clip_range = f[21];
+    if (rx.ndim() != 1) throw py::value_error("rx must be one-dimensional");
+    const size_t n = size_t(rx.shape(0));
+    need_len(ry, n, "ry");
+    F32Array O({py::ssize_t(3), py::ssize_t(n)}), D({py::ssize_t(3), py::ssize_t(n)}), tmax{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        camera_rays(c, rx.data(), ry.data(), n, O.mutable_data(), D.mutable_data(), tmax.mutable_data());
+    }
+    return py::make_tuple(O, D, tmax);
+}
+
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny) {
     if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
@@ -329,5 +352,6 @@ void register_shading(py::module_& m) {
     m.def("gather_emission", &gather_emission_py, py::arg("hits"), py::arg("hit"), py::arg("emission"),
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("D"), py::arg("thr"),
           py::arg("pdf"), py::arg("pid"), py::arg("L"));
+    m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"));
     m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
 }

@@ -138,5 +138,20 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
                        const float* tri_prob, const float* area, const float* geo, size_t M, const float* D,
                        const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N);
 
+// A camera's frame in float32, as addon/camera.py CameraModel rounds it: orthonormal
+// camera-to-world rotation (columns right, up, back), position, the raster -> viewplane map
+// s = origin + r * scale per axis, tan(fov/2), clip start and range; ortho_base = pos -
+// clip_start * back (ortho origins).
+struct CameraFrame {
+    bool ortho;
+    float rot[3][3], pos[3], ortho_base[3];
+    float sx0, sx_scale, sy0, sy_scale;
+    float tan_half_fov, clip_start, clip_range;
+};
+
+// Rays through full-frame raster positions (rx, ry): origins O and unit directions D (3 rows,
+// stride n) on the clip-start plane, tmax reaching the clip-end plane.
+void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D, float* tmax);
+
 }  // namespace dacrt
 

@@ -158,6 +158,15 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, D, thr, 
                                  np.ascontiguousarray(pid, np.int64), L)
 
 
+def camera_rays(ortho: bool, frame, rx, ry):
+    """Rays through raster positions rx, ry (n,) of a camera frame (22 float32: camera-to-world
+    rotation row-major (9), position (3), orthographic origin base (3), raster -> viewplane
+    map sx0, sx_scale, sy0, sy_scale (4), tan(fov / 2), clip start, clip range): origins and
+    unit directions (3, n) on the clip-start plane, tmax (n,) to the clip-end plane."""
+    return _core.camera_rays(bool(ortho), np.ascontiguousarray(frame, _F32), np.ascontiguousarray(rx, _F32),
+                             np.ascontiguousarray(ry, _F32))
+
+
 def accumulate(L, idx, values) -> None:
     """L[:, idx] += values for distinct idx (k,); L (3, N) float32 C-contiguous, values (3, k)."""
     if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
