@@ -417,3 +417,11 @@ def test_gather_emission_matches_the_numpy_definition():
         shading.gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, D, thr, None, pid, L)
     with pytest.raises(ValueError, match="pid"):
         shading.gather_emission(hits, hit, emission, emissive, None, area, geo, D, None, None, pid + N, L)
+
+
+def test_camera_rays_checks_its_frame():
+    rx = ry = np.zeros(4, F32)
+    with pytest.raises(ValueError, match="22 floats"):
+        shading.camera_rays(False, np.zeros(21, F32), rx, ry)
+    with pytest.raises(ValueError, match="ry"):
+        shading.camera_rays(False, np.zeros(22, F32), rx, np.zeros(3, F32))
