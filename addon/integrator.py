@@ -39,9 +39,10 @@ import dacrt
 
 from .camera import CameraModel
 from .adaptive import AdaptiveSampling
+from .allocator import render_heap
 from .film import Film
 from .filter import PixelFilter
-from .lights import BackgroundLight, EmissiveTriangles, LightSet, make_lamp
+from .lights import BackgroundLight, EmissiveTriangles, LightSet, lamp_records, make_lamp
 from .sampling import RandomStream, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 
@@ -370,14 +371,29 @@ class Integrator:
             self.messages.append(('INFO', f"skipped {len(self.lights.unseen_lamps)} light(s) that neither camera "
                                           f"nor diffuse rays can see: {', '.join(self.lights.unseen_lamps)}"))
         self._lamps_for_camera = bool(self.lights.num_lamps or self.lights.camera_lamps)
-        self._lamp_mis = np.array([l.seen_by_bsdf for l in self.lights.lamps], bool)
+        # Native lamp records (dacrt.lamps): the lamps light sampling may choose (0..nl-1), then
+        # the lamps only camera rays see. Record index lists per ray kind, for lamp_gather.
+        nl = self.lights.num_lamps
+        every = self.lights.lamps + self.lights.camera_lamps
+        self._lamp_records = lamp_records(every)
+        self._nee_records = np.ascontiguousarray(self._lamp_records[:nl])
+        self._camera_lamps = np.array([j for j, l in enumerate(every) if l.seen_by_camera and not (
+            self.transparent and isinstance(l, BackgroundLight))], np.int32)   # transparent film: no world
+        self._bsdf_lamps = np.array([j for j, l in enumerate(self.lights.lamps) if l.seen_by_bsdf], np.int32)
         self._selection_table()
 
     def _selection_table(self):
-        """Selection probability per light entry (lamps, then emissive triangles)."""
-        tri_entries = self.lights.tri_prob[self.lights.triangles.index] if self.lights.triangles is not None \
-            else np.zeros(0, F32)
-        self._entry_prob = np.concatenate([self.lights.lamp_prob, tri_entries]).astype(F32)
+        """Per light entry (lamps, then emissive triangles): selection probability, whether the
+        light is sampled without MIS (lamps BSDF rays cannot meet: weight 1, as a delta light),
+        and whether its samples cast shadow rays. lamp_prob per native lamp record (0 for the
+        camera-only ones) weights BSDF hits on lamps."""
+        lights = self.lights
+        ntri = len(lights.triangles.index) if lights.triangles is not None else 0
+        tri_entries = lights.tri_prob[lights.triangles.index] if ntri else np.zeros(0, F32)
+        self._entry_prob = np.concatenate([lights.lamp_prob, tri_entries]).astype(F32)
+        self._entry_no_mis = np.concatenate([[not l.seen_by_bsdf for l in lights.lamps], np.zeros(ntri, bool)])
+        self._entry_shadow = np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri, bool)])
+        self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.camera_lamps), F32)]).astype(F32)
 
     def _weight_lights(self, probes: int = 32):
         """Let the light choice follow where the camera looks: a probes x probes grid of camera
@@ -513,49 +529,50 @@ class Integrator:
         sample, offset = 0, 0
         adaptive = self.adaptive
         t_render = time.perf_counter()
-        try:
-            while sample < self.samples and len(film_pix):
-                t0 = time.perf_counter()
-                nact = len(film_pix)
-                if adaptive is not None:
-                    interval = adaptive.step_for(nact, _ADAPTIVE_MIN_BATCH)
-                if offset == 0 and target >= nact:
-                    ns = int(min(max(target // nact, 1), self.samples - sample))
+        with render_heap():        # freed pass arrays stay in the heap until the render ends
+            try:
+                while sample < self.samples and len(film_pix):
+                    t0 = time.perf_counter()
+                    nact = len(film_pix)
                     if adaptive is not None:
-                        ns = adaptive.align(sample, ns, interval)
-                    self._render_block(film_pix, frame_pix, sample, ns)
-                    step = nact * ns
-                    sample += ns
-                else:
-                    stop = min(offset + target, nact)
-                    self._render_block(film_pix[offset:stop], frame_pix[offset:stop], sample, 1)
-                    step = stop - offset
-                    offset = 0 if stop == nact else stop
-                    sample += offset == 0
-                self._paths_done += step
-                if adaptive is not None and offset == 0 and sample < self.samples \
-                        and adaptive.need_filter(sample - 1, interval):
-                    keep = adaptive.keep_sampling(self.film, film_pix)
-                    if not keep.all():
-                        stopped = int(nact - np.count_nonzero(keep))
-                        self._pixels_converged += stopped
-                        self._samples_skipped += stopped * (self.samples - sample)
-                        film_pix, frame_pix = film_pix[keep], frame_pix[keep]
-                        if not len(film_pix):
-                            sample = self.samples           # every pixel has finished
-                self._samples_done = sample
-                self._passes += 1
-                if self._fixed_paths is None:
-                    rate = step / max(time.perf_counter() - t0, 1e-6)
-                    target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(_MAX_PATHS, 4 * step)))
+                        interval = adaptive.step_for(nact, _ADAPTIVE_MIN_BATCH)
+                    if offset == 0 and target >= nact:
+                        ns = int(min(max(target // nact, 1), self.samples - sample))
+                        if adaptive is not None:
+                            ns = adaptive.align(sample, ns, interval)
+                        self._render_block(film_pix, frame_pix, sample, ns)
+                        step = nact * ns
+                        sample += ns
+                    else:
+                        stop = min(offset + target, nact)
+                        self._render_block(film_pix[offset:stop], frame_pix[offset:stop], sample, 1)
+                        step = stop - offset
+                        offset = 0 if stop == nact else stop
+                        sample += offset == 0
+                    self._paths_done += step
+                    if adaptive is not None and offset == 0 and sample < self.samples \
+                            and adaptive.need_filter(sample - 1, interval):
+                        keep = adaptive.keep_sampling(self.film, film_pix)
+                        if not keep.all():
+                            stopped = int(nact - np.count_nonzero(keep))
+                            self._pixels_converged += stopped
+                            self._samples_skipped += stopped * (self.samples - sample)
+                            film_pix, frame_pix = film_pix[keep], frame_pix[keep]
+                            if not len(film_pix):
+                                sample = self.samples           # every pixel has finished
+                    self._samples_done = sample
+                    self._passes += 1
+                    if self._fixed_paths is None:
+                        rate = step / max(time.perf_counter() - t0, 1e-6)
+                        target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(_MAX_PATHS, 4 * step)))
+                    self._render_seconds = time.perf_counter() - t_render
+                    yield self._progress((self._paths_done + self._samples_skipped) / max(total, 1))
+            finally:
                 self._render_seconds = time.perf_counter() - t_render
-                yield self._progress((self._paths_done + self._samples_skipped) / max(total, 1))
-        finally:
-            self._render_seconds = time.perf_counter() - t_render
-            self.close()
-            if self.film.nan_dropped:
-                self.messages.append(('WARNING', f"dropped {self.film.nan_dropped} sample(s) that were "
-                                                 f"NaN or infinite (pixels average the others)"))
+                self.close()
+                if self.film.nan_dropped:
+                    self.messages.append(('WARNING', f"dropped {self.film.nan_dropped} sample(s) that were "
+                                                     f"NaN or infinite (pixels average the others)"))
 
     def _progress(self, fraction):
         elapsed = self._render_seconds
@@ -649,15 +666,10 @@ class Integrator:
         hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax, path.prim)
         prim = hits['prim']
         hit = prim >= 0
-        lamps = self._lamps_for_camera if camera else self.lights.num_lamps
-        if lamps:
-            self._gather_lamps(camera, path, np.where(hit, hits['t'], path.tmax), L)
+        self._gather_lamps(camera, path, hit, hits, L)
         miss = np.flatnonzero(~hit)
-        if len(miss):
-            if lamps:
-                self._gather_infinite(camera, path, miss, L)
-            if camera and not self.transparent:
-                alpha[miss] = 1.0
+        if len(miss) and camera and not self.transparent:
+            alpha[miss] = 1.0
         if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
             if camera and self.film.passes:
                 self._write_passes(path, hits, hit, data, pix, samp)
@@ -763,15 +775,6 @@ class Integrator:
 
     # --- emission seen by rays ------------------------------------------------------------------
 
-    @staticmethod
-    def _mis_bsdf(pdf_bsdf, pdf_light):
-        """Power-heuristic weight of a BSDF-sampled hit against light sampling."""
-        with np.errstate(divide='ignore', invalid='ignore'):
-            r = pdf_light / pdf_bsdf
-            r *= r
-            r += F32(1.0)
-            return F32(1.0) / r
-
     def _gather_emission(self, camera, hit, hits, path, L):
         """Emission of the triangles hit by rays `hit` (two-sided), MIS-weighted for BSDF rays
         (one native pass)."""
@@ -779,42 +782,16 @@ class Integrator:
                                       None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
                                       path.D, path.thr, path.pdf, path.pid, L)
 
-    def _seen_lamps(self, camera):
-        """(index into lights.lamps, lamp) of the lamps camera or BSDF rays can meet; lamps that
-        only the camera sees carry index -1 (camera hits need no light-selection probability)."""
-        if not camera:
-            return [(j, l) for j, l in enumerate(self.lights.lamps) if l.seen_by_bsdf]
-        return ([(j, l) for j, l in enumerate(self.lights.lamps) if l.seen_by_camera]
-                + [(-1, l) for l in self.lights.camera_lamps])
-
-    def _gather_lamps(self, camera, path, t_surf, L):
-        """Finite lamps a ray passes before its surface hit (lamps are not geometry)."""
-        for j, lamp in self._seen_lamps(camera):
-            if lamp.at_infinity:
-                continue
-            idx, Le, pdf_l = lamp.intersect(path.O, path.D, t_surf)
-            if len(idx):
-                self._add_lamp(camera, j, path, idx, Le, pdf_l, L)
-
-    def _gather_infinite(self, camera, path, miss, L):
-        D = None
-        for j, lamp in self._seen_lamps(camera):
-            if not lamp.at_infinity:
-                continue
-            if camera and self.transparent and isinstance(lamp, BackgroundLight):
-                continue                              # transparent film: the world is not seen directly
-            if D is None:
-                D = np.take(path.D, miss, axis=1)
-            idx, Le, pdf_l = lamp.eval_miss(D)
-            if len(idx):
-                self._add_lamp(camera, j, path, np.take(miss, idx), Le, pdf_l, L)
-
-    def _add_lamp(self, camera, j, path, idx, Le, pdf_l, L):
-        if path.thr is not None:
-            Le = Le * np.take(path.thr, idx, axis=1)
-        if not camera:
-            Le *= self._mis_bsdf(np.take(path.pdf, idx), self.lights.lamp_prob[j] * pdf_l)
-        _accumulate(L, np.take(path.pid, idx), Le)
+    def _gather_lamps(self, camera, path, hit, hits, L):
+        """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
+        the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
+        One native pass over the rays for all lamps (dacrt.lamps.lamp_gather)."""
+        lamps = self._camera_lamps if camera else self._bsdf_lamps
+        if not len(lamps):
+            return
+        dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, np.where(hit, hits['t'], path.tmax),
+                                ~hit, path.pid, L, thr=path.thr, pdf_bsdf=None if camera else path.pdf,
+                                lamp_prob=None if camera else self._record_prob)
 
     # --- next-event estimation --------------------------------------------------------------------
 
@@ -826,37 +803,25 @@ class Integrator:
         n = P.shape[1]
         u1, u2 = self.rng.uniform2(keys, _dim(k, 1))
         nl = lights.num_lamps
-        if u_pick is None:
-            entry = np.zeros(n, np.int32)
-            groups = [0]                              # the only light (lamp 0 or the triangles)
-            bucket = None
-        else:
-            entry = lights.select(u_pick)
-            bucket = np.minimum(entry, nl)
-            counts = np.bincount(bucket, minlength=nl + 1)
-            groups = [j for j in range(nl + 1) if counts[j]]
-        shadow = None                                 # None: every sample casts a shadow ray
+        entry = np.zeros(n, np.int32) if u_pick is None else lights.select(u_pick)
+        wi, value = np.empty((3, n), F32), np.empty((3, n), F32)
+        dist, pdf = np.empty(n, F32), np.empty(n, F32)
         target = None
-        if len(groups) == 1:
-            ls = self._sample_group(groups[0], entry, P, u1, u2)
-            wi, dist, value, pdf, target = ls.wi, ls.dist, ls.value, ls.pdf, ls.target
-            if groups[0] < nl and not lights.lamps[groups[0]].cast_shadow:
-                shadow = np.zeros(n, bool)
-        else:
-            wi, value = np.empty((3, n), F32), np.empty((3, n), F32)
-            dist, pdf = np.empty(n, F32), np.empty(n, F32)
-            shadow = np.ones(n, bool)
-            for j in groups:
-                idx = np.flatnonzero(bucket == j)
-                take = _taker(idx)
-                ls = self._sample_group(j, take(entry), take(P), take(u1), take(u2))
-                wi[:, idx], dist[idx], value[:, idx], pdf[idx] = ls.wi, ls.dist, ls.value, ls.pdf
-                if ls.target is not None:
-                    if target is None:
-                        target = np.full((3, n), np.nan, F32)
-                    target[:, idx] = ls.target
-                if j < nl and not lights.lamps[j].cast_shadow:
-                    shadow[idx] = False
+        if nl:       # every lamp in one native pass; entries >= nl (triangles) are left alone
+            dacrt.lamps.lamp_sample(self._nee_records, entry, P, u1, u2, out=(wi, dist, value, pdf))
+        if lights.triangles is not None:
+            tri = np.flatnonzero(entry >= nl) if nl else None
+            take = _taker(tri)
+            ls = lights.triangles.sample(take(P), take(entry) - nl, take(u1), take(u2))
+            target = np.full((3, n), np.nan, F32) if nl else ls.target
+            if nl:
+                wi[:, tri], dist[tri], value[:, tri], pdf[tri] = ls.wi, ls.dist, ls.value, ls.pdf
+                target[:, tri] = ls.target
+            else:
+                wi, dist, value, pdf = ls.wi, ls.dist, ls.value, ls.pdf
+        if self._entry_no_mis.any():
+            pdf[np.take(self._entry_no_mis, entry)] = np.inf     # NEE-only lamps: weight 1
+        shadow = None if self._entry_shadow.all() else np.take(self._entry_shadow, entry)
         # value *= thr x cos/pi x MIS weight / p_sel (one native pass); ok: can contribute
         value = np.ascontiguousarray(value, F32)
         ok = dacrt.shading.nee_weight(ns, None if ns is ng else ng, wi, pdf, np.take(self._entry_prob, entry),
@@ -878,15 +843,6 @@ class Integrator:
                 send = np.concatenate([send, free])
         if len(send):
             _accumulate(L, np.take(pid, send), np.take(value, send, axis=1))
-
-    def _sample_group(self, j, entry, P, u1, u2):
-        lights = self.lights
-        if j < lights.num_lamps:
-            ls = lights.lamps[j].sample(P, u1, u2)
-            if not self._lamp_mis[j]:
-                ls.pdf = np.full(P.shape[1], np.inf, F32)      # NEE-only light: weight 1
-            return ls
-        return lights.triangles.sample(P, entry - lights.num_lamps, u1, u2)
 
 
 def _accumulate(L, idx, values):

@@ -20,12 +20,12 @@ import numpy as np
 
 from .area import AreaLight
 from .background import BackgroundLight
-from .base import F32, Lamp, LightSample
+from .base import F32, RECORD_WIDTH, Lamp, LightSample
 from .point import PointLight, SpotLight
 from .sun import SunLight
 from .triangles import EmissiveTriangles
 
-__all__ = ['LightSet', 'LightSample', 'Lamp', 'BackgroundLight', 'EmissiveTriangles', 'make_lamp']
+__all__ = ['LightSet', 'LightSample', 'Lamp', 'BackgroundLight', 'EmissiveTriangles', 'make_lamp', 'lamp_records']
 
 _KINDS = {'POINT': PointLight, 'SPOT': SpotLight, 'SUN': SunLight, 'AREA': AreaLight}
 
@@ -41,6 +41,12 @@ def make_lamp(light) -> Lamp:
     if m.shape != (4, 4) or not np.isfinite(m).all():
         raise ValueError(f"light {light.name!r}: matrix must be a finite 4x4 transform")
     return cls(light)
+
+
+def lamp_records(lamps) -> np.ndarray:
+    """(R, RECORD_WIDTH) float32: the native lamp records (dacrt.lamps) of lamps, in order."""
+    rows = [lamp.record() for lamp in lamps]
+    return np.stack(rows) if rows else np.zeros((0, RECORD_WIDTH), F32)
 
 
 class LightSet:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..sampling import concentric_disk, dot, normalize
-from .base import F32, Lamp, LightSample, outer
+from .base import F32, KIND_AREA, Lamp, LightSample, make_record, outer
 
 SHAPES = ('SQUARE', 'RECTANGLE', 'DISK', 'ELLIPSE')
 
@@ -62,6 +62,13 @@ class AreaLight(Lamp):
             scale *= np.where(cos_l > 0, f, F32(0.0))
         return scale
 
+    def record(self):
+        # shape 0: rectangle (square), 1: ellipse (disk); spread_norm 0: no spread
+        spread = {} if self.tan_half_spread is None else dict(tan_half_spread=self.tan_half_spread,
+                                                               spread_norm=self.spread_norm)
+        return make_record(KIND_AREA, 1 if self.ellipse else 0, emit=self.emit, pos=self.center, area=self.area,
+                           axis_x=self.axis_x, axis_y=self.axis_y, inv_x=self.inv_x, inv_y=self.inv_y,
+                           normal=self.normal, **spread)
 
     def sample(self, P, u1, u2):
         if self.ellipse:

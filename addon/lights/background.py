@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..sampling import uniform_sphere
-from .base import F32, Lamp, LightSample, outer
+from .base import F32, KIND_BACKGROUND, Lamp, LightSample, make_record, outer
 
 INV_4PI = F32(1.0 / (4.0 * np.pi))
 
@@ -17,6 +17,8 @@ class BackgroundLight(Lamp):
         super().__init__(color=color)
         self.emit = np.asarray(color, F32)
 
+    def record(self):
+        return make_record(KIND_BACKGROUND, 0, emit=self.emit, pdf=INV_4PI)
 
     def sample(self, P, u1, u2):
         n = P.shape[1]

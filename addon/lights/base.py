@@ -10,6 +10,17 @@ Conventions (Cycles' units, reference blender-cycles.md section 2.2); vectors ar
 - `intersect(O, D, tmax)` (finite lights) and `eval_miss(D)` (lights at infinity) return
   (indices of the rays that see the light, radiance (3,k), solid-angle pdf (k,)).
 Lights are not geometry: they never occlude, and a ray that meets one keeps going (as in Cycles).
+
+`record()` packs a lamp's parameters into one row of RECORD_WIDTH float32 for the native
+kernels (dacrt.lamps, native/cpp/lamps.h), which compute what `sample`, `intersect` and
+`eval_miss` define here for all lamps in one pass over the rays. Fields (offset, width), in the
+order of the C++ struct LampRecord; fields a lamp does not use stay 0:
+  kind 0 (KIND_*), shape 1 (point/spot: POINT_DELTA/SPHERE/DISK; sun: 0 delta, 1 cone;
+  area: 0 rectangle, 1 ellipse), emit 2..4 (intensity, irradiance or radiance, as `emit`),
+  pos 5..7 (centre, or the sun's unit direction), radius 8, cos_half 9 (spot, sun),
+  inv_smooth 10 (spot; 0 = hard edge), omc 11 (sun: 1 - cos(angle/2)), pdf 12 (sun cone,
+  background), area 13, axis_x 14..16, axis_y 17..19, inv_x 20..22, inv_y 23..25, normal 26..28,
+  tan_half_spread 29, spread_norm 30 (0 = no spread), inv_m3 31..39 (spot, row-major).
 """
 from __future__ import annotations
 
@@ -20,6 +31,26 @@ import numpy as np
 
 F32 = np.float32
 EMPTY_IDX = np.zeros(0, np.int64)
+
+RECORD_WIDTH = 40
+RECORD_FIELDS = {
+    'kind': (0, 1), 'shape': (1, 1), 'emit': (2, 3), 'pos': (5, 3), 'radius': (8, 1), 'cos_half': (9, 1),
+    'inv_smooth': (10, 1), 'omc': (11, 1), 'pdf': (12, 1), 'area': (13, 1), 'axis_x': (14, 3), 'axis_y': (17, 3),
+    'inv_x': (20, 3), 'inv_y': (23, 3), 'normal': (26, 3), 'tan_half_spread': (29, 1), 'spread_norm': (30, 1),
+    'inv_m3': (31, 9),
+}
+KIND_POINT, KIND_SPOT, KIND_SUN, KIND_AREA, KIND_BACKGROUND = range(5)
+POINT_DELTA, POINT_SPHERE, POINT_DISK = range(3)
+
+
+def make_record(kind: int, shape: int, **fields) -> np.ndarray:
+    """A (RECORD_WIDTH,) float32 lamp record with the given fields (see the module doc)."""
+    rec = np.zeros(RECORD_WIDTH, F32)
+    fields.update(kind=kind, shape=shape)
+    for name, value in fields.items():
+        off, width = RECORD_FIELDS[name]
+        rec[off:off + width] = np.ravel(np.asarray(value, F32))
+    return rec
 
 
 @dataclass
@@ -79,6 +110,10 @@ class Lamp(ABC):
     @abstractmethod
     def sample(self, P, u1, u2) -> LightSample:
         """Sample a direction toward the light from each shading point."""
+
+    @abstractmethod
+    def record(self) -> np.ndarray:
+        """The lamp's parameters as a native lamp record (RECORD_WIDTH float32, module doc)."""
 
     def intersect(self, O, D, tmax):
         return EMPTY_IDX, np.zeros((3, 0), F32), np.zeros(0, F32)

@@ -18,10 +18,12 @@ import numpy as np
 
 from ..sampling import (concentric_disk, dot, normalize, one_minus_cos_from_sin2, orthonormal_basis,
                         to_world, uniform_cone)
-from .base import F32, Lamp, LightSample, outer
+from .base import (F32, KIND_POINT, KIND_SPOT, POINT_DELTA, POINT_DISK, POINT_SPHERE, Lamp, LightSample, make_record,
+                   outer)
 
 
 class PointLight(Lamp):
+    record_kind = KIND_POINT
     def __init__(self, light):
         super().__init__(light)
         m = np.asarray(light.matrix, np.float64)
@@ -38,6 +40,13 @@ class PointLight(Lamp):
         # intensity (delta) or radiance (finite): strength * eval_fac
         self.emit = (self.color * fac).astype(F32)
 
+    def record(self):
+        shape = POINT_DELTA if self.delta else POINT_SPHERE if self.sphere else POINT_DISK
+        return make_record(self.record_kind, shape, emit=self.emit, pos=self.center, radius=self.radius,
+                           **self._cone_fields())
+
+    def _cone_fields(self) -> dict:
+        return {}
 
     def _attenuate(self, scale, to_light):
         """Per-sample scalars times the light's angular factor for unit directions (3,n) from the
@@ -112,6 +121,7 @@ def _smoothstep(f: np.ndarray) -> np.ndarray:
 
 
 class SpotLight(PointLight):
+    record_kind = KIND_SPOT
     def __init__(self, light):
         super().__init__(light)
         m3 = np.asarray(light.matrix, np.float64)[:3, :3]
@@ -126,6 +136,11 @@ class SpotLight(PointLight):
         self.cos_half = F32(np.cos(0.5 * size))
         omc = 2.0 * np.sin(0.25 * size) ** 2            # 1 - cos(size/2) without cancellation
         self.inv_smooth = F32(1.0 / (omc * blend)) if blend > 0 else None
+
+    def _cone_fields(self) -> dict:
+        # inv_smooth 0 marks the hard edge (blend 0)
+        return dict(cos_half=self.cos_half, inv_m3=self.inv_m3,
+                    inv_smooth=0.0 if self.inv_smooth is None else self.inv_smooth)
 
     def _attenuate(self, scale, to_light):
         scale *= self.attenuation(-to_light)

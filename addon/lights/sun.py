@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..sampling import dot, to_world, uniform_cone
-from .base import F32, Lamp, LightSample, outer
+from .base import F32, KIND_SUN, Lamp, LightSample, make_record, outer
 
 
 class SunLight(Lamp):
@@ -35,6 +35,10 @@ class SunLight(Lamp):
             self.emit = (self.color * fac).astype(F32)             # radiance
         self.pdf = F32(np.inf if self.delta else 1.0 / (2.0 * np.pi * float(self.omc)))
 
+    def record(self):
+        # shape 0: delta (its infinite pdf is implied, records stay finite), 1: cone
+        return make_record(KIND_SUN, 0 if self.delta else 1, emit=self.emit, pos=self.to_sun, cos_half=self.cos_half,
+                           omc=self.omc, pdf=0.0 if self.delta else self.pdf)
 
     def sample(self, P, u1, u2):
         n = P.shape[1]

@@ -160,9 +160,11 @@ private:
 }  // namespace
 
 void register_shading(py::module_& m);  // bindings_shading.cpp
+void register_lamps(py::module_& m);    // bindings_lamps.cpp
 
 PYBIND11_MODULE(_core, m) {
     register_shading(m);
+    register_lamps(m);
     m.doc() = "DACRT native core: divide-and-conquer ray tracing without acceleration structures";
     m.def("supported_isas", &supported_isas, "ISAs this CPU can run, weakest first");
     m.def("best_isa", []() { return isa_name(resolve_isa("")); });

@@ -224,3 +224,4 @@ class Scene:
         return out.view(np.bool_)
 
 from . import shading  # noqa: E402  (per-ray helper kernels; needs the names above)
+from . import lamps  # noqa: E402  (analytic lamp kernels)

@@ -1,0 +1,169 @@
+// pybind11 bindings of the lamp kernels (lamps.h), registered into dacrt._core by
+// register_lamps(). Shapes, dtypes, record codes and indices are checked here (the Python
+// wrappers in dacrt/lamps.py convert arguments); outputs are written in place, so they must be
+// exactly float32, C-contiguous and writeable (a converted copy would silently lose the
+// result). The GIL is released while a kernel runs.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "lamps.h"
+
+namespace py = pybind11;
+using namespace dacrt;
+
+namespace {
+
+using F32Array = py::array_t<float, py::array::c_style>;
+using I32Array = py::array_t<int32_t, py::array::c_style>;
+using I64Array = py::array_t<int64_t, py::array::c_style>;
+
+std::string shape_str(const py::array& a) {
+    std::string s = "(";
+    for (py::ssize_t k = 0; k < a.ndim(); ++k) s += (k ? ", " : "") + std::to_string(a.shape(k));
+    return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+// Checks a's shape: (rows, n) when rows > 0, else (n,).
+void need_shape(const py::array& a, py::ssize_t rows, size_t n, const char* name) {
+    const bool ok = rows > 0 ? a.ndim() == 2 && a.shape(0) == rows && size_t(a.shape(1)) == n
+                             : a.ndim() == 1 && size_t(a.shape(0)) == n;
+    if (!ok)
+        throw py::value_error(std::string(name) + " must have shape " +
+                              (rows > 0 ? "(" + std::to_string(rows) + ", " : "(") + std::to_string(n) +
+                              (rows > 0 ? ")" : ",)") + ", got " + shape_str(a));
+}
+
+// A caller-provided output array the kernel writes in place.
+float* out_array(py::array a, py::ssize_t rows, size_t n, const char* name) {
+    if (!py::isinstance<py::array_t<float>>(a) || !(a.flags() & py::array::c_style) || !a.writeable())
+        throw py::value_error(std::string(name) + " must be a writeable C-contiguous float32 array (written in place)");
+    need_shape(a, rows, n, name);
+    return static_cast<float*>(a.mutable_data());
+}
+
+// The (R, LAMP_RECORD_WIDTH) records as LampRecord rows, each checked.
+const LampRecord* lamp_records(const F32Array& records) {
+    if (records.ndim() != 2 || size_t(records.shape(1)) != LAMP_RECORD_WIDTH)
+        throw py::value_error("records must have shape (R, " + std::to_string(LAMP_RECORD_WIDTH) + "), got " +
+                              shape_str(records));
+    const LampRecord* rec = reinterpret_cast<const LampRecord*>(records.data());
+    for (py::ssize_t j = 0; j < records.shape(0); ++j) {
+        std::string err = lamp_record_error(rec[j]);
+        if (!err.empty()) throw py::value_error("records[" + std::to_string(j) + "]: " + err);
+    }
+    return rec;
+}
+
+const float* optional_f32(const py::object& o, py::ssize_t rows, size_t n, const char* name, F32Array& keep) {
+    if (o.is_none()) return nullptr;
+    keep = o.cast<F32Array>();
+    need_shape(keep, rows, n, name);
+    return keep.data();
+}
+
+void lamp_sample_py(F32Array records, I32Array entry, F32Array P, F32Array u1, F32Array u2, py::array wi,
+                    py::array dist, py::array value, py::array pdf) {
+    const LampRecord* rec = lamp_records(records);
+    const size_t R = size_t(records.shape(0));
+    if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
+    const size_t n = size_t(P.shape(1));
+    need_shape(entry, 0, n, "entry");
+    need_shape(u1, 0, n, "u1");
+    need_shape(u2, 0, n, "u2");
+    float* w = out_array(wi, 3, n, "wi");
+    float* d = out_array(dist, 0, n, "dist");
+    float* v = out_array(value, 3, n, "value");
+    float* p = out_array(pdf, 0, n, "pdf");
+    py::gil_scoped_release nogil;
+    lamp_sample(rec, R, entry.data(), P.data(), u1.data(), u2.data(), n, w, d, v, p);
+}
+
+void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D, F32Array t_surf,
+                    py::array_t<bool, py::array::c_style> miss, py::object thr, py::object pdf_bsdf, I64Array pid,
+                    py::array L) {
+    const LampRecord* rec = lamp_records(records);
+    const size_t R = size_t(records.shape(0));
+    if (lamps.ndim() != 1) throw py::value_error("lamps must be one-dimensional, got " + shape_str(lamps));
+    const size_t nl = size_t(lamps.shape(0));
+    for (size_t k = 0; k < nl; ++k)
+        if (lamps.data()[k] < 0 || size_t(lamps.data()[k]) >= R)
+            throw py::value_error("lamps[" + std::to_string(k) + "] = " + std::to_string(lamps.data()[k]) +
+                                  " is not a record index 0.." + std::to_string(R ? R - 1 : 0));
+    if (lamp_prob.is_none() != pdf_bsdf.is_none())
+        throw py::value_error("lamp_prob and pdf_bsdf go together: both for BSDF rays (MIS), neither for camera rays");
+    if (O.ndim() != 2 || O.shape(0) != 3) throw py::value_error("O must have shape (3, n), got " + shape_str(O));
+    const size_t n = size_t(O.shape(1));
+    need_shape(D, 3, n, "D");
+    need_shape(t_surf, 0, n, "t_surf");
+    need_shape(miss, 0, n, "miss");
+    need_shape(pid, 0, n, "pid");
+    F32Array prob_keep, thr_keep, pdf_keep;
+    const float* prob = optional_f32(lamp_prob, 0, R, "lamp_prob", prob_keep);
+    const float* t = optional_f32(thr, 3, n, "thr", thr_keep);
+    const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
+    if (!py::isinstance<py::array_t<float>>(L) || !(L.flags() & py::array::c_style) || !L.writeable() || L.ndim() != 2 ||
+        L.shape(0) != 3)
+        throw py::value_error("L must be a writeable C-contiguous (3, N) float32 array (added to in place), got " +
+                              shape_str(L));
+    const size_t N = size_t(L.shape(1));
+    float* out = static_cast<float*>(L.mutable_data());
+    std::string err;
+    {
+        py::gil_scoped_release nogil;
+        // threads split by ray and add to L[:, pid]: pid must be in range and distinct
+        std::vector<uint8_t> seen(N, 0);
+        const int64_t* p = pid.data();
+        for (size_t i = 0; i < n && err.empty(); ++i) {
+            if (p[i] < 0 || size_t(p[i]) >= N)
+                err = "pid[" + std::to_string(i) + "] = " + std::to_string(p[i]) + " is outside 0.." +
+                      std::to_string(N ? N - 1 : 0) + " (L has " + std::to_string(N) + " columns)";
+            else if (seen[size_t(p[i])]++)
+                err = "pid[" + std::to_string(i) + "] = " + std::to_string(p[i]) + " repeats an earlier pid (must be distinct)";
+        }
+        if (err.empty())
+            lamp_gather(rec, lamps.data(), nl, prob, O.data(), D.data(), t_surf.data(),
+                        reinterpret_cast<const uint8_t*>(miss.data()), t, pb, p, n, out, N);
+    }
+    if (!err.empty()) throw py::value_error(err);
+}
+
+py::dict lamp_record_layout() {
+    py::dict d;
+#define DACRT_FIELD(f, width) d[#f] = py::make_tuple(offsetof(LampRecord, f) / sizeof(float), width)
+    DACRT_FIELD(kind, 1);
+    DACRT_FIELD(shape, 1);
+    DACRT_FIELD(emit, 3);
+    DACRT_FIELD(pos, 3);
+    DACRT_FIELD(radius, 1);
+    DACRT_FIELD(cos_half, 1);
+    DACRT_FIELD(inv_smooth, 1);
+    DACRT_FIELD(omc, 1);
+    DACRT_FIELD(pdf, 1);
+    DACRT_FIELD(area, 1);
+    DACRT_FIELD(axis_x, 3);
+    DACRT_FIELD(axis_y, 3);
+    DACRT_FIELD(inv_x, 3);
+    DACRT_FIELD(inv_y, 3);
+    DACRT_FIELD(normal, 3);
+    DACRT_FIELD(tan_half_spread, 1);
+    DACRT_FIELD(spread_norm, 1);
+    DACRT_FIELD(inv_m3, 9);
+#undef DACRT_FIELD
+    return d;
+}
+
+}  // namespace
+
+void register_lamps(py::module_& m) {
+    m.attr("LAMP_RECORD_WIDTH") = LAMP_RECORD_WIDTH;
+    m.def("lamp_record_layout", &lamp_record_layout, "field name -> (offset, width) in float32 of a lamp record");
+    m.def("lamp_sample", &lamp_sample_py, py::arg("records"), py::arg("entry"), py::arg("P"), py::arg("u1"),
+          py::arg("u2"), py::arg("wi"), py::arg("dist"), py::arg("value"), py::arg("pdf"));
+    m.def("lamp_gather", &lamp_gather_py, py::arg("records"), py::arg("lamps"), py::arg("lamp_prob"), py::arg("O"),
+          py::arg("D"), py::arg("t_surf"), py::arg("miss"), py::arg("thr"), py::arg("pdf_bsdf"), py::arg("pid"),
+          py::arg("L"));
+}

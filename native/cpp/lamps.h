@@ -1,0 +1,339 @@
+// Analytic lamps (point, spot, distant, area, uniform background) as plain float32 records, and
+// their per-ray arithmetic: a light sample toward a shading point, a ray meeting a finite lamp,
+// a ray that left the scene seeing a lamp at infinity. lamps.cpp runs these over ray batches.
+//
+// The formulas and their float32 operation order are those of the readable Python definitions
+// (the renderer's addon/lights/{point,sun,area,background}.py and the warps of addon/sampling.py,
+// which say why each formula is what it is); tests/integrator/test_native_lamps.py compares the
+// two. Agreement is to rounding (libm vs numpy sin/cos, summation order), not bit for bit.
+//
+// Record layout: LAMP_RECORD_WIDTH float32 per lamp, exactly the fields of LampRecord in order
+// (a row of a (R, W) float32 array; the Python side builds them with Lamp.record()). Kind and
+// shape are small integers stored as floats. Unused fields are 0.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+namespace dacrt {
+
+enum LampKind : int { LAMP_POINT = 0, LAMP_SPOT = 1, LAMP_SUN = 2, LAMP_AREA = 3, LAMP_BACKGROUND = 4, LAMP_NUM_KINDS = 5 };
+enum PointShape : int { POINT_DELTA = 0, POINT_SPHERE = 1, POINT_DISK = 2 };  // point and spot
+enum SunShape : int { SUN_DELTA = 0, SUN_CONE = 1 };
+enum AreaShape : int { AREA_RECT = 0, AREA_ELLIPSE = 1 };                      // square = rectangle, disk = ellipse
+
+struct LampRecord {
+    float kind;             //  0 LampKind
+    float shape;            //  1 PointShape / SunShape / AreaShape; 0 for the background
+    float emit[3];          //  2 intensity (delta point/spot), irradiance (delta sun), else radiance
+    float pos[3];           //  5 centre (point, spot, area) or unit direction toward the sun
+    float radius;           //  8 point/spot
+    float cos_half;         //  9 spot: cos(size/2); sun: cos(angle/2)
+    float inv_smooth;       // 10 spot: 1 / ((1 - cos(size/2)) blend); 0 = hard edge (blend 0)
+    float omc;              // 11 sun: 1 - cos(angle/2)
+    float pdf;              // 12 solid-angle pdf of a sun cone or the background
+    float area;             // 13 area light: world area
+    float axis_x[3];        // 14 area light: world X extent (object X axis x size)
+    float axis_y[3];        // 17 world Y extent
+    float inv_x[3];         // 20 axis_x / |axis_x|^2: local coordinate = dot(q - centre, inv_x)
+    float inv_y[3];         // 23
+    float normal[3];        // 26 unit normal of the emitting side (object -Z)
+    float tan_half_spread;  // 29 area spread: tan(spread/2)
+    float spread_norm;      // 30 spread profile normalisation; 0 = no spread (spread = pi)
+    float inv_m3[9];        // 31 spot: inverse of the object's 3x3 transform, row-major
+};
+constexpr size_t LAMP_RECORD_WIDTH = 40;
+static_assert(sizeof(LampRecord) == LAMP_RECORD_WIDTH * sizeof(float), "LampRecord must be packed floats");
+
+// Empty if the record can be used, else what is wrong (kind/shape codes, non-finite fields).
+std::string lamp_record_error(const LampRecord& r);
+
+// Light samples: for i with 0 <= entry[i] < R, a sample of lamp rec[entry[i]] seen from P
+// (3 rows, stride n) with uniforms u1, u2: unit direction wi, shadow-ray length dist (inf at
+// infinity), value = radiance / pdf (RGB; 0 where the lamp cannot reach P) and the solid-angle
+// pdf (inf: delta lamp). Other samples are left untouched (another sampler fills them).
+void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const float* P, const float* u1,
+                 const float* u2, size_t n, float* wi, float* dist, float* value, float* pdf);
+
+// What rays (O, D: 3 rows, stride n) see of the lamps rec[lamps[0..nl)]: a finite lamp where
+// it is met at t < t_surf[i], a lamp at infinity where miss[i]. L[:, pid[i]] (stride N) +=
+// thr x radiance x w, lamp by lamp in list order, with thr null = 1 and w = 1 when lamp_prob
+// is null (camera rays), else the power heuristic 1 / (1 + (lamp_prob[j] pdf_l / pdf_bsdf)^2).
+// pid must be distinct (threads split by ray).
+void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
+                 const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
+                 const int64_t* pid, size_t n, float* L, size_t N);
+
+namespace lampmath {
+
+constexpr float PI = float(3.14159265358979323846);
+constexpr float PI_2 = float(3.14159265358979323846 / 2.0);
+constexpr float PI_4 = float(3.14159265358979323846 / 4.0);
+constexpr float TWO_PI = float(2.0 * 3.14159265358979323846);
+constexpr float INV_2PI = float(1.0 / (2.0 * 3.14159265358979323846));
+constexpr float INF = std::numeric_limits<float>::infinity();
+
+inline float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// v /= |v| (zero stays zero); returns |v|.
+inline float normalize(float v[3]) {
+    const float len = std::sqrt(dot3(v, v));
+    const float inv = len > 0 ? 1.0f / len : 0.0f;
+    for (int a = 0; a < 3; ++a) v[a] *= inv;
+    return len;
+}
+
+// Shirley-Chiu concentric map of the unit square to the unit disk.
+inline void concentric_disk(float u1, float u2, float& x, float& y) {
+    const float a = 2.0f * u1 - 1.0f, b = 2.0f * u2 - 1.0f;
+    const bool use_a = std::fabs(a) > std::fabs(b);
+    const float r = use_a ? a : b, num = use_a ? b : a;
+    const float q = r == 0 ? 0.0f : num / r;
+    const float phi = use_a ? PI_4 * q : PI_2 - PI_4 * q;
+    x = r * std::cos(phi);
+    y = r * std::sin(phi);
+}
+
+inline void uniform_sphere(float u1, float u2, float out[3]) {
+    const float z = 1.0f - 2.0f * u1;
+    const float r = std::sqrt(std::fmax(1.0f - z * z, 0.0f));
+    const float phi = TWO_PI * u2;
+    out[0] = r * std::cos(phi);
+    out[1] = r * std::sin(phi);
+    out[2] = z;
+}
+
+// Uniform direction in the cone around +Z with 1 - cos(half angle) = omc_max; returns cos(theta).
+inline float uniform_cone(float u1, float u2, float omc_max, float out[3]) {
+    const float omc = u1 * omc_max;
+    const float cos_t = 1.0f - omc;
+    const float sin_t = std::sqrt(std::fmax(omc * (2.0f - omc), 0.0f));
+    const float phi = TWO_PI * u2;
+    out[0] = sin_t * std::cos(phi);
+    out[1] = sin_t * std::sin(phi);
+    out[2] = cos_t;
+    return cos_t;
+}
+
+inline float one_minus_cos_from_sin2(float s) { return s / (1.0f + std::sqrt(std::fmax(1.0f - s, 0.0f))); }
+
+// Branchless tangent frame of a unit normal (Duff et al. 2017).
+inline void orthonormal_basis(const float n[3], float t[3], float b[3]) {
+    const float sign = n[2] >= 0 ? 1.0f : -1.0f;
+    const float a = -1.0f / (sign + n[2]);
+    const float bb = n[0] * n[1] * a;
+    const float sxa = sign * n[0] * a;
+    t[0] = 1.0f + sxa * n[0];
+    t[1] = sign * bb;
+    t[2] = -sign * n[0];
+    b[0] = bb;
+    b[1] = sign + n[1] * n[1] * a;
+    b[2] = -n[1];
+}
+
+inline void to_world(const float local[3], const float n[3], float out[3]) {
+    float t[3], b[3];
+    orthonormal_basis(n, t, b);
+    for (int a = 0; a < 3; ++a) {
+        float v = t[a] * local[0];
+        v += b[a] * local[1];
+        out[a] = v + n[a] * local[2];
+    }
+}
+
+// Spot cone factor for a unit light->point direction: smoothstep (or a hard edge) of the
+// forward component of that direction in the light's own (unscaled) frame.
+inline float spot_attenuation(const LampRecord& L, const float from_light[3]) {
+    const float* m = L.inv_m3;
+    float local[3];
+    for (int r = 0; r < 3; ++r) local[r] = m[3 * r] * from_light[0] + m[3 * r + 1] * from_light[1] + m[3 * r + 2] * from_light[2];
+    const float length = std::sqrt(dot3(local, local));
+    const float z = length > 0 ? -local[2] / length : -1.0f;
+    if (L.inv_smooth == 0) return z > L.cos_half ? 1.0f : 0.0f;
+    float f = (z - L.cos_half) * L.inv_smooth;
+    f = f < 0 ? 0.0f : (f > 1 ? 1.0f : f);  // NaN stays NaN, as np.clip
+    return f * f * (3.0f - 2.0f * f);
+}
+
+// Area light spread profile at emission cosine cos_l (1 without spread).
+inline float area_spread(const LampRecord& L, float cos_l) {
+    if (L.spread_norm == 0) return 1.0f;
+    if (!(cos_l > 0)) return 0.0f;
+    const float tan_t = std::sqrt(std::fmax(1.0f - cos_l * cos_l, 0.0f)) / cos_l;
+    return std::fmax(L.tan_half_spread - tan_t, 0.0f) * L.spread_norm;
+}
+
+}  // namespace lampmath
+
+struct LampSample {
+    float wi[3], dist, value[3], pdf;
+};
+
+// One light sample of lamp L toward the shading point P (Lamp.sample in the Python definitions).
+inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, float u2) {
+    using namespace lampmath;
+    LampSample s;
+    const int kind = int(L.kind), shape = int(L.shape);
+    float scale = 1.0f;      // multiplies emit
+    bool per_pdf = false;    // sun cone, background: value = (radiance / constant pdf) x 1
+    switch (kind) {
+    case LAMP_POINT:
+    case LAMP_SPOT: {
+        float axis[3] = {L.pos[0] - P[0], L.pos[1] - P[1], L.pos[2] - P[2]};
+        const float d = normalize(axis);
+        const float r = L.radius;
+        const bool outside = d > r;
+        if (shape == POINT_DELTA) {
+            for (int a = 0; a < 3; ++a) s.wi[a] = axis[a];
+            s.dist = d;
+            s.pdf = INF;
+            scale = d > 0 ? 1.0f / (d * d) : 0.0f;
+        } else if (shape == POINT_SPHERE) {
+            const float sin2 = std::fmin((r * r) / std::fmax(d * d, 1e-30f), 1.0f);
+            const float omc = one_minus_cos_from_sin2(sin2);
+            float local[3];
+            const float cos_t = uniform_cone(u1, u2, omc, local);
+            to_world(local, axis, s.wi);
+            const float b = d * cos_t;  // distance to the near sphere surface
+            s.dist = b - std::sqrt(std::fmax(r * r - std::fmax(d * d - b * b, 0.0f), 0.0f));
+            s.pdf = outside ? INV_2PI / omc : 0.0f;
+            scale = outside ? TWO_PI * omc : 0.0f;
+        } else {                         // disk of radius r through the centre, facing P
+            float x, y, t1[3], t2[3];
+            concentric_disk(u1, u2, x, y);
+            orthonormal_basis(axis, t1, t2);
+            const float rx = r * x, ry = r * y;
+            for (int a = 0; a < 3; ++a) {
+                float q = t1[a] * rx;
+                q += t2[a] * ry;
+                q += L.pos[a];
+                s.wi[a] = q - P[a];
+            }
+            s.dist = normalize(s.wi);
+            const float cos_l = dot3(s.wi, axis);
+            const bool good = outside && cos_l > 0;
+            const float p = s.dist * s.dist / (PI * r * r * cos_l);
+            s.pdf = good ? p : 0.0f;
+            scale = good ? 1.0f / p : 0.0f;
+        }
+        if (kind == LAMP_SPOT) {
+            const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
+            scale *= spot_attenuation(L, from_light);
+        }
+        break;
+    }
+    case LAMP_SUN:
+        s.dist = INF;
+        if (shape == SUN_DELTA) {
+            for (int a = 0; a < 3; ++a) s.wi[a] = L.pos[a];
+            s.pdf = INF;
+        } else {
+            float local[3];
+            uniform_cone(u1, u2, L.omc, local);
+            to_world(local, L.pos, s.wi);
+            s.pdf = L.pdf;
+            per_pdf = true;
+        }
+        break;
+    case LAMP_AREA: {
+        float x, y;
+        if (shape == AREA_ELLIPSE) {
+            concentric_disk(u1, u2, x, y);
+            x *= 0.5f;
+            y *= 0.5f;
+        } else {
+            x = u1 - 0.5f;
+            y = u2 - 0.5f;
+        }
+        for (int a = 0; a < 3; ++a) {
+            float q = L.axis_x[a] * x;
+            q += L.axis_y[a] * y;
+            s.wi[a] = q + (L.pos[a] - P[a]);
+        }
+        s.dist = normalize(s.wi);
+        const float cos_l = -dot3(s.wi, L.normal);
+        const bool ok = cos_l > 0 && s.dist > 0;
+        const float p = s.dist * s.dist / (L.area * cos_l);
+        s.pdf = ok ? p : 0.0f;
+        scale = ok ? 1.0f / p : 0.0f;
+        scale *= area_spread(L, cos_l);
+        break;
+    }
+    default:  // LAMP_BACKGROUND
+        uniform_sphere(u1, u2, s.wi);
+        s.dist = INF;
+        s.pdf = L.pdf;
+        per_pdf = true;
+        break;
+    }
+    for (int a = 0; a < 3; ++a) s.value[a] = (per_pdf ? L.emit[a] / L.pdf : L.emit[a]) * scale;
+    return s;
+}
+
+// A ray (O, D) meeting finite lamp L at t < tmax (Lamp.intersect): radiance Le and solid-angle
+// pdf. False for lamps at infinity and delta lamps (no ray meets them).
+inline bool hit_lamp(const LampRecord& L, const float O[3], const float D[3], float tmax, float Le[3], float& pdf) {
+    using namespace lampmath;
+    const int kind = int(L.kind), shape = int(L.shape);
+    float scale = 1.0f;
+    if ((kind == LAMP_POINT || kind == LAMP_SPOT) && shape != POINT_DELTA) {
+        const float r = L.radius;
+        const float oc[3] = {L.pos[0] - O[0], L.pos[1] - O[1], L.pos[2] - O[2]};
+        const float b = dot3(oc, D), d2 = dot3(oc, oc);
+        if (!(d2 > r * r)) return false;  // origin inside the light
+        if (shape == POINT_SPHERE) {
+            const float perp[3] = {oc[0] - D[0] * b, oc[1] - D[1] * b, oc[2] - D[2] * b};
+            const float h2 = r * r - dot3(perp, perp);
+            const float t = b - std::sqrt(std::fmax(h2, 0.0f));
+            if (!(h2 >= 0 && t > 0 && t < tmax)) return false;
+            pdf = INV_2PI / one_minus_cos_from_sin2(std::fmin(r * r / d2, 1.0f));
+        } else {                              // disk through the centre, facing the ray origin
+            const float dist_c = std::sqrt(d2);
+            const float cos_l = b / dist_c;   // cos between D and the disk axis
+            const float t = dist_c / cos_l;
+            const float rel[3] = {D[0] * t - oc[0], D[1] * t - oc[1], D[2] * t - oc[2]};
+            if (!(cos_l > 0 && t < tmax && dot3(rel, rel) <= r * r)) return false;
+            pdf = t * t / (PI * r * r * cos_l);
+        }
+        if (kind == LAMP_SPOT) {
+            const float from_light[3] = {-D[0], -D[1], -D[2]};
+            scale = spot_attenuation(L, from_light);
+        }
+    } else if (kind == LAMP_AREA) {
+        const float denom = dot3(D, L.normal);  // < 0: travelling toward the emitting face
+        const float t = (dot3(L.pos, L.normal) - dot3(O, L.normal)) / denom;
+        if (!(denom < 0 && t > 0 && t < tmax)) return false;
+        float rel[3];
+        for (int a = 0; a < 3; ++a) rel[a] = (D[a] * t + O[a]) - L.pos[a];
+        const float lx = dot3(rel, L.inv_x), ly = dot3(rel, L.inv_y);
+        const bool inside = int(L.shape) == AREA_ELLIPSE ? lx * lx + ly * ly <= 0.25f
+                                                         : std::fabs(lx) <= 0.5f && std::fabs(ly) <= 0.5f;
+        if (!inside) return false;
+        const float cos_l = -denom;
+        pdf = t * t / (L.area * cos_l);
+        scale = area_spread(L, cos_l);
+    } else {
+        return false;
+    }
+    for (int a = 0; a < 3; ++a) Le[a] = L.emit[a] * scale;
+    return true;
+}
+
+// A ray that left the scene along D seeing lamp L at infinity (Lamp.eval_miss): radiance and
+// solid-angle pdf. False for finite lamps and the delta sun.
+inline bool miss_lamp(const LampRecord& L, const float D[3], float Le[3], float& pdf) {
+    const int kind = int(L.kind);
+    if (kind == LAMP_SUN) {
+        if (int(L.shape) == SUN_DELTA || !(lampmath::dot3(D, L.pos) >= L.cos_half)) return false;
+    } else if (kind != LAMP_BACKGROUND) {
+        return false;
+    }
+    for (int a = 0; a < 3; ++a) Le[a] = L.emit[a];
+    pdf = L.pdf;
+    return true;
+}
+
+}  // namespace dacrt

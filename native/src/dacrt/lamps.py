@@ -1,0 +1,106 @@
+"""Analytic lamps as native per-ray kernels (threaded, GIL released).
+
+A lamp is a record of RECORD_WIDTH float32 (layout: `record_layout()`, documented field by field
+in native/cpp/lamps.h): point (delta, sphere, or a disk facing the point), spot (a point lamp
+with a smooth or hard elliptical cone), sun (delta direction or uniform cone), area (rectangle or
+ellipse, optional spread) and a uniform background. A renderer passes all its lamps as one
+(R, RECORD_WIDTH) array, so sampling and gathering every lamp is one pass over the rays instead
+of one numpy pass per lamp and operation. Vectors are (3, n) float32 structure-of-arrays.
+Units and formulas follow the renderer's Python lamp classes (Cycles' conventions), which the
+tests compare these kernels against.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather"]
+
+RECORD_WIDTH = int(_core.LAMP_RECORD_WIDTH)
+# kind codes (field 'kind'); shape codes per kind (field 'shape')
+KINDS = {"POINT": 0, "SPOT": 1, "SUN": 2, "AREA": 3, "BACKGROUND": 4}
+
+_F32 = np.float32
+
+
+def record_layout() -> dict:
+    """Field name -> (offset, width) in float32 of a lamp record, as the native struct has it."""
+    return {k: tuple(v) for k, v in _core.lamp_record_layout().items()}
+
+
+def _f32(a) -> np.ndarray:
+    return np.ascontiguousarray(a, _F32)
+
+
+def _records(records) -> np.ndarray:
+    r = np.ascontiguousarray(records, _F32)
+    if r.ndim != 2 or r.shape[1] != RECORD_WIDTH:
+        raise ValueError(f"records must have shape (R, {RECORD_WIDTH}), got {r.shape}")
+    return r
+
+
+def _index32(a, limit: int, name: str) -> np.ndarray:
+    """int32 copy of an integer array; values outside [0, limit) become -1 (so none can wrap
+    into range on the conversion)."""
+    a = np.asarray(a)
+    if a.size == 0:
+        a = a.astype(np.int32)                     # np.asarray([]) is float64
+    if a.dtype.kind not in "iu":
+        raise ValueError(f"{name} must be an integer array, got dtype {a.dtype}")
+    if a.dtype != np.int32:
+        a = np.where((a >= 0) & (a < limit), a, -1)
+    return np.ascontiguousarray(a, np.int32)
+
+
+def lamp_sample(records, entry, P, u1, u2, out=None):
+    """Light samples toward points P (3, n) with uniforms u1, u2 (n,): sample i uses lamp
+    records[entry[i]] when 0 <= entry[i] < R; other samples are left as they are in `out`
+    (another sampler, e.g. emissive triangles, fills them).
+
+    out: (wi (3, n), dist (n,), value (3, n), pdf (n,)), C-contiguous float32 arrays written in
+    place; None: new arrays, zero for samples without a lamp. Returns those four arrays: unit
+    direction toward the lamp, shadow-ray length (inf at infinity), value = radiance / pdf (RGB,
+    0 where the lamp cannot reach the point) and the solid-angle pdf (inf for delta lamps)."""
+    records = _records(records)
+    P = _f32(P)
+    if P.ndim != 2 or P.shape[0] != 3:
+        raise ValueError(f"P must have shape (3, n), got {P.shape}")
+    n = P.shape[1]
+    if out is None:
+        out = (np.zeros((3, n), _F32), np.zeros(n, _F32), np.zeros((3, n), _F32), np.zeros(n, _F32))
+    wi, dist, value, pdf = out
+    _core.lamp_sample(records, _index32(entry, len(records), "entry"), P, _f32(u1), _f32(u2), wi, dist, value, pdf)
+    return wi, dist, value, pdf
+
+
+def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=None, lamp_prob=None) -> None:
+    """Add to L (3, N) float32, in place, what rays (O, D) (3, n) see of the lamps
+    records[lamps] (lamps: record indices, in the order their light is added).
+
+    A finite lamp counts where the ray meets it at t < t_surf (n,) (the surface hit, or the
+    ray's length); a lamp at infinity (sun, background) counts where miss (n,) bool is set.
+    Lamps are not geometry: a ray collects every lamp it passes. L[:, pid[i]] += thr x Le x w
+    (pid (n,) distinct column indices; thr (3, n) path throughput or None = 1). For BSDF rays
+    give lamp_prob (R,) (each record's light-selection probability) and pdf_bsdf (n,): w is the
+    power heuristic 1 / (1 + (lamp_prob pdf_lamp / pdf_bsdf)^2) against light sampling; camera
+    rays give neither (w = 1)."""
+    if not isinstance(L, np.ndarray) or L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
+        raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
+    records = _records(records)
+    lamps = np.asarray(lamps)
+    if lamps.size == 0:
+        lamps = lamps.astype(np.int32)             # np.asarray([]) is float64
+    if lamps.dtype.kind not in "iu":
+        raise ValueError(f"lamps must be an integer array of record indices, got dtype {lamps.dtype}")
+    if lamps.size and (lamps.min() < 0 or lamps.max() >= len(records)):
+        raise ValueError(f"lamps must be record indices 0..{len(records) - 1}, got {lamps.tolist()}")
+    pid = np.asarray(pid)
+    if pid.dtype.kind not in "iu":
+        raise ValueError(f"pid must be an integer array of columns of L, got dtype {pid.dtype}")
+    miss = np.asarray(miss)
+    if miss.dtype != np.bool_:
+        raise ValueError(f"miss must be a bool array, got dtype {miss.dtype}")
+    opt = lambda a: None if a is None else _f32(a)
+    _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32(t_surf),
+                      np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf), np.ascontiguousarray(pid, np.int64), L)

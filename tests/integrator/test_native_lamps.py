@@ -1,0 +1,364 @@
+"""The native lamp kernels (dacrt.lamps) against the Python lamp classes (addon/lights/), which
+define them: light samples (lamp_sample) for every lamp kind and variant, and what camera and
+BSDF rays collect from lamps (lamp_gather) against the integrator's formula (intersect /
+eval_miss, throughput, power-heuristic MIS); the record layout; argument checks.
+
+Agreement is to float32 rounding: both sides run the same float32 formulas, but numpy and libm
+differ in sin/cos by an ULP or so (most results are bit-identical). Where a formula amplifies
+that (the spot smoothstep's steep slope, 1/cos at grazing emission) the tolerance says so."""
+import dacrt
+import numpy as np
+import pytest
+
+from addon.lights import BackgroundLight, lamp_records, make_lamp
+from addon.lights.base import RECORD_FIELDS, RECORD_WIDTH
+
+from .scenes import light, rotation_x, translation
+
+F32 = np.float32
+N_SAMPLES = 20_000
+
+
+def rotation_z(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    m = np.eye(4)
+    m[:2, :2] = [[c, -s], [s, c]]
+    return m
+
+
+def scale(x, y, z):
+    return np.diag([x, y, z, 1.0])
+
+
+CENTRE = (0.3, -0.7, 1.2)
+TILT = translation(*CENTRE) @ rotation_z(0.7) @ rotation_x(2.3)        # light -Z points down-ish, rotated
+SQUASH = TILT @ scale(1.0, 2.5, 0.4)                                   # non-uniform scale
+RGB = (120.0, 60.0, 15.0)
+
+VARIANTS = {
+    'point_delta': light('POINT', RGB, translation(*CENTRE)),
+    'point_delta_unnormalized': light('POINT', RGB, translation(*CENTRE), normalize=False),
+    'point_sphere': light('POINT', RGB, translation(*CENTRE), radius=0.5, soft_falloff=False),
+    'point_disk': light('POINT', RGB, translation(*CENTRE), radius=0.5, soft_falloff=True),
+    'point_disk_unnormalized': light('POINT', RGB, translation(*CENTRE), radius=0.3, normalize=False),
+    'spot_hard': light('SPOT', RGB, TILT, spot_size=np.radians(70.0), spot_blend=0.0),
+    'spot_smooth': light('SPOT', RGB, TILT, spot_size=np.radians(70.0), spot_blend=0.4),
+    'spot_smooth_disk': light('SPOT', RGB, TILT, radius=0.4, spot_size=np.radians(90.0), spot_blend=0.7),
+    'spot_sphere_hard': light('SPOT', RGB, TILT, radius=0.4, soft_falloff=False, spot_size=np.radians(60.0)),
+    'spot_scaled': light('SPOT', RGB, SQUASH, spot_size=np.radians(50.0), spot_blend=0.5),
+    'spot_scaled_disk': light('SPOT', RGB, SQUASH, radius=0.3, spot_size=np.radians(120.0), spot_blend=1.0),
+    'sun_delta': light('SUN', RGB, TILT),
+    'sun_angle': light('SUN', RGB, TILT, angle=np.radians(10.0)),
+    'sun_wide_unnormalized': light('SUN', RGB, TILT, angle=np.radians(150.0), normalize=False),
+    'area_square': light('AREA', RGB, TILT, shape='SQUARE', size_x=1.5),
+    'area_rectangle': light('AREA', RGB, SQUASH, shape='RECTANGLE', size_x=1.0, size_y=0.6),
+    'area_disk': light('AREA', RGB, TILT, shape='DISK', size_x=1.2),
+    'area_ellipse': light('AREA', RGB, SQUASH, shape='ELLIPSE', size_x=0.8, size_y=1.4),
+    'area_square_spread': light('AREA', RGB, TILT, shape='SQUARE', size_x=1.5, spread=np.radians(60.0)),
+    'area_ellipse_spread': light('AREA', RGB, SQUASH, shape='ELLIPSE', size_x=0.8, size_y=1.4,
+                                 spread=np.radians(120.0)),
+    'area_disk_narrow_spread': light('AREA', RGB, TILT, shape='DISK', size_x=1.2, spread=0.08),  # 3/h^3 branch
+    'area_rectangle_unnormalized': light('AREA', RGB, TILT, shape='RECTANGLE', size_x=2.0, size_y=0.5,
+                                         normalize=False),
+}
+
+
+def make(name):
+    if name == 'background':
+        return BackgroundLight(np.asarray((0.2, 0.5, 1.5), F32))
+    return make_lamp(VARIANTS[name])
+
+
+NAMES = list(VARIANTS) + ['background']
+
+
+def points(rng, n):
+    """Shading points all around the lamps: some inside point-light radii, some behind area lights."""
+    return (np.asarray(CENTRE)[:, None] + rng.normal(size=(3, n)) * 1.5).astype(F32)
+
+
+def uniforms(rng, n):
+    u = rng.random((2, n), np.float32)
+    u[:, :4] = [[0.0, 0.5, 0.999999, 0.25], [0.0, 0.5, 0.999999, 0.75]]     # corners and centre
+    return u[0], u[1]
+
+
+def close(native, python, rel=1e-5, abs_scale=1e-5, what=''):
+    """native ~ python: equal infinities, exact zeros where python is zero, else within
+    rel x |python| + abs_scale x (largest finite |python|); rel may be per sample (n,)."""
+    native, python = np.asarray(native, np.float64), np.asarray(python, np.float64)
+    assert native.shape == python.shape
+    rel = np.broadcast_to(np.asarray(rel, np.float64), python.shape[-1:]) * np.ones_like(python)
+    inf = np.isinf(python)
+    np.testing.assert_array_equal(native[inf], python[inf], err_msg=f'{what}: infinities')
+    zero = python == 0
+    assert (native[zero] == 0).all(), f'{what}: {np.count_nonzero(native[zero])} values non-zero where Python gives 0'
+    fin = ~inf & ~zero
+    big = np.abs(python[~inf]).max() if (~inf).any() else 0.0
+    err = np.abs(native[fin] - python[fin])
+    tol = rel[fin] * np.abs(python[fin]) + abs_scale * big
+    bad = np.flatnonzero(err > tol)
+    assert not len(bad), (f'{what}: {len(bad)} of {fin.sum()} differ beyond tolerance, e.g. native '
+                          f'{native[fin][bad[:3]]} vs python {python[fin][bad[:3]]}')
+
+
+def emission_cosine(lamp, P, wi):
+    """Cosine at the lamp of the sampled directions wi for lamps sampled by area (area lights,
+    soft-falloff disks), else 1. pdf and value go as 1/cos there, and near grazing cos is known
+    only to an absolute ~1e-7 (it comes from a unit vector), so their relative agreement is
+    ~1e-7 / cos."""
+    if hasattr(lamp, 'normal'):
+        return -(lamp.normal @ wi)
+    if getattr(lamp, 'radius', 0) > 0 and not lamp.sphere:
+        axis = lamp.center[:, None] - P
+        return np.einsum('ij,ij->j', wi, axis / np.linalg.norm(axis, axis=0))
+    return np.ones(P.shape[1])
+
+
+def sample_both(lamp, P, u1, u2):
+    rec = lamp_records([lamp])
+    n = P.shape[1]
+    wi, dist, value, pdf = dacrt.lamps.lamp_sample(rec, np.zeros(n, np.int32), P, u1, u2)
+    return (wi, dist, value, pdf), lamp.sample(P, u1, u2)
+
+
+@pytest.mark.parametrize('name', NAMES)
+def test_sample_matches_python(name):
+    rng = np.random.default_rng(NAMES.index(name))
+    lamp = make(name)
+    P = points(rng, N_SAMPLES)
+    u1, u2 = uniforms(rng, N_SAMPLES)
+    (wi, dist, value, pdf), ref = sample_both(lamp, P, u1, u2)
+    close(dist, ref.dist, abs_scale=1e-6, what='dist')
+    close(wi, ref.wi, abs_scale=2e-6, what='wi')
+    rel = 2e-5 + 1e-6 / np.maximum(np.abs(emission_cosine(lamp, P, ref.wi)), 1e-12)
+    close(pdf, ref.pdf, rel=rel, what='pdf')
+    # the spot smoothstep's slope (inv_smooth, up to ~20 here) amplifies an ULP of the cone cosine
+    close(value, ref.value, rel=rel, abs_scale=1e-4 if 'spot' in name else 1e-6, what='value')
+    # the variants really exercise their cases: some samples reach the point, and where a lamp
+    # cannot reach every point, some do not
+    lit = ref.value.max(axis=0) > 0
+    assert lit.any()
+    if name.startswith(('area', 'spot')) or name in ('point_sphere', 'point_disk', 'point_disk_unnormalized'):
+        assert not lit.all(), 'expected some points behind / outside / inside the lamp'
+    if name.startswith(('point_sphere', 'point_disk')):
+        d = np.linalg.norm(P - np.asarray(CENTRE, F32)[:, None], axis=0)
+        assert (d < lamp.radius).any() and (value[:, d < lamp.radius] == 0).all()
+
+
+def test_sample_entries_select_records_and_leave_others_untouched():
+    rng = np.random.default_rng(7)
+    lamps = [make(name) for name in NAMES]
+    rec = lamp_records(lamps)
+    R, n = len(lamps), 50_000
+    entry = rng.integers(-3, R + 3, n).astype(np.int32)
+    P = points(rng, n)
+    u1, u2 = uniforms(rng, n)
+    out = (np.full((3, n), 7.0, F32), np.full(n, 8.0, F32), np.full((3, n), 9.0, F32), np.full(n, 10.0, F32))
+    res = dacrt.lamps.lamp_sample(rec, entry, P, u1, u2, out=out)
+    assert all(a is b for a, b in zip(res, out))
+    wi, dist, value, pdf = out
+    other = (entry < 0) | (entry >= R)
+    assert other.any()
+    assert (wi[:, other] == 7).all() and (dist[other] == 8).all() and (value[:, other] == 9).all()
+    assert (pdf[other] == 10).all()
+    for j, lamp in enumerate(lamps):
+        idx = np.flatnonzero(entry == j)
+        ref = lamp.sample(P[:, idx], u1[idx], u2[idx])
+        close(value[:, idx], ref.value, rel=2e-5, abs_scale=1e-4, what=f'value of {NAMES[j]}')
+        close(pdf[idx], ref.pdf, rel=2e-5, what=f'pdf of {NAMES[j]}')
+    # a wider integer entry array: values that do not fit int32 are other samplers', not wrapped
+    wide = entry.astype(np.int64)
+    wide[:10] = 2**32                                # would be 0 if wrapped to int32
+    out2 = (np.full((3, n), 7.0, F32), np.full(n, 8.0, F32), np.full((3, n), 9.0, F32), np.full(n, 10.0, F32))
+    dacrt.lamps.lamp_sample(rec, wide, P, u1, u2, out=out2)
+    assert (out2[1][:10] == 8).all()
+
+
+def gather_reference(lamps, listed, O, D, t_surf, miss, pid, N, thr, pdf_bsdf, lamp_prob):
+    """What the numpy lamp classes define a ray collects, lamp by lamp (the reference lamp_gather must match)."""
+    L = np.zeros((3, N), F32)
+    miss_idx = np.flatnonzero(miss)
+    for j in listed:
+        lamp = lamps[j]
+        if lamp.at_infinity:
+            idx, Le, pdf_l = lamp.eval_miss(np.take(D, miss_idx, axis=1))
+            idx = np.take(miss_idx, idx)
+        else:
+            idx, Le, pdf_l = lamp.intersect(O, D, t_surf)
+        if thr is not None:
+            Le = Le * np.take(thr, idx, axis=1)
+        if lamp_prob is not None:
+            with np.errstate(divide='ignore', invalid='ignore'):
+                r = lamp_prob[j] * pdf_l / np.take(pdf_bsdf, idx)
+                r *= r
+                r += F32(1.0)
+                Le *= F32(1.0) / r
+        L[:, pid[idx]] += Le
+    return L
+
+
+def gather_rays(rng, lamps, n):
+    """Rays from all around: a third aimed near the lamps' centre, a third in random directions,
+    a third along a lamp's axis (toward a sun, or head-on at an area light's emitting face, so
+    narrow cones and spreads are met too); a random surface distance (some rays stop short of
+    the lamps) and random misses."""
+    O = points(rng, n)
+    target = np.asarray(CENTRE)[:, None] + rng.normal(size=(3, n)) * 0.5
+    D = np.where(rng.random(n) < 0.5, target - O, rng.normal(size=(3, n)))
+    axial = np.flatnonzero(rng.random(n) < 1 / 3)
+    which = rng.integers(0, len(lamps), len(axial))
+    for j, lamp in enumerate(lamps):
+        k = axial[which == j]
+        jitter = rng.normal(size=(3, len(k))) * 0.02
+        if hasattr(lamp, 'to_sun'):
+            D[:, k] = lamp.to_sun[:, None] + jitter
+        elif hasattr(lamp, 'normal'):
+            side = rng.normal(size=(2, len(k))) * 0.4
+            O[:, k] = (lamp.center[:, None] + lamp.normal[:, None] * rng.uniform(0.1, 3.0, len(k))
+                       + lamp.axis_x[:, None] * side[0] + lamp.axis_y[:, None] * side[1])
+            D[:, k] = -lamp.normal[:, None] + jitter
+    D = (D / np.linalg.norm(D, axis=0)).astype(F32)
+    t_surf = np.where(rng.random(n) < 0.3, rng.uniform(0.0, 3.0, n), np.inf).astype(F32)
+    miss = rng.random(n) < 0.6
+    return O.astype(F32), D, t_surf, miss
+
+
+@pytest.mark.parametrize('mode', ['camera', 'camera_thr', 'bsdf', 'bsdf_no_thr'])
+def test_gather_matches_integrator_formula(mode):
+    rng = np.random.default_rng(11)
+    lamps = [make(name) for name in NAMES]
+    rec = lamp_records(lamps)
+    n, N = 40_000, 60_000
+    O, D, t_surf, miss = gather_rays(rng, lamps, n)
+    pid = rng.permutation(N)[:n]
+    thr = rng.uniform(0.1, 2.0, (3, n)).astype(F32) if mode in ('camera_thr', 'bsdf') else None
+    bsdf = mode.startswith('bsdf')
+    pdf_bsdf = rng.uniform(0.01, 1.0, n).astype(F32) if bsdf else None
+    lamp_prob = rng.uniform(0.05, 1.0, len(lamps)).astype(F32) if bsdf else None
+    listed = [j for j in range(len(lamps)) if j % 5 != 3]        # a subset, as the integrator lists
+    L = rng.uniform(0.0, 1.0, (3, N)).astype(F32)                 # accumulated onto existing values
+    expected = L + gather_reference(lamps, listed, O, D, t_surf, miss, pid, N, thr, pdf_bsdf, lamp_prob)
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, L, thr=thr, pdf_bsdf=pdf_bsdf,
+                            lamp_prob=lamp_prob)
+    # the rays see finite lamps, lamps at infinity and several lamps at once
+    seen = np.zeros(n, int)
+    for j in listed:
+        lamp = lamps[j]
+        if lamp.at_infinity:
+            seen[np.flatnonzero(miss)[lamp.eval_miss(D[:, miss])[0]]] += 1
+        else:
+            seen[lamp.intersect(O, D, t_surf)[0]] += 1
+    assert (seen >= 2).sum() > 100 and (seen == 0).sum() > 100
+    np.testing.assert_allclose(L, expected, rtol=2e-5, atol=2e-5 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize('name', [n for n in NAMES if not make(n).delta])
+def test_gather_each_lamp(name):
+    """Per lamp (finite ones seen from both sides, up to t_surf; lamps at infinity where missed)."""
+    rng = np.random.default_rng(NAMES.index(name) + 100)
+    lamp = make(name)
+    n = 30_000
+    O, D, t_surf, miss = gather_rays(rng, [lamp], n)
+    pdf_bsdf = rng.uniform(0.01, 1.0, n).astype(F32)
+    lamp_prob = np.asarray([0.3], F32)
+    pid = np.arange(n)
+    expected = gather_reference([lamp], [0], O, D, t_surf, miss, pid, n, None, pdf_bsdf, lamp_prob)
+    assert (expected.max(axis=0) > 0).sum() > 50, 'too few rays see the lamp to test it'
+    L = np.zeros((3, n), F32)
+    dacrt.lamps.lamp_gather(lamp_records([lamp]), [0], O, D, t_surf, miss, pid, L, pdf_bsdf=pdf_bsdf,
+                            lamp_prob=lamp_prob)
+    close(L, expected, rel=2e-5, abs_scale=1e-4 if 'spot' in name else 1e-6, what=name)
+
+
+def test_delta_lamps_are_never_gathered():
+    rng = np.random.default_rng(3)
+    lamps = [make('point_delta'), make('spot_hard'), make('sun_delta')]
+    n = 5000
+    O, D, t_surf, _ = gather_rays(rng, lamps, n)
+    L = np.zeros((3, n), F32)
+    dacrt.lamps.lamp_gather(lamp_records(lamps), [0, 1, 2], O, D, t_surf, np.ones(n, bool), np.arange(n), L)
+    assert not L.any()
+
+
+def test_empty_inputs():
+    rec = lamp_records([make('area_square')])
+    wi, dist, value, pdf = dacrt.lamps.lamp_sample(rec, [], np.zeros((3, 0), F32), [], [])
+    assert wi.shape == (3, 0) and dist.shape == (0,) and value.shape == (3, 0) and pdf.shape == (0,)
+    L = np.ones((3, 4), F32)
+    rng = np.random.default_rng(2)
+    O, D, t_surf, miss = gather_rays(rng, [make('area_square')], 4)
+    dacrt.lamps.lamp_gather(rec, [], O, D, t_surf, miss, np.arange(4), L)          # no lamps listed
+    dacrt.lamps.lamp_gather(np.zeros((0, RECORD_WIDTH), F32), [], O, D, t_surf, miss, np.arange(4), L)
+    assert (L == 1).all()
+
+
+def test_record_layout_matches_native():
+    assert RECORD_WIDTH == dacrt.lamps.RECORD_WIDTH
+    assert RECORD_FIELDS == dacrt.lamps.record_layout()
+    rec = lamp_records([make(name) for name in NAMES])
+    assert rec.shape == (len(NAMES), RECORD_WIDTH) and rec.dtype == F32 and np.isfinite(rec).all()
+    assert lamp_records([]).shape == (0, RECORD_WIDTH)
+
+
+def test_bad_arguments():
+    rng = np.random.default_rng(5)
+    rec = lamp_records([make('area_square'), make('background')])
+    n = 10
+    P = points(rng, n)
+    u = np.full(n, 0.5, F32)
+    e = np.zeros(n, np.int32)
+    sample = dacrt.lamps.lamp_sample
+    with pytest.raises(ValueError, match=r'records must have shape \(R, 40\)'):
+        sample(rec[:, :39], e, P, u, u)
+    with pytest.raises(ValueError, match=r'P must have shape \(3, n\)'):
+        sample(rec, e, P[:2], u, u)
+    with pytest.raises(ValueError, match=r'u2 must have shape \(10,\)'):
+        sample(rec, e, P, u, u[:9])
+    with pytest.raises(ValueError, match=r'entry must have shape'):
+        sample(rec, e[:5], P, u, u)
+    with pytest.raises(ValueError, match='entry must be an integer array'):
+        sample(rec, e.astype(F32), P, u, u)
+    with pytest.raises(ValueError, match='value must be a writeable C-contiguous float32'):
+        sample(rec, e, P, u, u, out=(np.zeros((3, n), F32), np.zeros(n, F32), np.zeros((3, n)), np.zeros(n, F32)))
+    with pytest.raises(ValueError, match=r'dist must have shape \(10,\)'):
+        sample(rec, e, P, u, u, out=(np.zeros((3, n), F32), np.zeros(n + 1, F32), np.zeros((3, n), F32),
+                                     np.zeros(n, F32)))
+    bad = rec.copy()
+    bad[1, 0] = 9
+    with pytest.raises(ValueError, match=r'records\[1\]: kind 9'):
+        sample(bad, e, P, u, u)
+    bad = rec.copy()
+    bad[0, 1] = 2
+    with pytest.raises(ValueError, match=r'records\[0\]: shape 2'):
+        sample(bad, e, P, u, u)
+    bad = rec.copy()
+    bad[0, 15] = np.nan
+    with pytest.raises(ValueError, match=r'records\[0\]: field 15 is not finite'):
+        sample(bad, e, P, u, u)
+
+    D = np.tile(np.asarray([[0.0], [0.0], [1.0]], F32), n)
+    t = np.full(n, np.inf, F32)
+    miss = np.ones(n, bool)
+    L = np.zeros((3, n), F32)
+    pid = np.arange(n)
+    gather = dacrt.lamps.lamp_gather
+    with pytest.raises(ValueError, match=r'lamps must be record indices 0..1'):
+        gather(rec, [0, 2], P, D, t, miss, pid, L)
+    with pytest.raises(ValueError, match=r'D must have shape \(3, 10\)'):
+        gather(rec, [0], P, D[:, :9], t, miss, pid, L)
+    with pytest.raises(ValueError, match=r'miss must be a bool array'):
+        gather(rec, [0], P, D, t, miss.astype(np.int8), pid, L)
+    with pytest.raises(ValueError, match=r'thr must have shape \(3, 10\)'):
+        gather(rec, [0], P, D, t, miss, pid, L, thr=np.ones((3, 9), F32))
+    with pytest.raises(ValueError, match=r'lamp_prob and pdf_bsdf go together'):
+        gather(rec, [0], P, D, t, miss, pid, L, lamp_prob=np.ones(2, F32))
+    with pytest.raises(ValueError, match=r'lamp_prob must have shape \(2,\)'):
+        gather(rec, [0], P, D, t, miss, pid, L, lamp_prob=np.ones(3, F32), pdf_bsdf=np.ones(n, F32))
+    with pytest.raises(ValueError, match=r'L must be a C-contiguous \(3, N\) float32'):
+        gather(rec, [0], P, D, t, miss, pid, L.astype(np.float64))
+    with pytest.raises(ValueError, match=r'pid\[9\] = 10 is outside 0..9'):
+        gather(rec, [0], P, D, t, miss, pid + 1, L)
+    with pytest.raises(ValueError, match=r'pid\[3\] = 2 repeats an earlier pid'):
+        gather(rec, [0], P, D, t, miss, np.asarray([0, 1, 2, 2, 4, 5, 6, 7, 8, 9]), L)
+    assert not L.any()                                # nothing was added by the failed calls
