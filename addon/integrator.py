@@ -64,9 +64,16 @@ def _dim(vertex: int, slot: int) -> int:
 SKIP_WORK = True
 
 # Pass sizing: a pass should take ~0.8 s (progressive updates, cancel within a second) while
-# keeping batches large enough for the tracer.
+# keeping batches large enough for the tracer: DACRT re-partitions the triangles for every
+# batch, so the first pass holds at least _FIRST_PATHS_PER_TRIANGLE paths per triangle
+# (measured, 100K-triangle dragon at 64 spp: 128K-path passes 1.5 s, 1M-path passes 0.64 s).
+# Passes stop growing at _MAX_PATHS (twice that for scenes of over 512K triangles, whose
+# partitioning wants the rays): beyond ~1M paths the per-path arrays of a pass outgrow the
+# caches and the shading kernels turn memory-bound (Cornell box, 256 spp: 2M-path passes 15%
+# slower than 1M). The samples left are split into equal blocks, so no pass is a small remainder.
 _TARGET_PASS_SECONDS = 0.8
-_MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 21, 1 << 16
+_MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 20, 1 << 16
+_FIRST_PATHS_PER_TRIANGLE = 4
 # Adaptive sampling checks pixels every 16 samples (Cycles), less often once so few pixels are
 # left that a block between two checks would hold fewer paths than this (AdaptiveSampling.step_for).
 _ADAPTIVE_MIN_BATCH = 1 << 19
@@ -525,7 +532,9 @@ class Integrator:
         film_pix, frame_pix = self.camera.region_pixels()
         npix = len(film_pix)
         total = npix * self.samples
-        target = self._fixed_paths or min(_FIRST_PATHS, total)
+        most = int(np.clip(2 * len(self.tri), _MAX_PATHS, 2 * _MAX_PATHS))
+        first = int(np.clip(_FIRST_PATHS_PER_TRIANGLE * len(self.tri), _FIRST_PATHS, most))
+        target = self._fixed_paths or min(first, total)
         sample, offset = 0, 0
         adaptive = self.adaptive
         t_render = time.perf_counter()
@@ -537,7 +546,9 @@ class Integrator:
                     if adaptive is not None:
                         interval = adaptive.step_for(nact, _ADAPTIVE_MIN_BATCH)
                     if offset == 0 and target >= nact:
-                        ns = int(min(max(target // nact, 1), self.samples - sample))
+                        left = self.samples - sample
+                        ns = int(min(max(target // nact, 1), left))
+                        ns = -(-left // -(-left // ns))      # equal blocks: no small remainder
                         if adaptive is not None:
                             ns = adaptive.align(sample, ns, interval)
                         self._render_block(film_pix, frame_pix, sample, ns)
@@ -564,7 +575,7 @@ class Integrator:
                     self._passes += 1
                     if self._fixed_paths is None:
                         rate = step / max(time.perf_counter() - t0, 1e-6)
-                        target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(_MAX_PATHS, 4 * step)))
+                        target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(most, 4 * step)))
                     self._render_seconds = time.perf_counter() - t_render
                     yield self._progress((self._paths_done + self._samples_skipped) / max(total, 1))
             finally:
