@@ -712,12 +712,10 @@ class Integrator:
         if len(idx) == 0:
             return None
         sel = None if len(idx) == len(hit) else idx
-        take = _taker(sel)
         P, ng, ns, P_off = self._surface(hits, sel, path.D)
-        prim, pid, keys = take(prim), take(path.pid), take(path.keys)
-        u_pick = take(u_pick) if need_pick else None
+        prim, pid, keys, u_pick = _compact(sel, prim, path.pid, path.keys, u_pick if need_pick else None)
         if self.mats.textures:
-            self._texture(prim, take(hits['u']), take(hits['v']), thr)
+            self._texture(prim, *_compact(sel, hits['u'], hits['v']), thr)
         del hits, path
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L)
@@ -730,8 +728,7 @@ class Integrator:
         wi, pdf, ok = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng)
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
-            take = _taker(np.flatnonzero(ok))
-            P_off, wi, thr, pid, keys, pdf, prim = (take(a) for a in (P_off, wi, thr, pid, keys, pdf, prim))
+            P_off, wi, thr, pid, keys, pdf, prim = _compact(np.flatnonzero(ok), P_off, wi, thr, pid, keys, pdf, prim)
         if len(pid) == 0:
             return None
         return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim)
@@ -822,8 +819,8 @@ class Integrator:
             dacrt.lamps.lamp_sample(self._nee_records, entry, P, u1, u2, out=(wi, dist, value, pdf))
         if lights.triangles is not None:
             tri = np.flatnonzero(entry >= nl) if nl else None
-            take = _taker(tri)
-            ls = lights.triangles.sample(take(P), take(entry) - nl, take(u1), take(u2))
+            tP, te, tu1, tu2 = _compact(tri, P, entry, u1, u2)
+            ls = lights.triangles.sample(tP, te - nl, tu1, tu2)
             target = np.full((3, n), np.nan, F32) if nl else ls.target
             if nl:
                 wi[:, tri], dist[tri], value[:, tri], pdf[tri] = ls.wi, ls.dist, ls.value, ls.pdf
@@ -846,14 +843,14 @@ class Integrator:
             # emitters that are geometry: aim at the offset point in front of them and stop a
             # little short (the tracer can skip only one triangle: the one left behind)
             rays, valid = dacrt.shading.shadow_rays(P_off, wi, dist, target, send, _END_SHORTEN)
-            occ = self._occluded_rays(rays, np.take(prim, send))
+            occ = self._occluded_rays(rays, _compact(send, prim)[0])
             send = send[valid & ~occ]
         if shadow is not None:
             free = np.flatnonzero(ok & ~shadow)
             if len(free):
                 send = np.concatenate([send, free])
         if len(send):
-            _accumulate(L, np.take(pid, send), np.take(value, send, axis=1))
+            _accumulate(L, *_compact(send, pid, value))
 
 
 def _accumulate(L, idx, values):
@@ -861,15 +858,12 @@ def _accumulate(L, idx, values):
     dacrt.shading.accumulate(L, idx, values)
 
 
-def _taker(idx):
-    """Compaction of per-path arrays ((n,) or (3,n)) to the columns idx; None keeps all."""
+def _compact(idx, *arrays):
+    """The columns idx of per-path arrays ((n,) or (rows, n); None stays None) in one native
+    pass; idx None keeps them all."""
     if idx is None:
-        return lambda a: a
-    def take(a):
-        if a is None:
-            return None
-        return np.take(a, idx, axis=a.ndim - 1)
-    return take
+        return list(arrays)
+    return dacrt.shading.take_columns(idx, *arrays)
 
 
 @dataclass

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include <string>
+#include <vector>
 
 #include "shading.h"
 
@@ -309,6 +310,39 @@ py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry) {
     return py::make_tuple(O, D, tmax);
 }
 
+py::list take_columns_py(I64Array idx, py::list arrays) {
+    if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
+    const size_t k = size_t(idx.shape(0));
+    std::vector<Columns> cols;
+    py::list out;
+    size_t n = 0;
+    for (size_t a = 0; a < arrays.size(); ++a) {
+        py::array src = arrays[a].cast<py::array>();
+        const std::string name = "arrays[" + std::to_string(a) + "]";
+        if ((src.ndim() != 1 && src.ndim() != 2) || !(src.flags() & py::array::c_style))
+            throw py::value_error(name + " must be a C-contiguous (n,) or (rows, n) array");
+        const size_t itemsize = size_t(src.itemsize());
+        if (itemsize != 1 && itemsize != 2 && itemsize != 4 && itemsize != 8)
+            throw py::value_error(name + " has " + std::to_string(itemsize) + "-byte elements (1, 2, 4 or 8 supported)");
+        const size_t cols_n = size_t(src.shape(src.ndim() - 1)), rows = src.ndim() == 2 ? size_t(src.shape(0)) : 1;
+        if (a == 0) n = cols_n;
+        else if (cols_n != n) throw py::value_error(name + " has " + std::to_string(cols_n) + " columns, arrays[0] " +
+                                                    std::to_string(n));
+        std::vector<py::ssize_t> shape;
+        if (src.ndim() == 2) shape.push_back(py::ssize_t(rows));
+        shape.push_back(py::ssize_t(k));
+        py::array dst(src.dtype(), shape);
+        cols.push_back({src.data(), dst.mutable_data(), rows, n, itemsize});
+        out.append(dst);
+    }
+    if (!cols.empty()) check_index(idx, n, "idx");
+    {
+        py::gil_scoped_release nogil;
+        take_columns(cols.data(), cols.size(), idx.data(), k);
+    }
+    return out;
+}
+
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny) {
     if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
@@ -353,5 +387,6 @@ void register_shading(py::module_& m) {
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("D"), py::arg("thr"),
           py::arg("pdf"), py::arg("pid"), py::arg("L"));
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"));
+    m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
     m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
 }

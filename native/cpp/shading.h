@@ -153,5 +153,16 @@ struct CameraFrame {
 // stride n) on the clip-start plane, tmax reaching the clip-end plane.
 void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D, float* tmax);
 
+// One (rows, n) array (C order, elements of itemsize 1, 2, 4 or 8 bytes) and the (rows, k)
+// array its columns idx go to.
+struct Columns {
+    const void* src;
+    void* dst;
+    size_t rows, n, itemsize;
+};
+
+// dst[:, j] = src[:, idx[j]] for every array, j < k (idx checked by the caller).
+void take_columns(const Columns* arrays, size_t count, const int64_t* idx, size_t k);
+
 }  // namespace dacrt
 

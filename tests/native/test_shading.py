@@ -425,3 +425,20 @@ def test_camera_rays_checks_its_frame():
         shading.camera_rays(False, np.zeros(21, F32), rx, ry)
     with pytest.raises(ValueError, match="ry"):
         shading.camera_rays(False, np.zeros(22, F32), rx, np.zeros(3, F32))
+
+
+def test_take_columns_gathers_every_dtype_and_checks():
+    rng = np.random.default_rng(22)
+    n, k = 3000, 1700
+    idx = rng.integers(0, n, k)
+    arrays = [rng.random((3, n)).astype(F32), rng.integers(0, 2 ** 32, (2, n), dtype=np.uint64).astype(np.uint32),
+              rng.integers(-5, 5, n), rng.random(n), rng.random(n) < 0.5, rng.integers(0, 9, n).astype(np.int16)]
+    out = shading.take_columns(idx, *arrays[:3], None, *arrays[3:])
+    assert out[3] is None
+    for a, b in zip(arrays, out[:3] + out[4:]):
+        assert b.dtype == a.dtype
+        np.testing.assert_array_equal(b, np.take(a, idx, axis=a.ndim - 1))
+    with pytest.raises(ValueError, match="idx"):
+        shading.take_columns(np.array([0, n]), arrays[0])
+    with pytest.raises(ValueError, match="columns"):
+        shading.take_columns(idx, arrays[0], np.zeros(n + 1))

@@ -167,6 +167,15 @@ def camera_rays(ortho: bool, frame, rx, ry):
                              np.ascontiguousarray(ry, _F32))
 
 
+def take_columns(idx, *arrays):
+    """[a[..., idx] for a in arrays] in one threaded pass: arrays are (n,) or (rows, n) with the
+    same n (any 1, 2, 4 or 8-byte dtype); idx (k,) indexes their last axis. None stays None."""
+    idx = np.ascontiguousarray(idx, np.int64)
+    given = [np.ascontiguousarray(a) for a in arrays if a is not None]
+    taken = iter(_core.take_columns(idx, given))
+    return [None if a is None else next(taken) for a in arrays]
+
+
 def accumulate(L, idx, values) -> None:
     """L[:, idx] += values for distinct idx (k,); L (3, N) float32 C-contiguous, values (3, k)."""
     if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
