@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "parallel.h"
+#include "pathvertex.h"
 #include "shading.h"
 
 namespace dacrt {
@@ -21,40 +22,13 @@ size_t sample_triangles(const float* geo, const float* area, size_t M, const int
                 ++local_bad;
                 continue;
             }
-            auto g = [&](int row) { return geo[size_t(row) * M + size_t(w)]; };
-            // uniform point by area: barycentrics (u2 sqrt(u1), 1 - sqrt(u1)) of vertices 1, 2
-            const float su = std::sqrt(u1[i]);
-            const float b1 = u2[i] * su, b2 = 1.0f - su;
-            float q[3], d[3];
-            for (int a = 0; a < 3; ++a) {
-                float x = g(3 + a) * b1;
-                x += g(6 + a) * b2;
-                x += g(a);
-                q[a] = x;
-                d[a] = x - P[size_t(a) * n + i];
-            }
-            const float len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            const float inv = len > 0 ? 1.0f / len : 0.0f;
-            for (int a = 0; a < 3; ++a) d[a] *= inv;
-            float cos_l = g(9) * d[0] + g(10) * d[1] + g(11) * d[2];
-            const float side = cos_l <= 0 ? 1.0f : -1.0f;  // the emitter face that sees P
-            cos_l = std::fabs(cos_l);
-            const bool ok = cos_l > 0 && len > 0;
-            const float p = ok ? len * len / (area[w] * cos_l) : 0.0f;
-            // The shadow ray must end in front of the emitter by more than where its end can
-            // drift: a few ULPs of its origin's coordinates and of its length, which can exceed
-            // the emitter's own step (a small emitter seen from afar). 8 ULPs of the larger.
-            float big = len;
-            for (int a = 0; a < 3; ++a) big = std::max(big, std::fabs(P[size_t(a) * n + i]));
-            const float own = std::sqrt(g(12) * g(12) + g(13) * g(13) + g(14) * g(14));
-            const float reach = 8.0f * ulp_of(std::max(big, 0x1p-100f));
-            const float scale = own >= reach || !(own > 0) ? side : side * (reach / own);
+            const float p[3] = {P[i], P[n + i], P[2 * n + i]};
+            float d[3], q[3];
+            triangle_light(geo, area, M, size_t(w), p, u1[i], u2[i], d, dist[i], pdf[i], q);
             for (int a = 0; a < 3; ++a) {
                 wi[size_t(a) * n + i] = d[a];
-                target[size_t(a) * n + i] = q[a] + g(12 + a) * scale;
+                target[size_t(a) * n + i] = q[a];
             }
-            dist[i] = len;
-            pdf[i] = std::isfinite(p) ? p : 0.0f;
         }
         if (local_bad) bad += local_bad;
     });

@@ -3,35 +3,25 @@
 #include <cmath>
 
 #include "parallel.h"
+#include "pathvertex.h"
 #include "shading.h"
 
 namespace dacrt {
 
 void nee_weight(const float* ns, const float* ng, const float* wi, const float* pdf, const float* p_sel,
                 const float* thr, float* value, size_t n, uint8_t* ok) {
-    const float inv_pi = 0.3183098861837907f;
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
-            const float w0 = wi[i], w1 = wi[n + i], w2 = wi[2 * n + i];
-            const float cos_s = ns[i] * w0 + ns[n + i] * w1 + ns[2 * n + i] * w2;
-            // power heuristic w = 1 / (1 + (pdf_bsdf / (p_sel pdf_light))^2); delta lights: 1
-            float r = cos_s * inv_pi;
-            r /= p_sel[i] * pdf[i];
-            r *= r;
-            r += 1.0f;
-            float scale = cos_s * inv_pi;
-            scale /= r * p_sel[i];
-            float m = -1.0f;
+            const float s[3] = {ns[i], ns[n + i], ns[2 * n + i]};
+            const float w[3] = {wi[i], wi[n + i], wi[2 * n + i]};
+            float g[3], t[3], v[3];
             for (int a = 0; a < 3; ++a) {
-                float v = value[size_t(a) * n + i];
-                if (thr) v *= thr[size_t(a) * n + i];
-                v *= scale;
-                value[size_t(a) * n + i] = v;
-                m = std::fmax(m, v);  // fmax ignores NaN: a NaN channel alone never counts
+                if (ng) g[a] = ng[size_t(a) * n + i];
+                if (thr) t[a] = thr[size_t(a) * n + i];
+                v[a] = value[size_t(a) * n + i];
             }
-            bool good = cos_s > 0 && m > 0;
-            if (ng) good = good && (ng[i] * w0 + ng[n + i] * w1 + ng[2 * n + i] * w2) > 0;
-            ok[i] = good;
+            ok[i] = nee_scale(s, ng ? g : nullptr, w, pdf[i], p_sel[i], thr ? t : nullptr, v);
+            for (int a = 0; a < 3; ++a) value[size_t(a) * n + i] = v[a];
         }
     });
 }
@@ -41,24 +31,14 @@ void shadow_rays(const float* O, const float* wi, const float* dist, const float
     parallel_for(k, [&](size_t b, size_t e) {
         for (size_t j = b; j < e; ++j) {
             const size_t i = size_t(idx[j]);
-            Ray& r = out[j];
-            float d[3], len;
-            for (int a = 0; a < 3; ++a) r.org[a] = O[size_t(a) * n + i];
-            if (target && !std::isnan(target[i])) {
-                for (int a = 0; a < 3; ++a) d[a] = target[size_t(a) * n + i] - r.org[a];
-                len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                const float inv = len > 0 ? 1.0f / len : 0.0f;
-                for (int a = 0; a < 3; ++a) d[a] *= inv;
-                len *= shorten;
-            } else {
-                for (int a = 0; a < 3; ++a) d[a] = wi[size_t(a) * n + i];
-                len = dist[i];
+            float o[3], w[3], t[3];
+            for (int a = 0; a < 3; ++a) {
+                o[a] = O[size_t(a) * n + i];
+                w[a] = wi[size_t(a) * n + i];
+                if (target) t[a] = target[size_t(a) * n + i];
             }
-            const bool good = len > 0;
-            for (int a = 0; a < 3; ++a) r.dir[a] = good ? d[a] : (a == 2 ? 1.0f : 0.0f);
-            r.tfar = good ? len : 0.0f;
-            r.id = uint32_t(j);
-            valid[j] = good;
+            valid[j] = shadow_record(o, w, dist[i], target ? t : nullptr, shorten, out[j]);
+            out[j].id = uint32_t(j);
         }
     }, size_t(1) << 16);
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "parallel.h"
+#include "pathvertex.h"
 #include "random.h"
 #include "shading.h"
 
@@ -50,50 +51,19 @@ void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb,
 
 namespace {
 
-// sin and cos of 2 pi u for u in [0, 1): quadrant by the top bits, Taylor polynomials on
-// [0, pi/2] (truncation < 6e-8). Branch-free and in plain IEEE operations, so the per-ISA clones
-// below vectorise it and agree bit for bit (libm's sinf/cosf are scalar calls).
-inline void sincos_turn(float u, float& s, float& c) {
-    const float q4 = u * 4.0f;
-    const int q = int(q4);
-    const float x = (q4 - float(q)) * 1.5707963267948966f, x2 = x * x;
-    const float sn = x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040 + x2 * (1.0f / 362880 +
-                     x2 * (-1.0f / 39916800))))));
-    const float cs = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320 + x2 * (
-                     -1.0f / 3628800 + x2 * (1.0f / 479001600))))));
-    // rotate by q quarter turns: (s, c) = (sn, cs), (cs, -sn), (-sn, -cs), (-cs, sn)
-    const bool swap = q & 1, neg_s = q & 2, neg_c = (q + 1) & 2;
-    s = swap ? cs : sn;
-    c = swap ? sn : cs;
-    s = neg_s ? -s : s;
-    c = neg_c ? -c : c;
-}
-
 // Malley's method (uniform disk point lifted to the hemisphere) around the shading normals,
 // for one chunk of sample words.
 __attribute__((target_clones("avx512f", "avx2", "default")))
 void scatter_chunk(const uint32_t* __restrict wa, const uint32_t* __restrict wb, size_t m,
                    const float* __restrict nx_, const float* __restrict ny_, const float* __restrict nz_,
                    float* __restrict wx, float* __restrict wy, float* __restrict wz, float* __restrict pdf) {
-    const float inv_pi = 0.3183098861837907f;
     for (size_t j = 0; j < m; ++j) {
-        const float u1 = float(wa[j] >> 8) * kInv24, u2 = float(wb[j] >> 8) * kInv24;
-        float sp, cp;
-        sincos_turn(u2, sp, cp);
-        const float rad = std::sqrt(u1);
-        const float lx = rad * cp, ly = rad * sp;
-        const float lz = std::sqrt(std::max(1.0f - u1, 0.0f));
-        // branchless orthonormal basis around the shading normal (Duff et al. 2017)
-        const float nx = nx_[j], ny = ny_[j], nz = nz_[j];
-        const float sign = nz >= 0 ? 1.0f : -1.0f;
-        const float a = -1.0f / (sign + nz);
-        const float bb = nx * ny * a;
-        const float t0 = 1.0f + sign * nx * a * nx, t1 = sign * bb, t2 = -sign * nx;
-        const float b0 = bb, b1 = sign + ny * ny * a, b2 = -ny;
-        wx[j] = t0 * lx + b0 * ly + nx * lz;
-        wy[j] = t1 * lx + b1 * ly + ny * lz;
-        wz[j] = t2 * lx + b2 * ly + nz * lz;
-        pdf[j] = lz * inv_pi;
+        const float n[3] = {nx_[j], ny_[j], nz_[j]};
+        float w[3];
+        pdf[j] = malley(float(wa[j] >> 8) * kInv24, float(wb[j] >> 8) * kInv24, n, w);
+        wx[j] = w[0];
+        wy[j] = w[1];
+        wz[j] = w[2];
     }
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "parallel.h"
+#include "pathvertex.h"
 #include "shading.h"
 
 namespace dacrt {
@@ -51,37 +52,14 @@ size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits
                 ++local_bad;
                 continue;
             }
-            const size_t p = size_t(h.prim);
-            const float u = h.u, v = h.v;
-            auto g = [&](int row) { return geo[size_t(row) * M + p]; };
-            float P[3], ng[3];
+            const float d[3] = {D[i], D[n + i], D[2 * n + i]};
+            SurfacePoint sp;
+            surface_point(geo, M, normals, h, d, sp);
             for (int a = 0; a < 3; ++a) {
-                float x = g(3 + a) * u;
-                x += g(6 + a) * v;
-                x += g(a);
-                P[a] = x;
-                ng[a] = g(9 + a);
-            }
-            const float dn = ng[0] * D[i] + ng[1] * D[n + i] + ng[2] * D[2 * n + i];
-            const float flip = dn > 0 ? -1.0f : 1.0f;
-            for (int a = 0; a < 3; ++a) {
-                out[size_t(a) * k + j] = P[a];
-                out[size_t(3 + a) * k + j] = ng[a] * flip;
-                out[size_t(6 + a) * k + j] = P[a] + g(12 + a) * flip;
-            }
-            if (normals) {
-                float s[3];
-                for (int a = 0; a < 3; ++a) {
-                    float x = normals[size_t(3 + a) * M + p] * u;
-                    x += normals[size_t(6 + a) * M + p] * v;
-                    x += normals[size_t(a) * M + p];
-                    s[a] = x;
-                }
-                const float len = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-                // a zero interpolated normal (opposite corner normals) falls back to ng
-                const bool good = len > 0 && std::isfinite(len);
-                const float inv = good ? flip / len : 0.0f;
-                for (int a = 0; a < 3; ++a) out[size_t(9 + a) * k + j] = good ? s[a] * inv : ng[a] * flip;
+                out[size_t(a) * k + j] = sp.P[a];
+                out[size_t(3 + a) * k + j] = sp.ng[a];
+                out[size_t(6 + a) * k + j] = sp.P_off[a];
+                if (normals) out[size_t(9 + a) * k + j] = sp.ns[a];
             }
         }
         if (local_bad) bad += local_bad;

@@ -1,0 +1,189 @@
+// The steps of shading one path vertex, as inline functions on one path: hit-point
+// reconstruction, a light sample on an emissive triangle, the next-event weight, the shadow ray
+// and the cosine-weighted bounce. The single-step kernels (surface.cpp, emitters.cpp, nee.cpp,
+// scatter.cpp) and the fused vertex kernel (shade.cpp) share them, so both compute the same
+// bits; the arithmetic and its float32 order are those of the numpy code the kernels replaced.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "ray.h"
+#include "shading.h"
+
+namespace dacrt {
+
+// Hit point P, geometric and shading normals facing the incoming direction d, and P stepped
+// off the surface toward d's side (geo: 15 rows of M; normals: 9 rows of M or null = flat).
+struct SurfacePoint {
+    float P[3], ng[3], ns[3], P_off[3];
+};
+
+inline void surface_point(const float* geo, size_t M, const float* normals, const Hit& h, const float d[3],
+                          SurfacePoint& s) {
+    const size_t p = size_t(h.prim);
+    const float u = h.u, v = h.v;
+    auto g = [&](int row) { return geo[size_t(row) * M + p]; };
+    for (int a = 0; a < 3; ++a) {
+        float x = g(3 + a) * u;
+        x += g(6 + a) * v;
+        x += g(a);
+        s.P[a] = x;
+    }
+    const float dn = g(9) * d[0] + g(10) * d[1] + g(11) * d[2];
+    const float flip = dn > 0 ? -1.0f : 1.0f;
+    for (int a = 0; a < 3; ++a) {
+        s.ng[a] = g(9 + a) * flip;
+        s.P_off[a] = s.P[a] + g(12 + a) * flip;
+        s.ns[a] = s.ng[a];
+    }
+    if (normals) {
+        float n[3];
+        for (int a = 0; a < 3; ++a) {
+            float x = normals[size_t(3 + a) * M + p] * u;
+            x += normals[size_t(6 + a) * M + p] * v;
+            x += normals[size_t(a) * M + p];
+            n[a] = x;
+        }
+        const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        // a zero interpolated normal (opposite corner normals) falls back to ng
+        if (len > 0 && std::isfinite(len)) {
+            const float inv = flip / len;
+            for (int a = 0; a < 3; ++a) s.ns[a] = n[a] * inv;
+        }
+    }
+}
+
+// A point uniform by area on triangle w (geo: 15 rows of M) seen from P: unit direction wi,
+// distance, solid-angle pdf (0 where it cannot be seen) and the point the shadow ray must end
+// at (stepped off the emitter toward P). Radiance and pdf use the exact point.
+inline void triangle_light(const float* geo, const float* area, size_t M, size_t w, const float P[3], float u1,
+                           float u2, float wi[3], float& dist, float& pdf, float target[3]) {
+    auto g = [&](int row) { return geo[size_t(row) * M + w]; };
+    // uniform point by area: barycentrics (u2 sqrt(u1), 1 - sqrt(u1)) of vertices 1, 2
+    const float su = std::sqrt(u1);
+    const float b1 = u2 * su, b2 = 1.0f - su;
+    float q[3], d[3];
+    for (int a = 0; a < 3; ++a) {
+        float x = g(3 + a) * b1;
+        x += g(6 + a) * b2;
+        x += g(a);
+        q[a] = x;
+        d[a] = x - P[a];
+    }
+    const float len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    const float inv = len > 0 ? 1.0f / len : 0.0f;
+    for (int a = 0; a < 3; ++a) d[a] *= inv;
+    float cos_l = g(9) * d[0] + g(10) * d[1] + g(11) * d[2];
+    const float side = cos_l <= 0 ? 1.0f : -1.0f;  // the emitter face that sees P
+    cos_l = std::fabs(cos_l);
+    const bool ok = cos_l > 0 && len > 0;
+    const float p = ok ? len * len / (area[w] * cos_l) : 0.0f;
+    // The shadow ray must end in front of the emitter by more than where its end can drift: a
+    // few ULPs of its origin's coordinates and of its length, which can exceed the emitter's
+    // own step (a small emitter seen from afar). 8 ULPs of the larger.
+    float big = len;
+    for (int a = 0; a < 3; ++a) big = std::max(big, std::fabs(P[a]));
+    const float own = std::sqrt(g(12) * g(12) + g(13) * g(13) + g(14) * g(14));
+    const float reach = 8.0f * ulp_of(std::max(big, 0x1p-100f));
+    const float scale = own >= reach || !(own > 0) ? side : side * (reach / own);
+    for (int a = 0; a < 3; ++a) {
+        wi[a] = d[a];
+        target[a] = q[a] + g(12 + a) * scale;
+    }
+    dist = len;
+    pdf = std::isfinite(p) ? p : 0.0f;
+}
+
+// value (radiance / pdf of a light sample) times thr (null = 1) x cos/pi x the power-heuristic
+// weight against BSDF sampling / p_sel; whether the sample can contribute (in front of the
+// shading and geometric (null: same) normals, some positive channel).
+inline bool nee_scale(const float ns[3], const float* ng, const float wi[3], float pdf, float p_sel, const float* thr,
+                      float value[3]) {
+    const float inv_pi = 0.3183098861837907f;
+    const float cos_s = ns[0] * wi[0] + ns[1] * wi[1] + ns[2] * wi[2];
+    // power heuristic w = 1 / (1 + (pdf_bsdf / (p_sel pdf_light))^2); delta lights: 1
+    float r = cos_s * inv_pi;
+    r /= p_sel * pdf;
+    r *= r;
+    r += 1.0f;
+    float scale = cos_s * inv_pi;
+    scale /= r * p_sel;
+    float m = -1.0f;
+    for (int a = 0; a < 3; ++a) {
+        float v = value[a];
+        if (thr) v *= thr[a];
+        v *= scale;
+        value[a] = v;
+        m = std::fmax(m, v);  // fmax ignores NaN: a NaN channel alone never counts
+    }
+    bool good = cos_s > 0 && m > 0;
+    if (ng) good = good && (ng[0] * wi[0] + ng[1] * wi[1] + ng[2] * wi[2]) > 0;
+    return good;
+}
+
+// The shadow ray from O along wi over dist or, with a target (non-null, not NaN), toward it
+// over that distance x shorten. False (record tfar 0, never occluded) for a zero-length ray.
+inline bool shadow_record(const float O[3], const float wi[3], float dist, const float* target, float shorten,
+                          Ray& r) {
+    float d[3], len;
+    for (int a = 0; a < 3; ++a) r.org[a] = O[a];
+    if (target && !std::isnan(target[0])) {
+        for (int a = 0; a < 3; ++a) d[a] = target[a] - r.org[a];
+        len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        const float inv = len > 0 ? 1.0f / len : 0.0f;
+        for (int a = 0; a < 3; ++a) d[a] *= inv;
+        len *= shorten;
+    } else {
+        for (int a = 0; a < 3; ++a) d[a] = wi[a];
+        len = dist;
+    }
+    const bool good = len > 0;
+    for (int a = 0; a < 3; ++a) r.dir[a] = good ? d[a] : (a == 2 ? 1.0f : 0.0f);
+    r.tfar = good ? len : 0.0f;
+    return good;
+}
+
+// sin and cos of 2 pi u for u in [0, 1): quadrant by the top bits, Taylor polynomials on
+// [0, pi/2] (truncation < 6e-8). Branch-free plain IEEE operations, so per-ISA clones
+// vectorise it and agree bit for bit (libm's sinf/cosf are scalar calls).
+inline void sincos_turn(float u, float& s, float& c) {
+    const float q4 = u * 4.0f;
+    const int q = int(q4);
+    const float x = (q4 - float(q)) * 1.5707963267948966f, x2 = x * x;
+    const float sn = x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040 + x2 * (1.0f / 362880 +
+                     x2 * (-1.0f / 39916800))))));
+    const float cs = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320 + x2 * (
+                     -1.0f / 3628800 + x2 * (1.0f / 479001600))))));
+    // rotate by q quarter turns: (s, c) = (sn, cs), (cs, -sn), (-sn, -cs), (-cs, sn)
+    const bool swap = q & 1, neg_s = q & 2, neg_c = (q + 1) & 2;
+    s = swap ? cs : sn;
+    c = swap ? sn : cs;
+    s = neg_s ? -s : s;
+    c = neg_c ? -c : c;
+}
+
+// Cosine-weighted direction around the unit normal n (Malley: a uniform disk point lifted to
+// the hemisphere, in Duff et al.'s branchless basis); returns its pdf cos / pi (0: grazing).
+inline float malley(float u1, float u2, const float n[3], float wi[3]) {
+    const float inv_pi = 0.3183098861837907f;
+    float sp, cp;
+    sincos_turn(u2, sp, cp);
+    const float rad = std::sqrt(u1);
+    const float lx = rad * cp, ly = rad * sp;
+    const float lz = std::sqrt(std::max(1.0f - u1, 0.0f));
+    const float nx = n[0], ny = n[1], nz = n[2];
+    const float sign = nz >= 0 ? 1.0f : -1.0f;
+    const float a = -1.0f / (sign + nz);
+    const float bb = nx * ny * a;
+    const float t0 = 1.0f + sign * nx * a * nx, t1 = sign * bb, t2 = -sign * nx;
+    const float b0 = bb, b1 = sign + ny * ny * a, b2 = -ny;
+    wi[0] = t0 * lx + b0 * ly + nx * lz;
+    wi[1] = t1 * lx + b1 * ly + ny * lz;
+    wi[2] = t2 * lx + b2 * ly + nz * lz;
+    return lz * inv_pi;
+}
+
+}  // namespace dacrt
