@@ -448,7 +448,8 @@ class Integrator:
                     local = np.full(len(self.tri), -1, np.int32)
                     local[sub] = np.arange(len(sub), dtype=np.int32)
                 tris = self.tri.indices if everything else self.tri.indices[sub]
-                built[key] = (dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition), sub, local)
+                built[key] = (dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition, keep_top=True),
+                              sub, local)
             self._scenes[kind], self._maps[kind], self._local[kind] = built[key]
         self._num_scenes = len(built)
         # triangles only rays that are never cast could meet (shadow-only ones without lights,

@@ -22,7 +22,9 @@ namespace {
 
 class NativeScene {
 public:
-    NativeScene(py::array_t<float, py::array::c_style> vertices, py::array_t<uint32_t, py::array::c_style> triangles) {
+    NativeScene(py::array_t<float, py::array::c_style> vertices, py::array_t<uint32_t, py::array::c_style> triangles,
+                bool keep_top) {
+        if (keep_top) top_ = std::make_unique<TopCache>();
         if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
         if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw py::value_error("triangles must have shape (M, 3)");
         const size_t V = size_t(vertices.shape(0)), M = size_t(triangles.shape(0));
@@ -74,6 +76,7 @@ public:
 
 private:
     std::unique_ptr<TriangleSet> ts_;
+    std::unique_ptr<TopCache> top_;   // null: the partition's top is rebuilt by every call
 
     static Config config(int partition, int leaf_size, float sah_ratio, size_t chunk_rays) {
         if (partition < 0 || partition > 2) throw py::value_error("partition must be 0 (adaptive), 1 (median) or 2 (sah)");
@@ -127,7 +130,7 @@ private:
             if (err.empty()) {
                 const auto t0 = std::chrono::steady_clock::now();
                 const uint64_t c0 = phase_clock();
-                res = trace(*ts_, r, n, job, threads, isa);
+                res = trace(*ts_, r, n, job, threads, isa, top_.get());
                 const uint64_t ticks = phase_clock() - c0;
                 const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 seconds_per_tick = ticks > 0 ? s / double(ticks) : 0.0;
@@ -177,8 +180,8 @@ PYBIND11_MODULE(_core, m) {
     m.attr("ROBUST") = true;
 #endif
     py::class_<NativeScene>(m, "NativeScene")
-        .def(py::init<py::array_t<float, py::array::c_style>, py::array_t<uint32_t, py::array::c_style>>(),
-             py::arg("vertices"), py::arg("triangles"))
+        .def(py::init<py::array_t<float, py::array::c_style>, py::array_t<uint32_t, py::array::c_style>, bool>(),
+             py::arg("vertices"), py::arg("triangles"), py::arg("keep_top"))
         .def_property_readonly("num_triangles", &NativeScene::num_triangles)
         .def_property_readonly("num_degenerate", &NativeScene::num_degenerate)
         .def_property_readonly("bounds", &NativeScene::bounds)

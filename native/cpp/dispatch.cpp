@@ -12,13 +12,14 @@
 #include <atomic>
 #include <chrono>
 #include <exception>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
 namespace dacrt {
 
 static constexpr size_t kMinChunkRays = 1 << 16;
-static constexpr size_t kSharedMinTris = 256;
+static constexpr size_t kSharedMinTris = 32;
 
 static bool cpu_has_avx2() {
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
@@ -73,7 +74,8 @@ int hardware_threads() {
     return h ? int(h) : 1;
 }
 
-TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job, int threads, Isa isa) {
+TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job, int threads, Isa isa,
+                  TopCache* cache) {
     const auto t0 = std::chrono::steady_clock::now();
     TraceResult res;
     res.stats.rays = n;
@@ -97,13 +99,40 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         if (size_t(T) > chunks) T = int(chunks);
         res.threads = T;
 
-        std::vector<uint32_t> shared_ids(ts.valid_ids);
         int levels = 0;  // share down to nodes of about kSharedMinTris triangles
-        while (levels < 14 && (nt >> levels) > kSharedMinTris) ++levels;
-        std::vector<SharedNode> nodes(size_t(1) << levels);
+        while (levels < 17 && (nt >> levels) > kSharedMinTris) ++levels;
+        std::vector<uint32_t> own_ids;
+        std::unique_ptr<SharedNode[]> own_nodes;
+        std::shared_lock<std::shared_mutex> kept;
         SharedTop top;
-        top.ids = shared_ids.data();
-        top.nodes = nodes.data();
+        if (cache) {
+            const Config& c = job.cfg;
+            for (;;) {
+                {
+                    std::unique_lock<std::shared_mutex> reset(cache->lock);
+                    if (!cache->ready || cache->partition != c.partition || cache->leaf_size != c.leaf_size ||
+                        cache->sah_ratio != c.sah_ratio) {
+                        cache->ids = ts.valid_ids;
+                        cache->nodes.reset(new SharedNode[size_t(1) << levels]);
+                        cache->partition = c.partition;
+                        cache->leaf_size = c.leaf_size;
+                        cache->sah_ratio = c.sah_ratio;
+                        cache->ready = true;
+                    }
+                }
+                kept = std::shared_lock<std::shared_mutex>(cache->lock);
+                if (cache->partition == c.partition && cache->leaf_size == c.leaf_size && cache->sah_ratio == c.sah_ratio)
+                    break;
+                kept.unlock();  // another call reset it to its settings in between: again
+            }
+            top.ids = cache->ids.data();
+            top.nodes = cache->nodes.get();
+        } else {
+            own_ids = ts.valid_ids;
+            own_nodes.reset(new SharedNode[size_t(1) << levels]);
+            top.ids = own_ids.data();
+            top.nodes = own_nodes.get();
+        }
         top.levels = levels;
         top.min_tris = kSharedMinTris / 2;
         top.ray_scale = float(n) / float(std::min(n, chunk));

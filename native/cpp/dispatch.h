@@ -1,5 +1,7 @@
 // Instruction-set selection at run time and the multithreaded driver of a trace call.
 #pragma once
+#include <memory>
+#include <shared_mutex>
 #include <string>
 #include <vector>
 
@@ -22,8 +24,27 @@ struct TraceResult {
     double seconds = 0.0;
 };
 
+// The shared top levels of a scene's partition (kernel.h SharedTop: the split triangle ids and
+// the splits of nodes down to ~256 triangles), kept between the trace calls of one scene that
+// use the same partition settings: the batches of one frame. Those splits depend on the
+// triangles only (median; SAH's ray-count test in adaptive mode is made by the first batch),
+// so later batches skip them; they are most of the partitioning work when a batch has fewer
+// rays than the scene has triangles (an animation frame at low samples). Reset when the
+// settings change; the scene owns it, so it lives exactly as long as the scene.
+struct TopCache {
+    std::shared_mutex lock;  // calls share it; a reset takes it alone
+    bool ready = false;
+    Partition partition = Partition::Adaptive;
+    int leaf_size = 0;
+    float sah_ratio = 0.0f;
+    std::vector<uint32_t> ids;
+    std::unique_ptr<SharedNode[]> nodes;
+};
+
 // Validates nothing (see ray.h validate_rays); traces rays[0, n) with `threads` threads
 // (0 = all cores). Independent ray chunks per thread, as in the paper, with dynamic hand-out.
-TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job, int threads, Isa isa);
+// cache: the scene's kept top levels (null: built for this call only).
+TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job, int threads, Isa isa,
+                  TopCache* cache = nullptr);
 
 }  // namespace dacrt

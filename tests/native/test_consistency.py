@@ -153,3 +153,30 @@ def test_degenerate_triangles_are_never_hit():
     hits = harness.intersect(dacrt.Scene(v, t), o, d, np.inf)
     hit = hits["prim"] >= 0
     assert not np.any(area[hits["prim"][hit]] == 0), "a zero-area triangle was hit"
+
+
+@pytest.mark.parametrize("partition", ["adaptive", "median", "sah"])
+def test_kept_top_levels_give_identical_results(partition):
+    """keep_top reuses the partition's top splits across calls (a frame's batches): every call
+    must return what a fresh scene returns, for several ray batches, thread counts, and a
+    settings change in between (which resets what is kept)."""
+    rng = np.random.default_rng(41)
+    m = 20000                                        # deep enough for ~6 shared levels
+    centres = rng.normal(size=(m, 1, 3)) * 4
+    v = (centres + rng.normal(size=(m, 3, 3)) * 0.15).reshape(-1, 3).astype(np.float32)
+    t = np.arange(3 * m, dtype=np.int64).reshape(m, 3)
+    kept = dacrt.Scene(v, t, partition=partition, keep_top=True)
+    batches = [make_rays(kind, "inf", v, t, n, seed) for kind, n, seed in
+               (("camera", 3000, 1), ("bounce", 50000, 2), ("random", 800, 3), ("bounce", 7000, 4))]
+    for i, (org, dirs, tfar) in enumerate(batches):
+        threads = (1, 2, 0, 2)[i]
+        fresh = dacrt.Scene(v, t, partition=partition)
+        a = (harness.intersect(kept, org, dirs, tfar, threads=threads),
+             harness.occluded(kept, org, dirs, tfar, threads=threads))
+        b = (harness.intersect(fresh, org, dirs, tfar, threads=threads),
+             harness.occluded(fresh, org, dirs, tfar, threads=threads))
+        assert (a[0]["prim"] >= 0).any()
+        assert_identical(a, b, f"{partition} batch {i}: kept top vs fresh scene")
+        if i == 1:                                   # a settings change resets what is kept
+            kept.partition = "sah" if partition != "sah" else "median"
+            partition = kept.partition

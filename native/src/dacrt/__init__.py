@@ -114,13 +114,18 @@ class Scene:
 
     vertices: (V,3) float array; triangles: (M,3) integer vertex indices. Both are copied into
     the tracer's own layout; degenerate (zero-area) triangles are accepted and never hit.
+
+    keep_top: keep the top levels of the triangle partition (the splits of nodes down to ~256
+    triangles, which depend on the triangles, not on the rays) from one call to the next while
+    the partition settings stay the same, so the later batches of a frame skip them. Results are
+    identical either way; a renderer makes one Scene per frame, so nothing outlives the frame.
     """
 
     def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 8,
-                 sah_ratio: float = 128.0, chunk_rays: int = 0):
+                 sah_ratio: float = 128.0, chunk_rays: int = 0, keep_top: bool = False):
         v = _as_vertices(vertices)
         t = _as_triangles(triangles, len(v))
-        self._core = _core.NativeScene(v, t)
+        self._core = _core.NativeScene(v, t, bool(keep_top))
         self.partition = partition
         self.leaf_size = leaf_size
         self.sah_ratio = sah_ratio
