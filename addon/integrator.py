@@ -4,7 +4,8 @@ Owns the render loop: per pass it builds every camera ray of a block of (pixel, 
 then traces each bounce as ONE batch (`dacrt.Scene.intersect`) and all shadow rays of that bounce
 as one batch (`dacrt.Scene.occluded`). Shading is Lambertian (albedo = base colour x texture),
 with next-event estimation and multiple importance sampling (power heuristic) against every
-emitter a BSDF ray can meet (emissive triangles, lamps with MIS, the world), Russian roulette
+emitter a BSDF ray can meet (emissive triangles, lamps with MIS; the uniform world is left to
+BSDF rays alone, as in Cycles, see lights/background.py), Russian roulette
 and Cycles' bounce semantics: max_bounces K gives up to K+1 diffuse reflections, light sampling
 at vertices 0..K, and the last BSDF ray only collects emission (reference blender-cycles.md 2.5).
 
@@ -377,16 +378,18 @@ class Integrator:
         if self.lights.unseen_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.unseen_lamps)} light(s) that neither camera "
                                           f"nor diffuse rays can see: {', '.join(self.lights.unseen_lamps)}"))
-        self._lamps_for_camera = bool(self.lights.num_lamps or self.lights.camera_lamps)
         # Native lamp records (dacrt.lamps): the lamps light sampling may choose (0..nl-1), then
-        # the lamps only camera rays see. Record index lists per ray kind, for lamp_gather.
+        # those only BSDF and camera rays find (the world), then those only camera rays see.
+        # Record index lists per ray kind, for lamp_gather.
         nl = self.lights.num_lamps
-        every = self.lights.lamps + self.lights.camera_lamps
+        diffuse = self.lights.lamps + self.lights.unsampled_lamps
+        every = diffuse + self.lights.camera_lamps
+        self._lamps_for_camera = bool(every)
         self._lamp_records = lamp_records(every)
         self._nee_records = np.ascontiguousarray(self._lamp_records[:nl])
         self._camera_lamps = np.array([j for j, l in enumerate(every) if l.seen_by_camera and not (
             self.transparent and isinstance(l, BackgroundLight))], np.int32)   # transparent film: no world
-        self._bsdf_lamps = np.array([j for j, l in enumerate(self.lights.lamps) if l.seen_by_bsdf], np.int32)
+        self._bsdf_lamps = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf], np.int32)
         self._selection_table()
 
     def _selection_table(self):
@@ -400,7 +403,9 @@ class Integrator:
         self._entry_prob = np.concatenate([lights.lamp_prob, tri_entries]).astype(F32)
         self._entry_no_mis = np.concatenate([[not l.seen_by_bsdf for l in lights.lamps], np.zeros(ntri, bool)])
         self._entry_shadow = np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri, bool)])
-        self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.camera_lamps), F32)]).astype(F32)
+        # lamps never chosen (unsampled, camera-only) have 0: a BSDF hit on them weighs 1
+        self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.unsampled_lamps)
+                                                                        + len(lights.camera_lamps), F32)]).astype(F32)
 
     def _weight_lights(self, probes: int = 32):
         """Let the light choice follow where the camera looks: a probes x probes grid of camera
@@ -495,7 +500,7 @@ class Integrator:
             'nan_dropped': self.film.nan_dropped,
             'triangles': len(self.tri),
             'emissive_triangles': len(self.lights.triangles) if self.lights.triangles is not None else 0,
-            'lights': len(self.lights.lamps),
+            'lights': len(self.lights.lamps) + len(self.lights.unsampled_lamps),
             'adaptive_threshold': self.adaptive.user_threshold if self.adaptive else None,
             'adaptive_min_samples': self.adaptive.min_samples if self.adaptive else None,
             'pixels_converged': self._pixels_converged,

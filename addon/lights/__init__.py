@@ -2,17 +2,20 @@
 
 Owns the translation of SceneData lights, the world and emissive triangles into samplers
 (one light type per module, like Cycles' kernel/light/), and the discrete distribution that
-picks one of them per shading point. By default every lamp (the world counts as one) is equally
-likely, emissive triangles are chosen by power (area x mean radiance), and when both exist
-each group gets half. `reweight` then tilts the split between the groups (each lamp, all
-emissive triangles) toward the lights BSDF sampling finds badly from points the camera sees:
-small lights over wide ones (the world), mixed with 20% of the uniform split. Under MIS the
-cosine-weighted bounces already sample a sky well; giving it half the light samples put DACRT
-3-7x behind Cycles on sun + sky and area light + world scenes. (Weighting by estimated
+picks one of them per shading point. By default every lamp is equally likely, emissive
+triangles are chosen by power (area x mean radiance), and when both exist each group gets half.
+`reweight` then tilts the split between the groups (each lamp, all emissive triangles) toward
+the lights BSDF sampling finds badly from points the camera sees: small lights over wide ones,
+mixed with 20% of the uniform split. Under MIS the cosine-weighted bounces already sample a
+wide light well; giving the world half the light samples put DACRT 3-7x behind Cycles on sun +
+sky and area light + world scenes, and even 10% left it 1.5x behind, so the uniform world now
+takes none (background.py). (Weighting by estimated
 irradiance was tried and dropped: it is global, and starved a spot light where it is the main
 light.) The selection probability of every light is known, so a BSDF ray that meets a light
 can be weighted against light sampling (MIS).
-Lamps with diffuse ray visibility off take no part in that choice (camera rays may see them).
+Lamps with diffuse ray visibility off take no part in that choice (camera rays may see them),
+nor does the (uniform) world: BSDF rays alone collect it, with weight 1, as in Cycles
+(background.py says why).
 """
 from __future__ import annotations
 
@@ -57,7 +60,9 @@ class LightSet:
         self.skipped_lamps = [l.name for l in lamps if l.dark]
         # Cycles excludes a light with diffuse ray visibility off from diffuse surfaces
         # altogether (light sampling and BSDF hits): only camera rays may still see it.
-        self.lamps = [l for l in lit if l.visible_diffuse]
+        self.lamps = [l for l in lit if l.visible_diffuse and l.light_sampled]
+        # lamps only BSDF (and camera) rays find: never chosen, so a BSDF hit weighs 1
+        self.unsampled_lamps = [l for l in lit if l.visible_diffuse and not l.light_sampled]
         self.camera_lamps = [l for l in lit if not l.visible_diffuse and l.seen_by_camera]
         self.unseen_lamps = [l.name for l in lit if not l.visible_diffuse and not l.seen_by_camera]
         self.triangles = triangles if triangles is not None and len(triangles) else None
@@ -98,8 +103,8 @@ class LightSet:
         """Split the selection between the groups by how badly BSDF sampling would find each
         group from the points P ((3, n) float32, e.g. where camera rays land): a sample's
         weight is 1 - (the light's solid angle) / 2 pi, the solid angle taken as 1 / pdf (0
-        for delta lights). Under MIS a light as wide as the sky (the world) is found well by
-        the cosine-weighted bounces, so light samples are better spent on small lights. Mixed
+        for delta lights). Under MIS a light as wide as the sky is found well by the
+        cosine-weighted bounces, so light samples are better spent on small lights. Mixed
         with uniform_mix of the uniform split, so every group keeps a share."""
         groups = self.num_lamps + (self.triangles is not None)
         n = P.shape[1]
@@ -129,7 +134,7 @@ class LightSet:
     @property
     def seen_by_bsdf(self) -> bool:
         """Whether BSDF rays can collect any light (emissive triangles, visible lamps, world)."""
-        return self.triangles is not None or any(l.seen_by_bsdf for l in self.lamps)
+        return self.triangles is not None or any(l.seen_by_bsdf for l in self.lamps + self.unsampled_lamps)
 
     def select(self, u: np.ndarray) -> np.ndarray:
         """Entry per uniform: 0..num_lamps-1 are lamps, num_lamps + j is triangles.index[j]."""

@@ -77,6 +77,7 @@ class Lamp(ABC):
     """Shared settings of a Blender light (object visibility, MIS, shadows)."""
     delta = False           # a point or direction: only light sampling can find it
     at_infinity = False     # seen by rays that miss all geometry (sun, world)
+    light_sampled = True    # next-event estimation may choose it (False: only BSDF rays find it)
 
     def __init__(self, light=None, color=None):
         if light is not None:

@@ -291,19 +291,20 @@ def test_light_without_diffuse_visibility_lights_nothing():
 # --- choosing a light per shading point ---------------------------------------------------------
 
 def test_light_choice_favours_lights_bsdf_sampling_misses():
-    """A sun (a delta light here) and a world over a plane: the cosine-weighted bounces find
-    the world as well as light sampling would, so the sun gets the 80% share plus its 10%
-    uniform share and the world its 10%; the probabilities stay a distribution and the image
-    stays unbiased. Two point lights (both delta) keep equal shares."""
+    """A delta sun and a sun as wide as the sky (angle 180 degrees: uniform radiance over the
+    upper hemisphere, solid-angle pdf 1/(2 pi)) over a plane: the cosine-weighted bounces find
+    the wide one as well as light sampling would, so the delta sun gets the 80% share plus its
+    10% uniform share and the wide one its 10%; the probabilities stay a distribution and the
+    image stays unbiased. Two point lights (both delta) keep equal shares."""
     from addon.integrator import Integrator
-    sun = light('SUN', 3.0, np.eye(4))
-    scene = plane_scene([sun], world=(0.05, 0.05, 0.05), samples=64, max_bounces=0)
+    wide = light('SUN', 0.5, np.eye(4), angle=np.pi)              # irradiance 0.5 on the plane
+    scene = plane_scene([light('SUN', 3.0, np.eye(4)), wide], samples=64, max_bounces=0)
     integ = Integrator(scene)
     p = integ.lights.lamp_prob
     assert p.sum() == pytest.approx(1.0) and integ.lights.cdf[-1] == 1.0
     np.testing.assert_allclose(p, [0.9, 0.1], atol=1e-6)
     mean, err = pixel_stats(render(scene))
-    expected = 0.8 / np.pi * (3.0 + np.pi * 0.05)          # albedo/pi x irradiance
+    expected = 0.8 / np.pi * (3.0 + 0.5)                    # albedo/pi x irradiance
     assert abs(mean - expected) < 4 * err + 1e-4 * expected
     two = Integrator(plane_scene([light('POINT', 10.0, translation(z=2.0)), light('POINT', 50.0, translation(1, 0, 3))]))
     np.testing.assert_allclose(two.lights.lamp_prob, [0.5, 0.5])
@@ -312,7 +313,20 @@ def test_light_choice_favours_lights_bsdf_sampling_misses():
 def test_light_choice_keeps_uniform_shares_without_visible_surfaces():
     """No camera ray lands on anything: nothing to estimate from, the default split stays."""
     from addon.integrator import Integrator
-    scene = plane_scene([light('SUN', 3.0, np.eye(4))], world=(0.05, 0.05, 0.05), samples=4)
+    scene = plane_scene([light('SUN', 3.0, np.eye(4)), light('SUN', 0.5, np.eye(4), angle=np.pi)], samples=4)
     scene.camera.matrix[:3, 3] = (0.0, 0.0, -5.0)              # under the plane, looking down
     integ = Integrator(scene)
     np.testing.assert_allclose(integ.lights.lamp_prob, [0.5, 0.5])
+
+
+def test_uniform_world_is_left_to_bsdf_rays():
+    """As Cycles (a world shader that does not vary over directions is not light-sampled), the
+    world takes no light samples: every one goes to the sun, and BSDF rays collect the world with
+    weight 1. Under the world alone no shadow ray is traced, and the cosine-weighted bounce
+    samples the uniform sky exactly: an open plane renders albedo x radiance at 2 samples."""
+    from addon.integrator import Integrator
+    both = Integrator(plane_scene([light('SUN', 3.0, np.eye(4))], world=(0.05, 0.05, 0.05)))
+    np.testing.assert_allclose(both.lights.lamp_prob, [1.0])
+    alone = render(plane_scene(world=(0.5, 0.5, 0.5), samples=2, max_bounces=0))
+    assert alone.stats['rays']['shadow'] == 0 and alone.stats['lights'] == 1
+    np.testing.assert_allclose(alone.film.combined()[..., :3], RHO * 0.5, rtol=1e-5)

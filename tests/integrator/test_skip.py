@@ -60,8 +60,8 @@ def test_last_bounce_ray_not_cast_when_nothing_it_could_hit_emits(monkeypatch):
 def test_triangles_no_cast_ray_can_meet_are_left_out():
     v, t = quad((0.0, 0.0, 0.0), 1000.0, 1000.0)
     rv, rt = quad((0.0, 0.0, 1.0), 5.0, 5.0, up=False)
-    # a roof only shadow rays see: with the world as a light it casts shadows and stays ...
-    lit = plane_scene([], world=(0.5, 0.5, 0.5), samples=4, max_bounces=2)
+    # a roof only shadow rays see: under a sun it casts shadows and stays ...
+    lit = plane_scene([light('SUN', 3.0, np.eye(4))], samples=4, max_bounces=2)
     lit.geometry = geometry([(v, t, 1, ALL_VIS), (rv, rt, 1, sd.VIS_SHADOW)])
     assert render(lit).stats['skipped']['detail']['triangles_unreachable'] == 0
     # ... without any light no shadow ray is cast, and it is in no tracer scene
