@@ -6,7 +6,9 @@ page per 4 KiB again, plus a TLB-shootdown IPI to the other tracer thread per mu
 ~18% of a Cornell-box render (perf: clear_page, page faults, smp_call_function). While a render
 runs, freed blocks therefore stay in the heap for the next pass (mmap threshold up, trimming
 off); when it ends, the thresholds go back to glibc's defaults and the heap is trimmed, so the
-memory returns to the system (Blender's memory stays flat across renders).
+memory returns to the system (Blender's memory stays flat across renders). Nested uses (the
+engine holds the heap for a whole frame: export, set-up and passes; the integrator for its
+passes) act once, at the outermost.
 """
 from __future__ import annotations
 
@@ -32,21 +34,24 @@ def _libc():
 
 
 _LIBC = _libc()
+_depth = 0
 
 
 @contextmanager
 def render_heap():
-    """Keep freed blocks in the heap for the duration of the block (see the module doc)."""
-    if _LIBC is None:
-        yield
-        return
-    for size in _HOLD_MMAP:
-        if _LIBC.mallopt(_M_MMAP_THRESHOLD, size):
-            break
-    _LIBC.mallopt(_M_TRIM_THRESHOLD, _HOLD_TRIM)
+    """Keep freed blocks in the heap while any such block runs (see the module doc)."""
+    global _depth
+    _depth += 1
+    if _LIBC is not None and _depth == 1:
+        for size in _HOLD_MMAP:
+            if _LIBC.mallopt(_M_MMAP_THRESHOLD, size):
+                break
+        _LIBC.mallopt(_M_TRIM_THRESHOLD, _HOLD_TRIM)
     try:
         yield
     finally:
-        _LIBC.mallopt(_M_MMAP_THRESHOLD, _GLIBC_DEFAULT)
-        _LIBC.mallopt(_M_TRIM_THRESHOLD, _GLIBC_DEFAULT)
-        _LIBC.malloc_trim(0)
+        _depth -= 1
+        if _LIBC is not None and _depth == 0:
+            _LIBC.mallopt(_M_MMAP_THRESHOLD, _GLIBC_DEFAULT)
+            _LIBC.mallopt(_M_TRIM_THRESHOLD, _GLIBC_DEFAULT)
+            _LIBC.malloc_trim(0)

@@ -13,6 +13,7 @@ import bpy
 import numpy as np
 
 from . import export
+from .allocator import render_heap
 
 # Extra passes: (scenedata/film name, view-layer toggle, channels, chan_id, type)
 EXTRA_PASSES = (('Depth', 'use_pass_z', 1, 'Z', 'VALUE'),
@@ -68,7 +69,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
 
     def render(self, depsgraph):
         try:
-            self._render(depsgraph)
+            with render_heap():     # export, set-up and passes reuse each other's freed arrays
+                self._render(depsgraph)
         except export.ExportCancelled:
             self.report({'INFO'}, "DACRT: render cancelled during scene export")
         except Exception as e:          # reported in Blender, never only printed

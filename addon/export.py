@@ -23,8 +23,9 @@ Each approximated material says why in `Material.approximated`; the export repor
 one message.
 """
 
-import numpy as np
 import bpy
+import dacrt
+import numpy as np
 
 from . import scenedata as sd
 
@@ -507,9 +508,31 @@ def _image_pixels(img, reasons):
 # ----------------------------------------------------------------------------------------
 # Meshes
 
+def _transform(points, linear, offset):
+    """(k, N, 3) float64: the (N, 3) points through each of k 3x3 maps (and offsets (k, 3)).
+    A few instances go column by column (einsum's generic loop is several times slower, and
+    a matmul would wake OpenBLAS threads that then spin beside the tracer); many instances of
+    a small mesh go through einsum at once."""
+    k = len(linear)
+    if k > 4:
+        out = np.einsum('kij,vj->kvi', linear, points)
+        return out if offset is None else out + offset[:, None, :]
+    out = np.empty((k, len(points), 3))
+    x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    for i in range(k):
+        for c in range(3):
+            col = x * linear[i, c, 0]
+            col += y * linear[i, c, 1]
+            col += z * linear[i, c, 2]
+            if offset is not None:
+                col += offset[i, c]
+            out[i, :, c] = col
+    return out
+
+
 class _MeshArrays:
     """One evaluated mesh in its local space, read once per unique mesh."""
-    __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normals', 'uvs', 'domain')
+    __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index', 'uvs', 'domain')
 
     def __init__(self, me, want_uvs):
         nv = len(me.vertices)
@@ -540,13 +563,14 @@ class _MeshArrays:
         if self.domain == 'POINT':
             vn = np.empty(nv * 3, np.float32)
             me.vertex_normals.foreach_get('vector', vn)
-            self.normals = vn.reshape(nv, 3)[self.triangles]
+            # per-vertex normals and each corner's row: transformed once per vertex, not per corner
+            self.normal_rows, self.normal_index = vn.reshape(nv, 3), self.triangles
         elif self.domain == 'CORNER':
             cn = np.empty(nl * 3, np.float32)
             me.corner_normals.foreach_get('vector', cn)
-            self.normals = cn.reshape(nl, 3)[self.corners]
+            self.normal_rows, self.normal_index = cn.reshape(nl, 3), self.corners
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
-            self.normals = None
+            self.normal_rows = self.normal_index = None
         self.uvs = self._read_uvs(me) if want_uvs else None
 
     def _read_uvs(self, me):
@@ -803,7 +827,7 @@ class _Exporter:
         pos = a.positions.astype(np.float64)
         # float64 world positions: a scene far from the origin keeps its precision until the
         # renderer centres it (integrator.recentred) and rounds to float32
-        world = np.einsum('kij,vj->kvi', lin, pos) + mats[:, None, :3, 3]   # (k,nv,3)
+        world = _transform(pos, lin, mats[:, :3, 3])                       # (k,nv,3)
         tris = a.triangles[None, :, :] + (np.arange(k, dtype=np.int32) * nv)[:, None, None]
         world = world.reshape(k * nv, 3)
         tris = tris.reshape(k * nt, 3)
@@ -820,27 +844,26 @@ class _Exporter:
                     bad.append((p.name, nvb, nb))
             keep &= tri_ok
             world = np.where(finite[:, None], world, 0.0)
-        # geometric normals in world space; objects with negative scale keep their outside
-        v0, v1, v2 = world[tris[:, 0]], world[tris[:, 1]], world[tris[:, 2]]
-        ng = np.cross(v1 - v0, v2 - v0)
-        flip = np.repeat(np.where(np.linalg.det(lin) < 0, -1.0, 1.0), nt)
-        ng *= flip[:, None]
-        length = np.linalg.norm(ng, axis=1)
-        good = length > 0
+        # geometric normals in world space (float64, one native pass); objects with negative
+        # scale keep their outside
+        ng, good = dacrt.shading.face_normals(world, tris)
+        mirrored = np.linalg.det(lin) < 0
+        if mirrored.any():
+            ng *= np.repeat(np.where(mirrored, np.float32(-1), np.float32(1)), nt)[:, None]
         deg = int((keep & ~good).sum())
         keep &= good
-        ng[good] /= length[good, None]
-        if a.normals is None:
-            normals = np.repeat(ng[:, None, :].astype(np.float32), 3, axis=1)
+        if a.normal_rows is None:
+            normals = np.repeat(ng[:, None, :], 3, axis=1)
         else:
             inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin,
                                          np.eye(3)))    # normals transform by the inverse transpose
-            n = np.einsum('tcj,kji->ktci', a.normals.astype(np.float64), inv)
-            n = n.reshape(k * nt, 3, 3).astype(np.float32)
-            nlen = np.linalg.norm(n, axis=2, keepdims=True)
-            ok = nlen[..., 0] > 1e-12
-            normals = np.where(ok[..., None], n / np.where(ok[..., None], nlen, 1.0),
-                               ng[:, None, :]).astype(np.float32)
+            n = _transform(a.normal_rows.astype(np.float64), inv.transpose(0, 2, 1), None).astype(np.float32)
+            nlen = np.sqrt(np.einsum('kri,kri->kr', n, n))[..., None]
+            ok = nlen > 1e-12                           # a zero normal falls back to the face's
+            n = np.where(ok, n / np.where(ok, nlen, np.float32(1)), np.float32(0))
+            corner = n[:, a.normal_index].reshape(k * nt, 3, 3)
+            corner_ok = ok[:, a.normal_index].reshape(k * nt, 3, 1)
+            normals = np.where(corner_ok, corner, ng[:, None, :])
         slots = np.stack([p.slot_map[np.clip(a.slot, 0, len(p.slot_map) - 1)] for p in places])
         part = dict(vertices=world, triangles=tris, normals=normals,
                     material=slots.reshape(-1).astype(np.int32),

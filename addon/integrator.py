@@ -137,7 +137,7 @@ class _Triangles:
         self.visibility = np.where(bad_t, 0, np.asarray(geometry.visibility, np.uint8)).astype(np.uint8)
         normals = np.asarray(geometry.normals, F32)
         # flat shading everywhere (corner normals == geometric normal) needs no interpolation
-        flat = not m or bool(np.abs(normals - self.geo[9:12].T[:, None, :]).max() < 1e-6)
+        flat = not m or dacrt.shading.normals_flat(normals, self.geo, 1e-6)
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
         self.normals = None if flat else _corner_rows(normals)
         self.uvs = None if geometry.uvs is None else _corner_rows(np.asarray(geometry.uvs, F32))

@@ -343,6 +343,33 @@ py::list take_columns_py(I64Array idx, py::list arrays) {
     return out;
 }
 
+py::tuple face_normals_py(py::array_t<double, py::array::c_style> vertices,
+                          py::array_t<int32_t, py::array::c_style> triangles, float flip) {
+    if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
+    if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw py::value_error("triangles must have shape (M, 3)");
+    const size_t V = size_t(vertices.shape(0)), M = size_t(triangles.shape(0));
+    const int32_t* t = triangles.data();
+    for (size_t i = 0; i < 3 * M; ++i)
+        if (t[i] < 0 || size_t(t[i]) >= V)
+            throw py::value_error("triangles[" + std::to_string(i / 3) + "] refers to vertex " + std::to_string(t[i]) +
+                                  " outside 0.." + std::to_string(V ? V - 1 : 0));
+    F32Array normals({py::ssize_t(M), py::ssize_t(3)});
+    py::array_t<bool> good{py::ssize_t(M)};
+    {
+        py::gil_scoped_release nogil;
+        face_normals(vertices.data(), t, M, flip, normals.mutable_data(), reinterpret_cast<uint8_t*>(good.mutable_data()));
+    }
+    return py::make_tuple(normals, good);
+}
+
+bool normals_flat_py(F32Array normals, F32Array geo, float tol) {
+    const size_t M = rows_of(geo, 15, "geo");
+    if (normals.ndim() != 3 || size_t(normals.shape(0)) != M || normals.shape(1) != 3 || normals.shape(2) != 3)
+        throw py::value_error("normals must have shape (M, 3, 3), M = geo.shape[1]");
+    py::gil_scoped_release nogil;
+    return normals_flat(normals.data(), geo.data(), M, tol);
+}
+
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny) {
     if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
@@ -388,5 +415,7 @@ void register_shading(py::module_& m) {
           py::arg("pdf"), py::arg("pid"), py::arg("L"));
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"));
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
+    m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"), py::arg("flip"));
+    m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
     m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
 }

@@ -36,6 +36,16 @@ void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray*
 void triangle_table(const float* vertices, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     float* geo, double* area);
 
+// Unit geometric normals (M rows of 3, times flip: -1 for mirroring transforms) of triangles of
+// float64 vertices (V rows of 3), in double, rounded once; good[i] = 0 (normal 0) for a
+// zero-area or non-finite triangle. Triangles must index existing vertices (callers check).
+void face_normals(const double* vertices, const int32_t* triangles, size_t M, float flip, float* normals,
+                  uint8_t* good);
+
+// Whether every corner normal (M x 3 corners x 3, C order) is within tol of its triangle's
+// geometric normal (geo rows 9-11 of M): flat shading needs no interpolation.
+bool normals_flat(const float* normals, const float* geo, size_t M, float tol);
+
 // Hit points of rays idx[0..k) (all rays when idx is null): reads hits[i] and column i of D
 // (stride n). geo: 15 rows of M (v0, v1 - v0, v2 - v0, unit geometric normal, front-side
 // self-intersection step); normals: 9 rows of M (corner 0 normal, corner 1 - 0, corner 2 - 0)

@@ -67,4 +67,40 @@ size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits
     return bad.load();
 }
 
+void face_normals(const double* vertices, const int32_t* triangles, size_t M, float flip, float* normals,
+                  uint8_t* good) {
+    parallel_for(M, [vertices, triangles, M, flip, normals, good](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            const double* c[3];
+            for (int k = 0; k < 3; ++k) c[k] = vertices + 3 * size_t(triangles[3 * i + k]);
+            double e1[3], e2[3];
+            for (int a = 0; a < 3; ++a) {
+                e1[a] = c[1][a] - c[0][a];
+                e2[a] = c[2][a] - c[0][a];
+            }
+            const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                 e1[0] * e2[1] - e1[1] * e2[0]};
+            const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            const bool ok = len > 0 && std::isfinite(len);
+            for (int a = 0; a < 3; ++a) normals[3 * i + size_t(a)] = ok ? float(n[a] / len) * flip : 0.0f;
+            good[i] = ok;
+        }
+    });
+}
+
+bool normals_flat(const float* normals, const float* geo, size_t M, float tol) {
+    std::atomic<bool> flat{true};
+    parallel_for(M, [normals, geo, M, tol, &flat](size_t b, size_t e) {
+        for (size_t i = b; i < e && flat.load(std::memory_order_relaxed); ++i)
+            for (int c = 0; c < 3; ++c)
+                for (int a = 0; a < 3; ++a)
+                    if (!(std::fabs(normals[9 * i + size_t(3 * c + a)] - geo[size_t(9 + a) * M + i]) < tol)) {
+                        flat.store(false, std::memory_order_relaxed);
+                        return;
+                    }
+    });
+    return flat.load();
+}
+
 }  // namespace dacrt
+

@@ -34,3 +34,13 @@ def test_image_does_not_depend_on_the_policy(monkeypatch):
     monkeypatch.setattr(integrator_module, 'render_heap', contextlib.nullcontext)
     plain = scenes.render(sd).film.combined()
     np.testing.assert_array_equal(held, plain)
+
+
+def test_nested_and_interleaved_uses_restore_once():
+    outer, inner = allocator.render_heap(), allocator.render_heap()
+    outer.__enter__()
+    inner.__enter__()
+    outer.__exit__(None, None, None)          # the outer one may end first (generators)
+    assert allocator._depth == 1
+    inner.__exit__(None, None, None)
+    assert allocator._depth == 0

@@ -442,3 +442,23 @@ def test_take_columns_gathers_every_dtype_and_checks():
         shading.take_columns(np.array([0, n]), arrays[0])
     with pytest.raises(ValueError, match="columns"):
         shading.take_columns(idx, arrays[0], np.zeros(n + 1))
+
+
+def test_face_normals_and_flatness():
+    rng = np.random.default_rng(23)
+    v = rng.normal(size=(50, 3)) * 1e3 + 1e5             # float64 far from the origin
+    t = rng.integers(0, 50, (200, 3)).astype(np.int32)
+    t[0] = (3, 3, 7)                                       # degenerate
+    n, good = shading.face_normals(v, t, -1.0)
+    cross = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    length = np.linalg.norm(cross, axis=1)
+    np.testing.assert_array_equal(good, length > 0)
+    np.testing.assert_allclose(n[good], -cross[good] / length[good, None], atol=1e-6)
+    assert not n[0].any()
+    geo, _ = _geo(rng, 40)
+    flat = np.repeat(geo[9:12].T[:, None, :], 3, axis=1).copy()
+    assert shading.normals_flat(flat, geo, 1e-6)
+    flat[17, 2, 1] += 1e-4
+    assert not shading.normals_flat(flat, geo, 1e-6)
+    with pytest.raises(ValueError, match="vertex"):
+        shading.face_normals(v, t + 50)

@@ -176,6 +176,20 @@ def take_columns(idx, *arrays):
     return [None if a is None else next(taken) for a in arrays]
 
 
+def face_normals(vertices, triangles, flip: float = 1.0):
+    """Unit geometric normals (M, 3) float32 of triangles (M, 3) of float64 vertices (V, 3),
+    computed in double and multiplied by flip (-1: a mirroring transform keeps the outside), and
+    good (M,): False (normal 0) for zero-area or non-finite triangles. One threaded pass."""
+    return _core.face_normals(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(triangles, np.int32),
+                              float(flip))
+
+
+def normals_flat(normals, geo, tol: float) -> bool:
+    """Whether every corner normal of normals (M, 3, 3) is within tol of its triangle's geometric
+    normal (geo rows 9:12, geo as triangle_table makes it)."""
+    return bool(_core.normals_flat(np.ascontiguousarray(normals, _F32), _rows(geo, 15, "geo"), float(tol)))
+
+
 def accumulate(L, idx, values) -> None:
     """L[:, idx] += values for distinct idx (k,); L (3, N) float32 C-contiguous, values (3, k)."""
     if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
