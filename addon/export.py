@@ -519,7 +519,14 @@ def _transform(points, linear, offset):
         return out if offset is None else out + offset[:, None, :]
     out = np.empty((k, len(points), 3))
     x, y, z = points[:, 0], points[:, 1], points[:, 2]
-    for i in range(k):
+    with np.errstate(invalid='ignore', over='ignore'):   # non-finite input is dropped later
+        _columns(out, x, y, z, linear, offset)
+    return out
+
+
+def _columns(out, x, y, z, linear, offset):
+    """out[i, :, c] = row c of linear[i] applied to (x, y, z), plus offset[i, c]."""
+    for i in range(len(linear)):
         for c in range(3):
             col = x * linear[i, c, 0]
             col += y * linear[i, c, 1]
@@ -527,7 +534,6 @@ def _transform(points, linear, offset):
             if offset is not None:
                 col += offset[i, c]
             out[i, :, c] = col
-    return out
 
 
 class _MeshArrays:
