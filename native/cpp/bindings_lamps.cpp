@@ -114,10 +114,14 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     std::string err;
     {
         py::gil_scoped_release nogil;
-        // threads split by ray and add to L[:, pid]: pid must be in range and distinct
-        std::vector<uint8_t> seen(N, 0);
+        // threads split by ray and add to L[:, pid]: pid must be in range and distinct.
+        // A renderer's pids ascend (compaction keeps path order): checked in one cheap pass;
+        // any other order gets the full check with a marker per column.
         const int64_t* p = pid.data();
-        for (size_t i = 0; i < n && err.empty(); ++i) {
+        bool ascending = n == 0 || (p[0] >= 0 && size_t(p[n - 1]) < N);
+        for (size_t i = 1; i < n && ascending; ++i) ascending = p[i] > p[i - 1];
+        std::vector<uint8_t> seen(ascending ? 0 : N, 0);
+        for (size_t i = 0; i < n && err.empty() && !ascending; ++i) {
             if (p[i] < 0 || size_t(p[i]) >= N)
                 err = "pid[" + std::to_string(i) + "] = " + std::to_string(p[i]) + " is outside 0.." +
                       std::to_string(N ? N - 1 : 0) + " (L has " + std::to_string(N) + " columns)";
