@@ -612,8 +612,9 @@ class Integrator:
         local = self._local[kind]
         return prim if local is None else np.take(local, prim)
 
-    def _intersect(self, kind, O, D, tfar, skip=None):
-        rays = self._ray_array(O, D, tfar)
+    def _intersect(self, kind, O, D, tfar, skip=None, rays=None):
+        if rays is None:
+            rays = self._ray_array(O, D, tfar)
         skip = self._skip(kind, skip)
         t0 = time.perf_counter()
         hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip)
@@ -680,7 +681,7 @@ class Integrator:
         emission, Russian roulette, light sampling, BSDF sampling. Returns the paths that go on."""
         K = self.max_bounces
         camera = k == 0
-        hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax, path.prim)
+        hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax, path.prim, path.rays)
         prim = hits['prim']
         hit = prim >= 0
         self._gather_lamps(camera, path, hit, hits, L)
@@ -731,13 +732,14 @@ class Integrator:
         # cosine-weighted BSDF sample around the shading normal; reject directions below the
         # geometric surface (a diffuse BSDF only reflects)
         ka, kb = self.rng.dim_words(_dim(k, 2))
-        wi, pdf, ok = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng)
+        wi, pdf, ok, rays = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng, origins=P_off)
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
             P_off, wi, thr, pid, keys, pdf, prim = _compact(np.flatnonzero(ok), P_off, wi, thr, pid, keys, pdf, prim)
+            rays = None                                # repacked with the survivors' ids
         if len(pid) == 0:
             return None
-        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim)
+        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays)
 
     # --- surfaces -------------------------------------------------------------------------------
 
@@ -883,3 +885,4 @@ class _Paths:
     thr: np.ndarray | None   # throughput (None: 1, camera rays)
     pdf: np.ndarray | None   # solid-angle pdf of D at the previous vertex (None for camera rays)
     prim: np.ndarray | None  # triangle the rays leave (global index; None for camera rays)
+    rays: np.ndarray | None = None   # their RAY_DTYPE records when already packed

@@ -113,17 +113,24 @@ py::tuple uniform_pick_py(U32Array keys, uint32_t ka, uint32_t kb) {
     return py::make_tuple(pick, u);
 }
 
-py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns, py::object ng) {
+py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns, py::object ng, py::object origins,
+                            py::object rays) {
     size_t n = rows_of(keys, 2, "keys");
     if (rows_of(ns, 3, "ns") != n) throw py::value_error("ns must have shape (3, n), n = keys.shape[1]");
-    F32Array ng_keep;
+    F32Array ng_keep, o_keep;
     const float* g = optional_rows(ng, 3, n, "ng", ng_keep);
+    const float* o = optional_rows(origins, 3, n, "origins", o_keep);
+    Ray* r = nullptr;
+    if (o) {
+        if (rays.is_none()) throw py::value_error("origins need a rays array to fill");
+        r = records<Ray>(rays.cast<py::array>(), n, "rays");
+    }
     F32Array wi({py::ssize_t(3), py::ssize_t(n)}), pdf{py::ssize_t(n)};
     py::array_t<bool> ok{py::ssize_t(n)};
     {
         py::gil_scoped_release nogil;
         cosine_scatter(keys.data(), n, ka, kb, ns.data(), g, wi.mutable_data(), pdf.mutable_data(),
-                       reinterpret_cast<uint8_t*>(ok.mutable_data()));
+                       reinterpret_cast<uint8_t*>(ok.mutable_data()), o, r);
     }
     return py::make_tuple(wi, pdf, ok);
 }
@@ -399,7 +406,7 @@ void register_shading(py::module_& m) {
     m.def("uniform2", &uniform2_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("uniform_pick", &uniform_pick_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("cosine_scatter", &cosine_scatter_py, py::arg("keys"), py::arg("ka"), py::arg("kb"), py::arg("ns"),
-          py::arg("ng"));
+          py::arg("ng"), py::arg("origins"), py::arg("rays"));
     m.def("sample_triangles", &sample_triangles_py, py::arg("geo"), py::arg("area"), py::arg("which"), py::arg("P"),
           py::arg("u1"), py::arg("u2"));
     m.def("nee_weight", &nee_weight_py, py::arg("ns"), py::arg("ng"), py::arg("wi"), py::arg("pdf"), py::arg("p_sel"),

@@ -1,6 +1,7 @@
 // Diffuse (Lambertian) bounce directions and the renderer's random numbers (see shading.h).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "parallel.h"
 #include "pathvertex.h"
@@ -70,7 +71,7 @@ void scatter_chunk(const uint32_t* __restrict wa, const uint32_t* __restrict wb,
 }  // namespace
 
 void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
-                    float* wi, float* pdf, uint8_t* ok) {
+                    float* wi, float* pdf, uint8_t* ok, const float* O, Ray* rays) {
     parallel_for(n, [&](size_t begin, size_t end) {
         for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* wa, const uint32_t* wb) {
             scatter_chunk(wa, wb, m, ns + i0, ns + n + i0, ns + 2 * n + i0, wi + i0, wi + n + i0, wi + 2 * n + i0,
@@ -79,6 +80,15 @@ void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, co
                 bool good = pdf[i] > 0;          // grazing: cos = 0
                 if (ng) good = good && (wi[i] * ng[i] + wi[n + i] * ng[n + i] + wi[2 * n + i] * ng[2 * n + i]) > 0;
                 ok[i] = good;
+                if (rays) {  // the bounce rays' records, ready for the tracer
+                    Ray& r = rays[i];
+                    for (int a = 0; a < 3; ++a) {
+                        r.org[a] = O[size_t(a) * n + i];
+                        r.dir[a] = wi[size_t(a) * n + i];
+                    }
+                    r.tfar = std::numeric_limits<float>::infinity();
+                    r.id = uint32_t(i);
+                }
             }
         });
     }, size_t(1) << 15);

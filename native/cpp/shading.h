@@ -71,8 +71,10 @@ void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb,
 // Cosine-weighted directions around the shading normals ns (3 rows, stride n), random numbers
 // from keys/ka/kb; pdf = cos / pi. ok[i] = 0 for directions below the geometric normal ng
 // (null: ns is ng) or at grazing cos = 0.
+// With origins O (3 rows, stride n; else null) it also writes the bounce rays' records (org O,
+// dir wi, tfar inf, id i), saving the tracer's packing pass.
 void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
-                    float* wi, float* pdf, uint8_t* ok);
+                    float* wi, float* pdf, uint8_t* ok, const float* O = nullptr, Ray* rays = nullptr);
 
 }  // namespace dacrt
 

@@ -462,3 +462,16 @@ def test_face_normals_and_flatness():
     assert not shading.normals_flat(flat, geo, 1e-6)
     with pytest.raises(ValueError, match="vertex"):
         shading.face_normals(v, t + 50)
+
+
+def test_cosine_scatter_packs_the_bounce_rays():
+    rng = np.random.default_rng(24)
+    n = 5000
+    keys = rng.integers(0, 2 ** 32, (2, n), dtype=np.uint64).astype(np.uint32)
+    ns, O = _unit(rng, n), rng.normal(size=(3, n)).astype(F32)
+    wi, pdf, ok = shading.cosine_scatter(keys, 3, 4, ns)
+    wi2, pdf2, ok2, rays = shading.cosine_scatter(keys, 3, 4, ns, origins=O)
+    np.testing.assert_array_equal(wi2, wi)
+    np.testing.assert_array_equal(rays, shading.pack_rays(O, wi, np.full(n, np.inf, F32)))
+    with pytest.raises(ValueError, match="origins"):
+        shading.cosine_scatter(keys, 3, 4, ns, origins=O[:, :10])

@@ -86,15 +86,21 @@ def uniform_pick(keys, ka: int, kb: int):
     return _core.uniform_pick(_rows(keys, 2, "keys", np.uint32), int(ka), int(kb))
 
 
-def cosine_scatter(keys, ka: int, kb: int, ns, ng=None):
+def cosine_scatter(keys, ka: int, kb: int, ns, ng=None, origins=None):
     """Cosine-weighted directions around unit shading normals ns (3, n) from the random numbers
     of (keys, ka, kb): returns wi (3, n), pdf (n,) = cos/pi and ok (n,) bool, false where the
-    direction is grazing or below the geometric normals ng (None: ns is the geometric normal)."""
+    direction is grazing or below the geometric normals ng (None: ns is the geometric normal).
+    With origins (3, n) a fourth result: the bounce rays as RAY_DTYPE records (origins, wi,
+    tfar inf, ids 0..n-1), written in the same pass."""
     keys = _rows(keys, 2, "keys", np.uint32)
     ns = _rows(ns, 3, "ns")
     if ng is not None:
         ng = _rows(ng, 3, "ng")
-    return _core.cosine_scatter(keys, int(ka), int(kb), ns, ng)
+    if origins is None:
+        return _core.cosine_scatter(keys, int(ka), int(kb), ns, ng, None, None)
+    rays = np.empty(keys.shape[1], RAY_DTYPE)
+    wi, pdf, ok = _core.cosine_scatter(keys, int(ka), int(kb), ns, ng, _rows(origins, 3, "origins"), rays)
+    return wi, pdf, ok, rays
 
 
 def sample_triangles(geo, area, which, P, u1, u2):
