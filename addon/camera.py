@@ -80,13 +80,14 @@ class CameraModel:
 
     # --- rays ---------------------------------------------------------------------------------
 
-    def rays(self, rx, ry):
+    def rays(self, rx, ry, records: bool = False):
         """Rays for full-frame raster positions: origins (3,n), unit directions (3,n) float32 and
         tmax (n,) float32; origins lie on the clip-start plane, tmax reaches the clip-end plane.
         Perspective: direction R (sx tan, sy tan, -1) / |.| for viewplane point (sx, sy), origin
         at clip_start / d_cam.z along it; orthographic: origin R (sx, sy, -clip_start) + pos,
-        direction -R z. One native pass (dacrt.shading.camera_rays) on the frame below."""
-        return dacrt.shading.camera_rays(self.kind == 'ORTHO', self._frame, rx, ry)
+        direction -R z. One native pass (dacrt.shading.camera_rays) on the frame below; with
+        records=True also the tracer's RAY_DTYPE records of the rays."""
+        return dacrt.shading.camera_rays(self.kind == 'ORTHO', self._frame, rx, ry, records)
 
     def _frame_floats(self) -> np.ndarray:
         """The float32 frame camera_rays reads (each value rounded once from float64)."""

@@ -662,12 +662,12 @@ class Integrator:
         keys, rx, ry = dacrt.shading.pixel_samples(frame, samp, self.camera.width, k0, k1, ka, kb,
                                                    self.filter.table)
         del frame
-        O, D, tmax = self.camera.rays(rx, ry)
+        O, D, tmax, rays = self.camera.rays(rx, ry, records=True)
         del rx, ry
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
         L, alpha = rgba[:3], rgba[3]
         data = {}
-        path = _Paths(np.arange(n), keys, O, D, tmax, None, None, None)
+        path = _Paths(np.arange(n), keys, O, D, tmax, None, None, None, rays)
         for k in range(self.max_bounces + 2):
             path = self._vertex(k, path, L, alpha, data, pix, samp)
             if path is None:

@@ -294,7 +294,7 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
                            D.data(), t, pd, pid.data(), L.mutable_data(), N);
 }
 
-py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry) {
+py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, py::object rays) {
     if (frame.ndim() != 1 || frame.shape(0) != 22)
         throw py::value_error("frame must hold 22 floats (rotation 9, position 3, ortho base 3, raster map 4, "
                               "tan_half_fov, clip_start, clip_range)");
@@ -310,9 +310,10 @@ py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry) {
     const size_t n = size_t(rx.shape(0));
     need_len(ry, n, "ry");
     F32Array O({py::ssize_t(3), py::ssize_t(n)}), D({py::ssize_t(3), py::ssize_t(n)}), tmax{py::ssize_t(n)};
+    Ray* rec = rays.is_none() ? nullptr : records<Ray>(rays.cast<py::array>(), n, "rays");
     {
         py::gil_scoped_release nogil;
-        camera_rays(c, rx.data(), ry.data(), n, O.mutable_data(), D.mutable_data(), tmax.mutable_data());
+        camera_rays(c, rx.data(), ry.data(), n, O.mutable_data(), D.mutable_data(), tmax.mutable_data(), rec);
     }
     return py::make_tuple(O, D, tmax);
 }
@@ -420,7 +421,8 @@ void register_shading(py::module_& m) {
     m.def("gather_emission", &gather_emission_py, py::arg("hits"), py::arg("hit"), py::arg("emission"),
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("D"), py::arg("thr"),
           py::arg("pdf"), py::arg("pid"), py::arg("L"));
-    m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"));
+    m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
+          py::arg("rays"));
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
     m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"), py::arg("flip"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));

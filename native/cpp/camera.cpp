@@ -8,7 +8,16 @@
 namespace dacrt {
 
 void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
-                 float* tmax) {
+                 float* tmax, Ray* rays) {
+    auto pack = [&](size_t i) {  // the tracer's record of ray i
+        Ray& r = rays[i];
+        for (int a = 0; a < 3; ++a) {
+            r.org[a] = O[size_t(a) * n + i];
+            r.dir[a] = D[size_t(a) * n + i];
+        }
+        r.tfar = tmax[i];
+        r.id = uint32_t(i);
+    };
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             float sx = c.sx0 + rx[i] * c.sx_scale, sy = c.sy0 + ry[i] * c.sy_scale;
@@ -19,6 +28,7 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
                     D[size_t(a) * n + i] = -c.rot[a][2];
                 }
                 tmax[i] = c.clip_range;
+                if (rays) pack(i);
                 continue;
             }
             sx *= c.tan_half_fov;
@@ -32,6 +42,7 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
                 O[size_t(a) * n + i] = d * start + c.pos[a];
             }
             tmax[i] = c.clip_range / inv_len;
+            if (rays) pack(i);
         }
     }, size_t(1) << 16);
 }

@@ -162,8 +162,10 @@ struct CameraFrame {
 };
 
 // Rays through full-frame raster positions (rx, ry): origins O and unit directions D (3 rows,
-// stride n) on the clip-start plane, tmax reaching the clip-end plane.
-void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D, float* tmax);
+// stride n) on the clip-start plane, tmax reaching the clip-end plane; with rays non-null also
+// their records (ids 0..n-1) for the tracer.
+void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D, float* tmax,
+                 Ray* rays = nullptr);
 
 // One (rows, n) array (C order, elements of itemsize 1, 2, 4 or 8 bytes) and the (rows, k)
 // array its columns idx go to.

@@ -475,3 +475,14 @@ def test_cosine_scatter_packs_the_bounce_rays():
     np.testing.assert_array_equal(rays, shading.pack_rays(O, wi, np.full(n, np.inf, F32)))
     with pytest.raises(ValueError, match="origins"):
         shading.cosine_scatter(keys, 3, 4, ns, origins=O[:, :10])
+
+
+def test_camera_rays_records_match_packing():
+    rng = np.random.default_rng(25)
+    frame = np.zeros(22, F32)
+    frame[[0, 4, 8]] = 1.0                                  # identity rotation
+    frame[15:22] = (-1.0, 0.02, -0.75, 0.02, 0.4, 0.1, 99.9)
+    rx, ry = (rng.random(777) * 100).astype(F32), (rng.random(777) * 75).astype(F32)
+    for ortho in (False, True):
+        O, D, tmax, rays = shading.camera_rays(ortho, frame, rx, ry, records=True)
+        np.testing.assert_array_equal(rays, shading.pack_rays(O, D, tmax))

@@ -164,13 +164,17 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, D, thr, 
                                  np.ascontiguousarray(pid, np.int64), L)
 
 
-def camera_rays(ortho: bool, frame, rx, ry):
+def camera_rays(ortho: bool, frame, rx, ry, records: bool = False):
     """Rays through raster positions rx, ry (n,) of a camera frame (22 float32: camera-to-world
     rotation row-major (9), position (3), orthographic origin base (3), raster -> viewplane
     map sx0, sx_scale, sy0, sy_scale (4), tan(fov / 2), clip start, clip range): origins and
-    unit directions (3, n) on the clip-start plane, tmax (n,) to the clip-end plane."""
-    return _core.camera_rays(bool(ortho), np.ascontiguousarray(frame, _F32), np.ascontiguousarray(rx, _F32),
-                             np.ascontiguousarray(ry, _F32))
+    unit directions (3, n) on the clip-start plane, tmax (n,) to the clip-end plane, and with
+    records=True their RAY_DTYPE records (ids 0..n-1) from the same pass."""
+    rx = np.ascontiguousarray(rx, _F32)
+    rays = np.empty(len(rx), RAY_DTYPE) if records else None
+    O, D, tmax = _core.camera_rays(bool(ortho), np.ascontiguousarray(frame, _F32), rx,
+                                   np.ascontiguousarray(ry, _F32), rays)
+    return (O, D, tmax, rays) if records else (O, D, tmax)
 
 
 def take_columns(idx, *arrays):
