@@ -105,7 +105,9 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         std::unique_ptr<SharedNode[]> own_nodes;
         std::shared_lock<std::shared_mutex> kept;
         SharedTop top;
-        if (cache) {
+        // Small batches (a renderer's probe rays) neither use nor set the kept top: in adaptive
+        // mode its splits follow the first batch's ray count, which should be a real one.
+        if (cache && n >= kMinChunkRays) {
             const Config& c = job.cfg;
             for (;;) {
                 {

@@ -117,8 +117,9 @@ class Scene:
 
     keep_top: keep the top levels of the triangle partition (the splits of nodes down to ~256
     triangles, which depend on the triangles, not on the rays) from one call to the next while
-    the partition settings stay the same, so the later batches of a frame skip them. Results are
-    identical either way; a renderer makes one Scene per frame, so nothing outlives the frame.
+    the partition settings stay the same, so the later batches of a frame skip them (batches of
+    fewer than 64K rays neither use nor set them). Results are identical either way; a renderer
+    makes one Scene per frame, so nothing outlives the frame.
     """
 
     def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 8,
