@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "shading.h"
@@ -351,8 +352,8 @@ py::list take_columns_py(I64Array idx, py::list arrays) {
     return out;
 }
 
-py::tuple face_normals_py(py::array_t<double, py::array::c_style> vertices,
-                          py::array_t<int32_t, py::array::c_style> triangles, float flip) {
+// Shapes of a mesh's (V, 3) vertices and (M, 3) triangles, every index checked: (V, M).
+std::pair<size_t, size_t> mesh_sizes(const py::array& vertices, const py::array_t<int32_t, py::array::c_style>& triangles) {
     if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
     if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw py::value_error("triangles must have shape (M, 3)");
     const size_t V = size_t(vertices.shape(0)), M = size_t(triangles.shape(0));
@@ -360,7 +361,14 @@ py::tuple face_normals_py(py::array_t<double, py::array::c_style> vertices,
     for (size_t i = 0; i < 3 * M; ++i)
         if (t[i] < 0 || size_t(t[i]) >= V)
             throw py::value_error("triangles[" + std::to_string(i / 3) + "] refers to vertex " + std::to_string(t[i]) +
-                                  " outside 0.." + std::to_string(V ? V - 1 : 0));
+                                  " but there are " + std::to_string(V) + " vertices");
+    return {V, M};
+}
+
+py::tuple face_normals_py(py::array_t<double, py::array::c_style> vertices,
+                          py::array_t<int32_t, py::array::c_style> triangles, float flip) {
+    const size_t M = mesh_sizes(vertices, triangles).second;
+    const int32_t* t = triangles.data();
     F32Array normals({py::ssize_t(M), py::ssize_t(3)});
     py::array_t<bool> good{py::ssize_t(M)};
     {
@@ -380,14 +388,8 @@ bool normals_flat_py(F32Array normals, F32Array geo, float tol) {
 
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny) {
-    if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
-    if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw py::value_error("triangles must have shape (M, 3)");
-    const size_t V = size_t(vertices.shape(0)), M = size_t(triangles.shape(0));
+    const size_t M = mesh_sizes(vertices, triangles).second;
     const int32_t* t = triangles.data();
-    for (size_t i = 0; i < 3 * M; ++i)
-        if (t[i] < 0 || size_t(t[i]) >= V)
-            throw py::value_error("triangles[" + std::to_string(i / 3) + "] refers to vertex " + std::to_string(t[i]) +
-                                  " but there are " + std::to_string(V) + " vertices");
     F32Array geo({py::ssize_t(15), py::ssize_t(M)});
     py::array_t<double> area{py::ssize_t(M)};
     {
