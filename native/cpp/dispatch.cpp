@@ -105,28 +105,36 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         std::unique_ptr<SharedNode[]> own_nodes;
         std::shared_lock<std::shared_mutex> kept;
         SharedTop top;
-        // Small batches (a renderer's probe rays) neither use nor set the kept top: in adaptive
-        // mode its splits follow the first batch's ray count, which should be a real one.
-        if (cache && n >= kMinChunkRays) {
+        // A small batch (a renderer's probe rays) does not set the kept top, since in adaptive
+        // mode its splits follow the ray count of the batch that makes them; it uses one a
+        // real batch has set.
+        bool use_kept = false;
+        if (cache) {
             const Config& c = job.cfg;
+            auto matches = [&] {
+                return cache->ready && cache->partition == c.partition && cache->leaf_size == c.leaf_size &&
+                       cache->sah_ratio == c.sah_ratio;
+            };
             for (;;) {
-                {
-                    std::unique_lock<std::shared_mutex> reset(cache->lock);
-                    if (!cache->ready || cache->partition != c.partition || cache->leaf_size != c.leaf_size ||
-                        cache->sah_ratio != c.sah_ratio) {
-                        cache->ids = ts.valid_ids;
-                        cache->nodes.reset(new SharedNode[size_t(1) << levels]);
-                        cache->partition = c.partition;
-                        cache->leaf_size = c.leaf_size;
-                        cache->sah_ratio = c.sah_ratio;
-                        cache->ready = true;
-                    }
-                }
                 kept = std::shared_lock<std::shared_mutex>(cache->lock);
-                if (cache->partition == c.partition && cache->leaf_size == c.leaf_size && cache->sah_ratio == c.sah_ratio)
+                if (matches()) {
+                    use_kept = true;
                     break;
-                kept.unlock();  // another call reset it to its settings in between: again
-            }
+                }
+                kept.unlock();
+                if (n < kMinChunkRays) break;
+                std::unique_lock<std::shared_mutex> reset(cache->lock);
+                if (!matches()) {  // first big batch, or new settings: start over
+                    cache->ids = ts.valid_ids;
+                    cache->nodes.reset(new SharedNode[size_t(1) << levels]);
+                    cache->partition = c.partition;
+                    cache->leaf_size = c.leaf_size;
+                    cache->sah_ratio = c.sah_ratio;
+                    cache->ready = true;
+                }
+            }  // then take it shared (another call may have reset it to its settings: again)
+        }
+        if (use_kept) {
             top.ids = cache->ids.data();
             top.nodes = cache->nodes.get();
         } else {

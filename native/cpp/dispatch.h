@@ -30,8 +30,8 @@ struct TraceResult {
 // triangles only (median; SAH's ray-count test in adaptive mode is made by the first batch),
 // so later batches skip them; they are most of the partitioning work when a batch has fewer
 // rays than the scene has triangles (an animation frame at low samples). Reset when the
-// settings change; batches of fewer than 64K rays neither use nor set it. The scene owns it,
-// so it lives exactly as long as the scene.
+// settings change; a batch of fewer than 64K rays never sets it (it uses one a bigger batch
+// set). The scene owns it, so it lives exactly as long as the scene.
 struct TopCache {
     std::shared_mutex lock;  // calls share it; a reset takes it alone
     bool ready = false;

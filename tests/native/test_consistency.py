@@ -159,8 +159,8 @@ def test_degenerate_triangles_are_never_hit():
 def test_kept_top_levels_give_identical_results(partition):
     """keep_top reuses the partition's top splits across calls (a frame's batches): every call
     must return what a fresh scene returns, for several ray batches, thread counts, and a
-    settings change in between (which resets what is kept); batches under 64K rays (the third)
-    leave it alone."""
+    settings change in between (which resets what is kept); a batch under 64K rays (the third)
+    uses what a bigger one kept."""
     rng = np.random.default_rng(41)
     m = 20000                                        # deep enough for ~6 shared levels
     centres = rng.normal(size=(m, 1, 3)) * 4

@@ -117,8 +117,8 @@ class Scene:
 
     keep_top: keep the top levels of the triangle partition (the splits of nodes down to ~256
     triangles, which depend on the triangles, not on the rays) from one call to the next while
-    the partition settings stay the same, so the later batches of a frame skip them (batches of
-    fewer than 64K rays neither use nor set them). Results are identical either way; a renderer
+    the partition settings stay the same, so the later batches of a frame skip them (a batch of
+    fewer than 64K rays uses them but never sets them). Results are identical either way; a renderer
     makes one Scene per frame, so nothing outlives the frame.
     """
 
