@@ -17,9 +17,10 @@ in the constructor and dropped when rendering ends. Nothing here knows Blender.
 
 Per-ray data are (3, n) float32 structure-of-arrays; paths that end are compacted away after
 every vertex. The per-vertex arithmetic that numpy would run as dozens of passes on one core
-(ray packing, hit points, bounce directions, samples on emissive triangles, next-event weights,
-shadow rays, accumulation, random numbers) runs in the native kernels of dacrt.shading, one
-threaded pass each. Work that cannot change the image is not done (SKIP_WORK; counted in
+(camera rays, hit points, bounce directions and their ray records, lamp samples and lamp hits
+(dacrt.lamps), samples on emissive triangles, emission hits, next-event weights, shadow rays,
+compaction, accumulation, random numbers) runs in the native kernels of dacrt.shading, one
+threaded pass each; freed pass arrays stay in the heap while a render runs (allocator.py). Work that cannot change the image is not done (SKIP_WORK; counted in
 stats['skipped']): no shadow ray for a light sample that cannot contribute (behind the surface,
 outside a spot cone), no light sampling without lights, no last BSDF ray when nothing it could
 hit emits, paths end on black surfaces, passes that were not requested are not computed,
