@@ -77,6 +77,32 @@ def test_collection_instances_read_mesh_once_and_transform_each(scene, exported)
         assert np.allclose(dist, r, atol=1e-5), f"instance at x={x0} has radius {r}"
 
 
+def test_many_smooth_instances_keep_outward_unit_normals(scene, exported):
+    """Six instances (the batched transform path) of a smooth sphere, scaled unevenly and one
+    mirrored: every corner normal is unit length and follows the ellipsoid's gradient."""
+    setup(scene)
+    col = bpy.data.collections.new("Balls")
+    scene.collection.children.link(col)
+    ball = scenes.uv_sphere("Ball", radius=1.0, segments=16, rings=8, smooth=True)
+    scene.collection.objects.unlink(ball)
+    col.objects.link(ball)
+    scales = [(1, 1, 1), (2, 1, 1), (1, 3, 1), (1, 1, 0.5), (-1, 1, 1), (2, 2, 2)]
+    for i, s in enumerate(scales):
+        e = scenes.link(bpy.data.objects.new(f"Inst{i}", None))
+        e.instance_type, e.instance_collection = 'COLLECTION', col
+        e.location, e.scale = (10.0 * (i + 1), 0.0, 0.0), s
+    g = exported().geometry
+    c = g.vertices[g.triangles].astype(np.float64)                 # (M, 3, 3) corners
+    assert np.all(np.abs(np.linalg.norm(g.normals, axis=2) - 1) < 1e-5)
+    for i, s in enumerate(scales):
+        sel = np.abs(c[:, 0, 0] - 10.0 * (i + 1)) < 5
+        local = (c[sel] - (10.0 * (i + 1), 0, 0)) / np.abs(np.asarray(s, np.float64))
+        grad = local / np.abs(np.asarray(s, np.float64))           # gradient of sum (x_k / s_k)^2
+        grad /= np.linalg.norm(grad, axis=2, keepdims=True)
+        cos = np.einsum('ijk,ijk->ij', g.normals[sel], grad)
+        assert sel.sum() == 16 * 8 * 2 - 2 * 16 and cos.min() > 0.97, f"instance {i} (scale {s})"
+
+
 def _gn_instances(ob, points_x, points_y, size):
     ng = bpy.data.node_groups.new("Scatter", 'GeometryNodeTree')
     ng.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
