@@ -25,24 +25,19 @@ inline float filter_offset(float u, const float* table, size_t size) {
 void pixel_samples(const int64_t* pixel, const int64_t* sample, size_t n, int64_t width, uint64_t k0, uint64_t k1,
                    uint32_t ka, uint32_t kb, const float* table, size_t table_size, uint32_t* keys, float* rx,
                    float* ry) {
-    constexpr size_t kChunk = 512;
-    const float inv24 = 1.0f / float(1 << 24);
     parallel_for(n, [&](size_t begin, size_t end) {
-        uint32_t wa[kChunk], wb[kChunk];
-        for (size_t i0 = begin; i0 < end; i0 += kChunk) {
-            const size_t m = std::min(kChunk, end - i0);
-            for (size_t i = i0; i < i0 + m; ++i) {
-                // blocks are pixel-major: a pixel's seed is computed once for its run of samples
-                keys[i] = i > i0 && pixel[i] == pixel[i - 1] ? keys[i - 1] : pixel_seed(uint64_t(pixel[i]), k0, k1);
-                keys[n + i] = uint32_t(sample[i]);
-            }
-            sample_words(keys + i0, keys + n + i0, m, ka, kb, wa, wb);
+        for (size_t i = begin; i < end; ++i) {
+            // blocks are pixel-major: a pixel's seed is computed once for its run of samples
+            keys[i] = i > begin && pixel[i] == pixel[i - 1] ? keys[i - 1] : pixel_seed(uint64_t(pixel[i]), k0, k1);
+            keys[n + i] = uint32_t(sample[i]);
+        }
+        for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* wa, const uint32_t* wb) {
             for (size_t j = 0; j < m; ++j) {
                 const int64_t p = pixel[i0 + j], x = p % width, y = p / width;
-                rx[i0 + j] = filter_offset(float(wa[j] >> 8) * inv24, table, table_size) + float(x);
-                ry[i0 + j] = filter_offset(float(wb[j] >> 8) * inv24, table, table_size) + float(y);
+                rx[i0 + j] = filter_offset(unit24(wa[j]), table, table_size) + float(x);
+                ry[i0 + j] = filter_offset(unit24(wb[j]), table, table_size) + float(y);
             }
-        }
+        });
     }, size_t(1) << 16);
 }
 

@@ -3,7 +3,6 @@
 // (GCC target_clones; the dynamic loader picks the widest the CPU has: 4x over scalar code on
 // AVX2/AVX-512). Integer arithmetic only: every ISA gives the same bits.
 #include "random.h"
-#include "shading.h"
 
 namespace dacrt {
 

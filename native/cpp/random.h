@@ -6,6 +6,7 @@
 // A path's key is (pixel seed, sample index); a pair is named by two dimension words (ka, kb).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace dacrt {
@@ -70,15 +71,25 @@ inline Words mix_words(uint32_t pixel, uint32_t sample, uint32_t ka, uint32_t kb
             reverse_bits(laine_karras(sobol1_reversed(j), fmix32(seed ^ 0x7F4A7C15u)))};
 }
 
-struct Uniform2 {
-    float u1, u2;
-};
+// A sample word as a uniform in [0, 1) with 24-bit resolution (exact in float32).
+inline float unit24(uint32_t word) { return float(word >> 8) * (1.0f / float(1 << 24)); }
 
-// Two uniforms in [0, 1) (24-bit resolution) for key words (pixel, sample), dimension words.
-inline Uniform2 uniform2(uint32_t pixel, uint32_t sample, uint32_t ka, uint32_t kb) {
-    const Words w = mix_words(pixel, sample, ka, kb);
-    const float inv24 = 1.0f / float(1 << 24);
-    return {float(w.a >> 8) * inv24, float(w.b >> 8) * inv24};
+// The two sample words of dimension pair (ka, kb) for paths (pixel[i], sample[i]) (mix_words),
+// compiled per instruction set (random.cpp).
+void sample_words(const uint32_t* pixel, const uint32_t* sample, size_t n, uint32_t ka, uint32_t kb, uint32_t* a,
+                  uint32_t* b);
+
+// body(i0, count, a, b) for consecutive chunks of paths [begin, end) with their sample words;
+// keys: rows pixel seed, sample index (stride n). Chunks of 512 words stay in L1 and vectorise.
+template <class F>
+void for_words(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, size_t begin, size_t end, F&& body) {
+    constexpr size_t kChunk = 512;
+    uint32_t a[kChunk], b[kChunk];
+    for (size_t i0 = begin; i0 < end; i0 += kChunk) {
+        const size_t m = kChunk < end - i0 ? kChunk : end - i0;
+        sample_words(keys + i0, keys + n + i0, m, ka, kb, a, b);
+        body(i0, m, a, b);
+    }
 }
 
 // The 32-bit pixel seed of `pixel` for the 64-bit seed words k0, k1 (splitmix64, folded).

@@ -10,30 +10,12 @@
 
 namespace dacrt {
 
-namespace {
-
-constexpr size_t kChunk = 512;   // words per stack buffer: vector-friendly, stays in L1
-constexpr float kInv24 = 1.0f / float(1 << 24);
-
-// body(i0, count, a, b) for consecutive chunks of [begin, end) with their sample words.
-template <class F>
-void for_words(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, size_t begin, size_t end, F&& body) {
-    uint32_t a[kChunk], b[kChunk];
-    for (size_t i0 = begin; i0 < end; i0 += kChunk) {
-        const size_t m = std::min(kChunk, end - i0);
-        sample_words(keys + i0, keys + n + i0, m, ka, kb, a, b);
-        body(i0, m, a, b);
-    }
-}
-
-}  // namespace
-
 void uniform2_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, float* u1, float* u2) {
     parallel_for(n, [&](size_t begin, size_t end) {
         for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* a, const uint32_t* b) {
             for (size_t j = 0; j < m; ++j) {
-                u1[i0 + j] = float(a[j] >> 8) * kInv24;
-                u2[i0 + j] = float(b[j] >> 8) * kInv24;
+                u1[i0 + j] = unit24(a[j]);
+                u2[i0 + j] = unit24(b[j]);
             }
         });
     }, size_t(1) << 16);
@@ -44,7 +26,7 @@ void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb,
         for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* a, const uint32_t* b) {
             for (size_t j = 0; j < m; ++j) {
                 pick[i0 + j] = double(a[j]) * (1.0 / 4294967296.0);
-                u[i0 + j] = float(b[j] >> 8) * kInv24;
+                u[i0 + j] = unit24(b[j]);
             }
         });
     }, size_t(1) << 16);
@@ -61,7 +43,7 @@ void scatter_chunk(const uint32_t* __restrict wa, const uint32_t* __restrict wb,
     for (size_t j = 0; j < m; ++j) {
         const float n[3] = {nx_[j], ny_[j], nz_[j]};
         float w[3];
-        pdf[j] = malley(float(wa[j] >> 8) * kInv24, float(wb[j] >> 8) * kInv24, n, w);
+        pdf[j] = malley(unit24(wa[j]), unit24(wb[j]), n, w);
         wx[j] = w[0];
         wy[j] = w[1];
         wz[j] = w[2];

@@ -56,11 +56,6 @@ bool normals_flat(const float* normals, const float* geo, size_t M, float tol);
 size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits, const int64_t* idx,
                size_t k, const float* D, size_t n, float* out);
 
-// The two sample words of dimension pair (ka, kb) for paths (pixel[i], sample[i]) (random.h
-// mix_words), compiled per instruction set (random.cpp).
-void sample_words(const uint32_t* pixel, const uint32_t* sample, size_t n, uint32_t ka, uint32_t kb, uint32_t* a,
-                  uint32_t* b);
-
 // Two uniforms per path for keys (rows k0, k1; stride n) and dimension words ka, kb.
 void uniform2_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, float* u1, float* u2);
 
