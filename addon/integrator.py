@@ -20,8 +20,9 @@ every vertex. The per-vertex arithmetic that numpy would run as dozens of passes
 (camera rays, hit points, bounce directions and their ray records, lamp samples and lamp hits
 (dacrt.lamps), samples on emissive triangles, emission hits, next-event weights, shadow rays,
 compaction, accumulation, random numbers) runs in the native kernels of dacrt.shading, one
-threaded pass each; freed pass arrays stay in the heap while a render runs (allocator.py). Work that cannot change the image is not done (SKIP_WORK; counted in
-stats['skipped']): no shadow ray for a light sample that cannot contribute (behind the surface,
+threaded pass each; freed pass arrays stay in the heap while a render runs (allocator.py).
+Work that cannot change the image is not done (SKIP_WORK; counted in stats['skipped']): no
+shadow ray for a light sample that cannot contribute (behind the surface,
 outside a spot cone), no light sampling without lights, no last BSDF ray when nothing it could
 hit emits, paths end on black surfaces, passes that were not requested are not computed,
 triangles only never-cast rays could meet are in no tracer scene, and with adaptive sampling
@@ -369,9 +370,8 @@ class Integrator:
         vis = self.tri.visibility
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
         # same emitters.
-        emission = self._tri_emission if self._tri_emission is not None else np.zeros((3, len(self.tri)), F32)
-        tris = EmissiveTriangles(self.tri.geo, self.tri.area, emission,
-                                 self._tri_emissive & ((vis & VIS_DIFFUSE) != 0))
+        tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._tri_emission,
+                                 self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)) if self._any_emissive else None
         self.lights = LightSet(lamps, tris, len(self.tri))
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
@@ -385,7 +385,6 @@ class Integrator:
         nl = self.lights.num_lamps
         diffuse = self.lights.lamps + self.lights.unsampled_lamps
         every = diffuse + self.lights.camera_lamps
-        self._lamps_for_camera = bool(every)
         self._lamp_records = lamp_records(every)
         self._nee_records = np.ascontiguousarray(self._lamp_records[:nl])
         self._camera_lamps = np.array([j for j, l in enumerate(every) if l.seen_by_camera and not (
@@ -419,8 +418,7 @@ class Integrator:
         g = (np.arange(probes) + 0.5) / probes
         rx = (x0 + (x1 - x0) * (g[None, :] + (rng.random((probes, probes)) - 0.5) / probes)).ravel()
         ry = (y0 + (y1 - y0) * (g[:, None] + (rng.random((probes, probes)) - 0.5) / probes)).ravel()
-        O, D, tmax = self.camera.rays(rx.astype(F32), ry.astype(F32))
-        rays = dacrt.shading.pack_rays(O, D, tmax)
+        O, D, tmax, rays = self.camera.rays(rx.astype(F32), ry.astype(F32), records=True)
         hits = self._global_prims('camera', self._scenes['camera'].intersect(rays, threads=self.threads))
         idx = np.flatnonzero(hits['prim'] >= 0)
         if not len(idx):

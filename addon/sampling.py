@@ -114,7 +114,6 @@ class RandomStream:
         seed = (key ^ (key >> _U64(32))).astype(_U32)
         return np.stack([seed, np.asarray(sample).astype(_U32)])
 
-
     def _words(self, keys: np.ndarray, dim: int):
         """The two uint32 sample words per key for dimension pair `dim`: a shuffled,
         Owen-scrambled 2D Sobol point of the pixel's sequence for that pair."""

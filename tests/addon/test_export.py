@@ -55,17 +55,23 @@ def test_array_modifier_world_positions(scene, exported):
     assert g.vertices[:, 1].max() == pytest.approx(7.0, abs=1e-5)
 
 
+def _instance(scene, ob, placements):
+    """Move ob into a new collection (still rendered once where it is) and add an empty
+    instancing that collection per (location, scale) of placements."""
+    col = bpy.data.collections.new(ob.name + "Parts")
+    scene.collection.children.link(col)
+    scene.collection.objects.unlink(ob)
+    col.objects.link(ob)
+    for i, (loc, scale) in enumerate(placements):
+        e = scenes.link(bpy.data.objects.new(f"{ob.name}Inst{i}", None))
+        e.instance_type, e.instance_collection = 'COLLECTION', col
+        e.location, e.scale = loc, scale
+
+
 def test_collection_instances_read_mesh_once_and_transform_each(scene, exported):
     setup(scene)
-    col = bpy.data.collections.new("Parts")
-    scene.collection.children.link(col)
     sphere = scenes.uv_sphere("Ball", radius=1.0, segments=8, rings=4, smooth=False)
-    scene.collection.objects.unlink(sphere)
-    col.objects.link(sphere)
-    for name, loc, s in (("InstA", (10, 0, 0), 1.0), ("InstB", (20, 0, 0), 2.0)):
-        e = scenes.link(bpy.data.objects.new(name, None))
-        e.instance_type, e.instance_collection = 'COLLECTION', col
-        e.location, e.scale = loc, (s, s, s)
+    _instance(scene, sphere, [((10, 0, 0), (1.0, 1.0, 1.0)), ((20, 0, 0), (2.0, 2.0, 2.0))])
     data = exported()
     g = data.geometry
     per = len(sphere.data.polygons) + len([p for p in sphere.data.polygons if len(p.vertices) == 4])
@@ -81,16 +87,9 @@ def test_many_smooth_instances_keep_outward_unit_normals(scene, exported):
     """Six instances (the batched transform path) of a smooth sphere, scaled unevenly and one
     mirrored: every corner normal is unit length and follows the ellipsoid's gradient."""
     setup(scene)
-    col = bpy.data.collections.new("Balls")
-    scene.collection.children.link(col)
     ball = scenes.uv_sphere("Ball", radius=1.0, segments=16, rings=8, smooth=True)
-    scene.collection.objects.unlink(ball)
-    col.objects.link(ball)
     scales = [(1, 1, 1), (2, 1, 1), (1, 3, 1), (1, 1, 0.5), (-1, 1, 1), (2, 2, 2)]
-    for i, s in enumerate(scales):
-        e = scenes.link(bpy.data.objects.new(f"Inst{i}", None))
-        e.instance_type, e.instance_collection = 'COLLECTION', col
-        e.location, e.scale = (10.0 * (i + 1), 0.0, 0.0), s
+    _instance(scene, ball, [((10.0 * (i + 1), 0.0, 0.0), s) for i, s in enumerate(scales)])
     g = exported().geometry
     c = g.vertices[g.triangles].astype(np.float64)                 # (M, 3, 3) corners
     assert np.all(np.abs(np.linalg.norm(g.normals, axis=2) - 1) < 1e-5)
