@@ -12,6 +12,7 @@
 #include <string>
 
 #include "dispatch.h"
+#include "parallel.h"
 #include "ray_check.h"
 #include "triangles.h"
 

@@ -6,19 +6,18 @@
 // of a call: the shared triangle id array, one id scratch per thread (4 bytes per triangle
 // each) and the shared node table (at most 16K small records); nothing per ray.
 #include "dispatch.h"
-
-#include <sched.h>
+#include "parallel.h"
 
 #include <atomic>
 #include <chrono>
 #include <exception>
 #include <mutex>
 #include <stdexcept>
-#include <thread>
 
 namespace dacrt {
 
 static constexpr size_t kMinChunkRays = 1 << 16;
+static constexpr size_t kMinKeptChunkRays = 1 << 10;
 static constexpr size_t kSharedMinTris = 32;
 
 static bool cpu_has_avx2() {
@@ -64,16 +63,6 @@ FieldsFn fields_fn(Isa isa) {
     return isa == Isa::Avx512 ? avx512::fields_valid : (isa == Isa::Avx2 ? avx2::fields_valid : portable::fields_valid);
 }
 
-int hardware_threads() {
-    cpu_set_t set;
-    if (sched_getaffinity(0, sizeof(set), &set) == 0) {
-        const int c = CPU_COUNT(&set);
-        if (c > 0) return c;
-    }
-    const unsigned h = std::thread::hardware_concurrency();
-    return h ? int(h) : 1;
-}
-
 TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job, int threads, Isa isa,
                   TopCache* cache) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -83,22 +72,6 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
     const size_t nt = ts.valid_ids.size();
     if (n > 0 && nt > 0) {
         int T = threads > 0 ? threads : hardware_threads();
-        // Chunks of rays traced independently. DACRT wants big batches: measured on 1M diffuse
-        // rays x 100K triangles, 64K-ray chunks cost 2x the CPU time of one batch (each chunk
-        // repeats the deeper partitioning and reaches brute-force leaves sooner), n/2 chunks 5%;
-        // on 400K diffuse rays x 268K triangles, 2 threads, 4 chunks gave 4.5 Mrays/s and 2
-        // chunks 5.7. So one chunk per thread.
-        size_t chunks;
-        if (job.cfg.chunk_rays) {
-            chunks = (n + job.cfg.chunk_rays - 1) / job.cfg.chunk_rays;
-        } else {
-            chunks = std::min(size_t(T), (n + kMinChunkRays - 1) / kMinChunkRays);
-        }
-        chunks = std::max<size_t>(1, chunks);
-        const size_t chunk = (n + chunks - 1) / chunks;
-        if (size_t(T) > chunks) T = int(chunks);
-        res.threads = T;
-
         int levels = 0;  // share down to nodes of about kSharedMinTris triangles
         while (levels < 17 && (nt >> levels) > kSharedMinTris) ++levels;
         std::vector<uint32_t> own_ids;
@@ -143,6 +116,26 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
             top.ids = own_ids.data();
             top.nodes = own_nodes.get();
         }
+        // Chunks of rays traced independently. DACRT wants big batches: measured on 1M diffuse
+        // rays x 100K triangles, 64K-ray chunks cost 2x the CPU time of one batch (each chunk
+        // repeats the deeper partitioning and reaches brute-force leaves sooner), n/2 chunks 5%;
+        // on 400K diffuse rays x 268K triangles, 2 threads, 4 chunks gave 4.5 Mrays/s and 2
+        // chunks 5.7. So one chunk per thread. With a kept top (the frame's earlier batches
+        // split it down to ~32-triangle nodes) a chunk repeats almost nothing, so a smaller
+        // batch (shadow rays, deep bounces) is split too: on the dragon (100K triangles, 4 spp)
+        // most batches have 1K-45K rays and ran on one thread.
+        const size_t min_chunk = use_kept ? kMinKeptChunkRays : kMinChunkRays;
+        size_t chunks;
+        if (job.cfg.chunk_rays) {
+            chunks = (n + job.cfg.chunk_rays - 1) / job.cfg.chunk_rays;
+        } else {
+            chunks = std::min(size_t(T), (n + min_chunk - 1) / min_chunk);
+        }
+        chunks = std::max<size_t>(1, chunks);
+        const size_t chunk = (n + chunks - 1) / chunks;
+        if (size_t(T) > chunks) T = int(chunks);
+        res.threads = T;
+
         top.levels = levels;
         top.min_tris = kSharedMinTris / 2;
         top.ray_scale = float(n) / float(std::min(n, chunk));
@@ -166,10 +159,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
                 next.store(chunks);
             }
         };
-        std::vector<std::thread> pool;
-        for (int w = 1; w < T; ++w) pool.emplace_back(worker, w);
-        worker(0);
-        for (auto& th : pool) th.join();
+        run_workers(T, worker);
         for (auto& e : errors)
             if (e) std::rethrow_exception(e);
         for (const Stats& s : stats) res.stats.add(s);

@@ -15,7 +15,6 @@ std::vector<std::string> supported_isas();
 std::string isa_name(Isa isa);
 // "" -> best the CPU runs; otherwise that name, which must be supported (throws otherwise).
 Isa resolve_isa(const std::string& requested);
-int hardware_threads();
 FieldsFn fields_fn(Isa isa);  // the ISA's SIMD check of ray fields
 
 struct TraceResult {

@@ -1,32 +1,37 @@
-// A minimal parallel loop for the per-ray helper kernels (shading side): splits [0, n) into one
-// contiguous range per thread. Spawning threads per call costs ~50 us, negligible against the
-// 10^5..10^6-element arrays these kernels see; small inputs run on the calling thread.
+// The threads every native pass runs on: one process-wide pool of parked workers, woken per
+// call, instead of new std::threads per call. A renderer calls a dozen kernels per bounce and
+// traces a few batches; creating, faulting in and joining fresh threads each time cost ~5% of a
+// small render in kernel time (perf: clone, stack page faults, wake-ups).
 #pragma once
 
 #include <algorithm>
 #include <cstddef>
-#include <thread>
-#include <vector>
+#include <functional>
 
 namespace dacrt {
 
+// Cores this process may run on (its CPU affinity), at least 1.
+int hardware_threads();
+
+// Runs job(w) for w = 0..workers-1, w = 0 on the calling thread, and returns when all are done.
+// An exception from any job is rethrown here (the first one). Calls from inside a job, or
+// while another thread uses the pool, run on freshly created threads instead: never a deadlock.
+void run_workers(int workers, const std::function<void(int)>& job);
+
+// Splits [0, n) into one contiguous range per thread; small inputs run on the calling thread.
 template <class F>
 void parallel_for(size_t n, F&& body, size_t min_per_thread = 1 << 15) {
-    size_t hw = std::max<size_t>(1, std::thread::hardware_concurrency());
-    size_t threads = std::min(hw, std::max<size_t>(1, n / min_per_thread));
+    const size_t hw = size_t(hardware_threads());
+    const size_t threads = std::min(hw, std::max<size_t>(1, n / min_per_thread));
     if (threads <= 1) {
         body(size_t(0), n);
         return;
     }
-    std::vector<std::thread> pool;
-    pool.reserve(threads - 1);
     const size_t step = (n + threads - 1) / threads;
-    for (size_t t = 1; t < threads; ++t) {
-        size_t b = std::min(n, t * step), e = std::min(n, b + step);
-        pool.emplace_back([&body, b, e] { body(b, e); });
-    }
-    body(size_t(0), std::min(n, step));
-    for (auto& th : pool) th.join();
+    run_workers(int(threads), [&](int w) {
+        const size_t b = std::min(n, size_t(w) * step), e = std::min(n, b + step);
+        if (b < e) body(b, e);
+    });
 }
 
 }  // namespace dacrt

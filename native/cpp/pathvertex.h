@@ -117,7 +117,7 @@ inline bool nee_scale(const float ns[3], const float* ng, const float wi[3], flo
         if (thr) v *= thr[a];
         v *= scale;
         value[a] = v;
-        m = std::fmax(m, v);  // fmax ignores NaN: a NaN channel alone never counts
+        m = std::max(m, v);  // (m < v) ? v : m ignores a NaN v: a NaN channel alone never counts
     }
     bool good = cos_s > 0 && m > 0;
     if (ng) good = good && (ng[0] * wi[0] + ng[1] * wi[1] + ng[2] * wi[2]) > 0;
