@@ -1,0 +1,98 @@
+"""The worker pool every native pass runs on (native/cpp/parallel.cpp): results identical to
+one thread when a kept top splits small batches across threads, many calls in a row, calls
+from several Python threads at once (the pool is busy: fresh threads), and a forked child,
+which inherits the pool's memory but none of its threads."""
+
+import multiprocessing
+import threading
+
+import dacrt
+import numpy as np
+
+from . import harness
+from .cases import build_case
+
+CASE = ("torus", 5, 6, "bounce", "finite", 20000, 5)
+
+
+def _trace(scene, case, threads, seed=0):
+    hits = harness.intersect(scene, case.org, case.dirs, case.tfar, threads=threads, shuffle_seed=seed)
+    occ = harness.occluded(scene, case.org, case.dirs, case.tfar, threads=threads, shuffle_seed=seed + 1)
+    return hits, occ
+
+
+def _same(a, b):
+    return (np.array_equal(a[0].view(np.uint32), b[0].view(np.uint32)) and np.array_equal(a[1], b[1]))
+
+
+def _kept_scene(case):
+    scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy(), keep_top=True)
+    big = build_case("torus", 5, 6, "bounce", "finite", 70000, 9)   # >= 64K rays set the kept top
+    harness.intersect(scene, big.org, big.dirs, big.tfar, threads=2)
+    return scene
+
+
+def test_kept_top_small_batches_split_across_threads_identically():
+    case = build_case(*CASE)
+    one = _trace(dacrt.Scene(case.vertices.copy(), case.triangles.copy()), case, 1)
+    assert (one[0]["prim"] >= 0).any() and one[1].any() and not one[1].all()
+    scene = _kept_scene(case)
+    two = _trace(scene, case, 2)
+    assert scene.last_stats["threads"] == 2, scene.last_stats
+    assert _same(one, two)
+
+
+def test_many_calls_in_a_row():
+    case = build_case("cube", 3, 6, "axis", "mixed", 3000, 3)
+    scene = _kept_scene(case)
+    first = _trace(scene, case, 2)
+    for i in range(200):
+        assert _same(first, _trace(scene, case, 2, seed=i))
+
+
+def test_concurrent_python_threads():
+    case = build_case(*CASE)
+    want = _trace(dacrt.Scene(case.vertices.copy(), case.triangles.copy()), case, 1)
+    scene = _kept_scene(case)
+    got, errors = [], []
+
+    def work(i):
+        try:
+            for j in range(5):
+                got.append(_trace(scene, case, 2, seed=10 * i + j))
+        except Exception as e:   # reported below: a thread's exception would otherwise vanish
+            errors.append(e)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    assert not any(t.is_alive() for t in threads), "a tracing thread hung"
+    assert not errors, errors
+    assert len(got) == 20 and all(_same(want, g) for g in got)
+
+
+def _child(conn):
+    case = build_case(*CASE)
+    scene = _kept_scene(case)
+    hits, occ = _trace(scene, case, 2)
+    conn.send((hits["prim"].copy(), occ.copy(), scene.last_stats["threads"]))
+
+
+def test_forked_child_traces_with_threads():
+    case = build_case(*CASE)
+    parent = _trace(_kept_scene(case), case, 2)     # the parent's pool exists before the fork
+    ctx = multiprocessing.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    p = ctx.Process(target=_child, args=(send,))
+    p.start()
+    ready = recv.poll(120)
+    answer = recv.recv() if ready else None     # before join: the child blocks on a full pipe
+    p.join(timeout=30)
+    if p.is_alive():
+        p.kill()
+    assert ready, "the forked child hung tracing with 2 threads"
+    prim, occ, threads = answer
+    assert threads == 2
+    assert np.array_equal(prim, parent[0]["prim"]) and np.array_equal(occ, parent[1])
