@@ -9,6 +9,13 @@ off); when it ends, the thresholds go back to glibc's defaults and the heap is t
 memory returns to the system (Blender's memory stays flat across renders). Nested uses (the
 engine holds the heap for a whole frame: export, set-up and passes; the integrator for its
 passes) act once, at the outermost.
+
+Even a kept heap is faulted in page by page on each render's first pass: ~28K faults of 4 KiB
+(110 MiB) on a Cornell box at 64 spp, 8% of its render time. So the frame starts by growing the
+heap by a large free block marked for transparent huge pages (madvise, which is what Linux's
+default THP mode honours): the passes carve their arrays from it and fault it in 2 MiB at a
+time (~400 faults). The block is address space only until touched, and the end-of-render trim
+returns it.
 """
 from __future__ import annotations
 
@@ -21,6 +28,10 @@ _M_MMAP_THRESHOLD = -3
 _GLIBC_DEFAULT = 128 * 1024          # both thresholds' documented defaults (mallopt(3))
 _HOLD_MMAP = (1 << 30, 32 << 20)     # the first glibc accepts (some cap it at 32 MiB)
 _HOLD_TRIM = 2 ** 31 - 1             # mallopt takes an int: never trim
+_RESERVE = (512 << 20, 128 << 20)    # huge-page block to grow the heap by (the first malloc gives);
+                                     # below the mmap threshold, or malloc would mmap it
+_HUGE = 2 << 20
+_MADV_HUGEPAGE = 14
 
 
 def _libc():
@@ -28,9 +39,29 @@ def _libc():
         return None
     try:
         libc = ctypes.CDLL(None)
-        return libc if hasattr(libc, 'mallopt') and hasattr(libc, 'malloc_trim') else None
+        if not all(hasattr(libc, f) for f in ('mallopt', 'malloc_trim', 'malloc', 'free', 'madvise')):
+            return None
     except OSError:
         return None
+    libc.malloc.restype = ctypes.c_void_p
+    libc.malloc.argtypes = [ctypes.c_size_t]
+    libc.free.argtypes = [ctypes.c_void_p]
+    libc.madvise.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
+    return libc
+
+
+def _reserve_huge_pages(libc):
+    """Grow the heap by a free block marked MADV_HUGEPAGE (see the module doc). Best effort:
+    without THP, or when the block would be mmapped instead, nothing changes."""
+    for size in _RESERVE:
+        p = libc.malloc(size)
+        if p:
+            start = (p + _HUGE - 1) & ~(_HUGE - 1)
+            end = (p + size) & ~(_HUGE - 1)
+            if end > start:
+                libc.madvise(start, end - start, _MADV_HUGEPAGE)
+            libc.free(p)          # trimming is off: the block stays in the heap, untouched
+            return
 
 
 _LIBC = _libc()
@@ -47,6 +78,7 @@ def render_heap():
             if _LIBC.mallopt(_M_MMAP_THRESHOLD, size):
                 break
         _LIBC.mallopt(_M_TRIM_THRESHOLD, _HOLD_TRIM)
+        _reserve_huge_pages(_LIBC)
     try:
         yield
     finally:

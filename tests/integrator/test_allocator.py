@@ -44,3 +44,39 @@ def test_nested_and_interleaved_uses_restore_once():
     assert allocator._depth == 1
     inner.__exit__(None, None, None)
     assert allocator._depth == 0
+
+
+def _thp_mode():
+    try:
+        text = open('/sys/kernel/mm/transparent_hugepage/enabled').read()
+    except OSError:
+        return None
+    return text[text.index('[') + 1:text.index(']')]
+
+
+def _heap_kib():
+    """Size of the process's brk heap in KiB (0 when it has none)."""
+    size, in_heap = 0, False
+    for line in open('/proc/self/smaps'):
+        if line[0] in '0123456789abcdef' and '-' in line.split()[0]:
+            in_heap = line.rstrip().endswith('[heap]')
+        elif in_heap and line.startswith('Size:'):
+            size += int(line.split()[1])
+    return size
+
+
+@pytest.mark.skipif(allocator._LIBC is None or _thp_mode() not in ('always', 'madvise'),
+                    reason="needs glibc and transparent huge pages (always or madvise)")
+def test_render_heap_faults_in_huge_pages_and_returns_them():
+    import resource
+    with allocator.render_heap():
+        f0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        # 1 MiB arrays, under the 4 MiB from which numpy asks for huge pages itself
+        arrays = [np.ones(1 << 20, np.uint8) for _ in range(64)]     # 16384 pages of 4 KiB
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - f0
+        assert all(a[-1] == 1 for a in arrays)
+        inside = _heap_kib()
+        del arrays
+    assert faults < 2000, f"{faults} page faults for 64 MiB: the heap block is not in huge pages"
+    assert inside >= 64 << 10
+    assert _heap_kib() < inside - (32 << 10), "the heap was not trimmed when the render ended"
