@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -34,10 +35,18 @@ public:
         std::string err;
         {
             py::gil_scoped_release nogil;
-            for (size_t i = 0; i < 3 * V && err.empty(); ++i)
-                if (!std::isfinite(v[i]))
+            // Branch-free scans (they vectorise); the scalar search for the first culprit runs
+            // only after one failed.
+            bool finite = true;
+            for (size_t i = 0; i < 3 * V; ++i) finite &= std::isfinite(v[i]);
+            uint32_t most = 0;
+            for (size_t i = 0; i < 3 * M; ++i) most = std::max(most, t[i]);
+            for (size_t i = 0; i < 3 * V && !finite; ++i)
+                if (!std::isfinite(v[i])) {
                     err = "vertices[" + std::to_string(i / 3) + "] has a non-finite coordinate (" + std::to_string(v[i]) + ")";
-            for (size_t i = 0; i < 3 * M && err.empty(); ++i)
+                    break;
+                }
+            for (size_t i = 0; i < 3 * M && err.empty() && M && most >= V; ++i)
                 if (t[i] >= V)
                     err = "triangles[" + std::to_string(i / 3) + "] refers to vertex " + std::to_string(t[i]) +
                           " but there are only " + std::to_string(V) + " vertices";

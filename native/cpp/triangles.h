@@ -9,6 +9,7 @@
 #pragma once
 #include <cstdint>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 namespace dacrt {
@@ -28,9 +29,26 @@ struct Bounds3 {
     float lo[3], hi[3];
 };
 
+// An array the build writes every element of: allocated without zero-filling it first (a
+// std::vector would write the 48 MB of a 1M-triangle frame twice, once on one core).
+template <class T>
+class BuiltArray {
+  public:
+    explicit BuiltArray(size_t n) : p_(new T[n]), n_(n) {}
+    T* data() { return p_.get(); }
+    const T* data() const { return p_.get(); }
+    size_t size() const { return n_; }
+    T& operator[](size_t i) { return p_[i]; }
+    const T& operator[](size_t i) const { return p_[i]; }
+
+  private:
+    std::unique_ptr<T[]> p_;
+    size_t n_;
+};
+
 struct TriangleSet {
-    std::vector<Box> boxes;
-    std::vector<CompactTri> tris;
+    BuiltArray<Box> boxes;
+    BuiltArray<CompactTri> tris;
     std::vector<uint32_t> valid_ids;  // non-degenerate triangles, the root of every trace
     Bounds3 bounds{};                 // AABB of the valid triangles
     Bounds3 centroid_bounds{};        // AABB of their box centres
