@@ -5,8 +5,8 @@ such blocks with mmap and returns them on free, so the next pass takes a page fa
 page per 4 KiB again, plus a TLB-shootdown IPI to the other tracer thread per munmap: measured
 ~18% of a Cornell-box render (perf: clear_page, page faults, smp_call_function). While a render
 runs, freed blocks therefore stay in the heap for the next pass (mmap threshold up, trimming
-off); when it ends, the thresholds go back to glibc's defaults and the heap is trimmed, so the
-memory returns to the system (Blender's memory stays flat across renders). Nested uses (the
+off); when rendering stops (below), the thresholds go back to glibc's defaults and the heap is
+trimmed, so the memory returns to the system (Blender's memory stays flat across renders). Nested uses (the
 engine holds the heap for a whole frame: export, set-up and passes; the integrator for its
 passes) act once, at the outermost.
 
@@ -14,13 +14,19 @@ Even a kept heap is faulted in page by page on each render's first pass: ~28K fa
 (110 MiB) on a Cornell box at 64 spp, 8% of its render time. So the frame starts by growing the
 heap by a large free block marked for transparent huge pages (madvise, which is what Linux's
 default THP mode honours): the passes carve their arrays from it and fault it in 2 MiB at a
-time (~400 faults). The block is address space only until touched, and the end-of-render trim
-returns it.
+time (~400 faults). The block is address space only until touched.
+
+The pages a frame faulted in are still zeroed by the kernel each time (clear_page: 7% of a
+dragon render at 16 spp). So the heap is trimmed RELEASE_DELAY seconds after the last render
+ends, not at once: the frames of an animation, or renders a script runs back to back, reuse the
+previous frame's pages, and an artist's single F12 render still gives its memory back moments
+later (release_heap() does it at once).
 """
 from __future__ import annotations
 
 import ctypes
 import platform
+import threading
 from contextlib import contextmanager
 
 _M_TRIM_THRESHOLD = -1
@@ -32,6 +38,7 @@ _RESERVE = (512 << 20, 128 << 20)    # huge-page block to grow the heap by (the 
                                      # below the mmap threshold, or malloc would mmap it
 _HUGE = 2 << 20
 _MADV_HUGEPAGE = 14
+RELEASE_DELAY = 2.0                  # seconds without a render before the heap is trimmed
 
 
 def _libc():
@@ -66,24 +73,61 @@ def _reserve_huge_pages(libc):
 
 _LIBC = _libc()
 _depth = 0
+_lock = threading.Lock()
+_held = False                  # thresholds raised and the heap kept (during and just after renders)
+_release_timer = None
 
 
 @contextmanager
 def render_heap():
-    """Keep freed blocks in the heap while any such block runs (see the module doc)."""
-    global _depth
-    _depth += 1
-    if _LIBC is not None and _depth == 1:
-        for size in _HOLD_MMAP:
-            if _LIBC.mallopt(_M_MMAP_THRESHOLD, size):
-                break
-        _LIBC.mallopt(_M_TRIM_THRESHOLD, _HOLD_TRIM)
-        _reserve_huge_pages(_LIBC)
+    """Keep freed blocks in the heap while any such block runs and for RELEASE_DELAY seconds
+    after the last one ends (see the module doc)."""
+    global _depth, _held, _release_timer
+    with _lock:
+        _depth += 1
+        if _LIBC is not None and _depth == 1:
+            if _release_timer is not None:      # the previous frame's heap is still there: reuse it
+                _release_timer.cancel()
+                _release_timer = None
+            if not _held:
+                for size in _HOLD_MMAP:
+                    if _LIBC.mallopt(_M_MMAP_THRESHOLD, size):
+                        break
+                _LIBC.mallopt(_M_TRIM_THRESHOLD, _HOLD_TRIM)
+                _reserve_huge_pages(_LIBC)
+                _held = True
     try:
         yield
     finally:
-        _depth -= 1
-        if _LIBC is not None and _depth == 0:
-            _LIBC.mallopt(_M_MMAP_THRESHOLD, _GLIBC_DEFAULT)
-            _LIBC.mallopt(_M_TRIM_THRESHOLD, _GLIBC_DEFAULT)
-            _LIBC.malloc_trim(0)
+        with _lock:
+            _depth -= 1
+            if _LIBC is not None and _depth == 0:
+                _release_timer = threading.Timer(RELEASE_DELAY, _release_if_idle)
+                _release_timer.daemon = True
+                _release_timer.start()
+
+
+def _release_if_idle():
+    with _lock:
+        if _depth == 0:
+            _release_locked()
+
+
+def release_heap():
+    """Return the kept heap to the system now (no-op while a render runs)."""
+    global _release_timer
+    with _lock:
+        if _depth == 0:
+            if _release_timer is not None:
+                _release_timer.cancel()
+                _release_timer = None
+            _release_locked()
+
+
+def _release_locked():
+    global _held
+    if _LIBC is not None and _held:
+        _LIBC.mallopt(_M_MMAP_THRESHOLD, _GLIBC_DEFAULT)
+        _LIBC.mallopt(_M_TRIM_THRESHOLD, _GLIBC_DEFAULT)
+        _LIBC.malloc_trim(0)
+        _held = False

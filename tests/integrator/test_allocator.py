@@ -77,6 +77,33 @@ def test_render_heap_faults_in_huge_pages_and_returns_them():
         assert all(a[-1] == 1 for a in arrays)
         inside = _heap_kib()
         del arrays
+    allocator.release_heap()                     # what the delayed release does when idle
     assert faults < 2000, f"{faults} page faults for 64 MiB: the heap block is not in huge pages"
     assert inside >= 64 << 10
-    assert _heap_kib() < inside - (32 << 10), "the heap was not trimmed when the render ended"
+    assert _heap_kib() < inside - (32 << 10), "release_heap() did not trim the heap"
+
+
+@pytest.mark.skipif(allocator._LIBC is None, reason="the heap policy acts on glibc only")
+def test_heap_kept_between_renders_then_released_when_idle(monkeypatch):
+    import resource
+    import time
+    monkeypatch.setattr(allocator, 'RELEASE_DELAY', 0.3)
+    with allocator.render_heap():
+        arrays = [np.ones(1 << 20, np.uint8) for _ in range(32)]
+        del arrays
+    f0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    with allocator.render_heap():                  # the next frame, right away: same pages
+        arrays = [np.ones(1 << 20, np.uint8) for _ in range(32)]
+        del arrays
+    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - f0
+    assert faults < 200, f"{faults} page faults: the heap was not kept for the next frame"
+    kept = _heap_kib()
+    deadline = time.monotonic() + 10
+    while allocator._held and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not allocator._held, "the heap was not released after the delay"
+    assert _heap_kib() < kept - (16 << 10)
+    with allocator.render_heap():                  # a render starting later gets a fresh policy
+        assert allocator._held
+    allocator.release_heap()
+    assert not allocator._held
