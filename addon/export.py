@@ -508,16 +508,20 @@ def _image_pixels(img, reasons):
 # ----------------------------------------------------------------------------------------
 # Meshes
 
-def _transform(points, linear, offset):
-    """(k, N, 3) float64: the (N, 3) points through each of k 3x3 maps (and offsets (k, 3)).
-    A few instances go column by column (einsum's generic loop is several times slower, and
-    a matmul would wake OpenBLAS threads that then spin beside the tracer); many instances of
-    a small mesh go through einsum at once."""
+def _transform(points, linear, offset, out):
+    """out (k, N, 3) = the (N, 3) points through each of k 3x3 maps (and offsets (k, 3)),
+    computed in float64 and rounded once to out's dtype. A few instances go column by column
+    (einsum's generic loop is several times slower, and a matmul would wake OpenBLAS threads
+    that then spin beside the tracer); many instances of a small mesh go through einsum at once."""
     k = len(linear)
     if k > 4:
-        out = np.einsum('kij,vj->kvi', linear, points)
-        return out if offset is None else out + offset[:, None, :]
-    out = np.empty((k, len(points), 3))
+        res = out if out.dtype == np.float64 else None
+        res = np.einsum('kij,vj->kvi', linear, points.astype(np.float64), out=res)
+        if offset is not None:
+            res += offset[:, None, :]
+        if res is not out:
+            out[...] = res
+        return out
     x, y, z = points[:, 0], points[:, 1], points[:, 2]
     with np.errstate(invalid='ignore', over='ignore'):   # non-finite input is dropped later
         _columns(out, x, y, z, linear, offset)
@@ -525,20 +529,29 @@ def _transform(points, linear, offset):
 
 
 def _columns(out, x, y, z, linear, offset):
-    """out[i, :, c] = row c of linear[i] applied to (x, y, z), plus offset[i, c]."""
+    """out[i, :, c] = row c of linear[i] applied to (x, y, z), plus offset[i, c]; float64
+    arithmetic on the (exactly widened) inputs, without a float64 copy of them."""
+    col, tmp = np.empty(len(x)), np.empty(len(x))
     for i in range(len(linear)):
         for c in range(3):
-            col = x * linear[i, c, 0]
-            col += y * linear[i, c, 1]
-            col += z * linear[i, c, 2]
+            np.multiply(x, linear[i, c, 0], out=col, dtype=np.float64)
+            col += np.multiply(y, linear[i, c, 1], out=tmp, dtype=np.float64)
+            col += np.multiply(z, linear[i, c, 2], out=tmp, dtype=np.float64)
             if offset is not None:
                 col += offset[i, c]
             out[i, :, c] = col
 
 
 class _MeshArrays:
-    """One evaluated mesh in its local space, read once per unique mesh."""
-    __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index', 'uvs', 'domain')
+    """One evaluated mesh in its local space, read once per unique mesh.
+
+    corners (nt, 3): each triangle's face corners, or None when every face is a triangle:
+    triangle i is then face i and its corners are 3i, 3i+1, 3i+2 (face corners are contiguous
+    and a triangle keeps its corner order), so the per-triangle read of `loop_triangles`
+    (RNA's per-item path, ~0.1 s per million triangles) is skipped and per-corner data
+    reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
+    __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
+                 'corner_uvs', 'domain')
 
     def __init__(self, me, want_uvs):
         nv = len(me.vertices)
@@ -546,8 +559,6 @@ class _MeshArrays:
         me.attributes['position'].data.foreach_get('vector', self.positions)
         self.positions = self.positions.reshape(nv, 3)
         nt = len(me.loop_triangles)
-        corners = np.empty(nt * 3, np.int32)
-        me.loop_triangles.foreach_get('loops', corners)
         nl = len(me.loops)
         corner_vert = np.empty(nl, np.int32)
         cv_attr = me.attributes.get('.corner_vert')
@@ -555,16 +566,22 @@ class _MeshArrays:
             cv_attr.data.foreach_get('value', corner_vert)
         else:
             me.loops.foreach_get('vertex_index', corner_vert)
-        self.corners = corners.reshape(nt, 3)
-        self.triangles = corner_vert[self.corners]
         tri_poly = np.empty(nt, np.int32)
         me.loop_triangle_polygons.foreach_get('value', tri_poly)
-        self.slot = np.zeros(nt, np.int32)
+        if nl == 3 * nt and np.array_equal(tri_poly, np.arange(nt, dtype=np.int32)):
+            self.corners = None             # one triangle per face: all faces are triangles
+            self.triangles = corner_vert.reshape(nt, 3)
+        else:
+            corners = np.empty(nt * 3, np.int32)
+            me.loop_triangles.foreach_get('loops', corners)
+            self.corners = corners.reshape(nt, 3)
+            self.triangles = corner_vert[self.corners]
+        self.slot = None                    # None: slot 0 everywhere
         mi = me.attributes.get('material_index')
         if mi is not None and mi.domain == 'FACE' and mi.data_type == 'INT' and nt:
             per_face = np.empty(len(me.polygons), np.int32)
             mi.data.foreach_get('value', per_face)
-            self.slot = per_face[tri_poly]
+            self.slot = per_face if self.corners is None else per_face[tri_poly]
         self.domain = me.normals_domain
         if self.domain == 'POINT':
             vn = np.empty(nv * 3, np.float32)
@@ -577,9 +594,10 @@ class _MeshArrays:
             self.normal_rows, self.normal_index = cn.reshape(nl, 3), self.corners
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
             self.normal_rows = self.normal_index = None
-        self.uvs = self._read_uvs(me) if want_uvs else None
+        self.corner_uvs = self._read_uvs(me) if want_uvs else None
 
-    def _read_uvs(self, me):
+    @staticmethod
+    def _read_uvs(me):
         layer = next((l for l in me.uv_layers if l.active_render), None)
         if layer is None:
             return None
@@ -590,7 +608,43 @@ class _MeshArrays:
             attr.data.foreach_get('vector', uv)
         else:
             layer.uv.foreach_get('vector', uv)
-        return uv.reshape(nl, 2)[self.corners]
+        return uv.reshape(nl, 2)
+
+    def per_corner(self, rows, index, out):
+        """out (nt, 3, c) = rows (n, c) at index (nt, 3); index None: rows are the corners."""
+        if index is None:
+            out[...] = rows.reshape(out.shape)
+        else:   # indices come from Blender's validated mesh; mode='clip' avoids take's buffered copy
+            np.take(rows, index, axis=0, out=out, mode='clip')
+        return out
+
+
+class _Out:
+    """The frame's geometry arrays, allocated once at their final size and filled in place by
+    each mesh batch; triangles some batch drops are removed in one pass at the end."""
+
+    def __init__(self, nv, m, need_uvs):
+        self.vertices = np.empty((nv, 3))
+        self.triangles = np.empty((m, 3), np.int32)
+        self.normals = np.empty((m, 3, 3), np.float32)
+        self.material = np.empty(m, np.int32)
+        self.visibility = np.empty(m, np.uint8)
+        self.object_index = np.empty(m, np.int32)
+        self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
+        self.keep = None
+
+    def drop(self, rows, keep):
+        """Drop the triangles in slice `rows` where keep (their length) is False."""
+        if self.keep is None:
+            self.keep = np.ones(len(self.triangles), bool)
+        self.keep[rows] = keep
+
+    def geometry(self):
+        per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
+                       visibility=self.visibility, object_index=self.object_index, uvs=self.uvs)
+        if self.keep is not None and not self.keep.all():
+            per_tri = {k: (v[self.keep] if v is not None else None) for k, v in per_tri.items()}
+        return sd.Geometry(vertices=self.vertices, **per_tri)
 
 
 class _Placement:
@@ -766,44 +820,43 @@ class _Exporter:
 
     # -- geometry assembly -----------------------------------------------------------------
     def _assemble(self):
-        """Transform every unique mesh for all its instances at once and concatenate."""
-        parts = []
+        """Transform every unique mesh for all its instances at once, straight into the frame's
+        arrays (sized up front; dropped triangles are removed in one pass at the end)."""
         bad = {}          # object name -> [non-finite vertices, triangles dropped]
         degenerate = 0
         self._resolve_materials()
         need_uvs = any(self.materials.uses_texture)
+        batches = []
         for key, places in self.placements.items():
             if self.check_break():
                 raise ExportCancelled()
-            if not places:
-                continue
-            arrays = self.meshes[key]
-            part, nbad, ndeg = self._instance_batch(arrays, places, need_uvs)
+            if places:
+                batches.append((self.meshes[key], places))
+        if not batches:
+            return sd.Geometry.empty()
+        nv = sum(len(p) * len(a.positions) for a, p in batches)
+        m = sum(len(p) * len(a.triangles) for a, p in batches)
+        out = _Out(nv, m, need_uvs)
+        v0 = t0 = 0
+        for a, places in batches:
+            if self.check_break():
+                raise ExportCancelled()
+            nbad, ndeg = self._instance_batch(a, places, out, v0, t0)
             degenerate += ndeg
-            for name, nv, nt in nbad:
+            for name, nvb, ntb in nbad:
                 acc = bad.setdefault(name, [0, 0])
-                acc[0] += nv
-                acc[1] += nt
-            parts.append(part)
-        for name, (nv, nt) in bad.items():
-            self.messages.append(('WARNING', f"object '{name}': {nv} vertices with NaN/inf "
-                                             f"coordinates; {nt} triangles using them skipped"))
+                acc[0] += nvb
+                acc[1] += ntb
+            v0 += len(places) * len(a.positions)
+            t0 += len(places) * len(a.triangles)
+        for name, (nvb, ntb) in bad.items():
+            self.messages.append(('WARNING', f"object '{name}': {nvb} vertices with NaN/inf "
+                                             f"coordinates; {ntb} triangles using them skipped"))
         if degenerate:
             self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
         self.counts['triangles_degenerate'] = degenerate
         self.counts['triangles_nonfinite'] = sum(nt for _, nt in bad.values())
-        if not parts:
-            return sd.Geometry.empty()
-        verts, tris, offset = [], [], 0
-        for p in parts:
-            verts.append(p['vertices'])
-            tris.append(p['triangles'] + offset)
-            offset += len(p['vertices'])
-        cat = lambda k: np.concatenate([p[k] for p in parts])
-        uvs = cat('uvs') if need_uvs else None
-        return sd.Geometry(vertices=np.concatenate(verts), triangles=np.concatenate(tris),
-                           material=cat('material'), normals=cat('normals'), uvs=uvs,
-                           visibility=cat('visibility'), object_index=cat('object_index'))
+        return out.geometry()
 
     def _resolve_materials(self):
         """Evaluate the materials of the slots some triangle uses (per mesh: its slot indices,
@@ -812,7 +865,8 @@ class _Exporter:
         for key, places in self.placements.items():
             if not places:
                 continue
-            slots_used = np.unique(self.meshes[key].slot)
+            slot = self.meshes[key].slot
+            slots_used = np.zeros(1, np.int32) if slot is None else np.unique(slot)
             for p in places:
                 n = max(len(p.slots), 1)
                 used = np.unique(np.clip(slots_used, 0, n - 1))
@@ -825,64 +879,83 @@ class _Exporter:
                 seen.update(m.as_pointer() for m in p.slots if m is not None)
         self.counts['materials_unused'] = len(seen - built)
 
-    def _instance_batch(self, a, places, need_uvs):
+    def _instance_batch(self, a, places, out, v0, t0):
+        """Write the k instances of mesh `a` into out's vertex rows from v0 and triangle rows
+        from t0; returns ([(object name, bad vertices, bad triangles)], degenerate count)."""
         k = len(places)
         nv, nt = len(a.positions), len(a.triangles)
+        V, T = slice(v0, v0 + k * nv), slice(t0, t0 + k * nt)
         mats = np.stack([p.matrix for p in places])                # (k,4,4)
         lin = mats[:, :3, :3]
-        pos = a.positions.astype(np.float64)
         # float64 world positions: a scene far from the origin keeps its precision until the
         # renderer centres it (integrator.recentred) and rounds to float32
-        world = _transform(pos, lin, mats[:, :3, 3])                       # (k,nv,3)
-        tris = a.triangles[None, :, :] + (np.arange(k, dtype=np.int32) * nv)[:, None, None]
-        world = world.reshape(k * nv, 3)
-        tris = tris.reshape(k * nt, 3)
-        keep = np.ones(k * nt, bool)
-        bad = []
-        finite = np.isfinite(world).all(axis=1)
-        if not finite.all():
+        world = out.vertices[V]
+        _transform(a.positions, lin, mats[:, :3, 3], world.reshape(k, nv, 3))
+        tris = out.triangles[T]             # local indices first (face_normals reads them)
+        if k == 1:
+            tris[...] = a.triangles
+        else:
+            np.add(a.triangles[None, :, :], (np.arange(k, dtype=np.int32) * nv)[:, None, None],
+                   out=tris.reshape(k, nt, 3))
+        bad, keep = [], None
+        if not np.isfinite(world).all():
+            finite = np.isfinite(world).all(axis=1)
             tri_ok = finite[tris].all(axis=1)
             for i, p in enumerate(places):
-                sl = slice(i * nt, (i + 1) * nt)
-                nb = int((~tri_ok[sl]).sum())
+                nb = int((~tri_ok[i * nt:(i + 1) * nt]).sum())
                 nvb = int((~finite[i * nv:(i + 1) * nv]).sum())
                 if nvb:
                     bad.append((p.name, nvb, nb))
-            keep &= tri_ok
-            world = np.where(finite[:, None], world, 0.0)
+            keep = tri_ok
+            world[~finite] = 0.0
         # geometric normals in world space (float64, one native pass); objects with negative
         # scale keep their outside
-        ng, good = dacrt.shading.face_normals(world, tris)
         mirrored = np.linalg.det(lin) < 0
-        if mirrored.any():
-            ng *= np.repeat(np.where(mirrored, np.float32(-1), np.float32(1)), nt)[:, None]
-        deg = int((keep & ~good).sum())
-        keep &= good
+        ng, good = dacrt.shading.face_normals(world, tris, -1.0 if k == 1 and mirrored[0] else 1.0)
+        if k > 1:
+            for i in np.flatnonzero(mirrored):
+                np.negative(ng[i * nt:(i + 1) * nt], out=ng[i * nt:(i + 1) * nt])
+        if v0:
+            tris += v0
+        deg = int(np.count_nonzero(~good if keep is None else keep & ~good))
+        if keep is not None or deg:
+            keep = good if keep is None else keep & good
+            out.drop(T, keep)
+        normals = out.normals[T]
         if a.normal_rows is None:
-            normals = np.repeat(ng[:, None, :], 3, axis=1)
+            normals[...] = ng[:, None, :]
         else:
             inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin,
                                          np.eye(3)))    # normals transform by the inverse transpose
-            n = _transform(a.normal_rows.astype(np.float64), inv.transpose(0, 2, 1), None).astype(np.float32)
+            n = _transform(a.normal_rows, inv.transpose(0, 2, 1), None,
+                           np.empty((k, len(a.normal_rows), 3), np.float32))
             nlen = np.sqrt(np.einsum('kri,kri->kr', n, n))[..., None]
             ok = nlen > 1e-12                           # a zero normal falls back to the face's
-            n = np.where(ok, n / np.where(ok, nlen, np.float32(1)), np.float32(0))
-            corner = n[:, a.normal_index].reshape(k * nt, 3, 3)
-            corner_ok = ok[:, a.normal_index].reshape(k * nt, 3, 1)
-            normals = np.where(corner_ok, corner, ng[:, None, :])
-        slots = np.stack([p.slot_map[np.clip(a.slot, 0, len(p.slot_map) - 1)] for p in places])
-        part = dict(vertices=world, triangles=tris, normals=normals,
-                    material=slots.reshape(-1).astype(np.int32),
-                    visibility=np.repeat(np.array([p.visibility for p in places], np.uint8), nt),
-                    object_index=np.repeat(np.array([p.object_index for p in places], np.int32), nt))
-        if need_uvs:
-            part['uvs'] = (np.tile(a.uvs, (k, 1, 1)) if a.uvs is not None
-                           else np.zeros((k * nt, 3, 2), np.float32))
-        if not keep.all():
-            for name in ('triangles', 'normals', 'material', 'visibility', 'object_index', 'uvs'):
-                if name in part:
-                    part[name] = part[name][keep]
-        return part, bad, deg
+            n /= np.where(ok, nlen, np.float32(1))
+            if not ok.all():
+                np.copyto(n, np.float32(0), where=~ok)
+            per = normals.reshape(k, nt, 3, 3)
+            for i in range(k):
+                a.per_corner(n[i], a.normal_index, per[i])
+            if not ok.all():
+                corner_ok = np.empty((k, nt, 3, 1), bool)
+                for i in range(k):
+                    a.per_corner(ok[i], a.normal_index, corner_ok[i])
+                np.copyto(normals, ng[:, None, :], where=~corner_ok.reshape(k * nt, 3, 1))
+        for i, p in enumerate(places):
+            S = slice(t0 + i * nt, t0 + (i + 1) * nt)
+            if len(p.slot_map) == 1 or a.slot is None:     # index clamped as Blender does
+                out.material[S] = p.slot_map[0]
+            else:
+                np.take(p.slot_map, a.slot, mode='clip', out=out.material[S])
+            out.visibility[S] = p.visibility
+            out.object_index[S] = p.object_index
+            if out.uvs is not None:
+                if a.corner_uvs is None:
+                    out.uvs[S] = 0.0
+                else:
+                    a.per_corner(a.corner_uvs, a.corners, out.uvs[S])
+        return bad, deg
 
     # -- messages ----------------------------------------------------------------------------
     def _summarize(self, geometry, world):

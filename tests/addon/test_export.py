@@ -287,6 +287,86 @@ def test_sharp_edges_mixed_normals(scene, exported):
     assert flat[centroid[:, 2] > 0.05].all() and not flat[centroid[:, 2] < -0.05].any()
 
 
+def _reference_corners(ob):
+    """Per triangle corner, read the slow independent way (loop_triangles one by one) from the
+    object's own mesh (no modifiers: the evaluated mesh has the same topology): world
+    position, face corner normal, UV and material slot."""
+    me, m = ob.data, np.array(ob.matrix_world)
+    uv = me.uv_layers.active.uv
+    pos, nrm, uvs, slot = [], [], [], []
+    for t in me.loop_triangles:
+        pos.append([m[:3, :3] @ np.array(me.vertices[v].co) + m[:3, 3] for v in t.vertices])
+        nrm.append([np.array(me.corner_normals[c].vector) for c in t.loops])
+        uvs.append([np.array(uv[c].vector) for c in t.loops])
+        slot.append(me.polygons[t.polygon_index].material_index)
+    return np.array(pos), np.array(nrm), np.array(uvs), np.array(slot)
+
+
+@pytest.mark.parametrize("faces", ["triangles", "mixed"])
+def test_face_corners_match_loop_triangles(scene, exported, faces):
+    """A mesh of triangles only takes the fast path (triangle i is face i, corners 3i..3i+2, no
+    per-triangle read); a mesh with quads and an n-gon reads loop_triangles. Either way every
+    triangle's positions, corner normals, UVs and material slot are those of its face corners,
+    in loop_triangles order (faces start at different corners, normals are custom per corner)."""
+    setup(scene)
+    rng = np.random.default_rng(3)
+    verts = [(x, y, 0.3 * rng.random()) for x in range(4) for y in range(3)]
+    if faces == "triangles":
+        polys = [(0, 3, 4), (4, 1, 0), (5, 2, 1), (1, 4, 5), (6, 7, 4), (3, 6, 4), (8, 5, 4), (7, 8, 4),
+                 (10, 7, 6), (9, 10, 6), (11, 8, 7), (10, 11, 7)]
+    else:
+        polys = [(0, 3, 4), (4, 1, 0), (1, 4, 5, 2), (3, 6, 7, 4), (4, 7, 10, 11, 8, 5), (6, 9, 10, 7)]
+    mats = [scenes.diffuse(n, c) for n, c in (("Red", (1, 0, 0)), ("Blue", (0, 0, 1)))]
+    img = bpy.data.images.new("Grey", 2, 2)
+    mats.append(_image_material("Tex", img))
+    ob = scenes.mesh("M", verts, polys, materials=mats)
+    ob.location, ob.rotation_euler = (0.5, -1.0, 2.0), (0.3, 0.0, 0.7)
+    me = ob.data
+    for p in me.polygons:
+        p.material_index = p.index % 3
+    me.uv_layers.new(name="UVMap").uv.foreach_set(
+        'vector', rng.random(2 * len(me.loops)).astype(np.float32))
+    custom = rng.normal(size=(len(me.loops), 3)) + (0, 0, 3)
+    me.normals_split_custom_set((custom / np.linalg.norm(custom, axis=1, keepdims=True)).tolist())
+    assert me.normals_domain == 'CORNER'
+    assert (len(me.loop_triangles) == len(me.polygons)) == (faces == "triangles")
+    data = exported()
+    g = data.geometry
+    bpy.context.view_layer.update()                      # ob.matrix_world from its transform
+    pos, nrm, uvs, slot = _reference_corners(ob)
+    assert len(g.triangles) == len(pos)
+    assert np.allclose(g.vertices[g.triangles], pos, atol=1e-5)
+    rot = np.array(ob.matrix_world)[:3, :3]              # rotation only: normals turn with it
+    assert np.allclose(g.normals, nrm @ rot.T, atol=1e-5)
+    assert g.uvs is not None and np.array_equal(g.uvs, uvs.astype(np.float32))
+    names = np.array([m.name for m in data.materials])[g.material]
+    assert list(names) == [mats[s].name for s in slot]
+
+
+def test_dropped_triangles_keep_later_objects_aligned(scene, exported):
+    """Triangles dropped from one mesh (NaN vertex, zero area) are removed from every
+    per-triangle array alike, so the meshes after it keep their own materials, objects and
+    normals."""
+    setup(scene)
+    red, blue = scenes.diffuse("Red", (1, 0, 0)), scenes.diffuse("Blue", (0, 0, 1))
+    scenes.plane("First", location=(-5, 0, 0), materials=(red,))
+    scenes.mesh("Broken", [(0, 0, 0), (1, 0, 0), (1, 1, 0), (float('nan'), 0, 0), (2, 2, 2),
+                           (3, 3, 3), (4, 4, 4)],
+                [(0, 1, 2), (0, 3, 1), (4, 5, 6)], materials=(red,))
+    ball = scenes.uv_sphere("Ball", segments=12, rings=6, location=(5, 0, 0), smooth=True,
+                            materials=(blue,))
+    data = exported()
+    g = data.geometry
+    assert [of_object(data, n).sum() for n in ("First", "Broken", "Ball")] == [2, 1, 12 * 6 * 2 - 2 * 12]
+    assert data.skipped['triangles_degenerate'] == 1 and data.skipped['triangles_nonfinite'] == 1
+    sel = of_object(data, "Ball")
+    assert {data.materials[i].name for i in g.material[sel]} == {"Blue"}
+    assert {data.materials[i].name for i in g.material[~sel]} == {"Red"}
+    out = g.vertices[g.triangles[sel]] - np.array(ball.location)
+    out /= np.linalg.norm(out, axis=2, keepdims=True)
+    assert np.einsum('ijk,ijk->ij', g.normals[sel], out).min() > 0.99
+
+
 # -- visibility --------------------------------------------------------------------------------
 
 def test_hidden_and_ray_visibility(scene, exported):
