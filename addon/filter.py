@@ -7,6 +7,8 @@ offsets are drawn independently from the same 1-D table (the filter is separable
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 TABLE_SIZE = 1024
@@ -27,6 +29,30 @@ def _profile_fn(kind: str, width: float):
     return bh, 0.5 * wt
 
 
+@lru_cache(maxsize=16)
+def _table(kind: str, width: float) -> np.ndarray:
+    """Symmetric inverse CDF of the profile (float32, read-only), offsets centred on +0.5 (the
+    pixel centre). Cached: it depends on the settings only, and its 64K-point integration
+    was a fifth of a 100K-triangle frame's set-up.
+
+    The CDF is integrated in float64 on a fine grid of the half profile (the table is then
+    mirrored, as Cycles' util_cdf_inverted does with make_symmetric), so the only
+    discretisation left is the table's own 1024 entries with linear interpolation.
+    """
+    profile, r = _profile_fn(kind, width)
+    t = np.linspace(0.0, r, 1 << 16)
+    f = np.abs(profile(t))
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))])
+    cdf /= cdf[-1]
+    # Entry i covers the symmetric CDF value i/(N-1) in [0, 1]; the half CDF value is |2x-1|.
+    x = np.arange(TABLE_SIZE) / (TABLE_SIZE - 1)
+    half = np.abs(2.0 * x - 1.0)
+    offset = np.interp(half, cdf, t)
+    table = (0.5 + np.where(x < 0.5, -offset, offset)).astype(np.float32)
+    table.flags.writeable = False
+    return table
+
+
 class PixelFilter:
     """Pixel filter of a given type and width (BOX is always width 1, as Blender syncs it)."""
 
@@ -41,26 +67,8 @@ class PixelFilter:
         self.kind = kind
         self.width = width
         self.profile, self.radius = _profile_fn(kind, width)
-        self.table = self._build_table().astype(np.float32)
+        self.table = _table(kind, width)
         self._slope = np.diff(self.table)             # per-entry step for linear interpolation
-
-    def _build_table(self) -> np.ndarray:
-        """Symmetric inverse CDF of the profile, offsets centred on +0.5 (the pixel centre).
-
-        The CDF is integrated in float64 on a fine grid of the half profile (the table is then
-        mirrored, as Cycles' util_cdf_inverted does with make_symmetric), so the only
-        discretisation left is the table's own 1024 entries with linear interpolation.
-        """
-        r = self.radius
-        t = np.linspace(0.0, r, 1 << 16)
-        f = np.abs(self.profile(t))
-        cdf = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))])
-        cdf /= cdf[-1]
-        # Entry i covers the symmetric CDF value i/(N-1) in [0, 1]; the half CDF value is |2x-1|.
-        x = np.arange(TABLE_SIZE) / (TABLE_SIZE - 1)
-        half = np.abs(2.0 * x - 1.0)
-        offset = np.interp(half, cdf, t)
-        return 0.5 + np.where(x < 0.5, -offset, offset)
 
     def offsets(self, u: np.ndarray) -> np.ndarray:
         """Sub-pixel positions in [0.5 - R, 0.5 + R] for uniforms u in [0, 1) (Cycles' lookup_table_read)."""

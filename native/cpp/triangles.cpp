@@ -40,14 +40,18 @@ struct Part {
 
 void build_range(const float* V, const uint32_t* I, size_t b, size_t e, Box* boxes, CompactTri* tris,
                  uint8_t* bad, Part& part) {
+    // Bounds in locals: through `part` every box store could alias them, which turned the
+    // min/max updates into a chain of stores and reloads.
+    float lo[3], hi[3], clo[3], chi[3], abs_max = 0.0f;
+    size_t degenerate_count = 0;
     for (int k = 0; k < 3; ++k) {
-        part.bounds.lo[k] = part.centroid_bounds.lo[k] = INFINITY;
-        part.bounds.hi[k] = part.centroid_bounds.hi[k] = -INFINITY;
+        lo[k] = clo[k] = INFINITY;
+        hi[k] = chi[k] = -INFINITY;
     }
     for (size_t i = b; i < e; ++i) {
         const float* p[3] = {V + 3 * size_t(I[3 * i]), V + 3 * size_t(I[3 * i + 1]), V + 3 * size_t(I[3 * i + 2])};
-        Box& bx = boxes[i];
-        CompactTri& c = tris[i];
+        Box bx;
+        CompactTri c;
         c.code = 0;
         for (int a = 0; a < 3; ++a) {
             // Ties resolve to the lowest vertex index; min and max vertex differ even when
@@ -65,20 +69,30 @@ void build_range(const float* V, const uint32_t* I, size_t b, size_t e, Box* box
             c.code |= (imin | (imax << 2)) << (4 * a);
         }
         bx.lo[3] = bx.hi[3] = 0.0f;
+        boxes[i] = bx;
+        tris[i] = c;
         bad[i] = degenerate(p[0], p[1], p[2]);
         if (bad[i]) {
-            ++part.degenerate;
+            ++degenerate_count;
             continue;
         }
         for (int a = 0; a < 3; ++a) {
-            part.bounds.lo[a] = std::min(part.bounds.lo[a], bx.lo[a]);
-            part.bounds.hi[a] = std::max(part.bounds.hi[a], bx.hi[a]);
+            lo[a] = std::min(lo[a], bx.lo[a]);
+            hi[a] = std::max(hi[a], bx.hi[a]);
             const float cen = centre(bx.lo[a], bx.hi[a]);
-            part.centroid_bounds.lo[a] = std::min(part.centroid_bounds.lo[a], cen);
-            part.centroid_bounds.hi[a] = std::max(part.centroid_bounds.hi[a], cen);
-            part.abs_max = std::max(part.abs_max, std::max(std::fabs(bx.lo[a]), std::fabs(bx.hi[a])));
+            clo[a] = std::min(clo[a], cen);
+            chi[a] = std::max(chi[a], cen);
+            abs_max = std::max(abs_max, std::max(std::fabs(bx.lo[a]), std::fabs(bx.hi[a])));
         }
     }
+    for (int k = 0; k < 3; ++k) {
+        part.bounds.lo[k] = lo[k];
+        part.bounds.hi[k] = hi[k];
+        part.centroid_bounds.lo[k] = clo[k];
+        part.centroid_bounds.hi[k] = chi[k];
+    }
+    part.abs_max = abs_max;
+    part.degenerate = degenerate_count;
 }
 
 }  // namespace
@@ -109,9 +123,13 @@ TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I,
             centroid_bounds.hi[a] = std::max(centroid_bounds.hi[a], part.centroid_bounds.hi[a]);
         }
     }
-    valid_ids.reserve(M - num_degenerate);
-    for (size_t i = 0; i < M; ++i)
-        if (!bad[i]) valid_ids.push_back(uint32_t(i));
+    valid_ids.resize(M - num_degenerate + 1);  // + 1: the branch-free append writes one ahead
+    uint32_t* out = valid_ids.data();
+    for (size_t i = 0; i < M; ++i) {
+        *out = uint32_t(i);
+        out += !bad[i];
+    }
+    valid_ids.pop_back();
 }
 
 }  // namespace dacrt
