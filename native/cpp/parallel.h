@@ -20,7 +20,7 @@ void run_workers(int workers, const std::function<void(int)>& job);
 
 // Splits [0, n) into one contiguous range per thread; small inputs run on the calling thread.
 template <class F>
-void parallel_for(size_t n, F&& body, size_t min_per_thread = 1 << 15) {
+void parallel_for(size_t n, F&& body, size_t min_per_thread = 1 << 13) {
     const size_t hw = size_t(hardware_threads());
     const size_t threads = std::min(hw, std::max<size_t>(1, n / min_per_thread));
     if (threads <= 1) {
