@@ -21,6 +21,10 @@ dragon render at 16 spp). So the heap is trimmed RELEASE_DELAY seconds after the
 ends, not at once: the frames of an animation, or renders a script runs back to back, reuse the
 previous frame's pages, and an artist's single F12 render still gives its memory back moments
 later (release_heap() does it at once).
+
+While the heap is held, numpy's own per-array MADV_HUGEPAGE (arrays of 4 MiB and more) is off:
+its arrays now come from the block that is already marked, and the extra madvise calls only
+split the heap's mapping (1M-triangle frame: 0.35 -> 0.32 s, alternating fresh processes).
 """
 from __future__ import annotations
 
@@ -57,6 +61,18 @@ def _libc():
     return libc
 
 
+def _numpy_madvise_switch():
+    """numpy's switch for its per-array huge-page advice (returns the previous setting), or
+    None where this numpy has none."""
+    import numpy
+    for mod in ('_core', 'core'):
+        multiarray = getattr(getattr(numpy, mod, None), 'multiarray', None)
+        switch = getattr(multiarray, '_set_madvise_hugepage', None)
+        if switch is not None:
+            return switch
+    return None
+
+
 def _reserve_huge_pages(libc):
     """Grow the heap by a free block marked MADV_HUGEPAGE (see the module doc). Best effort:
     without THP, or when the block would be mmapped instead, nothing changes."""
@@ -76,13 +92,14 @@ _depth = 0
 _lock = threading.Lock()
 _held = False                  # thresholds raised and the heap kept (during and just after renders)
 _release_timer = None
+_numpy_madvise = None          # numpy's setting before the hold (restored on release)
 
 
 @contextmanager
 def render_heap():
     """Keep freed blocks in the heap while any such block runs and for RELEASE_DELAY seconds
     after the last one ends (see the module doc)."""
-    global _depth, _held, _release_timer
+    global _depth, _held, _release_timer, _numpy_madvise
     with _lock:
         _depth += 1
         if _LIBC is not None and _depth == 1:
@@ -95,6 +112,8 @@ def render_heap():
                         break
                 _LIBC.mallopt(_M_TRIM_THRESHOLD, _HOLD_TRIM)
                 _reserve_huge_pages(_LIBC)
+                switch = _numpy_madvise_switch()
+                _numpy_madvise = None if switch is None else switch(False)
                 _held = True
     try:
         yield
@@ -125,9 +144,12 @@ def release_heap():
 
 
 def _release_locked():
-    global _held
+    global _held, _numpy_madvise
     if _LIBC is not None and _held:
         _LIBC.mallopt(_M_MMAP_THRESHOLD, _GLIBC_DEFAULT)
         _LIBC.mallopt(_M_TRIM_THRESHOLD, _GLIBC_DEFAULT)
         _LIBC.malloc_trim(0)
+        if _numpy_madvise is not None:
+            _numpy_madvise_switch()(_numpy_madvise)
+            _numpy_madvise = None
         _held = False

@@ -107,3 +107,18 @@ def test_heap_kept_between_renders_then_released_when_idle(monkeypatch):
         assert allocator._held
     allocator.release_heap()
     assert not allocator._held
+
+
+@pytest.mark.skipif(allocator._LIBC is None or allocator._numpy_madvise_switch() is None,
+                    reason="needs glibc and a numpy with a huge-page switch")
+def test_numpy_huge_page_advice_off_while_held_and_restored():
+    switch = allocator._numpy_madvise_switch()
+    before = switch(True)
+    switch(before)
+    with allocator.render_heap():
+        current = switch(False)
+        switch(current)
+        assert current is False
+    allocator.release_heap()
+    after = switch(before)
+    assert after == before
