@@ -337,6 +337,7 @@ class Integrator:
         self._tri_live = max3(self._tri_albedo) > 0
         self._tri_any = np.ones(len(self.tri), bool)   # every triangle shades (SKIP_WORK off)
         self._area32 = self.tri.area.astype(F32)
+        self._any_holdout = bool(np.any(self.tri.visibility & HOLDOUT))
         self._any_emissive = bool(self._tri_emissive.any())
         # radiance per triangle (3, M), gathered once: BSDF and camera rays read it per hit
         self._tri_emission = np.ascontiguousarray(np.take(self.mats.emission, self.tri.material, axis=1)) \
@@ -695,7 +696,7 @@ class Integrator:
                 self._write_passes(path, hits, hit, data, pix, samp)
             return None
         if camera:
-            hold = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0)
+            hold = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0) if self._any_holdout else hit[:0]
             if hold.any():
                 hit &= ~hold                          # holdout: transparent, nothing behind it
             alpha[hit] = 1.0
