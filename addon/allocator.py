@@ -10,21 +10,18 @@ trimmed, so the memory returns to the system (Blender's memory stays flat across
 engine holds the heap for a whole frame: export, set-up and passes; the integrator for its
 passes) act once, at the outermost.
 
-Even a kept heap is faulted in page by page on each render's first pass: ~28K faults of 4 KiB
-(110 MiB) on a Cornell box at 64 spp, 8% of its render time. So the frame starts by growing the
-heap by a large free block marked for transparent huge pages (madvise, which is what Linux's
-default THP mode honours): the passes carve their arrays from it and fault it in 2 MiB at a
-time (~400 faults). The block is address space only until touched.
-
 The pages a frame faulted in are still zeroed by the kernel each time (clear_page: 7% of a
 dragon render at 16 spp). So the heap is trimmed RELEASE_DELAY seconds after the last render
 ends, not at once: the frames of an animation, or renders a script runs back to back, reuse the
 previous frame's pages, and an artist's single F12 render still gives its memory back moments
 later (release_heap() does it at once).
 
-While the heap is held, numpy's own per-array MADV_HUGEPAGE (arrays of 4 MiB and more) is off:
-its arrays now come from the block that is already marked, and the extra madvise calls only
-split the heap's mapping (1M-triangle frame: 0.35 -> 0.32 s, alternating fresh processes).
+Transparent huge pages were measured and left out: growing the heap by a block marked
+MADV_HUGEPAGE cut a render's page faults from 28K to ~1K, but the first render at a new size
+then faulted in (and zeroed) whole 2 MiB pages it barely used (Cornell box, 64 spp, first render
+in a process: 0.39 -> 0.58 s; later renders equal). For the same reason numpy's own per-array
+huge-page advice (arrays of 4 MiB and more) is off while the heap is held: on this machine a
+fresh 36 MiB array took 80-110 ms to first touch with it instead of 14 ms.
 """
 from __future__ import annotations
 
@@ -38,10 +35,6 @@ _M_MMAP_THRESHOLD = -3
 _GLIBC_DEFAULT = 128 * 1024          # both thresholds' documented defaults (mallopt(3))
 _HOLD_MMAP = (1 << 30, 32 << 20)     # the first glibc accepts (some cap it at 32 MiB)
 _HOLD_TRIM = 2 ** 31 - 1             # mallopt takes an int: never trim
-_RESERVE = (512 << 20, 128 << 20)    # huge-page block to grow the heap by (the first malloc gives);
-                                     # below the mmap threshold, or malloc would mmap it
-_HUGE = 2 << 20
-_MADV_HUGEPAGE = 14
 RELEASE_DELAY = 2.0                  # seconds without a render before the heap is trimmed
 
 
@@ -50,15 +43,9 @@ def _libc():
         return None
     try:
         libc = ctypes.CDLL(None)
-        if not all(hasattr(libc, f) for f in ('mallopt', 'malloc_trim', 'malloc', 'free', 'madvise')):
-            return None
+        return libc if hasattr(libc, 'mallopt') and hasattr(libc, 'malloc_trim') else None
     except OSError:
         return None
-    libc.malloc.restype = ctypes.c_void_p
-    libc.malloc.argtypes = [ctypes.c_size_t]
-    libc.free.argtypes = [ctypes.c_void_p]
-    libc.madvise.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
-    return libc
 
 
 def _numpy_madvise_switch():
@@ -71,20 +58,6 @@ def _numpy_madvise_switch():
         if switch is not None:
             return switch
     return None
-
-
-def _reserve_huge_pages(libc):
-    """Grow the heap by a free block marked MADV_HUGEPAGE (see the module doc). Best effort:
-    without THP, or when the block would be mmapped instead, nothing changes."""
-    for size in _RESERVE:
-        p = libc.malloc(size)
-        if p:
-            start = (p + _HUGE - 1) & ~(_HUGE - 1)
-            end = (p + size) & ~(_HUGE - 1)
-            if end > start:
-                libc.madvise(start, end - start, _MADV_HUGEPAGE)
-            libc.free(p)          # trimming is off: the block stays in the heap, untouched
-            return
 
 
 _LIBC = _libc()
@@ -111,7 +84,6 @@ def render_heap():
                     if _LIBC.mallopt(_M_MMAP_THRESHOLD, size):
                         break
                 _LIBC.mallopt(_M_TRIM_THRESHOLD, _HOLD_TRIM)
-                _reserve_huge_pages(_LIBC)
                 switch = _numpy_madvise_switch()
                 _numpy_madvise = None if switch is None else switch(False)
                 _held = True

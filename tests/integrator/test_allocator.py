@@ -46,14 +46,6 @@ def test_nested_and_interleaved_uses_restore_once():
     assert allocator._depth == 0
 
 
-def _thp_mode():
-    try:
-        text = open('/sys/kernel/mm/transparent_hugepage/enabled').read()
-    except OSError:
-        return None
-    return text[text.index('[') + 1:text.index(']')]
-
-
 def _heap_kib():
     """Size of the process's brk heap in KiB (0 when it has none)."""
     size, in_heap = 0, False
@@ -65,21 +57,15 @@ def _heap_kib():
     return size
 
 
-@pytest.mark.skipif(allocator._LIBC is None or _thp_mode() not in ('always', 'madvise'),
-                    reason="needs glibc and transparent huge pages (always or madvise)")
-def test_render_heap_faults_in_huge_pages_and_returns_them():
-    import resource
+@pytest.mark.skipif(allocator._LIBC is None, reason="the heap policy acts on glibc only")
+def test_release_heap_returns_the_memory():
     with allocator.render_heap():
-        f0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
-        # 1 MiB arrays, under the 4 MiB from which numpy asks for huge pages itself
-        arrays = [np.ones(1 << 20, np.uint8) for _ in range(64)]     # 16384 pages of 4 KiB
-        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - f0
+        arrays = [np.ones(1 << 20, np.uint8) for _ in range(64)]   # 1 MiB each: from the heap
         assert all(a[-1] == 1 for a in arrays)
         inside = _heap_kib()
         del arrays
-    allocator.release_heap()                     # what the delayed release does when idle
-    assert faults < 2000, f"{faults} page faults for 64 MiB: the heap block is not in huge pages"
     assert inside >= 64 << 10
+    allocator.release_heap()                     # what the delayed release does when idle
     assert _heap_kib() < inside - (32 << 10), "release_heap() did not trim the heap"
 
 
