@@ -68,6 +68,28 @@ def test_identical_across_partition_modes_and_leaf_sizes(monkeypatch, key):
                              f"{key}: adaptive/8 vs {partition}/{leaf}")
 
 
+@pytest.mark.parametrize("key", FIXED[:4], ids=[k[0] + "-" + k[3] for k in FIXED[:4]])
+def test_rays_alone_hit_what_they_hit_in_a_big_batch(monkeypatch, key):
+    """A ray traced alone or in a batch of 2-5 takes another path through the recursion (other
+    splits in adaptive mode, leaves closed by the ray count, mostly empty SIMD lanes) than in a
+    batch of thousands; the hit must be the same bits, on every ISA, for closest and any hits."""
+    case = build_case(*key)
+    big_hits, big_occ = results(monkeypatch, case, ISAS[0], 1)
+    picks = np.random.default_rng(5).choice(len(case.org), 40, replace=False)
+    for isa in ISAS:
+        monkeypatch.setenv("DACRT_ISA", isa)
+        scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy())
+        for size in (1, 2, 3, 5):
+            for start in range(0, 40, size):
+                idx = picks[start:start + size]
+                hits = harness.intersect(scene, case.org[idx], case.dirs[idx], case.tfar[idx], threads=1)
+                occ = harness.occluded(scene, case.org[idx], case.dirs[idx], case.tfar[idx], threads=1)
+                assert np.array_equal(hits.view(np.uint32), big_hits[idx].view(np.uint32)), \
+                    f"{key} {isa}: rays {idx.tolist()} alone: {hits} vs in the batch: {big_hits[idx]}"
+                assert np.array_equal(occ, big_occ[idx]), f"{key} {isa}: occluded of rays {idx.tolist()}"
+    assert (big_hits["prim"][picks] >= 0).any()
+
+
 def test_dtypes_match_the_spec():
     assert dacrt.RAY_DTYPE == RAY_DTYPE and dacrt.RAY_DTYPE.itemsize == 32
     assert dacrt.HIT_DTYPE == HIT_DTYPE and dacrt.HIT_DTYPE.itemsize == 16
