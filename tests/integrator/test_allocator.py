@@ -46,6 +46,18 @@ def test_nested_and_interleaved_uses_restore_once():
     assert allocator._depth == 0
 
 
+def _glibc_malloc_serves():
+    """Whether glibc's malloc serves this process (the sanitizer build's ASan replaces it and
+    maps its own memory: no brk heap to hold or trim)."""
+    import ctypes
+    return allocator._LIBC is not None and not hasattr(ctypes.CDLL(None), '__asan_init')
+
+
+_NEEDS_GLIBC_MALLOC = pytest.mark.skipif(not _glibc_malloc_serves(),
+                                         reason="glibc's malloc does not serve this process (non-glibc "
+                                                "platform, or the AddressSanitizer build)")
+
+
 def _heap_kib():
     """Size of the process's brk heap in KiB (0 when it has none)."""
     size, in_heap = 0, False
@@ -57,8 +69,9 @@ def _heap_kib():
     return size
 
 
-@pytest.mark.skipif(allocator._LIBC is None, reason="the heap policy acts on glibc only")
+@_NEEDS_GLIBC_MALLOC
 def test_release_heap_returns_the_memory():
+    allocator.release_heap()                     # an earlier render's heap may still be held
     with allocator.render_heap():
         arrays = [np.ones(1 << 20, np.uint8) for _ in range(64)]   # 1 MiB each: from the heap
         assert all(a[-1] == 1 for a in arrays)
@@ -69,10 +82,11 @@ def test_release_heap_returns_the_memory():
     assert _heap_kib() < inside - (32 << 10), "release_heap() did not trim the heap"
 
 
-@pytest.mark.skipif(allocator._LIBC is None, reason="the heap policy acts on glibc only")
+@_NEEDS_GLIBC_MALLOC
 def test_heap_kept_between_renders_then_released_when_idle(monkeypatch):
     import resource
     import time
+    allocator.release_heap()                     # an earlier render's heap may still be held
     monkeypatch.setattr(allocator, 'RELEASE_DELAY', 0.3)
     with allocator.render_heap():
         arrays = [np.ones(1 << 20, np.uint8) for _ in range(32)]
@@ -98,6 +112,7 @@ def test_heap_kept_between_renders_then_released_when_idle(monkeypatch):
 @pytest.mark.skipif(allocator._LIBC is None or allocator._numpy_madvise_switch() is None,
                     reason="needs glibc and a numpy with a huge-page switch")
 def test_numpy_huge_page_advice_off_while_held_and_restored():
+    allocator.release_heap()                     # an earlier render's heap may still be held
     switch = allocator._numpy_madvise_switch()
     before = switch(True)
     switch(before)
