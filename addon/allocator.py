@@ -6,9 +6,9 @@ page per 4 KiB again, plus a TLB-shootdown IPI to the other tracer thread per mu
 ~18% of a Cornell-box render (perf: clear_page, page faults, smp_call_function). While a render
 runs, freed blocks therefore stay in the heap for the next pass (mmap threshold up, trimming
 off); when rendering stops (below), the thresholds go back to glibc's defaults and the heap is
-trimmed, so the memory returns to the system (Blender's memory stays flat across renders). Nested uses (the
-engine holds the heap for a whole frame: export, set-up and passes; the integrator for its
-passes) act once, at the outermost.
+trimmed, so the memory returns to the system (Blender's memory stays flat across renders).
+Nested uses (the engine holds the heap for a whole frame: export, set-up and passes; the
+integrator for its passes) act once, at the outermost.
 
 The pages a frame faulted in are still zeroed by the kernel each time (clear_page: 7% of a
 dragon render at 16 spp). So the heap is trimmed RELEASE_DELAY seconds after the last render

@@ -696,9 +696,8 @@ class Integrator:
                 self._write_passes(path, hits, hit, data, pix, samp)
             return None
         if camera:
-            hold = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0) if self._any_holdout else hit[:0]
-            if hold.any():
-                hit &= ~hold                          # holdout: transparent, nothing behind it
+            if self._any_holdout:                     # holdout: transparent, nothing behind it
+                hit &= (np.take(self.tri.visibility, prim) & HOLDOUT) == 0
             alpha[hit] = 1.0
             if self.film.passes:
                 self._write_passes(path, hits, hit, data, pix, samp)

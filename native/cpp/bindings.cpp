@@ -46,7 +46,7 @@ public:
                     err = "vertices[" + std::to_string(i / 3) + "] has a non-finite coordinate (" + std::to_string(v[i]) + ")";
                     break;
                 }
-            for (size_t i = 0; i < 3 * M && err.empty() && M && most >= V; ++i)
+            for (size_t i = 0; i < 3 * M && err.empty() && most >= V; ++i)
                 if (t[i] >= V)
                     err = "triangles[" + std::to_string(i / 3) + "] refers to vertex " + std::to_string(t[i]) +
                           " but there are only " + std::to_string(V) + " vertices";

@@ -3,21 +3,13 @@
 #include <cmath>
 
 #include "parallel.h"
+#include "pathvertex.h"
 #include "shading.h"
 
 namespace dacrt {
 
 void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
                  float* tmax, Ray* rays) {
-    auto pack = [&](size_t i) {  // the tracer's record of ray i
-        Ray& r = rays[i];
-        for (int a = 0; a < 3; ++a) {
-            r.org[a] = O[size_t(a) * n + i];
-            r.dir[a] = D[size_t(a) * n + i];
-        }
-        r.tfar = tmax[i];
-        r.id = uint32_t(i);
-    };
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             float sx = c.sx0 + rx[i] * c.sx_scale, sy = c.sy0 + ry[i] * c.sy_scale;
@@ -28,7 +20,7 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
                     D[size_t(a) * n + i] = -c.rot[a][2];
                 }
                 tmax[i] = c.clip_range;
-                if (rays) pack(i);
+                if (rays) ray_record(O, D, n, i, tmax[i], rays[i]);
                 continue;
             }
             sx *= c.tan_half_fov;
@@ -42,7 +34,7 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
                 O[size_t(a) * n + i] = d * start + c.pos[a];
             }
             tmax[i] = c.clip_range / inv_len;
-            if (rays) pack(i);
+            if (rays) ray_record(O, D, n, i, tmax[i], rays[i]);
         }
     }, size_t(1) << 16);
 }

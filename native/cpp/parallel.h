@@ -18,11 +18,15 @@ int hardware_threads();
 // while another thread uses the pool, run on freshly created threads instead: never a deadlock.
 void run_workers(int workers, const std::function<void(int)>& job);
 
+// Threads worth using on n items of which each thread should get at least min_per_thread.
+inline int threads_for(size_t n, size_t min_per_thread) {
+    return int(std::min(size_t(hardware_threads()), std::max<size_t>(1, n / min_per_thread)));
+}
+
 // Splits [0, n) into one contiguous range per thread; small inputs run on the calling thread.
 template <class F>
 void parallel_for(size_t n, F&& body, size_t min_per_thread = 1 << 13) {
-    const size_t hw = size_t(hardware_threads());
-    const size_t threads = std::min(hw, std::max<size_t>(1, n / min_per_thread));
+    const size_t threads = size_t(threads_for(n, min_per_thread));
     if (threads <= 1) {
         body(size_t(0), n);
         return;

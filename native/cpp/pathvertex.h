@@ -1,8 +1,8 @@
 // The steps of shading one path vertex, as inline functions on one path: hit-point
-// reconstruction, a light sample on an emissive triangle, the next-event weight, the shadow ray
-// and the cosine-weighted bounce. The single-step kernels (surface.cpp, emitters.cpp, nee.cpp,
-// scatter.cpp) and the fused vertex kernel (shade.cpp) share them, so both compute the same
-// bits; the arithmetic and its float32 order are those of the numpy code the kernels replaced.
+// reconstruction, a light sample on an emissive triangle, the next-event weight, the shadow ray,
+// the cosine-weighted bounce and the tracer's record of a ray. The kernels (surface.cpp,
+// emitters.cpp, nee.cpp, scatter.cpp, camera.cpp, raypack.cpp) share them; the arithmetic and
+// its float32 order are those of the numpy code the kernels replaced.
 #pragma once
 
 #include <algorithm>
@@ -122,6 +122,16 @@ inline bool nee_scale(const float ns[3], const float* ng, const float wi[3], flo
     bool good = cos_s > 0 && m > 0;
     if (ng) good = good && (ng[0] * wi[0] + ng[1] * wi[1] + ng[2] * wi[2]) > 0;
     return good;
+}
+
+// The tracer's record of ray i from origins O and directions D (3 rows, stride n).
+inline void ray_record(const float* O, const float* D, size_t n, size_t i, float tfar, Ray& r) {
+    for (int a = 0; a < 3; ++a) {
+        r.org[a] = O[size_t(a) * n + i];
+        r.dir[a] = D[size_t(a) * n + i];
+    }
+    r.tfar = tfar;
+    r.id = uint32_t(i);
 }
 
 // The shadow ray from O along wi over dist or, with a target (non-null, not NaN), toward it

@@ -1,20 +1,13 @@
 // Ray records from structure-of-arrays origins and directions (see shading.h).
 #include "parallel.h"
+#include "pathvertex.h"
 #include "shading.h"
 
 namespace dacrt {
 
 void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray* out) {
     parallel_for(n, [&](size_t b, size_t e) {
-        for (size_t i = b; i < e; ++i) {
-            Ray& r = out[i];
-            for (int a = 0; a < 3; ++a) {
-                r.org[a] = O[a * n + i];
-                r.dir[a] = D[a * n + i];
-            }
-            r.tfar = tfar[i];
-            r.id = uint32_t(i);
-        }
+        for (size_t i = b; i < e; ++i) ray_record(O, D, n, i, tfar[i], out[i]);
     }, size_t(1) << 17);
 }
 

@@ -62,15 +62,8 @@ void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, co
                 bool good = pdf[i] > 0;          // grazing: cos = 0
                 if (ng) good = good && (wi[i] * ng[i] + wi[n + i] * ng[n + i] + wi[2 * n + i] * ng[2 * n + i]) > 0;
                 ok[i] = good;
-                if (rays) {  // the bounce rays' records, ready for the tracer
-                    Ray& r = rays[i];
-                    for (int a = 0; a < 3; ++a) {
-                        r.org[a] = O[size_t(a) * n + i];
-                        r.dir[a] = wi[size_t(a) * n + i];
-                    }
-                    r.tfar = std::numeric_limits<float>::infinity();
-                    r.id = uint32_t(i);
-                }
+                if (rays)  // the bounce rays' records, ready for the tracer
+                    ray_record(O, wi, n, i, std::numeric_limits<float>::infinity(), rays[i]);
             }
         });
     }, size_t(1) << 15);

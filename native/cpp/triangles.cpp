@@ -102,7 +102,7 @@ void build_range(const float* V, const uint32_t* I, size_t b, size_t e, Box* box
 TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I, size_t M)
     : boxes(M), tris(M) {
     (void)num_vertices;
-    const int T = int(std::max<size_t>(1, std::min<size_t>(size_t(hardware_threads()), M / (1 << 15))));
+    const int T = threads_for(M, size_t(1) << 15);
     std::vector<Part> parts(static_cast<size_t>(T));
     std::vector<uint8_t> bad(M);
     run_workers(T, [&](int w) {

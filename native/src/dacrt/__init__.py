@@ -115,7 +115,7 @@ class Scene:
     vertices: (V,3) float array; triangles: (M,3) integer vertex indices. Both are copied into
     the tracer's own layout; degenerate (zero-area) triangles are accepted and never hit.
 
-    keep_top: keep the top levels of the triangle partition (the splits of nodes down to ~256
+    keep_top: keep the top levels of the triangle partition (the splits of nodes down to ~32
     triangles, which depend on the triangles, not on the rays) from one call to the next while
     the partition settings stay the same, so the later batches of a frame skip them (a batch of
     fewer than 64K rays uses them but never sets them). Results are identical either way; a renderer
