@@ -63,23 +63,23 @@ public:
     }
 
     py::dict intersect(py::array rays, py::array hits, py::object skip, int threads, const std::string& isa,
-                       int partition, int leaf_size, float sah_ratio, size_t chunk_rays) {
+                       int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(hits, n, sizeof(Hit), "hits");
         Hit* h = static_cast<Hit*>(hits.mutable_data());
-        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Closest, h, nullptr,
+        TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Closest, h, nullptr,
                      skip_ptr(skip, n), 0.0f, nullptr};
         return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, h, f, oam); });
     }
 
     py::dict occluded(py::array rays, py::array out, py::object skip, int threads, const std::string& isa,
-                      int partition, int leaf_size, float sah_ratio, size_t chunk_rays) {
+                      int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(out, n, 1, "occluded");
         uint8_t* o = static_cast<uint8_t*>(out.mutable_data());
-        TraceJob job{ts_.get(), config(partition, leaf_size, sah_ratio, chunk_rays), Query::Any, nullptr, o,
+        TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Any, nullptr, o,
                      skip_ptr(skip, n), 0.0f, nullptr};
         return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, o, f, oam); });
     }
@@ -88,13 +88,15 @@ private:
     std::unique_ptr<TriangleSet> ts_;
     std::unique_ptr<TopCache> top_;   // null: the partition's top is rebuilt by every call
 
-    static Config config(int partition, int leaf_size, float sah_ratio, size_t chunk_rays) {
+    static Config config(int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays) {
         if (partition < 0 || partition > 2) throw py::value_error("partition must be 0 (adaptive), 1 (median) or 2 (sah)");
         if (leaf_size < 1) throw py::value_error("leaf_size must be >= 1");
+        if (leaf_rays < 1) throw py::value_error("leaf_rays must be >= 1");
         if (!(sah_ratio >= 0.0f) || !std::isfinite(sah_ratio)) throw py::value_error("sah_ratio must be a finite number >= 0");
         Config c;
         c.partition = Partition(partition);
         c.leaf_size = leaf_size;
+        c.leaf_rays = leaf_rays;
         c.sah_ratio = sah_ratio;
         c.chunk_rays = chunk_rays;
         return c;

@@ -72,8 +72,7 @@ struct Tracer {
         const uint64_t c1 = phase_clock();
         st.filter_ticks += c1 - c0;
         if (na == 0) return;
-        const size_t leaf = size_t(cfg.leaf_size);
-        if (nt <= leaf || na <= leaf) {
+        if (nt <= size_t(cfg.leaf_size) || na <= size_t(cfg.leaf_rays)) {
             intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, skip, st);
             st.leaf_ticks += phase_clock() - c1;
             return;

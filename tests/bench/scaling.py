@@ -48,7 +48,8 @@ def add_arguments(p) -> None:
     p.add_argument("--json", type=Path, default=None, help="default bench-out/scaling.json")
     p.add_argument("--partition", choices=["adaptive", "median", "sah"], default=None,
                    help="DACRT partitioning mode (default: the tracer's own)")
-    p.add_argument("--leaf-size", type=int, default=None, help="DACRT leaf size")
+    p.add_argument("--leaf-size", type=int, default=None, help="DACRT leaf size (triangles)")
+    p.add_argument("--leaf-rays", type=int, default=None, help="DACRT leaf size (active rays)")
     p.add_argument("--sah-ratio", type=float, default=None, help="DACRT adaptive SAH ratio")
 
 

@@ -45,7 +45,8 @@ def add_arguments(p) -> None:
     p.add_argument("--seed", type=int, default=1, help="ray generation seed (default 1)")
     p.add_argument("--partition", choices=["adaptive", "median", "sah"], default=None,
                    help="DACRT partitioning mode (default: the tracer's own default)")
-    p.add_argument("--leaf-size", type=int, default=None, help="DACRT leaf size")
+    p.add_argument("--leaf-size", type=int, default=None, help="DACRT leaf size (triangles)")
+    p.add_argument("--leaf-rays", type=int, default=None, help="DACRT leaf size (active rays)")
     p.add_argument("--sah-ratio", type=float, default=None, help="DACRT adaptive SAH ratio")
     p.add_argument("--json", type=Path, default=None, metavar="PATH",
                    help="write every number here (default bench-out/tracer.json)")
@@ -87,6 +88,8 @@ def _check_args(args) -> None:
         raise ValueError(f"--repeat must be >= 1 (got {args.repeat})")
     if args.leaf_size is not None and args.leaf_size < 1:
         raise ValueError(f"--leaf-size must be >= 1 (got {args.leaf_size})")
+    if args.leaf_rays is not None and args.leaf_rays < 1:
+        raise ValueError(f"--leaf-rays must be >= 1 (got {args.leaf_rays})")
 
 
 def _import_dacrt():
@@ -121,7 +124,7 @@ class _Dacrt:
 
     def __init__(self, dacrt, args):
         self.dacrt, self.kw = dacrt, {}
-        for key in ("partition", "leaf_size", "sah_ratio"):
+        for key in ("partition", "leaf_size", "leaf_rays", "sah_ratio"):
             if getattr(args, key) is not None:
                 self.kw[key] = getattr(args, key)
 

@@ -23,10 +23,10 @@ FIXED = [("soup_dirty", 1, 6, "random", "mixed", 4000, 1),
          ("soup_far", 6, 6, "camera", "mixed", 4000, 6)]
 
 
-def results(monkeypatch, case, isa, threads, partition="adaptive", leaf_size=8):
+def results(monkeypatch, case, isa, threads, partition="adaptive", leaf_size=16, leaf_rays=32):
     monkeypatch.setenv("DACRT_ISA", isa)
     scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy(), partition=partition,
-                        leaf_size=leaf_size)
+                        leaf_size=leaf_size, leaf_rays=leaf_rays)
     hits = harness.intersect(scene, case.org, case.dirs, case.tfar, threads=threads,
                              shuffle_seed=threads)
     mask = harness.occluded(scene, case.org, case.dirs, case.tfar, threads=threads,
@@ -61,11 +61,13 @@ def test_identical_across_partition_modes_and_leaf_sizes(monkeypatch, key):
     deterministic tie rule make it independent of how the set is split."""
     case = build_case(*key)
     isa = ISAS[-1]
-    base = results(monkeypatch, case, isa, 2, "adaptive", 8)
-    for partition, leaf in itertools.product(["adaptive", "median", "sah"], [1, 3, 8, 32, 10**6]):
-        if (partition, leaf) != ("adaptive", 8):
-            assert_identical(base, results(monkeypatch, case, isa, 2, partition, leaf),
-                             f"{key}: adaptive/8 vs {partition}/{leaf}")
+    base = results(monkeypatch, case, isa, 2)
+    # (triangles, rays) leaf thresholds: both tiny, both huge, the defaults, and one of each
+    leaves = [(1, 1), (3, 3), (8, 8), (32, 32), (10**6, 10**6), (16, 32), (3, 1000), (1000, 3)]
+    for partition, (leaf, rays) in itertools.product(["adaptive", "median", "sah"], leaves):
+        if (partition, leaf, rays) != ("adaptive", 16, 32):
+            assert_identical(base, results(monkeypatch, case, isa, 2, partition, leaf, rays),
+                             f"{key}: adaptive/16/32 vs {partition}/{leaf}/{rays}")
 
 
 @pytest.mark.parametrize("key", FIXED[:4], ids=[k[0] + "-" + k[3] for k in FIXED[:4]])
@@ -149,7 +151,7 @@ def test_scene_properties():
     scene = dacrt.Scene(v, t)
     assert scene.num_triangles == len(t)
     assert scene.num_degenerate == zero_area.sum() > 0
-    assert (scene.partition, scene.leaf_size) == ("adaptive", 8)
+    assert (scene.partition, scene.leaf_size, scene.leaf_rays) == ("adaptive", 16, 32)
     assert scene.sah_ratio == pytest.approx(128.0)
     o, d, tf = make_rays("random", "inf", v, t, 1000, 1)
     base = harness.intersect(scene, o, d, tf)
@@ -158,8 +160,9 @@ def test_scene_properties():
         assert scene.partition == mode
         np.testing.assert_array_equal(harness.intersect(scene, o, d, tf), base)
     scene.leaf_size = 3
+    scene.leaf_rays = 5
     scene.sah_ratio = 0.5
-    assert (scene.leaf_size, scene.sah_ratio) == (3, 0.5)
+    assert (scene.leaf_size, scene.leaf_rays, scene.sah_ratio) == (3, 5, 0.5)
     np.testing.assert_array_equal(harness.intersect(scene, o, d, tf), base)
 
 

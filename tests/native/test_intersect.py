@@ -21,9 +21,9 @@ THREADS = [1, 2]
 BUDGET = settings.default.max_examples  # from the active Hypothesis profile (conftest.py)
 
 
-def make_scene(case, partition="adaptive", leaf_size=8, **kw):
+def make_scene(case, partition="adaptive", leaf_size=16, leaf_rays=32, **kw):
     return dacrt.Scene(case.vertices.copy(), case.triangles.copy(), partition=partition,
-                       leaf_size=leaf_size, **kw)
+                       leaf_size=leaf_size, leaf_rays=leaf_rays, **kw)
 
 
 def check_case(case, scene, threads, label):
@@ -51,21 +51,22 @@ def test_matches_reference_per_configuration(monkeypatch, isa, partition, leaf_s
                                              case):
     monkeypatch.setenv("DACRT_ISA", isa)
     assert dacrt.isa() == isa
-    scene = make_scene(case, partition, leaf_size)
+    scene = make_scene(case, partition, leaf_size, leaf_size)  # both leaf thresholds
     check_case(case, scene, threads, f"[{isa} {partition} leaf={leaf_size} threads={threads}]")
     assert scene.last_stats["isa"] == isa
 
 
 @settings(max_examples=3 * BUDGET)
 @given(case=cases, isa=st.sampled_from(ISAS), partition=st.sampled_from(MODES),
-       leaf_size=st.sampled_from([1, 2, 3, 8, 16, 32, 1000]), threads=st.sampled_from([0, 1, 2]),
+       leaf_size=st.sampled_from([1, 2, 3, 8, 16, 32, 1000]),
+       leaf_rays=st.sampled_from([1, 2, 8, 16, 32, 1000]), threads=st.sampled_from([0, 1, 2]),
        sah_ratio=st.sampled_from([0.25, 1.0, 2.0, 8.0]))
 def test_matches_reference_any_configuration(monkeypatch, case, isa, partition, leaf_size,
-                                             threads, sah_ratio):
+                                             leaf_rays, threads, sah_ratio):
     monkeypatch.setenv("DACRT_ISA", isa)
-    scene = make_scene(case, partition, leaf_size, sah_ratio=sah_ratio)
-    check_case(case, scene, threads, f"[{isa} {partition} leaf={leaf_size} threads={threads} "
-                                     f"sah_ratio={sah_ratio}]")
+    scene = make_scene(case, partition, leaf_size, leaf_rays, sah_ratio=sah_ratio)
+    check_case(case, scene, threads, f"[{isa} {partition} leaf={leaf_size}/{leaf_rays} rays "
+                                     f"threads={threads} sah_ratio={sah_ratio}]")
 
 
 @pytest.mark.parametrize("kind", ["generated", "dragon"])

@@ -42,11 +42,12 @@ def test_large_batches_identical_and_correct(monkeypatch, kind):
 @settings(max_examples=10 * settings.default.max_examples)
 @given(case=cases, isa=st.sampled_from(ISAS),
        partition=st.sampled_from(["adaptive", "median", "sah"]),
-       leaf_size=st.sampled_from([1, 2, 5, 8, 13, 32, 64]), threads=st.sampled_from([1, 2]))
-def test_long_property_run(monkeypatch, case, isa, partition, leaf_size, threads):
+       leaf_size=st.sampled_from([1, 2, 5, 8, 13, 32, 64]),
+       leaf_rays=st.sampled_from([1, 3, 8, 17, 32, 64]), threads=st.sampled_from([1, 2]))
+def test_long_property_run(monkeypatch, case, isa, partition, leaf_size, leaf_rays, threads):
     monkeypatch.setenv("DACRT_ISA", isa)
     scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy(), partition=partition,
-                        leaf_size=leaf_size)
+                        leaf_size=leaf_size, leaf_rays=leaf_rays)
     hits = harness.intersect(scene, case.org, case.dirs, case.tfar, threads=threads)
     agreement.check_hits(case.vertices, case.triangles, case.org, case.dirs, case.tfar, hits,
                          case.ref, context=repr(case))

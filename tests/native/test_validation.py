@@ -53,12 +53,16 @@ def test_scene_rejects_bad_settings():
     raises("partition", dacrt.Scene, V, T, partition="octree")
     raises("leaf", dacrt.Scene, V, T, leaf_size=0)
     raises("leaf", dacrt.Scene, V, T, leaf_size=-3)
+    raises("leaf_rays", dacrt.Scene, V, T, leaf_rays=0)
+    raises("leaf_rays", dacrt.Scene, V, T, leaf_rays=2.5)
     scene = dacrt.Scene(V, T)
     with pytest.raises(ValueError, match="(?i)partition"):
         scene.partition = "bvh"
     with pytest.raises(ValueError, match="(?i)leaf"):
         scene.leaf_size = 0
-    assert (scene.partition, scene.leaf_size) == ("adaptive", 8)  # unchanged after the errors
+    with pytest.raises(ValueError, match="leaf_rays"):
+        scene.leaf_rays = -1
+    assert (scene.partition, scene.leaf_size, scene.leaf_rays) == ("adaptive", 16, 32)  # unchanged
 
 
 def good_rays(n=16):

@@ -47,7 +47,7 @@ def test_fuzz_extreme_scenes(monkeypatch, kind, seed, size, scale, offset, rays,
     o, d = o.astype(np.float32), d.astype(np.float32)
     ref = reference.trace(v, t, o, d, tf)
     monkeypatch.setenv("DACRT_ISA", isa)
-    scene = dacrt.Scene(v, t, partition=mode, leaf_size=leaf)
+    scene = dacrt.Scene(v, t, partition=mode, leaf_size=leaf, leaf_rays=leaf)
     what = f"{kind} seed={seed} size={size} x{scale:g} +{off:g} {rays}/{tfar} [{isa} {mode} " \
            f"{threads}t leaf={leaf}]"
     fits = ~(np.isfinite(ref.t) & (ref.t > np.finfo(np.float32).max))

@@ -122,13 +122,14 @@ class Scene:
     makes one Scene per frame, so nothing outlives the frame.
     """
 
-    def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 8,
-                 sah_ratio: float = 128.0, chunk_rays: int = 0, keep_top: bool = False):
+    def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 16,
+                 sah_ratio: float = 128.0, chunk_rays: int = 0, keep_top: bool = False, leaf_rays: int = 32):
         v = _as_vertices(vertices)
         t = _as_triangles(triangles, len(v))
         self._core = _core.NativeScene(v, t, bool(keep_top))
         self.partition = partition
         self.leaf_size = leaf_size
+        self.leaf_rays = leaf_rays
         self.sah_ratio = sah_ratio
         self.chunk_rays = chunk_rays
         self.last_stats: dict = {}
@@ -153,6 +154,18 @@ class Scene:
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
             raise ValueError(f"leaf_size must be an integer >= 1; got {value!r}")
         self._leaf_size = int(value)
+
+    @property
+    def leaf_rays(self) -> int:
+        """A node with at most this many active rays is a leaf (as one with at most leaf_size
+        triangles): its rays are tested against all its triangles."""
+        return self._leaf_rays
+
+    @leaf_rays.setter
+    def leaf_rays(self, value: int) -> None:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"leaf_rays must be an integer >= 1; got {value!r}")
+        self._leaf_rays = int(value)
 
     @property
     def sah_ratio(self) -> float:
@@ -191,7 +204,7 @@ class Scene:
 
     def _args(self, threads):
         return (_check_threads(threads), _requested_isa(), PARTITIONS.index(self._partition),
-                self._leaf_size, self._sah_ratio, self._chunk_rays)
+                self._leaf_size, self._leaf_rays, self._sah_ratio, self._chunk_rays)
 
     def _skip(self, skip, n: int):
         if skip is None:
