@@ -109,6 +109,12 @@ def _check_threads(threads) -> int:
     return int(threads)
 
 
+def _leaf_threshold(name: str, value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name} must be an integer >= 1; got {value!r}")
+    return int(value)
+
+
 class Scene:
     """A triangle soup ready to be traced. Building it costs one pass over the triangles.
 
@@ -147,25 +153,22 @@ class Scene:
 
     @property
     def leaf_size(self) -> int:
+        """A node with at most this many triangles is a leaf: its active rays are tested
+        against all its triangles."""
         return self._leaf_size
 
     @leaf_size.setter
     def leaf_size(self, value: int) -> None:
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"leaf_size must be an integer >= 1; got {value!r}")
-        self._leaf_size = int(value)
+        self._leaf_size = _leaf_threshold("leaf_size", value)
 
     @property
     def leaf_rays(self) -> int:
-        """A node with at most this many active rays is a leaf (as one with at most leaf_size
-        triangles): its rays are tested against all its triangles."""
+        """A node with at most this many active rays is a leaf too."""
         return self._leaf_rays
 
     @leaf_rays.setter
     def leaf_rays(self, value: int) -> None:
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"leaf_rays must be an integer >= 1; got {value!r}")
-        self._leaf_rays = int(value)
+        self._leaf_rays = _leaf_threshold("leaf_rays", value)
 
     @property
     def sah_ratio(self) -> float:
