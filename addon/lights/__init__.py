@@ -10,8 +10,9 @@ mixed with 20% of the uniform split. Under MIS the cosine-weighted bounces alrea
 wide light well; giving the world half the light samples put DACRT 3-7x behind Cycles on sun +
 sky and area light + world scenes, and even 10% left it 1.5x behind, so the uniform world now
 takes none (background.py). (Weighting by estimated irradiance was tried and dropped: it is
-global, and starved a spot light where it is the main light.) The selection probability of every light is known, so a BSDF ray that meets a light
-can be weighted against light sampling (MIS).
+global, and starved a spot light where it is the main light.) The selection probability of
+every light is known, so a BSDF ray that meets a light can be weighted against light sampling
+(MIS).
 Lamps with diffuse ray visibility off take no part in that choice (camera rays may see them),
 nor does the (uniform) world: BSDF rays alone collect it, with weight 1, as in Cycles
 (background.py says why).

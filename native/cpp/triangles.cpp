@@ -104,7 +104,7 @@ TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I,
     (void)num_vertices;
     const int T = threads_for(M, size_t(1) << 15);
     std::vector<Part> parts(static_cast<size_t>(T));
-    std::vector<uint8_t> bad(M);
+    BuiltArray<uint8_t> bad(M);  // every element written by build_range
     run_workers(T, [&](int w) {
         build_range(V, I, M * size_t(w) / size_t(T), M * size_t(w + 1) / size_t(T), boxes.data(), tris.data(),
                     bad.data(), parts[size_t(w)]);
