@@ -70,7 +70,7 @@ public:
         Hit* h = static_cast<Hit*>(hits.mutable_data());
         TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Closest, h, nullptr,
                      skip_ptr(skip, n), 0.0f, nullptr};
-        return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, h, f, oam); });
+        return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, h, f, oam, threads); });
     }
 
     py::dict occluded(py::array rays, py::array out, py::object skip, int threads, const std::string& isa,
@@ -81,7 +81,7 @@ public:
         uint8_t* o = static_cast<uint8_t*>(out.mutable_data());
         TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Any, nullptr, o,
                      skip_ptr(skip, n), 0.0f, nullptr};
-        return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, o, f, oam); });
+        return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, o, f, oam, threads); });
     }
 
 private:

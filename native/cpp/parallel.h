@@ -24,9 +24,11 @@ inline int threads_for(size_t n, size_t min_per_thread) {
 }
 
 // Splits [0, n) into one contiguous range per thread; small inputs run on the calling thread.
+// max_threads > 0 caps the threads (a caller's own thread setting).
 template <class F>
-void parallel_for(size_t n, F&& body, size_t min_per_thread = 1 << 13) {
-    const size_t threads = size_t(threads_for(n, min_per_thread));
+void parallel_for(size_t n, F&& body, size_t min_per_thread = 1 << 13, int max_threads = 0) {
+    size_t threads = size_t(threads_for(n, min_per_thread));
+    if (max_threads > 0) threads = std::min(threads, size_t(max_threads));
     if (threads <= 1) {
         body(size_t(0), n);
         return;

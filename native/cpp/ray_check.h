@@ -10,8 +10,10 @@ namespace dacrt {
 // output array (indexed by ray id) doubles as the mark array that finds repeated ids, so
 // validation allocates nothing; on success it holds all misses / all unoccluded.
 // origin_abs_max receives the largest |origin coordinate| (used to pad boxes).
-// fields: the ISA's SIMD field check (dispatch.h fields_fn).
-std::string validate_rays(const Ray* rays, size_t n, Hit* hits, FieldsFn fields, float& origin_abs_max);
-std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, FieldsFn fields, float& origin_abs_max);
+// fields: the ISA's SIMD field check (dispatch.h fields_fn). threads: at most this many
+// threads (0 = all cores), as the trace call that follows.
+std::string validate_rays(const Ray* rays, size_t n, Hit* hits, FieldsFn fields, float& origin_abs_max, int threads);
+std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, FieldsFn fields, float& origin_abs_max,
+                          int threads);
 
 }  // namespace dacrt

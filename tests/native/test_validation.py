@@ -157,3 +157,40 @@ def test_valid_edge_values_accepted():
     hits = scene.intersect(r.copy())
     assert hits.shape == (8,) and hits["prim"][1] == -1  # tfar = 0 never hits
     assert scene.occluded(r.copy()).shape == (8,)
+
+
+BIG = 200_000   # validated on several threads (the serial path is for batches under 64K rays)
+BIG_ERRORS = {
+    "NaN in org (two bad rays)": ([("org", (170_000, 0), np.nan), ("org", (120_000, 1), np.nan)],
+                                  r"rays\[120000\]\.org"),
+    "id == N late": ([("id", 190_000, BIG)], r"rays\[190000\]\.id"),
+    "repeated id far apart": ([("id", 150_000, 10)], r"rays\[150000\]\.id = 10 is repeated"),
+    "repeated id, first ray": ([("id", 0, BIG - 1)], r"rays\[199999\]\.id = 199999 is repeated"),
+}
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+@pytest.mark.parametrize("name", list(BIG_ERRORS))
+def test_big_batch_names_first_bad_ray(query, name, threads):
+    """A big batch is checked on several threads; the message still names the first bad ray
+    (as the serial scan would) and the rays are untouched."""
+    edits, pattern = BIG_ERRORS[name]
+    rays = good_rays(BIG)
+    for field, index, value in edits:
+        rays[field][index] = value
+    before = rays.copy()
+    raises(pattern, getattr(dacrt.Scene(V, T), query), rays, threads=threads)
+    assert rays.tobytes() == before.tobytes(), "the rays were modified by a failed call"
+
+
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+def test_big_batch_outputs_do_not_depend_on_threads(query):
+    """The outputs the parallel check initialises (misses, unoccluded) are the serial ones."""
+    rays = good_rays(BIG)
+    scene = dacrt.Scene(V, T)
+    out = [getattr(scene, query)(rays.copy(), threads=t) for t in (1, 2)]
+    assert out[0].tobytes() == out[1].tobytes()
+    if query == "intersect":
+        assert 0 < np.count_nonzero(out[0]["prim"] >= 0) < BIG   # some rays hit, some miss
+        assert np.all(np.isinf(out[0]["t"][out[0]["prim"] < 0]))
