@@ -19,6 +19,7 @@ namespace dacrt {
 static constexpr size_t kMinChunkRays = 1 << 16;
 static constexpr size_t kMinKeptChunkRays = 1 << 10;
 static constexpr size_t kSharedMinTris = 32;
+static constexpr int kKeptMaxDepth = 48;
 
 static bool cpu_has_avx2() {
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
@@ -72,10 +73,10 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
     const size_t nt = ts.valid_ids.size();
     if (n > 0 && nt > 0) {
         int T = threads > 0 ? threads : hardware_threads();
-        int levels = 0;  // share down to nodes of about kSharedMinTris triangles
-        while (levels < 17 && (nt >> levels) > kSharedMinTris) ++levels;
+        int levels = 0;  // a balanced tree's depth to nodes of about kSharedMinTris triangles
+        while ((nt >> levels) > kSharedMinTris) ++levels;
         std::vector<uint32_t> own_ids;
-        std::unique_ptr<SharedNode[]> own_nodes;
+        std::unique_ptr<NodePool> own_pool;
         std::shared_lock<std::shared_mutex> kept;
         SharedTop top;
         // A small batch (a renderer's probe rays) does not set the kept top, since in adaptive
@@ -99,7 +100,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
                 std::unique_lock<std::shared_mutex> reset(cache->lock);
                 if (!matches()) {  // first big batch, or new settings: start over
                     cache->ids = ts.valid_ids;
-                    cache->nodes.reset(new SharedNode[size_t(1) << levels]);
+                    cache->pool.reset(new NodePool());
                     cache->partition = c.partition;
                     cache->leaf_size = c.leaf_size;
                     cache->sah_ratio = c.sah_ratio;
@@ -109,12 +110,12 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         }
         if (use_kept) {
             top.ids = cache->ids.data();
-            top.nodes = cache->nodes.get();
+            top.pool = cache->pool.get();
         } else {
             own_ids = ts.valid_ids;
-            own_nodes.reset(new SharedNode[size_t(1) << levels]);
+            own_pool.reset(new NodePool());
             top.ids = own_ids.data();
-            top.nodes = own_nodes.get();
+            top.pool = own_pool.get();
         }
         // Chunks of rays traced independently. DACRT wants big batches: measured on 1M diffuse
         // rays x 100K triangles, 64K-ray chunks cost 2x the CPU time of one batch (each chunk
@@ -136,7 +137,13 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         if (size_t(T) > chunks) T = int(chunks);
         res.threads = T;
 
-        top.levels = levels;
+        // A call's own top stops at the balanced depth, below which each chunk's nodes follow
+        // its own rays (few rays: a brute-force leaf instead of a split). A kept top goes on
+        // down to every node of more than ~16 triangles that any batch reaches: its splits
+        // are made once per frame, and on unevenly dense scenes the tree is far deeper than
+        // balanced (bmw27, 1.7M triangles: leaves of thousands of triangles met by <= 32 rays
+        // below the balanced depth, 100-800 triangle tests per ray).
+        top.max_depth = use_kept ? kKeptMaxDepth : levels;
         top.min_tris = kSharedMinTris / 2;
         top.ray_scale = float(n) / float(std::min(n, chunk));
         TraceJob jb = job;

@@ -24,7 +24,7 @@ struct TraceResult {
 };
 
 // The shared top levels of a scene's partition (kernel.h SharedTop: the split triangle ids and
-// the splits of nodes down to ~32 triangles), kept between the trace calls of one scene that
+// the splits of every node a batch reached, down to ~16 triangles), kept between the trace calls of one scene that
 // use the same partition settings: the batches of one frame. Those splits depend on the
 // triangles only (median; SAH's ray-count test in adaptive mode is made by the first batch),
 // so later batches skip them; they are most of the partitioning work when a batch has fewer
@@ -38,7 +38,7 @@ struct TopCache {
     int leaf_size = 0;
     float sah_ratio = 0.0f;
     std::vector<uint32_t> ids;
-    std::unique_ptr<SharedNode[]> nodes;
+    std::unique_ptr<NodePool> pool;
 };
 
 // Validates nothing (see ray.h validate_rays); traces rays[0, n) with `threads` threads

@@ -4,6 +4,8 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 
 #include "ray.h"
 #include "triangles.h"
@@ -21,17 +23,46 @@ struct NodeBounds {
 // partitions the shared id array once and publishes the split, the others reuse it. Deeper
 // nodes are traced on a private copy of their triangle ids. A top node's ids are only read for
 // a leaf when the node cannot be split further, so no thread ever reads a range that another
-// is reordering. Lives for one call only.
+// is reordering.
 struct SharedNode {
     std::atomic<int> state{0};  // 0 untouched, 1 being partitioned, 2 split published
     uint32_t k = 0;             // left child = ids[0, k)
+    uint32_t child = 0;         // pool index of the left child (right: child + 1); 0 = none, trace privately
     int axis = 0;
     NodeBounds L{}, R{};
 };
+
+// The shared nodes, allocated in pairs as splits are published (a spatial-median tree over
+// unevenly dense geometry is far deeper than log2 of its size, so a fixed heap-ordered table
+// would cut it off early). Blocks never move; a reader reaches a node only through its parent's
+// published split, which orders the block's allocation before the read.
+class NodePool {
+  public:
+    static constexpr uint32_t kBlock = 4096, kMaxBlocks = 4096;  // at most 16M nodes
+    NodePool() { blocks_[0].reset(new SharedNode[kBlock]); used_ = 2; }  // 0: the root (1 unused)
+    SharedNode& at(uint32_t i) { return blocks_[i / kBlock][i % kBlock]; }
+    // Index of two fresh consecutive nodes, or 0 when the pool is full.
+    uint32_t alloc2() {
+        std::lock_guard<std::mutex> g(m_);
+        if (used_ % kBlock == 0) {
+            const uint32_t b = used_ / kBlock;
+            if (b >= kMaxBlocks) return 0;
+            blocks_[b].reset(new SharedNode[kBlock]);
+        }
+        used_ += 2;
+        return used_ - 2;
+    }
+
+  private:
+    std::mutex m_;
+    std::unique_ptr<SharedNode[]> blocks_[kMaxBlocks];
+    uint32_t used_ = 0;
+};
+
 struct SharedTop {
     uint32_t* ids = nullptr;
-    SharedNode* nodes = nullptr;  // heap order: root 1, children 2h and 2h + 1
-    int levels = 0;               // nodes at depth < levels are shared
+    NodePool* pool = nullptr;     // root: index 0
+    int max_depth = 0;            // nodes at depth < max_depth are shared
     size_t min_tris = 0;          // smaller nodes are traced privately
     float ray_scale = 1.0f;       // total rays / chunk rays: the adaptive choice at shared nodes
 };

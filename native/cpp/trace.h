@@ -91,7 +91,7 @@ struct Tracer {
     }
 
     // A node of the shared top: its split is made once, by whichever thread arrives first.
-    void shared_node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, size_t h) {
+    void shared_node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h) {
         const uint64_t c0 = phase_clock();
         const size_t na = filter(rays, n, nb, depth);
         const uint64_t c1 = phase_clock();
@@ -102,11 +102,12 @@ struct Tracer {
             st.leaf_ticks += phase_clock() - c1;
             return;
         }
-        SharedNode& sn = top->nodes[h];
+        SharedNode& sn = top->pool->at(h);
         if (sn.state.load(std::memory_order_acquire) != 2) {
             int expected = 0;
             if (sn.state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
                 sn.k = uint32_t(split(ids, nt, nb, float(na) * top->ray_scale, depth, sn.L, sn.R, sn.axis));
+                sn.child = top->pool->alloc2();
                 sn.state.store(2, std::memory_order_release);
             } else {
                 while (sn.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
@@ -114,17 +115,19 @@ struct Tracer {
         }
         st.partition_ticks += phase_clock() - c1;  // includes waiting for another thread's split
         const size_t k = sn.k;
+        const uint32_t c = sn.child;
         if (majority_positive(rays, na, sn.axis)) {
-            child(rays, na, ids, k, sn.L, depth + 1, 2 * h);
-            child(rays, na, ids + k, nt - k, sn.R, depth + 1, 2 * h + 1);
+            child(rays, na, ids, k, sn.L, depth + 1, c);
+            child(rays, na, ids + k, nt - k, sn.R, depth + 1, c ? c + 1 : 0);
         } else {
-            child(rays, na, ids + k, nt - k, sn.R, depth + 1, 2 * h + 1);
-            child(rays, na, ids, k, sn.L, depth + 1, 2 * h);
+            child(rays, na, ids + k, nt - k, sn.R, depth + 1, c ? c + 1 : 0);
+            child(rays, na, ids, k, sn.L, depth + 1, c);
         }
     }
 
-    void child(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, size_t h) {
-        if (depth < uint64_t(top->levels) && nt > top->min_tris) {
+    // h: the node's pool index (the root is 0; 0 below the root: no shared node, trace privately).
+    void child(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h) {
+        if ((h != 0 || depth == 0) && depth < uint64_t(top->max_depth) && nt > top->min_tris) {
             shared_node(rays, n, ids, nt, nb, depth, h);
         } else {  // leave the shared top: continue on a private copy of the ids
             std::memcpy(priv, ids, nt * sizeof(uint32_t));
@@ -143,7 +146,7 @@ void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& s
         root.lo[a] = ts.bounds.lo[a]; root.hi[a] = ts.bounds.hi[a];
         root.clo[a] = ts.centroid_bounds.lo[a]; root.chi[a] = ts.centroid_bounds.hi[a];
     }
-    tr.child(rays, n, job.top->ids, ts.valid_ids.size(), root, 0, 1);
+    tr.child(rays, n, job.top->ids, ts.valid_ids.size(), root, 0, 0);
     st.add(tr.st);
 }
 

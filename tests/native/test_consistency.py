@@ -206,3 +206,29 @@ def test_kept_top_levels_give_identical_results(partition):
         if i == 1:                                   # a settings change resets what is kept
             kept.partition = "sah" if partition != "sah" else "median"
             partition = kept.partition
+
+
+def test_kept_top_on_a_very_uneven_scene():
+    """A kept top follows the tree down to small nodes however deep it is: on geometry whose
+    density grows geometrically towards a point (spatial-median splits then cut one triangle
+    cluster at a time, far deeper than log2 of the triangle count), every batch still returns
+    what a fresh scene returns."""
+    rng = np.random.default_rng(7)
+    m = 30000
+    scale = 2.0 ** -rng.integers(0, 40, size=(m, 1, 1))      # clusters at 1, 1/2, ... 2^-39
+    v = (rng.normal(size=(m, 1, 3)) * scale + rng.normal(size=(m, 3, 3)) * scale * 0.2)
+    v = v.reshape(-1, 3).astype(np.float32)
+    t = np.arange(3 * m, dtype=np.int64).reshape(m, 3)
+    kept = dacrt.Scene(v, t, keep_top=True)
+    depth = 0
+    for i, (kind, n, threads) in enumerate((("camera", 70000, 2), ("bounce", 90000, 1), ("random", 5000, 2))):
+        org, dirs, tfar = make_rays(kind, "inf", v, t, n, 10 + i)
+        fresh = dacrt.Scene(v, t)
+        a = (harness.intersect(kept, org, dirs, tfar, threads=threads),
+             harness.occluded(kept, org, dirs, tfar, threads=threads))
+        b = (harness.intersect(fresh, org, dirs, tfar, threads=threads),
+             harness.occluded(fresh, org, dirs, tfar, threads=threads))
+        assert (a[0]["prim"] >= 0).any()
+        assert_identical(a, b, f"batch {i}: kept top vs fresh scene")
+        depth = max(depth, kept.last_stats["max_depth"])
+    assert depth > 2 * np.log2(m / 32)          # far deeper than a balanced tree
