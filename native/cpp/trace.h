@@ -20,6 +20,10 @@ inline bool majority_positive(const Ray* rays, size_t na, int axis) {
     return vote >= 0;
 }
 
+// Largest shared node that a few-ray visit (<= leaf_rays) leaves unsplit: bigger ones are split
+// for the kept top (a leaf of thousands of triangles costs far more than the split).
+constexpr size_t kPrivateFewRaysTris = 256;
+
 template <int W, Query Q>
 struct Tracer {
     const Box* boxes;
@@ -72,6 +76,12 @@ struct Tracer {
         const uint64_t c1 = phase_clock();
         st.filter_ticks += c1 - c0;
         if (na == 0) return;
+        node_split(rays, na, ids, nt, nb, depth, c1);
+    }
+
+    // A node whose rays[0, na) are filtered: leaf, or split and recurse (c1: clock at entry).
+    void node_split(Ray* rays, size_t na, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth,
+                    uint64_t c1) {
         if (nt <= size_t(cfg.leaf_size) || na <= size_t(cfg.leaf_rays)) {
             intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, skip, st);
             st.leaf_ticks += phase_clock() - c1;
@@ -103,15 +113,26 @@ struct Tracer {
             return;
         }
         SharedNode& sn = top->pool->at(h);
-        if (sn.state.load(std::memory_order_acquire) != 2) {
+        // Few rays at a small unsplit node: as in a private node, a brute-force leaf costs less
+        // than a split, so they go on privately (a copy of the ids taken under the node's lock,
+        // so no split can reorder them meanwhile) and leave the split to a batch that needs it.
+        const bool few = na <= size_t(cfg.leaf_rays) && nt <= kPrivateFewRaysTris;
+        for (int s = sn.state.load(std::memory_order_acquire); s != 2; s = sn.state.load(std::memory_order_acquire)) {
             int expected = 0;
-            if (sn.state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
+            if (s == 0 && sn.state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
+                if (few) {
+                    std::memcpy(priv, ids, nt * sizeof(uint32_t));
+                    sn.state.store(0, std::memory_order_release);
+                    st.partition_ticks += phase_clock() - c1;
+                    node_split(rays, na, priv, nt, nb, depth, phase_clock());
+                    return;
+                }
                 sn.k = uint32_t(split(ids, nt, nb, float(na) * top->ray_scale, depth, sn.L, sn.R, sn.axis));
                 sn.child = top->pool->alloc2();
                 sn.state.store(2, std::memory_order_release);
-            } else {
-                while (sn.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
+                break;
             }
+            std::this_thread::yield();  // another thread splits it (or copies its ids)
         }
         st.partition_ticks += phase_clock() - c1;  // includes waiting for another thread's split
         const size_t k = sn.k;
