@@ -180,6 +180,16 @@ def test_degenerate_triangles_are_never_hit():
     assert not np.any(area[hits["prim"][hit]] == 0), "a zero-area triangle was hit"
 
 
+def assert_kept_matches_fresh(kept, fresh, org, dirs, tfar, threads, what):
+    """A keep_top scene returns, bit for bit, what a fresh scene returns for the same batch."""
+    a = (harness.intersect(kept, org, dirs, tfar, threads=threads),
+         harness.occluded(kept, org, dirs, tfar, threads=threads))
+    b = (harness.intersect(fresh, org, dirs, tfar, threads=threads),
+         harness.occluded(fresh, org, dirs, tfar, threads=threads))
+    assert (a[0]["prim"] >= 0).any()
+    assert_identical(a, b, f"{what}: kept top vs fresh scene")
+
+
 @pytest.mark.parametrize("partition", ["adaptive", "median", "sah"])
 def test_kept_top_levels_give_identical_results(partition):
     """keep_top reuses the partition's top splits across calls (a frame's batches): every call
@@ -196,13 +206,8 @@ def test_kept_top_levels_give_identical_results(partition):
                (("camera", 70000, 1), ("bounce", 100000, 2), ("random", 800, 3), ("bounce", 66000, 4))]
     for i, (org, dirs, tfar) in enumerate(batches):
         threads = (1, 2, 0, 2)[i]
-        fresh = dacrt.Scene(v, t, partition=partition)
-        a = (harness.intersect(kept, org, dirs, tfar, threads=threads),
-             harness.occluded(kept, org, dirs, tfar, threads=threads))
-        b = (harness.intersect(fresh, org, dirs, tfar, threads=threads),
-             harness.occluded(fresh, org, dirs, tfar, threads=threads))
-        assert (a[0]["prim"] >= 0).any()
-        assert_identical(a, b, f"{partition} batch {i}: kept top vs fresh scene")
+        assert_kept_matches_fresh(kept, dacrt.Scene(v, t, partition=partition), org, dirs, tfar, threads,
+                                  f"{partition} batch {i}")
         if i == 1:                                   # a settings change resets what is kept
             kept.partition = "sah" if partition != "sah" else "median"
             partition = kept.partition
@@ -223,12 +228,6 @@ def test_kept_top_on_a_very_uneven_scene():
     depth = 0
     for i, (kind, n, threads) in enumerate((("camera", 70000, 2), ("bounce", 90000, 1), ("random", 5000, 2))):
         org, dirs, tfar = make_rays(kind, "inf", v, t, n, 10 + i)
-        fresh = dacrt.Scene(v, t)
-        a = (harness.intersect(kept, org, dirs, tfar, threads=threads),
-             harness.occluded(kept, org, dirs, tfar, threads=threads))
-        b = (harness.intersect(fresh, org, dirs, tfar, threads=threads),
-             harness.occluded(fresh, org, dirs, tfar, threads=threads))
-        assert (a[0]["prim"] >= 0).any()
-        assert_identical(a, b, f"batch {i}: kept top vs fresh scene")
+        assert_kept_matches_fresh(kept, dacrt.Scene(v, t), org, dirs, tfar, threads, f"batch {i}")
         depth = max(depth, kept.last_stats["max_depth"])
     assert depth > 2 * np.log2(m / 32)          # far deeper than a balanced tree
