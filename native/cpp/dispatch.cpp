@@ -4,7 +4,7 @@
 // handed out dynamically when chunk_rays asks for more), plus shared top levels (kernel.h
 // SharedTop) so the threads do not repeat the large partitioning steps. Allocations
 // of a call: the shared triangle id array, one id scratch per thread (4 bytes per triangle
-// each) and the shared node table (at most 16K small records); nothing per ray.
+// each) and the shared nodes (two per published split); nothing per ray.
 #include "dispatch.h"
 #include "parallel.h"
 
@@ -122,7 +122,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         // repeats the deeper partitioning and reaches brute-force leaves sooner), n/2 chunks 5%;
         // on 400K diffuse rays x 268K triangles, 2 threads, 4 chunks gave 4.5 Mrays/s and 2
         // chunks 5.7. So one chunk per thread. With a kept top (the frame's earlier batches
-        // split it down to ~32-triangle nodes) a chunk repeats almost nothing, so a smaller
+        // split it down to ~16-triangle nodes) a chunk repeats almost nothing, so a smaller
         // batch (shadow rays, deep bounces) is split too: on the dragon (100K triangles, 4 spp)
         // most batches have 1K-45K rays and ran on one thread.
         const size_t min_chunk = use_kept ? kMinKeptChunkRays : kMinChunkRays;

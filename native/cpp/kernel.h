@@ -22,10 +22,10 @@ struct NodeBounds {
 // repeat the top partitioning steps per ray batch; here the first thread to reach a top node
 // partitions the shared id array once and publishes the split, the others reuse it. Deeper
 // nodes are traced on a private copy of their triangle ids. A top node's ids are only read for
-// a leaf when the node cannot be split further, so no thread ever reads a range that another
-// is reordering.
+// a leaf when the node cannot be split further, or copied under the node's lock, so no thread
+// ever reads a range that another is reordering.
 struct SharedNode {
-    std::atomic<int> state{0};  // 0 untouched, 1 being partitioned, 2 split published
+    std::atomic<int> state{0};  // 0 unsplit, 1 locked (being split or its ids copied), 2 split published
     uint32_t k = 0;             // left child = ids[0, k)
     uint32_t child = 0;         // pool index of the left child (right: child + 1); 0 = none, trace privately
     int axis = 0;
@@ -39,7 +39,7 @@ struct SharedNode {
 class NodePool {
   public:
     static constexpr uint32_t kBlock = 4096, kMaxBlocks = 4096;  // at most 16M nodes
-    NodePool() { blocks_[0].reset(new SharedNode[kBlock]); used_ = 2; }  // 0: the root (1 unused)
+    NodePool() { blocks_[0].reset(new SharedNode[kBlock]); used_ = 2; }  // 1: the root (0: none)
     SharedNode& at(uint32_t i) { return blocks_[i / kBlock][i % kBlock]; }
     // Index of two fresh consecutive nodes, or 0 when the pool is full.
     uint32_t alloc2() {
@@ -61,7 +61,7 @@ class NodePool {
 
 struct SharedTop {
     uint32_t* ids = nullptr;
-    NodePool* pool = nullptr;     // root: index 0
+    NodePool* pool = nullptr;     // root: index 1
     int max_depth = 0;            // nodes at depth < max_depth are shared
     size_t min_tris = 0;          // smaller nodes are traced privately
     float ray_scale = 1.0f;       // total rays / chunk rays: the adaptive choice at shared nodes

@@ -146,9 +146,9 @@ struct Tracer {
         }
     }
 
-    // h: the node's pool index (the root is 0; 0 below the root: no shared node, trace privately).
+    // h: the node's pool index (0: no shared node, the pool was full; trace privately).
     void child(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h) {
-        if ((h != 0 || depth == 0) && depth < uint64_t(top->max_depth) && nt > top->min_tris) {
+        if (h != 0 && depth < uint64_t(top->max_depth) && nt > top->min_tris) {
             shared_node(rays, n, ids, nt, nb, depth, h);
         } else {  // leave the shared top: continue on a private copy of the ids
             std::memcpy(priv, ids, nt * sizeof(uint32_t));
@@ -167,7 +167,7 @@ void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& s
         root.lo[a] = ts.bounds.lo[a]; root.hi[a] = ts.bounds.hi[a];
         root.clo[a] = ts.centroid_bounds.lo[a]; root.chi[a] = ts.centroid_bounds.hi[a];
     }
-    tr.child(rays, n, job.top->ids, ts.valid_ids.size(), root, 0, 0);
+    tr.child(rays, n, job.top->ids, ts.valid_ids.size(), root, 0, 1);
     st.add(tr.st);
 }
 
