@@ -213,6 +213,25 @@ def test_kept_top_levels_give_identical_results(partition):
             partition = kept.partition
 
 
+def test_a_small_first_batch_sets_the_kept_top():
+    """A frame whose batches are all small (a 1-sample render of a big scene, a renderer's probe
+    rays) still keeps its splits: the first small batch sets the kept top and a later batch
+    reuses it instead of partitioning the whole scene again, with results identical to a fresh
+    scene's."""
+    v, t = scenes.random_soup(np.random.default_rng(5), 40000, spread=1.0, size=0.02)
+    kept = dacrt.Scene(v, t, keep_top=True)
+    probe = make_rays("camera", "inf", v, t, 2000, 21)
+    steps = []
+    for threads in (1, 2):
+        harness.intersect(kept, *probe, threads=threads)
+        steps.append(kept.last_stats["partition_steps"])
+    assert steps[0] > 100, "the first small batch partitions"
+    assert steps[1] * 10 < steps[0], f"the same batch again partitions almost nothing: {steps}"
+    assert_kept_matches_fresh(kept, dacrt.Scene(v, t), *probe, 2, "the probe")
+    bigger = make_rays("bounce", "inf", v, t, 20000, 22)
+    assert_kept_matches_fresh(kept, dacrt.Scene(v, t), *bigger, 2, "a later batch")
+
+
 def test_kept_top_on_a_very_uneven_scene():
     """A kept top follows the tree down to small nodes however deep it is: on geometry whose
     density grows geometrically towards a point (spatial-median splits then cut one triangle
