@@ -18,7 +18,9 @@ Documented diffuse approximation of everything else: a shader node of another ki
 diffuse surface with its constant 'Color' (or 'Base Color') input, 0.8 grey without one; a
 linked input that is not an Image Texture (or RGB/Value node) uses the socket's own value; the
 Principled BSDF keeps only its diffuse base (no specular layer, metal, coat, sheen,
-transmission, subsurface or alpha); Diffuse roughness (Oren-Nayar) is treated as Lambert.
+transmission, subsurface or alpha); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
+BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
+texture coordinates other than UV are read as the active render UV map.
 Each approximated material says why in `Material.approximated`; the export reports them in
 one message.
 """
@@ -337,6 +339,9 @@ class _MaterialBuilder:
                 closure = _Closure()    # Cycles: no surface shader renders black
             else:
                 closure = self._shader(out.inputs['Surface'], reasons, 0)
+            for socket in ('Volume', 'Displacement'):
+                if out.inputs.get(socket) is not None and _linked_node(out.inputs[socket]) is not None:
+                    reasons.append(f"{socket.lower()} ignored")
         base, texture, interp, ext = self._albedo(closure)
         return sd.Material(name=name, base_color=base,
                            emission=closure.emission.astype(np.float32), texture=texture,
@@ -369,6 +374,7 @@ class _MaterialBuilder:
             rough, _ = _constant_value(node.inputs['Roughness'])
             if rough > 1e-5:
                 reasons.append("Diffuse roughness (Oren-Nayar) as Lambert")
+            _note_normal_inputs(node, reasons)
             return self._color_closure(node.inputs['Color'], reasons)
         if t == 'BSDF_PRINCIPLED':
             return self._principled(node, reasons)
@@ -414,6 +420,7 @@ class _MaterialBuilder:
             a, ok = _constant_value(alpha)
             if a != 1.0 or not ok:
                 reasons.append("Principled alpha ignored")
+        _note_normal_inputs(node, reasons)
         c = self._color_closure(node.inputs['Base Color'], reasons)
         es = _input(node, 'Emission Strength')
         ec = _input(node, 'Emission Color', 'Emission')
@@ -443,10 +450,13 @@ class _MaterialBuilder:
 
     def _texture(self, node, reasons):
         img = node.image
-        vec = _linked_node(node.inputs['Vector'])
-        if vec is not None:
+        vec_link = _linked_link(node.inputs['Vector'])
+        if vec_link is not None:
+            vec = vec_link.from_node
             if vec.type == 'UVMAP' and vec.uv_map:
                 reasons.append(f"UV Map '{vec.uv_map}' read as the active render UV map")
+            elif vec.type == 'TEX_COORD' and vec_link.from_socket.name != 'UV':
+                reasons.append(f"{vec_link.from_socket.name} texture coordinates read as the UV map")
             elif vec.type not in ('UVMAP', 'TEX_COORD'):
                 reasons.append(f"texture coordinates from '{vec.bl_label}' read as the UV map")
         if node.projection != 'FLAT':
@@ -467,6 +477,13 @@ class _MaterialBuilder:
                 return None
             self._images[img.as_pointer()] = pixels
         return _Texture((img.as_pointer(), interp, ext), pixels, interp, ext)
+
+
+def _note_normal_inputs(node, reasons):
+    """A BSDF's linked Normal (bump or normal map) is ignored: shading normals come from the mesh."""
+    socket = node.inputs.get('Normal')
+    if socket is not None and _linked_node(socket) is not None:
+        reasons.append("Normal input (bump / normal map) ignored")
 
 
 def _srgb_to_linear(c):

@@ -37,7 +37,7 @@ from . import errorstats, plots, readme, report
 from .breakdown import split_wall
 from .progress import Progress
 from .renderjobs import Unavailable, run_jobs
-from .renderspec import BUILTIN, RenderSpec, reference_key, scene_spec
+from .renderspec import BUILTIN, MATERIAL_MODES, RenderSpec, reference_key, scene_spec
 from .scenes import OUT
 
 REF_DIR = OUT / "cache" / "reference"
@@ -62,6 +62,9 @@ def add_arguments(p) -> None:
                         "the reference's own noise)")
     p.add_argument("--bounces", type=int, default=None,
                    help="override every scene's bounce count")
+    p.add_argument("--materials", choices=MATERIAL_MODES, default="diffuse",
+                   help="a .blend's materials: 'diffuse' (default) makes them what DACRT renders "
+                        "exactly, for both engines (reference section 2.7); 'as-is' keeps them")
     p.add_argument("--engines", nargs="+", default=["cycles", "dacrt", "dacrt-adaptive"],
                    choices=["cycles", "dacrt", "dacrt-adaptive"],
                    help="series to render (default all; dacrt-adaptive only where the add-on "
@@ -84,7 +87,7 @@ def _check(args) -> list[RenderSpec]:
         raise ValueError("--bounces must be >= 0")
     names = list(BUILTIN) if args.scenes is None else args.scenes
     specs = [scene_spec(n, args.bounces) for n in names]
-    specs += [scene_spec(b, args.bounces) for b in args.blends]
+    specs += [scene_spec(b, args.bounces, args.materials) for b in args.blends]
     if not specs:
         raise ValueError("no scene to render (give built-in names with --scenes or .blend files)")
     seen = set()

@@ -7,8 +7,9 @@ Runs only inside a bpy process (renderworker.py). Built-in scenes:
   light and a dim world, 160x120, 3 bounces; without ../shared, a generated ~100K-triangle
   field of lumpy spheres (tests/bench/scenes.py) takes its place;
 - wave: a subdivided grid with a Wave modifier (animation benchmark), N x N quads.
-A .blend path is opened as it is, at its own resolution (and percentage); its bounces and pixel
-filter are read from its Cycles settings unless given.
+A .blend path is opened at its own resolution (and percentage); its bounces and pixel filter
+are read from its Cycles settings unless given, and its materials are made diffuse for both
+engines (fairmaterials.py) unless the spec says 'as-is'.
 
 Settings shared by both engines follow reference blender-cycles.md section 2.7 through the
 parity suite's own functions (tests/parity/rendering.py), so the two suites cannot drift apart.
@@ -24,6 +25,7 @@ import numpy as np
 
 from ..parity import rendering as fair
 from ..parity import scenes as parity_scenes
+from . import fairmaterials
 from . import scenes as bench_scenes
 from .renderspec import RenderSpec
 
@@ -137,6 +139,9 @@ def build(spec: RenderSpec):
                                 ('BOX', 'GAUSSIAN', 'BLACKMAN_HARRIS') else 'BLACKMAN_HARRIS')
             spec.filter_width = float(c.filter_width)
         fair.fair_scene_settings(scene)
+        if spec.materials == 'diffuse':
+            spec.extra["materials_made_diffuse"] = len(fairmaterials.make_diffuse())
+        spec.extra["approximated"] = fairmaterials.remaining_approximations()
         return scene
     if spec.grid:
         builder = lambda: build_wave(spec.grid)  # noqa: E731

@@ -28,6 +28,9 @@ class RenderSpec:
     filter_width: float = 1.5
     blend: str | None = None          # a .blend file instead of a built-in builder
     grid: int = 0                     # the animation benchmark's wave grid: quads per side
+    # a .blend's materials: 'diffuse' = made what DACRT renders exactly, for both engines
+    # (fairmaterials.py, reference section 2.7), or 'as-is' (Cycles renders them in full)
+    materials: str = 'diffuse'
     extra: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
@@ -54,23 +57,28 @@ def builtin_spec(name: str, resolution=None, bounces=None) -> RenderSpec:
     return RenderSpec(name=name, **kw)
 
 
-def blend_spec(path: str, bounces: int | None = None) -> RenderSpec:
-    """A .blend file as it is, at its own resolution; bounces and pixel filter from its Cycles
-    settings (read when the worker opens it) unless bounces is given."""
+MATERIAL_MODES = ('diffuse', 'as-is')
+
+
+def blend_spec(path: str, bounces: int | None = None, materials: str = 'diffuse') -> RenderSpec:
+    """A .blend file at its own resolution; bounces and pixel filter from its Cycles settings
+    (read when the worker opens it) unless bounces is given; materials: see RenderSpec."""
+    if materials not in MATERIAL_MODES:
+        raise ValueError(f"materials must be one of {', '.join(MATERIAL_MODES)}, got {materials!r}")
     if not path.endswith(".blend"):
         raise ValueError(f"{path}: scenes given by path must be .blend files")
     if not os.path.isfile(path):
         raise ValueError(f"no such .blend file: {path}")
     name = os.path.splitext(os.path.basename(path))[0]
     return RenderSpec(name=name, blend=os.path.abspath(path), bounces=bounces, filter_type=None,
-                      resolution=(0, 0))
+                      resolution=(0, 0), materials=materials)
 
 
-def scene_spec(arg: str, bounces: int | None = None) -> RenderSpec:
-    """A command-line scene: a built-in name or a .blend path."""
+def scene_spec(arg: str, bounces: int | None = None, materials: str = 'diffuse') -> RenderSpec:
+    """A command-line scene: a built-in name (diffuse already) or a .blend path."""
     if arg in BUILTIN:
         return builtin_spec(arg, bounces=bounces)
-    return blend_spec(arg, bounces)
+    return blend_spec(arg, bounces, materials)
 
 
 def _bpy_version() -> str:
@@ -85,7 +93,10 @@ def source_text(spec: RenderSpec) -> str:
     text: no Blender needed) or, for a file, its path, size and mtime."""
     if spec.blend:
         st = os.stat(spec.blend)
-        return f"blend:{spec.blend}:{st.st_size}:{int(st.st_mtime)}"
+        text = f"blend:{spec.blend}:{st.st_size}:{int(st.st_mtime)}"
+        if spec.materials == 'diffuse':     # the override decides what Cycles renders
+            text += "\n" + (REPO / "tests/bench/fairmaterials.py").read_text()
+        return text
     files = ["tests/parity/scenes.py", "tests/parity/rendering.py",
              "tests/bench/renderscenes.py", "tests/bench/renderworker.py"]
     text = "\n".join((REPO / f).read_text() for f in files)

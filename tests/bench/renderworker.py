@@ -97,6 +97,10 @@ def run(job: dict) -> None:
                       seed=int(item["seed"]), frame=item.get("frame"), seconds=wall,
                       frame_change_seconds=frame_s, scene_build_seconds=build_s,
                       resolution=list(spec.resolution), memory=mem.figures())
+        if spec.blend:      # what the fair material override changed, and what is still approximated
+            record["materials"] = dict(mode=spec.materials,
+                                       made_diffuse=spec.extra.get("materials_made_diffuse", 0),
+                                       approximated=spec.extra.get("approximated", {}))
         if instrument is not None:
             record["breakdown"] = instrument.take(wall)
         exr = os.path.join(outdir, f"render-{os.getpid()}.exr")

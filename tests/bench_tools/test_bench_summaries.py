@@ -54,3 +54,19 @@ def test_display_conversion_and_difference():
     d = compare.difference_image(lin, np.zeros_like(lin), gain=16)
     assert d[1, 0].tolist() == [255] * 3
     assert compare.channel_mean_ratio(lin * 2 + 0.0, lin)[0] == pytest.approx(2.0)
+
+
+def test_blend_materials_mode_is_checked_and_keys_the_cycles_reference(tmp_path):
+    from tests.bench import renderspec
+    blend = tmp_path / "shot.blend"
+    blend.write_bytes(b"BLENDER")
+    fair = renderspec.scene_spec(str(blend))
+    assert fair.materials == "diffuse"
+    as_is = renderspec.scene_spec(str(blend), materials="as-is")
+    with pytest.raises(ValueError, match="materials"):
+        renderspec.scene_spec(str(blend), materials="glossy")
+    # Cycles renders different materials in the two modes: their references must not be shared
+    assert renderspec.reference_key(fair, 64, [0]) != renderspec.reference_key(as_is, 64, [0])
+    assert renderspec.reference_key(fair, 64, [0]) == renderspec.reference_key(
+        renderspec.scene_spec(str(blend)), 64, [0])
+    assert renderspec.scene_spec("cornell").blend is None      # built-in scenes are diffuse already

@@ -1,0 +1,146 @@
+"""The benchmarks' fair material override (tests/bench/fairmaterials.py) against the add-on's
+export: after the override the export approximates nothing, and reads exactly the materials it
+read before (the override makes Cycles render what DACRT already rendered), so a comparison on
+a production .blend measures the engine rather than the diffuse approximation."""
+import math
+
+import bpy
+import numpy as np
+
+from addon import export
+from tests.bench import fairmaterials
+
+from . import scenes
+
+
+def _tree(name):
+    mat = bpy.data.materials.new(name)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    return mat, nt, nt.nodes.new('ShaderNodeOutputMaterial')
+
+
+def _non_diffuse_materials():
+    """Materials that each need one or more of the override's edits."""
+    mats = []
+    mat, nt, out = _tree("Glossy")                      # another BSDF: its colour as diffuse
+    g = nt.nodes.new('ShaderNodeBsdfGlossy')
+    g.inputs['Color'].default_value = (0.7, 0.6, 0.5, 1)
+    nt.links.new(g.outputs[0], out.inputs['Surface'])
+    mats.append(mat)
+
+    mat, nt, out = _tree("Shiny")                       # Principled layers, a bump map
+    p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    p.inputs['Base Color'].default_value = (0.5, 0.4, 0.3, 1)
+    p.inputs['Metallic'].default_value = 1.0
+    p.inputs['Coat Weight'].default_value = 0.3
+    p.inputs['Alpha'].default_value = 0.5
+    bump = nt.nodes.new('ShaderNodeBump')
+    noise = nt.nodes.new('ShaderNodeTexNoise')
+    nt.links.new(noise.outputs['Fac'], bump.inputs['Height'])
+    nt.links.new(bump.outputs['Normal'], p.inputs['Normal'])
+    value = nt.nodes.new('ShaderNodeValue')             # exact: kept by both
+    value.outputs[0].default_value = 0.0
+    nt.links.new(value.outputs[0], p.inputs['Transmission Weight'])
+    nt.links.new(p.outputs[0], out.inputs['Surface'])
+    mats.append(mat)
+
+    mat, nt, out = _tree("Driven")                      # node-driven inputs: their own values
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    d.inputs['Color'].default_value = (0.9, 0.1, 0.1, 1)
+    d.inputs['Roughness'].default_value = 0.5
+    nmap = nt.nodes.new('ShaderNodeNormalMap')
+    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
+    noise = nt.nodes.new('ShaderNodeTexNoise')
+    nt.links.new(noise.outputs['Color'], d.inputs['Color'])
+    e = nt.nodes.new('ShaderNodeEmission')
+    e.inputs['Strength'].default_value = 2.0
+    math_node = nt.nodes.new('ShaderNodeMath')
+    nt.links.new(math_node.outputs[0], e.inputs['Strength'])
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = 0.3
+    nt.links.new(noise.outputs['Fac'], mix.inputs['Fac'])
+    nt.links.new(d.outputs[0], mix.inputs[1])
+    nt.links.new(e.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    mats.append(mat)
+
+    mat, nt, out = _tree("Textured")                    # texture settings the export reads otherwise
+    img = bpy.data.images.new("Tiles", 2, 2)
+    img.pixels[:] = [0.5, 0.25, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.2, 0.4, 0.6, 0.5]
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.interpolation, tex.extension, tex.projection = img, 'Cubic', 'MIRROR', 'BOX'
+    coords = nt.nodes.new('ShaderNodeTexCoord')
+    nt.links.new(coords.outputs['Generated'], tex.inputs['Vector'])
+    p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    nt.links.new(tex.outputs['Alpha'], p.inputs['Base Color'])
+    nt.links.new(p.outputs[0], out.inputs['Surface'])
+    mats.append(mat)
+
+    mat, nt, out = _tree("Volumetric")                  # volume and displacement outputs
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    d.inputs['Color'].default_value = (0.3, 0.6, 0.3, 1)
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    nt.links.new(nt.nodes.new('ShaderNodeVolumeScatter').outputs[0], out.inputs['Volume'])
+    nt.links.new(nt.nodes.new('ShaderNodeDisplacement').outputs[0], out.inputs['Displacement'])
+    mats.append(mat)
+
+    mat, nt, out = _tree("Muted")                       # a muted shader: the default grey
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    d.inputs['Color'].default_value = (0.1, 0.2, 0.9, 1)
+    d.mute = True
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    mats.append(mat)
+    return mats
+
+
+def _table(data):
+    return {m.name: m for m in data.materials}
+
+
+def test_override_keeps_what_the_export_reads_and_leaves_nothing_approximated(scene, exported):
+    scenes.camera((0, -10, 0), (math.pi / 2, 0, 0))
+    mats = _non_diffuse_materials()
+    for i, mat in enumerate(mats):
+        scenes.plane(mat.name, location=(3 * i, 0, 0), materials=(mat,))
+    before = _table(exported())
+    assert {m.name for m in mats} <= {n for n, m in before.items() if m.approximated}
+    reasons = fairmaterials.remaining_approximations()
+    assert set(reasons) == {m.name for m in mats}
+    assert "Normal input" in reasons["Shiny"] and "Normal input" in reasons["Driven"]
+    assert "Generated texture coordinates" in reasons["Textured"]
+    assert "volume ignored" in reasons["Volumetric"] and "displacement ignored" in reasons["Volumetric"]
+
+    changes = fairmaterials.make_diffuse()
+    assert set(changes) == {m.name for m in mats}
+    assert fairmaterials.remaining_approximations() == {}
+    after = _table(exported())
+    for mat in mats:
+        a, b = before[mat.name], after[mat.name]
+        assert not b.approximated, (mat.name, b.approximated)
+        assert np.array_equal(a.base_color, b.base_color), mat.name
+        assert np.array_equal(a.emission, b.emission), mat.name
+        assert (a.texture is None) == (b.texture is None), mat.name
+        if a.texture is not None:
+            assert np.array_equal(a.texture, b.texture), mat.name
+            assert (a.texture_interpolation, a.texture_extension) == \
+                   (b.texture_interpolation, b.texture_extension), mat.name
+    assert fairmaterials.make_diffuse() == {}, "a second pass has nothing left to change"
+
+
+def test_override_sets_the_reference_fair_principled_inputs(scene):
+    mats = _non_diffuse_materials()
+    fairmaterials.make_diffuse(mats)
+    p = next(n for n in bpy.data.materials["Shiny"].node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+    for name in fairmaterials.ZEROED_PRINCIPLED:      # a Value node of 0 may stay linked
+        assert export._constant_value(p.inputs[name]) == (0.0, True), name
+    assert p.inputs['Transmission Weight'].is_linked and not p.inputs['Metallic'].is_linked
+    assert p.inputs['Alpha'].default_value == 1.0 and not p.inputs['Normal'].is_linked
+    glossy = bpy.data.materials["Glossy"].node_tree
+    out = glossy.get_output_node('ALL')
+    node = out.inputs['Surface'].links[0].from_node
+    assert node.type == 'BSDF_DIFFUSE' and node.inputs['Roughness'].default_value == 0.0
+    assert tuple(node.inputs['Color'].default_value)[:3] == tuple(np.float32((0.7, 0.6, 0.5)))
+    tex = next(n for n in bpy.data.materials["Textured"].node_tree.nodes if n.type == 'TEX_IMAGE')
+    assert (tex.projection, tex.interpolation, tex.extension) == ('FLAT', 'Linear', 'REPEAT')
+    assert not tex.inputs['Vector'].is_linked

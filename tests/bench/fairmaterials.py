@@ -1,0 +1,185 @@
+"""The material half of a fair DACRT-vs-Cycles comparison on a .blend file (reference
+blender-cycles.md section 2.7: "materials: Diffuse BSDF (roughness 0) or Principled with
+Specular IOR Level 0, Metallic/Coat/Sheen/Transmission/Subsurface 0, Diffuse Roughness 0").
+
+A production file (bmw27: glossy paint, glass, metal) renders in Cycles with closures a diffuse
+engine approximates, so comparing the two as they are measures the approximation, not the
+engine. `make_diffuse()` edits every material's node tree in place into what the add-on's
+export renders exactly, following the export's own rules (addon/export.py `_MaterialBuilder`):
+- Principled BSDF: metallic, transmission, coat, sheen, subsurface, specular layer, diffuse
+  roughness, thin film set to 0, alpha to 1, its Normal input unlinked;
+- Diffuse BSDF: roughness 0, normal unlinked;
+- any other shader node (Glossy, Glass, ...): replaced by a Diffuse BSDF of the colour the
+  export reads from it (its constant 'Color' / 'Base Color', 0.8 grey without one);
+- a linked colour or factor the export reads as the socket's own value (not an Image Texture,
+  RGB or Value node): unlinked, so Cycles uses that value too; Image Textures are kept, with
+  the coordinates, projection, interpolation and extension the export uses;
+- the output's Volume and Displacement inputs unlinked; muted shader nodes become the
+  default grey Diffuse BSDF.
+Textures, emission, Add and Mix Shader stay as they are: they are what the comparison tests.
+Runs only inside a bpy process (the benchmark's render worker).
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from addon import export
+
+ZEROED_PRINCIPLED = ('Metallic', 'Transmission Weight', 'Coat Weight', 'Sheen Weight',
+                     'Subsurface Weight', 'Specular IOR Level', 'Diffuse Roughness',
+                     'Thin Film Thickness')
+
+
+def make_diffuse(materials=None) -> dict[str, list[str]]:
+    """Edit materials (default: all of bpy.data.materials) in place; returns, per material
+    name, what was changed (materials already diffuse are not listed)."""
+    changes = {}
+    for mat in (bpy.data.materials if materials is None else materials):
+        done = _Editor(mat).run()
+        if done:
+            changes[mat.name] = done
+    return changes
+
+
+def remaining_approximations(materials=None) -> dict[str, str]:
+    """What the add-on's export would still approximate, per material name (empty after
+    make_diffuse, unless two different images are mixed in one material)."""
+    builder = export._MaterialBuilder()
+    out = {}
+    for mat in (bpy.data.materials if materials is None else materials):
+        m = builder.materials[builder.index(mat)]
+        if m.approximated:
+            out[mat.name] = m.approximated
+    return out
+
+
+class _Editor:
+    def __init__(self, mat):
+        self.mat, self.done = mat, []
+
+    def run(self) -> list[str]:
+        tree = self.mat.node_tree
+        if tree is None or (bpy.app.version < (5, 0, 0) and not self.mat.use_nodes):
+            return []
+        self.tree = tree
+        out = export._output_node(tree)
+        if out is None:
+            return []
+        for name in ('Volume', 'Displacement'):
+            sock = out.inputs.get(name)
+            if sock is not None and sock.is_linked:
+                self._unlink(sock, f"{name.lower()} removed")
+        self._shader(out.inputs['Surface'], 0)
+        return self.done
+
+    # --- edits ----------------------------------------------------------------------------
+
+    def _unlink(self, socket, why):
+        for link in list(socket.links):
+            self.tree.links.remove(link)
+        self.done.append(why)
+
+    def _set(self, socket, value, why):
+        """socket unlinked and set to value, when it is not already exactly that."""
+        current, exact = export._constant_value(socket)
+        if exact and current == value:
+            return
+        if socket.is_linked:
+            for link in list(socket.links):
+                self.tree.links.remove(link)
+        socket.default_value = value
+        self.done.append(why)
+
+    def _replace(self, socket, node, color, why):
+        """A Diffuse BSDF of `color` in place of `node`, feeding `socket`."""
+        diffuse = self.tree.nodes.new('ShaderNodeBsdfDiffuse')
+        diffuse.location = (node.location.x, node.location.y - 200) if node else (0, 0)
+        diffuse.inputs['Color'].default_value = (*color, 1.0)
+        diffuse.inputs['Roughness'].default_value = 0.0
+        for link in list(socket.links):
+            self.tree.links.remove(link)
+        self.tree.links.new(diffuse.outputs['BSDF'], socket)
+        self.done.append(why)
+
+    # --- the shader graph, walked as the export walks it ----------------------------------
+
+    def _shader(self, socket, depth):
+        node = export._linked_node(socket)
+        if node is None or depth > 32:
+            return
+        if node.mute:
+            self._replace(socket, node, export.DEFAULT_ALBEDO, f"muted '{node.name}' as grey diffuse")
+            return
+        t = node.type
+        if t == 'BSDF_DIFFUSE':
+            self._set(node.inputs['Roughness'], 0.0, "Diffuse roughness 0")
+            self._normals(node)
+            self._color(node.inputs['Color'])
+        elif t == 'BSDF_PRINCIPLED':
+            for name in ZEROED_PRINCIPLED:
+                sock = node.inputs.get(name)
+                if sock is not None:
+                    self._set(sock, 0.0, f"Principled {name} 0")
+            alpha = node.inputs.get('Alpha')
+            if alpha is not None:
+                self._set(alpha, 1.0, "Principled Alpha 1")
+            self._normals(node)
+            self._color(node.inputs['Base Color'])
+            self._own_value(export._input(node, 'Emission Color', 'Emission'))
+            self._own_value(export._input(node, 'Emission Strength'))
+        elif t == 'EMISSION':
+            self._own_value(node.inputs['Color'])
+            self._own_value(node.inputs['Strength'])
+        elif t == 'ADD_SHADER':
+            self._shader(node.inputs[0], depth + 1)
+            self._shader(node.inputs[1], depth + 1)
+        elif t == 'MIX_SHADER':
+            self._own_value(node.inputs['Fac'])
+            self._shader(node.inputs[1], depth + 1)
+            self._shader(node.inputs[2], depth + 1)
+        else:
+            sock = export._input(node, 'Color', 'Base Color')
+            color = export.DEFAULT_ALBEDO
+            if sock is not None and sock.type == 'RGBA':
+                color, _ = export._constant_color(sock)
+            self._replace(socket, node, tuple(color), f"{node.bl_label} as diffuse")
+
+    def _normals(self, node):
+        sock = node.inputs.get('Normal')
+        if sock is not None and export._linked_node(sock) is not None:
+            self._unlink(sock, f"{node.bl_label} Normal input removed")
+
+    def _own_value(self, socket):
+        """Unlink an input the export reads as the socket's own value."""
+        if socket is None:
+            return
+        link = export._linked_link(socket)
+        if link is not None and link.from_node.type not in ('RGB', 'VALUE'):
+            self._unlink(socket, f"'{socket.name}' from '{link.from_node.bl_label}' as its own value")
+
+    def _color(self, socket):
+        link = export._linked_link(socket)
+        if link is None or link.from_node.type != 'TEX_IMAGE':
+            self._own_value(socket)
+            return
+        node = link.from_node
+        if link.from_socket.name != 'Color':
+            self.tree.links.remove(link)
+            self.tree.links.new(node.outputs['Color'], socket)
+            self.done.append("image alpha as colour, read as its colour")
+        vec_link = export._linked_link(node.inputs['Vector'])
+        vec = vec_link.from_node if vec_link is not None else None
+        if vec is not None and (vec.type not in ('UVMAP', 'TEX_COORD') or
+                                (vec.type == 'UVMAP' and vec.uv_map) or
+                                (vec.type == 'TEX_COORD' and vec_link.from_socket.name != 'UV')):
+            self._unlink(node.inputs['Vector'], "texture coordinates: the active render UV map")
+        if node.projection != 'FLAT':
+            node.projection = 'FLAT'
+            self.done.append("image projection flat")
+        if node.interpolation in ('Cubic', 'Smart'):
+            node.interpolation = 'Linear'
+            self.done.append("image interpolation linear")
+        if node.extension not in ('REPEAT', 'EXTEND', 'CLIP'):
+            node.extension = 'REPEAT'
+            self.done.append("image extension repeat")
