@@ -51,6 +51,12 @@ from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 
 F32 = np.float32
 
+# Ray kinds share one tracer scene with visibility masks when each sees at least this share of
+# the triangles any kind needs (bmw27: 2 of 1.7M triangles camera-invisible built and
+# partitioned the scene twice); below it, a kind traces its own subset so the others' triangles
+# cost it no filtering.
+_SHARED_SCENE_FRACTION = 0.9
+
 # Random dimension pairs: 0 = pixel filter; then per vertex k: light pick + roulette, light
 # position, BSDF direction (Cycles keeps the same split: PRNG_FILTER, PRNG_LIGHT, PRNG_SURFACE_BSDF...).
 _DIM_FILTER = 0
@@ -423,7 +429,8 @@ class Integrator:
         rx = (x0 + (x1 - x0) * (g[None, :] + (rng.random((probes, probes)) - 0.5) / probes)).ravel()
         ry = (y0 + (y1 - y0) * (g[:, None] + (rng.random((probes, probes)) - 0.5) / probes)).ravel()
         O, D, tmax, rays = self.camera.rays(rx.astype(F32), ry.astype(F32), records=True)
-        hits = self._global_prims('camera', self._scenes['camera'].intersect(rays, threads=self.threads))
+        hits = self._global_prims('camera', self._scenes['camera'].intersect(
+            rays, threads=self.threads, visible=self._visible['camera']))
         idx = np.flatnonzero(hits['prim'] >= 0)
         if not len(idx):
             return
@@ -432,7 +439,9 @@ class Integrator:
         self._selection_table()
 
     def _build_scenes(self):
-        """One tracer scene per distinct visibility subset that some ray kind needs."""
+        """The tracer scenes the ray kinds need. Kinds that see nearly the same triangles share
+        one scene with per-triangle visibility masks (each call passes its kind's bit); kinds
+        whose subsets differ more get one scene per distinct subset."""
         vis = self.tri.visibility
         self._bounce_rays = self.max_bounces > 0 or self.lights.seen_by_bsdf or not SKIP_WORK
         wanted = {'camera': VIS_CAMERA}
@@ -440,35 +449,47 @@ class Integrator:
             wanted['bounce'] = VIS_DIFFUSE
         if self.lights:
             wanted['shadow'] = VIS_SHADOW
-        self._scenes, self._maps, self._local = {}, {}, {}
+        self._scenes, self._maps, self._local, self._visible = {}, {}, {}, {}
+        masks = {kind: (vis & bit) != 0 for kind, bit in wanted.items()}
+        needed = np.logical_or.reduce(list(masks.values()))
+        counts = [int(np.count_nonzero(m)) for m in masks.values()]
+        shared = (len({m.tobytes() for m in masks.values()}) > 1 and
+                  min(counts) >= _SHARED_SCENE_FRACTION * np.count_nonzero(needed))
         built = {}
-        needed = np.zeros(len(vis), bool)
         for kind, bit in wanted.items():
-            mask = (vis & bit) != 0
-            needed |= mask
+            mask = needed if shared else masks[kind]
             key = mask.tobytes()
             if key not in built:
-                everything = bool(mask.all())
-                sub = local = None
-                if not everything:
-                    sub = np.flatnonzero(mask).astype(np.int32)
-                    # global triangle -> this scene's index (-1: not in it), for skip
-                    local = np.full(len(self.tri), -1, np.int32)
-                    local[sub] = np.arange(len(sub), dtype=np.int32)
-                tris = self.tri.indices if everything else self.tri.indices[sub]
-                built[key] = (dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition, keep_top=True),
-                              sub, local)
+                built[key] = self._tracer_scene(mask, vis if shared else None)
             self._scenes[kind], self._maps[kind], self._local[kind] = built[key]
+            self._visible[kind] = bit if shared else None
         self._num_scenes = len(built)
         # triangles only rays that are never cast could meet (shadow-only ones without lights,
         # diffuse-only ones without bounces) are in no tracer scene
         self._tris_unreachable = int(np.count_nonzero(~needed & (vis != 0)))
+
+    def _tracer_scene(self, mask, vis):
+        """(Scene of the triangles in mask, their global indices or None for all, global ->
+        local index map or None); vis: per-triangle visibility bits to trace them by, or None."""
+        everything = bool(mask.all())
+        sub = local = None
+        if not everything:
+            sub = np.flatnonzero(mask).astype(np.int32)
+            # global triangle -> this scene's index (-1: not in it), for skip
+            local = np.full(len(self.tri), -1, np.int32)
+            local[sub] = np.arange(len(sub), dtype=np.int32)
+        tris = self.tri.indices if everything else self.tri.indices[sub]
+        masks = None if vis is None else np.ascontiguousarray(vis if everything else vis[sub], np.uint8)
+        scene = dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition, keep_top=True,
+                            masks=masks)
+        return scene, sub, local
 
     def close(self):
         """Drop the tracer scenes (also done when passes() ends or is closed)."""
         self._scenes = {}
         self._maps = {}
         self._local = {}
+        self._visible = {}
 
     # --- public ---------------------------------------------------------------------------------
 
@@ -620,7 +641,7 @@ class Integrator:
             rays = self._ray_array(O, D, tfar)
         skip = self._skip(kind, skip)
         t0 = time.perf_counter()
-        hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip)
+        hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip, visible=self._visible[kind])
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['camera' if kind == 'camera' else 'bounce'] += O.shape[1]
@@ -645,7 +666,7 @@ class Integrator:
     def _occluded_rays(self, rays, skip=None):
         skip = self._skip('shadow', skip)
         t0 = time.perf_counter()
-        occ = self._scenes['shadow'].occluded(rays, threads=self.threads, skip=skip)
+        occ = self._scenes['shadow'].occluded(rays, threads=self.threads, skip=skip, visible=self._visible['shadow'])
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes['shadow'].last_stats)
         self._rays['shadow'] += len(rays)

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "dispatch.h"
 #include "parallel.h"
@@ -25,8 +26,14 @@ namespace {
 class NativeScene {
 public:
     NativeScene(py::array_t<float, py::array::c_style> vertices, py::array_t<uint32_t, py::array::c_style> triangles,
-                bool keep_top) {
+                bool keep_top, py::object masks) {
         if (keep_top) top_ = std::make_unique<TopCache>();
+        if (!masks.is_none()) {
+            py::array_t<uint8_t, py::array::c_style> m = masks.cast<py::array_t<uint8_t, py::array::c_style>>();
+            if (m.ndim() != 1 || triangles.ndim() != 2 || m.shape(0) != triangles.shape(0))
+                throw py::value_error("masks must have one entry per triangle");
+            mask_.assign(m.data(), m.data() + m.shape(0));
+        }
         if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
         if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw py::value_error("triangles must have shape (M, 3)");
         const size_t V = size_t(vertices.shape(0)), M = size_t(triangles.shape(0));
@@ -63,30 +70,42 @@ public:
     }
 
     py::dict intersect(py::array rays, py::array hits, py::object skip, int threads, const std::string& isa,
-                       int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays) {
+                       int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays, int visible) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(hits, n, sizeof(Hit), "hits");
         Hit* h = static_cast<Hit*>(hits.mutable_data());
         TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Closest, h, nullptr,
                      skip_ptr(skip, n), 0.0f, nullptr};
+        set_visible(job, visible);
         return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, h, f, oam, threads); });
     }
 
     py::dict occluded(py::array rays, py::array out, py::object skip, int threads, const std::string& isa,
-                      int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays) {
+                      int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays, int visible) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(out, n, 1, "occluded");
         uint8_t* o = static_cast<uint8_t*>(out.mutable_data());
         TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Any, nullptr, o,
                      skip_ptr(skip, n), 0.0f, nullptr};
+        set_visible(job, visible);
         return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, o, f, oam, threads); });
     }
 
 private:
     std::unique_ptr<TriangleSet> ts_;
     std::unique_ptr<TopCache> top_;   // null: the partition's top is rebuilt by every call
+    std::vector<uint8_t> mask_;       // per triangle (empty: every triangle is seen by every call)
+
+    // visible: bits a triangle's mask must share to be traced by this call (0: all triangles).
+    void set_visible(TraceJob& job, int visible) const {
+        if (visible < 0 || visible > 255) throw py::value_error("visible must be 0 (all) or 1..255");
+        if (visible != 0 && !mask_.empty()) {
+            job.mask = mask_.data();
+            job.visible = uint8_t(visible);
+        }
+    }
 
     static Config config(int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays) {
         if (partition < 0 || partition > 2) throw py::value_error("partition must be 0 (adaptive), 1 (median) or 2 (sah)");
@@ -192,8 +211,8 @@ PYBIND11_MODULE(_core, m) {
     m.attr("ROBUST") = true;
 #endif
     py::class_<NativeScene>(m, "NativeScene")
-        .def(py::init<py::array_t<float, py::array::c_style>, py::array_t<uint32_t, py::array::c_style>, bool>(),
-             py::arg("vertices"), py::arg("triangles"), py::arg("keep_top"))
+        .def(py::init<py::array_t<float, py::array::c_style>, py::array_t<uint32_t, py::array::c_style>, bool, py::object>(),
+             py::arg("vertices"), py::arg("triangles"), py::arg("keep_top"), py::arg("masks"))
         .def_property_readonly("num_triangles", &NativeScene::num_triangles)
         .def_property_readonly("num_degenerate", &NativeScene::num_degenerate)
         .def_property_readonly("bounds", &NativeScene::bounds)

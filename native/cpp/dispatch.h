@@ -27,10 +27,10 @@ struct TraceResult {
 // the splits of every node a batch reached, down to ~16 triangles), kept between the trace
 // calls of one scene that use the same partition settings: the batches of one frame. Those
 // splits depend on the triangles only (median; SAH's ray-count test in adaptive mode is made
-// by the first batch), so later batches skip them; they are most of the partitioning work when a batch has fewer
-// rays than the scene has triangles (an animation frame at low samples). Reset when the
-// settings change; a batch of fewer than 64K rays never sets it (it uses one a bigger batch
-// set). The scene owns it, so it lives exactly as long as the scene.
+// by the batch that splits the node), so later batches skip them; they are most of the
+// partitioning work when a batch has fewer rays than the scene has triangles (an animation
+// frame at low samples). Reset when the settings change; any batch adds to it. The scene owns
+// it, so it lives exactly as long as the scene.
 struct TopCache {
     std::shared_mutex lock;  // calls share it; a reset takes it alone
     bool ready = false;

@@ -76,6 +76,10 @@ struct TraceJob {
     const int32_t* skip;  // optional, by ray id: triangle the ray must ignore (-1: none)
     float origin_abs_max; // largest |origin coordinate| over the batch (box padding)
     SharedTop* top;       // shared top levels of this call
+    // optional, by triangle: visibility bits; a triangle is traced when (mask & visible) != 0,
+    // so one scene serves ray kinds that see slightly different triangle subsets
+    const uint8_t* mask = nullptr;
+    uint8_t visible = 0xFF;
 };
 
 // Trace rays[0, n) against all valid triangles; ids: the thread's scratch of ts.valid_ids.size().

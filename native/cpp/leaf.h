@@ -118,19 +118,23 @@ __attribute__((noinline, cold)) uint32_t exact_lanes(const vfloat<W> P[3][2], co
 
 template <int W, Query Q>
 void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const Box* boxes,
-                    const CompactTri* tris, Hit* hits, uint8_t* occluded, const int32_t* skip, Stats& st) {
+                    const CompactTri* tris, Hit* hits, uint8_t* occluded, const int32_t* skip,
+                    const uint8_t* mask, uint8_t visible, Stats& st) {
     constexpr size_t kChunk = 32;
     alignas(64) LeafTri lt[kChunk];
     st.leaves += 1;
-    st.tri_tests += uint64_t(na) * nt;
     const vfloat<W> zero = splat<W>(0.0f);
     for (size_t c0 = 0; c0 < nt; c0 += kChunk) {
-        const size_t cn = std::min(kChunk, nt - c0);
-        for (size_t j = 0; j < cn; ++j) {
+        const size_t cl = std::min(kChunk, nt - c0);
+        size_t cn = 0;
+        for (size_t j = 0; j < cl; ++j) {
             const uint32_t p = ids[c0 + j];
-            reconstruct(boxes[p], tris[p], lt[j].v);
-            lt[j].prim = int32_t(p);
+            if (mask && !(mask[p] & visible)) continue;  // not seen by this call's rays
+            reconstruct(boxes[p], tris[p], lt[cn].v);
+            lt[cn++].prim = int32_t(p);
         }
+        if (cn == 0) continue;
+        st.tri_tests += uint64_t(na) * cn;
         for (size_t i = 0; i < na; i += W) {
             RayGroup<W> g;
             load_group<W>(rays, i, na, skip, g);

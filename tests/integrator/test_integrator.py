@@ -217,21 +217,27 @@ def _directions(ng, rng, min_elevation=0.0):
     return (d / np.linalg.norm(d, axis=0)).astype(np.float32)
 
 
+@pytest.mark.parametrize('scenes', ['separate', 'shared'])
 @pytest.mark.parametrize('name', list(SURFACES))
-def test_rays_leaving_a_surface_never_rehit_it(name):
+def test_rays_leaving_a_surface_never_rehit_it(name, scenes, monkeypatch):
     """Bounce and shadow rays leave from the render loop's offset origins and skip the triangle
     they leave: over huge, tiny, distant, subdivided and folded surfaces, at points hugging the
     edges and in grazing directions, none may hit the surface (its own triangle or a neighbour
     across a shared edge). A camera-only triangle listed first shifts the bounce and shadow
-    scenes' numbering, so skip must be translated. The step stays tiny (8 ULPs of the triangle's
-    largest coordinate; 256 ULPs biased lights near a huge plane)."""
+    scenes' numbering (separate scenes), or is masked out of one shared scene, so skip must be
+    translated. The step stays tiny (8 ULPs of the triangle's largest coordinate; 256 ULPs
+    biased lights near a huge plane)."""
+    monkeypatch.setattr(integrator_module, '_SHARED_SCENE_FRACTION', 2.0 if scenes == 'separate' else 0.0)
     (v, t), rot, shift, tris = SURFACES[name]
     v = (v if rot is None else v @ _rotation(rot).T) + np.asarray(shift)
     decoy = (np.array([(0, 0, 9e3), (1, 0, 9e3), (0, 1, 9e3)], float), np.array([(0, 1, 2)]))
     scene = plane_scene([light('POINT', 1.0, translation(z=5.0))], samples=1)
     scene.geometry = geometry([(*decoy, 1, sd.VIS_CAMERA), (v, t, 1, ALL_VIS)])
     integ = Integrator(scene)
-    assert integ._local['bounce'] is not None and integ._local['shadow'] is not None
+    if scenes == 'separate':
+        assert integ._local['bounce'] is not None and integ._local['shadow'] is not None
+    else:
+        assert integ.stats['tracer_scenes'] == 1 and integ._visible['bounce'] == sd.VIS_DIFFUSE
     rng = np.random.default_rng(0)
     n = 60000
     prim, P, P_off, ng = _surface_points(integ, np.arange(1, len(t) + 1) if tris is None else np.array(tris) + 1,
@@ -318,7 +324,11 @@ def roofed(roof_bits, samples=8, **kw):
     return scene
 
 
-def test_visibility_bits():
+@pytest.mark.parametrize('scenes', ['separate', 'shared'])
+def test_visibility_bits(scenes, monkeypatch):
+    """Each ray kind sees the triangles its visibility bit allows, whether it traces its own
+    subset (a scene per subset) or one scene shared with per-triangle masks."""
+    monkeypatch.setattr(integrator_module, '_SHARED_SCENE_FRACTION', 2.0 if scenes == 'separate' else 0.0)
     lit = 5.06606                                              # the point light alone
     # the roof (emission 0.25, 10 x 10 m, 1 m up) seen from the plane: E = L * 4 * corner(5, 5, 1)
     A = 5.0 / np.hypot(5.0, 1.0)
@@ -335,8 +345,20 @@ def test_visibility_bits():
     img = render(roofed(sd.VIS_DIFFUSE, 4096, max_bounces=0)).film.combined()[..., 0]
     assert img.mean() == pytest.approx(lit + glow, rel=0.01)
     # only shadow rays see the roof: it blocks the light and is no light itself
-    img = render(roofed(sd.VIS_SHADOW, max_bounces=0)).film.combined()[..., 0]
-    assert img.max() == 0.0
+    integ = render(roofed(sd.VIS_SHADOW, max_bounces=0))
+    assert integ.film.combined()[..., 0].max() == 0.0
+    assert integ.stats['tracer_scenes'] == (2 if scenes == 'separate' else 1)
+
+
+def test_shared_scene_renders_what_separate_scenes_render(monkeypatch):
+    """Masks trace exactly the subsets separate scenes hold: the same image, bit for bit."""
+    images = []
+    for fraction in (2.0, 0.0):
+        monkeypatch.setattr(integrator_module, '_SHARED_SCENE_FRACTION', fraction)
+        integ = render(roofed(sd.VIS_DIFFUSE | sd.VIS_SHADOW, 16, max_bounces=2))
+        images.append(integ.film.combined())
+        assert integ.stats['tracer_scenes'] == (2 if fraction > 1 else 1)
+    assert np.array_equal(images[0], images[1])
 
 
 def test_holdout_and_transparent_film():

@@ -29,11 +29,12 @@ def _by_id(before, after, n, what):
     return b, a
 
 
-def intersect(scene, org, dirs, tfar, threads=0, shuffle_seed=0):
-    """scene.intersect on packed rays; returns the hits after checking the rays' contract."""
+def intersect(scene, org, dirs, tfar, threads=0, shuffle_seed=0, **kw):
+    """scene.intersect on packed rays (kw: skip, visible); returns the hits after checking the
+    rays' contract."""
     rays = packed(org, dirs, tfar, shuffle_seed)
     before = rays.copy()
-    hits = scene.intersect(rays, threads=threads)
+    hits = scene.intersect(rays, threads=threads, **kw)
     n = len(before)
     assert isinstance(hits, np.ndarray) and hits.dtype == HIT_DTYPE and hits.shape == (n,), \
         f"intersect returned {type(hits)} {getattr(hits, 'dtype', None)} " \
@@ -47,11 +48,12 @@ def intersect(scene, org, dirs, tfar, threads=0, shuffle_seed=0):
     return hits
 
 
-def occluded(scene, org, dirs, tfar, threads=0, shuffle_seed=0):
-    """scene.occluded on packed rays; returns the mask after checking the rays' contract."""
+def occluded(scene, org, dirs, tfar, threads=0, shuffle_seed=0, **kw):
+    """scene.occluded on packed rays (kw: skip, visible); returns the mask after checking the
+    rays' contract."""
     rays = packed(org, dirs, tfar, shuffle_seed)
     before = rays.copy()
-    mask = scene.occluded(rays, threads=threads)
+    mask = scene.occluded(rays, threads=threads, **kw)
     n = len(before)
     assert isinstance(mask, np.ndarray) and mask.dtype == np.bool_ and mask.shape == (n,), \
         f"occluded returned {type(mask)} {getattr(mask, 'dtype', None)} " \

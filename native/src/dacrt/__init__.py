@@ -121,18 +121,31 @@ class Scene:
     vertices: (V,3) float array; triangles: (M,3) integer vertex indices. Both are copied into
     the tracer's own layout; degenerate (zero-area) triangles are accepted and never hit.
 
-    keep_top: keep the top levels of the triangle partition (the splits of nodes down to ~32
-    triangles, which depend on the triangles, not on the rays) from one call to the next while
-    the partition settings stay the same, so the later batches of a frame skip them (a batch of
-    fewer than 64K rays uses them but never sets them). Results are identical either way; a renderer
-    makes one Scene per frame, so nothing outlives the frame.
+    keep_top: keep the splits of the triangle partition (of every node of more than ~16
+    triangles that some batch reaches; they depend on the triangles, not on the rays) from one
+    call to the next while the partition settings stay the same, so the later batches of a frame
+    skip them; any batch, however small, adds to them. Results are identical either way; a
+    renderer makes one Scene per frame, so nothing outlives the frame.
+
+    masks (optional): one uint8 of visibility bits per triangle. A call given `visible` traces
+    only the triangles whose mask shares a bit with it, as if the others were not in the scene;
+    so one scene (and one kept top) serves ray kinds that see slightly different subsets, e.g.
+    camera rays that must not see a light-emitting card that bounce rays do see.
     """
 
     def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 16,
-                 sah_ratio: float = 128.0, chunk_rays: int = 0, keep_top: bool = False, leaf_rays: int = 32):
+                 sah_ratio: float = 128.0, chunk_rays: int = 0, keep_top: bool = False, leaf_rays: int = 32,
+                 masks=None):
         v = _as_vertices(vertices)
         t = _as_triangles(triangles, len(v))
-        self._core = _core.NativeScene(v, t, bool(keep_top))
+        if masks is not None:
+            m = np.asarray(masks)
+            if m.shape != (len(t),) or m.dtype != np.uint8:
+                raise ValueError(f"masks must be a uint8 array of one entry per triangle (shape ({len(t)},)); "
+                                 f"got shape {m.shape} dtype {m.dtype}")
+            masks = np.ascontiguousarray(m)
+        self._has_masks = masks is not None
+        self._core = _core.NativeScene(v, t, bool(keep_top), masks)
         self.partition = partition
         self.leaf_size = leaf_size
         self.leaf_rays = leaf_rays
@@ -218,31 +231,43 @@ class Scene:
                              f"got shape {s.shape} dtype {s.dtype}")
         return np.ascontiguousarray(s, dtype=np.int32)
 
-    def intersect(self, rays: np.ndarray, threads: int = 0, skip=None) -> np.ndarray:
+    def _visible(self, visible) -> int:
+        if visible is None:
+            return 0
+        if isinstance(visible, bool) or not isinstance(visible, (int, np.integer)) or not 1 <= visible <= 255:
+            raise ValueError(f"visible must be an integer in 1..255 (bits of the triangle masks); got {visible!r}")
+        if not self._has_masks:
+            raise ValueError("visible was given but this Scene was made without masks")
+        return int(visible)
+
+    def intersect(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None) -> np.ndarray:
         """Closest hit with t in (0, tfar] for every ray; returns HIT_DTYPE indexed by ray id.
 
         rays is reordered in place and each hit ray's tfar becomes its hit distance. Ties at
         equal t go to the lowest triangle index. skip (optional, by ray id): a triangle index
         the ray ignores, e.g. the one it leaves (-1: none), as Cycles skips the origin primitive.
+        visible (optional): only triangles whose mask has one of these bits (see Scene).
         """
         _check_rays(rays)
         args = self._args(threads)
         skip = self._skip(skip, len(rays))
+        vis = self._visible(visible)
         hits = np.empty(len(rays), HIT_DTYPE)
-        self.last_stats = self._core.intersect(rays, hits, skip, *args)
+        self.last_stats = self._core.intersect(rays, hits, skip, *args, vis)
         return hits
 
-    def occluded(self, rays: np.ndarray, threads: int = 0, skip=None) -> np.ndarray:
+    def occluded(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None) -> np.ndarray:
         """True for every ray (by id) that hits anything with t in (0, tfar).
 
         rays is reordered in place; the tfar of occluded rays is overwritten (negative).
-        skip: as for intersect().
+        skip, visible: as for intersect().
         """
         _check_rays(rays)
         args = self._args(threads)
         skip = self._skip(skip, len(rays))
+        vis = self._visible(visible)
         out = np.empty(len(rays), np.uint8)
-        self.last_stats = self._core.occluded(rays, out, skip, *args)
+        self.last_stats = self._core.occluded(rays, out, skip, *args, vis)
         return out.view(np.bool_)
 
 from . import shading  # noqa: E402  (per-ray helper kernels; needs the names above)
