@@ -100,7 +100,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
                 }
                 kept.unlock();
                 std::unique_lock<std::shared_mutex> reset(cache->lock);
-                if (!matches()) {  // first big batch, or new settings: start over
+                if (!matches()) {  // first batch, or new settings: start over
                     cache->ids = ts.valid_ids;
                     cache->pool.reset(new NodePool());
                     cache->partition = c.partition;
