@@ -37,6 +37,16 @@ UNSUPPORTED_TYPES = {'CURVES': "hair curves", 'POINTCLOUD': "point cloud", 'VOLU
 DEFAULT_ALBEDO = (0.8, 0.8, 0.8)          # Cycles' default surface: Diffuse BSDF 0.8 grey
 MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
 CHECK_EVERY = 64                          # instances between cancel checks
+# What the material export reads otherwise than Cycles renders it (each reported when used):
+# the Principled inputs whose layers it drops, the output sockets it ignores, the image
+# extensions it implements and the interpolations it reads as Linear.
+PRINCIPLED_IGNORED = (('Metallic', "metallic"), ('Transmission Weight', "transmission"),
+                      ('Coat Weight', "coat"), ('Sheen Weight', "sheen"),
+                      ('Subsurface Weight', "subsurface"), ('Specular IOR Level', "specular layer"),
+                      ('Diffuse Roughness', "diffuse roughness"))
+IGNORED_OUTPUTS = ('Volume', 'Displacement')
+TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP')
+LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')
 
 
 class ExportError(Exception):
@@ -339,7 +349,7 @@ class _MaterialBuilder:
                 closure = _Closure()    # Cycles: no surface shader renders black
             else:
                 closure = self._shader(out.inputs['Surface'], reasons, 0)
-            for socket in ('Volume', 'Displacement'):
+            for socket in IGNORED_OUTPUTS:
                 if out.inputs.get(socket) is not None and _linked_node(out.inputs[socket]) is not None:
                     reasons.append(f"{socket.lower()} ignored")
         base, texture, interp, ext = self._albedo(closure)
@@ -405,11 +415,7 @@ class _MaterialBuilder:
         return _Closure(const=DEFAULT_ALBEDO)
 
     def _principled(self, node, reasons):
-        checks = (('Metallic', "metallic"), ('Transmission Weight', "transmission"),
-                  ('Coat Weight', "coat"), ('Sheen Weight', "sheen"),
-                  ('Subsurface Weight', "subsurface"), ('Specular IOR Level', "specular layer"),
-                  ('Diffuse Roughness', "diffuse roughness"))
-        for name, what in checks:
+        for name, what in PRINCIPLED_IGNORED:
             s = node.inputs.get(name)
             if s is not None:
                 v, ok = _constant_value(s)
@@ -450,22 +456,16 @@ class _MaterialBuilder:
 
     def _texture(self, node, reasons):
         img = node.image
-        vec_link = _linked_link(node.inputs['Vector'])
-        if vec_link is not None:
-            vec = vec_link.from_node
-            if vec.type == 'UVMAP' and vec.uv_map:
-                reasons.append(f"UV Map '{vec.uv_map}' read as the active render UV map")
-            elif vec.type == 'TEX_COORD' and vec_link.from_socket.name != 'UV':
-                reasons.append(f"{vec_link.from_socket.name} texture coordinates read as the UV map")
-            elif vec.type not in ('UVMAP', 'TEX_COORD'):
-                reasons.append(f"texture coordinates from '{vec.bl_label}' read as the UV map")
+        coords = coordinates_approximation(node)
+        if coords:
+            reasons.append(coords)
         if node.projection != 'FLAT':
             reasons.append(f"{node.projection.lower()} image projection as flat")
         interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
-        if node.interpolation in ('Cubic', 'Smart'):
+        if node.interpolation in LINEAR_INTERPOLATIONS:
             reasons.append(f"{node.interpolation.lower()} image interpolation as linear")
-        ext = node.extension if node.extension in ('REPEAT', 'EXTEND', 'CLIP') else 'REPEAT'
-        if node.extension not in ('REPEAT', 'EXTEND', 'CLIP'):
+        ext = node.extension if node.extension in TEXTURE_EXTENSIONS else 'REPEAT'
+        if node.extension not in TEXTURE_EXTENSIONS:
             reasons.append(f"{node.extension.lower()} image extension as repeat")
         if img is None:
             reasons.append("Image Texture without an image (magenta, as Cycles)")
@@ -477,6 +477,21 @@ class _MaterialBuilder:
                 return None
             self._images[img.as_pointer()] = pixels
         return _Texture((img.as_pointer(), interp, ext), pixels, interp, ext)
+
+
+def coordinates_approximation(tex_node):
+    """Why an Image Texture's Vector input is not read exactly (the export always reads the
+    active render UV map), or '' when it is."""
+    link = _linked_link(tex_node.inputs['Vector'])
+    if link is None:
+        return ''
+    vec = link.from_node
+    if vec.type == 'UVMAP':
+        return f"UV Map '{vec.uv_map}' read as the active render UV map" if vec.uv_map else ''
+    if vec.type == 'TEX_COORD':
+        return '' if link.from_socket.name == 'UV' else \
+            f"{link.from_socket.name} texture coordinates read as the UV map"
+    return f"texture coordinates from '{vec.bl_label}' read as the UV map"
 
 
 def _note_normal_inputs(node, reasons):

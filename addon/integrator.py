@@ -451,16 +451,16 @@ class Integrator:
             wanted['shadow'] = VIS_SHADOW
         self._scenes, self._maps, self._local, self._visible = {}, {}, {}, {}
         masks = {kind: (vis & bit) != 0 for kind, bit in wanted.items()}
+        keys = {kind: m.tobytes() for kind, m in masks.items()}
         needed = np.logical_or.reduce(list(masks.values()))
         counts = [int(np.count_nonzero(m)) for m in masks.values()]
-        shared = (len({m.tobytes() for m in masks.values()}) > 1 and
+        shared = (len(set(keys.values())) > 1 and
                   min(counts) >= _SHARED_SCENE_FRACTION * np.count_nonzero(needed))
         built = {}
         for kind, bit in wanted.items():
-            mask = needed if shared else masks[kind]
-            key = mask.tobytes()
+            key = 'shared' if shared else keys[kind]
             if key not in built:
-                built[key] = self._tracer_scene(mask, vis if shared else None)
+                built[key] = self._tracer_scene(needed if shared else masks[kind], vis if shared else None)
             self._scenes[kind], self._maps[kind], self._local[kind] = built[key]
             self._visible[kind] = bit if shared else None
         self._num_scenes = len(built)

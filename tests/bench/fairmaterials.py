@@ -26,9 +26,8 @@ import bpy
 
 from addon import export
 
-ZEROED_PRINCIPLED = ('Metallic', 'Transmission Weight', 'Coat Weight', 'Sheen Weight',
-                     'Subsurface Weight', 'Specular IOR Level', 'Diffuse Roughness',
-                     'Thin Film Thickness')
+# the layers the export drops, and thin film (it tints only the dropped specular layer)
+ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
 
 
 def make_diffuse(materials=None) -> dict[str, list[str]]:
@@ -66,7 +65,7 @@ class _Editor:
         out = export._output_node(tree)
         if out is None:
             return []
-        for name in ('Volume', 'Displacement'):
+        for name in export.IGNORED_OUTPUTS:
             sock = out.inputs.get(name)
             if sock is not None and sock.is_linked:
                 self._unlink(sock, f"{name.lower()} removed")
@@ -75,9 +74,12 @@ class _Editor:
 
     # --- edits ----------------------------------------------------------------------------
 
-    def _unlink(self, socket, why):
+    def _drop_links(self, socket):
         for link in list(socket.links):
             self.tree.links.remove(link)
+
+    def _unlink(self, socket, why):
+        self._drop_links(socket)
         self.done.append(why)
 
     def _set(self, socket, value, why):
@@ -85,9 +87,7 @@ class _Editor:
         current, exact = export._constant_value(socket)
         if exact and current == value:
             return
-        if socket.is_linked:
-            for link in list(socket.links):
-                self.tree.links.remove(link)
+        self._drop_links(socket)
         socket.default_value = value
         self.done.append(why)
 
@@ -97,8 +97,7 @@ class _Editor:
         diffuse.location = (node.location.x, node.location.y - 200) if node else (0, 0)
         diffuse.inputs['Color'].default_value = (*color, 1.0)
         diffuse.inputs['Roughness'].default_value = 0.0
-        for link in list(socket.links):
-            self.tree.links.remove(link)
+        self._drop_links(socket)
         self.tree.links.new(diffuse.outputs['BSDF'], socket)
         self.done.append(why)
 
@@ -168,18 +167,14 @@ class _Editor:
             self.tree.links.remove(link)
             self.tree.links.new(node.outputs['Color'], socket)
             self.done.append("image alpha as colour, read as its colour")
-        vec_link = export._linked_link(node.inputs['Vector'])
-        vec = vec_link.from_node if vec_link is not None else None
-        if vec is not None and (vec.type not in ('UVMAP', 'TEX_COORD') or
-                                (vec.type == 'UVMAP' and vec.uv_map) or
-                                (vec.type == 'TEX_COORD' and vec_link.from_socket.name != 'UV')):
+        if export.coordinates_approximation(node):
             self._unlink(node.inputs['Vector'], "texture coordinates: the active render UV map")
         if node.projection != 'FLAT':
             node.projection = 'FLAT'
             self.done.append("image projection flat")
-        if node.interpolation in ('Cubic', 'Smart'):
+        if node.interpolation in export.LINEAR_INTERPOLATIONS:
             node.interpolation = 'Linear'
             self.done.append("image interpolation linear")
-        if node.extension not in ('REPEAT', 'EXTEND', 'CLIP'):
+        if node.extension not in export.TEXTURE_EXTENSIONS:
             node.extension = 'REPEAT'
             self.done.append("image extension repeat")
