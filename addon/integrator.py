@@ -819,7 +819,7 @@ class Integrator:
         (one native pass)."""
         dacrt.shading.gather_emission(hits, hit, self._tri_emission, self._tri_emissive,
                                       None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
-                                      path.D, path.thr, path.pdf, path.pid, L)
+                                      path.O, path.D, path.thr, path.pdf, path.pid, L)
 
     def _gather_lamps(self, camera, path, hit, hits, L):
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,

@@ -1,6 +1,8 @@
 """Emissive triangles as lights: chosen by power (area x mean radiance), sampled uniformly by
-area, emitting the material's emission from both sides (Cycles' emissive_simple_eval). The
-per-sample geometry runs in the native kernel dacrt.shading.sample_triangles."""
+solid angle where a triangle is large for its distance and by area elsewhere (as Cycles'
+kernel/light/triangle.h), emitting the material's emission from both sides (Cycles'
+emissive_simple_eval). The per-sample geometry runs in the native kernel
+dacrt.shading.sample_triangles (native/cpp/trianglelight.h)."""
 from __future__ import annotations
 
 import dacrt

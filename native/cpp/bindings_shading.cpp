@@ -262,7 +262,7 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
 
 size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> hit, F32Array emission,
                           py::array_t<bool, py::array::c_style> emissive, py::object tri_prob, F32Array area,
-                          F32Array geo, F32Array D, py::object thr, py::object pdf, I64Array pid,
+                          F32Array geo, F32Array O, F32Array D, py::object thr, py::object pdf, I64Array pid,
                           py::array_t<float, py::array::c_style> L) {
     const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const Hit* h = records<Hit>(hits, n, "hits");
@@ -271,6 +271,7 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
     if (rows_of(emission, 3, "emission") != M) throw py::value_error("emission must have shape (3, M) like geo");
     need_len(emissive, M, "emissive");
     need_len(area, M, "area");
+    if (rows_of(O, 3, "O") != n) throw py::value_error("O must have shape (3, n), n = len(hits)");
     if (rows_of(D, 3, "D") != n) throw py::value_error("D must have shape (3, n), n = len(hits)");
     F32Array thr_keep, prob_keep, pdf_keep;
     const float* t = optional_rows(thr, 3, n, "thr", thr_keep);
@@ -292,7 +293,7 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
     py::gil_scoped_release nogil;
     return gather_emission(h, reinterpret_cast<const uint8_t*>(hit.data()), n, emission.data(),
                            reinterpret_cast<const uint8_t*>(emissive.data()), prob, area.data(), geo.data(), M,
-                           D.data(), t, pd, pid.data(), L.mutable_data(), N);
+                           O.data(), D.data(), t, pd, pid.data(), L.mutable_data(), N);
 }
 
 py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, py::object rays) {
@@ -421,8 +422,8 @@ void register_shading(py::module_& m) {
     m.def("continue_paths", &continue_paths_py, py::arg("hits"), py::arg("hit"), py::arg("live"), py::arg("albedo"),
           py::arg("thr"), py::arg("u_rr"));
     m.def("gather_emission", &gather_emission_py, py::arg("hits"), py::arg("hit"), py::arg("emission"),
-          py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("D"), py::arg("thr"),
-          py::arg("pdf"), py::arg("pid"), py::arg("L"));
+          py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("O"), py::arg("D"),
+          py::arg("thr"), py::arg("pdf"), py::arg("pid"), py::arg("L"));
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
           py::arg("rays"));
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));

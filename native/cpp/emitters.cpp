@@ -1,12 +1,13 @@
-// Light samples on emissive triangles (see shading.h): the same arithmetic, in the same order,
-// as the numpy code it replaces (addon/lights/triangles.py), without gathering 15 rows per ray.
+// Emissive triangles as lights (see shading.h): light samples from shading points, and the
+// emission BSDF rays meet, weighted by MIS with the pdf the light sample would have had
+// (trianglelight.h holds both).
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 
 #include "parallel.h"
-#include "pathvertex.h"
 #include "shading.h"
+#include "trianglelight.h"
 
 namespace dacrt {
 
@@ -36,8 +37,8 @@ size_t sample_triangles(const float* geo, const float* area, size_t M, const int
 }
 
 size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
-                       const float* tri_prob, const float* area, const float* geo, size_t M, const float* D,
-                       const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N) {
+                       const float* tri_prob, const float* area, const float* geo, size_t M, const float* O,
+                       const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N) {
     std::atomic<size_t> count{0};
     parallel_for(n, [&](size_t b, size_t e) {
         size_t local = 0;
@@ -47,10 +48,8 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
             const size_t q = size_t(p);
             float w = 1.0f;
             if (tri_prob && tri_prob[q] > 0) {  // a BSDF ray: power heuristic against light sampling
-                const float cos_l = std::fabs(geo[9 * M + q] * D[i] + geo[10 * M + q] * D[n + i] +
-                                              geo[11 * M + q] * D[2 * n + i]);
-                const float t = hits[i].t;
-                float r = tri_prob[q] * t * t / (area[q] * cos_l);
+                const float o[3] = {O[i], O[n + i], O[2 * n + i]}, d[3] = {D[i], D[n + i], D[2 * n + i]};
+                float r = tri_prob[q] * triangle_light_pdf(geo, area, M, q, o, d, hits[i].t);
                 r /= pdf[i];
                 r *= r;
                 r += 1.0f;

@@ -1,5 +1,5 @@
 // The steps of shading one path vertex, as inline functions on one path: hit-point
-// reconstruction, a light sample on an emissive triangle, the next-event weight, the shadow ray,
+// reconstruction, the next-event weight, the shadow ray,
 // the cosine-weighted bounce and the tracer's record of a ray. The kernels (surface.cpp,
 // emitters.cpp, nee.cpp, scatter.cpp, camera.cpp, raypack.cpp) share them; the arithmetic and
 // its float32 order are those of the numpy code the kernels replaced.
@@ -54,47 +54,6 @@ inline void surface_point(const float* geo, size_t M, const float* normals, cons
             for (int a = 0; a < 3; ++a) s.ns[a] = n[a] * inv;
         }
     }
-}
-
-// A point uniform by area on triangle w (geo: 15 rows of M) seen from P: unit direction wi,
-// distance, solid-angle pdf (0 where it cannot be seen) and the point the shadow ray must end
-// at (stepped off the emitter toward P). Radiance and pdf use the exact point.
-inline void triangle_light(const float* geo, const float* area, size_t M, size_t w, const float P[3], float u1,
-                           float u2, float wi[3], float& dist, float& pdf, float target[3]) {
-    auto g = [&](int row) { return geo[size_t(row) * M + w]; };
-    // uniform point by area: barycentrics (u2 sqrt(u1), 1 - sqrt(u1)) of vertices 1, 2
-    const float su = std::sqrt(u1);
-    const float b1 = u2 * su, b2 = 1.0f - su;
-    float q[3], d[3];
-    for (int a = 0; a < 3; ++a) {
-        float x = g(3 + a) * b1;
-        x += g(6 + a) * b2;
-        x += g(a);
-        q[a] = x;
-        d[a] = x - P[a];
-    }
-    const float len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    const float inv = len > 0 ? 1.0f / len : 0.0f;
-    for (int a = 0; a < 3; ++a) d[a] *= inv;
-    float cos_l = g(9) * d[0] + g(10) * d[1] + g(11) * d[2];
-    const float side = cos_l <= 0 ? 1.0f : -1.0f;  // the emitter face that sees P
-    cos_l = std::fabs(cos_l);
-    const bool ok = cos_l > 0 && len > 0;
-    const float p = ok ? len * len / (area[w] * cos_l) : 0.0f;
-    // The shadow ray must end in front of the emitter by more than where its end can drift: a
-    // few ULPs of its origin's coordinates and of its length, which can exceed the emitter's
-    // own step (a small emitter seen from afar). 8 ULPs of the larger.
-    float big = len;
-    for (int a = 0; a < 3; ++a) big = std::max(big, std::fabs(P[a]));
-    const float own = std::sqrt(g(12) * g(12) + g(13) * g(13) + g(14) * g(14));
-    const float reach = 8.0f * ulp_of(std::max(big, 0x1p-100f));
-    const float scale = own >= reach || !(own > 0) ? side : side * (reach / own);
-    for (int a = 0; a < 3; ++a) {
-        wi[a] = d[a];
-        target[a] = q[a] + g(12 + a) * scale;
-    }
-    dist = len;
-    pdf = std::isfinite(p) ? p : 0.0f;
 }
 
 // value (radiance / pdf of a light sample) times thr (null = 1) x cos/pi x the power-heuristic

@@ -75,11 +75,13 @@ void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, co
 
 namespace dacrt {
 
-// Points on triangles which[i] (uniform by area, random numbers u1, u2) seen from points P
-// (3 rows, stride n); geo as in surface(), area per triangle of geo. Writes the unit direction
+// Points on triangles which[i] seen from points P (3 rows, stride n), random numbers u1, u2:
+// uniform by solid angle where the triangle is large for its distance, else by area
+// (trianglelight.h); geo as in surface(), area per triangle of geo. Writes the unit direction
 // wi toward the point, its distance dist, the solid-angle pdf (0 where the point cannot be
 // seen: edge-on or coincident) and target, the point stepped off the emitter toward P (where a
-// shadow ray must end) by its offset row or, if longer, 8 ULPs of max(|P|, dist). Returns how many which[i] are not triangles of geo (nothing written).
+// shadow ray must end) by its offset row or, if longer, 8 ULPs of max(|P|, dist). Returns how
+// many which[i] are not triangles of geo (nothing written).
 size_t sample_triangles(const float* geo, const float* area, size_t M, const int64_t* which, const float* P,
                         const float* u1, const float* u2, size_t n, float* wi, float* dist, float* pdf,
                         float* target);
@@ -135,14 +137,16 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
 void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                          const int64_t* idx, size_t k, float* thr_out);
 
-// Emission that rays meet on emissive triangles (two-sided), added to L (3 rows, stride N) at
-// column pid[i] (distinct per ray). Rays with hit[i] set whose triangle has emissive[prim]:
-// emission (3 rows of M, radiance per triangle) x thr (3 rows, stride n; null = 1) x, for BSDF
-// rays (tri_prob non-null; triangles of tri_prob 0 are never light-sampled: weight 1), the power-heuristic weight against light sampling of that triangle:
-// 1 / (1 + (tri_prob t^2 / (area |cos|) / pdf)^2), cos between D and the normal (geo rows 9-11
-// of M). Returns the number of rays that met emission.
+// Emission that rays (origins O, unit directions D: 3 rows, stride n) meet on emissive triangles
+// (two-sided), added to L (3 rows, stride N) at column pid[i] (distinct per ray). Rays with
+// hit[i] set whose triangle has emissive[prim]: emission (3 rows of M, radiance per triangle)
+// x thr (3 rows, stride n; null = 1) x, for BSDF rays (tri_prob non-null; triangles of
+// tri_prob 0 are never light-sampled: weight 1), the power-heuristic weight against light
+// sampling of that triangle, 1 / (1 + (tri_prob pdf_light / pdf)^2), pdf_light the solid-angle
+// pdf sample_triangles has at O for that direction. Returns the number of rays that met emission.
 size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
-                       const float* tri_prob, const float* area, const float* geo, size_t M, const float* D,
+                       const float* tri_prob, const float* area, const float* geo, size_t M, const float* O,
+                       const float* D,
                        const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N);
 
 // A camera's frame in float32, as addon/camera.py CameraModel rounds it: orthonormal

@@ -138,6 +138,23 @@ def test_area_light_over_a_tilted_2km_plane():
     assert mean == pytest.approx(expected, rel=1.5e-3), f"got {mean:.5f}, expected {expected:.5f} (+-{err:.5f})"
 
 
+@pytest.mark.parametrize('half,height', [(0.5, 1.0), (0.05, 1.0), (4.0, 0.25)])
+def test_emissive_quad_irradiance(half, height):
+    """An emissive mesh quad (2 triangles, black, radiance 10) above the plane, against the
+    closed form: 1 m at 1 m and 8 m at 25 cm are sampled by solid angle from below, 10 cm at
+    1 m by area. Within 0.5% (about 6 standard errors at 1024 samples x 16 x 16 pixels)."""
+    from .scenes import ALL_VIS, geometry, quad
+    scene = plane_scene(samples=1024, seed=3, camera=ortho_down(height=height / 2, width=16, px=16))
+    scene.materials.append(material('glow', (0.0,) * 3, (10.0,) * 3))
+    plane = quad((0.0, 0.0, 0.0), 1000.0, 1000.0)
+    scene.geometry = geometry([(*plane, 1, ALL_VIS), (*quad((0.0, 0.0, height), half, half, up=False), 2, ALL_VIS)])
+    expected = RHO * 4 * rect_irradiance(10.0, half, half, height) / np.pi
+    integ = render(scene)
+    mean, err = pixel_stats(integ)
+    assert err < 1e-3 * expected, f"too noisy to decide: stderr {err:.5f}"
+    assert mean == pytest.approx(expected, rel=5e-3), f"got {mean:.5f}, expected {expected:.5f} (+-{err:.5f})"
+
+
 def test_area_rectangle_scaled_object():
     m = translation(z=1.0) @ np.diag([2.0, 0.5, 1.0, 1.0])      # object scale enters the size
     area = light('AREA', 50.0, m, shape='RECTANGLE', size_x=0.5, size_y=1.0)

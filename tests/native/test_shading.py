@@ -1,6 +1,7 @@
 """The shading-side helper kernels (dacrt.shading) against float64 numpy references: ray
-packing, hit-point reconstruction, random numbers, cosine-weighted directions, light samples on
-triangles, next-event weights, shadow rays and accumulation; and their argument checks."""
+packing, hit-point reconstruction, random numbers, cosine-weighted directions, next-event
+weights, shadow rays and accumulation; and their argument checks (emissive triangles as lights:
+test_triangle_light.py)."""
 
 import dacrt
 import numpy as np
@@ -207,50 +208,6 @@ def test_cosine_scatter_distribution_and_checks():
     assert not ok2[below].any() and ok2[~below & ok].all()
 
 
-def test_sample_triangles_points_and_pdf():
-    rng = np.random.default_rng(7)
-    m, n = 20, 200_000
-    geo, area = _geo(rng, m)
-    which = rng.integers(0, m, n)
-    P = (rng.normal(size=(3, n)) * 3).astype(F32)
-    u1, u2 = rng.random(n).astype(F32), rng.random(n).astype(F32)
-    wi, dist, pdf, target = shading.sample_triangles(geo, area, which, P, u1, u2)
-    g = geo.astype(float)[:, which]
-    q = P + wi.astype(float) * dist                     # the sampled point
-    # barycentrics of q: inside the triangle, uniform by area (mean 1/3 each)
-    M2 = np.stack([g[3:6], g[6:9]], axis=1).transpose(2, 0, 1)            # (n, 3, 2)
-    bary = np.einsum("nij,nj->ni", np.linalg.pinv(M2), (q - g[0:3]).T)
-    assert bary.min() > -1e-3 and bary.sum(axis=1).max() < 1 + 1e-3
-    assert np.abs(bary.mean(axis=0) - 1 / 3).max() < 3e-3
-    cos_l = np.abs(np.einsum("ij,ij->j", g[9:12], wi))
-    steep = cos_l > 1e-3                              # near edge-on the float32 cosine is inexact
-    np.testing.assert_allclose(pdf[steep], (dist.astype(float) ** 2 / (area[which] * cos_l))[steep], rtol=1e-3)
-    assert (pdf > 0).all() and np.isfinite(pdf).all()
-    # target: the point stepped along the normal toward P's side, by the triangle's step or
-    # 8 ULPs of max(|P|, dist) if that is longer
-    side = np.where(np.einsum("ij,ij->j", g[9:12], wi) <= 0, 1.0, -1.0)
-    own = np.linalg.norm(g[12:15], axis=0)
-    big = np.maximum(np.abs(P).max(axis=0), dist).astype(F32)
-    reach = 8.0 * 2.0 ** (np.floor(np.log2(big)) - 23)
-    step = np.maximum(own, reach)
-    np.testing.assert_allclose(target, q + g[12:15] / own * step * side, atol=1e-4)
-    off = np.einsum("ij,ij->j", (target - q), g[9:12] * side)
-    np.testing.assert_allclose(off, step, atol=2e-6)          # float32 target rounding
-    with pytest.raises(ValueError, match="1 entries of which"):
-        shading.sample_triangles(geo, area, np.where(np.arange(n) == 5, m, which), P, u1, u2)
-
-
-def test_sample_triangles_edge_on_has_zero_pdf():
-    geo = np.zeros((15, 1), F32)
-    geo[3:6, 0] = (1, 0, 0)
-    geo[6:9, 0] = (0, 1, 0)
-    geo[11, 0] = 1.0                                  # triangle in z = 0, normal +z
-    P = np.array([[5.0], [0.2], [0.0]], F32)          # in its plane: sees it edge-on
-    _, _, pdf, _ = shading.sample_triangles(geo, np.array([0.5], F32), np.array([0]), P,
-                                            np.array([0.3], F32), np.array([0.3], F32))
-    assert pdf[0] == 0
-
-
 def test_nee_weight_matches_formula():
     rng = np.random.default_rng(8)
     n = 100_000
@@ -376,47 +333,6 @@ def test_triangle_table_matches_float64():
     np.testing.assert_allclose(np.linalg.norm(geo[12:15], axis=0)[good], 8 * ulp[good], rtol=1e-6)
     with pytest.raises(ValueError, match="refers to vertex 500"):
         shading.triangle_table(v, np.array([[0, 1, 500]]), 8.0)
-
-
-def test_gather_emission_matches_the_numpy_definition():
-    rng = np.random.default_rng(21)
-    m, n, N = 12, 5000, 7000
-    geo, _ = _geo(rng, m)
-    area = rng.uniform(0.1, 2.0, m).astype(F32)
-    emission = rng.uniform(0, 5, (3, m)).astype(F32)
-    emissive = rng.random(m) < 0.6
-    emission[:, ~emissive] = 0
-    tri_prob = np.where(rng.random(m) < 0.8, rng.uniform(0.01, 0.2, m), 0).astype(F32)
-    hits = np.zeros(n, dacrt.HIT_DTYPE)
-    hits['prim'] = rng.integers(-1, m, n)
-    hits['t'] = rng.uniform(0.1, 5, n)
-    hit = (hits['prim'] >= 0) & (rng.random(n) < 0.9)           # some hits masked (holdouts)
-    D = _unit(rng, n)
-    thr = rng.uniform(0, 1, (3, n)).astype(F32)
-    pdf = rng.uniform(0.05, 0.3, n).astype(F32)
-    pid = rng.permutation(N)[:n].astype(np.int64)
-    for camera in (True, False):
-        L = rng.uniform(0, 1, (3, N)).astype(F32)
-        expect = L.astype(np.float64)
-        p = hits['prim']
-        sel = np.flatnonzero(hit & emissive[np.maximum(p, 0)])
-        q = p[sel]
-        Le = emission[:, q].astype(np.float64)
-        if not camera:
-            Le *= thr[:, sel]
-            cos_l = np.abs(np.einsum("ij,ij->j", geo[9:12, q].astype(float), D[:, sel].astype(float)))
-            pdf_l = tri_prob[q] * hits['t'][sel].astype(float) ** 2 / (area[q] * cos_l)
-            w = np.where(tri_prob[q] > 0, 1 / (1 + (pdf_l / pdf[sel]) ** 2), 1.0)
-            Le *= w
-        expect[:, pid[sel]] += Le
-        count = shading.gather_emission(hits, hit, emission, emissive, None if camera else tri_prob, area, geo, D,
-                                        None if camera else thr, None if camera else pdf, pid, L)
-        assert count == len(sel)
-        np.testing.assert_allclose(L, expect, rtol=2e-5, atol=1e-6)
-    with pytest.raises(ValueError, match="pdf"):
-        shading.gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, D, thr, None, pid, L)
-    with pytest.raises(ValueError, match="pid"):
-        shading.gather_emission(hits, hit, emission, emissive, None, area, geo, D, None, None, pid + N, L)
 
 
 def test_camera_rays_checks_its_frame():

@@ -105,7 +105,8 @@ def cosine_scatter(keys, ka: int, kb: int, ns, ng=None, origins=None):
 
 def sample_triangles(geo, area, which, P, u1, u2):
     """Light samples on triangles which (n,) of geo (15, M) (rows as in surface(); area (M,)),
-    uniform by area from the uniforms u1, u2, seen from points P (3, n).
+    seen from points P (3, n), from the uniforms u1, u2: uniform by solid angle where the
+    triangle's longest edge exceeds the distance from P to its centroid, else uniform by area.
 
     Returns wi (3, n) unit directions toward the sampled points, dist (n,), the solid-angle pdf
     (n,) (0 where the point cannot be seen: edge-on or coincident) and target (3, n), the point
@@ -144,21 +145,23 @@ def shadow_rays(O, wi, dist, target, idx, shorten: float = 1.0):
     return out, valid
 
 
-def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, D, thr, pdf, pid, L) -> int:
+def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, thr, pdf, pid, L) -> int:
     """Add the emission that rays meet on emissive triangles to L (3, N) in place (two-sided).
 
     Rays i with hit[i] whose triangle hits['prim'][i] has emissive[prim] (bool (M,)) add
     emission[:, prim] ((3, M) radiance) x thr[:, i] (None: 1) x, when tri_prob (M,) is given
     (BSDF rays), the power-heuristic weight against light-sampling that triangle,
-    1 / (1 + (tri_prob t^2 / (area |cos| pdf))^2) with pdf (n,) the rays' BSDF pdf, cos
-    between D (3, n) and the triangle normal (geo rows 9:12), into column pid[i] (distinct).
+    1 / (1 + (tri_prob pdf_light / pdf)^2) with pdf (n,) the rays' BSDF pdf and pdf_light the
+    solid-angle pdf sample_triangles has from the ray origin O (3, n) for the direction D (3, n),
+    into column pid[i] (distinct).
     Returns how many rays met emission."""
     if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
         raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
     return _core.gather_emission(hits, np.ascontiguousarray(hit, np.bool_), _rows(emission, 3, "emission"),
                                  np.ascontiguousarray(emissive, np.bool_),
                                  None if tri_prob is None else np.ascontiguousarray(tri_prob, _F32),
-                                 np.ascontiguousarray(area, _F32), _rows(geo, 15, "geo"), _rows(D, 3, "D"),
+                                 np.ascontiguousarray(area, _F32), _rows(geo, 15, "geo"), _rows(O, 3, "O"),
+                                 _rows(D, 3, "D"),
                                  None if thr is None else _rows(thr, 3, "thr"),
                                  None if pdf is None else np.ascontiguousarray(pdf, _F32),
                                  np.ascontiguousarray(pid, np.int64), L)
