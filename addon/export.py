@@ -542,36 +542,26 @@ def _image_pixels(img, reasons):
 
 def _transform(points, linear, offset, out):
     """out (k, N, 3) = the (N, 3) points through each of k 3x3 maps (and offsets (k, 3)),
-    computed in float64 and rounded once to out's dtype. A few instances go column by column
-    (einsum's generic loop is several times slower, and a matmul would wake OpenBLAS threads
-    that then spin beside the tracer); many instances of a small mesh go through einsum at once."""
-    k = len(linear)
-    if k > 4:
-        res = out if out.dtype == np.float64 else None
-        res = np.einsum('kij,vj->kvi', linear, points.astype(np.float64), out=res)
-        if offset is not None:
-            res += offset[:, None, :]
-        if res is not out:
-            out[...] = res
-        return out
+    computed in float64 and rounded once to out's dtype: per output column, a broadcast
+    multiply-add over a block of instances at once, without a float64 copy of the points
+    (einsum's generic loop was 2-5x slower, and a matmul would wake OpenBLAS threads that then
+    spin beside the tracer). Blocks keep the float64 temporaries near 2^20 values."""
+    k, n = len(linear), len(points)
     x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    step = max(1, (1 << 20) // max(n, 1))
+    col, tmp = np.empty((min(step, k), n)), np.empty((min(step, k), n))
     with np.errstate(invalid='ignore', over='ignore'):   # non-finite input is dropped later
-        _columns(out, x, y, z, linear, offset)
+        for i in range(0, k, step):
+            j = min(i + step, k)
+            c_, t_ = col[:j - i], tmp[:j - i]
+            for c in range(3):
+                np.multiply(linear[i:j, c, 0, None], x, out=c_, dtype=np.float64)
+                c_ += np.multiply(linear[i:j, c, 1, None], y, out=t_, dtype=np.float64)
+                c_ += np.multiply(linear[i:j, c, 2, None], z, out=t_, dtype=np.float64)
+                if offset is not None:
+                    c_ += offset[i:j, c, None]
+                out[i:j, :, c] = c_
     return out
-
-
-def _columns(out, x, y, z, linear, offset):
-    """out[i, :, c] = row c of linear[i] applied to (x, y, z), plus offset[i, c]; float64
-    arithmetic on the (exactly widened) inputs, without a float64 copy of them."""
-    col, tmp = np.empty(len(x)), np.empty(len(x))
-    for i in range(len(linear)):
-        for c in range(3):
-            np.multiply(x, linear[i, c, 0], out=col, dtype=np.float64)
-            col += np.multiply(y, linear[i, c, 1], out=tmp, dtype=np.float64)
-            col += np.multiply(z, linear[i, c, 2], out=tmp, dtype=np.float64)
-            if offset is not None:
-                col += offset[i, c]
-            out[i, :, c] = col
 
 
 class _MeshArrays:
@@ -675,8 +665,25 @@ class _Out:
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, uvs=self.uvs)
         if self.keep is not None and not self.keep.all():
-            per_tri = {k: (v[self.keep] if v is not None else None) for k, v in per_tri.items()}
+            per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
         return sd.Geometry(vertices=self.vertices, **per_tri)
+
+
+def _compact_rows(a, keep):
+    """a[keep], computed in a's own memory (a is overwritten; the result is a view of it).
+
+    The dropped triangles are few (degenerate or NaN ones), so the kept runs between them move
+    down in place: bmw27's 190 of 1.7M cost 19 ms instead of 104 ms for a[keep], which
+    allocates, faults in and gathers a second copy of 81 bytes per triangle."""
+    drop = np.flatnonzero(~keep)
+    if not len(drop):
+        return a
+    dst = int(drop[0])
+    for s, e in zip((drop + 1).tolist(), np.append(drop[1:], len(a)).tolist()):
+        if e > s:
+            a[dst:dst + e - s] = a[s:e]       # numpy copies overlapping runs safely
+            dst += e - s
+    return a[:dst]
 
 
 class _Placement:
@@ -961,7 +968,11 @@ class _Exporter:
                                          np.eye(3)))    # normals transform by the inverse transpose
             n = _transform(a.normal_rows, inv.transpose(0, 2, 1), None,
                            np.empty((k, len(a.normal_rows), 3), np.float32))
-            nlen = np.sqrt(np.einsum('kri,kri->kr', n, n))[..., None]
+            # |n| per row from the three strided columns: 2x faster than einsum's reduction
+            nlen = n[..., 0] * n[..., 0]
+            nlen += n[..., 1] * n[..., 1]
+            nlen += n[..., 2] * n[..., 2]
+            nlen = np.sqrt(nlen, out=nlen)[..., None]
             ok = nlen > 1e-12                           # a zero normal falls back to the face's
             n /= np.where(ok, nlen, np.float32(1))
             if not ok.all():

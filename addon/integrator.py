@@ -147,22 +147,11 @@ class _Triangles:
         # flat shading everywhere (corner normals == geometric normal) needs no interpolation
         flat = not m or dacrt.shading.normals_flat(normals, self.geo, 1e-6)
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
-        self.normals = None if flat else _corner_rows(normals)
-        self.uvs = None if geometry.uvs is None else _corner_rows(np.asarray(geometry.uvs, F32))
+        self.normals = None if flat else dacrt.shading.corner_rows(normals)
+        self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
 
     def __len__(self):
         return len(self.indices)
-
-
-def _corner_rows(per_corner: np.ndarray) -> np.ndarray:
-    """(M, 3, c) per-corner values -> (3c, M) float32 rows: corner 0, corner 1 - corner 0,
-    corner 2 - corner 0 (what barycentric interpolation reads)."""
-    c = per_corner.shape[2]
-    rows = np.empty((3 * c, len(per_corner)), F32)
-    rows[:c] = per_corner[:, 0].T
-    np.subtract(per_corner[:, 1].T, per_corner[:, 0].T, out=rows[c:2 * c])
-    np.subtract(per_corner[:, 2].T, per_corner[:, 0].T, out=rows[2 * c:])
-    return rows
 
 
 def _wrap(i: np.ndarray, size: int, extension: str):

@@ -387,6 +387,16 @@ bool normals_flat_py(F32Array normals, F32Array geo, float tol) {
     return normals_flat(normals.data(), geo.data(), M, tol);
 }
 
+F32Array corner_rows_py(F32Array per_corner) {
+    if (per_corner.ndim() != 3 || per_corner.shape(1) != 3 || per_corner.shape(2) < 1)
+        throw py::value_error("per_corner must have shape (M, 3, c) with c >= 1");
+    const size_t M = size_t(per_corner.shape(0)), c = size_t(per_corner.shape(2));
+    F32Array rows({py::ssize_t(3 * c), py::ssize_t(M)});
+    py::gil_scoped_release nogil;
+    corner_rows(per_corner.data(), M, c, rows.mutable_data());
+    return rows;
+}
+
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny) {
     const size_t M = mesh_sizes(vertices, triangles).second;
@@ -428,6 +438,7 @@ void register_shading(py::module_& m) {
           py::arg("rays"));
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
     m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"), py::arg("flip"));
+    m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
     m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
 }

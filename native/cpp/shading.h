@@ -44,6 +44,10 @@ void face_normals(const double* vertices, const int32_t* triangles, size_t M, fl
 
 // Whether every corner normal (M x 3 corners x 3, C order) is within tol of its triangle's
 // geometric normal (geo rows 9-11 of M): flat shading needs no interpolation.
+// Per-corner values (M triangles x 3 corners x c floats) as the rows barycentric interpolation
+// reads: corner 0 (c rows of M), corner 1 - corner 0, corner 2 - corner 0 (3c rows in all).
+void corner_rows(const float* per_corner, size_t M, size_t c, float* rows);
+
 bool normals_flat(const float* normals, const float* geo, size_t M, float tol);
 
 // Hit points of rays idx[0..k) (all rays when idx is null): reads hits[i] and column i of D

@@ -88,6 +88,19 @@ void face_normals(const double* vertices, const int32_t* triangles, size_t M, fl
     });
 }
 
+void corner_rows(const float* per_corner, size_t M, size_t c, float* rows) {
+    parallel_for(M, [per_corner, M, c, rows](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            const float* p = per_corner + 3 * c * i;
+            for (size_t a = 0; a < c; ++a) {
+                rows[a * M + i] = p[a];
+                rows[(c + a) * M + i] = p[c + a] - p[a];
+                rows[(2 * c + a) * M + i] = p[2 * c + a] - p[a];
+            }
+        }
+    });
+}
+
 bool normals_flat(const float* normals, const float* geo, size_t M, float tol) {
     std::atomic<bool> flat{true};
     parallel_for(M, [normals, geo, M, tol, &flat](size_t b, size_t e) {

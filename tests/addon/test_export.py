@@ -3,6 +3,7 @@
 Every test renders through the registered engine (render depsgraph, as F12 does) and checks
 the SceneData it exported (see conftest.exported)."""
 import math
+import warnings
 
 import bpy
 import numpy as np
@@ -368,6 +369,51 @@ def test_dropped_triangles_keep_later_objects_aligned(scene, exported):
 
 
 # -- visibility --------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("k,n", [(1, 5000), (3, 10), (7, 300_000), (2000, 700)])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_transform_matches_float64_matrices(k, n, dtype):
+    """Instances' points through their 3x3 maps plus offsets, in float64 rounded once to the
+    output type, for one instance, a few, instance blocks (7 x 300K) and many small ones; a NaN
+    input point stays NaN without a warning (the export drops it later)."""
+    rng = np.random.default_rng(k)
+    pts = rng.normal(size=(n, 3)).astype(np.float32) * 100
+    pts[n // 2] = np.nan
+    lin, off = rng.normal(size=(k, 3, 3)), rng.normal(size=(k, 3)) * 1e4
+    expect = np.einsum('kij,vj->kvi', lin, pts.astype(np.float64)) + off[:, None, :]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = export._transform(pts, lin, off, np.empty((k, n, 3), dtype))
+    assert np.isnan(got[:, n // 2]).all()
+    fin = np.isfinite(expect)
+    np.testing.assert_allclose(got[fin], expect[fin].astype(dtype), rtol=1e-12 if dtype == np.float64 else 1e-6,
+                               atol=1e-9 if dtype == np.float64 else 1e-2)
+
+
+@pytest.mark.parametrize("pattern", ["first", "last", "runs", "scattered", "all", "none"])
+def test_compact_rows_equals_boolean_indexing(pattern):
+    """The in-place removal of dropped triangles gives exactly a[keep] for every array shape the
+    export uses, whatever the drop pattern (consecutive drops, the first and last rows, all)."""
+    rng = np.random.default_rng(len(pattern))
+    m = 5000
+    keep = np.ones(m, bool)
+    if pattern == "first":
+        keep[0] = False
+    elif pattern == "last":
+        keep[-1] = False
+    elif pattern == "runs":
+        keep[10:20] = keep[100:101] = keep[4990:] = False
+    elif pattern == "scattered":
+        keep[rng.choice(m, 300, replace=False)] = False
+    elif pattern == "all":
+        keep[:] = False
+    for shape, dtype in (((m, 3), np.int32), ((m, 3, 3), np.float32), ((m,), np.uint8), ((m, 3, 2), np.float32)):
+        a = rng.integers(0, 1000, shape).astype(dtype)
+        expect = a[keep]
+        got = export._compact_rows(a, keep)
+        assert got.dtype == dtype and got.shape == expect.shape
+        np.testing.assert_array_equal(got, expect)
+
 
 def test_hidden_and_ray_visibility(scene, exported):
     setup(scene)

@@ -360,6 +360,21 @@ def test_take_columns_gathers_every_dtype_and_checks():
         shading.take_columns(idx, arrays[0], np.zeros(n + 1))
 
 
+@pytest.mark.parametrize("c", [2, 3])
+def test_corner_rows_are_corner_0_and_differences(c):
+    rng = np.random.default_rng(24 + c)
+    m = 70_001                                         # more than one thread's share
+    per = rng.normal(size=(m, 3, c)).astype(F32)
+    rows = shading.corner_rows(per)
+    assert rows.dtype == F32 and rows.shape == (3 * c, m) and rows.flags.c_contiguous
+    np.testing.assert_array_equal(rows[:c], per[:, 0].T)
+    np.testing.assert_array_equal(rows[c:2 * c], per[:, 1].T - per[:, 0].T)    # float32 differences
+    np.testing.assert_array_equal(rows[2 * c:], per[:, 2].T - per[:, 0].T)
+    assert shading.corner_rows(np.zeros((0, 3, c), F32)).shape == (3 * c, 0)
+    with pytest.raises(ValueError, match="per_corner"):
+        shading.corner_rows(np.zeros((4, 2, c), F32))
+
+
 def test_face_normals_and_flatness():
     rng = np.random.default_rng(23)
     v = rng.normal(size=(50, 3)) * 1e3 + 1e5             # float64 far from the origin

@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["triangle_table", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
+__all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
            "accumulate"]
 
 _F32 = np.float32
@@ -195,6 +195,12 @@ def face_normals(vertices, triangles, flip: float = 1.0):
     good (M,): False (normal 0) for zero-area or non-finite triangles. One threaded pass."""
     return _core.face_normals(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(triangles, np.int32),
                               float(flip))
+
+
+def corner_rows(per_corner):
+    """(M, 3, c) per-corner values -> (3c, M) float32 rows: corner 0, corner 1 - corner 0,
+    corner 2 - corner 0 (what barycentric interpolation reads). One threaded pass."""
+    return _core.corner_rows(np.ascontiguousarray(per_corner, _F32))
 
 
 def normals_flat(normals, geo, tol: float) -> bool:
