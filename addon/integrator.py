@@ -76,10 +76,13 @@ SKIP_WORK = True
 # keeping batches large enough for the tracer: DACRT re-partitions the triangles for every
 # batch, so the first pass holds at least _FIRST_PATHS_PER_TRIANGLE paths per triangle
 # (measured, 100K-triangle dragon at 64 spp: 128K-path passes 1.5 s, 1M-path passes 0.64 s).
-# Passes stop growing at _MAX_PATHS (twice that for scenes of over 512K triangles, whose
-# partitioning wants the rays): beyond ~1M paths the per-path arrays of a pass outgrow the
+# Passes stop growing at _MAX_PATHS: beyond ~1M paths the per-path arrays of a pass outgrow the
 # caches and the shading kernels turn memory-bound (Cornell box, 256 spp: 2M-path passes 15%
-# slower than 1M). The samples left are split into equal blocks, so no pass is a small remainder.
+# slower than 1M). Scenes of over 512K triangles used to get 2M-path passes (partitioning wants
+# the rays), but a pass's arrays (~300 bytes per path) are memory the first render in a process
+# must fault in: bmw27 (1.7M triangles) at 64 spp took 3.2-3.8 s cold and 2.6 s warm with 2M,
+# 2.8-2.9 s cold and 2.7-2.8 s warm with 1M, at half the peak memory. The samples left are
+# split into equal blocks, so no pass is a small remainder.
 _TARGET_PASS_SECONDS = 0.8
 _MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 20, 1 << 16
 _FIRST_PATHS_PER_TRIANGLE = 4
@@ -551,7 +554,7 @@ class Integrator:
         film_pix, frame_pix = self.camera.region_pixels()
         npix = len(film_pix)
         total = npix * self.samples
-        most = int(np.clip(2 * len(self.tri), _MAX_PATHS, 2 * _MAX_PATHS))
+        most = _MAX_PATHS
         first = int(np.clip(_FIRST_PATHS_PER_TRIANGLE * len(self.tri), _FIRST_PATHS, most))
         target = self._fixed_paths or min(first, total)
         sample, offset = 0, 0
