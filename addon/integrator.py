@@ -554,8 +554,7 @@ class Integrator:
         film_pix, frame_pix = self.camera.region_pixels()
         npix = len(film_pix)
         total = npix * self.samples
-        most = _MAX_PATHS
-        first = int(np.clip(_FIRST_PATHS_PER_TRIANGLE * len(self.tri), _FIRST_PATHS, most))
+        first = int(np.clip(_FIRST_PATHS_PER_TRIANGLE * len(self.tri), _FIRST_PATHS, _MAX_PATHS))
         target = self._fixed_paths or min(first, total)
         sample, offset = 0, 0
         adaptive = self.adaptive
@@ -597,7 +596,7 @@ class Integrator:
                     self._passes += 1
                     if self._fixed_paths is None:
                         rate = step / max(time.perf_counter() - t0, 1e-6)
-                        target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(most, 4 * step)))
+                        target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(_MAX_PATHS, 4 * step)))
                     self._render_seconds = time.perf_counter() - t_render
                     yield self._progress((self._paths_done + self._samples_skipped) / max(total, 1))
             finally:

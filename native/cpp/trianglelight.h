@@ -27,6 +27,12 @@ namespace tri_light {
 
 inline double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+inline void cross3(const double a[3], const double b[3], double out[3]) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
 // a - (a . b) b normalised (the tangent at unit b toward a); false when a is parallel to b.
 inline bool tangent(const double a[3], const double b[3], double out[3]) {
     const double k = dot3(a, b);
@@ -70,7 +76,8 @@ inline double spherical_triangle(const float* geo, size_t M, size_t w, const dou
         if (!(len > 0)) return 0.0;
         for (int a = 0; a < 3; ++a) v[a] /= len;
     }
-    const double cross[3] = {B[1] * C[2] - B[2] * C[1], B[2] * C[0] - B[0] * C[2], B[0] * C[1] - B[1] * C[0]};
+    double cross[3];
+    tri_light::cross3(B, C, cross);
     const double triple = std::fabs(tri_light::dot3(A, cross));
     const double omega = 2.0 * std::atan2(triple, 1.0 + tri_light::dot3(A, B) + tri_light::dot3(B, C) +
                                                       tri_light::dot3(C, A));
@@ -86,8 +93,8 @@ inline bool arvo_direction(const double A[3], const double B[3], const double C[
     if (!tri_light::tangent(B, A, tb) || !tri_light::tangent(C, A, tc)) return false;
     // the angle alpha at A by its cosine and sine; s, t = sin, cos of (u1 omega - alpha)
     const double cos_alpha = tri_light::dot3(tb, tc);
-    const double cross[3] = {tb[1] * tc[2] - tb[2] * tc[1], tb[2] * tc[0] - tb[0] * tc[2],
-                             tb[0] * tc[1] - tb[1] * tc[0]};
+    double cross[3];
+    tri_light::cross3(tb, tc, cross);
     const double sin_alpha = std::sqrt(tri_light::dot3(cross, cross));
     const double cos_c = tri_light::dot3(A, B);
     const double sin_x = std::sin(u1 * omega), cos_x = std::cos(u1 * omega);
@@ -116,21 +123,21 @@ inline void triangle_light(const float* geo, const float* area, size_t M, size_t
                            float u2, float wi[3], float& dist, float& pdf, float target[3]) {
     auto g = [&](int row) { return geo[size_t(row) * M + w]; };
     const double p[3] = {P[0], P[1], P[2]};
-    float q[3], d[3], len, p_solid = -1.0f;
-    bool ok;
-    double A[3], B[3], C[3], omega;
-    if (by_solid_angle(geo, M, w, p) && (omega = spherical_triangle(geo, M, w, p, A, B, C)) > 0) {
-        double D[3];
+    float q[3], d[3], len;
+    const bool solid = by_solid_angle(geo, M, w, p);
+    double omega = 0.0;
+    if (solid) {  // seen edge-on (omega 0) or a failed construction: no sample, as triangle_light_pdf says
+        double A[3], B[3], C[3], D[3];
+        omega = spherical_triangle(geo, M, w, p, A, B, C);
         const double n[3] = {g(9), g(10), g(11)}, to_v0[3] = {g(0) - p[0], g(1) - p[1], g(2) - p[2]};
-        ok = arvo_direction(A, B, C, omega, u1, u2, D);
-        const double dn = tri_light::dot3(n, D), t = ok ? tri_light::dot3(n, to_v0) / dn : 0.0;
-        ok = ok && dn != 0 && t > 0 && std::isfinite(t);
+        bool found = omega > 0 && arvo_direction(A, B, C, omega, u1, u2, D);
+        const double dn = found ? tri_light::dot3(n, D) : 0.0, t = found ? tri_light::dot3(n, to_v0) / dn : 0.0;
+        found = found && dn != 0 && t > 0 && std::isfinite(t);
         for (int a = 0; a < 3; ++a) {
-            d[a] = ok ? float(D[a]) : 0.0f;
-            q[a] = ok ? float(p[a] + D[a] * t) : P[a];
+            d[a] = found ? float(D[a]) : 0.0f;
+            q[a] = found ? float(p[a] + D[a] * t) : P[a];
         }
-        len = ok ? float(t) : 0.0f;
-        p_solid = ok ? float(1.0 / omega) : 0.0f;
+        len = found ? float(t) : 0.0f;
     } else {
         // uniform point by area: barycentrics (u2 sqrt(u1), 1 - sqrt(u1)) of vertices 1, 2
         const float su = std::sqrt(u1);
@@ -149,8 +156,8 @@ inline void triangle_light(const float* geo, const float* area, size_t M, size_t
     float cos_l = g(9) * d[0] + g(10) * d[1] + g(11) * d[2];
     const float side = cos_l <= 0 ? 1.0f : -1.0f;  // the emitter face that sees P
     cos_l = std::fabs(cos_l);
-    ok = cos_l > 0 && len > 0;
-    const float p_l = !ok ? 0.0f : p_solid >= 0 ? p_solid : len * len / (area[w] * cos_l);
+    const bool ok = cos_l > 0 && len > 0;
+    const float p_l = !ok ? 0.0f : solid ? float(1.0 / omega) : len * len / (area[w] * cos_l);
     // The shadow ray must end in front of the emitter by more than where its end can drift: a
     // few ULPs of its origin's coordinates and of its length, which can exceed the emitter's
     // own step (a small emitter seen from afar). 8 ULPs of the larger.

@@ -12,8 +12,13 @@ F32 = np.float32
 
 
 def _geo(rng, m, scale=1.0):
-    """A (15, m) triangle table as the renderer builds it (rows v0, e1, e2, unit normal, offset)."""
-    v = rng.normal(size=(m, 3, 3)) * scale
+    """A (15, m) table of random triangles as the renderer builds it (rows v0, e1, e2, unit
+    normal, offset) and their areas."""
+    return _table(rng.normal(size=(m, 3, 3)) * scale, scale)
+
+
+def _table(v, scale=1.0):
+    """The (15, m) table and areas of triangles v (m, 3 corners, 3) (float64)."""
     e1, e2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
     n = np.cross(e1, e2)
     area = 0.5 * np.linalg.norm(n, axis=1)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from dacrt import shading
 
-from .test_shading import _geo, _unit
+from .test_shading import _geo, _table, _unit
 
 F32 = np.float32
 
@@ -49,16 +49,6 @@ def vector_moment(corners, P):
     return m if m @ sum(u) > 0 else -m
 
 
-def _one(corners):
-    """geo, area of one triangle from float64 corners."""
-    v0, v1, v2 = (np.asarray(c, np.float64) for c in corners)
-    n = np.cross(v1 - v0, v2 - v0)
-    area = 0.5 * np.linalg.norm(n)
-    n /= np.linalg.norm(n)
-    geo = np.concatenate([v0, v1 - v0, v2 - v0, n, n * 1e-6]).astype(F32)[:, None]
-    return np.ascontiguousarray(geo), np.array([area], F32)
-
-
 NEAR = [  # (corners, point): large for their distance, so sampled by solid angle
     (((-6.0, -3.5, 3.5), (6.5, -3.5, 3.5), (6.5, 3.5, 3.5)), (0.3, -0.2, 1.0)),   # a ceiling panel
     (((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), (0.2, 0.2, 0.05)),      # just above it
@@ -72,7 +62,7 @@ def test_solid_angle_samples_are_uniform_over_the_spherical_triangle(corners, po
     """1/pdf is the solid angle, every sample lands on the triangle, and the sample mean of
     w / pdf matches the closed-form vector moment (3 linear moments, so a warp that crowds
     samples anywhere fails) within 5 standard errors."""
-    geo, area = _one(corners)
+    geo, area = _table(np.asarray([corners], np.float64))
     P0 = np.asarray(point, np.float64)
     n = 200_000
     rng = np.random.default_rng(31)
