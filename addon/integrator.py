@@ -408,6 +408,10 @@ class Integrator:
         # lamps never chosen (unsampled, camera-only) have 0: a BSDF hit on them weighs 1
         self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.unsampled_lamps)
                                                                         + len(lights.camera_lamps), F32)]).astype(F32)
+        tris = lights.triangles
+        self._light_choice = dacrt.shading.LightChoice(
+            self._nee_records, lights.cdf, self._entry_prob, self._entry_no_mis, self._entry_shadow,
+            *(() if tris is None else (tris.geo, tris.area, tris.emission)))
 
     def _weight_lights(self, probes: int = 32):
         """Let the light choice follow where the camera looks: a probes x probes grid of camera
@@ -828,56 +832,19 @@ class Integrator:
     def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
-        the surface point P; shadow rays leave from P_off and skip the triangle prim they leave."""
-        lights = self.lights
-        n = P.shape[1]
-        u1, u2 = self.rng.uniform2(keys, _dim(k, 1))
-        nl = lights.num_lamps
-        entry = np.zeros(n, np.int32) if u_pick is None else lights.select(u_pick)
-        wi, value = np.empty((3, n), F32), np.empty((3, n), F32)
-        dist, pdf = np.empty(n, F32), np.empty(n, F32)
-        target = None
-        if nl:       # every lamp in one native pass; entries >= nl (triangles) are left alone
-            dacrt.lamps.lamp_sample(self._nee_records, entry, P, u1, u2, out=(wi, dist, value, pdf))
-        if lights.triangles is not None:
-            tri = np.flatnonzero(entry >= nl) if nl else None
-            tP, te, tu1, tu2 = _compact(tri, P, entry, u1, u2)
-            ls = lights.triangles.sample(tP, te - nl, tu1, tu2)
-            target = np.full((3, n), np.nan, F32) if nl else ls.target
-            if nl:
-                wi[:, tri], dist[tri], value[:, tri], pdf[tri] = ls.wi, ls.dist, ls.value, ls.pdf
-                target[:, tri] = ls.target
-            else:
-                wi, dist, value, pdf = ls.wi, ls.dist, ls.value, ls.pdf
-        if self._entry_no_mis.any():
-            pdf[np.take(self._entry_no_mis, entry)] = np.inf     # NEE-only lamps: weight 1
-        shadow = None if self._entry_shadow.all() else np.take(self._entry_shadow, entry)
-        # value *= thr x cos/pi x MIS weight / p_sel (one native pass); ok: can contribute
-        value = np.ascontiguousarray(value, F32)
-        ok = dacrt.shading.nee_weight(ns, None if ns is ng else ng, wi, pdf, np.take(self._entry_prob, entry),
-                                      thr, value)
-        if not SKIP_WORK:                             # trace every sample's shadow ray; those that
-            value[:, ~ok] = 0.0                       # cannot contribute add zero
-            ok = np.ones(n, bool)
-        send = np.flatnonzero(ok if shadow is None else ok & shadow)
-        self._skipped_shadow += n - int(np.count_nonzero(ok))
+        the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
+        The light choice, the sample, its weight and its shadow ray are one native pass
+        (dacrt.shading.next_event); emitters that are geometry are aimed at the offset point in
+        front of them, a little short (the tracer can skip only one triangle: the one left)."""
+        ka, kb = self.rng.dim_words(_dim(k, 1))
+        value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
+            self._light_choice, P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
+            prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK)
+        self._skipped_shadow += skipped
         if len(send):
-            # emitters that are geometry: aim at the offset point in front of them and stop a
-            # little short (the tracer can skip only one triangle: the one left behind)
-            rays, valid = dacrt.shading.shadow_rays(P_off, wi, dist, target, send, _END_SHORTEN)
-            occ = self._occluded_rays(rays, _compact(send, prim)[0])
-            send = send[valid & ~occ]
-        if shadow is not None:
-            free = np.flatnonzero(ok & ~shadow)
-            if len(free):
-                send = np.concatenate([send, free])
-        if len(send):
-            _accumulate(L, *_compact(send, pid, value))
-
-
-def _accumulate(L, idx, values):
-    """L[:, idx] += values for distinct idx (one native pass)."""
-    dacrt.shading.accumulate(L, idx, values)
+            occ = self._occluded_rays(rays, skip)
+            contrib[send[occ]] = False
+        dacrt.shading.accumulate_masked(L, pid, value, contrib)
 
 
 def _compact(idx, *arrays):

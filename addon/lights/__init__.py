@@ -135,8 +135,3 @@ class LightSet:
     def seen_by_bsdf(self) -> bool:
         """Whether BSDF rays can collect any light (emissive triangles, visible lamps, world)."""
         return self.triangles is not None or any(l.seen_by_bsdf for l in self.lamps + self.unsampled_lamps)
-
-    def select(self, u: np.ndarray) -> np.ndarray:
-        """Entry per uniform: 0..num_lamps-1 are lamps, num_lamps + j is triangles.index[j]."""
-        e = np.searchsorted(self.cdf, u, side='right')
-        return np.minimum(e, self.num_entries - 1).astype(np.int32)

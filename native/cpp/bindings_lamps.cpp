@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "lamps.h"
+#include "nextevent.h"
 
 namespace py = pybind11;
 using namespace dacrt;
@@ -160,6 +161,123 @@ py::dict lamp_record_layout() {
     return d;
 }
 
+// The per-entry tables of a light choice over R lamp records and T emissive triangles.
+LightChoice light_choice(const F32Array& records, const py::array_t<double, py::array::c_style>& cdf,
+                         const F32Array& prob, const py::array_t<bool, py::array::c_style>& no_mis,
+                         const py::array_t<bool, py::array::c_style>& shadow, const py::object& tri_geo,
+                         const py::object& tri_area, const py::object& tri_emission, F32Array keep[3]) {
+    LightChoice c{};
+    c.lamps = lamp_records(records);
+    c.num_lamps = size_t(records.shape(0));
+    if (tri_geo.is_none() != tri_area.is_none() || tri_geo.is_none() != tri_emission.is_none())
+        throw py::value_error("tri_geo, tri_area and tri_emission go together (all None: no emissive triangles)");
+    if (!tri_geo.is_none()) {
+        keep[0] = tri_geo.cast<F32Array>();
+        if (keep[0].ndim() != 2 || keep[0].shape(0) != 15)
+            throw py::value_error("tri_geo must have shape (15, T), got " + shape_str(keep[0]));
+        c.num_tris = size_t(keep[0].shape(1));
+        c.tri_geo = keep[0].data();
+        c.tri_area = optional_f32(tri_area, 0, c.num_tris, "tri_area", keep[1]);
+        c.tri_emission = optional_f32(tri_emission, 3, c.num_tris, "tri_emission", keep[2]);
+    }
+    c.entries = c.num_lamps + c.num_tris;
+    if (c.entries == 0) throw py::value_error("there is no light to choose (no lamp records, no triangles)");
+    need_shape(cdf, 0, c.entries, "cdf");
+    need_shape(prob, 0, c.entries, "prob");
+    need_shape(no_mis, 0, c.entries, "no_mis");
+    need_shape(shadow, 0, c.entries, "shadow");
+    c.cdf = cdf.data();
+    c.prob = prob.data();
+    c.no_mis = reinterpret_cast<const uint8_t*>(no_mis.data());
+    c.shadow = reinterpret_cast<const uint8_t*>(shadow.data());
+    return c;
+}
+
+py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style> cdf, F32Array prob,
+                     py::array_t<bool, py::array::c_style> no_mis, py::array_t<bool, py::array::c_style> shadow,
+                     py::object tri_geo, py::object tri_area, py::object tri_emission, F32Array P, F32Array P_off,
+                     F32Array ns, py::object ng, py::object thr, py::array_t<uint32_t, py::array::c_style> keys,
+                     uint32_t ka, uint32_t kb, py::object pick, py::object prim, float shorten, bool skip_work,
+                     py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
+                     py::array_t<int64_t, py::array::c_style> send, py::object skip) {
+    F32Array keep[3], ng_keep, thr_keep;
+    const LightChoice lights = light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, keep);
+    if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
+    VertexPoints pts{};
+    pts.n = size_t(P.shape(1));
+    const size_t n = pts.n;
+    need_shape(P_off, 3, n, "P_off");
+    need_shape(ns, 3, n, "ns");
+    need_shape(keys, 2, n, "keys");
+    pts.P = P.data();
+    pts.P_off = P_off.data();
+    pts.ns = ns.data();
+    pts.ng = optional_f32(ng, 3, n, "ng", ng_keep);
+    pts.thr = optional_f32(thr, 3, n, "thr", thr_keep);
+    pts.keys = keys.data();
+    pts.ka = ka;
+    pts.kb = kb;
+    py::array_t<double, py::array::c_style> pick_keep;
+    if (!pick.is_none()) {
+        pick_keep = pick.cast<py::array_t<double, py::array::c_style>>();
+        need_shape(pick_keep, 0, n, "pick");
+        pts.pick = pick_keep.data();
+    } else if (lights.entries > 1) {
+        throw py::value_error("pick (the light-choice uniforms) is needed with more than one light");
+    }
+    I32Array prim_keep;
+    if (!prim.is_none()) {
+        prim_keep = prim.cast<I32Array>();
+        need_shape(prim_keep, 0, n, "prim");
+        pts.prim = prim_keep.data();
+    }
+    pts.shorten = shorten;
+    pts.skip_work = skip_work;
+    NextEventOut out{};
+    out.value = out_array(value, 3, n, "value");
+    if (!contrib.writeable()) throw py::value_error("contrib must be writeable");
+    need_shape(contrib, 0, n, "contrib");
+    out.contrib = reinterpret_cast<uint8_t*>(contrib.mutable_data());
+    if (rays.ndim() != 1 || size_t(rays.shape(0)) != n || rays.itemsize() != sizeof(Ray) ||
+        !(rays.flags() & py::array::c_style) || !rays.writeable())
+        throw py::value_error("rays must be a writeable contiguous (" + std::to_string(n) + ",) array of ray records");
+    out.rays = static_cast<Ray*>(rays.mutable_data());
+    if (!send.writeable()) throw py::value_error("send must be writeable");
+    need_shape(send, 0, n, "send");
+    out.send = send.mutable_data();
+    I32Array skip_keep;
+    if (!skip.is_none()) {
+        if (!pts.prim) throw py::value_error("skip (the triangle each shadow ray leaves) needs prim");
+        skip_keep = skip.cast<I32Array>();
+        if (!skip_keep.writeable()) throw py::value_error("skip must be writeable");
+        need_shape(skip_keep, 0, n, "skip");
+        out.skip = skip_keep.mutable_data();
+    }
+    size_t m, bad;
+    {
+        py::gil_scoped_release nogil;
+        m = next_event(lights, pts, out, &bad);
+    }
+    return py::make_tuple(m, bad);
+}
+
+void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_t<bool, py::array::c_style> mask) {
+    if (L.ndim() != 2 || L.shape(0) != 3) throw py::value_error("L must have shape (3, N), got " + shape_str(L));
+    const size_t N = size_t(L.shape(1));
+    float* l = out_array(L, 3, N, "L");
+    if (pid.ndim() != 1) throw py::value_error("pid must be one-dimensional, got " + shape_str(pid));
+    const size_t n = size_t(pid.shape(0));
+    need_shape(values, 3, n, "values");
+    need_shape(mask, 0, n, "mask");
+    bool ok;
+    {
+        py::gil_scoped_release nogil;
+        ok = accumulate_masked(l, N, pid.data(), values.data(), reinterpret_cast<const uint8_t*>(mask.data()), n);
+    }
+    if (!ok) throw py::value_error("pid holds a column outside 0.." + std::to_string(N ? N - 1 : 0) + " (L has " +
+                                   std::to_string(N) + ") where mask is set");
+}
+
 }  // namespace
 
 void register_lamps(py::module_& m) {
@@ -170,4 +288,10 @@ void register_lamps(py::module_& m) {
     m.def("lamp_gather", &lamp_gather_py, py::arg("records"), py::arg("lamps"), py::arg("lamp_prob"), py::arg("O"),
           py::arg("D"), py::arg("t_surf"), py::arg("miss"), py::arg("thr"), py::arg("pdf_bsdf"), py::arg("pid"),
           py::arg("L"));
+    m.def("next_event", &next_event_py, py::arg("records"), py::arg("cdf"), py::arg("prob"), py::arg("no_mis"),
+          py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("P"),
+          py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),
+          py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
+          py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"));
+    m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"));
 }

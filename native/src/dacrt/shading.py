@@ -13,7 +13,7 @@ from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
 __all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
-           "accumulate"]
+           "accumulate", "LightChoice", "next_event", "accumulate_masked"]
 
 _F32 = np.float32
 
@@ -143,6 +143,71 @@ def shadow_rays(O, wi, dist, target, idx, shorten: float = 1.0):
     valid = _core.shadow_rays(_rows(O, 3, "O"), _rows(wi, 3, "wi"), np.ascontiguousarray(dist, _F32),
                               None if target is None else _rows(target, 3, "target"), idx, float(shorten), out)
     return out, valid
+
+
+class LightChoice:
+    """What next_event() picks a light from: R lamp records (dacrt.lamps layout) as entries
+    0..R-1, then T emissive triangles (tri_geo (15, T) rows as in surface(), tri_area (T,),
+    tri_emission (3, T) radiance; None: no triangles) as entries R..R+T-1. Per entry: cdf (the
+    choice: entry = first with cdf > u), prob (its probability), no_mis (sampled without MIS,
+    weight 1, as a delta light) and shadow (its samples need a shadow ray). Arrays are
+    converted once here, not per call."""
+
+    def __init__(self, records, cdf, prob, no_mis, shadow, tri_geo=None, tri_area=None, tri_emission=None):
+        self.records = np.ascontiguousarray(np.asarray(records, _F32).reshape(-1, _core.LAMP_RECORD_WIDTH))
+        self.cdf = np.ascontiguousarray(cdf, np.float64)
+        self.prob = np.ascontiguousarray(prob, _F32)
+        self.no_mis = np.ascontiguousarray(no_mis, np.bool_)
+        self.shadow = np.ascontiguousarray(shadow, np.bool_)
+        self.tri_geo = None if tri_geo is None else _rows(tri_geo, 15, "tri_geo")
+        self.tri_area = None if tri_area is None else np.ascontiguousarray(tri_area, _F32)
+        self.tri_emission = None if tri_emission is None else _rows(tri_emission, 3, "tri_emission")
+
+    @property
+    def entries(self) -> int:
+        return len(self.records) + (0 if self.tri_geo is None else self.tri_geo.shape[1])
+
+
+def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: int, pick=None, prim=None,
+               shorten: float = 1.0, skip_work: bool = True):
+    """Next-event estimation at n shading points in one pass: pick a light per point (entry 0
+    when pick is None, else the entry the uniform pick (n,) float64 falls in), sample it with
+    the uniforms of keys (2, n) and dimension words (ka, kb) (the same numbers as uniform2),
+    weight the sample as nee_weight (shading and geometric normals ns, ng (3, n), ng None: ns;
+    throughput thr (3, n) or None) and make its shadow ray as shadow_rays (from P_off (3, n);
+    toward a triangle's target point, times shorten). P (3, n): the surface points.
+
+    Returns value (3, n) (each sample's contribution), contrib (n,) bool (it adds to the image
+    unless its shadow ray is occluded), rays (m,) RAY_DTYPE (ids 0..m-1, in point order), send
+    (m,) int64 (the point of each ray), skip (m,) int32 (prim[send], the triangle each ray
+    leaves; None without prim) and how many samples could not contribute (no ray traced).
+    skip_work False: every sample that is not zero-length gets its ray (value 0 where it cannot
+    contribute), the reference the skips are tested against."""
+    P = _rows(P, 3, "P")
+    n = P.shape[1]
+    value = np.empty((3, n), _F32)
+    contrib = np.empty(n, np.bool_)
+    rays = np.empty(n, RAY_DTYPE)
+    send = np.empty(n, np.int64)
+    skip = None if prim is None else np.empty(n, np.int32)
+    opt = lambda a, name: None if a is None else _rows(a, 3, name)
+    m, skipped = _core.next_event(
+        lights.records, lights.cdf, lights.prob, lights.no_mis, lights.shadow, lights.tri_geo, lights.tri_area,
+        lights.tri_emission, P, _rows(P_off, 3, "P_off"), _rows(ns, 3, "ns"), opt(ng, "ng"), opt(thr, "thr"),
+        _rows(keys, 2, "keys", np.uint32), int(ka), int(kb),
+        None if pick is None else np.ascontiguousarray(pick, np.float64),
+        None if prim is None else np.ascontiguousarray(prim, np.int32), float(shorten), bool(skip_work),
+        value, contrib, rays, send, skip)
+    return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
+
+
+def accumulate_masked(L, pid, values, mask) -> None:
+    """L[:, pid[i]] += values[:, i] where mask[i] (n,) bool; pid (n,) distinct; L (3, N)
+    float32 C-contiguous, values (3, n)."""
+    if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
+        raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
+    _core.accumulate_masked(L, np.ascontiguousarray(pid, np.int64), _rows(values, 3, "values"),
+                            np.ascontiguousarray(mask, np.bool_))
 
 
 def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, thr, pdf, pid, L) -> int:

@@ -1,0 +1,141 @@
+// Next-event estimation at a path vertex in one pass (see nextevent.h). The steps and their
+// float32 arithmetic are those of the separate kernels it fuses (uniform2_rows, the light
+// choice, sample_lamp / triangle_light, nee_scale, shadow_record), so it gives the same bits.
+#include "nextevent.h"
+
+#include <algorithm>
+#include <atomic>
+#include <memory>
+#include <vector>
+
+#include "parallel.h"
+#include "pathvertex.h"
+#include "random.h"
+#include "trianglelight.h"
+
+namespace dacrt {
+
+namespace {
+
+constexpr size_t kBlock = 4096;  // paths per block: blocks compact their shadow rays on their own
+
+// The entry a uniform picks: the first with cdf > u (numpy's searchsorted side='right'), at
+// most the last.
+inline size_t choose(const double* cdf, size_t entries, double u) {
+    const size_t e = size_t(std::upper_bound(cdf, cdf + entries, u) - cdf);
+    return e < entries ? e : entries - 1;
+}
+
+struct Pending {  // a shadow ray before its block's place in the output is known
+    Ray ray;
+    int64_t path;
+};
+
+// Paths [b, e): value and contrib in place, shadow rays to pending[b, b + count); returns the
+// count. Arguments by value, so the loop reads them from registers or its own stack (see
+// lamps.cpp).
+size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* contrib, Pending* pending, size_t b,
+                   size_t e, size_t* skipped) {
+    const size_t n = p.n, T = L.num_tris;
+    size_t m = b, bad = 0;
+    for_words(p.keys, n, p.ka, p.kb, b, e, [&](size_t i0, size_t cnt, const uint32_t* wa, const uint32_t* wb) {
+        for (size_t j = 0; j < cnt; ++j) {
+            const size_t i = i0 + j;
+            const float u1 = unit24(wa[j]), u2 = unit24(wb[j]);
+            const size_t entry = p.pick ? choose(L.cdf, L.entries, p.pick[i]) : 0;
+            const float P[3] = {p.P[i], p.P[n + i], p.P[2 * n + i]};
+            float wi[3], dist, pdf, value[3], target[3];
+            const bool lamp = entry < L.num_lamps;
+            if (lamp) {
+                const LampSample s = sample_lamp(L.lamps[entry], P, u1, u2);
+                for (int a = 0; a < 3; ++a) wi[a] = s.wi[a], value[a] = s.value[a];
+                dist = s.dist;
+                pdf = s.pdf;
+            } else {
+                const size_t w = entry - L.num_lamps;
+                triangle_light(L.tri_geo, L.tri_area, T, w, P, u1, u2, wi, dist, pdf, target);
+                const float scale = pdf > 0 ? 1.0f / pdf : 0.0f;
+                for (int a = 0; a < 3; ++a) value[a] = L.tri_emission[size_t(a) * T + w] * scale;
+            }
+            if (L.no_mis[entry]) pdf = lampmath::INF;
+            float ns[3], ng[3], thr[3];
+            for (int a = 0; a < 3; ++a) {
+                ns[a] = p.ns[size_t(a) * n + i];
+                if (p.ng) ng[a] = p.ng[size_t(a) * n + i];
+                if (p.thr) thr[a] = p.thr[size_t(a) * n + i];
+            }
+            bool ok = nee_scale(ns, p.ng ? ng : nullptr, wi, pdf, L.prob[entry], p.thr ? thr : nullptr, value);
+            if (!p.skip_work) {  // every sample is traced; one that cannot contribute adds 0
+                if (!ok) value[0] = value[1] = value[2] = 0.0f;
+                ok = true;
+            }
+            for (int a = 0; a < 3; ++a) value_out[size_t(a) * n + i] = value[a];
+            bool adds = ok;
+            if (!ok) {
+                ++bad;
+            } else if (L.shadow[entry]) {
+                const float O[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
+                Pending& q = pending[m];
+                // a zero-length ray (the point lies on the light) is not traced and adds nothing
+                adds = shadow_record(O, wi, dist, lamp ? nullptr : target, p.shorten, q.ray);
+                if (adds) q.path = int64_t(i), ++m;
+            }
+            contrib[i] = adds;
+        }
+    });
+    *skipped = bad;
+    return m - b;
+}
+
+}  // namespace
+
+size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped) {
+    const size_t n = pts.n, blocks = (n + kBlock - 1) / kBlock;
+    std::unique_ptr<Pending[]> pending(new Pending[n ? n : 1]);
+    std::vector<size_t> count(blocks), bad(blocks), offset(blocks);
+    parallel_for(blocks, [&](size_t b0, size_t b1) {
+        for (size_t k = b0; k < b1; ++k)
+            count[k] = event_block(lights, pts, out.value, out.contrib, pending.get(), k * kBlock,
+                                   std::min(n, (k + 1) * kBlock), &bad[k]);
+    }, 1);
+    size_t m = 0, skip_count = 0;
+    for (size_t k = 0; k < blocks; ++k) {
+        offset[k] = m;
+        m += count[k];
+        skip_count += bad[k];
+    }
+    parallel_for(blocks, [&](size_t b0, size_t b1) {
+        for (size_t k = b0; k < b1; ++k) {
+            const Pending* src = pending.get() + k * kBlock;
+            for (size_t j = 0; j < count[k]; ++j) {
+                const size_t d = offset[k] + j;
+                out.rays[d] = src[j].ray;
+                out.rays[d].id = uint32_t(d);
+                out.send[d] = src[j].path;
+                if (out.skip) out.skip[d] = pts.prim[src[j].path];
+            }
+        }
+    }, 16);
+    *skipped = skip_count;
+    return m;
+}
+
+bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n) {
+    std::atomic<bool> in_range{true};
+    parallel_for(n, [&](size_t b, size_t e) {
+        bool ok = true;
+        for (size_t i = b; i < e; ++i) ok &= !mask[i] || (pid[i] >= 0 && uint64_t(pid[i]) < N);
+        if (!ok) in_range.store(false, std::memory_order_relaxed);
+    }, size_t(1) << 17);
+    if (!in_range.load()) return false;  // checked first: a refused call leaves L as it was
+    parallel_for(n, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            if (!mask[i]) continue;
+            const size_t j = size_t(pid[i]);
+            for (int a = 0; a < 3; ++a) L[size_t(a) * N + j] += values[size_t(a) * n + i];
+        }
+    }, size_t(1) << 17);
+    return true;
+}
+
+}  // namespace dacrt

@@ -1,0 +1,75 @@
+// Next-event estimation at a path vertex in one pass (nextevent.cpp): pick a light (lamps and
+// emissive triangles share one selection table), sample it, weight the sample by MIS against
+// the BSDF and write the shadow ray that tests it. Per vertex this replaces a dozen kernels and
+// numpy steps, each its own pass over the paths' arrays, with one.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "lamps.h"
+#include "ray.h"
+
+namespace dacrt {
+
+// What light sampling chooses from: entries 0..num_lamps-1 are lamps, num_lamps + j is
+// emissive triangle j of tri_geo (15 rows of num_tris, as surface() reads; area per triangle;
+// emission: radiance, 3 rows of num_tris). Per entry: cdf (the choice), prob (its probability),
+// no_mis (sampled without MIS: weight 1, as a delta light), shadow (its samples need a shadow ray).
+struct LightChoice {
+    const LampRecord* lamps;
+    size_t num_lamps;
+    const float* tri_geo;
+    const float* tri_area;
+    const float* tri_emission;
+    size_t num_tris;
+    const double* cdf;
+    const float* prob;
+    const uint8_t* no_mis;
+    const uint8_t* shadow;
+    size_t entries;  // num_lamps + num_tris
+};
+
+// The n shading points of one vertex. P: surface points, P_off: shadow-ray origins; ns, ng:
+// shading and geometric normals (ng null: same as ns); thr: throughput including this vertex's
+// albedo (null: 1); all 3 rows of stride n. keys: path keys (2 rows), (ka, kb): the light
+// position's dimension words; pick: the light-choice uniforms (null: entry 0, a single light);
+// prim: the triangle each point lies on (null: no skip output). shorten: a shadow ray aimed
+// at an emitter point ends that fraction of the way. skip_work false: every sample gets its
+// shadow ray, those that cannot contribute with value 0 (the reference the skips are tested
+// against).
+struct VertexPoints {
+    const float* P;
+    const float* P_off;
+    const float* ns;
+    const float* ng;
+    const float* thr;
+    const uint32_t* keys;
+    uint32_t ka, kb;
+    const double* pick;
+    const int32_t* prim;
+    size_t n;
+    float shorten;
+    bool skip_work;
+};
+
+// value (3 rows of n): the sample's contribution, thr x radiance / pdf x cos/pi x MIS / p_sel;
+// contrib[i] = 1 where it adds to the image unless its shadow ray is occluded. The shadow rays
+// (ids 0..m-1, in path order) go to rays[0..m), their path columns to send and, with prim, the
+// triangle each leaves to skip; rays, send and skip must hold n. Returns m; *skipped counts
+// the samples that could not contribute (no shadow ray traced).
+struct NextEventOut {
+    float* value;
+    uint8_t* contrib;
+    Ray* rays;
+    int64_t* send;
+    int32_t* skip;
+};
+
+size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped);
+
+// L[:, pid[i]] (stride N) += values[:, i] (stride n) where mask[i]; pid distinct. False (L
+// untouched) when a masked pid is outside 0..N-1.
+bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n);
+
+}  // namespace dacrt

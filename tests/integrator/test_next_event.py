@@ -1,0 +1,181 @@
+"""The fused next-event kernel (dacrt.shading.next_event) against the kernels it replaces,
+composed as the integrator used to compose them: uniform2 for the light position, the light
+choice by searchsorted on the CDF, lamp_sample for lamps, sample_triangles (value = emission /
+pdf) for emissive triangles, pdf = inf for entries without MIS, nee_weight, shadow_rays. Both
+run the same float32 arithmetic, so the results must be bit for bit the same. Also
+accumulate_masked, and the argument checks."""
+import dacrt
+import numpy as np
+import pytest
+from dacrt import shading
+
+from addon.lights import lamp_records
+from addon.lights.base import RECORD_WIDTH
+
+from ..native.test_shading import _geo, _unit
+from .test_native_lamps import NAMES, make, points
+
+F32 = np.float32
+SHORTEN = F32(1.0 - 2.0 ** -16)
+
+
+def _lights(rng, lamps: bool, triangles: bool):
+    """A LightChoice over every lamp variant and/or 40 emissive triangles near the lamps, with
+    random selection probabilities and no-MIS / shadow flags."""
+    recs = lamp_records([make(name) for name in NAMES]) if lamps else np.zeros((0, RECORD_WIDTH), F32)
+    T = 40 if triangles else 0
+    geo, area = _geo(rng, T, scale=0.8) if T else (None, None)
+    if T:
+        geo[0:3] += np.array([0.3, -0.7, 1.2], F32)[:, None]      # around the lamps' centre
+    emission = rng.uniform(0.5, 20.0, (3, T)).astype(F32) if T else None
+    E = len(recs) + T
+    p = rng.uniform(0.2, 1.0, E)
+    p /= p.sum()
+    cdf = np.cumsum(p)
+    cdf[-1] = 1.0
+    no_mis = rng.random(E) < 0.3
+    shadow = rng.random(E) < 0.8
+    no_mis[len(recs):] = False                                      # as the integrator: triangles use MIS
+    shadow[len(recs):] = True
+    return shading.LightChoice(recs, cdf, p.astype(F32), no_mis, shadow, geo, area, emission)
+
+
+def _composed(lc, P, P_off, ns, ng, thr, keys, ka, kb, pick, prim, skip_work):
+    """The pre-fusion integrator code path (value, contrib, rays, send, skip, skipped)."""
+    n = P.shape[1]
+    R = len(lc.records)
+    u1, u2 = shading.uniform2(keys, ka, kb)
+    entry = np.zeros(n, np.int32) if pick is None else \
+        np.minimum(np.searchsorted(lc.cdf, pick, side='right'), lc.entries - 1).astype(np.int32)
+    wi, value = np.zeros((3, n), F32), np.zeros((3, n), F32)
+    dist, pdf = np.zeros(n, F32), np.zeros(n, F32)
+    target = np.full((3, n), np.nan, F32)
+    if R:
+        dacrt.lamps.lamp_sample(lc.records, entry, P, u1, u2, out=(wi, dist, value, pdf))
+    tri = np.flatnonzero(entry >= R)
+    if len(tri):
+        w = entry[tri] - R
+        twi, tdist, tpdf, ttarget = shading.sample_triangles(lc.tri_geo, lc.tri_area, w, P[:, tri], u1[tri], u2[tri])
+        with np.errstate(divide='ignore'):
+            scale = np.where(tpdf > 0, F32(1.0) / tpdf, F32(0.0))
+        wi[:, tri], dist[tri], pdf[tri], target[:, tri] = twi, tdist, tpdf, ttarget
+        value[:, tri] = lc.tri_emission[:, w] * scale
+    pdf[lc.no_mis[entry]] = np.inf
+    ok = shading.nee_weight(ns, ng, wi, pdf, lc.prob[entry], thr, value)
+    if not skip_work:
+        value[:, ~ok] = 0.0
+        ok = np.ones(n, bool)
+    shadow = lc.shadow[entry]
+    send = np.flatnonzero(ok & shadow)
+    rays, valid = shading.shadow_rays(P_off, wi, dist, target, send, SHORTEN)
+    contrib = ok.copy()
+    contrib[send[~valid]] = False
+    rays, send = rays[valid], send[valid]
+    rays['id'] = np.arange(len(send), dtype=np.uint32)
+    return value, contrib, rays, send, None if prim is None else prim[send], n - int(np.count_nonzero(ok))
+
+
+def _points(rng, n, *, flat: bool, thr: bool):
+    P = points(rng, n)
+    ng = _unit(rng, n)
+    ns = ng if flat else _unit(rng, n)
+    P_off = P + F32(1e-4) * ng
+    keys = np.stack([rng.integers(0, 2**32, n, dtype=np.uint32), rng.integers(0, 4096, n, dtype=np.uint32)])
+    return P, P_off, ns, None if flat else ng, rng.uniform(0.0, 1.5, (3, n)).astype(F32) if thr else None, keys
+
+
+@pytest.mark.parametrize('lamps,triangles', [(True, True), (True, False), (False, True)])
+@pytest.mark.parametrize('flat,thr,skip_work', [(False, True, True), (True, False, True), (False, True, False)])
+def test_next_event_equals_the_composed_kernels(lamps, triangles, flat, thr, skip_work):
+    rng = np.random.default_rng(11 + 2 * lamps + triangles)
+    lc = _lights(rng, lamps, triangles)
+    n = 30_000
+    P, P_off, ns, ng, th, keys = _points(rng, n, flat=flat, thr=thr)
+    pick = rng.random(n)
+    prim = rng.integers(0, 1000, n).astype(np.int32)
+    ka, kb = 0x1234567, 0x89ABCDE
+    got = shading.next_event(lc, P, P_off, ns, ng, th, keys, ka, kb, pick=pick, prim=prim, shorten=SHORTEN,
+                             skip_work=skip_work)
+    ref = _composed(lc, P, P_off, ns, ng, th, keys, ka, kb, pick, prim, skip_work)
+    for name, a, b in zip(('value', 'contrib', 'rays', 'send', 'skip'), got[:5], ref[:5]):
+        assert a.dtype == b.dtype and a.shape == b.shape, name
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), f'{name} differs'
+    assert got[5] == ref[5]
+    # the case mix the comparison covers: every outcome occurs
+    value, contrib, rays, send, skip, skipped = got
+    assert len(send) and contrib.any()
+    if skip_work:
+        assert skipped > 0 and (~contrib).any() and len(send) < n
+    else:
+        assert skipped == 0
+    if lamps:
+        assert (contrib & ~np.isin(np.arange(n), send)).any(), 'no sample that needs no shadow ray'
+
+
+def test_single_light_needs_no_pick_and_more_lights_do():
+    rng = np.random.default_rng(5)
+    rec = lamp_records([make('area_square')])
+    one = shading.LightChoice(rec, [1.0], [1.0], [False], [True])
+    n = 2000
+    P, P_off, ns, ng, thr, keys = _points(rng, n, flat=True, thr=True)
+    got = shading.next_event(one, P, P_off, ns, ng, thr, keys, 3, 4)
+    ref = _composed(one, P, P_off, ns, ng, thr, keys, 3, 4, None, None, True)
+    assert got[4] is None
+    for a, b in zip(got[:4], ref[:4]):
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8))
+    lc = _lights(rng, True, True)
+    with pytest.raises(ValueError, match='pick'):
+        shading.next_event(lc, P, P_off, ns, ng, thr, keys, 3, 4)
+
+
+def test_next_event_checks_its_arguments():
+    rng = np.random.default_rng(6)
+    lc = _lights(rng, True, True)
+    n = 100
+    P, P_off, ns, ng, thr, keys = _points(rng, n, flat=False, thr=True)
+    pick = rng.random(n)
+    call = lambda lights=lc, **kw: shading.next_event(lights, **{**dict(
+        P=P, P_off=P_off, ns=ns, ng=ng, thr=thr, keys=keys, ka=1, kb=2, pick=pick), **kw})
+    with pytest.raises(ValueError, match='P_off'):
+        call(P_off=P_off[:, :50])
+    with pytest.raises(ValueError, match='pick'):
+        call(pick=pick[:50])
+    with pytest.raises(ValueError, match='keys'):
+        call(keys=keys[:1])
+    bad = shading.LightChoice(lc.records, lc.cdf[:-1], lc.prob, lc.no_mis, lc.shadow, lc.tri_geo, lc.tri_area,
+                              lc.tri_emission)
+    with pytest.raises(ValueError, match='cdf'):
+        call(bad)
+    half = shading.LightChoice(lc.records, lc.cdf, lc.prob, lc.no_mis, lc.shadow, lc.tri_geo, None, None)
+    with pytest.raises(ValueError, match='go together'):
+        call(half)
+    broken = lc.records.copy()
+    broken[0, 0] = 99.0                                             # not a lamp kind
+    with pytest.raises(ValueError, match='records\\[0\\]'):
+        call(shading.LightChoice(broken, lc.cdf, lc.prob, lc.no_mis, lc.shadow, lc.tri_geo, lc.tri_area,
+                                 lc.tri_emission))
+    empty = shading.LightChoice(np.zeros((0, RECORD_WIDTH), F32), [], [], [], [])
+    with pytest.raises(ValueError, match='no light'):
+        call(empty, pick=None)
+
+
+def test_accumulate_masked_adds_selected_columns():
+    rng = np.random.default_rng(8)
+    N, n = 500, 300
+    L = rng.random((3, N)).astype(F32)
+    pid = rng.permutation(N)[:n].astype(np.int64)
+    values = rng.random((3, n)).astype(F32)
+    mask = rng.random(n) < 0.6
+    want = L.copy()
+    want[:, pid[mask]] += values[:, mask]
+    shading.accumulate_masked(L, pid, values, mask)
+    assert np.array_equal(L, want)
+    bad = pid.copy()
+    bad[np.flatnonzero(mask)[0]] = N
+    before = L.copy()
+    with pytest.raises(ValueError, match='outside'):
+        shading.accumulate_masked(L, bad, values, mask)
+    assert np.array_equal(L, before), 'a refused call changed L'
+    masked_out = pid.copy()
+    masked_out[np.flatnonzero(~mask)[0]] = N                        # a masked-out column is never read
+    shading.accumulate_masked(L, masked_out, values, mask)
