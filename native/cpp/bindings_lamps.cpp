@@ -275,7 +275,7 @@ void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_
         ok = accumulate_masked(l, N, pid.data(), values.data(), reinterpret_cast<const uint8_t*>(mask.data()), n);
     }
     if (!ok) throw py::value_error("pid holds a column outside 0.." + std::to_string(N ? N - 1 : 0) + " (L has " +
-                                   std::to_string(N) + ") where mask is set");
+                                   std::to_string(N) + ")");
 }
 
 }  // namespace

@@ -202,8 +202,8 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
 
 
 def accumulate_masked(L, pid, values, mask) -> None:
-    """L[:, pid[i]] += values[:, i] where mask[i] (n,) bool; pid (n,) distinct; L (3, N)
-    float32 C-contiguous, values (3, n)."""
+    """L[:, pid[i]] += values[:, i] where mask[i] (n,) bool; pid (n,) distinct columns of L (every
+    one, masked or not); L (3, N) float32 C-contiguous, values (3, n)."""
     if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
         raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
     _core.accumulate_masked(L, np.ascontiguousarray(pid, np.int64), _rows(values, 3, "values"),
