@@ -26,18 +26,16 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
     std::atomic<size_t> black{0}, rr{0};
     parallel_for(n, [&](size_t b, size_t e) {
         size_t nb = 0, nr = 0;
+        // branch-free per path (hits, black surfaces and roulette follow no pattern); the
+        // triangle index is clamped before live[] is read
         for (size_t i = b; i < e; ++i) {
             const int32_t p = hits[i].prim;
-            bool k = hit[i] && p >= 0 && size_t(p) < M;
-            if (k && !live[p]) {
-                k = false;
-                ++nb;
-            }
-            if (k && u_rr && !(u_rr[i] < survival(thr, n, i))) {
-                k = false;
-                ++nr;
-            }
-            keep[i] = k;
+            const bool on = (hit[i] != 0) & (p >= 0) & (size_t(p) < M);
+            const bool alive = on & (live[on ? size_t(p) : 0] != 0);
+            const bool lucky = !u_rr || u_rr[i] < survival(thr, n, i);
+            nb += on & !alive;
+            nr += alive & !lucky;
+            keep[i] = alive & lucky;
         }
         black += nb;
         rr += nr;
@@ -45,8 +43,10 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
     *dead_black = black.load();
     *dead_rr = rr.load();
     size_t k = 0;
-    for (size_t i = 0; i < n; ++i)
-        if (keep[i]) idx[k++] = int64_t(i);
+    for (size_t i = 0; i < n; ++i) {  // branch-free: which paths survive is not predictable
+        idx[k] = int64_t(i);
+        k += keep[i];
+    }
     return k;
 }
 
