@@ -17,10 +17,10 @@ in the constructor and dropped when rendering ends. Nothing here knows Blender.
 
 Per-ray data are (3, n) float32 structure-of-arrays; paths that end are compacted away after
 every vertex. The per-vertex arithmetic that numpy would run as dozens of passes on one core
-(camera rays, hit points, bounce directions and their ray records, lamp samples and lamp hits
-(dacrt.lamps), samples on emissive triangles, emission hits, next-event weights, shadow rays,
-compaction, accumulation, random numbers) runs in the native kernels of dacrt.shading, one
-threaded pass each; freed pass arrays stay in the heap while a render runs (allocator.py).
+(camera rays, hit points, bounce directions and their ray records, lamp hits (dacrt.lamps),
+emission hits, next-event estimation (the light choice, lamp and triangle samples, weights and
+shadow rays together), compaction, accumulation, random numbers) runs in the native kernels of
+dacrt.shading, one threaded pass each; freed pass arrays stay in the heap while a render runs (allocator.py).
 Work that cannot change the image is not done (SKIP_WORK; counted in stats['skipped']): no
 shadow ray for a light sample that cannot contribute (behind the surface,
 outside a spot cone), no light sampling without lights, no last BSDF ray when nothing it could
@@ -104,7 +104,7 @@ _ADAPTIVE_MIN_BATCH = 1 << 19
 _OFFSET_ULPS = F32(8.0)
 _TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
 # A shadow ray that must end at an emitter triangle ends at a point pushed off it by the same
-# step, and a little short (dacrt.shading.shadow_rays; the end of a float32 ray drifts by a few
+# step, and a little short (dacrt.shading.next_event; the end of a float32 ray drifts by a few
 # ULPs of its length; measured: 2**-17 of the length always sufficed, 2**-18 did not).
 _END_SHORTEN = F32(1.0 - 2.0 ** -16)
 
