@@ -50,63 +50,20 @@ void sample_range(const LampRecord* rec, size_t R, const int32_t* entry, const f
     }
 }
 
-// Area lamp k's light for rays [b, e), without a branch per ray: whether a ray meets the lamp
-// is data a branch would mispredict about half the time (measured ~3x slower). Same float32
-// operations, in the same order, as hit_lamp and the generic loop below.
-void gather_area(LampRecord lamp, float p_sel, bool mis, const float* O, const float* D, const float* t_surf,
-                 const float* thr, const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N, size_t b,
-                 size_t e) {
-    using namespace lampmath;
-    const bool ellipse = int(lamp.shape) == AREA_ELLIPSE;
-    for (size_t i = b; i < e; ++i) {
-        const float o[3] = {O[i], O[n + i], O[2 * n + i]};
-        const float d[3] = {D[i], D[n + i], D[2 * n + i]};
-        const float denom = dot3(d, lamp.normal);  // < 0: travelling toward the emitting face
-        const float t = (dot3(lamp.pos, lamp.normal) - dot3(o, lamp.normal)) / denom;
-        float rel[3];
-        for (int a = 0; a < 3; ++a) rel[a] = (d[a] * t + o[a]) - lamp.pos[a];
-        const float lx = dot3(rel, lamp.inv_x), ly = dot3(rel, lamp.inv_y);
-        const bool inside = ellipse ? lx * lx + ly * ly <= 0.25f : (std::fabs(lx) <= 0.5f) & (std::fabs(ly) <= 0.5f);
-        const bool seen = (denom < 0) & (t > 0) & (t < t_surf[i]) & inside;
-        const float cos_l = -denom;
-        const float pdf_l = t * t / (lamp.area * cos_l);
-        const float scale = area_spread(lamp, cos_l);
-        float w = 1.0f;
-        if (mis) {
-            float r = p_sel * pdf_l / pdf_bsdf[i];
-            r *= r;
-            r += 1.0f;
-            w = 1.0f / r;
-        }
-        float* out = L + size_t(pid[i]);
-        for (int a = 0; a < 3; ++a) {
-            float v = lamp.emit[a] * scale;
-            if (thr) v *= thr[size_t(a) * n + i];
-            if (mis) v *= w;
-            out[size_t(a) * N] += seen ? v : 0.0f;
-        }
-    }
-}
-
 void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                   const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
                   const int64_t* pid, size_t n, float* L, size_t N, size_t b, size_t e) {
-    // lamp by lamp over the rays: each ray still adds its lamps in list order
+    // Lamp by lamp over the rays (each ray still adds its lamps in list order), and the add is
+    // selected, not branched on: whether a ray sees a lamp follows no pattern.
     for (size_t k = 0; k < nl; ++k) {
         const LampRecord& lamp = rec[lamps[k]];
         const int kind = int(lamp.kind);
-        if (kind == LAMP_AREA) {
-            gather_area(lamp, lamp_prob ? lamp_prob[lamps[k]] : 0.0f, lamp_prob != nullptr, O, D, t_surf, thr,
-                        pdf_bsdf, pid, n, L, N, b, e);
-            continue;
-        }
         for (size_t i = b; i < e; ++i) {
             const float o[3] = {O[i], O[n + i], O[2 * n + i]};
             const float d[3] = {D[i], D[n + i], D[2 * n + i]};
-            float Le[3], pdf_l;
+            float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
             const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? miss[i] && miss_lamp(lamp, d, Le, pdf_l)
                                                                           : hit_lamp(lamp, o, d, t_surf[i], Le, pdf_l);
-            if (!seen) continue;
             float w = 1.0f;
             if (lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
                 float r = lamp_prob[lamps[k]] * pdf_l / pdf_bsdf[i];
@@ -119,7 +76,7 @@ void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const 
                 float v = Le[a];
                 if (thr) v *= thr[size_t(a) * n + i];
                 if (lamp_prob) v *= w;
-                out[size_t(a) * N] += v;
+                out[size_t(a) * N] += seen ? v : 0.0f;
             }
         }
     }

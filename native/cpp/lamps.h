@@ -277,11 +277,13 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
 }
 
 // A ray (O, D) meeting finite lamp L at t < tmax (Lamp.intersect): radiance Le and solid-angle
-// pdf. False for lamps at infinity and delta lamps (no ray meets them).
+// pdf. False for lamps at infinity and delta lamps (no ray meets them). Le and pdf mean
+// something only when it returns true (an area lamp writes them either way).
 inline bool hit_lamp(const LampRecord& L, const float O[3], const float D[3], float tmax, float Le[3], float& pdf) {
     using namespace lampmath;
     const int kind = int(L.kind), shape = int(L.shape);
     float scale = 1.0f;
+    bool seen = true;
     if ((kind == LAMP_POINT || kind == LAMP_SPOT) && shape != POINT_DELTA) {
         const float r = L.radius;
         const float oc[3] = {L.pos[0] - O[0], L.pos[1] - O[1], L.pos[2] - O[2]};
@@ -306,23 +308,24 @@ inline bool hit_lamp(const LampRecord& L, const float O[3], const float D[3], fl
             scale = spot_attenuation(L, from_light);
         }
     } else if (kind == LAMP_AREA) {
+        // Everything is computed and the answer returned without a branch per ray: whether a
+        // ray meets the lamp is a coin flip a branch mispredicts (lamp_gather ~1.5x slower).
         const float denom = dot3(D, L.normal);  // < 0: travelling toward the emitting face
         const float t = (dot3(L.pos, L.normal) - dot3(O, L.normal)) / denom;
-        if (!(denom < 0 && t > 0 && t < tmax)) return false;
         float rel[3];
         for (int a = 0; a < 3; ++a) rel[a] = (D[a] * t + O[a]) - L.pos[a];
         const float lx = dot3(rel, L.inv_x), ly = dot3(rel, L.inv_y);
         const bool inside = int(L.shape) == AREA_ELLIPSE ? lx * lx + ly * ly <= 0.25f
-                                                         : std::fabs(lx) <= 0.5f && std::fabs(ly) <= 0.5f;
-        if (!inside) return false;
+                                                         : (std::fabs(lx) <= 0.5f) & (std::fabs(ly) <= 0.5f);
         const float cos_l = -denom;
         pdf = t * t / (L.area * cos_l);
         scale = area_spread(L, cos_l);
+        seen = (denom < 0) & (t > 0) & (t < tmax) & inside;
     } else {
         return false;
     }
     for (int a = 0; a < 3; ++a) Le[a] = L.emit[a] * scale;
-    return true;
+    return seen;
 }
 
 // A ray that left the scene along D seeing lamp L at infinity (Lamp.eval_miss): radiance and
