@@ -20,7 +20,8 @@ every vertex. The per-vertex arithmetic that numpy would run as dozens of passes
 (camera rays, hit points, bounce directions and their ray records, lamp hits (dacrt.lamps),
 emission hits, next-event estimation (the light choice, lamp and triangle samples, weights and
 shadow rays together), compaction, accumulation, random numbers) runs in the native kernels of
-dacrt.shading, one threaded pass each; freed pass arrays stay in the heap while a render runs (allocator.py).
+dacrt.shading, one threaded pass each; freed pass arrays stay in the heap while a render runs
+(allocator.py).
 Work that cannot change the image is not done (SKIP_WORK; counted in stats['skipped']): no
 shadow ray for a light sample that cannot contribute (behind the surface,
 outside a spot cone), no light sampling without lights, no last BSDF ray when nothing it could
@@ -395,23 +396,23 @@ class Integrator:
         self._selection_table()
 
     def _selection_table(self):
-        """Per light entry (lamps, then emissive triangles): selection probability, whether the
-        light is sampled without MIS (lamps BSDF rays cannot meet: weight 1, as a delta light),
-        and whether its samples cast shadow rays. lamp_prob per native lamp record (0 for the
-        camera-only ones) weights BSDF hits on lamps."""
+        """The light choice next-event estimation draws from (dacrt.shading.LightChoice): per
+        entry (lamps, then emissive triangles) its selection probability, whether it is sampled
+        without MIS (lamps BSDF rays cannot meet: weight 1, as a delta light) and whether its
+        samples cast shadow rays. lamp_prob per native lamp record (0 for the camera-only ones)
+        weights BSDF hits on lamps."""
         lights = self.lights
-        ntri = len(lights.triangles.index) if lights.triangles is not None else 0
-        tri_entries = lights.tri_prob[lights.triangles.index] if ntri else np.zeros(0, F32)
-        self._entry_prob = np.concatenate([lights.lamp_prob, tri_entries]).astype(F32)
-        self._entry_no_mis = np.concatenate([[not l.seen_by_bsdf for l in lights.lamps], np.zeros(ntri, bool)])
-        self._entry_shadow = np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri, bool)])
+        tris = lights.triangles
+        ntri = 0 if tris is None else len(tris.index)
+        tri_prob = lights.tri_prob[tris.index] if ntri else np.zeros(0, F32)
+        self._light_choice = dacrt.shading.LightChoice(
+            self._nee_records, lights.cdf, np.concatenate([lights.lamp_prob, tri_prob]).astype(F32),
+            np.concatenate([[not l.seen_by_bsdf for l in lights.lamps], np.zeros(ntri, bool)]),
+            np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri, bool)]),
+            *(() if tris is None else (tris.geo, tris.area, tris.emission)))
         # lamps never chosen (unsampled, camera-only) have 0: a BSDF hit on them weighs 1
         self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.unsampled_lamps)
                                                                         + len(lights.camera_lamps), F32)]).astype(F32)
-        tris = lights.triangles
-        self._light_choice = dacrt.shading.LightChoice(
-            self._nee_records, lights.cdf, self._entry_prob, self._entry_no_mis, self._entry_shadow,
-            *(() if tris is None else (tris.geo, tris.area, tris.emission)))
 
     def _weight_lights(self, probes: int = 32):
         """Let the light choice follow where the camera looks: a probes x probes grid of camera
