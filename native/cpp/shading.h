@@ -42,12 +42,12 @@ void triangle_table(const float* vertices, const int32_t* triangles, size_t M, f
 void face_normals(const double* vertices, const int32_t* triangles, size_t M, float flip, float* normals,
                   uint8_t* good);
 
-// Whether every corner normal (M x 3 corners x 3, C order) is within tol of its triangle's
-// geometric normal (geo rows 9-11 of M): flat shading needs no interpolation.
 // Per-corner values (M triangles x 3 corners x c floats) as the rows barycentric interpolation
 // reads: corner 0 (c rows of M), corner 1 - corner 0, corner 2 - corner 0 (3c rows in all).
 void corner_rows(const float* per_corner, size_t M, size_t c, float* rows);
 
+// Whether every corner normal (M x 3 corners x 3, C order) is within tol of its triangle's
+// geometric normal (geo rows 9-11 of M): flat shading needs no interpolation.
 bool normals_flat(const float* normals, const float* geo, size_t M, float tol);
 
 // Hit points of rays idx[0..k) (all rays when idx is null): reads hits[i] and column i of D
@@ -150,8 +150,7 @@ void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t 
 // pdf sample_triangles has at O for that direction. Returns the number of rays that met emission.
 size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
                        const float* tri_prob, const float* area, const float* geo, size_t M, const float* O,
-                       const float* D,
-                       const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N);
+                       const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N);
 
 // A camera's frame in float32, as addon/camera.py CameraModel rounds it: orthonormal
 // camera-to-world rotation (columns right, up, back), position, the raster -> viewplane map

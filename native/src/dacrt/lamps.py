@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
+from .shading import _check_added_to
 
 __all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather"]
 
@@ -85,8 +86,7 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     give lamp_prob (R,) (each record's light-selection probability) and pdf_bsdf (n,): w is the
     power heuristic 1 / (1 + (lamp_prob pdf_lamp / pdf_bsdf)^2) against light sampling; camera
     rays give neither (w = 1)."""
-    if not isinstance(L, np.ndarray) or L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
-        raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
+    _check_added_to(L)
     records = _records(records)
     lamps = np.asarray(lamps)
     if lamps.size == 0:

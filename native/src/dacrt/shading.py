@@ -25,6 +25,13 @@ def _rows(a, rows: int, name: str, dtype=_F32) -> np.ndarray:
     return a
 
 
+def _check_added_to(L) -> None:
+    """L is added to in place, so it must be float32 and C-contiguous as it is (a converted copy
+    would silently lose the result)."""
+    if not isinstance(L, np.ndarray) or L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
+        raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
+
+
 def pack_rays(O, D, tfar, out: np.ndarray | None = None) -> np.ndarray:
     """RAY_DTYPE records from origins O and directions D (3, n) and lengths tfar (n,);
     ids are 0..n-1. out: an (n,) RAY_DTYPE array to fill (reused between batches)."""
@@ -204,8 +211,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
 def accumulate_masked(L, pid, values, mask) -> None:
     """L[:, pid[i]] += values[:, i] where mask[i] (n,) bool; pid (n,) distinct columns of L (every
     one, masked or not); L (3, N) float32 C-contiguous, values (3, n)."""
-    if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
-        raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
+    _check_added_to(L)
     _core.accumulate_masked(L, np.ascontiguousarray(pid, np.int64), _rows(values, 3, "values"),
                             np.ascontiguousarray(mask, np.bool_))
 
@@ -220,8 +226,7 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
     solid-angle pdf sample_triangles has from the ray origin O (3, n) for the direction D (3, n),
     into column pid[i] (distinct).
     Returns how many rays met emission."""
-    if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
-        raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
+    _check_added_to(L)
     return _core.gather_emission(hits, np.ascontiguousarray(hit, np.bool_), _rows(emission, 3, "emission"),
                                  np.ascontiguousarray(emissive, np.bool_),
                                  None if tri_prob is None else np.ascontiguousarray(tri_prob, _F32),
@@ -276,8 +281,7 @@ def normals_flat(normals, geo, tol: float) -> bool:
 
 def accumulate(L, idx, values) -> None:
     """L[:, idx] += values for distinct idx (k,); L (3, N) float32 C-contiguous, values (3, k)."""
-    if L.dtype != _F32 or not L.flags.c_contiguous or L.ndim != 2:
-        raise ValueError("L must be a C-contiguous (3, N) float32 array (it is added to in place)")
+    _check_added_to(L)
     _core.accumulate(L, np.ascontiguousarray(idx, np.int64), _rows(values, 3, "values"))
 
 
