@@ -87,6 +87,12 @@ SKIP_WORK = True
 _TARGET_PASS_SECONDS = 0.8
 _MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 20, 1 << 16
 _FIRST_PATHS_PER_TRIANGLE = 4
+# The tracer scene stores its triangles in Morton order (dacrt.Scene spatial_order) when the
+# frame has at least this many paths per triangle: the order costs ~17 ns per triangle to build
+# and saves 5-15% of each ray's trace time on meshes whose own order is not spatially coherent,
+# so it pays from ~2 rays per triangle, and a path casts 2 or more (a 1M-triangle animation
+# frame at 4 spp, 0.2 paths per triangle, would lose ~18 ms a frame).
+_SPATIAL_ORDER_PATHS_PER_TRIANGLE = 2
 # Adaptive sampling checks pixels every 16 samples (Cycles), less often once so few pixels are
 # left that a block between two checks would hold fewer paths than this (AdaptiveSampling.step_for).
 _ADAPTIVE_MIN_BATCH = 1 << 19
@@ -357,6 +363,8 @@ class Integrator:
         self._paths_done = 0
         self._samples_done = 0
         self._passes = 0
+        x0, y0, x1, y1 = self.camera.region
+        self._frame_paths = max(0, x1 - x0) * max(0, y1 - y0) * self.samples
         t_build = time.perf_counter()
         self._build_scenes()
         self._weight_lights()
@@ -477,8 +485,9 @@ class Integrator:
             local[sub] = np.arange(len(sub), dtype=np.int32)
         tris = self.tri.indices if everything else self.tri.indices[sub]
         masks = None if vis is None else np.ascontiguousarray(vis if everything else vis[sub], np.uint8)
+        spatial = self._frame_paths >= _SPATIAL_ORDER_PATHS_PER_TRIANGLE * len(tris)
         scene = dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition, keep_top=True,
-                            masks=masks)
+                            masks=masks, spatial_order=spatial)
         return scene, sub, local
 
     def close(self):

@@ -26,7 +26,7 @@ namespace {
 class NativeScene {
 public:
     NativeScene(py::array_t<float, py::array::c_style> vertices, py::array_t<uint32_t, py::array::c_style> triangles,
-                bool keep_top, py::object masks) {
+                bool keep_top, py::object masks, bool spatial_order) {
         if (keep_top) top_ = std::make_unique<TopCache>();
         if (!masks.is_none()) {
             py::array_t<uint8_t, py::array::c_style> m = masks.cast<py::array_t<uint8_t, py::array::c_style>>();
@@ -57,7 +57,7 @@ public:
                 if (t[i] >= V)
                     err = "triangles[" + std::to_string(i / 3) + "] refers to vertex " + std::to_string(t[i]) +
                           " but there are only " + std::to_string(V) + " vertices";
-            if (err.empty()) ts_ = std::make_unique<TriangleSet>(v, V, t, M);
+            if (err.empty()) ts_ = std::make_unique<TriangleSet>(v, V, t, M, spatial_order);
         }
         if (!err.empty()) throw py::value_error(err);
     }
@@ -211,8 +211,9 @@ PYBIND11_MODULE(_core, m) {
     m.attr("ROBUST") = true;
 #endif
     py::class_<NativeScene>(m, "NativeScene")
-        .def(py::init<py::array_t<float, py::array::c_style>, py::array_t<uint32_t, py::array::c_style>, bool, py::object>(),
-             py::arg("vertices"), py::arg("triangles"), py::arg("keep_top"), py::arg("masks"))
+        .def(py::init<py::array_t<float, py::array::c_style>, py::array_t<uint32_t, py::array::c_style>, bool, py::object,
+                      bool>(),
+             py::arg("vertices"), py::arg("triangles"), py::arg("keep_top"), py::arg("masks"), py::arg("spatial_order"))
         .def_property_readonly("num_triangles", &NativeScene::num_triangles)
         .def_property_readonly("num_degenerate", &NativeScene::num_degenerate)
         .def_property_readonly("bounds", &NativeScene::bounds)

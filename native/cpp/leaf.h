@@ -118,7 +118,7 @@ __attribute__((noinline, cold)) uint32_t exact_lanes(const vfloat<W> P[3][2], co
 
 template <int W, Query Q>
 void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const Box* boxes,
-                    const CompactTri* tris, Hit* hits, uint8_t* occluded, const int32_t* skip,
+                    const CompactTri* tris, const uint32_t* prims, Hit* hits, uint8_t* occluded, const int32_t* skip,
                     const uint8_t* mask, uint8_t visible, Stats& st) {
     constexpr size_t kChunk = 32;
     alignas(64) LeafTri lt[kChunk];
@@ -128,9 +128,9 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
         const size_t cl = std::min(kChunk, nt - c0);
         size_t cn = 0;
         for (size_t j = 0; j < cl; ++j) {
-            const uint32_t p = ids[c0 + j];
+            const uint32_t s = ids[c0 + j], p = prims[s];
             if (mask && !(mask[p] & visible)) continue;  // not seen by this call's rays
-            reconstruct(boxes[p], tris[p], lt[cn].v);
+            reconstruct(boxes[s], tris[s], lt[cn].v);
             lt[cn++].prim = int32_t(p);
         }
         if (cn == 0) continue;

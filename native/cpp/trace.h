@@ -28,6 +28,7 @@ template <int W, Query Q>
 struct Tracer {
     const Box* boxes;
     const CompactTri* tris;
+    const uint32_t* prims;
     Hit* hits;
     uint8_t* occluded;
     const int32_t* skip;
@@ -85,7 +86,7 @@ struct Tracer {
     void node_split(Ray* rays, size_t na, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth,
                     uint64_t c1) {
         if (nt <= size_t(cfg.leaf_size) || na <= size_t(cfg.leaf_rays)) {
-            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, skip, mask, visible, st);
+            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, mask, visible, st);
             st.leaf_ticks += phase_clock() - c1;
             return;
         }
@@ -110,7 +111,7 @@ struct Tracer {
         st.filter_ticks += c1 - c0;
         if (na == 0) return;
         if (nt <= size_t(cfg.leaf_size)) {  // never split, so its ids never move
-            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, hits, occluded, skip, mask, visible, st);
+            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, mask, visible, st);
             st.leaf_ticks += phase_clock() - c1;
             return;
         }
@@ -162,7 +163,7 @@ struct Tracer {
 template <int W, Query Q>
 void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
     const TriangleSet& ts = *job.ts;
-    Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), job.hits, job.occluded, job.skip, job.mask, job.visible,
+    Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), ts.prim.data(), job.hits, job.occluded, job.skip, job.mask, job.visible,
                     job.cfg, job.origin_abs_max,
                     job.top, ids, Stats{}};
     NodeBounds root;

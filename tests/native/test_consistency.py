@@ -23,10 +23,11 @@ FIXED = [("soup_dirty", 1, 6, "random", "mixed", 4000, 1),
          ("soup_far", 6, 6, "camera", "mixed", 4000, 6)]
 
 
-def results(monkeypatch, case, isa, threads, partition="adaptive", leaf_size=16, leaf_rays=32):
+def results(monkeypatch, case, isa, threads, partition="adaptive", leaf_size=16, leaf_rays=32,
+            spatial_order=False):
     monkeypatch.setenv("DACRT_ISA", isa)
     scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy(), partition=partition,
-                        leaf_size=leaf_size, leaf_rays=leaf_rays)
+                        leaf_size=leaf_size, leaf_rays=leaf_rays, spatial_order=spatial_order)
     hits = harness.intersect(scene, case.org, case.dirs, case.tfar, threads=threads,
                              shuffle_seed=threads)
     mask = harness.occluded(scene, case.org, case.dirs, case.tfar, threads=threads,
@@ -68,6 +69,40 @@ def test_identical_across_partition_modes_and_leaf_sizes(monkeypatch, key):
         if (partition, leaf, rays) != ("adaptive", 16, 32):
             assert_identical(base, results(monkeypatch, case, isa, 2, partition, leaf, rays),
                              f"{key}: adaptive/16/32 vs {partition}/{leaf}/{rays}")
+
+
+@pytest.mark.parametrize("key", FIXED, ids=[k[0] + "-" + k[3] for k in FIXED])
+def test_spatial_order_changes_nothing_but_memory(monkeypatch, key):
+    """Morton-ordered storage reorders the triangles in memory only: hits report the caller's
+    triangle index, ties still go to the lowest of those, and skip names the caller's index."""
+    case = build_case(*key)
+    for isa in ISAS:
+        base = results(monkeypatch, case, isa, 2)
+        assert_identical(base, results(monkeypatch, case, isa, 2, spatial_order=True),
+                         f"{key}: {isa} in input order vs spatial order")
+    # skip: each ray ignores the triangle the input-order scene says it hits first
+    skip = np.where(base[0]["prim"] >= 0, base[0]["prim"], -1).astype(np.int32)
+    got = [harness.intersect(dacrt.Scene(case.vertices, case.triangles, spatial_order=so),
+                             case.org, case.dirs, case.tfar, threads=2, skip=skip)
+           for so in (False, True)]
+    assert_identical((got[0], base[1]), (got[1], base[1]), f"{key}: skip, input vs spatial order")
+    assert not np.any((got[1]["prim"] == skip) & (skip >= 0)), "a skipped triangle was hit"
+
+
+def test_spatial_order_is_independent_of_the_input_order(monkeypatch):
+    """A shuffled mesh in spatial order hits the same triangles (mapped back through the
+    shuffle), in the same place, as the mesh in its own order."""
+    case = build_case(*FIXED[3])
+    perm = np.random.default_rng(8).permutation(len(case.triangles))
+    plain = harness.intersect(dacrt.Scene(case.vertices, case.triangles), case.org, case.dirs,
+                              case.tfar, threads=2)
+    shuffled = harness.intersect(dacrt.Scene(case.vertices, case.triangles[perm], spatial_order=True),
+                                 case.org, case.dirs, case.tfar, threads=2)
+    hit = plain["prim"] >= 0
+    assert hit.sum() > len(hit) // 4
+    np.testing.assert_array_equal(shuffled["prim"] >= 0, hit)
+    np.testing.assert_array_equal(perm[shuffled["prim"][hit]], plain["prim"][hit])
+    np.testing.assert_array_equal(shuffled["t"][hit], plain["t"][hit])
 
 
 @pytest.mark.parametrize("key", FIXED[:4], ids=[k[0] + "-" + k[3] for k in FIXED[:4]])

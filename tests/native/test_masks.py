@@ -40,7 +40,8 @@ def test_visible_traces_exactly_the_triangles_it_sees(isa, monkeypatch):
                                               (3, "random", 2), (1, "bounce", 2))):
         org, dirs, tfar = make_rays(kind, "inf", v, t, 40000, 30 + i)
         want_hits, want_occ = _expected(v, t, masks, bit, org, dirs, tfar, threads)
-        for scene in (kept, dacrt.Scene(v, t, masks=masks)):
+        for scene in (kept, dacrt.Scene(v, t, masks=masks),
+                      dacrt.Scene(v, t, masks=masks, keep_top=True, spatial_order=True)):
             hits = harness.intersect(scene, org, dirs, tfar, threads=threads, visible=bit)
             assert (hits["prim"] >= 0).any()
             np.testing.assert_array_equal(hits["prim"], want_hits["prim"], f"bit {bit}: hit triangles")

@@ -131,11 +131,17 @@ class Scene:
     only the triangles whose mask shares a bit with it, as if the others were not in the scene;
     so one scene (and one kept top) serves ray kinds that see slightly different subsets, e.g.
     camera rays that must not see a light-emitting card that bounce rays do see.
+
+    spatial_order: store the triangles in Morton order of their centres, so triangles near in
+    space are near in memory. Tracing gets faster when the mesh's own order is not spatially
+    coherent (the dragon's scan order: +8-15%; a shuffled mesh: +25%), but building the scene
+    costs about twice as much (~17 ns more per triangle), so it pays for frames that trace
+    several rays per triangle. Results are identical either way.
     """
 
     def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 16,
                  sah_ratio: float = 128.0, chunk_rays: int = 0, keep_top: bool = False, leaf_rays: int = 32,
-                 masks=None):
+                 masks=None, spatial_order: bool = False):
         v = _as_vertices(vertices)
         t = _as_triangles(triangles, len(v))
         if masks is not None:
@@ -145,7 +151,7 @@ class Scene:
                                  f"got shape {m.shape} dtype {m.dtype}")
             masks = np.ascontiguousarray(m)
         self._has_masks = masks is not None
-        self._core = _core.NativeScene(v, t, bool(keep_top), masks)
+        self._core = _core.NativeScene(v, t, bool(keep_top), masks, bool(spatial_order))
         self.partition = partition
         self.leaf_size = leaf_size
         self.leaf_rays = leaf_rays
