@@ -48,6 +48,8 @@ def add_arguments(p) -> None:
     p.add_argument("--leaf-size", type=int, default=None, help="DACRT leaf size (triangles)")
     p.add_argument("--leaf-rays", type=int, default=None, help="DACRT leaf size (active rays)")
     p.add_argument("--sah-ratio", type=float, default=None, help="DACRT adaptive SAH ratio")
+    p.add_argument("--spatial-order", action="store_true",
+                   help="DACRT scenes store their triangles in Morton order (creation counts it)")
     p.add_argument("--json", type=Path, default=None, metavar="PATH",
                    help="write every number here (default bench-out/tracer.json)")
     p.add_argument("--update-readme", action="store_true",
@@ -127,6 +129,8 @@ class _Dacrt:
         for key in ("partition", "leaf_size", "leaf_rays", "sah_ratio"):
             if getattr(args, key) is not None:
                 self.kw[key] = getattr(args, key)
+        if getattr(args, "spatial_order", False):
+            self.kw["spatial_order"] = True
 
     def create(self, scene) -> tuple[object, float]:
         t0 = time.perf_counter()
