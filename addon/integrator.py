@@ -88,10 +88,10 @@ _TARGET_PASS_SECONDS = 0.8
 _MIN_PATHS, _MAX_PATHS, _FIRST_PATHS = 1 << 14, 1 << 20, 1 << 16
 _FIRST_PATHS_PER_TRIANGLE = 4
 # The tracer scene stores its triangles in Morton order (dacrt.Scene spatial_order) when the
-# frame has at least this many paths per triangle: the order costs ~17 ns per triangle to build
+# frame has at least this many paths per triangle: the order costs ~10 ns per triangle to build
 # and saves 5-15% of each ray's trace time on meshes whose own order is not spatially coherent,
 # so it pays from ~2 rays per triangle, and a path casts 2 or more (a 1M-triangle animation
-# frame at 4 spp, 0.2 paths per triangle, would lose ~18 ms a frame).
+# frame at 4 spp, 0.2 paths per triangle, would lose ~10 ms a frame).
 _SPATIAL_ORDER_PATHS_PER_TRIANGLE = 2
 # Adaptive sampling checks pixels every 16 samples (Cycles), less often once so few pixels are
 # left that a block between two checks would hold fewer paths than this (AdaptiveSampling.step_for).

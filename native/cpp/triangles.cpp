@@ -121,7 +121,7 @@ struct Part {
 };
 
 // Pass 2, slots [b, e): box, compact record and caller's index of the triangle in the low 32
-// bits of order[s], and whether it is degenerate.
+// bits of order[s] (no order: slot s is triangle s), and whether it is degenerate.
 void build_range(const float* V, const uint32_t* I, const uint64_t* order, size_t b, size_t e, Box* boxes,
                  CompactTri* tris, uint32_t* prim, uint8_t* bad, Part& part) {
     // Bounds in locals: through `part` every box store could alias them, which turned the
@@ -133,13 +133,7 @@ void build_range(const float* V, const uint32_t* I, const uint64_t* order, size_
         hi[k] = chi[k] = -INFINITY;
     }
     for (size_t s = b; s < e; ++s) {
-        // Morton order reads the caller's arrays at random: fetch ahead (~2x faster here).
-        if (s + 16 < e) __builtin_prefetch(I + 3 * size_t(uint32_t(order[s + 16])));
-        if (s + 8 < e) {
-            const uint32_t* q = I + 3 * size_t(uint32_t(order[s + 8]));
-            for (int j = 0; j < 3; ++j) __builtin_prefetch(V + 3 * size_t(q[j]));
-        }
-        const uint32_t i = uint32_t(order[s]);
+        const uint32_t i = order ? uint32_t(order[s]) : uint32_t(s);
         const float* p[3] = {V + 3 * size_t(I[3 * size_t(i)]), V + 3 * size_t(I[3 * size_t(i) + 1]),
                              V + 3 * size_t(I[3 * size_t(i) + 2])};
         Box bx;
@@ -148,17 +142,15 @@ void build_range(const float* V, const uint32_t* I, const uint64_t* order, size_
         for (int a = 0; a < 3; ++a) {
             // Ties resolve to the lowest vertex index; min and max vertex differ even when
             // all three coordinates are equal, so the middle one is well defined.
-            // Selects, not branches: which vertex is smallest is a coin flip per triangle, and
-            // mispredicted jumps were most of this loop's time.
-            const float x0 = p[0][a], x1 = p[1][a], x2 = p[2][a];
-            unsigned imin = x1 < x0 ? 1u : 0u, imax = x1 > x0 ? 1u : 0u;
-            const float mn = x1 < x0 ? x1 : x0, mx = x1 > x0 ? x1 : x0;
-            imin = x2 < mn ? 2u : imin;
-            imax = x2 > mx ? 2u : imax;
-            imax = imin == imax ? (imin + 1u) % 3u : imax;
+            unsigned imin = 0, imax = 0;
+            for (unsigned j = 1; j < 3; ++j) {
+                if (p[j][a] < p[imin][a]) imin = j;
+                if (p[j][a] > p[imax][a]) imax = j;
+            }
+            if (imin == imax) imax = (imin + 1) % 3;
             const unsigned imid = 3u - imin - imax;
-            bx.lo[a] = x2 < mn ? x2 : mn;
-            bx.hi[a] = x2 > mx ? x2 : mx;
+            bx.lo[a] = p[imin][a];
+            bx.hi[a] = p[imax][a];
             c.mid[a] = p[imid][a];
             c.code |= (imin | (imax << 2)) << (4 * a);
         }
@@ -193,12 +185,12 @@ void build_range(const float* V, const uint32_t* I, const uint64_t* order, size_
 }  // namespace
 
 // Threaded: a 1M-triangle frame spent ~30 ms here on one core (an animation rebuilds it
-// every frame). The Morton order roughly doubles the cost (keys, a sort, and the build's reads
-// of the caller's arrays in that order). Degenerate triangles keep their slots (they are never
+// every frame). The Morton order adds ~10 ns per triangle (keys, a sort, and the build's
+// reads of the caller's arrays in that order). Degenerate triangles keep their slots (they are never
 // traced: valid_ids skips them).
 TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I, size_t M, bool spatial_order)
     : boxes(M), tris(M), prim(M) {
-    BuiltArray<uint64_t> order(M);  // every element written below
+    BuiltArray<uint64_t> order(spatial_order ? M : 0);  // every element written by key_range
     if (spatial_order) {
         const Bounds3 vb = vertex_bounds(V, num_vertices);
         // Cells of ~32 triangles, at most 32^3: an order within a cell's few KB matters little
@@ -207,16 +199,15 @@ TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I,
         while (k < 5 && (size_t(1) << (3 * k)) * 32 < M) ++k;
         parallel_for(M, [&](size_t b, size_t e) { key_range(V, I, b, e, vb, k, order.data()); }, size_t(1) << 15);
         counting_sort(order, 3 * k);
-    } else {
-        for (size_t i = 0; i < M; ++i) order[i] = i;
     }
 
     const int T = threads_for(M, size_t(1) << 15);
     std::vector<Part> parts(static_cast<size_t>(T));
     BuiltArray<uint8_t> bad(M);  // every element written by build_range
     run_workers(T, [&](int w) {
-        build_range(V, I, order.data(), M * size_t(w) / size_t(T), M * size_t(w + 1) / size_t(T), boxes.data(),
-                    tris.data(), prim.data(), bad.data(), parts[size_t(w)]);
+        build_range(V, I, spatial_order ? order.data() : nullptr, M * size_t(w) / size_t(T),
+                    M * size_t(w + 1) / size_t(T), boxes.data(), tris.data(), prim.data(), bad.data(),
+                    parts[size_t(w)]);
     });
     for (int k = 0; k < 3; ++k) {
         bounds.lo[k] = centroid_bounds.lo[k] = INFINITY;

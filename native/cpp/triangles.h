@@ -4,8 +4,8 @@
 // centres (a triangle's position in the order is its slot). Partitioning and leaves read the
 // arrays below through id arrays; unless triangles near in space are near in memory those
 // reads miss the cache (1M diffuse rays, 2 threads: the dragon 10.4 -> 11.2-12.0 Mrays/s, San
-// Francisco +1-4%, a randomly shuffled San Francisco 7.7 -> 9.5). The order costs ~17 ns per
-// triangle to build (a 1M-triangle grid 16 -> 34 ms), so it pays only for frames that trace
+// Francisco +1-4%, a randomly shuffled San Francisco 7.7 -> 9.5). The order costs ~10 ns per
+// triangle to build (a 1M-triangle grid 12 -> 22 ms), so it pays only for frames that trace
 // several rays per triangle: the caller decides. Three arrays indexed by slot:
 //  - boxes: the triangle's AABB as lo[4], hi[4] (32 bytes, one AVX load), used by partitioning;
 //  - tris:  the compact triangle, Afra's trick: each AABB already holds 6 of the 9 vertex

@@ -134,8 +134,8 @@ class Scene:
 
     spatial_order: store the triangles in Morton order of their centres, so triangles near in
     space are near in memory. Tracing gets faster when the mesh's own order is not spatially
-    coherent (the dragon's scan order: +8-15%; a shuffled mesh: +25%), but building the scene
-    costs about twice as much (~17 ns more per triangle), so it pays for frames that trace
+    coherent (the dragon's scan order: +5-17% by ray kind; a shuffled mesh: +25%), but building the scene
+    costs more (~10 ns per triangle, +65% on San Francisco), so it pays for frames that trace
     several rays per triangle. Results are identical either way.
     """
 
