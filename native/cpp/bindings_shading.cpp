@@ -194,17 +194,6 @@ py::array_t<bool> shadow_rays_py(F32Array O, F32Array wi, F32Array dist, py::obj
     return valid;
 }
 
-void accumulate_py(py::array_t<float, py::array::c_style> L, I64Array idx, F32Array values) {
-    if (!L.writeable()) throw py::value_error("L must be writeable");
-    size_t N = rows_of(L, 3, "L");
-    if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
-    size_t k = size_t(idx.shape(0));
-    if (rows_of(values, 3, "values") != k) throw py::value_error("values must have shape (3, len(idx))");
-    check_index(idx, N, "idx");
-    py::gil_scoped_release nogil;
-    accumulate(L.mutable_data(), N, idx.data(), values.data(), k);
-}
-
 py::tuple pixel_samples_py(I64Array pixel, I64Array sample, int64_t width, uint64_t k0, uint64_t k1, uint32_t ka,
                            uint32_t kb, F32Array table) {
     if (pixel.ndim() != 1) throw py::value_error("pixel must be one-dimensional");
@@ -440,5 +429,4 @@ void register_shading(py::module_& m) {
     m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"), py::arg("flip"));
     m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
-    m.def("accumulate", &accumulate_py, py::arg("L"), py::arg("idx"), py::arg("values"));
 }

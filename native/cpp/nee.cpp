@@ -43,13 +43,4 @@ void shadow_rays(const float* O, const float* wi, const float* dist, const float
     }, size_t(1) << 16);
 }
 
-void accumulate(float* L, size_t N, const int64_t* idx, const float* values, size_t k) {
-    parallel_for(k, [&](size_t b, size_t e) {
-        for (size_t j = b; j < e; ++j) {
-            const size_t i = size_t(idx[j]);
-            for (int a = 0; a < 3; ++a) L[size_t(a) * N + i] += values[size_t(a) * k + j];
-        }
-    }, size_t(1) << 17);
-}
-
 }  // namespace dacrt

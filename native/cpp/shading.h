@@ -109,9 +109,6 @@ void nee_weight(const float* ns, const float* ng, const float* wi, const float* 
 void shadow_rays(const float* O, const float* wi, const float* dist, const float* target, size_t n,
                  const int64_t* idx, size_t k, float shorten, Ray* out, uint8_t* valid);
 
-// L[:, idx[j]] += values[:, j] (idx distinct; L has stride N, values stride k).
-void accumulate(float* L, size_t N, const int64_t* idx, const float* values, size_t k);
-
 }  // namespace dacrt
 
 namespace dacrt {

@@ -177,3 +177,23 @@ def test_accumulate_masked_adds_selected_columns():
         with pytest.raises(ValueError, match='outside'):
             shading.accumulate_masked(L, bad, values, mask)
         assert np.array_equal(L, before), 'a refused call changed L'
+
+
+def test_accumulate_masked_threads_blocks_and_refuses_copies():
+    """Enough columns for the threaded path; L may be the rows of a larger block (the integrator
+    adds into rgba[:3]); an L that would have to be converted is refused, not silently copied."""
+    rng = np.random.default_rng(10)
+    N = 300_000
+    L = rng.random((3, N)).astype(F32)
+    pid = rng.permutation(N).astype(np.int64)
+    values = rng.random((3, N)).astype(F32)
+    mask = rng.random(N) < 0.5
+    want = L.copy()
+    want[:, pid[mask]] += values[:, mask]
+    shading.accumulate_masked(L, pid, values, mask)
+    np.testing.assert_array_equal(L, want)
+    rgba = np.zeros((4, 10), F32)
+    shading.accumulate_masked(rgba[:3], np.array([3]), np.ones((3, 1), F32), np.array([True]))
+    assert rgba[:3, 3].tolist() == [1, 1, 1] and rgba[3].sum() == 0
+    with pytest.raises(ValueError, match="L must be a C-contiguous"):
+        shading.accumulate_masked(np.zeros((3, 10)), np.array([0]), np.ones((3, 1), F32), np.array([True]))

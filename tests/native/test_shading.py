@@ -266,25 +266,6 @@ def test_shadow_rays_toward_targets_and_along_directions():
         shading.shadow_rays(O, wi, dist, None, np.array([n]), 1.0)
 
 
-def test_accumulate_adds_into_columns():
-    rng = np.random.default_rng(10)
-    N = 300_000
-    L = rng.random((3, N)).astype(F32)
-    idx = rng.choice(N, N // 2, replace=False)
-    vals = rng.random((3, len(idx))).astype(F32)
-    expect = L.copy()
-    expect[:, idx] += vals
-    shading.accumulate(L, idx, vals)
-    np.testing.assert_array_equal(L, expect)
-    rgba = np.zeros((4, 10), F32)
-    shading.accumulate(rgba[:3], np.array([3]), np.ones((3, 1), F32))   # rows of a larger block
-    assert rgba[:3, 3].tolist() == [1, 1, 1] and rgba[3].sum() == 0
-    with pytest.raises(ValueError, match=r"idx\[0\] = 10 is outside"):
-        shading.accumulate(rgba[:3], np.array([10]), np.ones((3, 1), F32))
-    with pytest.raises(ValueError, match="L must be a C-contiguous"):
-        shading.accumulate(np.zeros((3, 10)), np.array([0]), np.ones((3, 1), F32))
-
-
 @pytest.mark.parametrize("roulette", [False, True])
 @pytest.mark.parametrize("with_thr", [False, True])
 def test_continue_paths_matches_numpy(roulette, with_thr):

@@ -13,7 +13,7 @@ from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
 __all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
-           "accumulate", "LightChoice", "next_event", "accumulate_masked"]
+           "LightChoice", "next_event", "accumulate_masked"]
 
 _F32 = np.float32
 
@@ -277,12 +277,6 @@ def normals_flat(normals, geo, tol: float) -> bool:
     """Whether every corner normal of normals (M, 3, 3) is within tol of its triangle's geometric
     normal (geo rows 9:12, geo as triangle_table makes it)."""
     return bool(_core.normals_flat(np.ascontiguousarray(normals, _F32), _rows(geo, 15, "geo"), float(tol)))
-
-
-def accumulate(L, idx, values) -> None:
-    """L[:, idx] += values for distinct idx (k,); L (3, N) float32 C-contiguous, values (3, k)."""
-    _check_added_to(L)
-    _core.accumulate(L, np.ascontiguousarray(idx, np.int64), _rows(values, 3, "values"))
 
 
 def pixel_samples(pixel, sample, width: int, k0: int, k1: int, ka: int, kb: int, table):
