@@ -31,7 +31,7 @@ class CameraModel:
         self.kind = cam.kind
         self.left, self.right, self.bottom, self.top = vp
         self.clip_start, self.clip_end = float(cam.clip_start), float(cam.clip_end)
-        if not (np.isfinite(self.clip_start) and self.clip_start >= 0.0 and self.clip_end > self.clip_start):
+        if not (np.isfinite(self.clip_start) and self.clip_start >= 0.0 and self.clip_end >= self.clip_start):
             raise ValueError(f"camera clip range [{cam.clip_start}, {cam.clip_end}] is invalid")
         self.tan_half_fov = float(cam.tan_half_fov)
         if self.kind == 'PERSP' and not (np.isfinite(self.tan_half_fov) and self.tan_half_fov > 0):

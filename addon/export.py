@@ -69,7 +69,7 @@ def export_scene(depsgraph, check_break=None):
 # ----------------------------------------------------------------------------------------
 # Camera (reference blender-cycles.md 1.8, Cycles' blender_camera_viewplane)
 
-def export_camera(scene):
+def export_camera(scene, messages=None):
     r = scene.render
     width = r.resolution_x * r.resolution_percentage // 100
     height = r.resolution_y * r.resolution_percentage // 100
@@ -92,6 +92,12 @@ def export_camera(scene):
     ortho_scale = cam.ortho_scale if cam else 6.0
     shift = (cam.shift_x, cam.shift_y) if cam else (0.0, 0.0)
     clip_start, clip_end = (cam.clip_start, cam.clip_end) if cam else (1e-5, 1e5)
+    if clip_end < clip_start:
+        # Cycles' camera rays are then empty: only the world shows
+        if messages is not None:
+            messages.append(('WARNING', f"camera '{cam_ob.name}': clip end {clip_end:g} is before clip "
+                                        f"start {clip_start:g}, so no object is visible to the camera"))
+        clip_end = clip_start
 
     xr = width * r.pixel_aspect_x
     yr = height * r.pixel_aspect_y
@@ -147,6 +153,12 @@ def export_light(ob, matrix, messages):
         strength *= np.array(light.temperature_color, np.float64)[:3]
     shader = _light_shader_factor(light, ob.name, messages)
     strength *= shader
+    if (strength < 0).any():
+        # Cycles subtracts a negative light's contribution; next-event estimation here only
+        # adds light, so such a lamp is left out rather than failing the render
+        messages.append(('WARNING', f"light '{ob.name}' has a negative strength "
+                                    f"({light.energy:g} W): negative lights are not supported; skipped"))
+        return None
     cycles = getattr(light, 'cycles', None)
     kw = dict(kind=light.type, strength=strength.astype(np.float32),
               matrix=np.array(matrix, np.float64), normalize=bool(getattr(light, 'normalize', True)),
@@ -165,8 +177,14 @@ def export_light(ob, matrix, messages):
         kw.update(angle=float(light.angle))
     elif light.type == 'AREA':
         two = light.shape in ('RECTANGLE', 'ELLIPSE')
-        kw.update(shape=light.shape, size_x=float(light.size),
-                  size_y=float(light.size_y if two else light.size), spread=float(light.spread))
+        sx, sy = float(light.size), float(light.size_y if two else light.size)
+        m = np.array(matrix, np.float64)
+        if not (sx * np.linalg.norm(m[:3, 0]) > 0 and sy * np.linalg.norm(m[:3, 1]) > 0):
+            # zero area (a size or the object's scale is 0): Cycles gets no light from it
+            messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} "
+                                        "at its object's scale): it emits nothing, as in Cycles; skipped"))
+            return None
+        kw.update(shape=light.shape, size_x=sx, size_y=sy, spread=float(light.spread))
     else:
         messages.append(('WARNING', f"light '{ob.name}' of type {light.type} is not supported; skipped"))
         return None
@@ -350,7 +368,8 @@ class _MaterialBuilder:
             else:
                 closure = self._shader(out.inputs['Surface'], reasons, 0)
             for socket in IGNORED_OUTPUTS:
-                if out.inputs.get(socket) is not None and _linked_node(out.inputs[socket]) is not None:
+                if out is not None and out.inputs.get(socket) is not None and \
+                        _linked_node(out.inputs[socket]) is not None:
                     reasons.append(f"{socket.lower()} ignored")
         base, texture, interp, ext = self._albedo(closure)
         return sd.Material(name=name, base_color=base,
@@ -719,7 +738,7 @@ class _Exporter:
                            materials_unused=0, triangles_degenerate=0, triangles_nonfinite=0)
 
     def run(self):
-        camera = export_camera(self.scene)
+        camera = export_camera(self.scene, self.messages)
         settings = self._settings()
         self._walk_instances()
         geometry = self._assemble()

@@ -605,6 +605,40 @@ def test_light_values_in_cycles_units(scene, exported):
     assert any("Unseen" in t for _, t in data.messages)
 
 
+
+def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
+    """Lights Blender allows but Cycles gets no (positive) light from: an area light of zero
+    size or at a zero object scale emits nothing; a negative strength, which Cycles subtracts,
+    is not supported. Each is left out with a message naming it; the rest export as usual."""
+    setup(scene)
+    scenes.light('AREA', 100.0, (0, 0, 2), name="NoSize", size=0.0)
+    flat = scenes.light('AREA', 100.0, (0, 0, 2), name="Squashed", shape='RECTANGLE', size=1.0, size_y=1.0)
+    flat.scale = (1.0, 0.0, 1.0)
+    scenes.light('POINT', -500.0, (0, 0, 2), name="Negative")
+    scenes.light('AREA', 100.0, (0, 0, 3), name="Fine", size=0.5)
+    data = exported()
+    assert [l.name for l in data.lights] == ["Fine"]
+    warnings = [t for lvl, t in data.messages if lvl == 'WARNING']
+    assert any("'NoSize'" in t and "zero area" in t for t in warnings)
+    assert any("'Squashed'" in t and "zero area" in t for t in warnings)
+    assert any("'Negative'" in t and "negative strength" in t for t in warnings)
+
+
+def test_material_without_output_node_is_black(scene, exported):
+    """A node tree with no Material Output renders black in Cycles (no surface shader); it used
+    to stop the export with an AttributeError."""
+    setup(scene)
+    mat = bpy.data.materials.new("NoOutput")
+    mat.node_tree.nodes.clear()
+    mat.node_tree.nodes.new('ShaderNodeBsdfDiffuse')
+    scenes.plane("P", materials=(mat,))
+    data = exported()
+    idx = next(i for i, m in enumerate(data.materials) if m.name == "NoOutput")
+    m = data.materials[idx]
+    assert np.all(m.base_color == 0) and np.all(m.emission == 0) and not m.approximated
+    assert np.all(data.geometry.material == idx)
+
+
 def test_light_ray_visibility(scene, exported):
     """A light's Object > Visibility > Ray Visibility reaches SceneData.Light: Camera (off on a
     new light object in Blender 5.0) and Diffuse; an instancer's visibility is inherited; a

@@ -127,6 +127,18 @@ def test_nan_vertices_are_skipped_and_the_rest_renders(scene, tmp_path, capfd):
     assert "Broken" in out and "NaN" in out
 
 
+
+def test_inverted_clip_range_shows_only_the_world(scene, tmp_path, capfd):
+    """Clip end before clip start leaves Cycles' camera rays empty: the world alone shows (it
+    used to fail the render). Said in a warning naming the camera."""
+    lit_plane_scene(scene)
+    scenes.world((0.2, 0.3, 0.4))
+    scene.camera.data.clip_start, scene.camera.data.clip_end = 10.0, 1.0
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "clip.exr")))
+    assert np.allclose(img[..., :3], (0.2, 0.3, 0.4), rtol=1e-6) and np.allclose(img[..., 3], 1)
+    out = capfd.readouterr().out
+    assert "'Camera'" in out and "clip end" in out
+
 def test_approximated_materials_reported_once(scene, capfd):
     lit_plane_scene(scene)
     glass = bpy.data.materials.new("Glassy")
