@@ -34,7 +34,10 @@ from . import scenedata as sd
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
 UNSUPPORTED_TYPES = {'CURVES': "hair curves", 'POINTCLOUD': "point cloud", 'VOLUME': "volume",
                      'GREASEPENCIL': "Grease Pencil"}
-DEFAULT_ALBEDO = (0.8, 0.8, 0.8)          # Cycles' default surface: Diffuse BSDF 0.8 grey
+# Objects without a material render in Cycles with Blender's default surface, a Principled BSDF of
+# base colour 0.8 (measured in Cycles 5.0: 0.842 where a Diffuse BSDF 0.8 gives 0.764, under a
+# sun behind the camera): its diffuse base here, reported like any Principled specular layer
+DEFAULT_ALBEDO = (0.8, 0.8, 0.8)
 MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
 CHECK_EVERY = 64                          # instances between cancel checks
 # What the material export reads otherwise than Cycles renders it (each reported when used):
@@ -1024,6 +1027,9 @@ class _Exporter:
         for reason, names in self.skipped.items():
             self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
         approx = [f"'{m.name}' ({m.approximated})" for m in self.materials.materials if m.approximated]
+        if len(geometry.material) and not geometry.material.all():     # material 0 is in use
+            approx.insert(0, "objects without a material (Blender's default surface, a Principled "
+                             "BSDF: specular layer ignored)")
         if approx:
             self.messages.append(('WARNING', f"{len(approx)} material(s) approximated as diffuse: "
                                              + "; ".join(approx)))

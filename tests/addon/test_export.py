@@ -639,6 +639,20 @@ def test_material_without_output_node_is_black(scene, exported):
     assert np.all(data.geometry.material == idx)
 
 
+def test_default_surface_reported_only_when_used(scene, exported):
+    """Cycles renders an object without a material with Blender's default surface, a Principled
+    BSDF whose specular layer a diffuse renderer drops: said in the approximation message, and
+    only when some triangle uses it."""
+    setup(scene)
+    scenes.plane("Bare")
+    scenes.plane("Painted", location=(3, 0, 0), materials=(scenes.diffuse("Paint", (0.5, 0.5, 0.5)),))
+    data = exported()
+    assert np.allclose(data.materials[0].base_color, 0.8)
+    assert any("default surface" in t for _, t in data.messages)
+    bpy.data.objects.remove(bpy.data.objects["Bare"])
+    data = exported()
+    assert not any("default surface" in t for _, t in data.messages)
+
 def test_light_ray_visibility(scene, exported):
     """A light's Object > Visibility > Ray Visibility reaches SceneData.Light: Camera (off on a
     new light object in Blender 5.0) and Diffuse; an instancer's visibility is inherited; a

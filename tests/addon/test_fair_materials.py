@@ -144,3 +144,27 @@ def test_override_sets_the_reference_fair_principled_inputs(scene):
     tex = next(n for n in bpy.data.materials["Textured"].node_tree.nodes if n.type == 'TEX_IMAGE')
     assert (tex.projection, tex.interpolation, tex.extension) == ('FLAT', 'Linear', 'REPEAT')
     assert not tex.inputs['Vector'].is_linked
+
+
+def test_objects_without_material_get_the_fair_default(scene, exported):
+    """Cycles renders an object without a material with Blender's default surface (Principled,
+    with a specular layer); the whole-file override gives such objects, and empty slots, a
+    Diffuse BSDF of the export's default grey, so both engines render the same material."""
+    scenes.camera((0, -10, 0), (math.pi / 2, 0, 0))
+    bare = scenes.plane("Bare")
+    slot = scenes.plane("EmptySlot", location=(3, 0, 0))
+    slot.data.materials.append(None)
+    scenes.plane("Painted", location=(6, 0, 0), materials=(scenes.diffuse("Paint", (0.5, 0.5, 0.5)),))
+    before = exported()
+    assert "(default surface)" in fairmaterials.remaining_approximations()
+    changes = fairmaterials.make_diffuse()
+    assert fairmaterials.DEFAULT_SURFACE in changes and "Paint" not in changes
+    assert fairmaterials.remaining_approximations() == {}
+    fair = bpy.data.materials[fairmaterials.DEFAULT_SURFACE]
+    assert bare.material_slots[0].material == fair and slot.material_slots[0].material == fair
+    assert bpy.data.objects["Painted"].material_slots[0].material.name == "Paint"
+    after = exported()
+    by_name = {m.name: m for m in after.materials}
+    assert np.array_equal(by_name[fairmaterials.DEFAULT_SURFACE].base_color, before.materials[0].base_color)
+    assert not by_name[fairmaterials.DEFAULT_SURFACE].approximated
+    assert not any("default surface" in t for _, t in after.messages)

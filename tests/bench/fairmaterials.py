@@ -17,6 +17,9 @@ export renders exactly, following the export's own rules (addon/export.py `_Mate
 - the output's Volume and Displacement inputs unlinked; muted shader nodes become the
   default grey Diffuse BSDF.
 Textures, emission, Add and Mix Shader stay as they are: they are what the comparison tests.
+Objects without a material (no slot, or an empty one) render in Cycles with Blender's default
+surface, a Principled BSDF with a specular layer; the whole-file `make_diffuse()` gives them a
+Diffuse BSDF of the same 0.8 grey, which is what the export renders for them.
 Runs only inside a bpy process (the benchmark's render worker).
 """
 
@@ -30,10 +33,19 @@ from addon import export
 ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
 
 
+DEFAULT_SURFACE = "DACRT fair default surface"
+DEFAULT_SURFACE_REASON = "Blender's default surface, a Principled BSDF: specular layer ignored"
+
+
 def make_diffuse(materials=None) -> dict[str, list[str]]:
-    """Edit materials (default: all of bpy.data.materials) in place; returns, per material
-    name, what was changed (materials already diffuse are not listed)."""
+    """Edit materials (default: all of bpy.data.materials, and the objects without one) in
+    place; returns, per material name, what was changed (materials already diffuse are not
+    listed)."""
     changes = {}
+    if materials is None:
+        filled = _fill_empty_slots()
+        if filled:
+            changes[DEFAULT_SURFACE] = [f"given to {len(filled)} object(s) without a material"]
     for mat in (bpy.data.materials if materials is None else materials):
         done = _Editor(mat).run()
         if done:
@@ -43,14 +55,47 @@ def make_diffuse(materials=None) -> dict[str, list[str]]:
 
 def remaining_approximations(materials=None) -> dict[str, str]:
     """What the add-on's export would still approximate, per material name (empty after
-    make_diffuse, unless two different images are mixed in one material)."""
+    make_diffuse, unless two different images are mixed in one material); objects without a
+    material are listed under '(default surface)'."""
     builder = export._MaterialBuilder()
     out = {}
+    if materials is None and _objects_without_material():
+        out['(default surface)'] = DEFAULT_SURFACE_REASON
     for mat in (bpy.data.materials if materials is None else materials):
         m = builder.materials[builder.index(mat)]
         if m.approximated:
             out[mat.name] = m.approximated
     return out
+
+
+def _objects_without_material():
+    """Geometry objects with no material slot or an empty one."""
+    return [ob for ob in bpy.data.objects if ob.type in export.GEOMETRY_TYPES and
+            (not ob.material_slots or any(s.material is None for s in ob.material_slots))]
+
+
+def _fill_empty_slots() -> list[str]:
+    """A Diffuse BSDF 0.8 (the export's default albedo) where an object has no material."""
+    objects = _objects_without_material()
+    if not objects:
+        return []
+    mat = bpy.data.materials.get(DEFAULT_SURFACE) or bpy.data.materials.new(DEFAULT_SURFACE)
+    if bpy.app.version < (5, 0, 0):
+        mat.use_nodes = True
+    tree = mat.node_tree
+    tree.nodes.clear()
+    out = tree.nodes.new('ShaderNodeOutputMaterial')
+    diffuse = tree.nodes.new('ShaderNodeBsdfDiffuse')
+    diffuse.inputs['Color'].default_value = (*export.DEFAULT_ALBEDO, 1.0)
+    diffuse.inputs['Roughness'].default_value = 0.0
+    tree.links.new(diffuse.outputs['BSDF'], out.inputs['Surface'])
+    for ob in objects:
+        if not ob.material_slots:
+            ob.data.materials.append(mat)
+        for slot in ob.material_slots:
+            if slot.material is None:
+                slot.material = mat
+    return [ob.name for ob in objects]
 
 
 class _Editor:
