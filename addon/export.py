@@ -22,7 +22,11 @@ transmission, subsurface or alpha); Diffuse roughness (Oren-Nayar) is treated as
 BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
 texture coordinates other than UV are read as the active render UV map.
 Each approximated material says why in `Material.approximated`; the export reports them in
-one message.
+one message. Objects without a material get the default material (Blender's default surface is a
+Principled BSDF: its 0.8 diffuse base), reported with them when used.
+Lights Cycles gets no light from (an area light of zero size) or that subtract light (negative
+strength, not supported) are skipped with a warning; so is a camera whose clip end lies before
+its clip start (nothing but the world is visible, as in Cycles).
 """
 
 import bpy
