@@ -24,10 +24,14 @@ texture coordinates other than UV are read as the active render UV map.
 Each approximated material says why in `Material.approximated`; the export reports them in
 one message. Objects without a material get the default material (Blender's default surface is a
 Principled BSDF: its 0.8 diffuse base), reported with them when used.
-Lights Cycles gets no light from (an area light of zero size) or that subtract light (negative
-strength, not supported) are skipped with a warning; so is a camera whose clip end lies before
-its clip start (nothing but the world is visible, as in Cycles).
+Blender-legal values the integrator cannot take become what Cycles renders, or the nearest thing
+a diffuse path tracer can, each with a warning: lights Cycles gets no light from (an area light
+of zero size or spread, a spot of zero scale) or that subtract light (negative strength, not
+supported) are skipped; negative or non-finite material channels and world become 0; a camera
+whose clip end lies before its clip start sees nothing but the world, as in Cycles.
 """
+
+import math
 
 import bpy
 import dacrt
@@ -160,6 +164,9 @@ def export_light(ob, matrix, messages):
         strength *= np.array(light.temperature_color, np.float64)[:3]
     shader = _light_shader_factor(light, ob.name, messages)
     strength *= shader
+    if not np.isfinite(strength).all():
+        messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
+        return None
     if (strength < 0).any():
         # Cycles subtracts a negative light's contribution; next-event estimation here only
         # adds light, so such a lamp is left out rather than failing the render
@@ -179,9 +186,14 @@ def export_light(ob, matrix, messages):
         kw.update(radius=float(light.shadow_soft_size),
                   soft_falloff=bool(getattr(light, 'use_soft_falloff', True)))
         if light.type == 'SPOT':
-            kw.update(spot_size=float(light.spot_size), spot_blend=float(light.spot_blend))
+            if abs(np.linalg.det(np.array(matrix, np.float64)[:3, :3])) < 1e-30:
+                # the cone's shape comes from the object's scale; a zero scale leaves none
+                messages.append(('WARNING', f"spot light '{ob.name}' has a zero object scale: "
+                                            "its cone is empty; skipped"))
+                return None
+            kw.update(spot_size=min(float(light.spot_size), math.pi), spot_blend=float(light.spot_blend))
     elif light.type == 'SUN':
-        kw.update(angle=float(light.angle))
+        kw.update(angle=min(max(float(light.angle), 0.0), math.pi))   # 180 deg is float32 pi > pi
     elif light.type == 'AREA':
         two = light.shape in ('RECTANGLE', 'ELLIPSE')
         sx, sy = float(light.size), float(light.size_y if two else light.size)
@@ -191,7 +203,12 @@ def export_light(ob, matrix, messages):
             messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} "
                                         "at its object's scale): it emits nothing, as in Cycles; skipped"))
             return None
-        kw.update(shape=light.shape, size_x=sx, size_y=sy, spread=float(light.spread))
+        spread = min(float(light.spread), math.pi)
+        if not spread > 0:
+            messages.append(('WARNING', f"area light '{ob.name}' has spread 0: it emits in no "
+                                        "direction; skipped"))
+            return None
+        kw.update(shape=light.shape, size_x=sx, size_y=sy, spread=spread)
     else:
         messages.append(('WARNING', f"light '{ob.name}' of type {light.type} is not supported; skipped"))
         return None
@@ -338,6 +355,16 @@ class _Closure:
         return _Closure(self.const + other.const, self.emission + other.emission, tex, w)
 
 
+def _nonnegative(v, label, reasons):
+    """v with negative or non-finite channels set to 0 (Cycles would subtract light or produce
+    NaN; a diffuse path tracer's weights must be finite and non-negative), noted in reasons."""
+    bad = ~np.isfinite(v) | (v < 0)
+    if not bad.any():
+        return v
+    reasons.append(f"negative or non-finite {label} {tuple(float(x) for x in v)} set to 0 per channel")
+    return np.where(bad, np.float32(0), v).astype(np.float32)
+
+
 class _MaterialBuilder:
     """Evaluates Blender materials into scenedata.Material, one per material."""
 
@@ -379,8 +406,10 @@ class _MaterialBuilder:
                         _linked_node(out.inputs[socket]) is not None:
                     reasons.append(f"{socket.lower()} ignored")
         base, texture, interp, ext = self._albedo(closure)
+        base = _nonnegative(base, "colour", reasons)
+        emission = _nonnegative(closure.emission.astype(np.float32), "emission", reasons)
         return sd.Material(name=name, base_color=base,
-                           emission=closure.emission.astype(np.float32), texture=texture,
+                           emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext,
                            approximated='; '.join(dict.fromkeys(reasons)))
 
@@ -750,6 +779,11 @@ class _Exporter:
         self._walk_instances()
         geometry = self._assemble()
         world, world_reason = export_world(self.scene)
+        if not (np.isfinite(world).all() and (world >= 0).all()):
+            # Cycles subtracts a negative background; that is not supported here
+            world_reason = (f"its colour x strength {tuple(float(v) for v in world)} is negative or "
+                            "not finite; rendered black")
+            world = np.zeros(3, np.float32)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
         self._summarize(geometry, world)

@@ -23,8 +23,9 @@ class SunLight(Lamp):
             raise ValueError(f"sun light {light.name!r}: object transform has no Z axis")
         self.to_sun = (z / length).astype(F32)
         half = 0.5 * float(light.angle)
-        if not (0.0 <= half <= 0.5 * np.pi):
+        if not (0.0 <= half <= 0.5 * np.pi + 1e-6):     # 180 degrees in float32 exceeds pi
             raise ValueError(f"sun light {light.name!r}: angle {light.angle!r} must be in [0, pi]")
+        half = min(half, 0.5 * np.pi)
         self.delta = half == 0.0
         self.omc = F32(2.0 * np.sin(0.5 * half) ** 2)     # 1 - cos(half)
         self.cos_half = F32(1.0) - self.omc

@@ -11,6 +11,7 @@ import pytest
 from mathutils import Euler, Vector
 
 from addon import export
+from addon import lights as ls
 from addon import scenedata as sd
 
 from . import scenes
@@ -615,13 +616,42 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     flat = scenes.light('AREA', 100.0, (0, 0, 2), name="Squashed", shape='RECTANGLE', size=1.0, size_y=1.0)
     flat.scale = (1.0, 0.0, 1.0)
     scenes.light('POINT', -500.0, (0, 0, 2), name="Negative")
+    scenes.light('POINT', float('inf'), (0, 0, 2), name="Infinite")
+    scenes.light('AREA', 100.0, (0, 0, 2), name="Beam", spread=0.0)
+    cone = scenes.light('SPOT', 100.0, (0, 0, 2), name="NoCone")
+    cone.scale = (1.0, 0.0, 1.0)
     scenes.light('AREA', 100.0, (0, 0, 3), name="Fine", size=0.5)
+    scenes.light('SUN', 3.0, name="WideSun", angle=math.pi)     # 180 degrees: float32 pi > pi
     data = exported()
-    assert [l.name for l in data.lights] == ["Fine"]
+    assert [l.name for l in data.lights] == ["Fine", "WideSun"]
+    assert data.lights[1].angle <= math.pi
     warnings = [t for lvl, t in data.messages if lvl == 'WARNING']
-    assert any("'NoSize'" in t and "zero area" in t for t in warnings)
-    assert any("'Squashed'" in t and "zero area" in t for t in warnings)
-    assert any("'Negative'" in t and "negative strength" in t for t in warnings)
+    for name, why in (("NoSize", "zero area"), ("Squashed", "zero area"), ("Negative", "negative strength"),
+                      ("Infinite", "non-finite strength"), ("Beam", "spread 0"), ("NoCone", "zero object scale")):
+        assert any(f"'{name}'" in t and why in t for t in warnings), (name, warnings)
+    assert ls.LightSet([ls.make_lamp(l) for l in data.lights], None, 0).num_lamps == 2   # the integrator takes them
+
+
+def test_negative_or_non_finite_material_values_become_zero_with_a_reason(scene, exported):
+    """Blender takes a negative emission strength or a NaN colour from a script or driver; the
+    export sets those channels to 0 and says so, instead of failing the render."""
+    setup(scene)
+    scenes.plane("Dark", materials=(scenes.emission("NegEmit", (1.0, 0.5, 0.25), -2.0),))
+    scenes.plane("Odd", location=(3, 0, 0), materials=(scenes.diffuse("NanColour", (float('nan'), 0.5, 0.5)),))
+    data = exported()
+    m = {m.name: m for m in data.materials}
+    assert np.array_equal(m["NegEmit"].emission, np.zeros(3, np.float32))
+    assert "negative or non-finite emission" in m["NegEmit"].approximated
+    assert np.array_equal(m["NanColour"].base_color, np.float32([0.0, 0.5, 0.5]))
+    assert "non-finite colour" in m["NanColour"].approximated
+
+
+def test_negative_world_rendered_black_with_a_message(scene, exported):
+    setup(scene)
+    scenes.world((0.5, 0.5, 0.5), strength=-1.0)
+    data = exported()
+    assert np.array_equal(data.world, np.zeros(3, np.float32))
+    assert any("world approximated" in t and "negative" in t for _, t in data.messages)
 
 
 def test_material_without_output_node_is_black(scene, exported):
