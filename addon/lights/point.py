@@ -10,7 +10,9 @@ forward (-Z) component of the light->point direction mapped through the inverse 
 (non-uniform scale makes the cone elliptical). As in Cycles 5.0 (kernel/light/spot.h) that
 direction runs from the sampled point on the light (or along the ray that meets it), not from the
 centre, so the cone edge softens with the light's radius. No cone normalisation: on axis a spot equals a
-point light of the same power. Shading points inside the light's radius receive nothing.
+point light of the same power. Within the radius, as in Cycles: the sphere is seen in every
+direction (sampled uniformly over the sphere of directions, pdf 1/(4 pi), a ray meets its far
+side), and the soft-falloff disk still faces the point.
 """
 from __future__ import annotations
 
@@ -62,16 +64,18 @@ class PointLight(Lamp):
             return LightSample(axis, d, outer(self.emit, self._attenuate(scale, axis)), np.full(n, np.inf, F32))
         r = F32(self.radius)
         outside = d > r
+        apart = d > 0                                      # P at the centre: no direction
         if self.sphere:
             sin2 = np.minimum((r * r) / np.maximum(d * d, F32(1e-30)), F32(1.0))
-            omc = one_minus_cos_from_sin2(sin2)
+            omc = np.where(outside, one_minus_cos_from_sin2(sin2), F32(2.0))   # inside: all round
             local, cos_t = uniform_cone(u1, u2, omc)
             wi = to_world(local, axis)
-            b = d * cos_t                                  # distance to the near sphere surface
-            dist = b - np.sqrt(np.maximum(r * r - np.maximum(d * d - b * b, 0.0), 0.0))
+            b = d * cos_t                                  # near surface (outside), far (inside)
+            h = np.sqrt(np.maximum(r * r - np.maximum(d * d - b * b, 0.0), 0.0))
+            dist = np.where(outside, b - h, b + h)
             with np.errstate(divide='ignore'):
-                pdf = np.where(outside, F32(1.0 / (2.0 * np.pi)) / omc, F32(0.0))
-                scale = np.where(outside, F32(2.0 * np.pi) * omc, F32(0.0))
+                pdf = np.where(apart, F32(1.0 / (2.0 * np.pi)) / omc, F32(0.0))
+                scale = np.where(apart, F32(2.0 * np.pi) * omc, F32(0.0))
         else:
             x, y = concentric_disk(u1, u2)                 # uniform point on the disk facing P
             t1, t2 = orthonormal_basis(axis)
@@ -80,7 +84,7 @@ class PointLight(Lamp):
             q += self.center[:, None]
             wi, dist = normalize(q - P)
             cos_l = dot(wi, axis)                          # disk normal (-axis) against -wi
-            good = outside & (cos_l > 0)
+            good = apart & (cos_l > 0)
             with np.errstate(divide='ignore', invalid='ignore'):
                 pdf = np.where(good, dist * dist / (F32(np.pi) * r * r * cos_l), F32(0.0))
                 scale = np.where(good, F32(1.0) / pdf, F32(0.0))
@@ -94,12 +98,14 @@ class PointLight(Lamp):
         b = dot(oc, D)
         d2 = dot(oc, oc)
         outside = d2 > r * r
+        apart = d2 > 0
         if self.sphere:
             perp = oc - D * b
             h2 = r * r - dot(perp, perp)
-            t = b - np.sqrt(np.maximum(h2, 0.0))
-            idx = np.flatnonzero(outside & (h2 >= 0) & (t > 0) & (t < tmax))
-            omc = one_minus_cos_from_sin2(np.minimum(r * r / d2[idx], F32(1.0)))
+            h = np.sqrt(np.maximum(h2, 0.0))
+            t = np.where(outside, b - h, b + h)            # from inside: the far side
+            idx = np.flatnonzero(apart & (h2 >= 0) & (t > 0) & (t < tmax))
+            omc = np.where(outside[idx], one_minus_cos_from_sin2(np.minimum(r * r / d2[idx], F32(1.0))), F32(2.0))
             pdf = F32(1.0 / (2.0 * np.pi)) / omc
         else:
             # disk through the centre, facing the ray origin: plane at distance |oc| along oc
@@ -108,7 +114,7 @@ class PointLight(Lamp):
                 cos_l = b / dist_c                         # cos between D and the disk axis
                 t = dist_c / cos_l
             rel = D * t - oc                               # hit point relative to the centre
-            idx = np.flatnonzero(outside & (cos_l > 0) & (t < tmax) & (dot(rel, rel) <= r * r))
+            idx = np.flatnonzero(apart & (cos_l > 0) & (t < tmax) & (dot(rel, rel) <= r * r))
             t_i = t[idx]
             pdf = t_i * t_i / (F32(np.pi) * r * r * cos_l[idx])
         scale = self._attenuate(np.ones(len(idx), F32), D[:, idx])

@@ -189,22 +189,27 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
         const float d = normalize(axis);
         const float r = L.radius;
         const bool outside = d > r;
+        const bool apart = d > 0;  // P at the very centre has no direction to the light
         if (shape == POINT_DELTA) {
             for (int a = 0; a < 3; ++a) s.wi[a] = axis[a];
             s.dist = d;
             s.pdf = INF;
             scale = d > 0 ? 1.0f / (d * d) : 0.0f;
         } else if (shape == POINT_SPHERE) {
+            // Outside: the cone the sphere subtends. Inside (as Cycles, the sphere is seen in
+            // every direction): the whole sphere of directions, a cone with 1 - cos = 2.
             const float sin2 = std::min(1.0f, (r * r) / std::max(1e-30f, d * d));
-            const float omc = one_minus_cos_from_sin2(sin2);
+            const float omc = outside ? one_minus_cos_from_sin2(sin2) : 2.0f;
             float local[3];
             const float cos_t = uniform_cone(u1, u2, omc, local);
             to_world(local, axis, s.wi);
-            const float b = d * cos_t;  // distance to the near sphere surface
-            s.dist = b - std::sqrt(std::max(0.0f, r * r - std::max(0.0f, d * d - b * b)));
-            s.pdf = outside ? INV_2PI / omc : 0.0f;
-            scale = outside ? TWO_PI * omc : 0.0f;
-        } else {                         // disk of radius r through the centre, facing P
+            const float b = d * cos_t;  // the near surface from outside, the far one from inside
+            const float h = std::sqrt(std::max(0.0f, r * r - std::max(0.0f, d * d - b * b)));
+            s.dist = outside ? b - h : b + h;
+            s.pdf = apart ? INV_2PI / omc : 0.0f;
+            scale = apart ? TWO_PI * omc : 0.0f;
+        } else {                         // disk of radius r through the centre, facing P (also from
+                                         // within r: Cycles' soft-falloff point has no inside)
             float x, y, t1[3], t2[3];
             concentric_disk(u1, u2, x, y);
             orthonormal_basis(axis, t1, t2);
@@ -217,7 +222,7 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
             }
             s.dist = normalize(s.wi);
             const float cos_l = dot3(s.wi, axis);
-            const bool good = outside && cos_l > 0;
+            const bool good = apart && cos_l > 0;
             const float p = s.dist * s.dist / (PI * r * r * cos_l);
             s.pdf = good ? p : 0.0f;
             scale = good ? 1.0f / p : 0.0f;
@@ -288,13 +293,16 @@ inline bool hit_lamp(const LampRecord& L, const float O[3], const float D[3], fl
         const float r = L.radius;
         const float oc[3] = {L.pos[0] - O[0], L.pos[1] - O[1], L.pos[2] - O[2]};
         const float b = dot3(oc, D), d2 = dot3(oc, oc);
-        if (!(d2 > r * r)) return false;  // origin inside the light
+        if (!(d2 > 0)) return false;  // origin at the centre
         if (shape == POINT_SPHERE) {
+            // from outside the near intersection; from inside the far one (seen all round)
+            const bool outside = d2 > r * r;
             const float perp[3] = {oc[0] - D[0] * b, oc[1] - D[1] * b, oc[2] - D[2] * b};
             const float h2 = r * r - dot3(perp, perp);
-            const float t = b - std::sqrt(std::max(0.0f, h2));
+            const float h = std::sqrt(std::max(0.0f, h2));
+            const float t = outside ? b - h : b + h;
             if (!(h2 >= 0 && t > 0 && t < tmax)) return false;
-            pdf = INV_2PI / one_minus_cos_from_sin2(std::min(1.0f, r * r / d2));
+            pdf = outside ? INV_2PI / one_minus_cos_from_sin2(std::min(1.0f, r * r / d2)) : INV_2PI / 2.0f;
         } else {                              // disk through the centre, facing the ray origin
             const float dist_c = std::sqrt(d2);
             const float cos_l = b / dist_c;   // cos between D and the disk axis

@@ -82,6 +82,17 @@ def test_soft_falloff_point(scene, tmp_path):
     assert rendered_mean(tmp_path, "soft") == pytest.approx(expected, rel=0.01)
 
 
+def test_point_lights_light_points_within_their_radius(scene, tmp_path):
+    """The plane point 2 m below a light of radius 3 lies inside it. Cycles still lights it:
+    a soft-falloff disk facing the point, E = P/(4 pi (h^2 + r^2)) as outside; a sphere is seen
+    in every direction above the plane, E = pi L = P/(4 pi r^2) (both rendered nothing here)."""
+    plane_setup(scene)
+    light = scenes.light('POINT', 1000.0, (0, 0, 2), shadow_soft_size=3.0, use_soft_falloff=True)
+    assert rendered_mean(tmp_path, "soft_inside") == pytest.approx(shade(1000 / (4 * math.pi * (4 + 9))), rel=0.01)
+    light.data.use_soft_falloff = False
+    assert rendered_mean(tmp_path, "sphere_inside") == pytest.approx(shade(1000 / (4 * math.pi * 9)), rel=0.01)
+
+
 def test_spot_on_axis(scene, tmp_path):
     plane_setup(scene)
     scenes.light('SPOT', 1000.0, (0, 0, 2), spot_size=math.radians(45), spot_blend=0.5,
