@@ -1007,13 +1007,16 @@ class _Exporter:
                     bad.append((p.name, nvb, nb))
             keep = tri_ok
             world[~finite] = 0.0
-        # geometric normals in world space (float64, one native pass); objects with negative
-        # scale keep their outside
-        mirrored = np.linalg.det(lin) < 0
-        ng, good = dacrt.shading.face_normals(world, tris, -1.0 if k == 1 and mirrored[0] else 1.0)
-        if k > 1:
-            for i in np.flatnonzero(mirrored):
-                np.negative(ng[i * nt:(i + 1) * nt], out=ng[i * nt:(i + 1) * nt])
+        # A mirroring transform (negative scale) reverses the winding. The renderer orients the
+        # shading normals by the winding normal, so those instances get corners 1 and 2 swapped
+        # (their corner normals and UVs below too): the winding normal faces the outside again.
+        # (Negating only the flat normals left the two opposed: mirrored objects rendered black.)
+        mirrored = np.flatnonzero(np.linalg.det(lin) < 0)
+        for i in mirrored:
+            r = tris[i * nt:(i + 1) * nt]
+            r[:, [1, 2]] = r[:, [2, 1]]
+        # geometric normals in world space (float64, one native pass)
+        ng, good = dacrt.shading.face_normals(world, tris, 1.0)
         if v0:
             tris += v0
         deg = int(np.count_nonzero(~good if keep is None else keep & ~good))
@@ -1040,10 +1043,14 @@ class _Exporter:
             per = normals.reshape(k, nt, 3, 3)
             for i in range(k):
                 a.per_corner(n[i], a.normal_index, per[i])
+            for i in mirrored:
+                per[i][:, [1, 2]] = per[i][:, [2, 1]]
             if not ok.all():
                 corner_ok = np.empty((k, nt, 3, 1), bool)
                 for i in range(k):
                     a.per_corner(ok[i], a.normal_index, corner_ok[i])
+                for i in mirrored:
+                    corner_ok[i][:, [1, 2]] = corner_ok[i][:, [2, 1]]
                 np.copyto(normals, ng[:, None, :], where=~corner_ok.reshape(k * nt, 3, 1))
         for i, p in enumerate(places):
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
@@ -1058,6 +1065,9 @@ class _Exporter:
                     out.uvs[S] = 0.0
                 else:
                     a.per_corner(a.corner_uvs, a.corners, out.uvs[S])
+                    if i in mirrored:
+                        uv = out.uvs[S]
+                        uv[:, [1, 2]] = uv[:, [2, 1]]
         return bad, deg
 
     # -- messages ----------------------------------------------------------------------------

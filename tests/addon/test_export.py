@@ -244,6 +244,34 @@ def test_flat_normals_are_outward_face_normals_even_mirrored(scene, exported):
     assert np.all(np.einsum('ij,ij->i', n[:, 0], centroid) > 0), "normals point outwards"
 
 
+
+def test_mirrored_instances_wind_outwards_with_their_corner_data(scene, exported):
+    """A negative scale reverses the winding; the renderer orients shading normals by the winding
+    normal, so a mirrored instance must wind outwards and keep each corner's normal and UV with
+    its vertex (mirrored objects rendered black while only the normals were flipped)."""
+    setup(scene)
+    mat = bpy.data.materials.new("Textured")           # UVs are exported when a texture reads them
+    nt = mat.node_tree
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = bpy.data.images.new("Px", 2, 2)
+    bsdf = next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
+    nt.links.new(tex.outputs['Color'], bsdf.inputs['Base Color'])
+    ob = scenes.uv_sphere("S", segments=12, rings=6, location=(1.0, 2.0, 3.0), materials=(mat,))
+    uv = ob.data.uv_layers.new(name="UV")
+    for loop in ob.data.loops:          # u, v = the vertex's local x, y: a known corner -> UV map
+        co = ob.data.vertices[loop.vertex_index].co
+        uv.data[loop.index].uv = (co.x, co.y)
+    ob.scale = (1.0, -2.0, 1.0)
+    data = exported()
+    g = data.geometry
+    V = np.asarray(g.vertices)[g.triangles]                       # (M, 3 corners, 3)
+    wind = np.cross(V[:, 1] - V[:, 0], V[:, 2] - V[:, 0])
+    centre = np.array([1.0, 2.0, 3.0])
+    assert np.all(np.einsum('ij,ij->i', wind, V.mean(axis=1) - centre) > 0), "winding faces the outside"
+    assert np.all(np.einsum('ij,ikj->ik', wind, g.normals) > 0), "corner normals on the winding side"
+    local = (V - centre) / np.array([1.0, -2.0, 1.0])
+    assert np.allclose(g.uvs, local[..., :2], atol=1e-5), "each corner keeps its vertex's UV"
+
 def test_smooth_normals_follow_inverse_transpose(scene, exported):
     setup(scene)
     ob = scenes.uv_sphere("Ball", radius=1.0, segments=48, rings=24, smooth=True)

@@ -139,6 +139,16 @@ def test_inverted_clip_range_shows_only_the_world(scene, tmp_path, capfd):
     out = capfd.readouterr().out
     assert "'Camera'" in out and "clip end" in out
 
+
+@pytest.mark.parametrize('scale', [(1, -1, 1), (-1, -1, -1)])
+def test_mirrored_objects_are_lit_like_unmirrored(scene, tmp_path, scale):
+    """A plane with a negative scale under a sun: rho E / pi as unmirrored (it rendered black:
+    its shading normals faced away from its reversed winding)."""
+    lit_plane_scene(scene)
+    bpy.data.objects["Ground"].scale = scale
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "mirrored.exr")))
+    assert np.allclose(img[..., :3].mean(axis=(0, 1)), np.array([0.2, 0.4, 0.6]) * 3 / math.pi, rtol=1e-3)
+
 def test_approximated_materials_reported_once(scene, capfd):
     lit_plane_scene(scene)
     glass = bpy.data.materials.new("Glassy")
