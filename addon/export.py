@@ -1016,7 +1016,7 @@ class _Exporter:
             r = tris[i * nt:(i + 1) * nt]
             r[:, [1, 2]] = r[:, [2, 1]]
         # geometric normals in world space (float64, one native pass)
-        ng, good = dacrt.shading.face_normals(world, tris, 1.0)
+        ng, good = dacrt.shading.face_normals(world, tris)
         if v0:
             tris += v0
         deg = int(np.count_nonzero(~good if keep is None else keep & ~good))

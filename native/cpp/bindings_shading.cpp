@@ -356,14 +356,14 @@ std::pair<size_t, size_t> mesh_sizes(const py::array& vertices, const py::array_
 }
 
 py::tuple face_normals_py(py::array_t<double, py::array::c_style> vertices,
-                          py::array_t<int32_t, py::array::c_style> triangles, float flip) {
+                          py::array_t<int32_t, py::array::c_style> triangles) {
     const size_t M = mesh_sizes(vertices, triangles).second;
     const int32_t* t = triangles.data();
     F32Array normals({py::ssize_t(M), py::ssize_t(3)});
     py::array_t<bool> good{py::ssize_t(M)};
     {
         py::gil_scoped_release nogil;
-        face_normals(vertices.data(), t, M, flip, normals.mutable_data(), reinterpret_cast<uint8_t*>(good.mutable_data()));
+        face_normals(vertices.data(), t, M, normals.mutable_data(), reinterpret_cast<uint8_t*>(good.mutable_data()));
     }
     return py::make_tuple(normals, good);
 }
@@ -426,7 +426,7 @@ void register_shading(py::module_& m) {
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
           py::arg("rays"));
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
-    m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"), py::arg("flip"));
+    m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"));
     m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
 }

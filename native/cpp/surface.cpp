@@ -67,9 +67,8 @@ size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits
     return bad.load();
 }
 
-void face_normals(const double* vertices, const int32_t* triangles, size_t M, float flip, float* normals,
-                  uint8_t* good) {
-    parallel_for(M, [vertices, triangles, M, flip, normals, good](size_t b, size_t e) {
+void face_normals(const double* vertices, const int32_t* triangles, size_t M, float* normals, uint8_t* good) {
+    parallel_for(M, [vertices, triangles, M, normals, good](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const double* c[3];
             for (int k = 0; k < 3; ++k) c[k] = vertices + 3 * size_t(triangles[3 * i + k]);
@@ -82,7 +81,7 @@ void face_normals(const double* vertices, const int32_t* triangles, size_t M, fl
                                  e1[0] * e2[1] - e1[1] * e2[0]};
             const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             const bool ok = len > 0 && std::isfinite(len);
-            for (int a = 0; a < 3; ++a) normals[3 * i + size_t(a)] = ok ? float(n[a] / len) * flip : 0.0f;
+            for (int a = 0; a < 3; ++a) normals[3 * i + size_t(a)] = ok ? float(n[a] / len) : 0.0f;
             good[i] = ok;
         }
     });

@@ -13,7 +13,7 @@
 //           axis and which vertex holds min/max/mid are stored (16 bytes);
 //  - prim:  the caller's triangle index, which is what hits, masks, skips and ties use, so
 //           results do not depend on the order;
-// plus the id array of all slots that every trace call copies and reorders.
+// plus the id array of the non-degenerate slots that every trace call copies and reorders.
 #pragma once
 #include <cstdint>
 #include <cstddef>
@@ -58,7 +58,7 @@ struct TriangleSet {
     BuiltArray<Box> boxes;
     BuiltArray<CompactTri> tris;
     BuiltArray<uint32_t> prim;
-    std::vector<uint32_t> valid_ids;  // every slot (0, 1, ...), the root of every trace
+    std::vector<uint32_t> valid_ids;  // the non-degenerate slots, ascending: the root of every trace
     Bounds3 bounds{};                 // AABB of the valid triangles
     Bounds3 centroid_bounds{};        // AABB of their box centres
     float abs_max = 0.0f;             // largest |coordinate| of any valid vertex

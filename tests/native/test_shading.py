@@ -366,11 +366,11 @@ def test_face_normals_and_flatness():
     v = rng.normal(size=(50, 3)) * 1e3 + 1e5             # float64 far from the origin
     t = rng.integers(0, 50, (200, 3)).astype(np.int32)
     t[0] = (3, 3, 7)                                       # degenerate
-    n, good = shading.face_normals(v, t, -1.0)
+    n, good = shading.face_normals(v, t)
     cross = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
     length = np.linalg.norm(cross, axis=1)
     np.testing.assert_array_equal(good, length > 0)
-    np.testing.assert_allclose(n[good], -cross[good] / length[good, None], atol=1e-6)
+    np.testing.assert_allclose(n[good], cross[good] / length[good, None], atol=1e-6)
     assert not n[0].any()
     geo, _ = _geo(rng, 40)
     flat = np.repeat(geo[9:12].T[:, None, :], 3, axis=1).copy()

@@ -259,12 +259,11 @@ def take_columns(idx, *arrays):
     return [None if a is None else next(taken) for a in arrays]
 
 
-def face_normals(vertices, triangles, flip: float = 1.0):
+def face_normals(vertices, triangles):
     """Unit geometric normals (M, 3) float32 of triangles (M, 3) of float64 vertices (V, 3),
-    computed in double and multiplied by flip (-1: a mirroring transform keeps the outside), and
-    good (M,): False (normal 0) for zero-area or non-finite triangles. One threaded pass."""
-    return _core.face_normals(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(triangles, np.int32),
-                              float(flip))
+    computed in double, by the winding (v1 - v0) x (v2 - v0), and good (M,): False (normal 0)
+    for zero-area or non-finite triangles. One threaded pass."""
+    return _core.face_normals(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(triangles, np.int32))
 
 
 def corner_rows(per_corner):
