@@ -31,8 +31,6 @@ supported) are skipped; negative or non-finite material channels and world becom
 whose clip end lies before its clip start sees nothing but the world, as in Cycles.
 """
 
-import math
-
 import bpy
 import dacrt
 import numpy as np
@@ -191,9 +189,9 @@ def export_light(ob, matrix, messages):
                 messages.append(('WARNING', f"spot light '{ob.name}' has a zero object scale: "
                                             "its cone is empty; skipped"))
                 return None
-            kw.update(spot_size=min(float(light.spot_size), math.pi), spot_blend=float(light.spot_blend))
+            kw.update(spot_size=float(light.spot_size), spot_blend=float(light.spot_blend))
     elif light.type == 'SUN':
-        kw.update(angle=min(max(float(light.angle), 0.0), math.pi))   # 180 deg is float32 pi > pi
+        kw.update(angle=float(light.angle))
     elif light.type == 'AREA':
         two = light.shape in ('RECTANGLE', 'ELLIPSE')
         sx, sy = float(light.size), float(light.size_y if two else light.size)
@@ -203,7 +201,7 @@ def export_light(ob, matrix, messages):
             messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} "
                                         "at its object's scale): it emits nothing, as in Cycles; skipped"))
             return None
-        spread = min(float(light.spread), math.pi)
+        spread = float(light.spread)
         if not spread > 0:
             messages.append(('WARNING', f"area light '{ob.name}' has spread 0: it emits in no "
                                         "direction; skipped"))

@@ -139,6 +139,7 @@ class SpotLight(PointLight):
         if not (0.0 < size <= np.pi + 1e-6) or not (0.0 <= blend <= 1.0):
             raise ValueError(f"spot light {light.name!r}: spot_size {size!r} must be in (0, pi], "
                              f"spot_blend {blend!r} in [0, 1]")
+        size = min(size, np.pi)                         # 180 degrees in float32 exceeds pi
         self.cos_half = F32(np.cos(0.5 * size))
         omc = 2.0 * np.sin(0.25 * size) ** 2            # 1 - cos(size/2) without cancellation
         self.inv_smooth = F32(1.0 / (omc * blend)) if blend > 0 else None

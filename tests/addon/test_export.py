@@ -652,12 +652,14 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     scenes.light('SUN', 3.0, name="WideSun", angle=math.pi)     # 180 degrees: float32 pi > pi
     data = exported()
     assert [l.name for l in data.lights] == ["Fine", "WideSun"]
-    assert data.lights[1].angle <= math.pi
+    assert data.lights[1].angle > math.pi                       # as Blender stores it
     warnings = [t for lvl, t in data.messages if lvl == 'WARNING']
     for name, why in (("NoSize", "zero area"), ("Squashed", "zero area"), ("Negative", "negative strength"),
                       ("Infinite", "non-finite strength"), ("Beam", "spread 0"), ("NoCone", "zero object scale")):
         assert any(f"'{name}'" in t and why in t for t in warnings), (name, warnings)
-    assert ls.LightSet([ls.make_lamp(l) for l in data.lights], None, 0).num_lamps == 2   # the integrator takes them
+    lamps = [ls.make_lamp(l) for l in data.lights]              # the integrator takes them
+    assert ls.LightSet(lamps, None, 0).num_lamps == 2
+    assert lamps[1].omc == 1.0                                   # the lights layer: a hemisphere
 
 
 def test_negative_or_non_finite_material_values_become_zero_with_a_reason(scene, exported):
