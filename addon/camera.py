@@ -1,7 +1,8 @@
 """Camera rays exactly as Cycles maps raster positions (reference blender-cycles.md section 1.8).
 
 Owns the raster -> ray mapping (perspective and orthographic, viewplane with shift, clip
-start/end), the render region (border, crop) and the inverse projection used to check it.
+start/end, depth of field as Cycles' thin lens), the render region (border, crop) and the
+inverse projection used to check it.
 Raster coordinates are full-frame pixels, x to the right and y up from the bottom edge; pixel
 (i, j) spans [i, i+1] x [j, j+1], so its centre is (i + 0.5, j + 0.5).
 """
@@ -44,6 +45,20 @@ class CameraModel:
         self.rot = rot / norms
         self.pos = m[:3, 3].copy()
         self.forward = -self.rot[:, 2]
+        self.aperture = float(cam.aperture)
+        self.focal_distance = float(cam.focal_distance)
+        self.aperture_blades = int(cam.aperture_blades)
+        self.aperture_rotation = float(cam.aperture_rotation)
+        self.aperture_ratio = float(cam.aperture_ratio)
+        if not (np.isfinite(self.aperture) and self.aperture >= 0.0):
+            raise ValueError(f"camera.aperture {cam.aperture!r} must be finite and >= 0")
+        if self.aperture > 0.0:
+            if not (np.isfinite(self.focal_distance) and self.focal_distance > 0.0):
+                raise ValueError(f"camera.focal_distance {cam.focal_distance!r} must be positive")
+            if not (np.isfinite(self.aperture_ratio) and self.aperture_ratio > 0.0):
+                raise ValueError(f"camera.aperture_ratio {cam.aperture_ratio!r} must be positive")
+            if not np.isfinite(self.aperture_rotation):
+                raise ValueError(f"camera.aperture_rotation {cam.aperture_rotation!r} must be finite")
         self._rot32 = self.rot.astype(np.float32)
         self._pos32 = self.pos.astype(np.float32)
         self._frame = self._frame_floats()
@@ -80,14 +95,23 @@ class CameraModel:
 
     # --- rays ---------------------------------------------------------------------------------
 
-    def rays(self, rx, ry, records: bool = False):
+    @property
+    def has_lens(self) -> bool:
+        """Whether rays need lens samples (depth of field with an open aperture)."""
+        return self.aperture > 0.0
+
+    def rays(self, rx, ry, records: bool = False, lens=None):
         """Rays for full-frame raster positions: origins (3,n), unit directions (3,n) float32 and
         tmax (n,) float32; origins lie on the clip-start plane, tmax reaches the clip-end plane.
         Perspective: direction R (sx tan, sy tan, -1) / |.| for viewplane point (sx, sy), origin
         at clip_start / d_cam.z along it; orthographic: origin R (sx, sy, -clip_start) + pos,
-        direction -R z. One native pass (dacrt.shading.camera_rays) on the frame below; with
-        records=True also the tracer's RAY_DTYPE records of the rays."""
-        return dacrt.shading.camera_rays(self.kind == 'ORTHO', self._frame, rx, ry, records)
+        direction -R z. lens: uniforms (u, v) (n,) of each ray's aperture point when the camera
+        has depth of field (Cycles' thin lens: the ray leaves its lens point towards the pinhole
+        ray's point on the plane of focus); None gives pinhole rays. One native pass
+        (dacrt.shading.camera_rays) on the frame below; with records=True also the tracer's
+        RAY_DTYPE records of the rays."""
+        return dacrt.shading.camera_rays(self.kind == 'ORTHO', self._frame, rx, ry, records,
+                                         lens if self.has_lens else None)
 
     def _frame_floats(self) -> np.ndarray:
         """The float32 frame camera_rays reads (each value rounded once from float64)."""
@@ -96,6 +120,10 @@ class CameraModel:
         raster = [self.left, (self.right - self.left) / self.width, self.bottom, (self.top - self.bottom) / self.height]
         return np.concatenate([r.ravel(), self._pos32, base, np.asarray(raster, np.float32),
                                np.asarray([self.tan_half_fov, self.clip_start, self.clip_end - self.clip_start],
+                                          np.float32),
+                               np.asarray([self.aperture, self.focal_distance if self.aperture > 0 else 1.0,
+                                           self.aperture_blades, self.aperture_rotation,
+                                           1.0 / self.aperture_ratio if self.aperture > 0 else 1.0],
                                           np.float32)]).astype(np.float32)
 
     def z_depth(self, points: np.ndarray) -> np.ndarray:

@@ -145,9 +145,37 @@ def export_camera(scene, messages=None):
         if border[2] <= border[0] or border[3] <= border[1]:
             raise ExportError("the render border is empty (less than one pixel wide or high)")
         crop = bool(r.use_crop_to_border)
+    dof = _depth_of_field(cam, kind, lens, m, cam_ob.name, messages) if cam else {}
     return sd.Camera(kind=kind, matrix=m, viewplane=viewplane, tan_half_fov=tan_half_fov,
                      clip_start=float(clip_start), clip_end=float(clip_end), width=width,
-                     height=height, border=border, crop=crop)
+                     height=height, border=border, crop=crop, **dof)
+
+
+def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):
+    """Cycles' thin lens (blender/camera.cpp): aperture radius lens / (2 f-stop) (lens in m;
+    orthographic 1 / (2 f-stop)), focus distance from the focus object (its distance along the
+    view axis, a bone's head when a bone is named) or the focus distance."""
+    d = cam.dof
+    if not d.use_dof:
+        return {}
+    fstop = max(float(d.aperture_fstop), 1e-5)
+    aperture = 1.0 / (2.0 * fstop) if kind == 'ORTHO' else (lens * 1e-3) / (2.0 * fstop)
+    focus = float(d.focus_distance)
+    target = d.focus_object
+    if target is not None:
+        where = np.array(target.matrix_world, dtype=np.float64)
+        bone = d.focus_subtarget
+        if bone and target.pose is not None and bone in target.pose.bones:
+            where = where @ np.array(target.pose.bones[bone].matrix, dtype=np.float64)
+        focus = abs(float(np.dot(cam_matrix[:3, 2], cam_matrix[:3, 3] - where[:3, 3])))
+    if not np.isfinite(aperture) or not np.isfinite(focus):
+        if messages is not None:
+            messages.append(('WARNING', f"camera '{cam_name}': depth of field has a non-finite aperture or "
+                                        "focus distance; rendered without it"))
+        return {}
+    return dict(aperture=float(aperture), focal_distance=max(focus, 1e-5),
+                aperture_blades=int(d.aperture_blades) if d.aperture_blades >= 3 else 0,
+                aperture_rotation=float(d.aperture_rotation), aperture_ratio=float(d.aperture_ratio))
 
 
 # ----------------------------------------------------------------------------------------

@@ -62,6 +62,9 @@ _SHARED_SCENE_FRACTION = 0.9
 # position, BSDF direction (Cycles keeps the same split: PRNG_FILTER, PRNG_LIGHT, PRNG_SURFACE_BSDF...).
 _DIM_FILTER = 0
 _DIMS_PER_VERTEX = 3
+# The lens point of depth of field (Cycles' PRNG_LENS_TIME) gets a pair of its own, out of the
+# per-vertex range, so a camera without depth of field draws exactly the numbers it always did.
+_DIM_LENS = 1 << 20
 
 
 def _dim(vertex: int, slot: int) -> int:
@@ -691,8 +694,9 @@ class Integrator:
         keys, rx, ry = dacrt.shading.pixel_samples(frame, samp, self.camera.width, k0, k1, ka, kb,
                                                    self.filter.table)
         del frame
-        O, D, tmax, rays = self.camera.rays(rx, ry, records=True)
-        del rx, ry
+        lens = self.rng.uniform2(keys, _DIM_LENS) if self.camera.has_lens else None
+        O, D, tmax, rays = self.camera.rays(rx, ry, records=True, lens=lens)
+        del rx, ry, lens
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
         L, alpha = rgba[:3], rgba[3]
         data = {}

@@ -38,6 +38,14 @@ class Camera:
     border: tuple = (0, 0, 0, 0)   # rendered region in full-frame pixels: (x0, y0, x1, y1), x1/y1 exclusive;
                                    # (0, 0, width, height) when no border is used
     crop: bool = False             # border with crop: the result is the border size only
+    # depth of field (Cycles' thin lens): aperture radius in scene units (0: pinhole), distance
+    # of the plane of focus along the view axis, blades (< 3: round aperture), their rotation
+    # (radians) and the aperture ratio (anamorphic bokeh: the lens is 1/ratio as wide)
+    aperture: float = 0.0
+    focal_distance: float = 10.0
+    aperture_blades: int = 0
+    aperture_rotation: float = 0.0
+    aperture_ratio: float = 1.0
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """DACRT's panels, and Blender's generic panels enabled for the engine.
 
 Generic panels (output, format/dimensions, colour management, world/light context, object
-visibility, spot shape, material slots ...) show for DACRT through their COMPAT_ENGINES sets
+visibility, spot shape, material slots, camera depth of field ...) show for DACRT through their COMPAT_ENGINES sets
 (reference blender-cycles.md 1.6). What no generic panel draws — our settings, view-layer
 passes, the light in Cycles' units, material and world surface node views — has a small panel
 here, modelled on Cycles'.
@@ -12,8 +12,9 @@ from bpy.types import Panel
 ENGINE = 'DACRT'
 # Generic panels we replace with our own (like Cycles does).
 EXCLUDE = {'VIEWLAYER_PT_filter', 'VIEWLAYER_PT_layer_passes', 'DATA_PT_light'}
-# Panels of other engines that are the generic UI for a concept (the material slot list).
-EXTRA_GENERIC = ('EEVEE_MATERIAL_PT_context_material',)
+# Panels of other engines that are the generic UI for a concept (the material slot list, the
+# camera's depth of field and its aperture: Blender's own, which Cycles replaces with a copy).
+EXTRA_GENERIC = ('EEVEE_MATERIAL_PT_context_material', 'DATA_PT_camera_dof', 'DATA_PT_camera_dof_aperture')
 
 
 def generic_panels():

@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
@@ -285,10 +286,12 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
                            O.data(), D.data(), t, pd, pid.data(), L.mutable_data(), N);
 }
 
-py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, py::object rays) {
-    if (frame.ndim() != 1 || frame.shape(0) != 22)
-        throw py::value_error("frame must hold 22 floats (rotation 9, position 3, ortho base 3, raster map 4, "
-                              "tan_half_fov, clip_start, clip_range)");
+py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, py::object rays, py::object lu_obj,
+                         py::object lv_obj) {
+    if (frame.ndim() != 1 || frame.shape(0) != 27)
+        throw py::value_error("frame must hold 27 floats (rotation 9, position 3, ortho base 3, raster map 4, "
+                              "tan_half_fov, clip_start, clip_range, aperture, focal_distance, blades, "
+                              "blade_rotation, inv_ratio)");
     const float* f = frame.data();
     CameraFrame c{};
     c.ortho = ortho;
@@ -297,14 +300,29 @@ py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, p
     for (int a = 0; a < 3; ++a) c.pos[a] = f[9 + a], c.ortho_base[a] = f[12 + a];
     c.sx0 = f[15], c.sx_scale = f[16], c.sy0 = f[17], c.sy_scale = f[18];
     c.tan_half_fov = f[19], c.clip_start = f[20], c.clip_range = f[21];
+    c.aperture = f[22], c.focal_distance = f[23], c.blades = f[24], c.blade_rotation = f[25], c.inv_ratio = f[26];
+    for (int k = 22; k < 27; ++k)
+        if (!std::isfinite(f[k])) throw py::value_error("frame's depth of field values must be finite");
+    if (c.aperture < 0.0f || (c.aperture > 0.0f && !(c.focal_distance > 0.0f && c.inv_ratio > 0.0f)))
+        throw py::value_error("depth of field needs aperture >= 0 and, with an aperture, a positive focal "
+                              "distance and inverse ratio");
     if (rx.ndim() != 1) throw py::value_error("rx must be one-dimensional");
     const size_t n = size_t(rx.shape(0));
     need_len(ry, n, "ry");
+    if (lu_obj.is_none() != lv_obj.is_none()) throw py::value_error("lu and lv are given together");
+    F32Array lu, lv;
+    if (!lu_obj.is_none()) {
+        lu = lu_obj.cast<F32Array>();
+        lv = lv_obj.cast<F32Array>();
+        need_len(lu, n, "lu");
+        need_len(lv, n, "lv");
+    }
     F32Array O({py::ssize_t(3), py::ssize_t(n)}), D({py::ssize_t(3), py::ssize_t(n)}), tmax{py::ssize_t(n)};
     Ray* rec = rays.is_none() ? nullptr : records<Ray>(rays.cast<py::array>(), n, "rays");
     {
         py::gil_scoped_release nogil;
-        camera_rays(c, rx.data(), ry.data(), n, O.mutable_data(), D.mutable_data(), tmax.mutable_data(), rec);
+        camera_rays(c, rx.data(), ry.data(), n, O.mutable_data(), D.mutable_data(), tmax.mutable_data(), rec,
+                    lu_obj.is_none() ? nullptr : lu.data(), lv_obj.is_none() ? nullptr : lv.data());
     }
     return py::make_tuple(O, D, tmax);
 }
@@ -424,7 +442,7 @@ void register_shading(py::module_& m) {
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("O"), py::arg("D"),
           py::arg("thr"), py::arg("pdf"), py::arg("pid"), py::arg("L"));
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
-          py::arg("rays"));
+          py::arg("rays"), py::arg("lu") = py::none(), py::arg("lv") = py::none());
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
     m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"));
     m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));

@@ -1,5 +1,6 @@
 // Camera rays for raster positions (see shading.h): the pinhole and orthographic mappings of
-// addon/camera.py (Cycles' camera), one threaded pass instead of a dozen numpy passes.
+// addon/camera.py (Cycles' camera) and Cycles' thin-lens depth of field, one threaded pass
+// instead of a dozen numpy passes.
 #include <cmath>
 
 #include "parallel.h"
@@ -8,18 +9,69 @@
 
 namespace dacrt {
 
+void aperture_point(const CameraFrame& c, float u, float v, float& x, float& y) {
+    constexpr float kPi = 3.14159265358979f;
+    if (c.blades < 3.0f) {
+        const float a = 2.0f * u - 1.0f, b = 2.0f * v - 1.0f;
+        float r, theta;
+        if (a == 0.0f && b == 0.0f) {
+            r = 0.0f, theta = 0.0f;
+        } else if (std::fabs(a) > std::fabs(b)) {
+            r = a, theta = 0.25f * kPi * (b / a);
+        } else {
+            r = b, theta = 0.5f * kPi - 0.25f * kPi * (a / b);
+        }
+        x = r * std::cos(theta);
+        y = r * std::sin(theta);
+    } else {
+        // a corner's triangle (centre, two neighbouring corners on the unit circle), uniform
+        const float corner = std::floor(u * c.blades);
+        float s = std::sqrt(u * c.blades - corner), t = v * s;
+        s = 1.0f - s;
+        const float half = kPi / c.blades;
+        const float px = (s + t) * std::cos(half), py = (s - t) * std::sin(half);
+        const float rot = c.blade_rotation + corner * 2.0f * kPi / c.blades;
+        const float cr = std::cos(rot), sr = std::sin(rot);
+        x = cr * px - sr * py;
+        y = sr * px + cr * py;
+    }
+    x *= c.inv_ratio;
+}
+
 void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
-                 float* tmax, Ray* rays) {
+                 float* tmax, Ray* rays, const float* lu, const float* lv) {
+    const bool lens = c.aperture > 0.0f && lu && lv;
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             float sx = c.sx0 + rx[i] * c.sx_scale, sy = c.sy0 + ry[i] * c.sy_scale;
+            float lx = 0.0f, ly = 0.0f;  // lens point (camera space)
+            if (lens) {
+                aperture_point(c, lu[i], lv[i], lx, ly);
+                lx *= c.aperture;
+                ly *= c.aperture;
+            }
             if (c.ortho) {
                 // origin on the clip-start plane, offset across the view; one direction for all
-                for (int a = 0; a < 3; ++a) {
-                    O[size_t(a) * n + i] = c.rot[a][0] * sx + c.rot[a][1] * sy + c.ortho_base[a];
-                    D[size_t(a) * n + i] = -c.rot[a][2];
-                }
                 tmax[i] = c.clip_range;
+                if (!lens) {
+                    for (int a = 0; a < 3; ++a) {
+                        O[size_t(a) * n + i] = c.rot[a][0] * sx + c.rot[a][1] * sy + c.ortho_base[a];
+                        D[size_t(a) * n + i] = -c.rot[a][2];
+                    }
+                    if (rays) ray_record(O, D, n, i, tmax[i], rays[i]);
+                    continue;
+                }
+                // with a lens: from the lens point on the camera plane towards the pinhole ray's
+                // point at the focus distance from the camera plane (measured against Cycles: not
+                // from the clip-start plane), starting where it crosses the clip-start plane
+                const float len = std::sqrt(lx * lx + ly * ly + c.focal_distance * c.focal_distance);
+                const float inv = 1.0f / len, start = c.clip_start * len / c.focal_distance;
+                const float dc[3] = {-lx * inv, -ly * inv, -c.focal_distance * inv};
+                for (int a = 0; a < 3; ++a) {
+                    const float d = c.rot[a][0] * dc[0] + c.rot[a][1] * dc[1] + c.rot[a][2] * dc[2];
+                    D[size_t(a) * n + i] = d;
+                    O[size_t(a) * n + i] = c.rot[a][0] * (sx + lx) + c.rot[a][1] * (sy + ly) + c.pos[a] + d * start;
+                }
                 if (rays) ray_record(O, D, n, i, tmax[i], rays[i]);
                 continue;
             }
@@ -27,13 +79,25 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
             sy *= c.tan_half_fov;
             const float inv_len = 1.0f / std::sqrt(sx * sx + sy * sy + 1.0f);   // d_cam.z
             // world direction R (sx, sy, -1) / |.| (R orthonormal); a plane at depth z is z / d_cam.z away
+            // (Cycles clips along the lens ray by the pinhole ray's factor too)
             const float start = c.clip_start / inv_len;
-            for (int a = 0; a < 3; ++a) {
-                const float d = (c.rot[a][0] * sx + c.rot[a][1] * sy - c.rot[a][2]) * inv_len;
-                D[size_t(a) * n + i] = d;
-                O[size_t(a) * n + i] = d * start + c.pos[a];
-            }
             tmax[i] = c.clip_range / inv_len;
+            if (!lens) {
+                for (int a = 0; a < 3; ++a) {
+                    const float d = (c.rot[a][0] * sx + c.rot[a][1] * sy - c.rot[a][2]) * inv_len;
+                    D[size_t(a) * n + i] = d;
+                    O[size_t(a) * n + i] = d * start + c.pos[a];
+                }
+            } else {
+                // the pinhole ray meets the plane of focus at (sx, sy, -1) * focal_distance
+                const float fx = sx * c.focal_distance - lx, fy = sy * c.focal_distance - ly, fz = -c.focal_distance;
+                const float inv = 1.0f / std::sqrt(fx * fx + fy * fy + fz * fz);
+                for (int a = 0; a < 3; ++a) {
+                    const float d = (c.rot[a][0] * fx + c.rot[a][1] * fy + c.rot[a][2] * fz) * inv;
+                    D[size_t(a) * n + i] = d;
+                    O[size_t(a) * n + i] = c.rot[a][0] * lx + c.rot[a][1] * ly + c.pos[a] + d * start;
+                }
+            }
             if (rays) ray_record(O, D, n, i, tmax[i], rays[i]);
         }
     }, size_t(1) << 16);

@@ -151,19 +151,29 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
 // A camera's frame in float32, as addon/camera.py CameraModel rounds it: orthonormal
 // camera-to-world rotation (columns right, up, back), position, the raster -> viewplane map
 // s = origin + r * scale per axis, tan(fov/2), clip start and range; ortho_base = pos -
-// clip_start * back (ortho origins).
+// clip_start * back (ortho origins). Depth of field as Cycles' thin lens: aperture radius
+// (0: pinhole), focus distance, blades (< 3: a round aperture), blade rotation and
+// 1 / aperture ratio (anamorphic bokeh: the lens x scaled by it).
 struct CameraFrame {
     bool ortho;
     float rot[3][3], pos[3], ortho_base[3];
     float sx0, sx_scale, sy0, sy_scale;
     float tan_half_fov, clip_start, clip_range;
+    float aperture, focal_distance, blades, blade_rotation, inv_ratio;
 };
+
+// A point of the unit aperture for uniforms (u, v): the unit disk (concentric mapping, as
+// Cycles' sample_uniform_disk) or, with blades >= 3, the regular polygon inscribed in it
+// (Cycles' regular_polygon_sample), rotated; x then scaled by inv_ratio.
+void aperture_point(const CameraFrame& c, float u, float v, float& x, float& y);
 
 // Rays through full-frame raster positions (rx, ry): origins O and unit directions D (3 rows,
 // stride n) on the clip-start plane, tmax reaching the clip-end plane; with rays non-null also
-// their records (ids 0..n-1) for the tracer.
+// their records (ids 0..n-1) for the tracer. With an aperture and lens uniforms (lu, lv) each
+// ray starts from its lens point and passes through the pinhole ray's point on the plane of
+// focus (Cycles' camera_sample_perspective / _orthographic).
 void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D, float* tmax,
-                 Ray* rays = nullptr);
+                 Ray* rays = nullptr, const float* lu = nullptr, const float* lv = nullptr);
 
 // One (rows, n) array (C order, elements of itemsize 1, 2, 4 or 8 bytes) and the (rows, k)
 // array its columns idx go to.

@@ -131,3 +131,33 @@ def test_scene_camera_read_from_evaluated_depsgraph(scene, exported):
     data = exported()
     assert data.camera.matrix[2, 3] == pytest.approx(cam.matrix_world.translation.z)
     assert 0 < data.camera.matrix[2, 3] < 10
+
+
+def test_depth_of_field_as_cycles_reads_it(scene):
+    """Cycles' thin lens (blender/camera.cpp): aperture radius lens / (2 f-stop) in metres
+    (orthographic: 1 / (2 f-stop)), focus distance from the focus object along the view axis,
+    0 blades a round aperture, and nothing without use_dof."""
+    make(scene, 'PERSP', 64, 48, 100, (1, 1), 'AUTO', (0, 0))
+    cam = scene.camera
+    dof = cam.data.dof
+    assert export.export_camera(scene).aperture == 0.0            # use_dof off: a pinhole
+    dof.use_dof, dof.aperture_fstop, dof.focus_distance = True, 2.8, 7.5
+    dof.aperture_blades, dof.aperture_rotation, dof.aperture_ratio = 0, 0.4, 1.5
+    c = export.export_camera(scene)
+    assert c.aperture == pytest.approx(35e-3 / (2 * 2.8))
+    assert c.focal_distance == pytest.approx(7.5)
+    assert (c.aperture_blades, c.aperture_rotation, c.aperture_ratio) == (0, pytest.approx(0.4), pytest.approx(1.5))
+    dof.aperture_blades = 6
+    assert export.export_camera(scene).aperture_blades == 6
+    # a focus object counts by its distance along the view axis, not straight-line distance
+    target = scenes.link(bpy.data.objects.new("Focus", None))
+    target.location = (4.0, 1.0, -2.0)
+    dof.focus_object = target
+    bpy.context.view_layer.update()
+    m = np.array(cam.matrix_world)
+    view = -m[:3, 2] / np.linalg.norm(m[:3, 2])
+    want = abs(float(view @ (np.array(target.location) - m[:3, 3])))
+    assert want < np.linalg.norm(np.array(target.location) - m[:3, 3]) - 0.1
+    assert export.export_camera(scene).focal_distance == pytest.approx(want, rel=1e-6)
+    cam.data.type = 'ORTHO'
+    assert export.export_camera(scene).aperture == pytest.approx(1.0 / (2 * 2.8))

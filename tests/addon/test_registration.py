@@ -47,7 +47,8 @@ def test_panels_shown_for_the_engine(scene):
     for name in ('RENDER_PT_format', 'RENDER_PT_output', 'RENDER_PT_color_management',
                  'RENDER_PT_frame_range', 'DATA_PT_spot', 'DATA_PT_context_light',
                  'WORLD_PT_context_world', 'EEVEE_MATERIAL_PT_context_material',
-                 'OBJECT_PT_visibility'):
+                 'OBJECT_PT_visibility', 'DATA_PT_lens', 'DATA_PT_camera_dof',
+                 'DATA_PT_camera_dof_aperture'):
         assert 'DACRT' in getattr(bpy.types, name).COMPAT_ENGINES, name
     for name in ('DATA_PT_dacrt_light', 'MATERIAL_PT_dacrt_surface', 'WORLD_PT_dacrt_surface',
                  'VIEWLAYER_PT_dacrt_passes'):

@@ -1,6 +1,8 @@
 """Raster -> ray mapping as Cycles does it (reference blender-cycles.md 1.8): known points
 project where the formulas say, rays pass through them, shift moves the viewplane, clip start
-and end bound the rays, and a render border selects (and with crop, sizes) the film."""
+and end bound the rays, a render border selects (and with crop, sizes) the film, and depth of
+field (Cycles' thin lens) spreads rays uniformly over the aperture's disk or polygon while
+each still passes through its pinhole ray's point on the plane of focus."""
 import numpy as np
 import pytest
 
@@ -102,7 +104,101 @@ def test_crop_keeps_the_noise_of_the_full_frame():
     assert np.allclose(crop, full[5:20, 10:30], rtol=1e-6, atol=1e-7)
 
 
+def lens_frame():
+    m = rotation_x(0.4)
+    m[:3, 3] = (0.5, -1.0, 2.0)
+    return m
+
+
+def lens_points(cam, O, D):
+    """Where each ray crosses the camera plane, in camera (x, y)."""
+    rel = O - cam.pos[:, None]
+    fwd = cam.forward
+    t = -(fwd @ rel) / (fwd @ D)
+    p = rel + D * t
+    return cam.rot[:, 0] @ p, cam.rot[:, 1] @ p
+
+
+@pytest.mark.parametrize('kind', ['PERSP', 'ORTHO'])
+@pytest.mark.parametrize('blades,rotation,ratio', [(0, 0.0, 1.0), (0, 0.0, 2.0), (6, 0.3, 1.0), (5, -1.0, 0.7)])
+def test_depth_of_field_lens_points_fill_the_aperture_uniformly(kind, blades, rotation, ratio):
+    a, focus = 0.2, 4.0
+    cam = CameraModel(persp(kind=kind, matrix=lens_frame(), aperture=a, focal_distance=focus,
+                            aperture_blades=blades, aperture_rotation=rotation, aperture_ratio=ratio))
+    n = 200_000
+    rng = np.random.default_rng(7)
+    rx = np.full(n, 23.5, np.float32)
+    ry = np.full(n, 41.25, np.float32)
+    lens = rng.random(n, dtype=np.float32), rng.random(n, dtype=np.float32)
+    O, D, tmax = cam.rays(rx, ry, lens=lens)
+    x, y = lens_points(cam, O.astype(np.float64), D.astype(np.float64))
+    O0, D0, _ = cam.rays(rx[:1], ry[:1])              # the pinhole ray: the aperture's centre
+    x0, y0 = lens_points(cam, O0.astype(np.float64), D0.astype(np.float64))
+    x, y = (x - x0) * ratio, y - y0                         # undo the anamorphic squeeze: a round or regular shape
+    if blades:
+        # inside the polygon inscribed in the radius-a circle (corners at rotation + pi/N + 2 pi k/N)
+        theta = rotation + 2.0 * np.pi * np.arange(blades) / blades
+        reach = np.max(np.outer(x, np.cos(theta)) + np.outer(y, np.sin(theta)), axis=1)
+        apothem = a * np.cos(np.pi / blades)
+        assert reach.max() <= apothem * (1 + 1e-4) and reach.max() > apothem * 0.995
+        second = a * a / 12.0 * (1.0 + 2.0 * np.cos(np.pi / blades) ** 2)   # E[x^2] = E[y^2]
+    else:
+        r = np.hypot(x, y)
+        assert r.max() <= a * (1 + 1e-4) and r.max() > a * 0.995
+        second = a * a / 4.0
+    # uniform over the shape: centred, with the shape's second moments (5 sigma bounds)
+    sd_mean = np.sqrt(second / n)
+    assert abs(x.mean()) < 5 * sd_mean and abs(y.mean()) < 5 * sd_mean
+    for v in (x, y):
+        m2 = np.mean(v * v)
+        assert abs(m2 - second) < 5 * np.std(v * v) / np.sqrt(n), (m2, second)
+
+
+@pytest.mark.parametrize('kind', ['PERSP', 'ORTHO'])
+def test_depth_of_field_rays_meet_at_the_plane_of_focus(kind):
+    """Every lens ray of a raster position passes through the pinhole ray's point at the focus
+    distance from the camera plane (Cycles' perspective and orthographic thin lens)."""
+    focus = 3.5
+    base = dict(kind=kind, matrix=lens_frame())
+    pinhole = CameraModel(persp(**base))
+    cam = CameraModel(persp(**base, aperture=0.3, focal_distance=focus, aperture_blades=7,
+                            aperture_rotation=0.5, aperture_ratio=1.3))
+    rng = np.random.default_rng(11)
+    n = 4000
+    rx = rng.uniform(0, 80, n).astype(np.float32)
+    ry = rng.uniform(0, 60, n).astype(np.float32)
+    O0, D0, tmax0 = pinhole.rays(rx, ry)
+    O, D, tmax = cam.rays(rx, ry, lens=(rng.random(n, dtype=np.float32), rng.random(n, dtype=np.float32)))
+    O0, D0, O, D = (v.astype(np.float64) for v in (O0, D0, O, D))
+    fwd = cam.forward
+    # the pinhole ray's point at depth `focus` from the camera plane
+    F = O0 + D0 * ((focus - fwd @ (O0 - cam.pos[:, None])) / (fwd @ D0))
+    to_f = F - O
+    miss = np.linalg.norm(np.cross(D.T, to_f.T), axis=1)
+    assert np.max(miss) < 2e-5 * focus
+    assert np.all(np.einsum('ij,ij->j', D, to_f) > 0)                     # ahead of the ray
+    assert np.allclose(np.linalg.norm(D, axis=0), 1.0, atol=1e-6)
+    assert np.max(np.linalg.norm(O - O0, axis=0)) > 0.1                   # the lens moved them
+    # rays start on (perspective: about) the clip-start plane, as the pinhole rays do
+    assert np.allclose(fwd @ (O - cam.pos[:, None]), 0.1, rtol=0.05)
+
+
+def test_closed_aperture_or_no_lens_samples_give_pinhole_rays():
+    rx = np.array([3.0, 40.0, 77.0], np.float32)
+    ry = np.array([1.0, 30.0, 59.0], np.float32)
+    lens = (np.array([0.1, 0.5, 0.9], np.float32), np.array([0.7, 0.2, 0.4], np.float32))
+    want = CameraModel(persp()).rays(rx, ry)
+    for got in (CameraModel(persp(aperture=0.0, focal_distance=2.0)).rays(rx, ry, lens=lens),
+                CameraModel(persp(aperture=0.5, focal_distance=2.0)).rays(rx, ry)):
+        for w, g in zip(want, got):
+            assert np.array_equal(w, g)
+
+
 @pytest.mark.parametrize('bad,message', [
+    (dict(aperture=-0.1), 'aperture'),
+    (dict(aperture=0.1, focal_distance=0.0), 'focal_distance'),
+    (dict(aperture=0.1, aperture_ratio=0.0), 'aperture_ratio'),
+    (dict(aperture=float('nan')), 'aperture'),
     (dict(kind='PANO'), 'camera.kind'),
     (dict(width=0), 'resolution'),
     (dict(viewplane=(1.0, -1.0, -1.0, 1.0)), 'viewplane'),

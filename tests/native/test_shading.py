@@ -323,10 +323,21 @@ def test_triangle_table_matches_float64():
 
 def test_camera_rays_checks_its_frame():
     rx = ry = np.zeros(4, F32)
-    with pytest.raises(ValueError, match="22 floats"):
-        shading.camera_rays(False, np.zeros(21, F32), rx, ry)
+    with pytest.raises(ValueError, match="27 floats"):
+        shading.camera_rays(False, np.zeros(22, F32), rx, ry)
+    frame = np.zeros(27, F32)
     with pytest.raises(ValueError, match="ry"):
-        shading.camera_rays(False, np.zeros(22, F32), rx, np.zeros(3, F32))
+        shading.camera_rays(False, frame, rx, np.zeros(3, F32))
+    lens = (np.zeros(4, F32), np.zeros(4, F32))
+    with pytest.raises(ValueError, match="lu"):
+        shading.camera_rays(False, frame, rx, ry, lens=(np.zeros(3, F32), lens[1]))
+    for k, value, message in ((22, -1.0, "aperture >= 0"), (23, 0.0, "positive focal"),
+                              (26, 0.0, "positive focal"), (24, np.nan, "finite")):
+        bad = frame.copy()
+        bad[22], bad[23], bad[26] = 0.1, 2.0, 1.0           # an open, valid lens ...
+        bad[k] = value                                       # ... but for one value
+        with pytest.raises(ValueError, match=message):
+            shading.camera_rays(False, bad, rx, ry, lens=lens)
 
 
 def test_take_columns_gathers_every_dtype_and_checks():
@@ -396,10 +407,14 @@ def test_cosine_scatter_packs_the_bounce_rays():
 
 def test_camera_rays_records_match_packing():
     rng = np.random.default_rng(25)
-    frame = np.zeros(22, F32)
+    frame = np.zeros(27, F32)
     frame[[0, 4, 8]] = 1.0                                  # identity rotation
-    frame[15:22] = (-1.0, 0.02, -0.75, 0.02, 0.4, 0.1, 99.9)
+    frame[15:27] = (-1.0, 0.02, -0.75, 0.02, 0.4, 0.1, 99.9, 0.0, 1.0, 0.0, 0.0, 1.0)
+    lensed = frame.copy()
+    lensed[22:27] = (0.05, 3.0, 6.0, 0.2, 0.8)              # depth of field, hexagonal aperture
     rx, ry = (rng.random(777) * 100).astype(F32), (rng.random(777) * 75).astype(F32)
+    lens = rng.random((2, 777), dtype=F32)
     for ortho in (False, True):
-        O, D, tmax, rays = shading.camera_rays(ortho, frame, rx, ry, records=True)
-        np.testing.assert_array_equal(rays, shading.pack_rays(O, D, tmax))
+        for f in (frame, lensed):
+            O, D, tmax, rays = shading.camera_rays(ortho, f, rx, ry, records=True, lens=lens)
+            np.testing.assert_array_equal(rays, shading.pack_rays(O, D, tmax))

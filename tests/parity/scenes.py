@@ -146,7 +146,7 @@ def camera(location, target, lens=35.0, kind='PERSP', ortho_scale=6.0, shift=(0.
 
 
 # ------------------------------------------------------------------------------------------
-# The six scenes
+# The scenes
 
 def build_cornell():
     """Cornell-style box (open towards the camera), two rotated blocks, a square area light
@@ -312,6 +312,39 @@ def build_ortho_border():
     r.border_min_y, r.border_max_y = 0.2, 0.9
 
 
+def build_depth_of_field():
+    """Depth of field: a hexagonal, rotated, anamorphic aperture at f/0.2 focused on a block
+    through its focus object; emissive bars before and behind the plane of focus blur into
+    bokeh, a checkered floor recedes through it. A square area light from above."""
+    quad("Floor", [(-4, -2, 0), (4, -2, 0), (4, 8, 0), (-4, 8, 0)], diffuse("Floor", (0.6, 0.6, 0.6)))
+    for i in range(6):        # dark stripes across the floor: sharp at the focus, soft elsewhere
+        y = -1.0 + 1.4 * i
+        quad(f"Stripe{i}", [(-4, y, 0.002), (4, y, 0.002), (4, y + 0.5, 0.002), (-4, y + 0.5, 0.002)],
+             diffuse("Stripe", (0.08, 0.1, 0.15)))
+    focus = box("Focus", (0.6, 0.6, 0.6), diffuse("Focus", (0.8, 0.45, 0.2)), (0.0, 2.5, 0.3),
+                (0, 0, math.radians(25)))
+    box("Near", (0.3, 0.3, 0.8), diffuse("Near", (0.3, 0.5, 0.8)), (-0.7, 0.2, 0.4))
+    box("Far", (0.5, 0.5, 1.4), diffuse("Far", (0.4, 0.7, 0.35)), (1.2, 6.0, 0.7))
+    glow = emission("Bar", (1.0, 0.8, 0.5), 6.0)
+    box("NearBar", (0.04, 0.04, 0.5), glow, (0.6, 0.0, 0.45))
+    box("FarBar", (0.08, 0.08, 1.0), glow, (-1.4, 5.5, 0.7))
+    lamp("Top", 'AREA', 300.0, (0.0, 2.0, 4.0), target=(0.0, 2.5, 0.0), shape='SQUARE', size=1.5)
+    world((0.05, 0.06, 0.08), 1.0)
+    cam = camera((0.0, -2.2, 1.2), (0.0, 2.5, 0.3), lens=50.0)
+    dof = cam.data.dof
+    dof.use_dof, dof.focus_object = True, focus
+    dof.aperture_fstop, dof.aperture_blades = 0.2, 6
+    dof.aperture_rotation, dof.aperture_ratio = math.radians(20), 1.6
+
+
+def build_ortho_depth_of_field():
+    """The orthographic border scene through a round f/0.3 aperture focused 4 m from the camera
+    plane (Cycles measures an orthographic camera's focus from there, not from clip start)."""
+    build_ortho_border()
+    dof = bpy.context.scene.camera.data.dof
+    dof.use_dof, dof.focus_distance, dof.aperture_fstop = True, 4.0, 0.3
+
+
 # ------------------------------------------------------------------------------------------
 # What the suite renders
 
@@ -321,8 +354,8 @@ class ParitySpec:
 
     Cycles renders `cycles_seeds` images of `cycles_samples` spp (cached), DACRT renders
     `dacrt_seeds` images of `dacrt_samples` spp; stats.py compares the two sets of per-seed
-    images. At 128 spp x 32 seeds per engine, a cold run of all six (Cycles and DACRT) takes
-    ~2.5 min on 2 cores, a run with cached Cycles images ~50 s."""
+    images. At 128 spp x 32 seeds per engine, a cold run of all of them (Cycles and DACRT) takes
+    ~3 min on 2 cores, a run with cached Cycles images ~1 min."""
     name: str
     build: object
     resolution: tuple          # (x, y) before resolution_percentage
@@ -349,4 +382,7 @@ SPECS = (
     ParitySpec("emissive", build_emissive, (64, 48), 3, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("instances", build_instances, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("ortho_border", build_ortho_border, (192, 144), 1, 'BLACKMAN_HARRIS', 2.0, 128, 32, 128, 32),
+    ParitySpec("depth_of_field", build_depth_of_field, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
+    ParitySpec("ortho_depth_of_field", build_ortho_depth_of_field, (192, 144), 1, 'BLACKMAN_HARRIS', 2.0,
+               128, 32, 128, 32),
 )

@@ -1,4 +1,4 @@
-"""Parity with Cycles: DACRT and Cycles render the six scenes of scenes.py with the fair
+"""Parity with Cycles: DACRT and Cycles render the scenes of scenes.py with the fair
 settings of reference blender-cycles.md 2.7 (rendering.py), each engine 32 seeds of 128 spp,
 and must agree statistically (stats.py):
 
