@@ -794,6 +794,8 @@ class _Exporter:
         self.placements = {}      # key -> [_Placement]
         self.lights = []
         self.skipped = {}         # reason -> [object names]
+        self.ignored = {}         # reason -> [object names]: rendered, without a feature Cycles has
+        self._noted = set()       # objects whose ignored features are noted (instances repeat them)
         # work not done, for the render's stats: objects hidden from render or from every ray
         # type, materials no exported triangle uses (never evaluated), triangles dropped
         self.counts = dict(objects_hidden=0, objects_invisible=0, objects_unsupported=0,
@@ -841,6 +843,8 @@ class _Exporter:
             if n % CHECK_EVERY == 0 and self.check_break():
                 raise ExportCancelled()
             ob = inst.object
+            if not inst.is_instance or ob.name not in self._noted:
+                self._note_ignored_features(ob)
             if ob.type == 'LIGHT':
                 light = self._light(inst, ob)
                 if light is not None:
@@ -885,15 +889,32 @@ class _Exporter:
                     | (sd.VIS_DIFFUSE if o.visible_diffuse else 0)
                     | (sd.VIS_SHADOW if o.visible_shadow else 0))
         vis = bits(ob) & bits(parent)
-        if vis and (parent.is_holdout or self._holdout_collection(parent)):
+        if vis and (parent.is_holdout or self._collection_flag(parent, 'holdout_get')):
             vis |= sd.HOLDOUT
+        elif self._collection_flag(parent, 'indirect_only_get'):
+            vis &= ~sd.VIS_CAMERA       # Cycles: an Indirect Only collection is not seen directly
         return vis
 
-    def _holdout_collection(self, ob):
+    def _collection_flag(self, ob, getter):
+        """The view layer's Holdout / Indirect Only flag of the object's collections."""
         try:
-            return ob.original.holdout_get(view_layer=self.view_layer)
-        except (RuntimeError, TypeError, ReferenceError):
+            return getattr(ob.original, getter)(view_layer=self.view_layer)
+        except (RuntimeError, TypeError, ReferenceError, AttributeError):
             return False
+
+    def _note_ignored_features(self, ob):
+        self._noted.add(ob.name)
+        if getattr(ob, 'is_shadow_catcher', False) and ob.type != 'LIGHT':
+            self._ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
+        linking = getattr(ob, 'light_linking', None)
+        if linking is not None and (linking.receiver_collection or linking.blocker_collection):
+            self._ignore("light and shadow linking are not supported; every light reaches every "
+                         "object", ob.name)
+
+    def _ignore(self, reason, name):
+        names = self.ignored.setdefault(reason, [])
+        if name not in names:
+            names.append(name)
 
     def _note_hair(self, ob):
         for ps in getattr(ob, 'particle_systems', ()):
@@ -1100,6 +1121,11 @@ class _Exporter:
     def _summarize(self, geometry, world):
         for reason, names in self.skipped.items():
             self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
+        for reason, names in self.ignored.items():
+            self.messages.append(('WARNING', f"{', '.join(repr(n) for n in names)}: {reason}"))
+        if self.scene.render.use_motion_blur:
+            self.messages.append(('WARNING', "motion blur is not rendered: every object is drawn at "
+                                             "its position on the frame"))
         approx = [f"'{m.name}' ({m.approximated})" for m in self.materials.materials if m.approximated]
         if len(geometry.material) and not geometry.material.all():     # material 0 is in use
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "

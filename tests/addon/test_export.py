@@ -485,6 +485,43 @@ def test_holdout_and_excluded_collections(scene, exported):
     assert np.all(data.geometry.visibility & sd.HOLDOUT)
 
 
+def test_indirect_only_collection_is_hidden_from_camera_rays_only(scene, exported):
+    """Cycles clears camera visibility for an Indirect Only collection (unless held out): its
+    objects still cast shadows and light others by bounces."""
+    setup(scene)
+    side = bpy.data.collections.new("Side")
+    scene.collection.children.link(side)
+    a = scenes.plane("Indirect")
+    scene.collection.objects.unlink(a)
+    side.objects.link(a)
+    scenes.plane("Direct", location=(3, 0, 0))
+    bpy.context.view_layer.layer_collection.children["Side"].indirect_only = True
+    data = exported()
+    vis = {name: data.geometry.visibility[data.geometry.object_index == i] for i, name in enumerate(data.object_names)}
+    assert np.all(vis["Indirect"] == sd.VIS_DIFFUSE | sd.VIS_SHADOW)
+    assert np.all(vis["Direct"] == sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)
+
+
+def test_features_rendered_without_are_reported(scene, exported):
+    """Shadow catchers, light linking and motion blur are Cycles features DACRT does not
+    render: the objects render as ordinary ones and the render says so."""
+    setup(scene)
+    catcher = scenes.plane("Catcher")
+    catcher.is_shadow_catcher = True
+    lamp = scenes.light('POINT', 100.0, (0, 0, 3), name="Linked")
+    lamp.light_linking.receiver_collection = bpy.data.collections.new("Receivers")
+    scene.render.use_motion_blur = True
+    text = " | ".join(m for _, m in exported().messages)
+    assert "'Catcher': shadow catcher is not supported" in text
+    assert "'Linked': light and shadow linking are not supported" in text
+    assert "motion blur is not rendered" in text
+    scene.render.use_motion_blur = False
+    catcher.is_shadow_catcher = False
+    lamp.light_linking.receiver_collection = None
+    text = " | ".join(m for _, m in exported().messages)
+    assert "shadow catcher" not in text and "linking" not in text and "motion blur" not in text
+
+
 def test_nan_vertices_dropped_with_message(scene, exported):
     setup(scene)
     ob = scenes.mesh("Broken", [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (float('nan'), 0, 0),
