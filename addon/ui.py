@@ -1,10 +1,10 @@
 """DACRT's panels, and Blender's generic panels enabled for the engine.
 
 Generic panels (output, format/dimensions, colour management, world/light context, object
-visibility, spot shape, material slots, camera depth of field ...) show for DACRT through their COMPAT_ENGINES sets
-(reference blender-cycles.md 1.6). What no generic panel draws — our settings, view-layer
-passes, the light in Cycles' units, material and world surface node views — has a small panel
-here, modelled on Cycles'.
+visibility, spot shape, material slots, camera depth of field ...) show for DACRT through their
+COMPAT_ENGINES sets (reference blender-cycles.md 1.6). What no generic panel draws — our
+settings, view-layer passes, the light in Cycles' units, material and world surface node
+views — has a small panel here, modelled on Cycles'.
 """
 import bpy
 from bpy.types import Panel
