@@ -9,6 +9,11 @@
 
 namespace dacrt {
 
+namespace {
+
+// A point of the unit aperture for uniforms (u, v): the unit disk (concentric mapping, as
+// Cycles' sample_uniform_disk) or, with blades >= 3, the regular polygon inscribed in it
+// (Cycles' regular_polygon_sample), rotated; x then scaled by inv_ratio.
 void aperture_point(const CameraFrame& c, float u, float v, float& x, float& y) {
     constexpr float kPi = 3.14159265358979f;
     if (c.blades < 3.0f) {
@@ -37,6 +42,8 @@ void aperture_point(const CameraFrame& c, float u, float v, float& x, float& y) 
     }
     x *= c.inv_ratio;
 }
+
+}  // namespace
 
 void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
                  float* tmax, Ray* rays, const float* lu, const float* lv) {

@@ -162,11 +162,6 @@ struct CameraFrame {
     float aperture, focal_distance, blades, blade_rotation, inv_ratio;
 };
 
-// A point of the unit aperture for uniforms (u, v): the unit disk (concentric mapping, as
-// Cycles' sample_uniform_disk) or, with blades >= 3, the regular polygon inscribed in it
-// (Cycles' regular_polygon_sample), rotated; x then scaled by inv_ratio.
-void aperture_point(const CameraFrame& c, float u, float v, float& x, float& y);
-
 // Rays through full-frame raster positions (rx, ry): origins O and unit directions D (3 rows,
 // stride n) on the clip-start plane, tmax reaching the clip-end plane; with rays non-null also
 // their records (ids 0..n-1) for the tracer. With an aperture and lens uniforms (lu, lv) each
