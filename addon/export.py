@@ -24,6 +24,9 @@ texture coordinates other than UV are read as the active render UV map.
 Each approximated material says why in `Material.approximated`; the export reports them in
 one message. Objects without a material get the default material (Blender's default surface is a
 Principled BSDF: its 0.8 diffuse base), reported with them when used.
+World: the Background's colour x strength, or an Environment Texture's equirectangular image
+(through a Mapping node's rotation) lighting the scene from every direction; other world
+shaders use the world colour, reported.
 Blender-legal values the integrator cannot take become what Cycles renders, or the nearest thing
 a diffuse path tracer can, each with a warning: lights Cycles gets no light from (an area light
 of zero size or spread, a spot of zero scale) or that subtract light (negative strength, not
@@ -263,25 +266,123 @@ def _light_shader_factor(light, name, messages):
 # World
 
 def export_world(scene):
-    """Background radiance (3,) and a reason string if it had to be approximated."""
+    """(uniform background radiance (3,), scenedata.Environment or None, reason string if the
+    world had to be approximated). An Environment Texture feeding the Background's Color is
+    exported as an image (its Mapping node's rotation included); other inputs use their own
+    value."""
     world = scene.world
+    none = np.zeros(3, np.float32)
     if world is None:
-        return np.zeros(3, np.float32), ''
+        return none, None, ''
     color = np.array(world.color, np.float32)[:3]
     ntree = world.node_tree
     if ntree is None or (bpy.app.version < (5, 0, 0) and not world.use_nodes):
-        return color, ''
+        return color, None, ''
     out = _output_node(ntree)
     if out is None or not out.inputs['Surface'].is_linked:
-        return np.zeros(3, np.float32), ''
+        return none, None, ''
     node = _linked_node(out.inputs['Surface'])
     if node is not None and node.type == 'BACKGROUND':
-        c, c_ok = _constant_color(node.inputs['Color'])
         s, s_ok = _constant_value(node.inputs['Strength'])
-        reason = '' if (c_ok and s_ok) else "Background input driven by nodes; its own value used"
-        return (np.array(c, np.float32) * np.float32(s)), reason
+        reasons = [] if s_ok else ["Background Strength driven by nodes; its own value used"]
+        tex = _linked_node(node.inputs['Color'])
+        if tex is not None and tex.type == 'TEX_ENVIRONMENT':
+            uniform, env = _environment(tex, np.float32(s), reasons)
+            return uniform, env, '; '.join(reasons)
+        c, c_ok = _constant_color(node.inputs['Color'])
+        if not c_ok:
+            reasons.append("Background Color driven by nodes; its own value used")
+        return np.array(c, np.float32) * np.float32(s), None, '; '.join(reasons)
     kind = node.bl_label if node is not None else 'nothing'
-    return color, f"world surface is {kind}, not a Background node; world colour used"
+    return color, None, f"world surface is {kind}, not a Background node; world colour used"
+
+
+def _environment(node, strength, reasons):
+    """(uniform radiance, scenedata.Environment or None) of an Environment Texture node."""
+    if not (np.isfinite(strength) and strength >= 0):
+        reasons.append(f"Background Strength {float(strength):g} is negative or not finite; rendered black")
+        return np.zeros(3, np.float32), None
+    img = node.image
+    pixels = None if img is None else _image_pixels(img, reasons)
+    if pixels is None:
+        if img is None:
+            reasons.append("Environment Texture without an image (magenta, as Cycles)")
+        return np.array(MISSING_IMAGE, np.float32) * strength, None
+    rgb = pixels[..., :3]
+    bad = ~np.isfinite(rgb)
+    if bad.any():
+        reasons.append(f"image '{img.name}': {int(bad.any(axis=2).sum())} pixel(s) not finite, rendered black")
+        rgb = np.where(bad, 0.0, rgb)
+    if (rgb < 0).any():
+        reasons.append(f"image '{img.name}': negative values rendered as 0")
+        rgb = np.maximum(rgb, 0.0)
+    if node.projection != 'EQUIRECTANGULAR':
+        reasons.append(f"{node.projection.lower().replace('_', ' ')} projection: the image's mean colour used "
+                       "as a uniform world")
+        return rgb.reshape(-1, 3).mean(0).astype(np.float32) * strength, None
+    interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
+    if node.interpolation in LINEAR_INTERPOLATIONS:
+        reasons.append(f"{node.interpolation.lower()} environment interpolation as linear")
+    env = sd.Environment(np.ascontiguousarray(rgb, np.float32), np.full(3, strength, np.float32),
+                         _environment_rotation(node, reasons), interp)
+    return np.zeros(3, np.float32), env
+
+
+# Texture Coordinate outputs that are the ray direction in a world shader
+_DIRECTION_COORDINATES = ('Generated', 'Normal', 'Object')
+
+
+def _environment_rotation(node, reasons):
+    """(3, 3) orthogonal world -> map-frame matrix from the Environment Texture's Vector input:
+    the view direction, optionally through a Mapping node (its rotation and the signs of its
+    scale are exact for directions; non-uniform scale and location are not representable)."""
+    link = _linked_link(node.inputs['Vector'])
+    if link is None:
+        return np.eye(3)
+    src = link.from_node
+    if src.type == 'MAPPING':
+        inner = _linked_link(src.inputs['Vector'])
+        if inner is None or not _is_direction(inner):
+            what = 'nothing' if inner is None else f"'{inner.from_node.bl_label}' {inner.from_socket.name}"
+            reasons.append(f"Mapping node fed by {what}: read as the view direction")
+        return _mapping_matrix(src, reasons)
+    if not _is_direction(link):
+        reasons.append(f"environment coordinates from '{src.bl_label}' {link.from_socket.name} read as the "
+                       "view direction")
+    return np.eye(3)
+
+
+def _is_direction(link):
+    node = link.from_node
+    return (node.type == 'TEX_COORD' and link.from_socket.name in _DIRECTION_COORDINATES
+            and (link.from_socket.name != 'Object' or node.object is None))
+
+
+def _mapping_matrix(node, reasons):
+    """The direction part of a Mapping node (Blender/Cycles: Point and Vector rotate the scaled
+    vector, Texture is the inverse, Normal rotates the vector divided by the scale)."""
+    from mathutils import Euler
+    kind = node.vector_type
+    values = {}
+    for name in ('Location', 'Rotation', 'Scale'):
+        sock = node.inputs.get(name)
+        if sock is None or not sock.enabled:
+            continue
+        if _linked_link(sock) is not None:
+            reasons.append(f"Mapping {name} driven by nodes; its own value used")
+        values[name] = np.array(sock.default_value, np.float64)
+    rot = np.array(Euler(values.get('Rotation', np.zeros(3)), 'XYZ').to_matrix(), np.float64)
+    scale = values.get('Scale', np.ones(3))
+    if not (np.abs(scale) > 0).all():
+        reasons.append("Mapping with a zero Scale ignored")
+        return np.eye(3)
+    if not np.allclose(np.abs(scale), np.abs(scale[0]), rtol=1e-6):
+        reasons.append(f"Mapping Scale {tuple(float(v) for v in scale)}: only its signs used (a non-uniform "
+                       "scale bends the map)")
+    sign = np.diag(np.sign(scale))
+    if kind in ('POINT', 'TEXTURE') and np.any(values.get('Location', np.zeros(3)) != 0):
+        reasons.append("Mapping Location ignored (the map is looked up by direction)")
+    return sign @ rot.T if kind == 'TEXTURE' else rot @ sign
 
 
 # ----------------------------------------------------------------------------------------
@@ -806,7 +907,7 @@ class _Exporter:
         settings = self._settings()
         self._walk_instances()
         geometry = self._assemble()
-        world, world_reason = export_world(self.scene)
+        world, environment, world_reason = export_world(self.scene)
         if not (np.isfinite(world).all() and (world >= 0).all()):
             # Cycles subtracts a negative background; that is not supported here
             world_reason = (f"its colour x strength {tuple(float(v) for v in world)} is negative or "
@@ -814,12 +915,12 @@ class _Exporter:
             world = np.zeros(3, np.float32)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
-        self._summarize(geometry, world)
+        self._summarize(geometry, world, environment)
         self.counts['objects_hidden'] = sum(1 for ob in self.scene.objects if ob.hide_render)
         return sd.SceneData(camera=camera, geometry=geometry, materials=self.materials.materials,
                             lights=self.lights, world=world, settings=settings,
                             object_names=self.object_names, messages=self.messages,
-                            skipped=dict(self.counts))
+                            skipped=dict(self.counts), environment=environment)
 
     # -- settings ------------------------------------------------------------------------
     def _settings(self):
@@ -1118,7 +1219,7 @@ class _Exporter:
         return bad, deg
 
     # -- messages ----------------------------------------------------------------------------
-    def _summarize(self, geometry, world):
+    def _summarize(self, geometry, world, environment):
         for reason, names in self.skipped.items():
             self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
         for reason, names in self.ignored.items():
@@ -1137,7 +1238,9 @@ class _Exporter:
             self.messages.append(('WARNING', "the scene has no renderable geometry; only the "
                                              "world background is rendered"))
         has_emission = any(np.any(m.emission > 0) for m in self.materials.materials)
-        if not self.lights and not np.any(world > 0) and not has_emission:
+        lit_world = np.any(world > 0) or (environment is not None and np.any(environment.strength > 0)
+                                           and np.any(environment.pixels > 0))
+        if not self.lights and not lit_world and not has_emission:
             self.messages.append(('WARNING', "the scene has no lights, no emissive materials and "
                                              "a black world: the image will be black"))
         elif not self.lights:

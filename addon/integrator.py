@@ -46,9 +46,10 @@ from .adaptive import AdaptiveSampling
 from .allocator import render_heap
 from .film import Film
 from .filter import PixelFilter
-from .lights import BackgroundLight, EmissiveTriangles, LightSet, lamp_records, make_lamp
+from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .sampling import RandomStream, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
+from .texture import texture_lookup
 
 F32 = np.float32
 
@@ -165,47 +166,6 @@ class _Triangles:
 
     def __len__(self):
         return len(self.indices)
-
-
-def _wrap(i: np.ndarray, size: int, extension: str):
-    """Texel index -> valid index and in-range mask for Blender's extension modes."""
-    if extension == 'REPEAT':
-        return np.mod(i, size), None
-    if extension == 'EXTEND':
-        return np.clip(i, 0, size - 1), None
-    inside = (i >= 0) & (i < size)                   # CLIP: texels outside are transparent black
-    return np.clip(i, 0, size - 1), inside
-
-
-def texture_lookup(tex: np.ndarray, u: np.ndarray, v: np.ndarray, interpolation: str,
-                   extension: str) -> np.ndarray:
-    """RGB (3,n) of an (h,w,4) texture (row 0 at the bottom) at (u, v): 'Closest' or bilinear
-    'Linear' with texel centres at (i + 0.5)/w, as Cycles' image texture node samples."""
-    h, w = tex.shape[:2]
-    x = u * F32(w)
-    y = v * F32(h)
-    if interpolation == 'Closest':
-        ix, mx = _wrap(np.floor(x).astype(np.int64), w, extension)
-        iy, my = _wrap(np.floor(y).astype(np.int64), h, extension)
-        rgb = tex[iy, ix, :3].T.astype(F32)
-        if mx is not None:
-            rgb *= mx & my
-        return rgb
-    x -= F32(0.5)
-    y -= F32(0.5)
-    x0f, y0f = np.floor(x), np.floor(y)
-    fx, fy = x - x0f, y - y0f
-    x0, y0 = x0f.astype(np.int64), y0f.astype(np.int64)
-    out = np.zeros((3, len(u)), F32)
-    for dy, wy in ((0, 1.0 - fy), (1, fy)):
-        iy, my = _wrap(y0 + dy, h, extension)
-        for dx, wx in ((0, 1.0 - fx), (1, fx)):
-            ix, mx = _wrap(x0 + dx, w, extension)
-            wgt = wx * wy
-            if mx is not None:
-                wgt = wgt * (mx & my)
-            out += tex[iy, ix, :3].T * wgt
-    return out
 
 
 class _Materials:
@@ -386,7 +346,8 @@ class Integrator:
         # same emitters.
         tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._tri_emission,
                                  self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)) if self._any_emissive else None
-        self.lights = LightSet(lamps, tris, len(self.tri))
+        env = EnvironmentLight(sd.environment) if sd.environment is not None else None
+        self.lights = LightSet(lamps, tris, len(self.tri), env)
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
                                           f"strength: {', '.join(self.lights.skipped_lamps)}"))
@@ -416,11 +377,15 @@ class Integrator:
         tris = lights.triangles
         ntri = 0 if tris is None else len(tris.index)
         tri_prob = lights.tri_prob[tris.index] if ntri else np.zeros(0, F32)
+        env = lights.environment
+        nenv = int(env is not None)
         self._light_choice = dacrt.shading.LightChoice(
-            self._nee_records, lights.cdf, np.concatenate([lights.lamp_prob, tri_prob]).astype(F32),
-            np.concatenate([[not l.seen_by_bsdf for l in lights.lamps], np.zeros(ntri, bool)]),
-            np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri, bool)]),
-            *(() if tris is None else (tris.geo, tris.area, tris.emission)))
+            self._nee_records, lights.cdf,
+            np.concatenate([lights.lamp_prob, tri_prob, [lights.env_prob] * nenv]).astype(F32),
+            np.concatenate([[not l.seen_by_bsdf for l in lights.lamps], np.zeros(ntri + nenv, bool)]),
+            np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri + nenv, bool)]),
+            *((None, None, None) if tris is None else (tris.geo, tris.area, tris.emission)),
+            environment=None if env is None else env.native)
         # lamps never chosen (unsampled, camera-only) have 0: a BSDF hit on them weighs 1
         self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.unsampled_lamps)
                                                                         + len(lights.camera_lamps), F32)]).astype(F32)
@@ -533,7 +498,8 @@ class Integrator:
             'nan_dropped': self.film.nan_dropped,
             'triangles': len(self.tri),
             'emissive_triangles': len(self.lights.triangles) if self.lights.triangles is not None else 0,
-            'lights': len(self.lights.lamps) + len(self.lights.unsampled_lamps),
+            'lights': (len(self.lights.lamps) + len(self.lights.unsampled_lamps)
+                       + (self.lights.environment is not None)),
             'adaptive_threshold': self.adaptive.user_threshold if self.adaptive else None,
             'adaptive_min_samples': self.adaptive.min_samples if self.adaptive else None,
             'pixels_converged': self._pixels_converged,
@@ -834,6 +800,10 @@ class Integrator:
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather)."""
+        env = self.lights.environment
+        if env is not None and not (camera and self.transparent):   # transparent film: no world
+            env.native.gather(0.0 if camera else self.lights.env_prob, path.D, ~hit, path.thr,
+                              None if camera else path.pdf, path.pid, L)
         lamps = self._camera_lamps if camera else self._bsdf_lamps
         if not len(lamps):
             return

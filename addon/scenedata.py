@@ -72,6 +72,16 @@ class Light:
 
 
 @dataclass
+class Environment:
+    """An Environment Texture lighting the world (equirectangular; lights/environment.py)."""
+    pixels: np.ndarray             # (h, w, 3+) float32 linear RGB, row 0 at the bottom (the -Z pole)
+    strength: np.ndarray           # (3,) multiplies the pixels (the Background's strength)
+    to_map: np.ndarray = field(default_factory=lambda: np.eye(3))  # (3,3) orthogonal: world direction
+                                                                   # -> the map's frame (Mapping node)
+    interpolation: str = 'Linear'  # 'Linear' | 'Closest'
+
+
+@dataclass
 class Material:
     """What a diffuse renderer can take from a Blender material."""
     name: str
@@ -125,8 +135,9 @@ class SceneData:
     geometry: Geometry
     materials: list                # [Material]; index 0 is always the default material
     lights: list                   # [Light]
-    world: np.ndarray              # (3,) background radiance (colour x strength)
+    world: np.ndarray              # (3,) uniform background radiance (colour x strength)
     settings: Settings
     object_names: list = field(default_factory=list)
     messages: list = field(default_factory=list)   # (level, text): 'WARNING'/'INFO'/'ERROR' for RenderEngine.report
     skipped: dict = field(default_factory=dict)    # export's counts of work not done (objects_hidden, ...)
+    environment: Optional[Environment] = None      # an image around the scene, added to `world`

@@ -15,7 +15,8 @@ every light is known, so a BSDF ray that meets a light can be weighted against l
 (MIS).
 Lamps with diffuse ray visibility off take no part in that choice (camera rays may see them),
 nor does the (uniform) world: BSDF rays alone collect it, with weight 1, as in Cycles
-(background.py says why).
+(background.py says why). An environment map, which varies over directions, is a group of its
+own (environment.py), chosen last in the table.
 """
 from __future__ import annotations
 
@@ -23,12 +24,14 @@ import numpy as np
 
 from .area import AreaLight
 from .background import BackgroundLight
+from .environment import EnvironmentLight
 from .base import F32, RECORD_WIDTH, Lamp, LightSample
 from .point import PointLight, SpotLight
 from .sun import SunLight
 from .triangles import EmissiveTriangles
 
-__all__ = ['LightSet', 'LightSample', 'Lamp', 'BackgroundLight', 'EmissiveTriangles', 'make_lamp', 'lamp_records']
+__all__ = ['LightSet', 'LightSample', 'Lamp', 'BackgroundLight', 'EnvironmentLight', 'EmissiveTriangles', 'make_lamp',
+           'lamp_records']
 
 _KINDS = {'POINT': PointLight, 'SPOT': SpotLight, 'SUN': SunLight, 'AREA': AreaLight}
 
@@ -55,9 +58,14 @@ def lamp_records(lamps) -> np.ndarray:
 class LightSet:
     """All light sources of a frame and the choice of one per shading point (see module doc)."""
 
-    def __init__(self, lamps, triangles: EmissiveTriangles | None, num_triangles: int):
+    def __init__(self, lamps, triangles: EmissiveTriangles | None, num_triangles: int,
+                 environment: EnvironmentLight | None = None):
         lit = [l for l in lamps if not l.dark]
         self.skipped_lamps = [l.name for l in lamps if l.dark]
+        if environment is not None and environment.dark:
+            self.skipped_lamps.append('World (black environment map)')
+            environment = None
+        self.environment = environment
         # Cycles excludes a light with diffuse ray visibility off from diffuse surfaces
         # altogether (light sampling and BSDF hits): only camera rays may still see it.
         self.lamps = [l for l in lit if l.visible_diffuse and l.light_sampled]
@@ -68,20 +76,25 @@ class LightSet:
         self.triangles = triangles if triangles is not None and len(triangles) else None
         self.num_lamps = len(self.lamps)
         self._num_triangles = num_triangles
-        share = 0.5 if self.num_lamps and self.triangles is not None else 1.0
+        # each group (the lamps together, the triangles, the environment) an equal share
+        kinds = bool(self.num_lamps) + (self.triangles is not None) + (environment is not None)
+        share = 1.0 / max(kinds, 1)
         groups = [share / self.num_lamps] * self.num_lamps if self.num_lamps else []
         if self.triangles is not None:
+            groups.append(share)
+        if environment is not None:
             groups.append(share)
         self._set_groups(np.asarray(groups, np.float64))
 
     def _set_groups(self, group_p):
         """Selection probabilities from one per group (each lamp, then all emissive triangles,
-        which share theirs by power)."""
+        which share theirs by power, then the environment map)."""
         lamp_w = np.asarray(group_p[:self.num_lamps], np.float64)
         tri_w = np.zeros(0)
         if self.triangles is not None:
             tri_w = group_p[self.num_lamps] * self.triangles.power / self.triangles.power.sum()
-        w = np.concatenate([lamp_w, tri_w])
+        env_w = np.asarray(group_p[-1:] if self.environment is not None else [], np.float64)
+        w = np.concatenate([lamp_w, tri_w, env_w])
         total = w.sum()
         self.num_entries = len(w)
         self.tri_prob = np.zeros(self._num_triangles, F32)   # selection probability per global triangle
@@ -90,11 +103,14 @@ class LightSet:
             self.cdf = np.cumsum(p)
             self.cdf[-1] = 1.0
             self.lamp_prob = p[:self.num_lamps].astype(F32)
+            ntri = 0 if self.triangles is None else len(self.triangles.index)
             if self.triangles is not None:
-                self.tri_prob[self.triangles.index] = p[self.num_lamps:]
+                self.tri_prob[self.triangles.index] = p[self.num_lamps:self.num_lamps + ntri]
+            self.env_prob = float(p[-1]) if self.environment is not None else 0.0
         else:
             self.cdf = np.zeros(0)
             self.lamp_prob = np.zeros(0, F32)
+            self.env_prob = 0.0
 
     def __bool__(self):
         return self.num_entries > 0
@@ -106,7 +122,7 @@ class LightSet:
         for delta lights). Under MIS a light as wide as the sky is found well by the
         cosine-weighted bounces, so light samples are better spent on small lights. Mixed
         with uniform_mix of the uniform split, so every group keeps a share."""
-        groups = self.num_lamps + (self.triangles is not None)
+        groups = self.num_lamps + (self.triangles is not None) + (self.environment is not None)
         n = P.shape[1]
         if groups < 2 or n == 0:
             return
@@ -116,6 +132,8 @@ class LightSet:
             power = self.triangles.power / self.triangles.power.sum()
             which = np.minimum(np.searchsorted(np.cumsum(power), rng.random(n)), len(power) - 1)
             narrow.append(self._narrowness(self.triangles.sample(P, which, u1, u2).pdf))
+        if self.environment is not None:
+            narrow.append(self._narrowness(self.environment.sample(P, u1, u2).pdf))
         w = np.asarray(narrow, np.float64)
         if not w.sum() > 0:
             return
@@ -134,4 +152,5 @@ class LightSet:
     @property
     def seen_by_bsdf(self) -> bool:
         """Whether BSDF rays can collect any light (emissive triangles, visible lamps, world)."""
-        return self.triangles is not None or any(l.seen_by_bsdf for l in self.lamps + self.unsampled_lamps)
+        return (self.triangles is not None or self.environment is not None
+                or any(l.seen_by_bsdf for l in self.lamps + self.unsampled_lamps))

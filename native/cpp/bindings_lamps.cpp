@@ -7,9 +7,12 @@
 #include <pybind11/pybind11.h>
 
 #include <cstddef>
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "environment.h"
 #include "lamps.h"
 #include "nextevent.h"
 
@@ -66,6 +69,34 @@ const float* optional_f32(const py::object& o, py::ssize_t rows, size_t n, const
     return keep.data();
 }
 
+// Gathers split threads by ray and add to L[:, pid]: pid must be in range and distinct. A
+// renderer's pids ascend (compaction keeps path order): checked in one cheap pass; any other
+// order gets the full check with a marker per column. Empty when fine.
+std::string pid_error(const int64_t* p, size_t n, size_t N) {
+    bool ascending = n == 0 || (p[0] >= 0 && size_t(p[n - 1]) < N);
+    for (size_t i = 1; i < n && ascending; ++i) ascending = p[i] > p[i - 1];
+    if (ascending) return {};
+    std::vector<uint8_t> seen(N, 0);
+    for (size_t i = 0; i < n; ++i) {
+        if (p[i] < 0 || size_t(p[i]) >= N)
+            return "pid[" + std::to_string(i) + "] = " + std::to_string(p[i]) + " is outside 0.." +
+                   std::to_string(N ? N - 1 : 0) + " (L has " + std::to_string(N) + " columns)";
+        if (seen[size_t(p[i])]++)
+            return "pid[" + std::to_string(i) + "] = " + std::to_string(p[i]) + " repeats an earlier pid (must be distinct)";
+    }
+    return {};
+}
+
+// L as a (3, N) array the gathers add to in place.
+float* added_to(py::array L, size_t& N) {
+    if (!py::isinstance<py::array_t<float>>(L) || !(L.flags() & py::array::c_style) || !L.writeable() || L.ndim() != 2 ||
+        L.shape(0) != 3)
+        throw py::value_error("L must be a writeable C-contiguous (3, N) float32 array (added to in place), got " +
+                              shape_str(L));
+    N = size_t(L.shape(1));
+    return static_cast<float*>(L.mutable_data());
+}
+
 void lamp_sample_py(F32Array records, I32Array entry, F32Array P, F32Array u1, F32Array u2, py::array wi,
                     py::array dist, py::array value, py::array pdf) {
     const LampRecord* rec = lamp_records(records);
@@ -106,32 +137,15 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const float* prob = optional_f32(lamp_prob, 0, R, "lamp_prob", prob_keep);
     const float* t = optional_f32(thr, 3, n, "thr", thr_keep);
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
-    if (!py::isinstance<py::array_t<float>>(L) || !(L.flags() & py::array::c_style) || !L.writeable() || L.ndim() != 2 ||
-        L.shape(0) != 3)
-        throw py::value_error("L must be a writeable C-contiguous (3, N) float32 array (added to in place), got " +
-                              shape_str(L));
-    const size_t N = size_t(L.shape(1));
-    float* out = static_cast<float*>(L.mutable_data());
+    size_t N;
+    float* out = added_to(L, N);
     std::string err;
     {
         py::gil_scoped_release nogil;
-        // threads split by ray and add to L[:, pid]: pid must be in range and distinct.
-        // A renderer's pids ascend (compaction keeps path order): checked in one cheap pass;
-        // any other order gets the full check with a marker per column.
-        const int64_t* p = pid.data();
-        bool ascending = n == 0 || (p[0] >= 0 && size_t(p[n - 1]) < N);
-        for (size_t i = 1; i < n && ascending; ++i) ascending = p[i] > p[i - 1];
-        std::vector<uint8_t> seen(ascending ? 0 : N, 0);
-        for (size_t i = 0; i < n && err.empty() && !ascending; ++i) {
-            if (p[i] < 0 || size_t(p[i]) >= N)
-                err = "pid[" + std::to_string(i) + "] = " + std::to_string(p[i]) + " is outside 0.." +
-                      std::to_string(N ? N - 1 : 0) + " (L has " + std::to_string(N) + " columns)";
-            else if (seen[size_t(p[i])]++)
-                err = "pid[" + std::to_string(i) + "] = " + std::to_string(p[i]) + " repeats an earlier pid (must be distinct)";
-        }
+        err = pid_error(pid.data(), n, N);
         if (err.empty())
             lamp_gather(rec, lamps.data(), nl, prob, O.data(), D.data(), t_surf.data(),
-                        reinterpret_cast<const uint8_t*>(miss.data()), t, pb, p, n, out, N);
+                        reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N);
     }
     if (!err.empty()) throw py::value_error(err);
 }
@@ -165,7 +179,8 @@ py::dict lamp_record_layout() {
 LightChoice light_choice(const F32Array& records, const py::array_t<double, py::array::c_style>& cdf,
                          const F32Array& prob, const py::array_t<bool, py::array::c_style>& no_mis,
                          const py::array_t<bool, py::array::c_style>& shadow, const py::object& tri_geo,
-                         const py::object& tri_area, const py::object& tri_emission, F32Array keep[3]) {
+                         const py::object& tri_area, const py::object& tri_emission, const py::object& env,
+                         std::shared_ptr<EnvironmentMap>& env_keep, F32Array keep[3]) {
     LightChoice c{};
     c.lamps = lamp_records(records);
     c.num_lamps = size_t(records.shape(0));
@@ -180,7 +195,11 @@ LightChoice light_choice(const F32Array& records, const py::array_t<double, py::
         c.tri_area = optional_f32(tri_area, 0, c.num_tris, "tri_area", keep[1]);
         c.tri_emission = optional_f32(tri_emission, 3, c.num_tris, "tri_emission", keep[2]);
     }
-    c.entries = c.num_lamps + c.num_tris;
+    if (!env.is_none()) {
+        env_keep = env.cast<std::shared_ptr<EnvironmentMap>>();
+        c.env = env_keep.get();
+    }
+    c.entries = c.num_lamps + c.num_tris + (c.env ? 1 : 0);
     if (c.entries == 0) throw py::value_error("there is no light to choose (no lamp records, no triangles)");
     need_shape(cdf, 0, c.entries, "cdf");
     need_shape(prob, 0, c.entries, "prob");
@@ -195,13 +214,16 @@ LightChoice light_choice(const F32Array& records, const py::array_t<double, py::
 
 py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style> cdf, F32Array prob,
                      py::array_t<bool, py::array::c_style> no_mis, py::array_t<bool, py::array::c_style> shadow,
-                     py::object tri_geo, py::object tri_area, py::object tri_emission, F32Array P, F32Array P_off,
+                     py::object tri_geo, py::object tri_area, py::object tri_emission, py::object env, F32Array P,
+                     F32Array P_off,
                      F32Array ns, py::object ng, py::object thr, py::array_t<uint32_t, py::array::c_style> keys,
                      uint32_t ka, uint32_t kb, py::object pick, py::object prim, float shorten, bool skip_work,
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
                      py::array_t<int64_t, py::array::c_style> send, py::object skip) {
     F32Array keep[3], ng_keep, thr_keep;
-    const LightChoice lights = light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, keep);
+    std::shared_ptr<EnvironmentMap> env_keep;
+    const LightChoice lights =
+        light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     VertexPoints pts{};
     pts.n = size_t(P.shape(1));
@@ -278,6 +300,89 @@ void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_
                                    std::to_string(N) + ")");
 }
 
+// --- the environment map (environment.h) ---
+
+std::shared_ptr<EnvironmentMap> make_environment(F32Array rgb, F32Array to_map, bool closest) {
+    if (rgb.ndim() != 3 || rgb.shape(2) != 3)
+        throw py::value_error("rgb must have shape (h, w, 3), got " + shape_str(rgb));
+    if (to_map.ndim() != 2 || to_map.shape(0) != 3 || to_map.shape(1) != 3)
+        throw py::value_error("to_map must have shape (3, 3), got " + shape_str(to_map));
+    if (rgb.shape(0) > py::ssize_t(UINT32_MAX) || rgb.shape(1) > py::ssize_t(UINT32_MAX))
+        throw py::value_error("the environment map is too large: " + shape_str(rgb));
+    auto env = std::make_shared<EnvironmentMap>();
+    std::string err;
+    {
+        py::gil_scoped_release nogil;
+        err = build_environment(*env, rgb.data(), uint32_t(rgb.shape(1)), uint32_t(rgb.shape(0)), to_map.data(), closest);
+    }
+    if (!err.empty()) throw py::value_error("environment map: " + err);
+    return env;
+}
+
+py::tuple environment_eval_py(const EnvironmentMap& env, F32Array D) {
+    if (D.ndim() != 2 || D.shape(0) != 3) throw py::value_error("D must have shape (3, n), got " + shape_str(D));
+    const size_t n = size_t(D.shape(1));
+    F32Array Le({py::ssize_t(3), py::ssize_t(n)}), pdf{py::ssize_t(n)};
+    float* le = Le.mutable_data();
+    float* p = pdf.mutable_data();
+    const float* d = D.data();
+    {
+        py::gil_scoped_release nogil;
+        for (size_t i = 0; i < n; ++i) {
+            const float di[3] = {d[i], d[n + i], d[2 * n + i]};
+            float l[3];
+            environment_eval(env, di, l, p[i]);
+            for (int a = 0; a < 3; ++a) le[size_t(a) * n + i] = l[a];
+        }
+    }
+    return py::make_tuple(Le, pdf);
+}
+
+py::tuple environment_sample_py(const EnvironmentMap& env, F32Array u1, F32Array u2) {
+    if (u1.ndim() != 1) throw py::value_error("u1 must be one-dimensional, got " + shape_str(u1));
+    const size_t n = size_t(u1.shape(0));
+    need_shape(u2, 0, n, "u2");
+    F32Array wi({py::ssize_t(3), py::ssize_t(n)}), value({py::ssize_t(3), py::ssize_t(n)}), pdf{py::ssize_t(n)};
+    float* w = wi.mutable_data();
+    float* v = value.mutable_data();
+    float* p = pdf.mutable_data();
+    const float *a1 = u1.data(), *a2 = u2.data();
+    {
+        py::gil_scoped_release nogil;
+        for (size_t i = 0; i < n; ++i) {
+            float wv[3], vv[3];
+            environment_sample(env, a1[i], a2[i], wv, vv, p[i]);
+            for (int a = 0; a < 3; ++a) w[size_t(a) * n + i] = wv[a], v[size_t(a) * n + i] = vv[a];
+        }
+    }
+    return py::make_tuple(wi, value, pdf);
+}
+
+void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py::array_t<bool, py::array::c_style> miss,
+                           py::object thr, py::object pdf_bsdf, I64Array pid, py::array L) {
+    if (!(prob >= 0 && prob <= 1)) throw py::value_error("prob must be in [0, 1], got " + std::to_string(prob));
+    if ((prob > 0) == pdf_bsdf.is_none())
+        throw py::value_error("prob > 0 (BSDF rays, MIS) needs pdf_bsdf; prob 0 (camera rays) takes none");
+    if (D.ndim() != 2 || D.shape(0) != 3) throw py::value_error("D must have shape (3, n), got " + shape_str(D));
+    const size_t n = size_t(D.shape(1));
+    need_shape(miss, 0, n, "miss");
+    need_shape(pid, 0, n, "pid");
+    F32Array thr_keep, pdf_keep;
+    const float* t = optional_f32(thr, 3, n, "thr", thr_keep);
+    const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
+    size_t N;
+    float* out = added_to(L, N);
+    std::string err;
+    {
+        py::gil_scoped_release nogil;
+        err = pid_error(pid.data(), n, N);
+        if (err.empty())
+            environment_gather(env, prob, D.data(), reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(),
+                               n, out, N);
+    }
+    if (!err.empty()) throw py::value_error(err);
+}
+
 }  // namespace
 
 void register_lamps(py::module_& m) {
@@ -289,9 +394,19 @@ void register_lamps(py::module_& m) {
           py::arg("D"), py::arg("t_surf"), py::arg("miss"), py::arg("thr"), py::arg("pdf_bsdf"), py::arg("pid"),
           py::arg("L"));
     m.def("next_event", &next_event_py, py::arg("records"), py::arg("cdf"), py::arg("prob"), py::arg("no_mis"),
-          py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("P"),
+          py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"), py::arg("P"),
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),
           py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
           py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"));
+    py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
+        m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)")
+        .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"))
+        .def_property_readonly("width", [](const EnvironmentMap& e) { return e.width; })
+        .def_property_readonly("height", [](const EnvironmentMap& e) { return e.height; })
+        .def_property_readonly("total", [](const EnvironmentMap& e) { return e.total; })
+        .def("eval", &environment_eval_py, py::arg("D"))
+        .def("sample", &environment_sample_py, py::arg("u1"), py::arg("u2"))
+        .def("gather", &environment_gather_py, py::arg("prob"), py::arg("D"), py::arg("miss"), py::arg("thr"),
+             py::arg("pdf_bsdf"), py::arg("pid"), py::arg("L"));
     m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"));
 }

@@ -51,6 +51,9 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                 for (int a = 0; a < 3; ++a) wi[a] = s.wi[a], value[a] = s.value[a];
                 dist = s.dist;
                 pdf = s.pdf;
+            } else if (entry == L.num_lamps + T) {  // the environment map (entries has it last)
+                environment_sample(*L.env, u1, u2, wi, value, pdf);
+                dist = lampmath::INF;
             } else {
                 const size_t w = entry - L.num_lamps;
                 triangle_light(L.tri_geo, L.tri_area, T, w, P, u1, u2, wi, dist, pdf, target);
@@ -77,7 +80,8 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                 const float O[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
                 Pending& q = pending[m];
                 // a zero-length ray (the point lies on the light) is not traced and adds nothing
-                adds = shadow_record(O, wi, dist, lamp ? nullptr : target, p.shorten, q.ray);
+                const bool geometry = !lamp && entry < L.num_lamps + T;  // a triangle: aim at its point
+                adds = shadow_record(O, wi, dist, geometry ? target : nullptr, p.shorten, q.ray);
                 if (adds) q.path = int64_t(i), ++m;
             }
             contrib[i] = adds;

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "environment.h"
 #include "lamps.h"
 #include "ray.h"
 
@@ -14,7 +15,8 @@ namespace dacrt {
 
 // What light sampling chooses from: entries 0..num_lamps-1 are lamps, num_lamps + j is
 // emissive triangle j of tri_geo (15 rows of num_tris, as surface() reads; area per triangle;
-// emission: radiance, 3 rows of num_tris). Per entry: cdf (the choice), prob (its probability),
+// emission: radiance, 3 rows of num_tris), and the last, num_lamps + num_tris, is the
+// environment map when env is not null. Per entry: cdf (the choice), prob (its probability),
 // no_mis (sampled without MIS: weight 1, as a delta light), shadow (its samples need a shadow ray).
 struct LightChoice {
     const LampRecord* lamps;
@@ -23,11 +25,12 @@ struct LightChoice {
     const float* tri_area;
     const float* tri_emission;
     size_t num_tris;
+    const EnvironmentMap* env;
     const double* cdf;
     const float* prob;
     const uint8_t* no_mis;
     const uint8_t* shadow;
-    size_t entries;  // num_lamps + num_tris
+    size_t entries;  // num_lamps + num_tris (+ 1 with env)
 };
 
 // The n shading points of one vertex. P: surface points, P_off: shadow-ray origins; ns, ng:

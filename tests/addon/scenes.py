@@ -143,6 +143,41 @@ def world(color, strength=1.0, scene=None):
     return w
 
 
+def float_image(name, pixels):
+    """A packed float image of pixels (h, w, 4), row 0 at the bottom (Cycles reads it too)."""
+    h, w = pixels.shape[:2]
+    img = bpy.data.images.new(name, w, h, float_buffer=True, alpha=True)
+    img.pixels.foreach_set(np.ascontiguousarray(pixels, np.float32).ravel())
+    img.update()
+    img.pack()
+    return img
+
+
+def environment_world(image, strength=1.0, rotation=None, scale=(1.0, 1.0, 1.0), vector_type='POINT',
+                      interpolation='Linear', scene=None):
+    """A world whose Background takes an Environment Texture of image, through a Mapping node
+    (Generated coordinates, the given rotation and scale) when rotation is given."""
+    scene = scene or bpy.context.scene
+    w = bpy.data.worlds.new("World")
+    nt = w.node_tree
+    env = nt.nodes.new('ShaderNodeTexEnvironment')
+    env.image = image
+    env.interpolation = interpolation
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    bg.inputs['Strength'].default_value = strength
+    nt.links.new(env.outputs['Color'], bg.inputs['Color'])
+    if rotation is not None:
+        coords = nt.nodes.new('ShaderNodeTexCoord')
+        mapping = nt.nodes.new('ShaderNodeMapping')
+        mapping.vector_type = vector_type
+        mapping.inputs['Rotation'].default_value = rotation
+        mapping.inputs['Scale'].default_value = scale
+        nt.links.new(coords.outputs['Generated'], mapping.inputs['Vector'])
+        nt.links.new(mapping.outputs['Vector'], env.inputs['Vector'])
+    scene.world = w
+    return w
+
+
 def black_world(scene=None):
     return world((0, 0, 0), 0.0, scene)
 

@@ -636,6 +636,66 @@ def test_world_background(scene, exported):
     assert np.allclose(exported().world, 0.0)
 
 
+def _sky_pixels(h=8, w=16):
+    rng = np.random.default_rng(7)
+    px = np.ones((h, w, 4), np.float32)
+    px[..., :3] = rng.random((h, w, 3), np.float32) * 2.0
+    return px
+
+
+def test_world_environment_texture(scene, exported):
+    """An Environment Texture on the Background is exported as its image (linear RGB, row 0 at
+    the bottom) with the strength and the Mapping node's rotation: Point and Vector rotate the
+    direction (a mirroring scale keeps its signs), Texture is the inverse."""
+    setup(scene)
+    px = _sky_pixels()
+    img = scenes.float_image("Sky", px)
+    scenes.environment_world(img, 2.0)
+    data = exported()
+    env = data.environment
+    assert env is not None and np.array_equal(data.world, np.zeros(3, np.float32))
+    assert np.allclose(env.pixels, px[..., :3]) and np.allclose(env.strength, 2.0)
+    assert np.allclose(env.to_map, np.eye(3)) and env.interpolation == 'Linear'
+    assert not any("world approximated" in t for _, t in data.messages)
+    rot = (0.3, -0.2, 1.2)
+    R = np.array(Euler(rot, 'XYZ').to_matrix())
+    for kind, scale, expect in (('POINT', (1, -1, 1), R @ np.diag([1, -1, 1])),
+                                ('VECTOR', (-2, -2, -2), -R),
+                                ('TEXTURE', (1, 1, 1), R.T)):
+        scenes.environment_world(img, 1.0, rotation=rot, scale=scale, vector_type=kind, interpolation='Closest')
+        data = exported()
+        assert np.allclose(data.environment.to_map, expect, atol=1e-6), kind
+        assert data.environment.interpolation == 'Closest'
+        assert not any("world approximated" in t for _, t in data.messages), kind
+
+
+def test_world_environment_approximations_are_reported(scene, exported):
+    setup(scene)
+    px = _sky_pixels()
+    px[2, 3, 1] = np.nan
+    img = scenes.float_image("Sky", px)
+    scenes.environment_world(img, 1.0, rotation=(0, 0, 0.5), scale=(1, 2, 1))
+    data = exported()
+    assert data.environment is not None and np.isfinite(data.environment.pixels).all()
+    assert data.environment.pixels[2, 3, 1] == 0
+    msg = " ".join(t for _, t in data.messages if "world approximated" in t)
+    assert "not finite" in msg and "only its signs" in msg
+    w = scenes.environment_world(None, 3.0)                     # no image: magenta, as Cycles
+    data = exported()
+    assert data.environment is None and np.allclose(data.world, (3.0, 0.0, 3.0))
+    assert any("without an image" in t for _, t in data.messages)
+    env = next(n for n in w.node_tree.nodes if n.type == 'TEX_ENVIRONMENT')
+    env.image, env.projection = img, 'MIRROR_BALL'
+    data = exported()
+    finite = np.where(np.isfinite(px[..., :3]), px[..., :3], 0.0)
+    assert data.environment is None and np.allclose(data.world, 3.0 * finite.reshape(-1, 3).mean(0), rtol=1e-5)
+    assert any("mirror ball" in t for _, t in data.messages)
+    scenes.environment_world(img, -1.0)
+    data = exported()
+    assert data.environment is None and not data.world.any()
+    assert any("negative" in t for _, t in data.messages)
+
+
 # -- lights ------------------------------------------------------------------------------------
 
 def test_light_values_in_cycles_units(scene, exported):

@@ -345,6 +345,53 @@ def build_ortho_depth_of_field():
     dof.use_dof, dof.focus_distance, dof.aperture_fstop = True, 4.0, 0.3
 
 
+def _sky_image(width=96, height=48):
+    """A packed float equirectangular sky: blue above the horizon (brighter toward the zenith,
+    warmer toward u = 0.25), brown ground below, and a small sun two texels wide."""
+    img = bpy.data.images.new("Sky", width, height, float_buffer=True, alpha=False)
+    px = []
+    for i in range(height):
+        v = (i + 0.5) / height
+        for j in range(width):
+            u = (j + 0.5) / width
+            warm = 1.0 + 0.6 * math.cos(2 * math.pi * (u - 0.25))
+            if v > 0.5:
+                t = 2 * v - 1
+                px += [0.25 * warm, 0.4 + 0.1 * t, 0.6 + 0.6 * t, 1.0]
+            else:
+                px += [0.18, 0.12, 0.07, 1.0]
+    for j in (30, 31):                       # the sun: about 36 degrees above the horizon
+        k = (38 * width + j) * 4
+        px[k:k + 3] = [900.0, 820.0, 700.0]
+    img.pixels.foreach_set(px)
+    img.update()
+    img.pack()
+    return img
+
+
+def build_environment():
+    """Blocks on a floor lit by an HDRI-style Environment Texture alone (sky, ground and a
+    small sun), turned by a Mapping node; sky and horizon in view."""
+    quad("Ground", [(-20, -20, 0), (20, -20, 0), (20, 20, 0), (-20, 20, 0)],
+         diffuse("Ground", (0.5, 0.45, 0.4)))
+    box("Cube", (1.0, 1.0, 1.0), diffuse("Cube", (0.8, 0.8, 0.8)), (0.0, 0.0, 0.5),
+        (0, 0, math.radians(30)))
+    uv_sphere("Ball", 0.6, diffuse("Ball", (0.3, 0.6, 0.3)), (1.5, 1.0, 0.6))
+    box("Pillar", (0.3, 0.3, 1.5), diffuse("Pillar", (0.7, 0.3, 0.3)), (-1.3, 0.8, 0.75))
+    w = world((0.0, 0.0, 0.0), 1.5)
+    nt = w.node_tree
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    env = nt.nodes.new('ShaderNodeTexEnvironment')
+    env.image = _sky_image()
+    coords = nt.nodes.new('ShaderNodeTexCoord')
+    mapping = nt.nodes.new('ShaderNodeMapping')
+    mapping.inputs['Rotation'].default_value = (0.0, math.radians(8), math.radians(140))
+    nt.links.new(coords.outputs['Generated'], mapping.inputs['Vector'])
+    nt.links.new(mapping.outputs['Vector'], env.inputs['Vector'])
+    nt.links.new(env.outputs['Color'], bg.inputs['Color'])
+    camera((3.4, -4.6, 1.9), (0.0, 0.4, 0.8), lens=28.0)
+
+
 # ------------------------------------------------------------------------------------------
 # What the suite renders
 
@@ -385,4 +432,5 @@ SPECS = (
     ParitySpec("depth_of_field", build_depth_of_field, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("ortho_depth_of_field", build_ortho_depth_of_field, (192, 144), 1, 'BLACKMAN_HARRIS', 2.0,
                128, 32, 128, 32),
+    ParitySpec("environment", build_environment, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
 )

@@ -6,6 +6,9 @@ with a smooth or hard elliptical cone), sun (delta direction or uniform cone), a
 ellipse, optional spread) and a uniform background. A renderer passes all its lamps as one
 (R, RECORD_WIDTH) array, so sampling and gathering every lamp is one pass over the rays instead
 of one numpy pass per lamp and operation. Vectors are (3, n) float32 structure-of-arrays.
+An equirectangular environment map is a light of its own (`environment_map`; its mapping,
+tables and pdf are documented in native/cpp/environment.h), sampled in proportion to its
+radiance.
 Units and formulas follow the renderer's Python lamp classes (Cycles' conventions), which the
 tests compare these kernels against.
 """
@@ -16,7 +19,8 @@ import numpy as np
 from . import _core
 from .shading import _check_added_to
 
-__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather"]
+__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather", "EnvironmentMap",
+           "environment_map"]
 
 RECORD_WIDTH = int(_core.LAMP_RECORD_WIDTH)
 # kind codes (field 'kind'); shape codes per kind (field 'shape')
@@ -104,3 +108,23 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     opt = lambda a: None if a is None else _f32(a)
     _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32(t_surf),
                       np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf), np.ascontiguousarray(pid, np.int64), L)
+
+
+EnvironmentMap = _core.EnvironmentMap
+
+
+def environment_map(rgb, to_map=None, interpolation: str = "Linear") -> EnvironmentMap:
+    """An environment light from rgb (h, w, 3) float32 linear radiance (row 0 at the bottom, the
+    -Z pole; strength included), the orthogonal to_map (3, 3) taking world directions to the
+    map's frame (None: identity) and 'Linear' (bilinear) or 'Closest' lookup.
+
+    The object offers eval(D (3, n)) -> (radiance (3, n), solid-angle pdf (n,)),
+    sample(u1, u2 (n,)) -> (wi (3, n), radiance / pdf (3, n), pdf (n,)) and
+    gather(prob, D, miss, thr, pdf_bsdf, pid, L): what rays that missed everything see, added
+    to L (3, N) in place, MIS-weighted against sampling the map with probability prob (0:
+    camera rays, weight 1; then pdf_bsdf is None)."""
+    if interpolation not in ("Linear", "Closest"):
+        raise ValueError(f"interpolation must be 'Linear' or 'Closest', got {interpolation!r}")
+    m = np.eye(3) if to_map is None else to_map
+    return _core.EnvironmentMap(np.ascontiguousarray(rgb, _F32), np.ascontiguousarray(m, _F32),
+                                interpolation == "Closest")

@@ -155,12 +155,14 @@ def shadow_rays(O, wi, dist, target, idx, shorten: float = 1.0):
 class LightChoice:
     """What next_event() picks a light from: R lamp records (dacrt.lamps layout) as entries
     0..R-1, then T emissive triangles (tri_geo (15, T) rows as in surface(), tri_area (T,),
-    tri_emission (3, T) radiance; None: no triangles) as entries R..R+T-1. Per entry: cdf (the
-    choice: entry = first with cdf > u), prob (its probability), no_mis (sampled without MIS,
-    weight 1, as a delta light) and shadow (its samples need a shadow ray). Arrays are
+    tri_emission (3, T) radiance; None: no triangles) as entries R..R+T-1, then the
+    environment map (a dacrt.lamps.EnvironmentMap; None: none) as entry R+T. Per entry: cdf
+    (the choice: entry = first with cdf > u), prob (its probability), no_mis (sampled without
+    MIS, weight 1, as a delta light) and shadow (its samples need a shadow ray). Arrays are
     converted once here, not per call."""
 
-    def __init__(self, records, cdf, prob, no_mis, shadow, tri_geo=None, tri_area=None, tri_emission=None):
+    def __init__(self, records, cdf, prob, no_mis, shadow, tri_geo=None, tri_area=None, tri_emission=None,
+                 environment=None):
         self.records = np.ascontiguousarray(np.asarray(records, _F32).reshape(-1, _core.LAMP_RECORD_WIDTH))
         self.cdf = np.ascontiguousarray(cdf, np.float64)
         self.prob = np.ascontiguousarray(prob, _F32)
@@ -169,10 +171,14 @@ class LightChoice:
         self.tri_geo = None if tri_geo is None else _rows(tri_geo, 15, "tri_geo")
         self.tri_area = None if tri_area is None else np.ascontiguousarray(tri_area, _F32)
         self.tri_emission = None if tri_emission is None else _rows(tri_emission, 3, "tri_emission")
+        if environment is not None and not isinstance(environment, _core.EnvironmentMap):
+            raise ValueError(f"environment must be a dacrt.lamps.EnvironmentMap or None, got {type(environment).__name__}")
+        self.environment = environment
 
     @property
     def entries(self) -> int:
-        return len(self.records) + (0 if self.tri_geo is None else self.tri_geo.shape[1])
+        return (len(self.records) + (0 if self.tri_geo is None else self.tri_geo.shape[1])
+                + (self.environment is not None))
 
 
 def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: int, pick=None, prim=None,
@@ -200,7 +206,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     opt = lambda a, name: None if a is None else _rows(a, 3, name)
     m, skipped = _core.next_event(
         lights.records, lights.cdf, lights.prob, lights.no_mis, lights.shadow, lights.tri_geo, lights.tri_area,
-        lights.tri_emission, P, _rows(P_off, 3, "P_off"), _rows(ns, 3, "ns"), opt(ng, "ng"), opt(thr, "thr"),
+        lights.tri_emission, lights.environment, P, _rows(P_off, 3, "P_off"), _rows(ns, 3, "ns"), opt(ng, "ng"), opt(thr, "thr"),
         _rows(keys, 2, "keys", np.uint32), int(ka), int(kb),
         None if pick is None else np.ascontiguousarray(pick, np.float64),
         None if prim is None else np.ascontiguousarray(prim, np.int32), float(shorten), bool(skip_work),

@@ -1,0 +1,59 @@
+// An equirectangular environment map as a light at infinity (Cycles' Environment Texture
+// feeding the world's Background): its radiance in a direction, and directions sampled in
+// proportion to it for next-event estimation (environment.cpp builds the tables).
+//
+// Mapping (Cycles' direction_to_equirectangular, checked against Cycles' panoramic render):
+// a unit direction m in the map's frame has u = 0.5 - atan2(m.y, m.x) / 2pi and
+// v = 1 - acos(m.z) / pi; texel (i, j) (row i from the bottom, the -Z pole) covers
+// u in [j/w, (j+1)/w), v in [i/h, (i+1)/h). Radiance is the texture there, 'Linear' bilinear
+// with texel centres at (j + 0.5)/w and REPEAT in both u and v (as Cycles: rows at a pole blend
+// with the other pole's), or 'Closest', times nothing else (strength is folded into the pixels).
+// The world direction d reaches the map frame as m = to_map d (to_map orthogonal: the Mapping
+// node's rotation and mirroring).
+//
+// Sampling (as Cycles' background map, on the texels): texel (i, j) is picked with probability
+// proportional to w_ij = a_ij sin(theta_i), theta_i = pi (1 - (i + 0.5)/h) the row's centre and
+// a_ij the mean over the texel of the looked-up radiance's RGB mean: the texel's own for
+// 'Closest', its (1, 6, 1)/8 x (1, 6, 1)/8 blend with its neighbours (REPEAT) for bilinear; u, v
+// uniform within it. The solid-angle pdf of a direction is then
+// p_ij w h / (2 pi^2 sin(theta)) with p_ij = w_ij / sum(w). Texels of weight 0 are never
+// sampled; BSDF rays, weighted by MIS, find the rest.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dacrt {
+
+struct EnvironmentMap {
+    uint32_t width = 0, height = 0;
+    bool closest = false;               // 'Closest' interpolation, else bilinear
+    std::vector<float> rgb;             // height x width x 3, row 0 at the bottom
+    std::vector<double> row_cdf;        // height + 1: cumulative row weights / total, [0] = 0, [h] = 1
+    std::vector<float> col_cdf;         // height x (width + 1): per row, cumulative / row total
+    std::vector<float> texel_pdf;       // height x width: p_ij w h (the pdf over (u, v))
+    float to_map[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};   // row-major, orthogonal
+    double total = 0;                   // sum of the weights: 0 = nothing to sample
+};
+
+// Builds the tables; empty string on success, else what is wrong with the input (sizes,
+// non-finite or negative pixels, a to_map that is not orthogonal).
+std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t width, uint32_t height,
+                              const float to_map[9], bool closest);
+
+// Radiance toward world direction d (unit) and the solid-angle pdf of sampling it.
+void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], float& pdf);
+
+// A direction wi (world, unit) for uniforms u1 (row), u2 (column) in [0, 1), its radiance /
+// pdf in value and its solid-angle pdf (0 and value 0 at a pole, where the map has no area).
+void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[3], float value[3], float& pdf);
+
+// What rays that missed everything see of the map: L[:, pid[i]] (stride N) += thr x Le x w
+// where miss[i], thr null = 1, w = 1 when prob is 0 (camera rays), else the power heuristic
+// 1 / (1 + (prob pdf_env / pdf_bsdf)^2). pid distinct (threads split by ray).
+void environment_gather(const EnvironmentMap& env, float prob, const float* D, const uint8_t* miss,
+                        const float* thr, const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N);
+
+}  // namespace dacrt

@@ -1,0 +1,257 @@
+"""The environment map light: the native kernels (dacrt.lamps.EnvironmentMap) against the
+Python definition (addon/lights/environment.py), its pdf and samples against their own
+definition (the pdf integrates to 1; samples land on texels in proportion to it), what rays
+gather from it, and renders against closed-form and quadrature values: a plane under a bright
+upper hemisphere (rho L), under a sky with a one-texel sun (rho/pi times the irradiance from a
+float64 quadrature of the map), a uniform map equal to the uniform world, a rotated map equal
+to the same map with its columns shifted, and transparent film."""
+import dacrt
+import numpy as np
+import pytest
+
+from addon import scenedata as sd
+from addon.lights.environment import EnvironmentLight
+
+from .scenes import pixel_stats, plane_scene, render
+
+F32 = np.float32
+
+
+def sky_map(h=32, w=64, sun=(24, 20), sun_value=3000.0, seed=0):
+    """A sky (brighter toward the zenith, coloured), a dark ground half and a one-texel sun."""
+    rng = np.random.default_rng(seed)
+    v = (np.arange(h) + 0.5) / h
+    px = np.empty((h, w, 3), F32)
+    px[:] = np.where(v[:, None, None] > 0.5, [0.3, 0.5, 1.0], [0.12, 0.1, 0.05]) * (0.5 + v[:, None, None])
+    px *= 1.0 + 0.3 * rng.random((h, w, 1), F32)
+    px[sun] = sun_value
+    return px
+
+
+def rotation(ax, ay, az):
+    """Blender's XYZ Euler rotation matrix."""
+    cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def unit_dirs(n, seed=1):
+    rng = np.random.default_rng(seed)
+    d = rng.normal(size=(3, n))
+    return (d / np.linalg.norm(d, axis=0)).astype(F32)
+
+
+def environment(px, to_map=None, interpolation='Linear', strength=1.0):
+    env = sd.Environment(px, np.full(3, strength, F32), np.eye(3) if to_map is None else to_map, interpolation)
+    return EnvironmentLight(env)
+
+
+MAPS = {
+    'linear': dict(),
+    'closest': dict(interpolation='Closest'),
+    'rotated': dict(to_map=rotation(0.4, -0.3, 1.1)),
+    'mirrored': dict(to_map=rotation(0.2, 0.1, -0.5) @ np.diag([1.0, -1.0, 1.0])),
+}
+
+
+@pytest.mark.parametrize('variant', sorted(MAPS))
+def test_native_eval_matches_definition(variant):
+    ref = environment(sky_map(), **MAPS[variant])
+    D = unit_dirs(20_000)
+    Le, pdf = ref.native.eval(D)
+    _, Le_ref, pdf_ref = ref.eval_miss(D)
+    # texel borders: float32 rounding of u, v may put a direction in the neighbour texel
+    close = np.isclose(pdf, pdf_ref, rtol=1e-4, atol=0)
+    assert close.mean() > 0.999
+    assert np.allclose(Le, Le_ref, rtol=2e-3, atol=2e-4 * ref.rgb.max())
+    assert np.median(np.abs(Le - Le_ref) / np.maximum(Le_ref, 1e-6)) < 1e-5
+
+
+@pytest.mark.parametrize('variant', sorted(MAPS))
+def test_pdf_integrates_to_one_and_samples_follow_it(variant):
+    ref = environment(sky_map(), **MAPS[variant])
+    env = ref.native
+    # the pdf over the sphere: midpoint quadrature in (theta, phi) on a grid aligned with the
+    # map's texels (8 x 8 points each), through to_map: pdf x sin(theta) is constant per texel,
+    # so the sum is exact up to rounding
+    h, w = ref.texel_pdf.shape
+    th = np.pi * (np.arange(8 * h) + 0.5) / (8 * h)
+    ph = 2 * np.pi * (np.arange(8 * w) + 0.5) / (8 * w)
+    T, PH = np.meshgrid(th, ph, indexing='ij')
+    m_frame = np.stack([np.sin(T) * np.cos(PH), np.sin(T) * np.sin(PH), np.cos(T)]).reshape(3, -1)
+    _, pdf = env.eval((ref.to_map.T @ m_frame).astype(F32))
+    integral = (pdf * np.sin(T).ravel()).sum() * (np.pi / (8 * h)) * (2 * np.pi / (8 * w))
+    assert integral == pytest.approx(1.0, abs=1e-4)
+    # samples: their texel histogram against the texel probabilities, their pdf against eval
+    rng = np.random.default_rng(2)
+    m = 400_000
+    u1, u2 = rng.random((2, m), F32)
+    wi, value, spdf = env.sample(u1, u2)
+    assert np.allclose(np.linalg.norm(wi, axis=0), 1.0, atol=1e-5)
+    Le, epdf = env.eval(wi)
+    good = spdf > 0
+    assert good.mean() > 0.9999
+    assert np.isclose(epdf[good], spdf[good], rtol=1e-3).mean() > 0.999
+    assert np.allclose((value * spdf)[:, good], Le[:, good], rtol=2e-2, atol=1e-3 * ref.rgb.max())
+    m_dir = ref.to_map @ wi.astype(np.float64)
+    u = 0.5 - np.arctan2(m_dir[1], m_dir[0]) / (2 * np.pi)
+    v = 1.0 - np.arccos(np.clip(m_dir[2], -1, 1)) / np.pi
+    i = np.minimum((v * h).astype(int), h - 1)
+    j = np.minimum((u * w).astype(int), w - 1)
+    counts = np.bincount(i * w + j, minlength=h * w)
+    p = (ref.texel_pdf / (w * h)).ravel()
+    expected = p * m
+    big = expected > 50
+    assert np.all(np.abs(counts[big] - expected[big]) < 5 * np.sqrt(expected[big]) + 2)
+    assert counts[p == 0].sum() <= 1e-4 * m
+    # the estimator E[Le / pdf] is the integral of Le over the sphere (quadrature as above)
+    Lq, _ = env.eval((ref.to_map.T @ m_frame).astype(F32))
+    integral = (Lq * np.sin(T).ravel()).sum(axis=1) * (np.pi / (8 * h)) * (2 * np.pi / (8 * w))
+    assert np.allclose(value.astype(np.float64).mean(axis=1), integral, rtol=0.01)
+
+
+def test_sun_texel_is_sampled_with_its_filtered_neighbours():
+    """Bilinear lookup spreads a one-texel sun into its 8 neighbours; the importance map holds
+    the filtered image's average per texel, so the sampled share of the sun's energy is what the
+    filter puts there: (6/8)^2 in the texel itself, not all of it."""
+    px = np.zeros((16, 32, 3), F32)
+    px[12, 10] = 1000.0
+    ref = environment(px)
+    p = ref.texel_pdf / ref.texel_pdf.sum()
+    assert p[12, 10] == pytest.approx(36 / 64, rel=0.02)
+    assert p[11:14, 9:12].sum() == pytest.approx(1.0, abs=1e-6)
+    closest = environment(px, interpolation='Closest')
+    assert closest.texel_pdf[12, 10] == pytest.approx(closest.texel_pdf.sum())
+
+
+def test_gather_adds_miss_rays_with_mis_weight():
+    ref = environment(sky_map())
+    env = ref.native
+    n = 5000
+    D = unit_dirs(n, seed=3)
+    rng = np.random.default_rng(4)
+    miss = rng.random(n) < 0.6
+    thr = rng.random((3, n), F32)
+    pdf_bsdf = (0.05 + rng.random(n)).astype(F32)
+    pid = np.arange(n, dtype=np.int64)
+    Le, pdf = env.eval(D)
+    L = np.zeros((3, n), F32)
+    env.gather(0.0, D, miss, None, None, pid, L)                  # camera rays: weight 1
+    assert np.allclose(L, Le * miss, rtol=1e-6)
+    L = np.zeros((3, n), F32)
+    prob = 0.4
+    env.gather(prob, D, miss, thr, pdf_bsdf, pid, L)
+    w = 1.0 / (1.0 + (prob * pdf / pdf_bsdf) ** 2)
+    assert np.allclose(L, Le * thr * w * miss, rtol=1e-5, atol=1e-7)
+    with pytest.raises(ValueError, match="pdf_bsdf"):
+        env.gather(prob, D, miss, thr, None, pid, L)
+    with pytest.raises(ValueError, match="repeats"):
+        env.gather(0.0, D, miss, None, None, np.zeros(n, np.int64), L)
+
+
+def test_bad_maps_are_refused_with_the_reason():
+    px = sky_map(8, 16, sun=(6, 3))
+    with pytest.raises(ValueError, match="negative or not finite"):
+        dacrt.lamps.environment_map(np.where(np.arange(16)[None, :, None] == 3, -1.0, px))
+    with pytest.raises(ValueError, match="negative or not finite"):
+        dacrt.lamps.environment_map(np.where(np.arange(16)[None, :, None] == 3, np.nan, px))
+    with pytest.raises(ValueError, match="orthogonal"):
+        dacrt.lamps.environment_map(px, np.diag([1.0, 2.0, 1.0]))
+    with pytest.raises(ValueError, match=r"\(h, w, 3\)"):
+        dacrt.lamps.environment_map(px[..., :2])
+    with pytest.raises(ValueError, match="no pixels"):
+        dacrt.lamps.environment_map(np.zeros((0, 4, 3), F32))
+    with pytest.raises(ValueError, match="interpolation"):
+        dacrt.lamps.environment_map(px, interpolation='Cubic')
+    black = dacrt.lamps.environment_map(np.zeros((4, 8, 3), F32))
+    wi, value, pdf = black.sample(np.full(3, 0.5, F32), np.full(3, 0.5, F32))
+    assert black.total == 0 and not value.any() and not pdf.any()
+
+
+# --- renders --------------------------------------------------------------------------------
+
+def irradiance_up(ref, n=1024):
+    """Irradiance on an upward-facing plane from the map: float64 quadrature in (theta, phi)
+    of the reference lookup over the upper hemisphere."""
+    th = (np.arange(n) + 0.5) / n * np.pi / 2
+    ph = (np.arange(4 * n) + 0.5) / (4 * n) * 2 * np.pi
+    T, P = np.meshgrid(th, ph, indexing='ij')
+    D = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)]).reshape(3, -1)
+    _, Le, _ = ref.eval_miss(D)
+    return (Le.astype(np.float64) * (np.cos(T) * np.sin(T)).ravel()).sum(axis=1) * (np.pi / 2 / n) * (np.pi / 2 / n)
+
+
+def env_plane(px, albedo=0.5, samples=128, to_map=None, interpolation='Linear', **kw):
+    """plane_scene (kw) lit by the map px alone, direct light only."""
+    scene = plane_scene(albedo=albedo, samples=samples, max_bounces=0, **kw)
+    scene.environment = sd.Environment(px, np.ones(3, F32), np.eye(3) if to_map is None else to_map, interpolation)
+    return scene
+
+
+def test_plane_under_bright_upper_hemisphere():
+    """Radiance 2 over the upper hemisphere, 0 below: the plane shows rho x 2 (exact)."""
+    px = np.zeros((32, 64, 3), F32)
+    px[16:] = 2.0
+    integ = render(env_plane(px, albedo=0.5))
+    mean, err = pixel_stats(integ)
+    assert err < 0.002
+    assert mean == pytest.approx(1.0, rel=0.005)
+
+
+@pytest.mark.parametrize('variant', ['linear', 'closest', 'rotated'])
+def test_plane_under_sky_with_sun(variant):
+    """A sky with a one-texel sun of 3000: the plane's radiance is rho / pi x the irradiance,
+    from a quadrature of the map; light sampling finds the sun (the error bound would not
+    hold with BSDF rays alone)."""
+    px = sky_map()
+    kw = MAPS[variant]
+    ref = environment(px, **kw)
+    expected = 0.5 / np.pi * irradiance_up(ref)
+    integ = render(env_plane(px, albedo=0.5, samples=256, **kw))
+    img = integ.film.combined()[..., :3].reshape(-1, 3)
+    mean = img.mean(axis=0)
+    err = img.std(axis=0) / np.sqrt(len(img))
+    assert np.all(err < 0.01 * expected)
+    assert np.allclose(mean, expected, rtol=0.01)
+    assert integ.stats['lights'] == 1
+
+
+def test_uniform_map_equals_uniform_world():
+    px = np.full((8, 16, 3), (0.4, 0.6, 0.9), F32)
+    a = render(env_plane(px, albedo=0.7, samples=64))
+    b = render(plane_scene(albedo=0.7, samples=64, max_bounces=0, world=(0.4, 0.6, 0.9)))
+    ma = a.film.combined()[..., :3].mean(axis=(0, 1))
+    mb = b.film.combined()[..., :3].mean(axis=(0, 1))
+    assert np.allclose(ma, 0.7 * np.array([0.4, 0.6, 0.9]), rtol=0.005)
+    assert np.allclose(ma, mb, rtol=0.005)
+
+
+def test_rotation_about_z_equals_shifted_columns():
+    """Turning the map a quarter about Z (to_map) is the same as shifting its columns by a
+    quarter of the width: u = 0.5 - phi / 2 pi."""
+    px = sky_map(32, 64, sun=(22, 5))
+    quarter = rotation(0, 0, np.pi / 2)
+    shifted = np.roll(px, -16, axis=1)        # m = R d: the map's phi = world phi + 90 degrees
+    a = render(env_plane(px, samples=256, to_map=quarter))
+    b = render(env_plane(shifted, samples=256))
+    ma = a.film.combined()[..., :3].mean(axis=(0, 1))
+    mb = b.film.combined()[..., :3].mean(axis=(0, 1))
+    assert np.allclose(ma, mb, rtol=0.01)
+    ref = environment(px, to_map=quarter)
+    assert np.allclose(ma, 0.5 / np.pi * irradiance_up(ref), rtol=0.01)
+
+
+def test_transparent_film_hides_the_map_but_keeps_its_light():
+    px = np.zeros((16, 32, 3), F32)
+    px[8:] = 1.0
+    scene = env_plane(px, albedo=0.5, samples=64, film_transparent=True, size=3e-4)   # the camera sees past it
+    integ = render(scene)
+    img = integ.film.combined()
+    inside = img[..., 3] > 0
+    assert inside.any() and (~inside).any()
+    assert np.allclose(img[~inside], 0.0)                 # the map itself is not in the film
+    full = img[..., 3] == 1.0                             # pixels the plane covers entirely
+    assert full.sum() >= 4
+    assert np.allclose(img[full][:, :3], 0.5, rtol=0.02)
