@@ -403,7 +403,7 @@ def cmd_bench(args: List[str]) -> int:
 def cmd_compare(args: List[str]) -> int:
     if not args or args[0].startswith("-"):
         raise SetupError("usage: python3 build.py compare scene.blend [--samples N] "
-                         "(or a built-in scene: cornell, outdoor, dragon)")
+                         "(or a built-in scene: cornell, outdoor, dragon, environment)")
     return cmd_bench(["compare", *args])
 
 

@@ -4,8 +4,8 @@ Owns the render loop: per pass it builds every camera ray of a block of (pixel, 
 then traces each bounce as ONE batch (`dacrt.Scene.intersect`) and all shadow rays of that bounce
 as one batch (`dacrt.Scene.occluded`). Shading is Lambertian (albedo = base colour x texture),
 with next-event estimation and multiple importance sampling (power heuristic) against every
-emitter a BSDF ray can meet (emissive triangles, lamps with MIS; the uniform world is left to
-BSDF rays alone, as in Cycles, see lights/background.py), Russian roulette
+emitter a BSDF ray can meet (emissive triangles, lamps with MIS, an environment map; the
+uniform world is left to BSDF rays alone, as in Cycles, see lights/background.py), Russian roulette
 and Cycles' bounce semantics: max_bounces K gives up to K+1 diffuse reflections, light sampling
 at vertices 0..K, and the last BSDF ray only collects emission (reference blender-cycles.md 2.5).
 
@@ -262,6 +262,18 @@ def _validate(sd: SceneData):
     w = np.asarray(sd.world, np.float64)
     if w.shape != (3,) or not np.isfinite(w).all() or (w < 0).any():
         raise ValueError(f"world must be 3 finite non-negative numbers, got {sd.world!r}")
+    env = sd.environment
+    if env is not None:
+        px, st = np.asarray(env.pixels), np.asarray(env.strength, np.float64)
+        if px.ndim != 3 or px.shape[2] < 3 or px.shape[0] < 1 or px.shape[1] < 1:
+            raise ValueError(f"environment.pixels must be (h, w, 3 or 4) with h, w >= 1, got {px.shape}")
+        if st.shape != (3,) or not np.isfinite(st).all() or (st < 0).any():
+            raise ValueError(f"environment.strength must be 3 finite non-negative numbers, got {env.strength!r}")
+        m = np.asarray(env.to_map, np.float64)
+        if m.shape != (3, 3) or not np.allclose(m @ m.T, np.eye(3), atol=1e-4):
+            raise ValueError(f"environment.to_map must be an orthogonal 3x3 matrix, got {env.to_map!r}")
+        if env.interpolation not in ('Linear', 'Closest'):
+            raise ValueError(f"environment.interpolation must be 'Linear' or 'Closest', got {env.interpolation!r}")
     s = sd.settings
     if int(s.samples) < 1:
         raise ValueError(f"settings.samples must be >= 1, got {s.samples!r}")

@@ -133,7 +133,7 @@ class LightSet:
             which = np.minimum(np.searchsorted(np.cumsum(power), rng.random(n)), len(power) - 1)
             narrow.append(self._narrowness(self.triangles.sample(P, which, u1, u2).pdf))
         if self.environment is not None:
-            narrow.append(self._narrowness(self.environment.sample(P, u1, u2).pdf))
+            narrow.append(self._narrowness(self.environment.sample_pdf(u1, u2)))
         w = np.asarray(narrow, np.float64)
         if not w.sum() > 0:
             return

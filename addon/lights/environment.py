@@ -9,18 +9,22 @@ native/cpp/environment.h) are tested against; the integrator renders with those.
   `to_map` (the Mapping node's rotation; orthogonal).
 - Lookup 'Linear' (bilinear, texel centres at (j + 0.5) / w) or 'Closest', REPEAT in u and v as
   Cycles' environment lookup.
-- Importance: texel (i, j) is chosen with probability proportional to the average over it of
-  the looked-up radiance's RGB mean (for bilinear lookup the (1, 6, 1) / 8 blend with its
-  neighbours in u and v, exactly) times sin(theta) at its row's centre (its solid angle), and a
-  point uniform in it; the solid-angle pdf is p_ij w h / (2 pi^2 sin(theta)). Cycles builds its
-  background map from the same kind of per-texel evaluation. Without the blend, three quarters
-  of a one-texel sun (spread into its neighbours by the bilinear filter) were left to BSDF rays.
+- Importance, in proportion to the looked-up radiance's RGB mean (luminance) x sin(theta):
+  'Closest' picks a texel by its luminance x the mean sin(theta) over its rows, then a point
+  uniform in it; 'Linear' picks a cell between texel centres by its corners' mean luminance x
+  mean sin(theta), then samples the corners' bilinear blend within it exactly (pbrt-v4's
+  bilinear sampling), so radiance / pdf is constant in a cell up to sin(theta) and colour.
+  The solid-angle pdf is p(u, v) / (2 pi^2 sin(theta)). Per-texel constant cells under a
+  bilinear image left a one-texel sun's light, spread into its neighbours, to BSDF rays.
 Unlike the uniform world (background.py), a map that varies is light-sampled, as Cycles does for
 a world shader that varies over directions: a small bright region (a sun in an HDRI) is what
 BSDF sampling finds badly.
 """
 from __future__ import annotations
 
+from functools import cached_property
+
+import dacrt
 import numpy as np
 
 from ..texture import texture_lookup
@@ -38,26 +42,25 @@ class EnvironmentLight:
     use_mis = cast_shadow = visible_camera = visible_diffuse = True
 
     def __init__(self, env):
-        rgb = np.asarray(env.pixels, np.float32)[..., :3] * np.asarray(env.strength, np.float32)
-        self.rgb = np.ascontiguousarray(rgb, np.float32)
+        self._env = env
         self.to_map = np.asarray(env.to_map, np.float64)
         self.interpolation = env.interpolation
-        h, w = self.rgb.shape[:2]
-        theta = np.pi * (1.0 - (np.arange(h) + 0.5) / h)
-        mean = self.rgb.astype(np.float64).mean(axis=2)
-        if self.interpolation != 'Closest':
-            # the bilinear image's average over each texel: (1, 6, 1) / 8 in u and v (REPEAT)
-            for axis in (0, 1):
-                mean = (np.roll(mean, 1, axis) + 6.0 * mean + np.roll(mean, -1, axis)) / 8.0
-        weight = mean * np.sin(theta)[:, None]
-        self.total = float(weight.sum())
-        self.texel_pdf = weight * (w * h / self.total) if self.total > 0 else np.zeros_like(weight)
-        self._flat_cdf = np.cumsum(weight.ravel()) / self.total if self.total > 0 else None
         self._native = None
+
+    def _radiance_image(self):
+        return np.ascontiguousarray(np.asarray(self._env.pixels, F32)[..., :3] * np.asarray(self._env.strength, F32))
+
+    @property
+    def native(self):
+        """The native environment light (dacrt.lamps.EnvironmentMap) the renderer uses, built
+        once; the numpy tables below are built only when the definition itself is asked."""
+        if self._native is None:
+            self._native = dacrt.lamps.environment_map(self._radiance_image(), self.to_map, self.interpolation)
+        return self._native
 
     @property
     def dark(self) -> bool:
-        return not self.total > 0
+        return not self.native.total > 0
 
     @property
     def seen_by_camera(self) -> bool:
@@ -67,13 +70,44 @@ class EnvironmentLight:
     def seen_by_bsdf(self) -> bool:
         return True
 
-    @property
-    def native(self):
-        """The native environment light (dacrt.lamps.EnvironmentMap), built once."""
-        if self._native is None:
-            import dacrt
-            self._native = dacrt.lamps.environment_map(self.rgb, self.to_map, self.interpolation)
-        return self._native
+    def sample_pdf(self, u1, u2) -> np.ndarray:
+        """Solid-angle pdfs (n,) of the renderer's (native) samples for uniforms u1, u2."""
+        return self.native.sample(np.asarray(u1, F32), np.asarray(u2, F32))[2]
+
+    # --- the readable definition (tests compare the native kernels with it) -------------------
+
+    @cached_property
+    def rgb(self) -> np.ndarray:
+        return self._radiance_image()
+
+    @cached_property
+    def lum(self) -> np.ndarray:
+        """(h, w) float64 RGB mean per texel."""
+        return self.rgb.astype(np.float64).mean(axis=2)
+
+    @cached_property
+    def cell_weight(self) -> np.ndarray:
+        """(h, w) float64 selection weight per cell: 'Closest' texel (i, j), 'Linear' the cell
+        between texel centres with corners (i, j) .. (i+1, j+1) (REPEAT); its mean luminance
+        times the mean of sin(theta) over its rows (module doc)."""
+        h, w = self.lum.shape
+        edges = np.arange(h + 1) / h if self.interpolation == 'Closest' else (np.arange(h + 1) + 0.5) / h
+        F = lambda v: np.cos(np.pi * (1.0 - np.clip(v, 0.0, 1.0))) / np.pi    # integral of sin(theta) dv
+        # rows past v = 1 (the last 'Linear' cell) wrap to the bottom
+        sin_mean = (F(edges[1:]) - F(edges[:-1]) + F(np.maximum(edges[1:] - 1.0, 0.0)) - F(0.0)) * h
+        return self.corner_mean * sin_mean[:, None]
+
+    @cached_property
+    def corner_mean(self) -> np.ndarray:
+        L = self.lum
+        if self.interpolation == 'Closest':
+            return L
+        return (L + np.roll(L, -1, 1) + np.roll(L, -1, 0) + np.roll(np.roll(L, -1, 0), -1, 1)) / 4.0
+
+    @cached_property
+    def _flat_cdf(self) -> np.ndarray:
+        cdf = np.cumsum(self.cell_weight.ravel())
+        return cdf / cdf[-1] if cdf[-1] > 0 else cdf
 
     def _uv(self, D):
         m = self.to_map @ np.asarray(D, np.float64)
@@ -82,12 +116,31 @@ class EnvironmentLight:
         v = 1.0 - np.arccos(np.clip(m[2], -1.0, 1.0)) / np.pi
         return u, v, np.hypot(m[0], m[1])
 
-    def _pdf(self, u, v, sin_theta):
-        h, w = self.texel_pdf.shape
-        i = np.minimum((v * h).astype(np.int64), h - 1)
-        j = np.minimum((u * w).astype(np.int64), w - 1)
+    def uv_pdf(self, u, v):
+        """The pdf over (u, v): P(cell) w h, times for 'Linear' the corners' bilinear
+        luminance over its mean."""
+        h, w = self.lum.shape
+        total = self.cell_weight.sum()
+        if not total > 0:
+            return np.zeros_like(np.asarray(u, np.float64))
+        scale = self.cell_weight * (w * h / total)
+        if self.interpolation == 'Closest':
+            i = np.minimum((v * h).astype(np.int64), h - 1)
+            j = np.minimum((u * w).astype(np.int64), w - 1)
+            return scale[i, j]
+        x, y = u * w - 0.5, v * h - 0.5
+        x0, y0 = np.floor(x), np.floor(y)
+        fx, fy = x - x0, y - y0
+        j, i = np.mod(x0.astype(np.int64), w), np.mod(y0.astype(np.int64), h)
+        j1, i1 = (j + 1) % w, (i + 1) % h
+        L = self.lum
+        bil = (L[i, j] * (1 - fx) + L[i, j1] * fx) * (1 - fy) + (L[i1, j] * (1 - fx) + L[i1, j1] * fx) * fy
         with np.errstate(divide='ignore', invalid='ignore'):
-            return np.where(sin_theta > 0, self.texel_pdf[i, j] / (_TWO_PI2 * sin_theta), 0.0)
+            return np.where(self.corner_mean[i, j] > 0, scale[i, j] / self.corner_mean[i, j] * bil, 0.0)
+
+    def _pdf(self, u, v, sin_theta):
+        with np.errstate(divide='ignore', invalid='ignore'):
+            return np.where(sin_theta > 0, self.uv_pdf(u, v) / (_TWO_PI2 * sin_theta), 0.0)
 
     def radiance(self, u, v):
         return texture_lookup(self.rgb, u.astype(F32), v.astype(F32), self.interpolation, 'REPEAT')
@@ -98,30 +151,44 @@ class EnvironmentLight:
         n = np.asarray(D).shape[1]
         return np.arange(n), self.radiance(u, v), self._pdf(u, v, s).astype(F32)
 
+    @staticmethod
+    def _sample_linear(u, a, b):
+        """x in [0, 1) with density proportional to (1 - x) a + x b, by inverting its cdf."""
+        with np.errstate(divide='ignore', invalid='ignore'):
+            x = np.where(a == b, u, (np.sqrt((1 - u) * a * a + u * b * b) - a) / (b - a))
+        return np.clip(np.nan_to_num(x), 0.0, np.nextafter(1.0, 0.0))
+
     def sample(self, P, u1, u2) -> LightSample:
         """Directions toward the map from points P (3, n) (the same for every point): u1 picks
-        the texel (one cdf over all texels, not the native row-then-column search) and its
-        place in the texel's share places v, u2 places u."""
+        the cell (one cdf over all cells, not the native row-then-column search) and its
+        place in the cell's share of the cdf places v, u2 places u; 'Linear' then warps both
+        to the cell's bilinear luminance."""
         n = np.asarray(P).shape[1]
-        if self.dark:
+        if not self.cell_weight.any():
             return LightSample(np.tile([[0.0], [0.0], [1.0]], n).astype(F32), np.full(n, np.inf, F32),
                                np.zeros((3, n), F32), np.zeros(n, F32))
-        h, w = self.texel_pdf.shape
+        h, w = self.lum.shape
         a = np.asarray(u1, np.float64)
         k = np.minimum(np.searchsorted(self._flat_cdf, a, side='right'), h * w - 1)
         i, j = np.divmod(k, w)
-        # u1's place inside its texel's share of the cdf places v, u2 places u
         lo = np.where(k > 0, self._flat_cdf[np.maximum(k - 1, 0)], 0.0)
         fv = np.clip((a - lo) / (self._flat_cdf[k] - lo), 0.0, np.nextafter(1.0, 0.0))
-        u = (j + np.asarray(u2, np.float64)) / w
-        v = (i + fv) / h
+        fu = np.asarray(u2, np.float64)
+        if self.interpolation == 'Closest':
+            u, v = (j + fu) / w, (i + fv) / h
+        else:
+            L = self.lum
+            j1, i1 = (j + 1) % w, (i + 1) % h
+            c00, c01, c10, c11 = L[i, j], L[i, j1], L[i1, j], L[i1, j1]
+            y = self._sample_linear(fv, c00 + c01, c10 + c11)
+            x = self._sample_linear(fu, c00 + (c10 - c00) * y, c01 + (c11 - c01) * y)
+            u, v = np.mod((j + 0.5 + x) / w, 1.0), np.mod((i + 0.5 + y) / h, 1.0)
         theta = np.pi * (1.0 - v)
         phi = np.pi * (1.0 - 2.0 * u)
         s = np.sin(theta)
         m = np.stack([s * np.cos(phi), s * np.sin(phi), np.cos(theta)])
         wi = self.to_map.T @ m
-        with np.errstate(divide='ignore', invalid='ignore'):
-            pdf = np.where(s > 0, self.texel_pdf[i, j] / (_TWO_PI2 * s), 0.0)
+        pdf = self._pdf(u, v, s)
         with np.errstate(divide='ignore', invalid='ignore'):
             value = np.where(pdf > 0, self.radiance(u, v) / pdf, 0.0)
         return LightSample(wi.astype(F32), np.full(n, np.inf, F32), value.astype(F32), pdf.astype(F32))

@@ -22,6 +22,28 @@ inline uint32_t wrap(int64_t i, uint32_t size) {
     return uint32_t(m < 0 ? m + size : m);
 }
 
+// Where (u, v) falls for bilinear lookup: the cell between texel centres (row i, column j:
+// corners (i, j), (i, j+1), (i+1, j), (i+1, j+1), wrapped) and the place (fx, fy) in it.
+struct Cell {
+    uint32_t i, j, i1, j1;
+    float fx, fy;
+};
+
+inline Cell cell_of(const EnvironmentMap& env, float u, float v) {
+    const uint32_t w = env.width, h = env.height;
+    const float x = u * float(w) - 0.5f, y = v * float(h) - 0.5f;
+    const float x0 = std::floor(x), y0 = std::floor(y);
+    Cell c;
+    c.j = wrap(int64_t(x0), w), c.j1 = wrap(int64_t(x0) + 1, w);
+    c.i = wrap(int64_t(y0), h), c.i1 = wrap(int64_t(y0) + 1, h);
+    c.fx = x - x0, c.fy = y - y0;
+    return c;
+}
+
+inline float bilerp(float a, float b, float c, float d, float fx, float fy) {
+    return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
+}
+
 // Radiance at (u, v) in texture space (REPEAT on both axes, as Cycles' environment lookup).
 void lookup(const EnvironmentMap& env, float u, float v, float out[3]) {
     const uint32_t w = env.width, h = env.height;
@@ -32,22 +54,35 @@ void lookup(const EnvironmentMap& env, float u, float v, float out[3]) {
         for (int a = 0; a < 3; ++a) out[a] = px[k + a];
         return;
     }
-    const float x = u * float(w) - 0.5f, y = v * float(h) - 0.5f;
-    const float x0f = std::floor(x), y0f = std::floor(y);
-    const float fx = x - x0f, fy = y - y0f;
-    const uint32_t xa = wrap(int64_t(x0f), w), xb = wrap(int64_t(x0f) + 1, w);
-    const uint32_t ya = wrap(int64_t(y0f), h), yb = wrap(int64_t(y0f) + 1, h);
-    const float* p00 = px + (size_t(ya) * w + xa) * 3;
-    const float* p01 = px + (size_t(ya) * w + xb) * 3;
-    const float* p10 = px + (size_t(yb) * w + xa) * 3;
-    const float* p11 = px + (size_t(yb) * w + xb) * 3;
-    for (int a = 0; a < 3; ++a)
-        out[a] = (p00[a] * (1.0f - fx) + p01[a] * fx) * (1.0f - fy) + (p10[a] * (1.0f - fx) + p11[a] * fx) * fy;
+    const Cell c = cell_of(env, u, v);
+    const float* p00 = px + (size_t(c.i) * w + c.j) * 3;
+    const float* p01 = px + (size_t(c.i) * w + c.j1) * 3;
+    const float* p10 = px + (size_t(c.i1) * w + c.j) * 3;
+    const float* p11 = px + (size_t(c.i1) * w + c.j1) * 3;
+    for (int a = 0; a < 3; ++a) out[a] = bilerp(p00[a], p01[a], p10[a], p11[a], c.fx, c.fy);
 }
 
-// pdf over the sphere of a direction in texel (i, j) with sin(theta) = s.
-inline float solid_angle_pdf(const EnvironmentMap& env, size_t i, size_t j, float s) {
-    return s > 0 ? env.texel_pdf[i * env.width + j] * INV_2PI2 / s : 0.0f;
+// The pdf over (u, v) at (u, v): constant per texel ('Closest'), or the cell's scale times the
+// bilinear blend of its corners' luminance (proportional to the looked-up radiance's mean).
+inline float uv_pdf(const EnvironmentMap& env, float u, float v) {
+    const uint32_t w = env.width, h = env.height;
+    if (env.closest) {
+        const size_t j = std::min(size_t(std::max(0.0f, u * float(w))), size_t(w) - 1);
+        const size_t i = std::min(size_t(std::max(0.0f, v * float(h))), size_t(h) - 1);
+        return env.cell_pdf[i * w + j];
+    }
+    const Cell c = cell_of(env, u, v);
+    const float* L = env.lum.data();
+    return env.cell_pdf[size_t(c.i) * w + c.j] * bilerp(L[size_t(c.i) * w + c.j], L[size_t(c.i) * w + c.j1],
+                                                         L[size_t(c.i1) * w + c.j], L[size_t(c.i1) * w + c.j1],
+                                                         c.fx, c.fy);
+}
+
+// x in [0, 1) with density proportional to (1 - x) a + x b (pbrt-v4's SampleLinear).
+inline float sample_linear(float u, float a, float b) {
+    if (u == 0 && a == 0) return 0.0f;
+    const float x = u * (a + b) / (a + std::sqrt((1.0f - u) * a * a + u * b * b));
+    return std::min(std::max(x, 0.0f), 0x1.fffffep-1f);
 }
 
 // The index k with cdf[k] <= u < cdf[k + 1] among cdf[0..count], at most count - 1.
@@ -55,6 +90,11 @@ template <class T>
 inline size_t find_interval(const T* cdf, size_t count, T u) {
     const size_t k = size_t(std::upper_bound(cdf, cdf + count + 1, u) - cdf);
     return k == 0 ? 0 : std::min(k - 1, count - 1);
+}
+
+// Integral of sin(theta) dv over v in [v0, v1] within [0, 1], theta = pi (1 - v).
+inline double sin_integral(double v0, double v1) {
+    return (std::cos(PI_D * (1.0 - v1)) - std::cos(PI_D * (1.0 - v0))) / PI_D;
 }
 
 void gather_range(const EnvironmentMap* env, float prob, const float* D, const uint8_t* miss, const float* thr,
@@ -101,43 +141,48 @@ std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t wi
     env.closest = closest;
     std::copy(to_map, to_map + 9, env.to_map);
     env.rgb.assign(rgb, rgb + count);
-    env.row_cdf.assign(size_t(height) + 1, 0.0);
-    env.col_cdf.assign(size_t(height) * (width + 1), 0.0f);
-    env.texel_pdf.assign(size_t(height) * width, 0.0f);
-    // Each texel's mean radiance over its area: its mean RGB, and for bilinear lookup the
-    // separable (1, 6, 1) / 8 blend with its neighbours (REPEAT), the exact average of the
-    // interpolated image over the texel. Weighting by the texel alone would leave three
-    // quarters of a one-texel sun, spread into its neighbours by the filter, to BSDF rays.
-    std::vector<double> mean(size_t(width) * height), blur(closest ? 0 : mean.size());
-    for (size_t k = 0; k < mean.size(); ++k) mean[k] = (double(rgb[3 * k]) + rgb[3 * k + 1] + rgb[3 * k + 2]) / 3.0;
-    if (!closest) {
-        for (uint32_t i = 0; i < height; ++i)
-            for (uint32_t j = 0; j < width; ++j) {
-                const double* r = mean.data() + size_t(i) * width;
-                blur[size_t(i) * width + j] = (r[wrap(int64_t(j) - 1, width)] + 6.0 * r[j] + r[wrap(int64_t(j) + 1, width)]) / 8.0;
-            }
-        for (uint32_t i = 0; i < height; ++i) {
-            const double* a = blur.data() + size_t(wrap(int64_t(i) - 1, height)) * width;
-            const double* b = blur.data() + size_t(i) * width;
-            const double* c = blur.data() + size_t(wrap(int64_t(i) + 1, height)) * width;
-            for (uint32_t j = 0; j < width; ++j) mean[size_t(i) * width + j] = (a[j] + 6.0 * b[j] + c[j]) / 8.0;
+    const size_t cells = size_t(width) * height;
+    env.lum.resize(cells);
+    for (size_t k = 0; k < cells; ++k) env.lum[k] = (rgb[3 * k] + rgb[3 * k + 1] + rgb[3 * k + 2]) * (1.0f / 3.0f);
+    // Cell weights: their luminance integral, the mean of the corners ('Linear': the cell
+    // between texel centres, whose bilinear blend is sampled exactly within it) or the texel
+    // ('Closest'), times the mean of sin(theta) over the cell's rows (the last 'Linear' row
+    // wraps over the pole: half at the top, half at the bottom).
+    std::vector<double> weight(cells);
+    std::vector<double> corner_mean(cells);
+    for (uint32_t i = 0; i < height; ++i) {
+        double s;
+        if (closest) {
+            s = sin_integral(double(i) / height, double(i + 1) / height) * height;
+        } else if (i + 1 < height) {
+            s = sin_integral((i + 0.5) / height, (i + 1.5) / height) * height;
+        } else {
+            s = (sin_integral((i + 0.5) / height, 1.0) + sin_integral(0.0, 0.5 / height)) * height;
+        }
+        const uint32_t i1 = (i + 1) % height;
+        for (uint32_t j = 0; j < width; ++j) {
+            const uint32_t j1 = (j + 1) % width;
+            const size_t k = size_t(i) * width + j;
+            const double m = closest ? double(env.lum[k])
+                                     : (double(env.lum[k]) + env.lum[size_t(i) * width + j1] +
+                                        env.lum[size_t(i1) * width + j] + env.lum[size_t(i1) * width + j1]) / 4.0;
+            corner_mean[k] = m;
+            weight[k] = m * s;
         }
     }
-    std::vector<double> row_w(width);
+    env.row_cdf.assign(size_t(height) + 1, 0.0);
+    env.col_cdf.assign(size_t(height) * (width + 1), 0.0f);
+    env.cell_pdf.assign(cells, 0.0f);
     double total = 0;
     for (uint32_t i = 0; i < height; ++i) {
-        const double s = std::sin(PI_D * (1.0 - (i + 0.5) / height));
+        const double* row = weight.data() + size_t(i) * width;
         double acc = 0;
-        for (uint32_t j = 0; j < width; ++j) {
-            row_w[j] = mean[size_t(i) * width + j] * s;
-            acc += row_w[j];
-        }
+        for (uint32_t j = 0; j < width; ++j) acc += row[j];
         float* c = env.col_cdf.data() + size_t(i) * (width + 1);
         double run = 0;
         for (uint32_t j = 0; j < width; ++j) {
-            run += row_w[j];
+            run += row[j];
             c[j + 1] = acc > 0 ? float(run / acc) : float(j + 1) / float(width);
-            env.texel_pdf[size_t(i) * width + j] = float(row_w[j]);  // scaled below
         }
         c[width] = 1.0f;
         total += acc;
@@ -147,8 +192,10 @@ std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t wi
     if (total > 0) {
         for (uint32_t i = 0; i <= height; ++i) env.row_cdf[i] /= total;
         env.row_cdf[height] = 1.0;
+        // pdf over (u, v) = P(cell) w h x (the blend / its mean over the cell)
         const double scale = double(width) * height / total;
-        for (float& p : env.texel_pdf) p = float(p * scale);
+        for (size_t k = 0; k < cells; ++k)
+            env.cell_pdf[k] = corner_mean[k] > 0 ? float(weight[k] * scale / (closest ? 1.0 : corner_mean[k])) : 0.0f;
     }
     return {};
 }
@@ -167,10 +214,8 @@ void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], 
     const float u = 0.5f - std::atan2(m[1], m[0]) * INV_2PI;
     const float v = 1.0f - std::acos(z) * INV_PI;
     lookup(env, u, v, Le);
-    const size_t j = std::min(size_t(std::max(0.0f, u * float(env.width))), size_t(env.width) - 1);
-    const size_t i = std::min(size_t(std::max(0.0f, v * float(env.height))), size_t(env.height) - 1);
     const float s = std::sqrt(m[0] * m[0] + m[1] * m[1]) / len;
-    pdf = env.total > 0 ? solid_angle_pdf(env, i, j, s) : 0.0f;
+    pdf = env.total > 0 && s > 0 ? uv_pdf(env, u, v) * INV_2PI2 / s : 0.0f;
 }
 
 void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[3], float value[3], float& pdf) {
@@ -183,18 +228,31 @@ void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[
     const uint32_t w = env.width, h = env.height;
     const size_t i = find_interval(env.row_cdf.data(), h, double(u1));
     const double r0 = env.row_cdf[i], r1 = env.row_cdf[i + 1];
-    const float fv = std::min(float((double(u1) - r0) / (r1 - r0)), 0x1.fffffep-1f);
+    const float fv = std::min(std::max(float((double(u1) - r0) / (r1 - r0)), 0.0f), 0x1.fffffep-1f);
     const float* c = env.col_cdf.data() + i * (size_t(w) + 1);
     const size_t j = find_interval(c, w, u2);
-    const float fu = std::min((u2 - c[j]) / (c[j + 1] - c[j]), 0x1.fffffep-1f);
-    const float u = (float(j) + std::max(0.0f, fu)) / float(w);
-    const float v = (float(i) + std::max(0.0f, fv)) / float(h);
+    const float fu = std::min(std::max((u2 - c[j]) / (c[j + 1] - c[j]), 0.0f), 0x1.fffffep-1f);
+    float u, v;
+    if (env.closest) {
+        u = (float(j) + fu) / float(w);
+        v = (float(i) + fv) / float(h);
+    } else {  // the cell's bilinear blend: y from its marginal, then x given y (both linear)
+        const float* L = env.lum.data();
+        const size_t i1 = (i + 1) % h, j1 = (j + 1) % w;
+        const float a = L[i * w + j], b = L[i * w + j1], cc = L[i1 * w + j], d = L[i1 * w + j1];
+        const float y = sample_linear(fv, a + b, cc + d);
+        const float x = sample_linear(fu, a + (cc - a) * y, b + (d - b) * y);
+        u = (float(j) + 0.5f + x) / float(w);
+        v = (float(i) + 0.5f + y) / float(h);
+        u -= std::floor(u);  // REPEAT: the last column's and row's cells wrap
+        v -= std::floor(v);
+    }
     const float theta = PI * (1.0f - v), phi = PI * (1.0f - 2.0f * u);
     const float s = std::sin(theta);
     const float m[3] = {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
     const float* M = env.to_map;  // orthogonal: the inverse is the transpose
     for (int a = 0; a < 3; ++a) wi[a] = M[a] * m[0] + M[3 + a] * m[1] + M[6 + a] * m[2];
-    pdf = solid_angle_pdf(env, i, j, s);
+    pdf = s > 0 ? uv_pdf(env, u, v) * INV_2PI2 / s : 0.0f;
     float Le[3];
     lookup(env, u, v, Le);
     const float inv = pdf > 0 ? 1.0f / pdf : 0.0f;

@@ -11,13 +11,15 @@
 // The world direction d reaches the map frame as m = to_map d (to_map orthogonal: the Mapping
 // node's rotation and mirroring).
 //
-// Sampling (as Cycles' background map, on the texels): texel (i, j) is picked with probability
-// proportional to w_ij = a_ij sin(theta_i), theta_i = pi (1 - (i + 0.5)/h) the row's centre and
-// a_ij the mean over the texel of the looked-up radiance's RGB mean: the texel's own for
-// 'Closest', its (1, 6, 1)/8 x (1, 6, 1)/8 blend with its neighbours (REPEAT) for bilinear; u, v
-// uniform within it. The solid-angle pdf of a direction is then
-// p_ij w h / (2 pi^2 sin(theta)) with p_ij = w_ij / sum(w). Texels of weight 0 are never
-// sampled; BSDF rays, weighted by MIS, find the rest.
+// Sampling, in proportion to the looked-up radiance's RGB mean (its luminance) x sin(theta):
+// 'Closest' picks texel (i, j) by its luminance x the mean sin(theta) over its rows, then u, v
+// uniform in it. 'Linear' picks a cell between texel centres (corners (i, j) .. (i+1, j+1),
+// REPEAT) by its corners' mean luminance x mean sin(theta), then samples the bilinear blend of
+// the corners within it exactly (pbrt-v4's bilinear sampling), so radiance / pdf is constant
+// in a cell up to sin(theta) and colour. The solid-angle pdf of a direction is
+// p(u, v) / (2 pi^2 sin(theta)). (Per-texel constant cells under a bilinear image left a
+// one-texel sun's light spread into its neighbours to BSDF rays: 7x Cycles' noise on an HDRI
+// scene; Cycles' own sampling is as good for 'Linear' as for 'Closest'.)
 #pragma once
 
 #include <cstddef>
@@ -33,7 +35,9 @@ struct EnvironmentMap {
     std::vector<float> rgb;             // height x width x 3, row 0 at the bottom
     std::vector<double> row_cdf;        // height + 1: cumulative row weights / total, [0] = 0, [h] = 1
     std::vector<float> col_cdf;         // height x (width + 1): per row, cumulative / row total
-    std::vector<float> texel_pdf;       // height x width: p_ij w h (the pdf over (u, v))
+    std::vector<float> lum;             // height x width: RGB mean per texel
+    std::vector<float> cell_pdf;        // height x width: the pdf over (u, v) per cell ('Closest'), or
+                                        // the factor of the corners' bilinear luminance ('Linear')
     float to_map[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};   // row-major, orthogonal
     double total = 0;                   // sum of the weights: 0 = nothing to sample
 };

@@ -1,6 +1,6 @@
 """One scene, DACRT beside Cycles (`python3 build.py compare scene.blend [--samples N]`).
 
-Renders the scene (a .blend, or a built-in benchmark scene name: cornell, outdoor, dragon)
+Renders the scene (a .blend, or a built-in benchmark scene name: cornell, outdoor, dragon, environment)
 with DACRT and with Cycles at matched settings (reference blender-cycles.md section 2.7, the
 same as the error-versus-time benchmark; a .blend's materials made what DACRT renders exactly
 unless --materials as-is) and N samples, plus a second Cycles render with another seed. Writes to --out (default bench-out/compare/<scene>/):

@@ -1,6 +1,6 @@
 """Error versus time, DACRT against Cycles (`python -m tests.bench errortime [scene.blend ...]`).
 
-For each scene (built-in ones generated from code: cornell, outdoor, dragon; plus any .blend
+For each scene (built-in ones generated from code: cornell, outdoor, dragon, environment; plus any .blend
 given) both engines render at matched settings (reference blender-cycles.md section 2.7:
 same resolution, bounces, pixel filter, no adaptive sampling, no denoising, no clamping) for a
 sweep of sample counts, several seeds per point. Time = wall seconds of the whole render

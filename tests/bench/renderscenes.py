@@ -6,6 +6,8 @@ Runs only inside a bpy process (renderworker.py). Built-in scenes:
 - dragon: the Stanford dragon (100K triangles, ../shared/scenes) on a floor under an area
   light and a dim world, 160x120, 3 bounces; without ../shared, a generated ~100K-triangle
   field of lumpy spheres (tests/bench/scenes.py) takes its place;
+- environment: the parity suite's blocks under an HDRI-style Environment Texture (sky, ground
+  and a small sun, no lamps), 160x120, 3 bounces;
 - wave: a subdivided grid with a Wave modifier (animation benchmark), N x N quads.
 A .blend path is opened at its own resolution (and percentage); its bounces and pixel filter
 are read from its Cycles settings unless given, and its materials are made diffuse for both
@@ -118,7 +120,7 @@ def build_wave(n: int):
 
 
 BUILDERS = {"cornell": parity_scenes.build_cornell, "outdoor": parity_scenes.build_outdoor,
-            "dragon": build_dragon}
+            "dragon": build_dragon, "environment": parity_scenes.build_environment}
 
 
 def build(spec: RenderSpec):

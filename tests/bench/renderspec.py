@@ -4,7 +4,7 @@ worker (renderworker.py) turns them into scenes (renderscenes.py).
 
 Built-in scenes and their settings (160x120 is the issue's Cornell-box size):
     cornell  4 bounces, Blackman-Harris 1.5     outdoor  3 bounces, Gaussian 1.5
-    dragon   3 bounces, Blackman-Harris 1.5
+    dragon   3 bounces, Blackman-Harris 1.5     environment  3 bounces, Blackman-Harris 1.5
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ BUILTIN = {
     "cornell": dict(resolution=(160, 120), bounces=4),
     "outdoor": dict(resolution=(160, 120), bounces=3, filter_type='GAUSSIAN'),
     "dragon": dict(resolution=(160, 120), bounces=3),
+    "environment": dict(resolution=(160, 120), bounces=3),
 }
 
 

@@ -76,7 +76,7 @@ def test_pdf_integrates_to_one_and_samples_follow_it(variant):
     # the pdf over the sphere: midpoint quadrature in (theta, phi) on a grid aligned with the
     # map's texels (8 x 8 points each), through to_map: pdf x sin(theta) is constant per texel,
     # so the sum is exact up to rounding
-    h, w = ref.texel_pdf.shape
+    h, w = ref.lum.shape
     th = np.pi * (np.arange(8 * h) + 0.5) / (8 * h)
     ph = 2 * np.pi * (np.arange(8 * w) + 0.5) / (8 * w)
     T, PH = np.meshgrid(th, ph, indexing='ij')
@@ -95,35 +95,62 @@ def test_pdf_integrates_to_one_and_samples_follow_it(variant):
     assert good.mean() > 0.9999
     assert np.isclose(epdf[good], spdf[good], rtol=1e-3).mean() > 0.999
     assert np.allclose((value * spdf)[:, good], Le[:, good], rtol=2e-2, atol=1e-3 * ref.rgb.max())
+    # texel histogram of the samples against the pdf's mass per texel (the quadrature above)
     m_dir = ref.to_map @ wi.astype(np.float64)
     u = 0.5 - np.arctan2(m_dir[1], m_dir[0]) / (2 * np.pi)
     v = 1.0 - np.arccos(np.clip(m_dir[2], -1, 1)) / np.pi
     i = np.minimum((v * h).astype(int), h - 1)
     j = np.minimum((u * w).astype(int), w - 1)
     counts = np.bincount(i * w + j, minlength=h * w)
-    p = (ref.texel_pdf / (w * h)).ravel()
-    expected = p * m
+    qv = 1.0 - T.ravel() / np.pi                          # the quadrature points' texels
+    qu = np.mod(0.5 - PH.ravel() / (2 * np.pi), 1.0)
+    qk = np.minimum((qv * h).astype(int), h - 1) * w + np.minimum((qu * w).astype(int), w - 1)
+    mass = np.bincount(qk, weights=pdf * np.sin(T).ravel(), minlength=h * w)
+    expected = mass / mass.sum() * m
     big = expected > 50
+    assert big.sum() > h * w / 3
     assert np.all(np.abs(counts[big] - expected[big]) < 5 * np.sqrt(expected[big]) + 2)
-    assert counts[p == 0].sum() <= 1e-4 * m
+    assert counts[expected == 0].sum() == 0
     # the estimator E[Le / pdf] is the integral of Le over the sphere (quadrature as above)
     Lq, _ = env.eval((ref.to_map.T @ m_frame).astype(F32))
     integral = (Lq * np.sin(T).ravel()).sum(axis=1) * (np.pi / (8 * h)) * (2 * np.pi / (8 * w))
     assert np.allclose(value.astype(np.float64).mean(axis=1), integral, rtol=0.01)
 
 
-def test_sun_texel_is_sampled_with_its_filtered_neighbours():
-    """Bilinear lookup spreads a one-texel sun into its 8 neighbours; the importance map holds
-    the filtered image's average per texel, so the sampled share of the sun's energy is what the
-    filter puts there: (6/8)^2 in the texel itself, not all of it."""
+@pytest.mark.parametrize('interpolation', ['Linear', 'Closest'])
+def test_samples_follow_the_looked_up_image(interpolation):
+    """A grey one-texel sun on black: the looked-up radiance is the sun's bilinear footprint
+    (or its texel), and sampling follows it exactly, so every sample's radiance / pdf is the
+    same up to sin(theta), which the pdf divides out: zero variance. (Per-texel cells under a
+    bilinear image would leave the footprint's edges to BSDF rays.)"""
     px = np.zeros((16, 32, 3), F32)
-    px[12, 10] = 1000.0
-    ref = environment(px)
-    p = ref.texel_pdf / ref.texel_pdf.sum()
-    assert p[12, 10] == pytest.approx(36 / 64, rel=0.02)
-    assert p[11:14, 9:12].sum() == pytest.approx(1.0, abs=1e-6)
-    closest = environment(px, interpolation='Closest')
-    assert closest.texel_pdf[12, 10] == pytest.approx(closest.texel_pdf.sum())
+    px[11, 10] = 1000.0
+    env = environment(px, interpolation=interpolation).native
+    rng = np.random.default_rng(6)
+    u1, u2 = rng.random((2, 100_000), F32)
+    wi, value, pdf = env.sample(u1, u2)
+    assert (pdf > 0).all()
+    sin_theta = np.hypot(wi[0], wi[1])
+    ratio = value[0] / sin_theta
+    # constant within each cell (cells differ by their mean sin(theta) only)
+    v = 1.0 - np.arccos(np.clip(wi[2], -1, 1)) / np.pi
+    u = 0.5 - np.arctan2(wi[1], wi[0]) / (2 * np.pi)
+    shift = 0.5 if interpolation == 'Linear' else 0.0
+    cell = np.floor(v * 16 - shift).astype(int) * 64 + np.floor(u * 32 - shift).astype(int)
+    cells = np.unique(cell)
+    assert len(cells) == (4 if interpolation == 'Linear' else 1)
+    for c in cells:
+        r = ratio[cell == c]
+        assert r.std() < 1e-3 * r.mean()
+    assert ratio.std() < 0.1 * ratio.mean()
+    # and that one constant is the sun's whole light: the integral of the radiance
+    texel = (2 * np.pi / 32) * (np.pi / 16)                   # its (u, v) area in (phi, theta)
+    exact = 1000.0 * texel * np.mean(np.sin(np.pi * (1 - (11 + np.linspace(0, 1, 10001)) / 16)))
+    if interpolation == 'Linear':                             # the footprint: rows 10.5 .. 12.5
+        t = np.linspace(-1, 1, 20001)
+        rows = np.sin(np.pi * (1 - (11.5 + t) / 16)) * (1 - np.abs(t))
+        exact = 1000.0 * texel * rows.mean() * 2
+    assert value[0].mean() == pytest.approx(exact, rel=2e-3)
 
 
 def test_gather_adds_miss_rays_with_mis_weight():
@@ -255,3 +282,19 @@ def test_transparent_film_hides_the_map_but_keeps_its_light():
     full = img[..., 3] == 1.0                             # pixels the plane covers entirely
     assert full.sum() >= 4
     assert np.allclose(img[full][:, :3], 0.5, rtol=0.02)
+
+
+def test_bad_environment_in_scene_data_is_named():
+    from addon.integrator import Integrator
+    good = sky_map(8, 16, sun=(6, 3))
+    for field, value, match in (('pixels', good[..., 0], r"environment.pixels"),
+                                ('strength', np.array([1.0, -1.0, 1.0], F32), "environment.strength"),
+                                ('to_map', np.diag([1.0, 2.0, 1.0]), "environment.to_map"),
+                                ('interpolation', 'Cubic', "environment.interpolation")):
+        scene = env_plane(good, samples=1)
+        setattr(scene.environment, field, value)
+        with pytest.raises(ValueError, match=match):
+            Integrator(scene)
+    scene = env_plane(np.where(np.arange(16)[None, :, None] == 3, np.nan, good).astype(F32), samples=1)
+    with pytest.raises(ValueError, match="not finite"):
+        Integrator(scene)

@@ -6,7 +6,8 @@ import pytest
 import dacrt
 from addon import scenedata as sd
 import addon.integrator as integrator_module
-from addon.integrator import Integrator, Progress, texture_lookup
+from addon.integrator import Integrator, Progress
+from addon.texture import texture_lookup
 
 from .scenes import (ALL_VIS, cornell_box, geometry, light, material, ortho_down, plane_scene, quad,
                      render, translation)
