@@ -34,12 +34,9 @@ _TWO_PI2 = 2.0 * np.pi * np.pi
 
 
 class EnvironmentLight:
-    """An environment map (scenedata.Environment) as a light at infinity."""
-    name = 'World'
-    at_infinity = True
-    light_sampled = True
-    delta = False
-    use_mis = cast_shadow = visible_camera = visible_diffuse = True
+    """An environment map (scenedata.Environment) as a light at infinity: seen by camera rays
+    (unless the film is transparent) and BSDF rays that miss everything, light-sampled, its
+    samples shadowed. A group of its own in LightSet, not a Lamp: its table is no lamp record."""
 
     def __init__(self, env):
         self._env = env
@@ -61,14 +58,6 @@ class EnvironmentLight:
     @property
     def dark(self) -> bool:
         return not self.native.total > 0
-
-    @property
-    def seen_by_camera(self) -> bool:
-        return True
-
-    @property
-    def seen_by_bsdf(self) -> bool:
-        return True
 
     def sample_pdf(self, u1, u2) -> np.ndarray:
         """Solid-angle pdfs (n,) of the renderer's (native) samples for uniforms u1, u2."""
