@@ -87,14 +87,23 @@ std::string pid_error(const int64_t* p, size_t n, size_t N) {
     return {};
 }
 
-// L as a (3, N) array the gathers add to in place.
-float* added_to(py::array L, size_t& N) {
+// Runs gather(out, N) on L, a (3, N) array added to in place, once pid (n,) is checked, with
+// the GIL released.
+template <class F>
+void gather_into(py::array L, const I64Array& pid, size_t n, F&& gather) {
     if (!py::isinstance<py::array_t<float>>(L) || !(L.flags() & py::array::c_style) || !L.writeable() || L.ndim() != 2 ||
         L.shape(0) != 3)
         throw py::value_error("L must be a writeable C-contiguous (3, N) float32 array (added to in place), got " +
                               shape_str(L));
-    N = size_t(L.shape(1));
-    return static_cast<float*>(L.mutable_data());
+    const size_t N = size_t(L.shape(1));
+    float* out = static_cast<float*>(L.mutable_data());
+    std::string err;
+    {
+        py::gil_scoped_release nogil;
+        err = pid_error(pid.data(), n, N);
+        if (err.empty()) gather(out, N);
+    }
+    if (!err.empty()) throw py::value_error(err);
 }
 
 void lamp_sample_py(F32Array records, I32Array entry, F32Array P, F32Array u1, F32Array u2, py::array wi,
@@ -137,17 +146,10 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const float* prob = optional_f32(lamp_prob, 0, R, "lamp_prob", prob_keep);
     const float* t = optional_f32(thr, 3, n, "thr", thr_keep);
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
-    size_t N;
-    float* out = added_to(L, N);
-    std::string err;
-    {
-        py::gil_scoped_release nogil;
-        err = pid_error(pid.data(), n, N);
-        if (err.empty())
-            lamp_gather(rec, lamps.data(), nl, prob, O.data(), D.data(), t_surf.data(),
-                        reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N);
-    }
-    if (!err.empty()) throw py::value_error(err);
+    gather_into(L, pid, n, [&](float* out, size_t N) {
+        lamp_gather(rec, lamps.data(), nl, prob, O.data(), D.data(), t_surf.data(),
+                    reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N);
+    });
 }
 
 py::dict lamp_record_layout() {
@@ -370,17 +372,10 @@ void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py
     F32Array thr_keep, pdf_keep;
     const float* t = optional_f32(thr, 3, n, "thr", thr_keep);
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
-    size_t N;
-    float* out = added_to(L, N);
-    std::string err;
-    {
-        py::gil_scoped_release nogil;
-        err = pid_error(pid.data(), n, N);
-        if (err.empty())
-            environment_gather(env, prob, D.data(), reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(),
-                               n, out, N);
-    }
-    if (!err.empty()) throw py::value_error(err);
+    gather_into(L, pid, n, [&](float* out, size_t N) {
+        environment_gather(env, prob, D.data(), reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n,
+                           out, N);
+    });
 }
 
 }  // namespace
