@@ -94,6 +94,12 @@ class EnvironmentLight:
         return (L + np.roll(L, -1, 1) + np.roll(L, -1, 0) + np.roll(np.roll(L, -1, 0), -1, 1)) / 4.0
 
     @cached_property
+    def cell_pdf(self) -> np.ndarray:
+        """(h, w) the pdf over (u, v) of each cell: P(cell) w h ('Linear': its mean over the cell)."""
+        total = self.cell_weight.sum()
+        return self.cell_weight * (self.cell_weight.size / total) if total > 0 else np.zeros_like(self.cell_weight)
+
+    @cached_property
     def _flat_cdf(self) -> np.ndarray:
         cdf = np.cumsum(self.cell_weight.ravel())
         return cdf / cdf[-1] if cdf[-1] > 0 else cdf
@@ -109,10 +115,7 @@ class EnvironmentLight:
         """The pdf over (u, v): P(cell) w h, times for 'Linear' the corners' bilinear
         luminance over its mean."""
         h, w = self.lum.shape
-        total = self.cell_weight.sum()
-        if not total > 0:
-            return np.zeros_like(np.asarray(u, np.float64))
-        scale = self.cell_weight * (w * h / total)
+        scale = self.cell_pdf
         if self.interpolation == 'Closest':
             i = np.minimum((v * h).astype(np.int64), h - 1)
             j = np.minimum((u * w).astype(np.int64), w - 1)

@@ -148,36 +148,30 @@ std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t wi
     // between texel centres, whose bilinear blend is sampled exactly within it) or the texel
     // ('Closest'), times the mean of sin(theta) over the cell's rows (the last 'Linear' row
     // wraps over the pole: half at the top, half at the bottom).
-    std::vector<double> weight(cells);
-    std::vector<double> corner_mean(cells);
+    std::vector<double> row_sin(height);
     for (uint32_t i = 0; i < height; ++i) {
-        double s;
-        if (closest) {
-            s = sin_integral(double(i) / height, double(i + 1) / height) * height;
-        } else if (i + 1 < height) {
-            s = sin_integral((i + 0.5) / height, (i + 1.5) / height) * height;
-        } else {
-            s = (sin_integral((i + 0.5) / height, 1.0) + sin_integral(0.0, 0.5 / height)) * height;
-        }
-        const uint32_t i1 = (i + 1) % height;
-        for (uint32_t j = 0; j < width; ++j) {
-            const uint32_t j1 = (j + 1) % width;
-            const size_t k = size_t(i) * width + j;
-            const double m = closest ? double(env.lum[k])
-                                     : (double(env.lum[k]) + env.lum[size_t(i) * width + j1] +
-                                        env.lum[size_t(i1) * width + j] + env.lum[size_t(i1) * width + j1]) / 4.0;
-            corner_mean[k] = m;
-            weight[k] = m * s;
-        }
+        if (closest)
+            row_sin[i] = sin_integral(double(i) / height, double(i + 1) / height) * height;
+        else if (i + 1 < height)
+            row_sin[i] = sin_integral((i + 0.5) / height, (i + 1.5) / height) * height;
+        else
+            row_sin[i] = (sin_integral((i + 0.5) / height, 1.0) + sin_integral(0.0, 0.5 / height)) * height;
     }
+    const float* L = env.lum.data();
+    auto cell_mean = [&](uint32_t i, uint32_t j) {  // recomputed, not stored: two doubles per cell
+        if (closest) return double(L[size_t(i) * width + j]);
+        const uint32_t i1 = (i + 1) % height, j1 = (j + 1) % width;
+        return (double(L[size_t(i) * width + j]) + L[size_t(i) * width + j1] + L[size_t(i1) * width + j] +
+                L[size_t(i1) * width + j1]) / 4.0;
+    };
     env.row_cdf.assign(size_t(height) + 1, 0.0);
     env.col_cdf.assign(size_t(height) * (width + 1), 0.0f);
     env.cell_pdf.assign(cells, 0.0f);
+    std::vector<double> row(width);
     double total = 0;
     for (uint32_t i = 0; i < height; ++i) {
-        const double* row = weight.data() + size_t(i) * width;
         double acc = 0;
-        for (uint32_t j = 0; j < width; ++j) acc += row[j];
+        for (uint32_t j = 0; j < width; ++j) acc += row[j] = cell_mean(i, j) * row_sin[i];
         float* c = env.col_cdf.data() + size_t(i) * (width + 1);
         double run = 0;
         for (uint32_t j = 0; j < width; ++j) {
@@ -194,8 +188,11 @@ std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t wi
         env.row_cdf[height] = 1.0;
         // pdf over (u, v) = P(cell) w h x (the blend / its mean over the cell)
         const double scale = double(width) * height / total;
-        for (size_t k = 0; k < cells; ++k)
-            env.cell_pdf[k] = corner_mean[k] > 0 ? float(weight[k] * scale / (closest ? 1.0 : corner_mean[k])) : 0.0f;
+        for (uint32_t i = 0; i < height; ++i)
+            for (uint32_t j = 0; j < width; ++j) {
+                const double m = cell_mean(i, j);
+                env.cell_pdf[size_t(i) * width + j] = m > 0 ? float(m * row_sin[i] * scale / (closest ? 1.0 : m)) : 0.0f;
+            }
     }
     return {};
 }
