@@ -297,6 +297,14 @@ def export_world(scene):
     return color, None, f"world surface is {kind}, not a Background node; world colour used"
 
 
+def world_visibility(world):
+    """The rays that see the world (World > Ray Visibility): VIS_CAMERA | VIS_DIFFUSE bits."""
+    vis = getattr(world, 'cycles_visibility', None)
+    if vis is None:
+        return sd.VIS_CAMERA | sd.VIS_DIFFUSE
+    return (sd.VIS_CAMERA if vis.camera else 0) | (sd.VIS_DIFFUSE if vis.diffuse else 0)
+
+
 def _environment(node, strength, reasons):
     """(uniform radiance, scenedata.Environment or None) of an Environment Texture node."""
     if not (np.isfinite(strength) and strength >= 0):
@@ -920,7 +928,8 @@ class _Exporter:
         return sd.SceneData(camera=camera, geometry=geometry, materials=self.materials.materials,
                             lights=self.lights, world=world, settings=settings,
                             object_names=self.object_names, messages=self.messages,
-                            skipped=dict(self.counts), environment=environment)
+                            skipped=dict(self.counts), environment=environment,
+                            world_visibility=world_visibility(self.scene.world))
 
     # -- settings ------------------------------------------------------------------------
     def _settings(self):

@@ -262,6 +262,9 @@ def _validate(sd: SceneData):
     w = np.asarray(sd.world, np.float64)
     if w.shape != (3,) or not np.isfinite(w).all() or (w < 0).any():
         raise ValueError(f"world must be 3 finite non-negative numbers, got {sd.world!r}")
+    wv = sd.world_visibility
+    if not isinstance(wv, (int, np.integer)) or int(wv) & ~(VIS_CAMERA | VIS_DIFFUSE):
+        raise ValueError(f"world_visibility must be bits of VIS_CAMERA | VIS_DIFFUSE, got {wv!r}")
     env = sd.environment
     if env is not None:
         px, st = np.asarray(env.pixels), np.asarray(env.strength, np.float64)
@@ -351,15 +354,22 @@ class Integrator:
     def _build_lights(self, sd: SceneData):
         lamps = [make_lamp(light) for light in sd.lights]
         world = np.asarray(sd.world, F32)
+        wv = int(sd.world_visibility)
         if world.max() > 0:
-            lamps.append(BackgroundLight(world))
+            bg = BackgroundLight(world)
+            bg.visible_camera, bg.visible_diffuse = bool(wv & VIS_CAMERA), bool(wv & VIS_DIFFUSE)
+            lamps.append(bg)
         vis = self.tri.visibility
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
         # same emitters.
         tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._tri_emission,
                                  self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)) if self._any_emissive else None
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None
-        self.lights = LightSet(lamps, tris, len(self.tri), env)
+        # a map diffuse rays cannot see lights nothing; camera rays may still see it
+        self._camera_env = env if env is not None and wv & VIS_CAMERA and not self.transparent else None
+        self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None)
+        if self._camera_env is not None and self._camera_env.dark:
+            self._camera_env = None
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
                                           f"strength: {', '.join(self.lights.skipped_lamps)}"))
@@ -812,8 +822,8 @@ class Integrator:
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather)."""
-        env = self.lights.environment
-        if env is not None and not (camera and self.transparent):   # transparent film: no world
+        env = self._camera_env if camera else self.lights.environment   # transparent film: no world
+        if env is not None:
             env.native.gather(0.0 if camera else self.lights.env_prob, path.D, ~hit, path.thr,
                               None if camera else path.pdf, path.pid, L)
         lamps = self._camera_lamps if camera else self._bsdf_lamps

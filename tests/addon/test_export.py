@@ -636,6 +636,19 @@ def test_world_background(scene, exported):
     assert np.allclose(exported().world, 0.0)
 
 
+def test_world_ray_visibility(scene, exported):
+    """World > Ray Visibility's camera and diffuse toggles reach SceneData as bits."""
+    setup(scene)
+    scenes.world((0.5, 0.25, 1.0), 2.0)
+    assert exported().world_visibility == sd.VIS_CAMERA | sd.VIS_DIFFUSE
+    vis = scene.world.cycles_visibility
+    for camera, diffuse in ((False, True), (True, False), (False, False)):
+        vis.camera, vis.diffuse = camera, diffuse
+        assert exported().world_visibility == (sd.VIS_CAMERA if camera else 0) | (sd.VIS_DIFFUSE if diffuse else 0)
+    scene.world = None
+    assert exported().world_visibility == sd.VIS_CAMERA | sd.VIS_DIFFUSE
+
+
 def _sky_pixels(h=8, w=16):
     rng = np.random.default_rng(7)
     px = np.ones((h, w, 4), np.float32)

@@ -392,6 +392,13 @@ def build_environment():
     camera((3.4, -4.6, 1.9), (0.0, 0.4, 0.8), lens=28.0)
 
 
+def build_environment_hidden():
+    """The environment scene with the world hidden from the camera (World > Ray Visibility >
+    Camera off): the HDRI still lights the blocks, the sky behind them is black."""
+    build_environment()
+    bpy.context.scene.world.cycles_visibility.camera = False
+
+
 # ------------------------------------------------------------------------------------------
 # What the suite renders
 
@@ -433,4 +440,6 @@ SPECS = (
     ParitySpec("ortho_depth_of_field", build_ortho_depth_of_field, (192, 144), 1, 'BLACKMAN_HARRIS', 2.0,
                128, 32, 128, 32),
     ParitySpec("environment", build_environment, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
+    ParitySpec("environment_hidden", build_environment_hidden, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5,
+               128, 32, 128, 32),
 )

@@ -1,0 +1,72 @@
+"""World > Ray Visibility (SceneData.world_visibility), as Cycles: with the camera bit off the
+background renders black (alpha 1) while the world still lights the scene; with the diffuse bit
+off the world lights nothing while the camera still sees it. For the uniform world and for an
+environment map alike; closed-form values on a diffuse plane (rho x L) and exact zeros."""
+import numpy as np
+import pytest
+
+from addon import scenedata as sd
+
+from .scenes import ortho_down, plane_scene, render
+
+F32 = np.float32
+L = np.array([0.4, 0.6, 0.9], F32)
+RHO = 0.5
+
+
+def scene(kind, visibility, **kw):
+    """A plane of albedo RHO under radiance L that covers the middle of the view; the camera
+    sees past it at the border. kind: 'uniform' world or an 'environment' map of L."""
+    s = plane_scene(albedo=RHO, samples=32, max_bounces=0, size=0.6,
+                    camera=ortho_down(width=16, px=16, view=2.0),
+                    world=L if kind == 'uniform' else (0.0, 0.0, 0.0), **kw)
+    if kind == 'environment':
+        s.environment = sd.Environment(np.broadcast_to(L, (8, 16, 3)).copy(), np.ones(3, F32), np.eye(3), 'Linear')
+    s.world_visibility = visibility
+    return s
+
+
+def regions(integ):
+    """(pixels the plane covers fully, pixels that see only the world) of the combined image."""
+    img = integ.film.combined()
+    h, w = img.shape[:2]
+    y, x = np.mgrid[0:h, 0:w]
+    r = np.maximum(np.abs(x + 0.5 - w / 2) / (w / 2), np.abs(y + 0.5 - h / 2) / (h / 2))
+    return img, r < 0.4, r > 0.9
+
+
+def test_layout_has_plane_and_background():
+    img, plane, bg = regions(render(scene('uniform', sd.VIS_CAMERA | sd.VIS_DIFFUSE)))
+    assert plane.sum() >= 16 and bg.sum() >= 16
+    assert np.allclose(img[plane][:, :3], RHO * L, rtol=0.02)
+    assert np.allclose(img[bg][:, :3], L, rtol=1e-5)
+
+
+@pytest.mark.parametrize('kind', ['uniform', 'environment'])
+def test_camera_off_hides_the_background_but_keeps_its_light(kind):
+    integ = render(scene(kind, sd.VIS_DIFFUSE))
+    img, plane, bg = regions(integ)
+    assert np.all(img[bg][:, :3] == 0.0)
+    assert np.all(img[bg][:, 3] == 1.0)                 # not transparent: black, as Cycles
+    assert np.allclose(img[plane][:, :3], RHO * L, rtol=0.02)
+
+
+@pytest.mark.parametrize('kind', ['uniform', 'environment'])
+def test_diffuse_off_lights_nothing_but_is_seen(kind):
+    integ = render(scene(kind, sd.VIS_CAMERA))
+    img, plane, bg = regions(integ)
+    assert np.all(img[plane][:, :3] == 0.0)
+    assert np.allclose(img[bg][:, :3], L, rtol=1e-5)
+
+
+@pytest.mark.parametrize('kind', ['uniform', 'environment'])
+def test_both_off_is_black(kind):
+    img = render(scene(kind, 0)).film.combined()
+    assert np.all(img[..., :3] == 0.0)
+
+
+def test_bad_visibility_is_named():
+    from addon.integrator import Integrator
+    for bad in (-1, 4, 1.0, 'camera'):
+        with pytest.raises(ValueError, match="world_visibility"):
+            Integrator(scene('uniform', bad))
