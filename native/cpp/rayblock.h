@@ -13,11 +13,8 @@ inline uint32_t load_block(const Ray* rays, size_t i, size_t n, const Ray& pad, 
         load_rays<W>(reinterpret_cast<const float*>(rays + i), r);
         return all_lanes<W>();
     }
-    alignas(64) Ray tail[W];
     const size_t k = n - i;
-    std::memcpy(tail, rays + i, k * sizeof(Ray));
-    for (size_t j = k; j < size_t(W); ++j) tail[j] = pad;
-    load_rays<W>(reinterpret_cast<const float*>(tail), r);
+    load_rays_tail<W>(reinterpret_cast<const float*>(rays + i), k, reinterpret_cast<const float*>(&pad), r);
     return (1u << k) - 1u;
 }
 

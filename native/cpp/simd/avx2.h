@@ -55,16 +55,12 @@ inline vf8 permute(const float* table4, vi8 idx) {
     return {_mm256_permutevar8x32_ps(_mm256_castps128_ps256(_mm_loadu_ps(table4)), idx.v)};
 }
 
-// 8x8 transpose of 8 consecutive 32-byte records: loads and shuffles, as in the paper.
-inline void transpose8(const float* rec, __m256 out[8]) {
-    const __m256 r0 = _mm256_loadu_ps(rec + 0), r1 = _mm256_loadu_ps(rec + 8);
-    const __m256 r2 = _mm256_loadu_ps(rec + 16), r3 = _mm256_loadu_ps(rec + 24);
-    const __m256 r4 = _mm256_loadu_ps(rec + 32), r5 = _mm256_loadu_ps(rec + 40);
-    const __m256 r6 = _mm256_loadu_ps(rec + 48), r7 = _mm256_loadu_ps(rec + 56);
-    const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
-    const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
-    const __m256 t4 = _mm256_unpacklo_ps(r4, r5), t5 = _mm256_unpackhi_ps(r4, r5);
-    const __m256 t6 = _mm256_unpacklo_ps(r6, r7), t7 = _mm256_unpackhi_ps(r6, r7);
+// 8x8 transpose of 8 loaded 32-byte records: shuffles, as in the paper.
+inline void transpose8(const __m256 r[8], __m256 out[8]) {
+    const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+    const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+    const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
+    const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
     const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xEE);
     const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xEE);
     const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xEE);
@@ -74,9 +70,22 @@ inline void transpose8(const float* rec, __m256 out[8]) {
     out[4] = _mm256_permute2f128_ps(s0, s4, 0x31); out[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
     out[6] = _mm256_permute2f128_ps(s2, s6, 0x31); out[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
 }
+
 template <int W> void load_rays(const float* rec, vfloat<W> out[8]);
 template <> inline void load_rays<8>(const float* rec, vf8 out[8]) {
-    __m256 o[8];
-    transpose8(rec, o);
+    __m256 r[8], o[8];
+    for (int j = 0; j < 8; ++j) r[j] = _mm256_loadu_ps(rec + 8 * j);
+    transpose8(r, o);
+    for (int f = 0; f < 8; ++f) out[f].v = o[f];
+}
+// Records rec[0, k) (k < W) as load_rays, the lanes from k holding the record `pad`: loaded
+// where they are (copying a short tail into a padded buffer stalled its reload on store
+// forwarding, a fixed cost that dominated nodes of a few rays).
+template <int W> void load_rays_tail(const float* rec, size_t k, const float* pad, vfloat<W> out[8]);
+template <> inline void load_rays_tail<8>(const float* rec, size_t k, const float* pad, vf8 out[8]) {
+    const __m256 p = _mm256_loadu_ps(pad);
+    __m256 r[8], o[8];
+    for (size_t j = 0; j < 8; ++j) r[j] = j < k ? _mm256_loadu_ps(rec + 8 * j) : p;
+    transpose8(r, o);
     for (int f = 0; f < 8; ++f) out[f].v = o[f];
 }

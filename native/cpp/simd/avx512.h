@@ -47,9 +47,8 @@ inline vf16 permute(const float* table4, vi16 idx) {
 
 // 16 records -> 8 vectors in 24 shuffles: the AVX2 in-lane transpose stages applied to zmm
 // rows that each hold two records, then one two-source permute per field restores ray order.
-template <> inline void load_rays<16>(const float* rec, vf16 out[8]) {
-    __m512 z[8];
-    for (int k = 0; k < 8; ++k) z[k] = _mm512_loadu_ps(rec + 16 * k);
+// z[k] holds records 2k and 2k + 1.
+inline void transpose16(const __m512 z[8], vf16 out[8]) {
     __m512 t[8], s[8];
     for (int h = 0; h < 2; ++h) {
         const int b = 4 * h;
@@ -64,4 +63,22 @@ template <> inline void load_rays<16>(const float* rec, vf16 out[8]) {
         out[f].v = _mm512_permutex2var_ps(s[f], lo, s[f + 4]);
         out[f + 4].v = _mm512_permutex2var_ps(s[f], hi, s[f + 4]);
     }
+}
+template <> inline void load_rays<16>(const float* rec, vf16 out[8]) {
+    __m512 z[8];
+    for (int k = 0; k < 8; ++k) z[k] = _mm512_loadu_ps(rec + 16 * k);
+    transpose16(z, out);
+}
+// Masked loads: the tail is read in place (lanes past it never touch memory) over the pad.
+template <> inline void load_rays_tail<16>(const float* rec, size_t k, const float* pad, vf16 out[8]) {
+    const __m512 p = _mm512_broadcast_f32x8(_mm256_loadu_ps(pad));
+    const size_t floats = 8 * k;
+    __m512 z[8];
+    for (size_t j = 0; j < 8; ++j) {
+        const size_t f0 = 16 * j;
+        const __mmask16 m = floats >= f0 + 16 ? __mmask16(0xFFFF)
+                            : floats <= f0 ? __mmask16(0) : __mmask16((1u << (floats - f0)) - 1u);
+        z[j] = _mm512_mask_loadu_ps(p, m, rec + f0);
+    }
+    transpose16(z, out);
 }

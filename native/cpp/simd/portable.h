@@ -53,4 +53,7 @@ template <int W> inline vfloat<W> permute(const float* table4, vint<W> idx) { vf
 template <int W> inline void load_rays(const float* rec, vfloat<W> out[8]) {
     for (int f = 0; f < 8; ++f) DACRT_LANES out[f].v[i] = rec[8 * i + f];
 }
+template <int W> inline void load_rays_tail(const float* rec, size_t k, const float* pad, vfloat<W> out[8]) {
+    for (int f = 0; f < 8; ++f) DACRT_LANES out[f].v[i] = size_t(i) < k ? rec[8 * i + f] : pad[f];
+}
 #undef DACRT_LANES
