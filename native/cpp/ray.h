@@ -68,7 +68,8 @@ struct Stats {
     uint64_t double_fallbacks = 0;
     uint64_t max_depth = 0;
     // Per-phase time in phase_clock() ticks, summed over threads: read at node
-    // granularity (3 clock reads per node), never per ray.
+    // granularity (3 clock reads per node), never per ray; nodes of few rays are sampled
+    // (Tracer::timing in trace.h), so for them these are estimates.
     uint64_t filter_ticks = 0;
     uint64_t partition_ticks = 0;
     uint64_t leaf_ticks = 0;

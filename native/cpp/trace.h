@@ -87,12 +87,19 @@ struct Tracer {
     }
     static uint64_t clock(uint64_t w) { return w ? phase_clock() : 0; }
 
-    void node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth) {
-        const uint64_t w = timing(n);
+    // filter() timed: sets the node's timing weight w and the clock after filtering c1.
+    size_t timed_filter(Ray* rays, size_t n, const NodeBounds& nb, uint64_t depth, uint64_t& w, uint64_t& c1) {
+        w = timing(n);
         const uint64_t c0 = clock(w);
         const size_t na = filter(rays, n, nb, depth);
-        const uint64_t c1 = clock(w);
+        c1 = clock(w);
         st.filter_ticks += w * (c1 - c0);
+        return na;
+    }
+
+    void node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth) {
+        uint64_t w, c1;
+        const size_t na = timed_filter(rays, n, nb, depth, w, c1);
         if (na == 0) return;
         node_split(rays, na, ids, nt, nb, depth, c1, w);
     }
@@ -121,11 +128,8 @@ struct Tracer {
 
     // A node of the shared top: its split is made once, by whichever thread arrives first.
     void shared_node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h) {
-        const uint64_t w = timing(n);
-        const uint64_t c0 = clock(w);
-        const size_t na = filter(rays, n, nb, depth);
-        const uint64_t c1 = clock(w);
-        st.filter_ticks += w * (c1 - c0);
+        uint64_t w, c1;
+        const size_t na = timed_filter(rays, n, nb, depth, w, c1);
         if (na == 0) return;
         if (nt <= size_t(cfg.leaf_size)) {  // never split, so its ids never move
             intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, mask, visible, st);
@@ -143,8 +147,9 @@ struct Tracer {
                 if (few) {
                     std::memcpy(priv, ids, nt * sizeof(uint32_t));
                     sn.state.store(0, std::memory_order_release);
-                    st.partition_ticks += w * (clock(w) - c1);
-                    node_split(rays, na, priv, nt, nb, depth, clock(w), w);
+                    const uint64_t c2 = clock(w);
+                    st.partition_ticks += w * (c2 - c1);
+                    node_split(rays, na, priv, nt, nb, depth, c2, w);
                     return;
                 }
                 sn.k = uint32_t(split(ids, nt, nb, float(na) * top->ray_scale, depth, sn.L, sn.R, sn.axis));
