@@ -365,11 +365,11 @@ class Integrator:
         tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._tri_emission,
                                  self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)) if self._any_emissive else None
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None
-        # a map diffuse rays cannot see lights nothing; camera rays may still see it
-        self._camera_env = env if env is not None and wv & VIS_CAMERA and not self.transparent else None
+        # a map diffuse rays cannot see lights nothing; camera rays may still see it (not
+        # through transparent film)
         self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None)
-        if self._camera_env is not None and self._camera_env.dark:
-            self._camera_env = None
+        self._camera_env = env if (env is not None and wv & VIS_CAMERA and not self.transparent
+                                   and not env.dark) else None
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
                                           f"strength: {', '.join(self.lights.skipped_lamps)}"))
@@ -822,7 +822,7 @@ class Integrator:
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather)."""
-        env = self._camera_env if camera else self.lights.environment   # transparent film: no world
+        env = self._camera_env if camera else self.lights.environment
         if env is not None:
             env.native.gather(0.0 if camera else self.lights.env_prob, path.D, ~hit, path.thr,
                               None if camera else path.pdf, path.pid, L)
