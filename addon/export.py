@@ -859,6 +859,19 @@ class _Out:
         return sd.Geometry(vertices=self.vertices, **per_tri)
 
 
+def _rewind(rows):
+    """Swap corners 1 and 2 of per-triangle rows (in place): a mirrored instance's triangles and
+    every per-corner array read with them."""
+    rows[:, [1, 2]] = rows[:, [2, 1]]
+
+
+def _add_name(table, reason, name):
+    """Note `name` once under `reason` in a reason -> [names] table (the export's messages)."""
+    names = table.setdefault(reason, [])
+    if name not in names:
+        names.append(name)
+
+
 def _compact_rows(a, keep):
     """a[keep], computed in a's own memory (a is overwritten; the result is a view of it).
 
@@ -1022,9 +1035,7 @@ class _Exporter:
                          "object", ob.name)
 
     def _ignore(self, reason, name):
-        names = self.ignored.setdefault(reason, [])
-        if name not in names:
-            names.append(name)
+        _add_name(self.ignored, reason, name)
 
     def _note_hair(self, ob):
         for ps in getattr(ob, 'particle_systems', ()):
@@ -1070,9 +1081,7 @@ class _Exporter:
 
     def _skip(self, reason, name):
         self.counts['objects_unsupported'] += 1
-        names = self.skipped.setdefault(reason, [])
-        if name not in names:
-            names.append(name)
+        _add_name(self.skipped, reason, name)
 
     # -- geometry assembly -----------------------------------------------------------------
     def _assemble(self):
@@ -1170,8 +1179,7 @@ class _Exporter:
         # (Negating only the flat normals left the two opposed: mirrored objects rendered black.)
         mirrored = np.flatnonzero(np.linalg.det(lin) < 0)
         for i in mirrored:
-            r = tris[i * nt:(i + 1) * nt]
-            r[:, [1, 2]] = r[:, [2, 1]]
+            _rewind(tris[i * nt:(i + 1) * nt])
         # geometric normals in world space (float64, one native pass)
         ng, good = dacrt.shading.face_normals(world, tris)
         if v0:
@@ -1201,13 +1209,13 @@ class _Exporter:
             for i in range(k):
                 a.per_corner(n[i], a.normal_index, per[i])
             for i in mirrored:
-                per[i][:, [1, 2]] = per[i][:, [2, 1]]
+                _rewind(per[i])
             if not ok.all():
                 corner_ok = np.empty((k, nt, 3, 1), bool)
                 for i in range(k):
                     a.per_corner(ok[i], a.normal_index, corner_ok[i])
                 for i in mirrored:
-                    corner_ok[i][:, [1, 2]] = corner_ok[i][:, [2, 1]]
+                    _rewind(corner_ok[i])
                 np.copyto(normals, ng[:, None, :], where=~corner_ok.reshape(k * nt, 3, 1))
         for i, p in enumerate(places):
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
@@ -1223,8 +1231,7 @@ class _Exporter:
                 else:
                     a.per_corner(a.corner_uvs, a.corners, out.uvs[S])
                     if i in mirrored:
-                        uv = out.uvs[S]
-                        uv[:, [1, 2]] = uv[:, [2, 1]]
+                        _rewind(out.uvs[S])
         return bad, deg
 
     # -- messages ----------------------------------------------------------------------------
