@@ -13,7 +13,8 @@ Materials (what a diffuse renderer can represent exactly):
 - Diffuse BSDF colour and Principled BSDF Base Color, each constant or an Image Texture on
   the UV map (pixels converted to float scene-linear);
 - Emission (colour x strength) and Principled emission (Emission Color x Emission Strength);
-- Add Shader and Mix Shader with a constant factor, combining the above linearly.
+- Add Shader and Mix Shader with a constant factor, combining the above linearly;
+- node groups and reroutes are transparent, as Cycles flattens them (nodegraph.py).
 Documented diffuse approximation of everything else: a shader node of another kind becomes a
 diffuse surface with its constant 'Color' (or 'Base Color') input, 0.8 grey without one; a
 linked input that is not an Image Texture (or RGB/Value node) uses the socket's own value; the
@@ -39,6 +40,7 @@ import dacrt
 import numpy as np
 
 from . import scenedata as sd
+from .nodegraph import constant_color, constant_value, input_socket, linked_link, linked_node, output_node
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
 UNSUPPORTED_TYPES = {'CURVES': "hair curves", 'POINTCLOUD': "point cloud", 'VOLUME': "volume",
@@ -248,13 +250,13 @@ def _light_shader_factor(light, name, messages):
     """The light's node tree (if used) as a constant RGB factor: Emission colour x strength."""
     if not getattr(light, 'use_nodes', False) or light.node_tree is None:
         return np.ones(3)
-    out = _output_node(light.node_tree)
+    out = output_node(light.node_tree)
     if out is None or not out.inputs['Surface'].is_linked:
         return np.ones(3)
-    node = _linked_node(out.inputs['Surface'])
+    node = linked_node(out.inputs['Surface'])
     if node is not None and node.type == 'EMISSION':
-        color, c_ok = _constant_color(node.inputs['Color'])
-        strength, s_ok = _constant_value(node.inputs['Strength'])
+        color, c_ok = constant_color(node.inputs['Color'])
+        strength, s_ok = constant_value(node.inputs['Strength'])
         if c_ok and s_ok:
             return np.array(color) * strength
     messages.append(('WARNING', f"light '{name}': its node tree is not a constant Emission "
@@ -278,18 +280,18 @@ def export_world(scene):
     ntree = world.node_tree
     if ntree is None or (bpy.app.version < (5, 0, 0) and not world.use_nodes):
         return color, None, ''
-    out = _output_node(ntree)
+    out = output_node(ntree)
     if out is None or not out.inputs['Surface'].is_linked:
         return none, None, ''
-    node = _linked_node(out.inputs['Surface'])
+    node = linked_node(out.inputs['Surface'])
     if node is not None and node.type == 'BACKGROUND':
-        s, s_ok = _constant_value(node.inputs['Strength'])
+        s, s_ok = constant_value(node.inputs['Strength'])
         reasons = [] if s_ok else ["Background Strength driven by nodes; its own value used"]
-        tex = _linked_node(node.inputs['Color'])
+        tex = linked_node(node.inputs['Color'])
         if tex is not None and tex.type == 'TEX_ENVIRONMENT':
             uniform, env = _environment(tex, np.float32(s), reasons)
             return uniform, env, '; '.join(reasons)
-        c, c_ok = _constant_color(node.inputs['Color'])
+        c, c_ok = constant_color(node.inputs['Color'])
         if not c_ok:
             reasons.append("Background Color driven by nodes; its own value used")
         return np.array(c, np.float32) * np.float32(s), None, '; '.join(reasons)
@@ -344,12 +346,12 @@ def _environment_rotation(node, reasons):
     """(3, 3) orthogonal world -> map-frame matrix from the Environment Texture's Vector input:
     the view direction, optionally through a Mapping node (its rotation and the signs of its
     scale are exact for directions; non-uniform scale and location are not representable)."""
-    link = _linked_link(node.inputs['Vector'])
+    link = linked_link(node.inputs['Vector'])
     if link is None:
         return np.eye(3)
     src = link.from_node
     if src.type == 'MAPPING':
-        inner = _linked_link(src.inputs['Vector'])
+        inner = linked_link(src.inputs['Vector'])
         if inner is None or not _is_direction(inner):
             what = 'nothing' if inner is None else f"'{inner.from_node.bl_label}' {inner.from_socket.name}"
             reasons.append(f"Mapping node fed by {what}: read as the view direction")
@@ -376,7 +378,7 @@ def _mapping_matrix(node, reasons):
         sock = node.inputs.get(name)
         if sock is None or not sock.enabled:
             continue
-        if _linked_link(sock) is not None:
+        if linked_link(sock) is not None:
             reasons.append(f"Mapping {name} driven by nodes; its own value used")
         values[name] = np.array(sock.default_value, np.float64)
     rot = np.array(Euler(values.get('Rotation', np.zeros(3)), 'XYZ').to_matrix(), np.float64)
@@ -391,68 +393,6 @@ def _mapping_matrix(node, reasons):
     if kind in ('POINT', 'TEXTURE') and np.any(values.get('Location', np.zeros(3)) != 0):
         reasons.append("Mapping Location ignored (the map is looked up by direction)")
     return sign @ rot.T if kind == 'TEXTURE' else rot @ sign
-
-
-# ----------------------------------------------------------------------------------------
-# Node helpers
-
-def _output_node(ntree):
-    """The output node Cycles renders: target CYCLES, else ALL."""
-    return ntree.get_output_node('CYCLES') or ntree.get_output_node('ALL')
-
-
-def _linked_link(socket):
-    """The link feeding `socket`, through reroutes; None if unlinked or muted."""
-    seen = 0
-    while socket.is_linked and seen < 64:
-        link = socket.links[0]
-        if link.is_muted or not link.is_valid:
-            return None
-        if link.from_node.type == 'REROUTE':
-            socket = link.from_node.inputs[0]
-            seen += 1
-            continue
-        return link
-    return None
-
-
-def _linked_node(socket):
-    link = _linked_link(socket)
-    return link.from_node if link is not None else None
-
-
-def _constant_color(socket):
-    """(rgb, exact): the socket's constant colour, following RGB/Value nodes."""
-    link = _linked_link(socket)
-    if link is None:
-        v = socket.default_value
-        return (tuple(v[:3]) if hasattr(v, '__len__') else (v, v, v)), True
-    node = link.from_node
-    if node.type == 'RGB':
-        return tuple(node.outputs[0].default_value[:3]), True
-    if node.type == 'VALUE':
-        v = node.outputs[0].default_value
-        return (v, v, v), True
-    v = socket.default_value
-    return (tuple(v[:3]) if hasattr(v, '__len__') else (v, v, v)), False
-
-
-def _constant_value(socket):
-    """(value, exact): the socket's constant float, following a Value node."""
-    link = _linked_link(socket)
-    if link is None:
-        return float(socket.default_value), True
-    if link.from_node.type == 'VALUE':
-        return float(link.from_node.outputs[0].default_value), True
-    return float(socket.default_value), False
-
-
-def _input(node, *names):
-    for n in names:
-        s = node.inputs.get(n)
-        if s is not None:
-            return s
-    return None
 
 
 # ----------------------------------------------------------------------------------------
@@ -531,14 +471,14 @@ class _MaterialBuilder:
         if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
             closure = _Closure(const=tuple(mat.diffuse_color[:3]))
         else:
-            out = _output_node(ntree)
+            out = output_node(ntree)
             if out is None or not out.inputs['Surface'].is_linked:
                 closure = _Closure()    # Cycles: no surface shader renders black
             else:
                 closure = self._shader(out.inputs['Surface'], reasons, 0)
             for socket in IGNORED_OUTPUTS:
                 if out is not None and out.inputs.get(socket) is not None and \
-                        _linked_node(out.inputs[socket]) is not None:
+                        linked_node(out.inputs[socket]) is not None:
                     reasons.append(f"{socket.lower()} ignored")
         base, texture, interp, ext = self._albedo(closure)
         base = _nonnegative(base, "colour", reasons)
@@ -560,7 +500,7 @@ class _MaterialBuilder:
         return np.ones(3, np.float32), baked, t.interpolation, t.extension
 
     def _shader(self, socket, reasons, depth):
-        node = _linked_node(socket)
+        node = linked_node(socket)
         if node is None:
             return _Closure()
         if depth > 32:
@@ -571,7 +511,7 @@ class _MaterialBuilder:
             return _Closure(const=DEFAULT_ALBEDO)
         t = node.type
         if t == 'BSDF_DIFFUSE':
-            rough, _ = _constant_value(node.inputs['Roughness'])
+            rough, _ = constant_value(node.inputs['Roughness'])
             if rough > 1e-5:
                 reasons.append("Diffuse roughness (Oren-Nayar) as Lambert")
             _note_normal_inputs(node, reasons)
@@ -579,8 +519,8 @@ class _MaterialBuilder:
         if t == 'BSDF_PRINCIPLED':
             return self._principled(node, reasons)
         if t == 'EMISSION':
-            color, c_ok = _constant_color(node.inputs['Color'])
-            strength, s_ok = _constant_value(node.inputs['Strength'])
+            color, c_ok = constant_color(node.inputs['Color'])
+            strength, s_ok = constant_value(node.inputs['Strength'])
             if not (c_ok and s_ok):
                 reasons.append("Emission driven by nodes; its own values used")
             return _Closure(emission=np.array(color) * strength)
@@ -589,7 +529,7 @@ class _MaterialBuilder:
             b = self._shader(node.inputs[1], reasons, depth + 1)
             return a.plus(b, reasons)
         if t == 'MIX_SHADER':
-            fac, ok = _constant_value(node.inputs['Fac'])
+            fac, ok = constant_value(node.inputs['Fac'])
             if not ok:
                 reasons.append("Mix Shader factor driven by nodes; its own value used")
             fac = min(max(fac, 0.0), 1.0)
@@ -598,9 +538,9 @@ class _MaterialBuilder:
             return a.plus(b, reasons)
         # Documented approximation: a diffuse surface of the node's constant colour.
         reasons.append(f"{node.bl_label} as diffuse")
-        sock = _input(node, 'Color', 'Base Color')
+        sock = input_socket(node, 'Color', 'Base Color')
         if sock is not None and sock.type == 'RGBA':
-            color, _ = _constant_color(sock)
+            color, _ = constant_color(sock)
             return _Closure(const=color)
         return _Closure(const=DEFAULT_ALBEDO)
 
@@ -608,21 +548,21 @@ class _MaterialBuilder:
         for name, what in PRINCIPLED_IGNORED:
             s = node.inputs.get(name)
             if s is not None:
-                v, ok = _constant_value(s)
+                v, ok = constant_value(s)
                 if v != 0.0 or not ok:
                     reasons.append(f"Principled {what} ignored")
         alpha = node.inputs.get('Alpha')
         if alpha is not None:
-            a, ok = _constant_value(alpha)
+            a, ok = constant_value(alpha)
             if a != 1.0 or not ok:
                 reasons.append("Principled alpha ignored")
         _note_normal_inputs(node, reasons)
         c = self._color_closure(node.inputs['Base Color'], reasons)
-        es = _input(node, 'Emission Strength')
-        ec = _input(node, 'Emission Color', 'Emission')
+        es = input_socket(node, 'Emission Strength')
+        ec = input_socket(node, 'Emission Color', 'Emission')
         if es is not None and ec is not None:
-            color, c_ok = _constant_color(ec)
-            strength, s_ok = _constant_value(es)
+            color, c_ok = constant_color(ec)
+            strength, s_ok = constant_value(es)
             if not (c_ok and s_ok):
                 reasons.append("Principled emission driven by nodes; its own values used")
             c.emission = np.array(color, np.float64) * strength
@@ -630,7 +570,7 @@ class _MaterialBuilder:
 
     def _color_closure(self, socket, reasons):
         """A diffuse colour input: constant, or an Image Texture on the UV map."""
-        link = _linked_link(socket)
+        link = linked_link(socket)
         if link is not None and link.from_node.type == 'TEX_IMAGE':
             node = link.from_node
             if link.from_socket.name != 'Color':
@@ -639,7 +579,7 @@ class _MaterialBuilder:
             if tex is None:
                 return _Closure(const=MISSING_IMAGE)
             return _Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
-        color, ok = _constant_color(socket)
+        color, ok = constant_color(socket)
         if not ok:
             reasons.append(f"colour from '{link.from_node.bl_label}' node; its own value used")
         return _Closure(const=color)
@@ -672,7 +612,7 @@ class _MaterialBuilder:
 def coordinates_approximation(tex_node):
     """Why an Image Texture's Vector input is not read exactly (the export always reads the
     active render UV map), or '' when it is."""
-    link = _linked_link(tex_node.inputs['Vector'])
+    link = linked_link(tex_node.inputs['Vector'])
     if link is None:
         return ''
     vec = link.from_node
@@ -687,7 +627,7 @@ def coordinates_approximation(tex_node):
 def _note_normal_inputs(node, reasons):
     """A BSDF's linked Normal (bump or normal map) is ignored: shading normals come from the mesh."""
     socket = node.inputs.get('Normal')
-    if socket is not None and _linked_node(socket) is not None:
+    if socket is not None and linked_node(socket) is not None:
         reasons.append("Normal input (bump / normal map) ignored")
 
 

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import bpy
 
-from addon import export
+from addon import export, nodegraph
 
 # the layers the export drops, and thin film (it tints only the dropped specular layer)
 ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
@@ -99,6 +99,10 @@ def _fill_empty_slots() -> list[str]:
 
 
 class _Editor:
+    """Edits one material; a node reached inside a node group is edited in the group's own tree
+    (groups are shared: the edit applies to every material using the group, which is what the
+    fair comparison wants)."""
+
     def __init__(self, mat):
         self.mat, self.done = mat, []
 
@@ -106,8 +110,7 @@ class _Editor:
         tree = self.mat.node_tree
         if tree is None or (bpy.app.version < (5, 0, 0) and not self.mat.use_nodes):
             return []
-        self.tree = tree
-        out = export._output_node(tree)
+        out = nodegraph.output_node(tree)
         if out is None:
             return []
         for name in export.IGNORED_OUTPUTS:
@@ -119,9 +122,11 @@ class _Editor:
 
     # --- edits ----------------------------------------------------------------------------
 
-    def _drop_links(self, socket):
+    @staticmethod
+    def _drop_links(socket):
+        socket = nodegraph.unwrap(socket)
         for link in list(socket.links):
-            self.tree.links.remove(link)
+            socket.id_data.links.remove(link)
 
     def _unlink(self, socket, why):
         self._drop_links(socket)
@@ -129,27 +134,32 @@ class _Editor:
 
     def _set(self, socket, value, why):
         """socket unlinked and set to value, when it is not already exactly that."""
-        current, exact = export._constant_value(socket)
+        current, exact = nodegraph.constant_value(socket)
         if exact and current == value:
             return
+        socket = nodegraph.unwrap(socket)
         self._drop_links(socket)
         socket.default_value = value
         self.done.append(why)
 
     def _replace(self, socket, node, color, why):
-        """A Diffuse BSDF of `color` in place of `node`, feeding `socket`."""
-        diffuse = self.tree.nodes.new('ShaderNodeBsdfDiffuse')
+        """A Diffuse BSDF of `color` in place of the node feeding `socket` (made in the tree
+        of the socket the node's link ends at)."""
+        target = nodegraph.linked_link(socket)
+        target = nodegraph.unwrap(socket) if target is None else target.to_socket
+        tree = target.id_data
+        diffuse = tree.nodes.new('ShaderNodeBsdfDiffuse')
         diffuse.location = (node.location.x, node.location.y - 200) if node else (0, 0)
         diffuse.inputs['Color'].default_value = (*color, 1.0)
         diffuse.inputs['Roughness'].default_value = 0.0
-        self._drop_links(socket)
-        self.tree.links.new(diffuse.outputs['BSDF'], socket)
+        self._drop_links(target)
+        tree.links.new(diffuse.outputs['BSDF'], target)
         self.done.append(why)
 
     # --- the shader graph, walked as the export walks it ----------------------------------
 
     def _shader(self, socket, depth):
-        node = export._linked_node(socket)
+        node = nodegraph.linked_node(socket)
         if node is None or depth > 32:
             return
         if node.mute:
@@ -170,8 +180,8 @@ class _Editor:
                 self._set(alpha, 1.0, "Principled Alpha 1")
             self._normals(node)
             self._color(node.inputs['Base Color'])
-            self._own_value(export._input(node, 'Emission Color', 'Emission'))
-            self._own_value(export._input(node, 'Emission Strength'))
+            self._own_value(nodegraph.input_socket(node, 'Emission Color', 'Emission'))
+            self._own_value(nodegraph.input_socket(node, 'Emission Strength'))
         elif t == 'EMISSION':
             self._own_value(node.inputs['Color'])
             self._own_value(node.inputs['Strength'])
@@ -183,37 +193,40 @@ class _Editor:
             self._shader(node.inputs[1], depth + 1)
             self._shader(node.inputs[2], depth + 1)
         else:
-            sock = export._input(node, 'Color', 'Base Color')
+            sock = nodegraph.input_socket(node, 'Color', 'Base Color')
             color = export.DEFAULT_ALBEDO
             if sock is not None and sock.type == 'RGBA':
-                color, _ = export._constant_color(sock)
+                color, _ = nodegraph.constant_color(sock)
             self._replace(socket, node, tuple(color), f"{node.bl_label} as diffuse")
 
     def _normals(self, node):
         sock = node.inputs.get('Normal')
-        if sock is not None and export._linked_node(sock) is not None:
+        if sock is not None and nodegraph.linked_node(sock) is not None:
             self._unlink(sock, f"{node.bl_label} Normal input removed")
 
     def _own_value(self, socket):
-        """Unlink an input the export reads as the socket's own value."""
+        """Unlink an input the export reads as its own value (of the carrier: the socket, or
+        where its chain last crossed a group boundary), so Cycles uses that value too."""
         if socket is None:
             return
-        link = export._linked_link(socket)
+        link, carrier = nodegraph.source(socket)
         if link is not None and link.from_node.type not in ('RGB', 'VALUE'):
-            self._unlink(socket, f"'{socket.name}' from '{link.from_node.bl_label}' as its own value")
+            self._unlink(carrier, f"'{socket.name}' from '{link.from_node.bl_label}' as its own value")
 
     def _color(self, socket):
-        link = export._linked_link(socket)
+        link = nodegraph.linked_link(socket)
         if link is None or link.from_node.type != 'TEX_IMAGE':
             self._own_value(socket)
             return
         node = link.from_node
         if link.from_socket.name != 'Color':
-            self.tree.links.remove(link)
-            self.tree.links.new(node.outputs['Color'], socket)
+            tree, to_socket = link.link.id_data, link.to_socket
+            tree.links.remove(link.link)
+            tree.links.new(node.outputs['Color'], to_socket)
             self.done.append("image alpha as colour, read as its colour")
         if export.coordinates_approximation(node):
             self._unlink(node.inputs['Vector'], "texture coordinates: the active render UV map")
+        node = nodegraph.unwrap(node)       # the Blender node, to set its properties
         if node.projection != 'FLAT':
             node.projection = 'FLAT'
             self.done.append("image projection flat")

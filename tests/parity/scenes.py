@@ -42,6 +42,27 @@ def diffuse(name, color):
     return mat
 
 
+def grouped_diffuse(name, color):
+    """diffuse() wrapped in a node group whose colour input is fed by an RGB node outside, with
+    a reroute inside: Cycles flattens groups, and so must the export."""
+    g = bpy.data.node_groups.new(name + " group", 'ShaderNodeTree')
+    g.interface.new_socket("Colour", in_out='INPUT', socket_type='NodeSocketColor')
+    g.interface.new_socket("BSDF", in_out='OUTPUT', socket_type='NodeSocketShader')
+    gi, go = g.nodes.new('NodeGroupInput'), g.nodes.new('NodeGroupOutput')
+    node, reroute = g.nodes.new('ShaderNodeBsdfDiffuse'), g.nodes.new('NodeReroute')
+    node.inputs['Roughness'].default_value = 0.0
+    g.links.new(gi.outputs['Colour'], reroute.inputs[0])
+    g.links.new(reroute.outputs[0], node.inputs['Color'])
+    g.links.new(node.outputs['BSDF'], go.inputs['BSDF'])
+    mat, nt, out = _node_material(name)
+    group, rgb = nt.nodes.new('ShaderNodeGroup'), nt.nodes.new('ShaderNodeRGB')
+    group.node_tree = g
+    rgb.outputs[0].default_value = (*color, 1.0)
+    nt.links.new(rgb.outputs[0], group.inputs['Colour'])
+    nt.links.new(group.outputs['BSDF'], out.inputs['Surface'])
+    return mat
+
+
 def emission(name, color, strength):
     mat, nt, out = _node_material(name)
     node = nt.nodes.new('ShaderNodeEmission')
@@ -151,9 +172,10 @@ def camera(location, target, lens=35.0, kind='PERSP', ortho_scale=6.0, shift=(0.
 def build_cornell():
     """Cornell-style box (open towards the camera), two rotated blocks, a square area light
     under the ceiling, in view (its emitting side faces the camera's rays: still not seen,
-    since a light object's visible_camera is False by default)."""
+    since a light object's visible_camera is False by default). The red wall's material is a
+    node group."""
     white = diffuse("White", (0.73, 0.73, 0.73))
-    red = diffuse("Red", (0.63, 0.065, 0.05))
+    red = grouped_diffuse("Red", (0.63, 0.065, 0.05))
     green = diffuse("Green", (0.14, 0.45, 0.091))
     quad("Floor", [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], white)
     quad("Ceiling", [(-1, -1, 2), (-1, 1, 2), (1, 1, 2), (1, -1, 2)], white)

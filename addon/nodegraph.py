@@ -1,0 +1,196 @@
+"""Reading Blender shader node graphs as Cycles compiles them: what feeds a socket.
+
+Part of the export layer (only the export, and the benchmark's fair-material editor, which
+follows the export's rules, use it): it reads node trees handed to it and imports nothing of
+Blender itself.
+
+Cycles flattens node groups before it compiles a shader, so groups are transparent here too:
+a link from a Group node continues at the matching input of the group's active Group Output,
+and a link from a Group Input node continues at the matching input of the Group node it was
+entered through. Reroutes are skipped; a muted or invalid link leaves the input at its own
+value. A node reached inside groups comes wrapped (`GraphNode`), remembering the Group nodes it
+was reached through, so its inputs can be followed back out; wrappers read through to the
+Blender node or socket they hold.
+"""
+
+from __future__ import annotations
+
+MAX_HOPS = 256      # reroutes and group boundaries followed before a chain counts as unreadable
+
+
+class GraphSocket:
+    """A socket and the Group nodes (outermost first) its node was reached through."""
+    __slots__ = ('socket', 'groups')
+
+    def __init__(self, socket, groups=()):
+        self.socket, self.groups = socket, groups
+
+    def __getattr__(self, name):
+        return getattr(self.socket, name)
+
+
+class GraphNode:
+    """A node and the Group nodes (outermost first) it was reached through."""
+    __slots__ = ('node', 'groups')
+
+    def __init__(self, node, groups=()):
+        self.node, self.groups = node, groups
+
+    def __getattr__(self, name):
+        return getattr(self.node, name)
+
+    @property
+    def inputs(self):
+        return _Inputs(self.node.inputs, self.groups)
+
+
+class GraphLink:
+    """The link that produces a socket's value: from_node (a GraphNode), from_socket and
+    to_socket (Blender sockets), and the Blender link itself."""
+    __slots__ = ('link', 'from_node')
+
+    def __init__(self, link, groups):
+        self.link, self.from_node = link, GraphNode(link.from_node, groups)
+
+    @property
+    def from_socket(self):
+        return self.link.from_socket
+
+    @property
+    def to_socket(self):
+        return self.link.to_socket
+
+
+class _Inputs:
+    __slots__ = ('_inputs', '_groups')
+
+    def __init__(self, inputs, groups):
+        self._inputs, self._groups = inputs, groups
+
+    def __getitem__(self, key):
+        return GraphSocket(self._inputs[key], self._groups)
+
+    def get(self, key, default=None):
+        s = self._inputs.get(key)
+        return default if s is None else GraphSocket(s, self._groups)
+
+    def __len__(self):
+        return len(self._inputs)
+
+
+def unwrap(x):
+    """The Blender socket or node a wrapper holds (or x itself)."""
+    if isinstance(x, GraphSocket):
+        return x.socket
+    if isinstance(x, GraphNode):
+        return x.node
+    return x
+
+
+def output_node(ntree):
+    """The output node Cycles renders: target CYCLES, else ALL."""
+    return ntree.get_output_node('CYCLES') or ntree.get_output_node('ALL')
+
+
+def source(socket):
+    """(link, carrier) for an input socket (Blender socket or GraphSocket).
+
+    link: the GraphLink from the node that computes the socket's value, or None when nothing
+    does (unlinked, muted link, a group without an output for it). carrier: the GraphSocket
+    whose own value Cycles uses when link is None, and which the export reads when it cannot
+    evaluate the linked node: the socket itself, or the input where the chain last crossed a
+    group boundary (a Group Output's input, or a Group node's input)."""
+    if isinstance(socket, GraphSocket):
+        sock, groups = socket.socket, socket.groups
+    else:
+        sock, groups = socket, ()
+    carrier = GraphSocket(sock, groups)
+    for _ in range(MAX_HOPS):
+        if not sock.is_linked:
+            return None, carrier
+        link = sock.links[0]
+        if link.is_muted or not link.is_valid:
+            return None, carrier
+        node = link.from_node
+        if node.type == 'REROUTE':
+            sock = node.inputs[0]
+            continue
+        if node.type == 'GROUP' and not node.mute and node.node_tree is not None:
+            inner = _matching(_group_output(node.node_tree), 'inputs', link.from_socket.identifier)
+            if inner is None:
+                return None, carrier
+            sock, groups = inner, groups + (node,)
+            carrier = GraphSocket(sock, groups)
+            continue
+        if node.type == 'GROUP_INPUT':
+            outer = _matching(groups[-1] if groups else None, 'inputs', link.from_socket.identifier)
+            if outer is None:
+                return None, carrier
+            sock, groups = outer, groups[:-1]
+            carrier = GraphSocket(sock, groups)
+            continue
+        return GraphLink(link, groups), carrier
+    return None, carrier
+
+
+def linked_link(socket):
+    """The GraphLink feeding `socket` (see source), or None."""
+    return source(socket)[0]
+
+
+def linked_node(socket):
+    """The GraphNode feeding `socket` (see source), or None."""
+    link = source(socket)[0]
+    return link.from_node if link is not None else None
+
+
+def constant_color(socket):
+    """(rgb, exact): the socket's constant colour, following RGB/Value nodes; where another
+    node computes it, the carrier's own value and exact False."""
+    link, carrier = source(socket)
+    if link is None:
+        return _as_color(carrier.default_value), True
+    node = link.from_node
+    if node.type == 'RGB':
+        return tuple(node.outputs[0].default_value[:3]), True
+    if node.type == 'VALUE':
+        v = node.outputs[0].default_value
+        return (v, v, v), True
+    return _as_color(carrier.default_value), False
+
+
+def constant_value(socket):
+    """(value, exact): the socket's constant float, following a Value node; where another node
+    computes it, the carrier's own value and exact False."""
+    link, carrier = source(socket)
+    if link is None:
+        return float(carrier.default_value), True
+    if link.from_node.type == 'VALUE':
+        return float(link.from_node.outputs[0].default_value), True
+    return float(carrier.default_value), False
+
+
+def input_socket(node, *names):
+    """The first of the named inputs the node has, or None."""
+    for n in names:
+        s = node.inputs.get(n)
+        if s is not None:
+            return s
+    return None
+
+
+def _as_color(v):
+    return tuple(v[:3]) if hasattr(v, '__len__') else (v, v, v)
+
+
+def _group_output(ntree):
+    """The Group Output node a group's value comes from (the active one)."""
+    outputs = [n for n in ntree.nodes if n.type == 'GROUP_OUTPUT']
+    return next((n for n in outputs if n.is_active_output), outputs[0] if outputs else None)
+
+
+def _matching(node, side, identifier):
+    """The socket of node.inputs/outputs with that identifier, or None."""
+    if node is None:
+        return None
+    return next((s for s in getattr(node, side) if s.identifier == identifier), None)
