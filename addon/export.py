@@ -13,6 +13,9 @@ Materials (what a diffuse renderer can represent exactly):
 - Diffuse BSDF colour and Principled BSDF Base Color, each constant or an Image Texture on
   the UV map (pixels converted to float scene-linear);
 - Emission (colour x strength) and Principled emission (Emission Color x Emission Strength);
+- colour nodes between constants or an Image Texture and a diffuse colour (Mix, Invert, Gamma,
+  Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp), evaluated per texel and
+  baked into the material's texture (colornodes.py);
 - Add Shader and Mix Shader with a constant factor, combining the above linearly;
 - node groups and reroutes are transparent, as Cycles flattens them (nodegraph.py).
 Documented diffuse approximation of everything else: a shader node of another kind becomes a
@@ -39,6 +42,7 @@ import bpy
 import dacrt
 import numpy as np
 
+from . import colornodes, nodegraph
 from . import scenedata as sd
 from .nodegraph import constant_color, constant_value, input_socket, linked_link, linked_node, output_node
 
@@ -569,13 +573,14 @@ class _MaterialBuilder:
         return c
 
     def _color_closure(self, socket, reasons):
-        """A diffuse colour input: constant, or an Image Texture on the UV map."""
+        """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes
+        (colornodes.py) on constants and one image, baked into a texture."""
         link = linked_link(socket)
+        if link is not None and (link.from_node.type in colornodes.NODE_TYPES or
+                                 (link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha')):
+            return self._evaluated_closure(socket, reasons)
         if link is not None and link.from_node.type == 'TEX_IMAGE':
-            node = link.from_node
-            if link.from_socket.name != 'Color':
-                reasons.append("image alpha used as colour, read as its colour")
-            tex = self._texture(node, reasons)
+            tex = self._texture(link.from_node, reasons)
             if tex is None:
                 return _Closure(const=MISSING_IMAGE)
             return _Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
@@ -583,6 +588,22 @@ class _MaterialBuilder:
         if not ok:
             reasons.append(f"colour from '{link.from_node.bl_label}' node; its own value used")
         return _Closure(const=color)
+
+    def _evaluated_closure(self, socket, reasons):
+        f = colornodes.Evaluator(nodegraph, self._texture, reasons, MISSING_IMAGE).input(socket, True)
+        if f.tex is None:
+            return _Closure(const=f.value)
+        src = f.tex
+        baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
+        baked[..., :3] = f.value
+        baked[..., 3] = src.pixels[..., 3]
+        bad = ~np.isfinite(baked[..., :3]) | (baked[..., :3] < 0)
+        if bad.any():
+            reasons.append(f"colour nodes on image texels gave {int(bad.any(axis=-1).sum())} negative or "
+                           "non-finite texel(s), set to 0")
+            baked[..., :3] = np.where(bad, np.float32(0), baked[..., :3])
+        key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
+        return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension), tex_weight=(1.0, 1.0, 1.0))
 
     def _texture(self, node, reasons):
         img = node.image
@@ -600,13 +621,23 @@ class _MaterialBuilder:
         if img is None:
             reasons.append("Image Texture without an image (magenta, as Cycles)")
             return None
-        pixels = self._images.get(img.as_pointer())
+        # Cycles: with the Alpha output linked, the Color output of an image stored with
+        # associated alpha (float buffers) is unassociated, rgb / alpha (measured in Cycles 5.0)
+        unassociate = bool(node.outputs['Alpha'].is_linked and img.is_float and not img.colorspace_settings.is_data
+                           and img.alpha_mode not in ('CHANNEL_PACKED', 'NONE'))
+        key = (img.as_pointer(), unassociate)
+        pixels = self._images.get(key)
         if pixels is None:
-            pixels = _image_pixels(img, reasons)
+            pixels = self._images.get((img.as_pointer(), False))
             if pixels is None:
-                return None
-            self._images[img.as_pointer()] = pixels
-        return _Texture((img.as_pointer(), interp, ext), pixels, interp, ext)
+                pixels = _image_pixels(img, reasons)
+                if pixels is None:
+                    return None
+                self._images[(img.as_pointer(), False)] = pixels
+            if unassociate:
+                pixels = _unassociated(pixels)
+                self._images[key] = pixels
+        return _Texture(key + (interp, ext), pixels, interp, ext)
 
 
 def coordinates_approximation(tex_node):
@@ -629,6 +660,15 @@ def _note_normal_inputs(node, reasons):
     socket = node.inputs.get('Normal')
     if socket is not None and linked_node(socket) is not None:
         reasons.append("Normal input (bump / normal map) ignored")
+
+
+def _unassociated(rgba):
+    """RGB divided by alpha where alpha is neither 0 nor 1 (Cycles' color_unpremultiply)."""
+    a = rgba[..., 3:4]
+    out = rgba.copy()
+    div = (a != 0) & (a != 1)
+    out[..., :3] = np.where(div, rgba[..., :3] / np.where(div, a, 1), rgba[..., :3])
+    return out
 
 
 def _srgb_to_linear(c):

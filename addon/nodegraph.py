@@ -179,6 +179,13 @@ def input_socket(node, *names):
     return None
 
 
+def input_by_id(node, identifier):
+    """The input of node (GraphNode or Blender node) with that identifier (Blender looks
+    inputs up by name, and nodes such as Mix have several inputs of one name), or None."""
+    s = _matching(unwrap(node), 'inputs', identifier)
+    return None if s is None else GraphSocket(s, node.groups if isinstance(node, GraphNode) else ())
+
+
 def _as_color(v):
     return tuple(v[:3]) if hasattr(v, '__len__') else (v, v, v)
 

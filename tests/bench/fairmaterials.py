@@ -12,8 +12,9 @@ export renders exactly, following the export's own rules (addon/export.py `_Mate
 - any other shader node (Glossy, Glass, ...): replaced by a Diffuse BSDF of the colour the
   export reads from it (its constant 'Color' / 'Base Color', 0.8 grey without one);
 - a linked colour or factor the export reads as the socket's own value (not an Image Texture,
-  RGB or Value node): unlinked, so Cycles uses that value too; Image Textures are kept, with
-  the coordinates, projection, interpolation and extension the export uses;
+  RGB or Value node, or for a diffuse colour one of the colour nodes the export evaluates):
+  unlinked, so Cycles uses that value too; Image Textures and those colour nodes are kept,
+  with the coordinates, projection, interpolation and extension the export uses;
 - the output's Volume and Displacement inputs unlinked; muted shader nodes become the
   default grey Diffuse BSDF.
 Textures, emission, Add and Mix Shader stay as they are: they are what the comparison tests.
@@ -27,7 +28,7 @@ from __future__ import annotations
 
 import bpy
 
-from addon import export, nodegraph
+from addon import colornodes, export, nodegraph
 
 # the layers the export drops, and thin film (it tints only the dropped specular layer)
 ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
@@ -214,16 +215,26 @@ class _Editor:
             self._unlink(carrier, f"'{socket.name}' from '{link.from_node.bl_label}' as its own value")
 
     def _color(self, socket):
-        link = nodegraph.linked_link(socket)
-        if link is None or link.from_node.type != 'TEX_IMAGE':
-            self._own_value(socket)
+        """A diffuse colour input: constants, images and the colour nodes between them stay (the
+        export renders them); any other node feeding the chain is unlinked where the export
+        reads its own value."""
+        link, carrier = nodegraph.source(socket)
+        if link is None:
             return
         node = link.from_node
-        if link.from_socket.name != 'Color':
-            tree, to_socket = link.link.id_data, link.to_socket
-            tree.links.remove(link.link)
-            tree.links.new(node.outputs['Color'], to_socket)
-            self.done.append("image alpha as colour, read as its colour")
+        if node.type in ('RGB', 'VALUE'):
+            return
+        if node.type == 'TEX_IMAGE':
+            self._image(node)
+            return
+        roles = colornodes.node_inputs(node) if node.type in colornodes.NODE_TYPES else None
+        if roles is None:
+            self._unlink(carrier, f"'{socket.name}' from '{node.bl_label}' as its own value")
+            return
+        for ident in roles.values():
+            self._color(nodegraph.input_by_id(node, ident))
+
+    def _image(self, node):
         if export.coordinates_approximation(node):
             self._unlink(node.inputs['Vector'], "texture coordinates: the active render UV map")
         node = nodegraph.unwrap(node)       # the Blender node, to set its properties

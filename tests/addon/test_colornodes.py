@@ -1,0 +1,224 @@
+"""Colour nodes: the numpy formulas against independent scalar references (Python's colorsys
+for HSV; per-channel transcriptions of the blend modes' definitions), and the export's
+evaluation of colour-node chains on constants and image texels (bpy)."""
+import colorsys
+import math
+
+import bpy
+import numpy as np
+import pytest
+
+from addon import colornodes as cn
+from addon import export, nodegraph
+
+from . import scenes
+
+RNG = np.random.default_rng(5)
+COLOURS = np.concatenate([RNG.random((200, 3)), [[0, 0, 0], [1, 1, 1], [0.5, 0.5, 0.5], [1, 0, 0], [0, 1, 0],
+                                                  [0, 0, 1], [1, 1, 0], [0.2, 0.2, 0.9]]])
+
+
+def test_hsv_round_trip_matches_colorsys():
+    hsv = cn.rgb_to_hsv(COLOURS)
+    ref = np.array([colorsys.rgb_to_hsv(*c) for c in COLOURS])
+    assert np.allclose(hsv, ref, atol=1e-12)
+    assert np.allclose(cn.hsv_to_rgb(hsv), COLOURS, atol=1e-12)
+    assert np.allclose(cn.hsv_to_rgb([1.0, 0.5, 0.8]), colorsys.hsv_to_rgb(0.0, 0.5, 0.8))   # hue 1 is hue 0
+
+
+def _scalar_blend(blend, t, a, b):
+    """One channel, written from the definitions (Cycles' kernel/svm/color_util.h)."""
+    tm = 1 - t
+    if blend == 'MIX':
+        return tm * a + t * b
+    if blend == 'MULTIPLY':
+        return tm * a + t * a * b
+    if blend == 'SCREEN':
+        return 1 - (tm + t * (1 - b)) * (1 - a)
+    if blend == 'OVERLAY':
+        return a * (tm + 2 * t * b) if a < 0.5 else 1 - (tm + 2 * t * (1 - b)) * (1 - a)
+    if blend == 'DIVIDE':
+        return tm * a + t * a / b if b != 0 else a
+    if blend == 'DODGE':
+        if a == 0:
+            return a
+        d = 1 - t * b
+        return 1.0 if d <= 0 else min(a / d, 1.0)
+    if blend == 'BURN':
+        d = tm + t * b
+        return 0.0 if d <= 0 else min(max(1 - (1 - a) / d, 0.0), 1.0)
+    if blend == 'EXCLUSION':
+        return max(tm * a + t * (a + b - 2 * a * b), 0.0)
+    if blend == 'LINEAR_LIGHT':
+        return a + t * (2 * b - 1)
+    if blend == 'SOFT_LIGHT':
+        return tm * a + t * ((1 - a) * b * a + a * (1 - (1 - b) * (1 - a)))
+    raise KeyError(blend)
+
+
+@pytest.mark.parametrize('blend', ['MIX', 'MULTIPLY', 'SCREEN', 'OVERLAY', 'DIVIDE', 'DODGE', 'BURN',
+                                   'EXCLUSION', 'LINEAR_LIGHT', 'SOFT_LIGHT'])
+def test_blend_modes_per_channel(blend):
+    a, b = COLOURS, COLOURS[::-1].copy()
+    b[3] = 0.0                                  # a zero divisor
+    for t in (0.0, 0.35, 1.0):
+        got = cn.mix(blend, t, a, b)
+        ref = np.vectorize(lambda x, y: _scalar_blend(blend, t, x, y))(a, b)
+        assert np.allclose(got, ref, atol=1e-12), (blend, t)
+
+
+def test_hsv_blends_and_hue_saturation():
+    a, b = COLOURS, COLOURS[::-1]
+    t = 0.4
+    for i in range(len(a)):
+        h1, h2 = colorsys.rgb_to_hsv(*a[i]), colorsys.rgb_to_hsv(*b[i])
+        hue = np.array(colorsys.hsv_to_rgb(h2[0], h1[1], h1[2])) if h2[1] != 0 else a[i]
+        assert np.allclose(cn.mix('HUE', t, a[i], b[i]), (1 - t) * a[i] + t * hue if h2[1] != 0 else a[i])
+        val = colorsys.hsv_to_rgb(h1[0], h1[1], (1 - t) * h1[2] + t * h2[2])
+        assert np.allclose(cn.mix('VALUE', t, a[i], b[i]), val)
+        h, s, v = colorsys.rgb_to_hsv(*a[i])
+        shifted = np.array(colorsys.hsv_to_rgb((h + 0.1 + 0.5) % 1.0, min(s * 1.5, 1.0), v * 0.8))
+        ref = np.maximum(0.7 * shifted + 0.3 * a[i], 0.0)
+        assert np.allclose(cn.hue_saturation(a[i], 0.1, 1.5, 0.8, 0.7), ref)
+
+
+def test_simple_nodes():
+    c = np.array([0.0, 0.25, 2.0])
+    assert np.allclose(cn.invert(0.5, c), 0.5)
+    assert np.allclose(cn.gamma(np.array([-0.5, 0.0, 0.25]), 2.0), [-0.5, 0.0, 0.0625])
+    assert np.allclose(cn.brightness_contrast(c, 0.1, 0.5), np.maximum(1.5 * c + 0.1 - 0.25, 0))
+    assert np.allclose(cn.gray([1.0, 1.0, 1.0]), 1.0, atol=1e-6)
+
+
+def test_ramp_table_lookup():
+    """A two-stop linear ramp is reproduced between table entries; Constant picks an entry."""
+    table = cn.ramp_table(lambda p: (p, 1 - p, 0.5, 1.0))
+    f = np.array([0.0, 0.1234, 0.5, 0.999, 1.0, -1.0, 2.0, np.nan])
+    got = cn.ramp_lookup(table, f, True)
+    ref = np.clip(np.nan_to_num(f), 0, 1)
+    assert np.allclose(got[:, 0], ref, atol=1e-12) and np.allclose(got[:, 1], 1 - ref, atol=1e-12)
+    assert np.allclose(cn.ramp_lookup(table, np.array([0.5]), False)[0, 0], 127 / 255)
+
+
+# -- the export (bpy) ------------------------------------------------------------------------
+
+def _image_material(name, px, chain, interpolation='Closest'):
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image(name + " image", px)
+    tex.interpolation = interpolation
+    nt.links.new(chain(nt, tex), d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _mix(nt, blend, a, b, fac=0.5):
+    m = nt.nodes.new('ShaderNodeMix')
+    m.data_type, m.blend_type = 'RGBA', blend
+    m.inputs['Factor'].default_value = fac
+    for ident, v in (('A_Color', a), ('B_Color', b)):
+        sock = nodegraph.input_by_id(m, ident).socket
+        if isinstance(v, tuple):
+            sock.default_value = (*v, 1.0)
+        else:
+            nt.links.new(v, sock)
+    return m
+
+
+def _exported_material(mat):
+    builder = export._MaterialBuilder()
+    return builder.materials[builder.index(mat)]
+
+
+PX = np.ones((2, 2, 4), np.float32)
+PX[0, 0, :3], PX[0, 1, :3], PX[1, 0, :3], PX[1, 1, :3] = (0.25, 0.5, 0.75), (0.9, 0.1, 0.2), (0.05, 0.6, 0.3), \
+    (0.7, 0.7, 0.1)
+PX[0, 1, 3] = 0.3
+
+
+def test_chain_on_an_image_is_baked_per_texel(scene):
+    def chain(nt, tex):
+        m = _mix(nt, 'MULTIPLY', tex.outputs['Color'], (0.5, 1.0, 0.0), 0.5)
+        hs = nt.nodes.new('ShaderNodeHueSaturation')
+        hs.inputs['Saturation'].default_value = 0.5
+        nt.links.new(m.outputs['Result'], hs.inputs['Color'])
+        return hs.outputs['Color']
+    m = _exported_material(_image_material("Chain", PX, chain))
+    expect = cn.hue_saturation(cn.mix('MULTIPLY', 0.5, PX[..., :3].astype(np.float64), np.array([0.5, 1.0, 0.0])),
+                               0.5, 0.5, 1.0, 1.0)
+    assert not m.approximated and m.texture is not None and m.texture_interpolation == 'Closest'
+    assert np.allclose(m.texture[..., :3], expect, atol=1e-6) and np.allclose(m.texture[..., 3], PX[..., 3])
+    assert np.allclose(m.base_color, 1.0)
+
+
+def test_constant_chain_folds_to_a_colour(scene):
+    mat, nt, out = scenes._material("Folded")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.2, 0.4, 0.6, 1.0)
+    inv = nt.nodes.new('ShaderNodeInvert')
+    inv.inputs['Fac'].default_value = 0.25
+    nt.links.new(_mix(nt, 'ADD', rgb.outputs[0], (0.1, 0.1, 0.1), 1.0).outputs['Result'], inv.inputs['Color'])
+    nt.links.new(inv.outputs[0], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    m = _exported_material(mat)
+    c = np.array([0.3, 0.5, 0.7])
+    assert m.texture is None and not m.approximated
+    assert np.allclose(m.base_color, 0.75 * c + 0.25 * (1 - c), atol=1e-6)
+
+
+def test_ramp_of_an_alpha_mask_and_unreadable_inputs(scene):
+    """A Color Ramp fed by the image's alpha; a Noise Texture in the chain reads as the input's
+    own value, and a second image as its average, each reported."""
+    def chain(nt, tex):
+        ramp = nt.nodes.new('ShaderNodeValToRGB')
+        ramp.color_ramp.elements[0].color = (1, 0, 0, 1)
+        ramp.color_ramp.elements[1].color = (0, 0, 1, 1)
+        nt.links.new(tex.outputs['Alpha'], ramp.inputs['Fac'])
+        noise = nt.nodes.new('ShaderNodeTexNoise')
+        m = _mix(nt, 'MIX', ramp.outputs['Color'], noise.outputs['Color'], 0.0)
+        other = nt.nodes.new('ShaderNodeTexImage')
+        other.image = scenes.float_image("Other", np.full((4, 4, 4), 0.5, np.float32))
+        return _mix(nt, 'MIX', m.outputs['Result'], other.outputs['Color'], 0.5).outputs['Result']
+    m = _exported_material(_image_material("Ramp", PX, chain))
+    a = PX[..., 3:4].astype(np.float64)
+    ramp = np.concatenate([1 - a, 0 * a, a], axis=-1)
+    assert np.allclose(m.texture[..., :3], 0.5 * ramp + 0.25, atol=1e-2)       # table of 256 entries
+    assert "colour from 'Noise Texture' node; its own value used" in m.approximated
+    assert "two image textures mixed" in m.approximated
+
+
+def test_float_image_with_alpha_linked_is_unassociated(scene):
+    """Cycles divides a float image's colour by its alpha when the Alpha output is linked
+    (measured: 0.9 at alpha 0.3 reads 3.0); not when only Color is used."""
+    def with_alpha(nt, tex):
+        nt.links.new(tex.outputs['Alpha'], nt.nodes.new('ShaderNodeMath').inputs[0])   # used elsewhere
+        return _mix(nt, 'MIX', (1.0, 1.0, 1.0), tex.outputs['Color'], 1.0).outputs['Result']
+    m = _exported_material(_image_material("Alpha", PX, with_alpha))
+    assert np.allclose(m.texture[0, 1, :3], PX[0, 1, :3] / 0.3, atol=1e-6)
+    assert np.allclose(m.texture[0, 0, :3], PX[0, 0, :3])
+    plain = _exported_material(_image_material("Plain", PX, lambda nt, tex: tex.outputs['Color']))
+    assert np.allclose(plain.texture[..., :3], PX[..., :3])
+
+
+def test_fair_editor_keeps_colour_nodes(scene):
+    """The benchmark's fair-material editor keeps what the export evaluates (the image, the Mix
+    and Hue/Saturation nodes) and unlinks only the Noise Texture, where the export reads the
+    Mix input's own value."""
+    from tests.bench import fairmaterials
+    state = {}
+
+    def chain(nt, tex):
+        noise = nt.nodes.new('ShaderNodeTexNoise')
+        m = _mix(nt, 'MULTIPLY', tex.outputs['Color'], noise.outputs['Color'], 0.5)
+        hs = nt.nodes.new('ShaderNodeHueSaturation')
+        nt.links.new(m.outputs['Result'], hs.inputs['Color'])
+        state.update(noise=noise, mix=m, hs=hs)
+        return hs.outputs['Color']
+    mat = _image_material("Kept", PX, chain)
+    assert "Noise Texture" in fairmaterials.remaining_approximations([mat])["Kept"]
+    fairmaterials.make_diffuse([mat])
+    assert fairmaterials.remaining_approximations([mat]) == {}
+    assert not state['noise'].outputs['Color'].is_linked
+    assert state['mix'].outputs['Result'].is_linked and state['hs'].outputs['Color'].is_linked
