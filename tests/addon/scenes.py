@@ -122,6 +122,21 @@ def emissive_diffuse(name, albedo, emission_strength):
     return mat
 
 
+def mix_node(nt, blend, a, b, fac=0.5):
+    """A colour Mix node of blend type `blend` in tree nt: a and b each an RGB tuple (its
+    socket's value) or an output socket to link; returns the node."""
+    m = nt.nodes.new('ShaderNodeMix')
+    m.data_type, m.blend_type = 'RGBA', blend
+    m.inputs['Factor'].default_value = fac
+    for ident, v in (('A_Color', a), ('B_Color', b)):
+        sock = next(s for s in m.inputs if s.identifier == ident)   # inputs['A'] is the float one
+        if isinstance(v, tuple):
+            sock.default_value = (*v, 1.0)
+        else:
+            nt.links.new(v, sock)
+    return m
+
+
 def light(kind, energy, location=(0, 0, 0), rotation=(0, 0, 0), scene=None, name=None, **props):
     data = bpy.data.lights.new(name or kind.title(), kind)
     data.energy = energy

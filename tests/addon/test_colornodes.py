@@ -113,19 +113,6 @@ def _image_material(name, px, chain, interpolation='Closest'):
     return mat
 
 
-def _mix(nt, blend, a, b, fac=0.5):
-    m = nt.nodes.new('ShaderNodeMix')
-    m.data_type, m.blend_type = 'RGBA', blend
-    m.inputs['Factor'].default_value = fac
-    for ident, v in (('A_Color', a), ('B_Color', b)):
-        sock = nodegraph.input_by_id(m, ident).socket
-        if isinstance(v, tuple):
-            sock.default_value = (*v, 1.0)
-        else:
-            nt.links.new(v, sock)
-    return m
-
-
 def _exported_material(mat):
     builder = export._MaterialBuilder()
     return builder.materials[builder.index(mat)]
@@ -139,7 +126,7 @@ PX[0, 1, 3] = 0.3
 
 def test_chain_on_an_image_is_baked_per_texel(scene):
     def chain(nt, tex):
-        m = _mix(nt, 'MULTIPLY', tex.outputs['Color'], (0.5, 1.0, 0.0), 0.5)
+        m = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], (0.5, 1.0, 0.0), 0.5)
         hs = nt.nodes.new('ShaderNodeHueSaturation')
         hs.inputs['Saturation'].default_value = 0.5
         nt.links.new(m.outputs['Result'], hs.inputs['Color'])
@@ -159,7 +146,7 @@ def test_constant_chain_folds_to_a_colour(scene):
     rgb.outputs[0].default_value = (0.2, 0.4, 0.6, 1.0)
     inv = nt.nodes.new('ShaderNodeInvert')
     inv.inputs['Fac'].default_value = 0.25
-    nt.links.new(_mix(nt, 'ADD', rgb.outputs[0], (0.1, 0.1, 0.1), 1.0).outputs['Result'], inv.inputs['Color'])
+    nt.links.new(scenes.mix_node(nt, 'ADD', rgb.outputs[0], (0.1, 0.1, 0.1), 1.0).outputs['Result'], inv.inputs['Color'])
     nt.links.new(inv.outputs[0], d.inputs['Color'])
     nt.links.new(d.outputs[0], out.inputs['Surface'])
     m = _exported_material(mat)
@@ -177,10 +164,10 @@ def test_ramp_of_an_alpha_mask_and_unreadable_inputs(scene):
         ramp.color_ramp.elements[1].color = (0, 0, 1, 1)
         nt.links.new(tex.outputs['Alpha'], ramp.inputs['Fac'])
         noise = nt.nodes.new('ShaderNodeTexNoise')
-        m = _mix(nt, 'MIX', ramp.outputs['Color'], noise.outputs['Color'], 0.0)
+        m = scenes.mix_node(nt, 'MIX', ramp.outputs['Color'], noise.outputs['Color'], 0.0)
         other = nt.nodes.new('ShaderNodeTexImage')
         other.image = scenes.float_image("Other", np.full((4, 4, 4), 0.5, np.float32))
-        return _mix(nt, 'MIX', m.outputs['Result'], other.outputs['Color'], 0.5).outputs['Result']
+        return scenes.mix_node(nt, 'MIX', m.outputs['Result'], other.outputs['Color'], 0.5).outputs['Result']
     m = _exported_material(_image_material("Ramp", PX, chain))
     a = PX[..., 3:4].astype(np.float64)
     ramp = np.concatenate([1 - a, 0 * a, a], axis=-1)
@@ -194,7 +181,7 @@ def test_float_image_with_alpha_linked_is_unassociated(scene):
     (measured: 0.9 at alpha 0.3 reads 3.0); not when only Color is used."""
     def with_alpha(nt, tex):
         nt.links.new(tex.outputs['Alpha'], nt.nodes.new('ShaderNodeMath').inputs[0])   # used elsewhere
-        return _mix(nt, 'MIX', (1.0, 1.0, 1.0), tex.outputs['Color'], 1.0).outputs['Result']
+        return scenes.mix_node(nt, 'MIX', (1.0, 1.0, 1.0), tex.outputs['Color'], 1.0).outputs['Result']
     m = _exported_material(_image_material("Alpha", PX, with_alpha))
     assert np.allclose(m.texture[0, 1, :3], PX[0, 1, :3] / 0.3, atol=1e-6)
     assert np.allclose(m.texture[0, 0, :3], PX[0, 0, :3])
@@ -211,7 +198,7 @@ def test_fair_editor_keeps_colour_nodes(scene):
 
     def chain(nt, tex):
         noise = nt.nodes.new('ShaderNodeTexNoise')
-        m = _mix(nt, 'MULTIPLY', tex.outputs['Color'], noise.outputs['Color'], 0.5)
+        m = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], noise.outputs['Color'], 0.5)
         hs = nt.nodes.new('ShaderNodeHueSaturation')
         nt.links.new(m.outputs['Result'], hs.inputs['Color'])
         state.update(noise=noise, mix=m, hs=hs)

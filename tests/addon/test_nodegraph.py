@@ -45,6 +45,17 @@ def _principled_group():
     return g
 
 
+def _output_from_group(tree, output_type, group):
+    """Replace the tree by an output node of output_type fed by a Group node of `group`'s
+    'Shader' output; returns the Group node."""
+    tree.nodes.clear()
+    out = tree.nodes.new(output_type)
+    node = tree.nodes.new('ShaderNodeGroup')
+    node.node_tree = group
+    tree.links.new(node.outputs['Shader'], out.inputs['Surface'])
+    return node
+
+
 def _material_using(group, name, tint=None, tint_node=None):
     mat, nt, out = scenes._material(name)
     node = nt.nodes.new('ShaderNodeGroup')
@@ -174,13 +185,7 @@ def test_world_and_light_groups(scene, exported):
     bg.inputs['Color'].default_value = (0.5, 0.25, 1.0, 1.0)
     g.links.new(gi.outputs['Strength'], bg.inputs['Strength'])
     g.links.new(bg.outputs[0], go.inputs['Shader'])
-    wt = scene.world.node_tree
-    wt.nodes.clear()
-    wout = wt.nodes.new('ShaderNodeOutputWorld')
-    wn = wt.nodes.new('ShaderNodeGroup')
-    wn.node_tree = g
-    wn.inputs['Strength'].default_value = 2.0
-    wt.links.new(wn.outputs['Shader'], wout.inputs['Surface'])
+    _output_from_group(scene.world.node_tree, 'ShaderNodeOutputWorld', g).inputs['Strength'].default_value = 2.0
     lamp = scenes.light('POINT', 100.0, location=(0, 0, 3), name="Lamp")
     lamp.data.use_nodes = True
     lg, _, lgo = _group("LampShader")
@@ -188,12 +193,7 @@ def test_world_and_light_groups(scene, exported):
     em.inputs['Color'].default_value = (1.0, 0.5, 0.5, 1.0)
     em.inputs['Strength'].default_value = 0.5
     lg.links.new(em.outputs[0], lgo.inputs['Shader'])
-    lt = lamp.data.node_tree
-    lt.nodes.clear()
-    lout = lt.nodes.new('ShaderNodeOutputLight')
-    ln = lt.nodes.new('ShaderNodeGroup')
-    ln.node_tree = lg
-    lt.links.new(ln.outputs['Shader'], lout.inputs['Surface'])
+    _output_from_group(lamp.data.node_tree, 'ShaderNodeOutputLight', lg)
     scenes.plane("Floor")
     data = exported()
     assert np.allclose(data.world, (1.0, 0.5, 2.0))

@@ -21,19 +21,6 @@ TEXELS = [(slice(2, 6), slice(2, 6)), (slice(2, 6), slice(10, 14)), (slice(10, 1
           (slice(10, 14), slice(10, 14))]
 
 
-def _mix(nt, blend, a, b, fac):
-    m = nt.nodes.new('ShaderNodeMix')
-    m.data_type, m.blend_type = 'RGBA', blend
-    m.inputs['Factor'].default_value = fac
-    for ident, v in (('A_Color', a), ('B_Color', b)):
-        sock = nodegraph.input_by_id(m, ident).socket
-        if isinstance(v, tuple):
-            sock.default_value = (*v, 1.0)
-        else:
-            nt.links.new(v, sock)
-    return m.outputs['Result']
-
-
 def _after(nt, kind, socket, **inputs):
     n = nt.nodes.new(kind)
     for k, v in inputs.items():
@@ -43,12 +30,13 @@ def _after(nt, kind, socket, **inputs):
 
 
 def multiply_hue(nt, tex):
-    m = _mix(nt, 'MULTIPLY', tex.outputs['Color'], (0.3, 0.8, 0.5), 0.6)
+    m = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], (0.3, 0.8, 0.5), 0.6).outputs['Result']
     return _after(nt, 'ShaderNodeHueSaturation', m, Hue=0.3, Saturation=1.4, Value=0.9, Fac=0.8)
 
 
 def overlay_invert(nt, tex):
-    return _after(nt, 'ShaderNodeInvert', _mix(nt, 'OVERLAY', tex.outputs['Color'], (0.3, 0.8, 0.5), 0.6), Fac=0.7)
+    m = scenes.mix_node(nt, 'OVERLAY', tex.outputs['Color'], (0.3, 0.8, 0.5), 0.6).outputs['Result']
+    return _after(nt, 'ShaderNodeInvert', m, Fac=0.7)
 
 
 def gamma_contrast(nt, tex):
