@@ -20,7 +20,8 @@ Materials (what a diffuse renderer can represent exactly):
 - node groups and reroutes are transparent, as Cycles flattens them (nodegraph.py).
 Documented diffuse approximation of everything else: a shader node of another kind becomes a
 diffuse surface with its constant 'Color' (or 'Base Color') input, 0.8 grey without one; a
-linked input that is not an Image Texture (or RGB/Value node) uses the socket's own value; the
+linked input that is not an Image Texture, an RGB/Value node or (for a diffuse colour) one of
+the colour nodes above uses its own value (the socket's, or where its chain left a group); the
 Principled BSDF keeps only its diffuse base (no specular layer, metal, coat, sheen,
 transmission, subsurface or alpha); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
 BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
