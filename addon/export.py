@@ -436,12 +436,16 @@ class _Closure:
 
 
 def _nonnegative(v, label, reasons):
-    """v with negative or non-finite channels set to 0 (Cycles would subtract light or produce
-    NaN; a diffuse path tracer's weights must be finite and non-negative), noted in reasons."""
+    """v (a colour (3,), or texels (h, w, 3)) with negative or non-finite channels set to 0
+    (Cycles would subtract light or produce NaN; a diffuse path tracer's weights must be finite
+    and non-negative), noted in reasons."""
     bad = ~np.isfinite(v) | (v < 0)
     if not bad.any():
         return v
-    reasons.append(f"negative or non-finite {label} {tuple(float(x) for x in v)} set to 0 per channel")
+    if v.ndim == 1:
+        reasons.append(f"negative or non-finite {label} {tuple(float(x) for x in v)} set to 0 per channel")
+    else:
+        reasons.append(f"{int(bad.any(axis=-1).sum())} texel(s) of negative or non-finite {label} set to 0")
     return np.where(bad, np.float32(0), v).astype(np.float32)
 
 
@@ -453,7 +457,8 @@ class _MaterialBuilder:
                                       base_color=np.array(DEFAULT_ALBEDO, np.float32),
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
-        self._images = {}
+        self._images = {}          # image pointer -> its pixels
+        self._unassociated = {}    # image pointer -> its pixels, rgb / alpha
         self.uses_texture = [False]
 
     def index(self, mat):
@@ -596,13 +601,8 @@ class _MaterialBuilder:
             return _Closure(const=f.value)
         src = f.tex
         baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
-        baked[..., :3] = f.value
+        baked[..., :3] = _nonnegative(f.value.astype(np.float32), "colour from colour nodes", reasons)
         baked[..., 3] = src.pixels[..., 3]
-        bad = ~np.isfinite(baked[..., :3]) | (baked[..., :3] < 0)
-        if bad.any():
-            reasons.append(f"colour nodes on image texels gave {int(bad.any(axis=-1).sum())} negative or "
-                           "non-finite texel(s), set to 0")
-            baked[..., :3] = np.where(bad, np.float32(0), baked[..., :3])
         key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
         return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension), tex_weight=(1.0, 1.0, 1.0))
 
@@ -626,19 +626,18 @@ class _MaterialBuilder:
         # associated alpha (float buffers) is unassociated, rgb / alpha (measured in Cycles 5.0)
         unassociate = bool(node.outputs['Alpha'].is_linked and img.is_float and not img.colorspace_settings.is_data
                            and img.alpha_mode not in ('CHANNEL_PACKED', 'NONE'))
-        key = (img.as_pointer(), unassociate)
+        key = img.as_pointer()
         pixels = self._images.get(key)
         if pixels is None:
-            pixels = self._images.get((img.as_pointer(), False))
+            pixels = _image_pixels(img, reasons)
             if pixels is None:
-                pixels = _image_pixels(img, reasons)
-                if pixels is None:
-                    return None
-                self._images[(img.as_pointer(), False)] = pixels
-            if unassociate:
-                pixels = _unassociated(pixels)
-                self._images[key] = pixels
-        return _Texture(key + (interp, ext), pixels, interp, ext)
+                return None
+            self._images[key] = pixels
+        if unassociate:
+            if key not in self._unassociated:
+                self._unassociated[key] = _unassociated(pixels)
+            pixels = self._unassociated[key]
+        return _Texture((key, unassociate, interp, ext), pixels, interp, ext)
 
 
 def coordinates_approximation(tex_node):

@@ -209,3 +209,14 @@ def test_fair_editor_keeps_colour_nodes(scene):
     assert fairmaterials.remaining_approximations([mat]) == {}
     assert not state['noise'].outputs['Color'].is_linked
     assert state['mix'].outputs['Result'].is_linked and state['hs'].outputs['Color'].is_linked
+
+
+def test_negative_texels_from_colour_nodes_become_zero(scene):
+    """Subtract can make texels negative; like a negative constant colour, they become 0 and
+    the material says so."""
+    m = _exported_material(_image_material(
+        "Sub", PX, lambda nt, tex: scenes.mix_node(nt, 'SUBTRACT', tex.outputs['Color'], (0.5, 0.5, 0.5),
+                                                   1.0).outputs['Result']))
+    expect = np.maximum(PX[..., :3] - 0.5, 0.0)
+    assert np.allclose(m.texture[..., :3], expect, atol=1e-6)
+    assert "4 texel(s) of negative or non-finite colour from colour nodes set to 0" in m.approximated
