@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import nodegraph
+
 # Linear Rec.709 luminance: Cycles' colour -> float conversion (film rgb_to_y) in Blender's
 # default scene-linear space
 LUMINANCE = np.array([0.2126729, 0.7151522, 0.0721750])
@@ -226,18 +228,18 @@ class Field:
 
 class Evaluator:
     """Evaluates what feeds a colour or float input through the colour nodes above, as one
-    value per texel of (at most) one image. graph: the nodegraph module (how links are
-    followed); texture(node, reasons) -> the export's image of an Image Texture node (an object
-    with .pixels (h, w, 4) and .key) or None (then `missing`, a colour). Unsupported nodes give the
-    input's own value; a second, different image its average colour; both noted in reasons."""
+    value per texel of (at most) one image (links followed by nodegraph). texture(node,
+    reasons) -> the export's image of an Image Texture node (an object with .pixels (h, w, 4)
+    and .key) or None (then `missing`, a colour). Unsupported nodes give the input's own value;
+    a second, different image its average colour; both noted in reasons."""
 
     MAX_DEPTH = 64
 
-    def __init__(self, graph, texture, reasons, missing):
-        self.graph, self.texture, self.reasons, self.missing = graph, texture, reasons, missing
+    def __init__(self, texture, reasons, missing):
+        self.texture, self.reasons, self.missing = texture, reasons, missing
 
     def input(self, socket, color, depth=0):
-        link, carrier = self.graph.source(socket)
+        link, carrier = nodegraph.source(socket)
         if link is None:
             return Field(_own(carrier.default_value, color))
         f = self._node(link.from_node, link.from_socket, depth) if depth < self.MAX_DEPTH else None
@@ -264,7 +266,7 @@ class Evaluator:
         float_mix = t == 'MIX' and node.data_type == 'FLOAT'
         x = {}
         for role, ident in roles.items():
-            sock = self.graph.input_by_id(node, ident)
+            sock = nodegraph.input_by_id(node, ident)
             x[role] = self.input(sock, role in _COLOR_ROLES and not float_mix, depth + 1)
         tex = self._join(x.values())
         v = {role: f.value for role, f in x.items()}

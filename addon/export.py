@@ -43,7 +43,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import colornodes, nodegraph
+from . import colornodes
 from . import scenedata as sd
 from .nodegraph import constant_color, constant_value, input_socket, linked_link, linked_node, output_node
 
@@ -596,7 +596,7 @@ class _MaterialBuilder:
         return _Closure(const=color)
 
     def _evaluated_closure(self, socket, reasons):
-        f = colornodes.Evaluator(nodegraph, self._texture, reasons, MISSING_IMAGE).input(socket, True)
+        f = colornodes.Evaluator(self._texture, reasons, MISSING_IMAGE).input(socket, True)
         if f.tex is None:
             return _Closure(const=f.value)
         src = f.tex
