@@ -11,7 +11,8 @@ instances is read once and transformed for all of its instances in one batch.
 
 Materials (what a diffuse renderer can represent exactly):
 - Diffuse BSDF colour and Principled BSDF Base Color, each constant or an Image Texture on
-  the UV map (pixels converted to float scene-linear);
+  the UV map, directly or through Mapping nodes (mapping.py; pixels converted to float
+  scene-linear);
 - Emission (colour x strength) and Principled emission (Emission Color x Emission Strength);
 - colour nodes between constants or an Image Texture and a diffuse colour (Mix, Invert, Gamma,
   Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp), evaluated per texel and
@@ -25,7 +26,8 @@ the colour nodes above uses its own value (the socket's, or where its chain left
 Principled BSDF keeps only its diffuse base (no specular layer, metal, coat, sheen,
 transmission, subsurface or alpha); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
 BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
-texture coordinates other than UV are read as the active render UV map.
+texture coordinates other than the UV map (and Mapping nodes of it) are read as the active
+render UV map.
 Each approximated material says why in `Material.approximated`; the export reports them in
 one message. Objects without a material get the default material (Blender's default surface is a
 Principled BSDF: its 0.8 diffuse base), reported with them when used.
@@ -45,6 +47,7 @@ import numpy as np
 
 from . import colornodes
 from . import scenedata as sd
+from .mapping import environment_rotation, texture_transform
 from .nodegraph import constant_color, constant_value, input_socket, linked_link, linked_node, output_node
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
@@ -339,75 +342,20 @@ def _environment(node, strength, reasons):
     if node.interpolation in LINEAR_INTERPOLATIONS:
         reasons.append(f"{node.interpolation.lower()} environment interpolation as linear")
     env = sd.Environment(np.ascontiguousarray(rgb, np.float32), np.full(3, strength, np.float32),
-                         _environment_rotation(node, reasons), interp)
+                         environment_rotation(node, reasons), interp)
     return np.zeros(3, np.float32), env
-
-
-# Texture Coordinate outputs that are the ray direction in a world shader
-_DIRECTION_COORDINATES = ('Generated', 'Normal', 'Object')
-
-
-def _environment_rotation(node, reasons):
-    """(3, 3) orthogonal world -> map-frame matrix from the Environment Texture's Vector input:
-    the view direction, optionally through a Mapping node (its rotation and the signs of its
-    scale are exact for directions; non-uniform scale and location are not representable)."""
-    link = linked_link(node.inputs['Vector'])
-    if link is None:
-        return np.eye(3)
-    src = link.from_node
-    if src.type == 'MAPPING':
-        inner = linked_link(src.inputs['Vector'])
-        if inner is None or not _is_direction(inner):
-            what = 'nothing' if inner is None else f"'{inner.from_node.bl_label}' {inner.from_socket.name}"
-            reasons.append(f"Mapping node fed by {what}: read as the view direction")
-        return _mapping_matrix(src, reasons)
-    if not _is_direction(link):
-        reasons.append(f"environment coordinates from '{src.bl_label}' {link.from_socket.name} read as the "
-                       "view direction")
-    return np.eye(3)
-
-
-def _is_direction(link):
-    node = link.from_node
-    return (node.type == 'TEX_COORD' and link.from_socket.name in _DIRECTION_COORDINATES
-            and (link.from_socket.name != 'Object' or node.object is None))
-
-
-def _mapping_matrix(node, reasons):
-    """The direction part of a Mapping node (Blender/Cycles: Point and Vector rotate the scaled
-    vector, Texture is the inverse, Normal rotates the vector divided by the scale)."""
-    from mathutils import Euler
-    kind = node.vector_type
-    values = {}
-    for name in ('Location', 'Rotation', 'Scale'):
-        sock = node.inputs.get(name)
-        if sock is None or not sock.enabled:
-            continue
-        if linked_link(sock) is not None:
-            reasons.append(f"Mapping {name} driven by nodes; its own value used")
-        values[name] = np.array(sock.default_value, np.float64)
-    rot = np.array(Euler(values.get('Rotation', np.zeros(3)), 'XYZ').to_matrix(), np.float64)
-    scale = values.get('Scale', np.ones(3))
-    if not (np.abs(scale) > 0).all():
-        reasons.append("Mapping with a zero Scale ignored")
-        return np.eye(3)
-    if not np.allclose(np.abs(scale), np.abs(scale[0]), rtol=1e-6):
-        reasons.append(f"Mapping Scale {tuple(float(v) for v in scale)}: only its signs used (a non-uniform "
-                       "scale bends the map)")
-    sign = np.diag(np.sign(scale))
-    if kind in ('POINT', 'TEXTURE') and np.any(values.get('Location', np.zeros(3)) != 0):
-        reasons.append("Mapping Location ignored (the map is looked up by direction)")
-    return sign @ rot.T if kind == 'TEXTURE' else rot @ sign
 
 
 # ----------------------------------------------------------------------------------------
 # Materials
 
 class _Texture:
-    """An image texture as the shader graph uses it (pixels shared between materials)."""
-    def __init__(self, key, pixels, interpolation, extension):
+    """An image texture as the shader graph uses it (pixels shared between materials), read at
+    (x, y) = transform @ (u, v, 1) of the UV map (transform None: the UV map itself)."""
+    def __init__(self, key, pixels, interpolation, extension, transform=None):
         self.key, self.pixels = key, pixels
         self.interpolation, self.extension = interpolation, extension
+        self.transform = transform
 
 
 class _Closure:
@@ -490,24 +438,24 @@ class _MaterialBuilder:
                 if out is not None and out.inputs.get(socket) is not None and \
                         linked_node(out.inputs[socket]) is not None:
                     reasons.append(f"{socket.lower()} ignored")
-        base, texture, interp, ext = self._albedo(closure)
+        base, texture, interp, ext, transform = self._albedo(closure)
         base = _nonnegative(base, "colour", reasons)
         emission = _nonnegative(closure.emission.astype(np.float32), "emission", reasons)
         return sd.Material(name=name, base_color=base,
                            emission=emission, texture=texture,
-                           texture_interpolation=interp, texture_extension=ext,
+                           texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            approximated='; '.join(dict.fromkeys(reasons)))
 
     @staticmethod
     def _albedo(c):
         if c.texture is None or not np.any(c.tex_weight):
-            return c.const.astype(np.float32), None, 'Linear', 'REPEAT'
+            return c.const.astype(np.float32), None, 'Linear', 'REPEAT', None
         t = c.texture
         if not np.any(c.const):
-            return c.tex_weight.astype(np.float32), t.pixels, t.interpolation, t.extension
+            return c.tex_weight.astype(np.float32), t.pixels, t.interpolation, t.extension, t.transform
         baked = t.pixels.copy()
         baked[..., :3] = t.pixels[..., :3] * c.tex_weight.astype(np.float32) + c.const.astype(np.float32)
-        return np.ones(3, np.float32), baked, t.interpolation, t.extension
+        return np.ones(3, np.float32), baked, t.interpolation, t.extension, t.transform
 
     def _shader(self, socket, reasons, depth):
         node = linked_node(socket)
@@ -604,13 +552,12 @@ class _MaterialBuilder:
         baked[..., :3] = _nonnegative(f.value.astype(np.float32), "colour from colour nodes", reasons)
         baked[..., 3] = src.pixels[..., 3]
         key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
-        return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension), tex_weight=(1.0, 1.0, 1.0))
+        return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension, src.transform),
+                        tex_weight=(1.0, 1.0, 1.0))
 
     def _texture(self, node, reasons):
         img = node.image
-        coords = coordinates_approximation(node)
-        if coords:
-            reasons.append(coords)
+        transform = texture_transform(node, reasons)
         if node.projection != 'FLAT':
             reasons.append(f"{node.projection.lower()} image projection as flat")
         interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
@@ -637,22 +584,8 @@ class _MaterialBuilder:
             if key not in self._unassociated:
                 self._unassociated[key] = _unassociated(pixels)
             pixels = self._unassociated[key]
-        return _Texture((key, unassociate, interp, ext), pixels, interp, ext)
-
-
-def coordinates_approximation(tex_node):
-    """Why an Image Texture's Vector input is not read exactly (the export always reads the
-    active render UV map), or '' when it is."""
-    link = linked_link(tex_node.inputs['Vector'])
-    if link is None:
-        return ''
-    vec = link.from_node
-    if vec.type == 'UVMAP':
-        return f"UV Map '{vec.uv_map}' read as the active render UV map" if vec.uv_map else ''
-    if vec.type == 'TEX_COORD':
-        return '' if link.from_socket.name == 'UV' else \
-            f"{link.from_socket.name} texture coordinates read as the UV map"
-    return f"texture coordinates from '{vec.bl_label}' read as the UV map"
+        where = None if transform is None else tuple(transform.ravel())
+        return _Texture((key, unassociate, interp, ext, where), pixels, interp, ext, transform)
 
 
 def _note_normal_inputs(node, reasons):

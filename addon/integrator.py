@@ -173,7 +173,7 @@ class _Materials:
         if not materials:
             raise ValueError("scene has no materials (index 0 must be the default material)")
         base, emit = [], []
-        self.textures = []          # (material index, texture, interpolation, extension)
+        self.textures = []          # (material index, texture, interpolation, extension, uv transform)
         for i, mat in enumerate(materials):
             b = np.asarray(mat.base_color, np.float64)
             e = np.asarray(mat.emission, np.float64)
@@ -193,8 +193,15 @@ class _Materials:
                 if mat.texture_extension not in ('REPEAT', 'EXTEND', 'CLIP'):
                     raise ValueError(f"material {mat.name!r}: texture_extension "
                                      f"{mat.texture_extension!r} is not REPEAT, EXTEND or CLIP")
+                xf = mat.texture_transform
+                if xf is not None:
+                    xf = np.asarray(xf, np.float64)
+                    if xf.shape != (2, 3) or not np.isfinite(xf).all():
+                        raise ValueError(f"material {mat.name!r}: texture_transform must be (2, 3) finite, "
+                                         f"got {xf!r}")
+                    xf = xf.astype(F32)
                 self.textures.append((i, np.ascontiguousarray(tex, F32), mat.texture_interpolation,
-                                      mat.texture_extension))
+                                      mat.texture_extension, xf))
         self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
         self.emissive = self.emission.max(axis=0) > 0
@@ -769,18 +776,20 @@ class Integrator:
         return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D)
 
     def _texture(self, prim, u, v, albedo):
-        """Multiply image textures (on the UV map) into albedo (3,k) (or a throughput that
-        includes it) in place."""
+        """Multiply image textures (on the UV map, through each texture's affine map) into
+        albedo (3,k) (or a throughput that includes it) in place."""
         if self.tri.uvs is None:
             return
         mat = np.take(self.tri.material, prim)
-        for m, tex, interp, ext in self.mats.textures:
+        for m, tex, interp, ext, xf in self.mats.textures:
             sel = np.flatnonzero(mat == m)
             if len(sel):
                 uvc = np.take(self.tri.uvs, np.take(prim, sel), axis=1)
                 us, vs = np.take(u, sel), np.take(v, sel)
                 tu = uvc[0] + uvc[2] * us + uvc[4] * vs
                 tv = uvc[1] + uvc[3] * us + uvc[5] * vs
+                if xf is not None:
+                    tu, tv = xf[0, 0] * tu + xf[0, 1] * tv + xf[0, 2], xf[1, 0] * tu + xf[1, 1] * tv + xf[1, 2]
                 albedo[:, sel] *= texture_lookup(tex, tu, tv, interp, ext)
 
     def _write_passes(self, path, hits, hit, data, pix, samp):

@@ -90,6 +90,8 @@ class Material:
     texture: Optional[np.ndarray] = None          # (h, w, 4) float32 linear RGBA, row 0 at the bottom
     texture_interpolation: str = 'Linear'         # 'Closest' | 'Linear'
     texture_extension: str = 'REPEAT'             # 'REPEAT' | 'EXTEND' | 'CLIP'
+    texture_transform: Optional[np.ndarray] = None   # (2, 3): the texture is read at
+                                                  # (x, y) = T @ (u, v, 1); None: at (u, v)
     approximated: str = ''                        # non-empty: why this is a diffuse approximation
 
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import bpy
 
-from addon import colornodes, export, nodegraph
+from addon import colornodes, export, mapping, nodegraph
 
 # the layers the export drops, and thin film (it tints only the dropped specular layer)
 ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
@@ -235,7 +235,7 @@ class _Editor:
             self._color(nodegraph.input_by_id(node, ident))
 
     def _image(self, node):
-        if export.coordinates_approximation(node):
+        if mapping.coordinates_approximation(node):
             self._unlink(node.inputs['Vector'], "texture coordinates: the active render UV map")
         node = nodegraph.unwrap(node)       # the Blender node, to set its properties
         if node.projection != 'FLAT':

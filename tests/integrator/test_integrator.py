@@ -425,6 +425,22 @@ def test_textured_albedo_multiplies_base_colour():
     assert np.allclose(render(scene).film.combined()[..., :3], [0.4, 0.2, 0.1], rtol=1e-5)
 
 
+def test_texture_transform_moves_the_lookup():
+    """The material's (2, 3) texture transform maps the UV map before the lookup: a shift by
+    half the width reads the texel to the right; a transform of the wrong shape is refused."""
+    scene = plane_scene([light('SUN', np.pi, np.eye(4))], samples=4)
+    tex = np.ones((2, 2, 4), np.float32)
+    tex[0, 0, :3], tex[0, 1, :3] = (0.2, 0.3, 0.4), (0.6, 0.5, 0.1)
+    scene.geometry.uvs = np.full((2, 3, 2), 0.25, np.float32)
+    scene.materials[1] = material('tex', (1.0, 1.0, 1.0), texture=tex, texture_interpolation='Closest')
+    assert np.allclose(render(scene).film.combined()[..., :3], [0.2, 0.3, 0.4], rtol=1e-5)
+    scene.materials[1].texture_transform = np.array([[1.0, 0.0, 0.5], [0.0, 1.0, 0.0]])
+    assert np.allclose(render(scene).film.combined()[..., :3], [0.6, 0.5, 0.1], rtol=1e-5)
+    scene.materials[1].texture_transform = np.eye(2)
+    with pytest.raises(ValueError, match="texture_transform must be"):
+        render(scene)
+
+
 # --- smooth normals -----------------------------------------------------------------------------
 
 def test_smooth_normals_shade_with_the_interpolated_normal():

@@ -1,0 +1,149 @@
+"""Mapping nodes: what a chain of Mapping nodes does to the vectors it is given, as Cycles
+computes it (kernel/svm/mapping_util.h, svm_mapping), and the two places the export reads them:
+the texture coordinates of an Image Texture (an affine map of the UV map, exact) and the
+direction of an Environment Texture (a rotation, exact for rotations and the signs of a scale).
+
+Cycles, with R the Euler XYZ rotation matrix (Blender's, Rz Ry Rx), s the scale, l the location:
+  Point:   R (v * s) + l          Texture: safe_divide(R^T (v - l), s)
+  Vector:  R (v * s)              Normal:  normalize(R safe_divide(v, s))
+safe_divide gives 0 where the divisor is 0. Part of the export layer (reads Blender nodes,
+through nodegraph so groups and reroutes are transparent).
+"""
+
+import numpy as np
+
+from .nodegraph import linked_link, source
+
+# Texture Coordinate outputs that are the ray direction in a world shader
+_DIRECTION_COORDINATES = ('Generated', 'Normal', 'Object')
+_MAX_CHAIN = 64
+
+
+def _rotation(euler):
+    """Blender's Euler XYZ rotation matrix (mathutils.Euler(..., 'XYZ').to_matrix())."""
+    cx, cy, cz = np.cos(euler)
+    sx, sy, sz = np.sin(euler)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def _safe_inverse(s):
+    return np.where(s != 0, 1.0 / np.where(s != 0, s, 1.0), 0.0)
+
+
+def _vector_input(node, name, default, reasons):
+    """The constant vector of a Mapping input (its own value, or the carrier's where the chain
+    crossed a group boundary); a computed one is reported and its own value used."""
+    sock = node.inputs.get(name)
+    if sock is None or not sock.enabled:
+        return np.array(default, np.float64)
+    link, carrier = source(sock)
+    if link is not None:
+        reasons.append(f"Mapping {name} driven by nodes; its own value used")
+    return np.array(carrier.default_value[:3], np.float64)
+
+
+def mapping_affine(node, reasons):
+    """(M, t): the Mapping node as v -> M v + t (3x3, 3), float64. The Normal type normalises
+    its result, which no affine map does: reported, and read without the normalisation."""
+    loc = _vector_input(node, 'Location', (0, 0, 0), reasons)
+    rot = _rotation(_vector_input(node, 'Rotation', (0, 0, 0), reasons))
+    scale = _vector_input(node, 'Scale', (1, 1, 1), reasons)
+    kind = node.vector_type
+    if kind == 'POINT':
+        return rot * scale[None, :], loc
+    if kind == 'TEXTURE':
+        m = _safe_inverse(scale)[:, None] * rot.T
+        return m, -m @ loc
+    if kind == 'NORMAL':
+        reasons.append("Mapping of type Normal read without its normalisation")
+        return rot * _safe_inverse(scale)[None, :], np.zeros(3)
+    return rot * scale[None, :], np.zeros(3)      # VECTOR
+
+
+def texture_transform(tex_node, reasons):
+    """How an Image Texture's Vector input maps the active render UV map (u, v, 0): a (2, 3)
+    float64 T with (x, y) = T @ (u, v, 1), or None for the UV map itself. Chains of Mapping
+    nodes compose exactly; a Mapping with nothing linked maps its own (constant) vector. Other
+    sources are read as the UV map, with the reason in reasons."""
+    M, t = np.eye(3), np.zeros(3)         # from the vector reached so far to the image's
+    link = linked_link(tex_node.inputs['Vector'])
+    for _ in range(_MAX_CHAIN):
+        if link is None or link.from_node.type != 'MAPPING':
+            break
+        mi, ti = mapping_affine(link.from_node, reasons)
+        M, t = M @ mi, M @ ti + t
+        inner = linked_link(link.from_node.inputs['Vector'])
+        if inner is None:                 # a constant point: every shading point reads one texel
+            _, carrier = source(link.from_node.inputs['Vector'])
+            p = M @ np.array(carrier.default_value[:3], np.float64) + t
+            return np.array([[0.0, 0.0, p[0]], [0.0, 0.0, p[1]]])
+        link = inner
+    if link is not None:
+        vec = link.from_node
+        if vec.type == 'UVMAP':
+            if vec.uv_map:
+                reasons.append(f"UV Map '{vec.uv_map}' read as the active render UV map")
+        elif vec.type == 'TEX_COORD':
+            if link.from_socket.name != 'UV':
+                reasons.append(f"{link.from_socket.name} texture coordinates read as the UV map")
+        elif vec.type == 'MAPPING':
+            reasons.append("Mapping chain too long; read as the UV map")
+        else:
+            reasons.append(f"texture coordinates from '{vec.bl_label}' read as the UV map")
+    if np.array_equal(M, np.eye(3)) and not t.any():
+        return None
+    return np.array([[M[0, 0], M[0, 1], t[0]], [M[1, 0], M[1, 1], t[1]]])
+
+
+def coordinates_approximation(tex_node):
+    """Why an Image Texture's Vector input is not read exactly, or '' when it is."""
+    reasons = []
+    texture_transform(tex_node, reasons)
+    return '; '.join(reasons)
+
+
+def environment_rotation(node, reasons):
+    """(3, 3) orthogonal world -> map-frame matrix from the Environment Texture's Vector input:
+    the view direction, optionally through a Mapping node (its rotation and the signs of its
+    scale are exact for directions; non-uniform scale and location are not representable)."""
+    link = linked_link(node.inputs['Vector'])
+    if link is None:
+        return np.eye(3)
+    src = link.from_node
+    if src.type == 'MAPPING':
+        inner = linked_link(src.inputs['Vector'])
+        if inner is None or not _is_direction(inner):
+            what = 'nothing' if inner is None else f"'{inner.from_node.bl_label}' {inner.from_socket.name}"
+            reasons.append(f"Mapping node fed by {what}: read as the view direction")
+        return _direction_matrix(src, reasons)
+    if not _is_direction(link):
+        reasons.append(f"environment coordinates from '{src.bl_label}' {link.from_socket.name} read as the "
+                       "view direction")
+    return np.eye(3)
+
+
+def _is_direction(link):
+    node = link.from_node
+    return (node.type == 'TEX_COORD' and link.from_socket.name in _DIRECTION_COORDINATES
+            and (link.from_socket.name != 'Object' or node.object is None))
+
+
+def _direction_matrix(node, reasons):
+    """The direction part of a Mapping node (Point and Vector rotate the scaled vector, Texture
+    is the inverse, Normal rotates the vector divided by the scale)."""
+    kind = node.vector_type
+    rot = _rotation(_vector_input(node, 'Rotation', (0, 0, 0), reasons))
+    scale = _vector_input(node, 'Scale', (1, 1, 1), reasons)
+    if not (np.abs(scale) > 0).all():
+        reasons.append("Mapping with a zero Scale ignored")
+        return np.eye(3)
+    if not np.allclose(np.abs(scale), np.abs(scale[0]), rtol=1e-6):
+        reasons.append(f"Mapping Scale {tuple(float(v) for v in scale)}: only its signs used (a non-uniform "
+                       "scale bends the map)")
+    sign = np.diag(np.sign(scale))
+    if kind in ('POINT', 'TEXTURE') and np.any(_vector_input(node, 'Location', (0, 0, 0), []) != 0):
+        reasons.append("Mapping Location ignored (the map is looked up by direction)")
+    return sign @ rot.T if kind == 'TEXTURE' else rot @ sign

@@ -1,0 +1,140 @@
+"""Mapping nodes on image texture coordinates: the export turns a chain of Mapping nodes on the
+UV map into the affine map Cycles applies (svm_mapping), checked here against the formulas
+worked by hand and against Blender's own Euler matrices; the renders are compared with Cycles
+in tests/parity/test_mapping.py."""
+import math
+
+import bpy
+import numpy as np
+from mathutils import Euler
+
+from addon import mapping
+from tests.bench import fairmaterials
+
+from . import scenes
+from .test_nodegraph import _group
+
+
+def _textured(name, *, source='TEX_COORD'):
+    """A Diffuse material whose Image Texture reads the UV map (a Texture Coordinate 'UV' or a
+    UV Map node) through the Mapping nodes the caller links; returns (material, tree, image
+    node, the coordinate output socket)."""
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image(name + "Image", np.full((2, 2, 4), 0.5, np.float32))
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    if source == 'TEX_COORD':
+        coords = nt.nodes.new('ShaderNodeTexCoord').outputs['UV']
+    else:
+        coords = nt.nodes.new('ShaderNodeUVMap').outputs['UV']
+    return mat, nt, tex, coords
+
+
+def _mapping(nt, kind, loc=None, rot=None, scale=None):
+    m = nt.nodes.new('ShaderNodeMapping')
+    m.vector_type = kind
+    for name, v in (('Location', loc), ('Rotation', rot), ('Scale', scale)):
+        if v is not None:
+            m.inputs[name].default_value = v
+    return m
+
+
+def _apply(T, u, v):
+    return T @ np.array([u, v, 1.0])
+
+
+def test_rotation_is_blenders_euler_xyz():
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        e = rng.uniform(-4, 4, 3)
+        assert np.allclose(mapping._rotation(e), np.array(Euler(e, 'XYZ').to_matrix()), atol=1e-6)
+
+
+def test_point_mapping_worked_by_hand(dacrt_addon):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat, nt, tex, uv = _textured("Point")
+    m = _mapping(nt, 'POINT', loc=(0.25, 0.5, 7.0), rot=(0, 0, math.pi / 2), scale=(2, 3, 1))
+    nt.links.new(uv, m.inputs['Vector'])
+    nt.links.new(m.outputs[0], tex.inputs['Vector'])
+    reasons = []
+    T = mapping.texture_transform(tex, reasons)
+    # scale (2u, 3v), rotate 90 degrees about z: (-3v, 2u), then move by (0.25, 0.5)
+    assert np.allclose(T, [[0, -3, 0.25], [2, 0, 0.5]], atol=1e-6) and reasons == []
+    assert mapping.coordinates_approximation(tex) == ''
+
+
+def test_texture_mapping_undoes_point_mapping(dacrt_addon):
+    """Texture is Point's inverse (same inputs); a chain of the two maps the UV map to itself.
+    A zero scale component maps that axis to 0 (Cycles' safe_divide)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat, nt, tex, uv = _textured("Inverse", source='UVMAP')
+    args = dict(loc=(0.3, -0.2, 0.1), rot=(0.4, -0.3, 1.1), scale=(1.5, 0.5, 2.0))
+    p, t = _mapping(nt, 'POINT', **args), _mapping(nt, 'TEXTURE', **args)
+    nt.links.new(uv, p.inputs['Vector'])
+    nt.links.new(p.outputs[0], t.inputs['Vector'])
+    nt.links.new(t.outputs[0], tex.inputs['Vector'])
+    T = mapping.texture_transform(tex, [])
+    assert T is None or np.allclose(T, [[1, 0, 0], [0, 1, 0]], atol=1e-6)
+    nt.links.new(uv, t.inputs['Vector'])               # Texture alone: R^T (v - l) / s
+    T = mapping.texture_transform(tex, [])
+    R = np.array(Euler(args['rot'], 'XYZ').to_matrix())
+    for u, v in ((0.0, 0.0), (1.0, 0.0), (0.3, 0.8)):
+        want = (R.T @ (np.array([u, v, 0.0]) - args['loc'])) / args['scale']
+        assert np.allclose(_apply(T, u, v), want[:2], atol=1e-6)
+    t.inputs['Scale'].default_value = (0.0, 2.0, 1.0)
+    T = mapping.texture_transform(tex, [])
+    assert np.allclose(T[0], 0.0) and not np.allclose(T[1], 0.0)
+
+
+def test_vector_type_ignores_location_and_unlinked_vector_is_a_point(dacrt_addon):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat, nt, tex, uv = _textured("Vector")
+    m = _mapping(nt, 'VECTOR', rot=(0, 0, math.pi), scale=(2, 2, 2))
+    nt.links.new(uv, m.inputs['Vector'])
+    nt.links.new(m.outputs[0], tex.inputs['Vector'])
+    assert np.allclose(mapping.texture_transform(tex, []), [[-2, 0, 0], [0, -2, 0]], atol=1e-6)
+    # a Mapping with nothing in its Vector input maps its own constant vector (Cycles renders
+    # one texel everywhere; tests/parity/test_mapping.py)
+    p = _mapping(nt, 'POINT', loc=(0.5, 0.25, 0))
+    p.inputs['Vector'].default_value = (0.1, 0.2, 0.0)
+    nt.links.new(p.outputs[0], tex.inputs['Vector'])
+    assert np.allclose(mapping.texture_transform(tex, []), [[0, 0, 0.6], [0, 0, 0.45]], atol=1e-6)
+
+
+def test_mapping_inside_a_group_and_unsupported_sources(dacrt_addon):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat, nt, tex, uv = _textured("Grouped")
+    g, gi, go = _group("Tile", inputs=(('UV', 'NodeSocketVector'),), outputs=(('Vector', 'NodeSocketVector'),))
+    m = g.nodes.new('ShaderNodeMapping')
+    m.inputs['Scale'].default_value = (4, 4, 1)
+    g.links.new(gi.outputs['UV'], m.inputs['Vector'])
+    g.links.new(m.outputs[0], go.inputs['Vector'])
+    node = nt.nodes.new('ShaderNodeGroup')
+    node.node_tree = g
+    nt.links.new(uv, node.inputs['UV'])
+    nt.links.new(node.outputs['Vector'], tex.inputs['Vector'])
+    reasons = []
+    assert np.allclose(mapping.texture_transform(tex, reasons), [[4, 0, 0], [0, 4, 0]]) and reasons == []
+    gen = nt.nodes.new('ShaderNodeTexCoord').outputs['Generated']
+    nt.links.new(gen, node.inputs['UV'])                 # Generated coordinates: reported
+    reasons = []
+    assert np.allclose(mapping.texture_transform(tex, reasons), [[4, 0, 0], [0, 4, 0]])
+    assert reasons == ["Generated texture coordinates read as the UV map"]
+    m.vector_type = 'NORMAL'
+    assert "Normal read without its normalisation" in mapping.coordinates_approximation(tex)
+
+
+def test_export_keeps_the_transform_and_the_fair_editor_keeps_the_mapping(scene, exported):
+    scenes.camera((0, 0, 5), (0, 0, 0))
+    mat, nt, tex, uv = _textured("Tiled")
+    m = _mapping(nt, 'POINT', scale=(3, 2, 1))
+    nt.links.new(uv, m.inputs['Vector'])
+    nt.links.new(m.outputs[0], tex.inputs['Vector'])
+    scenes.plane("P", materials=(mat,)).data.uv_layers.new(name="UVMap")
+    data = exported()
+    got = data.materials[data.geometry.material[0]]
+    assert got.name == "Tiled" and not got.approximated
+    assert np.allclose(got.texture_transform, [[3, 0, 0], [0, 2, 0]])
+    assert "Tiled" not in fairmaterials.make_diffuse([mat]) and tex.inputs["Vector"].is_linked
