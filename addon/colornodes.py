@@ -1,23 +1,20 @@
-"""Cycles' colour nodes: Mix (every blend mode, colour or float), Invert, Gamma,
-Brightness/Contrast, Hue/Saturation/Value, RGB to BW and Color Ramp, as numpy functions, and
-`Evaluator`, which evaluates a graph of them for the export.
+"""Cycles' colour nodes as numpy functions: Mix (every blend mode, colour or float), Invert,
+Gamma, Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp, RGB Curves and
+Separate/Combine Color (RGB, HSV, HSL).
 
-The export evaluates the colour nodes between Image Textures (or constants) and a BSDF's colour
-with these, on a constant (shape (3,)) or on every texel of the image (shape (h, w, 3));
-factors are floats or per-texel (h, w, 1). The result is baked into a texture of the material:
+The export (nodeeval.py) evaluates the colour nodes between Image Textures (or constants) and a
+BSDF's colour with these, on a constant (shape (3,)) or on every texel of the image (shape
+(h, w, 3)); factors are floats or per-texel (h, w, 1). The result is baked into a texture of the material:
 exact for constants, for Closest interpolation and for transforms that are affine in the texel
 (Mix by a constant factor, Invert, Brightness/Contrast above 0); a non-linear transform of a
 linearly interpolated image is applied to the texels before filtering, where Cycles filters
 first (the two differ only within a texel). The formulas are Cycles' (kernel/svm/color_util.h,
-hsv.h, gamma.h, invert.h, ramp.h), in float64. No Blender import here: nodes arrive from the
-export, links are followed by nodegraph.
+hsv.h, gamma.h, invert.h, ramp.h, sepcomb_color.h), in float64. No Blender import here.
 """
 
 from __future__ import annotations
 
 import numpy as np
-
-from . import nodegraph
 
 # Linear Rec.709 luminance: Cycles' colour -> float conversion (film rgb_to_y) in Blender's
 # default scene-linear space
@@ -138,6 +135,51 @@ def hsv_to_rgb(hsv):
     return np.where((s != 0.0)[..., None], rgb, v[..., None])
 
 
+def rgb_to_hsl(c):
+    """(..., 3) RGB -> HSL, hue in [0, 1) (Cycles' rgb_to_hsl; lightness at most 1)."""
+    c = np.asarray(c, np.float64)
+    cmax, cmin = c.max(axis=-1), c.min(axis=-1)
+    lum = np.minimum(1.0, (cmax + cmin) / 2.0)
+    delta = cmax - cmin
+    grey = delta == 0.0
+    with np.errstate(divide='ignore', invalid='ignore'):
+        d = np.where(grey, 1.0, delta)
+        s = np.where(lum > 0.5, delta / (2.0 - cmax - cmin), delta / (cmax + cmin))
+        r, g, b = c[..., 0], c[..., 1], c[..., 2]
+        h = np.where(cmax == r, (g - b) / d + np.where(g < b, 6.0, 0.0),
+                     np.where(cmax == g, (b - r) / d + 2.0, (r - g) / d + 4.0))
+    return np.stack([np.where(grey, 0.0, h) / 6.0, np.where(grey, 0.0, s), lum], axis=-1)
+
+
+def hsl_to_rgb(hsl):
+    """(..., 3) HSL -> RGB (Cycles' hsl_to_rgb)."""
+    hsl = np.asarray(hsl, np.float64)
+    h, s, lum = hsl[..., 0], hsl[..., 1], hsl[..., 2]
+    nr = np.clip(np.abs(h * 6.0 - 3.0) - 1.0, 0.0, 1.0)
+    ng = np.clip(2.0 - np.abs(h * 6.0 - 2.0), 0.0, 1.0)
+    nb = np.clip(2.0 - np.abs(h * 6.0 - 4.0), 0.0, 1.0)
+    chroma = (1.0 - np.abs(2.0 * lum - 1.0)) * s
+    return np.stack([(n - 0.5) * chroma + lum for n in (nr, ng, nb)], axis=-1)
+
+
+def separate_color(mode, c):
+    """Separate Color node: the colour's RGB, HSV or HSL components (..., 3)."""
+    if mode == 'HSV':
+        return rgb_to_hsv(c)
+    if mode == 'HSL':
+        return rgb_to_hsl(c)
+    return np.asarray(c, np.float64)
+
+
+def combine_color(mode, v):
+    """Combine Color node: RGB from three RGB, HSV or HSL components (..., 3)."""
+    if mode == 'HSV':
+        return hsv_to_rgb(v)
+    if mode == 'HSL':
+        return hsl_to_rgb(v)
+    return np.asarray(v, np.float64)
+
+
 def invert(fac, c):
     return _lerp(c, 1.0 - c, fac)
 
@@ -168,6 +210,46 @@ def ramp_table(evaluate):
     return np.array([evaluate(i / (n - 1)) for i in range(n)], np.float64)
 
 
+def curves_table(evaluate, curves):
+    """RGB Curves as Cycles bakes them (blender/util.h curvemapping_color_to_array): the range
+    [lo, hi] of every curve's first and last point x, and RAMP_TABLE_SIZE + 1 entries at
+    lo + i / RAMP_TABLE_SIZE (hi - lo), each channel's curve applied after the combined curve.
+    curves: the mapping's four curves (R, G, B, C), each a list of point x; evaluate(k, x):
+    Blender's CurveMapping.evaluate of curve k. Returns (table (n, 3), lo, hi)."""
+    lo = min(p[0] for p in curves)
+    hi = max(p[-1] for p in curves)
+    n = RAMP_TABLE_SIZE
+    table = np.empty((n + 1, 3), np.float64)
+    for i in range(n + 1):
+        t = lo + i / n * (hi - lo)
+        ci = evaluate(3, t)
+        table[i] = [evaluate(k, ci) for k in range(3)]
+    return table, lo, hi
+
+
+def curves_lookup(table, lo, hi, c, fac, extrapolate):
+    """RGB Curves node (Cycles' svm_node_curves): each channel looked up at its position in
+    [lo, hi] (linearly extrapolated beyond it when the mapping's extension is Extrapolated,
+    else clamped), mixed with the input by fac."""
+    c = np.asarray(c, np.float64)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        rel = (c - lo) / (hi - lo)
+    n = len(table)
+    out = np.empty(np.broadcast_shapes(c.shape, (3,)), np.float64)
+    for k in range(3):
+        f = rel[..., k]
+        x = np.clip(np.nan_to_num(f, nan=0.0), 0.0, 1.0) * (n - 1)
+        i = np.minimum(x.astype(int), n - 1)
+        t = x - i
+        v = (1.0 - t) * table[i, k] + t * table[np.minimum(i + 1, n - 1), k]
+        if extrapolate:
+            below = table[0, k] + (table[0, k] - table[1, k]) * (-f) * (n - 1)
+            above = table[-1, k] + (table[-1, k] - table[-2, k]) * (f - 1.0) * (n - 1)
+            v = np.where(f < 0.0, below, np.where(f > 1.0, above, v))
+        out[..., k] = v
+    return _lerp(c, out, fac)
+
+
 def ramp_lookup(table, f, interpolate):
     """RGBA of the table at positions f (clamped to [0, 1]), linear between entries unless
     the ramp is Constant (Cycles' rgb_ramp_lookup)."""
@@ -178,145 +260,3 @@ def ramp_lookup(table, f, interpolate):
         return table[i]
     t = (x - i)[..., None]
     return (1.0 - t) * table[i] + t * table[np.minimum(i + 1, n - 1)]
-
-
-# ----------------------------------------------------------------------------------------
-# Evaluating a graph of colour nodes
-
-# node type -> {role: input identifier} of the inputs the evaluation reads (Mix: by data type)
-_INPUTS = {
-    'INVERT': {'fac': 'Fac', 'color': 'Color'},
-    'GAMMA': {'color': 'Color', 'gamma': 'Gamma'},
-    'BRIGHTCONTRAST': {'color': 'Color', 'bright': 'Bright', 'contrast': 'Contrast'},
-    'HUE_SAT': {'hue': 'Hue', 'sat': 'Saturation', 'val': 'Value', 'fac': 'Fac', 'color': 'Color'},
-    'RGBTOBW': {'color': 'Color'},
-    'VALTORGB': {'fac': 'Fac'},
-}
-_MIX_INPUTS = {'RGBA': {'fac': 'Factor_Float', 'a': 'A_Color', 'b': 'B_Color'},
-               'FLOAT': {'fac': 'Factor_Float', 'a': 'A_Float', 'b': 'B_Float'}}
-NODE_TYPES = frozenset(_INPUTS) | {'MIX'}
-_COLOR_ROLES = {'color', 'a', 'b'}     # the rest are floats (Mix FLOAT: a and b too)
-
-
-def node_inputs(node):
-    """{role: identifier} of the inputs of a colour node that the evaluation reads, or None
-    when it cannot evaluate the node (an unknown type, a Mix of vectors or non-uniform)."""
-    if node.type == 'MIX':
-        if getattr(node, 'factor_mode', 'UNIFORM') != 'UNIFORM':
-            return None
-        return _MIX_INPUTS.get(node.data_type)
-    return _INPUTS.get(node.type)
-
-
-class Field:
-    """A colour (..., 3) or float (..., 1) value: constant (shape (3,) or (1,)) or one per texel
-    of the image `tex` (shape (h, w, 3) or (h, w, 1))."""
-    __slots__ = ('value', 'tex')
-
-    def __init__(self, value, tex=None):
-        self.value, self.tex = np.asarray(value, np.float64), tex
-
-    def as_kind(self, color):
-        """This value as a colour (color True) or a float, as Cycles converts sockets."""
-        n = self.value.shape[-1]
-        if color and n == 1:
-            return Field(np.repeat(self.value, 3, axis=-1), self.tex)
-        if not color and n != 1:
-            return Field(gray(self.value), self.tex)
-        return self
-
-
-class Evaluator:
-    """Evaluates what feeds a colour or float input through the colour nodes above, as one
-    value per texel of (at most) one image (links followed by nodegraph). texture(node,
-    reasons) -> the export's image of an Image Texture node (an object with .pixels (h, w, 4)
-    and .key) or None (then `missing`, a colour). Unsupported nodes give the input's own value;
-    a second, different image its average colour; both noted in reasons."""
-
-    MAX_DEPTH = 64
-
-    def __init__(self, texture, reasons, missing):
-        self.texture, self.reasons, self.missing = texture, reasons, missing
-
-    def input(self, socket, color, depth=0):
-        link, carrier = nodegraph.source(socket)
-        if link is None:
-            return Field(_own(carrier.default_value, color))
-        f = self._node(link.from_node, link.from_socket, depth) if depth < self.MAX_DEPTH else None
-        if f is None:
-            what = 'colour' if color else 'value'
-            self.reasons.append(f"{what} from '{link.from_node.bl_label}' node; its own value used")
-            return Field(_own(carrier.default_value, color))
-        return f.as_kind(color)
-
-    def _node(self, node, out, depth):
-        t = node.type
-        if t == 'RGB':
-            return Field(tuple(out.default_value[:3]))
-        if t == 'VALUE':
-            return Field((out.default_value,))
-        if t == 'TEX_IMAGE':
-            tex = self.texture(node, self.reasons)
-            if tex is None:
-                return Field(self.missing)
-            return Field(tex.pixels[..., 3:4] if out.name == 'Alpha' else tex.pixels[..., :3], tex)
-        roles = node_inputs(node)
-        if roles is None:
-            return None
-        float_mix = t == 'MIX' and node.data_type == 'FLOAT'
-        x = {}
-        for role, ident in roles.items():
-            sock = nodegraph.input_by_id(node, ident)
-            x[role] = self.input(sock, role in _COLOR_ROLES and not float_mix, depth + 1)
-        tex = self._join(x.values())
-        v = {role: f.value for role, f in x.items()}
-        if t == 'MIX':
-            fac = np.clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
-            r = _lerp(v['a'], v['b'], fac) if float_mix else mix(node.blend_type, fac, v['a'], v['b'])
-            if node.clamp_result:
-                r = np.clip(r, 0.0, 1.0)
-        elif t == 'INVERT':
-            r = invert(v['fac'], v['color'])
-        elif t == 'GAMMA':
-            r = gamma(v['color'], v['gamma'])
-        elif t == 'BRIGHTCONTRAST':
-            r = brightness_contrast(v['color'], v['bright'], v['contrast'])
-        elif t == 'HUE_SAT':
-            r = hue_saturation(v['color'], _scalar(v['hue']), _scalar(v['sat']), _scalar(v['val']), v['fac'])
-        elif t == 'RGBTOBW':
-            r = gray(v['color'])
-        else:  # VALTORGB
-            ramp = node.color_ramp
-            rgba = ramp_lookup(ramp_table(lambda p: tuple(ramp.evaluate(p))), v['fac'][..., 0],
-                               ramp.interpolation != 'CONSTANT')
-            r = rgba[..., 3:4] if out.name == 'Alpha' else rgba[..., :3]
-        return Field(r, tex)
-
-    def _join(self, fields):
-        """The image the operands are per texel of; an operand of another image is replaced by
-        its average (one image per material)."""
-        tex = None
-        for f in fields:
-            if f.tex is None:
-                continue
-            if tex is None:
-                tex = f.tex
-            elif f.tex.key != tex.key:
-                self.reasons.append("two image textures mixed; the second as its average colour")
-                f.value, f.tex = f.value.reshape(-1, f.value.shape[-1]).mean(0), None
-        return tex
-
-
-def _own(v, color):
-    """A socket's own value as a colour (3,) or float (1,) array."""
-    if hasattr(v, '__len__'):
-        c = np.array(v[:3], np.float64)
-        return c if color else gray(c)
-    return np.full(3 if color else 1, float(v))
-
-
-def _scalar(v):
-    """Per-node constants such as Hue/Saturation/Value: a float, or per texel (..., 1) ->
-    (...,) so they broadcast against one HSV component."""
-    v = np.asarray(v, np.float64)
-    return v[..., 0] if v.ndim > 1 else float(v.reshape(-1)[0])

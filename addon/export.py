@@ -14,9 +14,10 @@ Materials (what a diffuse renderer can represent exactly):
   the UV map, directly or through Mapping nodes (mapping.py; pixels converted to float
   scene-linear);
 - Emission (colour x strength) and Principled emission (Emission Color x Emission Strength);
-- colour nodes between constants or an Image Texture and a diffuse colour (Mix, Invert, Gamma,
-  Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp), evaluated per texel and
-  baked into the material's texture (colornodes.py);
+- colour and float nodes between constants or an Image Texture and a diffuse colour (Mix,
+  Invert, Gamma, Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp, RGB Curves,
+  Separate/Combine Color, Math, Map Range, Clamp), evaluated per texel and baked into the
+  material's texture (nodeeval.py);
 - Add Shader and Mix Shader with a constant factor, combining the above linearly;
 - node groups and reroutes are transparent, as Cycles flattens them (nodegraph.py).
 Documented diffuse approximation of everything else: a shader node of another kind becomes a
@@ -45,7 +46,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import colornodes
+from . import nodeeval
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodegraph import constant_color, constant_value, input_socket, linked_link, linked_node, output_node
@@ -528,9 +529,9 @@ class _MaterialBuilder:
 
     def _color_closure(self, socket, reasons):
         """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes
-        (colornodes.py) on constants and one image, baked into a texture."""
+        and float nodes (nodeeval.py) on constants and one image, baked into a texture."""
         link = linked_link(socket)
-        if link is not None and (link.from_node.type in colornodes.NODE_TYPES or
+        if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
                                  (link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha')):
             return self._evaluated_closure(socket, reasons)
         if link is not None and link.from_node.type == 'TEX_IMAGE':
@@ -544,7 +545,7 @@ class _MaterialBuilder:
         return _Closure(const=color)
 
     def _evaluated_closure(self, socket, reasons):
-        f = colornodes.Evaluator(self._texture, reasons, MISSING_IMAGE).input(socket, True)
+        f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE).input(socket, True)
         if f.tex is None:
             return _Closure(const=f.value)
         src = f.tex

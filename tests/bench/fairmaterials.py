@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import bpy
 
-from addon import colornodes, export, mapping, nodegraph
+from addon import export, mapping, nodeeval, nodegraph
 
 # the layers the export drops, and thin film (it tints only the dropped specular layer)
 ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
@@ -227,7 +227,7 @@ class _Editor:
         if node.type == 'TEX_IMAGE':
             self._image(node)
             return
-        roles = colornodes.node_inputs(node) if node.type in colornodes.NODE_TYPES else None
+        roles = nodeeval.node_inputs(node) if node.type in nodeeval.NODE_TYPES else None
         if roles is None:
             self._unlink(carrier, f"'{socket.name}' from '{node.bl_label}' as its own value")
             return

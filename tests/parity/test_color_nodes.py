@@ -63,6 +63,74 @@ def alpha_mask(nt, tex):
     return m.outputs['Result']
 
 
+def separate_math_combine(nt, tex):
+    """Channels through Math and Map Range, recombined as HSV; the Clamp node on the way."""
+    sep = nt.nodes.new('ShaderNodeSeparateColor')
+    nt.links.new(tex.outputs['Color'], sep.inputs['Color'])
+    p = nt.nodes.new('ShaderNodeMath')
+    p.operation = 'POWER'
+    p.inputs[1].default_value = 0.5
+    nt.links.new(sep.outputs['Red'], p.inputs[0])
+    w = nt.nodes.new('ShaderNodeMath')
+    w.operation, w.use_clamp = 'MULTIPLY_ADD', True
+    w.inputs[1].default_value, w.inputs[2].default_value = 1.7, 0.1
+    nt.links.new(sep.outputs['Green'], w.inputs[0])
+    r = nt.nodes.new('ShaderNodeMapRange')
+    r.interpolation_type = 'SMOOTHSTEP'
+    r.inputs['From Min'].default_value, r.inputs['From Max'].default_value = 0.8, 0.1
+    r.inputs['To Min'].default_value, r.inputs['To Max'].default_value = 0.2, 0.9
+    nt.links.new(sep.outputs['Blue'], r.inputs['Value'])
+    c = nt.nodes.new('ShaderNodeClamp')
+    c.clamp_type = 'RANGE'
+    c.inputs['Min'].default_value, c.inputs['Max'].default_value = 0.85, 0.3
+    nt.links.new(r.outputs['Result'], c.inputs['Value'])
+    comb = nt.nodes.new('ShaderNodeCombineColor')
+    comb.mode = 'HSV'
+    nt.links.new(p.outputs[0], comb.inputs['Red'])
+    nt.links.new(w.outputs[0], comb.inputs['Green'])
+    nt.links.new(c.outputs[0], comb.inputs['Blue'])
+    return comb.outputs['Color']
+
+
+def hsl_stepped(nt, tex):
+    """HSL separation, a stepped Map Range on lightness and a Wrap, recombined as HSL."""
+    sep = nt.nodes.new('ShaderNodeSeparateColor')
+    sep.mode = 'HSL'
+    nt.links.new(tex.outputs['Color'], sep.inputs['Color'])
+    r = nt.nodes.new('ShaderNodeMapRange')
+    r.interpolation_type = 'STEPPED'
+    r.inputs['Steps'].default_value = 6.0       # no texel's lightness on a step edge (k / 7)
+    r.inputs['To Max'].default_value = 0.8
+    nt.links.new(sep.outputs['Blue'], r.inputs['Value'])
+    h = nt.nodes.new('ShaderNodeMath')
+    h.operation = 'WRAP'
+    h.inputs[1].default_value, h.inputs[2].default_value = 0.4, -0.1
+    nt.links.new(sep.outputs['Red'], h.inputs[0])
+    comb = nt.nodes.new('ShaderNodeCombineColor')
+    comb.mode = 'HSL'
+    nt.links.new(h.outputs[0], comb.inputs['Red'])
+    nt.links.new(sep.outputs['Green'], comb.inputs['Green'])
+    nt.links.new(r.outputs['Result'], comb.inputs['Blue'])
+    return comb.outputs['Color']
+
+
+def rgb_curves(nt, tex):
+    """RGB Curves on the texels x 1.6 (some beyond the curves' range [0, 1]: extrapolated): an
+    S on the combined curve, a lifted red curve, a green curve ending at x = 0.8, factor 0.9."""
+    c = nt.nodes.new('ShaderNodeRGBCurve')
+    m = c.mapping
+    comb = m.curves[3]
+    comb.points.new(0.3, 0.15)
+    comb.points.new(0.7, 0.85)
+    m.curves[0].points[0].location = (0.0, 0.2)
+    m.curves[1].points[1].location = (0.8, 0.9)
+    m.update()
+    c.inputs['Fac'].default_value = 0.9
+    brighter = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], (1.6, 1.6, 1.6), 1.0)
+    nt.links.new(brighter.outputs['Result'], c.inputs['Color'])
+    return c.outputs['Color']
+
+
 def _build(chain):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
@@ -92,7 +160,8 @@ def _texels(engine, tmp_path):
     return np.array([rgb[s].reshape(-1, 3).mean(0) for s in TEXELS])
 
 
-@pytest.mark.parametrize('chain', [multiply_hue, overlay_invert, gamma_contrast, ramp, alpha_mask],
+@pytest.mark.parametrize('chain', [multiply_hue, overlay_invert, gamma_contrast, ramp, alpha_mask,
+                                   separate_math_combine, hsl_stepped, rgb_curves],
                          ids=lambda c: c.__name__)
 def test_color_nodes_agree_with_cycles(chain, tmp_path):
     _build(chain)

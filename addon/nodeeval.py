@@ -1,0 +1,192 @@
+"""Evaluating the colour and float nodes between Image Textures (or constants) and a diffuse
+colour, for the export: `Evaluator` walks the graph (links followed by nodegraph, so groups and
+reroutes are transparent) and computes each node with Cycles' formulas (colornodes.py,
+floatnodes.py) on a constant or on every texel of one image; the export bakes the result into
+the material's texture. Part of the export layer: nodes are Blender's (or nodegraph's wrappers).
+
+Values are float64 where Cycles computes in float32: at a discontinuity (Math Floor or Compare, a
+Stepped Map Range) a value within float32 rounding of the edge may land on the other side.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import colornodes as cn
+from . import floatnodes as fn
+from . import nodegraph
+
+# node type -> {role: input identifier} of the inputs the evaluation reads (Mix, Map Range: by
+# data type; Math reads three values whatever its operation, as Cycles does)
+_INPUTS = {
+    'INVERT': {'fac': 'Fac', 'color': 'Color'},
+    'GAMMA': {'color': 'Color', 'gamma': 'Gamma'},
+    'BRIGHTCONTRAST': {'color': 'Color', 'bright': 'Bright', 'contrast': 'Contrast'},
+    'HUE_SAT': {'hue': 'Hue', 'sat': 'Saturation', 'val': 'Value', 'fac': 'Fac', 'color': 'Color'},
+    'RGBTOBW': {'color': 'Color'},
+    'VALTORGB': {'fac': 'Fac'},
+    'CURVE_RGB': {'fac': 'Fac', 'color': 'Color'},
+    'SEPARATE_COLOR': {'color': 'Color'},
+    'COMBINE_COLOR': {'red': 'Red', 'green': 'Green', 'blue': 'Blue'},
+    'MATH': {'a': 'Value', 'b': 'Value_001', 'c': 'Value_002'},
+    'CLAMP': {'value': 'Value', 'lo': 'Min', 'hi': 'Max'},
+}
+_MIX_INPUTS = {'RGBA': {'fac': 'Factor_Float', 'a': 'A_Color', 'b': 'B_Color'},
+               'FLOAT': {'fac': 'Factor_Float', 'a': 'A_Float', 'b': 'B_Float'}}
+_MAP_RANGE_INPUTS = {'value': 'Value', 'f0': 'From Min', 'f1': 'From Max', 't0': 'To Min', 't1': 'To Max',
+                     'steps': 'Steps'}
+NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
+_COLOR_ROLES = {'color', 'a', 'b'}     # colour inputs (but floats in Mix FLOAT and Math)
+_FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
+_SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2}
+
+
+def node_inputs(node):
+    """{role: identifier} of the inputs of a node that the evaluation reads, or None when it
+    cannot evaluate the node (an unknown type or operation, a Mix or Map Range of vectors, a
+    non-uniform Mix)."""
+    t = node.type
+    if t == 'MIX':
+        if getattr(node, 'factor_mode', 'UNIFORM') != 'UNIFORM':
+            return None
+        return _MIX_INPUTS.get(node.data_type)
+    if t == 'MAP_RANGE':
+        return _MAP_RANGE_INPUTS if node.data_type == 'FLOAT' else None
+    if t == 'MATH' and node.operation not in fn.MATH_OPERATIONS:
+        return None
+    return _INPUTS.get(t)
+
+
+class Field:
+    """A colour (..., 3) or float (..., 1) value: constant (shape (3,) or (1,)) or one per texel
+    of the image `tex` (shape (h, w, 3) or (h, w, 1))."""
+    __slots__ = ('value', 'tex')
+
+    def __init__(self, value, tex=None):
+        self.value, self.tex = np.asarray(value, np.float64), tex
+
+    def as_kind(self, color):
+        """This value as a colour (color True) or a float, as Cycles converts sockets."""
+        n = self.value.shape[-1]
+        if color and n == 1:
+            return Field(np.repeat(self.value, 3, axis=-1), self.tex)
+        if not color and n != 1:
+            return Field(cn.gray(self.value), self.tex)
+        return self
+
+
+class Evaluator:
+    """Evaluates what feeds a colour or float input through the nodes above, as one value per
+    texel of (at most) one image. texture(node, reasons) -> the export's image of an Image
+    Texture node (an object with .pixels (h, w, 4) and .key) or None (then `missing`, a
+    colour). Unsupported nodes give the input's own value; a second, different image its
+    average colour; both noted in reasons."""
+
+    MAX_DEPTH = 64
+
+    def __init__(self, texture, reasons, missing):
+        self.texture, self.reasons, self.missing = texture, reasons, missing
+
+    def input(self, socket, color, depth=0):
+        link, carrier = nodegraph.source(socket)
+        if link is None:
+            return Field(_own(carrier.default_value, color))
+        f = self._node(link.from_node, link.from_socket, depth) if depth < self.MAX_DEPTH else None
+        if f is None:
+            what = 'colour' if color else 'value'
+            self.reasons.append(f"{what} from '{link.from_node.bl_label}' node; its own value used")
+            return Field(_own(carrier.default_value, color))
+        return f.as_kind(color)
+
+    def _node(self, node, out, depth):
+        t = node.type
+        if t == 'RGB':
+            return Field(tuple(out.default_value[:3]))
+        if t == 'VALUE':
+            return Field((out.default_value,))
+        if t == 'TEX_IMAGE':
+            tex = self.texture(node, self.reasons)
+            if tex is None:
+                return Field(self.missing)
+            return Field(tex.pixels[..., 3:4] if out.name == 'Alpha' else tex.pixels[..., :3], tex)
+        roles = node_inputs(node)
+        if roles is None:
+            return None
+        float_node = (t == 'MIX' and node.data_type == 'FLOAT') or t in _FLOAT_NODES
+        x = {}
+        for role, ident in roles.items():
+            sock = nodegraph.input_by_id(node, ident)
+            x[role] = self.input(sock, role in _COLOR_ROLES and not float_node, depth + 1)
+        tex = self._join(x.values())
+        return Field(_compute(node, out, {role: f.value for role, f in x.items()}), tex)
+
+    def _join(self, fields):
+        """The image the operands are per texel of; an operand of another image is replaced by
+        its average (one image per material)."""
+        tex = None
+        for f in fields:
+            if f.tex is None:
+                continue
+            if tex is None:
+                tex = f.tex
+            elif f.tex.key != tex.key:
+                self.reasons.append("two image textures mixed; the second as its average colour")
+                f.value, f.tex = f.value.reshape(-1, f.value.shape[-1]).mean(0), None
+        return tex
+
+
+def _compute(node, out, v):
+    """The value of node's output `out` from its inputs' values v (by role)."""
+    t = node.type
+    if t == 'MIX':
+        fac = np.clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
+        r = cn.mix('MIX' if node.data_type == 'FLOAT' else node.blend_type, fac, v['a'], v['b'])
+        return np.clip(r, 0.0, 1.0) if node.clamp_result else r
+    if t == 'INVERT':
+        return cn.invert(v['fac'], v['color'])
+    if t == 'GAMMA':
+        return cn.gamma(v['color'], v['gamma'])
+    if t == 'BRIGHTCONTRAST':
+        return cn.brightness_contrast(v['color'], v['bright'], v['contrast'])
+    if t == 'HUE_SAT':
+        return cn.hue_saturation(v['color'], _scalar(v['hue']), _scalar(v['sat']), _scalar(v['val']), v['fac'])
+    if t == 'RGBTOBW':
+        return cn.gray(v['color'])
+    if t == 'VALTORGB':
+        ramp = node.color_ramp
+        rgba = cn.ramp_lookup(cn.ramp_table(lambda p: tuple(ramp.evaluate(p))), v['fac'][..., 0],
+                              ramp.interpolation != 'CONSTANT')
+        return rgba[..., 3:4] if out.name == 'Alpha' else rgba[..., :3]
+    if t == 'CURVE_RGB':
+        m = node.mapping
+        curves = [[p.location[0] for p in c.points] for c in m.curves]
+        table, lo, hi = cn.curves_table(lambda k, x: m.evaluate(m.curves[k], x), curves)
+        return cn.curves_lookup(table, lo, hi, v['color'], v['fac'], m.extend == 'EXTRAPOLATED')
+    if t == 'SEPARATE_COLOR':
+        k = _SEPARATED[out.identifier]
+        return cn.separate_color(node.mode, v['color'])[..., k:k + 1]
+    if t == 'COMBINE_COLOR':
+        r, g, b = np.broadcast_arrays(v['red'], v['green'], v['blue'])
+        return cn.combine_color(node.mode, np.concatenate([r, g, b], axis=-1))
+    if t == 'MATH':
+        return fn.math(node.operation, v['a'], v['b'], v['c'], node.use_clamp)
+    if t == 'CLAMP':
+        clamp = fn.clamp_range if node.clamp_type == 'RANGE' else fn.clamp_min_max
+        return clamp(v['value'], v['lo'], v['hi'])
+    return fn.map_range(node.interpolation_type, v['value'], v['f0'], v['f1'], v['t0'], v['t1'], v['steps'],
+                        node.clamp)
+
+
+def _own(v, color):
+    """A socket's own value as a colour (3,) or float (1,) array."""
+    if hasattr(v, '__len__'):
+        c = np.array(v[:3], np.float64)
+        return c if color else cn.gray(c)
+    return np.full(3 if color else 1, float(v))
+
+
+def _scalar(v):
+    """Per-node constants such as Hue/Saturation/Value: a float, or per texel (..., 1) ->
+    (...,) so they broadcast against one HSV component."""
+    v = np.asarray(v, np.float64)
+    return v[..., 0] if v.ndim > 1 else float(v.reshape(-1)[0])
