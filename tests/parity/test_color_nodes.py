@@ -2,14 +2,14 @@
 through chains of colour nodes, lit by a sun (direct light only, so each texel's radiance is
 albedo x E / pi with almost no noise), seen from above by an orthographic camera; the mean of
 each texel's interior pixels must agree within 2% (the sun's own sampling noise is ~0.5%)."""
-import math
 
-import bpy
 import numpy as np
 import pytest
 
 from addon import nodegraph
 from tests.addon import scenes
+
+from . import sunplane
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -131,32 +131,8 @@ def rgb_curves(nt, tex):
     return c.outputs['Color']
 
 
-def _build(chain):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=2.0)
-    mat, nt, out = scenes._material("Nodes")
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image = scenes.float_image("Texels", PX)
-    tex.interpolation = 'Closest'
-    nt.links.new(chain(nt, tex), d.inputs['Color'])
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
-    scenes.plane("Plane", size=2.0, materials=(mat,)).data.uv_layers.new(name="UVMap")
-    scenes.light('SUN', 2.0)
-    scenes.black_world()
-    sc.render.resolution_x = sc.render.resolution_y = 16
-    sc.cycles.device = 'CPU'
-    sc.cycles.samples = sc.dacrt.samples = 64
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
-
-
 def _texels(engine, tmp_path):
-    bpy.context.scene.render.engine = engine
-    r = scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr"))
-    rgb = np.stack([r['R'], r['G'], r['B']], -1)
+    rgb = sunplane.render_rgb(engine, tmp_path)
     return np.array([rgb[s].reshape(-1, 3).mean(0) for s in TEXELS])
 
 
@@ -164,7 +140,7 @@ def _texels(engine, tmp_path):
                                    separate_math_combine, hsl_stepped, rgb_curves],
                          ids=lambda c: c.__name__)
 def test_color_nodes_agree_with_cycles(chain, tmp_path):
-    _build(chain)
+    sunplane.build(PX, lambda nt, tex, d: nt.links.new(chain(nt, tex), d.inputs['Color']), 16, 64)
     dacrt, cycles = _texels('DACRT', tmp_path), _texels('CYCLES', tmp_path)
     assert cycles.max() > 0.05
     err = np.abs(dacrt - cycles).max() / cycles.max()

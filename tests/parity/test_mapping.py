@@ -7,11 +7,10 @@ block must agree within 2.5% of the brightest one (measured: 0.6-1.1%). With the
 ignored, the largest block differences are 73-102% of the brightest block."""
 import math
 
-import bpy
 import numpy as np
 import pytest
 
-from tests.addon import scenes
+from . import sunplane
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -55,39 +54,21 @@ def unlinked(nt, uv):
     return _mapping(nt, 'POINT', (0.3, 0.6, 0)).outputs[0]
 
 
-def _build(coordinates):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=2.0)
-    mat, nt, out = scenes._material("Mapped")
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image = scenes.float_image("Texels", PX)
-    tex.interpolation = 'Closest'
-    nt.links.new(coordinates(nt, nt.nodes.new('ShaderNodeTexCoord').outputs['UV']), tex.inputs['Vector'])
-    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
-    scenes.plane("Plane", size=2.0, materials=(mat,)).data.uv_layers.new(name="UVMap")
-    scenes.light('SUN', 2.0)
-    scenes.black_world()
-    sc.render.resolution_x = sc.render.resolution_y = RES
-    sc.cycles.device = 'CPU'
-    sc.cycles.samples = sc.dacrt.samples = 16
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+def _wire(coordinates):
+    def wire(nt, tex, diffuse):
+        nt.links.new(coordinates(nt, nt.nodes.new('ShaderNodeTexCoord').outputs['UV']), tex.inputs['Vector'])
+        nt.links.new(tex.outputs['Color'], diffuse.inputs['Color'])
+    return wire
 
 
 def _blocks(engine, tmp_path):
-    bpy.context.scene.render.engine = engine
-    r = scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr"))
-    rgb = np.stack([r['R'], r['G'], r['B']], -1)
+    rgb = sunplane.render_rgb(engine, tmp_path)
     return rgb.reshape(RES // BLOCK, BLOCK, RES // BLOCK, BLOCK, 3).mean((1, 3))
 
 
 @pytest.mark.parametrize('coordinates', [point, texture, chain, unlinked], ids=lambda c: c.__name__)
 def test_mapped_texture_agrees_with_cycles(coordinates, tmp_path):
-    _build(coordinates)
+    sunplane.build(PX, _wire(coordinates), RES, 16)
     dacrt, cycles = _blocks('DACRT', tmp_path), _blocks('CYCLES', tmp_path)
     assert cycles.max() > 0.05
     err = np.abs(dacrt - cycles).max() / cycles.max()
