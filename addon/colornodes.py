@@ -238,10 +238,7 @@ def curves_lookup(table, lo, hi, c, fac, extrapolate):
     out = np.empty(np.broadcast_shapes(c.shape, (3,)), np.float64)
     for k in range(3):
         f = rel[..., k]
-        x = np.clip(np.nan_to_num(f, nan=0.0), 0.0, 1.0) * (n - 1)
-        i = np.minimum(x.astype(int), n - 1)
-        t = x - i
-        v = (1.0 - t) * table[i, k] + t * table[np.minimum(i + 1, n - 1), k]
+        v = ramp_lookup(table[:, k:k + 1], f, True)[..., 0]
         if extrapolate:
             below = table[0, k] + (table[0, k] - table[1, k]) * (-f) * (n - 1)
             above = table[-1, k] + (table[-1, k] - table[-2, k]) * (f - 1.0) * (n - 1)
