@@ -49,7 +49,8 @@ import numpy as np
 from . import nodeeval
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
-from .nodegraph import constant_color, constant_value, input_socket, linked_link, linked_node, output_node
+from .nodeeval import constant_color, constant_value
+from .nodegraph import input_socket, linked_link, linked_node, output_node
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
 UNSUPPORTED_TYPES = {'CURVES': "hair curves", 'POINTCLOUD': "point cloud", 'VOLUME': "volume",

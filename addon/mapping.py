@@ -12,6 +12,7 @@ through nodegraph so groups and reroutes are transparent).
 
 import numpy as np
 
+from .nodeeval import constant
 from .nodegraph import linked_link, source
 
 # Texture Coordinate outputs that are the ray direction in a world shader
@@ -34,15 +35,17 @@ def _safe_inverse(s):
 
 
 def _vector_input(node, name, default, reasons):
-    """The constant vector of a Mapping input (its own value, or the carrier's where the chain
-    crossed a group boundary); a computed one is reported and its own value used."""
+    """The constant vector of a Mapping input: its own value, or what RGB, Value and the
+    evaluated colour and float nodes compute for it (a Value node driving a uniform Scale); an
+    input computed from anything else (an image, a vector node) is reported and its own value
+    used."""
     sock = node.inputs.get(name)
     if sock is None or not sock.enabled:
         return np.array(default, np.float64)
-    link, carrier = source(sock)
-    if link is not None:
+    value, exact = constant(sock, True)
+    if not exact:
         reasons.append(f"Mapping {name} driven by nodes; its own value used")
-    return np.array(carrier.default_value[:3], np.float64)
+    return np.array(value, np.float64)
 
 
 def mapping_affine(node, reasons):

@@ -177,6 +177,41 @@ def _compute(node, out, v):
                         node.clamp)
 
 
+class _NotConstant(Exception):
+    """An image texture reached while evaluating a constant."""
+
+
+def _no_texture(node, reasons):
+    raise _NotConstant
+
+
+def constant(socket, color):
+    """(value, exact): the constant feeding a colour or vector input (color True: (3,)) or a
+    float input ((1,)), computed through RGB and Value nodes and the nodes above (Cycles
+    converts a float to (v, v, v), a colour to its luminance). Where an image or a node the
+    evaluation cannot compute feeds it: the carrier's own value and exact False."""
+    reasons = []
+    try:
+        f = Evaluator(_no_texture, reasons, None).input(socket, color)
+    except _NotConstant:
+        reasons.append("image")
+    if reasons:
+        return _own(nodegraph.source(socket)[1].default_value, color), False
+    return f.value, True
+
+
+def constant_color(socket):
+    """(rgb tuple, exact) of a colour or vector input: see constant."""
+    v, exact = constant(socket, True)
+    return tuple(float(x) for x in v), exact
+
+
+def constant_value(socket):
+    """(float, exact) of a float input: see constant."""
+    v, exact = constant(socket, False)
+    return float(v[0]), exact
+
+
 def _own(v, color):
     """A socket's own value as a colour (3,) or float (1,) array."""
     if hasattr(v, '__len__'):

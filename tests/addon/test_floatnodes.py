@@ -5,11 +5,13 @@ tests/parity/test_color_nodes.py."""
 import colorsys
 import math
 
+import bpy
 import numpy as np
 import pytest
 
 from addon import colornodes as cn
 from addon import floatnodes as fn
+from addon import nodeeval
 
 from . import scenes
 
@@ -150,3 +152,46 @@ def test_unsupported_math_inputs_are_reported(scene, exported):
     got = data.materials[data.geometry.material[0]]
     assert "colour from 'Map Range' node; its own value used" in got.approximated
     assert np.allclose(got.base_color, d.inputs['Color'].default_value[:3])
+
+
+def test_constant_inputs_evaluate_chains_of_constant_nodes(dacrt_addon):
+    """nodeeval.constant: what a Value/RGB -> Math / Mix chain computes for an input, with
+    Cycles' conversions (float -> (v, v, v), colour -> luminance); an image or an unsupported
+    node anywhere in the chain gives the socket's own value and exact False."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    nt = bpy.data.node_groups.new("Consts", 'ShaderNodeTree')
+    e = nt.nodes.new('ShaderNodeEmission')
+    e.inputs['Strength'].default_value = 9.0
+    e.inputs['Color'].default_value = (0.1, 0.2, 0.3, 1.0)
+    assert nodeeval.constant_value(e.inputs['Strength']) == (9.0, True)
+    value = nt.nodes.new('ShaderNodeValue')
+    value.outputs[0].default_value = 2.0
+    power = nt.nodes.new('ShaderNodeMath')
+    power.operation = 'POWER'
+    power.inputs[1].default_value = 3.0
+    nt.links.new(value.outputs[0], power.inputs[0])
+    nt.links.new(power.outputs[0], e.inputs['Strength'])
+    assert nodeeval.constant_value(e.inputs['Strength']) == (8.0, True)
+    nt.links.new(power.outputs[0], e.inputs['Color'])     # a float on a colour: (v, v, v)
+    assert nodeeval.constant_color(e.inputs['Color']) == ((8.0, 8.0, 8.0), True)
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.2, 0.4, 0.6, 1.0)
+    mix = nt.nodes.new('ShaderNodeMix')
+    mix.data_type = 'RGBA'
+    mix.blend_type = 'MULTIPLY'
+    mix.inputs['Factor'].default_value = 1.0
+    mix.inputs['B'].default_value = (0.5, 0.5, 2.0, 1.0)
+    nt.links.new(rgb.outputs[0], mix.inputs['A'])
+    nt.links.new(mix.outputs['Result'], e.inputs['Color'])
+    color, exact = nodeeval.constant_color(e.inputs['Color'])
+    assert exact and np.allclose(color, (0.1, 0.2, 1.2))
+    nt.links.new(mix.outputs['Result'], power.inputs[0])  # a colour on a float: its luminance
+    strength, exact = nodeeval.constant_value(e.inputs['Strength'])
+    assert exact and np.isclose(strength, float(np.asarray(cn.gray(np.array([0.1, 0.2, 1.2]))).reshape(-1)[0]) ** 3)
+    noise = nt.nodes.new('ShaderNodeTexNoise')
+    nt.links.new(noise.outputs['Fac'], mix.inputs['Factor'])
+    assert nodeeval.constant_value(e.inputs['Strength']) == (9.0, False)
+    img = nt.nodes.new('ShaderNodeTexImage')
+    nt.links.new(img.outputs['Color'], mix.inputs['A'])
+    nt.links.new(value.outputs[0], mix.inputs['Factor'])
+    assert nodeeval.constant_color(e.inputs['Color'])[1] is False

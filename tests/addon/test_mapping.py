@@ -138,3 +138,38 @@ def test_export_keeps_the_transform_and_the_fair_editor_keeps_the_mapping(scene,
     assert got.name == "Tiled" and not got.approximated
     assert np.allclose(got.texture_transform, [[3, 0, 0], [0, 2, 0]])
     assert "Tiled" not in fairmaterials.make_diffuse([mat]) and tex.inputs["Vector"].is_linked
+
+
+def test_mapping_inputs_driven_by_constant_nodes(dacrt_addon):
+    """A Value node on Scale (one number tiling both ways), an RGB node on Location and a Math
+    node on Rotation are constants Cycles computes: read exactly, as (v, v, v) for the Value. A
+    Noise Texture on Scale is not: reported, and the socket's own value used."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat, nt, tex, uv = _textured("Driven")
+    m = _mapping(nt, 'POINT', loc=(9, 9, 9), rot=(1, 1, 1), scale=(7, 7, 7))
+    nt.links.new(uv, m.inputs['Vector'])
+    nt.links.new(m.outputs[0], tex.inputs['Vector'])
+    value = nt.nodes.new('ShaderNodeValue')
+    value.outputs[0].default_value = 3.0
+    nt.links.new(value.outputs[0], m.inputs['Scale'])
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.25, 0.5, 0.0, 1.0)
+    nt.links.new(rgb.outputs[0], m.inputs['Location'])
+    angle = nt.nodes.new('ShaderNodeMath')
+    angle.operation = 'MULTIPLY'
+    angle.inputs[0].default_value, angle.inputs[1].default_value = 0.25, math.pi
+    nt.links.new(angle.outputs[0], m.inputs['Rotation'])
+    reasons = []
+    T = mapping.texture_transform(tex, reasons)
+    assert reasons == []
+    R = np.array(Euler((math.pi / 4,) * 3, 'XYZ').to_matrix())
+    for u, v in ((0.0, 0.0), (1.0, 0.0), (0.3, 0.8)):
+        want = R @ (3.0 * np.array([u, v, 0.0])) + np.array([0.25, 0.5, 0.0])
+        assert np.allclose(_apply(T, u, v), want[:2], atol=1e-12)
+    noise = nt.nodes.new('ShaderNodeTexNoise')
+    nt.links.new(noise.outputs['Fac'], m.inputs['Scale'])
+    reasons = []
+    T = mapping.texture_transform(tex, reasons)
+    assert reasons == ["Mapping Scale driven by nodes; its own value used"]
+    want = R @ (7.0 * np.array([1.0, 0.0, 0.0])) + np.array([0.25, 0.5, 0.0])
+    assert np.allclose(_apply(T, 1.0, 0.0), want[:2], atol=1e-12)

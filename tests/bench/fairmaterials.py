@@ -135,7 +135,7 @@ class _Editor:
 
     def _set(self, socket, value, why):
         """socket unlinked and set to value, when it is not already exactly that."""
-        current, exact = nodegraph.constant_value(socket)
+        current, exact = nodeeval.constant_value(socket)
         if exact and current == value:
             return
         socket = nodegraph.unwrap(socket)
@@ -197,7 +197,7 @@ class _Editor:
             sock = nodegraph.input_socket(node, 'Color', 'Base Color')
             color = export.DEFAULT_ALBEDO
             if sock is not None and sock.type == 'RGBA':
-                color, _ = nodegraph.constant_color(sock)
+                color, _ = nodeeval.constant_color(sock)
             self._replace(socket, node, tuple(color), f"{node.bl_label} as diffuse")
 
     def _normals(self, node):
@@ -207,11 +207,12 @@ class _Editor:
 
     def _own_value(self, socket):
         """Unlink an input the export reads as its own value (of the carrier: the socket, or
-        where its chain last crossed a group boundary), so Cycles uses that value too."""
+        where its chain last crossed a group boundary), so Cycles uses that value too; a
+        constant chain the export evaluates (nodeeval.constant) stays."""
         if socket is None:
             return
         link, carrier = nodegraph.source(socket)
-        if link is not None and link.from_node.type not in ('RGB', 'VALUE'):
+        if link is not None and not nodeeval.constant(socket, socket.type != 'VALUE')[1]:
             self._unlink(carrier, f"'{socket.name}' from '{link.from_node.bl_label}' as its own value")
 
     def _color(self, socket):

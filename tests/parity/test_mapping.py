@@ -1,6 +1,7 @@
 """Mapping nodes on image texture coordinates agree with Cycles: a plane textured with a 4x4
 Closest image read through Mapping nodes (tiled, rotated, moved; Point, Texture and Vector
-types, a chain of two, and one with nothing in its Vector input), lit by a sun (direct light
+types, a chain of two, one with nothing in its Vector input, and one whose Location, Rotation
+and Scale come from RGB, Value, Math and Combine Color nodes), lit by a sun (direct light
 only), seen from above by an orthographic camera. The 64x64 renders are averaged over 8x8
 pixel blocks (1024 samples a block, so texel edges crossing a block cost little noise); every
 block must agree within 2.5% of the brightest one (measured: 0.6-1.1%). With the mapping
@@ -54,6 +55,26 @@ def unlinked(nt, uv):
     return _mapping(nt, 'POINT', (0.3, 0.6, 0)).outputs[0]
 
 
+def driven(nt, uv):
+    """Scale from a Value node (one number on a vector: (v, v, v)), Location from an RGB node,
+    the Z rotation from a Math node: constants Cycles computes, which the export evaluates."""
+    m = _mapping(nt, 'POINT', (5, 5, 5), (1, 1, 1), (9, 9, 9))
+    value = nt.nodes.new('ShaderNodeValue')
+    value.outputs[0].default_value = 2.5
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.15, 0.4, 0.0, 1.0)
+    angle = nt.nodes.new('ShaderNodeMath')
+    angle.operation = 'MULTIPLY'
+    angle.inputs[0].default_value, angle.inputs[1].default_value = 0.2, math.pi
+    combine = nt.nodes.new('ShaderNodeCombineColor')    # (0, 0, angle) as a colour on a vector
+    nt.links.new(angle.outputs[0], combine.inputs['Blue'])
+    nt.links.new(value.outputs[0], m.inputs['Scale'])
+    nt.links.new(rgb.outputs[0], m.inputs['Location'])
+    nt.links.new(combine.outputs[0], m.inputs['Rotation'])
+    nt.links.new(uv, m.inputs['Vector'])
+    return m.outputs[0]
+
+
 def _wire(coordinates):
     def wire(nt, tex, diffuse):
         nt.links.new(coordinates(nt, nt.nodes.new('ShaderNodeTexCoord').outputs['UV']), tex.inputs['Vector'])
@@ -66,7 +87,7 @@ def _blocks(engine, tmp_path):
     return rgb.reshape(RES // BLOCK, BLOCK, RES // BLOCK, BLOCK, 3).mean((1, 3))
 
 
-@pytest.mark.parametrize('coordinates', [point, texture, chain, unlinked], ids=lambda c: c.__name__)
+@pytest.mark.parametrize('coordinates', [point, texture, chain, unlinked, driven], ids=lambda c: c.__name__)
 def test_mapped_texture_agrees_with_cycles(coordinates, tmp_path):
     sunplane.build(PX, _wire(coordinates), RES, 16)
     dacrt, cycles = _blocks('DACRT', tmp_path), _blocks('CYCLES', tmp_path)
