@@ -28,6 +28,8 @@ _INPUTS = {
     'CURVE_RGB': {'fac': 'Fac', 'color': 'Color'},
     'SEPARATE_COLOR': {'color': 'Color'},
     'COMBINE_COLOR': {'red': 'Red', 'green': 'Green', 'blue': 'Blue'},
+    'COMBXYZ': {'x': 'X', 'y': 'Y', 'z': 'Z'},
+    'SEPXYZ': {'vector': 'Vector'},
     'MATH': {'a': 'Value', 'b': 'Value_001', 'c': 'Value_002'},
     'CLAMP': {'value': 'Value', 'lo': 'Min', 'hi': 'Max'},
 }
@@ -36,9 +38,9 @@ _MIX_INPUTS = {'RGBA': {'fac': 'Factor_Float', 'a': 'A_Color', 'b': 'B_Color'},
 _MAP_RANGE_INPUTS = {'value': 'Value', 'f0': 'From Min', 'f1': 'From Max', 't0': 'To Min', 't1': 'To Max',
                      'steps': 'Steps'}
 NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
-_COLOR_ROLES = {'color', 'a', 'b'}     # colour inputs (but floats in Mix FLOAT and Math)
+_COLOR_ROLES = {'color', 'a', 'b', 'vector'}     # colour or vector inputs (but floats in Mix FLOAT and Math)
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
-_SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2}
+_SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2, 'X': 0, 'Y': 1, 'Z': 2}
 
 
 def node_inputs(node):
@@ -58,19 +60,23 @@ def node_inputs(node):
 
 
 class Field:
-    """A colour (..., 3) or float (..., 1) value: constant (shape (3,) or (1,)) or one per texel
-    of the image `tex` (shape (h, w, 3) or (h, w, 1))."""
-    __slots__ = ('value', 'tex')
+    """A colour or vector (..., 3) or float (..., 1) value: constant (shape (3,) or (1,)) or one
+    per texel of the image `tex` (shape (h, w, 3) or (h, w, 1)). vector: the value is a vector
+    (a Combine XYZ output), which Cycles turns into a float by its average, not its luminance."""
+    __slots__ = ('value', 'tex', 'vector')
 
-    def __init__(self, value, tex=None):
-        self.value, self.tex = np.asarray(value, np.float64), tex
+    def __init__(self, value, tex=None, vector=False):
+        self.value, self.tex, self.vector = np.asarray(value, np.float64), tex, vector
 
     def as_kind(self, color):
-        """This value as a colour (color True) or a float, as Cycles converts sockets."""
+        """This value as a colour or vector (color True: colours and vectors pass unchanged) or
+        a float, as Cycles converts sockets (svm_node_convert)."""
         n = self.value.shape[-1]
         if color and n == 1:
             return Field(np.repeat(self.value, 3, axis=-1), self.tex)
         if not color and n != 1:
+            if self.vector:
+                return Field(self.value.mean(axis=-1, keepdims=True), self.tex)
             return Field(cn.gray(self.value), self.tex)
         return self
 
@@ -118,7 +124,7 @@ class Evaluator:
             sock = nodegraph.input_by_id(node, ident)
             x[role] = self.input(sock, role in _COLOR_ROLES and not float_node, depth + 1)
         tex = self._join(x.values())
-        return Field(_compute(node, out, {role: f.value for role, f in x.items()}), tex)
+        return Field(_compute(node, out, {role: f.value for role, f in x.items()}), tex, t == 'COMBXYZ')
 
     def _join(self, fields):
         """The image the operands are per texel of; an operand of another image is replaced by
@@ -168,6 +174,11 @@ def _compute(node, out, v):
     if t == 'COMBINE_COLOR':
         r, g, b = np.broadcast_arrays(v['red'], v['green'], v['blue'])
         return cn.combine_color(node.mode, np.concatenate([r, g, b], axis=-1))
+    if t == 'COMBXYZ':
+        return np.concatenate(np.broadcast_arrays(v['x'], v['y'], v['z']), axis=-1)
+    if t == 'SEPXYZ':
+        k = _SEPARATED[out.identifier]
+        return v['vector'][..., k:k + 1]
     if t == 'MATH':
         return fn.math(node.operation, v['a'], v['b'], v['c'], node.use_clamp)
     if t == 'CLAMP':

@@ -195,3 +195,42 @@ def test_constant_inputs_evaluate_chains_of_constant_nodes(dacrt_addon):
     nt.links.new(img.outputs['Color'], mix.inputs['A'])
     nt.links.new(value.outputs[0], mix.inputs['Factor'])
     assert nodeeval.constant_color(e.inputs['Color'])[1] is False
+
+
+def test_combine_and_separate_xyz_with_cycles_vector_conversions(dacrt_addon):
+    """Combine XYZ makes a vector, Separate XYZ takes one apart; a vector into a float input is
+    its average (Cycles' svm_node_convert, NODE_CONVERT_VF), a colour its luminance, a float
+    into a vector input (v, v, v)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    nt = bpy.data.node_groups.new("Vectors", 'ShaderNodeTree')
+    e = nt.nodes.new('ShaderNodeEmission')
+    comb = nt.nodes.new('ShaderNodeCombineXYZ')
+    comb.inputs['X'].default_value, comb.inputs['Y'].default_value, comb.inputs['Z'].default_value = 0.3, 0.6, 2.1
+    nt.links.new(comb.outputs[0], e.inputs['Color'])
+    color, exact = nodeeval.constant_color(e.inputs['Color'])
+    assert exact and np.allclose(color, (0.3, 0.6, 2.1))
+    nt.links.new(comb.outputs[0], e.inputs['Strength'])
+    strength, exact = nodeeval.constant_value(e.inputs['Strength'])
+    assert exact and np.isclose(strength, 1.0)            # (0.3 + 0.6 + 2.1) / 3, not luminance
+    sep = nt.nodes.new('ShaderNodeSeparateXYZ')
+    nt.links.new(comb.outputs[0], sep.inputs['Vector'])
+    for k, name in enumerate('XYZ'):
+        nt.links.new(sep.outputs[name], e.inputs['Strength'])
+        strength, exact = nodeeval.constant_value(e.inputs['Strength'])
+        assert exact and np.isclose(strength, (0.3, 0.6, 2.1)[k])
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.2, 0.4, 0.8, 1.0)
+    nt.links.new(rgb.outputs[0], sep.inputs['Vector'])   # a colour into a vector input: as it is
+    nt.links.new(sep.outputs['Z'], e.inputs['Strength'])
+    strength, exact = nodeeval.constant_value(e.inputs['Strength'])
+    assert exact and np.isclose(strength, 0.8)
+    nt.links.new(rgb.outputs[0], e.inputs['Strength'])   # a colour into a float: its luminance
+    strength, _ = nodeeval.constant_value(e.inputs['Strength'])
+    assert np.isclose(strength, float(np.asarray(cn.gray(np.array([0.2, 0.4, 0.8]))).reshape(-1)[0]))
+    assert not np.isclose(strength, (0.2 + 0.4 + 0.8) / 3)
+    value = nt.nodes.new('ShaderNodeValue')
+    value.outputs[0].default_value = 0.7
+    nt.links.new(value.outputs[0], sep.inputs['Vector'])  # a float into a vector: (v, v, v)
+    nt.links.new(sep.outputs['Y'], e.inputs['Strength'])
+    strength, exact = nodeeval.constant_value(e.inputs['Strength'])
+    assert exact and np.isclose(strength, 0.7)

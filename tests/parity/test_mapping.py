@@ -1,7 +1,7 @@
 """Mapping nodes on image texture coordinates agree with Cycles: a plane textured with a 4x4
 Closest image read through Mapping nodes (tiled, rotated, moved; Point, Texture and Vector
 types, a chain of two, one with nothing in its Vector input, and one whose Location, Rotation
-and Scale come from RGB, Value, Math and Combine Color nodes), lit by a sun (direct light
+and Scale come from RGB, Value, Math, Combine XYZ and Combine Color nodes), lit by a sun (direct light
 only), seen from above by an orthographic camera. The 64x64 renders are averaged over 8x8
 pixel blocks (1024 samples a block, so texel edges crossing a block cost little noise); every
 block must agree within 2.5% of the brightest one (measured: 0.6-1.1%). With the mapping
@@ -56,8 +56,9 @@ def unlinked(nt, uv):
 
 
 def driven(nt, uv):
-    """Scale from a Value node (one number on a vector: (v, v, v)), Location from an RGB node,
-    the Z rotation from a Math node: constants Cycles computes, which the export evaluates."""
+    """Scale from Combine XYZ of a Value node and a Math node, Location from an RGB node, the Z
+    rotation from a Math node through Combine Color: constants Cycles computes, which the export
+    evaluates."""
     m = _mapping(nt, 'POINT', (5, 5, 5), (1, 1, 1), (9, 9, 9))
     value = nt.nodes.new('ShaderNodeValue')
     value.outputs[0].default_value = 2.5
@@ -68,7 +69,15 @@ def driven(nt, uv):
     angle.inputs[0].default_value, angle.inputs[1].default_value = 0.2, math.pi
     combine = nt.nodes.new('ShaderNodeCombineColor')    # (0, 0, angle) as a colour on a vector
     nt.links.new(angle.outputs[0], combine.inputs['Blue'])
-    nt.links.new(value.outputs[0], m.inputs['Scale'])
+    scale = nt.nodes.new('ShaderNodeCombineXYZ')            # (2.5, 2.5 * 0.6, 1)
+    ratio = nt.nodes.new('ShaderNodeMath')
+    ratio.operation = 'MULTIPLY'
+    ratio.inputs[1].default_value = 0.6
+    nt.links.new(value.outputs[0], scale.inputs['X'])
+    nt.links.new(value.outputs[0], ratio.inputs[0])
+    nt.links.new(ratio.outputs[0], scale.inputs['Y'])
+    scale.inputs['Z'].default_value = 1.0
+    nt.links.new(scale.outputs[0], m.inputs['Scale'])
     nt.links.new(rgb.outputs[0], m.inputs['Location'])
     nt.links.new(combine.outputs[0], m.inputs['Rotation'])
     nt.links.new(uv, m.inputs['Vector'])
