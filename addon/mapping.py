@@ -78,9 +78,8 @@ def texture_transform(tex_node, reasons):
             break
         mi, ti = mapping_affine(link.from_node, reasons)
         M, t = M @ mi, M @ ti + t
-        inner = linked_link(link.from_node.inputs['Vector'])
+        inner, carrier = source(link.from_node.inputs['Vector'])
         if inner is None:                 # a constant point: every shading point reads one texel
-            _, carrier = source(link.from_node.inputs['Vector'])
             p = M @ np.array(carrier.default_value[:3], np.float64) + t
             return np.array([[0.0, 0.0, p[0]], [0.0, 0.0, p[1]]])
         link = inner

@@ -2,7 +2,10 @@
 colour, for the export: `Evaluator` walks the graph (links followed by nodegraph, so groups and
 reroutes are transparent) and computes each node with Cycles' formulas (colornodes.py,
 floatnodes.py) on a constant or on every texel of one image; the export bakes the result into
-the material's texture. Part of the export layer: nodes are Blender's (or nodegraph's wrappers).
+the material's texture. `constant` uses the same walk for inputs that must be constants
+(emission strength, Mix Shader factor, a Mapping's inputs): what RGB and Value nodes through
+these nodes compute, with Cycles' socket conversions. Part of the export layer: nodes are
+Blender's (or nodegraph's wrappers).
 
 Values are float64 where Cycles computes in float32: at a discontinuity (Math Floor or Compare, a
 Stepped Map Range) a value within float32 rounding of the edge may land on the other side.

@@ -144,32 +144,6 @@ def linked_node(socket):
     return link.from_node if link is not None else None
 
 
-def constant_color(socket):
-    """(rgb, exact): the socket's constant colour, following RGB/Value nodes; where another
-    node computes it, the carrier's own value and exact False."""
-    link, carrier = source(socket)
-    if link is None:
-        return _as_color(carrier.default_value), True
-    node = link.from_node
-    if node.type == 'RGB':
-        return tuple(node.outputs[0].default_value[:3]), True
-    if node.type == 'VALUE':
-        v = node.outputs[0].default_value
-        return (v, v, v), True
-    return _as_color(carrier.default_value), False
-
-
-def constant_value(socket):
-    """(value, exact): the socket's constant float, following a Value node; where another node
-    computes it, the carrier's own value and exact False."""
-    link, carrier = source(socket)
-    if link is None:
-        return float(carrier.default_value), True
-    if link.from_node.type == 'VALUE':
-        return float(link.from_node.outputs[0].default_value), True
-    return float(carrier.default_value), False
-
-
 def input_socket(node, *names):
     """The first of the named inputs the node has, or None."""
     for n in names:
@@ -184,10 +158,6 @@ def input_by_id(node, identifier):
     inputs up by name, and nodes such as Mix have several inputs of one name), or None."""
     s = _matching(unwrap(node), 'inputs', identifier)
     return None if s is None else GraphSocket(s, node.groups if isinstance(node, GraphNode) else ())
-
-
-def _as_color(v):
-    return tuple(v[:3]) if hasattr(v, '__len__') else (v, v, v)
 
 
 def _group_output(ntree):

@@ -7,7 +7,7 @@ import math
 import bpy
 import numpy as np
 
-from addon import export, nodegraph
+from addon import export, nodeeval
 from tests.bench import fairmaterials
 
 from . import scenes
@@ -133,7 +133,7 @@ def test_override_sets_the_reference_fair_principled_inputs(scene):
     fairmaterials.make_diffuse(mats)
     p = next(n for n in bpy.data.materials["Shiny"].node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
     for name in fairmaterials.ZEROED_PRINCIPLED:      # a Value node of 0 may stay linked
-        assert nodegraph.constant_value(p.inputs[name]) == (0.0, True), name
+        assert nodeeval.constant_value(p.inputs[name]) == (0.0, True), name
     assert p.inputs['Transmission Weight'].is_linked and not p.inputs['Metallic'].is_linked
     assert p.inputs['Alpha'].default_value == 1.0 and not p.inputs['Normal'].is_linked
     glossy = bpy.data.materials["Glossy"].node_tree

@@ -6,7 +6,7 @@ import math
 import bpy
 import numpy as np
 
-from addon import nodegraph
+from addon import nodeeval, nodegraph
 from tests.bench import fairmaterials
 
 from . import scenes
@@ -219,7 +219,7 @@ def test_source_carrier_and_unwrap(scene):
     link, carrier = nodegraph.source(inner.inputs['Color'])
     assert nodegraph.unwrap(link.from_node) == noise
     assert nodegraph.unwrap(carrier) == node.inputs['Tint'] and carrier.groups == ()
-    color, exact = nodegraph.constant_color(inner.inputs['Color'])
+    color, exact = nodeeval.constant_color(inner.inputs['Color'])
     assert np.allclose(color, 0.3) and not exact
 
 

@@ -12,7 +12,8 @@ export renders exactly, following the export's own rules (addon/export.py `_Mate
 - any other shader node (Glossy, Glass, ...): replaced by a Diffuse BSDF of the colour the
   export reads from it (its constant 'Color' / 'Base Color', 0.8 grey without one);
 - a linked colour or factor the export reads as the socket's own value (not an Image Texture,
-  RGB or Value node, or for a diffuse colour one of the colour nodes the export evaluates):
+  a constant chain of RGB or Value nodes through the nodes the export evaluates, or for a
+  diffuse colour those nodes on an image):
   unlinked, so Cycles uses that value too; Image Textures and those colour nodes are kept,
   with the coordinates, projection, interpolation and extension the export uses;
 - the output's Volume and Displacement inputs unlinked; muted shader nodes become the
