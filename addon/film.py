@@ -16,6 +16,14 @@ PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3}
 BACKGROUND_DEPTH = 1e10    # what Cycles reports for pixels whose first sample saw no surface
 
 
+def _sample_sums(values: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """(C, P, S) float32 samples summed over S in float64 (weights: 0/1 per sample, or all).
+    A product with a vector of ones: numpy's sum over a short last axis with a float64 cast
+    ran element by element, 5x slower (4% of a Cornell-box render)."""
+    w = np.ones(values.shape[2]) if weights is None else np.asarray(weights, np.float64)
+    return values.astype(np.float64) @ w
+
+
 class Film:
     def __init__(self, width: int, height: int, passes=(), adaptive: bool = False):
         unknown = [p for p in passes if p not in PASS_CHANNELS]
@@ -54,13 +62,13 @@ class Film:
             rgba = np.where(ok, rgba, 0.0)
             data = {k: np.where(ok, v, 0.0) for k, v in data.items()}
         self._count[pixels] += ok.sum(axis=1)
-        self._sum[:, pixels] += rgba.sum(axis=2, dtype=np.float64)
+        self._sum[:, pixels] += _sample_sums(rgba)
         if self._odd is not None:
             odd = (first_sample + np.arange(rgba.shape[2])) % 2 == 1
             if odd.any():
-                self._odd[:, pixels] += 2.0 * rgba[:3][:, :, odd].sum(axis=2, dtype=np.float64)
+                self._odd[:, pixels] += 2.0 * _sample_sums(rgba[:3], odd)
         for name, values in data.items():
-            self._pass_sum[name][:, pixels] += values.sum(axis=2, dtype=np.float64)
+            self._pass_sum[name][:, pixels] += _sample_sums(values)
         self.nan_dropped += dropped
         return dropped
 
