@@ -738,18 +738,17 @@ class Integrator:
         u_pick = u_rr = None
         if need_pick or k >= 2:
             u_pick, u_rr = self.rng.uniform_pick(path.keys, _dim(k, 0))
-        idx, thr, n_black, n_rr = dacrt.shading.continue_paths(
+        # ... and, in the same pass, the survivors' hit points and the path columns they keep
+        idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_albedo, path.thr,
-            u_rr if k >= 2 else None)
+            u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),
+            take=(path.pid, path.keys, u_pick if need_pick else None))
         self._ended['black'] += n_black
         self._ended['roulette'] += n_rr
         if len(idx) == 0:
             return None
-        sel = None if len(idx) == len(hit) else idx
-        P, ng, ns, P_off = self._surface(hits, sel, path.D)
-        prim, pid, keys, u_pick = _compact(sel, prim, path.pid, path.keys, u_pick if need_pick else None)
         if self.mats.textures:
-            self._texture(prim, *_compact(sel, hits['u'], hits['v']), thr)
+            self._texture(prim, *_compact(idx, hits['u'], hits['v']), thr)
         del hits, path
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L)
@@ -832,14 +831,20 @@ class Integrator:
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather)."""
         env = self._camera_env if camera else self.lights.environment
-        if env is not None:
-            env.native.gather(0.0 if camera else self.lights.env_prob, path.D, ~hit, path.thr,
-                              None if camera else path.pdf, path.pid, L)
         lamps = self._camera_lamps if camera else self._bsdf_lamps
+        if env is None and not len(lamps):
+            return
+        miss = ~hit
+        if env is not None:
+            env.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss, path.thr,
+                              None if camera else path.pdf, path.pid, L)
         if not len(lamps):
             return
-        dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, np.where(hit, hits['t'], path.tmax),
-                                ~hit, path.pid, L, thr=path.thr, pdf_bsdf=None if camera else path.pdf,
+        # a lamp counts in front of the surface hit, or of the ray's end where it missed (the
+        # tracer leaves a miss at t = inf: only camera rays end sooner, at the clip end)
+        t_surf = np.where(hit, hits['t'], path.tmax) if camera else hits['t']
+        dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
+                                miss, path.pid, L, thr=path.thr, pdf_bsdf=None if camera else path.pdf,
                                 lamp_prob=None if camera else self._record_prob)
 
     # --- next-event estimation --------------------------------------------------------------------

@@ -217,16 +217,18 @@ py::tuple pixel_samples_py(I64Array pixel, I64Array sample, int64_t width, uint6
     return py::make_tuple(keys, rx, ry);
 }
 
+std::vector<Columns> columns_of(const py::list& arrays, size_t k, py::list& out, size_t& n);
+
 py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style> hit,
                             py::array_t<bool, py::array::c_style> live, F32Array albedo, py::object thr,
-                            py::object u_rr) {
+                            py::object u_rr, py::object geo, py::object normals, py::object D, py::list take) {
     const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const Hit* h = records<Hit>(hits, n, "hits");
     need_len(hit, n, "hit");
     if (live.ndim() != 1) throw py::value_error("live must be one-dimensional");
     size_t M = size_t(live.shape(0));
     if (rows_of(albedo, 3, "albedo") != M) throw py::value_error("albedo must have shape (3, M), M = len(live)");
-    F32Array thr_keep, rr_keep;
+    F32Array thr_keep, rr_keep, geo_keep, nrm_keep, D_keep;
     const float* t = optional_rows(thr, 3, n, "thr", thr_keep);
     const float* r = nullptr;
     if (!u_rr.is_none()) {
@@ -234,6 +236,11 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
         need_len(rr_keep, n, "u_rr");
         r = rr_keep.data();
     }
+    // the survivors' surface points (geo given) and columns (take) in the same pass
+    const float* g = optional_rows(geo, 15, M, "geo", geo_keep);
+    const float* nrm = g ? optional_rows(normals, 9, M, "normals", nrm_keep) : nullptr;
+    const float* d = g ? optional_rows(D, 3, n, "D", D_keep) : nullptr;
+    if (g && !d) throw py::value_error("geo needs D, the rays' directions");
     I64Array idx{py::ssize_t(n)};
     size_t k, black, rr;
     {
@@ -243,11 +250,29 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
     }
     idx.resize({py::ssize_t(k)});
     F32Array thr_out({py::ssize_t(3), py::ssize_t(k)});
+    py::object surf = py::none(), prim = py::none();
+    float* surf_out = nullptr;
+    int32_t* prim_out = nullptr;
+    if (g) {
+        F32Array so({py::ssize_t(nrm ? 12 : 9), py::ssize_t(k)});
+        py::array_t<int32_t> po{py::ssize_t(k)};
+        surf_out = so.mutable_data();
+        prim_out = po.mutable_data();
+        surf = so;
+        prim = po;
+    }
+    py::list taken;
+    size_t tn = 0;
+    const std::vector<Columns> cols = columns_of(take, k, taken, tn);
+    if (!cols.empty() && tn != n)
+        throw py::value_error("take: arrays have " + std::to_string(tn) + " columns, hits " + std::to_string(n));
     {
         py::gil_scoped_release nogil;
-        survivor_throughput(h, n, albedo.data(), M, t, r != nullptr, idx.data(), k, thr_out.mutable_data());
+        survivor_throughput(h, n, albedo.data(), M, t, r != nullptr, idx.data(), k, thr_out.mutable_data(), g, nrm, d,
+                            surf_out, prim_out);
+        if (!cols.empty()) take_columns(cols.data(), cols.size(), idx.data(), k);
     }
-    return py::make_tuple(idx, thr_out, black, rr);
+    return py::make_tuple(idx, thr_out, black, rr, surf, prim, taken);
 }
 
 size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> hit, F32Array emission,
@@ -327,12 +352,11 @@ py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, p
     return py::make_tuple(O, D, tmax);
 }
 
-py::list take_columns_py(I64Array idx, py::list arrays) {
-    if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
-    const size_t k = size_t(idx.shape(0));
+// The Columns of `arrays` (each C-contiguous (n,) or (rows, n), the same n) taken at k
+// indices, with their fresh outputs appended to out; n: their column count (0 when none).
+std::vector<Columns> columns_of(const py::list& arrays, size_t k, py::list& out, size_t& n) {
     std::vector<Columns> cols;
-    py::list out;
-    size_t n = 0;
+    n = 0;
     for (size_t a = 0; a < arrays.size(); ++a) {
         py::array src = arrays[a].cast<py::array>();
         const std::string name = "arrays[" + std::to_string(a) + "]";
@@ -352,6 +376,15 @@ py::list take_columns_py(I64Array idx, py::list arrays) {
         cols.push_back({src.data(), dst.mutable_data(), rows, n, itemsize});
         out.append(dst);
     }
+    return cols;
+}
+
+py::list take_columns_py(I64Array idx, py::list arrays) {
+    if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
+    const size_t k = size_t(idx.shape(0));
+    py::list out;
+    size_t n = 0;
+    const std::vector<Columns> cols = columns_of(arrays, k, out, n);
     if (!cols.empty()) check_index(idx, n, "idx");
     {
         py::gil_scoped_release nogil;
@@ -437,7 +470,8 @@ void register_shading(py::module_& m) {
     m.def("pixel_samples", &pixel_samples_py, py::arg("pixel"), py::arg("sample"), py::arg("width"), py::arg("k0"),
           py::arg("k1"), py::arg("ka"), py::arg("kb"), py::arg("table"));
     m.def("continue_paths", &continue_paths_py, py::arg("hits"), py::arg("hit"), py::arg("live"), py::arg("albedo"),
-          py::arg("thr"), py::arg("u_rr"));
+          py::arg("thr"), py::arg("u_rr"), py::arg("geo") = py::none(), py::arg("normals") = py::none(),
+          py::arg("D") = py::none(), py::arg("take") = py::list());
     m.def("gather_emission", &gather_emission_py, py::arg("hits"), py::arg("hit"), py::arg("emission"),
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("O"), py::arg("D"),
           py::arg("thr"), py::arg("pdf"), py::arg("pid"), py::arg("L"));

@@ -133,9 +133,14 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
                  const float* u_rr, int64_t* idx, size_t* dead_black, size_t* dead_rr);
 
 // Throughput after this reflection of the k survivors idx: albedo[prim] x thr / q (q as in
-// survivors() when roulette, else 1); thr_out: 3 rows of stride k.
+// survivors() when roulette, else 1); thr_out: 3 rows of stride k. With geo non-null, in the
+// same pass, their surface points as surface() gives them (directions D: 3 rows, stride n;
+// normals null = flat) to surf_out: rows P, ng, P_off (and ns with normals) of stride k, and
+// their triangles to prim_out: one pass over the survivors instead of three calls and passes.
 void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
-                         const int64_t* idx, size_t k, float* thr_out);
+                         const int64_t* idx, size_t k, float* thr_out, const float* geo = nullptr,
+                         const float* normals = nullptr, const float* D = nullptr, float* surf_out = nullptr,
+                         int32_t* prim_out = nullptr);
 
 // Emission that rays (origins O, unit directions D: 3 rows, stride n) meet on emissive triangles
 // (two-sided), added to L (3 rows, stride N) at column pid[i] (distinct per ray). Rays with

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "parallel.h"
+#include "pathvertex.h"
 #include "shading.h"
 
 namespace dacrt {
@@ -51,11 +52,13 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
 }
 
 void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
-                         const int64_t* idx, size_t k, float* thr_out) {
+                         const int64_t* idx, size_t k, float* thr_out, const float* geo, const float* normals,
+                         const float* D, float* surf_out, int32_t* prim_out) {
     parallel_for(k, [&](size_t b, size_t e) {
         for (size_t j = b; j < e; ++j) {
             const size_t i = size_t(idx[j]);
-            const size_t p = size_t(hits[i].prim);
+            const Hit& h = hits[i];
+            const size_t p = size_t(h.prim);
             const float q = roulette ? survival(thr, n, i) : 1.0f;
             const float inv_q = q > 0 ? 1.0f / q : 1.0f;
             for (int a = 0; a < 3; ++a) {
@@ -63,6 +66,17 @@ void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t 
                 if (roulette) t = t * inv_q;
                 thr_out[size_t(a) * k + j] = albedo[size_t(a) * M + p] * t;
             }
+            if (!geo) continue;
+            const float d[3] = {D[i], D[n + i], D[2 * n + i]};
+            SurfacePoint sp;
+            surface_point(geo, M, normals, h, d, sp);  // survivors have 0 <= prim < M
+            for (int a = 0; a < 3; ++a) {
+                surf_out[size_t(a) * k + j] = sp.P[a];
+                surf_out[size_t(3 + a) * k + j] = sp.ng[a];
+                surf_out[size_t(6 + a) * k + j] = sp.P_off[a];
+                if (normals) surf_out[size_t(9 + a) * k + j] = sp.ns[a];
+            }
+            prim_out[j] = h.prim;
         }
     });
 }

@@ -297,6 +297,48 @@ def test_continue_paths_matches_numpy(roulette, with_thr):
         shading.continue_paths(hits, hit, live, albedo[:, :-1])
 
 
+@pytest.mark.parametrize("smooth", [False, True])
+def test_continue_paths_gives_survivors_surface_and_columns_in_one_pass(smooth):
+    """surface= and take= give exactly what surface() and take_columns() give for the
+    survivors (the integrator relies on the same bits), and the plain return is unchanged."""
+    rng = np.random.default_rng(13)
+    n, m = 50_000, 40
+    geo, _ = _geo(rng, m)
+    normals = None
+    if smooth:
+        c = _unit(rng, 3 * m).reshape(3, 3, m)
+        normals = np.concatenate([c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]]).astype(F32)
+    hits = np.zeros(n, dacrt.HIT_DTYPE)
+    hits["prim"] = rng.integers(-1, m, n)
+    su = np.sqrt(rng.random(n))
+    hits["u"], hits["v"] = rng.random(n) * su, 1 - su
+    hit = hits["prim"] >= 0
+    live = rng.random(m) < 0.8
+    albedo = rng.random((3, m)).astype(F32)
+    thr = rng.random((3, n)).astype(F32)
+    u_rr = rng.random(n).astype(F32)
+    D = _unit(rng, n)
+    pid = rng.permutation(n)
+    keys = rng.integers(0, 2 ** 32, (2, n), dtype=np.uint32)
+    pick = rng.random(n)
+    idx, out, black, dead = shading.continue_paths(hits, hit, live, albedo, thr, u_rr)
+    idx2, out2, black2, dead2, points, prim, taken = shading.continue_paths(
+        hits, hit, live, albedo, thr, u_rr, surface=(geo, normals, D), take=(pid, None, keys, pick))
+    np.testing.assert_array_equal(idx2, idx)
+    np.testing.assert_array_equal(out2, out)
+    assert (black2, dead2) == (black, dead) and 0 < len(idx) < n
+    for got, want in zip(points, shading.surface(geo, normals, hits, idx, D)):
+        np.testing.assert_array_equal(got, want)
+    assert (points[2] is points[1]) == (normals is None)     # flat: ns is ng, as surface()
+    np.testing.assert_array_equal(prim, hits["prim"][idx])
+    assert taken[1] is None
+    for got, want in zip([taken[0], taken[2], taken[3]], [pid[idx], keys[:, idx], pick[idx]]):
+        assert got.dtype == want.dtype
+        np.testing.assert_array_equal(got, want)
+    with pytest.raises(ValueError, match="take: arrays have"):
+        shading.continue_paths(hits, hit, live, albedo, thr, u_rr, take=(pid[:-1],))
+
+
 def test_triangle_table_matches_float64():
     rng = np.random.default_rng(12)
     v = (rng.normal(size=(500, 3)) * 10.0 ** rng.uniform(-3, 3, (500, 1))).astype(F32)

@@ -247,7 +247,8 @@ class Scene:
         return int(visible)
 
     def intersect(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None) -> np.ndarray:
-        """Closest hit with t in (0, tfar] for every ray; returns HIT_DTYPE indexed by ray id.
+        """Closest hit with t in (0, tfar] for every ray; returns HIT_DTYPE indexed by ray id
+        (a miss: prim -1, t = inf, u = v = 0, whatever its tfar).
 
         rays is reordered in place and each hit ray's tfar becomes its hit distance. Ties at
         equal t go to the lowest triangle index. skip (optional, by ray id): a triangle index

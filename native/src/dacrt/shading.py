@@ -298,7 +298,7 @@ def pixel_samples(pixel, sample, width: int, k0: int, k1: int, ka: int, kb: int,
                                int(width), int(k0), int(k1), int(ka), int(kb), np.ascontiguousarray(table, _F32))
 
 
-def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None):
+def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None, surface=None, take=()):
     """Which paths go on after a vertex, and with what throughput.
 
     hits (n,) HIT_DTYPE; hit (n,) bool: the ray hit a surface that shades; live (M,) bool per
@@ -306,11 +306,32 @@ def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None):
     u_rr (n,) uniforms for Russian roulette (None: no roulette), survival probability
     q = min(sqrt(max channel of thr), 1) as Cycles. Returns (idx (k,) int64 of the survivors,
     their throughput albedo[prim] x thr / q (3, k), paths ended on black surfaces, paths ended
-    by roulette)."""
+    by roulette).
+
+    surface = (geo, normals, D) and take (per-path arrays, (n,) or (rows, n), None kept None)
+    ask for more of the survivors in the same native pass: the return then ends with
+    (P, ng, ns, P_off) as surface(geo, normals, hits, idx, D) gives them (None without
+    surface), their triangles prim (k,) int32 (None without surface) and the columns idx of
+    each array of take, as take_columns(idx, *take)."""
     hits = np.asarray(hits)
     if hits.dtype != HIT_DTYPE:
         raise ValueError(f"hits must be a HIT_DTYPE array, got {hits.dtype}")
-    return _core.continue_paths(np.ascontiguousarray(hits), np.ascontiguousarray(hit, np.bool_),
-                                np.ascontiguousarray(live, np.bool_), _rows(albedo, 3, "albedo"),
-                                None if thr is None else _rows(thr, 3, "thr"),
-                                None if u_rr is None else np.ascontiguousarray(u_rr, _F32))
+    geo = normals = D = None
+    if surface is not None:
+        geo, normals, D = surface
+        geo, D = _rows(geo, 15, "geo"), _rows(D, 3, "D")
+        if normals is not None:
+            normals = _rows(normals, 9, "normals")
+    given = [np.ascontiguousarray(a) for a in take if a is not None]
+    idx, thr_out, black, rr, surf, prim, taken = _core.continue_paths(
+        np.ascontiguousarray(hits), np.ascontiguousarray(hit, np.bool_), np.ascontiguousarray(live, np.bool_),
+        _rows(albedo, 3, "albedo"), None if thr is None else _rows(thr, 3, "thr"),
+        None if u_rr is None else np.ascontiguousarray(u_rr, _F32), geo, normals, D, given)
+    if surface is None and not take:
+        return idx, thr_out, black, rr
+    points = None
+    if surf is not None:
+        ng = surf[3:6]
+        points = (surf[0:3], ng, ng if normals is None else surf[9:12], surf[6:9])
+    taken = iter(taken)
+    return idx, thr_out, black, rr, points, prim, [None if a is None else next(taken) for a in take]
