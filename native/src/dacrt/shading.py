@@ -264,8 +264,17 @@ def take_columns(idx, *arrays):
     """[a[..., idx] for a in arrays] in one threaded pass: arrays are (n,) or (rows, n) with the
     same n (any 1, 2, 4 or 8-byte dtype); idx (k,) indexes their last axis. None stays None."""
     idx = np.ascontiguousarray(idx, np.int64)
-    given = [np.ascontiguousarray(a) for a in arrays if a is not None]
-    taken = iter(_core.take_columns(idx, given))
+    return _refill(arrays, _core.take_columns(idx, _present(arrays)))
+
+
+def _present(arrays):
+    """The arrays that are not None, C-contiguous, for a native call that takes columns."""
+    return [np.ascontiguousarray(a) for a in arrays if a is not None]
+
+
+def _refill(arrays, taken):
+    """taken (one result per array that is not None) with None back where arrays had None."""
+    taken = iter(taken)
     return [None if a is None else next(taken) for a in arrays]
 
 
@@ -322,16 +331,14 @@ def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None, surface=None, t
         geo, D = _rows(geo, 15, "geo"), _rows(D, 3, "D")
         if normals is not None:
             normals = _rows(normals, 9, "normals")
-    given = [np.ascontiguousarray(a) for a in take if a is not None]
     idx, thr_out, black, rr, surf, prim, taken = _core.continue_paths(
         np.ascontiguousarray(hits), np.ascontiguousarray(hit, np.bool_), np.ascontiguousarray(live, np.bool_),
         _rows(albedo, 3, "albedo"), None if thr is None else _rows(thr, 3, "thr"),
-        None if u_rr is None else np.ascontiguousarray(u_rr, _F32), geo, normals, D, given)
+        None if u_rr is None else np.ascontiguousarray(u_rr, _F32), geo, normals, D, _present(take))
     if surface is None and not take:
         return idx, thr_out, black, rr
     points = None
     if surf is not None:
         ng = surf[3:6]
         points = (surf[0:3], ng, ng if normals is None else surf[9:12], surf[6:9])
-    taken = iter(taken)
-    return idx, thr_out, black, rr, points, prim, [None if a is None else next(taken) for a in take]
+    return idx, thr_out, black, rr, points, prim, _refill(take, taken)
