@@ -739,16 +739,19 @@ class Integrator:
         if need_pick or k >= 2:
             u_pick, u_rr = self.rng.uniform_pick(path.keys, _dim(k, 0))
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
-        idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick) = dacrt.shading.continue_paths(
+        # (their barycentrics too where textures need them)
+        tex = bool(self.mats.textures)
+        idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_albedo, path.thr,
             u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),
-            take=(path.pid, path.keys, u_pick if need_pick else None))
+            take=(path.pid, path.keys, u_pick if need_pick else None,
+                  hits['u'] if tex else None, hits['v'] if tex else None))
         self._ended['black'] += n_black
         self._ended['roulette'] += n_rr
         if len(idx) == 0:
             return None
-        if self.mats.textures:
-            self._texture(prim, *_compact(idx, hits['u'], hits['v']), thr)
+        if tex:
+            self._texture(prim, u, v, thr)
         del hits, path
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L)
