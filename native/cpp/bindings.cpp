@@ -172,6 +172,7 @@ private:
         d["rays"] = res.stats.rays;
         d["box_tests"] = res.stats.box_tests;
         d["box_hits"] = res.stats.box_hits;
+        d["filter_skips"] = res.stats.filter_skips;
         d["tri_tests"] = res.stats.tri_tests;
         d["partition_steps"] = res.stats.partition_steps;
         d["median_steps"] = res.stats.median_steps;

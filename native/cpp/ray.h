@@ -60,6 +60,7 @@ struct Stats {
     uint64_t rays = 0;
     uint64_t box_tests = 0;
     uint64_t box_hits = 0;  // rays kept active by the box tests
+    uint64_t filter_skips = 0;  // nodes whose filter was skipped (most sampled rays hit the box)
     uint64_t tri_tests = 0;
     uint64_t partition_steps = 0;
     uint64_t median_steps = 0;
@@ -74,7 +75,8 @@ struct Stats {
     uint64_t partition_ticks = 0;
     uint64_t leaf_ticks = 0;
     void add(const Stats& o) {
-        rays += o.rays; box_tests += o.box_tests; box_hits += o.box_hits; tri_tests += o.tri_tests;
+        rays += o.rays; box_tests += o.box_tests; box_hits += o.box_hits; filter_skips += o.filter_skips;
+        tri_tests += o.tri_tests;
         partition_steps += o.partition_steps; median_steps += o.median_steps;
         sah_steps += o.sah_steps; leaves += o.leaves; double_fallbacks += o.double_fallbacks;
         filter_ticks += o.filter_ticks; partition_ticks += o.partition_ticks; leaf_ticks += o.leaf_ticks;

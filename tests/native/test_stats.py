@@ -9,7 +9,7 @@ from . import harness, scenes
 from .rays import make_rays
 
 STATS_KEYS = {"rays", "box_tests", "tri_tests", "partition_steps", "median_steps", "sah_steps",
-              "leaves", "threads", "isa", "seconds"}
+              "leaves", "filter_skips", "threads", "isa", "seconds"}
 COUNTERS = STATS_KEYS - {"isa", "seconds"}
 
 
@@ -43,6 +43,38 @@ def test_stats_are_sane(query, partition):
     if partition == "sah":
         assert s["sah_steps"] > 0
     assert s["isa"] == dacrt.isa()
+
+
+def test_filters_are_skipped_only_where_most_rays_hit_the_box(monkeypatch):
+    """A node whose box most of its (>= 1024) rays hit keeps them all instead of filtering; the
+    children's filters cull the rest. Rays all aimed into a torus from around it skip at least
+    the root's filter; rays all aimed away from it, or fewer than 1024 rays, skip none. The hits
+    are the same bits as the same rays traced in batches too small to skip, on every ISA."""
+    v, t = scenes.make_scene("torus", 3, 6)
+    rng = np.random.default_rng(11)
+    n = 3000
+    o = rng.normal(size=(n, 3)) * 3.0
+    target = rng.uniform(-1.0, 1.0, (n, 3)) * np.array([1.2, 1.2, 0.3])
+    inward = (target - o).astype(np.float32)
+    tf = np.full(n, np.inf, np.float32)
+    for isa in dacrt.supported_isas():
+        monkeypatch.setenv("DACRT_ISA", isa)
+        scene = dacrt.Scene(v, t)
+        big = harness.intersect(scene, o, inward, tf, threads=1)
+        assert check_stats(scene.last_stats, n, len(t))["filter_skips"] >= 1, isa
+        assert (big["prim"] >= 0).mean() > 0.3
+        small = np.concatenate([harness.intersect(scene, o[i:i + 500], inward[i:i + 500], tf[i:i + 500],
+                                                  threads=1) for i in range(0, n, 500)])
+        assert scene.last_stats["filter_skips"] == 0, f"{isa}: 500 rays are too few to skip"
+        assert np.array_equal(big.view(np.uint32), small.view(np.uint32)), isa
+        occ_big = harness.occluded(scene, o, inward, tf, threads=1)
+        occ_small = np.concatenate([harness.occluded(scene, o[i:i + 500], inward[i:i + 500], tf[i:i + 500],
+                                                     threads=1) for i in range(0, n, 500)])
+        assert np.array_equal(occ_big, occ_small) and occ_big.any(), isa
+        away = np.where(np.sum(o * inward, axis=1, keepdims=True) < 0, -inward, inward)
+        away = np.where(np.sum(o * away, axis=1, keepdims=True) < 0, -away, away)  # from the origin
+        harness.intersect(scene, o + 1e-3 * away, away, tf, threads=1)
+        assert scene.last_stats["filter_skips"] == 0, f"{isa}: rays leaving the torus's box skipped a filter"
 
 
 def test_stats_follow_the_last_call():
