@@ -40,6 +40,11 @@ struct Tracer {
     uint32_t* priv;  // this thread's id scratch
     Stats st;
 
+    // A node of na active rays and nt triangles is a leaf: all of them tested brute force.
+    bool is_leaf(size_t na, size_t nt) const {
+        return nt <= size_t(cfg.leaf_size) || na <= size_t(cfg.leaf_rays);
+    }
+
     // Filtering a node whose box most rays hit is not worth its cost (Nabata et al. 2013 skip
     // such filters, judged on sampled rays): with a share p of the n rays kept, a filter tests
     // n rays so that the two children test 2pn instead of 2n, a saving only for p < 1/2. So
@@ -73,7 +78,7 @@ struct Tracer {
         const float pad = 0.0f;
 #endif
         for (int a = 0; a < 3; ++a) { lo[a] = nb.lo[a] - pad; hi[a] = nb.hi[a] + pad; }
-        if (n >= kSampledRays && nt > size_t(cfg.leaf_size) && most_inside(rays, n, lo, hi)) {
+        if (n >= kSampledRays && !is_leaf(n, nt) && most_inside(rays, n, lo, hi)) {
             ++st.filter_skips;
             return n;
         }
@@ -131,7 +136,7 @@ struct Tracer {
     // w: the node's timing weight).
     void node_split(Ray* rays, size_t na, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth,
                     uint64_t c1, uint64_t w) {
-        if (nt <= size_t(cfg.leaf_size) || na <= size_t(cfg.leaf_rays)) {
+        if (is_leaf(na, nt)) {
             intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, mask, visible, st);
             st.leaf_ticks += w * (clock(w) - c1);
             return;
