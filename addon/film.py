@@ -12,16 +12,19 @@ from __future__ import annotations
 
 import numpy as np
 
+import dacrt
+import dacrt.shading
+
 PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3}
 BACKGROUND_DEPTH = 1e10    # what Cycles reports for pixels whose first sample saw no surface
 
 
 def _sample_sums(values: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
     """(C, P, S) float32 samples summed over S in float64 (weights: 0/1 per sample, or all).
-    A product with a vector of ones: numpy's sum over a short last axis with a float64 cast
-    ran element by element, 5x slower (4% of a Cornell-box render)."""
-    w = np.ones(values.shape[2]) if weights is None else np.asarray(weights, np.float64)
-    return values.astype(np.float64) @ w
+    Native: numpy's sum over a short last axis with a float64 cast ran element by element, 5x
+    slower (4% of a Cornell-box render), and a float64 product with ones went to OpenBLAS, whose
+    idle threads then spun on the second core after every block."""
+    return dacrt.shading.sample_sums(values, weights)
 
 
 class Film:

@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -379,6 +380,28 @@ std::vector<Columns> columns_of(const py::list& arrays, size_t k, py::list& out,
     return cols;
 }
 
+py::array_t<double> sample_sums_py(F32Array values, py::object weights) {
+    if (values.ndim() < 1) throw py::value_error("values must have at least one dimension (samples last)");
+    const size_t S = size_t(values.shape(values.ndim() - 1));
+    const size_t rows = S ? size_t(values.size()) / S : 0;
+    std::vector<py::ssize_t> shape(values.shape(), values.shape() + values.ndim() - 1);
+    py::array_t<double> out(shape);
+    py::array_t<double, py::array::c_style | py::array::forcecast> w;
+    if (!weights.is_none()) {
+        w = weights.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+        need_len(w, S, "weights");
+    }
+    double* o = out.mutable_data();
+    if (S == 0) {
+        std::fill(o, o + out.size(), 0.0);
+        return out;
+    }
+    const double* wp = weights.is_none() ? nullptr : w.data();
+    py::gil_scoped_release nogil;
+    sample_sums(values.data(), rows, S, wp, o);
+    return out;
+}
+
 py::list take_columns_py(I64Array idx, py::list arrays) {
     if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
     const size_t k = size_t(idx.shape(0));
@@ -478,6 +501,7 @@ void register_shading(py::module_& m) {
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
           py::arg("rays"), py::arg("lu") = py::none(), py::arg("lv") = py::none());
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
+    m.def("sample_sums", &sample_sums_py, py::arg("values"), py::arg("weights"));
     m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"));
     m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));

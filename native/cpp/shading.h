@@ -25,6 +25,10 @@ inline float ulp_of(float x) {
     return u;
 }
 
+// out[r] = sum over j of values[r * samples + j] x weights[j] (weights null: 1), in double, j in
+// order: the film's per-pixel sums of a block of samples (rows = channels x pixels).
+void sample_sums(const float* values, size_t rows, size_t samples, const double* weights, double* out);
+
 // Ray records from rows O, D (stride n) and tfar; ids 0..n-1.
 void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray* out);
 

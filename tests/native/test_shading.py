@@ -399,6 +399,23 @@ def test_take_columns_gathers_every_dtype_and_checks():
         shading.take_columns(idx, arrays[0], np.zeros(n + 1))
 
 
+def test_sample_sums_are_sequential_float64_sums_over_the_last_axis():
+    rng = np.random.default_rng(23)
+    # wide exponent range: a float32 sum, or one that skipped the weights, would be off
+    v = (rng.normal(size=(4, 30_001, 25)) * 10.0 ** rng.integers(-6, 7, (4, 30_001, 25))).astype(F32)
+    w = (np.arange(25) % 2 == 1).astype(np.float64) * 2.0
+    ref = np.zeros(v.shape[:2])
+    ref_w = np.zeros(v.shape[:2])
+    for j in range(v.shape[2]):                       # the order the film documents: sample 0 first
+        ref += v[:, :, j].astype(np.float64)
+        ref_w += v[:, :, j].astype(np.float64) * w[j]
+    np.testing.assert_array_equal(shading.sample_sums(v), ref)
+    np.testing.assert_array_equal(shading.sample_sums(v, w), ref_w)
+    assert shading.sample_sums(np.zeros((3, 5, 0), F32)).tolist() == np.zeros((3, 5)).tolist()
+    with pytest.raises(ValueError, match="weights"):
+        shading.sample_sums(v, np.ones(3))
+
+
 @pytest.mark.parametrize("c", [2, 3])
 def test_corner_rows_are_corner_0_and_differences(c):
     rng = np.random.default_rng(24 + c)

@@ -260,6 +260,14 @@ def camera_rays(ortho: bool, frame, rx, ry, records: bool = False, lens=None):
     return (O, D, tmax, rays) if records else (O, D, tmax)
 
 
+def sample_sums(values, weights=None):
+    """values (..., S) summed over their last axis in float64, sample 0 first: the film's
+    per-pixel sums of a block of S samples. weights (S,): each sample's factor (None: 1).
+    Values are taken as float32 (the samples' own precision). One threaded pass."""
+    return _core.sample_sums(np.ascontiguousarray(values, _F32),
+                             None if weights is None else np.asarray(weights, np.float64))
+
+
 def take_columns(idx, *arrays):
     """[a[..., idx] for a in arrays] in one threaded pass: arrays are (n,) or (rows, n) with the
     same n (any 1, 2, 4 or 8-byte dtype); idx (k,) indexes their last axis. None stays None."""
