@@ -13,18 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 import dacrt
-import dacrt.shading
 
 PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3}
 BACKGROUND_DEPTH = 1e10    # what Cycles reports for pixels whose first sample saw no surface
-
-
-def _sample_sums(values: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
-    """(C, P, S) float32 samples summed over S in float64 (weights: 0/1 per sample, or all).
-    Native: numpy's sum over a short last axis with a float64 cast ran element by element, 5x
-    slower (4% of a Cornell-box render), and a float64 product with ones went to OpenBLAS, whose
-    idle threads then spun on the second core after every block."""
-    return dacrt.shading.sample_sums(values, weights)
 
 
 class Film:
@@ -65,13 +56,13 @@ class Film:
             rgba = np.where(ok, rgba, 0.0)
             data = {k: np.where(ok, v, 0.0) for k, v in data.items()}
         self._count[pixels] += ok.sum(axis=1)
-        self._sum[:, pixels] += _sample_sums(rgba)
+        self._sum[:, pixels] += dacrt.shading.sample_sums(rgba)
         if self._odd is not None:
             odd = (first_sample + np.arange(rgba.shape[2])) % 2 == 1
             if odd.any():
-                self._odd[:, pixels] += 2.0 * _sample_sums(rgba[:3], odd)
+                self._odd[:, pixels] += 2.0 * dacrt.shading.sample_sums(rgba[:3], odd)
         for name, values in data.items():
-            self._pass_sum[name][:, pixels] += _sample_sums(values)
+            self._pass_sum[name][:, pixels] += dacrt.shading.sample_sums(values)
         self.nan_dropped += dropped
         return dropped
 

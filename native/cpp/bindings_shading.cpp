@@ -4,7 +4,6 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
-#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -218,7 +217,32 @@ py::tuple pixel_samples_py(I64Array pixel, I64Array sample, int64_t width, uint6
     return py::make_tuple(keys, rx, ry);
 }
 
-std::vector<Columns> columns_of(const py::list& arrays, size_t k, py::list& out, size_t& n);
+// The Columns of `arrays` (each C-contiguous (n,) or (rows, n), the same n) taken at k
+// indices, with their fresh outputs appended to out; n: their column count (0 when none).
+std::vector<Columns> columns_of(const py::list& arrays, size_t k, py::list& out, size_t& n) {
+    std::vector<Columns> cols;
+    n = 0;
+    for (size_t a = 0; a < arrays.size(); ++a) {
+        py::array src = arrays[a].cast<py::array>();
+        const std::string name = "arrays[" + std::to_string(a) + "]";
+        if ((src.ndim() != 1 && src.ndim() != 2) || !(src.flags() & py::array::c_style))
+            throw py::value_error(name + " must be a C-contiguous (n,) or (rows, n) array");
+        const size_t itemsize = size_t(src.itemsize());
+        if (itemsize != 1 && itemsize != 2 && itemsize != 4 && itemsize != 8)
+            throw py::value_error(name + " has " + std::to_string(itemsize) + "-byte elements (1, 2, 4 or 8 supported)");
+        const size_t cols_n = size_t(src.shape(src.ndim() - 1)), rows = src.ndim() == 2 ? size_t(src.shape(0)) : 1;
+        if (a == 0) n = cols_n;
+        else if (cols_n != n) throw py::value_error(name + " has " + std::to_string(cols_n) + " columns, arrays[0] " +
+                                                    std::to_string(n));
+        std::vector<py::ssize_t> shape;
+        if (src.ndim() == 2) shape.push_back(py::ssize_t(rows));
+        shape.push_back(py::ssize_t(k));
+        py::array dst(src.dtype(), shape);
+        cols.push_back({src.data(), dst.mutable_data(), rows, n, itemsize});
+        out.append(dst);
+    }
+    return cols;
+}
 
 py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style> hit,
                             py::array_t<bool, py::array::c_style> live, F32Array albedo, py::object thr,
@@ -353,52 +377,18 @@ py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, p
     return py::make_tuple(O, D, tmax);
 }
 
-// The Columns of `arrays` (each C-contiguous (n,) or (rows, n), the same n) taken at k
-// indices, with their fresh outputs appended to out; n: their column count (0 when none).
-std::vector<Columns> columns_of(const py::list& arrays, size_t k, py::list& out, size_t& n) {
-    std::vector<Columns> cols;
-    n = 0;
-    for (size_t a = 0; a < arrays.size(); ++a) {
-        py::array src = arrays[a].cast<py::array>();
-        const std::string name = "arrays[" + std::to_string(a) + "]";
-        if ((src.ndim() != 1 && src.ndim() != 2) || !(src.flags() & py::array::c_style))
-            throw py::value_error(name + " must be a C-contiguous (n,) or (rows, n) array");
-        const size_t itemsize = size_t(src.itemsize());
-        if (itemsize != 1 && itemsize != 2 && itemsize != 4 && itemsize != 8)
-            throw py::value_error(name + " has " + std::to_string(itemsize) + "-byte elements (1, 2, 4 or 8 supported)");
-        const size_t cols_n = size_t(src.shape(src.ndim() - 1)), rows = src.ndim() == 2 ? size_t(src.shape(0)) : 1;
-        if (a == 0) n = cols_n;
-        else if (cols_n != n) throw py::value_error(name + " has " + std::to_string(cols_n) + " columns, arrays[0] " +
-                                                    std::to_string(n));
-        std::vector<py::ssize_t> shape;
-        if (src.ndim() == 2) shape.push_back(py::ssize_t(rows));
-        shape.push_back(py::ssize_t(k));
-        py::array dst(src.dtype(), shape);
-        cols.push_back({src.data(), dst.mutable_data(), rows, n, itemsize});
-        out.append(dst);
-    }
-    return cols;
-}
-
 py::array_t<double> sample_sums_py(F32Array values, py::object weights) {
     if (values.ndim() < 1) throw py::value_error("values must have at least one dimension (samples last)");
     const size_t S = size_t(values.shape(values.ndim() - 1));
-    const size_t rows = S ? size_t(values.size()) / S : 0;
-    std::vector<py::ssize_t> shape(values.shape(), values.shape() + values.ndim() - 1);
-    py::array_t<double> out(shape);
+    py::array_t<double> out(std::vector<py::ssize_t>(values.shape(), values.shape() + values.ndim() - 1));
     py::array_t<double, py::array::c_style | py::array::forcecast> w;
     if (!weights.is_none()) {
         w = weights.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
         need_len(w, S, "weights");
     }
-    double* o = out.mutable_data();
-    if (S == 0) {
-        std::fill(o, o + out.size(), 0.0);
-        return out;
-    }
     const double* wp = weights.is_none() ? nullptr : w.data();
     py::gil_scoped_release nogil;
-    sample_sums(values.data(), rows, S, wp, o);
+    sample_sums(values.data(), size_t(out.size()), S, wp, out.mutable_data());  // no samples: sums of 0
     return out;
 }
 
