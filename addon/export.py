@@ -155,8 +155,12 @@ def export_camera(scene, messages=None):
     border = (0, 0, width, height)
     crop = False
     if r.use_border:
-        border = (int(r.border_min_x * width), int(r.border_min_y * height),
-                  int(r.border_max_x * width), int(r.border_max_y * height))
+        # in float32, as Blender sizes the result and Cycles its buffer: int(0.7f * 100) is 70,
+        # where float64 gives 69 (a blank last column, or a region of another size than Blender's)
+        def edge(fraction, size):
+            return int(np.float32(fraction) * np.float32(size))
+        border = (edge(r.border_min_x, width), edge(r.border_min_y, height),
+                  edge(r.border_max_x, width), edge(r.border_max_y, height))
         if border[2] <= border[0] or border[3] <= border[1]:
             raise ExportError("the render border is empty (less than one pixel wide or high)")
         crop = bool(r.use_crop_to_border)
@@ -669,6 +673,14 @@ def _transform(points, linear, offset, out):
     return out
 
 
+def _mesh_arrays(me, want_uvs):
+    """The mesh's arrays, or None when it has no faces: a mesh made by `meshes.new()` or an
+    empty metaball's mesh has not even a position attribute to read."""
+    if me is None or len(me.loop_triangles) == 0:
+        return None
+    return _MeshArrays(me, want_uvs)
+
+
 class _MeshArrays:
     """One evaluated mesh in its local space, read once per unique mesh.
 
@@ -968,7 +980,7 @@ class _Exporter:
             return key if self.meshes[key] is not None else None
         want_uvs = True
         if ob.type == 'MESH':
-            arrays = _MeshArrays(ob.data, want_uvs)
+            arrays = _mesh_arrays(ob.data, want_uvs)
         else:
             try:
                 me = ob.to_mesh()
@@ -977,7 +989,7 @@ class _Exporter:
                 self.meshes[key] = None
                 return None
             try:
-                arrays = _MeshArrays(me, want_uvs) if me is not None else None
+                arrays = _mesh_arrays(me, want_uvs)
             finally:
                 ob.to_mesh_clear()
         if arrays is None or len(arrays.triangles) == 0:

@@ -84,6 +84,24 @@ def test_border_render_with_and_without_crop(scene, tmp_path):
     assert np.allclose(full[10:20, 10:30], cropped, rtol=1e-6)
 
 
+@pytest.mark.parametrize("crop", [False, True])
+def test_border_edges_round_in_float32_as_blender(scene, tmp_path, crop):
+    """0.7 x 100 is 69.99... in float64 but 70 in float32, Blender's arithmetic for the result
+    it allocates; 0.01 x 100 likewise 1, not 0. The border must cover exactly those pixels."""
+    lit_plane_scene(scene, size=(100, 50))
+    r = scene.render
+    r.use_border, r.use_crop_to_border = True, crop
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.01, 0.7, 0.1, 0.7
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "edges.exr")))
+    inside = np.zeros((50, 100), bool)
+    inside[5:35, 1:70] = True      # rows from the bottom: Blender's y runs upwards
+    if crop:
+        assert img.shape[:2] == (30, 69) and (img[..., 3] > 0).all()
+    else:
+        assert img.shape[:2] == (50, 100)
+        assert (img[inside][:, 3] > 0).all() and np.all(img[~inside] == 0)
+
+
 def test_one_render_per_view_layer(scene, tmp_path, capfd):
     lit_plane_scene(scene)
     first = bpy.context.view_layer
@@ -125,6 +143,17 @@ def test_nan_vertices_are_skipped_and_the_rest_renders(scene, tmp_path, capfd):
     assert np.allclose(img[..., :3].mean(axis=(0, 1)), np.array([0.2, 0.4, 0.6]) * 3 / math.pi, rtol=1e-3)
     out = capfd.readouterr().out
     assert "Broken" in out and "NaN" in out
+
+
+def test_meshes_without_faces_do_not_stop_the_render(scene, tmp_path):
+    """A placeholder from meshes.new() has not even a position attribute, nor has an empty
+    metaball's mesh; they add nothing and the rest of the scene renders."""
+    lit_plane_scene(scene)
+    for ob in (bpy.data.objects.new("Placeholder", bpy.data.meshes.new("Placeholder")),
+               bpy.data.objects.new("Meta", bpy.data.metaballs.new("Meta"))):
+        scene.collection.objects.link(ob)
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "faceless.exr")))
+    assert np.allclose(img[..., :3].mean(axis=(0, 1)), np.array([0.2, 0.4, 0.6]) * 3 / math.pi, rtol=1e-3)
 
 
 
