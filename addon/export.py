@@ -240,6 +240,10 @@ def export_light(ob, matrix, messages):
     elif light.type == 'SUN':
         kw.update(angle=float(light.angle))
     elif light.type == 'AREA':
+        if getattr(cycles, 'is_portal', False):
+            # a portal emits nothing in Cycles: it only guides the world's sampling there, and
+            # the world is sampled here without it, to the same expected image
+            return None
         two = light.shape in ('RECTANGLE', 'ELLIPSE')
         sx, sy = float(light.size), float(light.size_y if two else light.size)
         m = np.array(matrix, np.float64)

@@ -772,6 +772,15 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     assert lamps[1].omc == 1.0                                   # the lights layer: a hemisphere
 
 
+def test_portal_area_lights_emit_nothing(scene, exported):
+    """A portal only guides Cycles' world sampling and adds no light of its own."""
+    setup(scene)
+    portal = scenes.light('AREA', 500.0, (0, 0, 2), name="Window", size=1.0)
+    portal.data.cycles.is_portal = True
+    scenes.light('AREA', 100.0, (0, 0, 3), name="Lamp", size=0.5)
+    assert [l.name for l in exported().lights] == ["Lamp"]
+
+
 def test_negative_or_non_finite_material_values_become_zero_with_a_reason(scene, exported):
     """Blender takes a negative emission strength or a NaN colour from a script or driver; the
     export sets those channels to 0 and says so, instead of failing the render."""
