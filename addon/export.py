@@ -415,8 +415,7 @@ class _MaterialBuilder:
                                       base_color=np.array(DEFAULT_ALBEDO, np.float32),
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
-        self._images = {}          # image pointer -> its pixels
-        self._unassociated = {}    # image pointer -> its pixels, rgb / alpha
+        self._images = {}          # (image pointer, unassociated) -> its pixels
         self.uses_texture = [False]
 
     def index(self, mat):
@@ -580,20 +579,15 @@ class _MaterialBuilder:
             reasons.append("Image Texture without an image (magenta, as Cycles)")
             return None
         # Cycles: with the Alpha output linked, the Color output of an image stored with
-        # associated alpha (float buffers) is unassociated, rgb / alpha (measured in Cycles 5.0)
-        unassociate = bool(node.outputs['Alpha'].is_linked and img.is_float and not img.colorspace_settings.is_data
-                           and img.alpha_mode not in ('CHANNEL_PACKED', 'NONE'))
+        # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0)
+        unassociate = bool(node.outputs['Alpha'].is_linked and _associates_alpha(img))
         key = img.as_pointer()
-        pixels = self._images.get(key)
+        pixels = self._images.get((key, unassociate))
         if pixels is None:
-            pixels = _image_pixels(img, reasons)
+            pixels = _image_pixels(img, reasons, unassociate)
             if pixels is None:
                 return None
-            self._images[key] = pixels
-        if unassociate:
-            if key not in self._unassociated:
-                self._unassociated[key] = _unassociated(pixels)
-            pixels = self._unassociated[key]
+            self._images[key, unassociate] = pixels
         where = None if transform is None else tuple(transform.ravel())
         return _Texture((key, unassociate, interp, ext, where), pixels, interp, ext, transform)
 
@@ -603,6 +597,13 @@ def _note_normal_inputs(node, reasons):
     socket = node.inputs.get('Normal')
     if socket is not None and linked_node(socket) is not None:
         reasons.append("Normal input (bump / normal map) ignored")
+
+
+def _associates_alpha(img):
+    """Whether Cycles keeps the image's colour associated with (multiplied by) its alpha:
+    float buffers are stored so, byte ones are multiplied on load; not for data, channel-packed
+    or alpha-ignored images (Cycles' ImageTextureNode and image loader)."""
+    return not img.colorspace_settings.is_data and img.alpha_mode not in ('CHANNEL_PACKED', 'NONE')
 
 
 def _unassociated(rgba):
@@ -618,8 +619,10 @@ def _srgb_to_linear(c):
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
-def _image_pixels(img, reasons):
-    """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels."""
+def _image_pixels(img, reasons, unassociate=False):
+    """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels.
+    The colour is associated with alpha as Cycles stores the image (_associates_alpha), or with
+    `unassociate` divided by it again as Cycles' lookup does for a linked Alpha output."""
     try:
         w, h = img.size
         ch = img.channels
@@ -638,6 +641,14 @@ def _image_pixels(img, reasons):
         rgba[..., 1] = rgba[..., 2] = buf[..., 0]
         rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
     if not img.is_float:   # byte buffers are in the image's colour space; float ones are linear
+        if ch == 4 and _associates_alpha(img):
+            # Blender keeps byte images straight; Cycles associates them on load (integer
+            # c * a / 255) and unassociates at lookup, both in the image's own encoding, before
+            # the colour conversion: a linked Alpha gives nearly the straight colour again
+            b = np.rint(rgba * 255.0)
+            rgba[..., :3] = np.floor_divide(b[..., :3] * b[..., 3:4], 255.0) / np.float32(255.0)
+            if unassociate:
+                rgba = _unassociated(rgba)
         space = img.colorspace_settings.name
         if space in ('sRGB', 'Filmic sRGB', 'AgX Base sRGB') or space.startswith('sRGB'):
             rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
@@ -647,6 +658,8 @@ def _image_pixels(img, reasons):
                   or space in ('Non-Color', 'Working Space')):
             rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
             reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
+    elif unassociate:      # float buffers are linear and associated
+        rgba = _unassociated(rgba)
     return rgba
 
 

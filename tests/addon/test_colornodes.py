@@ -189,6 +189,51 @@ def test_float_image_with_alpha_linked_is_unassociated(scene):
     assert np.allclose(plain.texture[..., :3], PX[..., :3])
 
 
+def _byte_image(name, texel, alpha_mode='STRAIGHT', space='sRGB'):
+    """A packed 8-bit image of one RGBA texel given in bytes."""
+    img = bpy.data.images.new(name, 1, 1, alpha=True)
+    img.pixels.foreach_set(np.asarray(texel, np.float32) / 255)
+    img.pack()
+    img.alpha_mode, img.colorspace_settings.name = alpha_mode, space
+    return img
+
+
+def _srgb_decode(c):
+    c = np.asarray(c, np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+@pytest.mark.parametrize("alpha_linked", [False, True])
+def test_byte_image_alpha_associated_in_its_encoding_as_cycles(scene, alpha_linked):
+    """Cycles multiplies an 8-bit image's colour by its alpha on load, in bytes (c * a / 255,
+    truncated) and before the sRGB decoding; a linked Alpha output divides it again, also before
+    decoding (measured in Cycles 5.0: texel (255, 128, 51, 64) reads 0.0513, 0.0144, 0.0037
+    with Alpha unlinked; the linked case gives back nearly the straight colour). Data and
+    channel-packed images keep the straight colour."""
+    def chain(tex):
+        def build(nt, _):
+            if alpha_linked:
+                nt.links.new(tex.outputs['Alpha'], nt.nodes.new('ShaderNodeMath').inputs[0])
+            return tex.outputs['Color']
+        return build
+
+    def texel(alpha_mode='STRAIGHT', space='sRGB'):
+        mat, nt, out = scenes._material(f"Decal {alpha_mode} {space} {alpha_linked}")
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        tex = nt.nodes.new('ShaderNodeTexImage')
+        tex.image = _byte_image(mat.name, (255, 128, 51, 64), alpha_mode, space)
+        nt.links.new(chain(tex)(nt, tex), d.inputs['Color'])
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        return _exported_material(mat).texture[0, 0]
+    premultiplied = np.array([64, 32, 12])          # (255, 128, 51) * 64 // 255
+    expect = _srgb_decode(premultiplied / 64 if alpha_linked else premultiplied / 255)
+    got = texel()
+    assert np.allclose(got[:3], expect, atol=1e-6) and got[3] == np.float32(64 / 255)
+    straight = np.array([255, 128, 51]) / 255
+    assert np.allclose(texel('CHANNEL_PACKED')[:3], _srgb_decode(straight), atol=1e-6)
+    assert np.allclose(texel(space='Non-Color')[:3], straight, atol=1e-6)
+
+
 def test_fair_editor_keeps_colour_nodes(scene):
     """The benchmark's fair-material editor keeps what the export evaluates (the image, the Mix
     and Hue/Saturation nodes) and unlinks only the Noise Texture, where the export reads the
