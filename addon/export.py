@@ -578,6 +578,10 @@ class _MaterialBuilder:
         if img is None:
             reasons.append("Image Texture without an image (magenta, as Cycles)")
             return None
+        if img.source == 'TILED' and len(img.tiles) > 1:
+            # bpy gives the pixels of one tile only; the others cannot be read without their files
+            first = img.tiles[0].number
+            reasons.append(f"UDIM image '{img.name}': only tile {first} is used, on every tile")
         # Cycles: with the Alpha output linked, the Color output of an image stored with
         # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0)
         unassociate = bool(node.outputs['Alpha'].is_linked and _associates_alpha(img))

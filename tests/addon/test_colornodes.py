@@ -234,6 +234,17 @@ def test_byte_image_alpha_associated_in_its_encoding_as_cycles(scene, alpha_link
     assert np.allclose(texel(space='Non-Color')[:3], straight, atol=1e-6)
 
 
+def test_udim_image_reported_as_its_first_tile(scene):
+    mat, nt, out = scenes._material("Tiled")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = bpy.data.images.new("Tiles", 4, 4, tiled=True)
+    tex.image.tiles.new(1002)
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    assert "UDIM image 'Tiles': only tile 1001 is used, on every tile" in _exported_material(mat).approximated
+
+
 def test_fair_editor_keeps_colour_nodes(scene):
     """The benchmark's fair-material editor keeps what the export evaluates (the image, the Mix
     and Hue/Saturation nodes) and unlinks only the Noise Texture, where the export reads the
