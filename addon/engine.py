@@ -99,12 +99,41 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         x0, y0, x1, y1 = camera.border
         # begin_result coordinates are relative to the render border's rect
         result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=layer)
+        views = [v.name for v in result.views]
         try:
-            self._integrate(integ, result, scene_data, t0)
+            for view in views if len(views) > 1 else [None]:
+                if view is not None:    # stereo / multiview: each view's camera, same geometry
+                    integ = None        # the last view's arrays go before the next view's are made
+                    integ = self._view_integrator(depsgraph, scene_data, view)
+                    if integ is None:
+                        break
+                try:
+                    self._integrate(integ, result, scene_data, t0, view)
+                finally:
+                    self._report_messages(integ.messages)    # also when integration failed
+                if self.cancel_requested():
+                    break
         finally:
             self.end_result(result)
-            self._report_messages(integ.messages)    # also when integration failed
-        self._report_summary(integ, scene_data, layer, export_seconds)
+        if integ is not None:
+            self._report_summary(integ, scene_data, layer, export_seconds)
+
+    def _view_integrator(self, depsgraph, scene_data, view):
+        """The integrator of one view of a multiview render: the frame's export with the
+        camera Blender gives that view; None when cancelled."""
+        from .integrator import Integrator
+        self.active_view_set(view)
+        scene = depsgraph.scene_eval
+        cam_ob = scene.camera
+        view_cam = (self.camera_model_matrix(cam_ob, use_spherical_stereo=False),
+                    self.camera_shift_x(cam_ob, use_spherical_stereo=False))
+        try:
+            scene_data.camera = export.export_camera(scene, None, view_cam)
+        except export.ExportError as e:
+            raise RuntimeError(f"view '{view}': {e}") from None
+        if self.cancel_requested():
+            return None
+        return Integrator(scene_data)
 
     def _layer_enabled(self, layer):
         """Blender may call render for a layer it will not use (Render Single Layer)."""
@@ -115,16 +144,16 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self.end_result(probe, cancel=True, do_merge_results=False)
         return enabled
 
-    def _integrate(self, integ, result, scene_data, t0):
+    def _integrate(self, integ, result, scene_data, t0, view=None):
         memory = _scene_bytes(scene_data) / 2 ** 20
         self.update_memory_stats(memory_used=memory, memory_peak=memory)
         steps = integ.passes()
         try:
-            self._steps(steps, integ, result, scene_data, t0, memory)
+            self._steps(steps, integ, result, scene_data, t0, memory, view)
         finally:
             steps.close()            # frees the tracer scenes now, also after a cancel
 
-    def _steps(self, steps, integ, result, scene_data, t0, memory):
+    def _steps(self, steps, integ, result, scene_data, t0, memory, view):
         """Progressive display, progress and status per step; poll cancel between steps."""
         last_draw = 0.0
         progress = None
@@ -132,7 +161,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             now = time.perf_counter()
             final = progress.samples_done >= progress.samples_total
             if final or now - last_draw > 0.5:   # redraw at most twice a second
-                self._write(integ.film, result, scene_data)
+                self._write(integ.film, result, scene_data, view)
                 self.update_result(result)
                 last_draw = now
             fraction = getattr(progress, 'fraction', None)
@@ -143,7 +172,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             if self.cancel_requested():
                 break
         if progress is None or progress.samples_done < progress.samples_total or last_draw == 0:
-            self._write(integ.film, result, scene_data)   # partial (cancelled) image stays
+            self._write(integ.film, result, scene_data, view)   # partial (cancelled) image stays
             self.update_result(result)
 
     @staticmethod
@@ -151,17 +180,18 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         return (f"DACRT | Sample {p.samples_done}/{p.samples_total} | {p.mrays_per_s:.2f} Mrays/s"
                 f" | Time {_clock(elapsed)} | Remaining {_clock(p.eta_seconds)}")
 
-    def _write(self, film, result, scene_data):
+    def _write(self, film, result, scene_data, view=None):
         passes = result.layers[0].passes
-        self._set(passes, 'Combined', film.combined(), scene_data.camera)
+        self._set(passes, 'Combined', film.combined(), scene_data.camera, view)
         for name in scene_data.settings.passes:
             if RESULT_PASS_NAME[name] in passes:
-                self._set(passes, RESULT_PASS_NAME[name], film.pass_image(name), scene_data.camera)
+                self._set(passes, RESULT_PASS_NAME[name], film.pass_image(name), scene_data.camera, view)
 
     @staticmethod
-    def _set(passes, name, image, camera):
-        """Copy an (H,W[,C]) film image into a result pass; crop a full-frame film to the border."""
-        render_pass = passes[name]
+    def _set(passes, name, image, camera, view=None):
+        """Copy an (H,W[,C]) film image into a result pass (of `view` in a multiview render);
+        crop a full-frame film to the border."""
+        render_pass = passes[name] if view is None else passes.find_by_name(name, view)
         x0, y0, x1, y1 = camera.border
         if image.shape[0] == camera.height and image.shape[1] == camera.width and \
                 (y1 - y0, x1 - x0) != (camera.height, camera.width):

@@ -93,7 +93,10 @@ def export_scene(depsgraph, check_break=None):
 # ----------------------------------------------------------------------------------------
 # Camera (reference blender-cycles.md 1.8, Cycles' blender_camera_viewplane)
 
-def export_camera(scene, messages=None):
+def export_camera(scene, messages=None, view=None):
+    """The scene camera as scenedata.Camera. view: None, or (matrix_world, shift_x) of one view
+    of a stereo / multiview render, as the engine's camera_model_matrix and camera_shift_x give
+    them for the active view (Cycles takes its eye cameras from the same two calls)."""
     r = scene.render
     width = r.resolution_x * r.resolution_percentage // 100
     height = r.resolution_y * r.resolution_percentage // 100
@@ -115,6 +118,8 @@ def export_camera(scene, messages=None):
     sensor_height = cam.sensor_height if cam else 24.0
     ortho_scale = cam.ortho_scale if cam else 6.0
     shift = (cam.shift_x, cam.shift_y) if cam else (0.0, 0.0)
+    if view is not None:
+        shift = (float(view[1]), shift[1])
     clip_start, clip_end = (cam.clip_start, cam.clip_end) if cam else (1e-5, 1e5)
     if clip_end < clip_start:
         # Cycles' camera rays are then empty: only the world shows
@@ -146,7 +151,7 @@ def export_camera(scene, messages=None):
     tan_half_fov = 0.5 * sensor / lens / ar
 
     # Cycles clears the scale of the camera matrix (transform_clear_scale).
-    m = np.array(cam_ob.matrix_world, dtype=np.float64)
+    m = np.array(cam_ob.matrix_world if view is None else view[0], dtype=np.float64)
     lengths = np.linalg.norm(m[:3, :3], axis=0)
     if not np.all(lengths > 0) or not np.all(np.isfinite(m)):
         raise ExportError(f"camera '{cam_ob.name}' has a zero or non-finite scale/transform")

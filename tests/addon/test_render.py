@@ -268,6 +268,29 @@ def test_write_still_like_blender_b(scene, tmp_path):
     assert buf.get_pixels().mean() > 0
 
 
+def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path):
+    """Stereo 3D with parallel eyes about the centre: each view is the mono render of the camera
+    moved half the interocular distance along its own x axis (Blender's eye cameras, which the
+    engine asks for per view), and both views are written."""
+    lit_plane_scene(scene, size=(32, 24))
+    scenes.cube("Box", size=1.0, location=(0.0, 0.0, 0.5))
+    cam = scene.camera
+    cam.data.stereo.convergence_mode, cam.data.stereo.pivot = 'PARALLEL', 'CENTER'
+    cam.data.stereo.interocular_distance = 0.8
+    scene.render.use_multiview, scene.render.views_format = True, 'STEREO_3D'
+    settings = scene.render.image_settings
+    settings.file_format, settings.color_depth, settings.views_format = 'OPEN_EXR', '32', 'INDIVIDUAL'
+    scene.render.filepath = str(tmp_path / "eye")
+    bpy.ops.render.render(write_still=True)
+    eyes = {side: scenes.rgba(scenes.read_exr(next(tmp_path.glob(f"eye*_{side}.exr")))) for side in "LR"}
+    scene.render.use_multiview = False
+    for side, dx in (("L", -0.4), ("R", 0.4)):
+        cam.location = (dx, 0.0, 5.0)
+        mono = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"mono_{side}.exr")))
+        assert np.allclose(eyes[side], mono, atol=1e-5), side
+    assert not np.allclose(eyes["L"], eyes["R"], atol=1e-2)
+
+
 def run_cli(args, cwd):
     env = dict(os.environ, PYTHONPATH=str(conftest.ROOT))
     return subprocess.run([sys.executable, "-m", "addon.cli", "render", *args], cwd=str(cwd),
