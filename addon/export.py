@@ -376,14 +376,15 @@ class _Texture:
 class _Closure:
     """Linear combination of what a diffuse renderer keeps:
     albedo = const + tex_weight * texture, emission constant."""
-    def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0)):
+    def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0):
         self.const = np.array(const, np.float64)
         self.emission = np.array(emission, np.float64)
         self.texture = texture
         self.tex_weight = np.array(tex_weight, np.float64)
+        self.holdout = float(holdout)     # weight of a Holdout shader
 
     def scaled(self, f):
-        return _Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f)
+        return _Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f)
 
     def plus(self, other, reasons):
         tex, w = self.texture, self.tex_weight
@@ -394,8 +395,9 @@ class _Closure:
                 reasons.append("two image textures mixed; the second as its average colour")
                 mean = other.texture.pixels[..., :3].reshape(-1, 3).mean(0)
                 return _Closure(self.const + other.const + other.tex_weight * mean,
-                                self.emission + other.emission, tex, w)
-        return _Closure(self.const + other.const, self.emission + other.emission, tex, w)
+                                self.emission + other.emission, tex, w, self.holdout + other.holdout)
+        return _Closure(self.const + other.const, self.emission + other.emission, tex, w,
+                        self.holdout + other.holdout)
 
 
 def _nonnegative(v, label, reasons):
@@ -455,10 +457,13 @@ class _MaterialBuilder:
         base, texture, interp, ext, transform = self._albedo(closure)
         base = _nonnegative(base, "colour", reasons)
         emission = _nonnegative(closure.emission.astype(np.float32), "emission", reasons)
+        holdout = closure.holdout >= 1.0 - 1e-6
+        if 0.0 < closure.holdout and not holdout:
+            reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")
         return sd.Material(name=name, base_color=base,
                            emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
-                           approximated='; '.join(dict.fromkeys(reasons)))
+                           approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout)
 
     @staticmethod
     def _albedo(c):
@@ -496,6 +501,9 @@ class _MaterialBuilder:
             if not (c_ok and s_ok):
                 reasons.append("Emission driven by nodes; its own values used")
             return _Closure(emission=np.array(color) * strength)
+        if t == 'HOLDOUT':
+            # Cycles: camera rays see through it (alpha 0); other rays meet a black absorber
+            return _Closure(holdout=1.0)
         if t == 'ADD_SHADER':
             a = self._shader(node.inputs[0], reasons, depth + 1)
             b = self._shader(node.inputs[1], reasons, depth + 1)

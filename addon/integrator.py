@@ -321,6 +321,10 @@ class Integrator:
                          adaptive=self.adaptive is not None)
         self.tri = _Triangles(scene_data.geometry, self.messages)
         self.mats = _Materials(scene_data.materials)
+        holdout = np.array([bool(m.holdout) for m in scene_data.materials])
+        if holdout.any():    # a Holdout material acts as object holdout does for camera rays
+            seen = (self.tri.visibility & VIS_CAMERA) != 0
+            self.tri.visibility |= np.where(seen & holdout[self.tri.material], HOLDOUT, 0).astype(np.uint8)
         self._tri_emissive = self.mats.emissive[self.tri.material] & (self.tri.area > 0)
         # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
         self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))

@@ -93,6 +93,8 @@ class Material:
     texture_transform: Optional[np.ndarray] = None   # (2, 3): the texture is read at
                                                   # (x, y) = T @ (u, v, 1); None: at (u, v)
     approximated: str = ''                        # non-empty: why this is a diffuse approximation
+    holdout: bool = False                         # a Holdout shader: camera rays see through it
+                                                  # (alpha 0), other rays meet a black surface
 
 
 @dataclass

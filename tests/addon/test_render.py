@@ -291,6 +291,21 @@ def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path):
     assert not np.allclose(eyes["L"], eyes["R"], atol=1e-2)
 
 
+def test_holdout_shader_is_an_object_holdout_of_a_black_surface(scene, tmp_path):
+    """A Holdout material: camera rays see through it (alpha 0, as Cycles), other rays meet an
+    opaque black surface; so the image equals that of a black object marked holdout."""
+    lit_plane_scene(scene, size=(32, 24))
+    mat, nt, out = scenes._material("Hold")
+    nt.links.new(nt.nodes.new('ShaderNodeHoldout').outputs[0], out.inputs['Surface'])
+    box = scenes.cube("Box", size=1.5, location=(0.0, 0.0, 0.75), materials=(mat,))
+    shader = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "shader.exr")))
+    box.data.materials[0] = scenes.diffuse("Black", (0.0, 0.0, 0.0))
+    box.is_holdout = True
+    held = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "object.exr")))
+    assert np.array_equal(shader, held)
+    assert (shader[..., 3] == 0).sum() > 20 and (shader[..., 3] == 1).sum() > 20
+
+
 def run_cli(args, cwd):
     env = dict(os.environ, PYTHONPATH=str(conftest.ROOT))
     return subprocess.run([sys.executable, "-m", "addon.cli", "render", *args], cwd=str(cwd),
