@@ -306,20 +306,47 @@ def export_world(scene):
     out = output_node(ntree)
     if out is None or not out.inputs['Surface'].is_linked:
         return none, None, ''
-    node = linked_node(out.inputs['Surface'])
-    if node is not None and node.type == 'BACKGROUND':
-        s, s_ok = constant_value(node.inputs['Strength'])
-        reasons = [] if s_ok else ["Background Strength driven by nodes; its own value used"]
-        tex = linked_node(node.inputs['Color'])
-        if tex is not None and tex.type == 'TEX_ENVIRONMENT':
-            uniform, env = _environment(tex, np.float32(s), reasons)
-            return uniform, env, '; '.join(reasons)
-        c, c_ok = constant_color(node.inputs['Color'])
-        if not c_ok:
-            reasons.append("Background Color driven by nodes; its own value used")
-        return np.array(c, np.float32) * np.float32(s), None, '; '.join(reasons)
-    kind = node.bl_label if node is not None else 'nothing'
-    return color, None, f"world surface is {kind}, not a Background node; world colour used"
+    reasons = []
+    uniform, env = _world_surface(linked_node(out.inputs['Surface']), 1.0, color, reasons, 0)
+    return uniform.astype(np.float32), env, '; '.join(dict.fromkeys(reasons))
+
+
+def _world_surface(node, weight, color, reasons, depth):
+    """(uniform radiance, Environment or None) of a world shader node at `weight`: Background
+    and Emission (the same for the world in Cycles), Add Shader and Mix Shader (constant
+    factor) of them; anything else is the world's viewport colour, with a reason."""
+    none = np.zeros(3, np.float32)
+    if node is None or weight == 0.0:
+        return none, None
+    t = node.type
+    if depth > 32 or node.mute or t not in ('BACKGROUND', 'EMISSION', 'ADD_SHADER', 'MIX_SHADER'):
+        kind = node.bl_label + (" (muted)" if node.mute else "")
+        reasons.append(f"world surface has {kind}, not a Background node; world colour used for it")
+        return color * np.float32(weight), None
+    if t in ('ADD_SHADER', 'MIX_SHADER'):
+        fac = 0.5
+        if t == 'MIX_SHADER':
+            fac, ok = constant_value(node.inputs['Fac'])
+            if not ok:
+                reasons.append("world Mix Shader factor driven by nodes; its own value used")
+            fac = min(max(fac, 0.0), 1.0)
+        weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
+        first = 0 if t == 'ADD_SHADER' else 1
+        (ua, ea), (ub, eb) = (_world_surface(linked_node(node.inputs[first + i]), w, color, reasons, depth + 1)
+                              for i, w in enumerate(weights))
+        if ea is not None and eb is not None:
+            reasons.append("two environment textures in the world; the second ignored")
+        return ua + ub, ea if ea is not None else eb
+    s, s_ok = constant_value(node.inputs['Strength'])
+    if not s_ok:
+        reasons.append(f"world {node.bl_label} Strength driven by nodes; its own value used")
+    tex = linked_node(node.inputs['Color'])
+    if tex is not None and tex.type == 'TEX_ENVIRONMENT':
+        return _environment(tex, np.float32(s * weight), reasons)
+    c, c_ok = constant_color(node.inputs['Color'])
+    if not c_ok:
+        reasons.append(f"world {node.bl_label} Color driven by nodes; its own value used")
+    return np.array(c, np.float32) * np.float32(s * weight), None
 
 
 def world_visibility(world):

@@ -636,6 +636,35 @@ def test_world_background(scene, exported):
     assert np.allclose(exported().world, 0.0)
 
 
+def test_world_emission_add_and_mix_shaders(scene, exported):
+    """For the world, Emission is Background's twin in Cycles; Add and Mix Shader (constant
+    factor) of them combine linearly; an unsupported node in the tree is said, with the world
+    colour standing in for it alone."""
+    setup(scene)
+    w = scenes.world((0.5, 0.25, 1.0), 2.0)
+    nt = w.node_tree
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    out = next(n for n in nt.nodes if n.type == 'OUTPUT_WORLD')
+    emit = nt.nodes.new('ShaderNodeEmission')
+    emit.inputs['Color'].default_value, emit.inputs['Strength'].default_value = (1.0, 1.0, 0.0, 1.0), 4.0
+    nt.links.new(emit.outputs[0], out.inputs['Surface'])
+    assert np.allclose(exported().world, (4.0, 4.0, 0.0))
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = 0.25
+    nt.links.new(bg.outputs[0], mix.inputs[1])
+    nt.links.new(emit.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    assert np.allclose(exported().world, 0.75 * np.array([1.0, 0.5, 2.0]) + 0.25 * np.array([4.0, 4.0, 0.0]))
+    add = nt.nodes.new('ShaderNodeAddShader')
+    nt.links.new(mix.outputs[0], add.inputs[0])
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], out.inputs['Surface'])
+    w.color = (0.1, 0.2, 0.3)
+    data = exported()
+    assert np.allclose(data.world, np.array([1.75, 1.375, 1.5]) + (0.1, 0.2, 0.3))
+    assert any("world surface has Diffuse BSDF" in t for lvl, t in data.messages if lvl == 'WARNING')
+
+
 def test_world_ray_visibility(scene, exported):
     """World > Ray Visibility's camera and diffuse toggles reach SceneData as bits."""
     setup(scene)
