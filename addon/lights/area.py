@@ -5,6 +5,10 @@ Y = |Y_obj| size_y, area A = X Y (x pi/4 for disk/ellipse). Radiance L = strengt
 (strength / pi unnormalised), times the spread profile
 f(theta) = max(tan(s/2) - tan(theta), 0) / (tan(s/2) - s/2), normalised so that the emitted
 power is unchanged (s = pi: f = 1). Sampled uniformly by area: pdf = t^2 / (A cos_l).
+Spread < pi (Cycles' area_light_spread_clamp_light): f = 0 outside the square of half-size
+h tan(s/2) about the shading point's foot (h: its height), so only its overlap with the light's
+bounding rectangle is sampled, uniformly: pdf = t^2 / (A_overlap cos_l), in sample() and
+intersect() alike (an ellipse the square covers whole keeps the concentric map over its area).
 """
 from __future__ import annotations
 
@@ -52,6 +56,38 @@ class AreaLight(Lamp):
             h = 0.5 * spread
             self.tan_half_spread = F32(np.tan(h))
             self.spread_norm = F32(3.0 / h ** 3 if h <= 0.05 else 1.0 / (np.tan(h) - h))
+            # |inv| = 1 / |axis|: a world length in local units (float32 as lamps.h computes it)
+            self._len_inv_x = np.sqrt(self.inv_x[0] * self.inv_x[0] + self.inv_x[1] * self.inv_x[1]
+                                      + self.inv_x[2] * self.inv_x[2])
+            self._len_inv_y = np.sqrt(self.inv_y[0] * self.inv_y[0] + self.inv_y[1] * self.inv_y[1]
+                                      + self.inv_y[2] * self.inv_y[2])
+
+    def _spread_box(self, X):
+        """What of the local square [-0.5, 0.5]^2 the spread lets reach points X (3, n): f = 0
+        beyond the disk of radius h tan(s/2) about X's foot on the plane (h: X's height on the
+        emitting side), so beyond the square around it. Returns (lo_x, hi_x, lo_y, hi_y, w_x,
+        w_y, frac, full): the clamped box, its widths (0 if empty), its share of the bounding
+        rectangle's area and whether it is the whole rectangle. lamps.h area_spread_box."""
+        rel = X - self.center[:, None]
+        h = dot(rel, self.normal)
+        fx, fy = dot(rel, self.inv_x), dot(rel, self.inv_y)
+        r = h * self.tan_half_spread
+        rx, ry = r * self._len_inv_x, r * self._len_inv_y
+        half, zero = F32(0.5), F32(0.0)
+        x0, x1, y0, y1 = fx - rx, fx + rx, fy - ry, fy + ry
+        lo_x, hi_x = np.fmax(-half, x0), np.fmin(half, x1)
+        lo_y, hi_y = np.fmax(-half, y0), np.fmin(half, y1)
+        w_x, w_y = np.fmax(zero, hi_x - lo_x), np.fmax(zero, hi_y - lo_y)
+        full = (x0 <= -half) & (x1 >= half) & (y0 <= -half) & (y1 >= half)
+        return lo_x, hi_x, lo_y, hi_y, w_x, w_y, w_x * w_y, full
+
+    def _box_area(self, full):
+        """Area the clamped share refers to: the rectangle's; for an ellipse its bounding
+        rectangle's where the box is clamped (sampled uniformly there), its own where it is not
+        (the concentric map)."""
+        if not self.ellipse:
+            return F32(self.area)
+        return np.where(full, F32(self.area), F32(self.area) * F32(4.0 / np.pi))
 
     def _spread(self, scale, cos_l):
         """Multiply per-sample scalars by the spread profile at emission angle acos(cos_l)."""
@@ -71,6 +107,8 @@ class AreaLight(Lamp):
                            normal=self.normal, **spread)
 
     def sample(self, P, u1, u2):
+        if self.tan_half_spread is not None:
+            return self._sample_spread(P, u1, u2)
         if self.ellipse:
             x, y = concentric_disk(u1, u2)
             x *= 0.5
@@ -88,6 +126,29 @@ class AreaLight(Lamp):
             scale = np.where(ok, F32(1.0) / pdf, F32(0.0))
         return LightSample(wi, dist, outer(self.emit, self._spread(scale, cos_l)), pdf)
 
+    def _sample_spread(self, P, u1, u2):
+        """Uniform over the clamped box (_spread_box); an empty box gives value 0 and pdf 0, as do
+        box points outside an ellipse. An ellipse inside the box keeps the concentric map."""
+        lo_x, _, lo_y, _, w_x, w_y, frac, full = self._spread_box(P)
+        x = lo_x + u1 * w_x
+        y = lo_y + u2 * w_y
+        on_lamp = True
+        if self.ellipse:
+            dx, dy = concentric_disk(u1, u2)
+            on_lamp = full | (x * x + y * y <= F32(0.25))
+            x = np.where(full, dx * F32(0.5), x)
+            y = np.where(full, dy * F32(0.5), y)
+        q = self.axis_x[:, None] * x
+        q += self.axis_y[:, None] * y
+        q += (self.center[:, None] - P)
+        wi, dist = normalize(q)
+        cos_l = -dot(wi, self.normal)
+        ok = (cos_l > 0) & (dist > 0) & (frac > 0) & on_lamp
+        with np.errstate(divide='ignore', invalid='ignore'):
+            pdf = np.where(ok, dist * dist / (self._box_area(full) * frac * cos_l), F32(0.0))
+            scale = np.where(ok, F32(1.0) / pdf, F32(0.0))
+        return LightSample(wi, dist, outer(self.emit, self._spread(scale, cos_l)), pdf)
+
     def intersect(self, O, D, tmax):
         denom = dot(D, self.normal)                   # < 0: the ray travels toward the emitting face
         with np.errstate(divide='ignore', invalid='ignore'):
@@ -100,7 +161,17 @@ class AreaLight(Lamp):
         rel -= self.center[:, None]
         lx, ly = dot(rel, self.inv_x), dot(rel, self.inv_y)
         inside = (lx * lx + ly * ly <= 0.25) if self.ellipse else ((np.abs(lx) <= 0.5) & (np.abs(ly) <= 0.5))
-        idx, tc = cand[inside], tc[inside]
-        cos_l = -denom[idx]
-        pdf = tc * tc / (F32(self.area) * cos_l)
+        if self.tan_half_spread is None:
+            idx, tc = cand[inside], tc[inside]
+            cos_l = -denom[idx]
+            pdf = tc * tc / (F32(self.area) * cos_l)
+        else:
+            # only the box sample() draws from for a shading point at O: outside it f = 0 (a ray
+            # from O meets nothing that sample() could have drawn), inside the pdf of the draw
+            lo_x, hi_x, lo_y, hi_y, _, _, frac, full = self._spread_box(np.take(O, cand, axis=1))
+            in_box = (lx >= lo_x) & (lx <= hi_x) & (ly >= lo_y) & (ly <= hi_y)
+            inside &= (full | in_box) & (frac > 0)
+            idx, tc = cand[inside], tc[inside]
+            cos_l = -denom[idx]
+            pdf = tc * tc / (self._box_area(full[inside]) * frac[inside] * cos_l)
         return idx, outer(self.emit, self._spread(np.ones(len(idx), F32), cos_l)), pdf

@@ -18,6 +18,9 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#endif
 
 namespace dacrt {
 
@@ -74,6 +77,7 @@ constexpr float PI = float(3.14159265358979323846);
 constexpr float PI_2 = float(3.14159265358979323846 / 2.0);
 constexpr float PI_4 = float(3.14159265358979323846 / 4.0);
 constexpr float TWO_PI = float(2.0 * 3.14159265358979323846);
+constexpr float FOUR_OVER_PI = float(4.0 / 3.14159265358979323846);
 constexpr float INV_2PI = float(1.0 / (2.0 * 3.14159265358979323846));
 constexpr float INF = std::numeric_limits<float>::infinity();
 
@@ -121,6 +125,23 @@ inline float uniform_cone(float u1, float u2, float omc_max, float out[3]) {
     return cos_t;
 }
 
+// max(c, x) and min(c, x) as std::max(c, x) and std::min(c, x) (NaN x gives c), and c ? a : b
+// with both computed, but always maxss/minss/masks on x86: in this scalar code GCC turns the
+// std:: forms into branches (to skip a division, say), which rays or points whose spread box is
+// clipped, empty or not at random mispredict (lamp_gather, lamp_sample up to 1.5x slower).
+#if defined(__SSE2__) || defined(_M_X64)
+inline float max_sel(float c, float x) { return _mm_cvtss_f32(_mm_max_ss(_mm_set_ss(x), _mm_set_ss(c))); }
+inline float min_sel(float c, float x) { return _mm_cvtss_f32(_mm_min_ss(_mm_set_ss(x), _mm_set_ss(c))); }
+inline float select_f(bool c, float a, float b) {
+    const __m128 m = _mm_castsi128_ps(_mm_set1_epi32(-int(c)));
+    return _mm_cvtss_f32(_mm_or_ps(_mm_and_ps(m, _mm_set_ss(a)), _mm_andnot_ps(m, _mm_set_ss(b))));
+}
+#else
+inline float max_sel(float c, float x) { return std::max(c, x); }
+inline float min_sel(float c, float x) { return std::min(c, x); }
+inline float select_f(bool c, float a, float b) { return c ? a : b; }
+#endif
+
 inline float one_minus_cos_from_sin2(float s) { return s / (1.0f + std::sqrt(std::max(0.0f, 1.0f - s))); }
 
 // Branchless tangent frame of a unit normal (Duff et al. 2017).
@@ -163,10 +184,48 @@ inline float spot_attenuation(const LampRecord& L, const float from_light[3]) {
 
 // Area light spread profile at emission cosine cos_l (1 without spread).
 inline float area_spread(const LampRecord& L, float cos_l) {
-    if (L.spread_norm == 0) return 1.0f;
-    if (!(cos_l > 0)) return 0.0f;
-    const float tan_t = std::sqrt(std::max(0.0f, 1.0f - cos_l * cos_l)) / cos_l;
-    return std::max(0.0f, L.tan_half_spread - tan_t) * L.spread_norm;
+    if (L.spread_norm == 0) return 1.0f;  // per lamp: predicted
+    // behind the lamp (cos_l <= 0, or NaN) c = 0: tan_t = inf and f = 0 without a branch on
+    // which side a ray is (no pattern to predict); elsewhere c = cos_l
+    const float c = max_sel(0.0f, cos_l);
+    const float tan_t = std::sqrt(max_sel(0.0f, 1.0f - c * c)) / c;
+    return max_sel(0.0f, L.tan_half_spread - tan_t) * L.spread_norm;
+}
+
+// Area spread (Cycles' area_light_spread_clamp_light): the profile is 0 beyond the disk of
+// radius h tan(spread/2) about the foot of a point X at height h on the emitting side, so beyond
+// the square around it. The part of the local square [-0.5, 0.5]^2 within it, its widths (0 if
+// empty), their product (its share of the bounding rectangle) and whether it is all of it
+// (AreaLight._spread_box). Only for lamps with spread.
+struct AreaBox {
+    float lo_x, hi_x, lo_y, hi_y, w_x, w_y, frac;
+    bool full;
+};
+
+inline AreaBox area_spread_box(const LampRecord& L, const float X[3]) {
+    AreaBox b;
+    const float rel[3] = {X[0] - L.pos[0], X[1] - L.pos[1], X[2] - L.pos[2]};
+    const float h = dot3(rel, L.normal);
+    const float fx = dot3(rel, L.inv_x), fy = dot3(rel, L.inv_y);
+    const float r = h * L.tan_half_spread;
+    const float rx = r * std::sqrt(dot3(L.inv_x, L.inv_x)), ry = r * std::sqrt(dot3(L.inv_y, L.inv_y));
+    const float x0 = fx - rx, x1 = fx + rx, y0 = fy - ry, y1 = fy + ry;
+    // whether the box is clipped varies from ray to ray: selects and flags, no branches
+    b.lo_x = max_sel(-0.5f, x0);
+    b.hi_x = min_sel(0.5f, x1);
+    b.lo_y = max_sel(-0.5f, y0);
+    b.hi_y = min_sel(0.5f, y1);
+    b.w_x = max_sel(0.0f, b.hi_x - b.lo_x);
+    b.w_y = max_sel(0.0f, b.hi_y - b.lo_y);
+    b.frac = b.w_x * b.w_y;
+    b.full = (x0 <= -0.5f) & (x1 >= 0.5f) & (y0 <= -0.5f) & (y1 >= 0.5f);
+    return b;
+}
+
+// The area the box's share refers to: the lamp's; for an ellipse its bounding rectangle's where
+// the box is clamped (sampled uniformly there), its own where not (the concentric map).
+inline float area_box_area(const LampRecord& L, int shape, bool full) {
+    return (shape == AREA_ELLIPSE) & !full ? L.area * FOUR_OVER_PI : L.area;
 }
 
 }  // namespace lampmath
@@ -256,6 +315,21 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
             x = u1 - 0.5f;
             y = u2 - 0.5f;
         }
+        float area = L.area;  // of what x, y are uniform over
+        bool drawn = true;    // x, y on the lamp and within the spread's reach
+        if (L.spread_norm != 0) {  // per lamp: predicted
+            // Uniform over the part of the bounding rectangle within the spread's box about P
+            // (area_spread_box; a whole rectangle's box gives u1 - 0.5 again, bit for bit),
+            // where box points off an ellipse give 0; an ellipse the box covers whole keeps the
+            // concentric map. Selects: whether a box is clipped varies from point to point.
+            const AreaBox box = area_spread_box(L, P);
+            const bool ellipse = shape == AREA_ELLIPSE, use_box = !ellipse | !box.full;
+            const float bx = box.lo_x + u1 * box.w_x, by = box.lo_y + u2 * box.w_y;
+            x = use_box ? bx : x;
+            y = use_box ? by : y;
+            drawn = (box.frac > 0) & (!ellipse | box.full | (bx * bx + by * by <= 0.25f));
+            area = area_box_area(L, shape, box.full) * box.frac;
+        }
         for (int a = 0; a < 3; ++a) {
             float q = L.axis_x[a] * x;
             q += L.axis_y[a] * y;
@@ -263,10 +337,10 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
         }
         s.dist = normalize(s.wi);
         const float cos_l = -dot3(s.wi, L.normal);
-        const bool ok = cos_l > 0 && s.dist > 0;
-        const float p = s.dist * s.dist / (L.area * cos_l);
-        s.pdf = ok ? p : 0.0f;
-        scale = ok ? 1.0f / p : 0.0f;
+        const bool ok = (cos_l > 0) & (s.dist > 0) & drawn;
+        const float p = s.dist * s.dist / (area * cos_l);
+        s.pdf = select_f(ok, p, 0.0f);
+        scale = select_f(ok, 1.0f / p, 0.0f);
         scale *= area_spread(L, cos_l);
         break;
     }
@@ -281,10 +355,47 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
     return s;
 }
 
+// hit_lamp for an area lamp, without or with spread (AreaLight.intersect). Everything is computed
+// and the answer returned without a branch per ray: whether a ray meets the lamp is a coin flip
+// a branch mispredicts (lamp_gather ~1.5x slower).
+template <bool SPREAD>
+inline bool hit_area(const LampRecord& L, const float O[3], const float D[3], float tmax, float Le[3], float& pdf) {
+    using namespace lampmath;
+    const float denom = dot3(D, L.normal);  // < 0: travelling toward the emitting face
+    const float t = (dot3(L.pos, L.normal) - dot3(O, L.normal)) / denom;
+    float rel[3];
+    for (int a = 0; a < 3; ++a) rel[a] = (D[a] * t + O[a]) - L.pos[a];
+    const float lx = dot3(rel, L.inv_x), ly = dot3(rel, L.inv_y);
+    const bool inside = int(L.shape) == AREA_ELLIPSE ? lx * lx + ly * ly <= 0.25f
+                                                     : (std::fabs(lx) <= 0.5f) & (std::fabs(ly) <= 0.5f);
+    const float cos_l = -denom;
+    float area = L.area, scale = 1.0f;
+    bool drawn = true;
+    if (SPREAD) {
+        // only the part sample_lamp draws from for a shading point at O (beyond the box the
+        // profile is 0), with that draw's pdf
+        const AreaBox box = area_spread_box(L, O);
+        const bool in_box = (lx >= box.lo_x) & (lx <= box.hi_x) & (ly >= box.lo_y) & (ly <= box.hi_y);
+        drawn = (box.full | in_box) & (box.frac > 0);
+        area = area_box_area(L, int(L.shape), box.full) * box.frac;
+        scale = area_spread(L, cos_l);
+    }
+    pdf = t * t / (area * cos_l);
+    for (int a = 0; a < 3; ++a) Le[a] = L.emit[a] * scale;
+    return (denom < 0) & (t > 0) & (t < tmax) & inside & drawn;
+}
+
+__attribute__((noinline)) inline bool hit_area_spread(const LampRecord& L, const float O[3], const float D[3], float tmax,
+                                                      float Le[3], float& pdf) {
+    return hit_area<true>(L, O, D, tmax, Le, pdf);
+}
+
 // A ray (O, D) meeting finite lamp L at t < tmax (Lamp.intersect): radiance Le and solid-angle
 // pdf. False for lamps at infinity and delta lamps (no ray meets them). Le and pdf mean
-// something only when it returns true (an area lamp writes them either way).
-inline bool hit_lamp(const LampRecord& L, const float O[3], const float D[3], float tmax, float Le[3], float& pdf) {
+// something only when it returns true (an area lamp writes them either way). Always inlined:
+// lamp_gather's loop around it runs ~20% slower calling it (GCC stops inlining it at about
+// this size).
+__attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const float O[3], const float D[3], float tmax, float Le[3], float& pdf) {
     using namespace lampmath;
     const int kind = int(L.kind), shape = int(L.shape);
     float scale = 1.0f;
@@ -316,19 +427,8 @@ inline bool hit_lamp(const LampRecord& L, const float O[3], const float D[3], fl
             scale = spot_attenuation(L, from_light);
         }
     } else if (kind == LAMP_AREA) {
-        // Everything is computed and the answer returned without a branch per ray: whether a
-        // ray meets the lamp is a coin flip a branch mispredicts (lamp_gather ~1.5x slower).
-        const float denom = dot3(D, L.normal);  // < 0: travelling toward the emitting face
-        const float t = (dot3(L.pos, L.normal) - dot3(O, L.normal)) / denom;
-        float rel[3];
-        for (int a = 0; a < 3; ++a) rel[a] = (D[a] * t + O[a]) - L.pos[a];
-        const float lx = dot3(rel, L.inv_x), ly = dot3(rel, L.inv_y);
-        const bool inside = int(L.shape) == AREA_ELLIPSE ? lx * lx + ly * ly <= 0.25f
-                                                         : (std::fabs(lx) <= 0.5f) & (std::fabs(ly) <= 0.5f);
-        const float cos_l = -denom;
-        pdf = t * t / (L.area * cos_l);
-        scale = area_spread(L, cos_l);
-        seen = (denom < 0) & (t > 0) & (t < tmax) & inside;
+        // per lamp, predicted; with spread out of line, which keeps lamps without spread as fast
+        return L.spread_norm != 0 ? hit_area_spread(L, O, D, tmax, Le, pdf) : hit_area<false>(L, O, D, tmax, Le, pdf);
     } else {
         return false;
     }

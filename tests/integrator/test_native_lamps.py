@@ -58,6 +58,8 @@ VARIANTS = {
     'area_ellipse_spread': light('AREA', RGB, SQUASH, shape='ELLIPSE', size_x=0.8, size_y=1.4,
                                  spread=np.radians(120.0)),
     'area_disk_narrow_spread': light('AREA', RGB, TILT, shape='DISK', size_x=1.2, spread=0.08),  # 3/h^3 branch
+    'area_rectangle_narrow_spread': light('AREA', RGB, SQUASH, shape='RECTANGLE', size_x=1.0, size_y=0.6,
+                                          spread=np.radians(2.0)),
     'area_rectangle_unnormalized': light('AREA', RGB, TILT, shape='RECTANGLE', size_x=2.0, size_y=0.5,
                                          normalize=False),
 }
@@ -270,6 +272,42 @@ def test_gather_each_lamp(name):
     dacrt.lamps.lamp_gather(lamp_records([lamp]), [0], O, D, t_surf, miss, pid, L, pdf_bsdf=pdf_bsdf,
                             lamp_prob=lamp_prob)
     close(L, expected, rel=2e-5, abs_scale=1e-4 if 'spot' in name else 1e-6, what=name)
+
+
+@pytest.mark.parametrize('name', [n for n in NAMES if 'spread' in n])
+def test_gather_pdf_equals_sample_pdf(name):
+    """MIS with spread: the native sample's pdf (clamped to the spread's square about the shading
+    point) is the pdf lamp_gather weighs a BSDF ray along that sample with. With lamp_prob 1 and
+    pdf_bsdf = the sample's pdf the power heuristic is exactly 1/2 where they agree; the gathered
+    radiance (camera mode) is the sample's value x pdf."""
+    rng = np.random.default_rng(NAMES.index(name) + 200)
+    lamp = make(name)
+    rec = lamp_records([lamp])
+    n = 40_000
+    # points in front of the lamp at heights where the spread's square is clamped by the lamp's
+    # edges, lies inside it or (wide spreads, far points) covers it whole
+    side = rng.uniform(-0.8, 0.8, (2, n))
+    h = rng.uniform(0.05, 4.0, n)
+    P = (lamp.center[:, None] + lamp.normal[:, None] * h + lamp.axis_x[:, None] * side[0]
+         + lamp.axis_y[:, None] * side[1]).astype(F32)
+    u1, u2 = rng.random((2, n), np.float32)
+    wi, dist, value, pdf = dacrt.lamps.lamp_sample(rec, np.zeros(n, np.int32), P, u1, u2)
+    good = np.flatnonzero(value.max(axis=0) > 0)
+    assert len(good) > n // 10
+    m = len(good)
+    O, D = np.ascontiguousarray(P[:, good]), np.ascontiguousarray(wi[:, good])
+    t_surf, miss, pid = np.full(m, np.inf, F32), np.zeros(m, bool), np.arange(m)
+    Le = np.zeros((3, m), F32)
+    dacrt.lamps.lamp_gather(rec, [0], O, D, t_surf, miss, pid, Le)
+    Lw = np.zeros((3, m), F32)
+    dacrt.lamps.lamp_gather(rec, [0], O, D, t_surf, miss, pid, Lw, pdf_bsdf=np.ascontiguousarray(pdf[good]),
+                            lamp_prob=np.ones(1, F32))
+    seen = Le.max(axis=0) > 0
+    assert seen.mean() >= 0.999                       # (a few at the square's edge round outside it)
+    np.testing.assert_allclose(Le[:, seen], (value * pdf)[:, good][:, seen], rtol=2e-3)
+    w = Lw[0, seen].astype(np.float64) / Le[0, seen]
+    pdf_gather = pdf[good][seen] * np.sqrt(1.0 / w - 1.0)    # w = 1 / (1 + (pdf_l / pdf_bsdf)^2)
+    np.testing.assert_allclose(pdf_gather, pdf[good][seen], rtol=2e-3)
 
 
 def test_delta_lamps_are_never_gathered():
