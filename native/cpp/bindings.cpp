@@ -76,9 +76,9 @@ public:
         check_out(hits, n, sizeof(Hit), "hits");
         Hit* h = static_cast<Hit*>(hits.mutable_data());
         TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Closest, h, nullptr,
-                     skip_ptr(skip, n), 0.0f, nullptr};
+                     skip_ptr(skip, n), BatchInfo{}, nullptr};
         set_visible(job, visible);
-        return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, h, f, oam, threads); });
+        return run(r, n, job, threads, isa, [&](FieldsFn f, BatchInfo& b) { return validate_rays(r, n, h, f, b, threads); });
     }
 
     py::dict occluded(py::array rays, py::array out, py::object skip, int threads, const std::string& isa,
@@ -88,9 +88,9 @@ public:
         check_out(out, n, 1, "occluded");
         uint8_t* o = static_cast<uint8_t*>(out.mutable_data());
         TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Any, nullptr, o,
-                     skip_ptr(skip, n), 0.0f, nullptr};
+                     skip_ptr(skip, n), BatchInfo{}, nullptr};
         set_visible(job, visible);
-        return run(r, n, job, threads, isa, [&](FieldsFn f, float& oam) { return validate_rays(r, n, o, f, oam, threads); });
+        return run(r, n, job, threads, isa, [&](FieldsFn f, BatchInfo& b) { return validate_rays(r, n, o, f, b, threads); });
     }
 
 private:
@@ -156,7 +156,7 @@ private:
         {
             py::gil_scoped_release nogil;
             const auto v0 = std::chrono::steady_clock::now();
-            err = validate(fields_fn(isa), job.origin_abs_max);
+            err = validate(fields_fn(isa), job.batch);
             validate_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - v0).count();
             if (err.empty()) {
                 const auto t0 = std::chrono::steady_clock::now();

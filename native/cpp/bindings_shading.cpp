@@ -421,13 +421,13 @@ std::pair<size_t, size_t> mesh_sizes(const py::array& vertices, const py::array_
 
 py::tuple face_normals_py(py::array_t<double, py::array::c_style> vertices,
                           py::array_t<int32_t, py::array::c_style> triangles) {
-    const size_t M = mesh_sizes(vertices, triangles).second;
+    const auto [V, M] = mesh_sizes(vertices, triangles);
     const int32_t* t = triangles.data();
     F32Array normals({py::ssize_t(M), py::ssize_t(3)});
     py::array_t<bool> good{py::ssize_t(M)};
     {
         py::gil_scoped_release nogil;
-        face_normals(vertices.data(), t, M, normals.mutable_data(), reinterpret_cast<uint8_t*>(good.mutable_data()));
+        face_normals(vertices.data(), V, t, M, normals.mutable_data(), reinterpret_cast<uint8_t*>(good.mutable_data()));
     }
     return py::make_tuple(normals, good);
 }
@@ -452,13 +452,13 @@ F32Array corner_rows_py(F32Array per_corner) {
 
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny) {
-    const size_t M = mesh_sizes(vertices, triangles).second;
+    const auto [V, M] = mesh_sizes(vertices, triangles);
     const int32_t* t = triangles.data();
     F32Array geo({py::ssize_t(15), py::ssize_t(M)});
     py::array_t<double> area{py::ssize_t(M)};
     {
         py::gil_scoped_release nogil;
-        triangle_table(vertices.data(), t, M, offset_ulps, tiny, geo.mutable_data(), area.mutable_data());
+        triangle_table(vertices.data(), V, t, M, offset_ulps, tiny, geo.mutable_data(), area.mutable_data());
     }
     return py::make_tuple(geo, area);
 }

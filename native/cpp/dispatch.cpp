@@ -72,7 +72,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
     ChunkFn fn = isa == Isa::Avx512 ? avx512::trace_chunk : (isa == Isa::Avx2 ? avx2::trace_chunk : portable::trace_chunk);
     const size_t nt = ts.valid_ids.size();
     if (n > 0 && nt > 0) {
-        int T = threads > 0 ? threads : hardware_threads();
+        int T = threads > 0 ? std::min(threads, max_workers()) : hardware_threads();
         int levels = 0;  // a balanced tree's depth to nodes of about kSharedMinTris triangles
         while ((nt >> levels) > kSharedMinTris) ++levels;
         std::vector<uint32_t> own_ids;
@@ -130,7 +130,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         const size_t min_chunk = use_kept ? kMinKeptChunkRays : kMinChunkRays;
         size_t chunks;
         if (job.cfg.chunk_rays) {
-            chunks = (n + job.cfg.chunk_rays - 1) / job.cfg.chunk_rays;
+            chunks = n / job.cfg.chunk_rays + (n % job.cfg.chunk_rays != 0);  // no overflow near 2^64
         } else {
             chunks = std::min(size_t(T), (n + min_chunk - 1) / min_chunk);
         }
@@ -150,6 +150,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         top.ray_scale = float(n) / float(std::min(n, chunk));
         TraceJob jb = job;
         jb.top = &top;
+        jb.num_ids = n;
 
         std::atomic<size_t> next{0};
         std::vector<Stats> stats(T);

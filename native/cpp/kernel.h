@@ -67,6 +67,16 @@ struct SharedTop {
     float ray_scale = 1.0f;       // total rays / chunk rays: the adaptive choice at shared nodes
 };
 
+// What the field check (validate.h) learns about a batch besides its validity.
+struct BatchInfo {
+    float origin_abs_max = 0.0f;  // largest |origin coordinate| (box padding)
+    bool odd_dirs = false;        // a direction component is denormal or > 2^125 in size (filter.h)
+    void merge(const BatchInfo& o) {
+        origin_abs_max = origin_abs_max > o.origin_abs_max ? origin_abs_max : o.origin_abs_max;
+        odd_dirs = odd_dirs || o.odd_dirs;
+    }
+};
+
 struct TraceJob {
     const TriangleSet* ts;
     Config cfg;
@@ -74,29 +84,34 @@ struct TraceJob {
     Hit* hits;            // Closest: output by ray id
     uint8_t* occluded;    // Any: output by ray id
     const int32_t* skip;  // optional, by ray id: triangle the ray must ignore (-1: none)
-    float origin_abs_max; // largest |origin coordinate| over the batch (box padding)
+    BatchInfo batch;      // from the field check of the batch
     SharedTop* top;       // shared top levels of this call
     // optional, by triangle: visibility bits; a triangle is traced when (mask & visible) != 0,
     // so one scene serves ray kinds that see slightly different triangle subsets
     const uint8_t* mask = nullptr;
     uint8_t visible = 0xFF;
+    // Length of hits / occluded / skip. Ids were validated, but the rays are the caller's
+    // array, which another Python thread may rewrite while the GIL is released: every id is
+    // checked against this where it indexes (a rewritten ray gets a wrong answer, never a
+    // write out of bounds). Set by trace().
+    size_t num_ids = 0;
 };
 
 // Trace rays[0, n) against all valid triangles; ids: the thread's scratch of ts.valid_ids.size().
 using ChunkFn = void (*)(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
-// Whether every ray's fields are valid (validate.h); also the largest |origin coordinate|.
-using FieldsFn = bool (*)(const Ray*, size_t, float&);
+// Whether every ray's fields are valid (validate.h); also what the trace needs to know of them.
+using FieldsFn = bool (*)(const Ray*, size_t, BatchInfo&);
 namespace portable {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
-bool fields_valid(const Ray*, size_t, float&);
+bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 namespace avx2 {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
-bool fields_valid(const Ray*, size_t, float&);
+bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 namespace avx512 {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
-bool fields_valid(const Ray*, size_t, float&);
+bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 
 }  // namespace dacrt

@@ -23,8 +23,8 @@ void trace_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats&
     trace_chunk_w<8>(job, rays, n, ids, st);
 }
 
-bool fields_valid(const Ray* rays, size_t n, float& origin_abs_max) {
-    return fields_valid_w<8>(rays, n, origin_abs_max);
+bool fields_valid(const Ray* rays, size_t n, BatchInfo& info) {
+    return fields_valid_w<8>(rays, n, info);
 }
 }  // namespace avx2
 }  // namespace dacrt

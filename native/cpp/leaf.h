@@ -14,12 +14,41 @@
 // t = (barycentrics . Pz) / dz cannot overflow before the division (|b| <= 1); a t beyond the
 // float range is not a hit.
 // Ties (equal t) go to the lowest triangle index, so results do not depend on traversal order,
-// thread count or ISA. Included inside an ISA namespace.
+// thread count or ISA.
+//
+// Hits on the filter's segment: a ray lying (within rounding) in a triangle's plane can pass
+// the inside test -- its projection of the triangle is a sliver that rounding may move over the
+// origin -- with t from the plane far from where the ray meets the triangle's box. Whether such
+// a ray reached that leaf depended on how the filter's boxes fell (leaf size, partition mode,
+// thread count, ISA), so its hit did too. So a hit is kept only where the segment [0, t] meets
+// the triangle's box padded by tol = 2^-20 (largest |box coordinate| + largest |origin
+// coordinate|), half the filter's padding of every node box that holds the triangle (trace.h):
+// then every node on the way keeps the ray while its tfar >= t, and the hits are a function of
+// the ray and the triangles alone. A t short of the padded box is raised to where the ray
+// enters it, a ray that misses it is no hit. A ray that really meets the triangle passes within
+// ~6 ulps of those magnitudes of it (the rounding of its sheared coordinates), inside tol, so
+// it is never dropped; only a grazing ray's t can move. Dropping the hits whose point o + t d
+// lies outside the padded box, or short of it, instead let rays out of closed meshes through
+// the edges of faces they graze (tests/stress/test_watertight.py, grazing rays).
+// Included inside an ISA namespace.
 #pragma once
 
 struct LeafTri {
     float v[3][4];
     int32_t prim;
+};
+
+// A leaf triangle's box and its largest |coordinate|, for the hit point check: computed where
+// a hit needs it (a padded copy made with every leaf triangle was no faster).
+struct TriBox {
+    float lo[3], hi[3], abs_max = 0.0f;
+    explicit TriBox(const LeafTri& T) {
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(T.v[0][a], std::min(T.v[1][a], T.v[2][a]));
+            hi[a] = std::max(T.v[0][a], std::max(T.v[1][a], T.v[2][a]));
+            abs_max = std::max(abs_max, std::max(std::fabs(lo[a]), std::fabs(hi[a])));
+        }
+    }
 };
 
 template <int W>
@@ -28,6 +57,7 @@ struct RayGroup {
     vint<W> k[3];        // kx, ky, kz
     vfloat<W> S[2];      // shear: Sx = dir[kx] / dz, Sy = dir[ky] / dz
     vfloat<W> dz;        // dir[kz] (t = sheared z / dz: no reciprocal, denormal dz still works)
+    vfloat<W> org[3], dir[3];  // as loaded (the hit point check)
     vfloat<W> tfar;
     vint<W> skip;        // triangle each lane ignores (-1: none)
     uint32_t id[W];
@@ -40,18 +70,19 @@ inline vfloat<W> pick(vint<W> k, const vfloat<W> v[3]) {
 }
 
 template <int W>
-inline void load_group(const Ray* rays, size_t i, size_t na, const int32_t* skip, RayGroup<W>& g) {
+inline void load_group(const Ray* rays, size_t i, size_t na, const int32_t* skip, size_t nids, RayGroup<W>& g) {
     vfloat<W> r[8];
     g.valid = load_block<W>(rays, i, na, kInactiveRay, r);
     storeu(reinterpret_cast<float*>(g.id), r[7]);
     g.tfar = r[6];
     if (skip) {  // gathered once per group, then one compare per triangle
         alignas(64) int32_t sk[W];
-        for (int l = 0; l < W; ++l) sk[l] = (g.valid >> l & 1u) ? skip[g.id[l]] : -1;
+        for (int l = 0; l < W; ++l) sk[l] = (g.valid >> l & 1u) && g.id[l] < nids ? skip[g.id[l]] : -1;
         g.skip = loadi<W>(sk);
     }
     const vfloat<W> org[3] = {r[0], r[1], r[2]};
     const vfloat<W> dir[3] = {r[3], r[4], r[5]};
+    for (int a = 0; a < 3; ++a) { g.org[a] = org[a]; g.dir[a] = dir[a]; }
     const vfloat<W> ax = vabs(dir[0]), ay = vabs(dir[1]), az = vabs(dir[2]);
     const vbool<W> x_max = cmple(ay, ax) & cmple(az, ax);
     const vbool<W> y_max = cmple(az, ay);
@@ -116,10 +147,73 @@ __attribute__((noinline, cold)) uint32_t exact_lanes(const vfloat<W> P[3][2], co
     return hit;
 }
 
-template <int W, Query Q>
-void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const Box* boxes,
-                    const CompactTri* tris, const uint32_t* prims, Hit* hits, uint8_t* occluded, const int32_t* skip,
-                    const uint8_t* mask, uint8_t visible, Stats& st) {
+// The hit point check (see the top): t is kept, raised or the hit dropped by the segment
+// [0, t] against the triangle's box padded by kHitBoxTol (largest |box coordinate| + largest
+// |origin coordinate|), evaluated in double (differences and quotients of floats, exact to
+// 2^-53). The float check in intersect_leaf passes only points well inside that box (padding
+// kFastBoxTol of the box's magnitude, less than kHitBoxTol minus its own rounding), where this
+// keeps t as it is, so which of the two decides a lane never changes its result.
+constexpr double kHitBoxTol = 0x1p-20;
+constexpr float kFastBoxTol = 0x1p-21f;
+
+// The lanes of the check that the float test could not pass; returns those kept (t raised
+// where the padded box lies beyond it).
+template <int W>
+__attribute__((noinline, cold)) uint32_t box_lanes(const Ray* rays, const TriBox& B, uint32_t lanes, vfloat<W>& To) {
+    alignas(64) float t[W];
+    storeu(t, To);
+    uint32_t keep = 0;
+    while (lanes) {
+        const int j = __builtin_ctz(lanes);
+        lanes &= lanes - 1;
+        const Ray& r = rays[j];
+        double oabs = 0.0;
+        for (int a = 0; a < 3; ++a) oabs = std::max(oabs, std::fabs(double(r.org[a])));
+        const double tol = kHitBoxTol * (double(B.abs_max) + oabs);
+        double s0 = 0.0, s1 = INFINITY;  // where the ray from its origin on is in the padded box
+        for (int a = 0; a < 3; ++a) {
+            const double l = double(B.lo[a]) - tol - r.org[a], h = double(B.hi[a]) + tol - r.org[a];
+            if (r.dir[a] == 0.0f) {
+                if (l > 0.0 || h < 0.0) s1 = -INFINITY;
+                continue;
+            }
+            const double e0 = l / r.dir[a], e1 = h / r.dir[a];
+            s0 = std::max(s0, std::min(e0, e1));
+            s1 = std::min(s1, std::max(e0, e1));
+        }
+        if (!(s0 <= s1)) continue;  // misses the padded box, or it lies behind the origin
+        const float tn = double(t[j]) < s0 ? float(s0) : t[j];
+        if (!(tn < INFINITY)) continue;
+        t[j] = tn;
+        keep |= 1u << j;
+    }
+    To = loadu<W>(t);
+    return keep;
+}
+
+// The hit point check of the lanes `lanes` (see the top), t raised where needed; returns the
+// lanes kept.
+template <int W>
+__attribute__((always_inline)) inline uint32_t hits_on_segment(const RayGroup<W>& g, const Ray* rays, const LeafTri& T,
+                                                   uint32_t lanes, vfloat<W>& t) {
+    const TriBox B(T);
+    const float pad = kFastBoxTol * B.abs_max;
+    vbool<W> in = from_bits<W>(lanes);
+    for (int a = 0; a < 3; ++a) {
+        const vfloat<W> p = g.org[a] + t * g.dir[a];
+        in = in & cmple(splat<W>(B.lo[a] - pad), p) & cmple(p, splat<W>(B.hi[a] + pad));
+    }
+    const uint32_t out = lanes & ~bits(in);
+    return out ? (lanes & ~out) | box_lanes<W>(rays, B, out, t) : lanes;
+}
+
+// Skip: whether skip is given. A template parameter, not a test in the triangle loop: GCC made
+// the two loops itself until the hit point check grew the function, and the single loop it
+// then made ran occlusion leaves ~30% slower on AVX2 (San Francisco shadow rays).
+template <int W, Query Q, bool Skip>
+void intersect_leaf_k(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const Box* boxes,
+                      const CompactTri* tris, const uint32_t* prims, Hit* hits, uint8_t* occluded,
+                      const int32_t* skip, size_t nids, const uint8_t* mask, uint8_t visible, Stats& st) {
     constexpr size_t kChunk = 32;
     alignas(64) LeafTri lt[kChunk];
     st.leaves += 1;
@@ -137,7 +231,7 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
         st.tri_tests += uint64_t(na) * cn;
         for (size_t i = 0; i < na; i += W) {
             RayGroup<W> g;
-            load_group<W>(rays, i, na, skip, g);
+            load_group<W>(rays, i, na, Skip ? skip : nullptr, nids, g);
             const vbool<W> valid = from_bits<W>(g.valid);
             vfloat<W> best_t = g.tfar, best_u = zero, best_v = zero;
             vint<W> best_p = splati<W>(-2);  // -2: unknown (earlier leaves' best is in hits[id])
@@ -182,13 +276,22 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
                 }
                 // t in (0, inf): NaN (det 0 in the non-robust build) and overflowed t never hit
                 vbool<W> ok = inside & cmplt(zero, t) & cmplt(t, splat<W>(INFINITY));
-                if (skip) ok = andnot(cmpeqi(g.skip, splati<W>(T.prim)), ok);  // never the triangle it leaves
+                if (Skip) ok = andnot(cmpeqi(g.skip, splati<W>(T.prim)), ok);  // never the triangle it leaves
+                // The hit point check (see the top) runs on the lanes where this hit could count:
+                // it only ever raises t, so a lane already beyond its best hit cannot matter.
                 if (Q == Query::Any) {
-                    const uint32_t hit = bits(ok & cmplt(t, g.tfar)) & ~done;
+                    uint32_t hit = bits(ok & cmplt(t, g.tfar)) & ~done;
+#ifndef DACRT_NONROBUST
+                    if (hit) hit = hits_on_segment<W>(g, rays + i, T, hit, t) & bits(cmplt(t, g.tfar));
+#endif
                     done |= hit;
                     if (done == g.valid) break;
                     continue;
                 }
+#ifndef DACRT_NONROBUST
+                const uint32_t counts = bits(ok & cmple(t, best_t));
+                if (counts) ok = andnot(from_bits<W>(counts & ~hits_on_segment<W>(g, rays + i, T, counts, t)), ok);
+#endif
                 const vbool<W> closer = ok & cmplt(t, best_t);
                 const vbool<W> tie = ok & cmpeq(t, best_t);
                 vbool<W> take = closer;
@@ -199,7 +302,7 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
                     while (tl) {
                         const int l = __builtin_ctz(tl);
                         tl &= tl - 1;
-                        if (bp[l] == -2) bp[l] = hits[g.id[l]].prim;
+                        if (bp[l] == -2) bp[l] = g.id[l] < nids ? hits[g.id[l]].prim : -1;
                         if (bp[l] == -1 || T.prim < bp[l]) win |= 1u << l;
                     }
                     take = take | from_bits<W>(win);
@@ -217,7 +320,7 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
                     const int l = __builtin_ctz(done);
                     done &= done - 1;
                     rays[i + l].tfar = kOccludedTfar;
-                    occluded[g.id[l]] = 1;
+                    if (g.id[l] < nids) occluded[g.id[l]] = 1;  // see TraceJob::num_ids
                 }
                 continue;
             }
@@ -229,8 +332,16 @@ void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const 
                 const int l = __builtin_ctz(changed);
                 changed &= changed - 1;
                 rays[i + l].tfar = bt[l];
-                hits[g.id[l]] = Hit{bt[l], bp[l], bu[l], bv[l]};
+                if (g.id[l] < nids) hits[g.id[l]] = Hit{bt[l], bp[l], bu[l], bv[l]};  // see TraceJob::num_ids
             }
         }
     }
+}
+
+template <int W, Query Q>
+void intersect_leaf(Ray* rays, size_t na, const uint32_t* ids, size_t nt, const Box* boxes,
+                    const CompactTri* tris, const uint32_t* prims, Hit* hits, uint8_t* occluded, const int32_t* skip,
+                    size_t nids, const uint8_t* mask, uint8_t visible, Stats& st) {
+    if (skip) intersect_leaf_k<W, Q, true>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, nids, mask, visible, st);
+    else intersect_leaf_k<W, Q, false>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, nids, mask, visible, st);
 }

@@ -30,6 +30,10 @@ int hardware_threads() {
     return h ? int(h) : 1;
 }
 
+int max_workers() {
+    return std::max(hardware_threads(), int(std::thread::hardware_concurrency()));
+}
+
 namespace {
 
 // Busy-waits up to ~50 us while waiting() holds: about the cost of a futex wake-up, so a

@@ -13,6 +13,11 @@ namespace dacrt {
 // Cores this process may run on (its CPU affinity), at least 1.
 int hardware_threads();
 
+// The most workers a call asking for a thread count uses: the machine's hardware threads (at
+// least hardware_threads()). Results never depend on the count, and every worker beyond it
+// would only time-share a core and then stay parked in the pool for the life of the process.
+int max_workers();
+
 // Runs job(w) for w = 0..workers-1, w = 0 on the calling thread, and returns when all are done.
 // An exception from any job is rethrown here (the first one). Calls from inside a job, or
 // while another thread uses the pool, run on freshly created threads instead: never a deadlock.

@@ -46,8 +46,8 @@ __attribute__((noinline, cold)) static std::string describe(const Ray* rays, siz
 // failure (the scalar scan then names the first bad ray).
 template <class Mark>
 static std::string validate_serial(const Ray* rays, size_t n, char* marks, size_t stride, Mark unseen, Mark seen,
-                                   FieldsFn fields, float& origin_abs_max) {
-    if (!fields(rays, n, origin_abs_max))
+                                   FieldsFn fields, BatchInfo& info) {
+    if (!fields(rays, n, info))
         for (size_t k = 0; k < n; ++k) {
             std::string msg = describe(rays, n, k, false);
             if (!msg.empty()) return msg;
@@ -70,22 +70,22 @@ static std::string validate_serial(const Ray* rays, size_t n, char* marks, size_
 // failure reruns the serial check for its exact message.
 template <class Mark, class Init>
 static std::string validate(const Ray* rays, size_t n, char* marks, size_t stride, Mark unseen, Mark seen,
-                            FieldsFn fields, float& origin_abs_max, int threads, Init init) {
+                            FieldsFn fields, BatchInfo& info, int threads, Init init) {
     constexpr size_t kMinPerThread = 1 << 15;
     if (threads == 1 || threads_for(n, kMinPerThread) <= 1) {
         init(size_t(0), n);
-        return validate_serial(rays, n, marks, stride, unseen, seen, fields, origin_abs_max);
+        return validate_serial(rays, n, marks, stride, unseen, seen, fields, info);
     }
     auto slot = [&](size_t id) { return reinterpret_cast<Mark*>(marks + id * stride); };
     std::atomic<bool> fields_ok{true}, ids_ok{true};
     std::mutex m;
-    float oam = 0.0f;
+    BatchInfo all;
     parallel_for(n, [&](size_t b, size_t e) {
         init(b, e);
-        float part = 0.0f;
+        BatchInfo part;
         if (!fields(rays + b, e - b, part)) fields_ok.store(false, std::memory_order_relaxed);
         std::lock_guard<std::mutex> g(m);
-        oam = std::max(oam, part);
+        all.merge(part);
     }, kMinPerThread, threads);
     if (fields_ok.load()) {
         parallel_for(n, [&](size_t b, size_t e) {
@@ -106,25 +106,25 @@ static std::string validate(const Ray* rays, size_t n, char* marks, size_t strid
         }, kMinPerThread, threads);
     }
     if (fields_ok.load() && ids_ok.load()) {
-        origin_abs_max = oam;
+        info = all;
         return {};
     }
     init(size_t(0), n);  // unmark, then name the first bad ray
-    return validate_serial(rays, n, marks, stride, unseen, seen, fields, origin_abs_max);
+    return validate_serial(rays, n, marks, stride, unseen, seen, fields, info);
 }
 
-std::string validate_rays(const Ray* rays, size_t n, Hit* hits, FieldsFn fields, float& origin_abs_max, int threads) {
+std::string validate_rays(const Ray* rays, size_t n, Hit* hits, FieldsFn fields, BatchInfo& info, int threads) {
     auto init = [hits](size_t b, size_t e) {
         for (size_t k = b; k < e; ++k) hits[k] = Hit{INFINITY, -2, 0.0f, 0.0f};
     };
     return validate<int32_t>(rays, n, reinterpret_cast<char*>(&hits[0].prim), sizeof(Hit), -2, -1, fields,
-                             origin_abs_max, threads, init);
+                             info, threads, init);
 }
 
-std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, FieldsFn fields, float& origin_abs_max,
+std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, FieldsFn fields, BatchInfo& info,
                           int threads) {
     auto init = [occluded](size_t b, size_t e) { std::memset(occluded + b, 2, e - b); };
-    return validate<uint8_t>(rays, n, reinterpret_cast<char*>(occluded), 1, 2, 0, fields, origin_abs_max, threads,
+    return validate<uint8_t>(rays, n, reinterpret_cast<char*>(occluded), 1, 2, 0, fields, info, threads,
                              init);
 }
 

@@ -9,11 +9,11 @@ namespace dacrt {
 // Return "" when the batch is valid, else a message naming the first bad ray and field. The
 // output array (indexed by ray id) doubles as the mark array that finds repeated ids, so
 // validation allocates nothing; on success it holds all misses / all unoccluded.
-// origin_abs_max receives the largest |origin coordinate| (used to pad boxes).
+// info receives what the trace needs to know of the batch (kernel.h BatchInfo).
 // fields: the ISA's SIMD field check (dispatch.h fields_fn). threads: at most this many
 // threads (0 = all cores), as the trace call that follows.
-std::string validate_rays(const Ray* rays, size_t n, Hit* hits, FieldsFn fields, float& origin_abs_max, int threads);
-std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, FieldsFn fields, float& origin_abs_max,
+std::string validate_rays(const Ray* rays, size_t n, Hit* hits, FieldsFn fields, BatchInfo& info, int threads);
+std::string validate_rays(const Ray* rays, size_t n, uint8_t* occluded, FieldsFn fields, BatchInfo& info,
                           int threads);
 
 }  // namespace dacrt

@@ -37,13 +37,13 @@ void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray*
 // cross product; 0 for zero area) and the front-side self-intersection step: offset_ulps ULPs of
 // the triangle's largest |coordinate| (at least `tiny`) along that normal. geo: 15 rows of M;
 // area: M doubles. Triangles must index existing vertices (callers check).
-void triangle_table(const float* vertices, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
+void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     float* geo, double* area);
 
 // Unit geometric normals (M rows of 3, by the winding (v1 - v0) x (v2 - v0)) of triangles of
 // float64 vertices (V rows of 3), in double, rounded once; good[i] = 0 (normal 0) for a
 // zero-area or non-finite triangle. Triangles must index existing vertices (callers check).
-void face_normals(const double* vertices, const int32_t* triangles, size_t M, float* normals, uint8_t* good);
+void face_normals(const double* vertices, size_t V, const int32_t* triangles, size_t M, float* normals, uint8_t* good);
 
 // Per-corner values (M triangles x 3 corners x c floats) as the rows barycentric interpolation
 // reads: corner 0 (c rows of M), corner 1 - corner 0, corner 2 - corner 0 (3c rows in all).

@@ -34,8 +34,10 @@ struct Tracer {
     const int32_t* skip;
     const uint8_t* mask;
     uint8_t visible;
+    size_t num_ids;
     Config cfg;
     float origin_abs_max;
+    bool odd_dirs;  // some direction component needs the box test's check (filter.h)
     SharedTop* top;
     uint32_t* priv;  // this thread's id scratch
     Stats st;
@@ -56,11 +58,12 @@ struct Tracer {
     // time -5 to -7% on diffuse, camera and shadow rays, for thresholds of 18-22 of 32.
     static constexpr size_t kSampledRays = 1024;
     static constexpr int kSampledKept = 20;
+    template <bool Odd>
     static bool most_inside(const Ray* rays, size_t n, const float lo[3], const float hi[3]) {
         alignas(64) Ray s[32];
         for (size_t k = 0; k < 32; ++k) std::memcpy(&s[k], rays + (k * n) / 32, sizeof(Ray));
         int kept = 0;
-        for (int b = 0; b < 32; b += W) kept += __builtin_popcount(block_active<W>(s + b, lo, hi));
+        for (int b = 0; b < 32; b += W) kept += __builtin_popcount(block_active<W, Odd>(s + b, lo, hi));
         return kept >= kSampledKept;
     }
 
@@ -71,6 +74,8 @@ struct Tracer {
 #ifndef DACRT_NONROBUST
         // Conservative box: the watertight test may accept a ray a few ulps of |v - o| outside
         // the exact triangle; the box must never cull such a ray or closed meshes could leak.
+        // A leaf keeps a hit only where [0, t] meets its triangle's box padded by half this
+        // (leaf.h), so every node on the way keeps the ray while its tfar >= t.
         float abs_max = 0.0f;
         for (int a = 0; a < 3; ++a) abs_max = std::max(abs_max, std::max(std::fabs(nb.lo[a]), std::fabs(nb.hi[a])));
         const float pad = 32.0f * 0x1p-24f * (abs_max + origin_abs_max);
@@ -78,11 +83,12 @@ struct Tracer {
         const float pad = 0.0f;
 #endif
         for (int a = 0; a < 3; ++a) { lo[a] = nb.lo[a] - pad; hi[a] = nb.hi[a] + pad; }
-        if (n >= kSampledRays && !is_leaf(n, nt) && most_inside(rays, n, lo, hi)) {
+        if (n >= kSampledRays && !is_leaf(n, nt) &&
+            (odd_dirs ? most_inside<true>(rays, n, lo, hi) : most_inside<false>(rays, n, lo, hi))) {
             ++st.filter_skips;
             return n;
         }
-        const size_t na = filter_rays<W>(rays, n, lo, hi, st);
+        const size_t na = odd_dirs ? filter_rays<W, true>(rays, n, lo, hi, st) : filter_rays<W, false>(rays, n, lo, hi, st);
         st.box_hits += na;
         return na;
     }
@@ -137,7 +143,7 @@ struct Tracer {
     void node_split(Ray* rays, size_t na, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth,
                     uint64_t c1, uint64_t w) {
         if (is_leaf(na, nt)) {
-            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, mask, visible, st);
+            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, num_ids, mask, visible, st);
             st.leaf_ticks += w * (clock(w) - c1);
             return;
         }
@@ -160,7 +166,7 @@ struct Tracer {
         const size_t na = timed_filter(rays, n, nb, depth, nt, w, c1);
         if (na == 0) return;
         if (nt <= size_t(cfg.leaf_size)) {  // never split, so its ids never move
-            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, mask, visible, st);
+            intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, num_ids, mask, visible, st);
             st.leaf_ticks += w * (clock(w) - c1);
             return;
         }
@@ -214,7 +220,7 @@ template <int W, Query Q>
 void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
     const TriangleSet& ts = *job.ts;
     Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), ts.prim.data(), job.hits, job.occluded, job.skip, job.mask, job.visible,
-                    job.cfg, job.origin_abs_max,
+                    job.num_ids, job.cfg, job.batch.origin_abs_max, job.batch.odd_dirs,
                     job.top, ids, Stats{}};
     NodeBounds root;
     for (int a = 0; a < 3; ++a) {

@@ -30,6 +30,15 @@ static bool degenerate(const float* a, const float* b, const float* c) {
 
 namespace {
 
+// Vertex j of the index array (triangle j / 3). The caller checked every index, but the
+// array is the caller's, read again here with the GIL released, and another Python thread may
+// have rewritten it since: each index is read once and clamped, so a rewritten triangle is a
+// wrong triangle, never a read outside the vertex array.
+const float* vertex_at(const float* V, size_t nv, const uint32_t* I, size_t j) {
+    const uint32_t k = __atomic_load_n(I + j, __ATOMIC_RELAXED);
+    return V + 3 * std::min(size_t(k), nv - 1);  // nv >= 1: some index passed the check
+}
+
 // Spreads the low 5 bits of x to every third bit.
 uint32_t spread3(uint32_t x) {
     x &= 31u;
@@ -63,7 +72,8 @@ Bounds3 vertex_bounds(const float* V, size_t nv) {
 // Pass 1, triangles [b, e): the Morton key of each box centre's cell, k <= 5 bits per axis of
 // the vertex bounds (a NaN from an overflowed extent lands in cell 0), with the triangle index
 // in the low 32 bits.
-void key_range(const float* V, const uint32_t* I, size_t b, size_t e, const Bounds3& vb, int k, uint64_t* keys) {
+void key_range(const float* V, size_t nv, const uint32_t* I, size_t b, size_t e, const Bounds3& vb, int k,
+               uint64_t* keys) {
     const float top = float((1 << k) - 1);
     float scale[3];
     for (int a = 0; a < 3; ++a) {
@@ -71,7 +81,7 @@ void key_range(const float* V, const uint32_t* I, size_t b, size_t e, const Boun
         scale[a] = ext > 0.0f && std::isfinite(sc) ? sc : 0.0f;
     }
     for (size_t i = b; i < e; ++i) {
-        const float* p[3] = {V + 3 * size_t(I[3 * i]), V + 3 * size_t(I[3 * i + 1]), V + 3 * size_t(I[3 * i + 2])};
+        const float* p[3] = {vertex_at(V, nv, I, 3 * i), vertex_at(V, nv, I, 3 * i + 1), vertex_at(V, nv, I, 3 * i + 2)};
         uint32_t key = 0;
         for (int a = 0; a < 3; ++a) {
             const float lo = std::min(p[0][a], std::min(p[1][a], p[2][a]));
@@ -122,7 +132,7 @@ struct Part {
 
 // Pass 2, slots [b, e): box, compact record and caller's index of the triangle in the low 32
 // bits of order[s] (no order: slot s is triangle s), and whether it is degenerate.
-void build_range(const float* V, const uint32_t* I, const uint64_t* order, size_t b, size_t e, Box* boxes,
+void build_range(const float* V, size_t nv, const uint32_t* I, const uint64_t* order, size_t b, size_t e, Box* boxes,
                  CompactTri* tris, uint32_t* prim, uint8_t* bad, Part& part) {
     // Bounds in locals: through `part` every box store could alias them, which turned the
     // min/max updates into a chain of stores and reloads.
@@ -134,8 +144,8 @@ void build_range(const float* V, const uint32_t* I, const uint64_t* order, size_
     }
     for (size_t s = b; s < e; ++s) {
         const uint32_t i = order ? uint32_t(order[s]) : uint32_t(s);
-        const float* p[3] = {V + 3 * size_t(I[3 * size_t(i)]), V + 3 * size_t(I[3 * size_t(i) + 1]),
-                             V + 3 * size_t(I[3 * size_t(i) + 2])};
+        const float* p[3] = {vertex_at(V, nv, I, 3 * size_t(i)), vertex_at(V, nv, I, 3 * size_t(i) + 1),
+                             vertex_at(V, nv, I, 3 * size_t(i) + 2)};
         Box bx;
         CompactTri c;
         c.code = 0;
@@ -197,7 +207,7 @@ TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I,
         // (its triangles share cache lines either way), and one counting pass then sorts.
         int k = 1;
         while (k < 5 && (size_t(1) << (3 * k)) * 32 < M) ++k;
-        parallel_for(M, [&](size_t b, size_t e) { key_range(V, I, b, e, vb, k, order.data()); }, size_t(1) << 15);
+        parallel_for(M, [&](size_t b, size_t e) { key_range(V, num_vertices, I, b, e, vb, k, order.data()); }, size_t(1) << 15);
         counting_sort(order, 3 * k);
     }
 
@@ -205,7 +215,7 @@ TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I,
     std::vector<Part> parts(static_cast<size_t>(T));
     BuiltArray<uint8_t> bad(M);  // every element written by build_range
     run_workers(T, [&](int w) {
-        build_range(V, I, spatial_order ? order.data() : nullptr, M * size_t(w) / size_t(T),
+        build_range(V, num_vertices, I, spatial_order ? order.data() : nullptr, M * size_t(w) / size_t(T),
                     M * size_t(w + 1) / size_t(T), boxes.data(), tris.data(), prim.data(), bad.data(),
                     parts[size_t(w)]);
     });

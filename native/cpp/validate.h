@@ -1,14 +1,15 @@
 // SIMD check of the ray fields (finite origin and direction, non-zero direction, tfar >= 0 or
-// +inf) and the largest |origin coordinate|, W rays per step with the filter's transposed
-// loads. The exact message for a bad ray and the id checks are in ray.cpp (scalar, cold/cheap).
+// +inf), the largest |origin coordinate| and whether a direction component is one the box
+// test's reciprocal cannot take (filter.h), W rays per step with the filter's transposed loads.
+// The exact message for a bad ray and the id checks are in ray.cpp (scalar, cold/cheap).
 // Included inside an ISA namespace.
 #pragma once
 
 template <int W>
-bool fields_valid_w(const Ray* rays, size_t n, float& origin_abs_max) {
+bool fields_valid_w(const Ray* rays, size_t n, BatchInfo& info) {
     const vfloat<W> zero = splat<W>(0.0f);
     const vbool<W> all = cmpeq(zero, zero);
-    vbool<W> ok_all = all;
+    vbool<W> ok_all = all, odd = andnot(all, all);
     vfloat<W> oam = zero;
     const Ray pad{{0, 0, 0}, {1, 0, 0}, 0.0f, 0};  // a valid ray
     for (size_t i = 0; i < n; i += W) {
@@ -20,11 +21,16 @@ bool fields_valid_w(const Ray* rays, size_t n, float& origin_abs_max) {
         const vbool<W> zero_dir = cmpeq(r[3], zero) & cmpeq(r[4], zero) & cmpeq(r[5], zero);
         ok_all = ok_all & cmpeq(z, zero) & cmple(zero, r[6]) & andnot(zero_dir, all);
         oam = vmax(oam, vmax(vabs(r[0]), vmax(vabs(r[1]), vabs(r[2]))));
+        for (int a = 3; a < 6; ++a) {  // nonzero below 2^-126 (denormal), or above 2^125
+            const vfloat<W> ad = vabs(r[a]);
+            odd = odd | (cmplt(zero, ad) & cmplt(ad, splat<W>(0x1p-126f))) | cmplt(splat<W>(0x1p125f), ad);
+        }
     }
     alignas(64) float m[W];
     storeu(m, oam);
     float best = 0.0f;
     for (int l = 0; l < W; ++l) best = m[l] > best ? m[l] : best;
-    origin_abs_max = best;
+    info.origin_abs_max = best;
+    info.odd_dirs = bits(odd) != 0;
     return bits(ok_all) == bits(all);
 }

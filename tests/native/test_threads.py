@@ -96,3 +96,37 @@ def test_forked_child_traces_with_threads():
     prim, occ, threads = answer
     assert threads == 2
     assert np.array_equal(prim, parent[0]["prim"]) and np.array_equal(occ, parent[1])
+
+
+_MANY_THREADS = r"""
+import os, sys, numpy as np, dacrt
+def os_threads():
+    return int(open("/proc/self/status").read().split("Threads:")[1].split()[0])
+rng = np.random.default_rng(0)
+v = rng.uniform(-1, 1, (300, 3)).astype(np.float32)
+t = np.arange(300).reshape(100, 3)
+o = rng.uniform(-2, 2, (20000, 3)).astype(np.float32)
+d = rng.normal(size=(20000, 3)).astype(np.float32)
+scene = dacrt.Scene(v, t, chunk_rays=16)  # 1,250 chunks: work for 1,000 threads
+one = scene.intersect(dacrt.make_rays(o, d), threads=1)
+before = os_threads()
+many = scene.intersect(dacrt.make_rays(o, d), threads=1000)
+print(before, os_threads(), scene.last_stats["threads"], int(many.tobytes() == one.tobytes()))
+"""
+
+
+def test_thread_counts_are_capped_at_the_hardware_threads():
+    """threads=1000 used to start ~1,000 workers that stayed parked for the life of the process;
+    a call now uses at most the machine's hardware threads (results never depend on the count).
+    In a fresh process, so the count of OS threads is this call's alone."""
+    import os
+    import subprocess
+    import sys
+    out = subprocess.run([sys.executable, "-c", _MANY_THREADS], capture_output=True, text=True,
+                         timeout=300, env=dict(os.environ))
+    assert out.returncode == 0, out.stderr
+    before, after, used, same = map(int, out.stdout.split())
+    hw = max(os.cpu_count() or 1, dacrt._core.hardware_threads())
+    assert same == 1, "threads=1000 changed the hits"
+    assert 1 <= used <= hw, f"the call used {used} threads on a machine of {hw}"
+    assert after - before <= hw - 1, f"{after - before} new OS threads for a call on {hw} hardware threads"

@@ -194,3 +194,77 @@ def test_big_batch_outputs_do_not_depend_on_threads(query):
     if query == "intersect":
         assert 0 < np.count_nonzero(out[0]["prim"] >= 0) < BIG   # some rays hit, some miss
         assert np.all(np.isinf(out[0]["t"][out[0]["prim"] < 0]))
+
+
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+def test_skip_outside_the_triangle_indices_rejected(query):
+    """skip must be -1 or a triangle index 0..M-1, checked before the int32 conversion (which
+    turned int64 2**32 into 0 and uint64 2**64-1 into -1)."""
+    scene = dacrt.Scene(V, T)  # 2 triangles
+    for value, dtype in [(2, np.int32), (7, np.int64), (-2, np.int32), (-7, np.int64),
+                         (2**32, np.int64), (2**33 + 1, np.int64), (2**64 - 1, np.uint64),
+                         (2**31, np.uint32)]:
+        skip = np.array([-1 if np.issubdtype(dtype, np.signedinteger) else 0] * 15 + [value], dtype)
+        rays = good_rays()
+        before = rays.copy()
+        raises(rf"skip\[15\] = {value} .*triangle", getattr(scene, query), rays, skip=skip)
+        assert rays.tobytes() == before.tobytes()
+    want = getattr(scene, query)(good_rays(), skip=np.array([1] * 16, np.int32))
+    for dtype in (np.int64, np.uint64, np.int8, np.uint16):  # in range: any integer type works
+        got = getattr(scene, query)(good_rays(), skip=np.array([1] * 16, dtype))
+        assert got.tobytes() == want.tobytes()
+
+
+@pytest.mark.parametrize("name", ["triangle_table", "face_normals"])
+def test_shading_tables_reject_indices_that_would_wrap(name):
+    from dacrt import shading
+    args = {"triangle_table": lambda t: (V, t, 4.0), "face_normals": lambda t: (V.astype(np.float64), t)}[name]
+    for t in [np.array([[0, 2**32 + 1, 2]], np.int64), np.array([[0, 1, 2**64 - 1]], np.uint64),
+              np.array([[0, 1, -1]], np.int64), np.array([[0, 1, 4]], np.int32)]:
+        raises(r"triangles\[0\] refers to vertex", getattr(shading, name), *args(t))
+    ok = getattr(shading, name)(*args(np.array([[0, 1, 3]], np.uint64)))
+    assert np.array_equal(ok[0], getattr(shading, name)(*args(np.array([[0, 1, 3]], np.int32)))[0])
+
+
+SETTING_LIMITS = {  # setting: (too large, the largest accepted)
+    "leaf_size": (2**31, 2**31 - 1),
+    "leaf_rays": (2**31, 2**31 - 1),
+    "chunk_rays": (2**64, 2**64 - 1),
+    "sah_ratio": (1e39, 3.4e38),
+}
+
+
+@pytest.mark.parametrize("name", list(SETTING_LIMITS))
+def test_settings_beyond_the_native_range_rejected_when_set(name):
+    """Values the native layer cannot hold fail where they are set, naming the setting and the
+    value (they used to pass and fail at trace time with pybind11's dump of every argument)."""
+    big, largest = SETTING_LIMITS[name]
+    raises(rf"{name}.*{re.escape(repr(big))}", dacrt.Scene, V, T, **{name: big})
+    scene = dacrt.Scene(V, T)
+    with pytest.raises(ValueError, match=name):
+        setattr(scene, name, big)
+    want = scene.intersect(good_rays())
+    setattr(scene, name, largest)  # accepted, and traces the same hits
+    assert scene.intersect(good_rays()).tobytes() == want.tobytes()
+
+
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+def test_thread_counts_beyond_int32_rejected(query):
+    scene = dacrt.Scene(V, T)
+    for threads in (2**31, 2**63, 2**64):
+        raises(rf"threads.*{threads}", getattr(scene, query), good_rays(), threads=threads)
+    want = getattr(scene, query)(good_rays(), threads=1)
+    assert getattr(scene, query)(good_rays(), threads=2**31 - 1).tobytes() == want.tobytes()
+
+
+def test_make_rays_names_a_bad_tfar_or_an_overflowing_coordinate():
+    o, d = np.zeros((4, 3)), np.ones((4, 3))
+    raises(r"tfar.*\(4,\)", dacrt.make_rays, o, d, np.ones(3))
+    raises(r"tfar.*\(4,\)", dacrt.make_rays, o, d, np.ones((4, 1)))
+    big = o.copy()
+    big[2, 1] = 1e300  # finite in float64, inf in float32
+    raises(r"org\[2\].*float32", dacrt.make_rays, big, d)
+    raises(r"dir\[2\].*float32", dacrt.make_rays, o, big + 1)
+    r = dacrt.make_rays(o, d, np.full(4, 1e300))  # a tfar beyond float32 is the unbounded ray
+    assert np.isposinf(r["tfar"]).all()
+    assert dacrt.make_rays(o.astype(np.float32), d, [1, 2, 3, 4])["tfar"].tolist() == [1, 2, 3, 4]

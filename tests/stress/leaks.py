@@ -127,6 +127,31 @@ def inside_rays(name, v, t, scale, offset, rng, origins_per_target=2):
     return RaySet(name, v, t, org[keep], dirs[keep], np.full(int(keep.sum()), np.inf))
 
 
+def grazing_rays(name, v, t, rng, heights=(1e-2, 1e-3, 1e-4, 1e-5)):
+    """Rays from just inside a closed convex mesh, nearly parallel to a face, out through that
+    face's vertices and a point of each of its edges. The origin lies a height (relative to the
+    mesh's size) below a random point of the face, so the ray grazes the face (the sine of its
+    angle is about height / distance) and meets the neighbour across the edge at a healthy
+    angle, or grazes a coplanar neighbour. Rounding decides which triangle the float test
+    picks; none may let the ray out, so any miss is a leak."""
+    vv = v.astype(np.float64)
+    p = vv[t]                                             # (M, 3 corners, 3)
+    n = _unit(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]))
+    centre = vv.mean(axis=0)
+    q_w = rng.dirichlet([4.0, 4.0, 4.0], len(t))         # well inside the face
+    q = np.einsum("mk,mka->ma", q_w, p)
+    n = n * np.sign(np.einsum("ma,ma->m", n, q - centre))[:, None]  # outward
+    size = np.abs(vv - centre).max()
+    e_w = rng.uniform(0.05, 0.95, (len(t), 3, 1))
+    edge_pts = p * e_w + p[:, [1, 2, 0]] * (1 - e_w)
+    targets = np.concatenate([p, edge_pts], axis=1)      # (M, 6, 3)
+    h = np.asarray(heights)[rng.integers(0, len(heights), (len(t), 6))] * size
+    org = q[:, None, :] - h[..., None] * n[:, None, :]
+    org32 = org.reshape(-1, 3).astype(np.float32)
+    dirs = (targets.reshape(-1, 3) - org32.astype(np.float64)).astype(np.float32)
+    return RaySet(name, v, t, org32, dirs, np.full(len(org32), np.inf))
+
+
 def _unit(x):
     return x / np.linalg.norm(x, axis=-1, keepdims=True)
 

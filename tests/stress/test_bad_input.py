@@ -156,3 +156,78 @@ def test_random_garbage_rays_never_crash():
         agreement.check_hits(V, T, b["org"], b["dir"], b["tfar"], hits, ref,
                              context=f"garbage trial {trial}")
     assert accepted > 20
+
+
+_REWRITE_TRIANGLES = r"""
+import threading, numpy as np, dacrt
+M = 500_000
+V = np.random.default_rng(0).uniform(-1, 1, (3 * M, 3)).astype(np.float32)
+T = np.arange(3 * M, dtype=np.uint32).reshape(M, 3)  # passed to the native layer uncopied
+stop = False
+def writer():
+    k = 0
+    while not stop:
+        r = M - 1 - k % 1000
+        T[r, 0] = 0xF0000000  # far outside the vertex array
+        T[r, 0] = 3 * r
+        k += 1
+th = threading.Thread(target=writer)
+th.start()
+try:
+    for i in range(8):
+        try:
+            dacrt.Scene(V, T, spatial_order=bool(i % 2))
+        except ValueError:
+            pass
+finally:
+    stop = True
+    th.join()
+print("done")
+"""
+
+_REWRITE_RAY_IDS = r"""
+import threading, numpy as np, dacrt
+rng = np.random.default_rng(0)
+M = 20_000
+c = rng.uniform(-1, 1, (M, 1, 3))
+s = dacrt.Scene((c + rng.normal(scale=0.02, size=(M, 3, 3))).reshape(-1, 3).astype(np.float32),
+                np.arange(3 * M).reshape(M, 3))
+n = 300_000
+o = rng.uniform(-0.2, 0.2, (n, 3)).astype(np.float32)
+d = rng.normal(size=(n, 3)).astype(np.float32)
+rays = dacrt.make_rays(o, d)
+ids = rays["id"]  # a view into the records the tracer reads
+stop = False
+def writer():
+    while not stop:
+        ids[::997] = 0x7FFFFFF0
+        ids[::997] = np.arange(0, n, 997)
+th = threading.Thread(target=writer)
+th.start()
+try:
+    for i in range(8):
+        rays[:] = dacrt.make_rays(o, d)
+        try:
+            (s.intersect if i % 2 == 0 else s.occluded)(rays, threads=2, skip=np.full(n, -1))
+        except ValueError:
+            pass
+finally:
+    stop = True
+    th.join()
+print("done")
+"""
+
+
+@pytest.mark.parametrize("script", ["triangles", "ray ids"])
+def test_inputs_rewritten_by_another_thread_during_a_call_never_crash(script):
+    """The GIL is released while a Scene is built and while rays are traced, and the inputs are
+    the caller's arrays: another Python thread may rewrite them after they were checked. That
+    gives wrong answers, never memory errors (an index read again after the check used to
+    read or write far outside the arrays: a segfault). In a child process, so a crash fails
+    the test instead of ending the run."""
+    import subprocess
+    import sys
+    code = _REWRITE_TRIANGLES if script == "triangles" else _REWRITE_RAY_IDS
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0 and out.stdout.strip() == "done", \
+        f"the child ended with {out.returncode}: {out.stderr[-2000:]}"

@@ -1,5 +1,6 @@
 """Awkward rays against the float64 reference, in every configuration: direction components
-that are zero, -0.0 or denormal (and directions that are entirely denormal), origins exactly on
+that are zero, -0.0, denormal or above 2^126 (and directions that are entirely denormal),
+origins exactly on
 box planes, on triangles, on edges and vertices, grazing rays in and near a face's plane, and
 rays starting inside closed meshes."""
 
@@ -55,6 +56,51 @@ def test_entirely_denormal_directions(monkeypatch):
     far, _ = against_reference(monkeypatch, v, t, o32[~fits], d32[~fits],
                                label="denormal dirs, t beyond float", ref=_strict_miss(ref, ~fits))
     assert (far["prim"] == -1).all() and np.isposinf(far["t"]).all()
+
+
+def _walls(xs, scale=1.0):
+    """Square walls x = const (two triangles each) covering y, z in [-1, 1] * scale."""
+    v = [[x, y * scale, z * scale] for x in xs for y, z in ((-1, -1), (1, -1), (-1, 1), (1, 1))]
+    t = [[4 * k, 4 * k + 1, 4 * k + 2] for k in range(len(xs))] + \
+        [[4 * k + 1, 4 * k + 3, 4 * k + 2] for k in range(len(xs))]
+    return np.array(v, np.float32), np.array(t, np.int32)
+
+
+def test_far_hits_of_denormal_direction_components(monkeypatch):
+    """Rays whose only nonzero direction component is denormal reach walls at t ~ 1e35: the box
+    test's reciprocal of such a component is +-inf (AVX2 reads a denormal as 0; 1/d overflows
+    below ~2.9e-39), which put the wall's box at infinity and culled them (a farther wall or a
+    miss instead). With a finite tfar, and with tfar = inf in a batch whose other rays make the
+    far wall's node come first."""
+    rng = np.random.default_rng(7)
+    v, t = _walls([1e-3, 1e-2])
+    n = 400
+    o = np.c_[np.zeros(n), rng.uniform(-0.9, 0.9, (n, 2))]
+    d = np.zeros((n, 3))
+    d[:, 0] = rng.choice([5e-39, 2e-39, 1e-39, 1.1e-38, 3e-40], n)  # t = 1e-3 / d <= 3.4e36
+    tfar = np.where(rng.uniform(size=n) < 0.5, 1e37, np.inf)
+    others = 2 * n  # travelling -x from beyond the far wall
+    o = np.r_[o, np.c_[np.ones(others), rng.uniform(-0.5, 0.5, (others, 2))]]
+    d = np.r_[d, np.c_[-np.ones(others), rng.uniform(-0.05, 0.05, (others, 2))]]
+    tfar = np.r_[tfar, np.full(others, np.inf)]
+    hits, _ = against_reference(monkeypatch, v, t, o, d, tfar, label="denormal direction components")
+    assert np.isin(hits["prim"][:n], [0, 2]).all(), "a denormal-direction ray missed the near wall"
+
+
+def test_hits_of_huge_direction_components(monkeypatch):
+    """Direction components above 2^126: AVX2's approximate reciprocal flushes its tiny result
+    to 0, which made the slab [0, 0] and culled every ray entering the box later (here through
+    its y slab at t = 2.5)."""
+    rng = np.random.default_rng(8)
+    # the wall y = 1e38, x in [1e38, 2.2e38], z in [-1e38, 1e38]
+    v = np.array([[1e38, 1e38, -1e38], [2.2e38, 1e38, -1e38], [1e38, 1e38, 1e38], [2.2e38, 1e38, 1e38]],
+                 np.float32)
+    t = np.array([[0, 1, 2], [1, 3, 2]], np.int32)
+    n = 500
+    o = np.tile([-5e37, 0.0, 0.0], (n, 1))
+    d = np.c_[rng.uniform(8.6e37, 1e38, n), np.full(n, 4e37), rng.uniform(-2e37, 2e37, n)]
+    hits, _ = against_reference(monkeypatch, v, t, o, d, label="huge direction components")
+    assert (hits["prim"] >= 0).all()
 
 
 def _strict_miss(ref, sel):

@@ -13,6 +13,7 @@ import dacrt
 import numpy as np
 import pytest
 
+from ..native import scenes
 from . import leaks
 from .conftest import REPORT
 
@@ -58,6 +59,40 @@ def test_fan_apex_rays_are_exact():
     for isa in ISAS:
         inter, occ = leaks.dacrt_leaks(rs, isa, "adaptive", 1)
         assert not inter.any() and not occ.any(), leaks.describe(rs, inter | occ, isa)
+
+
+@pytest.mark.parametrize("isa", ISAS)
+def test_no_leaks_at_the_ends_of_the_float_range(isa):
+    """The closed meshes at 1e-37 and 1e38: their rays have direction components below 2^-126
+    (denormal) and above 2^126, whose reciprocals in the box test are +-inf or 0 (a box at
+    infinity culled rays that hit it, on every ISA at 1e-37 and on AVX2 at 1e38)."""
+    sets = [s for name in leaks.CLOSED_MESHES for scale in (1e-37, 1e38)
+            for s in leaks.closed_sets(name, scale, 0.0)]
+    problems, rays = run_config(sets, isa, "adaptive", 2)
+    assert not problems, "\n".join(problems)
+    assert rays > 100_000
+
+
+@pytest.mark.parametrize("isa", ISAS)
+def test_no_leaks_grazing_a_face(isa):
+    """Rays from just inside closed convex meshes, nearly parallel to a face (sine of the angle
+    down to ~1e-5), out through that face's vertices and edges. A ray that the float test gives
+    to the grazing face gets its t from that face's plane, which rounding can move far along
+    the ray, past the face's box: such a hit must still count (a hit dropped for lying outside
+    the triangle's box would let the ray out)."""
+    rng = leaks.seeded_rng("grazing")
+    cube = scenes.transformed(rng, *scenes.subdivided_cube(6, 1.0))
+    meshes = [("icosphere", scenes.icosphere(2, 1.0)), ("rotated cube", cube),
+              ("icosphere x1e3 +1e5", (leaks.placed(scenes.icosphere(2, 1.0)[0], 1e3, 1e5),
+                                       scenes.icosphere(2, 1.0)[1]))]
+    sets = [leaks.grazing_rays(name + " grazing", v, t, leaks.seeded_rng("grazing", name))
+            for name, (v, t) in meshes]
+    problems = []
+    for mode in MODES:
+        p, rays = run_config(sets, isa, mode, 2)
+        problems += p
+    assert not problems, "\n".join(problems)
+    assert rays > 10_000
 
 
 @pytest.mark.stress

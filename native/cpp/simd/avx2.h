@@ -38,6 +38,12 @@ inline vb8 cmplt(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ)}; }
 inline vb8 cmple(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ)}; }
 inline vb8 cmpeq(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_EQ_OQ)}; }
 inline vb8 cmpunord(vf8 a, vf8 b) { return {_mm256_cmp_ps(a.v, b.v, _CMP_UNORD_Q)}; }
+// Lanes where inv = rcp(a) is no reciprocal of a nonzero a: a denormal (rcp_ps reads it as 0:
+// +-inf) or |a| near 2^126 and above (its tiny result is flushed to 0). a * inv is then inf or
+// 0, where it is ~1 for any other a and NaN for a = 0 (not flagged: ordered compare).
+inline vb8 rcp_unusable(vf8 a, vf8 inv) {
+    return {_mm256_cmp_ps(_mm256_set1_ps(0.5f), vabs(a * inv - vf8{_mm256_set1_ps(1.0f)}).v, _CMP_LE_OQ)};
+}
 inline vf8 select(vb8 m, vf8 a, vf8 b) { return {_mm256_blendv_ps(b.v, a.v, m.m)}; }
 inline vf8 nan_where(vb8 m, vf8 a) { return {_mm256_or_ps(a.v, m.m)}; }  // all-ones bits are a NaN
 inline vf8 xorsign(vf8 a, vf8 s) { return {_mm256_xor_ps(a.v, _mm256_and_ps(s.v, _mm256_set1_ps(-0.0f)))}; }

@@ -24,6 +24,9 @@ inline vf16 operator/(vf16 a, vf16 b) { return {_mm512_div_ps(a.v, b.v)}; }
 inline vf16 vmin(vf16 a, vf16 b) { return {_mm512_min_ps(a.v, b.v)}; }
 inline vf16 vmax(vf16 a, vf16 b) { return {_mm512_max_ps(a.v, b.v)}; }
 inline vf16 rcp(vf16 a) { return {_mm512_rcp14_ps(a.v)}; }  // |rel err| <= 2^-14, +-0 -> +-inf
+// Lanes where inv = rcp(a) may be no reciprocal of a nonzero a: a denormal (rcp14 is +-inf
+// below ~2^-128; for large |a| its denormal results keep ~2^-14 precision).
+inline vb16 rcp_unusable(vf16 a, vf16) { return {_mm512_fpclass_ps_mask(a.v, 0x20)}; }
 inline vf16 vabs(vf16 a) { return {_mm512_abs_ps(a.v)}; }
 inline vb16 cmplt(vf16 a, vf16 b) { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ)}; }
 inline vb16 cmple(vf16 a, vf16 b) { return {_mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ)}; }

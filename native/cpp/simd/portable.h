@@ -29,6 +29,11 @@ template <int W> inline vfloat<W> vmin(vfloat<W> a, vfloat<W> b) { vfloat<W> r; 
 template <int W> inline vfloat<W> vmax(vfloat<W> a, vfloat<W> b) { vfloat<W> r; DACRT_LANES r.v[i] = a.v[i] > b.v[i] ? a.v[i] : b.v[i]; return r; }
 // Reciprocal for the box test; exact here, approximate on AVX (the box test widens for it).
 template <int W> inline vfloat<W> rcp(vfloat<W> a) { vfloat<W> r; DACRT_LANES r.v[i] = 1.0f / a.v[i]; return r; }
+// Lanes where inv = rcp(a) may be no reciprocal of a nonzero a: a denormal (1/a overflows to
+// +-inf below ~2^-128), as on AVX-512.
+template <int W> inline vbool<W> rcp_unusable(vfloat<W> a, vfloat<W>) {
+    uint32_t m = 0; DACRT_LANES m |= uint32_t(std::fpclassify(a.v[i]) == FP_SUBNORMAL) << i; return {m};
+}
 template <int W> inline vfloat<W> vabs(vfloat<W> a) { vfloat<W> r; DACRT_LANES r.v[i] = std::fabs(a.v[i]); return r; }
 #define DACRT_CMP(name, expr) \
     template <int W> inline vbool<W> name(vfloat<W> a, vfloat<W> b) { \

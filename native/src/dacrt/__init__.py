@@ -40,16 +40,36 @@ def isa() -> str:
     return _core.check_isa(_requested_isa())
 
 
+def _float32(a, name: str) -> np.ndarray:
+    """a as float32; a finite value that float32 cannot hold is an error, not a silent inf."""
+    a = np.asarray(a)
+    if a.dtype == np.float32 or a.dtype.kind not in "fiu":
+        return np.asarray(a, dtype=np.float32)
+    with np.errstate(over="ignore"):
+        a32 = a.astype(np.float32)
+    bad = np.isfinite(a) & ~np.isfinite(a32)
+    if bad.any():
+        at = np.unravel_index(int(np.argmax(bad)), a.shape)
+        where = f"[{at[0]}]" if len(at) else ""
+        raise ValueError(f"{name}{where} = {a[at].tolist()!r} is too large to be represented in float32")
+    return a32
+
+
 def make_rays(org, dir, tfar=np.inf) -> np.ndarray:
-    """Build a RAY_DTYPE array from (N,3) origins and directions; ids are 0..N-1."""
-    org = np.asarray(org, dtype=np.float32)
-    dir = np.asarray(dir, dtype=np.float32)
+    """Build a RAY_DTYPE array from (N,3) origins and directions; ids are 0..N-1. tfar: a
+    scalar or one per ray (a finite tfar beyond float32's range becomes inf: the same rays)."""
+    org = _float32(org, "org")
+    dir = _float32(dir, "dir")
     if org.ndim != 2 or org.shape[1] != 3 or dir.shape != org.shape:
         raise ValueError(f"org and dir must both have shape (N, 3); got {org.shape} and {dir.shape}")
+    tfar = np.asarray(tfar)
+    if tfar.ndim > 1 or (tfar.ndim == 1 and tfar.shape != (len(org),)):
+        raise ValueError(f"tfar must be a scalar or have shape ({len(org)},); got {tfar.shape}")
     rays = np.empty(len(org), RAY_DTYPE)
     rays["org"] = org
     rays["dir"] = dir
-    rays["tfar"] = tfar
+    with np.errstate(over="ignore"):
+        rays["tfar"] = tfar
     rays["id"] = np.arange(len(org), dtype=np.uint32)
     return rays
 
@@ -101,17 +121,22 @@ def _check_rays(rays) -> None:
         raise ValueError("rays must be writeable (they are reordered in place)")
 
 
+_INT32_MAX = 2**31 - 1
+
+
 def _check_threads(threads) -> int:
     if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)):
         raise ValueError(f"threads must be an integer (0 = all cores); got {threads!r}")
     if threads < 0:
         raise ValueError(f"threads must be >= 0 (0 = all cores); got {threads}")
+    if threads > _INT32_MAX:
+        raise ValueError(f"threads must be at most {_INT32_MAX} (0 = all cores); got {threads}")
     return int(threads)
 
 
 def _leaf_threshold(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} must be an integer >= 1; got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= _INT32_MAX:
+        raise ValueError(f"{name} must be an integer in 1..{_INT32_MAX}; got {value!r}")
     return int(value)
 
 
@@ -196,8 +221,11 @@ class Scene:
     @sah_ratio.setter
     def sah_ratio(self, value: float) -> None:
         value = float(value)
-        if not np.isfinite(value) or value < 0:
-            raise ValueError(f"sah_ratio must be a finite number >= 0; got {value!r}")
+        with np.errstate(over="ignore"):
+            representable = np.isfinite(np.float32(value))
+        if not representable or value < 0:  # the tracer compares in float32
+            raise ValueError(f"sah_ratio must be a finite number >= 0 that float32 holds "
+                             f"(<= {float(np.finfo(np.float32).max):.4g}); got {value!r}")
         self._sah_ratio = value
 
     @property
@@ -207,8 +235,8 @@ class Scene:
 
     @chunk_rays.setter
     def chunk_rays(self, value: int) -> None:
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-            raise ValueError(f"chunk_rays must be an integer >= 0 (0 = automatic); got {value!r}")
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value < 2**64:
+            raise ValueError(f"chunk_rays must be an integer in 0..2**64-1 (0 = automatic); got {value!r}")
         self._chunk_rays = int(value)
 
     @property
@@ -235,6 +263,10 @@ class Scene:
         if s.shape != (n,) or s.dtype.kind not in "iu":
             raise ValueError(f"skip must be an integer array of one triangle index per ray id (shape ({n},)); "
                              f"got shape {s.shape} dtype {s.dtype}")
+        m = self._core.num_triangles
+        if n and (s.min() < -1 or s.max() >= m):  # before the int32 cast, which wraps 2**32 to 0
+            i = int(np.argmax((s < -1) | (s >= m)))
+            raise ValueError(f"skip[{i}] = {int(s[i])} is not a triangle index (-1 = none, 0..{m - 1})")
         return np.ascontiguousarray(s, dtype=np.int32)
 
     def _visible(self, visible) -> int:
@@ -251,8 +283,10 @@ class Scene:
         (a miss: prim -1, t = inf, u = v = 0, whatever its tfar).
 
         rays is reordered in place and each hit ray's tfar becomes its hit distance. Ties at
-        equal t go to the lowest triangle index. skip (optional, by ray id): a triangle index
-        the ray ignores, e.g. the one it leaves (-1: none), as Cycles skips the origin primitive.
+        equal t go to the lowest triangle index. threads: 0 = all cores; a count above the
+        machine's hardware threads is capped there (results never depend on it). skip
+        (optional, by ray id): a triangle index the ray ignores, e.g. the one it leaves (-1:
+        none), as Cycles skips the origin primitive.
         visible (optional): only triangles whose mask has one of these bits (see Scene).
         """
         _check_rays(rays)

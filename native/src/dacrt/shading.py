@@ -47,6 +47,24 @@ def pack_rays(O, D, tfar, out: np.ndarray | None = None) -> np.ndarray:
     return out
 
 
+def _triangles32(triangles, num_vertices: int) -> np.ndarray:
+    """Vertex indices (M, 3) as int32, checked to be in [0, num_vertices) before the cast (which
+    would wrap 2**32 + 1 to 1)."""
+    t = np.asarray(triangles)
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise ValueError(f"triangles must have shape (M, 3); got {t.shape}")
+    if t.size == 0:
+        return np.zeros((0, 3), np.int32)
+    if t.dtype.kind not in "iu":
+        raise ValueError(f"triangles must be an integer array of vertex indices; got dtype {t.dtype}")
+    if t.dtype != np.int32 and (t.min() < 0 or t.max() >= num_vertices):  # int32: checked natively
+        bad = (t < 0) | (t >= num_vertices)
+        row = int(np.argmax(bad.any(axis=1)))
+        raise ValueError(f"triangles[{row}] refers to vertex {int(t[row][bad[row]][0])} "
+                         f"but there are {num_vertices} vertices")
+    return np.ascontiguousarray(t, np.int32)
+
+
 def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100):
     """The (15, M) float32 table surface() and sample_triangles() read, and the areas (M,)
     float64, of triangles (M, 3) of vertices (V, 3): rows v0, v1 - v0, v2 - v0 (differences
@@ -54,8 +72,7 @@ def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 **
     self-intersection step, offset_ulps ULPs of the triangle's largest |coordinate| (at least
     tiny) along the normal."""
     v = np.ascontiguousarray(vertices, _F32)
-    t = np.ascontiguousarray(triangles, np.int32)
-    return _core.triangle_table(v, t, float(offset_ulps), float(tiny))
+    return _core.triangle_table(v, _triangles32(triangles, len(v)), float(offset_ulps), float(tiny))
 
 
 def surface(geo, normals, hits, idx, D):
@@ -290,7 +307,8 @@ def face_normals(vertices, triangles):
     """Unit geometric normals (M, 3) float32 of triangles (M, 3) of float64 vertices (V, 3),
     computed in double, by the winding (v1 - v0) x (v2 - v0), and good (M,): False (normal 0)
     for zero-area or non-finite triangles. One threaded pass."""
-    return _core.face_normals(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(triangles, np.int32))
+    v = np.ascontiguousarray(vertices, np.float64)
+    return _core.face_normals(v, _triangles32(triangles, len(v)))
 
 
 def corner_rows(per_corner):
