@@ -158,6 +158,13 @@ def test_random_garbage_rays_never_crash():
     assert accepted > 20
 
 
+# every mutation script ends by stopping its writer thread and saying it survived
+_STOP_WRITER = """finally:
+    stop = True
+    th.join()
+print("done")
+"""
+
 _REWRITE_TRIANGLES = r"""
 import threading, numpy as np, dacrt
 M = 500_000
@@ -179,11 +186,7 @@ try:
             dacrt.Scene(V, T, spatial_order=bool(i % 2))
         except ValueError:
             pass
-finally:
-    stop = True
-    th.join()
-print("done")
-"""
+""" + _STOP_WRITER
 
 _REWRITE_RAY_IDS = r"""
 import threading, numpy as np, dacrt
@@ -211,11 +214,7 @@ try:
             (s.intersect if i % 2 == 0 else s.occluded)(rays, threads=2, skip=np.full(n, -1))
         except ValueError:
             pass
-finally:
-    stop = True
-    th.join()
-print("done")
-"""
+""" + _STOP_WRITER
 
 
 @pytest.mark.parametrize("script", ["triangles", "ray ids"])
