@@ -7,24 +7,16 @@
 #include "parallel.h"
 #include "pathvertex.h"
 #include "shading.h"
+#include "triangles.h"
 
 namespace dacrt {
-
-// Corner k of triangle i. The binding checked every index against V, but the array is the
-// caller's, read again with the GIL released (another Python thread may rewrite it): read
-// once and clamped, so a rewritten index picks a wrong vertex, never memory outside the array.
-template <class T>
-static const T* corner(const T* vertices, size_t V, const int32_t* triangles, size_t i, int k) {
-    const uint32_t j = uint32_t(__atomic_load_n(triangles + 3 * i + size_t(k), __ATOMIC_RELAXED));
-    return vertices + 3 * std::min(size_t(j), V - 1);  // V >= 1 when M >= 1 passed the check
-}
 
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     float* geo, double* area) {
     parallel_for(M, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const float* c[3];
-            for (int k = 0; k < 3; ++k) c[k] = corner(vertices, V, triangles, i, k);
+            for (int k = 0; k < 3; ++k) c[k] = vertex_of(vertices, V, triangles, 3 * i + size_t(k));
             double e1[3], e2[3];
             float mag = tiny;
             for (int a = 0; a < 3; ++a) {
@@ -80,7 +72,7 @@ void face_normals(const double* vertices, size_t V, const int32_t* triangles, si
     parallel_for(M, [vertices, V, triangles, normals, good](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const double* c[3];
-            for (int k = 0; k < 3; ++k) c[k] = corner(vertices, V, triangles, i, k);
+            for (int k = 0; k < 3; ++k) c[k] = vertex_of(vertices, V, triangles, 3 * i + size_t(k));
             double e1[3], e2[3];
             for (int a = 0; a < 3; ++a) {
                 e1[a] = c[1][a] - c[0][a];

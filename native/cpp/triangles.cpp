@@ -30,15 +30,6 @@ static bool degenerate(const float* a, const float* b, const float* c) {
 
 namespace {
 
-// Vertex j of the index array (triangle j / 3). The caller checked every index, but the
-// array is the caller's, read again here with the GIL released, and another Python thread may
-// have rewritten it since: each index is read once and clamped, so a rewritten triangle is a
-// wrong triangle, never a read outside the vertex array.
-const float* vertex_at(const float* V, size_t nv, const uint32_t* I, size_t j) {
-    const uint32_t k = __atomic_load_n(I + j, __ATOMIC_RELAXED);
-    return V + 3 * std::min(size_t(k), nv - 1);  // nv >= 1: some index passed the check
-}
-
 // Spreads the low 5 bits of x to every third bit.
 uint32_t spread3(uint32_t x) {
     x &= 31u;
@@ -81,7 +72,7 @@ void key_range(const float* V, size_t nv, const uint32_t* I, size_t b, size_t e,
         scale[a] = ext > 0.0f && std::isfinite(sc) ? sc : 0.0f;
     }
     for (size_t i = b; i < e; ++i) {
-        const float* p[3] = {vertex_at(V, nv, I, 3 * i), vertex_at(V, nv, I, 3 * i + 1), vertex_at(V, nv, I, 3 * i + 2)};
+        const float* p[3] = {vertex_of(V, nv, I, 3 * i), vertex_of(V, nv, I, 3 * i + 1), vertex_of(V, nv, I, 3 * i + 2)};
         uint32_t key = 0;
         for (int a = 0; a < 3; ++a) {
             const float lo = std::min(p[0][a], std::min(p[1][a], p[2][a]));
@@ -144,8 +135,8 @@ void build_range(const float* V, size_t nv, const uint32_t* I, const uint64_t* o
     }
     for (size_t s = b; s < e; ++s) {
         const uint32_t i = order ? uint32_t(order[s]) : uint32_t(s);
-        const float* p[3] = {vertex_at(V, nv, I, 3 * size_t(i)), vertex_at(V, nv, I, 3 * size_t(i) + 1),
-                             vertex_at(V, nv, I, 3 * size_t(i) + 2)};
+        const float* p[3] = {vertex_of(V, nv, I, 3 * size_t(i)), vertex_of(V, nv, I, 3 * size_t(i) + 1),
+                             vertex_of(V, nv, I, 3 * size_t(i) + 2)};
         Box bx;
         CompactTri c;
         c.code = 0;

@@ -15,12 +15,24 @@
 //           results do not depend on the order;
 // plus the id array of the non-degenerate slots that every trace call copies and reorders.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <cstddef>
 #include <memory>
 #include <vector>
 
 namespace dacrt {
+
+// Vertex j of a caller's index array (corner j % 3 of triangle j / 3) of V vertices. The
+// bindings check every index, but the array is the caller's, read again with the GIL released,
+// and another Python thread may rewrite it meanwhile: each index is read once and clamped, so
+// a rewritten triangle is a wrong triangle, never a read outside the vertex array (V >= 1 once
+// some index passed the check).
+template <class T, class Index>
+inline const T* vertex_of(const T* vertices, size_t V, const Index* indices, size_t j) {
+    const uint32_t k = uint32_t(__atomic_load_n(indices + j, __ATOMIC_RELAXED));
+    return vertices + 3 * std::min(size_t(k), V - 1);
+}
 
 struct alignas(32) Box {
     float lo[4];
