@@ -324,12 +324,7 @@ def _world_surface(node, weight, color, reasons, depth):
         reasons.append(f"world surface has {kind}, not a Background node; world colour used for it")
         return color * np.float32(weight), None
     if t in ('ADD_SHADER', 'MIX_SHADER'):
-        fac = 0.5
-        if t == 'MIX_SHADER':
-            fac, ok = constant_value(node.inputs['Fac'])
-            if not ok:
-                reasons.append("world Mix Shader factor driven by nodes; its own value used")
-            fac = min(max(fac, 0.0), 1.0)
+        fac = _mix_factor(node, reasons, "world Mix Shader") if t == 'MIX_SHADER' else 0.5
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
         (ua, ea), (ub, eb) = (_world_surface(linked_node(node.inputs[first + i]), w, color, reasons, depth + 1)
@@ -347,6 +342,14 @@ def _world_surface(node, weight, color, reasons, depth):
     if not c_ok:
         reasons.append(f"world {node.bl_label} Color driven by nodes; its own value used")
     return np.array(c, np.float32) * np.float32(s * weight), None
+
+
+def _mix_factor(node, reasons, label):
+    """A Mix Shader's factor, clamped to [0, 1] as Cycles does; a linked one at its own value."""
+    fac, ok = constant_value(node.inputs['Fac'])
+    if not ok:
+        reasons.append(f"{label} factor driven by nodes; its own value used")
+    return min(max(fac, 0.0), 1.0)
 
 
 def world_visibility(world):
@@ -536,10 +539,7 @@ class _MaterialBuilder:
             b = self._shader(node.inputs[1], reasons, depth + 1)
             return a.plus(b, reasons)
         if t == 'MIX_SHADER':
-            fac, ok = constant_value(node.inputs['Fac'])
-            if not ok:
-                reasons.append("Mix Shader factor driven by nodes; its own value used")
-            fac = min(max(fac, 0.0), 1.0)
+            fac = _mix_factor(node, reasons, "Mix Shader")
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
             return a.plus(b, reasons)
