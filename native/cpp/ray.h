@@ -37,10 +37,12 @@ enum class Query : int { Closest = 0, Any = 1 };
 struct Config {
     Partition partition = Partition::Adaptive;
     // A node becomes a leaf at most leaf_size triangles or at most leaf_rays active rays. The
-    // paper uses 8 for both (8-wide AVX); measured here (bench tracer, SF 268K triangles, and a
-    // dragon frame's batches), 16 triangles and 32 rays (two 16-wide groups) are 6-14% faster:
-    // below ~2 SIMD groups of rays one more partitioning step costs more than it saves.
-    int leaf_size = 16;
+    // paper uses 8 for both (8-wide AVX). Measured here (bench tracer, SF 268K triangles, and a
+    // dragon frame's batches), 32 rays (two 16-wide groups) are 6-14% faster: below ~2 SIMD
+    // groups of rays one more partitioning step costs more than it saves. leaf_size 0 (the
+    // default) is the kernel's SIMD width (default_leaf_size in dispatch.cpp): 16 on AVX-512,
+    // 8 on AVX2 and portable.
+    int leaf_size = 0;
     int leaf_rays = 32;
     float sah_ratio = 128.0f;  // adaptive: SAH where active rays / triangles exceeds this (bench partition)
     size_t chunk_rays = 0;   // rays per independently traced chunk; 0 = automatic

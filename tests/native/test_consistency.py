@@ -23,7 +23,7 @@ FIXED = [("soup_dirty", 1, 6, "random", "mixed", 4000, 1),
          ("soup_far", 6, 6, "camera", "mixed", 4000, 6)]
 
 
-def results(monkeypatch, case, isa, threads, partition="adaptive", leaf_size=16, leaf_rays=32,
+def results(monkeypatch, case, isa, threads, partition="adaptive", leaf_size=None, leaf_rays=32,
             spatial_order=False):
     monkeypatch.setenv("DACRT_ISA", isa)
     scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy(), partition=partition,
@@ -63,12 +63,12 @@ def test_identical_across_partition_modes_and_leaf_sizes(monkeypatch, key):
     case = build_case(*key)
     isa = ISAS[-1]
     base = results(monkeypatch, case, isa, 2)
-    # (triangles, rays) leaf thresholds: both tiny, both huge, the defaults, and one of each
-    leaves = [(1, 1), (3, 3), (8, 8), (32, 32), (10**6, 10**6), (16, 32), (3, 1000), (1000, 3)]
+    # (triangles, rays) leaf thresholds: both tiny, both huge, the defaults of both SIMD
+    # widths, and one of each
+    leaves = [(1, 1), (3, 3), (8, 8), (32, 32), (10**6, 10**6), (8, 32), (16, 32), (3, 1000), (1000, 3)]
     for partition, (leaf, rays) in itertools.product(["adaptive", "median", "sah"], leaves):
-        if (partition, leaf, rays) != ("adaptive", 16, 32):
-            assert_identical(base, results(monkeypatch, case, isa, 2, partition, leaf, rays),
-                             f"{key}: adaptive/16/32 vs {partition}/{leaf}/{rays}")
+        assert_identical(base, results(monkeypatch, case, isa, 2, partition, leaf, rays),
+                         f"{key}: adaptive/default/32 vs {partition}/{leaf}/{rays}")
 
 
 @pytest.mark.parametrize("key", FIXED, ids=[k[0] + "-" + k[3] for k in FIXED])
@@ -186,10 +186,12 @@ def test_scene_properties():
     scene = dacrt.Scene(v, t)
     assert scene.num_triangles == len(t)
     assert scene.num_degenerate == zero_area.sum() > 0
-    assert (scene.partition, scene.leaf_size, scene.leaf_rays) == ("adaptive", 16, 32)
+    assert (scene.partition, scene.leaf_size, scene.leaf_rays) == ("adaptive", None, 32)
     assert scene.sah_ratio == pytest.approx(128.0)
     o, d, tf = make_rays("random", "inf", v, t, 1000, 1)
     base = harness.intersect(scene, o, d, tf)
+    # the default leaf size is the kernel's SIMD width
+    assert scene.last_stats["leaf_size"] == {"avx512": 16, "avx2": 8, "portable": 8}[scene.last_stats["isa"]]
     for mode in ("median", "sah", "adaptive"):
         scene.partition = mode
         assert scene.partition == mode
@@ -198,6 +200,10 @@ def test_scene_properties():
     scene.leaf_rays = 5
     scene.sah_ratio = 0.5
     assert (scene.leaf_size, scene.leaf_rays, scene.sah_ratio) == (3, 5, 0.5)
+    harness.intersect(scene, o, d, tf)
+    assert scene.last_stats["leaf_size"] == 3
+    scene.leaf_size = None
+    assert scene.leaf_size is None
     np.testing.assert_array_equal(harness.intersect(scene, o, d, tf), base)
 
 

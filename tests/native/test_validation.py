@@ -62,7 +62,7 @@ def test_scene_rejects_bad_settings():
         scene.leaf_size = 0
     with pytest.raises(ValueError, match="leaf_rays"):
         scene.leaf_rays = -1
-    assert (scene.partition, scene.leaf_size, scene.leaf_rays) == ("adaptive", 16, 32)  # unchanged
+    assert (scene.partition, scene.leaf_size, scene.leaf_rays) == ("adaptive", None, 32)  # unchanged
 
 
 def good_rays(n=16):

@@ -164,7 +164,7 @@ class Scene:
     several rays per triangle. Results are identical either way.
     """
 
-    def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int = 16,
+    def __init__(self, vertices, triangles, partition: str = "adaptive", leaf_size: int | None = None,
                  sah_ratio: float = 128.0, chunk_rays: int = 0, keep_top: bool = False, leaf_rays: int = 32,
                  masks=None, spatial_order: bool = False):
         v = _as_vertices(vertices)
@@ -196,14 +196,15 @@ class Scene:
         self._partition = value.lower()
 
     @property
-    def leaf_size(self) -> int:
+    def leaf_size(self) -> int | None:
         """A node with at most this many triangles is a leaf: its active rays are tested
-        against all its triangles."""
+        against all its triangles. None (the default): the kernel's SIMD width, 8 on AVX2 and
+        portable, 16 on AVX-512 (`last_stats['leaf_size']` says which a call used)."""
         return self._leaf_size
 
     @leaf_size.setter
-    def leaf_size(self, value: int) -> None:
-        self._leaf_size = _leaf_threshold("leaf_size", value)
+    def leaf_size(self, value: int | None) -> None:
+        self._leaf_size = None if value is None else _leaf_threshold("leaf_size", value)
 
     @property
     def leaf_rays(self) -> int:
@@ -254,7 +255,7 @@ class Scene:
 
     def _args(self, threads):
         return (_check_threads(threads), _requested_isa(), PARTITIONS.index(self._partition),
-                self._leaf_size, self._leaf_rays, self._sah_ratio, self._chunk_rays)
+                self._leaf_size or 0, self._leaf_rays, self._sah_ratio, self._chunk_rays)
 
     def _skip(self, skip, n: int):
         if skip is None:
