@@ -51,6 +51,7 @@ from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant_color, constant_value
 from .nodegraph import input_socket, linked_link, linked_node, output_node
+from .texture import UdimTiles
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
 UNSUPPORTED_TYPES = {'CURVES': "hair curves", 'POINTCLOUD': "point cloud", 'VOLUME': "volume",
@@ -396,11 +397,17 @@ def _environment(node, strength, reasons):
 
 class _Texture:
     """An image texture as the shader graph uses it (pixels shared between materials), read at
-    (x, y) = transform @ (u, v, 1) of the UV map (transform None: the UV map itself)."""
-    def __init__(self, key, pixels, interpolation, extension, transform=None):
+    (x, y) = transform @ (u, v, 1) of the UV map (transform None: the UV map itself). A UDIM
+    image's pixels are its tiles' texels side by side, (1, N, 4), laid out as `udim` says."""
+    def __init__(self, key, pixels, interpolation, extension, transform=None, udim=None):
         self.key, self.pixels = key, pixels
         self.interpolation, self.extension = interpolation, extension
         self.transform = transform
+        self.udim = udim
+
+    def texels(self, pixels):
+        """pixels (these texels, or a colour baked into them) as the scene data holds a texture."""
+        return pixels if self.udim is None else self.udim.with_texels(pixels)
 
 
 class _Closure:
@@ -501,10 +508,10 @@ class _MaterialBuilder:
             return c.const.astype(np.float32), None, 'Linear', 'REPEAT', None
         t = c.texture
         if not np.any(c.const):
-            return c.tex_weight.astype(np.float32), t.pixels, t.interpolation, t.extension, t.transform
+            return c.tex_weight.astype(np.float32), t.texels(t.pixels), t.interpolation, t.extension, t.transform
         baked = t.pixels.copy()
         baked[..., :3] = t.pixels[..., :3] * c.tex_weight.astype(np.float32) + c.const.astype(np.float32)
-        return np.ones(3, np.float32), baked, t.interpolation, t.extension, t.transform
+        return np.ones(3, np.float32), t.texels(baked), t.interpolation, t.extension, t.transform
 
     def _shader(self, socket, reasons, depth):
         node = linked_node(socket)
@@ -601,7 +608,7 @@ class _MaterialBuilder:
         baked[..., :3] = _nonnegative(f.value.astype(np.float32), "colour from colour nodes", reasons)
         baked[..., 3] = src.pixels[..., 3]
         key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
-        return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension, src.transform),
+        return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim),
                         tex_weight=(1.0, 1.0, 1.0))
 
     def _texture(self, node, reasons):
@@ -618,10 +625,6 @@ class _MaterialBuilder:
         if img is None:
             reasons.append("Image Texture without an image (magenta, as Cycles)")
             return None
-        if img.source == 'TILED' and len(img.tiles) > 1:
-            # bpy gives the pixels of one tile only; the others cannot be read without their files
-            first = img.tiles[0].number
-            reasons.append(f"UDIM image '{img.name}': only tile {first} is used, on every tile")
         # Cycles: with the Alpha output linked, the Color output of an image stored with
         # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0)
         unassociate = bool(node.outputs['Alpha'].is_linked and _associates_alpha(img))
@@ -631,9 +634,13 @@ class _MaterialBuilder:
             pixels = _image_pixels(img, reasons, unassociate)
             if pixels is None:
                 return None
+            if img.source == 'TILED':
+                pixels = _udim_tiles(img, pixels, reasons, unassociate)
             self._images[key, unassociate] = pixels
+        udim = pixels if isinstance(pixels, UdimTiles) else None
         where = None if transform is None else tuple(transform.ravel())
-        return _Texture((key, unassociate, interp, ext, where), pixels, interp, ext, transform)
+        return _Texture((key, unassociate, interp, ext, where), pixels if udim is None else udim.flat,
+                        interp, ext, transform, udim)
 
 
 def _note_normal_inputs(node, reasons):
@@ -659,6 +666,45 @@ def _unassociated(rgba):
     return out
 
 
+def _udim_tiles(img, first, reasons, unassociate):
+    """A UDIM image's tiles: the first (the one bpy's pixels give) as read, the others from
+    their files through OpenImageIO (bpy gives no other tile's pixels), converted as Blender
+    converts the first one. A tile that cannot be read renders magenta, as in Cycles."""
+    tiles = {img.tiles[0].number: first}
+    rest = [t.number for t in img.tiles[1:]]
+    if not rest:
+        return UdimTiles.stack(tiles)
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        reasons.append(f"UDIM image '{img.name}': OpenImageIO is not available to read tiles "
+                       f"{', '.join(map(str, rest))} (magenta)")
+        return UdimTiles.stack(tiles)
+    pattern = bpy.path.abspath(img.filepath_raw, library=img.library)
+    straight = oiio.ImageSpec()   # a byte file's alpha as stored (straight, as Blender keeps it)
+    straight.attribute('oiio:UnassociatedAlpha', 1)
+    unread = []
+    for number in rest:
+        tx, ty = (number - 1001) % 10, (number - 1001) // 10
+        path = pattern.replace('<UDIM>', str(number)).replace('<UVTILE>', f"u{tx + 1}_v{ty + 1}")
+        buf = oiio.ImageBuf(path, 0, 0, straight) if '<' not in path and path != pattern else None
+        spec = buf.spec() if buf is not None and not buf.has_error else None
+        if spec is None or spec.width < 1 or spec.height < 1 or spec.nchannels < 1:
+            unread.append(number)
+            continue
+        raw = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32).reshape(spec.height, spec.width, -1)[::-1]
+        # byte files are byte buffers in Blender; deeper ones float buffers in the image's space
+        tiles[number] = _linear_rgba(np.ascontiguousarray(raw), img, reasons, unassociate,
+                                     byte=spec.format.basetype == oiio.UINT8, encoded=True)
+    if unread:
+        reasons.append(f"UDIM image '{img.name}': tile{'s' if len(unread) > 1 else ''} "
+                       f"{', '.join(map(str, unread))} could not be read from '{pattern}' (magenta); "
+                       f"packed or generated tiles other than the first are not supported")
+        for number in unread:
+            tiles[number] = np.broadcast_to(np.array([1.0, 0.0, 1.0, 1.0], np.float32), (1, 1, 4)).copy()
+    return UdimTiles.stack(tiles)
+
+
 def _srgb_to_linear(c):
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
@@ -678,13 +724,27 @@ def _image_pixels(img, reasons, unassociate=False):
     except (RuntimeError, ValueError, ReferenceError):
         reasons.append(f"image '{img.name}' could not be loaded (magenta, as Cycles)")
         return None
-    buf = buf.reshape(h, w, ch)
+    return _linear_rgba(buf.reshape(h, w, ch), img, reasons, unassociate, byte=not img.is_float, encoded=False)
+
+
+def _linear_rgba(buf, img, reasons, unassociate, byte, encoded):
+    """(h, w, 4) scene-linear RGBA of an image buffer (h, w, channels) of `img`: a byte buffer
+    is in the image's colour space with straight alpha; a float one is linear and associated
+    unless `encoded` (a deeper-than-byte file read directly: in the image's colour space,
+    converted and associated here as Blender does on load)."""
+    h, w, ch = buf.shape
     rgba = np.ones((h, w, 4), np.float32)
     rgba[..., :min(ch, 4)] = buf[..., :4]
     if ch < 3:     # grey (+alpha) images
         rgba[..., 1] = rgba[..., 2] = buf[..., 0]
         rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
-    if not img.is_float:   # byte buffers are in the image's colour space; float ones are linear
+    if not byte and encoded:
+        if _decodes_srgb(img, reasons):
+            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+        if _associates_alpha(img):
+            rgba[..., :3] *= rgba[..., 3:4]
+        return _unassociated(rgba) if unassociate else rgba
+    if byte:   # byte buffers are in the image's colour space; float ones are linear
         if ch == 4 and _associates_alpha(img):
             # Blender keeps byte images straight; Cycles associates them on load (integer
             # c * a / 255) and unassociates at lookup, both in the image's own encoding, before
@@ -693,18 +753,25 @@ def _image_pixels(img, reasons, unassociate=False):
             rgba[..., :3] = np.floor_divide(b[..., :3] * b[..., 3:4], 255.0) / np.float32(255.0)
             if unassociate:
                 rgba = _unassociated(rgba)
-        space = img.colorspace_settings.name
-        if space in ('sRGB', 'Filmic sRGB', 'AgX Base sRGB') or space.startswith('sRGB'):
+        if _decodes_srgb(img, reasons):
             rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
-            if space != 'sRGB':
-                reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
-        elif not (img.colorspace_settings.is_data or space.startswith('Linear')
-                  or space in ('Non-Color', 'Working Space')):
-            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
-            reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
     elif unassociate:      # float buffers are linear and associated
         rgba = _unassociated(rgba)
     return rgba
+
+
+def _decodes_srgb(img, reasons):
+    """Whether the image's colour space is read as sRGB (every space but linear and data ones;
+    other display spaces are noted as approximated so)."""
+    space = img.colorspace_settings.name
+    if space in ('sRGB', 'Filmic sRGB', 'AgX Base sRGB') or space.startswith('sRGB'):
+        if space != 'sRGB':
+            reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
+        return True
+    if img.colorspace_settings.is_data or space.startswith('Linear') or space in ('Non-Color', 'Working Space'):
+        return False
+    reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
+    return True
 
 
 # ----------------------------------------------------------------------------------------

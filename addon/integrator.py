@@ -49,7 +49,7 @@ from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .sampling import RandomStream, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
-from .texture import texture_lookup
+from .texture import UdimTiles, texture_lookup
 
 F32 = np.float32
 
@@ -184,9 +184,14 @@ class _Materials:
             base.append(b)
             emit.append(e)
             if mat.texture is not None:
-                tex = np.asarray(mat.texture)
-                if tex.ndim != 3 or tex.shape[2] != 4 or tex.shape[0] < 1 or tex.shape[1] < 1:
-                    raise ValueError(f"material {mat.name!r}: texture must be (h, w, 4), got {tex.shape}")
+                if isinstance(mat.texture, UdimTiles):   # its shapes were checked when it was made
+                    tex = mat.texture.with_texels(np.ascontiguousarray(mat.texture.flat, F32))
+                else:
+                    tex = np.asarray(mat.texture)
+                    if tex.ndim != 3 or tex.shape[2] != 4 or tex.shape[0] < 1 or tex.shape[1] < 1:
+                        raise ValueError(f"material {mat.name!r}: texture must be (h, w, 4) or UdimTiles, "
+                                         f"got {tex.shape}")
+                    tex = np.ascontiguousarray(tex, F32)
                 if mat.texture_interpolation not in ('Closest', 'Linear'):
                     raise ValueError(f"material {mat.name!r}: texture_interpolation "
                                      f"{mat.texture_interpolation!r} is not 'Closest' or 'Linear'")
@@ -200,7 +205,7 @@ class _Materials:
                         raise ValueError(f"material {mat.name!r}: texture_transform must be (2, 3) finite, "
                                          f"got {xf!r}")
                     xf = xf.astype(F32)
-                self.textures.append((i, np.ascontiguousarray(tex, F32), mat.texture_interpolation,
+                self.textures.append((i, tex, mat.texture_interpolation,
                                       mat.texture_extension, xf))
         self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)

@@ -87,7 +87,8 @@ class Material:
     name: str
     base_color: np.ndarray                        # (3,) linear albedo (multiplies the texture if any)
     emission: np.ndarray                          # (3,) colour x strength, two-sided radiance
-    texture: Optional[np.ndarray] = None          # (h, w, 4) float32 linear RGBA, row 0 at the bottom
+    texture: Optional[np.ndarray] = None          # (h, w, 4) float32 linear RGBA, row 0 at the bottom,
+                                                  # or a texture.UdimTiles of such tiles
     texture_interpolation: str = 'Linear'         # 'Closest' | 'Linear'
     texture_extension: str = 'REPEAT'             # 'REPEAT' | 'EXTEND' | 'CLIP'
     texture_transform: Optional[np.ndarray] = None   # (2, 3): the texture is read at

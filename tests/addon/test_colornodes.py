@@ -234,15 +234,27 @@ def test_byte_image_alpha_associated_in_its_encoding_as_cycles(scene, alpha_link
     assert np.allclose(texel(space='Non-Color')[:3], straight, atol=1e-6)
 
 
-def test_udim_image_reported_as_its_first_tile(scene):
+def test_udim_tile_without_a_file_reported_and_magenta(scene):
+    """A generated UDIM image: bpy gives the first tile's pixels; a tile added in Python has no
+    file to read, so it renders magenta (Cycles' missing image) and the render says why. The
+    tiles' texels go through colour nodes tile by tile (here an Invert)."""
     mat, nt, out = scenes._material("Tiled")
     d = nt.nodes.new('ShaderNodeBsdfDiffuse')
     tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image = bpy.data.images.new("Tiles", 4, 4, tiled=True)
+    tex.image = bpy.data.images.new("Tiles", 4, 2, tiled=True, float_buffer=True)
+    tex.image.generated_color = (0.25, 0.5, 0.75, 1.0)
     tex.image.tiles.new(1002)
-    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    inv = nt.nodes.new('ShaderNodeInvert')
+    nt.links.new(tex.outputs['Color'], inv.inputs['Color'])
+    nt.links.new(inv.outputs['Color'], d.inputs['Color'])
     nt.links.new(d.outputs[0], out.inputs['Surface'])
-    assert "UDIM image 'Tiles': only tile 1001 is used, on every tile" in _exported_material(mat).approximated
+    m = _exported_material(mat)
+    assert ("UDIM image 'Tiles': tile 1002 could not be read from '' (magenta); packed or generated tiles "
+            "other than the first are not supported") in m.approximated
+    assert m.texture.numbers == (1001, 1002) and m.texture.shapes == ((2, 4), (1, 1))
+    # a float generated tile holds its colour converted from sRGB; then inverted
+    assert np.allclose(m.texture.tile(0)[..., :3], 1 - _srgb_decode(np.array([0.25, 0.5, 0.75])), atol=1e-4)
+    assert np.allclose(m.texture.tile(1)[..., :3], [0.0, 1.0, 0.0])       # magenta, inverted
 
 
 def test_fair_editor_keeps_colour_nodes(scene):

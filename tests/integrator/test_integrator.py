@@ -7,7 +7,7 @@ import dacrt
 from addon import scenedata as sd
 import addon.integrator as integrator_module
 from addon.integrator import Integrator, Progress
-from addon.texture import texture_lookup
+from addon.texture import MISSING_TILE, UdimTiles, texture_lookup
 
 from .scenes import (ALL_VIS, cornell_box, geometry, light, material, ortho_down, plane_scene, quad,
                      render, translation)
@@ -415,6 +415,44 @@ def test_texture_lookup_modes():
     assert np.allclose(clip[0], [0, 1, 1, 0, 0, 2])
     rep = texture_lookup(tex, np.array([0.0], np.float32), np.array([0.25], np.float32), 'Linear', 'REPEAT')
     assert rep[0, 0] == pytest.approx(1.5)                     # wraps between columns 3 and 0
+
+
+def test_udim_lookup_picks_the_tile_as_cycles():
+    """Tile (int) u, (int) v -> 1001 + tx + 10 ty, read at the UV minus the tile's corner with
+    the node's extension; no tile, tx outside 0..9, or a non-finite UV: magenta."""
+    tiles = {1001: np.zeros((1, 2, 4), np.float32), 1002: np.zeros((2, 1, 4), np.float32),
+             1013: np.zeros((1, 1, 4), np.float32)}
+    tiles[1001][..., 0] = [[1, 2]]                             # red: which tile, which texel
+    tiles[1002][..., 0] = [[3], [4]]
+    tiles[1013][..., 0] = 5
+    udim = UdimTiles.stack(tiles)
+    assert udim.numbers == (1001, 1002, 1013) and udim.shapes == ((1, 2), (2, 1), (1, 1))
+    u = np.array([0.25, 0.75, 1.5, 1.5, 2.5, -0.25, 2.5, 0.5, 10.5, -1.5, np.nan, np.inf], np.float32)
+    v = np.array([0.5, 0.5, 0.25, 0.75, 1.5, 0.5, 0.5, 1.5, 0.5, 0.5, 0.5, 0.5], np.float32)
+    got = texture_lookup(udim, u, v, 'Closest', 'REPEAT')
+    magenta = MISSING_TILE[0]
+    # u = -0.25 truncates to tile 1001 and reads it at -0.25 (REPEAT: its last texel)
+    assert got[0].tolist() == [1, 2, 3, 4, 5, 2, magenta, magenta, magenta, magenta, magenta, magenta]
+    missing = got[:, 6:]
+    assert np.array_equal(missing, np.repeat(MISSING_TILE[:, None], missing.shape[1], axis=1))
+    # the tile's own extension: CLIP reads black outside it, never the neighbouring tile
+    clip = texture_lookup(udim, np.array([-0.25], np.float32), np.array([0.5], np.float32), 'Closest', 'CLIP')
+    assert clip[0, 0] == 0
+    with pytest.raises(ValueError, match="UDIM texels"):
+        udim.with_texels(np.zeros((1, 3, 4), np.float32))
+
+
+def test_udim_texture_renders_per_tile():
+    """A UdimTiles material texture goes through the integrator: each tile's albedo where its
+    UVs fall, magenta (1, 0, 1) x base colour where no tile is."""
+    scene = plane_scene([light('SUN', np.pi, np.eye(4))], samples=4)
+    udim = UdimTiles.stack({1001: np.full((1, 1, 4), 0.5, np.float32), 1002: np.full((1, 1, 4), 0.25, np.float32)})
+    for uv, expect in (((0.5, 0.5), 0.5), ((1.5, 0.5), 0.25), ((0.5, 1.5), None)):
+        scene.geometry.uvs = np.tile(np.array(uv, np.float32), (2, 3, 1))
+        scene.materials[1] = material('udim', (0.8, 0.4, 0.2), texture=udim)
+        rgb = render(scene).film.combined()[..., :3]
+        want = np.array([0.8, 0.4, 0.2]) * (MISSING_TILE if expect is None else expect)
+        assert np.allclose(rgb, want, rtol=1e-5, atol=1e-7), (uv, rgb.reshape(-1, 3)[0], want)
 
 
 def test_textured_albedo_multiplies_base_colour():
