@@ -182,7 +182,7 @@ private:
         d["max_depth"] = res.stats.max_depth;
         d["threads"] = res.threads;
         d["isa"] = isa_name(isa);
-        d["leaf_size"] = job.cfg.leaf_size ? job.cfg.leaf_size : default_leaf_size(isa);
+        d["leaf_size"] = res.leaf_size;
         d["seconds"] = res.seconds;
         d["validate_seconds"] = validate_s;
         // Thread-seconds (summed over threads) in each phase of the recursion.

@@ -69,7 +69,8 @@ FieldsFn fields_fn(Isa isa) {
 // camera, diffuse and shadow rays, 1 and 2 threads): 16 was best on the 16-wide AVX-512 kernel,
 // where it was tuned; on the 8-wide AVX2 kernel (a Zen 3 machine without AVX-512) 8 was 3-6%
 // faster than 16 on most sets.
-int default_leaf_size(Isa isa) { return isa == Isa::Avx512 ? 16 : 8; }
+// The leaf size a Config's leaf_size 0 stands for: the kernel's SIMD width.
+static int default_leaf_size(Isa isa) { return isa == Isa::Avx512 ? 16 : 8; }
 
 TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, int threads, Isa isa,
                   TopCache* cache) {
@@ -78,6 +79,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
     const auto t0 = std::chrono::steady_clock::now();
     TraceResult res;
     res.stats.rays = n;
+    res.leaf_size = job.cfg.leaf_size;
     ChunkFn fn = isa == Isa::Avx512 ? avx512::trace_chunk : (isa == Isa::Avx2 ? avx2::trace_chunk : portable::trace_chunk);
     const size_t nt = ts.valid_ids.size();
     if (n > 0 && nt > 0) {

@@ -16,12 +16,11 @@ std::string isa_name(Isa isa);
 // "" -> best the CPU runs; otherwise that name, which must be supported (throws otherwise).
 Isa resolve_isa(const std::string& requested);
 FieldsFn fields_fn(Isa isa);  // the ISA's SIMD check of ray fields
-// The leaf size a Config's leaf_size 0 stands for: the kernel's SIMD width (dispatch.cpp).
-int default_leaf_size(Isa isa);
 
 struct TraceResult {
     Stats stats;
     int threads = 1;
+    int leaf_size = 0;  // the leaf size the call used (a Config's 0 resolved per ISA)
     double seconds = 0.0;
 };
 
