@@ -701,7 +701,7 @@ def _udim_tiles(img, first, reasons, unassociate):
                        f"{', '.join(map(str, unread))} could not be read from '{pattern}' (magenta); "
                        f"packed or generated tiles other than the first are not supported")
         for number in unread:
-            tiles[number] = np.broadcast_to(np.array([1.0, 0.0, 1.0, 1.0], np.float32), (1, 1, 4)).copy()
+            tiles[number] = np.array(MISSING_IMAGE + (1.0,), np.float32).reshape(1, 1, 4)
     return UdimTiles.stack(tiles)
 
 
@@ -738,12 +738,6 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded):
     if ch < 3:     # grey (+alpha) images
         rgba[..., 1] = rgba[..., 2] = buf[..., 0]
         rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
-    if not byte and encoded:
-        if _decodes_srgb(img, reasons):
-            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
-        if _associates_alpha(img):
-            rgba[..., :3] *= rgba[..., 3:4]
-        return _unassociated(rgba) if unassociate else rgba
     if byte:   # byte buffers are in the image's colour space; float ones are linear
         if ch == 4 and _associates_alpha(img):
             # Blender keeps byte images straight; Cycles associates them on load (integer
@@ -755,6 +749,13 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded):
                 rgba = _unassociated(rgba)
         if _decodes_srgb(img, reasons):
             rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+    elif encoded:          # a deeper file: converted, then associated, as Blender loads it
+        if _decodes_srgb(img, reasons):
+            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+        if _associates_alpha(img):
+            rgba[..., :3] *= rgba[..., 3:4]
+        if unassociate:
+            rgba = _unassociated(rgba)
     elif unassociate:      # float buffers are linear and associated
         rgba = _unassociated(rgba)
     return rgba

@@ -100,10 +100,10 @@ def _udim_lookup(tex: UdimTiles, u, v, interpolation, extension):
     u, v = np.asarray(u, F32), np.asarray(v, F32)
     out = np.empty((3, len(u)), F32)
     out[:] = MISSING_TILE[:, None]
-    with np.errstate(invalid='ignore'):
+    with np.errstate(invalid='ignore', over='ignore'):   # non-finite or huge UVs: no tile
         tx, ty = np.trunc(u), np.trunc(v)
         inside = np.isfinite(tx) & np.isfinite(ty) & (tx >= 0) & (ty >= 0) & (tx < 10)
-    number = np.where(inside, 1001.0 + 10.0 * np.where(inside, ty, 0) + np.where(inside, tx, 0), 0.0)
+        number = np.where(inside, 1001.0 + 10.0 * ty + tx, 0.0)
     for i, n in enumerate(tex.numbers):
         sel = np.flatnonzero(number == n)
         if len(sel):
