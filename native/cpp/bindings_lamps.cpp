@@ -130,9 +130,11 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const size_t R = size_t(records.shape(0));
     if (lamps.ndim() != 1) throw py::value_error("lamps must be one-dimensional, got " + shape_str(lamps));
     const size_t nl = size_t(lamps.shape(0));
+    // a private copy, checked: the kernel then reads no caller index another thread may rewrite
+    const std::vector<int32_t> lamp_list(lamps.data(), lamps.data() + nl);
     for (size_t k = 0; k < nl; ++k)
-        if (lamps.data()[k] < 0 || size_t(lamps.data()[k]) >= R)
-            throw py::value_error("lamps[" + std::to_string(k) + "] = " + std::to_string(lamps.data()[k]) +
+        if (lamp_list[k] < 0 || size_t(lamp_list[k]) >= R)
+            throw py::value_error("lamps[" + std::to_string(k) + "] = " + std::to_string(lamp_list[k]) +
                                   " is not a record index 0.." + std::to_string(R ? R - 1 : 0));
     if (lamp_prob.is_none() != pdf_bsdf.is_none())
         throw py::value_error("lamp_prob and pdf_bsdf go together: both for BSDF rays (MIS), neither for camera rays");
@@ -147,7 +149,7 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const float* t = optional_f32(thr, 3, n, "thr", thr_keep);
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
     gather_into(L, pid, n, [&](float* out, size_t N) {
-        lamp_gather(rec, lamps.data(), nl, prob, O.data(), D.data(), t_surf.data(),
+        lamp_gather(rec, lamp_list.data(), nl, prob, O.data(), D.data(), t_surf.data(),
                     reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N);
     });
 }

@@ -14,7 +14,7 @@ void gather_rows(const Columns& c, const int64_t* idx, size_t k, size_t b, size_
     for (size_t r = 0; r < c.rows; ++r) {
         const T* s = src + r * c.n;
         T* d = dst + r * k;
-        for (size_t j = b; j < e; ++j) d[j] = s[idx[j]];
+        for (size_t j = b; j < e; ++j) d[j] = s[index_at(idx, j, c.n)];
     }
 }
 

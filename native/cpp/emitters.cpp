@@ -43,7 +43,7 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
     parallel_for(n, [&](size_t b, size_t e) {
         size_t local = 0;
         for (size_t i = b; i < e; ++i) {
-            const int32_t p = hits[i].prim;
+            const int32_t p = __atomic_load_n(&hits[i].prim, __ATOMIC_RELAXED);
             if (!hit[i] || p < 0 || size_t(p) >= M || !emissive[p]) continue;
             const size_t q = size_t(p);
             float w = 1.0f;
@@ -55,7 +55,7 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
                 r += 1.0f;
                 w = 1.0f / r;
             }
-            const size_t j = size_t(pid[i]);
+            const size_t j = index_at(pid, i, N);
             for (int a = 0; a < 3; ++a) {
                 float v = emission[size_t(a) * M + q];
                 if (thr) v *= thr[size_t(a) * n + i];

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "parallel.h"
+#include "shading.h"
 
 namespace dacrt {
 
@@ -110,7 +111,7 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
             r *= r;
             w = 1.0f / (1.0f + r);
         }
-        float* out = L + size_t(pid[i]);
+        float* out = L + index_at(pid, i, N);
         for (int a = 0; a < 3; ++a) {
             float v = Le[a] * w;
             if (thr) v *= thr[size_t(a) * n + i];

@@ -4,6 +4,7 @@
 #include "lamps.h"
 
 #include "parallel.h"
+#include "shading.h"
 
 namespace dacrt {
 
@@ -71,7 +72,7 @@ void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const 
                 r += 1.0f;
                 w = 1.0f / r;
             }
-            float* out = L + size_t(pid[i]);
+            float* out = L + index_at(pid, i, N);
             for (int a = 0; a < 3; ++a) {
                 float v = Le[a];
                 if (thr) v *= thr[size_t(a) * n + i];

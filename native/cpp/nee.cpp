@@ -30,7 +30,7 @@ void shadow_rays(const float* O, const float* wi, const float* dist, const float
                  const int64_t* idx, size_t k, float shorten, Ray* out, uint8_t* valid) {
     parallel_for(k, [&](size_t b, size_t e) {
         for (size_t j = b; j < e; ++j) {
-            const size_t i = size_t(idx[j]);
+            const size_t i = index_at(idx, j, n);
             float o[3], w[3], t[3];
             for (int a = 0; a < 3; ++a) {
                 o[a] = O[size_t(a) * n + i];

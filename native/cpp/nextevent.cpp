@@ -137,7 +137,7 @@ bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* valu
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const bool on = mask[i];
-            const size_t j = size_t(pid[i]);
+            const size_t j = index_at(pid, i, N);  // checked above, but the caller's array
             for (int a = 0; a < 3; ++a) L[size_t(a) * N + j] += on ? values[size_t(a) * n + i] : 0.0f;
         }
     }, size_t(1) << 17);

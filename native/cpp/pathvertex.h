@@ -23,7 +23,7 @@ struct SurfacePoint {
 
 inline void surface_point(const float* geo, size_t M, const float* normals, const Hit& h, const float d[3],
                           SurfacePoint& s) {
-    const size_t p = size_t(h.prim);
+    const size_t p = prim_at(h, M);
     const float u = h.u, v = h.v;
     auto g = [&](int row) { return geo[size_t(row) * M + p]; };
     for (int a = 0; a < 3; ++a) {

@@ -14,6 +14,21 @@
 
 namespace dacrt {
 
+// The caller's arrays are read with the GIL released, and another Python thread may rewrite
+// them after the binding checked them. So every index a kernel takes from one (a column of a
+// path array, a film column, a triangle of a hit) is read once and clamped to the n >= 1 entries
+// it indexes: a rewritten index selects a wrong entry, never memory outside the array (as
+// vertex_of does for the tracer's triangles). Negative values clamp to n - 1 too.
+template <class Index>
+inline size_t index_at(const Index* idx, size_t j, size_t n) {
+    const uint64_t k = uint64_t(int64_t(__atomic_load_n(idx + j, __ATOMIC_RELAXED)));
+    return k < n ? size_t(k) : n - 1;
+}
+inline size_t prim_at(const Hit& h, size_t M) {
+    const uint32_t p = uint32_t(__atomic_load_n(&h.prim, __ATOMIC_RELAXED));
+    return p < M ? size_t(p) : M - 1;
+}
+
 // ULP of a positive normal float: 2^(its exponent - 23) (self-intersection steps are counted
 // in these, as the add-on documents).
 inline float ulp_of(float x) {

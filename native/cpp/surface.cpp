@@ -47,9 +47,10 @@ size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits
     parallel_for(k, [&](size_t b, size_t e) {
         size_t local_bad = 0;
         for (size_t j = b; j < e; ++j) {
-            const size_t i = idx ? size_t(idx[j]) : j;
+            const size_t i = idx ? index_at(idx, j, n) : j;
             const Hit& h = hits[i];
-            if (h.prim < 0 || size_t(h.prim) >= M) {
+            const int32_t p = __atomic_load_n(&h.prim, __ATOMIC_RELAXED);
+            if (p < 0 || size_t(p) >= M) {
                 ++local_bad;
                 continue;
             }

@@ -30,7 +30,7 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
         // branch-free per path (hits, black surfaces and roulette follow no pattern); the
         // triangle index is clamped before live[] is read
         for (size_t i = b; i < e; ++i) {
-            const int32_t p = hits[i].prim;
+            const int32_t p = __atomic_load_n(&hits[i].prim, __ATOMIC_RELAXED);
             const bool on = (hit[i] != 0) & (p >= 0) & (size_t(p) < M);
             const bool alive = on & (live[on ? size_t(p) : 0] != 0);
             const bool lucky = !u_rr || u_rr[i] < survival(thr, n, i);
@@ -58,7 +58,7 @@ void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t 
         for (size_t j = b; j < e; ++j) {
             const size_t i = size_t(idx[j]);
             const Hit& h = hits[i];
-            const size_t p = size_t(h.prim);
+            const size_t p = prim_at(h, M);  // checked by the first pass, but the caller's array
             const float q = roulette ? survival(thr, n, i) : 1.0f;
             const float inv_q = q > 0 ? 1.0f / q : 1.0f;
             for (int a = 0; a < 3; ++a) {
@@ -76,7 +76,7 @@ void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t 
                 surf_out[size_t(6 + a) * k + j] = sp.P_off[a];
                 if (normals) surf_out[size_t(9 + a) * k + j] = sp.ns[a];
             }
-            prim_out[j] = h.prim;
+            prim_out[j] = int32_t(p);
         }
     });
 }

@@ -6,6 +6,7 @@ index), leave the rays untouched, and leave the process healthy; random byte gar
 either raises ValueError or gives the reference's answer for the rays it describes."""
 
 import re
+from pathlib import Path
 
 import dacrt
 import numpy as np
@@ -217,7 +218,72 @@ try:
 """ + _STOP_WRITER
 
 
-@pytest.mark.parametrize("script", ["triangles", "ray ids"])
+# The shading kernels' index arrays (path columns, film columns, the triangles of hits), each
+# rewritten while kernels read it: the values written name no column, film column or triangle.
+_REWRITE_SHADING_INDICES = r"""
+import threading, numpy as np, dacrt
+from addon.lights import lamp_records, make_lamp
+from tests.integrator.scenes import light, translation
+rng = np.random.default_rng(0)
+M, n = 2_000, 400_000
+V = rng.uniform(-1, 1, (3 * M, 3)).astype(np.float32)
+T = np.arange(3 * M, dtype=np.int32).reshape(M, 3)
+geo, area = dacrt.shading.triangle_table(V, T, 8.0)
+hits = np.zeros(n, dacrt.HIT_DTYPE)
+hits["t"], hits["prim"], hits["u"], hits["v"] = 1.0, rng.integers(0, M, n), 0.25, 0.25
+hit = np.ones(n, bool)
+O = rng.uniform(-1, 1, (3, n)).astype(np.float32)
+D = rng.normal(size=(3, n)).astype(np.float32)
+D /= np.linalg.norm(D, axis=0)
+dist = np.ones(n, np.float32)
+thr = np.ones((3, n), np.float32)
+pdf = np.ones(n, np.float32)
+idx = np.arange(n, dtype=np.int64)
+pid = np.arange(n, dtype=np.int64)
+L = np.zeros((3, n), np.float32)
+emission = np.ones((3, M), np.float32)
+albedo = np.full((3, M), 0.5, np.float32)
+every = np.ones(M, bool)
+prob = np.full(M, 1.0 / M, np.float32)
+records = lamp_records([make_lamp(light("POINT", 10.0, translation(0, 0, 2), radius=0.1))])
+env = dacrt.lamps.environment_map(np.ones((8, 16, 3), np.float32))
+prims = hits["prim"]  # a view into the records the kernels read
+stop = False
+def writer():
+    while not stop:
+        for a in (idx, pid):
+            a[::997] = -(1 << 40)
+            a[1::997] = 1 << 40
+            a[::997] = np.arange(0, n, 997)
+            a[1::997] = np.arange(1, n, 997)
+        prims[::997] = 0x7FFFFFF0
+        prims[1::997] = -7
+        prims[::997] = 3
+        prims[1::997] = 4
+th = threading.Thread(target=writer)
+th.start()
+calls = [
+    lambda: dacrt.shading.surface(geo, None, hits, idx, D),
+    lambda: dacrt.shading.take_columns(idx, O, thr, pid, pdf),
+    lambda: dacrt.shading.shadow_rays(O, D, dist, None, idx),
+    lambda: dacrt.shading.gather_emission(hits, hit, emission, every, prob, area, geo, O, D, thr, pdf, pid, L),
+    lambda: dacrt.shading.accumulate_masked(L, pid, thr, hit),
+    lambda: dacrt.shading.continue_paths(hits, hit, every, albedo, thr, None, surface=(geo, None, D),
+                                         take=(pid, pdf)),
+    lambda: dacrt.lamps.lamp_gather(records, [0], O, D, dist, hit, pid, L, thr=thr, pdf_bsdf=pdf,
+                                    lamp_prob=np.ones(1, np.float32)),
+    lambda: env.gather(0.5, D, hit, thr, pdf, pid, L),
+]
+try:
+    for i in range(48):
+        try:
+            calls[i % len(calls)]()
+        except ValueError:
+            pass
+""" + _STOP_WRITER
+
+
+@pytest.mark.parametrize("script", ["triangles", "ray ids", "shading indices"])
 def test_inputs_rewritten_by_another_thread_during_a_call_never_crash(script):
     """The GIL is released while a Scene is built and while rays are traced, and the inputs are
     the caller's arrays: another Python thread may rewrite them after they were checked. That
@@ -226,7 +292,9 @@ def test_inputs_rewritten_by_another_thread_during_a_call_never_crash(script):
     the test instead of ending the run."""
     import subprocess
     import sys
-    code = _REWRITE_TRIANGLES if script == "triangles" else _REWRITE_RAY_IDS
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    code = {"triangles": _REWRITE_TRIANGLES, "ray ids": _REWRITE_RAY_IDS,
+            "shading indices": _REWRITE_SHADING_INDICES}[script]
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
+                         cwd=Path(__file__).resolve().parents[2])
     assert out.returncode == 0 and out.stdout.strip() == "done", \
         f"the child ended with {out.returncode}: {out.stderr[-2000:]}"
