@@ -2,7 +2,7 @@
 """Project driver: sets up .venv, builds the native tracer and runs tests, renders, benchmarks
 and packaging.
 
-    python3 build.py test [--stress] [--sanitize] [pytest args...]
+    python3 build.py test [--stress] [--precise] [--sanitize] [pytest args...]
     python3 build.py render [scene.blend] [--samples N] [--out file]
     python3 build.py bench [tracer|errortime|scaling|animation|partition|...] [options]
     python3 build.py compare scene.blend [--samples N]

@@ -1,5 +1,7 @@
 """Pytest set-up shared by every test layer: the `stress` marker (heavy tests, deselected unless
-pytest gets --stress, i.e. `python3 build.py test --stress`) and the Hypothesis profiles.
+pytest gets --stress, i.e. `python3 build.py test --stress`), the `precise` marker (parity with
+Cycles at 4x the samples, deselected unless --precise; CI does not run it) and the Hypothesis
+profiles.
 
 Profiles (choose with HYPOTHESIS_PROFILE, default "ci"):
   ci  - derandomized (the same examples every run), no deadline, moderate example counts so
@@ -24,12 +26,19 @@ collect_ignore = ["bench"]  # benchmark code: run by `python3 build.py bench`, n
 def pytest_addoption(parser):
     parser.addoption("--stress", action="store_true", default=False,
                      help="also run the heavy tests marked `stress`")
+    parser.addoption("--precise", action="store_true", default=False,
+                     help="also run the parity tests marked `precise` (4x the samples)")
 
 
 def pytest_configure(config):
     config.addinivalue_line(
         "markers", "stress: heavy stress test, only run with --stress "
                    "(python3 build.py test --stress)")
+    config.addinivalue_line(
+        "markers", "precise: parity with Cycles at 4x the samples, only run with --precise "
+                   "(python3 build.py test --precise); not part of CI")
     # Default deselection; an explicit -m from the command line wins.
-    if not config.option.markexpr and not config.getoption("--stress"):
-        config.option.markexpr = "not stress"
+    if not config.option.markexpr:
+        left_out = [tier for tier in ("stress", "precise") if not config.getoption("--" + tier)]
+        if left_out:
+            config.option.markexpr = " and ".join(f"not {tier}" for tier in left_out)

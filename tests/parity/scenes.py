@@ -401,6 +401,11 @@ def build_environment():
     uv_sphere("Ball", 0.6, diffuse("Ball", (0.3, 0.6, 0.3)), (1.5, 1.0, 0.6))
     box("Pillar", (0.3, 0.3, 1.5), diffuse("Pillar", (0.7, 0.3, 0.3)), (-1.3, 0.8, 0.75))
     w = world((0.0, 0.0, 0.0), 1.5)
+    # Cycles' Automatic importance map took 1.6 s to build for every render of this 96x48 sky
+    # (more than 128 spp of the scene); a Manual 1024 map takes 0.1 s. The map only steers
+    # Cycles' sampling of the world, so its images keep their expectation.
+    w.cycles.sampling_method = 'MANUAL'
+    w.cycles.sample_map_resolution = 1024
     nt = w.node_tree
     bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
     env = nt.nodes.new('ShaderNodeTexEnvironment')

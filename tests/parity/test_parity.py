@@ -77,12 +77,13 @@ def test_statistics_on_real_render_noise(spec, parity_addon):
 
 
 # The same scenes with 4x the samples per seed for both engines: twice the power to find a
-# per-pixel bias. Too slow for the default suite (cold ~10 min, cached ~3 min).
+# per-pixel bias. Too slow for CI (cold ~17 min on 2 cores, of which Cycles ~3/4; cached ~4
+# min), so a tier of its own: `python3 build.py test --precise` (or `-m precise`).
 PRECISE = [dataclasses.replace(s, name=s.name + "_precise", cycles_samples=4 * s.cycles_samples,
                                dacrt_samples=4 * s.dacrt_samples) for s in SPECS]
 
 
-@pytest.mark.stress
+@pytest.mark.precise
 @pytest.mark.parametrize("spec", PRECISE, ids=[s.name for s in PRECISE])
 def test_parity_with_cycles_precise(spec, parity_addon):
     check_parity(spec)
