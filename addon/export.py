@@ -74,6 +74,28 @@ TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP')
 LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')
 
 
+# View-layer passes Cycles renders and DACRT does not: (settings owner, toggle, label); owner ''
+# is the view layer itself, 'cycles' its Cycles settings. The engine registers only the passes
+# it writes, so these would be missing from the result without a word.
+_UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
+    ('mist', 'Mist'), ('position', 'Position'), ('vector', 'Vector'), ('uv', 'UV'),
+    ('object_index', 'Object Index'), ('material_index', 'Material Index'),
+    ('diffuse_direct', 'Diffuse Direct'), ('diffuse_indirect', 'Diffuse Indirect'),
+    ('glossy_direct', 'Glossy Direct'), ('glossy_indirect', 'Glossy Indirect'),
+    ('glossy_color', 'Glossy Color'), ('transmission_direct', 'Transmission Direct'),
+    ('transmission_indirect', 'Transmission Indirect'), ('transmission_color', 'Transmission Color'),
+    ('subsurface_direct', 'Subsurface Direct'), ('subsurface_indirect', 'Subsurface Indirect'),
+    ('subsurface_color', 'Subsurface Color'), ('emit', 'Emission'), ('environment', 'Environment'),
+    ('ambient_occlusion', 'Ambient Occlusion'), ('shadow', 'Shadow'),
+    ('cryptomatte_object', 'Cryptomatte Object'), ('cryptomatte_material', 'Cryptomatte Material'),
+    ('cryptomatte_asset', 'Cryptomatte Asset'))) + (
+    ('cycles', 'denoising_store_passes', 'Denoising Data'),
+    ('cycles', 'pass_debug_sample_count', 'Sample Count'),
+    ('cycles', 'use_pass_shadow_catcher', 'Shadow Catcher'),
+    ('cycles', 'use_pass_volume_direct', 'Volume Direct'),
+    ('cycles', 'use_pass_volume_indirect', 'Volume Indirect'))
+
+
 class ExportError(Exception):
     """The scene cannot be rendered; the message says why, for the user."""
 
@@ -1008,6 +1030,14 @@ class _Exporter:
             raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
         passes = tuple(name for name, on in (('Depth', vl.use_pass_z), ('Normal', vl.use_pass_normal),
                                               ('DiffCol', vl.use_pass_diffuse_color)) if on)
+        missing = [label for owner, attr, label in _UNRENDERED_PASSES
+                   if getattr(getattr(vl, owner) if owner else vl, attr, False)]
+        missing += [f"AOV '{a.name}'" for a in getattr(vl, 'aovs', ())]
+        missing += [f"light group '{g.name}'" for g in getattr(vl, 'lightgroups', ())]
+        if missing:
+            self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, Depth, "
+                                             f"Normal and Diffuse Color only; not in the result: "
+                                             f"{', '.join(missing)}"))
         return sd.Settings(samples=d.samples, max_bounces=d.max_bounces, filter_type=d.filter_type,
                            filter_width=d.filter_width, seed=d.seed,
                            threads=0 if r.threads_mode == 'AUTO' else r.threads,

@@ -522,6 +522,24 @@ def test_features_rendered_without_are_reported(scene, exported):
     assert "shadow catcher" not in text and "linking" not in text and "motion blur" not in text
 
 
+def test_passes_dacrt_does_not_write_are_reported(scene, exported):
+    """A view layer asking for passes Cycles renders and DACRT does not (Mist, AO, Cryptomatte,
+    an AOV...) is told which are missing from the result; the passes DACRT writes are not
+    named, and nothing is said when only those are on."""
+    setup(scene)
+    vl = bpy.context.view_layer
+    vl.use_pass_z = vl.use_pass_normal = vl.use_pass_diffuse_color = True
+    assert not any("not in the result" in m for _, m in exported().messages)
+    vl.use_pass_mist = vl.use_pass_ambient_occlusion = vl.use_pass_cryptomatte_object = True
+    vl.cycles.denoising_store_passes = True
+    vl.aovs.add().name = "Wetness"
+    notes = [m for _, m in exported().messages if "not in the result" in m]
+    assert len(notes) == 1, notes
+    for label in ("Mist", "Ambient Occlusion", "Cryptomatte Object", "Denoising Data", "AOV 'Wetness'"):
+        assert label in notes[0], (label, notes[0])
+    assert "Depth," in notes[0] and "Depth" not in notes[0].split("not in the result")[1]
+
+
 def test_nan_vertices_dropped_with_message(scene, exported):
     setup(scene)
     ob = scenes.mesh("Broken", [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (float('nan'), 0, 0),
