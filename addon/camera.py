@@ -1,8 +1,8 @@
 """Camera rays exactly as Cycles maps raster positions (reference blender-cycles.md section 1.8).
 
 Owns the raster -> ray mapping (perspective and orthographic, viewplane with shift, clip
-start/end, depth of field as Cycles' thin lens), the render region (border, crop) and the
-inverse projection used to check it.
+start/end, depth of field as Cycles' thin lens; panoramic cameras through panorama.py), the
+render region (border, crop) and the inverse projection used to check it.
 Raster coordinates are full-frame pixels, x to the right and y up from the bottom edge; pixel
 (i, j) spans [i, i+1] x [j, j+1], so its centre is (i + 0.5, j + 0.5).
 """
@@ -11,6 +11,7 @@ from __future__ import annotations
 import dacrt
 import numpy as np
 
+from . import panorama
 from .scenedata import Camera
 
 
@@ -18,8 +19,19 @@ class CameraModel:
     """Validated camera with precomputed frame; generates rays for raster positions."""
 
     def __init__(self, cam: Camera):
-        if cam.kind not in ('PERSP', 'ORTHO'):
-            raise ValueError(f"camera.kind {cam.kind!r} is not 'PERSP' or 'ORTHO'")
+        if cam.kind not in ('PERSP', 'ORTHO', 'PANO'):
+            raise ValueError(f"camera.kind {cam.kind!r} is not 'PERSP', 'ORTHO' or 'PANO'")
+        if cam.kind == 'PANO':
+            if cam.panorama_type not in panorama.SUPPORTED:
+                raise ValueError(f"camera.panorama_type {cam.panorama_type!r} is not one of "
+                                 f"{', '.join(panorama.SUPPORTED)}")
+            numbers = (*cam.longitude, *cam.latitude, cam.fisheye_fov, cam.fisheye_lens, *cam.sensor_mm)
+            if not np.isfinite(numbers).all() or min(cam.fisheye_lens, *cam.sensor_mm) <= 0:
+                raise ValueError(f"camera panorama settings must be finite (lens and sensor positive), "
+                                 f"got {numbers}")
+            if cam.aperture > 0:
+                raise ValueError("a panoramic camera has no depth of field here (aperture must be 0)")
+        self.pano = cam if cam.kind == 'PANO' else None
         m = np.asarray(cam.matrix, np.float64)
         if m.shape != (4, 4) or not np.isfinite(m).all():
             raise ValueError("camera.matrix must be a finite 4x4 camera-to-world matrix")
@@ -110,8 +122,37 @@ class CameraModel:
         ray's point on the plane of focus); None gives pinhole rays. One native pass
         (dacrt.shading.camera_rays) on the frame below; with records=True also the tracer's
         RAY_DTYPE records of the rays."""
+        if self.pano is not None:
+            return self._panorama_rays(rx, ry, records)
         return dacrt.shading.camera_rays(self.kind == 'ORTHO', self._frame, rx, ry, records,
                                          lens if self.has_lens else None)
+
+    def _viewplane(self, rx, ry):
+        rx, ry = np.asarray(rx, np.float64), np.asarray(ry, np.float64)
+        return (self.left + rx * ((self.right - self.left) / self.width),
+                self.bottom + ry * ((self.top - self.bottom) / self.height))
+
+    def sees(self, rx, ry):
+        """Which raster positions have a camera ray: None when all do (every camera but a
+        fisheye or mirror ball, whose rays end at the edge of their circle)."""
+        if self.pano is None or self.pano.panorama_type == 'EQUIRECTANGULAR':
+            return None
+        return panorama.sees(self.pano, *self._viewplane(rx, ry))
+
+    def _panorama_rays(self, rx, ry, records):
+        """Cycles' camera_sample_panorama: from the camera position along the projection's
+        direction, starting clip_start along the ray and clip_end - clip_start long (distances,
+        not planes); positions without a ray (sees()) get a ray of length 0, which meets nothing."""
+        d = self.rot @ panorama.directions(self.pano, *self._viewplane(rx, ry))
+        D = np.ascontiguousarray(d, np.float32)
+        O = np.ascontiguousarray(self.pos[:, None] + self.clip_start * d, np.float32)
+        seen = self.sees(rx, ry)
+        tmax = np.full(D.shape[1], self.clip_end - self.clip_start, np.float32)
+        if seen is not None:
+            tmax[~seen] = 0.0
+        if not records:
+            return O, D, tmax
+        return O, D, tmax, dacrt.shading.pack_rays(O, D, tmax)
 
     def _frame_floats(self) -> np.ndarray:
         """The float32 frame camera_rays reads (each value rounded once from float64)."""
@@ -127,13 +168,18 @@ class CameraModel:
                                           np.float32)]).astype(np.float32)
 
     def z_depth(self, points: np.ndarray) -> np.ndarray:
-        """Distance of world points (3,n) along the view axis (Cycles' camera_z_depth)."""
+        """Distance of world points (3,n) along the view axis (Cycles' camera_z_depth), or from
+        the camera for a panoramic one (as Cycles' camera_z_depth gives it there)."""
+        if self.pano is not None:
+            return np.sqrt(sum((points[a] - self._pos32[a]) ** 2 for a in range(3))).astype(np.float32)
         f = -self._rot32[:, 2]
         return f[0] * (points[0] - self._pos32[0]) + f[1] * (points[1] - self._pos32[1]) + \
             f[2] * (points[2] - self._pos32[2])
 
     def project(self, points: np.ndarray):
         """World points (n,3) -> full-frame raster (rx, ry) float64 and z-depth; inverse of rays()."""
+        if self.pano is not None:
+            raise NotImplementedError("project() covers perspective and orthographic cameras")
         p = (np.asarray(points, np.float64) - self.pos) @ self.rot     # camera space (x right, y up, -z forward)
         depth = -p[:, 2]
         if self.kind == 'ORTHO':

@@ -46,7 +46,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import nodeeval
+from . import nodeeval, panorama
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant_color, constant_value
@@ -132,9 +132,12 @@ def export_camera(scene, messages=None, view=None):
     # A non-camera object as scene camera: Cycles uses its default camera parameters.
     cam = cam_ob.data if cam_ob.type == 'CAMERA' else None
     kind = cam.type if cam else 'PERSP'
-    if kind not in ('PERSP', 'ORTHO'):
-        raise ExportError(f"camera '{cam_ob.name}' is {kind.lower()}; DACRT renders perspective "
-                          "and orthographic cameras only")
+    pano = cam.panorama_type if kind == 'PANO' else ''
+    if kind not in ('PERSP', 'ORTHO', 'PANO') or (pano and pano not in panorama.SUPPORTED):
+        what = f"a {pano.lower().replace('_', ' ')} panorama" if pano else kind.lower()
+        raise ExportError(f"camera '{cam_ob.name}' is {what}; DACRT renders perspective, "
+                          "orthographic and panoramic cameras (equirectangular, fisheye equidistant "
+                          "and equisolid, mirror ball)")
     lens = cam.lens if cam else 50.0
     sensor_fit = cam.sensor_fit if cam else 'AUTO'
     sensor_width = cam.sensor_width if cam else 36.0
@@ -172,6 +175,15 @@ def export_camera(scene, messages=None, view=None):
     dx, dy = 2.0 * ar * shift[0], 2.0 * ar * shift[1]
     viewplane = (-ax + dx, ax + dx, -ay + dy, ay + dy)
     tan_half_fov = 0.5 * sensor / lens / ar
+    pano_settings = {}
+    if pano:
+        # Cycles: the panorama's viewplane is the unit square moved by the shift, and an
+        # equisolid fisheye's sensor is fitted to the frame like a perspective camera's
+        viewplane = (shift[0], 1.0 + shift[0], shift[1], 1.0 + shift[1])
+        sensor_mm = (sensor, sensor * yr / xr) if horizontal else (sensor * xr / yr, sensor)
+        pano_settings = dict(panorama_type=pano, longitude=(cam.longitude_min, cam.longitude_max),
+                             latitude=(cam.latitude_min, cam.latitude_max), fisheye_fov=cam.fisheye_fov,
+                             fisheye_lens=cam.fisheye_lens, sensor_mm=sensor_mm)
 
     # Cycles clears the scale of the camera matrix (transform_clear_scale).
     m = np.array(cam_ob.matrix_world if view is None else view[0], dtype=np.float64)
@@ -193,9 +205,14 @@ def export_camera(scene, messages=None, view=None):
             raise ExportError("the render border is empty (less than one pixel wide or high)")
         crop = bool(r.use_crop_to_border)
     dof = _depth_of_field(cam, kind, lens, m, cam_ob.name, messages) if cam else {}
+    if pano and dof.get('aperture', 0.0) > 0:
+        dof = {}
+        if messages is not None:
+            messages.append(('WARNING', f"camera '{cam_ob.name}': depth of field is not rendered for "
+                                        "panoramic cameras (every ray leaves the camera's position)"))
     return sd.Camera(kind=kind, matrix=m, viewplane=viewplane, tan_half_fov=tan_half_fov,
                      clip_start=float(clip_start), clip_end=float(clip_end), width=width,
-                     height=height, border=border, crop=crop, **dof)
+                     height=height, border=border, crop=crop, **dof, **pano_settings)
 
 
 def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):

@@ -700,11 +700,18 @@ class Integrator:
         del frame
         lens = self.rng.uniform2(keys, _DIM_LENS) if self.camera.has_lens else None
         O, D, tmax, rays = self.camera.rays(rx, ry, records=True, lens=lens)
+        seen = self.camera.sees(rx, ry)
         del rx, ry, lens
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
         L, alpha = rgba[:3], rgba[3]
         data = {}
         path = _Paths(np.arange(n), keys, O, D, tmax, None, None, None, rays)
+        if seen is not None and not seen.all():
+            # outside a fisheye's circle: no ray, opaque black (as Cycles, transparent film too)
+            alpha[~seen] = 1.0
+            pid = np.flatnonzero(seen)
+            keys, O, D, tmax = _compact(pid, keys, O, D, tmax)
+            path = _Paths(pid, keys, O, D, tmax, None, None, None, None)
         for k in range(self.max_bounces + 2):
             path = self._vertex(k, path, L, alpha, data, pix, samp)
             if path is None:
@@ -724,7 +731,7 @@ class Integrator:
         self._gather_lamps(camera, path, hit, hits, L)
         miss = np.flatnonzero(~hit)
         if len(miss) and camera and not self.transparent:
-            alpha[miss] = 1.0
+            alpha[np.take(path.pid, miss)] = 1.0
         if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
             if camera and self.film.passes:
                 self._write_passes(path, hits, hit, data, pix, samp)
@@ -732,7 +739,7 @@ class Integrator:
         if camera:
             if self._any_holdout:                     # holdout: transparent, nothing behind it
                 hit &= (np.take(self.tri.visibility, prim) & HOLDOUT) == 0
-            alpha[hit] = 1.0
+            alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
             if self.film.passes:
                 self._write_passes(path, hits, hit, data, pix, samp)
         if self._any_emissive:
@@ -805,8 +812,9 @@ class Integrator:
 
     def _write_passes(self, path, hits, hit, data, pix, samp):
         """Data passes from the first visible surface (holdouts and background stay 0)."""
-        n = len(hit)
+        n = len(pix)                                # the block's paths (camera rays: path.pid)
         idx = np.flatnonzero(hit)
+        cols = np.take(path.pid, idx)
         want = self.film.passes
         if len(idx):
             prim = np.take(hits['prim'], idx)
@@ -818,15 +826,15 @@ class Integrator:
             P = ns = albedo = np.zeros((3, 0), F32)
         if 'Normal' in want:
             data['Normal'] = np.zeros((3, n), F32)
-            data['Normal'][:, idx] = ns
+            data['Normal'][:, cols] = ns
         if 'DiffCol' in want:
             data['DiffCol'] = np.zeros((3, n), F32)
-            data['DiffCol'][:, idx] = albedo
+            data['DiffCol'][:, cols] = albedo
         if 'Depth' in want:
             first = np.flatnonzero(samp == 0)       # Cycles writes depth from sample 0 only
             if len(first):
                 depth = np.full(n, np.inf, F32)
-                depth[idx] = self.camera.z_depth(P)
+                depth[cols] = self.camera.z_depth(P)
                 self.film.set_depth(pix[first], depth[first])
 
     # --- emission seen by rays ------------------------------------------------------------------

@@ -27,9 +27,9 @@ HOLDOUT = 8
 @dataclass
 class Camera:
     """Camera exactly as Cycles maps it (reference blender-cycles.md section 1.8)."""
-    kind: str                      # 'PERSP' | 'ORTHO'
+    kind: str                      # 'PERSP' | 'ORTHO' | 'PANO'
     matrix: np.ndarray             # (4,4) float64 camera-to-world, scale removed; looks down -Z, +Y up
-    viewplane: tuple               # (left, right, bottom, top), shift included
+    viewplane: tuple               # (left, right, bottom, top), shift included (PANO: (0, 1, 0, 1) + shift)
     tan_half_fov: float            # PERSP: d_cam = normalize(sx*t, sy*t, 1) before the -Z flip; ORTHO: unused
     clip_start: float
     clip_end: float
@@ -46,6 +46,15 @@ class Camera:
     aperture_blades: int = 0
     aperture_rotation: float = 0.0
     aperture_ratio: float = 1.0
+    # PANO (Cycles' panorama types): 'EQUIRECTANGULAR' (longitude and latitude ranges, radians),
+    # 'FISHEYE_EQUIDISTANT' (fisheye_fov), 'FISHEYE_EQUISOLID' (fisheye_lens and the sensor
+    # size in mm, fitted to the frame as Cycles does, fisheye_fov), 'MIRRORBALL'
+    panorama_type: str = ''
+    longitude: tuple = (-np.pi, np.pi)
+    latitude: tuple = (-np.pi / 2, np.pi / 2)
+    fisheye_fov: float = np.pi
+    fisheye_lens: float = 10.5
+    sensor_mm: tuple = (36.0, 24.0)
 
 
 @dataclass

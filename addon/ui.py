@@ -3,8 +3,8 @@
 Generic panels (output, format/dimensions, colour management, world/light context, object
 visibility, spot shape, material slots, camera depth of field ...) show for DACRT through their
 COMPAT_ENGINES sets (reference blender-cycles.md 1.6). What no generic panel draws — our
-settings, view-layer passes, the light in Cycles' units, material and world surface node
-views — has a small panel here, modelled on Cycles'.
+settings, view-layer passes, the light in Cycles' units, a panoramic camera's projection,
+material and world surface node views — has a small panel here, modelled on Cycles'.
 """
 import bpy
 from bpy.types import Panel
@@ -135,6 +135,40 @@ class DATA_PT_dacrt_light(DACRTPanel, Panel):
         layout.prop(light, "use_shadow", text="Cast Shadow")
 
 
+class DATA_PT_dacrt_panorama(DACRTPanel, Panel):
+    """A panoramic camera's projection: Blender's Lens panel draws its settings for Cycles
+    only."""
+    bl_label = "Panorama"
+    bl_context = 'data'
+
+    @classmethod
+    def poll(cls, context):
+        cam = getattr(context, 'camera', None)
+        return cam is not None and cam.type == 'PANO' and super().poll(context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        cam = context.camera
+        col = layout.column()
+        col.prop(cam, "panorama_type")
+        kind = cam.panorama_type
+        if kind == 'EQUIRECTANGULAR':
+            sub = col.column(align=True)
+            sub.prop(cam, "latitude_min", text="Latitude Min")
+            sub.prop(cam, "latitude_max", text="Max")
+            sub = col.column(align=True)
+            sub.prop(cam, "longitude_min", text="Longitude Min")
+            sub.prop(cam, "longitude_max", text="Max")
+        elif kind == 'FISHEYE_EQUISOLID':
+            col.prop(cam, "fisheye_lens", text="Lens")
+            col.prop(cam, "fisheye_fov")
+        elif kind == 'FISHEYE_EQUIDISTANT':
+            col.prop(cam, "fisheye_fov")
+        elif kind != 'MIRRORBALL':
+            col.label(text="Not rendered by DACRT", icon='ERROR')
+
+
 class MATERIAL_PT_dacrt_surface(DACRTPanel, Panel):
     bl_label = "Surface"
     bl_context = 'material'
@@ -167,7 +201,7 @@ class WORLD_PT_dacrt_surface(DACRTPanel, Panel):
             node_view(self.layout, world.node_tree, 'Surface')
 
 
-CLASSES = (RENDER_PT_dacrt, VIEWLAYER_PT_dacrt_passes, DATA_PT_dacrt_light,
+CLASSES = (RENDER_PT_dacrt, VIEWLAYER_PT_dacrt_passes, DATA_PT_dacrt_light, DATA_PT_dacrt_panorama,
            MATERIAL_PT_dacrt_surface, WORLD_PT_dacrt_surface)
 
 

@@ -112,13 +112,46 @@ def test_bad_cameras_are_explained(scene):
         export.export_camera(scene)
     cam = scenes.camera()
     cam.data.type = 'PANO'
-    with pytest.raises(export.ExportError, match="perspective and orthographic"):
+    for kind in ('EQUIANGULAR_CUBEMAP_FACE', 'FISHEYE_LENS_POLYNOMIAL', 'CENTRAL_CYLINDRICAL'):
+        cam.data.panorama_type = kind
+        with pytest.raises(export.ExportError, match=f"is a {kind.lower().replace('_', ' ')} panorama; "
+                                                     "DACRT renders perspective, orthographic and panoramic"):
+            export.export_camera(scene)
+    cam.data.type = 'CUSTOM'
+    with pytest.raises(export.ExportError, match="is custom; DACRT renders"):
         export.export_camera(scene)
     cam.data.type = 'PERSP'
     cam.scale = (0, 1, 1)
     bpy.context.view_layer.update()
     with pytest.raises(export.ExportError, match="zero"):
         export.export_camera(scene)
+
+
+def test_panoramic_camera_settings_as_cycles_reads_them(scene):
+    """The panorama's viewplane is the unit square moved by the shift; an equisolid fisheye's
+    sensor is fitted to the frame (pixel aspect included) as Cycles fits it; depth of field is
+    reported and dropped (every panoramic ray leaves the camera's position)."""
+    import math
+    cam = scenes.camera()
+    d = cam.data
+    d.type, d.panorama_type = 'PANO', 'FISHEYE_EQUISOLID'
+    d.fisheye_lens, d.fisheye_fov = 9.0, math.radians(200)
+    d.sensor_fit, d.sensor_width, d.sensor_height = 'VERTICAL', 36.0, 20.0
+    d.shift_x, d.shift_y = 0.1, -0.05
+    d.longitude_min, d.longitude_max, d.latitude_min, d.latitude_max = -1.0, 2.0, -0.5, 0.7
+    d.dof.use_dof, d.dof.aperture_fstop = True, 2.0
+    r = scene.render
+    r.resolution_x, r.resolution_y, r.pixel_aspect_x = 300, 100, 2.0
+    messages = []
+    c = export.export_camera(scene, messages)
+    assert c.kind == 'PANO' and c.panorama_type == 'FISHEYE_EQUISOLID'
+    assert np.allclose(c.viewplane, (0.1, 1.1, -0.05, 0.95))
+    assert np.allclose(c.sensor_mm, (20.0 * 600 / 100, 20.0))        # vertical fit: height is the sensor
+    assert np.isclose(c.fisheye_lens, 9.0) and np.isclose(c.fisheye_fov, math.radians(200))
+    assert np.allclose(c.longitude, (-1.0, 2.0)) and np.allclose(c.latitude, (-0.5, 0.7))
+    assert c.aperture == 0.0 and any("depth of field is not rendered for panoramic" in m for _, m in messages)
+    d.sensor_fit = 'AUTO'                                              # 600 x 100: horizontal
+    assert np.allclose(export.export_camera(scene).sensor_mm, (36.0, 36.0 * 100 / 600))
 
 
 def test_scene_camera_read_from_evaluated_depsgraph(scene, exported):

@@ -51,7 +51,7 @@ def test_panels_shown_for_the_engine(scene):
                  'DATA_PT_camera_dof_aperture'):
         assert 'DACRT' in getattr(bpy.types, name).COMPAT_ENGINES, name
     for name in ('DATA_PT_dacrt_light', 'MATERIAL_PT_dacrt_surface', 'WORLD_PT_dacrt_surface',
-                 'VIEWLAYER_PT_dacrt_passes'):
+                 'VIEWLAYER_PT_dacrt_passes', 'DATA_PT_dacrt_panorama'):
         assert hasattr(bpy.types, name), name
     scene.render.engine = 'CYCLES'
     assert not bpy.types.RENDER_PT_dacrt.poll(bpy.context)
@@ -186,3 +186,16 @@ def test_panels_draw_existing_properties(scene):
         layout = FakeLayout()
         bpy.types.DATA_PT_dacrt_light.draw(SimpleNamespace(layout=layout), ctx)
         assert 'energy' in layout.drawn
+    cam = bpy.data.cameras.new("Cam")
+    ctx.camera = cam
+    assert not bpy.types.DATA_PT_dacrt_panorama.poll(ctx)          # perspective: the Lens panel
+    cam.type = 'PANO'
+    want = {'EQUIRECTANGULAR': {'latitude_min', 'latitude_max', 'longitude_min', 'longitude_max'},
+            'FISHEYE_EQUISOLID': {'fisheye_lens', 'fisheye_fov'}, 'FISHEYE_EQUIDISTANT': {'fisheye_fov'},
+            'MIRRORBALL': set(), 'CENTRAL_CYLINDRICAL': {'label'}}
+    for kind, props in want.items():
+        cam.panorama_type = kind
+        assert bpy.types.DATA_PT_dacrt_panorama.poll(ctx)
+        layout = FakeLayout()
+        bpy.types.DATA_PT_dacrt_panorama.draw(SimpleNamespace(layout=layout), ctx)
+        assert set(layout.drawn) == {'panorama_type'} | props, (kind, layout.drawn)

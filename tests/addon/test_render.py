@@ -195,7 +195,8 @@ def test_approximated_materials_reported_once(scene, capfd):
 def test_failed_render_reports_the_reason(scene):
     lit_plane_scene(scene)
     scene.camera.data.type = 'PANO'
-    with pytest.raises(RuntimeError, match="perspective and orthographic"):
+    scene.camera.data.panorama_type = 'CENTRAL_CYLINDRICAL'
+    with pytest.raises(RuntimeError, match="central cylindrical panorama; DACRT renders"):
         bpy.ops.render.render()
 
 

@@ -426,6 +426,34 @@ def build_environment_hidden():
     bpy.context.scene.world.cycles_visibility.camera = False
 
 
+def _panoramic_camera(kind, location, target, **settings):
+    """The scene camera moved to location, aimed at target and made a panorama of kind."""
+    ob = bpy.context.scene.camera
+    ob.location = location
+    aim(ob, target)
+    ob.data.type, ob.data.panorama_type = 'PANO', kind
+    for name, value in settings.items():
+        setattr(ob.data, name, value)
+
+
+def build_panorama_equirect():
+    """The emissive room seen whole from inside by an equirectangular camera with narrowed
+    longitude and latitude ranges and a horizontal shift: walls, the open sides and both
+    emitters at once, stretched as Cycles maps them."""
+    build_emissive()
+    _panoramic_camera('EQUIRECTANGULAR', (0.2, -0.6, 1.0), (0.2, 1.0, 0.9),
+                      longitude_min=math.radians(-160), longitude_max=math.radians(150),
+                      latitude_min=math.radians(-70), latitude_max=math.radians(80), shift_x=0.05)
+
+
+def build_panorama_fisheye():
+    """The outdoor blocks seen by an equisolid fisheye (8 mm, 180 degrees on the sensor fitted
+    to the frame): the circle's edge, and opaque black pixels without rays around it."""
+    build_outdoor()
+    _panoramic_camera('FISHEYE_EQUISOLID', (1.7, -2.3, 1.0), (0.0, 0.4, 0.5),
+                      fisheye_lens=8.0, fisheye_fov=math.radians(180))
+
+
 # ------------------------------------------------------------------------------------------
 # What the suite renders
 
@@ -468,5 +496,9 @@ SPECS = (
                128, 32, 128, 32),
     ParitySpec("environment", build_environment, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("environment_hidden", build_environment_hidden, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5,
+               128, 32, 128, 32),
+    ParitySpec("panorama_equirect", build_panorama_equirect, (64, 32), 3, 'BLACKMAN_HARRIS', 1.5,
+               128, 32, 128, 32),
+    ParitySpec("panorama_fisheye", build_panorama_fisheye, (64, 48), 2, 'GAUSSIAN', 1.5,
                128, 32, 128, 32),
 )

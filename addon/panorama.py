@@ -1,0 +1,75 @@
+"""Cycles' panoramic camera projections (kernel/camera/projection.h): a viewplane point (u, v) of
+a panoramic camera to the direction of its ray in the camera's own frame (Blender's: -Z forward,
++Y up, +X right), and which points have a ray at all (a fisheye's circle, the mirror ball).
+
+Cycles computes these directions in a frame of its own (x forward, z up: the equirectangular
+map's axes; the mirror ball looks along -y) and turns the camera matrix to meet it
+(blender/camera.cpp, blender_camera_matrix). The functions here return the directions already
+turned into Blender's camera frame, so the camera applies the object's rotation alone. Float64
+numpy: a panoramic camera's rays are one pass per block of samples, not per bounce.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+# Cycles' panorama types DACRT renders; Equiangular Cubemap Face, Fisheye Lens Polynomial and
+# Central Cylindrical are refused by the export with their name.
+SUPPORTED = ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'MIRRORBALL')
+
+
+def sees(cam, u, v) -> np.ndarray:
+    """Whether the viewplane points (u, v) have a ray (Cycles gives the others none: they stay
+    empty, alpha 0)."""
+    kind = cam.panorama_type
+    if kind == 'FISHEYE_EQUIDISTANT':
+        return np.hypot((u - 0.5) * 2.0, (v - 0.5) * 2.0) <= 1.0
+    if kind == 'FISHEYE_EQUISOLID':
+        w, h = cam.sensor_mm
+        return np.hypot((u - 0.5) * w, (v - 0.5) * h) <= 2.0 * cam.fisheye_lens * np.sin(cam.fisheye_fov * 0.25)
+    if kind == 'MIRRORBALL':
+        return (2.0 * u - 1.0) ** 2 + (2.0 * v - 1.0) ** 2 <= 1.0
+    return np.ones(np.shape(u), bool)
+
+
+def directions(cam, u, v) -> np.ndarray:
+    """(3, n) unit directions in Blender's camera frame for viewplane points (u, v) (n,); rows
+    where sees() is False hold the view axis (0, 0, -1)."""
+    kind = cam.panorama_type
+    u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
+    if kind == 'EQUIRECTANGULAR':
+        (lon0, lon1), (lat0, lat1) = cam.longitude, cam.latitude
+        phi = (lon0 - lon1) * u - lon0
+        theta = (lat0 - lat1) * v - lat0 + 0.5 * np.pi
+        d = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+    elif kind == 'MIRRORBALL':
+        x, z = 2.0 * u - 1.0, 2.0 * v - 1.0
+        y = -np.sqrt(np.maximum(1.0 - x * x - z * z, 0.0))
+        # the view ray I = (0, -1, 0) reflected about the ball's normal (x, y, z): 2 (n.I) n - I
+        k = -2.0 * y
+        d = np.stack([k * x, k * y + 1.0, k * z])
+        local = np.stack([d[0], d[2], d[1]])        # Cycles' mirror-ball frame: looks along -y
+        return _unit(np.where(sees(cam, u, v), local, [[0.0], [0.0], [-1.0]]))
+    else:                                           # the fisheyes
+        if kind == 'FISHEYE_EQUIDISTANT':
+            x, y = (u - 0.5) * 2.0, (v - 0.5) * 2.0
+            r = np.hypot(x, y)
+            theta = r * cam.fisheye_fov * 0.5
+        elif kind == 'FISHEYE_EQUISOLID':
+            w, h = cam.sensor_mm
+            x, y = (u - 0.5) * w, (v - 0.5) * h
+            r = np.hypot(x, y)
+            theta = 2.0 * np.arcsin(np.minimum(r / (2.0 * cam.fisheye_lens), 1.0))
+        else:
+            raise ValueError(f"panorama type {kind!r} is not one of {', '.join(SUPPORTED)}")
+        with np.errstate(invalid='ignore', divide='ignore'):
+            c = np.where(r != 0.0, x / r, 0.0)
+        phi = np.arccos(np.clip(c, -1.0, 1.0))
+        phi = np.where(y < 0.0, -phi, phi)
+        d = np.stack([np.cos(theta), -np.cos(phi) * np.sin(theta), np.sin(phi) * np.sin(theta)])
+    # Cycles' panorama frame (x forward, y left, z up) in Blender's camera frame
+    local = np.stack([-d[1], d[2], -d[0]])
+    return _unit(np.where(sees(cam, u, v), local, [[0.0], [0.0], [-1.0]]))
+
+
+def _unit(d: np.ndarray) -> np.ndarray:
+    return d / np.linalg.norm(d, axis=0)

@@ -1,0 +1,118 @@
+"""Panoramic cameras as Cycles maps them (kernel/camera/projection.h, addon/panorama.py), checked
+against closed forms: an equirectangular camera's longitude and latitude per pixel, a fisheye's
+angle from the view axis (equidistant: proportional to the radius; equisolid: r = 2 f sin(theta/2)
+on the fitted sensor), the mirror ball's reflections, and the pixels outside a fisheye's circle:
+no ray, opaque black, while a uniform world fills the circle exactly."""
+import numpy as np
+import pytest
+
+from addon import scenedata as sd
+from addon.camera import CameraModel
+
+from .scenes import render, rotation_x
+
+
+def pano(kind, **kw):
+    args = dict(kind='PANO', panorama_type=kind, matrix=np.eye(4), viewplane=(0.0, 1.0, 0.0, 1.0),
+                tan_half_fov=1.0, clip_start=0.5, clip_end=100.0, width=200, height=100)
+    args.update(kw)
+    return sd.Camera(**args)
+
+
+def rays_at(cam, u, v):
+    """Rays through viewplane points (u, v) of a camera whose viewplane is the unit square."""
+    model = CameraModel(cam)
+    rx = np.asarray(u, np.float32) * model.width
+    ry = np.asarray(v, np.float32) * model.height
+    return model, model.rays(rx, ry)
+
+
+def test_equirectangular_longitude_and_latitude():
+    rng = np.random.default_rng(1)
+    u, v = rng.uniform(0, 1, 500), rng.uniform(0, 1, 500)
+    lon, lat = (-2.0, 1.5), (-0.4, 1.2)
+    _, (O, D, tmax) = rays_at(pano('EQUIRECTANGULAR', longitude=lon, latitude=lat), u, v)
+    # u runs from longitude min at the left edge to max at the right (longitude grows to the
+    # right of the view axis, -Z), v from latitude min at the bottom to max at the top
+    want_lon = lon[0] + np.float32(u) * (lon[1] - lon[0])
+    want_lat = lat[0] + np.float32(v) * (lat[1] - lat[0])
+    assert np.allclose(np.arcsin(np.clip(D[1], -1, 1)), want_lat, atol=2e-5)
+    assert np.allclose(np.arctan2(D[0], -D[2]), want_lon, atol=2e-5)
+    assert np.allclose(np.linalg.norm(D, axis=0), 1.0, atol=1e-6)
+    assert np.allclose(O, 0.5 * D, atol=1e-6) and np.allclose(tmax, 99.5)
+
+
+def test_equirectangular_full_sphere_axes_and_rotation():
+    # centre: forward; quarter turns right, left, behind; top and bottom: up and down
+    uv = [(0.5, 0.5), (0.75, 0.5), (0.25, 0.5), (0.0, 0.5), (0.5, 1.0), (0.5, 0.0)]
+    want = [(0, 0, -1), (1, 0, 0), (-1, 0, 0), (0, 0, 1), (0, 1, 0), (0, -1, 0)]
+    m = rotation_x(0.6)
+    m[:3, 3] = (1.0, 2.0, 3.0)
+    _, (O, D, _) = rays_at(pano('EQUIRECTANGULAR', matrix=m), *zip(*uv))
+    assert np.allclose(D.T, np.asarray(want, float) @ m[:3, :3].T, atol=1e-6)
+    assert np.allclose(O, m[:3, 3:4] + 0.5 * D, atol=1e-6)
+
+
+@pytest.mark.parametrize('fov', [np.pi, np.radians(230.0)])
+def test_fisheye_equidistant_angle_grows_with_radius(fov):
+    rng = np.random.default_rng(2)
+    u, v = rng.uniform(0, 1, 600), rng.uniform(0, 1, 600)
+    model, (_, D, tmax) = rays_at(pano('FISHEYE_EQUIDISTANT', fisheye_fov=fov, width=100), u, v)
+    x, y = (np.float32(u) - 0.5) * 2, (np.float32(v) - 0.5) * 2
+    r = np.hypot(x, y)
+    inside = r <= 1.0
+    assert inside.any() and (~inside).any()
+    theta = np.arccos(np.clip(-D[2], -1, 1))
+    assert np.allclose(theta[inside], r[inside] * fov / 2, atol=2e-5)
+    azimuth = np.arctan2(D[1], D[0])[inside & (r > 1e-3)]
+    assert np.allclose(np.cos(azimuth - np.arctan2(y, x)[inside & (r > 1e-3)]), 1.0, atol=1e-5)
+    assert (tmax[~inside] == 0).all() and (tmax[inside] > 0).all()
+    seen = model.sees(np.float32(u) * model.width, np.float32(v) * model.height)
+    assert np.array_equal(seen, inside)
+
+
+def test_fisheye_equisolid_radius_on_the_sensor():
+    lens, sensor = 8.0, (36.0, 18.0)
+    rng = np.random.default_rng(3)
+    u, v = rng.uniform(0, 1, 600), rng.uniform(0, 1, 600)
+    _, (_, D, tmax) = rays_at(pano('FISHEYE_EQUISOLID', fisheye_lens=lens, fisheye_fov=np.pi,
+                                   sensor_mm=sensor), u, v)
+    r_mm = np.hypot((np.float32(u) - 0.5) * sensor[0], (np.float32(v) - 0.5) * sensor[1])
+    inside = r_mm <= 2 * lens * np.sin(np.pi / 4)          # the 180-degree circle
+    assert inside.any() and (~inside).any()
+    theta = np.arccos(np.clip(-D[2], -1, 1))
+    assert np.allclose(2 * lens * np.sin(theta[inside] / 2), r_mm[inside], atol=1e-4)
+    assert (tmax[~inside] == 0).all()
+
+
+def test_mirror_ball_reflections():
+    # the ball's centre reflects straight back at the camera's view: forward; at 45 degrees of
+    # the ball's normal, a quarter turn; at its rim, behind the camera
+    s = np.sqrt(0.5)
+    uv = [(0.5, 0.5), ((1 + s) / 2, 0.5), ((1 - s) / 2, 0.5), (0.5, (1 + s) / 2), (1.0, 0.5)]
+    want = [(0, 0, -1), (1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, 0, 1)]
+    _, (_, D, tmax) = rays_at(pano('MIRRORBALL'), *zip(*uv))
+    assert np.allclose(D.T, want, atol=2e-3)
+    _, (_, _, tmax) = rays_at(pano('MIRRORBALL'), [0.05, 0.5], [0.05, 0.5])
+    assert tmax[0] == 0 and tmax[1] > 0
+
+
+def test_fisheye_under_a_uniform_world_fills_its_circle_exactly():
+    """World only, no geometry: every ray inside the circle sees the world's colour, pixels
+    wholly outside it get no ray and stay black but opaque (Cycles); pixel depth is the
+    distance, as Cycles gives it for panoramic cameras."""
+    cam = pano('FISHEYE_EQUIDISTANT', fisheye_fov=np.pi, width=24, height=24)
+    data = sd.SceneData(geometry=sd.Geometry.empty(),
+                        materials=[sd.Material('default', np.full(3, 0.8), np.zeros(3))], lights=[], camera=cam,
+                        world=np.array([0.25, 0.5, 1.0]),
+                        settings=sd.Settings(samples=4, max_bounces=1, filter_type='BOX', filter_width=1.0))
+    integ = render(data)
+    img = integ.film.combined()
+    c = (np.arange(24) + 0.5) / 24 - 0.5
+    r_far = np.hypot(*np.meshgrid(np.abs(c) + 0.5 / 24, np.abs(c) + 0.5 / 24)) * 2   # pixel's farthest corner
+    r_near = np.hypot(*np.meshgrid(np.maximum(np.abs(c) - 0.5 / 24, 0), np.maximum(np.abs(c) - 0.5 / 24, 0))) * 2
+    inside, outside = r_far <= 1.0, r_near > 1.0
+    assert inside.sum() > 300 and outside.sum() > 50
+    assert np.allclose(img[inside], [0.25, 0.5, 1.0, 1.0], atol=1e-6)
+    assert np.allclose(img[outside], [0.0, 0.0, 0.0, 1.0])
+    assert np.allclose(img[..., 3], 1.0)
