@@ -171,10 +171,17 @@ class CameraModel:
         """Distance of world points (3,n) along the view axis (Cycles' camera_z_depth), or from
         the camera for a panoramic one (as Cycles' camera_z_depth gives it there)."""
         if self.pano is not None:
-            return np.sqrt(sum((points[a] - self._pos32[a]) ** 2 for a in range(3))).astype(np.float32)
+            return self.distance(points)
         f = -self._rot32[:, 2]
         return f[0] * (points[0] - self._pos32[0]) + f[1] * (points[1] - self._pos32[1]) + \
             f[2] * (points[2] - self._pos32[2])
+
+    def distance(self, points: np.ndarray) -> np.ndarray:
+        """Cycles' camera_distance of world points (3,n), what the Mist pass measures: from the
+        camera's position, or along its view axis for an orthographic camera."""
+        if self.kind == 'ORTHO':
+            return np.abs(self.z_depth(points))
+        return np.sqrt(sum((points[a] - self._pos32[a]) ** 2 for a in range(3))).astype(np.float32)
 
     def project(self, points: np.ndarray):
         """World points (n,3) -> full-frame raster (rx, ry) float64 and z-depth; inverse of rays()."""

@@ -18,12 +18,13 @@ from .allocator import render_heap
 # Extra passes: (scenedata/film name, view-layer toggle, channels, chan_id, type)
 EXTRA_PASSES = (('Depth', 'use_pass_z', 1, 'Z', 'VALUE'),
                 ('Normal', 'use_pass_normal', 3, 'XYZ', 'VECTOR'),
-                ('DiffCol', 'use_pass_diffuse_color', 3, 'RGB', 'COLOR'))
+                ('DiffCol', 'use_pass_diffuse_color', 3, 'RGB', 'COLOR'),
+                ('Mist', 'use_pass_mist', 1, 'Z', 'VALUE'))
 # Blender's own names for these passes (what the compositor and multilayer EXR use). Blender
 # renamed the short "DiffCol" to "Diffuse Color" (5.0.1: "Diffuse Color", checked; 4.2: "DiffCol";
 # the 4.4 boundary follows the release history and is not checked here).
 RESULT_PASS_NAME = {'Depth': 'Depth', 'Normal': 'Normal',
-                    'DiffCol': 'Diffuse Color' if bpy.app.version >= (4, 4, 0) else 'DiffCol'}
+                    'DiffCol': 'Diffuse Color' if bpy.app.version >= (4, 4, 0) else 'DiffCol', 'Mist': 'Mist'}
 
 
 # Stats of the latest render per view layer, for scripts (addon.last_render_stats()); replaced

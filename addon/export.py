@@ -78,7 +78,7 @@ LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')
 # is the view layer itself, 'cycles' its Cycles settings. The engine registers only the passes
 # it writes, so these would be missing from the result without a word.
 _UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
-    ('mist', 'Mist'), ('position', 'Position'), ('vector', 'Vector'), ('uv', 'UV'),
+    ('position', 'Position'), ('vector', 'Vector'), ('uv', 'UV'),
     ('object_index', 'Object Index'), ('material_index', 'Material Index'),
     ('diffuse_direct', 'Diffuse Direct'), ('diffuse_indirect', 'Diffuse Indirect'),
     ('glossy_direct', 'Glossy Direct'), ('glossy_indirect', 'Glossy Indirect'),
@@ -94,6 +94,10 @@ _UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
     ('cycles', 'use_pass_shadow_catcher', 'Shadow Catcher'),
     ('cycles', 'use_pass_volume_direct', 'Volume Direct'),
     ('cycles', 'use_pass_volume_indirect', 'Volume Indirect'))
+
+
+# World > Mist Pass falloff as Cycles' exponent (blender/sync.cpp)
+MIST_FALLOFF = {'QUADRATIC': 2.0, 'LINEAR': 1.0, 'INVERSE_QUADRATIC': 0.5}
 
 
 class ExportError(Exception):
@@ -1046,20 +1050,24 @@ class _Exporter:
         if d is None:
             raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
         passes = tuple(name for name, on in (('Depth', vl.use_pass_z), ('Normal', vl.use_pass_normal),
-                                              ('DiffCol', vl.use_pass_diffuse_color)) if on)
+                                              ('DiffCol', vl.use_pass_diffuse_color),
+                                              ('Mist', vl.use_pass_mist)) if on)
         missing = [label for owner, attr, label in _UNRENDERED_PASSES
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
         missing += [f"AOV '{a.name}'" for a in getattr(vl, 'aovs', ())]
         missing += [f"light group '{g.name}'" for g in getattr(vl, 'lightgroups', ())]
         if missing:
             self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, Depth, "
-                                             f"Normal and Diffuse Color only; not in the result: "
+                                             f"Normal, Diffuse Color and Mist only; not in the result: "
                                              f"{', '.join(missing)}"))
+        mist = scene.world.mist_settings if scene.world is not None else None
+        mist = (0.0, 100.0, 1.0) if mist is None else (
+            float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
         return sd.Settings(samples=d.samples, max_bounces=d.max_bounces, filter_type=d.filter_type,
                            filter_width=d.filter_width, seed=d.seed,
                            threads=0 if r.threads_mode == 'AUTO' else r.threads,
                            partition=d.partition.lower(), film_transparent=r.film_transparent,
-                           passes=passes, use_adaptive_sampling=d.use_adaptive_sampling,
+                           passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
                            adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
     # -- instances -----------------------------------------------------------------------

@@ -1,7 +1,8 @@
 """The film: per-pixel accumulation of samples and the passes read back by the engine.
 
-Owns the Combined sums (RGBA, premultiplied, linear), the optional Depth, Normal and DiffCol
-(albedo) passes, the per-pixel count of accepted samples, the count of samples dropped for
+Owns the Combined sums (RGBA, premultiplied, linear), the optional Depth, Normal, DiffCol
+(albedo) and Mist passes (Mist sums each sample's 1 - mist, 0 where it saw no surface, and
+reads back 1 - their mean, as Cycles stores it), the per-pixel count of accepted samples, the count of samples dropped for
 being NaN or infinite and, for adaptive sampling, a second Combined sum of the odd-numbered
 samples (weighted 2, Cycles' adaptive auxiliary buffer) and the error estimate built from it. Pixel values are the plain mean of the samples that landed in the pixel
 (the pixel filter is applied by importance sampling the ray positions, see filter.py), so a
@@ -14,7 +15,7 @@ import numpy as np
 
 import dacrt
 
-PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3}
+PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3, 'Mist': 1}
 BACKGROUND_DEPTH = 1e10    # what Cycles reports for pixels whose first sample saw no surface
 
 
@@ -43,7 +44,7 @@ class Film:
         """Accumulate a block of samples: pixels (P,) distinct film indices; rgba (4, P, S)
         premultiplied, channel-major, S samples per pixel with sample numbers first_sample ..
         first_sample + S - 1; data holds the averaged passes' per-sample values ('Normal',
-        'DiffCol': (3, P, S)).
+        'DiffCol': (3, P, S); 'Mist': (1, P, S) of 1 - mist).
 
         A sample with any non-finite Combined or pass value is dropped whole (counted in
         nan_dropped, not in its pixel's sample count). Returns the number dropped."""
@@ -94,11 +95,13 @@ class Film:
         return self._mean(self._sum)
 
     def pass_image(self, name: str) -> np.ndarray:
-        """(H, W, channels) float32 image of an enabled pass ('Depth', 'Normal', 'DiffCol')."""
+        """(H, W, channels) float32 image of an enabled pass ('Depth', 'Normal', 'DiffCol', 'Mist')."""
         if name not in self.passes:
             raise KeyError(f"pass {name!r} was not requested (requested: {list(self.passes)})")
         if name == 'Depth':
             return self._depth.reshape(self.height, self.width, 1).copy()
+        if name == 'Mist':
+            return 1.0 - self._mean(self._pass_sum[name])
         return self._mean(self._pass_sum[name])
 
     def sample_counts(self) -> np.ndarray:

@@ -298,6 +298,9 @@ def _validate(sd: SceneData):
         raise ValueError(f"settings.threads must be >= 0 (0 = all cores), got {s.threads!r}")
     if not 0 <= int(s.seed) < 2 ** 63:
         raise ValueError(f"settings.seed must be a non-negative integer, got {s.seed!r}")
+    mist = np.asarray(s.mist, np.float64)
+    if mist.shape != (3,) or not np.isfinite(mist).all() or mist[1] < 0 or mist[2] < 0:
+        raise ValueError(f"settings.mist must be (start, depth >= 0, falloff >= 0), finite, got {s.mist!r}")
 
 
 class Integrator:
@@ -830,6 +833,12 @@ class Integrator:
         if 'DiffCol' in want:
             data['DiffCol'] = np.zeros((3, n), F32)
             data['DiffCol'][:, cols] = albedo
+        if 'Mist' in want:                          # Cycles' mist of the first surface, stored as 1 - mist
+            start, depth, falloff = self.settings.mist
+            mist = np.clip((self.camera.distance(P) - F32(start)) * F32(1.0 / depth if depth > 0 else 0.0),
+                           0.0, 1.0)
+            data['Mist'] = np.zeros((1, n), F32)
+            data['Mist'][0, cols] = 1.0 - mist ** F32(falloff)
         if 'Depth' in want:
             first = np.flatnonzero(samp == 0)       # Cycles writes depth from sample 0 only
             if len(first):

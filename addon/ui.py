@@ -94,6 +94,7 @@ class VIEWLAYER_PT_dacrt_passes(DACRTPanel, Panel):
         col.prop(vl, "use_pass_z")
         col.prop(vl, "use_pass_normal")
         col.prop(vl, "use_pass_diffuse_color", text="Diffuse Color")
+        col.prop(vl, "use_pass_mist")
 
 
 class DATA_PT_dacrt_light(DACRTPanel, Panel):

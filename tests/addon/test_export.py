@@ -523,21 +523,22 @@ def test_features_rendered_without_are_reported(scene, exported):
 
 
 def test_passes_dacrt_does_not_write_are_reported(scene, exported):
-    """A view layer asking for passes Cycles renders and DACRT does not (Mist, AO, Cryptomatte,
-    an AOV...) is told which are missing from the result; the passes DACRT writes are not
-    named, and nothing is said when only those are on."""
+    """A view layer asking for passes Cycles renders and DACRT does not (Emission, AO,
+    Cryptomatte, an AOV...) is told which are missing from the result; the passes DACRT writes
+    are not named, and nothing is said when only those are on."""
     setup(scene)
     vl = bpy.context.view_layer
-    vl.use_pass_z = vl.use_pass_normal = vl.use_pass_diffuse_color = True
+    vl.use_pass_z = vl.use_pass_normal = vl.use_pass_diffuse_color = vl.use_pass_mist = True
     assert not any("not in the result" in m for _, m in exported().messages)
-    vl.use_pass_mist = vl.use_pass_ambient_occlusion = vl.use_pass_cryptomatte_object = True
+    vl.use_pass_emit = vl.use_pass_ambient_occlusion = vl.use_pass_cryptomatte_object = True
     vl.cycles.denoising_store_passes = True
     vl.aovs.add().name = "Wetness"
     notes = [m for _, m in exported().messages if "not in the result" in m]
     assert len(notes) == 1, notes
-    for label in ("Mist", "Ambient Occlusion", "Cryptomatte Object", "Denoising Data", "AOV 'Wetness'"):
+    for label in ("Emission", "Ambient Occlusion", "Cryptomatte Object", "Denoising Data", "AOV 'Wetness'"):
         assert label in notes[0], (label, notes[0])
-    assert "Depth," in notes[0] and "Depth" not in notes[0].split("not in the result")[1]
+    written = notes[0].split("not in the result")[1]
+    assert "Depth," in notes[0] and "Depth" not in written and "Mist" not in written
 
 
 def test_nan_vertices_dropped_with_message(scene, exported):
@@ -961,6 +962,16 @@ def test_settings_follow_scene_dacrt_and_blender(scene, exported):
     d.use_adaptive_sampling, d.adaptive_threshold, d.adaptive_min_samples = True, 0.02, 12
     s = exported().settings
     assert s.use_adaptive_sampling and s.adaptive_threshold == pytest.approx(0.02) and s.adaptive_min_samples == 12
+    # the Mist pass's settings: the world's (falloff as Cycles' exponent), Cycles' film defaults without one
+    layer.use_pass_mist = True
+    scene.world = None
+    s = exported().settings
+    assert s.passes == ('Depth', 'DiffCol', 'Mist') and s.mist == (0.0, 100.0, 1.0)
+    scene.world = bpy.data.worlds.new("W")
+    for falloff, power in (('QUADRATIC', 2.0), ('LINEAR', 1.0), ('INVERSE_QUADRATIC', 0.5)):
+        m = scene.world.mist_settings
+        m.start, m.depth, m.falloff = 1.5, 7.0, falloff
+        assert exported().settings.mist == pytest.approx((1.5, 7.0, power))
 
 
 def test_materials_no_triangle_uses_are_never_evaluated(scene, exported, monkeypatch):

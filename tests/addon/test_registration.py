@@ -177,7 +177,8 @@ def test_panels_draw_existing_properties(scene):
         drawn[name] = layout.drawn
     assert {'samples', 'max_bounces', 'filter_type', 'filter_width', 'seed', 'partition',
             'threads_mode', 'threads'} <= set(drawn['RENDER_PT_dacrt'])
-    assert {'use_pass_z', 'use_pass_normal', 'use_pass_diffuse_color'} <= set(drawn['VIEWLAYER_PT_dacrt_passes'])
+    assert {'use_pass_z', 'use_pass_normal', 'use_pass_diffuse_color', 'use_pass_mist'} <= \
+        set(drawn['VIEWLAYER_PT_dacrt_passes'])
     assert {'energy', 'color', 'shape', 'size', 'spread'} <= set(drawn['DATA_PT_dacrt_light'])
     assert drawn['MATERIAL_PT_dacrt_surface'] == ['node_view'] == drawn['WORLD_PT_dacrt_surface']
     for kind in ('POINT', 'SPOT', 'SUN'):

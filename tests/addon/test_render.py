@@ -49,9 +49,12 @@ def test_demo_scene_renders_a_plausible_image(scene, tmp_path):
 def test_passes_present_when_enabled(scene, tmp_path):
     lit_plane_scene(scene)
     exr = scenes.read_exr(scenes.render_exr(tmp_path / "plain.exr", multilayer=True))
-    assert not any(".Depth." in c or ".Normal." in c or ".Diffuse Color." in c for c in exr)
+    assert not any(".Depth." in c or ".Normal." in c or ".Diffuse Color." in c or ".Mist." in c for c in exr)
     layer = bpy.context.view_layer
-    layer.use_pass_z = layer.use_pass_normal = layer.use_pass_diffuse_color = True
+    layer.use_pass_z = layer.use_pass_normal = layer.use_pass_diffuse_color = layer.use_pass_mist = True
+    scenes.world((0, 0, 0), 0.0)
+    mist = scene.world.mist_settings
+    mist.start, mist.depth, mist.falloff = 4.0, 2.0, 'LINEAR'
     exr = scenes.read_exr(scenes.render_exr(tmp_path / "passes.exr", multilayer=True))
     name = layer.name
     depth = exr[f"{name}.Depth.Z"]
@@ -62,6 +65,10 @@ def test_passes_present_when_enabled(scene, tmp_path):
     assert np.allclose(depth, 5.0, rtol=1e-4)                # z-depth of the plane
     assert np.allclose(normal, (0, 0, 1), atol=1e-5)
     assert np.allclose(albedo, (0.2, 0.4, 0.6), atol=1e-5)
+    # Mist: (distance - 4) / 2 from the camera 5 m above the plane, 5 to 5.5 m away in this view
+    mist = exr[f"{name}.Mist.Z"]
+    assert mist.shape == (12, 16) and np.all((mist > 0.5 - 1e-4) & (mist < 0.75))
+    assert mist[0, 0] > mist[5:7, 7:9].max() + 0.1 and mist[5:7, 7:9].max() < 0.52
     combined = scenes.rgba(exr, f"{name}.Combined.")
     assert combined[..., :3].mean() > 0
 

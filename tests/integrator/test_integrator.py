@@ -399,6 +399,24 @@ def test_data_passes():
         render(plane_scene(samples=1)).film.pass_image('Depth')
 
 
+@pytest.mark.parametrize('start,depth,falloff', [(0.1, 1.0, 2.0), (0.2, 0.5, 1.0), (0.0, 2.0, 0.5),
+                                                  (1.0, 3.0, 2.0)])
+def test_mist_pass_closed_form(start, depth, falloff):
+    """Cycles' mist of the first surface: ((distance - start) / depth) clamped to [0, 1], to
+    the falloff's power; the orthographic camera's distance is along its axis (0.5 to the
+    plane everywhere); rays that meet nothing give 1, partly covered pixels the mean."""
+    scene = plane_scene(samples=8, passes=('Mist',), mist=(start, depth, falloff))
+    scene.camera = ortho_down(height=0.5, width=8, px=4)
+    v, t = quad((-0.00025, 0.0, 0.0), 0.00025, 1.0)            # covers the left half of the view
+    scene.geometry = geometry([(v, t, 1, ALL_VIS)])
+    mist = render(scene).film.pass_image('Mist')[..., 0]
+    want = min(max((0.5 - start) / depth, 0.0), 1.0) ** falloff
+    assert mist.shape == (4, 8)
+    assert np.allclose(mist[:, :3], want, atol=1e-6)          # pixels wholly on the plane
+    assert np.allclose(mist[:, 5:], 1.0)                       # pixels wholly off it
+    assert np.all((mist[:, 3:5] >= min(want, 1.0) - 1e-6) & (mist[:, 3:5] <= 1.0 + 1e-6))
+
+
 # --- textures -----------------------------------------------------------------------------------
 
 def test_texture_lookup_modes():
