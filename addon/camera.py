@@ -135,18 +135,24 @@ class CameraModel:
     def sees(self, rx, ry):
         """Which raster positions have a camera ray: None when all do (every camera but a
         fisheye or mirror ball, whose rays end at the edge of their circle)."""
-        if self.pano is None or self.pano.panorama_type == 'EQUIRECTANGULAR':
-            return None
-        return panorama.sees(self.pano, *self._viewplane(rx, ry))
+        return self._sees_viewplane(*self._viewplane(rx, ry))
+
+    def _sees_viewplane(self, u, v):
+        return None if self.pano is None else panorama.sees(self.pano, u, v)
 
     def _panorama_rays(self, rx, ry, records):
         """Cycles' camera_sample_panorama: from the camera position along the projection's
         direction, starting clip_start along the ray and clip_end - clip_start long (distances,
-        not planes); positions without a ray (sees()) get a ray of length 0, which meets nothing."""
-        d = self.rot @ panorama.directions(self.pano, *self._viewplane(rx, ry))
+        not planes); positions without a ray (sees()) get the view axis and a length of 0, which
+        meets nothing."""
+        u, v = self._viewplane(rx, ry)
+        local = panorama.directions(self.pano, u, v)
+        seen = self._sees_viewplane(u, v)
+        if seen is not None:
+            local = np.where(seen, local, [[0.0], [0.0], [-1.0]])
+        d = self.rot @ local
         D = np.ascontiguousarray(d, np.float32)
         O = np.ascontiguousarray(self.pos[:, None] + self.clip_start * d, np.float32)
-        seen = self.sees(rx, ry)
         tmax = np.full(D.shape[1], self.clip_end - self.clip_start, np.float32)
         if seen is not None:
             tmax[~seen] = 0.0

@@ -17,9 +17,9 @@ import numpy as np
 SUPPORTED = ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'MIRRORBALL')
 
 
-def sees(cam, u, v) -> np.ndarray:
+def sees(cam, u, v):
     """Whether the viewplane points (u, v) have a ray (Cycles gives the others none: they stay
-    empty, alpha 0)."""
+    black and opaque); None when every point has one (equirectangular)."""
     kind = cam.panorama_type
     if kind == 'FISHEYE_EQUIDISTANT':
         return np.hypot((u - 0.5) * 2.0, (v - 0.5) * 2.0) <= 1.0
@@ -28,12 +28,12 @@ def sees(cam, u, v) -> np.ndarray:
         return np.hypot((u - 0.5) * w, (v - 0.5) * h) <= 2.0 * cam.fisheye_lens * np.sin(cam.fisheye_fov * 0.25)
     if kind == 'MIRRORBALL':
         return (2.0 * u - 1.0) ** 2 + (2.0 * v - 1.0) ** 2 <= 1.0
-    return np.ones(np.shape(u), bool)
+    return None
 
 
 def directions(cam, u, v) -> np.ndarray:
-    """(3, n) unit directions in Blender's camera frame for viewplane points (u, v) (n,); rows
-    where sees() is False hold the view axis (0, 0, -1)."""
+    """(3, n) unit directions in Blender's camera frame for viewplane points (u, v) (n,). Where
+    sees() is False they are finite but meaningless: the camera gives those points no ray."""
     kind = cam.panorama_type
     u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
     if kind == 'EQUIRECTANGULAR':
@@ -47,8 +47,7 @@ def directions(cam, u, v) -> np.ndarray:
         # the view ray I = (0, -1, 0) reflected about the ball's normal (x, y, z): 2 (n.I) n - I
         k = -2.0 * y
         d = np.stack([k * x, k * y + 1.0, k * z])
-        local = np.stack([d[0], d[2], d[1]])        # Cycles' mirror-ball frame: looks along -y
-        return _unit(np.where(sees(cam, u, v), local, [[0.0], [0.0], [-1.0]]))
+        return _unit(np.stack([d[0], d[2], d[1]]))  # Cycles' mirror-ball frame: looks along -y
     else:                                           # the fisheyes
         if kind == 'FISHEYE_EQUIDISTANT':
             x, y = (u - 0.5) * 2.0, (v - 0.5) * 2.0
@@ -67,8 +66,7 @@ def directions(cam, u, v) -> np.ndarray:
         phi = np.where(y < 0.0, -phi, phi)
         d = np.stack([np.cos(theta), -np.cos(phi) * np.sin(theta), np.sin(phi) * np.sin(theta)])
     # Cycles' panorama frame (x forward, y left, z up) in Blender's camera frame
-    local = np.stack([-d[1], d[2], -d[0]])
-    return _unit(np.where(sees(cam, u, v), local, [[0.0], [0.0], [-1.0]]))
+    return _unit(np.stack([-d[1], d[2], -d[0]]))
 
 
 def _unit(d: np.ndarray) -> np.ndarray:
