@@ -19,13 +19,16 @@ Materials (what a diffuse renderer can represent exactly):
   Separate/Combine Color, Math, Map Range, Clamp), evaluated per texel and baked into the
   material's texture (nodeeval.py);
 - Add Shader and Mix Shader with a constant factor, combining the above linearly;
+- transparency: the Transparent BSDF (its colour) and the Principled BSDF's Alpha (constant, or
+  an Image Texture's Alpha output), and a Mix Shader between a Transparent BSDF and another
+  shader whose factor is an Image Texture's Alpha (cut-outs);
 - node groups and reroutes are transparent, as Cycles flattens them (nodegraph.py).
 Documented diffuse approximation of everything else: a shader node of another kind becomes a
 diffuse surface with its constant 'Color' (or 'Base Color') input, 0.8 grey without one; a
 linked input that is not an Image Texture, an RGB/Value node or (for a diffuse colour) one of
 the colour nodes above uses its own value (the socket's, or where its chain left a group); the
 Principled BSDF keeps only its diffuse base (no specular layer, metal, coat, sheen,
-transmission, subsurface or alpha); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
+transmission or subsurface); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
 BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
 texture coordinates other than the UV map (and Mapping nodes of it) are read as the active
 render UV map.
@@ -455,18 +458,39 @@ class _Texture:
 
 class _Closure:
     """Linear combination of what a diffuse renderer keeps:
-    albedo = const + tex_weight * texture, emission constant."""
-    def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0):
+    albedo = const + tex_weight * texture, emission constant, and the weight of transparent
+    closures (`transparent`, rgb). `opacity` (an image's alpha, (_Texture, inverted)) makes the
+    shader opacity x (everything else) + (1 - opacity) x transparent at each hit."""
+    def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0,
+                 transparent=(0, 0, 0), opacity=None):
         self.const = np.array(const, np.float64)
         self.emission = np.array(emission, np.float64)
         self.texture = texture
         self.tex_weight = np.array(tex_weight, np.float64)
         self.holdout = float(holdout)     # weight of a Holdout shader
+        self.transparent = np.array(transparent, np.float64)
+        self.opacity = opacity
 
     def scaled(self, f):
-        return _Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f)
+        return _Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
+                        self.transparent * f, self.opacity)
+
+    def only_transparent(self):
+        return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
+                                                      self.tex_weight.any() or self.holdout or self.opacity)
+
+    def is_empty(self):
+        return not (self.const.any() or self.emission.any() or self.tex_weight.any() or self.holdout
+                    or self.transparent.any())
 
     def plus(self, other, reasons):
+        opacity = self.opacity or other.opacity
+        if self.opacity is not None and other.opacity is not None or \
+                (self.opacity is not None and not other.is_empty()) or \
+                (other.opacity is not None and not self.is_empty()):
+            # opacity multiplies the whole opaque part: a sum with other shaders has none
+            reasons.append("image alpha combined with other shaders; alpha ignored")
+            opacity = None
         tex, w = self.texture, self.tex_weight
         if other.texture is not None:
             if tex is None or tex.key == other.texture.key:
@@ -475,9 +499,10 @@ class _Closure:
                 reasons.append("two image textures mixed; the second as its average colour")
                 mean = other.texture.pixels[..., :3].reshape(-1, 3).mean(0)
                 return _Closure(self.const + other.const + other.tex_weight * mean,
-                                self.emission + other.emission, tex, w, self.holdout + other.holdout)
+                                self.emission + other.emission, tex, w, self.holdout + other.holdout,
+                                self.transparent + other.transparent, opacity)
         return _Closure(self.const + other.const, self.emission + other.emission, tex, w,
-                        self.holdout + other.holdout)
+                        self.holdout + other.holdout, self.transparent + other.transparent, opacity)
 
 
 def _nonnegative(v, label, reasons):
@@ -514,7 +539,7 @@ class _MaterialBuilder:
         if idx is None:
             idx = len(self.materials)
             self.materials.append(self._build(mat))
-            self.uses_texture.append(self.materials[-1].texture is not None)
+            self.uses_texture.append(self.materials[-1].texture is not None or self.materials[-1].opacity is not None)
             self._index[key] = idx
         return idx
 
@@ -540,9 +565,23 @@ class _MaterialBuilder:
         holdout = closure.holdout >= 1.0 - 1e-6
         if 0.0 < closure.holdout and not holdout:
             reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")
+        transparency = opacity = None
+        o_interp, o_ext, o_transform = 'Linear', 'REPEAT', None
+        if closure.transparent.any() and not holdout:
+            transparency = _nonnegative(closure.transparent.astype(np.float32), "transparency", reasons)
+            if closure.opacity is not None:
+                tex, inverted = closure.opacity
+                a = tex.pixels[..., 3:4]
+                a = np.clip(1.0 - a if inverted else a, 0.0, 1.0).astype(np.float32)
+                opacity = tex.texels(np.ascontiguousarray(np.concatenate([a, a, a, np.ones_like(a)], axis=-1)))
+                o_interp, o_ext, o_transform = tex.interpolation, tex.extension, tex.transform
+                if emission.any():
+                    reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
         return sd.Material(name=name, base_color=base,
                            emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
+                           transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
+                           opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout)
 
     @staticmethod
@@ -588,7 +627,15 @@ class _MaterialBuilder:
             a = self._shader(node.inputs[0], reasons, depth + 1)
             b = self._shader(node.inputs[1], reasons, depth + 1)
             return a.plus(b, reasons)
+        if t == 'BSDF_TRANSPARENT':
+            color, ok = constant_color(node.inputs['Color'])
+            if not ok:
+                reasons.append("Transparent BSDF colour driven by nodes; its own value used")
+            return _Closure(transparent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
         if t == 'MIX_SHADER':
+            alpha_mix = self._alpha_mix(node, reasons, depth)
+            if alpha_mix is not None:
+                return alpha_mix
             fac = _mix_factor(node, reasons, "Mix Shader")
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
@@ -608,11 +655,6 @@ class _MaterialBuilder:
                 v, ok = constant_value(s)
                 if v != 0.0 or not ok:
                     reasons.append(f"Principled {what} ignored")
-        alpha = node.inputs.get('Alpha')
-        if alpha is not None:
-            a, ok = constant_value(alpha)
-            if a != 1.0 or not ok:
-                reasons.append("Principled alpha ignored")
         _note_normal_inputs(node, reasons)
         c = self._color_closure(node.inputs['Base Color'], reasons)
         es = input_socket(node, 'Emission Strength')
@@ -623,7 +665,52 @@ class _MaterialBuilder:
             if not (c_ok and s_ok):
                 reasons.append("Principled emission driven by nodes; its own values used")
             c.emission = np.array(color, np.float64) * strength
+        # Cycles: alpha < 1 adds a white Transparent BSDF of weight 1 - alpha and scales the rest
+        # (emission included) by alpha
+        alpha = node.inputs.get('Alpha')
+        if alpha is None:
+            return c
+        opacity = self._image_alpha(alpha, reasons)
+        if opacity is not None:
+            c.opacity, c.transparent = opacity, np.ones(3)
+            return c
+        a, ok = constant_value(alpha)
+        if not ok:
+            reasons.append("Principled alpha driven by nodes; its own value used")
+        a = min(max(float(a), 0.0), 1.0) if np.isfinite(a) else 1.0
+        if a < 1.0:
+            c = c.scaled(a)
+            c.transparent = c.transparent + (1.0 - a)
         return c
+
+    def _image_alpha(self, socket, reasons, inverted=False):
+        """(_Texture, inverted) when socket is linked straight to an Image Texture's Alpha output."""
+        link = linked_link(socket)
+        if link is None or link.from_node.type != 'TEX_IMAGE' or link.from_socket.name != 'Alpha':
+            return None
+        tex = self._texture(link.from_node, reasons)
+        return None if tex is None else (tex, inverted)
+
+    def _alpha_mix(self, node, reasons, depth):
+        """A Mix Shader whose factor is an image's alpha, between a purely transparent shader and
+        another one (the usual cut-out leaf): that shader with the image as its opacity."""
+        link = linked_link(node.inputs['Fac'])
+        if link is None or link.from_node.type != 'TEX_IMAGE' or link.from_socket.name != 'Alpha':
+            return None
+        a = self._shader(node.inputs[1], reasons, depth + 1)
+        b = self._shader(node.inputs[2], reasons, depth + 1)
+        clear_a, clear_b = a.only_transparent(), b.only_transparent()
+        if clear_a == clear_b or a.opacity is not None or b.opacity is not None:
+            return None
+        opaque, clear = (b, a) if clear_a else (a, b)
+        if opaque.transparent.any() or opaque.holdout:
+            return None
+        # Mix = (1 - fac) A + fac B: fac is the opacity when A is the transparent one
+        opacity = self._image_alpha(node.inputs['Fac'], reasons, inverted=not clear_a)
+        if opacity is None:
+            return None
+        return _Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
+                        clear.transparent, opacity)
 
     def _color_closure(self, socket, reasons):
         """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes
@@ -1063,7 +1150,8 @@ class _Exporter:
         mist = scene.world.mist_settings if scene.world is not None else None
         mist = (0.0, 100.0, 1.0) if mist is None else (
             float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
-        return sd.Settings(samples=d.samples, max_bounces=d.max_bounces, filter_type=d.filter_type,
+        return sd.Settings(samples=d.samples, max_bounces=d.max_bounces,
+                           transparent_max_bounces=d.transparent_max_bounces, filter_type=d.filter_type,
                            filter_width=d.filter_width, seed=d.seed,
                            threads=0 if r.threads_mode == 'AUTO' else r.threads,
                            partition=d.partition.lower(), film_transparent=r.film_transparent,

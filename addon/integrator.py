@@ -15,6 +15,11 @@ ULPs off it, see _OFFSET_ULPS) and the tracer scenes, one per distinct ray-visib
 (camera rays see VIS_CAMERA triangles, bounce rays VIS_DIFFUSE, shadow rays VIS_SHADOW), built
 in the constructor and dropped when rendering ends. Nothing here knows Blender.
 
+Transparent surfaces (Transparent BSDF, Principled Alpha, image cut-outs) are passed or stopped
+at by each camera and bounce ray at random, weighted so the estimate stays unbiased, within
+the segment (no diffuse bounce counted); shadow rays that no opaque triangle stops are traced
+through a scene of the transparent triangles and dimmed by each (_through, _shadow_through).
+
 Per-ray data are (3, n) float32 structure-of-arrays; paths that end are compacted away after
 every vertex. The per-vertex arithmetic that numpy would run as dozens of passes on one core
 (camera rays, hit points, bounce directions and their ray records, lamp hits (dacrt.lamps),
@@ -66,6 +71,11 @@ _DIMS_PER_VERTEX = 3
 # The lens point of depth of field (Cycles' PRNG_LENS_TIME) gets a pair of its own, out of the
 # per-vertex range, so a camera without depth of field draws exactly the numbers it always did.
 _DIM_LENS = 1 << 20
+# Passing or stopping at transparent surfaces: pair _DIM_TRANSPARENT + 64 k + j for the j-th
+# transparent surface of segment k, also out of the per-vertex range (opaque scenes unchanged).
+_DIM_TRANSPARENT = 1 << 21
+# internal visibility bit: transparent triangles shadow rays pass (their own tracer scene)
+_VIS_THROUGH = 16
 
 
 def _dim(vertex: int, slot: int) -> int:
@@ -184,32 +194,57 @@ class _Materials:
             base.append(b)
             emit.append(e)
             if mat.texture is not None:
-                if isinstance(mat.texture, UdimTiles):   # its shapes were checked when it was made
-                    tex = mat.texture.with_texels(np.ascontiguousarray(mat.texture.flat, F32))
-                else:
-                    tex = np.asarray(mat.texture)
-                    if tex.ndim != 3 or tex.shape[2] != 4 or tex.shape[0] < 1 or tex.shape[1] < 1:
-                        raise ValueError(f"material {mat.name!r}: texture must be (h, w, 4) or UdimTiles, "
-                                         f"got {tex.shape}")
-                    tex = np.ascontiguousarray(tex, F32)
-                if mat.texture_interpolation not in ('Closest', 'Linear'):
-                    raise ValueError(f"material {mat.name!r}: texture_interpolation "
-                                     f"{mat.texture_interpolation!r} is not 'Closest' or 'Linear'")
-                if mat.texture_extension not in ('REPEAT', 'EXTEND', 'CLIP'):
-                    raise ValueError(f"material {mat.name!r}: texture_extension "
-                                     f"{mat.texture_extension!r} is not REPEAT, EXTEND or CLIP")
-                xf = mat.texture_transform
-                if xf is not None:
-                    xf = np.asarray(xf, np.float64)
-                    if xf.shape != (2, 3) or not np.isfinite(xf).all():
-                        raise ValueError(f"material {mat.name!r}: texture_transform must be (2, 3) finite, "
-                                         f"got {xf!r}")
-                    xf = xf.astype(F32)
-                self.textures.append((i, tex, mat.texture_interpolation,
-                                      mat.texture_extension, xf))
+                self.textures.append((i, _texture_array(mat.name, 'texture', mat.texture),
+                                      *_texture_modes(mat.name, 'texture', mat.texture_interpolation,
+                                                      mat.texture_extension, mat.texture_transform)))
         self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
         self.emissive = self.emission.max(axis=0) > 0
+        # transparency (3, materials) and the opacity textures (index, texture, interpolation,
+        # extension, uv transform), as scenedata.Material describes them
+        self.transparency = np.zeros((3, len(materials)), F32)
+        self.opacity = []
+        for i, mat in enumerate(materials):
+            if mat.transparency is None:
+                continue
+            t = np.asarray(mat.transparency, np.float64)
+            if t.shape != (3,) or not np.isfinite(t).all() or (t < 0).any():
+                raise ValueError(f"material {mat.name!r}: transparency must be 3 finite non-negative "
+                                 f"numbers, got {t!r}")
+            self.transparency[:, i] = t
+            if mat.opacity is not None:
+                tex = _texture_array(mat.name, 'opacity', mat.opacity)
+                self.opacity.append((i, tex, *_texture_modes(mat.name, 'opacity', mat.opacity_interpolation,
+                                                             mat.opacity_extension, mat.opacity_transform)))
+        self.transparent = self.transparency.max(axis=0) > 0
+        # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
+        # picks closures by their mean weight): its albedo, or 1 where it only emits
+        self.opaque_weight = np.where(self.emissive, np.maximum(self.base.mean(axis=0), 1.0),
+                                      self.base.mean(axis=0)).astype(F32)
+
+
+def _texture_array(name, label, texture):
+    """A material's texture as the lookups read it: (h, w, 4) float32 or UdimTiles."""
+    if isinstance(texture, UdimTiles):   # its shapes were checked when it was made
+        return texture.with_texels(np.ascontiguousarray(texture.flat, F32))
+    tex = np.asarray(texture)
+    if tex.ndim != 3 or tex.shape[2] != 4 or tex.shape[0] < 1 or tex.shape[1] < 1:
+        raise ValueError(f"material {name!r}: {label} must be (h, w, 4) or UdimTiles, got {tex.shape}")
+    return np.ascontiguousarray(tex, F32)
+
+
+def _texture_modes(name, label, interpolation, extension, transform):
+    """(interpolation, extension, float32 (2, 3) uv transform or None), checked."""
+    if interpolation not in ('Closest', 'Linear'):
+        raise ValueError(f"material {name!r}: {label}_interpolation {interpolation!r} is not 'Closest' or 'Linear'")
+    if extension not in ('REPEAT', 'EXTEND', 'CLIP'):
+        raise ValueError(f"material {name!r}: {label}_extension {extension!r} is not REPEAT, EXTEND or CLIP")
+    if transform is not None:
+        transform = np.asarray(transform, np.float64)
+        if transform.shape != (2, 3) or not np.isfinite(transform).all():
+            raise ValueError(f"material {name!r}: {label}_transform must be (2, 3) finite, got {transform!r}")
+        transform = transform.astype(F32)
+    return interpolation, extension, transform
 
 
 def recentred(sd: SceneData):
@@ -334,6 +369,9 @@ class Integrator:
             seen = (self.tri.visibility & VIS_CAMERA) != 0
             self.tri.visibility |= np.where(seen & holdout[self.tri.material], HOLDOUT, 0).astype(np.uint8)
         self._tri_emissive = self.mats.emissive[self.tri.material] & (self.tri.area > 0)
+        self.max_transparent = max(0, int(getattr(s, 'transparent_max_bounces', 8)))
+        self._tri_transparent = self.mats.transparent[self.tri.material] & (self.tri.visibility != 0)
+        self._any_transparent = bool(self._tri_transparent.any())
         # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
         self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))
         self._tri_live = max3(self._tri_albedo) > 0
@@ -457,6 +495,11 @@ class Integrator:
         one scene with per-triangle visibility masks (each call passes its kind's bit); kinds
         whose subsets differ more get one scene per distinct subset."""
         vis = self.tri.visibility
+        if self._any_transparent:
+            # shadow rays pass transparent triangles (their own scene, 'through') and stop at the rest
+            vis = vis.copy()
+            through = self._tri_transparent & ((vis & VIS_SHADOW) != 0)
+            vis[through] = (vis[through] & ~np.uint8(VIS_SHADOW)) | np.uint8(_VIS_THROUGH)
         self._bounce_rays = self.max_bounces > 0 or self.lights.seen_by_bsdf or not SKIP_WORK
         wanted = {'camera': VIS_CAMERA}
         if self._bounce_rays:
@@ -477,6 +520,13 @@ class Integrator:
                 built[key] = self._tracer_scene(needed if shared else masks[kind], vis if shared else None)
             self._scenes[kind], self._maps[kind], self._local[kind] = built[key]
             self._visible[kind] = bit if shared else None
+        if self.lights and self._any_transparent:
+            through = (vis & _VIS_THROUGH) != 0
+            if through.any():
+                self._scenes['through'], self._maps['through'], self._local['through'] = \
+                    built['through'] = self._tracer_scene(through, None)
+                self._visible['through'] = None
+                needed = needed | through
         self._num_scenes = len(built)
         # triangles only rays that are never cast could meet (shadow-only ones without lights,
         # diffuse-only ones without bounces) are in no tracer scene
@@ -659,7 +709,7 @@ class Integrator:
         hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip, visible=self._visible[kind])
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
-        self._rays['camera' if kind == 'camera' else 'bounce'] += O.shape[1]
+        self._rays['camera' if kind == 'camera' else 'shadow' if kind == 'through' else 'bounce'] += len(rays)
         return self._global_prims(kind, hits)
 
     def _global_prims(self, kind, hits):
@@ -732,9 +782,16 @@ class Integrator:
         prim = hits['prim']
         hit = prim >= 0
         self._gather_lamps(camera, path, hit, hits, L)
+        if self._any_transparent and self.max_transparent >= 0 and hit.any():
+            self._through(k, camera, path, hits, L)
+            prim = hits['prim']
+            hit = prim >= 0
         miss = np.flatnonzero(~hit)
         if len(miss) and camera and not self.transparent:
             alpha[np.take(path.pid, miss)] = 1.0
+        elif len(miss) and camera and path.thr is not None:
+            # transparent film seen through transparent surfaces: alpha 1 - what passed (Cycles)
+            alpha[np.take(path.pid, miss)] = 1.0 - np.take(path.thr, miss, axis=1).mean(axis=0)
         if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
             if camera and self.film.passes:
                 self._write_passes(path, hits, hit, data, pix, samp)
@@ -805,13 +862,144 @@ class Integrator:
         for m, tex, interp, ext, xf in self.mats.textures:
             sel = np.flatnonzero(mat == m)
             if len(sel):
-                uvc = np.take(self.tri.uvs, np.take(prim, sel), axis=1)
-                us, vs = np.take(u, sel), np.take(v, sel)
-                tu = uvc[0] + uvc[2] * us + uvc[4] * vs
-                tv = uvc[1] + uvc[3] * us + uvc[5] * vs
-                if xf is not None:
-                    tu, tv = xf[0, 0] * tu + xf[0, 1] * tv + xf[0, 2], xf[1, 0] * tu + xf[1, 1] * tv + xf[1, 2]
-                albedo[:, sel] *= texture_lookup(tex, tu, tv, interp, ext)
+                albedo[:, sel] *= self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
+                                               np.take(v, sel))
+
+    def _lookup(self, tex, interp, ext, xf, prim, u, v):
+        """RGB (3,k) of a texture at hits (prim, u, v) on the UV map (no UV map: (0, 0), as
+        Cycles reads a missing attribute), through its affine map xf (or None)."""
+        if self.tri.uvs is None:
+            tu = tv = np.zeros(len(prim), F32)
+        else:
+            uvc = np.take(self.tri.uvs, prim, axis=1)
+            tu = uvc[0] + uvc[2] * u + uvc[4] * v
+            tv = uvc[1] + uvc[3] * u + uvc[5] * v
+        if xf is not None:
+            tu, tv = xf[0, 0] * tu + xf[0, 1] * tv + xf[0, 2], xf[1, 0] * tu + xf[1, 1] * tv + xf[1, 2]
+        return texture_lookup(tex, tu, tv, interp, ext)
+
+    # --- transparent surfaces -------------------------------------------------------------------
+
+    def _transparency(self, prim, u, v):
+        """At hits (prim, u, v) on transparent triangles: the weight rays pass with (3,k) and
+        the opacity (k,) the rest of the shader carries (1 but under opacity textures)."""
+        mat = np.take(self.tri.material, prim)
+        tau = np.take(self.mats.transparency, mat, axis=1)
+        opacity = np.ones(len(prim), F32)
+        for m, tex, interp, ext, xf in self.mats.opacity:
+            sel = np.flatnonzero(mat == m)
+            if len(sel):
+                a = np.clip(self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
+                                         np.take(v, sel))[0], 0.0, 1.0)
+                opacity[sel] = a
+                tau[:, sel] *= 1.0 - a
+        return tau, opacity, mat
+
+    def _through(self, k, camera, path, hits, L):
+        """Rays that hit a transparent surface pass it or stop there, at random by the
+        transparent and the opaque weights (as Cycles picks a closure by its mean weight; the
+        estimate is the same whichever probability p is used). Passing multiplies the
+        throughput by transparency / p and traces on from just behind the surface, gathering
+        the lamps along the new segment and the world where it then misses; stopping
+        multiplies it by opacity / (1 - p), so all the surface does next (emission, reflection,
+        light sampling) carries its weight. hits and path.thr change in place; a ray that meets
+        more than max_transparent transparent surfaces in a segment ends (throughput 0, as Cycles
+        ends the path)."""
+        kind = 'camera' if camera else 'bounce'
+        thr = path.thr
+        rows = None                             # all rays, then those that passed
+        for j in range(self.max_transparent + 1):
+            prim = hits['prim'] if rows is None else np.take(hits['prim'], rows)
+            at = np.flatnonzero((prim >= 0) & np.take(self._tri_transparent, np.maximum(prim, 0)))
+            if not len(at):
+                return
+            rows, prim = (at if rows is None else rows[at]), prim[at]
+            if thr is None:                     # camera rays: throughput 1 until now
+                thr = path.thr = np.ones((3, len(hits)), F32)
+            if j == self.max_transparent:
+                thr[:, rows] = 0.0
+                return
+            tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows))
+            t_mean = tau.mean(axis=0)
+            total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
+            p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
+            u = self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_TRANSPARENT + 64 * k + j)[0]
+            go = u < p
+            stop = ~go
+            thr[:, rows[stop]] *= opacity[stop] / (1.0 - p[stop])
+            rows = rows[go]
+            if not len(rows):
+                return
+            thr[:, rows] *= tau[:, go] / p[go]
+            # on from just behind the surface (P stepped off it away from the ray's side)
+            P, _, _, P_off = self._surface(hits, rows, path.D)
+            D = np.ascontiguousarray(np.take(path.D, rows, axis=1))
+            t0 = np.take(hits['t'], rows)
+            tmax = np.take(path.tmax, rows) - t0
+            sub = self._intersect(kind, np.ascontiguousarray(P + P - P_off), D, tmax.astype(F32),
+                                  np.take(hits['prim'], rows))
+            sub['t'] += t0                      # distances from the path vertex, for lamps and MIS
+            seg = _Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
+                         np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
+                         None if path.pdf is None else np.take(path.pdf, rows), None)
+            self._gather_segment(camera, seg, sub, t0, L)
+            hits[rows] = sub
+
+    def _gather_segment(self, camera, seg, sub, t0, L):
+        """Lamps beyond distance t0 along a segment past a transparent surface, and the world
+        where it misses: lamp_gather counts lamps from the path vertex (so MIS sees the true
+        distance) up to the new hit; the same lamps up to t0, already gathered, are taken off."""
+        hit = sub['prim'] >= 0
+        self._gather_lamps(camera, seg, hit, sub, L)
+        lamps = self._camera_lamps if camera else self._bsdf_lamps
+        if len(lamps):
+            dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
+                                    np.zeros(len(t0), bool), seg.pid, L, thr=-seg.thr,
+                                    pdf_bsdf=None if camera else seg.pdf,
+                                    lamp_prob=None if camera else self._record_prob)
+
+    def _shadow_through(self, rays, skip, send, occluded, value):
+        """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
+        scene), their light multiplied by each surface's transparency, as Cycles' transparent
+        shadows; more than max_transparent surfaces block them."""
+        # the records as the occlusion query left them (reordered, ids kept; the tfar of rays
+        # that reach their light untouched), renumbered for the rays still open
+        ids = rays['id']
+        keep = ~np.take(occluded, ids)
+        r = rays[keep]
+        if not len(r):
+            return
+        cols = np.take(send, ids[keep])              # the light samples they carry
+        prim = None if skip is None else np.take(skip, ids[keep])
+        r['id'] = np.arange(len(r), dtype=np.uint32)
+        tfar = r['tfar'].copy()
+        atten = np.ones((3, len(r)), F32)
+        rows = np.arange(len(r))
+        D = None
+        for j in range(self.max_transparent + 1):
+            hits = self._intersect('through', None, D, None, prim, rays=r)
+            at = np.flatnonzero(hits['prim'] >= 0)
+            if not len(at):
+                break
+            if D is None:                            # first pass: directions by id
+                D = np.empty((3, len(r)), F32)
+                D[:, r['id']] = r['dir'].T
+            rows_at = rows[at]
+            if j == self.max_transparent:
+                atten[:, rows_at] = 0.0
+                break
+            tau = self._transparency(hits['prim'][at], hits['u'][at], hits['v'][at])[0]
+            atten[:, rows_at] *= tau
+            go = at[tau.max(axis=0) > 0]        # fully opaque there: nothing left to trace
+            if not len(go):
+                break
+            P, _, _, P_off = self._surface(hits, go, D)
+            D = np.ascontiguousarray(np.take(D, go, axis=1))
+            tfar = np.maximum(np.take(tfar, go) - np.take(hits['t'], go), 0.0).astype(F32)
+            prim = np.take(hits['prim'], go)
+            rows = rows[go]
+            r = self._ray_array(np.ascontiguousarray(P + P - P_off), D, tfar)
+        value[:, cols] *= atten
 
     def _write_passes(self, path, hits, hit, data, pix, samp):
         """Data passes from the first visible surface (holdouts and background stay 0)."""
@@ -893,6 +1081,8 @@ class Integrator:
         if len(send):
             occ = self._occluded_rays(rays, skip)
             contrib[send[occ]] = False
+            if 'through' in self._scenes:
+                self._shadow_through(rays, skip, send, occ, value)
         dacrt.shading.accumulate_masked(L, pid, value, contrib)
 
 

@@ -29,6 +29,12 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
         description="Diffuse bounces K, as Cycles counts them: paths have up to K+1 diffuse "
                     "reflections; 0 is direct light only",
         default=4, min=0, max=1024, soft_max=32)
+    transparent_max_bounces: IntProperty(
+        name="Transparent Max Bounces",
+        description="Transparent surfaces (Transparent BSDF, Principled Alpha) a ray passes "
+                    "through before it stops, as Cycles' Light Paths > Transparent; they do not "
+                    "count as diffuse bounces",
+        default=8, min=0, max=1024, soft_max=64)
     filter_type: EnumProperty(
         name="Filter Type", description="Pixel filter", items=FILTER_ITEMS,
         default='BLACKMAN_HARRIS')

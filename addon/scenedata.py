@@ -105,6 +105,16 @@ class Material:
     approximated: str = ''                        # non-empty: why this is a diffuse approximation
     holdout: bool = False                         # a Holdout shader: camera rays see through it
                                                   # (alpha 0), other rays meet a black surface
+    # Transparency (Transparent BSDF, Principled Alpha): rays pass straight through with weight
+    # `transparency` (3,), the transparent closures' colour x mix weights; the rest of the shader
+    # (base_color, emission) already carries its own weight. With an `opacity` texture (h, w, 4
+    # or UdimTiles, the opacity in R, G and B; read on the UV map like `texture`) the shader at a
+    # hit is opacity x (base_color, emission) + (1 - opacity) x transparency instead.
+    transparency: Optional[np.ndarray] = None
+    opacity: Optional[np.ndarray] = None
+    opacity_interpolation: str = 'Linear'
+    opacity_extension: str = 'REPEAT'
+    opacity_transform: Optional[np.ndarray] = None
 
 
 @dataclass
@@ -131,6 +141,7 @@ class Settings:
     """Render settings, from scene.dacrt and Blender's render settings."""
     samples: int = 64
     max_bounces: int = 4           # K: up to K+1 diffuse reflections (Cycles' semantics)
+    transparent_max_bounces: int = 8   # transparent surfaces a ray segment or shadow ray passes
     filter_type: str = 'BLACKMAN_HARRIS'   # 'BOX' | 'GAUSSIAN' | 'BLACKMAN_HARRIS'
     filter_width: float = 1.5      # pixels; BOX is always 1
     seed: int = 0

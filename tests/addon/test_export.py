@@ -645,6 +645,76 @@ def test_material_table(scene, exported):
     assert len(approx) == 1 and "'Glass'" in approx[0] and "'Shiny'" in approx[0]
 
 
+def _shader_material(name):
+    mat = bpy.data.materials.new(name)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    return mat, nt, nt.nodes.new('ShaderNodeOutputMaterial')
+
+
+def _alpha_image(alphas):
+    img = bpy.data.images.new("Alpha", len(alphas), 1, float_buffer=True, alpha=True)
+    img.pixels.foreach_set([c for a in alphas for c in (0.5, 0.5, 0.5, a)])
+    img.pack()
+    return img
+
+
+def test_transparent_materials(scene, exported):
+    """Transparent BSDF (its colour, mixed by constants), Principled Alpha (constant: the rest
+    scaled by alpha; an image's Alpha output: an opacity texture) and a Mix Shader whose factor
+    is an image's alpha between a Transparent BSDF and a Diffuse (either input order)."""
+    setup(scene)
+    built = []
+    pane, nt, out = _shader_material("Pane")
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = 0.25
+    clear, dif = nt.nodes.new('ShaderNodeBsdfTransparent'), nt.nodes.new('ShaderNodeBsdfDiffuse')
+    clear.inputs['Color'].default_value = (0.8, 0.4, 0.2, 1.0)
+    dif.inputs['Color'].default_value = (1.0, 1.0, 1.0, 1.0)
+    nt.links.new(clear.outputs[0], mix.inputs[1])
+    nt.links.new(dif.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    built.append(pane)
+    ghost = scenes.principled("Ghost", (0.4, 0.2, 0.8), (1.0, 1.0, 1.0), 2.0)
+    ghost.node_tree.nodes['Principled BSDF'].inputs['Alpha'].default_value = 0.25
+    built.append(ghost)
+    leaf = scenes.principled("Leaf", (0.2, 0.6, 0.1))
+    tex = leaf.node_tree.nodes.new('ShaderNodeTexImage')
+    tex.image = _alpha_image([0.0, 0.25, 1.0])
+    leaf.node_tree.links.new(tex.outputs['Alpha'], leaf.node_tree.nodes['Principled BSDF'].inputs['Alpha'])
+    built.append(leaf)
+    for name, transparent_first in (("CardA", True), ("CardB", False)):
+        card, nt, out = _shader_material(name)
+        mix = nt.nodes.new('ShaderNodeMixShader')
+        clear, dif = nt.nodes.new('ShaderNodeBsdfTransparent'), nt.nodes.new('ShaderNodeBsdfDiffuse')
+        dif.inputs['Color'].default_value = (0.7, 0.3, 0.3, 1.0)
+        t = nt.nodes.new('ShaderNodeTexImage')
+        t.image = _alpha_image([0.0, 0.25, 1.0])
+        nt.links.new(t.outputs['Alpha'], mix.inputs['Fac'])
+        nt.links.new(clear.outputs[0], mix.inputs[1 if transparent_first else 2])
+        nt.links.new(dif.outputs[0], mix.inputs[2 if transparent_first else 1])
+        nt.links.new(mix.outputs[0], out.inputs['Surface'])
+        built.append(card)
+    for i, mat in enumerate(built):
+        ob = scenes.plane(mat.name, location=(3 * i, 0, 0), materials=(mat,))
+        ob.data.uv_layers.new(name="UVMap")
+    table = {m.name: m for m in exported().materials}
+    assert np.allclose(table["Pane"].transparency, [0.6, 0.3, 0.15]) and table["Pane"].opacity is None
+    assert np.allclose(table["Pane"].base_color, 0.25)
+    g = table["Ghost"]
+    assert np.allclose(g.transparency, 0.75) and np.allclose(g.base_color, [0.1, 0.05, 0.2])
+    assert np.allclose(g.emission, 0.5) and g.opacity is None          # emission x alpha, as Cycles
+    leaf = table["Leaf"]
+    assert np.allclose(leaf.transparency, 1.0) and np.allclose(leaf.base_color, [0.2, 0.6, 0.1])
+    assert np.allclose(leaf.opacity[0, :, 0], [0.0, 0.25, 1.0]) and not leaf.approximated
+    # Mix = (1 - fac) first + fac second: the opacity is fac when the Transparent BSDF is first
+    assert np.allclose(table["CardA"].opacity[0, :, 0], [0.0, 0.25, 1.0])
+    assert np.allclose(table["CardB"].opacity[0, :, 0], [1.0, 0.75, 0.0])
+    for name in ("CardA", "CardB"):
+        assert np.allclose(table[name].base_color, [0.7, 0.3, 0.3]) and np.allclose(table[name].transparency, 1)
+    assert all(table[n].transparency is None for n in table if n not in {"Pane", "Ghost", "Leaf", "CardA", "CardB"})
+
+
 def test_world_background(scene, exported):
     setup(scene)
     scenes.world((0.5, 0.25, 1.0), 2.0)

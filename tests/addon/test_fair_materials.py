@@ -135,7 +135,7 @@ def test_override_sets_the_reference_fair_principled_inputs(scene):
     for name in fairmaterials.ZEROED_PRINCIPLED:      # a Value node of 0 may stay linked
         assert nodeeval.constant_value(p.inputs[name]) == (0.0, True), name
     assert p.inputs['Transmission Weight'].is_linked and not p.inputs['Metallic'].is_linked
-    assert p.inputs['Alpha'].default_value == 1.0 and not p.inputs['Normal'].is_linked
+    assert p.inputs['Alpha'].default_value == 0.5 and not p.inputs['Normal'].is_linked
     glossy = bpy.data.materials["Glossy"].node_tree
     out = glossy.get_output_node('ALL')
     node = out.inputs['Surface'].links[0].from_node

@@ -7,7 +7,10 @@ engine approximates, so comparing the two as they are measures the approximation
 engine. `make_diffuse()` edits every material's node tree in place into what the add-on's
 export renders exactly, following the export's own rules (addon/export.py `_MaterialBuilder`):
 - Principled BSDF: metallic, transmission, coat, sheen, subsurface, specular layer, diffuse
-  roughness, thin film set to 0, alpha to 1, its Normal input unlinked;
+  roughness, thin film set to 0, its Normal input unlinked; Alpha kept (the export renders a
+  constant one and an Image Texture's Alpha output; anything else feeding it is unlinked);
+- Transparent BSDF kept (its colour as the export reads it), and a Mix Shader's factor kept
+  when it is an Image Texture's Alpha output;
 - Diffuse BSDF: roughness 0, normal unlinked;
 - any other shader node (Glossy, Glass, ...): replaced by a Diffuse BSDF of the colour the
   export reads from it (its constant 'Color' / 'Base Color', 0.8 grey without one);
@@ -100,6 +103,12 @@ def _fill_empty_slots() -> list[str]:
     return [ob.name for ob in objects]
 
 
+
+def _image_alpha(socket):
+    """Whether socket is fed straight by an Image Texture's Alpha output (the export renders it)."""
+    link = nodegraph.linked_link(socket)
+    return link is not None and link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha'
+
 class _Editor:
     """Edits one material; a node reached inside a node group is edited in the group's own tree
     (groups are shared: the edit applies to every material using the group, which is what the
@@ -178,8 +187,8 @@ class _Editor:
                 if sock is not None:
                     self._set(sock, 0.0, f"Principled {name} 0")
             alpha = node.inputs.get('Alpha')
-            if alpha is not None:
-                self._set(alpha, 1.0, "Principled Alpha 1")
+            if alpha is not None and not _image_alpha(alpha):
+                self._own_value(alpha)
             self._normals(node)
             self._color(node.inputs['Base Color'])
             self._own_value(nodegraph.input_socket(node, 'Emission Color', 'Emission'))
@@ -190,8 +199,11 @@ class _Editor:
         elif t == 'ADD_SHADER':
             self._shader(node.inputs[0], depth + 1)
             self._shader(node.inputs[1], depth + 1)
+        elif t == 'BSDF_TRANSPARENT':
+            self._own_value(node.inputs['Color'])
         elif t == 'MIX_SHADER':
-            self._own_value(node.inputs['Fac'])
+            if not _image_alpha(node.inputs['Fac']):
+                self._own_value(node.inputs['Fac'])
             self._shader(node.inputs[1], depth + 1)
             self._shader(node.inputs[2], depth + 1)
         else:

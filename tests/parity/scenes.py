@@ -419,6 +419,90 @@ def build_environment():
     camera((3.4, -4.6, 1.9), (0.0, 0.4, 0.8), lens=28.0)
 
 
+def _alpha_image(size=8):
+    """A packed float RGBA image whose alpha is a cut-out pattern: a checker of 0 and 1 with a
+    band of partial alpha (0.3, 0.6) across the middle rows."""
+    img = bpy.data.images.new("Cutout", size, size, float_buffer=True, alpha=True)
+    px = []
+    for i in range(size):
+        for j in range(size):
+            a = float((i + j) % 2)
+            if i in (3, 4):
+                a = 0.3 if j % 2 else 0.6
+            px += [1.0, 1.0, 1.0, a]
+    img.pixels.foreach_set(px)
+    img.update()
+    img.pack()
+    return img
+
+
+def _uv_quad(name, corners, material):
+    ob = quad(name, corners, material)
+    ob.data.uv_layers.new(name="UVMap")        # one face: the whole 0..1 square
+    return ob
+
+
+def _image_alpha_node(nt):
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = _alpha_image()
+    tex.interpolation = 'Linear'
+    return tex
+
+
+def build_transparency():
+    """Transparent surfaces under a sun and a sky, their shadows on the floor in view: a leaf
+    cut out by an image's alpha (Principled Alpha), a card whose Mix Shader factor is that
+    alpha (Transparent BSDF and Diffuse), a pane of tinted Transparent BSDF mixed 40% with a
+    Diffuse, and a sphere of Principled Alpha 0.5 (the camera sees through two surfaces)."""
+    quad("Floor", [(-4, -4, 0), (4, -4, 0), (4, 4, 0), (-4, 4, 0)], diffuse("Floor", (0.6, 0.6, 0.6)))
+    quad("Wall", [(-4, 1.5, 0), (4, 1.5, 0), (4, 1.5, 3), (-4, 1.5, 3)], diffuse("Wall", (0.7, 0.65, 0.6)))
+    # the leaf: Principled (no specular layer: Specular IOR Level 0), Alpha from the image
+    leaf, nt, out = _node_material("Leaf")
+    bsdf = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    bsdf.inputs['Base Color'].default_value = (0.2, 0.6, 0.15, 1.0)
+    bsdf.inputs['Specular IOR Level'].default_value = 0.0
+    nt.links.new(_image_alpha_node(nt).outputs['Alpha'], bsdf.inputs['Alpha'])
+    nt.links.new(bsdf.outputs['BSDF'], out.inputs['Surface'])
+    _uv_quad("Leaf", [(-1.7, 0.0, 0.2), (-0.5, 0.0, 0.2), (-0.5, 0.0, 1.4), (-1.7, 0.0, 1.4)], leaf)
+    # the card: Mix Shader (factor = the image's alpha) of a Transparent BSDF and a Diffuse
+    card, nt, out = _node_material("Card")
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    clear = nt.nodes.new('ShaderNodeBsdfTransparent')
+    dif = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    dif.inputs['Color'].default_value = (0.75, 0.3, 0.3, 1.0)
+    dif.inputs['Roughness'].default_value = 0.0
+    nt.links.new(_image_alpha_node(nt).outputs['Alpha'], mix.inputs['Fac'])
+    nt.links.new(clear.outputs['BSDF'], mix.inputs[1])
+    nt.links.new(dif.outputs['BSDF'], mix.inputs[2])
+    nt.links.new(mix.outputs['Shader'], out.inputs['Surface'])
+    _uv_quad("Card", [(-0.3, 0.6, 1.0), (0.7, 0.6, 1.0), (0.7, 0.6, 2.0), (-0.3, 0.6, 2.0)], card)
+    # the pane: 60% tinted Transparent BSDF, 40% Diffuse
+    pane, nt, out = _node_material("Pane")
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = 0.4
+    clear = nt.nodes.new('ShaderNodeBsdfTransparent')
+    clear.inputs['Color'].default_value = (0.9, 0.5, 0.3, 1.0)
+    dif = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    dif.inputs['Color'].default_value = (0.8, 0.8, 0.8, 1.0)
+    dif.inputs['Roughness'].default_value = 0.0
+    nt.links.new(clear.outputs['BSDF'], mix.inputs[1])
+    nt.links.new(dif.outputs['BSDF'], mix.inputs[2])
+    nt.links.new(mix.outputs['Shader'], out.inputs['Surface'])
+    quad("Pane", [(0.5, -0.2, 0.1), (1.7, -0.2, 0.1), (1.7, -0.2, 1.3), (0.5, -0.2, 1.3)], pane)
+    # the sphere: Principled Alpha 0.5
+    ghost, nt, out = _node_material("Ghost")
+    bsdf = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    bsdf.inputs['Base Color'].default_value = (0.3, 0.4, 0.8, 1.0)
+    bsdf.inputs['Specular IOR Level'].default_value = 0.0
+    bsdf.inputs['Alpha'].default_value = 0.5
+    nt.links.new(bsdf.outputs['BSDF'], out.inputs['Surface'])
+    uv_sphere("Ghost", 0.4, ghost, (-0.2, -1.0, 0.45), segments=16, rings=8)
+    sun = lamp("Sun", 'SUN', 3.0, (0, 0, 10), color=(1.0, 0.95, 0.85), angle=math.radians(5))
+    sun.rotation_euler = (math.radians(35), 0.0, math.radians(-20))
+    world((0.3, 0.35, 0.45), 1.0)
+    camera((0.4, -4.6, 1.7), (-0.1, 0.2, 0.7), lens=32.0)
+
+
 def build_environment_hidden():
     """The environment scene with the world hidden from the camera (World > Ray Visibility >
     Camera off): the HDRI still lights the blocks, the sky behind them is black."""
@@ -501,4 +585,5 @@ SPECS = (
                128, 32, 128, 32),
     ParitySpec("panorama_fisheye", build_panorama_fisheye, (64, 48), 2, 'GAUSSIAN', 1.5,
                128, 32, 128, 32),
+    ParitySpec("transparency", build_transparency, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
 )

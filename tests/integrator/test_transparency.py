@@ -1,0 +1,127 @@
+"""Transparent surfaces (Transparent BSDF, Principled Alpha, image-alpha cut-outs) against closed
+forms: camera and bounce rays pass or stop at random with weights that make every sample of the
+setups below exact, shadow rays are attenuated by each surface they pass, film alpha is
+1 - the transparency the camera sees through (Cycles), and more surfaces than Transparent Max
+Bounces stop a ray."""
+import numpy as np
+import pytest
+
+from addon import scenedata as sd
+
+from .scenes import (ALL_VIS, geometry, light, material, ortho_down, plane_scene, quad, render, rotation_x,
+                     translation)
+
+WORLD = np.array([0.6, 0.6, 0.6], np.float32)
+
+
+def sheet_scene(sheet, floor=False, lights=(), world=WORLD, samples=16, sheet_vis=ALL_VIS, sheets=(0.25,),
+                **settings):
+    """A camera looking down through horizontal sheets (material `sheet`) at z in `sheets`, over
+    nothing (the world) or a 0.8 floor at z = 0."""
+    scene = plane_scene(list(lights), world=world, samples=samples, max_bounces=0, **settings)
+    scene.materials = [material('default'), material('floor', (0.8,) * 3), sheet]
+    parts = [(*quad((0.0, 0.0, 0.0), 100.0, 100.0), 1, ALL_VIS)] if floor else []
+    parts += [(*quad((0.0, 0.0, z), 100.0, 100.0), 2, sheet_vis) for z in sheets]
+    scene.geometry = geometry(parts)
+    scene.camera = ortho_down(height=0.5)
+    return scene
+
+
+def test_principled_alpha_weights_the_surface_and_what_lies_behind():
+    """alpha 0.6 over albedo 0.5 under a uniform world: 0.6 x 0.5 W reflected + 0.4 W seen
+    through, and each sample is exactly that (pass and stop weights cancel the pick)."""
+    sheet = material('sheet', (0.3,) * 3, transparency=np.full(3, 0.4, np.float32))
+    img = render(sheet_scene(sheet)).film.combined()
+    assert np.allclose(img[..., :3], 0.7 * WORLD, rtol=1e-5)
+    assert np.all(img[..., 3] == 1.0)
+
+
+def test_transparent_film_alpha_is_one_minus_the_transparency():
+    sheet = material('sheet', (0.3,) * 3, transparency=np.full(3, 0.4, np.float32))
+    integ = render(sheet_scene(sheet, samples=256, film_transparent=True))
+    img = integ.film.combined()
+    # the world is not seen through transparent film: only the reflected 0.3 W
+    assert img[..., 0].mean() == pytest.approx(0.3 * WORLD[0], rel=0.02)
+    assert img[..., 3].mean() == pytest.approx(0.6, rel=0.02)
+
+
+def test_tinted_transparency_multiplies_light_through_it():
+    """A black Transparent BSDF of colour tau: the camera sees tau x W, and a floor lit by a
+    sun through it gets tau x its light, seen through the sheet again: 0.8 tau^2."""
+    tau = np.array([0.5, 0.25, 1.0], np.float32)
+    sheet = material('sheet', (0.0,) * 3, transparency=tau)
+    img = render(sheet_scene(sheet)).film.combined()[..., :3]
+    assert np.allclose(img, tau * WORLD, rtol=1e-5)
+    sun = light('SUN', np.pi, np.eye(4))
+    img = render(sheet_scene(sheet, floor=True, lights=[sun], world=np.zeros(3))).film.combined()[..., :3]
+    assert np.allclose(img, 0.8 * tau * tau, rtol=1e-5)
+    # a sheet only shadow rays see: the floor's light alone is attenuated
+    img = render(sheet_scene(sheet, floor=True, lights=[sun], world=np.zeros(3),
+                             sheet_vis=sd.VIS_SHADOW)).film.combined()[..., :3]
+    assert np.allclose(img, 0.8 * tau, rtol=1e-5)
+
+
+def test_opacity_texture_is_read_on_the_uv_map():
+    """opacity 0.25 from a texture over albedo 0.5: 0.25 x 0.5 W + 0.75 W, exactly per sample;
+    a cut-out texture (opacity 0 | 1 across the sheet) gives each half its own answer."""
+    tex = np.full((1, 1, 4), 0.25, np.float32)
+    sheet = material('sheet', (0.5,) * 3, transparency=np.ones(3, np.float32), opacity=tex)
+    scene = sheet_scene(sheet)
+    scene.geometry.uvs = np.zeros((2, 3, 2), np.float32)
+    assert np.allclose(render(scene).film.combined()[..., :3], (0.125 + 0.75) * WORLD, rtol=1e-5)
+    cut = np.zeros((1, 2, 4), np.float32)
+    cut[0, 1] = 1.0                                    # right texel opaque
+    scene.materials[2] = material('sheet', (0.5,) * 3, transparency=np.ones(3, np.float32), opacity=cut,
+                                  opacity_interpolation='Closest')
+    # u = 0.5 + x / 200 across the sheet: u < 0.5 on the left half of the image (the pixel
+    # columns next to the edge are left out: a pixel filter sample may land either side)
+    v, _ = quad((0.0, 0.0, 0.25), 100.0, 100.0)
+    scene.geometry.uvs = np.array([[[0.5 + x / 200.0, 0.5] for x, y, z in v[list(t)]]
+                                   for t in [(0, 1, 2), (0, 2, 3)]], np.float32)
+    img = render(scene).film.combined()[..., 0]
+    w = img.shape[1]
+    assert np.allclose(img[:, : w // 2 - 1], WORLD[0], rtol=1e-5)       # cut away: the world
+    assert np.allclose(img[:, w // 2 + 1:], 0.5 * WORLD[0], rtol=1e-5)  # opaque: albedo 0.5
+
+
+def test_emission_of_a_transparent_surface_is_added_once():
+    """Transparent BSDF + Emission: the world through it plus its emission, in expectation."""
+    sheet = material('sheet', (0.0,) * 3, (0.2, 0.2, 0.2), transparency=np.ones(3, np.float32))
+    integ = render(sheet_scene(sheet, samples=512))
+    img = integ.film.combined()[..., 0].astype(np.float64)
+    assert img.mean() == pytest.approx(WORLD[0] + 0.2, abs=4 * img.std() / np.sqrt(img.size) + 1e-6)
+
+
+def test_transparent_max_bounces_stops_a_ray():
+    """Three clear sheets: with a limit of 2 the camera rays end (black), with 3 they pass."""
+    clear = material('sheet', (0.0,) * 3, transparency=np.ones(3, np.float32))
+    img = render(sheet_scene(clear, sheets=(0.1, 0.2, 0.3), transparent_max_bounces=3)).film.combined()
+    assert np.allclose(img[..., :3], WORLD, rtol=1e-5)
+    img = render(sheet_scene(clear, sheets=(0.1, 0.2, 0.3), transparent_max_bounces=2)).film.combined()
+    assert np.all(img[..., :3] == 0.0)
+
+
+def test_lamp_behind_a_transparent_sheet_is_seen_once_through_it():
+    """An area lamp below the sheet, facing the camera: seen through tau, not also in front."""
+    tau = np.array([0.5, 0.25, 1.0], np.float32)
+    sheet = material('sheet', (0.0,) * 3, transparency=tau)
+    lamp = light('AREA', 10.0, translation(z=0.1) @ rotation_x(np.pi), size_x=1.0, size_y=1.0, shape='SQUARE')
+    img = render(sheet_scene(sheet, lights=[lamp], world=np.zeros(3))).film.combined()[..., :3]
+    # (the lamp faces +Z, up at the camera; what it looks like bare is the other render)
+    bare = render(sheet_scene(sheet, lights=[lamp], world=np.zeros(3), sheets=())).film.combined()[..., :3]
+    assert bare.min() > 0
+    assert np.allclose(img, tau * bare, rtol=1e-5)
+
+
+def test_area_lamp_through_a_sheet_weighs_both_strategies_alike():
+    """A floor lit by a large area lamp above a tinted sheet, seen through the sheet: light
+    sampling (shadow rays attenuated) and BSDF rays (lamps gathered past the sheet, MIS by the
+    distance from the floor) together give tau^2 x the bare floor, within the noise."""
+    tau = np.array([0.5, 0.25, 1.0], np.float32)
+    sheet = material('sheet', (0.0,) * 3, transparency=tau)
+    lamp = light('AREA', 50.0, translation(z=0.4), size_x=4.0, size_y=4.0, shape='SQUARE')
+    img = render(sheet_scene(sheet, floor=True, lights=[lamp], world=np.zeros(3), samples=512)).film.combined()
+    bare = render(sheet_scene(sheet, floor=True, lights=[lamp], world=np.zeros(3), samples=512,
+                              sheets=())).film.combined()
+    for c in range(3):
+        assert img[..., c].mean() == pytest.approx(tau[c] ** 2 * bare[..., c].mean(), rel=0.02)
