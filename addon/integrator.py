@@ -71,8 +71,9 @@ _DIMS_PER_VERTEX = 3
 # The lens point of depth of field (Cycles' PRNG_LENS_TIME) gets a pair of its own, out of the
 # per-vertex range, so a camera without depth of field draws exactly the numbers it always did.
 _DIM_LENS = 1 << 20
-# Passing or stopping at transparent surfaces: pair _DIM_TRANSPARENT + 64 k + j for the j-th
-# transparent surface of segment k, also out of the per-vertex range (opaque scenes unchanged).
+# Passing or stopping at transparent surfaces: pair _DIM_TRANSPARENT + 2048 k + j for the j-th
+# transparent surface of segment k (j <= the 1024 limit), also out of the per-vertex range
+# (opaque scenes draw the same numbers as before).
 _DIM_TRANSPARENT = 1 << 21
 # internal visibility bit: transparent triangles shadow rays pass (their own tracer scene)
 _VIS_THROUGH = 16
@@ -828,9 +829,10 @@ class Integrator:
             return None
         if tex:
             self._texture(prim, u, v, thr)
+        tb = None if path.tb is None else np.take(path.tb, idx)
         del hits, path
         if self.lights:
-            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L)
+            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
@@ -840,11 +842,13 @@ class Integrator:
         wi, pdf, ok, rays = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng, origins=P_off)
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
-            P_off, wi, thr, pid, keys, pdf, prim = _compact(np.flatnonzero(ok), P_off, wi, thr, pid, keys, pdf, prim)
+            kept = np.flatnonzero(ok)
+            P_off, wi, thr, pid, keys, pdf, prim = _compact(kept, P_off, wi, thr, pid, keys, pdf, prim)
+            tb = None if tb is None else np.take(tb, kept)
             rays = None                                # repacked with the survivors' ids
         if len(pid) == 0:
             return None
-        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays)
+        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb)
 
     # --- surfaces -------------------------------------------------------------------------------
 
@@ -902,13 +906,14 @@ class Integrator:
         throughput by transparency / p and traces on from just behind the surface, gathering
         the lamps along the new segment and the world where it then misses; stopping
         multiplies it by opacity / (1 - p), so all the surface does next (emission, reflection,
-        light sampling) carries its weight. hits and path.thr change in place; a ray that meets
-        more than max_transparent transparent surfaces in a segment ends (throughput 0, as Cycles
-        ends the path)."""
+        light sampling) carries its weight. hits, path.thr and path.tb (surfaces passed) change in
+        place; a path that has passed max_transparent transparent surfaces ends at the next one
+        (throughput 0: Cycles counts them over the whole path and ends it there)."""
         kind = 'camera' if camera else 'bounce'
         thr = path.thr
         rows = None                             # all rays, then those that passed
-        for j in range(self.max_transparent + 1):
+        j = 0
+        while True:
             prim = hits['prim'] if rows is None else np.take(hits['prim'], rows)
             at = np.flatnonzero((prim >= 0) & np.take(self._tri_transparent, np.maximum(prim, 0)))
             if not len(at):
@@ -916,14 +921,21 @@ class Integrator:
             rows, prim = (at if rows is None else rows[at]), prim[at]
             if thr is None:                     # camera rays: throughput 1 until now
                 thr = path.thr = np.ones((3, len(hits)), F32)
-            if j == self.max_transparent:
-                thr[:, rows] = 0.0
-                return
+            if path.tb is None:
+                path.tb = np.zeros(len(hits), np.int32)
+            # Cycles counts transparent surfaces over the whole path; past the limit it ends
+            spent = np.take(path.tb, rows) >= self.max_transparent
+            if spent.any():
+                thr[:, rows[spent]] = 0.0
+                keep = ~spent
+                rows, prim = rows[keep], prim[keep]
+                if not len(rows):
+                    return
             tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows))
             t_mean = tau.mean(axis=0)
             total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
-            u = self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_TRANSPARENT + 64 * k + j)[0]
+            u = self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_TRANSPARENT + (k << 11) + j)[0]
             go = u < p
             stop = ~go
             thr[:, rows[stop]] *= opacity[stop] / (1.0 - p[stop])
@@ -931,6 +943,7 @@ class Integrator:
             if not len(rows):
                 return
             thr[:, rows] *= tau[:, go] / p[go]
+            path.tb[rows] += 1
             # on from just behind the surface (P stepped off it away from the ray's side)
             P, _, _, P_off = self._surface(hits, rows, path.D)
             D = np.ascontiguousarray(np.take(path.D, rows, axis=1))
@@ -944,6 +957,7 @@ class Integrator:
                          None if path.pdf is None else np.take(path.pdf, rows), None)
             self._gather_segment(camera, seg, sub, t0, L)
             hits[rows] = sub
+            j += 1
 
     def _gather_segment(self, camera, seg, sub, t0, L):
         """Lamps beyond distance t0 along a segment past a transparent surface, and the world
@@ -958,10 +972,11 @@ class Integrator:
                                     pdf_bsdf=None if camera else seg.pdf,
                                     lamp_prob=None if camera else self._record_prob)
 
-    def _shadow_through(self, rays, skip, send, occluded, value):
+    def _shadow_through(self, rays, skip, send, occluded, value, tb=None):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
         scene), their light multiplied by each surface's transparency, as Cycles' transparent
-        shadows; more than max_transparent surfaces block them."""
+        shadows; more surfaces than the path has left of max_transparent (tb: surfaces its
+        vertex's path passed, per light sample) block them."""
         # the records as the occlusion query left them (reordered, ids kept; the tfar of rays
         # that reach their light untouched), renumbered for the rays still open
         ids = rays['id']
@@ -972,23 +987,32 @@ class Integrator:
         cols = np.take(send, ids[keep])              # the light samples they carry
         prim = None if skip is None else np.take(skip, ids[keep])
         r['id'] = np.arange(len(r), dtype=np.uint32)
+        left = np.full(len(r), self.max_transparent, np.int64) if tb is None else \
+            self.max_transparent - np.take(tb, cols).astype(np.int64)
         tfar = r['tfar'].copy()
-        atten = np.ones((3, len(r)), F32)
-        rows = np.arange(len(r))
-        D = None
+        hits = self._intersect('through', None, None, None, prim, rays=r)
+        at = np.flatnonzero(hits['prim'] >= 0)
+        if not len(at):
+            return
+        # from here on only the rays that met a transparent triangle (by id; the tracer
+        # reordered r): their directions, remaining lengths, light samples and attenuation
+        pos = np.empty(len(r), np.int64)
+        pos[r['id']] = np.arange(len(r))
+        D = np.ascontiguousarray(r['dir'][pos[at]].T)
+        tfar, cols, left = np.take(tfar, at), np.take(cols, at), np.take(left, at)
+        hits = hits[at]
+        atten = np.ones((3, len(at)), F32)
+        rows = np.arange(len(at))
+        at = rows
         for j in range(self.max_transparent + 1):
-            hits = self._intersect('through', None, D, None, prim, rays=r)
-            at = np.flatnonzero(hits['prim'] >= 0)
-            if not len(at):
-                break
-            if D is None:                            # first pass: directions by id
-                D = np.empty((3, len(r)), F32)
-                D[:, r['id']] = r['dir'].T
+            if j:
+                hits = self._intersect('through', None, D, None, prim, rays=r)
+                at = np.flatnonzero(hits['prim'] >= 0)
+                if not len(at):
+                    break
             rows_at = rows[at]
-            if j == self.max_transparent:
-                atten[:, rows_at] = 0.0
-                break
             tau = self._transparency(hits['prim'][at], hits['u'][at], hits['v'][at])[0]
+            tau[:, np.take(left, rows_at) <= j] = 0.0      # over the path's limit: blocked
             atten[:, rows_at] *= tau
             go = at[tau.max(axis=0) > 0]        # fully opaque there: nothing left to trace
             if not len(go):
@@ -1066,7 +1090,7 @@ class Integrator:
 
     # --- next-event estimation --------------------------------------------------------------------
 
-    def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L):
+    def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
         the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
@@ -1082,7 +1106,7 @@ class Integrator:
             occ = self._occluded_rays(rays, skip)
             contrib[send[occ]] = False
             if 'through' in self._scenes:
-                self._shadow_through(rays, skip, send, occ, value)
+                self._shadow_through(rays, skip, send, occ, value, tb)
         dacrt.shading.accumulate_masked(L, pid, value, contrib)
 
 
@@ -1106,3 +1130,4 @@ class _Paths:
     pdf: np.ndarray | None   # solid-angle pdf of D at the previous vertex (None for camera rays)
     prim: np.ndarray | None  # triangle the rays leave (global index; None for camera rays)
     rays: np.ndarray | None = None   # their RAY_DTYPE records when already packed
+    tb: np.ndarray | None = None     # transparent surfaces passed so far (None: none yet)

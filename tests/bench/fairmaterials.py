@@ -104,6 +104,13 @@ def _fill_empty_slots() -> list[str]:
 
 
 
+def _one_side_transparent(mix):
+    """Whether exactly one of a Mix Shader's shaders is a Transparent BSDF (with an image's
+    alpha as the factor, the export renders that as a cut-out)."""
+    sides = [nodegraph.linked_node(mix.inputs[i]) for i in (1, 2)]
+    return sum(n is not None and n.type == 'BSDF_TRANSPARENT' for n in sides) == 1
+
+
 def _image_alpha(socket):
     """Whether socket is fed straight by an Image Texture's Alpha output (the export renders it)."""
     link = nodegraph.linked_link(socket)
@@ -202,7 +209,7 @@ class _Editor:
         elif t == 'BSDF_TRANSPARENT':
             self._own_value(node.inputs['Color'])
         elif t == 'MIX_SHADER':
-            if not _image_alpha(node.inputs['Fac']):
+            if not (_image_alpha(node.inputs['Fac']) and _one_side_transparent(node)):
                 self._own_value(node.inputs['Fac'])
             self._shader(node.inputs[1], depth + 1)
             self._shader(node.inputs[2], depth + 1)

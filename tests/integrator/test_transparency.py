@@ -125,3 +125,24 @@ def test_area_lamp_through_a_sheet_weighs_both_strategies_alike():
                               sheets=())).film.combined()
     for c in range(3):
         assert img[..., c].mean() == pytest.approx(tau[c] ** 2 * bare[..., c].mean(), rel=0.02)
+
+
+@pytest.mark.parametrize('limit, lit', [(2, False), (3, False), (4, True)])
+def test_transparent_bounces_count_over_the_whole_path(limit, lit):
+    """Two clear sheets over a 0.8 floor under a uniform world: the camera passes two, the
+    floor's light (BSDF rays and light samples alike) two more, so a limit below 4 leaves it
+    black, as Cycles 5.0 renders the same scene (0.80 at 4 and 5, 1e-6 at 1, 2 and 3)."""
+    clear = material('sheet', (0.0,) * 3, transparency=np.ones(3, np.float32))
+    img = render(sheet_scene(clear, floor=True, sheets=(0.3, 0.4), transparent_max_bounces=limit)).film.combined()
+    assert np.allclose(img[..., :3], 0.8 * WORLD if lit else 0.0, rtol=1e-5, atol=1e-7)
+
+
+@pytest.mark.parametrize('limit, lit', [(3, False), (4, True)])
+def test_shadow_rays_get_what_the_path_has_left_of_the_limit(limit, lit):
+    """The same sheets over a floor lit by a sun: its shadow rays may pass only the surfaces
+    the camera's path has not used up (Cycles: transparent max bounces - the path's count)."""
+    clear = material('sheet', (0.0,) * 3, transparency=np.ones(3, np.float32))
+    sun = light('SUN', np.pi, np.eye(4))
+    img = render(sheet_scene(clear, floor=True, lights=[sun], world=np.zeros(3), sheets=(0.3, 0.4),
+                             transparent_max_bounces=limit)).film.combined()
+    assert np.allclose(img[..., :3], 0.8 if lit else 0.0, rtol=1e-5, atol=1e-7)
