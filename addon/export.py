@@ -572,6 +572,10 @@ class _MaterialBuilder:
             if closure.opacity is not None:
                 tex, inverted = closure.opacity
                 a = tex.pixels[..., 3:4]
+                if not np.isfinite(a).all():
+                    reasons.append(f"{int(np.count_nonzero(~np.isfinite(a)))} texel(s) of non-finite alpha "
+                                   f"read as opaque")
+                    a = np.where(np.isfinite(a), a, 1.0)
                 a = np.clip(1.0 - a if inverted else a, 0.0, 1.0).astype(np.float32)
                 opacity = tex.texels(np.ascontiguousarray(np.concatenate([a, a, a, np.ones_like(a)], axis=-1)))
                 o_interp, o_ext, o_transform = tex.interpolation, tex.extension, tex.transform

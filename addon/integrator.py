@@ -893,8 +893,8 @@ class Integrator:
         for m, tex, interp, ext, xf in self.mats.opacity:
             sel = np.flatnonzero(mat == m)
             if len(sel):
-                a = np.clip(self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
-                                         np.take(v, sel))[0], 0.0, 1.0)
+                a = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))[0]
+                a = np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)    # a NaN texel: opaque
                 opacity[sel] = a
                 tau[:, sel] *= 1.0 - a
         return tau, opacity, mat

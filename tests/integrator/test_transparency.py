@@ -146,3 +146,12 @@ def test_shadow_rays_get_what_the_path_has_left_of_the_limit(limit, lit):
     img = render(sheet_scene(clear, floor=True, lights=[sun], world=np.zeros(3), sheets=(0.3, 0.4),
                              transparent_max_bounces=limit)).film.combined()
     assert np.allclose(img[..., :3], 0.8 if lit else 0.0, rtol=1e-5, atol=1e-7)
+
+
+def test_non_finite_opacity_reads_as_opaque():
+    tex = np.full((1, 1, 4), np.nan, np.float32)
+    sheet = material('sheet', (0.5,) * 3, transparency=np.ones(3, np.float32), opacity=tex)
+    scene = sheet_scene(sheet)
+    scene.geometry.uvs = np.zeros((2, 3, 2), np.float32)
+    img = render(scene).film.combined()
+    assert np.allclose(img[..., :3], 0.5 * WORLD, rtol=1e-5) and np.isfinite(img).all()
