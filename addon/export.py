@@ -1160,6 +1160,7 @@ class _Exporter:
                            threads=0 if r.threads_mode == 'AUTO' else r.threads,
                            partition=d.partition.lower(), film_transparent=r.film_transparent,
                            passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
+                           pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
                            adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
     # -- instances -----------------------------------------------------------------------

@@ -783,8 +783,10 @@ class Integrator:
         prim = hits['prim']
         hit = prim >= 0
         self._gather_lamps(camera, path, hit, hits, L)
+        chain = None                                  # camera rays' transparent surfaces, for the passes
         if self._any_transparent and self.max_transparent >= 0 and hit.any():
-            self._through(k, camera, path, hits, L)
+            chain = [] if camera and self.film.passes else None
+            self._through(k, camera, path, hits, L, chain)
             prim = hits['prim']
             hit = prim >= 0
         miss = np.flatnonzero(~hit)
@@ -795,14 +797,14 @@ class Integrator:
             alpha[np.take(path.pid, miss)] = 1.0 - np.take(path.thr, miss, axis=1).mean(axis=0)
         if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
             if camera and self.film.passes:
-                self._write_passes(path, hits, hit, data, pix, samp)
+                self._write_passes(path, hits, hit, data, pix, samp, chain)
             return None
         if camera:
             if self._any_holdout:                     # holdout: transparent, nothing behind it
                 hit &= (np.take(self.tri.visibility, prim) & HOLDOUT) == 0
             alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
             if self.film.passes:
-                self._write_passes(path, hits, hit, data, pix, samp)
+                self._write_passes(path, hits, hit, data, pix, samp, chain)
         if self._any_emissive:
             self._gather_emission(camera, hit, hits, path, L)
         if k == K + 1:
@@ -899,7 +901,7 @@ class Integrator:
                 tau[:, sel] *= 1.0 - a
         return tau, opacity, mat
 
-    def _through(self, k, camera, path, hits, L):
+    def _through(self, k, camera, path, hits, L, chain=None):
         """Rays that hit a transparent surface pass it or stop there, at random by the
         transparent and the opaque weights (as Cycles picks a closure by its mean weight; the
         estimate is the same whichever probability p is used). Passing multiplies the
@@ -932,6 +934,10 @@ class Integrator:
                 if not len(rows):
                     return
             tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows))
+            if chain is not None:                   # what the data passes read here, before the pick
+                P, _, ns, _ = self._surface(hits, rows, path.D)
+                chain.append(dict(rows=rows, prim=prim, u=np.take(hits['u'], rows), v=np.take(hits['v'], rows),
+                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=P, ns=ns))
             t_mean = tau.mean(axis=0)
             total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
@@ -1025,8 +1031,11 @@ class Integrator:
             r = self._ray_array(np.ascontiguousarray(P + P - P_off), D, tfar)
         value[:, cols] *= atten
 
-    def _write_passes(self, path, hits, hit, data, pix, samp):
-        """Data passes from the first visible surface (holdouts and background stay 0)."""
+    def _write_passes(self, path, hits, hit, data, pix, samp, chain=None):
+        """Data passes from the first visible surface (holdouts and background stay 0); with
+        transparent surfaces on the way (chain), as Cycles writes them along it."""
+        if chain:
+            return self._write_chain_passes(path, hits, hit, data, pix, samp, chain)
         n = len(pix)                                # the block's paths (camera rays: path.pid)
         idx = np.flatnonzero(hit)
         cols = np.take(path.pid, idx)
@@ -1056,6 +1065,61 @@ class Integrator:
             if len(first):
                 depth = np.full(n, np.inf, F32)
                 depth[cols] = self.camera.z_depth(P)
+                self.film.set_depth(pix[first], depth[first])
+
+    def _write_chain_passes(self, path, hits, hit, data, pix, samp, chain):
+        """Cycles' data passes for camera rays that met transparent surfaces (film/data_passes.h):
+        at every surface of the chain, before its pass-or-stop pick, Diffuse Color adds
+        throughput x the surface's diffuse weight and Mist (1 - mist) x mean(throughput x
+        alpha); Normal comes from the first surface whose alpha (1 - mean transparency) reaches
+        the view layer's Pass Alpha Threshold (0: the first surface), and Depth (sample 0) from
+        that surface, or the last one the chain reached before it stopped."""
+        n, want = len(pix), self.film.passes
+        threshold = float(getattr(self.settings, 'pass_alpha_threshold', 0.5))
+        normal, diff = np.zeros((3, n), F32), np.zeros((3, n), F32)
+        mist_out = np.zeros(n, F32)
+        depth = np.full(n, np.inf, F32)
+        done = np.zeros(n, bool)                    # Cycles' PATH_RAY_SINGLE_PASS_DONE
+        start, mdepth, falloff = self.settings.mist
+
+        def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns):
+            albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
+            if self.mats.textures:
+                self._texture(prim, u, v, albedo)
+            diff[:, cols] += thr * albedo
+            if 'Mist' in want:
+                m = np.clip((self.camera.distance(P) - F32(start)) * F32(1.0 / mdepth if mdepth > 0 else 0.0),
+                            0.0, 1.0) ** F32(falloff)
+                mist_out[cols] += (1.0 - m) * (thr * alpha).mean(axis=0)
+            todo = ~done[cols]
+            depth[cols[todo]] = self.camera.z_depth(P[:, todo]) if 'Depth' in want else 0.0
+            first = todo & ((alpha.mean(axis=0) >= threshold) | (threshold == 0.0))
+            normal[:, cols[first]] = ns[:, first]
+            done[cols[first]] = True
+
+        for c in chain:
+            cols = np.take(path.pid, c['rows'])
+            alpha = np.clip(1.0 - c['tau'], 0.0, 1.0)
+            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'], alpha, c['opacity'], c['P'], c['ns'])
+        # the surfaces the chain ended on that are not transparent (stops were counted above)
+        idx = np.flatnonzero(hit)
+        prim = np.take(hits['prim'], idx)
+        opaque = ~np.take(self._tri_transparent, prim)
+        idx, prim = idx[opaque], prim[opaque]
+        if len(idx):
+            P, _, ns, _ = self._surface(hits, idx, path.D)
+            thr = np.ones((3, len(idx)), F32) if path.thr is None else np.take(path.thr, idx, axis=1)
+            surfaces(np.take(path.pid, idx), prim, np.take(hits['u'], idx), np.take(hits['v'], idx), thr,
+                     np.ones((3, len(idx)), F32), np.ones(len(idx), F32), P, ns)
+        if 'Normal' in want:
+            data['Normal'] = normal
+        if 'DiffCol' in want:
+            data['DiffCol'] = diff
+        if 'Mist' in want:
+            data['Mist'] = mist_out[None, :]
+        if 'Depth' in want:
+            first = np.flatnonzero(samp == 0)       # Cycles writes depth from sample 0 only
+            if len(first):
                 self.film.set_depth(pix[first], depth[first])
 
     # --- emission seen by rays ------------------------------------------------------------------

@@ -155,6 +155,9 @@ class Settings:
     # the Mist pass (World > Mist Pass; Cycles' film defaults without a world): start and depth
     # in scene units, falloff exponent (Quadratic 2, Linear 1, Inverse Quadratic 0.5)
     mist: tuple = (0.0, 100.0, 1.0)
+    # data passes (Normal, Depth) come from the first surface at least this opaque (1 - mean
+    # transparency) along a camera ray: the view layer's Pass Alpha Threshold (0: the first)
+    pass_alpha_threshold: float = 0.5
 
 
 @dataclass

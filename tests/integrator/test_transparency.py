@@ -155,3 +155,26 @@ def test_non_finite_opacity_reads_as_opaque():
     scene.geometry.uvs = np.zeros((2, 3, 2), np.float32)
     img = render(scene).film.combined()
     assert np.allclose(img[..., :3], 0.5 * WORLD, rtol=1e-5) and np.isfinite(img).all()
+
+
+@pytest.mark.parametrize('threshold', [0.5, 0.7])
+def test_data_passes_along_transparent_surfaces(threshold):
+    """Cycles' data passes through alpha 0.6 (albedo 0.5) at 0.25 over a 0.8 floor, camera at
+    0.5: Diffuse Color adds throughput x weight at each surface (0.3 + 0.4 x 0.8), Mist (start 0,
+    depth 1, linear) 1 - (0.75 x 0.6 + 0.4 x 0.5); Normal and Depth come from the sheet when its
+    alpha reaches the Pass Alpha Threshold, else from the floor where the ray went on, with no
+    normal where it stopped at the sheet."""
+    sheet = material('sheet', (0.3,) * 3, transparency=np.full(3, 0.4, np.float32))
+    scene = sheet_scene(sheet, floor=True, samples=256, passes=('Depth', 'Normal', 'DiffCol', 'Mist'),
+                        mist=(0.0, 1.0, 1.0), pass_alpha_threshold=threshold)
+    film = render(scene).film
+    n = film.pass_image('DiffCol')[..., 0].size * 256
+    assert film.pass_image('DiffCol')[..., 0].mean() == pytest.approx(0.3 + 0.4 * 0.8, abs=4 * 0.28 / np.sqrt(n))
+    assert film.pass_image('Mist')[..., 0].mean() == pytest.approx(1 - (0.45 + 0.2), abs=4 * 0.25 / np.sqrt(n))
+    depth, normal_z = film.pass_image('Depth')[..., 0], film.pass_image('Normal')[..., 2]
+    if threshold == 0.5:                    # the sheet qualifies: every sample
+        assert np.allclose(depth, 0.25, rtol=1e-5) and np.allclose(normal_z, 1.0, rtol=1e-5)
+    else:                                   # sample 0 passed (floor) or stopped (sheet)
+        assert set(np.round(np.unique(depth), 4)) <= {0.25, 0.5} and len(np.unique(np.round(depth, 4))) == 2
+        p = 0.4 / (0.4 + 0.3)               # the pick's probability of passing
+        assert normal_z.mean() == pytest.approx(p, abs=4 * 0.5 / np.sqrt(n))
