@@ -485,8 +485,8 @@ class _Closure:
 
     def plus(self, other, reasons):
         opacity = self.opacity or other.opacity
-        if self.opacity is not None and other.opacity is not None or \
-                (self.opacity is not None and not other.is_empty()) or \
+        # (a closure with an opacity always has a transparent part, so it is never empty)
+        if (self.opacity is not None and not other.is_empty()) or \
                 (other.opacity is not None and not self.is_empty()):
             # opacity multiplies the whole opaque part: a sum with other shaders has none
             reasons.append("image alpha combined with other shaders; alpha ignored")
@@ -503,6 +503,11 @@ class _Closure:
                                 self.transparent + other.transparent, opacity)
         return _Closure(self.const + other.const, self.emission + other.emission, tex, w,
                         self.holdout + other.holdout, self.transparent + other.transparent, opacity)
+
+
+def is_image_alpha(link):
+    """Whether a link (or None) comes straight from an Image Texture's Alpha output."""
+    return link is not None and link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha'
 
 
 def _nonnegative(v, label, reasons):
@@ -690,7 +695,7 @@ class _MaterialBuilder:
     def _image_alpha(self, socket, reasons, inverted=False):
         """(_Texture, inverted) when socket is linked straight to an Image Texture's Alpha output."""
         link = linked_link(socket)
-        if link is None or link.from_node.type != 'TEX_IMAGE' or link.from_socket.name != 'Alpha':
+        if not is_image_alpha(link):
             return None
         tex = self._texture(link.from_node, reasons)
         return None if tex is None else (tex, inverted)
@@ -698,8 +703,7 @@ class _MaterialBuilder:
     def _alpha_mix(self, node, reasons, depth):
         """A Mix Shader whose factor is an image's alpha, between a purely transparent shader and
         another one (the usual cut-out leaf): that shader with the image as its opacity."""
-        link = linked_link(node.inputs['Fac'])
-        if link is None or link.from_node.type != 'TEX_IMAGE' or link.from_socket.name != 'Alpha':
+        if not is_image_alpha(linked_link(node.inputs['Fac'])):
             return None
         a = self._shader(node.inputs[1], reasons, depth + 1)
         b = self._shader(node.inputs[2], reasons, depth + 1)
@@ -721,7 +725,7 @@ class _MaterialBuilder:
         and float nodes (nodeeval.py) on constants and one image, baked into a texture."""
         link = linked_link(socket)
         if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
-                                 (link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha')):
+                                 is_image_alpha(link)):
             return self._evaluated_closure(socket, reasons)
         if link is not None and link.from_node.type == 'TEX_IMAGE':
             tex = self._texture(link.from_node, reasons)

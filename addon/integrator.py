@@ -16,8 +16,8 @@ ULPs off it, see _OFFSET_ULPS) and the tracer scenes, one per distinct ray-visib
 in the constructor and dropped when rendering ends. Nothing here knows Blender.
 
 Transparent surfaces (Transparent BSDF, Principled Alpha, image cut-outs) are passed or stopped
-at by each camera and bounce ray at random, weighted so the estimate stays unbiased, within
-the segment (no diffuse bounce counted); shadow rays that no opaque triangle stops are traced
+at by each camera and bounce ray at random, weighted so the estimate stays unbiased (no diffuse
+bounce counted; up to Transparent Max Bounces over the whole path); shadow rays that no opaque triangle stops are traced
 through a scene of the transparent triangles and dimmed by each (_through, _shadow_through).
 
 Per-ray data are (3, n) float32 structure-of-arrays; paths that end are compacted away after
@@ -784,7 +784,7 @@ class Integrator:
         hit = prim >= 0
         self._gather_lamps(camera, path, hit, hits, L)
         chain = None                                  # camera rays' transparent surfaces, for the passes
-        if self._any_transparent and self.max_transparent >= 0 and hit.any():
+        if self._any_transparent and hit.any():
             chain = [] if camera and self.film.passes else None
             self._through(k, camera, path, hits, L, chain)
             prim = hits['prim']
@@ -934,10 +934,11 @@ class Integrator:
                 if not len(rows):
                     return
             tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows))
+            surface = None
             if chain is not None:                   # what the data passes read here, before the pick
-                P, _, ns, _ = self._surface(hits, rows, path.D)
+                surface = self._surface(hits, rows, path.D)
                 chain.append(dict(rows=rows, prim=prim, u=np.take(hits['u'], rows), v=np.take(hits['v'], rows),
-                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=P, ns=ns))
+                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=surface[0], ns=surface[2]))
             t_mean = tau.mean(axis=0)
             total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
@@ -951,7 +952,10 @@ class Integrator:
             thr[:, rows] *= tau[:, go] / p[go]
             path.tb[rows] += 1
             # on from just behind the surface (P stepped off it away from the ray's side)
-            P, _, _, P_off = self._surface(hits, rows, path.D)
+            if surface is None:
+                P, _, _, P_off = self._surface(hits, rows, path.D)
+            else:
+                P, P_off = surface[0][:, go], surface[3][:, go]
             D = np.ascontiguousarray(np.take(path.D, rows, axis=1))
             t0 = np.take(hits['t'], rows)
             tmax = np.take(path.tmax, rows) - t0
@@ -993,8 +997,6 @@ class Integrator:
         cols = np.take(send, ids[keep])              # the light samples they carry
         prim = None if skip is None else np.take(skip, ids[keep])
         r['id'] = np.arange(len(r), dtype=np.uint32)
-        left = np.full(len(r), self.max_transparent, np.int64) if tb is None else \
-            self.max_transparent - np.take(tb, cols).astype(np.int64)
         tfar = r['tfar'].copy()
         hits = self._intersect('through', None, None, None, prim, rays=r)
         at = np.flatnonzero(hits['prim'] >= 0)
@@ -1005,7 +1007,9 @@ class Integrator:
         pos = np.empty(len(r), np.int64)
         pos[r['id']] = np.arange(len(r))
         D = np.ascontiguousarray(r['dir'][pos[at]].T)
-        tfar, cols, left = np.take(tfar, at), np.take(cols, at), np.take(left, at)
+        tfar, cols = np.take(tfar, at), np.take(cols, at)
+        left = np.full(len(at), self.max_transparent, np.int64) if tb is None else \
+            self.max_transparent - np.take(tb, cols).astype(np.int64)
         hits = hits[at]
         atten = np.ones((3, len(at)), F32)
         rows = np.arange(len(at))
@@ -1055,17 +1059,20 @@ class Integrator:
             data['DiffCol'] = np.zeros((3, n), F32)
             data['DiffCol'][:, cols] = albedo
         if 'Mist' in want:                          # Cycles' mist of the first surface, stored as 1 - mist
-            start, depth, falloff = self.settings.mist
-            mist = np.clip((self.camera.distance(P) - F32(start)) * F32(1.0 / depth if depth > 0 else 0.0),
-                           0.0, 1.0)
             data['Mist'] = np.zeros((1, n), F32)
-            data['Mist'][0, cols] = 1.0 - mist ** F32(falloff)
+            data['Mist'][0, cols] = 1.0 - self._mist(P)
         if 'Depth' in want:
             first = np.flatnonzero(samp == 0)       # Cycles writes depth from sample 0 only
             if len(first):
                 depth = np.full(n, np.inf, F32)
                 depth[cols] = self.camera.z_depth(P)
                 self.film.set_depth(pix[first], depth[first])
+
+    def _mist(self, P):
+        """Cycles' mist of surface points P (3,k): World > Mist Pass start, depth and falloff."""
+        start, depth, falloff = self.settings.mist
+        m = np.clip((self.camera.distance(P) - F32(start)) * F32(1.0 / depth if depth > 0 else 0.0), 0.0, 1.0)
+        return m ** F32(falloff)
 
     def _write_chain_passes(self, path, hits, hit, data, pix, samp, chain):
         """Cycles' data passes for camera rays that met transparent surfaces (film/data_passes.h):
@@ -1080,7 +1087,6 @@ class Integrator:
         mist_out = np.zeros(n, F32)
         depth = np.full(n, np.inf, F32)
         done = np.zeros(n, bool)                    # Cycles' PATH_RAY_SINGLE_PASS_DONE
-        start, mdepth, falloff = self.settings.mist
 
         def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns):
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
@@ -1088,9 +1094,7 @@ class Integrator:
                 self._texture(prim, u, v, albedo)
             diff[:, cols] += thr * albedo
             if 'Mist' in want:
-                m = np.clip((self.camera.distance(P) - F32(start)) * F32(1.0 / mdepth if mdepth > 0 else 0.0),
-                            0.0, 1.0) ** F32(falloff)
-                mist_out[cols] += (1.0 - m) * (thr * alpha).mean(axis=0)
+                mist_out[cols] += (1.0 - self._mist(P)) * (thr * alpha).mean(axis=0)
             todo = ~done[cols]
             depth[cols[todo]] = self.camera.z_depth(P[:, todo]) if 'Depth' in want else 0.0
             first = todo & ((alpha.mean(axis=0) >= threshold) | (threshold == 0.0))

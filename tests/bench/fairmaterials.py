@@ -113,8 +113,7 @@ def _one_side_transparent(mix):
 
 def _image_alpha(socket):
     """Whether socket is fed straight by an Image Texture's Alpha output (the export renders it)."""
-    link = nodegraph.linked_link(socket)
-    return link is not None and link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha'
+    return export.is_image_alpha(nodegraph.linked_link(socket))
 
 class _Editor:
     """Edits one material; a node reached inside a node group is edited in the group's own tree
