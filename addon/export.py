@@ -1037,6 +1037,7 @@ class _Out:
         self.visibility = np.empty(m, np.uint8)
         self.object_index = np.empty(m, np.int32)
         self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
+        self.terminator = None            # (m, 2), allocated by the first object that has one
         self.keep = None
 
     def drop(self, rows, keep):
@@ -1047,7 +1048,8 @@ class _Out:
 
     def geometry(self):
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
-                       visibility=self.visibility, object_index=self.object_index, uvs=self.uvs)
+                       visibility=self.visibility, object_index=self.object_index, uvs=self.uvs,
+                       terminator=self.terminator)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
         return sd.Geometry(vertices=self.vertices, **per_tri)
@@ -1083,15 +1085,26 @@ def _compact_rows(a, keep):
     return a[:dst]
 
 
+def _terminator(ob):
+    """The object's shadow terminator offsets (geometry, shading) as Cycles reads them: 0..1
+    (Blender's range; a non-finite value is none)."""
+    out = []
+    for name in ('shadow_terminator_geometry_offset', 'shadow_terminator_shading_offset'):
+        v = float(getattr(ob, name, 0.0))
+        out.append(min(max(v, 0.0), 1.0) if np.isfinite(v) else 0.0)
+    return tuple(out)
+
+
 class _Placement:
     """One instance of a mesh: where it is and how it is shaded. slots: its material slots'
     materials; slot_map (slot -> global material index) is filled for the slots its mesh's
     triangles use, so a material no triangle shows is never evaluated."""
-    __slots__ = ('matrix', 'slots', 'slot_map', 'visibility', 'object_index', 'name')
+    __slots__ = ('matrix', 'slots', 'slot_map', 'visibility', 'object_index', 'name', 'terminator')
 
-    def __init__(self, matrix, slots, visibility, object_index, name):
+    def __init__(self, matrix, slots, visibility, object_index, name, terminator=(0.0, 0.0)):
         self.matrix, self.slots, self.slot_map = matrix, slots, None
         self.visibility, self.object_index, self.name = visibility, object_index, name
+        self.terminator = terminator      # (geometry offset, shading offset), Cycles' object settings
 
 
 # ----------------------------------------------------------------------------------------
@@ -1198,7 +1211,8 @@ class _Exporter:
                 continue
             slots = [override] if override is not None else [s.material for s in ob.material_slots]
             self.placements[key].append(_Placement(np.array(inst.matrix_world, np.float64),
-                                                   slots, vis, self._object_id(ob.name), ob.name))
+                                                   slots, vis, self._object_id(ob.name), ob.name,
+                                                   _terminator(ob)))
 
     def _light(self, inst, ob):
         # instances also take their instancer's ray visibility (as Cycles)
@@ -1438,6 +1452,12 @@ class _Exporter:
                 np.take(p.slot_map, a.slot, mode='clip', out=out.material[S])
             out.visibility[S] = p.visibility
             out.object_index[S] = p.object_index
+            # Cycles lifts shadow rays off smooth triangles only; the shading offset is for all
+            term = (p.terminator[0] if a.normal_rows is not None else 0.0, p.terminator[1])
+            if any(term):
+                if out.terminator is None:
+                    out.terminator = np.zeros((len(out.triangles), 2), np.float32)
+                out.terminator[S] = term
             if out.uvs is not None:
                 if a.corner_uvs is None:
                     out.uvs[S] = 0.0

@@ -174,6 +174,17 @@ class _Triangles:
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
         self.normals = None if flat else dacrt.shading.corner_rows(normals)
         self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
+        # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
+        # which lifts shadow rays off smooth triangles (none when all are flat), and the
+        # shading offset as Cycles' frequency multiplier 1 / (1 - offset / 2); None: none
+        self.term_cutoff = self.term_freq = None
+        if geometry.terminator is not None and m:
+            t = np.asarray(geometry.terminator, F32)
+            if self.normals is not None and (t[:, 0] > 0).any():
+                self.term_cutoff = np.ascontiguousarray(t[:, 0])
+            if (t[:, 1] > 0).any():
+                self.term_freq = (F32(1.0) / (F32(1.0) - F32(0.5) * t[:, 1])).astype(F32)
+        self.terminator = self.term_cutoff is not None or self.term_freq is not None
 
     def __len__(self):
         return len(self.indices)
@@ -296,10 +307,16 @@ def _validate(sd: SceneData):
         (np.asarray(g.normals).shape == (m, 3, 3), f"geometry.normals must be ({m},3,3)"),
         (np.asarray(g.visibility).shape == (m,), f"geometry.visibility must have one entry per triangle ({m})"),
         (g.uvs is None or np.asarray(g.uvs).shape == (m, 3, 2), f"geometry.uvs must be None or ({m},3,2)"),
+        (g.terminator is None or np.asarray(g.terminator).shape == (m, 2),
+         f"geometry.terminator must be None or ({m},2)"),
     ]
     for ok, msg in checks:
         if not ok:
             raise ValueError(msg)
+    if g.terminator is not None:
+        t = np.asarray(g.terminator, np.float64)
+        if not (np.isfinite(t).all() and (t >= 0).all() and (t <= 1).all()):
+            raise ValueError("geometry.terminator (shadow terminator offsets) must lie in 0..1")
     nv = len(np.asarray(g.vertices))
     tri = np.asarray(g.triangles)
     if m and (tri.min() < 0 or tri.max() >= nv):
@@ -541,7 +558,8 @@ class Integrator:
         if not everything:
             sub = np.flatnonzero(mask).astype(np.int32)
             # global triangle -> this scene's index (-1: not in it), for skip
-            local = np.full(len(self.tri), -1, np.int32)
+            # (one entry more, so a ray that skips nothing (-1) reads -1)
+            local = np.full(len(self.tri) + 1, -1, np.int32)
             local[sub] = np.arange(len(sub), dtype=np.int32)
         tris = self.tri.indices if everything else self.tri.indices[sub]
         masks = None if vis is None else np.ascontiguousarray(vis if everything else vis[sub], np.uint8)
@@ -820,11 +838,12 @@ class Integrator:
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
         # (their barycentrics too where textures need them)
         tex = bool(self.mats.textures)
+        uv = tex or (self.tri.terminator and bool(self.lights))
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_albedo, path.thr,
             u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),
             take=(path.pid, path.keys, u_pick if need_pick else None,
-                  hits['u'] if tex else None, hits['v'] if tex else None))
+                  hits['u'] if uv else None, hits['v'] if uv else None))
         self._ended['black'] += n_black
         self._ended['roulette'] += n_rr
         if len(idx) == 0:
@@ -834,7 +853,7 @@ class Integrator:
         tb = None if path.tb is None else np.take(path.tb, idx)
         del hits, path
         if self.lights:
-            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb)
+            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb, u, v)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
@@ -842,6 +861,8 @@ class Integrator:
         # geometric surface (a diffuse BSDF only reflects)
         ka, kb = self.rng.dim_words(_dim(k, 2))
         wi, pdf, ok, rays = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng, origins=P_off)
+        if self.tri.term_freq is not None:
+            self._shading_offset(prim, ns, wi, ok, thr)
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
             kept = np.flatnonzero(ok)
@@ -1158,17 +1179,36 @@ class Integrator:
 
     # --- next-event estimation --------------------------------------------------------------------
 
-    def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None):
+    def _shading_offset(self, prim, ns, wi, ok, thr):
+        """Cycles' shadow terminator shading offset on the BSDF rays just sampled: thr (3,k) of
+        the rays ok leaving a triangle whose multiplier f > 1 times shift_cos_in (the cosine's
+        angle stretched by f, closure/bsdf.h), in place."""
+        f = np.take(self.tri.term_freq, prim)
+        sel = np.flatnonzero((f > 1) & ok)
+        if not len(sel):
+            return
+        c = np.minimum(np.einsum('ij,ij->j', np.take(ns, sel, axis=1), np.take(wi, sel, axis=1)), F32(1))
+        with np.errstate(divide='ignore', invalid='ignore'):
+            s = np.maximum(np.cos(np.arccos(c) * f[sel]), F32(0)) / c
+        thr[:, sel] *= np.where(c > 0, s, F32(0)).astype(F32)
+
+    def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
         the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
         The light choice, the sample, its weight and its shadow ray are one native pass
         (dacrt.shading.next_event); emitters that are geometry are aimed at the offset point in
-        front of them, a little short (the tracer can skip only one triangle: the one left)."""
+        front of them, a little short (the tracer can skip only one triangle: the one left).
+        Light samples need only be in front of the shading normal, as in Cycles. With Cycles'
+        shadow terminator (u, v: the points' barycentrics), shadow rays near it leave from the
+        smooth surface and samples are dimmed by the shading offset."""
         ka, kb = self.rng.dim_words(_dim(k, 1))
+        t = self.tri
+        term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff, t.term_freq, u, v) \
+            if t.terminator else None
         value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
             self._light_choice, P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
-            prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK)
+            prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term)
         self._skipped_shadow += skipped
         if len(send):
             occ = self._occluded_rays(rays, skip)

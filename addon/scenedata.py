@@ -128,6 +128,10 @@ class Geometry:
     uvs: Optional[np.ndarray]      # (M,3,2) float32 active UV map per corner, or None
     visibility: np.ndarray         # (M,) uint8 bits VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW | HOLDOUT
     object_index: np.ndarray       # (M,) int32 index into SceneData.object_names
+    # (M,2) float32 Cycles' shadow terminator of each triangle's object: its geometry offset
+    # (0 on flat-shaded meshes, as Cycles applies it to smooth triangles only) and shading
+    # offset, both 0..1; None: all 0
+    terminator: Optional[np.ndarray] = None
 
     @staticmethod
     def empty() -> 'Geometry':

@@ -223,7 +223,7 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
                      F32Array ns, py::object ng, py::object thr, py::array_t<uint32_t, py::array::c_style> keys,
                      uint32_t ka, uint32_t kb, py::object pick, py::object prim, float shorten, bool skip_work,
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
-                     py::array_t<int64_t, py::array::c_style> send, py::object skip) {
+                     py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator) {
     F32Array keep[3], ng_keep, thr_keep;
     std::shared_ptr<EnvironmentMap> env_keep;
     const LightChoice lights =
@@ -259,6 +259,27 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     }
     pts.shorten = shorten;
     pts.skip_work = skip_work;
+    Terminator term{};
+    F32Array term_keep[6];
+    if (!terminator.is_none()) {
+        if (!pts.prim) throw py::value_error("terminator needs prim");
+        const py::tuple t = terminator.cast<py::tuple>();
+        if (t.size() != 6) throw py::value_error("terminator is (geo, normals, cutoff, freq, u, v)");
+        term_keep[0] = t[0].cast<F32Array>();
+        if (term_keep[0].ndim() != 2 || term_keep[0].shape(0) != 15)
+            throw py::value_error("terminator geo must have shape (15, M), got " + shape_str(term_keep[0]));
+        term.M = size_t(term_keep[0].shape(1));
+        if (term.M == 0) throw py::value_error("terminator geo has no triangles");
+        term.geo = term_keep[0].data();
+        term.normals = optional_f32(t[1], 9, term.M, "terminator normals", term_keep[1]);
+        term.cutoff = optional_f32(t[2], 0, term.M, "terminator cutoff", term_keep[2]);
+        term.freq = optional_f32(t[3], 0, term.M, "terminator freq", term_keep[3]);
+        term.u = optional_f32(t[4], 0, n, "terminator u", term_keep[4]);
+        term.v = optional_f32(t[5], 0, n, "terminator v", term_keep[5]);
+        if (!term.u || !term.v) throw py::value_error("terminator needs u and v");
+        if (term.cutoff && !term.normals) throw py::value_error("a terminator cutoff needs the corner normals");
+        pts.term = &term;
+    }
     NextEventOut out{};
     out.value = out_array(value, 3, n, "value");
     if (!contrib.writeable()) throw py::value_error("contrib must be writeable");
@@ -394,7 +415,7 @@ void register_lamps(py::module_& m) {
           py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"), py::arg("P"),
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),
           py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
-          py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"));
+          py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"));
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)")
         .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"))

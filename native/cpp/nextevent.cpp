@@ -29,6 +29,7 @@ inline size_t choose(const double* cdf, size_t entries, double u) {
 struct Pending {  // a shadow ray before its block's place in the output is known
     Ray ray;
     int64_t path;
+    int32_t skip;  // the triangle it leaves, or -1 when it is meant to be able to hit it
 };
 
 // Paths [b, e): value and contrib in place, shadow rays to pending[b, b + count); returns the
@@ -64,10 +65,26 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             float ns[3], ng[3], thr[3];
             for (int a = 0; a < 3; ++a) {
                 ns[a] = p.ns[size_t(a) * n + i];
-                if (p.ng) ng[a] = p.ng[size_t(a) * n + i];
+                ng[a] = p.ng ? p.ng[size_t(a) * n + i] : ns[a];
                 if (p.thr) thr[a] = p.thr[size_t(a) * n + i];
             }
-            bool ok = nee_scale(ns, p.ng ? ng : nullptr, wi, pdf, L.prob[entry], p.thr ? thr : nullptr, value);
+            // In front of the shading normal is enough: a sample below the geometric one is
+            // the shadow ray's to decide (it leaves through its own, skipped, triangle), as in
+            // Cycles, whose diffuse eval has no geometric test.
+            bool ok = nee_scale(ns, nullptr, wi, pdf, L.prob[entry], p.thr ? thr : nullptr, value);
+            const float NL = ns[0] * wi[0] + ns[1] * wi[1] + ns[2] * wi[2];
+            size_t tri = 0;
+            float cutoff = 0.0f;
+            if (p.term) {
+                tri = index_at(p.prim, i, p.term->M);
+                cutoff = p.term->cutoff ? p.term->cutoff[tri] : 0.0f;
+                const float f = p.term->freq ? p.term->freq[tri] : 1.0f;
+                if (f > 1.0f && NL > 0) {
+                    const float s = shift_cos_in(NL, f);
+                    for (int a = 0; a < 3; ++a) value[a] *= s;
+                    ok = ok && s > 0;
+                }
+            }
             if (!p.skip_work) {  // every sample is traced; one that cannot contribute adds 0
                 if (!ok) value[0] = value[1] = value[2] = 0.0f;
                 ok = true;
@@ -77,11 +94,35 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             if (!ok) {
                 ++bad;
             } else if (L.shadow[entry]) {
-                const float O[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
+                float O[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
                 Pending& q = pending[m];
-                // a zero-length ray (the point lies on the light) is not traced and adds nothing
                 const bool geometry = !lamp && entry < L.num_lamps + T;  // a triangle: aim at its point
-                adds = shadow_record(O, wi, dist, geometry ? target : nullptr, p.shorten, q.ray);
+                const float* aim = geometry ? target : nullptr;
+                float shorten = p.shorten, lamp_point[3];
+                q.skip = p.prim ? p.prim[i] : -1;
+                const float ngw = ng[0] * wi[0] + ng[1] * wi[1] + ng[2] * wi[2];
+                // Cycles' shadow_ray_offset: the geometric normal on the side of L (by ns)
+                const float sign = NL < 0 ? -1.0f : 1.0f;
+                const float Ng[3] = {ng[0] * sign, ng[1] * sign, ng[2] * sign}, NgL = ngw * sign;
+                const float amount = cutoff > 0.0f ? terminator_amount(NL * sign, NgL, cutoff) : 0.0f;
+                if (amount > 0.0f) {
+                    float lift[3];
+                    terminator_lift(p.term->geo, p.term->normals, p.term->M, tri, p.term->u[i], p.term->v[i], Ng, lift);
+                    for (int a = 0; a < 3; ++a) O[a] += lift[a] * amount;
+                    // below the geometric normal the lifted ray is meant to meet its own triangle
+                    if (NgL <= 0.0f) q.skip = -1;
+                    if (!aim && dist < lampmath::INF) {  // still to the sampled point of the lamp
+                        for (int a = 0; a < 3; ++a) lamp_point[a] = P[a] + wi[a] * dist;
+                        aim = lamp_point;
+                        shorten = 1.0f;
+                    }
+                } else if (ngw < 0.0f) {
+                    // toward the back of the surface: the step off it is mirrored to that side,
+                    // so the ray cannot cross the plane beyond its own (skipped) triangle
+                    for (int a = 0; a < 3; ++a) O[a] = P[a] + (P[a] - O[a]);
+                }
+                // a zero-length ray (the point lies on the light) is not traced and adds nothing
+                adds = shadow_record(O, wi, dist, aim, shorten, q.ray);
                 if (adds) q.path = int64_t(i), ++m;
             }
             contrib[i] = adds;
@@ -116,7 +157,7 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
                 out.rays[d] = src[j].ray;
                 out.rays[d].id = uint32_t(d);
                 out.send[d] = src[j].path;
-                if (out.skip) out.skip[d] = pts.prim[src[j].path];
+                if (out.skip) out.skip[d] = src[j].skip;
             }
         }
     }, 16);

@@ -33,14 +33,29 @@ struct LightChoice {
     size_t entries;  // num_lamps + num_tris (+ 1 with env)
 };
 
+// Cycles' shadow terminator per triangle (pathvertex.h): the geometry offset's cutoff (null or
+// 0: none, as on flat triangles) and the shading offset's frequency multiplier (null or <= 1:
+// none), with the triangle table (15 rows of M) and corner normals (9 rows of M; needed with a
+// cutoff) the lift is computed from and each point's barycentrics (u, v: n each).
+struct Terminator {
+    const float* geo;
+    const float* normals;
+    size_t M;
+    const float* cutoff;
+    const float* freq;
+    const float* u;
+    const float* v;
+};
+
 // The n shading points of one vertex. P: surface points, P_off: shadow-ray origins; ns, ng:
-// shading and geometric normals (ng null: same as ns); thr: throughput including this vertex's
+// shading and geometric normals (ng null: same as ns; a light sample needs only to be in front
+// of ns, as in Cycles, whose diffuse closure leaves the rest to the shadow ray); thr: throughput including this vertex's
 // albedo (null: 1); all 3 rows of stride n. keys: path keys (2 rows), (ka, kb): the light
 // position's dimension words; pick: the light-choice uniforms (null: entry 0, a single light);
 // prim: the triangle each point lies on (null: no skip output). shorten: a shadow ray aimed
 // at an emitter point ends that fraction of the way. skip_work false: every sample gets its
 // shadow ray, those that cannot contribute with value 0 (the reference the skips are tested
-// against).
+// against). term (null: none; needs prim): the shadow terminator of the points' triangles.
 struct VertexPoints {
     const float* P;
     const float* P_off;
@@ -54,6 +69,7 @@ struct VertexPoints {
     size_t n;
     float shorten;
     bool skip_work;
+    const Terminator* term;
 };
 
 // value (3 rows of n): the sample's contribution, thr x radiance / pdf x cos/pi x MIS / p_sel;

@@ -83,6 +83,74 @@ inline bool nee_scale(const float ns[3], const float* ng, const float wi[3], flo
     return good;
 }
 
+// Cycles' shadow terminator (light/sample.h, closure/bsdf.h): what a smooth-shaded low-poly
+// mesh needs so its light does not end in the facets' steps.
+//
+// Geometry offset: how far (0..1) a shadow ray toward unit L is lifted off a smooth triangle
+// whose object has the offset cutoff > 0 (Cycles' shadow_ray_offset), from the cosines with
+// the shading normal (NL = |ns . L|) and with the geometric normal on L's side (NgL).
+inline float terminator_amount(float NL, float NgL, float cutoff) {
+    const float a = NL < cutoff ? 2.0f - (NgL + NL) / cutoff : 1.0f - NgL / cutoff;
+    return std::min(std::max(a, 0.0f), 1.0f);
+}
+
+// The lift itself (shadow_ray_smooth_surface_offset): the point (u, v) of triangle p moved
+// onto the smooth surface its corner normals describe (a parabolic fit, bounded by each
+// corner's tangent plane), in world space; Ng: the geometric normal on the side the ray
+// leaves. geo: the triangle table (15 rows of M), normals: corner rows (9 rows of M).
+inline void terminator_lift(const float* geo, const float* normals, size_t M, size_t p, float u, float v,
+                            const float Ng[3], float lift[3]) {
+    float V[3][3], N[3][3];
+    for (int a = 0; a < 3; ++a) {
+        const float v0 = geo[size_t(a) * M + p], n0 = normals[size_t(a) * M + p];
+        V[0][a] = v0;
+        V[1][a] = v0 + geo[size_t(3 + a) * M + p];
+        V[2][a] = v0 + geo[size_t(6 + a) * M + p];
+        N[0][a] = n0;
+        N[1][a] = n0 + normals[size_t(3 + a) * M + p];
+        N[2][a] = n0 + normals[size_t(6 + a) * M + p];
+    }
+    auto dot_diff = [](const float* a, const float* b, const float* n) {  // (a - b) . n
+        return (a[0] - b[0]) * n[0] + (a[1] - b[1]) * n[1] + (a[2] - b[2]) * n[2];
+    };
+    const float w0 = 1.0f - u - v;
+    float P[3], n[3];
+    for (int a = 0; a < 3; ++a) {
+        P[a] = V[0][a] * w0 + V[1][a] * u + V[2][a] * v;
+        n[a] = N[0][a] * w0 + N[1][a] * u + N[2][a] * v;  // not normalised, as in Cycles
+    }
+    float d20[3], d21[3], d10[3];
+    for (int a = 0; a < 3; ++a) d20[a] = N[2][a] - N[0][a], d21[a] = N[2][a] - N[1][a], d10[a] = N[1][a] - N[0][a];
+    const float pa = dot_diff(V[0], V[2], d20), pb = dot_diff(V[1], V[2], d21), pc = dot_diff(V[1], V[0], d10);
+    float h = pa * w0 * (w0 - 1) + (pa + pb + pc) * w0 * u + pb * u * (u - 1);
+    if (n[0] * Ng[0] + n[1] * Ng[1] + n[2] * Ng[2] > 0) {
+        float e[3];
+        for (int k = 0; k < 3; ++k) {
+            const int i = (k + 1) % 3, j = (k + 2) % 3;
+            e[k] = std::max(std::max(dot_diff(V[i], V[k], N[k]), dot_diff(V[j], V[k], N[k])), 0.0f);
+            e[k] = std::max(dot_diff(V[k], P, N[k]) + e[k], 0.0f);
+        }
+        h = std::max(std::min(std::min(e[0], e[1]), e[2]), h * 0.5f);
+    } else {
+        float e[3];
+        for (int k = 0; k < 3; ++k) {
+            const int i = (k + 1) % 3, j = (k + 2) % 3;
+            e[k] = std::max(std::max(dot_diff(V[k], V[i], N[k]), dot_diff(V[k], V[j], N[k])), 0.0f);
+            e[k] = std::max(dot_diff(P, V[k], N[k]) + e[k], 0.0f);
+        }
+        h = std::min(-std::min(std::min(e[0], e[1]), e[2]), h * 0.5f);
+    }
+    for (int a = 0; a < 3; ++a) lift[a] = n[a] * h;
+}
+
+// Shading offset: the factor on a diffuse reflection toward a direction at cosine c to the
+// shading normal, for Cycles' frequency multiplier 1 / (1 - offset / 2) (> 1; Appleseed's
+// shift_cos_in): the cosine's angle stretched, so the light falls off before the terminator.
+inline float shift_cos_in(float c, float freq) {
+    c = std::min(c, 1.0f);
+    return std::max(std::cos(std::acos(c) * freq), 0.0f) / c;
+}
+
 // The tracer's record of ray i from origins O and directions D (3 rows, stride n).
 inline void ray_record(const float* O, const float* D, size_t n, size_t i, float tfar, Ray& r) {
     for (int a = 0; a < 3; ++a) {

@@ -301,6 +301,28 @@ def test_custom_normals_corner_domain(scene, exported):
     assert np.allclose(data.geometry.normals.reshape(-1, 3), expected, atol=1e-4)
 
 
+def test_shadow_terminator_offsets_per_triangle(scene, exported):
+    """Cycles' shadow terminator settings, per triangle of each object: the geometry offset on
+    smooth meshes only (Blender's default 0.1; Cycles lifts shadow rays off smooth triangles
+    alone), the shading offset on all; none at all when every object has zero offsets."""
+    setup(scene)
+    ball = scenes.uv_sphere("Ball", segments=8, rings=4, smooth=True)
+    soft = scenes.uv_sphere("Soft", segments=8, rings=4, smooth=True, location=(3, 0, 0))
+    soft.shadow_terminator_geometry_offset, soft.shadow_terminator_shading_offset = 0.4, 0.7
+    box = scenes.cube("Box", location=(-3, 0, 0))
+    box.shadow_terminator_shading_offset = 0.25
+    data = exported()
+    t = data.geometry.terminator
+    assert t.dtype == np.float32 and t.shape == (len(data.geometry.triangles), 2)
+    assert ball.shadow_terminator_geometry_offset == pytest.approx(0.1)
+    assert np.allclose(t[of_object(data, "Ball")], (0.1, 0.0))
+    assert np.allclose(t[of_object(data, "Soft")], (0.4, 0.7))
+    assert np.allclose(t[of_object(data, "Box")], (0.0, 0.25))        # flat: no geometry offset
+    for ob in (ball, soft, box):
+        ob.shadow_terminator_geometry_offset = ob.shadow_terminator_shading_offset = 0.0
+    assert exported().geometry.terminator is None
+
+
 def test_sharp_edges_mixed_normals(scene, exported):
     setup(scene)
     ob = scenes.uv_sphere("Ball", segments=16, rings=8, smooth=True)

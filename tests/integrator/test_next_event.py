@@ -1,7 +1,8 @@
 """The fused next-event kernel (dacrt.shading.next_event) against the kernels it replaces,
 composed as the integrator used to compose them: uniform2 for the light position, the light
 choice by searchsorted on the CDF, lamp_sample for lamps, sample_triangles (value = emission /
-pdf) for emissive triangles, pdf = inf for entries without MIS, nee_weight, shadow_rays. Both
+pdf) for emissive triangles, pdf = inf for entries without MIS, nee_weight (without the
+geometric-normal test: Cycles leaves samples below it to the shadow ray), shadow_rays. Both
 run the same float32 arithmetic, so the results must be bit for bit the same. Also
 accumulate_masked, and the argument checks."""
 import dacrt
@@ -61,13 +62,18 @@ def _composed(lc, P, P_off, ns, ng, thr, keys, ka, kb, pick, prim, skip_work):
         wi[:, tri], dist[tri], pdf[tri], target[:, tri] = twi, tdist, tpdf, ttarget
         value[:, tri] = lc.tri_emission[:, w] * scale
     pdf[lc.no_mis[entry]] = np.inf
-    ok = shading.nee_weight(ns, ng, wi, pdf, lc.prob[entry], thr, value)
+    # no geometric-normal test (ng None): as Cycles, the shadow ray decides below ng
+    ok = shading.nee_weight(ns, None, wi, pdf, lc.prob[entry], thr, value)
     if not skip_work:
         value[:, ~ok] = 0.0
         ok = np.ones(n, bool)
     shadow = lc.shadow[entry]
     send = np.flatnonzero(ok & shadow)
-    rays, valid = shading.shadow_rays(P_off, wi, dist, target, send, SHORTEN)
+    # a ray toward the back of the geometric surface leaves from the mirrored step P + (P - P_off)
+    g = ns if ng is None else ng
+    back = (g[0] * wi[0] + g[1] * wi[1]) + g[2] * wi[2] < 0
+    O = np.where(back, P + (P - P_off), P_off).astype(F32)
+    rays, valid = shading.shadow_rays(O, wi, dist, target, send, SHORTEN)
     contrib = ok.copy()
     contrib[send[~valid]] = False
     rays, send = rays[valid], send[valid]

@@ -199,13 +199,21 @@ class LightChoice:
 
 
 def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: int, pick=None, prim=None,
-               shorten: float = 1.0, skip_work: bool = True):
+               shorten: float = 1.0, skip_work: bool = True, terminator=None):
     """Next-event estimation at n shading points in one pass: pick a light per point (entry 0
     when pick is None, else the entry the uniform pick (n,) float64 falls in), sample it with
     the uniforms of keys (2, n) and dimension words (ka, kb) (the same numbers as uniform2),
-    weight the sample as nee_weight (shading and geometric normals ns, ng (3, n), ng None: ns;
+    weight the sample as nee_weight with ng None (in front of the shading normal ns (3, n) is
+    enough, as in Cycles: below the geometric normal ng (3, n; None: ns) the shadow ray decides;
     throughput thr (3, n) or None) and make its shadow ray as shadow_rays (from P_off (3, n);
     toward a triangle's target point, times shorten). P (3, n): the surface points.
+
+    terminator (needs prim): Cycles' shadow terminator of the points' triangles, a tuple
+    (geo (15, M) triangle table, normals (9, M) corner rows, cutoff (M,) geometry offset (0:
+    none), freq (M,) shading offset's frequency multiplier 1 / (1 - offset / 2), u, v (n,)
+    barycentrics; normals and cutoff, or freq, may be None): a shadow ray near the terminator leaves from the point lifted onto the
+    smooth surface (and, below ng, no longer skips its triangle: skip -1), and a sample's value
+    is multiplied by shift_cos_in where freq > 1.
 
     Returns value (3, n) (each sample's contribution), contrib (n,) bool (it adds to the image
     unless its shadow ray is occluded), rays (m,) RAY_DTYPE (ids 0..m-1, in point order), send
@@ -227,8 +235,17 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         _rows(keys, 2, "keys", np.uint32), int(ka), int(kb),
         None if pick is None else np.ascontiguousarray(pick, np.float64),
         None if prim is None else np.ascontiguousarray(prim, np.int32), float(shorten), bool(skip_work),
-        value, contrib, rays, send, skip)
+        value, contrib, rays, send, skip, _terminator(terminator))
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
+
+
+def _terminator(t):
+    if t is None:
+        return None
+    geo, normals, cutoff, freq, u, v = t
+    f32 = lambda a: np.ascontiguousarray(a, _F32)
+    opt = lambda a: None if a is None else f32(a)
+    return (f32(geo), opt(normals), opt(cutoff), opt(freq), f32(u), f32(v))
 
 
 def accumulate_masked(L, pid, values, mask) -> None:
