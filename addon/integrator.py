@@ -838,7 +838,7 @@ class Integrator:
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
         # (their barycentrics too where textures need them)
         tex = bool(self.mats.textures)
-        uv = tex or (self.tri.terminator and bool(self.lights))
+        uv = tex or (self.tri.term_cutoff is not None and bool(self.lights))   # the lift needs u, v
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_albedo, path.thr,
             u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),

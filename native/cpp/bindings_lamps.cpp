@@ -276,8 +276,8 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
         term.freq = optional_f32(t[3], 0, term.M, "terminator freq", term_keep[3]);
         term.u = optional_f32(t[4], 0, n, "terminator u", term_keep[4]);
         term.v = optional_f32(t[5], 0, n, "terminator v", term_keep[5]);
-        if (!term.u || !term.v) throw py::value_error("terminator needs u and v");
-        if (term.cutoff && !term.normals) throw py::value_error("a terminator cutoff needs the corner normals");
+        if (term.cutoff && (!term.normals || !term.u || !term.v))
+            throw py::value_error("a terminator cutoff needs the corner normals and the points' u and v");
         pts.term = &term;
     }
     NextEventOut out{};

@@ -35,8 +35,8 @@ struct LightChoice {
 
 // Cycles' shadow terminator per triangle (pathvertex.h): the geometry offset's cutoff (null or
 // 0: none, as on flat triangles) and the shading offset's frequency multiplier (null or <= 1:
-// none), with the triangle table (15 rows of M) and corner normals (9 rows of M; needed with a
-// cutoff) the lift is computed from and each point's barycentrics (u, v: n each).
+// none), with the triangle table (15 rows of M), the corner normals (9 rows of M) and each
+// point's barycentrics (u, v: n each) the lift is computed from (needed with a cutoff).
 struct Terminator {
     const float* geo;
     const float* normals;

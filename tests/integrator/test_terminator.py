@@ -208,10 +208,9 @@ def test_shading_offset_scales_light_samples_by_shift_cos_in():
     freq = (1.0 / (1.0 - 0.5 * rng.random(M))).astype(F32)
     freq[:10] = 1.0                                          # no offset on those
     geo = np.zeros((15, M), F32)
-    u = v = np.zeros(n, F32)
     base = shading.next_event(lc, P, P_off, ns, ng, None, keys, 1, 2, pick=pick, prim=prim, shorten=SHORTEN)
     got = shading.next_event(lc, P, P_off, ns, ng, None, keys, 1, 2, pick=pick, prim=prim, shorten=SHORTEN,
-                             terminator=(geo, None, None, freq, u, v))
+                             terminator=(geo, None, None, freq, None, None))
     send = base[3]
     wi = base[2]['dir'].astype(np.float64)
     c = (ns[:, send].T.astype(np.float64) * wi).sum(1)

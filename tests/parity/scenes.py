@@ -503,6 +503,32 @@ def build_transparency():
     camera((0.4, -4.6, 1.7), (-0.1, 0.2, 0.7), lens=32.0)
 
 
+def build_terminator():
+    """Cycles' shadow terminator on smooth low-poly meshes lit at grazing angles: a ball of 8 x
+    5 faces with Blender's default offsets (geometry 0.1, shading 0), a ball with geometry
+    offset 0.5 and shading offset 0.6, and an open smooth half-pipe of 5 facets whose light
+    comes from below some facets' geometric normal but above their shading normal, under a
+    low sun, an area light and a dim sky (rendered with the offsets kept, see ParitySpec)."""
+    quad("Floor", [(-5, -5, 0), (5, -5, 0), (5, 5, 0), (-5, 5, 0)], diffuse("Floor", (0.5, 0.5, 0.5)))
+    uv_sphere("Ball", 0.7, diffuse("Ball", (0.8, 0.75, 0.7)), (-1.1, 0.2, 0.7), segments=8, rings=5)
+    soft = uv_sphere("Soft", 0.6, diffuse("Soft", (0.6, 0.7, 0.85)), (0.55, 0.6, 0.6), segments=10, rings=6)
+    soft.shadow_terminator_geometry_offset = 0.5
+    soft.shadow_terminator_shading_offset = 0.6
+    # the half-pipe: 5 facets of a cylinder (axis y) opening towards the camera, smooth
+    verts, faces = [], []
+    for j in range(6):
+        a = math.pi * (0.15 + 0.7 * j / 5)
+        verts += [(1.9 + 0.6 * math.cos(a), -0.9, 0.05 + 0.6 * math.sin(a)),
+                  (1.9 + 0.6 * math.cos(a), -0.1, 0.05 + 0.6 * math.sin(a))]
+    faces = [(2 * j, 2 * j + 2, 2 * j + 3, 2 * j + 1) for j in range(5)]
+    mesh_object("Pipe", verts, faces, diffuse("Pipe", (0.85, 0.6, 0.4)), smooth=True)
+    sun = lamp("Sun", 'SUN', 4.0, (0, 0, 10), color=(1.0, 0.95, 0.85), angle=math.radians(2))
+    sun.rotation_euler = (math.radians(72), 0.0, math.radians(-60))
+    lamp("Area", 'AREA', 60.0, (-2.5, -1.5, 1.2), target=(-1.1, 0.2, 0.7), size=0.6)
+    world((0.12, 0.14, 0.18), 1.0)
+    camera((0.3, -4.8, 1.9), (0.3, 0.0, 0.6), lens=30.0)
+
+
 def build_environment_hidden():
     """The environment scene with the world hidden from the camera (World > Ray Visibility >
     Camera off): the HDRI still lights the blocks, the sky behind them is black."""
@@ -559,13 +585,15 @@ class ParitySpec:
     cycles_seeds: int
     dacrt_samples: int
     dacrt_seeds: int
+    # keep the scene's shadow terminator offsets (zeroed elsewhere, see fair_scene_settings)
+    terminator: bool = False
 
     def key(self):
         """The settings part of the cache key (the builder is keyed by its module source)."""
         return dict(name=self.name, build=self.build.__name__, resolution=list(self.resolution),
                     bounces=self.bounces, filter_type=self.filter_type,
                     filter_width=self.filter_width, cycles_samples=self.cycles_samples,
-                    cycles_seeds=self.cycles_seeds)
+                    cycles_seeds=self.cycles_seeds, terminator=self.terminator)
 
 
 SPECS = (
@@ -586,4 +614,6 @@ SPECS = (
     ParitySpec("panorama_fisheye", build_panorama_fisheye, (64, 48), 2, 'GAUSSIAN', 1.5,
                128, 32, 128, 32),
     ParitySpec("transparency", build_transparency, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
+    ParitySpec("terminator", build_terminator, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32,
+               terminator=True),
 )

@@ -211,7 +211,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     terminator (needs prim): Cycles' shadow terminator of the points' triangles, a tuple
     (geo (15, M) triangle table, normals (9, M) corner rows, cutoff (M,) geometry offset (0:
     none), freq (M,) shading offset's frequency multiplier 1 / (1 - offset / 2), u, v (n,)
-    barycentrics; normals and cutoff, or freq, may be None): a shadow ray near the terminator leaves from the point lifted onto the
+    barycentrics; freq, or cutoff with normals, u and v, may be None): a shadow ray near the terminator leaves from the point lifted onto the
     smooth surface (and, below ng, no longer skips its triangle: skip -1), and a sample's value
     is multiplied by shift_cos_in where freq > 1.
 
@@ -245,7 +245,7 @@ def _terminator(t):
     geo, normals, cutoff, freq, u, v = t
     f32 = lambda a: np.ascontiguousarray(a, _F32)
     opt = lambda a: None if a is None else f32(a)
-    return (f32(geo), opt(normals), opt(cutoff), opt(freq), f32(u), f32(v))
+    return (f32(geo), opt(normals), opt(cutoff), opt(freq), opt(u), opt(v))
 
 
 def accumulate_masked(L, pid, values, mask) -> None:
