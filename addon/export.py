@@ -1172,7 +1172,9 @@ class _Exporter:
         mist = (0.0, 100.0, 1.0) if mist is None else (
             float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
         return sd.Settings(samples=d.samples, max_bounces=d.max_bounces,
-                           transparent_max_bounces=d.transparent_max_bounces, filter_type=d.filter_type,
+                           transparent_max_bounces=d.transparent_max_bounces,
+                           sample_clamp_direct=d.sample_clamp_direct,
+                           sample_clamp_indirect=d.sample_clamp_indirect, filter_type=d.filter_type,
                            filter_width=d.filter_width, seed=d.seed,
                            threads=0 if r.threads_mode == 'AUTO' else r.threads,
                            partition=d.partition.lower(), film_transparent=r.film_transparent,

@@ -8,6 +8,8 @@ emitter a BSDF ray can meet (emissive triangles, lamps with MIS, an environment 
 uniform world is left to BSDF rays alone, as in Cycles, see lights/background.py), Russian roulette
 and Cycles' bounce semantics: max_bounces K gives up to K+1 diffuse reflections, light sampling
 at vertices 0..K, and the last BSDF ray only collects emission (reference blender-cycles.md 2.5).
+Each contribution is clamped as Cycles' Light Paths > Clamping does (direct light: what camera
+rays and vertex 0 gather), and Cycles' shadow terminator offsets are rendered (next_event).
 
 Also owns the per-frame surface data the loop reads (triangle table, materials and textures,
 self-intersection: every bounce and shadow ray skips the triangle it leaves and starts a few
@@ -388,6 +390,10 @@ class Integrator:
             self.tri.visibility |= np.where(seen & holdout[self.tri.material], HOLDOUT, 0).astype(np.uint8)
         self._tri_emissive = self.mats.emissive[self.tri.material] & (self.tri.area > 0)
         self.max_transparent = max(0, int(getattr(s, 'transparent_max_bounces', 8)))
+        # Cycles' sample clamps as the kernel applies them (scene/integrator.cpp): a limit on a
+        # contribution's absolute channel sum, 3 x the setting; 0 is none
+        self._clamps = tuple(_clamp_limit(name, getattr(s, name, 0.0))
+                             for name in ('sample_clamp_direct', 'sample_clamp_indirect'))
         self._tri_transparent = self.mats.transparent[self.tri.material] & (self.tri.visibility != 0)
         self._any_transparent = bool(self._tri_transparent.any())
         # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
@@ -800,11 +806,13 @@ class Integrator:
         hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax, path.prim, path.rays)
         prim = hits['prim']
         hit = prim >= 0
-        self._gather_lamps(camera, path, hit, hits, L)
+        # what a ray finds is direct light up to the BSDF rays of vertex 0 (Cycles: bounce - 1 <= 0)
+        clamp = self._clamps[k > 1]
+        self._gather_lamps(camera, path, hit, hits, L, clamp)
         chain = None                                  # camera rays' transparent surfaces, for the passes
         if self._any_transparent and hit.any():
             chain = [] if camera and self.film.passes else None
-            self._through(k, camera, path, hits, L, chain)
+            self._through(k, camera, path, hits, L, chain, clamp)
             prim = hits['prim']
             hit = prim >= 0
         miss = np.flatnonzero(~hit)
@@ -824,7 +832,7 @@ class Integrator:
             if self.film.passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
         if self._any_emissive:
-            self._gather_emission(camera, hit, hits, path, L)
+            self._gather_emission(camera, hit, hits, path, L, clamp)
         if k == K + 1:
             return None
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
@@ -922,7 +930,7 @@ class Integrator:
                 tau[:, sel] *= 1.0 - a
         return tau, opacity, mat
 
-    def _through(self, k, camera, path, hits, L, chain=None):
+    def _through(self, k, camera, path, hits, L, chain=None, clamp=np.inf):
         """Rays that hit a transparent surface pass it or stop there, at random by the
         transparent and the opaque weights (as Cycles picks a closure by its mean weight; the
         estimate is the same whichever probability p is used). Passing multiplies the
@@ -986,22 +994,22 @@ class Integrator:
             seg = _Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
                          np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
                          None if path.pdf is None else np.take(path.pdf, rows), None)
-            self._gather_segment(camera, seg, sub, t0, L)
+            self._gather_segment(camera, seg, sub, t0, L, clamp)
             hits[rows] = sub
             j += 1
 
-    def _gather_segment(self, camera, seg, sub, t0, L):
+    def _gather_segment(self, camera, seg, sub, t0, L, clamp=np.inf):
         """Lamps beyond distance t0 along a segment past a transparent surface, and the world
         where it misses: lamp_gather counts lamps from the path vertex (so MIS sees the true
         distance) up to the new hit; the same lamps up to t0, already gathered, are taken off."""
         hit = sub['prim'] >= 0
-        self._gather_lamps(camera, seg, hit, sub, L)
+        self._gather_lamps(camera, seg, hit, sub, L, clamp)
         lamps = self._camera_lamps if camera else self._bsdf_lamps
         if len(lamps):
             dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
                                     np.zeros(len(t0), bool), seg.pid, L, thr=-seg.thr,
                                     pdf_bsdf=None if camera else seg.pdf,
-                                    lamp_prob=None if camera else self._record_prob)
+                                    lamp_prob=None if camera else self._record_prob, clamp=clamp)
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
@@ -1149,14 +1157,14 @@ class Integrator:
 
     # --- emission seen by rays ------------------------------------------------------------------
 
-    def _gather_emission(self, camera, hit, hits, path, L):
+    def _gather_emission(self, camera, hit, hits, path, L, clamp=np.inf):
         """Emission of the triangles hit by rays `hit` (two-sided), MIS-weighted for BSDF rays
-        (one native pass)."""
+        (one native pass); each contribution clamped to clamp (Cycles' sample clamp)."""
         dacrt.shading.gather_emission(hits, hit, self._tri_emission, self._tri_emissive,
                                       None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
-                                      path.O, path.D, path.thr, path.pdf, path.pid, L)
+                                      path.O, path.D, path.thr, path.pdf, path.pid, L, clamp=clamp)
 
-    def _gather_lamps(self, camera, path, hit, hits, L):
+    def _gather_lamps(self, camera, path, hit, hits, L, clamp=np.inf):
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather)."""
@@ -1167,7 +1175,7 @@ class Integrator:
         miss = ~hit
         if env is not None:
             env.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss, path.thr,
-                              None if camera else path.pdf, path.pid, L)
+                              None if camera else path.pdf, path.pid, L, clamp)
         if not len(lamps):
             return
         # a lamp counts in front of the surface hit, or of the ray's end where it missed (the
@@ -1175,7 +1183,7 @@ class Integrator:
         t_surf = np.where(hit, hits['t'], path.tmax) if camera else hits['t']
         dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
                                 miss, path.pid, L, thr=path.thr, pdf_bsdf=None if camera else path.pdf,
-                                lamp_prob=None if camera else self._record_prob)
+                                lamp_prob=None if camera else self._record_prob, clamp=clamp)
 
     # --- next-event estimation --------------------------------------------------------------------
 
@@ -1215,7 +1223,17 @@ class Integrator:
             contrib[send[occ]] = False
             if 'through' in self._scenes:
                 self._shadow_through(rays, skip, send, occ, value, tb)
-        dacrt.shading.accumulate_masked(L, pid, value, contrib)
+        # light sampled at vertex 0 is direct light (Cycles: the shadow path's bounce 0)
+        dacrt.shading.accumulate_masked(L, pid, value, contrib, self._clamps[k > 0])
+
+
+def _clamp_limit(name, value):
+    """The kernel's limit for a sample clamp setting: 3 x value (the channels' absolute sum;
+    Cycles' integrator sync), infinity for 0."""
+    v = float(value)
+    if not (np.isfinite(v) and v >= 0):
+        raise ValueError(f"settings.{name} must be a finite number >= 0 (0: no clamp), got {value!r}")
+    return np.inf if v == 0 else 3.0 * v
 
 
 def _compact(idx, *arrays):

@@ -35,6 +35,20 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
                     "through before it stops, as Cycles' Light Paths > Transparent; they do not "
                     "count as diffuse bounces",
         default=8, min=0, max=1024, soft_max=64)
+    # Cycles' Light Paths > Clamping, with its defaults (direct off, indirect 10)
+    sample_clamp_direct: FloatProperty(
+        name="Clamp Direct",
+        description="If non-zero, the most one sample of direct light (emission seen by the camera, "
+                    "light at the first surface) may add, as the mean of its R, G and B; brighter "
+                    "samples are scaled down, as Cycles clamps them, cutting fireflies at the cost "
+                    "of accuracy",
+        default=0.0, min=0.0, max=1e8, soft_max=1000.0)
+    sample_clamp_indirect: FloatProperty(
+        name="Clamp Indirect",
+        description="If non-zero, the most one sample of indirect light (light after the first "
+                    "bounce) may add, as the mean of its R, G and B, as Cycles clamps it; 0 turns it "
+                    "off",
+        default=10.0, min=0.0, max=1e8, soft_max=1000.0)
     filter_type: EnumProperty(
         name="Filter Type", description="Pixel filter", items=FILTER_ITEMS,
         default='BLACKMAN_HARRIS')

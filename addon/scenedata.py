@@ -146,6 +146,12 @@ class Settings:
     samples: int = 64
     max_bounces: int = 4           # K: up to K+1 diffuse reflections (Cycles' semantics)
     transparent_max_bounces: int = 8   # transparent surfaces a ray segment or shadow ray passes
+    # Cycles' sample clamps (Light Paths > Clamping; 0: none): the most one sample of direct
+    # light (camera-seen emission, light at the first vertex) or of indirect light may add, as
+    # the mean of its channels. The add-on's properties default to Cycles' (0, 10); here both
+    # are off
+    sample_clamp_direct: float = 0.0
+    sample_clamp_indirect: float = 0.0
     filter_type: str = 'BLACKMAN_HARRIS'   # 'BOX' | 'GAUSSIAN' | 'BLACKMAN_HARRIS'
     filter_width: float = 1.5      # pixels; BOX is always 1
     seed: int = 0

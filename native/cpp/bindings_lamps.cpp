@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -125,7 +126,8 @@ void lamp_sample_py(F32Array records, I32Array entry, F32Array P, F32Array u1, F
 
 void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D, F32Array t_surf,
                     py::array_t<bool, py::array::c_style> miss, py::object thr, py::object pdf_bsdf, I64Array pid,
-                    py::array L) {
+                    py::array L, float clamp) {
+    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
     const LampRecord* rec = lamp_records(records);
     const size_t R = size_t(records.shape(0));
     if (lamps.ndim() != 1) throw py::value_error("lamps must be one-dimensional, got " + shape_str(lamps));
@@ -150,7 +152,7 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
     gather_into(L, pid, n, [&](float* out, size_t N) {
         lamp_gather(rec, lamp_list.data(), nl, prob, O.data(), D.data(), t_surf.data(),
-                    reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N);
+                    reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N, clamp);
     });
 }
 
@@ -308,7 +310,9 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     return py::make_tuple(m, bad);
 }
 
-void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_t<bool, py::array::c_style> mask) {
+void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_t<bool, py::array::c_style> mask,
+                          float clamp) {
+    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
     if (L.ndim() != 2 || L.shape(0) != 3) throw py::value_error("L must have shape (3, N), got " + shape_str(L));
     const size_t N = size_t(L.shape(1));
     float* l = out_array(L, 3, N, "L");
@@ -319,7 +323,8 @@ void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_
     bool ok;
     {
         py::gil_scoped_release nogil;
-        ok = accumulate_masked(l, N, pid.data(), values.data(), reinterpret_cast<const uint8_t*>(mask.data()), n);
+        ok = accumulate_masked(l, N, pid.data(), values.data(), reinterpret_cast<const uint8_t*>(mask.data()), n,
+                               clamp);
     }
     if (!ok) throw py::value_error("pid holds a column outside 0.." + std::to_string(N ? N - 1 : 0) + " (L has " +
                                    std::to_string(N) + ")");
@@ -384,7 +389,8 @@ py::tuple environment_sample_py(const EnvironmentMap& env, F32Array u1, F32Array
 }
 
 void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py::array_t<bool, py::array::c_style> miss,
-                           py::object thr, py::object pdf_bsdf, I64Array pid, py::array L) {
+                           py::object thr, py::object pdf_bsdf, I64Array pid, py::array L, float clamp) {
+    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
     if (!(prob >= 0 && prob <= 1)) throw py::value_error("prob must be in [0, 1], got " + std::to_string(prob));
     if ((prob > 0) == pdf_bsdf.is_none())
         throw py::value_error("prob > 0 (BSDF rays, MIS) needs pdf_bsdf; prob 0 (camera rays) takes none");
@@ -397,7 +403,7 @@ void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
     gather_into(L, pid, n, [&](float* out, size_t N) {
         environment_gather(env, prob, D.data(), reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n,
-                           out, N);
+                           out, N, clamp);
     });
 }
 
@@ -410,7 +416,7 @@ void register_lamps(py::module_& m) {
           py::arg("u2"), py::arg("wi"), py::arg("dist"), py::arg("value"), py::arg("pdf"));
     m.def("lamp_gather", &lamp_gather_py, py::arg("records"), py::arg("lamps"), py::arg("lamp_prob"), py::arg("O"),
           py::arg("D"), py::arg("t_surf"), py::arg("miss"), py::arg("thr"), py::arg("pdf_bsdf"), py::arg("pid"),
-          py::arg("L"));
+          py::arg("L"), py::arg("clamp") = std::numeric_limits<float>::infinity());
     m.def("next_event", &next_event_py, py::arg("records"), py::arg("cdf"), py::arg("prob"), py::arg("no_mis"),
           py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"), py::arg("P"),
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),
@@ -425,6 +431,8 @@ void register_lamps(py::module_& m) {
         .def("eval", &environment_eval_py, py::arg("D"))
         .def("sample", &environment_sample_py, py::arg("u1"), py::arg("u2"))
         .def("gather", &environment_gather_py, py::arg("prob"), py::arg("D"), py::arg("miss"), py::arg("thr"),
-             py::arg("pdf_bsdf"), py::arg("pid"), py::arg("L"));
-    m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"));
+             py::arg("pdf_bsdf"), py::arg("pid"), py::arg("L"),
+             py::arg("clamp") = std::numeric_limits<float>::infinity());
+    m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"),
+          py::arg("clamp") = std::numeric_limits<float>::infinity());
 }

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -303,7 +304,8 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
 size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> hit, F32Array emission,
                           py::array_t<bool, py::array::c_style> emissive, py::object tri_prob, F32Array area,
                           F32Array geo, F32Array O, F32Array D, py::object thr, py::object pdf, I64Array pid,
-                          py::array_t<float, py::array::c_style> L) {
+                          py::array_t<float, py::array::c_style> L, float clamp) {
+    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
     const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const Hit* h = records<Hit>(hits, n, "hits");
     need_len(hit, n, "hit");
@@ -333,7 +335,7 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
     py::gil_scoped_release nogil;
     return gather_emission(h, reinterpret_cast<const uint8_t*>(hit.data()), n, emission.data(),
                            reinterpret_cast<const uint8_t*>(emissive.data()), prob, area.data(), geo.data(), M,
-                           O.data(), D.data(), t, pd, pid.data(), L.mutable_data(), N);
+                           O.data(), D.data(), t, pd, pid.data(), L.mutable_data(), N, clamp);
 }
 
 py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, py::object rays, py::object lu_obj,
@@ -487,7 +489,8 @@ void register_shading(py::module_& m) {
           py::arg("D") = py::none(), py::arg("take") = py::list());
     m.def("gather_emission", &gather_emission_py, py::arg("hits"), py::arg("hit"), py::arg("emission"),
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("O"), py::arg("D"),
-          py::arg("thr"), py::arg("pdf"), py::arg("pid"), py::arg("L"));
+          py::arg("thr"), py::arg("pdf"), py::arg("pid"), py::arg("L"),
+          py::arg("clamp") = std::numeric_limits<float>::infinity());
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
           py::arg("rays"), py::arg("lu") = py::none(), py::arg("lv") = py::none());
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));

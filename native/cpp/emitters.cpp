@@ -38,7 +38,7 @@ size_t sample_triangles(const float* geo, const float* area, size_t M, const int
 
 size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
                        const float* tri_prob, const float* area, const float* geo, size_t M, const float* O,
-                       const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N) {
+                       const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N, float clamp) {
     std::atomic<size_t> count{0};
     parallel_for(n, [&](size_t b, size_t e) {
         size_t local = 0;
@@ -56,11 +56,14 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
                 w = 1.0f / r;
             }
             const size_t j = index_at(pid, i, N);
+            float v[3];
             for (int a = 0; a < 3; ++a) {
-                float v = emission[size_t(a) * M + q];
-                if (thr) v *= thr[size_t(a) * n + i];
-                L[size_t(a) * N + j] += v * w;
+                v[a] = emission[size_t(a) * M + q];
+                if (thr) v[a] *= thr[size_t(a) * n + i];
+                v[a] *= w;
             }
+            clamp_light(v, clamp);
+            for (int a = 0; a < 3; ++a) L[size_t(a) * N + j] += v[a];
             ++local;
         }
         count += local;

@@ -99,7 +99,7 @@ inline double sin_integral(double v0, double v1) {
 }
 
 void gather_range(const EnvironmentMap* env, float prob, const float* D, const uint8_t* miss, const float* thr,
-                  const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N, size_t b, size_t e) {
+                  const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N, float clamp, size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
         if (!miss[i]) continue;
         const float d[3] = {D[i], D[n + i], D[2 * n + i]};
@@ -112,11 +112,13 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
             w = 1.0f / (1.0f + r);
         }
         float* out = L + index_at(pid, i, N);
+        float v[3];
         for (int a = 0; a < 3; ++a) {
-            float v = Le[a] * w;
-            if (thr) v *= thr[size_t(a) * n + i];
-            out[size_t(a) * N] += v;
+            v[a] = Le[a] * w;
+            if (thr) v[a] *= thr[size_t(a) * n + i];
         }
+        clamp_light(v, clamp);
+        for (int a = 0; a < 3; ++a) out[size_t(a) * N] += v[a];
     }
 }
 
@@ -258,9 +260,12 @@ void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[
 }
 
 void environment_gather(const EnvironmentMap& env, float prob, const float* D, const uint8_t* miss,
-                        const float* thr, const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N) {
+                        const float* thr, const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N,
+                        float clamp) {
     const EnvironmentMap* e = &env;
-    parallel_for(n, [&](size_t b, size_t end) { gather_range(e, prob, D, miss, thr, pdf_bsdf, pid, n, L, N, b, end); });
+    parallel_for(n, [&](size_t b, size_t end) {
+        gather_range(e, prob, D, miss, thr, pdf_bsdf, pid, n, L, N, clamp, b, end);
+    });
 }
 
 }  // namespace dacrt

@@ -58,6 +58,7 @@ void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[
 // where miss[i], thr null = 1, w = 1 when prob is 0 (camera rays), else the power heuristic
 // 1 / (1 + (prob pdf_env / pdf_bsdf)^2). pid distinct (threads split by ray).
 void environment_gather(const EnvironmentMap& env, float prob, const float* D, const uint8_t* miss,
-                        const float* thr, const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N);
+                        const float* thr, const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N,
+                        float clamp);
 
 }  // namespace dacrt

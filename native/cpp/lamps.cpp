@@ -53,7 +53,7 @@ void sample_range(const LampRecord* rec, size_t R, const int32_t* entry, const f
 
 void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                   const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
-                  const int64_t* pid, size_t n, float* L, size_t N, size_t b, size_t e) {
+                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, size_t b, size_t e) {
     // Lamp by lamp over the rays (each ray still adds its lamps in list order), and the add is
     // selected, not branched on: whether a ray sees a lamp follows no pattern.
     for (size_t k = 0; k < nl; ++k) {
@@ -73,12 +73,14 @@ void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const 
                 w = 1.0f / r;
             }
             float* out = L + index_at(pid, i, N);
+            float v[3];
             for (int a = 0; a < 3; ++a) {
-                float v = Le[a];
-                if (thr) v *= thr[size_t(a) * n + i];
-                if (lamp_prob) v *= w;
-                out[size_t(a) * N] += seen ? v : 0.0f;
+                v[a] = Le[a];
+                if (thr) v[a] *= thr[size_t(a) * n + i];
+                if (lamp_prob) v[a] *= w;
             }
+            clamp_light(v, clamp);  // each lamp a ray meets is its own contribution, as in Cycles
+            for (int a = 0; a < 3; ++a) out[size_t(a) * N] += seen ? v[a] : 0.0f;
         }
     }
 }
@@ -92,9 +94,9 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
-                 const int64_t* pid, size_t n, float* L, size_t N) {
+                 const int64_t* pid, size_t n, float* L, size_t N, float clamp) {
     parallel_for(n, [&](size_t b, size_t e) {
-        gather_range(rec, lamps, nl, lamp_prob, O, D, t_surf, miss, thr, pdf_bsdf, pid, n, L, N, b, e);
+        gather_range(rec, lamps, nl, lamp_prob, O, D, t_surf, miss, thr, pdf_bsdf, pid, n, L, N, clamp, b, e);
     });
 }
 

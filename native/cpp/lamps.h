@@ -69,7 +69,7 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 // pid must be distinct (threads split by ray).
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
-                 const int64_t* pid, size_t n, float* L, size_t N);
+                 const int64_t* pid, size_t n, float* L, size_t N, float clamp);
 
 namespace lampmath {
 

@@ -165,7 +165,8 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
     return m;
 }
 
-bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n) {
+bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n,
+                       float clamp) {
     std::atomic<bool> in_range{true};
     parallel_for(n, [&](size_t b, size_t e) {
         bool ok = true;
@@ -179,7 +180,9 @@ bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* valu
         for (size_t i = b; i < e; ++i) {
             const bool on = mask[i];
             const size_t j = index_at(pid, i, N);  // checked above, but the caller's array
-            for (int a = 0; a < 3; ++a) L[size_t(a) * N + j] += on ? values[size_t(a) * n + i] : 0.0f;
+            float v[3] = {values[i], values[n + i], values[2 * n + i]};
+            clamp_light(v, clamp);
+            for (int a = 0; a < 3; ++a) L[size_t(a) * N + j] += on ? v[a] : 0.0f;
         }
     }, size_t(1) << 17);
     return true;

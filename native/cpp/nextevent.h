@@ -87,8 +87,9 @@ struct NextEventOut {
 
 size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped);
 
-// L[:, pid[i]] (stride N) += values[:, i] (stride n) where mask[i]; pid distinct. False (L
-// untouched) when some pid is outside 0..N-1.
-bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n);
+// L[:, pid[i]] (stride N) += values[:, i] (stride n) where mask[i], each clamped to clamp
+// (clamp_light); pid distinct. False (L untouched) when some pid is outside 0..N-1.
+bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n,
+                       float clamp);
 
 }  // namespace dacrt

@@ -6,6 +6,8 @@
 // Vectors are structure-of-arrays: 3 rows of `stride` floats (numpy (3, n) C order).
 #pragma once
 
+#include <cmath>
+
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -27,6 +29,17 @@ inline size_t index_at(const Index* idx, size_t j, size_t n) {
 inline size_t prim_at(const Hit& h, size_t M) {
     const uint32_t p = uint32_t(__atomic_load_n(&h.prim, __ATOMIC_RELAXED));
     return p < M ? size_t(p) : M - 1;
+}
+
+// Cycles' sample clamp (film/light_passes.h film_clamp_light): a contribution whose channels'
+// absolute values sum to more than limit is scaled down to that sum (limit: 3 x the Clamp
+// Direct / Indirect setting, infinity for none).
+inline void clamp_light(float v[3], float limit) {
+    const float sum = std::fabs(v[0]) + std::fabs(v[1]) + std::fabs(v[2]);
+    if (sum > limit) {
+        const float s = limit / sum;
+        for (int a = 0; a < 3; ++a) v[a] *= s;
+    }
 }
 
 // ULP of a positive normal float: 2^(its exponent - 23) (self-intersection steps are counted
@@ -170,7 +183,7 @@ void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t 
 // pdf sample_triangles has at O for that direction. Returns the number of rays that met emission.
 size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
                        const float* tri_prob, const float* area, const float* geo, size_t M, const float* O,
-                       const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N);
+                       const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N, float clamp);
 
 // A camera's frame in float32, as addon/camera.py CameraModel rounds it: orthonormal
 // camera-to-world rotation (columns right, up, back), position, the raster -> viewplane map

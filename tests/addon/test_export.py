@@ -1054,6 +1054,12 @@ def test_settings_follow_scene_dacrt_and_blender(scene, exported):
     d.use_adaptive_sampling, d.adaptive_threshold, d.adaptive_min_samples = True, 0.02, 12
     s = exported().settings
     assert s.use_adaptive_sampling and s.adaptive_threshold == pytest.approx(0.02) and s.adaptive_min_samples == 12
+    # Light Paths > Clamping with Cycles' defaults (direct off, indirect 10)
+    assert (s.sample_clamp_direct, s.sample_clamp_indirect) == (0.0, pytest.approx(10.0))
+    scene.cycles.sample_clamp_indirect = 3.0                  # Cycles' own settings do not leak in
+    d.sample_clamp_direct, d.sample_clamp_indirect = 4.0, 0.0
+    s = exported().settings
+    assert (s.sample_clamp_direct, s.sample_clamp_indirect) == (4.0, 0.0)
     # the Mist pass's settings: the world's (falloff as Cycles' exponent), Cycles' film defaults without one
     layer.use_pass_mist = True
     scene.world = None

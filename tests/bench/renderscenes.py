@@ -160,6 +160,7 @@ class _ParityView:
         self.bounces, self.filter_type, self.filter_width = (spec.bounces, spec.filter_type,
                                                              spec.filter_width)
         self.cycles_samples = self.dacrt_samples = 1   # set per render by configure()
+        self.terminator, self.clamp = False, (0.0, 0.0)   # the fair settings: offsets and clamps off
 
 
 # DACRT's adaptive series: the automatic threshold (0: Cycles' max(0.001, 1 / samples), the

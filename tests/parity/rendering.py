@@ -52,7 +52,7 @@ def set_cycles(scene, spec, seed):
     c.use_adaptive_sampling = False
     c.use_denoising = False
     c.max_bounces = c.diffuse_bounces = spec.bounces     # K: up to K+1 diffuse reflections
-    c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
+    c.sample_clamp_direct, c.sample_clamp_indirect = spec.clamp
     c.light_sampling_threshold = 0.0
     c.caustics_reflective = c.caustics_refractive = True
     c.pixel_filter_type = spec.filter_type     # same identifiers as scene.dacrt.filter_type
@@ -72,6 +72,7 @@ def set_dacrt(scene, spec, seed):
     d.filter_type = spec.filter_type
     d.filter_width = spec.filter_width
     d.seed = seed
+    d.sample_clamp_direct, d.sample_clamp_indirect = spec.clamp      # as set_cycles (fair: 0, 0)
 
 
 def render_combined(scene, path):

@@ -529,6 +529,25 @@ def build_terminator():
     camera((0.3, -4.8, 1.9), (0.3, 0.0, 0.6), lens=30.0)
 
 
+def build_clamp():
+    """Cycles' sample clamps at work: a box lit by one point light of radius 0 near its back
+    wall, so direct and bounced light both exceed the clamps the spec sets. (One delta light:
+    both engines then draw every contribution from the same distribution, so the clamped means
+    agree too; with several lights or area lights their different light-selection and sampling
+    pdfs would clamp differently.)"""
+    white = diffuse("White", (0.73, 0.73, 0.73))
+    warm = diffuse("Warm", (0.7, 0.35, 0.2))
+    quad("Floor", [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], white)
+    quad("Ceiling", [(-1, -1, 2), (-1, 1, 2), (1, 1, 2), (1, -1, 2)], white)
+    quad("Back", [(-1, 1, 0), (1, 1, 0), (1, 1, 2), (-1, 1, 2)], white)
+    quad("Left", [(-1, -1, 0), (-1, 1, 0), (-1, 1, 2), (-1, -1, 2)], warm)
+    quad("Right", [(1, -1, 0), (1, -1, 2), (1, 1, 2), (1, 1, 0)], white)
+    box("Block", (0.5, 0.5, 0.8), white, (0.35, 0.1, 0.4), (0, 0, math.radians(25)))
+    lamp("Point", 'POINT', 60.0, (-0.3, 0.75, 1.2), shadow_soft_size=0.0, use_soft_falloff=False)
+    world((0.0, 0.0, 0.0), 0.0)
+    camera((0.0, -3.4, 1.0), (0.0, 0.0, 1.0), lens=35.0)
+
+
 def build_environment_hidden():
     """The environment scene with the world hidden from the camera (World > Ray Visibility >
     Camera off): the HDRI still lights the blocks, the sky behind them is black."""
@@ -587,13 +606,15 @@ class ParitySpec:
     dacrt_seeds: int
     # keep the scene's shadow terminator offsets (zeroed elsewhere, see fair_scene_settings)
     terminator: bool = False
+    # both engines' sample clamps (direct, indirect; 0: none, the fair setting)
+    clamp: tuple = (0.0, 0.0)
 
     def key(self):
         """The settings part of the cache key (the builder is keyed by its module source)."""
         return dict(name=self.name, build=self.build.__name__, resolution=list(self.resolution),
                     bounces=self.bounces, filter_type=self.filter_type,
                     filter_width=self.filter_width, cycles_samples=self.cycles_samples,
-                    cycles_seeds=self.cycles_seeds, terminator=self.terminator)
+                    cycles_seeds=self.cycles_seeds, terminator=self.terminator, clamp=list(self.clamp))
 
 
 SPECS = (
@@ -616,4 +637,5 @@ SPECS = (
     ParitySpec("transparency", build_transparency, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("terminator", build_terminator, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32,
                terminator=True),
+    ParitySpec("clamp", build_clamp, (48, 36), 3, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32, clamp=(2.0, 0.25)),
 )

@@ -79,7 +79,8 @@ def lamp_sample(records, entry, P, u1, u2, out=None):
     return wi, dist, value, pdf
 
 
-def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=None, lamp_prob=None) -> None:
+def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=None, lamp_prob=None,
+                clamp: float = np.inf) -> None:
     """Add to L (3, N) float32, in place, what rays (O, D) (3, n) see of the lamps
     records[lamps] (lamps: record indices, in the order their light is added).
 
@@ -89,7 +90,8 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     (pid (n,) distinct column indices; thr (3, n) path throughput or None = 1). For BSDF rays
     give lamp_prob (R,) (each record's light-selection probability) and pdf_bsdf (n,): w is the
     power heuristic 1 / (1 + (lamp_prob pdf_lamp / pdf_bsdf)^2) against light sampling; camera
-    rays give neither (w = 1)."""
+    rays give neither (w = 1). clamp: each lamp's contribution to a ray is scaled down to an
+    absolute channel sum of at most clamp (Cycles' sample clamp; inf: none)."""
     _check_added_to(L)
     records = _records(records)
     lamps = np.asarray(lamps)
@@ -107,7 +109,8 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
         raise ValueError(f"miss must be a bool array, got dtype {miss.dtype}")
     opt = lambda a: None if a is None else _f32(a)
     _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32(t_surf),
-                      np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf), np.ascontiguousarray(pid, np.int64), L)
+                      np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf), np.ascontiguousarray(pid, np.int64), L,
+                      float(clamp))
 
 
 EnvironmentMap = _core.EnvironmentMap
@@ -120,9 +123,10 @@ def environment_map(rgb, to_map=None, interpolation: str = "Linear") -> Environm
 
     The object offers eval(D (3, n)) -> (radiance (3, n), solid-angle pdf (n,)),
     sample(u1, u2 (n,)) -> (wi (3, n), radiance / pdf (3, n), pdf (n,)) and
-    gather(prob, D, miss, thr, pdf_bsdf, pid, L): what rays that missed everything see, added
-    to L (3, N) in place, MIS-weighted against sampling the map with probability prob (0:
-    camera rays, weight 1; then pdf_bsdf is None)."""
+    gather(prob, D, miss, thr, pdf_bsdf, pid, L, clamp=inf): what rays that missed everything
+    see, added to L (3, N) in place, MIS-weighted against sampling the map with probability
+    prob (0: camera rays, weight 1; then pdf_bsdf is None), each ray's contribution clamped as
+    lamp_gather's."""
     if interpolation not in ("Linear", "Closest"):
         raise ValueError(f"interpolation must be 'Linear' or 'Closest', got {interpolation!r}")
     m = np.eye(3) if to_map is None else to_map

@@ -248,15 +248,18 @@ def _terminator(t):
     return (f32(geo), opt(normals), opt(cutoff), opt(freq), opt(u), opt(v))
 
 
-def accumulate_masked(L, pid, values, mask) -> None:
+def accumulate_masked(L, pid, values, mask, clamp: float = np.inf) -> None:
     """L[:, pid[i]] += values[:, i] where mask[i] (n,) bool; pid (n,) distinct columns of L (every
-    one, masked or not); L (3, N) float32 C-contiguous, values (3, n)."""
+    one, masked or not); L (3, N) float32 C-contiguous, values (3, n). clamp: each value is
+    scaled down to an absolute channel sum of at most clamp first (Cycles' sample clamp; inf:
+    none)."""
     _check_added_to(L)
     _core.accumulate_masked(L, np.ascontiguousarray(pid, np.int64), _rows(values, 3, "values"),
-                            np.ascontiguousarray(mask, np.bool_))
+                            np.ascontiguousarray(mask, np.bool_), float(clamp))
 
 
-def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, thr, pdf, pid, L) -> int:
+def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, thr, pdf, pid, L,
+                    clamp: float = np.inf) -> int:
     """Add the emission that rays meet on emissive triangles to L (3, N) in place (two-sided).
 
     Rays i with hit[i] whose triangle hits['prim'][i] has emissive[prim] (bool (M,)) add
@@ -264,7 +267,7 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
     (BSDF rays), the power-heuristic weight against light-sampling that triangle,
     1 / (1 + (tri_prob pdf_light / pdf)^2) with pdf (n,) the rays' BSDF pdf and pdf_light the
     solid-angle pdf sample_triangles has from the ray origin O (3, n) for the direction D (3, n),
-    into column pid[i] (distinct).
+    into column pid[i] (distinct), clamped as accumulate_masked's.
     Returns how many rays met emission."""
     _check_added_to(L)
     return _core.gather_emission(hits, np.ascontiguousarray(hit, np.bool_), _rows(emission, 3, "emission"),
@@ -274,7 +277,7 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
                                  _rows(D, 3, "D"),
                                  None if thr is None else _rows(thr, 3, "thr"),
                                  None if pdf is None else np.ascontiguousarray(pdf, _F32),
-                                 np.ascontiguousarray(pid, np.int64), L)
+                                 np.ascontiguousarray(pid, np.int64), L, float(clamp))
 
 
 def camera_rays(ortho: bool, frame, rx, ry, records: bool = False, lens=None):
