@@ -121,6 +121,16 @@ def uv_sphere(name, radius, material, location=(0, 0, 0), segments=24, rings=12,
     return mesh_object(name, verts, faces, material, location, smooth=smooth, collection=collection)
 
 
+def box_room(white, left, right):
+    """A 2 m box open towards -y (floor, ceiling and back wall `white`, side walls `left` and
+    `right`), its inward faces lit."""
+    quad("Floor", [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], white)
+    quad("Ceiling", [(-1, -1, 2), (-1, 1, 2), (1, 1, 2), (1, -1, 2)], white)
+    quad("Back", [(-1, 1, 0), (1, 1, 0), (1, 1, 2), (-1, 1, 2)], white)
+    quad("Left", [(-1, -1, 0), (-1, 1, 0), (-1, 1, 2), (-1, -1, 2)], left)
+    quad("Right", [(1, -1, 0), (1, -1, 2), (1, 1, 2), (1, 1, 0)], right)
+
+
 def aim(ob, target):
     """Point the object's -Z axis (cameras, spot/area/sun lights) at `target`, +Y up."""
     direction = Vector(target) - Vector(ob.location)
@@ -177,11 +187,7 @@ def build_cornell():
     white = diffuse("White", (0.73, 0.73, 0.73))
     red = grouped_diffuse("Red", (0.63, 0.065, 0.05))
     green = diffuse("Green", (0.14, 0.45, 0.091))
-    quad("Floor", [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], white)
-    quad("Ceiling", [(-1, -1, 2), (-1, 1, 2), (1, 1, 2), (1, -1, 2)], white)
-    quad("Back", [(-1, 1, 0), (1, 1, 0), (1, 1, 2), (-1, 1, 2)], white)
-    quad("Left", [(-1, -1, 0), (-1, 1, 0), (-1, 1, 2), (-1, -1, 2)], red)
-    quad("Right", [(1, -1, 0), (1, -1, 2), (1, 1, 2), (1, 1, 0)], green)
+    box_room(white, red, green)
     box("TallBlock", (0.55, 0.55, 1.2), white, (-0.35, 0.35, 0.6), (0, 0, math.radians(22)))
     box("ShortBlock", (0.55, 0.55, 0.6), white, (0.4, -0.25, 0.3), (0, 0, math.radians(-17)))
     lamp("CeilingLight", 'AREA', 45.0, (0.0, 0.0, 1.98), color=(1.0, 0.85, 0.7),
@@ -537,11 +543,7 @@ def build_clamp():
     pdfs would clamp differently.)"""
     white = diffuse("White", (0.73, 0.73, 0.73))
     warm = diffuse("Warm", (0.7, 0.35, 0.2))
-    quad("Floor", [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], white)
-    quad("Ceiling", [(-1, -1, 2), (-1, 1, 2), (1, 1, 2), (1, -1, 2)], white)
-    quad("Back", [(-1, 1, 0), (1, 1, 0), (1, 1, 2), (-1, 1, 2)], white)
-    quad("Left", [(-1, -1, 0), (-1, 1, 0), (-1, 1, 2), (-1, -1, 2)], warm)
-    quad("Right", [(1, -1, 0), (1, -1, 2), (1, 1, 2), (1, 1, 0)], white)
+    box_room(white, warm, white)
     box("Block", (0.5, 0.5, 0.8), white, (0.35, 0.1, 0.4), (0, 0, math.radians(25)))
     lamp("Point", 'POINT', 60.0, (-0.3, 0.75, 1.2), shadow_soft_size=0.0, use_soft_falloff=False)
     world((0.0, 0.0, 0.0), 0.0)
