@@ -91,19 +91,17 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         if self.cancel_requested():
             return
         self.update_stats("", "DACRT | Preparing")
-        from .integrator import Integrator
-        try:
-            integ = Integrator(scene_data)
-        except ValueError as e:
-            raise RuntimeError(str(e)) from None
-        camera = scene_data.camera
-        x0, y0, x1, y1 = camera.border
+        # a mono render's integrator is made (and the scene checked) before the result is begun;
+        # stereo / multiview makes one per view instead, none for the mono camera
+        multiview = bool(depsgraph.scene_eval.render.use_multiview)
+        integ = None if multiview else self._view_integrator(depsgraph, scene_data, None)
+        x0, y0, x1, y1 = scene_data.camera.border
         # begin_result coordinates are relative to the render border's rect
         result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=layer)
         views = [v.name for v in result.views]
         try:
             for view in views if len(views) > 1 else [None]:
-                if view is not None:    # stereo / multiview: each view's camera, same geometry
+                if view is not None or integ is None:   # each view's camera, the same geometry
                     integ = None        # the last view's arrays go before the next view's are made
                     integ = self._view_integrator(depsgraph, scene_data, view)
                     if integ is None:
@@ -120,21 +118,25 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             self._report_summary(integ, scene_data, layer, export_seconds)
 
     def _view_integrator(self, depsgraph, scene_data, view):
-        """The integrator of one view of a multiview render: the frame's export with the
-        camera Blender gives that view; None when cancelled."""
+        """The integrator of the frame's export (view None) or of one view of a multiview
+        render, with the camera Blender gives that view; None when cancelled."""
         from .integrator import Integrator
-        self.active_view_set(view)
-        scene = depsgraph.scene_eval
-        cam_ob = scene.camera
-        view_cam = (self.camera_model_matrix(cam_ob, use_spherical_stereo=False),
-                    self.camera_shift_x(cam_ob, use_spherical_stereo=False))
+        if view is not None:
+            self.active_view_set(view)
+            scene = depsgraph.scene_eval
+            cam_ob = scene.camera
+            view_cam = (self.camera_model_matrix(cam_ob, use_spherical_stereo=False),
+                        self.camera_shift_x(cam_ob, use_spherical_stereo=False))
+            try:
+                scene_data.camera = export.export_camera(scene, None, view_cam)
+            except export.ExportError as e:
+                raise RuntimeError(f"view '{view}': {e}") from None
+            if self.cancel_requested():
+                return None
         try:
-            scene_data.camera = export.export_camera(scene, None, view_cam)
-        except export.ExportError as e:
-            raise RuntimeError(f"view '{view}': {e}") from None
-        if self.cancel_requested():
-            return None
-        return Integrator(scene_data)
+            return Integrator(scene_data)
+        except ValueError as e:
+            raise RuntimeError(str(e) if view is None else f"view '{view}': {e}") from None
 
     def _layer_enabled(self, layer):
         """Blender may call render for a layer it will not use (Render Single Layer)."""

@@ -276,10 +276,19 @@ def test_write_still_like_blender_b(scene, tmp_path):
     assert buf.get_pixels().mean() > 0
 
 
-def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path):
+def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path, monkeypatch):
     """Stereo 3D with parallel eyes about the centre: each view is the mono render of the camera
     moved half the interocular distance along its own x axis (Blender's eye cameras, which the
-    engine asks for per view), and both views are written."""
+    engine asks for per view), and both views are written, with one integrator each (none for
+    the mono camera)."""
+    from addon import integrator
+    made = []
+    real_init = integrator.Integrator.__init__
+
+    def counting_init(self, *args, **kw):
+        made.append(1)
+        real_init(self, *args, **kw)
+    monkeypatch.setattr(integrator.Integrator, '__init__', counting_init)
     lit_plane_scene(scene, size=(32, 24))
     scenes.cube("Box", size=1.0, location=(0.0, 0.0, 0.5))
     cam = scene.camera
@@ -290,6 +299,7 @@ def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path):
     settings.file_format, settings.color_depth, settings.views_format = 'OPEN_EXR', '32', 'INDIVIDUAL'
     scene.render.filepath = str(tmp_path / "eye")
     bpy.ops.render.render(write_still=True)
+    assert len(made) == 2
     eyes = {side: scenes.rgba(scenes.read_exr(next(tmp_path.glob(f"eye*_{side}.exr")))) for side in "LR"}
     scene.render.use_multiview = False
     for side, dx in (("L", -0.4), ("R", 0.4)):
