@@ -1,9 +1,9 @@
 """The DACRT RenderEngine: orchestration only.
 
 Per view layer: export the depsgraph (export.py), integrate in passes (integrator.py), write
-Combined and the enabled Depth/Normal/DiffCol passes progressively, keep the status line,
-progress and memory stats current, honour cancel between steps, and report every message
-and error through `self.report` so nothing is only printed. Nothing outlives `render()`.
+Combined and the enabled Depth/Normal/DiffCol/Mist and light passes progressively, keep the
+status line, progress and memory stats current, honour cancel between steps, and report every
+message and error through `self.report` so nothing is only printed. Nothing outlives `render()`.
 """
 import math
 import time
@@ -19,12 +19,20 @@ from .allocator import render_heap
 EXTRA_PASSES = (('Depth', 'use_pass_z', 1, 'Z', 'VALUE'),
                 ('Normal', 'use_pass_normal', 3, 'XYZ', 'VECTOR'),
                 ('DiffCol', 'use_pass_diffuse_color', 3, 'RGB', 'COLOR'),
-                ('Mist', 'use_pass_mist', 1, 'Z', 'VALUE'))
+                ('Mist', 'use_pass_mist', 1, 'Z', 'VALUE'),
+                ('DiffDir', 'use_pass_diffuse_direct', 3, 'RGB', 'COLOR'),
+                ('DiffInd', 'use_pass_diffuse_indirect', 3, 'RGB', 'COLOR'),
+                ('Emit', 'use_pass_emit', 3, 'RGB', 'COLOR'),
+                ('Env', 'use_pass_environment', 3, 'RGB', 'COLOR'))
 # Blender's own names for these passes (what the compositor and multilayer EXR use). Blender
-# renamed the short "DiffCol" to "Diffuse Color" (5.0.1: "Diffuse Color", checked; 4.2: "DiffCol";
-# the 4.4 boundary follows the release history and is not checked here).
-RESULT_PASS_NAME = {'Depth': 'Depth', 'Normal': 'Normal',
-                    'DiffCol': 'Diffuse Color' if bpy.app.version >= (4, 4, 0) else 'DiffCol', 'Mist': 'Mist'}
+# renamed the short ones ("DiffCol", "DiffDir", "DiffInd", "Emit", "Env") to the long ones
+# (5.0.1: "Diffuse Color" and the others as Cycles' engine.py registers them, checked; 4.2: the
+# short ones; the 4.4 boundary follows the release history and is not checked here).
+_LONG_NAMES = bpy.app.version >= (4, 4, 0)
+RESULT_PASS_NAME = {'Depth': 'Depth', 'Normal': 'Normal', 'Mist': 'Mist'}
+RESULT_PASS_NAME.update((short, long if _LONG_NAMES else short) for short, long in (
+    ('DiffCol', 'Diffuse Color'), ('DiffDir', 'Diffuse Direct'), ('DiffInd', 'Diffuse Indirect'),
+    ('Emit', 'Emission'), ('Env', 'Environment')))
 
 
 # Stats of the latest render per view layer, for scripts (addon.last_render_stats()); replaced

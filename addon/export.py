@@ -83,12 +83,11 @@ LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')
 _UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
     ('position', 'Position'), ('vector', 'Vector'), ('uv', 'UV'),
     ('object_index', 'Object Index'), ('material_index', 'Material Index'),
-    ('diffuse_direct', 'Diffuse Direct'), ('diffuse_indirect', 'Diffuse Indirect'),
     ('glossy_direct', 'Glossy Direct'), ('glossy_indirect', 'Glossy Indirect'),
     ('glossy_color', 'Glossy Color'), ('transmission_direct', 'Transmission Direct'),
     ('transmission_indirect', 'Transmission Indirect'), ('transmission_color', 'Transmission Color'),
     ('subsurface_direct', 'Subsurface Direct'), ('subsurface_indirect', 'Subsurface Indirect'),
-    ('subsurface_color', 'Subsurface Color'), ('emit', 'Emission'), ('environment', 'Environment'),
+    ('subsurface_color', 'Subsurface Color'),
     ('ambient_occlusion', 'Ambient Occlusion'), ('shadow', 'Shadow'),
     ('cryptomatte_object', 'Cryptomatte Object'), ('cryptomatte_material', 'Cryptomatte Material'),
     ('cryptomatte_asset', 'Cryptomatte Asset'))) + (
@@ -1159,7 +1158,11 @@ class _Exporter:
             raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
         passes = tuple(name for name, on in (('Depth', vl.use_pass_z), ('Normal', vl.use_pass_normal),
                                               ('DiffCol', vl.use_pass_diffuse_color),
-                                              ('Mist', vl.use_pass_mist)) if on)
+                                              ('Mist', vl.use_pass_mist),
+                                              ('DiffDir', vl.use_pass_diffuse_direct),
+                                              ('DiffInd', vl.use_pass_diffuse_indirect),
+                                              ('Emit', vl.use_pass_emit),
+                                              ('Env', vl.use_pass_environment)) if on)
         missing = [label for owner, attr, label in _UNRENDERED_PASSES
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
         missing += [f"AOV '{a.name}'" for a in getattr(vl, 'aovs', ())]

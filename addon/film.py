@@ -2,7 +2,9 @@
 
 Owns the Combined sums (RGBA, premultiplied, linear), the optional Depth, Normal, DiffCol
 (albedo) and Mist passes (Mist sums each sample's 1 - mist, 0 where it saw no surface, and
-reads back 1 - their mean, as Cycles stores it), the per-pixel count of accepted samples, the count of samples dropped for
+reads back 1 - their mean, as Cycles stores it), the light passes (Emit, Env, and DiffDir and
+DiffInd, which read back divided by the Diffuse Color sums as Cycles divides them, 0 where that
+is 0; the film keeps DiffCol for them when it is not requested), the per-pixel count of accepted samples, the count of samples dropped for
 being NaN or infinite and, for adaptive sampling, a second Combined sum of the odd-numbered
 samples (weighted 2, Cycles' adaptive auxiliary buffer) and the error estimate built from it. Pixel values are the plain mean of the samples that landed in the pixel
 (the pixel filter is applied by importance sampling the ray positions, see filter.py), so a
@@ -15,7 +17,9 @@ import numpy as np
 
 import dacrt
 
-PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3, 'Mist': 1}
+PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3, 'Mist': 1, 'DiffDir': 3, 'DiffInd': 3, 'Emit': 3, 'Env': 3}
+LIGHT_PASSES = ('DiffDir', 'DiffInd', 'Emit', 'Env')   # the parts Combined is the sum of
+DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')
 BACKGROUND_DEPTH = 1e10    # what Cycles reports for pixels whose first sample saw no surface
 
 
@@ -29,6 +33,8 @@ class Film:
         self._sum = np.zeros((4, npix), np.float64)
         self._count = np.zeros(npix, np.int64)
         self.passes = tuple(dict.fromkeys(passes))
+        if any(p in self.passes for p in DIVIDED_BY_COLOR) and 'DiffCol' not in self.passes:
+            self.passes += ('DiffCol',)             # their divisor
         self._pass_sum = {p: np.zeros((PASS_CHANNELS[p], npix), np.float64)
                           for p in self.passes if p != 'Depth'}
         self._depth = np.zeros(npix, np.float32) if 'Depth' in self.passes else None
@@ -95,13 +101,18 @@ class Film:
         return self._mean(self._sum)
 
     def pass_image(self, name: str) -> np.ndarray:
-        """(H, W, channels) float32 image of an enabled pass ('Depth', 'Normal', 'DiffCol', 'Mist')."""
+        """(H, W, channels) float32 image of an enabled pass (PASS_CHANNELS)."""
         if name not in self.passes:
             raise KeyError(f"pass {name!r} was not requested (requested: {list(self.passes)})")
         if name == 'Depth':
             return self._depth.reshape(self.height, self.width, 1).copy()
         if name == 'Mist':
             return 1.0 - self._mean(self._pass_sum[name])
+        if name in DIVIDED_BY_COLOR:                # Cycles: light / colour, 0 where no colour
+            color = self._pass_sum['DiffCol']
+            with np.errstate(divide='ignore', invalid='ignore'):
+                ratio = np.where(color != 0, self._pass_sum[name] / color, 0.0)
+            return ratio.T.reshape(self.height, self.width, 3).astype(np.float32)
         return self._mean(self._pass_sum[name])
 
     def sample_counts(self) -> np.ndarray:

@@ -51,7 +51,7 @@ import dacrt
 from .camera import CameraModel
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
-from .film import Film
+from .film import LIGHT_PASSES, Film
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .sampling import RandomStream, max3
@@ -382,6 +382,8 @@ class Integrator:
                          if s.use_adaptive_sampling else None)
         self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes),
                          adaptive=self.adaptive is not None)
+        self._light_passes = tuple(p for p in LIGHT_PASSES if p in self.film.passes)
+        self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES)
         self.tri = _Triangles(scene_data.geometry, self.messages)
         self.mats = _Materials(scene_data.materials)
         holdout = np.array([bool(m.holdout) for m in scene_data.materials])
@@ -467,6 +469,14 @@ class Integrator:
         self._nee_records = np.ascontiguousarray(self._lamp_records[:nl])
         self._camera_lamps = np.array([j for j, l in enumerate(every) if l.seen_by_camera and not (
             self.transparent and isinstance(l, BackgroundLight))], np.int32)   # transparent film: no world
+        # with light passes, camera rays' lamps go to Emission and their world to Environment,
+        # which holds the world seen through transparent film too (as Cycles), though Combined
+        # does not
+        self._camera_world = np.array([j for j, l in enumerate(every) if l.seen_by_camera and
+                                       isinstance(l, BackgroundLight)], np.int32)
+        self._camera_emitters = np.array([j for j, l in enumerate(every) if l.seen_by_camera and
+                                          not isinstance(l, BackgroundLight)], np.int32)
+        self._camera_env_pass = env if (env is not None and wv & VIS_CAMERA and not env.dark) else None
         self._bsdf_lamps = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf], np.int32)
         self._selection_table()
 
@@ -782,6 +792,7 @@ class Integrator:
         del rx, ry, lens
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
         L, alpha = rgba[:3], rgba[3]
+        sinks = _Sinks(L, self._light_passes)
         data = {}
         path = _Paths(np.arange(n), keys, O, D, tmax, None, None, None, rays)
         if seen is not None and not seen.all():
@@ -791,14 +802,15 @@ class Integrator:
             keys, O, D, tmax = _compact(pid, keys, O, D, tmax)
             path = _Paths(pid, keys, O, D, tmax, None, None, None, None)
         for k in range(self.max_bounces + 2):
-            path = self._vertex(k, path, L, alpha, data, pix, samp)
+            path = self._vertex(k, path, sinks, alpha, data, pix, samp)
             if path is None:
                 break
+        sinks.finish(data, self.transparent)
         shape = (-1, len(film_pix), ns)               # paths are pixel-major
         self.film.add_samples(film_pix, rgba.reshape(shape), {k: v.reshape(shape) for k, v in data.items()},
                               first_sample=s0)
 
-    def _vertex(self, k, path, L, alpha, data, pix, samp):
+    def _vertex(self, k, path, sinks, alpha, data, pix, samp):
         """Trace path segment k (k = 0: camera rays), gather what it sees, shade vertex k:
         emission, Russian roulette, light sampling, BSDF sampling. Returns the paths that go on."""
         K = self.max_bounces
@@ -808,11 +820,11 @@ class Integrator:
         hit = prim >= 0
         # what a ray finds is direct light up to the BSDF rays of vertex 0 (Cycles: bounce - 1 <= 0)
         clamp = self._clamps[k > 1]
-        self._gather_lamps(camera, path, hit, hits, L, clamp)
+        self._gather_lamps(camera, path, hit, hits, sinks, k, clamp)
         chain = None                                  # camera rays' transparent surfaces, for the passes
         if self._any_transparent and hit.any():
-            chain = [] if camera and self.film.passes else None
-            self._through(k, camera, path, hits, L, chain, clamp)
+            chain = [] if camera and self._data_passes else None
+            self._through(k, camera, path, hits, sinks, chain, clamp)
             prim = hits['prim']
             hit = prim >= 0
         miss = np.flatnonzero(~hit)
@@ -822,17 +834,17 @@ class Integrator:
             # transparent film seen through transparent surfaces: alpha 1 - what passed (Cycles)
             alpha[np.take(path.pid, miss)] = 1.0 - np.take(path.thr, miss, axis=1).mean(axis=0)
         if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
-            if camera and self.film.passes:
+            if camera and self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
             return None
         if camera:
             if self._any_holdout:                     # holdout: transparent, nothing behind it
                 hit &= (np.take(self.tri.visibility, prim) & HOLDOUT) == 0
             alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
-            if self.film.passes:
+            if self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
         if self._any_emissive:
-            self._gather_emission(camera, hit, hits, path, L, clamp)
+            self._gather_emission(camera, hit, hits, path, sinks.camera()[0] if camera else sinks.found(k), clamp)
         if k == K + 1:
             return None
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
@@ -861,7 +873,7 @@ class Integrator:
         tb = None if path.tb is None else np.take(path.tb, idx)
         del hits, path
         if self.lights:
-            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb, u, v)
+            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, sinks.sampled(k), tb, u, v)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
@@ -930,7 +942,7 @@ class Integrator:
                 tau[:, sel] *= 1.0 - a
         return tau, opacity, mat
 
-    def _through(self, k, camera, path, hits, L, chain=None, clamp=np.inf):
+    def _through(self, k, camera, path, hits, sinks, chain=None, clamp=np.inf):
         """Rays that hit a transparent surface pass it or stop there, at random by the
         transparent and the opaque weights (as Cycles picks a closure by its mean weight; the
         estimate is the same whichever probability p is used). Passing multiplies the
@@ -994,17 +1006,21 @@ class Integrator:
             seg = _Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
                          np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
                          None if path.pdf is None else np.take(path.pdf, rows), None)
-            self._gather_segment(camera, seg, sub, t0, L, clamp)
+            self._gather_segment(camera, seg, sub, t0, sinks, k, clamp)
             hits[rows] = sub
             j += 1
 
-    def _gather_segment(self, camera, seg, sub, t0, L, clamp=np.inf):
+    def _gather_segment(self, camera, seg, sub, t0, sinks, k, clamp=np.inf):
         """Lamps beyond distance t0 along a segment past a transparent surface, and the world
         where it misses: lamp_gather counts lamps from the path vertex (so MIS sees the true
         distance) up to the new hit; the same lamps up to t0, already gathered, are taken off."""
         hit = sub['prim'] >= 0
-        self._gather_lamps(camera, seg, hit, sub, L, clamp)
-        lamps = self._camera_lamps if camera else self._bsdf_lamps
+        self._gather_lamps(camera, seg, hit, sub, sinks, k, clamp)
+        # (lamps at infinity count only where a ray missed: nothing to take off for them)
+        if camera:
+            lamps, L = (self._camera_emitters if sinks.split else self._camera_lamps), sinks.camera()[0]
+        else:
+            lamps, L = self._bsdf_lamps, sinks.found(k)
         if len(lamps):
             dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
                                     np.zeros(len(t0), bool), seg.pid, L, thr=-seg.thr,
@@ -1164,26 +1180,38 @@ class Integrator:
                                       None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
                                       path.O, path.D, path.thr, path.pdf, path.pid, L, clamp=clamp)
 
-    def _gather_lamps(self, camera, path, hit, hits, L, clamp=np.inf):
+    def _gather_lamps(self, camera, path, hit, hits, sinks, k, clamp=np.inf):
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
-        One native pass over the rays for all lamps (dacrt.lamps.lamp_gather)."""
-        env = self._camera_env if camera else self.lights.environment
-        lamps = self._camera_lamps if camera else self._bsdf_lamps
-        if env is None and not len(lamps):
+        One native pass over the rays for all lamps (dacrt.lamps.lamp_gather); with light
+        passes, camera rays' emitters and world go to their two passes."""
+        if not camera:
+            env, L = self.lights.environment, sinks.found(k)
+            groups = ((self._bsdf_lamps, L),)
+            L_env = L
+        elif sinks.split:
+            (L, L_env), env = sinks.camera(), self._camera_env_pass
+            groups = ((self._camera_emitters, L), (self._camera_world, L_env))
+        else:
+            env, L = self._camera_env, sinks.L
+            groups = ((self._camera_lamps, L),)
+            L_env = L
+        groups = [(lamps, out) for lamps, out in groups if len(lamps)]
+        if env is None and not groups:
             return
         miss = ~hit
         if env is not None:
             env.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss, path.thr,
-                              None if camera else path.pdf, path.pid, L, clamp)
-        if not len(lamps):
+                              None if camera else path.pdf, path.pid, L_env, clamp)
+        if not groups:
             return
         # a lamp counts in front of the surface hit, or of the ray's end where it missed (the
         # tracer leaves a miss at t = inf: only camera rays end sooner, at the clip end)
         t_surf = np.where(hit, hits['t'], path.tmax) if camera else hits['t']
-        dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
-                                miss, path.pid, L, thr=path.thr, pdf_bsdf=None if camera else path.pdf,
-                                lamp_prob=None if camera else self._record_prob, clamp=clamp)
+        for lamps, out in groups:
+            dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
+                                    miss, path.pid, out, thr=path.thr, pdf_bsdf=None if camera else path.pdf,
+                                    lamp_prob=None if camera else self._record_prob, clamp=clamp)
 
     # --- next-event estimation --------------------------------------------------------------------
 
@@ -1225,6 +1253,40 @@ class Integrator:
                 self._shadow_through(rays, skip, send, occ, value, tb)
         # light sampled at vertex 0 is direct light (Cycles: the shadow path's bounce 0)
         dacrt.shading.accumulate_masked(L, pid, value, contrib, self._clamps[k > 0])
+
+
+class _Sinks:
+    """Where a block's light goes: all of it to Combined (L, (3, n)), or with light passes to
+    the pass Cycles files it under, summed into L when the block ends. Camera rays' emitters go
+    to Emit and their world to Env (not summed with transparent film: Cycles keeps it in the
+    pass only); vertex 0's light samples and what its BSDF rays find to DiffDir; all later light
+    to DiffInd (the same split as the direct and indirect clamps)."""
+
+    def __init__(self, L, passes):
+        self.L, self.passes = L, passes
+        self.split = bool(passes)
+        self.arrays = {p: np.zeros_like(L) for p in LIGHT_PASSES} if self.split else None
+
+    def camera(self):
+        """(emitters' sink, world's sink) for camera rays."""
+        return (self.arrays['Emit'], self.arrays['Env']) if self.split else (self.L, self.L)
+
+    def found(self, k):
+        """What rays arriving at vertex k >= 1 find."""
+        return self.arrays['DiffDir' if k == 1 else 'DiffInd'] if self.split else self.L
+
+    def sampled(self, k):
+        """Light sampled at vertex k."""
+        return self.arrays['DiffDir' if k == 0 else 'DiffInd'] if self.split else self.L
+
+    def finish(self, data, transparent):
+        """L = the sum of the passes; the requested ones into data."""
+        if not self.split:
+            return
+        for name, a in self.arrays.items():
+            if not (name == 'Env' and transparent):
+                self.L += a
+        data.update((name, self.arrays[name]) for name in self.passes)
 
 
 def _clamp_limit(name, value):

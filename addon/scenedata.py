@@ -161,7 +161,8 @@ class Settings:
     adaptive_threshold: float = 0.01   # Cycles' scale; 0 = automatic (from samples)
     adaptive_min_samples: int = 0      # 0 = automatic (from the threshold)
     film_transparent: bool = False
-    passes: tuple = ()             # extra passes wanted: any of 'Depth', 'Normal', 'DiffCol', 'Mist'
+    passes: tuple = ()             # extra passes wanted: any of 'Depth', 'Normal', 'DiffCol', 'Mist',
+                                   # and the light passes 'DiffDir', 'DiffInd', 'Emit', 'Env'
     # the Mist pass (World > Mist Pass; Cycles' film defaults without a world): start and depth
     # in scene units, falloff exponent (Quadratic 2, Linear 1, Inverse Quadratic 0.5)
     mist: tuple = (0.0, 100.0, 1.0)

@@ -99,6 +99,11 @@ class VIEWLAYER_PT_dacrt_passes(DACRTPanel, Panel):
         col.prop(vl, "use_pass_normal")
         col.prop(vl, "use_pass_diffuse_color", text="Diffuse Color")
         col.prop(vl, "use_pass_mist")
+        col = layout.column(heading="Light", align=True)
+        col.prop(vl, "use_pass_diffuse_direct", text="Diffuse Direct")
+        col.prop(vl, "use_pass_diffuse_indirect", text="Diffuse Indirect")
+        col.prop(vl, "use_pass_emit", text="Emission")
+        col.prop(vl, "use_pass_environment", text="Environment")
 
 
 class DATA_PT_dacrt_light(DACRTPanel, Panel):

@@ -545,22 +545,28 @@ def test_features_rendered_without_are_reported(scene, exported):
 
 
 def test_passes_dacrt_does_not_write_are_reported(scene, exported):
-    """A view layer asking for passes Cycles renders and DACRT does not (Emission, AO,
+    """A view layer asking for passes Cycles renders and DACRT does not (Glossy, AO,
     Cryptomatte, an AOV...) is told which are missing from the result; the passes DACRT writes
-    are not named, and nothing is said when only those are on."""
+    (data and diffuse light passes, Emission, Environment) are not named, and nothing is said
+    when only those are on."""
     setup(scene)
     vl = bpy.context.view_layer
     vl.use_pass_z = vl.use_pass_normal = vl.use_pass_diffuse_color = vl.use_pass_mist = True
-    assert not any("not in the result" in m for _, m in exported().messages)
-    vl.use_pass_emit = vl.use_pass_ambient_occlusion = vl.use_pass_cryptomatte_object = True
+    vl.use_pass_diffuse_direct = vl.use_pass_diffuse_indirect = True
+    vl.use_pass_emit = vl.use_pass_environment = True
+    s = exported()
+    assert not any("not in the result" in m for _, m in s.messages)
+    assert s.settings.passes == ('Depth', 'Normal', 'DiffCol', 'Mist', 'DiffDir', 'DiffInd', 'Emit', 'Env')
+    vl.use_pass_glossy_direct = vl.use_pass_ambient_occlusion = vl.use_pass_cryptomatte_object = True
     vl.cycles.denoising_store_passes = True
     vl.aovs.add().name = "Wetness"
     notes = [m for _, m in exported().messages if "not in the result" in m]
     assert len(notes) == 1, notes
-    for label in ("Emission", "Ambient Occlusion", "Cryptomatte Object", "Denoising Data", "AOV 'Wetness'"):
+    for label in ("Glossy Direct", "Ambient Occlusion", "Cryptomatte Object", "Denoising Data", "AOV 'Wetness'"):
         assert label in notes[0], (label, notes[0])
     written = notes[0].split("not in the result")[1]
     assert "Depth," in notes[0] and "Depth" not in written and "Mist" not in written
+    assert "Emission" not in written and "Diffuse Direct" not in written
 
 
 def test_nan_vertices_dropped_with_message(scene, exported):
