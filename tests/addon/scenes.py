@@ -1,5 +1,6 @@
 """Scene-building helpers for the add-on tests (plain bpy data API, no operators' context)."""
 import math
+from pathlib import Path
 
 import bpy
 import numpy as np
@@ -195,6 +196,16 @@ def environment_world(image, strength=1.0, rotation=None, scale=(1.0, 1.0, 1.0),
 
 def black_world(scene=None):
     return world((0, 0, 0), 0.0, scene)
+
+
+def render_engines(scene, directory, engines=('CYCLES', 'DACRT')):
+    """The scene rendered by each engine, as {engine: {'<layer>.<pass>.<channel>': (H, W)}}
+    read back from multilayer EXRs in directory."""
+    out = {}
+    for engine in engines:
+        scene.render.engine = engine
+        out[engine] = read_exr(render_exr(Path(directory) / f"{engine}.exr", scene, multilayer=True))
+    return out
 
 
 def render_exr(path, scene=None, multilayer=False):

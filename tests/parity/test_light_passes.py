@@ -6,7 +6,6 @@ transparent film the Environment pass still holds the sky. Each pass's channel m
 within 2% (of the brightest channel) and its mean per-pixel difference is small against its
 level."""
 import math
-from pathlib import Path
 
 import bpy
 import numpy as np
@@ -58,10 +57,7 @@ def test_light_passes_match_cycles(transparent, tmp_path):
     for indirect light). The divided passes are compared where the colour is not small: their
     mean over all pixels follows the noise of the edge pixels' tiny colours."""
     sc = _scene(transparent)
-    out = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        out[engine] = scenes.read_exr(scenes.render_exr(Path(tmp_path) / f"{engine}.exr", sc, multilayer=True))
+    out = scenes.render_engines(sc, tmp_path)
     name = sc.view_layers[0].name
 
     def get(o, p):

@@ -5,7 +5,6 @@ transparent chain, weighted by the throughput, and takes Normal from the first s
 that opaque (none where the chain stopped at a thinner one); Depth comes from sample 0 alone,
 so only its mean is compared."""
 import math
-from pathlib import Path
 
 import bpy
 import numpy as np
@@ -40,10 +39,7 @@ def _scene(alpha):
 @pytest.mark.parametrize('alpha', [0.6, 0.3])
 def test_data_passes_through_alpha_match_cycles(alpha, tmp_path):
     sc = _scene(alpha)
-    out = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        out[engine] = scenes.read_exr(scenes.render_exr(Path(tmp_path) / f"{engine}.exr", sc, multilayer=True))
+    out = scenes.render_engines(sc, tmp_path)
     name = sc.view_layers[0].name
     c, d = out['CYCLES'], out['DACRT']
     for key in ('Mist.Z', 'Diffuse Color.R', 'Diffuse Color.G', 'Diffuse Color.B', 'Normal.X', 'Normal.Y',
