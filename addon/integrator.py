@@ -467,15 +467,15 @@ class Integrator:
         every = diffuse + self.lights.camera_lamps
         self._lamp_records = lamp_records(every)
         self._nee_records = np.ascontiguousarray(self._lamp_records[:nl])
-        self._camera_lamps = np.array([j for j, l in enumerate(every) if l.seen_by_camera and not (
-            self.transparent and isinstance(l, BackgroundLight))], np.int32)   # transparent film: no world
+        # camera rays' lamps: (record index, is the world), in record order
+        seen = [(j, isinstance(l, BackgroundLight)) for j, l in enumerate(every) if l.seen_by_camera]
+        pick = lambda keep: np.array([j for j, world in seen if keep(world)], np.int32)
+        self._camera_lamps = pick(lambda world: not (world and self.transparent))   # transparent film: no world
         # with light passes, camera rays' lamps go to Emission and their world to Environment,
         # which holds the world seen through transparent film too (as Cycles), though Combined
         # does not
-        self._camera_world = np.array([j for j, l in enumerate(every) if l.seen_by_camera and
-                                       isinstance(l, BackgroundLight)], np.int32)
-        self._camera_emitters = np.array([j for j, l in enumerate(every) if l.seen_by_camera and
-                                          not isinstance(l, BackgroundLight)], np.int32)
+        self._camera_world = pick(lambda world: world)
+        self._camera_emitters = pick(lambda world: not world)
         self._camera_env_pass = env if (env is not None and wv & VIS_CAMERA and not env.dark) else None
         self._bsdf_lamps = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf], np.int32)
         self._selection_table()
@@ -818,13 +818,11 @@ class Integrator:
         hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax, path.prim, path.rays)
         prim = hits['prim']
         hit = prim >= 0
-        # what a ray finds is direct light up to the BSDF rays of vertex 0 (Cycles: bounce - 1 <= 0)
-        clamp = self._clamps[k > 1]
-        self._gather_lamps(camera, path, hit, hits, sinks, k, clamp)
+        self._gather_lamps(path, hit, hits, sinks, k)
         chain = None                                  # camera rays' transparent surfaces, for the passes
         if self._any_transparent and hit.any():
             chain = [] if camera and self._data_passes else None
-            self._through(k, camera, path, hits, sinks, chain, clamp)
+            self._through(k, camera, path, hits, sinks, chain)
             prim = hits['prim']
             hit = prim >= 0
         miss = np.flatnonzero(~hit)
@@ -844,7 +842,7 @@ class Integrator:
             if self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
         if self._any_emissive:
-            self._gather_emission(camera, hit, hits, path, sinks.camera()[0] if camera else sinks.found(k), clamp)
+            self._gather_emission(camera, hit, hits, path, sinks.found(k), self._found_clamp(k))
         if k == K + 1:
             return None
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
@@ -942,7 +940,7 @@ class Integrator:
                 tau[:, sel] *= 1.0 - a
         return tau, opacity, mat
 
-    def _through(self, k, camera, path, hits, sinks, chain=None, clamp=np.inf):
+    def _through(self, k, camera, path, hits, sinks, chain=None):
         """Rays that hit a transparent surface pass it or stop there, at random by the
         transparent and the opaque weights (as Cycles picks a closure by its mean weight; the
         estimate is the same whichever probability p is used). Passing multiplies the
@@ -1006,26 +1004,24 @@ class Integrator:
             seg = _Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
                          np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
                          None if path.pdf is None else np.take(path.pdf, rows), None)
-            self._gather_segment(camera, seg, sub, t0, sinks, k, clamp)
+            self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
             j += 1
 
-    def _gather_segment(self, camera, seg, sub, t0, sinks, k, clamp=np.inf):
+    def _gather_segment(self, seg, sub, t0, sinks, k):
         """Lamps beyond distance t0 along a segment past a transparent surface, and the world
         where it misses: lamp_gather counts lamps from the path vertex (so MIS sees the true
         distance) up to the new hit; the same lamps up to t0, already gathered, are taken off."""
         hit = sub['prim'] >= 0
-        self._gather_lamps(camera, seg, hit, sub, sinks, k, clamp)
+        self._gather_lamps(seg, hit, sub, sinks, k)
         # (lamps at infinity count only where a ray missed: nothing to take off for them)
-        if camera:
-            lamps, L = (self._camera_emitters if sinks.split else self._camera_lamps), sinks.camera()[0]
-        else:
-            lamps, L = self._bsdf_lamps, sinks.found(k)
+        camera = k == 0
+        lamps = self._bsdf_lamps if not camera else self._camera_emitters if sinks.split else self._camera_lamps
         if len(lamps):
             dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
-                                    np.zeros(len(t0), bool), seg.pid, L, thr=-seg.thr,
+                                    np.zeros(len(t0), bool), seg.pid, sinks.found(k), thr=-seg.thr,
                                     pdf_bsdf=None if camera else seg.pdf,
-                                    lamp_prob=None if camera else self._record_prob, clamp=clamp)
+                                    lamp_prob=None if camera else self._record_prob, clamp=self._found_clamp(k))
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
@@ -1180,22 +1176,24 @@ class Integrator:
                                       None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
                                       path.O, path.D, path.thr, path.pdf, path.pid, L, clamp=clamp)
 
-    def _gather_lamps(self, camera, path, hit, hits, sinks, k, clamp=np.inf):
+    def _found_clamp(self, k):
+        """The clamp of light that rays arriving at vertex k find: direct up to the BSDF rays
+        of vertex 0 (Cycles clamps it by bounce - 1 <= 0), indirect after."""
+        return self._clamps[k > 1]
+
+    def _gather_lamps(self, path, hit, hits, sinks, k):
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather); with light
         passes, camera rays' emitters and world go to their two passes."""
+        camera, clamp = k == 0, self._found_clamp(k)
+        L, L_env = sinks.found(k), sinks.world(k)
         if not camera:
-            env, L = self.lights.environment, sinks.found(k)
-            groups = ((self._bsdf_lamps, L),)
-            L_env = L
+            env, groups = self.lights.environment, ((self._bsdf_lamps, L),)
         elif sinks.split:
-            (L, L_env), env = sinks.camera(), self._camera_env_pass
-            groups = ((self._camera_emitters, L), (self._camera_world, L_env))
+            env, groups = self._camera_env_pass, ((self._camera_emitters, L), (self._camera_world, L_env))
         else:
-            env, L = self._camera_env, sinks.L
-            groups = ((self._camera_lamps, L),)
-            L_env = L
+            env, groups = self._camera_env, ((self._camera_lamps, L),)
         groups = [(lamps, out) for lamps, out in groups if len(lamps)]
         if env is None and not groups:
             return
@@ -1267,13 +1265,15 @@ class _Sinks:
         self.split = bool(passes)
         self.arrays = {p: np.zeros_like(L) for p in LIGHT_PASSES} if self.split else None
 
-    def camera(self):
-        """(emitters' sink, world's sink) for camera rays."""
-        return (self.arrays['Emit'], self.arrays['Env']) if self.split else (self.L, self.L)
-
     def found(self, k):
-        """What rays arriving at vertex k >= 1 find."""
-        return self.arrays['DiffDir' if k == 1 else 'DiffInd'] if self.split else self.L
+        """The emitters rays arriving at vertex k find (k = 0: camera rays)."""
+        if not self.split:
+            return self.L
+        return self.arrays['Emit' if k == 0 else 'DiffDir' if k == 1 else 'DiffInd']
+
+    def world(self, k):
+        """The world rays arriving at vertex k find where they miss."""
+        return self.arrays['Env'] if self.split and k == 0 else self.found(k)
 
     def sampled(self, k):
         """Light sampled at vertex k."""
