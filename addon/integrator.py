@@ -878,9 +878,10 @@ class Integrator:
         # cosine-weighted BSDF sample around the shading normal; reject directions below the
         # geometric surface (a diffuse BSDF only reflects)
         ka, kb = self.rng.dim_words(_dim(k, 2))
-        wi, pdf, ok, rays = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng, origins=P_off)
-        if self.tri.term_freq is not None:
-            self._shading_offset(prim, ns, wi, ok, thr)
+        # (and Cycles' shadow terminator shading offset on their throughput, closure/bsdf.h)
+        offset = None if self.tri.term_freq is None else (self.tri.term_freq, prim, thr)
+        wi, pdf, ok, rays = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng, origins=P_off,
+                                                         shading_offset=offset)
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
             kept = np.flatnonzero(ok)
@@ -1212,19 +1213,6 @@ class Integrator:
                                     lamp_prob=None if camera else self._record_prob, clamp=clamp)
 
     # --- next-event estimation --------------------------------------------------------------------
-
-    def _shading_offset(self, prim, ns, wi, ok, thr):
-        """Cycles' shadow terminator shading offset on the BSDF rays just sampled: thr (3,k) of
-        the rays ok leaving a triangle whose multiplier f > 1 times shift_cos_in (the cosine's
-        angle stretched by f, closure/bsdf.h), in place."""
-        f = np.take(self.tri.term_freq, prim)
-        sel = np.flatnonzero((f > 1) & ok)
-        if not len(sel):
-            return
-        c = np.minimum(np.einsum('ij,ij->j', np.take(ns, sel, axis=1), np.take(wi, sel, axis=1)), F32(1))
-        with np.errstate(divide='ignore', invalid='ignore'):
-            s = np.maximum(np.cos(np.arccos(c) * f[sel]), F32(0)) / c
-        thr[:, sel] *= np.where(c > 0, s, F32(0)).astype(F32)
 
     def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one

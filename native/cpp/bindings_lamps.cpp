@@ -13,42 +13,20 @@
 #include <string>
 #include <vector>
 
+#include "bindargs.h"
 #include "environment.h"
 #include "lamps.h"
 #include "nextevent.h"
 
 namespace py = pybind11;
 using namespace dacrt;
+using namespace dacrt::bindargs;
 
 namespace {
 
 using F32Array = py::array_t<float, py::array::c_style>;
 using I32Array = py::array_t<int32_t, py::array::c_style>;
 using I64Array = py::array_t<int64_t, py::array::c_style>;
-
-std::string shape_str(const py::array& a) {
-    std::string s = "(";
-    for (py::ssize_t k = 0; k < a.ndim(); ++k) s += (k ? ", " : "") + std::to_string(a.shape(k));
-    return s + (a.ndim() == 1 ? ",)" : ")");
-}
-
-// Checks a's shape: (rows, n) when rows > 0, else (n,).
-void need_shape(const py::array& a, py::ssize_t rows, size_t n, const char* name) {
-    const bool ok = rows > 0 ? a.ndim() == 2 && a.shape(0) == rows && size_t(a.shape(1)) == n
-                             : a.ndim() == 1 && size_t(a.shape(0)) == n;
-    if (!ok)
-        throw py::value_error(std::string(name) + " must have shape " +
-                              (rows > 0 ? "(" + std::to_string(rows) + ", " : "(") + std::to_string(n) +
-                              (rows > 0 ? ")" : ",)") + ", got " + shape_str(a));
-}
-
-// A caller-provided output array the kernel writes in place.
-float* out_array(py::array a, py::ssize_t rows, size_t n, const char* name) {
-    if (!py::isinstance<py::array_t<float>>(a) || !(a.flags() & py::array::c_style) || !a.writeable())
-        throw py::value_error(std::string(name) + " must be a writeable C-contiguous float32 array (written in place)");
-    need_shape(a, rows, n, name);
-    return static_cast<float*>(a.mutable_data());
-}
 
 // The (R, LAMP_RECORD_WIDTH) records as LampRecord rows, each checked.
 const LampRecord* lamp_records(const F32Array& records) {
@@ -127,7 +105,7 @@ void lamp_sample_py(F32Array records, I32Array entry, F32Array P, F32Array u1, F
 void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D, F32Array t_surf,
                     py::array_t<bool, py::array::c_style> miss, py::object thr, py::object pdf_bsdf, I64Array pid,
                     py::array L, float clamp) {
-    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
+    check_clamp(clamp);
     const LampRecord* rec = lamp_records(records);
     const size_t R = size_t(records.shape(0));
     if (lamps.ndim() != 1) throw py::value_error("lamps must be one-dimensional, got " + shape_str(lamps));
@@ -312,7 +290,7 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
 
 void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_t<bool, py::array::c_style> mask,
                           float clamp) {
-    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
+    check_clamp(clamp);
     if (L.ndim() != 2 || L.shape(0) != 3) throw py::value_error("L must have shape (3, N), got " + shape_str(L));
     const size_t N = size_t(L.shape(1));
     float* l = out_array(L, 3, N, "L");
@@ -390,7 +368,7 @@ py::tuple environment_sample_py(const EnvironmentMap& env, F32Array u1, F32Array
 
 void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py::array_t<bool, py::array::c_style> miss,
                            py::object thr, py::object pdf_bsdf, I64Array pid, py::array L, float clamp) {
-    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
+    check_clamp(clamp);
     if (!(prob >= 0 && prob <= 1)) throw py::value_error("prob must be in [0, 1], got " + std::to_string(prob));
     if ((prob > 0) == pdf_bsdf.is_none())
         throw py::value_error("prob > 0 (BSDF rays, MIS) needs pdf_bsdf; prob 0 (camera rays) takes none");

@@ -10,10 +10,12 @@
 #include <utility>
 #include <vector>
 
+#include "bindargs.h"
 #include "shading.h"
 
 namespace py = pybind11;
 using namespace dacrt;
+using namespace dacrt::bindargs;
 
 namespace {
 
@@ -117,7 +119,7 @@ py::tuple uniform_pick_py(U32Array keys, uint32_t ka, uint32_t kb) {
 }
 
 py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns, py::object ng, py::object origins,
-                            py::object rays) {
+                            py::object rays, py::object shading_offset) {
     size_t n = rows_of(keys, 2, "keys");
     if (rows_of(ns, 3, "ns") != n) throw py::value_error("ns must have shape (3, n), n = keys.shape[1]");
     F32Array ng_keep, o_keep;
@@ -128,12 +130,28 @@ py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns
         if (rays.is_none()) throw py::value_error("origins need a rays array to fill");
         r = records<Ray>(rays.cast<py::array>(), n, "rays");
     }
+    ShadingOffset off{};
+    F32Array freq_keep;
+    py::array_t<int32_t, py::array::c_style> prim_keep;
+    if (!shading_offset.is_none()) {
+        const py::tuple t = shading_offset.cast<py::tuple>();
+        if (t.size() != 3) throw py::value_error("shading_offset is (freq, prim, thr)");
+        freq_keep = t[0].cast<F32Array>();
+        if (freq_keep.ndim() != 1 || freq_keep.shape(0) == 0)
+            throw py::value_error("shading_offset freq must have shape (M,), M > 0, got " + shape_str(freq_keep));
+        off.freq = freq_keep.data();
+        off.M = size_t(freq_keep.shape(0));
+        prim_keep = t[1].cast<py::array_t<int32_t, py::array::c_style>>();
+        need_shape(prim_keep, 0, n, "shading_offset prim");
+        off.prim = prim_keep.data();
+        off.thr = out_array(t[2].cast<py::array>(), 3, n, "shading_offset thr");
+    }
     F32Array wi({py::ssize_t(3), py::ssize_t(n)}), pdf{py::ssize_t(n)};
     py::array_t<bool> ok{py::ssize_t(n)};
     {
         py::gil_scoped_release nogil;
         cosine_scatter(keys.data(), n, ka, kb, ns.data(), g, wi.mutable_data(), pdf.mutable_data(),
-                       reinterpret_cast<uint8_t*>(ok.mutable_data()), o, r);
+                       reinterpret_cast<uint8_t*>(ok.mutable_data()), o, r, off.freq ? &off : nullptr);
     }
     return py::make_tuple(wi, pdf, ok);
 }
@@ -305,7 +323,7 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
                           py::array_t<bool, py::array::c_style> emissive, py::object tri_prob, F32Array area,
                           F32Array geo, F32Array O, F32Array D, py::object thr, py::object pdf, I64Array pid,
                           py::array_t<float, py::array::c_style> L, float clamp) {
-    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
+    check_clamp(clamp);
     const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const Hit* h = records<Hit>(hits, n, "hits");
     need_len(hit, n, "hit");
@@ -475,7 +493,7 @@ void register_shading(py::module_& m) {
     m.def("uniform2", &uniform2_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("uniform_pick", &uniform_pick_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("cosine_scatter", &cosine_scatter_py, py::arg("keys"), py::arg("ka"), py::arg("kb"), py::arg("ns"),
-          py::arg("ng"), py::arg("origins"), py::arg("rays"));
+          py::arg("ng"), py::arg("origins"), py::arg("rays"), py::arg("shading_offset") = py::none());
     m.def("sample_triangles", &sample_triangles_py, py::arg("geo"), py::arg("area"), py::arg("which"), py::arg("P"),
           py::arg("u1"), py::arg("u2"));
     m.def("nee_weight", &nee_weight_py, py::arg("ns"), py::arg("ng"), py::arg("wi"), py::arg("pdf"), py::arg("p_sel"),

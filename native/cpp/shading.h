@@ -103,8 +103,17 @@ void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb,
 // (null: ns is ng) or at grazing cos = 0.
 // With origins O (3 rows, stride n; else null) it also writes the bounce rays' records (org O,
 // dir wi, tfar inf, id i), saving the tracer's packing pass.
+// With a ShadingOffset, Cycles' shadow terminator shading offset dims the throughput of each
+// kept direction leaving a triangle whose frequency multiplier exceeds 1 (shift_cos_in).
+struct ShadingOffset {
+    const float* freq = nullptr;   // per triangle, 1 / (1 - offset / 2)
+    size_t M = 0;                  // triangles of freq
+    const int32_t* prim = nullptr; // the triangle each direction leaves (n)
+    float* thr = nullptr;          // throughputs (3 rows, stride n), scaled in place
+};
 void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
-                    float* wi, float* pdf, uint8_t* ok, const float* O = nullptr, Ray* rays = nullptr);
+                    float* wi, float* pdf, uint8_t* ok, const float* O = nullptr, Ray* rays = nullptr,
+                    const ShadingOffset* offset = nullptr);
 
 }  // namespace dacrt
 

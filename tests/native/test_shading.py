@@ -464,6 +464,34 @@ def test_cosine_scatter_packs_the_bounce_rays():
         shading.cosine_scatter(keys, 3, 4, ns, origins=O[:, :10])
 
 
+def test_cosine_scatter_shading_offset_scales_throughput():
+    """Cycles' shading offset on BSDF rays (closure/bsdf.h shift_cos_in), in the scatter pass:
+    kept directions leaving a triangle with freq > 1 have thr scaled by cos(acos(c) f) / c
+    (clamped at 0), against float64; other rays and the directions are untouched."""
+    rng = np.random.default_rng(26)
+    n = 20000
+    keys = rng.integers(0, 2 ** 32, (2, n), dtype=np.uint64).astype(np.uint32)
+    ns, ng = _unit(rng, n), _unit(rng, n)
+    freq = np.array([1.0, 1.25, 2.0, 1.0 / (1.0 - 0.5 * 0.9)], F32)      # triangle 0: no offset
+    prim = rng.integers(0, 4, n).astype(np.int32)
+    thr = rng.random((3, n)).astype(F32)
+    before = thr.copy()
+    wi, pdf, ok = shading.cosine_scatter(keys, 5, 9, ns, ng)
+    wi2, pdf2, ok2 = shading.cosine_scatter(keys, 5, 9, ns, ng, shading_offset=(freq, prim, thr))
+    np.testing.assert_array_equal(wi2, wi)
+    np.testing.assert_array_equal(ok2, ok)
+    c = np.minimum(np.einsum("ij,ij->j", ns.astype(float), wi.astype(float)), 1.0)
+    f = freq[prim].astype(float)
+    scale = np.where(c > 0, np.maximum(np.cos(np.arccos(np.clip(c, -1, 1)) * f), 0.0) / np.where(c > 0, c, 1), 0)
+    scale = np.where(ok & (f > 1), scale, 1.0)
+    np.testing.assert_allclose(thr, before * scale, rtol=2e-5, atol=2e-6)
+    assert (scale[ok & (f > 1)] < 1).mean() > 0.99 and (scale == 0).any()   # dimmed, some to 0
+    with pytest.raises(ValueError, match="thr"):
+        shading.cosine_scatter(keys, 5, 9, ns, ng, shading_offset=(freq, prim, thr[:, :10]))
+    with pytest.raises(ValueError, match="thr"):
+        shading.cosine_scatter(keys, 5, 9, ns, ng, shading_offset=(freq, prim, thr.astype(np.float64)))
+
+
 def test_camera_rays_records_match_packing():
     rng = np.random.default_rng(25)
     frame = np.zeros(27, F32)

@@ -110,20 +110,28 @@ def uniform_pick(keys, ka: int, kb: int):
     return _core.uniform_pick(_rows(keys, 2, "keys", np.uint32), int(ka), int(kb))
 
 
-def cosine_scatter(keys, ka: int, kb: int, ns, ng=None, origins=None):
+def cosine_scatter(keys, ka: int, kb: int, ns, ng=None, origins=None, shading_offset=None):
     """Cosine-weighted directions around unit shading normals ns (3, n) from the random numbers
     of (keys, ka, kb): returns wi (3, n), pdf (n,) = cos/pi and ok (n,) bool, false where the
     direction is grazing or below the geometric normals ng (None: ns is the geometric normal).
     With origins (3, n) a fourth result: the bounce rays as RAY_DTYPE records (origins, wi,
-    tfar inf, ids 0..n-1), written in the same pass."""
+    tfar inf, ids 0..n-1), written in the same pass.
+
+    shading_offset = (freq (M,), prim (n,), thr (3, n)): Cycles' shadow terminator shading
+    offset. Where ok and freq[prim] > 1, thr (float32, C-contiguous, scaled in place) is
+    multiplied by shift_cos_in: cos(acos(c) freq) / c clamped at 0, c = ns . wi."""
     keys = _rows(keys, 2, "keys", np.uint32)
     ns = _rows(ns, 3, "ns")
     if ng is not None:
         ng = _rows(ng, 3, "ng")
+    if shading_offset is not None:
+        freq, prim, thr = shading_offset
+        shading_offset = (np.ascontiguousarray(freq, _F32), np.ascontiguousarray(prim, np.int32), thr)
     if origins is None:
-        return _core.cosine_scatter(keys, int(ka), int(kb), ns, ng, None, None)
+        return _core.cosine_scatter(keys, int(ka), int(kb), ns, ng, None, None, shading_offset)
     rays = np.empty(keys.shape[1], RAY_DTYPE)
-    wi, pdf, ok = _core.cosine_scatter(keys, int(ka), int(kb), ns, ng, _rows(origins, 3, "origins"), rays)
+    wi, pdf, ok = _core.cosine_scatter(keys, int(ka), int(kb), ns, ng, _rows(origins, 3, "origins"), rays,
+                                       shading_offset)
     return wi, pdf, ok, rays
 
 
@@ -211,9 +219,10 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     terminator (needs prim): Cycles' shadow terminator of the points' triangles, a tuple
     (geo (15, M) triangle table, normals (9, M) corner rows, cutoff (M,) geometry offset (0:
     none), freq (M,) shading offset's frequency multiplier 1 / (1 - offset / 2), u, v (n,)
-    barycentrics; freq, or cutoff with normals, u and v, may be None): a shadow ray near the terminator leaves from the point lifted onto the
-    smooth surface (and, below ng, no longer skips its triangle: skip -1), and a sample's value
-    is multiplied by shift_cos_in where freq > 1.
+    barycentrics; freq, or cutoff with normals, u and v, may be None): a shadow ray near the
+    terminator leaves from the point lifted onto the smooth surface (and, below ng, no longer
+    skips its triangle: skip -1), and a sample's value is multiplied by shift_cos_in where
+    freq > 1.
 
     Returns value (3, n) (each sample's contribution), contrib (n,) bool (it adds to the image
     unless its shadow ray is occluded), rays (m,) RAY_DTYPE (ids 0..m-1, in point order), send

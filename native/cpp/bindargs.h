@@ -1,0 +1,45 @@
+// Argument checks the pybind11 binding files share: shapes named in the message, output arrays
+// written in place, and the light clamp limit.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstddef>
+#include <string>
+
+namespace dacrt::bindargs {
+
+namespace py = pybind11;
+
+inline std::string shape_str(const py::array& a) {
+    std::string s = "(";
+    for (py::ssize_t k = 0; k < a.ndim(); ++k) s += (k ? ", " : "") + std::to_string(a.shape(k));
+    return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+// Checks a's shape: (rows, n) when rows > 0, else (n,).
+inline void need_shape(const py::array& a, py::ssize_t rows, size_t n, const char* name) {
+    const bool ok = rows > 0 ? a.ndim() == 2 && a.shape(0) == rows && size_t(a.shape(1)) == n
+                             : a.ndim() == 1 && size_t(a.shape(0)) == n;
+    if (!ok)
+        throw py::value_error(std::string(name) + " must have shape " +
+                              (rows > 0 ? "(" + std::to_string(rows) + ", " : "(") + std::to_string(n) +
+                              (rows > 0 ? ")" : ",)") + ", got " + shape_str(a));
+}
+
+// A caller-provided output array the kernel writes in place.
+inline float* out_array(py::array a, py::ssize_t rows, size_t n, const char* name) {
+    if (!py::isinstance<py::array_t<float>>(a) || !(a.flags() & py::array::c_style) || !a.writeable())
+        throw py::value_error(std::string(name) + " must be a writeable C-contiguous float32 array (written in place)");
+    need_shape(a, rows, n, name);
+    return static_cast<float*>(a.mutable_data());
+}
+
+// The clamp of a kernel that adds light (shading.h clamp_light): a positive limit, infinity
+// for none. NaN and 0 are refused rather than read as "no light" or "no clamp".
+inline void check_clamp(float clamp) {
+    if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
+}
+
+}  // namespace dacrt::bindargs
