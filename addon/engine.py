@@ -1,7 +1,7 @@
 """The DACRT RenderEngine: orchestration only.
 
 Per view layer: export the depsgraph (export.py), integrate in passes (integrator.py), write
-Combined and the enabled Depth/Normal/DiffCol/Mist and light passes progressively, keep the
+Combined and the enabled data and light passes (passes.py) progressively, keep the
 status line, progress and memory stats current, honour cancel between steps, and report every
 message and error through `self.report` so nothing is only printed. Nothing outlives `render()`.
 """
@@ -14,25 +14,12 @@ import numpy as np
 
 from . import export
 from .allocator import render_heap
+from .passes import PASSES, result_name
 
-# Extra passes: (scenedata/film name, view-layer toggle, channels, chan_id, type)
-EXTRA_PASSES = (('Depth', 'use_pass_z', 1, 'Z', 'VALUE'),
-                ('Normal', 'use_pass_normal', 3, 'XYZ', 'VECTOR'),
-                ('DiffCol', 'use_pass_diffuse_color', 3, 'RGB', 'COLOR'),
-                ('Mist', 'use_pass_mist', 1, 'Z', 'VALUE'),
-                ('DiffDir', 'use_pass_diffuse_direct', 3, 'RGB', 'COLOR'),
-                ('DiffInd', 'use_pass_diffuse_indirect', 3, 'RGB', 'COLOR'),
-                ('Emit', 'use_pass_emit', 3, 'RGB', 'COLOR'),
-                ('Env', 'use_pass_environment', 3, 'RGB', 'COLOR'))
-# Blender's own names for these passes (what the compositor and multilayer EXR use). Blender
-# renamed the short ones ("DiffCol", "DiffDir", "DiffInd", "Emit", "Env") to the long ones
-# (5.0.1: "Diffuse Color" and the others as Cycles' engine.py registers them, checked; 4.2: the
-# short ones; the 4.4 boundary follows the release history and is not checked here).
-_LONG_NAMES = bpy.app.version >= (4, 4, 0)
-RESULT_PASS_NAME = {'Depth': 'Depth', 'Normal': 'Normal', 'Mist': 'Mist'}
-RESULT_PASS_NAME.update((short, long if _LONG_NAMES else short) for short, long in (
-    ('DiffCol', 'Diffuse Color'), ('DiffDir', 'Diffuse Direct'), ('DiffInd', 'Diffuse Indirect'),
-    ('Emit', 'Emission'), ('Env', 'Environment')))
+# Extra passes: (film name, view-layer toggle, channels, chan_id, type), and Blender's names
+# for them (what the compositor and multilayer EXR use) in this Blender
+EXTRA_PASSES = tuple(p[:5] for p in PASSES)
+RESULT_PASS_NAME = {p[0]: result_name(p[0], bpy.app.version) for p in PASSES}
 
 
 # Stats of the latest render per view layer, for scripts (addon.last_render_stats()); replaced

@@ -56,6 +56,7 @@ from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant_color, constant_value
 from .nodegraph import input_socket, linked_link, linked_node, output_node
+from .passes import PASSES, result_name
 from .texture import UdimTiles
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
@@ -83,9 +84,7 @@ LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')
 # is the view layer itself, 'cycles' its Cycles settings. The engine registers only the passes
 # it writes, so these would be missing from the result without a word.
 _UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
-    ('position', 'Position'), ('vector', 'Vector'), ('uv', 'UV'),
-    ('object_index', 'Object Index'), ('material_index', 'Material Index'),
-    ('glossy_direct', 'Glossy Direct'), ('glossy_indirect', 'Glossy Indirect'),
+    ('vector', 'Vector'), ('glossy_direct', 'Glossy Direct'), ('glossy_indirect', 'Glossy Indirect'),
     ('glossy_color', 'Glossy Color'), ('transmission_direct', 'Transmission Direct'),
     ('transmission_indirect', 'Transmission Indirect'), ('transmission_color', 'Transmission Color'),
     ('subsurface_direct', 'Subsurface Direct'), ('subsurface_indirect', 'Subsurface Indirect'),
@@ -592,7 +591,8 @@ class _MaterialBuilder:
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
-                           approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout)
+                           approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
+                           pass_index=int(mat.pass_index))
 
     @staticmethod
     def _albedo(c):
@@ -1039,6 +1039,7 @@ class _Out:
         self.object_index = np.empty(m, np.int32)
         self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
         self.terminator = None            # (m, 2), allocated by the first object that has one
+        self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.keep = None
 
     def drop(self, rows, keep):
@@ -1050,7 +1051,7 @@ class _Out:
     def geometry(self):
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, uvs=self.uvs,
-                       terminator=self.terminator)
+                       terminator=self.terminator, has_uv=self.has_uv)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
         return sd.Geometry(vertices=self.vertices, **per_tri)
@@ -1119,6 +1120,7 @@ class _Exporter:
         self.messages = []
         self.materials = _MaterialBuilder()
         self.object_names = []
+        self.object_pass_index = []
         self._object_index = {}
         self.meshes = {}          # key -> _MeshArrays
         self.placements = {}      # key -> [_Placement]
@@ -1135,7 +1137,7 @@ class _Exporter:
         camera = export_camera(self.scene, self.messages)
         settings = self._settings()
         self._walk_instances()
-        geometry = self._assemble()
+        geometry = self._assemble(uv_pass='UV' in settings.passes)
         world, environment, world_reason = export_world(self.scene)
         if not (np.isfinite(world).all() and (world >= 0).all()):
             # Cycles subtracts a negative background; that is not supported here
@@ -1150,7 +1152,8 @@ class _Exporter:
                             lights=self.lights, world=world, settings=settings,
                             object_names=self.object_names, messages=self.messages,
                             skipped=dict(self.counts), environment=environment,
-                            world_visibility=world_visibility(self.scene.world))
+                            world_visibility=world_visibility(self.scene.world),
+                            object_pass_index=np.array(self.object_pass_index, np.int32))
 
     # -- settings ------------------------------------------------------------------------
     def _settings(self):
@@ -1158,21 +1161,15 @@ class _Exporter:
         d = getattr(scene, 'dacrt', None)
         if d is None:
             raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
-        passes = tuple(name for name, on in (('Depth', vl.use_pass_z), ('Normal', vl.use_pass_normal),
-                                              ('DiffCol', vl.use_pass_diffuse_color),
-                                              ('Mist', vl.use_pass_mist),
-                                              ('DiffDir', vl.use_pass_diffuse_direct),
-                                              ('DiffInd', vl.use_pass_diffuse_indirect),
-                                              ('Emit', vl.use_pass_emit),
-                                              ('Env', vl.use_pass_environment)) if on)
+        passes = tuple(p[0] for p in PASSES if getattr(vl, p[1], False))
         missing = [label for owner, attr, label in _UNRENDERED_PASSES
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
         missing += [f"AOV '{a.name}'" for a in getattr(vl, 'aovs', ())]
         missing += [f"light group '{g.name}'" for g in getattr(vl, 'lightgroups', ())]
         if missing:
-            self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, Depth, "
-                                             f"Normal, Diffuse Color and Mist only; not in the result: "
-                                             f"{', '.join(missing)}"))
+            written = ', '.join(result_name(p[0], bpy.app.version) for p in PASSES)
+            self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, {written} "
+                                             f"only; not in the result: {', '.join(missing)}"))
         mist = scene.world.mist_settings if scene.world is not None else None
         mist = (0.0, 100.0, 1.0) if mist is None else (
             float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
@@ -1218,7 +1215,7 @@ class _Exporter:
                 continue
             slots = [override] if override is not None else [s.material for s in ob.material_slots]
             self.placements[key].append(_Placement(np.array(inst.matrix_world, np.float64),
-                                                   slots, vis, self._object_id(ob.name), ob.name,
+                                                   slots, vis, self._object_id(ob), ob.name,
                                                    _terminator(ob)))
 
     def _light(self, inst, ob):
@@ -1306,11 +1303,12 @@ class _Exporter:
         self.placements[key] = []
         return key
 
-    def _object_id(self, name):
-        idx = self._object_index.get(name)
+    def _object_id(self, ob):
+        idx = self._object_index.get(ob.name)
         if idx is None:
-            idx = self._object_index[name] = len(self.object_names)
-            self.object_names.append(name)
+            idx = self._object_index[ob.name] = len(self.object_names)
+            self.object_names.append(ob.name)
+            self.object_pass_index.append(ob.pass_index)   # Cycles: the instanced object's own
         return idx
 
     def _skip(self, reason, name):
@@ -1318,13 +1316,13 @@ class _Exporter:
         _add_name(self.skipped, reason, name)
 
     # -- geometry assembly -----------------------------------------------------------------
-    def _assemble(self):
+    def _assemble(self, uv_pass=False):
         """Transform every unique mesh for all its instances at once, straight into the frame's
         arrays (sized up front; dropped triangles are removed in one pass at the end)."""
         bad = {}          # object name -> [non-finite vertices, triangles dropped]
         degenerate = 0
         self._resolve_materials()
-        need_uvs = any(self.materials.uses_texture)
+        need_uvs = uv_pass or any(self.materials.uses_texture)
         batches = []
         for key, places in self.placements.items():
             if self.check_break():
@@ -1468,6 +1466,9 @@ class _Exporter:
             if out.uvs is not None:
                 if a.corner_uvs is None:
                     out.uvs[S] = 0.0
+                    if out.has_uv is None:
+                        out.has_uv = np.ones(len(out.triangles), bool)
+                    out.has_uv[S] = False
                 else:
                     a.per_corner(a.corner_uvs, a.corners, out.uvs[S])
                     if i in mirrored:

@@ -1,7 +1,8 @@
 """The film: per-pixel accumulation of samples and the passes read back by the engine.
 
-Owns the Combined sums (RGBA, premultiplied, linear), the optional Depth, Normal, DiffCol
-(albedo) and Mist passes (Mist sums each sample's 1 - mist, 0 where it saw no surface, and
+Owns the Combined sums (RGBA, premultiplied, linear), the optional data passes (passes.py):
+Depth, Position, Object and Material Index as each pixel's sample 0 saw them (as Cycles writes
+them), Normal, UV, DiffCol (albedo) and Mist averaged over the samples (Mist sums each sample's 1 - mist, 0 where it saw no surface, and
 reads back 1 - their mean, as Cycles stores it), the light passes (Emit, Env, and DiffDir and
 DiffInd, which read back divided by the Diffuse Color sums as Cycles divides them, 0 where that
 is 0; the film keeps DiffCol for them when it is not requested), the per-pixel count of accepted samples, the count of samples dropped for
@@ -17,10 +18,9 @@ import numpy as np
 
 import dacrt
 
-PASS_CHANNELS = {'Depth': 1, 'Normal': 3, 'DiffCol': 3, 'Mist': 1, 'DiffDir': 3, 'DiffInd': 3, 'Emit': 3, 'Env': 3}
-LIGHT_PASSES = ('DiffDir', 'DiffInd', 'Emit', 'Env')   # the parts Combined is the sum of
-DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')
-BACKGROUND_DEPTH = 1e10    # what Cycles reports for pixels whose first sample saw no surface
+from .passes import CHANNELS as PASS_CHANNELS
+from .passes import DIVIDED_BY_COLOR, FIRST_SAMPLE
+from .passes import LIGHT as LIGHT_PASSES
 
 
 class Film:
@@ -36,8 +36,10 @@ class Film:
         if any(p in self.passes for p in DIVIDED_BY_COLOR) and 'DiffCol' not in self.passes:
             self.passes += ('DiffCol',)             # their divisor
         self._pass_sum = {p: np.zeros((PASS_CHANNELS[p], npix), np.float64)
-                          for p in self.passes if p != 'Depth'}
-        self._depth = np.zeros(npix, np.float32) if 'Depth' in self.passes else None
+                          for p in self.passes if p not in FIRST_SAMPLE}
+        # 0 until a pixel's sample 0 is rendered (pixels outside a render border stay 0)
+        self._first = {p: np.zeros((PASS_CHANNELS[p], npix), np.float32)
+                       for p in self.passes if p in FIRST_SAMPLE}
         self._odd = np.zeros((3, npix), np.float64) if adaptive else None
         self.nan_dropped = 0
 
@@ -49,7 +51,7 @@ class Film:
                     first_sample: int = 0) -> int:
         """Accumulate a block of samples: pixels (P,) distinct film indices; rgba (4, P, S)
         premultiplied, channel-major, S samples per pixel with sample numbers first_sample ..
-        first_sample + S - 1; data holds the averaged passes' per-sample values ('Normal',
+        first_sample + S - 1; data holds the averaged passes' per-sample values ('Normal', 'UV',
         'DiffCol': (3, P, S); 'Mist': (1, P, S) of 1 - mist).
 
         A sample with any non-finite Combined or pass value is dropped whole (counted in
@@ -85,11 +87,14 @@ class Film:
         norm = np.sqrt(np.maximum(total.sum(axis=0), 0.0) / n)
         return diff / (1e-4 + norm)
 
-    def set_depth(self, pixels: np.ndarray, depth: np.ndarray):
-        """Depth is not averaged: it holds the z-depth seen by each pixel's sample 0 (as Cycles)."""
-        if self._depth is not None:
-            d = np.where(np.isfinite(depth), depth, BACKGROUND_DEPTH).astype(np.float32)
-            self._depth[pixels] = d
+    def set_first(self, name: str, pixels: np.ndarray, values: np.ndarray):
+        """A pass Cycles writes from sample 0 only (FIRST_SAMPLE: Depth, Position, IndexOB,
+        IndexMA), not averaged: values (channels, k) of pixels (k,), what their sample 0 saw
+        (non-finite: nothing, the pass's background value). Ignored when not requested."""
+        first = self._first.get(name)
+        if first is not None:
+            v = np.asarray(values, np.float32).reshape(first.shape[0], -1)
+            first[:, pixels] = np.where(np.isfinite(v), v, np.float32(FIRST_SAMPLE[name]))
 
     def _mean(self, sums: np.ndarray) -> np.ndarray:
         with np.errstate(divide='ignore', invalid='ignore'):
@@ -104,8 +109,8 @@ class Film:
         """(H, W, channels) float32 image of an enabled pass (PASS_CHANNELS)."""
         if name not in self.passes:
             raise KeyError(f"pass {name!r} was not requested (requested: {list(self.passes)})")
-        if name == 'Depth':
-            return self._depth.reshape(self.height, self.width, 1).copy()
+        if name in FIRST_SAMPLE:
+            return self._first[name].T.reshape(self.height, self.width, -1).copy()
         if name == 'Mist':
             return 1.0 - self._mean(self._pass_sum[name])
         if name in DIVIDED_BY_COLOR:                # Cycles: light / colour, 0 where no colour

@@ -52,6 +52,8 @@ from .camera import CameraModel
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
 from .film import LIGHT_PASSES, Film
+from .passes import CHANNELS as PASS_CHANNELS
+from .passes import FIRST_SAMPLE
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .sampling import RandomStream, max3
@@ -176,6 +178,8 @@ class _Triangles:
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
         self.normals = None if flat else dacrt.shading.corner_rows(normals)
         self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
+        self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
+            np.asarray(geometry.has_uv, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
         # which lifts shadow rays off smooth triangles (none when all are flat), and the
         # shading offset as Cycles' frequency multiplier 1 / (1 - offset / 2); None: none
@@ -231,6 +235,8 @@ class _Materials:
                 self.opacity.append((i, tex, *_texture_modes(mat.name, 'opacity', mat.opacity_interpolation,
                                                              mat.opacity_extension, mat.opacity_transform)))
         self.transparent = self.transparency.max(axis=0) > 0
+        # the Material Index pass's value of each material (Blender's material pass index)
+        self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
         # picks closures by their mean weight): its albedo, or 1 where it only emits
         self.opaque_weight = np.where(self.emissive, np.maximum(self.base.mean(axis=0), 1.0),
@@ -311,6 +317,7 @@ def _validate(sd: SceneData):
         (g.uvs is None or np.asarray(g.uvs).shape == (m, 3, 2), f"geometry.uvs must be None or ({m},3,2)"),
         (g.terminator is None or np.asarray(g.terminator).shape == (m, 2),
          f"geometry.terminator must be None or ({m},2)"),
+        (g.has_uv is None or np.asarray(g.has_uv).shape == (m,), f"geometry.has_uv must be None or ({m},)"),
     ]
     for ok, msg in checks:
         if not ok:
@@ -408,6 +415,14 @@ class Integrator:
         # radiance per triangle (3, M), gathered once: BSDF and camera rays read it per hit
         self._tri_emission = np.ascontiguousarray(np.take(self.mats.emission, self.tri.material, axis=1)) \
             if self._any_emissive else None
+        self._object_pass = None                # the Object Index pass's value of each triangle
+        if 'IndexOB' in self.film.passes:
+            ids = np.asarray(scene_data.object_pass_index if scene_data.object_pass_index is not None
+                             else np.zeros(len(scene_data.object_names)), F32)
+            ob = np.asarray(scene_data.geometry.object_index, np.int64)
+            if len(ob) and (ob.min() < 0 or ob.max() >= len(ids)):
+                raise ValueError(f"geometry.object_index must index the {len(ids)} object pass indices")
+            self._object_pass = np.take(ids, ob) if len(ob) else np.zeros(0, F32)
         self._build_lights(scene_data)
         self._fixed_paths = None if paths_per_pass is None else max(1, int(paths_per_pass))
         self._rays = {'camera': 0, 'bounce': 0, 'shadow': 0}
@@ -911,15 +926,18 @@ class Integrator:
                 albedo[:, sel] *= self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
                                                np.take(v, sel))
 
+    def _uv(self, prim, u, v):
+        """The active UV map's (u, v) (two (k,) arrays) at hits (prim, u, v); (0, 0) without
+        a UV map, as Cycles reads a missing attribute."""
+        if self.tri.uvs is None:
+            return np.zeros(len(prim), F32), np.zeros(len(prim), F32)
+        uvc = np.take(self.tri.uvs, prim, axis=1)
+        return uvc[0] + uvc[2] * u + uvc[4] * v, uvc[1] + uvc[3] * u + uvc[5] * v
+
     def _lookup(self, tex, interp, ext, xf, prim, u, v):
         """RGB (3,k) of a texture at hits (prim, u, v) on the UV map (no UV map: (0, 0), as
         Cycles reads a missing attribute), through its affine map xf (or None)."""
-        if self.tri.uvs is None:
-            tu = tv = np.zeros(len(prim), F32)
-        else:
-            uvc = np.take(self.tri.uvs, prim, axis=1)
-            tu = uvc[0] + uvc[2] * u + uvc[4] * v
-            tv = uvc[1] + uvc[3] * u + uvc[5] * v
+        tu, tv = self._uv(prim, u, v)
         if xf is not None:
             tu, tv = xf[0, 0] * tu + xf[0, 1] * tv + xf[0, 2], xf[1, 0] * tu + xf[1, 1] * tv + xf[1, 2]
         return texture_lookup(tex, tu, tv, interp, ext)
@@ -1086,14 +1104,18 @@ class Integrator:
         idx = np.flatnonzero(hit)
         cols = np.take(path.pid, idx)
         want = self.film.passes
+        prim = np.take(hits['prim'], idx)
+        hu, hv = np.take(hits['u'], idx), np.take(hits['v'], idx)
         if len(idx):
-            prim = np.take(hits['prim'], idx)
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1)
             if self.mats.textures:
-                self._texture(prim, np.take(hits['u'], idx), np.take(hits['v'], idx), albedo)
+                self._texture(prim, hu, hv, albedo)
             P, ng, ns, _ = self._surface(hits, idx, path.D)
         else:
             P = ns = albedo = np.zeros((3, 0), F32)
+        if 'UV' in want:
+            data['UV'] = np.zeros((3, n), F32)
+            data['UV'][:, cols] = self._uv_pass(prim, hu, hv)
         if 'Normal' in want:
             data['Normal'] = np.zeros((3, n), F32)
             data['Normal'][:, cols] = ns
@@ -1103,12 +1125,41 @@ class Integrator:
         if 'Mist' in want:                          # Cycles' mist of the first surface, stored as 1 - mist
             data['Mist'] = np.zeros((1, n), F32)
             data['Mist'][0, cols] = 1.0 - self._mist(P)
-        if 'Depth' in want:
-            first = np.flatnonzero(samp == 0)       # Cycles writes depth from sample 0 only
-            if len(first):
-                depth = np.full(n, np.inf, F32)
-                depth[cols] = self.camera.z_depth(P)
-                self.film.set_depth(pix[first], depth[first])
+        self._write_first(pix, samp, cols, prim, P)
+
+    def _uv_pass(self, prim, u, v):
+        """Cycles' UV pass at hits (prim, u, v): (u, v, 1) on the active UV map (3,k), 0 on
+        meshes without one (primitive_uv)."""
+        if self.tri.uvs is None:
+            return np.zeros((3, len(prim)), F32)
+        tu, tv = self._uv(prim, u, v)
+        has = np.ones_like(tu) if self.tri.has_uv is None else np.take(self.tri.has_uv, prim).astype(F32)
+        return np.stack([tu, tv, has])
+
+    def _write_first(self, pix, samp, cols, prim, P):
+        """The passes Cycles writes from each pixel's sample 0 only (Depth, Position, Object
+        and Material Index): of the surfaces prim at points P (3,k) that the paths cols saw;
+        the film keeps its background value for the rest."""
+        first = np.flatnonzero(samp == 0)
+        want = [p for p in FIRST_SAMPLE if p in self.film.passes]
+        if not len(first) or not want:
+            return
+        at = np.full(len(pix), -1, np.int64)      # the block's path -> its column of cols
+        at[cols] = np.arange(len(cols))
+        rows = np.flatnonzero(at[first] >= 0)     # sample-0 paths that saw a surface
+        k = at[first[rows]]
+        pixels = pix[first]
+        for name in want:
+            values = np.full((PASS_CHANNELS[name], len(first)), np.nan, F32)   # nan: background
+            if name == 'Depth':
+                values[0, rows] = self.camera.z_depth(P[:, k])
+            elif name == 'Position':                # world space: the render's centring undone
+                values[:, rows] = (P[:, k].astype(np.float64) + self.origin[:, None]).astype(F32)
+            elif name == 'IndexOB':
+                values[0, rows] = np.take(self._object_pass, np.take(prim, k))
+            else:
+                values[0, rows] = np.take(self.mats.pass_index, np.take(self.tri.material, np.take(prim, k)))
+            self.film.set_first(name, pixels, values)
 
     def _mist(self, P):
         """Cycles' mist of surface points P (3,k): World > Mist Pass start, depth and falloff."""
@@ -1125,9 +1176,10 @@ class Integrator:
         that surface, or the last one the chain reached before it stopped."""
         n, want = len(pix), self.film.passes
         threshold = float(getattr(self.settings, 'pass_alpha_threshold', 0.5))
-        normal, diff = np.zeros((3, n), F32), np.zeros((3, n), F32)
+        normal, diff, uv = np.zeros((3, n), F32), np.zeros((3, n), F32), np.zeros((3, n), F32)
         mist_out = np.zeros(n, F32)
-        depth = np.full(n, np.inf, F32)
+        first_prim = np.full(n, -1, np.int64)       # the surface the sample-0 passes describe
+        first_P = np.zeros((3, n), F32)
         done = np.zeros(n, bool)                    # Cycles' PATH_RAY_SINGLE_PASS_DONE
 
         def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns):
@@ -1138,9 +1190,12 @@ class Integrator:
             if 'Mist' in want:
                 mist_out[cols] += (1.0 - self._mist(P)) * (thr * alpha).mean(axis=0)
             todo = ~done[cols]
-            depth[cols[todo]] = self.camera.z_depth(P[:, todo]) if 'Depth' in want else 0.0
+            first_prim[cols[todo]] = prim[todo]
+            first_P[:, cols[todo]] = P[:, todo]
             first = todo & ((alpha.mean(axis=0) >= threshold) | (threshold == 0.0))
             normal[:, cols[first]] = ns[:, first]
+            if 'UV' in want:
+                uv[:, cols[first]] = self._uv_pass(prim[first], u[first], v[first])
             done[cols[first]] = True
 
         for c in chain:
@@ -1163,10 +1218,10 @@ class Integrator:
             data['DiffCol'] = diff
         if 'Mist' in want:
             data['Mist'] = mist_out[None, :]
-        if 'Depth' in want:
-            first = np.flatnonzero(samp == 0)       # Cycles writes depth from sample 0 only
-            if len(first):
-                self.film.set_depth(pix[first], depth[first])
+        if 'UV' in want:
+            data['UV'] = uv
+        seen = np.flatnonzero(first_prim >= 0)
+        self._write_first(pix, samp, seen, first_prim[seen], first_P[:, seen])
 
     # --- emission seen by rays ------------------------------------------------------------------
 

@@ -115,6 +115,7 @@ class Material:
     opacity_interpolation: str = 'Linear'
     opacity_extension: str = 'REPEAT'
     opacity_transform: Optional[np.ndarray] = None
+    pass_index: int = 0                           # Blender's material pass index (Material Index pass)
 
 
 @dataclass
@@ -132,6 +133,9 @@ class Geometry:
     # (0 on flat-shaded meshes, as Cycles applies it to smooth triangles only) and shading
     # offset, both 0..1; None: all 0
     terminator: Optional[np.ndarray] = None
+    # (M,) bool: the triangle's mesh has a UV map (uvs there are 0 where not, as Cycles reads a
+    # missing attribute; the UV pass's third channel is 0 there); None: every mesh has one
+    has_uv: Optional[np.ndarray] = None
 
     @staticmethod
     def empty() -> 'Geometry':
@@ -161,7 +165,8 @@ class Settings:
     adaptive_threshold: float = 0.01   # Cycles' scale; 0 = automatic (from samples)
     adaptive_min_samples: int = 0      # 0 = automatic (from the threshold)
     film_transparent: bool = False
-    passes: tuple = ()             # extra passes wanted: any of 'Depth', 'Normal', 'DiffCol', 'Mist',
+    passes: tuple = ()             # extra passes wanted (passes.py): data passes 'Depth', 'Mist',
+                                   # 'Position', 'Normal', 'UV', 'IndexOB', 'IndexMA', 'DiffCol'
                                    # and the light passes 'DiffDir', 'DiffInd', 'Emit', 'Env'
     # the Mist pass (World > Mist Pass; Cycles' film defaults without a world): start and depth
     # in scene units, falloff exponent (Quadratic 2, Linear 1, Inverse Quadratic 0.5)
@@ -186,3 +191,5 @@ class SceneData:
     # which rays see the world (colour and image): VIS_CAMERA | VIS_DIFFUSE, Cycles' World >
     # Ray Visibility; the camera bit off leaves the background black (alpha 1, as Cycles)
     world_visibility: int = VIS_CAMERA | VIS_DIFFUSE
+    # (len(object_names),) each object's pass index (Object Index pass); None: all 0
+    object_pass_index: Optional[np.ndarray] = None

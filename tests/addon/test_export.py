@@ -554,9 +554,11 @@ def test_passes_dacrt_does_not_write_are_reported(scene, exported):
     vl.use_pass_z = vl.use_pass_normal = vl.use_pass_diffuse_color = vl.use_pass_mist = True
     vl.use_pass_diffuse_direct = vl.use_pass_diffuse_indirect = True
     vl.use_pass_emit = vl.use_pass_environment = True
+    vl.use_pass_position = vl.use_pass_uv = vl.use_pass_object_index = vl.use_pass_material_index = True
     s = exported()
     assert not any("not in the result" in m for _, m in s.messages)
-    assert s.settings.passes == ('Depth', 'Normal', 'DiffCol', 'Mist', 'DiffDir', 'DiffInd', 'Emit', 'Env')
+    assert set(s.settings.passes) == {'Depth', 'Normal', 'DiffCol', 'Mist', 'DiffDir', 'DiffInd', 'Emit', 'Env',
+                                      'Position', 'UV', 'IndexOB', 'IndexMA'}
     vl.use_pass_glossy_direct = vl.use_pass_ambient_occlusion = vl.use_pass_cryptomatte_object = True
     vl.cycles.denoising_store_passes = True
     vl.aovs.add().name = "Wetness"
@@ -567,6 +569,7 @@ def test_passes_dacrt_does_not_write_are_reported(scene, exported):
     written = notes[0].split("not in the result")[1]
     assert "Depth," in notes[0] and "Depth" not in written and "Mist" not in written
     assert "Emission" not in written and "Diffuse Direct" not in written
+    assert "Position" not in written and "Object Index" not in written and "UV" not in written
 
 
 def test_nan_vertices_dropped_with_message(scene, exported):
@@ -1070,7 +1073,7 @@ def test_settings_follow_scene_dacrt_and_blender(scene, exported):
     layer.use_pass_mist = True
     scene.world = None
     s = exported().settings
-    assert s.passes == ('Depth', 'DiffCol', 'Mist') and s.mist == (0.0, 100.0, 1.0)
+    assert s.passes == ('Depth', 'Mist', 'DiffCol') and s.mist == (0.0, 100.0, 1.0)
     scene.world = bpy.data.worlds.new("W")
     for falloff, power in (('QUADRATIC', 2.0), ('LINEAR', 1.0), ('INVERSE_QUADRATIC', 0.5)):
         m = scene.world.mist_settings

@@ -73,6 +73,41 @@ def test_passes_present_when_enabled(scene, tmp_path):
     assert combined[..., :3].mean() > 0
 
 
+def test_position_uv_and_index_passes(scene, tmp_path, capfd):
+    """Position, UV, Object Index and Material Index, with Blender's names in the result: the
+    object's and the material's pass index, world positions on the plane, the UV map's
+    coordinates with A = 1; none of them reported as missing."""
+    lit_plane_scene(scene)
+    ground = bpy.data.objects["Ground"]
+    ground.location = (30.0, -20.0, 0.0)
+    scene.camera.location = (30.0, -20.0, 5.0)
+    ground.pass_index = 4
+    ground.material_slots[0].material.pass_index = 6
+    uv = ground.data.uv_layers.new(name="UVMap")
+    uv.data.foreach_set("uv", [0, 0, 1, 0, 1, 1, 0, 1])
+    layer = bpy.context.view_layer
+    layer.use_pass_position = layer.use_pass_uv = True
+    layer.use_pass_object_index = layer.use_pass_material_index = True
+    exr = scenes.read_exr(scenes.render_exr(tmp_path / "data.exr", multilayer=True))
+    name = layer.name
+    assert "not in the result" not in capfd.readouterr().err
+    ob = exr[f"{name}.{engine_module.RESULT_PASS_NAME['IndexOB']}.X"]
+    ma = exr[f"{name}.{engine_module.RESULT_PASS_NAME['IndexMA']}.X"]
+    assert ob.shape == (12, 16) and np.all(ob == 4.0) and np.all(ma == 6.0)
+    pos = np.stack([exr[f"{name}.Position.{c}"] for c in "XYZ"], axis=-1)
+    assert np.allclose(pos[..., 2], 0.0, atol=1e-4)
+    assert np.all(np.abs(pos[..., 0] - 30.0) < 3) and np.all(np.abs(pos[..., 1] + 20.0) < 3)
+    # x grows to the right, y upwards (sample 0's points jitter over the filter's 1.5 pixels)
+    col, row = np.meshgrid(np.arange(16), np.arange(12))
+    assert np.corrcoef(col.ravel(), pos[..., 0].ravel())[0, 1] > 0.95
+    assert np.corrcoef(row.ravel(), pos[..., 1].ravel())[0, 1] > 0.95
+    uva = np.stack([exr[f"{name}.UV.{c}"] for c in "UVA"], axis=-1)
+    # the 100 m plane's UV is (x - x0) / 100 + 0.5 on its local axes
+    assert np.allclose(uva[..., 0], (pos[..., 0] - 30.0) / 100 + 0.5, atol=0.02)
+    assert np.allclose(uva[..., 1], (pos[..., 1] + 20.0) / 100 + 0.5, atol=0.02)
+    assert np.allclose(uva[..., 2], 1.0)
+
+
 def test_border_render_with_and_without_crop(scene, tmp_path):
     lit_plane_scene(scene, size=(40, 20))
     r = scene.render

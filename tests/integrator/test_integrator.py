@@ -399,6 +399,53 @@ def test_data_passes():
         render(plane_scene(samples=1)).film.pass_image('Depth')
 
 
+def test_position_uv_and_index_passes():
+    """Cycles' Position, UV, Object Index and Material Index passes (film/data_passes.h) on two
+    quads far from the origin (the render recentres the scene; Position is world space), 1 x 1
+    unit pixels, box filter: Position, Object and Material Index from each pixel's sample 0,
+    UV = (u, v, 1) averaged over the samples; the pixels that see nothing stay 0 (Depth 1e10)."""
+    T = np.array([1000.0, -2000.0])
+    a = quad((T[0] - 2.0, T[1], 0.0), 2.0, 2.0)                 # pixel columns 0-3
+    b = quad((T[0] + 1.5, T[1], 0.0), 1.5, 2.0)                 # columns 4-6; column 7: nothing
+    mats = [material('default'), material('a', pass_index=3), material('b', pass_index=7)]
+    g = geometry([(*a, 1, ALL_VIS), (*b, 2, ALL_VIS)])
+    corners = g.vertices[g.triangles]                            # (M, 3, 3)
+    g.uvs = np.stack([(corners[..., 0] - T[0]) / 8 + 0.5, (corners[..., 1] - T[1]) / 4 + 0.5],
+                     axis=-1).astype(np.float32)
+    scene = sd.SceneData(ortho_down(height=0.5, width=8, px=4, view=8.0, target=T), g, mats, [],
+                         np.zeros(3, np.float32),
+                         sd.Settings(samples=16, filter_type='BOX',
+                                     passes=('Depth', 'Position', 'UV', 'IndexOB', 'IndexMA')),
+                         object_names=['A', 'B'], object_pass_index=np.array([5, 9]))
+    integ = render(scene)
+    assert np.abs(integ.origin).max() > 100                      # the render did recentre
+    film = integ.film
+    col = np.arange(8)[None, :].repeat(4, axis=0)
+    row = np.arange(4)[:, None].repeat(8, axis=1)
+    on = col < 7
+    ob, ma = film.pass_image('IndexOB')[..., 0], film.pass_image('IndexMA')[..., 0]
+    assert np.array_equal(ob, np.where(col < 4, 5.0, np.where(on, 9.0, 0.0)))
+    assert np.array_equal(ma, np.where(col < 4, 3.0, np.where(on, 7.0, 0.0)))
+    pos = film.pass_image('Position')
+    x0, y0 = T[0] - 4 + col, T[1] - 2 + row                     # each pixel's footprint corner
+    assert np.all((pos[on][:, 0] >= x0[on] - 1e-3) & (pos[on][:, 0] <= x0[on] + 1 + 1e-3))
+    assert np.all((pos[on][:, 1] >= y0[on] - 1e-3) & (pos[on][:, 1] <= y0[on] + 1 + 1e-3))
+    assert np.allclose(pos[on][:, 2], 0.0, atol=1e-3) and np.all(pos[~on] == 0.0)
+    assert len(np.unique(np.round(pos[on][:, 0] - x0[on], 3))) > 10   # sample 0's own points
+    uv = film.pass_image('UV')
+    # the mean of 16 uniform points: the pixel centre's UV within ~4 standard errors
+    assert np.allclose(uv[on][:, 0], (col[on] + 0.5) / 8, atol=4 * (1 / 8) / np.sqrt(12 * 16))
+    assert np.allclose(uv[on][:, 1], (row[on] + 0.5) / 4, atol=4 * (1 / 4) / np.sqrt(12 * 16))
+    assert np.allclose(uv[on][:, 2], 1.0) and np.all(uv[~on] == 0.0)
+    depth = film.pass_image('Depth')[..., 0]
+    assert np.allclose(depth[on], 0.5, rtol=1e-4) and np.all(depth[~on] == 1e10)
+    scene.geometry.has_uv = scene.geometry.object_index == 0     # quad b's mesh has no UV map
+    uv_b = render(scene).film.pass_image('UV')
+    assert np.allclose(uv_b[col < 4], uv[col < 4]) and np.all(uv_b[(col >= 4)][:, 2] == 0.0)
+    scene.geometry.uvs = scene.geometry.has_uv = None            # no UV map: Cycles reads 0
+    assert np.all(render(scene).film.pass_image('UV') == 0.0)
+
+
 @pytest.mark.parametrize('start,depth,falloff', [(0.1, 1.0, 2.0), (0.2, 0.5, 1.0), (0.0, 2.0, 0.5),
                                                   (1.0, 3.0, 2.0)])
 def test_mist_pass_closed_form(start, depth, falloff):

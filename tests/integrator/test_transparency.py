@@ -165,13 +165,15 @@ def test_data_passes_along_transparent_surfaces(threshold):
     alpha reaches the Pass Alpha Threshold, else from the floor where the ray went on, with no
     normal where it stopped at the sheet."""
     sheet = material('sheet', (0.3,) * 3, transparency=np.full(3, 0.4, np.float32))
-    scene = sheet_scene(sheet, floor=True, samples=256, passes=('Depth', 'Normal', 'DiffCol', 'Mist'),
+    scene = sheet_scene(sheet, floor=True, samples=256, passes=('Depth', 'Normal', 'DiffCol', 'Mist', 'Position'),
                         mist=(0.0, 1.0, 1.0), pass_alpha_threshold=threshold)
     film = render(scene).film
     n = film.pass_image('DiffCol')[..., 0].size * 256
     assert film.pass_image('DiffCol')[..., 0].mean() == pytest.approx(0.3 + 0.4 * 0.8, abs=4 * 0.28 / np.sqrt(n))
     assert film.pass_image('Mist')[..., 0].mean() == pytest.approx(1 - (0.45 + 0.2), abs=4 * 0.25 / np.sqrt(n))
     depth, normal_z = film.pass_image('Depth')[..., 0], film.pass_image('Normal')[..., 2]
+    # Position comes from the same surface as Depth (the camera looks down from z = 0.5)
+    assert np.allclose(film.pass_image('Position')[..., 2], 0.5 - depth, atol=1e-5)
     if threshold == 0.5:                    # the sheet qualifies: every sample
         assert np.allclose(depth, 0.25, rtol=1e-5) and np.allclose(normal_z, 1.0, rtol=1e-5)
     else:                                   # sample 0 passed (floor) or stopped (sheet)

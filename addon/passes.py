@@ -1,0 +1,46 @@
+"""The render passes DACRT writes besides Combined: the film's name of each, the view-layer
+toggle that enables it, its channels and Blender's name for it in the render result.
+
+Shared by the export (which passes a view layer asks for), the film (channels) and the engine
+(pass registration, result names). Free of bpy, so the film and integrator stay testable
+without Blender: the result name takes Blender's version as an argument.
+"""
+from __future__ import annotations
+
+# (film name, view-layer toggle, channels, channel ids, pass type, Blender's name: 5.0 or
+# (the long name, the name before 4.4))
+PASSES = (
+    ('Depth', 'use_pass_z', 1, 'Z', 'VALUE', 'Depth'),
+    ('Mist', 'use_pass_mist', 1, 'Z', 'VALUE', 'Mist'),
+    ('Position', 'use_pass_position', 3, 'XYZ', 'VECTOR', 'Position'),
+    ('Normal', 'use_pass_normal', 3, 'XYZ', 'VECTOR', 'Normal'),
+    ('UV', 'use_pass_uv', 3, 'UVA', 'VECTOR', 'UV'),
+    ('IndexOB', 'use_pass_object_index', 1, 'X', 'VALUE', ('Object Index', 'IndexOB')),
+    ('IndexMA', 'use_pass_material_index', 1, 'X', 'VALUE', ('Material Index', 'IndexMA')),
+    ('DiffDir', 'use_pass_diffuse_direct', 3, 'RGB', 'COLOR', ('Diffuse Direct', 'DiffDir')),
+    ('DiffInd', 'use_pass_diffuse_indirect', 3, 'RGB', 'COLOR', ('Diffuse Indirect', 'DiffInd')),
+    ('DiffCol', 'use_pass_diffuse_color', 3, 'RGB', 'COLOR', ('Diffuse Color', 'DiffCol')),
+    ('Emit', 'use_pass_emit', 3, 'RGB', 'COLOR', ('Emission', 'Emit')),
+    ('Env', 'use_pass_environment', 3, 'RGB', 'COLOR', ('Environment', 'Env')),
+)
+
+CHANNELS = {name: channels for name, _, channels, _, _, _ in PASSES}
+
+# Passes Cycles writes from each pixel's sample 0 only (film/data_passes.h overwrites them), with
+# their value where that sample saw no surface; the other data passes average all samples.
+FIRST_SAMPLE = {'Depth': 1e10, 'Position': 0.0, 'IndexOB': 0.0, 'IndexMA': 0.0}
+
+# the parts Combined is the sum of, and those read back divided by the Diffuse Color sums
+LIGHT = ('DiffDir', 'DiffInd', 'Emit', 'Env')
+DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')
+
+
+def result_name(name: str, blender_version: tuple) -> str:
+    """Blender's name of film pass `name` in a render result (the compositor's and multilayer
+    EXR's). Blender renamed the short ones ("IndexOB", "DiffCol", ...) to the long ones as
+    Cycles' engine.py registers them (5.0.1 checked; 4.2: the short ones; the 4.4 boundary
+    follows the release history and is not checked here)."""
+    names = next(p[5] for p in PASSES if p[0] == name)
+    if isinstance(names, str):
+        return names
+    return names[0] if tuple(blender_version) >= (4, 4, 0) else names[1]

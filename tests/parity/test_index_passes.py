@@ -1,0 +1,93 @@
+"""The Position, UV, Object Index and Material Index passes agree with Cycles on a floor, a block
+and a ball with UV maps and pass indices, seen by perspective and orthographic cameras.
+
+Cycles writes Position and both indices from each pixel's sample 0 (film/data_passes.h), so
+they are compared where that sample cannot land on another surface: pixels whose 3 x 3
+neighbourhood shows one object in both engines. There the indices must be equal, and the
+positions, jittered by each engine's own sample 0 over the pixel filter, within two pixel
+footprints (the distance to the neighbouring pixels' positions). UV = (u, v, 1) is averaged over
+the samples, so it converges to the same pixel-filtered value in both engines (like Mist)."""
+import math
+
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+def _planar_uvs(ob, scale):
+    """A UV map of the mesh's local x, y (x scale + 0.5): a gradient to compare."""
+    me = ob.data
+    layer = me.uv_layers.new(name="UVMap")
+    co = [me.vertices[lv.vertex_index].co for lv in me.loops]
+    layer.data.foreach_set("uv", [c for v in co for c in (v.x * scale + 0.5, v.y * scale + 0.5)])
+
+
+def _scene(kind):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 48, 32
+    scenes.camera(location=(0, -6, 2), rotation=(math.radians(75), 0, 0), kind=kind)
+    floor = scenes.plane("Floor", size=30, materials=[scenes.diffuse("Floor", (0.8, 0.5, 0.3))])
+    block = scenes.cube("Block", size=1, location=(1, 0, 0.5), materials=[scenes.diffuse("Block", (0.2, 0.7, 0.2))])
+    ball = scenes.uv_sphere("Ball", radius=0.6, location=(-1.2, 1.5, 0.6),
+                            materials=[scenes.diffuse("Ball", (0.7, 0.2, 0.2))])
+    for ob, index, mat_index, uv_scale in ((floor, 2, 11, 0.05), (block, 5, 13, 0.8), (ball, 7, 0, None)):
+        ob.pass_index = index
+        ob.material_slots[0].material.pass_index = mat_index
+        if uv_scale is not None:          # the ball has no UV map: Cycles' UV pass is 0 there
+            _planar_uvs(ob, uv_scale)
+    scenes.world((0.3, 0.4, 0.6), 1.0)
+    vl = sc.view_layers[0]
+    vl.use_pass_position = vl.use_pass_uv = vl.use_pass_object_index = vl.use_pass_material_index = True
+    sc.cycles.samples = sc.dacrt.samples = 64
+    sc.cycles.use_denoising = False
+    sc.cycles.pixel_filter_type = sc.dacrt.filter_type = 'BLACKMAN_HARRIS'
+    sc.cycles.filter_width = sc.dacrt.filter_width = 1.5
+    return sc
+
+
+def _interior(index):
+    """Pixels whose 3 x 3 neighbourhood holds one value of index (H, W)."""
+    pad = np.pad(index, 1, mode='edge')
+    same = np.ones(index.shape, bool)
+    for dy in (0, 1, 2):
+        for dx in (0, 1, 2):
+            same &= pad[dy:dy + index.shape[0], dx:dx + index.shape[1]] == index
+    return same
+
+
+@pytest.mark.parametrize('kind', ['PERSP', 'ORTHO'])
+def test_position_uv_and_index_passes_match_cycles(kind, tmp_path):
+    sc = _scene(kind)
+    layer = sc.view_layers[0].name
+    exrs = scenes.render_engines(sc, tmp_path)
+    from addon.engine import RESULT_PASS_NAME
+    ob_name, ma_name = RESULT_PASS_NAME['IndexOB'], RESULT_PASS_NAME['IndexMA']
+    got = {e: dict(ob=x[f"{layer}.{ob_name}.X"], ma=x[f"{layer}.{ma_name}.X"],
+                   pos=np.stack([x[f"{layer}.Position.{c}"] for c in "XYZ"], axis=-1),
+                   uv=np.stack([x[f"{layer}.UV.{c}"] for c in "UVA"], axis=-1)) for e, x in exrs.items()}
+    d, c = got['DACRT'], got['CYCLES']
+    assert set(np.unique(c['ob'])) >= {2.0, 5.0, 7.0}, "all three objects must be in view"
+    inner = _interior(c['ob']) & _interior(d['ob'])
+    assert inner.mean() > 0.5
+    assert np.array_equal(d['ob'][inner], c['ob'][inner])
+    assert np.array_equal(d['ma'][inner], c['ma'][inner])
+    assert (d['ob'] == c['ob']).mean() > 0.9 and (d['ma'] == c['ma']).mean() > 0.9
+    # positions: within two footprints of Cycles' (its largest step to a 4-neighbour)
+    p = np.pad(c['pos'], ((1, 1), (1, 1), (0, 0)), mode='edge')
+    h, w = c['ob'].shape
+    step = np.max([np.linalg.norm(p[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] - c['pos'], axis=-1)
+                   for dy, dx in ((-1, 0), (1, 0), (0, -1), (0, 1))], axis=0)
+    err = np.linalg.norm(d['pos'] - c['pos'], axis=-1)
+    assert (err[inner] <= 2 * step[inner] + 1e-4).mean() > 0.99, np.percentile(err[inner] / step[inner], 99)
+    assert np.abs(d['pos'][inner].mean(axis=0) - c['pos'][inner].mean(axis=0)).max() < 0.05
+    # UV (u, v, 1) averaged: the same filtered value, up to the filter's sampling noise at edges
+    diff = np.abs(d['uv'] - c['uv'])
+    assert c['uv'][..., 0].std() > 0.02, "the UV map must vary across the view"
+    ball = inner & (c['ob'] == 7.0)
+    assert ball.any() and np.allclose(c['uv'][ball], 0.0, atol=0.02) and np.allclose(d['uv'][ball], 0.0, atol=0.02)
+    assert diff[inner].mean() < 0.003 and diff.mean() < 0.01, (diff[inner].mean(), diff.mean(), diff.max())
