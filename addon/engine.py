@@ -12,7 +12,7 @@ import traceback
 import bpy
 import numpy as np
 
-from . import export
+from . import cryptomatte, export
 from .allocator import render_heap
 from .passes import PASSES, result_name
 
@@ -62,6 +62,10 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
             if getattr(renderlayer, toggle, False):
                 self.register_pass(scene, renderlayer, RESULT_PASS_NAME[name], channels, chan_id, kind)
+        for kind, toggle in cryptomatte.KINDS:
+            if getattr(renderlayer, toggle, False):
+                for name in cryptomatte.pass_names(kind, getattr(renderlayer, 'pass_cryptomatte_depth', 6)):
+                    self.register_pass(scene, renderlayer, name, 4, "rgba", 'COLOR')   # as Cycles
 
     def render(self, depsgraph):
         try:
@@ -93,6 +97,11 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         x0, y0, x1, y1 = scene_data.camera.border
         # begin_result coordinates are relative to the render border's rect
         result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=layer)
+        # Cryptomatte names and manifests, stamped on the engine's full result as Cycles does
+        for kind in scene_data.settings.cryptomatte:
+            names = cryptomatte.layer_names(scene_data, kind)
+            for field, value in cryptomatte.metadata(layer, kind, names).items():
+                self.get_result().stamp_data_add_field(field, value)
         views = [v.name for v in result.views]
         try:
             for view in views if len(views) > 1 else [None]:
@@ -159,7 +168,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             now = time.perf_counter()
             final = progress.samples_done >= progress.samples_total
             if final or now - last_draw > 0.5:   # redraw at most twice a second
-                self._write(integ.film, result, scene_data, view)
+                self._write(integ.film, result, scene_data, view, final)
                 self.update_result(result)
                 last_draw = now
             fraction = getattr(progress, 'fraction', None)
@@ -170,7 +179,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             if self.cancel_requested():
                 break
         if progress is None or progress.samples_done < progress.samples_total or last_draw == 0:
-            self._write(integ.film, result, scene_data, view)   # partial (cancelled) image stays
+            self._write(integ.film, result, scene_data, view, True)   # partial (cancelled) image stays
             self.update_result(result)
 
     @staticmethod
@@ -178,12 +187,17 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         return (f"DACRT | Sample {p.samples_done}/{p.samples_total} | {p.mrays_per_s:.2f} Mrays/s"
                 f" | Time {_clock(elapsed)} | Remaining {_clock(p.eta_seconds)}")
 
-    def _write(self, film, result, scene_data, view=None):
+    def _write(self, film, result, scene_data, view=None, final=False):
+        """The film's passes into the result; Cryptomatte (a sort of every pixel's IDs) only
+        when final, not at every progressive redraw."""
         passes = result.layers[0].passes
         self._set(passes, 'Combined', film.combined(), scene_data.camera, view)
         for name in scene_data.settings.passes:
             if RESULT_PASS_NAME[name] in passes:
                 self._set(passes, RESULT_PASS_NAME[name], film.pass_image(name), scene_data.camera, view)
+        for name, image in (film.cryptomatte_images() if final else {}).items():
+            if name in passes:
+                self._set(passes, name, image, scene_data.camera, view)
 
     @staticmethod
     def _set(passes, name, image, camera, view=None):

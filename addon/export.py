@@ -56,6 +56,7 @@ from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant_color, constant_value
 from .nodegraph import input_socket, linked_link, linked_node, output_node
+from .cryptomatte import KINDS as CRYPTO_KINDS
 from .passes import PASSES, result_name
 from .texture import UdimTiles
 
@@ -89,9 +90,7 @@ _UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
     ('transmission_indirect', 'Transmission Indirect'), ('transmission_color', 'Transmission Color'),
     ('subsurface_direct', 'Subsurface Direct'), ('subsurface_indirect', 'Subsurface Indirect'),
     ('subsurface_color', 'Subsurface Color'),
-    ('ambient_occlusion', 'Ambient Occlusion'), ('shadow', 'Shadow'),
-    ('cryptomatte_object', 'Cryptomatte Object'), ('cryptomatte_material', 'Cryptomatte Material'),
-    ('cryptomatte_asset', 'Cryptomatte Asset'))) + (
+    ('ambient_occlusion', 'Ambient Occlusion'), ('shadow', 'Shadow'))) + (
     ('cycles', 'denoising_store_passes', 'Denoising Data'),
     ('cycles', 'pass_debug_sample_count', 'Sample Count'),
     ('cycles', 'use_pass_shadow_catcher', 'Shadow Catcher'),
@@ -1121,6 +1120,7 @@ class _Exporter:
         self.materials = _MaterialBuilder()
         self.object_names = []
         self.object_pass_index = []
+        self.object_assets = []
         self._object_index = {}
         self.meshes = {}          # key -> _MeshArrays
         self.placements = {}      # key -> [_Placement]
@@ -1153,7 +1153,8 @@ class _Exporter:
                             object_names=self.object_names, messages=self.messages,
                             skipped=dict(self.counts), environment=environment,
                             world_visibility=world_visibility(self.scene.world),
-                            object_pass_index=np.array(self.object_pass_index, np.int32))
+                            object_pass_index=np.array(self.object_pass_index, np.int32),
+                            object_assets=self.object_assets)
 
     # -- settings ------------------------------------------------------------------------
     def _settings(self):
@@ -1166,8 +1167,9 @@ class _Exporter:
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
         missing += [f"AOV '{a.name}'" for a in getattr(vl, 'aovs', ())]
         missing += [f"light group '{g.name}'" for g in getattr(vl, 'lightgroups', ())]
+        crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
         if missing:
-            written = ', '.join(result_name(p[0], bpy.app.version) for p in PASSES)
+            written = ', '.join([result_name(p[0], bpy.app.version) for p in PASSES] + ['Cryptomatte'])
             self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, {written} "
                                              f"only; not in the result: {', '.join(missing)}"))
         mist = scene.world.mist_settings if scene.world is not None else None
@@ -1182,6 +1184,7 @@ class _Exporter:
                            partition=d.partition.lower(), film_transparent=r.film_transparent,
                            passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
                            pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
+                           cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),
                            adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
     # -- instances -----------------------------------------------------------------------
@@ -1309,6 +1312,10 @@ class _Exporter:
             idx = self._object_index[ob.name] = len(self.object_names)
             self.object_names.append(ob.name)
             self.object_pass_index.append(ob.pass_index)   # Cycles: the instanced object's own
+            top = ob
+            while top.parent is not None:                 # Cryptomatte's asset: the topmost parent
+                top = top.parent
+            self.object_assets.append(top.name)
         return idx
 
     def _skip(self, reason, name):

@@ -7,7 +7,8 @@ reads back 1 - their mean, as Cycles stores it), the light passes (Emit, Env, an
 DiffInd, which read back divided by the Diffuse Color sums as Cycles divides them, 0 where that
 is 0; the film keeps DiffCol for them when it is not requested), the per-pixel count of accepted samples, the count of samples dropped for
 being NaN or infinite and, for adaptive sampling, a second Combined sum of the odd-numbered
-samples (weighted 2, Cycles' adaptive auxiliary buffer) and the error estimate built from it. Pixel values are the plain mean of the samples that landed in the pixel
+samples (weighted 2, Cycles' adaptive auxiliary buffer) and the error estimate built from it,
+and the Cryptomatte coverage of each ID per pixel (cryptomatte.py). Pixel values are the plain mean of the samples that landed in the pixel
 (the pixel filter is applied by importance sampling the ray positions, see filter.py), so a
 dropped sample only lowers that pixel's count. Arrays are (height, width, channels), row 0 at
 the bottom, as Blender's render result expects.
@@ -18,13 +19,14 @@ import numpy as np
 
 import dacrt
 
+from .cryptomatte import Coverage, pass_names
 from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DIVIDED_BY_COLOR, FIRST_SAMPLE
 from .passes import LIGHT as LIGHT_PASSES
 
 
 class Film:
-    def __init__(self, width: int, height: int, passes=(), adaptive: bool = False):
+    def __init__(self, width: int, height: int, passes=(), adaptive: bool = False, cryptomatte=None):
         unknown = [p for p in passes if p not in PASS_CHANNELS]
         if unknown:
             raise ValueError(f"unknown pass(es) {unknown}; supported: {sorted(PASS_CHANNELS)}")
@@ -41,6 +43,9 @@ class Film:
         self._first = {p: np.zeros((PASS_CHANNELS[p], npix), np.float32)
                        for p in self.passes if p in FIRST_SAMPLE}
         self._odd = np.zeros((3, npix), np.float64) if adaptive else None
+        # Cryptomatte: kind -> (the ID of each index (n,) float32, levels) and its coverage sums
+        self._crypto = {kind: (np.asarray(id_values, np.float32), int(levels), Coverage(len(id_values)))
+                        for kind, (id_values, levels) in (cryptomatte or {}).items()}
         self.nan_dropped = 0
 
     @property
@@ -95,6 +100,25 @@ class Film:
         if first is not None:
             v = np.asarray(values, np.float32).reshape(first.shape[0], -1)
             first[:, pixels] = np.where(np.isfinite(v), v, np.float32(FIRST_SAMPLE[name]))
+
+    def add_coverage(self, kind: str, pixels: np.ndarray, index: np.ndarray, weight: np.ndarray):
+        """Cryptomatte: samples of pixels (k,) saw ID index (k,) with weight (k,) (1 for an
+        opaque surface; along transparent surfaces, throughput x opacity). Ignored when the
+        kind was not requested."""
+        if kind in self._crypto:
+            self._crypto[kind][2].add(pixels, index, weight)
+
+    def cryptomatte_images(self) -> dict:
+        """{pass name ('CryptoObject00', ...): (H, W, 4) float32}: two ranks per pass, (ID,
+        coverage, ID, coverage), coverage = weight / the pixel's samples, most covered first."""
+        out = {}
+        for kind, (id_values, levels, cov) in self._crypto.items():
+            names = pass_names(kind, levels)
+            ranks = cov.ranks(self.num_pixels, self._count, id_values, 2 * len(names))
+            for i, name in enumerate(names):
+                rgba = ranks[2 * i:2 * i + 2].reshape(4, self.num_pixels)
+                out[name] = rgba.T.reshape(self.height, self.width, 4).copy()
+        return out
 
     def _mean(self, sums: np.ndarray) -> np.ndarray:
         with np.errstate(divide='ignore', invalid='ignore'):

@@ -48,7 +48,9 @@ import numpy as np
 
 import dacrt
 
+from . import cryptomatte
 from .camera import CameraModel
+from .cryptomatte import KINDS as CRYPTO_KINDS
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
 from .film import LIGHT_PASSES, Film
@@ -387,10 +389,16 @@ class Integrator:
         self.rng = RandomStream(int(s.seed))
         self.adaptive = (AdaptiveSampling(self.samples, s.adaptive_threshold, s.adaptive_min_samples)
                          if s.use_adaptive_sampling else None)
+        # Cryptomatte: each kind's ID per triangle (the film keeps the coverage of the IDs)
+        kinds = tuple(k for k, _ in CRYPTO_KINDS if k in tuple(getattr(s, 'cryptomatte', ())))
+        levels = int(getattr(s, 'cryptomatte_levels', 6))
+        self._crypto_ids = {k: cryptomatte.triangle_ids(scene_data, k) for k in kinds}
+        crypto = {k: (cryptomatte.ids(cryptomatte.layer_names(scene_data, k)), levels) for k in kinds}
         self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes),
-                         adaptive=self.adaptive is not None)
+                         adaptive=self.adaptive is not None, cryptomatte=crypto)
         self._light_passes = tuple(p for p in LIGHT_PASSES if p in self.film.passes)
-        self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES)
+        # what camera rays' first surfaces write: the data passes and Cryptomatte
+        self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES) + kinds
         self.tri = _Triangles(scene_data.geometry, self.messages)
         self.mats = _Materials(scene_data.materials)
         holdout = np.array([bool(m.holdout) for m in scene_data.materials])
@@ -1126,6 +1134,12 @@ class Integrator:
             data['Mist'] = np.zeros((1, n), F32)
             data['Mist'][0, cols] = 1.0 - self._mist(P)
         self._write_first(pix, samp, cols, prim, P)
+        self._write_coverage(pix, cols, prim, np.ones(len(cols), F32))
+
+    def _write_coverage(self, pix, cols, prim, weight):
+        """Cryptomatte: the paths cols of the block saw the surfaces prim with weight (k,)."""
+        for kind, tri_ids in self._crypto_ids.items():
+            self.film.add_coverage(kind, pix[cols], np.take(tri_ids, prim), weight)
 
     def _uv_pass(self, prim, u, v):
         """Cycles' UV pass at hits (prim, u, v): (u, v, 1) on the active UV map (3,k), 0 on
@@ -1189,6 +1203,8 @@ class Integrator:
             diff[:, cols] += thr * albedo
             if 'Mist' in want:
                 mist_out[cols] += (1.0 - self._mist(P)) * (thr * alpha).mean(axis=0)
+            # Cryptomatte weighs every surface by throughput x opacity (film/data_passes.h)
+            self._write_coverage(pix, cols, prim, thr.mean(axis=0) * alpha.mean(axis=0))
             todo = ~done[cols]
             first_prim[cols[todo]] = prim[todo]
             first_P[:, cols[todo]] = P[:, todo]

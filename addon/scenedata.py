@@ -174,6 +174,10 @@ class Settings:
     # data passes (Normal, Depth) come from the first surface at least this opaque (1 - mean
     # transparency) along a camera ray: the view layer's Pass Alpha Threshold (0: the first)
     pass_alpha_threshold: float = 0.5
+    # Cryptomatte kinds wanted (cryptomatte.KINDS: 'CryptoObject', 'CryptoMaterial',
+    # 'CryptoAsset') and the view layer's Levels (ID ranks per pixel, two per RGBA pass)
+    cryptomatte: tuple = ()
+    cryptomatte_levels: int = 6
 
 
 @dataclass
@@ -193,3 +197,6 @@ class SceneData:
     world_visibility: int = VIS_CAMERA | VIS_DIFFUSE
     # (len(object_names),) each object's pass index (Object Index pass); None: all 0
     object_pass_index: Optional[np.ndarray] = None
+    # each object's Cryptomatte asset: the name of its topmost parent (its own without one);
+    # empty: the object names
+    object_assets: list = field(default_factory=list)
