@@ -14,7 +14,7 @@ import numpy as np
 
 from . import cryptomatte, export
 from .allocator import render_heap
-from .passes import PASSES, result_name
+from .passes import PASSES, enabled, result_name
 
 # Extra passes: (film name, view-layer toggle, channels, chan_id, type), and Blender's names
 # for them (what the compositor and multilayer EXR use) in this Blender
@@ -60,7 +60,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
         for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
-            if getattr(renderlayer, toggle, False):
+            if enabled(renderlayer, toggle):
                 self.register_pass(scene, renderlayer, RESULT_PASS_NAME[name], channels, chan_id, kind)
         for kind, toggle in cryptomatte.KINDS:
             if getattr(renderlayer, toggle, False):

@@ -57,7 +57,7 @@ from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant_color, constant_value
 from .nodegraph import input_socket, linked_link, linked_node, output_node
 from .cryptomatte import KINDS as CRYPTO_KINDS
-from .passes import PASSES, result_name
+from .passes import PASSES, enabled, result_name
 from .texture import UdimTiles
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
@@ -91,7 +91,6 @@ _UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
     ('subsurface_direct', 'Subsurface Direct'), ('subsurface_indirect', 'Subsurface Indirect'),
     ('subsurface_color', 'Subsurface Color'),
     ('ambient_occlusion', 'Ambient Occlusion'), ('shadow', 'Shadow'))) + (
-    ('cycles', 'denoising_store_passes', 'Denoising Data'),
     ('cycles', 'pass_debug_sample_count', 'Sample Count'),
     ('cycles', 'use_pass_shadow_catcher', 'Shadow Catcher'),
     ('cycles', 'use_pass_volume_direct', 'Volume Direct'),
@@ -1162,14 +1161,15 @@ class _Exporter:
         d = getattr(scene, 'dacrt', None)
         if d is None:
             raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
-        passes = tuple(p[0] for p in PASSES if getattr(vl, p[1], False))
+        passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]))
         missing = [label for owner, attr, label in _UNRENDERED_PASSES
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
         missing += [f"AOV '{a.name}'" for a in getattr(vl, 'aovs', ())]
         missing += [f"light group '{g.name}'" for g in getattr(vl, 'lightgroups', ())]
         crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
         if missing:
-            written = ', '.join([result_name(p[0], bpy.app.version) for p in PASSES] + ['Cryptomatte'])
+            written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
+                                              + ['Cryptomatte']))
             self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, {written} "
                                              f"only; not in the result: {', '.join(missing)}"))
         mist = scene.world.mist_settings if scene.world is not None else None

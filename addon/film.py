@@ -37,6 +37,8 @@ class Film:
         self.passes = tuple(dict.fromkeys(passes))
         if any(p in self.passes for p in DIVIDED_BY_COLOR) and 'DiffCol' not in self.passes:
             self.passes += ('DiffCol',)             # their divisor
+        if 'DenoiseAlbedo' in self.passes:          # Cycles adds the light camera rays see to it
+            self.passes += tuple(p for p in ('Emit', 'Env') if p not in self.passes)
         self._pass_sum = {p: np.zeros((PASS_CHANNELS[p], npix), np.float64)
                           for p in self.passes if p not in FIRST_SAMPLE}
         # 0 until a pixel's sample 0 is rendered (pixels outside a render border stay 0)
@@ -142,6 +144,8 @@ class Film:
             with np.errstate(divide='ignore', invalid='ignore'):
                 ratio = np.where(color != 0, self._pass_sum[name] / color, 0.0)
             return ratio.T.reshape(self.height, self.width, 3).astype(np.float32)
+        if name == 'DenoiseAlbedo':                 # the diffuse albedo + emitters and world seen
+            return self._mean(self._pass_sum[name] + self._pass_sum['Emit'] + self._pass_sum['Env'])
         return self._mean(self._pass_sum[name])
 
     def sample_counts(self) -> np.ndarray:

@@ -55,6 +55,7 @@ from .adaptive import AdaptiveSampling
 from .allocator import render_heap
 from .film import LIGHT_PASSES, Film
 from .passes import CHANNELS as PASS_CHANNELS
+from .passes import DENOISE as DENOISE_PASSES
 from .passes import FIRST_SAMPLE
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
@@ -1124,6 +1125,11 @@ class Integrator:
         if 'UV' in want:
             data['UV'] = np.zeros((3, n), F32)
             data['UV'][:, cols] = self._uv_pass(prim, hu, hv)
+        if any(p in want for p in DENOISE_PASSES):
+            denoise = _Denoise(self, n)
+            denoise.prev[:, cols] = np.take(path.O, idx, axis=1)
+            denoise.surface(cols, ns, albedo, P)
+            denoise.finish(data)
         if 'Normal' in want:
             data['Normal'] = np.zeros((3, n), F32)
             data['Normal'][:, cols] = ns
@@ -1195,11 +1201,16 @@ class Integrator:
         first_prim = np.full(n, -1, np.int64)       # the surface the sample-0 passes describe
         first_P = np.zeros((3, n), F32)
         done = np.zeros(n, bool)                    # Cycles' PATH_RAY_SINGLE_PASS_DONE
+        denoise = _Denoise(self, n) if any(p in want for p in DENOISE_PASSES) else None
+        if denoise is not None:
+            denoise.prev[:, path.pid] = path.O      # depth from the ray's origin, then each surface
 
-        def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns):
+        def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns, tau=None):
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
             if self.mats.textures:
                 self._texture(prim, u, v, albedo)
+            if denoise is not None:
+                denoise.surface(cols, ns, albedo, P, tau)
             diff[:, cols] += thr * albedo
             if 'Mist' in want:
                 mist_out[cols] += (1.0 - self._mist(P)) * (thr * alpha).mean(axis=0)
@@ -1217,7 +1228,7 @@ class Integrator:
         for c in chain:
             cols = np.take(path.pid, c['rows'])
             alpha = np.clip(1.0 - c['tau'], 0.0, 1.0)
-            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'], alpha, c['opacity'], c['P'], c['ns'])
+            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'], alpha, c['opacity'], c['P'], c['ns'], c['tau'])
         # the surfaces the chain ended on that are not transparent (stops were counted above)
         idx = np.flatnonzero(hit)
         prim = np.take(hits['prim'], idx)
@@ -1236,6 +1247,8 @@ class Integrator:
             data['Mist'] = mist_out[None, :]
         if 'UV' in want:
             data['UV'] = uv
+        if denoise is not None:
+            denoise.finish(data)
         seen = np.flatnonzero(first_prim >= 0)
         self._write_first(pix, samp, seen, first_prim[seen], first_P[:, seen])
 
@@ -1310,6 +1323,54 @@ class Integrator:
                 self._shadow_through(rays, skip, send, occ, value, tb)
         # light sampled at vertex 0 is direct light (Cycles: the shadow path's bounce 0)
         dacrt.shading.accumulate_masked(L, pid, value, contrib, self._clamps[k > 0])
+
+
+class _Denoise:
+    """Cycles' Denoising Data along a camera ray's surfaces (film/denoising_passes.h): the
+    first surface whose diffuse part carries more than a fifth of its closures' sample weight
+    (all but a mostly transparent one) writes the camera-space shading normal (x right, y up, z
+    into the view; 0 where no closure has weight), the diffuse albedo and the distance from the
+    ray's last surface (or origin), all times the features' throughput, the transparency of the
+    surfaces it passed before (not divided by the pass probability, as Cycles keeps it); depth
+    adds up every surface the features reach. Not followed (Cycles does): a path that stops at a
+    mostly transparent surface carries its features on to the next bounce's surface."""
+
+    def __init__(self, integ, n):
+        self.rot = integ.camera.rot.astype(F32)     # camera axes in world space (columns)
+        self.want = integ.film.passes
+        self.normal, self.albedo = np.zeros((3, n), F32), np.zeros((3, n), F32)
+        self.depth = np.zeros(n, F32)
+        self.thr = np.ones((3, n), F32)             # Cycles' denoising_feature_throughput
+        self.prev = np.zeros((3, n), F32)           # where each camera ray's segment began
+        self.done = np.zeros(n, bool)
+
+    def surface(self, cols, ns, albedo, P, tau=None):
+        """Surfaces (ns, diffuse albedo, points P; (3,k)) the paths cols reached; tau (3,k)
+        their transparency (None: opaque)."""
+        todo = ~self.done[cols]
+        # depth at every surface the features reach, before deciding (as Cycles writes it)
+        t = np.flatnonzero(todo)
+        seg = np.linalg.norm(P[:, t] - self.prev[:, cols[t]], axis=0)
+        self.depth[cols[t]] += self.thr[:, cols[t]].mean(axis=0) * seg
+        diffuse = albedo.mean(axis=0)
+        total = diffuse if tau is None else diffuse + tau.mean(axis=0)
+        write = todo & ((total == 0) | (4 * diffuse > total))
+        w, c = np.flatnonzero(write), cols[write]
+        if 'DenoiseNormal' in self.want:
+            cam = self.rot.T @ ns[:, w] * np.array([[1], [1], [-1]], F32)
+            self.normal[:, c] = np.where(total[w] > 0, cam, F32(0))
+        self.albedo[:, c] = self.thr[:, c] * albedo[:, w]
+        self.done[c] = True
+        go = np.flatnonzero(todo & ~write)          # mostly transparent: on to the next surface
+        if len(go) and tau is not None:
+            self.thr[:, cols[go]] *= tau[:, go]
+        self.prev[:, cols] = P
+
+    def finish(self, data):
+        for name, values in (('DenoiseNormal', self.normal), ('DenoiseAlbedo', self.albedo),
+                             ('DenoiseDepth', self.depth[None, :])):
+            if name in self.want:
+                data[name] = values
 
 
 class _Sinks:

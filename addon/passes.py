@@ -22,6 +22,11 @@ PASSES = (
     ('DiffCol', 'use_pass_diffuse_color', 3, 'RGB', 'COLOR', ('Diffuse Color', 'DiffCol')),
     ('Emit', 'use_pass_emit', 3, 'RGB', 'COLOR', ('Emission', 'Emit')),
     ('Env', 'use_pass_environment', 3, 'RGB', 'COLOR', ('Environment', 'Env')),
+    # Cycles' Denoising Data (view layer > Cycles settings): what a denoiser takes beside the
+    # image, at the first surface that is mostly diffuse (film/denoising_passes.h)
+    ('DenoiseNormal', 'cycles.denoising_store_passes', 3, 'XYZ', 'VECTOR', 'Denoising Normal'),
+    ('DenoiseAlbedo', 'cycles.denoising_store_passes', 3, 'RGB', 'COLOR', 'Denoising Albedo'),
+    ('DenoiseDepth', 'cycles.denoising_store_passes', 1, 'Z', 'VALUE', 'Denoising Depth'),
 )
 
 CHANNELS = {name: channels for name, _, channels, _, _, _ in PASSES}
@@ -30,9 +35,19 @@ CHANNELS = {name: channels for name, _, channels, _, _, _ in PASSES}
 # their value where that sample saw no surface; the other data passes average all samples.
 FIRST_SAMPLE = {'Depth': 1e10, 'Position': 0.0, 'IndexOB': 0.0, 'IndexMA': 0.0}
 
+DENOISE = ('DenoiseNormal', 'DenoiseAlbedo', 'DenoiseDepth')
+
 # the parts Combined is the sum of, and those read back divided by the Diffuse Color sums
 LIGHT = ('DiffDir', 'DiffInd', 'Emit', 'Env')
 DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')
+
+
+def enabled(view_layer, toggle: str) -> bool:
+    """Whether the view layer's toggle (an attribute, or 'owner.attribute' such as
+    'cycles.denoising_store_passes') is on; False where the setting does not exist."""
+    owner, _, attr = toggle.rpartition('.')
+    obj = getattr(view_layer, owner, None) if owner else view_layer
+    return bool(getattr(obj, attr, False)) if obj is not None else False
 
 
 def result_name(name: str, blender_version: tuple) -> str:

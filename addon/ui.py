@@ -101,6 +101,8 @@ class VIEWLAYER_PT_dacrt_passes(DACRTPanel, Panel):
         col.prop(vl, "use_pass_normal")
         col.prop(vl, "use_pass_uv")
         col.prop(vl, "use_pass_diffuse_color", text="Diffuse Color")
+        if hasattr(vl, "cycles"):
+            col.prop(vl.cycles, "denoising_store_passes", text="Denoising Data")
         col = layout.column(heading="Indexes", align=True)
         col.prop(vl, "use_pass_object_index")
         col.prop(vl, "use_pass_material_index")

@@ -446,6 +446,24 @@ def test_position_uv_and_index_passes():
     assert np.all(render(scene).film.pass_image('UV') == 0.0)
 
 
+def test_denoising_data_closed_form():
+    """Cycles' Denoising Data on a plane of albedo 0.8 half in view under a world of 0.25:
+    normal (0, 0, -1) in camera space (z into the view), albedo 0.8 on the plane and the world
+    where rays miss (Cycles adds what camera rays see), depth from the clip-start plane."""
+    scene = plane_scene(world=(0.25, 0.25, 0.25), samples=8,
+                        passes=('DenoiseNormal', 'DenoiseAlbedo', 'DenoiseDepth'))
+    scene.camera = ortho_down(height=0.5, width=8, px=4)      # clip start 1e-3
+    v, t = quad((-0.00025, 0.0, 0.0), 0.00025, 1.0)            # the left half of the view
+    scene.geometry = geometry([(v, t, 1, ALL_VIS)])
+    film = render(scene).film
+    normal, albedo = film.pass_image('DenoiseNormal'), film.pass_image('DenoiseAlbedo')
+    depth = film.pass_image('DenoiseDepth')[..., 0]
+    assert np.allclose(normal[:, :3], [0, 0, -1], atol=1e-6) and np.all(normal[:, 5:] == 0)
+    assert np.allclose(albedo[:, :3], 0.8, rtol=1e-6) and np.allclose(albedo[:, 5:], 0.25, rtol=1e-6)
+    assert np.allclose(depth[:, :3], 0.5 - 1e-3, rtol=1e-5) and np.all(depth[:, 5:] == 0)
+    assert 'Emit' not in scene.settings.passes and 'Env' in film.passes   # kept for the albedo
+
+
 @pytest.mark.parametrize('start,depth,falloff', [(0.1, 1.0, 2.0), (0.2, 0.5, 1.0), (0.0, 2.0, 0.5),
                                                   (1.0, 3.0, 2.0)])
 def test_mist_pass_closed_form(start, depth, falloff):
