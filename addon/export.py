@@ -1230,10 +1230,8 @@ class _Exporter:
             return None
         light = export_light(ob, inst.matrix_world, self.messages)
         limit = getattr(getattr(ob.data, 'cycles', None), 'max_bounces', None)
-        if light is not None and limit is not None and limit < self.scene.dacrt.max_bounces:
-            # Cycles stops sampling such a light after that many bounces; here it lights them all
-            self._ignore("the light's Max Bounces is not supported: it lights every bounce",
-                         ob.name)
+        if light is not None and limit is not None:
+            light.max_bounces = int(limit)
         if light is not None and parent is not ob:
             light.visible_camera = light.visible_camera and bool(parent.visible_camera)
             light.visible_diffuse = light.visible_diffuse and bool(parent.visible_diffuse)

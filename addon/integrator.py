@@ -59,6 +59,7 @@ from .passes import DENOISE as DENOISE_PASSES
 from .passes import FIRST_SAMPLE
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
+from .lights.base import RECORD_FIELDS
 from .sampling import RandomStream, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 from .texture import UdimTiles, texture_lookup
@@ -523,9 +524,29 @@ class Integrator:
             np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri + nenv, bool)]),
             *((None, None, None) if tris is None else (tris.geo, tris.area, tris.emission)),
             environment=None if env is None else env.native)
+        # Cycles' Light > Max Bounces: at vertex k the lamps whose limit is below k are still
+        # chosen with their probability but light nothing (their records' emission is 0), as
+        # Cycles rejects their samples; BSDF rays still find them (Cycles does not limit those)
+        self._max_bounces = np.array([l.max_bounces for l in lights.lamps], np.int64)
+        self._choice_at = {}
         # lamps never chosen (unsampled, camera-only) have 0: a BSDF hit on them weighs 1
         self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.unsampled_lamps)
                                                                         + len(lights.camera_lamps), F32)]).astype(F32)
+
+    def _light_choice_at(self, k):
+        """The light choice of vertex k: the frame's, with the lamps past their Max Bounces dark."""
+        past = self._max_bounces < k
+        if not past.any():
+            return self._light_choice
+        key = past.tobytes()
+        if key not in self._choice_at:
+            c = self._light_choice
+            records = c.records.copy()
+            off, width = RECORD_FIELDS['emit']
+            records[past, off:off + width] = 0.0
+            self._choice_at[key] = dacrt.shading.LightChoice(
+                records, c.cdf, c.prob, c.no_mis, c.shadow, c.tri_geo, c.tri_area, c.tri_emission, c.environment)
+        return self._choice_at[key]
 
     def _weight_lights(self, probes: int = 32):
         """Let the light choice follow where the camera looks: a probes x probes grid of camera
@@ -1313,7 +1334,7 @@ class Integrator:
         term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff, t.term_freq, u, v) \
             if t.terminator else None
         value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
-            self._light_choice, P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
+            self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
             prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term)
         self._skipped_shadow += skipped
         if len(send):

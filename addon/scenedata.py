@@ -78,6 +78,7 @@ class Light:
     name: str = ''
     visible_camera: bool = True    # object ray visibility (Cycles: a light seen by camera rays)
     visible_diffuse: bool = True   # object ray visibility (Cycles: BSDF rays collect the light)
+    max_bounces: int = 1024        # Cycles' Light > Max Bounces: light sampling skips it deeper
 
 
 @dataclass

@@ -32,6 +32,8 @@ import numpy as np
 F32 = np.float32
 EMPTY_IDX = np.zeros(0, np.int64)
 
+MAX_BOUNCES_UNLIMITED = 1024   # Blender's default Max Bounces of a light
+
 RECORD_WIDTH = 40
 RECORD_FIELDS = {
     'kind': (0, 1), 'shape': (1, 1), 'emit': (2, 3), 'pos': (5, 3), 'radius': (8, 1), 'cos_half': (9, 1),
@@ -88,11 +90,15 @@ class Lamp(ABC):
             self.visible_camera = bool(getattr(light, 'visible_camera', True))
             self.visible_diffuse = bool(getattr(light, 'visible_diffuse', True))
             self.normalize = bool(light.normalize)
+            # Cycles' Light > Max Bounces: light sampling skips the light at shading points
+            # deeper than this many bounces (light_select_reached_max_bounces)
+            self.max_bounces = int(getattr(light, 'max_bounces', MAX_BOUNCES_UNLIMITED))
         else:
             self.name = 'World'
             self.color = np.asarray(color, np.float64)
             self.use_mis = self.cast_shadow = self.visible_camera = self.visible_diffuse = True
             self.normalize = True
+            self.max_bounces = MAX_BOUNCES_UNLIMITED
 
     @property
     def seen_by_camera(self) -> bool:

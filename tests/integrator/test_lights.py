@@ -1,6 +1,7 @@
 """Light units against closed-form irradiance: a diffuse plane (albedo 0.8) seen from above by a
 tiny orthographic camera, pixel value = albedo * E / pi (reference blender-cycles.md 2.2, whose
 table also lists Cycles' own numbers for the same setups)."""
+import dataclasses
 import functools
 
 import dacrt
@@ -11,7 +12,8 @@ from addon import scenedata as sd
 from addon.lights import lamp_records, make_lamp
 from addon.sampling import RandomStream
 
-from .scenes import light, material, ortho_down, pixel_stats, plane_scene, render, rotation_x, translation
+from .scenes import (cornell_box, light, material, ortho_down, pixel_stats, plane_scene, render, rotation_x,
+                     translation)
 
 RHO = 0.8
 
@@ -529,3 +531,20 @@ def test_uniform_world_is_left_to_bsdf_rays():
     alone = render(plane_scene(world=(0.5, 0.5, 0.5), samples=2, max_bounces=0))
     assert alone.stats['rays']['shadow'] == 0 and alone.stats['lights'] == 1
     np.testing.assert_allclose(alone.film.combined()[..., :3], RHO * 0.5, rtol=1e-5)
+
+
+@pytest.mark.parametrize('limit', [0, 1, 2])
+def test_light_max_bounces_stops_light_sampling_deeper(limit):
+    """Cycles' Light > Max Bounces: light sampling skips the light at shading points deeper
+    than that (light_select_reached_max_bounces). A point light in the Cornell box (BSDF rays
+    cannot meet it) limited to `limit` lights a 4-bounce render exactly as the box rendered
+    with `limit` bounces: the same random numbers up to that vertex, nothing after it."""
+    box = lambda bounces, light_limit: dataclasses.replace(
+        cornell_box(24, 18, samples=4, max_bounces=bounces), lights=[light(
+            'POINT', 30.0, translation(0.5, 0.5, 0.9), radius=0.0, max_bounces=light_limit)])
+    def lit(scene):
+        scene.materials[4] = material('light', (0.78, 0.78, 0.78))     # the ceiling quad: not emissive
+        return render(scene).film.combined()
+    limited, shallow, full = lit(box(4, limit)), lit(box(limit, 1024)), lit(box(4, 1024))
+    assert np.array_equal(limited, shallow)
+    assert full[..., 0].mean() > limited[..., 0].mean() * 1.05        # deeper light was cut
