@@ -250,6 +250,19 @@ def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):
 # ----------------------------------------------------------------------------------------
 # Lights (reference 2.1)
 
+def light_link_receivers(collection):
+    """An emitter's light linking receiver collection as (included, excluded) object names,
+    as Blender reads it: each object of the collection by its own Include / Exclude state, the
+    objects of a child collection (all levels down) by that child's state."""
+    included, excluded = set(), set()
+    for ob, item in zip(collection.objects, collection.collection_objects):
+        (included if item.light_linking.link_state == 'INCLUDE' else excluded).add(ob.name)
+    for child, item in zip(collection.children, collection.collection_children):
+        names = {ob.name for ob in child.all_objects}
+        (included if item.light_linking.link_state == 'INCLUDE' else excluded).update(names)
+    return frozenset(included), frozenset(excluded)
+
+
 def export_light(ob, matrix, messages):
     """One light object (evaluated) at `matrix` -> scenedata.Light, in Cycles' units."""
     light = ob.data
@@ -1119,6 +1132,7 @@ class _Exporter:
         self.materials = _MaterialBuilder()
         self.object_names = []
         self.object_pass_index = []
+        self.light_links = {}         # emitter name -> (included, excluded) receiver names
         self.object_assets = []
         self._object_index = {}
         self.meshes = {}          # key -> _MeshArrays
@@ -1153,7 +1167,7 @@ class _Exporter:
                             skipped=dict(self.counts), environment=environment,
                             world_visibility=world_visibility(self.scene.world),
                             object_pass_index=np.array(self.object_pass_index, np.int32),
-                            object_assets=self.object_assets)
+                            object_assets=self.object_assets, light_links=self.light_links)
 
     # -- settings ------------------------------------------------------------------------
     def _settings(self):
@@ -1262,9 +1276,11 @@ class _Exporter:
         if getattr(ob, 'is_shadow_catcher', False) and ob.type != 'LIGHT':
             self._ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
         linking = getattr(ob, 'light_linking', None)
-        if linking is not None and (linking.receiver_collection or linking.blocker_collection):
-            self._ignore("light and shadow linking are not supported; every light reaches every "
-                         "object", ob.name)
+        if linking is not None and linking.receiver_collection is not None:
+            self.light_links[ob.name] = light_link_receivers(linking.receiver_collection)
+        if linking is not None and linking.blocker_collection is not None:
+            self._ignore("shadow linking is not supported; every object casts shadows from this "
+                         "emitter", ob.name)
 
     def _ignore(self, reason, name):
         _add_name(self.ignored, reason, name)

@@ -60,6 +60,7 @@ from .passes import FIRST_SAMPLE
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .lights.base import RECORD_FIELDS
+from .lights.linking import LightLinking, reached
 from .sampling import RandomStream, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 from .texture import UdimTiles, texture_lookup
@@ -460,6 +461,7 @@ class Integrator:
     # --- setup ----------------------------------------------------------------------------------
 
     def _build_lights(self, sd: SceneData):
+        self._init_linking(sd)
         lamps = [make_lamp(light) for light in sd.lights]
         world = np.asarray(sd.world, F32)
         wv = int(sd.world_visibility)
@@ -524,6 +526,13 @@ class Integrator:
             np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri + nenv, bool)]),
             *((None, None, None) if tris is None else (tris.geo, tris.area, tris.emission)),
             environment=None if env is None else env.native)
+        if self._link is not None:          # light linking: each entry's and lamp record's light set
+            every = lights.lamps + lights.unsampled_lamps + lights.camera_lamps
+            self._record_set = np.array([0 if isinstance(l, BackgroundLight) else self._link.emitter_set(l.name)
+                                         for l in every], np.uint8).reshape(-1)
+            self._entry_set = np.concatenate([self._record_set[:len(lights.lamps)],
+                                              self._tri_set[tris.index] if ntri else np.zeros(0, np.uint8),
+                                              np.zeros(nenv, np.uint8)]).astype(np.uint8)
         # Cycles' Light > Max Bounces: at vertex k the lamps whose limit is below k are still
         # chosen with their probability but light nothing (their records' emission is 0), as
         # Cycles rejects their samples; BSDF rays still find them (Cycles does not limit those)
@@ -532,6 +541,26 @@ class Integrator:
         # lamps never chosen (unsampled, camera-only) have 0: a BSDF hit on them weighs 1
         self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.unsampled_lamps)
                                                                         + len(lights.camera_lamps), F32)]).astype(F32)
+
+    def _init_linking(self, sd: SceneData):
+        """Light linking (lights/linking.py): each triangle's receiver mask and, as emitter, its
+        object's light set; None when no emitter links its light."""
+        self._link = None
+        links = getattr(sd, 'light_links', None) or {}
+        if not links or not len(self.tri):
+            return
+        ob = np.asarray(sd.geometry.object_index, np.int64)
+        names = list(sd.object_names) + [None] * max(0, int(ob.max()) + 1 - len(sd.object_names))
+        link = LightLinking(links, names, self.messages)
+        if not link.active:
+            return
+        self._link = link
+        self._tri_recv = np.take(link.object_mask, ob)
+        self._tri_set = np.take(link.sets(names), ob)
+
+    def _receivers(self, prim):
+        """The receiver masks (k,) uint64 of the shading points (or ray origins) on prim."""
+        return np.take(self._tri_recv, prim)
 
     def _light_choice_at(self, k):
         """The light choice of vertex k: the frame's, with the lamps past their Max Bounces dark."""
@@ -1052,7 +1081,8 @@ class Integrator:
             sub['t'] += t0                      # distances from the path vertex, for lamps and MIS
             seg = _Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
                          np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
-                         None if path.pdf is None else np.take(path.pdf, rows), None)
+                         None if path.pdf is None else np.take(path.pdf, rows),
+                         None if path.prim is None else np.take(path.prim, rows))
             self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
             j += 1
@@ -1067,10 +1097,11 @@ class Integrator:
         camera = k == 0
         lamps = self._bsdf_lamps if not camera else self._camera_emitters if sinks.split else self._camera_lamps
         if len(lamps):
-            dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
-                                    np.zeros(len(t0), bool), seg.pid, sinks.found(k), thr=-seg.thr,
-                                    pdf_bsdf=None if camera else seg.pdf,
-                                    lamp_prob=None if camera else self._record_prob, clamp=self._found_clamp(k))
+            for lamps, thr in self._linked(lamps, seg, -seg.thr, camera):
+                dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
+                                        np.zeros(len(t0), bool), seg.pid, sinks.found(k), thr=thr,
+                                        pdf_bsdf=None if camera else seg.pdf,
+                                        lamp_prob=None if camera else self._record_prob, clamp=self._found_clamp(k))
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
@@ -1278,6 +1309,10 @@ class Integrator:
     def _gather_emission(self, camera, hit, hits, path, L, clamp=np.inf):
         """Emission of the triangles hit by rays `hit` (two-sided), MIS-weighted for BSDF rays
         (one native pass); each contribution clamped to clamp (Cycles' sample clamp)."""
+        if self._link is not None and not camera and path.prim is not None:
+            # light linking: emitters do not light the objects their set leaves out
+            prim = np.maximum(hits['prim'], 0)
+            hit = hit & reached(self._receivers(path.prim), np.take(self._tri_set, prim))
         dacrt.shading.gather_emission(hits, hit, self._tri_emission, self._tri_emissive,
                                       None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
                                       path.O, path.D, path.thr, path.pdf, path.pid, L, clamp=clamp)
@@ -1313,9 +1348,21 @@ class Integrator:
         # tracer leaves a miss at t = inf: only camera rays end sooner, at the clip end)
         t_surf = np.where(hit, hits['t'], path.tmax) if camera else hits['t']
         for lamps, out in groups:
-            dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
-                                    miss, path.pid, out, thr=path.thr, pdf_bsdf=None if camera else path.pdf,
-                                    lamp_prob=None if camera else self._record_prob, clamp=clamp)
+            for lamps, thr in self._linked(lamps, path, path.thr, camera):
+                dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
+                                        miss, path.pid, out, thr=thr, pdf_bsdf=None if camera else path.pdf,
+                                        lamp_prob=None if camera else self._record_prob, clamp=clamp)
+
+    def _linked(self, lamps, path, thr, camera):
+        """(lamp records, throughput) pairs to gather with: per light set of the lamps, the
+        throughput 0 on BSDF rays leaving objects that set does not light (light linking;
+        camera rays see every lamp)."""
+        if self._link is None or camera or path.prim is None:
+            return [(lamps, thr)]
+        recv = self._receivers(path.prim)
+        sets = self._record_set[lamps]
+        return [(lamps[sets == s], thr if s == 0 else thr * reached(recv, s).astype(F32))
+                for s in np.unique(sets)]
 
     # --- next-event estimation --------------------------------------------------------------------
 
@@ -1335,7 +1382,8 @@ class Integrator:
             if t.terminator else None
         value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
             self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
-            prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term)
+            prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term,
+            linking=None if self._link is None else (self._entry_set, self._receivers(prim)))
         self._skipped_shadow += skipped
         if len(send):
             occ = self._occluded_rays(rays, skip)

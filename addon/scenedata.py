@@ -201,3 +201,7 @@ class SceneData:
     # each object's Cryptomatte asset: the name of its topmost parent (its own without one);
     # empty: the object names
     object_assets: list = field(default_factory=list)
+    # light linking: emitter (light or emissive object) name -> (included, excluded) names of
+    # the objects it lights: with any included, only those not excluded; else all but the
+    # excluded (Blender's receiver collection); emitters not listed light every object
+    light_links: dict = field(default_factory=dict)

@@ -203,10 +203,11 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
                      F32Array ns, py::object ng, py::object thr, py::array_t<uint32_t, py::array::c_style> keys,
                      uint32_t ka, uint32_t kb, py::object pick, py::object prim, float shorten, bool skip_work,
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
-                     py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator) {
+                     py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator,
+                     py::object linking) {
     F32Array keep[3], ng_keep, thr_keep;
     std::shared_ptr<EnvironmentMap> env_keep;
-    const LightChoice lights =
+    LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     VertexPoints pts{};
@@ -239,6 +240,21 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     }
     pts.shorten = shorten;
     pts.skip_work = skip_work;
+    py::array_t<uint8_t, py::array::c_style> set_keep;
+    py::array_t<uint64_t, py::array::c_style> recv_keep;
+    if (!linking.is_none()) {
+        const py::tuple t = linking.cast<py::tuple>();
+        if (t.size() != 2) throw py::value_error("linking is (light_set, receivers)");
+        set_keep = t[0].cast<py::array_t<uint8_t, py::array::c_style>>();
+        need_shape(set_keep, 0, lights.entries, "linking light_set");
+        for (size_t e = 0; e < lights.entries; ++e)
+            if (set_keep.data()[e] > 63)
+                throw py::value_error("linking light_set[" + std::to_string(e) + "] must be a light set 0..63");
+        recv_keep = t[1].cast<py::array_t<uint64_t, py::array::c_style>>();
+        need_shape(recv_keep, 0, n, "linking receivers");
+        lights.light_set = set_keep.data();
+        pts.receivers = recv_keep.data();
+    }
     Terminator term{};
     F32Array term_keep[6];
     if (!terminator.is_none()) {
@@ -399,7 +415,8 @@ void register_lamps(py::module_& m) {
           py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"), py::arg("P"),
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),
           py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
-          py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"));
+          py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"),
+          py::arg("linking") = py::none());
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)")
         .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"))

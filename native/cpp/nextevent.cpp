@@ -72,6 +72,10 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             // the shadow ray's to decide (it leaves through its own, skipped, triangle), as in
             // Cycles, whose diffuse eval has no geometric test.
             bool ok = nee_scale(ns, nullptr, wi, pdf, L.prob[entry], p.thr ? thr : nullptr, value);
+            if (L.light_set && p.receivers && !((p.receivers[i] >> L.light_set[entry]) & 1u)) {
+                ok = false;  // light linking: the light does not reach this point's object
+                value[0] = value[1] = value[2] = 0.0f;
+            }
             const float NL = ns[0] * wi[0] + ns[1] * wi[1] + ns[2] * wi[2];
             size_t tri = 0;
             float cutoff = 0.0f;

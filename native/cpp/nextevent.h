@@ -31,6 +31,9 @@ struct LightChoice {
     const uint8_t* no_mis;
     const uint8_t* shadow;
     size_t entries;  // num_lamps + num_tris (+ 1 with env)
+    // Light linking (null: none): each entry's light set (0..63); a point lights by an entry
+    // only when bit light_set[entry] of its receiver mask (VertexPoints::receivers) is set.
+    const uint8_t* light_set = nullptr;
 };
 
 // Cycles' shadow terminator per triangle (pathvertex.h): the geometry offset's cutoff (null or
@@ -70,6 +73,7 @@ struct VertexPoints {
     float shorten;
     bool skip_work;
     const Terminator* term;
+    const uint64_t* receivers = nullptr;  // light linking: the light sets each point receives (n)
 };
 
 // value (3 rows of n): the sample's contribution, thr x radiance / pdf x cos/pi x MIS / p_sel;

@@ -525,23 +525,47 @@ def test_indirect_only_collection_is_hidden_from_camera_rays_only(scene, exporte
 
 
 def test_features_rendered_without_are_reported(scene, exported):
-    """Shadow catchers, light linking and motion blur are Cycles features DACRT does not
-    render: the objects render as ordinary ones and the render says so."""
+    """Shadow catchers, shadow linking and motion blur are Cycles features DACRT does not
+    render: the objects render as ordinary ones and the render says so. Light linking (the
+    receiver collection) is rendered and exported, not reported."""
     setup(scene)
     catcher = scenes.plane("Catcher")
     catcher.is_shadow_catcher = True
     lamp = scenes.light('POINT', 100.0, (0, 0, 3), name="Linked")
-    lamp.light_linking.receiver_collection = bpy.data.collections.new("Receivers")
+    lamp.light_linking.blocker_collection = bpy.data.collections.new("Blockers")
     scene.render.use_motion_blur = True
     text = " | ".join(m for _, m in exported().messages)
     assert "'Catcher': shadow catcher is not supported" in text
-    assert "'Linked': light and shadow linking are not supported" in text
+    assert "'Linked': shadow linking is not supported" in text
     assert "motion blur is not rendered" in text
     scene.render.use_motion_blur = False
     catcher.is_shadow_catcher = False
-    lamp.light_linking.receiver_collection = None
+    lamp.light_linking.blocker_collection = None
     text = " | ".join(m for _, m in exported().messages)
     assert "shadow catcher" not in text and "linking" not in text and "motion blur" not in text
+
+
+def test_light_linking_receivers_exported(scene, exported):
+    """An emitter's receiver collection as (included, excluded) names: objects by their own
+    state, a child collection's objects (all levels) by the child's state."""
+    setup(scene)
+    for name in ("A", "B", "C", "D"):
+        scenes.plane(name)
+    lamp = scenes.light('POINT', 100.0, (0, 0, 3), name="Key")
+    recv = bpy.data.collections.new("Receivers")
+    recv.objects.link(bpy.data.objects["A"])
+    recv.objects.link(bpy.data.objects["B"])
+    recv.collection_objects[1].light_linking.link_state = 'EXCLUDE'
+    child, grandchild = bpy.data.collections.new("Child"), bpy.data.collections.new("Grandchild")
+    recv.children.link(child)
+    child.children.link(grandchild)
+    child.objects.link(bpy.data.objects["C"])
+    grandchild.objects.link(bpy.data.objects["D"])
+    recv.collection_children[0].light_linking.link_state = 'EXCLUDE'
+    lamp.light_linking.receiver_collection = recv
+    s = exported()
+    assert s.light_links == {"Key": (frozenset({"A"}), frozenset({"B", "C", "D"}))}
+    assert not any("linking" in m for _, m in s.messages)
 
 
 def test_passes_dacrt_does_not_write_are_reported(scene, exported):

@@ -548,3 +548,25 @@ def test_light_max_bounces_stops_light_sampling_deeper(limit):
     limited, shallow, full = lit(box(4, limit)), lit(box(limit, 1024)), lit(box(4, 1024))
     assert np.array_equal(limited, shallow)
     assert full[..., 0].mean() > limited[..., 0].mean() * 1.05        # deeper light was cut
+
+
+def test_light_linking_sets_and_receiver_masks():
+    """lights/linking.py: emitters with the same receivers share a light set (0: everyone's);
+    an object receives a set when included (or, with nobody included, when not excluded)."""
+    from addon.lights.linking import LightLinking, reached, receives
+    assert receives("A", (frozenset({"A"}), frozenset())) and not receives("B", (frozenset({"A"}), frozenset()))
+    assert not receives("A", (frozenset({"A"}), frozenset({"A"})))             # excluded wins
+    assert receives("B", (frozenset(), frozenset({"A"}))) and receives("B", (frozenset(), frozenset()))
+    only_a, not_a = (frozenset({"A"}), frozenset()), (frozenset(), frozenset({"A"}))
+    messages = []
+    link = LightLinking({"Key": only_a, "Fill": not_a, "Rim": only_a}, ["A", "B", None], messages)
+    assert link.active and not messages
+    assert link.emitter_set("Key") == link.emitter_set("Rim") != link.emitter_set("Fill")
+    assert link.emitter_set("Unlinked") == 0
+    s_key, s_fill = link.emitter_set("Key"), link.emitter_set("Fill")
+    assert reached(link.object_mask, 0).all()                                  # set 0: everyone
+    assert list(reached(link.object_mask, s_key)) == [True, False, False]
+    assert list(reached(link.object_mask, s_fill)) == [False, True, True]
+    many = {f"L{i}": (frozenset({f"O{i}"}), frozenset()) for i in range(70)}
+    link = LightLinking(many, ["O0"], messages)
+    assert link.emitter_set("L62") > 0 and link.emitter_set("L63") == 0 and "light every object" in messages[0][1]

@@ -118,6 +118,42 @@ def test_next_event_equals_the_composed_kernels(lamps, triangles, flat, thr, ski
         assert (contrib & ~np.isin(np.arange(n), send)).any(), 'no sample that needs no shadow ray'
 
 
+def test_light_linking_rejects_the_samples_of_lights_a_point_does_not_receive():
+    """linking = (light set per entry, receiver mask per point): a sample of an entry whose set
+    the point does not receive adds nothing and traces no ray; every other sample, and its
+    shadow ray, is bit for bit what the unlinked call gives (the same pick, the same numbers)."""
+    rng = np.random.default_rng(17)
+    lc = _lights(rng, True, True)
+    n = 20_000
+    P, P_off, ns, ng, th, keys = _points(rng, n, flat=False, thr=True)
+    pick = rng.random(n)
+    prim = rng.integers(0, 1000, n).astype(np.int32)
+    light_set = rng.integers(0, 3, lc.entries).astype(np.uint8)
+    light_set[5] = 63
+    receivers = rng.integers(0, 2 ** 63, n, dtype=np.uint64) | np.uint64(1)      # set 0: everyone
+    args = (lc, P, P_off, ns, ng, th, keys, 7, 9)
+    kw = dict(pick=pick, prim=prim, shorten=SHORTEN)
+    free = shading.next_event(*args, **kw)
+    linked = shading.next_event(*args, **kw, linking=(light_set, receivers))
+    entry = np.minimum(np.searchsorted(lc.cdf, pick, side='right'), lc.entries - 1)
+    reached = ((receivers >> light_set[entry].astype(np.uint64)) & np.uint64(1)) == 1
+    assert 0.2 < reached.mean() < 0.95
+    assert np.array_equal(linked[0][:, reached], free[0][:, reached]) and not linked[0][:, ~reached].any()
+    assert np.array_equal(linked[1], free[1] & reached)
+    keep = reached[free[3]]
+    assert np.array_equal(linked[3], free[3][keep]) and np.array_equal(linked[4], free[4][keep])
+    same = free[2][keep].copy()
+    same['id'] = np.arange(len(same), dtype=np.uint32)
+    assert np.array_equal(linked[2], same)
+    everyone = shading.next_event(*args, **kw, linking=(np.zeros(lc.entries, np.uint8), np.ones(n, np.uint64)))
+    for a, b in zip(everyone[:5], free[:5]):
+        assert np.array_equal(a, b)
+    with pytest.raises(ValueError, match='light set'):
+        shading.next_event(*args, **kw, linking=(np.full(lc.entries, 64, np.uint8), receivers))
+    with pytest.raises(ValueError, match='receivers'):
+        shading.next_event(*args, **kw, linking=(light_set, receivers[:10]))
+
+
 def test_single_light_needs_no_pick_and_more_lights_do():
     rng = np.random.default_rng(5)
     rec = lamp_records([make('area_square')])

@@ -207,7 +207,7 @@ class LightChoice:
 
 
 def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: int, pick=None, prim=None,
-               shorten: float = 1.0, skip_work: bool = True, terminator=None):
+               shorten: float = 1.0, skip_work: bool = True, terminator=None, linking=None):
     """Next-event estimation at n shading points in one pass: pick a light per point (entry 0
     when pick is None, else the entry the uniform pick (n,) float64 falls in), sample it with
     the uniforms of keys (2, n) and dimension words (ka, kb) (the same numbers as uniform2),
@@ -223,6 +223,10 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     terminator leaves from the point lifted onto the smooth surface (and, below ng, no longer
     skips its triangle: skip -1), and a sample's value is multiplied by shift_cos_in where
     freq > 1.
+
+    linking = (light_set (entries,) uint8 0..63, receivers (n,) uint64): light linking; a point
+    is lit by the entry it picked only where bit light_set[entry] of its receivers is set
+    (otherwise the sample adds nothing and traces no ray, as a light that does not reach it).
 
     Returns value (3, n) (each sample's contribution), contrib (n,) bool (it adds to the image
     unless its shadow ray is occluded), rays (m,) RAY_DTYPE (ids 0..m-1, in point order), send
@@ -244,7 +248,9 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         _rows(keys, 2, "keys", np.uint32), int(ka), int(kb),
         None if pick is None else np.ascontiguousarray(pick, np.float64),
         None if prim is None else np.ascontiguousarray(prim, np.int32), float(shorten), bool(skip_work),
-        value, contrib, rays, send, skip, _terminator(terminator))
+        value, contrib, rays, send, skip, _terminator(terminator),
+        None if linking is None else (np.ascontiguousarray(linking[0], np.uint8),
+                                      np.ascontiguousarray(linking[1], np.uint64)))
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
 
 

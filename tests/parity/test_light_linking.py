@@ -1,0 +1,96 @@
+"""Light linking agrees with Cycles: an emitter's receiver collection decides which objects it
+lights (with any object included, only those; else all but the excluded), for an area light
+and for an emissive mesh, directly (three planes, no bounce) and with bounces (the Cornell
+box's light kept off the back wall and the tall block: their bounced light changes too).
+A renderer ignoring the links fails each case by far more than the tolerances."""
+from types import SimpleNamespace
+
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+from tests.parity import rendering, scenes as parity_scenes
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+def _link(emitter, states, children=None):
+    """Give emitter a receiver collection of the named objects in their states, and child
+    collections {name: (state, object names)}."""
+    coll = bpy.data.collections.new(f"{emitter.name}Receivers")
+    for name in states:
+        coll.objects.link(bpy.data.objects[name])
+    for ob, item in zip(coll.objects, coll.collection_objects):
+        item.light_linking.link_state = states[ob.name]
+    for cname, (state, names) in (children or {}).items():
+        child = bpy.data.collections.new(cname)
+        coll.children.link(child)
+        for name in names:
+            child.objects.link(bpy.data.objects[name])
+        coll.collection_children[-1].light_linking.link_state = state
+    emitter.light_linking.receiver_collection = coll
+
+
+def _planes(emissive):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 30, 10
+    scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=6.0)
+    for name, x in (("A", -2), ("B", 0), ("C", 2)):
+        scenes.plane(name, size=1.8, location=(x, 0, 0), materials=[scenes.diffuse(name, (0.8, 0.8, 0.8))])
+    if emissive:
+        emitter = scenes.plane("Glow", size=6, location=(0, 0, 3),
+                               materials=[scenes.emission("Glow", (1, 1, 1), 3.0)])
+        emitter.rotation_euler = (np.pi, 0, 0)           # emitting side down
+        emitter.visible_camera = False
+    else:
+        emitter = scenes.light('AREA', 30.0, (0, 0, 3), size=2.0)
+    sc.cycles.samples = sc.dacrt.samples = 128
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    sc.cycles.use_denoising = False
+    return sc, emitter
+
+
+def _plane_means(sc, engine, tmp_path):
+    sc.render.engine = engine
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(str(tmp_path / f"{engine}.exr"))))
+    return np.array([img[2:8, c - 3:c + 3, 0].mean() for c in (5, 15, 25)])
+
+
+@pytest.mark.parametrize('emissive', [False, True])
+@pytest.mark.parametrize('states,children,lit', [
+    ({"A": 'INCLUDE'}, None, (True, False, False)),
+    ({"A": 'EXCLUDE'}, None, (False, True, True)),
+    ({"A": 'INCLUDE', "B": 'EXCLUDE'}, None, (True, False, False)),
+    ({}, {"Pair": ('INCLUDE', ("B", "C"))}, (False, True, True)),       # a child collection's state
+])
+def test_receiver_collection_lights_the_linked_planes(emissive, states, children, lit, tmp_path):
+    sc, emitter = _planes(emissive)
+    _link(emitter, states, children)
+    c, d = _plane_means(sc, 'CYCLES', tmp_path), _plane_means(sc, 'DACRT', tmp_path)
+    assert np.array_equal(c > 0.01, np.array(lit)), c                  # what the links mean in Cycles
+    assert np.all(np.abs(d - c) <= 0.02 * np.maximum(c, 0.05)), (d, c)
+
+
+def test_light_linking_with_bounces_matches_cycles(tmp_path):
+    """The Cornell box's area light excluded from the back wall and the tall block, 4 bounces:
+    those surfaces get only bounced light, and what they would have bounced is missing."""
+    means = {}
+    for linked in (False, True):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        parity_scenes.build_cornell()
+        sc = bpy.context.scene
+        sc.render.resolution_x, sc.render.resolution_y = 48, 36
+        rendering.fair_scene_settings(sc)
+        if linked:
+            _link(bpy.data.objects["CeilingLight"], {"Back": 'EXCLUDE', "TallBlock": 'EXCLUDE'})
+        spec = SimpleNamespace(cycles_samples=256, dacrt_samples=256, bounces=4, clamp=(0.0, 0.0),
+                               filter_type='BLACKMAN_HARRIS', filter_width=1.5)
+        for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
+            setup(sc, spec, 0)
+            img = rendering.render_combined(sc, str(tmp_path / f"{engine}-{linked}.exr"))
+            means[engine, linked] = img[..., :3].astype(np.float64).mean(axis=(0, 1))
+    ratio = means['DACRT', True] / means['CYCLES', True]
+    assert np.all(np.abs(ratio - 1) < 0.01), ratio
+    assert np.all(means['CYCLES', True] < 0.9 * means['CYCLES', False])    # the links matter here
