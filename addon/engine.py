@@ -14,7 +14,7 @@ import numpy as np
 
 from . import cryptomatte, export
 from .allocator import render_heap
-from .passes import PASSES, enabled, result_name
+from .passes import LIGHTGROUP_PREFIX, PASSES, enabled, result_name
 
 # Extra passes: (film name, view-layer toggle, channels, chan_id, type), and Blender's names
 # for them (what the compositor and multilayer EXR use) in this Blender
@@ -62,6 +62,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
             if enabled(renderlayer, toggle):
                 self.register_pass(scene, renderlayer, RESULT_PASS_NAME[name], channels, chan_id, kind)
+        for group in dict.fromkeys(g.name for g in getattr(renderlayer, 'lightgroups', ())):
+            self.register_pass(scene, renderlayer, LIGHTGROUP_PREFIX + group, 3, "RGB", 'COLOR')
         for kind, toggle in cryptomatte.KINDS:
             if getattr(renderlayer, toggle, False):
                 for name in cryptomatte.pass_names(kind, getattr(renderlayer, 'pass_cryptomatte_depth', 6)):
@@ -195,6 +197,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         for name in scene_data.settings.passes:
             if RESULT_PASS_NAME[name] in passes:
                 self._set(passes, RESULT_PASS_NAME[name], film.pass_image(name), scene_data.camera, view)
+        for name in film.lightgroup_passes:
+            if name in passes:
+                self._set(passes, name, film.pass_image(name), scene_data.camera, view)
         for name, image in (film.cryptomatte_images() if final else {}).items():
             if name in passes:
                 self._set(passes, name, image, scene_data.camera, view)

@@ -1134,6 +1134,7 @@ class _Exporter:
         self.object_pass_index = []
         self.light_links = {}         # emitter name -> (included, excluded) receiver names
         self.object_assets = []
+        self.object_lightgroups = []
         self._object_index = {}
         self.meshes = {}          # key -> _MeshArrays
         self.placements = {}      # key -> [_Placement]
@@ -1167,7 +1168,9 @@ class _Exporter:
                             skipped=dict(self.counts), environment=environment,
                             world_visibility=world_visibility(self.scene.world),
                             object_pass_index=np.array(self.object_pass_index, np.int32),
-                            object_assets=self.object_assets, light_links=self.light_links)
+                            object_assets=self.object_assets, light_links=self.light_links,
+                            object_lightgroups=self.object_lightgroups,
+                            world_lightgroup=getattr(self.scene.world, 'lightgroup', '') if self.scene.world else '')
 
     # -- settings ------------------------------------------------------------------------
     def _settings(self):
@@ -1179,11 +1182,10 @@ class _Exporter:
         missing = [label for owner, attr, label in _UNRENDERED_PASSES
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
         missing += [f"AOV '{a.name}'" for a in getattr(vl, 'aovs', ())]
-        missing += [f"light group '{g.name}'" for g in getattr(vl, 'lightgroups', ())]
         crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
         if missing:
             written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
-                                              + ['Cryptomatte']))
+                                              + ['Cryptomatte', 'light groups']))
             self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, {written} "
                                              f"only; not in the result: {', '.join(missing)}"))
         mist = scene.world.mist_settings if scene.world is not None else None
@@ -1199,6 +1201,7 @@ class _Exporter:
                            passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
                            pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
                            cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),
+                           lightgroups=tuple(dict.fromkeys(g.name for g in getattr(vl, 'lightgroups', ()))),
                            adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
     # -- instances -----------------------------------------------------------------------
@@ -1246,6 +1249,8 @@ class _Exporter:
         limit = getattr(getattr(ob.data, 'cycles', None), 'max_bounces', None)
         if light is not None and limit is not None:
             light.max_bounces = int(limit)
+        if light is not None:
+            light.lightgroup = getattr(ob, 'lightgroup', '')
         if light is not None and parent is not ob:
             light.visible_camera = light.visible_camera and bool(parent.visible_camera)
             light.visible_diffuse = light.visible_diffuse and bool(parent.visible_diffuse)
@@ -1330,6 +1335,7 @@ class _Exporter:
             while top.parent is not None:                 # Cryptomatte's asset: the topmost parent
                 top = top.parent
             self.object_assets.append(top.name)
+            self.object_lightgroups.append(getattr(ob, 'lightgroup', ''))
         return idx
 
     def _skip(self, reason, name):

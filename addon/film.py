@@ -21,12 +21,13 @@ import dacrt
 
 from .cryptomatte import Coverage, pass_names
 from .passes import CHANNELS as PASS_CHANNELS
-from .passes import DIVIDED_BY_COLOR, FIRST_SAMPLE
+from .passes import DIVIDED_BY_COLOR, FIRST_SAMPLE, LIGHTGROUP_PREFIX
 from .passes import LIGHT as LIGHT_PASSES
 
 
 class Film:
-    def __init__(self, width: int, height: int, passes=(), adaptive: bool = False, cryptomatte=None):
+    def __init__(self, width: int, height: int, passes=(), adaptive: bool = False, cryptomatte=None,
+                 lightgroups=()):
         unknown = [p for p in passes if p not in PASS_CHANNELS]
         if unknown:
             raise ValueError(f"unknown pass(es) {unknown}; supported: {sorted(PASS_CHANNELS)}")
@@ -41,6 +42,9 @@ class Film:
             self.passes += tuple(p for p in ('Emit', 'Env') if p not in self.passes)
         self._pass_sum = {p: np.zeros((PASS_CHANNELS[p], npix), np.float64)
                           for p in self.passes if p not in FIRST_SAMPLE}
+        # light groups: 'Combined_<name>', the RGB light of each group's emitters
+        self.lightgroup_passes = tuple(LIGHTGROUP_PREFIX + name for name in dict.fromkeys(lightgroups))
+        self._pass_sum.update((p, np.zeros((3, npix), np.float64)) for p in self.lightgroup_passes)
         # 0 until a pixel's sample 0 is rendered (pixels outside a render border stay 0)
         self._first = {p: np.zeros((PASS_CHANNELS[p], npix), np.float32)
                        for p in self.passes if p in FIRST_SAMPLE}
@@ -133,7 +137,7 @@ class Film:
 
     def pass_image(self, name: str) -> np.ndarray:
         """(H, W, channels) float32 image of an enabled pass (PASS_CHANNELS)."""
-        if name not in self.passes:
+        if name not in self.passes and name not in self.lightgroup_passes:
             raise KeyError(f"pass {name!r} was not requested (requested: {list(self.passes)})")
         if name in FIRST_SAMPLE:
             return self._first[name].T.reshape(self.height, self.width, -1).copy()

@@ -56,6 +56,7 @@ from .allocator import render_heap
 from .film import LIGHT_PASSES, Film
 from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DENOISE as DENOISE_PASSES
+from .passes import LIGHTGROUP_PREFIX
 from .passes import FIRST_SAMPLE
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
@@ -398,7 +399,8 @@ class Integrator:
         self._crypto_ids = {k: cryptomatte.triangle_ids(scene_data, k) for k in kinds}
         crypto = {k: (cryptomatte.ids(cryptomatte.layer_names(scene_data, k)), levels) for k in kinds}
         self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes),
-                         adaptive=self.adaptive is not None, cryptomatte=crypto)
+                         adaptive=self.adaptive is not None, cryptomatte=crypto,
+                         lightgroups=tuple(getattr(s, 'lightgroups', ())))
         self._light_passes = tuple(p for p in LIGHT_PASSES if p in self.film.passes)
         # what camera rays' first surfaces write: the data passes and Cryptomatte
         self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES) + kinds
@@ -465,6 +467,16 @@ class Integrator:
         lamps = [make_lamp(light) for light in sd.lights]
         world = np.asarray(sd.world, F32)
         wv = int(sd.world_visibility)
+        # Light Groups: each triangle's group as an emitter (-1: none) and the world's
+        self._groups = tuple(getattr(sd.settings, 'lightgroups', ()))
+        group = {name: g for g, name in enumerate(self._groups)}
+        ob = np.asarray(sd.geometry.object_index, np.int64)
+        names = list(getattr(sd, 'object_lightgroups', ())) + [''] * max(0, (int(ob.max()) + 1 if len(ob) else 0)
+                                                                      - len(getattr(sd, 'object_lightgroups', ())))
+        self._tri_group = np.take(np.array([group.get(n, -1) for n in names] or [-1], np.int64), ob) \
+            if self._groups and len(ob) else None
+        self._world_group = group.get(getattr(sd, 'world_lightgroup', ''), -1)
+        self._group_index = group
         if world.max() > 0:
             bg = BackgroundLight(world)
             bg.visible_camera, bg.visible_diffuse = bool(wv & VIS_CAMERA), bool(wv & VIS_DIFFUSE)
@@ -526,6 +538,15 @@ class Integrator:
             np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri + nenv, bool)]),
             *((None, None, None) if tris is None else (tris.geo, tris.area, tris.emission)),
             environment=None if env is None else env.native)
+        if self._groups:                    # light groups: each lamp record's and entry's group
+            every = lights.lamps + lights.unsampled_lamps + lights.camera_lamps
+            self._record_group = np.array([self._world_group if isinstance(l, BackgroundLight)
+                                           else self._group_index.get(l.lightgroup, -1) for l in every] or [-1],
+                                          np.int64)[:len(every)]
+            self._entry_group = np.concatenate([
+                self._record_group[:len(lights.lamps)],
+                self._tri_group[tris.index] if ntri else np.zeros(0, np.int64),
+                np.full(nenv, self._world_group, np.int64)]).astype(np.int64)
         if self._link is not None:          # light linking: each entry's and lamp record's light set
             every = lights.lamps + lights.unsampled_lamps + lights.camera_lamps
             self._record_set = np.array([0 if isinstance(l, BackgroundLight) else self._link.emitter_set(l.name)
@@ -866,7 +887,7 @@ class Integrator:
         del rx, ry, lens
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
         L, alpha = rgba[:3], rgba[3]
-        sinks = _Sinks(L, self._light_passes)
+        sinks = _Sinks(L, self._light_passes, self._groups)
         data = {}
         path = _Paths(np.arange(n), keys, O, D, tmax, None, None, None, rays)
         if seen is not None and not seen.all():
@@ -916,7 +937,7 @@ class Integrator:
             if self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
         if self._any_emissive:
-            self._gather_emission(camera, hit, hits, path, sinks.found(k), self._found_clamp(k))
+            self._gather_emission(camera, hit, hits, path, sinks.found(k), self._found_clamp(k), sinks.groups)
         if k == K + 1:
             return None
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
@@ -945,7 +966,8 @@ class Integrator:
         tb = None if path.tb is None else np.take(path.tb, idx)
         del hits, path
         if self.lights:
-            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, sinks.sampled(k), tb, u, v)
+            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, sinks.sampled(k), tb, u, v,
+                             sinks.groups)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
@@ -1096,10 +1118,17 @@ class Integrator:
         # (lamps at infinity count only where a ray missed: nothing to take off for them)
         camera = k == 0
         lamps = self._bsdf_lamps if not camera else self._camera_emitters if sinks.split else self._camera_lamps
-        if len(lamps):
+        outs = [(lamps, sinks.found(k))]
+        if sinks.groups:                    # each light group's lamps, from its own array
+            combined = self._bsdf_lamps if not camera else self._camera_lamps
+            outs += [(combined[self._record_group[combined] == g], G) for g, G in enumerate(sinks.groups)
+                     if len(combined)]
+        for lamps, out in outs:
+            if not len(lamps):
+                continue
             for lamps, thr in self._linked(lamps, seg, -seg.thr, camera):
                 dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
-                                        np.zeros(len(t0), bool), seg.pid, sinks.found(k), thr=thr,
+                                        np.zeros(len(t0), bool), seg.pid, out, thr=thr,
                                         pdf_bsdf=None if camera else seg.pdf,
                                         lamp_prob=None if camera else self._record_prob, clamp=self._found_clamp(k))
 
@@ -1306,16 +1335,22 @@ class Integrator:
 
     # --- emission seen by rays ------------------------------------------------------------------
 
-    def _gather_emission(self, camera, hit, hits, path, L, clamp=np.inf):
+    def _gather_emission(self, camera, hit, hits, path, L, clamp=np.inf, groups=()):
         """Emission of the triangles hit by rays `hit` (two-sided), MIS-weighted for BSDF rays
-        (one native pass); each contribution clamped to clamp (Cycles' sample clamp)."""
+        (one native pass); each contribution clamped to clamp (Cycles' sample clamp); with
+        light groups, each group's triangles again into its own array."""
         if self._link is not None and not camera and path.prim is not None:
             # light linking: emitters do not light the objects their set leaves out
             prim = np.maximum(hits['prim'], 0)
             hit = hit & reached(self._receivers(path.prim), np.take(self._tri_set, prim))
-        dacrt.shading.gather_emission(hits, hit, self._tri_emission, self._tri_emissive,
-                                      None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
-                                      path.O, path.D, path.thr, path.pdf, path.pid, L, clamp=clamp)
+        outs = [(hit, L)]
+        if groups:
+            grp = np.take(self._tri_group, np.maximum(hits['prim'], 0))
+            outs += [(hit & (grp == g), G) for g, G in enumerate(groups)]
+        for mask, out in outs:
+            dacrt.shading.gather_emission(hits, mask, self._tri_emission, self._tri_emissive,
+                                          None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
+                                          path.O, path.D, path.thr, path.pdf, path.pid, out, clamp=clamp)
 
     def _found_clamp(self, k):
         """The clamp of light that rays arriving at vertex k find: direct up to the BSDF rays
@@ -1326,7 +1361,8 @@ class Integrator:
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather); with light
-        passes, camera rays' emitters and world go to their two passes."""
+        passes, camera rays' emitters and world go to their two passes; with light groups,
+        each group's lamps (and the world) again into its own array."""
         camera, clamp = k == 0, self._found_clamp(k)
         L, L_env = sinks.found(k), sinks.world(k)
         if not camera:
@@ -1335,13 +1371,21 @@ class Integrator:
             env, groups = self._camera_env_pass, ((self._camera_emitters, L), (self._camera_world, L_env))
         else:
             env, groups = self._camera_env, ((self._camera_lamps, L),)
+        # what goes to Combined, for the light groups (not the world behind transparent film)
+        combined_env = self.lights.environment if not camera else self._camera_env
+        combined_lamps = self._bsdf_lamps if not camera else self._camera_lamps
+        envs = [(env, L_env)] if env is not None else []
+        if sinks.groups and combined_env is not None and self._world_group >= 0:
+            envs.append((combined_env, sinks.groups[self._world_group]))
         groups = [(lamps, out) for lamps, out in groups if len(lamps)]
-        if env is None and not groups:
-            return
+        for g, G in enumerate(sinks.groups):
+            mine = combined_lamps[self._record_group[combined_lamps] == g] if len(combined_lamps) else combined_lamps
+            if len(mine):
+                groups.append((mine, G))
         miss = ~hit
-        if env is not None:
-            env.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss, path.thr,
-                              None if camera else path.pdf, path.pid, L_env, clamp)
+        for e, out in envs:
+            e.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss, path.thr,
+                            None if camera else path.pdf, path.pid, out, clamp)
         if not groups:
             return
         # a lamp counts in front of the surface hit, or of the ray's end where it missed (the
@@ -1366,7 +1410,8 @@ class Integrator:
 
     # --- next-event estimation --------------------------------------------------------------------
 
-    def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None):
+    def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None,
+                    groups=()):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
         the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
@@ -1380,10 +1425,11 @@ class Integrator:
         t = self.tri
         term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff, t.term_freq, u, v) \
             if t.terminator else None
+        entry = np.empty(len(pid), np.int32) if groups else None
         value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
             self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
             prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term,
-            linking=None if self._link is None else (self._entry_set, self._receivers(prim)))
+            linking=None if self._link is None else (self._entry_set, self._receivers(prim)), entry=entry)
         self._skipped_shadow += skipped
         if len(send):
             occ = self._occluded_rays(rays, skip)
@@ -1392,6 +1438,10 @@ class Integrator:
                 self._shadow_through(rays, skip, send, occ, value, tb)
         # light sampled at vertex 0 is direct light (Cycles: the shadow path's bounce 0)
         dacrt.shading.accumulate_masked(L, pid, value, contrib, self._clamps[k > 0])
+        if entry is not None:               # and each light group's own share
+            grp = np.take(self._entry_group, entry)
+            for g, G in enumerate(groups):
+                dacrt.shading.accumulate_masked(G, pid, value, contrib & (grp == g), self._clamps[k > 0])
 
 
 class _Denoise:
@@ -1449,10 +1499,13 @@ class _Sinks:
     pass only); vertex 0's light samples and what its BSDF rays find to DiffDir; all later light
     to DiffInd (the same split as the direct and indirect clamps)."""
 
-    def __init__(self, L, passes):
+    def __init__(self, L, passes, groups=()):
         self.L, self.passes = L, passes
         self.split = bool(passes)
         self.arrays = {p: np.zeros_like(L) for p in LIGHT_PASSES} if self.split else None
+        # light groups: each group's share of what goes to Combined, besides it
+        self.group_names = tuple(groups)
+        self.groups = [np.zeros_like(L) for _ in self.group_names]
 
     def found(self, k):
         """The emitters rays arriving at vertex k find (k = 0: camera rays)."""
@@ -1469,7 +1522,8 @@ class _Sinks:
         return self.arrays['DiffDir' if k == 0 else 'DiffInd'] if self.split else self.L
 
     def finish(self, data, transparent):
-        """L = the sum of the passes; the requested ones into data."""
+        """L = the sum of the passes; the requested ones and the light groups into data."""
+        data.update((LIGHTGROUP_PREFIX + name, G) for name, G in zip(self.group_names, self.groups))
         if not self.split:
             return
         for name, a in self.arrays.items():

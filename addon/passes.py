@@ -37,6 +37,9 @@ FIRST_SAMPLE = {'Depth': 1e10, 'Position': 0.0, 'IndexOB': 0.0, 'IndexMA': 0.0}
 
 DENOISE = ('DenoiseNormal', 'DenoiseAlbedo', 'DenoiseDepth')
 
+# a view layer's Light Group <name> is the pass 'Combined_<name>' (RGB), as Cycles names it
+LIGHTGROUP_PREFIX = 'Combined_'
+
 # the parts Combined is the sum of, and those read back divided by the Diffuse Color sums
 LIGHT = ('DiffDir', 'DiffInd', 'Emit', 'Env')
 DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')

@@ -79,6 +79,7 @@ class Light:
     visible_camera: bool = True    # object ray visibility (Cycles: a light seen by camera rays)
     visible_diffuse: bool = True   # object ray visibility (Cycles: BSDF rays collect the light)
     max_bounces: int = 1024        # Cycles' Light > Max Bounces: light sampling skips it deeper
+    lightgroup: str = ''           # the light's Light Group (its light also goes to that pass)
 
 
 @dataclass
@@ -179,6 +180,8 @@ class Settings:
     # 'CryptoAsset') and the view layer's Levels (ID ranks per pixel, two per RGBA pass)
     cryptomatte: tuple = ()
     cryptomatte_levels: int = 6
+    # the view layer's Light Groups: a Combined_<name> pass each, the light of its emitters
+    lightgroups: tuple = ()
 
 
 @dataclass
@@ -205,3 +208,7 @@ class SceneData:
     # the objects it lights: with any included, only those not excluded; else all but the
     # excluded (Blender's receiver collection); emitters not listed light every object
     light_links: dict = field(default_factory=dict)
+    # Light Groups: each object's group name ('' none; its emission goes to that group's pass)
+    # and the world's
+    object_lightgroups: list = field(default_factory=list)
+    world_lightgroup: str = ''

@@ -93,12 +93,14 @@ class Lamp(ABC):
             # Cycles' Light > Max Bounces: light sampling skips the light at shading points
             # deeper than this many bounces (light_select_reached_max_bounces)
             self.max_bounces = int(getattr(light, 'max_bounces', MAX_BOUNCES_UNLIMITED))
+            self.lightgroup = str(getattr(light, 'lightgroup', ''))
         else:
             self.name = 'World'
             self.color = np.asarray(color, np.float64)
             self.use_mis = self.cast_shadow = self.visible_camera = self.visible_diffuse = True
             self.normalize = True
             self.max_bounces = MAX_BOUNCES_UNLIMITED
+            self.lightgroup = ''            # the integrator gives the world's
 
     @property
     def seen_by_camera(self) -> bool:

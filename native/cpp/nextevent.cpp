@@ -35,8 +35,8 @@ struct Pending {  // a shadow ray before its block's place in the output is know
 // Paths [b, e): value and contrib in place, shadow rays to pending[b, b + count); returns the
 // count. Arguments by value, so the loop reads them from registers or its own stack (see
 // lamps.cpp).
-size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* contrib, Pending* pending, size_t b,
-                   size_t e, size_t* skipped) {
+size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* contrib, int32_t* entry_out,
+                   Pending* pending, size_t b, size_t e, size_t* skipped) {
     const size_t n = p.n, T = L.num_tris;
     size_t m = b, bad = 0;
     for_words(p.keys, n, p.ka, p.kb, b, e, [&](size_t i0, size_t cnt, const uint32_t* wa, const uint32_t* wb) {
@@ -44,6 +44,7 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             const size_t i = i0 + j;
             const float u1 = unit24(wa[j]), u2 = unit24(wb[j]);
             const size_t entry = p.pick ? choose(L.cdf, L.entries, p.pick[i]) : 0;
+            if (entry_out) entry_out[i] = int32_t(entry);
             const float P[3] = {p.P[i], p.P[n + i], p.P[2 * n + i]};
             float wi[3], dist, pdf, value[3], target[3];
             const bool lamp = entry < L.num_lamps;
@@ -144,7 +145,7 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
     std::vector<size_t> count(blocks), bad(blocks), offset(blocks);
     parallel_for(blocks, [&](size_t b0, size_t b1) {
         for (size_t k = b0; k < b1; ++k)
-            count[k] = event_block(lights, pts, out.value, out.contrib, pending.get(), k * kBlock,
+            count[k] = event_block(lights, pts, out.value, out.contrib, out.entry, pending.get(), k * kBlock,
                                    std::min(n, (k + 1) * kBlock), &bad[k]);
     }, 1);
     size_t m = 0, skip_count = 0;

@@ -87,6 +87,7 @@ struct NextEventOut {
     Ray* rays;
     int64_t* send;
     int32_t* skip;
+    int32_t* entry = nullptr;  // the entry each point picked (n; null: not wanted), e.g. for light groups
 };
 
 size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped);

@@ -1163,3 +1163,22 @@ def test_missing_image_is_magenta_like_cycles(scene, exported):
     for name in ("NoImage", "Broken"):
         assert table[name].texture is None and np.allclose(table[name].base_color, (1, 0, 1)), name
         assert table[name].approximated, name
+
+
+def test_light_groups_exported(scene, exported):
+    """The view layer's Light Groups and each emitter's group: lights, objects, the world."""
+    setup(scene)
+    vl = bpy.context.view_layer
+    vl.lightgroups.add(name="key")
+    vl.lightgroups.add(name="sky")
+    lamp = scenes.light('POINT', 100.0, (0, 0, 3), name="Key")
+    lamp.lightgroup = "key"
+    glow = scenes.plane("Glow", materials=[scenes.emission("Glow", (1, 1, 1), 2.0)])
+    glow.lightgroup = "key"
+    scenes.world((0.1, 0.1, 0.1), 1.0)
+    scene.world.lightgroup = "sky"
+    s = exported()
+    assert s.settings.lightgroups == ("key", "sky") and s.world_lightgroup == "sky"
+    assert [l.lightgroup for l in s.lights if l.name == "Key"] == ["key"]
+    assert s.object_lightgroups[s.object_names.index("Glow")] == "key"
+    assert not any("light group" in m for _, m in s.messages)

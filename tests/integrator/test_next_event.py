@@ -145,6 +145,11 @@ def test_light_linking_rejects_the_samples_of_lights_a_point_does_not_receive():
     same = free[2][keep].copy()
     same['id'] = np.arange(len(same), dtype=np.uint32)
     assert np.array_equal(linked[2], same)
+    picked = np.full(n, -7, np.int32)                        # the entries, for light groups
+    shading.next_event(*args, **kw, entry=picked)
+    assert np.array_equal(picked, entry)
+    with pytest.raises(ValueError, match='entry'):
+        shading.next_event(*args, **kw, entry=np.empty(n, np.int64))
     everyone = shading.next_event(*args, **kw, linking=(np.zeros(lc.entries, np.uint8), np.ones(n, np.uint64)))
     for a, b in zip(everyone[:5], free[:5]):
         assert np.array_equal(a, b)
