@@ -68,21 +68,32 @@ class Film:
         A sample with any non-finite Combined or pass value is dropped whole (counted in
         nan_dropped, not in its pixel's sample count). Returns the number dropped."""
         data = {k: v for k, v in (data or {}).items() if k in self._pass_sum}
-        ok = np.isfinite(rgba).all(axis=0)
-        for values in data.values():
-            ok &= np.isfinite(values).all(axis=0)
-        dropped = int(ok.size - np.count_nonzero(ok))
-        if dropped:
+        pixels = _as_slice(pixels)          # a run of pixels: slices, not a gather and scatter each
+        # The sums (one native pass each) are finite exactly when every sample is (NaN and
+        # inf carry into a sum, and float32 values cannot overflow a float64 one), so the
+        # per-sample check, a numpy pass per array, is needed only when some sum is not.
+        sums = dacrt.shading.sample_sums(rgba)
+        pass_sums = {name: dacrt.shading.sample_sums(values) for name, values in data.items()}
+        dropped = 0
+        if not (np.isfinite(sums).all() and all(np.isfinite(v).all() for v in pass_sums.values())):
+            ok = np.isfinite(rgba).all(axis=0)
+            for values in data.values():
+                ok &= np.isfinite(values).all(axis=0)
+            dropped = int(ok.size - np.count_nonzero(ok))
             rgba = np.where(ok, rgba, 0.0)
             data = {k: np.where(ok, v, 0.0) for k, v in data.items()}
-        self._count[pixels] += ok.sum(axis=1)
-        self._sum[:, pixels] += dacrt.shading.sample_sums(rgba)
+            sums = dacrt.shading.sample_sums(rgba)
+            pass_sums = {name: dacrt.shading.sample_sums(values) for name, values in data.items()}
+            self._count[pixels] += ok.sum(axis=1)
+        else:
+            self._count[pixels] += rgba.shape[2]
+        self._sum[:, pixels] += sums
         if self._odd is not None:
             odd = (first_sample + np.arange(rgba.shape[2])) % 2 == 1
             if odd.any():
                 self._odd[:, pixels] += 2.0 * dacrt.shading.sample_sums(rgba[:3], odd)
-        for name, values in data.items():
-            self._pass_sum[name][:, pixels] += dacrt.shading.sample_sums(values)
+        for name, values in pass_sums.items():
+            self._pass_sum[name][:, pixels] += values
         self.nan_dropped += dropped
         return dropped
 
@@ -155,3 +166,12 @@ class Film:
     def sample_counts(self) -> np.ndarray:
         """(H, W) number of accepted samples per pixel."""
         return self._count.reshape(self.height, self.width).copy()
+
+
+def _as_slice(pixels):
+    """pixels as a slice when they are one increasing run (the integrator's blocks are), else
+    as they are."""
+    p = np.asarray(pixels)
+    if p.ndim == 1 and len(p) and p[-1] - p[0] == len(p) - 1 and (len(p) == 1 or (np.diff(p) == 1).all()):
+        return slice(int(p[0]), int(p[-1]) + 1)
+    return pixels

@@ -1206,11 +1206,17 @@ class Integrator:
         if 'UV' in want:
             data['UV'] = np.zeros((3, n), F32)
             data['UV'][:, cols] = self._uv_pass(prim, hu, hv)
-        if any(p in want for p in DENOISE_PASSES):
-            denoise = _Denoise(self, n)
-            denoise.prev[:, cols] = np.take(path.O, idx, axis=1)
-            denoise.surface(cols, ns, albedo, P)
-            denoise.finish(data)
+        if any(p in want for p in DENOISE_PASSES):    # opaque first surfaces: written there
+            if 'DenoiseNormal' in want:
+                data['DenoiseNormal'] = np.zeros((3, n), F32)
+                data['DenoiseNormal'][:, cols] = _Denoise.camera_normal(self.camera.rot, ns, albedo.mean(axis=0))
+            if 'DenoiseAlbedo' in want:
+                data['DenoiseAlbedo'] = np.zeros((3, n), F32)
+                data['DenoiseAlbedo'][:, cols] = albedo
+            if 'DenoiseDepth' in want:
+                data['DenoiseDepth'] = np.zeros((1, n), F32)
+                d = P - np.take(path.O, idx, axis=1)
+                data['DenoiseDepth'][0, cols] = np.sqrt(np.einsum('ij,ij->j', d, d))
         if 'Normal' in want:
             data['Normal'] = np.zeros((3, n), F32)
             data['Normal'][:, cols] = ns
@@ -1463,6 +1469,13 @@ class _Denoise:
         self.prev = np.zeros((3, n), F32)           # where each camera ray's segment began
         self.done = np.zeros(n, bool)
 
+    @staticmethod
+    def camera_normal(rot, ns, weight):
+        """Shading normals ns (3,k) in Cycles' camera space (x right, y up, z into the view;
+        rot: the camera's world axes as columns), 0 where the closures' weight (k,) is 0."""
+        cam = np.asarray(rot, F32).T @ ns * np.array([[1], [1], [-1]], F32)
+        return np.where(weight > 0, cam, F32(0))
+
     def surface(self, cols, ns, albedo, P, tau=None):
         """Surfaces (ns, diffuse albedo, points P; (3,k)) the paths cols reached; tau (3,k)
         their transparency (None: opaque)."""
@@ -1476,8 +1489,7 @@ class _Denoise:
         write = todo & ((total == 0) | (4 * diffuse > total))
         w, c = np.flatnonzero(write), cols[write]
         if 'DenoiseNormal' in self.want:
-            cam = self.rot.T @ ns[:, w] * np.array([[1], [1], [-1]], F32)
-            self.normal[:, c] = np.where(total[w] > 0, cam, F32(0))
+            self.normal[:, c] = self.camera_normal(self.rot, ns[:, w], total[w])
         self.albedo[:, c] = self.thr[:, c] * albedo[:, w]
         self.done[c] = True
         go = np.flatnonzero(todo & ~write)          # mostly transparent: on to the next surface
