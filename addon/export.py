@@ -1133,6 +1133,7 @@ class _Exporter:
         self.object_names = []
         self.object_pass_index = []
         self.light_links = {}         # emitter name -> (included, excluded) receiver names
+        self.shadow_links = {}        # emitter name -> (included, excluded) blocker names
         self.object_assets = []
         self.object_lightgroups = []
         self._object_index = {}
@@ -1169,6 +1170,7 @@ class _Exporter:
                             world_visibility=world_visibility(self.scene.world),
                             object_pass_index=np.array(self.object_pass_index, np.int32),
                             object_assets=self.object_assets, light_links=self.light_links,
+                            shadow_links=self.shadow_links,
                             object_lightgroups=self.object_lightgroups,
                             world_lightgroup=getattr(self.scene.world, 'lightgroup', '') if self.scene.world else '')
 
@@ -1284,8 +1286,7 @@ class _Exporter:
         if linking is not None and linking.receiver_collection is not None:
             self.light_links[ob.name] = light_link_receivers(linking.receiver_collection)
         if linking is not None and linking.blocker_collection is not None:
-            self._ignore("shadow linking is not supported; every object casts shadows from this "
-                         "emitter", ob.name)
+            self.shadow_links[ob.name] = light_link_receivers(linking.blocker_collection)
 
     def _ignore(self, reason, name):
         _add_name(self.ignored, reason, name)

@@ -547,6 +547,12 @@ class Integrator:
                 self._record_group[:len(lights.lamps)],
                 self._tri_group[tris.index] if ntri else np.zeros(0, np.int64),
                 np.full(nenv, self._world_group, np.int64)]).astype(np.int64)
+        if self._shadow_link is not None:   # shadow linking: each entry's set of blockers
+            self._entry_shadow_set = np.concatenate([
+                np.array([0 if isinstance(l, BackgroundLight) else self._shadow_link.emitter_set(l.name)
+                          for l in lights.lamps], np.int64).reshape(-1),
+                self._tri_shadow_set[tris.index] if ntri else np.zeros(0, np.int64),
+                np.zeros(nenv, np.int64)]).astype(np.int64)
         if self._link is not None:          # light linking: each entry's and lamp record's light set
             every = lights.lamps + lights.unsampled_lamps + lights.camera_lamps
             self._record_set = np.array([0 if isinstance(l, BackgroundLight) else self._link.emitter_set(l.name)
@@ -566,18 +572,25 @@ class Integrator:
     def _init_linking(self, sd: SceneData):
         """Light linking (lights/linking.py): each triangle's receiver mask and, as emitter, its
         object's light set; None when no emitter links its light."""
-        self._link = None
+        self._link = self._shadow_link = None
         links = getattr(sd, 'light_links', None) or {}
-        if not links or not len(self.tri):
+        shadow_links = getattr(sd, 'shadow_links', None) or {}
+        if not (links or shadow_links) or not len(self.tri):
             return
         ob = np.asarray(sd.geometry.object_index, np.int64)
         names = list(sd.object_names) + [None] * max(0, int(ob.max()) + 1 - len(sd.object_names))
         link = LightLinking(links, names, self.messages)
-        if not link.active:
-            return
-        self._link = link
-        self._tri_recv = np.take(link.object_mask, ob)
-        self._tri_set = np.take(link.sets(names), ob)
+        if link.active:
+            self._link = link
+            self._tri_recv = np.take(link.object_mask, ob)
+            self._tri_set = np.take(link.sets(names), ob)
+        # shadow linking: the same sets of blocker objects; a light sample's shadow ray is then
+        # traced against the triangles of its emitter's blockers only
+        shadow = LightLinking(shadow_links, names, self.messages)
+        if shadow.active:
+            self._shadow_link = shadow
+            self._tri_blocks = np.take(shadow.object_mask, ob)
+            self._tri_shadow_set = np.take(shadow.sets(names), ob)
 
     def _receivers(self, prim):
         """The receiver masks (k,) uint64 of the shading points (or ray origins) on prim."""
@@ -656,6 +669,18 @@ class Integrator:
                     built['through'] = self._tracer_scene(through, None)
                 self._visible['through'] = None
                 needed = needed | through
+        if self.lights and self._shadow_link is not None:
+            # shadow linking: per set of blockers, its opaque and transparent shadow casters
+            sets = np.unique(self._entry_shadow_set) if hasattr(self, '_entry_shadow_set') else []
+            for s in sets[sets > 0] if len(sets) else ():
+                blocks = reached(self._tri_blocks, int(s))
+                for kind, bit in ((f'shadow{s}', VIS_SHADOW), (f'through{s}', _VIS_THROUGH)):
+                    mask = blocks & ((vis & bit) != 0)
+                    if mask.any():
+                        self._scenes[kind], self._maps[kind], self._local[kind] = \
+                            built[kind] = self._tracer_scene(mask, None)
+                        self._visible[kind] = None
+                        needed = needed | mask
         self._num_scenes = len(built)
         # triangles only rays that are never cast could meet (shadow-only ones without lights,
         # diffuse-only ones without bounces) are in no tracer scene
@@ -839,7 +864,7 @@ class Integrator:
         hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip, visible=self._visible[kind])
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
-        self._rays['camera' if kind == 'camera' else 'shadow' if kind == 'through' else 'bounce'] += len(rays)
+        self._rays['camera' if kind == 'camera' else 'shadow' if kind.startswith('through') else 'bounce'] += len(rays)
         return self._global_prims(kind, hits)
 
     def _global_prims(self, kind, hits):
@@ -858,12 +883,16 @@ class Integrator:
     def _occluded(self, O, D, tfar, skip=None):
         return self._occluded_rays(self._ray_array(O, D, tfar), skip)
 
-    def _occluded_rays(self, rays, skip=None):
-        skip = self._skip('shadow', skip)
+    def _occluded_rays(self, rays, skip=None, kind='shadow'):
+        """Occlusion of shadow rays by the `kind` scene's triangles (a shadow-linked set's
+        scene may not exist: it has no blockers, nothing is occluded)."""
+        if kind not in self._scenes:
+            return np.zeros(len(rays), bool)
+        skip = self._skip(kind, skip)
         t0 = time.perf_counter()
-        occ = self._scenes['shadow'].occluded(rays, threads=self.threads, skip=skip, visible=self._visible['shadow'])
+        occ = self._scenes[kind].occluded(rays, threads=self.threads, skip=skip, visible=self._visible[kind])
         self._trace_seconds += time.perf_counter() - t0
-        self._add_phases(self._scenes['shadow'].last_stats)
+        self._add_phases(self._scenes[kind].last_stats)
         self._rays['shadow'] += len(rays)
         return occ
 
@@ -1132,7 +1161,7 @@ class Integrator:
                                         pdf_bsdf=None if camera else seg.pdf,
                                         lamp_prob=None if camera else self._record_prob, clamp=self._found_clamp(k))
 
-    def _shadow_through(self, rays, skip, send, occluded, value, tb=None):
+    def _shadow_through(self, rays, skip, send, occluded, value, tb=None, kind='through'):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
         scene), their light multiplied by each surface's transparency, as Cycles' transparent
         shadows; more surfaces than the path has left of max_transparent (tb: surfaces its
@@ -1148,7 +1177,7 @@ class Integrator:
         prim = None if skip is None else np.take(skip, ids[keep])
         r['id'] = np.arange(len(r), dtype=np.uint32)
         tfar = r['tfar'].copy()
-        hits = self._intersect('through', None, None, None, prim, rays=r)
+        hits = self._intersect(kind, None, None, None, prim, rays=r)
         at = np.flatnonzero(hits['prim'] >= 0)
         if not len(at):
             return
@@ -1166,7 +1195,7 @@ class Integrator:
         at = rows
         for j in range(self.max_transparent + 1):
             if j:
-                hits = self._intersect('through', None, D, None, prim, rays=r)
+                hits = self._intersect(kind, None, D, None, prim, rays=r)
                 at = np.flatnonzero(hits['prim'] >= 0)
                 if not len(at):
                     break
@@ -1431,20 +1460,34 @@ class Integrator:
         t = self.tri
         term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff, t.term_freq, u, v) \
             if t.terminator else None
-        entry = np.empty(len(pid), np.int32) if groups else None
+        entry = np.empty(len(pid), np.int32) if groups or self._shadow_link is not None else None
         value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
             self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
             prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term,
             linking=None if self._link is None else (self._entry_set, self._receivers(prim)), entry=entry)
         self._skipped_shadow += skipped
-        if len(send):
+        if len(send) and self._shadow_link is not None:
+            # shadow linking: each set's rays against its own blockers (set 0: every object)
+            sset = np.take(self._entry_shadow_set, np.take(entry, send))
+            for s in np.unique(sset):
+                sel = np.flatnonzero(sset == s)
+                r = rays[sel]
+                r['id'] = np.arange(len(sel), dtype=np.uint32)
+                sk = None if skip is None else np.ascontiguousarray(skip[sel])
+                sends = send[sel]
+                occ = self._occluded_rays(r, sk, 'shadow' if s == 0 else f'shadow{s}')
+                contrib[sends[occ]] = False
+                through = 'through' if s == 0 else f'through{s}'
+                if through in self._scenes:
+                    self._shadow_through(r, sk, sends, occ, value, tb, through)
+        elif len(send):
             occ = self._occluded_rays(rays, skip)
             contrib[send[occ]] = False
             if 'through' in self._scenes:
                 self._shadow_through(rays, skip, send, occ, value, tb)
         # light sampled at vertex 0 is direct light (Cycles: the shadow path's bounce 0)
         dacrt.shading.accumulate_masked(L, pid, value, contrib, self._clamps[k > 0])
-        if entry is not None:               # and each light group's own share
+        if groups:                          # and each light group's own share
             grp = np.take(self._entry_group, entry)
             for g, G in enumerate(groups):
                 dacrt.shading.accumulate_masked(G, pid, value, contrib & (grp == g), self._clamps[k > 0])

@@ -208,6 +208,9 @@ class SceneData:
     # the objects it lights: with any included, only those not excluded; else all but the
     # excluded (Blender's receiver collection); emitters not listed light every object
     light_links: dict = field(default_factory=dict)
+    # shadow linking: emitter name -> (included, excluded) names of the objects that block its
+    # light, with the same rule (Blender's blocker collection); unlisted emitters: every object
+    shadow_links: dict = field(default_factory=dict)
     # Light Groups: each object's group name ('' none; its emission goes to that group's pass)
     # and the world's
     object_lightgroups: list = field(default_factory=list)

@@ -525,19 +525,20 @@ def test_indirect_only_collection_is_hidden_from_camera_rays_only(scene, exporte
 
 
 def test_features_rendered_without_are_reported(scene, exported):
-    """Shadow catchers, shadow linking and motion blur are Cycles features DACRT does not
-    render: the objects render as ordinary ones and the render says so. Light linking (the
-    receiver collection) is rendered and exported, not reported."""
+    """Shadow catchers and motion blur are Cycles features DACRT does not render: the objects
+    render as ordinary ones and the render says so. Light and shadow linking (receiver and
+    blocker collections) are rendered and exported, not reported."""
     setup(scene)
     catcher = scenes.plane("Catcher")
     catcher.is_shadow_catcher = True
     lamp = scenes.light('POINT', 100.0, (0, 0, 3), name="Linked")
     lamp.light_linking.blocker_collection = bpy.data.collections.new("Blockers")
     scene.render.use_motion_blur = True
-    text = " | ".join(m for _, m in exported().messages)
+    s = exported()
+    text = " | ".join(m for _, m in s.messages)
     assert "'Catcher': shadow catcher is not supported" in text
-    assert "'Linked': shadow linking is not supported" in text
     assert "motion blur is not rendered" in text
+    assert "linking" not in text and s.shadow_links == {"Linked": (frozenset(), frozenset())}
     scene.render.use_motion_blur = False
     catcher.is_shadow_catcher = False
     lamp.light_linking.blocker_collection = None

@@ -570,3 +570,29 @@ def test_light_linking_sets_and_receiver_masks():
     many = {f"L{i}": (frozenset({f"O{i}"}), frozenset()) for i in range(70)}
     link = LightLinking(many, ["O0"], messages)
     assert link.emitter_set("L62") > 0 and link.emitter_set("L63") == 0 and "light every object" in messages[0][1]
+
+
+def test_shadow_linking_traces_against_the_emitters_blockers_only():
+    """A plate over half the view shadows a sunlit floor; the sun's blocker collection leaving
+    the plate out (excluded, or another object included) lights the floor under it exactly as
+    without the plate, while a second, unlinked sun is still shadowed by it."""
+    from .scenes import geometry, quad, ALL_VIS
+    floor = quad((0.0, 0.0, 0.0), 100.0, 100.0)
+    plate = quad((-0.00025, 0.0, 0.1), 0.00025, 1.0)           # over the left half, z = 0.1
+    suns = [light('SUN', 3.0, np.eye(4), name='Sun'), light('SUN', 1.0, np.eye(4), name='Other')]
+
+    def image(with_plate, links):
+        scene = plane_scene(suns, samples=4, max_bounces=0)
+        scene.camera = ortho_down(height=0.5, width=8, px=4)
+        parts = [(*floor, 1, ALL_VIS)] + ([(*plate, 1, ALL_VIS & ~sd.VIS_CAMERA)] if with_plate else [])
+        scene.geometry = geometry(parts)
+        scene.object_names = ['Floor', 'Plate'][:len(parts)]
+        scene.shadow_links = links
+        return render(scene).film.combined()[..., 0]
+
+    bare, shadowed = image(False, {}), image(True, {})
+    assert shadowed[:, :3].max() < 1e-6 and np.allclose(shadowed[:, 5:], bare[:, 5:])
+    for spec in ((frozenset(), frozenset({'Plate'})), (frozenset({'Floor'}), frozenset())):
+        only_other = image(True, {'Sun': spec})      # the plate still blocks 'Other'
+        assert np.allclose(only_other[:, :3], bare[:, :3] * 3.0 / 4.0, rtol=1e-5)
+        assert np.allclose(only_other[:, 5:], bare[:, 5:])

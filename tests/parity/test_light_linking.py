@@ -94,3 +94,50 @@ def test_light_linking_with_bounces_matches_cycles(tmp_path):
     ratio = means['DACRT', True] / means['CYCLES', True]
     assert np.all(np.abs(ratio - 1) < 0.01), ratio
     assert np.all(means['CYCLES', True] < 0.9 * means['CYCLES', False])    # the links matter here
+
+
+def _blockers(emitter_kind, tinted):
+    """A floor under two raised plates B (left) and C (right), hidden from the camera, lit from
+    above by a sun or an area light; with tinted, C is a tinted transparent sheet."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 30, 10
+    scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=6.0)
+    scenes.plane("Floor", size=8, materials=[scenes.diffuse("Floor", (0.8, 0.8, 0.8))])
+    for name, x in (("B", -1.5), ("C", 1.5)):
+        mat = scenes.diffuse(name, (0.8, 0.8, 0.8))
+        if tinted and name == "C":
+            mat, nt, out = scenes._material(name)
+            clear = nt.nodes.new('ShaderNodeBsdfTransparent')
+            clear.inputs['Color'].default_value = (0.9, 0.4, 0.2, 1.0)
+            nt.links.new(clear.outputs['BSDF'], out.inputs['Surface'])
+        scenes.plane(name, size=1.5, location=(x, 0, 1), materials=[mat]).visible_camera = False
+    emitter = scenes.light('SUN', 3.0) if emitter_kind == 'SUN' else scenes.light('AREA', 40.0, (0, 0, 4), size=1.0)
+    sc.cycles.samples = sc.dacrt.samples = 64
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    sc.cycles.use_denoising = False
+    return sc, emitter
+
+
+def _floor_means(sc, engine, tmp_path):
+    sc.render.engine = engine
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(str(tmp_path / f"{engine}.exr"))))
+    return np.array([img[3:7, c - 2:c + 2, :3].mean(axis=(0, 1)) for c in (7, 15, 22)])
+
+
+@pytest.mark.parametrize('emitter_kind,tinted', [('SUN', False), ('AREA', True)])
+@pytest.mark.parametrize('states', [{"B": 'INCLUDE'}, {"B": 'EXCLUDE'}, {"C": 'INCLUDE'}])
+def test_blocker_collection_decides_the_shadows(emitter_kind, tinted, states, tmp_path):
+    """Shadow linking: with any blocker included only those cast the emitter's shadows, else
+    all but the excluded; a transparent blocker tints them (Cycles' transparent shadows)."""
+    sc, emitter = _blockers(emitter_kind, tinted)
+    plain_c = _floor_means(sc, 'CYCLES', tmp_path)
+    coll = bpy.data.collections.new("Blockers")
+    for name in states:
+        coll.objects.link(bpy.data.objects[name])
+    for ob, item in zip(coll.objects, coll.collection_objects):
+        item.light_linking.link_state = states[ob.name]
+    emitter.light_linking.blocker_collection = coll
+    c, d = _floor_means(sc, 'CYCLES', tmp_path), _floor_means(sc, 'DACRT', tmp_path)
+    assert np.abs(c - plain_c).max() > 0.05, "the blockers must change the shadows"
+    assert np.all(np.abs(d - c) <= 0.02 * np.maximum(c, 0.05)), (d, c)
