@@ -8,6 +8,8 @@ as (seeds, H, W, 4) float32, row 0 at the bottom as Blender stores them.
 """
 import os
 import tempfile
+from pathlib import Path
+from types import SimpleNamespace
 
 import bpy
 import numpy as np
@@ -73,6 +75,19 @@ def set_dacrt(scene, spec, seed):
     d.filter_width = spec.filter_width
     d.seed = seed
     d.sample_clamp_direct, d.sample_clamp_indirect = spec.clamp      # as set_cycles (fair: 0, 0)
+
+
+def engine_means(scene, directory, tag, samples=256, bounces=4):
+    """{engine: Combined's RGB means (float64)} of the scene rendered by Cycles and DACRT with
+    the fair settings at `samples` and `bounces`, EXRs named by tag in directory."""
+    spec = SimpleNamespace(cycles_samples=samples, dacrt_samples=samples, bounces=bounces, clamp=(0.0, 0.0),
+                           filter_type='BLACKMAN_HARRIS', filter_width=1.5)
+    means = {}
+    for engine, setup in (('CYCLES', set_cycles), ('DACRT', set_dacrt)):
+        setup(scene, spec, 0)
+        img = render_combined(scene, str(Path(directory) / f"{engine}-{tag}.exr"))
+        means[engine] = img[..., :3].astype(np.float64).mean(axis=(0, 1))
+    return means
 
 
 def render_combined(scene, path):

@@ -3,8 +3,6 @@ lights (with any object included, only those; else all but the excluded), for an
 and for an emissive mesh, directly (three planes, no bounce) and with bounces (the Cornell
 box's light kept off the back wall and the tall block: their bounced light changes too).
 A renderer ignoring the links fails each case by far more than the tolerances."""
-from types import SimpleNamespace
-
 import bpy
 import numpy as np
 import pytest
@@ -46,16 +44,26 @@ def _planes(emissive):
         emitter.visible_camera = False
     else:
         emitter = scenes.light('AREA', 30.0, (0, 0, 3), size=2.0)
-    sc.cycles.samples = sc.dacrt.samples = 128
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.use_denoising = False
+    _direct_light(sc, 128)
     return sc, emitter
 
 
-def _plane_means(sc, engine, tmp_path):
+def _direct_light(sc, samples):
+    """Both engines at `samples`, no bounce (direct light only), no denoising."""
+    sc.cycles.samples = sc.dacrt.samples = samples
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    sc.cycles.use_denoising = False
+
+
+def _means(sc, engine, tmp_path, rows, half, cols=(5, 15, 25)):
+    """The mean RGB of the 30 x 10 render's windows (rows, cols +- half), by `engine`."""
     sc.render.engine = engine
     img = scenes.rgba(scenes.read_exr(scenes.render_exr(str(tmp_path / f"{engine}.exr"))))
-    return np.array([img[2:8, c - 3:c + 3, 0].mean() for c in (5, 15, 25)])
+    return np.array([img[rows, c - half:c + half, :3].mean(axis=(0, 1)) for c in cols])
+
+
+def _plane_means(sc, engine, tmp_path):
+    return _means(sc, engine, tmp_path, slice(2, 8), 3)[:, 0]
 
 
 @pytest.mark.parametrize('emissive', [False, True])
@@ -85,12 +93,8 @@ def test_light_linking_with_bounces_matches_cycles(tmp_path):
         rendering.fair_scene_settings(sc)
         if linked:
             _link(bpy.data.objects["CeilingLight"], {"Back": 'EXCLUDE', "TallBlock": 'EXCLUDE'})
-        spec = SimpleNamespace(cycles_samples=256, dacrt_samples=256, bounces=4, clamp=(0.0, 0.0),
-                               filter_type='BLACKMAN_HARRIS', filter_width=1.5)
-        for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
-            setup(sc, spec, 0)
-            img = rendering.render_combined(sc, str(tmp_path / f"{engine}-{linked}.exr"))
-            means[engine, linked] = img[..., :3].astype(np.float64).mean(axis=(0, 1))
+        for engine, m in rendering.engine_means(sc, tmp_path, linked).items():
+            means[engine, linked] = m
     ratio = means['DACRT', True] / means['CYCLES', True]
     assert np.all(np.abs(ratio - 1) < 0.01), ratio
     assert np.all(means['CYCLES', True] < 0.9 * means['CYCLES', False])    # the links matter here
@@ -113,16 +117,12 @@ def _blockers(emitter_kind, tinted):
             nt.links.new(clear.outputs['BSDF'], out.inputs['Surface'])
         scenes.plane(name, size=1.5, location=(x, 0, 1), materials=[mat]).visible_camera = False
     emitter = scenes.light('SUN', 3.0) if emitter_kind == 'SUN' else scenes.light('AREA', 40.0, (0, 0, 4), size=1.0)
-    sc.cycles.samples = sc.dacrt.samples = 64
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.use_denoising = False
+    _direct_light(sc, 64)
     return sc, emitter
 
 
 def _floor_means(sc, engine, tmp_path):
-    sc.render.engine = engine
-    img = scenes.rgba(scenes.read_exr(scenes.render_exr(str(tmp_path / f"{engine}.exr"))))
-    return np.array([img[3:7, c - 2:c + 2, :3].mean(axis=(0, 1)) for c in (7, 15, 22)])
+    return _means(sc, engine, tmp_path, slice(3, 7), 2, (7, 15, 22))
 
 
 @pytest.mark.parametrize('emitter_kind,tinted', [('SUN', False), ('AREA', True)])

@@ -3,8 +3,6 @@ bounces. Cycles skips the light when sampling lights at shading points deeper th
 (light_select_reached_max_bounces) but still lets BSDF rays find it, MIS-weighted; so does
 DACRT. With the limit the box is far darker (0.22 and 0.32 against 0.41 in red), so a renderer
 ignoring it, or also limiting the BSDF rays' hits, fails the 1% comparison of channel means."""
-from types import SimpleNamespace
-
 import bpy
 import numpy as np
 import pytest
@@ -23,16 +21,12 @@ def test_light_max_bounces_matches_cycles(limit, tmp_path):
     rendering.fair_scene_settings(sc)
     lamps = [o for o in bpy.data.objects if o.type == 'LIGHT']
     assert lamps
-    spec = SimpleNamespace(cycles_samples=256, dacrt_samples=256, bounces=4, clamp=(0.0, 0.0),
-                           filter_type='BLACKMAN_HARRIS', filter_width=1.5)
     means = {}
     for light_limit in (1024, limit):
         for ob in lamps:
             ob.data.cycles.max_bounces = light_limit
-        for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
-            setup(sc, spec, 0)
-            img = rendering.render_combined(sc, str(tmp_path / f"{engine}-{light_limit}.exr"))
-            means[engine, light_limit] = img[..., :3].astype(np.float64).mean(axis=(0, 1))
+        for engine, m in rendering.engine_means(sc, tmp_path, light_limit).items():
+            means[engine, light_limit] = m
     ratio = means['DACRT', limit] / means['CYCLES', limit]
     assert np.all(np.abs(ratio - 1) < 0.01), ratio
     assert np.all(means['CYCLES', limit] < 0.85 * means['CYCLES', 1024])    # the limit matters here
