@@ -136,10 +136,7 @@ class Coverage:
 def _objects(scene_data) -> list:
     """The object names, one per object index the geometry uses (named by index where a
     caller gave fewer names)."""
-    names = list(scene_data.object_names)
-    index = np.asarray(scene_data.geometry.object_index)
-    need = int(index.max()) + 1 if len(index) else 0
-    return names + [f"Object.{i:03d}" for i in range(len(names), need)]
+    return scene_data.per_object(scene_data.object_names, lambda i: f"Object.{i:03d}")
 
 
 def _assets(scene_data) -> list:

@@ -471,8 +471,7 @@ class Integrator:
         self._groups = tuple(getattr(sd.settings, 'lightgroups', ()))
         group = {name: g for g, name in enumerate(self._groups)}
         ob = np.asarray(sd.geometry.object_index, np.int64)
-        names = list(getattr(sd, 'object_lightgroups', ())) + [''] * max(0, (int(ob.max()) + 1 if len(ob) else 0)
-                                                                      - len(getattr(sd, 'object_lightgroups', ())))
+        names = sd.per_object(sd.object_lightgroups, lambda i: '')
         self._tri_group = np.take(np.array([group.get(n, -1) for n in names] or [-1], np.int64), ob) \
             if self._groups and len(ob) else None
         self._world_group = group.get(getattr(sd, 'world_lightgroup', ''), -1)
@@ -503,7 +502,7 @@ class Integrator:
         # Record index lists per ray kind, for lamp_gather.
         nl = self.lights.num_lamps
         diffuse = self.lights.lamps + self.lights.unsampled_lamps
-        every = diffuse + self.lights.camera_lamps
+        every = self._record_lamps = diffuse + self.lights.camera_lamps
         self._lamp_records = lamp_records(every)
         self._nee_records = np.ascontiguousarray(self._lamp_records[:nl])
         # camera rays' lamps: (record index, is the world), in record order
@@ -538,28 +537,20 @@ class Integrator:
             np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri + nenv, bool)]),
             *((None, None, None) if tris is None else (tris.geo, tris.area, tris.emission)),
             environment=None if env is None else env.native)
+        every = self._record_lamps
         if self._groups:                    # light groups: each lamp record's and entry's group
-            every = lights.lamps + lights.unsampled_lamps + lights.camera_lamps
             self._record_group = np.array([self._world_group if isinstance(l, BackgroundLight)
-                                           else self._group_index.get(l.lightgroup, -1) for l in every] or [-1],
-                                          np.int64)[:len(every)]
-            self._entry_group = np.concatenate([
-                self._record_group[:len(lights.lamps)],
-                self._tri_group[tris.index] if ntri else np.zeros(0, np.int64),
-                np.full(nenv, self._world_group, np.int64)]).astype(np.int64)
+                                           else self._group_index.get(l.lightgroup, -1) for l in every],
+                                          np.int64).reshape(-1)
+            self._entry_group = self._entry_table(self._record_group, self._tri_group, self._world_group)
         if self._shadow_link is not None:   # shadow linking: each entry's set of blockers
-            self._entry_shadow_set = np.concatenate([
-                np.array([0 if isinstance(l, BackgroundLight) else self._shadow_link.emitter_set(l.name)
-                          for l in lights.lamps], np.int64).reshape(-1),
-                self._tri_shadow_set[tris.index] if ntri else np.zeros(0, np.int64),
-                np.zeros(nenv, np.int64)]).astype(np.int64)
+            self._entry_shadow_set = self._entry_table(
+                [0 if isinstance(l, BackgroundLight) else self._shadow_link.emitter_set(l.name) for l in every],
+                self._tri_shadow_set, 0)
         if self._link is not None:          # light linking: each entry's and lamp record's light set
-            every = lights.lamps + lights.unsampled_lamps + lights.camera_lamps
             self._record_set = np.array([0 if isinstance(l, BackgroundLight) else self._link.emitter_set(l.name)
                                          for l in every], np.uint8).reshape(-1)
-            self._entry_set = np.concatenate([self._record_set[:len(lights.lamps)],
-                                              self._tri_set[tris.index] if ntri else np.zeros(0, np.uint8),
-                                              np.zeros(nenv, np.uint8)]).astype(np.uint8)
+            self._entry_set = self._entry_table(self._record_set, self._tri_set, 0, np.uint8)
         # Cycles' Light > Max Bounces: at vertex k the lamps whose limit is below k are still
         # chosen with their probability but light nothing (their records' emission is 0), as
         # Cycles rejects their samples; BSDF rays still find them (Cycles does not limit those)
@@ -568,6 +559,17 @@ class Integrator:
         # lamps never chosen (unsampled, camera-only) have 0: a BSDF hit on them weighs 1
         self._record_prob = np.concatenate([lights.lamp_prob, np.zeros(len(lights.unsampled_lamps)
                                                                         + len(lights.camera_lamps), F32)]).astype(F32)
+
+    def _entry_table(self, per_record, per_tri, env_value, dtype=np.int64):
+        """A value per light-choice entry, from one per lamp record (the sampled lamps are the
+        first records) and one per triangle: the lamps', the emissive triangles', the
+        environment's (env_value)."""
+        lights = self.lights
+        tris = lights.triangles
+        return np.concatenate([
+            np.asarray(per_record, dtype).reshape(-1)[:len(lights.lamps)],
+            np.asarray(per_tri, dtype)[tris.index] if tris is not None and len(tris.index) else np.zeros(0, dtype),
+            np.full(int(lights.environment is not None), env_value, dtype)]).astype(dtype)
 
     def _init_linking(self, sd: SceneData):
         """Light linking (lights/linking.py): each triangle's receiver mask and, as emitter, its
@@ -578,7 +580,7 @@ class Integrator:
         if not (links or shadow_links) or not len(self.tri):
             return
         ob = np.asarray(sd.geometry.object_index, np.int64)
-        names = list(sd.object_names) + [None] * max(0, int(ob.max()) + 1 - len(sd.object_names))
+        names = sd.per_object(sd.object_names, lambda i: None)
         link = LightLinking(links, names, self.messages)
         if link.active:
             self._link = link
@@ -1148,10 +1150,7 @@ class Integrator:
         camera = k == 0
         lamps = self._bsdf_lamps if not camera else self._camera_emitters if sinks.split else self._camera_lamps
         outs = [(lamps, sinks.found(k))]
-        if sinks.groups:                    # each light group's lamps, from its own array
-            combined = self._bsdf_lamps if not camera else self._camera_lamps
-            outs += [(combined[self._record_group[combined] == g], G) for g, G in enumerate(sinks.groups)
-                     if len(combined)]
+        outs += self._group_lamps(camera, sinks)
         for lamps, out in outs:
             if not len(lamps):
                 continue
@@ -1392,6 +1391,15 @@ class Integrator:
         of vertex 0 (Cycles clamps it by bounce - 1 <= 0), indirect after."""
         return self._clamps[k > 1]
 
+    def _group_lamps(self, camera, sinks):
+        """[(lamp records, light group's array)]: per light group, the records of its lamps
+        among those Combined gathers from camera or BSDF rays (none: left out)."""
+        combined = self._bsdf_lamps if not camera else self._camera_lamps
+        if not sinks.groups or not len(combined):
+            return []
+        mine = ((combined[self._record_group[combined] == g], G) for g, G in enumerate(sinks.groups))
+        return [(lamps, G) for lamps, G in mine if len(lamps)]
+
     def _gather_lamps(self, path, hit, hits, sinks, k):
         """Lamps the rays meet (lamps are not geometry): finite ones before the surface hit,
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
@@ -1408,15 +1416,10 @@ class Integrator:
             env, groups = self._camera_env, ((self._camera_lamps, L),)
         # what goes to Combined, for the light groups (not the world behind transparent film)
         combined_env = self.lights.environment if not camera else self._camera_env
-        combined_lamps = self._bsdf_lamps if not camera else self._camera_lamps
         envs = [(env, L_env)] if env is not None else []
         if sinks.groups and combined_env is not None and self._world_group >= 0:
             envs.append((combined_env, sinks.groups[self._world_group]))
-        groups = [(lamps, out) for lamps, out in groups if len(lamps)]
-        for g, G in enumerate(sinks.groups):
-            mine = combined_lamps[self._record_group[combined_lamps] == g] if len(combined_lamps) else combined_lamps
-            if len(mine):
-                groups.append((mine, G))
+        groups = [(lamps, out) for lamps, out in groups if len(lamps)] + self._group_lamps(camera, sinks)
         miss = ~hit
         for e, out in envs:
             e.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss, path.thr,

@@ -215,3 +215,11 @@ class SceneData:
     # and the world's
     object_lightgroups: list = field(default_factory=list)
     world_lightgroup: str = ''
+
+    def per_object(self, values, fill) -> list:
+        """values, one per object (a caller may give fewer), padded with fill(i) up to the
+        object indices the geometry uses, so that geometry.object_index indexes the result."""
+        values = list(values)
+        index = np.asarray(self.geometry.object_index)
+        need = int(index.max()) + 1 if len(index) else 0
+        return values + [fill(i) for i in range(len(values), need)]
