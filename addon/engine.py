@@ -14,7 +14,7 @@ import numpy as np
 
 from . import cryptomatte, export
 from .allocator import render_heap
-from .passes import LIGHTGROUP_PREFIX, PASSES, enabled, result_name
+from .passes import AOV_CHANNELS, AOV_PREFIX, LIGHTGROUP_PREFIX, PASSES, enabled, result_name
 
 # Extra passes: (film name, view-layer toggle, channels, chan_id, type), and Blender's names
 # for them (what the compositor and multilayer EXR use) in this Blender
@@ -64,6 +64,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
                 self.register_pass(scene, renderlayer, RESULT_PASS_NAME[name], channels, chan_id, kind)
         for group in dict.fromkeys(g.name for g in getattr(renderlayer, 'lightgroups', ())):
             self.register_pass(scene, renderlayer, LIGHTGROUP_PREFIX + group, 3, "RGB", 'COLOR')
+        for aov in getattr(renderlayer, 'aovs', ()):      # as Cycles' engine.py registers them
+            if aov.is_valid:
+                self.register_pass(scene, renderlayer, aov.name, *AOV_CHANNELS.get(aov.type, AOV_CHANNELS['COLOR']))
         for kind, toggle in cryptomatte.KINDS:
             if getattr(renderlayer, toggle, False):
                 for name in cryptomatte.pass_names(kind, getattr(renderlayer, 'pass_cryptomatte_depth', 6)):
@@ -200,6 +203,10 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         for name in film.lightgroup_passes:
             if name in passes:
                 self._set(passes, name, film.pass_image(name), scene_data.camera, view)
+        for key in film.aov_passes:
+            name = key[len(AOV_PREFIX):]
+            if name in passes:
+                self._set(passes, name, film.pass_image(key), scene_data.camera, view)
         for name, image in (film.cryptomatte_images() if final else {}).items():
             if name in passes:
                 self._set(passes, name, image, scene_data.camera, view)

@@ -55,7 +55,7 @@ from . import nodeeval, panorama
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant_color, constant_value
-from .nodegraph import input_socket, linked_link, linked_node, output_node
+from .nodegraph import aov_outputs, input_socket, linked_link, linked_node, output_node
 from .cryptomatte import KINDS as CRYPTO_KINDS
 from .passes import PASSES, enabled, result_name
 from .texture import UdimTiles
@@ -597,13 +597,29 @@ class _MaterialBuilder:
                 o_interp, o_ext, o_transform = tex.interpolation, tex.extension, tex.transform
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
+        aovs = self._aovs(ntree, reasons) if ntree is not None else {}
         return sd.Material(name=name, base_color=base,
                            emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
-                           pass_index=int(mat.pass_index))
+                           pass_index=int(mat.pass_index), aovs=aovs)
+
+    @staticmethod
+    def _aovs(ntree, reasons):
+        """{AOV name: (colour (3,), value)} of the tree's AOV Output nodes (those of one name add
+        up, as Cycles writes each); an input fed by an image or a node the export cannot compute
+        is read as its own value, noted in reasons."""
+        aovs = {}
+        for node in aov_outputs(ntree):
+            (color, c_exact), (value, v_exact) = constant_color(node.inputs['Color']), constant_value(node.inputs['Value'])
+            if not (c_exact and v_exact):
+                reasons.append(f"AOV '{node.aov_name}' is fed by an image or an unsupported node: its input's own "
+                               f"value is written")
+            c0, v0 = aovs.get(node.aov_name, (np.zeros(3, np.float32), 0.0))
+            aovs[node.aov_name] = (c0 + np.asarray(color, np.float32), v0 + float(value))
+        return aovs
 
     @staticmethod
     def _albedo(c):
@@ -1183,11 +1199,15 @@ class _Exporter:
         passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]))
         missing = [label for owner, attr, label in _UNRENDERED_PASSES
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
-        missing += [f"AOV '{a.name}'" for a in getattr(vl, 'aovs', ())]
+        aovs = tuple(dict.fromkeys((a.name, a.type) for a in getattr(vl, 'aovs', ()) if a.is_valid))
+        missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ()) if not a.is_valid]
+        if aovs and scene.world is not None and aov_outputs(scene.world.node_tree):
+            self.messages.append(('WARNING', f"world '{scene.world.name}': its AOV Output nodes are not rendered "
+                                             f"(DACRT writes the AOVs of materials only)"))
         crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
         if missing:
             written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
-                                              + ['Cryptomatte', 'light groups']))
+                                              + ['Cryptomatte', 'light groups', 'shader AOVs']))
             self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, {written} "
                                              f"only; not in the result: {', '.join(missing)}"))
         mist = scene.world.mist_settings if scene.world is not None else None
@@ -1204,6 +1224,7 @@ class _Exporter:
                            pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
                            cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),
                            lightgroups=tuple(dict.fromkeys(g.name for g in getattr(vl, 'lightgroups', ()))),
+                           aovs=aovs,
                            adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
     # -- instances -----------------------------------------------------------------------

@@ -8,7 +8,8 @@ DiffInd, which read back divided by the Diffuse Color sums as Cycles divides the
 is 0; the film keeps DiffCol for them when it is not requested), the per-pixel count of accepted samples, the count of samples dropped for
 being NaN or infinite and, for adaptive sampling, a second Combined sum of the odd-numbered
 samples (weighted 2, Cycles' adaptive auxiliary buffer) and the error estimate built from it,
-and the Cryptomatte coverage of each ID per pixel (cryptomatte.py). Pixel values are the plain mean of the samples that landed in the pixel
+the Cryptomatte coverage of each ID per pixel (cryptomatte.py), the light groups' Combined_<name>
+and the Shader AOVs ('AOV:<name>', averaged like the data passes). Pixel values are the plain mean of the samples that landed in the pixel
 (the pixel filter is applied by importance sampling the ray positions, see filter.py), so a
 dropped sample only lowers that pixel's count. Arrays are (height, width, channels), row 0 at
 the bottom, as Blender's render result expects.
@@ -21,13 +22,13 @@ import dacrt
 
 from .cryptomatte import Coverage, pass_names
 from .passes import CHANNELS as PASS_CHANNELS
-from .passes import DIVIDED_BY_COLOR, FIRST_SAMPLE, LIGHTGROUP_PREFIX
+from .passes import AOV_CHANNELS, AOV_PREFIX, DIVIDED_BY_COLOR, FIRST_SAMPLE, LIGHTGROUP_PREFIX
 from .passes import LIGHT as LIGHT_PASSES
 
 
 class Film:
     def __init__(self, width: int, height: int, passes=(), adaptive: bool = False, cryptomatte=None,
-                 lightgroups=()):
+                 lightgroups=(), aovs=()):
         unknown = [p for p in passes if p not in PASS_CHANNELS]
         if unknown:
             raise ValueError(f"unknown pass(es) {unknown}; supported: {sorted(PASS_CHANNELS)}")
@@ -45,6 +46,10 @@ class Film:
         # light groups: 'Combined_<name>', the RGB light of each group's emitters
         self.lightgroup_passes = tuple(LIGHTGROUP_PREFIX + name for name in dict.fromkeys(lightgroups))
         self._pass_sum.update((p, np.zeros((3, npix), np.float64)) for p in self.lightgroup_passes)
+        # Shader AOVs ((name, 'COLOR' | 'VALUE')): 'AOV:<name>', the mean of what the samples' surfaces wrote
+        aov_channels = {AOV_PREFIX + name: AOV_CHANNELS[kind][0] for name, kind in aovs}
+        self.aov_passes = tuple(aov_channels)
+        self._pass_sum.update((p, np.zeros((c, npix), np.float64)) for p, c in aov_channels.items())
         # 0 until a pixel's sample 0 is rendered (pixels outside a render border stay 0)
         self._first = {p: np.zeros((PASS_CHANNELS[p], npix), np.float32)
                        for p in self.passes if p in FIRST_SAMPLE}
@@ -148,7 +153,7 @@ class Film:
 
     def pass_image(self, name: str) -> np.ndarray:
         """(H, W, channels) float32 image of an enabled pass (PASS_CHANNELS)."""
-        if name not in self.passes and name not in self.lightgroup_passes:
+        if name not in self.passes and name not in self.lightgroup_passes and name not in self.aov_passes:
             raise KeyError(f"pass {name!r} was not requested (requested: {list(self.passes)})")
         if name in FIRST_SAMPLE:
             return self._first[name].T.reshape(self.height, self.width, -1).copy()

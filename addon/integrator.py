@@ -54,10 +54,10 @@ from .cryptomatte import KINDS as CRYPTO_KINDS
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
 from .film import LIGHT_PASSES, Film
+from .passes import AOV_CHANNELS, AOV_PREFIX
 from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DENOISE as DENOISE_PASSES
-from .passes import LIGHTGROUP_PREFIX
-from .passes import FIRST_SAMPLE
+from .passes import FIRST_SAMPLE, LIGHTGROUP_PREFIX
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .lights.base import RECORD_FIELDS
@@ -398,12 +398,15 @@ class Integrator:
         levels = int(getattr(s, 'cryptomatte_levels', 6))
         self._crypto_ids = {k: cryptomatte.triangle_ids(scene_data, k) for k in kinds}
         crypto = {k: (cryptomatte.ids(cryptomatte.layer_names(scene_data, k)), levels) for k in kinds}
+        aovs = tuple(dict.fromkeys((str(name), str(kind)) for name, kind in getattr(s, 'aovs', ())))
         self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes),
                          adaptive=self.adaptive is not None, cryptomatte=crypto,
-                         lightgroups=tuple(getattr(s, 'lightgroups', ())))
+                         lightgroups=tuple(getattr(s, 'lightgroups', ())), aovs=aovs)
+        self._aovs = _aov_tables(aovs, scene_data.materials)
         self._light_passes = tuple(p for p in LIGHT_PASSES if p in self.film.passes)
-        # what camera rays' first surfaces write: the data passes and Cryptomatte
-        self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES) + kinds
+        # what camera rays' first surfaces write: the data passes, Cryptomatte and the AOVs
+        self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES) + kinds \
+            + tuple(self._aovs)
         self.tri = _Triangles(scene_data.geometry, self.messages)
         self.mats = _Materials(scene_data.materials)
         holdout = np.array([bool(m.holdout) for m in scene_data.materials])
@@ -1256,6 +1259,14 @@ class Integrator:
             data['Mist'][0, cols] = 1.0 - self._mist(P)
         self._write_first(pix, samp, cols, prim, P)
         self._write_coverage(pix, cols, prim, np.ones(len(cols), F32))
+        for key, table in self._aovs.items():
+            data[key] = np.zeros((table.shape[0], n), F32)
+            data[key][:, cols] = self._aov_values(table, prim)
+
+    def _aov_values(self, table, prim):
+        """(channels, k): what the materials of the surfaces prim write to an AOV (per material
+        table, _aov_tables)."""
+        return np.take(table, np.take(self.tri.material, prim), axis=1)
 
     def _write_coverage(self, pix, cols, prim, weight):
         """Cryptomatte: the paths cols of the block saw the surfaces prim with weight (k,)."""
@@ -1313,6 +1324,7 @@ class Integrator:
         threshold = float(getattr(self.settings, 'pass_alpha_threshold', 0.5))
         normal, diff, uv = np.zeros((3, n), F32), np.zeros((3, n), F32), np.zeros((3, n), F32)
         mist_out = np.zeros(n, F32)
+        aovs = {key: np.zeros((table.shape[0], n), F32) for key, table in self._aovs.items()}
         first_prim = np.full(n, -1, np.int64)       # the surface the sample-0 passes describe
         first_P = np.zeros((3, n), F32)
         done = np.zeros(n, bool)                    # Cycles' PATH_RAY_SINGLE_PASS_DONE
@@ -1332,6 +1344,9 @@ class Integrator:
             # Cryptomatte weighs every surface by throughput x opacity (film/data_passes.h)
             self._write_coverage(pix, cols, prim, thr.mean(axis=0) * alpha.mean(axis=0))
             todo = ~done[cols]
+            # Shader AOVs: every surface's shader writes until the pass is done (svm/aov.h)
+            for key, table in self._aovs.items():
+                aovs[key][:, cols[todo]] += self._aov_values(table, prim[todo])
             first_prim[cols[todo]] = prim[todo]
             first_P[:, cols[todo]] = P[:, todo]
             first = todo & ((alpha.mean(axis=0) >= threshold) | (threshold == 0.0))
@@ -1364,6 +1379,7 @@ class Integrator:
             data['UV'] = uv
         if denoise is not None:
             denoise.finish(data)
+        data.update(aovs)
         seen = np.flatnonzero(first_prim >= 0)
         self._write_first(pix, samp, seen, first_prim[seen], first_P[:, seen])
 
@@ -1548,6 +1564,24 @@ class _Denoise:
                              ('DenoiseDepth', self.depth[None, :])):
             if name in self.want:
                 data[name] = values
+
+
+def _aov_tables(aovs, materials) -> dict:
+    """{film key 'AOV:<name>': (channels, materials) float32}: what each material's AOV Output
+    nodes write per sample, as Cycles' film/aov_passes.h: a COLOR AOV (r, g, b, 1), a VALUE AOV
+    its value; 0 (alpha 0 too) for materials that write nothing to it."""
+    tables = {}
+    for name, kind in aovs:
+        channels = AOV_CHANNELS[kind][0]
+        table = np.zeros((channels, len(materials)), F32)
+        for j, m in enumerate(materials):
+            written = (getattr(m, 'aovs', None) or {}).get(name)
+            if written is None:
+                continue
+            color, value = written
+            table[:, j] = (*np.asarray(color, F32)[:3], 1.0) if kind == 'COLOR' else (value,)
+        tables[AOV_PREFIX + name] = table
+    return tables
 
 
 class _Sinks:

@@ -160,6 +160,22 @@ def input_by_id(node, identifier):
     return None if s is None else GraphSocket(s, node.groups if isinstance(node, GraphNode) else ())
 
 
+def aov_outputs(ntree, groups=(), depth=0):
+    """The AOV Output nodes Cycles runs in a tree: every unmuted one, in groups too (Cycles
+    flattens them), as GraphNodes whose inputs can be followed out of their groups."""
+    found = []
+    if ntree is None or depth > MAX_HOPS:
+        return found
+    for node in ntree.nodes:
+        if node.mute:
+            continue
+        if node.type == 'OUTPUT_AOV':
+            found.append(GraphNode(node, groups))
+        elif node.type == 'GROUP' and node.node_tree is not None:
+            found += aov_outputs(node.node_tree, groups + (node,), depth + 1)
+    return found
+
+
 def _group_output(ntree):
     """The Group Output node a group's value comes from (the active one)."""
     outputs = [n for n in ntree.nodes if n.type == 'GROUP_OUTPUT']

@@ -40,6 +40,11 @@ DENOISE = ('DenoiseNormal', 'DenoiseAlbedo', 'DenoiseDepth')
 # a view layer's Light Group <name> is the pass 'Combined_<name>' (RGB), as Cycles names it
 LIGHTGROUP_PREFIX = 'Combined_'
 
+# a Shader AOV's result pass is its own name; the film keys it apart from the passes above
+# (an AOV may share a name with one of them), and Cycles' channels per AOV type
+AOV_PREFIX = 'AOV:'
+AOV_CHANNELS = {'COLOR': (4, 'RGBA', 'COLOR'), 'VALUE': (1, 'X', 'VALUE')}
+
 # the parts Combined is the sum of, and those read back divided by the Diffuse Color sums
 LIGHT = ('DiffDir', 'DiffInd', 'Emit', 'Env')
 DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')

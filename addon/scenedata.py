@@ -118,6 +118,9 @@ class Material:
     opacity_extension: str = 'REPEAT'
     opacity_transform: Optional[np.ndarray] = None
     pass_index: int = 0                           # Blender's material pass index (Material Index pass)
+    # AOV Output nodes: AOV name -> (colour (3,), value), what the material writes to that
+    # AOV's pass (a COLOR AOV takes the colour, a VALUE AOV the value; nodes of one name add up)
+    aovs: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -182,6 +185,8 @@ class Settings:
     cryptomatte_levels: int = 6
     # the view layer's Light Groups: a Combined_<name> pass each, the light of its emitters
     lightgroups: tuple = ()
+    # the view layer's Shader AOVs: ((name, 'COLOR' | 'VALUE'), ...), a pass each
+    aovs: tuple = ()
 
 
 @dataclass

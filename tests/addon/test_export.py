@@ -570,8 +570,7 @@ def test_light_linking_receivers_exported(scene, exported):
 
 
 def test_passes_dacrt_does_not_write_are_reported(scene, exported):
-    """A view layer asking for passes Cycles renders and DACRT does not (Glossy, AO,
-    Cryptomatte, an AOV...) is told which are missing from the result; the passes DACRT writes
+    """A view layer asking for passes Cycles renders and DACRT does not (Glossy, AO...) is told which are missing from the result; the passes DACRT writes
     (data and diffuse light passes, Emission, Environment) are not named, and nothing is said
     when only those are on."""
     setup(scene)
@@ -589,8 +588,9 @@ def test_passes_dacrt_does_not_write_are_reported(scene, exported):
     vl.aovs.add().name = "Wetness"
     notes = [m for _, m in exported().messages if "not in the result" in m]
     assert len(notes) == 1, notes
-    for label in ("Glossy Direct", "Ambient Occlusion", "AOV 'Wetness'"):
+    for label in ("Glossy Direct", "Ambient Occlusion"):
         assert label in notes[0], (label, notes[0])
+    assert "Wetness" not in notes[0] and exported().settings.aovs == (("Wetness", 'COLOR'),)   # written
     assert "Denoising Data" not in notes[0] and "DenoiseNormal" in exported().settings.passes
     assert "Cryptomatte Object" not in notes[0]               # written since it has been
     assert exported().settings.cryptomatte == ('CryptoObject',)
@@ -1183,3 +1183,45 @@ def test_light_groups_exported(scene, exported):
     assert [l.lightgroup for l in s.lights if l.name == "Key"] == ["key"]
     assert s.object_lightgroups[s.object_names.index("Glow")] == "key"
     assert not any("light group" in m for _, m in s.messages)
+
+
+def test_shader_aovs_exported(scene, exported):
+    """The view layer's AOVs (name, type) and what each material's AOV Output nodes write:
+    constants, through a Math node and a node group, nodes of one name adding up; an image
+    feeding one is reported; AOV Output nodes in the world are reported as not rendered."""
+    setup(scene)
+    vl = bpy.context.view_layer
+    a, b = vl.aovs.add(), vl.aovs.add()
+    a.name, a.type, b.name, b.type = "tint", 'COLOR', "mask", 'VALUE'
+    mat = scenes.diffuse("Tagged", (0.5, 0.5, 0.5))
+    nt = mat.node_tree
+    out = nt.nodes.new('ShaderNodeOutputAOV')
+    out.aov_name = "tint"
+    out.inputs['Color'].default_value = (0.1, 0.2, 0.3, 1.0)
+    math = nt.nodes.new('ShaderNodeMath')
+    math.operation, math.inputs[0].default_value, math.inputs[1].default_value = 'ADD', 0.25, 0.5
+    nt.links.new(math.outputs[0], out.inputs['Value'])
+    group = bpy.data.node_groups.new("AOVGroup", 'ShaderNodeTree')
+    inner = group.nodes.new('ShaderNodeOutputAOV')
+    inner.aov_name, inner.inputs['Value'].default_value = "mask", 0.5
+    nt.nodes.new('ShaderNodeGroup').node_tree = group
+    twice = nt.nodes.new('ShaderNodeOutputAOV')
+    twice.aov_name, twice.inputs['Value'].default_value = "mask", 0.25
+    imaged = scenes.diffuse("Imaged", (0.5, 0.5, 0.5))
+    node = imaged.node_tree.nodes.new('ShaderNodeOutputAOV')
+    node.aov_name = "tint"
+    tex = imaged.node_tree.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image("AOVImage", np.full((2, 2, 4), 0.5, np.float32))
+    imaged.node_tree.links.new(tex.outputs['Color'], node.inputs['Color'])
+    scenes.plane("A", materials=[mat])
+    scenes.plane("B", location=(3, 0, 0), materials=[imaged])
+    scenes.world((0.1, 0.1, 0.1), 1.0)
+    scene.world.node_tree.nodes.new('ShaderNodeOutputAOV').aov_name = "tint"
+    s = exported()
+    assert s.settings.aovs == (("tint", 'COLOR'), ("mask", 'VALUE'))
+    table = {m.name: m for m in s.materials}
+    color, value = table["Tagged"].aovs["tint"]
+    assert np.allclose(color, (0.1, 0.2, 0.3)) and value == pytest.approx(0.75)
+    assert table["Tagged"].aovs["mask"][1] == pytest.approx(0.75) and not table["Tagged"].approximated
+    assert "AOV 'tint'" in table["Imaged"].approximated
+    assert any("world" in m and "AOV Output" in m for _, m in s.messages)

@@ -1,0 +1,86 @@
+"""Shader AOVs agree with Cycles: AOV Output nodes in the Cornell box's materials (one inside a
+node group, one fed by a Math node, two of one name adding up) and on two sheets that are
+partly transparent, where Cycles writes every surface's AOVs up to the first one at least as
+opaque as the Pass Alpha Threshold. A COLOR and a VALUE AOV; each pass's channel means, and its
+pixels, against Cycles' at the same pixel filter."""
+from types import SimpleNamespace
+
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+from tests.parity import rendering, scenes as parity_scenes
+from tests.parity.test_index_passes import _sheet
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+def _aov(mat, name, color=None, value=None, group=False):
+    """An AOV Output node named `name` in mat's tree (inside a node group when group) with a
+    constant colour and value; a value of ('MULTIPLY', a, b) comes from a Math node."""
+    nt = mat.node_tree
+    tree = nt
+    if group:
+        tree = bpy.data.node_groups.new(f"{mat.name}AOV", 'ShaderNodeTree')
+        g = nt.nodes.new('ShaderNodeGroup')
+        g.node_tree = tree
+    node = tree.nodes.new('ShaderNodeOutputAOV')
+    node.aov_name = name
+    if color is not None:
+        node.inputs['Color'].default_value = (*color, 1.0)
+    if isinstance(value, tuple):
+        math = tree.nodes.new('ShaderNodeMath')
+        math.operation, math.inputs[0].default_value, math.inputs[1].default_value = value
+        tree.links.new(math.outputs[0], node.inputs['Value'])
+    elif value is not None:
+        node.inputs['Value'].default_value = value
+    return node
+
+
+def test_shader_aovs_match_cycles(tmp_path):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    parity_scenes.build_cornell()
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 48, 36
+    rendering.fair_scene_settings(sc)
+    vl = sc.view_layers[0]
+    tint = vl.aovs.add()
+    tint.name, tint.type = "tint", 'COLOR'
+    mask = vl.aovs.add()
+    mask.name, mask.type = "mask", 'VALUE'
+    mats = bpy.data.materials
+    _aov(mats["White"], "tint", color=(0.2, 0.4, 0.6), value=0.25)
+    _aov(mats["Red"], "tint", color=(0.9, 0.1, 0.1))
+    _aov(mats["Red"], "mask", value=('MULTIPLY', 0.5, 1.5))          # 0.75, from a Math node
+    _aov(mats["Green"], "mask", value=0.5, group=True)
+    _aov(mats["Green"], "mask", value=0.25)                            # adds up to 0.75
+    # sheets: one mostly opaque (its own AOVs end the pass), one mostly
+    # transparent (its AOVs and those of the red wall behind it add up)
+    for name, transparency, x in (("Card", 0.3, 0.35), ("Veil", 0.8, -0.75)):
+        mat = _sheet(name, transparency, (0.3, 0.6, 0.9))
+        _aov(mat, "tint", color=(0.0, 0.5, 1.0))
+        _aov(mat, "mask", value=1.0)
+        sheet = scenes.plane(name, size=0.5, location=(x, -0.8, 0.8), materials=[mat])
+        sheet.rotation_euler = (np.pi / 2, 0.0, 0.0)                   # facing the camera
+    spec = SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
+                           filter_type='BLACKMAN_HARRIS', filter_width=1.5)
+    got = {}
+    for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
+        setup(sc, spec, 0)
+        exr = scenes.read_exr(scenes.render_exr(str(tmp_path / f"{engine}.exr"), sc, multilayer=True))
+        got[engine] = {'tint': np.stack([exr[f"{vl.name}.tint.{c}"] for c in "RGBA"], axis=-1),
+                       'mask': exr[f"{vl.name}.mask.X"]}
+    c, d = got['CYCLES'], got['DACRT']
+    # the AOVs are there and tell the surfaces apart (not a blank or a copy of another pass)
+    assert c['tint'][..., 3].max() > 0.99 and c['tint'][..., 2].max() > 0.6 and c['mask'].max() > 0.99
+    assert np.ptp(c['mask']) > 0.5 and np.ptp(c['tint'][..., 0]) > 0.5
+    for key in ('tint', 'mask'):
+        cm = c[key].reshape(-1, 1 if key == 'mask' else 4).mean(axis=0)
+        dm = d[key].reshape(-1, 1 if key == 'mask' else 4).mean(axis=0)
+        assert np.all(np.abs(dm - cm) < 0.01 * np.maximum(cm, 0.05)), (key, dm, cm)
+        # pixels: the same values away from edges, where the filter's samples split
+        diff = np.abs(d[key] - c[key])
+        assert diff.mean() < 0.01 and np.mean(diff > 0.05) < 0.03, (key, diff.mean(), np.mean(diff > 0.05))
+    # the mostly transparent sheet adds its value (1) to the red wall's behind it (0.75)
+    assert c['mask'].max() > 1.5 and d['mask'].max() > 1.5
