@@ -535,6 +535,21 @@ def _nonnegative(v, label, reasons):
     return np.where(bad, np.float32(0), v).astype(np.float32)
 
 
+def shader_aovs(ntree, reasons) -> dict:
+    """{AOV name: (colour (3,), value)} of a material's or world's AOV Output nodes (those of
+    one name add up, as Cycles writes each); an input fed by an image or a node the export
+    cannot compute is read as its own value, noted in reasons."""
+    aovs = {}
+    for node in aov_outputs(ntree):
+        (color, c_exact), (value, v_exact) = constant_color(node.inputs['Color']), constant_value(node.inputs['Value'])
+        if not (c_exact and v_exact):
+            reasons.append(f"AOV '{node.aov_name}' is fed by an image or an unsupported node: its input's own "
+                           f"value is written")
+        c0, v0 = aovs.get(node.aov_name, (np.zeros(3, np.float32), 0.0))
+        aovs[node.aov_name] = (c0 + np.asarray(color, np.float32), v0 + float(value))
+    return aovs
+
+
 class _MaterialBuilder:
     """Evaluates Blender materials into scenedata.Material, one per material."""
 
@@ -597,7 +612,7 @@ class _MaterialBuilder:
                 o_interp, o_ext, o_transform = tex.interpolation, tex.extension, tex.transform
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
-        aovs = self._aovs(ntree, reasons) if ntree is not None else {}
+        aovs = shader_aovs(ntree, reasons) if ntree is not None else {}
         return sd.Material(name=name, base_color=base,
                            emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
@@ -605,21 +620,6 @@ class _MaterialBuilder:
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
                            pass_index=int(mat.pass_index), aovs=aovs)
-
-    @staticmethod
-    def _aovs(ntree, reasons):
-        """{AOV name: (colour (3,), value)} of the tree's AOV Output nodes (those of one name add
-        up, as Cycles writes each); an input fed by an image or a node the export cannot compute
-        is read as its own value, noted in reasons."""
-        aovs = {}
-        for node in aov_outputs(ntree):
-            (color, c_exact), (value, v_exact) = constant_color(node.inputs['Color']), constant_value(node.inputs['Value'])
-            if not (c_exact and v_exact):
-                reasons.append(f"AOV '{node.aov_name}' is fed by an image or an unsupported node: its input's own "
-                               f"value is written")
-            c0, v0 = aovs.get(node.aov_name, (np.zeros(3, np.float32), 0.0))
-            aovs[node.aov_name] = (c0 + np.asarray(color, np.float32), v0 + float(value))
-        return aovs
 
     @staticmethod
     def _albedo(c):
@@ -1175,6 +1175,11 @@ class _Exporter:
             world_reason = (f"its colour x strength {tuple(float(v) for v in world)} is negative or "
                             "not finite; rendered black")
             world = np.zeros(3, np.float32)
+        world_aovs = {}
+        if settings.aovs and self.scene.world is not None and self.scene.world.node_tree is not None:
+            reasons = []
+            world_aovs = shader_aovs(self.scene.world.node_tree, reasons)
+            world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
         self._summarize(geometry, world, environment)
@@ -1188,7 +1193,8 @@ class _Exporter:
                             object_assets=self.object_assets, light_links=self.light_links,
                             shadow_links=self.shadow_links,
                             object_lightgroups=self.object_lightgroups,
-                            world_lightgroup=getattr(self.scene.world, 'lightgroup', '') if self.scene.world else '')
+                            world_lightgroup=getattr(self.scene.world, 'lightgroup', '') if self.scene.world else '',
+                            world_aovs=world_aovs)
 
     # -- settings ------------------------------------------------------------------------
     def _settings(self):
@@ -1201,9 +1207,6 @@ class _Exporter:
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
         aovs = tuple(dict.fromkeys((a.name, a.type) for a in getattr(vl, 'aovs', ()) if a.is_valid))
         missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ()) if not a.is_valid]
-        if aovs and scene.world is not None and aov_outputs(scene.world.node_tree):
-            self.messages.append(('WARNING', f"world '{scene.world.name}': its AOV Output nodes are not rendered "
-                                             f"(DACRT writes the AOVs of materials only)"))
         crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
         if missing:
             written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]

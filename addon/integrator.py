@@ -402,7 +402,12 @@ class Integrator:
         self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes),
                          adaptive=self.adaptive is not None, cryptomatte=crypto,
                          lightgroups=tuple(getattr(s, 'lightgroups', ())), aovs=aovs)
-        self._aovs = _aov_tables(aovs, scene_data.materials)
+        self._aovs = _aov_tables(aovs, [getattr(m, 'aovs', None) for m in scene_data.materials])
+        # the world's AOVs, where camera rays miss: not with transparent film or a world camera
+        # rays cannot see (Cycles does not run the background shader for them)
+        sees_world = not self.transparent and scene_data.world_visibility & VIS_CAMERA
+        world = _aov_tables(aovs, [scene_data.world_aovs if sees_world else None])
+        self._world_aovs = {key: table[:, 0] for key, table in world.items() if table.any()}
         self._light_passes = tuple(p for p in LIGHT_PASSES if p in self.film.passes)
         # what camera rays' first surfaces write: the data passes, Cryptomatte and the AOVs
         self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES) + kinds \
@@ -1262,6 +1267,12 @@ class Integrator:
         for key, table in self._aovs.items():
             data[key] = np.zeros((table.shape[0], n), F32)
             data[key][:, cols] = self._aov_values(table, prim)
+        self._world_aov(data, np.take(path.pid, np.flatnonzero(hits['prim'] < 0)))
+
+    def _world_aov(self, data, cols):
+        """The world's AOVs added where the block's paths cols missed everything."""
+        for key, value in self._world_aovs.items():
+            data[key][:, cols] += value[:, None]
 
     def _aov_values(self, table, prim):
         """(channels, k): what the materials of the surfaces prim write to an AOV (per material
@@ -1380,6 +1391,8 @@ class Integrator:
         if denoise is not None:
             denoise.finish(data)
         data.update(aovs)
+        missed = np.take(path.pid, np.flatnonzero(hits['prim'] < 0))
+        self._world_aov(data, missed[~done[missed]])
         seen = np.flatnonzero(first_prim >= 0)
         self._write_first(pix, samp, seen, first_prim[seen], first_P[:, seen])
 
@@ -1566,16 +1579,16 @@ class _Denoise:
                 data[name] = values
 
 
-def _aov_tables(aovs, materials) -> dict:
-    """{film key 'AOV:<name>': (channels, materials) float32}: what each material's AOV Output
-    nodes write per sample, as Cycles' film/aov_passes.h: a COLOR AOV (r, g, b, 1), a VALUE AOV
-    its value; 0 (alpha 0 too) for materials that write nothing to it."""
+def _aov_tables(aovs, shaders) -> dict:
+    """{film key 'AOV:<name>': (channels, shaders) float32}: what each shader's AOV Output
+    nodes (Material.aovs, or None) write per sample, as Cycles' film/aov_passes.h: a COLOR AOV
+    (r, g, b, 1), a VALUE AOV its value; 0 (alpha 0 too) for shaders that write nothing to it."""
     tables = {}
     for name, kind in aovs:
         channels = AOV_CHANNELS[kind][0]
-        table = np.zeros((channels, len(materials)), F32)
-        for j, m in enumerate(materials):
-            written = (getattr(m, 'aovs', None) or {}).get(name)
+        table = np.zeros((channels, len(shaders)), F32)
+        for j, written_by in enumerate(shaders):
+            written = (written_by or {}).get(name)
             if written is None:
                 continue
             color, value = written

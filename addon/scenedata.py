@@ -220,6 +220,8 @@ class SceneData:
     # and the world's
     object_lightgroups: list = field(default_factory=list)
     world_lightgroup: str = ''
+    # the world's AOV Output nodes, as Material.aovs: written where camera rays miss
+    world_aovs: dict = field(default_factory=dict)
 
     def per_object(self, values, fill) -> list:
         """values, one per object (a caller may give fewer), padded with fill(i) up to the

@@ -72,3 +72,29 @@ def test_aovs_change_nothing_else():
     without = render(dataclasses.replace(_scene(0.8), settings=dataclasses.replace(_scene(0.8).settings, aovs=())))
     assert np.array_equal(with_aovs, without.film.combined())
     assert without.film.aov_passes == ()
+
+
+def test_world_aovs_where_camera_rays_miss():
+    """The world's AOVs where camera rays miss (through the pane too, when the pass is not
+    done there), not with transparent film, and not where the world is hidden from the camera."""
+    scene = _scene(0.3, samples=16)
+    floor = scene.geometry.material == 1
+    g = scene.geometry
+    keep = ~floor                                        # no floor: the view's middle sees the world
+    scene = dataclasses.replace(scene, geometry=dataclasses.replace(
+        g, triangles=g.triangles[keep], material=g.material[keep], normals=g.normals[keep],
+        visibility=g.visibility[keep], object_index=g.object_index[keep]),
+        world_aovs={'mask': ((0.0, 0.0, 0.0), 0.125), 'tint': ((0.5, 0.5, 0.0), 0.0)})
+    _, tint, mask = _passes(scene)
+    np.testing.assert_allclose(mask[:, 4:6], 0.125)
+    np.testing.assert_allclose(tint[:, 4:6], np.broadcast_to([0.5, 0.5, 0.0, 1.0], tint[:, 4:6].shape))
+    np.testing.assert_allclose(mask[:, 0:3], 1.0)        # the pane (alpha 0.7) ends the pass
+    veil = dataclasses.replace(scene, materials=scene.materials[:3] + [dataclasses.replace(
+        scene.materials[3], transparency=np.full(3, 0.8, np.float32))])
+    _, _, mask = _passes(veil)                           # alpha 0.2: the world behind it adds
+    passed = (mask[:, 0:3] - 1.0) / 0.125
+    assert np.all((passed >= -1e-6) & (passed <= 1 + 1e-6)) and 0.4 < passed.mean() < 0.8
+    hidden = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, film_transparent=True))
+    assert not _passes(hidden)[2][:, 4:6].any()
+    hidden = dataclasses.replace(scene, world_visibility=sd.VIS_DIFFUSE)
+    assert not _passes(hidden)[2][:, 4:6].any()

@@ -1,5 +1,5 @@
 """Shader AOVs agree with Cycles: AOV Output nodes in the Cornell box's materials (one inside a
-node group, one fed by a Math node, two of one name adding up) and on two sheets that are
+node group, one fed by a Math node, two of one name adding up), in the world, and on two sheets that are
 partly transparent, where Cycles writes every surface's AOVs up to the first one at least as
 opaque as the Pass Alpha Threshold. A COLOR and a VALUE AOV; each pass's channel means, and its
 pixels, against Cycles' at the same pixel filter."""
@@ -63,6 +63,11 @@ def test_shader_aovs_match_cycles(tmp_path):
         _aov(mat, "mask", value=1.0)
         sheet = scenes.plane(name, size=0.5, location=(x, -0.8, 0.8), materials=[mat])
         sheet.rotation_euler = (np.pi / 2, 0.0, 0.0)                   # facing the camera
+    # the world, seen through the box's open front
+    world = sc.world.node_tree.nodes.new('ShaderNodeOutputAOV')
+    world.aov_name, world.inputs['Color'].default_value = "tint", (0.3, 0.3, 0.0, 1.0)
+    world = sc.world.node_tree.nodes.new('ShaderNodeOutputAOV')
+    world.aov_name, world.inputs['Value'].default_value = "mask", 0.125
     spec = SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
                            filter_type='BLACKMAN_HARRIS', filter_width=1.5)
     got = {}
