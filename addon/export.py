@@ -54,7 +54,7 @@ import numpy as np
 from . import nodeeval, panorama
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
-from .nodeeval import constant_color, constant_value
+from .nodeeval import constant, constant_color, constant_value
 from .nodegraph import aov_outputs, input_socket, linked_link, linked_node, output_node
 from .cryptomatte import KINDS as CRYPTO_KINDS
 from .passes import PASSES, enabled, result_name
@@ -535,19 +535,43 @@ def _nonnegative(v, label, reasons):
     return np.where(bad, np.float32(0), v).astype(np.float32)
 
 
-def shader_aovs(ntree, reasons) -> dict:
-    """{AOV name: (colour (3,), value)} of a material's or world's AOV Output nodes (those of
-    one name add up, as Cycles writes each); an input fed by an image or a node the export
-    cannot compute is read as its own value, noted in reasons."""
-    aovs = {}
+def shader_aovs(ntree, reasons, texture=None):
+    """(aovs, textures) of a material's or world's AOV Output nodes. aovs: {AOV name: (colour
+    (3,), value)}, the constant part of what they write (nodes of one name add up, as Cycles
+    writes each). textures: {(name, 'color' | 'value'): _Texture whose RGB is what an image (and
+    the colour and float nodes after it) writes per texel}, when texture(node, reasons) reads
+    Image Textures (materials; the world's inputs are read as constants). What cannot be
+    computed is read as the input's own value (a second image of one AOV as its average),
+    noted in reasons."""
+    aovs, textures = {}, {}
     for node in aov_outputs(ntree):
-        (color, c_exact), (value, v_exact) = constant_color(node.inputs['Color']), constant_value(node.inputs['Value'])
-        if not (c_exact and v_exact):
-            reasons.append(f"AOV '{node.aov_name}' is fed by an image or an unsupported node: its input's own "
-                           f"value is written")
-        c0, v0 = aovs.get(node.aov_name, (np.zeros(3, np.float32), 0.0))
-        aovs[node.aov_name] = (c0 + np.asarray(color, np.float32), v0 + float(value))
-    return aovs
+        name = node.aov_name
+        c0, v0 = aovs.get(name, (np.zeros(3, np.float32), 0.0))
+        parts = {}
+        for kind, color in (('color', True), ('value', False)):
+            socket = node.inputs[kind.title()]
+            if texture is None:
+                v, exact = constant(socket, color)
+                if not exact:
+                    reasons.append(f"AOV '{name}' is fed by an image or an unsupported node: its input's own "
+                                   f"value is written")
+                parts[kind] = np.asarray(v, np.float32)
+                continue
+            f = nodeeval.Evaluator(texture, reasons, MISSING_IMAGE).input(socket, color)
+            v = np.asarray(f.value, np.float32)
+            if f.tex is None or (name, kind) in textures:
+                if f.tex is not None:
+                    reasons.append(f"AOV '{name}' is fed by two images; the second as its average")
+                parts[kind] = v.reshape(-1, v.shape[-1]).mean(axis=0)
+                continue
+            texels = np.empty(f.tex.pixels.shape[:2] + (4,), np.float32)
+            texels[..., :3], texels[..., 3] = v if color else v[..., :1], 1.0
+            src = f.tex
+            textures[name, kind] = _Texture(('aov', src.key, id(texels)), texels, src.interpolation,
+                                            src.extension, src.transform, src.udim)
+            parts[kind] = np.zeros(3 if color else 1, np.float32)
+        aovs[name] = (c0 + parts['color'], v0 + float(parts['value'][0]))
+    return aovs, textures
 
 
 class _MaterialBuilder:
@@ -570,7 +594,8 @@ class _MaterialBuilder:
         if idx is None:
             idx = len(self.materials)
             self.materials.append(self._build(mat))
-            self.uses_texture.append(self.materials[-1].texture is not None or self.materials[-1].opacity is not None)
+            m = self.materials[-1]
+            self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures))
             self._index[key] = idx
         return idx
 
@@ -612,14 +637,16 @@ class _MaterialBuilder:
                 o_interp, o_ext, o_transform = tex.interpolation, tex.extension, tex.transform
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
-        aovs = shader_aovs(ntree, reasons) if ntree is not None else {}
+        aovs, aov_textures = shader_aovs(ntree, reasons, self._texture) if ntree is not None else ({}, {})
         return sd.Material(name=name, base_color=base,
                            emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
-                           pass_index=int(mat.pass_index), aovs=aovs)
+                           pass_index=int(mat.pass_index), aovs=aovs,
+                           aov_textures={key: (t.texels(t.pixels), t.interpolation, t.extension, t.transform)
+                                         for key, t in aov_textures.items()})
 
     @staticmethod
     def _albedo(c):
@@ -1178,7 +1205,7 @@ class _Exporter:
         world_aovs = {}
         if settings.aovs and self.scene.world is not None and self.scene.world.node_tree is not None:
             reasons = []
-            world_aovs = shader_aovs(self.scene.world.node_tree, reasons)
+            world_aovs = shader_aovs(self.scene.world.node_tree, reasons)[0]
             world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))

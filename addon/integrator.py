@@ -241,6 +241,14 @@ class _Materials:
                 self.opacity.append((i, tex, *_texture_modes(mat.name, 'opacity', mat.opacity_interpolation,
                                                              mat.opacity_extension, mat.opacity_transform)))
         self.transparent = self.transparency.max(axis=0) > 0
+        # images that write AOVs: (AOV name, 'color' | 'value') -> [(material index, texture,
+        # interpolation, extension, uv transform)]
+        self.aov_textures = {}
+        for i, mat in enumerate(materials):
+            for (name, kind), (tex, interp, ext, xf) in (getattr(mat, 'aov_textures', None) or {}).items():
+                label = f"AOV {name!r} {kind}"
+                self.aov_textures.setdefault((name, kind), []).append(
+                    (i, _texture_array(mat.name, label, tex), *_texture_modes(mat.name, label, interp, ext, xf)))
         # the Material Index pass's value of each material (Blender's material pass index)
         self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
@@ -1266,7 +1274,7 @@ class Integrator:
         self._write_coverage(pix, cols, prim, np.ones(len(cols), F32))
         for key, table in self._aovs.items():
             data[key] = np.zeros((table.shape[0], n), F32)
-            data[key][:, cols] = self._aov_values(table, prim)
+            data[key][:, cols] = self._aov_values(key, table, prim, hu, hv)
         self._world_aov(data, np.take(path.pid, np.flatnonzero(hits['prim'] < 0)))
 
     def _world_aov(self, data, cols):
@@ -1274,10 +1282,18 @@ class Integrator:
         for key, value in self._world_aovs.items():
             data[key][:, cols] += value[:, None]
 
-    def _aov_values(self, table, prim):
-        """(channels, k): what the materials of the surfaces prim write to an AOV (per material
-        table, _aov_tables)."""
-        return np.take(table, np.take(self.tri.material, prim), axis=1)
+    def _aov_values(self, key, table, prim, u, v):
+        """(channels, k): what the materials of the surfaces (prim, u, v) write to AOV key: the
+        constants of its table (_aov_tables) plus what images write there."""
+        mat = np.take(self.tri.material, prim)
+        out = np.take(table, mat, axis=1)
+        kind = 'color' if table.shape[0] == 4 else 'value'
+        for m, tex, interp, ext, xf in self.mats.aov_textures.get((key[len(AOV_PREFIX):], kind), ()):
+            sel = np.flatnonzero(mat == m)
+            if len(sel):
+                rgb = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))
+                out[:3 if kind == 'color' else 1, sel] += rgb[:3 if kind == 'color' else 1]
+        return out
 
     def _write_coverage(self, pix, cols, prim, weight):
         """Cryptomatte: the paths cols of the block saw the surfaces prim with weight (k,)."""
@@ -1357,7 +1373,7 @@ class Integrator:
             todo = ~done[cols]
             # Shader AOVs: every surface's shader writes until the pass is done (svm/aov.h)
             for key, table in self._aovs.items():
-                aovs[key][:, cols[todo]] += self._aov_values(table, prim[todo])
+                aovs[key][:, cols[todo]] += self._aov_values(key, table, prim[todo], u[todo], v[todo])
             first_prim[cols[todo]] = prim[todo]
             first_P[:, cols[todo]] = P[:, todo]
             first = todo & ((alpha.mean(axis=0) >= threshold) | (threshold == 0.0))

@@ -121,6 +121,10 @@ class Material:
     # AOV Output nodes: AOV name -> (colour (3,), value), what the material writes to that
     # AOV's pass (a COLOR AOV takes the colour, a VALUE AOV the value; nodes of one name add up)
     aovs: dict = field(default_factory=dict)
+    # what images write to AOVs, added to `aovs`: (name, 'color' | 'value') -> (texture (h, w, 4)
+    # or UdimTiles whose RGB is the colour, or the value in R, per texel; interpolation,
+    # extension, uv transform), read on the UV map as `texture` is
+    aov_textures: dict = field(default_factory=dict)
 
 
 @dataclass

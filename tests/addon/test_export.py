@@ -1187,8 +1187,8 @@ def test_light_groups_exported(scene, exported):
 
 def test_shader_aovs_exported(scene, exported):
     """The view layer's AOVs (name, type) and what each material's AOV Output nodes write:
-    constants, through a Math node and a node group, nodes of one name adding up; an image
-    feeding one is reported; the world's AOV Output nodes."""
+    constants, through a Math node and a node group, nodes of one name adding up, an image
+    (as a texture); the world's AOV Output nodes."""
     setup(scene)
     vl = bpy.context.view_layer
     a, b = vl.aovs.add(), vl.aovs.add()
@@ -1224,5 +1224,8 @@ def test_shader_aovs_exported(scene, exported):
     color, value = table["Tagged"].aovs["tint"]
     assert np.allclose(color, (0.1, 0.2, 0.3)) and value == pytest.approx(0.75)
     assert table["Tagged"].aovs["mask"][1] == pytest.approx(0.75) and not table["Tagged"].approximated
-    assert "AOV 'tint'" in table["Imaged"].approximated
+    assert not table["Imaged"].approximated and "tint" in table["Imaged"].aovs
+    texels, interp, ext, _ = table["Imaged"].aov_textures["tint", 'color']
+    assert np.allclose(texels[..., :3], 0.5) and interp == 'Linear' and ext == 'REPEAT'
+    assert ("tint", 'value') not in table["Imaged"].aov_textures
     assert s.world_aovs["mask"][1] == pytest.approx(0.125) and "tint" not in s.world_aovs

@@ -98,3 +98,25 @@ def test_world_aovs_where_camera_rays_miss():
     assert not _passes(hidden)[2][:, 4:6].any()
     hidden = dataclasses.replace(scene, world_visibility=sd.VIS_DIFFUSE)
     assert not _passes(hidden)[2][:, 4:6].any()
+
+
+def test_images_write_aovs_on_the_uv_map():
+    """An AOV fed by an image: what the texel under each hit holds, added to the constants."""
+    scene = _scene(0.3)
+    g = scene.geometry
+    # the UV map: u = (x + 1) / 2 over the view, so the floor's left texel covers x < 0
+    uvs = ((g.vertices[g.triangles][..., :2] + 1.0) / 2.0).astype(np.float32)
+    texels = np.ones((1, 2, 4), np.float32)
+    texels[0, 0, :3], texels[0, 1, :3] = 0.25, 0.75
+    floor = dataclasses.replace(scene.materials[1], aov_textures={('mask', 'value'): (texels, 'Closest', 'EXTEND', None)})
+    scene = dataclasses.replace(scene, geometry=dataclasses.replace(g, uvs=uvs),
+                                materials=[scene.materials[0], floor] + scene.materials[2:])
+    _, tint, mask = _passes(scene)
+    np.testing.assert_allclose(mask[:, 4:6], 0.5 + 0.75, rtol=1e-6)     # constant + the right texel
+    np.testing.assert_allclose(mask[:, 0:3], 1.0, rtol=1e-6)            # the pane ends the pass there
+    np.testing.assert_allclose(tint[:, 4:6], np.broadcast_to([0.2, 0.4, 0.6, 1.0], tint[:, 4:6].shape))
+    veil = dataclasses.replace(scene, materials=scene.materials[:3] + [dataclasses.replace(
+        scene.materials[3], transparency=np.full(3, 0.8, np.float32))])
+    _, _, mask = _passes(veil)               # through the pane: the floor's left texel, 0.25
+    passed = (mask[:, 0:3] - 1.0) / (0.5 + 0.25)
+    assert np.all((passed >= -1e-6) & (passed <= 1 + 1e-6)) and 0.4 < passed.mean() < 0.8

@@ -1,5 +1,6 @@
 """Shader AOVs agree with Cycles: AOV Output nodes in the Cornell box's materials (one inside a
-node group, one fed by a Math node, two of one name adding up), in the world, and on two sheets that are
+node group, one fed by a Math node, two of one name adding up, one from an image), in the
+world, and on two sheets that are
 partly transparent, where Cycles writes every surface's AOVs up to the first one at least as
 opaque as the Pass Alpha Threshold. A COLOR and a VALUE AOV; each pass's channel means, and its
 pixels, against Cycles' at the same pixel filter."""
@@ -63,6 +64,24 @@ def test_shader_aovs_match_cycles(tmp_path):
         _aov(mat, "mask", value=1.0)
         sheet = scenes.plane(name, size=0.5, location=(x, -0.8, 0.8), materials=[mat])
         sheet.rotation_euler = (np.pi / 2, 0.0, 0.0)                   # facing the camera
+    # a poster on the back wall whose AOVs come from a 4x4 image (tint its colour, mask twice
+    # its colour's luminance through a Math node), read on its UV map
+    texels = np.zeros((4, 4, 4), np.float32)
+    texels[..., 3] = 1.0
+    texels[..., 0] = np.linspace(0.0, 1.0, 4)[None, :]
+    texels[..., 1] = np.linspace(1.0, 0.0, 4)[:, None]
+    texels[..., 2] = 0.5
+    poster_mat = scenes.diffuse("Poster", (0.6, 0.6, 0.6))
+    nt = poster_mat.node_tree
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.interpolation = scenes.float_image("PosterImage", texels), 'Closest'
+    tint_out = _aov(poster_mat, "tint")
+    nt.links.new(tex.outputs['Color'], tint_out.inputs['Color'])
+    mask_out = _aov(poster_mat, "mask", value=('MULTIPLY', 1.0, 2.0))
+    nt.links.new(tex.outputs['Color'], mask_out.inputs['Value'].links[0].from_node.inputs[0])
+    poster = scenes.plane("Poster", size=0.6, location=(0.1, 0.98, 1.3), materials=[poster_mat])
+    poster.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    poster.data.uv_layers.new(name="UVMap").data.foreach_set("uv", [0, 0, 1, 0, 1, 1, 0, 1])
     # the world, seen through the box's open front
     world = sc.world.node_tree.nodes.new('ShaderNodeOutputAOV')
     world.aov_name, world.inputs['Color'].default_value = "tint", (0.3, 0.3, 0.0, 1.0)
@@ -87,5 +106,7 @@ def test_shader_aovs_match_cycles(tmp_path):
         # pixels: the same values away from edges, where the filter's samples split
         diff = np.abs(d[key] - c[key])
         assert diff.mean() < 0.01 and np.mean(diff > 0.05) < 0.03, (key, diff.mean(), np.mean(diff > 0.05))
+    # the poster's image: green above 0.8 is written by nothing else
+    assert min(np.sum(e['tint'][..., 1] > 0.8) for e in (c, d)) >= 3
     # the mostly transparent sheet adds its value (1) to the red wall's behind it (0.75)
     assert c['mask'].max() > 1.5 and d['mask'].max() > 1.5
