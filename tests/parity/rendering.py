@@ -90,6 +90,30 @@ def engine_means(scene, directory, tag, samples=256, bounces=4):
     return means
 
 
+def small_cornell(width=48, height=36):
+    """A fresh file holding the parity Cornell box (scenes.build_cornell) at width x height with
+    the fair settings; returns its scene."""
+    from . import scenes as parity_scenes
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    parity_scenes.build_cornell()
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    fair_scene_settings(scene)
+    return scene
+
+
+def render_layers(scene, spec, directory):
+    """{engine: {'<layer>.<pass>.<channel>': (H, W) float32}} of the scene rendered by Cycles
+    and DACRT with spec's settings (seed 0), as multilayer EXRs in directory."""
+    from tests.addon import scenes
+    out = {}
+    for engine, setup in (('CYCLES', set_cycles), ('DACRT', set_dacrt)):
+        setup(scene, spec, 0)
+        out[engine] = scenes.read_exr(scenes.render_exr(str(Path(directory) / f"{engine}.exr"), scene,
+                                                        multilayer=True))
+    return out
+
+
 def render_combined(scene, path):
     """Render with the scene's engine, save Combined as float32 EXR at `path`, return it as
     (H, W, 4) float32 (row 0 at the bottom)."""

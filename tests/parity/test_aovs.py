@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
-from tests.parity import rendering, scenes as parity_scenes
+from tests.parity import rendering
 from tests.parity.test_index_passes import _sheet
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
@@ -40,11 +40,7 @@ def _aov(mat, name, color=None, value=None, group=False):
 
 
 def test_shader_aovs_match_cycles(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    parity_scenes.build_cornell()
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 48, 36
-    rendering.fair_scene_settings(sc)
+    sc = rendering.small_cornell()
     vl = sc.view_layers[0]
     tint = vl.aovs.add()
     tint.name, tint.type = "tint", 'COLOR'
@@ -89,12 +85,9 @@ def test_shader_aovs_match_cycles(tmp_path):
     world.aov_name, world.inputs['Value'].default_value = "mask", 0.125
     spec = SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
                            filter_type='BLACKMAN_HARRIS', filter_width=1.5)
-    got = {}
-    for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
-        setup(sc, spec, 0)
-        exr = scenes.read_exr(scenes.render_exr(str(tmp_path / f"{engine}.exr"), sc, multilayer=True))
-        got[engine] = {'tint': np.stack([exr[f"{vl.name}.tint.{c}"] for c in "RGBA"], axis=-1),
-                       'mask': exr[f"{vl.name}.mask.X"]}
+    got = {engine: {'tint': np.stack([exr[f"{vl.name}.tint.{c}"] for c in "RGBA"], axis=-1),
+                    'mask': exr[f"{vl.name}.mask.X"]}
+           for engine, exr in rendering.render_layers(sc, spec, tmp_path).items()}
     c, d = got['CYCLES'], got['DACRT']
     # the AOVs are there and tell the surfaces apart (not a blank or a copy of another pass)
     assert c['tint'][..., 3].max() > 0.99 and c['tint'][..., 2].max() > 0.6 and c['mask'].max() > 0.99

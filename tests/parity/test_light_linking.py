@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
-from tests.parity import rendering, scenes as parity_scenes
+from tests.parity import rendering
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -86,11 +86,7 @@ def test_light_linking_with_bounces_matches_cycles(tmp_path):
     those surfaces get only bounced light, and what they would have bounced is missing."""
     means = {}
     for linked in (False, True):
-        bpy.ops.wm.read_factory_settings(use_empty=True)
-        parity_scenes.build_cornell()
-        sc = bpy.context.scene
-        sc.render.resolution_x, sc.render.resolution_y = 48, 36
-        rendering.fair_scene_settings(sc)
+        sc = rendering.small_cornell()
         if linked:
             _link(bpy.data.objects["CeilingLight"], {"Back": 'EXCLUDE', "TallBlock": 'EXCLUDE'})
         for engine, m in rendering.engine_means(sc, tmp_path, linked).items():

@@ -7,18 +7,14 @@ import bpy
 import numpy as np
 import pytest
 
-from tests.parity import rendering, scenes as parity_scenes
+from tests.parity import rendering
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 @pytest.mark.parametrize('limit', [0, 1])
 def test_light_max_bounces_matches_cycles(limit, tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    parity_scenes.build_cornell()
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 48, 36
-    rendering.fair_scene_settings(sc)
+    sc = rendering.small_cornell()
     lamps = [o for o in bpy.data.objects if o.type == 'LIGHT']
     assert lamps
     means = {}

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
-from tests.parity import rendering, scenes as parity_scenes
+from tests.parity import rendering
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -17,11 +17,7 @@ GROUPS = ("key", "fill", "sky", "panel")
 
 
 def test_light_groups_match_cycles(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    parity_scenes.build_cornell()
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 48, 36
-    rendering.fair_scene_settings(sc)
+    sc = rendering.small_cornell()
     vl = sc.view_layers[0]
     for name in GROUPS:
         vl.lightgroups.add(name=name)
@@ -36,9 +32,7 @@ def test_light_groups_match_cycles(tmp_path):
     spec = SimpleNamespace(cycles_samples=256, dacrt_samples=256, bounces=4, clamp=(0.0, 0.0),
                            filter_type='BLACKMAN_HARRIS', filter_width=1.5)
     means = {}
-    for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
-        setup(sc, spec, 0)
-        exr = scenes.read_exr(scenes.render_exr(str(tmp_path / f"{engine}.exr"), sc, multilayer=True))
+    for engine, exr in rendering.render_layers(sc, spec, tmp_path).items():
         for g in GROUPS:
             means[engine, g] = np.array([exr[f"{vl.name}.Combined_{g}.{c}"].mean() for c in "RGB"], np.float64)
         means[engine, 'combined'] = np.array([exr[f"{vl.name}.Combined.{c}"].mean() for c in "RGB"], np.float64)
