@@ -84,49 +84,63 @@ def pass_names(kind: str, levels: int) -> list:
 
 class Coverage:
     """Per-pixel sums of sample weights by ID index, kept sparse: (pixel x IDs + ID) keys with
-    their sums, merged as blocks come in (a pixel sees a few IDs, not all of them)."""
+    their sums and the order in which each ID first reached its pixel, merged as blocks come
+    in (a pixel sees a few IDs, not all of them)."""
 
     def __init__(self, num_ids: int):
         self.num_ids = max(1, int(num_ids))
         self._keys = np.zeros(0, np.int64)
         self._sums = np.zeros(0, np.float64)
+        self._first = np.zeros(0, np.int64)
         self._pending = []
 
-    def add(self, pixels, index, weight):
-        """Add weight (k,) of ID index (k,) to pixels (k,) (film indices)."""
+    def add(self, pixels, index, weight, order=None):
+        """Add weight (k,) of ID index (k,) to pixels (k,) (film indices); order (k,) int64
+        ranks the additions in the order Cycles makes them (sample, then surface along the
+        ray; None: all at once)."""
         w = np.asarray(weight, np.float64)
         keep = w != 0
         if keep.any():
             keys = np.asarray(pixels, np.int64)[keep] * self.num_ids + np.asarray(index, np.int64)[keep]
-            self._pending.append((keys, w[keep]))
-            if sum(len(k) for k, _ in self._pending) > 4 * len(self._keys) + (1 << 20):
+            first = np.zeros(len(keys), np.int64) if order is None else np.asarray(order, np.int64)[keep]
+            self._pending.append((keys, w[keep], first))
+            if sum(len(k) for k, _, _ in self._pending) > 4 * len(self._keys) + (1 << 20):
                 self._merge()
 
     def _merge(self):
         if not self._pending:
             return
-        keys = np.concatenate([self._keys] + [k for k, _ in self._pending])
-        sums = np.concatenate([self._sums] + [w for _, w in self._pending])
+        keys = np.concatenate([self._keys] + [k for k, _, _ in self._pending])
+        sums = np.concatenate([self._sums] + [w for _, w, _ in self._pending])
+        first = np.concatenate([self._first] + [f for _, _, f in self._pending])
         self._pending = []
         self._keys, inverse = np.unique(keys, return_inverse=True)
         self._sums = np.bincount(inverse, weights=sums, minlength=len(self._keys))
+        self._first = np.full(len(self._keys), np.iinfo(np.int64).max, np.int64)
+        np.minimum.at(self._first, inverse, first)
 
     def ranks(self, num_pixels: int, count, id_values, levels: int) -> np.ndarray:
         """(ranks, 2, num_pixels) float32: per rank the ID and its coverage (sum / the pixel's
-        sample count, count (num_pixels,)), ranks sorted by coverage, most first; 0, 0 past the
-        IDs a pixel saw."""
+        sample count, count (num_pixels,)), as Cycles' `levels` slots hold them
+        (film/cryptomatte.h): IDs take the slots in the order they first reach a pixel, and
+        once all are taken every other ID's weight goes to the last slot's; then sorted by
+        coverage, most first (ties in slot order). 0, 0 past the IDs a pixel saw."""
         self._merge()
         out = np.zeros((levels, 2, num_pixels), np.float32)
         if not len(self._keys):
             return out
         pix, idx = np.divmod(self._keys, self.num_ids)
-        # by pixel, then coverage descending (ties: lower ID index first, deterministic)
-        order = np.lexsort((idx, -self._sums, pix))
+        order = np.lexsort((idx, self._first, pix))          # by pixel, then first arrival
         pix, idx, sums = pix[order], idx[order], self._sums[order]
-        start = np.searchsorted(pix, pix, side='left')
-        rank = np.arange(len(pix)) - start
-        sel = rank < levels
-        pix, idx, sums, rank = pix[sel], idx[sel], sums[sel], rank[sel]
+        slot = np.arange(len(pix)) - np.searchsorted(pix, pix, side='left')
+        over = slot >= levels - 1                            # what the last slot collects
+        last = np.bincount(pix[over], weights=sums[over], minlength=num_pixels)
+        sel = slot < levels
+        pix, idx, sums, slot = pix[sel], idx[sel], sums[sel], slot[sel]
+        sums = np.where(slot == levels - 1, last[pix], sums)
+        order = np.lexsort((slot, -sums, pix))               # Cycles' insertion sort, descending
+        pix, idx, sums = pix[order], idx[order], sums[order]
+        rank = np.arange(len(pix)) - np.searchsorted(pix, pix, side='left')
         n = np.maximum(np.asarray(count)[pix], 1)
         out[rank, 0, pix] = np.asarray(id_values, np.float32)[idx]
         out[rank, 1, pix] = (sums / n).astype(np.float32)

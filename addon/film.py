@@ -123,12 +123,13 @@ class Film:
             v = np.asarray(values, np.float32).reshape(first.shape[0], -1)
             first[:, pixels] = np.where(np.isfinite(v), v, np.float32(FIRST_SAMPLE[name]))
 
-    def add_coverage(self, kind: str, pixels: np.ndarray, index: np.ndarray, weight: np.ndarray):
+    def add_coverage(self, kind: str, pixels: np.ndarray, index: np.ndarray, weight: np.ndarray, order=None):
         """Cryptomatte: samples of pixels (k,) saw ID index (k,) with weight (k,) (1 for an
-        opaque surface; along transparent surfaces, throughput x opacity). Ignored when the
-        kind was not requested."""
+        opaque surface; along transparent surfaces, throughput x opacity); order (k,) int64
+        ranks these as Cycles makes them (Coverage.add). Ignored when the kind was not
+        requested."""
         if kind in self._crypto:
-            self._crypto[kind][2].add(pixels, index, weight)
+            self._crypto[kind][2].add(pixels, index, weight, order)
 
     def cryptomatte_images(self) -> dict:
         """{pass name ('CryptoObject00', ...): (H, W, 4) float32}: two ranks per pass, (ID,

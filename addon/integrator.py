@@ -87,6 +87,8 @@ _DIM_LENS = 1 << 20
 _DIM_TRANSPARENT = 1 << 21
 # internal visibility bit: transparent triangles shadow rays pass (their own tracer scene)
 _VIS_THROUGH = 16
+# Cryptomatte's arrival order of a sample's surfaces: sample x _MAX_CHAIN + depth along the ray
+_MAX_CHAIN = 1 << 12
 
 
 def _dim(vertex: int, slot: int) -> int:
@@ -1271,7 +1273,7 @@ class Integrator:
             data['Mist'] = np.zeros((1, n), F32)
             data['Mist'][0, cols] = 1.0 - self._mist(P)
         self._write_first(pix, samp, cols, prim, P)
-        self._write_coverage(pix, cols, prim, np.ones(len(cols), F32))
+        self._write_coverage(pix, samp, cols, prim, np.ones(len(cols), F32))
         for key, table in self._aovs.items():
             data[key] = np.zeros((table.shape[0], n), F32)
             data[key][:, cols] = self._aov_values(key, table, prim, hu, hv)
@@ -1295,10 +1297,14 @@ class Integrator:
                 out[:3 if kind == 'color' else 1, sel] += rgb[:3 if kind == 'color' else 1]
         return out
 
-    def _write_coverage(self, pix, cols, prim, weight):
-        """Cryptomatte: the paths cols of the block saw the surfaces prim with weight (k,)."""
+    def _write_coverage(self, pix, samp, cols, prim, weight, depth=0):
+        """Cryptomatte: the paths cols of the block saw the surfaces prim with weight (k,), as
+        the depth-th surface along their camera rays (Cycles' slots go by sample, then depth)."""
+        if not self._crypto_ids:
+            return
+        order = np.take(samp, cols) * _MAX_CHAIN + min(depth, _MAX_CHAIN - 1)
         for kind, tri_ids in self._crypto_ids.items():
-            self.film.add_coverage(kind, pix[cols], np.take(tri_ids, prim), weight)
+            self.film.add_coverage(kind, pix[cols], np.take(tri_ids, prim), weight, order)
 
     def _uv_pass(self, prim, u, v):
         """Cycles' UV pass at hits (prim, u, v): (u, v, 1) on the active UV map (3,k), 0 on
@@ -1359,7 +1365,7 @@ class Integrator:
         if denoise is not None:
             denoise.prev[:, path.pid] = path.O      # depth from the ray's origin, then each surface
 
-        def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns, tau=None):
+        def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns, depth, tau=None):
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
             if self.mats.textures:
                 self._texture(prim, u, v, albedo)
@@ -1369,7 +1375,7 @@ class Integrator:
             if 'Mist' in want:
                 mist_out[cols] += (1.0 - self._mist(P)) * (thr * alpha).mean(axis=0)
             # Cryptomatte weighs every surface by throughput x opacity (film/data_passes.h)
-            self._write_coverage(pix, cols, prim, thr.mean(axis=0) * alpha.mean(axis=0))
+            self._write_coverage(pix, samp, cols, prim, thr.mean(axis=0) * alpha.mean(axis=0), depth)
             todo = ~done[cols]
             # Shader AOVs: every surface's shader writes until the pass is done (svm/aov.h)
             for key, table in self._aovs.items():
@@ -1382,10 +1388,10 @@ class Integrator:
                 uv[:, cols[first]] = self._uv_pass(prim[first], u[first], v[first])
             done[cols[first]] = True
 
-        for c in chain:
+        for depth, c in enumerate(chain):
             cols = np.take(path.pid, c['rows'])
             alpha = np.clip(1.0 - c['tau'], 0.0, 1.0)
-            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'], alpha, c['opacity'], c['P'], c['ns'], c['tau'])
+            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'], alpha, c['opacity'], c['P'], c['ns'], depth, c['tau'])
         # the surfaces the chain ended on that are not transparent (stops were counted above)
         idx = np.flatnonzero(hit)
         prim = np.take(hits['prim'], idx)
@@ -1395,7 +1401,7 @@ class Integrator:
             P, _, ns, _ = self._surface(hits, idx, path.D)
             thr = np.ones((3, len(idx)), F32) if path.thr is None else np.take(path.thr, idx, axis=1)
             surfaces(np.take(path.pid, idx), prim, np.take(hits['u'], idx), np.take(hits['v'], idx), thr,
-                     np.ones((3, len(idx)), F32), np.ones(len(idx), F32), P, ns)
+                     np.ones((3, len(idx)), F32), np.ones(len(idx), F32), P, ns, len(chain))
         if 'Normal' in want:
             data['Normal'] = normal
         if 'DiffCol' in want:
@@ -1593,6 +1599,7 @@ class _Denoise:
                              ('DenoiseDepth', self.depth[None, :])):
             if name in self.want:
                 data[name] = values
+
 
 
 def _aov_tables(aovs, shaders) -> dict:

@@ -33,23 +33,53 @@ def test_murmur3_known_vectors_and_float_ids():
     assert len(cm.pass_names("CryptoAsset", 7)) == 4 and len(cm.pass_names("CryptoAsset", 40)) == 8
 
 
-def test_coverage_ranks_match_a_dense_sum():
+def _cycles_slots(events, slots):
+    """Cycles' film_write_cryptomatte_slots and film_sort_cryptomatte_slots, one write at a
+    time: events [(ID index, weight)] of one pixel, in order -> [(ID index, weight)]."""
+    table = []
+    for i, w in events:
+        if w == 0:
+            continue
+        for s in range(slots):
+            if s == len(table):
+                table.append([i, w])
+                break
+            if table[s][0] == i or s == slots - 1:
+                table[s][1] += w
+                break
+    for s in range(1, len(table)):                  # insertion sort, heaviest first
+        j = s
+        while j > 0 and table[j][1] > table[j - 1][1]:
+            table[j], table[j - 1] = table[j - 1], table[j]
+            j -= 1
+    return table
+
+
+@pytest.mark.parametrize('nid', [3, 9])
+def test_coverage_ranks_match_cycles_slots(nid):
+    """More IDs in a pixel than slots (nid 9): the last slot collects the weight of every ID
+    that arrives after the slots are taken, as Cycles' does; fewer (3): the plain sums."""
     rng = np.random.default_rng(3)
-    npix, nid = 50, 9
-    cov, dense = cm.Coverage(nid), np.zeros((npix, nid))
+    npix, slots = 50, 4
+    cov, events = cm.Coverage(nid), [[] for _ in range(50)]
+    t = 0
     for _ in range(30):                                          # blocks, merged as they come
         k = 700
         pix, idx, w = rng.integers(0, npix, k), rng.integers(0, nid, k), rng.random(k)
         w[::11] = 0.0                                            # zero weights add nothing
-        cov.add(pix, idx, w)
-        np.add.at(dense, (pix, idx), w)
+        order = t + rng.permutation(k)                           # arrival order within the block
+        cov.add(pix, idx, w, order)
+        for j in np.argsort(order):
+            events[pix[j]].append((idx[j], w[j]))
+        t += k
     count = rng.integers(1, 40, npix)
     id_values = cm.ids([f"ob{i}" for i in range(nid)])
-    ranks = cov.ranks(npix, count, id_values, 4)
+    ranks = cov.ranks(npix, count, id_values, slots)
     for p in range(npix):
-        order = sorted(range(nid), key=lambda i: (-dense[p, i], i))[:4]
-        assert np.array_equal(ranks[:, 0, p], id_values[order])
-        assert np.allclose(ranks[:, 1, p], dense[p, order] / count[p], rtol=1e-6)
+        table = _cycles_slots(events[p], slots)
+        assert np.array_equal(ranks[:len(table), 0, p], id_values[[i for i, _ in table]])
+        assert np.allclose(ranks[:len(table), 1, p], [w / count[p] for _, w in table], rtol=1e-6)
+        assert np.allclose(ranks[:, 1, p].sum(), sum(w for i, w in events[p]) / count[p], rtol=1e-6)
     assert not cm.Coverage(3).ranks(5, np.ones(5), id_values[:3], 2).any()    # nothing seen: 0
 
 
