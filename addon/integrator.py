@@ -424,6 +424,10 @@ class Integrator:
             + tuple(self._aovs)
         self.tri = _Triangles(scene_data.geometry, self.messages)
         self.mats = _Materials(scene_data.materials)
+        # per AOV the images that write to it: (rows they fill, [(material, texture, ...)])
+        self._aov_images = {AOV_PREFIX + name: (3 if kind == 'COLOR' else 1,
+                                                self.mats.aov_textures.get((name, kind.lower()), ()))
+                            for name, kind in aovs}
         holdout = np.array([bool(m.holdout) for m in scene_data.materials])
         if holdout.any():    # a Holdout material acts as object holdout does for camera rays
             seen = (self.tri.visibility & VIS_CAMERA) != 0
@@ -1277,10 +1281,16 @@ class Integrator:
         for key, table in self._aovs.items():
             data[key] = np.zeros((table.shape[0], n), F32)
             data[key][:, cols] = self._aov_values(key, table, prim, hu, hv)
-        self._world_aov(data, np.take(path.pid, np.flatnonzero(hits['prim'] < 0)))
+        self._world_aov(data, path, hits)
 
-    def _world_aov(self, data, cols):
-        """The world's AOVs added where the block's paths cols missed everything."""
+    def _world_aov(self, data, path, hits, done=None):
+        """The world's AOVs added where the block's camera rays missed everything (and their
+        pass is not done: done (n,), per block path)."""
+        if not self._world_aovs:
+            return
+        cols = np.take(path.pid, np.flatnonzero(hits['prim'] < 0))
+        if done is not None:
+            cols = cols[~done[cols]]
         for key, value in self._world_aovs.items():
             data[key][:, cols] += value[:, None]
 
@@ -1289,12 +1299,12 @@ class Integrator:
         constants of its table (_aov_tables) plus what images write there."""
         mat = np.take(self.tri.material, prim)
         out = np.take(table, mat, axis=1)
-        kind = 'color' if table.shape[0] == 4 else 'value'
-        for m, tex, interp, ext, xf in self.mats.aov_textures.get((key[len(AOV_PREFIX):], kind), ()):
+        rows, images = self._aov_images[key]
+        for m, tex, interp, ext, xf in images:
             sel = np.flatnonzero(mat == m)
             if len(sel):
                 rgb = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))
-                out[:3 if kind == 'color' else 1, sel] += rgb[:3 if kind == 'color' else 1]
+                out[:rows, sel] += rgb[:rows]
         return out
 
     def _write_coverage(self, pix, samp, cols, prim, weight, depth=0):
@@ -1413,8 +1423,7 @@ class Integrator:
         if denoise is not None:
             denoise.finish(data)
         data.update(aovs)
-        missed = np.take(path.pid, np.flatnonzero(hits['prim'] < 0))
-        self._world_aov(data, missed[~done[missed]])
+        self._world_aov(data, path, hits, done)
         seen = np.flatnonzero(first_prim >= 0)
         self._write_first(pix, samp, seen, first_prim[seen], first_P[:, seen])
 
@@ -1599,7 +1608,6 @@ class _Denoise:
                              ('DenoiseDepth', self.depth[None, :])):
             if name in self.want:
                 data[name] = values
-
 
 
 def _aov_tables(aovs, shaders) -> dict:
