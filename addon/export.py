@@ -403,8 +403,12 @@ def _world_surface(node, weight, color, reasons, depth):
 
 
 def _mix_factor(node, reasons, label):
-    """A Mix Shader's factor, clamped to [0, 1] as Cycles does; a linked one at its own value."""
-    fac, ok = constant_value(node.inputs['Fac'])
+    """A Mix Shader's factor, clamped to [0, 1] as Cycles does: computed through the nodes the
+    export evaluates, a Fresnel or Layer Weight (a clear coat's blend) as its average over view
+    directions; otherwise at its own value."""
+    notes = []
+    fac, ok = constant_value(node.inputs['Fac'], notes)
+    reasons.extend(f"{label} factor from {n}" for n in notes)
     if not ok:
         reasons.append(f"{label} factor driven by nodes; its own value used")
     return min(max(fac, 0.0), 1.0)
@@ -780,7 +784,7 @@ class _MaterialBuilder:
         and float nodes (nodeeval.py) on constants and one image, baked into a texture."""
         link = linked_link(socket)
         if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
-                                 is_image_alpha(link)):
+                                 link.from_node.type in nodeeval.VIEW_NODE_TYPES or is_image_alpha(link)):
             return self._evaluated_closure(socket, reasons)
         if link is not None and link.from_node.type == 'TEX_IMAGE':
             tex = self._texture(link.from_node, reasons)

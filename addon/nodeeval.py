@@ -17,6 +17,7 @@ import numpy as np
 
 from . import colornodes as cn
 from . import floatnodes as fn
+from . import fresnel
 from . import nodegraph
 
 # node type -> {role: input identifier} of the inputs the evaluation reads (Mix, Map Range: by
@@ -41,6 +42,7 @@ _MIX_INPUTS = {'RGBA': {'fac': 'Factor_Float', 'a': 'A_Color', 'b': 'B_Color'},
 _MAP_RANGE_INPUTS = {'value': 'Value', 'f0': 'From Min', 'f1': 'From Max', 't0': 'To Min', 't1': 'To Max',
                      'steps': 'Steps'}
 NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
+VIEW_NODE_TYPES = frozenset({'FRESNEL', 'LAYER_WEIGHT'})   # as their average over view directions
 _COLOR_ROLES = {'color', 'a', 'b', 'vector'}     # colour or vector inputs (but floats in Mix FLOAT and Math)
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
 _SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2, 'X': 0, 'Y': 1, 'Z': 2}
@@ -89,12 +91,14 @@ class Evaluator:
     texel of (at most) one image. texture(node, reasons) -> the export's image of an Image
     Texture node (an object with .pixels (h, w, 4) and .key) or None (then `missing`, a
     colour). Unsupported nodes give the input's own value; a second, different image its
-    average colour; both noted in reasons."""
+    average colour; both noted in reasons. View-dependent nodes (Fresnel, Layer Weight) give
+    their average over view directions (fresnel.py), noted in `notes` (default: reasons)."""
 
     MAX_DEPTH = 64
 
-    def __init__(self, texture, reasons, missing):
+    def __init__(self, texture, reasons, missing, notes=None):
         self.texture, self.reasons, self.missing = texture, reasons, missing
+        self.notes = reasons if notes is None else notes
 
     def input(self, socket, color, depth=0):
         link, carrier = nodegraph.source(socket)
@@ -118,6 +122,8 @@ class Evaluator:
             if tex is None:
                 return Field(self.missing)
             return Field(tex.pixels[..., 3:4] if out.name == 'Alpha' else tex.pixels[..., :3], tex)
+        if t in VIEW_NODE_TYPES:
+            return self._view_average(node, out, depth)
         roles = node_inputs(node)
         if roles is None:
             return None
@@ -128,6 +134,22 @@ class Evaluator:
             x[role] = self.input(sock, role in _COLOR_ROLES and not float_node, depth + 1)
         tex = self._join(x.values())
         return Field(_compute(node, out, {role: f.value for role, f in x.items()}), tex, t == 'COMBXYZ')
+
+    def _view_average(self, node, out, depth):
+        """A Fresnel or Layer Weight output as its average over view directions (its Normal
+        input, a bump or normal map, is not read: the export ignores those)."""
+        # rounded to float32, as Cycles computes and a socket stores it (the fair-material
+        # override writes this value into the socket; the export then reads back the same)
+        if node.type == 'FRESNEL':
+            ior = self.input(nodegraph.input_by_id(node, 'IOR'), False, depth + 1)
+            f = Field(np.float32(fresnel.fresnel_node_average(ior.value)), ior.tex)
+        else:
+            blend = self.input(nodegraph.input_by_id(node, 'Blend'), False, depth + 1)
+            f = Field(np.float32(fresnel.layer_weight_average(blend.value, out.identifier)), blend.tex)
+        what = node.bl_label + ('' if node.type == 'FRESNEL' else f" {out.name}")
+        at = f", {float(f.value[0]):.3f}" if f.tex is None else ""
+        self.notes.append(f"'{what}' (view-dependent) as its average over view directions{at}")
+        return f
 
     def _join(self, fields):
         """The image the operands are per texel of; an operand of another image is replaced by
@@ -199,18 +221,23 @@ def _no_texture(node, reasons):
     raise _NotConstant
 
 
-def constant(socket, color):
+def constant(socket, color, notes=None):
     """(value, exact): the constant feeding a colour or vector input (color True: (3,)) or a
     float input ((1,)), computed through RGB and Value nodes and the nodes above (Cycles
     converts a float to (v, v, v), a colour to its luminance). Where an image or a node the
-    evaluation cannot compute feeds it: the carrier's own value and exact False."""
+    evaluation cannot compute feeds it: the carrier's own value and exact False. With a list
+    `notes`, view-dependent nodes count as their average over view directions (noted there);
+    without one they are nodes it cannot compute."""
     reasons = []
+    kept = []
     try:
-        f = Evaluator(_no_texture, reasons, None).input(socket, color)
+        f = Evaluator(_no_texture, reasons, None, notes=kept if notes is not None else None).input(socket, color)
     except _NotConstant:
         reasons.append("image")
     if reasons:
         return _own(nodegraph.source(socket)[1].default_value, color), False
+    if notes is not None:
+        notes.extend(kept)
     return f.value, True
 
 
@@ -220,9 +247,9 @@ def constant_color(socket):
     return tuple(float(x) for x in v), exact
 
 
-def constant_value(socket):
+def constant_value(socket, notes=None):
     """(float, exact) of a float input: see constant."""
-    v, exact = constant(socket, False)
+    v, exact = constant(socket, False, notes)
     return float(v[0]), exact
 
 

@@ -85,6 +85,26 @@ def _non_diffuse_materials():
     nt.links.new(nt.nodes.new('ShaderNodeDisplacement').outputs[0], out.inputs['Displacement'])
     mats.append(mat)
 
+    mat, nt, out = _tree("Coated")                      # view-dependent factors: their averages
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    lw = nt.nodes.new('ShaderNodeLayerWeight')
+    lw.inputs['Blend'].default_value = 0.4
+    nt.links.new(lw.outputs['Fresnel'], mix.inputs['Fac'])
+    paint = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tint = nt.nodes.new('ShaderNodeMix')
+    tint.data_type = 'RGBA'
+    tint.inputs['A'].default_value = (0.8, 0.1, 0.1, 1)
+    tint.inputs['B'].default_value = (0.1, 0.1, 0.8, 1)
+    fres = nt.nodes.new('ShaderNodeFresnel')
+    nt.links.new(fres.outputs['Fac'], tint.inputs['Factor'])
+    nt.links.new(tint.outputs['Result'], paint.inputs['Color'])
+    coat = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    coat.inputs['Color'].default_value = (0.9, 0.9, 0.9, 1)
+    nt.links.new(paint.outputs[0], mix.inputs[1])
+    nt.links.new(coat.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    mats.append(mat)
+
     mat, nt, out = _tree("Muted")                       # a muted shader: the default grey
     d = nt.nodes.new('ShaderNodeBsdfDiffuse')
     d.inputs['Color'].default_value = (0.1, 0.2, 0.9, 1)
@@ -110,6 +130,8 @@ def test_override_keeps_what_the_export_reads_and_leaves_nothing_approximated(sc
     assert "Normal input" in reasons["Shiny"] and "Normal input" in reasons["Driven"]
     assert "Generated texture coordinates" in reasons["Textured"]
     assert "volume ignored" in reasons["Volumetric"] and "displacement ignored" in reasons["Volumetric"]
+    assert "'Layer Weight Fresnel' (view-dependent) as its average" in reasons["Coated"]
+    assert "'Fresnel' (view-dependent) as its average" in reasons["Coated"]
 
     changes = fairmaterials.make_diffuse()
     assert set(changes) == {m.name for m in mats}

@@ -14,6 +14,8 @@ export renders exactly, following the export's own rules (addon/export.py `_Mate
 - Diffuse BSDF: roughness 0, normal unlinked;
 - any other shader node (Glossy, Glass, ...): replaced by a Diffuse BSDF of the colour the
   export reads from it (its constant 'Color' / 'Base Color', 0.8 grey without one);
+- a Fresnel or Layer Weight node (in a factor or colour chain): the socket it feeds set to the
+  average over view directions the export renders it as;
 - a linked colour or factor the export reads as the socket's own value (not an Image Texture,
   a constant chain of RGB or Value nodes through the nodes the export evaluates, or for a
   diffuse colour those nodes on an image):
@@ -231,8 +233,27 @@ class _Editor:
         if socket is None:
             return
         link, carrier = nodegraph.source(socket)
-        if link is not None and not nodeeval.constant(socket, socket.type != 'VALUE')[1]:
+        if link is None:
+            return
+        notes = []
+        exact = nodeeval.constant(socket, socket.type != 'VALUE', notes)[1]
+        if not exact:
             self._unlink(carrier, f"'{socket.name}' from '{link.from_node.bl_label}' as its own value")
+        elif notes:
+            self._view_average(socket)
+
+    def _view_average(self, socket):
+        """A chain with a Fresnel or Layer Weight node (which the export renders as its
+        average over view directions, nodeeval.py) replaced by the value the export computes."""
+        color = socket.type != 'VALUE'
+        value, _ = nodeeval.constant(socket, color, [])
+        sock = nodegraph.unwrap(socket)
+        self._drop_links(sock)
+        if color:
+            sock.default_value = (*value[:3], 1.0)[:len(sock.default_value)]
+        else:
+            sock.default_value = float(value[0])
+        self.done.append(f"'{socket.name}' from a view-dependent node as its average over view directions")
 
     def _color(self, socket):
         """A diffuse colour input: constants, images and the colour nodes between them stay (the
@@ -246,6 +267,12 @@ class _Editor:
             return
         if node.type == 'TEX_IMAGE':
             self._image(node)
+            return
+        if node.type in nodeeval.VIEW_NODE_TYPES:
+            if nodeeval.constant(socket, socket.type != 'VALUE', [])[1]:
+                self._view_average(socket)
+            else:
+                self._unlink(carrier, f"'{socket.name}' from '{node.bl_label}' as its own value")
             return
         roles = nodeeval.node_inputs(node) if node.type in nodeeval.NODE_TYPES else None
         if roles is None:

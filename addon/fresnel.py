@@ -1,0 +1,67 @@
+"""View-dependent factors (the Fresnel and Layer Weight nodes) as the constants a diffuse
+renderer can use: each output's average over the directions a surface is seen from.
+
+Cycles evaluates these per shading point from the angle between the view and the normal
+(svm/fresnel.h, fresnel_dielectric_cos), typically to blend a clear coat over a paint with
+a Mix Shader. A diffuse material has one albedo per point, so the export takes the average of
+the factor over view directions weighted by cos (projected solid angle), 2 int_0^1 f(mu) mu dmu:
+the share of a surface's projected area seen at each angle, so an orthographic view of a
+sphere has exactly that mean (tests/parity/test_fresnel.py). Front faces only: a mesh is
+mostly seen from outside. Pure numpy, no Blender.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Gauss-Legendre nodes on [0, 1] for s, with mu = mu_c + (1 - mu_c) s^2 (see _fresnel_average)
+_S, _WS = np.polynomial.legendre.leggauss(128)
+_S, _WS = 0.5 * (_S + 1.0), 0.5 * _WS
+
+
+def fresnel_dielectric_cos(cosi, eta):
+    """Cycles' fresnel_dielectric_cos: unpolarised reflectance of a dielectric of relative
+    index eta at incidence cosine cosi (1 under total internal reflection)."""
+    c = np.abs(cosi)
+    g2 = eta * eta - 1.0 + c * c
+    g = np.sqrt(np.maximum(g2, 0.0))
+    with np.errstate(divide='ignore', invalid='ignore'):
+        a = (g - c) / (g + c)
+        b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0)
+        f = 0.5 * a * a * (1.0 + b * b)
+    return np.where(g2 > 0.0, f, 1.0)
+
+
+def _fresnel_average(eta):
+    """2 int_0^1 F(mu, eta) mu dmu for each eta (an array). Below mu_c = sqrt(1 - eta^2)
+    (eta < 1) F is 1; above it F has a square-root edge, which mu = mu_c + (1 - mu_c) s^2
+    makes smooth for the quadrature."""
+    eta = np.asarray(eta, np.float64)[..., None]
+    mu_c = np.sqrt(np.clip(1.0 - eta * eta, 0.0, 1.0))
+    mu = mu_c + (1.0 - mu_c) * _S * _S
+    dmu = 2.0 * (1.0 - mu_c) * _S
+    tail = 2.0 * np.sum(_WS * fresnel_dielectric_cos(mu, eta) * mu * dmu, axis=-1)
+    return mu_c[..., 0] ** 2 + tail
+
+
+def _per_value(fn, x):
+    """fn over the distinct values of x (an input may be an image: few distinct texels)."""
+    x = np.asarray(x, np.float64)
+    values, inverse = np.unique(x, return_inverse=True)
+    return fn(values)[inverse].reshape(x.shape)
+
+
+def fresnel_node_average(ior):
+    """The Fresnel node's output averaged over view directions (front faces: eta = IOR)."""
+    return _per_value(lambda v: _fresnel_average(np.maximum(v, 1e-5)), ior)
+
+
+def layer_weight_average(blend, output):
+    """The Layer Weight node's 'Fresnel' or 'Facing' output averaged over view directions.
+    Fresnel: eta = 1 / max(1 - blend, 1e-5); Facing: 1 - mu^p with p = 2 blend below 0.5 and
+    0.5 / (1 - blend) above (blend clamped to [0, 1 - 1e-5]), whose average is p / (p + 2)."""
+    if output == 'Fresnel':
+        return _per_value(lambda v: _fresnel_average(1.0 / np.maximum(1.0 - v, 1e-5)), blend)
+    b = np.clip(np.asarray(blend, np.float64), 0.0, 1.0 - 1e-5)
+    p = np.where(b < 0.5, 2.0 * b, 0.5 / (1.0 - b))
+    return p / (p + 2.0)
