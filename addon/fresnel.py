@@ -44,11 +44,20 @@ def _fresnel_average(eta):
     return mu_c[..., 0] ** 2 + tail
 
 
+# Distinct input values computed one by one; beyond that (an input fed by a float image) the
+# average is interpolated from this many points over the inputs' range (a quadrature per texel
+# of a 4K image would take gigabytes).
+_MAX_DISTINCT = 4096
+
+
 def _per_value(fn, x):
-    """fn over the distinct values of x (an input may be an image: few distinct texels)."""
+    """fn over the values of x (an input may be an image, one value per texel)."""
     x = np.asarray(x, np.float64)
     values, inverse = np.unique(x, return_inverse=True)
-    return fn(values)[inverse].reshape(x.shape)
+    if len(values) <= _MAX_DISTINCT:
+        return fn(values)[inverse].reshape(x.shape)
+    grid = np.linspace(values[0], values[-1], _MAX_DISTINCT)
+    return np.interp(x, grid, fn(grid))
 
 
 def fresnel_node_average(ior):

@@ -75,6 +75,16 @@ def test_per_texel_values_keep_their_shape():
     assert out[1, 1, 0] == 0.0
 
 
+def test_many_distinct_values_are_interpolated_closely():
+    """A float image feeding the IOR has a value per texel: past _MAX_DISTINCT distinct values
+    the averages come from a table over their range, within 1e-5 of each computed alone."""
+    ior = np.random.default_rng(3).uniform(1.0, 3.0, (300, 300))
+    out = fresnel.fresnel_node_average(ior)
+    assert out.shape == ior.shape
+    pick = ior.ravel()[:50]
+    np.testing.assert_allclose(out.ravel()[:50], [fresnel.fresnel_node_average(v) for v in pick], atol=1e-5)
+
+
 def test_export_mixes_by_the_average(scene, exported):
     """A clear coat over a paint, Mix Shader factor from Layer Weight: the albedo mixes by the
     factor's average, reported (a Fresnel in a colour chain: tests/addon/test_fair_materials.py)."""
