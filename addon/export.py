@@ -382,7 +382,7 @@ def _world_surface(node, weight, color, reasons, depth):
         reasons.append(f"world surface has {kind}, not a Background node; world colour used for it")
         return color * np.float32(weight), None
     if t in ('ADD_SHADER', 'MIX_SHADER'):
-        fac = _mix_factor(node, reasons, "world Mix Shader") if t == 'MIX_SHADER' else 0.5
+        fac = _mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
         (ua, ea), (ub, eb) = (_world_surface(linked_node(node.inputs[first + i]), w, color, reasons, depth + 1)
@@ -402,12 +402,14 @@ def _world_surface(node, weight, color, reasons, depth):
     return np.array(c, np.float32) * np.float32(s * weight), None
 
 
-def _mix_factor(node, reasons, label):
+def _mix_factor(node, reasons, label, surface=True):
     """A Mix Shader's factor, clamped to [0, 1] as Cycles does: computed through the nodes the
-    export evaluates, a Fresnel or Layer Weight (a clear coat's blend) as its average over view
-    directions; otherwise at its own value."""
-    notes = []
+    export evaluates, on a surface a Fresnel or Layer Weight (a clear coat's blend) as its
+    average over view directions (fresnel.py; not in the world, which has no surface to view);
+    otherwise at its own value."""
+    notes = [] if surface else None
     fac, ok = constant_value(node.inputs['Fac'], notes)
+    notes = notes or ()
     reasons.extend(f"{label} factor from {n}" for n in notes)
     if not ok:
         reasons.append(f"{label} factor driven by nodes; its own value used")

@@ -110,3 +110,25 @@ def test_export_mixes_by_the_average(scene, exported):
     assert f"'Layer Weight Fresnel' (view-dependent) as its average over view directions, {f:.3f}" \
         in m.approximated
     assert "own value" not in m.approximated
+
+
+def test_world_mix_factor_keeps_its_own_value(scene):
+    """The world has no surface to view: a Layer Weight there is not averaged (its own value,
+    reported, as before)."""
+    w = bpy.data.worlds.new("Sky")
+    scene.world = w
+    nt = w.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new('ShaderNodeOutputWorld')
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = 0.25
+    lw = nt.nodes.new('ShaderNodeLayerWeight')
+    nt.links.new(lw.outputs['Facing'], mix.inputs['Fac'])
+    for slot, colour in ((1, (1.0, 0.0, 0.0, 1.0)), (2, (0.0, 0.0, 1.0, 1.0))):
+        bg = nt.nodes.new('ShaderNodeBackground')
+        bg.inputs['Color'].default_value = colour
+        nt.links.new(bg.outputs[0], mix.inputs[slot])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    uniform, env, reason = export.export_world(scene)
+    np.testing.assert_allclose(uniform, (0.75, 0.0, 0.25))
+    assert env is None and "world Mix Shader factor driven by nodes; its own value used" in reason
