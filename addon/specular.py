@@ -1,0 +1,86 @@
+"""The Principled BSDF's dielectric specular layer as a diffuse renderer can keep it: the
+layer's albedo averaged over view directions, added to the diffuse base it dims.
+
+In Cycles (svm/closure.h, Principled) a dielectric GGX layer of roughness r (alpha = r^2) lies
+over the diffuse base; at a view cosine mu it reflects E(mu) = int f_spec cos dw_i and the base
+below is weighted by 1 - max over channels of E(mu) (closure_layering_weight). Its Fresnel is
+the generalised Schlick form with the real dielectric curve: F = f0 t + (1 - f0 t) s, with
+s = (F(eta) - F0) / (1 - F0), f0 = F0(eta) and t the Specular Tint; Specular IOR Level l moves
+F0 to 2 l F0 (eta follows; l = 0: no layer). A diffuse material has one albedo, so the export
+takes base (1 - E_max) + E with E averaged over view directions weighted by cos (as fresnel.py
+does for Fresnel nodes): under uniform light an orthographic view of a sphere then has Cycles'
+mean (tests/parity/test_specular.py). E is the single-scattering GGX albedo (height-correlated
+Smith G2), integrated here by quadrature over the half vector; it matches what Cycles renders
+(0.059 at roughness 0.5, IOR 1.5, against the smooth 0.092). Pure numpy, no Blender.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from .fresnel import fresnel_dielectric_cos
+
+
+def _gauss(n):
+    x, w = np.polynomial.legendre.leggauss(n)
+    return 0.5 * (x + 1.0), 0.5 * w
+
+
+# view cosines (weight 2 mu), the half vector's GGX-distributed polar variable xi and azimuth:
+# ~1.3 ms per (roughness, IOR), within 0.2% of a grid 4x as fine each way (Fresnel albedo)
+_MU, _W_MU = _gauss(32)
+_XI, _W_XI = _gauss(48)
+_PHI = (np.arange(32) + 0.5) / 32 * 2.0 * np.pi
+
+
+def f0_from_ior(eta):
+    return ((eta - 1.0) / (eta + 1.0)) ** 2
+
+
+@lru_cache(maxsize=256)
+def _ggx_averages(alpha: float, eta: float) -> tuple[float, float]:
+    """(E1, EF): the cos-weighted view averages of the GGX reflection albedo without Fresnel
+    (F = 1) and with the dielectric Fresnel of eta. The half vector h is taken with density
+    D(h) cos(theta_h) (tan^2 theta_h = alpha^2 xi / (1 - xi)); per h the reflected direction
+    contributes F G2 (wo.h) / (mu_o cos theta_h)."""
+    mo = _MU[:, None, None]
+    so = np.sqrt(1.0 - mo * mo)
+    xi = _XI[None, :, None]
+    t2 = alpha * alpha * xi / (1.0 - xi)
+    ch = 1.0 / np.sqrt(1.0 + t2)
+    sh = np.sqrt(t2) * ch
+    oh = so * sh * np.cos(_PHI) + mo * ch          # wo = (sin, 0, mu_o)
+    wiz = 2.0 * oh * ch - mo
+
+    def smith_lambda(c):
+        c = np.clip(c, 1e-9, 1.0)
+        return 0.5 * (np.sqrt(1.0 + alpha * alpha * (1.0 - c * c) / (c * c)) - 1.0)
+
+    g2 = 1.0 / (1.0 + smith_lambda(mo) + smith_lambda(wiz))
+    per_h = np.where((wiz > 0.0) & (oh > 0.0), g2 * oh / (mo * ch), 0.0)
+    w = _W_XI[None, :, None] / len(_PHI)
+    e1 = (per_h * w).sum(axis=(1, 2))
+    ef = (per_h * fresnel_dielectric_cos(np.clip(oh, 0.0, 1.0), eta) * w).sum(axis=(1, 2))
+    view = 2.0 * _MU * _W_MU
+    return float(view @ e1), float(view @ ef)
+
+
+def layer_albedo(roughness: float, ior: float, level: float, tint) -> np.ndarray:
+    """Per channel, the specular layer's albedo averaged over view directions (see the top);
+    zeros without a layer (Specular IOR Level 0, IOR 1, or a black tint)."""
+    tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, None)
+    ior = max(float(ior), 1e-5)                    # front faces: eta = IOR
+    f0 = min(f0_from_ior(ior) * 2.0 * max(float(level), 0.0), 1.0 - 1e-6)
+    if f0 <= 0.0 or not tint.any():
+        return np.zeros(3)
+    eta = (1.0 + np.sqrt(f0)) / (1.0 - np.sqrt(f0))   # Cycles' ior_from_F0 (level 0.5: the IOR)
+    if ior < 1.0:
+        eta = 1.0 / eta
+    r = min(max(float(roughness), 0.0), 1.0)
+    e1, ef = _ggx_averages(r * r, float(eta))
+    # s = (F - f0) / (1 - f0) averages to (EF - f0 E1) / (1 - f0)
+    es = (ef - f0 * e1) / (1.0 - f0)
+    ft = f0 * tint
+    return ft * e1 + (1.0 - ft) * es

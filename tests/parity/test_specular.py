@@ -1,0 +1,62 @@
+"""The Principled BSDF's specular layer, approximated as diffuse (addon/specular.py), against
+Cycles.
+
+Under a uniform white world (no bounces past the first: the surface's albedo alone), a point
+seen at view cosine mu returns base (1 - E_max(mu)) + E(mu) in Cycles, E the specular layer's
+albedo. An orthographic view of a sphere sees each mu on a share 2 mu dmu of its disk, so the
+disk's mean is the cos-weighted average DACRT uses: the two agree however rough, tinted or
+strong the layer is. The disk's mean is read with a transparent film, as sum(RGB) / sum(alpha)
+(premultiplied pixels: the silhouette's coverage divides out). Without the layer (the export
+before) DACRT rendered the base alone: a dark plastic at half its brightness in Cycles.
+"""
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0)):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 48
+    sc.render.film_transparent = True
+    scenes.camera(location=(0, -5, 0), rotation=(np.pi / 2, 0, 0), kind='ORTHO', ortho_scale=2.1)
+    mat = scenes.principled("Plastic", base, specular=level)
+    p = next(n for n in mat.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+    p.inputs['Roughness'].default_value = roughness
+    p.inputs['IOR'].default_value = ior
+    p.inputs['Specular Tint'].default_value = (*tint, 1.0)
+    scenes.uv_sphere(radius=1.0, segments=96, rings=48, smooth=True, materials=[mat])
+    scenes.world((1.0, 1.0, 1.0), 1.0)
+    sc.cycles.samples = sc.dacrt.samples = 64
+    sc.cycles.use_denoising = False
+    sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.cycles.glossy_bounces = 0
+    sc.dacrt.max_bounces = 0
+    return sc
+
+
+CASES = {  # base, Specular IOR Level, roughness, IOR, tint
+    'dark_rough': ((0.05, 0.05, 0.05), 0.5, 0.5, 1.5, (1, 1, 1)),
+    'dark_smooth': ((0.05, 0.05, 0.05), 0.5, 0.05, 1.5, (1, 1, 1)),
+    'water_very_rough': ((0.05, 0.05, 0.05), 0.5, 0.9, 1.33, (1, 1, 1)),
+    'bright': ((0.8, 0.6, 0.4), 0.5, 0.5, 1.5, (1, 1, 1)),
+    'strong_tinted': ((0.2, 0.2, 0.2), 1.0, 0.3, 1.5, (1.0, 0.4, 0.1)),
+}
+
+
+@pytest.mark.parametrize('case', sorted(CASES))
+def test_specular_layer_matches_cycles_on_a_sphere(case, tmp_path):
+    base, level, roughness, ior, tint = CASES[case]
+    sc = _scene(base, level, roughness, ior, tint)
+    layer = sc.view_layers[0].name
+    disk = {}
+    for engine, exr in scenes.render_engines(sc, tmp_path).items():
+        a = exr[f"{layer}.Combined.A"].sum()
+        disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
+    d, c = disk['DACRT'], disk['CYCLES']
+    np.testing.assert_allclose(d, c, rtol=0.02)
+    if case.startswith('dark'):       # the layer is most of what a dark surface returns
+        assert c.min() > 1.4 * base[0], (c, base)
