@@ -78,6 +78,19 @@ def _material(name):
     return mat, nt, out
 
 
+def mix_shader_material(name, first, second, fac=0.5):
+    """A material whose surface is a Mix Shader (factor fac) of two new shader nodes, given by
+    their bl_idname: (material, node tree, mix node, first node, second node)."""
+    mat, nt, out = _material(name)
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = fac
+    a, b = nt.nodes.new(first), nt.nodes.new(second)
+    nt.links.new(a.outputs[0], mix.inputs[1])
+    nt.links.new(b.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    return mat, nt, mix, a, b
+
+
 def diffuse(name, color, roughness=0.0):
     mat, nt, out = _material(name)
     node = nt.nodes.new('ShaderNodeBsdfDiffuse')

@@ -89,20 +89,12 @@ def test_export_mixes_by_the_average(scene, exported):
     """A clear coat over a paint, Mix Shader factor from Layer Weight: the albedo mixes by the
     factor's average, reported (a Fresnel in a colour chain: tests/addon/test_fair_materials.py)."""
     scenes.camera((0, -10, 0), (math.pi / 2, 0, 0))
-    mat = bpy.data.materials.new("Paint")
-    nt = mat.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new('ShaderNodeOutputMaterial')
-    mix = nt.nodes.new('ShaderNodeMixShader')
+    mat, nt, mix, paint, coat = scenes.mix_shader_material("Paint", 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfGlossy')
     lw = nt.nodes.new('ShaderNodeLayerWeight')
     lw.inputs['Blend'].default_value = 0.5
     nt.links.new(lw.outputs['Fresnel'], mix.inputs['Fac'])
-    paint, coat = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeBsdfGlossy')
     paint.inputs['Color'].default_value = (0.8, 0.1, 0.05, 1)
     coat.inputs['Color'].default_value = (1.0, 1.0, 1.0, 1)
-    nt.links.new(paint.outputs[0], mix.inputs[1])
-    nt.links.new(coat.outputs[0], mix.inputs[2])
-    nt.links.new(mix.outputs[0], out.inputs['Surface'])
     scenes.plane("Car", materials=(mat,))
     m = next(x for x in exported().materials if x.name == "Paint")
     f = float(np.float32(fresnel.fresnel_node_average(2.0)))

@@ -36,19 +36,11 @@ def _scene(kind):
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 64
     scenes.camera(location=(0, -5, 0), rotation=(np.pi / 2, 0, 0), kind='ORTHO', ortho_scale=2.4)
-    mat = bpy.data.materials.new("Coat")
-    nt = mat.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new('ShaderNodeOutputMaterial')
-    mix = nt.nodes.new('ShaderNodeMixShader')
-    mix.inputs['Fac'].default_value = 0.5
-    for slot, colour in ((1, A), (2, B)):
-        e = nt.nodes.new('ShaderNodeEmission')
+    mat, nt, mix, *emitters = scenes.mix_shader_material("Coat", 'ShaderNodeEmission', 'ShaderNodeEmission')
+    for e, colour in zip(emitters, (A, B)):
         e.inputs['Color'].default_value = (*colour, 1.0)
         e.inputs['Strength'].default_value = 1.0
-        nt.links.new(e.outputs[0], mix.inputs[slot])
     nt.links.new(_factor_node(nt, kind), mix.inputs['Fac'])
-    nt.links.new(mix.outputs[0], out.inputs['Surface'])
     scenes.uv_sphere(radius=1.0, segments=96, rings=48, smooth=True, materials=[mat])
     scenes.black_world()
     sc.cycles.samples = sc.dacrt.samples = 16
