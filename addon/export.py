@@ -420,20 +420,21 @@ def _mix_factor(node, reasons, label, surface=True):
 
 def principled_specular_albedo(node, reasons):
     """The albedo (3,) of a Principled BSDF's dielectric specular layer averaged over view
-    directions (specular.py), or None without a layer (Specular IOR Level 0, IOR 1, a black
-    tint) or with a metallic or transmissive part, which the export drops (reported; the base
-    alone stands for them, as before)."""
+    directions (specular.py), weighted by the dielectric's share 1 - Metallic (the metal is
+    dropped: its base colour stands for it, about what Cycles' metal reflects), or None
+    without a layer (Specular IOR Level 0, IOR 1, a black tint, Metallic 1) or with a
+    transmissive part or a node-driven Metallic, which the export drops (reported)."""
     level_socket = node.inputs.get('Specular IOR Level')
     if level_socket is None:
         return None
     level, ok = constant_value(level_socket)
     if ok and level == 0.0:
         return None
-    for name in ('Metallic', 'Transmission Weight'):
-        v, v_ok = constant_value(node.inputs[name])
-        if v != 0.0 or not v_ok:
-            reasons.append("Principled specular layer ignored")
-            return None
+    metallic, m_ok = constant_value(node.inputs['Metallic'])
+    transmission, t_ok = constant_value(node.inputs['Transmission Weight'])
+    if not (m_ok and t_ok) or transmission != 0.0:
+        reasons.append("Principled specular layer ignored")
+        return None
     values = []
     for name in ('Roughness', 'IOR'):
         v, v_ok = constant_value(node.inputs[name])
@@ -442,7 +443,7 @@ def principled_specular_albedo(node, reasons):
     tint, t_ok = constant_color(node.inputs['Specular Tint'])
     if not (ok and t_ok):
         reasons.append("Principled specular layer inputs driven by nodes; their own values used")
-    albedo = specular.layer_albedo(values[0], values[1], level, tint)
+    albedo = specular.layer_albedo(values[0], values[1], level, tint) * (1.0 - min(max(metallic, 0.0), 1.0))
     return albedo if albedo.any() else None
 
 

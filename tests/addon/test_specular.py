@@ -8,6 +8,8 @@ import pytest
 
 from addon import fresnel, specular
 
+from . import scenes
+
 
 def _direct_average(roughness, eta, n_mu=48, n_theta=160, n_phi=128):
     """2 int mu_o E(mu_o) dmu_o with E = int F D G2 / (4 mu_o mu_i) mu_i dw_i, over incoming
@@ -72,3 +74,21 @@ def test_level_and_tint():
     e = specular.layer_albedo(0.4, 1.5, 0.5, (1.0, 0.5, 0.0))
     assert e[1] == pytest.approx((e[0] + e[2]) / 2, abs=1e-12)
     assert 0 < e[2] < e[1] < e[0]
+
+
+def test_export_weights_the_layer_by_the_dielectric_share(scene, exported):
+    """Metallic m: the dielectric (specular over diffuse) is 1 - m of the BSDF, the metal (its
+    base colour as diffuse) m: base (1 - (1 - m) E_max) + (1 - m) E."""
+    scenes.camera((0, -10, 0), (np.pi / 2, 0, 0))
+    for i, m in enumerate((0.0, 0.5, 1.0)):
+        mat = scenes.principled(f"Half{i}", (0.8, 0.3, 0.1), specular=0.5, metallic=m)
+        node = next(n for n in mat.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+        node.inputs['Roughness'].default_value = 0.4
+        scenes.plane(f"P{i}", location=(3 * i, 0, 0), materials=(mat,))
+    by_name = {x.name: x for x in exported().materials}
+    e = specular.layer_albedo(0.4, 1.5, 0.5, (1, 1, 1))
+    for i, m in enumerate((0.0, 0.5, 1.0)):
+        got = by_name[f"Half{i}"]
+        want = np.array([0.8, 0.3, 0.1]) * (1 - (1 - m) * e.max()) + (1 - m) * e
+        np.testing.assert_allclose(got.base_color, want, rtol=1e-6)
+        assert ("specular layer as diffuse" in got.approximated) == (m < 1)
