@@ -30,9 +30,9 @@ diffuse surface with its constant 'Color' (or 'Base Color') input, 0.8 grey with
 linked input that is not an Image Texture, an RGB/Value node or (for a diffuse colour) one of
 the colour nodes above uses its own value (the socket's, or where its chain left a group),
 but Fresnel and Layer Weight nodes give their average over view directions (fresnel.py); the
-Principled BSDF keeps its diffuse base, with its dielectric specular layer as that layer's
-albedo averaged over view directions (specular.py; no metal, coat, sheen, transmission or
-subsurface); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
+Principled BSDF keeps its diffuse base, with its dielectric specular layer and its coat as
+those layers' albedos averaged over view directions (principled.py, specular.py; no metal,
+sheen, transmission or subsurface); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
 BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
 texture coordinates other than the UV map (and Mapping nodes of it) are read as the active
 render UV map.
@@ -53,7 +53,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import nodeeval, panorama, specular
+from . import nodeeval, panorama, principled
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant, constant_color, constant_value
@@ -418,47 +418,6 @@ def _mix_factor(node, reasons, label, surface=True):
     return min(max(fac, 0.0), 1.0)
 
 
-def principled_specular_albedo(node, reasons):
-    """The albedo (3,) of a Principled BSDF's dielectric specular layer averaged over view
-    directions (specular.py), weighted by the dielectric's share 1 - Metallic (the metal is
-    dropped: its base colour stands for it, about what Cycles' metal reflects), or None
-    without a layer (Specular IOR Level 0, IOR 1, a black tint, Metallic 1) or with a
-    transmissive part or a node-driven Metallic, which the export drops (reported)."""
-    level_socket = node.inputs.get('Specular IOR Level')
-    if level_socket is None:
-        return None
-    level, ok = constant_value(level_socket)
-    if ok and level == 0.0:
-        return None
-    metallic, m_ok = constant_value(node.inputs['Metallic'])
-    transmission, t_ok = constant_value(node.inputs['Transmission Weight'])
-    if not (m_ok and t_ok) or transmission != 0.0:
-        reasons.append("Principled specular layer ignored")
-        return None
-    values = []
-    for name in ('Roughness', 'IOR'):
-        v, v_ok = constant_value(node.inputs[name])
-        ok &= v_ok
-        values.append(v)
-    tint, t_ok = constant_color(node.inputs['Specular Tint'])
-    if not (ok and t_ok):
-        reasons.append("Principled specular layer inputs driven by nodes; their own values used")
-    albedo = specular.layer_albedo(values[0], values[1], level, tint) * (1.0 - min(max(metallic, 0.0), 1.0))
-    return albedo if albedo.any() else None
-
-
-def _specular_layer(node, base, reasons):
-    """The Principled BSDF's specular layer over its diffuse base, as diffuse: the base dimmed
-    by the layer's albedo (its largest channel, as Cycles' closure_layering_weight) and the
-    albedo added."""
-    albedo = principled_specular_albedo(node, reasons)
-    if albedo is None:
-        return base
-    reasons.append(f"Principled specular layer as diffuse: its albedo averaged over view directions, "
-                   f"{albedo.max():.3f}")
-    return base.scaled(1.0 - albedo.max()).plus(_Closure(const=albedo), reasons)
-
-
 def world_visibility(world):
     """The rays that see the world (World > Ray Visibility): VIS_CAMERA | VIS_DIFFUSE bits."""
     vis = getattr(world, 'cycles_visibility', None)
@@ -530,6 +489,12 @@ class _Closure:
         self.holdout = float(holdout)     # weight of a Holdout shader
         self.transparent = np.array(transparent, np.float64)
         self.opacity = opacity
+
+    def layered(self, dim, add):
+        """Under a layer (principled.py): the albedo x dim (3,) + add (3,); emission,
+        transparency and holdout are set after the layers."""
+        return _Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
+                        self.transparent, self.opacity)
 
     def scaled(self, f):
         return _Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
@@ -764,12 +729,14 @@ class _MaterialBuilder:
     def _principled(self, node, reasons):
         for name, what in PRINCIPLED_IGNORED:
             s = node.inputs.get(name)
-            if s is not None and name != 'Specular IOR Level':
+            if s is not None and name not in principled.HANDLED:
                 v, ok = constant_value(s)
                 if v != 0.0 or not ok:
                     reasons.append(f"Principled {what} ignored")
         _note_normal_inputs(node, reasons)
-        c = _specular_layer(node, self._color_closure(node.inputs['Base Color'], reasons), reasons)
+        c = self._color_closure(node.inputs['Base Color'], reasons)
+        for dim, add in principled.layer_steps(node, reasons):
+            c = c.layered(dim, add)
         es = input_socket(node, 'Emission Strength')
         ec = input_socket(node, 'Emission Color', 'Emission')
         if es is not None and ec is not None:

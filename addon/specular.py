@@ -84,3 +84,13 @@ def layer_albedo(roughness: float, ior: float, level: float, tint) -> np.ndarray
     es = (ef - f0 * e1) / (1.0 - f0)
     ft = f0 * tint
     return ft * e1 + (1.0 - ft) * es
+
+
+def coat_tint_average(tint, coat_ior: float) -> np.ndarray:
+    """Per channel, Cycles' Coat Tint absorption of the layers below the coat, tint^(1 / cos_t)
+    with cos_t the refracted view cosine in the coat (tint is the transmittance at normal
+    incidence), averaged over view directions weighted by cos."""
+    tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, None)
+    eta = max(float(coat_ior), 1.0)
+    cos_t = np.sqrt(1.0 - (1.0 - _MU * _MU) / (eta * eta))
+    return (tint[:, None] ** (1.0 / cos_t)[None, :]) @ (2.0 * _MU * _W_MU)

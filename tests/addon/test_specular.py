@@ -92,3 +92,15 @@ def test_export_weights_the_layer_by_the_dielectric_share(scene, exported):
         want = np.array([0.8, 0.3, 0.1]) * (1 - (1 - m) * e.max()) + (1 - m) * e
         np.testing.assert_allclose(got.base_color, want, rtol=1e-6)
         assert ("specular layer as diffuse" in got.approximated) == (m < 1)
+
+
+def test_coat_tint_average():
+    """tint^(1 / cos_t) averaged with weight 2 mu, cos_t refracted into the coat: against the
+    trapezoid rule; white passes everything, black nothing."""
+    mu = np.linspace(1e-6, 1.0, 200_001)
+    for ior in (1.3, 1.5, 2.2):
+        cos_t = np.sqrt(1 - (1 - mu * mu) / ior ** 2)
+        want = [np.trapz(2 * mu * t ** (1 / cos_t), mu) for t in (0.9, 0.5, 0.1)]
+        np.testing.assert_allclose(specular.coat_tint_average((0.9, 0.5, 0.1), ior), want, rtol=1e-4)
+    np.testing.assert_allclose(specular.coat_tint_average((1, 1, 1), 1.5), 1.0, rtol=1e-12)
+    assert not specular.coat_tint_average((0, 0, 0), 1.5).any()

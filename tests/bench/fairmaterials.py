@@ -7,8 +7,8 @@ engine approximates, so comparing the two as they are measures the approximation
 engine. `make_diffuse()` edits every material's node tree in place into what the add-on's
 export renders exactly, following the export's own rules (addon/export.py `_MaterialBuilder`):
 - Principled BSDF: metallic, transmission, coat, sheen, subsurface, specular layer, diffuse
-  roughness, thin film set to 0, its Normal input unlinked; the specular layer, which the export
-  renders as diffuse (addon/specular.py), folded into the base colour first; Alpha kept (the export renders a
+  roughness, thin film set to 0, its Normal input unlinked; the specular layer and the coat,
+  which the export renders as diffuse (addon/principled.py), folded into the base colour first; Alpha kept (the export renders a
   constant one and an Image Texture's Alpha output; anything else feeding it is unlinked);
 - Transparent BSDF kept (its colour as the export reads it), and a Mix Shader's factor kept
   when it is an Image Texture's Alpha output;
@@ -36,7 +36,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from addon import export, mapping, nodeeval, nodegraph
+from addon import export, mapping, nodeeval, nodegraph, principled
 
 # the layers the export drops, and thin film (it tints only the dropped specular layer)
 ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
@@ -192,7 +192,7 @@ class _Editor:
             self._normals(node)
             self._color(node.inputs['Color'])
         elif t == 'BSDF_PRINCIPLED':
-            albedo = export.principled_specular_albedo(node, [])
+            steps = principled.layer_steps(node, [])
             for name in ZEROED_PRINCIPLED:
                 sock = node.inputs.get(name)
                 if sock is not None:
@@ -202,8 +202,8 @@ class _Editor:
                 self._own_value(alpha)
             self._normals(node)
             self._color(node.inputs['Base Color'])
-            if albedo is not None:
-                self._fold_specular(node.inputs['Base Color'], albedo)
+            if steps:
+                self._fold_layers(node.inputs['Base Color'], steps)
             self._own_value(nodegraph.input_socket(node, 'Emission Color', 'Emission'))
             self._own_value(nodegraph.input_socket(node, 'Emission Strength'))
         elif t == 'EMISSION':
@@ -226,30 +226,32 @@ class _Editor:
                 color, _ = nodeeval.constant_color(sock)
             self._replace(socket, node, tuple(color), f"{node.bl_label} as diffuse")
 
-    def _fold_specular(self, socket, albedo):
-        """The specular layer the export renders as diffuse (Specular IOR Level is 0 by now),
-        folded into the base colour: base (1 - max albedo) + albedo, as the export computes it,
-        for a constant base; a Mix node (factor max albedo, B = albedo / max) after a textured
-        or evaluated one."""
-        emax = float(albedo.max())
+    def _fold_layers(self, socket, steps):
+        """The layers the export renders as diffuse (principled.py; their inputs are zeroed by
+        now) folded into the base colour: base -> base x dim + add per layer, with the export's
+        arithmetic for a constant base; Mix nodes (Multiply, then Add, factor 1) after a
+        textured or evaluated one."""
         color, exact = nodeeval.constant_color(socket)
         sock = nodegraph.unwrap(socket)
-        why = f"Principled specular layer folded into the base colour ({emax:.3f})"
+        self.done.append("Principled specular layer and coat folded into the base colour")
         if exact:
-            folded = np.array(color, np.float64) * (1.0 - emax) + albedo
+            folded = np.array(color, np.float64)
+            for dim, add in steps:
+                folded = folded * dim + add
             self._drop_links(sock)
             sock.default_value = (*folded, 1.0)
-            self.done.append(why)
             return
-        link = sock.links[0]
         tree = sock.id_data
-        mix = tree.nodes.new('ShaderNodeMix')
-        mix.data_type, mix.blend_type, mix.clamp_factor = 'RGBA', 'MIX', True
-        mix.inputs['Factor'].default_value = emax
-        mix.inputs['B'].default_value = (*(albedo / emax), 1.0)
-        tree.links.new(link.from_socket, mix.inputs['A'])
-        tree.links.new(mix.outputs['Result'], sock)
-        self.done.append(why)
+        source = sock.links[0].from_socket
+        for dim, add in steps:
+            for blend, value in (('MULTIPLY', dim), ('ADD', add)):
+                mix = tree.nodes.new('ShaderNodeMix')
+                mix.data_type, mix.blend_type = 'RGBA', blend
+                mix.inputs['Factor'].default_value = 1.0
+                mix.inputs['B'].default_value = (*value, 1.0)
+                tree.links.new(source, mix.inputs['A'])
+                source = mix.outputs['Result']
+        tree.links.new(source, sock)
 
     def _normals(self, node):
         sock = node.inputs.get('Normal')

@@ -1,5 +1,5 @@
-"""The Principled BSDF's specular layer, approximated as diffuse (addon/specular.py), against
-Cycles.
+"""The Principled BSDF's specular layer and coat, approximated as diffuse (addon/principled.py,
+specular.py), against Cycles.
 
 Under a uniform white world (no bounces past the first: the surface's albedo alone), a point
 seen at view cosine mu returns base (1 - E_max(mu)) + E(mu) in Cycles, E the specular layer's
@@ -18,7 +18,7 @@ from tests.addon import scenes
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0)):
+def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0), coat=None):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
@@ -29,6 +29,10 @@ def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0)):
     p.inputs['Roughness'].default_value = roughness
     p.inputs['IOR'].default_value = ior
     p.inputs['Specular Tint'].default_value = (*tint, 1.0)
+    if coat is not None:                   # weight, roughness, IOR, tint
+        for name, value in zip(('Coat Weight', 'Coat Roughness', 'Coat IOR'), coat[:3]):
+            p.inputs[name].default_value = value
+        p.inputs['Coat Tint'].default_value = (*coat[3], 1.0)
     scenes.uv_sphere(radius=1.0, segments=96, rings=48, smooth=True, materials=[mat])
     scenes.world((1.0, 1.0, 1.0), 1.0)
     sc.cycles.samples = sc.dacrt.samples = 64
@@ -38,25 +42,30 @@ def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0)):
     return sc
 
 
-CASES = {  # base, Specular IOR Level, roughness, IOR, tint
+CASES = {  # base, Specular IOR Level, roughness, IOR, tint[, coat (weight, roughness, IOR, tint)]
     'dark_rough': ((0.05, 0.05, 0.05), 0.5, 0.5, 1.5, (1, 1, 1)),
     'dark_smooth': ((0.05, 0.05, 0.05), 0.5, 0.05, 1.5, (1, 1, 1)),
     'water_very_rough': ((0.05, 0.05, 0.05), 0.5, 0.9, 1.33, (1, 1, 1)),
     'bright': ((0.8, 0.6, 0.4), 0.5, 0.5, 1.5, (1, 1, 1)),
     'strong_tinted': ((0.2, 0.2, 0.2), 1.0, 0.3, 1.5, (1.0, 0.4, 0.1)),
+    'dark_coated': ((0.05, 0.05, 0.05), 0.0, 0.5, 1.5, (1, 1, 1), (1.0, 0.03, 1.5, (1, 1, 1))),
+    'car_paint': ((0.8, 0.1, 0.05), 0.5, 0.4, 1.5, (1, 1, 1), (1.0, 0.1, 1.5, (1, 1, 1))),
+    'tinted_half_coat': ((0.6, 0.6, 0.6), 0.5, 0.5, 1.5, (1, 1, 1), (0.6, 0.2, 1.8, (0.9, 0.6, 0.3))),
 }
 
 
 @pytest.mark.parametrize('case', sorted(CASES))
 def test_specular_layer_matches_cycles_on_a_sphere(case, tmp_path):
-    base, level, roughness, ior, tint = CASES[case]
-    sc = _scene(base, level, roughness, ior, tint)
+    sc = _scene(*CASES[case])
+    base = CASES[case][0]
     layer = sc.view_layers[0].name
     disk = {}
     for engine, exr in scenes.render_engines(sc, tmp_path).items():
         a = exr[f"{layer}.Combined.A"].sum()
         disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
     d, c = disk['DACRT'], disk['CYCLES']
-    np.testing.assert_allclose(d, c, rtol=0.02)
+    # stacked layers (a coat over the specular layer) multiply two view averages where Cycles
+    # averages their product: measured within 1.9% (car paint, blue), single layers within 0.7%
+    np.testing.assert_allclose(d, c, rtol=0.025 if len(CASES[case]) > 5 else 0.01)
     if case.startswith('dark'):       # the layer is most of what a dark surface returns
         assert c.min() > 1.4 * base[0], (c, base)
