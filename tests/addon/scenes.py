@@ -207,6 +207,16 @@ def environment_world(image, strength=1.0, rotation=None, scale=(1.0, 1.0, 1.0),
     return w
 
 
+def world_tree(scene=None):
+    """An empty node tree for a new world of the scene: (world, node tree, World Output node)."""
+    scene = scene or bpy.context.scene
+    w = bpy.data.worlds.new("World")
+    scene.world = w
+    nt = w.node_tree
+    nt.nodes.clear()
+    return w, nt, nt.nodes.new('ShaderNodeOutputWorld')
+
+
 def black_world(scene=None):
     return world((0, 0, 0), 0.0, scene)
 

@@ -107,11 +107,7 @@ def test_export_mixes_by_the_average(scene, exported):
 def test_world_mix_factor_keeps_its_own_value(scene):
     """The world has no surface to view: a Layer Weight there is not averaged (its own value,
     reported, as before)."""
-    w = bpy.data.worlds.new("Sky")
-    scene.world = w
-    nt = w.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new('ShaderNodeOutputWorld')
+    _, nt, out = scenes.world_tree(scene)
     mix = nt.nodes.new('ShaderNodeMixShader')
     mix.inputs['Fac'].default_value = 0.25
     lw = nt.nodes.new('ShaderNodeLayerWeight')
