@@ -21,14 +21,26 @@ from .nodeeval import constant_color, constant_value
 HANDLED = ('Specular IOR Level', 'Coat Weight')   # inputs whose layers the steps render
 
 
+# what Cycles uses for an input a Principled BSDF of another Blender version lacks
+_DEFAULTS = {'Metallic': 0.0, 'Transmission Weight': 0.0, 'Roughness': 0.5, 'IOR': 1.5, 'Coat Roughness': 0.03,
+             'Coat IOR': 1.5}
+
+
 def _values(node, names):
     """(values, all exact) of float inputs (own values where nodes drive them)."""
     out, ok = [], True
     for name in names:
-        v, v_ok = constant_value(node.inputs[name])
+        sock = node.inputs.get(name)
+        v, v_ok = constant_value(sock) if sock is not None else (_DEFAULTS[name], True)
         ok &= v_ok
         out.append(v)
     return out, ok
+
+
+def _color(node, name):
+    """(rgb, exact) of a colour input; white where the node has no such input."""
+    sock = node.inputs.get(name)
+    return constant_color(sock) if sock is not None else ((1.0, 1.0, 1.0), True)
 
 
 def _specular_step(node, reasons):
@@ -43,7 +55,7 @@ def _specular_step(node, reasons):
         reasons.append("Principled specular layer ignored")
         return None
     (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
-    tint, t_ok = constant_color(node.inputs['Specular Tint'])
+    tint, t_ok = _color(node, 'Specular Tint')
     if not (ok and v_ok and t_ok):
         reasons.append("Principled specular layer inputs driven by nodes; their own values used")
     albedo = specular.layer_albedo(roughness, ior, level, tint) * (1.0 - min(max(metallic, 0.0), 1.0))
@@ -63,7 +75,7 @@ def _coat_step(node, reasons):
     if weight == 0.0:
         return None
     (roughness, ior), v_ok = _values(node, ('Coat Roughness', 'Coat IOR'))
-    tint, t_ok = constant_color(node.inputs['Coat Tint'])
+    tint, t_ok = _color(node, 'Coat Tint')
     if not (ok and v_ok and t_ok):
         reasons.append("Principled coat inputs driven by nodes; their own values used")
     albedo = specular.layer_albedo(roughness, ior, 0.5, (1.0, 1.0, 1.0)) * weight
