@@ -409,9 +409,8 @@ def _mix_factor(node, reasons, label, surface=True):
     export evaluates, on a surface a Fresnel or Layer Weight (a clear coat's blend) as its
     average over view directions (fresnel.py; not in the world, which has no surface to view);
     otherwise at its own value."""
-    notes = [] if surface else None
-    fac, ok = constant_value(node.inputs['Fac'], notes)
-    notes = notes or ()
+    notes = []
+    fac, ok = constant_value(node.inputs['Fac'], notes if surface else None)
     reasons.extend(f"{label} factor from {n}" for n in notes)
     if not ok:
         reasons.append(f"{label} factor driven by nodes; its own value used")

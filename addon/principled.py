@@ -73,6 +73,8 @@ def _coat_step(node, reasons):
     weight, ok = constant_value(weight_socket)
     weight = min(max(weight, 0.0), 1.0)
     if weight == 0.0:
+        if not ok:       # driven by nodes, own value 0: reported, as before the coat was kept
+            reasons.append("Principled coat ignored")
         return None
     (roughness, ior), v_ok = _values(node, ('Coat Roughness', 'Coat IOR'))
     tint, t_ok = _color(node, 'Coat Tint')

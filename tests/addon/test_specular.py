@@ -104,3 +104,18 @@ def test_coat_tint_average():
         np.testing.assert_allclose(specular.coat_tint_average((0.9, 0.5, 0.1), ior), want, rtol=1e-4)
     np.testing.assert_allclose(specular.coat_tint_average((1, 1, 1), 1.5), 1.0, rtol=1e-12)
     assert not specular.coat_tint_average((0, 0, 0), 1.5).any()
+
+
+def test_node_driven_coat_of_own_value_zero_is_reported(scene, exported):
+    """A Coat Weight a node drives is read at its own value; at 0 there is no coat to render,
+    which the export says (as it did before the coat was kept)."""
+    scenes.camera((0, -10, 0), (np.pi / 2, 0, 0))
+    mat = scenes.principled("Noisy", (0.5, 0.5, 0.5))
+    nt = mat.node_tree
+    p = next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
+    p.inputs['Coat Weight'].default_value = 0.0
+    nt.links.new(nt.nodes.new('ShaderNodeTexNoise').outputs['Fac'], p.inputs['Coat Weight'])
+    scenes.plane("P", materials=(mat,))
+    m = next(x for x in exported().materials if x.name == "Noisy")
+    assert "Principled coat ignored" in m.approximated
+    np.testing.assert_allclose(m.base_color, 0.5)

@@ -8,8 +8,9 @@ engine. `make_diffuse()` edits every material's node tree in place into what the
 export renders exactly, following the export's own rules (addon/export.py `_MaterialBuilder`):
 - Principled BSDF: metallic, transmission, coat, sheen, subsurface, specular layer, diffuse
   roughness, thin film set to 0, its Normal input unlinked; the specular layer and the coat,
-  which the export renders as diffuse (addon/principled.py), folded into the base colour first; Alpha kept (the export renders a
-  constant one and an Image Texture's Alpha output; anything else feeding it is unlinked);
+  which the export renders as diffuse (addon/principled.py), folded into the base colour
+  first; Alpha kept (the export renders a constant one and an Image Texture's Alpha output;
+  anything else feeding it is unlinked);
 - Transparent BSDF kept (its colour as the export reads it), and a Mix Shader's factor kept
   when it is an Image Texture's Alpha output;
 - Diffuse BSDF: roughness 0, normal unlinked;
@@ -268,17 +269,17 @@ class _Editor:
         if link is None:
             return
         notes = []
-        exact = nodeeval.constant(socket, socket.type != 'VALUE', notes)[1]
+        value, exact = nodeeval.constant(socket, socket.type != 'VALUE', notes)
         if not exact:
             self._unlink(carrier, f"'{socket.name}' from '{link.from_node.bl_label}' as its own value")
         elif notes:
-            self._view_average(socket)
+            self._view_average(socket, value)
 
-    def _view_average(self, socket):
+    def _view_average(self, socket, value):
         """A chain with a Fresnel or Layer Weight node (which the export renders as its
-        average over view directions, nodeeval.py) replaced by the value the export computes."""
+        average over view directions, nodeeval.py) replaced by the value the export computes
+        for it (nodeeval.constant with notes)."""
         color = socket.type != 'VALUE'
-        value, _ = nodeeval.constant(socket, color, [])
         sock = nodegraph.unwrap(socket)
         self._drop_links(sock)
         if color:
@@ -301,8 +302,9 @@ class _Editor:
             self._image(node)
             return
         if node.type in nodeeval.VIEW_NODE_TYPES:
-            if nodeeval.constant(socket, socket.type != 'VALUE', [])[1]:
-                self._view_average(socket)
+            value, exact = nodeeval.constant(socket, socket.type != 'VALUE', [])
+            if exact:
+                self._view_average(socket, value)
             else:
                 self._unlink(carrier, f"'{socket.name}' from '{node.bl_label}' as its own value")
             return
