@@ -71,9 +71,14 @@ struct SharedTop {
 struct BatchInfo {
     float origin_abs_max = 0.0f;  // largest |origin coordinate| (box padding)
     bool odd_dirs = false;        // a direction component is denormal or > 2^125 in size (filter.h)
+    // Input: the index of the first checked ray in the batch. Output: whether every checked
+    // ray k has id first_id + k (then the ids are a permutation without any id marking).
+    size_t first_id = 0;
+    bool ids_in_order = true;
     void merge(const BatchInfo& o) {
         origin_abs_max = origin_abs_max > o.origin_abs_max ? origin_abs_max : o.origin_abs_max;
         odd_dirs = odd_dirs || o.odd_dirs;
+        ids_in_order = ids_in_order && o.ids_in_order;
     }
 };
 

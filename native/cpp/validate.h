@@ -1,7 +1,9 @@
 // SIMD check of the ray fields (finite origin and direction, non-zero direction, tfar >= 0 or
 // +inf), the largest |origin coordinate| and whether a direction component is one the box
 // test's reciprocal cannot take (filter.h), W rays per step with the filter's transposed loads.
-// The exact message for a bad ray and the id checks are in ray.cpp (scalar, cold/cheap).
+// Also whether the ids run first_id, first_id + 1, ... in order, as every batch the renderer
+// and the benchmarks build does: then no id needs marking (ray.cpp). The exact message for a
+// bad ray and the general id check are in ray.cpp (scalar, cold/cheap).
 // Included inside an ISA namespace.
 #pragma once
 
@@ -12,9 +14,12 @@ bool fields_valid_w(const Ray* rays, size_t n, BatchInfo& info) {
     vbool<W> ok_all = all, odd = andnot(all, all);
     vfloat<W> oam = zero;
     const Ray pad{{0, 0, 0}, {1, 0, 0}, 0.0f, 0};  // a valid ray
+    uint32_t id_diff = 0;  // OR of (id ^ expected id): 0 when the ids are in order
     for (size_t i = 0; i < n; i += W) {
         vfloat<W> r[8];
         load_block<W>(rays, i, n, pad, r);
+        const size_t m = n - i < size_t(W) ? n - i : size_t(W);  // the records just loaded, in L1
+        for (size_t l = 0; l < m; ++l) id_diff |= rays[i + l].id ^ uint32_t(info.first_id + i + l);
         // x - x is exactly 0 for finite x and NaN for inf/NaN: one compare for six fields.
         const vfloat<W> z = ((r[0] - r[0]) + (r[1] - r[1])) + ((r[2] - r[2]) + (r[3] - r[3])) +
                             ((r[4] - r[4]) + (r[5] - r[5]));
@@ -32,5 +37,6 @@ bool fields_valid_w(const Ray* rays, size_t n, BatchInfo& info) {
     for (int l = 0; l < W; ++l) best = m[l] > best ? m[l] : best;
     info.origin_abs_max = best;
     info.odd_dirs = bits(odd) != 0;
+    info.ids_in_order = id_diff == 0 && info.first_id + n <= size_t(UINT32_MAX) + 1;
     return bits(ok_all) == bits(all);
 }

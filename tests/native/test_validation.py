@@ -196,6 +196,26 @@ def test_big_batch_outputs_do_not_depend_on_threads(query):
         assert np.all(np.isinf(out[0]["t"][out[0]["prim"] < 0]))
 
 
+@pytest.mark.parametrize("threads", [1, 2])
+@pytest.mark.parametrize("query", ["intersect", "occluded"])
+def test_big_batch_ids_out_of_order_accepted(query, threads):
+    """Ids in order (ray k has id k) are validated in one pass; any other permutation takes
+    the marking check. Both must give every ray its own answer: ids swapped at the end, in
+    the middle of a thread's range and across the ranges, and fully shuffled."""
+    rays = good_rays(BIG)
+    scene = dacrt.Scene(V, T)
+    want = getattr(scene, query)(rays.copy(), threads=threads)
+    for swaps in ([(BIG - 2, BIG - 1)], [(1000, 60_000)], [(5, BIG - 5), (99_999, 100_000)], None):
+        order = np.arange(BIG)
+        if swaps is None:
+            order = np.random.default_rng(4).permutation(BIG)
+        else:
+            for a, b in swaps:
+                order[[a, b]] = order[[b, a]]
+        got = getattr(scene, query)(rays[order], threads=threads)   # ray k keeps its id order[k]
+        assert got.tobytes() == want.tobytes(), f"swaps {swaps}: answers not the in-order ones by id"
+
+
 @pytest.mark.parametrize("query", ["intersect", "occluded"])
 def test_skip_outside_the_triangle_indices_rejected(query):
     """skip must be -1 or a triangle index 0..M-1, checked before the int32 conversion (which
