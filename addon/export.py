@@ -53,7 +53,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import nodeeval, panorama, principled
+from . import hair, nodeeval, panorama, pointcloud, principled
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant, constant_color, constant_value
@@ -62,9 +62,8 @@ from .cryptomatte import KINDS as CRYPTO_KINDS
 from .passes import PASSES, enabled, result_name
 from .texture import UdimTiles
 
-GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
-UNSUPPORTED_TYPES = {'CURVES': "hair curves", 'POINTCLOUD': "point cloud", 'VOLUME': "volume",
-                     'GREASEPENCIL': "Grease Pencil"}
+GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
+UNSUPPORTED_TYPES = {'VOLUME': "volume", 'GREASEPENCIL': "Grease Pencil"}
 # Objects without a material render in Cycles with Blender's default surface, a Principled BSDF of
 # base colour 0.8 (measured in Cycles 5.0: 0.842 where a Diffuse BSDF 0.8 gives 0.764, under a
 # sun behind the camera): its diffuse base here, reported like any Principled specular layer
@@ -1010,6 +1009,18 @@ def _transform(points, linear, offset, out):
     return out
 
 
+def _point_attribute(data, name, data_type, width):
+    """A point-domain attribute of a point cloud or Curves as float64 (n, width) (width 1:
+    (n,)), or None when it is missing or of another type."""
+    attr = data.attributes.get(name)
+    if attr is None or attr.domain != 'POINT' or attr.data_type != data_type:
+        return None
+    n = len(data.points)
+    out = np.empty(n * width, np.float32)
+    attr.data.foreach_get('vector' if width > 1 else 'value', out)
+    return out.reshape(n, width).astype(np.float64) if width > 1 else out.astype(np.float64)
+
+
 def _mesh_arrays(me, want_uvs):
     """The mesh's arrays, or None when it has no faces: a mesh made by `meshes.new()` or an
     empty metaball's mesh has not even a position attribute to read."""
@@ -1071,6 +1082,17 @@ class _MeshArrays:
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
             self.normal_rows = self.normal_index = None
         self.corner_uvs = self._read_uvs(me) if want_uvs else None
+
+    @classmethod
+    def from_arrays(cls, positions, triangles, vertex_normals):
+        """A mesh made here (tessellated points or curves): smooth per-vertex normals, one
+        material slot, no UV map."""
+        a = cls.__new__(cls)
+        a.positions = np.ascontiguousarray(positions, np.float32)
+        a.triangles = np.ascontiguousarray(triangles, np.int32)
+        a.corners, a.slot, a.corner_uvs, a.domain = None, None, None, 'POINT'
+        a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
+        return a
 
     @staticmethod
     def _read_uvs(me):
@@ -1288,6 +1310,9 @@ class _Exporter:
                 continue
             if not inst.is_instance:
                 self._note_hair(ob)
+            if ob.type == 'CURVES' and not getattr(self.view_layer, 'use_strand', True):
+                self._skip("hair curves are off in the view layer's filter (Hair)", ob.name)
+                continue
             if ob.type in UNSUPPORTED_TYPES:
                 self._skip(f"{UNSUPPORTED_TYPES[ob.type]} objects are not rendered", ob.name)
                 continue
@@ -1374,6 +1399,8 @@ class _Exporter:
         want_uvs = True
         if ob.type == 'MESH':
             arrays = _mesh_arrays(ob.data, want_uvs)
+        elif ob.type in ('POINTCLOUD', 'CURVES'):
+            arrays = self._tessellated(ob)
         else:
             try:
                 me = ob.to_mesh()
@@ -1391,6 +1418,37 @@ class _Exporter:
         self.meshes[key] = arrays
         self.placements[key] = []
         return key
+
+    def _tessellated(self, ob):
+        """A point cloud's spheres or a Curves object's tubes (pointcloud.py, hair.py) as mesh
+        arrays in object space, or None when nothing in it has a size. Cycles shades all of
+        them with the first material slot; the tessellation is reported once per object."""
+        data = ob.data
+        if data is None or len(data.points) == 0:
+            return None
+        positions = _point_attribute(data, 'position', 'FLOAT_VECTOR', 3)
+        if positions is None:
+            return None
+        if ob.type == 'POINTCLOUD':
+            radii = _point_attribute(data, 'radius', 'FLOAT', 1)
+            radii = np.full(len(positions), pointcloud.DEFAULT_RADIUS) if radii is None else radii
+            level = pointcloud.level_for(len(positions))
+            v, t, n, kept = pointcloud.spheres(positions, radii, level)
+            what = f"point clouds rendered as spheres of {len(pointcloud.unit_sphere(level)[1])} triangles"
+            if kept < len(positions):
+                self._ignore("points of radius 0 or less are not rendered", ob.name)
+        else:
+            radii = _point_attribute(data, 'radius', 'FLOAT', 1)
+            radii = np.full(len(positions), hair.DEFAULT_RADIUS) if radii is None else radii
+            offsets = np.empty(len(data.curves) + 1, np.int32)
+            data.curve_offset_data.foreach_get('value', offsets)
+            sides, steps = hair.level_for(len(positions))
+            v, t, n, kept = hair.tubes(positions, radii, offsets, (sides, steps))
+            what = f"hair curves rendered as tubes of {sides} sides, {steps} step(s) a segment, open ends"
+            if kept < len(data.curves):
+                self._ignore("curves of fewer than 2 points are not rendered", ob.name)
+        self._ignore(what, ob.name)
+        return _MeshArrays.from_arrays(v, t, n) if len(t) else None
 
     def _object_id(self, ob):
         idx = self._object_index.get(ob.name)

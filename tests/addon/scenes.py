@@ -70,6 +70,49 @@ def uv_sphere(name="Sphere", radius=1.0, segments=32, rings=16, location=(0, 0, 
     return ob
 
 
+def point_cloud(name, points, radius=None, material=None, scene=None):
+    """A mesh object whose Geometry Nodes modifier turns its vertices into a point cloud (Mesh to
+    Points, radius `radius`; None: the node removes the radius attribute, so the renderers use
+    their default) with `material`, as a scatter set-up makes them."""
+    ob = mesh(name, points, [], scene=scene)
+    ng = bpy.data.node_groups.new(name + "Points", 'GeometryNodeTree')
+    ng.interface.new_socket('Geometry', in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gin, gout = ng.nodes.new('NodeGroupInput'), ng.nodes.new('NodeGroupOutput')
+    to_points = ng.nodes.new('GeometryNodeMeshToPoints')
+    to_points.inputs['Radius'].default_value = 0.05 if radius is None else radius
+    ng.links.new(gin.outputs[0], to_points.inputs['Mesh'])
+    last = to_points.outputs['Points']
+    if radius is None:
+        drop = ng.nodes.new('GeometryNodeRemoveAttribute')
+        drop.inputs['Name'].default_value = 'radius'
+        ng.links.new(last, drop.inputs['Geometry'])
+        last = drop.outputs['Geometry']
+    if material is not None:
+        setm = ng.nodes.new('GeometryNodeSetMaterial')
+        setm.inputs['Material'].default_value = material
+        ng.links.new(last, setm.inputs['Geometry'])
+        last = setm.outputs['Geometry']
+    ng.links.new(last, gout.inputs[0])
+    ob.modifiers.new("Points", 'NODES').node_group = ng
+    return ob
+
+
+def hair_curves(name, curves, radius=None, material=None, scene=None):
+    """A Curves (hair) object of the given curves (each an (n, 3) array of control points) with
+    a 'radius' attribute of `radius` at every point (None: no attribute)."""
+    hc = bpy.data.hair_curves.new(name)
+    hc.add_curves([len(c) for c in curves])
+    pos = np.concatenate([np.asarray(c, np.float32) for c in curves])
+    hc.position_data.foreach_set('vector', pos.ravel())
+    if radius is not None:
+        attr = hc.attributes.new('radius', 'FLOAT', 'POINT')
+        attr.data.foreach_set('value', np.full(len(pos), radius, np.float32))
+    if material is not None:
+        hc.materials.append(material)
+    return link(bpy.data.objects.new(name, hc), scene)
+
+
 def _material(name):
     mat = bpy.data.materials.new(name)
     nt = mat.node_tree

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from mathutils import Euler, Vector
 
-from addon import export
+from addon import export, hair, pointcloud
 from addon import lights as ls
 from addon import scenedata as sd
 
@@ -184,6 +184,62 @@ def test_particle_instances_and_hair_report(scene, exported):
     assert leaves.sum() == 12 * 11       # the leaf object itself plus ten particle instances
     assert of_object(data, "Emitter").sum() == 2
     assert any("hair" in t and "Emitter" in t for _, t in data.messages)
+
+
+def test_point_cloud_becomes_spheres_with_its_material(scene, exported):
+    """Geometry Nodes points (Mesh to Points) are spheres of their radius around each point,
+    in world space, with the point cloud's material; the tessellation is reported."""
+    setup(scene)
+    mat = scenes.diffuse("Dots", (0.9, 0.2, 0.1))
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.5]], np.float64)
+    ob = scenes.point_cloud("Scatter", pts, radius=0.1, material=mat)
+    ob.location = (0, 0, 2)
+    data = exported()
+    g = data.geometry
+    names = [data.object_names[i] for i in np.unique(g.object_index)]
+    assert names == ["Scatter"]
+    level = pointcloud.level_for(3)
+    per = len(pointcloud.unit_sphere(level)[1])
+    assert len(g.triangles) == 3 * per
+    c = corners(g).reshape(3, per * 3, 3)                 # one sphere after another
+    scale = pointcloud.unit_sphere(level)[2]
+    for k in range(3):
+        assert np.allclose(c[k].mean(axis=0), pts[k] + (0, 0, 2), atol=1e-4)
+        assert np.allclose(np.linalg.norm(c[k] - pts[k] - (0, 0, 2), axis=1), 0.1 * scale, rtol=1e-4)
+    assert {data.materials[m].name for m in np.unique(g.material)} == {"Dots"}
+    assert tri_area(g) == pytest.approx(3 * 4 * np.pi * 0.01, rel=1e-4)
+    text = " | ".join(m for _, m in data.messages)
+    assert "'Scatter': point clouds rendered as spheres" in text and "not rendered" not in text
+
+
+def test_point_cloud_default_radius_and_hair_curves(scene, exported):
+    """Points without a radius attribute take Cycles' 0.01; a Curves object becomes one tube
+    per curve of 2+ points with its radius (Cycles' 0.005 without the attribute); hair off in
+    the view layer's filter skips the curves, as Cycles does."""
+    setup(scene)
+    scenes.point_cloud("Bare", np.zeros((1, 3)), radius=None)
+    z = np.linspace(0, 1, 4)[:, None] * (0, 0, 1)
+    scenes.hair_curves("Fur", [z, z + (1, 0, 0), [[5, 5, 5]]], radius=0.02)
+    scenes.hair_curves("Fuzz", [z + (3, 0, 0)])
+    data = exported()
+    g = data.geometry
+    bare = corners(g, of_object(data, "Bare"))
+    scale = pointcloud.unit_sphere(pointcloud.level_for(1))[2]
+    assert np.linalg.norm(bare, axis=1).max() == pytest.approx(pointcloud.DEFAULT_RADIUS * scale, rel=1e-4)
+    sides, steps = hair.level_for(9)
+    assert of_object(data, "Fur").sum() == 2 * 3 * steps * sides * 2
+    fur = corners(g, of_object(data, "Fur"))
+    ring = np.pi / (sides * np.sin(np.pi / sides))
+    off_axis = np.linalg.norm((fur - np.round(fur[:, :1]) * (1, 0, 0))[:, :2], axis=1)
+    assert np.allclose(off_axis.max(), 0.02 * ring, rtol=1e-4)
+    fuzz = corners(g, of_object(data, "Fuzz"))
+    assert np.linalg.norm(fuzz[:, :2] - (3, 0), axis=1).max() == pytest.approx(hair.DEFAULT_RADIUS * ring, rel=1e-4)
+    text = " | ".join(m for _, m in data.messages)
+    assert "hair curves rendered as tubes" in text and "'Fur': curves of fewer than 2 points" in text
+    scene.view_layers[0].use_strand = False
+    data = exported()
+    assert "Fur" not in data.object_names and "Bare" in data.object_names
+    assert "off in the view layer" in " | ".join(m for _, m in data.messages)
 
 
 def test_material_slot_per_triangle(scene, exported):
