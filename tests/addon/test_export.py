@@ -167,9 +167,14 @@ def test_curve_text_and_metaball_become_triangles(scene, exported):
     assert np.abs(blob.mean(axis=0) - (0, 0, -3)).max() < 0.1
 
 
-def test_particle_instances_and_hair_report(scene, exported):
+def test_particle_instances_and_hair_strands(scene, exported):
+    """Object particles are instances; hair particles are strands rendered as tubes, as Cycles
+    reads them: co_hair's points (2^render_step + 1 a strand), children instead of the parents
+    when there are children, the radius from the Hair Shape settings, tessellated in the
+    emitter's object space, with the material slot the settings name."""
     setup(scene)
-    emitter = scenes.plane("Emitter", size=4)
+    emitter = scenes.plane("Emitter", size=4, materials=[scenes.diffuse("Skin", (0.2, 0.2, 0.2)),
+                                                         scenes.diffuse("Fur", (0.9, 0.6, 0.3))])
     leaf = scenes.cube("Leaf", size=0.2, location=(50, 0, 0))
     emitter.modifiers.new("ps", 'PARTICLE_SYSTEM')
     ps = emitter.particle_systems[0].settings
@@ -177,13 +182,39 @@ def test_particle_instances_and_hair_report(scene, exported):
     ps.render_type, ps.instance_object = 'OBJECT', leaf
     ps.particle_size, ps.physics_type = 1.0, 'NO'
     emitter.modifiers.new("hair", 'PARTICLE_SYSTEM')
-    hair = emitter.particle_systems[1].settings
-    hair.type, hair.count = 'HAIR', 5
+    hair_settings = emitter.particle_systems[1].settings
+    hair_settings.type, hair_settings.count, hair_settings.hair_length = 'HAIR', 5, 1.0
+    hair_settings.material, hair_settings.use_close_tip = 2, False
+    hair_settings.root_radius, hair_settings.tip_radius, hair_settings.radius_scale = 1.0, 1.0, 0.02
     data = exported()
     leaves = of_object(data, "Leaf")
     assert leaves.sum() == 12 * 11       # the leaf object itself plus ten particle instances
+    g = data.geometry
+    em = of_object(data, "Emitter")
+    names = np.array([m.name for m in data.materials])[g.material]
+    plane, strands = em & (names == "Skin"), em & (names == "Fur")
+    assert plane.sum() == 2
+    sides, steps = hair.level_for(5 * 9)
+    assert strands.sum() == 5 * 8 * steps * sides * 2       # 5 strands of 2^3 + 1 points
+    c = corners(g, strands)
+    assert c[:, 2].min() == pytest.approx(0.0, abs=1e-4) and c[:, 2].max() == pytest.approx(1.0, abs=1e-3)
+    ring = np.pi / (sides * np.sin(np.pi / sides))
+    # straight strands along +z, one after another: every corner at radius_scale / 2 (times
+    # the ring's perimeter scale) from its strand's axis
+    per = c.reshape(5, -1, 3)
+    off_axis = np.linalg.norm(per[:, :, :2] - per[:, :, :2].mean(axis=1, keepdims=True), axis=2)
+    assert np.allclose(off_axis, 0.5 * 0.02 * ring, rtol=1e-3)
+    text = " | ".join(m for _, m in data.messages)
+    assert "'Emitter': hair particles rendered as tubes" in text
+    # children replace their parents
+    hair_settings.child_type, hair_settings.rendered_child_count = 'INTERPOLATED', 3
+    data = exported()
+    names = np.array([m.name for m in data.materials])[data.geometry.material]
+    assert (of_object(data, "Emitter") & (names == "Fur")).sum() == 15 * 8 * steps * sides * 2
+    scene.view_layers[0].use_strand = False
+    data = exported()
+    assert "off in the view layer" in " | ".join(m for _, m in data.messages)
     assert of_object(data, "Emitter").sum() == 2
-    assert any("hair" in t and "Emitter" in t for _, t in data.messages)
 
 
 def test_point_cloud_becomes_spheres_with_its_material(scene, exported):

@@ -104,3 +104,20 @@ def test_curves_of_one_point_are_dropped_and_offsets_respected():
     xs = v[:, 0]
     assert set(np.round(xs[np.abs(xs) > 0.5]).astype(int).tolist()) <= {3}, "a tube joined two curves"
     assert hair.tubes(np.zeros((1, 3)), [0.1], [0, 1])[3] == 0
+
+
+@pytest.mark.parametrize('shape,power', [(0.0, 1.0), (0.5, 2.0), (-0.5, 0.5)])
+def test_hair_particle_radius_follows_the_hair_shape(shape, power):
+    """Cycles' shaperadius: tip + (root - tip) (1 - t)^p with p = 1 / (1 - shape) for a
+    positive shape and 1 + shape for a negative one, on half the Radius Scale; Close Tip
+    zeroes the last point."""
+    from types import SimpleNamespace
+
+    from addon.export import _hair_radius
+    t = np.array([[0.0, 0.25, 0.5, 1.0]])
+    s = SimpleNamespace(shape=shape, radius_scale=0.1, root_radius=2.0, tip_radius=0.5, use_close_tip=False)
+    want = 0.05 * (0.5 + (2.0 - 0.5) * (1 - t) ** power)
+    assert np.allclose(_hair_radius(s, t), want)
+    s.use_close_tip = True
+    got = _hair_radius(s, t)
+    assert got[0, -1] == 0 and np.allclose(got[0, :-1], want[0, :-1])
