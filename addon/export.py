@@ -37,8 +37,8 @@ BSDF's Normal input (bump, normal map) and the output's Volume and Displacement 
 texture coordinates other than the UV map (and Mapping nodes of it) are read as the active
 render UV map.
 Each approximated material says why in `Material.approximated`; the export reports them in
-one message. Objects without a material get the default material (Blender's default surface is a
-Principled BSDF: its 0.8 diffuse base), reported with them when used.
+one message. Objects without a material get the default material (Blender's default surface, a
+Principled BSDF: its 0.8 base under its default specular layer), reported with them when used.
 World: the Background's colour x strength, or an Environment Texture's equirectangular image
 (through a Mapping node's rotation) lighting the scene from every direction; other world
 shaders use the world colour, reported.
@@ -53,7 +53,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import hair, nodeeval, panorama, pointcloud, principled
+from . import hair, nodeeval, panorama, pointcloud, principled, specular
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant, constant_color, constant_value
@@ -64,10 +64,13 @@ from .texture import UdimTiles
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
 UNSUPPORTED_TYPES = {'VOLUME': "volume", 'GREASEPENCIL': "Grease Pencil"}
-# Objects without a material render in Cycles with Blender's default surface, a Principled BSDF of
-# base colour 0.8 (measured in Cycles 5.0: 0.842 where a Diffuse BSDF 0.8 gives 0.764, under a
-# sun behind the camera): its diffuse base here, reported like any Principled specular layer
+# The grey of the diffuse fallbacks (a muted node, a shader without a colour)
 DEFAULT_ALBEDO = (0.8, 0.8, 0.8)
+# Objects without a material render in Cycles with Blender's default surface, a Principled BSDF
+# of base colour 0.8 and its default specular layer (Specular IOR Level 0.5, IOR 1.5, roughness
+# 0.5): that layer over the base, as diffuse like any Principled specular layer (principled.py)
+DEFAULT_SURFACE_LAYER = specular.layer_albedo(0.5, 1.5, 0.5, (1.0, 1.0, 1.0))
+DEFAULT_SURFACE_ALBEDO = tuple(float(v) for v in 0.8 * (1.0 - DEFAULT_SURFACE_LAYER.max()) + DEFAULT_SURFACE_LAYER)
 MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
 CHECK_EVERY = 64                          # instances between cancel checks
 # What the material export reads otherwise than Cycles renders it (each reported when used):
@@ -591,7 +594,7 @@ class _MaterialBuilder:
 
     def __init__(self):
         self.materials = [sd.Material(name='(default)',
-                                      base_color=np.array(DEFAULT_ALBEDO, np.float32),
+                                      base_color=np.array(DEFAULT_SURFACE_ALBEDO, np.float32),
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
         self._images = {}          # (image pointer, unassociated) -> its pixels
@@ -1720,7 +1723,7 @@ class _Exporter:
         approx = [f"'{m.name}' ({m.approximated})" for m in self.materials.materials if m.approximated]
         if len(geometry.material) and not geometry.material.all():     # material 0 is in use
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "
-                             "BSDF: specular layer ignored)")
+                             "BSDF: specular layer as diffuse)")
         if approx:
             self.messages.append(('WARNING', f"{len(approx)} material(s) approximated as diffuse: "
                                              + "; ".join(approx)))

@@ -312,7 +312,7 @@ def test_missing_slot_material_uses_default(scene, exported):
     ob.data.materials.append(None)
     data = exported()
     assert np.all(data.geometry.material == 0)
-    assert np.allclose(data.materials[0].base_color, 0.8)
+    assert np.allclose(data.materials[0].base_color, export.DEFAULT_SURFACE_ALBEDO)
 
 
 # -- normals -----------------------------------------------------------------------------
@@ -1097,13 +1097,14 @@ def test_material_without_output_node_is_black(scene, exported):
 
 def test_default_surface_reported_only_when_used(scene, exported):
     """Cycles renders an object without a material with Blender's default surface, a Principled
-    BSDF whose specular layer a diffuse renderer drops: said in the approximation message, and
-    only when some triangle uses it."""
+    BSDF whose specular layer is rendered as diffuse over the 0.8 base: said in the
+    approximation message, and only when some triangle uses it."""
     setup(scene)
     scenes.plane("Bare")
     scenes.plane("Painted", location=(3, 0, 0), materials=(scenes.diffuse("Paint", (0.5, 0.5, 0.5)),))
     data = exported()
-    assert np.allclose(data.materials[0].base_color, 0.8)
+    assert np.allclose(data.materials[0].base_color, export.DEFAULT_SURFACE_ALBEDO)
+    assert 0.805 < export.DEFAULT_SURFACE_ALBEDO[0] < 0.82      # 0.8 (1 - layer) + layer
     assert any("default surface" in t for _, t in data.messages)
     bpy.data.objects.remove(bpy.data.objects["Bare"])
     data = exported()

@@ -28,7 +28,7 @@ export renders exactly, following the export's own rules (addon/export.py `_Mate
 Textures, emission, Add and Mix Shader stay as they are: they are what the comparison tests.
 Objects without a material (no slot, or an empty one) render in Cycles with Blender's default
 surface, a Principled BSDF with a specular layer; the whole-file `make_diffuse()` gives them a
-Diffuse BSDF of the same 0.8 grey, which is what the export renders for them.
+Diffuse BSDF of the grey the export renders for them (the 0.8 base under that layer).
 Runs only inside a bpy process (the benchmark's render worker).
 """
 
@@ -44,7 +44,7 @@ ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thi
 
 
 DEFAULT_SURFACE = "DACRT fair default surface"
-DEFAULT_SURFACE_REASON = "Blender's default surface, a Principled BSDF: specular layer ignored"
+DEFAULT_SURFACE_REASON = "Blender's default surface, a Principled BSDF: specular layer as diffuse"
 
 
 def make_diffuse(materials=None) -> dict[str, list[str]]:
@@ -85,7 +85,7 @@ def _objects_without_material():
 
 
 def _fill_empty_slots() -> list[str]:
-    """A Diffuse BSDF 0.8 (the export's default albedo) where an object has no material."""
+    """A Diffuse BSDF of the export's default-surface grey where an object has no material."""
     objects = _objects_without_material()
     if not objects:
         return []
@@ -96,7 +96,7 @@ def _fill_empty_slots() -> list[str]:
     tree.nodes.clear()
     out = tree.nodes.new('ShaderNodeOutputMaterial')
     diffuse = tree.nodes.new('ShaderNodeBsdfDiffuse')
-    diffuse.inputs['Color'].default_value = (*export.DEFAULT_ALBEDO, 1.0)
+    diffuse.inputs['Color'].default_value = (*export.DEFAULT_SURFACE_ALBEDO, 1.0)
     diffuse.inputs['Roughness'].default_value = 0.0
     tree.links.new(diffuse.outputs['BSDF'], out.inputs['Surface'])
     for ob in objects:

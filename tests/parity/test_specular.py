@@ -69,3 +69,19 @@ def test_specular_layer_matches_cycles_on_a_sphere(case, tmp_path):
     np.testing.assert_allclose(d, c, rtol=0.025 if len(CASES[case]) > 5 else 0.01)
     if case.startswith('dark'):       # the layer is most of what a dark surface returns
         assert c.min() > 1.4 * base[0], (c, base)
+
+
+def test_default_surface_matches_cycles_on_a_sphere(tmp_path):
+    """An object without a material: Cycles renders Blender's default surface, a Principled
+    BSDF of base 0.8 with its default specular layer (the export: that layer over the base,
+    0.812, where the base alone was 0.8 and 1.5% dark)."""
+    sc = _scene((0.8, 0.8, 0.8), 0.5, 0.5)
+    bpy.data.objects["Sphere"].data.materials.clear()
+    layer = sc.view_layers[0].name
+    disk = {}
+    for engine, exr in scenes.render_engines(sc, tmp_path).items():
+        a = exr[f"{layer}.Combined.A"].sum()
+        disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
+    d, c = disk['DACRT'], disk['CYCLES']
+    np.testing.assert_allclose(d, c, rtol=0.005)
+    assert abs(c.mean() / 0.8 - 1) > 0.01, "the test must tell the layer from the base alone"
