@@ -30,9 +30,9 @@ diffuse surface with its constant 'Color' (or 'Base Color') input, 0.8 grey with
 linked input that is not an Image Texture, an RGB/Value node or (for a diffuse colour) one of
 the colour nodes above uses its own value (the socket's, or where its chain left a group),
 but Fresnel and Layer Weight nodes give their average over view directions (fresnel.py); the
-Principled BSDF keeps its diffuse base, with its dielectric specular layer and its coat as
-those layers' albedos averaged over view directions (principled.py, specular.py; no metal,
-sheen, transmission or subsurface); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
+Principled BSDF keeps its diffuse base, with its metal, dielectric specular layer and coat as
+those layers' albedos averaged over view directions (principled.py, specular.py; no sheen,
+transmission or subsurface); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
 BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
 texture coordinates other than the UV map (and Mapping nodes of it) are read as the active
 render UV map.
@@ -497,6 +497,19 @@ class _Closure:
         return _Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
                         self.transparent, self.opacity)
 
+    def mapped(self, f):
+        """Under a nonlinear map of the albedo (principled.BaseMap): exact for a constant
+        albedo; a textured one becomes a texture of the mapped texels (weight 1)."""
+        if self.texture is None or not self.tex_weight.any():
+            return _Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
+                            self.opacity)
+        t = self.texture
+        px = t.pixels.copy()
+        px[..., :3] = f(t.pixels[..., :3] * self.tex_weight.astype(np.float32) + self.const.astype(np.float32))
+        mapped = _Texture(('mapped', t.key, f.m, f.roughness, *f.tint, *f.spec, *self.tex_weight, *self.const),
+                          px, t.interpolation, t.extension, t.transform, t.udim)
+        return _Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity)
+
     def scaled(self, f):
         return _Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
                         self.transparent * f, self.opacity)
@@ -736,8 +749,8 @@ class _MaterialBuilder:
                     reasons.append(f"Principled {what} ignored")
         _note_normal_inputs(node, reasons)
         c = self._color_closure(node.inputs['Base Color'], reasons)
-        for dim, add in principled.layer_steps(node, reasons):
-            c = c.layered(dim, add)
+        for step in principled.layer_steps(node, reasons):
+            c = c.mapped(step) if isinstance(step, principled.BaseMap) else c.layered(*step)
         es = input_socket(node, 'Emission Strength')
         ec = input_socket(node, 'Emission Color', 'Emission')
         if es is not None and ec is not None:

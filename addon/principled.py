@@ -7,8 +7,11 @@ own albedo. The export keeps two as diffuse (specular.py): the dielectric specul
 weighted by the dielectric's share 1 - Metallic, and the coat, of weight Coat Weight, with
 its Coat Tint's absorption of the layers below. Each is a step (dim (3,), add (3,)) applied
 in order to the diffuse base colour: base -> base x dim + add (export._Closure.layered; the
-fair-material override folds the same steps into a base colour). Metal, sheen, transmission
-and subsurface are dropped and reported, as before.
+fair-material override folds the same steps into a base colour). A metallic Principled (a
+constant Metallic m > 0) starts with a BaseMap instead, a per-channel function of the base:
+m x the metal's albedo (specular.metal_albedo, F0 = the base, nonlinear in it) + (1 - m) x the
+specular layer over the base, as Cycles mixes metal and dielectric by Metallic. Sheen,
+transmission and subsurface are dropped and reported, as before.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy as np
 from . import specular
 from .nodeeval import constant_color, constant_value
 
-HANDLED = ('Specular IOR Level', 'Coat Weight')   # inputs whose layers the steps render
+HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic')   # inputs whose layers the steps render
 
 
 # what Cycles uses for an input a Principled BSDF of another Blender version lacks
@@ -43,27 +46,95 @@ def _color(node, name):
     return constant_color(sock) if sock is not None else ((1.0, 1.0, 1.0), True)
 
 
+class BaseMap:
+    """base -> m A(base) + (1 - m) (base (1 - a_max) + a) per channel: metal of weight m
+    (A: specular.metal_albedo at this roughness and tint) mixed with the dielectric specular
+    layer (albedo a, zeros without one) over the base. Exact for a constant base (exact);
+    a texture's texels go through a table of the function (__call__, 129 F0 steps per channel:
+    within 1e-4 of exact)."""
+
+    _GRID = np.linspace(0.0, 1.0, 129)
+
+    def __init__(self, metallic, roughness, tint, spec):
+        self.m, self.roughness = float(metallic), float(roughness)
+        self.tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, 1.0)
+        self.spec = np.asarray(spec, np.float64)
+        self._table = None
+
+    def _mix(self, x, metal):
+        return self.m * metal + (1.0 - self.m) * (x * (1.0 - self.spec.max()) + self.spec)
+
+    def exact(self, rgb):
+        x = np.asarray(rgb, np.float64)[:3]
+        return self._mix(x, specular.metal_albedo(self.roughness, np.clip(x, 0.0, 1.0), self.tint))
+
+    def __call__(self, x):
+        """x (..., 3) -> (..., 3), through the table (F0 clipped to 0..1, as metal_albedo)."""
+        if self._table is None:
+            g = self._GRID
+            self._table = np.stack([specular.metal_albedo(self.roughness, (v, v, v), self.tint) for v in g], 1)
+        x = np.asarray(x, np.float64)
+        metal = np.stack([np.interp(np.clip(x[..., c], 0.0, 1.0), self._GRID, self._table[c]) for c in range(3)], -1)
+        return self._mix(x, metal)
+
+    def line(self):
+        """(dim, add): the least-squares line of the map over base 0..1 per channel (the fair
+        override's stand-in for a textured base: within 0.02 up to roughness 0.5)."""
+        g = self._GRID
+        y = self(np.repeat(g[:, None], 3, axis=1))
+        fits = [np.polyfit(g, y[:, c], 1) for c in range(3)]
+        return np.array([f[0] for f in fits]), np.array([f[1] for f in fits])
+
+
+def _specular_albedo(node, reasons, metallic_weight):
+    """The dielectric specular layer's albedo x metallic_weight (None: no layer)."""
+    (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
+    level, ok = constant_value(node.inputs['Specular IOR Level'])
+    tint, t_ok = _color(node, 'Specular Tint')
+    if not (ok and v_ok and t_ok):
+        reasons.append("Principled specular layer inputs driven by nodes; their own values used")
+    albedo = specular.layer_albedo(roughness, ior, level, tint) * metallic_weight
+    if not albedo.any():
+        return None
+    reasons.append(f"Principled specular layer as diffuse: its albedo averaged over view directions, "
+                   f"{albedo.max():.3f}")
+    return albedo
+
+
 def _specular_step(node, reasons):
     level_socket = node.inputs.get('Specular IOR Level')
+    (metallic, transmission), mt_ok = _values(node, ('Metallic', 'Transmission Weight'))
+    (_,), m_ok = _values(node, ('Metallic',))
+    metallic = min(max(metallic, 0.0), 1.0)
+    if mt_ok and transmission == 0.0 and metallic > 0.0:
+        return _metal_step(node, reasons, metallic, level_socket)
+    if metallic != 0.0 or not m_ok:        # driven by nodes, or under transmission: as before
+        reasons.append("Principled metallic ignored")
     if level_socket is None:
         return None
     level, ok = constant_value(level_socket)
     if ok and level == 0.0:
         return None
-    (metallic, transmission), mt_ok = _values(node, ('Metallic', 'Transmission Weight'))
     if not mt_ok or transmission != 0.0:
         reasons.append("Principled specular layer ignored")
         return None
-    (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
+    albedo = _specular_albedo(node, reasons, 1.0)
+    return None if albedo is None else (np.full(3, 1.0 - albedo.max()), albedo)
+
+
+def _metal_step(node, reasons, metallic, level_socket):
+    (roughness,), r_ok = _values(node, ('Roughness',))
     tint, t_ok = _color(node, 'Specular Tint')
-    if not (ok and v_ok and t_ok):
-        reasons.append("Principled specular layer inputs driven by nodes; their own values used")
-    albedo = specular.layer_albedo(roughness, ior, level, tint) * (1.0 - min(max(metallic, 0.0), 1.0))
-    if not albedo.any():
-        return None
-    reasons.append(f"Principled specular layer as diffuse: its albedo averaged over view directions, "
-                   f"{albedo.max():.3f}")
-    return np.full(3, 1.0 - albedo.max()), albedo
+    if not (r_ok and t_ok):
+        reasons.append("Principled metal inputs driven by nodes; their own values used")
+    spec = None
+    if level_socket is not None and metallic < 1.0:
+        level, ok = constant_value(level_socket)
+        if level != 0.0 or not ok:
+            spec = _specular_albedo(node, reasons, 1.0)
+    reasons.append(f"Principled metal as diffuse: its albedo averaged over view directions "
+                   f"(Metallic {metallic:g})")
+    return BaseMap(metallic, roughness, tint, np.zeros(3) if spec is None else spec)
 
 
 def _coat_step(node, reasons):
@@ -87,5 +158,6 @@ def _coat_step(node, reasons):
 
 
 def layer_steps(node, reasons) -> list:
-    """[(dim (3,), add (3,))] for the layers over a Principled BSDF's diffuse base, bottom up."""
+    """[(dim (3,), add (3,)) or a BaseMap first] for the layers over a Principled BSDF's
+    diffuse base, bottom up."""
     return [s for s in (_specular_step(node, reasons), _coat_step(node, reasons)) if s is not None]

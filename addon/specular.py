@@ -94,3 +94,47 @@ def coat_tint_average(tint, coat_ior: float) -> np.ndarray:
     eta = max(float(coat_ior), 1.0)
     cos_t = np.sqrt(1.0 - (1.0 - _MU * _MU) / (eta * eta))
     return (tint[:, None] ** (1.0 / cos_t)[None, :]) @ (2.0 * _MU * _W_MU)
+
+
+@lru_cache(maxsize=256)
+def _ggx_moments(alpha: float) -> tuple:
+    """Per view cosine _MU, the GGX reflection albedo without Fresnel E and its moments with
+    the Schlick weights s^5 and cos s^6 (s = 1 - wo.h): (E, S5, S6), each (len(_MU),)."""
+    mo = _MU[:, None, None]
+    so = np.sqrt(1.0 - mo * mo)
+    xi = _XI[None, :, None]
+    t2 = alpha * alpha * xi / (1.0 - xi)
+    ch = 1.0 / np.sqrt(1.0 + t2)
+    sh = np.sqrt(t2) * ch
+    oh = so * sh * np.cos(_PHI) + mo * ch
+    wiz = 2.0 * oh * ch - mo
+
+    def smith_lambda(c):
+        c = np.clip(c, 1e-9, 1.0)
+        return 0.5 * (np.sqrt(1.0 + alpha * alpha * (1.0 - c * c) / (c * c)) - 1.0)
+
+    g2 = 1.0 / (1.0 + smith_lambda(mo) + smith_lambda(wiz))
+    per_h = np.where((wiz > 0.0) & (oh > 0.0), g2 * oh / (mo * ch), 0.0) * (_W_XI[None, :, None] / len(_PHI))
+    s = 1.0 - np.clip(oh, 0.0, 1.0)
+    s5 = s ** 5
+    return per_h.sum(axis=(1, 2)), (per_h * s5).sum(axis=(1, 2)), (per_h * (1.0 - s) * s5 * s).sum(axis=(1, 2))
+
+
+def metal_albedo(roughness: float, f0, tint) -> np.ndarray:
+    """Per channel, the albedo of Cycles' Principled metal averaged over view directions
+    (weighted by cos): GGX reflection with the F82-tint Fresnel (F0 = base colour, tint =
+    Specular Tint; bsdf_util.h fresnel_f82tint_B / fresnel_f82) and the energy compensation of
+    microfacet_ggx_preserve_energy, single-scattering albedo x (1 + Fms (1 - E) / E), Fms from
+    the average Fresnel as Kulla and Conty's multiple-scattering Fresnel."""
+    f0 = np.clip(np.asarray(f0, np.float64)[:3], 0.0, 1.0)[:, None]
+    tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, 1.0)[:, None]
+    r = min(max(float(roughness), 0.0), 1.0)
+    e, s5, s6 = _ggx_moments(max(r * r, 1e-4))
+    f = 6.0 / 7.0
+    b = (f0 + (1.0 - f0) * f ** 5) * (7.0 / f ** 6) * (1.0 - tint)
+    single = f0 * e + (1.0 - f0) * s5 - b * s6
+    view = 2.0 * _MU * _W_MU
+    e_avg = float(view @ e)
+    fss = f0 + (1.0 - f0) / 21.0 - b / 126.0
+    fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
+    return (single * (1.0 + fms * (1.0 - e) / e)) @ view

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from mathutils import Euler, Vector
 
-from addon import export, hair, pointcloud
+from addon import export, hair, pointcloud, specular
 from addon import lights as ls
 from addon import scenedata as sd
 
@@ -781,13 +781,15 @@ def test_material_table(scene, exported):
               "Mix": ((0.75, 0, 0.25), (0, 0, 0)),
               "Furnace": ((0.5, 0.5, 0.5), (1, 1, 1)),
               "Glass": ((0.9, 0.8, 0.7), (0, 0, 0)),
-              "Shiny": ((0.5, 0.5, 0.5), (0, 0, 0))}
+              "Shiny": (tuple(specular.metal_albedo(0.5, (0.5, 0.5, 0.5), (1, 1, 1))), (0, 0, 0))}
     for name, (base, emit) in expect.items():
         assert np.allclose(table[name].base_color, base, atol=1e-6), name
         assert np.allclose(table[name].emission, emit, atol=1e-6), name
     assert {n for n, m in table.items() if m.approximated} == {"Glass", "Shiny"}
-    # fully metallic: the metal (its base colour as diffuse) replaces the dielectric specular layer
-    assert "metallic" in table["Shiny"].approximated and "specular" not in table["Shiny"].approximated
+    # fully metallic: the metal (its albedo as diffuse, 0.48 for base 0.5 at roughness 0.5)
+    # replaces the dielectric specular layer
+    assert 0.47 < table["Shiny"].base_color[0] < 0.49
+    assert "metal as diffuse" in table["Shiny"].approximated and "specular" not in table["Shiny"].approximated
     approx = [t for _, t in data.messages if "approximated" in t]
     assert len(approx) == 1 and "'Glass'" in approx[0] and "'Shiny'" in approx[0]
 

@@ -3,6 +3,7 @@ against independent references: the smooth limit (the Fresnel average, fresnel.p
 quadrature over incoming directions (not the half-vector one the module uses), and the
 structure of Cycles' tinted Fresnel (linear in the tint, no layer at level 0). Cycles itself
 is the reference in tests/parity/test_specular.py."""
+import bpy
 import numpy as np
 import pytest
 
@@ -78,7 +79,7 @@ def test_level_and_tint():
 
 def test_export_weights_the_layer_by_the_dielectric_share(scene, exported):
     """Metallic m: the dielectric (specular over diffuse) is 1 - m of the BSDF, the metal (its
-    base colour as diffuse) m: base (1 - (1 - m) E_max) + (1 - m) E."""
+    albedo A as diffuse) m: m A + (1 - m) (base (1 - E_max) + E)."""
     scenes.camera((0, -10, 0), (np.pi / 2, 0, 0))
     for i, m in enumerate((0.0, 0.5, 1.0)):
         mat = scenes.principled(f"Half{i}", (0.8, 0.3, 0.1), specular=0.5, metallic=m)
@@ -89,7 +90,8 @@ def test_export_weights_the_layer_by_the_dielectric_share(scene, exported):
     e = specular.layer_albedo(0.4, 1.5, 0.5, (1, 1, 1))
     for i, m in enumerate((0.0, 0.5, 1.0)):
         got = by_name[f"Half{i}"]
-        want = np.array([0.8, 0.3, 0.1]) * (1 - (1 - m) * e.max()) + (1 - m) * e
+        base = np.array([0.8, 0.3, 0.1])
+        want = m * specular.metal_albedo(0.4, base, (1, 1, 1)) + (1 - m) * (base * (1 - e.max()) + e)
         np.testing.assert_allclose(got.base_color, want, rtol=1e-6)
         assert ("specular layer as diffuse" in got.approximated) == (m < 1)
 
@@ -119,3 +121,48 @@ def test_node_driven_coat_of_own_value_zero_is_reported(scene, exported):
     m = next(x for x in exported().materials if x.name == "Noisy")
     assert "Principled coat ignored" in m.approximated
     np.testing.assert_allclose(m.base_color, 0.5)
+
+
+def test_metal_albedo_conserves_energy_and_follows_its_base():
+    """A white metal (F0 = 1, no tint) returns everything at any roughness (Cycles' energy
+    compensation); a smooth one returns the cos-weighted average of Schlick's Fresnel,
+    F0 + (1 - F0) / 21; a rough one less than its base, a black one almost nothing."""
+    for r in (0.0, 0.2, 0.5, 0.8, 1.0):
+        np.testing.assert_allclose(specular.metal_albedo(r, (1, 1, 1), (1, 1, 1)), 1.0, rtol=1e-9)
+    f0 = np.array([0.9, 0.5, 0.1])
+    np.testing.assert_allclose(specular.metal_albedo(0.0, f0, (1, 1, 1)), f0 + (1 - f0) / 21, rtol=2e-3)
+    assert (specular.metal_albedo(0.8, f0, (1, 1, 1)) < f0).all()
+    assert specular.metal_albedo(0.5, (0, 0, 0), (1, 1, 1)).max() < 0.03
+    # the F82 tint darkens towards grazing angles only: less than without it, more than F0 x E
+    tinted = specular.metal_albedo(0.3, f0, (0.5, 0.5, 0.5))
+    assert (tinted < specular.metal_albedo(0.3, f0, (1, 1, 1))).all()
+
+
+def test_metal_map_table_and_textured_base(scene, exported):
+    """A textured metallic base: each texel goes through the metal's map (BaseMap's table,
+    within 1e-4 of the exact albedo); the fair override's line fit of it stays within 0.02
+    at roughness 0.5."""
+    from addon import principled
+    f = principled.BaseMap(1.0, 0.5, (1, 1, 1), np.zeros(3))
+    x = np.random.default_rng(0).uniform(0, 1, (50, 3))
+    exact = np.array([f.exact(v) for v in x])
+    np.testing.assert_allclose(f(x), exact, atol=1e-4)
+    dim, add = f.line()
+    assert np.abs(x * dim + add - exact).max() < 0.02
+    scenes.camera((0, -10, 0), (np.pi / 2, 0, 0))
+    img = bpy.data.images.new("Rust", 4, 4, float_buffer=True)
+    px = np.random.default_rng(1).uniform(0, 1, (4, 4, 4)).astype(np.float32)
+    px[..., 3] = 1
+    img.pixels.foreach_set(px.ravel())
+    mat = scenes.principled("Textured", (0.5, 0.5, 0.5), specular=0.5, metallic=1.0)
+    nt = mat.node_tree
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    node = next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
+    nt.links.new(tex.outputs['Color'], node.inputs['Base Color'])
+    scenes.plane("P", materials=(mat,))
+    m = next(x for x in exported().materials if x.name == "Textured")
+    assert np.allclose(m.base_color, 1.0) and m.texture is not None
+    got = np.asarray(m.texture)[..., :3].reshape(-1, 3)
+    want = np.array([f.exact(v) for v in px[..., :3].reshape(-1, 3)])
+    np.testing.assert_allclose(np.sort(got, axis=0), np.sort(want, axis=0), atol=2e-4)

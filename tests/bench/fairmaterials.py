@@ -234,16 +234,19 @@ class _Editor:
         textured or evaluated one."""
         color, exact = nodeeval.constant_color(socket)
         sock = nodegraph.unwrap(socket)
-        self.done.append("Principled specular layer and coat folded into the base colour")
+        self.done.append("Principled metal, specular layer and coat folded into the base colour")
         if exact:
             folded = np.array(color, np.float64)
-            for dim, add in steps:
-                folded = folded * dim + add
+            for step in steps:
+                folded = step.exact(folded) if isinstance(step, principled.BaseMap) else folded * step[0] + step[1]
             self._drop_links(sock)
             sock.default_value = (*folded, 1.0)
             return
         tree = sock.id_data
         source = sock.links[0].from_socket
+        if isinstance(steps[0], principled.BaseMap):   # nonlinear in a texture: its line fit
+            self.done.append("Principled metal under a texture folded as a line fit of its albedo")
+            steps = [steps[0].line(), *steps[1:]]
         for dim, add in steps:
             for blend, value in (('MULTIPLY', dim), ('ADD', add)):
                 mix = tree.nodes.new('ShaderNodeMix')
