@@ -732,6 +732,9 @@ class _MaterialBuilder:
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
             return a.plus(b, reasons)
+        reflector = reflector_albedo(node, reasons)
+        if reflector is not None:
+            return _Closure(const=reflector)
         # Documented approximation: a diffuse surface of the node's constant colour.
         reasons.append(f"{node.bl_label} as diffuse")
         sock = input_socket(node, 'Color', 'Base Color')
@@ -1023,6 +1026,35 @@ def _transform(points, linear, offset, out):
                     c_ += offset[i:j, c, None]
                 out[i:j, :, c] = c_
     return out
+
+
+def reflector_albedo(node, reasons):
+    """A Glossy BSDF's, or a Metallic BSDF's in F82 mode, albedo averaged over view directions
+    (specular.py) for its constant inputs (their own values where nodes drive them, reported),
+    as the diffuse colour that stands in for it; None for other nodes, and for distributions or
+    Fresnel modes not modelled (they keep their colour, as before)."""
+    t = node.type
+    if t not in ('BSDF_GLOSSY', 'BSDF_METALLIC'):
+        return None
+    dist = getattr(node, 'distribution', 'MULTI_GGX')
+    if dist not in ('GGX', 'MULTI_GGX') or (t == 'BSDF_METALLIC' and getattr(node, 'fresnel_type', 'F82') != 'F82'):
+        return None
+    rough, r_ok = constant_value(node.inputs['Roughness'])
+    if t == 'BSDF_GLOSSY':
+        color, c_ok = constant_color(node.inputs['Color'])
+        albedo = specular.glossy_albedo(rough, color, dist == 'MULTI_GGX')
+    else:
+        color, c_ok = constant_color(node.inputs['Base Color'])
+        tint, t_ok = constant_color(node.inputs['Edge Tint'])
+        c_ok = c_ok and t_ok
+        albedo = specular.metal_albedo(rough, color, tint, dist == 'MULTI_GGX')
+    reasons.append(f"{node.bl_label} as diffuse: its albedo averaged over view directions")
+    if not (r_ok and c_ok):
+        reasons.append(f"{node.bl_label} inputs driven by nodes; their own values used")
+    aniso = node.inputs.get('Anisotropy')
+    if aniso is not None and constant_value(aniso)[0] != 0.0:
+        reasons.append(f"{node.bl_label} anisotropy ignored")
+    return albedo
 
 
 def _hair_radius(settings, time):

@@ -120,11 +120,24 @@ def _ggx_moments(alpha: float) -> tuple:
     return per_h.sum(axis=(1, 2)), (per_h * s5).sum(axis=(1, 2)), (per_h * (1.0 - s) * s5 * s).sum(axis=(1, 2))
 
 
-def metal_albedo(roughness: float, f0, tint) -> np.ndarray:
-    """Per channel, the albedo of Cycles' Principled metal averaged over view directions
-    (weighted by cos): GGX reflection with the F82-tint Fresnel (F0 = base colour, tint =
-    Specular Tint; bsdf_util.h fresnel_f82tint_B / fresnel_f82) and the energy compensation of
-    microfacet_ggx_preserve_energy, single-scattering albedo x (1 + Fms (1 - E) / E), Fms from
+def _compensated(single, e, fss, compensate):
+    """Per view cosine, the albedo single (channels x mu) with Cycles' multiple-scattering
+    energy compensation (microfacet_ggx_preserve_energy) for the average Fresnel fss (channels
+    x 1), averaged over view directions; single-scattering only without compensate."""
+    view = 2.0 * _MU * _W_MU
+    if not compensate:
+        return single @ view
+    e_avg = float(view @ e)
+    fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
+    return (single * (1.0 + fms * (1.0 - e) / e)) @ view
+
+
+def metal_albedo(roughness: float, f0, tint, multiscatter: bool = True) -> np.ndarray:
+    """Per channel, the albedo of Cycles' Principled metal (and of the Metallic BSDF in F82
+    mode) averaged over view directions (weighted by cos): GGX reflection with the F82-tint
+    Fresnel (F0 = base colour, tint = Specular Tint / Edge Tint; bsdf_util.h fresnel_f82tint_B
+    / fresnel_f82) and, with multiscatter (Multiscatter GGX), the energy compensation of
+    microfacet_ggx_preserve_energy: single-scattering albedo x (1 + Fms (1 - E) / E), Fms from
     the average Fresnel as Kulla and Conty's multiple-scattering Fresnel."""
     f0 = np.clip(np.asarray(f0, np.float64)[:3], 0.0, 1.0)[:, None]
     tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, 1.0)[:, None]
@@ -133,8 +146,15 @@ def metal_albedo(roughness: float, f0, tint) -> np.ndarray:
     f = 6.0 / 7.0
     b = (f0 + (1.0 - f0) * f ** 5) * (7.0 / f ** 6) * (1.0 - tint)
     single = f0 * e + (1.0 - f0) * s5 - b * s6
-    view = 2.0 * _MU * _W_MU
-    e_avg = float(view @ e)
-    fss = f0 + (1.0 - f0) / 21.0 - b / 126.0
-    fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
-    return (single * (1.0 + fms * (1.0 - e) / e)) @ view
+    return _compensated(single, e, f0 + (1.0 - f0) / 21.0 - b / 126.0, multiscatter)
+
+
+def glossy_albedo(roughness: float, color, multiscatter: bool = True) -> np.ndarray:
+    """Per channel, the albedo of Cycles' Glossy BSDF averaged over view directions: GGX
+    reflection of constant Fresnel = its colour, with the energy compensation for Multiscatter
+    GGX (nonlinear in the colour: 0.974 x a colour of 0.8 at roughness 0.5, 0.926 x 0.4) or
+    without it for GGX (the colour x the lobe's average albedo, 0.882 at roughness 0.5)."""
+    c = np.clip(np.asarray(color, np.float64)[:3], 0.0, None)[:, None]
+    r = min(max(float(roughness), 0.0), 1.0)
+    e, _, _ = _ggx_moments(max(r * r, 1e-4))
+    return _compensated(c * e, e, np.minimum(c, 1.0), multiscatter)

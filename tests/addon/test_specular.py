@@ -166,3 +166,16 @@ def test_metal_map_table_and_textured_base(scene, exported):
     got = np.asarray(m.texture)[..., :3].reshape(-1, 3)
     want = np.array([f.exact(v) for v in px[..., :3].reshape(-1, 3)])
     np.testing.assert_allclose(np.sort(got, axis=0), np.sort(want, axis=0), atol=2e-4)
+
+
+def test_glossy_albedo():
+    """Glossy BSDF: a white one returns everything with Multiscatter GGX (energy
+    compensation) and the lobe's average albedo E_avg with GGX, linear in the colour there;
+    with Multiscatter GGX a darker colour loses more to its repeated Fresnel (Kulla-Conty)."""
+    e_avg, _ = specular._ggx_averages(0.25, 1.5)          # roughness 0.5
+    for r in (0.1, 0.5, 0.9):
+        np.testing.assert_allclose(specular.glossy_albedo(r, (1, 1, 1)), 1.0, rtol=1e-9)
+    c = np.array([0.8, 0.5, 0.2])
+    np.testing.assert_allclose(specular.glossy_albedo(0.5, c, multiscatter=False), c * e_avg, rtol=1e-9)
+    ratio = specular.glossy_albedo(0.5, c) / c
+    assert (np.diff(ratio) < 0).all() and (ratio < 1).all() and (ratio > e_avg).all()

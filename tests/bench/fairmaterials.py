@@ -225,7 +225,10 @@ class _Editor:
             color = export.DEFAULT_ALBEDO
             if sock is not None and sock.type == 'RGBA':
                 color, _ = nodeeval.constant_color(sock)
-            self._replace(socket, node, tuple(color), f"{node.bl_label} as diffuse")
+            reflector = export.reflector_albedo(node, [])     # a Glossy or Metallic BSDF's albedo
+            if reflector is not None:
+                color = reflector
+            self._replace(socket, node, tuple(float(v) for v in color[:3]), f"{node.bl_label} as diffuse")
 
     def _fold_layers(self, socket, steps):
         """The layers the export renders as diffuse (principled.py; their inputs are zeroed by
