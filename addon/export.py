@@ -506,7 +506,8 @@ class _Closure:
         t = self.texture
         px = t.pixels.copy()
         px[..., :3] = f(t.pixels[..., :3] * self.tex_weight.astype(np.float32) + self.const.astype(np.float32))
-        mapped = _Texture(('mapped', t.key, f.m, f.roughness, *f.tint, *f.spec, *self.tex_weight, *self.const),
+        mapped = _Texture(('mapped', t.key, f.m, f.roughness, f.multiscatter, *f.tint, *f.spec, *self.tex_weight,
+                           *self.const),
                           px, t.interpolation, t.extension, t.transform, t.udim)
         return _Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity)
 
@@ -1031,23 +1032,25 @@ def _transform(points, linear, offset, out):
 def reflector_albedo(node, reasons):
     """A Glossy BSDF's, or a Metallic BSDF's in F82 mode, albedo averaged over view directions
     (specular.py) for its constant inputs (their own values where nodes drive them, reported),
-    as the diffuse colour that stands in for it; None for other nodes, and for distributions or
-    Fresnel modes not modelled (they keep their colour, as before)."""
+    as the diffuse colour that stands in for it: GGX, Multiscatter GGX and Beckmann; None for
+    other nodes, Ashikhmin-Shirley and the physical-conductor mode (they keep their colour)."""
     t = node.type
     if t not in ('BSDF_GLOSSY', 'BSDF_METALLIC'):
         return None
     dist = getattr(node, 'distribution', 'MULTI_GGX')
-    if dist not in ('GGX', 'MULTI_GGX') or (t == 'BSDF_METALLIC' and getattr(node, 'fresnel_type', 'F82') != 'F82'):
+    if dist not in ('GGX', 'MULTI_GGX', 'BECKMANN') or \
+            (t == 'BSDF_METALLIC' and getattr(node, 'fresnel_type', 'F82') != 'F82'):
         return None
+    multi, beckmann = dist == 'MULTI_GGX', dist == 'BECKMANN'
     rough, r_ok = constant_value(node.inputs['Roughness'])
     if t == 'BSDF_GLOSSY':
         color, c_ok = constant_color(node.inputs['Color'])
-        albedo = specular.glossy_albedo(rough, color, dist == 'MULTI_GGX')
+        albedo = specular.glossy_albedo(rough, color, multi, beckmann)
     else:
         color, c_ok = constant_color(node.inputs['Base Color'])
         tint, t_ok = constant_color(node.inputs['Edge Tint'])
         c_ok = c_ok and t_ok
-        albedo = specular.metal_albedo(rough, color, tint, dist == 'MULTI_GGX')
+        albedo = specular.metal_albedo(rough, color, tint, multi, beckmann)
     reasons.append(f"{node.bl_label} as diffuse: its albedo averaged over view directions")
     if not (r_ok and c_ok):
         reasons.append(f"{node.bl_label} inputs driven by nodes; their own values used")

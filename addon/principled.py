@@ -55,10 +55,11 @@ class BaseMap:
 
     _GRID = np.linspace(0.0, 1.0, 129)
 
-    def __init__(self, metallic, roughness, tint, spec):
+    def __init__(self, metallic, roughness, tint, spec, multiscatter=True):
         self.m, self.roughness = float(metallic), float(roughness)
         self.tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, 1.0)
         self.spec = np.asarray(spec, np.float64)
+        self.multiscatter = bool(multiscatter)
         self._table = None
 
     def _mix(self, x, metal):
@@ -66,13 +67,14 @@ class BaseMap:
 
     def exact(self, rgb):
         x = np.asarray(rgb, np.float64)[:3]
-        return self._mix(x, specular.metal_albedo(self.roughness, np.clip(x, 0.0, 1.0), self.tint))
+        return self._mix(x, specular.metal_albedo(self.roughness, np.clip(x, 0.0, 1.0), self.tint, self.multiscatter))
 
     def __call__(self, x):
         """x (..., 3) -> (..., 3), through the table (F0 clipped to 0..1, as metal_albedo)."""
         if self._table is None:
             g = self._GRID
-            self._table = np.stack([specular.metal_albedo(self.roughness, (v, v, v), self.tint) for v in g], 1)
+            self._table = np.stack([specular.metal_albedo(self.roughness, (v, v, v), self.tint, self.multiscatter)
+                                    for v in g], 1)
         x = np.asarray(x, np.float64)
         metal = np.stack([np.interp(np.clip(x[..., c], 0.0, 1.0), self._GRID, self._table[c]) for c in range(3)], -1)
         return self._mix(x, metal)
@@ -134,7 +136,9 @@ def _metal_step(node, reasons, metallic, level_socket):
             spec = _specular_albedo(node, reasons, 1.0)
     reasons.append(f"Principled metal as diffuse: its albedo averaged over view directions "
                    f"(Metallic {metallic:g})")
-    return BaseMap(metallic, roughness, tint, np.zeros(3) if spec is None else spec)
+    # Cycles' energy compensation only with Multiscatter GGX (the Principled's default)
+    multiscatter = getattr(node, 'distribution', 'MULTI_GGX') == 'MULTI_GGX'
+    return BaseMap(metallic, roughness, tint, np.zeros(3) if spec is None else spec, multiscatter)
 
 
 def _coat_step(node, reasons):

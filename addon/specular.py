@@ -97,13 +97,15 @@ def coat_tint_average(tint, coat_ior: float) -> np.ndarray:
 
 
 @lru_cache(maxsize=256)
-def _ggx_moments(alpha: float) -> tuple:
-    """Per view cosine _MU, the GGX reflection albedo without Fresnel E and its moments with
-    the Schlick weights s^5 and cos s^6 (s = 1 - wo.h): (E, S5, S6), each (len(_MU),)."""
+def _ggx_moments(alpha: float, beckmann: bool = False) -> tuple:
+    """Per view cosine _MU, the microfacet reflection albedo without Fresnel E and its moments
+    with the Schlick weights s^5 and cos s^6 (s = 1 - wo.h): (E, S5, S6), each (len(_MU),).
+    GGX, or with beckmann the Beckmann distribution and Cycles' rational approximation of its
+    Smith Lambda (bsdf_microfacet.h)."""
     mo = _MU[:, None, None]
     so = np.sqrt(1.0 - mo * mo)
     xi = _XI[None, :, None]
-    t2 = alpha * alpha * xi / (1.0 - xi)
+    t2 = -alpha * alpha * np.log1p(-xi) if beckmann else alpha * alpha * xi / (1.0 - xi)
     ch = 1.0 / np.sqrt(1.0 + t2)
     sh = np.sqrt(t2) * ch
     oh = so * sh * np.cos(_PHI) + mo * ch
@@ -111,7 +113,11 @@ def _ggx_moments(alpha: float) -> tuple:
 
     def smith_lambda(c):
         c = np.clip(c, 1e-9, 1.0)
-        return 0.5 * (np.sqrt(1.0 + alpha * alpha * (1.0 - c * c) / (c * c)) - 1.0)
+        a2t2 = alpha * alpha * (1.0 - c * c) / (c * c)
+        if not beckmann:
+            return 0.5 * (np.sqrt(1.0 + a2t2) - 1.0)
+        a = 1.0 / np.sqrt(np.maximum(a2t2, 1e-30))
+        return np.where(a2t2 < 0.39, 0.0, ((0.396 * a - 1.259) * a + 1.0) / ((2.181 * a + 3.535) * a))
 
     g2 = 1.0 / (1.0 + smith_lambda(mo) + smith_lambda(wiz))
     per_h = np.where((wiz > 0.0) & (oh > 0.0), g2 * oh / (mo * ch), 0.0) * (_W_XI[None, :, None] / len(_PHI))
@@ -132,7 +138,7 @@ def _compensated(single, e, fss, compensate):
     return (single * (1.0 + fms * (1.0 - e) / e)) @ view
 
 
-def metal_albedo(roughness: float, f0, tint, multiscatter: bool = True) -> np.ndarray:
+def metal_albedo(roughness: float, f0, tint, multiscatter: bool = True, beckmann: bool = False) -> np.ndarray:
     """Per channel, the albedo of Cycles' Principled metal (and of the Metallic BSDF in F82
     mode) averaged over view directions (weighted by cos): GGX reflection with the F82-tint
     Fresnel (F0 = base colour, tint = Specular Tint / Edge Tint; bsdf_util.h fresnel_f82tint_B
@@ -142,19 +148,20 @@ def metal_albedo(roughness: float, f0, tint, multiscatter: bool = True) -> np.nd
     f0 = np.clip(np.asarray(f0, np.float64)[:3], 0.0, 1.0)[:, None]
     tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, 1.0)[:, None]
     r = min(max(float(roughness), 0.0), 1.0)
-    e, s5, s6 = _ggx_moments(max(r * r, 1e-4))
+    e, s5, s6 = _ggx_moments(max(r * r, 1e-4), beckmann)
     f = 6.0 / 7.0
     b = (f0 + (1.0 - f0) * f ** 5) * (7.0 / f ** 6) * (1.0 - tint)
     single = f0 * e + (1.0 - f0) * s5 - b * s6
     return _compensated(single, e, f0 + (1.0 - f0) / 21.0 - b / 126.0, multiscatter)
 
 
-def glossy_albedo(roughness: float, color, multiscatter: bool = True) -> np.ndarray:
+def glossy_albedo(roughness: float, color, multiscatter: bool = True, beckmann: bool = False) -> np.ndarray:
     """Per channel, the albedo of Cycles' Glossy BSDF averaged over view directions: GGX
     reflection of constant Fresnel = its colour, with the energy compensation for Multiscatter
     GGX (nonlinear in the colour: 0.974 x a colour of 0.8 at roughness 0.5, 0.926 x 0.4) or
-    without it for GGX (the colour x the lobe's average albedo, 0.882 at roughness 0.5)."""
+    without it for GGX (the colour x the lobe's average albedo, 0.882 at roughness 0.5) and
+    Beckmann (beckmann; no compensation in Cycles either)."""
     c = np.clip(np.asarray(color, np.float64)[:3], 0.0, None)[:, None]
     r = min(max(float(roughness), 0.0), 1.0)
-    e, _, _ = _ggx_moments(max(r * r, 1e-4))
+    e, _, _ = _ggx_moments(max(r * r, 1e-4), beckmann)
     return _compensated(c * e, e, np.minimum(c, 1.0), multiscatter)

@@ -87,12 +87,14 @@ def test_default_surface_matches_cycles_on_a_sphere(tmp_path):
     assert abs(c.mean() / 0.8 - 1) > 0.01, "the test must tell the layer from the base alone"
 
 
-METALS = {  # base, roughness, Specular Tint (the F82 tint of a metal), Metallic, Specular IOR Level
+METALS = {  # base, roughness, Specular Tint (the F82 tint of a metal), Metallic, Specular IOR Level[,
+           # distribution: Multiscatter GGX, the default, or GGX]
     'grey_metal': ((0.8, 0.8, 0.8), 0.5, (1, 1, 1), 1.0, 0.5),
     'rough_metal': ((0.8, 0.8, 0.8), 0.8, (1, 1, 1), 1.0, 0.5),
     'gold_f82_tint': ((0.9, 0.5, 0.2), 0.3, (0.5, 0.8, 1.0), 1.0, 0.5),
     'half_metal_dark': ((0.05, 0.05, 0.05), 0.5, (1, 1, 1), 0.5, 0.5),
     'copper_mostly_metal': ((0.8, 0.3, 0.1), 0.8, (1, 1, 1), 0.7, 1.0),
+    'single_scatter_metal': ((0.8, 0.5, 0.2), 0.8, (1, 1, 1), 1.0, 0.5, 'GGX'),   # no compensation
 }
 
 
@@ -102,10 +104,11 @@ def test_metal_matches_cycles_on_a_sphere(case, tmp_path):
     energy compensation averaged over view directions (specular.metal_albedo), mixed by m with
     the dielectric layers. Rendered as its base colour before: a grey metal of roughness 0.8
     returns 0.713 in Cycles, not 0.8, and a half-metallic dark plastic 0.085, not 0.078."""
-    base, roughness, tint, metallic, level = METALS[case]
+    base, roughness, tint, metallic, level, *distribution = METALS[case]
     sc = _scene(base, level, roughness, tint=tint)
     node = next(n for n in bpy.data.materials['Plastic'].node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
     node.inputs['Metallic'].default_value = metallic
+    node.distribution = distribution[0] if distribution else 'MULTI_GGX'
     layer = sc.view_layers[0].name
     disk = {}
     for engine, exr in scenes.render_engines(sc, tmp_path).items():
@@ -122,6 +125,7 @@ def test_metal_matches_cycles_on_a_sphere(case, tmp_path):
 REFLECTORS = {  # node, distribution, roughness, colour (Glossy) or base colour and edge tint (Metallic)
     'glossy_multiscatter': ('ShaderNodeBsdfGlossy', 'MULTI_GGX', 0.5, (0.8, 0.6, 0.4), None),
     'glossy_ggx_rough': ('ShaderNodeBsdfGlossy', 'GGX', 0.8, (0.8, 0.6, 0.4), None),
+    'glossy_beckmann_rough': ('ShaderNodeBsdfGlossy', 'BECKMANN', 0.8, (0.8, 0.6, 0.4), None),
     'metallic_f82_multiscatter': ('ShaderNodeBsdfMetallic', 'MULTI_GGX', 0.4, (0.9, 0.6, 0.3), (0.7, 0.9, 1.0)),
     'metallic_f82_ggx': ('ShaderNodeBsdfMetallic', 'GGX', 0.6, (0.9, 0.6, 0.3), (0.7, 0.9, 1.0)),
 }
@@ -131,7 +135,7 @@ REFLECTORS = {  # node, distribution, roughness, colour (Glossy) or base colour 
 def test_glossy_and_metallic_bsdf_match_cycles_on_a_sphere(case, tmp_path):
     """The Glossy BSDF (reflection of constant Fresnel = its colour) and the Metallic BSDF in
     F82 mode as diffuse of their albedo averaged over view directions, with Multiscatter GGX's
-    energy compensation or GGX's single scattering (measured within 0.06%). As their colour,
+    energy compensation or GGX's and Beckmann's single scattering (measured within 0.06%). As their colour,
     before, a rough GGX Glossy of 0.8 rendered 0.8 where Cycles returns 0.48."""
     kind, dist, roughness, color, tint = REFLECTORS[case]
     sc = _scene((0.8, 0.8, 0.8), 0.5, 0.5)
