@@ -1060,6 +1060,11 @@ def reflector_albedo(node, reasons):
     return albedo
 
 
+def _hair_systems(ob):
+    """ob's particle systems whose hair Cycles renders as strands (Hair, Render As Path)."""
+    return [ps for ps in ob.particle_systems if ps.settings.type == 'HAIR' and ps.settings.render_type == 'PATH']
+
+
 def _hair_radius(settings, time):
     """A hair particle strand's radius at `time` (0 at the root, 1 at the tip, by length), as
     Cycles' shaperadius: half the Radius Scale times root..tip along the Shape's power curve,
@@ -1377,8 +1382,11 @@ class _Exporter:
                 if light is not None:
                     self.lights.append(light)
                 continue
-            if not inst.is_instance and getattr(ob, 'particle_systems', None):
-                self._particle_hair(ob, override)
+            if getattr(ob, 'particle_systems', None) and _hair_systems(ob):
+                if inst.is_instance:
+                    self._skip("hair particles of an instanced object are not rendered", ob.name)
+                else:
+                    self._particle_hair(ob, override)
             if ob.type == 'CURVES' and not getattr(self.view_layer, 'use_strand', True):
                 self._skip("hair curves are off in the view layer's filter (Hair)", ob.name)
                 continue
@@ -1455,11 +1463,10 @@ class _Exporter:
         """The strands of ob's hair particle systems (Render As Path), as Cycles reads them
         (blender/curves.cpp): children only when it has some (else the parents), 2^render_step
         + 1 world-space points a strand from co_hair, the radius from the Hair Shape settings
-        along the strand's length; tessellated as tubes (hair.py) in object space. The object's ray visibility applies; the view layer's Hair filter off skips it."""
-        systems = [ps for ps in ob.particle_systems
-                   if ps.settings.type == 'HAIR' and ps.settings.render_type == 'PATH']
-        if not systems:
-            return
+        along the strand's length; tessellated as tubes (hair.py) in object space. The
+        object's ray visibility applies; the view layer's Hair filter off skips it. (An
+        instanced emitter's hair is not rendered, and reported.)"""
+        systems = _hair_systems(ob)
         if not getattr(self.view_layer, 'use_strand', True):
             self._skip("hair is off in the view layer's filter (Hair)", ob.name)
             return

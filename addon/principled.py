@@ -3,7 +3,7 @@ of the export layer (reads the node's inputs through nodeeval).
 
 Cycles (svm/closure.h) stacks the layers of a Principled BSDF: coat over the specular layer
 (or metal, or glass) over the diffuse base, each upper layer dimming what lies below by its
-own albedo. The export keeps two as diffuse (specular.py): the dielectric specular layer,
+own albedo. The export keeps them as diffuse (specular.py): the dielectric specular layer,
 weighted by the dielectric's share 1 - Metallic, and the coat, of weight Coat Weight, with
 its Coat Tint's absorption of the layers below. Each is a step (dim (3,), add (3,)) applied
 in order to the diffuse base colour: base -> base x dim + add (export._Closure.layered; the
@@ -88,14 +88,14 @@ class BaseMap:
         return np.array([f[0] for f in fits]), np.array([f[1] for f in fits])
 
 
-def _specular_albedo(node, reasons, metallic_weight):
-    """The dielectric specular layer's albedo x metallic_weight (None: no layer)."""
+def _specular_albedo(node, reasons):
+    """The dielectric specular layer's albedo (None: no layer)."""
     (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
     level, ok = constant_value(node.inputs['Specular IOR Level'])
     tint, t_ok = _color(node, 'Specular Tint')
     if not (ok and v_ok and t_ok):
         reasons.append("Principled specular layer inputs driven by nodes; their own values used")
-    albedo = specular.layer_albedo(roughness, ior, level, tint) * metallic_weight
+    albedo = specular.layer_albedo(roughness, ior, level, tint)
     if not albedo.any():
         return None
     reasons.append(f"Principled specular layer as diffuse: its albedo averaged over view directions, "
@@ -105,8 +105,9 @@ def _specular_albedo(node, reasons, metallic_weight):
 
 def _specular_step(node, reasons):
     level_socket = node.inputs.get('Specular IOR Level')
-    (metallic, transmission), mt_ok = _values(node, ('Metallic', 'Transmission Weight'))
-    (_,), m_ok = _values(node, ('Metallic',))
+    (metallic,), m_ok = _values(node, ('Metallic',))
+    (transmission,), t_ok = _values(node, ('Transmission Weight',))
+    mt_ok = m_ok and t_ok
     metallic = min(max(metallic, 0.0), 1.0)
     if mt_ok and transmission == 0.0 and metallic > 0.0:
         return _metal_step(node, reasons, metallic, level_socket)
@@ -120,7 +121,7 @@ def _specular_step(node, reasons):
     if not mt_ok or transmission != 0.0:
         reasons.append("Principled specular layer ignored")
         return None
-    albedo = _specular_albedo(node, reasons, 1.0)
+    albedo = _specular_albedo(node, reasons)
     return None if albedo is None else (np.full(3, 1.0 - albedo.max()), albedo)
 
 
@@ -133,7 +134,7 @@ def _metal_step(node, reasons, metallic, level_socket):
     if level_socket is not None and metallic < 1.0:
         level, ok = constant_value(level_socket)
         if level != 0.0 or not ok:
-            spec = _specular_albedo(node, reasons, 1.0)
+            spec = _specular_albedo(node, reasons)
     reasons.append(f"Principled metal as diffuse: its albedo averaged over view directions "
                    f"(Metallic {metallic:g})")
     # Cycles' energy compensation only with Multiscatter GGX (the Principled's default)

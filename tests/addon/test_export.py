@@ -217,6 +217,21 @@ def test_particle_instances_and_hair_strands(scene, exported):
     assert of_object(data, "Emitter").sum() == 2
 
 
+def test_instanced_hair_emitter_is_reported(scene, exported):
+    """An emitter's own hair is rendered; the hair of its collection instances is not, and the
+    render says so (the emitter itself, as a mesh, is instanced as usual)."""
+    setup(scene)
+    em = scenes.plane("Furry", size=1)
+    em.modifiers.new("hair", 'PARTICLE_SYSTEM')
+    em.particle_systems[0].settings.type, em.particle_systems[0].settings.count = 'HAIR', 3
+    _instance(scene, em, [((5, 0, 0), (1, 1, 1))])
+    data = exported()
+    text = " | ".join(m for _, m in data.messages)
+    assert "'Furry': hair particles of an instanced object are not rendered" in text
+    assert "'Furry': hair particles rendered as tubes" in text
+    assert of_object(data, "Furry").sum() > 2 * 2           # both planes and the own strands
+
+
 def test_point_cloud_becomes_spheres_with_its_material(scene, exported):
     """Geometry Nodes points (Mesh to Points) are spheres of their radius around each point,
     in world space, with the point cloud's material; the tessellation is reported."""
