@@ -1,6 +1,6 @@
 """Cycles' colour nodes as numpy functions: Mix (every blend mode, colour or float), Invert,
-Gamma, Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp, RGB Curves and
-Separate/Combine Color (RGB, HSV, HSL).
+Gamma, Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp, RGB Curves,
+Separate/Combine Color (RGB, HSV, HSL) and Blackbody.
 
 The export (nodeeval.py) evaluates the colour nodes between Image Textures (or constants) and a
 BSDF's colour with these, on a constant (shape (3,)) or on every texel of the image (shape
@@ -9,7 +9,7 @@ exact for constants, for Closest interpolation and for transforms that are affin
 (Mix by a constant factor, Invert, Brightness/Contrast above 0); a non-linear transform of a
 linearly interpolated image is applied to the texels before filtering, where Cycles filters
 first (the two differ only within a texel). The formulas are Cycles' (kernel/svm/color_util.h,
-hsv.h, gamma.h, invert.h, ramp.h, sepcomb_color.h), in float64. No Blender import here.
+hsv.h, gamma.h, invert.h, ramp.h, sepcomb_color.h, math_util.h), in float64. No Blender import here.
 """
 
 from __future__ import annotations
@@ -257,3 +257,45 @@ def ramp_lookup(table, f, interpolate):
         return table[i]
     t = (x - i)[..., None]
     return (1.0 - t) * table[i] + t * table[np.minimum(i + 1, n - 1)]
+
+
+# Cycles' fit of the Planck locus in Rec.709 (svm/math_util.h svm_math_blackbody_color_rec709):
+# a / t + b t + c for red and green, ((a t + b) t + c) t + d for blue, per temperature range
+_BLACKBODY_EDGES = np.array([965.0, 1167.0, 1449.0, 1902.0, 3315.0, 6365.0])
+_BLACKBODY_R = np.array([[1.61919106e+03, -2.05010916e-03, 5.02995757e+00],
+                         [2.48845471e+03, -1.11330907e-03, 3.22621544e+00],
+                         [3.34143193e+03, -4.86551192e-04, 1.76486769e+00],
+                         [4.09461742e+03, -1.27446582e-04, 7.25731635e-01],
+                         [4.67028036e+03, 2.91258199e-05, 1.26703442e-01],
+                         [4.59509185e+03, 2.87495649e-05, 1.50345020e-01],
+                         [3.78717450e+03, 9.35907826e-06, 3.99075871e-01]])
+_BLACKBODY_G = np.array([[-4.88999748e+02, 6.04330754e-04, -7.55807526e-02],
+                         [-7.55994277e+02, 3.16730098e-04, 4.78306139e-01],
+                         [-1.02363977e+03, 1.20223470e-04, 9.36662319e-01],
+                         [-1.26571316e+03, 4.87340896e-06, 1.27054498e+00],
+                         [-1.42529332e+03, -4.01150431e-05, 1.43972784e+00],
+                         [-1.17554822e+03, -2.16378048e-05, 1.30408023e+00],
+                         [-5.00799571e+02, -4.59832026e-06, 1.09098763e+00]])
+_BLACKBODY_B = np.array([[5.96945309e-11, -4.85742887e-08, -9.70622247e-05, -4.07936148e-03],
+                         [2.40430366e-11, 5.55021075e-08, -1.98503712e-04, 2.89312858e-02],
+                         [-1.40949732e-11, 1.89878968e-07, -3.56632824e-04, 9.10767778e-02],
+                         [-3.61460868e-11, 2.84822009e-07, -4.93211319e-04, 1.56723440e-01],
+                         [-1.97075738e-11, 1.75359352e-07, -2.50542825e-04, -2.22783266e-02],
+                         [-1.61997957e-13, -1.64216008e-08, 3.86216271e-04, -7.38077418e-01],
+                         [6.72650283e-13, -2.73078809e-08, 4.24098264e-04, -7.52335691e-01]])
+_BLACKBODY_ABOVE = np.array([0.8262954810464208, 0.9945080501520986, 1.566307710274283])    # t >= 12000
+_BLACKBODY_BELOW = np.array([5.413294490189271, -0.20319390035873933, -0.0822535242887164])  # t < 800
+
+
+def blackbody(temperature):
+    """Blackbody node: the colour of a black body at `temperature` kelvin, (..., 1) -> (..., 3),
+    in Blender's default scene-linear Rec.709, negative channels clamped to 0 (svm_node_blackbody)."""
+    t = np.asarray(temperature, np.float64)[..., 0]
+    i = np.searchsorted(_BLACKBODY_EDGES, t, side='right')
+    ts = np.maximum(t, 1.0)[..., None]
+    r, g, b = _BLACKBODY_R[i], _BLACKBODY_G[i], _BLACKBODY_B[i]
+    rgb = np.stack([r[..., 0] / ts[..., 0] + r[..., 1] * ts[..., 0] + r[..., 2],
+                    g[..., 0] / ts[..., 0] + g[..., 1] * ts[..., 0] + g[..., 2],
+                    ((b[..., 0] * ts[..., 0] + b[..., 1]) * ts[..., 0] + b[..., 2]) * ts[..., 0] + b[..., 3]], -1)
+    rgb = np.where((t >= 12000.0)[..., None], _BLACKBODY_ABOVE, np.where((t < 800.0)[..., None], _BLACKBODY_BELOW, rgb))
+    return np.maximum(rgb, 0.0)

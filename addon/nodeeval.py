@@ -36,6 +36,7 @@ _INPUTS = {
     'SEPXYZ': {'vector': 'Vector'},
     'MATH': {'a': 'Value', 'b': 'Value_001', 'c': 'Value_002'},
     'CLAMP': {'value': 'Value', 'lo': 'Min', 'hi': 'Max'},
+    'BLACKBODY': {'temp': 'Temperature'},
 }
 _MIX_INPUTS = {'RGBA': {'fac': 'Factor_Float', 'a': 'A_Color', 'b': 'B_Color'},
                'FLOAT': {'fac': 'Factor_Float', 'a': 'A_Float', 'b': 'B_Float'}}
@@ -206,6 +207,8 @@ def _compute(node, out, v):
         return v['vector'][..., k:k + 1]
     if t == 'MATH':
         return fn.math(node.operation, v['a'], v['b'], v['c'], node.use_clamp)
+    if t == 'BLACKBODY':
+        return cn.blackbody(v['temp'])
     if t == 'CLAMP':
         clamp = fn.clamp_range if node.clamp_type == 'RANGE' else fn.clamp_min_max
         return clamp(v['value'], v['lo'], v['hi'])

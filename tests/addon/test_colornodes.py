@@ -288,3 +288,20 @@ def test_negative_texels_from_colour_nodes_become_zero(scene):
     expect = np.maximum(PX[..., :3] - 0.5, 0.0)
     assert np.allclose(m.texture[..., :3], expect, atol=1e-6)
     assert "4 texel(s) of negative or non-finite colour from colour nodes set to 0" in m.approximated
+
+
+def test_blackbody_is_blenders_light_temperature_colour(scene):
+    """colornodes.blackbody against Blender's own computation, a light's Temperature colour
+    (read from the evaluated light), across the fit's ranges and its two ends."""
+    import bpy
+    light = bpy.data.lights.new("Warm", 'POINT')
+    light.use_temperature = True
+    ob = bpy.data.objects.new("Warm", light)
+    bpy.context.scene.collection.objects.link(ob)
+    for kelvin in (850.0, 1000.0, 1300.0, 1700.0, 2700.0, 4000.0, 6500.0, 9000.0, 13000.0):
+        light.temperature = kelvin
+        dg = bpy.context.evaluated_depsgraph_get()
+        dg.update()
+        want = np.array(ob.evaluated_get(dg).data.temperature_color)
+        np.testing.assert_allclose(cn.blackbody(np.array([[kelvin]]))[0], want, rtol=1e-5, atol=1e-6,
+                                   err_msg=f"{kelvin} K")

@@ -145,3 +145,29 @@ def test_color_nodes_agree_with_cycles(chain, tmp_path):
     assert cycles.max() > 0.05
     err = np.abs(dacrt - cycles).max() / cycles.max()
     assert err < 0.02, (dacrt.round(3).tolist(), cycles.round(3).tolist())
+
+
+@pytest.mark.parametrize('kelvin', [1000.0, 2700.0, 6500.0, 10000.0])
+def test_blackbody_emission_agrees_with_cycles(kelvin, tmp_path):
+    """An Emission coloured by a Blackbody node, seen straight on (pixels = its colour, no
+    noise): the export computes Cycles' blackbody fit (colornodes.blackbody) and agrees to
+    float32 rounding. Before, the colour was the Emission socket's own white."""
+    import bpy
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 8
+    scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=1.0)
+    mat = scenes.emission("Glow", (1, 1, 1), 1.0)
+    nt = mat.node_tree
+    bb = nt.nodes.new('ShaderNodeBlackbody')
+    bb.inputs['Temperature'].default_value = kelvin
+    nt.links.new(bb.outputs[0], next(n for n in nt.nodes if n.type == 'EMISSION').inputs['Color'])
+    scenes.plane("Panel", size=4, materials=[mat])
+    scenes.black_world()
+    sc.cycles.samples = sc.dacrt.samples = 4
+    sc.cycles.use_denoising = False
+    layer = sc.view_layers[0].name
+    means = {e: np.array([exr[f"{layer}.Combined.{c}"].mean() for c in 'RGB'])
+             for e, exr in scenes.render_engines(sc, tmp_path).items()}
+    np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=1e-4, atol=1e-5)
+    assert np.abs(means['CYCLES'] - 1.0).max() > 0.03, "a white panel could pass for it"
