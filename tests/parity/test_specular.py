@@ -42,6 +42,17 @@ def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0), coat=None):
     return sc
 
 
+def _disk_means(sc, tmp_path):
+    """(DACRT, Cycles) mean colour over the sphere's disk: sum(RGB) / sum(alpha) of each
+    engine's render (premultiplied pixels; the silhouette's coverage divides out)."""
+    layer = sc.view_layers[0].name
+    disk = {}
+    for engine, exr in scenes.render_engines(sc, tmp_path).items():
+        a = exr[f"{layer}.Combined.A"].sum()
+        disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
+    return disk['DACRT'], disk['CYCLES']
+
+
 CASES = {  # base, Specular IOR Level, roughness, IOR, tint[, coat (weight, roughness, IOR, tint)]
     'dark_rough': ((0.05, 0.05, 0.05), 0.5, 0.5, 1.5, (1, 1, 1)),
     'dark_smooth': ((0.05, 0.05, 0.05), 0.5, 0.05, 1.5, (1, 1, 1)),
@@ -58,12 +69,7 @@ CASES = {  # base, Specular IOR Level, roughness, IOR, tint[, coat (weight, roug
 def test_specular_layer_matches_cycles_on_a_sphere(case, tmp_path):
     sc = _scene(*CASES[case])
     base = CASES[case][0]
-    layer = sc.view_layers[0].name
-    disk = {}
-    for engine, exr in scenes.render_engines(sc, tmp_path).items():
-        a = exr[f"{layer}.Combined.A"].sum()
-        disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
-    d, c = disk['DACRT'], disk['CYCLES']
+    d, c = _disk_means(sc, tmp_path)
     # stacked layers (a coat over the specular layer) multiply two view averages where Cycles
     # averages their product: measured within 1.9% (car paint, blue), single layers within 0.7%
     np.testing.assert_allclose(d, c, rtol=0.025 if len(CASES[case]) > 5 else 0.01)
@@ -77,12 +83,7 @@ def test_default_surface_matches_cycles_on_a_sphere(tmp_path):
     0.812, where the base alone was 0.8 and 1.5% dark)."""
     sc = _scene((0.8, 0.8, 0.8), 0.5, 0.5)
     bpy.data.objects["Sphere"].data.materials.clear()
-    layer = sc.view_layers[0].name
-    disk = {}
-    for engine, exr in scenes.render_engines(sc, tmp_path).items():
-        a = exr[f"{layer}.Combined.A"].sum()
-        disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
-    d, c = disk['DACRT'], disk['CYCLES']
+    d, c = _disk_means(sc, tmp_path)
     np.testing.assert_allclose(d, c, rtol=0.005)
     assert abs(c.mean() / 0.8 - 1) > 0.01, "the test must tell the layer from the base alone"
 
@@ -109,12 +110,7 @@ def test_metal_matches_cycles_on_a_sphere(case, tmp_path):
     node = next(n for n in bpy.data.materials['Plastic'].node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
     node.inputs['Metallic'].default_value = metallic
     node.distribution = distribution[0] if distribution else 'MULTI_GGX'
-    layer = sc.view_layers[0].name
-    disk = {}
-    for engine, exr in scenes.render_engines(sc, tmp_path).items():
-        a = exr[f"{layer}.Combined.A"].sum()
-        disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
-    d, c = disk['DACRT'], disk['CYCLES']
+    d, c = _disk_means(sc, tmp_path)
     # pure metals measured within 0.05%; mixed with the dielectric within 0.9% (the layers'
     # view averages multiplied where Cycles averages their product)
     np.testing.assert_allclose(d, c, rtol=0.005 if metallic == 1.0 else 0.015)
@@ -150,11 +146,6 @@ def test_glossy_and_metallic_bsdf_match_cycles_on_a_sphere(case, tmp_path):
         node.inputs['Edge Tint'].default_value = (*tint, 1.0)
     out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
     nt.links.new(node.outputs[0], out.inputs['Surface'])
-    layer = sc.view_layers[0].name
-    disk = {}
-    for engine, exr in scenes.render_engines(sc, tmp_path).items():
-        a = exr[f"{layer}.Combined.A"].sum()
-        disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
-    d, c = disk['DACRT'], disk['CYCLES']
+    d, c = _disk_means(sc, tmp_path)
     np.testing.assert_allclose(d, c, rtol=0.005)
     assert abs(c[0] / color[0] - 1) > 0.02, "the test must tell the albedo from the colour"
