@@ -506,8 +506,7 @@ class _Closure:
         t = self.texture
         px = t.pixels.copy()
         px[..., :3] = f(t.pixels[..., :3] * self.tex_weight.astype(np.float32) + self.const.astype(np.float32))
-        mapped = _Texture(('mapped', t.key, f.m, f.roughness, f.multiscatter, *f.tint, *f.spec, *self.tex_weight,
-                           *self.const),
+        mapped = _Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
                           px, t.interpolation, t.extension, t.transform, t.udim)
         return _Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity)
 

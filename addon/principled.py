@@ -3,15 +3,16 @@ of the export layer (reads the node's inputs through nodeeval).
 
 Cycles (svm/closure.h) stacks the layers of a Principled BSDF: coat over the specular layer
 (or metal, or glass) over the diffuse base, each upper layer dimming what lies below by its
-own albedo. The export keeps them as diffuse (specular.py): the dielectric specular layer,
-weighted by the dielectric's share 1 - Metallic, and the coat, of weight Coat Weight, with
-its Coat Tint's absorption of the layers below. Each is a step (dim (3,), add (3,)) applied
-in order to the diffuse base colour: base -> base x dim + add (export._Closure.layered; the
-fair-material override folds the same steps into a base colour). A metallic Principled (a
-constant Metallic m > 0) starts with a BaseMap instead, a per-channel function of the base:
-m x the metal's albedo (specular.metal_albedo, F0 = the base, nonlinear in it) + (1 - m) x the
-specular layer over the base, as Cycles mixes metal and dielectric by Metallic. Sheen,
-transmission and subsurface are dropped and reported, as before.
+own albedo. The export keeps them as diffuse (specular.py): the dielectric specular layer
+(weight 1 - Metallic), the metal (weight Metallic; its albedo nonlinear in the base colour,
+its F0) and the coat (weight Coat Weight, with its Coat Tint's absorption of the layers
+below). Cycles stacks them at each view direction; so does this module, per view cosine of
+specular.py's quadrature, and only then averages over view directions (weighted by cos): at
+every view cosine the stack is affine in the base colour without metal, so the average is one
+step (dim (3,), add (3,)), base -> base x dim + add, exact for any base, textured or not
+(export._Closure.layered; the fair-material override folds it into a base colour). With metal
+it is a BaseMap, a per-channel function of the base (exact for a constant, through a table per
+texel). Sheen, transmission and subsurface are dropped and reported, as before.
 """
 
 from __future__ import annotations
@@ -47,37 +48,39 @@ def _color(node, name):
 
 
 class BaseMap:
-    """base -> m A(base) + (1 - m) (base (1 - a_max) + a) per channel: metal of weight m
-    (A: specular.metal_albedo at this roughness and tint) mixed with the dielectric specular
-    layer (albedo a, zeros without one) over the base. Exact for a constant base (exact);
-    a texture's texels go through a table of the function (__call__, 129 F0 steps per channel:
-    within 1e-4 of exact)."""
+    """base -> average over view cosines of dim_c (m A(base) + (1 - m) (base dim_s + add_s))
+    + add_c, per channel: the metal of weight m (A: specular.metal_albedo_mu at this roughness
+    and tint) mixed with the dielectric specular layer over the base (dim_s, add_s; 1 and 0
+    without one), under the coat (dim_c, add_c; 1 and 0 without one), each (.., len(_MU)).
+    Exact for a constant base (exact); a texture's texels go through a table of the function
+    (__call__, 129 F0 steps per channel: within 1e-4 of exact)."""
 
     _GRID = np.linspace(0.0, 1.0, 129)
 
-    def __init__(self, metallic, roughness, tint, spec, multiscatter=True):
+    def __init__(self, metallic, roughness, tint, multiscatter, dim_s, add_s, dim_c, add_c):
         self.m, self.roughness = float(metallic), float(roughness)
         self.tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, 1.0)
-        self.spec = np.asarray(spec, np.float64)
         self.multiscatter = bool(multiscatter)
+        self.dim_s, self.add_s, self.dim_c, self.add_c = dim_s, add_s, dim_c, add_c
+        self.key = (self.m, self.roughness, self.multiscatter, *self.tint,
+                    *(np.asarray(a, np.float64).tobytes() for a in (dim_s, add_s, dim_c, add_c)))
         self._table = None
-
-    def _mix(self, x, metal):
-        return self.m * metal + (1.0 - self.m) * (x * (1.0 - self.spec.max()) + self.spec)
 
     def exact(self, rgb):
         x = np.asarray(rgb, np.float64)[:3]
-        return self._mix(x, specular.metal_albedo(self.roughness, np.clip(x, 0.0, 1.0), self.tint, self.multiscatter))
+        metal = specular.metal_albedo_mu(self.roughness, np.clip(x, 0.0, 1.0), self.tint, self.multiscatter)
+        below = self.m * metal + (1.0 - self.m) * (x[:, None] * self.dim_s + self.add_s)
+        return (self.dim_c * below + self.add_c) @ specular.VIEW
 
     def __call__(self, x):
         """x (..., 3) -> (..., 3), through the table (F0 clipped to 0..1, as metal_albedo)."""
         if self._table is None:
-            g = self._GRID
-            self._table = np.stack([specular.metal_albedo(self.roughness, (v, v, v), self.tint, self.multiscatter)
-                                    for v in g], 1)
+            self._table = np.stack([self.exact((v, v, v)) for v in self._GRID], 1)
         x = np.asarray(x, np.float64)
-        metal = np.stack([np.interp(np.clip(x[..., c], 0.0, 1.0), self._GRID, self._table[c]) for c in range(3)], -1)
-        return self._mix(x, metal)
+        out = [np.interp(np.clip(x[..., c], 0.0, 1.0), self._GRID, self._table[c]) for c in range(3)]
+        # beyond 0..1 the metal is clipped but the dielectric part goes on linearly
+        lin = np.clip(x, 0.0, 1.0)
+        return np.stack(out, -1) + (x - lin) * (1.0 - self.m) * ((self.dim_c * self.dim_s) @ specular.VIEW)
 
     def line(self):
         """(dim, add): the least-squares line of the map over base 0..1 per channel (the fair
@@ -88,61 +91,55 @@ class BaseMap:
         return np.array([f[0] for f in fits]), np.array([f[1] for f in fits])
 
 
-def _specular_albedo(node, reasons):
-    """The dielectric specular layer's albedo (None: no layer)."""
-    (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
-    level, ok = constant_value(node.inputs['Specular IOR Level'])
-    tint, t_ok = _color(node, 'Specular Tint')
-    if not (ok and v_ok and t_ok):
-        reasons.append("Principled specular layer inputs driven by nodes; their own values used")
-    albedo = specular.layer_albedo(roughness, ior, level, tint)
-    if not albedo.any():
-        return None
-    reasons.append(f"Principled specular layer as diffuse: its albedo averaged over view directions, "
-                   f"{albedo.max():.3f}")
-    return albedo
+def _multiscatter(node):
+    """Whether Cycles compensates the layers' multiple scattering: Multiscatter GGX, the
+    Principled's default (its coat always)."""
+    return getattr(node, 'distribution', 'MULTI_GGX') == 'MULTI_GGX'
 
 
-def _specular_step(node, reasons):
+def _specular_mu(node, reasons):
+    """The dielectric specular layer's albedo per view cosine (3, len(_MU)), or None."""
     level_socket = node.inputs.get('Specular IOR Level')
-    (metallic,), m_ok = _values(node, ('Metallic',))
-    (transmission,), t_ok = _values(node, ('Transmission Weight',))
-    mt_ok = m_ok and t_ok
-    metallic = min(max(metallic, 0.0), 1.0)
-    if mt_ok and transmission == 0.0 and metallic > 0.0:
-        return _metal_step(node, reasons, metallic, level_socket)
-    if metallic != 0.0 or not m_ok:        # driven by nodes, or under transmission: as before
-        reasons.append("Principled metallic ignored")
     if level_socket is None:
         return None
     level, ok = constant_value(level_socket)
     if ok and level == 0.0:
         return None
-    if not mt_ok or transmission != 0.0:
-        reasons.append("Principled specular layer ignored")
-        return None
-    albedo = _specular_albedo(node, reasons)
-    return None if albedo is None else (np.full(3, 1.0 - albedo.max()), albedo)
-
-
-def _metal_step(node, reasons, metallic, level_socket):
-    (roughness,), r_ok = _values(node, ('Roughness',))
+    (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
     tint, t_ok = _color(node, 'Specular Tint')
-    if not (r_ok and t_ok):
-        reasons.append("Principled metal inputs driven by nodes; their own values used")
-    spec = None
-    if level_socket is not None and metallic < 1.0:
-        level, ok = constant_value(level_socket)
-        if level != 0.0 or not ok:
-            spec = _specular_albedo(node, reasons)
-    reasons.append(f"Principled metal as diffuse: its albedo averaged over view directions "
-                   f"(Metallic {metallic:g})")
-    # Cycles' energy compensation only with Multiscatter GGX (the Principled's default)
-    multiscatter = getattr(node, 'distribution', 'MULTI_GGX') == 'MULTI_GGX'
-    return BaseMap(metallic, roughness, tint, np.zeros(3) if spec is None else spec, multiscatter)
+    if not (ok and v_ok and t_ok):
+        reasons.append("Principled specular layer inputs driven by nodes; their own values used")
+    albedo = specular.layer_albedo_mu(roughness, ior, level, tint, _multiscatter(node))
+    if not albedo.any():
+        return None
+    reasons.append(f"Principled specular layer as diffuse: its albedo averaged over view directions, "
+                   f"{(albedo @ specular.VIEW).max():.3f}")
+    return albedo
 
 
-def _coat_step(node, reasons):
+def _metal(node, reasons):
+    """(metallic, roughness, tint) of the metal layer when Cycles renders one that the export
+    keeps (a constant Metallic > 0 without transmission), else None; whether the dielectric
+    specular layer is kept (not under transmission, nor under a node-driven metallic)."""
+    (metallic,), m_ok = _values(node, ('Metallic',))
+    (transmission,), t_ok = _values(node, ('Transmission Weight',))
+    metallic = min(max(metallic, 0.0), 1.0)
+    if m_ok and t_ok and transmission == 0.0 and metallic > 0.0:
+        (roughness,), r_ok = _values(node, ('Roughness',))
+        tint, c_ok = _color(node, 'Specular Tint')
+        if not (r_ok and c_ok):
+            reasons.append("Principled metal inputs driven by nodes; their own values used")
+        reasons.append(f"Principled metal as diffuse: its albedo averaged over view directions "
+                       f"(Metallic {metallic:g})")
+        return (metallic, roughness, tint), metallic < 1.0
+    if metallic != 0.0 or not m_ok:        # driven by nodes, or under transmission: as before
+        reasons.append("Principled metallic ignored")
+    keep = m_ok and t_ok and transmission == 0.0
+    return None, keep
+
+
+def _coat_mu(node, reasons):
+    """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None."""
     weight_socket = node.inputs.get('Coat Weight')
     if weight_socket is None:
         return None
@@ -156,13 +153,31 @@ def _coat_step(node, reasons):
     tint, t_ok = _color(node, 'Coat Tint')
     if not (ok and v_ok and t_ok):
         reasons.append("Principled coat inputs driven by nodes; their own values used")
-    albedo = specular.layer_albedo(roughness, ior, 0.5, (1.0, 1.0, 1.0)) * weight
-    absorb = 1.0 + weight * (specular.coat_tint_average(tint, ior) - 1.0)
-    reasons.append(f"Principled coat as diffuse: its albedo averaged over view directions, {albedo.max():.3f}")
-    return (1.0 - albedo.max()) * absorb, albedo
+    albedo = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True) * weight
+    absorb = 1.0 + weight * (specular.coat_tint_mu(tint, ior) - 1.0)
+    reasons.append(f"Principled coat as diffuse: its albedo averaged over view directions, "
+                   f"{(albedo @ specular.VIEW).max():.3f}")
+    return (1.0 - albedo.max(axis=0)) * absorb, albedo
 
 
 def layer_steps(node, reasons) -> list:
-    """[(dim (3,), add (3,)) or a BaseMap first] for the layers over a Principled BSDF's
-    diffuse base, bottom up."""
-    return [s for s in (_specular_step(node, reasons), _coat_step(node, reasons)) if s is not None]
+    """[] without layers, else [one step] for the layers over a Principled BSDF's diffuse
+    base: (dim (3,), add (3,)), or a BaseMap with metal."""
+    metal, keep_specular = _metal(node, reasons)
+    spec = None
+    if keep_specular:
+        spec = _specular_mu(node, reasons)
+    elif metal is None and node.inputs.get('Specular IOR Level') is not None:
+        level, ok = constant_value(node.inputs['Specular IOR Level'])
+        if level != 0.0 or not ok:
+            reasons.append("Principled specular layer ignored")
+    coat = _coat_mu(node, reasons)
+    if metal is None and spec is None and coat is None:
+        return []
+    n = len(specular.VIEW)
+    dim_s = np.ones(n) if spec is None else 1.0 - spec.max(axis=0)
+    add_s = np.zeros((3, n)) if spec is None else spec
+    dim_c, add_c = (np.ones((3, n)), np.zeros((3, n))) if coat is None else coat
+    if metal is not None:
+        return [BaseMap(metal[0], metal[1], metal[2], _multiscatter(node), dim_s, add_s, dim_c, add_c)]
+    return [((dim_c * dim_s) @ specular.VIEW, (dim_c * add_s + add_c) @ specular.VIEW)]

@@ -1,17 +1,19 @@
-"""The Principled BSDF's dielectric specular layer as a diffuse renderer can keep it: the
-layer's albedo averaged over view directions, added to the diffuse base it dims.
+"""The Principled BSDF's layers (and the Glossy and Metallic BSDFs) as a diffuse renderer can
+keep them: their albedos per view cosine and averaged over view directions.
 
 In Cycles (svm/closure.h, Principled) a dielectric GGX layer of roughness r (alpha = r^2) lies
 over the diffuse base; at a view cosine mu it reflects E(mu) = int f_spec cos dw_i and the base
 below is weighted by 1 - max over channels of E(mu) (closure_layering_weight). Its Fresnel is
 the generalised Schlick form with the real dielectric curve: F = f0 t + (1 - f0 t) s, with
 s = (F(eta) - F0) / (1 - F0), f0 = F0(eta) and t the Specular Tint; Specular IOR Level l moves
-F0 to 2 l F0 (eta follows; l = 0: no layer). A diffuse material has one albedo, so the export
-takes base (1 - E_max) + E with E averaged over view directions weighted by cos (as fresnel.py
-does for Fresnel nodes): under uniform light an orthographic view of a sphere then has Cycles'
-mean (tests/parity/test_specular.py). E is the single-scattering GGX albedo (height-correlated
-Smith G2), integrated here by quadrature over the half vector; it matches what Cycles renders
-(0.059 at roughness 0.5, IOR 1.5, against the smooth 0.092). Pure numpy, no Blender.
+F0 to 2 l F0 (eta follows; l = 0: no layer). The metal's Fresnel is F82-tint, the coat's the
+dielectric's; with Multiscatter GGX (and always for the coat) Cycles compensates the energy
+single scattering loses (microfacet_ggx_preserve_energy). A diffuse material has one albedo, so
+the export stacks the layers per view cosine (principled.py) and averages over view directions
+weighted by cos (as fresnel.py does for Fresnel nodes): under uniform light an orthographic view
+of a sphere then has Cycles' mean (tests/parity/test_specular.py). The albedos are integrated
+by quadrature over the half vector (height-correlated Smith G2); they match what Cycles renders
+(0.060 at roughness 0.5, IOR 1.5, against the smooth 0.092). Pure numpy, no Blender.
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ def _gauss(n):
 _MU, _W_MU = _gauss(32)
 _XI, _W_XI = _gauss(48)
 _PHI = (np.arange(32) + 0.5) / 32 * 2.0 * np.pi
+# a per-view-cosine quantity (..., len(_MU)) @ VIEW: its average over view directions weighted by cos
+VIEW = 2.0 * _MU * _W_MU
 
 
 def f0_from_ior(eta):
@@ -40,11 +44,11 @@ def f0_from_ior(eta):
 
 
 @lru_cache(maxsize=256)
-def _ggx_averages(alpha: float, eta: float) -> tuple[float, float]:
-    """(E1, EF): the cos-weighted view averages of the GGX reflection albedo without Fresnel
-    (F = 1) and with the dielectric Fresnel of eta. The half vector h is taken with density
-    D(h) cos(theta_h) (tan^2 theta_h = alpha^2 xi / (1 - xi)); per h the reflected direction
-    contributes F G2 (wo.h) / (mu_o cos theta_h)."""
+def _ggx_dielectric(alpha: float, eta: float) -> tuple:
+    """Per view cosine _MU, the GGX reflection albedo without Fresnel (F = 1) and with the
+    dielectric Fresnel of eta: (E, EF), each (len(_MU),). The half vector h is taken with
+    density D(h) cos(theta_h) (tan^2 theta_h = alpha^2 xi / (1 - xi)); per h the reflected
+    direction contributes F G2 (wo.h) / (mu_o cos theta_h)."""
     mo = _MU[:, None, None]
     so = np.sqrt(1.0 - mo * mo)
     xi = _XI[None, :, None]
@@ -63,37 +67,64 @@ def _ggx_averages(alpha: float, eta: float) -> tuple[float, float]:
     w = _W_XI[None, :, None] / len(_PHI)
     e1 = (per_h * w).sum(axis=(1, 2))
     ef = (per_h * fresnel_dielectric_cos(np.clip(oh, 0.0, 1.0), eta) * w).sum(axis=(1, 2))
-    view = 2.0 * _MU * _W_MU
-    return float(view @ e1), float(view @ ef)
+    return e1, ef
 
 
-def layer_albedo(roughness: float, ior: float, level: float, tint) -> np.ndarray:
-    """Per channel, the specular layer's albedo averaged over view directions (see the top);
-    zeros without a layer (Specular IOR Level 0, IOR 1, or a black tint)."""
+def _ggx_averages(alpha: float, eta: float) -> tuple[float, float]:
+    """(E1, EF): _ggx_dielectric's two albedos averaged over view directions (weighted by cos)."""
+    e1, ef = _ggx_dielectric(alpha, eta)
+    return float(VIEW @ e1), float(VIEW @ ef)
+
+
+def fresnel_dielectric_fss(eta: float) -> float:
+    """Cycles' fit of the dielectric Fresnel averaged over incident directions (weighted by cos;
+    bsdf_util.h fresnel_dielectric_Fss, after Kulla and Conty)."""
+    if eta < 1.0:
+        return 0.997118 + eta * (0.1014 - eta * (0.965241 + eta * 0.130607))
+    return (eta - 1.0) / (4.08567 + 1.00071 * eta)
+
+
+def layer_albedo_mu(roughness: float, ior: float, level: float, tint, multiscatter: bool = True) -> np.ndarray:
+    """Per channel and view cosine (3, len(_MU)), the specular layer's albedo (see the top);
+    zeros without a layer (Specular IOR Level 0, IOR 1, or a black tint). With multiscatter
+    (the Principled's Multiscatter GGX; a coat always), Cycles' energy compensation, with the
+    generalised Schlick's average Fresnel (bsdf_microfacet_setup_fresnel_generalized_schlick)."""
     tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, None)
     ior = max(float(ior), 1e-5)                    # front faces: eta = IOR
     f0 = min(f0_from_ior(ior) * 2.0 * max(float(level), 0.0), 1.0 - 1e-6)
     if f0 <= 0.0 or not tint.any():
-        return np.zeros(3)
+        return np.zeros((3, len(_MU)))
     eta = (1.0 + np.sqrt(f0)) / (1.0 - np.sqrt(f0))   # Cycles' ior_from_F0 (level 0.5: the IOR)
     if ior < 1.0:
         eta = 1.0 / eta
     r = min(max(float(roughness), 0.0), 1.0)
-    e1, ef = _ggx_averages(r * r, float(eta))
-    # s = (F - f0) / (1 - f0) averages to (EF - f0 E1) / (1 - f0)
+    e1, ef = _ggx_dielectric(r * r, float(eta))
+    # s = (F - f0) / (1 - f0) integrates to (EF - f0 E1) / (1 - f0), per view cosine
     es = (ef - f0 * e1) / (1.0 - f0)
-    ft = f0 * tint
-    return ft * e1 + (1.0 - ft) * es
+    ft = np.minimum(f0 * tint, 1.0)[:, None]
+    single = ft * e1 + (1.0 - ft) * es
+    s = min(max((fresnel_dielectric_fss(float(eta)) - f0) / (1.0 - f0), 0.0), 1.0)
+    return _compensated(single, e1, ft + (1.0 - ft) * s, multiscatter)
 
 
-def coat_tint_average(tint, coat_ior: float) -> np.ndarray:
-    """Per channel, Cycles' Coat Tint absorption of the layers below the coat, tint^(1 / cos_t)
-    with cos_t the refracted view cosine in the coat (tint is the transmittance at normal
-    incidence), averaged over view directions weighted by cos."""
+def layer_albedo(roughness: float, ior: float, level: float, tint, multiscatter: bool = True) -> np.ndarray:
+    """Per channel, layer_albedo_mu averaged over view directions."""
+    return layer_albedo_mu(roughness, ior, level, tint, multiscatter) @ VIEW
+
+
+def coat_tint_mu(tint, coat_ior: float) -> np.ndarray:
+    """Per channel and view cosine (3, len(_MU)), Cycles' Coat Tint absorption of the layers
+    below the coat, tint^(1 / cos_t) with cos_t the refracted view cosine in the coat (tint is
+    the transmittance at normal incidence)."""
     tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, None)
     eta = max(float(coat_ior), 1.0)
     cos_t = np.sqrt(1.0 - (1.0 - _MU * _MU) / (eta * eta))
-    return (tint[:, None] ** (1.0 / cos_t)[None, :]) @ (2.0 * _MU * _W_MU)
+    return tint[:, None] ** (1.0 / cos_t)[None, :]
+
+
+def coat_tint_average(tint, coat_ior: float) -> np.ndarray:
+    """Per channel, coat_tint_mu averaged over view directions weighted by cos."""
+    return coat_tint_mu(tint, coat_ior) @ VIEW
 
 
 @lru_cache(maxsize=256)
@@ -129,18 +160,22 @@ def _ggx_moments(alpha: float, beckmann: bool = False) -> tuple:
 def _compensated(single, e, fss, compensate):
     """Per view cosine, the albedo single (channels x mu) with Cycles' multiple-scattering
     energy compensation (microfacet_ggx_preserve_energy) for the average Fresnel fss (channels
-    x 1), averaged over view directions; single-scattering only without compensate."""
-    view = 2.0 * _MU * _W_MU
+    x 1); single-scattering only without compensate."""
     if not compensate:
-        return single @ view
-    e_avg = float(view @ e)
+        return single
+    e_avg = float(VIEW @ e)
     fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
-    return (single * (1.0 + fms * (1.0 - e) / e)) @ view
+    return single * (1.0 + fms * (1.0 - e) / e)
 
 
 def metal_albedo(roughness: float, f0, tint, multiscatter: bool = True, beckmann: bool = False) -> np.ndarray:
-    """Per channel, the albedo of Cycles' Principled metal (and of the Metallic BSDF in F82
-    mode) averaged over view directions (weighted by cos): GGX reflection with the F82-tint
+    """Per channel, metal_albedo_mu averaged over view directions (weighted by cos)."""
+    return metal_albedo_mu(roughness, f0, tint, multiscatter, beckmann) @ VIEW
+
+
+def metal_albedo_mu(roughness: float, f0, tint, multiscatter: bool = True, beckmann: bool = False) -> np.ndarray:
+    """Per channel and view cosine (3, len(_MU)), the albedo of Cycles' Principled metal (and
+    of the Metallic BSDF in F82 mode): GGX reflection with the F82-tint
     Fresnel (F0 = base colour, tint = Specular Tint / Edge Tint; bsdf_util.h fresnel_f82tint_B
     / fresnel_f82) and, with multiscatter (Multiscatter GGX), the energy compensation of
     microfacet_ggx_preserve_energy: single-scattering albedo x (1 + Fms (1 - E) / E), Fms from
@@ -164,4 +199,4 @@ def glossy_albedo(roughness: float, color, multiscatter: bool = True, beckmann: 
     c = np.clip(np.asarray(color, np.float64)[:3], 0.0, None)[:, None]
     r = min(max(float(roughness), 0.0), 1.0)
     e, _, _ = _ggx_moments(max(r * r, 1e-4), beckmann)
-    return _compensated(c * e, e, np.minimum(c, 1.0), multiscatter)
+    return _compensated(c * e, e, np.minimum(c, 1.0), multiscatter) @ VIEW

@@ -52,8 +52,21 @@ def test_smooth_layer_is_the_fresnel_average():
 def test_rough_layer_matches_a_direct_quadrature(roughness, grid):
     # (a narrower lobe needs a finer grid of incoming directions: at roughness 0.3 the coarse one
     # is 4% low, the fine one within 0.1% of a grid twice as fine again)
-    e = specular.layer_albedo(roughness, 1.5, 0.5, (1, 1, 1))
+    e = specular.layer_albedo(roughness, 1.5, 0.5, (1, 1, 1), multiscatter=False)   # single scattering
     assert e[0] == pytest.approx(_direct_average(roughness, 1.5, n_theta=grid[0], n_phi=grid[1]), rel=5e-3)
+
+
+def test_multiscatter_compensation():
+    """Cycles' energy compensation adds what single scattering loses, (1 - E) / E of it times
+    the multiple-scattering Fresnel: nothing on a smooth layer (E = 1), more the rougher it is,
+    and the compensated albedo stays below the Fresnel average of a smooth one."""
+    for ior in (1.33, 1.5):
+        assert np.allclose(specular.layer_albedo(0.0, ior, 0.5, (1, 1, 1)),
+                           specular.layer_albedo(0.0, ior, 0.5, (1, 1, 1), multiscatter=False))
+    gain = [specular.layer_albedo(r, 1.5, 0.5, (1, 1, 1))[0] / specular.layer_albedo(r, 1.5, 0.5, (1, 1, 1), False)[0]
+            for r in (0.2, 0.5, 0.8, 1.0)]
+    assert all(1.0 < a < b for a, b in zip(gain, gain[1:])) and gain[-1] < 1.2
+    assert specular.layer_albedo(1.0, 1.5, 0.5, (1, 1, 1))[0] < specular.layer_albedo(0.0, 1.5, 0.5, (1, 1, 1))[0]
 
 
 def test_rougher_layers_reflect_less():
@@ -70,9 +83,9 @@ def test_level_and_tint():
     f0 = 2 * specular.f0_from_ior(1.5)
     eta = (1 + np.sqrt(f0)) / (1 - np.sqrt(f0))
     assert specular.layer_albedo(0.0, 1.5, 1.0, (1, 1, 1))[0] == pytest.approx(fresnel.fresnel_node_average(eta))
-    # F = f0 t + (1 - f0 t) s is linear in the tint, so is the albedo; a black channel keeps the
-    # grazing (s) part, a white one the full Fresnel
-    e = specular.layer_albedo(0.4, 1.5, 0.5, (1.0, 0.5, 0.0))
+    # F = f0 t + (1 - f0 t) s is linear in the tint, so is the single-scattering albedo; a black
+    # channel keeps the grazing (s) part, a white one the full Fresnel
+    e = specular.layer_albedo(0.4, 1.5, 0.5, (1.0, 0.5, 0.0), multiscatter=False)
     assert e[1] == pytest.approx((e[0] + e[2]) / 2, abs=1e-12)
     assert 0 < e[2] < e[1] < e[0]
 
@@ -143,7 +156,9 @@ def test_metal_map_table_and_textured_base(scene, exported):
     within 1e-4 of the exact albedo); the fair override's line fit of it stays within 0.02
     at roughness 0.5."""
     from addon import principled
-    f = principled.BaseMap(1.0, 0.5, (1, 1, 1), np.zeros(3))
+    n = len(specular.VIEW)      # a metal alone: no dielectric layer, no coat
+    f = principled.BaseMap(1.0, 0.5, (1, 1, 1), True, np.ones(n), np.zeros((3, n)), np.ones((3, n)),
+                           np.zeros((3, n)))
     x = np.random.default_rng(0).uniform(0, 1, (50, 3))
     exact = np.array([f.exact(v) for v in x])
     np.testing.assert_allclose(f(x), exact, atol=1e-4)
