@@ -32,7 +32,8 @@ the colour nodes above uses its own value (the socket's, or where its chain left
 but Fresnel and Layer Weight nodes give their average over view directions (fresnel.py); the
 Principled BSDF keeps its diffuse base, with its metal, dielectric specular layer and coat as
 those layers' albedos averaged over view directions (principled.py, specular.py; no sheen,
-transmission or subsurface); Diffuse roughness (Oren-Nayar) is treated as Lambert; a
+transmission or subsurface); a rough diffuse (Cycles' Oren-Nayar) as its albedo averaged over
+view directions (roughdiffuse.py); a
 BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
 texture coordinates other than the UV map (and Mapping nodes of it) are read as the active
 render UV map.
@@ -53,7 +54,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import hair, nodeeval, panorama, pointcloud, principled, specular
+from . import hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform
 from .nodeeval import constant, constant_color, constant_value
@@ -699,11 +700,10 @@ class _MaterialBuilder:
             return _Closure(const=DEFAULT_ALBEDO)
         t = node.type
         if t == 'BSDF_DIFFUSE':
-            rough, _ = constant_value(node.inputs['Roughness'])
-            if rough > 1e-5:
-                reasons.append("Diffuse roughness (Oren-Nayar) as Lambert")
             _note_normal_inputs(node, reasons)
-            return self._color_closure(node.inputs['Color'], reasons)
+            c = self._color_closure(node.inputs['Color'], reasons)
+            rough = diffuse_roughness(node, reasons)
+            return c if rough == 0.0 else c.mapped(roughdiffuse.RoughDiffuse(rough))
         if t == 'BSDF_PRINCIPLED':
             return self._principled(node, reasons)
         if t == 'EMISSION':
@@ -753,7 +753,7 @@ class _MaterialBuilder:
         _note_normal_inputs(node, reasons)
         c = self._color_closure(node.inputs['Base Color'], reasons)
         for step in principled.layer_steps(node, reasons):
-            c = c.mapped(step) if isinstance(step, principled.BaseMap) else c.layered(*step)
+            c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
         es = input_socket(node, 'Emission Strength')
         ec = input_socket(node, 'Emission Color', 'Emission')
         if es is not None and ec is not None:
@@ -1026,6 +1026,19 @@ def _transform(points, linear, offset, out):
                     c_ += offset[i:j, c, None]
                 out[i:j, :, c] = c_
     return out
+
+
+def diffuse_roughness(node, reasons):
+    """A Diffuse BSDF's roughness (0..1; Cycles' Oren-Nayar above 1e-5, roughdiffuse.py), 0 for
+    Lambert; a node-driven one at its own value, reported."""
+    rough, ok = constant_value(node.inputs['Roughness'])
+    rough = min(max(rough, 0.0), 1.0) if np.isfinite(rough) else 0.0
+    if not ok:
+        reasons.append("Diffuse roughness driven by nodes; its own value used")
+    if rough <= 1e-5:
+        return 0.0
+    reasons.append("Diffuse roughness (Oren-Nayar) as its albedo averaged over view directions")
+    return rough
 
 
 def reflector_albedo(node, reasons):

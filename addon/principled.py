@@ -19,15 +19,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import specular
+from . import roughdiffuse, specular
 from .nodeeval import constant_color, constant_value
 
-HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic')   # inputs whose layers the steps render
+# inputs whose layers the steps render
+HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic', 'Diffuse Roughness')
 
 
 # what Cycles uses for an input a Principled BSDF of another Blender version lacks
 _DEFAULTS = {'Metallic': 0.0, 'Transmission Weight': 0.0, 'Roughness': 0.5, 'IOR': 1.5, 'Coat Roughness': 0.03,
-             'Coat IOR': 1.5}
+             'Coat IOR': 1.5, 'Diffuse Roughness': 0.0}
 
 
 def _values(node, names):
@@ -48,28 +49,31 @@ def _color(node, name):
 
 
 class BaseMap:
-    """base -> average over view cosines of dim_c (m A(base) + (1 - m) (base dim_s + add_s))
+    """base -> average over view cosines of dim_c (m A(base) + (1 - m) (D(base) dim_s + add_s))
     + add_c, per channel: the metal of weight m (A: specular.metal_albedo_mu at this roughness
-    and tint) mixed with the dielectric specular layer over the base (dim_s, add_s; 1 and 0
-    without one), under the coat (dim_c, add_c; 1 and 0 without one), each (.., len(_MU)).
+    and tint) mixed with the dielectric specular layer over the diffuse base (dim_s, add_s; 1
+    and 0 without one; D: the rough diffuse's albedo, roughdiffuse.py, the colour itself at
+    roughness 0), under the coat (dim_c, add_c; 1 and 0 without one), each (.., len(_MU)).
     Exact for a constant base (exact); a texture's texels go through a table of the function
     (__call__, 129 F0 steps per channel: within 1e-4 of exact)."""
 
     _GRID = np.linspace(0.0, 1.0, 129)
 
-    def __init__(self, metallic, roughness, tint, multiscatter, dim_s, add_s, dim_c, add_c):
+    def __init__(self, metallic, roughness, tint, multiscatter, dim_s, add_s, dim_c, add_c, diffuse=0.0):
         self.m, self.roughness = float(metallic), float(roughness)
         self.tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, 1.0)
         self.multiscatter = bool(multiscatter)
         self.dim_s, self.add_s, self.dim_c, self.add_c = dim_s, add_s, dim_c, add_c
-        self.key = (self.m, self.roughness, self.multiscatter, *self.tint,
+        self.diffuse = float(diffuse)          # the diffuse base's roughness (roughdiffuse.py)
+        self.key = (self.m, self.roughness, self.multiscatter, self.diffuse, *self.tint,
                     *(np.asarray(a, np.float64).tobytes() for a in (dim_s, add_s, dim_c, add_c)))
         self._table = None
 
     def exact(self, rgb):
         x = np.asarray(rgb, np.float64)[:3]
         metal = specular.metal_albedo_mu(self.roughness, np.clip(x, 0.0, 1.0), self.tint, self.multiscatter)
-        below = self.m * metal + (1.0 - self.m) * (x[:, None] * self.dim_s + self.add_s)
+        base = roughdiffuse.albedo(x, self.diffuse)[:, None]
+        below = self.m * metal + (1.0 - self.m) * (base * self.dim_s + self.add_s)
         return (self.dim_c * below + self.add_c) @ specular.VIEW
 
     def __call__(self, x):
@@ -78,9 +82,11 @@ class BaseMap:
             self._table = np.stack([self.exact((v, v, v)) for v in self._GRID], 1)
         x = np.asarray(x, np.float64)
         out = [np.interp(np.clip(x[..., c], 0.0, 1.0), self._GRID, self._table[c]) for c in range(3)]
-        # beyond 0..1 the metal is clipped but the dielectric part goes on linearly
+        # beyond 0..1 the metal is clipped but the dielectric part goes on (its diffuse base
+        # linearly in the colour there)
         lin = np.clip(x, 0.0, 1.0)
-        return np.stack(out, -1) + (x - lin) * (1.0 - self.m) * ((self.dim_c * self.dim_s) @ specular.VIEW)
+        beyond = roughdiffuse.albedo(x, self.diffuse) - roughdiffuse.albedo(lin, self.diffuse)
+        return np.stack(out, -1) + beyond * (1.0 - self.m) * ((self.dim_c * self.dim_s) @ specular.VIEW)
 
     def line(self):
         """(dim, add): the least-squares line of the map over base 0..1 per channel (the fair
@@ -161,8 +167,9 @@ def _coat_mu(node, reasons):
 
 
 def layer_steps(node, reasons) -> list:
-    """[] without layers, else [one step] for the layers over a Principled BSDF's diffuse
-    base: (dim (3,), add (3,)), or a BaseMap with metal."""
+    """The steps from a Principled BSDF's base colour to its albedo, in order: [] for a plain
+    Lambertian base; a rough diffuse base's RoughDiffuse map; then one step for the layers
+    over it, (dim (3,), add (3,)), or a BaseMap (which includes the rough diffuse) with metal."""
     metal, keep_specular = _metal(node, reasons)
     spec = None
     if keep_specular:
@@ -172,12 +179,28 @@ def layer_steps(node, reasons) -> list:
         if level != 0.0 or not ok:
             reasons.append("Principled specular layer ignored")
     coat = _coat_mu(node, reasons)
+    diffuse = _diffuse_roughness(node, reasons)
     if metal is None and spec is None and coat is None:
-        return []
+        return [] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse)]
     n = len(specular.VIEW)
     dim_s = np.ones(n) if spec is None else 1.0 - spec.max(axis=0)
     add_s = np.zeros((3, n)) if spec is None else spec
     dim_c, add_c = (np.ones((3, n)), np.zeros((3, n))) if coat is None else coat
     if metal is not None:
-        return [BaseMap(metal[0], metal[1], metal[2], _multiscatter(node), dim_s, add_s, dim_c, add_c)]
-    return [((dim_c * dim_s) @ specular.VIEW, (dim_c * add_s + add_c) @ specular.VIEW)]
+        return [BaseMap(metal[0], metal[1], metal[2], _multiscatter(node), dim_s, add_s, dim_c, add_c, diffuse)]
+    step = ((dim_c * dim_s) @ specular.VIEW, (dim_c * add_s + add_c) @ specular.VIEW)
+    return [step] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse), step]
+
+
+def _diffuse_roughness(node, reasons):
+    """The diffuse base's roughness (Cycles' Oren-Nayar, roughdiffuse.py), 0 for Lambert."""
+    sock = node.inputs.get('Diffuse Roughness')
+    if sock is None:
+        return 0.0
+    v, ok = constant_value(sock)
+    v = min(max(v, 0.0), 1.0) if np.isfinite(v) else 0.0
+    if not ok:
+        reasons.append("Principled diffuse roughness driven by nodes; its own value used")
+    if v > 0.0:
+        reasons.append("Principled diffuse roughness (Oren-Nayar) as its albedo averaged over view directions")
+    return v

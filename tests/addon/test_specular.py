@@ -194,3 +194,32 @@ def test_glossy_albedo():
     np.testing.assert_allclose(specular.glossy_albedo(0.5, c, multiscatter=False), c * e_avg, rtol=1e-9)
     ratio = specular.glossy_albedo(0.5, c) / c
     assert (np.diff(ratio) < 0).all() and (ratio < 1).all() and (ratio > e_avg).all()
+
+
+def test_rough_diffuse_albedo_against_a_direct_quadrature():
+    """roughdiffuse.albedo's closed form against a brute-force integral of Cycles' Oren-Nayar
+    (single scattering Fujii + OpenPBR's multiple scattering, as bsdf_oren_nayar.h writes it)
+    over light and view directions; Lambert at roughness 0."""
+    from addon import roughdiffuse
+    assert np.array_equal(roughdiffuse.albedo([0.3, 0.8], 0.0), [0.3, 0.8])
+    x, w = np.polynomial.legendre.leggauss(48)
+    mu, wm = 0.5 * (x + 1), 0.5 * w
+    phi = (np.arange(96) + 0.5) / 96 * 2 * np.pi
+    for sigma in (0.3, 1.0):
+        a = 1 / (np.pi + sigma * (np.pi / 2 - 2 / 3))
+        b = sigma * a
+        e = lambda c: a * np.pi + b * roughdiffuse._g(c)      # noqa: E731
+        eavg = a * np.pi + (2 * np.pi - 5.6) / 3 * b
+        for rho in (0.2, 0.9):
+            ems = rho * rho * eavg / (1 - eavg) / (1 - rho * (1 - eavg)) / np.pi
+            total = 0.0
+            for mo, wo_w in zip(mu, wm):
+                so = np.sqrt(1 - mo * mo)
+                si = np.sqrt(1 - mu * mu)[:, None]
+                ldotv = si * so * np.cos(phi)[None, :] + mu[:, None] * mo
+                t = ldotv - mu[:, None] * mo
+                t = np.where(t > 0, t / np.maximum(mu[:, None], mo), t)
+                f = rho * (a + b * t + ems * (1 - e(mo)) * (1 - e(mu))[:, None])
+                directional = (f * mu[:, None] * wm[:, None]).sum() * (2 * np.pi / 96)
+                total += 2 * mo * wo_w * directional
+            assert roughdiffuse.albedo(rho, sigma) == pytest.approx(total, rel=2e-3), (sigma, rho)

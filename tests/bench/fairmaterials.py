@@ -37,7 +37,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from addon import export, mapping, nodeeval, nodegraph, principled
+from addon import export, mapping, nodeeval, nodegraph, principled, roughdiffuse
 
 # the layers the export drops, and thin film (it tints only the dropped specular layer)
 ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
@@ -189,9 +189,12 @@ class _Editor:
             return
         t = node.type
         if t == 'BSDF_DIFFUSE':
+            rough = export.diffuse_roughness(node, [])
             self._set(node.inputs['Roughness'], 0.0, "Diffuse roughness 0")
             self._normals(node)
             self._color(node.inputs['Color'])
+            if rough > 0.0:      # the rough diffuse's albedo, as the export renders it
+                self._fold_layers(node.inputs['Color'], [roughdiffuse.RoughDiffuse(rough)])
         elif t == 'BSDF_PRINCIPLED':
             steps = principled.layer_steps(node, [])
             for name in ZEROED_PRINCIPLED:
@@ -237,19 +240,19 @@ class _Editor:
         textured or evaluated one."""
         color, exact = nodeeval.constant_color(socket)
         sock = nodegraph.unwrap(socket)
-        self.done.append("Principled metal, specular layer and coat folded into the base colour")
+        self.done.append("the Principled layers or rough diffuse the export renders folded into the colour")
         if exact:
             folded = np.array(color, np.float64)
             for step in steps:
-                folded = step.exact(folded) if isinstance(step, principled.BaseMap) else folded * step[0] + step[1]
+                folded = step.exact(folded) if hasattr(step, 'exact') else folded * step[0] + step[1]
             self._drop_links(sock)
             sock.default_value = (*folded, 1.0)
             return
         tree = sock.id_data
         source = sock.links[0].from_socket
-        if isinstance(steps[0], principled.BaseMap):   # nonlinear in a texture: its line fit
-            self.done.append("Principled metal under a texture folded as a line fit of its albedo")
-            steps = [steps[0].line(), *steps[1:]]
+        if any(hasattr(step, 'exact') for step in steps):   # nonlinear in a texture: line fits
+            self.done.append("a metal or rough diffuse under a texture folded as a line fit of its albedo")
+            steps = [step.line() if hasattr(step, 'exact') else step for step in steps]
         for dim, add in steps:
             for blend, value in (('MULTIPLY', dim), ('ADD', add)):
                 mix = tree.nodes.new('ShaderNodeMix')
