@@ -628,8 +628,41 @@ class _MaterialBuilder:
             self._index[key] = idx
         return idx
 
+    def _ray_type_mix(self, socket, reasons):
+        """(closure, visibility) when the surface is a Mix Shader whose factor is a Light Path
+        node's Is Camera Ray or Is Shadow Ray and one of whose shaders is a white Transparent
+        BSDF: those rays (factor 1: the second shader) or all others (factor 0: the first) see
+        through it, as if the material were invisible to them (the common 'light plane hidden
+        from the camera'), and the rest see the other shader. (None, all) otherwise: the factor
+        is then read at its own value, as any node-driven factor."""
+        every = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
+        node = linked_node(socket)
+        if node is None or node.type != 'MIX_SHADER' or node.mute:
+            return None, every
+        link = linked_link(node.inputs['Fac'])
+        kinds = {'Is Camera Ray': sd.VIS_CAMERA, 'Is Shadow Ray': sd.VIS_SHADOW}
+        if link is None or link.from_node.type != 'LIGHT_PATH' or link.from_socket.name not in kinds:
+            return None, every
+        kind = kinds[link.from_socket.name]
+        first = self._shader(node.inputs[1], reasons, 1)
+        second = self._shader(node.inputs[2], reasons, 1)
+
+        def clear(c):
+            return c.only_transparent() and c.opacity is None and np.allclose(c.transparent, 1.0)
+
+        if clear(second) and not clear(first):
+            vis = every & ~kind            # those rays see through it; the rest see the first
+            closure = first
+        elif clear(first) and not clear(second):
+            vis = kind                     # only those rays see the second
+            closure = second
+        else:
+            return None, every
+        return closure, vis
+
     def _build(self, mat):
         reasons = []
+        visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
         if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
@@ -639,7 +672,9 @@ class _MaterialBuilder:
             if out is None or not out.inputs['Surface'].is_linked:
                 closure = _Closure()    # Cycles: no surface shader renders black
             else:
-                closure = self._shader(out.inputs['Surface'], reasons, 0)
+                closure, visibility = self._ray_type_mix(out.inputs['Surface'], reasons)
+                if closure is None:
+                    closure = self._shader(out.inputs['Surface'], reasons, 0)
             for socket in IGNORED_OUTPUTS:
                 if out is not None and out.inputs.get(socket) is not None and \
                         linked_node(out.inputs[socket]) is not None:
@@ -673,7 +708,7 @@ class _MaterialBuilder:
                            transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
-                           pass_index=int(mat.pass_index), aovs=aovs,
+                           pass_index=int(mat.pass_index), aovs=aovs, visibility=visibility,
                            aov_textures={key: (t.texels(t.pixels), t.interpolation, t.extension, t.transform)
                                          for key, t in aov_textures.items()})
 
@@ -1656,7 +1691,13 @@ class _Exporter:
             self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
         self.counts['triangles_degenerate'] = degenerate
         self.counts['triangles_nonfinite'] = sum(nt for _, nt in bad.values())
-        return out.geometry()
+        geometry = out.geometry()
+        # materials hidden from some ray kinds (a Light Path ray-type mix, see _ray_type_mix)
+        mvis = np.array([m.visibility for m in self.materials.materials], np.uint8)
+        if len(geometry.material) and (mvis != (sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)).any():
+            keep = mvis | np.uint8(sd.HOLDOUT)
+            geometry.visibility &= keep[geometry.material]
+        return geometry
 
     def _resolve_materials(self):
         """Evaluate the materials of the slots some triangle uses (per mesh: its slot indices,

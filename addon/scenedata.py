@@ -118,6 +118,10 @@ class Material:
     opacity_extension: str = 'REPEAT'
     opacity_transform: Optional[np.ndarray] = None
     pass_index: int = 0                           # Blender's material pass index (Material Index pass)
+    # the ray kinds that meet this material (VIS_* bits; the others pass through its triangles):
+    # a Mix Shader of a fully transparent shader by a Light Path ray-type output hides it from
+    # that kind or from the others (export.py)
+    visibility: int = VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW
     # AOV Output nodes: AOV name -> (colour (3,), value), what the material writes to that
     # AOV's pass (a COLOR AOV takes the colour, a VALUE AOV the value; nodes of one name add up)
     aovs: dict = field(default_factory=dict)

@@ -288,6 +288,35 @@ def test_point_cloud_default_radius_and_hair_curves(scene, exported):
     assert "off in the view layer" in " | ".join(m for _, m in data.messages)
 
 
+def test_light_path_ray_type_mix_hides_the_material(scene, exported):
+    """A Mix Shader by Light Path Is Camera Ray / Is Shadow Ray with a white Transparent BSDF on
+    one side: the triangles lose the ray kinds that see through it and keep the other shader;
+    a non-white transparent side or another factor source keeps the own-value mix."""
+    setup(scene)
+    cases = {"NoCam": ('Is Camera Ray', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent', (1, 1, 1),
+                       sd.VIS_DIFFUSE | sd.VIS_SHADOW),
+             "CamOnly": ('Is Camera Ray', 'ShaderNodeBsdfTransparent', 'ShaderNodeEmission', (1, 1, 1),
+                         sd.VIS_CAMERA),
+             "NoShadow": ('Is Shadow Ray', 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTransparent', (1, 1, 1),
+                          sd.VIS_CAMERA | sd.VIS_DIFFUSE),
+             "Tinted": ('Is Camera Ray', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent', (0.5, 1, 1),
+                        sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)}
+    for i, (name, (output, first, second, clear, _)) in enumerate(cases.items()):
+        mat, nt, mix, a, b = scenes.mix_shader_material(name, first, second)
+        nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs[output], mix.inputs['Fac'])
+        for node in (a, b):
+            if node.type == 'BSDF_TRANSPARENT':
+                node.inputs['Color'].default_value = (*clear, 1)
+        scenes.plane(name, location=(3 * i, 0, 0), materials=(mat,))
+    data = exported()
+    for name, (*_, want) in cases.items():
+        vis = np.unique(data.geometry.visibility[of_object(data, name)])
+        assert vis.tolist() == [want], name
+    by_name = {m.name: m for m in data.materials}
+    assert np.allclose(by_name["NoCam"].emission, 1.0) and by_name["NoCam"].transparency is None
+    assert np.allclose(by_name["Tinted"].emission, 0.5)      # the own-value mix (factor 0.5)
+
+
 def test_material_slot_per_triangle(scene, exported):
     setup(scene)
     red, blue = scenes.diffuse("Red", (1, 0, 0)), scenes.diffuse("Blue", (0, 0, 1))

@@ -206,3 +206,16 @@ def test_objects_without_material_get_the_fair_default(scene, exported):
     assert np.array_equal(by_name[fairmaterials.DEFAULT_SURFACE].base_color, before.materials[0].base_color)
     assert not by_name[fairmaterials.DEFAULT_SURFACE].approximated
     assert not any("default surface" in t for _, t in after.messages)
+
+
+def test_override_keeps_a_light_path_ray_type_mix(scene):
+    """A light plane hidden from the camera by Light Path Is Camera Ray and a white Transparent
+    BSDF is rendered exactly (by ray kind), so the fair override leaves its factor linked; a
+    ray-type factor the export cannot render that way is still set to its own value."""
+    exact, nt, mix, a, b = scenes.mix_shader_material("HiddenLamp", 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent')
+    nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray'], mix.inputs['Fac'])
+    other, nt2, mix2, _, _ = scenes.mix_shader_material("Glowing", 'ShaderNodeEmission', 'ShaderNodeBsdfDiffuse')
+    nt2.links.new(nt2.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray'], mix2.inputs['Fac'])
+    fairmaterials.make_diffuse([exact, other])
+    assert mix.inputs['Fac'].is_linked and not mix2.inputs['Fac'].is_linked
+    assert fairmaterials.remaining_approximations([exact, other]) == {}

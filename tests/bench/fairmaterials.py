@@ -84,6 +84,22 @@ def _objects_without_material():
             (not ob.material_slots or any(s.material is None for s in ob.material_slots))]
 
 
+def _ray_type_mix(node) -> bool:
+    """A surface Mix Shader the export renders by ray kind (export._ray_type_mix): its factor a
+    Light Path's Is Camera Ray or Is Shadow Ray, exactly one side a white Transparent BSDF."""
+    link = nodegraph.linked_link(node.inputs['Fac'])
+    if link is None or link.from_node.type != 'LIGHT_PATH' or \
+            link.from_socket.name not in ('Is Camera Ray', 'Is Shadow Ray'):
+        return False
+    clear = []
+    for sock in (node.inputs[1], node.inputs[2]):
+        n = nodegraph.linked_node(sock)
+        white = n is not None and n.type == 'BSDF_TRANSPARENT' and \
+            nodeeval.constant_color(n.inputs['Color']) == ((1.0, 1.0, 1.0), True)
+        clear.append(white)
+    return clear[0] != clear[1]
+
+
 def _fill_empty_slots() -> list[str]:
     """A Diffuse BSDF of the export's default-surface grey where an object has no material."""
     objects = _objects_without_material()
@@ -219,7 +235,9 @@ class _Editor:
         elif t == 'BSDF_TRANSPARENT':
             self._own_value(node.inputs['Color'])
         elif t == 'MIX_SHADER':
-            if not (_image_alpha(node.inputs['Fac']) and _one_side_transparent(node)):
+            keep = (_image_alpha(node.inputs['Fac']) and _one_side_transparent(node)) or \
+                (depth == 0 and _ray_type_mix(node))
+            if not keep:
                 self._own_value(node.inputs['Fac'])
             self._shader(node.inputs[1], depth + 1)
             self._shader(node.inputs[2], depth + 1)
