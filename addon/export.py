@@ -1537,12 +1537,12 @@ class _Exporter:
             s = ps.settings
             parents, children = len(ps.particles), len(ps.child_particles)
             first = parents if (s.child_type != 'NONE' and children) else 0
-            steps = (1 << s.render_step) + 1 + (s.kink_extra_steps if s.kink == 'SPIRAL' else 0)
-            co = np.empty((parents + children - first, steps, 3))
+            points = (1 << s.render_step) + 1 + (s.kink_extra_steps if s.kink == 'SPIRAL' else 0)
+            co = np.empty((parents + children - first, points, 3))
             for i, pa in enumerate(range(first, parents + children)):
                 if i % 4096 == 0 and self.check_break():
                     raise ExportCancelled()
-                for j in range(steps):
+                for j in range(points):
                     co[i, j] = ps.co_hair(ob, particle_no=pa, step=j)
             if not len(co):
                 continue
@@ -1553,7 +1553,7 @@ class _Exporter:
             radius = _hair_radius(s, time)
             positions.append(co.reshape(-1, 3) @ to_object[:3, :3].T + to_object[:3, 3])
             radii.append(radius.reshape(-1))
-            offsets.extend((offsets[-1] + steps * np.arange(1, len(co) + 1)).tolist())
+            offsets.extend((offsets[-1] + points * np.arange(1, len(co) + 1)).tolist())
             slots.append(np.full(len(co), min(max(s.material - 1, 0), n_slots - 1)))
         if not positions:
             return
