@@ -47,7 +47,7 @@ __attribute__((always_inline)) inline uint32_t block_active(const Ray* rays, con
     return bits(box_test<W, Odd>(r, lo, hi));
 }
 
-// Lomuto partition of a short range (< 3W rays) with a padded last block.
+// Lomuto partition of a short range (< 3 runs) with a padded last block.
 template <int W, bool Odd>
 size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
     size_t w = 0;
@@ -65,35 +65,47 @@ size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
     return w;
 }
 
-// Returns the number of active rays, now rays[0, result). Hoare-style on blocks of W rays from
-// both ends: an inactive ray in a left block swaps with an active ray in a right block, so only
+// The box test of the 64 rays from `rays` on, one bit per ray.
+constexpr size_t kRunRays = 64;
+template <int W, bool Odd>
+__attribute__((always_inline)) inline uint64_t run_active(const Ray* rays, const float lo[3], const float hi[3]) {
+    static_assert(kRunRays % W == 0, "W-ray blocks must tile a run");
+    uint64_t m = 0;
+    for (size_t b = 0; b < kRunRays / W; ++b) m |= uint64_t(block_active<W, Odd>(rays + b * W, lo, hi)) << (b * W);
+    return m;
+}
+
+// Returns the number of active rays, now rays[0, result). Hoare-style on runs of 64 rays from
+// both ends: an inactive ray in a left run swaps with an active ray in a right run, so only
 // misplaced records move (about p(1-p)n swaps for an active fraction p, against pn for a
-// one-sided sweep).
+// one-sided sweep). Runs of 64 rays rather than blocks of W: each run pair's swap loop ends on
+// a mispredicted branch, as does each test for an empty mask, and with W = 16 those cost about
+// a tenth of the whole trace (San Francisco diffuse rays, 1 thread: runs of 64 +10%, of 32
+// +8%; of 128, with two mask words, -28%).
 template <int W, bool Odd>
 size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], Stats& st) {
     st.box_tests += n;
-    const uint32_t full = all_lanes<W>();
-    size_t i = 0, j = n;    // [0, i) settled active (but a pending left block), [j, n) inactive
-    size_t li = 0, rj = 0;  // pending blocks
-    uint32_t ml = 0, mr = 0;  // inactive lanes of the left block, active lanes of the right block
+    size_t i = 0, j = n;    // [0, i) settled active (but a pending left run), [j, n) inactive
+    size_t li = 0, rj = 0;  // pending runs
+    uint64_t ml = 0, mr = 0;  // inactive rays of the left run, active rays of the right run
     for (;;) {
-        while (ml == 0 && j - i >= size_t(W)) {
-            ml = ~block_active<W, Odd>(rays + i, lo, hi) & full;
+        while (ml == 0 && j - i >= kRunRays) {
+            ml = ~run_active<W, Odd>(rays + i, lo, hi);
             li = i;
-            i += W;
+            i += kRunRays;
         }
-        while (mr == 0 && j - i >= size_t(W)) {
-            j -= W;
-            mr = block_active<W, Odd>(rays + j, lo, hi);
+        while (mr == 0 && j - i >= kRunRays) {
+            j -= kRunRays;
+            mr = run_active<W, Odd>(rays + j, lo, hi);
             rj = j;
         }
         if (ml == 0 || mr == 0) break;
         do {
-            swap_records(rays + li + __builtin_ctz(ml), rays + rj + __builtin_ctz(mr));
+            swap_records(rays + li + __builtin_ctzll(ml), rays + rj + __builtin_ctzll(mr));
             ml &= ml - 1;
             mr &= mr - 1;
         } while (ml && mr);
     }
-    const size_t b = ml ? li : i, e = mr ? rj + W : j;
+    const size_t b = ml ? li : i, e = mr ? rj + kRunRays : j;
     return b + filter_small<W, Odd>(rays + b, e - b, lo, hi);
 }
