@@ -196,7 +196,13 @@ struct Tracer {
         st.partition_ticks += w * (clock(w) - c1);  // includes waiting for another thread's split
         const size_t k = sn.k;
         const uint32_t c = sn.child;
-        if (majority_positive(rays, na, sn.axis)) {
+        bool lower_first = majority_positive(rays, na, sn.axis);
+        // Threads tracing their chunks walk the shared top in step, so one waits while the
+        // other splits each large node. If the nearer child is being split right now, the
+        // farther one goes first (and gets split meanwhile): order changes work, never hits.
+        const uint32_t nearer = lower_first ? c : (c ? c + 1 : 0);
+        if (nearer && top->pool->at(nearer).state.load(std::memory_order_relaxed) == 1) lower_first = !lower_first;
+        if (lower_first) {
             child(rays, na, ids, k, sn.L, depth + 1, c);
             child(rays, na, ids + k, nt - k, sn.R, depth + 1, c ? c + 1 : 0);
         } else {
