@@ -33,11 +33,13 @@ __attribute__((always_inline)) inline vbool<W> box_test(const vfloat<W> r[8], co
     return cmple(tmin * splat<W>(1.0f - kWiden), tmax * splat<W>(1.0f + kWiden));
 }
 
+// Exchanges two records; a == b is allowed (each copy goes through a temporary).
 inline void swap_records(Ray* a, Ray* b) {
-    Ray t;
-    std::memcpy(&t, a, sizeof(Ray));
-    std::memcpy(a, b, sizeof(Ray));
-    std::memcpy(b, &t, sizeof(Ray));
+    Ray ta, tb;
+    std::memcpy(&ta, a, sizeof(Ray));
+    std::memcpy(&tb, b, sizeof(Ray));
+    std::memcpy(a, &tb, sizeof(Ray));
+    std::memcpy(b, &ta, sizeof(Ray));
 }
 
 template <int W, bool Odd>
@@ -45,24 +47,6 @@ __attribute__((always_inline)) inline uint32_t block_active(const Ray* rays, con
     vfloat<W> r[8];
     load_rays<W>(reinterpret_cast<const float*>(rays), r);
     return bits(box_test<W, Odd>(r, lo, hi));
-}
-
-// Lomuto partition of a short range (< 3 runs) with a padded last block.
-template <int W, bool Odd>
-size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
-    size_t w = 0;
-    for (size_t i = 0; i < n; i += W) {
-        vfloat<W> r[8];
-        const uint32_t valid = load_block<W>(rays, i, n, kInactiveRay, r);
-        uint32_t m = bits(box_test<W, Odd>(r, lo, hi)) & valid;
-        while (m) {
-            const size_t src = i + size_t(__builtin_ctz(m));
-            m &= m - 1;
-            if (src != w) swap_records(rays + src, rays + w);
-            ++w;
-        }
-    }
-    return w;
 }
 
 // The box test of the 64 rays from `rays` on, one bit per ray.
@@ -73,6 +57,29 @@ __attribute__((always_inline)) inline uint64_t run_active(const Ray* rays, const
     uint64_t m = 0;
     for (size_t b = 0; b < kRunRays / W; ++b) m |= uint64_t(block_active<W, Odd>(rays + b * W, lo, hi)) << (b * W);
     return m;
+}
+
+// Lomuto partition of a short range (< 3 runs), a run's mask at a time (one swap loop exit
+// per run, not per block), the last run padded. The mask is taken before the run's swaps:
+// they exchange each active ray with the inactive one at w <= its position, never touching a
+// later position of the run.
+template <int W, bool Odd>
+size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
+    size_t w = 0;
+    for (size_t i = 0; i < n; i += kRunRays) {
+        uint64_t m = 0;
+        for (size_t b = 0; b < kRunRays / W && i + b * W < n; ++b) {
+            vfloat<W> r[8];
+            const uint32_t valid = load_block<W>(rays, i + b * W, n, kInactiveRay, r);
+            m |= uint64_t(bits(box_test<W, Odd>(r, lo, hi)) & valid) << (b * W);
+        }
+        while (m) {
+            swap_records(rays + i + size_t(__builtin_ctzll(m)), rays + w);
+            m &= m - 1;
+            ++w;
+        }
+    }
+    return w;
 }
 
 // Returns the number of active rays, now rays[0, result). Hoare-style on runs of 64 rays from
