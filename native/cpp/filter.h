@@ -9,14 +9,19 @@
 // widened by a relative 2^-10, far more than the approximation error (<= 1.5 * 2^-12) plus
 // rounding (Ize 2013's 1 + 2*gamma(3)), so the test never culls a ray that hits the exact box.
 // Culling may differ by ISA at that margin; hits cannot, since leaves decide them exactly.
-// Zero direction components give +-inf, and 0 * inf = NaN when the origin lies on a slab plane;
-// such a slab is marked NaN and ignored by the NaN-ordered max/min, so a ray that runs inside a
-// plane of the box is kept. A nonzero component whose reciprocal is +-inf or 0 (a denormal, or
-// on AVX2 |d| >= ~2^126: see rcp_unusable) would put a finite slab at infinity and cull rays
-// that hit; its slab is ignored the same way (zero components keep the exact +-inf slab, which
-// orthographic camera rays need to be culled at all). Made on every batch, that check cost
-// 14-20% of the trace throughput on AVX-512 and 3-7% on AVX2 (San Francisco rays, 1 thread),
-// so only a batch with such a component (Odd, found by the field check) pays for it.
+// Zero direction components give 1/d = +-inf: a slab distance is then +-inf, the exact slab
+// (orthographic camera rays need it to be culled at all), or NaN (0 * inf) where the origin
+// lies exactly on the slab's plane. The ordered min/max turn such a NaN into a kept or a culled
+// ray; either is exact, because the ray runs inside a plane of the padded node box, more than
+// the leaf's hit-point padding (half this one, leaf.h) away from every triangle of the node,
+// so no hit of it could be kept there (the DACRT_NONROBUST build, without that padding, may
+// lose such rays: part of what it gives up).
+// Odd: a nonzero component whose reciprocal is +-inf or 0 (a denormal, or on AVX2 |d| >=
+// ~2^126: see rcp_unusable) would put a finite slab at infinity and cull rays that hit; its
+// slab is marked NaN and ignored by the NaN-ordered max/min. Made on every batch, that check
+// cost 14-20% of the trace throughput on AVX-512 and 3-7% on AVX2 (San Francisco rays, 1
+// thread), so only a batch with such a component (found by the field check) pays for it.
+// (Marking the NaN slabs of zero components on every batch as well cost 2-3.5%.)
 template <int W, bool Odd>
 __attribute__((always_inline)) inline vbool<W> box_test(const vfloat<W> r[8], const float lo[3], const float hi[3]) {
     constexpr float kWiden = 0x1p-10f;
@@ -25,8 +30,12 @@ __attribute__((always_inline)) inline vbool<W> box_test(const vfloat<W> r[8], co
         const vfloat<W> inv = rcp(r[3 + a]);
         const vfloat<W> t0 = (splat<W>(lo[a]) - r[a]) * inv;
         const vfloat<W> t1 = (splat<W>(hi[a]) - r[a]) * inv;
-        vbool<W> nan = cmpunord(t0, t1);
-        if (Odd) nan = nan | rcp_unusable(r[3 + a], inv);
+        if (!Odd) {
+            tmin = vmax(vmin(t0, t1), tmin);
+            tmax = vmin(vmax(t0, t1), tmax);
+            continue;
+        }
+        const vbool<W> nan = cmpunord(t0, t1) | rcp_unusable(r[3 + a], inv);
         tmin = vmax(nan_where(nan, vmin(t0, t1)), tmin);  // NaN first operand -> tmin kept
         tmax = vmin(nan_where(nan, vmax(t0, t1)), tmax);
     }
