@@ -3,6 +3,11 @@ packing, hit-point reconstruction, random numbers, cosine-weighted directions, n
 weights, shadow rays and accumulation; and their argument checks (emissive triangles as lights:
 test_triangle_light.py)."""
 
+import os
+import subprocess
+import sys
+import tempfile
+
 import dacrt
 import numpy as np
 import pytest
@@ -163,6 +168,28 @@ def test_uniform2_is_the_documented_owen_scrambled_sobol():
         a, b = _words(int(keys[0, i]), int(keys[1, i]), ka, kb)
         assert (u1[i], u2[i]) == ((a >> 8) / 2 ** 24, (b >> 8) / 2 ** 24)
         assert (pick[i], u[i]) == (a / 2 ** 32, (b >> 8) / 2 ** 24)
+
+
+def test_sample_words_are_the_same_on_every_instruction_set():
+    """The words come from a GFNI/AVX-512 version where the CPU has one and from the compiler's
+    per-ISA versions otherwise (native/cpp/random.cpp); DACRT_ISA picks them in a new process."""
+    code = ("import sys, numpy as np; from dacrt import shading; "
+            "k = np.load(sys.argv[1]); u1, u2 = shading.uniform2(k, 0xDEADBEEF, 77); "
+            "p, u = shading.uniform_pick(k, 3, 0xFFFFFFFF); np.save(sys.argv[2], np.stack([u1, u2, p, u]))")
+    rng = np.random.default_rng(8)
+    keys = np.stack([rng.integers(0, 2 ** 32, 1037, dtype=np.uint64).astype(np.uint32),
+                     rng.integers(0, 2 ** 32, 1037, dtype=np.uint64).astype(np.uint32)])
+    with tempfile.TemporaryDirectory() as tmp:
+        np.save(os.path.join(tmp, "keys.npy"), keys)
+        out = {}
+        for isa in dacrt.supported_isas():
+            path = os.path.join(tmp, f"{isa}.npy")
+            subprocess.run([sys.executable, "-c", code, os.path.join(tmp, "keys.npy"), path], check=True,
+                           env={**os.environ, "DACRT_ISA": isa})
+            out[isa] = np.load(path)
+    first = out[dacrt.supported_isas()[0]]
+    for isa, words in out.items():
+        assert words.tobytes() == first.tobytes(), isa
 
 
 @pytest.mark.parametrize("m", [4, 8, 10])
