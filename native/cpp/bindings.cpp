@@ -109,7 +109,7 @@ private:
 
     static Config config(int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays) {
         if (partition < 0 || partition > 2) throw py::value_error("partition must be 0 (adaptive), 1 (median) or 2 (sah)");
-        if (leaf_size < 0) throw py::value_error("leaf_size must be >= 1 (0: the kernel's SIMD width)");
+        if (leaf_size < 0) throw py::value_error("leaf_size must be >= 1 (0: the default, 8)");
         if (leaf_rays < 1) throw py::value_error("leaf_rays must be >= 1");
         if (!(sah_ratio >= 0.0f) || !std::isfinite(sah_ratio)) throw py::value_error("sah_ratio must be a finite number >= 0");
         Config c;

@@ -64,13 +64,13 @@ FieldsFn fields_fn(Isa isa) {
     return isa == Isa::Avx512 ? avx512::fields_valid : (isa == Isa::Avx2 ? avx2::fields_valid : portable::fields_valid);
 }
 
-// Leaf triangles per SIMD width: a leaf tests W rays per triangle step while partitioning is
-// scalar, so the narrower the kernel the sooner a split pays. Measured (San Francisco and dragon
-// camera, diffuse and shadow rays, 1 and 2 threads): 16 was best on the 16-wide AVX-512 kernel,
-// where it was tuned; on the 8-wide AVX2 kernel (a Zen 3 machine without AVX-512) 8 was 3-6%
-// faster than 16 on most sets.
-// The leaf size a Config's leaf_size 0 stands for: the kernel's SIMD width.
-static int default_leaf_size(Isa isa) { return isa == Isa::Avx512 ? 16 : 8; }
+// The leaf size a Config's leaf_size 0 stands for: 8 triangles on every kernel. On the 8-wide
+// AVX2 kernel (a Zen 3 machine without AVX-512) 8 was 3-6% faster than 16 on most sets of San
+// Francisco and dragon rays. On AVX-512, 16 was best until the filter's 64-ray runs made
+// splitting cheaper; then (bench tracer, 10K room, dragon, San Francisco; 1 and 2 threads) 8
+// gave diffuse rays +0..+9%, shadow rays +1..+9%, camera rays -3..+6%, and a Cornell box
+// render's tracing -13% (it tests ~16-triangle leaves brute force).
+static int default_leaf_size(Isa) { return 8; }
 
 TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, int threads, Isa isa,
                   TopCache* cache) {

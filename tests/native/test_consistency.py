@@ -190,8 +190,8 @@ def test_scene_properties():
     assert scene.sah_ratio == pytest.approx(128.0)
     o, d, tf = make_rays("random", "inf", v, t, 1000, 1)
     base = harness.intersect(scene, o, d, tf)
-    # the default leaf size is the kernel's SIMD width
-    assert scene.last_stats["leaf_size"] == {"avx512": 16, "avx2": 8, "portable": 8}[scene.last_stats["isa"]]
+    # the default leaf size: 8 triangles on every kernel
+    assert scene.last_stats["leaf_size"] == 8
     for mode in ("median", "sah", "adaptive"):
         scene.partition = mode
         assert scene.partition == mode

@@ -198,8 +198,8 @@ class Scene:
     @property
     def leaf_size(self) -> int | None:
         """A node with at most this many triangles is a leaf: its active rays are tested
-        against all its triangles. None (the default): the kernel's SIMD width, 8 on AVX2 and
-        portable, 16 on AVX-512 (`last_stats['leaf_size']` says which a call used)."""
+        against all its triangles. None (the default): 8, measured best on every kernel
+        (`last_stats['leaf_size']` says which a call used)."""
         return self._leaf_size
 
     @leaf_size.setter
