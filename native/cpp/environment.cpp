@@ -94,18 +94,12 @@ inline float sample_linear(float u, float a, float b) {
 }
 
 // The index k with cdf[k] <= u < cdf[k + 1] among cdf[0..count], at most count - 1.
-// Branch-free (conditional moves): which interval a random u falls in follows no pattern, and
-// std::upper_bound's mispredicted branches cost more than its loads. Same index.
 template <class T>
 inline size_t find_interval(const T* cdf, size_t count, T u) {
-    const T* base = cdf;  // upper bound of u in cdf[0..count] lies in [base, base + n]
-    size_t n = count + 1;
-    while (n > 1) {
-        const size_t half = n / 2;
-        base = base[half] <= u ? base + half : base;
-        n -= half;
-    }
-    const size_t k = size_t(base - cdf) + (*base <= u);
+    // std::upper_bound, not a branch-free search: its speculation runs ahead through a big
+    // map's CDF rows, where the dependent loads of a branch-free one made a 2K x 1K map's
+    // samples 8-20% slower (and a 96 x 48 one's no faster)
+    const size_t k = size_t(std::upper_bound(cdf, cdf + count + 1, u) - cdf);
     return k == 0 ? 0 : std::min(k - 1, count - 1);
 }
 
