@@ -35,6 +35,10 @@ struct EnvironmentMap {
     std::vector<float> rgb;             // height x width x 3, row 0 at the bottom
     std::vector<double> row_cdf;        // height + 1: cumulative row weights / total, [0] = 0, [h] = 1
     std::vector<float> col_cdf;         // height x (width + 1): per row, cumulative / row total
+    uint32_t guide_buckets = 1;         // G, a power of two: u2 in [b/G, (b+1)/G) is bucket b
+    std::vector<uint32_t> col_guide;    // height x (G + 1): per row, where u2 = b/G lands in its
+                                        // CDF (std::upper_bound's position), so a sample searches
+                                        // only between its bucket's two entries
     std::vector<float> lum;             // height x width: RGB mean per texel
     std::vector<float> cell_pdf;        // height x width: the pdf over (u, v) per cell ('Closest'), or
                                         // the factor of the corners' bilinear luminance ('Linear')

@@ -153,6 +153,30 @@ def test_samples_follow_the_looked_up_image(interpolation):
     assert value[0].mean() == pytest.approx(exact, rel=2e-3)
 
 
+def test_column_search_at_guide_bucket_edges():
+    """Samples search a row's CDF only between two guide entries (native/cpp/environment.cpp:
+    64 columns -> 8 buckets). At every bucket edge u2 = b/8, and one float either side, the
+    sample lies where a numpy inversion of the CDF puts it (flat CDF stretches, black runs of
+    columns, begin and end on edges here, so an off-by-one bucket would land in one)."""
+    w, h = 64, 4
+    px = np.zeros((h, w, 3), F32)
+    weights = np.where((np.arange(w) // 8) % 2 == 0, 1.0, 0.0) * (1 + np.arange(w) % 3)
+    px[:] = weights[None, :, None]
+    env = environment(px, interpolation='Closest').native
+    edges = np.arange(9, dtype=F32) / 8
+    u2 = np.unique(np.concatenate([edges, np.nextafter(edges, F32(0)), np.nextafter(edges, F32(1))]))
+    u2 = u2[(u2 >= 0) & (u2 < 1)].astype(F32)
+    u1 = np.full(len(u2), F32(0.6))
+    wi, value, pdf = env.sample(u1, u2)
+    cdf = np.concatenate([[0.0], np.cumsum(weights) / weights.sum()]).astype(F32)
+    col = np.minimum(np.searchsorted(cdf, u2, side='right') - 1, w - 1)
+    assert (weights[col] > 0).all() and (np.diff(col) >= 0).all()
+    fu = np.clip((u2 - cdf[col]) / (cdf[col + 1] - cdf[col]), 0, 1)
+    u = (0.5 - np.arctan2(wi[1], wi[0]) / (2 * np.pi)) % 1.0
+    gap = np.abs((u - (col + fu) / w + 0.5) % 1.0 - 0.5)    # on the circle: u wraps at 1
+    assert gap.max() < 1e-5
+
+
 def test_gather_adds_miss_rays_with_mis_weight():
     ref = environment(sky_map())
     env = ref.native
