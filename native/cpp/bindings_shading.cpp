@@ -439,6 +439,30 @@ std::pair<size_t, size_t> mesh_sizes(const py::array& vertices, const py::array_
     return {V, M};
 }
 
+void transform_points_py(F32Array points, py::array_t<double, py::array::c_style> linear, py::object offset,
+                         py::array out) {
+    if (points.ndim() != 2 || points.shape(1) != 3) throw py::value_error("points must have shape (n, 3), got " + shape_str(points));
+    if (linear.ndim() != 3 || linear.shape(1) != 3 || linear.shape(2) != 3)
+        throw py::value_error("linear must have shape (k, 3, 3), got " + shape_str(linear));
+    const size_t n = size_t(points.shape(0)), k = size_t(linear.shape(0));
+    py::array_t<double, py::array::c_style> off;
+    if (!offset.is_none()) {
+        off = py::array_t<double, py::array::c_style>::ensure(offset);
+        if (!off || off.ndim() != 2 || size_t(off.shape(0)) != k || off.shape(1) != 3)
+            throw py::value_error("offset must be None or have shape (k, 3)");
+    }
+    const bool f32 = py::isinstance<py::array_t<float>>(out), f64 = py::isinstance<py::array_t<double>>(out);
+    if (!(f32 || f64) || !(out.flags() & py::array::c_style) || !out.writeable() || out.ndim() != 3 ||
+        size_t(out.shape(0)) != k || size_t(out.shape(1)) != n || out.shape(2) != 3)
+        throw py::value_error("out must be a writeable C-contiguous float32 or float64 array of shape (" +
+                              std::to_string(k) + ", " + std::to_string(n) + ", 3), got " + shape_str(out));
+    const double* o = offset.is_none() ? nullptr : off.data();
+    void* dst = out.mutable_data();
+    py::gil_scoped_release nogil;
+    if (f32) transform_points(points.data(), n, linear.data(), o, k, static_cast<float*>(dst));
+    else transform_points(points.data(), n, linear.data(), o, k, static_cast<double*>(dst));
+}
+
 py::tuple face_normals_py(py::array_t<double, py::array::c_style> vertices,
                           py::array_t<int32_t, py::array::c_style> triangles) {
     const auto [V, M] = mesh_sizes(vertices, triangles);
@@ -514,6 +538,8 @@ void register_shading(py::module_& m) {
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
     m.def("sample_sums", &sample_sums_py, py::arg("values"), py::arg("weights"));
     m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"));
+    m.def("transform_points", &transform_points_py, py::arg("points"), py::arg("linear"), py::arg("offset"),
+          py::arg("out"));
     m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
 }

@@ -73,6 +73,13 @@ void triangle_table(const float* vertices, size_t V, const int32_t* triangles, s
 // zero-area or non-finite triangle. Triangles must index existing vertices (callers check).
 void face_normals(const double* vertices, size_t V, const int32_t* triangles, size_t M, float* normals, uint8_t* good);
 
+// Points through k affine maps (the export's object-to-world transform of a mesh's instances):
+// out[i][p] (k x n rows of 3) = linear_i points[p] + offset_i, each component computed as
+// ((l0 x + l1 y) + l2 z) + o in double and rounded once to T (float or double); linear: k
+// row-major 3x3 doubles, offset: k x 3 doubles or null. Threaded over all k n points.
+template <class T>
+void transform_points(const float* points, size_t n, const double* linear, const double* offset, size_t k, T* out);
+
 // Per-corner values (M triangles x 3 corners x c floats) as the rows barycentric interpolation
 // reads: corner 0 (c rows of M), corner 1 - corner 0, corner 2 - corner 0 (3c rows in all).
 void corner_rows(const float* per_corner, size_t M, size_t c, float* rows);

@@ -352,6 +352,17 @@ def face_normals(vertices, triangles):
     return _core.face_normals(v, _triangles32(triangles, len(v)))
 
 
+def transform_points(points, linear, offset, out):
+    """out (k, n, 3) float32 or float64 = points (n, 3) through k 3x3 maps linear (k, 3, 3) plus
+    offset (k, 3) (None: none); each component ((l0 x + l1 y) + l2 z) + o in float64, rounded once
+    to out's dtype. Written in place and returned. One threaded pass."""
+    p = np.ascontiguousarray(points, np.float32)
+    lin = np.ascontiguousarray(linear, np.float64)
+    off = None if offset is None else np.ascontiguousarray(offset, np.float64)
+    _core.transform_points(p, lin, off, out)
+    return out
+
+
 def corner_rows(per_corner):
     """(M, 3, c) per-corner values -> (3c, M) float32 rows: corner 0, corner 1 - corner 0,
     corner 2 - corner 0 (what barycentric interpolation reads). One threaded pass."""
