@@ -266,6 +266,10 @@ void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[
     if (env.closest) {
         u = (float(j) + fu) / float(w);
         v = (float(i) + fv) / float(h);
+        // fu, fv < 1, but the division can round u up onto the next texel's edge, whose texel
+        // (black, say) the lookup and the pdf would then read: stay inside the sampled one
+        while (u * float(w) >= float(j + 1)) u = std::nextafter(u, 0.0f);
+        while (v * float(h) >= float(i + 1)) v = std::nextafter(v, 0.0f);
     } else {  // the cell's bilinear blend: y from its marginal, then x given y (both linear)
         const float* L = env.lum.data();
         const size_t i1 = i + 1 == h ? 0 : i + 1, j1 = j + 1 == w ? 0 : j + 1;

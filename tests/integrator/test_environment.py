@@ -157,7 +157,8 @@ def test_column_search_at_guide_bucket_edges():
     """Samples search a row's CDF only between two guide entries (native/cpp/environment.cpp:
     64 columns -> 8 buckets). At every bucket edge u2 = b/8, and one float either side, the
     sample lies where a numpy inversion of the CDF puts it (flat CDF stretches, black runs of
-    columns, begin and end on edges here, so an off-by-one bucket would land in one)."""
+    columns, begin and end on edges here, so an off-by-one bucket would land in one), and a
+    sample at the very top of a column stays in it (rounding had put it on the black next one)."""
     w, h = 64, 4
     px = np.zeros((h, w, 3), F32)
     weights = np.where((np.arange(w) // 8) % 2 == 0, 1.0, 0.0) * (1 + np.arange(w) % 3)
@@ -168,6 +169,7 @@ def test_column_search_at_guide_bucket_edges():
     u2 = u2[(u2 >= 0) & (u2 < 1)].astype(F32)
     u1 = np.full(len(u2), F32(0.6))
     wi, value, pdf = env.sample(u1, u2)
+    assert (pdf > 0).all()          # u2 at the very top of a column stays in its texel
     cdf = np.concatenate([[0.0], np.cumsum(weights) / weights.sum()]).astype(F32)
     col = np.minimum(np.searchsorted(cdf, u2, side='right') - 1, w - 1)
     assert (weights[col] > 0).all() and (np.diff(col) >= 0).all()
