@@ -70,12 +70,12 @@ FieldsFn fields_fn(Isa isa) {
 // splitting cheaper; then (bench tracer, 10K room, dragon, San Francisco; 1 and 2 threads) 8
 // gave diffuse rays +0..+9%, shadow rays +1..+9%, camera rays -3..+6%, and a Cornell box
 // render's tracing -13% (it tests ~16-triangle leaves brute force).
-static int default_leaf_size(Isa) { return 8; }
+constexpr int kDefaultLeafSize = 8;
 
 TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, int threads, Isa isa,
                   TopCache* cache) {
     TraceJob job = job_in;
-    if (job.cfg.leaf_size == 0) job.cfg.leaf_size = default_leaf_size(isa);
+    if (job.cfg.leaf_size == 0) job.cfg.leaf_size = kDefaultLeafSize;
     const auto t0 = std::chrono::steady_clock::now();
     TraceResult res;
     res.stats.rays = n;

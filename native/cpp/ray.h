@@ -40,7 +40,7 @@ struct Config {
     // paper uses 8 for both (8-wide AVX). Measured here (bench tracer, SF 268K triangles, and a
     // dragon frame's batches), 32 rays (two 16-wide groups) are 6-14% faster: below ~2 SIMD
     // groups of rays one more partitioning step costs more than it saves. leaf_size 0 (the
-    // default) is default_leaf_size in dispatch.cpp: 8 triangles.
+    // default) is kDefaultLeafSize in dispatch.cpp: 8 triangles.
     int leaf_size = 0;
     int leaf_rays = 32;
     float sah_ratio = 128.0f;  // adaptive: SAH where active rays / triangles exceeds this (bench partition)
