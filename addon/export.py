@@ -1039,15 +1039,6 @@ def _decodes_srgb(img, reasons):
 # ----------------------------------------------------------------------------------------
 # Meshes
 
-def _transform(points, linear, offset, out):
-    """out (k, N, 3) = the (N, 3) float32 points through each of k 3x3 maps (and offsets (k, 3)),
-    computed in float64 and rounded once to out's dtype, in one threaded native pass
-    (dacrt.shading.transform_points: a 1M-triangle mesh's positions 13 -> 2 ms against the
-    broadcast numpy multiply-adds it replaced, bit for bit; einsum was slower still, and a matmul
-    would wake OpenBLAS threads that then spin beside the tracer)."""
-    return dacrt.shading.transform_points(points, linear, offset, out)
-
-
 def diffuse_roughness(node, reasons):
     """A Diffuse BSDF's roughness (0..1; Cycles' Oren-Nayar above 1e-5, roughdiffuse.py), 0 for
     Lambert; a node-driven one at its own value, reported."""
@@ -1716,7 +1707,8 @@ class _Exporter:
         # float64 world positions: a scene far from the origin keeps its precision until the
         # renderer centres it (integrator.recentred) and rounds to float32
         world = out.vertices[V]
-        _transform(a.positions, lin, mats[:, :3, 3], world.reshape(k, nv, 3))
+        # (one threaded native pass, bit for bit the float64 numpy multiply-adds it replaced)
+        dacrt.shading.transform_points(a.positions, lin, mats[:, :3, 3], world.reshape(k, nv, 3))
         tris = out.triangles[T]             # local indices first (face_normals reads them)
         if k == 1:
             tris[...] = a.triangles
@@ -1755,7 +1747,7 @@ class _Exporter:
         else:
             inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin,
                                          np.eye(3)))    # normals transform by the inverse transpose
-            n = _transform(a.normal_rows, inv.transpose(0, 2, 1), None,
+            n = dacrt.shading.transform_points(a.normal_rows, inv.transpose(0, 2, 1), None,
                            np.empty((k, len(a.normal_rows), 3), np.float32))
             # |n| per row from the three strided columns: 2x faster than einsum's reduction
             nlen = n[..., 0] * n[..., 0]

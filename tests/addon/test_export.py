@@ -3,7 +3,6 @@
 Every test renders through the registered engine (render depsgraph, as F12 does) and checks
 the SceneData it exported (see conftest.exported)."""
 import math
-import warnings
 
 import bpy
 import numpy as np
@@ -551,26 +550,6 @@ def test_dropped_triangles_keep_later_objects_aligned(scene, exported):
 
 
 # -- visibility --------------------------------------------------------------------------------
-
-@pytest.mark.parametrize("k,n", [(1, 5000), (3, 10), (7, 300_000), (2000, 700)])
-@pytest.mark.parametrize("dtype", [np.float64, np.float32])
-def test_transform_matches_float64_matrices(k, n, dtype):
-    """Instances' points through their 3x3 maps plus offsets, in float64 rounded once to the
-    output type, for one instance, a few, instance blocks (7 x 300K) and many small ones; a NaN
-    input point stays NaN without a warning (the export drops it later)."""
-    rng = np.random.default_rng(k)
-    pts = rng.normal(size=(n, 3)).astype(np.float32) * 100
-    pts[n // 2] = np.nan
-    lin, off = rng.normal(size=(k, 3, 3)), rng.normal(size=(k, 3)) * 1e4
-    expect = np.einsum('kij,vj->kvi', lin, pts.astype(np.float64)) + off[:, None, :]
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        got = export._transform(pts, lin, off, np.empty((k, n, 3), dtype))
-    assert np.isnan(got[:, n // 2]).all()
-    fin = np.isfinite(expect)
-    np.testing.assert_allclose(got[fin], expect[fin].astype(dtype), rtol=1e-12 if dtype == np.float64 else 1e-6,
-                               atol=1e-9 if dtype == np.float64 else 1e-2)
-
 
 @pytest.mark.parametrize("pattern", ["first", "last", "runs", "scattered", "all", "none"])
 def test_compact_rows_equals_boolean_indexing(pattern):

@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import warnings
 
 import dacrt
 import numpy as np
@@ -534,28 +535,31 @@ def test_camera_rays_records_match_packing():
             np.testing.assert_array_equal(rays, shading.pack_rays(O, D, tmax))
 
 
+@pytest.mark.parametrize("k,n", [(1, 5000), (3, 10), (5, 20_001), (7, 300_000), (2000, 700)])
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
-def test_transform_points_is_the_float64_affine_map_rounded_once(dtype):
+def test_transform_points_is_the_float64_affine_map_rounded_once(k, n, dtype):
     """The export's object-to-world transform: per component ((l0 x + l1 y) + l2 z) + o in
-    float64, rounded once to out's dtype, for every instance; non-finite points stay so."""
-    rng = np.random.default_rng(12)
-    n, k = 20_001, 5
+    float64, rounded once to out's dtype, for one instance, a few, instance blocks (7 x 300K)
+    and many small ones; non-finite points stay so, without a warning (the export drops them)."""
+    rng = np.random.default_rng(k)
     p = (rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-4, 6, (n, 1))).astype(np.float32)
-    p[3] = [np.inf, 0.0, np.nan]
+    p[n // 2] = [np.inf, 0.0, np.nan]
     lin = rng.normal(size=(k, 3, 3))
     off = rng.normal(size=(k, 3)) * 1e5 if dtype == np.float64 else None
     out = np.empty((k, n, 3), dtype)
-    assert shading.transform_points(p, lin, off, out) is out
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert shading.transform_points(p, lin, off, out) is out
+    assert np.isnan(out[:, n // 2]).all()
     x = p.astype(np.float64)
     with np.errstate(invalid="ignore"):
-        for i in range(k):
-            for c in range(3):
-                v = lin[i, c, 0] * x[:, 0]
-                v = v + lin[i, c, 1] * x[:, 1]
-                v = v + lin[i, c, 2] * x[:, 2]
-                if off is not None:
-                    v = v + off[i, c]
-                np.testing.assert_array_equal(out[i, :, c], v.astype(dtype))
+        for c in range(3):
+            v = lin[:, c, 0, None] * x[:, 0]
+            v = v + lin[:, c, 1, None] * x[:, 1]
+            v = v + lin[:, c, 2, None] * x[:, 2]
+            if off is not None:
+                v = v + off[:, c, None]
+            np.testing.assert_array_equal(out[:, :, c], v.astype(dtype))
     with pytest.raises(ValueError, match="out must be a writeable C-contiguous"):
         shading.transform_points(p, lin, off, np.empty((k, n, 3), np.float16))
     with pytest.raises(ValueError, match="out must be"):
