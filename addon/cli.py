@@ -77,11 +77,18 @@ def render(args):
     if args.frame is not None:
         scene.frame_set(args.frame)
     png, exr = output_paths(args.out, args.blend)
+    if not scene.render.use_single_layer and not any(layer.use for layer in scene.view_layers):
+        # Blender renders nothing then, without a word, and the result cannot be saved
+        raise SystemExit(f"error: scene '{scene.name}' has no view layer enabled for rendering "
+                         "(View Layer Properties > Use for Rendering)")
     try:
         bpy.ops.render.render(write_still=False, scene=scene.name)
     except RuntimeError as e:     # the engine reported an ERROR: the render failed
         raise SystemExit(f"error: render failed: {e}")
-    save_render(scene, png, exr)
+    try:
+        save_render(scene, png, exr)
+    except RuntimeError as e:     # e.g. an unwritable path: Blender's own message
+        raise SystemExit(f"error: could not write the image: {e}")
     print(f"DACRT: wrote {png} and {exr}")
 
 

@@ -50,6 +50,8 @@ supported) are skipped; negative or non-finite material channels and world becom
 whose clip end lies before its clip start sees nothing but the world, as in Cycles.
 """
 
+import math
+
 import bpy
 import dacrt
 import numpy as np
@@ -139,7 +141,8 @@ def export_camera(scene, messages=None, view=None):
     cam_ob = scene.camera
     if cam_ob is None:
         raise ExportError("the scene has no active camera (Scene Properties > Camera)")
-    # A non-camera object as scene camera: Cycles uses its default camera parameters.
+    # A non-camera object as scene camera: Cycles uses its default camera parameters, and
+    # looks through a light as through its spot cone (lens 16 / tan(spot size / 2)).
     cam = cam_ob.data if cam_ob.type == 'CAMERA' else None
     kind = cam.type if cam else 'PERSP'
     pano = cam.panorama_type if kind == 'PANO' else ''
@@ -148,7 +151,7 @@ def export_camera(scene, messages=None, view=None):
         raise ExportError(f"camera '{cam_ob.name}' is {what}; DACRT renders perspective, "
                           "orthographic and panoramic cameras (equirectangular, fisheye equidistant "
                           "and equisolid, mirror ball)")
-    lens = cam.lens if cam else 50.0
+    lens = cam.lens if cam else _look_through_lens(cam_ob)
     sensor_fit = cam.sensor_fit if cam else 'AUTO'
     sensor_width = cam.sensor_width if cam else 36.0
     sensor_height = cam.sensor_height if cam else 24.0
@@ -223,6 +226,17 @@ def export_camera(scene, messages=None, view=None):
     return sd.Camera(kind=kind, matrix=m, viewplane=viewplane, tan_half_fov=tan_half_fov,
                      clip_start=float(clip_start), clip_end=float(clip_end), width=width,
                      height=height, border=border, crop=crop, **dof, **pano_settings)
+
+
+def _look_through_lens(ob):
+    """The focal length (mm) Cycles gives a non-camera object used as the camera
+    (blender/camera.cpp): a light's from its spot size, as Blender's view through a spot light
+    (other lights keep their spot size in Blender's data but Python reads it on spot lights
+    only: Blender's default 45 degrees is used), anything else 50 mm."""
+    if ob.type != 'LIGHT' or ob.data is None:
+        return 50.0
+    lens = 16.0 / math.tan(0.5 * float(getattr(ob.data, 'spot_size', math.radians(45.0))))
+    return lens if lens > 0.0 and math.isfinite(lens) else 50.0
 
 
 def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):
@@ -367,30 +381,37 @@ def export_world(scene):
     if ntree is None or (bpy.app.version < (5, 0, 0) and not world.use_nodes):
         return color, None, ''
     out = output_node(ntree)
-    if out is None or not out.inputs['Surface'].is_linked:
+    if out is None:
         return none, None, ''
     reasons = []
-    uniform, env = _world_surface(linked_node(out.inputs['Surface']), 1.0, color, reasons, 0)
+    volume = out.inputs.get('Volume')
+    if volume is not None and linked_link(volume) is not None:
+        reasons.append("world volume ignored")      # a world's fog or haze: no volumes here
+    uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0)
     return uniform.astype(np.float32), env, '; '.join(dict.fromkeys(reasons))
 
 
-def _world_surface(node, weight, color, reasons, depth):
-    """(uniform radiance, Environment or None) of a world shader node at `weight`: Background
-    and Emission (the same for the world in Cycles), Add Shader and Mix Shader (constant
-    factor) of them; anything else is the world's viewport colour, with a reason."""
+def _world_surface(socket, weight, color, reasons, depth):
+    """(uniform radiance, Environment or None) of what feeds a world shader socket at
+    `weight`: Background and Emission (the same for the world in Cycles), Add Shader and Mix
+    Shader (constant factor) of them, a colour or value (an emission of it, as Cycles converts
+    it); anything else is the world's viewport colour, with a reason."""
     none = np.zeros(3, np.float32)
-    if node is None or weight == 0.0:
+    link = linked_link(socket)        # muted nodes are passed through (nodegraph)
+    if link is None or weight == 0.0:
         return none, None
+    if link.from_socket.type != 'SHADER':
+        return value_emission(link, reasons).astype(np.float32) * np.float32(weight), None
+    node = link.from_node
     t = node.type
-    if depth > 32 or node.mute or t not in ('BACKGROUND', 'EMISSION', 'ADD_SHADER', 'MIX_SHADER'):
-        kind = node.bl_label + (" (muted)" if node.mute else "")
-        reasons.append(f"world surface has {kind}, not a Background node; world colour used for it")
+    if depth > 32 or t not in ('BACKGROUND', 'EMISSION', 'ADD_SHADER', 'MIX_SHADER'):
+        reasons.append(f"world surface has {node.bl_label}, not a Background node; world colour used for it")
         return color * np.float32(weight), None
     if t in ('ADD_SHADER', 'MIX_SHADER'):
         fac = _mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
-        (ua, ea), (ub, eb) = (_world_surface(linked_node(node.inputs[first + i]), w, color, reasons, depth + 1)
+        (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1)
                               for i, w in enumerate(weights))
         if ea is not None and eb is not None:
             reasons.append("two environment textures in the world; the second ignored")
@@ -405,6 +426,27 @@ def _world_surface(node, weight, color, reasons, depth):
     if not c_ok:
         reasons.append(f"world {node.bl_label} Color driven by nodes; its own value used")
     return np.array(c, np.float32) * np.float32(s * weight), None
+
+
+def _no_image(node, reasons):
+    reasons.append(f"image '{node.name}' in a world colour chain not read (black)")
+    return None
+
+
+def value_emission(link, reasons, texture=_no_image):
+    """Cycles' conversion of a colour, vector or float output linked into a shader input (a
+    GraphLink): an emission of that value, a float as grey ((3,) float64; ShaderGraph::connect
+    adds an Emission of strength 1). An image-driven value counts as its average colour and a
+    node the export cannot compute as no emission, both noted."""
+    label = link.from_node.bl_label
+    f = nodeeval.Evaluator(texture, reasons, np.zeros(3) if texture is _no_image else MISSING_IMAGE).output(link, True)
+    if f is None:
+        reasons.append(f"'{label}' output into a shader input not computed; no emission for it")
+        return np.zeros(3)
+    if f.tex is not None:
+        reasons.append(f"'{label}' output into a shader input as an emission of its average colour")
+        return np.asarray(f.value, np.float64).reshape(-1, 3).mean(axis=0)
+    return np.asarray(f.value, np.float64).reshape(3)
 
 
 def _mix_factor(node, reasons, label, surface=True):
@@ -637,7 +679,7 @@ class _MaterialBuilder:
         is then read at its own value, as any node-driven factor."""
         every = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         node = linked_node(socket)
-        if node is None or node.type != 'MIX_SHADER' or node.mute:
+        if node is None or node.type != 'MIX_SHADER':
             return None, every
         link = linked_link(node.inputs['Fac'])
         kinds = {'Is Camera Ray': sd.VIS_CAMERA, 'Is Shadow Ray': sd.VIS_SHADOW}
@@ -724,14 +766,14 @@ class _MaterialBuilder:
         return np.ones(3, np.float32), t.texels(baked), t.interpolation, t.extension, t.transform
 
     def _shader(self, socket, reasons, depth):
-        node = linked_node(socket)
-        if node is None:
+        link = linked_link(socket)        # muted nodes are passed through (nodegraph)
+        if link is None:
             return _Closure()
+        if link.from_socket.type != 'SHADER':
+            return _Closure(emission=value_emission(link, reasons, self._texture))
+        node = link.from_node
         if depth > 32:
             reasons.append("shader graph too deep")
-            return _Closure(const=DEFAULT_ALBEDO)
-        if node.mute:
-            reasons.append(f"muted node '{node.name}'")
             return _Closure(const=DEFAULT_ALBEDO)
         t = node.type
         if t == 'BSDF_DIFFUSE':

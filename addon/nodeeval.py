@@ -112,6 +112,12 @@ class Evaluator:
             return Field(_own(carrier.default_value, color))
         return f.as_kind(color)
 
+    def output(self, link, color):
+        """What the output a GraphLink comes from computes, as a colour or float Field, or None
+        where the evaluation cannot compute its node."""
+        f = self._node(link.from_node, link.from_socket, 0)
+        return None if f is None else f.as_kind(color)
+
     def _node(self, node, out, depth):
         t = node.type
         if t == 'RGB':

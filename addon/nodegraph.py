@@ -7,7 +7,8 @@ Blender itself.
 Cycles flattens node groups before it compiles a shader, so groups are transparent here too:
 a link from a Group node continues at the matching input of the group's active Group Output,
 and a link from a Group Input node continues at the matching input of the Group node it was
-entered through. Reroutes are skipped; a muted or invalid link leaves the input at its own
+entered through. Reroutes are skipped, muted nodes (groups included) are passed through along
+Blender's internal links as Cycles does; a muted or invalid link leaves the input at its own
 value. A node reached inside groups comes wrapped (`GraphNode`), remembering the Group nodes it
 was reached through, so its inputs can be followed back out; wrappers read through to the
 Blender node or socket they hold.
@@ -115,7 +116,16 @@ def source(socket):
         if node.type == 'REROUTE':
             sock = node.inputs[0]
             continue
-        if node.type == 'GROUP' and not node.mute and node.node_tree is not None:
+        if node.mute:
+            # Blender and Cycles pass a muted node through its internal links: the output
+            # continues at the input Blender links it to (for a Mix Shader the linked shader
+            # input); an output without one, or an unlinked input, leaves the socket at its own
+            # value (Cycles drops the proxy), so a muted Diffuse BSDF is no closure at all
+            sock = _passed_through(node, link.from_socket)
+            if sock is None:
+                return None, carrier
+            continue
+        if node.type == 'GROUP' and node.node_tree is not None:
             inner = _matching(_group_output(node.node_tree), 'inputs', link.from_socket.identifier)
             if inner is None:
                 return None, carrier
@@ -174,6 +184,12 @@ def aov_outputs(ntree, groups=(), depth=0):
         elif node.type == 'GROUP' and node.node_tree is not None:
             found += aov_outputs(node.node_tree, groups + (node,), depth + 1)
     return found
+
+
+def _passed_through(node, output):
+    """The input of a muted node its internal links connect to `output`, or None."""
+    key = output.as_pointer()
+    return next((l.from_socket for l in node.internal_links if l.to_socket.as_pointer() == key), None)
 
 
 def _group_output(ntree):

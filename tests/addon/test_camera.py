@@ -1,6 +1,8 @@
 """Camera export against the reference formulas (blender-cycles.md 1.8) and Blender's own
 projection (`Camera.view_frame`, `bpy_extras.object_utils.world_to_camera_view`)."""
 
+import math
+
 import bpy
 import numpy as np
 import pytest
@@ -194,3 +196,24 @@ def test_depth_of_field_as_cycles_reads_it(scene):
     assert export.export_camera(scene).focal_distance == pytest.approx(want, rel=1e-6)
     cam.data.type = 'ORTHO'
     assert export.export_camera(scene).aperture == pytest.approx(1.0 / (2 * 2.8))
+
+
+@pytest.mark.parametrize("kind, spot, lens", [('SPOT', 1.2, 16.0 / math.tan(0.6)),
+                                               ('POINT', None, 16.0 / math.tan(math.radians(22.5))),
+                                               ('EMPTY', None, 50.0)])
+def test_a_light_or_empty_as_camera_has_cycles_lens(scene, kind, spot, lens):
+    """Cycles looks through a light as Blender's view through a spot light does (lens 16 /
+    tan(spot size / 2); Python reads a spot size on spot lights only, so other lights get
+    Blender's default 45 degrees) and through any other object with a 50 mm lens; Cycles'
+    default 36 mm sensor fits the wider side (64 x 48: t = 18 / lens / (64 / 48))."""
+    make(scene, 'PERSP', 64, 48, 100, (1, 1), 'AUTO', (0, 0))
+    if kind == 'EMPTY':
+        ob = bpy.data.objects.new("Eye", None)
+    else:
+        ob = bpy.data.objects.new("Eye", bpy.data.lights.new("Eye", kind))
+        if spot is not None:
+            ob.data.spot_size = spot
+    scene.collection.objects.link(ob)
+    scene.camera = ob
+    c = export.export_camera(scene)
+    assert c.tan_half_fov == pytest.approx(18.0 / lens / (64 / 48), rel=1e-6)

@@ -1120,6 +1120,124 @@ def test_material_without_output_node_is_black(scene, exported):
     assert np.all(data.geometry.material == idx)
 
 
+def test_muted_nodes_pass_through_as_in_cycles(scene, exported):
+    """Blender and Cycles pass a muted node through its internal links: a muted Invert or Math
+    gives its linked input, a muted Mix Shader its linked shader, a muted Diffuse BSDF no
+    closure (black), and a muted node whose passed-through input is unlinked leaves the input
+    it feeds at that input's own value (checked against Cycles: a Diffuse's 0.8). Before, muted
+    colour nodes were evaluated as if unmuted and muted shaders became a grey diffuse."""
+    setup(scene)
+    mats = {}
+
+    def new(name):
+        mat, nt, out = scenes._material(name)
+        mats[name] = mat
+        return nt, out
+
+    nt, out = new("Invert")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.9, 0.1, 0.1, 1)
+    inv = nt.nodes.new('ShaderNodeInvert')
+    inv.mute = True
+    nt.links.new(rgb.outputs[0], inv.inputs['Color'])
+    nt.links.new(inv.outputs[0], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+
+    nt, out = new("Math")
+    e = nt.nodes.new('ShaderNodeEmission')
+    v = nt.nodes.new('ShaderNodeValue')
+    v.outputs[0].default_value = 0.5
+    mt = nt.nodes.new('ShaderNodeMath')
+    mt.operation, mt.mute = 'MULTIPLY', True
+    mt.inputs[1].default_value = 10.0
+    nt.links.new(v.outputs[0], mt.inputs[0])
+    nt.links.new(mt.outputs[0], e.inputs['Strength'])
+    nt.links.new(e.outputs[0], out.inputs['Surface'])
+
+    nt, out = new("MixShader")
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.mute = True
+    red = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    red.inputs['Color'].default_value = (0.8, 0.1, 0.1, 1)
+    nt.links.new(red.outputs[0], mix.inputs[2])          # the only linked shader input
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+
+    nt, out = new("Diffuse")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    d.inputs['Color'].default_value = (0.1, 0.2, 0.9, 1)
+    d.mute = True
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+
+    nt, out = new("Unlinked")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    d.inputs['Color'].default_value = (0.3, 0.6, 0.2, 1)
+    inv = nt.nodes.new('ShaderNodeInvert')
+    inv.mute = True
+    inv.inputs['Color'].default_value = (0.9, 0.1, 0.1, 1)
+    nt.links.new(inv.outputs[0], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+
+    for i, mat in enumerate(mats.values()):
+        scenes.plane(mat.name, location=(3 * i, 0, 0), materials=(mat,))
+    table = {m.name: m for m in exported().materials}
+    assert np.allclose(table["Invert"].base_color, (0.9, 0.1, 0.1))
+    assert np.allclose(table["Math"].emission, 0.5)
+    assert np.allclose(table["MixShader"].base_color, (0.8, 0.1, 0.1))
+    assert np.all(table["Diffuse"].base_color == 0) and np.all(table["Diffuse"].emission == 0)
+    assert np.allclose(table["Unlinked"].base_color, (0.3, 0.6, 0.2))
+    assert not any(table[n].approximated for n in mats)
+
+
+def test_a_colour_or_value_into_a_shader_input_is_its_emission(scene, exported):
+    """Cycles turns a colour, vector or float output linked into a shader input into an
+    Emission of that value (strength 1; ShaderGraph::connect), in materials and the world.
+    Before, the material became the default grey diffuse and the world its viewport colour."""
+    setup(scene)
+    mat, nt, out = scenes._material("ColorSurface")
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.9, 0.2, 0.1, 1)
+    nt.links.new(rgb.outputs[0], out.inputs['Surface'])
+    val, vnt, vout = scenes._material("ValueSurface")
+    v = vnt.nodes.new('ShaderNodeValue')
+    v.outputs[0].default_value = 0.75
+    add = vnt.nodes.new('ShaderNodeAddShader')           # one level down, beside a diffuse
+    vnt.links.new(v.outputs[0], add.inputs[0])
+    vnt.links.new(vnt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], add.inputs[1])
+    vnt.links.new(add.outputs[0], vout.inputs['Surface'])
+    scenes.plane("A", materials=(mat,))
+    scenes.plane("B", location=(3, 0, 0), materials=(val,))
+    w = scenes.world((0.5, 0.5, 0.5), 1.0)
+    sky = w.node_tree.nodes.new('ShaderNodeRGB')
+    sky.outputs[0].default_value = (0.2, 0.4, 0.6, 1)
+    w.node_tree.links.new(sky.outputs[0], next(n for n in w.node_tree.nodes if n.type == 'OUTPUT_WORLD').inputs['Surface'])
+    data = exported()
+    table = {m.name: m for m in data.materials}
+    assert np.allclose(table["ColorSurface"].emission, (0.9, 0.2, 0.1))
+    assert np.all(table["ColorSurface"].base_color == 0) and not table["ColorSurface"].approximated
+    assert np.allclose(table["ValueSurface"].emission, 0.75)
+    assert np.allclose(table["ValueSurface"].base_color, 0.8)
+    assert np.allclose(data.world, (0.2, 0.4, 0.6))
+    assert not any("world approximated" in t for _, t in data.messages)
+
+
+def test_world_volume_is_reported(scene, exported):
+    """A world's Volume (fog, haze) is not rendered, and the render says so, as it does for a
+    material's; the world's Surface is rendered as before."""
+    setup(scene)
+    w = scenes.world((0.5, 0.5, 0.5), 1.0)
+    out = next(n for n in w.node_tree.nodes if n.type == 'OUTPUT_WORLD')
+    fog = w.node_tree.nodes.new('ShaderNodeVolumeScatter')
+    w.node_tree.links.new(fog.outputs[0], out.inputs['Volume'])
+    data = exported()
+    assert np.allclose(data.world, 0.5)
+    assert any(lvl == 'WARNING' and "world volume ignored" in t for lvl, t in data.messages)
+    w.node_tree.links.remove(out.inputs['Surface'].links[0])      # a volume alone: still said
+    data = exported()
+    assert np.allclose(data.world, 0.0)
+    assert any("world volume ignored" in t for _, t in data.messages)
+
+
 def test_default_surface_reported_only_when_used(scene, exported):
     """Cycles renders an object without a material with Blender's default surface, a Principled
     BSDF whose specular layer is rendered as diffuse over the 0.8 base: said in the

@@ -112,12 +112,6 @@ def _non_diffuse_materials():
     nt.links.new(p.outputs[0], out.inputs['Surface'])
     mats.append(mat)
 
-    mat, nt, out = _tree("Muted")                       # a muted shader: the default grey
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    d.inputs['Color'].default_value = (0.1, 0.2, 0.9, 1)
-    d.mute = True
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
-    mats.append(mat)
     return mats
 
 

@@ -384,6 +384,13 @@ def test_cli_renders_a_blend_file_and_explains_failures(scene, tmp_path):
     assert (tmp_path / "render" / "plane.png").is_file()
     missing = run_cli([str(tmp_path / "nope.blend")], tmp_path)
     assert missing.returncode != 0 and "no such .blend file" in missing.stderr
+    # no view layer to render: Blender renders nothing without a word, and saving the empty
+    # result used to end the CLI in a traceback
+    scene.view_layers[0].use = False
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    off = run_cli([str(blend), "--samples", "1", "--out", str(tmp_path / "off.png")], tmp_path)
+    assert off.returncode != 0 and "no view layer enabled for rendering" in off.stderr
+    assert "Traceback" not in off.stderr and not (tmp_path / "off.png").exists()
 
 
 def test_adaptive_sampling_and_skip_stats_for_scripts(scene, capfd, monkeypatch):

@@ -23,8 +23,8 @@ export renders exactly, following the export's own rules (addon/export.py `_Mate
   diffuse colour those nodes on an image):
   unlinked, so Cycles uses that value too; Image Textures and those colour nodes are kept,
   with the coordinates, projection, interpolation and extension the export uses;
-- the output's Volume and Displacement inputs unlinked; muted shader nodes become the
-  default grey Diffuse BSDF.
+- the output's Volume and Displacement inputs unlinked (muted nodes pass through their
+  internal links in both engines, so they are left as they are).
 Textures, emission, Add and Mix Shader stay as they are: they are what the comparison tests.
 Objects without a material (no slot, or an empty one) render in Cycles with Blender's default
 surface, a Principled BSDF with a specular layer; the whole-file `make_diffuse()` gives them a
@@ -197,12 +197,11 @@ class _Editor:
     # --- the shader graph, walked as the export walks it ----------------------------------
 
     def _shader(self, socket, depth):
-        node = nodegraph.linked_node(socket)
-        if node is None or depth > 32:
+        link = nodegraph.linked_link(socket)       # muted nodes are passed through
+        # a colour or value into a shader input is the emission of it the export renders too
+        if link is None or depth > 32 or link.from_socket.type != 'SHADER':
             return
-        if node.mute:
-            self._replace(socket, node, export.DEFAULT_ALBEDO, f"muted '{node.name}' as grey diffuse")
-            return
+        node = link.from_node
         t = node.type
         if t == 'BSDF_DIFFUSE':
             rough = export.diffuse_roughness(node, [])
