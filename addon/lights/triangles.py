@@ -36,11 +36,13 @@ class EmissiveTriangles:
         The shadow ray must end at a point pushed off the emitter toward P (LightSample.target)
         instead of racing the emitter itself to the same t. Radiance and pdf use the exact points."""
         wi, dist, pdf, target = dacrt.shading.sample_triangles(self.geo, self.area, which, P, u1, u2)
-        with np.errstate(divide='ignore'):
+        # an emission near float32's limit over a small pdf overflows to inf: the film drops
+        # such samples and says so, so numpy's console warning would only be noise
+        with np.errstate(divide='ignore', over='ignore', invalid='ignore'):
             scale = np.where(pdf > 0, F32(1.0) / pdf, F32(0.0))
-        if self.uniform_emission is not None:
-            value = self.uniform_emission[:, None] * scale
-        else:
-            value = np.take(self.emission, which, axis=1)
-            value *= scale
+            if self.uniform_emission is not None:
+                value = self.uniform_emission[:, None] * scale
+            else:
+                value = np.take(self.emission, which, axis=1)
+                value *= scale
         return LightSample(wi, dist, value, pdf, target)
