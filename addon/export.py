@@ -58,7 +58,7 @@ import numpy as np
 
 from . import hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular
 from . import scenedata as sd
-from .mapping import environment_rotation, texture_transform
+from .mapping import environment_rotation, texture_transform, uv_map_name
 from .nodeeval import constant, constant_color, constant_value
 from .nodegraph import aov_outputs, input_socket, linked_link, linked_node, output_node
 from .cryptomatte import KINDS as CRYPTO_KINDS
@@ -655,6 +655,8 @@ class _MaterialBuilder:
         self._index = {}
         self._images = {}          # (image pointer, unassociated) -> its pixels
         self.uses_texture = [False]
+        self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
+        self._uv_names = []
 
     def index(self, mat):
         """Global index of an (evaluated) material; None -> default material 0."""
@@ -667,6 +669,7 @@ class _MaterialBuilder:
             self.materials.append(self._build(mat))
             m = self.materials[-1]
             self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures))
+            self.uv_maps.append(m.uv_map)
             self._index[key] = idx
         return idx
 
@@ -704,6 +707,7 @@ class _MaterialBuilder:
 
     def _build(self, mat):
         reasons = []
+        self._uv_names = []           # the UV map each image this material reads asks for
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
@@ -744,7 +748,11 @@ class _MaterialBuilder:
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
         aovs, aov_textures = shader_aovs(ntree, reasons, self._texture) if ntree is not None else ({}, {})
-        return sd.Material(name=name, base_color=base,
+        uv_names = list(dict.fromkeys(self._uv_names))
+        if len(uv_names) > 1:       # one UV map per triangle here
+            shown = ', '.join(repr(n) if n else 'the active render map' for n in uv_names)
+            reasons.append(f"images on several UV maps ({shown}); all read on the first")
+        return sd.Material(name=name, base_color=base, uv_map=uv_names[0] if uv_names else '',
                            emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
@@ -917,6 +925,7 @@ class _MaterialBuilder:
     def _texture(self, node, reasons):
         img = node.image
         transform = texture_transform(node, reasons)
+        self._uv_names.append(uv_map_name(node))
         if node.projection != 'FLAT':
             reasons.append(f"{node.projection.lower()} image projection as flat")
         interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
@@ -1177,7 +1186,7 @@ class _MeshArrays:
     (RNA's per-item path, ~0.1 s per million triangles) is skipped and per-corner data
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
-                 'corner_uvs', 'domain')
+                 'corner_uvs', 'uv_layers', 'domain')
 
     def __init__(self, me, want_uvs):
         nv = len(me.vertices)
@@ -1220,7 +1229,11 @@ class _MeshArrays:
             self.normal_rows, self.normal_index = cn.reshape(nl, 3), self.corners
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
             self.normal_rows = self.normal_index = None
-        self.corner_uvs = self._read_uvs(me) if want_uvs else None
+        # every UV map by name (a material may read one by a UV Map node); corner_uvs: the
+        # active render one, which textures read otherwise
+        self.uv_layers = self._read_uvs(me) if want_uvs else {}
+        active = next((l.name for l in me.uv_layers if l.active_render), None) if want_uvs else None
+        self.corner_uvs = self.uv_layers.get(active)
 
     @classmethod
     def from_arrays(cls, positions, triangles, vertex_normals):
@@ -1229,23 +1242,24 @@ class _MeshArrays:
         a = cls.__new__(cls)
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
-        a.corners, a.slot, a.corner_uvs, a.domain = None, None, None, 'POINT'
+        a.corners, a.slot, a.corner_uvs, a.uv_layers, a.domain = None, None, None, {}, 'POINT'
         a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
         return a
 
     @staticmethod
     def _read_uvs(me):
-        layer = next((l for l in me.uv_layers if l.active_render), None)
-        if layer is None:
-            return None
+        """{name: (corners, 2) float32} of every UV map of the mesh."""
         nl = len(me.loops)
-        uv = np.empty(nl * 2, np.float32)
-        attr = me.attributes.get(layer.name)
-        if attr is not None and attr.domain == 'CORNER' and attr.data_type == 'FLOAT2':
-            attr.data.foreach_get('vector', uv)
-        else:
-            layer.uv.foreach_get('vector', uv)
-        return uv.reshape(nl, 2)
+        layers = {}
+        for layer in me.uv_layers:
+            uv = np.empty(nl * 2, np.float32)
+            attr = me.attributes.get(layer.name)
+            if attr is not None and attr.domain == 'CORNER' and attr.data_type == 'FLOAT2':
+                attr.data.foreach_get('vector', uv)
+            else:
+                layer.uv.foreach_get('vector', uv)
+            layers[layer.name] = uv.reshape(nl, 2)
+        return layers
 
     def per_corner(self, rows, index, out):
         """out (nt, 3, c) = rows (n, c) at index (nt, 3); index None: rows are the corners."""
@@ -1834,9 +1848,27 @@ class _Exporter:
                     out.has_uv[S] = False
                 else:
                     a.per_corner(a.corner_uvs, a.corners, out.uvs[S])
-                    if i in mirrored:
-                        _rewind(out.uvs[S])
+                self._named_uvs(a, p, out.material[S], out.uvs[S])
+                if i in mirrored:
+                    _rewind(out.uvs[S])
         return bad, deg
+
+    def _named_uvs(self, a, place, material, uvs):
+        """Triangles whose material reads a UV map by name get that map's coordinates (0, 0 on
+        a mesh without it, as in Cycles) instead of the active render map's."""
+        named = {self.materials.uv_maps[k] for k in set(place.slot_map)} - {''}
+        for name in named:
+            wants = np.array([self.materials.uv_maps[k] == name for k in range(len(self.materials.uv_maps))])
+            rows = np.flatnonzero(wants[material])
+            if not len(rows):
+                continue
+            layer = a.uv_layers.get(name)
+            if layer is None:
+                uvs[rows] = 0.0
+                continue
+            index = a.corners[rows] if a.corners is not None else \
+                3 * rows[:, None] + np.arange(3)[None, :]
+            uvs[rows] = layer[index]
 
     # -- messages ----------------------------------------------------------------------------
     def _summarize(self, geometry, world, environment):

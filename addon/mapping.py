@@ -85,9 +85,9 @@ def texture_transform(tex_node, reasons):
         link = inner
     if link is not None:
         vec = link.from_node
-        if vec.type == 'UVMAP':
-            if vec.uv_map:
-                reasons.append(f"UV Map '{vec.uv_map}' read as the active render UV map")
+        if vec.type == 'UVMAP':      # its map by name: uv_map_name, per material in the export
+            if vec.from_instancer:
+                reasons.append(f"UV Map '{vec.name}' from the instancer read as the object's own")
         elif vec.type == 'TEX_COORD':
             if link.from_socket.name != 'UV':
                 reasons.append(f"{link.from_socket.name} texture coordinates read as the UV map")
@@ -98,6 +98,19 @@ def texture_transform(tex_node, reasons):
     if np.array_equal(M, np.eye(3)) and not t.any():
         return None
     return np.array([[M[0, 0], M[0, 1], t[0]], [M[1, 0], M[1, 1], t[1]]])
+
+
+def uv_map_name(tex_node):
+    """The UV map an Image Texture reads by name: a UV Map node's (through Mapping nodes), or
+    '' for the active render UV map (no UV Map node, or one with no name)."""
+    link = linked_link(tex_node.inputs['Vector'])
+    for _ in range(_MAX_CHAIN):
+        if link is None or link.from_node.type != 'MAPPING':
+            break
+        link = linked_link(link.from_node.inputs['Vector'])
+    if link is not None and link.from_node.type == 'UVMAP':
+        return str(link.from_node.uv_map)
+    return ''
 
 
 def coordinates_approximation(tex_node):

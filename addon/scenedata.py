@@ -104,6 +104,9 @@ class Material:
     texture_extension: str = 'REPEAT'             # 'REPEAT' | 'EXTEND' | 'CLIP'
     texture_transform: Optional[np.ndarray] = None   # (2, 3): the texture is read at
                                                   # (x, y) = T @ (u, v, 1); None: at (u, v)
+    uv_map: str = ''                              # the UV map (u, v) come from, by name (a UV Map
+                                                  # node); '' the active render one. A mesh
+                                                  # without it reads (0, 0), as in Cycles
     approximated: str = ''                        # non-empty: why this is a diffuse approximation
     holdout: bool = False                         # a Holdout shader: camera rays see through it
                                                   # (alpha 0), other rays meet a black surface
@@ -139,7 +142,8 @@ class Geometry:
     triangles: np.ndarray          # (M,3) int32 indices into vertices
     material: np.ndarray           # (M,) int32 index into SceneData.materials
     normals: np.ndarray            # (M,3,3) float32 shading normal per triangle corner (unit, world)
-    uvs: Optional[np.ndarray]      # (M,3,2) float32 active UV map per corner, or None
+    uvs: Optional[np.ndarray]      # (M,3,2) float32 per corner, on the UV map the triangle's
+                                   # material reads (Material.uv_map), or None
     visibility: np.ndarray         # (M,) uint8 bits VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW | HOLDOUT
     object_index: np.ndarray       # (M,) int32 index into SceneData.object_names
     # (M,2) float32 Cycles' shadow terminator of each triangle's object: its geometry offset

@@ -469,12 +469,12 @@ def test_sharp_edges_mixed_normals(scene, exported):
     assert flat[centroid[:, 2] > 0.05].all() and not flat[centroid[:, 2] < -0.05].any()
 
 
-def _reference_corners(ob):
+def _reference_corners(ob, uv_map=None):
     """Per triangle corner, read the slow independent way (loop_triangles one by one) from the
     object's own mesh (no modifiers: the evaluated mesh has the same topology): world
-    position, face corner normal, UV and material slot."""
+    position, face corner normal, UV (of the active map, or the one named) and material slot."""
     me, m = ob.data, np.array(ob.matrix_world)
-    uv = me.uv_layers.active.uv
+    uv = (me.uv_layers.active if uv_map is None else me.uv_layers[uv_map]).uv
     pos, nrm, uvs, slot = [], [], [], []
     for t in me.loop_triangles:
         pos.append([m[:3, :3] @ np.array(me.vertices[v].co) + m[:3, 3] for v in t.vertices])
@@ -523,6 +523,70 @@ def test_face_corners_match_loop_triangles(scene, exported, faces):
     assert g.uvs is not None and np.array_equal(g.uvs, uvs.astype(np.float32))
     names = np.array([m.name for m in data.materials])[g.material]
     assert list(names) == [mats[s].name for s in slot]
+
+
+def _uv_map_material(name, image, *uv_maps):
+    """A diffuse whose colour is the sum (Mix Add) of one image per UV map name given, each read
+    through a UV Map node of that name ('' : the node with no map chosen)."""
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    last = None
+    for uv_map in uv_maps:
+        tex = nt.nodes.new('ShaderNodeTexImage')
+        tex.image = image
+        node = nt.nodes.new('ShaderNodeUVMap')
+        node.uv_map = uv_map
+        nt.links.new(node.outputs['UV'], tex.inputs['Vector'])
+        if last is None:
+            last = tex.outputs['Color']
+            continue
+        add = nt.nodes.new('ShaderNodeMix')
+        add.data_type, add.blend_type = 'RGBA', 'ADD'
+        add.inputs['Factor'].default_value = 1.0
+        nt.links.new(last, add.inputs['A'])
+        nt.links.new(tex.outputs['Color'], add.inputs['B'])
+        last = add.outputs['Result']
+    nt.links.new(last, d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_uv_map_node_reads_its_map_by_name(scene, exported):
+    """An image read through a UV Map node uses that map (Cycles: the attribute of that name)
+    on the triangles of its material, the active render map elsewhere; a mesh without the map
+    reads (0, 0), as in Cycles; a material whose images ask for two maps is reported. Before,
+    every image read the active render map (reported)."""
+    setup(scene)
+    rng = np.random.default_rng(5)
+    img = bpy.data.images.new("Grey", 2, 2)
+    mats = [_image_material("Active", img), _uv_map_material("Detail", img, "Detail"),
+            _uv_map_material("Unnamed", img, "")]
+    verts = [(x, y, 0.3 * rng.random()) for x in range(4) for y in range(3)]
+    polys = [(0, 3, 4), (4, 1, 0), (1, 4, 5, 2), (3, 6, 7, 4), (4, 7, 10, 11, 8, 5), (6, 9, 10, 7)]
+    ob = scenes.mesh("M", verts, polys, materials=mats)
+    ob.scale.x = -1.0                                    # mirrored: corners 1 and 2 swap
+    me = ob.data
+    for p in me.polygons:
+        p.material_index = p.index % 3
+    for layer in ("UVMap", "Detail"):
+        me.uv_layers.new(name=layer).uv.foreach_set('vector', rng.random(2 * len(me.loops)).astype(np.float32))
+    me.uv_layers["UVMap"].active_render = True
+    lone = scenes.plane("NoDetail", location=(5, 0, 0), materials=(mats[1],))
+    lone.data.uv_layers.new(name="UVMap")
+    both = scenes.plane("Both", location=(9, 0, 0), materials=(_uv_map_material("Two", img, "UVMap", "Detail"),))
+    both.data.uv_layers.new(name="UVMap")
+    data = exported()
+    g = data.geometry
+    bpy.context.view_layer.update()
+    _, _, active, slot = _reference_corners(ob)
+    _, _, detail, _ = _reference_corners(ob, "Detail")
+    sel = of_object(data, "M")
+    expect = np.where((slot == 1)[:, None, None], detail, active)[:, [0, 2, 1]]    # rewound
+    assert np.array_equal(g.uvs[sel], expect.astype(np.float32))
+    assert np.all(g.uvs[of_object(data, "NoDetail")] == 0.0)
+    table = {m.name: m for m in data.materials}
+    assert table["Detail"].uv_map == "Detail" and table["Unnamed"].uv_map == "" and not table["Detail"].approximated
+    assert "images on several UV maps ('UVMap', 'Detail')" in table["Two"].approximated
 
 
 def test_dropped_triangles_keep_later_objects_aligned(scene, exported):
