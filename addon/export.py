@@ -792,11 +792,8 @@ class _MaterialBuilder:
         if t == 'BSDF_PRINCIPLED':
             return self._principled(node, reasons)
         if t == 'EMISSION':
-            color, c_ok = constant_color(node.inputs['Color'])
-            strength, s_ok = constant_value(node.inputs['Strength'])
-            if not (c_ok and s_ok):
-                reasons.append("Emission driven by nodes; its own values used")
-            return _Closure(emission=np.array(color) * strength)
+            return _Closure(emission=self._emission(node.inputs['Color'], node.inputs['Strength'],
+                                                    "Emission", reasons))
         if t == 'HOLDOUT':
             # Cycles: camera rays see through it (alpha 0); other rays meet a black absorber
             return _Closure(holdout=1.0)
@@ -842,11 +839,7 @@ class _MaterialBuilder:
         es = input_socket(node, 'Emission Strength')
         ec = input_socket(node, 'Emission Color', 'Emission')
         if es is not None and ec is not None:
-            color, c_ok = constant_color(ec)
-            strength, s_ok = constant_value(es)
-            if not (c_ok and s_ok):
-                reasons.append("Principled emission driven by nodes; its own values used")
-            c.emission = np.array(color, np.float64) * strength
+            c.emission = self._emission(ec, es, "Principled emission", reasons)
         # Cycles: alpha < 1 adds a white Transparent BSDF of weight 1 - alpha and scales the rest
         # (emission included) by alpha
         alpha = node.inputs.get('Alpha')
@@ -909,6 +902,26 @@ class _MaterialBuilder:
         if not ok:
             reasons.append(f"colour from '{link.from_node.bl_label}' node; its own value used")
         return _Closure(const=color)
+
+    def _emission(self, color_socket, strength_socket, label, reasons):
+        """Radiance (3,) float64 of an emission's colour x strength: exact for constants and the
+        nodes the export evaluates; one driven by an image (a screen, a sign) emits its average
+        over the image's texels, as a uniform emitter (reported: emission is not textured
+        here); anything else its own value, reported."""
+        evaluate = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE)
+        averaged = []
+
+        def mean(socket, color):
+            f = evaluate.input(socket, color)
+            if f.tex is None:
+                return np.asarray(f.value, np.float64).reshape(-1)
+            averaged.append('colour' if color else 'strength')
+            return np.asarray(f.value, np.float64).reshape(-1, 3 if color else 1).mean(axis=0)
+
+        value = mean(color_socket, True) * mean(strength_socket, False)[0]
+        if averaged:
+            reasons.append(f"{label} {' and '.join(averaged)} from an image as its average over the image")
+        return value
 
     def _evaluated_closure(self, socket, reasons):
         f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE).input(socket, True)

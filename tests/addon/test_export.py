@@ -1285,6 +1285,36 @@ def test_a_colour_or_value_into_a_shader_input_is_its_emission(scene, exported):
     assert not any("world approximated" in t for _, t in data.messages)
 
 
+def test_image_driven_emission_emits_its_average(scene, exported):
+    """An Emission (or Principled emission) colour or strength from an image (a screen, a sign)
+    is not textured here: it emits the image's average, reported, where it used to emit the
+    socket's own value (the Emission node's default white)."""
+    setup(scene)
+    img = bpy.data.images.new("Screen", 2, 2, float_buffer=True)
+    px = np.array([[0.2, 0.4, 0.6, 1], [1.0, 0.0, 0.0, 1], [0.0, 1.0, 0.0, 1], [0.6, 0.6, 0.2, 1]])
+    img.pixels[:] = px.ravel()
+    mat, nt, out = scenes._material("Screen")
+    e = nt.nodes.new('ShaderNodeEmission')
+    e.inputs['Strength'].default_value = 3.0
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    nt.links.new(tex.outputs['Color'], e.inputs['Color'])
+    nt.links.new(e.outputs[0], out.inputs['Surface'])
+    pmat = scenes.principled("Sign", (0.5, 0.5, 0.5), (1.0, 1.0, 1.0), 1.0)
+    p = next(n for n in pmat.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+    ptex = pmat.node_tree.nodes.new('ShaderNodeTexImage')
+    ptex.image = img
+    pmat.node_tree.links.new(ptex.outputs['Color'], p.inputs['Emission Strength'])   # as its grey
+    scenes.plane("A", materials=(mat,))
+    scenes.plane("B", location=(3, 0, 0), materials=(pmat,))
+    table = {m.name: m for m in exported().materials}
+    assert np.allclose(table["Screen"].emission, 3.0 * px[:, :3].mean(axis=0), rtol=1e-6)
+    assert "Emission colour from an image as its average" in table["Screen"].approximated
+    grey = (px[:, :3] @ np.array([0.2126729, 0.7151522, 0.0721750])).mean()   # Rec.709 luminance
+    assert np.allclose(table["Sign"].emission, grey, rtol=1e-4)
+    assert "Principled emission strength from an image" in table["Sign"].approximated
+
+
 def test_world_volume_is_reported(scene, exported):
     """A world's Volume (fog, haze) is not rendered, and the render says so, as it does for a
     material's; the world's Surface is rendered as before."""
