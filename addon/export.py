@@ -1170,6 +1170,64 @@ def _hair_radius(settings, time):
     return r
 
 
+def _quad_corner_tris(positions, corner_vert, tri_poly, num_corners):
+    """The corners (nt, 3) int32 of each triangle of a mesh of triangles and quads, as Blender
+    tessellates it (blenkernel mesh_tessellate.cc: a quad is (0 1 2) (0 2 3), or (0 1 3)
+    (1 2 3) where is_quad_flip_v3_first_third_fast finds the 0-2 diagonal folds it over), or
+    None when the mesh has n-gons. Reading loop_triangles' corners goes through RNA item by
+    item, ~90 ms per million triangles; this is ~15. Faces are contiguous runs of corners in
+    face order, so a face's size is its triangle count + 2 and its start their running sum."""
+    nt = len(tri_poly)
+    if nt == 0 or np.any(tri_poly[1:] < tri_poly[:-1]):
+        return None
+    per_face = np.bincount(tri_poly)
+    if per_face.min() < 1 or per_face.max() > 2:
+        return None
+    size = per_face.astype(np.int32) + 2
+    if int(size.sum(dtype=np.int64)) != num_corners:
+        return None
+    first = np.ones(nt, bool)                       # a face's first triangle
+    first[1:] = tri_poly[1:] != tri_poly[:-1]
+    if nt == 2 * len(size):                         # quads only: no gathers
+        corners = (4 * np.arange(len(size), dtype=np.int32))[:, None, None] + \
+            np.array([[0, 1, 2], [0, 2, 3]], np.int32)
+        corners = corners.reshape(nt, 3)
+        quad_start = 4 * np.arange(len(size), dtype=np.int32)
+        cv = corner_vert.reshape(-1, 4)
+        quads = None
+    else:
+        start = (np.cumsum(size, dtype=np.int64) - size).astype(np.int32)
+        corners = start[tri_poly][:, None] + np.where(first[:, None], np.array([0, 1, 2], np.int32),
+                                                      np.array([0, 2, 3], np.int32))
+        quads = np.flatnonzero(size == 4)
+        quad_start = start[quads]
+        cv = corner_vert[quad_start[:, None] + np.arange(4, dtype=np.int32)]
+    if len(quad_start):
+        # float32 in Blender's order: d_1k = v_k - v_1, cross(d12, d13) . cross(d14, d13) > 0
+        comp = np.ascontiguousarray(positions.T)    # gathers from contiguous rows are ~3x faster
+        p = [[np.take(comp[a], k_vert) for a in range(3)] for k_vert in np.ascontiguousarray(cv.T)]
+        d12, d13, d14 = ([p[k][a] - p[0][a] for a in range(3)] for k in (1, 2, 3))
+
+        def cross(a, b):
+            return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+        ca, cb = cross(d12, d13), cross(d14, d13)
+        dot = ca[0] * cb[0]
+        dot += ca[1] * cb[1]
+        dot += ca[2] * cb[2]
+        flip = np.flatnonzero(dot > np.float32(0))
+        if len(flip):
+            if quads is None:
+                t = 2 * flip                        # each flipped quad's first triangle
+            else:
+                flipped = np.zeros(len(size), bool)
+                flipped[quads[flip]] = True
+                t = np.flatnonzero(first & flipped[tri_poly])
+            corners[t, 2] = corners[t, 0] + 3
+            corners[t + 1, 0] = corners[t, 0] + 1
+    return np.ascontiguousarray(corners, np.int32)
+
+
 def _point_attribute(data, name, data_type, width):
     """A point-domain attribute of a point cloud or Curves as float64 (n, width) (width 1:
     (n,)), or None when it is missing or of another type."""
@@ -1220,9 +1278,12 @@ class _MeshArrays:
             self.corners = None             # one triangle per face: all faces are triangles
             self.triangles = corner_vert.reshape(nt, 3)
         else:
-            corners = np.empty(nt * 3, np.int32)
-            me.loop_triangles.foreach_get('loops', corners)
-            self.corners = corners.reshape(nt, 3)
+            corners = _quad_corner_tris(self.positions, corner_vert, tri_poly, nl)
+            if corners is None:             # n-gons: Blender's own tessellation, item by item
+                corners = np.empty(nt * 3, np.int32)
+                me.loop_triangles.foreach_get('loops', corners)
+                corners = corners.reshape(nt, 3)
+            self.corners = corners
             self.triangles = corner_vert[self.corners]
         self.slot = None                    # None: slot 0 everywhere
         mi = me.attributes.get('material_index')
