@@ -50,9 +50,10 @@ class PointLight(Lamp):
     def _cone_fields(self) -> dict:
         return {}
 
-    def _attenuate(self, scale, to_light):
+    def _attenuate(self, scale, to_light, inside=None):
         """Per-sample scalars times the light's angular factor for unit directions (3,n) from the
-        shading point toward the light sample (1 for points)."""
+        shading point toward the light sample (1 for points); inside (n,) bool or None: points
+        within a sphere light, which a spot's cone does not shape (Cycles' light/spot.h)."""
         return scale
 
     def sample(self, P, u1, u2):
@@ -88,7 +89,8 @@ class PointLight(Lamp):
             with np.errstate(divide='ignore', invalid='ignore'):
                 pdf = np.where(good, dist * dist / (F32(np.pi) * r * r * cos_l), F32(0.0))
                 scale = np.where(good, F32(1.0) / pdf, F32(0.0))
-        return LightSample(wi, dist, outer(self.emit, self._attenuate(scale, wi)), pdf)
+        inside = ~outside if self.sphere else None
+        return LightSample(wi, dist, outer(self.emit, self._attenuate(scale, wi, inside)), pdf)
 
     def intersect(self, O, D, tmax):
         if self.delta:
@@ -117,7 +119,7 @@ class PointLight(Lamp):
             idx = np.flatnonzero(apart & (cos_l > 0) & (t < tmax) & (dot(rel, rel) <= r * r))
             t_i = t[idx]
             pdf = t_i * t_i / (F32(np.pi) * r * r * cos_l[idx])
-        scale = self._attenuate(np.ones(len(idx), F32), D[:, idx])
+        scale = self._attenuate(np.ones(len(idx), F32), D[:, idx], ~outside[idx] if self.sphere else None)
         return idx, outer(self.emit, scale), pdf.astype(F32)
 
 
@@ -149,8 +151,9 @@ class SpotLight(PointLight):
         return dict(cos_half=self.cos_half, inv_m3=self.inv_m3,
                     inv_smooth=0.0 if self.inv_smooth is None else self.inv_smooth)
 
-    def _attenuate(self, scale, to_light):
-        scale *= self.attenuation(-to_light)
+    def _attenuate(self, scale, to_light, inside=None):
+        cone = self.attenuation(-to_light)
+        scale *= cone if inside is None else np.where(inside, F32(1.0), cone)
         return scale
 
     def attenuation(self, from_light):

@@ -286,7 +286,9 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
             s.pdf = good ? p : 0.0f;
             scale = good ? 1.0f / p : 0.0f;
         }
-        if (kind == LAMP_SPOT) {
+        // Cycles (light/spot.h): a sphere spot's cone applies only to points outside the
+        // sphere; inside it the light is seen all round, unshaped
+        if (kind == LAMP_SPOT && (shape != POINT_SPHERE || outside)) {
             const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
             scale *= spot_attenuation(L, from_light);
         }
@@ -405,9 +407,11 @@ __attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const f
         const float oc[3] = {L.pos[0] - O[0], L.pos[1] - O[1], L.pos[2] - O[2]};
         const float b = dot3(oc, D), d2 = dot3(oc, oc);
         if (!(d2 > 0)) return false;  // origin at the centre
+        bool cone = true;             // a sphere spot shapes only what lies outside it
         if (shape == POINT_SPHERE) {
             // from outside the near intersection; from inside the far one (seen all round)
             const bool outside = d2 > r * r;
+            cone = outside;
             const float perp[3] = {oc[0] - D[0] * b, oc[1] - D[1] * b, oc[2] - D[2] * b};
             const float h2 = r * r - dot3(perp, perp);
             const float h = std::sqrt(std::max(0.0f, h2));
@@ -422,7 +426,7 @@ __attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const f
             if (!(cos_l > 0 && t < tmax && dot3(rel, rel) <= r * r)) return false;
             pdf = t * t / (PI * r * r * cos_l);
         }
-        if (kind == LAMP_SPOT) {
+        if (kind == LAMP_SPOT && cone) {
             const float from_light[3] = {-D[0], -D[1], -D[2]};
             scale = spot_attenuation(L, from_light);
         }
