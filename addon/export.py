@@ -82,7 +82,9 @@ CHECK_EVERY = 64                          # instances between cancel checks
 PRINCIPLED_IGNORED = (('Metallic', "metallic"), ('Transmission Weight', "transmission"),
                       ('Coat Weight', "coat"), ('Sheen Weight', "sheen"),
                       ('Subsurface Weight', "subsurface"), ('Specular IOR Level', "specular layer"),
-                      ('Diffuse Roughness', "diffuse roughness"))
+                      ('Diffuse Roughness', "diffuse roughness"),
+                      ('Anisotropic', "anisotropy (its layers as isotropic)"),
+                      ('Thin Film Thickness', "thin film"))
 IGNORED_OUTPUTS = ('Volume', 'Displacement')
 TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP')
 LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')
@@ -839,7 +841,7 @@ class _MaterialBuilder:
         es = input_socket(node, 'Emission Strength')
         ec = input_socket(node, 'Emission Color', 'Emission')
         if es is not None and ec is not None:
-            c.emission = self._emission(ec, es, "Principled emission", reasons)
+            c.emission = self._emission(ec, es, "Principled emission", reasons) * principled.emission_dim(node)
         # Cycles: alpha < 1 adds a white Transparent BSDF of weight 1 - alpha and scales the rest
         # (emission included) by alpha
         alpha = node.inputs.get('Alpha')

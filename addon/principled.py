@@ -192,6 +192,15 @@ def layer_steps(node, reasons) -> list:
     return [step] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse), step]
 
 
+def emission_dim(node):
+    """(3,) what the coat lets through of the Principled's emission: Cycles adds the emission
+    under sheen and coat (svm/closure.h, 'attenuated by sheen and coat'), dimmed and tinted by
+    the coat as the layers below are, per view direction; averaged over view directions as
+    everything here (sheen is dropped, reported with it)."""
+    coat = _coat_mu(node, [])
+    return np.ones(3) if coat is None else coat[0] @ specular.VIEW
+
+
 def _diffuse_roughness(node, reasons):
     """The diffuse base's roughness (Cycles' Oren-Nayar, roughdiffuse.py), 0 for Lambert."""
     sock = node.inputs.get('Diffuse Roughness')
