@@ -1567,8 +1567,8 @@ class _Exporter:
         # instances also take their instancer's ray visibility (as Cycles)
         parent = inst.parent if inst.is_instance and inst.parent is not None else ob
         if not ((ob.visible_diffuse and parent.visible_diffuse) or (ob.visible_camera and parent.visible_camera)):
-            self._skip("lights with camera and diffuse ray visibility off contribute nothing to a "
-                       "diffuse renderer", ob.name)
+            self._skip("lights with camera and diffuse ray visibility off light nothing here, where "
+                       "every surface is diffuse (Cycles still lights glossy layers with them)", ob.name)
             return None
         light = export_light(ob, inst.matrix_world, self.messages)
         limit = getattr(getattr(ob.data, 'cycles', None), 'max_bounces', None)
