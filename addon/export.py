@@ -56,14 +56,14 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular
+from . import hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular, texture
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform, uv_map_name
 from .nodeeval import constant, constant_color, constant_value
 from .nodegraph import aov_outputs, input_socket, linked_link, linked_node, output_node
 from .cryptomatte import KINDS as CRYPTO_KINDS
 from .passes import PASSES, enabled, result_name
-from .texture import UdimTiles
+from .texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stored_texels
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
 UNSUPPORTED_TYPES = {'VOLUME': "volume", 'GREASEPENCIL': "Grease Pencil"}
@@ -499,7 +499,7 @@ def _environment(node, strength, reasons):
     if node.interpolation in LINEAR_INTERPOLATIONS:
         reasons.append(f"{node.interpolation.lower()} environment interpolation as linear")
     env = sd.Environment(np.ascontiguousarray(rgb, np.float32), np.full(3, strength, np.float32),
-                         environment_rotation(node, reasons), interp)
+                         environment_rotation(node, reasons), interp, encoded=_encoded_environment(pixels, interp))
     return np.zeros(3, np.float32), env
 
 
@@ -549,8 +549,10 @@ class _Closure:
             return _Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
                             self.opacity)
         t = self.texture
+        w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
         px = t.pixels.copy()
-        px[..., :3] = f(t.pixels[..., :3] * self.tex_weight.astype(np.float32) + self.const.astype(np.float32))
+        px[..., :3] = f(t.pixels[..., :3] * w + k)
+        px = texture.baked(t.pixels, px, lambda rgb: f(rgb * w + k))   # after the lookup, as Cycles
         mapped = _Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
                           px, t.interpolation, t.extension, t.transform, t.udim)
         return _Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity)
@@ -771,8 +773,11 @@ class _MaterialBuilder:
         t = c.texture
         if not np.any(c.const):
             return c.tex_weight.astype(np.float32), t.texels(t.pixels), t.interpolation, t.extension, t.transform
+        w, k = c.tex_weight.astype(np.float32), c.const.astype(np.float32)
         baked = t.pixels.copy()
-        baked[..., :3] = t.pixels[..., :3] * c.tex_weight.astype(np.float32) + c.const.astype(np.float32)
+        baked[..., :3] = t.pixels[..., :3] * w + k
+        # an image Cycles keeps encoded: the weight and constant after its lookup, in its order
+        baked = texture.baked(t.pixels, baked, lambda rgb: rgb * w + k)
         return np.ones(3, np.float32), t.texels(baked), t.interpolation, t.extension, t.transform
 
     def _shader(self, socket, reasons, depth):
@@ -1000,13 +1005,13 @@ def _udim_tiles(img, first, reasons, unassociate):
     tiles = {img.tiles[0].number: first}
     rest = [t.number for t in img.tiles[1:]]
     if not rest:
-        return UdimTiles.stack(tiles)
+        return _stacked_tiles(tiles)
     try:
         import OpenImageIO as oiio
     except ImportError:
         reasons.append(f"UDIM image '{img.name}': OpenImageIO is not available to read tiles "
                        f"{', '.join(map(str, rest))} (magenta)")
-        return UdimTiles.stack(tiles)
+        return _stacked_tiles(tiles)
     pattern = bpy.path.abspath(img.filepath_raw, library=img.library)
     straight = oiio.ImageSpec()   # a byte file's alpha as stored (straight, as Blender keeps it)
     straight.attribute('oiio:UnassociatedAlpha', 1)
@@ -1029,7 +1034,23 @@ def _udim_tiles(img, first, reasons, unassociate):
                        f"packed or generated tiles other than the first are not supported")
         for number in unread:
             tiles[number] = np.array(MISSING_IMAGE + (1.0,), np.float32).reshape(1, 1, 4)
-    return UdimTiles.stack(tiles)
+    return _stacked_tiles(tiles)
+
+
+def _stacked_tiles(tiles):
+    """UdimTiles of {number: texels}: what _linear_rgba made of each tile (ImageTexels), or a
+    missing tile's magenta. Its texels carry the tiles' stored encoding when every tile has one
+    alike (Cycles decodes every tile by the first one's flags; a missing tile's magenta is the
+    same encoded)."""
+    udim = UdimTiles.stack(tiles)
+    real = [n for n, t in tiles.items() if isinstance(t, ImageTexels)]
+    stored = {n: stored_texels(tiles[n]) for n in real}
+    kinds = {None if e is None else (e.srgb, e.unassociate) for e in stored.values()}
+    if len(kinds) != 1 or None in kinds:
+        return udim
+    srgb, unassociate = kinds.pop()
+    encoded = {n: stored[n].texels.astype(np.float32) * stored[n].scale if n in stored else tiles[n] for n in tiles}
+    return udim.with_texels(ImageTexels(udim.flat, EncodedTexels(UdimTiles.stack(encoded), srgb, unassociate)))
 
 
 def _srgb_to_linear(c):
@@ -1039,7 +1060,9 @@ def _srgb_to_linear(c):
 def _image_pixels(img, reasons, unassociate=False):
     """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels.
     The colour is associated with alpha as Cycles stores the image (_associates_alpha), or with
-    `unassociate` divided by it again as Cycles' lookup does for a linked Alpha output."""
+    `unassociate` divided by it again as Cycles' lookup does for a linked Alpha output. A
+    texture.ImageTexels: it also carries the texels as Cycles stores them for its lookup
+    (_stored_texels), which blends those and decodes after."""
     try:
         w, h = img.size
         ch = img.channels
@@ -1051,20 +1074,24 @@ def _image_pixels(img, reasons, unassociate=False):
     except (RuntimeError, ValueError, ReferenceError):
         reasons.append(f"image '{img.name}' could not be loaded (magenta, as Cycles)")
         return None
-    return _linear_rgba(buf.reshape(h, w, ch), img, reasons, unassociate, byte=not img.is_float, encoded=False)
+    return _linear_rgba(buf.reshape(h, w, ch), img, reasons, unassociate, byte=not img.is_float, encoded=False,
+                        from_file=not _read_from_blender(img))
 
 
-def _linear_rgba(buf, img, reasons, unassociate, byte, encoded):
+def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
     """(h, w, 4) scene-linear RGBA of an image buffer (h, w, channels) of `img`: a byte buffer
     is in the image's colour space with straight alpha; a float one is linear and associated
     unless `encoded` (a deeper-than-byte file read directly: in the image's colour space,
-    converted and associated here as Blender does on load)."""
+    converted and associated here as Blender does on load). A texture.ImageTexels carrying the
+    texels as Cycles stores them for lookup (_stored_texels; from_file: Cycles reads the image's
+    file, not Blender's buffer)."""
     h, w, ch = buf.shape
     rgba = np.ones((h, w, 4), np.float32)
     rgba[..., :min(ch, 4)] = buf[..., :4]
     if ch < 3:     # grey (+alpha) images
         rgba[..., 1] = rgba[..., 2] = buf[..., 0]
         rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
+    stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, ch)
     if byte:   # byte buffers are in the image's colour space; float ones are linear
         if ch == 4 and _associates_alpha(img):
             # Blender keeps byte images straight; Cycles associates them on load (integer
@@ -1085,7 +1112,75 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded):
             rgba = _unassociated(rgba)
     elif unassociate:      # float buffers are linear and associated
         rgba = _unassociated(rgba)
-    return rgba
+    return ImageTexels(rgba, stored)
+
+
+def _keeps_srgb(img):
+    """Whether Cycles keeps the image in its sRGB encoding (compress_as_srgb: its colour space is
+    sRGB; ImageMetaData::detect_colorspace), decoding after its lookup's blend. Other display
+    spaces are converted to linear on load, texel by texel, as here."""
+    return not img.colorspace_settings.is_data and img.colorspace_settings.name == 'sRGB'
+
+
+def _read_from_blender(img):
+    """Whether Cycles reads the image's pixels from Blender's buffers rather than its file
+    (image_is_builtin: packed, generated, a movie, a UDIM image with a generated tile); Blender's
+    float buffers are scene linear, so Cycles blends those linear."""
+    if img.packed_file is not None or len(getattr(img, 'packed_files', ())) or img.source in ('GENERATED', 'MOVIE'):
+        return True
+    return img.source == 'TILED' and any(getattr(t, 'is_generated_tile', False) for t in img.tiles)
+
+
+def _stored_texels(rgba, img, unassociate, byte, encoded, from_file, channels):
+    """The image as Cycles stores it for lookup when that is not the scene-linear texels
+    _linear_rgba makes (texture.EncodedTexels), else None, from its buffer's RGBA (straight
+    bytes / 255; a deeper file's straight values; Blender's linear float buffer, associated).
+    An sRGB image is kept in its encoding, its colour associated with alpha in it (bytes
+    integer, c a / 255), and decoded after the blend, when Cycles reads it from its file at any
+    depth or from Blender's byte buffer; a linked Alpha output divides by the blended alpha
+    (Cycles: the associated texels are blended, then divided). Exact for those; images in
+    other display spaces are converted texel by texel before the blend, as before."""
+    associates = _associates_alpha(img)
+    srgb = _keeps_srgb(img)
+    linear_space = not _decodes_srgb(img, [])
+    if byte:
+        b = np.rint(rgba * 255.0)
+        if channels == 4 and associates:
+            b[..., :3] = np.floor_divide(b[..., :3] * b[..., 3:4], 255.0)
+        if srgb or (linear_space and unassociate):
+            return EncodedTexels(b.astype(np.uint8), srgb, unassociate, 1.0 / 255.0)
+        return None
+    if encoded:            # a deeper file's values, straight, in the image's colour space
+        if not (srgb or (linear_space and unassociate)):
+            return None
+        texels = rgba.copy()
+        if associates:
+            texels[..., :3] *= texels[..., 3:4]
+        return EncodedTexels(texels, srgb, unassociate)
+    if srgb and from_file:  # the file's values again from Blender's linear, associated buffer
+        texels = rgba.copy()
+        a = rgba[..., 3:4]
+        if associates:
+            with np.errstate(divide='ignore', invalid='ignore'):
+                texels[..., :3] = np.where(a > 0, rgba[..., :3] / a, 0.0)
+        texels[..., :3] = linear_to_srgb(texels[..., :3])
+        if associates:
+            texels[..., :3] *= a
+        return EncodedTexels(texels, True, unassociate)
+    if unassociate:         # linear associated floats: blended, then divided
+        return EncodedTexels(rgba.copy(), False, True)
+    return None
+
+
+def _encoded_environment(pixels, interpolation):
+    """An Environment Texture image's RGB as Cycles' 'Linear' lookup blends it, sRGB-encoded
+    (h, w, 3) float32, when Cycles keeps it so and the values are finite and non-negative;
+    None: the scene-linear pixels are blended ('Closest' reads one texel: the same either way)."""
+    stored = stored_texels(pixels)
+    if interpolation == 'Closest' or stored is None or not stored.srgb or isinstance(stored.texels, UdimTiles):
+        return None
+    rgb = stored.texels[..., :3].astype(np.float32) * stored.scale
+    return rgb if np.isfinite(rgb).all() and (rgb >= 0).all() else None
 
 
 def _decodes_srgb(img, reasons):

@@ -64,7 +64,7 @@ from .lights.base import RECORD_FIELDS
 from .lights.linking import LightLinking, reached
 from .sampling import RandomStream, max3
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
-from .texture import UdimTiles, texture_lookup
+from .texture import EncodedTexels, UdimTiles, lookup_texels, texture_lookup
 
 F32 = np.float32
 
@@ -220,9 +220,9 @@ class _Materials:
             base.append(b)
             emit.append(e)
             if mat.texture is not None:
-                self.textures.append((i, _texture_array(mat.name, 'texture', mat.texture),
-                                      *_texture_modes(mat.name, 'texture', mat.texture_interpolation,
-                                                      mat.texture_extension, mat.texture_transform)))
+                modes = _texture_modes(mat.name, 'texture', mat.texture_interpolation, mat.texture_extension,
+                                       mat.texture_transform)
+                self.textures.append((i, _texture_array(mat.name, 'texture', mat.texture, modes[0]), *modes))
         self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
         self.emissive = self.emission.max(axis=0) > 0
@@ -239,9 +239,9 @@ class _Materials:
                                  f"numbers, got {t!r}")
             self.transparency[:, i] = t
             if mat.opacity is not None:
-                tex = _texture_array(mat.name, 'opacity', mat.opacity)
-                self.opacity.append((i, tex, *_texture_modes(mat.name, 'opacity', mat.opacity_interpolation,
-                                                             mat.opacity_extension, mat.opacity_transform)))
+                modes = _texture_modes(mat.name, 'opacity', mat.opacity_interpolation, mat.opacity_extension,
+                                       mat.opacity_transform)
+                self.opacity.append((i, _texture_array(mat.name, 'opacity', mat.opacity, modes[0]), *modes))
         self.transparent = self.transparency.max(axis=0) > 0
         # images that write AOVs: (AOV name, 'color' | 'value') -> [(material index, texture,
         # interpolation, extension, uv transform)]
@@ -249,8 +249,9 @@ class _Materials:
         for i, mat in enumerate(materials):
             for (name, kind), (tex, interp, ext, xf) in (getattr(mat, 'aov_textures', None) or {}).items():
                 label = f"AOV {name!r} {kind}"
+                modes = _texture_modes(mat.name, label, interp, ext, xf)
                 self.aov_textures.setdefault((name, kind), []).append(
-                    (i, _texture_array(mat.name, label, tex), *_texture_modes(mat.name, label, interp, ext, xf)))
+                    (i, _texture_array(mat.name, label, tex, modes[0]), *modes))
         # the Material Index pass's value of each material (Blender's material pass index)
         self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
@@ -259,8 +260,12 @@ class _Materials:
                                       self.base.mean(axis=0)).astype(F32)
 
 
-def _texture_array(name, label, texture):
-    """A material's texture as the lookups read it: (h, w, 4) float32 or UdimTiles."""
+def _texture_array(name, label, texture, interpolation):
+    """A material's texture as the lookups read it: (h, w, 4) float32, UdimTiles, or the
+    EncodedTexels an image carries (texture.lookup_texels: blended in Cycles' stored encoding)."""
+    texture = lookup_texels(texture, interpolation)
+    if isinstance(texture, EncodedTexels):  # checked when it was made
+        return texture
     if isinstance(texture, UdimTiles):   # its shapes were checked when it was made
         return texture.with_texels(np.ascontiguousarray(texture.flat, F32))
     tex = np.asarray(texture)
@@ -367,6 +372,9 @@ def _validate(sd: SceneData):
             raise ValueError(f"environment.to_map must be an orthogonal 3x3 matrix, got {env.to_map!r}")
         if env.interpolation not in ('Linear', 'Closest'):
             raise ValueError(f"environment.interpolation must be 'Linear' or 'Closest', got {env.interpolation!r}")
+        if env.encoded is not None and np.shape(env.encoded) != px.shape[:2] + (3,):
+            raise ValueError(f"environment.encoded must be (h, w, 3) as its pixels {px.shape[:2]}, "
+                             f"got {np.shape(env.encoded)}")
     s = sd.settings
     if int(s.samples) < 1:
         raise ValueError(f"settings.samples must be >= 1, got {s.samples!r}")

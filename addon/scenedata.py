@@ -90,6 +90,10 @@ class Environment:
     to_map: np.ndarray = field(default_factory=lambda: np.eye(3))  # (3,3) orthogonal: world direction
                                                                    # -> the map's frame (Mapping node)
     interpolation: str = 'Linear'  # 'Linear' | 'Closest'
+    # (h, w, 3) float32: the image's RGB in its sRGB encoding, as Cycles keeps an sRGB image: the
+    # lookup blends it and decodes the blend, the importance map comes from its decoded texels;
+    # None: `pixels` are blended. `pixels` are the decoded texels either way
+    encoded: Optional[np.ndarray] = None
 
 
 @dataclass
@@ -99,7 +103,10 @@ class Material:
     base_color: np.ndarray                        # (3,) linear albedo (multiplies the texture if any)
     emission: np.ndarray                          # (3,) colour x strength, two-sided radiance
     texture: Optional[np.ndarray] = None          # (h, w, 4) float32 linear RGBA, row 0 at the bottom,
-                                                  # or a texture.UdimTiles of such tiles
+                                                  # or a texture.UdimTiles of such tiles; an image's
+                                                  # texture.ImageTexels, or a texture.EncodedTexels,
+                                                  # is looked up as Cycles stores it (sRGB-encoded
+                                                  # texels decoded after the blend)
     texture_interpolation: str = 'Linear'         # 'Closest' | 'Linear'
     texture_extension: str = 'REPEAT'             # 'REPEAT' | 'EXTEND' | 'CLIP'
     texture_transform: Optional[np.ndarray] = None   # (2, 3): the texture is read at

@@ -8,7 +8,9 @@ native/cpp/environment.h) are tested against; the integrator renders with those.
   the image's row 0 is the bottom (the -Z pole). World directions reach the map frame through
   `to_map` (the Mapping node's rotation; orthogonal).
 - Lookup 'Linear' (bilinear, texel centres at (j + 0.5) / w) or 'Closest', REPEAT in u and v as
-  Cycles' environment lookup.
+  Cycles' environment lookup. A map given `encoded` (an sRGB image, which Cycles keeps in its
+  encoding) blends those texels and decodes the blend, then times the strength; its importance
+  comes from its decoded texels (the pixels).
 - Importance, in proportion to the looked-up radiance's RGB mean (luminance) x sin(theta):
   'Closest' picks a texel by its luminance x the mean sin(theta) over its rows, then a point
   uniform in it; 'Linear' picks a cell between texel centres by its corners' mean luminance x
@@ -27,7 +29,7 @@ from functools import cached_property
 import dacrt
 import numpy as np
 
-from ..texture import texture_lookup
+from ..texture import EncodedTexels, srgb_to_linear, texture_lookup
 from .base import F32, LightSample
 
 _TWO_PI2 = 2.0 * np.pi * np.pi
@@ -42,17 +44,24 @@ class EnvironmentLight:
         self._env = env
         self.to_map = np.asarray(env.to_map, np.float64)
         self.interpolation = env.interpolation
+        self.encoded = None if env.encoded is None else np.ascontiguousarray(env.encoded, F32)
         self._native = None
 
     def _radiance_image(self):
-        return np.ascontiguousarray(np.asarray(self._env.pixels, F32)[..., :3] * np.asarray(self._env.strength, F32))
+        """(h, w, 3) the texels' radiance (an encoded map's decoded as the native map decodes them)."""
+        px = np.asarray(self._env.pixels, F32)[..., :3] if self.encoded is None else srgb_to_linear(self.encoded)
+        return np.ascontiguousarray(px * np.asarray(self._env.strength, F32))
 
     @property
     def native(self):
         """The native environment light (dacrt.lamps.EnvironmentMap) the renderer uses, built
         once; the numpy tables below are built only when the definition itself is asked."""
         if self._native is None:
-            self._native = dacrt.lamps.environment_map(self._radiance_image(), self.to_map, self.interpolation)
+            if self.encoded is None:
+                self._native = dacrt.lamps.environment_map(self._radiance_image(), self.to_map, self.interpolation)
+            else:
+                self._native = dacrt.lamps.environment_map(self.encoded, self.to_map, self.interpolation, srgb=True,
+                                                           scale=np.asarray(self._env.strength, F32))
         return self._native
 
     @property
@@ -135,6 +144,10 @@ class EnvironmentLight:
             return np.where(sin_theta > 0, self.uv_pdf(u, v) / (_TWO_PI2 * sin_theta), 0.0)
 
     def radiance(self, u, v):
+        if self.encoded is not None:
+            rgb = texture_lookup(EncodedTexels(self.encoded, srgb=True), u.astype(F32), v.astype(F32),
+                                 self.interpolation, 'REPEAT')
+            return rgb * np.asarray(self._env.strength, F32)[:, None]
         return texture_lookup(self.rgb, u.astype(F32), v.astype(F32), self.interpolation, 'REPEAT')
 
     def eval_miss(self, D):

@@ -334,18 +334,28 @@ void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_
 
 // --- the environment map (environment.h) ---
 
-std::shared_ptr<EnvironmentMap> make_environment(F32Array rgb, F32Array to_map, bool closest) {
+std::shared_ptr<EnvironmentMap> make_environment(F32Array rgb, F32Array to_map, bool closest, bool srgb,
+                                                 py::object scale) {
     if (rgb.ndim() != 3 || rgb.shape(2) != 3)
         throw py::value_error("rgb must have shape (h, w, 3), got " + shape_str(rgb));
     if (to_map.ndim() != 2 || to_map.shape(0) != 3 || to_map.shape(1) != 3)
         throw py::value_error("to_map must have shape (3, 3), got " + shape_str(to_map));
     if (rgb.shape(0) > py::ssize_t(UINT32_MAX) || rgb.shape(1) > py::ssize_t(UINT32_MAX))
         throw py::value_error("the environment map is too large: " + shape_str(rgb));
+    F32Array scale_keep;
+    const float* sc = nullptr;
+    if (!scale.is_none()) {
+        scale_keep = scale.cast<F32Array>();
+        if (scale_keep.ndim() != 1 || scale_keep.shape(0) != 3)
+            throw py::value_error("scale must have shape (3,), got " + shape_str(scale_keep));
+        sc = scale_keep.data();
+    }
     auto env = std::make_shared<EnvironmentMap>();
     std::string err;
     {
         py::gil_scoped_release nogil;
-        err = build_environment(*env, rgb.data(), uint32_t(rgb.shape(1)), uint32_t(rgb.shape(0)), to_map.data(), closest);
+        err = build_environment(*env, rgb.data(), uint32_t(rgb.shape(1)), uint32_t(rgb.shape(0)), to_map.data(), closest,
+                                srgb, sc);
     }
     if (!err.empty()) throw py::value_error("environment map: " + err);
     return env;
@@ -427,7 +437,8 @@ void register_lamps(py::module_& m) {
           py::arg("linking") = py::none(), py::arg("entry") = py::none());
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)")
-        .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"))
+        .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"),
+             py::arg("srgb") = false, py::arg("scale") = py::none())
         .def_property_readonly("width", [](const EnvironmentMap& e) { return e.width; })
         .def_property_readonly("height", [](const EnvironmentMap& e) { return e.height; })
         .def_property_readonly("total", [](const EnvironmentMap& e) { return e.total; })

@@ -52,6 +52,16 @@ inline float bilerp(float a, float b, float c, float d, float fx, float fy) {
     return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
 }
 
+// Cycles' color_srgb_to_linear (negative -> 0).
+inline float srgb_to_linear(float c) {
+    return c < 0.04045f ? std::max(c * (1.0f / 12.92f), 0.0f) : std::pow((c + 0.055f) * (1.0f / 1.055f), 2.4f);
+}
+
+// An sRGB map's looked-up (blended) encoded value -> radiance.
+inline void decode(const EnvironmentMap& env, float out[3]) {
+    for (int a = 0; a < 3; ++a) out[a] = srgb_to_linear(out[a]) * env.scale[a];
+}
+
 // Radiance at (u, v) in texture space (REPEAT on both axes, as Cycles' environment lookup).
 void lookup(const EnvironmentMap& env, float u, float v, float out[3]) {
     const uint32_t w = env.width, h = env.height;
@@ -60,6 +70,7 @@ void lookup(const EnvironmentMap& env, float u, float v, float out[3]) {
         const size_t k = (size_t(wrap(int64_t(std::floor(v * float(h))), h)) * w +
                           wrap(int64_t(std::floor(u * float(w))), w)) * 3;
         for (int a = 0; a < 3; ++a) out[a] = px[k + a];
+        if (env.srgb) decode(env, out);
         return;
     }
     const Cell c = cell_of(env, u, v);
@@ -68,6 +79,7 @@ void lookup(const EnvironmentMap& env, float u, float v, float out[3]) {
     const float* p10 = px + (size_t(c.i1) * w + c.j) * 3;
     const float* p11 = px + (size_t(c.i1) * w + c.j1) * 3;
     for (int a = 0; a < 3; ++a) out[a] = bilerp(p00[a], p01[a], p10[a], p11[a], c.fx, c.fy);
+    if (env.srgb) decode(env, out);
 }
 
 // The pdf over (u, v) at (u, v): constant per texel ('Closest'), or the cell's scale times the
@@ -151,7 +163,7 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
 }  // namespace
 
 std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t width, uint32_t height,
-                              const float to_map[9], bool closest) {
+                              const float to_map[9], bool closest, bool srgb, const float* scale) {
     if (width == 0 || height == 0) return "the map has no pixels";
     if (size_t(width) * height > (size_t(1) << 28)) return "the map has more than 2^28 pixels";
     for (int r = 0; r < 3; ++r)
@@ -165,14 +177,23 @@ std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t wi
         if (!(rgb[k] >= 0 && rgb[k] < std::numeric_limits<float>::infinity()))
             return "pixel value " + std::to_string(rgb[k]) + " at " + std::to_string(k / 3) +
                    " is negative or not finite";
+    for (int a = 0; scale && a < 3; ++a)
+        if (!(scale[a] >= 0 && scale[a] < std::numeric_limits<float>::infinity()))
+            return "scale " + std::to_string(scale[a]) + " is negative or not finite";
     env.width = width;
     env.height = height;
     env.closest = closest;
+    env.srgb = srgb;
+    for (int a = 0; a < 3; ++a) env.scale[a] = scale ? scale[a] : 1.0f;
     std::copy(to_map, to_map + 9, env.to_map);
     env.rgb.assign(rgb, rgb + count);
     const size_t cells = size_t(width) * height;
     env.lum.resize(cells);
-    for (size_t k = 0; k < cells; ++k) env.lum[k] = (rgb[3 * k] + rgb[3 * k + 1] + rgb[3 * k + 2]) * (1.0f / 3.0f);
+    for (size_t k = 0; k < cells; ++k) {
+        float t[3] = {rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]};
+        if (srgb) decode(env, t);  // the radiance of the texel itself
+        env.lum[k] = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
+    }
     // Cell weights: their luminance integral, the mean of the corners ('Linear': the cell
     // between texel centres, whose bilinear blend is sampled exactly within it) or the texel
     // ('Closest'), times the mean of sin(theta) over the cell's rows (the last 'Linear' row

@@ -8,6 +8,10 @@
 // u in [j/w, (j+1)/w), v in [i/h, (i+1)/h). Radiance is the texture there, 'Linear' bilinear
 // with texel centres at (j + 0.5)/w and REPEAT in both u and v (as Cycles: rows at a pole blend
 // with the other pole's), or 'Closest', times nothing else (strength is folded into the pixels).
+// An sRGB map (`srgb`: an 8-bit image, say) holds its texels in the sRGB encoding as Cycles keeps
+// such an image (compress_as_srgb): the lookup blends them, decodes the blend (Cycles'
+// color_srgb_to_linear) and multiplies by `scale` (the strength); its luminance below is that of
+// the decoded texels.
 // The world direction d reaches the map frame as m = to_map d (to_map orthogonal: the Mapping
 // node's rotation and mirroring).
 //
@@ -16,7 +20,8 @@
 // uniform in it. 'Linear' picks a cell between texel centres (corners (i, j) .. (i+1, j+1),
 // REPEAT) by its corners' mean luminance x mean sin(theta), then samples the bilinear blend of
 // the corners within it exactly (pbrt-v4's bilinear sampling), so radiance / pdf is constant
-// in a cell up to sin(theta) and colour. The solid-angle pdf of a direction is
+// in a cell up to sin(theta) and colour (an sRGB map's decoded blend is not bilinear: there the
+// ratio varies within a cell, and sampling stays unbiased). The solid-angle pdf of a direction is
 // p(u, v) / (2 pi^2 sin(theta)). (Per-texel constant cells under a bilinear image left a
 // one-texel sun's light spread into its neighbours to BSDF rays: 7x Cycles' noise on an HDRI
 // scene; Cycles' own sampling is as good for 'Linear' as for 'Closest'.)
@@ -32,6 +37,8 @@ namespace dacrt {
 struct EnvironmentMap {
     uint32_t width = 0, height = 0;
     bool closest = false;               // 'Closest' interpolation, else bilinear
+    bool srgb = false;                  // rgb is sRGB-encoded: decoded after the blend, then x scale
+    float scale[3] = {1, 1, 1};         // multiplies an sRGB map's decoded radiance
     std::vector<float> rgb;             // height x width x 3, row 0 at the bottom
     std::vector<double> row_cdf;        // height + 1: cumulative row weights / total, [0] = 0, [h] = 1
     std::vector<float> col_cdf;         // height x (width + 1): per row, cumulative / row total
@@ -47,9 +54,10 @@ struct EnvironmentMap {
 };
 
 // Builds the tables; empty string on success, else what is wrong with the input (sizes,
-// non-finite or negative pixels, a to_map that is not orthogonal).
+// non-finite or negative pixels or scale, a to_map that is not orthogonal). srgb: rgb is
+// sRGB-encoded, its lookups decoded and multiplied by scale (null: 1).
 std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t width, uint32_t height,
-                              const float to_map[9], bool closest);
+                              const float to_map[9], bool closest, bool srgb = false, const float* scale = nullptr);
 
 // Radiance toward world direction d (unit) and the solid-angle pdf of sampling it.
 void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], float& pdf);

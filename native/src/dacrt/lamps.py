@@ -116,10 +116,12 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
 EnvironmentMap = _core.EnvironmentMap
 
 
-def environment_map(rgb, to_map=None, interpolation: str = "Linear") -> EnvironmentMap:
+def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool = False, scale=None) -> EnvironmentMap:
     """An environment light from rgb (h, w, 3) float32 linear radiance (row 0 at the bottom, the
     -Z pole; strength included), the orthogonal to_map (3, 3) taking world directions to the
-    map's frame (None: identity) and 'Linear' (bilinear) or 'Closest' lookup.
+    map's frame (None: identity) and 'Linear' (bilinear) or 'Closest' lookup. With srgb, rgb is
+    sRGB-encoded (as Cycles keeps an 8-bit image): lookups blend it, decode the blend and
+    multiply by scale ((3,), the strength; None: 1), and the map is sampled by its decoded texels.
 
     The object offers eval(D (3, n)) -> (radiance (3, n), solid-angle pdf (n,)),
     sample(u1, u2 (n,)) -> (wi (3, n), radiance / pdf (3, n), pdf (n,)) and
@@ -131,4 +133,5 @@ def environment_map(rgb, to_map=None, interpolation: str = "Linear") -> Environm
         raise ValueError(f"interpolation must be 'Linear' or 'Closest', got {interpolation!r}")
     m = np.eye(3) if to_map is None else to_map
     return _core.EnvironmentMap(np.ascontiguousarray(rgb, _F32), np.ascontiguousarray(m, _F32),
-                                interpolation == "Closest")
+                                interpolation == "Closest", bool(srgb),
+                                None if scale is None else np.ascontiguousarray(scale, _F32).reshape(3))
