@@ -1074,8 +1074,34 @@ def _image_pixels(img, reasons, unassociate=False):
     except (RuntimeError, ValueError, ReferenceError):
         reasons.append(f"image '{img.name}' could not be loaded (magenta, as Cycles)")
         return None
-    return _linear_rgba(buf.reshape(h, w, ch), img, reasons, unassociate, byte=not img.is_float, encoded=False,
-                        from_file=not _read_from_blender(img))
+    buf = buf.reshape(h, w, ch)
+    from_file = not _read_from_blender(img)
+    if not img.is_float and ch == 4 and img.alpha_mode == 'PREMUL':
+        buf = _premultiplied_bytes(img, buf, from_file, reasons)
+    return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file)
+
+
+def _premultiplied_bytes(img, buf, from_file, reasons):
+    """An 8-bit RGBA image set to Premultiplied alpha: Blender's pixels are its bytes divided by
+    alpha (clamped at 1, so colour above alpha is lost), while Cycles reads the file's bytes and
+    renders them as it renders a straight image (measured). The file's bytes, read as stored,
+    stand in for Blender's (h, w, 4) buffer; a packed image or an unreadable file keeps
+    Blender's, reported."""
+    path = bpy.path.abspath(img.filepath_raw, library=img.library) if from_file else ''
+    try:
+        import OpenImageIO as oiio
+        as_stored = oiio.ImageSpec()
+        as_stored.attribute('oiio:UnassociatedAlpha', 1)
+        file = oiio.ImageBuf(path, 0, 0, as_stored) if path else None
+        spec = file.spec() if file is not None and not file.has_error else None
+    except ImportError:
+        spec = None
+    h, w = buf.shape[:2]
+    if spec is None or (spec.height, spec.width, spec.nchannels) != (h, w, 4) or spec.format.basetype != oiio.UINT8:
+        reasons.append(f"image '{img.name}' with Premultiplied alpha read as Blender divides it by its alpha "
+                       "(its file could not be read as stored)")
+        return buf
+    return np.ascontiguousarray(np.asarray(file.get_pixels(oiio.FLOAT), np.float32).reshape(h, w, 4)[::-1])
 
 
 def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
