@@ -56,7 +56,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular, texture
+from . import hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform, uv_map_name
 from .nodeeval import constant, constant_color, constant_value
@@ -64,6 +64,7 @@ from .nodegraph import aov_outputs, input_socket, linked_link, linked_node, outp
 from .cryptomatte import KINDS as CRYPTO_KINDS
 from .passes import PASSES, enabled, result_name
 from .texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stored_texels
+from .texture import baked as after_lookup
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
 UNSUPPORTED_TYPES = {'VOLUME': "volume", 'GREASEPENCIL': "Grease Pencil"}
@@ -527,7 +528,7 @@ class _Closure:
     closures (`transparent`, rgb). `opacity` (an image's alpha, (_Texture, inverted)) makes the
     shader opacity x (everything else) + (1 - opacity) x transparent at each hit."""
     def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0,
-                 transparent=(0, 0, 0), opacity=None):
+                 transparent=(0, 0, 0), opacity=None, emission_tex=None):
         self.const = np.array(const, np.float64)
         self.emission = np.array(emission, np.float64)
         self.texture = texture
@@ -535,31 +536,36 @@ class _Closure:
         self.holdout = float(holdout)     # weight of a Holdout shader
         self.transparent = np.array(transparent, np.float64)
         self.opacity = opacity
+        # an image's emission, (_Texture, weight (3,)): weight x the image; `emission` is then
+        # its average over the image's texels (what chooses it as a light)
+        self.emission_tex = emission_tex
 
     def layered(self, dim, add):
         """Under a layer (principled.py): the albedo x dim (3,) + add (3,); emission,
         transparency and holdout are set after the layers."""
         return _Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
-                        self.transparent, self.opacity)
+                        self.transparent, self.opacity, self.emission_tex)
 
     def mapped(self, f):
         """Under a nonlinear map of the albedo (principled.BaseMap): exact for a constant
         albedo; a textured one becomes a texture of the mapped texels (weight 1)."""
         if self.texture is None or not self.tex_weight.any():
             return _Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
-                            self.opacity)
+                            self.opacity, self.emission_tex)
         t = self.texture
         w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
         px = t.pixels.copy()
         px[..., :3] = f(t.pixels[..., :3] * w + k)
-        px = texture.baked(t.pixels, px, lambda rgb: f(rgb * w + k))   # after the lookup, as Cycles
+        px = after_lookup(t.pixels, px, lambda rgb: f(rgb * w + k))   # after the lookup, as Cycles
         mapped = _Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
                           px, t.interpolation, t.extension, t.transform, t.udim)
-        return _Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity)
+        return _Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
+                        self.emission_tex)
 
     def scaled(self, f):
+        etex = None if self.emission_tex is None else (self.emission_tex[0], self.emission_tex[1] * f)
         return _Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
-                        self.transparent * f, self.opacity)
+                        self.transparent * f, self.opacity, etex)
 
     def only_transparent(self):
         return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
@@ -569,7 +575,23 @@ class _Closure:
         return not (self.const.any() or self.emission.any() or self.tex_weight.any() or self.holdout
                     or self.transparent.any())
 
+    def _emission_sum(self, other, reasons):
+        """The image emission of self + other: one image (or the same one twice) stays an image;
+        an image beside another image's or a constant emission counts as its average."""
+        a, b = self.emission_tex, other.emission_tex
+        if a is None or b is None:
+            mine, theirs = (a, other) if b is None else (b, self)
+            if mine is not None and theirs.emission.any():
+                reasons.append("an image's emission added to another emission; as its average")
+                return None
+            return mine
+        if a[0].key == b[0].key:
+            return a[0], a[1] + b[1]
+        reasons.append("two images' emission added; both as their averages")
+        return None
+
     def plus(self, other, reasons):
+        etex = self._emission_sum(other, reasons)
         opacity = self.opacity or other.opacity
         # (a closure with an opacity always has a transparent part, so it is never empty)
         if (self.opacity is not None and not other.is_empty()) or \
@@ -586,9 +608,9 @@ class _Closure:
                 mean = other.texture.pixels[..., :3].reshape(-1, 3).mean(0)
                 return _Closure(self.const + other.const + other.tex_weight * mean,
                                 self.emission + other.emission, tex, w, self.holdout + other.holdout,
-                                self.transparent + other.transparent, opacity)
+                                self.transparent + other.transparent, opacity, etex)
         return _Closure(self.const + other.const, self.emission + other.emission, tex, w,
-                        self.holdout + other.holdout, self.transparent + other.transparent, opacity)
+                        self.holdout + other.holdout, self.transparent + other.transparent, opacity, etex)
 
 
 def is_image_alpha(link):
@@ -672,7 +694,8 @@ class _MaterialBuilder:
             idx = len(self.materials)
             self.materials.append(self._build(mat))
             m = self.materials[-1]
-            self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures))
+            self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
+                                     or m.emission_texture is not None)
             self.uv_maps.append(m.uv_map)
             self._index[key] = idx
         return idx
@@ -752,11 +775,21 @@ class _MaterialBuilder:
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
         aovs, aov_textures = shader_aovs(ntree, reasons, self._texture) if ntree is not None else ({}, {})
+        e_tex = e_interp = e_ext = e_xf = None
+        if closure.emission_tex is not None and emission.any():
+            t, w = closure.emission_tex
+            w32 = np.where(emission > 0, w, 0).astype(np.float32)   # channels _nonnegative kept
+            px = t.pixels.copy()
+            px[..., :3] = t.pixels[..., :3] * w32
+            px = after_lookup(t.pixels, px, lambda rgb: rgb * w32)   # after the lookup, as Cycles
+            e_tex, e_interp, e_ext, e_xf = t.texels(px), t.interpolation, t.extension, t.transform
         uv_names = list(dict.fromkeys(self._uv_names))
         if len(uv_names) > 1:       # one UV map per triangle here
             shown = ', '.join(repr(n) if n else 'the active render map' for n in uv_names)
             reasons.append(f"images on several UV maps ({shown}); all read on the first")
         return sd.Material(name=name, base_color=base, uv_map=uv_names[0] if uv_names else '',
+                           emission_texture=e_tex, emission_interpolation=e_interp or 'Linear',
+                           emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,
                            emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
@@ -777,7 +810,7 @@ class _MaterialBuilder:
         baked = t.pixels.copy()
         baked[..., :3] = t.pixels[..., :3] * w + k
         # an image Cycles keeps encoded: the weight and constant after its lookup, in its order
-        baked = texture.baked(t.pixels, baked, lambda rgb: rgb * w + k)
+        baked = after_lookup(t.pixels, baked, lambda rgb: rgb * w + k)
         return np.ones(3, np.float32), t.texels(baked), t.interpolation, t.extension, t.transform
 
     def _shader(self, socket, reasons, depth):
@@ -799,8 +832,8 @@ class _MaterialBuilder:
         if t == 'BSDF_PRINCIPLED':
             return self._principled(node, reasons)
         if t == 'EMISSION':
-            return _Closure(emission=self._emission(node.inputs['Color'], node.inputs['Strength'],
-                                                    "Emission", reasons))
+            emission, etex = self._emission(node.inputs['Color'], node.inputs['Strength'], "Emission", reasons)
+            return _Closure(emission=emission, emission_tex=etex)
         if t == 'HOLDOUT':
             # Cycles: camera rays see through it (alpha 0); other rays meet a black absorber
             return _Closure(holdout=1.0)
@@ -846,7 +879,10 @@ class _MaterialBuilder:
         es = input_socket(node, 'Emission Strength')
         ec = input_socket(node, 'Emission Color', 'Emission')
         if es is not None and ec is not None:
-            c.emission = self._emission(ec, es, "Principled emission", reasons) * principled.emission_dim(node)
+            dim = principled.emission_dim(node)
+            emission, etex = self._emission(ec, es, "Principled emission", reasons)
+            c.emission = emission * dim
+            c.emission_tex = None if etex is None else (etex[0], etex[1] * dim)
         # Cycles: alpha < 1 adds a white Transparent BSDF of weight 1 - alpha and scales the rest
         # (emission included) by alpha
         alpha = node.inputs.get('Alpha')
@@ -911,24 +947,33 @@ class _MaterialBuilder:
         return _Closure(const=color)
 
     def _emission(self, color_socket, strength_socket, label, reasons):
-        """Radiance (3,) float64 of an emission's colour x strength: exact for constants and the
-        nodes the export evaluates; one driven by an image (a screen, a sign) emits its average
-        over the image's texels, as a uniform emitter (reported: emission is not textured
-        here); anything else its own value, reported."""
+        """(radiance (3,) float64, image emission or None) of an emission's colour x strength:
+        exact for constants and the nodes the export evaluates. Driven by an image (a screen,
+        a sign, a glTF emissive map): (_Texture, weight (3,)), emitting weight x the image,
+        and the radiance its average over the image's texels (what picks it as a light); an
+        image straight into the colour is read as Cycles reads it, colour and float nodes
+        after the image are baked into its texels (as for a diffuse colour)."""
         evaluate = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE)
-        averaged = []
-
-        def mean(socket, color):
-            f = evaluate.input(socket, color)
-            if f.tex is None:
-                return np.asarray(f.value, np.float64).reshape(-1)
-            averaged.append('colour' if color else 'strength')
-            return np.asarray(f.value, np.float64).reshape(-1, 3 if color else 1).mean(axis=0)
-
-        value = mean(color_socket, True) * mean(strength_socket, False)[0]
-        if averaged:
-            reasons.append(f"{label} {' and '.join(averaged)} from an image as its average over the image")
-        return value
+        color, strength = evaluate.input(color_socket, True), evaluate.input(strength_socket, False)
+        if color.tex is None and strength.tex is None:
+            return np.asarray(color.value, np.float64).reshape(3) * float(strength.value.reshape(-1)[0]), None
+        link = linked_link(color_socket)
+        if strength.tex is None and link is not None and link.from_node.type == 'TEX_IMAGE' \
+                and link.from_socket.name == 'Color':
+            tex = color.tex                 # the image itself, looked up as Cycles stores it
+            weight = np.full(3, float(strength.value.reshape(-1)[0]))
+        else:                               # nodes (or an image strength) baked per texel
+            src = color.tex if color.tex is not None else strength.tex
+            values = np.asarray(color.value, np.float64) * np.asarray(strength.value, np.float64)
+            px = np.empty(src.pixels.shape[:2] + (4,), np.float32)
+            px[..., :3] = _nonnegative(np.broadcast_to(values, px.shape[:2] + (3,)).astype(np.float32),
+                                       f"{label} from nodes", reasons)
+            px[..., 3] = 1.0
+            tex = _Texture(('emission', src.key, id(px)), px, src.interpolation, src.extension, src.transform,
+                           src.udim)
+            weight = np.ones(3)
+        mean = np.asarray(tex.pixels[..., :3], np.float64).reshape(-1, 3).mean(axis=0)
+        return mean * weight, (tex, weight)
 
     def _evaluated_closure(self, socket, reasons):
         f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE).input(socket, True)

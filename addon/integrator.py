@@ -210,6 +210,7 @@ class _Materials:
             raise ValueError("scene has no materials (index 0 must be the default material)")
         base, emit = [], []
         self.textures = []          # (material index, texture, interpolation, extension, uv transform)
+        self.emission_textures = []  # the same, of the materials whose emission is an image's
         for i, mat in enumerate(materials):
             b = np.asarray(mat.base_color, np.float64)
             e = np.asarray(mat.emission, np.float64)
@@ -223,6 +224,11 @@ class _Materials:
                 modes = _texture_modes(mat.name, 'texture', mat.texture_interpolation, mat.texture_extension,
                                        mat.texture_transform)
                 self.textures.append((i, _texture_array(mat.name, 'texture', mat.texture, modes[0]), *modes))
+            if getattr(mat, 'emission_texture', None) is not None and e.any():
+                modes = _texture_modes(mat.name, 'emission texture', mat.emission_interpolation,
+                                       mat.emission_extension, mat.emission_transform)
+                self.emission_textures.append(
+                    (i, _texture_array(mat.name, 'emission texture', mat.emission_texture, modes[0]), *modes))
         self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
         self.emissive = self.emission.max(axis=0) > 0
@@ -458,6 +464,16 @@ class Integrator:
         # radiance per triangle (3, M), gathered once: BSDF and camera rays read it per hit
         self._tri_emission = np.ascontiguousarray(np.take(self.mats.emission, self.tri.material, axis=1)) \
             if self._any_emissive else None
+        # image emission: such triangles' radiance is the image's at the point (_emission_at), so
+        # the tables gather and light samples scale have 1 there (the average still weighs the
+        # light choice); None without any
+        self._tri_emit_tex = self._tri_emission_unit = None
+        if self._any_emissive and self.mats.emission_textures:
+            textured = np.zeros(len(self.mats.emissive), bool)
+            textured[[m for m, *_ in self.mats.emission_textures]] = True
+            self._tri_emit_tex = textured[self.tri.material]
+            self._tri_emission_unit = self._tri_emission.copy()
+            self._tri_emission_unit[:, self._tri_emit_tex] = 1.0
         self._object_pass = None                # the Object Index pass's value of each triangle
         if 'IndexOB' in self.film.passes:
             ids = np.asarray(scene_data.object_pass_index if scene_data.object_pass_index is not None
@@ -513,8 +529,9 @@ class Integrator:
         vis = self.tri.visibility
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
         # same emitters.
-        tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._tri_emission,
-                                 self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)) if self._any_emissive else None
+        tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(),
+                                 self._tri_emissive & ((vis & VIS_DIFFUSE) != 0),
+                                 power_emission=self._tri_emission) if self._any_emissive else None
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None
         # a map diffuse rays cannot see lights nothing; camera rays may still see it (not
         # through transparent film)
@@ -1068,6 +1085,47 @@ class Integrator:
                 albedo[:, sel] *= self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
                                                np.take(v, sel))
 
+    def _emission_table(self):
+        """(3, M) per triangle: the radiance emission is gathered and light-sampled with (1 on
+        image-emission triangles, whose hits and samples are then scaled by _emission_at)."""
+        return self._tri_emission if self._tri_emission_unit is None else self._tri_emission_unit
+
+    def _emission_at(self, prim, u, v):
+        """Radiance (3, k) of image-emission triangles prim at barycentrics (u, v)."""
+        out = np.ones((3, len(prim)), F32)
+        mat = np.take(self.tri.material, prim)
+        for m, tex, interp, ext, xf in self.mats.emission_textures:
+            sel = np.flatnonzero(mat == m)
+            if len(sel):
+                out[:, sel] = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))
+        return out
+
+    def _textured_samples(self, value, entry, point):
+        """Scale light samples (value (3, n), in place) that picked an image-emission triangle
+        by the image's radiance at the sampled point (point (3, n)), found by its barycentrics."""
+        tris, r = self.lights.triangles, self.lights.num_lamps
+        if tris is None:
+            return
+        e = entry.astype(np.int64) - r
+        idx = np.flatnonzero((e >= 0) & (e < len(tris.index)))
+        if not len(idx):
+            return
+        prim = tris.index[e[idx]]
+        keep = np.flatnonzero(self._tri_emit_tex[prim])
+        idx, prim = idx[keep], prim[keep]
+        if not len(idx):
+            return
+        g = np.take(self.tri.geo, prim, axis=1).astype(np.float64)
+        d = point[:, idx].astype(np.float64) - g[0:3]
+        e1, e2 = g[3:6], g[6:9]
+        d00, d01, d11 = (e1 * e1).sum(0), (e1 * e2).sum(0), (e2 * e2).sum(0)
+        d20, d21 = (d * e1).sum(0), (d * e2).sum(0)
+        den = d00 * d11 - d01 * d01
+        with np.errstate(divide='ignore', invalid='ignore'):
+            bu = np.where(den > 0, (d11 * d20 - d01 * d21) / den, 0.0)
+            bv = np.where(den > 0, (d00 * d21 - d01 * d20) / den, 0.0)
+        value[:, idx] *= self._emission_at(prim, bu.astype(F32), bv.astype(F32))
+
     def _uv(self, prim, u, v):
         """The active UV map's (u, v) (two (k,) arrays) at hits (prim, u, v); (0, 0) without
         a UV map, as Cycles reads a missing attribute."""
@@ -1449,10 +1507,19 @@ class Integrator:
         if groups:
             grp = np.take(self._tri_group, np.maximum(hits['prim'], 0))
             outs += [(hit & (grp == g), G) for g, G in enumerate(groups)]
+        thr = path.thr
+        if self._tri_emit_tex is not None:
+            # image emission: its radiance at each hit scales the ray's throughput, against 1 in
+            # the table gathered from
+            prim = np.maximum(hits['prim'], 0)
+            at = np.flatnonzero(hit & np.take(self._tri_emit_tex, prim))
+            if len(at):
+                thr = np.ones((3, len(hit)), F32) if thr is None else thr.copy()
+                thr[:, at] *= self._emission_at(prim[at], hits['u'][at], hits['v'][at])
         for mask, out in outs:
-            dacrt.shading.gather_emission(hits, mask, self._tri_emission, self._tri_emissive,
+            dacrt.shading.gather_emission(hits, mask, self._emission_table(), self._tri_emissive,
                                           None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
-                                          path.O, path.D, path.thr, path.pdf, path.pid, out, clamp=clamp)
+                                          path.O, path.D, thr, path.pdf, path.pid, out, clamp=clamp)
 
     def _found_clamp(self, k):
         """The clamp of light that rays arriving at vertex k find: direct up to the BSDF rays
@@ -1531,11 +1598,16 @@ class Integrator:
         t = self.tri
         term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff, t.term_freq, u, v) \
             if t.terminator else None
-        entry = np.empty(len(pid), np.int32) if groups or self._shadow_link is not None else None
+        textured = self._tri_emit_tex is not None
+        entry = np.empty(len(pid), np.int32) if groups or self._shadow_link is not None or textured else None
+        point = np.empty((3, len(pid)), F32) if textured else None
         value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
             self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
             prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term,
-            linking=None if self._link is None else (self._entry_set, self._receivers(prim)), entry=entry)
+            linking=None if self._link is None else (self._entry_set, self._receivers(prim)), entry=entry,
+            point=point)
+        if textured:
+            self._textured_samples(value, entry, point)
         self._skipped_shadow += skipped
         if len(send) and self._shadow_link is not None:
             # shadow linking: each set's rays against its own blockers (set 0: every object)

@@ -111,6 +111,13 @@ class Material:
     texture_extension: str = 'REPEAT'             # 'REPEAT' | 'EXTEND' | 'CLIP'
     texture_transform: Optional[np.ndarray] = None   # (2, 3): the texture is read at
                                                   # (x, y) = T @ (u, v, 1); None: at (u, v)
+    # An image's emission (h, w, 4 texels like `texture`, RGB the radiance, or an EncodedTexels-
+    # carrying ImageTexels), read on the UV map: the emission at a hit, where `emission` is
+    # then its average over the image (what chooses the material's triangles as lights)
+    emission_texture: Optional[np.ndarray] = None
+    emission_interpolation: str = 'Linear'
+    emission_extension: str = 'REPEAT'
+    emission_transform: Optional[np.ndarray] = None
     uv_map: str = ''                              # the UV map (u, v) come from, by name (a UV Map
                                                   # node); '' the active render one. A mesh
                                                   # without it reads (0, 0), as in Cycles

@@ -16,9 +16,13 @@ class EmissiveTriangles:
     offset step of the front side; area (M,); emission (3, M) radiance per triangle;
     eligible (M,) triangles that may act as lights."""
 
-    def __init__(self, geo, area, emission, eligible):
+    def __init__(self, geo, area, emission, eligible, power_emission=None):
         lum = emission.astype(np.float64).mean(axis=0)      # float32 would overflow near 3e38
         self.index = np.flatnonzero(eligible & (lum > 0) & (area > 0))
+        # power_emission (3, M): what weighs the choice where `emission` is not the radiance
+        # (an image's emission: 1 here, its average there)
+        if power_emission is not None:
+            lum = power_emission.astype(np.float64).mean(axis=0)
         self.power = (area[self.index] * lum[self.index] * 2.0 * np.pi).astype(np.float64)
         self.geo = np.ascontiguousarray(geo[:, self.index])
         self.area = area[self.index].astype(F32)

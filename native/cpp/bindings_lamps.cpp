@@ -204,7 +204,7 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
                      uint32_t ka, uint32_t kb, py::object pick, py::object prim, float shorten, bool skip_work,
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
                      py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator,
-                     py::object linking, py::object entry) {
+                     py::object linking, py::object entry, py::object point) {
     F32Array keep[3], ng_keep, thr_keep;
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
@@ -288,6 +288,14 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
             throw py::value_error("entry must be a writeable C-contiguous int32 array (written in place)");
         need_shape(entry_keep, 0, n, "entry");
         out.entry = entry_keep.mutable_data();
+    }
+    F32Array point_keep;
+    if (!point.is_none()) {
+        point_keep = point.cast<F32Array>();
+        if (!point_keep.writeable() || point_keep.ptr() != point.ptr())
+            throw py::value_error("point must be a writeable C-contiguous float32 array (written in place)");
+        need_shape(point_keep, 3, n, "point");
+        out.point = point_keep.mutable_data();
     }
     if (rays.ndim() != 1 || size_t(rays.shape(0)) != n || rays.itemsize() != sizeof(Ray) ||
         !(rays.flags() & py::array::c_style) || !rays.writeable())
@@ -434,7 +442,7 @@ void register_lamps(py::module_& m) {
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),
           py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
           py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"),
-          py::arg("linking") = py::none(), py::arg("entry") = py::none());
+          py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none());
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)")
         .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"),

@@ -36,7 +36,7 @@ struct Pending {  // a shadow ray before its block's place in the output is know
 // count. Arguments by value, so the loop reads them from registers or its own stack (see
 // lamps.cpp).
 size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* contrib, int32_t* entry_out,
-                   Pending* pending, size_t b, size_t e, size_t* skipped) {
+                   float* point_out, Pending* pending, size_t b, size_t e, size_t* skipped) {
     const size_t n = p.n, T = L.num_tris;
     size_t m = b, bad = 0;
     for_words(p.keys, n, p.ka, p.kb, b, e, [&](size_t i0, size_t cnt, const uint32_t* wa, const uint32_t* wb) {
@@ -59,6 +59,8 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             } else {
                 const size_t w = entry - L.num_lamps;
                 triangle_light(L.tri_geo, L.tri_area, T, w, P, u1, u2, wi, dist, pdf, target);
+                if (point_out)
+                    for (int a = 0; a < 3; ++a) point_out[size_t(a) * n + i] = target[a];
                 const float scale = pdf > 0 ? 1.0f / pdf : 0.0f;
                 for (int a = 0; a < 3; ++a) value[a] = L.tri_emission[size_t(a) * T + w] * scale;
             }
@@ -145,7 +147,7 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
     std::vector<size_t> count(blocks), bad(blocks), offset(blocks);
     parallel_for(blocks, [&](size_t b0, size_t b1) {
         for (size_t k = b0; k < b1; ++k)
-            count[k] = event_block(lights, pts, out.value, out.contrib, out.entry, pending.get(), k * kBlock,
+            count[k] = event_block(lights, pts, out.value, out.contrib, out.entry, out.point, pending.get(), k * kBlock,
                                    std::min(n, (k + 1) * kBlock), &bad[k]);
     }, 1);
     size_t m = 0, skip_count = 0;

@@ -88,6 +88,9 @@ struct NextEventOut {
     int64_t* send;
     int32_t* skip;
     int32_t* entry = nullptr;  // the entry each point picked (n; null: not wanted), e.g. for light groups
+    // (3, n) the point sampled on an emissive triangle (just in front of it: the shadow ray's
+    // target), e.g. to read a textured emission there; other entries leave theirs untouched
+    float* point = nullptr;
 };
 
 size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped);

@@ -1326,10 +1326,12 @@ def test_a_colour_or_value_into_a_shader_input_is_its_emission(scene, exported):
     assert not any("world approximated" in t for _, t in data.messages)
 
 
-def test_image_driven_emission_emits_its_average(scene, exported):
-    """An Emission (or Principled emission) colour or strength from an image (a screen, a sign)
-    is not textured here: it emits the image's average, reported, where it used to emit the
-    socket's own value (the Emission node's default white)."""
+def test_image_driven_emission_is_the_image(scene, exported):
+    """An Emission (or Principled emission) colour from an image (a screen, a sign) emits the
+    image x strength, looked up per hit and per light sample (tests/parity/test_emission_texture.py),
+    and `emission` holds its average, which weighs the light choice; an image into the strength
+    bakes colour x strength per texel. Before, the socket's own value (the Emission node's
+    default white) was emitted."""
     setup(scene)
     img = bpy.data.images.new("Screen", 2, 2, float_buffer=True)
     px = np.array([[0.2, 0.4, 0.6, 1], [1.0, 0.0, 0.0, 1], [0.0, 1.0, 0.0, 1], [0.6, 0.6, 0.2, 1]])
@@ -1341,7 +1343,7 @@ def test_image_driven_emission_emits_its_average(scene, exported):
     tex.image = img
     nt.links.new(tex.outputs['Color'], e.inputs['Color'])
     nt.links.new(e.outputs[0], out.inputs['Surface'])
-    pmat = scenes.principled("Sign", (0.5, 0.5, 0.5), (1.0, 1.0, 1.0), 1.0)
+    pmat = scenes.principled("Sign", (0.5, 0.5, 0.5), (1.0, 0.5, 1.0), 1.0)
     p = next(n for n in pmat.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
     ptex = pmat.node_tree.nodes.new('ShaderNodeTexImage')
     ptex.image = img
@@ -1349,11 +1351,13 @@ def test_image_driven_emission_emits_its_average(scene, exported):
     scenes.plane("A", materials=(mat,))
     scenes.plane("B", location=(3, 0, 0), materials=(pmat,))
     table = {m.name: m for m in exported().materials}
-    assert np.allclose(table["Screen"].emission, 3.0 * px[:, :3].mean(axis=0), rtol=1e-6)
-    assert "Emission colour from an image as its average" in table["Screen"].approximated
-    grey = (px[:, :3] @ np.array([0.2126729, 0.7151522, 0.0721750])).mean()   # Rec.709 luminance
-    assert np.allclose(table["Sign"].emission, grey, rtol=1e-4)
-    assert "Principled emission strength from an image" in table["Sign"].approximated
+    screen, sign = table["Screen"], table["Sign"]
+    assert np.allclose(screen.emission, 3.0 * px[:, :3].mean(axis=0), rtol=1e-6) and not screen.approximated
+    assert np.allclose(np.asarray(screen.emission_texture)[..., :3].reshape(-1, 3), 3.0 * px[:, :3], rtol=1e-6)
+    grey = px[:, :3] @ np.array([0.2126729, 0.7151522, 0.0721750])                    # Rec.709 luminance
+    texels = np.asarray(sign.emission_texture)[..., :3].reshape(-1, 3)
+    assert np.allclose(texels, grey[:, None] * np.array([1.0, 0.5, 1.0]), rtol=1e-4)
+    assert np.allclose(sign.emission, texels.mean(axis=0), rtol=1e-6)
 
 
 def test_world_volume_is_reported(scene, exported):

@@ -118,6 +118,33 @@ def test_next_event_equals_the_composed_kernels(lamps, triangles, flat, thr, ski
         assert (contrib & ~np.isin(np.arange(n), send)).any(), 'no sample that needs no shadow ray'
 
 
+def test_point_is_each_triangle_samples_target():
+    """point (3, n) gets, for the points that picked an emissive triangle, the sampled point's
+    target (what an image emission is read at): sample_triangles' target for the same uniforms,
+    bit for bit; other columns are left as they were. The rest of the outputs do not change."""
+    rng = np.random.default_rng(5)
+    lc = _lights(rng, True, True)
+    n = 20_000
+    P, P_off, ns, ng, th, keys = _points(rng, n, flat=False, thr=True)
+    pick = rng.random(n)
+    ka, kb = 0x1234567, 0x89ABCDE
+    entry = np.empty(n, np.int32)
+    point = np.full((3, n), 7.0, F32)
+    got = shading.next_event(lc, P, P_off, ns, ng, th, keys, ka, kb, pick=pick, entry=entry, point=point)
+    plain = shading.next_event(lc, P, P_off, ns, ng, th, keys, ka, kb, pick=pick)
+    for a, b in zip(got[:4], plain[:4]):
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8))
+    R = len(lc.records)
+    tri = np.flatnonzero(entry >= R)
+    assert 0 < len(tri) < n
+    u1, u2 = shading.uniform2(keys, ka, kb)
+    target = shading.sample_triangles(lc.tri_geo, lc.tri_area, entry[tri] - R, P[:, tri], u1[tri], u2[tri])[3]
+    assert np.array_equal(point[:, tri], target)
+    assert np.all(np.delete(point, tri, axis=1) == 7.0)
+    with pytest.raises(ValueError, match="point must be a writeable C-contiguous float32"):
+        shading.next_event(lc, P, P_off, ns, ng, th, keys, ka, kb, pick=pick, point=np.zeros((3, n)))
+
+
 def test_light_linking_rejects_the_samples_of_lights_a_point_does_not_receive():
     """linking = (light set per entry, receiver mask per point): a sample of an entry whose set
     the point does not receive adds nothing and traces no ray; every other sample, and its

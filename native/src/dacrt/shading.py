@@ -207,7 +207,8 @@ class LightChoice:
 
 
 def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: int, pick=None, prim=None,
-               shorten: float = 1.0, skip_work: bool = True, terminator=None, linking=None, entry=None):
+               shorten: float = 1.0, skip_work: bool = True, terminator=None, linking=None, entry=None,
+               point=None):
     """Next-event estimation at n shading points in one pass: pick a light per point (entry 0
     when pick is None, else the entry the uniform pick (n,) float64 falls in), sample it with
     the uniforms of keys (2, n) and dimension words (ka, kb) (the same numbers as uniform2),
@@ -231,6 +232,10 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     entry: an (n,) int32 array filled in place with the entry each point picked (for routing
     the light by its source, e.g. light groups).
 
+    point: a (3, n) float32 array filled in place, for the points that picked an emissive
+    triangle, with the point sampled on it (the shadow ray's target, a few ULPs in front of the
+    triangle), e.g. to read a textured emission there; other columns are left as they were.
+
     Returns value (3, n) (each sample's contribution), contrib (n,) bool (it adds to the image
     unless its shadow ray is occluded), rays (m,) RAY_DTYPE (ids 0..m-1, in point order), send
     (m,) int64 (the point of each ray), skip (m,) int32 (prim[send], the triangle each ray
@@ -242,6 +247,9 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     if entry is not None and not (isinstance(entry, np.ndarray) and entry.dtype == np.int32
                                   and entry.flags.c_contiguous and entry.flags.writeable):
         raise ValueError("entry must be a writeable C-contiguous int32 array (written in place)")
+    if point is not None and not (isinstance(point, np.ndarray) and point.dtype == np.float32
+                                  and point.flags.c_contiguous and point.flags.writeable):
+        raise ValueError("point must be a writeable C-contiguous float32 array (written in place)")
     value = np.empty((3, n), _F32)
     contrib = np.empty(n, np.bool_)
     rays = np.empty(n, RAY_DTYPE)
@@ -256,7 +264,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         None if prim is None else np.ascontiguousarray(prim, np.int32), float(shorten), bool(skip_work),
         value, contrib, rays, send, skip, _terminator(terminator),
         None if linking is None else (np.ascontiguousarray(linking[0], np.uint8),
-                                      np.ascontiguousarray(linking[1], np.uint64)), entry)
+                                      np.ascontiguousarray(linking[1], np.uint64)), entry, point)
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
 
 

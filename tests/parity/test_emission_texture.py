@@ -1,0 +1,65 @@
+"""Emission from an image (a screen, a sign, a glTF emissive map) against Cycles: the emitter
+seen by the camera shows the image, and what it lights follows the image's colours, in light
+samples (the sample's point on the emitter reads the image) and in BSDF rays that meet it.
+
+Before, such an emitter glowed with the image's average everywhere: the floor under a red half
+and a blue half came out the same purple on both sides."""
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+def _image(tmp_path):
+    """A 2 x 1 8-bit sRGB image on disk: red on the left, blue on the right."""
+    import OpenImageIO as oiio
+    path = str(tmp_path / "screen.png")
+    px = np.array([[[230, 40, 20], [20, 60, 240]]], np.uint8)
+    out = oiio.ImageOutput.create(path)
+    out.open(path, oiio.ImageSpec(2, 1, 3, 'uint8'))
+    out.write_image(px)
+    out.close()
+    return bpy.data.images.load(path)
+
+
+@pytest.mark.parametrize('shader', ['EMISSION', 'PRINCIPLED'])
+def test_image_emission_matches_cycles(shader, tmp_path):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 64, 48
+    scenes.camera(location=(0, -7, 4), rotation=(np.radians(60), 0, 0))
+    scenes.plane("Floor", size=8.0, materials=(scenes.diffuse("Floor", (0.8, 0.8, 0.8)),))
+    mat, nt, out = scenes._material("Screen")
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.interpolation, tex.extension = _image(tmp_path), 'Closest', 'EXTEND'
+    if shader == 'EMISSION':
+        node = nt.nodes.new('ShaderNodeEmission')
+        node.inputs['Strength'].default_value = 3.0
+        nt.links.new(tex.outputs['Color'], node.inputs['Color'])
+    else:                                  # as a glTF import makes it: black base, emissive map
+        node = nt.nodes.new('ShaderNodeBsdfPrincipled')
+        node.inputs['Base Color'].default_value = (0, 0, 0, 1)
+        node.inputs['Specular IOR Level'].default_value = 0.0
+        node.inputs['Emission Strength'].default_value = 3.0
+        nt.links.new(tex.outputs['Color'], node.inputs['Emission Color'])
+    nt.links.new(node.outputs[0], out.inputs['Surface'])
+    screen = scenes.plane("Screen", size=3.0, location=(0, 1.5, 1.6), materials=(mat,))
+    screen.rotation_euler = (np.radians(90), 0, 0)            # upright, facing the camera (-y)
+    screen.data.uv_layers.new(name="UVMap")
+    sc.cycles.samples = sc.dacrt.samples = 256
+    sc.cycles.use_denoising = False
+    sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.dacrt.max_bounces = 1
+    sc.cycles.glossy_bounces = 0
+    layer = sc.view_layers[0].name
+    img = {e: np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], axis=-1)
+           for e, exr in scenes.render_engines(sc, tmp_path).items()}
+    d, c = img['DACRT'], img['CYCLES']
+    rows = slice(0, 14)                     # the floor in front of the screen (row 0: bottom)
+    for cols in (slice(4, 28), slice(36, 60)):                 # left (red) and right (blue) halves
+        np.testing.assert_allclose(d[rows, cols].mean((0, 1)), c[rows, cols].mean((0, 1)), rtol=0.03)
+    np.testing.assert_allclose(d.mean((0, 1)), c.mean((0, 1)), rtol=0.01)
+    left, right = c[rows, 4:28].mean((0, 1)), c[rows, 36:60].mean((0, 1))
+    assert left[0] > 1.2 * right[0] and right[2] > 1.2 * left[2], "the floor must show the image's halves"
