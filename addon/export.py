@@ -683,6 +683,8 @@ class _MaterialBuilder:
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
         self._uv_names = []
+        self._normal_maps = []
+        self.normal_mapped = False  # some material has a normal map: meshes need tangents
 
     def index(self, mat):
         """Global index of an (evaluated) material; None -> default material 0."""
@@ -695,7 +697,7 @@ class _MaterialBuilder:
             self.materials.append(self._build(mat))
             m = self.materials[-1]
             self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
-                                     or m.emission_texture is not None)
+                                     or m.emission_texture is not None or m.normal_texture is not None)
             self.uv_maps.append(m.uv_map)
             self._index[key] = idx
         return idx
@@ -735,6 +737,7 @@ class _MaterialBuilder:
     def _build(self, mat):
         reasons = []
         self._uv_names = []           # the UV map each image this material reads asks for
+        self._normal_maps = []        # (_Texture, strength, UV map) of its BSDFs' normal maps
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
@@ -783,6 +786,16 @@ class _MaterialBuilder:
             px[..., :3] = t.pixels[..., :3] * w32
             px = after_lookup(t.pixels, px, lambda rgb: rgb * w32)   # after the lookup, as Cycles
             e_tex, e_interp, e_ext, e_xf = t.texels(px), t.interpolation, t.extension, t.transform
+        n_tex = n_interp = n_ext = n_xf = None
+        n_strength = 1.0
+        if self._normal_maps:
+            t, n_strength, n_uv = self._normal_maps[0]
+            if len({(m[0].key, m[1]) for m in self._normal_maps}) > 1:
+                reasons.append("BSDFs with different normal maps; the first one's for all")
+            if n_uv and n_uv not in self._uv_names:
+                reasons.append(f"normal map tangents of UV map '{n_uv}' read on the image's UV map")
+            n_tex, n_interp, n_ext, n_xf = t.texels(t.pixels), t.interpolation, t.extension, t.transform
+            self.normal_mapped = True
         uv_names = list(dict.fromkeys(self._uv_names))
         if len(uv_names) > 1:       # one UV map per triangle here
             shown = ', '.join(repr(n) if n else 'the active render map' for n in uv_names)
@@ -790,6 +803,10 @@ class _MaterialBuilder:
         return sd.Material(name=name, base_color=base, uv_map=uv_names[0] if uv_names else '',
                            emission_texture=e_tex, emission_interpolation=e_interp or 'Linear',
                            emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,
+                           normal_texture=n_tex, normal_interpolation=n_interp or 'Linear',
+                           normal_extension=n_ext or 'REPEAT', normal_transform=n_xf, normal_strength=n_strength,
+                           bump_correction=bool(getattr(getattr(mat, 'cycles', None), 'use_bump_map_correction',
+                                                        True)),
                            emission=emission, texture=texture,
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
@@ -825,7 +842,7 @@ class _MaterialBuilder:
             return _Closure(const=DEFAULT_ALBEDO)
         t = node.type
         if t == 'BSDF_DIFFUSE':
-            _note_normal_inputs(node, reasons)
+            self._normal_input(node, reasons)
             c = self._color_closure(node.inputs['Color'], reasons)
             rough = diffuse_roughness(node, reasons)
             return c if rough == 0.0 else c.mapped(roughdiffuse.RoughDiffuse(rough))
@@ -872,7 +889,7 @@ class _MaterialBuilder:
                 v, ok = constant_value(s)
                 if v != 0.0 or not ok:
                     reasons.append(f"Principled {what} ignored")
-        _note_normal_inputs(node, reasons)
+        self._normal_input(node, reasons)
         c = self._color_closure(node.inputs['Base Color'], reasons)
         for step in principled.layer_steps(node, reasons):
             c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
@@ -987,6 +1004,15 @@ class _MaterialBuilder:
         return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim),
                         tex_weight=(1.0, 1.0, 1.0))
 
+    def _normal_input(self, node, reasons):
+        """Note a BSDF's tangent-space normal map (tangent_normal_map) for the material."""
+        found = tangent_normal_map(node, reasons)
+        if found is not None:
+            image, strength, uv_map = found
+            tex = self._texture(image, reasons)
+            if tex is not None:
+                self._normal_maps.append((tex, strength, uv_map))
+
     def _texture(self, node, reasons):
         img = node.image
         transform = texture_transform(node, reasons)
@@ -1020,11 +1046,26 @@ class _MaterialBuilder:
                         interp, ext, transform, udim)
 
 
-def _note_normal_inputs(node, reasons):
-    """A BSDF's linked Normal (bump or normal map) is ignored: shading normals come from the mesh."""
+def tangent_normal_map(node, reasons):
+    """(image node, strength, UV map name) of a BSDF's Normal input fed by a tangent-space
+    Normal Map node whose Color is an Image Texture's (the common baked normal map), or None
+    (an unlinked Normal; anything else is reported as ignored)."""
     socket = node.inputs.get('Normal')
-    if socket is not None and linked_node(socket) is not None:
-        reasons.append("Normal input (bump / normal map) ignored")
+    link = linked_link(socket) if socket is not None else None
+    if link is None:
+        return None
+    nmap = link.from_node
+    image = linked_link(nmap.inputs['Color']) if nmap.type == 'NORMAL_MAP' else None
+    if nmap.type != 'NORMAL_MAP' or nmap.space != 'TANGENT' or image is None \
+            or image.from_node.type != 'TEX_IMAGE' or image.from_socket.name != 'Color':
+        what = f"{nmap.space.lower().replace('_', ' ')} space normal map" if nmap.type == 'NORMAL_MAP' else \
+            f"'{nmap.bl_label}'"
+        reasons.append(f"Normal input ({what}) ignored: tangent-space normal maps of an image only")
+        return None
+    strength, ok = constant_value(nmap.inputs['Strength'])
+    if not ok:
+        reasons.append("Normal Map strength driven by nodes; its own value used")
+    return image.from_node, max(float(strength), 0.0), str(nmap.uv_map)
 
 
 def _associates_alpha(img):
@@ -1425,7 +1466,7 @@ class _MeshArrays:
     (RNA's per-item path, ~0.1 s per million triangles) is skipped and per-corner data
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
-                 'corner_uvs', 'uv_layers', 'domain')
+                 'corner_uvs', 'uv_layers', 'domain', 'mesh', '_tangents')
 
     def __init__(self, me, want_uvs):
         nv = len(me.vertices)
@@ -1471,6 +1512,7 @@ class _MeshArrays:
             self.normal_rows, self.normal_index = cn.reshape(nl, 3), self.corners
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
             self.normal_rows = self.normal_index = None
+        self.mesh, self._tangents = None, {}   # set for depsgraph meshes: tangents on demand
         # every UV map by name (a material may read one by a UV Map node); corner_uvs: the
         # active render one, which textures read otherwise
         self.uv_layers = self._read_uvs(me) if want_uvs else {}
@@ -1485,8 +1527,35 @@ class _MeshArrays:
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
         a.corners, a.slot, a.corner_uvs, a.uv_layers, a.domain = None, None, None, {}, 'POINT'
+        a.mesh, a._tangents = None, {}
         a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
         return a
+
+    def corner_tangents(self, uv_map):
+        """(nt, 3, 4) float32 object-space mikktspace tangent and bitangent sign per triangle
+        corner, of UV map uv_map ('' the active render one), as Cycles computes them for a
+        normal map (Blender's calc_tangents); None where there are none (no such UV map, a
+        mesh made here or by to_mesh, n-gons Blender cannot take)."""
+        if uv_map in self._tangents:
+            return self._tangents[uv_map]
+        out = None
+        me = self.mesh
+        name = uv_map or next((l.name for l in me.uv_layers if l.active_render), '') if me is not None else ''
+        if me is not None and name in me.uv_layers:
+            try:
+                me.calc_tangents(uvmap=name)
+                nl = len(me.loops)
+                tan = np.empty(nl * 3, np.float32)
+                me.loops.foreach_get('tangent', tan)
+                sign = np.empty(nl, np.float32)
+                me.loops.foreach_get('bitangent_sign', sign)
+                rows = np.concatenate([tan.reshape(nl, 3), sign[:, None]], axis=1)
+                out = np.empty((len(self.triangles), 3, 4), np.float32)
+                self.per_corner(rows, self.corners, out)
+            except RuntimeError:
+                out = None
+        self._tangents[uv_map] = out
+        return out
 
     @staticmethod
     def _read_uvs(me):
@@ -1524,6 +1593,7 @@ class _Out:
         self.visibility = np.empty(m, np.uint8)
         self.object_index = np.empty(m, np.int32)
         self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
+        self.tangents = None              # (m, 3, 4), allocated by the first normal-mapped mesh
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.keep = None
@@ -1537,7 +1607,7 @@ class _Out:
     def geometry(self):
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, uvs=self.uvs,
-                       terminator=self.terminator, has_uv=self.has_uv)
+                       terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
         return sd.Geometry(vertices=self.vertices, **per_tri)
@@ -1859,6 +1929,8 @@ class _Exporter:
         want_uvs = True
         if ob.type == 'MESH':
             arrays = _mesh_arrays(ob.data, want_uvs)
+            if arrays is not None:
+                arrays.mesh = ob.data       # the depsgraph's mesh, alive through the export
         elif ob.type in ('POINTCLOUD', 'CURVES'):
             arrays = self._tessellated(ob)
         else:
@@ -2093,7 +2165,37 @@ class _Exporter:
                 self._named_uvs(a, p, out.material[S], out.uvs[S])
                 if i in mirrored:
                     _rewind(out.uvs[S])
+            if self.materials.normal_mapped:
+                self._world_tangents(a, p, lin[i], i in mirrored, out, S)
         return bad, deg
+
+    def _world_tangents(self, a, place, lin, mirrored, out, S):
+        """The world-space tangents (unit) and bitangent signs of one instance's triangles whose
+        material has a normal map, as Cycles' object-space normal map math turned to world
+        space: a mirroring transform flips the sign (cross(M n, M t) = det(M) M^-T cross(n, t)).
+        A mesh without tangents keeps zeros there: the normal map then leaves the normal as
+        it is (Cycles' fallback without the tangent attribute)."""
+        mats = self.materials.materials
+        wants = {k for k in set(place.slot_map) if mats[k].normal_texture is not None}
+        if not wants:
+            return
+        names = {self.materials.uv_maps[k] for k in wants}
+        tan = a.corner_tangents(sorted(names)[0])
+        if tan is None:
+            self._ignore("normal map not applied: no tangents (the mesh has no such UV map, n-gons, or is "
+                         "a curve, text or metaball; Cycles derives them from generated coordinates)", place.name)
+            return
+        if out.tangents is None:
+            out.tangents = np.zeros((len(out.triangles), 3, 4), np.float32)
+        rows = np.flatnonzero(np.isin(out.material[S], list(wants)))
+        t = tan[rows, :, :3] @ lin.T.astype(np.float32)
+        length = np.linalg.norm(t, axis=-1, keepdims=True)
+        t = np.where(length > 0, t / np.where(length > 0, length, 1), 0).astype(np.float32)
+        block = out.tangents[S]
+        block[rows, :, :3] = t
+        block[rows, :, 3] = -tan[rows, :, 3] if mirrored else tan[rows, :, 3]
+        if mirrored:                      # corners 1 and 2 were swapped for these triangles
+            block[rows] = block[rows][:, [0, 2, 1]]
 
     def _named_uvs(self, a, place, material, uvs):
         """Triangles whose material reads a UV map by name get that map's coordinates (0, 0 on

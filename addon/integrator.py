@@ -186,6 +186,10 @@ class _Triangles:
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
         self.normals = None if flat else dacrt.shading.corner_rows(normals)
         self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
+        # rows: corner 0 tangent and sign (0:4), corner 1 - corner 0 (4:8), corner 2 - corner 0
+        # (8:12), for normal maps
+        tangents = getattr(geometry, 'tangents', None)
+        self.tangents = None if tangents is None else dacrt.shading.corner_rows(np.asarray(tangents, F32))
         self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
             np.asarray(geometry.has_uv, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
@@ -211,6 +215,7 @@ class _Materials:
         base, emit = [], []
         self.textures = []          # (material index, texture, interpolation, extension, uv transform)
         self.emission_textures = []  # the same, of the materials whose emission is an image's
+        self.normal_maps = []       # (index, texture, interpolation, extension, uv transform, strength)
         for i, mat in enumerate(materials):
             b = np.asarray(mat.base_color, np.float64)
             e = np.asarray(mat.emission, np.float64)
@@ -224,6 +229,16 @@ class _Materials:
                 modes = _texture_modes(mat.name, 'texture', mat.texture_interpolation, mat.texture_extension,
                                        mat.texture_transform)
                 self.textures.append((i, _texture_array(mat.name, 'texture', mat.texture, modes[0]), *modes))
+            if getattr(mat, 'normal_texture', None) is not None:
+                modes = _texture_modes(mat.name, 'normal map', mat.normal_interpolation, mat.normal_extension,
+                                       mat.normal_transform)
+                strength = float(mat.normal_strength)
+                if not (np.isfinite(strength) and strength >= 0):
+                    raise ValueError(f"material {mat.name!r}: normal_strength must be finite and >= 0, "
+                                     f"got {mat.normal_strength!r}")
+                self.normal_maps.append(
+                    (i, _texture_array(mat.name, 'normal map', mat.normal_texture, modes[0]), *modes, strength,
+                     bool(getattr(mat, 'bump_correction', True))))
             if getattr(mat, 'emission_texture', None) is not None and e.any():
                 modes = _texture_modes(mat.name, 'emission texture', mat.emission_interpolation,
                                        mat.emission_extension, mat.emission_transform)
@@ -345,6 +360,8 @@ def _validate(sd: SceneData):
         (g.terminator is None or np.asarray(g.terminator).shape == (m, 2),
          f"geometry.terminator must be None or ({m},2)"),
         (g.has_uv is None or np.asarray(g.has_uv).shape == (m,), f"geometry.has_uv must be None or ({m},)"),
+        (getattr(g, 'tangents', None) is None or np.asarray(g.tangents).shape == (m, 3, 4),
+         f"geometry.tangents must be None or ({m}, 3, 4)"),
     ]
     for ok, msg in checks:
         if not ok:
@@ -1029,7 +1046,8 @@ class Integrator:
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
         # (their barycentrics too where textures need them)
         tex = bool(self.mats.textures)
-        uv = tex or (self.tri.term_cutoff is not None and bool(self.lights))   # the lift needs u, v
+        bumped = bool(self.mats.normal_maps) and self.tri.tangents is not None
+        uv = tex or bumped or (self.tri.term_cutoff is not None and bool(self.lights))   # the lift needs u, v
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_albedo, path.thr,
             u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),
@@ -1041,11 +1059,16 @@ class Integrator:
             return None
         if tex:
             self._texture(prim, u, v, thr)
+        bump = None
+        if bumped:                        # the smooth normal and the correction flag stay for the
+            bump = np.empty((4, len(prim)), F32)      # bump shadowing of light samples and bounces
+            bump[:3] = ns
+            ns = self._normal_mapped(prim, u, v, ns, ng, bump[3])
         tb = None if path.tb is None else np.take(path.tb, idx)
         del hits, path
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, sinks.sampled(k), tb, u, v,
-                             sinks.groups)
+                             sinks.groups, bump)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
@@ -1056,6 +1079,8 @@ class Integrator:
         offset = None if self.tri.term_freq is None else (self.tri.term_freq, prim, thr)
         wi, pdf, ok, rays = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng, origins=P_off,
                                                          shading_offset=offset)
+        if bump is not None:              # Cycles' bsdf_sample: eval x bump_shadowing_term
+            thr *= bump_shadowing(bump[:3], ns, wi, bump[3] != 0)
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
             kept = np.flatnonzero(ok)
@@ -1084,6 +1109,45 @@ class Integrator:
             if len(sel):
                 albedo[:, sel] *= self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
                                                np.take(v, sel))
+
+    def _normal_mapped(self, prim, u, v, ns, ng, correction):
+        """The shading normals (3, k) at hits (prim, u, v) with their materials' tangent-space
+        normal maps applied as Cycles' svm_node_normal_map: c = 2 x texel - 1, its x, y times
+        the strength and z mixed from 1, N = normalize(c.x T + c.y sign (n x T) + c.z n) with T
+        the interpolated tangent and n the interpolated (unnormalized) smooth normal of the
+        front face, turned to the side the ray came from as ns is (ng: the geometric normal on
+        that side). A new array; hits of other materials keep ns. correction (k,): filled with
+        each hit's material's Bump Map Correction (0 or 1)."""
+        out = np.array(ns, F32, copy=True)
+        correction[:] = 0.0
+        mat = np.take(self.tri.material, prim)
+        t, geo, normals = self.tri.tangents, self.tri.geo, self.tri.normals
+        for m, tex, interp, ext, xf, strength, corrected in self.mats.normal_maps:
+            sel = np.flatnonzero(mat == m)
+            if not len(sel):
+                continue
+            correction[sel] = float(corrected)
+            p, uu, vv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
+            c = F32(2.0) * (self._lookup(tex, interp, ext, xf, p, uu, vv) - F32(0.5))
+            c[0] *= F32(strength)
+            c[1] *= F32(strength)
+            c[2] = F32(1.0) + (c[2] - F32(1.0)) * F32(min(strength, 1.0))
+            tr = np.take(t, p, axis=1)
+            T = tr[0:4] + tr[4:8] * uu + tr[8:12] * vv          # tangent (0:3) and sign (3)
+            if normals is None:
+                n = np.take(geo[9:12], p, axis=1)
+            else:
+                nr = np.take(normals, p, axis=1)
+                n = nr[0:3] + nr[3:6] * uu + nr[6:9] * vv
+            B = T[3] * np.cross(n, T[:3], axis=0)
+            N = c[0] * T[:3] + c[1] * B + c[2] * n
+            length = np.sqrt((N * N).sum(axis=0))
+            good = (length > 0) & np.isfinite(length) & (np.abs(T[:3]).sum(axis=0) > 0)
+            # back faces: the ray meets the side opposite the winding normal
+            back = (np.take(ng, sel, axis=1) * np.take(geo[9:12], p, axis=1)).sum(axis=0) < 0
+            N = np.where(back, -N, N) / np.where(good, length, 1)
+            out[:, sel] = np.where(good, N, out[:, sel])
+        return out
 
     def _emission_table(self):
         """(3, M) per triangle: the radiance emission is gathered and light-sampled with (1 on
@@ -1584,7 +1648,7 @@ class Integrator:
     # --- next-event estimation --------------------------------------------------------------------
 
     def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None,
-                    groups=()):
+                    groups=(), bump=None):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
         the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
@@ -1605,7 +1669,7 @@ class Integrator:
             self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
             prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term,
             linking=None if self._link is None else (self._entry_set, self._receivers(prim)), entry=entry,
-            point=point)
+            point=point, bump=bump)
         if textured:
             self._textured_samples(value, entry, point)
         self._skipped_shadow += skipped
@@ -1746,6 +1810,27 @@ class _Sinks:
             if not (name == 'Env' and transparent):
                 self.L += a
         data.update((name, self.arrays[name]) for name in self.passes)
+
+
+def bump_shadowing(Ns, N, I, correction):
+    """(k,) Cycles' bump_shadowing_term of diffuse closures with normals N bent by a normal map
+    from the smooth normals Ns, toward directions I (all (3, k) unit), as the native light
+    samples take it (native/cpp/pathvertex.h bump_shadowing): 1 where N is Ns, 0 where I and N
+    lie on different sides of the smooth surface, else with correction (k,) bool the GGX G1 of
+    alpha^2 = tan^2(angle(Ns, N)) / 8 at I."""
+    Ns, N, I = (np.asarray(x, F32) for x in (Ns, N, I))
+    cos_si = (Ns * I).sum(axis=0)
+    cos_sn = (Ns * N).sum(axis=0)
+    cos_ni = (N * I).sum(axis=0)
+    cos_i, cos_d = np.abs(cos_si), np.abs(cos_sn)
+    with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
+        alpha2 = np.clip(F32(0.125) * (F32(1.0) / (cos_d * cos_d) - F32(1.0)), 0.0, 1.0)
+        tan2_i = (F32(1.0) - cos_i * cos_i) / (cos_i * cos_i)
+        g = F32(2.0) / (F32(1.0) + np.sqrt(F32(1.0) + alpha2 * tan2_i))
+    g = np.where((cos_d >= 1) | (cos_i >= 1), F32(1.0), np.where(cos_i < F32(1e-6), F32(0.0), g))
+    g = np.where(correction, g, F32(1.0))
+    g = np.where(cos_si * cos_sn * cos_ni < 0, F32(0.0), g)
+    return np.where((Ns == N).all(axis=0), F32(1.0), g).astype(F32)
 
 
 def _clamp_limit(name, value):

@@ -118,6 +118,14 @@ class Material:
     emission_interpolation: str = 'Linear'
     emission_extension: str = 'REPEAT'
     emission_transform: Optional[np.ndarray] = None
+    # A tangent-space normal map (an image's texels, as `texture`, read on the UV map) of
+    # strength normal_strength, with the triangles' tangents (Geometry.tangents); None: none
+    normal_texture: Optional[np.ndarray] = None
+    normal_interpolation: str = 'Linear'
+    normal_extension: str = 'REPEAT'
+    normal_transform: Optional[np.ndarray] = None
+    normal_strength: float = 1.0
+    bump_correction: bool = True                  # Material > Settings > Bump Map Correction (Cycles)
     uv_map: str = ''                              # the UV map (u, v) come from, by name (a UV Map
                                                   # node); '' the active render one. A mesh
                                                   # without it reads (0, 0), as in Cycles
@@ -167,6 +175,10 @@ class Geometry:
     # (M,) bool: the triangle's mesh has a UV map (uvs there are 0 where not, as Cycles reads a
     # missing attribute; the UV pass's third channel is 0 there); None: every mesh has one
     has_uv: Optional[np.ndarray] = None
+    # (M,3,4) float32 per corner: the world-space unit tangent (mikktspace, of the UV map the
+    # triangle's material reads) and the bitangent sign, for normal maps; 0 where none; None: no
+    # material has a normal map
+    tangents: Optional[np.ndarray] = None
 
     @staticmethod
     def empty() -> 'Geometry':

@@ -204,8 +204,8 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
                      uint32_t ka, uint32_t kb, py::object pick, py::object prim, float shorten, bool skip_work,
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
                      py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator,
-                     py::object linking, py::object entry, py::object point) {
-    F32Array keep[3], ng_keep, thr_keep;
+                     py::object linking, py::object entry, py::object point, py::object bump) {
+    F32Array keep[3], ng_keep, thr_keep, bump_keep;
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
@@ -221,6 +221,7 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     pts.ns = ns.data();
     pts.ng = optional_f32(ng, 3, n, "ng", ng_keep);
     pts.thr = optional_f32(thr, 3, n, "thr", thr_keep);
+    pts.bump = optional_f32(bump, 4, n, "bump", bump_keep);
     pts.keys = keys.data();
     pts.ka = ka;
     pts.kb = kb;
@@ -442,7 +443,8 @@ void register_lamps(py::module_& m) {
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),
           py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
           py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"),
-          py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none());
+          py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none(),
+          py::arg("bump") = py::none());
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)")
         .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"),

@@ -75,6 +75,12 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             // the shadow ray's to decide (it leaves through its own, skipped, triangle), as in
             // Cycles, whose diffuse eval has no geometric test.
             bool ok = nee_scale(ns, nullptr, wi, pdf, L.prob[entry], p.thr ? thr : nullptr, value);
+            if (p.bump) {  // a normal-mapped point: Cycles' bump shadowing of the sample
+                const float Ns[3] = {p.bump[i], p.bump[n + i], p.bump[2 * n + i]};
+                const float g = bump_shadowing(Ns, ns, wi, p.bump[3 * n + i] != 0.0f);
+                for (int a = 0; a < 3; ++a) value[a] *= g;
+                ok = ok && g > 0.0f;
+            }
             if (L.light_set && p.receivers && !((p.receivers[i] >> L.light_set[entry]) & 1u)) {
                 ok = false;  // light linking: the light does not reach this point's object
                 value[0] = value[1] = value[2] = 0.0f;

@@ -74,6 +74,9 @@ struct VertexPoints {
     bool skip_work;
     const Terminator* term;
     const uint64_t* receivers = nullptr;  // light linking: the light sets each point receives (n)
+    // normal maps: (4, n) the smooth normal before the map (rows 0-2; ns where there is none)
+    // and the material's Bump Map Correction (row 3, 0 or 1): samples take bump_shadowing
+    const float* bump = nullptr;
 };
 
 // value (3 rows of n): the sample's contribution, thr x radiance / pdf x cos/pi x MIS / p_sel;

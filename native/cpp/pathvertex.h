@@ -83,6 +83,28 @@ inline bool nee_scale(const float ns[3], const float* ng, const float wi[3], flo
     return good;
 }
 
+// Cycles' bump_shadowing_term (closure/bsdf.h) of a diffuse closure whose normal N a normal
+// map bent away from the smooth normal Ns, toward the unit direction I: 1 where N is Ns; 0
+// where I and N lie on different sides of the smooth surface; else, with the material's Bump
+// Map Correction (correction), the GGX shadowing G1 of alpha^2 = tan^2(angle(Ns, N)) / 8 at
+// I (Conty Estevez et al., "A Microfacet-Based Shadowing Function to Solve the Bump Terminator
+// Problem"), which softens the light a bent normal would catch past the terminator.
+inline float bump_shadowing(const float Ns[3], const float N[3], const float I[3], bool correction) {
+    if (Ns[0] == N[0] && Ns[1] == N[1] && Ns[2] == N[2]) return 1.0f;
+    const float cosNsI = Ns[0] * I[0] + Ns[1] * I[1] + Ns[2] * I[2];
+    const float cosNsN = Ns[0] * N[0] + Ns[1] * N[1] + Ns[2] * N[2];
+    const float cosNI = N[0] * I[0] + N[1] * I[1] + N[2] * I[2];
+    if (cosNsI * cosNsN * cosNI < 0.0f) return 0.0f;
+    if (!correction) return 1.0f;
+    const float cos_i = std::fabs(cosNsI), cos_d = std::fabs(cosNsN);
+    if (cos_d >= 1.0f || cos_i >= 1.0f) return 1.0f;
+    if (cos_i < 1e-6f) return 0.0f;
+    const float tan2_d = 1.0f / (cos_d * cos_d) - 1.0f;
+    const float alpha2 = std::min(std::max(0.125f * tan2_d, 0.0f), 1.0f);
+    const float tan2_i = (1.0f - cos_i * cos_i) / (cos_i * cos_i);
+    return 2.0f / (1.0f + std::sqrt(1.0f + alpha2 * tan2_i));
+}
+
 // Cycles' shadow terminator (light/sample.h, closure/bsdf.h): what a smooth-shaded low-poly
 // mesh needs so its light does not end in the facets' steps.
 //

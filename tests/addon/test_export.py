@@ -1600,3 +1600,44 @@ def test_shader_aovs_exported(scene, exported):
     assert np.allclose(texels[..., :3], 0.5) and interp == 'Linear' and ext == 'REPEAT'
     assert ("tint", 'value') not in table["Imaged"].aov_textures
     assert s.world_aovs["mask"][1] == pytest.approx(0.125) and "tint" not in s.world_aovs
+
+
+def test_normal_map_material_and_world_tangents(scene, exported):
+    """A BSDF's Normal fed by a tangent-space Normal Map node of an image: the material carries
+    the image and the strength, and its triangles get world-space unit tangents (Blender's
+    mikktspace, turned by the object) and bitangent signs, flipped with a mirroring transform;
+    other triangles keep zeros; a bump node is still reported as ignored."""
+    setup(scene)
+    img = bpy.data.images.new("Normals", 2, 2)
+    img.colorspace_settings.name = 'Non-Color'
+    mat, nt, out = scenes._material("Mapped")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    nmap = nt.nodes.new('ShaderNodeNormalMap')
+    nmap.inputs['Strength'].default_value = 0.7
+    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
+    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    bumped, bnt, bout = scenes._material("Bumped")
+    bd = bnt.nodes.new('ShaderNodeBsdfDiffuse')
+    bnt.links.new(bnt.nodes.new('ShaderNodeBump').outputs['Normal'], bd.inputs['Normal'])
+    bnt.links.new(bd.outputs[0], bout.inputs['Surface'])
+    for name, x, sx in (("Plain", 0.0, 1.0), ("Mirrored", 3.0, -1.0)):
+        bpy.ops.mesh.primitive_plane_add(size=2.0, location=(x, 0, 0), rotation=(0, 0, math.pi / 2))
+        ob = bpy.context.active_object
+        ob.name, ob.scale.x = name, sx
+        ob.data.materials.append(mat)
+    scenes.plane("Other", location=(6, 0, 0), materials=(bumped,))
+    data = exported()
+    table = {m.name: m for m in data.materials}
+    assert table["Mapped"].normal_texture is not None and table["Mapped"].normal_strength == pytest.approx(0.7)
+    assert not table["Mapped"].approximated
+    assert "Normal input ('Bump') ignored" in table["Bumped"].approximated
+    g = data.geometry
+    plain, mirrored, other = (g.tangents[of_object(data, n)] for n in ("Plain", "Mirrored", "Other"))
+    # the plane's UV u runs along its local +x, turned 90 degrees about z: world +y
+    np.testing.assert_allclose(plain[..., :3], np.broadcast_to([0.0, 1.0, 0.0], plain[..., :3].shape), atol=1e-6)
+    np.testing.assert_allclose(mirrored[..., :3], -plain[..., :3], atol=1e-6)  # local x mirrored first
+    assert np.all(plain[..., 3] == 1.0) and np.all(mirrored[..., 3] == -1.0)
+    assert not other.any()

@@ -7,7 +7,8 @@ engine approximates, so comparing the two as they are measures the approximation
 engine. `make_diffuse()` edits every material's node tree in place into what the add-on's
 export renders exactly, following the export's own rules (addon/export.py `_MaterialBuilder`):
 - Principled BSDF: metallic, transmission, coat, sheen, subsurface, specular layer, diffuse
-  roughness, thin film set to 0, its Normal input unlinked; the specular layer and the coat,
+  roughness, thin film set to 0, its Normal input unlinked (a tangent-space normal map of an
+  image stays: the export renders it); the specular layer and the coat,
   which the export renders as diffuse (addon/principled.py), folded into the base colour
   first; Alpha kept (the export renders a constant one and an Image Texture's Alpha output;
   anything else feeding it is unlinked);
@@ -282,7 +283,8 @@ class _Editor:
 
     def _normals(self, node):
         sock = node.inputs.get('Normal')
-        if sock is not None and nodegraph.linked_node(sock) is not None:
+        if sock is not None and nodegraph.linked_node(sock) is not None \
+                and export.tangent_normal_map(node, []) is None:     # a normal map it renders stays
             self._unlink(sock, f"{node.bl_label} Normal input removed")
 
     def _own_value(self, socket):

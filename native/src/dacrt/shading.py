@@ -208,7 +208,7 @@ class LightChoice:
 
 def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: int, pick=None, prim=None,
                shorten: float = 1.0, skip_work: bool = True, terminator=None, linking=None, entry=None,
-               point=None):
+               point=None, bump=None):
     """Next-event estimation at n shading points in one pass: pick a light per point (entry 0
     when pick is None, else the entry the uniform pick (n,) float64 falls in), sample it with
     the uniforms of keys (2, n) and dimension words (ka, kb) (the same numbers as uniform2),
@@ -235,6 +235,11 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     point: a (3, n) float32 array filled in place, for the points that picked an emissive
     triangle, with the point sampled on it (the shadow ray's target, a few ULPs in front of the
     triangle), e.g. to read a textured emission there; other columns are left as they were.
+
+    bump (4, n): for normal-mapped points, ns being the mapped normal, the smooth normal before
+    the map (rows 0-2; equal to ns where there is no map) and the material's Bump Map
+    Correction (row 3, 0 or 1): each sample is multiplied by Cycles' bump shadowing term
+    (bump_shadowing: 0 below the smooth surface, the GGX softening with correction).
 
     Returns value (3, n) (each sample's contribution), contrib (n,) bool (it adds to the image
     unless its shadow ray is occluded), rays (m,) RAY_DTYPE (ids 0..m-1, in point order), send
@@ -264,7 +269,8 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         None if prim is None else np.ascontiguousarray(prim, np.int32), float(shorten), bool(skip_work),
         value, contrib, rays, send, skip, _terminator(terminator),
         None if linking is None else (np.ascontiguousarray(linking[0], np.uint8),
-                                      np.ascontiguousarray(linking[1], np.uint64)), entry, point)
+                                      np.ascontiguousarray(linking[1], np.uint64)), entry, point,
+        None if bump is None else _rows(bump, 4, "bump"))
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
 
 
