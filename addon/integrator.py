@@ -1381,6 +1381,8 @@ class Integrator:
             if self.mats.textures:
                 self._texture(prim, hu, hv, albedo)
             P, ng, ns, _ = self._surface(hits, idx, path.D)
+            if self.mats.normal_maps and self.tri.tangents is not None:   # Cycles: the bent normal
+                ns = self._normal_mapped(prim, hu, hv, ns, ng, np.empty(len(idx), F32))
         else:
             P = ns = albedo = np.zeros((3, 0), F32)
         if 'UV' in want:
