@@ -313,3 +313,31 @@ def read_exr(path):
 
 def rgba(channels, prefix=''):
     return np.stack([channels[prefix + c] for c in 'RGBA'], axis=-1)
+
+
+def write_image(path, px, fmt='uint8'):
+    """px (h, w, c) written to an image file through OpenImageIO, row 0 at the BOTTOM (as
+    Blender's pixels), alpha straight as given; returns the path as str."""
+    import OpenImageIO as oiio
+    h, w, c = px.shape
+    spec = oiio.ImageSpec(w, h, c, fmt)
+    spec.attribute('oiio:UnassociatedAlpha', 1)
+    buf = oiio.ImageBuf(spec)
+    buf.set_pixels(oiio.ROI(), np.ascontiguousarray(px[::-1]))
+    assert buf.write(str(path)), buf.geterror()
+    return str(path)
+
+
+def normal_map_material(name, image, strength=1.0, interpolation='Linear'):
+    """A Diffuse BSDF (0.8) whose Normal is a tangent-space Normal Map node of the image."""
+    mat, nt, out = _material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    d.inputs['Color'].default_value = (0.8, 0.8, 0.8, 1.0)
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.interpolation, tex.extension = image, interpolation, 'EXTEND'
+    nmap = nt.nodes.new('ShaderNodeNormalMap')
+    nmap.inputs['Strength'].default_value = strength
+    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
+    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat

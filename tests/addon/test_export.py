@@ -1610,15 +1610,7 @@ def test_normal_map_material_and_world_tangents(scene, exported):
     setup(scene)
     img = bpy.data.images.new("Normals", 2, 2)
     img.colorspace_settings.name = 'Non-Color'
-    mat, nt, out = scenes._material("Mapped")
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image = img
-    nmap = nt.nodes.new('ShaderNodeNormalMap')
-    nmap.inputs['Strength'].default_value = 0.7
-    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
-    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    mat = scenes.normal_map_material("Mapped", img, 0.7)
     bumped, bnt, bout = scenes._material("Bumped")
     bd = bnt.nodes.new('ShaderNodeBsdfDiffuse')
     bnt.links.new(bnt.nodes.new('ShaderNodeBump').outputs['Normal'], bd.inputs['Normal'])

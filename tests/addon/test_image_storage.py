@@ -21,13 +21,7 @@ BYTES = np.array([[[10, 128, 250, 255], [250, 60, 5, 255]]], np.uint8)     # (1,
 
 def _write(path, px, fmt):
     """px (h, w, c) row 0 at the bottom; straight alpha as given."""
-    h, w, c = px.shape
-    spec = oiio.ImageSpec(w, h, c, fmt)
-    spec.attribute('oiio:UnassociatedAlpha', 1)
-    buf = oiio.ImageBuf(spec)
-    buf.set_pixels(oiio.ROI(), np.ascontiguousarray(px[::-1]))
-    assert buf.write(str(path)), buf.geterror()
-    return str(path)
+    return scenes.write_image(path, px, fmt)
 
 
 def _material(img, alpha_linked=False, interpolation='Linear'):

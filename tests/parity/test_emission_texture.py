@@ -15,14 +15,8 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 def _image(tmp_path):
     """A 2 x 1 8-bit sRGB image on disk: red on the left, blue on the right."""
-    import OpenImageIO as oiio
-    path = str(tmp_path / "screen.png")
-    px = np.array([[[230, 40, 20], [20, 60, 240]]], np.uint8)
-    out = oiio.ImageOutput.create(path)
-    out.open(path, oiio.ImageSpec(2, 1, 3, 'uint8'))
-    out.write_image(px)
-    out.close()
-    return bpy.data.images.load(path)
+    return bpy.data.images.load(scenes.write_image(tmp_path / "screen.png",
+                                                   np.array([[[230, 40, 20], [20, 60, 240]]], np.uint8)))
 
 
 @pytest.mark.parametrize('shader', ['EMISSION', 'PRINCIPLED'])

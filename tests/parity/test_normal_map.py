@@ -16,14 +16,8 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 def _normal_image(tmp_path):
     """A 2 x 1 8-bit Non-Color image: the left texel tilts the normal 45 degrees toward +tangent
     (c = (0.7, 0, 0.7)), the right one toward -tangent."""
-    import OpenImageIO as oiio
-    path = str(tmp_path / "normal.png")
-    px = np.array([[[217, 128, 217], [38, 128, 217]]], np.uint8)
-    out = oiio.ImageOutput.create(path)
-    out.open(path, oiio.ImageSpec(2, 1, 3, 'uint8'))
-    out.write_image(px)
-    out.close()
-    img = bpy.data.images.load(path)
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "normal.png",
+                                                  np.array([[[217, 128, 217], [38, 128, 217]]], np.uint8)))
     img.colorspace_settings.name = 'Non-Color'
     return img
 
@@ -34,16 +28,7 @@ def test_normal_map_matches_cycles(strength, mirrored, tmp_path):
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 32
     scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=4.2)
-    mat, nt, out = scenes._material("Bumpy")
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    d.inputs['Color'].default_value = (0.8, 0.8, 0.8, 1.0)
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image, tex.interpolation, tex.extension = _normal_image(tmp_path), 'Closest', 'EXTEND'
-    nmap = nt.nodes.new('ShaderNodeNormalMap')
-    nmap.inputs['Strength'].default_value = strength
-    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
-    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    mat = scenes.normal_map_material("Bumpy", _normal_image(tmp_path), strength, 'Closest')
     bpy.ops.mesh.primitive_plane_add(size=4.0)               # UVs: u along +x (the tangent)
     plane = bpy.context.active_object
     plane.data.materials.append(mat)
@@ -80,14 +65,7 @@ def test_normal_map_under_a_world_matches_cycles(tmp_path):
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 16
     scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=4.2)
-    mat, nt, out = scenes._material("Bumpy")
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image, tex.interpolation, tex.extension = _normal_image(tmp_path), 'Closest', 'EXTEND'
-    nmap = nt.nodes.new('ShaderNodeNormalMap')
-    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
-    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    mat = scenes.normal_map_material("Bumpy", _normal_image(tmp_path), interpolation='Closest')
     bpy.ops.mesh.primitive_plane_add(size=4.0)
     bpy.context.active_object.data.materials.append(mat)
     scenes.world((1.0, 1.0, 1.0), 1.0)
@@ -108,22 +86,9 @@ def test_normal_map_on_a_smooth_sphere_matches_cycles(tmp_path):
     sc.render.resolution_x = sc.render.resolution_y = 48
     sc.render.film_transparent = True
     scenes.camera(location=(0, -5, 0), rotation=(np.pi / 2, 0, 0), kind='ORTHO', ortho_scale=2.2)
-    import OpenImageIO as oiio
-    path = str(tmp_path / "tilt.png")
-    out = oiio.ImageOutput.create(path)
-    out.open(path, oiio.ImageSpec(1, 1, 3, 'uint8'))
-    out.write_image(np.array([[[190, 100, 230]]], np.uint8))
-    out.close()
-    img = bpy.data.images.load(path)
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "tilt.png", np.array([[[190, 100, 230]]], np.uint8)))
     img.colorspace_settings.name = 'Non-Color'
-    mat, nt, o = scenes._material("Tilted")
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image = img
-    nmap = nt.nodes.new('ShaderNodeNormalMap')
-    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
-    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
-    nt.links.new(d.outputs[0], o.inputs['Surface'])
+    mat = scenes.normal_map_material("Tilted", img)
     bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=1.0)   # with its UV map
     sphere = bpy.context.active_object
     sphere.data.shade_smooth()
