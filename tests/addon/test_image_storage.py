@@ -8,7 +8,6 @@ packed 16-bit images and linear or data spaces are blended linear; a linked Alph
 the blended associated colour. The scene-linear texels the colour nodes read are unchanged."""
 import bpy
 import numpy as np
-import OpenImageIO as oiio
 import pytest
 
 from addon import export
