@@ -167,15 +167,18 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
 
     def _steps(self, steps, integ, result, scene_data, t0, memory, view):
         """Progressive display, progress and status per step; poll cancel between steps."""
-        last_draw = 0.0
+        last_draw = draw_cost = 0.0
         progress = None
         for progress in steps:
             now = time.perf_counter()
             final = progress.samples_done >= progress.samples_total
-            if final or now - last_draw > 0.5:   # redraw at most twice a second
+            # redraw at most twice a second, and at most a fifth of the time: a redraw of a
+            # big frame (~1 s at 8K) every pass made the render quadratic in its pixels
+            if final or now - last_draw > max(0.5, 4.0 * draw_cost):
                 self._write(integ.film, result, scene_data, view, final)
                 self.update_result(result)
-                last_draw = now
+                last_draw = time.perf_counter()
+                draw_cost = last_draw - now
             fraction = getattr(progress, 'fraction', None)
             if fraction is None:
                 fraction = progress.samples_done / max(progress.samples_total, 1)
