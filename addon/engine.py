@@ -235,9 +235,11 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         parts = [f"{len(scene_data.geometry.triangles)} triangles",
                  f"{len(scene_data.lights)} lights"]
         for key, fmt in (('samples_done', "{} samples"), ('mrays_per_s', "{:.2f} Mrays/s"),
-                         ('total_seconds', "{:.2f} s"), ('trace_share', "tracing {:.0%} of the time")):
+                         ('total_seconds', "{:.2f} s"), ('trace_share', "tracing {:.0%} of the path tracing")):
             if key in s:
                 parts.append(fmt.format(s[key]))
+        # where the rest of the frame went: a scene of many instances can spend most of it here
+        parts.append(f"export {export_seconds:.2f} s, set-up {s.get('setup_seconds', 0.0):.2f} s")
         self.report({'INFO'}, "DACRT: " + ", ".join(parts))
         skipped = _skipped_text(s.get('skipped'))
         if skipped:
