@@ -2094,6 +2094,8 @@ class _Exporter:
                 p.slot_map = np.zeros(n, np.int32)
                 for i in used:
                     if i < len(p.slots):
+                        if p.slots[i] is not None and p.slots[i].as_pointer() not in built and self.check_break():
+                            raise ExportCancelled()   # a material's images can take seconds
                         p.slot_map[i] = self.materials.index(p.slots[i])
                         if p.slots[i] is not None:
                             built.add(p.slots[i].as_pointer())
