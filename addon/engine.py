@@ -15,6 +15,7 @@ import numpy as np
 from . import cryptomatte, export
 from .allocator import render_heap
 from .passes import AOV_CHANNELS, AOV_PREFIX, LIGHTGROUP_PREFIX, PASSES, enabled, result_name
+from .texture import stored_texels
 
 # Extra passes: (film name, view-layer toggle, channels, chan_id, type), and Blender's names
 # for them (what the compositor and multilayer EXR use) in this Blender
@@ -37,9 +38,14 @@ def _clock(seconds):
 
 
 def _scene_bytes(scene_data):
+    """What the exported scene holds: geometry, and every image a material reads (with the
+    texels kept as Cycles stores them for lookup, texture.stored_texels)."""
     g = scene_data.geometry
-    arrays = [g.vertices, g.triangles, g.material, g.normals, g.uvs, g.visibility, g.object_index]
-    arrays += [m.texture for m in scene_data.materials]
+    arrays = [g.vertices, g.triangles, g.material, g.normals, g.uvs, g.visibility, g.object_index,
+              getattr(g, 'tangents', None)]
+    images = [getattr(m, k, None) for m in scene_data.materials
+              for k in ('texture', 'opacity', 'emission_texture', 'normal_texture')]
+    arrays += images + [stored_texels(t) for t in images if t is not None]
     return sum(a.nbytes for a in arrays if a is not None)
 
 

@@ -442,3 +442,21 @@ def test_progressive_redraws_take_at_most_a_fifth_of_the_time(monkeypatch):
     engine_module.DACRTRenderEngine._steps(Fake(), passes(100), integ, None, None, 0.0, 0.0, None)
     assert draws[-1] is True and draws.count(True) == 1
     assert 5 <= len(draws) <= 10, len(draws)        # every ~4 s of a 30 s render (was: every pass)
+
+
+def test_memory_stats_count_every_image_and_its_stored_texels():
+    """The memory the render reports counts the geometry, every image a material reads (colour,
+    opacity, emission, normal map) and the copy kept as Cycles stores it (an 8-bit image's
+    bytes beside its linear texels)."""
+    import types
+    from addon import engine as engine_module
+    from addon.texture import EncodedTexels, ImageTexels
+    g = types.SimpleNamespace(**{k: np.zeros(10, np.float32) for k in
+                                 ('vertices', 'triangles', 'material', 'normals', 'visibility', 'object_index')},
+                              uvs=None, tangents=np.zeros((10, 3, 4), np.float32))
+    linear = np.zeros((4, 4, 4), np.float32)
+    encoded = ImageTexels(linear, EncodedTexels(np.zeros((4, 4, 4), np.uint8), srgb=True, scale=1 / 255))
+    mats = [types.SimpleNamespace(texture=encoded, opacity=None, emission_texture=linear.copy(),
+                                  normal_texture=None)]
+    got = engine_module._scene_bytes(types.SimpleNamespace(geometry=g, materials=mats))
+    assert got == 6 * 40 + 480 + 256 + 64 + 256
