@@ -521,6 +521,14 @@ class _Texture:
         """pixels (these texels, or a colour baked into them) as the scene data holds a texture."""
         return pixels if self.udim is None else self.udim.with_texels(pixels)
 
+    def baked(self, fn):
+        """These texels with the colour map fn ((..., 3) -> (..., 3)) applied to their RGB; an
+        image Cycles keeps encoded applies fn after its lookup instead, in Cycles' order
+        (texture.baked)."""
+        px = self.pixels.copy()
+        px[..., :3] = fn(self.pixels[..., :3])
+        return after_lookup(self.pixels, px, fn)
+
 
 class _Closure:
     """Linear combination of what a diffuse renderer keeps:
@@ -554,11 +562,8 @@ class _Closure:
                             self.opacity, self.emission_tex)
         t = self.texture
         w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
-        px = t.pixels.copy()
-        px[..., :3] = f(t.pixels[..., :3] * w + k)
-        px = after_lookup(t.pixels, px, lambda rgb: f(rgb * w + k))   # after the lookup, as Cycles
         mapped = _Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
-                          px, t.interpolation, t.extension, t.transform, t.udim)
+                          t.baked(lambda rgb: f(rgb * w + k)), t.interpolation, t.extension, t.transform, t.udim)
         return _Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
                         self.emission_tex)
 
@@ -782,10 +787,8 @@ class _MaterialBuilder:
         if closure.emission_tex is not None and emission.any():
             t, w = closure.emission_tex
             w32 = np.where(emission > 0, w, 0).astype(np.float32)   # channels _nonnegative kept
-            px = t.pixels.copy()
-            px[..., :3] = t.pixels[..., :3] * w32
-            px = after_lookup(t.pixels, px, lambda rgb: rgb * w32)   # after the lookup, as Cycles
-            e_tex, e_interp, e_ext, e_xf = t.texels(px), t.interpolation, t.extension, t.transform
+            e_tex, e_interp, e_ext, e_xf = t.texels(t.baked(lambda rgb: rgb * w32)), t.interpolation, \
+                t.extension, t.transform
         n_tex = n_interp = n_ext = n_xf = None
         n_strength = 1.0
         if self._normal_maps:
@@ -824,11 +827,8 @@ class _MaterialBuilder:
         if not np.any(c.const):
             return c.tex_weight.astype(np.float32), t.texels(t.pixels), t.interpolation, t.extension, t.transform
         w, k = c.tex_weight.astype(np.float32), c.const.astype(np.float32)
-        baked = t.pixels.copy()
-        baked[..., :3] = t.pixels[..., :3] * w + k
-        # an image Cycles keeps encoded: the weight and constant after its lookup, in its order
-        baked = after_lookup(t.pixels, baked, lambda rgb: rgb * w + k)
-        return np.ones(3, np.float32), t.texels(baked), t.interpolation, t.extension, t.transform
+        return np.ones(3, np.float32), t.texels(t.baked(lambda rgb: rgb * w + k)), t.interpolation, t.extension, \
+            t.transform
 
     def _shader(self, socket, reasons, depth):
         link = linked_link(socket)        # muted nodes are passed through (nodegraph)
@@ -1140,6 +1140,9 @@ def _stacked_tiles(tiles):
 
 
 def _srgb_to_linear(c):
+    """sRGB decoding of texels as the export has always converted images on load (the linear
+    texels colour nodes read); Cycles' own kernel formula, for lookups of stored sRGB texels,
+    is texture.srgb_to_linear."""
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
@@ -1206,15 +1209,16 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
         rgba[..., 1] = rgba[..., 2] = buf[..., 0]
         rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
     k8 = None
+    associate = ch == 4 and _associates_alpha(img)
     if byte:   # the bytes, once: Blender's byte pixels are k x (1/255) in float32
         k8 = np.rint(rgba * 255.0).astype(np.uint8)
-        if ch == 4 and _associates_alpha(img):   # integer c * a / 255, as Cycles associates
+        if associate:                            # integer c * a / 255, as Cycles associates
             c = k8[..., :3].astype(np.uint16) * k8[..., 3:4]
             k8[..., :3] = (c + 1 + (c >> 8)) >> 8       # c // 255 for c <= 255^2, without a division
     stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, ch, k8)
     if byte:   # byte buffers are in the image's colour space; float ones are linear
         decode = _decodes_srgb(img, reasons)
-        if ch == 4 and _associates_alpha(img):
+        if associate:
             # Blender keeps byte images straight; Cycles associates them on load (integer
             # c * a / 255) and unassociates at lookup, both in the image's own encoding, before
             # the colour conversion: a linked Alpha gives nearly the straight colour again
@@ -1498,7 +1502,7 @@ class _MeshArrays:
     (RNA's per-item path, ~0.1 s per million triangles) is skipped and per-corner data
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
-                 'corner_uvs', 'uv_layers', 'domain', 'mesh', '_tangents')
+                 'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents')
 
     def __init__(self, me, want_uvs):
         nv = len(me.vertices)
@@ -1550,8 +1554,8 @@ class _MeshArrays:
         # every UV map by name (a material may read one by a UV Map node); corner_uvs: the
         # active render one, which textures read otherwise
         self.uv_layers = self._read_uvs(me) if want_uvs else {}
-        active = next((l.name for l in me.uv_layers if l.active_render), None) if want_uvs else None
-        self.corner_uvs = self.uv_layers.get(active)
+        self.active_uv = next((l.name for l in me.uv_layers if l.active_render), '')
+        self.corner_uvs = self.uv_layers.get(self.active_uv)
 
     @classmethod
     def from_arrays(cls, positions, triangles, vertex_normals):
@@ -1560,7 +1564,7 @@ class _MeshArrays:
         a = cls.__new__(cls)
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
-        a.corners, a.slot, a.corner_uvs, a.uv_layers, a.domain = None, None, None, {}, 'POINT'
+        a.corners, a.slot, a.corner_uvs, a.uv_layers, a.active_uv, a.domain = None, None, None, {}, '', 'POINT'
         a.mesh, a._tangents = None, {}
         a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
         return a
@@ -1573,8 +1577,7 @@ class _MeshArrays:
         if uv_map in self._tangents:
             return self._tangents[uv_map]
         out = None
-        me = self.mesh
-        name = uv_map or next((l.name for l in me.uv_layers if l.active_render), '') if me is not None else ''
+        me, name = self.mesh, uv_map or self.active_uv
         if me is not None and name in me.uv_layers:
             try:
                 me.calc_tangents(uvmap=name)

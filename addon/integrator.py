@@ -226,24 +226,21 @@ class _Materials:
             base.append(b)
             emit.append(e)
             if mat.texture is not None:
-                modes = _texture_modes(mat.name, 'texture', mat.texture_interpolation, mat.texture_extension,
-                                       mat.texture_transform)
-                self.textures.append((i, _texture_array(mat.name, 'texture', mat.texture, modes[0]), *modes))
+                self.textures.append((i, *_texture_entry(mat.name, 'texture', mat.texture, mat.texture_interpolation,
+                                                         mat.texture_extension, mat.texture_transform)))
             if getattr(mat, 'normal_texture', None) is not None:
-                modes = _texture_modes(mat.name, 'normal map', mat.normal_interpolation, mat.normal_extension,
-                                       mat.normal_transform)
                 strength = float(mat.normal_strength)
                 if not (np.isfinite(strength) and strength >= 0):
                     raise ValueError(f"material {mat.name!r}: normal_strength must be finite and >= 0, "
                                      f"got {mat.normal_strength!r}")
                 self.normal_maps.append(
-                    (i, _texture_array(mat.name, 'normal map', mat.normal_texture, modes[0]), *modes, strength,
-                     bool(getattr(mat, 'bump_correction', True))))
+                    (i, *_texture_entry(mat.name, 'normal map', mat.normal_texture, mat.normal_interpolation,
+                                        mat.normal_extension, mat.normal_transform),
+                     strength, bool(getattr(mat, 'bump_correction', True))))
             if getattr(mat, 'emission_texture', None) is not None and e.any():
-                modes = _texture_modes(mat.name, 'emission texture', mat.emission_interpolation,
-                                       mat.emission_extension, mat.emission_transform)
                 self.emission_textures.append(
-                    (i, _texture_array(mat.name, 'emission texture', mat.emission_texture, modes[0]), *modes))
+                    (i, *_texture_entry(mat.name, 'emission texture', mat.emission_texture, mat.emission_interpolation,
+                                        mat.emission_extension, mat.emission_transform)))
         self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
         self.emissive = self.emission.max(axis=0) > 0
@@ -260,25 +257,29 @@ class _Materials:
                                  f"numbers, got {t!r}")
             self.transparency[:, i] = t
             if mat.opacity is not None:
-                modes = _texture_modes(mat.name, 'opacity', mat.opacity_interpolation, mat.opacity_extension,
-                                       mat.opacity_transform)
-                self.opacity.append((i, _texture_array(mat.name, 'opacity', mat.opacity, modes[0]), *modes))
+                self.opacity.append((i, *_texture_entry(mat.name, 'opacity', mat.opacity, mat.opacity_interpolation,
+                                                        mat.opacity_extension, mat.opacity_transform)))
         self.transparent = self.transparency.max(axis=0) > 0
         # images that write AOVs: (AOV name, 'color' | 'value') -> [(material index, texture,
         # interpolation, extension, uv transform)]
         self.aov_textures = {}
         for i, mat in enumerate(materials):
             for (name, kind), (tex, interp, ext, xf) in (getattr(mat, 'aov_textures', None) or {}).items():
-                label = f"AOV {name!r} {kind}"
-                modes = _texture_modes(mat.name, label, interp, ext, xf)
                 self.aov_textures.setdefault((name, kind), []).append(
-                    (i, _texture_array(mat.name, label, tex, modes[0]), *modes))
+                    (i, *_texture_entry(mat.name, f"AOV {name!r} {kind}", tex, interp, ext, xf)))
         # the Material Index pass's value of each material (Blender's material pass index)
         self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
         # picks closures by their mean weight): its albedo, or 1 where it only emits
         self.opaque_weight = np.where(self.emissive, np.maximum(self.base.mean(axis=0), 1.0),
                                       self.base.mean(axis=0)).astype(F32)
+
+
+def _texture_entry(name, label, texture, interpolation, extension, transform):
+    """(texture as the lookups read it, interpolation, extension, uv transform) of one of a
+    material's images, checked."""
+    modes = _texture_modes(name, label, interpolation, extension, transform)
+    return (_texture_array(name, label, texture, modes[0]), *modes)
 
 
 def _texture_array(name, label, texture, interpolation):
@@ -1098,13 +1099,14 @@ class Integrator:
         offset off the surface toward the ray's side (all (3,k)), of the rays sel (None: all)."""
         return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D)
 
-    def _texture(self, prim, u, v, albedo):
+    def _texture(self, prim, u, v, albedo, textures=None):
         """Multiply image textures (on the UV map, through each texture's affine map) into
-        albedo (3,k) (or a throughput that includes it) in place."""
+        albedo (3,k) (or a throughput that includes it) in place: the materials' colour
+        textures, or the entries `textures` lists (material, texture, modes) instead."""
         if self.tri.uvs is None:
             return
         mat = np.take(self.tri.material, prim)
-        for m, tex, interp, ext, xf in self.mats.textures:
+        for m, tex, interp, ext, xf in self.mats.textures if textures is None else textures:
             sel = np.flatnonzero(mat == m)
             if len(sel):
                 albedo[:, sel] *= self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
@@ -1157,11 +1159,7 @@ class Integrator:
     def _emission_at(self, prim, u, v):
         """Radiance (3, k) of image-emission triangles prim at barycentrics (u, v)."""
         out = np.ones((3, len(prim)), F32)
-        mat = np.take(self.tri.material, prim)
-        for m, tex, interp, ext, xf in self.mats.emission_textures:
-            sel = np.flatnonzero(mat == m)
-            if len(sel):
-                out[:, sel] = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))
+        self._texture(prim, u, v, out, self.mats.emission_textures)
         return out
 
     def _textured_samples(self, value, entry, point):
