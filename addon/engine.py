@@ -105,6 +105,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         # stereo / multiview makes one per view instead, none for the mono camera
         multiview = bool(depsgraph.scene_eval.render.use_multiview)
         integ = None if multiview else self._view_integrator(depsgraph, scene_data, None)
+        if integ is None and not multiview:
+            return                      # cancelled while preparing
         x0, y0, x1, y1 = scene_data.camera.border
         # begin_result coordinates are relative to the render border's rect
         result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=layer)
@@ -135,7 +137,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
     def _view_integrator(self, depsgraph, scene_data, view):
         """The integrator of the frame's export (view None) or of one view of a multiview
         render, with the camera Blender gives that view; None when cancelled."""
-        from .integrator import Integrator
+        from .integrator import Integrator, SetupCancelled
         if view is not None:
             self.active_view_set(view)
             scene = depsgraph.scene_eval
@@ -149,7 +151,10 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             if self.cancel_requested():
                 return None
         try:
-            return Integrator(scene_data)
+            return Integrator(scene_data, check_break=self.cancel_requested)
+        except SetupCancelled:
+            self.report({'INFO'}, "DACRT: render cancelled while preparing the scene")
+            return None
         except ValueError as e:
             raise RuntimeError(str(e) if view is None else f"view '{view}': {e}") from None
 

@@ -155,10 +155,14 @@ class Progress:
     fraction: float            # share of all (pixel, sample) paths done, 0..1
 
 
+class SetupCancelled(Exception):
+    """The render was cancelled (check_break) while the integrator was being set up."""
+
+
 class _Triangles:
     """Per-triangle arrays the shading code gathers from, one float32 row per quantity."""
 
-    def __init__(self, geometry, messages: list):
+    def __init__(self, geometry, messages: list, poll=lambda: None):
         v = np.asarray(geometry.vertices)
         t = np.asarray(geometry.triangles)               # any integer type (validated); int32 from export
         m = len(t)
@@ -177,6 +181,7 @@ class _Triangles:
         # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), the
         # self-intersection step off the front side (12:15, see _OFFSET_ULPS); one native pass
         self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, _OFFSET_ULPS, _TINY)
+        poll()
         self.area = np.where(bad_t, 0.0, area)
         self.material = np.asarray(geometry.material, np.int32)
         self.visibility = np.where(bad_t, 0, np.asarray(geometry.visibility, np.uint8)).astype(np.uint8)
@@ -184,7 +189,9 @@ class _Triangles:
         # flat shading everywhere (corner normals == geometric normal) needs no interpolation
         flat = not m or dacrt.shading.normals_flat(normals, self.geo, 1e-6)
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
+        poll()
         self.normals = None if flat else dacrt.shading.corner_rows(normals)
+        poll()
         self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
         # rows: corner 0 tangent and sign (0:4), corner 1 - corner 0 (4:8), corner 2 - corner 0
         # (8:12), for normal maps
@@ -419,8 +426,10 @@ class Integrator:
     paths_per_pass: fixed number of (pixel, sample) paths per pass instead of the timed
     default (tests use it to show the image does not depend on blocking)."""
 
-    def __init__(self, scene_data: SceneData, *, paths_per_pass: int | None = None):
+    def __init__(self, scene_data: SceneData, *, paths_per_pass: int | None = None, check_break=None):
         t_start = time.perf_counter()
+        # set-up of tens of millions of triangles takes seconds: cancel is polled between its steps
+        self._check_break = check_break or (lambda: False)
         _validate(scene_data)
         scene_data, self.origin = recentred(scene_data)
         self.messages: list = []
@@ -454,7 +463,8 @@ class Integrator:
         # what camera rays' first surfaces write: the data passes, Cryptomatte and the AOVs
         self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES) + kinds \
             + tuple(self._aovs)
-        self.tri = _Triangles(scene_data.geometry, self.messages)
+        self.tri = _Triangles(scene_data.geometry, self.messages, self._poll)
+        self._poll()
         self.mats = _Materials(scene_data.materials)
         # per AOV the images that write to it: (rows they fill, [(material, texture, ...)])
         self._aov_images = {AOV_PREFIX + name: (3 if kind == 'COLOR' else 1,
@@ -519,7 +529,9 @@ class Integrator:
         x0, y0, x1, y1 = self.camera.region
         self._frame_paths = max(0, x1 - x0) * max(0, y1 - y0) * self.samples
         t_build = time.perf_counter()
+        self._poll()
         self._build_scenes()
+        self._poll()
         self._weight_lights()
         self._build_seconds = time.perf_counter() - t_build
         self._setup_seconds = time.perf_counter() - t_start
@@ -726,6 +738,7 @@ class Integrator:
         for kind, bit in wanted.items():
             key = 'shared' if shared else keys[kind]
             if key not in built:
+                self._poll()
                 built[key] = self._tracer_scene(needed if shared else masks[kind], vis if shared else None)
             self._scenes[kind], self._maps[kind], self._local[kind] = built[key]
             self._visible[kind] = bit if shared else None
@@ -770,6 +783,10 @@ class Integrator:
         scene = dacrt.Scene(self.tri.vertices, tris, partition=self.settings.partition, keep_top=True,
                             masks=masks, spatial_order=spatial)
         return scene, sub, local
+
+    def _poll(self):
+        if self._check_break():
+            raise SetupCancelled()
 
     def close(self):
         """Drop the tracer scenes (also done when passes() ends or is closed)."""

@@ -298,6 +298,36 @@ def test_cancel_during_export(scene, monkeypatch, capfd):
     assert "cancelled" in capfd.readouterr().out
 
 
+def test_cancel_during_setup_stops_before_tracing(scene, monkeypatch, capfd):
+    """Preparing tens of millions of triangles takes seconds: Esc pressed after the export is
+    answered between the set-up's steps, before any tracer scene is built or pass traced."""
+    from addon import integrator
+    build_demo_scene(scene, resolution=32, samples=64)
+    state = {'setup': False, 'polls': 0, 'scenes': 0}
+    real_tri, real_scene = integrator._Triangles.__init__, integrator.Integrator._tracer_scene
+
+    def tri_init(self, *a, **k):
+        state['setup'] = True          # the export is done: Esc from now on
+        real_tri(self, *a, **k)
+
+    def cancel(self):
+        state['polls'] += state['setup']
+        return state['setup']
+
+    def tracer_scene(self, *a, **k):
+        state['scenes'] += 1
+        return real_scene(self, *a, **k)
+    monkeypatch.setattr(integrator._Triangles, '__init__', tri_init)
+    monkeypatch.setattr(integrator.Integrator, '_tracer_scene', tracer_scene)
+    monkeypatch.setattr(engine_module.DACRTRenderEngine, 'cancel_requested', cancel)
+    bpy.ops.render.render()
+    out = capfd.readouterr().out
+    assert state['polls'] >= 1, "the set-up polled for cancel"
+    assert state['scenes'] == 0, "no tracer scene is built after Esc"
+    assert "cancelled while preparing the scene" in out
+    assert "samples," not in out, "no render summary: nothing was traced"
+
+
 def test_write_still_like_blender_b(scene, tmp_path):
     lit_plane_scene(scene, size=(24, 16))
     scene.render.filepath = str(tmp_path / "frame_")
