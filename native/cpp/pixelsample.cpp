@@ -34,8 +34,11 @@ void pixel_samples(const int64_t* pixel, const int64_t* sample, size_t n, int64_
         for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* wa, const uint32_t* wb) {
             for (size_t j = 0; j < m; ++j) {
                 const int64_t p = pixel[i0 + j], x = p % width, y = p / width;
-                rx[i0 + j] = filter_offset(unit24(wa[j]), table, table_size) + float(x);
-                ry[i0 + j] = filter_offset(unit24(wb[j]), table, table_size) + float(y);
+                // Cycles (integrate_camera_sample): sample 0 looks up the table at 0.5, the
+                // pixel centre, so the passes written from it (depth, IDs) are not jittered
+                const bool centre = sample[i0 + j] == 0;
+                rx[i0 + j] = filter_offset(centre ? 0.5f : unit24(wa[j]), table, table_size) + float(x);
+                ry[i0 + j] = filter_offset(centre ? 0.5f : unit24(wb[j]), table, table_size) + float(y);
             }
         });
     }, size_t(1) << 16);

@@ -399,11 +399,27 @@ def test_data_passes():
         render(plane_scene(samples=1)).film.pass_image('Depth')
 
 
+def test_depth_comes_from_the_pixel_centre_whatever_the_seed():
+    """Cycles sends sample 0 through the pixel centre (integrate_camera_sample: the filter table
+    read at 0.5), and the data passes come from sample 0: on a sloped plane Depth is the
+    distance at each pixel's centre, exactly, for any seed and filter."""
+    v = np.array([[-10, -10, -3], [10, -10, 3], [10, 10, 3], [-10, 10, -3]], np.float64)   # z = 0.3 x
+    t = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
+    centre_x = -1.0 + (np.arange(8) + 0.5) * 0.25          # ortho view 2 wide, 8 pixels
+    for seed, filt in ((0, 'BLACKMAN_HARRIS'), (7, 'GAUSSIAN'), (11, 'BOX')):
+        scene = plane_scene([light('SUN', 1.0, np.eye(4))], samples=3, passes=('Depth',), seed=seed,
+                            filter_type=filt, filter_width=2.0)
+        scene.camera = ortho_down(height=5.0, width=8, px=8, view=2.0)
+        scene.geometry = geometry([(v, t, 1, ALL_VIS)])
+        depth = render(scene).film.pass_image('Depth')[..., 0]
+        assert np.allclose(depth, 5.0 - 0.3 * centre_x[None, :], atol=1e-5), (seed, filt)
+
+
 def test_position_uv_and_index_passes():
     """Cycles' Position, UV, Object Index and Material Index passes (film/data_passes.h) on two
     quads far from the origin (the render recentres the scene; Position is world space), 1 x 1
-    unit pixels, box filter: Position, Object and Material Index from each pixel's sample 0,
-    UV = (u, v, 1) averaged over the samples; the pixels that see nothing stay 0 (Depth 1e10)."""
+    unit pixels, box filter: Position, Object and Material Index from each pixel's sample 0
+    (through its centre), UV = (u, v, 1) averaged over the samples; the pixels that see nothing stay 0 (Depth 1e10)."""
     T = np.array([1000.0, -2000.0])
     a = quad((T[0] - 2.0, T[1], 0.0), 2.0, 2.0)                 # pixel columns 0-3
     b = quad((T[0] + 1.5, T[1], 0.0), 1.5, 2.0)                 # columns 4-6; column 7: nothing
@@ -431,7 +447,8 @@ def test_position_uv_and_index_passes():
     assert np.all((pos[on][:, 0] >= x0[on] - 1e-3) & (pos[on][:, 0] <= x0[on] + 1 + 1e-3))
     assert np.all((pos[on][:, 1] >= y0[on] - 1e-3) & (pos[on][:, 1] <= y0[on] + 1 + 1e-3))
     assert np.allclose(pos[on][:, 2], 0.0, atol=1e-3) and np.all(pos[~on] == 0.0)
-    assert len(np.unique(np.round(pos[on][:, 0] - x0[on], 3))) > 10   # sample 0's own points
+    # sample 0 goes through the pixel centre (Cycles), so Position is the centre's point
+    assert np.allclose(pos[on][:, 0] - x0[on], 0.5, atol=1e-3) and np.allclose(pos[on][:, 1] - y0[on], 0.5, atol=1e-3)
     uv = film.pass_image('UV')
     # the mean of 16 uniform points: the pixel centre's UV within ~4 standard errors
     assert np.allclose(uv[on][:, 0], (col[on] + 0.5) / 8, atol=4 * (1 / 8) / np.sqrt(12 * 16))

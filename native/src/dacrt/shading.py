@@ -394,7 +394,7 @@ def pixel_samples(pixel, sample, width: int, k0: int, k1: int, ka: int, kb: int,
     the path keys (2, n) uint32 (splitmix64 of pixel << 32 | sample keyed by the 64-bit words
     k0, k1) and the raster positions rx, ry (n,) = pixel corner + a pixel-filter offset per axis,
     looked up in the inverse-CDF table (linear interpolation) with the uniforms of the key and
-    dimension words ka, kb."""
+    dimension words ka, kb; sample 0 with 0.5 instead (the pixel centre, as Cycles)."""
     return _core.pixel_samples(np.ascontiguousarray(pixel, np.int64), np.ascontiguousarray(sample, np.int64),
                                int(width), int(k0), int(k1), int(ka), int(kb), np.ascontiguousarray(table, _F32))
 
