@@ -95,7 +95,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             return
         t0 = time.perf_counter()
         self.update_stats("", "DACRT | Exporting scene")
-        scene_data = export.export_scene(depsgraph, check_break=self.cancel_requested)
+        # a sequencer strip renders its scene through the strip's camera (Cycles reads the same)
+        scene_data = export.export_scene(depsgraph, check_break=self.cancel_requested, camera=self.camera_override)
         export_seconds = time.perf_counter() - t0
         self._report_messages(scene_data.messages)
         if self.cancel_requested():
@@ -141,11 +142,11 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         if view is not None:
             self.active_view_set(view)
             scene = depsgraph.scene_eval
-            cam_ob = scene.camera
+            cam_ob = self.camera_override or scene.camera
             view_cam = (self.camera_model_matrix(cam_ob, use_spherical_stereo=False),
                         self.camera_shift_x(cam_ob, use_spherical_stereo=False))
             try:
-                scene_data.camera = export.export_camera(scene, None, view_cam)
+                scene_data.camera = export.export_camera(scene, None, view_cam, camera=cam_ob)
             except export.ExportError as e:
                 raise RuntimeError(f"view '{view}': {e}") from None
             if self.cancel_requested():

@@ -67,6 +67,9 @@ from .texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stor
 from .texture import baked as after_lookup
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
+# what the view layer's Surfaces filter (use_solid) hides, as Cycles syncs no mesh then (hair
+# follows the Hair filter, point clouds stay)
+SURFACE_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
 UNSUPPORTED_TYPES = {'VOLUME': "volume", 'GREASEPENCIL': "Grease Pencil"}
 # The grey of the diffuse fallbacks (a muted node, a shader without a colour)
 DEFAULT_ALBEDO = (0.8, 0.8, 0.8)
@@ -119,29 +122,40 @@ class ExportCancelled(Exception):
     """The user cancelled (test_break) while the scene was being exported."""
 
 
-def export_scene(depsgraph, check_break=None):
+def export_scene(depsgraph, check_break=None, camera=None):
     """Build the frame's SceneData from an evaluated depsgraph.
 
     check_break: optional callable returning True when the user cancelled; polled during the
-    export, which then raises ExportCancelled.
+    export, which then raises ExportCancelled. camera: the object to render through instead of
+    the scene's camera (RenderEngine.camera_override: a sequencer strip's camera), or None.
     """
-    return _Exporter(depsgraph, check_break).run()
+    return _Exporter(depsgraph, check_break, camera).run()
+
+
+def effective_world(scene, view_layer):
+    """The world a view layer renders with, as Cycles: its World Override, else the scene's;
+    None when its Environment filter (use_sky) is off (Cycles: no background shader)."""
+    if view_layer is not None and not getattr(view_layer, 'use_sky', True):
+        return None
+    override = getattr(view_layer, 'world_override', None) if view_layer is not None else None
+    return override if override is not None else scene.world
 
 
 # ----------------------------------------------------------------------------------------
 # Camera (reference blender-cycles.md 1.8, Cycles' blender_camera_viewplane)
 
-def export_camera(scene, messages=None, view=None):
-    """The scene camera as scenedata.Camera. view: None, or (matrix_world, shift_x) of one view
-    of a stereo / multiview render, as the engine's camera_model_matrix and camera_shift_x give
-    them for the active view (Cycles takes its eye cameras from the same two calls)."""
+def export_camera(scene, messages=None, view=None, camera=None):
+    """The scene camera (or `camera`, an override) as scenedata.Camera. view: None, or
+    (matrix_world, shift_x) of one view of a stereo / multiview render, as the engine's
+    camera_model_matrix and camera_shift_x give them for the active view (Cycles takes its eye
+    cameras from the same two calls)."""
     r = scene.render
     width = r.resolution_x * r.resolution_percentage // 100
     height = r.resolution_y * r.resolution_percentage // 100
     if width < 1 or height < 1:
         raise ExportError(f"render resolution {r.resolution_x}x{r.resolution_y} at "
                           f"{r.resolution_percentage}% is less than one pixel")
-    cam_ob = scene.camera
+    cam_ob = camera if camera is not None else scene.camera
     if cam_ob is None:
         raise ExportError("the scene has no active camera (Scene Properties > Camera)")
     # A non-camera object as scene camera: Cycles uses its default camera parameters, and
@@ -370,12 +384,12 @@ def _light_shader_factor(light, name, messages):
 # ----------------------------------------------------------------------------------------
 # World
 
-def export_world(scene):
+def export_world(scene, view_layer=None):
     """(uniform background radiance (3,), scenedata.Environment or None, reason string if the
-    world had to be approximated). An Environment Texture feeding the Background's Color is
-    exported as an image (its Mapping node's rotation included); other inputs use their own
-    value."""
-    world = scene.world
+    world had to be approximated) of the world the view layer renders with (effective_world).
+    An Environment Texture feeding the Background's Color is exported as an image (its Mapping
+    node's rotation included); other inputs use their own value."""
+    world = effective_world(scene, view_layer)
     none = np.zeros(3, np.float32)
     if world is None:
         return none, None, ''
@@ -1705,10 +1719,12 @@ class _Placement:
 # ----------------------------------------------------------------------------------------
 
 class _Exporter:
-    def __init__(self, depsgraph, check_break):
+    def __init__(self, depsgraph, check_break, camera=None):
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
         self.view_layer = depsgraph.view_layer
+        self.camera = camera
+        self.world = effective_world(self.scene, self.view_layer)
         self.check_break = check_break or (lambda: False)
         self.messages = []
         self.materials = _MaterialBuilder()
@@ -1731,20 +1747,20 @@ class _Exporter:
                            materials_unused=0, triangles_degenerate=0, triangles_nonfinite=0)
 
     def run(self):
-        camera = export_camera(self.scene, self.messages)
+        camera = export_camera(self.scene, self.messages, camera=self.camera)
         settings = self._settings()
         self._walk_instances()
         geometry = self._assemble(uv_pass='UV' in settings.passes)
-        world, environment, world_reason = export_world(self.scene)
+        world, environment, world_reason = export_world(self.scene, self.view_layer)
         if not (np.isfinite(world).all() and (world >= 0).all()):
             # Cycles subtracts a negative background; that is not supported here
             world_reason = (f"its colour x strength {tuple(float(v) for v in world)} is negative or "
                             "not finite; rendered black")
             world = np.zeros(3, np.float32)
         world_aovs = {}
-        if settings.aovs and self.scene.world is not None and self.scene.world.node_tree is not None:
+        if settings.aovs and self.world is not None and self.world.node_tree is not None:
             reasons = []
-            world_aovs = shader_aovs(self.scene.world.node_tree, reasons)[0]
+            world_aovs = shader_aovs(self.world.node_tree, reasons)[0]
             world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
@@ -1754,12 +1770,12 @@ class _Exporter:
                             lights=self.lights, world=world, settings=settings,
                             object_names=self.object_names, messages=self.messages,
                             skipped=dict(self.counts), environment=environment,
-                            world_visibility=world_visibility(self.scene.world),
+                            world_visibility=world_visibility(self.world),
                             object_pass_index=np.array(self.object_pass_index, np.int32),
                             object_assets=self.object_assets, light_links=self.light_links,
                             shadow_links=self.shadow_links,
                             object_lightgroups=self.object_lightgroups,
-                            world_lightgroup=getattr(self.scene.world, 'lightgroup', '') if self.scene.world else '',
+                            world_lightgroup=getattr(self.world, 'lightgroup', '') if self.world else '',
                             world_aovs=world_aovs)
 
     # -- settings ------------------------------------------------------------------------
@@ -1779,10 +1795,13 @@ class _Exporter:
                                               + ['Cryptomatte', 'light groups', 'shader AOVs']))
             self.messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, {written} "
                                              f"only; not in the result: {', '.join(missing)}"))
-        mist = scene.world.mist_settings if scene.world is not None else None
+        mist_world = getattr(vl, 'world_override', None) or scene.world
+        mist = mist_world.mist_settings if mist_world is not None else None
         mist = (0.0, 100.0, 1.0) if mist is None else (
             float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
-        return sd.Settings(samples=d.samples, max_bounces=d.max_bounces,
+        # a view layer's Samples override (0: the scene's), as Cycles' default 'Use' layer samples
+        samples = int(getattr(vl, 'samples', 0)) or d.samples
+        return sd.Settings(samples=samples, max_bounces=d.max_bounces,
                            transparent_max_bounces=d.transparent_max_bounces,
                            sample_clamp_direct=d.sample_clamp_direct,
                            sample_clamp_indirect=d.sample_clamp_indirect, filter_type=d.filter_type,
@@ -1822,6 +1841,9 @@ class _Exporter:
                 self._skip(f"{UNSUPPORTED_TYPES[ob.type]} objects are not rendered", ob.name)
                 continue
             if ob.type not in GEOMETRY_TYPES or not inst.show_self:
+                continue
+            if ob.type in SURFACE_TYPES and not getattr(self.view_layer, 'use_solid', True):
+                self._skip("surfaces are off in the view layer's filter (Surfaces)", ob.name)
                 continue
             parent = inst.parent if inst.is_instance and inst.parent is not None else ob
             vis = self._visibility(ob, parent)

@@ -43,8 +43,8 @@ def exported(monkeypatch):
     captured = []
     real = export.export_scene
 
-    def capture(depsgraph, check_break=None):
-        captured.append(real(depsgraph, check_break))
+    def capture(depsgraph, check_break=None, camera=None):
+        captured.append(real(depsgraph, check_break, camera))
         raise export.ExportCancelled()
 
     monkeypatch.setattr(export, 'export_scene', capture)

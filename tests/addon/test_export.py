@@ -1633,3 +1633,45 @@ def test_normal_map_material_and_world_tangents(scene, exported):
     np.testing.assert_allclose(mirrored[..., :3], -plain[..., :3], atol=1e-6)  # local x mirrored first
     assert np.all(plain[..., 3] == 1.0) and np.all(mirrored[..., 3] == -1.0)
     assert not other.any()
+
+
+# -- view layer overrides and filters (as Cycles syncs them) ---------------------------------
+
+def test_view_layer_world_override_samples_and_filters(scene, exported):
+    setup(scene)
+    scenes.cube("Cube")
+    scenes.world((0.5, 0.25, 1.0), 2.0)
+    green = bpy.data.worlds.new("Green")
+    next(n for n in green.node_tree.nodes if n.type == 'BACKGROUND').inputs['Color'].default_value = (0, 1, 0, 1)
+    vl = scene.view_layers[0]
+    scene.dacrt.samples = 64
+    data = exported()
+    assert np.allclose(data.world, (1.0, 0.5, 2.0)) and data.settings.samples == 64
+    assert len(data.geometry.triangles) == 12
+    vl.world_override = green                 # the layer's world, lights and background alike
+    vl.samples = 3                            # Cycles' default 'Use' layer samples: overrides
+    data = exported()
+    assert np.allclose(data.world, (0.0, 1.0, 0.0)) and data.settings.samples == 3
+    vl.use_sky = False                        # Environment filter off: no world at all
+    assert np.allclose(exported().world, 0.0)
+    vl.use_sky, vl.samples = True, 0
+    vl.use_solid = False                      # Surfaces filter off: no mesh is synced
+    data = exported()
+    assert len(data.geometry.triangles) == 0 and data.settings.samples == 64
+    assert any("surfaces are off in the view layer's filter" in text for _, text in data.messages)
+
+
+def test_camera_override_renders_through_that_camera(scene):
+    """RenderEngine.camera_override (a sequencer strip's camera) replaces the scene camera."""
+    main = scenes.camera((0, -10, 0), (math.pi / 2, 0, 0), name="Main")
+    other = scenes.camera((0, 0, 8), (0, 0, 0), lens=35.0, name="Other")
+    scene.camera = main
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    scenes.cube("Cube")
+    default = export.export_camera(scene)
+    chosen = export.export_camera(scene, camera=other)
+    assert np.allclose(default.matrix, np.array(main.matrix_world))
+    assert np.allclose(chosen.matrix, np.array(other.matrix_world))
+    assert not np.allclose(chosen.tan_half_fov, default.tan_half_fov)
+    data = export.export_scene(depsgraph, camera=other)
+    assert np.allclose(data.camera.matrix, np.array(other.matrix_world))

@@ -490,3 +490,34 @@ def test_memory_stats_count_every_image_and_its_stored_texels():
                                   normal_texture=None)]
     got = engine_module._scene_bytes(types.SimpleNamespace(geometry=g, materials=mats))
     assert got == 6 * 40 + 480 + 256 + 64 + 256
+
+
+def test_sequencer_strip_renders_through_its_camera(scene, tmp_path):
+    """A scene strip with its own camera (RenderEngine.camera_override) renders through that
+    camera, as in Cycles: the edit's frame equals a direct render through it."""
+    scene.render.resolution_x, scene.render.resolution_y = 24, 16
+    a = scenes.camera((0, -6, 3), (math.radians(65), 0, 0), name="A")
+    b = scenes.camera((1, -4, 6), (math.radians(30), 0, 0.3), name="B")
+    scenes.plane("Ground", size=20, materials=(scenes.diffuse("Ground", (0.5, 0.5, 0.5)),))
+    scenes.cube("Cube", size=1.5, location=(0, 0, 0.75), materials=(scenes.diffuse("Red", (0.8, 0.1, 0.1)),))
+    scenes.light('SUN', 3.0)
+    scene.dacrt.samples = 4
+    scene.camera = b
+    direct = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "direct.exr", scene)))
+    scene.camera = a
+    through_a = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "a.exr", scene)))
+    edit = bpy.data.scenes.new("Edit")
+    edit.render.engine = 'DACRT'
+    edit.render.resolution_x, edit.render.resolution_y = 24, 16
+    edit.render.resolution_percentage = 100
+    strip = edit.sequence_editor_create().strips.new_scene("shot", scene, 1, 1)
+    strip.scene_camera = b
+    edit.frame_start = edit.frame_end = 1
+    edit.render.use_sequencer = True
+    bpy.ops.render.render(scene="Edit")
+    s = edit.render.image_settings
+    s.file_format, s.color_depth, s.color_mode = 'OPEN_EXR', '32', 'RGBA'
+    bpy.data.images['Render Result'].save_render(filepath=str(tmp_path / "edit.exr"), scene=edit)
+    seq = scenes.rgba(scenes.read_exr(tmp_path / "edit.exr"))
+    assert np.abs(direct - through_a).max() > 0.05          # the cameras see different images
+    assert np.allclose(seq, direct, atol=1e-4), np.abs(seq - direct).max()
