@@ -159,6 +159,10 @@ class SetupCancelled(Exception):
     """The render was cancelled (check_break) while the integrator was being set up."""
 
 
+class _PassCancelled(Exception):
+    """Cancel (check_break) polled inside a pass: the pass's samples are not added."""
+
+
 class _Triangles:
     """Per-triangle arrays the shading code gathers from, one float32 row per quantity."""
 
@@ -885,12 +889,14 @@ class Integrator:
                         ns = -(-left // -(-left // ns))      # equal blocks: no small remainder
                         if adaptive is not None:
                             ns = adaptive.align(sample, ns, interval)
-                        self._render_block(film_pix, frame_pix, sample, ns)
+                        if not self._pass(film_pix, frame_pix, sample, ns):
+                            return
                         step = nact * ns
                         sample += ns
                     else:
                         stop = min(offset + target, nact)
-                        self._render_block(film_pix[offset:stop], frame_pix[offset:stop], sample, 1)
+                        if not self._pass(film_pix[offset:stop], frame_pix[offset:stop], sample, 1):
+                            return
                         step = stop - offset
                         offset = 0 if stop == nact else stop
                         sample += offset == 0
@@ -982,6 +988,14 @@ class Integrator:
 
     # --- one block of paths ---------------------------------------------------------------------
 
+    def _pass(self, film_pix, frame_pix, s0, ns):
+        """Render one block of paths into the film; False when it was cancelled midway."""
+        try:
+            self._render_block(film_pix, frame_pix, s0, ns)
+        except _PassCancelled:
+            return False
+        return True
+
     def _render_block(self, film_pix, frame_pix, s0, ns):
         n = len(film_pix) * ns
         pix = np.repeat(film_pix, ns)
@@ -1010,6 +1024,10 @@ class Integrator:
             keys, O, D, tmax = _compact(pid, keys, O, D, tmax)
             path = _Paths(pid, keys, O, D, tmax, None, None, None, None)
         for k in range(self.max_bounces + 2):
+            # a pass of many bounces (a closed bright room, 1024 bounces) can run for a minute:
+            # Esc is polled per bounce; the pass is then dropped, the film keeps whole passes
+            if k and self._check_break():
+                raise _PassCancelled()
             path = self._vertex(k, path, sinks, alpha, data, pix, samp)
             if path is None:
                 break

@@ -9,7 +9,7 @@ import addon.integrator as integrator_module
 from addon.integrator import Integrator, Progress
 from addon.texture import MISSING_TILE, UdimTiles, texture_lookup
 
-from .scenes import (ALL_VIS, cornell_box, geometry, light, material, ortho_down, plane_scene, quad,
+from .scenes import (ALL_VIS, cornell_box, geometry, icosphere, light, material, ortho_down, plane_scene, quad,
                      render, translation)
 
 
@@ -588,3 +588,35 @@ def test_smooth_normals_shade_with_the_interpolated_normal():
     scene.geometry.normals[:] = n
     img = render(scene).film.combined()[..., 0]
     assert img == pytest.approx(0.8 * 3.0 * np.sqrt(0.5) / np.pi, rel=1e-5)
+
+
+def test_cancel_is_polled_per_bounce_and_drops_the_unfinished_pass():
+    """A pass of very long paths (inside a closed sphere of albedo 0.999, 1000 bounces) polls
+    check_break between bounces: Esc stops it within a bounce, and its partial samples do not
+    reach the film (the completed passes stay)."""
+    v, t = icosphere(5.0, subdiv=2)
+    t = t[:, ::-1].copy()                                  # facing inward: the camera is inside
+    mats = [material('default'), material('furnace', (0.999,) * 3, emission=(1.0, 1.0, 1.0))]
+    scene = sd.SceneData(ortho_down(height=0.0, width=8, px=8, view=1.0), geometry([(v, t, 1, ALL_VIS)]),
+                         mats, [], np.zeros(3, np.float32), sd.Settings(samples=4, max_bounces=1000))
+    state = {'armed': False, 'polls': 0}
+
+    def check_break():                                   # Esc 5 bounces into the second pass
+        state['polls'] += state['armed']
+        return state['polls'] > 5
+    integ = Integrator(scene, paths_per_pass=8 * 8 * 2, check_break=check_break)
+    done = []
+    for p in integ.passes():
+        done.append(p.samples_done)
+        state['armed'] = True
+    assert done == [2], done                              # the first pass (2 samples) only
+    assert state['polls'] == 6                            # stopped at the first poll after Esc
+    img = integ.film.combined()
+    assert np.all(img[..., 0] > 1.0)                      # the first pass's samples are there
+    full = render(scene, paths_per_pass=8 * 8 * 2)
+    first = Integrator(scene, paths_per_pass=8 * 8 * 2)
+    steps = first.passes()
+    next(steps)
+    steps.close()
+    assert np.array_equal(img, first.film.combined())     # exactly the first pass, nothing more
+    assert not np.array_equal(img, full.film.combined())
