@@ -364,14 +364,16 @@ def export_light(ob, matrix, messages):
 
 
 def _light_shader_factor(light, name, messages):
-    """The light's node tree (if used) as a constant RGB factor: Emission colour x strength."""
+    """The light's node tree (if used) as a constant RGB factor: Emission colour x strength;
+    0 where nothing reaches the output's Surface (unlinked, no output, a muted Emission): as
+    Cycles, which then has no emission for the light."""
     if not getattr(light, 'use_nodes', False) or light.node_tree is None:
         return np.ones(3)
     out = output_node(light.node_tree)
-    if out is None or not out.inputs['Surface'].is_linked:
-        return np.ones(3)
-    node = linked_node(out.inputs['Surface'])
-    if node is not None and node.type == 'EMISSION':
+    node = None if out is None else linked_node(out.inputs['Surface'])
+    if node is None:
+        return np.zeros(3)
+    if node.type == 'EMISSION':
         color, c_ok = constant_color(node.inputs['Color'])
         strength, s_ok = constant_value(node.inputs['Strength'])
         if c_ok and s_ok:
@@ -765,7 +767,11 @@ class _MaterialBuilder:
         else:
             out = output_node(ntree)
             if out is None or not out.inputs['Surface'].is_linked:
-                closure = _Closure()    # Cycles: no surface shader renders black
+                # Cycles: no surface shader renders black, but a volume-only material's
+                # surface lets every ray through (SD_HAS_ONLY_VOLUME): a fog box is clear here
+                volume = out is not None and out.inputs.get('Volume') is not None and \
+                    linked_link(out.inputs['Volume']) is not None
+                closure = _Closure(transparent=(1.0, 1.0, 1.0)) if volume else _Closure()
             else:
                 closure, visibility = self._ray_type_mix(out.inputs['Surface'], reasons)
                 if closure is None:
@@ -1060,12 +1066,38 @@ class _MaterialBuilder:
                         interp, ext, transform, udim)
 
 
+def _normal_link(socket):
+    """The link that bends the normal a Normal input receives, past the nodes that leave it as
+    it is in Cycles (None: the shading normal itself): a Bump of constant height or strength 0
+    (it passes its own Normal input on), a Normal Map of strength 0 or of its default flat
+    colour, Geometry > Normal."""
+    while True:
+        link = linked_link(socket)
+        if link is None:
+            return None
+        node = link.from_node
+        if node.type == 'NEW_GEOMETRY' and link.from_socket.name == 'Normal':
+            return None
+        strength, constant = (constant_value(node.inputs['Strength'])
+                              if node.type in ('BUMP', 'NORMAL_MAP') else (1.0, False))
+        if node.type == 'BUMP':
+            if (constant and strength <= 0.0) or linked_link(node.inputs['Height']) is None:
+                socket = node.inputs['Normal']
+                continue
+        elif node.type == 'NORMAL_MAP':
+            colour = node.inputs['Color']
+            flat = linked_link(colour) is None and np.allclose(tuple(colour.default_value)[:3], (0.5, 0.5, 1.0))
+            if (constant and strength <= 0.0) or flat:
+                return None
+        return link
+
+
 def tangent_normal_map(node, reasons):
     """(image node, strength, UV map name) of a BSDF's Normal input fed by a tangent-space
     Normal Map node whose Color is an Image Texture's (the common baked normal map), or None
     (an unlinked Normal; anything else is reported as ignored)."""
     socket = node.inputs.get('Normal')
-    link = linked_link(socket) if socket is not None else None
+    link = _normal_link(socket) if socket is not None else None
     if link is None:
         return None
     nmap = link.from_node

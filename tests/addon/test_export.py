@@ -1521,6 +1521,15 @@ def test_light_node_tree_and_world_approximation_reported(scene, exported):
     assert np.allclose(data.lights[0].strength, (200.0, 100.0, 200.0))
     assert np.allclose(data.world, 0.6)           # the Background's own colour x strength
     assert any(lvl == 'WARNING' and "world approximated" in t for lvl, t in data.messages)
+    # nothing reaching the output's Surface: Cycles' light emits nothing (exact, not reported)
+    emit.mute = True
+    data = exported()
+    assert np.allclose(data.lights[0].strength, 0.0)
+    assert not any("light 'Point'" in t or "Light'" in t for _, t in data.messages if "node tree" in t)
+    emit.mute = False
+    out = next(n for n in lamp.data.node_tree.nodes if n.type == 'OUTPUT_LIGHT')
+    lamp.data.node_tree.links.remove(out.inputs['Surface'].links[0])
+    assert np.allclose(exported().lights[0].strength, 0.0)
 
 
 def test_missing_image_is_magenta_like_cycles(scene, exported):
@@ -1675,3 +1684,59 @@ def test_camera_override_renders_through_that_camera(scene):
     assert not np.allclose(chosen.tan_half_fov, default.tan_half_fov)
     data = export.export_scene(depsgraph, camera=other)
     assert np.allclose(data.camera.matrix, np.array(other.matrix_world))
+
+
+def test_volume_only_material_has_a_clear_surface(scene, exported):
+    """Cycles: a material with only a Volume output (a fog box) has a surface every ray passes
+    (SD_HAS_ONLY_VOLUME); with neither output linked it is black. The volume is reported."""
+    setup(scene)
+    fog, nt, out = _shader_material("Fog")
+    vol = nt.nodes.new('ShaderNodeVolumePrincipled')
+    nt.links.new(vol.outputs[0], out.inputs['Volume'])
+    black, _, _ = _shader_material("Nothing")
+    scenes.cube("Box", materials=(fog,))
+    scenes.cube("Other", location=(3, 0, 0), materials=(black,))
+    table = {m.name: m for m in exported().materials}
+    assert np.allclose(table["Fog"].transparency, 1.0) and np.allclose(table["Fog"].base_color, 0.0)
+    assert "volume ignored" in table["Fog"].approximated
+    assert table["Nothing"].transparency is None and np.allclose(table["Nothing"].base_color, 0.0)
+
+
+def test_normal_setups_that_leave_the_normal_are_not_approximations(scene, exported):
+    """A Bump without a height or of strength 0, a Normal Map of its default flat colour or of
+    strength 0, Geometry > Normal: Cycles shades with the normal as it is, so these are exact;
+    a Bump driven by a texture is still reported."""
+    setup(scene)
+
+    def bsdf_normal(name, build):
+        mat = scenes.diffuse(name, (0.5, 0.4, 0.3))
+        nt = mat.node_tree
+        bsdf = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+        nt.links.new(build(nt), bsdf.inputs['Normal'])
+        return mat
+
+    def bump(nt, strength=1.0, height=False):
+        b = nt.nodes.new('ShaderNodeBump')
+        b.inputs['Strength'].default_value = strength
+        if height:
+            nt.links.new(nt.nodes.new('ShaderNodeTexNoise').outputs['Fac'], b.inputs['Height'])
+        return b.outputs['Normal']
+
+    def normal_map(nt, strength=1.0):
+        m = nt.nodes.new('ShaderNodeNormalMap')
+        m.inputs['Strength'].default_value = strength
+        return m.outputs['Normal']
+
+    exact = {
+        "BumpNoHeight": lambda nt: bump(nt),
+        "BumpZero": lambda nt: bump(nt, 0.0, height=True),
+        "FlatMap": lambda nt: normal_map(nt),
+        "GeometryNormal": lambda nt: nt.nodes.new('ShaderNodeNewGeometry').outputs['Normal'],
+    }
+    for i, (name, build) in enumerate(exact.items()):
+        scenes.plane(name, location=(3 * i, 0, 0), materials=(bsdf_normal(name, build),))
+    scenes.plane("Bumpy", location=(-3, 0, 0), materials=(bsdf_normal("Bumpy", lambda nt: bump(nt, height=True)),))
+    table = {m.name: m for m in exported().materials}
+    for name in exact:
+        assert table[name].approximated == '', (name, table[name].approximated)
+    assert "Normal input ('Bump') ignored" in table["Bumpy"].approximated
