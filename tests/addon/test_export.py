@@ -1622,7 +1622,9 @@ def test_normal_map_material_and_world_tangents(scene, exported):
     mat = scenes.normal_map_material("Mapped", img, 0.7)
     bumped, bnt, bout = scenes._material("Bumped")
     bd = bnt.nodes.new('ShaderNodeBsdfDiffuse')
-    bnt.links.new(bnt.nodes.new('ShaderNodeBump').outputs['Normal'], bd.inputs['Normal'])
+    bump = bnt.nodes.new('ShaderNodeBump')
+    bnt.links.new(bnt.nodes.new('ShaderNodeTexNoise').outputs['Fac'], bump.inputs['Height'])
+    bnt.links.new(bump.outputs['Normal'], bd.inputs['Normal'])
     bnt.links.new(bd.outputs[0], bout.inputs['Surface'])
     for name, x, sx in (("Plain", 0.0, 1.0), ("Mirrored", 3.0, -1.0)):
         bpy.ops.mesh.primitive_plane_add(size=2.0, location=(x, 0, 0), rotation=(0, 0, math.pi / 2))

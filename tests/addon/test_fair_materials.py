@@ -52,6 +52,7 @@ def _non_diffuse_materials():
     nmap = nt.nodes.new('ShaderNodeNormalMap')
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
     noise = nt.nodes.new('ShaderNodeTexNoise')
+    nt.links.new(noise.outputs['Color'], nmap.inputs['Color'])     # (a flat default map is exact)
     nt.links.new(noise.outputs['Color'], d.inputs['Color'])
     e = nt.nodes.new('ShaderNodeEmission')
     e.inputs['Strength'].default_value = 2.0
