@@ -199,6 +199,11 @@ def export_camera(scene, messages=None, view=None, camera=None):
         ar = yr / xr
         ax, ay = 1.0, ar
     if kind == 'ORTHO':
+        if not ortho_scale > 0.0:          # Blender allows 0: a view of no width
+            if messages is not None:
+                messages.append(('WARNING', f"camera '{cam_ob.name}': orthographic scale {ortho_scale:g}: "
+                                            "every pixel sees the one point straight ahead of the camera"))
+            ortho_scale = 1e-30
         ax *= ortho_scale / (ar * 2.0)
         ay *= ortho_scale / (ar * 2.0)
         ar = ortho_scale / 2.0
