@@ -186,7 +186,8 @@ class _Triangles:
         # self-intersection step off the front side (12:15, see _OFFSET_ULPS); one native pass
         self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, _OFFSET_ULPS, _TINY)
         poll()
-        self.area = np.where(bad_t, 0.0, area)
+        # (capped at float32's largest: the light tables and kernels hold areas in float32)
+        self.area = np.minimum(np.where(bad_t, 0.0, area), np.finfo(F32).max)
         self.material = np.asarray(geometry.material, np.int32)
         self.visibility = np.where(bad_t, 0, np.asarray(geometry.visibility, np.uint8)).astype(np.uint8)
         normals = np.asarray(geometry.normals, F32)

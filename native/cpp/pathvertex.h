@@ -191,10 +191,11 @@ inline bool shadow_record(const float O[3], const float wi[3], float dist, const
     for (int a = 0; a < 3; ++a) r.org[a] = O[a];
     if (target && !std::isnan(target[0])) {
         for (int a = 0; a < 3; ++a) d[a] = target[a] - r.org[a];
-        len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        len = length3(d);
         const float inv = len > 0 ? 1.0f / len : 0.0f;
         for (int a = 0; a < 3; ++a) d[a] *= inv;
         len *= shorten;
+        if (!(len <= 3.4028234663852886e38f)) len = 0.0f;   // a target beyond float range: no ray
     } else {
         for (int a = 0; a < 3; ++a) d[a] = wi[a];
         len = dist;

@@ -53,6 +53,19 @@ inline float ulp_of(float x) {
     return u;
 }
 
+// |d| in float32: sqrt(d . d), the same bits, where that sum is finite; beyond (|d| past
+// ~1.8e19, a vast emitter's sampled point) scaled by the largest component, so the length and
+// the unit direction stay finite; +inf where a component is. (An overflowing sum had left a
+// shadow ray with a zero direction.)
+inline float length3(const float d[3]) {
+    const float s = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    if (s <= 3.4028234663852886e38f) return std::sqrt(s);
+    const float m = std::fmax(std::fabs(d[0]), std::fmax(std::fabs(d[1]), std::fabs(d[2])));
+    if (!(m < 3.4028234663852886e38f)) return m;   // inf (NaN stays NaN through fmax only if all are)
+    const float e[3] = {d[0] / m, d[1] / m, d[2] / m};
+    return m * std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+}
+
 // out[r] = sum over j of values[r * samples + j] x weights[j] (weights null: 1), in double, j in
 // order: the film's per-pixel sums of a block of samples (rows = channels x pixels).
 void sample_sums(const float* values, size_t rows, size_t samples, const double* weights, double* out);

@@ -521,3 +521,24 @@ def test_sequencer_strip_renders_through_its_camera(scene, tmp_path):
     seq = scenes.rgba(scenes.read_exr(tmp_path / "edit.exr"))
     assert np.abs(direct - through_a).max() > 0.05          # the cameras see different images
     assert np.allclose(seq, direct, atol=1e-4), np.abs(seq - direct).max()
+
+
+def test_a_vast_emitter_beyond_float_lengths_renders(scene, tmp_path):
+    """An emissive triangle 2e19 across (a tester's): distances to points sampled on it
+    overflow float32's dot product (|d| > 1.8e19), which left a shadow ray with a zero
+    direction and failed the render ('rays[i].dir is the zero vector'). Lengths are now
+    scaled, and the image is that of the scene without it (its emission is negligible)."""
+    scene.render.resolution_x, scene.render.resolution_y = 64, 48
+    scenes.camera((0, -8, 4), (math.radians(65), 0, 0))
+    scenes.plane("Floor", 10, materials=(scenes.diffuse("Grey", (0.8, 0.8, 0.8)),))
+    scenes.cube("Cube", 2, location=(0, 0, 1), materials=(scenes.diffuse("Red", (0.8, 0.2, 0.2)),))
+    scenes.world((0.05, 0.05, 0.05), 1.0)
+    scenes.light('AREA', 500, location=(2, -2, 5), size=2)
+    scene.dacrt.samples = 16
+    ref = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "ref.exr", scene)))
+    size = 1e19
+    scenes.mesh("Vast", [(-size, -size, 50), (size, -size, 50), (0, size, 50)], [(0, 2, 1)],
+                materials=(scenes.emission("Faint", (1, 1, 1), 1e-30),))
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "vast.exr", scene)))   # (raised)
+    assert np.isfinite(img).all()
+    assert img[..., :3].mean() == pytest.approx(ref[..., :3].mean(), rel=0.1)

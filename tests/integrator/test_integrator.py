@@ -620,3 +620,4 @@ def test_cancel_is_polled_per_bounce_and_drops_the_unfinished_pass():
     steps.close()
     assert np.array_equal(img, first.film.combined())     # exactly the first pass, nothing more
     assert not np.array_equal(img, full.film.combined())
+
