@@ -66,6 +66,7 @@ from .passes import PASSES, enabled, result_name
 from .texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stored_texels
 from .texture import baked as after_lookup
 
+MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_light)
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
 # what the view layer's Surfaces filter (use_solid) hides, as Cycles syncs no mesh then (hair
 # follows the Hair filter, point clouds stay)
@@ -356,11 +357,9 @@ def export_light(ob, matrix, messages):
             messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} "
                                         "at its object's scale): it emits nothing, as in Cycles; skipped"))
             return None
-        spread = float(light.spread)
-        if not spread > 0:
-            messages.append(('WARNING', f"area light '{ob.name}' has spread 0: it emits in no "
-                                        "direction; skipped"))
-            return None
+        # Cycles renders spread 0 as a beam straight out of the lamp (cos > 0.9999997); here
+        # the narrowest spread sampled reliably, 1e-4 radians, whose light is the same
+        spread = max(float(light.spread), MIN_SPREAD)
         kw.update(shape=light.shape, size_x=sx, size_y=sy, spread=spread)
     else:
         messages.append(('WARNING', f"light '{ob.name}' of type {light.type} is not supported; skipped"))

@@ -89,11 +89,18 @@ class AreaLight(Lamp):
             return F32(self.area)
         return np.where(full, F32(self.area), F32(self.area) * F32(4.0 / np.pi))
 
-    def _spread(self, scale, cos_l):
-        """Multiply per-sample scalars by the spread profile at emission angle acos(cos_l)."""
+    def _spread(self, scale, cos_l, w):
+        """Multiply per-sample scalars by the spread profile at emission angle acos(cos_l), w
+        (3, n) the unit directions: tan as |w x normal| / cos_l, which keeps small angles
+        (1 - cos^2 in float32 does not; lamps.h area_spread, the same float32 operations)."""
         if self.tan_half_spread is not None:
+            n = self.normal
+            cx = w[1] * n[2] - w[2] * n[1]
+            cy = w[2] * n[0] - w[0] * n[2]
+            cz = w[0] * n[1] - w[1] * n[0]
+            sin_t = np.sqrt(cx * cx + cy * cy + cz * cz)
             with np.errstate(divide='ignore', invalid='ignore'):
-                tan_t = np.sqrt(np.maximum(1.0 - cos_l * cos_l, 0.0)) / cos_l
+                tan_t = np.where(cos_l > 0, sin_t / cos_l, F32(np.inf))
             f = np.maximum(self.tan_half_spread - tan_t, 0.0) * self.spread_norm
             scale *= np.where(cos_l > 0, f, F32(0.0))
         return scale
@@ -124,7 +131,7 @@ class AreaLight(Lamp):
         with np.errstate(divide='ignore', invalid='ignore'):
             pdf = np.where(ok, dist * dist / (F32(self.area) * cos_l), F32(0.0))
             scale = np.where(ok, F32(1.0) / pdf, F32(0.0))
-        return LightSample(wi, dist, outer(self.emit, self._spread(scale, cos_l)), pdf)
+        return LightSample(wi, dist, outer(self.emit, self._spread(scale, cos_l, wi)), pdf)
 
     def _sample_spread(self, P, u1, u2):
         """Uniform over the clamped box (_spread_box); an empty box gives value 0 and pdf 0, as do
@@ -147,7 +154,7 @@ class AreaLight(Lamp):
         with np.errstate(divide='ignore', invalid='ignore'):
             pdf = np.where(ok, dist * dist / (self._box_area(full) * frac * cos_l), F32(0.0))
             scale = np.where(ok, F32(1.0) / pdf, F32(0.0))
-        return LightSample(wi, dist, outer(self.emit, self._spread(scale, cos_l)), pdf)
+        return LightSample(wi, dist, outer(self.emit, self._spread(scale, cos_l, wi)), pdf)
 
     def intersect(self, O, D, tmax):
         denom = dot(D, self.normal)                   # < 0: the ray travels toward the emitting face
@@ -174,4 +181,4 @@ class AreaLight(Lamp):
             idx, tc = cand[inside], tc[inside]
             cos_l = -denom[idx]
             pdf = tc * tc / (self._box_area(full[inside]) * frac[inside] * cos_l)
-        return idx, outer(self.emit, self._spread(np.ones(len(idx), F32), cos_l)), pdf
+        return idx, outer(self.emit, self._spread(np.ones(len(idx), F32), cos_l, np.take(D, idx, axis=1))), pdf

@@ -1156,15 +1156,16 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     scenes.light('AREA', 100.0, (0, 0, 3), name="Fine", size=0.5)
     scenes.light('SUN', 3.0, name="WideSun", angle=math.pi)     # 180 degrees: float32 pi > pi
     data = exported()
-    assert [l.name for l in data.lights] == ["Fine", "WideSun"]
-    assert data.lights[1].angle > math.pi                       # as Blender stores it
+    assert [l.name for l in data.lights] == ["Beam", "Fine", "WideSun"]
+    assert data.lights[0].spread == export.MIN_SPREAD            # Cycles: a beam, not nothing
+    assert data.lights[2].angle > math.pi                       # as Blender stores it
     warnings = [t for lvl, t in data.messages if lvl == 'WARNING']
     for name, why in (("NoSize", "zero area"), ("Squashed", "zero area"), ("Negative", "negative strength"),
-                      ("Infinite", "non-finite strength"), ("Beam", "spread 0"), ("NoCone", "zero object scale")):
+                      ("Infinite", "non-finite strength"), ("NoCone", "zero object scale")):
         assert any(f"'{name}'" in t and why in t for t in warnings), (name, warnings)
     lamps = [ls.make_lamp(l) for l in data.lights]              # the integrator takes them
-    assert ls.LightSet(lamps, None, 0).num_lamps == 2
-    assert lamps[1].omc == 1.0                                   # the lights layer: a hemisphere
+    assert ls.LightSet(lamps, None, 0).num_lamps == 3
+    assert lamps[2].omc == 1.0                                   # the lights layer: a hemisphere
 
 
 def test_portal_area_lights_emit_nothing(scene, exported):
