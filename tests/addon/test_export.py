@@ -12,6 +12,7 @@ from mathutils import Euler, Vector
 from addon import export, hair, pointcloud, specular
 from addon import lights as ls
 from addon import scenedata as sd
+from addon.texture import stored_texels
 
 from . import scenes
 
@@ -1743,3 +1744,31 @@ def test_normal_setups_that_leave_the_normal_are_not_approximations(scene, expor
     for name in exact:
         assert table[name].approximated == '', (name, table[name].approximated)
     assert "Normal input ('Bump') ignored" in table["Bumpy"].approximated
+
+
+def test_colour_nodes_after_an_8bit_image(scene, exported, tmp_path):
+    """After an image Cycles blends encoded (8-bit sRGB), an affine chain (a Mix Multiply tint)
+    stays weight x lookup (the image itself, looked up as stored); a non-affine one (Gamma) is
+    baked into the decoded texels and reported, since Cycles runs it after the blend."""
+    setup(scene)
+    px = (np.arange(4 * 4 * 3).reshape(4, 4, 3) * 5).astype(np.uint8)
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "bytes.png", px))
+    for i, kind in enumerate(("Tint", "Gamma")):
+        mat = scenes.diffuse(kind, (1, 1, 1))
+        nt = mat.node_tree
+        tex = nt.nodes.new('ShaderNodeTexImage')
+        tex.image = img
+        if kind == "Tint":
+            out = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], (0.5, 0.25, 1.0), 1.0).outputs['Result']
+        else:
+            g = nt.nodes.new('ShaderNodeGamma')
+            g.inputs['Gamma'].default_value = 2.0
+            nt.links.new(tex.outputs['Color'], g.inputs['Color'])
+            out = g.outputs['Color']
+        nt.links.new(out, next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE').inputs['Color'])
+        scenes.plane(kind, location=(3 * i, 0, 0), materials=(mat,))
+    table = {m.name: m for m in exported().materials}
+    tint, gamma = table["Tint"], table["Gamma"]
+    assert tint.approximated == '' and np.allclose(tint.base_color, (0.5, 0.25, 1.0))
+    assert stored_texels(tint.texture) is not None              # the image as Cycles stores it
+    assert "colour nodes after image 'bytes.png' applied to its texels before the blend" in gamma.approximated

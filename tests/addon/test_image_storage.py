@@ -119,24 +119,34 @@ def test_closest_reads_the_linear_texels():
     assert isinstance(lookup_texels(m.texture, 'Linear'), EncodedTexels)
 
 
-def test_colour_nodes_bake_linear_texels():
+def test_colour_nodes_after_an_encoded_image():
     """Colour nodes between the image and the colour are evaluated texel by texel on the linear
-    texels (nodeeval.py), and that bake is what is blended: nothing stored (an approximation
-    for 'Linear' where neighbouring texels differ)."""
+    texels (nodeeval.py). An affine chain (Invert: 1 - c) keeps the image's stored encoding
+    and runs after its lookup, as Cycles; any other (Gamma) is a bake of the linear texels,
+    which is what is blended: nothing stored (an approximation for 'Linear' where neighbouring
+    texels differ, reported)."""
     img = bpy.data.images.new("gen", 2, 1)
     img.pixels.foreach_set((BYTES / 255.0).astype(np.float32).ravel())
-    mat, nt, out = scenes._material("Inverted")
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image = img
-    inv = nt.nodes.new('ShaderNodeInvert')
-    nt.links.new(tex.outputs['Color'], inv.inputs['Color'])
-    nt.links.new(inv.outputs['Color'], d.inputs['Color'])
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
-    builder = export._MaterialBuilder()
-    m = builder.materials[builder.index(mat)]
-    assert stored_texels(m.texture) is None
-    assert np.allclose(m.texture[..., :3], 1 - srgb_to_linear(BYTES[..., :3] / 255.0), atol=1e-6)
+    linear = srgb_to_linear(BYTES[..., :3] / 255.0)
+    built = {}
+    for name, kind, socket in (("Inverted", 'ShaderNodeInvert', 'Color'), ("Gamma", 'ShaderNodeGamma', 'Color')):
+        mat, nt, out = scenes._material(name)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        tex = nt.nodes.new('ShaderNodeTexImage')
+        tex.image = img
+        node = nt.nodes.new(kind)
+        if kind == 'ShaderNodeGamma':
+            node.inputs['Gamma'].default_value = 2.0
+        nt.links.new(tex.outputs['Color'], node.inputs[socket])
+        nt.links.new(node.outputs['Color'], d.inputs['Color'])
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        builder = export._MaterialBuilder()
+        built[name] = builder.materials[builder.index(mat)]
+    inverted, gamma = built["Inverted"], built["Gamma"]
+    assert stored_texels(inverted.texture) is not None and inverted.approximated == ''
+    assert np.allclose(inverted.texture[..., :3], 1 - linear, atol=1e-6)     # what reads the texels
+    assert stored_texels(gamma.texture) is None and "before the blend" in gamma.approximated
+    assert np.allclose(gamma.texture[..., :3], linear ** 2, atol=1e-6)
 
 
 def test_udim_tiles_from_files_keep_their_encoding(tmp_path):

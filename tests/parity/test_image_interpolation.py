@@ -142,3 +142,46 @@ def test_environment_lookup_blends_the_encoding(tmp_path):
     assert np.abs(old - exact).max() / exact.max() > 0.1
     cols = np.abs(_blocks(dacrt) - _blocks(cycles)).max() / _blocks(cycles).max()
     assert cols < 0.003, cols
+
+
+TINT = np.array([0.9, 0.8, 0.7])
+CHAINS = {
+    # Mix Multiply by a constant (the everyday tint) and Invert: affine in the image's colour,
+    # kept as weight x lookup + constant after the encoded blend, as Cycles runs them
+    'tint': (lambda c: c * TINT, lambda nt, s: scenes.mix_node(nt, 'MULTIPLY', s, (*TINT,), 1.0).outputs['Result']),
+    'invert': (lambda c: 1.0 - c, None),
+}
+
+
+def _invert(nt, socket):
+    node = nt.nodes.new('ShaderNodeInvert')
+    nt.links.new(socket, node.inputs['Color'])
+    return node.outputs['Color']
+
+
+@pytest.mark.parametrize('chain', sorted(CHAINS))
+def test_affine_colour_nodes_after_an_image_keep_its_encoded_blend(tmp_path, chain):
+    """Colour nodes after an 8-bit image run after Cycles' lookup (blend the encoded texels,
+    decode, then the nodes). Baking them into decoded texels before the blend, as DACRT did,
+    brightened a tinted 0/255 stripe pattern 61% (a tester's). Affine chains now keep the blend."""
+    f, build = CHAINS[chain]
+    build = build or _invert
+    path = _write(tmp_path / "texels.png", TEXELS[..., :3], 'uint8')
+
+    def wire(nt, tex, diffuse):
+        tex.image = bpy.data.images.load(path)
+        tex.interpolation = 'Linear'
+        nt.links.new(build(nt, tex.outputs['Color']), diffuse.inputs['Color'])
+
+    sunplane.build(np.ones((1, 1, 4), np.float32), wire, WIDTH, SAMPLES)
+    _exact_cycles(bpy.context.scene)
+    bpy.context.scene.render.resolution_y = HEIGHT
+    t = TEXELS.astype(np.float64)[0, :, :3] / 255.0
+    exact = _blocks(columns(lambda u: f(decode(blend(t[0], t[1], u))))[None]) * K
+    old = _blocks(columns(lambda u: blend(f(decode(t[0])), f(decode(t[1])), u))[None]) * K
+    top = exact.max()
+    for name in ('DACRT', 'CYCLES'):
+        got = _blocks(sunplane.render_rgb(name, tmp_path))
+        err = np.abs(got - exact).max() / top
+        assert err < 0.002, (name, chain, err, got.round(4).tolist(), exact.round(4).tolist())
+    assert np.abs(old - exact).max() / top > 0.05
