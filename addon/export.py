@@ -1910,6 +1910,7 @@ class _Exporter:
                            filter_width=d.filter_width, seed=d.seed,
                            threads=0 if r.threads_mode == 'AUTO' else r.threads,
                            partition=d.partition.lower(), film_transparent=r.film_transparent,
+                           film_exposure=float(getattr(d, 'film_exposure', 1.0)),
                            passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
                            pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
                            cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),

@@ -28,7 +28,7 @@ from .passes import LIGHT as LIGHT_PASSES
 
 class Film:
     def __init__(self, width: int, height: int, passes=(), adaptive: bool = False, cryptomatte=None,
-                 lightgroups=(), aovs=()):
+                 lightgroups=(), aovs=(), exposure=1.0):
         unknown = [p for p in passes if p not in PASS_CHANNELS]
         if unknown:
             raise ValueError(f"unknown pass(es) {unknown}; supported: {sorted(PASS_CHANNELS)}")
@@ -58,6 +58,11 @@ class Film:
         self._crypto = {kind: (np.asarray(id_values, np.float32), int(levels), Coverage(len(id_values)))
                         for kind, (id_values, levels) in (cryptomatte or {}).items()}
         self.nan_dropped = 0
+        # Cycles' Film > Exposure: a scale of what is light (Combined RGB, light passes and light
+        # groups) applied when they are read, never to alpha or data passes
+        if not (np.isfinite(exposure) and exposure >= 0):
+            raise ValueError(f"film exposure must be finite and >= 0, got {exposure!r}")
+        self.exposure = float(exposure)
 
     @property
     def num_pixels(self) -> int:
@@ -149,13 +154,24 @@ class Film:
         return mean.T.reshape(self.height, self.width, sums.shape[0]).astype(np.float32)
 
     def combined(self) -> np.ndarray:
-        """(H, W, 4) float32 premultiplied linear RGBA; pixels without samples are 0."""
-        return self._mean(self._sum)
+        """(H, W, 4) float32 premultiplied linear RGBA (RGB times the exposure); pixels without
+        samples are 0."""
+        rgba = self._mean(self._sum)
+        if self.exposure != 1.0:
+            rgba[..., :3] *= np.float32(self.exposure)
+        return rgba
 
     def pass_image(self, name: str) -> np.ndarray:
-        """(H, W, channels) float32 image of an enabled pass (PASS_CHANNELS)."""
+        """(H, W, channels) float32 image of an enabled pass (PASS_CHANNELS); light passes and
+        light groups times the exposure, as Cycles scales them."""
         if name not in self.passes and name not in self.lightgroup_passes and name not in self.aov_passes:
             raise KeyError(f"pass {name!r} was not requested (requested: {list(self.passes)})")
+        image = self._pass_image(name)
+        if self.exposure != 1.0 and (name in LIGHT_PASSES or name in self.lightgroup_passes):
+            image *= np.float32(self.exposure)
+        return image
+
+    def _pass_image(self, name: str) -> np.ndarray:
         if name in FIRST_SAMPLE:
             return self._first[name].T.reshape(self.height, self.width, -1).copy()
         if name == 'Mist':

@@ -457,7 +457,8 @@ class Integrator:
         aovs = tuple(dict.fromkeys((str(name), str(kind)) for name, kind in getattr(s, 'aovs', ())))
         self.film = Film(self.camera.film_width, self.camera.film_height, tuple(s.passes),
                          adaptive=self.adaptive is not None, cryptomatte=crypto,
-                         lightgroups=tuple(getattr(s, 'lightgroups', ())), aovs=aovs)
+                         lightgroups=tuple(getattr(s, 'lightgroups', ())), aovs=aovs,
+                         exposure=float(getattr(s, 'film_exposure', 1.0)))
         self._aovs = _aov_tables(aovs, [getattr(m, 'aovs', None) for m in scene_data.materials])
         # the world's AOVs, where camera rays miss: not with transparent film or a world camera
         # rays cannot see (Cycles does not run the background shader for them)

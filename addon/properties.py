@@ -49,6 +49,11 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
                     "bounce) may add, as the mean of its R, G and B, as Cycles clamps it; 0 turns it "
                     "off",
         default=10.0, min=0.0, max=1e8, soft_max=1000.0)
+    film_exposure: FloatProperty(
+        name="Exposure",
+        description="Image brightness scale, as Cycles' Film > Exposure: multiplies the Combined "
+                    "colour and the light passes (not alpha or data passes)",
+        default=1.0, min=0.0, soft_max=10.0)
     filter_type: EnumProperty(
         name="Filter Type", description="Pixel filter", items=FILTER_ITEMS,
         default='BLACKMAN_HARRIS')

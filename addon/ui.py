@@ -71,6 +71,7 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
         col.prop(settings, "sample_clamp_direct", text="Direct Light")
         col.prop(settings, "sample_clamp_indirect", text="Indirect Light")
         col = layout.column()
+        col.prop(settings, "film_exposure")
         col.prop(settings, "filter_type")
         sub = col.column()
         sub.active = settings.filter_type != 'BOX'

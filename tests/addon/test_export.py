@@ -1661,6 +1661,8 @@ def test_view_layer_world_override_samples_and_filters(scene, exported):
     data = exported()
     assert np.allclose(data.world, (1.0, 0.5, 2.0)) and data.settings.samples == 64
     assert len(data.geometry.triangles) == 12
+    scene.dacrt.film_exposure = 1.5
+    assert exported().settings.film_exposure == 1.5
     vl.world_override = green                 # the layer's world, lights and background alike
     vl.samples = 3                            # Cycles' default 'Use' layer samples: overrides
     data = exported()

@@ -621,3 +621,21 @@ def test_cancel_is_polled_per_bounce_and_drops_the_unfinished_pass():
     assert np.array_equal(img, first.film.combined())     # exactly the first pass, nothing more
     assert not np.array_equal(img, full.film.combined())
 
+
+
+def test_film_exposure_scales_light_not_alpha_or_data():
+    """Cycles' Film > Exposure: Combined RGB, the light passes and light groups scale by it;
+    alpha and the data passes (Diffuse Color, Depth) do not."""
+    passes = ('DiffCol', 'DiffDir', 'Emit', 'Depth')
+    base = render(plane_scene([light('POINT', 100.0, translation(z=2.0))], samples=4, passes=passes,
+                              film_transparent=True)).film
+    lit = render(plane_scene([light('POINT', 100.0, translation(z=2.0))], samples=4, passes=passes,
+                             film_transparent=True, film_exposure=2.5)).film
+    a, b = base.combined(), lit.combined()
+    assert a[..., :3].max() > 0 and np.allclose(b[..., :3], 2.5 * a[..., :3], rtol=1e-6)
+    assert np.array_equal(a[..., 3], b[..., 3])
+    assert np.allclose(lit.pass_image('DiffDir'), 2.5 * base.pass_image('DiffDir'), rtol=1e-6)
+    for name in ('DiffCol', 'Depth'):
+        assert np.array_equal(lit.pass_image(name), base.pass_image(name)), name
+    with pytest.raises(ValueError, match="exposure"):
+        render(plane_scene(samples=1, film_exposure=-1.0))
