@@ -531,12 +531,15 @@ class _Texture:
     """An image texture as the shader graph uses it (pixels shared between materials), read at
     (x, y) = transform @ (u, v, 1) of the UV map (transform None: the UV map itself). A UDIM
     image's pixels are its tiles' texels side by side, (1, N, 4), laid out as `udim` says."""
-    def __init__(self, key, pixels, interpolation, extension, transform=None, udim=None, name=''):
+    def __init__(self, key, pixels, interpolation, extension, transform=None, udim=None, name='', attribute=None):
         self.key, self.pixels = key, pixels
         self.interpolation, self.extension = interpolation, extension
         self.transform = transform
         self.udim = udim
         self.name = name            # the image's, for messages
+        # not an image: the probe values of a mesh attribute (its name; '' the render colour
+        # attribute) a Color Attribute or Attribute node reads, see _MaterialBuilder._attribute
+        self.attribute = attribute
 
     def texels(self, pixels):
         """pixels (these texels, or a colour baked into them) as the scene data holds a texture."""
@@ -584,7 +587,8 @@ class _Closure:
         t = self.texture
         w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
         mapped = _Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
-                          t.baked(lambda rgb: f(rgb * w + k)), t.interpolation, t.extension, t.transform, t.udim)
+                          t.baked(lambda rgb: f(rgb * w + k)), t.interpolation, t.extension, t.transform, t.udim,
+                          t.name, t.attribute)
         return _Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
                         self.emission_tex)
 
@@ -708,6 +712,10 @@ class _MaterialBuilder:
         self._images = {}          # (image pointer, unassociated) -> its pixels
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
+        # per material: None, or (attribute name, w (3,), k (3,)): its albedo is w x the mesh
+        # attribute's colour + k at each point (a Color Attribute or Attribute node)
+        self.attribute_maps = [None]
+        self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
         self._uv_names = []
         self._normal_maps = []
         self.normal_mapped = False  # some material has a normal map: meshes need tangents
@@ -722,6 +730,7 @@ class _MaterialBuilder:
             idx = len(self.materials)
             self.materials.append(self._build(mat))
             m = self.materials[-1]
+            self.attribute_maps.append(self._attribute_map)
             self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
                                      or m.emission_texture is not None or m.normal_texture is not None)
             self.uv_maps.append(m.uv_map)
@@ -760,7 +769,68 @@ class _MaterialBuilder:
             return None, every
         return closure, vis
 
+    # what a mesh attribute reads as in a build, (1, n, 4) like an image's texels: random
+    # colours at alpha 1, then one colour at alphas 0..1 (a chain reading the alpha is not a
+    # scale and offset of the colour)
+    _ATTRIBUTE_PROBE = np.random.default_rng(11).random((1, 64, 4)).astype(np.float32)
+    _ATTRIBUTE_PROBE[..., 3] = 1.0
+    _ATTRIBUTE_ALPHAS = np.concatenate([np.full((1, 16, 3), 0.5), np.linspace(0, 1, 16)[None, :, None]],
+                                       axis=2).astype(np.float32)
+
+    def _attribute(self, node, reasons):
+        """The probe values a Color Attribute or (geometry) Attribute node reads in this build,
+        as a texture marked with the attribute's name; None where attributes are not read."""
+        if self._attribute_pixels is None:
+            return None
+        if node.type == 'ATTRIBUTE':
+            if node.attribute_type != 'GEOMETRY':
+                reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
+                               f"'{node.attribute_name}' not read")
+                return None
+            name = node.attribute_name
+        else:
+            name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
+        label = f"attribute '{name}'" if name else "the render colour attribute"
+        return _Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None, label, name)
+
     def _build(self, mat):
+        """The material, and self._attribute_map: how its albedo follows a mesh attribute (a
+        Color Attribute or Attribute node into the colour) when it is a per-channel scale and
+        offset of the attribute's colour (checked on probe values, as _affine_in does for
+        images); a chain that is not (or reads the alpha) takes the node's own value, reported."""
+        self._attribute_map = None
+        self._attribute_pixels = self._ATTRIBUTE_PROBE
+        m = self._build_material(mat)
+        name = self._albedo_attribute
+        if name is None:
+            self._attribute_pixels = None
+            return m
+        x = self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64)
+        y = m.base_color.astype(np.float64) * np.asarray(m.texture, np.float64)[0, :, :3]
+        self._attribute_pixels = self._ATTRIBUTE_ALPHAS
+        m_alpha = self._build_material(mat)
+        ya = m_alpha.base_color.astype(np.float64) * np.asarray(m_alpha.texture, np.float64)[0, :, :3]
+        w, k = np.empty(3), np.empty(3)
+        for c in range(3):
+            (w[c], k[c]), *_ = np.linalg.lstsq(np.stack([x[:, c], np.ones(len(x))], axis=1), y[:, c], rcond=None)
+        k = np.where(np.abs(k) < 1e-9, 0.0, k)
+        affine = np.abs(x * w + k - y).max() <= 1e-5 * (1.0 + np.abs(y).max()) and np.ptp(ya, axis=0).max() < 1e-7 \
+            and (k >= 0).all() and (k + w >= -1e-9).all()
+        if affine:
+            self._attribute_pixels = None
+            self._attribute_map = (name, w, k)
+            m.texture = None                # the albedo comes per point from Geometry.colors
+            m.base_color = np.ones(3, np.float32)
+            m.color_attribute = name
+            return m
+        self._attribute_pixels = None       # the attribute nodes then read as their own values
+        m = self._build_material(mat)
+        label = f"attribute '{name}'" if name else "the render colour attribute"
+        m.approximated = '; '.join(r for r in (m.approximated, f"colour from {label} through nodes that are "
+                                               "not a scale and offset of its colour") if r)
+        return m
+
+    def _build_material(self, mat):
         reasons = []
         self._uv_names = []           # the UV map each image this material reads asks for
         self._normal_maps = []        # (_Texture, strength, UV map) of its BSDFs' normal maps
@@ -786,6 +856,8 @@ class _MaterialBuilder:
                         linked_node(out.inputs[socket]) is not None:
                     reasons.append(f"{socket.lower()} ignored")
         base, texture, interp, ext, transform = self._albedo(closure)
+        self._albedo_attribute = closure.texture.attribute \
+            if closure.texture is not None and closure.tex_weight.any() else None
         base = _nonnegative(base, "colour", reasons)
         emission = _nonnegative(closure.emission.astype(np.float32), "emission", reasons)
         holdout = closure.holdout >= 1.0 - 1e-6
@@ -976,7 +1048,8 @@ class _MaterialBuilder:
         and float nodes (nodeeval.py) on constants and one image, baked into a texture."""
         link = linked_link(socket)
         if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
-                                 link.from_node.type in nodeeval.VIEW_NODE_TYPES or is_image_alpha(link)):
+                                 link.from_node.type in nodeeval.VIEW_NODE_TYPES or
+                                 link.from_node.type in nodeeval.ATTRIBUTE_NODE_TYPES or is_image_alpha(link)):
             return self._evaluated_closure(socket, reasons)
         if link is not None and link.from_node.type == 'TEX_IMAGE':
             tex = self._texture(link.from_node, reasons)
@@ -1025,7 +1098,7 @@ class _MaterialBuilder:
         return mean * weight, (tex, weight)
 
     def _evaluated_closure(self, socket, reasons):
-        f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE).input(socket, True)
+        f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE, attribute=self._attribute).input(socket, True)
         if f.tex is None:
             return _Closure(const=f.value)
         src = f.tex
@@ -1045,7 +1118,8 @@ class _MaterialBuilder:
         baked[..., :3] = _nonnegative(f.value.astype(np.float32), "colour from colour nodes", reasons)
         baked[..., 3] = src.pixels[..., 3]
         key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
-        return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim),
+        return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim,
+                                         src.name, src.attribute),
                         tex_weight=(1.0, 1.0, 1.0))
 
     # colours an image's texels are replaced by to see how a node chain maps them: random RGB
@@ -1618,7 +1692,7 @@ class _MeshArrays:
     (RNA's per-item path, ~0.1 s per million triangles) is skipped and per-corner data
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
-                 'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents')
+                 'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes')
 
     def __init__(self, me, want_uvs):
         nv = len(me.vertices)
@@ -1666,7 +1740,7 @@ class _MeshArrays:
             self.normal_rows, self.normal_index = cn.reshape(nl, 3), self.corners
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
             self.normal_rows = self.normal_index = None
-        self.mesh, self._tangents = None, {}   # set for depsgraph meshes: tangents on demand
+        self.mesh, self._tangents, self._attributes = None, {}, {}   # depsgraph meshes: read on demand
         # every UV map by name (a material may read one by a UV Map node); corner_uvs: the
         # active render one, which textures read otherwise
         self.uv_layers = self._read_uvs(me) if want_uvs else {}
@@ -1681,7 +1755,7 @@ class _MeshArrays:
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
         a.corners, a.slot, a.corner_uvs, a.uv_layers, a.active_uv, a.domain = None, None, None, {}, '', 'POINT'
-        a.mesh, a._tangents = None, {}
+        a.mesh, a._tangents, a._attributes = None, {}, {}
         a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
         return a
 
@@ -1709,6 +1783,65 @@ class _MeshArrays:
                 out = None
         self._tangents[uv_map] = out
         return out
+
+    def corner_attribute(self, name):
+        """(nt, 3, 4) float32 per triangle corner: the mesh attribute `name` ('' the render
+        colour attribute) as Cycles' Attribute and Color Attribute nodes read it, RGB and alpha
+        (a colour as stored, bytes in linear; a vector, 2D vector or number as (x, y, z, 1),
+        (x, y, 0, 1), (v, v, v, 1)), from its point, corner or face domain; None where the mesh
+        has none (or one on edges, which Cycles does not read either)."""
+        if name in self._attributes:
+            return self._attributes[name]
+        out = None
+        me = self.mesh
+        if me is not None:
+            if not name:
+                colors = me.color_attributes
+                i = colors.render_color_index
+                name_found = colors[i].name if 0 <= i < len(colors) else None
+            else:
+                name_found = name
+            attr = me.attributes.get(name_found) if name_found else None
+            out = None if attr is None else self._attribute_corners(me, attr)
+        self._attributes[name] = out
+        return out
+
+    def _attribute_corners(self, me, attr):
+        n = len(attr.data)
+        kind = attr.data_type
+        if kind in ('FLOAT_COLOR', 'BYTE_COLOR'):
+            v = np.empty(n * 4, np.float32)
+            attr.data.foreach_get('color', v)
+            rows = v.reshape(n, 4)
+        elif kind in ('FLOAT_VECTOR', 'FLOAT2'):
+            width = 3 if kind == 'FLOAT_VECTOR' else 2
+            v = np.empty(n * width, np.float32)
+            attr.data.foreach_get('vector', v)
+            rows = np.zeros((n, 4), np.float32)
+            rows[:, :width] = v.reshape(n, width)
+            rows[:, 3] = 1.0
+        elif kind in ('FLOAT', 'INT', 'INT8', 'BOOLEAN'):
+            v = np.empty(n, np.float32 if kind == 'FLOAT' else (bool if kind == 'BOOLEAN' else np.int32))
+            attr.data.foreach_get('value', v)
+            rows = np.ones((n, 4), np.float32)
+            rows[:, :3] = v.astype(np.float32)[:, None]
+        else:
+            return None
+        nt = len(self.triangles)
+        if attr.domain == 'POINT':
+            index = self.triangles
+        elif attr.domain == 'CORNER':
+            index = self.corners                   # None: the corners are 0, 1, 2, ... in order
+        elif attr.domain == 'FACE':
+            if self.corners is None:
+                face = np.arange(nt, dtype=np.int32)
+            else:
+                face = np.empty(nt, np.int32)
+                me.loop_triangle_polygons.foreach_get('value', face)
+            index = np.repeat(face[:, None], 3, axis=1)
+        else:
+            return None
+        return self.per_corner(rows, index, np.empty((nt, 3, 4), np.float32))
 
     @staticmethod
     def _read_uvs(me):
@@ -1749,6 +1882,7 @@ class _Out:
         self.tangents = None              # (m, 3, 4), allocated by the first normal-mapped mesh
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
+        self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
         self.keep = None
 
     def drop(self, rows, keep):
@@ -1760,7 +1894,8 @@ class _Out:
     def geometry(self):
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, uvs=self.uvs,
-                       terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents)
+                       terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
+                       colors=self.colors)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
         return sd.Geometry(vertices=self.vertices, **per_tri)
@@ -2331,7 +2466,32 @@ class _Exporter:
                     _rewind(out.uvs[S])
             if self.materials.normal_mapped:
                 self._world_tangents(a, p, lin[i], i in mirrored, out, S)
+            if any(self.materials.attribute_maps[k] is not None for k in set(p.slot_map)):
+                self._attribute_colors(a, p, i in mirrored, out, S)
         return bad, deg
+
+    def _attribute_colors(self, a, place, mirrored, out, S):
+        """The per-corner albedo factors (w x the attribute's colour + k, Cycles' 0 where the
+        mesh lacks the attribute) of one instance's triangles whose material reads a mesh
+        attribute; 1 on the frame's other triangles."""
+        if out.colors is None:
+            out.colors = np.ones((len(out.triangles), 3, 3), np.float32)
+        block = out.colors[S]
+        material = out.material[S]
+        for k in set(place.slot_map):
+            entry = self.materials.attribute_maps[k]
+            if entry is None:
+                continue
+            name, w, c = entry
+            rows = np.flatnonzero(material == k)
+            values = a.corner_attribute(name)
+            rgb = np.zeros((len(rows), 3, 3)) if values is None else values[rows, :, :3]
+            if values is None:
+                self._ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
+                             "its colour reads 0, as in Cycles", place.name)
+            block[rows] = (rgb * w + c).astype(np.float32)
+            if mirrored:                     # corners 1 and 2 were swapped for these triangles
+                block[rows] = block[rows][:, [0, 2, 1]]
 
     def _world_tangents(self, a, place, lin, mirrored, out, S):
         """The world-space tangents (unit) and bitangent signs of one instance's triangles whose

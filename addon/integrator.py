@@ -202,6 +202,11 @@ class _Triangles:
         # (8:12), for normal maps
         tangents = getattr(geometry, 'tangents', None)
         self.tangents = None if tangents is None else dacrt.shading.corner_rows(np.asarray(tangents, F32))
+        # rows: corner 0 colour (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9): the
+        # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors)
+        colors = getattr(geometry, 'colors', None)
+        self.colors = None if colors is None else dacrt.shading.corner_rows(
+            np.nan_to_num(np.maximum(np.asarray(colors, F32), 0.0), posinf=0.0))
         self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
             np.asarray(geometry.has_uv, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
@@ -254,6 +259,8 @@ class _Materials:
                     (i, *_texture_entry(mat.name, 'emission texture', mat.emission_texture, mat.emission_interpolation,
                                         mat.emission_extension, mat.emission_transform)))
         self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
+        # materials whose albedo is times the triangles' interpolated Geometry.colors
+        self.colored = np.array([getattr(m, 'color_attribute', None) is not None for m in materials])
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
         self.emissive = self.emission.max(axis=0) > 0
         # transparency (3, materials) and the opacity textures (index, texture, interpolation,
@@ -375,6 +382,8 @@ def _validate(sd: SceneData):
         (g.has_uv is None or np.asarray(g.has_uv).shape == (m,), f"geometry.has_uv must be None or ({m},)"),
         (getattr(g, 'tangents', None) is None or np.asarray(g.tangents).shape == (m, 3, 4),
          f"geometry.tangents must be None or ({m}, 3, 4)"),
+        (getattr(g, 'colors', None) is None or np.asarray(g.colors).shape == (m, 3, 3),
+         f"geometry.colors must be None or ({m}, 3, 3)"),
     ]
     for ok, msg in checks:
         if not ok:
@@ -490,6 +499,8 @@ class Integrator:
         self._any_transparent = bool(self._tri_transparent.any())
         # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
         self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))
+        # textures or attribute colours vary the albedo over a triangle: hits need (u, v) for them
+        self._albedo_varies = bool(self.mats.textures) or (self.tri.colors is not None and bool(self.mats.colored.any()))
         self._tri_live = max3(self._tri_albedo) > 0
         self._tri_any = np.ones(len(self.tri), bool)   # every triangle shades (SKIP_WORK off)
         self._area32 = self.tri.area.astype(F32)
@@ -1083,7 +1094,7 @@ class Integrator:
             u_pick, u_rr = self.rng.uniform_pick(path.keys, _dim(k, 0))
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
         # (their barycentrics too where textures need them)
-        tex = bool(self.mats.textures)
+        tex = self._albedo_varies
         bumped = bool(self.mats.normal_maps) and self.tri.tangents is not None
         uv = tex or bumped or (self.tri.term_cutoff is not None and bool(self.lights))   # the lift needs u, v
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
@@ -1096,7 +1107,7 @@ class Integrator:
         if len(idx) == 0:
             return None
         if tex:
-            self._texture(prim, u, v, thr)
+            self._albedo_maps(prim, u, v, thr)
         bump = None
         if bumped:                        # the smooth normal and the correction flag stay for the
             bump = np.empty((4, len(prim)), F32)      # bump shadowing of light samples and bounces
@@ -1135,6 +1146,18 @@ class Integrator:
         """Hit points P, geometric and shading normals facing the incoming rays, and the points
         offset off the surface toward the ray's side (all (3,k)), of the rays sel (None: all)."""
         return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D)
+
+    def _albedo_maps(self, prim, u, v, albedo):
+        """Multiply what varies over a surface into albedo (3, k) (or a throughput that
+        includes it) at hits (prim, u, v), in place: the colour textures, then the attribute
+        colours (Geometry.colors) of the materials that read one."""
+        self._texture(prim, u, v, albedo)
+        if self.tri.colors is not None:
+            sel = np.flatnonzero(np.take(self.mats.colored, np.take(self.tri.material, prim)))
+            if len(sel):
+                p = np.take(prim, sel)
+                rows = np.take(self.tri.colors, p, axis=1)
+                albedo[:, sel] *= rows[0:3] + rows[3:6] * np.take(u, sel) + rows[6:9] * np.take(v, sel)
 
     def _texture(self, prim, u, v, albedo, textures=None):
         """Multiply image textures (on the UV map, through each texture's affine map) into
@@ -1413,8 +1436,8 @@ class Integrator:
         hu, hv = np.take(hits['u'], idx), np.take(hits['v'], idx)
         if len(idx):
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1)
-            if self.mats.textures:
-                self._texture(prim, hu, hv, albedo)
+            if self._albedo_varies:
+                self._albedo_maps(prim, hu, hv, albedo)
             P, ng, ns, _ = self._surface(hits, idx, path.D)
             if self.mats.normal_maps and self.tri.tangents is not None:   # Cycles: the bent normal
                 ns = self._normal_mapped(prim, hu, hv, ns, ng, np.empty(len(idx), F32))
@@ -1544,8 +1567,8 @@ class Integrator:
 
         def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns, depth, tau=None):
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
-            if self.mats.textures:
-                self._texture(prim, u, v, albedo)
+            if self._albedo_varies:
+                self._albedo_maps(prim, u, v, albedo)
             if denoise is not None:
                 denoise.surface(cols, ns, albedo, P, tau)
             diff[:, cols] += thr * albedo

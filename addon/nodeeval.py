@@ -44,6 +44,7 @@ _MAP_RANGE_INPUTS = {'value': 'Value', 'f0': 'From Min', 'f1': 'From Max', 't0':
                      'steps': 'Steps'}
 NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
 VIEW_NODE_TYPES = frozenset({'FRESNEL', 'LAYER_WEIGHT'})   # as their average over view directions
+ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE'})   # Color Attribute, Attribute
 _COLOR_ROLES = {'color', 'a', 'b', 'vector'}     # colour or vector inputs (but floats in Mix FLOAT and Math)
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
 _SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2, 'X': 0, 'Y': 1, 'Z': 2}
@@ -93,13 +94,17 @@ class Evaluator:
     Texture node (an object with .pixels (h, w, 4) and .key) or None (then `missing`, a
     colour). Unsupported nodes give the input's own value; a second, different image its
     average colour; both noted in reasons. View-dependent nodes (Fresnel, Layer Weight) give
-    their average over view directions (fresnel.py), noted in `notes` (default: reasons)."""
+    their average over view directions (fresnel.py), noted in `notes` (default: reasons).
+    attribute(node, reasons): the values a Color Attribute or Attribute node reads, as an image's
+    (an object like texture's, .pixels (..., 4): RGB and alpha), or None (not evaluated here:
+    its own value); None: such nodes are not evaluated."""
 
     MAX_DEPTH = 64
 
-    def __init__(self, texture, reasons, missing, notes=None):
+    def __init__(self, texture, reasons, missing, notes=None, attribute=None):
         self.texture, self.reasons, self.missing = texture, reasons, missing
         self.notes = reasons if notes is None else notes
+        self.attribute = attribute
 
     def input(self, socket, color, depth=0):
         link, carrier = nodegraph.source(socket)
@@ -131,6 +136,16 @@ class Evaluator:
             return Field(tex.pixels[..., 3:4] if out.name == 'Alpha' else tex.pixels[..., :3], tex)
         if t in VIEW_NODE_TYPES:
             return self._view_average(node, out, depth)
+        if t in ATTRIBUTE_NODE_TYPES:
+            tex = None if self.attribute is None else self.attribute(node, self.reasons)
+            if tex is None:
+                return None
+            px = tex.pixels
+            if out.name == 'Alpha':
+                return Field(px[..., 3:4], tex)
+            if out.name == 'Fac':           # Cycles: a colour or vector attribute's average
+                return Field(px[..., :3].mean(axis=-1, keepdims=True), tex)
+            return Field(px[..., :3], tex, out.name == 'Vector')
         roles = node_inputs(node)
         if roles is None:
             return None

@@ -126,6 +126,9 @@ class Material:
     normal_transform: Optional[np.ndarray] = None
     normal_strength: float = 1.0
     bump_correction: bool = True                  # Material > Settings > Bump Map Correction (Cycles)
+    # a Color Attribute or Attribute node's colour into the albedo: the attribute's name ('' the
+    # render colour attribute); base_color then multiplies each point's Geometry.colors
+    color_attribute: Optional[str] = None
     uv_map: str = ''                              # the UV map (u, v) come from, by name (a UV Map
                                                   # node); '' the active render one. A mesh
                                                   # without it reads (0, 0), as in Cycles
@@ -179,6 +182,9 @@ class Geometry:
     # triangle's material reads) and the bitangent sign, for normal maps; 0 where none; None: no
     # material has a normal map
     tangents: Optional[np.ndarray] = None
+    # (M,3,3) float32 per corner: the albedo factor of triangles whose material reads a mesh
+    # attribute (Material.color_attribute), interpolated like UVs; 1 elsewhere; None: none does
+    colors: Optional[np.ndarray] = None
 
     @staticmethod
     def empty() -> 'Geometry':

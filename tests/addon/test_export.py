@@ -1774,3 +1774,85 @@ def test_colour_nodes_after_an_8bit_image(scene, exported, tmp_path):
     assert tint.approximated == '' and np.allclose(tint.base_color, (0.5, 0.25, 1.0))
     assert stored_texels(tint.texture) is not None              # the image as Cycles stores it
     assert "colour nodes after image 'bytes.png' applied to its texels before the blend" in gamma.approximated
+
+
+def _attribute_material(name, node_type='ShaderNodeVertexColor', attribute='Col', chain=None):
+    mat, nt, out = _shader_material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    node = nt.nodes.new(node_type)
+    if node_type == 'ShaderNodeVertexColor':
+        node.layer_name = attribute
+    else:
+        node.attribute_name = attribute
+    s = node.outputs['Color']
+    if chain is not None:
+        s = chain(nt, s)
+    nt.links.new(s, d.inputs['Color'])
+    return mat
+
+
+def test_colour_attributes_per_corner(scene, exported):
+    """A Color Attribute (or Attribute) node into the diffuse colour: the material is marked
+    with the attribute, Geometry.colors holds w x the attribute + k per triangle corner (point,
+    corner and face domains, as Cycles reads them; 0 where the mesh lacks it, as Cycles), 1 on
+    other triangles. A chain that is not a scale and offset of the colour (Gamma) reads the
+    node's own value and is reported."""
+    setup(scene)
+    quad = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
+    made = {}
+    for i, (domain, kind) in enumerate((('POINT', 'FLOAT_COLOR'), ('CORNER', 'BYTE_COLOR'), ('FACE', 'FLOAT_COLOR'))):
+        ob = scenes.mesh(domain, quad, [(0, 1, 2, 3)], location=(3 * i, 0, 0),
+                         materials=(_attribute_material(f"M{domain}", chain=lambda nt, s: scenes.mix_node(
+                             nt, 'MULTIPLY', s, (0.5, 1.0, 2.0), 1.0).outputs['Result']),))
+        attr = ob.data.color_attributes.new('Col', kind, domain)
+        values = np.linspace(0.1, 0.9, len(attr.data) * 4).reshape(-1, 4).astype(np.float32)
+        values[:, 3] = 1.0
+        attr.data.foreach_set('color', values.ravel())
+        back = np.empty(len(attr.data) * 4, np.float32)
+        attr.data.foreach_get('color', back)          # (bytes round the values)
+        made[domain] = back.reshape(-1, 4)[:, :3]
+    mirror = scenes.mesh("Mirror", quad, [(0, 1, 2, 3)], location=(-3, 0, 0), materials=(_attribute_material("MMirror"),))
+    mirror.scale.x = -1.0                     # rewound triangles: the colours follow their corners
+    mattr = mirror.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT')
+    mvalues = np.random.default_rng(1).random((4, 4)).astype(np.float32)
+    mattr.data.foreach_set('color', mvalues.ravel())
+    scenes.mesh("Bare", quad, [(0, 1, 2, 3)], location=(9, 0, 0), materials=(_attribute_material("MBare"),))
+    scenes.mesh("Plain", quad, [(0, 1, 2, 3)], location=(12, 0, 0), materials=(scenes.diffuse("P", (0.5, 0.5, 0.5)),))
+    gamma = scenes.mesh("Gamma", quad, [(0, 1, 2, 3)], location=(15, 0, 0), materials=(_attribute_material(
+        "MGamma", 'ShaderNodeAttribute', chain=lambda nt, s: _gamma(nt, s)),))
+    gamma.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT')
+    data = exported()
+    table = {m.name: m for m in data.materials}
+    g = data.geometry
+    tint = np.array([0.5, 1.0, 2.0])
+    for domain, values in made.items():
+        m = table[f"M{domain}"]
+        assert m.color_attribute == 'Col' and m.texture is None and m.approximated == '', m.approximated
+        assert np.allclose(m.base_color, 1.0)
+        tris = np.asarray(data.geometry.triangles)[of_object(data, domain)]
+        colors = g.colors[of_object(data, domain)]
+        if domain == 'POINT':
+            want = values[tris - tris.min()] * tint
+        elif domain == 'FACE':
+            want = np.broadcast_to(values[0] * tint, colors.shape)
+        else:                                 # corners: the face's loops in the triangles' order
+            want = None
+            gap = np.abs(colors.reshape(-1, 1, 3) - (values * tint)[None]).max(axis=2).min(axis=1)
+            assert gap.max() < 1e-6, gap                   # every corner is one of the face's loops
+        if want is not None:
+            assert np.allclose(colors, want, atol=1e-6), domain
+    mtris = np.asarray(g.triangles)[of_object(data, "Mirror")]
+    assert np.allclose(g.colors[of_object(data, "Mirror")], mvalues[mtris - mtris.min(), :3], atol=1e-6)
+    assert np.allclose(g.colors[of_object(data, "Bare")], 0.0)          # Cycles: a missing attribute is 0
+    assert any("'Bare'" in t and "no attribute 'Col' on the mesh" in t for _, t in data.messages)
+    assert np.allclose(g.colors[of_object(data, "Plain")], 1.0)
+    assert table["MGamma"].color_attribute is None
+    assert "not a scale and offset of its colour" in table["MGamma"].approximated
+
+
+def _gamma(nt, socket):
+    node = nt.nodes.new('ShaderNodeGamma')
+    node.inputs['Gamma'].default_value = 2.0
+    nt.links.new(socket, node.inputs['Color'])
+    return node.outputs['Color']

@@ -639,3 +639,20 @@ def test_film_exposure_scales_light_not_alpha_or_data():
         assert np.array_equal(lit.pass_image(name), base.pass_image(name)), name
     with pytest.raises(ValueError, match="exposure"):
         render(plane_scene(samples=1, film_exposure=-1.0))
+
+
+def test_attribute_colours_multiply_the_albedo_per_point():
+    """A material with color_attribute: its albedo times the triangle's interpolated
+    Geometry.colors, for light and the Diffuse Color pass alike; other materials ignore them.
+    Under a sun of strength E straight down: L = E / pi x albedo x colour."""
+    scene = plane_scene([light('SUN', 3.0, np.eye(4))], samples=4, max_bounces=0, passes=('DiffCol',))
+    plain = render(scene).film
+    scene.materials[1].color_attribute = 'Col'
+    c = np.array([0.5, 0.25, 1.0], np.float32)
+    scene.geometry.colors = np.broadcast_to(c, (len(scene.geometry.triangles), 3, 3)).copy()
+    coloured = render(scene).film
+    assert np.allclose(plain.combined()[..., :3], 3.0 / np.pi * 0.8, rtol=1e-5)
+    assert np.allclose(coloured.combined()[..., :3], 3.0 / np.pi * 0.8 * c, rtol=1e-5)
+    assert np.allclose(coloured.pass_image('DiffCol'), 0.8 * c, rtol=1e-5)
+    scene.materials[1].color_attribute = None                  # not read by other materials
+    assert np.allclose(render(scene).film.combined(), plain.combined())
