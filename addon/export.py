@@ -2138,6 +2138,10 @@ class _Exporter:
         self._noted.add(ob.name)
         if getattr(ob, 'is_shadow_catcher', False) and ob.type != 'LIGHT':
             self._ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
+        for mod in getattr(ob, 'modifiers', ()):
+            if mod.type == 'SUBSURF' and mod.show_render and getattr(mod, 'use_adaptive_subdivision', False):
+                self._ignore(f"adaptive subdivision is not rendered (Cycles dices by the dicing rate); the "
+                             f"Subdivision modifier's Render Levels ({mod.render_levels}) are used", ob.name)
         linking = getattr(ob, 'light_linking', None)
         if linking is not None and linking.receiver_collection is not None:
             self.light_links[ob.name] = light_link_receivers(linking.receiver_collection)

@@ -1856,3 +1856,19 @@ def _gamma(nt, socket):
     node.inputs['Gamma'].default_value = 2.0
     nt.links.new(socket, node.inputs['Color'])
     return node.outputs['Color']
+
+
+def test_adaptive_subdivision_is_reported(scene, exported):
+    """Cycles dices an adaptive Subdivision modifier by its dicing rate; DACRT renders the
+    modifier's Render Levels, and says so (it was silent: a tester's cube at Render Levels 0
+    rendered as its 12 raw triangles, 25% off Cycles' rounded shape)."""
+    setup(scene)
+    ob = scenes.cube("Smooth")
+    mod = ob.modifiers.new("Subdivision", 'SUBSURF')
+    mod.levels = mod.render_levels = 1
+    data = exported()
+    assert not any("adaptive" in t for _, t in data.messages)
+    mod.use_adaptive_subdivision = True
+    data = exported()
+    assert any("'Smooth'" in t and "adaptive subdivision is not rendered" in t and "Render Levels (1)" in t
+               for _, t in data.messages)
