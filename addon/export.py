@@ -67,6 +67,9 @@ from .texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stor
 from .texture import baked as after_lookup
 
 MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_light)
+# Object Info outputs read per object, as a material's colour attribute named OBJECT_INFO + output
+OBJECT_INFO = 'Object Info:'
+OBJECT_INFO_OUTPUTS = ('Random', 'Color', 'Alpha', 'Location')
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
 # what the view layer's Surfaces filter (use_solid) hides, as Cycles syncs no mesh then (hair
 # follows the Hair filter, point clouds stay)
@@ -712,8 +715,9 @@ class _MaterialBuilder:
         self._images = {}          # (image pointer, unassociated) -> its pixels
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
-        # per material: None, or (attribute name, w (3,), k (3,)): its albedo is w x the mesh
-        # attribute's colour + k at each point (a Color Attribute or Attribute node)
+        # per material: None; ('mesh', attribute name, w (3,), k (3,)): its albedo is w x the
+        # mesh attribute's colour + k at each point (a Color Attribute or Attribute node); or
+        # ('object', Object Info output, material): per object, object_albedo
         self.attribute_maps = [None]
         self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
         self._uv_names = []
@@ -777,11 +781,19 @@ class _MaterialBuilder:
     _ATTRIBUTE_ALPHAS = np.concatenate([np.full((1, 16, 3), 0.5), np.linspace(0, 1, 16)[None, :, None]],
                                        axis=2).astype(np.float32)
 
-    def _attribute(self, node, reasons):
-        """The probe values a Color Attribute or (geometry) Attribute node reads in this build,
-        as a texture marked with the attribute's name; None where attributes are not read."""
+    def _attribute(self, node, out, reasons):
+        """The values a Color Attribute, (geometry) Attribute or Object Info node reads in this
+        build (probe values, or each object's: _build, object_albedo), as a texture marked with
+        the attribute's name (OBJECT_INFO + the output's, for Object Info); None where they
+        are not read."""
         if self._attribute_pixels is None:
             return None
+        if node.type == 'OBJECT_INFO':
+            if out.name not in OBJECT_INFO_OUTPUTS:
+                return None
+            name = OBJECT_INFO + out.name
+            return _Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
+                            f"Object Info {out.name}", name)
         if node.type == 'ATTRIBUTE':
             if node.attribute_type != 'GEOMETRY':
                 reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
@@ -805,6 +817,13 @@ class _MaterialBuilder:
         if name is None:
             self._attribute_pixels = None
             return m
+        if name.startswith(OBJECT_INFO):
+            # one value per object: the nodes after it are evaluated on each object's value
+            # (object_albedo), exact whatever they are (a Random into a Color Ramp)
+            self._attribute_pixels = None
+            self._attribute_map = ('object', name[len(OBJECT_INFO):], mat)
+            m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
+            return m
         x = self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64)
         y = m.base_color.astype(np.float64) * np.asarray(m.texture, np.float64)[0, :, :3]
         self._attribute_pixels = self._ATTRIBUTE_ALPHAS
@@ -818,7 +837,7 @@ class _MaterialBuilder:
             and (k >= 0).all() and (k + w >= -1e-9).all()
         if affine:
             self._attribute_pixels = None
-            self._attribute_map = (name, w, k)
+            self._attribute_map = ('mesh', name, w, k)
             m.texture = None                # the albedo comes per point from Geometry.colors
             m.base_color = np.ones(3, np.float32)
             m.color_attribute = name
@@ -829,6 +848,19 @@ class _MaterialBuilder:
         m.approximated = '; '.join(r for r in (m.approximated, f"colour from {label} through nodes that are "
                                                "not a scale and offset of its colour") if r)
         return m
+
+    def object_albedo(self, index, values):
+        """The albedo (n, 3) material `index` (an Object Info one) has on objects whose Object
+        Info output is values (n, 4) each: the material evaluated once on all of them."""
+        _, _, mat = self.attribute_maps[index]
+        self._attribute_pixels = np.ascontiguousarray(values, np.float32)[None]
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attribute_pixels = None
+        if m.texture is None:                  # (the chain no longer reads it: a constant)
+            return np.broadcast_to(m.base_color, (len(values), 3)).astype(np.float32)
+        return (m.base_color * np.asarray(m.texture, np.float32)[0, :, :3]).astype(np.float32)
 
     def _build_material(self, mat):
         reasons = []
@@ -1945,12 +1977,56 @@ class _Placement:
     """One instance of a mesh: where it is and how it is shaded. slots: its material slots'
     materials; slot_map (slot -> global material index) is filled for the slots its mesh's
     triangles use, so a material no triangle shows is never evaluated."""
-    __slots__ = ('matrix', 'slots', 'slot_map', 'visibility', 'object_index', 'name', 'terminator')
+    __slots__ = ('matrix', 'slots', 'slot_map', 'visibility', 'object_index', 'name', 'terminator', 'info',
+                 'object_albedo')
 
-    def __init__(self, matrix, slots, visibility, object_index, name, terminator=(0.0, 0.0)):
+    def __init__(self, matrix, slots, visibility, object_index, name, terminator=(0.0, 0.0), info=None):
         self.matrix, self.slots, self.slot_map = matrix, slots, None
         self.visibility, self.object_index, self.name = visibility, object_index, name
         self.terminator = terminator      # (geometry offset, shading offset), Cycles' object settings
+        self.info = info                  # (random, colour RGBA): what its Object Info nodes read
+        self.object_albedo = {}           # material index -> albedo (3,) of an Object Info material
+
+    def object_info(self, output):
+        """The (4,) value an Object Info output has for this instance (RGB, alpha; a number in
+        all four, a location with alpha 1)."""
+        random, color = self.info
+        if output == 'Random':
+            return np.array([random, random, random, 1.0])
+        if output == 'Alpha':
+            return np.full(4, color[3])
+        if output == 'Location':
+            return np.append(self.matrix[:3, 3], 1.0)
+        return np.asarray(color, np.float64)
+
+
+def object_random(name, random_id, is_instance):
+    """Cycles' Object Info Random of an object: an instance's random_id / (2^32 - 1); an object
+    of its own, hash_uint2(hash_string(its name), 0) / (2^32 - 1) (blender/object.cpp; checked
+    against Cycles renders)."""
+    full = 0xFFFFFFFF
+    if is_instance:
+        return (random_id & full) / full
+    h = 0
+    for b in name.encode('utf-8'):        # Cycles' hash_string reads (signed) chars into a uint
+        h = (h * 37 + (b if b < 128 else (b - 256) & full)) & full
+    return _hash_uint2(h, 0) / full
+
+
+def _hash_uint2(kx, ky):
+    """Cycles' hash_uint2 (Bob Jenkins' lookup3 final mix of two words)."""
+    full = 0xFFFFFFFF
+
+    def rot(x, k):
+        return ((x << k) | (x >> (32 - k))) & full
+    a = b = c = (0xdeadbeef + (2 << 2) + 13) & full
+    a, b = (a + kx) & full, (b + ky) & full
+    for x, y, k in (('c', 'b', 14), ('a', 'c', 11), ('b', 'a', 25), ('c', 'b', 16), ('a', 'c', 4),
+                    ('b', 'a', 14), ('c', 'b', 24)):
+        v = {'a': a, 'b': b, 'c': c}
+        r = ((v[x] ^ v[y]) - rot(v[y], k)) & full
+        a, b, c = (r if x == 'a' else a), (r if x == 'b' else b), (r if x == 'c' else c)
+    return c
 
 
 # ----------------------------------------------------------------------------------------
@@ -2092,9 +2168,10 @@ class _Exporter:
             if key is None:
                 continue
             slots = [override] if override is not None else [s.material for s in ob.material_slots]
+            info = (object_random(ob.name, inst.random_id, inst.is_instance), tuple(ob.color))
             self.placements[key].append(_Placement(np.array(inst.matrix_world, np.float64),
                                                    slots, vis, self._object_id(ob), ob.name,
-                                                   _terminator(ob)))
+                                                   _terminator(ob), info))
 
     def _light(self, inst, ob):
         # instances also take their instancer's ray visibility (as Cycles)
@@ -2215,7 +2292,8 @@ class _Exporter:
         arrays.slot = np.repeat(curve_slot, (np.diff(offsets) - 1) * steps * sides * 2).astype(np.int32)
         self.meshes[key] = arrays
         slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
-        self.placements[key] = [_Placement(to_world, slots_of, vis, self._object_id(ob), ob.name)]
+        info = (object_random(ob.name, 0, False), tuple(ob.color))     # the emitter's, as Cycles' hair
+        self.placements[key] = [_Placement(to_world, slots_of, vis, self._object_id(ob), ob.name, info=info)]
         self._ignore(f"hair particles rendered as tubes of {sides} sides, {steps} step(s) a segment, "
                      "open ends", ob.name)
 
@@ -2307,6 +2385,7 @@ class _Exporter:
         bad = {}          # object name -> [non-finite vertices, triangles dropped]
         degenerate = 0
         self._resolve_materials()
+        self._object_info_albedos()
         need_uvs = uv_pass or any(self.materials.uses_texture)
         batches = []
         for key, places in self.placements.items():
@@ -2345,6 +2424,21 @@ class _Exporter:
             keep = mvis | np.uint8(sd.HOLDOUT)
             geometry.visibility &= keep[geometry.material]
         return geometry
+
+    def _object_info_albedos(self):
+        """Each placement's albedo for the Object Info materials it shows: per material, one
+        evaluation over all its placements' values (export._MaterialBuilder.object_albedo)."""
+        maps = self.materials.attribute_maps
+        for k, entry in enumerate(maps):
+            if entry is None or entry[0] != 'object':
+                continue
+            users = [p for places in self.placements.values() for p in places
+                     if p.slot_map is not None and k in p.slot_map]
+            if not users:
+                continue
+            albedo = self.materials.object_albedo(k, np.stack([p.object_info(entry[1]) for p in users]))
+            for p, a in zip(users, albedo):
+                p.object_albedo[k] = a
 
     def _resolve_materials(self):
         """Evaluate the materials of the slots some triangle uses (per mesh: its slot indices,
@@ -2486,8 +2580,11 @@ class _Exporter:
             entry = self.materials.attribute_maps[k]
             if entry is None:
                 continue
-            name, w, c = entry
             rows = np.flatnonzero(material == k)
+            if entry[0] == 'object':                 # one albedo over the whole object
+                block[rows] = place.object_albedo[k]
+                continue
+            _, name, w, c = entry
             values = a.corner_attribute(name)
             rgb = np.zeros((len(rows), 3, 3)) if values is None else values[rows, :, :3]
             if values is None:

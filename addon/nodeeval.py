@@ -44,7 +44,8 @@ _MAP_RANGE_INPUTS = {'value': 'Value', 'f0': 'From Min', 'f1': 'From Max', 't0':
                      'steps': 'Steps'}
 NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
 VIEW_NODE_TYPES = frozenset({'FRESNEL', 'LAYER_WEIGHT'})   # as their average over view directions
-ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE'})   # Color Attribute, Attribute
+# Color Attribute, Attribute and Object Info: values per point or per object (export.py)
+ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 _COLOR_ROLES = {'color', 'a', 'b', 'vector'}     # colour or vector inputs (but floats in Mix FLOAT and Math)
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
 _SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2, 'X': 0, 'Y': 1, 'Z': 2}
@@ -95,7 +96,8 @@ class Evaluator:
     colour). Unsupported nodes give the input's own value; a second, different image its
     average colour; both noted in reasons. View-dependent nodes (Fresnel, Layer Weight) give
     their average over view directions (fresnel.py), noted in `notes` (default: reasons).
-    attribute(node, reasons): the values a Color Attribute or Attribute node reads, as an image's
+    attribute(node, output, reasons): the values a Color Attribute, Attribute or Object Info
+    node's output reads, as an image's
     (an object like texture's, .pixels (..., 4): RGB and alpha), or None (not evaluated here:
     its own value); None: such nodes are not evaluated."""
 
@@ -137,7 +139,7 @@ class Evaluator:
         if t in VIEW_NODE_TYPES:
             return self._view_average(node, out, depth)
         if t in ATTRIBUTE_NODE_TYPES:
-            tex = None if self.attribute is None else self.attribute(node, self.reasons)
+            tex = None if self.attribute is None else self.attribute(node, out, self.reasons)
             if tex is None:
                 return None
             px = tex.pixels
@@ -145,7 +147,9 @@ class Evaluator:
                 return Field(px[..., 3:4], tex)
             if out.name == 'Fac':           # Cycles: a colour or vector attribute's average
                 return Field(px[..., :3].mean(axis=-1, keepdims=True), tex)
-            return Field(px[..., :3], tex, out.name == 'Vector')
+            if out.type in ('VALUE', 'INT'):    # a number (Object Info's Random): the first channel
+                return Field(px[..., :1], tex)
+            return Field(px[..., :3], tex, out.name in ('Vector', 'Location'))
         roles = node_inputs(node)
         if roles is None:
             return None

@@ -1872,3 +1872,12 @@ def test_adaptive_subdivision_is_reported(scene, exported):
     data = exported()
     assert any("'Smooth'" in t and "adaptive subdivision is not rendered" in t and "Render Levels (1)" in t
                for _, t in data.messages)
+
+
+def test_object_random_is_cycles(scene):
+    """Object Info Random as Cycles computes it, values read from Cycles renders: objects of
+    their own hash their names, instances divide their random_id."""
+    assert [round(export.object_random(n, 0, False), 7) for n in ("P0", "P1", "P2")] == \
+        [0.3344228, 0.644282, 0.5273009]
+    assert export.object_random("Any", 360212060, True) == pytest.approx(0.08386841, abs=1e-7)
+    assert 0.0 <= export.object_random("Ünïcode", 0, False) < 1.0
