@@ -842,17 +842,20 @@ class _MaterialBuilder:
             m.base_color = np.ones(3, np.float32)
             m.color_attribute = name
             return m
-        self._attribute_pixels = None       # the attribute nodes then read as their own values
-        m = self._build_material(mat)
+        # any other chain is evaluated on each mesh's corner values (evaluated_albedo) and the
+        # results interpolated: Cycles interpolates first, so this is exact at the corners only
+        self._attribute_pixels = None
+        self._attribute_map = ('corners', name, mat)
+        m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
         label = f"attribute '{name}'" if name else "the render colour attribute"
-        m.approximated = '; '.join(r for r in (m.approximated, f"colour from {label} through nodes that are "
-                                               "not a scale and offset of its colour") if r)
+        m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
+                                               "corners, then interpolated (Cycles interpolates first)") if r)
         return m
 
-    def object_albedo(self, index, values):
-        """The albedo (n, 3) material `index` (an Object Info one) has on objects whose Object
-        Info output is values (n, 4) each: the material evaluated once on all of them."""
-        _, _, mat = self.attribute_maps[index]
+    def evaluated_albedo(self, index, values):
+        """The albedo (n, 3) material `index` (an Object Info or per-corner attribute one) has
+        where what its node reads is values (n, 4) each: the material evaluated once on all."""
+        mat = self.attribute_maps[index][2]
         self._attribute_pixels = np.ascontiguousarray(values, np.float32)[None]
         try:
             m = self._build_material(mat)
@@ -2049,6 +2052,7 @@ class _Exporter:
         self.object_lightgroups = []
         self._object_index = {}
         self.meshes = {}          # key -> _MeshArrays
+        self._corner_albedos = {}  # (material, mesh) -> per-corner albedo of a node chain on an attribute
         self.placements = {}      # key -> [_Placement]
         self.lights = []
         self.skipped = {}         # reason -> [object names]
@@ -2436,7 +2440,7 @@ class _Exporter:
                      if p.slot_map is not None and k in p.slot_map]
             if not users:
                 continue
-            albedo = self.materials.object_albedo(k, np.stack([p.object_info(entry[1]) for p in users]))
+            albedo = self.materials.evaluated_albedo(k, np.stack([p.object_info(entry[1]) for p in users]))
             for p, a in zip(users, albedo):
                 p.object_albedo[k] = a
 
@@ -2568,6 +2572,19 @@ class _Exporter:
                 self._attribute_colors(a, p, i in mirrored, out, S)
         return bad, deg
 
+    def _corner_albedo(self, a, k, name, object_name):
+        """(nt, 3, 3): material k's albedo at each corner of mesh a, its chain evaluated on the
+        corners' attribute values (0 where the mesh lacks it, as Cycles); once per mesh."""
+        cache = self._corner_albedos
+        if (k, id(a)) not in cache:
+            values = a.corner_attribute(name)
+            if values is None:
+                self._ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
+                             "its colour reads 0, as in Cycles", object_name)
+                values = np.zeros((len(a.triangles), 3, 4), np.float32)
+            cache[k, id(a)] = self.materials.evaluated_albedo(k, values.reshape(-1, 4)).reshape(-1, 3, 3)
+        return cache[k, id(a)]
+
     def _attribute_colors(self, a, place, mirrored, out, S):
         """The per-corner albedo factors (w x the attribute's colour + k, Cycles' 0 where the
         mesh lacks the attribute) of one instance's triangles whose material reads a mesh
@@ -2583,6 +2600,11 @@ class _Exporter:
             rows = np.flatnonzero(material == k)
             if entry[0] == 'object':                 # one albedo over the whole object
                 block[rows] = place.object_albedo[k]
+                continue
+            if entry[0] == 'corners':                # the chain evaluated at each corner
+                block[rows] = self._corner_albedo(a, k, entry[1], place.name)[rows]
+                if mirrored:
+                    block[rows] = block[rows][:, [0, 2, 1]]
                 continue
             _, name, w, c = entry
             values = a.corner_attribute(name)

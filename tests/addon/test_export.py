@@ -1796,8 +1796,8 @@ def test_colour_attributes_per_corner(scene, exported):
     """A Color Attribute (or Attribute) node into the diffuse colour: the material is marked
     with the attribute, Geometry.colors holds w x the attribute + k per triangle corner (point,
     corner and face domains, as Cycles reads them; 0 where the mesh lacks it, as Cycles), 1 on
-    other triangles. A chain that is not a scale and offset of the colour (Gamma) reads the
-    node's own value and is reported."""
+    other triangles. A chain that is not a scale and offset of the colour (Gamma) is evaluated
+    on the corners' values and interpolated, reported."""
     setup(scene)
     quad = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
     made = {}
@@ -1821,7 +1821,9 @@ def test_colour_attributes_per_corner(scene, exported):
     scenes.mesh("Plain", quad, [(0, 1, 2, 3)], location=(12, 0, 0), materials=(scenes.diffuse("P", (0.5, 0.5, 0.5)),))
     gamma = scenes.mesh("Gamma", quad, [(0, 1, 2, 3)], location=(15, 0, 0), materials=(_attribute_material(
         "MGamma", 'ShaderNodeAttribute', chain=lambda nt, s: _gamma(nt, s)),))
-    gamma.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT')
+    gattr = gamma.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT')
+    gvalues = np.random.default_rng(2).random((4, 4)).astype(np.float32)
+    gattr.data.foreach_set('color', gvalues.ravel())
     data = exported()
     table = {m.name: m for m in data.materials}
     g = data.geometry
@@ -1847,8 +1849,11 @@ def test_colour_attributes_per_corner(scene, exported):
     assert np.allclose(g.colors[of_object(data, "Bare")], 0.0)          # Cycles: a missing attribute is 0
     assert any("'Bare'" in t and "no attribute 'Col' on the mesh" in t for _, t in data.messages)
     assert np.allclose(g.colors[of_object(data, "Plain")], 1.0)
-    assert table["MGamma"].color_attribute is None
-    assert "not a scale and offset of its colour" in table["MGamma"].approximated
+    # any other chain: evaluated on the corners' values, then interpolated (reported)
+    assert table["MGamma"].color_attribute == 'Col'
+    assert "applied at the mesh's corners, then interpolated" in table["MGamma"].approximated
+    gtris = np.asarray(g.triangles)[of_object(data, "Gamma")]
+    assert np.allclose(g.colors[of_object(data, "Gamma")], gvalues[gtris - gtris.min(), :3] ** 2, atol=1e-6)
 
 
 def _gamma(nt, socket):
