@@ -2148,10 +2148,7 @@ class _Exporter:
                     self.lights.append(light)
                 continue
             if getattr(ob, 'particle_systems', None) and _hair_systems(ob):
-                if inst.is_instance:
-                    self._skip("hair particles of an instanced object are not rendered", ob.name)
-                else:
-                    self._particle_hair(ob, override)
+                self._particle_hair(ob, override, inst)
             if ob.type == 'CURVES' and not getattr(self.view_layer, 'use_strand', True):
                 self._skip("hair curves are off in the view layer's filter (Hair)", ob.name)
                 continue
@@ -2232,21 +2229,36 @@ class _Exporter:
     def _ignore(self, reason, name):
         _add_name(self.ignored, reason, name)
 
-    def _particle_hair(self, ob, override):
+    def _particle_hair(self, ob, override, inst):
         """The strands of ob's hair particle systems (Render As Path), as Cycles reads them
         (blender/curves.cpp): children only when it has some (else the parents), 2^render_step
         + 1 world-space points a strand from co_hair, the radius from the Hair Shape settings
-        along the strand's length; tessellated as tubes (hair.py) in object space. The
-        object's ray visibility applies; the view layer's Hair filter off skips it. (An
-        instanced emitter's hair is not rendered, and reported.)"""
-        systems = _hair_systems(ob)
+        along the strand's length; tessellated as tubes (hair.py) in object space once per
+        emitter, and placed by each instance of it (inst: the depsgraph's), as Cycles places an
+        instanced emitter's hair. The object's ray visibility applies (an instance's with its
+        instancer's); the view layer's Hair filter off skips it."""
         if not getattr(self.view_layer, 'use_strand', True):
             self._skip("hair is off in the view layer's filter (Hair)", ob.name)
             return
-        vis = self._visibility(ob, ob)
+        parent = inst.parent if inst.is_instance and inst.parent is not None else ob
+        vis = self._visibility(ob, parent)
         if vis == 0:
             self.counts['objects_invisible'] += 1
             return
+        key = ('HAIR', ob.original.as_pointer())
+        if key not in self.meshes:
+            self.meshes[key] = self._hair_arrays(ob)
+            self.placements[key] = []
+        if self.meshes[key] is None:
+            return
+        slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
+        info = (object_random(ob.name, inst.random_id, inst.is_instance), tuple(ob.color))   # the emitter's
+        self.placements[key].append(_Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
+                                               self._object_id(ob), ob.name, info=info))
+
+    def _hair_arrays(self, ob):
+        """ob's hair as object-space tube arrays (with their material slots), or None."""
+        systems = _hair_systems(ob)
         positions, radii, offsets, slots = [], [], [0], []
         n_slots = max(len(ob.material_slots), 1)
         # co_hair gives world space; the tubes are made round in object space and placed by
@@ -2258,7 +2270,7 @@ class _Exporter:
             to_object = np.linalg.inv(to_world)
         except np.linalg.LinAlgError:
             self._skip("hair of an object with a singular (zero-scale) transform is not rendered", ob.name)
-            return
+            return None
         for ps in systems:
             s = ps.settings
             parents, children = len(ps.particles), len(ps.child_particles)
@@ -2282,24 +2294,20 @@ class _Exporter:
             offsets.extend((offsets[-1] + points * np.arange(1, len(co) + 1)).tolist())
             slots.append(np.full(len(co), min(max(s.material - 1, 0), n_slots - 1)))
         if not positions:
-            return
+            return None
         positions, radii = np.concatenate(positions), np.concatenate(radii)
         curve_slot = np.concatenate(slots)
         sides, steps = hair.level_for(len(positions))
         v, t, n, kept = hair.tubes(positions, radii, np.array(offsets), (sides, steps))
         if not len(t):
-            return
-        key = ('HAIR', ob.original.as_pointer())
+            return None
         arrays = _MeshArrays.from_arrays(v, t, n)
         # every strand has 2+ points, so hair.tubes keeps them all, in order, each with
         # (points - 1) x steps x sides x 2 triangles
         arrays.slot = np.repeat(curve_slot, (np.diff(offsets) - 1) * steps * sides * 2).astype(np.int32)
-        self.meshes[key] = arrays
-        slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
-        info = (object_random(ob.name, 0, False), tuple(ob.color))     # the emitter's, as Cycles' hair
-        self.placements[key] = [_Placement(to_world, slots_of, vis, self._object_id(ob), ob.name, info=info)]
         self._ignore(f"hair particles rendered as tubes of {sides} sides, {steps} step(s) a segment, "
                      "open ends", ob.name)
+        return arrays
 
     def _read_geometry(self, ob):
         """Read (once) the evaluated geometry of `ob`; returns its cache key or None."""
