@@ -380,7 +380,11 @@ def run_module(module: str, module_path: Path, args: List[str], owner: str) -> i
     if not module_path.exists():
         raise SetupError(f"{module_path.relative_to(ROOT)} does not exist yet ({owner}); "
                          f"`python -m {module}` has nothing to run.")
-    return subprocess.call([str(VPY), "-m", module, *args], cwd=ROOT)
+    # run where the user is, so relative paths (a scene, --out) mean what they typed; the
+    # repository root goes on the import path for `-m` instead of being the working directory
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+    return subprocess.call([str(VPY), "-m", module, *args], env=env)
 
 
 def cmd_render(args: List[str]) -> int:

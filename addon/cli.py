@@ -35,9 +35,14 @@ def output_paths(out, blend):
         stem = os.path.splitext(os.path.basename(blend))[0] if blend else "demo"
         out = os.path.join("render", stem)
     base, ext = os.path.splitext(out)
-    if ext.lower() not in (".png", ".exr"):
-        base = out
+    if ext.lower() not in (".png", ".exr") + OTHER_IMAGE_EXTENSIONS:
+        base = out                      # no image extension: the name is the base
     return base + ".png", base + ".exr"
+
+
+# an --out in another image format names the base of the PNG and EXR written (shot.jpg: shot.png,
+# shot.exr), rather than shot.jpg.png
+OTHER_IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".hdr", ".tga")
 
 
 def save_render(scene, png, exr):

@@ -239,7 +239,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
 
     def _report_messages(self, messages):
         for level, text in dict.fromkeys((lvl, txt) for lvl, txt in messages):
-            self.report({level if level in ('INFO', 'WARNING', 'ERROR') else 'INFO'}, f"DACRT: {text}")
+            kind = {level if level in ('INFO', 'WARNING', 'ERROR') else 'INFO'}
+            for i, part in enumerate(_report_chunks(text)):
+                self.report(kind, f"DACRT: {part}" if i == 0 else f"DACRT (continued): {part}")
 
     def _report_summary(self, integ, scene_data, layer, export_seconds):
         s = dict(integ.stats or {}, export_seconds=export_seconds)
@@ -257,6 +259,23 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         if skipped:
             self.report({'INFO'}, f"DACRT: skipped {skipped}")
             self.update_stats("", f"DACRT | Done | skipped {skipped}")
+
+
+# Blender cuts a report at about 1,024 bytes (the rest was lost: 8 of a tester's 18 approximated
+# materials); longer texts go out in parts, split between their '; '-separated items
+REPORT_LIMIT = 900
+
+
+def _report_chunks(text: str, limit: int = REPORT_LIMIT) -> list:
+    """text in parts of at most `limit` bytes (UTF-8), cut after '; ' where one is, else hard."""
+    parts = []
+    while len(text.encode('utf-8')) > limit:
+        head = text.encode('utf-8')[:limit].decode('utf-8', errors='ignore')
+        cut = head.rfind('; ')
+        cut = cut + 2 if cut > limit // 4 else len(head)
+        parts.append(text[:cut].rstrip())
+        text = text[cut:]
+    return parts + [text]
 
 
 def _skipped_text(skipped) -> str:

@@ -31,6 +31,8 @@ from .renderjobs import run_jobs
 from .renderspec import BUILTIN, MATERIAL_MODES, scene_spec
 from .scenes import OUT
 
+SEED_LIMIT = 2 ** 31 - 1        # Cycles' largest seed; compare renders seed and seed + 1
+
 
 def add_arguments(p) -> None:
     p.add_argument("scene", help=f".blend file, or a built-in scene ({', '.join(BUILTIN)})")
@@ -100,12 +102,17 @@ def _print_materials(m) -> None:
 def run(args) -> int:
     if args.samples < 1:
         raise ValueError("--samples must be >= 1")
+    if not 0 <= args.seed < SEED_LIMIT:        # the second Cycles render uses seed + 1
+        raise ValueError(f"--seed must be in 0..{SEED_LIMIT - 1} (Cycles' seeds are 0..{SEED_LIMIT})")
+    if args.bounces is not None and not 0 <= args.bounces <= 1024:
+        raise ValueError("--bounces must be in 0..1024")
     spec = scene_spec(args.scene, args.bounces, args.materials)
     out = args.out or OUT / "compare" / spec.name
     out.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix="compare-", dir=OUT))
     progress = Progress(3)
     other_seed = args.seed + 1
+    done = False
     try:
         item = lambda engine, seed: dict(spec=spec.as_dict(), samples=args.samples,  # noqa: E731
                                          seed=seed, image=f"{engine}-{seed}.npy")
@@ -114,14 +121,24 @@ def run(args) -> int:
                      work, progress)
         dimg = np.load(work / d["image"])
         cimg, cimg2 = np.load(work / c[0]["image"]), np.load(work / c[1]["image"])
+        done = True
     finally:
         progress.close()
-        shutil.rmtree(work, ignore_errors=True)
+        if done:                        # a failed run keeps its folder: the error names its log
+            shutil.rmtree(work, ignore_errors=True)
     if dimg.shape != cimg.shape:
         raise RuntimeError(f"DACRT rendered {dimg.shape[1]}x{dimg.shape[0]} but Cycles "
                            f"{cimg.shape[1]}x{cimg.shape[0]}")
-    rel = errorstats.relmse(dimg, cimg)
-    noise = errorstats.relmse(cimg2, cimg)
+    # a render region without crop leaves the rest of the frame empty in all three: the error
+    # is measured over the rendered pixels (alpha > 0 in some render; compare turns transparent
+    # film off, so every rendered pixel has alpha 1)
+    rendered = np.ones(dimg.shape[:2], bool)
+    if dimg.shape[-1] >= 4:
+        rendered = (dimg[..., 3] > 0) | (cimg[..., 3] > 0) | (cimg2[..., 3] > 0)
+    if not rendered.any():
+        rendered[:] = True
+    rel = errorstats.relmse(dimg[rendered][None], cimg[rendered][None])
+    noise = errorstats.relmse(cimg2[rendered][None], cimg[rendered][None])
     diff = difference_image(dimg, cimg)
     gap = np.full((dimg.shape[0], 4, 3), 255, np.uint8)
     _write_png(out / "side_by_side.png",
@@ -130,7 +147,8 @@ def run(args) -> int:
     _write_exr(out / "dacrt.exr", dimg)
     _write_exr(out / "cycles.exr", cimg)
     doc = dict(scene=spec.name, source=spec.blend or "built-in", samples=args.samples,
-               seed=args.seed, resolution=d["resolution"],
+               seed=args.seed, resolution=[dimg.shape[1], dimg.shape[0]],
+               pixels_compared=int(rendered.sum()), bounces=d.get("bounces"), pixel_filter=d.get("filter"),
                when=time.strftime("%Y-%m-%d %H:%M:%S"),
                command=" ".join(["python -m tests.bench", *sys.argv[1:]]),
                dacrt_seconds=d["seconds"], cycles_seconds=c[0]["seconds"],
@@ -143,8 +161,13 @@ def run(args) -> int:
                dacrt_breakdown=d.get("breakdown"), dacrt_memory=d.get("memory"),
                cycles_memory=c[0].get("memory"))
     report.write_json(doc, out / "compare.json")
-    w, h = d["resolution"]
-    print(f"\n{spec.name}: {w}x{h}, {args.samples} spp, seed {args.seed}")
+    h, w = dimg.shape[:2]
+    filt = d.get("filter") or [None, None]
+    print(f"\n{spec.name}: {w}x{h}, {args.samples} spp, seed {args.seed}, {d.get('bounces')} bounces, "
+          f"{filt[0]} filter {filt[1]:g} px" if filt[0] else f"\n{spec.name}: {w}x{h}, {args.samples} spp, "
+          f"seed {args.seed}, {d.get('bounces')} bounces")
+    if not rendered.all():
+        print(f"  errors over the {int(rendered.sum())} pixels of the render region")
     print(f"  DACRT  {d['seconds']:8.3f} s")
     print(f"  Cycles {c[0]['seconds']:8.3f} s   (DACRT / Cycles time {d['seconds'] / c[0]['seconds']:.2f})")
     print(f"  relMSE DACRT vs Cycles          {rel:.4e}")

@@ -130,9 +130,9 @@ def build(spec: RenderSpec):
         scene = bpy.context.scene
         if scene.camera is None:
             raise ValueError(f"{spec.blend}: the scene has no camera")
-        pct = scene.render.resolution_percentage / 100.0
-        spec.resolution = (round(scene.render.resolution_x * pct),
-                           round(scene.render.resolution_y * pct))
+        r = scene.render             # as Blender sizes the frame: truncated, then the crop
+        spec.resolution = (r.resolution_x * r.resolution_percentage // 100,
+                           r.resolution_y * r.resolution_percentage // 100)
         c = scene.cycles
         if spec.bounces is None:     # the file's own diffuse bounce count (Cycles' K)
             spec.bounces = int(min(c.max_bounces, c.diffuse_bounces))

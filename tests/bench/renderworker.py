@@ -96,7 +96,8 @@ def run(job: dict) -> None:
         record = dict(index=i, engine=engine, scene=spec.name, samples=int(item["samples"]),
                       seed=int(item["seed"]), frame=item.get("frame"), seconds=wall,
                       frame_change_seconds=frame_s, scene_build_seconds=build_s,
-                      resolution=list(spec.resolution), memory=mem.figures())
+                      resolution=list(spec.resolution), memory=mem.figures(), bounces=spec.bounces,
+                      filter=[spec.filter_type, spec.filter_width])
         if spec.blend:      # what the fair material override changed, and what is still approximated
             record["materials"] = dict(mode=spec.materials,
                                        made_diffuse=spec.extra.get("materials_made_diffuse", 0),
