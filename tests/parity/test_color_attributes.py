@@ -43,24 +43,31 @@ def _grid(name, x, domain, kind, chain):
     ob.data.materials.append(mat)
 
 
+def _render_both(sc, tmp_path, ortho_scale, samples):
+    """Both engines' RGB (H, W, 3) of the scene under an orthographic view from above and a sun
+    straight down, direct light only (exact per sample up to the pixel filter's sampling)."""
+    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=ortho_scale)
+    scenes.light('SUN', math.pi, angle=0.0)
+    scenes.black_world()
+    sc.cycles.device = 'CPU'
+    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
+    sc.cycles.samples = sc.dacrt.samples = samples
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    images = {}
+    for engine in ('CYCLES', 'DACRT'):
+        sc.render.engine = engine
+        images[engine] = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr", sc)))[..., :3]
+    return images
+
+
 def test_colour_attributes_match_cycles(tmp_path):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 96, 32
     for i, case in enumerate(CASES):
         _grid(case[0], -1.0 + i, *case[1:])
-    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=3.0)
-    scenes.light('SUN', math.pi, angle=0.0)
-    scenes.black_world()
-    sc.cycles.device = 'CPU'
-    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
-    sc.cycles.samples = sc.dacrt.samples = 16
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    means = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr", sc)))
-        means[engine] = np.array([img[4:28, 32 * i + 4:32 * i + 28, :3].mean(axis=(0, 1)) for i in range(3)])
+    means = {engine: np.array([img[4:28, 32 * i + 4:32 * i + 28].mean(axis=(0, 1)) for i in range(3)])
+             for engine, img in _render_both(sc, tmp_path, 3.0, 16).items()}
     assert means['CYCLES'].min() > 0.2 and np.ptp(means['CYCLES'], axis=0).max() > 0.05   # colours, not grey
     rel = np.abs(means['DACRT'] - means['CYCLES']) / means['CYCLES']
     assert rel.max() < 0.005, (rel.round(4).tolist(), means)
@@ -117,18 +124,8 @@ def test_object_info_random_and_colour_match_cycles(tmp_path):
     for i, (x, col) in enumerate(((1.0, (0.9, 0.2, 0.1, 1)), (1.5, (0.1, 0.8, 0.3, 1)))):
         scenes.plane(f"Tinted{i}", size=0.45, location=(x, 0, 0), materials=(colour_mat,)).color = col
         cells.append((x, 0.0))
-    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=4.0)
-    scenes.light('SUN', math.pi, angle=0.0)
-    scenes.black_world()
-    sc.cycles.device = 'CPU'
-    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
-    sc.cycles.samples = sc.dacrt.samples = 4
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    got = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr", sc)))[..., :3]
-        got[engine] = np.array([img[int(16 + y * 32), int(64 + x * 32)] for x, y in cells])
+    got = {engine: np.array([img[int(16 + y * 32), int(64 + x * 32)] for x, y in cells])
+           for engine, img in _render_both(sc, tmp_path, 4.0, 4).items()}
     c, d = got['CYCLES'], got['DACRT']
     assert len({tuple(np.round(v, 3)) for v in c}) == len(cells)      # every object its own colour
     assert np.abs(c - d).max() < 1e-3, (c.round(4).tolist(), d.round(4).tolist())
