@@ -776,7 +776,11 @@ class _MaterialBuilder:
     # what a mesh attribute reads as in a build, (1, n, 4) like an image's texels: random
     # colours at alpha 1, then one colour at alphas 0..1 (a chain reading the alpha is not a
     # scale and offset of the colour)
+    # (float colours, vectors and numbers go past 1: values up to 10 too, so a clamp to [0, 1]
+    # after the attribute is not taken for a scale and offset; not below 0, where the export's
+    # own clamp of a negative albedo would do the same)
     _ATTRIBUTE_PROBE = np.random.default_rng(11).random((1, 64, 4)).astype(np.float32)
+    _ATTRIBUTE_PROBE[0, 40:, :3] = 1.0 + 9.0 * _ATTRIBUTE_PROBE[0, 40:, :3]
     _ATTRIBUTE_PROBE[..., 3] = 1.0
     _ATTRIBUTE_ALPHAS = np.concatenate([np.full((1, 16, 3), 0.5), np.linspace(0, 1, 16)[None, :, None]],
                                        axis=2).astype(np.float32)
@@ -788,6 +792,7 @@ class _MaterialBuilder:
         are not read."""
         if self._attribute_pixels is None:
             return None
+        self._attributes_read = True
         if node.type == 'OBJECT_INFO':
             if out.name not in OBJECT_INFO_OUTPUTS:
                 return None
@@ -812,10 +817,15 @@ class _MaterialBuilder:
         images); a chain that is not (or reads the alpha) takes the node's own value, reported."""
         self._attribute_map = None
         self._attribute_pixels = self._ATTRIBUTE_PROBE
+        self._attributes_read = False
         m = self._build_material(mat)
         name = self._albedo_attribute
         if name is None:
             self._attribute_pixels = None
+            if self._attributes_read:
+                # read, then averaged beside an image (one varying colour per material): the
+                # probe's mean would stand in for it; the nodes read their own values instead
+                m = self._build_material(mat)
             return m
         if name.startswith(OBJECT_INFO):
             # one value per object: the nodes after it are evaluated on each object's value
@@ -1150,7 +1160,9 @@ class _MaterialBuilder:
                 reasons.append(f"colour nodes after image '{src.name}' applied to its texels before the "
                                "blend (Cycles blends, decodes, then applies them)")
         baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
-        baked[..., :3] = _nonnegative(f.value.astype(np.float32), "colour from colour nodes", reasons)
+        # (an attribute's probe values go negative by design: their clamping says nothing)
+        baked[..., :3] = _nonnegative(f.value.astype(np.float32), "colour from colour nodes",
+                                      reasons if src.attribute is None else [])
         baked[..., 3] = src.pixels[..., 3]
         key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
         return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim,
@@ -1248,8 +1260,9 @@ class _MaterialBuilder:
 def _normal_link(socket):
     """The link that bends the normal a Normal input receives, past the nodes that leave it as
     it is in Cycles (None: the shading normal itself): a Bump of constant height or strength 0
-    (it passes its own Normal input on), a Normal Map of strength 0 or of its default flat
-    colour, Geometry > Normal."""
+    (it passes its own Normal input on), a Normal Map of strength 0 or, in tangent space, of its
+    default flat colour (in object or world space that colour is a fixed direction), Geometry >
+    Normal."""
     while True:
         link = linked_link(socket)
         if link is None:
@@ -1265,7 +1278,8 @@ def _normal_link(socket):
                 continue
         elif node.type == 'NORMAL_MAP':
             colour = node.inputs['Color']
-            flat = linked_link(colour) is None and np.allclose(tuple(colour.default_value)[:3], (0.5, 0.5, 1.0))
+            flat = node.space == 'TANGENT' and linked_link(colour) is None and \
+                np.allclose(tuple(colour.default_value)[:3], (0.5, 0.5, 1.0))
             if (constant and strength <= 0.0) or flat:
                 return None
         return link
@@ -2620,7 +2634,7 @@ class _Exporter:
             if values is None:
                 self._ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
                              "its colour reads 0, as in Cycles", place.name)
-            block[rows] = (rgb * w + c).astype(np.float32)
+            block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)   # (no negative albedo)
             if mirrored:                     # corners 1 and 2 were swapped for these triangles
                 block[rows] = block[rows][:, [0, 2, 1]]
 

@@ -1748,10 +1748,17 @@ def test_normal_setups_that_leave_the_normal_are_not_approximations(scene, expor
     for i, (name, build) in enumerate(exact.items()):
         scenes.plane(name, location=(3 * i, 0, 0), materials=(bsdf_normal(name, build),))
     scenes.plane("Bumpy", location=(-3, 0, 0), materials=(bsdf_normal("Bumpy", lambda nt: bump(nt, height=True)),))
+
+    def object_map(nt):                       # its default colour is a fixed direction there
+        out = normal_map(nt)
+        out.node.space = 'OBJECT'
+        return out
+    scenes.plane("ObjectMap", location=(-6, 0, 0), materials=(bsdf_normal("ObjectMap", object_map),))
     table = {m.name: m for m in exported().materials}
     for name in exact:
         assert table[name].approximated == '', (name, table[name].approximated)
     assert "Normal input ('Bump') ignored" in table["Bumpy"].approximated
+    assert "Normal input (object space normal map) ignored" in table["ObjectMap"].approximated
 
 
 def test_colour_nodes_after_an_8bit_image(scene, exported, tmp_path):
@@ -1892,3 +1899,34 @@ def test_object_random_is_cycles(scene):
         [0.3344228, 0.644282, 0.5273009]
     assert export.object_random("Any", 360212060, True) == pytest.approx(0.08386841, abs=1e-7)
     assert 0.0 <= export.object_random("Ünïcode", 0, False) < 1.0
+
+
+def test_colour_attribute_beside_an_image_or_past_a_clamp(scene, exported, tmp_path):
+    """A colour attribute multiplied by an image (one varying colour per material here) reads
+    its node's own value, reported, not the mean of the values the build probes with; a clamp
+    after an attribute (float colours go past 1) is no scale and offset: the chain is evaluated
+    at the corners, so a colour of 4 x 0.5 clamps to 1 as in Cycles."""
+    setup(scene)
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "red.png", np.full((2, 2, 3), (204, 25, 25), np.uint8)))
+
+    def times_image(nt, s):
+        tex = nt.nodes.new('ShaderNodeTexImage')
+        tex.image = img
+        return scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], s, 1.0).outputs['Result']
+
+    def clamped_half(nt, s):
+        mix = scenes.mix_node(nt, 'MULTIPLY', s, (0.5, 0.5, 0.5), 1.0)
+        mix.clamp_result = True
+        return mix.outputs['Result']
+    quad = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
+    for i, (name, chain) in enumerate((("Imaged", times_image), ("Clamped", clamped_half))):
+        ob = scenes.mesh(name, quad, [(0, 1, 2, 3)], location=(3 * i, 0, 0),
+                         materials=(_attribute_material(name, chain=chain),))
+        attr = ob.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT')
+        attr.data.foreach_set('color', np.tile([4.0, 4.0, 0.5, 1.0], 4).astype(np.float32))
+    data = exported()
+    table = {m.name: m for m in data.materials}
+    assert table["Imaged"].color_attribute is None
+    assert "colour from 'Color Attribute' node; its own value used" in table["Imaged"].approximated
+    assert table["Clamped"].color_attribute == 'Col'
+    assert np.allclose(data.geometry.colors[of_object(data, "Clamped")], (1.0, 1.0, 0.25))
