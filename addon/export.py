@@ -69,7 +69,7 @@ from .texture import baked as after_lookup
 MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_light)
 # Object Info outputs read per object, as a material's colour attribute named OBJECT_INFO + output
 OBJECT_INFO = 'Object Info:'
-OBJECT_INFO_OUTPUTS = ('Random', 'Color', 'Alpha', 'Location')
+OBJECT_INFO_OUTPUTS = ('Random', 'Color', 'Alpha', 'Location', 'Object Index', 'Material Index')
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
 # what the view layer's Surfaces filter (use_solid) hides, as Cycles syncs no mesh then (hair
 # follows the Hair filter, point clouds stay)
@@ -2001,15 +2001,17 @@ class _Placement:
         self.matrix, self.slots, self.slot_map = matrix, slots, None
         self.visibility, self.object_index, self.name = visibility, object_index, name
         self.terminator = terminator      # (geometry offset, shading offset), Cycles' object settings
-        self.info = info                  # (random, colour RGBA): what its Object Info nodes read
+        self.info = info                  # (random, colour RGBA, pass index): what Object Info reads
         self.object_albedo = {}           # material index -> albedo (3,) of an Object Info material
 
-    def object_info(self, output):
-        """The (4,) value an Object Info output has for this instance (RGB, alpha; a number in
-        all four, a location with alpha 1)."""
-        random, color = self.info
-        if output == 'Random':
-            return np.array([random, random, random, 1.0])
+    def object_info(self, output, material=None):
+        """The (4,) value an Object Info output has for this instance shading `material` (RGB,
+        alpha; a number in all four, a location with alpha 1)."""
+        random, color, index = self.info
+        if output in ('Random', 'Object Index', 'Material Index'):
+            v = {'Random': random, 'Object Index': float(index),
+                 'Material Index': float(getattr(material, 'pass_index', 0))}[output]
+            return np.array([v, v, v, 1.0])
         if output == 'Alpha':
             return np.full(4, color[3])
         if output == 'Location':
@@ -2183,7 +2185,7 @@ class _Exporter:
             if key is None:
                 continue
             slots = [override] if override is not None else [s.material for s in ob.material_slots]
-            info = (object_random(ob.name, inst.random_id, inst.is_instance), tuple(ob.color))
+            info = (object_random(ob.name, inst.random_id, inst.is_instance), tuple(ob.color), ob.pass_index)
             self.placements[key].append(_Placement(np.array(inst.matrix_world, np.float64),
                                                    slots, vis, self._object_id(ob), ob.name,
                                                    _terminator(ob), info))
@@ -2266,7 +2268,8 @@ class _Exporter:
         if self.meshes[key] is None:
             return
         slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
-        info = (object_random(ob.name, inst.random_id, inst.is_instance), tuple(ob.color))   # the emitter's
+        info = (object_random(ob.name, inst.random_id, inst.is_instance), tuple(ob.color),   # the emitter's
+                ob.pass_index)
         self.placements[key].append(_Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
                                                self._object_id(ob), ob.name, info=info))
 
@@ -2462,7 +2465,7 @@ class _Exporter:
                      if p.slot_map is not None and k in p.slot_map]
             if not users:
                 continue
-            albedo = self.materials.evaluated_albedo(k, np.stack([p.object_info(entry[1]) for p in users]))
+            albedo = self.materials.evaluated_albedo(k, np.stack([p.object_info(entry[1], entry[2]) for p in users]))
             for p, a in zip(users, albedo):
                 p.object_albedo[k] = a
 

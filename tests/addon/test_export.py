@@ -1930,3 +1930,27 @@ def test_colour_attribute_beside_an_image_or_past_a_clamp(scene, exported, tmp_p
     assert "colour from 'Color Attribute' node; its own value used" in table["Imaged"].approximated
     assert table["Clamped"].color_attribute == 'Col'
     assert np.allclose(data.geometry.colors[of_object(data, "Clamped")], (1.0, 1.0, 0.25))
+
+
+def test_object_info_indices_per_object(scene, exported):
+    """Object Info's Object Index (the object's pass index) and Material Index (the material's)
+    into a colour, through a Math node: one albedo per object, as Cycles reads them."""
+    setup(scene)
+    mat, nt, out = _shader_material("Indexed")
+    mat.pass_index = 5
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    info = nt.nodes.new('ShaderNodeObjectInfo')
+    add = nt.nodes.new('ShaderNodeMath')
+    add.operation = 'MULTIPLY_ADD'                    # object index x 0.1 + material index x ...
+    add.inputs[1].default_value = 0.1
+    nt.links.new(info.outputs['Object Index'], add.inputs[0])
+    mix = scenes.mix_node(nt, 'ADD', (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 1.0)
+    nt.links.new(add.outputs[0], next(s for s in mix.inputs if s.identifier == 'A_Color'))
+    nt.links.new(info.outputs['Material Index'], add.inputs[2])
+    nt.links.new(mix.outputs['Result'], d.inputs['Color'])
+    for i, index in enumerate((3, 7)):
+        scenes.plane(f"P{index}", location=(3 * i, 0, 0), materials=(mat,)).pass_index = index
+    data = exported()
+    for index in (3, 7):
+        assert np.allclose(data.geometry.colors[of_object(data, f"P{index}")], 0.1 * index + 5.0), index
