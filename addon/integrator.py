@@ -85,6 +85,7 @@ _DIM_LENS = 1 << 20
 # transparent surface of segment k (j <= the 1024 limit), also out of the per-vertex range
 # (opaque scenes draw the same numbers as before).
 _DIM_TRANSPARENT = 1 << 21
+_DIM_PASSED = 1 << 22     # light sampling at passed semi-transparent surfaces (+ k << 11 + 2 layer)
 # internal visibility bit: transparent triangles shadow rays pass (their own tracer scene)
 _VIS_THROUGH = 16
 # Cryptomatte's arrival order of a sample's surfaces: sample x _MAX_CHAIN + depth along the ray
@@ -1114,10 +1115,11 @@ class Integrator:
             bump[:3] = ns
             ns = self._normal_mapped(prim, u, v, ns, ng, bump[3])
         tb = None if path.tb is None else np.take(path.tb, idx)
+        nee = None if path.nee is None else np.take(path.nee, idx)
         del hits, path
         if self.lights:
-            self._next_event(k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, sinks.sampled(k), tb, u, v,
-                             sinks.groups, bump)
+            self._next_event(k, P, P_off, prim, ng, ns, thr if nee is None else thr * nee, pid, keys, u_pick,
+                             sinks.sampled(k), tb, u, v, sinks.groups, bump)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
@@ -1325,6 +1327,17 @@ class Integrator:
             u = self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_TRANSPARENT + (k << 11) + j)[0]
             go = u < p
             stop = ~go
+            if self.lights and go.any() and k <= self.max_bounces:
+                # As Cycles, the surface's light is sampled at every hit, passed or not, at the
+                # opaque part's weight: here for the paths that pass; those that stop sample it
+                # at their vertex with 1 - p of the 1 / (1 - p) their bounce carries. (Sampled
+                # only where the path stopped, a window of 80% Transparent and 20% Diffuse had
+                # 5-8x Cycles' noise.)
+                self._light_passed(k, j, path, hits, sinks, rows[go], prim[go], opacity[go], surface, go)
+            if stop.any():
+                if path.nee is None:
+                    path.nee = np.ones(len(hits), F32)
+                path.nee[rows[stop]] = 1.0 - p[stop]
             thr[:, rows[stop]] *= opacity[stop] / (1.0 - p[stop])
             rows = rows[go]
             if not len(rows):
@@ -1349,6 +1362,33 @@ class Integrator:
             self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
             j += 1
+
+    def _light_passed(self, k, j, path, hits, sinks, rows, prim, opacity, surface, go):
+        """Light sampling at the semi-transparent surfaces (layer j) that paths rows pass: the
+        path's throughput so far x the opaque part's weight (opacity x albedo), as vertex k's
+        sampling is (the same sinks and light choice), with random dimensions of their own."""
+        u, v = np.take(hits['u'], rows), np.take(hits['v'], rows)
+        if surface is None:
+            P, ng, ns, P_off = self._surface(hits, rows, path.D)
+        else:
+            P, ng, ns, P_off = (x[:, go] for x in surface)
+        thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
+        if self._albedo_varies:
+            self._albedo_maps(prim, u, v, thr)
+        bump = None
+        if self.mats.normal_maps and self.tri.tangents is not None:
+            bump = np.empty((4, len(prim)), F32)
+            bump[:3] = ns
+            ns = self._normal_mapped(prim, u, v, ns, ng, bump[3])
+        keys = np.ascontiguousarray(np.take(path.keys, rows, axis=1))
+        u_pick = None
+        if self.lights.num_entries > 1:
+            u_pick = self.rng.uniform_pick(keys, _DIM_PASSED + (k << 11) + 2 * j)[0]
+        tb = None if path.tb is None else np.take(path.tb, rows)
+        self._next_event(k, np.ascontiguousarray(P), np.ascontiguousarray(P_off), prim, np.ascontiguousarray(ng),
+                         np.ascontiguousarray(ns), np.ascontiguousarray(thr, F32), np.take(path.pid, rows), keys,
+                         u_pick, sinks.sampled(k), tb, u, v, sinks.groups, bump,
+                         dims=_DIM_PASSED + (k << 11) + 2 * j + 1)
 
     def _gather_segment(self, seg, sub, t0, sinks, k):
         """Lamps beyond distance t0 along a segment past a transparent surface, and the world
@@ -1708,7 +1748,7 @@ class Integrator:
     # --- next-event estimation --------------------------------------------------------------------
 
     def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None,
-                    groups=(), bump=None):
+                    groups=(), bump=None, dims=None):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
         the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
@@ -1718,7 +1758,7 @@ class Integrator:
         Light samples need only be in front of the shading normal, as in Cycles. With Cycles'
         shadow terminator (u, v: the points' barycentrics), shadow rays near it leave from the
         smooth surface and samples are dimmed by the shading offset."""
-        ka, kb = self.rng.dim_words(_dim(k, 1))
+        ka, kb = self.rng.dim_words(_dim(k, 1) if dims is None else dims)
         t = self.tri
         term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff, t.term_freq, u, v) \
             if t.terminator else None
@@ -1923,3 +1963,6 @@ class _Paths:
     prim: np.ndarray | None  # triangle the rays leave (global index; None for camera rays)
     rays: np.ndarray | None = None   # their RAY_DTYPE records when already packed
     tb: np.ndarray | None = None     # transparent surfaces passed so far (None: none yet)
+    # light sampling's share of the throughput at the next vertex (None: all of it): 1 - p of
+    # a path that stopped at a semi-transparent surface (_through), whose bounce carries 1 / (1 - p)
+    nee: np.ndarray | None = None
