@@ -19,7 +19,10 @@ Materials (what a diffuse renderer can represent exactly):
 - colour and float nodes between constants or an Image Texture and a diffuse colour (Mix,
   Invert, Gamma, Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp, RGB Curves,
   Separate/Combine Color, Math, Map Range, Clamp), evaluated per texel and baked into the
-  material's texture (nodeeval.py);
+  material's texture (nodeeval.py), or after the lookup where they scale and offset an 8-bit
+  image's colour (_affine_in);
+- a Color Attribute or (geometry) Attribute node into a diffuse colour, read per point, corner
+  or face (Geometry.colors), and Object Info outputs per object (_MaterialBuilder._build);
 - Add Shader and Mix Shader with a constant factor, combining the above linearly;
 - transparency: the Transparent BSDF (its colour) and the Principled BSDF's Alpha (constant, or
   an Image Texture's Alpha output), and a Mix Shader between a Transparent BSDF and another
@@ -34,7 +37,8 @@ Principled BSDF keeps its diffuse base, with its metal, dielectric specular laye
 those layers' albedos averaged over view directions (principled.py, specular.py; no sheen,
 transmission or subsurface); a rough diffuse (Cycles' Oren-Nayar) as its albedo averaged over
 view directions (roughdiffuse.py); a
-BSDF's Normal input (bump, normal map) and the output's Volume and Displacement are ignored;
+BSDF's Normal input other than a tangent-space normal map of an image (bump, other normal
+maps) and the output's Volume and Displacement are ignored (a volume-only material is clear);
 texture coordinates other than the UV map (and Mapping nodes of it) are read as the active
 render UV map.
 Each approximated material says why in `Material.approximated`; the export reports them in
@@ -45,7 +49,7 @@ World: the Background's colour x strength, or an Environment Texture's equirecta
 shaders use the world colour, reported.
 Blender-legal values the integrator cannot take become what Cycles renders, or the nearest thing
 a diffuse path tracer can, each with a warning: lights Cycles gets no light from (an area light
-of zero size or spread, a spot of zero scale) or that subtract light (negative strength, not
+of zero size, a spot of zero scale) or that subtract light (negative strength, not
 supported) are skipped; negative or non-finite material channels and world become 0; a camera
 whose clip end lies before its clip start sees nothing but the world, as in Cycles.
 """
@@ -716,8 +720,9 @@ class _MaterialBuilder:
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
         # per material: None; ('mesh', attribute name, w (3,), k (3,)): its albedo is w x the
-        # mesh attribute's colour + k at each point (a Color Attribute or Attribute node); or
-        # ('object', Object Info output, material): per object, object_albedo
+        # mesh attribute's colour + k at each point (a Color Attribute or Attribute node);
+        # ('corners', attribute name, material): its nodes evaluated on each corner's value; or
+        # ('object', Object Info output, material): on each object's (both evaluated_albedo)
         self.attribute_maps = [None]
         self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
         self._uv_names = []
@@ -787,7 +792,7 @@ class _MaterialBuilder:
 
     def _attribute(self, node, out, reasons):
         """The values a Color Attribute, (geometry) Attribute or Object Info node reads in this
-        build (probe values, or each object's: _build, object_albedo), as a texture marked with
+        build (probe values, or each corner's or object's: _build, evaluated_albedo), as a texture marked with
         the attribute's name (OBJECT_INFO + the output's, for Object Info); None where they
         are not read."""
         if self._attribute_pixels is None:
@@ -812,9 +817,11 @@ class _MaterialBuilder:
 
     def _build(self, mat):
         """The material, and self._attribute_map: how its albedo follows a mesh attribute (a
-        Color Attribute or Attribute node into the colour) when it is a per-channel scale and
-        offset of the attribute's colour (checked on probe values, as _affine_in does for
-        images); a chain that is not (or reads the alpha) takes the node's own value, reported."""
+        Color Attribute or Attribute node into the colour) or an Object Info output. A chain
+        that is a per-channel scale and offset of the attribute's colour (checked on probe
+        values, as _affine_in does for images) is applied per point; any other is evaluated at
+        each corner (reported); Object Info on each object's value. An attribute averaged away
+        beside an image reads the node's own value (reported by the evaluation)."""
         self._attribute_map = None
         self._attribute_pixels = self._ATTRIBUTE_PROBE
         self._attributes_read = False
@@ -829,7 +836,7 @@ class _MaterialBuilder:
             return m
         if name.startswith(OBJECT_INFO):
             # one value per object: the nodes after it are evaluated on each object's value
-            # (object_albedo), exact whatever they are (a Random into a Color Ramp)
+            # (evaluated_albedo), exact whatever they are (a Random into a Color Ramp)
             self._attribute_pixels = None
             self._attribute_map = ('object', name[len(OBJECT_INFO):], mat)
             m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
@@ -2466,7 +2473,7 @@ class _Exporter:
 
     def _object_info_albedos(self):
         """Each placement's albedo for the Object Info materials it shows: per material, one
-        evaluation over all its placements' values (export._MaterialBuilder.object_albedo)."""
+        evaluation over all its placements' values (_MaterialBuilder.evaluated_albedo)."""
         maps = self.materials.attribute_maps
         for k, entry in enumerate(maps):
             if entry is None or entry[0] != 'object':
