@@ -547,6 +547,7 @@ class _Texture:
         # not an image: the probe values of a mesh attribute (its name; '' the render colour
         # attribute) a Color Attribute or Attribute node reads, see _MaterialBuilder._attribute
         self.attribute = attribute
+        self.aligned = False        # probe values, entry by entry with other probes (nodeeval._join)
 
     def texels(self, pixels):
         """pixels (these texels, or a colour baked into them) as the scene data holds a texture."""
@@ -641,7 +642,7 @@ class _Closure:
             if tex is None or tex.key == other.texture.key:
                 tex, w = other.texture, w + other.tex_weight
             else:   # two different images: keep the first, the other contributes its mean
-                reasons.append("two image textures mixed; the second as its average colour")
+                reasons.append(nodeeval.TWO_IMAGES)
                 mean = other.texture.pixels[..., :3].reshape(-1, 3).mean(0)
                 return _Closure(self.const + other.const + other.tex_weight * mean,
                                 self.emission + other.emission, tex, w, self.holdout + other.holdout,
@@ -725,6 +726,7 @@ class _MaterialBuilder:
         # ('object', Object Info output, material): on each object's (both evaluated_albedo)
         self.attribute_maps = [None]
         self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
+        self._image_probe = None        # what images read instead of their texels (_product_map)
         self._uv_names = []
         self._normal_maps = []
         self.normal_mapped = False  # some material has a normal map: meshes need tangents
@@ -813,7 +815,9 @@ class _MaterialBuilder:
         else:
             name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
         label = f"attribute '{name}'" if name else "the render colour attribute"
-        return _Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None, label, name)
+        t = _Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None, label, name)
+        t.aligned = True
+        return t
 
     def _build(self, mat):
         """The material, and self._attribute_map: how its albedo follows a mesh attribute (a
@@ -827,11 +831,17 @@ class _MaterialBuilder:
         self._attributes_read = False
         m = self._build_material(mat)
         name = self._albedo_attribute
+        if self._attributes_read and (name is None or nodeeval.TWO_IMAGES in m.approximated):
+            # an attribute beside an image (one varying colour per material): an image times
+            # the attribute (a glTF vertex colour) is taken apart (_product_map)
+            product = self._product_map(mat)
+            if product is not None:
+                return product
         if name is None:
             self._attribute_pixels = None
             if self._attributes_read:
-                # read, then averaged beside an image (one varying colour per material): the
-                # probe's mean would stand in for it; the nodes read their own values instead
+                # the attribute was averaged beside an image: the probe's mean would stand in
+                # for it; the nodes read their own values instead
                 m = self._build_material(mat)
             return m
         if name.startswith(OBJECT_INFO):
@@ -867,6 +877,55 @@ class _MaterialBuilder:
         label = f"attribute '{name}'" if name else "the render colour attribute"
         m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
                                                "corners, then interpolated (Cycles interpolates first)") if r)
+        return m
+
+    # an image's probe values beside the attribute's (kept away from 0: the fit divides by them)
+    _IMAGE_PROBE = (0.1 + 0.9 * np.random.default_rng(13).random((1, 64, 4))).astype(np.float32)
+    _IMAGE_PROBE[..., 3] = 1.0
+
+    def _product_map(self, mat):
+        """The material when its albedo is an image times (w x an attribute's colour + k) per
+        channel (a Mix Multiply of an Image Texture and a Color Attribute, the layers after it
+        scaling both): the image as usual (its lookup exact, the attribute read as 1) and
+        self._attribute_map ('mesh', name, w', k') so that Geometry.colors supplies the rest.
+        Checked on probe values of both, entry by entry; None when it is not that."""
+        def joint(attribute_pixels, image_pixels):
+            self._attribute_pixels, self._image_probe = attribute_pixels, image_pixels
+            try:
+                m = self._build_material(mat)
+            finally:
+                self._attribute_pixels = self._image_probe = None
+            name = self._albedo_attribute
+            if name is None or name.startswith(OBJECT_INFO) or m.texture is None:
+                return None, None
+            return name, m.base_color.astype(np.float64) * np.asarray(m.texture, np.float64)[0, :, :3]
+        name, y = joint(self._ATTRIBUTE_PROBE, self._IMAGE_PROBE)
+        if name is None:
+            return None
+        n = self._ATTRIBUTE_ALPHAS.shape[1]      # (one image colour: only the alpha varies)
+        _, ya = joint(self._ATTRIBUTE_ALPHAS, np.repeat(self._IMAGE_PROBE[:, :1], n, axis=1))
+        if ya is None or not np.allclose(ya, ya[:1], rtol=1e-6, atol=1e-9):
+            ya = None
+        x = self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64)
+        q = y / self._IMAGE_PROBE[0, :, :3].astype(np.float64)       # = w x attribute + k if a product
+        w, k = np.empty(3), np.empty(3)
+        for c in range(3):
+            (w[c], k[c]), *_ = np.linalg.lstsq(np.stack([x[:, c], np.ones(len(x))], axis=1), q[:, c], rcond=None)
+        k = np.where(np.abs(k) < 1e-9, 0.0, k)
+        if ya is None or np.abs(x * w + k - q).max() > 1e-5 * (1.0 + np.abs(q).max()) \
+                or (k < 0).any() or (w + k <= 0).any():
+            return None
+        # the final build reads the attribute as 1: the image's albedo x (w + k); the colours
+        # carry (w x attribute + k) / (w + k)
+        self._attribute_pixels = np.ones(4, np.float32)
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attribute_pixels = None
+        if m.texture is None:
+            return None
+        self._attribute_map = ('mesh', name, w / (w + k), k / (w + k))
+        m.color_attribute = name
         return m
 
     def evaluated_albedo(self, index, values):
@@ -1191,7 +1250,7 @@ class _MaterialBuilder:
             if t is None or t.key != src.key:
                 return t
             return _Texture(t.key, pixels, t.interpolation, t.extension, t.transform, None, t.name)
-        f = nodeeval.Evaluator(probed, [], MISSING_IMAGE).input(socket, True)
+        f = nodeeval.Evaluator(probed, [], MISSING_IMAGE, attribute=self._attribute).input(socket, True)
         if f.tex is None or f.tex.key != src.key:
             return None
         y = np.broadcast_to(f.value, (len(pixels), 3))
@@ -1260,6 +1319,11 @@ class _MaterialBuilder:
             self._images[key, unassociate] = pixels
         udim = pixels if isinstance(pixels, UdimTiles) else None
         where = None if transform is None else tuple(transform.ravel())
+        if self._image_probe is not None:        # probing how a chain combines it with an attribute
+            t = _Texture((key, unassociate, interp, ext, where), self._image_probe, interp, ext, transform,
+                         None, img.name)
+            t.aligned = True
+            return t
         return _Texture((key, unassociate, interp, ext, where), pixels if udim is None else udim.flat,
                         interp, ext, transform, udim, img.name)
 

@@ -44,6 +44,8 @@ _MAP_RANGE_INPUTS = {'value': 'Value', 'f0': 'From Min', 'f1': 'From Max', 't0':
                      'steps': 'Steps'}
 NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
 VIEW_NODE_TYPES = frozenset({'FRESNEL', 'LAYER_WEIGHT'})   # as their average over view directions
+# the note when one of two images is averaged (one image per material)
+TWO_IMAGES = "two image textures mixed; the second as its average colour"
 # Color Attribute, Attribute and Object Info: values per point or per object (export.py)
 ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 _COLOR_ROLES = {'color', 'a', 'b', 'vector'}     # colour or vector inputs (but floats in Mix FLOAT and Math)
@@ -143,6 +145,8 @@ class Evaluator:
             if tex is None:
                 return None
             px = tex.pixels
+            if np.ndim(px) == 1:            # one value for all (the export's constant probe)
+                tex = None
             if out.name == 'Alpha':
                 return Field(px[..., 3:4], tex)
             if out.name == 'Fac':           # Cycles: a colour or vector attribute's average
@@ -187,7 +191,13 @@ class Evaluator:
             if tex is None:
                 tex = f.tex
             elif f.tex.key != tex.key:
-                self.reasons.append("two image textures mixed; the second as its average colour")
+                if getattr(f.tex, 'aligned', False) and getattr(tex, 'aligned', False):
+                    # probe values of an image and of an attribute, one per entry alike (the
+                    # export probing how a chain combines them): computed entry by entry
+                    if getattr(f.tex, 'attribute', None) is not None:
+                        tex = f.tex                 # the result is marked as the attribute's
+                    continue
+                self.reasons.append(TWO_IMAGES)
                 f.value, f.tex = f.value.reshape(-1, f.value.shape[-1]).mean(0), None
         return tex
 

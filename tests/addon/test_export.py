@@ -1902,24 +1902,24 @@ def test_object_random_is_cycles(scene):
 
 
 def test_colour_attribute_beside_an_image_or_past_a_clamp(scene, exported, tmp_path):
-    """A colour attribute multiplied by an image (one varying colour per material here) reads
-    its node's own value, reported, not the mean of the values the build probes with; a clamp
+    """A colour attribute added to an image (a sum is not the image times colours per point)
+    reads its node's own value, reported, not the mean of the values the build probes with; a clamp
     after an attribute (float colours go past 1) is no scale and offset: the chain is evaluated
     at the corners, so a colour of 4 x 0.5 clamps to 1 as in Cycles."""
     setup(scene)
     img = bpy.data.images.load(scenes.write_image(tmp_path / "red.png", np.full((2, 2, 3), (204, 25, 25), np.uint8)))
 
-    def times_image(nt, s):
+    def plus_image(nt, s):
         tex = nt.nodes.new('ShaderNodeTexImage')
         tex.image = img
-        return scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], s, 1.0).outputs['Result']
+        return scenes.mix_node(nt, 'ADD', tex.outputs['Color'], s, 1.0).outputs['Result']
 
     def clamped_half(nt, s):
         mix = scenes.mix_node(nt, 'MULTIPLY', s, (0.5, 0.5, 0.5), 1.0)
         mix.clamp_result = True
         return mix.outputs['Result']
     quad = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
-    for i, (name, chain) in enumerate((("Imaged", times_image), ("Clamped", clamped_half))):
+    for i, (name, chain) in enumerate((("Imaged", plus_image), ("Clamped", clamped_half))):
         ob = scenes.mesh(name, quad, [(0, 1, 2, 3)], location=(3 * i, 0, 0),
                          materials=(_attribute_material(name, chain=chain),))
         attr = ob.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT')
@@ -1954,3 +1954,30 @@ def test_object_info_indices_per_object(scene, exported):
     data = exported()
     for index in (3, 7):
         assert np.allclose(data.geometry.colors[of_object(data, f"P{index}")], 0.1 * index + 5.0), index
+
+
+def test_image_times_colour_attribute_either_way(scene, exported, tmp_path):
+    """An image multiplied by a colour attribute (a glTF import's vertex colours), in either
+    input order: the material keeps the image (looked up as Cycles stores it) and the colours
+    multiply it per point, exactly, nothing reported."""
+    setup(scene)
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "red.png", np.full((2, 2, 3), (204, 25, 25), np.uint8)))
+    quad = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
+    for i, image_first in enumerate((True, False)):
+        def times_image(nt, s, image_first=image_first):
+            tex = nt.nodes.new('ShaderNodeTexImage')
+            tex.image = img
+            a, b = (tex.outputs['Color'], s) if image_first else (s, tex.outputs['Color'])
+            return scenes.mix_node(nt, 'MULTIPLY', a, b, 1.0).outputs['Result']
+        name = f"Order{i}"
+        ob = scenes.mesh(name, quad, [(0, 1, 2, 3)], location=(3 * i, 0, 0),
+                         materials=(_attribute_material(name, chain=times_image),))
+        ob.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT').data.foreach_set(
+            'color', np.tile([0.25, 1.0, 0.5, 1.0], 4).astype(np.float32))
+    data = exported()
+    table = {m.name: m for m in data.materials}
+    for i in range(2):
+        m = table[f"Order{i}"]
+        assert m.approximated == '' and m.color_attribute == 'Col' and stored_texels(m.texture) is not None
+        assert np.allclose(m.base_color, 1.0)
+        assert np.allclose(data.geometry.colors[of_object(data, f"Order{i}")], (0.25, 1.0, 0.5), atol=1e-6)

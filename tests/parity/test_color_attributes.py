@@ -4,7 +4,9 @@ colours on faces read by an Attribute node; each read per point and interpolated
 triangle as Cycles does (byte colours decoded per corner first). Three 4 x 4 grids of random
 colours under a straight-down sun, direct light only, so each grid's mean is exact up to the
 pixel filter's sampling: both engines agree within 0.5% per channel (measured 0.2%). Before,
-the node's own (white) colour was used and the material reported as approximated."""
+the node's own (white) colour was used and the material reported as approximated. A fourth
+grid multiplies an 8-bit image by the colours (a glTF import's vertex colours): the image is
+looked up as Cycles stores it and the colours multiply it per point."""
 import math
 
 import bpy
@@ -16,7 +18,7 @@ from tests.addon import scenes
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 CASES = (('point_float', 'POINT', 'FLOAT_COLOR', 'direct'), ('corner_byte', 'CORNER', 'BYTE_COLOR', 'tint'),
-         ('face_float', 'FACE', 'FLOAT_COLOR', 'attribute'))
+         ('face_float', 'FACE', 'FLOAT_COLOR', 'attribute'), ('point_image', 'POINT', 'FLOAT_COLOR', 'image'))
 
 
 def _grid(name, x, domain, kind, chain):
@@ -39,6 +41,11 @@ def _grid(name, x, domain, kind, chain):
     s = node.outputs['Color']
     if chain == 'tint':
         s = scenes.mix_node(nt, 'MULTIPLY', s, (0.5, 0.8, 1.0), 1.0).outputs['Result']
+    elif chain == 'image':                    # an 8-bit image times the colours (glTF's COLOR_0)
+        tex = nt.nodes.new('ShaderNodeTexImage')
+        tex.image = bpy.data.images.new("Checker", 4, 4)
+        tex.image.generated_type = 'COLOR_GRID'
+        s = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], s, 1.0).outputs['Result']
     nt.links.new(s, d.inputs['Color'])
     ob.data.materials.append(mat)
 
@@ -63,12 +70,12 @@ def _render_both(sc, tmp_path, ortho_scale, samples):
 def test_colour_attributes_match_cycles(tmp_path):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 96, 32
+    sc.render.resolution_x, sc.render.resolution_y = 128, 32
     for i, case in enumerate(CASES):
-        _grid(case[0], -1.0 + i, *case[1:])
-    means = {engine: np.array([img[4:28, 32 * i + 4:32 * i + 28].mean(axis=(0, 1)) for i in range(3)])
-             for engine, img in _render_both(sc, tmp_path, 3.0, 16).items()}
-    assert means['CYCLES'].min() > 0.2 and np.ptp(means['CYCLES'], axis=0).max() > 0.05   # colours, not grey
+        _grid(case[0], -1.5 + i, *case[1:])
+    means = {engine: np.array([img[4:28, 32 * i + 4:32 * i + 28].mean(axis=(0, 1)) for i in range(len(CASES))])
+             for engine, img in _render_both(sc, tmp_path, 4.0, 16).items()}
+    assert means['CYCLES'].min() > 0.05 and np.ptp(means['CYCLES'], axis=0).max() > 0.05   # colours, not grey
     rel = np.abs(means['DACRT'] - means['CYCLES']) / means['CYCLES']
     assert rel.max() < 0.005, (rel.round(4).tolist(), means)
 
