@@ -780,6 +780,13 @@ class _MaterialBuilder:
             return None, every
         return closure, vis
 
+    # colours an image's texels are replaced by to see how a node chain maps them: random RGB
+    # at alpha 1, then one RGB at random alphas (a chain may read either)
+    _PROBE = np.random.default_rng(7).random((64, 4)).astype(np.float32)
+    _PROBE[:, 3] = 1.0
+    _PROBE[:5, :3] = [[0, 0, 0], [1, 1, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    _ALPHA_PROBE = np.concatenate([np.full((16, 3), 0.5), np.linspace(0, 1, 16)[:, None]], axis=1).astype(np.float32)
+
     # what a mesh attribute reads as in a build, (1, n, 4) like an image's texels: random
     # colours at alpha 1, then one colour at alphas 0..1 (a chain reading the alpha is not a
     # scale and offset of the colour)
@@ -789,8 +796,7 @@ class _MaterialBuilder:
     _ATTRIBUTE_PROBE = np.random.default_rng(11).random((1, 64, 4)).astype(np.float32)
     _ATTRIBUTE_PROBE[0, 40:, :3] = 1.0 + 9.0 * _ATTRIBUTE_PROBE[0, 40:, :3]
     _ATTRIBUTE_PROBE[..., 3] = 1.0
-    _ATTRIBUTE_ALPHAS = np.concatenate([np.full((1, 16, 3), 0.5), np.linspace(0, 1, 16)[None, :, None]],
-                                       axis=2).astype(np.float32)
+    _ATTRIBUTE_ALPHAS = _ALPHA_PROBE[None]
 
     def _attribute(self, node, out, reasons):
         """The values a Color Attribute, (geometry) Attribute or Object Info node reads in this
@@ -851,18 +857,11 @@ class _MaterialBuilder:
             self._attribute_map = ('object', name[len(OBJECT_INFO):], mat)
             m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
             return m
-        x = self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64)
-        y = m.base_color.astype(np.float64) * np.asarray(m.texture, np.float64)[0, :, :3]
+        line = _channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), _probe_albedo(m), 1e-5)
         self._attribute_pixels = self._ATTRIBUTE_ALPHAS
-        m_alpha = self._build_material(mat)
-        ya = m_alpha.base_color.astype(np.float64) * np.asarray(m_alpha.texture, np.float64)[0, :, :3]
-        w, k = np.empty(3), np.empty(3)
-        for c in range(3):
-            (w[c], k[c]), *_ = np.linalg.lstsq(np.stack([x[:, c], np.ones(len(x))], axis=1), y[:, c], rcond=None)
-        k = np.where(np.abs(k) < 1e-9, 0.0, k)
-        affine = np.abs(x * w + k - y).max() <= 1e-5 * (1.0 + np.abs(y).max()) and np.ptp(ya, axis=0).max() < 1e-7 \
-            and (k >= 0).all() and (k + w >= -1e-9).all()
-        if affine:
+        reads_alpha = np.ptp(_probe_albedo(self._build_material(mat)), axis=0).max() >= 1e-7
+        if line is not None and not reads_alpha and (line[1] >= 0).all() and (line[1] + line[0] >= -1e-9).all():
+            w, k = line
             self._attribute_pixels = None
             self._attribute_map = ('mesh', name, w, k)
             m.texture = None                # the albedo comes per point from Geometry.colors
@@ -898,7 +897,7 @@ class _MaterialBuilder:
             name = self._albedo_attribute
             if name is None or name.startswith(OBJECT_INFO) or m.texture is None:
                 return None, None
-            return name, m.base_color.astype(np.float64) * np.asarray(m.texture, np.float64)[0, :, :3]
+            return name, _probe_albedo(m)
         name, y = joint(self._ATTRIBUTE_PROBE, self._IMAGE_PROBE)
         if name is None:
             return None
@@ -906,15 +905,11 @@ class _MaterialBuilder:
         _, ya = joint(self._ATTRIBUTE_ALPHAS, np.repeat(self._IMAGE_PROBE[:, :1], n, axis=1))
         if ya is None or not np.allclose(ya, ya[:1], rtol=1e-6, atol=1e-9):
             ya = None
-        x = self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64)
         q = y / self._IMAGE_PROBE[0, :, :3].astype(np.float64)       # = w x attribute + k if a product
-        w, k = np.empty(3), np.empty(3)
-        for c in range(3):
-            (w[c], k[c]), *_ = np.linalg.lstsq(np.stack([x[:, c], np.ones(len(x))], axis=1), q[:, c], rcond=None)
-        k = np.where(np.abs(k) < 1e-9, 0.0, k)
-        if ya is None or np.abs(x * w + k - q).max() > 1e-5 * (1.0 + np.abs(q).max()) \
-                or (k < 0).any() or (w + k <= 0).any():
+        line = _channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), q, 1e-5)
+        if ya is None or line is None or (line[1] < 0).any() or (line[0] + line[1] <= 0).any():
             return None
+        w, k = line
         # the final build reads the attribute as 1: the image's albedo x (w + k); the colours
         # carry (w x attribute + k) / (w + k)
         self._attribute_pixels = np.ones(4, np.float32)
@@ -1235,13 +1230,6 @@ class _MaterialBuilder:
                                          src.name, src.attribute),
                         tex_weight=(1.0, 1.0, 1.0))
 
-    # colours an image's texels are replaced by to see how a node chain maps them: random RGB
-    # at alpha 1, then one RGB at random alphas (a chain may read either)
-    _PROBE = np.random.default_rng(7).random((64, 4)).astype(np.float32)
-    _PROBE[:, 3] = 1.0
-    _PROBE[:5, :3] = [[0, 0, 0], [1, 1, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
-    _ALPHA_PROBE = np.concatenate([np.full((16, 3), 0.5), np.linspace(0, 1, 16)[:, None]], axis=1).astype(np.float32)
-
     def _probe(self, socket, src, pixels):
         """What feeds `socket` (n, 3) with image src's texels replaced by pixels (n, 4); None
         where the result no longer comes from src."""
@@ -1269,17 +1257,10 @@ class _MaterialBuilder:
         ya = self._probe(socket, src, self._ALPHA_PROBE)
         if ya is None or np.ptp(ya, axis=0).max() > 0.0:
             return None                                     # colour and alpha both
-        x = self._PROBE[:, :3].astype(np.float64)
-        w, k = np.empty(3), np.empty(3)
-        for c in range(3):
-            A = np.stack([x[:, c], np.ones(len(x))], axis=1)
-            (w[c], k[c]), *_ = np.linalg.lstsq(A, y[:, c], rcond=None)
-        if np.abs(x * w + k - y).max() > 1e-6 * (1.0 + np.abs(y).max()):
-            return None
-        k = np.where(np.abs(k) < 1e-9, 0.0, k)         # (the fit's rounding about an exact 0)
-        if (k < 0).any() or (k + w < -1e-9).any():      # a colour in [0, 1] would go negative
-            return None
-        return w, k
+        line = _channel_line(self._PROBE[:, :3].astype(np.float64), y, 1e-6)
+        if line is None or (line[1] < 0).any() or (line[1] + line[0] < -1e-9).any():
+            return None                                     # (a colour in [0, 1] would go negative)
+        return line
 
     def _normal_input(self, node, reasons):
         """Note a BSDF's tangent-space normal map (tangent_normal_map) for the material."""
@@ -1326,6 +1307,23 @@ class _MaterialBuilder:
             return t
         return _Texture((key, unassociate, interp, ext, where), pixels if udim is None else udim.flat,
                         interp, ext, transform, udim, img.name)
+
+
+def _channel_line(x, y, tolerance):
+    """(w (3,), k (3,)) with y = w x + k per channel, the least-squares line through probe
+    values x, y (n, 3), when it passes every point within tolerance x (1 + max |y|); None
+    otherwise. k within 1e-9 of 0 is 0 (the fit's rounding about an exact 0)."""
+    w, k = np.empty(3), np.empty(3)
+    for c in range(3):
+        (w[c], k[c]), *_ = np.linalg.lstsq(np.stack([x[:, c], np.ones(len(x))], axis=1), y[:, c], rcond=None)
+    if np.abs(x * w + k - y).max() > tolerance * (1.0 + np.abs(y).max()):
+        return None
+    return w, np.where(np.abs(k) < 1e-9, 0.0, k)
+
+
+def _probe_albedo(m):
+    """The albedo (n, 3) float64 a material built on probe values has at each of them."""
+    return m.base_color.astype(np.float64) * np.asarray(m.texture, np.float64)[0, :, :3]
 
 
 def _normal_link(socket):

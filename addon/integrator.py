@@ -502,6 +502,8 @@ class Integrator:
         self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))
         # textures or attribute colours vary the albedo over a triangle: hits need (u, v) for them
         self._albedo_varies = bool(self.mats.textures) or (self.tri.colors is not None and bool(self.mats.colored.any()))
+        # normal maps bend shading normals (they need the tangents the export made)
+        self._bumped = bool(self.mats.normal_maps) and self.tri.tangents is not None
         self._tri_live = max3(self._tri_albedo) > 0
         self._tri_any = np.ones(len(self.tri), bool)   # every triangle shades (SKIP_WORK off)
         self._area32 = self.tri.area.astype(F32)
@@ -1096,8 +1098,7 @@ class Integrator:
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
         # (their barycentrics too where textures need them)
         tex = self._albedo_varies
-        bumped = bool(self.mats.normal_maps) and self.tri.tangents is not None
-        uv = tex or bumped or (self.tri.term_cutoff is not None and bool(self.lights))   # the lift needs u, v
+        uv = tex or self._bumped or (self.tri.term_cutoff is not None and bool(self.lights))   # the lift needs u, v
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_albedo, path.thr,
             u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),
@@ -1109,11 +1110,7 @@ class Integrator:
             return None
         if tex:
             self._albedo_maps(prim, u, v, thr)
-        bump = None
-        if bumped:                        # the smooth normal and the correction flag stay for the
-            bump = np.empty((4, len(prim)), F32)      # bump shadowing of light samples and bounces
-            bump[:3] = ns
-            ns = self._normal_mapped(prim, u, v, ns, ng, bump[3])
+        ns, bump = self._bent_normals(prim, u, v, ns, ng)
         tb = None if path.tb is None else np.take(path.tb, idx)
         nee = None if path.nee is None else np.take(path.nee, idx)
         del hits, path
@@ -1173,6 +1170,16 @@ class Integrator:
             if len(sel):
                 albedo[:, sel] *= self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
                                                np.take(v, sel))
+
+    def _bent_normals(self, prim, u, v, ns, ng):
+        """(shading normals with the materials' normal maps applied, bump or None): bump (4, k)
+        keeps the smooth normal (rows 0-2) and the Bump Map Correction flag (row 3) for the bump
+        shadowing of light samples and bounces; (ns, None) when no material has a normal map."""
+        if not self._bumped:
+            return ns, None
+        bump = np.empty((4, len(prim)), F32)
+        bump[:3] = ns
+        return self._normal_mapped(prim, u, v, ns, ng, bump[3]), bump
 
     def _normal_mapped(self, prim, u, v, ns, ng, correction):
         """The shading normals (3, k) at hits (prim, u, v) with their materials' tangent-space
@@ -1375,11 +1382,7 @@ class Integrator:
         thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
         if self._albedo_varies:
             self._albedo_maps(prim, u, v, thr)
-        bump = None
-        if self.mats.normal_maps and self.tri.tangents is not None:
-            bump = np.empty((4, len(prim)), F32)
-            bump[:3] = ns
-            ns = self._normal_mapped(prim, u, v, ns, ng, bump[3])
+        ns, bump = self._bent_normals(prim, u, v, ns, ng)
         keys = np.ascontiguousarray(np.take(path.keys, rows, axis=1))
         u_pick = None
         if self.lights.num_entries > 1:
@@ -1479,8 +1482,7 @@ class Integrator:
             if self._albedo_varies:
                 self._albedo_maps(prim, hu, hv, albedo)
             P, ng, ns, _ = self._surface(hits, idx, path.D)
-            if self.mats.normal_maps and self.tri.tangents is not None:   # Cycles: the bent normal
-                ns = self._normal_mapped(prim, hu, hv, ns, ng, np.empty(len(idx), F32))
+            ns = self._bent_normals(prim, hu, hv, ns, ng)[0]          # Cycles: the bent normal
         else:
             P = ns = albedo = np.zeros((3, 0), F32)
         if 'UV' in want:

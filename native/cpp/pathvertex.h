@@ -195,7 +195,7 @@ inline bool shadow_record(const float O[3], const float wi[3], float dist, const
         const float inv = len > 0 ? 1.0f / len : 0.0f;
         for (int a = 0; a < 3; ++a) d[a] *= inv;
         len *= shorten;
-        if (!(len <= 3.4028234663852886e38f)) len = 0.0f;   // a target beyond float range: no ray
+        if (!(len <= kFloatMax)) len = 0.0f;   // a target beyond float range: no ray
     } else {
         for (int a = 0; a < 3; ++a) d[a] = wi[a];
         len = dist;

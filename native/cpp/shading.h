@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 #include "ray.h"
 
@@ -53,15 +54,17 @@ inline float ulp_of(float x) {
     return u;
 }
 
+constexpr float kFloatMax = std::numeric_limits<float>::max();
+
 // |d| in float32: sqrt(d . d), the same bits, where that sum is finite; beyond (|d| past
 // ~1.8e19, a vast emitter's sampled point) scaled by the largest component, so the length and
 // the unit direction stay finite; +inf where a component is. (An overflowing sum had left a
 // shadow ray with a zero direction.)
 inline float length3(const float d[3]) {
     const float s = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    if (s <= 3.4028234663852886e38f) return std::sqrt(s);
+    if (s <= kFloatMax) return std::sqrt(s);
     const float m = std::fmax(std::fabs(d[0]), std::fmax(std::fabs(d[1]), std::fabs(d[2])));
-    if (!(m < 3.4028234663852886e38f)) return m;   // inf (NaN stays NaN through fmax only if all are)
+    if (!(m < kFloatMax)) return m;   // inf (NaN stays NaN through fmax only if all are)
     const float e[3] = {d[0] / m, d[1] / m, d[2] / m};
     return m * std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }

@@ -150,7 +150,7 @@ inline void triangle_light(const float* geo, const float* area, size_t M, size_t
             d[a] = x - P[a];
         }
         len = length3(d);
-        const float inv = len > 0 && len < 3.4028234663852886e38f ? 1.0f / len : 0.0f;
+        const float inv = len > 0 && len < kFloatMax ? 1.0f / len : 0.0f;
         for (int a = 0; a < 3; ++a) d[a] *= inv;
     }
     float cos_l = g(9) * d[0] + g(10) * d[1] + g(11) * d[2];
