@@ -2222,6 +2222,7 @@ class _Exporter:
                            threads=0 if r.threads_mode == 'AUTO' else r.threads,
                            partition=d.partition.lower(), film_transparent=r.film_transparent,
                            film_exposure=float(getattr(d, 'film_exposure', 1.0)),
+                           use_light_tree=bool(getattr(d, 'use_light_tree', True)),
                            passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
                            pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
                            cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),

@@ -585,7 +585,8 @@ class Integrator:
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None
         # a map diffuse rays cannot see lights nothing; camera rays may still see it (not
         # through transparent film)
-        self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None)
+        self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None,
+                               use_tree=bool(getattr(self.settings, 'use_light_tree', True)), tri_object=ob)
         self._camera_env = env if (env is not None and wv & VIS_CAMERA and not self.transparent
                                    and not env.dark) else None
         if self.lights.skipped_lamps:
@@ -623,6 +624,7 @@ class Integrator:
         weights BSDF hits on lamps."""
         lights = self.lights
         tris = lights.triangles
+        nl = lights.num_lamps
         ntri = 0 if tris is None else len(tris.index)
         tri_prob = lights.tri_prob[tris.index] if ntri else np.zeros(0, F32)
         env = lights.environment
@@ -633,7 +635,19 @@ class Integrator:
             np.concatenate([[not l.seen_by_bsdf for l in lights.lamps], np.zeros(ntri + nenv, bool)]),
             np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri + nenv, bool)]),
             *((None, None, None) if tris is None else (tris.geo, tris.area, tris.emission)),
-            environment=None if env is None else env.native)
+            environment=None if env is None else env.native, tree=lights.tree)
+        # the light tree's keys of the lamp records and of the triangles (-1: not in it), for
+        # the MIS weights of BSDF rays that meet them
+        self._record_key = self._tri_key = None
+        if lights.tree is not None:
+            member = np.zeros(lights.num_entries, bool)
+            member[lights.tree_entries] = True
+            self._record_key = np.full(len(self._record_lamps), -1, np.int32)
+            self._record_key[:nl] = np.where(member[:nl], np.arange(nl), -1)
+            self._tri_key = np.full(len(self.tri), -1, np.int32)
+            if ntri:
+                j = np.arange(ntri)
+                self._tri_key[tris.index] = np.where(member[nl + j], nl + j, -1)
         every = self._record_lamps
         if self._groups:                    # light groups: each lamp record's and entry's group
             self._record_group = np.array([self._world_group if isinstance(l, BackgroundLight)
@@ -707,7 +721,8 @@ class Integrator:
             off, width = RECORD_FIELDS['emit']
             records[past, off:off + width] = 0.0
             self._choice_at[key] = dacrt.shading.LightChoice(
-                records, c.cdf, c.prob, c.no_mis, c.shadow, c.tri_geo, c.tri_area, c.tri_emission, c.environment)
+                records, c.cdf, c.prob, c.no_mis, c.shadow, c.tri_geo, c.tri_area, c.tri_emission, c.environment,
+                c.tree)
         return self._choice_at[key]
 
     def _weight_lights(self, probes: int = 32):
@@ -1410,8 +1425,8 @@ class Integrator:
             for lamps, thr in self._linked(lamps, seg, -seg.thr, camera):
                 dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
                                         np.zeros(len(t0), bool), seg.pid, out, thr=thr,
-                                        pdf_bsdf=None if camera else seg.pdf,
-                                        lamp_prob=None if camera else self._record_prob, clamp=self._found_clamp(k))
+                                        pdf_bsdf=None if camera else seg.pdf, clamp=self._found_clamp(k),
+                                        **self._lamp_mis(camera))
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None, kind='through'):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
@@ -1685,7 +1700,9 @@ class Integrator:
         for mask, out in outs:
             dacrt.shading.gather_emission(hits, mask, self._emission_table(), self._tri_emissive,
                                           None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
-                                          path.O, path.D, thr, path.pdf, path.pid, out, clamp=clamp)
+                                          path.O, path.D, thr, path.pdf, path.pid, out, clamp=clamp,
+                                          **({} if camera or self._tri_key is None
+                                             else dict(tree=self.lights.tree, tri_key=self._tri_key)))
 
     def _found_clamp(self, k):
         """The clamp of light that rays arriving at vertex k find: direct up to the BSDF rays
@@ -1734,7 +1751,16 @@ class Integrator:
             for lamps, thr in self._linked(lamps, path, path.thr, camera):
                 dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
                                         miss, path.pid, out, thr=thr, pdf_bsdf=None if camera else path.pdf,
-                                        lamp_prob=None if camera else self._record_prob, clamp=clamp)
+                                        clamp=clamp, **self._lamp_mis(camera))
+
+    def _lamp_mis(self, camera):
+        """lamp_gather's MIS arguments: none for camera rays; for BSDF rays each lamp record's
+        selection probability and, with a light tree, the records' keys in it."""
+        if camera:
+            return {}
+        if self._record_key is None:
+            return dict(lamp_prob=self._record_prob)
+        return dict(lamp_prob=self._record_prob, tree=self.lights.tree, lamp_key=self._record_key)
 
     def _linked(self, lamps, path, thr, camera):
         """(lamp records, throughput) pairs to gather with: per light set of the lamps, the

@@ -77,6 +77,11 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
         name="Min Samples",
         description="Samples every pixel takes before it may stop; 0 picks one from the threshold",
         default=0, min=0, max=4096)
+    use_light_tree: BoolProperty(
+        name="Light Tree",
+        description="Pick the light each point samples by its estimated contribution there (distance, "
+                    "power, facing), as Cycles' light tree; off: a global choice",
+        default=True)
     partition: EnumProperty(
         name="Partitioning", description="How the tracer splits primitives while it recurses",
         items=PARTITION_ITEMS, default='ADAPTIVE')

@@ -215,6 +215,7 @@ class Settings:
     adaptive_min_samples: int = 0      # 0 = automatic (from the threshold)
     film_transparent: bool = False
     film_exposure: float = 1.0     # Cycles' Film > Exposure: scales Combined RGB and the light passes
+    use_light_tree: bool = True    # Cycles' Lights > Light Tree: a light per point by its contribution
     passes: tuple = ()             # extra passes wanted (passes.py): data passes 'Depth', 'Mist',
                                    # 'Position', 'Normal', 'UV', 'IndexOB', 'IndexMA', 'DiffCol'
                                    # and the light passes 'DiffDir', 'DiffInd', 'Emit', 'Env'

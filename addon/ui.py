@@ -67,6 +67,8 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
         sub.active = settings.use_adaptive_sampling
         sub.prop(settings, "adaptive_threshold")
         sub.prop(settings, "adaptive_min_samples")
+        col = layout.column(heading="Lights")
+        col.prop(settings, "use_light_tree")
         col = layout.column(heading="Clamping")
         col.prop(settings, "sample_clamp_direct", text="Direct Light")
         col.prop(settings, "sample_clamp_indirect", text="Indirect Light")

@@ -2,9 +2,13 @@
 
 Owns the translation of SceneData lights, the world and emissive triangles into samplers
 (one light type per module, like Cycles' kernel/light/), and the discrete distribution that
-picks one of them per shading point. By default every lamp is equally likely, emissive
-triangles are chosen by power (area x mean radiance), and when both exist each group gets half.
-`reweight` then tilts the split between the groups (each lamp, all emissive triangles) toward
+picks one of them per shading point. With two or more lights that have a position (point,
+spot and area lamps, emissive triangles) they form one group, the light tree (tree.py), which
+picks among them per shading point by estimated contribution, as Cycles' light tree does; a
+single such light is a group of its own. Suns are a group each and the environment map one.
+By default each kind (suns, the lights with a position, the environment) gets an equal share;
+without a tree, every lamp is equally likely and emissive triangles are chosen by power.
+`reweight` then tilts the split between the groups toward
 the lights BSDF sampling finds badly from points the camera sees: small lights over wide ones,
 mixed with 20% of the uniform split. Under MIS the cosine-weighted bounces already sample a
 wide light well; giving the world half the light samples put DACRT 3-7x behind Cycles on sun +
@@ -28,6 +32,7 @@ from .environment import EnvironmentLight
 from .base import F32, RECORD_WIDTH, Lamp, LightSample
 from .point import PointLight, SpotLight
 from .sun import SunLight
+from .tree import build_tree
 from .triangles import EmissiveTriangles
 
 __all__ = ['LightSet', 'LightSample', 'Lamp', 'BackgroundLight', 'EnvironmentLight', 'EmissiveTriangles', 'make_lamp',
@@ -59,7 +64,7 @@ class LightSet:
     """All light sources of a frame and the choice of one per shading point (see module doc)."""
 
     def __init__(self, lamps, triangles: EmissiveTriangles | None, num_triangles: int,
-                 environment: EnvironmentLight | None = None):
+                 environment: EnvironmentLight | None = None, use_tree: bool = True, tri_object=None):
         lit = [l for l in lamps if not l.dark]
         self.skipped_lamps = [l.name for l in lamps if l.dark]
         if environment is not None and environment.dark:
@@ -76,32 +81,51 @@ class LightSet:
         self.triangles = triangles if triangles is not None and len(triangles) else None
         self.num_lamps = len(self.lamps)
         self._num_triangles = num_triangles
-        # each group (the lamps together, the triangles, the environment) an equal share
-        kinds = bool(self.num_lamps) + (self.triangles is not None) + (environment is not None)
-        share = 1.0 / max(kinds, 1)
-        groups = [share / self.num_lamps] * self.num_lamps if self.num_lamps else []
-        if self.triangles is not None:
-            groups.append(share)
-        if environment is not None:
-            groups.append(share)
-        self._set_groups(np.asarray(groups, np.float64))
+        ntri = 0 if self.triangles is None else len(self.triangles)
+        self.num_entries = self.num_lamps + ntri + (environment is not None)
+        # the light choice's entries: lamps, then emissive triangles, then the environment
+        self.tree, self.tree_entries = build_tree(self.lamps, self.triangles, self.num_lamps, use_tree, tri_object)
+        self._groups = self._group_table(ntri)
+        # each kind an equal share: lamps (without a tree) or suns (with one), the emissive
+        # triangles (without a tree) or the tree, the environment; lamps split theirs evenly
+        kind = [g[0] for g in self._groups]
+        counts = {k: kind.count(k) for k in kind}
+        share = 1.0 / max(len(counts), 1)
+        self._set_groups(np.asarray([share / counts[k] for k in kind], np.float64))
+
+    def _group_table(self, ntri):
+        """[(kind, entries, weights within)]: the groups reweight splits the choice between."""
+        member = np.zeros(self.num_entries, bool)
+        member[self.tree_entries] = True
+        groups = [('lamps', np.array([i]), np.ones(1)) for i in range(self.num_lamps) if not member[i]]
+        if self.tree is not None:
+            # the first member holds the group's mass in the cdf (LightChoice: the tree picks)
+            within = np.zeros(len(self.tree_entries))
+            within[0] = 1.0
+            groups.append(('tree', self.tree_entries, within))
+        elif ntri:
+            power = self.triangles.power
+            groups.append(('triangles', self.num_lamps + np.arange(ntri), power / power.sum()))
+        if self.environment is not None:
+            groups.append(('environment', np.array([self.num_entries - 1]), np.ones(1)))
+        return groups
 
     def _set_groups(self, group_p):
-        """Selection probabilities from one per group (each lamp, then all emissive triangles,
-        which share theirs by power, then the environment map)."""
-        lamp_w = np.asarray(group_p[:self.num_lamps], np.float64)
-        tri_w = np.zeros(0)
-        if self.triangles is not None:
-            tri_w = group_p[self.num_lamps] * self.triangles.power / self.triangles.power.sum()
-        env_w = np.asarray(group_p[-1:] if self.environment is not None else [], np.float64)
-        w = np.concatenate([lamp_w, tri_w, env_w])
+        """Selection probabilities from one per group (_groups' order). A tree member's prob
+        is its group's: the tree's own pdf at the point multiplies it (LightChoice)."""
+        w = np.zeros(self.num_entries)
+        for (kind, entries, within), g in zip(self._groups, group_p):
+            w[entries] = g * within
         total = w.sum()
-        self.num_entries = len(w)
         self.tri_prob = np.zeros(self._num_triangles, F32)   # selection probability per global triangle
         if total > 0:
             p = w / total
             self.cdf = np.cumsum(p)
             self.cdf[-1] = 1.0
+            for (kind, entries, _), g in zip(self._groups, group_p):
+                if kind == 'tree':
+                    p[entries] = g / total
+            self.entry_prob = p.astype(F32)
             self.lamp_prob = p[:self.num_lamps].astype(F32)
             ntri = 0 if self.triangles is None else len(self.triangles.index)
             if self.triangles is not None:
@@ -109,6 +133,7 @@ class LightSet:
             self.env_prob = float(p[-1]) if self.environment is not None else 0.0
         else:
             self.cdf = np.zeros(0)
+            self.entry_prob = np.zeros(0, F32)
             self.lamp_prob = np.zeros(0, F32)
             self.env_prob = 0.0
 
@@ -122,22 +147,43 @@ class LightSet:
         for delta lights). Under MIS a light as wide as the sky is found well by the
         cosine-weighted bounces, so light samples are better spent on small lights. Mixed
         with uniform_mix of the uniform split, so every group keeps a share."""
-        groups = self.num_lamps + (self.triangles is not None) + (self.environment is not None)
+        groups = len(self._groups)
         n = P.shape[1]
         if groups < 2 or n == 0:
             return
         u1, u2 = rng.random((2, n), np.float32)
-        narrow = [self._narrowness(lamp.sample(P, u1, u2).pdf) for lamp in self.lamps]
-        if self.triangles is not None:
-            power = self.triangles.power / self.triangles.power.sum()
-            which = np.minimum(np.searchsorted(np.cumsum(power), rng.random(n)), len(power) - 1)
-            narrow.append(self._narrowness(self.triangles.sample(P, which, u1, u2).pdf))
-        if self.environment is not None:
-            narrow.append(self._narrowness(self.environment.sample_pdf(u1, u2)))
+        narrow = []
+        for kind, entries, within in self._groups:
+            if kind == 'lamps':
+                pdf = self.lamps[int(entries[0])].sample(P, u1, u2).pdf
+            elif kind == 'environment':
+                pdf = self.environment.sample_pdf(u1, u2)
+            else:                       # the tree's or the power-weighted pick at each point
+                if kind == 'tree':
+                    which = self.tree.sample(np.ascontiguousarray(P, F32), rng.random(n))[0].astype(np.int64)
+                else:
+                    which = self.num_lamps + np.minimum(np.searchsorted(np.cumsum(within), rng.random(n)),
+                                                        len(within) - 1)
+                pdf = self._entry_pdf(P, which, u1, u2)
+            narrow.append(self._narrowness(pdf))
         w = np.asarray(narrow, np.float64)
         if not w.sum() > 0:
             return
         self._set_groups((1.0 - uniform_mix) * w / w.sum() + uniform_mix / groups)
+
+    def _entry_pdf(self, P, which, u1, u2):
+        """The solid-angle pdf of one light sample per point P[:, i] of entry which[i] (a lamp or
+        an emissive triangle)."""
+        pdf = np.zeros(P.shape[1], F32)
+        for e in np.unique(which):
+            at = np.flatnonzero(which == e)
+            if e < self.num_lamps:
+                pdf[at] = self.lamps[int(e)].sample(P[:, at], u1[at], u2[at]).pdf
+        tri = np.flatnonzero(which >= self.num_lamps)
+        if len(tri):
+            pdf[tri] = self.triangles.sample(np.ascontiguousarray(P[:, tri]), which[tri] - self.num_lamps,
+                                             u1[tri], u2[tri]).pdf
+        return pdf
 
     @staticmethod
     def _narrowness(pdf) -> float:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..sampling import concentric_disk, dot, normalize
-from .base import F32, KIND_AREA, Lamp, LightSample, make_record, outer
+from .base import F32, KIND_AREA, Bounds, Lamp, LightSample, luminance, make_record, outer
 
 SHAPES = ('SQUARE', 'RECTANGLE', 'DISK', 'ELLIPSE')
 
@@ -104,6 +104,12 @@ class AreaLight(Lamp):
             f = np.maximum(self.tan_half_spread - tan_t, 0.0) * self.spread_norm
             scale *= np.where(cos_l > 0, f, F32(0.0))
         return scale
+
+    def bounds(self) -> Bounds:
+        # one-sided: the front hemisphere of the normal; on-axis intensity radiance x area
+        half = 0.5 * (np.abs(self.axis_x) + np.abs(self.axis_y))
+        return Bounds(self.center - half, self.center + half, self.normal, 1.0, 0.0,
+                      luminance(self.emit) * self.area)
 
     def record(self):
         # shape 0: rectangle (square), 1: ellipse (disk); spread_norm 0: no spread

@@ -56,6 +56,20 @@ def make_record(kind: int, shape: int, **fields) -> np.ndarray:
 
 
 @dataclass
+class Bounds:
+    """What the light tree (tree.py) knows of a light with a position: its box, the cone of
+    directions it emits in (unit axis, cos of the spread cos_o: -1 for every direction, cos of
+    the falloff beyond it cos_e) and its energy (on-axis intensity: it gives an irradiance of
+    about energy / d^2 at distance d)."""
+    lo: np.ndarray
+    hi: np.ndarray
+    axis: np.ndarray
+    cos_o: float
+    cos_e: float
+    energy: float
+
+
+@dataclass
 class LightSample:
     wi: np.ndarray       # (3,n) unit direction from the shading point to the light
     dist: np.ndarray     # (n,) shadow ray length (inf for lights at infinity)
@@ -123,6 +137,11 @@ class Lamp(ABC):
     @abstractmethod
     def record(self) -> np.ndarray:
         """The lamp's parameters as a native lamp record (RECORD_WIDTH float32, module doc)."""
+
+    def bounds(self) -> Bounds | None:
+        """The light's place in the light tree; None for lights at infinity (sun, world),
+        which the global choice keeps."""
+        return None
 
     def intersect(self, O, D, tmax):
         return EMPTY_IDX, np.zeros((3, 0), F32), np.zeros(0, F32)

@@ -20,8 +20,8 @@ import numpy as np
 
 from ..sampling import (concentric_disk, dot, normalize, one_minus_cos_from_sin2, orthonormal_basis,
                         to_world, uniform_cone)
-from .base import (F32, KIND_POINT, KIND_SPOT, POINT_DELTA, POINT_DISK, POINT_SPHERE, Lamp, LightSample, make_record,
-                   outer)
+from .base import (F32, KIND_POINT, KIND_SPOT, POINT_DELTA, POINT_DISK, POINT_SPHERE, Bounds, Lamp, LightSample,
+                   luminance, make_record, outer)
 
 
 class PointLight(Lamp):
@@ -41,6 +41,13 @@ class PointLight(Lamp):
             fac = 1.0 / (4.0 * np.pi ** 2 * self.radius ** 2) if self.normalize else 1.0 / np.pi
         # intensity (delta) or radiance (finite): strength * eval_fac
         self.emit = (self.color * fac).astype(F32)
+
+    def bounds(self) -> Bounds:
+        # every direction: a spot's cone is left out, so the tree never culls a delta light
+        # (light sampling is its only estimator); on-axis intensity strength / 4 pi either way
+        r = F32(self.radius)
+        energy = luminance(self.emit) * (1.0 if self.delta else np.pi * self.radius ** 2)
+        return Bounds(self.center - r, self.center + r, np.array([0.0, 0.0, 1.0], F32), -1.0, 0.0, energy)
 
     def record(self):
         shape = POINT_DELTA if self.delta else POINT_SPHERE if self.sphere else POINT_DISK

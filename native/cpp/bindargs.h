@@ -6,7 +6,10 @@
 #include <pybind11/pybind11.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
+
+#include "lighttree.h"
 
 namespace dacrt::bindargs {
 
@@ -40,6 +43,22 @@ inline float* out_array(py::array a, py::ssize_t rows, size_t n, const char* nam
 // for none. NaN and 0 are refused rather than read as "no light" or "no clamp".
 inline void check_clamp(float clamp) {
     if (!(clamp > 0)) throw py::value_error("clamp must be > 0 (infinity: none), got " + std::to_string(clamp));
+}
+
+// The tree and the per-item keys of a gather (both or neither); keys -1 or a member's key.
+inline const LightTree* tree_keys(const py::object& tree, const py::object& keys, size_t count, const char* name,
+                           py::array_t<int32_t, py::array::c_style>& keep) {
+    if (tree.is_none() != keys.is_none())
+        throw py::value_error(std::string("tree and ") + name + " go together (both None: no light tree)");
+    if (tree.is_none()) return nullptr;
+    const LightTree* lt = tree.cast<const LightTree*>();
+    keep = keys.cast<py::array_t<int32_t, py::array::c_style>>();
+    need_shape(keep, 0, count, name);
+    for (size_t k = 0; k < count; ++k)
+        if (keep.data()[k] != -1 && !lt->member(keep.data()[k]))
+            throw py::value_error(std::string(name) + "[" + std::to_string(k) + "] = " + std::to_string(keep.data()[k]) +
+                                  " is neither -1 nor a key of the light tree");
+    return lt;
 }
 
 }  // namespace dacrt::bindargs

@@ -102,9 +102,61 @@ void lamp_sample_py(F32Array records, I32Array entry, F32Array P, F32Array u1, F
     lamp_sample(rec, R, entry.data(), P.data(), u1.data(), u2.data(), n, w, d, v, p);
 }
 
+py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py::array::c_style> u) {
+    if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
+    const size_t n = size_t(P.shape(1));
+    need_shape(u, 0, n, "u");
+    py::array_t<int32_t> key(n);
+    py::array_t<double> prob(n);
+    const float* p = P.data();
+    for (size_t i = 0; i < n; ++i) {
+        const float q[3] = {p[i], p[n + i], p[2 * n + i]};
+        double pr;
+        key.mutable_data()[i] = t.sample(q, u.data()[i], pr);
+        prob.mutable_data()[i] = pr;
+    }
+    return py::make_tuple(key, prob);
+}
+
+py::array_t<double> tree_pdf_py(const LightTree& t, F32Array P, I64Array key) {
+    if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
+    const size_t n = size_t(P.shape(1));
+    need_shape(key, 0, n, "key");
+    py::array_t<double> prob(n);
+    const float* p = P.data();
+    for (size_t i = 0; i < n; ++i) {
+        const float q[3] = {p[i], p[n + i], p[2 * n + i]};
+        prob.mutable_data()[i] = t.pdf(q, key.data()[i]);
+    }
+    return prob;
+}
+
+std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F32Array cos_o, F32Array cos_e,
+                                     py::array_t<double, py::array::c_style> energy, I32Array key, py::object group) {
+    if (lo.ndim() != 2 || lo.shape(0) != 3) throw py::value_error("lo must have shape (3, m), got " + shape_str(lo));
+    const size_t m = size_t(lo.shape(1));
+    need_shape(hi, 3, m, "hi");
+    need_shape(axis, 3, m, "axis");
+    need_shape(cos_o, 0, m, "cos_o");
+    need_shape(cos_e, 0, m, "cos_e");
+    need_shape(energy, 0, m, "energy");
+    need_shape(key, 0, m, "key");
+    LightTreeInput in{lo.data(), hi.data(), axis.data(), cos_o.data(), cos_e.data(), energy.data(), key.data(), m};
+    I32Array group_keep;
+    if (!group.is_none()) {
+        group_keep = group.cast<I32Array>();
+        need_shape(group_keep, 0, m, "group");
+        in.group = group_keep.data();
+    }
+    const std::string err = light_tree_error(in);
+    if (!err.empty()) throw py::value_error(err);
+    py::gil_scoped_release nogil;
+    return std::make_shared<LightTree>(in);
+}
+
 void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D, F32Array t_surf,
                     py::array_t<bool, py::array::c_style> miss, py::object thr, py::object pdf_bsdf, I64Array pid,
-                    py::array L, float clamp) {
+                    py::array L, float clamp, py::object tree, py::object lamp_key) {
     check_clamp(clamp);
     const LampRecord* rec = lamp_records(records);
     const size_t R = size_t(records.shape(0));
@@ -128,9 +180,12 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const float* prob = optional_f32(lamp_prob, 0, R, "lamp_prob", prob_keep);
     const float* t = optional_f32(thr, 3, n, "thr", thr_keep);
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
+    I32Array key_keep;
+    const LightTree* lt = tree_keys(tree, lamp_key, R, "lamp_key", key_keep);
     gather_into(L, pid, n, [&](float* out, size_t N) {
         lamp_gather(rec, lamp_list.data(), nl, prob, O.data(), D.data(), t_surf.data(),
-                    reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N, clamp);
+                    reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N, clamp, lt,
+                    lt ? key_keep.data() : nullptr);
     });
 }
 
@@ -204,11 +259,17 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
                      uint32_t ka, uint32_t kb, py::object pick, py::object prim, float shorten, bool skip_work,
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
                      py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator,
-                     py::object linking, py::object entry, py::object point, py::object bump) {
+                     py::object linking, py::object entry, py::object point, py::object bump, py::object tree) {
     F32Array keep[3], ng_keep, thr_keep, bump_keep;
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
+    if (!tree.is_none()) {
+        lights.tree = tree.cast<const LightTree*>();
+        if (lights.tree->key_bound() > lights.entries)
+            throw py::value_error("the light tree's keys must be entries of the light choice (0.." +
+                                  std::to_string(lights.entries - 1) + ")");
+    }
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     VertexPoints pts{};
     pts.n = size_t(P.shape(1));
@@ -437,14 +498,23 @@ void register_lamps(py::module_& m) {
           py::arg("u2"), py::arg("wi"), py::arg("dist"), py::arg("value"), py::arg("pdf"));
     m.def("lamp_gather", &lamp_gather_py, py::arg("records"), py::arg("lamps"), py::arg("lamp_prob"), py::arg("O"),
           py::arg("D"), py::arg("t_surf"), py::arg("miss"), py::arg("thr"), py::arg("pdf_bsdf"), py::arg("pid"),
-          py::arg("L"), py::arg("clamp") = std::numeric_limits<float>::infinity());
+          py::arg("L"), py::arg("clamp") = std::numeric_limits<float>::infinity(), py::arg("tree") = py::none(),
+          py::arg("lamp_key") = py::none());
+    py::class_<LightTree, std::shared_ptr<LightTree>>(
+        m, "LightTree", "Many-light sampling: a light per point by its estimated contribution (lighttree.h)")
+        .def(py::init(&make_tree), py::arg("lo"), py::arg("hi"), py::arg("axis"), py::arg("cos_o"), py::arg("cos_e"),
+             py::arg("energy"), py::arg("key"), py::arg("group") = py::none())
+        .def_property_readonly("members", &LightTree::members)
+        .def_property_readonly("nodes", &LightTree::nodes)
+        .def("sample", &tree_sample_py, py::arg("P"), py::arg("u"))
+        .def("pdf", &tree_pdf_py, py::arg("P"), py::arg("key"));
     m.def("next_event", &next_event_py, py::arg("records"), py::arg("cdf"), py::arg("prob"), py::arg("no_mis"),
           py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"), py::arg("P"),
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),
           py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
           py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"),
           py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none(),
-          py::arg("bump") = py::none());
+          py::arg("bump") = py::none(), py::arg("tree") = py::none());
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)")
         .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"),

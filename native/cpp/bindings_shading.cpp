@@ -322,7 +322,8 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
 size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> hit, F32Array emission,
                           py::array_t<bool, py::array::c_style> emissive, py::object tri_prob, F32Array area,
                           F32Array geo, F32Array O, F32Array D, py::object thr, py::object pdf, I64Array pid,
-                          py::array_t<float, py::array::c_style> L, float clamp) {
+                          py::array_t<float, py::array::c_style> L, float clamp, py::object tree,
+                          py::object tri_key) {
     check_clamp(clamp);
     const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const Hit* h = records<Hit>(hits, n, "hits");
@@ -350,10 +351,13 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
     if (!L.writeable()) throw py::value_error("L must be writeable");
     const size_t N = rows_of(L, 3, "L");
     check_index(pid, N, "pid");
+    py::array_t<int32_t, py::array::c_style> key_keep;
+    const LightTree* lt = tree_keys(tree, tri_key, M, "tri_key", key_keep);
     py::gil_scoped_release nogil;
     return gather_emission(h, reinterpret_cast<const uint8_t*>(hit.data()), n, emission.data(),
                            reinterpret_cast<const uint8_t*>(emissive.data()), prob, area.data(), geo.data(), M,
-                           O.data(), D.data(), t, pd, pid.data(), L.mutable_data(), N, clamp);
+                           O.data(), D.data(), t, pd, pid.data(), L.mutable_data(), N, clamp, lt,
+                           lt ? key_keep.data() : nullptr);
 }
 
 py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, py::object rays, py::object lu_obj,
@@ -532,7 +536,8 @@ void register_shading(py::module_& m) {
     m.def("gather_emission", &gather_emission_py, py::arg("hits"), py::arg("hit"), py::arg("emission"),
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("O"), py::arg("D"),
           py::arg("thr"), py::arg("pdf"), py::arg("pid"), py::arg("L"),
-          py::arg("clamp") = std::numeric_limits<float>::infinity());
+          py::arg("clamp") = std::numeric_limits<float>::infinity(), py::arg("tree") = py::none(),
+          py::arg("tri_key") = py::none());
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
           py::arg("rays"), py::arg("lu") = py::none(), py::arg("lv") = py::none());
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));

@@ -38,7 +38,8 @@ size_t sample_triangles(const float* geo, const float* area, size_t M, const int
 
 size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
                        const float* tri_prob, const float* area, const float* geo, size_t M, const float* O,
-                       const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N, float clamp) {
+                       const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N, float clamp,
+                       const LightTree* tree, const int32_t* tri_key) {
     std::atomic<size_t> count{0};
     parallel_for(n, [&](size_t b, size_t e) {
         size_t local = 0;
@@ -49,7 +50,9 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
             float w = 1.0f;
             if (tri_prob && tri_prob[q] > 0) {  // a BSDF ray: power heuristic against light sampling
                 const float o[3] = {O[i], O[n + i], O[2 * n + i]}, d[3] = {D[i], D[n + i], D[2 * n + i]};
-                float r = tri_prob[q] * triangle_light_pdf(geo, area, M, q, o, d, hits[i].t);
+                float p_sel = tri_prob[q];
+                if (tree && tri_key && tri_key[q] >= 0) p_sel = float(double(p_sel) * tree->pdf(o, tri_key[q]));
+                float r = p_sel * triangle_light_pdf(geo, area, M, q, o, d, hits[i].t);
                 r /= pdf[i];
                 r *= r;
                 r += 1.0f;

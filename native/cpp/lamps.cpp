@@ -53,12 +53,14 @@ void sample_range(const LampRecord* rec, size_t R, const int32_t* entry, const f
 
 void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                   const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
-                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, size_t b, size_t e) {
+                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
+                  const int32_t* lamp_key, size_t b, size_t e) {
     // Lamp by lamp over the rays (each ray still adds its lamps in list order), and the add is
     // selected, not branched on: whether a ray sees a lamp follows no pattern.
     for (size_t k = 0; k < nl; ++k) {
         const LampRecord& lamp = rec[lamps[k]];
         const int kind = int(lamp.kind);
+        const int32_t key = tree && lamp_key ? lamp_key[lamps[k]] : -1;  // a light of the tree
         for (size_t i = b; i < e; ++i) {
             const float o[3] = {O[i], O[n + i], O[2 * n + i]};
             const float d[3] = {D[i], D[n + i], D[2 * n + i]};
@@ -67,7 +69,9 @@ void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const 
                                                                           : hit_lamp(lamp, o, d, t_surf[i], Le, pdf_l);
             float w = 1.0f;
             if (lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
-                float r = lamp_prob[lamps[k]] * pdf_l / pdf_bsdf[i];
+                float p_sel = lamp_prob[lamps[k]];
+                if (key >= 0 && seen) p_sel = float(double(p_sel) * tree->pdf(o, key));  // as picked from o
+                float r = p_sel * pdf_l / pdf_bsdf[i];
                 r *= r;
                 r += 1.0f;
                 w = 1.0f / r;
@@ -94,9 +98,11 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
-                 const int64_t* pid, size_t n, float* L, size_t N, float clamp) {
+                 const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
+                 const int32_t* lamp_key) {
     parallel_for(n, [&](size_t b, size_t e) {
-        gather_range(rec, lamps, nl, lamp_prob, O, D, t_surf, miss, thr, pdf_bsdf, pid, n, L, N, clamp, b, e);
+        gather_range(rec, lamps, nl, lamp_prob, O, D, t_surf, miss, thr, pdf_bsdf, pid, n, L, N, clamp, tree, lamp_key,
+                     b, e);
     });
 }
 

@@ -19,13 +19,6 @@ namespace {
 
 constexpr size_t kBlock = 4096;  // paths per block: blocks compact their shadow rays on their own
 
-// The entry a uniform picks: the first with cdf > u (numpy's searchsorted side='right'), at
-// most the last.
-inline size_t choose(const double* cdf, size_t entries, double u) {
-    const size_t e = size_t(std::upper_bound(cdf, cdf + entries, u) - cdf);
-    return e < entries ? e : entries - 1;
-}
-
 struct Pending {  // a shadow ray before its block's place in the output is known
     Ray ray;
     int64_t path;
@@ -43,9 +36,16 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
         for (size_t j = 0; j < cnt; ++j) {
             const size_t i = i0 + j;
             const float u1 = unit24(wa[j]), u2 = unit24(wb[j]);
-            const size_t entry = p.pick ? choose(L.cdf, L.entries, p.pick[i]) : 0;
-            if (entry_out) entry_out[i] = int32_t(entry);
             const float P[3] = {p.P[i], p.P[n + i], p.P[2 * n + i]};
+            // the entry: the first with cdf > u (numpy's searchsorted side='right'), or the
+            // tree's pick at the shadow ray's origin
+            float p_sel = L.prob[0];
+            size_t entry = 0;
+            if (p.pick) {
+                const float Q[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
+                entry = choose_light(L, Q, p.pick[i], p_sel);
+            }
+            if (entry_out) entry_out[i] = int32_t(entry);
             float wi[3], dist, pdf, value[3], target[3];
             const bool lamp = entry < L.num_lamps;
             if (lamp) {
@@ -74,7 +74,8 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             // In front of the shading normal is enough: a sample below the geometric one is
             // the shadow ray's to decide (it leaves through its own, skipped, triangle), as in
             // Cycles, whose diffuse eval has no geometric test.
-            bool ok = nee_scale(ns, nullptr, wi, pdf, L.prob[entry], p.thr ? thr : nullptr, value);
+            bool ok = p_sel > 0.0f && nee_scale(ns, nullptr, wi, pdf, p_sel, p.thr ? thr : nullptr, value);
+            if (!(p_sel > 0.0f)) value[0] = value[1] = value[2] = 0.0f;  // (a tree pick below float's range)
             if (p.bump) {  // a normal-mapped point: Cycles' bump shadowing of the sample
                 const float Ns[3] = {p.bump[i], p.bump[n + i], p.bump[2 * n + i]};
                 const float g = bump_shadowing(Ns, ns, wi, p.bump[3 * n + i] != 0.0f);

@@ -4,11 +4,13 @@
 // numpy steps, each its own pass over the paths' arrays, with one.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 
 #include "environment.h"
 #include "lamps.h"
+#include "lighttree.h"
 #include "ray.h"
 
 namespace dacrt {
@@ -34,7 +36,27 @@ struct LightChoice {
     // Light linking (null: none): each entry's light set (0..63); a point lights by an entry
     // only when bit light_set[entry] of its receiver mask (VertexPoints::receivers) is set.
     const uint8_t* light_set = nullptr;
+    // Many lights (null: none): the entries that are the tree's members (keys) share one slot
+    // of cdf (the others of them have no mass of their own) and each has prob = that slot's
+    // mass; a pick that lands there picks the member by the tree at the point (lighttree.h),
+    // its probability prob x the tree's.
+    const LightTree* tree = nullptr;
 };
+
+// The light entry a point at P (the shadow ray's origin, as a BSDF ray's MIS sees it) picks
+// with the uniform u, and its selection probability.
+inline size_t choose_light(const LightChoice& L, const float P[3], double u, float& p_sel) {
+    size_t e = size_t(std::upper_bound(L.cdf, L.cdf + L.entries, u) - L.cdf);
+    e = e < L.entries ? e : L.entries - 1;
+    p_sel = L.prob[e];
+    if (L.tree && L.tree->member(int64_t(e))) {
+        const double lo = e ? L.cdf[e - 1] : 0.0, mass = L.cdf[e] - lo;
+        double pt = 0.0;
+        e = size_t(L.tree->sample(P, mass > 0 ? (u - lo) / mass : 0.0, pt));
+        p_sel = float(double(L.prob[e]) * pt);
+    }
+    return e;
+}
 
 // Cycles' shadow terminator per triangle (pathvertex.h): the geometry offset's cutoff (null or
 // 0: none, as on flat triangles) and the shading offset's frequency multiplier (null or <= 1:

@@ -1669,6 +1669,9 @@ def test_view_layer_world_override_samples_and_filters(scene, exported):
     assert len(data.geometry.triangles) == 12
     scene.dacrt.film_exposure = 1.5
     assert exported().settings.film_exposure == 1.5
+    assert scene.dacrt.use_light_tree and exported().settings.use_light_tree      # on, as Cycles'
+    scene.dacrt.use_light_tree = False
+    assert not exported().settings.use_light_tree
     vl.world_override = green                 # the layer's world, lights and background alike
     vl.samples = 3                            # Cycles' default 'Use' layer samples: overrides
     data = exported()

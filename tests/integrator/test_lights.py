@@ -510,7 +510,8 @@ def test_light_choice_favours_lights_bsdf_sampling_misses():
     upper hemisphere, solid-angle pdf 1/(2 pi)) over a plane: the cosine-weighted bounces find
     the wide one as well as light sampling would, so the delta sun gets the 80% share plus its
     10% uniform share and the wide one its 10%; the probabilities stay a distribution and the
-    image stays unbiased. Two point lights (both delta) keep equal shares."""
+    image stays unbiased. Two point lights (both delta, both with a position) are one group, the
+    light tree: each holds the whole group's share, and the tree splits it per point."""
     from addon.integrator import Integrator
     wide = light('SUN', 0.5, np.eye(4), angle=np.pi)              # irradiance 0.5 on the plane
     scene = plane_scene([light('SUN', 3.0, np.eye(4)), wide], samples=64, max_bounces=0)
@@ -522,7 +523,8 @@ def test_light_choice_favours_lights_bsdf_sampling_misses():
     expected = 0.8 / np.pi * (3.0 + 0.5)                    # albedo/pi x irradiance
     assert abs(mean - expected) < 4 * err + 1e-4 * expected
     two = Integrator(plane_scene([light('POINT', 10.0, translation(z=2.0)), light('POINT', 50.0, translation(1, 0, 3))]))
-    np.testing.assert_allclose(two.lights.lamp_prob, [0.5, 0.5])
+    np.testing.assert_allclose(two.lights.lamp_prob, [1.0, 1.0])
+    assert two.lights.tree is not None and two.lights.tree.members == 2
 
 
 def test_light_choice_keeps_uniform_shares_without_visible_surfaces():

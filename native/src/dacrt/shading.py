@@ -184,10 +184,15 @@ class LightChoice:
     environment map (a dacrt.lamps.EnvironmentMap; None: none) as entry R+T. Per entry: cdf
     (the choice: entry = first with cdf > u), prob (its probability), no_mis (sampled without
     MIS, weight 1, as a delta light) and shadow (its samples need a shadow ray). Arrays are
-    converted once here, not per call."""
+    converted once here, not per call.
+
+    tree (a dacrt.lamps.LightTree whose keys are entries; None: none): many-light sampling. Its
+    members share one slot of cdf (the first member in entry order holds the mass, the others
+    none) and each has prob = that mass; a pick in the slot is passed on to the tree at the
+    shadow ray's origin, so a member's selection probability is prob x the tree's pdf there."""
 
     def __init__(self, records, cdf, prob, no_mis, shadow, tri_geo=None, tri_area=None, tri_emission=None,
-                 environment=None):
+                 environment=None, tree=None):
         self.records = np.ascontiguousarray(np.asarray(records, _F32).reshape(-1, _core.LAMP_RECORD_WIDTH))
         self.cdf = np.ascontiguousarray(cdf, np.float64)
         self.prob = np.ascontiguousarray(prob, _F32)
@@ -199,6 +204,9 @@ class LightChoice:
         if environment is not None and not isinstance(environment, _core.EnvironmentMap):
             raise ValueError(f"environment must be a dacrt.lamps.EnvironmentMap or None, got {type(environment).__name__}")
         self.environment = environment
+        if tree is not None and not isinstance(tree, _core.LightTree):
+            raise ValueError(f"tree must be a dacrt.lamps.LightTree or None, got {type(tree).__name__}")
+        self.tree = tree
 
     @property
     def entries(self) -> int:
@@ -270,7 +278,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         value, contrib, rays, send, skip, _terminator(terminator),
         None if linking is None else (np.ascontiguousarray(linking[0], np.uint8),
                                       np.ascontiguousarray(linking[1], np.uint64)), entry, point,
-        None if bump is None else _rows(bump, 4, "bump"))
+        None if bump is None else _rows(bump, 4, "bump"), lights.tree)
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
 
 
@@ -294,7 +302,7 @@ def accumulate_masked(L, pid, values, mask, clamp: float = np.inf) -> None:
 
 
 def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, thr, pdf, pid, L,
-                    clamp: float = np.inf) -> int:
+                    clamp: float = np.inf, tree=None, tri_key=None) -> int:
     """Add the emission that rays meet on emissive triangles to L (3, N) in place (two-sided).
 
     Rays i with hit[i] whose triangle hits['prim'][i] has emissive[prim] (bool (M,)) add
@@ -302,7 +310,9 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
     (BSDF rays), the power-heuristic weight against light-sampling that triangle,
     1 / (1 + (tri_prob pdf_light / pdf)^2) with pdf (n,) the rays' BSDF pdf and pdf_light the
     solid-angle pdf sample_triangles has from the ray origin O (3, n) for the direction D (3, n),
-    into column pid[i] (distinct), clamped as accumulate_masked's.
+    into column pid[i] (distinct), clamped as accumulate_masked's. With a light tree
+    (dacrt.lamps.LightTree) and tri_key (M,) int32 (a triangle's key in it, or -1), a member's
+    selection probability is tri_prob x the tree's pdf at O.
     Returns how many rays met emission."""
     _check_added_to(L)
     return _core.gather_emission(hits, np.ascontiguousarray(hit, np.bool_), _rows(emission, 3, "emission"),
@@ -312,7 +322,8 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
                                  _rows(D, 3, "D"),
                                  None if thr is None else _rows(thr, 3, "thr"),
                                  None if pdf is None else np.ascontiguousarray(pdf, _F32),
-                                 np.ascontiguousarray(pid, np.int64), L, float(clamp))
+                                 np.ascontiguousarray(pid, np.int64), L, float(clamp), tree,
+                                 None if tri_key is None else np.ascontiguousarray(tri_key, np.int32))
 
 
 def camera_rays(ortho: bool, frame, rx, ry, records: bool = False, lens=None):

@@ -1,0 +1,322 @@
+// The light tree (see lighttree.h): a build by spatial median, cones merged as Cycles'
+// light tree does, and the importance that splits a point's choice between two children.
+#include "lighttree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace dacrt {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// Squared distances below this count as this (keeps the cross products of shares() > 0).
+constexpr double kMinDist2 = 1e-60;
+
+double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+struct Cone {
+    double axis[3];
+    double theta_o, theta_e;  // theta_o >= pi: every direction
+};
+
+// The smallest cone holding a's and b's directions (Cycles' merge_cones), with a small margin
+// so that float rounding of the stored cone never excludes a direction of its lights.
+Cone merge(const Cone& a, const Cone& b) {
+    Cone c{};
+    c.theta_e = std::max(a.theta_e, b.theta_e);
+    c.axis[0] = c.axis[1] = 0.0;
+    c.axis[2] = 1.0;
+    c.theta_o = kPi;
+    if (a.theta_o >= kPi || b.theta_o >= kPi) return c;
+    const double theta_d = std::acos(std::clamp(dot3(a.axis, b.axis), -1.0, 1.0));
+    if (std::min(theta_d + b.theta_o, kPi) <= a.theta_o) {
+        std::copy(a.axis, a.axis + 3, c.axis);
+        c.theta_o = a.theta_o;
+        return c;
+    }
+    if (std::min(theta_d + a.theta_o, kPi) <= b.theta_o) {
+        std::copy(b.axis, b.axis + 3, c.axis);
+        c.theta_o = b.theta_o;
+        return c;
+    }
+    const double theta_o = 0.5 * (a.theta_o + theta_d + b.theta_o) + 1e-6;
+    if (theta_o >= kPi) return c;
+    // a's axis turned toward b's by theta_o - theta_a, in the plane of the two
+    double w[3];
+    const double ab = dot3(a.axis, b.axis);
+    for (int k = 0; k < 3; ++k) w[k] = b.axis[k] - a.axis[k] * ab;
+    const double len = std::sqrt(dot3(w, w));
+    if (!(len > 1e-12)) return c;  // (anti)parallel axes not caught above: every direction
+    const double r = theta_o - a.theta_o, cr = std::cos(r), sr = std::sin(r);
+    for (int k = 0; k < 3; ++k) c.axis[k] = a.axis[k] * cr + w[k] / len * sr;
+    c.theta_o = theta_o;
+    return c;
+}
+
+// The importance of node nd's lights at P (see lighttree.h) as energy x f / d2: returns f
+// and d2, so that two children compare by cross-multiplying, without a division each.
+void weigh(const LightTreeNode& nd, const float P[3], double& f, double& d2) {
+    const double v[3] = {double(nd.center[0]) - P[0], double(nd.center[1]) - P[1], double(nd.center[2]) - P[2]};
+    const double dd = dot3(v, v), r = nd.radius, r2 = r * r;
+    f = 1.0;
+    if (!(dd > r2)) {  // within the bounds (or NaN): no culling, and the distance to the centre
+        d2 = std::max(std::max(dd, 0.25 * r2), kMinDist2);  // at least half the radius (Cycles)
+        return;
+    }
+    d2 = std::max(dd, kMinDist2);
+    if (nd.cos_o > -1.0f) {
+        const double d = std::sqrt(dd);
+        const double sin_u = r / d, cos_u = std::sqrt(std::max(0.0, 1.0 - sin_u * sin_u));
+        // phi = theta_o + theta_u: the widest angle from the axis at which a light of the node
+        // can be seen from P's direction
+        const double cos_p = nd.cos_o * cos_u - nd.sin_o * sin_u, sin_p = nd.sin_o * cos_u + nd.cos_o * sin_u;
+        const double ax[3] = {nd.axis[0], nd.axis[1], nd.axis[2]};
+        const double cos_t = std::clamp(-dot3(ax, v) / d, -1.0, 1.0);  // axis vs. node -> P
+        if (sin_p >= 0.0 && cos_t < cos_p) {                           // phi <= pi and theta > phi
+            const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
+            const double cos_r = cos_t * cos_p + sin_t * sin_p;        // cos(theta - phi)
+            f = cos_r <= nd.cos_e ? 0.0 : cos_r;
+        }
+    }
+}
+
+// The probabilities of going to either of the two children c[0], c[1] at P: by importance,
+// by energy where both importances are 0 (or their sum is not finite). Each share is its own
+// quotient, not 1 - the other: a faint light's 1e-19 would round to 0 that way, and a delta
+// light must never become impossible.
+struct Shares {
+    double left, right;
+};
+Shares shares(const LightTreeNode* c, const float P[3]) {
+    double fa, da, fb, db;
+    weigh(c[0], P, fa, da);
+    weigh(c[1], P, fb, db);
+    // Ea fa / da : Eb fb / db, each side times da db (energies < 1e210, d2 < 1e78: finite)
+    const double a = c[0].energy * fa * db, b = c[1].energy * fb * da, s = a + b;
+    if (s > 0.0 && std::isfinite(s)) {
+        const double inv = 1.0 / s;
+        return {a * inv, b * inv};
+    }
+    const double inv = 1.0 / (c[0].energy + c[1].energy);
+    return {c[0].energy * inv, c[1].energy * inv};
+}
+
+// A leaf's lights: a group of members (LightTreeInput::group), their box, cone and energy.
+struct Item {
+    double lo[3], hi[3];
+    Cone cone;
+    double energy;
+};
+
+Cone member_cone(const LightTreeInput& in, size_t i) {
+    Cone cone{};
+    const double co = in.cos_o[i];
+    cone.theta_o = co <= -1.0 ? kPi : std::acos(std::min(co, 1.0));
+    cone.theta_e = std::acos(std::clamp(double(in.cos_e[i]), -1.0, 1.0));
+    const double ax[3] = {in.axis[i], in.axis[in.m + i], in.axis[2 * in.m + i]};
+    const double len = std::sqrt(dot3(ax, ax));
+    for (int k = 0; k < 3; ++k) cone.axis[k] = len > 0 ? ax[k] / len : double(k == 2);
+    if (!(len > 0)) cone.theta_o = kPi;
+    return cone;
+}
+
+struct Builder {
+    const std::vector<Item>& items;
+    std::vector<LightTreeNode>& nodes;
+    std::vector<int32_t>& leaf_of_item;
+    std::vector<int32_t> order;
+
+    double centroid(int32_t i, int k) const { return 0.5 * (items[size_t(i)].lo[k] + items[size_t(i)].hi[k]); }
+
+    // Fills node `at` over items order[b, e); returns its box (lo, hi) and cone.
+    void build(size_t at, size_t b, size_t e, int32_t parent, double lo[3], double hi[3], Cone& cone) {
+        nodes[at].parent = parent;
+        if (e - b == 1) {
+            const int32_t i = order[b];
+            const Item& it = items[size_t(i)];
+            for (int k = 0; k < 3; ++k) lo[k] = it.lo[k], hi[k] = it.hi[k];
+            cone = it.cone;
+            nodes[at].energy = it.energy;
+            nodes[at].child = -1 - i;
+            leaf_of_item[size_t(i)] = int32_t(at);
+        } else {
+            double clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            for (size_t j = b; j < e; ++j)
+                for (int k = 0; k < 3; ++k) {
+                    const double c = centroid(order[j], k);
+                    clo[k] = std::min(clo[k], c);
+                    chi[k] = std::max(chi[k], c);
+                }
+            int axis = 0;
+            for (int k = 1; k < 3; ++k)
+                if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
+            const size_t mid = b + (e - b) / 2;
+            // ties broken by item index: the halves (and so the tree) do not depend on the
+            // standard library's partitioning
+            std::nth_element(order.begin() + long(b), order.begin() + long(mid), order.begin() + long(e),
+                             [&](int32_t x, int32_t y) {
+                                 const double cx = centroid(x, axis), cy = centroid(y, axis);
+                                 return cx < cy || (cx == cy && x < y);
+                             });
+            const size_t child = nodes.size();
+            nodes.resize(child + 2);
+            double llo[3], lhi[3], rlo[3], rhi[3];
+            Cone lc, rc;
+            build(child, b, mid, int32_t(at), llo, lhi, lc);
+            build(child + 1, mid, e, int32_t(at), rlo, rhi, rc);
+            for (int k = 0; k < 3; ++k) lo[k] = std::min(llo[k], rlo[k]), hi[k] = std::max(lhi[k], rhi[k]);
+            cone = merge(lc, rc);
+            nodes[at].energy = nodes[child].energy + nodes[child + 1].energy;
+            nodes[at].child = int32_t(child);
+        }
+        LightTreeNode& nd = nodes[at];
+        double r2 = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const double c = 0.5 * (lo[k] + hi[k]), h = 0.5 * (hi[k] - lo[k]);
+            nd.center[k] = float(c);
+            // the float centre is off the box's by up to half an ULP: the radius covers that
+            const double off = std::fabs(double(nd.center[k]) - c);
+            r2 += (h + off) * (h + off);
+        }
+        nd.radius = float(std::sqrt(r2) * (1.0 + 1e-6));
+        const bool all = cone.theta_o >= kPi;
+        for (int k = 0; k < 3; ++k) nd.axis[k] = float(cone.axis[k]);
+        nd.cos_o = all ? -1.0f : float(std::cos(cone.theta_o));
+        nd.sin_o = all ? 0.0f : float(std::sin(cone.theta_o));
+        nd.cos_e = float(std::cos(std::min(cone.theta_e, kPi / 2)));
+    }
+};
+
+}  // namespace
+
+std::string light_tree_error(const LightTreeInput& in) {
+    if (in.m == 0) return "a light tree needs at least one light";
+    if (in.m > (size_t(1) << 30)) return "a light tree holds at most 2^30 lights";
+    std::vector<uint8_t> seen;
+    for (size_t i = 0; i < in.m; ++i) {
+        const std::string at = "light " + std::to_string(i) + ": ";
+        for (int k = 0; k < 3; ++k) {
+            const float lo = in.lo[k * in.m + i], hi = in.hi[k * in.m + i], ax = in.axis[k * in.m + i];
+            if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo <= hi)) return at + "bounds must be finite with lo <= hi";
+            if (!std::isfinite(ax)) return at + "axis must be finite";
+        }
+        if (!(in.cos_o[i] >= -1.0f && in.cos_o[i] <= 1.0f) || !(in.cos_e[i] >= -1.0f && in.cos_e[i] <= 1.0f))
+            return at + "cos_o and cos_e must lie in [-1, 1]";
+        if (!(in.energy[i] > 0.0 && in.energy[i] <= 1e200)) return at + "energy must be > 0 and at most 1e200";
+        if (in.group && in.group[i] < 0) return at + "group must be >= 0";
+        const int32_t key = in.key[i];
+        if (key < 0 || key >= (int32_t(1) << 30)) return at + "key must lie in 0..2^30-1";
+        if (size_t(key) >= seen.size()) seen.resize(size_t(key) + 1, 0);
+        if (seen[size_t(key)]) return at + "key " + std::to_string(key) + " is not unique";
+        seen[size_t(key)] = 1;
+    }
+    return {};
+}
+
+LightTree::LightTree(const LightTreeInput& in) {
+    const std::string err = light_tree_error(in);
+    if (!err.empty()) throw std::invalid_argument(err);
+    // members by group (stable: members keep their order inside a group), one item per group
+    std::vector<int32_t> by(in.m);
+    std::iota(by.begin(), by.end(), 0);
+    if (in.group)
+        std::stable_sort(by.begin(), by.end(), [&](int32_t x, int32_t y) { return in.group[x] < in.group[y]; });
+    std::vector<Item> items;
+    item_start_.clear();
+    for (size_t j = 0; j < in.m; ++j) {
+        const size_t i = size_t(by[j]);
+        const bool fresh = j == 0 || !in.group || in.group[i] != in.group[size_t(by[j - 1])];
+        if (fresh) {
+            item_start_.push_back(int32_t(j));
+            Item it{};
+            for (int k = 0; k < 3; ++k) it.lo[k] = INFINITY, it.hi[k] = -INFINITY;
+            it.cone = member_cone(in, i);
+            items.push_back(it);
+        } else {
+            items.back().cone = merge(items.back().cone, member_cone(in, i));
+        }
+        Item& it = items.back();
+        for (int k = 0; k < 3; ++k) {
+            it.lo[k] = std::min(it.lo[k], double(in.lo[k * in.m + i]));
+            it.hi[k] = std::max(it.hi[k], double(in.hi[k * in.m + i]));
+        }
+        it.energy += in.energy[i];
+    }
+    item_start_.push_back(int32_t(in.m));
+    // per member (in group order): its key and the cumulative share of its group's energy
+    member_key_.resize(in.m);
+    member_cdf_.resize(in.m);
+    member_share_.resize(in.m);
+    leaf_of_key_.assign(size_t(*std::max_element(in.key, in.key + in.m)) + 1, -1);
+    slot_of_key_.assign(leaf_of_key_.size(), -1);
+    for (size_t g = 0; g + 1 < item_start_.size(); ++g) {
+        double run = 0.0;
+        for (int32_t j = item_start_[g]; j < item_start_[g + 1]; ++j) {
+            run += in.energy[size_t(by[size_t(j)])];
+            member_key_[size_t(j)] = in.key[by[size_t(j)]];
+            member_cdf_[size_t(j)] = run / items[g].energy;
+            member_share_[size_t(j)] = in.energy[size_t(by[size_t(j)])] / items[g].energy;
+            slot_of_key_[size_t(member_key_[size_t(j)])] = j;
+        }
+        member_cdf_[size_t(item_start_[g + 1] - 1)] = 1.0;
+    }
+    nodes_.reserve(2 * items.size() - 1);
+    nodes_.resize(1);
+    std::vector<int32_t> leaf_of_item(items.size());
+    Builder bld{items, nodes_, leaf_of_item, std::vector<int32_t>(items.size())};
+    std::iota(bld.order.begin(), bld.order.end(), 0);
+    double lo[3], hi[3];
+    Cone cone;
+    bld.build(0, 0, items.size(), -1, lo, hi, cone);
+    for (size_t g = 0; g < items.size(); ++g)
+        for (int32_t j = item_start_[g]; j < item_start_[g + 1]; ++j)
+            leaf_of_key_[size_t(member_key_[size_t(j)])] = leaf_of_item[g];
+}
+
+int32_t LightTree::sample(const float P[3], double u, double& prob) const {
+    // u stays as drawn; the node's share of [0, 1) narrows to [lo, lo + w) on the way down
+    // (no rescaling of u: one division per level, in shares)
+    size_t at = 0;
+    double lo = 0.0, w = 1.0;
+    if (!(u >= 0.0)) u = 0.0;  // (NaN too)
+    while (nodes_[at].child >= 0) {
+        const size_t c = size_t(nodes_[at].child);
+        const Shares sh = shares(&nodes_[c], P);
+        const double split = lo + w * sh.left;
+        // selected, not branched on: which way a point goes follows no pattern
+        const bool right = !(u < split) & (sh.right > 0.0);
+        lo = right ? split : lo;
+        w *= right ? sh.right : sh.left;
+        at = c + size_t(right);
+    }
+    // the leaf's group: a member by energy, with what is left of u
+    const size_t g = size_t(-1 - nodes_[at].child);
+    const int32_t b = item_start_[g], e = item_start_[g + 1];
+    int32_t slot = b;
+    if (e - b > 1) {
+        const double t = std::clamp(w > 0.0 ? (u - lo) / w : 0.0, 0.0, 1.0);
+        slot = int32_t(std::upper_bound(member_cdf_.begin() + b, member_cdf_.begin() + e, t) - member_cdf_.begin());
+        slot = std::min(slot, e - 1);
+        w *= member_share_[size_t(slot)];
+    }
+    prob = w;
+    return member_key_[size_t(slot)];
+}
+
+double LightTree::pdf(const float P[3], int64_t key) const {
+    if (!member(key)) return 0.0;
+    size_t at = size_t(leaf_of_key_[size_t(key)]);
+    double p = member_share_[size_t(slot_of_key_[size_t(key)])];
+    while (nodes_[at].parent >= 0) {
+        const size_t up = size_t(nodes_[at].parent), c = size_t(nodes_[up].child);
+        const Shares sh = shares(&nodes_[c], P);
+        p *= at == c ? sh.left : sh.right;
+        at = up;
+    }
+    return p;
+}
+
+}  // namespace dacrt

@@ -1,0 +1,92 @@
+// A light tree: many-light sampling that picks, per shading point, a light with probability
+// following its estimated contribution there (Cycles' kernel/light/tree.h, after Conty and
+// Kulla, "Importance Sampling of Many Lights with Adaptive Tree Splitting", 2018). Built per
+// frame over the local lights (lamps with a position, emissive triangles); distant lights stay
+// in the global choice. A leaf is one light or one group of them (the triangles of one emissive
+// object), within which a point picks by energy alone.
+//
+// Each node bounds its lights by a sphere, the directions they emit in by a cone (axis, spread
+// theta_o, falloff theta_e beyond it) and carries their summed energy (on-axis intensity: an
+// irradiance of energy / d^2 at distance d). A point P splits its way down by the children's
+// importance: energy x the cosine of the smallest emission angle any of the node's lights can
+// have toward P / the squared distance to the centre (0 where no light of the node can face P;
+// inside the sphere no culling, and the distance at least half the radius, as in Cycles). The
+// receiving surface's normal is not used: the probability depends on P alone, so a BSDF ray's
+// MIS weight needs only its origin, and a light behind the surface is merely sampled in vain,
+// never missed.
+//
+// Delta lights (points, spots) are given a cone of every direction, so they are never culled:
+// their only estimator is light sampling, and every node on their way keeps a probability > 0
+// (children whose importances are both 0 or overflow split by energy).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dacrt {
+
+struct LightTreeNode {
+    float center[3], radius;  // bounding sphere of the lights' bounds
+    float axis[3], cos_o;     // emission cone: within theta_o of axis (cos_o = -1: every direction)
+    float sin_o, cos_e;       // sin theta_o; cos of the falloff angle theta_e beyond theta_o
+    double energy;            // summed energy of the lights below (> 0; double: sums of float
+                              // energies overflow float, and importances divide it by d^2)
+    int32_t child;            // inner node: left child (right = child + 1); leaf: -1 - member
+    int32_t parent;           // -1 at the root
+    int32_t pad[2];
+};
+static_assert(sizeof(LightTreeNode) == 64, "a node is one cache line");
+
+// The lights of a tree, m members, each with an axis-aligned box (lo, hi: 3 rows of m), an
+// emission cone (axis: 3 rows of m, unit or anything for cos_o = -1; cos_o, cos_e: m), an
+// energy (m, > 0, at most 1e200: shares stay finite) and the key it answers to (m distinct values >= 0, e.g. the light
+// choice's entry index).
+struct LightTreeInput {
+    const float* lo;
+    const float* hi;
+    const float* axis;
+    const float* cos_o;
+    const float* cos_e;
+    const double* energy;
+    const int32_t* key;
+    size_t m;
+    // (null: each member its own) members with the same group value (>= 0) form one leaf, in
+    // which a point picks by energy alone: e.g. the triangles of one emissive object, whose
+    // per-point split would cost a tree level per halving for little gain
+    const int32_t* group = nullptr;
+};
+
+class LightTree {
+public:
+    // Throws std::invalid_argument naming the first bad member (see light_tree_error).
+    explicit LightTree(const LightTreeInput& in);
+
+    size_t members() const { return member_key_.size(); }
+    size_t nodes() const { return nodes_.size(); }
+    // One more than the largest key.
+    size_t key_bound() const { return leaf_of_key_.size(); }
+    // Whether key is one of the tree's lights.
+    bool member(int64_t key) const {
+        return key >= 0 && uint64_t(key) < leaf_of_key_.size() && leaf_of_key_[size_t(key)] >= 0;
+    }
+    // The key of the light picked at P with the uniform u in [0, 1), and its probability.
+    int32_t sample(const float P[3], double u, double& prob) const;
+    // The probability that sample() at P picks key (0 when key is not a member).
+    double pdf(const float P[3], int64_t key) const;
+
+private:
+    std::vector<LightTreeNode> nodes_;
+    std::vector<int32_t> item_start_;   // group g's members: slots item_start_[g] .. [g + 1] - 1
+    std::vector<int32_t> member_key_;   // slot -> key
+    std::vector<double> member_cdf_;    // slot -> cumulative energy share within its group
+    std::vector<double> member_share_;  // slot -> its energy share within its group
+    std::vector<int32_t> leaf_of_key_;  // key -> its leaf node, -1: not a member
+    std::vector<int32_t> slot_of_key_;  // key -> its slot
+};
+
+// Empty when the input can build a tree, else what is wrong with which member.
+std::string light_tree_error(const LightTreeInput& in);
+
+}  // namespace dacrt

@@ -1,0 +1,82 @@
+"""Many lights through the light tree (addon/lights/tree.py): the image stays unbiased
+(closed form for point lights; for area lamps and emissive triangles, whose BSDF hits are
+weighted against the tree's per-point pick, the same scene rendered with the global choice),
+and a point far from most of many lights is much less noisy than with the global choice."""
+
+import numpy as np
+import pytest
+
+from addon import scenedata as sd
+
+from .scenes import (ALL_VIS, geometry, light, material, ortho_down, pixel_stats, plane_scene, quad, render,
+                     rotation_x, translation)
+
+RHO = 0.8
+
+
+def point_lights(rng, count=16):
+    """Point lights of mixed power over the plane (a few below it: they light nothing)."""
+    pos = np.stack([rng.uniform(-6, 6, count), rng.uniform(-6, 6, count), rng.uniform(-0.5, 3.0, count)], 1)
+    power = rng.choice([5.0, 40.0, 300.0], count)
+    return pos, power
+
+
+def test_many_point_lights_add_up_to_the_closed_form():
+    """Direct light at the point the camera sees: albedo / pi x sum of I cos / d^2 over the
+    lights above the plane (I = power / 4 pi), within 1%."""
+    pos, power = point_lights(np.random.default_rng(11))
+    lights = [light('POINT', p, translation(*x)) for x, p in zip(pos, power)]
+    integ = render(plane_scene(lights, samples=512, max_bounces=0))
+    assert integ.lights.tree is not None and integ.lights.tree.members == len(lights)
+    d2 = np.sum(pos ** 2, 1)
+    above = pos[:, 2] > 0
+    E = np.sum((power / (4 * np.pi) * pos[:, 2] / np.sqrt(d2) / d2)[above])
+    mean, err = pixel_stats(integ)
+    expected = RHO / np.pi * E
+    assert err < 0.003 * expected
+    assert mean == pytest.approx(expected, rel=0.01), f"{mean} vs {expected} +- {err}"
+
+
+def _area_and_emitter_scene(samples, **settings):
+    """Area lamps near the plane (one facing away from it), and two emissive quads: light that
+    both light sampling and BSDF rays find, so MIS weighs each BSDF hit with the tree's pdf."""
+    lights = [light('AREA', 60.0, translation(0.3, 0.2, 0.6) @ rotation_x(0.3), size_x=0.8),
+              light('AREA', 30.0, translation(-0.5, 0.1, 0.4), size_x=0.5, shape='DISK'),
+              light('AREA', 500.0, translation(0.0, 0.0, 0.8) @ rotation_x(np.pi), size_x=0.5),   # faces up
+              light('POINT', 20.0, translation(2.0, -1.0, 1.5))]
+    scene = plane_scene(lights, samples=samples, max_bounces=1, **settings)
+    v0, t0 = quad((0.0, 0.0, 0.0), 1000.0, 1000.0)
+    e1, t1 = quad((0.6, -0.4, 0.5), 0.3, 0.3)
+    e2, t2 = quad((-0.7, -0.6, 0.9), 0.6, 0.2)
+    mats = scene.materials + [material('glow', (0.0, 0.0, 0.0), emission=(4.0, 3.0, 2.0)),
+                              material('dim', (0.0, 0.0, 0.0), emission=(1.0, 1.0, 1.0))]
+    geo = geometry([(v0, t0, 1, ALL_VIS), (e1, t1, 2, ALL_VIS), (e2, t2, 3, ALL_VIS)])
+    camera = ortho_down(height=0.3, width=16, px=16, view=1.0)
+    return sd.SceneData(camera, geo, mats, scene.lights, scene.world, scene.settings)
+
+
+def test_area_lamps_and_emitters_agree_with_the_global_choice():
+    """Same scene, tree and global choice: every pixel mean within the noise of the two, and
+    the image mean within 4 standard errors (a wrong MIS pdf on BSDF hits would bias it)."""
+    with_tree = render(_area_and_emitter_scene(256))
+    assert with_tree.lights.tree is not None and with_tree.lights.tree.members == 4 + 4
+    without = render(_area_and_emitter_scene(256, use_light_tree=False))
+    assert without.lights.tree is None
+    for c in range(3):
+        a, ea = pixel_stats(with_tree, c)
+        b, eb = pixel_stats(without, c)
+        assert abs(a - b) < 4 * np.hypot(ea, eb) + 1e-4 * b, f"channel {c}: {a} vs {b} (+- {ea}, {eb})"
+
+
+def test_a_point_under_one_of_a_row_of_lights_is_less_noisy():
+    """A street of sixteen lamps 5 m apart, 2 m high, seen under the ninth: the global choice
+    gives each lamp 1/16 of the samples, the tree most of them to the lamps nearby (the one
+    overhead gives 89% of the light). Variance per pixel at 4 samples, measured: tree / global
+    0.044."""
+    row = [light('POINT', 100.0, translation(5.0 * i - 37.5, 0.0, 2.0)) for i in range(16)]
+    scene = lambda tree: plane_scene(row, samples=4, max_bounces=0, use_light_tree=tree,
+                                     camera=ortho_down(width=32, px=32, target=(2.5, 0.0)))
+    tree, flat = render(scene(True)), render(scene(False))
+    assert tree.lights.tree is not None and flat.lights.tree is None
+    var = lambda integ: integ.film.combined()[..., 0].var()     # the view is 1 mm: all of it is noise
+    assert var(tree) < 0.3 * var(flat), (var(tree), var(flat))

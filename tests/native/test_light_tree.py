@@ -1,0 +1,171 @@
+"""The light tree (dacrt.lamps.LightTree, native/cpp/lighttree.h): at every point its pick is a
+probability distribution over its lights, sampling follows the pdf it reports (the MIS weights
+of BSDF rays rely on that), two lights split by the importance written out here in float64,
+lights that cannot face a point are never picked, delta lights always can be, and bad input is
+refused with a message naming the light."""
+
+import numpy as np
+import pytest
+from dacrt import lamps
+
+F32 = np.float32
+EVERY = -1.0      # cos_o of a light that emits in every direction
+
+
+def tree_of(centers, half, energy, axis=None, cos_o=None, cos_e=None, keys=None):
+    c = np.asarray(centers, F32).reshape(3, -1)
+    m = c.shape[1]
+    h = np.asarray(half, F32)
+    h = np.broadcast_to(h.reshape(3, 1) if h.shape == (3,) and m != 3 else h, (3, m))
+    axis = np.tile([[0.0], [0.0], [1.0]], (1, m)) if axis is None else np.asarray(axis).reshape(3, m)
+    cos_o = np.full(m, EVERY) if cos_o is None else np.asarray(cos_o)
+    cos_e = np.zeros(m) if cos_e is None else np.asarray(cos_e)
+    keys = np.arange(m) if keys is None else np.asarray(keys)
+    return lamps.light_tree(c - h, c + h, axis, cos_o, cos_e, np.asarray(energy, np.float64), keys)
+
+
+def random_tree(rng, m, one_sided=0.5):
+    c = rng.uniform(-5, 5, (3, m))
+    axis = rng.normal(size=(3, m))
+    axis /= np.linalg.norm(axis, axis=0)
+    cos_o = np.where(rng.random(m) < one_sided, 1.0, EVERY)     # area-like (a hemisphere) or point-like
+    return tree_of(c, rng.uniform(0.0, 0.3, (3, m)), rng.uniform(0.1, 10.0, m), axis, cos_o, keys=np.arange(m) + 7)
+
+
+def test_pdf_is_a_distribution_and_sampling_follows_it():
+    rng = np.random.default_rng(3)
+    m = 40
+    tree = random_tree(rng, m)
+    assert tree.members == m and tree.nodes == 2 * m - 1
+    keys = np.arange(m) + 7
+    for P in rng.uniform(-6, 6, (5, 3, 1)).astype(F32):
+        pdf = tree.pdf(np.repeat(P, m, 1), keys)
+        assert pdf.sum() == pytest.approx(1.0, abs=1e-12)
+        n = 400_000
+        got, prob = tree.sample(np.repeat(P, n, 1), rng.random(n))
+        assert np.isin(got, keys).all()
+        # the probability sample() reports is the pdf of what it picked
+        np.testing.assert_allclose(prob, pdf[got - 7], rtol=1e-12)
+        freq = np.bincount(got - 7, minlength=m) / n
+        sigma = np.sqrt(pdf * (1 - pdf) / n)
+        assert np.all(np.abs(freq - pdf) <= 5 * sigma + 1e-9)
+        assert np.all(freq[pdf == 0] == 0)
+    assert tree.pdf(np.zeros((3, 2), F32), np.array([0, 10_000])).tolist() == [0.0, 0.0]   # not members
+
+
+def importance(center, radius, energy, P, axis=None, one_sided=False):
+    """lighttree.h's importance in float64: energy x cos(smallest emission angle) / d^2."""
+    v = np.asarray(center, np.float64) - P
+    d2 = v @ v
+    if d2 <= radius ** 2:
+        return energy / max(d2, radius ** 2 / 4)
+    f = 1.0
+    if one_sided:            # theta_o = 0, theta_e = pi/2
+        d = np.sqrt(d2)
+        theta = np.arccos(np.clip(-(np.asarray(axis) @ v) / d, -1, 1))
+        theta_u = np.arcsin(radius / d)
+        rest = max(theta - theta_u, 0.0)
+        if rest >= np.pi / 2:
+            return 0.0
+        f = np.cos(rest)
+    return energy * f / d2
+
+
+def test_two_lights_split_by_importance():
+    """Two lights: the pick is the ratio of their importances, computed independently here."""
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        c = rng.uniform(-3, 3, (3, 2))
+        E = rng.uniform(0.5, 20.0, 2)
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        half = 0.1
+        tree = tree_of(c, half, E, axis=np.stack([[0, 0, 1.0], axis], 1), cos_o=[EVERY, 1.0])
+        P = rng.uniform(-4, 4, 3).astype(F32)
+        r = np.sqrt(3) * half
+        # the stored bounds: the boxes' float32 centres and their half-diagonals
+        c32 = ((c - half).astype(F32).astype(np.float64) + (c + half).astype(F32).astype(np.float64)) / 2
+        ia = importance(c32[:, 0], r, E[0], P.astype(np.float64))
+        ib = importance(c32[:, 1], r, E[1], P.astype(np.float64), axis=axis, one_sided=True)
+        pdf = tree.pdf(np.repeat(P[:, None], 2, 1), np.array([0, 1]))
+        assert pdf[1] == pytest.approx(ib / (ia + ib), rel=1e-4, abs=1e-12)
+
+
+def test_a_light_facing_away_is_never_picked_and_delta_lights_always_can_be():
+    """A one-sided light whose back faces the point gets probability 0 (a light sample there
+    would be wasted); a point light, however faint and far, keeps a probability > 0 beside a
+    bright near one (light sampling is its only estimator: 0 would lose its light)."""
+    P = np.zeros((3, 1), F32)
+    # area-like light above the point, emitting upward (away), and one below emitting up at it
+    tree = tree_of([[0, 0], [0, 0], [2, -2]], [0.2, 0.2, 0.0], [5.0, 5.0],
+                   axis=[[0, 0], [0, 0], [1, 1]], cos_o=[1.0, 1.0])
+    np.testing.assert_allclose(tree.pdf(np.repeat(P, 2, 1), np.array([0, 1])), [0.0, 1.0])
+    # a point below both faces neither: the split falls back to energy, never 0/0
+    below = np.array([[0.0], [0.0], [-10.0]], F32)
+    np.testing.assert_allclose(tree.pdf(np.repeat(below, 2, 1), np.array([0, 1])), [0.5, 0.5])
+    m = 200
+    rng = np.random.default_rng(9)
+    c = np.concatenate([[[0.0], [0.0], [0.5]], rng.uniform(1e3, 2e3, (3, m - 1))], axis=1)
+    E = np.concatenate([[1e6], np.full(m - 1, 1e-6)])
+    faint = tree_of(c, 0.0, E)
+    pdf = faint.pdf(np.repeat(P, m, 1), np.arange(m))
+    assert (pdf > 0).all() and pdf.sum() == pytest.approx(1.0)
+
+
+def test_one_light_and_coincident_lights():
+    one = tree_of([[1.0], [2.0], [3.0]], 0.0, [4.0], keys=[5])
+    assert one.members == 1 and one.nodes == 1
+    key, prob = one.sample(np.zeros((3, 3), F32), np.array([0.0, 0.5, 1.0]))
+    assert key.tolist() == [5, 5, 5] and prob.tolist() == [1.0, 1.0, 1.0]
+    # the same place, energies 1 : 3: a point anywhere splits them 1 : 3 (P on them too)
+    same = tree_of(np.zeros((3, 2)), 0.0, [1.0, 3.0])
+    for P in (np.zeros((3, 1), F32), np.ones((3, 1), F32)):
+        np.testing.assert_allclose(same.pdf(np.repeat(P, 2, 1), np.array([0, 1])), [0.25, 0.75])
+
+
+@pytest.mark.parametrize('bad, message', [
+    (dict(lo_nan=True), 'light 1: bounds must be finite'),
+    (dict(energy=[1.0, 0.0]), 'light 1: energy must be > 0 and at most 1e200'),
+    (dict(energy=[1.0, np.inf]), 'light 1: energy must be > 0'),
+    (dict(keys=[3, 3]), 'light 1: key 3 is not unique'),
+    (dict(keys=[0, -2]), 'light 1: key must lie in'),
+    (dict(cos_o=[1.0, 2.0]), 'light 1: cos_o and cos_e must lie in'),
+    (dict(m=0), 'at least one light'),
+])
+def test_bad_input_is_refused_naming_the_light(bad, message):
+    m = bad.get('m', 2)
+    lo = np.zeros((3, m), F32)
+    if bad.get('lo_nan'):
+        lo[1, 1] = np.nan
+    with pytest.raises(ValueError, match=message):
+        lamps.light_tree(lo, np.ones((3, m), F32), np.tile([[0.0], [0.0], [1.0]], (1, m)),
+                         bad.get('cos_o', np.full(m, EVERY)), np.zeros(m), bad.get('energy', np.ones(m)),
+                         bad.get('keys', np.arange(m)))
+
+
+def test_groups_are_leaves_split_by_energy():
+    """Lights of one group (e.g. the triangles of one emissive object) form one leaf: a point
+    picks the group by importance, then a light of it by energy alone; pdf and sampling agree."""
+    rng = np.random.default_rng(21)
+    m = 30
+    c = rng.uniform(-5, 5, (3, m))
+    E = rng.uniform(0.5, 4.0, m)
+    group = rng.integers(0, 6, m)
+    f32 = lambda a: np.asarray(a, F32)
+    tree = lamps.light_tree(f32(c - 0.1), f32(c + 0.1), np.tile([[0.0], [0.0], [1.0]], (1, m)), np.full(m, EVERY),
+                            np.zeros(m), E, np.arange(m), group)
+    assert tree.members == m and tree.nodes == 2 * len(np.unique(group)) - 1
+    P = np.array([[1.0], [-2.0], [0.5]], F32)
+    pdf = tree.pdf(np.repeat(P, m, 1), np.arange(m))
+    assert pdf.sum() == pytest.approx(1.0, abs=1e-12)
+    for g in np.unique(group):          # within a group: proportional to energy
+        at = group == g
+        np.testing.assert_allclose(pdf[at] / pdf[at].sum(), E[at] / E[at].sum(), rtol=1e-12)
+    n = 400_000
+    got, prob = tree.sample(np.repeat(P, n, 1), rng.random(n))
+    np.testing.assert_allclose(prob, pdf[got], rtol=1e-12)
+    freq = np.bincount(got, minlength=m) / n
+    assert np.all(np.abs(freq - pdf) <= 5 * np.sqrt(pdf * (1 - pdf) / n) + 1e-9)
+    with pytest.raises(ValueError, match='light 3: group must be >= 0'):
+        lamps.light_tree(f32(c - 0.1), f32(c + 0.1), np.tile([[0.0], [0.0], [1.0]], (1, m)), np.full(m, EVERY),
+                         np.zeros(m), E, np.arange(m), np.where(np.arange(m) == 3, -1, group))
