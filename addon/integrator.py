@@ -1147,12 +1147,13 @@ class Integrator:
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
             kept = np.flatnonzero(ok)
-            P_off, wi, thr, pid, keys, pdf, prim = _compact(kept, P_off, wi, thr, pid, keys, pdf, prim)
+            P_off, wi, thr, pid, keys, pdf, prim, ns = _compact(kept, P_off, wi, thr, pid, keys, pdf, prim, ns)
             tb = None if tb is None else np.take(tb, kept)
             rays = None                                # repacked with the survivors' ids
         if len(pid) == 0:
             return None
-        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb)
+        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb,
+                      N=ns if self.lights.tree is not None else None)
 
     # --- surfaces -------------------------------------------------------------------------------
 
@@ -1380,7 +1381,8 @@ class Integrator:
             seg = _Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
                          np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
                          None if path.pdf is None else np.take(path.pdf, rows),
-                         None if path.prim is None else np.take(path.prim, rows))
+                         None if path.prim is None else np.take(path.prim, rows),
+                         N=None if path.N is None else np.ascontiguousarray(np.take(path.N, rows, axis=1)))
             self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
             j += 1
@@ -1426,7 +1428,7 @@ class Integrator:
                 dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
                                         np.zeros(len(t0), bool), seg.pid, out, thr=thr,
                                         pdf_bsdf=None if camera else seg.pdf, clamp=self._found_clamp(k),
-                                        **self._lamp_mis(camera))
+                                        **self._lamp_mis(camera, seg))
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None, kind='through'):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
@@ -1702,7 +1704,7 @@ class Integrator:
                                           None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
                                           path.O, path.D, thr, path.pdf, path.pid, out, clamp=clamp,
                                           **({} if camera or self._tri_key is None
-                                             else dict(tree=self.lights.tree, tri_key=self._tri_key)))
+                                             else dict(tree=self.lights.tree, tri_key=self._tri_key, N=path.N)))
 
     def _found_clamp(self, k):
         """The clamp of light that rays arriving at vertex k find: direct up to the BSDF rays
@@ -1751,16 +1753,17 @@ class Integrator:
             for lamps, thr in self._linked(lamps, path, path.thr, camera):
                 dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
                                         miss, path.pid, out, thr=thr, pdf_bsdf=None if camera else path.pdf,
-                                        clamp=clamp, **self._lamp_mis(camera))
+                                        clamp=clamp, **self._lamp_mis(camera, path))
 
-    def _lamp_mis(self, camera):
+    def _lamp_mis(self, camera, path):
         """lamp_gather's MIS arguments: none for camera rays; for BSDF rays each lamp record's
-        selection probability and, with a light tree, the records' keys in it."""
+        selection probability and, with a light tree, the records' keys in it and the normals
+        the paths' vertices sampled lights with."""
         if camera:
             return {}
         if self._record_key is None:
             return dict(lamp_prob=self._record_prob)
-        return dict(lamp_prob=self._record_prob, tree=self.lights.tree, lamp_key=self._record_key)
+        return dict(lamp_prob=self._record_prob, tree=self.lights.tree, lamp_key=self._record_key, N=path.N)
 
     def _linked(self, lamps, path, thr, camera):
         """(lamp records, throughput) pairs to gather with: per light set of the lamps, the
@@ -1994,3 +1997,4 @@ class _Paths:
     # light sampling's share of the throughput at the next vertex (None: all of it): 1 - p of
     # a path that stopped at a semi-transparent surface (_through), whose bounce carries 1 / (1 - p)
     nee: np.ndarray | None = None
+    N: np.ndarray | None = None      # shading normals (3,n) the rays' vertex sampled lights with

@@ -102,31 +102,37 @@ void lamp_sample_py(F32Array records, I32Array entry, F32Array P, F32Array u1, F
     lamp_sample(rec, R, entry.data(), P.data(), u1.data(), u2.data(), n, w, d, v, p);
 }
 
-py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py::array::c_style> u) {
+py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py::array::c_style> u, py::object N) {
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     const size_t n = size_t(P.shape(1));
     need_shape(u, 0, n, "u");
+    F32Array normal_keep;
+    const float* nv = optional_f32(N, 3, n, "N", normal_keep);
     py::array_t<int32_t> key(n);
     py::array_t<double> prob(n);
     const float* p = P.data();
     for (size_t i = 0; i < n; ++i) {
         const float q[3] = {p[i], p[n + i], p[2 * n + i]};
         double pr;
-        key.mutable_data()[i] = t.sample(q, u.data()[i], pr);
+        const float m[3] = {nv ? nv[i] : 0.0f, nv ? nv[n + i] : 0.0f, nv ? nv[2 * n + i] : 0.0f};
+        key.mutable_data()[i] = t.sample(q, nv ? m : nullptr, u.data()[i], pr);
         prob.mutable_data()[i] = pr;
     }
     return py::make_tuple(key, prob);
 }
 
-py::array_t<double> tree_pdf_py(const LightTree& t, F32Array P, I64Array key) {
+py::array_t<double> tree_pdf_py(const LightTree& t, F32Array P, I64Array key, py::object N) {
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     const size_t n = size_t(P.shape(1));
     need_shape(key, 0, n, "key");
+    F32Array normal_keep;
+    const float* nv = optional_f32(N, 3, n, "N", normal_keep);
     py::array_t<double> prob(n);
     const float* p = P.data();
     for (size_t i = 0; i < n; ++i) {
         const float q[3] = {p[i], p[n + i], p[2 * n + i]};
-        prob.mutable_data()[i] = t.pdf(q, key.data()[i]);
+        const float m[3] = {nv ? nv[i] : 0.0f, nv ? nv[n + i] : 0.0f, nv ? nv[2 * n + i] : 0.0f};
+        prob.mutable_data()[i] = t.pdf(q, nv ? m : nullptr, key.data()[i]);
     }
     return prob;
 }
@@ -156,7 +162,7 @@ std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F3
 
 void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D, F32Array t_surf,
                     py::array_t<bool, py::array::c_style> miss, py::object thr, py::object pdf_bsdf, I64Array pid,
-                    py::array L, float clamp, py::object tree, py::object lamp_key) {
+                    py::array L, float clamp, py::object tree, py::object lamp_key, py::object normal) {
     check_clamp(clamp);
     const LampRecord* rec = lamp_records(records);
     const size_t R = size_t(records.shape(0));
@@ -182,10 +188,12 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
     I32Array key_keep;
     const LightTree* lt = tree_keys(tree, lamp_key, R, "lamp_key", key_keep);
+    F32Array normal_keep;
+    const float* nv = optional_f32(normal, 3, n, "normal", normal_keep);
     gather_into(L, pid, n, [&](float* out, size_t N) {
         lamp_gather(rec, lamp_list.data(), nl, prob, O.data(), D.data(), t_surf.data(),
                     reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N, clamp, lt,
-                    lt ? key_keep.data() : nullptr);
+                    lt ? key_keep.data() : nullptr, nv);
     });
 }
 
@@ -499,15 +507,15 @@ void register_lamps(py::module_& m) {
     m.def("lamp_gather", &lamp_gather_py, py::arg("records"), py::arg("lamps"), py::arg("lamp_prob"), py::arg("O"),
           py::arg("D"), py::arg("t_surf"), py::arg("miss"), py::arg("thr"), py::arg("pdf_bsdf"), py::arg("pid"),
           py::arg("L"), py::arg("clamp") = std::numeric_limits<float>::infinity(), py::arg("tree") = py::none(),
-          py::arg("lamp_key") = py::none());
+          py::arg("lamp_key") = py::none(), py::arg("normal") = py::none());
     py::class_<LightTree, std::shared_ptr<LightTree>>(
         m, "LightTree", "Many-light sampling: a light per point by its estimated contribution (lighttree.h)")
         .def(py::init(&make_tree), py::arg("lo"), py::arg("hi"), py::arg("axis"), py::arg("cos_o"), py::arg("cos_e"),
              py::arg("energy"), py::arg("key"), py::arg("group") = py::none())
         .def_property_readonly("members", &LightTree::members)
         .def_property_readonly("nodes", &LightTree::nodes)
-        .def("sample", &tree_sample_py, py::arg("P"), py::arg("u"))
-        .def("pdf", &tree_pdf_py, py::arg("P"), py::arg("key"));
+        .def("sample", &tree_sample_py, py::arg("P"), py::arg("u"), py::arg("N") = py::none())
+        .def("pdf", &tree_pdf_py, py::arg("P"), py::arg("key"), py::arg("N") = py::none());
     m.def("next_event", &next_event_py, py::arg("records"), py::arg("cdf"), py::arg("prob"), py::arg("no_mis"),
           py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"), py::arg("P"),
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),

@@ -54,7 +54,7 @@ void sample_range(const LampRecord* rec, size_t R, const int32_t* entry, const f
 void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                   const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
                   const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
-                  const int32_t* lamp_key, size_t b, size_t e) {
+                  const int32_t* lamp_key, const float* normal, size_t b, size_t e) {
     // Lamp by lamp over the rays (each ray still adds its lamps in list order), and the add is
     // selected, not branched on: whether a ray sees a lamp follows no pattern.
     for (size_t k = 0; k < nl; ++k) {
@@ -70,7 +70,11 @@ void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const 
             float w = 1.0f;
             if (lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
                 float p_sel = lamp_prob[lamps[k]];
-                if (key >= 0 && seen) p_sel = float(double(p_sel) * tree->pdf(o, key));  // as picked from o
+                if (key >= 0 && seen) {  // as picked from o with the vertex's normal
+                    const float nv[3] = {normal ? normal[i] : 0.0f, normal ? normal[n + i] : 0.0f,
+                                         normal ? normal[2 * n + i] : 0.0f};
+                    p_sel = float(double(p_sel) * tree->pdf(o, normal ? nv : nullptr, key));
+                }
                 float r = p_sel * pdf_l / pdf_bsdf[i];
                 r *= r;
                 r += 1.0f;
@@ -99,10 +103,10 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
-                 const int32_t* lamp_key) {
+                 const int32_t* lamp_key, const float* normal) {
     parallel_for(n, [&](size_t b, size_t e) {
         gather_range(rec, lamps, nl, lamp_prob, O, D, t_surf, miss, thr, pdf_bsdf, pid, n, L, N, clamp, tree, lamp_key,
-                     b, e);
+                     normal, b, e);
     });
 }
 

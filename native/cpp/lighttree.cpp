@@ -57,8 +57,9 @@ Cone merge(const Cone& a, const Cone& b) {
 }
 
 // The importance of node nd's lights at P (see lighttree.h) as energy x f / d2: returns f
-// and d2, so that two children compare by cross-multiplying, without a division each.
-void weigh(const LightTreeNode& nd, const float P[3], double& f, double& d2) {
+// and d2, so that two children compare by cross-multiplying, without a division each. N (null:
+// none) is the receiving point's unit normal: lights wholly below its horizon get f = 0.
+void weigh(const LightTreeNode& nd, const float P[3], const float* N, double& f, double& d2) {
     const double v[3] = {double(nd.center[0]) - P[0], double(nd.center[1]) - P[1], double(nd.center[2]) - P[2]};
     const double dd = dot3(v, v), r = nd.radius, r2 = r * r;
     f = 1.0;
@@ -67,9 +68,22 @@ void weigh(const LightTreeNode& nd, const float P[3], double& f, double& d2) {
         return;
     }
     d2 = std::max(dd, kMinDist2);
+    const double d = std::sqrt(dd);
+    const double sin_u = r / d, cos_u = std::sqrt(std::max(0.0, 1.0 - sin_u * sin_u));
+    if (N) {  // the smallest angle of incidence any light of the node can have: theta_i - theta_u
+        const double n[3] = {N[0], N[1], N[2]};
+        const double cos_i = std::clamp(dot3(n, v) / d, -1.0, 1.0);
+        if (cos_i < cos_u) {
+            const double sin_i = std::sqrt(std::max(0.0, 1.0 - cos_i * cos_i));
+            const double c = cos_i * cos_u + sin_i * sin_u;  // cos(theta_i - theta_u)
+            if (!(c > 0.0)) {
+                f = 0.0;
+                return;
+            }
+            f = c;
+        }
+    }
     if (nd.cos_o > -1.0f) {
-        const double d = std::sqrt(dd);
-        const double sin_u = r / d, cos_u = std::sqrt(std::max(0.0, 1.0 - sin_u * sin_u));
         // phi = theta_o + theta_u: the widest angle from the axis at which a light of the node
         // can be seen from P's direction
         const double cos_p = nd.cos_o * cos_u - nd.sin_o * sin_u, sin_p = nd.sin_o * cos_u + nd.cos_o * sin_u;
@@ -78,7 +92,7 @@ void weigh(const LightTreeNode& nd, const float P[3], double& f, double& d2) {
         if (sin_p >= 0.0 && cos_t < cos_p) {                           // phi <= pi and theta > phi
             const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
             const double cos_r = cos_t * cos_p + sin_t * sin_p;        // cos(theta - phi)
-            f = cos_r <= nd.cos_e ? 0.0 : cos_r;
+            f *= cos_r <= nd.cos_e ? 0.0 : cos_r;
         }
     }
 }
@@ -90,10 +104,10 @@ void weigh(const LightTreeNode& nd, const float P[3], double& f, double& d2) {
 struct Shares {
     double left, right;
 };
-Shares shares(const LightTreeNode* c, const float P[3]) {
+Shares shares(const LightTreeNode* c, const float P[3], const float* N) {
     double fa, da, fb, db;
-    weigh(c[0], P, fa, da);
-    weigh(c[1], P, fb, db);
+    weigh(c[0], P, N, fa, da);
+    weigh(c[1], P, N, fb, db);
     // Ea fa / da : Eb fb / db, each side times da db (energies < 1e210, d2 < 1e78: finite)
     const double a = c[0].energy * fa * db, b = c[1].energy * fb * da, s = a + b;
     if (s > 0.0 && std::isfinite(s)) {
@@ -276,7 +290,7 @@ LightTree::LightTree(const LightTreeInput& in) {
             leaf_of_key_[size_t(member_key_[size_t(j)])] = leaf_of_item[g];
 }
 
-int32_t LightTree::sample(const float P[3], double u, double& prob) const {
+int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob) const {
     // u stays as drawn; the node's share of [0, 1) narrows to [lo, lo + w) on the way down
     // (no rescaling of u: one division per level, in shares)
     size_t at = 0;
@@ -284,7 +298,7 @@ int32_t LightTree::sample(const float P[3], double u, double& prob) const {
     if (!(u >= 0.0)) u = 0.0;  // (NaN too)
     while (nodes_[at].child >= 0) {
         const size_t c = size_t(nodes_[at].child);
-        const Shares sh = shares(&nodes_[c], P);
+        const Shares sh = shares(&nodes_[c], P, N);
         const double split = lo + w * sh.left;
         // selected, not branched on: which way a point goes follows no pattern
         const bool right = !(u < split) & (sh.right > 0.0);
@@ -306,13 +320,13 @@ int32_t LightTree::sample(const float P[3], double u, double& prob) const {
     return member_key_[size_t(slot)];
 }
 
-double LightTree::pdf(const float P[3], int64_t key) const {
+double LightTree::pdf(const float P[3], const float* N, int64_t key) const {
     if (!member(key)) return 0.0;
     size_t at = size_t(leaf_of_key_[size_t(key)]);
     double p = member_share_[size_t(slot_of_key_[size_t(key)])];
     while (nodes_[at].parent >= 0) {
         const size_t up = size_t(nodes_[at].parent), c = size_t(nodes_[up].child);
-        const Shares sh = shares(&nodes_[c], P);
+        const Shares sh = shares(&nodes_[c], P, N);
         p *= at == c ? sh.left : sh.right;
         at = up;
     }

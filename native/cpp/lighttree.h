@@ -10,10 +10,10 @@
 // irradiance of energy / d^2 at distance d). A point P splits its way down by the children's
 // importance: energy x the cosine of the smallest emission angle any of the node's lights can
 // have toward P / the squared distance to the centre (0 where no light of the node can face P;
-// inside the sphere no culling, and the distance at least half the radius, as in Cycles). The
-// receiving surface's normal is not used: the probability depends on P alone, so a BSDF ray's
-// MIS weight needs only its origin, and a light behind the surface is merely sampled in vain,
-// never missed.
+// inside the sphere no culling, and the distance at least half the radius, as in Cycles),
+// times the cosine of the smallest angle of incidence at the receiving point's normal N (0 for
+// a node wholly below its horizon: a diffuse surface gets nothing from there). A BSDF ray's MIS
+// weight evaluates the same pdf at its origin with that vertex's normal.
 //
 // Delta lights (points, spots) are given a cone of every direction, so they are never culled:
 // their only estimator is light sampling, and every node on their way keeps a probability > 0
@@ -71,10 +71,11 @@ public:
     bool member(int64_t key) const {
         return key >= 0 && uint64_t(key) < leaf_of_key_.size() && leaf_of_key_[size_t(key)] >= 0;
     }
-    // The key of the light picked at P with the uniform u in [0, 1), and its probability.
-    int32_t sample(const float P[3], double u, double& prob) const;
-    // The probability that sample() at P picks key (0 when key is not a member).
-    double pdf(const float P[3], int64_t key) const;
+    // The key of the light picked at P (receiving normal N, unit; null: none) with the uniform
+    // u in [0, 1), and its probability.
+    int32_t sample(const float P[3], const float* N, double u, double& prob) const;
+    // The probability that sample() at P, N picks key (0 when key is not a member).
+    double pdf(const float P[3], const float* N, int64_t key) const;
 
 private:
     std::vector<LightTreeNode> nodes_;

@@ -34,15 +34,20 @@ def test_black_surfaces_end_paths_without_changing_the_image(monkeypatch):
 def test_light_samples_that_cannot_contribute_cast_no_shadow_ray(monkeypatch):
     # a spot light aimed away from most of the plane, and a point light below it: most light
     # samples are outside the cone or behind the surface
+    # (with the global choice: the light tree would not pick the point below the surface)
     lights = [light('SPOT', 500.0, translation(z=3.0), spot_size=np.radians(30.0)),
               light('POINT', 50.0, translation(z=-2.0))]
-    scene = plane_scene(lights, samples=16, max_bounces=0)
+    scene = plane_scene(lights, samples=16, max_bounces=0, use_light_tree=False)
     fast, slow = _both(scene, monkeypatch)
     assert np.array_equal(fast.film.combined(), slow.film.combined())
     # (the light choice favours the spot, which delivers; the point below still gets its
     # uniform share of samples, none of which can contribute)
     assert fast.stats['skipped']['shadow_rays'] > 0.05 * slow.stats['rays']['shadow']
     assert fast.stats['rays']['shadow'] + fast.stats['skipped']['shadow_rays'] == slow.stats['rays']['shadow']
+    # the tree sends no sample to the light below the plane's horizon: fewer wasted
+    tree_fast, tree_slow = _both(plane_scene(lights, samples=16, max_bounces=0), monkeypatch)
+    assert np.array_equal(tree_fast.film.combined(), tree_slow.film.combined())
+    assert tree_fast.stats['skipped']['shadow_rays'] < 0.5 * fast.stats['skipped']['shadow_rays']
 
 
 def test_last_bounce_ray_not_cast_when_nothing_it_could_hit_emits(monkeypatch):

@@ -169,3 +169,29 @@ def test_groups_are_leaves_split_by_energy():
     with pytest.raises(ValueError, match='light 3: group must be >= 0'):
         lamps.light_tree(f32(c - 0.1), f32(c + 0.1), np.tile([[0.0], [0.0], [1.0]], (1, m)), np.full(m, EVERY),
                          np.zeros(m), E, np.arange(m), np.where(np.arange(m) == 3, -1, group))
+
+
+def test_lights_below_the_receivers_horizon_are_not_picked():
+    """With the receiving point's normal, a node wholly below its horizon gets probability 0 (a
+    diffuse surface gets nothing from there); lights below share only what reaches a node that
+    straddles the horizon with both children below it (split by energy there). Sampling and
+    pdf agree with the normal as without."""
+    rng = np.random.default_rng(2)
+    m = 24
+    c = rng.uniform(-4, 4, (3, m))
+    c[2] = np.where(np.arange(m) % 2, 2.0, -2.0)        # half above the point, half below
+    tree = tree_of(c, 0.05, rng.uniform(1.0, 5.0, m))
+    P = np.zeros((3, 1), F32)
+    N = np.array([[0.0], [0.0], [1.0]], F32)
+    pdf = tree.pdf(np.repeat(P, m, 1), np.arange(m), N=np.repeat(N, m, 1))
+    assert pdf.sum() == pytest.approx(1.0, abs=1e-12)
+    assert np.all(pdf[1::2] > 0) and pdf[::2].sum() < 0.05
+    flat = tree.pdf(np.repeat(P, m, 1), np.arange(m))
+    assert flat[::2].sum() > 0.3                         # without the normal: by distance alone
+    n = 300_000
+    got, prob = tree.sample(np.repeat(P, n, 1), rng.random(n), N=np.repeat(N, n, 1))
+    np.testing.assert_allclose(prob, pdf[got], rtol=1e-12)
+    # a light straddling the horizon (its sphere crosses the tangent plane) keeps a share
+    straddle = tree_of([[3.0, -3.0], [0.0, 0.0], [-0.1, 1.0]], 0.3, [1.0, 1.0])
+    p = straddle.pdf(np.repeat(P, 2, 1), np.array([0, 1]), N=np.repeat(N, 2, 1))
+    assert p[0] > 0 and p.sum() == pytest.approx(1.0)

@@ -80,7 +80,7 @@ def lamp_sample(records, entry, P, u1, u2, out=None):
 
 
 def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=None, lamp_prob=None,
-                clamp: float = np.inf, tree=None, lamp_key=None) -> None:
+                clamp: float = np.inf, tree=None, lamp_key=None, N=None) -> None:
     """Add to L (3, N) float32, in place, what rays (O, D) (3, n) see of the lamps
     records[lamps] (lamps: record indices, in the order their light is added).
 
@@ -93,7 +93,8 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     rays give neither (w = 1). clamp: each lamp's contribution to a ray is scaled down to an
     absolute channel sum of at most clamp (Cycles' sample clamp; inf: none). With a light tree
     (LightTree) and lamp_key (R,) int32 (a record's key in it, or -1), a member's selection
-    probability is lamp_prob x the tree's pdf at the ray's origin."""
+    probability is lamp_prob x the tree's pdf at the ray's origin with N (3, n), the normal its
+    vertex sampled lights with."""
     _check_added_to(L)
     records = _records(records)
     lamps = np.asarray(lamps)
@@ -112,7 +113,8 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     opt = lambda a: None if a is None else _f32(a)
     _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32(t_surf),
                       np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf), np.ascontiguousarray(pid, np.int64), L,
-                      float(clamp), tree, None if lamp_key is None else np.ascontiguousarray(lamp_key, np.int32))
+                      float(clamp), tree, None if lamp_key is None else np.ascontiguousarray(lamp_key, np.int32),
+                      opt(N))
 
 
 EnvironmentMap = _core.EnvironmentMap
@@ -124,8 +126,9 @@ def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None) -> LightTree
     (3, m), emission cones (unit axis (3, m), cos of the spread cos_o (m,), -1 for every
     direction, and of the falloff beyond it cos_e (m,)), energy (m,) > 0 (on-axis intensity:
     irradiance energy / d^2 at distance d) and distinct keys (m,) >= 0 (e.g. light-choice
-    entries). tree.sample(P (3, n), u (n,) float64) gives each point's key and its probability;
-    tree.pdf(P, key) that probability for given keys (0 for non-members). group (m,) >= 0 or None:
+    entries). tree.sample(P (3, n), u (n,) float64, N=None) gives each point's key and its
+    probability (N (3, n): the points' unit normals; lights below their horizon are not picked);
+    tree.pdf(P, key, N=None) that probability for given keys (0 for non-members). group (m,) >= 0 or None:
     lights with the same group form one leaf, within which a point picks by energy alone (e.g.
     the triangles of one emissive object)."""
     f32 = lambda a: np.ascontiguousarray(a, np.float32)

@@ -189,7 +189,8 @@ class LightChoice:
     tree (a dacrt.lamps.LightTree whose keys are entries; None: none): many-light sampling. Its
     members share one slot of cdf (the first member in entry order holds the mass, the others
     none) and each has prob = that mass; a pick in the slot is passed on to the tree at the
-    shadow ray's origin, so a member's selection probability is prob x the tree's pdf there."""
+    shadow ray's origin with the shading normal, so a member's selection probability is prob x
+    the tree's pdf there."""
 
     def __init__(self, records, cdf, prob, no_mis, shadow, tri_geo=None, tri_area=None, tri_emission=None,
                  environment=None, tree=None):
@@ -302,7 +303,7 @@ def accumulate_masked(L, pid, values, mask, clamp: float = np.inf) -> None:
 
 
 def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, thr, pdf, pid, L,
-                    clamp: float = np.inf, tree=None, tri_key=None) -> int:
+                    clamp: float = np.inf, tree=None, tri_key=None, N=None) -> int:
     """Add the emission that rays meet on emissive triangles to L (3, N) in place (two-sided).
 
     Rays i with hit[i] whose triangle hits['prim'][i] has emissive[prim] (bool (M,)) add
@@ -312,7 +313,8 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
     solid-angle pdf sample_triangles has from the ray origin O (3, n) for the direction D (3, n),
     into column pid[i] (distinct), clamped as accumulate_masked's. With a light tree
     (dacrt.lamps.LightTree) and tri_key (M,) int32 (a triangle's key in it, or -1), a member's
-    selection probability is tri_prob x the tree's pdf at O.
+    selection probability is tri_prob x the tree's pdf at O with N (3, n), the normal the rays'
+    vertices sampled lights with.
     Returns how many rays met emission."""
     _check_added_to(L)
     return _core.gather_emission(hits, np.ascontiguousarray(hit, np.bool_), _rows(emission, 3, "emission"),
@@ -323,7 +325,8 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
                                  None if thr is None else _rows(thr, 3, "thr"),
                                  None if pdf is None else np.ascontiguousarray(pdf, _F32),
                                  np.ascontiguousarray(pid, np.int64), L, float(clamp), tree,
-                                 None if tri_key is None else np.ascontiguousarray(tri_key, np.int32))
+                                 None if tri_key is None else np.ascontiguousarray(tri_key, np.int32),
+                                 None if N is None else _rows(N, 3, "N"))
 
 
 def camera_rays(ortho: bool, frame, rx, ry, records: bool = False, lens=None):
