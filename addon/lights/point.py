@@ -153,6 +153,25 @@ class SpotLight(PointLight):
         omc = 2.0 * np.sin(0.25 * size) ** 2            # 1 - cos(size/2) without cancellation
         self.inv_smooth = F32(1.0 / (omc * blend)) if blend > 0 else None
 
+    def bounds(self) -> Bounds:
+        # the cone it lights (a point within its radius is lit all round: the tree does not
+        # cull inside a node's sphere), widened by a margin so rounding never culls a lit point
+        b = super().bounds()
+        half = float(np.arccos(np.clip(float(self.cos_half), -1.0, 1.0)))
+        if half >= np.pi / 2 - 1e-3:
+            return b                                       # a hemisphere or more: every direction
+        m3 = np.linalg.inv(self.inv_m3.astype(np.float64))
+        axis = m3 @ np.array([0.0, 0.0, -1.0])
+        axis /= np.linalg.norm(axis)
+        # the widest angle from the axis of the cone's edge (elliptical under non-uniform scale)
+        phi = np.linspace(0.0, 2.0 * np.pi, 721)
+        edge = m3 @ np.stack([np.sin(half) * np.cos(phi), np.sin(half) * np.sin(phi), -np.full_like(phi, np.cos(half))])
+        edge /= np.linalg.norm(edge, axis=0)
+        widest = float(np.arccos(np.clip(axis @ edge, -1.0, 1.0)).max()) + 1e-3
+        if widest >= np.pi / 2:
+            return b
+        return Bounds(b.lo, b.hi, axis.astype(F32), float(np.cos(widest)), 1.0, b.energy)
+
     def _cone_fields(self) -> dict:
         # inv_smooth 0 marks the hard edge (blend 0)
         return dict(cos_half=self.cos_half, inv_m3=self.inv_m3,

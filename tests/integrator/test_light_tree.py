@@ -80,3 +80,50 @@ def test_a_point_under_one_of_a_row_of_lights_is_less_noisy():
     assert tree.lights.tree is not None and flat.lights.tree is None
     var = lambda integ: integ.film.combined()[..., 0].var()     # the view is 1 mm: all of it is noise
     assert var(tree) < 0.3 * var(flat), (var(tree), var(flat))
+
+
+def _spot(rng, radius=0.0):
+    m = np.eye(4)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    m[:3, :3] = q @ np.diag(rng.uniform(0.3, 3.0, 3))          # rotated, non-uniformly scaled
+    m[:3, 3] = rng.uniform(-1.0, 1.0, 3)
+    return light('SPOT', 100.0, m, spot_size=rng.uniform(0.05, 3.0), spot_blend=rng.uniform(0.0, 1.0),
+                 radius=radius)
+
+
+def test_a_spots_tree_cone_holds_every_point_it_lights():
+    """The cone a spot gets in the tree (its world-space cone, elliptical under non-uniform
+    scale, widened by a margin) holds every direction its attenuation lights: the tree must
+    never cull a point a delta light reaches (its only estimator is light sampling)."""
+    from addon.lights import make_lamp
+    rng = np.random.default_rng(4)
+    coned = 0
+    for _ in range(200):
+        lamp = make_lamp(_spot(rng))
+        b = lamp.bounds()
+        if b.cos_o <= -1.0:                                     # a hemisphere or wider: all round
+            continue
+        coned += 1
+        d = rng.normal(size=(3, 20000))
+        d /= np.linalg.norm(d, axis=0)
+        lit = lamp.attenuation(d.astype(np.float32)) > 0
+        assert np.all(np.asarray(b.axis, np.float64) @ d[:, lit] >= b.cos_o)
+    assert coned > 50
+
+
+def test_spot_lights_agree_with_the_global_choice():
+    """Spots aimed every way over the plane (some away from it, with and without radius): the
+    tree culls a spot only where its cone cannot reach, so the image matches the global
+    choice's within the noise."""
+    rng = np.random.default_rng(8)
+    spots = [_spot(rng, radius=r) for r in (0.0, 0.0, 0.0, 0.1, 0.3, 0.0)]
+    for s in spots:
+        s.matrix[2, 3] = abs(s.matrix[2, 3]) + 0.5               # above the plane
+    scene = lambda tree: plane_scene(spots, samples=256, max_bounces=1, use_light_tree=tree,
+                                     camera=ortho_down(height=0.3, width=16, px=16, view=3.0))
+    with_tree, without = render(scene(True)), render(scene(False))
+    assert with_tree.lights.tree is not None
+    for c in range(3):
+        a, ea = pixel_stats(with_tree, c)
+        b, eb = pixel_stats(without, c)
+        assert abs(a - b) < 4 * np.hypot(ea, eb) + 1e-4 * b, f"channel {c}: {a} vs {b} (+- {ea}, {eb})"
