@@ -120,7 +120,8 @@ def build_wave(n: int):
 
 
 BUILDERS = {"cornell": parity_scenes.build_cornell, "outdoor": parity_scenes.build_outdoor,
-            "dragon": build_dragon, "environment": parity_scenes.build_environment}
+            "dragon": build_dragon, "environment": parity_scenes.build_environment,
+            "many_lights": parity_scenes.build_many_lights}
 
 
 def build(spec: RenderSpec):

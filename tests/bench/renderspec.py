@@ -5,6 +5,7 @@ worker (renderworker.py) turns them into scenes (renderscenes.py).
 Built-in scenes and their settings (160x120 is the issue's Cornell-box size):
     cornell  4 bounces, Blackman-Harris 1.5     outdoor  3 bounces, Gaussian 1.5
     dragon   3 bounces, Blackman-Harris 1.5     environment  3 bounces, Blackman-Harris 1.5
+    many_lights  3 bounces, Blackman-Harris 1.5 (a street of 12 lamps, emissive globes, a sun)
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ BUILTIN = {
     "outdoor": dict(resolution=(160, 120), bounces=3, filter_type='GAUSSIAN'),
     "dragon": dict(resolution=(160, 120), bounces=3),
     "environment": dict(resolution=(160, 120), bounces=3),
+    "many_lights": dict(resolution=(160, 120), bounces=3),
 }
 
 

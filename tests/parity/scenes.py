@@ -215,6 +215,37 @@ def build_point_spot():
     camera((0.0, -5.0, 2.2), (0.0, 0.3, 0.5), lens=35.0)
 
 
+def build_many_lights():
+    """A street at dusk for the light tree: a row of lamp posts (point lights with and without a
+    radius), spots aimed every way (one non-uniformly scaled, one away from everything), area
+    lights (one facing up, lighting only the sky), three small emissive globes, a wall with
+    lights on both sides, a dim sun and a dark blue world."""
+    quad("Street", [(-8, -4, 0), (8, -4, 0), (8, 4, 0), (-8, 4, 0)], diffuse("Street", (0.5, 0.5, 0.5)))
+    quad("Wall", [(-8, 1.5, 0), (8, 1.5, 0), (8, 1.5, 2.5), (-8, 1.5, 2.5)], diffuse("Wall", (0.7, 0.6, 0.5)))
+    box("Kiosk", (0.8, 0.8, 1.2), diffuse("Kiosk", (0.3, 0.5, 0.7)), (1.0, -0.5, 0.6), (0, 0, math.radians(20)))
+    for i, x in enumerate((-6.0, -3.0, 0.0, 3.0, 6.0)):
+        lamp(f"Post{i}", 'POINT', (40.0, 120.0, 60.0, 200.0, 90.0)[i], (x, -1.0, 2.2),
+             color=(1.0, 0.8, 0.55), shadow_soft_size=(0.0, 0.1, 0.25, 0.0, 0.05)[i],
+             use_soft_falloff=bool(i % 2))
+    lamp("Behind", 'POINT', 300.0, (-2.0, 3.0, 1.0), color=(0.6, 1.0, 0.6), shadow_soft_size=0.1)
+    lamp("SpotDown", 'SPOT', 400.0, (2.5, -2.0, 3.0), color=(0.7, 0.85, 1.0), target=(2.5, -2.0, 0.0),
+         spot_size=math.radians(35), spot_blend=0.3, shadow_soft_size=0.0)
+    squash = lamp("SpotWall", 'SPOT', 300.0, (-4.0, -3.0, 1.5), color=(1.0, 0.5, 0.5), target=(-3.0, 1.5, 1.0),
+                  spot_size=math.radians(50), spot_blend=0.1, shadow_soft_size=0.05)
+    squash.scale = (2.5, 0.6, 1.0)
+    lamp("SpotAway", 'SPOT', 800.0, (5.0, -3.5, 0.5), target=(9.0, -6.0, 0.5), spot_size=math.radians(20))
+    lamp("Panel", 'AREA', 150.0, (-1.5, -0.5, 2.4), color=(0.9, 0.9, 1.0), size=0.8, size_y=0.4,
+         shape='RECTANGLE')
+    lamp("Skyward", 'AREA', 500.0, (4.0, 0.0, 2.4), shape='DISK', size=0.6).rotation_euler = (math.pi, 0.0, 0.0)
+    glow = emission("Globe", (1.0, 0.7, 0.3), 15.0)
+    for i, x in enumerate((-5.0, -0.5, 4.5)):
+        uv_sphere(f"Globe{i}", 0.12, glow, (x, 0.8, 1.6), segments=12, rings=6, smooth=True)
+    sun = lamp("Sun", 'SUN', 0.2, (0, 0, 10), color=(1.0, 0.6, 0.4), angle=math.radians(5))
+    sun.rotation_euler = (math.radians(75), 0.0, math.radians(-60))
+    world((0.02, 0.03, 0.08), 1.0)
+    camera((0.0, -7.0, 2.5), (0.0, 0.5, 0.9), lens=26.0)
+
+
 def build_outdoor():
     """Ground and blocks under a soft sun (angle 10 deg) and a blue sky world; sky in view."""
     quad("Ground", [(-20, -20, 0), (20, -20, 0), (20, 20, 0), (-20, 20, 0)],
@@ -622,6 +653,7 @@ class ParitySpec:
 SPECS = (
     ParitySpec("cornell", build_cornell, (64, 48), 4, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("point_spot", build_point_spot, (64, 48), 2, 'BOX', 1.0, 128, 32, 128, 32),
+    ParitySpec("many_lights", build_many_lights, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("outdoor", build_outdoor, (64, 48), 3, 'GAUSSIAN', 1.5, 128, 32, 128, 32),
     ParitySpec("emissive", build_emissive, (64, 48), 3, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("instances", build_instances, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
