@@ -1,5 +1,6 @@
-// The light tree (see lighttree.h): a build by spatial median, cones merged as Cycles'
-// light tree does, and the importance that splits a point's choice between two children.
+// The light tree (see lighttree.h): a build by the surface area orientation heuristic, cones
+// merged as Cycles' light tree does, and the importance that splits a point's choice between
+// two children.
 #include "lighttree.h"
 
 #include <algorithm>
@@ -63,6 +64,15 @@ void weigh(const LightTreeNode& nd, const float P[3], const float* N, double& f,
     const double v[3] = {double(nd.center[0]) - P[0], double(nd.center[1]) - P[1], double(nd.center[2]) - P[2]};
     const double dd = dot3(v, v), r = nd.radius, r2 = r * r;
     f = 1.0;
+    if (N) {  // the box wholly below the tangent plane at P (its highest corner on or under it)
+        const double reach = double(N[0]) * v[0] + double(N[1]) * v[1] + double(N[2]) * v[2] +
+                             std::fabs(N[0]) * nd.half[0] + std::fabs(N[1]) * nd.half[1] + std::fabs(N[2]) * nd.half[2];
+        if (!(reach > 0.0)) {
+            f = 0.0;
+            d2 = std::max(dd, kMinDist2);
+            return;
+        }
+    }
     if (!(dd > r2)) {  // within the bounds (or NaN): no culling, and the distance to the centre
         d2 = std::max(std::max(dd, 0.25 * r2), kMinDist2);  // at least half the radius (Cycles)
         return;
@@ -118,6 +128,15 @@ Shares shares(const LightTreeNode* c, const float P[3], const float* N) {
     return {c[0].energy * inv, c[1].energy * inv};
 }
 
+// Conty and Kulla's orientation measure of a cone: the solid angle of its axis spread plus the
+// falloff beyond it, weighted by cosine (Cycles' OrientationBounds::calculate_measure).
+double measure(const Cone& c) {
+    const double theta_o = std::min(c.theta_o, kPi), theta_w = std::min(kPi, theta_o + c.theta_e);
+    const double co = std::cos(theta_o), so = std::sin(theta_o);
+    return 2.0 * kPi * (1.0 - co) +
+           0.5 * kPi * (2.0 * theta_w * so - std::cos(theta_o - 2.0 * theta_w) - 2.0 * theta_o * so + co);
+}
+
 // A leaf's lights: a group of members (LightTreeInput::group), their box, cone and energy.
 struct Item {
     double lo[3], hi[3];
@@ -145,6 +164,76 @@ struct Builder {
 
     double centroid(int32_t i, int k) const { return 0.5 * (items[size_t(i)].lo[k] + items[size_t(i)].hi[k]); }
 
+    // Splits order[b, e) by Conty and Kulla's surface area orientation heuristic, as Cycles'
+    // light tree builds: over 12 bins of the centres per axis, the split of least
+    // sum over the halves of energy x box area x orientation measure, times the longest
+    // extent over the axis' (favouring cuts across long axes). A bright light that emits one
+    // way is so kept apart from lights that emit every way: grouped, the group would look
+    // bright from everywhere its cone then covers. Returns the first item of the right half
+    // (b or e: no split found).
+    size_t saoh_split(size_t b, size_t e, const double clo[3], const double chi[3]) {
+        constexpr int kBins = 12;
+        struct Bin {
+            double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            double energy = 0.0;
+            Cone cone{};
+            size_t count = 0;
+            void add(const double l[3], const double h[3], double en, const Cone& c) {
+                for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], l[k]), hi[k] = std::max(hi[k], h[k]);
+                cone = count ? merge(cone, c) : c;
+                energy += en;
+                ++count;
+            }
+            void add(const Bin& o) {
+                if (o.count) add(o.lo, o.hi, o.energy, o.cone), count += o.count - 1;
+            }
+            double cost(double pad) const {  // energy x area x orientation measure
+                double d[3];
+                for (int k = 0; k < 3; ++k) d[k] = hi[k] - lo[k] + pad;
+                return energy * 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]) * measure(cone);
+            }
+        };
+        double longest = 0.0;
+        for (int k = 0; k < 3; ++k) longest = std::max(longest, chi[k] - clo[k]);
+        if (!(longest > 0.0)) return b;
+        const double pad = 1e-3 * longest;  // lights without extent still cost their energy
+        double best = INFINITY;
+        int best_axis = -1, best_cut = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double extent = chi[k] - clo[k];
+            if (!(extent > 1e-9 * longest)) continue;
+            Bin bins[kBins];
+            for (size_t j = b; j < e; ++j) {
+                const Item& it = items[size_t(order[j])];
+                bins[bin_of(order[j], k, clo[k], extent, kBins)].add(it.lo, it.hi, it.energy, it.cone);
+            }
+            Bin right[kBins];  // right[c]: bins c..kBins-1
+            right[kBins - 1] = bins[kBins - 1];
+            for (int c = kBins - 2; c >= 0; --c) {
+                right[c] = right[c + 1];
+                right[c].add(bins[c]);
+            }
+            Bin left;
+            for (int cut = 1; cut < kBins; ++cut) {
+                left.add(bins[cut - 1]);
+                if (!left.count || !right[cut].count) continue;
+                const double cost = (longest / extent) * (left.cost(pad) + right[cut].cost(pad));
+                if (cost < best) best = cost, best_axis = k, best_cut = cut;
+            }
+        }
+        if (best_axis < 0) return b;
+        const double extent = chi[best_axis] - clo[best_axis];
+        const auto first_right = std::stable_partition(order.begin() + long(b), order.begin() + long(e), [&](int32_t x) {
+            return bin_of(x, best_axis, clo[best_axis], extent, kBins) < best_cut;
+        });
+        return size_t(first_right - order.begin());
+    }
+
+    int bin_of(int32_t i, int k, double lo, double extent, int bins) const {
+        const int c = int((centroid(i, k) - lo) / extent * bins);
+        return std::clamp(c, 0, bins - 1);
+    }
+
     // Fills node `at` over items order[b, e); returns its box (lo, hi) and cone.
     void build(size_t at, size_t b, size_t e, int32_t parent, double lo[3], double hi[3], Cone& cone) {
         nodes[at].parent = parent;
@@ -164,17 +253,20 @@ struct Builder {
                     clo[k] = std::min(clo[k], c);
                     chi[k] = std::max(chi[k], c);
                 }
-            int axis = 0;
-            for (int k = 1; k < 3; ++k)
-                if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
-            const size_t mid = b + (e - b) / 2;
-            // ties broken by item index: the halves (and so the tree) do not depend on the
-            // standard library's partitioning
-            std::nth_element(order.begin() + long(b), order.begin() + long(mid), order.begin() + long(e),
-                             [&](int32_t x, int32_t y) {
-                                 const double cx = centroid(x, axis), cy = centroid(y, axis);
-                                 return cx < cy || (cx == cy && x < y);
-                             });
+            size_t mid = saoh_split(b, e, clo, chi);
+            if (mid == b || mid == e) {  // no split: all centres in one place (or bins)
+                int axis = 0;
+                for (int k = 1; k < 3; ++k)
+                    if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
+                mid = b + (e - b) / 2;
+                // ties broken by item index: the halves (and so the tree) do not depend on
+                // the standard library's partitioning
+                std::nth_element(order.begin() + long(b), order.begin() + long(mid), order.begin() + long(e),
+                                 [&](int32_t x, int32_t y) {
+                                     const double cx = centroid(x, axis), cy = centroid(y, axis);
+                                     return cx < cy || (cx == cy && x < y);
+                                 });
+            }
             const size_t child = nodes.size();
             nodes.resize(child + 2);
             double llo[3], lhi[3], rlo[3], rhi[3];
@@ -194,6 +286,7 @@ struct Builder {
             // the float centre is off the box's by up to half an ULP: the radius covers that
             const double off = std::fabs(double(nd.center[k]) - c);
             r2 += (h + off) * (h + off);
+            nd.half[k] = float((h + off) * (1.0 + 1e-6));
         }
         nd.radius = float(std::sqrt(r2) * (1.0 + 1e-6));
         const bool all = cone.theta_o >= kPi;

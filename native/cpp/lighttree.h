@@ -12,7 +12,8 @@
 // have toward P / the squared distance to the centre (0 where no light of the node can face P;
 // inside the sphere no culling, and the distance at least half the radius, as in Cycles),
 // times the cosine of the smallest angle of incidence at the receiving point's normal N (0 for
-// a node wholly below its horizon: a diffuse surface gets nothing from there). A BSDF ray's MIS
+// a node wholly below its horizon, by its box, even where its sphere holds the point: a diffuse
+// surface gets nothing from there). A BSDF ray's MIS
 // weight evaluates the same pdf at its origin with that vertex's normal.
 //
 // Delta lights (points, spots) are given a cone of every direction, so they are never culled:
@@ -29,15 +30,14 @@ namespace dacrt {
 
 struct LightTreeNode {
     float center[3], radius;  // bounding sphere of the lights' bounds
+    float half[3];            // the bounds' half extents about center (rounded up)
     float axis[3], cos_o;     // emission cone: within theta_o of axis (cos_o = -1: every direction)
     float sin_o, cos_e;       // sin theta_o; cos of the falloff angle theta_e beyond theta_o
     double energy;            // summed energy of the lights below (> 0; double: sums of float
                               // energies overflow float, and importances divide it by d^2)
     int32_t child;            // inner node: left child (right = child + 1); leaf: -1 - member
     int32_t parent;           // -1 at the root
-    int32_t pad[2];
 };
-static_assert(sizeof(LightTreeNode) == 64, "a node is one cache line");
 
 // The lights of a tree, m members, each with an axis-aligned box (lo, hi: 3 rows of m), an
 // emission cone (axis: 3 rows of m, unit or anything for cos_o = -1; cos_o, cos_e: m), an
