@@ -13,7 +13,7 @@ namespace dacrt {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-// Squared distances below this count as this (keeps the cross products of shares() > 0).
+// Squared distances below this count as this: energy (< 1e210) / d2 stays finite.
 constexpr double kMinDist2 = 1e-60;
 
 double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -58,8 +58,8 @@ Cone merge(const Cone& a, const Cone& b) {
 }
 
 // The importance of node nd's lights at P (see lighttree.h) as energy x f / d2: returns f
-// and d2, so that two children compare by cross-multiplying, without a division each. N (null:
-// none) is the receiving point's unit normal: lights wholly below its horizon get f = 0.
+// and d2. N (null: none) is the receiving point's unit normal: lights wholly below its horizon
+// get f = 0.
 void weigh(const LightTreeNode& nd, const float P[3], const float* N, double& f, double& d2) {
     const double v[3] = {double(nd.center[0]) - P[0], double(nd.center[1]) - P[1], double(nd.center[2]) - P[2]};
     const double dd = dot3(v, v), r = nd.radius, r2 = r * r;
@@ -107,25 +107,41 @@ void weigh(const LightTreeNode& nd, const float P[3], const float* N, double& f,
     }
 }
 
-// The probabilities of going to either of the two children c[0], c[1] at P: by importance,
-// by energy where both importances are 0 (or their sum is not finite). Each share is its own
+// A node's importance at P: energy x f / d2 (weigh), looking one level further down for an
+// inner node (the sum of its children's, whose tighter bounds see more: a group of spots all
+// aimed away from P, or lights all behind its surface, is 0 even where their merged cone and
+// sphere are not).
+double importance(const LightTreeNode* nodes, size_t at, const float P[3], const float* N) {
+    const LightTreeNode& nd = nodes[at];
+    double f, d2;
+    if (nd.child < 0) {
+        weigh(nd, P, N, f, d2);
+        return f > 0.0 ? nd.energy * f / d2 : 0.0;
+    }
+    double sum = 0.0;
+    for (int k = 0; k < 2; ++k) {
+        const LightTreeNode& c = nodes[size_t(nd.child) + size_t(k)];
+        weigh(c, P, N, f, d2);
+        if (f > 0.0) sum += c.energy * f / d2;
+    }
+    return sum;
+}
+
+// The probabilities of going to either of the two children c, c + 1 at P: by importance, by
+// energy where both importances are 0 (or their sum is not finite). Each share is its own
 // quotient, not 1 - the other: a faint light's 1e-19 would round to 0 that way, and a delta
 // light must never become impossible.
 struct Shares {
     double left, right;
 };
-Shares shares(const LightTreeNode* c, const float P[3], const float* N) {
-    double fa, da, fb, db;
-    weigh(c[0], P, N, fa, da);
-    weigh(c[1], P, N, fb, db);
-    // Ea fa / da : Eb fb / db, each side times da db (energies < 1e210, d2 < 1e78: finite)
-    const double a = c[0].energy * fa * db, b = c[1].energy * fb * da, s = a + b;
+Shares shares(const LightTreeNode* nodes, size_t c, const float P[3], const float* N) {
+    const double a = importance(nodes, c, P, N), b = importance(nodes, c + 1, P, N), s = a + b;
     if (s > 0.0 && std::isfinite(s)) {
         const double inv = 1.0 / s;
         return {a * inv, b * inv};
     }
-    const double inv = 1.0 / (c[0].energy + c[1].energy);
-    return {c[0].energy * inv, c[1].energy * inv};
+    const double inv = 1.0 / (nodes[c].energy + nodes[c + 1].energy);
+    return {nodes[c].energy * inv, nodes[c + 1].energy * inv};
 }
 
 // Conty and Kulla's orientation measure of a cone: the solid angle of its axis spread plus the
@@ -391,7 +407,7 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     if (!(u >= 0.0)) u = 0.0;  // (NaN too)
     while (nodes_[at].child >= 0) {
         const size_t c = size_t(nodes_[at].child);
-        const Shares sh = shares(&nodes_[c], P, N);
+        const Shares sh = shares(nodes_.data(), c, P, N);
         const double split = lo + w * sh.left;
         // selected, not branched on: which way a point goes follows no pattern
         const bool right = !(u < split) & (sh.right > 0.0);
@@ -419,7 +435,7 @@ double LightTree::pdf(const float P[3], const float* N, int64_t key) const {
     double p = member_share_[size_t(slot_of_key_[size_t(key)])];
     while (nodes_[at].parent >= 0) {
         const size_t up = size_t(nodes_[at].parent), c = size_t(nodes_[up].child);
-        const Shares sh = shares(&nodes_[c], P, N);
+        const Shares sh = shares(nodes_.data(), c, P, N);
         p *= at == c ? sh.left : sh.right;
         at = up;
     }
