@@ -102,38 +102,43 @@ void lamp_sample_py(F32Array records, I32Array entry, F32Array P, F32Array u1, F
     lamp_sample(rec, R, entry.data(), P.data(), u1.data(), u2.data(), n, w, d, v, p);
 }
 
-py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py::array::c_style> u, py::object N) {
+// Calls f(i, P_i, N_i or null) for the n points of P (3, n) with optional normals N (3, n);
+// returns n.
+template <class F>
+size_t for_tree_points(const F32Array& P, const py::object& N, F&& f) {
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     const size_t n = size_t(P.shape(1));
-    need_shape(u, 0, n, "u");
     F32Array normal_keep;
     const float* nv = optional_f32(N, 3, n, "N", normal_keep);
-    py::array_t<int32_t> key(n);
-    py::array_t<double> prob(n);
     const float* p = P.data();
     for (size_t i = 0; i < n; ++i) {
         const float q[3] = {p[i], p[n + i], p[2 * n + i]};
-        double pr;
         const float m[3] = {nv ? nv[i] : 0.0f, nv ? nv[n + i] : 0.0f, nv ? nv[2 * n + i] : 0.0f};
-        key.mutable_data()[i] = t.sample(q, nv ? m : nullptr, u.data()[i], pr);
-        prob.mutable_data()[i] = pr;
+        f(i, q, nv ? m : nullptr);
     }
+    return n;
+}
+
+py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py::array::c_style> u, py::object N) {
+    const size_t n = P.ndim() == 2 ? size_t(P.shape(1)) : 0;
+    need_shape(u, 0, n, "u");
+    py::array_t<int32_t> key(n);
+    py::array_t<double> prob(n);
+    for_tree_points(P, N, [&](size_t i, const float* q, const float* m) {
+        double pr;
+        key.mutable_data()[i] = t.sample(q, m, u.data()[i], pr);
+        prob.mutable_data()[i] = pr;
+    });
     return py::make_tuple(key, prob);
 }
 
 py::array_t<double> tree_pdf_py(const LightTree& t, F32Array P, I64Array key, py::object N) {
-    if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
-    const size_t n = size_t(P.shape(1));
+    const size_t n = P.ndim() == 2 ? size_t(P.shape(1)) : 0;
     need_shape(key, 0, n, "key");
-    F32Array normal_keep;
-    const float* nv = optional_f32(N, 3, n, "N", normal_keep);
     py::array_t<double> prob(n);
-    const float* p = P.data();
-    for (size_t i = 0; i < n; ++i) {
-        const float q[3] = {p[i], p[n + i], p[2 * n + i]};
-        const float m[3] = {nv ? nv[i] : 0.0f, nv ? nv[n + i] : 0.0f, nv ? nv[2 * n + i] : 0.0f};
-        prob.mutable_data()[i] = t.pdf(q, nv ? m : nullptr, key.data()[i]);
-    }
+    for_tree_points(P, N, [&](size_t i, const float* q, const float* m) {
+        prob.mutable_data()[i] = t.pdf(q, m, key.data()[i]);
+    });
     return prob;
 }
 
