@@ -24,6 +24,8 @@ own (environment.py), chosen last in the table.
 """
 from __future__ import annotations
 
+from collections import Counter
+
 import numpy as np
 
 from .area import AreaLight
@@ -89,7 +91,7 @@ class LightSet:
         # each kind an equal share: lamps (without a tree) or suns (with one), the emissive
         # triangles (without a tree) or the tree, the environment; lamps split theirs evenly
         kind = [g[0] for g in self._groups]
-        counts = {k: kind.count(k) for k in kind}
+        counts = Counter(kind)
         share = 1.0 / max(len(counts), 1)
         self._set_groups(np.asarray([share / counts[k] for k in kind], np.float64))
 
