@@ -640,8 +640,7 @@ class Integrator:
         # the MIS weights of BSDF rays that meet them
         self._record_key = self._tri_key = None
         if lights.tree is not None:
-            member = np.zeros(lights.num_entries, bool)
-            member[lights.tree_entries] = True
+            member = lights.tree_member
             self._record_key = np.full(len(self._record_lamps), -1, np.int32)
             self._record_key[:nl] = np.where(member[:nl], np.arange(nl), -1)
             self._tri_key = np.full(len(self.tri), -1, np.int32)

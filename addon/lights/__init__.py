@@ -87,6 +87,8 @@ class LightSet:
         self.num_entries = self.num_lamps + ntri + (environment is not None)
         # the light choice's entries: lamps, then emissive triangles, then the environment
         self.tree, self.tree_entries = build_tree(self.lamps, self.triangles, self.num_lamps, use_tree, tri_object)
+        self.tree_member = np.zeros(self.num_entries, bool)     # per entry: a light of the tree
+        self.tree_member[self.tree_entries] = True
         self._groups = self._group_table(ntri)
         # each kind an equal share: lamps (without a tree) or suns (with one), the emissive
         # triangles (without a tree) or the tree, the environment; lamps split theirs evenly
@@ -97,9 +99,7 @@ class LightSet:
 
     def _group_table(self, ntri):
         """[(kind, entries, weights within)]: the groups reweight splits the choice between."""
-        member = np.zeros(self.num_entries, bool)
-        member[self.tree_entries] = True
-        groups = [('lamps', np.array([i]), np.ones(1)) for i in range(self.num_lamps) if not member[i]]
+        groups = [('lamps', np.array([i]), np.ones(1)) for i in range(self.num_lamps) if not self.tree_member[i]]
         if self.tree is not None:
             # the first member holds the group's mass in the cdf (LightChoice: the tree picks)
             within = np.zeros(len(self.tree_entries))
@@ -127,7 +127,6 @@ class LightSet:
             for (kind, entries, _), g in zip(self._groups, group_p):
                 if kind == 'tree':
                     p[entries] = g / total
-            self.entry_prob = p.astype(F32)
             self.lamp_prob = p[:self.num_lamps].astype(F32)
             ntri = 0 if self.triangles is None else len(self.triangles.index)
             if self.triangles is not None:
@@ -135,7 +134,6 @@ class LightSet:
             self.env_prob = float(p[-1]) if self.environment is not None else 0.0
         else:
             self.cdf = np.zeros(0)
-            self.entry_prob = np.zeros(0, F32)
             self.lamp_prob = np.zeros(0, F32)
             self.env_prob = 0.0
 
@@ -177,10 +175,9 @@ class LightSet:
         """The solid-angle pdf of one light sample per point P[:, i] of entry which[i] (a lamp or
         an emissive triangle)."""
         pdf = np.zeros(P.shape[1], F32)
-        for e in np.unique(which):
+        for e in np.unique(which[which < self.num_lamps]):
             at = np.flatnonzero(which == e)
-            if e < self.num_lamps:
-                pdf[at] = self.lamps[int(e)].sample(P[:, at], u1[at], u2[at]).pdf
+            pdf[at] = self.lamps[int(e)].sample(P[:, at], u1[at], u2[at]).pdf
         tri = np.flatnonzero(which >= self.num_lamps)
         if len(tri):
             pdf[tri] = self.triangles.sample(np.ascontiguousarray(P[:, tri]), which[tri] - self.num_lamps,

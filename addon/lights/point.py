@@ -43,8 +43,8 @@ class PointLight(Lamp):
         self.emit = (self.color * fac).astype(F32)
 
     def bounds(self) -> Bounds:
-        # every direction: a spot's cone is left out, so the tree never culls a delta light
-        # (light sampling is its only estimator); on-axis intensity strength / 4 pi either way
+        # every direction (SpotLight narrows it to its cone); on-axis intensity strength / 4 pi
+        # either way
         r = F32(self.radius)
         energy = luminance(self.emit) * (1.0 if self.delta else np.pi * self.radius ** 2)
         return Bounds(self.center - r, self.center + r, np.array([0.0, 0.0, 1.0], F32), -1.0, 0.0, energy)

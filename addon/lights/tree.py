@@ -51,8 +51,9 @@ def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_objec
         groups.append(len(rows) + np.unique(objects, return_inverse=True)[1])
     energy = np.concatenate(energy)
     keys = np.concatenate(keys)
-    # a light too faint for float64 still has to be reachable: its energy floored, not 0
-    energy = np.clip(np.nan_to_num(energy, nan=0.0, posinf=1e200), 1e-300, 1e200)   # lighttree.cpp shares()
+    # a light too faint for float64 still has to be reachable: its energy floored, not 0; and
+    # capped so that energy / d^2 and sums of it stay finite (lighttree.cpp importance)
+    energy = np.clip(np.nan_to_num(energy, nan=0.0, posinf=1e200), 1e-300, 1e200)
     tree = dacrt.lamps.light_tree(np.concatenate(lo, axis=1), np.concatenate(hi, axis=1),
                                   np.concatenate(axis, axis=1), np.concatenate(cos_o), np.concatenate(cos_e),
                                   energy, keys.astype(np.int32), np.concatenate(groups).astype(np.int32))

@@ -159,10 +159,8 @@ std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F3
         need_shape(group_keep, 0, m, "group");
         in.group = group_keep.data();
     }
-    const std::string err = light_tree_error(in);
-    if (!err.empty()) throw py::value_error(err);
     py::gil_scoped_release nogil;
-    return std::make_shared<LightTree>(in);
+    return std::make_shared<LightTree>(in);  // it validates: std::invalid_argument is ValueError
 }
 
 void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D, F32Array t_surf,

@@ -51,11 +51,8 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
             if (tri_prob && tri_prob[q] > 0) {  // a BSDF ray: power heuristic against light sampling
                 const float o[3] = {O[i], O[n + i], O[2 * n + i]}, d[3] = {D[i], D[n + i], D[2 * n + i]};
                 float p_sel = tri_prob[q];
-                if (tree && tri_key && tri_key[q] >= 0) {  // as picked from o with the vertex's normal
-                    const float nv[3] = {normal ? normal[i] : 0.0f, normal ? normal[n + i] : 0.0f,
-                                         normal ? normal[2 * n + i] : 0.0f};
-                    p_sel = float(double(p_sel) * tree->pdf(o, normal ? nv : nullptr, tri_key[q]));
-                }
+                if (tree && tri_key && tri_key[q] >= 0)  // as picked from o with the vertex's normal
+                    p_sel = float(double(p_sel) * tree->pdf(o, normal, n, i, tri_key[q]));
                 float r = p_sel * triangle_light_pdf(geo, area, M, q, o, d, hits[i].t);
                 r /= pdf[i];
                 r *= r;

@@ -70,11 +70,8 @@ void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const 
             float w = 1.0f;
             if (lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
                 float p_sel = lamp_prob[lamps[k]];
-                if (key >= 0 && seen) {  // as picked from o with the vertex's normal
-                    const float nv[3] = {normal ? normal[i] : 0.0f, normal ? normal[n + i] : 0.0f,
-                                         normal ? normal[2 * n + i] : 0.0f};
-                    p_sel = float(double(p_sel) * tree->pdf(o, normal ? nv : nullptr, key));
-                }
+                if (key >= 0 && seen)  // as picked from o with the vertex's normal
+                    p_sel = float(double(p_sel) * tree->pdf(o, normal, n, i, key));
                 float r = p_sel * pdf_l / pdf_bsdf[i];
                 r *= r;
                 r += 1.0f;

@@ -57,27 +57,21 @@ Cone merge(const Cone& a, const Cone& b) {
     return c;
 }
 
-// The importance of node nd's lights at P (see lighttree.h) as energy x f / d2: returns f
-// and d2. N (null: none) is the receiving point's unit normal: lights wholly below its horizon
-// get f = 0.
-void weigh(const LightTreeNode& nd, const float P[3], const float* N, double& f, double& d2) {
+// The importance of node nd's own bounds at P (see lighttree.h): energy x f / d2, f the
+// incidence and emission cosines. N (null: none) is the receiving point's unit normal: lights
+// wholly below its horizon count 0.
+double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
     const double v[3] = {double(nd.center[0]) - P[0], double(nd.center[1]) - P[1], double(nd.center[2]) - P[2]};
     const double dd = dot3(v, v), r = nd.radius, r2 = r * r;
-    f = 1.0;
     if (N) {  // the box wholly below the tangent plane at P (its highest corner on or under it)
         const double reach = double(N[0]) * v[0] + double(N[1]) * v[1] + double(N[2]) * v[2] +
                              std::fabs(N[0]) * nd.half[0] + std::fabs(N[1]) * nd.half[1] + std::fabs(N[2]) * nd.half[2];
-        if (!(reach > 0.0)) {
-            f = 0.0;
-            d2 = std::max(dd, kMinDist2);
-            return;
-        }
+        if (!(reach > 0.0)) return 0.0;
     }
-    if (!(dd > r2)) {  // within the bounds (or NaN): no culling, and the distance to the centre
-        d2 = std::max(std::max(dd, 0.25 * r2), kMinDist2);  // at least half the radius (Cycles)
-        return;
-    }
-    d2 = std::max(dd, kMinDist2);
+    // within the bounds (or NaN): no culling, and the distance to the centre at least half the
+    // radius (Cycles)
+    if (!(dd > r2)) return nd.energy / std::max(std::max(dd, 0.25 * r2), kMinDist2);
+    double f = 1.0;
     const double d = std::sqrt(dd);
     const double sin_u = r / d, cos_u = std::sqrt(std::max(0.0, 1.0 - sin_u * sin_u));
     if (N) {  // the smallest angle of incidence any light of the node can have: theta_i - theta_u
@@ -86,10 +80,7 @@ void weigh(const LightTreeNode& nd, const float P[3], const float* N, double& f,
         if (cos_i < cos_u) {
             const double sin_i = std::sqrt(std::max(0.0, 1.0 - cos_i * cos_i));
             const double c = cos_i * cos_u + sin_i * sin_u;  // cos(theta_i - theta_u)
-            if (!(c > 0.0)) {
-                f = 0.0;
-                return;
-            }
+            if (!(c > 0.0)) return 0.0;
             f = c;
         }
     }
@@ -102,9 +93,11 @@ void weigh(const LightTreeNode& nd, const float P[3], const float* N, double& f,
         if (sin_p >= 0.0 && cos_t < cos_p) {                           // phi <= pi and theta > phi
             const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
             const double cos_r = cos_t * cos_p + sin_t * sin_p;        // cos(theta - phi)
-            f *= cos_r <= nd.cos_e ? 0.0 : cos_r;
+            if (cos_r <= nd.cos_e) return 0.0;
+            f *= cos_r;
         }
     }
+    return nd.energy * f / std::max(dd, kMinDist2);
 }
 
 // A node's importance at P: energy x f / d2 (weigh), looking one level further down for an
@@ -113,18 +106,9 @@ void weigh(const LightTreeNode& nd, const float P[3], const float* N, double& f,
 // sphere are not).
 double importance(const LightTreeNode* nodes, size_t at, const float P[3], const float* N) {
     const LightTreeNode& nd = nodes[at];
-    double f, d2;
-    if (nd.child < 0) {
-        weigh(nd, P, N, f, d2);
-        return f > 0.0 ? nd.energy * f / d2 : 0.0;
-    }
-    double sum = 0.0;
-    for (int k = 0; k < 2; ++k) {
-        const LightTreeNode& c = nodes[size_t(nd.child) + size_t(k)];
-        weigh(c, P, N, f, d2);
-        if (f > 0.0) sum += c.energy * f / d2;
-    }
-    return sum;
+    if (nd.child < 0) return weigh(nd, P, N);
+    const size_t c = size_t(nd.child);
+    return weigh(nodes[c], P, N) + weigh(nodes[c + 1], P, N);
 }
 
 // The probabilities of going to either of the two children c, c + 1 at P: by importance, by
@@ -320,20 +304,20 @@ std::string light_tree_error(const LightTreeInput& in) {
     if (in.m > (size_t(1) << 30)) return "a light tree holds at most 2^30 lights";
     std::vector<uint8_t> seen;
     for (size_t i = 0; i < in.m; ++i) {
-        const std::string at = "light " + std::to_string(i) + ": ";
+        const auto at = [i] { return "light " + std::to_string(i) + ": "; };  // built on error only
         for (int k = 0; k < 3; ++k) {
             const float lo = in.lo[k * in.m + i], hi = in.hi[k * in.m + i], ax = in.axis[k * in.m + i];
-            if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo <= hi)) return at + "bounds must be finite with lo <= hi";
-            if (!std::isfinite(ax)) return at + "axis must be finite";
+            if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo <= hi)) return at() + "bounds must be finite with lo <= hi";
+            if (!std::isfinite(ax)) return at() + "axis must be finite";
         }
         if (!(in.cos_o[i] >= -1.0f && in.cos_o[i] <= 1.0f) || !(in.cos_e[i] >= -1.0f && in.cos_e[i] <= 1.0f))
-            return at + "cos_o and cos_e must lie in [-1, 1]";
-        if (!(in.energy[i] > 0.0 && in.energy[i] <= 1e200)) return at + "energy must be > 0 and at most 1e200";
-        if (in.group && in.group[i] < 0) return at + "group must be >= 0";
+            return at() + "cos_o and cos_e must lie in [-1, 1]";
+        if (!(in.energy[i] > 0.0 && in.energy[i] <= 1e200)) return at() + "energy must be > 0 and at most 1e200";
+        if (in.group && in.group[i] < 0) return at() + "group must be >= 0";
         const int32_t key = in.key[i];
-        if (key < 0 || key >= (int32_t(1) << 30)) return at + "key must lie in 0..2^30-1";
+        if (key < 0 || key >= (int32_t(1) << 30)) return at() + "key must lie in 0..2^30-1";
         if (size_t(key) >= seen.size()) seen.resize(size_t(key) + 1, 0);
-        if (seen[size_t(key)]) return at + "key " + std::to_string(key) + " is not unique";
+        if (seen[size_t(key)]) return at() + "key " + std::to_string(key) + " is not unique";
         seen[size_t(key)] = 1;
     }
     return {};
@@ -440,6 +424,12 @@ double LightTree::pdf(const float P[3], const float* N, int64_t key) const {
         at = up;
     }
     return p;
+}
+
+double LightTree::pdf(const float P[3], const float* normals, size_t n, size_t i, int64_t key) const {
+    if (!normals) return pdf(P, nullptr, key);
+    const float N[3] = {normals[i], normals[n + i], normals[2 * n + i]};
+    return pdf(P, N, key);
 }
 
 }  // namespace dacrt

@@ -41,7 +41,7 @@ struct LightTreeNode {
 
 // The lights of a tree, m members, each with an axis-aligned box (lo, hi: 3 rows of m), an
 // emission cone (axis: 3 rows of m, unit or anything for cos_o = -1; cos_o, cos_e: m), an
-// energy (m, > 0, at most 1e200: shares stay finite) and the key it answers to (m distinct values >= 0, e.g. the light
+// energy (m, > 0, at most 1e200: importances stay finite) and the key it answers to (m distinct values >= 0, e.g. the light
 // choice's entry index).
 struct LightTreeInput {
     const float* lo;
@@ -76,6 +76,8 @@ public:
     int32_t sample(const float P[3], const float* N, double u, double& prob) const;
     // The probability that sample() at P, N picks key (0 when key is not a member).
     double pdf(const float P[3], const float* N, int64_t key) const;
+    // The same with N column i of normals (3 rows, stride n; null: none).
+    double pdf(const float P[3], const float* normals, size_t n, size_t i, int64_t key) const;
 
 private:
     std::vector<LightTreeNode> nodes_;
