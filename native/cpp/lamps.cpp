@@ -3,6 +3,10 @@
 // instead of one numpy pass per lamp and operation.
 #include "lamps.h"
 
+#include <algorithm>
+#include <vector>
+
+#include "lampbvh.h"
 #include "parallel.h"
 #include "shading.h"
 
@@ -31,6 +35,11 @@ std::string lamp_record_error(const LampRecord& r) {
 
 namespace {
 
+// Listed lamps from which lamp_gather goes ray by ray through a LampBVH rather than lamp by
+// lamp over the rays. Measured (1M cosine rays from a 40 m floor, 2 threads): 1 lamp 8 ns per
+// ray either way; 2 lamps 15 vs 12 ns, also when the two nearly touch; 1024 lamps 7.5 us vs 58 ns.
+constexpr size_t kLampBVHMin = 2;
+
 // The loops take every argument by value, so they live in registers or the thread's own
 // stack. Inside a parallel_for lambda they would be read through the captured references
 // after every (not inlined) sample_lamp call, from the calling thread's stack frame, whose
@@ -51,41 +60,84 @@ void sample_range(const LampRecord* rec, size_t R, const int32_t* entry, const f
     }
 }
 
-void gather_range(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
-                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
-                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
-                  const int32_t* lamp_key, const float* normal, size_t b, size_t e) {
-    // Lamp by lamp over the rays (each ray still adds its lamps in list order), and the add is
-    // selected, not branched on: whether a ray sees a lamp follows no pattern.
-    for (size_t k = 0; k < nl; ++k) {
-        const LampRecord& lamp = rec[lamps[k]];
+// lamp_gather's arguments (see lamps.h), passed by value like sample_range's.
+struct Gather {
+    const LampRecord* rec;
+    const int32_t* lamps;
+    size_t nl;
+    const float *lamp_prob, *O, *D, *t_surf;
+    const uint8_t* miss;
+    const float *thr, *pdf_bsdf;
+    const int64_t* pid;
+    size_t n;
+    float* L;
+    size_t N;
+    float clamp;
+    const LightTree* tree;
+    const int32_t* lamp_key;
+    const float* normal;
+};
+
+// Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
+// caller). The add is selected, not branched on: whether a ray sees a lamp follows no pattern.
+__attribute__((always_inline)) inline void gather_one(const Gather& g, const LampRecord& lamp, int kind, int32_t key,
+                                                      size_t k, size_t i) {
+    const size_t n = g.n;
+    const float o[3] = {g.O[i], g.O[n + i], g.O[2 * n + i]};
+    const float d[3] = {g.D[i], g.D[n + i], g.D[2 * n + i]};
+    float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
+    const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
+                                                                  : hit_lamp(lamp, o, d, g.t_surf[i], Le, pdf_l);
+    float w = 1.0f;
+    if (g.lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
+        float p_sel = g.lamp_prob[g.lamps[k]];
+        if (key >= 0 && seen)  // as picked from o with the vertex's normal
+            p_sel = float(double(p_sel) * g.tree->pdf(o, g.normal, n, i, key));
+        float r = p_sel * pdf_l / g.pdf_bsdf[i];
+        r *= r;
+        r += 1.0f;
+        w = 1.0f / r;
+    }
+    float* out = g.L + index_at(g.pid, i, g.N);
+    float v[3];
+    for (int a = 0; a < 3; ++a) {
+        v[a] = Le[a];
+        if (g.thr) v[a] *= g.thr[size_t(a) * n + i];
+        if (g.lamp_prob) v[a] *= w;
+    }
+    clamp_light(v, g.clamp);  // each lamp a ray meets is its own contribution, as in Cycles
+    for (int a = 0; a < 3; ++a) out[size_t(a) * g.N] += seen ? v[a] : 0.0f;
+}
+
+inline int32_t tree_key(const Gather& g, size_t k) {  // the lamp's key in the light tree, or -1
+    return g.tree && g.lamp_key ? g.lamp_key[g.lamps[k]] : -1;
+}
+
+// Lamp by lamp over the rays (each ray still adds its lamps in list order).
+void gather_range(Gather g, size_t b, size_t e) {
+    for (size_t k = 0; k < g.nl; ++k) {
+        const LampRecord& lamp = g.rec[g.lamps[k]];
         const int kind = int(lamp.kind);
-        const int32_t key = tree && lamp_key ? lamp_key[lamps[k]] : -1;  // a light of the tree
-        for (size_t i = b; i < e; ++i) {
-            const float o[3] = {O[i], O[n + i], O[2 * n + i]};
-            const float d[3] = {D[i], D[n + i], D[2 * n + i]};
-            float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
-            const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? miss[i] && miss_lamp(lamp, d, Le, pdf_l)
-                                                                          : hit_lamp(lamp, o, d, t_surf[i], Le, pdf_l);
-            float w = 1.0f;
-            if (lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
-                float p_sel = lamp_prob[lamps[k]];
-                if (key >= 0 && seen)  // as picked from o with the vertex's normal
-                    p_sel = float(double(p_sel) * tree->pdf(o, normal, n, i, key));
-                float r = p_sel * pdf_l / pdf_bsdf[i];
-                r *= r;
-                r += 1.0f;
-                w = 1.0f / r;
-            }
-            float* out = L + index_at(pid, i, N);
-            float v[3];
-            for (int a = 0; a < 3; ++a) {
-                v[a] = Le[a];
-                if (thr) v[a] *= thr[size_t(a) * n + i];
-                if (lamp_prob) v[a] *= w;
-            }
-            clamp_light(v, clamp);  // each lamp a ray meets is its own contribution, as in Cycles
-            for (int a = 0; a < 3; ++a) out[size_t(a) * N] += seen ? v[a] : 0.0f;
+        const int32_t key = tree_key(g, k);
+        for (size_t i = b; i < e; ++i) gather_one(g, lamp, kind, key, k, i);
+    }
+}
+
+// Ray by ray, over the lamps the BVH finds near it and those at infinity, in list order: the
+// same additions in the same order as gather_range, without the lamps a ray passes far from
+// (a delta lamp is never seen: the linear loop adds 0 for it).
+void gather_range_bvh(Gather g, const LampBVH& bvh, const std::vector<int32_t>& at_infinity, size_t b, size_t e) {
+    std::vector<int32_t> cand;
+    for (size_t i = b; i < e; ++i) {
+        cand.clear();
+        const float o[3] = {g.O[i], g.O[g.n + i], g.O[2 * g.n + i]};
+        const float d[3] = {g.D[i], g.D[g.n + i], g.D[2 * g.n + i]};
+        bvh.visit(o, d, g.t_surf[i], cand);
+        if (g.miss[i]) cand.insert(cand.end(), at_infinity.begin(), at_infinity.end());
+        std::sort(cand.begin(), cand.end());
+        for (int32_t k : cand) {
+            const LampRecord& lamp = g.rec[g.lamps[k]];
+            gather_one(g, lamp, int(lamp.kind), tree_key(g, size_t(k)), size_t(k), i);
         }
     }
 }
@@ -101,10 +153,18 @@ void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const f
                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
                  const int32_t* lamp_key, const float* normal) {
-    parallel_for(n, [&](size_t b, size_t e) {
-        gather_range(rec, lamps, nl, lamp_prob, O, D, t_surf, miss, thr, pdf_bsdf, pid, n, L, N, clamp, tree, lamp_key,
-                     normal, b, e);
-    });
+    const Gather g{rec, lamps, nl, lamp_prob, O, D, t_surf, miss, thr, pdf_bsdf, pid, n, L, N, clamp, tree, lamp_key, normal};
+    if (nl < kLampBVHMin) {
+        parallel_for(n, [&](size_t b, size_t e) { gather_range(g, b, e); });
+        return;
+    }
+    const LampBVH bvh(rec, lamps, nl);
+    std::vector<int32_t> at_infinity;  // the sun and background among the lamps, in list order
+    for (size_t k = 0; k < nl; ++k) {
+        const int kind = int(rec[lamps[k]].kind);
+        if (kind == LAMP_SUN || kind == LAMP_BACKGROUND) at_infinity.push_back(int32_t(k));
+    }
+    parallel_for(n, [&](size_t b, size_t e) { gather_range_bvh(g, bvh, at_infinity, b, e); });
 }
 
 }  // namespace dacrt

@@ -310,6 +310,98 @@ def test_gather_pdf_equals_sample_pdf(name):
     np.testing.assert_allclose(pdf_gather, pdf[good][seen], rtol=2e-3)
 
 
+def many_lamps(rng, count, spread=20.0):
+    """count lamps of every variant (delta ones, suns and the background among them) scattered
+    over a spread-metre box, turned and scaled at random, some repeated (a list may name a
+    record twice)."""
+    lamps = []
+    for j in range(count):
+        kind = VARIANTS[NAMES[j % (len(NAMES) - 1)]]
+        pose = (translation(*rng.uniform(-spread / 2, spread / 2, 3)) @ rotation_z(rng.uniform(0, 6.3))
+                @ rotation_x(rng.uniform(0, 6.3)) @ scale(*rng.uniform(0.1, 1.5, 3)))
+        lamps.append(make_lamp(light(kind.kind, RGB, pose, radius=kind.radius * rng.uniform(0.2, 2.0),
+                                     soft_falloff=kind.soft_falloff, spot_size=kind.spot_size,
+                                     spot_blend=kind.spot_blend, angle=kind.angle, shape=kind.shape,
+                                     size_x=kind.size_x, size_y=kind.size_y, spread=kind.spread)))
+    lamps.append(make('background'))
+    return lamps
+
+
+def rays_at_lamps(rng, lamps, n, far=1.0):
+    """Rays that meet lamps, graze them and pass them: origins around the box (far x its size)
+    and on lamp centres; directions at lamp centres with jitter, along the axes (zero
+    components), at random and at lamps' rims; surfaces at random distances, just beyond the
+    aim, or none."""
+    centres = np.array([lamp.center for lamp in lamps if hasattr(lamp, 'center')]).T
+    pick = lambda m: centres[:, rng.integers(0, centres.shape[1], m)]
+    O = rng.uniform(-12, 12, (3, n)) * far
+    on = rng.random(n) < 0.15
+    O[:, on] = pick(on.sum()) + rng.normal(size=(3, on.sum())) * 1e-4
+    target = pick(n) + rng.normal(size=(3, n)) * rng.choice([0.02, 0.3, 1.0], n)
+    D = target - O
+    kind = rng.random(n)
+    D[:, kind < 0.15] = rng.normal(size=(3, (kind < 0.15).sum()))
+    axis = (kind >= 0.15) & (kind < 0.3)
+    D[:, axis] = np.eye(3)[:, rng.integers(0, 3, axis.sum())] * rng.choice([-1, 1], axis.sum())
+    # a quarter aimed at the rims, where float32 rounding decides a meeting: a sphere's or
+    # disk's edge, an area light's corners and sides, from its emitting side
+    rim = np.flatnonzero(rng.random(n) < 0.25)
+    finite = [lamp for lamp in lamps if hasattr(lamp, 'center') and not lamp.delta]
+    for i, j in zip(rim, rng.integers(0, len(finite), len(rim))):
+        lamp = finite[j]
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        if hasattr(lamp, 'normal'):
+            d = d if d @ lamp.normal < 0 else -d
+            sx, sy = rng.choice([-0.5, 0.5], 2) * (1 + rng.normal(size=2) * 1e-6)
+            if rng.random() < 0.5:
+                sx = rng.uniform(-0.5, 0.5)
+            B = lamp.center + sx * lamp.axis_x + sy * lamp.axis_y
+        else:
+            u = rng.normal(size=3)
+            u -= (u @ d) * d
+            B = lamp.center + lamp.radius * (1 + rng.normal() * 1e-6) * u / np.linalg.norm(u)
+        O[:, i] = B - d * rng.uniform(0.5, 20) * far
+        D[:, i] = d
+        target[:, i] = B
+    t_centre = np.linalg.norm(target - O, axis=0)
+    D = (D / np.linalg.norm(D, axis=0)).astype(F32)
+    t_surf = np.select([kind < 0.5, kind < 0.7], [np.inf, t_centre * 1.0001], rng.uniform(0, 30 * far, n))
+    miss = ~np.isfinite(t_surf) & (rng.random(n) < 0.8)
+    return O.astype(F32), D, t_surf.astype(F32), miss
+
+
+@pytest.mark.parametrize('mode', ['camera', 'bsdf', 'far'])
+def test_gather_many_lamps_equals_lamp_by_lamp(mode):
+    """With many lamps listed, lamp_gather tests each ray only against the lamps a BVH finds
+    near it (lamps.cpp). Its sums must be bit for bit those of gathering one lamp at a time in
+    list order (each call the plain lamp-by-lamp loop): the same additions in the same order,
+    and no lamp a ray meets left out, also for rays from 1000x farther than the lamps' spread
+    (the boxes' rounding margin) and along the axes."""
+    rng = np.random.default_rng(['camera', 'bsdf', 'far'].index(mode) + 40)
+    lamps = many_lamps(rng, 300)
+    rec = lamp_records(lamps)
+    listed = np.concatenate([np.arange(len(lamps)), rng.integers(0, len(lamps), 20)]).astype(np.int32)
+    rng.shuffle(listed)                                     # any order, duplicates included
+    n, N = 30_000, 40_000
+    O, D, t_surf, miss = rays_at_lamps(rng, lamps, n, far=1000.0 if mode == 'far' else 1.0)
+    pid = rng.permutation(N)[:n]
+    bsdf = mode == 'bsdf'
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=rng.uniform(0.05, 1.0, len(lamps)).astype(F32))
+    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    L = L0.copy()
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, L, **kw)
+    one_by_one = L0.copy()
+    for j in listed:
+        dacrt.lamps.lamp_gather(rec, [j], O, D, t_surf, miss, pid, one_by_one, **kw)
+    changed = (one_by_one != L0).any(axis=0)[pid]
+    assert changed.sum() > (300 if mode == 'far' else 2000), 'too few rays see a lamp to test it'
+    np.testing.assert_array_equal(L, one_by_one)
+
+
 def test_delta_lamps_are_never_gathered():
     rng = np.random.default_rng(3)
     lamps = [make('point_delta'), make('spot_hard'), make('sun_delta')]

@@ -1,0 +1,137 @@
+// The lamp BVH of lampbvh.h: boxes per lamp kind, a median-split build, and a padded slab test.
+#include "lampbvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace dacrt {
+
+bool lamp_box(const LampRecord& L, float lo[3], float hi[3]) {
+    const int kind = int(L.kind), shape = int(L.shape);
+    float ext[3];
+    if ((kind == LAMP_POINT || kind == LAMP_SPOT) && shape != POINT_DELTA) {
+        // a sphere, or a disk through the centre: within radius of the centre either way
+        for (int a = 0; a < 3; ++a) ext[a] = L.radius;
+    } else if (kind == LAMP_AREA) {
+        // rectangle or ellipse spanned by half the axes around the centre
+        for (int a = 0; a < 3; ++a) ext[a] = 0.5f * (std::fabs(L.axis_x[a]) + std::fabs(L.axis_y[a]));
+    } else {
+        return false;
+    }
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = L.pos[a] - ext[a];
+        hi[a] = L.pos[a] + ext[a];
+    }
+    return true;
+}
+
+LampBVH::LampBVH(const LampRecord* rec, const int32_t* lamps, size_t nl) {
+    std::vector<float> box, centre;
+    std::vector<int32_t> items, position;
+    for (size_t k = 0; k < nl; ++k) {
+        float lo[3], hi[3];
+        if (!lamp_box(rec[lamps[k]], lo, hi)) continue;
+        // the rounding of the lamp's own coordinates in hit_lamp (|pos| and its extent)
+        float mag = 0.0f;
+        for (int a = 0; a < 3; ++a) mag = std::max({mag, std::fabs(lo[a]), std::fabs(hi[a]), hi[a] - lo[a]});
+        const float pad = kSlack * mag;
+        for (int a = 0; a < 3; ++a) box.push_back(lo[a] - pad);
+        for (int a = 0; a < 3; ++a) box.push_back(hi[a] + pad);
+        for (int a = 0; a < 3; ++a) centre.push_back(0.5f * (lo[a] + hi[a]));
+        items.push_back(int32_t(items.size()));
+        position.push_back(int32_t(k));
+    }
+    if (items.empty()) return;
+    nodes_.reserve(2 * items.size());  // a binary tree over m >= 1 leaves' items: < 2m nodes
+    nodes_.emplace_back();
+    build(items, 0, items.size(), box, centre, 0);
+    order_.reserve(items.size());
+    for (int32_t j : items) order_.push_back(position[size_t(j)]);  // leaf by leaf
+}
+
+void LampBVH::build(std::vector<int32_t>& items, size_t b, size_t e, const std::vector<float>& box,
+                    const std::vector<float>& centre, size_t slot) {
+    Node node;
+    float clo[3], chi[3];
+    for (int a = 0; a < 3; ++a) {
+        node.lo[a] = clo[a] = std::numeric_limits<float>::infinity();
+        node.hi[a] = chi[a] = -std::numeric_limits<float>::infinity();
+    }
+    for (size_t i = b; i < e; ++i) {
+        const size_t j = size_t(items[i]);
+        for (int a = 0; a < 3; ++a) {
+            node.lo[a] = std::min(node.lo[a], box[6 * j + a]);
+            node.hi[a] = std::max(node.hi[a], box[6 * j + 3 + a]);
+            clo[a] = std::min(clo[a], centre[3 * j + a]);
+            chi[a] = std::max(chi[a], centre[3 * j + a]);
+        }
+    }
+    if (e - b <= size_t(kLeafSize)) {
+        node.first = int32_t(b);
+        node.count = int32_t(e - b);
+        nodes_[slot] = node;
+        return;
+    }
+    // median of the centroids along their widest axis: lamps are small and similar in size
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+        if (chi[a] - clo[a] > chi[axis] - clo[axis]) axis = a;
+    const size_t mid = b + (e - b) / 2;
+    std::nth_element(items.begin() + long(b), items.begin() + long(mid), items.begin() + long(e),
+                     [&](int32_t x, int32_t y) { return centre[3 * size_t(x) + axis] < centre[3 * size_t(y) + axis]; });
+    node.first = int32_t(nodes_.size());
+    node.count = 0;
+    nodes_[slot] = node;
+    nodes_.emplace_back();
+    nodes_.emplace_back();
+    build(items, b, mid, box, centre, size_t(node.first));
+    build(items, mid, e, box, centre, size_t(node.first) + 1);
+}
+
+void LampBVH::visit(const float O[3], const float D[3], float tmax, std::vector<int32_t>& out) const {
+    if (nodes_.empty()) return;
+    // A point hit_lamp computes at parameter t may be off by ~ulps of |O| and of t (|D| = 1)
+    // on every axis: the box grows by c (M + t), M = |O|max. On axis a that is
+    //   (D_a + c) t >= lo_a - O_a - c M   and   (D_a - c) t <= hi_a - O_a + c M,
+    // a slab test whose bounds are lower or upper by the signs of D_a +- c (at |D_a| < c the
+    // widening outruns the ray: both are lower bounds).
+    const float c = kSlack;
+    const float M = std::max({std::fabs(O[0]), std::fabs(O[1]), std::fabs(O[2])});
+    float inv_p[3], inv_m[3], off_lo[3], off_hi[3];
+    bool lower_p[3], upper_m[3];
+    for (int a = 0; a < 3; ++a) {
+        const float ap = D[a] + c, am = D[a] - c;
+        inv_p[a] = 1.0f / ap;  // a zero gives +-inf: the bound is then +-inf or (0 x inf) NaN, ignored
+        inv_m[a] = 1.0f / am;
+        lower_p[a] = !std::signbit(ap);
+        upper_m[a] = !std::signbit(am);
+        off_lo[a] = -O[a] - c * M;
+        off_hi[a] = -O[a] + c * M;
+    }
+    const float t_end = tmax + c * (M + tmax);
+    int32_t stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const Node& node = nodes_[size_t(stack[--top])];
+        float tn = 0.0f, tf = t_end;
+        for (int a = 0; a < 3; ++a) {
+            const float x = (node.lo[a] + off_lo[a]) * inv_p[a], y = (node.hi[a] + off_hi[a]) * inv_m[a];
+            // NaN bounds compare false and are ignored: the test stays conservative
+            if (lower_p[a]) tn = x > tn ? x : tn;
+            else tf = x < tf ? x : tf;
+            if (upper_m[a]) tf = y < tf ? y : tf;
+            else tn = y > tn ? y : tn;
+        }
+        if (!(tn <= tf)) continue;
+        if (node.count == 0) {
+            stack[top++] = node.first;
+            stack[top++] = node.first + 1;
+        } else {
+            for (int32_t i = 0; i < node.count; ++i) out.push_back(order_[size_t(node.first + i)]);
+        }
+    }
+}
+
+}  // namespace dacrt
