@@ -1996,6 +1996,8 @@ class _Out:
         self.material = np.empty(m, np.int32)
         self.visibility = np.empty(m, np.uint8)
         self.object_index = np.empty(m, np.int32)
+        self.instance = np.empty(m, np.int32)    # the placement: instances of one object differ
+        self.instances = 0                        # placements written so far
         self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
         self.tangents = None              # (m, 3, 4), allocated by the first normal-mapped mesh
         self.terminator = None            # (m, 2), allocated by the first object that has one
@@ -2011,8 +2013,8 @@ class _Out:
 
     def geometry(self):
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
-                       visibility=self.visibility, object_index=self.object_index, uvs=self.uvs,
-                       terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
+                       visibility=self.visibility, object_index=self.object_index, instance=self.instance,
+                       uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
                        colors=self.colors)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
@@ -2656,6 +2658,7 @@ class _Exporter:
                 np.take(p.slot_map, a.slot, mode='clip', out=out.material[S])
             out.visibility[S] = p.visibility
             out.object_index[S] = p.object_index
+            out.instance[S] = out.instances + i
             # Cycles lifts shadow rays off smooth triangles only; the shading offset is for all
             term = (p.terminator[0] if a.normal_rows is not None else 0.0, p.terminator[1])
             if any(term):
@@ -2677,6 +2680,7 @@ class _Exporter:
                 self._world_tangents(a, p, lin[i], i in mirrored, out, S)
             if attributed and not attributed.isdisjoint(p.slot_map.tolist()):
                 self._attribute_colors(a, p, i in mirrored, out, S)
+        out.instances += k
         return bad, deg
 
     def _corner_albedo(self, a, k, name, object_name):

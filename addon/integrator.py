@@ -586,7 +586,8 @@ class Integrator:
         # a map diffuse rays cannot see lights nothing; camera rays may still see it (not
         # through transparent film)
         self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None,
-                               use_tree=bool(getattr(self.settings, 'use_light_tree', True)), tri_object=ob)
+                               use_tree=bool(getattr(self.settings, 'use_light_tree', True)),
+                               tri_object=ob if sd.geometry.instance is None else sd.geometry.instance)
         self._camera_env = env if (env is not None and wv & VIS_CAMERA and not self.transparent
                                    and not env.dark) else None
         if self.lights.skipped_lamps:

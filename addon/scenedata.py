@@ -171,6 +171,9 @@ class Geometry:
                                    # material reads (Material.uv_map), or None
     visibility: np.ndarray         # (M,) uint8 bits VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW | HOLDOUT
     object_index: np.ndarray       # (M,) int32 index into SceneData.object_names
+    # (M,) int32 the placement (object or instance of one) each triangle comes from: the light
+    # tree makes each emissive instance a light of its own; None: object_index stands in
+    instance: Optional[np.ndarray] = None
     # (M,2) float32 Cycles' shadow terminator of each triangle's object: its geometry offset
     # (0 on flat-shaded meshes, as Cycles applies it to smooth triangles only) and shading
     # offset, both 0..1; None: all 0

@@ -85,6 +85,52 @@ def test_collection_instances_read_mesh_once_and_transform_each(scene, exported)
         assert np.allclose(dist, r, atol=1e-5), f"instance at x={x0} has radius {r}"
 
 
+def test_emissive_instances_are_lights_of_their_own(scene, exported):
+    """Each placement of a mesh (the object, every collection instance, every Geometry Nodes
+    instance) has its own instance id, so the light tree holds each emissive instance as a
+    light of its own (one object id for all of them made them one leaf, sampled by power
+    wherever the shading point was)."""
+    from addon.integrator import Integrator
+    setup(scene)
+    bulb = scenes.uv_sphere("Bulb", radius=0.2, segments=8, rings=4)
+    bulb.data.materials.append(scenes.emission("Glow", (1.0, 0.9, 0.7), 20.0))
+    _instance(scene, bulb, [((3.0 * i, 0.0, 2.0), (1.0, 1.0, 1.0)) for i in range(1, 5)])
+    field = scenes.plane("Field")
+    _gn_instances(field, 3, 2, 8.0)
+    ng = field.modifiers["GN"].node_group                        # the cones made emissive
+    setmat = ng.nodes.new('GeometryNodeSetMaterial')
+    setmat.inputs['Material'].default_value = scenes.emission("Cones", (0.5, 0.5, 1.0), 5.0)
+    ng.links.new(ng.nodes['Cone'].outputs['Mesh'], setmat.inputs['Geometry'])
+    ng.links.new(setmat.outputs['Geometry'], ng.nodes['Instance on Points'].inputs['Instance'])
+    field.location = (0, 0, -3)
+    scenes.light('POINT', 100.0, (0, 0, 5))
+    data = exported()
+    g = data.geometry
+    bulbs, cones = of_object(data, "Bulb"), ~of_object(data, "Bulb")
+    assert len(np.unique(g.object_index[bulbs])) == 1            # one object ...
+    ids = np.unique(g.instance[bulbs])
+    assert len(ids) == 5                                         # ... placed five times
+    for i in ids:                                                # each id one whole sphere
+        c = corners(g, g.instance == i)
+        assert np.ptp(c, axis=0).max() == pytest.approx(0.4, abs=1e-4)
+    assert len(np.unique(g.instance[cones])) == 6 and not set(g.instance[cones]) & set(ids)
+    integ = Integrator(data)
+    try:
+        lights = integ.lights
+        assert lights.tree is not None and lights.tree.nodes == 2 * (1 + 5 + 6) - 1     # 12 leaves
+        # half a metre under one bulb, looking up: the tree picks that bulb, not by power
+        tris = lights.triangles
+        inst = g.instance[tris.index]
+        v0 = tris.geo[0:3].T                                     # (the integrator's frame)
+        near, far = ids[1], ids[-1]
+        P = (v0[inst == near].mean(axis=0) - (0.0, 0.0, 0.5)).astype(np.float32)
+        key = lights.num_lamps + np.array([np.flatnonzero(inst == near)[0], np.flatnonzero(inst == far)[0]])
+        pdf = lights.tree.pdf(np.repeat(P[:, None], 2, axis=1), key, np.tile(np.float32([[0], [0], [1]]), 2))
+        assert pdf[0] > 10 * pdf[1], pdf
+    finally:
+        integ.close()
+
+
 def test_many_smooth_instances_keep_outward_unit_normals(scene, exported):
     """Six instances (the batched transform path) of a smooth sphere, scaled unevenly and one
     mirrored: every corner normal is unit length and follows the ellipsoid's gradient."""
