@@ -2000,6 +2000,7 @@ class _Out:
         self.instances = 0                        # placements written so far
         self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
         self.tangents = None              # (m, 3, 4), allocated by the first normal-mapped mesh
+        self.tangent_xf = None            # (m, 3, 3), allocated with tangents
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
@@ -2015,6 +2016,7 @@ class _Out:
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, instance=self.instance,
                        uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
+                       tangent_xf=self.tangent_xf,
                        colors=self.colors)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
@@ -2728,11 +2730,13 @@ class _Exporter:
                 block[rows] = block[rows][:, [0, 2, 1]]
 
     def _world_tangents(self, a, place, lin, mirrored, out, S):
-        """The world-space tangents (unit) and bitangent signs of one instance's triangles whose
-        material has a normal map, as Cycles' object-space normal map math turned to world
-        space: a mirroring transform flips the sign (cross(M n, M t) = det(M) M^-T cross(n, t)).
-        A mesh without tangents keeps zeros there: the normal map then leaves the normal as
-        it is (Cycles' fallback without the tangent attribute)."""
+        """The object-space tangents (unit) and bitangent signs of one instance's triangles whose
+        material has a normal map, with the instance's linear map (out.tangent_xf): Cycles
+        bends the normal in object space and turns the result to world space with the normal
+        matrix M^-T, which only a similarity (rotation, uniform scale, mirror) makes the same as
+        bending it in a world-space frame. A mesh without tangents keeps zeros there: the
+        normal map then leaves the normal as it is (Cycles' fallback without the tangent
+        attribute)."""
         mats = self.materials.materials
         wants = {k for k in set(place.slot_map) if mats[k].normal_texture is not None}
         if not wants:
@@ -2745,13 +2749,11 @@ class _Exporter:
             return
         if out.tangents is None:
             out.tangents = np.zeros((len(out.triangles), 3, 4), np.float32)
+            out.tangent_xf = np.zeros((len(out.triangles), 3, 3), np.float32)
         rows = np.flatnonzero(np.isin(out.material[S], list(wants)))
-        t = tan[rows, :, :3] @ lin.T.astype(np.float32)
-        length = np.linalg.norm(t, axis=-1, keepdims=True)
-        t = np.where(length > 0, t / np.where(length > 0, length, 1), 0).astype(np.float32)
         block = out.tangents[S]
-        block[rows, :, :3] = t
-        block[rows, :, 3] = -tan[rows, :, 3] if mirrored else tan[rows, :, 3]
+        block[rows] = tan[rows]
+        out.tangent_xf[S][rows] = lin.astype(np.float32)
         if mirrored:                      # corners 1 and 2 were swapped for these triangles
             block[rows] = block[rows][:, [0, 2, 1]]
 

@@ -203,6 +203,9 @@ class _Triangles:
         # (8:12), for normal maps
         tangents = getattr(geometry, 'tangents', None)
         self.tangents = None if tangents is None else dacrt.shading.corner_rows(np.asarray(tangents, F32))
+        # (M, 3, 3) the object-to-world map of those triangles: their tangents are object-space
+        xf = getattr(geometry, 'tangent_xf', None)
+        self.tangent_xf = None if xf is None else np.asarray(xf, F32)
         # rows: corner 0 colour (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9): the
         # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors)
         colors = getattr(geometry, 'colors', None)
@@ -1200,11 +1203,12 @@ class Integrator:
     def _normal_mapped(self, prim, u, v, ns, ng, correction):
         """The shading normals (3, k) at hits (prim, u, v) with their materials' tangent-space
         normal maps applied as Cycles' svm_node_normal_map: c = 2 x texel - 1, its x, y times
-        the strength and z mixed from 1, N = normalize(c.x T + c.y sign (n x T) + c.z n) with T
-        the interpolated tangent and n the interpolated (unnormalized) smooth normal of the
-        front face, turned to the side the ray came from as ns is (ng: the geometric normal on
-        that side). A new array; hits of other materials keep ns. correction (k,): filled with
-        each hit's material's Bump Map Correction (0 or 1)."""
+        the strength and z mixed from 1, N = normalize(M^-T (c.x T + c.y sign (n x T) + c.z n)),
+        all in object space (M the triangle's tangent_xf; world space, M = 1, without one), T
+        the interpolated tangent and n the front face's normal (the geometric one, or the corner
+        normals interpolated, unnormalized), turned to the side the ray came from as ns is (ng:
+        the geometric normal on that side). A new array; hits of other materials keep ns.
+        correction (k,): filled with each hit's material's Bump Map Correction (0 or 1)."""
         out = np.array(ns, F32, copy=True)
         correction[:] = 0.0
         mat = np.take(self.tri.material, prim)
@@ -1221,13 +1225,27 @@ class Integrator:
             c[2] = F32(1.0) + (c[2] - F32(1.0)) * F32(min(strength, 1.0))
             tr = np.take(t, p, axis=1)
             T = tr[0:4] + tr[4:8] * uu + tr[8:12] * vv          # tangent (0:3) and sign (3)
+            M = None if self.tri.tangent_xf is None else np.take(self.tri.tangent_xf, p, axis=0)
             if normals is None:
                 n = np.take(geo[9:12], p, axis=1)
+                if M is not None:                 # object space: normalize(M^T Ng), as Cycles
+                    n = _unit(np.einsum('kji,jk->ik', M, n))
             else:
                 nr = np.take(normals, p, axis=1)
-                n = nr[0:3] + nr[3:6] * uu + nr[6:9] * vv
+                corners = (nr[0:3], nr[0:3] + nr[3:6], nr[0:3] + nr[6:9])
+                if M is not None:                 # each corner's normal back in object space
+                    corners = [_unit(np.einsum('kji,jk->ik', M, x)) for x in corners]
+                n = corners[0] + (corners[1] - corners[0]) * uu + (corners[2] - corners[0]) * vv
             B = T[3] * np.cross(n, T[:3], axis=0)
             N = c[0] * T[:3] + c[1] * B + c[2] * n
+            if M is not None:
+                # to world space by the normal matrix: M^-T N = sign(det M) (N.x (b x c) +
+                # N.y (c x a) + N.z (a x b)) up to a positive scale, a, b, c the columns of M (all
+                # 0 for a triangle without tangents: good is False there)
+                a, b, cc = (np.moveaxis(M[:, :, j], 0, 1) for j in range(3))
+                bc, ca, ab = np.cross(b, cc, axis=0), np.cross(cc, a, axis=0), np.cross(a, b, axis=0)
+                flip = np.where((a * bc).sum(axis=0) < 0, F32(-1.0), F32(1.0))
+                N = (N[0] * bc + N[1] * ca + N[2] * ab) * flip
             length = np.sqrt((N * N).sum(axis=0))
             good = (length > 0) & np.isfinite(length) & (np.abs(T[:3]).sum(axis=0) > 0)
             # back faces: the ray meets the side opposite the winding normal
@@ -1941,6 +1959,12 @@ class _Sinks:
             if not (name == 'Env' and transparent):
                 self.L += a
         data.update((name, self.arrays[name]) for name in self.passes)
+
+
+def _unit(v):
+    """Columns of v (3, k) scaled to unit length (0 stays 0)."""
+    length = np.sqrt((v * v).sum(axis=0))
+    return (v / np.where(length > 0, length, 1)).astype(F32)
 
 
 def bump_shadowing(Ns, N, I, correction):

@@ -181,10 +181,14 @@ class Geometry:
     # (M,) bool: the triangle's mesh has a UV map (uvs there are 0 where not, as Cycles reads a
     # missing attribute; the UV pass's third channel is 0 there); None: every mesh has one
     has_uv: Optional[np.ndarray] = None
-    # (M,3,4) float32 per corner: the world-space unit tangent (mikktspace, of the UV map the
-    # triangle's material reads) and the bitangent sign, for normal maps; 0 where none; None: no
-    # material has a normal map
+    # (M,3,4) float32 per corner: the unit tangent (mikktspace, of the UV map the triangle's
+    # material reads; in object space when tangent_xf is given, else in world space) and the
+    # bitangent sign, for normal maps; 0 where none; None: no material has a normal map
     tangents: Optional[np.ndarray] = None
+    # (M,3,3) float32: the object-to-world linear map (3x3 of the instance's matrix) of the
+    # triangles with tangents, whose tangents are then in object space as Cycles keeps them;
+    # None: tangents are world-space (or there are none)
+    tangent_xf: Optional[np.ndarray] = None
     # (M,3,3) float32 per corner: the albedo factor of triangles whose material reads a mesh
     # attribute (Material.color_attribute), interpolated like UVs; 1 elsewhere; None: none does
     colors: Optional[np.ndarray] = None

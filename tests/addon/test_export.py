@@ -1665,11 +1665,12 @@ def test_shader_aovs_exported(scene, exported):
     assert s.world_aovs["mask"][1] == pytest.approx(0.125) and "tint" not in s.world_aovs
 
 
-def test_normal_map_material_and_world_tangents(scene, exported):
+def test_normal_map_material_and_object_tangents(scene, exported):
     """A BSDF's Normal fed by a tangent-space Normal Map node of an image: the material carries
-    the image and the strength, and its triangles get world-space unit tangents (Blender's
-    mikktspace, turned by the object) and bitangent signs, flipped with a mirroring transform;
-    other triangles keep zeros; a bump node is still reported as ignored."""
+    the image and the strength, and its triangles get Blender's object-space mikktspace tangents
+    and bitangent signs (as Cycles keeps them) with the object's linear map (tangent_xf), a
+    mirroring one included; other triangles keep zeros; a bump node is still reported as
+    ignored."""
     setup(scene)
     img = bpy.data.images.new("Normals", 2, 2)
     img.colorspace_settings.name = 'Non-Color'
@@ -1693,11 +1694,17 @@ def test_normal_map_material_and_world_tangents(scene, exported):
     assert "Normal input ('Bump') ignored" in table["Bumped"].approximated
     g = data.geometry
     plain, mirrored, other = (g.tangents[of_object(data, n)] for n in ("Plain", "Mirrored", "Other"))
-    # the plane's UV u runs along its local +x, turned 90 degrees about z: world +y
-    np.testing.assert_allclose(plain[..., :3], np.broadcast_to([0.0, 1.0, 0.0], plain[..., :3].shape), atol=1e-6)
-    np.testing.assert_allclose(mirrored[..., :3], -plain[..., :3], atol=1e-6)  # local x mirrored first
-    assert np.all(plain[..., 3] == 1.0) and np.all(mirrored[..., 3] == -1.0)
+    # the plane's UV u runs along its local +x, in object space for both
+    np.testing.assert_allclose(plain[..., :3], np.broadcast_to([1.0, 0.0, 0.0], plain[..., :3].shape), atol=1e-6)
+    np.testing.assert_allclose(mirrored[..., :3], plain[..., :3], atol=1e-6)
+    assert np.all(plain[..., 3] == 1.0) and np.all(mirrored[..., 3] == 1.0)
     assert not other.any()
+    # the objects' linear maps: a quarter turn about z, after mirroring x for the second
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    xf_plain, xf_mirrored = (g.tangent_xf[of_object(data, n)] for n in ("Plain", "Mirrored"))
+    np.testing.assert_allclose(xf_plain, np.broadcast_to(turn, xf_plain.shape), atol=1e-6)
+    np.testing.assert_allclose(xf_mirrored, np.broadcast_to(turn @ np.diag([-1.0, 1.0, 1.0]), xf_mirrored.shape),
+                               atol=1e-6)
 
 
 # -- view layer overrides and filters (as Cycles syncs them) ---------------------------------

@@ -104,3 +104,40 @@ def test_normal_map_on_a_smooth_sphere_matches_cycles(tmp_path):
         a = exr[f"{layer}.Combined.A"].sum()
         means[e] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
     np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.01)
+
+
+@pytest.mark.parametrize('scale', [(0.5, 0.5, 1.0), (1.6, 0.6, 1.0), (1.3, 1.3, 1.3)])
+def test_normal_map_on_a_scaled_plane_matches_cycles(scale, tmp_path):
+    """Cycles bends the normal in object space and turns it to world space with the normal
+    matrix (M^-T): under a non-uniform scale the world-space tilt is not the object-space one
+    (a plane scaled (0.5, 0.5, 1) tilts twice as far). The bent normals as Cycles writes them,
+    and the plane's brightness."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 64, 32
+    scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=4.2 * max(scale[0], scale[1]) / 2)
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "normal.png",
+                                                  np.array([[[190, 160, 217], [38, 100, 217]]], np.uint8)))
+    img.colorspace_settings.name = 'Non-Color'
+    mat = scenes.normal_map_material("Bumpy", img, 1.0, 'Closest')
+    bpy.ops.mesh.primitive_plane_add(size=4.0, rotation=(0.0, 0.0, math.radians(30.0)))
+    plane = bpy.context.active_object
+    plane.scale = scale
+    plane.data.materials.append(mat)
+    sun = scenes.light('SUN', 3.0)
+    sun.rotation_euler = (0.0, math.radians(35.0), 0.0)
+    sc.cycles.samples = sc.dacrt.samples = 16
+    sc.cycles.use_denoising = False
+    sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.dacrt.max_bounces = 0
+    sc.view_layers[0].use_pass_normal = True
+    layer = sc.view_layers[0].name
+    exrs = scenes.render_engines(sc, tmp_path)
+    nrm = {e: np.stack([exr[f"{layer}.Normal.{c}"] for c in 'XYZ'], axis=-1) for e, exr in exrs.items()}
+    img = {e: exr[f"{layer}.Combined.R"] for e, exr in exrs.items()}
+    hit = (np.abs(nrm['CYCLES']).sum(-1) > 0.5) & (np.abs(nrm['DACRT']).sum(-1) > 0.5)
+    assert hit.mean() > 0.2
+    # (pixels on the texel boundary and the plane's edge mix two normals differently)
+    close = (np.abs(nrm['DACRT'] - nrm['CYCLES']).max(-1) < 2e-3)[hit]
+    assert close.mean() > 0.95, f"bent normals differ from Cycles' on {1 - close.mean():.1%} of the plane"
+    np.testing.assert_allclose(nrm['DACRT'][hit].mean(0), nrm['CYCLES'][hit].mean(0), atol=2e-3)
+    np.testing.assert_allclose(img['DACRT'][hit].mean(), img['CYCLES'][hit].mean(), rtol=0.002)
