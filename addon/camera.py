@@ -135,6 +135,8 @@ class CameraModel:
     def sees(self, rx, ry):
         """Which raster positions have a camera ray: None when all do (every camera but a
         fisheye or mirror ball, whose rays end at the edge of their circle)."""
+        if self.pano is None:      # (without mapping every sample to the view plane first)
+            return None
         return self._sees_viewplane(*self._viewplane(rx, ry))
 
     def _sees_viewplane(self, u, v):
