@@ -2000,7 +2000,7 @@ class _Out:
         self.instances = 0                        # placements written so far
         self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
         self.tangents = None              # (m, 3, 4), allocated by the first normal-mapped mesh
-        self.tangent_xf = None            # (m, 3, 3), allocated with tangents
+        self.linear = []                  # per batch, its placements' 3x3 maps (k, 3, 3)
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
@@ -2016,11 +2016,12 @@ class _Out:
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, instance=self.instance,
                        uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
-                       tangent_xf=self.tangent_xf,
                        colors=self.colors)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
-        return sd.Geometry(vertices=self.vertices, **per_tri)
+        # per placement (instance id), for the object-space tangents of normal maps
+        xf = np.concatenate(self.linear).astype(np.float32) if self.tangents is not None else None
+        return sd.Geometry(vertices=self.vertices, tangent_xf=xf, **per_tri)
 
 
 def _rewind(rows):
@@ -2683,6 +2684,7 @@ class _Exporter:
             if attributed and not attributed.isdisjoint(p.slot_map.tolist()):
                 self._attribute_colors(a, p, i in mirrored, out, S)
         out.instances += k
+        out.linear.append(lin)
         return bad, deg
 
     def _corner_albedo(self, a, k, name, object_name):
@@ -2731,7 +2733,7 @@ class _Exporter:
 
     def _world_tangents(self, a, place, lin, mirrored, out, S):
         """The object-space tangents (unit) and bitangent signs of one instance's triangles whose
-        material has a normal map, with the instance's linear map (out.tangent_xf): Cycles
+        material has a normal map (with Geometry.tangent_xf, the placements' linear maps): Cycles
         bends the normal in object space and turns the result to world space with the normal
         matrix M^-T, which only a similarity (rotation, uniform scale, mirror) makes the same as
         bending it in a world-space frame. A mesh without tangents keeps zeros there: the
@@ -2749,11 +2751,9 @@ class _Exporter:
             return
         if out.tangents is None:
             out.tangents = np.zeros((len(out.triangles), 3, 4), np.float32)
-            out.tangent_xf = np.zeros((len(out.triangles), 3, 3), np.float32)
         rows = np.flatnonzero(np.isin(out.material[S], list(wants)))
         block = out.tangents[S]
         block[rows] = tan[rows]
-        out.tangent_xf[S][rows] = lin.astype(np.float32)
         if mirrored:                      # corners 1 and 2 were swapped for these triangles
             block[rows] = block[rows][:, [0, 2, 1]]
 

@@ -203,9 +203,13 @@ class _Triangles:
         # (8:12), for normal maps
         tangents = getattr(geometry, 'tangents', None)
         self.tangents = None if tangents is None else dacrt.shading.corner_rows(np.asarray(tangents, F32))
-        # (M, 3, 3) the object-to-world map of those triangles: their tangents are object-space
+        # (M, 3, 3) the object-to-world map of each triangle's placement: their tangents are
+        # object-space (tangent_xf, per placement, by the triangle's instance id)
         xf = getattr(geometry, 'tangent_xf', None)
+        if xf is not None and getattr(geometry, 'instance', None) is None:
+            raise ValueError("geometry.tangent_xf needs geometry.instance (the placement of each triangle)")
         self.tangent_xf = None if xf is None else np.asarray(xf, F32)
+        self.instance = None if xf is None else np.asarray(geometry.instance, np.int64)
         # rows: corner 0 colour (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9): the
         # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors)
         colors = getattr(geometry, 'colors', None)
@@ -1204,7 +1208,7 @@ class Integrator:
         """The shading normals (3, k) at hits (prim, u, v) with their materials' tangent-space
         normal maps applied as Cycles' svm_node_normal_map: c = 2 x texel - 1, its x, y times
         the strength and z mixed from 1, N = normalize(M^-T (c.x T + c.y sign (n x T) + c.z n)),
-        all in object space (M the triangle's tangent_xf; world space, M = 1, without one), T
+        all in object space (M the triangle's placement's tangent_xf; world space, M = 1, without one), T
         the interpolated tangent and n the front face's normal (the geometric one, or the corner
         normals interpolated, unnormalized), turned to the side the ray came from as ns is (ng:
         the geometric normal on that side). A new array; hits of other materials keep ns.
@@ -1225,7 +1229,8 @@ class Integrator:
             c[2] = F32(1.0) + (c[2] - F32(1.0)) * F32(min(strength, 1.0))
             tr = np.take(t, p, axis=1)
             T = tr[0:4] + tr[4:8] * uu + tr[8:12] * vv          # tangent (0:3) and sign (3)
-            M = None if self.tri.tangent_xf is None else np.take(self.tri.tangent_xf, p, axis=0)
+            M = None if self.tri.tangent_xf is None else \
+                np.take(self.tri.tangent_xf, np.take(self.tri.instance, p), axis=0)
             if normals is None:
                 n = np.take(geo[9:12], p, axis=1)
                 if M is not None:                 # object space: normalize(M^T Ng), as Cycles
@@ -1240,8 +1245,7 @@ class Integrator:
             N = c[0] * T[:3] + c[1] * B + c[2] * n
             if M is not None:
                 # to world space by the normal matrix: M^-T N = sign(det M) (N.x (b x c) +
-                # N.y (c x a) + N.z (a x b)) up to a positive scale, a, b, c the columns of M (all
-                # 0 for a triangle without tangents: good is False there)
+                # N.y (c x a) + N.z (a x b)) up to a positive scale, a, b, c the columns of M
                 a, b, cc = (np.moveaxis(M[:, :, j], 0, 1) for j in range(3))
                 bc, ca, ab = np.cross(b, cc, axis=0), np.cross(cc, a, axis=0), np.cross(a, b, axis=0)
                 flip = np.where((a * bc).sum(axis=0) < 0, F32(-1.0), F32(1.0))

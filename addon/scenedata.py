@@ -185,9 +185,9 @@ class Geometry:
     # material reads; in object space when tangent_xf is given, else in world space) and the
     # bitangent sign, for normal maps; 0 where none; None: no material has a normal map
     tangents: Optional[np.ndarray] = None
-    # (M,3,3) float32: the object-to-world linear map (3x3 of the instance's matrix) of the
-    # triangles with tangents, whose tangents are then in object space as Cycles keeps them;
-    # None: tangents are world-space (or there are none)
+    # (P,3,3) float32: the object-to-world linear map (3x3 of the matrix) of each placement, by
+    # instance id (instance must be given): tangents are then in object space, as Cycles keeps
+    # them; None: tangents are world-space (or there are none)
     tangent_xf: Optional[np.ndarray] = None
     # (M,3,3) float32 per corner: the albedo factor of triangles whose material reads a mesh
     # attribute (Material.color_attribute), interpolated like UVs; 1 elsewhere; None: none does

@@ -1701,7 +1701,7 @@ def test_normal_map_material_and_object_tangents(scene, exported):
     assert not other.any()
     # the objects' linear maps: a quarter turn about z, after mirroring x for the second
     turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-    xf_plain, xf_mirrored = (g.tangent_xf[of_object(data, n)] for n in ("Plain", "Mirrored"))
+    xf_plain, xf_mirrored = (g.tangent_xf[g.instance[of_object(data, n)]] for n in ("Plain", "Mirrored"))
     np.testing.assert_allclose(xf_plain, np.broadcast_to(turn, xf_plain.shape), atol=1e-6)
     np.testing.assert_allclose(xf_mirrored, np.broadcast_to(turn @ np.diag([-1.0, 1.0, 1.0]), xf_mirrored.shape),
                                atol=1e-6)
