@@ -60,7 +60,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from . import hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular
+from . import emissionsampling, hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular
 from . import scenedata as sd
 from .mapping import environment_rotation, texture_transform, uv_map_name
 from .nodeeval import constant, constant_color, constant_value
@@ -1014,6 +1014,7 @@ class _MaterialBuilder:
                            bump_correction=bool(getattr(getattr(mat, 'cycles', None), 'use_bump_map_correction',
                                                         True)),
                            emission=emission, texture=texture,
+                           emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,

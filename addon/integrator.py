@@ -271,6 +271,9 @@ class _Materials:
         self.colored = np.array([getattr(m, 'color_attribute', None) is not None for m in materials])
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
         self.emissive = self.emission.max(axis=0) > 0
+        # emitters light sampling may pick (Emission Sampling, scenedata.Material)
+        self.light_sampled = np.array([getattr(m, 'emission_sampling', 'FRONT_BACK') != 'NONE'
+                                       for m in materials], bool)
         # transparency (3, materials) and the opacity textures (index, texture, interpolation,
         # extension, uv transform), as scenedata.Material describes them
         self.transparency = np.zeros((3, len(materials)), F32)
@@ -585,16 +588,18 @@ class Integrator:
             lamps.append(bg)
         vis = self.tri.visibility
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
-        # same emitters.
-        tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(),
-                                 self._tri_emissive & ((vis & VIS_DIFFUSE) != 0),
+        # same emitters; of those, the materials' Emission Sampling (None: BSDF rays alone)
+        hittable = self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)
+        sampled = hittable & self.mats.light_sampled[self.tri.material] if len(self.tri) else hittable
+        tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(), sampled,
                                  power_emission=self._tri_emission) if self._any_emissive else None
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None
         # a map diffuse rays cannot see lights nothing; camera rays may still see it (not
         # through transparent film)
         self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None,
                                use_tree=bool(getattr(self.settings, 'use_light_tree', True)),
-                               tri_object=ob if sd.geometry.instance is None else sd.geometry.instance)
+                               tri_object=ob if sd.geometry.instance is None else sd.geometry.instance,
+                               unsampled_emitters=bool((hittable & ~sampled).any()))
         self._camera_env = env if (env is not None and wv & VIS_CAMERA and not self.transparent
                                    and not env.dark) else None
         if self.lights.skipped_lamps:

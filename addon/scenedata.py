@@ -102,6 +102,9 @@ class Material:
     name: str
     base_color: np.ndarray                        # (3,) linear albedo (multiplies the texture if any)
     emission: np.ndarray                          # (3,) colour x strength, two-sided radiance
+    # Cycles' Emission Sampling, Auto resolved (addon/emissionsampling.py): 'NONE' leaves the
+    # emitter to BSDF rays (light sampling never picks it); 'FRONT' and 'BACK' sample both sides
+    emission_sampling: str = 'FRONT_BACK'
     texture: Optional[np.ndarray] = None          # (h, w, 4) float32 linear RGBA, row 0 at the bottom,
                                                   # or a texture.UdimTiles of such tiles; an image's
                                                   # texture.ImageTexels, or a texture.EncodedTexels,

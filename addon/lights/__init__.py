@@ -66,8 +66,12 @@ class LightSet:
     """All light sources of a frame and the choice of one per shading point (see module doc)."""
 
     def __init__(self, lamps, triangles: EmissiveTriangles | None, num_triangles: int,
-                 environment: EnvironmentLight | None = None, use_tree: bool = True, tri_object=None):
+                 environment: EnvironmentLight | None = None, use_tree: bool = True, tri_object=None,
+                 unsampled_emitters: bool = False):
         lit = [l for l in lamps if not l.dark]
+        # emissive triangles light sampling never picks (Emission Sampling None): BSDF rays
+        # still find them
+        self.unsampled_emitters = unsampled_emitters
         self.skipped_lamps = [l.name for l in lamps if l.dark]
         if environment is not None and environment.dark:
             self.skipped_lamps.append('World (black environment map)')
@@ -197,5 +201,5 @@ class LightSet:
     @property
     def seen_by_bsdf(self) -> bool:
         """Whether BSDF rays can collect any light (emissive triangles, visible lamps, world)."""
-        return (self.triangles is not None or self.environment is not None
+        return (self.triangles is not None or self.environment is not None or self.unsampled_emitters
                 or any(l.seen_by_bsdf for l in self.lamps + self.unsampled_lamps))

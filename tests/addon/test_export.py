@@ -1665,6 +1665,54 @@ def test_shader_aovs_exported(scene, exported):
     assert s.world_aovs["mask"][1] == pytest.approx(0.125) and "tint" not in s.world_aovs
 
 
+def test_emission_sampling_follows_cycles(scene, exported):
+    """Each material's Emission Sampling as Cycles resolves it (scene/shader.cpp): the setting,
+    or for Auto the shader's emission estimate (colour x strength; a linked colour counts 1, a
+    colour plugged into Surface 0.1; Add sums, Mix mixes by a constant factor and sums by a
+    linked one) above 0.5 in some channel: both sides, else none."""
+    setup(scene)
+    made = {}
+
+    def emitter(name, color=(1.0, 1.0, 1.0), strength=1.0, method='AUTO'):
+        made[name] = mat = scenes.emission(name, color, strength)
+        mat.cycles.emission_sampling = method
+        return mat
+
+    emitter("Bright")
+    emitter("Dim", strength=0.3)
+    emitter("DarkColour", color=(0.2, 0.1, 0.1), strength=3.0)              # 0.6 in red
+    emitter("Forced", strength=0.3, method='FRONT_BACK')
+    emitter("Front", method='FRONT')
+    emitter("Off", strength=50.0, method='NONE')
+    made["PrincipledDim"] = scenes.principled("PrincipledDim", (0.5, 0.5, 0.5), (1.0, 1.0, 1.0), 0.4)
+    made["PrincipledBright"] = scenes.principled("PrincipledBright", (0.5, 0.5, 0.5), (1.0, 0.5, 0.5), 2.0)
+    for name, strength in (("ImageDim", 0.4), ("ImageBright", 0.6)):     # a linked colour counts 1
+        mat = emitter(name, strength=strength)
+        img = bpy.data.images.new(name + "Texels", 2, 2)
+        img.pixels = [0.1, 0.1, 0.1, 1.0] * 4
+        tex = mat.node_tree.nodes.new('ShaderNodeTexImage')
+        tex.image = img
+        mat.node_tree.links.new(tex.outputs['Color'], mat.node_tree.nodes['Emission'].inputs['Color'])
+    for name, fac, linked in (("MixHalf", 0.5, False), ("MixLinked", 0.5, True)):
+        mat, nt, mix, e, d = scenes.mix_shader_material(name, 'ShaderNodeEmission', 'ShaderNodeBsdfDiffuse', fac)
+        e.inputs['Strength'].default_value = 0.8                    # 0.4 mixed in, 0.8 summed
+        if linked:
+            nt.links.new(nt.nodes.new('ShaderNodeValue').outputs[0], mix.inputs['Fac'])
+        made[name] = mat
+    mat, nt, out = scenes._material("ColourToSurface")               # Cycles' auto-converted emission
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (4.0, 4.0, 4.0, 1.0)
+    nt.links.new(rgb.outputs[0], out.inputs['Surface'])
+    made["ColourToSurface"] = mat
+    for i, (name, mat) in enumerate(made.items()):
+        scenes.plane(name + "Plane", location=(3.0 * i, 0, 0), materials=[mat])
+    table = {m.name: m.emission_sampling for m in exported().materials if m.name in made}
+    both, none = 'FRONT_BACK', 'NONE'
+    assert table == {"Bright": both, "Dim": none, "DarkColour": both, "Forced": both, "Front": 'FRONT',
+                     "Off": none, "PrincipledDim": none, "PrincipledBright": both, "ImageDim": none,
+                     "ImageBright": both, "MixHalf": none, "MixLinked": both, "ColourToSurface": none}, table
+
+
 def test_normal_map_material_and_object_tangents(scene, exported):
     """A BSDF's Normal fed by a tangent-space Normal Map node of an image: the material carries
     the image and the strength, and its triangles get Blender's object-space mikktspace tangents
