@@ -41,8 +41,8 @@ def _scene_bytes(scene_data):
     """What the exported scene holds: geometry, and every image a material reads (with the
     texels kept as Cycles stores them for lookup, texture.stored_texels)."""
     g = scene_data.geometry
-    arrays = [g.vertices, g.triangles, g.material, g.normals, g.uvs, g.visibility, g.object_index, g.instance,
-              getattr(g, 'tangents', None), getattr(g, 'tangent_xf', None),
+    arrays = [g.vertices, g.triangles, g.material, g.normals, g.uvs, g.visibility, g.object_index,
+              getattr(g, 'instance', None), getattr(g, 'tangents', None), getattr(g, 'tangent_xf', None),
               getattr(g, 'colors', None)]
     images = [getattr(m, k, None) for m in scene_data.materials
               for k in ('texture', 'opacity', 'emission_texture', 'normal_texture')]
