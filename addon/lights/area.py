@@ -40,9 +40,24 @@ class AreaLight(Lamp):
             raise ValueError(f"area light {light.name!r}: object transform makes the light degenerate")
         self.center = m[:3, 3].astype(F32)
         self.axis_x, self.axis_y = ax.astype(F32), ay.astype(F32)
-        self.inv_x = (ax / ax.dot(ax)).astype(F32)      # local coordinate = dot(q - c, inv)
-        self.inv_y = (ay / ay.dot(ay)).astype(F32)
-        self.normal = (-z / np.linalg.norm(z)).astype(F32)    # emitting side
+        self.sheared = _sheared(m[:3, :3])
+        if not self.sheared:
+            self.inv_x = (ax / ax.dot(ax)).astype(F32)      # local coordinate = dot(q - c, inv)
+            self.inv_y = (ay / ay.dot(ay)).astype(F32)
+            self.normal = (-z / np.linalg.norm(z)).astype(F32)    # emitting side
+        else:
+            # a sheared matrix (a rotated child of a non-uniformly scaled parent): the
+            # parallelogram (or the ellipse in it) the axes span emits, on the side of -z, and
+            # every formula reads it so: its own normal and area, and the dual basis of the
+            # axes for local coordinates (Cycles treats the axes as orthogonal: export warns)
+            n = np.cross(ax, ay)
+            n = n if n.dot(z) >= 0 else -n
+            area = np.linalg.norm(n) * (np.pi / 4 if self.ellipse else 1.0)
+            n = n / np.linalg.norm(n)
+            bx, by = np.cross(ay, n), np.cross(n, ax)
+            self.inv_x = (bx / bx.dot(ax)).astype(F32)
+            self.inv_y = (by / by.dot(ay)).astype(F32)
+            self.normal = (-n).astype(F32)
         self.area = float(area)
         fac = 1.0 / (np.pi * self.area) if self.normalize else 1.0 / np.pi
         self.emit = (self.color * fac).astype(F32)
@@ -188,3 +203,12 @@ class AreaLight(Lamp):
             cos_l = -denom[idx]
             pdf = tc * tc / (self._box_area(full[inside]) * frac[inside] * cos_l)
         return idx, outer(self.emit, self._spread(np.ones(len(idx), F32), cos_l, np.take(D, idx, axis=1))), pdf
+
+
+def _sheared(linear) -> bool:
+    """Whether a 3x3 object-to-world map's columns are not orthogonal (beyond rounding)."""
+    length = np.linalg.norm(linear, axis=0)
+    if not (length > 0).all():
+        return False
+    c = linear / length
+    return max(abs(c[:, 0] @ c[:, 1]), abs(c[:, 0] @ c[:, 2]), abs(c[:, 1] @ c[:, 2])) > 1e-4

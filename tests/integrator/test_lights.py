@@ -180,6 +180,44 @@ def test_area_rectangle_scaled_object():
 
 
 
+@pytest.mark.parametrize('shape', ['RECTANGLE', 'ELLIPSE'])
+def test_area_sheared_is_the_parallelogram_it_spans(shape):
+    """A rotated child of a non-uniformly scaled parent: a sheared matrix. The lamp is the
+    parallelogram its axes span (or the ellipse inside it) emitting on the side of -z: the
+    plane's light equals that of an emissive mesh of that shape and radiance, and light sampling
+    alone (MIS off) agrees with MIS (an inconsistent normal, area or local frame would not)."""
+    c, s_ = np.cos(0.6), np.sin(0.6)
+    turn = np.array([[c, -s_, 0, 0], [s_, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+    m = translation(z=0.8) @ np.diag([2.0, 0.5, 1.0, 1.0]) @ turn @ rotation_x(0.3)
+    area = light('AREA', 40.0, m, shape=shape, size_x=0.6, size_y=0.9)
+    lamp = make_lamp(area)
+    assert lamp.sheared
+    ax, ay = lamp.axis_x.astype(np.float64), lamp.axis_y.astype(np.float64)
+    assert lamp.area == pytest.approx(np.linalg.norm(np.cross(ax, ay)) * (np.pi / 4 if shape == 'ELLIPSE' else 1))
+    # the same shape as a mesh: a fan around the centre (64 segments for the ellipse)
+    k = 64 if shape == 'ELLIPSE' else 4
+    t = 2 * np.pi * (np.arange(k) + 0.5) / k
+    rim = (np.stack([np.cos(t), np.sin(t)], 1) * 0.5 if shape == 'ELLIPSE'
+           else np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]))
+    centre = m[:3, 3]
+    verts = np.concatenate([[centre], centre + rim[:, :1] * ax + rim[:, 1:] * ay])
+    fan = np.array([(0, 1 + i, 1 + (i + 1) % k) for i in range(k)])
+    mesh_area = 0.5 * np.linalg.norm(np.cross(verts[fan[:, 1]] - verts[fan[:, 0]],
+                                              verts[fan[:, 2]] - verts[fan[:, 0]]), axis=1).sum()
+    radiance = 40.0 / (np.pi * mesh_area)
+    base = plane_scene([], samples=512, camera=ortho_down(height=0.3, width=16, px=16, view=1.5))
+    from .scenes import ALL_VIS, geometry, quad
+    v0, t0 = quad((0.0, 0.0, 0.0), 1000.0, 1000.0)
+    glow = material('glow', (0.0, 0.0, 0.0), emission=(radiance,) * 3)
+    mesh = dataclasses.replace(base, materials=base.materials + [glow],
+                               geometry=geometry([(v0, t0, 1, ALL_VIS), (verts, fan, 2, ALL_VIS)]))
+    ref, ref_err = pixel_stats(render(mesh))
+    for use_mis in (True, False):
+        lamp_scene = dataclasses.replace(base, lights=[dataclasses.replace(area, use_mis=use_mis)])
+        mean, err = pixel_stats(render(lamp_scene))
+        assert ref > 0.05 and abs(mean - ref) < 4 * np.hypot(err, ref_err) + 2e-3 * ref, (use_mis, mean, ref, err)
+
+
 def test_area_is_one_sided():
     down = light('AREA', 100.0, translation(z=1.0) @ rotation_x(np.pi), size_x=1.0)   # emits +Z
     integ = lit([down], samples=16)
