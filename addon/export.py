@@ -364,6 +364,18 @@ def export_light(ob, matrix, messages):
             messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} "
                                         "at its object's scale): it emits nothing, as in Cycles; skipped"))
             return None
+        # a sheared matrix (a light under a rotated child of a non-uniformly scaled parent):
+        # Cycles keeps the normalised columns as the lamp's axes and direction (scene/light.cpp)
+        # and samples it as a spherical rectangle (kernel/light/area.h), whose construction
+        # assumes orthogonal axes, so its light there follows no surface (0.43x the mean of
+        # this renderer's on a 2 x 0.5 parent); here the parallelogram the axes span emits
+        # (lights/area.py), the same to light sampling and to BSDF rays
+        with np.errstate(divide='ignore', invalid='ignore'):      # (a flattened axis: no shear to see)
+            c = m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0)
+        if max(abs(c[:, 0] @ c[:, 1]), abs(c[:, 0] @ c[:, 2]), abs(c[:, 1] @ c[:, 2])) > 1e-4:
+            messages.append(('WARNING', f"area light '{ob.name}' has a sheared transform (a rotation under a "
+                                        "non-uniform scale): rendered as the parallelogram its axes span; "
+                                        "Cycles treats the axes as orthogonal and its light differs"))
         # Cycles renders spread 0 as a beam straight out of the lamp (cos > 0.9999997); here
         # the narrowest spread sampled reliably, 1e-4 radians, whose light is the same
         spread = max(float(light.spread), MIN_SPREAD)

@@ -1230,6 +1230,23 @@ def test_portal_area_lights_emit_nothing(scene, exported):
     assert [l.name for l in exported().lights] == ["Lamp"]
 
 
+def test_sheared_area_light_is_reported(scene, exported):
+    """An area light turned under a non-uniformly scaled parent has a sheared matrix, which
+    Cycles renders as if its axes were orthogonal: the render says so, naming the light; a
+    light scaled non-uniformly on its own axes is not sheared and says nothing."""
+    setup(scene)
+    parent = scenes.link(bpy.data.objects.new("Rig", None))
+    parent.scale = (2.0, 0.5, 1.0)
+    sheared = scenes.light('AREA', 100.0, (0, 0, 3), rotation=(0.3, 0.0, 0.6), name="Tilted", size=0.5)
+    sheared.parent = parent
+    plain = scenes.light('AREA', 100.0, (2, 0, 3), name="Stretched", size=0.5)
+    plain.scale = (3.0, 0.5, 1.0)
+    s = exported()
+    assert {l.name for l in s.lights} == {"Tilted", "Stretched"}
+    said = [t for _, t in s.messages if "sheared" in t]
+    assert len(said) == 1 and "'Tilted'" in said[0], said
+
+
 def test_light_max_bounces_exported(scene, exported):
     """Cycles' Light > Max Bounces reaches the render (light sampling skips the light deeper),
     with nothing reported."""
