@@ -280,6 +280,29 @@ def build_emissive():
     camera((0.3, -4.0, 1.1), (0.0, 0.3, 0.8), lens=30.0)
 
 
+def build_emission_sampling():
+    """Emitters light sampling leaves alone or in part (Material > Settings > Emission Sampling):
+    a back wall glowing at 0.4 (Auto: under Cycles' 0.5, BSDF rays alone), a bright sphere set
+    to None, a panel set to Front (Cycles samples its front only, DACRT both sides) seen from
+    both sides, and an area light."""
+    white = diffuse("White", (0.75, 0.75, 0.75))
+    quad("Floor", [(-1.5, -1.5, 0), (1.5, -1.5, 0), (1.5, 1.5, 0), (-1.5, 1.5, 0)], white)
+    quad("Left", [(-1.5, -1.5, 0), (-1.5, 1.5, 0), (-1.5, 1.5, 2), (-1.5, -1.5, 2)],
+         diffuse("Left", (0.3, 0.5, 0.7)))
+    quad("Ceiling", [(-1.5, -1.5, 2), (-1.5, 1.5, 2), (1.5, 1.5, 2), (1.5, -1.5, 2)], white)
+    quad("Back", [(-1.5, 1.5, 0), (1.5, 1.5, 0), (1.5, 1.5, 2), (-1.5, 1.5, 2)],
+         emission("Glow wall", (1.0, 0.8, 0.6), 0.4))
+    ball = emission("Unsampled", (0.5, 0.8, 1.0), 6.0)
+    ball.cycles.emission_sampling = 'NONE'
+    uv_sphere("Ball", 0.2, ball, (0.6, 0.3, 0.3), segments=16, rings=8, smooth=True)
+    front = emission("Front only", (1.0, 0.5, 0.3), 4.0)
+    front.cycles.emission_sampling = 'FRONT'
+    quad("Panel", [(-0.3, -0.2, 0.2), (-0.3, 0.6, 0.2), (-0.3, 0.6, 1.2), (-0.3, -0.2, 1.2)], front)
+    lamp("Key", 'AREA', 60.0, (0.8, -0.6, 1.9), size=0.3)
+    bpy.context.scene.world = None
+    camera((0.3, -4.0, 1.1), (0.0, 0.3, 0.8), lens=30.0)
+
+
 def build_instances():
     """Instanced and modified geometry: two collection instances (one rotated and
     non-uniformly scaled), an Array modifier, a Subdivision Surface modifier and Geometry
@@ -656,6 +679,8 @@ SPECS = (
     ParitySpec("many_lights", build_many_lights, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("outdoor", build_outdoor, (64, 48), 3, 'GAUSSIAN', 1.5, 128, 32, 128, 32),
     ParitySpec("emissive", build_emissive, (64, 48), 3, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
+    ParitySpec("emission_sampling", build_emission_sampling, (64, 48), 3, 'BLACKMAN_HARRIS', 1.5,
+               128, 32, 128, 32),
     ParitySpec("instances", build_instances, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("ortho_border", build_ortho_border, (192, 144), 1, 'BLACKMAN_HARRIS', 2.0, 128, 32, 128, 32),
     ParitySpec("depth_of_field", build_depth_of_field, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
