@@ -1998,6 +1998,16 @@ class _MeshArrays:
         return out
 
 
+def _per_corner_all(rows, index, out):
+    """out (k, nt, 3, c) = rows (k, n, c) at index (nt, 3) for each of k instances (_MeshArrays.
+    per_corner for all of them at once); index None: rows are the corners."""
+    if index is None:
+        out[...] = rows.reshape(out.shape)
+    else:
+        np.take(rows, index, axis=1, out=out, mode='clip')
+    return out
+
+
 class _Out:
     """The frame's geometry arrays, allocated once at their final size and filled in place by
     each mesh batch; triangles some batch drops are removed in one pass at the end."""
@@ -2673,34 +2683,47 @@ class _Exporter:
             if not ok.all():
                 np.copyto(n, np.float32(0), where=~ok)
             per = normals.reshape(k, nt, 3, 3)
-            for i in range(k):
-                a.per_corner(n[i], a.normal_index, per[i])
+            _per_corner_all(n, a.normal_index, per)
             for i in mirrored:
                 _rewind(per[i])
             if not ok.all():
-                corner_ok = np.empty((k, nt, 3, 1), bool)
-                for i in range(k):
-                    a.per_corner(ok[i], a.normal_index, corner_ok[i])
+                corner_ok = _per_corner_all(ok, a.normal_index, np.empty((k, nt, 3, 1), bool))
                 for i in mirrored:
                     _rewind(corner_ok[i])
                 np.copyto(normals, ng[:, None, :], where=~corner_ok.reshape(k * nt, 3, 1))
-        # the materials whose albedo follows an attribute or Object Info (most scenes: none)
-        attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
+        # per placement, for all k at once (a scatter's 100K instances: a Python step each was
+        # most of the batch): materials (placements sharing a slot map share their rows),
+        # visibility, object and instance ids, shadow terminator
+        rows = slice(t0, t0 + k * nt)
+        material = out.material[rows].reshape(k, nt)
+        by_map = {}
         for i, p in enumerate(places):
-            S = slice(t0 + i * nt, t0 + (i + 1) * nt)
-            if len(p.slot_map) == 1 or a.slot is None:     # index clamped as Blender does
-                out.material[S] = p.slot_map[0]
-            else:
-                np.take(p.slot_map, a.slot, mode='clip', out=out.material[S])
-            out.visibility[S] = p.visibility
-            out.object_index[S] = p.object_index
-            out.instance[S] = out.instances + i
-            # Cycles lifts shadow rays off smooth triangles only; the shading offset is for all
-            term = (p.terminator[0] if a.normal_rows is not None else 0.0, p.terminator[1])
+            by_map.setdefault(id(p.slot_map), []).append(i)
+        for ids in by_map.values():
+            slot_map = places[ids[0]].slot_map
+            material[ids] = slot_map[0] if len(slot_map) == 1 or a.slot is None else \
+                np.take(slot_map, a.slot, mode='clip')     # index clamped as Blender does
+        for name, values in (('visibility', [p.visibility for p in places]),
+                             ('object_index', [p.object_index for p in places])):
+            arr = getattr(out, name)
+            arr[rows].reshape(k, nt)[...] = np.asarray(values, arr.dtype)[:, None]
+        out.instance[rows].reshape(k, nt)[...] = (out.instances + np.arange(k, dtype=np.int32))[:, None]
+        # Cycles lifts shadow rays off smooth triangles only; the shading offset is for all
+        smooth = a.normal_rows is not None
+        for i, p in enumerate(places):
+            term = (p.terminator[0] if smooth else 0.0, p.terminator[1])
             if any(term):
                 if out.terminator is None:
                     out.terminator = np.zeros((len(out.triangles), 2), np.float32)
-                out.terminator[S] = term
+                out.terminator[t0 + i * nt:t0 + (i + 1) * nt] = term
+        # the materials whose albedo follows an attribute or Object Info (most scenes: none)
+        attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
+        if out.uvs is None and not self.materials.normal_mapped and not attributed:
+            out.instances += k
+            out.linear.append(lin)
+            return bad, deg
+        for i, p in enumerate(places):
+            S = slice(t0 + i * nt, t0 + (i + 1) * nt)
             if out.uvs is not None:
                 if a.corner_uvs is None:
                     out.uvs[S] = 0.0
