@@ -409,11 +409,13 @@ def _light_shader_factor(light, name, messages):
 # ----------------------------------------------------------------------------------------
 # World
 
-def export_world(scene, view_layer=None):
+def export_world(scene, view_layer=None, camera=None, by_ray=None):
     """(uniform background radiance (3,), scenedata.Environment or None, reason string if the
     world had to be approximated) of the world the view layer renders with (effective_world).
     An Environment Texture feeding the Background's Color is exported as an image (its Mapping
-    node's rotation included); other inputs use their own value."""
+    node's rotation included); other inputs use their own value. camera True / False: the world
+    as camera rays / all other rays see it, a Mix Shader whose factor is a Light Path's Is
+    Camera Ray giving 1 / 0 (each such mix appends to the list by_ray); None: its own value."""
     world = effective_world(scene, view_layer)
     none = np.zeros(3, np.float32)
     if world is None:
@@ -429,11 +431,18 @@ def export_world(scene, view_layer=None):
     volume = out.inputs.get('Volume')
     if volume is not None and linked_link(volume) is not None:
         reasons.append("world volume ignored")      # a world's fog or haze: no volumes here
-    uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0)
+    uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, camera,
+                                  by_ray if by_ray is not None else [])
     return uniform.astype(np.float32), env, '; '.join(dict.fromkeys(reasons))
 
 
-def _world_surface(socket, weight, color, reasons, depth):
+def _is_camera_ray(socket):
+    """Whether a Mix Shader's factor is a Light Path node's Is Camera Ray output."""
+    link = linked_link(socket)
+    return link is not None and link.from_node.type == 'LIGHT_PATH' and link.from_socket.name == 'Is Camera Ray'
+
+
+def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()):
     """(uniform radiance, Environment or None) of what feeds a world shader socket at
     `weight`: Background and Emission (the same for the world in Cycles), Add Shader and Mix
     Shader (constant factor) of them, a colour or value (an emission of it, as Cycles converts
@@ -450,10 +459,14 @@ def _world_surface(socket, weight, color, reasons, depth):
         reasons.append(f"world surface has {node.bl_label}, not a Background node; world colour used for it")
         return color * np.float32(weight), None
     if t in ('ADD_SHADER', 'MIX_SHADER'):
-        fac = _mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
+        if t == 'MIX_SHADER' and camera is not None and _is_camera_ray(node.inputs['Fac']):
+            fac = 1.0 if camera else 0.0      # (the background trick: what the camera sees, and the light)
+            by_ray.append(node.name)
+        else:
+            fac = _mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
-        (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1)
+        (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1, camera, by_ray)
                               for i, w in enumerate(weights))
         if ea is not None and eb is not None:
             reasons.append("two environment textures in the world; the second ignored")
@@ -466,6 +479,16 @@ def _world_surface(socket, weight, color, reasons, depth):
         return _environment(tex, np.float32(s * weight), reasons)
     c, c_ok = constant_color(node.inputs['Color'])
     if not c_ok:
+        # colour nodes on an Environment Texture (a tint, a Hue/Saturation, a ramp): applied to
+        # the map's texels
+        envs = [n for n in node.id_data.nodes if n.type == 'TEX_ENVIRONMENT' and n.image is not None and not n.mute]
+        if len(envs) == 1:
+            try:
+                chain = nodeeval.compile_image_chain(node.inputs['Color'], True, envs[0].image.as_pointer())
+            except nodeeval.NotCompiled:
+                chain = None
+            if chain is not None:
+                return _environment(envs[0], np.float32(s * weight), reasons, chain)
         reasons.append(f"world {node.bl_label} Color driven by nodes; its own value used")
     return np.array(c, np.float32) * np.float32(s * weight), None
 
@@ -512,8 +535,9 @@ def world_visibility(world):
     return (sd.VIS_CAMERA if vis.camera else 0) | (sd.VIS_DIFFUSE if vis.diffuse else 0)
 
 
-def _environment(node, strength, reasons):
-    """(uniform radiance, scenedata.Environment or None) of an Environment Texture node."""
+def _environment(node, strength, reasons, chain=None):
+    """(uniform radiance, scenedata.Environment or None) of an Environment Texture node; chain:
+    the colour nodes after it (nodeeval.compile_image_chain), applied to its texels."""
     if not (np.isfinite(strength) and strength >= 0):
         reasons.append(f"Background Strength {float(strength):g} is negative or not finite; rendered black")
         return np.zeros(3, np.float32), None
@@ -531,6 +555,13 @@ def _environment(node, strength, reasons):
     if (rgb < 0).any():
         reasons.append(f"image '{img.name}': negative values rendered as 0")
         rgb = np.maximum(rgb, 0.0)
+    if chain is not None:
+        px = np.concatenate([rgb, pixels[..., 3:4]], axis=-1).reshape(-1, 4)
+        y = np.asarray(chain(px), np.float64).reshape(rgb.shape)
+        rgb = np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0).astype(np.float32)
+        if _encoded_environment(pixels, 'Linear') is not None and node.interpolation != 'Closest':
+            reasons.append(f"colour nodes after environment image '{img.name}' applied to its texels before the blend")
+        pixels = None
     if node.projection != 'EQUIRECTANGULAR':
         reasons.append(f"{node.projection.lower().replace('_', ' ')} projection: the image's mean colour used "
                        "as a uniform world")
@@ -539,7 +570,8 @@ def _environment(node, strength, reasons):
     if node.interpolation in LINEAR_INTERPOLATIONS:
         reasons.append(f"{node.interpolation.lower()} environment interpolation as linear")
     env = sd.Environment(np.ascontiguousarray(rgb, np.float32), np.full(3, strength, np.float32),
-                         environment_rotation(node, reasons), interp, encoded=_encoded_environment(pixels, interp))
+                         environment_rotation(node, reasons), interp,
+                         encoded=None if pixels is None else _encoded_environment(pixels, interp))
     return np.zeros(3, np.float32), env
 
 
@@ -1210,6 +1242,14 @@ class _MaterialBuilder:
             px[..., :3] = _nonnegative(np.broadcast_to(values, px.shape[:2] + (3,)).astype(np.float32),
                                        f"{label} from nodes", reasons)
             px[..., 3] = 1.0
+            if color.tex is not None and strength.tex is None and color.tex.attribute is None:
+                # nodes that read the image's colour alone run after its lookup, as Cycles runs
+                # them (see _evaluated_closure); baked into the texels, a Gamma of 2.2 on an
+                # 8-bit screen image emitted 2.3-4.3x Cycles' light
+                after = self._after_lookup(color_socket, color.tex, stored_texels(color.tex.pixels))
+                if after is not None:
+                    s = np.float32(strength.value.reshape(-1)[0])
+                    px = ImageTexels(px, after.followed_by(lambda rgb: rgb * s))
             tex = _Texture(('emission', src.key, id(px)), px, src.interpolation, src.extension, src.transform,
                            src.udim)
             weight = np.ones(3)
@@ -1221,27 +1261,64 @@ class _MaterialBuilder:
         if f.tex is None:
             return _Closure(const=f.value)
         src = f.tex
-        if stored_texels(src.pixels) is not None:
-            # an image Cycles blends as stored (8-bit sRGB: encoded), then decodes, then runs
-            # the nodes: baking them into decoded texels before the blend brightened edges and
-            # minified detail (a tint on 0/255 stripes +61%, on 1-texel noise +20%). A chain
-            # affine in the image's colour per channel (a Mix tint, Invert, Bright/Contrast,
-            # an identity) is kept as weight x image + constant, applied after the lookup.
+        stored = stored_texels(src.pixels)
+        after = None
+        if src.attribute is None:
+            # Cycles blends the image as stored (8-bit sRGB: encoded; float: linear), decodes,
+            # then runs the nodes per shading point: baking them into the texels before the
+            # blend brightened edges and minified detail (a tint on 0/255 stripes +61%; a
+            # Gamma 2.2 on 1-texel noise +58% on a float EXR, +170% on an 8-bit PNG, a Color
+            # Ramp of constant interpolation 4.5x). A chain affine in the image's colour per
+            # channel (a Mix tint, Invert, Bright/Contrast, an identity) is kept as weight x
+            # image + constant; any other chain that reads the colour alone is evaluated on
+            # the looked-up colour (EncodedTexels.then), after the blend, as Cycles does.
             affine = self._affine_in(socket, src)
-            if isinstance(affine, tuple):
+            if isinstance(affine, tuple) and stored is not None:
                 return _Closure(const=affine[1], texture=src, tex_weight=affine[0])
             if affine is None:
-                reasons.append(f"colour nodes after image '{src.name}' applied to its texels before the "
-                               "blend (Cycles blends, decodes, then applies them)")
+                after = self._after_lookup(socket, src, stored)
+                if after is None and stored is not None:
+                    reasons.append(f"colour nodes after image '{src.name}' applied to its texels before the "
+                                   "blend (Cycles blends, decodes, then applies them)")
         baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
         # (an attribute's probe values go negative by design: their clamping says nothing)
         baked[..., :3] = _nonnegative(f.value.astype(np.float32), "colour from colour nodes",
                                       reasons if src.attribute is None else [])
         baked[..., 3] = src.pixels[..., 3]
         key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
+        if after is not None:
+            baked = ImageTexels(baked, after)         # 'Closest' reads the baked texels: the same
         return _Closure(texture=_Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim,
                                          src.name, src.attribute),
                         tex_weight=(1.0, 1.0, 1.0))
+
+    def _after_lookup(self, socket, src, stored):
+        """An EncodedTexels that looks image src up as Cycles stores it and then runs the
+        chain feeding `socket` on each looked-up colour, or None when the chain reads the
+        image's alpha or anything but src (then it is baked into the texels)."""
+        if src.udim is not None and stored is None:
+            return None
+        ya = self._probe(socket, src, self._ALPHA_PROBE)
+        if ya is None or np.ptp(ya, axis=0).max() > 0.0:
+            return None
+        try:
+            compiled = nodeeval.compile_image_chain(socket, True, src.key[0])
+        except nodeeval.NotCompiled:
+            return None
+
+        def chain(rgb):         # reads no Blender data: it runs during the render's lookups
+            px = np.empty((len(rgb), 4), np.float32)
+            px[:, :3], px[:, 3] = rgb, 1.0
+            y = np.broadcast_to(np.asarray(compiled(px), np.float64), (len(rgb), 3))
+            return np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0).astype(np.float32)
+
+        # the chain as rebuilt here must be the one probed through the export's own textures
+        want = self._probe(socket, src, self._PROBE)
+        if want is None or not np.array_equal(chain(self._PROBE[:, :3]), np.maximum(want, 0.0).astype(np.float32)):
+            return None
+        base = stored if stored is not None else \
+            EncodedTexels(np.ascontiguousarray(src.pixels[..., :3], np.float32), srgb=False)
+        return base.followed_by(chain)
 
     def _probe(self, socket, src, pixels):
         """What feeds `socket` (n, 3) with image src's texels replaced by pixels (n, 4); None
@@ -2195,7 +2272,15 @@ class _Exporter:
         settings = self._settings()
         self._walk_instances()
         geometry = self._assemble(uv_pass='UV' in settings.passes)
-        world, environment, world_reason = export_world(self.scene, self.view_layer)
+        by_ray = []
+        world, environment, world_reason = export_world(self.scene, self.view_layer, camera=False, by_ray=by_ray)
+        camera_world = None
+        if by_ray:      # a Light Path's Is Camera Ray picks what the camera sees of the world
+            cw, cenv, creason = export_world(self.scene, self.view_layer, camera=True)
+            world_reason = '; '.join(dict.fromkeys(r for r in (world_reason, creason) if r))
+            if not (np.isfinite(cw).all() and (cw >= 0).all()):
+                cw = np.zeros(3, np.float32)
+            camera_world = (cw, cenv)
         if not (np.isfinite(world).all() and (world >= 0).all()):
             # Cycles subtracts a negative background; that is not supported here
             world_reason = (f"its colour x strength {tuple(float(v) for v in world)} is negative or "
@@ -2213,7 +2298,7 @@ class _Exporter:
         return sd.SceneData(camera=camera, geometry=geometry, materials=self.materials.materials,
                             lights=self.lights, world=world, settings=settings,
                             object_names=self.object_names, messages=self.messages,
-                            skipped=dict(self.counts), environment=environment,
+                            skipped=dict(self.counts), environment=environment, camera_world=camera_world,
                             world_visibility=world_visibility(self.world),
                             object_pass_index=np.array(self.object_pass_index, np.int32),
                             object_assets=self.object_assets, light_links=self.light_links,

@@ -582,10 +582,17 @@ class Integrator:
             if self._groups and len(ob) else None
         self._world_group = group.get(getattr(sd, 'world_lightgroup', ''), -1)
         self._group_index = group
+        camera_world = getattr(sd, 'camera_world', None)
         if world.max() > 0:
             bg = BackgroundLight(world)
             bg.visible_camera, bg.visible_diffuse = bool(wv & VIS_CAMERA), bool(wv & VIS_DIFFUSE)
+            if camera_world is not None:        # camera rays see camera_world's instead
+                bg.visible_camera = False
             lamps.append(bg)
+        if camera_world is not None and np.asarray(camera_world[0]).max() > 0 and wv & VIS_CAMERA:
+            bgc = BackgroundLight(np.asarray(camera_world[0], F32))
+            bgc.visible_camera, bgc.visible_diffuse = True, False
+            lamps.append(bgc)
         vis = self.tri.visibility
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
         # same emitters; of those, the materials' Emission Sampling (None: BSDF rays alone)
@@ -594,14 +601,17 @@ class Integrator:
         tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(), sampled,
                                  power_emission=self._tri_emission) if self._any_emissive else None
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None
+        camera_env = env
+        if camera_world is not None:
+            camera_env = EnvironmentLight(camera_world[1]) if camera_world[1] is not None else None
         # a map diffuse rays cannot see lights nothing; camera rays may still see it (not
         # through transparent film)
         self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None,
                                use_tree=bool(getattr(self.settings, 'use_light_tree', True)),
                                tri_object=ob if sd.geometry.instance is None else sd.geometry.instance,
                                unsampled_emitters=bool((hittable & ~sampled).any()))
-        self._camera_env = env if (env is not None and wv & VIS_CAMERA and not self.transparent
-                                   and not env.dark) else None
+        self._camera_env = camera_env if (camera_env is not None and wv & VIS_CAMERA and not self.transparent
+                                          and not camera_env.dark) else None
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
                                           f"strength: {', '.join(self.lights.skipped_lamps)}"))
@@ -625,7 +635,8 @@ class Integrator:
         # does not
         self._camera_world = pick(lambda world: world)
         self._camera_emitters = pick(lambda world: not world)
-        self._camera_env_pass = env if (env is not None and wv & VIS_CAMERA and not env.dark) else None
+        self._camera_env_pass = camera_env if (camera_env is not None and wv & VIS_CAMERA
+                                               and not camera_env.dark) else None
         self._bsdf_lamps = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf], np.int32)
         self._selection_table()
 
@@ -1196,8 +1207,11 @@ class Integrator:
         for m, tex, interp, ext, xf in self.mats.textures if textures is None else textures:
             sel = np.flatnonzero(mat == m)
             if len(sel):
-                albedo[:, sel] *= self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
-                                               np.take(v, sel))
+                # a texel may be negative (a float image's own values, or a wide-gamut space such
+                # as ACEScg converted to scene linear): Cycles' closure weight is not, so a
+                # negative blend is 0 there (and NaN too), not a negative albedo
+                albedo[:, sel] *= np.fmax(self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
+                                                       np.take(v, sel)), F32(0.0))
 
     def _bent_normals(self, prim, u, v, ns, ng):
         """(shading normals with the materials' normal maps applied, bump or None): bump (4, k)

@@ -37,6 +37,7 @@ _INPUTS = {
     'MATH': {'a': 'Value', 'b': 'Value_001', 'c': 'Value_002'},
     'CLAMP': {'value': 'Value', 'lo': 'Min', 'hi': 'Max'},
     'BLACKBODY': {'temp': 'Temperature'},
+    'MIX_RGB': {'fac': 'Fac', 'a': 'Color1', 'b': 'Color2'},   # the legacy Mix (old files, scripts)
 }
 _MIX_INPUTS = {'RGBA': {'fac': 'Factor_Float', 'a': 'A_Color', 'b': 'B_Color'},
                'FLOAT': {'fac': 'Factor_Float', 'a': 'A_Float', 'b': 'B_Float'}}
@@ -209,6 +210,9 @@ def _compute(node, out, v):
         fac = np.clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
         r = cn.mix('MIX' if node.data_type == 'FLOAT' else node.blend_type, fac, v['a'], v['b'])
         return np.clip(r, 0.0, 1.0) if node.clamp_result else r
+    if t == 'MIX_RGB':         # Cycles' legacy MixNode: factor clamped to [0, 1] always
+        r = cn.mix(node.blend_type, np.clip(v['fac'], 0.0, 1.0), v['a'], v['b'])
+        return np.clip(r, 0.0, 1.0) if node.use_clamp else r
     if t == 'INVERT':
         return cn.invert(v['fac'], v['color'])
     if t == 'GAMMA':
@@ -220,15 +224,12 @@ def _compute(node, out, v):
     if t == 'RGBTOBW':
         return cn.gray(v['color'])
     if t == 'VALTORGB':
-        ramp = node.color_ramp
-        rgba = cn.ramp_lookup(cn.ramp_table(lambda p: tuple(ramp.evaluate(p))), v['fac'][..., 0],
-                              ramp.interpolation != 'CONSTANT')
+        table, interpolate = node.ramp if isinstance(node, Frozen) else _ramp(node)
+        rgba = cn.ramp_lookup(table, v['fac'][..., 0], interpolate)
         return rgba[..., 3:4] if out.name == 'Alpha' else rgba[..., :3]
     if t == 'CURVE_RGB':
-        m = node.mapping
-        curves = [[p.location[0] for p in c.points] for c in m.curves]
-        table, lo, hi = cn.curves_table(lambda k, x: m.evaluate(m.curves[k], x), curves)
-        return cn.curves_lookup(table, lo, hi, v['color'], v['fac'], m.extend == 'EXTRAPOLATED')
+        table, lo, hi, extrapolate = node.curves if isinstance(node, Frozen) else _curves(node)
+        return cn.curves_lookup(table, lo, hi, v['color'], v['fac'], extrapolate)
     if t == 'SEPARATE_COLOR':
         k = _SEPARATED[out.identifier]
         return cn.separate_color(node.mode, v['color'])[..., k:k + 1]
@@ -249,6 +250,91 @@ def _compute(node, out, v):
         return clamp(v['value'], v['lo'], v['hi'])
     return fn.map_range(node.interpolation_type, v['value'], v['f0'], v['f1'], v['t0'], v['t1'], v['steps'],
                         node.clamp)
+
+
+def _ramp(node):
+    ramp = node.color_ramp
+    return cn.ramp_table(lambda p: tuple(ramp.evaluate(p))), ramp.interpolation != 'CONSTANT'
+
+
+def _curves(node):
+    m = node.mapping
+    curves = [[p.location[0] for p in c.points] for c in m.curves]
+    table, lo, hi = cn.curves_table(lambda k, x: m.evaluate(m.curves[k], x), curves)
+    return table, lo, hi, m.extend == 'EXTRAPOLATED'
+
+
+class Frozen:
+    """What _compute reads of a node (or an output socket), copied: computing with it reads no
+    Blender data, so it may run after the export (during the render's lookups)."""
+    _ATTRS = ('type', 'name', 'identifier', 'clamp_factor', 'data_type', 'blend_type', 'clamp_result', 'use_clamp',
+              'mode', 'operation', 'clamp_type', 'interpolation_type', 'clamp')
+
+    def __init__(self, thing):
+        for a in self._ATTRS:
+            if hasattr(thing, a):
+                setattr(self, a, getattr(thing, a))
+        t = getattr(thing, 'type', None)
+        if t == 'VALTORGB':
+            self.ramp = _ramp(thing)
+        elif t == 'CURVE_RGB':
+            self.curves = _curves(thing)
+
+
+class NotCompiled(Exception):
+    """The chain reads something compile_image_chain does not compile (another image, an
+    attribute, a node the evaluation cannot compute)."""
+
+
+def _as_kind(value, vector, color):
+    """Field.as_kind on a value."""
+    n = value.shape[-1]
+    if color and n == 1:
+        return np.repeat(value, 3, axis=-1)
+    if not color and n != 1:
+        return value.mean(axis=-1, keepdims=True) if vector else cn.gray(value)
+    return value
+
+
+def compile_image_chain(socket, color, image_pointer, depth=0):
+    """What feeds `socket` as a function of one image's texels: fn(px (n, 4) float) -> (n, 3)
+    colour (color) or (n, 1), computed as Evaluator computes it with that image's texels
+    replaced by px, but with every node's settings read now (Frozen): fn reads no Blender data.
+    Raises NotCompiled for chains reading anything but that image (by image.as_pointer()),
+    constants and the colour and float nodes."""
+    link, carrier = nodegraph.source(socket)
+    if link is None:
+        const = _own(carrier.default_value, color)
+        return lambda px: const
+    if depth >= Evaluator.MAX_DEPTH:
+        raise NotCompiled("too deep")
+    f, vector = _compile_node(link.from_node, link.from_socket, image_pointer, depth)
+    return lambda px: _as_kind(np.asarray(f(px), np.float64), vector, color)
+
+
+def _compile_node(node, out, image_pointer, depth):
+    t = node.type
+    if t == 'RGB':
+        const = np.array(tuple(out.default_value[:3]), np.float64)
+        return (lambda px: const), False
+    if t == 'VALUE':
+        const = np.array((out.default_value,), np.float64)
+        return (lambda px: const), False
+    if t in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
+        if node.image is None or node.image.as_pointer() != image_pointer:
+            raise NotCompiled("another image")
+        if out.name == 'Alpha':
+            return (lambda px: px[..., 3:4]), False
+        return (lambda px: px[..., :3]), False
+    roles = node_inputs(node)
+    if roles is None:
+        raise NotCompiled(node.bl_label)
+    float_node = (t == 'MIX' and node.data_type == 'FLOAT') or t in _FLOAT_NODES
+    parts = {role: compile_image_chain(nodegraph.input_by_id(node, ident), role in _COLOR_ROLES and not float_node,
+                                       image_pointer, depth + 1)
+             for role, ident in roles.items()}
+    frozen, frozen_out = Frozen(node), Frozen(out)
+    return (lambda px: _compute(frozen, frozen_out, {role: g(px) for role, g in parts.items()})), t == 'COMBXYZ'
 
 
 class _NotConstant(Exception):

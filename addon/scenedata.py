@@ -257,6 +257,9 @@ class SceneData:
     messages: list = field(default_factory=list)   # (level, text): 'WARNING'/'INFO'/'ERROR' for RenderEngine.report
     skipped: dict = field(default_factory=dict)    # export's counts of work not done (objects_hidden, ...)
     environment: Optional[Environment] = None      # an image around the scene, added to `world`
+    # what camera rays see of the world instead of (world, environment), when a Light Path's Is
+    # Camera Ray picks it (a Mix Shader in the world): ((3,) uniform radiance, Environment or None)
+    camera_world: Optional[tuple] = None
     # which rays see the world (colour and image): VIS_CAMERA | VIS_DIFFUSE, Cycles' World >
     # Ray Visibility; the camera bit off leaves the background black (alpha 1, as Cycles)
     world_visibility: int = VIS_CAMERA | VIS_DIFFUSE

@@ -12,7 +12,7 @@ from mathutils import Euler, Vector
 from addon import export, hair, pointcloud, specular
 from addon import lights as ls
 from addon import scenedata as sd
-from addon.texture import stored_texels
+from addon.texture import srgb_to_linear, stored_texels
 
 from . import scenes
 
@@ -1084,6 +1084,30 @@ def test_world_emission_add_and_mix_shaders(scene, exported):
     assert any("world surface has Diffuse BSDF" in t for lvl, t in data.messages if lvl == 'WARNING')
 
 
+def test_world_light_path_camera_ray_splits_the_world(scene, exported):
+    """The artist's backdrop trick: a world Mix Shader whose factor is a Light Path's Is Camera
+    Ray. The world lighting the scene is the mix at 0 (its first shader), what camera rays see
+    (camera_world) the mix at 1; nothing reported. Without the trick there is no camera_world."""
+    setup(scene)
+    w = scenes.world((0.5, 0.25, 1.0), 2.0)
+    nt = w.node_tree
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    out = next(n for n in nt.nodes if n.type == 'OUTPUT_WORLD')
+    assert exported().camera_world is None
+    backdrop = nt.nodes.new('ShaderNodeBackground')
+    backdrop.inputs['Color'].default_value, backdrop.inputs['Strength'].default_value = (0.9, 0.9, 0.1, 1.0), 0.5
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray'], mix.inputs['Fac'])
+    nt.links.new(bg.outputs[0], mix.inputs[1])
+    nt.links.new(backdrop.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    data = exported()
+    assert np.allclose(data.world, (1.0, 0.5, 2.0))
+    uniform, env = data.camera_world
+    assert np.allclose(uniform, (0.45, 0.45, 0.05)) and env is None
+    assert not any("Mix Shader" in t or "Light Path" in t for _, t in data.messages), data.messages
+
+
 def test_world_ray_visibility(scene, exported):
     """World > Ray Visibility's camera and diffuse toggles reach SceneData as bits."""
     setup(scene)
@@ -1884,8 +1908,9 @@ def test_normal_setups_that_leave_the_normal_are_not_approximations(scene, expor
 
 def test_colour_nodes_after_an_8bit_image(scene, exported, tmp_path):
     """After an image Cycles blends encoded (8-bit sRGB), an affine chain (a Mix Multiply tint)
-    stays weight x lookup (the image itself, looked up as stored); a non-affine one (Gamma) is
-    baked into the decoded texels and reported, since Cycles runs it after the blend."""
+    stays weight x lookup (the image itself, looked up as stored); a non-affine one (Gamma) runs
+    after the image's lookup as stored (EncodedTexels.then), as Cycles runs it after the blend:
+    exact, not reported."""
     setup(scene)
     px = (np.arange(4 * 4 * 3).reshape(4, 4, 3) * 5).astype(np.uint8)
     img = bpy.data.images.load(scenes.write_image(tmp_path / "bytes.png", px))
@@ -1907,7 +1932,13 @@ def test_colour_nodes_after_an_8bit_image(scene, exported, tmp_path):
     tint, gamma = table["Tint"], table["Gamma"]
     assert tint.approximated == '' and np.allclose(tint.base_color, (0.5, 0.25, 1.0))
     assert stored_texels(tint.texture) is not None              # the image as Cycles stores it
-    assert "colour nodes after image 'bytes.png' applied to its texels before the blend" in gamma.approximated
+    assert gamma.approximated == ''
+    stored = stored_texels(gamma.texture)
+    assert stored is not None and stored.then is not None
+    u = np.array([0.25], np.float32)        # halfway between texels (0, 0) and (1, 0) of row 0
+    v = np.array([0.125], np.float32)
+    want = srgb_to_linear((px[0, 0] / 255.0 + px[0, 1] / 255.0) / 2) ** 2
+    assert np.allclose(stored.lookup(u, v, 'Linear', 'REPEAT')[:, 0], want, rtol=1e-5, atol=1e-7)
 
 
 def _attribute_material(name, node_type='ShaderNodeVertexColor', attribute='Col', chain=None):

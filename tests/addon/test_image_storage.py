@@ -121,10 +121,10 @@ def test_closest_reads_the_linear_texels():
 
 def test_colour_nodes_after_an_encoded_image():
     """Colour nodes between the image and the colour are evaluated texel by texel on the linear
-    texels (nodeeval.py). An affine chain (Invert: 1 - c) keeps the image's stored encoding
-    and runs after its lookup, as Cycles; any other (Gamma) is a bake of the linear texels,
-    which is what is blended: nothing stored (an approximation for 'Linear' where neighbouring
-    texels differ, reported)."""
+    texels (nodeeval.py; what 'Closest' and averages read). An affine chain (Invert: 1 - c)
+    keeps the image's stored encoding and runs after its lookup, as Cycles; so does any other
+    chain that reads the colour alone (Gamma): the image is blended as stored, decoded, and the
+    chain runs on the result (EncodedTexels.then), exact and not reported."""
     img = bpy.data.images.new("gen", 2, 1)
     img.pixels.foreach_set((BYTES / 255.0).astype(np.float32).ravel())
     linear = srgb_to_linear(BYTES[..., :3] / 255.0)
@@ -145,8 +145,13 @@ def test_colour_nodes_after_an_encoded_image():
     inverted, gamma = built["Inverted"], built["Gamma"]
     assert stored_texels(inverted.texture) is not None and inverted.approximated == ''
     assert np.allclose(inverted.texture[..., :3], 1 - linear, atol=1e-6)     # what reads the texels
-    assert stored_texels(gamma.texture) is None and "before the blend" in gamma.approximated
+    assert stored_texels(gamma.texture) is not None and gamma.approximated == ''
     assert np.allclose(gamma.texture[..., :3], linear ** 2, atol=1e-6)
+    # the lookup halfway between the two texels: the encoded blend, decoded, then squared
+    stored = stored_texels(gamma.texture)
+    got = stored.lookup(np.array([0.5], np.float32), np.array([0.5], np.float32), 'Linear', 'REPEAT')[:, 0]
+    want = srgb_to_linear((BYTES[0, 0, :3] / 255.0 + BYTES[0, 1, :3] / 255.0) / 2) ** 2
+    assert np.allclose(got, want, rtol=1e-5, atol=1e-7)
 
 
 def test_udim_tiles_from_files_keep_their_encoding(tmp_path):

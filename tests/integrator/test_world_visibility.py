@@ -70,3 +70,17 @@ def test_bad_visibility_is_named():
     for bad in (-1, 4, 1.0, 'camera'):
         with pytest.raises(ValueError, match="world_visibility"):
             Integrator(scene('uniform', bad))
+
+
+@pytest.mark.parametrize('kind', ['uniform', 'environment'])
+def test_camera_world_is_what_the_camera_sees(kind):
+    """A Light Path's Is Camera Ray in the world (SceneData.camera_world): camera rays that miss
+    see the camera world, uniform or a map; the plane is lit by the world as before (rho x L),
+    not by the camera's."""
+    C = np.array([0.9, 0.1, 0.3], F32)
+    s = scene(kind, sd.VIS_CAMERA | sd.VIS_DIFFUSE)
+    s.camera_world = (C, None) if kind == 'uniform' else \
+        (np.zeros(3, F32), sd.Environment(np.broadcast_to(C, (8, 16, 3)).copy(), np.ones(3, F32), np.eye(3), 'Linear'))
+    img, plane, bg = regions(render(s))
+    np.testing.assert_allclose(img[bg][:, :3], np.broadcast_to(C, (bg.sum(), 3)), rtol=1e-5)
+    np.testing.assert_allclose(img[plane][:, :3].mean(axis=0), RHO * L, rtol=0.02)
