@@ -98,8 +98,8 @@ PRINCIPLED_IGNORED = (('Metallic', "metallic"), ('Transmission Weight', "transmi
                       ('Anisotropic', "anisotropy (its layers as isotropic)"),
                       ('Thin Film Thickness', "thin film"))
 IGNORED_OUTPUTS = ('Volume', 'Displacement')
-TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP')
-LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')
+TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR')
+LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')     # of environment maps: blended linearly (reported)
 
 
 # View-layer passes Cycles renders and DACRT does not: (settings owner, toggle, label); owner ''
@@ -1367,9 +1367,8 @@ class _MaterialBuilder:
         self._uv_names.append(uv_map_name(node))
         if node.projection != 'FLAT':
             reasons.append(f"{node.projection.lower()} image projection as flat")
-        interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
-        if node.interpolation in LINEAR_INTERPOLATIONS:
-            reasons.append(f"{node.interpolation.lower()} image interpolation as linear")
+        # Smart is Cycles' bicubic too (its SVM image lookup: closest, linear, else cubic)
+        interp = {'Closest': 'Closest', 'Cubic': 'Cubic', 'Smart': 'Cubic'}.get(node.interpolation, 'Linear')
         ext = node.extension if node.extension in TEXTURE_EXTENSIONS else 'REPEAT'
         if node.extension not in TEXTURE_EXTENSIONS:
             reasons.append(f"{node.extension.lower()} image extension as repeat")

@@ -328,10 +328,12 @@ def _texture_array(name, label, texture, interpolation):
 
 def _texture_modes(name, label, interpolation, extension, transform):
     """(interpolation, extension, float32 (2, 3) uv transform or None), checked."""
-    if interpolation not in ('Closest', 'Linear'):
-        raise ValueError(f"material {name!r}: {label}_interpolation {interpolation!r} is not 'Closest' or 'Linear'")
-    if extension not in ('REPEAT', 'EXTEND', 'CLIP'):
-        raise ValueError(f"material {name!r}: {label}_extension {extension!r} is not REPEAT, EXTEND or CLIP")
+    if interpolation not in ('Closest', 'Linear', 'Cubic'):
+        raise ValueError(f"material {name!r}: {label}_interpolation {interpolation!r} is not 'Closest', "
+                         "'Linear' or 'Cubic'")
+    if extension not in ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR'):
+        raise ValueError(f"material {name!r}: {label}_extension {extension!r} is not REPEAT, EXTEND, CLIP or "
+                         "MIRROR")
     if transform is not None:
         transform = np.asarray(transform, np.float64)
         if transform.shape != (2, 3) or not np.isfinite(transform).all():

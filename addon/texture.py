@@ -40,6 +40,9 @@ def _wrap(i: np.ndarray, size: int, extension: str):
         return np.mod(i, size), None
     if extension == 'EXTEND':
         return np.clip(i, 0, size - 1), None
+    if extension == 'MIRROR':                        # ... n-1, n-1 ... 1, 0, 0, 1 ... n-1, n-1 ...
+        m = np.mod(i, 2 * size)
+        return np.where(m < size, m, 2 * size - 1 - m), None
     inside = (i >= 0) & (i < size)                   # CLIP: texels outside are transparent black
     return np.clip(i, 0, size - 1), inside
 
@@ -203,8 +206,8 @@ def lookup_texels(texture, interpolation):
 
 def texture_lookup(tex, u: np.ndarray, v: np.ndarray, interpolation: str, extension: str) -> np.ndarray:
     """RGB (3,n) of an (h,w,4) texture (row 0 at the bottom), a UdimTiles or an EncodedTexels at
-    (u, v): 'Closest' or bilinear 'Linear' with texel centres at (i + 0.5)/w, as Cycles' image
-    texture node samples."""
+    (u, v): 'Closest', bilinear 'Linear' or bicubic (B-spline) 'Cubic', with texel centres at
+    (i + 0.5)/w, as Cycles' image texture node samples."""
     if isinstance(tex, EncodedTexels):
         return tex.lookup(u, v, interpolation, extension)
     if isinstance(tex, UdimTiles):
@@ -230,6 +233,18 @@ def _blend(tex, u, v, interpolation, extension, channels):
     fx, fy = x - x0f, y - y0f
     x0, y0 = x0f.astype(np.int64), y0f.astype(np.int64)
     out = np.zeros((channels, len(u)), F32)
+    if interpolation == 'Cubic':
+        # Cycles' bicubic: a uniform cubic B-spline over the 4 x 4 texels around the point (it
+        # smooths: a texel's own value is not reproduced at its centre)
+        for dy, wy in zip(range(-1, 3), _bspline_weights(fy)):
+            iy, my = _wrap(y0 + dy, h, extension)
+            for dx, wx in zip(range(-1, 3), _bspline_weights(fx)):
+                ix, mx = _wrap(x0 + dx, w, extension)
+                wgt = wx * wy
+                if mx is not None:
+                    wgt = wgt * (mx & my)
+                out += tex[iy, ix, :channels].T * wgt
+        return out
     for dy, wy in ((0, 1.0 - fy), (1, fy)):
         iy, my = _wrap(y0 + dy, h, extension)
         for dx, wx in ((0, 1.0 - fx), (1, fx)):
@@ -239,6 +254,14 @@ def _blend(tex, u, v, interpolation, extension, channels):
                 wgt = wgt * (mx & my)
             out += tex[iy, ix, :channels].T * wgt
     return out
+
+
+def _bspline_weights(t):
+    """The uniform cubic B-spline's weights of texels -1, 0, 1, 2 at fraction t (float32, as
+    Cycles' SET_CUBIC_SPLINE_WEIGHTS)."""
+    sixth, half = F32(1.0 / 6.0), F32(0.5)
+    return ((((-sixth * t + half) * t - half) * t + sixth), ((half * t - F32(1.0)) * t) * t + F32(2.0 / 3.0),
+            ((-half * t + half) * t + half) * t + sixth, sixth * t * t * t)
 
 
 def _udim_lookup(tex: UdimTiles, u, v, interpolation, extension, channels=3, finish=None):

@@ -350,9 +350,6 @@ class _Editor:
         if node.projection != 'FLAT':
             node.projection = 'FLAT'
             self.done.append("image projection flat")
-        if node.interpolation in export.LINEAR_INTERPOLATIONS:
-            node.interpolation = 'Linear'
-            self.done.append("image interpolation linear")
         if node.extension not in export.TEXTURE_EXTENSIONS:
             node.extension = 'REPEAT'
             self.done.append("image extension repeat")

@@ -517,6 +517,61 @@ def test_texture_lookup_modes():
     assert rep[0, 0] == pytest.approx(1.5)                     # wraps between columns 3 and 0
 
 
+def _mirror(i, n):
+    """Blender's mirrored repeat of texel index i: 0 .. n-1, n-1 .. 0, 0 .. (period 2n)."""
+    m = i % (2 * n)
+    return m if m < n else 2 * n - 1 - m
+
+
+def _cubic_reference(tex, u, v, extension):
+    """Cycles' bicubic lookup in float64, texel by texel: the uniform cubic B-spline
+    (1/6)[(1-t)^3, 3t^3 - 6t^2 + 4, -3t^3 + 3t^2 + 3t + 1, t^3] over texels floor(x - 1/2) - 1 .. + 2."""
+    h, w = tex.shape[:2]
+    def weights(t):
+        return np.array([(1 - t) ** 3, 3 * t ** 3 - 6 * t ** 2 + 4, -3 * t ** 3 + 3 * t ** 2 + 3 * t + 1, t ** 3]) / 6
+    def index(i, n):
+        if extension == 'REPEAT':
+            return i % n, True
+        if extension == 'MIRROR':
+            return _mirror(i, n), True
+        if extension == 'EXTEND':
+            return min(max(i, 0), n - 1), True
+        return min(max(i, 0), n - 1), 0 <= i < n                # CLIP
+    out = np.zeros((3, len(u)))
+    for k in range(len(u)):
+        x, y = float(u[k]) * w - 0.5, float(v[k]) * h - 0.5
+        x0, y0 = int(np.floor(x)), int(np.floor(y))
+        wx, wy = weights(x - x0), weights(y - y0)
+        for a in range(4):
+            iy, iny = index(y0 - 1 + a, h)
+            for b in range(4):
+                ix, inx = index(x0 - 1 + b, w)
+                out[:, k] += wy[a] * wx[b] * tex[iy, ix, :3] * (iny and inx)
+    return out
+
+
+@pytest.mark.parametrize('extension', ['REPEAT', 'EXTEND', 'CLIP', 'MIRROR'])
+def test_texture_cubic_and_mirror_as_cycles(extension):
+    """'Cubic' (and 'Smart', which the export maps to it) is Cycles' bicubic B-spline, and
+    MIRROR its mirrored repeat, against a float64 reference written texel by texel; at texel
+    centres the B-spline does not reproduce the texel (it smooths: 1/6, 2/3, 1/6)."""
+    rng = np.random.default_rng(5)
+    tex = rng.random((5, 7, 4)).astype(np.float32)
+    u = rng.uniform(-1.5, 2.5, 400).astype(np.float32)
+    v = rng.uniform(-1.5, 2.5, 400).astype(np.float32)
+    got = texture_lookup(tex, u, v, 'Cubic', extension)
+    np.testing.assert_allclose(got, _cubic_reference(tex, u, v, extension), atol=2e-6)
+    line = np.zeros((1, 3, 4), np.float32)
+    line[0, 1, :3] = 1.0
+    centre = texture_lookup(line, np.array([0.5], np.float32), np.array([0.5], np.float32), 'Cubic', 'CLIP')
+    # the lit texel's centre: weight 4/6 across, and 4/6 down (CLIP: the rows above and below
+    # are outside the one-row image)
+    assert centre[0, 0] == pytest.approx((4 / 6) * (4 / 6), rel=1e-6)
+    mirrored = texture_lookup(tex, (np.arange(-7, 21, dtype=np.float32) + 0.5) / 7,
+                              np.full(28, 0.5 / 5, np.float32), 'Closest', 'MIRROR')
+    np.testing.assert_array_equal(mirrored[0], tex[0, [_mirror(i, 7) for i in range(-7, 21)], 0])
+
+
 def test_udim_lookup_picks_the_tile_as_cycles():
     """Tile (int) u, (int) v -> 1001 + tx + 10 ty, read at the UV minus the tile's corner with
     the node's extension; no tile, tx outside 0..9, or a non-finite UV: magenta."""
