@@ -74,6 +74,10 @@ MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_l
 # Object Info outputs read per object, as a material's colour attribute named OBJECT_INFO + output
 OBJECT_INFO = 'Object Info:'
 OBJECT_INFO_OUTPUTS = ('Random', 'Color', 'Alpha', 'Location', 'Object Index', 'Material Index')
+# an Attribute node of type Object: OBJECT_INFO + this + its output + ':' + the attribute's name
+# (type Instancer stays unread: Cycles reads Geometry Nodes instance attributes there first,
+# which Python cannot)
+OBJECT_ATTRIBUTE = 'Object Attribute:'
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
 # what the view layer's Surfaces filter (use_solid) hides, as Cycles syncs no mesh then (hair
 # follows the Hair filter, point clouds stay)
@@ -857,6 +861,11 @@ class _MaterialBuilder:
             return _Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
                             f"Object Info {out.name}", name)
         if node.type == 'ATTRIBUTE':
+            if node.attribute_type == 'OBJECT':
+                # one value per object: read as Object Info is, per placement
+                name = f"{OBJECT_INFO}{OBJECT_ATTRIBUTE}{out.name}:{node.attribute_name}"
+                return _Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
+                                f"object attribute '{node.attribute_name}'", name)
             if node.attribute_type != 'GEOMETRY':
                 reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
                                f"'{node.attribute_name}' not read")
@@ -2184,6 +2193,17 @@ class _Placement:
         """The (4,) value an Object Info output has for this instance shading `material` (RGB,
         alpha; a number in all four, a location with alpha 1)."""
         ob, random_id, is_instance = self.info
+        if output.startswith(OBJECT_ATTRIBUTE):
+            out, name = output[len(OBJECT_ATTRIBUTE):].split(':', 1)
+            # Cycles (BKE_object_dupli_find_rgba_attribute): the object's own, then its data's;
+            # none: 0
+            rgba = next((v for v in (_rgba_attribute(o, name) for o in (ob, getattr(ob, 'data', None))
+                                     if o is not None) if v is not None), np.zeros(4))
+            if out in ('Fac', 'Factor'):         # svm_node_attr: the colour's average
+                return np.append(np.full(3, rgba[:3].mean()), 1.0)
+            if out == 'Alpha':
+                return np.full(4, rgba[3])
+            return rgba
         if output in ('Random', 'Object Index', 'Material Index'):
             v = (object_random(ob.name, random_id, is_instance) if output == 'Random' else
                  float(ob.pass_index) if output == 'Object Index' else float(getattr(material, 'pass_index', 0)))
@@ -2194,6 +2214,29 @@ class _Placement:
         if output == 'Location':
             return np.append(self.matrix[:3, 3], 1.0)
         return np.asarray(color, np.float64)
+
+
+def _rgba_attribute(owner, name):
+    """An object's (or its data's) attribute as Cycles reads it for an Attribute node of type
+    Object (find_rgba_attribute): its custom property of that name, else the RNA path; a number
+    is (v, v, v, 1), an array fills (0, 0, 0, 1) from the front; None when neither exists."""
+    try:
+        value = owner[name]
+    except (KeyError, TypeError, AttributeError):
+        try:
+            value = owner.path_resolve(name)
+        except (ValueError, TypeError, AttributeError):
+            return None
+    out = np.array([0.0, 0.0, 0.0, 1.0])
+    try:
+        if isinstance(value, (bool, int, float)):
+            out[:3] = float(value)
+            return out
+        seq = [float(x) for x in value][:4]
+    except (TypeError, ValueError):
+        return None                          # a string, a pointer: not a colour
+    out[:len(seq)] = seq
+    return out
 
 
 def _shader_trees():
@@ -2240,7 +2283,8 @@ class _Exporter:
         self.camera = camera
         self.world = effective_world(self.scene, self.view_layer)
         # whether any shader reads Object Info: else no instance's values are gathered
-        self._object_info = any(n.type == 'OBJECT_INFO' for t in _shader_trees() for n in t.nodes)
+        self._object_info = any(n.type == 'OBJECT_INFO' or (n.type == 'ATTRIBUTE' and n.attribute_type == 'OBJECT')
+                                for t in _shader_trees() for n in t.nodes)
         self.check_break = check_break or (lambda: False)
         self.messages = []
         self.materials = _MaterialBuilder()

@@ -2108,6 +2108,45 @@ def test_object_info_indices_per_object(scene, exported):
         assert np.allclose(data.geometry.colors[of_object(data, f"P{index}")], 0.1 * index + 5.0), index
 
 
+def test_object_attribute_per_object(scene, exported):
+    """An Attribute node of type Object reads each object's value as Cycles does (custom
+    property, else RNA path such as 'color', else the object data's property; none: 0): the
+    Color output the value, Factor its average."""
+    setup(scene)
+    made = {}
+    for out in ('Color', 'Factor'):
+        mat, nt, o = _shader_material(out)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        nt.links.new(d.outputs[0], o.inputs['Surface'])
+        attr = nt.nodes.new('ShaderNodeAttribute')
+        attr.attribute_type, attr.attribute_name = 'OBJECT', 'tint'
+        nt.links.new(attr.outputs[out], d.inputs['Color'])
+        made[out] = mat
+    obs = {}
+    for i, out in enumerate(('Color', 'Factor')):
+        for j, how in enumerate(('prop', 'data', 'none')):
+            ob = scenes.plane(f"{out}_{how}", location=(3 * i, 3 * j, 0), materials=(made[out],))
+            if how == 'prop':
+                ob['tint'] = (0.2, 0.5, 0.8)
+            elif how == 'data':
+                ob.data['tint'] = 0.4
+            obs[ob.name] = {'prop': (0.2, 0.5, 0.8), 'data': (0.4,) * 3, 'none': (0.0,) * 3}[how]
+    path, pm, po = _shader_material("Path")
+    d = pm.nodes.new('ShaderNodeBsdfDiffuse')
+    pm.links.new(d.outputs[0], po.inputs['Surface'])
+    attr = pm.nodes.new('ShaderNodeAttribute')
+    attr.attribute_type, attr.attribute_name = 'OBJECT', 'color'       # the object's Viewport colour
+    pm.links.new(attr.outputs['Color'], d.inputs['Color'])
+    scenes.plane("ByPath", location=(9, 0, 0), materials=(path,)).color = (0.9, 0.3, 0.1, 1.0)
+    obs["ByPath"] = (0.9, 0.3, 0.1)
+    data = exported()
+    for name, rgb in obs.items():
+        want = np.full(3, np.mean(rgb)) if name.startswith('Factor') else np.asarray(rgb)
+        got = data.geometry.colors[of_object(data, name)]
+        assert np.allclose(got, want, atol=1e-6), (name, got[0, 0], want)
+    assert not any('attribute' in m.approximated for m in data.materials)
+
+
 def test_image_times_colour_attribute_either_way(scene, exported, tmp_path):
     """An image multiplied by a colour attribute (a glTF import's vertex colours), in either
     input order: the material keeps the image (looked up as Cycles stores it) and the colours
