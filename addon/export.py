@@ -2222,11 +2222,15 @@ def _rgba_attribute(owner, name):
     is (v, v, v, 1), an array fills (0, 0, 0, 1) from the front; None when neither exists."""
     try:
         value = owner[name]
+        if isinstance(value, str):
+            raise KeyError(name)             # no colour: the RNA path is tried next, as Cycles
     except (KeyError, TypeError, AttributeError):
         try:
             value = owner.path_resolve(name)
         except (ValueError, TypeError, AttributeError):
             return None
+    if isinstance(value, str):
+        return None
     out = np.array([0.0, 0.0, 0.0, 1.0])
     try:
         if isinstance(value, (bool, int, float)):
