@@ -236,18 +236,13 @@ def _blend(tex, u, v, interpolation, extension, channels):
     if interpolation == 'Cubic':
         # Cycles' bicubic: a uniform cubic B-spline over the 4 x 4 texels around the point (it
         # smooths: a texel's own value is not reproduced at its centre)
-        for dy, wy in zip(range(-1, 3), _bspline_weights(fy)):
-            iy, my = _wrap(y0 + dy, h, extension)
-            for dx, wx in zip(range(-1, 3), _bspline_weights(fx)):
-                ix, mx = _wrap(x0 + dx, w, extension)
-                wgt = wx * wy
-                if mx is not None:
-                    wgt = wgt * (mx & my)
-                out += tex[iy, ix, :channels].T * wgt
-        return out
-    for dy, wy in ((0, 1.0 - fy), (1, fy)):
+        taps_x = list(zip(range(-1, 3), _bspline_weights(fx)))
+        taps_y = zip(range(-1, 3), _bspline_weights(fy))
+    else:
+        taps_x, taps_y = ((0, 1.0 - fx), (1, fx)), ((0, 1.0 - fy), (1, fy))
+    for dy, wy in taps_y:
         iy, my = _wrap(y0 + dy, h, extension)
-        for dx, wx in ((0, 1.0 - fx), (1, fx)):
+        for dx, wx in taps_x:
             ix, mx = _wrap(x0 + dx, w, extension)
             wgt = wx * wy
             if mx is not None:
