@@ -74,7 +74,8 @@ MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_l
 # Object Info outputs read per object, as a material's colour attribute named OBJECT_INFO + output
 OBJECT_INFO = 'Object Info:'
 OBJECT_INFO_OUTPUTS = ('Random', 'Color', 'Alpha', 'Location', 'Object Index', 'Material Index')
-# an Attribute node of type Object: OBJECT_INFO + this + its output + ':' + the attribute's name
+# an Attribute node of type Object: OBJECT_INFO + this + the attribute's name (its outputs are
+# read from the value as the evaluation reads any attribute's)
 # (type Instancer stays unread: Cycles reads Geometry Nodes instance attributes there first,
 # which Python cannot)
 OBJECT_ATTRIBUTE = 'Object Attribute:'
@@ -863,7 +864,7 @@ class _MaterialBuilder:
         if node.type == 'ATTRIBUTE':
             if node.attribute_type == 'OBJECT':
                 # one value per object: read as Object Info is, per placement
-                name = f"{OBJECT_INFO}{OBJECT_ATTRIBUTE}{out.name}:{node.attribute_name}"
+                name = f"{OBJECT_INFO}{OBJECT_ATTRIBUTE}{node.attribute_name}"
                 return _Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
                                 f"object attribute '{node.attribute_name}'", name)
             if node.attribute_type != 'GEOMETRY':
@@ -2194,16 +2195,11 @@ class _Placement:
         alpha; a number in all four, a location with alpha 1)."""
         ob, random_id, is_instance = self.info
         if output.startswith(OBJECT_ATTRIBUTE):
-            out, name = output[len(OBJECT_ATTRIBUTE):].split(':', 1)
             # Cycles (BKE_object_dupli_find_rgba_attribute): the object's own, then its data's;
             # none: 0
-            rgba = next((v for v in (_rgba_attribute(o, name) for o in (ob, getattr(ob, 'data', None))
+            name = output[len(OBJECT_ATTRIBUTE):]
+            return next((v for v in (_rgba_attribute(o, name) for o in (ob, getattr(ob, 'data', None))
                                      if o is not None) if v is not None), np.zeros(4))
-            if out in ('Fac', 'Factor'):         # svm_node_attr: the colour's average
-                return np.append(np.full(3, rgba[:3].mean()), 1.0)
-            if out == 'Alpha':
-                return np.full(4, rgba[3])
-            return rgba
         if output in ('Random', 'Object Index', 'Material Index'):
             v = (object_random(ob.name, random_id, is_instance) if output == 'Random' else
                  float(ob.pass_index) if output == 'Object Index' else float(getattr(material, 'pass_index', 0)))

@@ -150,7 +150,8 @@ class Evaluator:
                 tex = None
             if out.name == 'Alpha':
                 return Field(px[..., 3:4], tex)
-            if out.name == 'Fac':           # Cycles: a colour or vector attribute's average
+            if out.identifier == 'Fac':     # Cycles: a colour or vector attribute's average (the
+                                            # Attribute node's Factor: so named since Blender 4)
                 return Field(px[..., :3].mean(axis=-1, keepdims=True), tex)
             if out.type in ('VALUE', 'INT'):    # a number (Object Info's Random): the first channel
                 return Field(px[..., :1], tex)

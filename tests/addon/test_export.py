@@ -1957,6 +1957,28 @@ def _attribute_material(name, node_type='ShaderNodeVertexColor', attribute='Col'
     return mat
 
 
+def test_attribute_factor_is_the_colours_average(scene, exported):
+    """An Attribute node's Factor output (so named since Blender 4; identifier Fac) is the
+    colour's average, as Cycles' svm_node_attr, not its first channel: on a quad of one colour
+    per point, every corner's albedo is its point's mean."""
+    setup(scene)
+    mat, nt, out = _shader_material("Factor")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    attr = nt.nodes.new('ShaderNodeAttribute')
+    attr.attribute_name = 'Col'
+    nt.links.new(attr.outputs['Factor'], d.inputs['Color'])
+    ob = scenes.mesh("Quad", [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], [(0, 1, 2, 3)], materials=(mat,))
+    values = np.array([[0.9, 0.1, 0.2, 1], [0.1, 0.8, 0.3, 1], [0.2, 0.3, 0.9, 1], [0.7, 0.7, 0.1, 1]], np.float32)
+    ob.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT').data.foreach_set('color', values.ravel())
+    data = exported()
+    g = data.geometry
+    corners = np.asarray(g.triangles)[of_object(data, "Quad")]
+    means = values[:, :3].mean(axis=1)
+    np.testing.assert_allclose(g.colors[of_object(data, "Quad")], np.repeat(means[corners][..., None], 3, -1),
+                               atol=1e-6)
+
+
 def test_colour_attributes_per_corner(scene, exported):
     """A Color Attribute (or Attribute) node into the diffuse colour: the material is marked
     with the attribute, Geometry.colors holds w x the attribute + k per triangle corner (point,
