@@ -7,12 +7,13 @@ An emitter light sampling does not pick is found by BSDF rays alone, whose hits 
 weigh 1: the image is the same, the samples go elsewhere (a large, dim emissive wall no longer
 draws light samples away from the lamps). Front and Back are sampled as both sides here.
 
-Part of the export layer: it reads the node tree handed to it (nodegraph), nothing else of
-Blender.
+Part of the export layer: it reads the node tree handed to it (nodegraph, nodeeval), nothing
+else of Blender.
 """
 
 import numpy as np
 
+from .nodeeval import constant
 from .nodegraph import output_node, source
 
 NONE, BOTH = 'NONE', 'FRONT_BACK'
@@ -41,12 +42,7 @@ def sampling(mat) -> str:
 
 def _value(socket):
     """An unlinked input's own value as RGB (a float repeated)."""
-    carrier = source(socket)[1]
-    v = getattr(carrier, 'default_value', 0.0)
-    try:
-        return np.asarray(v[:3], np.float64)
-    except TypeError:
-        return np.full(3, float(v))
+    return np.asarray(constant(socket, True)[0], np.float64)
 
 
 def _estimate(link, depth):

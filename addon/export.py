@@ -62,6 +62,7 @@ import numpy as np
 
 from . import emissionsampling, hair, nodeeval, panorama, pointcloud, principled, roughdiffuse, specular
 from . import scenedata as sd
+from .lights.area import sheared
 from .mapping import environment_rotation, texture_transform, uv_map_name
 from .nodeeval import constant, constant_color, constant_value
 from .nodegraph import aov_outputs, input_socket, linked_link, linked_node, output_node
@@ -375,9 +376,7 @@ def export_light(ob, matrix, messages):
         # assumes orthogonal axes, so its light there follows no surface (0.43x the mean of
         # this renderer's on a 2 x 0.5 parent); here the parallelogram the axes span emits
         # (lights/area.py), the same to light sampling and to BSDF rays
-        with np.errstate(divide='ignore', invalid='ignore'):      # (a flattened axis: no shear to see)
-            c = m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0)
-        if max(abs(c[:, 0] @ c[:, 1]), abs(c[:, 0] @ c[:, 2]), abs(c[:, 1] @ c[:, 2])) > 1e-4:
+        if sheared(m[:3, :3]):
             messages.append(('WARNING', f"area light '{ob.name}' has a sheared transform (a rotation under a "
                                         "non-uniform scale): rendered as the parallelogram its axes span; "
                                         "Cycles treats the axes as orthogonal and its light differs"))
@@ -2076,22 +2075,13 @@ class _MeshArrays:
         return layers
 
     def per_corner(self, rows, index, out):
-        """out (nt, 3, c) = rows (n, c) at index (nt, 3); index None: rows are the corners."""
+        """out (nt, 3, c) = rows (n, c) at index (nt, 3); index None: rows are the corners. With
+        a leading instance axis, out (k, nt, 3, c) from rows (k, n, c): all k at once."""
         if index is None:
             out[...] = rows.reshape(out.shape)
         else:   # indices come from Blender's validated mesh; mode='clip' avoids take's buffered copy
-            np.take(rows, index, axis=0, out=out, mode='clip')
+            np.take(rows, index, axis=rows.ndim - 2, out=out, mode='clip')
         return out
-
-
-def _per_corner_all(rows, index, out):
-    """out (k, nt, 3, c) = rows (k, n, c) at index (nt, 3) for each of k instances (_MeshArrays.
-    per_corner for all of them at once); index None: rows are the corners."""
-    if index is None:
-        out[...] = rows.reshape(out.shape)
-    else:
-        np.take(rows, index, axis=1, out=out, mode='clip')
-    return out
 
 
 class _Out:
@@ -2302,8 +2292,9 @@ class _Exporter:
         self.skipped = {}         # reason -> [object names]
         self.ignored = {}         # reason -> [object names]: rendered, without a feature Cycles has
         self._noted = set()       # objects whose ignored features are noted (instances repeat them)
-        # per object (and instancer): its ray visibility and shadow terminator, read once for
-        # all its instances (a scatter of 100K: ~12 us of RNA reads each)
+        # per object (visibility: and instancer): its ray visibility, shadow terminator and
+        # material slots, read once for all its instances (a scatter of 100K: ~12 us of RNA
+        # reads each)
         self._vis_of, self._terminator_of, self._slots_of = {}, {}, {}
         # work not done, for the render's stats: objects hidden from render or from every ray
         # type, materials no exported triangle uses (never evaluated), triangles dropped
@@ -2811,11 +2802,11 @@ class _Exporter:
             if not ok.all():
                 np.copyto(n, np.float32(0), where=~ok)
             per = normals.reshape(k, nt, 3, 3)
-            _per_corner_all(n, a.normal_index, per)
+            a.per_corner(n, a.normal_index, per)
             for i in mirrored:
                 _rewind(per[i])
             if not ok.all():
-                corner_ok = _per_corner_all(ok, a.normal_index, np.empty((k, nt, 3, 1), bool))
+                corner_ok = a.per_corner(ok, a.normal_index, np.empty((k, nt, 3, 1), bool))
                 for i in mirrored:
                     _rewind(corner_ok[i])
                 np.copyto(normals, ng[:, None, :], where=~corner_ok.reshape(k * nt, 3, 1))
@@ -2846,11 +2837,8 @@ class _Exporter:
                 out.terminator[t0 + i * nt:t0 + (i + 1) * nt] = term
         # the materials whose albedo follows an attribute or Object Info (most scenes: none)
         attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
-        if out.uvs is None and not self.materials.normal_mapped and not attributed:
-            out.instances += k
-            out.linear.append(lin)
-            return bad, deg
-        for i, p in enumerate(places):
+        per_placement = out.uvs is not None or self.materials.normal_mapped or attributed
+        for i, p in enumerate(places if per_placement else ()):
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
             if out.uvs is not None:
                 if a.corner_uvs is None:
@@ -2864,7 +2852,7 @@ class _Exporter:
                 if i in mirrored:
                     _rewind(out.uvs[S])
             if self.materials.normal_mapped:
-                self._world_tangents(a, p, lin[i], i in mirrored, out, S)
+                self._world_tangents(a, p, i in mirrored, out, S)
             if attributed and not attributed.isdisjoint(p.slot_map.tolist()):
                 self._attribute_colors(a, p, i in mirrored, out, S)
         out.instances += k
@@ -2915,7 +2903,7 @@ class _Exporter:
             if mirrored:                     # corners 1 and 2 were swapped for these triangles
                 block[rows] = block[rows][:, [0, 2, 1]]
 
-    def _world_tangents(self, a, place, lin, mirrored, out, S):
+    def _world_tangents(self, a, place, mirrored, out, S):
         """The object-space tangents (unit) and bitangent signs of one instance's triangles whose
         material has a normal map (with Geometry.tangent_xf, the placements' linear maps): Cycles
         bends the normal in object space and turns the result to world space with the normal

@@ -599,7 +599,7 @@ class Integrator:
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
         # same emitters; of those, the materials' Emission Sampling (None: BSDF rays alone)
         hittable = self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)
-        sampled = hittable & self.mats.light_sampled[self.tri.material] if len(self.tri) else hittable
+        sampled = hittable & self.mats.light_sampled[self.tri.material]
         tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(), sampled,
                                  power_emission=self._tri_emission) if self._any_emissive else None
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None

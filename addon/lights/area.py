@@ -40,7 +40,7 @@ class AreaLight(Lamp):
             raise ValueError(f"area light {light.name!r}: object transform makes the light degenerate")
         self.center = m[:3, 3].astype(F32)
         self.axis_x, self.axis_y = ax.astype(F32), ay.astype(F32)
-        self.sheared = _sheared(m[:3, :3])
+        self.sheared = sheared(m[:3, :3])
         if not self.sheared:
             self.inv_x = (ax / ax.dot(ax)).astype(F32)      # local coordinate = dot(q - c, inv)
             self.inv_y = (ay / ay.dot(ay)).astype(F32)
@@ -205,7 +205,7 @@ class AreaLight(Lamp):
         return idx, outer(self.emit, self._spread(np.ones(len(idx), F32), cos_l, np.take(D, idx, axis=1))), pdf
 
 
-def _sheared(linear) -> bool:
+def sheared(linear) -> bool:
     """Whether a 3x3 object-to-world map's columns are not orthogonal (beyond rounding)."""
     length = np.linalg.norm(linear, axis=0)
     if not (length > 0).all():

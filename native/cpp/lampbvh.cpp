@@ -7,6 +7,10 @@
 
 namespace dacrt {
 
+namespace {
+
+// The box around everything of lamp L that hit_lamp can report as met, unpadded; false for
+// lamps no ray meets (delta point and spot lamps) and lamps at infinity (sun, background).
 bool lamp_box(const LampRecord& L, float lo[3], float hi[3]) {
     const int kind = int(L.kind), shape = int(L.shape);
     float ext[3];
@@ -25,6 +29,8 @@ bool lamp_box(const LampRecord& L, float lo[3], float hi[3]) {
     }
     return true;
 }
+
+}  // namespace
 
 LampBVH::LampBVH(const LampRecord* rec, const int32_t* lamps, size_t nl) {
     std::vector<float> box, centre;

@@ -18,16 +18,10 @@
 
 namespace dacrt {
 
-// The box around everything of lamp L that hit_lamp can report as met, unpadded; false for
-// lamps no ray meets (delta point and spot lamps) and lamps at infinity (sun, background).
-bool lamp_box(const LampRecord& L, float lo[3], float hi[3]);
-
 class LampBVH {
 public:
     // Over the lamps rec[lamps[k]], k < nl, that have a box; candidates are reported as k.
     LampBVH(const LampRecord* rec, const int32_t* lamps, size_t nl);
-
-    size_t size() const { return order_.size(); }  // lamps with a box
 
     // Appends to out the k of every lamp whose box the ray O + t D may meet at 0 < t < tmax
     // (unsorted). The test widens each box by what hit_lamp's float32 rounding can move a
