@@ -1,6 +1,6 @@
 """The DACRT RenderEngine: orchestration only.
 
-Per view layer: export the depsgraph (export.py), integrate in passes (integrator.py), write
+Per view layer: export the depsgraph (the export package), integrate in passes (integrator.py), write
 Combined and the enabled data and light passes (passes.py) progressively, keep the
 status line, progress and memory stats current, honour cancel between steps, and report every
 message and error through `self.report` so nothing is only printed. Nothing outlives `render()`.

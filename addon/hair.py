@@ -11,7 +11,7 @@ tube; each curve's first ring is turned by its own share of one polygon sector, 
 of a common direction show a view 2r on average (a polygon is wider across its corners than
 across its sides). Rings and segment steps drop as curves grow in number so the frame's
 triangle count stays bounded (LEVELS). The tube is open at its ends (Cycles' round caps are a
-radius long; hair is thin). Plain numpy; the export layer (export.py) reads the Blender data.
+radius long; hair is thin). Plain numpy; the export layer (export/strands.py) reads the Blender data.
 """
 from __future__ import annotations
 

@@ -47,7 +47,7 @@ NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
 VIEW_NODE_TYPES = frozenset({'FRESNEL', 'LAYER_WEIGHT'})   # as their average over view directions
 # the note when one of two images is averaged (one image per material)
 TWO_IMAGES = "two image textures mixed; the second as its average colour"
-# Color Attribute, Attribute and Object Info: values per point or per object (export.py)
+# Color Attribute, Attribute and Object Info: values per point or per object (export/materials.py)
 ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 _COLOR_ROLES = {'color', 'a', 'b', 'vector'}     # colour or vector inputs (but floats in Mix FLOAT and Math)
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}

@@ -6,7 +6,7 @@ A polyhedron inscribed in the sphere would look smaller than it (an icosphere of
 Cauchy's formula makes its projected area, averaged over view directions, the sphere's pi r^2:
 the light a point cloud catches and the pixels it covers agree with Cycles' exact spheres on
 average. The subdivision drops as points grow in number so the frame's triangle count stays
-bounded (LEVELS). Plain numpy; the export layer (export.py) reads the Blender data.
+bounded (LEVELS). Plain numpy; the export layer (export/strands.py) reads the Blender data.
 """
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ below). Cycles stacks them at each view direction; so does this module, per view
 specular.py's quadrature, and only then averages over view directions (weighted by cos): at
 every view cosine the stack is affine in the base colour without metal, so the average is one
 step (dim (3,), add (3,)), base -> base x dim + add, exact for any base, textured or not
-(export._Closure.layered; the fair-material override folds it into a base colour). With metal
+(export.closure.Closure.layered; the fair-material override folds it into a base colour). With metal
 it is a BaseMap, a per-channel function of the base (exact for a constant, through a table per
 texel). Sheen, transmission and subsurface are dropped and reported, as before.
 """

@@ -1,6 +1,6 @@
 """DACRT's render settings: the `scene.dacrt` property group (like `scene.cycles`).
 
-Scripts drive the engine through these; export.py turns them into `scenedata.Settings`.
+Scripts drive the engine through these; export/settings.py turns them into `scenedata.Settings`.
 Threads are not a setting of ours: they follow Blender's Render > Performance > Threads
 (`scene.render.threads_mode` / `threads`).
 """

@@ -57,7 +57,7 @@ def albedo(rho, sigma: float) -> np.ndarray:
 
 class RoughDiffuse:
     """The colour -> albedo map of a rough diffuse of roughness sigma, as a step of the export
-    (_Closure.mapped) and of the fair-material override: exact on a constant and per texel."""
+    (export.closure.Closure.mapped) and of the fair-material override: exact on a constant and per texel."""
 
     def __init__(self, sigma):
         self.sigma = min(max(float(sigma), 0.0), 1.0)

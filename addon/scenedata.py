@@ -1,7 +1,7 @@
 """The per-frame scene snapshot: plain numpy arrays and small dataclasses.
 
-This is the one boundary between Blender and everything below it. `export.py` fills a
-`SceneData` from the depsgraph (the only module that reads bpy scene data); the integrator,
+This is the one boundary between Blender and everything below it. The `export` package fills a
+`SceneData` from the depsgraph (the only package that reads bpy scene data); the integrator,
 camera, lights and film read it and never touch bpy. Nothing here outlives a frame.
 
 Conventions:
@@ -151,7 +151,7 @@ class Material:
     pass_index: int = 0                           # Blender's material pass index (Material Index pass)
     # the ray kinds that meet this material (VIS_* bits; the others pass through its triangles):
     # a Mix Shader of a fully transparent shader by a Light Path ray-type output hides it from
-    # that kind or from the others (export.py)
+    # that kind or from the others (export/materials.py)
     visibility: int = VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW
     # AOV Output nodes: AOV name -> (colour (3,), value), what the material writes to that
     # AOV's pass (a COLOR AOV takes the colour, a VALUE AOV the value; nodes of one name add up)

@@ -1,7 +1,7 @@
 """Light linking: which objects each emitter lights, as light sets and receiver masks.
 
 Blender's receiver collection of an emitter (a light or an emissive object) names objects to
-include or exclude (export.light_link_receivers); with any included, only they are lit (less
+include or exclude (export.lights.light_link_receivers); with any included, only they are lit (less
 the excluded), else every object but the excluded. Emitters with the same receivers share a
 light set; set 0 is every object's (emitters without a receiver collection). Each object gets a
 64-bit mask of the sets it receives, so a shading point is lit by an emitter when bit

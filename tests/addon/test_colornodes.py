@@ -114,7 +114,7 @@ def _image_material(name, px, chain, interpolation='Closest'):
 
 
 def _exported_material(mat):
-    builder = export._MaterialBuilder()
+    builder = export.materials.MaterialBuilder()
     return builder.materials[builder.index(mat)]
 
 

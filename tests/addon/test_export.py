@@ -408,7 +408,7 @@ def test_missing_slot_material_uses_default(scene, exported):
     ob.data.materials.append(None)
     data = exported()
     assert np.all(data.geometry.material == 0)
-    assert np.allclose(data.materials[0].base_color, export.DEFAULT_SURFACE_ALBEDO)
+    assert np.allclose(data.materials[0].base_color, export.materials.DEFAULT_SURFACE_ALBEDO)
 
 
 # -- normals -----------------------------------------------------------------------------
@@ -672,7 +672,7 @@ def test_quad_tessellation_is_blenders(scene, seed):
     me.attributes['.corner_vert'].data.foreach_get('value', corner_vert)
     tri_poly = np.empty(nt, np.int32)
     me.loop_triangle_polygons.foreach_get('value', tri_poly)
-    got = export._quad_corner_tris(positions.reshape(-1, 3), corner_vert, tri_poly, nl)
+    got = export.meshes._quad_corner_tris(positions.reshape(-1, 3), corner_vert, tri_poly, nl)
     assert got is not None and np.array_equal(got, expect.reshape(-1, 3))
     flipped = np.count_nonzero(np.diff(got[:, 0]) == 1)        # (0 1 3) then (1 2 3)
     assert flipped > 100, "the sample has folded quads for the flip rule to decide"
@@ -680,7 +680,7 @@ def test_quad_tessellation_is_blenders(scene, seed):
     ngon.from_pydata([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0.5, 1.5, 0), (0, 1, 0)], [], [(0, 1, 2, 3, 4)])
     tp = np.empty(3, np.int32)
     ngon.loop_triangle_polygons.foreach_get('value', tp)
-    assert export._quad_corner_tris(np.zeros((5, 3), np.float32), np.arange(5, dtype=np.int32), tp, 5) is None
+    assert export.meshes._quad_corner_tris(np.zeros((5, 3), np.float32), np.arange(5, dtype=np.int32), tp, 5) is None
 
 
 def test_dropped_triangles_keep_later_objects_aligned(scene, exported):
@@ -729,7 +729,7 @@ def test_compact_rows_equals_boolean_indexing(pattern):
     for shape, dtype in (((m, 3), np.int32), ((m, 3, 3), np.float32), ((m,), np.uint8), ((m, 3, 2), np.float32)):
         a = rng.integers(0, 1000, shape).astype(dtype)
         expect = a[keep]
-        got = export._compact_rows(a, keep)
+        got = export.assembly._compact_rows(a, keep)
         assert got.dtype == dtype and got.shape == expect.shape
         np.testing.assert_array_equal(got, expect)
 
@@ -1234,7 +1234,7 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     scenes.light('SUN', 3.0, name="WideSun", angle=math.pi)     # 180 degrees: float32 pi > pi
     data = exported()
     assert [l.name for l in data.lights] == ["Beam", "Fine", "WideSun"]
-    assert data.lights[0].spread == export.MIN_SPREAD            # Cycles: a beam, not nothing
+    assert data.lights[0].spread == export.lights.MIN_SPREAD            # Cycles: a beam, not nothing
     assert data.lights[2].angle > math.pi                       # as Blender stores it
     warnings = [t for lvl, t in data.messages if lvl == 'WARNING']
     for name, why in (("NoSize", "zero area"), ("Squashed", "zero area"), ("Negative", "negative strength"),
@@ -1480,8 +1480,8 @@ def test_default_surface_reported_only_when_used(scene, exported):
     scenes.plane("Bare")
     scenes.plane("Painted", location=(3, 0, 0), materials=(scenes.diffuse("Paint", (0.5, 0.5, 0.5)),))
     data = exported()
-    assert np.allclose(data.materials[0].base_color, export.DEFAULT_SURFACE_ALBEDO)
-    assert 0.805 < export.DEFAULT_SURFACE_ALBEDO[0] < 0.82      # 0.8 (1 - layer) + layer
+    assert np.allclose(data.materials[0].base_color, export.materials.DEFAULT_SURFACE_ALBEDO)
+    assert 0.805 < export.materials.DEFAULT_SURFACE_ALBEDO[0] < 0.82      # 0.8 (1 - layer) + layer
     assert any("default surface" in t for _, t in data.messages)
     bpy.data.objects.remove(bpy.data.objects["Bare"])
     data = exported()
@@ -1581,8 +1581,8 @@ def test_materials_no_triangle_uses_are_never_evaluated(scene, exported, monkeyp
     used, unused = scenes.diffuse("Used", (0.5, 0.5, 0.5)), scenes.diffuse("OnlyInAnUnusedSlot", (0.1, 0.9, 0.1))
     scenes.plane("Plane", materials=(used, unused))              # every face uses slot 0
     built = []
-    real = export._MaterialBuilder._build
-    monkeypatch.setattr(export._MaterialBuilder, '_build', lambda self, m: built.append(m.name) or real(self, m))
+    real = export.materials.MaterialBuilder._build
+    monkeypatch.setattr(export.materials.MaterialBuilder, '_build', lambda self, m: built.append(m.name) or real(self, m))
     data = exported()
     assert built == ["Used"] and [m.name for m in data.materials][1:] == ["Used"]
     assert data.skipped['materials_unused'] == 1
@@ -2069,10 +2069,10 @@ def test_adaptive_subdivision_is_reported(scene, exported):
 def test_object_random_is_cycles(scene):
     """Object Info Random as Cycles computes it, values read from Cycles renders: objects of
     their own hash their names, instances divide their random_id."""
-    assert [round(export.object_random(n, 0, False), 7) for n in ("P0", "P1", "P2")] == \
+    assert [round(export.objectinfo.object_random(n, 0, False), 7) for n in ("P0", "P1", "P2")] == \
         [0.3344228, 0.644282, 0.5273009]
-    assert export.object_random("Any", 360212060, True) == pytest.approx(0.08386841, abs=1e-7)
-    assert 0.0 <= export.object_random("Ünïcode", 0, False) < 1.0
+    assert export.objectinfo.object_random("Any", 360212060, True) == pytest.approx(0.08386841, abs=1e-7)
+    assert 0.0 <= export.objectinfo.object_random("Ünïcode", 0, False) < 1.0
 
 
 def test_colour_attribute_beside_an_image_or_past_a_clamp(scene, exported, tmp_path):

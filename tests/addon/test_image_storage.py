@@ -1,4 +1,4 @@
-"""The export keeps each image as Cycles stores it for lookup (addon/export.py _stored_texels,
+"""The export keeps each image as Cycles stores it for lookup (addon/export/images.py _stored_texels,
 addon/texture.py EncodedTexels), from Cycles 5.0's sources (scene/image.cpp detect_colorspace:
 an sRGB image is compress_as_srgb at any depth; blender/image.cpp: Blender's float buffers of
 packed and generated images are scene linear) and checked by renders
@@ -32,7 +32,7 @@ def _material(img, alpha_linked=False, interpolation='Linear'):
     if alpha_linked:
         nt.links.new(tex.outputs['Alpha'], d.inputs['Roughness'])
     nt.links.new(d.outputs[0], out.inputs['Surface'])
-    builder = export._MaterialBuilder()
+    builder = export.materials.MaterialBuilder()
     return builder.materials[builder.index(mat)]
 
 
@@ -140,7 +140,7 @@ def test_colour_nodes_after_an_encoded_image():
         nt.links.new(tex.outputs['Color'], node.inputs[socket])
         nt.links.new(node.outputs['Color'], d.inputs['Color'])
         nt.links.new(d.outputs[0], out.inputs['Surface'])
-        builder = export._MaterialBuilder()
+        builder = export.materials.MaterialBuilder()
         built[name] = builder.materials[builder.index(mat)]
     inverted, gamma = built["Inverted"], built["Gamma"]
     assert stored_texels(inverted.texture) is not None and inverted.approximated == ''
@@ -224,13 +224,13 @@ def test_byte_conversion_tables_equal_the_float_arithmetic(space, alpha_mode, un
     img.colorspace_settings.name = space
     img.alpha_mode = alpha_mode
     buf = k * np.float32(1.0 / 255.0)                          # Blender's byte pixels
-    got = export._linear_rgba(buf.copy(), img, [], unassociate, byte=True, encoded=False)
+    got = export.images._linear_rgba(buf.copy(), img, [], unassociate, byte=True, encoded=False)
     want = buf.copy()
     if alpha_mode == 'STRAIGHT' and space != 'Non-Color':      # Cycles associates these
         b = np.rint(want * 255.0)
         want[..., :3] = np.floor_divide(b[..., :3] * b[..., 3:4], 255.0) / np.float32(255.0)
         if unassociate:
-            want = export._unassociated(want)
+            want = export.images._unassociated(want)
     if space == 'sRGB':
-        want[..., :3] = export._srgb_to_linear(want[..., :3])
+        want[..., :3] = export.images._srgb_to_linear(want[..., :3])
     assert np.array_equal(np.asarray(got).view(np.uint32), want.view(np.uint32))

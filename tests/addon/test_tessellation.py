@@ -113,11 +113,11 @@ def test_hair_particle_radius_follows_the_hair_shape(shape, power):
     zeroes the last point."""
     from types import SimpleNamespace
 
-    from addon.export import _hair_radius
+    from addon.export.strands import hair_radius
     t = np.array([[0.0, 0.25, 0.5, 1.0]])
     s = SimpleNamespace(shape=shape, radius_scale=0.1, root_radius=2.0, tip_radius=0.5, use_close_tip=False)
     want = 0.05 * (0.5 + (2.0 - 0.5) * (1 - t) ** power)
-    assert np.allclose(_hair_radius(s, t), want)
+    assert np.allclose(hair_radius(s, t), want)
     s.use_close_tip = True
-    got = _hair_radius(s, t)
+    got = hair_radius(s, t)
     assert got[0, -1] == 0 and np.allclose(got[0, :-1], want[0, :-1])

@@ -5,7 +5,7 @@ Specular IOR Level 0, Metallic/Coat/Sheen/Transmission/Subsurface 0, Diffuse Rou
 A production file (bmw27: glossy paint, glass, metal) renders in Cycles with closures a diffuse
 engine approximates, so comparing the two as they are measures the approximation, not the
 engine. `make_diffuse()` edits every material's node tree in place into what the add-on's
-export renders exactly, following the export's own rules (addon/export.py `_MaterialBuilder`):
+export renders exactly, following the export's own rules (addon/export/materials.py `MaterialBuilder`):
 - Principled BSDF: metallic, transmission, coat, sheen, subsurface, specular layer, diffuse
   roughness, thin film set to 0, its Normal input unlinked (a tangent-space normal map of an
   image stays: the export renders it); the specular layer and the coat,
@@ -41,7 +41,7 @@ import numpy as np
 from addon import export, mapping, nodeeval, nodegraph, principled, roughdiffuse
 
 # the layers the export drops, and thin film (it tints only the dropped specular layer)
-ZEROED_PRINCIPLED = tuple(name for name, _ in export.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
+ZEROED_PRINCIPLED = tuple(name for name, _ in export.materials.PRINCIPLED_IGNORED) + ('Thin Film Thickness',)
 
 
 DEFAULT_SURFACE = "DACRT fair default surface"
@@ -68,7 +68,7 @@ def remaining_approximations(materials=None) -> dict[str, str]:
     """What the add-on's export would still approximate, per material name (empty after
     make_diffuse, unless two different images are mixed in one material); objects without a
     material are listed under '(default surface)'."""
-    builder = export._MaterialBuilder()
+    builder = export.materials.MaterialBuilder()
     out = {}
     if materials is None and _objects_without_material():
         out['(default surface)'] = DEFAULT_SURFACE_REASON
@@ -81,12 +81,12 @@ def remaining_approximations(materials=None) -> dict[str, str]:
 
 def _objects_without_material():
     """Geometry objects with no material slot or an empty one."""
-    return [ob for ob in bpy.data.objects if ob.type in export.GEOMETRY_TYPES and
+    return [ob for ob in bpy.data.objects if ob.type in export.scene.GEOMETRY_TYPES and
             (not ob.material_slots or any(s.material is None for s in ob.material_slots))]
 
 
 def _ray_type_mix(node) -> bool:
-    """A surface Mix Shader the export renders by ray kind (export._ray_type_mix): its factor a
+    """A surface Mix Shader the export renders by ray kind (export.materials.MaterialBuilder._ray_type_mix): its factor a
     Light Path's Is Camera Ray or Is Shadow Ray, exactly one side a white Transparent BSDF."""
     link = nodegraph.linked_link(node.inputs['Fac'])
     if link is None or link.from_node.type != 'LIGHT_PATH' or \
@@ -113,7 +113,7 @@ def _fill_empty_slots() -> list[str]:
     tree.nodes.clear()
     out = tree.nodes.new('ShaderNodeOutputMaterial')
     diffuse = tree.nodes.new('ShaderNodeBsdfDiffuse')
-    diffuse.inputs['Color'].default_value = (*export.DEFAULT_SURFACE_ALBEDO, 1.0)
+    diffuse.inputs['Color'].default_value = (*export.materials.DEFAULT_SURFACE_ALBEDO, 1.0)
     diffuse.inputs['Roughness'].default_value = 0.0
     tree.links.new(diffuse.outputs['BSDF'], out.inputs['Surface'])
     for ob in objects:
@@ -135,7 +135,7 @@ def _one_side_transparent(mix):
 
 def _image_alpha(socket):
     """Whether socket is fed straight by an Image Texture's Alpha output (the export renders it)."""
-    return export.is_image_alpha(nodegraph.linked_link(socket))
+    return export.closure.is_image_alpha(nodegraph.linked_link(socket))
 
 class _Editor:
     """Edits one material; a node reached inside a node group is edited in the group's own tree
@@ -152,7 +152,7 @@ class _Editor:
         out = nodegraph.output_node(tree)
         if out is None:
             return []
-        for name in export.IGNORED_OUTPUTS:
+        for name in export.materials.IGNORED_OUTPUTS:
             sock = out.inputs.get(name)
             if sock is not None and sock.is_linked:
                 self._unlink(sock, f"{name.lower()} removed")
@@ -205,7 +205,7 @@ class _Editor:
         node = link.from_node
         t = node.type
         if t == 'BSDF_DIFFUSE':
-            rough = export.diffuse_roughness(node, [])
+            rough = export.reflectors.diffuse_roughness(node, [])
             self._set(node.inputs['Roughness'], 0.0, "Diffuse roughness 0")
             self._normals(node)
             self._color(node.inputs['Color'])
@@ -243,10 +243,10 @@ class _Editor:
             self._shader(node.inputs[2], depth + 1)
         else:
             sock = nodegraph.input_socket(node, 'Color', 'Base Color')
-            color = export.DEFAULT_ALBEDO
+            color = export.materials.DEFAULT_ALBEDO
             if sock is not None and sock.type == 'RGBA':
                 color, _ = nodeeval.constant_color(sock)
-            reflector = export.reflector_albedo(node, [])     # a Glossy or Metallic BSDF's albedo
+            reflector = export.reflectors.reflector_albedo(node, [])     # a Glossy or Metallic BSDF's albedo
             if reflector is not None:
                 color = reflector
             self._replace(socket, node, tuple(float(v) for v in color[:3]), f"{node.bl_label} as diffuse")
@@ -284,7 +284,7 @@ class _Editor:
     def _normals(self, node):
         sock = node.inputs.get('Normal')
         if sock is not None and nodegraph.linked_node(sock) is not None \
-                and export.tangent_normal_map(node, []) is None:     # a normal map it renders stays
+                and export.normalmaps.tangent_normal_map(node, []) is None:     # a normal map it renders stays
             self._unlink(sock, f"{node.bl_label} Normal input removed")
 
     def _own_value(self, socket):
@@ -350,6 +350,6 @@ class _Editor:
         if node.projection != 'FLAT':
             node.projection = 'FLAT'
             self.done.append("image projection flat")
-        if node.extension not in export.TEXTURE_EXTENSIONS:
+        if node.extension not in export.materials.TEXTURE_EXTENSIONS:
             node.extension = 'REPEAT'
             self.done.append("image extension repeat")

@@ -1,7 +1,7 @@
 """A Mix Shader by a Light Path ray-type output between a shader and a white Transparent BSDF
 (the usual way to hide a light plane from the camera, or a shadow caster from shadow rays),
 against Cycles: the material is invisible to those rays (or to all others) and the rest see
-the other shader (export._ray_type_mix). Read at the factor's own value, as before, such a
+the other shader (export.materials.MaterialBuilder._ray_type_mix). Read at the factor's own value, as before, such a
 light plane showed half its emission to the camera and lit the scene at half strength (image
 means off by 3% to 98%)."""
 import math

@@ -1,0 +1,383 @@
+"""The frame's geometry arrays: every unique mesh transformed for all of its placements at once
+(one native pass), straight into arrays sized up front, with per-triangle materials, ray
+visibility, object and instance ids, UVs, tangents, attribute colours and shadow terminator;
+non-finite and degenerate triangles dropped and reported. Part of the export layer."""
+
+import dacrt
+import numpy as np
+
+from .. import scenedata as sd
+from .errors import ExportCancelled
+
+class _Out:
+    """The frame's geometry arrays, allocated once at their final size and filled in place by
+    each mesh batch; triangles some batch drops are removed in one pass at the end."""
+
+    def __init__(self, nv, m, need_uvs):
+        self.vertices = np.empty((nv, 3))
+        self.triangles = np.empty((m, 3), np.int32)
+        self.normals = np.empty((m, 3, 3), np.float32)
+        self.material = np.empty(m, np.int32)
+        self.visibility = np.empty(m, np.uint8)
+        self.object_index = np.empty(m, np.int32)
+        self.instance = np.empty(m, np.int32)    # the placement: instances of one object differ
+        self.instances = 0                        # placements written so far
+        self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
+        self.tangents = None              # (m, 3, 4), allocated by the first normal-mapped mesh
+        self.linear = []                  # per batch, its placements' 3x3 maps (k, 3, 3)
+        self.terminator = None            # (m, 2), allocated by the first object that has one
+        self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
+        self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
+        self.keep = None
+
+    def drop(self, rows, keep):
+        """Drop the triangles in slice `rows` where keep (their length) is False."""
+        if self.keep is None:
+            self.keep = np.ones(len(self.triangles), bool)
+        self.keep[rows] = keep
+
+    def geometry(self):
+        per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
+                       visibility=self.visibility, object_index=self.object_index, instance=self.instance,
+                       uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
+                       colors=self.colors)
+        if self.keep is not None and not self.keep.all():
+            per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
+        # per placement (instance id), for the object-space tangents of normal maps
+        xf = np.concatenate(self.linear).astype(np.float32) if self.tangents is not None else None
+        return sd.Geometry(vertices=self.vertices, tangent_xf=xf, **per_tri)
+
+
+def _rewind(rows):
+    """Swap corners 1 and 2 of per-triangle rows (in place): a mirrored instance's triangles and
+    every per-corner array read with them."""
+    rows[:, [1, 2]] = rows[:, [2, 1]]
+
+
+def _compact_rows(a, keep):
+    """a[keep], computed in a's own memory (a is overwritten; the result is a view of it).
+
+    The dropped triangles are few (degenerate or NaN ones), so the kept runs between them move
+    down in place: bmw27's 190 of 1.7M cost 19 ms instead of 104 ms for a[keep], which
+    allocates, faults in and gathers a second copy of 81 bytes per triangle."""
+    drop = np.flatnonzero(~keep)
+    if not len(drop):
+        return a
+    dst = int(drop[0])
+    for s, e in zip((drop + 1).tolist(), np.append(drop[1:], len(a)).tolist()):
+        if e > s:
+            a[dst:dst + e - s] = a[s:e]       # numpy copies overlapping runs safely
+            dst += e - s
+    return a[:dst]
+
+
+class Assembly:
+    """Writes the walk's meshes (key -> meshes.MeshArrays) at their placements (key -> [Placement])
+    into the frame's scenedata.Geometry, evaluating the materials the placed triangles use.
+    exporter: the walk's, whose materials (materials.MaterialBuilder), meshes, placements,
+    messages and counts it reads and adds to, and whose check_break and ignore it calls."""
+
+    def __init__(self, exporter):
+        self.materials, self.meshes, self.placements = exporter.materials, exporter.meshes, exporter.placements
+        self.messages, self.counts = exporter.messages, exporter.counts
+        self.check_break, self.ignore = exporter.check_break, exporter.ignore
+        self._corner_albedos = {}  # (material, mesh) -> per-corner albedo of a node chain on an attribute
+
+    def geometry(self, uv_pass=False):
+        """Transform every unique mesh for all its instances at once, straight into the frame's
+        arrays (sized up front; dropped triangles are removed in one pass at the end)."""
+        bad = {}          # object name -> [non-finite vertices, triangles dropped]
+        degenerate = 0
+        self._resolve_materials()
+        self._object_info_albedos()
+        need_uvs = uv_pass or any(self.materials.uses_texture)
+        batches = []
+        for key, places in self.placements.items():
+            if self.check_break():
+                raise ExportCancelled()
+            if places:
+                batches.append((self.meshes[key], places))
+        if not batches:
+            return sd.Geometry.empty()
+        nv = sum(len(p) * len(a.positions) for a, p in batches)
+        m = sum(len(p) * len(a.triangles) for a, p in batches)
+        out = _Out(nv, m, need_uvs)
+        v0 = t0 = 0
+        for a, places in batches:
+            if self.check_break():
+                raise ExportCancelled()
+            nbad, ndeg = self._instance_batch(a, places, out, v0, t0)
+            degenerate += ndeg
+            for name, nvb, ntb in nbad:
+                acc = bad.setdefault(name, [0, 0])
+                acc[0] += nvb
+                acc[1] += ntb
+            v0 += len(places) * len(a.positions)
+            t0 += len(places) * len(a.triangles)
+        for name, (nvb, ntb) in bad.items():
+            self.messages.append(('WARNING', f"object '{name}': {nvb} vertices with NaN/inf "
+                                             f"coordinates; {ntb} triangles using them skipped"))
+        if degenerate:
+            self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
+        self.counts['triangles_degenerate'] = degenerate
+        self.counts['triangles_nonfinite'] = sum(nt for _, nt in bad.values())
+        geometry = out.geometry()
+        # materials hidden from some ray kinds (a Light Path ray-type mix, see _ray_type_mix)
+        mvis = np.array([m.visibility for m in self.materials.materials], np.uint8)
+        if len(geometry.material) and (mvis != (sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)).any():
+            keep = mvis | np.uint8(sd.HOLDOUT)
+            geometry.visibility &= keep[geometry.material]
+        return geometry
+
+    def _object_info_albedos(self):
+        """Each placement's albedo for the Object Info materials it shows: per material, one
+        evaluation over all its placements' values (MaterialBuilder.evaluated_albedo)."""
+        maps = self.materials.attribute_maps
+        for k, entry in enumerate(maps):
+            if entry is None or entry[0] != 'object':
+                continue
+            users = [p for places in self.placements.values() for p in places
+                     if p.slot_map is not None and k in p.slot_map]
+            if not users:
+                continue
+            albedo = self.materials.evaluated_albedo(k, np.stack([p.object_info(entry[1], entry[2]) for p in users]))
+            for p, a in zip(users, albedo):
+                p.object_albedo[k] = a
+
+    def _resolve_materials(self):
+        """Evaluate the materials of the slots some triangle uses (per mesh: its slot indices,
+        clamped as Blender does); a material only on unused slots is never built."""
+        seen, built = set(), set()
+        for key, places in self.placements.items():
+            if not places:
+                continue
+            slot = self.meshes[key].slot
+            slots_used = np.zeros(1, np.int32) if slot is None else np.unique(slot)
+            # placements sharing their slots list (the instances of one object, 100K of them in
+            # a scattered forest: _walk_instances) share one map, read-only from here on
+            maps = {}
+            for p in places:
+                known = maps.get(id(p.slots))
+                if known is not None:
+                    p.slot_map = known
+                    continue
+                ptrs = [m.as_pointer() if m is not None else 0 for m in p.slots]
+                n = max(len(p.slots), 1)
+                used = np.unique(np.clip(slots_used, 0, n - 1))
+                p.slot_map = maps[id(p.slots)] = np.zeros(n, np.int32)
+                for i in used:
+                    if i < len(p.slots):
+                        if p.slots[i] is not None and p.slots[i].as_pointer() not in built and self.check_break():
+                            raise ExportCancelled()   # a material's images can take seconds
+                        p.slot_map[i] = self.materials.index(p.slots[i])
+                        if p.slots[i] is not None:
+                            built.add(p.slots[i].as_pointer())
+                seen.update(ptr for ptr in ptrs if ptr)
+        self.counts['materials_unused'] = len(seen - built)
+
+    def _instance_batch(self, a, places, out, v0, t0):
+        """Write the k instances of mesh `a` into out's vertex rows from v0 and triangle rows
+        from t0; returns ([(object name, bad vertices, bad triangles)], degenerate count)."""
+        k = len(places)
+        nv, nt = len(a.positions), len(a.triangles)
+        V, T = slice(v0, v0 + k * nv), slice(t0, t0 + k * nt)
+        mats = np.stack([p.matrix for p in places])                # (k,4,4)
+        lin = mats[:, :3, :3]
+        # float64 world positions: a scene far from the origin keeps its precision until the
+        # renderer centres it (integrator.recentred) and rounds to float32
+        world = out.vertices[V]
+        # (one threaded native pass, bit for bit the float64 numpy multiply-adds it replaced)
+        dacrt.shading.transform_points(a.positions, lin, mats[:, :3, 3], world.reshape(k, nv, 3))
+        tris = out.triangles[T]             # local indices first (face_normals reads them)
+        if k == 1:
+            tris[...] = a.triangles
+        else:
+            np.add(a.triangles[None, :, :], (np.arange(k, dtype=np.int32) * nv)[:, None, None],
+                   out=tris.reshape(k, nt, 3))
+        bad, keep = [], None
+        if not np.isfinite(world).all():
+            finite = np.isfinite(world).all(axis=1)
+            tri_ok = finite[tris].all(axis=1)
+            for i, p in enumerate(places):
+                nb = int((~tri_ok[i * nt:(i + 1) * nt]).sum())
+                nvb = int((~finite[i * nv:(i + 1) * nv]).sum())
+                if nvb:
+                    bad.append((p.name, nvb, nb))
+            keep = tri_ok
+            world[~finite] = 0.0
+        # A mirroring transform (negative scale) reverses the winding. The renderer orients the
+        # shading normals by the winding normal, so those instances get corners 1 and 2 swapped
+        # (their corner normals and UVs below too): the winding normal faces the outside again.
+        # (Negating only the flat normals left the two opposed: mirrored objects rendered black.)
+        mirrored = np.flatnonzero(np.linalg.det(lin) < 0)
+        for i in mirrored:
+            _rewind(tris[i * nt:(i + 1) * nt])
+        # geometric normals in world space (float64, one native pass)
+        ng, good = dacrt.shading.face_normals(world, tris)
+        if v0:
+            tris += v0
+        deg = int(np.count_nonzero(~good if keep is None else keep & ~good))
+        if keep is not None or deg:
+            keep = good if keep is None else keep & good
+            out.drop(T, keep)
+        normals = out.normals[T]
+        if a.normal_rows is None:
+            normals[...] = ng[:, None, :]
+        else:
+            inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin,
+                                         np.eye(3)))    # normals transform by the inverse transpose
+            n = dacrt.shading.transform_points(a.normal_rows, inv.transpose(0, 2, 1), None,
+                           np.empty((k, len(a.normal_rows), 3), np.float32))
+            # |n| per row from the three strided columns: 2x faster than einsum's reduction
+            nlen = n[..., 0] * n[..., 0]
+            nlen += n[..., 1] * n[..., 1]
+            nlen += n[..., 2] * n[..., 2]
+            nlen = np.sqrt(nlen, out=nlen)[..., None]
+            ok = nlen > 1e-12                           # a zero normal falls back to the face's
+            n /= np.where(ok, nlen, np.float32(1))
+            if not ok.all():
+                np.copyto(n, np.float32(0), where=~ok)
+            per = normals.reshape(k, nt, 3, 3)
+            a.per_corner(n, a.normal_index, per)
+            for i in mirrored:
+                _rewind(per[i])
+            if not ok.all():
+                corner_ok = a.per_corner(ok, a.normal_index, np.empty((k, nt, 3, 1), bool))
+                for i in mirrored:
+                    _rewind(corner_ok[i])
+                np.copyto(normals, ng[:, None, :], where=~corner_ok.reshape(k * nt, 3, 1))
+        # per placement, for all k at once (a scatter's 100K instances: a Python step each was
+        # most of the batch): materials (placements sharing a slot map share their rows),
+        # visibility, object and instance ids, shadow terminator
+        rows = slice(t0, t0 + k * nt)
+        material = out.material[rows].reshape(k, nt)
+        by_map = {}
+        for i, p in enumerate(places):
+            by_map.setdefault(id(p.slot_map), []).append(i)
+        for ids in by_map.values():
+            slot_map = places[ids[0]].slot_map
+            material[ids] = slot_map[0] if len(slot_map) == 1 or a.slot is None else \
+                np.take(slot_map, a.slot, mode='clip')     # index clamped as Blender does
+        for name, values in (('visibility', [p.visibility for p in places]),
+                             ('object_index', [p.object_index for p in places])):
+            arr = getattr(out, name)
+            arr[rows].reshape(k, nt)[...] = np.asarray(values, arr.dtype)[:, None]
+        out.instance[rows].reshape(k, nt)[...] = (out.instances + np.arange(k, dtype=np.int32))[:, None]
+        # Cycles lifts shadow rays off smooth triangles only; the shading offset is for all
+        smooth = a.normal_rows is not None
+        for i, p in enumerate(places):
+            term = (p.terminator[0] if smooth else 0.0, p.terminator[1])
+            if any(term):
+                if out.terminator is None:
+                    out.terminator = np.zeros((len(out.triangles), 2), np.float32)
+                out.terminator[t0 + i * nt:t0 + (i + 1) * nt] = term
+        # the materials whose albedo follows an attribute or Object Info (most scenes: none)
+        attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
+        per_placement = out.uvs is not None or self.materials.normal_mapped or attributed
+        for i, p in enumerate(places if per_placement else ()):
+            S = slice(t0 + i * nt, t0 + (i + 1) * nt)
+            if out.uvs is not None:
+                if a.corner_uvs is None:
+                    out.uvs[S] = 0.0
+                    if out.has_uv is None:
+                        out.has_uv = np.ones(len(out.triangles), bool)
+                    out.has_uv[S] = False
+                else:
+                    a.per_corner(a.corner_uvs, a.corners, out.uvs[S])
+                self._named_uvs(a, p, out.material[S], out.uvs[S])
+                if i in mirrored:
+                    _rewind(out.uvs[S])
+            if self.materials.normal_mapped:
+                self._world_tangents(a, p, i in mirrored, out, S)
+            if attributed and not attributed.isdisjoint(p.slot_map.tolist()):
+                self._attribute_colors(a, p, i in mirrored, out, S)
+        out.instances += k
+        out.linear.append(lin)
+        return bad, deg
+
+    def _corner_albedo(self, a, k, name, object_name):
+        """(nt, 3, 3): material k's albedo at each corner of mesh a, its chain evaluated on the
+        corners' attribute values (0 where the mesh lacks it, as Cycles); once per mesh."""
+        cache = self._corner_albedos
+        if (k, id(a)) not in cache:
+            values = a.corner_attribute(name)
+            if values is None:
+                self.ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
+                             "its colour reads 0, as in Cycles", object_name)
+                values = np.zeros((len(a.triangles), 3, 4), np.float32)
+            cache[k, id(a)] = self.materials.evaluated_albedo(k, values.reshape(-1, 4)).reshape(-1, 3, 3)
+        return cache[k, id(a)]
+
+    def _attribute_colors(self, a, place, mirrored, out, S):
+        """The per-corner albedo factors (w x the attribute's colour + k, Cycles' 0 where the
+        mesh lacks the attribute) of one instance's triangles whose material reads a mesh
+        attribute; 1 on the frame's other triangles."""
+        if out.colors is None:
+            out.colors = np.ones((len(out.triangles), 3, 3), np.float32)
+        block = out.colors[S]
+        material = out.material[S]
+        for k in set(place.slot_map):
+            entry = self.materials.attribute_maps[k]
+            if entry is None:
+                continue
+            rows = np.flatnonzero(material == k)
+            if entry[0] == 'object':                 # one albedo over the whole object
+                block[rows] = place.object_albedo[k]
+                continue
+            if entry[0] == 'corners':                # the chain evaluated at each corner
+                block[rows] = self._corner_albedo(a, k, entry[1], place.name)[rows]
+                if mirrored:
+                    block[rows] = block[rows][:, [0, 2, 1]]
+                continue
+            _, name, w, c = entry
+            values = a.corner_attribute(name)
+            rgb = np.zeros((len(rows), 3, 3)) if values is None else values[rows, :, :3]
+            if values is None:
+                self.ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
+                             "its colour reads 0, as in Cycles", place.name)
+            block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)   # (no negative albedo)
+            if mirrored:                     # corners 1 and 2 were swapped for these triangles
+                block[rows] = block[rows][:, [0, 2, 1]]
+
+    def _world_tangents(self, a, place, mirrored, out, S):
+        """The object-space tangents (unit) and bitangent signs of one instance's triangles whose
+        material has a normal map (with Geometry.tangent_xf, the placements' linear maps): Cycles
+        bends the normal in object space and turns the result to world space with the normal
+        matrix M^-T, which only a similarity (rotation, uniform scale, mirror) makes the same as
+        bending it in a world-space frame. A mesh without tangents keeps zeros there: the
+        normal map then leaves the normal as it is (Cycles' fallback without the tangent
+        attribute)."""
+        mats = self.materials.materials
+        wants = {k for k in set(place.slot_map) if mats[k].normal_texture is not None}
+        if not wants:
+            return
+        names = {self.materials.uv_maps[k] for k in wants}
+        tan = a.corner_tangents(sorted(names)[0])
+        if tan is None:
+            self.ignore("normal map not applied: no tangents (the mesh has no such UV map, n-gons, or is "
+                         "a curve, text or metaball; Cycles derives them from generated coordinates)", place.name)
+            return
+        if out.tangents is None:
+            out.tangents = np.zeros((len(out.triangles), 3, 4), np.float32)
+        rows = np.flatnonzero(np.isin(out.material[S], list(wants)))
+        block = out.tangents[S]
+        block[rows] = tan[rows]
+        if mirrored:                      # corners 1 and 2 were swapped for these triangles
+            block[rows] = block[rows][:, [0, 2, 1]]
+
+    def _named_uvs(self, a, place, material, uvs):
+        """Triangles whose material reads a UV map by name get that map's coordinates (0, 0 on
+        a mesh without it, as in Cycles) instead of the active render map's."""
+        named = {self.materials.uv_maps[k] for k in set(place.slot_map)} - {''}
+        for name in named:
+            wants = np.array([self.materials.uv_maps[k] == name for k in range(len(self.materials.uv_maps))])
+            rows = np.flatnonzero(wants[material])
+            if not len(rows):
+                continue
+            layer = a.uv_layers.get(name)
+            if layer is None:
+                uvs[rows] = 0.0
+                continue
+            index = a.corners[rows] if a.corners is not None else \
+                3 * rows[:, None] + np.arange(3)[None, :]
+            uvs[rows] = layer[index]

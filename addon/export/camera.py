@@ -1,0 +1,156 @@
+"""The render camera as Cycles maps it (reference blender-cycles.md 1.8, Cycles'
+blender_camera_viewplane and blender/camera.cpp): resolution and percentage, sensor fit,
+perspective, orthographic and panoramic projections, shift, clip range, pixel aspect, render
+border and crop, depth of field; a non-camera object as the camera. Part of the export layer."""
+
+import math
+
+import numpy as np
+
+from .. import panorama
+from .. import scenedata as sd
+from .errors import ExportError
+
+
+def export_camera(scene, messages=None, view=None, camera=None):
+    """The scene camera (or `camera`, an override) as scenedata.Camera. view: None, or
+    (matrix_world, shift_x) of one view of a stereo / multiview render, as the engine's
+    camera_model_matrix and camera_shift_x give them for the active view (Cycles takes its eye
+    cameras from the same two calls)."""
+    r = scene.render
+    width = r.resolution_x * r.resolution_percentage // 100
+    height = r.resolution_y * r.resolution_percentage // 100
+    if width < 1 or height < 1:
+        raise ExportError(f"render resolution {r.resolution_x}x{r.resolution_y} at "
+                          f"{r.resolution_percentage}% is less than one pixel")
+    cam_ob = camera if camera is not None else scene.camera
+    if cam_ob is None:
+        raise ExportError("the scene has no active camera (Scene Properties > Camera)")
+    # A non-camera object as scene camera: Cycles uses its default camera parameters, and
+    # looks through a light as through its spot cone (lens 16 / tan(spot size / 2)).
+    cam = cam_ob.data if cam_ob.type == 'CAMERA' else None
+    kind = cam.type if cam else 'PERSP'
+    pano = cam.panorama_type if kind == 'PANO' else ''
+    if kind not in ('PERSP', 'ORTHO', 'PANO') or (pano and pano not in panorama.SUPPORTED):
+        what = f"a {pano.lower().replace('_', ' ')} panorama" if pano else kind.lower()
+        raise ExportError(f"camera '{cam_ob.name}' is {what}; DACRT renders perspective, "
+                          "orthographic and panoramic cameras (equirectangular, fisheye equidistant "
+                          "and equisolid, mirror ball)")
+    lens = cam.lens if cam else _look_through_lens(cam_ob)
+    sensor_fit = cam.sensor_fit if cam else 'AUTO'
+    sensor_width = cam.sensor_width if cam else 36.0
+    sensor_height = cam.sensor_height if cam else 24.0
+    ortho_scale = cam.ortho_scale if cam else 6.0
+    shift = (cam.shift_x, cam.shift_y) if cam else (0.0, 0.0)
+    if view is not None:
+        shift = (float(view[1]), shift[1])
+    clip_start, clip_end = (cam.clip_start, cam.clip_end) if cam else (1e-5, 1e5)
+    if clip_end < clip_start:
+        # Cycles' camera rays are then empty: only the world shows
+        if messages is not None:
+            messages.append(('WARNING', f"camera '{cam_ob.name}': clip end {clip_end:g} is before clip "
+                                        f"start {clip_start:g}, so no object is visible to the camera"))
+        clip_end = clip_start
+
+    xr = width * r.pixel_aspect_x
+    yr = height * r.pixel_aspect_y
+    if sensor_fit == 'AUTO':
+        horizontal, sensor = xr > yr, sensor_width
+    elif sensor_fit == 'HORIZONTAL':
+        horizontal, sensor = True, sensor_width
+    else:
+        horizontal, sensor = False, sensor_height
+    if horizontal:
+        ar = xr / yr
+        ax, ay = ar, 1.0
+    else:
+        ar = yr / xr
+        ax, ay = 1.0, ar
+    if kind == 'ORTHO':
+        if not ortho_scale > 0.0:          # Blender allows 0: a view of no width
+            if messages is not None:
+                messages.append(('WARNING', f"camera '{cam_ob.name}': orthographic scale {ortho_scale:g}: "
+                                            "every pixel sees the one point straight ahead of the camera"))
+            ortho_scale = 1e-30
+        ax *= ortho_scale / (ar * 2.0)
+        ay *= ortho_scale / (ar * 2.0)
+        ar = ortho_scale / 2.0
+    dx, dy = 2.0 * ar * shift[0], 2.0 * ar * shift[1]
+    viewplane = (-ax + dx, ax + dx, -ay + dy, ay + dy)
+    tan_half_fov = 0.5 * sensor / lens / ar
+    pano_settings = {}
+    if pano:
+        # Cycles: the panorama's viewplane is the unit square moved by the shift, and an
+        # equisolid fisheye's sensor is fitted to the frame like a perspective camera's
+        viewplane = (shift[0], 1.0 + shift[0], shift[1], 1.0 + shift[1])
+        sensor_mm = (sensor, sensor * yr / xr) if horizontal else (sensor * xr / yr, sensor)
+        pano_settings = dict(panorama_type=pano, longitude=(cam.longitude_min, cam.longitude_max),
+                             latitude=(cam.latitude_min, cam.latitude_max), fisheye_fov=cam.fisheye_fov,
+                             fisheye_lens=cam.fisheye_lens, sensor_mm=sensor_mm)
+
+    # Cycles clears the scale of the camera matrix (transform_clear_scale).
+    m = np.array(cam_ob.matrix_world if view is None else view[0], dtype=np.float64)
+    lengths = np.linalg.norm(m[:3, :3], axis=0)
+    if not np.all(lengths > 0) or not np.all(np.isfinite(m)):
+        raise ExportError(f"camera '{cam_ob.name}' has a zero or non-finite scale/transform")
+    m[:3, :3] /= lengths
+
+    border = (0, 0, width, height)
+    crop = False
+    if r.use_border:
+        # in float32, as Blender sizes the result and Cycles its buffer: int(0.7f * 100) is 70,
+        # where float64 gives 69 (a blank last column, or a region of another size than Blender's)
+        def edge(fraction, size):
+            return int(np.float32(fraction) * np.float32(size))
+        border = (edge(r.border_min_x, width), edge(r.border_min_y, height),
+                  edge(r.border_max_x, width), edge(r.border_max_y, height))
+        if border[2] <= border[0] or border[3] <= border[1]:
+            raise ExportError("the render border is empty (less than one pixel wide or high)")
+        crop = bool(r.use_crop_to_border)
+    dof = _depth_of_field(cam, kind, lens, m, cam_ob.name, messages) if cam else {}
+    if pano and dof.get('aperture', 0.0) > 0:
+        dof = {}
+        if messages is not None:
+            messages.append(('WARNING', f"camera '{cam_ob.name}': depth of field is not rendered for "
+                                        "panoramic cameras (every ray leaves the camera's position)"))
+    return sd.Camera(kind=kind, matrix=m, viewplane=viewplane, tan_half_fov=tan_half_fov,
+                     clip_start=float(clip_start), clip_end=float(clip_end), width=width,
+                     height=height, border=border, crop=crop, **dof, **pano_settings)
+
+
+def _look_through_lens(ob):
+    """The focal length (mm) Cycles gives a non-camera object used as the camera
+    (blender/camera.cpp): a light's from its spot size, as Blender's view through a spot light
+    (other lights keep their spot size in Blender's data but Python reads it on spot lights
+    only: Blender's default 45 degrees is used), anything else 50 mm."""
+    if ob.type != 'LIGHT' or ob.data is None:
+        return 50.0
+    lens = 16.0 / math.tan(0.5 * float(getattr(ob.data, 'spot_size', math.radians(45.0))))
+    return lens if lens > 0.0 and math.isfinite(lens) else 50.0
+
+
+def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):
+    """Cycles' thin lens (blender/camera.cpp): aperture radius lens / (2 f-stop) (lens in m;
+    orthographic 1 / (2 f-stop)), focus distance from the focus object (its distance along the
+    view axis, a bone's head when a bone is named) or the focus distance."""
+    d = cam.dof
+    if not d.use_dof:
+        return {}
+    fstop = max(float(d.aperture_fstop), 1e-5)
+    aperture = 1.0 / (2.0 * fstop) if kind == 'ORTHO' else (lens * 1e-3) / (2.0 * fstop)
+    focus = float(d.focus_distance)
+    target = d.focus_object
+    if target is not None:
+        where = np.array(target.matrix_world, dtype=np.float64)
+        bone = d.focus_subtarget
+        if bone and target.pose is not None and bone in target.pose.bones:
+            where = where @ np.array(target.pose.bones[bone].matrix, dtype=np.float64)
+        focus = abs(float(np.dot(cam_matrix[:3, 2], cam_matrix[:3, 3] - where[:3, 3])))
+    if not np.isfinite(aperture) or not np.isfinite(focus):
+        if messages is not None:
+            messages.append(('WARNING', f"camera '{cam_name}': depth of field has a non-finite aperture or "
+                                        "focus distance; rendered without it"))
+        return {}
+    return dict(aperture=float(aperture), focal_distance=max(focus, 1e-5),
+                aperture_blades=int(d.aperture_blades) if d.aperture_blades >= 3 else 0,
+                aperture_rotation=float(d.aperture_rotation), aperture_ratio=float(d.aperture_ratio))

@@ -1,0 +1,133 @@
+"""What a material's shader graph sums to for a diffuse renderer: `Closure`, a linear
+combination of a constant albedo, one image texture's albedo, emission (constant or one
+image's), transparency (with an image's alpha as opacity) and holdout; and `Texture`, an image
+as the graph reads it (texels shared between materials, a UV transform, a UDIM layout). Add and
+Mix Shaders combine closures; principled.py's layers scale or map them. Part of the export
+layer."""
+
+import numpy as np
+
+from .. import nodeeval
+from ..texture import baked as after_lookup
+
+
+class Texture:
+    """An image texture as the shader graph uses it (pixels shared between materials), read at
+    (x, y) = transform @ (u, v, 1) of the UV map (transform None: the UV map itself). A UDIM
+    image's pixels are its tiles' texels side by side, (1, N, 4), laid out as `udim` says."""
+    def __init__(self, key, pixels, interpolation, extension, transform=None, udim=None, name='', attribute=None):
+        self.key, self.pixels = key, pixels
+        self.interpolation, self.extension = interpolation, extension
+        self.transform = transform
+        self.udim = udim
+        self.name = name            # the image's, for messages
+        # not an image: the probe values of a mesh attribute (its name; '' the render colour
+        # attribute) a Color Attribute or Attribute node reads, see MaterialBuilder._attribute
+        self.attribute = attribute
+        self.aligned = False        # probe values, entry by entry with other probes (nodeeval._join)
+
+    def texels(self, pixels):
+        """pixels (these texels, or a colour baked into them) as the scene data holds a texture."""
+        return pixels if self.udim is None else self.udim.with_texels(pixels)
+
+    def baked(self, fn):
+        """These texels with the colour map fn ((..., 3) -> (..., 3)) applied to their RGB; an
+        image Cycles keeps encoded applies fn after its lookup instead, in Cycles' order
+        (texture.baked)."""
+        px = self.pixels.copy()
+        px[..., :3] = fn(self.pixels[..., :3])
+        return after_lookup(self.pixels, px, fn)
+
+
+class Closure:
+    """Linear combination of what a diffuse renderer keeps:
+    albedo = const + tex_weight * texture, emission constant, and the weight of transparent
+    closures (`transparent`, rgb). `opacity` (an image's alpha, (Texture, inverted)) makes the
+    shader opacity x (everything else) + (1 - opacity) x transparent at each hit."""
+    def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0,
+                 transparent=(0, 0, 0), opacity=None, emission_tex=None):
+        self.const = np.array(const, np.float64)
+        self.emission = np.array(emission, np.float64)
+        self.texture = texture
+        self.tex_weight = np.array(tex_weight, np.float64)
+        self.holdout = float(holdout)     # weight of a Holdout shader
+        self.transparent = np.array(transparent, np.float64)
+        self.opacity = opacity
+        # an image's emission, (Texture, weight (3,)): weight x the image; `emission` is then
+        # its average over the image's texels (what chooses it as a light)
+        self.emission_tex = emission_tex
+
+    def layered(self, dim, add):
+        """Under a layer (principled.py): the albedo x dim (3,) + add (3,); emission,
+        transparency and holdout are set after the layers."""
+        return Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
+                        self.transparent, self.opacity, self.emission_tex)
+
+    def mapped(self, f):
+        """Under a nonlinear map of the albedo (principled.BaseMap): exact for a constant
+        albedo; a textured one becomes a texture of the mapped texels (weight 1)."""
+        if self.texture is None or not self.tex_weight.any():
+            return Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
+                            self.opacity, self.emission_tex)
+        t = self.texture
+        w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
+        mapped = Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
+                          t.baked(lambda rgb: f(rgb * w + k)), t.interpolation, t.extension, t.transform, t.udim,
+                          t.name, t.attribute)
+        return Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
+                        self.emission_tex)
+
+    def scaled(self, f):
+        etex = None if self.emission_tex is None else (self.emission_tex[0], self.emission_tex[1] * f)
+        return Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
+                        self.transparent * f, self.opacity, etex)
+
+    def only_transparent(self):
+        return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
+                                                      self.tex_weight.any() or self.holdout or self.opacity)
+
+    def is_empty(self):
+        return not (self.const.any() or self.emission.any() or self.tex_weight.any() or self.holdout
+                    or self.transparent.any())
+
+    def _emission_sum(self, other, reasons):
+        """The image emission of self + other: one image (or the same one twice) stays an image;
+        an image beside another image's or a constant emission counts as its average."""
+        a, b = self.emission_tex, other.emission_tex
+        if a is None or b is None:
+            mine, theirs = (a, other) if b is None else (b, self)
+            if mine is not None and theirs.emission.any():
+                reasons.append("an image's emission added to another emission; as its average")
+                return None
+            return mine
+        if a[0].key == b[0].key:
+            return a[0], a[1] + b[1]
+        reasons.append("two images' emission added; both as their averages")
+        return None
+
+    def plus(self, other, reasons):
+        etex = self._emission_sum(other, reasons)
+        opacity = self.opacity or other.opacity
+        # (a closure with an opacity always has a transparent part, so it is never empty)
+        if (self.opacity is not None and not other.is_empty()) or \
+                (other.opacity is not None and not self.is_empty()):
+            # opacity multiplies the whole opaque part: a sum with other shaders has none
+            reasons.append("image alpha combined with other shaders; alpha ignored")
+            opacity = None
+        tex, w = self.texture, self.tex_weight
+        if other.texture is not None:
+            if tex is None or tex.key == other.texture.key:
+                tex, w = other.texture, w + other.tex_weight
+            else:   # two different images: keep the first, the other contributes its mean
+                reasons.append(nodeeval.TWO_IMAGES)
+                mean = other.texture.pixels[..., :3].reshape(-1, 3).mean(0)
+                return Closure(self.const + other.const + other.tex_weight * mean,
+                                self.emission + other.emission, tex, w, self.holdout + other.holdout,
+                                self.transparent + other.transparent, opacity, etex)
+        return Closure(self.const + other.const, self.emission + other.emission, tex, w,
+                        self.holdout + other.holdout, self.transparent + other.transparent, opacity, etex)
+
+
+def is_image_alpha(link):
+    """Whether a link (or None) comes straight from an Image Texture's Alpha output."""
+    return link is not None and link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha'

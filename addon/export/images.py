@@ -1,0 +1,283 @@
+"""Image pixels as Cycles reads them: scene-linear float32 RGBA with alpha associated as Cycles
+stores it, byte images decoded by their colour space, premultiplied bytes as stored, UDIM tiles
+read from their files (OpenImageIO), and, for Cycles' blend-then-decode lookups, the texels as
+Cycles stores them (texture.EncodedTexels). Missing or unreadable images are magenta, as in
+Cycles. Part of the export layer."""
+
+import bpy
+import numpy as np
+
+from ..texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stored_texels
+
+MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
+
+
+def associates_alpha(img):
+    """Whether Cycles keeps the image's colour associated with (multiplied by) its alpha:
+    float buffers are stored so, byte ones are multiplied on load; not for data, channel-packed
+    or alpha-ignored images (Cycles' ImageTextureNode and image loader)."""
+    return not img.colorspace_settings.is_data and img.alpha_mode not in ('CHANNEL_PACKED', 'NONE')
+
+
+def _unassociated(rgba):
+    """RGB divided by alpha where alpha is neither 0 nor 1 (Cycles' color_unpremultiply)."""
+    a = rgba[..., 3:4]
+    out = rgba.copy()
+    div = (a != 0) & (a != 1)
+    out[..., :3] = np.where(div, rgba[..., :3] / np.where(div, a, 1), rgba[..., :3])
+    return out
+
+
+def udim_tiles(img, first, reasons, unassociate):
+    """A UDIM image's tiles: the first (the one bpy's pixels give) as read, the others from
+    their files through OpenImageIO (bpy gives no other tile's pixels), converted as Blender
+    converts the first one. A tile that cannot be read renders magenta, as in Cycles."""
+    tiles = {img.tiles[0].number: first}
+    rest = [t.number for t in img.tiles[1:]]
+    if not rest:
+        return _stacked_tiles(tiles)
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        reasons.append(f"UDIM image '{img.name}': OpenImageIO is not available to read tiles "
+                       f"{', '.join(map(str, rest))} (magenta)")
+        return _stacked_tiles(tiles)
+    pattern = bpy.path.abspath(img.filepath_raw, library=img.library)
+    straight = oiio.ImageSpec()   # a byte file's alpha as stored (straight, as Blender keeps it)
+    straight.attribute('oiio:UnassociatedAlpha', 1)
+    unread = []
+    for number in rest:
+        tx, ty = (number - 1001) % 10, (number - 1001) // 10
+        path = pattern.replace('<UDIM>', str(number)).replace('<UVTILE>', f"u{tx + 1}_v{ty + 1}")
+        buf = oiio.ImageBuf(path, 0, 0, straight) if '<' not in path and path != pattern else None
+        spec = buf.spec() if buf is not None and not buf.has_error else None
+        if spec is None or spec.width < 1 or spec.height < 1 or spec.nchannels < 1:
+            unread.append(number)
+            continue
+        raw = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32).reshape(spec.height, spec.width, -1)[::-1]
+        # byte files are byte buffers in Blender; deeper ones float buffers in the image's space
+        tiles[number] = _linear_rgba(np.ascontiguousarray(raw), img, reasons, unassociate,
+                                     byte=spec.format.basetype == oiio.UINT8, encoded=True)
+    if unread:
+        reasons.append(f"UDIM image '{img.name}': tile{'s' if len(unread) > 1 else ''} "
+                       f"{', '.join(map(str, unread))} could not be read from '{pattern}' (magenta); "
+                       f"packed or generated tiles other than the first are not supported")
+        for number in unread:
+            tiles[number] = np.array(MISSING_IMAGE + (1.0,), np.float32).reshape(1, 1, 4)
+    return _stacked_tiles(tiles)
+
+
+def _stacked_tiles(tiles):
+    """UdimTiles of {number: texels}: what _linear_rgba made of each tile (ImageTexels), or a
+    missing tile's magenta. Its texels carry the tiles' stored encoding when every tile has one
+    alike (Cycles decodes every tile by the first one's flags; a missing tile's magenta is the
+    same encoded)."""
+    udim = UdimTiles.stack(tiles)
+    real = [n for n, t in tiles.items() if isinstance(t, ImageTexels)]
+    stored = {n: stored_texels(tiles[n]) for n in real}
+    kinds = {None if e is None else (e.srgb, e.unassociate) for e in stored.values()}
+    if len(kinds) != 1 or None in kinds:
+        return udim
+    srgb, unassociate = kinds.pop()
+    encoded = {n: stored[n].texels.astype(np.float32) * stored[n].scale if n in stored else tiles[n] for n in tiles}
+    return udim.with_texels(ImageTexels(udim.flat, EncodedTexels(UdimTiles.stack(encoded), srgb, unassociate)))
+
+
+def _srgb_to_linear(c):
+    """sRGB decoding of texels as the export has always converted images on load (the linear
+    texels colour nodes read); Cycles' own kernel formula, for lookups of stored sRGB texels,
+    is texture.srgb_to_linear."""
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
+def image_pixels(img, reasons, unassociate=False):
+    """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels.
+    The colour is associated with alpha as Cycles stores the image (associates_alpha), or with
+    `unassociate` divided by it again as Cycles' lookup does for a linked Alpha output. A
+    texture.ImageTexels: it also carries the texels as Cycles stores them for its lookup
+    (_stored_texels), which blends those and decodes after."""
+    try:
+        w, h = img.size
+        ch = img.channels
+        n = w * h * ch
+        if n == 0:
+            raise ValueError
+        buf = np.empty(n, np.float32)
+        img.pixels.foreach_get(buf)
+    except (RuntimeError, ValueError, ReferenceError):
+        reasons.append(f"image '{img.name}' could not be loaded (magenta, as Cycles)")
+        return None
+    buf = buf.reshape(h, w, ch)
+    from_file = not _read_from_blender(img)
+    if not img.is_float and ch == 4 and img.alpha_mode == 'PREMUL':
+        buf = _premultiplied_bytes(img, buf, from_file, reasons)
+    return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file)
+
+
+def _premultiplied_bytes(img, buf, from_file, reasons):
+    """An 8-bit RGBA image set to Premultiplied alpha: Blender's pixels are its bytes divided by
+    alpha (clamped at 1, so colour above alpha is lost), while Cycles reads the file's bytes and
+    renders them as it renders a straight image (measured). The file's bytes, read as stored,
+    stand in for Blender's (h, w, 4) buffer; a packed image or an unreadable file keeps
+    Blender's, reported."""
+    path = bpy.path.abspath(img.filepath_raw, library=img.library) if from_file else ''
+    try:
+        import OpenImageIO as oiio
+        as_stored = oiio.ImageSpec()
+        as_stored.attribute('oiio:UnassociatedAlpha', 1)
+        file = oiio.ImageBuf(path, 0, 0, as_stored) if path else None
+        spec = file.spec() if file is not None and not file.has_error else None
+    except ImportError:
+        spec = None
+    h, w = buf.shape[:2]
+    if spec is None or (spec.height, spec.width, spec.nchannels) != (h, w, 4) or spec.format.basetype != oiio.UINT8:
+        reasons.append(f"image '{img.name}' with Premultiplied alpha read as Blender divides it by its alpha "
+                       "(its file could not be read as stored)")
+        return buf
+    return np.ascontiguousarray(np.asarray(file.get_pixels(oiio.FLOAT), np.float32).reshape(h, w, 4)[::-1])
+
+
+def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
+    """(h, w, 4) scene-linear RGBA of an image buffer (h, w, channels) of `img`: a byte buffer
+    is in the image's colour space with straight alpha; a float one is linear and associated
+    unless `encoded` (a deeper-than-byte file read directly: in the image's colour space,
+    converted and associated here as Blender does on load). A texture.ImageTexels carrying the
+    texels as Cycles stores them for lookup (_stored_texels; from_file: Cycles reads the image's
+    file, not Blender's buffer)."""
+    h, w, ch = buf.shape
+    rgba = np.empty((h, w, 4), np.float32)
+    rgba[..., :min(ch, 4)] = buf[..., :4]
+    if ch == 3:
+        rgba[..., 3] = 1.0
+    if ch < 3:     # grey (+alpha) images
+        rgba[..., 1] = rgba[..., 2] = buf[..., 0]
+        rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
+    k8 = None
+    associate = ch == 4 and associates_alpha(img)
+    if byte:   # the bytes, once: Blender's byte pixels are k x (1/255) in float32
+        k8 = np.rint(rgba * 255.0).astype(np.uint8)
+        if associate:                            # integer c * a / 255, as Cycles associates
+            c = k8[..., :3].astype(np.uint16) * k8[..., 3:4]
+            k8[..., :3] = (c + 1 + (c >> 8)) >> 8       # c // 255 for c <= 255^2, without a division
+    stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, ch, k8)
+    if byte:   # byte buffers are in the image's colour space; float ones are linear
+        decode = _decodes_srgb(img, reasons)
+        if associate:
+            # Blender keeps byte images straight; Cycles associates them on load (integer
+            # c * a / 255) and unassociates at lookup, both in the image's own encoding, before
+            # the colour conversion: a linked Alpha gives nearly the straight colour again
+            if unassociate:
+                rgba[..., :3] = k8[..., :3] / np.float32(255.0)
+                rgba = _unassociated(rgba)
+            else:      # a table per byte value: ~15 ns a texel, not ~250 (4K image: 5 s)
+                rgba[..., :3] = _byte_table('divided', decode)[k8[..., :3]]
+                decode = False
+        elif decode and np.array_equal(rgba[..., :3], _byte_table('blender', False)[k8[..., :3]]):
+            rgba[..., :3] = _byte_table('blender', True)[k8[..., :3]]   # Blender's own byte floats
+            decode = False
+        if decode:
+            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+    elif encoded:          # a deeper file: converted, then associated, as Blender loads it
+        if _decodes_srgb(img, reasons):
+            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+        if associates_alpha(img):
+            rgba[..., :3] *= rgba[..., 3:4]
+        if unassociate:
+            rgba = _unassociated(rgba)
+    elif unassociate:      # float buffers are linear and associated
+        rgba = _unassociated(rgba)
+    return ImageTexels(rgba, stored)
+
+
+def _keeps_srgb(img):
+    """Whether Cycles keeps the image in its sRGB encoding (compress_as_srgb: its colour space is
+    sRGB; ImageMetaData::detect_colorspace), decoding after its lookup's blend. Other display
+    spaces are converted to linear on load, texel by texel, as here."""
+    return not img.colorspace_settings.is_data and img.colorspace_settings.name == 'sRGB'
+
+
+def _read_from_blender(img):
+    """Whether Cycles reads the image's pixels from Blender's buffers rather than its file
+    (image_is_builtin: packed, generated, a movie, a UDIM image with a generated tile); Blender's
+    float buffers are scene linear, so Cycles blends those linear."""
+    if img.packed_file is not None or len(getattr(img, 'packed_files', ())) or img.source in ('GENERATED', 'MOVIE'):
+        return True
+    return img.source == 'TILED' and any(getattr(t, 'is_generated_tile', False) for t in img.tiles)
+
+
+_BYTE_TABLES = {}
+
+
+def _byte_table(kind, decode):
+    """(256,) float32: byte k as _linear_rgba computes it from Blender's float k x (1/255)
+    ('blender') or from an associated byte k / 255 ('divided'), sRGB-decoded or not; the same
+    float32 operations on every byte value, so a lookup is bit-identical to computing it."""
+    key = (kind, decode)
+    if key not in _BYTE_TABLES:
+        k = np.arange(256, dtype=np.float32)
+        v = k * np.float32(1.0 / 255.0) if kind == 'blender' else k / np.float32(255.0)
+        _BYTE_TABLES[key] = _srgb_to_linear(v) if decode else v
+    return _BYTE_TABLES[key]
+
+
+def _stored_texels(rgba, img, unassociate, byte, encoded, from_file, channels, k8=None):
+    """The image as Cycles stores it for lookup when that is not the scene-linear texels
+    _linear_rgba makes (texture.EncodedTexels), else None, from its buffer's RGBA (straight
+    bytes / 255; a deeper file's straight values; Blender's linear float buffer, associated).
+    An sRGB image is kept in its encoding, its colour associated with alpha in it (bytes
+    integer, c a / 255), and decoded after the blend, when Cycles reads it from its file at any
+    depth or from Blender's byte buffer; a linked Alpha output divides by the blended alpha
+    (Cycles: the associated texels are blended, then divided). Exact for those; images in
+    other display spaces are converted texel by texel before the blend, as before."""
+    associates = associates_alpha(img)
+    srgb = _keeps_srgb(img)
+    linear_space = not _decodes_srgb(img, [])
+    if byte:   # k8: the bytes, associated where Cycles associates (_linear_rgba made them)
+        if srgb or (linear_space and unassociate):
+            return EncodedTexels(k8.copy(), srgb, unassociate, 1.0 / 255.0)
+        return None
+    if encoded:            # a deeper file's values, straight, in the image's colour space
+        if not (srgb or (linear_space and unassociate)):
+            return None
+        texels = rgba.copy()
+        if associates:
+            texels[..., :3] *= texels[..., 3:4]
+        return EncodedTexels(texels, srgb, unassociate)
+    if srgb and from_file:  # the file's values again from Blender's linear, associated buffer
+        texels = rgba.copy()
+        a = rgba[..., 3:4]
+        if associates:
+            with np.errstate(divide='ignore', invalid='ignore'):
+                texels[..., :3] = np.where(a > 0, rgba[..., :3] / a, 0.0)
+        texels[..., :3] = linear_to_srgb(texels[..., :3])
+        if associates:
+            texels[..., :3] *= a
+        return EncodedTexels(texels, True, unassociate)
+    if unassociate:         # linear associated floats: blended, then divided
+        return EncodedTexels(rgba.copy(), False, True)
+    return None
+
+
+def encoded_environment(pixels, interpolation):
+    """An Environment Texture image's RGB as Cycles' 'Linear' lookup blends it, sRGB-encoded
+    (h, w, 3) float32, when Cycles keeps it so and the values are finite and non-negative;
+    None: the scene-linear pixels are blended ('Closest' reads one texel: the same either way)."""
+    stored = stored_texels(pixels)
+    if interpolation == 'Closest' or stored is None or not stored.srgb or isinstance(stored.texels, UdimTiles):
+        return None
+    rgb = stored.texels[..., :3].astype(np.float32) * stored.scale
+    return rgb if np.isfinite(rgb).all() and (rgb >= 0).all() else None
+
+
+def _decodes_srgb(img, reasons):
+    """Whether the image's colour space is read as sRGB (every space but linear and data ones;
+    other display spaces are noted as approximated so)."""
+    space = img.colorspace_settings.name
+    if space in ('sRGB', 'Filmic sRGB', 'AgX Base sRGB') or space.startswith('sRGB'):
+        if space != 'sRGB':
+            reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
+        return True
+    if img.colorspace_settings.is_data or space.startswith('Linear') or space in ('Non-Color', 'Working Space'):
+        return False
+    reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
+    return True

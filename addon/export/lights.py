@@ -1,0 +1,119 @@
+"""Light objects in Cycles' units (reference blender-cycles.md 2.1): point, spot, sun and area
+lights as scenedata.Light, their node trees as a constant factor, and light linking's receiver
+sets. What Cycles gets no light from (zero area, zero scale, portals) is skipped with a
+warning; negative lights are not supported. Part of the export layer."""
+
+import numpy as np
+
+from .. import scenedata as sd
+from ..lights.area import sheared
+from ..nodeeval import constant_color, constant_value
+from ..nodegraph import linked_node, output_node
+
+
+MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_light)
+
+
+def light_link_receivers(collection):
+    """An emitter's light linking receiver collection as (included, excluded) object names,
+    as Blender reads it: each object of the collection by its own Include / Exclude state, the
+    objects of a child collection (all levels down) by that child's state."""
+    included, excluded = set(), set()
+    for ob, item in zip(collection.objects, collection.collection_objects):
+        (included if item.light_linking.link_state == 'INCLUDE' else excluded).add(ob.name)
+    for child, item in zip(collection.children, collection.collection_children):
+        names = {ob.name for ob in child.all_objects}
+        (included if item.light_linking.link_state == 'INCLUDE' else excluded).update(names)
+    return frozenset(included), frozenset(excluded)
+
+
+def export_light(ob, matrix, messages):
+    """One light object (evaluated) at `matrix` -> scenedata.Light, in Cycles' units."""
+    light = ob.data
+    strength = np.array(light.color, np.float64) * light.energy
+    strength *= 2.0 ** getattr(light, 'exposure', 0.0)
+    if getattr(light, 'use_temperature', False):
+        strength *= np.array(light.temperature_color, np.float64)[:3]
+    shader = _light_shader_factor(light, ob.name, messages)
+    strength *= shader
+    if not np.isfinite(strength).all():
+        messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
+        return None
+    if (strength < 0).any():
+        # Cycles subtracts a negative light's contribution; next-event estimation here only
+        # adds light, so such a lamp is left out rather than failing the render
+        messages.append(('WARNING', f"light '{ob.name}' has a negative strength "
+                                    f"({light.energy:g} W): negative lights are not supported; skipped"))
+        return None
+    cycles = getattr(light, 'cycles', None)
+    kw = dict(kind=light.type, strength=strength.astype(np.float32),
+              matrix=np.array(matrix, np.float64), normalize=bool(getattr(light, 'normalize', True)),
+              cast_shadow=bool(light.use_shadow),
+              use_mis=bool(getattr(cycles, 'use_multiple_importance_sampling', True)),
+              name=ob.name,
+              # object ray visibility (Object > Visibility > Ray Visibility; a new light object
+              # has Camera off): camera rays see the lamp, diffuse surfaces receive its light
+              visible_camera=bool(ob.visible_camera), visible_diffuse=bool(ob.visible_diffuse))
+    if light.type in ('POINT', 'SPOT'):
+        kw.update(radius=float(light.shadow_soft_size),
+                  soft_falloff=bool(getattr(light, 'use_soft_falloff', True)))
+        if light.type == 'SPOT':
+            if abs(np.linalg.det(np.array(matrix, np.float64)[:3, :3])) < 1e-30:
+                # the cone's shape comes from the object's scale; a zero scale leaves none
+                messages.append(('WARNING', f"spot light '{ob.name}' has a zero object scale: "
+                                            "its cone is empty; skipped"))
+                return None
+            kw.update(spot_size=float(light.spot_size), spot_blend=float(light.spot_blend))
+    elif light.type == 'SUN':
+        kw.update(angle=float(light.angle))
+    elif light.type == 'AREA':
+        if getattr(cycles, 'is_portal', False):
+            # a portal emits nothing in Cycles: it only guides the world's sampling there, and
+            # the world is sampled here without it, to the same expected image
+            return None
+        two = light.shape in ('RECTANGLE', 'ELLIPSE')
+        sx, sy = float(light.size), float(light.size_y if two else light.size)
+        m = np.array(matrix, np.float64)
+        if not (sx * np.linalg.norm(m[:3, 0]) > 0 and sy * np.linalg.norm(m[:3, 1]) > 0):
+            # zero area (a size or the object's scale is 0): Cycles gets no light from it
+            messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} "
+                                        "at its object's scale): it emits nothing, as in Cycles; skipped"))
+            return None
+        # a sheared matrix (a light under a rotated child of a non-uniformly scaled parent):
+        # Cycles keeps the normalised columns as the lamp's axes and direction (scene/light.cpp)
+        # and samples it as a spherical rectangle (kernel/light/area.h), whose construction
+        # assumes orthogonal axes, so its light there follows no surface (0.43x the mean of
+        # this renderer's on a 2 x 0.5 parent); here the parallelogram the axes span emits
+        # (lights/area.py), the same to light sampling and to BSDF rays
+        if sheared(m[:3, :3]):
+            messages.append(('WARNING', f"area light '{ob.name}' has a sheared transform (a rotation under a "
+                                        "non-uniform scale): rendered as the parallelogram its axes span; "
+                                        "Cycles treats the axes as orthogonal and its light differs"))
+        # Cycles renders spread 0 as a beam straight out of the lamp (cos > 0.9999997); here
+        # the narrowest spread sampled reliably, 1e-4 radians, whose light is the same
+        spread = max(float(light.spread), MIN_SPREAD)
+        kw.update(shape=light.shape, size_x=sx, size_y=sy, spread=spread)
+    else:
+        messages.append(('WARNING', f"light '{ob.name}' of type {light.type} is not supported; skipped"))
+        return None
+    return sd.Light(**kw)
+
+
+def _light_shader_factor(light, name, messages):
+    """The light's node tree (if used) as a constant RGB factor: Emission colour x strength;
+    0 where nothing reaches the output's Surface (unlinked, no output, a muted Emission): as
+    Cycles, which then has no emission for the light."""
+    if not getattr(light, 'use_nodes', False) or light.node_tree is None:
+        return np.ones(3)
+    out = output_node(light.node_tree)
+    node = None if out is None else linked_node(out.inputs['Surface'])
+    if node is None:
+        return np.zeros(3)
+    if node.type == 'EMISSION':
+        color, c_ok = constant_color(node.inputs['Color'])
+        strength, s_ok = constant_value(node.inputs['Strength'])
+        if c_ok and s_ok:
+            return np.array(color) * strength
+    messages.append(('WARNING', f"light '{name}': its node tree is not a constant Emission "
+                                "shader; rendered with the light's colour and power only"))
+    return np.ones(3)

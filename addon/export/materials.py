@@ -1,0 +1,726 @@
+"""Blender materials as scenedata.Material, what a diffuse renderer can represent exactly:
+Diffuse BSDF colour and Principled Base Color (constant, an Image Texture on a UV map through
+Mapping nodes, colour and float nodes evaluated per texel or after the lookup as Cycles runs
+them), emission, a Color Attribute / Attribute / Object Info colour per point, corner or object,
+Add and Mix Shaders, transparency and image cut-outs, holdout, ray-type mixes, a tangent-space
+normal map, AOVs. Everything else is the documented diffuse approximation, each material saying
+why in Material.approximated (see the package's docstring). Part of the export layer."""
+
+import bpy
+import numpy as np
+
+from .. import emissionsampling, nodeeval, principled, roughdiffuse, specular
+from .. import scenedata as sd
+from ..mapping import texture_transform, uv_map_name
+from ..nodeeval import constant_color, constant_value
+from ..nodegraph import input_socket, linked_link, linked_node, output_node
+from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
+from .aovs import shader_aovs
+from .closure import Closure, Texture, is_image_alpha
+from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
+from .normalmaps import tangent_normal_map
+from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
+from .reflectors import diffuse_roughness, reflector_albedo
+from .shadersockets import mix_factor, value_emission
+
+# The grey of the diffuse fallbacks (a muted node, a shader without a colour)
+DEFAULT_ALBEDO = (0.8, 0.8, 0.8)
+# Objects without a material render in Cycles with Blender's default surface, a Principled BSDF
+# of base colour 0.8 and its default specular layer (Specular IOR Level 0.5, IOR 1.5, roughness
+# 0.5): that layer over the base, as diffuse like any Principled specular layer (principled.py)
+DEFAULT_SURFACE_LAYER = specular.layer_albedo(0.5, 1.5, 0.5, (1.0, 1.0, 1.0))
+DEFAULT_SURFACE_ALBEDO = tuple(float(v) for v in 0.8 * (1.0 - DEFAULT_SURFACE_LAYER.max()) + DEFAULT_SURFACE_LAYER)
+
+
+# What the material export reads otherwise than Cycles renders it (each reported when used):
+# the Principled inputs whose layers it drops, the output sockets it ignores, the image
+# extensions it implements.
+PRINCIPLED_IGNORED = (('Metallic', "metallic"), ('Transmission Weight', "transmission"),
+                      ('Coat Weight', "coat"), ('Sheen Weight', "sheen"),
+                      ('Subsurface Weight', "subsurface"), ('Specular IOR Level', "specular layer"),
+                      ('Diffuse Roughness', "diffuse roughness"),
+                      ('Anisotropic', "anisotropy (its layers as isotropic)"),
+                      ('Thin Film Thickness', "thin film"))
+IGNORED_OUTPUTS = ('Volume', 'Displacement')
+TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR')
+
+
+def _nonnegative(v, label, reasons):
+    """v (a colour (3,), or texels (h, w, 3)) with negative or non-finite channels set to 0
+    (Cycles would subtract light or produce NaN; a diffuse path tracer's weights must be finite
+    and non-negative), noted in reasons."""
+    bad = ~np.isfinite(v) | (v < 0)
+    if not bad.any():
+        return v
+    if v.ndim == 1:
+        reasons.append(f"negative or non-finite {label} {tuple(float(x) for x in v)} set to 0 per channel")
+    else:
+        reasons.append(f"{int(bad.any(axis=-1).sum())} texel(s) of negative or non-finite {label} set to 0")
+    return np.where(bad, np.float32(0), v).astype(np.float32)
+
+
+class MaterialBuilder:
+    """Evaluates Blender materials into scenedata.Material, one per material."""
+
+    def __init__(self):
+        self.materials = [sd.Material(name='(default)',
+                                      base_color=np.array(DEFAULT_SURFACE_ALBEDO, np.float32),
+                                      emission=np.zeros(3, np.float32))]
+        self._index = {}
+        self._images = {}          # (image pointer, unassociated) -> its pixels
+        self.uses_texture = [False]
+        self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
+        # per material: None; ('mesh', attribute name, w (3,), k (3,)): its albedo is w x the
+        # mesh attribute's colour + k at each point (a Color Attribute or Attribute node);
+        # ('corners', attribute name, material): its nodes evaluated on each corner's value; or
+        # ('object', Object Info output, material): on each object's (both evaluated_albedo)
+        self.attribute_maps = [None]
+        self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
+        self._image_probe = None        # what images read instead of their texels (_product_map)
+        self._uv_names = []
+        self._normal_maps = []
+        self.normal_mapped = False  # some material has a normal map: meshes need tangents
+
+    def index(self, mat):
+        """Global index of an (evaluated) material; None -> default material 0."""
+        if mat is None:
+            return 0
+        key = mat.as_pointer()
+        idx = self._index.get(key)
+        if idx is None:
+            idx = len(self.materials)
+            self.materials.append(self._build(mat))
+            m = self.materials[-1]
+            self.attribute_maps.append(self._attribute_map)
+            self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
+                                     or m.emission_texture is not None or m.normal_texture is not None)
+            self.uv_maps.append(m.uv_map)
+            self._index[key] = idx
+        return idx
+
+    def _ray_type_mix(self, socket, reasons):
+        """(closure, visibility) when the surface is a Mix Shader whose factor is a Light Path
+        node's Is Camera Ray or Is Shadow Ray and one of whose shaders is a white Transparent
+        BSDF: those rays (factor 1: the second shader) or all others (factor 0: the first) see
+        through it, as if the material were invisible to them (the common 'light plane hidden
+        from the camera'), and the rest see the other shader. (None, all) otherwise: the factor
+        is then read at its own value, as any node-driven factor."""
+        every = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
+        node = linked_node(socket)
+        if node is None or node.type != 'MIX_SHADER':
+            return None, every
+        link = linked_link(node.inputs['Fac'])
+        kinds = {'Is Camera Ray': sd.VIS_CAMERA, 'Is Shadow Ray': sd.VIS_SHADOW}
+        if link is None or link.from_node.type != 'LIGHT_PATH' or link.from_socket.name not in kinds:
+            return None, every
+        kind = kinds[link.from_socket.name]
+        first = self._shader(node.inputs[1], reasons, 1)
+        second = self._shader(node.inputs[2], reasons, 1)
+
+        def clear(c):
+            return c.only_transparent() and c.opacity is None and np.allclose(c.transparent, 1.0)
+
+        if clear(second) and not clear(first):
+            vis = every & ~kind            # those rays see through it; the rest see the first
+            closure = first
+        elif clear(first) and not clear(second):
+            vis = kind                     # only those rays see the second
+            closure = second
+        else:
+            return None, every
+        return closure, vis
+
+    # colours an image's texels are replaced by to see how a node chain maps them: random RGB
+    # at alpha 1, then one RGB at random alphas (a chain may read either)
+    _PROBE = np.random.default_rng(7).random((64, 4)).astype(np.float32)
+    _PROBE[:, 3] = 1.0
+    _PROBE[:5, :3] = [[0, 0, 0], [1, 1, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    _ALPHA_PROBE = np.concatenate([np.full((16, 3), 0.5), np.linspace(0, 1, 16)[:, None]], axis=1).astype(np.float32)
+
+    # what a mesh attribute reads as in a build, (1, n, 4) like an image's texels: random
+    # colours at alpha 1, then one colour at alphas 0..1 (a chain reading the alpha is not a
+    # scale and offset of the colour)
+    # (float colours, vectors and numbers go past 1: values up to 10 too, so a clamp to [0, 1]
+    # after the attribute is not taken for a scale and offset; not below 0, where the export's
+    # own clamp of a negative albedo would do the same)
+    _ATTRIBUTE_PROBE = np.random.default_rng(11).random((1, 64, 4)).astype(np.float32)
+    _ATTRIBUTE_PROBE[0, 40:, :3] = 1.0 + 9.0 * _ATTRIBUTE_PROBE[0, 40:, :3]
+    _ATTRIBUTE_PROBE[..., 3] = 1.0
+    _ATTRIBUTE_ALPHAS = _ALPHA_PROBE[None]
+
+    def _attribute(self, node, out, reasons):
+        """The values a Color Attribute, (geometry) Attribute or Object Info node reads in this
+        build (probe values, or each corner's or object's: _build, evaluated_albedo), as a texture marked with
+        the attribute's name (OBJECT_INFO + the output's, for Object Info); None where they
+        are not read."""
+        if self._attribute_pixels is None:
+            return None
+        self._attributes_read = True
+        if node.type == 'OBJECT_INFO':
+            if out.name not in OBJECT_INFO_OUTPUTS:
+                return None
+            name = OBJECT_INFO + out.name
+            return Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
+                            f"Object Info {out.name}", name)
+        if node.type == 'ATTRIBUTE':
+            if node.attribute_type == 'OBJECT':
+                # one value per object: read as Object Info is, per placement
+                name = f"{OBJECT_INFO}{OBJECT_ATTRIBUTE}{node.attribute_name}"
+                return Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
+                                f"object attribute '{node.attribute_name}'", name)
+            if node.attribute_type != 'GEOMETRY':
+                reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
+                               f"'{node.attribute_name}' not read")
+                return None
+            name = node.attribute_name
+        else:
+            name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
+        label = f"attribute '{name}'" if name else "the render colour attribute"
+        t = Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None, label, name)
+        t.aligned = True
+        return t
+
+    def _build(self, mat):
+        """The material, and self._attribute_map: how its albedo follows a mesh attribute (a
+        Color Attribute or Attribute node into the colour) or an Object Info output. A chain
+        that is a per-channel scale and offset of the attribute's colour (checked on probe
+        values, as _affine_in does for images) is applied per point; any other is evaluated at
+        each corner (reported); Object Info on each object's value. An attribute averaged away
+        beside an image reads the node's own value (reported by the evaluation)."""
+        self._attribute_map = None
+        self._attribute_pixels = self._ATTRIBUTE_PROBE
+        self._attributes_read = False
+        m = self._build_material(mat)
+        name = self._albedo_attribute
+        if self._attributes_read and (name is None or nodeeval.TWO_IMAGES in m.approximated):
+            # an attribute beside an image (one varying colour per material): an image times
+            # the attribute (a glTF vertex colour) is taken apart (_product_map)
+            product = self._product_map(mat)
+            if product is not None:
+                return product
+        if name is None:
+            self._attribute_pixels = None
+            if self._attributes_read:
+                # the attribute was averaged beside an image: the probe's mean would stand in
+                # for it; the nodes read their own values instead
+                m = self._build_material(mat)
+            return m
+        if name.startswith(OBJECT_INFO):
+            # one value per object: the nodes after it are evaluated on each object's value
+            # (evaluated_albedo), exact whatever they are (a Random into a Color Ramp)
+            self._attribute_pixels = None
+            self._attribute_map = ('object', name[len(OBJECT_INFO):], mat)
+            m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
+            return m
+        line = _channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), _probe_albedo(m), 1e-5)
+        self._attribute_pixels = self._ATTRIBUTE_ALPHAS
+        reads_alpha = np.ptp(_probe_albedo(self._build_material(mat)), axis=0).max() >= 1e-7
+        if line is not None and not reads_alpha and (line[1] >= 0).all() and (line[1] + line[0] >= -1e-9).all():
+            w, k = line
+            self._attribute_pixels = None
+            self._attribute_map = ('mesh', name, w, k)
+            m.texture = None                # the albedo comes per point from Geometry.colors
+            m.base_color = np.ones(3, np.float32)
+            m.color_attribute = name
+            return m
+        # any other chain is evaluated on each mesh's corner values (evaluated_albedo) and the
+        # results interpolated: Cycles interpolates first, so this is exact at the corners only
+        self._attribute_pixels = None
+        self._attribute_map = ('corners', name, mat)
+        m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
+        label = f"attribute '{name}'" if name else "the render colour attribute"
+        m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
+                                               "corners, then interpolated (Cycles interpolates first)") if r)
+        return m
+
+    # an image's probe values beside the attribute's (kept away from 0: the fit divides by them)
+    _IMAGE_PROBE = (0.1 + 0.9 * np.random.default_rng(13).random((1, 64, 4))).astype(np.float32)
+    _IMAGE_PROBE[..., 3] = 1.0
+
+    def _product_map(self, mat):
+        """The material when its albedo is an image times (w x an attribute's colour + k) per
+        channel (a Mix Multiply of an Image Texture and a Color Attribute, the layers after it
+        scaling both): the image as usual (its lookup exact, the attribute read as 1) and
+        self._attribute_map ('mesh', name, w', k') so that Geometry.colors supplies the rest.
+        Checked on probe values of both, entry by entry; None when it is not that."""
+        def joint(attribute_pixels, image_pixels):
+            self._attribute_pixels, self._image_probe = attribute_pixels, image_pixels
+            try:
+                m = self._build_material(mat)
+            finally:
+                self._attribute_pixels = self._image_probe = None
+            name = self._albedo_attribute
+            if name is None or name.startswith(OBJECT_INFO) or m.texture is None:
+                return None, None
+            return name, _probe_albedo(m)
+        name, y = joint(self._ATTRIBUTE_PROBE, self._IMAGE_PROBE)
+        if name is None:
+            return None
+        n = self._ATTRIBUTE_ALPHAS.shape[1]      # (one image colour: only the alpha varies)
+        _, ya = joint(self._ATTRIBUTE_ALPHAS, np.repeat(self._IMAGE_PROBE[:, :1], n, axis=1))
+        if ya is None or not np.allclose(ya, ya[:1], rtol=1e-6, atol=1e-9):
+            ya = None
+        q = y / self._IMAGE_PROBE[0, :, :3].astype(np.float64)       # = w x attribute + k if a product
+        line = _channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), q, 1e-5)
+        if ya is None or line is None or (line[1] < 0).any() or (line[0] + line[1] <= 0).any():
+            return None
+        w, k = line
+        # the final build reads the attribute as 1: the image's albedo x (w + k); the colours
+        # carry (w x attribute + k) / (w + k)
+        self._attribute_pixels = np.ones(4, np.float32)
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attribute_pixels = None
+        if m.texture is None:
+            return None
+        self._attribute_map = ('mesh', name, w / (w + k), k / (w + k))
+        m.color_attribute = name
+        return m
+
+    def evaluated_albedo(self, index, values):
+        """The albedo (n, 3) material `index` (an Object Info or per-corner attribute one) has
+        where what its node reads is values (n, 4) each: the material evaluated once on all."""
+        mat = self.attribute_maps[index][2]
+        self._attribute_pixels = np.ascontiguousarray(values, np.float32)[None]
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attribute_pixels = None
+        if m.texture is None:                  # (the chain no longer reads it: a constant)
+            return np.broadcast_to(m.base_color, (len(values), 3)).astype(np.float32)
+        return (m.base_color * np.asarray(m.texture, np.float32)[0, :, :3]).astype(np.float32)
+
+    def _build_material(self, mat):
+        reasons = []
+        self._uv_names = []           # the UV map each image this material reads asks for
+        self._normal_maps = []        # (Texture, strength, UV map) of its BSDFs' normal maps
+        visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
+        name = mat.original.name if mat.original else mat.name
+        ntree = mat.node_tree
+        if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
+            closure = Closure(const=tuple(mat.diffuse_color[:3]))
+        else:
+            out = output_node(ntree)
+            if out is None or not out.inputs['Surface'].is_linked:
+                # Cycles: no surface shader renders black, but a volume-only material's
+                # surface lets every ray through (SD_HAS_ONLY_VOLUME): a fog box is clear here
+                volume = out is not None and out.inputs.get('Volume') is not None and \
+                    linked_link(out.inputs['Volume']) is not None
+                closure = Closure(transparent=(1.0, 1.0, 1.0)) if volume else Closure()
+            else:
+                closure, visibility = self._ray_type_mix(out.inputs['Surface'], reasons)
+                if closure is None:
+                    closure = self._shader(out.inputs['Surface'], reasons, 0)
+            for socket in IGNORED_OUTPUTS:
+                if out is not None and out.inputs.get(socket) is not None and \
+                        linked_node(out.inputs[socket]) is not None:
+                    reasons.append(f"{socket.lower()} ignored")
+        base, texture, interp, ext, transform = self._albedo(closure)
+        self._albedo_attribute = closure.texture.attribute \
+            if closure.texture is not None and closure.tex_weight.any() else None
+        base = _nonnegative(base, "colour", reasons)
+        emission = _nonnegative(closure.emission.astype(np.float32), "emission", reasons)
+        holdout = closure.holdout >= 1.0 - 1e-6
+        if 0.0 < closure.holdout and not holdout:
+            reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")
+        transparency = opacity = None
+        o_interp, o_ext, o_transform = 'Linear', 'REPEAT', None
+        if closure.transparent.any() and not holdout:
+            transparency = _nonnegative(closure.transparent.astype(np.float32), "transparency", reasons)
+            if closure.opacity is not None:
+                tex, inverted = closure.opacity
+                a = tex.pixels[..., 3:4]
+                if not np.isfinite(a).all():
+                    reasons.append(f"{int(np.count_nonzero(~np.isfinite(a)))} texel(s) of non-finite alpha "
+                                   f"read as opaque")
+                    a = np.where(np.isfinite(a), a, 1.0)
+                a = np.clip(1.0 - a if inverted else a, 0.0, 1.0).astype(np.float32)
+                opacity = tex.texels(np.ascontiguousarray(np.concatenate([a, a, a, np.ones_like(a)], axis=-1)))
+                o_interp, o_ext, o_transform = tex.interpolation, tex.extension, tex.transform
+                if emission.any():
+                    reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
+        aovs, aov_textures = shader_aovs(ntree, reasons, self._texture) if ntree is not None else ({}, {})
+        e_tex = e_interp = e_ext = e_xf = None
+        if closure.emission_tex is not None and emission.any():
+            t, w = closure.emission_tex
+            w32 = np.where(emission > 0, w, 0).astype(np.float32)   # channels _nonnegative kept
+            e_tex, e_interp, e_ext, e_xf = t.texels(t.baked(lambda rgb: rgb * w32)), t.interpolation, \
+                t.extension, t.transform
+        n_tex = n_interp = n_ext = n_xf = None
+        n_strength = 1.0
+        if self._normal_maps:
+            t, n_strength, n_uv = self._normal_maps[0]
+            if len({(m[0].key, m[1]) for m in self._normal_maps}) > 1:
+                reasons.append("BSDFs with different normal maps; the first one's for all")
+            if n_uv and n_uv not in self._uv_names:
+                reasons.append(f"normal map tangents of UV map '{n_uv}' read on the image's UV map")
+            n_tex, n_interp, n_ext, n_xf = t.texels(t.pixels), t.interpolation, t.extension, t.transform
+            self.normal_mapped = True
+        uv_names = list(dict.fromkeys(self._uv_names))
+        if len(uv_names) > 1:       # one UV map per triangle here
+            shown = ', '.join(repr(n) if n else 'the active render map' for n in uv_names)
+            reasons.append(f"images on several UV maps ({shown}); all read on the first")
+        return sd.Material(name=name, base_color=base, uv_map=uv_names[0] if uv_names else '',
+                           emission_texture=e_tex, emission_interpolation=e_interp or 'Linear',
+                           emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,
+                           normal_texture=n_tex, normal_interpolation=n_interp or 'Linear',
+                           normal_extension=n_ext or 'REPEAT', normal_transform=n_xf, normal_strength=n_strength,
+                           bump_correction=bool(getattr(getattr(mat, 'cycles', None), 'use_bump_map_correction',
+                                                        True)),
+                           emission=emission, texture=texture,
+                           emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
+                           texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
+                           transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
+                           opacity_extension=o_ext, opacity_transform=o_transform,
+                           approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
+                           pass_index=int(mat.pass_index), aovs=aovs, visibility=visibility,
+                           aov_textures={key: (t.texels(t.pixels), t.interpolation, t.extension, t.transform)
+                                         for key, t in aov_textures.items()})
+
+    @staticmethod
+    def _albedo(c):
+        if c.texture is None or not np.any(c.tex_weight):
+            return c.const.astype(np.float32), None, 'Linear', 'REPEAT', None
+        t = c.texture
+        if not np.any(c.const):
+            return c.tex_weight.astype(np.float32), t.texels(t.pixels), t.interpolation, t.extension, t.transform
+        w, k = c.tex_weight.astype(np.float32), c.const.astype(np.float32)
+        return np.ones(3, np.float32), t.texels(t.baked(lambda rgb: rgb * w + k)), t.interpolation, t.extension, \
+            t.transform
+
+    def _shader(self, socket, reasons, depth):
+        link = linked_link(socket)        # muted nodes are passed through (nodegraph)
+        if link is None:
+            return Closure()
+        if link.from_socket.type != 'SHADER':
+            return Closure(emission=value_emission(link, reasons, self._texture))
+        node = link.from_node
+        if depth > 32:
+            reasons.append("shader graph too deep")
+            return Closure(const=DEFAULT_ALBEDO)
+        t = node.type
+        if t == 'BSDF_DIFFUSE':
+            self._normal_input(node, reasons)
+            c = self._color_closure(node.inputs['Color'], reasons)
+            rough = diffuse_roughness(node, reasons)
+            return c if rough == 0.0 else c.mapped(roughdiffuse.RoughDiffuse(rough))
+        if t == 'BSDF_PRINCIPLED':
+            return self._principled(node, reasons)
+        if t == 'EMISSION':
+            emission, etex = self._emission(node.inputs['Color'], node.inputs['Strength'], "Emission", reasons)
+            return Closure(emission=emission, emission_tex=etex)
+        if t == 'HOLDOUT':
+            # Cycles: camera rays see through it (alpha 0); other rays meet a black absorber
+            return Closure(holdout=1.0)
+        if t == 'ADD_SHADER':
+            a = self._shader(node.inputs[0], reasons, depth + 1)
+            b = self._shader(node.inputs[1], reasons, depth + 1)
+            return a.plus(b, reasons)
+        if t == 'BSDF_TRANSPARENT':
+            color, ok = constant_color(node.inputs['Color'])
+            if not ok:
+                reasons.append("Transparent BSDF colour driven by nodes; its own value used")
+            return Closure(transparent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
+        if t == 'MIX_SHADER':
+            alpha_mix = self._alpha_mix(node, reasons, depth)
+            if alpha_mix is not None:
+                return alpha_mix
+            fac = mix_factor(node, reasons, "Mix Shader")
+            a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
+            b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
+            return a.plus(b, reasons)
+        reflector = reflector_albedo(node, reasons)
+        if reflector is not None:
+            return Closure(const=reflector)
+        # Documented approximation: a diffuse surface of the node's constant colour.
+        reasons.append(f"{node.bl_label} as diffuse")
+        sock = input_socket(node, 'Color', 'Base Color')
+        if sock is not None and sock.type == 'RGBA':
+            color, _ = constant_color(sock)
+            return Closure(const=color)
+        return Closure(const=DEFAULT_ALBEDO)
+
+    def _principled(self, node, reasons):
+        for name, what in PRINCIPLED_IGNORED:
+            s = node.inputs.get(name)
+            if s is not None and name not in principled.HANDLED:
+                v, ok = constant_value(s)
+                if v != 0.0 or not ok:
+                    reasons.append(f"Principled {what} ignored")
+        self._normal_input(node, reasons)
+        c = self._color_closure(node.inputs['Base Color'], reasons)
+        for step in principled.layer_steps(node, reasons):
+            c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
+        es = input_socket(node, 'Emission Strength')
+        ec = input_socket(node, 'Emission Color', 'Emission')
+        if es is not None and ec is not None:
+            dim = principled.emission_dim(node)
+            emission, etex = self._emission(ec, es, "Principled emission", reasons)
+            c.emission = emission * dim
+            c.emission_tex = None if etex is None else (etex[0], etex[1] * dim)
+        # Cycles: alpha < 1 adds a white Transparent BSDF of weight 1 - alpha and scales the rest
+        # (emission included) by alpha
+        alpha = node.inputs.get('Alpha')
+        if alpha is None:
+            return c
+        opacity = self._image_alpha(alpha, reasons)
+        if opacity is not None:
+            c.opacity, c.transparent = opacity, np.ones(3)
+            return c
+        a, ok = constant_value(alpha)
+        if not ok:
+            reasons.append("Principled alpha driven by nodes; its own value used")
+        a = min(max(float(a), 0.0), 1.0) if np.isfinite(a) else 1.0
+        if a < 1.0:
+            c = c.scaled(a)
+            c.transparent = c.transparent + (1.0 - a)
+        return c
+
+    def _image_alpha(self, socket, reasons, inverted=False):
+        """(Texture, inverted) when socket is linked straight to an Image Texture's Alpha output."""
+        link = linked_link(socket)
+        if not is_image_alpha(link):
+            return None
+        tex = self._texture(link.from_node, reasons)
+        return None if tex is None else (tex, inverted)
+
+    def _alpha_mix(self, node, reasons, depth):
+        """A Mix Shader whose factor is an image's alpha, between a purely transparent shader and
+        another one (the usual cut-out leaf): that shader with the image as its opacity."""
+        if not is_image_alpha(linked_link(node.inputs['Fac'])):
+            return None
+        a = self._shader(node.inputs[1], reasons, depth + 1)
+        b = self._shader(node.inputs[2], reasons, depth + 1)
+        clear_a, clear_b = a.only_transparent(), b.only_transparent()
+        if clear_a == clear_b or a.opacity is not None or b.opacity is not None:
+            return None
+        opaque, clear = (b, a) if clear_a else (a, b)
+        if opaque.transparent.any() or opaque.holdout:
+            return None
+        # Mix = (1 - fac) A + fac B: fac is the opacity when A is the transparent one
+        opacity = self._image_alpha(node.inputs['Fac'], reasons, inverted=not clear_a)
+        if opacity is None:
+            return None
+        return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
+                        clear.transparent, opacity)
+
+    def _color_closure(self, socket, reasons):
+        """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes
+        and float nodes (nodeeval.py) on constants and one image, baked into a texture."""
+        link = linked_link(socket)
+        if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
+                                 link.from_node.type in nodeeval.VIEW_NODE_TYPES or
+                                 link.from_node.type in nodeeval.ATTRIBUTE_NODE_TYPES or is_image_alpha(link)):
+            return self._evaluated_closure(socket, reasons)
+        if link is not None and link.from_node.type == 'TEX_IMAGE':
+            tex = self._texture(link.from_node, reasons)
+            if tex is None:
+                return Closure(const=MISSING_IMAGE)
+            return Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
+        color, ok = constant_color(socket)
+        if not ok:
+            reasons.append(f"colour from '{link.from_node.bl_label}' node; its own value used")
+        return Closure(const=color)
+
+    def _emission(self, color_socket, strength_socket, label, reasons):
+        """(radiance (3,) float64, image emission or None) of an emission's colour x strength:
+        exact for constants and the nodes the export evaluates. Driven by an image (a screen,
+        a sign, a glTF emissive map): (Texture, weight (3,)), emitting weight x the image,
+        and the radiance its average over the image's texels (what picks it as a light); an
+        image straight into the colour is read as Cycles reads it, colour and float nodes
+        after the image are baked into its texels (as for a diffuse colour)."""
+        evaluate = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE)
+        color, strength = evaluate.input(color_socket, True), evaluate.input(strength_socket, False)
+        if color.tex is None and strength.tex is None:
+            return np.asarray(color.value, np.float64).reshape(3) * float(strength.value.reshape(-1)[0]), None
+        link = linked_link(color_socket)
+        # nodes after an image Cycles keeps encoded that scale its colour per channel (a tint):
+        # the image itself times that weight, after the lookup (see _evaluated_closure)
+        affine = self._affine_in(color_socket, color.tex) if strength.tex is None and color.tex is not None \
+            and stored_texels(color.tex.pixels) is not None else None
+        if strength.tex is None and link is not None and link.from_node.type == 'TEX_IMAGE' \
+                and link.from_socket.name == 'Color':
+            tex = color.tex                 # the image itself, looked up as Cycles stores it
+            weight = np.full(3, float(strength.value.reshape(-1)[0]))
+        elif isinstance(affine, tuple) and not affine[1].any():
+            tex = color.tex
+            weight = affine[0] * float(strength.value.reshape(-1)[0])
+        else:                               # nodes (or an image strength) baked per texel
+            src = color.tex if color.tex is not None else strength.tex
+            values = np.asarray(color.value, np.float64) * np.asarray(strength.value, np.float64)
+            px = np.empty(src.pixels.shape[:2] + (4,), np.float32)
+            px[..., :3] = _nonnegative(np.broadcast_to(values, px.shape[:2] + (3,)).astype(np.float32),
+                                       f"{label} from nodes", reasons)
+            px[..., 3] = 1.0
+            if color.tex is not None and strength.tex is None and color.tex.attribute is None:
+                # nodes that read the image's colour alone run after its lookup, as Cycles runs
+                # them (see _evaluated_closure); baked into the texels, a Gamma of 2.2 on an
+                # 8-bit screen image emitted 2.3-4.3x Cycles' light
+                after = self._after_lookup(color_socket, color.tex, stored_texels(color.tex.pixels))
+                if after is not None:
+                    s = np.float32(strength.value.reshape(-1)[0])
+                    px = ImageTexels(px, after.followed_by(lambda rgb: rgb * s))
+            tex = Texture(('emission', src.key, id(px)), px, src.interpolation, src.extension, src.transform,
+                           src.udim)
+            weight = np.ones(3)
+        mean = np.asarray(tex.pixels[..., :3], np.float64).reshape(-1, 3).mean(axis=0)
+        return mean * weight, (tex, weight)
+
+    def _evaluated_closure(self, socket, reasons):
+        f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE, attribute=self._attribute).input(socket, True)
+        if f.tex is None:
+            return Closure(const=f.value)
+        src = f.tex
+        stored = stored_texels(src.pixels)
+        after = None
+        if src.attribute is None:
+            # Cycles blends the image as stored (8-bit sRGB: encoded; float: linear), decodes,
+            # then runs the nodes per shading point: baking them into the texels before the
+            # blend brightened edges and minified detail (a tint on 0/255 stripes +61%; a
+            # Gamma 2.2 on 1-texel noise +58% on a float EXR, +170% on an 8-bit PNG, a Color
+            # Ramp of constant interpolation 4.5x). A chain affine in the image's colour per
+            # channel (a Mix tint, Invert, Bright/Contrast, an identity) is kept as weight x
+            # image + constant; any other chain that reads the colour alone is evaluated on
+            # the looked-up colour (EncodedTexels.then), after the blend, as Cycles does.
+            affine = self._affine_in(socket, src)
+            if isinstance(affine, tuple) and stored is not None:
+                return Closure(const=affine[1], texture=src, tex_weight=affine[0])
+            if affine is None:
+                after = self._after_lookup(socket, src, stored)
+                if after is None and stored is not None:
+                    reasons.append(f"colour nodes after image '{src.name}' applied to its texels before the "
+                                   "blend (Cycles blends, decodes, then applies them)")
+        baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
+        # (an attribute's probe values go negative by design: their clamping says nothing)
+        baked[..., :3] = _nonnegative(f.value.astype(np.float32), "colour from colour nodes",
+                                      reasons if src.attribute is None else [])
+        baked[..., 3] = src.pixels[..., 3]
+        key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
+        if after is not None:
+            baked = ImageTexels(baked, after)         # 'Closest' reads the baked texels: the same
+        return Closure(texture=Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim,
+                                         src.name, src.attribute),
+                        tex_weight=(1.0, 1.0, 1.0))
+
+    def _after_lookup(self, socket, src, stored):
+        """An EncodedTexels that looks image src up as Cycles stores it and then runs the
+        chain feeding `socket` on each looked-up colour, or None when the chain reads the
+        image's alpha or anything but src (then it is baked into the texels)."""
+        if src.udim is not None and stored is None:
+            return None
+        ya = self._probe(socket, src, self._ALPHA_PROBE)
+        if ya is None or np.ptp(ya, axis=0).max() > 0.0:
+            return None
+        try:
+            compiled = nodeeval.compile_image_chain(socket, True, src.key[0])
+        except nodeeval.NotCompiled:
+            return None
+
+        def chain(rgb):         # reads no Blender data: it runs during the render's lookups
+            px = np.empty((len(rgb), 4), np.float32)
+            px[:, :3], px[:, 3] = rgb, 1.0
+            y = np.broadcast_to(np.asarray(compiled(px), np.float64), (len(rgb), 3))
+            return np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0).astype(np.float32)
+
+        # the chain as rebuilt here must be the one probed through the export's own textures
+        want = self._probe(socket, src, self._PROBE)
+        if want is None or not np.array_equal(chain(self._PROBE[:, :3]), np.maximum(want, 0.0).astype(np.float32)):
+            return None
+        base = stored if stored is not None else \
+            EncodedTexels(np.ascontiguousarray(src.pixels[..., :3], np.float32), srgb=False)
+        return base.followed_by(chain)
+
+    def _probe(self, socket, src, pixels):
+        """What feeds `socket` (n, 3) with image src's texels replaced by pixels (n, 4); None
+        where the result no longer comes from src."""
+        def probed(node, reasons):
+            t = self._texture(node, reasons)
+            if t is None or t.key != src.key:
+                return t
+            return Texture(t.key, pixels, t.interpolation, t.extension, t.transform, None, t.name)
+        f = nodeeval.Evaluator(probed, [], MISSING_IMAGE, attribute=self._attribute).input(socket, True)
+        if f.tex is None or f.tex.key != src.key:
+            return None
+        y = np.broadcast_to(f.value, (len(pixels), 3))
+        return y if np.isfinite(y).all() else None
+
+    def _affine_in(self, socket, src):
+        """How what feeds `socket` reads image src's colour, checked on probe texels: (weight
+        (3,), constant (3,)) when it is w x colour + k per channel (non-negative for colours
+        in [0, 1]) and reads no alpha; 'alpha' when it reads the alpha only (blended as
+        stored, linear: no decode stands between); None otherwise."""
+        y = self._probe(socket, src, self._PROBE)
+        if y is None:
+            return None
+        if np.ptp(y, axis=0).max() == 0.0:
+            return 'alpha'                                  # (the colour does not matter)
+        ya = self._probe(socket, src, self._ALPHA_PROBE)
+        if ya is None or np.ptp(ya, axis=0).max() > 0.0:
+            return None                                     # colour and alpha both
+        line = _channel_line(self._PROBE[:, :3].astype(np.float64), y, 1e-6)
+        if line is None or (line[1] < 0).any() or (line[1] + line[0] < -1e-9).any():
+            return None                                     # (a colour in [0, 1] would go negative)
+        return line
+
+    def _normal_input(self, node, reasons):
+        """Note a BSDF's tangent-space normal map (tangent_normal_map) for the material."""
+        found = tangent_normal_map(node, reasons)
+        if found is not None:
+            image, strength, uv_map = found
+            tex = self._texture(image, reasons)
+            if tex is not None:
+                self._normal_maps.append((tex, strength, uv_map))
+
+    def _texture(self, node, reasons):
+        img = node.image
+        transform = texture_transform(node, reasons)
+        self._uv_names.append(uv_map_name(node))
+        if node.projection != 'FLAT':
+            reasons.append(f"{node.projection.lower()} image projection as flat")
+        # Smart is Cycles' bicubic too (its SVM image lookup: closest, linear, else cubic)
+        interp = {'Closest': 'Closest', 'Cubic': 'Cubic', 'Smart': 'Cubic'}.get(node.interpolation, 'Linear')
+        ext = node.extension if node.extension in TEXTURE_EXTENSIONS else 'REPEAT'
+        if node.extension not in TEXTURE_EXTENSIONS:
+            reasons.append(f"{node.extension.lower()} image extension as repeat")
+        if img is None:
+            reasons.append("Image Texture without an image (magenta, as Cycles)")
+            return None
+        # Cycles: with the Alpha output linked, the Color output of an image stored with
+        # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0)
+        unassociate = bool(node.outputs['Alpha'].is_linked and associates_alpha(img))
+        key = img.as_pointer()
+        pixels = self._images.get((key, unassociate))
+        if pixels is None:
+            pixels = image_pixels(img, reasons, unassociate)
+            if pixels is None:
+                return None
+            if img.source == 'TILED':
+                pixels = udim_tiles(img, pixels, reasons, unassociate)
+            self._images[key, unassociate] = pixels
+        udim = pixels if isinstance(pixels, UdimTiles) else None
+        where = None if transform is None else tuple(transform.ravel())
+        if self._image_probe is not None:        # probing how a chain combines it with an attribute
+            t = Texture((key, unassociate, interp, ext, where), self._image_probe, interp, ext, transform,
+                         None, img.name)
+            t.aligned = True
+            return t
+        return Texture((key, unassociate, interp, ext, where), pixels if udim is None else udim.flat,
+                        interp, ext, transform, udim, img.name)
+
+
+def _channel_line(x, y, tolerance):
+    """(w (3,), k (3,)) with y = w x + k per channel, the least-squares line through probe
+    values x, y (n, 3), when it passes every point within tolerance x (1 + max |y|); None
+    otherwise. k within 1e-9 of 0 is 0 (the fit's rounding about an exact 0)."""
+    w, k = np.empty(3), np.empty(3)
+    for c in range(3):
+        (w[c], k[c]), *_ = np.linalg.lstsq(np.stack([x[:, c], np.ones(len(x))], axis=1), y[:, c], rcond=None)
+    if np.abs(x * w + k - y).max() > tolerance * (1.0 + np.abs(y).max()):
+        return None
+    return w, np.where(np.abs(k) < 1e-9, 0.0, k)
+
+
+def _probe_albedo(m):
+    """The albedo (n, 3) float64 a material built on probe values has at each of them."""
+    return m.base_color.astype(np.float64) * np.asarray(m.texture, np.float64)[0, :, :3]

@@ -1,0 +1,263 @@
+"""One evaluated mesh read into numpy once (per unique mesh, in its local space): positions,
+triangles as Blender tessellates them, normals by the mesh's normals domain, material slots,
+UV maps, and on demand mikktspace tangents and attributes per corner. Part of the export
+layer."""
+
+import numpy as np
+
+
+# Triangles from which a mesh of quads is tessellated in numpy (_quad_corner_tris, ~15 ns a
+# triangle plus ~100 us of calls) rather than read from loop_triangles (~90 ns a triangle):
+# 20,000 separate cubes spent 2.4 s in the numpy path's fixed cost
+_QUADS_IN_NUMPY = 2048
+
+
+def _quad_corner_tris(positions, corner_vert, tri_poly, num_corners):
+    """The corners (nt, 3) int32 of each triangle of a mesh of triangles and quads, as Blender
+    tessellates it (blenkernel mesh_tessellate.cc: a quad is (0 1 2) (0 2 3), or (0 1 3)
+    (1 2 3) where is_quad_flip_v3_first_third_fast finds the 0-2 diagonal folds it over), or
+    None when the mesh has n-gons. Reading loop_triangles' corners goes through RNA item by
+    item, ~90 ms per million triangles; this is ~15. Faces are contiguous runs of corners in
+    face order, so a face's size is its triangle count + 2 and its start their running sum."""
+    nt = len(tri_poly)
+    if nt == 0 or np.any(tri_poly[1:] < tri_poly[:-1]):
+        return None
+    per_face = np.bincount(tri_poly)
+    if per_face.min() < 1 or per_face.max() > 2:
+        return None
+    size = per_face.astype(np.int32) + 2
+    if int(size.sum(dtype=np.int64)) != num_corners:
+        return None
+    first = np.ones(nt, bool)                       # a face's first triangle
+    first[1:] = tri_poly[1:] != tri_poly[:-1]
+    if nt == 2 * len(size):                         # quads only: no gathers
+        corners = (4 * np.arange(len(size), dtype=np.int32))[:, None, None] + \
+            np.array([[0, 1, 2], [0, 2, 3]], np.int32)
+        corners = corners.reshape(nt, 3)
+        quad_start = 4 * np.arange(len(size), dtype=np.int32)
+        cv = corner_vert.reshape(-1, 4)
+        quads = None
+    else:
+        start = (np.cumsum(size, dtype=np.int64) - size).astype(np.int32)
+        corners = start[tri_poly][:, None] + np.where(first[:, None], np.array([0, 1, 2], np.int32),
+                                                      np.array([0, 2, 3], np.int32))
+        quads = np.flatnonzero(size == 4)
+        quad_start = start[quads]
+        cv = corner_vert[quad_start[:, None] + np.arange(4, dtype=np.int32)]
+    if len(quad_start):
+        # float32 in Blender's order: d_1k = v_k - v_1, cross(d12, d13) . cross(d14, d13) > 0
+        comp = np.ascontiguousarray(positions.T)    # gathers from contiguous rows are ~3x faster
+        p = [[np.take(comp[a], k_vert) for a in range(3)] for k_vert in np.ascontiguousarray(cv.T)]
+        d12, d13, d14 = ([p[k][a] - p[0][a] for a in range(3)] for k in (1, 2, 3))
+
+        def cross(a, b):
+            return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+        ca, cb = cross(d12, d13), cross(d14, d13)
+        dot = ca[0] * cb[0]
+        dot += ca[1] * cb[1]
+        dot += ca[2] * cb[2]
+        flip = np.flatnonzero(dot > np.float32(0))
+        if len(flip):
+            if quads is None:
+                t = 2 * flip                        # each flipped quad's first triangle
+            else:
+                flipped = np.zeros(len(size), bool)
+                flipped[quads[flip]] = True
+                t = np.flatnonzero(first & flipped[tri_poly])
+            corners[t, 2] = corners[t, 0] + 3
+            corners[t + 1, 0] = corners[t, 0] + 1
+    return np.ascontiguousarray(corners, np.int32)
+
+
+def mesh_arrays(me, want_uvs):
+    """The mesh's arrays, or None when it has no faces: a mesh made by `meshes.new()` or an
+    empty metaball's mesh has not even a position attribute to read."""
+    if me is None or len(me.loop_triangles) == 0:
+        return None
+    return MeshArrays(me, want_uvs)
+
+
+class MeshArrays:
+    """One evaluated mesh in its local space, read once per unique mesh.
+
+    corners (nt, 3): each triangle's face corners, or None when every face is a triangle:
+    triangle i is then face i and its corners are 3i, 3i+1, 3i+2 (face corners are contiguous
+    and a triangle keeps its corner order), so the per-triangle read of `loop_triangles`
+    (RNA's per-item path, ~0.1 s per million triangles) is skipped and per-corner data
+    reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
+    __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
+                 'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes')
+
+    def __init__(self, me, want_uvs):
+        nv = len(me.vertices)
+        self.positions = np.empty(nv * 3, np.float32)
+        me.attributes['position'].data.foreach_get('vector', self.positions)
+        self.positions = self.positions.reshape(nv, 3)
+        nt = len(me.loop_triangles)
+        nl = len(me.loops)
+        corner_vert = np.empty(nl, np.int32)
+        cv_attr = me.attributes.get('.corner_vert')
+        if cv_attr is not None:
+            cv_attr.data.foreach_get('value', corner_vert)
+        else:
+            me.loops.foreach_get('vertex_index', corner_vert)
+        tri_poly = np.empty(nt, np.int32)
+        me.loop_triangle_polygons.foreach_get('value', tri_poly)
+        if nl == 3 * nt and np.array_equal(tri_poly, np.arange(nt, dtype=np.int32)):
+            self.corners = None             # one triangle per face: all faces are triangles
+            self.triangles = corner_vert.reshape(nt, 3)
+        else:
+            # a small mesh reads Blender's own tessellation faster than numpy's per-call overhead
+            corners = _quad_corner_tris(self.positions, corner_vert, tri_poly, nl) if nt >= _QUADS_IN_NUMPY \
+                else None
+            if corners is None:             # n-gons, or small: Blender's own tessellation, item by item
+                corners = np.empty(nt * 3, np.int32)
+                me.loop_triangles.foreach_get('loops', corners)
+                corners = corners.reshape(nt, 3)
+            self.corners = corners
+            self.triangles = corner_vert[self.corners]
+        self.slot = None                    # None: slot 0 everywhere
+        mi = me.attributes.get('material_index')
+        if mi is not None and mi.domain == 'FACE' and mi.data_type == 'INT' and nt:
+            per_face = np.empty(len(me.polygons), np.int32)
+            mi.data.foreach_get('value', per_face)
+            self.slot = per_face if self.corners is None else per_face[tri_poly]
+        self.domain = me.normals_domain
+        if self.domain == 'POINT':
+            vn = np.empty(nv * 3, np.float32)
+            me.vertex_normals.foreach_get('vector', vn)
+            # per-vertex normals and each corner's row: transformed once per vertex, not per corner
+            self.normal_rows, self.normal_index = vn.reshape(nv, 3), self.triangles
+        elif self.domain == 'CORNER':
+            cn = np.empty(nl * 3, np.float32)
+            me.corner_normals.foreach_get('vector', cn)
+            self.normal_rows, self.normal_index = cn.reshape(nl, 3), self.corners
+        else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
+            self.normal_rows = self.normal_index = None
+        self.mesh, self._tangents, self._attributes = None, {}, {}   # depsgraph meshes: read on demand
+        # every UV map by name (a material may read one by a UV Map node); corner_uvs: the
+        # active render one, which textures read otherwise
+        self.uv_layers = self._read_uvs(me) if want_uvs else {}
+        self.active_uv = next((l.name for l in me.uv_layers if l.active_render), '')
+        self.corner_uvs = self.uv_layers.get(self.active_uv)
+
+    @classmethod
+    def from_arrays(cls, positions, triangles, vertex_normals):
+        """A mesh made here (tessellated points or curves): smooth per-vertex normals, one
+        material slot, no UV map."""
+        a = cls.__new__(cls)
+        a.positions = np.ascontiguousarray(positions, np.float32)
+        a.triangles = np.ascontiguousarray(triangles, np.int32)
+        a.corners, a.slot, a.corner_uvs, a.uv_layers, a.active_uv, a.domain = None, None, None, {}, '', 'POINT'
+        a.mesh, a._tangents, a._attributes = None, {}, {}
+        a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
+        return a
+
+    def corner_tangents(self, uv_map):
+        """(nt, 3, 4) float32 object-space mikktspace tangent and bitangent sign per triangle
+        corner, of UV map uv_map ('' the active render one), as Cycles computes them for a
+        normal map (Blender's calc_tangents); None where there are none (no such UV map, a
+        mesh made here or by to_mesh, n-gons Blender cannot take)."""
+        if uv_map in self._tangents:
+            return self._tangents[uv_map]
+        out = None
+        me, name = self.mesh, uv_map or self.active_uv
+        if me is not None and name in me.uv_layers:
+            try:
+                me.calc_tangents(uvmap=name)
+                nl = len(me.loops)
+                tan = np.empty(nl * 3, np.float32)
+                me.loops.foreach_get('tangent', tan)
+                sign = np.empty(nl, np.float32)
+                me.loops.foreach_get('bitangent_sign', sign)
+                rows = np.concatenate([tan.reshape(nl, 3), sign[:, None]], axis=1)
+                out = np.empty((len(self.triangles), 3, 4), np.float32)
+                self.per_corner(rows, self.corners, out)
+            except RuntimeError:
+                out = None
+        self._tangents[uv_map] = out
+        return out
+
+    def corner_attribute(self, name):
+        """(nt, 3, 4) float32 per triangle corner: the mesh attribute `name` ('' the render
+        colour attribute) as Cycles' Attribute and Color Attribute nodes read it, RGB and alpha
+        (a colour as stored, bytes in linear; a vector, 2D vector or number as (x, y, z, 1),
+        (x, y, 0, 1), (v, v, v, 1)), from its point, corner or face domain; None where the mesh
+        has none (or one on edges, which Cycles does not read either)."""
+        if name in self._attributes:
+            return self._attributes[name]
+        out = None
+        me = self.mesh
+        if me is not None:
+            if not name:
+                colors = me.color_attributes
+                i = colors.render_color_index
+                name_found = colors[i].name if 0 <= i < len(colors) else None
+            else:
+                name_found = name
+            attr = me.attributes.get(name_found) if name_found else None
+            out = None if attr is None else self._attribute_corners(me, attr)
+        self._attributes[name] = out
+        return out
+
+    def _attribute_corners(self, me, attr):
+        n = len(attr.data)
+        kind = attr.data_type
+        if kind in ('FLOAT_COLOR', 'BYTE_COLOR'):
+            v = np.empty(n * 4, np.float32)
+            attr.data.foreach_get('color', v)
+            rows = v.reshape(n, 4)
+        elif kind in ('FLOAT_VECTOR', 'FLOAT2'):
+            width = 3 if kind == 'FLOAT_VECTOR' else 2
+            v = np.empty(n * width, np.float32)
+            attr.data.foreach_get('vector', v)
+            rows = np.zeros((n, 4), np.float32)
+            rows[:, :width] = v.reshape(n, width)
+            rows[:, 3] = 1.0
+        elif kind in ('FLOAT', 'INT', 'INT8', 'BOOLEAN'):
+            v = np.empty(n, np.float32 if kind == 'FLOAT' else (bool if kind == 'BOOLEAN' else np.int32))
+            attr.data.foreach_get('value', v)
+            rows = np.ones((n, 4), np.float32)
+            rows[:, :3] = v.astype(np.float32)[:, None]
+        else:
+            return None
+        nt = len(self.triangles)
+        if attr.domain == 'POINT':
+            index = self.triangles
+        elif attr.domain == 'CORNER':
+            index = self.corners                   # None: the corners are 0, 1, 2, ... in order
+        elif attr.domain == 'FACE':
+            if self.corners is None:
+                face = np.arange(nt, dtype=np.int32)
+            else:
+                face = np.empty(nt, np.int32)
+                me.loop_triangle_polygons.foreach_get('value', face)
+            index = np.repeat(face[:, None], 3, axis=1)
+        else:
+            return None
+        return self.per_corner(rows, index, np.empty((nt, 3, 4), np.float32))
+
+    @staticmethod
+    def _read_uvs(me):
+        """{name: (corners, 2) float32} of every UV map of the mesh."""
+        nl = len(me.loops)
+        layers = {}
+        for layer in me.uv_layers:
+            uv = np.empty(nl * 2, np.float32)
+            attr = me.attributes.get(layer.name)
+            if attr is not None and attr.domain == 'CORNER' and attr.data_type == 'FLOAT2':
+                attr.data.foreach_get('vector', uv)
+            else:
+                layer.uv.foreach_get('vector', uv)
+            layers[layer.name] = uv.reshape(nl, 2)
+        return layers
+
+    def per_corner(self, rows, index, out):
+        """out (nt, 3, c) = rows (n, c) at index (nt, 3); index None: rows are the corners. With
+        a leading instance axis, out (k, nt, 3, c) from rows (k, n, c): all k at once."""
+        if index is None:
+            out[...] = rows.reshape(out.shape)
+        else:   # indices come from Blender's validated mesh; mode='clip' avoids take's buffered copy
+            np.take(rows, index, axis=rows.ndim - 2, out=out, mode='clip')
+        return out

@@ -1,0 +1,58 @@
+"""Which BSDF Normal inputs bend the shading normal: a tangent-space Normal Map of an Image
+Texture is rendered (the material's normal texture); the nodes that leave the normal as it is
+are looked past; anything else is reported as ignored. Part of the export layer."""
+
+import numpy as np
+
+from ..nodeeval import constant_value
+from ..nodegraph import linked_link
+
+
+def _normal_link(socket):
+    """The link that bends the normal a Normal input receives, past the nodes that leave it as
+    it is in Cycles (None: the shading normal itself): a Bump of constant height or strength 0
+    (it passes its own Normal input on), a Normal Map of strength 0 or, in tangent space, of its
+    default flat colour (in object or world space that colour is a fixed direction), Geometry >
+    Normal."""
+    while True:
+        link = linked_link(socket)
+        if link is None:
+            return None
+        node = link.from_node
+        if node.type == 'NEW_GEOMETRY' and link.from_socket.name == 'Normal':
+            return None
+        strength, constant = (constant_value(node.inputs['Strength'])
+                              if node.type in ('BUMP', 'NORMAL_MAP') else (1.0, False))
+        if node.type == 'BUMP':
+            if (constant and strength <= 0.0) or linked_link(node.inputs['Height']) is None:
+                socket = node.inputs['Normal']
+                continue
+        elif node.type == 'NORMAL_MAP':
+            colour = node.inputs['Color']
+            flat = node.space == 'TANGENT' and linked_link(colour) is None and \
+                np.allclose(tuple(colour.default_value)[:3], (0.5, 0.5, 1.0))
+            if (constant and strength <= 0.0) or flat:
+                return None
+        return link
+
+
+def tangent_normal_map(node, reasons):
+    """(image node, strength, UV map name) of a BSDF's Normal input fed by a tangent-space
+    Normal Map node whose Color is an Image Texture's (the common baked normal map), or None
+    (an unlinked Normal; anything else is reported as ignored)."""
+    socket = node.inputs.get('Normal')
+    link = _normal_link(socket) if socket is not None else None
+    if link is None:
+        return None
+    nmap = link.from_node
+    image = linked_link(nmap.inputs['Color']) if nmap.type == 'NORMAL_MAP' else None
+    if nmap.type != 'NORMAL_MAP' or nmap.space != 'TANGENT' or image is None \
+            or image.from_node.type != 'TEX_IMAGE' or image.from_socket.name != 'Color':
+        what = f"{nmap.space.lower().replace('_', ' ')} space normal map" if nmap.type == 'NORMAL_MAP' else \
+            f"'{nmap.bl_label}'"
+        reasons.append(f"Normal input ({what}) ignored: tangent-space normal maps of an image only")
+        return None
+    strength, ok = constant_value(nmap.inputs['Strength'])
+    if not ok:
+        reasons.append("Normal Map strength driven by nodes; its own value used")
+    return image.from_node, max(float(strength), 0.0), str(nmap.uv_map)

@@ -1,0 +1,95 @@
+"""What Object Info and object Attribute nodes read per object, as Cycles reads them: the
+object's random number (Cycles' hash of its name, or an instance's random id), colour, alpha,
+location, pass indices, and custom properties or RNA paths. Part of the export layer."""
+
+import numpy as np
+
+# Object Info outputs read per object, as a material's colour attribute named OBJECT_INFO + output
+OBJECT_INFO = 'Object Info:'
+OBJECT_INFO_OUTPUTS = ('Random', 'Color', 'Alpha', 'Location', 'Object Index', 'Material Index')
+# an Attribute node of type Object: OBJECT_INFO + this + the attribute's name (its outputs are
+# read from the value as the evaluation reads any attribute's)
+# (type Instancer stays unread: Cycles reads Geometry Nodes instance attributes there first,
+# which Python cannot)
+OBJECT_ATTRIBUTE = 'Object Attribute:'
+
+
+
+def object_value(info, location, output, material=None):
+    """The (4,) value an Object Info output has for an object placed at `location` (3,) shading
+    `material` (RGB, alpha; a number in all four, a location with alpha 1), or for an
+    OBJECT_ATTRIBUTE + name output the object's attribute. info: (original object, random_id,
+    is an instance)."""
+    ob, random_id, is_instance = info
+    if output.startswith(OBJECT_ATTRIBUTE):
+        # Cycles (BKE_object_dupli_find_rgba_attribute): the object's own, then its data's;
+        # none: 0
+        name = output[len(OBJECT_ATTRIBUTE):]
+        return next((v for v in (_rgba_attribute(o, name) for o in (ob, getattr(ob, 'data', None))
+                                 if o is not None) if v is not None), np.zeros(4))
+    if output in ('Random', 'Object Index', 'Material Index'):
+        v = (object_random(ob.name, random_id, is_instance) if output == 'Random' else
+             float(ob.pass_index) if output == 'Object Index' else float(getattr(material, 'pass_index', 0)))
+        return np.array([v, v, v, 1.0])
+    color = tuple(ob.color)
+    if output == 'Alpha':
+        return np.full(4, color[3])
+    if output == 'Location':
+        return np.append(location, 1.0)
+    return np.asarray(color, np.float64)
+
+
+def _rgba_attribute(owner, name):
+    """An object's (or its data's) attribute as Cycles reads it for an Attribute node of type
+    Object (find_rgba_attribute): its custom property of that name, else the RNA path; a number
+    is (v, v, v, 1), an array fills (0, 0, 0, 1) from the front; None when neither exists."""
+    try:
+        value = owner[name]
+        if isinstance(value, str):
+            raise KeyError(name)             # no colour: the RNA path is tried next, as Cycles
+    except (KeyError, TypeError, AttributeError):
+        try:
+            value = owner.path_resolve(name)
+        except (ValueError, TypeError, AttributeError):
+            return None
+    if isinstance(value, str):
+        return None
+    out = np.array([0.0, 0.0, 0.0, 1.0])
+    try:
+        if isinstance(value, (bool, int, float)):
+            out[:3] = float(value)
+            return out
+        seq = [float(x) for x in value][:4]
+    except (TypeError, ValueError):
+        return None                          # a string, a pointer: not a colour
+    out[:len(seq)] = seq
+    return out
+
+
+def object_random(name, random_id, is_instance):
+    """Cycles' Object Info Random of an object: an instance's random_id / (2^32 - 1); an object
+    of its own, hash_uint2(hash_string(its name), 0) / (2^32 - 1) (blender/object.cpp; checked
+    against Cycles renders)."""
+    full = 0xFFFFFFFF
+    if is_instance:
+        return (random_id & full) / full
+    h = 0
+    for b in name.encode('utf-8'):        # Cycles' hash_string reads (signed) chars into a uint
+        h = (h * 37 + (b if b < 128 else (b - 256) & full)) & full
+    return _hash_uint2(h, 0) / full
+
+
+def _hash_uint2(kx, ky):
+    """Cycles' hash_uint2 (Bob Jenkins' lookup3 final mix of two words)."""
+    full = 0xFFFFFFFF
+
+    def rot(x, k):
+        return ((x << k) | (x >> (32 - k))) & full
+    a = b = c = (0xdeadbeef + (2 << 2) + 13) & full
+    a, b = (a + kx) & full, (b + ky) & full
+    for x, y, k in (('c', 'b', 14), ('a', 'c', 11), ('b', 'a', 25), ('c', 'b', 16), ('a', 'c', 4),
+                    ('b', 'a', 14), ('c', 'b', 24)):
+        v = {'a': a, 'b': b, 'c': c}
+        r = ((v[x] ^ v[y]) - rot(v[y], k)) & full
+        a, b, c = (r if x == 'a' else a), (r if x == 'b' else b), (r if x == 'c' else c)
+    return c

@@ -1,0 +1,52 @@
+"""BSDF nodes a diffuse renderer keeps as an albedo: a rough Diffuse BSDF (Oren-Nayar, as its
+albedo averaged over view directions, roughdiffuse.py) and the Glossy and Metallic BSDFs (their
+albedo averaged over view directions, specular.py). Part of the export layer."""
+
+import numpy as np
+
+from .. import specular
+from ..nodeeval import constant_color, constant_value
+
+
+def diffuse_roughness(node, reasons):
+    """A Diffuse BSDF's roughness (0..1; Cycles' Oren-Nayar above 1e-5, roughdiffuse.py), 0 for
+    Lambert; a node-driven one at its own value, reported."""
+    rough, ok = constant_value(node.inputs['Roughness'])
+    rough = min(max(rough, 0.0), 1.0) if np.isfinite(rough) else 0.0
+    if not ok:
+        reasons.append("Diffuse roughness driven by nodes; its own value used")
+    if rough <= 1e-5:
+        return 0.0
+    reasons.append("Diffuse roughness (Oren-Nayar) as its albedo averaged over view directions")
+    return rough
+
+
+def reflector_albedo(node, reasons):
+    """A Glossy BSDF's, or a Metallic BSDF's in F82 mode, albedo averaged over view directions
+    (specular.py) for its constant inputs (their own values where nodes drive them, reported),
+    as the diffuse colour that stands in for it: GGX, Multiscatter GGX and Beckmann; None for
+    other nodes, Ashikhmin-Shirley and the physical-conductor mode (they keep their colour)."""
+    t = node.type
+    if t not in ('BSDF_GLOSSY', 'BSDF_METALLIC'):
+        return None
+    dist = getattr(node, 'distribution', 'MULTI_GGX')
+    if dist not in ('GGX', 'MULTI_GGX', 'BECKMANN') or \
+            (t == 'BSDF_METALLIC' and getattr(node, 'fresnel_type', 'F82') != 'F82'):
+        return None
+    multi, beckmann = dist == 'MULTI_GGX', dist == 'BECKMANN'
+    rough, r_ok = constant_value(node.inputs['Roughness'])
+    if t == 'BSDF_GLOSSY':
+        color, c_ok = constant_color(node.inputs['Color'])
+        albedo = specular.glossy_albedo(rough, color, multi, beckmann)
+    else:
+        color, c_ok = constant_color(node.inputs['Base Color'])
+        tint, t_ok = constant_color(node.inputs['Edge Tint'])
+        c_ok = c_ok and t_ok
+        albedo = specular.metal_albedo(rough, color, tint, multi, beckmann)
+    reasons.append(f"{node.bl_label} as diffuse: its albedo averaged over view directions")
+    if not (r_ok and c_ok):
+        reasons.append(f"{node.bl_label} inputs driven by nodes; their own values used")
+    aniso = node.inputs.get('Anisotropy')
+    if aniso is not None and constant_value(aniso)[0] != 0.0:
+        reasons.append(f"{node.bl_label} anisotropy ignored")
+    return albedo

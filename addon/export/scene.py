@@ -1,0 +1,349 @@
+"""The depsgraph walk of one frame: `Exporter` visits every object instance Cycles would render
+(respecting render visibility, ray visibility, holdout and the view layer's filters), reads
+each unique mesh once (meshes.py, strands.py) and notes where it is placed, exports the lights,
+then assembles the geometry (assembly.py) and reads camera, world and settings into a
+scenedata.SceneData. Skipped objects, ignored features and approximated materials are
+collected as messages. Part of the export layer."""
+
+import bpy
+import numpy as np
+
+from .. import scenedata as sd
+from .assembly import Assembly
+from .camera import export_camera
+from .errors import ExportCancelled
+from .lights import export_light, light_link_receivers
+from .materials import MaterialBuilder
+from .meshes import mesh_arrays
+from .placement import Placement
+from .aovs import shader_aovs
+from .settings import export_settings
+from .strands import hair_arrays, hair_systems, tessellated
+from .world import effective_world, export_world, world_visibility
+
+GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
+# what the view layer's Surfaces filter (use_solid) hides, as Cycles syncs no mesh then (hair
+# follows the Hair filter, point clouds stay)
+SURFACE_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
+UNSUPPORTED_TYPES = {'VOLUME': "volume", 'GREASEPENCIL': "Grease Pencil"}
+
+
+CHECK_EVERY = 64                          # instances between cancel checks
+
+
+def _add_name(table, reason, name):
+    """Note `name` once under `reason` in a reason -> [names] table (the export's messages)."""
+    names = table.setdefault(reason, [])
+    if name not in names:
+        names.append(name)
+
+
+def _terminator(ob):
+    """The object's shadow terminator offsets (geometry, shading) as Cycles reads them: 0..1
+    (Blender's range; a non-finite value is none)."""
+    out = []
+    for name in ('shadow_terminator_geometry_offset', 'shadow_terminator_shading_offset'):
+        v = float(getattr(ob, name, 0.0))
+        out.append(min(max(v, 0.0), 1.0) if np.isfinite(v) else 0.0)
+    return tuple(out)
+
+
+def _shader_trees():
+    """Every material's node tree and every node group (shader groups among them)."""
+    return [m.node_tree for m in bpy.data.materials if m.node_tree is not None] + list(bpy.data.node_groups)
+
+
+class Exporter:
+    """One frame's export: walks the depsgraph's instances (lights, meshes and their placements,
+    hair, point clouds), then assembles the geometry, reads the world and the settings, and
+    collects every message for the render to report."""
+
+    def __init__(self, depsgraph, check_break, camera=None):
+        self.depsgraph = depsgraph
+        self.scene = depsgraph.scene_eval
+        self.view_layer = depsgraph.view_layer
+        self.camera = camera
+        self.world = effective_world(self.scene, self.view_layer)
+        # whether any shader reads Object Info: else no instance's values are gathered
+        self._object_info = any(n.type == 'OBJECT_INFO' or (n.type == 'ATTRIBUTE' and n.attribute_type == 'OBJECT')
+                                for t in _shader_trees() for n in t.nodes)
+        self.check_break = check_break or (lambda: False)
+        self.messages = []
+        self.materials = MaterialBuilder()
+        self.object_names = []
+        self.object_pass_index = []
+        self.light_links = {}         # emitter name -> (included, excluded) receiver names
+        self.shadow_links = {}        # emitter name -> (included, excluded) blocker names
+        self.object_assets = []
+        self.object_lightgroups = []
+        self._object_index = {}
+        self.meshes = {}          # key -> MeshArrays
+        self.placements = {}      # key -> [Placement]
+        self.lights = []
+        self.skipped = {}         # reason -> [object names]
+        self.ignored = {}         # reason -> [object names]: rendered, without a feature Cycles has
+        self._noted = set()       # objects whose ignored features are noted (instances repeat them)
+        # per object (visibility: and instancer): its ray visibility, shadow terminator and
+        # material slots, read once for all its instances (a scatter of 100K: ~12 us of RNA
+        # reads each)
+        self._vis_of, self._terminator_of, self._slots_of = {}, {}, {}
+        # work not done, for the render's stats: objects hidden from render or from every ray
+        # type, materials no exported triangle uses (never evaluated), triangles dropped
+        self.counts = dict(objects_hidden=0, objects_invisible=0, objects_unsupported=0,
+                           materials_unused=0, triangles_degenerate=0, triangles_nonfinite=0)
+
+    def run(self):
+        camera = export_camera(self.scene, self.messages, camera=self.camera)
+        settings = export_settings(self.scene, self.view_layer, self.messages)
+        self._walk_instances()
+        geometry = Assembly(self).geometry(uv_pass='UV' in settings.passes)
+        by_ray = []
+        world, environment, world_reason = export_world(self.scene, self.view_layer, camera=False, by_ray=by_ray)
+        camera_world = None
+        if by_ray:      # a Light Path's Is Camera Ray picks what the camera sees of the world
+            cw, cenv, creason = export_world(self.scene, self.view_layer, camera=True)
+            world_reason = '; '.join(dict.fromkeys(r for r in (world_reason, creason) if r))
+            if not (np.isfinite(cw).all() and (cw >= 0).all()):
+                cw = np.zeros(3, np.float32)
+            camera_world = (cw, cenv)
+        if not (np.isfinite(world).all() and (world >= 0).all()):
+            # Cycles subtracts a negative background; that is not supported here
+            world_reason = (f"its colour x strength {tuple(float(v) for v in world)} is negative or "
+                            "not finite; rendered black")
+            world = np.zeros(3, np.float32)
+        world_aovs = {}
+        if settings.aovs and self.world is not None and self.world.node_tree is not None:
+            reasons = []
+            world_aovs = shader_aovs(self.world.node_tree, reasons)[0]
+            world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
+        if world_reason:
+            self.messages.append(('WARNING', f"world approximated: {world_reason}"))
+        self._summarize(geometry, world, environment)
+        self.counts['objects_hidden'] = sum(1 for ob in self.scene.objects if ob.hide_render)
+        return sd.SceneData(camera=camera, geometry=geometry, materials=self.materials.materials,
+                            lights=self.lights, world=world, settings=settings,
+                            object_names=self.object_names, messages=self.messages,
+                            skipped=dict(self.counts), environment=environment, camera_world=camera_world,
+                            world_visibility=world_visibility(self.world),
+                            object_pass_index=np.array(self.object_pass_index, np.int32),
+                            object_assets=self.object_assets, light_links=self.light_links,
+                            shadow_links=self.shadow_links,
+                            object_lightgroups=self.object_lightgroups,
+                            world_lightgroup=getattr(self.world, 'lightgroup', '') if self.world else '',
+                            world_aovs=world_aovs)
+
+
+    def _walk_instances(self):
+        override = self.view_layer.material_override
+        for n, inst in enumerate(self.depsgraph.object_instances):
+            if n % CHECK_EVERY == 0 and self.check_break():
+                raise ExportCancelled()
+            ob = inst.object
+            if not inst.is_instance or ob.name not in self._noted:
+                self._note_ignored_features(ob)
+            if ob.type == 'LIGHT':
+                light = self._light(inst, ob)
+                if light is not None:
+                    self.lights.append(light)
+                continue
+            if getattr(ob, 'particle_systems', None) and hair_systems(ob):
+                self._particle_hair(ob, override, inst)
+            if ob.type == 'CURVES' and not getattr(self.view_layer, 'use_strand', True):
+                self.skip("hair curves are off in the view layer's filter (Hair)", ob.name)
+                continue
+            if ob.type in UNSUPPORTED_TYPES:
+                self.skip(f"{UNSUPPORTED_TYPES[ob.type]} objects are not rendered", ob.name)
+                continue
+            if ob.type not in GEOMETRY_TYPES or not inst.show_self:
+                continue
+            if ob.type in SURFACE_TYPES and not getattr(self.view_layer, 'use_solid', True):
+                self.skip("surfaces are off in the view layer's filter (Surfaces)", ob.name)
+                continue
+            parent = inst.parent if inst.is_instance and inst.parent is not None else ob
+            names = (ob.name_full, parent.name_full)
+            vis = self._vis_of.get(names)
+            if vis is None:
+                vis = self._vis_of[names] = self._visibility(ob, parent)
+            if vis == 0:
+                self.counts['objects_invisible'] += 1    # no ray type sees it
+                continue
+            key = self._read_geometry(ob)
+            if key is None:
+                continue
+            slots = self._slots_of.get((names[0], key))      # (one list shared by the object's instances)
+            if slots is None:
+                slots = self._slots_of[names[0], key] = \
+                    [override] if override is not None else [s.material for s in ob.material_slots]
+            info = (ob.original, inst.random_id, inst.is_instance) if self._object_info else None
+            terminator = self._terminator_of.get(names[0])
+            if terminator is None:
+                terminator = self._terminator_of[names[0]] = _terminator(ob)
+            self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64),
+                                                   slots, vis, self._object_id(ob), ob.name,
+                                                   terminator, info))
+
+    def _light(self, inst, ob):
+        # instances also take their instancer's ray visibility (as Cycles)
+        parent = inst.parent if inst.is_instance and inst.parent is not None else ob
+        if not ((ob.visible_diffuse and parent.visible_diffuse) or (ob.visible_camera and parent.visible_camera)):
+            self.skip("lights with camera and diffuse ray visibility off light nothing here, where "
+                       "every surface is diffuse (Cycles still lights glossy layers with them)", ob.name)
+            return None
+        light = export_light(ob, inst.matrix_world, self.messages)
+        limit = getattr(getattr(ob.data, 'cycles', None), 'max_bounces', None)
+        if light is not None and limit is not None:
+            light.max_bounces = int(limit)
+        if light is not None:
+            light.lightgroup = getattr(ob, 'lightgroup', '')
+        if light is not None and parent is not ob:
+            light.visible_camera = light.visible_camera and bool(parent.visible_camera)
+            light.visible_diffuse = light.visible_diffuse and bool(parent.visible_diffuse)
+        return light
+
+    def _visibility(self, ob, parent):
+        """Ray visibility bits; instances also take their instancer's (as Cycles)."""
+        def bits(o):
+            return ((sd.VIS_CAMERA if o.visible_camera else 0)
+                    | (sd.VIS_DIFFUSE if o.visible_diffuse else 0)
+                    | (sd.VIS_SHADOW if o.visible_shadow else 0))
+        vis = bits(ob) & bits(parent)
+        if vis and (parent.is_holdout or self._collection_flag(parent, 'holdout_get')):
+            vis |= sd.HOLDOUT
+        elif self._collection_flag(parent, 'indirect_only_get'):
+            vis &= ~sd.VIS_CAMERA       # Cycles: an Indirect Only collection is not seen directly
+        return vis
+
+    def _collection_flag(self, ob, getter):
+        """The view layer's Holdout / Indirect Only flag of the object's collections."""
+        try:
+            return getattr(ob.original, getter)(view_layer=self.view_layer)
+        except (RuntimeError, TypeError, ReferenceError, AttributeError):
+            return False
+
+    def _note_ignored_features(self, ob):
+        self._noted.add(ob.name)
+        if getattr(ob, 'is_shadow_catcher', False) and ob.type != 'LIGHT':
+            self.ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
+        for mod in getattr(ob, 'modifiers', ()):
+            if mod.type == 'SUBSURF' and mod.show_render and getattr(mod, 'use_adaptive_subdivision', False):
+                self.ignore(f"adaptive subdivision is not rendered (Cycles dices by the dicing rate); the "
+                             f"Subdivision modifier's Render Levels ({mod.render_levels}) are used", ob.name)
+        linking = getattr(ob, 'light_linking', None)
+        if linking is not None and linking.receiver_collection is not None:
+            self.light_links[ob.name] = light_link_receivers(linking.receiver_collection)
+        if linking is not None and linking.blocker_collection is not None:
+            self.shadow_links[ob.name] = light_link_receivers(linking.blocker_collection)
+
+    def ignore(self, reason, name):
+        """Note that object `name` is rendered without a feature Cycles has (`reason`)."""
+        _add_name(self.ignored, reason, name)
+
+    def _particle_hair(self, ob, override, inst):
+        """The strands of ob's hair particle systems (Render As Path), as Cycles reads them
+        (blender/curves.cpp): children only when it has some (else the parents), 2^render_step
+        + 1 world-space points a strand from co_hair, the radius from the Hair Shape settings
+        along the strand's length; tessellated as tubes (hair.py) in object space once per
+        emitter, and placed by each instance of it (inst: the depsgraph's), as Cycles places an
+        instanced emitter's hair. The object's ray visibility applies (an instance's with its
+        instancer's); the view layer's Hair filter off skips it."""
+        if not getattr(self.view_layer, 'use_strand', True):
+            self.skip("hair is off in the view layer's filter (Hair)", ob.name)
+            return
+        parent = inst.parent if inst.is_instance and inst.parent is not None else ob
+        vis = self._visibility(ob, parent)
+        if vis == 0:
+            self.counts['objects_invisible'] += 1
+            return
+        key = ('HAIR', ob.original.as_pointer())
+        if key not in self.meshes:
+            self.meshes[key] = hair_arrays(ob, self)
+            self.placements[key] = []
+        if self.meshes[key] is None:
+            return
+        slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
+        info = (ob.original, inst.random_id, inst.is_instance)      # the emitter's, as Cycles' hair
+        self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
+                                               self._object_id(ob), ob.name, info=info))
+
+
+    def _read_geometry(self, ob):
+        """Read (once) the evaluated geometry of `ob`; returns its cache key or None."""
+        if ob.type == 'MESH':
+            key = ('MESH', ob.data.as_pointer())
+        else:   # curves/text/metaballs: one evaluated mesh per (object, data)
+            key = (ob.type, ob.original.as_pointer(), ob.data.as_pointer() if ob.data else 0)
+        if key in self.meshes:
+            return key if self.meshes[key] is not None else None
+        want_uvs = True
+        if ob.type == 'MESH':
+            arrays = mesh_arrays(ob.data, want_uvs)
+            if arrays is not None:
+                arrays.mesh = ob.data       # the depsgraph's mesh, alive through the export
+        elif ob.type in ('POINTCLOUD', 'CURVES'):
+            arrays = tessellated(ob, self)
+        else:
+            try:
+                me = ob.to_mesh()
+            except RuntimeError as e:
+                self.skip(f"could not be converted to a mesh ({e})", ob.name)
+                self.meshes[key] = None
+                return None
+            try:
+                arrays = mesh_arrays(me, want_uvs)
+            finally:
+                ob.to_mesh_clear()
+        if arrays is None or len(arrays.triangles) == 0:
+            self.meshes[key] = None
+            return None
+        self.meshes[key] = arrays
+        self.placements[key] = []
+        return key
+
+
+    def _object_id(self, ob):
+        idx = self._object_index.get(ob.name)
+        if idx is None:
+            idx = self._object_index[ob.name] = len(self.object_names)
+            self.object_names.append(ob.name)
+            self.object_pass_index.append(ob.pass_index)   # Cycles: the instanced object's own
+            top = ob
+            while top.parent is not None:                 # Cryptomatte's asset: the topmost parent
+                top = top.parent
+            self.object_assets.append(top.name)
+            self.object_lightgroups.append(getattr(ob, 'lightgroup', ''))
+        return idx
+
+    def skip(self, reason, name):
+        """Note that object `name` is not rendered, and why."""
+        self.counts['objects_unsupported'] += 1
+        _add_name(self.skipped, reason, name)
+
+
+    # -- messages ----------------------------------------------------------------------------
+    def _summarize(self, geometry, world, environment):
+        for reason, names in self.skipped.items():
+            self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
+        for reason, names in self.ignored.items():
+            self.messages.append(('WARNING', f"{', '.join(repr(n) for n in names)}: {reason}"))
+        if self.scene.render.use_motion_blur:
+            self.messages.append(('WARNING', "motion blur is not rendered: every object is drawn at "
+                                             "its position on the frame"))
+        approx = [f"'{m.name}' ({m.approximated})" for m in self.materials.materials if m.approximated]
+        if len(geometry.material) and not geometry.material.all():     # material 0 is in use
+            approx.insert(0, "objects without a material (Blender's default surface, a Principled "
+                             "BSDF: specular layer as diffuse)")
+        if approx:
+            self.messages.append(('WARNING', f"{len(approx)} material(s) approximated as diffuse: "
+                                             + "; ".join(approx)))
+        if len(geometry.triangles) == 0:
+            self.messages.append(('WARNING', "the scene has no renderable geometry; only the "
+                                             "world background is rendered"))
+        has_emission = any(np.any(m.emission > 0) for m in self.materials.materials)
+        lit_world = np.any(world > 0) or (environment is not None and np.any(environment.strength > 0)
+                                           and np.any(environment.pixels > 0))
+        if not self.lights and not lit_world and not has_emission:
+            self.messages.append(('WARNING', "the scene has no lights, no emissive materials and "
+                                             "a black world: the image will be black"))
+        elif not self.lights:
+            self.messages.append(('INFO', "the scene has no light objects; lit by the world and "
+                                          "emissive materials only"))

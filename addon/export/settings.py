@@ -1,0 +1,70 @@
+"""The frame's render settings: what scene.dacrt, the render and the view layer ask for
+(samples, bounces, filter, passes, AOVs, Cryptomatte, light groups, mist), as
+scenedata.Settings. Part of the export layer."""
+
+import bpy
+
+from .. import scenedata as sd
+from ..cryptomatte import KINDS as CRYPTO_KINDS
+from ..passes import PASSES, enabled, result_name
+from .errors import ExportError
+
+# View-layer passes Cycles renders and DACRT does not: (settings owner, toggle, label); owner ''
+# is the view layer itself, 'cycles' its Cycles settings. The engine registers only the passes
+# it writes, so these would be missing from the result without a word.
+_UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
+    ('vector', 'Vector'), ('glossy_direct', 'Glossy Direct'), ('glossy_indirect', 'Glossy Indirect'),
+    ('glossy_color', 'Glossy Color'), ('transmission_direct', 'Transmission Direct'),
+    ('transmission_indirect', 'Transmission Indirect'), ('transmission_color', 'Transmission Color'),
+    ('subsurface_direct', 'Subsurface Direct'), ('subsurface_indirect', 'Subsurface Indirect'),
+    ('subsurface_color', 'Subsurface Color'),
+    ('ambient_occlusion', 'Ambient Occlusion'), ('shadow', 'Shadow'))) + (
+    ('cycles', 'pass_debug_sample_count', 'Sample Count'),
+    ('cycles', 'use_pass_shadow_catcher', 'Shadow Catcher'),
+    ('cycles', 'use_pass_volume_direct', 'Volume Direct'),
+    ('cycles', 'use_pass_volume_indirect', 'Volume Indirect'))
+
+
+# World > Mist Pass falloff as Cycles' exponent (blender/sync.cpp)
+MIST_FALLOFF = {'QUADRATIC': 2.0, 'LINEAR': 1.0, 'INVERSE_QUADRATIC': 0.5}
+
+
+def export_settings(scene, vl, messages):
+    """scenedata.Settings of one view layer `vl` of the evaluated scene. Passes Cycles would
+    write there and DACRT does not are named in a warning appended to messages."""
+    r = scene.render
+    d = getattr(scene, 'dacrt', None)
+    if d is None:
+        raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
+    passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]))
+    missing = [label for owner, attr, label in _UNRENDERED_PASSES
+               if getattr(getattr(vl, owner) if owner else vl, attr, False)]
+    aovs = tuple(dict.fromkeys((a.name, a.type) for a in getattr(vl, 'aovs', ()) if a.is_valid))
+    missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ()) if not a.is_valid]
+    crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
+    if missing:
+        written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
+                                          + ['Cryptomatte', 'light groups', 'shader AOVs']))
+        messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, {written} "
+                                        f"only; not in the result: {', '.join(missing)}"))
+    mist_world = getattr(vl, 'world_override', None) or scene.world
+    mist = mist_world.mist_settings if mist_world is not None else None
+    mist = (0.0, 100.0, 1.0) if mist is None else (
+        float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
+    # a view layer's Samples override (0: the scene's), as Cycles' default 'Use' layer samples
+    samples = int(getattr(vl, 'samples', 0)) or d.samples
+    return sd.Settings(samples=samples, max_bounces=d.max_bounces,
+                       transparent_max_bounces=d.transparent_max_bounces,
+                       sample_clamp_direct=d.sample_clamp_direct,
+                       sample_clamp_indirect=d.sample_clamp_indirect, filter_type=d.filter_type,
+                       filter_width=d.filter_width, seed=d.seed,
+                       threads=0 if r.threads_mode == 'AUTO' else r.threads,
+                       partition=d.partition.lower(), film_transparent=r.film_transparent,
+                       film_exposure=float(getattr(d, 'film_exposure', 1.0)),
+                       use_light_tree=bool(getattr(d, 'use_light_tree', True)),
+                       passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
+                       pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
+                       cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),
+                       lightgroups=tuple(dict.fromkeys(g.name for g in getattr(vl, 'lightgroups', ()))),
+                       aovs=aovs,
+                       adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)

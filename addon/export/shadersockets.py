@@ -1,0 +1,43 @@
+"""Cycles' rules for what a shader socket receives, shared by materials and the world: a colour,
+vector or float linked into a shader input (an emission of that value) and a Mix Shader's
+factor (clamped, computed through the nodes the export evaluates). Part of the export layer."""
+
+import numpy as np
+
+from .. import nodeeval
+from ..nodeeval import constant_value
+from .images import MISSING_IMAGE
+
+
+def _no_image(node, reasons):
+    reasons.append(f"image '{node.name}' in a world colour chain not read (black)")
+    return None
+
+
+def value_emission(link, reasons, texture=_no_image):
+    """Cycles' conversion of a colour, vector or float output linked into a shader input (a
+    GraphLink): an emission of that value, a float as grey ((3,) float64; ShaderGraph::connect
+    adds an Emission of strength 1). An image-driven value counts as its average colour and a
+    node the export cannot compute as no emission, both noted."""
+    label = link.from_node.bl_label
+    f = nodeeval.Evaluator(texture, reasons, np.zeros(3) if texture is _no_image else MISSING_IMAGE).output(link, True)
+    if f is None:
+        reasons.append(f"'{label}' output into a shader input not computed; no emission for it")
+        return np.zeros(3)
+    if f.tex is not None:
+        reasons.append(f"'{label}' output into a shader input as an emission of its average colour")
+        return np.asarray(f.value, np.float64).reshape(-1, 3).mean(axis=0)
+    return np.asarray(f.value, np.float64).reshape(3)
+
+
+def mix_factor(node, reasons, label, surface=True):
+    """A Mix Shader's factor, clamped to [0, 1] as Cycles does: computed through the nodes the
+    export evaluates, on a surface a Fresnel or Layer Weight (a clear coat's blend) as its
+    average over view directions (fresnel.py; not in the world, which has no surface to view);
+    otherwise at its own value."""
+    notes = []
+    fac, ok = constant_value(node.inputs['Fac'], notes if surface else None)
+    reasons.extend(f"{label} factor from {n}" for n in notes)
+    if not ok:
+        reasons.append(f"{label} factor driven by nodes; its own value used")
+    return min(max(fac, 0.0), 1.0)

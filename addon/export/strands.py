@@ -1,0 +1,132 @@
+"""Geometry Cycles renders as curves or spheres, tessellated here into meshes in object space:
+hair particle systems (Render As Path) and Curves objects as tubes (hair.py), point clouds as
+spheres (pointcloud.py), with Cycles' radii. The tessellation is reported once per object.
+Part of the export layer."""
+
+import numpy as np
+
+from .. import hair, pointcloud
+from .errors import ExportCancelled
+from .meshes import MeshArrays
+
+def hair_systems(ob):
+    """ob's particle systems whose hair Cycles renders as strands (Hair, Render As Path)."""
+    return [ps for ps in ob.particle_systems if ps.settings.type == 'HAIR' and ps.settings.render_type == 'PATH']
+
+
+def hair_radius(settings, time):
+    """A hair particle strand's radius at `time` (0 at the root, 1 at the tip, by length), as
+    Cycles' shaperadius: half the Radius Scale times root..tip along the Shape's power curve,
+    0 at the tip with Close Tip."""
+    shape = float(settings.shape)
+    f = 1.0 - time
+    if shape < 0:
+        f = f ** (1.0 + shape)
+    elif shape > 0:
+        f = f ** (1.0 / (1.0 - shape))
+    half = 0.5 * float(settings.radius_scale)
+    root, tip = half * float(settings.root_radius), half * float(settings.tip_radius)
+    r = f * (root - tip) + tip
+    if settings.use_close_tip:
+        r[:, -1] = 0.0
+    return r
+
+
+def point_attribute(data, name, data_type, width):
+    """A point-domain attribute of a point cloud or Curves as float64 (n, width) (width 1:
+    (n,)), or None when it is missing or of another type."""
+    attr = data.attributes.get(name)
+    if attr is None or attr.domain != 'POINT' or attr.data_type != data_type:
+        return None
+    n = len(data.points)
+    out = np.empty(n * width, np.float32)
+    attr.data.foreach_get('vector' if width > 1 else 'value', out)
+    return out.reshape(n, width).astype(np.float64) if width > 1 else out.astype(np.float64)
+
+
+def hair_arrays(ob, notes):
+    """ob's hair as object-space tube arrays (with their material slots), or None. notes: the
+    exporter (its skip, ignore and check_break), as for tessellated."""
+    systems = hair_systems(ob)
+    positions, radii, offsets, slots = [], [], [0], []
+    n_slots = max(len(ob.material_slots), 1)
+    # co_hair gives world space; the tubes are made round in object space and placed by
+    # the object's matrix, as Cycles makes them (on a non-uniformly scaled emitter its
+    # strands are elliptic: measured, a 0.3 y-scale gives 7-12% brighter hair than round
+    # tubes would, which this reproduces)
+    to_world = np.array(ob.matrix_world, np.float64)
+    try:
+        to_object = np.linalg.inv(to_world)
+    except np.linalg.LinAlgError:
+        notes.skip("hair of an object with a singular (zero-scale) transform is not rendered", ob.name)
+        return None
+    for ps in systems:
+        s = ps.settings
+        parents, children = len(ps.particles), len(ps.child_particles)
+        first = parents if (s.child_type != 'NONE' and children) else 0
+        points = (1 << s.render_step) + 1 + (s.kink_extra_steps if s.kink == 'SPIRAL' else 0)
+        co = np.empty((parents + children - first, points, 3))
+        for i, pa in enumerate(range(first, parents + children)):
+            if i % 4096 == 0 and notes.check_break():
+                raise ExportCancelled()
+            for j in range(points):
+                co[i, j] = ps.co_hair(ob, particle_no=pa, step=j)
+        if not len(co):
+            continue
+        seg = np.linalg.norm(np.diff(co, axis=1), axis=2)
+        along = np.concatenate([np.zeros((len(co), 1)), np.cumsum(seg, axis=1)], axis=1)
+        length = along[:, -1:]
+        time = np.divide(along, length, out=np.zeros_like(along), where=length > 0)
+        radius = hair_radius(s, time)
+        positions.append(co.reshape(-1, 3) @ to_object[:3, :3].T + to_object[:3, 3])
+        radii.append(radius.reshape(-1))
+        offsets.extend((offsets[-1] + points * np.arange(1, len(co) + 1)).tolist())
+        slots.append(np.full(len(co), min(max(s.material - 1, 0), n_slots - 1)))
+    if not positions:
+        return None
+    positions, radii = np.concatenate(positions), np.concatenate(radii)
+    curve_slot = np.concatenate(slots)
+    sides, steps = hair.level_for(len(positions))
+    v, t, n, kept = hair.tubes(positions, radii, np.array(offsets), (sides, steps))
+    if not len(t):
+        return None
+    arrays = MeshArrays.from_arrays(v, t, n)
+    # every strand has 2+ points, so hair.tubes keeps them all, in order, each with
+    # (points - 1) x steps x sides x 2 triangles
+    arrays.slot = np.repeat(curve_slot, (np.diff(offsets) - 1) * steps * sides * 2).astype(np.int32)
+    notes.ignore(f"hair particles rendered as tubes of {sides} sides, {steps} step(s) a segment, "
+                 "open ends", ob.name)
+    return arrays
+
+
+def tessellated(ob, notes):
+    """A point cloud's spheres or a Curves object's tubes (pointcloud.py, hair.py) as mesh
+    arrays in object space, or None when nothing in it has a size. Cycles shades all of
+    them with the first material slot; the tessellation is reported once per object through
+    notes.ignore (notes: the exporter)."""
+    data = ob.data
+    if data is None or len(data.points) == 0:
+        return None
+    positions = point_attribute(data, 'position', 'FLOAT_VECTOR', 3)
+    if positions is None:
+        return None
+    if ob.type == 'POINTCLOUD':
+        radii = point_attribute(data, 'radius', 'FLOAT', 1)
+        radii = np.full(len(positions), pointcloud.DEFAULT_RADIUS) if radii is None else radii
+        level = pointcloud.level_for(len(positions))
+        v, t, n, kept = pointcloud.spheres(positions, radii, level)
+        what = f"point clouds rendered as spheres of {len(pointcloud.unit_sphere(level)[1])} triangles"
+        if kept < len(positions):
+            notes.ignore("points of radius 0 or less are not rendered", ob.name)
+    else:
+        radii = point_attribute(data, 'radius', 'FLOAT', 1)
+        radii = np.full(len(positions), hair.DEFAULT_RADIUS) if radii is None else radii
+        offsets = np.empty(len(data.curves) + 1, np.int32)
+        data.curve_offset_data.foreach_get('value', offsets)
+        sides, steps = hair.level_for(len(positions))
+        v, t, n, kept = hair.tubes(positions, radii, offsets, (sides, steps))
+        what = f"hair curves rendered as tubes of {sides} sides, {steps} step(s) a segment, open ends"
+        if kept < len(data.curves):
+            notes.ignore("curves of fewer than 2 points are not rendered", ob.name)
+    notes.ignore(what, ob.name)
+    return MeshArrays.from_arrays(v, t, n) if len(t) else None

@@ -1,0 +1,160 @@
+"""The world the view layer renders with: the Background (or Emission) colour x strength, an
+Environment Texture's equirectangular image (through a Mapping node's rotation, with colour
+nodes after it applied to its texels), Add and Mix Shaders of these, the camera/light split of
+a Light Path's Is Camera Ray, and the world's ray visibility. Other world shaders use the world
+colour, reported. Part of the export layer."""
+
+import bpy
+import numpy as np
+
+from .. import nodeeval
+from .. import scenedata as sd
+from ..mapping import environment_rotation
+from ..nodeeval import constant_color, constant_value
+from ..nodegraph import linked_link, linked_node, output_node
+from .images import MISSING_IMAGE, encoded_environment, image_pixels
+from .shadersockets import mix_factor, value_emission
+
+
+LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')     # of environment maps: blended linearly (reported)
+
+
+def effective_world(scene, view_layer):
+    """The world a view layer renders with, as Cycles: its World Override, else the scene's;
+    None when its Environment filter (use_sky) is off (Cycles: no background shader)."""
+    if view_layer is not None and not getattr(view_layer, 'use_sky', True):
+        return None
+    override = getattr(view_layer, 'world_override', None) if view_layer is not None else None
+    return override if override is not None else scene.world
+
+
+def export_world(scene, view_layer=None, camera=None, by_ray=None):
+    """(uniform background radiance (3,), scenedata.Environment or None, reason string if the
+    world had to be approximated) of the world the view layer renders with (effective_world).
+    An Environment Texture feeding the Background's Color is exported as an image (its Mapping
+    node's rotation included); other inputs use their own value. camera True / False: the world
+    as camera rays / all other rays see it, a Mix Shader whose factor is a Light Path's Is
+    Camera Ray giving 1 / 0 (each such mix appends to the list by_ray); None: its own value."""
+    world = effective_world(scene, view_layer)
+    none = np.zeros(3, np.float32)
+    if world is None:
+        return none, None, ''
+    color = np.array(world.color, np.float32)[:3]
+    ntree = world.node_tree
+    if ntree is None or (bpy.app.version < (5, 0, 0) and not world.use_nodes):
+        return color, None, ''
+    out = output_node(ntree)
+    if out is None:
+        return none, None, ''
+    reasons = []
+    volume = out.inputs.get('Volume')
+    if volume is not None and linked_link(volume) is not None:
+        reasons.append("world volume ignored")      # a world's fog or haze: no volumes here
+    uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, camera,
+                                  by_ray if by_ray is not None else [])
+    return uniform.astype(np.float32), env, '; '.join(dict.fromkeys(reasons))
+
+
+def _is_camera_ray(socket):
+    """Whether a Mix Shader's factor is a Light Path node's Is Camera Ray output."""
+    link = linked_link(socket)
+    return link is not None and link.from_node.type == 'LIGHT_PATH' and link.from_socket.name == 'Is Camera Ray'
+
+
+def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()):
+    """(uniform radiance, Environment or None) of what feeds a world shader socket at
+    `weight`: Background and Emission (the same for the world in Cycles), Add Shader and Mix
+    Shader (constant factor) of them, a colour or value (an emission of it, as Cycles converts
+    it); anything else is the world's viewport colour, with a reason."""
+    none = np.zeros(3, np.float32)
+    link = linked_link(socket)        # muted nodes are passed through (nodegraph)
+    if link is None or weight == 0.0:
+        return none, None
+    if link.from_socket.type != 'SHADER':
+        return value_emission(link, reasons).astype(np.float32) * np.float32(weight), None
+    node = link.from_node
+    t = node.type
+    if depth > 32 or t not in ('BACKGROUND', 'EMISSION', 'ADD_SHADER', 'MIX_SHADER'):
+        reasons.append(f"world surface has {node.bl_label}, not a Background node; world colour used for it")
+        return color * np.float32(weight), None
+    if t in ('ADD_SHADER', 'MIX_SHADER'):
+        if t == 'MIX_SHADER' and camera is not None and _is_camera_ray(node.inputs['Fac']):
+            fac = 1.0 if camera else 0.0      # (the background trick: what the camera sees, and the light)
+            by_ray.append(node.name)
+        else:
+            fac = mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
+        weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
+        first = 0 if t == 'ADD_SHADER' else 1
+        (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1, camera, by_ray)
+                              for i, w in enumerate(weights))
+        if ea is not None and eb is not None:
+            reasons.append("two environment textures in the world; the second ignored")
+        return ua + ub, ea if ea is not None else eb
+    s, s_ok = constant_value(node.inputs['Strength'])
+    if not s_ok:
+        reasons.append(f"world {node.bl_label} Strength driven by nodes; its own value used")
+    tex = linked_node(node.inputs['Color'])
+    if tex is not None and tex.type == 'TEX_ENVIRONMENT':
+        return _environment(tex, np.float32(s * weight), reasons)
+    c, c_ok = constant_color(node.inputs['Color'])
+    if not c_ok:
+        # colour nodes on an Environment Texture (a tint, a Hue/Saturation, a ramp): applied to
+        # the map's texels
+        envs = [n for n in node.id_data.nodes if n.type == 'TEX_ENVIRONMENT' and n.image is not None and not n.mute]
+        if len(envs) == 1:
+            try:
+                chain = nodeeval.compile_image_chain(node.inputs['Color'], True, envs[0].image.as_pointer())
+            except nodeeval.NotCompiled:
+                chain = None
+            if chain is not None:
+                return _environment(envs[0], np.float32(s * weight), reasons, chain)
+        reasons.append(f"world {node.bl_label} Color driven by nodes; its own value used")
+    return np.array(c, np.float32) * np.float32(s * weight), None
+
+
+def world_visibility(world):
+    """The rays that see the world (World > Ray Visibility): VIS_CAMERA | VIS_DIFFUSE bits."""
+    vis = getattr(world, 'cycles_visibility', None)
+    if vis is None:
+        return sd.VIS_CAMERA | sd.VIS_DIFFUSE
+    return (sd.VIS_CAMERA if vis.camera else 0) | (sd.VIS_DIFFUSE if vis.diffuse else 0)
+
+
+def _environment(node, strength, reasons, chain=None):
+    """(uniform radiance, scenedata.Environment or None) of an Environment Texture node; chain:
+    the colour nodes after it (nodeeval.compile_image_chain), applied to its texels."""
+    if not (np.isfinite(strength) and strength >= 0):
+        reasons.append(f"Background Strength {float(strength):g} is negative or not finite; rendered black")
+        return np.zeros(3, np.float32), None
+    img = node.image
+    pixels = None if img is None else image_pixels(img, reasons)
+    if pixels is None:
+        if img is None:
+            reasons.append("Environment Texture without an image (magenta, as Cycles)")
+        return np.array(MISSING_IMAGE, np.float32) * strength, None
+    rgb = pixels[..., :3]
+    bad = ~np.isfinite(rgb)
+    if bad.any():
+        reasons.append(f"image '{img.name}': {int(bad.any(axis=2).sum())} pixel(s) not finite, rendered black")
+        rgb = np.where(bad, 0.0, rgb)
+    if (rgb < 0).any():
+        reasons.append(f"image '{img.name}': negative values rendered as 0")
+        rgb = np.maximum(rgb, 0.0)
+    if chain is not None:
+        px = np.concatenate([rgb, pixels[..., 3:4]], axis=-1).reshape(-1, 4)
+        y = np.asarray(chain(px), np.float64).reshape(rgb.shape)
+        rgb = np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0).astype(np.float32)
+        if encoded_environment(pixels, 'Linear') is not None and node.interpolation != 'Closest':
+            reasons.append(f"colour nodes after environment image '{img.name}' applied to its texels before the blend")
+        pixels = None
+    if node.projection != 'EQUIRECTANGULAR':
+        reasons.append(f"{node.projection.lower().replace('_', ' ')} projection: the image's mean colour used "
+                       "as a uniform world")
+        return rgb.reshape(-1, 3).mean(0).astype(np.float32) * strength, None
+    interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
+    if node.interpolation in LINEAR_INTERPOLATIONS:
+        reasons.append(f"{node.interpolation.lower()} environment interpolation as linear")
+    env = sd.Environment(np.ascontiguousarray(rgb, np.float32), np.full(3, strength, np.float32),
+                         environment_rotation(node, reasons), interp,
+                         encoded=None if pixels is None else encoded_environment(pixels, interp))
+    return np.zeros(3, np.float32), env
