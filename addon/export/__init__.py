@@ -5,8 +5,9 @@
 and evaluated objects, rebuilt per frame, and nothing is kept afterwards.
 
 Geometry: every `depsgraph.object_instances` entry Cycles would render (modifiers, Geometry
-Nodes and collection instances, particle instances); curves, surfaces, text and metaballs via
-the evaluated `to_mesh()`. Arrays come from `foreach_get` into numpy; a mesh shared by many
+Nodes and collection instances, particle instances); curves, surfaces, text and metaballs by
+the evaluated mesh the depsgraph lists for each (as Cycles, whose object_is_geometry reads Mesh
+data only). Arrays come from `foreach_get` into numpy; a mesh shared by many
 instances is read once and transformed for all of its instances in one batch. Each triangle
 carries its object's Shadow Terminator offsets (the geometry offset on smooth meshes only, as
 Cycles applies it).
