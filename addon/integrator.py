@@ -1119,7 +1119,13 @@ class Integrator:
             return None
         if camera:
             if self._any_holdout:                     # holdout: transparent, nothing behind it
-                hit &= (np.take(self.tri.visibility, prim) & HOLDOUT) == 0
+                held = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0)
+                hit &= ~held
+                if path.thr is not None and held.any():
+                    # seen through transparent surfaces: alpha 1 - what passed, as at a miss
+                    # (Cycles adds the throughput reaching a holdout to the transparency)
+                    h = np.flatnonzero(held)
+                    alpha[np.take(path.pid, h)] = 1.0 - np.take(path.thr, h, axis=1).mean(axis=0)
             alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
             if self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
@@ -1653,8 +1659,11 @@ class Integrator:
         at every surface of the chain, before its pass-or-stop pick, Diffuse Color adds
         throughput x the surface's diffuse weight and Mist (1 - mist) x mean(throughput x
         alpha); Normal comes from the first surface whose alpha (1 - mean transparency) reaches
-        the view layer's Pass Alpha Threshold (0: the first surface), and Depth (sample 0) from
-        that surface, or the last one the chain reached before it stopped."""
+        the view layer's Pass Alpha Threshold (0: the first surface), and Depth, Position and
+        the indices (sample 0) from that surface, or the last one the chain reached before it
+        stopped; a path that passed every surface to the background leaves them at the
+        background's values, as in Cycles (0 and 1e10 for Depth; before, they described the
+        last surface passed)."""
         n, want = len(pix), self.film.passes
         threshold = float(getattr(self.settings, 'pass_alpha_threshold', 0.5))
         normal, diff, uv = np.zeros((3, n), F32), np.zeros((3, n), F32), np.zeros((3, n), F32)
@@ -1716,6 +1725,8 @@ class Integrator:
             denoise.finish(data)
         data.update(aovs)
         self._world_aov(data, path, hits, done)
+        missed = np.take(path.pid, np.flatnonzero(~hit))
+        first_prim[missed[~done[missed]]] = -1       # passed every surface below the threshold
         seen = np.flatnonzero(first_prim >= 0)
         self._write_first(pix, samp, seen, first_prim[seen], first_P[:, seen])
 
