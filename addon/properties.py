@@ -41,13 +41,15 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
         description="If non-zero, the most one sample of direct light (emission seen by the camera, "
                     "light at the first surface) may add, as the mean of its R, G and B; brighter "
                     "samples are scaled down, as Cycles clamps them, cutting fireflies at the cost "
-                    "of accuracy",
+                    "of accuracy. With several lights the clamped image depends on how lights are "
+                    "picked, which differs from Cycles' light tree",
         default=0.0, min=0.0, max=1e8, soft_max=1000.0)
     sample_clamp_indirect: FloatProperty(
         name="Clamp Indirect",
         description="If non-zero, the most one sample of indirect light (light after the first "
                     "bounce) may add, as the mean of its R, G and B, as Cycles clamps it; 0 turns it "
-                    "off",
+                    "off. Strong clamps of several lights differ from Cycles' (lights are picked "
+                    "otherwise)",
         default=10.0, min=0.0, max=1e8, soft_max=1000.0)
     film_exposure: FloatProperty(
         name="Exposure",

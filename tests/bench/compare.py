@@ -109,6 +109,7 @@ def run(args) -> int:
     spec = scene_spec(args.scene, args.bounces, args.materials)
     out = args.out or OUT / "compare" / spec.name
     out.mkdir(parents=True, exist_ok=True)
+    OUT.mkdir(parents=True, exist_ok=True)     # (with --out elsewhere, OUT may not exist yet)
     work = Path(tempfile.mkdtemp(prefix="compare-", dir=OUT))
     progress = Progress(3)
     other_seed = args.seed + 1
