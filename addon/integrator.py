@@ -11,9 +11,9 @@ at vertices 0..K, and the last BSDF ray only collects emission (reference blende
 Each contribution is clamped as Cycles' Light Paths > Clamping does (direct light: what camera
 rays and vertex 0 gather), and Cycles' shadow terminator offsets are rendered (next_event).
 
-Also owns the per-frame surface data the loop reads (triangle table, materials and textures,
-self-intersection: every bounce and shadow ray skips the triangle it leaves and starts a few
-ULPs off it, see _OFFSET_ULPS) and the tracer scenes, one per distinct ray-visibility subset
+Also owns, built from the per-frame surface tables (surfacetables.py: triangles, materials and
+textures, self-intersection: every bounce and shadow ray skips the triangle it leaves and starts
+a few ULPs off it, see _OFFSET_ULPS there), the tracer scenes, one per distinct ray-visibility subset
 (camera rays see VIS_CAMERA triangles, bounce rays VIS_DIFFUSE, shadow rays VIS_SHADOW), built
 in the constructor and dropped when rendering ends. Nothing here knows Blender.
 
@@ -42,29 +42,33 @@ noise unchanged.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 import dacrt
 
 from . import cryptomatte
-from .camera import CameraModel
-from .cryptomatte import KINDS as CRYPTO_KINDS
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
+from .camera import CameraModel
+from .cryptomatte import KINDS as CRYPTO_KINDS
+from .denoise import DenoiseFeatures
 from .film import LIGHT_PASSES, Film
-from .passes import AOV_CHANNELS, AOV_PREFIX
-from .passes import CHANNELS as PASS_CHANNELS
-from .passes import DENOISE as DENOISE_PASSES
-from .passes import FIRST_SAMPLE, LIGHTGROUP_PREFIX
 from .filter import PixelFilter
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .lights.base import RECORD_FIELDS
 from .lights.linking import LightLinking, reached
+from .passes import AOV_CHANNELS, AOV_PREFIX
+from .passes import CHANNELS as PASS_CHANNELS
+from .passes import DENOISE as DENOISE_PASSES
+from .passes import FIRST_SAMPLE
+from .pathstate import Paths, Sinks, compact
 from .sampling import RandomStream, max3
+from .sceneprep import recentred, validate
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
-from .texture import EncodedTexels, UdimTiles, lookup_texels, texture_lookup
+from .surfacetables import Materials, Triangles
+from .texture import texture_lookup
 
 F32 = np.float32
 
@@ -125,19 +129,6 @@ _SPATIAL_ORDER_PATHS_PER_TRIANGLE = 2
 # left that a block between two checks would hold fewer paths than this (AdaptiveSampling.step_for).
 _ADAPTIVE_MIN_BATCH = 1 << 19
 
-# Self-intersection (reference dacrt-anchors.md section 4). As Cycles, a bounce or shadow ray
-# never hits the triangle it leaves: the tracer skips it (`skip`, by ray id). What skip cannot
-# cover is a NEIGHBOUR across an edge or vertex at the hit point: a float32 ray/triangle test errs
-# by a few ULPs of the coordinates involved, and a point on a huge triangle (a 2 km ground plane)
-# can lie far closer to the origin than the shared edge's vertices, so the ULPs that matter are
-# those of the triangle's largest coordinate, not the point's. The origin therefore moves
-# _OFFSET_ULPS of those ULPs along the geometric normal: the Ray Tracing Gems ch. 6 integer-ULP
-# offset, evaluated at the triangle's scale, with 8 instead of RTG's 256 ULPs since the triangle
-# itself is skipped. (Measured over random tilted, subdivided, huge, tiny and distant planes and
-# convex folds: 2 ULPs already never re-hit a neighbour; 8 is the margin.) A 2 km plane so gets
-# a 0.5 mm step where the previous 256 ULPs gave 1.5 cm (which biased MIS toward nearby lights).
-_OFFSET_ULPS = F32(8.0)
-_TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
 # A shadow ray that must end at an emitter triangle ends at a point pushed off it by the same
 # step, and a little short (dacrt.shading.next_event; the end of a float32 ray drifts by a few
 # ULPs of its length; measured: 2**-17 of the length always sufficed, 2**-18 did not).
@@ -164,289 +155,6 @@ class _PassCancelled(Exception):
     """Cancel (check_break) polled inside a pass: the pass's samples are not added."""
 
 
-class _Triangles:
-    """Per-triangle arrays the shading code gathers from, one float32 row per quantity."""
-
-    def __init__(self, geometry, messages: list, poll=lambda: None):
-        v = np.asarray(geometry.vertices)
-        t = np.asarray(geometry.triangles)               # any integer type (validated); int32 from export
-        m = len(t)
-        bad_v = None if np.isfinite(v).all() else ~np.isfinite(v).all(axis=1)   # rows only when needed
-        if bad_v is not None:
-            # a NaN vertex would poison the tracer: drop its triangles, park the vertex at 0
-            bad_t = bad_v[t].any(axis=1)
-            messages.append(('WARNING', f"skipped {int(bad_t.sum())} triangle(s) with non-finite vertex "
-                                        f"coordinates ({int(bad_v.sum())} vertices)"))
-            v = np.where(bad_v[:, None], 0.0, v)
-        else:
-            bad_t = np.zeros(m, bool)
-        self.num_nonfinite = int(np.count_nonzero(bad_t))
-        self.vertices = np.ascontiguousarray(v, F32)
-        self.indices = np.ascontiguousarray(t, np.int32)
-        # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), the
-        # self-intersection step off the front side (12:15, see _OFFSET_ULPS); one native pass
-        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, _OFFSET_ULPS, _TINY)
-        poll()
-        # (capped at float32's largest: the light tables and kernels hold areas in float32)
-        self.area = np.minimum(np.where(bad_t, 0.0, area), np.finfo(F32).max)
-        self.material = np.asarray(geometry.material, np.int32)
-        self.visibility = np.where(bad_t, 0, np.asarray(geometry.visibility, np.uint8)).astype(np.uint8)
-        normals = np.asarray(geometry.normals, F32)
-        # flat shading everywhere (corner normals == geometric normal) needs no interpolation
-        flat = not m or dacrt.shading.normals_flat(normals, self.geo, 1e-6)
-        # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
-        poll()
-        self.normals = None if flat else dacrt.shading.corner_rows(normals)
-        poll()
-        self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
-        # rows: corner 0 tangent and sign (0:4), corner 1 - corner 0 (4:8), corner 2 - corner 0
-        # (8:12), for normal maps
-        tangents = getattr(geometry, 'tangents', None)
-        self.tangents = None if tangents is None else dacrt.shading.corner_rows(np.asarray(tangents, F32))
-        # (M, 3, 3) the object-to-world map of each triangle's placement: their tangents are
-        # object-space (tangent_xf, per placement, by the triangle's instance id)
-        xf = getattr(geometry, 'tangent_xf', None)
-        if xf is not None and getattr(geometry, 'instance', None) is None:
-            raise ValueError("geometry.tangent_xf needs geometry.instance (the placement of each triangle)")
-        self.tangent_xf = None if xf is None else np.asarray(xf, F32)
-        self.instance = None if xf is None else np.asarray(geometry.instance, np.int64)
-        # rows: corner 0 colour (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9): the
-        # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors)
-        colors = getattr(geometry, 'colors', None)
-        self.colors = None if colors is None else dacrt.shading.corner_rows(
-            np.nan_to_num(np.maximum(np.asarray(colors, F32), 0.0), posinf=0.0))
-        self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
-            np.asarray(geometry.has_uv, bool)
-        # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
-        # which lifts shadow rays off smooth triangles (none when all are flat), and the
-        # shading offset as Cycles' frequency multiplier 1 / (1 - offset / 2); None: none
-        self.term_cutoff = self.term_freq = None
-        if geometry.terminator is not None and m:
-            t = np.asarray(geometry.terminator, F32)
-            if self.normals is not None and (t[:, 0] > 0).any():
-                self.term_cutoff = np.ascontiguousarray(t[:, 0])
-            if (t[:, 1] > 0).any():
-                self.term_freq = (F32(1.0) / (F32(1.0) - F32(0.5) * t[:, 1])).astype(F32)
-        self.terminator = self.term_cutoff is not None or self.term_freq is not None
-
-    def __len__(self):
-        return len(self.indices)
-
-
-class _Materials:
-    def __init__(self, materials: list):
-        if not materials:
-            raise ValueError("scene has no materials (index 0 must be the default material)")
-        base, emit = [], []
-        self.textures = []          # (material index, texture, interpolation, extension, uv transform)
-        self.emission_textures = []  # the same, of the materials whose emission is an image's
-        self.normal_maps = []       # (index, texture, interpolation, extension, uv transform, strength)
-        for i, mat in enumerate(materials):
-            b = np.asarray(mat.base_color, np.float64)
-            e = np.asarray(mat.emission, np.float64)
-            for label, val in (('base_color', b), ('emission', e)):
-                if val.shape != (3,) or not np.isfinite(val).all() or (val < 0).any():
-                    raise ValueError(f"material {mat.name!r}: {label} must be 3 finite non-negative "
-                                     f"numbers, got {val!r}")
-            base.append(b)
-            emit.append(e)
-            if mat.texture is not None:
-                self.textures.append((i, *_texture_entry(mat.name, 'texture', mat.texture, mat.texture_interpolation,
-                                                         mat.texture_extension, mat.texture_transform)))
-            if getattr(mat, 'normal_texture', None) is not None:
-                strength = float(mat.normal_strength)
-                if not (np.isfinite(strength) and strength >= 0):
-                    raise ValueError(f"material {mat.name!r}: normal_strength must be finite and >= 0, "
-                                     f"got {mat.normal_strength!r}")
-                self.normal_maps.append(
-                    (i, *_texture_entry(mat.name, 'normal map', mat.normal_texture, mat.normal_interpolation,
-                                        mat.normal_extension, mat.normal_transform),
-                     strength, bool(getattr(mat, 'bump_correction', True))))
-            if getattr(mat, 'emission_texture', None) is not None and e.any():
-                self.emission_textures.append(
-                    (i, *_texture_entry(mat.name, 'emission texture', mat.emission_texture, mat.emission_interpolation,
-                                        mat.emission_extension, mat.emission_transform)))
-        self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
-        # materials whose albedo is times the triangles' interpolated Geometry.colors
-        self.colored = np.array([getattr(m, 'color_attribute', None) is not None for m in materials])
-        self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
-        self.emissive = self.emission.max(axis=0) > 0
-        # emitters light sampling may pick (Emission Sampling, scenedata.Material)
-        self.light_sampled = np.array([getattr(m, 'emission_sampling', 'FRONT_BACK') != 'NONE'
-                                       for m in materials], bool)
-        # transparency (3, materials) and the opacity textures (index, texture, interpolation,
-        # extension, uv transform), as scenedata.Material describes them
-        self.transparency = np.zeros((3, len(materials)), F32)
-        self.opacity = []
-        for i, mat in enumerate(materials):
-            if mat.transparency is None:
-                continue
-            t = np.asarray(mat.transparency, np.float64)
-            if t.shape != (3,) or not np.isfinite(t).all() or (t < 0).any():
-                raise ValueError(f"material {mat.name!r}: transparency must be 3 finite non-negative "
-                                 f"numbers, got {t!r}")
-            self.transparency[:, i] = t
-            if mat.opacity is not None:
-                self.opacity.append((i, *_texture_entry(mat.name, 'opacity', mat.opacity, mat.opacity_interpolation,
-                                                        mat.opacity_extension, mat.opacity_transform)))
-        self.transparent = self.transparency.max(axis=0) > 0
-        # images that write AOVs: (AOV name, 'color' | 'value') -> [(material index, texture,
-        # interpolation, extension, uv transform)]
-        self.aov_textures = {}
-        for i, mat in enumerate(materials):
-            for (name, kind), (tex, interp, ext, xf) in (getattr(mat, 'aov_textures', None) or {}).items():
-                self.aov_textures.setdefault((name, kind), []).append(
-                    (i, *_texture_entry(mat.name, f"AOV {name!r} {kind}", tex, interp, ext, xf)))
-        # the Material Index pass's value of each material (Blender's material pass index)
-        self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
-        # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
-        # picks closures by their mean weight): its albedo, or 1 where it only emits
-        self.opaque_weight = np.where(self.emissive, np.maximum(self.base.mean(axis=0), 1.0),
-                                      self.base.mean(axis=0)).astype(F32)
-
-
-def _texture_entry(name, label, texture, interpolation, extension, transform):
-    """(texture as the lookups read it, interpolation, extension, uv transform) of one of a
-    material's images, checked."""
-    modes = _texture_modes(name, label, interpolation, extension, transform)
-    return (_texture_array(name, label, texture, modes[0]), *modes)
-
-
-def _texture_array(name, label, texture, interpolation):
-    """A material's texture as the lookups read it: (h, w, 4) float32, UdimTiles, or the
-    EncodedTexels an image carries (texture.lookup_texels: blended in Cycles' stored encoding)."""
-    texture = lookup_texels(texture, interpolation)
-    if isinstance(texture, EncodedTexels):  # checked when it was made
-        return texture
-    if isinstance(texture, UdimTiles):   # its shapes were checked when it was made
-        return texture.with_texels(np.ascontiguousarray(texture.flat, F32))
-    tex = np.asarray(texture)
-    if tex.ndim != 3 or tex.shape[2] != 4 or tex.shape[0] < 1 or tex.shape[1] < 1:
-        raise ValueError(f"material {name!r}: {label} must be (h, w, 4) or UdimTiles, got {tex.shape}")
-    return np.ascontiguousarray(tex, F32)
-
-
-def _texture_modes(name, label, interpolation, extension, transform):
-    """(interpolation, extension, float32 (2, 3) uv transform or None), checked."""
-    if interpolation not in ('Closest', 'Linear', 'Cubic'):
-        raise ValueError(f"material {name!r}: {label}_interpolation {interpolation!r} is not 'Closest', "
-                         "'Linear' or 'Cubic'")
-    if extension not in ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR'):
-        raise ValueError(f"material {name!r}: {label}_extension {extension!r} is not REPEAT, EXTEND, CLIP or "
-                         "MIRROR")
-    if transform is not None:
-        transform = np.asarray(transform, np.float64)
-        if transform.shape != (2, 3) or not np.isfinite(transform).all():
-            raise ValueError(f"material {name!r}: {label}_transform must be (2, 3) finite, got {transform!r}")
-        transform = transform.astype(F32)
-    return interpolation, extension, transform
-
-
-def recentred(sd: SceneData):
-    """The scene moved so its bounding box is centred on the origin, and that offset (float64),
-    when the scene lies away from the origin (further than its half-extent).
-
-    Shading works in float32 (hit points, self-intersection steps of a few ULPs of the
-    coordinates): a scene a few units across placed 1e5 from the origin would shade on a grid
-    of 2^-7 and step ~6% of its size off surfaces. A translation changes no image, so the
-    render uses coordinates centred on the scene (vertices, camera and lamp positions move;
-    directions do not). The vertices are shifted in float64 before rounding to float32, so
-    input given in float64 keeps its precision."""
-    v = np.asarray(sd.geometry.vertices)
-    if v.ndim != 2 or not len(v):
-        return sd, np.zeros(3)
-    fv = v if np.isfinite(v).all() else v[np.isfinite(v).all(axis=1)]
-    if not len(fv):
-        return sd, np.zeros(3)
-    # per column: min/max over axis 0 of an (N, 3) array is ~10x slower in numpy; exact in
-    # any float type, so only the centre needs float64
-    lo = np.array([fv[:, a].min() for a in range(3)], np.float64)
-    hi = np.array([fv[:, a].max() for a in range(3)], np.float64)
-    origin = 0.5 * (lo + hi)
-    # only worth it when the scene lies off the origin: the largest coordinate then drops from
-    # |centre| + half-extent to half-extent (a scene around the origin keeps its coordinates)
-    if np.abs(origin).max() <= 0.5 * (hi - lo).max():
-        return sd, np.zeros(3)
-
-    def moved(matrix):
-        m = np.array(matrix, np.float64)
-        m[:3, 3] -= origin
-        return m
-
-    geometry = replace(sd.geometry, vertices=(v.astype(np.float64) - origin).astype(F32))
-    camera = replace(sd.camera, matrix=moved(sd.camera.matrix))
-    lights = [replace(light, matrix=moved(light.matrix)) for light in sd.lights]
-    return replace(sd, geometry=geometry, camera=camera, lights=lights), origin
-
-
-def _validate(sd: SceneData):
-    g = sd.geometry
-    m = len(np.asarray(g.triangles))
-    checks = [
-        (np.asarray(g.vertices).ndim == 2 and np.asarray(g.vertices).shape[1] == 3, "geometry.vertices must be (V,3)"),
-        (np.asarray(g.triangles).ndim == 2 and np.asarray(g.triangles).shape[1] == 3, "geometry.triangles must be (M,3)"),
-        (np.issubdtype(np.asarray(g.triangles).dtype, np.integer), "geometry.triangles must be integers"),
-        (np.asarray(g.material).shape == (m,), f"geometry.material must have one entry per triangle ({m})"),
-        (np.asarray(g.normals).shape == (m, 3, 3), f"geometry.normals must be ({m},3,3)"),
-        (np.asarray(g.visibility).shape == (m,), f"geometry.visibility must have one entry per triangle ({m})"),
-        (g.uvs is None or np.asarray(g.uvs).shape == (m, 3, 2), f"geometry.uvs must be None or ({m},3,2)"),
-        (g.terminator is None or np.asarray(g.terminator).shape == (m, 2),
-         f"geometry.terminator must be None or ({m},2)"),
-        (g.has_uv is None or np.asarray(g.has_uv).shape == (m,), f"geometry.has_uv must be None or ({m},)"),
-        (getattr(g, 'tangents', None) is None or np.asarray(g.tangents).shape == (m, 3, 4),
-         f"geometry.tangents must be None or ({m}, 3, 4)"),
-        (getattr(g, 'colors', None) is None or np.asarray(g.colors).shape == (m, 3, 3),
-         f"geometry.colors must be None or ({m}, 3, 3)"),
-    ]
-    for ok, msg in checks:
-        if not ok:
-            raise ValueError(msg)
-    if g.terminator is not None:
-        t = np.asarray(g.terminator, np.float64)
-        if not (np.isfinite(t).all() and (t >= 0).all() and (t <= 1).all()):
-            raise ValueError("geometry.terminator (shadow terminator offsets) must lie in 0..1")
-    nv = len(np.asarray(g.vertices))
-    tri = np.asarray(g.triangles)
-    if m and (tri.min() < 0 or tri.max() >= nv):
-        raise ValueError(f"geometry.triangles index a vertex outside 0..{nv - 1}")
-    mat = np.asarray(g.material)
-    if m and (mat.min() < 0 or mat.max() >= len(sd.materials)):
-        raise ValueError(f"geometry.material indexes a material outside 0..{len(sd.materials) - 1}")
-    w = np.asarray(sd.world, np.float64)
-    if w.shape != (3,) or not np.isfinite(w).all() or (w < 0).any():
-        raise ValueError(f"world must be 3 finite non-negative numbers, got {sd.world!r}")
-    wv = sd.world_visibility
-    if not isinstance(wv, (int, np.integer)) or int(wv) & ~(VIS_CAMERA | VIS_DIFFUSE):
-        raise ValueError(f"world_visibility must be bits of VIS_CAMERA | VIS_DIFFUSE, got {wv!r}")
-    env = sd.environment
-    if env is not None:
-        px, st = np.asarray(env.pixels), np.asarray(env.strength, np.float64)
-        if px.ndim != 3 or px.shape[2] < 3 or px.shape[0] < 1 or px.shape[1] < 1:
-            raise ValueError(f"environment.pixels must be (h, w, 3 or 4) with h, w >= 1, got {px.shape}")
-        if st.shape != (3,) or not np.isfinite(st).all() or (st < 0).any():
-            raise ValueError(f"environment.strength must be 3 finite non-negative numbers, got {env.strength!r}")
-        m = np.asarray(env.to_map, np.float64)
-        if m.shape != (3, 3) or not np.allclose(m @ m.T, np.eye(3), atol=1e-4):
-            raise ValueError(f"environment.to_map must be an orthogonal 3x3 matrix, got {env.to_map!r}")
-        if env.interpolation not in ('Linear', 'Closest'):
-            raise ValueError(f"environment.interpolation must be 'Linear' or 'Closest', got {env.interpolation!r}")
-        if env.encoded is not None and np.shape(env.encoded) != px.shape[:2] + (3,):
-            raise ValueError(f"environment.encoded must be (h, w, 3) as its pixels {px.shape[:2]}, "
-                             f"got {np.shape(env.encoded)}")
-    s = sd.settings
-    if int(s.samples) < 1:
-        raise ValueError(f"settings.samples must be >= 1, got {s.samples!r}")
-    if int(s.max_bounces) < 0:
-        raise ValueError(f"settings.max_bounces must be >= 0, got {s.max_bounces!r}")
-    if int(s.threads) < 0:
-        raise ValueError(f"settings.threads must be >= 0 (0 = all cores), got {s.threads!r}")
-    if not 0 <= int(s.seed) < 2 ** 63:
-        raise ValueError(f"settings.seed must be a non-negative integer, got {s.seed!r}")
-    mist = np.asarray(s.mist, np.float64)
-    if mist.shape != (3,) or not np.isfinite(mist).all() or mist[1] < 0 or mist[2] < 0:
-        raise ValueError(f"settings.mist must be (start, depth >= 0, falloff >= 0), finite, got {s.mist!r}")
-
-
 class Integrator:
     """Renders a SceneData progressively; see the module docstring and `passes()`.
 
@@ -457,7 +165,7 @@ class Integrator:
         t_start = time.perf_counter()
         # set-up of tens of millions of triangles takes seconds: cancel is polled between its steps
         self._check_break = check_break or (lambda: False)
-        _validate(scene_data)
+        validate(scene_data)
         scene_data, self.origin = recentred(scene_data)
         self.messages: list = []
         s = scene_data.settings
@@ -491,9 +199,9 @@ class Integrator:
         # what camera rays' first surfaces write: the data passes, Cryptomatte and the AOVs
         self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES) + kinds \
             + tuple(self._aovs)
-        self.tri = _Triangles(scene_data.geometry, self.messages, self._poll)
+        self.tri = Triangles(scene_data.geometry, self.messages, self._poll)
         self._poll()
-        self.mats = _Materials(scene_data.materials)
+        self.mats = Materials(scene_data.materials)
         # per AOV the images that write to it: (rows they fill, [(material, texture, ...)])
         self._aov_images = {AOV_PREFIX + name: (3 if kind == 'COLOR' else 1,
                                                 self.mats.aov_textures.get((name, kind.lower()), ()))
@@ -1070,15 +778,15 @@ class Integrator:
         del rx, ry, lens
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
         L, alpha = rgba[:3], rgba[3]
-        sinks = _Sinks(L, self._light_passes, self._groups)
+        sinks = Sinks(L, self._light_passes, self._groups)
         data = {}
-        path = _Paths(np.arange(n), keys, O, D, tmax, None, None, None, rays)
+        path = Paths(np.arange(n), keys, O, D, tmax, None, None, None, rays)
         if seen is not None and not seen.all():
             # outside a fisheye's circle: no ray, opaque black (as Cycles, transparent film too)
             alpha[~seen] = 1.0
             pid = np.flatnonzero(seen)
-            keys, O, D, tmax = _compact(pid, keys, O, D, tmax)
-            path = _Paths(pid, keys, O, D, tmax, None, None, None, None)
+            keys, O, D, tmax = compact(pid, keys, O, D, tmax)
+            path = Paths(pid, keys, O, D, tmax, None, None, None, None)
         for k in range(self.max_bounces + 2):
             # a pass of many bounces (a closed bright room, 1024 bounces) can run for a minute:
             # Esc is polled per bounce; the pass is then dropped, the film keeps whole passes
@@ -1178,12 +886,12 @@ class Integrator:
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
             kept = np.flatnonzero(ok)
-            P_off, wi, thr, pid, keys, pdf, prim, ns = _compact(kept, P_off, wi, thr, pid, keys, pdf, prim, ns)
+            P_off, wi, thr, pid, keys, pdf, prim, ns = compact(kept, P_off, wi, thr, pid, keys, pdf, prim, ns)
             tb = None if tb is None else np.take(tb, kept)
             rays = None                                # repacked with the survivors' ids
         if len(pid) == 0:
             return None
-        return _Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb,
+        return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb,
                       N=ns if self.lights.tree is not None else None)
 
     # --- surfaces -------------------------------------------------------------------------------
@@ -1427,7 +1135,7 @@ class Integrator:
             sub = self._intersect(kind, np.ascontiguousarray(P + P - P_off), D, tmax.astype(F32),
                                   np.take(hits['prim'], rows))
             sub['t'] += t0                      # distances from the path vertex, for lamps and MIS
-            seg = _Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
+            seg = Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
                          np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
                          None if path.pdf is None else np.take(path.pdf, rows),
                          None if path.prim is None else np.take(path.prim, rows),
@@ -1557,7 +1265,7 @@ class Integrator:
         if any(p in want for p in DENOISE_PASSES):    # opaque first surfaces: written there
             if 'DenoiseNormal' in want:
                 data['DenoiseNormal'] = np.zeros((3, n), F32)
-                data['DenoiseNormal'][:, cols] = _Denoise.camera_normal(self.camera.rot, ns, albedo.mean(axis=0))
+                data['DenoiseNormal'][:, cols] = DenoiseFeatures.camera_normal(self.camera.rot, ns, albedo.mean(axis=0))
             if 'DenoiseAlbedo' in want:
                 data['DenoiseAlbedo'] = np.zeros((3, n), F32)
                 data['DenoiseAlbedo'][:, cols] = albedo
@@ -1672,7 +1380,7 @@ class Integrator:
         first_prim = np.full(n, -1, np.int64)       # the surface the sample-0 passes describe
         first_P = np.zeros((3, n), F32)
         done = np.zeros(n, bool)                    # Cycles' PATH_RAY_SINGLE_PASS_DONE
-        denoise = _Denoise(self, n) if any(p in want for p in DENOISE_PASSES) else None
+        denoise = DenoiseFeatures(self, n) if any(p in want for p in DENOISE_PASSES) else None
         if denoise is not None:
             denoise.prev[:, path.pid] = path.O      # depth from the ray's origin, then each surface
 
@@ -1885,60 +1593,6 @@ class Integrator:
                 dacrt.shading.accumulate_masked(G, pid, value, contrib & (grp == g), self._clamps[k > 0])
 
 
-class _Denoise:
-    """Cycles' Denoising Data along a camera ray's surfaces (film/denoising_passes.h): the
-    first surface whose diffuse part carries more than a fifth of its closures' sample weight
-    (all but a mostly transparent one) writes the camera-space shading normal (x right, y up, z
-    into the view; 0 where no closure has weight), the diffuse albedo and the distance from the
-    ray's last surface (or origin), all times the features' throughput, the transparency of the
-    surfaces it passed before (not divided by the pass probability, as Cycles keeps it); depth
-    adds up every surface the features reach. Not followed (Cycles does): a path that stops at a
-    mostly transparent surface carries its features on to the next bounce's surface."""
-
-    def __init__(self, integ, n):
-        self.rot = integ.camera.rot.astype(F32)     # camera axes in world space (columns)
-        self.want = integ.film.passes
-        self.normal, self.albedo = np.zeros((3, n), F32), np.zeros((3, n), F32)
-        self.depth = np.zeros(n, F32)
-        self.thr = np.ones((3, n), F32)             # Cycles' denoising_feature_throughput
-        self.prev = np.zeros((3, n), F32)           # where each camera ray's segment began
-        self.done = np.zeros(n, bool)
-
-    @staticmethod
-    def camera_normal(rot, ns, weight):
-        """Shading normals ns (3,k) in Cycles' camera space (x right, y up, z into the view;
-        rot: the camera's world axes as columns), 0 where the closures' weight (k,) is 0."""
-        cam = np.asarray(rot, F32).T @ ns * np.array([[1], [1], [-1]], F32)
-        return np.where(weight > 0, cam, F32(0))
-
-    def surface(self, cols, ns, albedo, P, tau=None):
-        """Surfaces (ns, diffuse albedo, points P; (3,k)) the paths cols reached; tau (3,k)
-        their transparency (None: opaque)."""
-        todo = ~self.done[cols]
-        # depth at every surface the features reach, before deciding (as Cycles writes it)
-        t = np.flatnonzero(todo)
-        seg = np.linalg.norm(P[:, t] - self.prev[:, cols[t]], axis=0)
-        self.depth[cols[t]] += self.thr[:, cols[t]].mean(axis=0) * seg
-        diffuse = albedo.mean(axis=0)
-        total = diffuse if tau is None else diffuse + tau.mean(axis=0)
-        write = todo & ((total == 0) | (4 * diffuse > total))
-        w, c = np.flatnonzero(write), cols[write]
-        if 'DenoiseNormal' in self.want:
-            self.normal[:, c] = self.camera_normal(self.rot, ns[:, w], total[w])
-        self.albedo[:, c] = self.thr[:, c] * albedo[:, w]
-        self.done[c] = True
-        go = np.flatnonzero(todo & ~write)          # mostly transparent: on to the next surface
-        if len(go) and tau is not None:
-            self.thr[:, cols[go]] *= tau[:, go]
-        self.prev[:, cols] = P
-
-    def finish(self, data):
-        for name, values in (('DenoiseNormal', self.normal), ('DenoiseAlbedo', self.albedo),
-                             ('DenoiseDepth', self.depth[None, :])):
-            if name in self.want:
-                data[name] = values
-
-
 def _aov_tables(aovs, shaders) -> dict:
     """{film key 'AOV:<name>': (channels, shaders) float32}: what each shader's AOV Output
     nodes (Material.aovs, or None) write per sample, as Cycles' film/aov_passes.h: a COLOR AOV
@@ -1955,46 +1609,6 @@ def _aov_tables(aovs, shaders) -> dict:
             table[:, j] = (*np.asarray(color, F32)[:3], 1.0) if kind == 'COLOR' else (value,)
         tables[AOV_PREFIX + name] = table
     return tables
-
-
-class _Sinks:
-    """Where a block's light goes: all of it to Combined (L, (3, n)), or with light passes to
-    the pass Cycles files it under, summed into L when the block ends. Camera rays' emitters go
-    to Emit and their world to Env (not summed with transparent film: Cycles keeps it in the
-    pass only); vertex 0's light samples and what its BSDF rays find to DiffDir; all later light
-    to DiffInd (the same split as the direct and indirect clamps)."""
-
-    def __init__(self, L, passes, groups=()):
-        self.L, self.passes = L, passes
-        self.split = bool(passes)
-        self.arrays = {p: np.zeros_like(L) for p in LIGHT_PASSES} if self.split else None
-        # light groups: each group's share of what goes to Combined, besides it
-        self.group_names = tuple(groups)
-        self.groups = [np.zeros_like(L) for _ in self.group_names]
-
-    def found(self, k):
-        """The emitters rays arriving at vertex k find (k = 0: camera rays)."""
-        if not self.split:
-            return self.L
-        return self.arrays['Emit' if k == 0 else 'DiffDir' if k == 1 else 'DiffInd']
-
-    def world(self, k):
-        """The world rays arriving at vertex k find where they miss."""
-        return self.arrays['Env'] if self.split and k == 0 else self.found(k)
-
-    def sampled(self, k):
-        """Light sampled at vertex k."""
-        return self.arrays['DiffDir' if k == 0 else 'DiffInd'] if self.split else self.L
-
-    def finish(self, data, transparent):
-        """L = the sum of the passes; the requested ones and the light groups into data."""
-        data.update((LIGHTGROUP_PREFIX + name, G) for name, G in zip(self.group_names, self.groups))
-        if not self.split:
-            return
-        for name, a in self.arrays.items():
-            if not (name == 'Env' and transparent):
-                self.L += a
-        data.update((name, self.arrays[name]) for name in self.passes)
 
 
 def _unit(v):
@@ -2033,28 +1647,3 @@ def _clamp_limit(name, value):
     return np.inf if v == 0 else 3.0 * v
 
 
-def _compact(idx, *arrays):
-    """The columns idx of per-path arrays ((n,) or (rows, n); None stays None) in one native
-    pass; idx None keeps them all."""
-    if idx is None:
-        return list(arrays)
-    return dacrt.shading.take_columns(idx, *arrays)
-
-
-@dataclass
-class _Paths:
-    """Live paths of one block between bounces (all arrays indexed alike; vectors (3,n))."""
-    pid: np.ndarray      # index into the block's per-path arrays (radiance, alpha, pixel)
-    keys: np.ndarray     # random-number keys (2,n) uint32
-    O: np.ndarray        # ray origins
-    D: np.ndarray        # unit directions
-    tmax: np.ndarray     # ray lengths
-    thr: np.ndarray | None   # throughput (None: 1, camera rays)
-    pdf: np.ndarray | None   # solid-angle pdf of D at the previous vertex (None for camera rays)
-    prim: np.ndarray | None  # triangle the rays leave (global index; None for camera rays)
-    rays: np.ndarray | None = None   # their RAY_DTYPE records when already packed
-    tb: np.ndarray | None = None     # transparent surfaces passed so far (None: none yet)
-    # light sampling's share of the throughput at the next vertex (None: all of it): 1 - p of
-    # a path that stopped at a semi-transparent surface (_through), whose bounce carries 1 / (1 - p)
-    nee: np.ndarray | None = None
-    N: np.ndarray | None = None      # shading normals (3,n) the rays' vertex sampled lights with

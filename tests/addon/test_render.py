@@ -301,10 +301,10 @@ def test_cancel_during_export(scene, monkeypatch, capfd):
 def test_cancel_during_setup_stops_before_tracing(scene, monkeypatch, capfd):
     """Preparing tens of millions of triangles takes seconds: Esc pressed after the export is
     answered between the set-up's steps, before any tracer scene is built or pass traced."""
-    from addon import integrator
+    from addon import integrator, surfacetables
     build_demo_scene(scene, resolution=32, samples=64)
     state = {'setup': False, 'polls': 0, 'scenes': 0}
-    real_tri, real_scene = integrator._Triangles.__init__, integrator.Integrator._tracer_scene
+    real_tri, real_scene = surfacetables.Triangles.__init__, integrator.Integrator._tracer_scene
 
     def tri_init(self, *a, **k):
         state['setup'] = True          # the export is done: Esc from now on
@@ -317,7 +317,7 @@ def test_cancel_during_setup_stops_before_tracing(scene, monkeypatch, capfd):
     def tracer_scene(self, *a, **k):
         state['scenes'] += 1
         return real_scene(self, *a, **k)
-    monkeypatch.setattr(integrator._Triangles, '__init__', tri_init)
+    monkeypatch.setattr(surfacetables.Triangles, '__init__', tri_init)
     monkeypatch.setattr(integrator.Integrator, '_tracer_scene', tracer_scene)
     monkeypatch.setattr(engine_module.DACRTRenderEngine, 'cancel_requested', cancel)
     bpy.ops.render.render()

@@ -1,0 +1,206 @@
+"""The per-frame surface tables the integrator's shading gathers from: `Triangles` (vertex and
+edge rows, unit geometric normals and each triangle's self-intersection step, corner normals,
+UVs, tangents, attribute colours, shadow terminator; non-finite triangles dropped and reported)
+and `Materials` (base colours, emission, transparency, textures checked as the lookups read
+them, AOV images, pass indices). Nothing here knows Blender."""
+
+import numpy as np
+
+import dacrt
+
+from .texture import EncodedTexels, UdimTiles, lookup_texels
+
+F32 = np.float32
+
+
+# Self-intersection (reference dacrt-anchors.md section 4). As Cycles, a bounce or shadow ray
+# never hits the triangle it leaves: the tracer skips it (`skip`, by ray id). What skip cannot
+# cover is a NEIGHBOUR across an edge or vertex at the hit point: a float32 ray/triangle test errs
+# by a few ULPs of the coordinates involved, and a point on a huge triangle (a 2 km ground plane)
+# can lie far closer to the origin than the shared edge's vertices, so the ULPs that matter are
+# those of the triangle's largest coordinate, not the point's. The origin therefore moves
+# _OFFSET_ULPS of those ULPs along the geometric normal: the Ray Tracing Gems ch. 6 integer-ULP
+# offset, evaluated at the triangle's scale, with 8 instead of RTG's 256 ULPs since the triangle
+# itself is skipped. (Measured over random tilted, subdivided, huge, tiny and distant planes and
+# convex folds: 2 ULPs already never re-hit a neighbour; 8 is the margin.) A 2 km plane so gets
+# a 0.5 mm step where the previous 256 ULPs gave 1.5 cm (which biased MIS toward nearby lights).
+_OFFSET_ULPS = F32(8.0)
+_TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
+
+
+class Triangles:
+    """Per-triangle arrays the shading code gathers from, one float32 row per quantity."""
+
+    def __init__(self, geometry, messages: list, poll=lambda: None):
+        v = np.asarray(geometry.vertices)
+        t = np.asarray(geometry.triangles)               # any integer type (validated); int32 from export
+        m = len(t)
+        bad_v = None if np.isfinite(v).all() else ~np.isfinite(v).all(axis=1)   # rows only when needed
+        if bad_v is not None:
+            # a NaN vertex would poison the tracer: drop its triangles, park the vertex at 0
+            bad_t = bad_v[t].any(axis=1)
+            messages.append(('WARNING', f"skipped {int(bad_t.sum())} triangle(s) with non-finite vertex "
+                                        f"coordinates ({int(bad_v.sum())} vertices)"))
+            v = np.where(bad_v[:, None], 0.0, v)
+        else:
+            bad_t = np.zeros(m, bool)
+        self.num_nonfinite = int(np.count_nonzero(bad_t))
+        self.vertices = np.ascontiguousarray(v, F32)
+        self.indices = np.ascontiguousarray(t, np.int32)
+        # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), the
+        # self-intersection step off the front side (12:15, see _OFFSET_ULPS); one native pass
+        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, _OFFSET_ULPS, _TINY)
+        poll()
+        # (capped at float32's largest: the light tables and kernels hold areas in float32)
+        self.area = np.minimum(np.where(bad_t, 0.0, area), np.finfo(F32).max)
+        self.material = np.asarray(geometry.material, np.int32)
+        self.visibility = np.where(bad_t, 0, np.asarray(geometry.visibility, np.uint8)).astype(np.uint8)
+        normals = np.asarray(geometry.normals, F32)
+        # flat shading everywhere (corner normals == geometric normal) needs no interpolation
+        flat = not m or dacrt.shading.normals_flat(normals, self.geo, 1e-6)
+        # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
+        poll()
+        self.normals = None if flat else dacrt.shading.corner_rows(normals)
+        poll()
+        self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
+        # rows: corner 0 tangent and sign (0:4), corner 1 - corner 0 (4:8), corner 2 - corner 0
+        # (8:12), for normal maps
+        tangents = getattr(geometry, 'tangents', None)
+        self.tangents = None if tangents is None else dacrt.shading.corner_rows(np.asarray(tangents, F32))
+        # (M, 3, 3) the object-to-world map of each triangle's placement: their tangents are
+        # object-space (tangent_xf, per placement, by the triangle's instance id)
+        xf = getattr(geometry, 'tangent_xf', None)
+        if xf is not None and getattr(geometry, 'instance', None) is None:
+            raise ValueError("geometry.tangent_xf needs geometry.instance (the placement of each triangle)")
+        self.tangent_xf = None if xf is None else np.asarray(xf, F32)
+        self.instance = None if xf is None else np.asarray(geometry.instance, np.int64)
+        # rows: corner 0 colour (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9): the
+        # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors)
+        colors = getattr(geometry, 'colors', None)
+        self.colors = None if colors is None else dacrt.shading.corner_rows(
+            np.nan_to_num(np.maximum(np.asarray(colors, F32), 0.0), posinf=0.0))
+        self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
+            np.asarray(geometry.has_uv, bool)
+        # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
+        # which lifts shadow rays off smooth triangles (none when all are flat), and the
+        # shading offset as Cycles' frequency multiplier 1 / (1 - offset / 2); None: none
+        self.term_cutoff = self.term_freq = None
+        if geometry.terminator is not None and m:
+            t = np.asarray(geometry.terminator, F32)
+            if self.normals is not None and (t[:, 0] > 0).any():
+                self.term_cutoff = np.ascontiguousarray(t[:, 0])
+            if (t[:, 1] > 0).any():
+                self.term_freq = (F32(1.0) / (F32(1.0) - F32(0.5) * t[:, 1])).astype(F32)
+        self.terminator = self.term_cutoff is not None or self.term_freq is not None
+
+    def __len__(self):
+        return len(self.indices)
+
+
+class Materials:
+    def __init__(self, materials: list):
+        if not materials:
+            raise ValueError("scene has no materials (index 0 must be the default material)")
+        base, emit = [], []
+        self.textures = []          # (material index, texture, interpolation, extension, uv transform)
+        self.emission_textures = []  # the same, of the materials whose emission is an image's
+        self.normal_maps = []       # (index, texture, interpolation, extension, uv transform, strength)
+        for i, mat in enumerate(materials):
+            b = np.asarray(mat.base_color, np.float64)
+            e = np.asarray(mat.emission, np.float64)
+            for label, val in (('base_color', b), ('emission', e)):
+                if val.shape != (3,) or not np.isfinite(val).all() or (val < 0).any():
+                    raise ValueError(f"material {mat.name!r}: {label} must be 3 finite non-negative "
+                                     f"numbers, got {val!r}")
+            base.append(b)
+            emit.append(e)
+            if mat.texture is not None:
+                self.textures.append((i, *texture_entry(mat.name, 'texture', mat.texture, mat.texture_interpolation,
+                                                         mat.texture_extension, mat.texture_transform)))
+            if getattr(mat, 'normal_texture', None) is not None:
+                strength = float(mat.normal_strength)
+                if not (np.isfinite(strength) and strength >= 0):
+                    raise ValueError(f"material {mat.name!r}: normal_strength must be finite and >= 0, "
+                                     f"got {mat.normal_strength!r}")
+                self.normal_maps.append(
+                    (i, *texture_entry(mat.name, 'normal map', mat.normal_texture, mat.normal_interpolation,
+                                        mat.normal_extension, mat.normal_transform),
+                     strength, bool(getattr(mat, 'bump_correction', True))))
+            if getattr(mat, 'emission_texture', None) is not None and e.any():
+                self.emission_textures.append(
+                    (i, *texture_entry(mat.name, 'emission texture', mat.emission_texture, mat.emission_interpolation,
+                                        mat.emission_extension, mat.emission_transform)))
+        self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
+        # materials whose albedo is times the triangles' interpolated Geometry.colors
+        self.colored = np.array([getattr(m, 'color_attribute', None) is not None for m in materials])
+        self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
+        self.emissive = self.emission.max(axis=0) > 0
+        # emitters light sampling may pick (Emission Sampling, scenedata.Material)
+        self.light_sampled = np.array([getattr(m, 'emission_sampling', 'FRONT_BACK') != 'NONE'
+                                       for m in materials], bool)
+        # transparency (3, materials) and the opacity textures (index, texture, interpolation,
+        # extension, uv transform), as scenedata.Material describes them
+        self.transparency = np.zeros((3, len(materials)), F32)
+        self.opacity = []
+        for i, mat in enumerate(materials):
+            if mat.transparency is None:
+                continue
+            t = np.asarray(mat.transparency, np.float64)
+            if t.shape != (3,) or not np.isfinite(t).all() or (t < 0).any():
+                raise ValueError(f"material {mat.name!r}: transparency must be 3 finite non-negative "
+                                 f"numbers, got {t!r}")
+            self.transparency[:, i] = t
+            if mat.opacity is not None:
+                self.opacity.append((i, *texture_entry(mat.name, 'opacity', mat.opacity, mat.opacity_interpolation,
+                                                        mat.opacity_extension, mat.opacity_transform)))
+        self.transparent = self.transparency.max(axis=0) > 0
+        # images that write AOVs: (AOV name, 'color' | 'value') -> [(material index, texture,
+        # interpolation, extension, uv transform)]
+        self.aov_textures = {}
+        for i, mat in enumerate(materials):
+            for (name, kind), (tex, interp, ext, xf) in (getattr(mat, 'aov_textures', None) or {}).items():
+                self.aov_textures.setdefault((name, kind), []).append(
+                    (i, *texture_entry(mat.name, f"AOV {name!r} {kind}", tex, interp, ext, xf)))
+        # the Material Index pass's value of each material (Blender's material pass index)
+        self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
+        # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
+        # picks closures by their mean weight): its albedo, or 1 where it only emits
+        self.opaque_weight = np.where(self.emissive, np.maximum(self.base.mean(axis=0), 1.0),
+                                      self.base.mean(axis=0)).astype(F32)
+
+
+def texture_entry(name, label, texture, interpolation, extension, transform):
+    """(texture as the lookups read it, interpolation, extension, uv transform) of one of a
+    material's images, checked."""
+    modes = _texture_modes(name, label, interpolation, extension, transform)
+    return (_texture_array(name, label, texture, modes[0]), *modes)
+
+
+def _texture_array(name, label, texture, interpolation):
+    """A material's texture as the lookups read it: (h, w, 4) float32, UdimTiles, or the
+    EncodedTexels an image carries (texture.lookup_texels: blended in Cycles' stored encoding)."""
+    texture = lookup_texels(texture, interpolation)
+    if isinstance(texture, EncodedTexels):  # checked when it was made
+        return texture
+    if isinstance(texture, UdimTiles):   # its shapes were checked when it was made
+        return texture.with_texels(np.ascontiguousarray(texture.flat, F32))
+    tex = np.asarray(texture)
+    if tex.ndim != 3 or tex.shape[2] != 4 or tex.shape[0] < 1 or tex.shape[1] < 1:
+        raise ValueError(f"material {name!r}: {label} must be (h, w, 4) or UdimTiles, got {tex.shape}")
+    return np.ascontiguousarray(tex, F32)
+
+
+def _texture_modes(name, label, interpolation, extension, transform):
+    """(interpolation, extension, float32 (2, 3) uv transform or None), checked."""
+    if interpolation not in ('Closest', 'Linear', 'Cubic'):
+        raise ValueError(f"material {name!r}: {label}_interpolation {interpolation!r} is not 'Closest', "
+                         "'Linear' or 'Cubic'")
+    if extension not in ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR'):
+        raise ValueError(f"material {name!r}: {label}_extension {extension!r} is not REPEAT, EXTEND, CLIP or "
+                         "MIRROR")
+    if transform is not None:
+        transform = np.asarray(transform, np.float64)
+        if transform.shape != (2, 3) or not np.isfinite(transform).all():
+            raise ValueError(f"material {name!r}: {label}_transform must be (2, 3) finite, got {transform!r}")
+        transform = transform.astype(F32)
+    return interpolation, extension, transform
