@@ -27,12 +27,7 @@ GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CUR
 # or metaball object is listed once as itself and once as an instance of its evaluated mesh,
 # and only that mesh is rendered (read both, an emissive text gave 1.06-1.17x Cycles' light)
 SYNCED_TYPES = {'MESH', 'POINTCLOUD', 'CURVES'}
-# what the view layer's Surfaces filter (use_solid) hides, as Cycles syncs no mesh then (hair
-# follows the Hair filter, point clouds stay)
-SURFACE_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
 UNSUPPORTED_TYPES = {'VOLUME': "volume", 'GREASEPENCIL': "Grease Pencil"}
-
-
 CHECK_EVERY = 64                          # instances between cancel checks
 
 
@@ -161,7 +156,9 @@ class Exporter:
                 continue
             if ob.type not in SYNCED_TYPES or not inst.show_self:
                 continue
-            if ob.type in SURFACE_TYPES and not getattr(self.view_layer, 'use_solid', True):
+            # the view layer's Surfaces filter hides meshes (those of curves and text too), as
+            # Cycles syncs none then (hair follows the Hair filter, point clouds stay)
+            if ob.type == 'MESH' and not getattr(self.view_layer, 'use_solid', True):
                 self.skip("surfaces are off in the view layer's filter (Surfaces)", ob.name)
                 continue
             parent = inst.parent if inst.is_instance and inst.parent is not None else ob
