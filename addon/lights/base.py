@@ -118,7 +118,9 @@ class Lamp(ABC):
 
     @property
     def seen_by_camera(self) -> bool:
-        return self.visible_camera and not self.delta
+        """Camera rays see this light: as Cycles, not a light without MIS, which no ray
+        intersects (a point light of MIS off rendered its disc 3.7-4.8x Cycles' image)."""
+        return self.visible_camera and self.use_mis and not self.delta
 
     @property
     def seen_by_bsdf(self) -> bool:

@@ -521,6 +521,10 @@ def test_lights_seen_by_camera():
     assert looking_up(hidden).film.combined()[..., 0].max() == 0.0
     back = light('AREA', 100.0, translation(z=1.0) @ rotation_x(np.pi), size_x=1.0)
     assert looking_up(back).film.combined()[..., 0].max() == 0.0      # one-sided
+    # Cycles intersects no light whose MIS is off: camera rays do not see it either
+    for lamp in (light('AREA', 100.0, translation(z=1.0), size_x=1.0, use_mis=False),
+                 light('POINT', 1000.0, translation(z=2.0), radius=0.5, soft_falloff=False, use_mis=False)):
+        assert looking_up(lamp).film.combined()[..., 0].max() == 0.0
 
 
 def test_light_without_diffuse_visibility_lights_nothing():
