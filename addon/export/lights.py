@@ -8,7 +8,8 @@ import numpy as np
 from .. import scenedata as sd
 from ..lights.area import sheared
 from ..nodeeval import constant_color, constant_value
-from ..nodegraph import linked_node, output_node
+from ..nodegraph import linked_link, output_node
+from .shadersockets import mix_factor, value_emission
 
 
 MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_light)
@@ -100,20 +101,63 @@ def export_light(ob, matrix, messages):
 
 
 def _light_shader_factor(light, name, messages):
-    """The light's node tree (if used) as a constant RGB factor: Emission colour x strength;
-    0 where nothing reaches the output's Surface (unlinked, no output, a muted Emission): as
-    Cycles, which then has no emission for the light."""
+    """The light's node tree (if used) as a constant RGB factor on its colour x power, as Cycles
+    evaluates a light's shader: the emission reaching the output's Surface (Emission colour x
+    strength, Add and Mix Shaders of them, a colour or value linked in as an emission of it);
+    0 where nothing emits (unlinked, no output, a muted Emission, a BSDF: no light in Cycles).
+    What depends on the shading point (textures, a Light Falloff's distance) is read at its
+    own value, with a warning naming the light."""
     if not getattr(light, 'use_nodes', False) or light.node_tree is None:
         return np.ones(3)
     out = output_node(light.node_tree)
-    node = None if out is None else linked_node(out.inputs['Surface'])
-    if node is None:
+    if out is None:
+        return np.zeros(3)
+    reasons = []
+    factor = _light_surface(out.inputs['Surface'], reasons, 0)
+    if reasons:
+        messages.append(('WARNING', f"light '{name}': node tree approximated: {'; '.join(dict.fromkeys(reasons))}"))
+    return factor
+
+
+def _light_surface(socket, reasons, depth):
+    """(3,) emission of what feeds a light's shader socket (see _light_shader_factor)."""
+    link = linked_link(socket)            # muted nodes are passed through (nodegraph)
+    if link is None:
+        return np.zeros(3)
+    if link.from_socket.type != 'SHADER':
+        return value_emission(link, reasons)
+    node = link.from_node
+    if depth > 32:
+        reasons.append("shader graph too deep")
         return np.zeros(3)
     if node.type == 'EMISSION':
-        color, c_ok = constant_color(node.inputs['Color'])
-        strength, s_ok = constant_value(node.inputs['Strength'])
-        if c_ok and s_ok:
-            return np.array(color) * strength
-    messages.append(('WARNING', f"light '{name}': its node tree is not a constant Emission "
-                                "shader; rendered with the light's colour and power only"))
-    return np.ones(3)
+        color, ok = constant_color(node.inputs['Color'])
+        if not ok:
+            reasons.append("Emission colour driven by nodes; its own value used")
+        return np.array(color[:3], np.float64) * _light_strength(node.inputs['Strength'], reasons)
+    if node.type == 'ADD_SHADER':
+        return _light_surface(node.inputs[0], reasons, depth + 1) + _light_surface(node.inputs[1], reasons, depth + 1)
+    if node.type == 'MIX_SHADER':
+        fac = mix_factor(node, reasons, "light Mix Shader", surface=False)
+        return (1.0 - fac) * _light_surface(node.inputs[1], reasons, depth + 1) + \
+            fac * _light_surface(node.inputs[2], reasons, depth + 1)
+    reasons.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")
+    return np.zeros(3)
+
+
+def _light_strength(socket, reasons):
+    """An Emission's strength in a light's shader: a Light Falloff's Quadratic output is its
+    own Strength input (the light's inverse square is the lamp's already, as Cycles computes
+    it); its Linear and Constant outputs and Smooth depend on the distance to the shaded point
+    and are read as Quadratic, reported."""
+    link = linked_link(socket)
+    if link is not None and link.from_node.type == 'LIGHT_FALLOFF':
+        falloff = link.from_node
+        smooth, _ = constant_value(falloff.inputs['Smooth'])
+        if link.from_socket.name != 'Quadratic' or smooth != 0.0:
+            reasons.append(f"Light Falloff {link.from_socket.name} (smooth {smooth:g}) as Quadratic without smoothing")
+        socket = falloff.inputs['Strength']
+    strength, ok = constant_value(socket)
+    if not ok:
+        reasons.append("Emission strength driven by nodes; its own value used")
+    return float(strength)

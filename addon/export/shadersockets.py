@@ -10,7 +10,7 @@ from .images import MISSING_IMAGE
 
 
 def _no_image(node, reasons):
-    reasons.append(f"image '{node.name}' in a world colour chain not read (black)")
+    reasons.append(f"image '{node.name}' in a colour chain into a shader input not read (black)")
     return None
 
 

@@ -1640,6 +1640,55 @@ def test_light_node_tree_and_world_approximation_reported(scene, exported):
     assert np.allclose(exported().lights[0].strength, 0.0)
 
 
+def test_light_node_trees_as_cycles_evaluates_them(scene, exported):
+    """A light's shader is its emission, as Cycles evaluates it: a Mix or Add of Emissions, a
+    colour linked into Surface (an emission of it), a Light Falloff's Quadratic (its own
+    Strength); a BSDF emits nothing. They had rendered at the light's colour and power alone
+    (Mix 0.5x, Add 0.25x, an RGB node 1.1-5x, Light Falloff 0.02x, a Diffuse BSDF full power)."""
+    setup(scene)
+    lamp = scenes.light('POINT', 100.0)
+    lamp.data.use_nodes = True
+    nt = lamp.data.node_tree
+    out = next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT')
+    a = next(n for n in nt.nodes if n.type == 'EMISSION')
+    a.inputs['Color'].default_value, a.inputs['Strength'].default_value = (1.0, 0.5, 0.25, 1.0), 2.0
+    b = nt.nodes.new('ShaderNodeEmission')
+    b.inputs['Color'].default_value, b.inputs['Strength'].default_value = (0.0, 1.0, 1.0, 1.0), 4.0
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = 0.25
+    nt.links.new(a.outputs[0], mix.inputs[1])
+    nt.links.new(b.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+
+    def strength():
+        data = exported()
+        warned = [t for _, t in data.messages if "light 'Point'" in t]
+        return data.lights[0].strength / 100.0, warned
+    s, warned = strength()
+    assert np.allclose(s, 0.75 * np.array([2.0, 1.0, 0.5]) + 0.25 * np.array([0.0, 4.0, 4.0])) and not warned
+    add = nt.nodes.new('ShaderNodeAddShader')
+    nt.links.new(a.outputs[0], add.inputs[0])
+    nt.links.new(b.outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], out.inputs['Surface'])
+    assert np.allclose(strength()[0], [2.0, 5.0, 4.5])
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.2, 0.4, 0.8, 1.0)
+    nt.links.new(rgb.outputs[0], out.inputs['Surface'])
+    assert np.allclose(strength()[0], [0.2, 0.4, 0.8])
+    falloff = nt.nodes.new('ShaderNodeLightFalloff')
+    falloff.inputs['Strength'].default_value = 7.0
+    nt.links.new(falloff.outputs['Quadratic'], a.inputs['Strength'])
+    nt.links.new(a.outputs[0], out.inputs['Surface'])
+    s, warned = strength()
+    assert np.allclose(s, [7.0, 3.5, 1.75]) and not warned
+    nt.links.new(falloff.outputs['Linear'], a.inputs['Strength'])
+    s, warned = strength()
+    assert np.allclose(s, [7.0, 3.5, 1.75]) and any("Light Falloff Linear" in t for t in warned)
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], out.inputs['Surface'])
+    s, warned = strength()
+    assert np.allclose(s, 0.0) and any("emits no light" in t for t in warned)
+
+
 def test_missing_image_is_magenta_like_cycles(scene, exported):
     setup(scene)
     empty_node = _image_material("NoImage", None)
