@@ -291,6 +291,8 @@ class Integrator:
         self._tri_group = np.take(np.array([group.get(n, -1) for n in names] or [-1], np.int64), ob) \
             if self._groups and len(ob) else None
         self._world_group = group.get(getattr(sd, 'world_lightgroup', ''), -1)
+        # Cycles' World > Max Bounces: the environment map's light samples light nothing past it
+        self._world_max_bounces = int(getattr(sd, 'world_max_bounces', 1024))
         self._group_index = group
         camera_world = getattr(sd, 'camera_world', None)
         if world.max() > 0:
@@ -1556,7 +1558,11 @@ class Integrator:
         term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff, t.term_freq, u, v) \
             if t.terminator else None
         textured = self._tri_emit_tex is not None
-        entry = np.empty(len(pid), np.int32) if groups or self._shadow_link is not None or textured else None
+        # past the world's Max Bounces its samples are still chosen but light nothing, as Cycles
+        # rejects them (light_select_reached_max_bounces) while BSDF rays keep their MIS weight
+        dark_world = self.lights.environment is not None and k > self._world_max_bounces
+        entry = np.empty(len(pid), np.int32) if groups or self._shadow_link is not None or textured or dark_world \
+            else None
         point = np.empty((3, len(pid)), F32) if textured else None
         value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
             self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
@@ -1565,6 +1571,10 @@ class Integrator:
             point=point, bump=bump)
         if textured:
             self._textured_samples(value, entry, point)
+        if dark_world:
+            off = np.flatnonzero(entry == self.lights.num_entries - 1)     # (the map is the last entry)
+            value[:, off] = 0.0
+            contrib[off] = False
         self._skipped_shadow += skipped
         if len(send) and self._shadow_link is not None:
             # shadow linking: each set's rays against its own blockers (set 0: every object)

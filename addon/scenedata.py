@@ -281,6 +281,9 @@ class SceneData:
     world_lightgroup: str = ''
     # the world's AOV Output nodes, as Material.aovs: written where camera rays miss
     world_aovs: dict = field(default_factory=dict)
+    # Cycles' World > Settings > Light > Max Bounces: light sampling of the environment map
+    # lights nothing at vertices deeper than this (BSDF rays still find the world)
+    world_max_bounces: int = 1024
 
     def per_object(self, values, fill) -> list:
         """values, one per object (a caller may give fewer), padded with fill(i) up to the

@@ -130,7 +130,8 @@ class Exporter:
                             shadow_links=self.shadow_links,
                             object_lightgroups=self.object_lightgroups,
                             world_lightgroup=getattr(self.world, 'lightgroup', '') if self.world else '',
-                            world_aovs=world_aovs)
+                            world_aovs=world_aovs,
+                            world_max_bounces=int(getattr(getattr(self.world, 'cycles', None), 'max_bounces', 1024)))
 
 
     def _walk_instances(self):

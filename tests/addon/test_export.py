@@ -2256,3 +2256,11 @@ def test_image_times_colour_attribute_either_way(scene, exported, tmp_path):
         assert m.approximated == '' and m.color_attribute == 'Col' and stored_texels(m.texture) is not None
         assert np.allclose(m.base_color, 1.0)
         assert np.allclose(data.geometry.colors[of_object(data, f"Order{i}")], (0.25, 1.0, 0.5), atol=1e-6)
+
+
+def test_world_max_bounces_exported(scene, exported):
+    setup(scene)
+    w = scenes.world((0.2, 0.2, 0.2), 1.0)
+    assert exported().world_max_bounces == 1024         # Blender's default: no limit
+    w.cycles.max_bounces = 3
+    assert exported().world_max_bounces == 3

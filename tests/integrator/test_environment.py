@@ -12,7 +12,7 @@ import pytest
 from addon import scenedata as sd
 from addon.lights.environment import EnvironmentLight
 
-from .scenes import pixel_stats, plane_scene, render
+from .scenes import ALL_VIS, geometry, pixel_stats, plane_scene, quad, render
 
 F32 = np.float32
 
@@ -324,3 +324,25 @@ def test_bad_environment_in_scene_data_is_named():
     scene = env_plane(np.where(np.arange(16)[None, :, None] == 3, np.nan, good).astype(F32), samples=1)
     with pytest.raises(ValueError, match="not finite"):
         Integrator(scene)
+
+
+def test_world_max_bounces_darkens_the_maps_later_light_samples():
+    """Cycles' World > Max Bounces: past it the map's light samples light nothing (BSDF rays
+    still find it, MIS-weighted, as Cycles keeps them): a floor beside a wall lit by a sky,
+    one bounce. A limit of 1 leaves the image bit for bit; 0 drops the wall's sampled light
+    from what the floor receives, and the floor gets darker."""
+    px = sky_map()
+    wall = (np.array([(0.3, -1e3, 0.0), (0.3, 1e3, 0.0), (0.3, 1e3, 1e3), (0.3, -1e3, 1e3)]),
+            np.array([(0, 2, 1), (0, 3, 2)]))                         # facing -x
+    scene = env_plane(px, albedo=0.5, samples=64)
+    scene.settings.max_bounces = 1
+    scene.geometry = geometry([(*quad((0.0, 0.0, 0.0), 1e3, 1e3), 1, ALL_VIS),
+                               (*wall, 1, sd.VIS_DIFFUSE | sd.VIS_SHADOW)])
+    images = {}
+    for limit in (1024, 1, 0):
+        scene.world_max_bounces = limit
+        images[limit] = render(scene).film.combined()[..., :3]
+    assert np.array_equal(images[1], images[1024])
+    n = images[0][..., 0].size
+    drop = (images[1024] - images[0]).mean(axis=(0, 1))
+    assert np.all(drop > 5 * (images[1024] - images[0]).std(axis=(0, 1)) / np.sqrt(n))
