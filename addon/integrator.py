@@ -463,7 +463,8 @@ class Integrator:
     def _weight_lights(self, probes: int = 32):
         """Let the light choice follow where the camera looks: a probes x probes grid of camera
         rays (jittered by the seed) finds visible points, from which LightSet.reweight judges
-        how narrow each light group looks (how badly BSDF sampling would find it)."""
+        what each light group gives them and how narrow it looks (how badly BSDF sampling would
+        find it)."""
         if self.lights.num_entries < 2 or not len(self.tri):
             return
         x0, y0, x1, y1 = self.camera.region
@@ -477,8 +478,8 @@ class Integrator:
         idx = np.flatnonzero(hits['prim'] >= 0)
         if not len(idx):
             return
-        _, _, _, P_off = self._surface(hits, idx, D)
-        self.lights.reweight(P_off, rng)
+        _, _, ns, P_off = self._surface(hits, idx, D)
+        self.lights.reweight(P_off, rng, N=ns)
         self._selection_table()
 
     def _build_scenes(self):

@@ -144,49 +144,67 @@ class LightSet:
     def __bool__(self):
         return self.num_entries > 0
 
-    def reweight(self, P: np.ndarray, rng: np.random.Generator, uniform_mix: float = 0.2):
-        """Split the selection between the groups by how badly BSDF sampling would find each
-        group from the points P ((3, n) float32, e.g. where camera rays land): a sample's
-        weight is 1 - (the light's solid angle) / 2 pi, the solid angle taken as 1 / pdf (0
-        for delta lights). Under MIS a light as wide as the sky is found well by the
-        cosine-weighted bounces, so light samples are better spent on small lights. Mixed
-        with uniform_mix of the uniform split, so every group keeps a share."""
+    def reweight(self, P: np.ndarray, rng: np.random.Generator, uniform_mix: float = 0.2, N=None):
+        """Split the selection between the groups by what each would give the points P ((3, n)
+        float32, e.g. where camera rays land; N: their unit normals, or None) and how badly
+        BSDF sampling would find it there: a group's weight is the mean over one light sample
+        per point of its unshadowed contribution (luminance of radiance / pdf, times the
+        cosine at N, over the pick's probability within the group) times its narrowness (1 -
+        the light's solid angle / 2 pi, the solid angle taken as 1 / pdf; 1 for delta
+        lights). Under MIS a light as wide as the sky is found well by the cosine-weighted
+        bounces, so light samples are better spent on small lights, and a dim lamp beside a
+        bright sky should not take half of them (by narrowness alone a 1 W point light beside
+        an HDRI took half: 4.9x Cycles' noise). Groups that give the points nothing are
+        weighed by narrowness alone when all do. Mixed with uniform_mix of the uniform split,
+        so every group keeps a share."""
         groups = len(self._groups)
         n = P.shape[1]
         if groups < 2 or n == 0:
             return
         u1, u2 = rng.random((2, n), np.float32)
-        narrow = []
+        narrow, gives = [], []
         for kind, entries, within in self._groups:
             if kind == 'lamps':
-                pdf = self.lamps[int(entries[0])].sample(P, u1, u2).pdf
+                s = self.lamps[int(entries[0])].sample(P, u1, u2)
+                wi, value, pdf, pick = s.wi, s.value, s.pdf, np.ones(n)
             elif kind == 'environment':
-                pdf = self.environment.sample_pdf(u1, u2)
+                s = self.environment.sample(P, u1, u2)
+                wi, value, pdf, pick = s.wi, s.value, s.pdf, np.ones(n)
             else:                       # the tree's or the power-weighted pick at each point
                 if kind == 'tree':
-                    which = self.tree.sample(np.ascontiguousarray(P, F32), rng.random(n))[0].astype(np.int64)
+                    which, pick = self.tree.sample(np.ascontiguousarray(P, F32), rng.random(n))
+                    which = which.astype(np.int64)
                 else:
                     which = self.num_lamps + np.minimum(np.searchsorted(np.cumsum(within), rng.random(n)),
                                                         len(within) - 1)
-                pdf = self._entry_pdf(P, which, u1, u2)
+                    pick = within[which - self.num_lamps]
+                wi, value, pdf = self._entry_samples(P, which, u1, u2)
             narrow.append(self._narrowness(pdf))
-        w = np.asarray(narrow, np.float64)
+            lum = np.nan_to_num(np.asarray(value, np.float64).mean(axis=0), nan=0.0, posinf=0.0)
+            cos = 1.0 if N is None else np.maximum((np.asarray(N, np.float64) * wi).sum(axis=0), 0.0)
+            with np.errstate(divide='ignore', invalid='ignore'):
+                gives.append(float(np.nan_to_num(np.where(pick > 0, lum * cos / pick, 0.0)).mean()))
+        w = np.asarray(narrow, np.float64) * np.asarray(gives)
+        if not (np.isfinite(w).all() and w.sum() > 0):
+            w = np.asarray(narrow, np.float64)
         if not w.sum() > 0:
             return
         self._set_groups((1.0 - uniform_mix) * w / w.sum() + uniform_mix / groups)
 
-    def _entry_pdf(self, P, which, u1, u2):
-        """The solid-angle pdf of one light sample per point P[:, i] of entry which[i] (a lamp or
-        an emissive triangle)."""
-        pdf = np.zeros(P.shape[1], F32)
+    def _entry_samples(self, P, which, u1, u2):
+        """(wi (3, n), value (3, n), solid-angle pdf (n,)) of one light sample per point P[:, i]
+        of entry which[i] (a lamp or an emissive triangle)."""
+        n = P.shape[1]
+        wi, value, pdf = np.zeros((3, n), F32), np.zeros((3, n), F32), np.zeros(n, F32)
         for e in np.unique(which[which < self.num_lamps]):
             at = np.flatnonzero(which == e)
-            pdf[at] = self.lamps[int(e)].sample(P[:, at], u1[at], u2[at]).pdf
+            s = self.lamps[int(e)].sample(P[:, at], u1[at], u2[at])
+            wi[:, at], value[:, at], pdf[at] = s.wi, s.value, s.pdf
         tri = np.flatnonzero(which >= self.num_lamps)
         if len(tri):
-            pdf[tri] = self.triangles.sample(np.ascontiguousarray(P[:, tri]), which[tri] - self.num_lamps,
-                                             u1[tri], u2[tri]).pdf
-        return pdf
+            s = self.triangles.sample(np.ascontiguousarray(P[:, tri]), which[tri] - self.num_lamps, u1[tri], u2[tri])
+            wi[:, tri], value[:, tri], pdf[tri] = s.wi, s.value, s.pdf
+        return wi, value, pdf
 
     @staticmethod
     def _narrowness(pdf) -> float:

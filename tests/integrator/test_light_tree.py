@@ -68,18 +68,19 @@ def test_area_lamps_and_emitters_agree_with_the_global_choice():
         assert abs(a - b) < 4 * np.hypot(ea, eb) + 1e-4 * b, f"channel {c}: {a} vs {b} (+- {ea}, {eb})"
 
 
-def test_a_point_under_one_of_a_row_of_lights_is_less_noisy():
-    """A street of sixteen lamps 5 m apart, 2 m high, seen under the ninth: the global choice
-    gives each lamp 1/16 of the samples, the tree most of them to the lamps nearby (the one
-    overhead gives 89% of the light). Variance per pixel at 4 samples, measured: tree / global
-    0.044."""
+def test_points_under_a_row_of_lights_are_less_noisy():
+    """A street of sixteen lamps 5 m apart, 2 m high, seen whole from above: the global choice
+    (weighted by what each lamp gives the view on average, LightSet.reweight) cannot favour
+    the lamp overhead, which differs from point to point; the tree gives most samples to the
+    lamps near each point. Noise per pixel at 4 samples (half the mean squared difference of
+    two seeds), measured: tree / global 0.072."""
     row = [light('POINT', 100.0, translation(5.0 * i - 37.5, 0.0, 2.0)) for i in range(16)]
-    scene = lambda tree: plane_scene(row, samples=4, max_bounces=0, use_light_tree=tree,
-                                     camera=ortho_down(width=32, px=32, target=(2.5, 0.0)))
-    tree, flat = render(scene(True)), render(scene(False))
-    assert tree.lights.tree is not None and flat.lights.tree is None
-    var = lambda integ: integ.film.combined()[..., 0].var()     # the view is 1 mm: all of it is noise
-    assert var(tree) < 0.3 * var(flat), (var(tree), var(flat))
+
+    def noise(tree):
+        a, b = (render(plane_scene(row, samples=4, max_bounces=0, use_light_tree=tree, seed=seed,
+                                   camera=ortho_down(width=80, px=64))).film.combined()[..., 0] for seed in (1, 2))
+        return ((a - b) ** 2).mean() / 2
+    assert noise(True) < 0.3 * noise(False)
 
 
 def _spot(rng, radius=0.0):

@@ -637,7 +637,8 @@ def test_shadow_linking_traces_against_the_emitters_blockers_only():
     from .scenes import geometry, quad, ALL_VIS
     floor = quad((0.0, 0.0, 0.0), 100.0, 100.0)
     plate = quad((-0.00025, 0.0, 0.1), 0.00025, 1.0)           # over the left half, z = 0.1
-    suns = [light('SUN', 3.0, np.eye(4), name='Sun'), light('SUN', 1.0, np.eye(4), name='Other')]
+    # (equal suns: an even light choice makes every pixel's split of samples exact)
+    suns = [light('SUN', 2.0, np.eye(4), name='Sun'), light('SUN', 2.0, np.eye(4), name='Other')]
 
     def image(with_plate, links):
         scene = plane_scene(suns, samples=4, max_bounces=0)
@@ -652,5 +653,5 @@ def test_shadow_linking_traces_against_the_emitters_blockers_only():
     assert shadowed[:, :3].max() < 1e-6 and np.allclose(shadowed[:, 5:], bare[:, 5:])
     for spec in ((frozenset(), frozenset({'Plate'})), (frozenset({'Floor'}), frozenset())):
         only_other = image(True, {'Sun': spec})      # the plate still blocks 'Other'
-        assert np.allclose(only_other[:, :3], bare[:, :3] * 3.0 / 4.0, rtol=1e-5)
+        assert np.allclose(only_other[:, :3], bare[:, :3] / 2.0, rtol=1e-5)
         assert np.allclose(only_other[:, 5:], bare[:, 5:])
