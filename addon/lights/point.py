@@ -12,7 +12,11 @@ direction runs from the sampled point on the light (or along the ray that meets 
 centre, so the cone edge softens with the light's radius. No cone normalisation: on axis a spot equals a
 point light of the same power. Within the radius, as in Cycles: the sphere is seen in every
 direction (sampled uniformly over the sphere of directions, pdf 1/(4 pi), a ray meets its far
-side), and the soft-falloff disk still faces the point.
+side), and the soft-falloff disk still faces the point. One difference is Cycles' own: a
+sphere spot (soft falloff off) lighting surfaces inside its radius renders 1.04-1.41x Cycles'
+image with MIS on (a floor 0.2-0.5 m under a 1 m spot), and the same as Cycles with MIS off;
+measured, the gap grows away from the centre, as if Cycles' BSDF rays missed the spot from
+inside while its MIS weights still counted them. This image is the consistent one.
 """
 from __future__ import annotations
 
