@@ -40,6 +40,11 @@ def export_light(ob, matrix, messages):
     if not np.isfinite(strength).all():
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
         return None
+    if not np.isfinite(np.array(matrix, np.float64)).all():
+        # (a NaN location, rotation or scale: where it is and what it faces are undefined)
+        messages.append(('WARNING', f"light '{ob.name}' has a non-finite transform (location, rotation or "
+                                    "scale); skipped"))
+        return None
     if (strength < 0).any():
         # Cycles subtracts a negative light's contribution; next-event estimation here only
         # adds light, so such a lamp is left out rather than failing the render

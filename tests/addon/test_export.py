@@ -1245,13 +1245,17 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     cone.scale = (1.0, 0.0, 1.0)
     scenes.light('AREA', 100.0, (0, 0, 3), name="Fine", size=0.5)
     scenes.light('SUN', 3.0, name="WideSun", angle=math.pi)     # 180 degrees: float32 pi > pi
+    # a NaN location or rotation: skipped, not a failed render (it was)
+    scenes.light('POINT', 100.0, (float('nan'), 0, 2), name="Lost")
+    scenes.light('AREA', 100.0, (0, 0, 2), name="Spun").rotation_euler = (float('nan'), 0.0, 0.0)
     data = exported()
     assert [l.name for l in data.lights] == ["Beam", "Fine", "WideSun"]
     assert data.lights[0].spread == export.lights.MIN_SPREAD            # Cycles: a beam, not nothing
     assert data.lights[2].angle > math.pi                       # as Blender stores it
     warnings = [t for lvl, t in data.messages if lvl == 'WARNING']
     for name, why in (("NoSize", "zero area"), ("Squashed", "zero area"), ("Negative", "negative strength"),
-                      ("Infinite", "non-finite strength"), ("NoCone", "zero object scale")):
+                      ("Infinite", "non-finite strength"), ("NoCone", "zero object scale"),
+                      ("Lost", "non-finite transform"), ("Spun", "non-finite transform")):
         assert any(f"'{name}'" in t and why in t for t in warnings), (name, warnings)
     lamps = [ls.make_lamp(l) for l in data.lights]              # the integrator takes them
     assert ls.LightSet(lamps, None, 0).num_lamps == 3
