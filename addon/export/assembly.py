@@ -9,6 +9,12 @@ import numpy as np
 from .. import scenedata as sd
 from .errors import ExportCancelled
 
+# The largest world coordinate a vertex may have: half float32's range, so that the edges and
+# the hit points of its triangles stay finite in float32 (a triangle at 2e38 failed the render
+# with an infinite ray origin)
+REACH = float(np.finfo(np.float32).max) / 2
+
+
 class _Out:
     """The frame's geometry arrays, allocated once at their final size and filled in place by
     each mesh batch; triangles some batch drops are removed in one pass at the end."""
@@ -115,8 +121,9 @@ class Assembly:
             v0 += len(places) * len(a.positions)
             t0 += len(places) * len(a.triangles)
         for name, (nvb, ntb) in bad.items():
-            self.messages.append(('WARNING', f"object '{name}': {nvb} vertices with NaN/inf "
-                                             f"coordinates; {ntb} triangles using them skipped"))
+            self.messages.append(('WARNING', f"object '{name}': {nvb} vertices with NaN, infinite or "
+                                             f"out-of-range (beyond +-{REACH:.1e}) coordinates; {ntb} "
+                                             "triangles using them skipped"))
         if degenerate:
             self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
         self.counts['triangles_degenerate'] = degenerate
@@ -195,8 +202,9 @@ class Assembly:
             np.add(a.triangles[None, :, :], (np.arange(k, dtype=np.int32) * nv)[:, None, None],
                    out=tris.reshape(k, nt, 3))
         bad, keep = [], None
-        if not np.isfinite(world).all():
-            finite = np.isfinite(world).all(axis=1)
+        # (NaN fails both comparisons; beyond REACH an edge or a hit point on it overflows float32)
+        if not (world.max(initial=0.0) <= REACH and world.min(initial=0.0) >= -REACH):
+            finite = (np.abs(world) <= REACH).all(axis=1)
             tri_ok = finite[tris].all(axis=1)
             for i, p in enumerate(places):
                 nb = int((~tri_ok[i * nt:(i + 1) * nt]).sum())

@@ -187,6 +187,18 @@ def test_nan_vertices_are_skipped_and_the_rest_renders(scene, tmp_path, capfd):
     assert "Broken" in out and "NaN" in out
 
 
+def test_triangles_beyond_float32s_reach_are_skipped_and_the_rest_renders(scene, tmp_path, capfd):
+    """A triangle of finite coordinates near float32's largest (2e38) has edges and hit points
+    float32 cannot hold: skipped and named (it failed the render with an infinite ray origin)."""
+    lit_plane_scene(scene)
+    scenes.mesh("Huge", [(-2e38, -2e38, 1), (2e38, -2e38, 1), (0, 2e38, 1)], [(0, 1, 2)])
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "huge.exr")))
+    assert np.isfinite(img).all()
+    assert np.allclose(img[..., :3].mean(axis=(0, 1)), np.array([0.2, 0.4, 0.6]) * 3 / math.pi, rtol=1e-3)
+    out = capfd.readouterr().out
+    assert "'Huge'" in out and "out-of-range" in out
+
+
 def test_meshes_without_faces_do_not_stop_the_render(scene, tmp_path):
     """A placeholder from meshes.new() has not even a position attribute, nor has an empty
     metaball's mesh; they add nothing and the rest of the scene renders."""
