@@ -535,12 +535,15 @@ class MaterialBuilder:
         if color.tex is None and strength.tex is None:
             return np.asarray(color.value, np.float64).reshape(3) * float(strength.value.reshape(-1)[0]), None
         link = linked_link(color_socket)
+        # an image with non-finite texels is baked below, where they become 0 (noted): its
+        # average would be NaN, and the emitter lost that colour channel altogether
+        clean = color.tex is None or bool(np.isfinite(color.tex.pixels[..., :3]).all())
         # nodes after an image Cycles keeps encoded that scale its colour per channel (a tint):
         # the image itself times that weight, after the lookup (see _evaluated_closure)
         affine = self._affine_in(color_socket, color.tex) if strength.tex is None and color.tex is not None \
-            and stored_texels(color.tex.pixels) is not None else None
+            and stored_texels(color.tex.pixels) is not None and clean else None
         if strength.tex is None and link is not None and link.from_node.type == 'TEX_IMAGE' \
-                and link.from_socket.name == 'Color':
+                and link.from_socket.name == 'Color' and clean:
             tex = color.tex                 # the image itself, looked up as Cycles stores it
             weight = np.full(3, float(strength.value.reshape(-1)[0]))
         elif isinstance(affine, tuple) and not affine[1].any():
@@ -551,9 +554,10 @@ class MaterialBuilder:
             values = np.asarray(color.value, np.float64) * np.asarray(strength.value, np.float64)
             px = np.empty(src.pixels.shape[:2] + (4,), np.float32)
             px[..., :3] = _nonnegative(np.broadcast_to(values, px.shape[:2] + (3,)).astype(np.float32),
-                                       f"{label} from nodes", reasons)
+                                       f"{label} from nodes" if clean else f"{label} of image '{color.tex.name}'",
+                                       reasons)
             px[..., 3] = 1.0
-            if color.tex is not None and strength.tex is None and color.tex.attribute is None:
+            if color.tex is not None and strength.tex is None and color.tex.attribute is None and clean:
                 # nodes that read the image's colour alone run after its lookup, as Cycles runs
                 # them (see _evaluated_closure); baked into the texels, a Gamma of 2.2 on an
                 # 8-bit screen image emitted 2.3-4.3x Cycles' light

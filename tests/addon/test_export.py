@@ -1472,6 +1472,29 @@ def test_image_driven_emission_is_the_image(scene, exported):
     assert np.allclose(sign.emission, texels.mean(axis=0), rtol=1e-6)
 
 
+def test_emission_image_with_a_nan_texel_keeps_its_channel(scene, exported):
+    """One NaN texel of 4 in an emission image: that texel emits 0 (noted, naming the image)
+    and the rest as usual; the average had been NaN and the emitter lost the whole channel."""
+    setup(scene)
+    img = bpy.data.images.new("Glitch", 2, 2, float_buffer=True)
+    px = np.ones((4, 4))
+    px[1, 0] = np.nan
+    img.pixels[:] = px.ravel()
+    mat, nt, out = scenes._material("Lamp")
+    e = nt.nodes.new('ShaderNodeEmission')
+    e.inputs['Strength'].default_value = 2.0
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    nt.links.new(tex.outputs['Color'], e.inputs['Color'])
+    nt.links.new(e.outputs[0], out.inputs['Surface'])
+    scenes.plane("A", materials=(mat,))
+    m = {m.name: m for m in exported().materials}["Lamp"]
+    assert np.allclose(m.emission, [1.5, 2.0, 2.0])
+    texels = np.asarray(m.emission_texture)[..., :3].reshape(-1, 3)
+    assert np.isfinite(texels).all() and texels[:, 0].tolist().count(0.0) == 1
+    assert "image 'Glitch'" in m.approximated
+
+
 def test_world_volume_is_reported(scene, exported):
     """A world's Volume (fog, haze) is not rendered, and the render says so, as it does for a
     material's; the world's Surface is rendered as before."""
