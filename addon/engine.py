@@ -101,6 +101,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         export_seconds = time.perf_counter() - t0
         self._report_messages(scene_data.messages)
         if self.cancel_requested():
+            self.report({'INFO'}, "DACRT: render cancelled after the scene export")
             return
         self.update_stats("", "DACRT | Preparing")
         # a mono render's integrator is made (and the scene checked) before the result is begun;
@@ -255,7 +256,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
                 parts.append(fmt.format(s[key]))
         # where the rest of the frame went: a scene of many instances can spend most of it here
         parts.append(f"export {export_seconds:.2f} s, set-up {s.get('setup_seconds', 0.0):.2f} s")
-        self.report({'INFO'}, "DACRT: " + ", ".join(parts))
+        # a cancelled render says so: its sample count alone read like a finished render's
+        cancelled = "render cancelled; " if self.cancel_requested() else ""
+        self.report({'INFO'}, "DACRT: " + cancelled + ", ".join(parts))
         skipped = _skipped_text(s.get('skipped'))
         if skipped:
             self.report({'INFO'}, f"DACRT: skipped {skipped}")
