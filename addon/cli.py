@@ -30,10 +30,13 @@ def parse_args(argv):
 
 
 def output_paths(out, blend):
-    """(png, exr) paths: --out with or without an extension, else render/<name>."""
+    """(png, exr) paths: --out with or without an extension, else render/<name>; an --out that
+    is a directory (existing, or ending in a separator) gets <name> inside it."""
+    stem = os.path.splitext(os.path.basename(blend))[0] if blend else "demo"
     if out is None:
-        stem = os.path.splitext(os.path.basename(blend))[0] if blend else "demo"
         out = os.path.join("render", stem)
+    elif not out or out.endswith(("/", os.sep)) or os.path.isdir(out):
+        out = os.path.join(out or ".", stem)
     base, ext = os.path.splitext(out)
     if ext.lower() not in (".png", ".exr") + OTHER_IMAGE_EXTENSIONS:
         base = out                      # no image extension: the name is the base
@@ -46,18 +49,41 @@ OTHER_IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".h
 
 
 def save_render(scene, png, exr):
+    """Write the render result as png and exr; returns the files written (a stereo or
+    multiview render: one per view, Blender's view suffix before the extension)."""
     image = bpy.data.images['Render Result']
     settings = scene.render.image_settings
     saved = (settings.file_format, settings.color_mode, settings.color_depth)
+    written = []
     try:
         for path, fmt, depth in ((png, 'PNG', '8'), (exr, 'OPEN_EXR', '32')):
             os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
             settings.file_format = fmt
             settings.color_mode = 'RGBA'
             settings.color_depth = depth
-            image.save_render(filepath=os.path.abspath(path), scene=scene)
+            try:
+                image.save_render(filepath=os.path.abspath(path), scene=scene)
+                written.append(path)
+            except RuntimeError:
+                # Blender writes each view of a multiview render to its own file and then
+                # raises all the same: those files are the result
+                views = _view_files(scene, path)
+                if not views or not all(os.path.isfile(v) for v in views):
+                    raise
+                written.extend(views)
     finally:
         settings.file_format, settings.color_mode, settings.color_depth = saved
+    return written
+
+
+def _view_files(scene, path):
+    """The files Blender writes for `path` per view of a multiview render (none for mono)."""
+    r = scene.render
+    if not r.use_multiview:
+        return []
+    base, ext = os.path.splitext(path)
+    names = ('left', 'right') if r.views_format == 'STEREO_3D' else None
+    return [base + v.file_suffix + ext for v in r.views if v.use and (names is None or v.name in names)]
 
 
 def render(args):
@@ -70,7 +96,10 @@ def render(args):
     except ImportError as e:          # the native module does not load: say which Python it needs
         raise SystemExit(f"error: {e}")
     if args.blend:
-        bpy.ops.wm.open_mainfile(filepath=os.path.abspath(args.blend))
+        try:
+            bpy.ops.wm.open_mainfile(filepath=os.path.abspath(args.blend))
+        except RuntimeError as e:     # not a .blend, or a damaged one
+            raise SystemExit(f"error: could not open {args.blend}: {e}")
         scene = bpy.context.scene
     else:
         from .demo import build_demo_scene
@@ -78,6 +107,9 @@ def render(args):
         scene = build_demo_scene()
     scene.render.engine = 'DACRT'
     if args.samples is not None:
+        most = type(scene.dacrt).bl_rna.properties['samples'].hard_max
+        if args.samples > most:          # (Blender would clamp it without a word)
+            raise SystemExit(f"error: --samples must be at most {most}")
         scene.dacrt.samples = args.samples
     if args.frame is not None:
         scene.frame_set(args.frame)
@@ -91,10 +123,10 @@ def render(args):
     except RuntimeError as e:     # the engine reported an ERROR: the render failed
         raise SystemExit(f"error: render failed: {e}")
     try:
-        save_render(scene, png, exr)
-    except RuntimeError as e:     # e.g. an unwritable path: Blender's own message
+        written = save_render(scene, png, exr)
+    except (RuntimeError, OSError) as e:     # e.g. an unwritable path: Blender's or the system's message
         raise SystemExit(f"error: could not write the image: {e}")
-    print(f"DACRT: wrote {png} and {exr}")
+    print(f"DACRT: wrote {' and '.join(written)}")
 
 
 def main(argv=None):

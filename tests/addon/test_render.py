@@ -436,6 +436,35 @@ def test_cli_renders_a_blend_file_and_explains_failures(scene, tmp_path):
     assert "Traceback" not in off.stderr and not (tmp_path / "off.png").exists()
 
 
+def test_cli_output_names_and_stereo(scene, tmp_path):
+    """--out as a directory (existing or ending in a separator) writes <name> inside it, not a
+    file beside it or a hidden '.png'; a stereo render writes one file per view and succeeds
+    (it ended in 'could not be saved' after Blender had written them); an absurd sample count
+    or a file that is not a .blend gives a message, not a traceback."""
+    from addon.cli import output_paths
+    d = tmp_path / "outdir"
+    d.mkdir()
+    assert output_paths(str(d), "a/shot.blend") == (str(d / "shot.png"), str(d / "shot.exr"))
+    assert output_paths(str(tmp_path / "new") + os.sep, None)[0] == str(tmp_path / "new" / "demo.png")
+    assert output_paths("", None) == (os.path.join(".", "demo.png"), os.path.join(".", "demo.exr"))
+    assert output_paths(str(tmp_path / "x.jpg"), None) == (str(tmp_path / "x.png"), str(tmp_path / "x.exr"))
+    lit_plane_scene(scene, size=(16, 8))
+    scene.render.use_multiview = True
+    blend = tmp_path / "stereo.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    out = run_cli([str(blend), "--samples", "1", "--out", str(d) + os.sep], tmp_path)
+    assert out.returncode == 0, out.stdout + out.stderr
+    for suffix in ("_L", "_R"):
+        for ext in (".png", ".exr"):
+            assert (d / f"stereo{suffix}{ext}").is_file(), (suffix, ext, out.stdout)
+    many = run_cli([str(blend), "--samples", "99999999999"], tmp_path)
+    assert many.returncode != 0 and "at most" in many.stderr and "Traceback" not in many.stderr
+    fake = tmp_path / "fake.blend"
+    fake.write_text("not a blend file")
+    bad = run_cli([str(fake)], tmp_path)
+    assert bad.returncode != 0 and "could not open" in bad.stderr and "Traceback" not in bad.stderr
+
+
 def test_adaptive_sampling_and_skip_stats_for_scripts(scene, capfd, monkeypatch):
     import addon.integrator
     monkeypatch.setattr(addon.integrator, '_ADAPTIVE_MIN_BATCH', 0)   # a tiny image: Cycles' cadence
