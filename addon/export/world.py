@@ -108,7 +108,10 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
                 chain = None
             if chain is not None:
                 return _environment(envs[0], np.float32(s * weight), reasons, chain)
-        reasons.append(f"world {node.bl_label} Color driven by nodes; its own value used")
+        source = linked_node(node.inputs['Color'])
+        what = f"'{source.bl_label}'" if source is not None else "nodes"
+        reasons.append(f"world {node.bl_label} Color from {what}, which is not evaluated; the socket's own "
+                       f"colour {tuple(round(float(x), 3) for x in c[:3])} used")
     return np.array(c, np.float32) * np.float32(s * weight), None
 
 
