@@ -318,8 +318,11 @@ class Integrator:
             camera_env = EnvironmentLight(camera_world[1]) if camera_world[1] is not None else None
         # a map diffuse rays cannot see lights nothing; camera rays may still see it (not
         # through transparent film)
+        # with light linking, the tree picks each point's light among the sets it is lit by
+        sets = None if self._link is None else (
+            lambda lamp: 0 if isinstance(lamp, BackgroundLight) else self._link.emitter_set(lamp.name), self._tri_set)
         self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None,
-                               use_tree=bool(getattr(self.settings, 'use_light_tree', True)),
+                               use_tree=bool(getattr(self.settings, 'use_light_tree', True)), light_sets=sets,
                                tri_object=ob if sd.geometry.instance is None else sd.geometry.instance,
                                unsampled_emitters=bool((hittable & ~sampled).any()))
         self._camera_env = camera_env if (camera_env is not None and wv & VIS_CAMERA and not self.transparent
@@ -1469,7 +1472,8 @@ class Integrator:
                                           None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
                                           path.O, path.D, thr, path.pdf, path.pid, out, clamp=clamp,
                                           **({} if camera or self._tri_key is None
-                                             else dict(tree=self.lights.tree, tri_key=self._tri_key, N=path.N)))
+                                             else dict(tree=self.lights.tree, tri_key=self._tri_key, N=path.N,
+                                                       receivers=self._linked_receivers(path))))
 
     def _found_clamp(self, k):
         """The clamp of light that rays arriving at vertex k find: direct up to the BSDF rays
@@ -1528,7 +1532,13 @@ class Integrator:
             return {}
         if self._record_key is None:
             return dict(lamp_prob=self._record_prob)
-        return dict(lamp_prob=self._record_prob, tree=self.lights.tree, lamp_key=self._record_key, N=path.N)
+        return dict(lamp_prob=self._record_prob, tree=self.lights.tree, lamp_key=self._record_key, N=path.N,
+                    receivers=self._linked_receivers(path))
+
+    def _linked_receivers(self, path):
+        """With light linking, the receiver masks of the objects BSDF rays leave: the light tree
+        picked their vertex's light among the sets it lights, and their MIS pdf must too."""
+        return None if self._link is None else self._receivers(path.prim)
 
     def _linked(self, lamps, path, thr, camera):
         """(lamp records, throughput) pairs to gather with: per light set of the lamps, the

@@ -67,7 +67,10 @@ class LightSet:
 
     def __init__(self, lamps, triangles: EmissiveTriangles | None, num_triangles: int,
                  environment: EnvironmentLight | None = None, use_tree: bool = True, tri_object=None,
-                 unsampled_emitters: bool = False):
+                 unsampled_emitters: bool = False, light_sets=None):
+        """light_sets: None, or with light linking (lamp -> its light set, (num_triangles,) the
+        light set of each triangle as an emitter): the tree then never picks a light of a set
+        the shading point's object is not lit by."""
         lit = [l for l in lamps if not l.dark]
         # emissive triangles light sampling never picks (Emission Sampling None): BSDF rays
         # still find them
@@ -90,7 +93,9 @@ class LightSet:
         ntri = 0 if self.triangles is None else len(self.triangles)
         self.num_entries = self.num_lamps + ntri + (environment is not None)
         # the light choice's entries: lamps, then emissive triangles, then the environment
-        self.tree, self.tree_entries = build_tree(self.lamps, self.triangles, self.num_lamps, use_tree, tri_object)
+        sets = None if light_sets is None else ([light_sets[0](l) for l in self.lamps], light_sets[1])
+        self.tree, self.tree_entries = build_tree(self.lamps, self.triangles, self.num_lamps, use_tree, tri_object,
+                                                  sets)
         self.tree_member = np.zeros(self.num_entries, bool)     # per entry: a light of the tree
         self.tree_member[self.tree_entries] = True
         self._groups = self._group_table(ntri)

@@ -18,11 +18,12 @@ from .base import F32
 MIN_MEMBERS = 2
 
 
-def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_object=None):
+def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_object=None, sets=None):
     """(tree, member entries) for the light choice's entries: lamps[i] is entry i, emissive
     triangle j (of triangles.index) entry num_lamps + j, grouped by tri_object (per global
     triangle; None: all one object); None, [] below MIN_MEMBERS lights (lamps and emissive
-    objects) or when not enabled (the setting Light Tree off)."""
+    objects) or when not enabled (the setting Light Tree off). sets: None, or light linking's
+    (light set of each lamp, of each global triangle)."""
     rows = [(i, b) for i, b in ((i, lamp.bounds()) for i, lamp in enumerate(lamps)) if b is not None]
     ntri = 0 if triangles is None else len(triangles)
     objects = np.zeros(ntri, np.int64) if tri_object is None or not ntri \
@@ -37,6 +38,7 @@ def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_objec
     energy = [np.asarray([b.energy for _, b in rows], np.float64)]
     keys = [np.asarray([i for i, _ in rows], np.int64)]
     groups = [np.arange(len(rows), dtype=np.int64)]
+    light_set = None if sets is None else [np.asarray([sets[0][i] for i, _ in rows], np.uint8)]
     if ntri:
         g = triangles.geo                       # rows v0, v1 - v0, v2 - v0
         v0, v1, v2 = g[0:3], g[0:3] + g[3:6], g[0:3] + g[6:9]
@@ -49,6 +51,8 @@ def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_objec
         energy.append(np.asarray(triangles.power, np.float64) / (2.0 * np.pi))
         keys.append(num_lamps + np.arange(ntri, dtype=np.int64))
         groups.append(len(rows) + np.unique(objects, return_inverse=True)[1])
+        if light_set is not None:
+            light_set.append(np.asarray(sets[1], np.uint8)[triangles.index])
     energy = np.concatenate(energy)
     keys = np.concatenate(keys)
     # a light too faint for float64 still has to be reachable: its energy floored, not 0; and
@@ -56,5 +60,6 @@ def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_objec
     energy = np.clip(np.nan_to_num(energy, nan=0.0, posinf=1e200), 1e-300, 1e200)
     tree = dacrt.lamps.light_tree(np.concatenate(lo, axis=1), np.concatenate(hi, axis=1),
                                   np.concatenate(axis, axis=1), np.concatenate(cos_o), np.concatenate(cos_e),
-                                  energy, keys.astype(np.int32), np.concatenate(groups).astype(np.int32))
+                                  energy, keys.astype(np.int32), np.concatenate(groups).astype(np.int32),
+                                  None if light_set is None else np.concatenate(light_set))
     return tree, np.sort(keys)

@@ -119,31 +119,45 @@ size_t for_tree_points(const F32Array& P, const py::object& N, F&& f) {
     return n;
 }
 
-py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py::array::c_style> u, py::object N) {
+// Light linking's receiver masks (n,) uint64, or null (none) when `receivers` is None.
+const uint64_t* optional_receivers(const py::object& receivers, size_t n, py::array_t<uint64_t, py::array::c_style>& keep) {
+    if (receivers.is_none()) return nullptr;
+    keep = receivers.cast<py::array_t<uint64_t, py::array::c_style>>();
+    need_shape(keep, 0, n, "receivers");
+    return keep.data();
+}
+
+py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py::array::c_style> u, py::object N,
+                         py::object receivers) {
     const size_t n = P.ndim() == 2 ? size_t(P.shape(1)) : 0;
     need_shape(u, 0, n, "u");
+    py::array_t<uint64_t, py::array::c_style> recv_keep;
+    const uint64_t* r = optional_receivers(receivers, n, recv_keep);
     py::array_t<int32_t> key(n);
     py::array_t<double> prob(n);
     for_tree_points(P, N, [&](size_t i, const float* q, const float* m) {
         double pr;
-        key.mutable_data()[i] = t.sample(q, m, u.data()[i], pr);
+        key.mutable_data()[i] = t.sample(q, m, u.data()[i], pr, r ? r[i] : LightTree::kAllSets);
         prob.mutable_data()[i] = pr;
     });
     return py::make_tuple(key, prob);
 }
 
-py::array_t<double> tree_pdf_py(const LightTree& t, F32Array P, I64Array key, py::object N) {
+py::array_t<double> tree_pdf_py(const LightTree& t, F32Array P, I64Array key, py::object N, py::object receivers) {
     const size_t n = P.ndim() == 2 ? size_t(P.shape(1)) : 0;
     need_shape(key, 0, n, "key");
+    py::array_t<uint64_t, py::array::c_style> recv_keep;
+    const uint64_t* r = optional_receivers(receivers, n, recv_keep);
     py::array_t<double> prob(n);
     for_tree_points(P, N, [&](size_t i, const float* q, const float* m) {
-        prob.mutable_data()[i] = t.pdf(q, m, key.data()[i]);
+        prob.mutable_data()[i] = t.pdf(q, m, key.data()[i], r ? r[i] : LightTree::kAllSets);
     });
     return prob;
 }
 
 std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F32Array cos_o, F32Array cos_e,
-                                     py::array_t<double, py::array::c_style> energy, I32Array key, py::object group) {
+                                     py::array_t<double, py::array::c_style> energy, I32Array key, py::object group,
+                                     py::object set) {
     if (lo.ndim() != 2 || lo.shape(0) != 3) throw py::value_error("lo must have shape (3, m), got " + shape_str(lo));
     const size_t m = size_t(lo.shape(1));
     need_shape(hi, 3, m, "hi");
@@ -159,13 +173,20 @@ std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F3
         need_shape(group_keep, 0, m, "group");
         in.group = group_keep.data();
     }
+    py::array_t<uint8_t, py::array::c_style> set_keep;
+    if (!set.is_none()) {
+        set_keep = set.cast<py::array_t<uint8_t, py::array::c_style>>();
+        need_shape(set_keep, 0, m, "set");
+        in.set = set_keep.data();
+    }
     py::gil_scoped_release nogil;
     return std::make_shared<LightTree>(in);  // it validates: std::invalid_argument is ValueError
 }
 
 void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D, F32Array t_surf,
                     py::array_t<bool, py::array::c_style> miss, py::object thr, py::object pdf_bsdf, I64Array pid,
-                    py::array L, float clamp, py::object tree, py::object lamp_key, py::object normal) {
+                    py::array L, float clamp, py::object tree, py::object lamp_key, py::object normal,
+                    py::object receivers) {
     check_clamp(clamp);
     const LampRecord* rec = lamp_records(records);
     const size_t R = size_t(records.shape(0));
@@ -193,10 +214,12 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const LightTree* lt = tree_keys(tree, lamp_key, R, "lamp_key", key_keep);
     F32Array normal_keep;
     const float* nv = optional_f32(normal, 3, n, "normal", normal_keep);
+    py::array_t<uint64_t, py::array::c_style> recv_keep;
+    const uint64_t* recv = optional_receivers(receivers, n, recv_keep);
     gather_into(L, pid, n, [&](float* out, size_t N) {
         lamp_gather(rec, lamp_list.data(), nl, prob, O.data(), D.data(), t_surf.data(),
                     reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N, clamp, lt,
-                    lt ? key_keep.data() : nullptr, nv);
+                    lt ? key_keep.data() : nullptr, nv, recv);
     });
 }
 
@@ -510,15 +533,17 @@ void register_lamps(py::module_& m) {
     m.def("lamp_gather", &lamp_gather_py, py::arg("records"), py::arg("lamps"), py::arg("lamp_prob"), py::arg("O"),
           py::arg("D"), py::arg("t_surf"), py::arg("miss"), py::arg("thr"), py::arg("pdf_bsdf"), py::arg("pid"),
           py::arg("L"), py::arg("clamp") = std::numeric_limits<float>::infinity(), py::arg("tree") = py::none(),
-          py::arg("lamp_key") = py::none(), py::arg("normal") = py::none());
+          py::arg("lamp_key") = py::none(), py::arg("normal") = py::none(), py::arg("receivers") = py::none());
     py::class_<LightTree, std::shared_ptr<LightTree>>(
         m, "LightTree", "Many-light sampling: a light per point by its estimated contribution (lighttree.h)")
         .def(py::init(&make_tree), py::arg("lo"), py::arg("hi"), py::arg("axis"), py::arg("cos_o"), py::arg("cos_e"),
-             py::arg("energy"), py::arg("key"), py::arg("group") = py::none())
+             py::arg("energy"), py::arg("key"), py::arg("group") = py::none(), py::arg("set") = py::none())
         .def_property_readonly("members", &LightTree::members)
         .def_property_readonly("nodes", &LightTree::nodes)
-        .def("sample", &tree_sample_py, py::arg("P"), py::arg("u"), py::arg("N") = py::none())
-        .def("pdf", &tree_pdf_py, py::arg("P"), py::arg("key"), py::arg("N") = py::none());
+        .def("sample", &tree_sample_py, py::arg("P"), py::arg("u"), py::arg("N") = py::none(),
+             py::arg("receivers") = py::none())
+        .def("pdf", &tree_pdf_py, py::arg("P"), py::arg("key"), py::arg("N") = py::none(),
+             py::arg("receivers") = py::none());
     m.def("next_event", &next_event_py, py::arg("records"), py::arg("cdf"), py::arg("prob"), py::arg("no_mis"),
           py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"), py::arg("P"),
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),

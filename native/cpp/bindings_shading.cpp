@@ -323,7 +323,7 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
                           py::array_t<bool, py::array::c_style> emissive, py::object tri_prob, F32Array area,
                           F32Array geo, F32Array O, F32Array D, py::object thr, py::object pdf, I64Array pid,
                           py::array_t<float, py::array::c_style> L, float clamp, py::object tree,
-                          py::object tri_key, py::object normal) {
+                          py::object tri_key, py::object normal, py::object receivers) {
     check_clamp(clamp);
     const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const Hit* h = records<Hit>(hits, n, "hits");
@@ -355,11 +355,17 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
     const LightTree* lt = tree_keys(tree, tri_key, M, "tri_key", key_keep);
     F32Array normal_keep;
     const float* nv = optional_rows(normal, 3, n, "normal", normal_keep);
+    py::array_t<uint64_t, py::array::c_style> recv_keep;
+    if (!receivers.is_none()) {
+        recv_keep = receivers.cast<py::array_t<uint64_t, py::array::c_style>>();
+        need_len(recv_keep, n, "receivers");
+    }
+    const uint64_t* recv = receivers.is_none() ? nullptr : recv_keep.data();
     py::gil_scoped_release nogil;
     return gather_emission(h, reinterpret_cast<const uint8_t*>(hit.data()), n, emission.data(),
                            reinterpret_cast<const uint8_t*>(emissive.data()), prob, area.data(), geo.data(), M,
                            O.data(), D.data(), t, pd, pid.data(), L.mutable_data(), N, clamp, lt,
-                           lt ? key_keep.data() : nullptr, nv);
+                           lt ? key_keep.data() : nullptr, nv, recv);
 }
 
 py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, py::object rays, py::object lu_obj,
@@ -539,7 +545,7 @@ void register_shading(py::module_& m) {
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("O"), py::arg("D"),
           py::arg("thr"), py::arg("pdf"), py::arg("pid"), py::arg("L"),
           py::arg("clamp") = std::numeric_limits<float>::infinity(), py::arg("tree") = py::none(),
-          py::arg("tri_key") = py::none(), py::arg("normal") = py::none());
+          py::arg("tri_key") = py::none(), py::arg("normal") = py::none(), py::arg("receivers") = py::none());
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
           py::arg("rays"), py::arg("lu") = py::none(), py::arg("lv") = py::none());
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));

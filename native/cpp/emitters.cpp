@@ -39,7 +39,8 @@ size_t sample_triangles(const float* geo, const float* area, size_t M, const int
 size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
                        const float* tri_prob, const float* area, const float* geo, size_t M, const float* O,
                        const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N, float clamp,
-                       const LightTree* tree, const int32_t* tri_key, const float* normal) {
+                       const LightTree* tree, const int32_t* tri_key, const float* normal,
+                       const uint64_t* receivers) {
     std::atomic<size_t> count{0};
     parallel_for(n, [&](size_t b, size_t e) {
         size_t local = 0;
@@ -52,7 +53,8 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
                 const float o[3] = {O[i], O[n + i], O[2 * n + i]}, d[3] = {D[i], D[n + i], D[2 * n + i]};
                 float p_sel = tri_prob[q];
                 if (tree && tri_key && tri_key[q] >= 0)  // as picked from o with the vertex's normal
-                    p_sel = float(double(p_sel) * tree->pdf(o, normal, n, i, tri_key[q]));
+                    p_sel = float(double(p_sel) * tree->pdf(o, normal, n, i, tri_key[q],
+                                                            receivers ? receivers[i] : LightTree::kAllSets));
                 float r = p_sel * triangle_light_pdf(geo, area, M, q, o, d, hits[i].t);
                 r /= pdf[i];
                 r *= r;

@@ -76,6 +76,7 @@ struct Gather {
     const LightTree* tree;
     const int32_t* lamp_key;
     const float* normal;
+    const uint64_t* receivers;
 };
 
 // Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
@@ -92,7 +93,8 @@ __attribute__((always_inline)) inline void gather_one(const Gather& g, const Lam
     if (g.lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
         float p_sel = g.lamp_prob[g.lamps[k]];
         if (key >= 0 && seen)  // as picked from o with the vertex's normal
-            p_sel = float(double(p_sel) * g.tree->pdf(o, g.normal, n, i, key));
+            p_sel = float(double(p_sel) * g.tree->pdf(o, g.normal, n, i, key,
+                                                      g.receivers ? g.receivers[i] : LightTree::kAllSets));
         float r = p_sel * pdf_l / g.pdf_bsdf[i];
         r *= r;
         r += 1.0f;
@@ -152,8 +154,9 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
-                 const int32_t* lamp_key, const float* normal) {
-    const Gather g{rec, lamps, nl, lamp_prob, O, D, t_surf, miss, thr, pdf_bsdf, pid, n, L, N, clamp, tree, lamp_key, normal};
+                 const int32_t* lamp_key, const float* normal, const uint64_t* receivers) {
+    const Gather g{rec,  lamps, nl, lamp_prob, O,     D,        t_surf, miss,   thr,      pdf_bsdf,
+                   pid,  n,     L,  N,         clamp, tree,     lamp_key, normal, receivers};
     if (nl < kLampBVHMin) {
         parallel_for(n, [&](size_t b, size_t e) { gather_range(g, b, e); });
         return;

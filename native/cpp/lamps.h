@@ -70,12 +70,14 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 // is null (camera rays), else the power heuristic 1 / (1 + (lamp_prob[j] pdf_l / pdf_bsdf)^2).
 // With a light tree, a record j with lamp_key[j] >= 0 is that member of it: its selection
 // probability is lamp_prob[j] x the tree's pdf at the ray's origin with normal (3 rows, stride
-// n; null: none), the normal the ray's vertex sampled its light with.
+// n; null: none), the normal the ray's vertex sampled its light with, and with light linking
+// receivers (n; null: none) the receiver mask of that vertex's object (LightTree::pdf).
 // pid must be distinct (threads split by ray).
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree = nullptr,
-                 const int32_t* lamp_key = nullptr, const float* normal = nullptr);
+                 const int32_t* lamp_key = nullptr, const float* normal = nullptr,
+                 const uint64_t* receivers = nullptr);
 
 namespace lampmath {
 

@@ -104,10 +104,16 @@ double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
 // inner node (the sum of its children's, whose tighter bounds see more: a group of spots all
 // aimed away from P, or lights all behind its surface, is 0 even where their merged cone and
 // sphere are not).
-double importance(const LightTreeNode* nodes, size_t at, const float P[3], const float* N) {
+// With light linking (sets: each node's light sets, null: none), what a point lit by the sets
+// in `receivers` cannot reach counts nothing.
+double importance(const LightTreeNode* nodes, size_t at, const float P[3], const float* N,
+                  const uint64_t* sets = nullptr, uint64_t receivers = LightTree::kAllSets) {
     const LightTreeNode& nd = nodes[at];
     if (nd.child < 0) return weigh(nd, P, N);
     const size_t c = size_t(nd.child);
+    if (sets)
+        return ((sets[c] & receivers) ? weigh(nodes[c], P, N) : 0.0) +
+               ((sets[c + 1] & receivers) ? weigh(nodes[c + 1], P, N) : 0.0);
     return weigh(nodes[c], P, N) + weigh(nodes[c + 1], P, N);
 }
 
@@ -118,8 +124,14 @@ double importance(const LightTreeNode* nodes, size_t at, const float P[3], const
 struct Shares {
     double left, right;
 };
-Shares shares(const LightTreeNode* nodes, size_t c, const float P[3], const float* N) {
-    const double a = importance(nodes, c, P, N), b = importance(nodes, c + 1, P, N), s = a + b;
+Shares shares(const LightTreeNode* nodes, size_t c, const float P[3], const float* N,
+              const uint64_t* sets = nullptr, uint64_t receivers = LightTree::kAllSets) {
+    // light linking: a child holding none of the point's sets is never taken (unless neither
+    // does: then the point is lit by no light of this node, and either way gives it nothing)
+    const bool ra = !sets || (sets[c] & receivers), rb = !sets || (sets[c + 1] & receivers);
+    if (ra != rb) return {ra ? 1.0 : 0.0, rb ? 1.0 : 0.0};
+    const double a = importance(nodes, c, P, N, sets, receivers), b = importance(nodes, c + 1, P, N, sets, receivers);
+    const double s = a + b;
     if (s > 0.0 && std::isfinite(s)) {
         const double inv = 1.0 / s;
         return {a * inv, b * inv};
@@ -142,6 +154,7 @@ struct Item {
     double lo[3], hi[3];
     Cone cone;
     double energy;
+    uint64_t sets;  // light linking: its members' light sets (bit s)
 };
 
 Cone member_cone(const LightTreeInput& in, size_t i) {
@@ -314,6 +327,7 @@ std::string light_tree_error(const LightTreeInput& in) {
             return at() + "cos_o and cos_e must lie in [-1, 1]";
         if (!(in.energy[i] > 0.0 && in.energy[i] <= 1e200)) return at() + "energy must be > 0 and at most 1e200";
         if (in.group && in.group[i] < 0) return at() + "group must be >= 0";
+        if (in.set && in.set[i] > 63) return at() + "set must lie in 0..63";
         const int32_t key = in.key[i];
         if (key < 0 || key >= (int32_t(1) << 30)) return at() + "key must lie in 0..2^30-1";
         if (size_t(key) >= seen.size()) seen.resize(size_t(key) + 1, 0);
@@ -346,6 +360,7 @@ LightTree::LightTree(const LightTreeInput& in) {
             items.back().cone = merge(items.back().cone, member_cone(in, i));
         }
         Item& it = items.back();
+        it.sets |= uint64_t(1) << (in.set ? in.set[i] : 0);
         for (int k = 0; k < 3; ++k) {
             it.lo[k] = std::min(it.lo[k], double(in.lo[k * in.m + i]));
             it.hi[k] = std::max(it.hi[k], double(in.hi[k * in.m + i]));
@@ -381,9 +396,17 @@ LightTree::LightTree(const LightTreeInput& in) {
     for (size_t g = 0; g < items.size(); ++g)
         for (int32_t j = item_start_[g]; j < item_start_[g + 1]; ++j)
             leaf_of_key_[size_t(member_key_[size_t(j)])] = leaf_of_item[g];
+    if (in.set) {  // light linking: each node's sets, children (stored after their parent) first
+        sets_.assign(nodes_.size(), 0);
+        for (size_t at = nodes_.size(); at-- > 0;) {
+            const int32_t c = nodes_[at].child;
+            sets_[at] = c < 0 ? items[size_t(-1 - c)].sets : sets_[size_t(c)] | sets_[size_t(c) + 1];
+        }
+    }
 }
 
-int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob) const {
+int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers) const {
+    const uint64_t* sets = sets_.empty() || receivers == kAllSets ? nullptr : sets_.data();
     // u stays as drawn; the node's share of [0, 1) narrows to [lo, lo + w) on the way down
     // (no rescaling of u: one division per level, in shares)
     size_t at = 0;
@@ -391,7 +414,7 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     if (!(u >= 0.0)) u = 0.0;  // (NaN too)
     while (nodes_[at].child >= 0) {
         const size_t c = size_t(nodes_[at].child);
-        const Shares sh = shares(nodes_.data(), c, P, N);
+        const Shares sh = shares(nodes_.data(), c, P, N, sets, receivers);
         const double split = lo + w * sh.left;
         // selected, not branched on: which way a point goes follows no pattern
         const bool right = !(u < split) & (sh.right > 0.0);
@@ -413,23 +436,25 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     return member_key_[size_t(slot)];
 }
 
-double LightTree::pdf(const float P[3], const float* N, int64_t key) const {
+double LightTree::pdf(const float P[3], const float* N, int64_t key, uint64_t receivers) const {
     if (!member(key)) return 0.0;
+    const uint64_t* sets = sets_.empty() || receivers == kAllSets ? nullptr : sets_.data();
     size_t at = size_t(leaf_of_key_[size_t(key)]);
     double p = member_share_[size_t(slot_of_key_[size_t(key)])];
     while (nodes_[at].parent >= 0) {
         const size_t up = size_t(nodes_[at].parent), c = size_t(nodes_[up].child);
-        const Shares sh = shares(nodes_.data(), c, P, N);
+        const Shares sh = shares(nodes_.data(), c, P, N, sets, receivers);
         p *= at == c ? sh.left : sh.right;
         at = up;
     }
     return p;
 }
 
-double LightTree::pdf(const float P[3], const float* normals, size_t n, size_t i, int64_t key) const {
-    if (!normals) return pdf(P, nullptr, key);
+double LightTree::pdf(const float P[3], const float* normals, size_t n, size_t i, int64_t key,
+                      uint64_t receivers) const {
+    if (!normals) return pdf(P, nullptr, key, receivers);
     const float N[3] = {normals[i], normals[n + i], normals[2 * n + i]};
-    return pdf(P, N, key);
+    return pdf(P, N, key, receivers);
 }
 
 }  // namespace dacrt

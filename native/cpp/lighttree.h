@@ -56,6 +56,10 @@ struct LightTreeInput {
     // which a point picks by energy alone: e.g. the triangles of one emissive object, whose
     // per-point split would cost a tree level per halving for little gain
     const int32_t* group = nullptr;
+    // (null: all 0) light linking: each member's light set (0..63; the members of one group
+    // share theirs). A point whose receiver mask (bit s: it is lit by set s) holds none of a
+    // node's sets never goes there, so light samples are not spent on lights it is not lit by.
+    const uint8_t* set = nullptr;
 };
 
 class LightTree {
@@ -71,13 +75,17 @@ public:
     bool member(int64_t key) const {
         return key >= 0 && uint64_t(key) < leaf_of_key_.size() && leaf_of_key_[size_t(key)] >= 0;
     }
+    // Every light set (receiver mask) a point can hold: no light is excluded.
+    static constexpr uint64_t kAllSets = ~uint64_t(0);
     // The key of the light picked at P (receiving normal N, unit; null: none) with the uniform
-    // u in [0, 1), and its probability.
-    int32_t sample(const float P[3], const float* N, double u, double& prob) const;
-    // The probability that sample() at P, N picks key (0 when key is not a member).
-    double pdf(const float P[3], const float* N, int64_t key) const;
+    // u in [0, 1), and its probability, among the lights of the sets in `receivers` (when the
+    // point is lit by none of the tree's, a light of any set, which lights it nothing).
+    int32_t sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers = kAllSets) const;
+    // The probability that sample() at P, N (and receivers) picks key (0 when key is not a member).
+    double pdf(const float P[3], const float* N, int64_t key, uint64_t receivers = kAllSets) const;
     // The same with N column i of normals (3 rows, stride n; null: none).
-    double pdf(const float P[3], const float* normals, size_t n, size_t i, int64_t key) const;
+    double pdf(const float P[3], const float* normals, size_t n, size_t i, int64_t key,
+               uint64_t receivers = kAllSets) const;
 
 private:
     std::vector<LightTreeNode> nodes_;
@@ -87,6 +95,7 @@ private:
     std::vector<double> member_share_;  // slot -> its energy share within its group
     std::vector<int32_t> leaf_of_key_;  // key -> its leaf node, -1: not a member
     std::vector<int32_t> slot_of_key_;  // key -> its slot
+    std::vector<uint64_t> sets_;        // node -> the light sets below it (bit s); empty: unlinked
 };
 
 // Empty when the input can build a tree, else what is wrong with which member.

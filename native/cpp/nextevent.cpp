@@ -44,7 +44,8 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             if (p.pick) {
                 const float Q[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
                 const float N[3] = {p.ns[i], p.ns[n + i], p.ns[2 * n + i]};
-                entry = choose_light(L, Q, N, p.pick[i], p_sel);
+                entry = choose_light(L, Q, N, p.pick[i], p_sel,
+                                     L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets);
             }
             if (entry_out) entry_out[i] = int32_t(entry);
             float wi[3], dist, pdf, value[3], target[3];

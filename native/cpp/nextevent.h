@@ -44,15 +44,17 @@ struct LightChoice {
 };
 
 // The light entry a point at P (the shadow ray's origin, as a BSDF ray's MIS sees it) with
-// shading normal N picks with the uniform u, and its selection probability.
-inline size_t choose_light(const LightChoice& L, const float P[3], const float N[3], double u, float& p_sel) {
+// shading normal N (and, with light linking, the receiver mask of its object) picks with the
+// uniform u, and its selection probability.
+inline size_t choose_light(const LightChoice& L, const float P[3], const float N[3], double u, float& p_sel,
+                           uint64_t receivers = LightTree::kAllSets) {
     size_t e = size_t(std::upper_bound(L.cdf, L.cdf + L.entries, u) - L.cdf);
     e = e < L.entries ? e : L.entries - 1;
     p_sel = L.prob[e];
     if (L.tree && L.tree->member(int64_t(e))) {
         const double lo = e ? L.cdf[e - 1] : 0.0, mass = L.cdf[e] - lo;
         double pt = 0.0;
-        e = size_t(L.tree->sample(P, N, mass > 0 ? (u - lo) / mass : 0.0, pt));
+        e = size_t(L.tree->sample(P, N, mass > 0 ? (u - lo) / mass : 0.0, pt, receivers));
         p_sel = float(double(L.prob[e]) * pt);
     }
     return e;

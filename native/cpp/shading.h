@@ -215,13 +215,14 @@ void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t 
 // sampling of that triangle, 1 / (1 + (tri_prob pdf_light / pdf)^2), pdf_light the solid-angle
 // pdf sample_triangles has at O for that direction; a triangle with tri_key[q] >= 0 is that
 // member of the light tree, its selection probability tri_prob x the tree's pdf at O with
-// normal (3 rows, stride n; null: none), the normal the ray's vertex sampled its light with.
+// normal (3 rows, stride n; null: none), the normal the ray's vertex sampled its light with,
+// and with light linking receivers (n; null: none) the receiver mask of that vertex's object.
 // Returns the number of rays that met emission.
 size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const float* emission, const uint8_t* emissive,
                        const float* tri_prob, const float* area, const float* geo, size_t M, const float* O,
                        const float* D, const float* thr, const float* pdf, const int64_t* pid, float* L, size_t N, float clamp,
                        const LightTree* tree = nullptr, const int32_t* tri_key = nullptr,
-                       const float* normal = nullptr);
+                       const float* normal = nullptr, const uint64_t* receivers = nullptr);
 
 // A camera's frame in float32, as addon/camera.py CameraModel rounds it: orthonormal
 // camera-to-world rotation (columns right, up, back), position, the raster -> viewplane map

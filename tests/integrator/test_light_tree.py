@@ -128,3 +128,66 @@ def test_spot_lights_agree_with_the_global_choice():
         a, ea = pixel_stats(with_tree, c)
         b, eb = pixel_stats(without, c)
         assert abs(a - b) < 4 * np.hypot(ea, eb) + 1e-4 * b, f"channel {c}: {a} vs {b} (+- {ea}, {eb})"
+
+
+def test_light_linking_picks_only_lights_a_point_is_lit_by():
+    """With light sets (light linking), a point whose receiver mask holds only some sets never
+    picks a light of another: the tree's pick and its pdf agree, the pdf sums to 1 over the
+    lights the point can reach and is 0 for the rest; a point lit by no light of the tree still
+    gets a pick (which lights it nothing). Before, every point chose among all lights and most
+    samples of a linked scene were discarded (4.8x Cycles' noise with 8 linked lights)."""
+    import dacrt
+    rng = np.random.default_rng(5)
+    m, n = 24, 400
+    pos = rng.uniform(-5, 5, (3, m)).astype(np.float32)
+    sets = rng.integers(0, 4, m).astype(np.uint8)
+    tree = dacrt.lamps.light_tree(pos, pos, np.tile([[0.0], [0.0], [1.0]], m), np.full(m, -1.0), np.zeros(m),
+                                  rng.uniform(1, 100, m), np.arange(m, dtype=np.int32), set=sets)
+    P = rng.uniform(-6, 6, (3, n)).astype(np.float32)
+    receivers = rng.choice(np.array([0b0001, 0b0110, 0b1000, 0b1111, 0b10000], np.uint64), n)
+    key, prob = tree.sample(P, rng.random(n), receivers=receivers)
+    reach = ((receivers >> sets[key].astype(np.uint64)) & np.uint64(1)).astype(bool)
+    none = receivers == np.uint64(0b10000)                  # set 4: no light of the tree
+    assert reach[~none].all() and (prob > 0).all()
+    assert np.allclose(tree.pdf(P, key.astype(np.int64), receivers=receivers), prob, rtol=1e-9)
+    for i in range(0, n, 40):
+        every = np.arange(m, dtype=np.int64)
+        pdf = tree.pdf(np.repeat(P[:, i:i + 1], m, axis=1), every, receivers=np.full(m, receivers[i]))
+        lit = ((receivers[i] >> sets.astype(np.uint64)) & np.uint64(1)).astype(bool)
+        assert pdf.sum() == pytest.approx(1.0, abs=1e-9)
+        if lit.any():
+            assert np.all(pdf[~lit] == 0.0)
+    # without receivers (or with every set), the tree is the one it was without sets
+    plain = dacrt.lamps.light_tree(pos, pos, np.tile([[0.0], [0.0], [1.0]], m), np.full(m, -1.0), np.zeros(m),
+                                   np.ones(m), np.arange(m, dtype=np.int32))
+    linked = dacrt.lamps.light_tree(pos, pos, np.tile([[0.0], [0.0], [1.0]], m), np.full(m, -1.0), np.zeros(m),
+                                    np.ones(m), np.arange(m, dtype=np.int32), set=sets)
+    u = rng.random(n)
+    assert np.array_equal(plain.sample(P, u)[0], linked.sample(P, u)[0])
+    assert np.array_equal(plain.sample(P, u)[0], linked.sample(P, u, receivers=np.full(n, ~np.uint64(0)))[0])
+
+
+def test_linked_lights_are_sampled_among_the_lights_a_plate_is_lit_by(monkeypatch):
+    """Eight point lights over eight plates, each light linked to its own plate: with the
+    tree's pick restricted to the sets a point is lit by, the image equals (in expectation)
+    the one whose pick ignored the sets, and its noise is far lower (7 of 8 samples had lit
+    nothing)."""
+    import addon.integrator as integrator_module
+    lights = [light('POINT', 100.0, translation(2.0 * i - 7.0, 0.0, 1.5), name=f'L{i}') for i in range(8)]
+
+    def render_linked(seed, samples):
+        s = plane_scene(lights, samples=samples, max_bounces=0, seed=seed, camera=ortho_down(width=16, px=64))
+        s.geometry = geometry([(*quad((2.0 * i - 7.0, 0.0, 0.0), 1.0, 4.0), 1, ALL_VIS) for i in range(8)])
+        s.object_names = [f'P{i}' for i in range(8)]
+        s.light_links = {f'L{i}': (frozenset({f'P{i}'}), frozenset()) for i in range(8)}
+        return render(s).film.combined()[..., 0]
+
+    def noise_and_mean():
+        a, b = render_linked(1, 4), render_linked(2, 4)
+        return ((a - b) ** 2).mean() / 2, render_linked(3, 256).mean()
+    linked_noise, linked_mean = noise_and_mean()
+    real = integrator_module.LightSet
+    monkeypatch.setattr(integrator_module, 'LightSet', lambda *a, light_sets=None, **k: real(*a, **k))
+    blind_noise, blind_mean = noise_and_mean()
+    assert linked_noise < 0.4 * blind_noise, (linked_noise, blind_noise)
+    assert linked_mean == pytest.approx(blind_mean, rel=0.01)

@@ -80,7 +80,7 @@ def lamp_sample(records, entry, P, u1, u2, out=None):
 
 
 def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=None, lamp_prob=None,
-                clamp: float = np.inf, tree=None, lamp_key=None, N=None) -> None:
+                clamp: float = np.inf, tree=None, lamp_key=None, N=None, receivers=None) -> None:
     """Add to L (3, N) float32, in place, what rays (O, D) (3, n) see of the lamps
     records[lamps] (lamps: record indices, in the order their light is added).
 
@@ -94,7 +94,8 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     absolute channel sum of at most clamp (Cycles' sample clamp; inf: none). With a light tree
     (LightTree) and lamp_key (R,) int32 (a record's key in it, or -1), a member's selection
     probability is lamp_prob x the tree's pdf at the ray's origin with N (3, n), the normal its
-    vertex sampled lights with."""
+    vertex sampled lights with, and receivers (n,) uint64 (light linking: the receiver mask of
+    that vertex's object; None: every set)."""
     _check_added_to(L)
     records = _records(records)
     lamps = np.asarray(lamps)
@@ -114,14 +115,14 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32(t_surf),
                       np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf), np.ascontiguousarray(pid, np.int64), L,
                       float(clamp), tree, None if lamp_key is None else np.ascontiguousarray(lamp_key, np.int32),
-                      opt(N))
+                      opt(N), None if receivers is None else np.ascontiguousarray(receivers, np.uint64))
 
 
 EnvironmentMap = _core.EnvironmentMap
 LightTree = _core.LightTree
 
 
-def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None) -> LightTree:
+def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None, set=None) -> LightTree:
     """A light tree (many-light sampling, native/cpp/lighttree.h) over m lights: boxes lo, hi
     (3, m), emission cones (unit axis (3, m), cos of the spread cos_o (m,), -1 for every
     direction, and of the falloff beyond it cos_e (m,)), energy (m,) > 0 (on-axis intensity:
@@ -130,10 +131,13 @@ def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None) -> LightTree
     probability (N (3, n): the points' unit normals; lights below their horizon are not picked);
     tree.pdf(P, key, N=None) that probability for given keys (0 for non-members). group (m,) >= 0 or None:
     lights with the same group form one leaf, within which a point picks by energy alone (e.g.
-    the triangles of one emissive object)."""
+    the triangles of one emissive object). set (m,) uint8 0..63 or None: light linking's light
+    set of each light; sample and pdf then take receivers (n,) uint64, each point's receiver
+    mask (bit s: lit by set s), and never pick a light of a set the point is not lit by."""
     f32 = lambda a: np.ascontiguousarray(a, np.float32)
     return LightTree(f32(lo), f32(hi), f32(axis), f32(cos_o), f32(cos_e), np.ascontiguousarray(energy, np.float64),
-                     np.ascontiguousarray(key, np.int32), None if group is None else np.ascontiguousarray(group, np.int32))
+                     np.ascontiguousarray(key, np.int32), None if group is None else np.ascontiguousarray(group, np.int32),
+                     None if set is None else np.ascontiguousarray(set, np.uint8))
 
 
 def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool = False, scale=None) -> EnvironmentMap:

@@ -303,7 +303,7 @@ def accumulate_masked(L, pid, values, mask, clamp: float = np.inf) -> None:
 
 
 def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, thr, pdf, pid, L,
-                    clamp: float = np.inf, tree=None, tri_key=None, N=None) -> int:
+                    clamp: float = np.inf, tree=None, tri_key=None, N=None, receivers=None) -> int:
     """Add the emission that rays meet on emissive triangles to L (3, N) in place (two-sided).
 
     Rays i with hit[i] whose triangle hits['prim'][i] has emissive[prim] (bool (M,)) add
@@ -314,7 +314,8 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
     into column pid[i] (distinct), clamped as accumulate_masked's. With a light tree
     (dacrt.lamps.LightTree) and tri_key (M,) int32 (a triangle's key in it, or -1), a member's
     selection probability is tri_prob x the tree's pdf at O with N (3, n), the normal the rays'
-    vertices sampled lights with.
+    vertices sampled lights with, and receivers (n,) uint64 (light linking: the receiver masks
+    of their objects; None: every set).
     Returns how many rays met emission."""
     _check_added_to(L)
     return _core.gather_emission(hits, np.ascontiguousarray(hit, np.bool_), _rows(emission, 3, "emission"),
@@ -326,7 +327,8 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
                                  None if pdf is None else np.ascontiguousarray(pdf, _F32),
                                  np.ascontiguousarray(pid, np.int64), L, float(clamp), tree,
                                  None if tri_key is None else np.ascontiguousarray(tri_key, np.int32),
-                                 None if N is None else _rows(N, 3, "N"))
+                                 None if N is None else _rows(N, 3, "N"),
+                                 None if receivers is None else np.ascontiguousarray(receivers, np.uint64))
 
 
 def camera_rays(ortho: bool, frame, rx, ry, records: bool = False, lens=None):
