@@ -1438,6 +1438,18 @@ def test_a_colour_or_value_into_a_shader_input_is_its_emission(scene, exported):
     assert not any("world approximated" in t for _, t in data.messages)
 
 
+def _image_emission(name, img, strength):
+    """A material whose Emission (of `strength`) takes its colour from an Image Texture of img."""
+    mat, nt, out = scenes._material(name)
+    e = nt.nodes.new('ShaderNodeEmission')
+    e.inputs['Strength'].default_value = strength
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    nt.links.new(tex.outputs['Color'], e.inputs['Color'])
+    nt.links.new(e.outputs[0], out.inputs['Surface'])
+    return mat
+
+
 def test_image_driven_emission_is_the_image(scene, exported):
     """An Emission (or Principled emission) colour from an image (a screen, a sign) emits the
     image x strength, looked up per hit and per light sample (tests/parity/test_emission_texture.py),
@@ -1448,13 +1460,7 @@ def test_image_driven_emission_is_the_image(scene, exported):
     img = bpy.data.images.new("Screen", 2, 2, float_buffer=True)
     px = np.array([[0.2, 0.4, 0.6, 1], [1.0, 0.0, 0.0, 1], [0.0, 1.0, 0.0, 1], [0.6, 0.6, 0.2, 1]])
     img.pixels[:] = px.ravel()
-    mat, nt, out = scenes._material("Screen")
-    e = nt.nodes.new('ShaderNodeEmission')
-    e.inputs['Strength'].default_value = 3.0
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image = img
-    nt.links.new(tex.outputs['Color'], e.inputs['Color'])
-    nt.links.new(e.outputs[0], out.inputs['Surface'])
+    mat = _image_emission("Screen", img, 3.0)
     pmat = scenes.principled("Sign", (0.5, 0.5, 0.5), (1.0, 0.5, 1.0), 1.0)
     p = next(n for n in pmat.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
     ptex = pmat.node_tree.nodes.new('ShaderNodeTexImage')
@@ -1480,13 +1486,7 @@ def test_emission_image_with_a_nan_texel_keeps_its_channel(scene, exported):
     px = np.ones((4, 4))
     px[1, 0] = np.nan
     img.pixels[:] = px.ravel()
-    mat, nt, out = scenes._material("Lamp")
-    e = nt.nodes.new('ShaderNodeEmission')
-    e.inputs['Strength'].default_value = 2.0
-    tex = nt.nodes.new('ShaderNodeTexImage')
-    tex.image = img
-    nt.links.new(tex.outputs['Color'], e.inputs['Color'])
-    nt.links.new(e.outputs[0], out.inputs['Surface'])
+    mat = _image_emission("Lamp", img, 2.0)
     scenes.plane("A", materials=(mat,))
     m = {m.name: m for m in exported().materials}["Lamp"]
     assert np.allclose(m.emission, [1.5, 2.0, 2.0])
