@@ -172,9 +172,9 @@ class LightSet:
             if kind == 'lamps':
                 s = self.lamps[int(entries[0])].sample(P, u1, u2)
                 wi, value, pdf, pick = s.wi, s.value, s.pdf, np.ones(n)
-            elif kind == 'environment':
-                s = self.environment.sample(P, u1, u2)
-                wi, value, pdf, pick = s.wi, s.value, s.pdf, np.ones(n)
+            elif kind == 'environment':      # (the renderer's samples: the readable definition
+                wi, value, pdf = self.environment.native_sample(u1, u2)   # builds tables of its own)
+                pick = np.ones(n)
             else:                       # the tree's or the power-weighted pick at each point
                 if kind == 'tree':
                     which, pick = self.tree.sample(np.ascontiguousarray(P, F32), rng.random(n))

@@ -68,9 +68,10 @@ class EnvironmentLight:
     def dark(self) -> bool:
         return not self.native.total > 0
 
-    def sample_pdf(self, u1, u2) -> np.ndarray:
-        """Solid-angle pdfs (n,) of the renderer's (native) samples for uniforms u1, u2."""
-        return self.native.sample(np.asarray(u1, F32), np.asarray(u2, F32))[2]
+    def native_sample(self, u1, u2):
+        """The renderer's (native) samples for uniforms u1, u2: (wi (3, n), radiance / pdf
+        (3, n), solid-angle pdf (n,)), the same for every point."""
+        return self.native.sample(np.asarray(u1, F32), np.asarray(u2, F32))
 
     # --- the readable definition (tests compare the native kernels with it) -------------------
 
