@@ -319,8 +319,7 @@ class Integrator:
         # a map diffuse rays cannot see lights nothing; camera rays may still see it (not
         # through transparent film)
         # with light linking, the tree picks each point's light among the sets it is lit by
-        sets = None if self._link is None else (
-            lambda lamp: 0 if isinstance(lamp, BackgroundLight) else self._link.emitter_set(lamp.name), self._tri_set)
+        sets = None if self._link is None else (lambda lamp: _light_set(self._link, lamp), self._tri_set)
         self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None,
                                use_tree=bool(getattr(self.settings, 'use_light_tree', True)), light_sets=sets,
                                tri_object=ob if sd.geometry.instance is None else sd.geometry.instance,
@@ -394,11 +393,10 @@ class Integrator:
             self._entry_group = self._entry_table(self._record_group, self._tri_group, self._world_group)
         if self._shadow_link is not None:   # shadow linking: each entry's set of blockers
             self._entry_shadow_set = self._entry_table(
-                [0 if isinstance(l, BackgroundLight) else self._shadow_link.emitter_set(l.name) for l in every],
+                [_light_set(self._shadow_link, l) for l in every],
                 self._tri_shadow_set, 0)
         if self._link is not None:          # light linking: each entry's and lamp record's light set
-            self._record_set = np.array([0 if isinstance(l, BackgroundLight) else self._link.emitter_set(l.name)
-                                         for l in every], np.uint8).reshape(-1)
+            self._record_set = np.array([_light_set(self._link, l) for l in every], np.uint8).reshape(-1)
             self._entry_set = self._entry_table(self._record_set, self._tri_set, 0, np.uint8)
         # Cycles' Light > Max Bounces: at vertex k the lamps whose limit is below k are still
         # chosen with their probability but light nothing (their records' emission is 0), as
@@ -825,8 +823,7 @@ class Integrator:
         if len(miss) and camera and not self.transparent:
             alpha[np.take(path.pid, miss)] = 1.0
         elif len(miss) and camera and path.thr is not None:
-            # transparent film seen through transparent surfaces: alpha 1 - what passed (Cycles)
-            alpha[np.take(path.pid, miss)] = 1.0 - np.take(path.thr, miss, axis=1).mean(axis=0)
+            _seen_through(alpha, path, miss)          # transparent film behind transparent surfaces
         if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
             if camera and self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
@@ -836,10 +833,7 @@ class Integrator:
                 held = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0)
                 hit &= ~held
                 if path.thr is not None and held.any():
-                    # seen through transparent surfaces: alpha 1 - what passed, as at a miss
-                    # (Cycles adds the throughput reaching a holdout to the transparency)
-                    h = np.flatnonzero(held)
-                    alpha[np.take(path.pid, h)] = 1.0 - np.take(path.thr, h, axis=1).mean(axis=0)
+                    _seen_through(alpha, path, np.flatnonzero(held))
             alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
             if self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
@@ -1612,6 +1606,19 @@ class Integrator:
             grp = np.take(self._entry_group, entry)
             for g, G in enumerate(groups):
                 dacrt.shading.accumulate_masked(G, pid, value, contrib & (grp == g), self._clamps[k > 0])
+
+
+def _light_set(linking, lamp) -> int:
+    """A lamp's light set in linking (lights/linking.py, light or shadow linking): its own by
+    name; the world's is 0, every object's."""
+    return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.name)
+
+
+def _seen_through(alpha, path, rows):
+    """Camera paths `rows` that end transparent (at transparent film's background or a
+    holdout) after passing transparent surfaces: alpha 1 - what passed, as Cycles adds the
+    throughput reaching them to the transparency."""
+    alpha[np.take(path.pid, rows)] = 1.0 - np.take(path.thr, rows, axis=1).mean(axis=0)
 
 
 def _aov_tables(aovs, shaders) -> dict:
