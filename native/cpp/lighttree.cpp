@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <stdexcept>
 
@@ -100,44 +101,114 @@ double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
     return nd.energy * f / std::max(dd, kMinDist2);
 }
 
-// A node's importance at P: energy x f / d2 (weigh), looking one level further down for an
-// inner node (the sum of its children's, whose tighter bounds see more: a group of spots all
-// aimed away from P, or lights all behind its surface, is 0 even where their merged cone and
-// sphere are not).
-// With light linking (sets: each node's light sets, null: none), what a point lit by the sets
-// in `receivers` cannot reach counts nothing.
-double importance(const LightTreeNode* nodes, size_t at, const float P[3], const float* N,
-                  const uint64_t* sets = nullptr, uint64_t receivers = LightTree::kAllSets) {
-    const LightTreeNode& nd = nodes[at];
-    if (nd.child < 0) return weigh(nd, P, N);
-    const size_t c = size_t(nd.child);
-    if (sets)
-        return ((sets[c] & receivers) ? weigh(nodes[c], P, N) : 0.0) +
-               ((sets[c + 1] & receivers) ? weigh(nodes[c + 1], P, N) : 0.0);
-    return weigh(nodes[c], P, N) + weigh(nodes[c + 1], P, N);
+// Four floats side by side (GCC/Clang vector extensions: SSE on x86-64, NEON on arm64, no
+// per-ISA build needed); comparisons give lane masks, `mask ? a : b` selects per lane.
+typedef float F4 __attribute__((vector_size(16)));
+typedef int32_t M4 __attribute__((vector_size(16)));
+
+F4 load4(const float* p) {
+    F4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+F4 sqrt4(F4 x) {  // of x >= 0 lanes (a lane loop the compiler turns into one sqrtps)
+    F4 r;
+    for (int k = 0; k < 4; ++k) r[k] = std::sqrt(x[k]);
+    return r;
+}
+F4 clamp1(F4 x) {
+    const F4 one = {1.0f, 1.0f, 1.0f, 1.0f};
+    x = x < -one ? -one : x;
+    return x > one ? one : x;
+}
+F4 max4(F4 a, F4 b) { return a > b ? a : b; }
+
+// Lanes o..o+3 of stop q weighed at P (and N), as weigh() does, in float and side by side:
+// this is most of a many-light render's light sampling. Float is enough for a sampling
+// estimate once distances are in range: the culling tests keep a margin of float's rounding,
+// so no lane weighs 0 that weigh() would not, and a lane not culled weighs more than 0.
+// Returns false (imp untouched) when some lane's squared distance lies outside [1e-30, 1e30]
+// or is NaN: those take weigh() in float64.
+template <bool kNormal>
+bool weigh4_float(const LightTree::Stop& q, int o, const float P[3], const float* N, double imp[4]) {
+    const F4 zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
+    const F4 margin = one * 1e-5f;  // ~100 float ULPs of a cosine
+    const F4 v0 = load4(q.center[0] + o) - P[0], v1 = load4(q.center[1] + o) - P[1], v2 = load4(q.center[2] + o) - P[2];
+    const F4 dd = v0 * v0 + v1 * v1 + v2 * v2, r = load4(q.radius + o), r2 = r * r;
+    const M4 inside = !(dd > r2);
+    const F4 denom = inside ? max4(dd, r2 * 0.25f) : dd;
+    const M4 ok = (denom >= 1e-30f) & (dd <= 1e30f) & (r2 <= 1e30f);
+    if (!(ok[0] & ok[1] & ok[2] & ok[3])) return false;
+    const F4 inv_d = one / sqrt4(dd);
+    const F4 sin_u = r * inv_d < one ? r * inv_d : one;
+    const F4 cos_u = sqrt4(max4(one - sin_u * sin_u, zero));
+    M4 culled = {0, 0, 0, 0}, out_culled = {0, 0, 0, 0};  // out_culled: outside the bounds only
+    F4 f = one;
+    if (kNormal) {
+        const F4 nv = N[0] * v0 + N[1] * v1 + N[2] * v2;
+        const F4 spread = std::fabs(N[0]) * load4(q.half[0] + o) + std::fabs(N[1]) * load4(q.half[1] + o) +
+                          std::fabs(N[2]) * load4(q.half[2] + o);
+        const F4 reach = nv + spread, nv_abs = nv < zero ? -nv : nv;
+        culled = !(reach > -(margin * (nv_abs + spread)));
+        const F4 ci = clamp1(nv * inv_d), sin_i = sqrt4(max4(one - ci * ci, zero));
+        const F4 c = ci * cos_u + sin_i * sin_u;
+        const M4 below = ci < cos_u;
+        out_culled = below & !(c > -margin);
+        f = below ? max4(c, margin) : one;
+    }
+    const F4 co = load4(q.cos_o + o), so = load4(q.sin_o + o);
+    const F4 cos_p = co * cos_u - so * sin_u, sin_p = so * cos_u + co * sin_u;
+    const F4 ct = clamp1(-(load4(q.axis[0] + o) * v0 + load4(q.axis[1] + o) * v1 + load4(q.axis[2] + o) * v2) * inv_d);
+    const F4 sin_t = sqrt4(max4(one - ct * ct, zero));
+    const F4 cos_r = ct * cos_p + sin_t * sin_p;
+    const M4 beyond = (co > -one) & (sin_p >= zero) & (ct < cos_p);
+    out_culled |= beyond & (cos_r <= load4(q.cos_e + o) - margin);
+    f = beyond ? f * max4(cos_r, margin) : f;
+    culled |= ~inside & out_culled;
+    const F4 g = culled ? zero : (inside ? one : f) / denom;
+    for (int k = 0; k < 4; ++k) imp[k] = q.energy[o + k] * double(g[k]);
+    return true;
 }
 
-// The probabilities of going to either of the two children c, c + 1 at P: by importance, by
-// energy where both importances are 0 (or their sum is not finite). Each share is its own
-// quotient, not 1 - the other: a faint light's 1e-19 would round to 0 that way, and a delta
-// light must never become impossible.
-struct Shares {
-    double left, right;
-};
-Shares shares(const LightTreeNode* nodes, size_t c, const float P[3], const float* N,
-              const uint64_t* sets = nullptr, uint64_t receivers = LightTree::kAllSets) {
-    // light linking: a child holding none of the point's sets is never taken (unless neither
-    // does: then the point is lit by no light of this node, and either way gives it nothing)
-    const bool ra = !sets || (sets[c] & receivers), rb = !sets || (sets[c + 1] & receivers);
-    if (ra != rb) return {ra ? 1.0 : 0.0, rb ? 1.0 : 0.0};
-    const double a = importance(nodes, c, P, N, sets, receivers), b = importance(nodes, c + 1, P, N, sets, receivers);
-    const double s = a + b;
+// The probabilities at P of a walk at stop q going on to each of its targets (see
+// LightTree::Stop): by importance, a leaf target's own weigh() or an inner one's children's
+// summed (whose tighter bounds see more than their parent's: a group of spots all aimed away
+// from P, or lights all behind its surface, is 0 even where their merged cone and sphere are
+// not); by energy where all importances are 0 (or their sum is not finite). With light linking
+// (lane_sets: the stop's lanes' light sets then its targets', null: none) what holds none of
+// the point's sets counts nothing, and such a target is never taken (unless no target holds
+// them: then the point is lit by no light below, and any way gives it nothing). Each
+// probability is its own quotient, not 1 - the others: a faint light's 1e-19 would round to 0
+// that way, and a delta light must never become impossible. At least one target gets > 0.
+void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const float P[3],
+                  const float* N, uint64_t receivers, double p[4]) {
+    double imp[8];
+    for (int o = 0; o < 8; o += 4)
+        if (!(N ? weigh4_float<true>(q, o, P, N, imp + o) : weigh4_float<false>(q, o, P, N, imp + o)))
+            for (int k = o; k < o + 4; ++k) imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], P, N);
+    if (lane_sets)
+        for (int k = 0; k < 8; ++k) imp[k] = (lane_sets[k] & receivers) ? imp[k] : 0.0;
+    bool eligible[4], any = false;
+    for (int j = 0; j < 4; ++j) {
+        eligible[j] = q.target[j] >= 0 && (!lane_sets || (lane_sets[8 + j] & receivers));
+        any |= eligible[j];
+    }
+    if (!any)
+        for (int j = 0; j < 4; ++j) eligible[j] = q.target[j] >= 0;
+    double t[4], s = 0.0;
+    for (int j = 0; j < 4; ++j) {
+        t[j] = eligible[j] ? imp[2 * j] + imp[2 * j + 1] : 0.0;
+        s += t[j];
+    }
     if (s > 0.0 && std::isfinite(s)) {
         const double inv = 1.0 / s;
-        return {a * inv, b * inv};
+        for (int j = 0; j < 4; ++j) p[j] = t[j] * inv;
+        return;
     }
-    const double inv = 1.0 / (nodes[c].energy + nodes[c + 1].energy);
-    return {nodes[c].energy * inv, nodes[c + 1].energy * inv};
+    double e = 0.0;
+    for (int j = 0; j < 4; ++j) e += eligible[j] ? nodes[q.target[j]].energy : 0.0;
+    const double inv = 1.0 / e;
+    for (int j = 0; j < 4; ++j) p[j] = eligible[j] ? nodes[q.target[j]].energy * inv : 0.0;
 }
 
 // Conty and Kulla's orientation measure of a cone: the solid angle of its axis spread plus the
@@ -403,31 +474,109 @@ LightTree::LightTree(const LightTreeInput& in) {
             sets_[at] = c < 0 ? items[size_t(-1 - c)].sets : sets_[size_t(c)] | sets_[size_t(c) + 1];
         }
     }
+    build_stops();
 }
 
-int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers) const {
-    const uint64_t* sets = sets_.empty() || receivers == kAllSets ? nullptr : sets_.data();
-    // u stays as drawn; the node's share of [0, 1) narrows to [lo, lo + w) on the way down
-    // (no rescaling of u: one division per level, in shares)
-    size_t at = 0;
-    double lo = 0.0, w = 1.0;
-    if (!(u >= 0.0)) u = 0.0;  // (NaN too)
-    while (nodes_[at].child >= 0) {
+void LightTree::build_stops() {
+    // From the root down: each stop's targets are its children's children (a leaf child: itself),
+    // and each inner target is a stop in turn.
+    stop_of_.assign(nodes_.size(), -1);
+    hop_from_.assign(nodes_.size(), -1);
+    hop_lane_.assign(nodes_.size(), 0);
+    stops_.clear();
+    stop_sets_.clear();
+    std::vector<size_t> todo{0};
+    while (!todo.empty()) {
+        const size_t at = todo.back();
+        todo.pop_back();
+        if (nodes_[at].child < 0) continue;
+        stop_of_[at] = int32_t(stops_.size());
+        Stop q{};
         const size_t c = size_t(nodes_[at].child);
-        const Shares sh = shares(nodes_.data(), c, P, N, sets, receivers);
-        const double split = lo + w * sh.left;
-        // selected, not branched on: which way a point goes follows no pattern
-        const bool right = !(u < split) & (sh.right > 0.0);
-        lo = right ? split : lo;
-        w *= right ? sh.right : sh.left;
-        at = c + size_t(right);
+        for (int side = 0; side < 2; ++side) {
+            const LightTreeNode& ch = nodes_[c + size_t(side)];
+            const bool leaf = ch.child < 0;
+            q.target[2 * side] = leaf ? int32_t(c) + side : ch.child;
+            q.target[2 * side + 1] = leaf ? -1 : ch.child + 1;
+        }
+        for (int j = 0; j < 4; ++j) {
+            const int32_t t = q.target[j];
+            const bool inner = t >= 0 && nodes_[size_t(t)].child >= 0;
+            q.node[2 * j] = inner ? nodes_[size_t(t)].child : t;
+            q.node[2 * j + 1] = inner ? nodes_[size_t(t)].child + 1 : -1;
+            if (t < 0) continue;
+            hop_from_[size_t(t)] = int32_t(at);
+            hop_lane_[size_t(t)] = uint8_t(j);
+            if (inner) todo.push_back(size_t(t));
+        }
+        for (int k = 0; k < 8; ++k) {
+            // an empty lane repeats lane 0's bounds (so it never pushes its four out of float's
+            // range on its own) with no energy
+            const LightTreeNode& nd = nodes_[size_t(q.node[k] < 0 ? q.node[0] : q.node[k])];
+            for (int a = 0; a < 3; ++a) {
+                q.center[a][k] = nd.center[a];
+                q.half[a][k] = nd.half[a];
+                q.axis[a][k] = nd.axis[a];
+            }
+            q.radius[k] = nd.radius;
+            q.cos_o[k] = nd.cos_o;
+            q.sin_o[k] = nd.sin_o;
+            q.cos_e[k] = nd.cos_e;
+            q.energy[k] = q.node[k] < 0 ? 0.0 : nd.energy;
+        }
+        stops_.push_back(q);
+        if (!sets_.empty()) {  // light linking: the lanes' sets, then the targets'
+            for (int k = 0; k < 8; ++k) stop_sets_.push_back(q.node[k] < 0 ? 0 : sets_[size_t(q.node[k])]);
+            for (int j = 0; j < 4; ++j) stop_sets_.push_back(q.target[j] < 0 ? 0 : sets_[size_t(q.target[j])]);
+        }
     }
+}
+
+// One point's way down (sample()): u stays as drawn, and the node's share of [0, 1) narrows to
+// [lo, lo + w) on the way down (no rescaling of u: one division per level, in shares).
+struct LightTree::Walk {
+    size_t at;
+    double lo, w, u;
+};
+
+inline LightTree::Walk LightTree::start(double u) const {
+    return {0, 0.0, 1.0, u >= 0.0 ? u : 0.0};  // (NaN: 0)
+}
+
+inline void LightTree::probs_at(size_t at, const float P[3], const float* N, uint64_t receivers,
+                                double p[4]) const {
+    const size_t qi = size_t(stop_of_[at]);
+    const uint64_t* lane_sets = stop_sets_.empty() || receivers == kAllSets ? nullptr : stop_sets_.data() + 12 * qi;
+    target_probs(nodes_.data(), stops_[qi], lane_sets, P, N, receivers, p);
+}
+
+inline void LightTree::step(Walk& k, const float P[3], const float* N, uint64_t receivers) const {
+    double p[4];
+    probs_at(k.at, P, N, receivers, p);
+    // the first target (of those possible) whose share of [lo, lo + w) holds u; the last
+    // possible one where rounding leaves u past them all
+    double run = k.lo, pick_lo = k.lo;
+    int pick = 0;
+    for (int j = 0; j < 4; ++j) {
+        if (!(p[j] > 0.0)) continue;
+        pick = j;
+        pick_lo = run;
+        run += k.w * p[j];
+        if (k.u < run) break;
+    }
+    k.lo = pick_lo;
+    k.w *= p[pick];
+    k.at = size_t(stops_[size_t(stop_of_[k.at])].target[pick]);
+}
+
+inline int32_t LightTree::finish(const Walk& k, double& prob) const {
     // the leaf's group: a member by energy, with what is left of u
-    const size_t g = size_t(-1 - nodes_[at].child);
+    const size_t g = size_t(-1 - nodes_[k.at].child);
     const int32_t b = item_start_[g], e = item_start_[g + 1];
     int32_t slot = b;
+    double w = k.w;
     if (e - b > 1) {
-        const double t = std::clamp(w > 0.0 ? (u - lo) / w : 0.0, 0.0, 1.0);
+        const double t = std::clamp(w > 0.0 ? (k.u - k.lo) / w : 0.0, 0.0, 1.0);
         slot = int32_t(std::upper_bound(member_cdf_.begin() + b, member_cdf_.begin() + e, t) - member_cdf_.begin());
         slot = std::min(slot, e - 1);
         w *= member_share_[size_t(slot)];
@@ -436,16 +585,22 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     return member_key_[size_t(slot)];
 }
 
+int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers) const {
+    Walk k = start(u);
+    while (nodes_[k.at].child >= 0) step(k, P, N, receivers);
+    return finish(k, prob);
+}
+
 double LightTree::pdf(const float P[3], const float* N, int64_t key, uint64_t receivers) const {
     if (!member(key)) return 0.0;
-    const uint64_t* sets = sets_.empty() || receivers == kAllSets ? nullptr : sets_.data();
     size_t at = size_t(leaf_of_key_[size_t(key)]);
     double p = member_share_[size_t(slot_of_key_[size_t(key)])];
-    while (nodes_[at].parent >= 0) {
-        const size_t up = size_t(nodes_[at].parent), c = size_t(nodes_[up].child);
-        const Shares sh = shares(nodes_.data(), c, P, N, sets, receivers);
-        p *= at == c ? sh.left : sh.right;
-        at = up;
+    while (at != 0) {  // up the walk's stops to the root
+        const size_t from = size_t(hop_from_[at]);
+        double lp[4];
+        probs_at(from, P, N, receivers, lp);
+        p *= lp[hop_lane_[at]];
+        at = from;
     }
     return p;
 }

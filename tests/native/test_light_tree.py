@@ -24,25 +24,36 @@ def tree_of(centers, half, energy, axis=None, cos_o=None, cos_e=None, keys=None)
     return lamps.light_tree(c - h, c + h, axis, cos_o, cos_e, np.asarray(energy, np.float64), keys)
 
 
-def random_tree(rng, m, one_sided=0.5):
-    c = rng.uniform(-5, 5, (3, m))
+def random_tree(rng, m, one_sided=0.5, scale=1.0):
+    c = rng.uniform(-5, 5, (3, m)) * scale
     axis = rng.normal(size=(3, m))
     axis /= np.linalg.norm(axis, axis=0)
     cos_o = np.where(rng.random(m) < one_sided, 1.0, EVERY)     # area-like (a hemisphere) or point-like
-    return tree_of(c, rng.uniform(0.0, 0.3, (3, m)), rng.uniform(0.1, 10.0, m), axis, cos_o, keys=np.arange(m) + 7)
+    return tree_of(c, rng.uniform(0.0, 0.3, (3, m)) * scale, rng.uniform(0.1, 10.0, m), axis, cos_o,
+                   keys=np.arange(m) + 7)
 
 
-def test_pdf_is_a_distribution_and_sampling_follows_it():
+def random_normals(rng, n):
+    N = rng.normal(size=(3, n))
+    return (N / np.linalg.norm(N, axis=0)).astype(F32)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e17, 1e-17])
+@pytest.mark.parametrize("with_normal", [False, True])
+def test_pdf_is_a_distribution_and_sampling_follows_it(scale, with_normal):
+    """At every scale (1: the float path; 1e17, 1e-17: squared distances beyond float's safe
+    range, the float64 path) and with or without a receiving normal."""
     rng = np.random.default_rng(3)
     m = 40
-    tree = random_tree(rng, m)
+    tree = random_tree(rng, m, scale=scale)
     assert tree.members == m and tree.nodes == 2 * m - 1
     keys = np.arange(m) + 7
-    for P in rng.uniform(-6, 6, (5, 3, 1)).astype(F32):
-        pdf = tree.pdf(np.repeat(P, m, 1), keys)
+    for P in (rng.uniform(-6, 6, (5, 3, 1)) * scale).astype(F32):
+        N = np.repeat(random_normals(rng, 1), m, 1) if with_normal else None
+        pdf = tree.pdf(np.repeat(P, m, 1), keys, N)
         assert pdf.sum() == pytest.approx(1.0, abs=1e-12)
         n = 400_000
-        got, prob = tree.sample(np.repeat(P, n, 1), rng.random(n))
+        got, prob = tree.sample(np.repeat(P, n, 1), rng.random(n), None if N is None else N[:, :1].repeat(n, 1))
         assert np.isin(got, keys).all()
         # the probability sample() reports is the pdf of what it picked
         np.testing.assert_allclose(prob, pdf[got - 7], rtol=1e-12)
@@ -51,6 +62,27 @@ def test_pdf_is_a_distribution_and_sampling_follows_it():
         assert np.all(np.abs(freq - pdf) <= 5 * sigma + 1e-9)
         assert np.all(freq[pdf == 0] == 0)
     assert tree.pdf(np.zeros((3, 2), F32), np.array([0, 10_000])).tolist() == [0.0, 0.0]   # not members
+
+
+def test_the_float_path_weighs_as_the_float64_path():
+    """Scaling a scene scales every importance by the same factor, so the pdf is the same;
+    at scale 1 it is weighed in float, at 1e17 and 1e-17 in float64: they agree to float's
+    precision, so the float path neither culls nor misweighs what float64 would not."""
+    rng = np.random.default_rng(11)
+    m = 60
+    P = rng.uniform(-6, 6, (3, 300))
+    N = random_normals(rng, 300)
+    keys = np.arange(m) + 7
+    pdfs = {}
+    for scale in (1.0, 1e17, 1e-17):
+        tree = random_tree(np.random.default_rng(5), m, scale=scale)
+        Q = (P * scale).astype(F32)
+        pdfs[scale] = np.stack([tree.pdf(np.repeat(Q[:, i:i + 1], m, 1), keys, np.repeat(N[:, i:i + 1], m, 1))
+                                for i in range(P.shape[1])])
+    assert (pdfs[1.0] > 0).sum() > 0.3 * pdfs[1.0].size         # (a test of weighing, not of culling alone)
+    for scale in (1e17, 1e-17):
+        np.testing.assert_array_equal(pdfs[scale] > 0, pdfs[1.0] > 0)
+        np.testing.assert_allclose(pdfs[scale], pdfs[1.0], rtol=2e-4, atol=1e-12)
 
 
 def importance(center, radius, energy, P, axis=None, one_sided=False):
