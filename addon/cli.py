@@ -6,14 +6,18 @@
 Registers the add-on, opens the .blend (or builds the demo scene), renders every enabled view
 layer with DACRT and writes a PNG (view transform applied) and a linear float EXR next to each
 other. `python3 build.py render ...` forwards here. Exit status 1 with the reason on failure.
+Ctrl-C cancels the render as Esc does in Blender: the samples done so far are written and the
+exit status is 130; a second Ctrl-C stops at once.
 """
 import argparse
+import contextlib
 import os
+import signal
 import sys
 
 import bpy
 
-from . import register
+from . import engine, last_render_stats, register
 
 
 def parse_args(argv):
@@ -118,15 +122,43 @@ def render(args):
         # Blender renders nothing then, without a word, and the result cannot be saved
         raise SystemExit(f"error: scene '{scene.name}' has no view layer enabled for rendering "
                          "(View Layer Properties > Use for Rendering)")
-    try:
-        bpy.ops.render.render(write_still=False, scene=scene.name)
-    except RuntimeError as e:     # the engine reported an ERROR: the render failed
-        raise SystemExit(f"error: render failed: {e}")
+    with _ctrl_c_cancels() as interrupted:
+        try:
+            bpy.ops.render.render(write_still=False, scene=scene.name)
+        except RuntimeError as e:     # the engine reported an ERROR: the render failed
+            raise SystemExit(f"error: render failed: {e}")
     try:
         written = save_render(scene, png, exr)
     except (RuntimeError, OSError) as e:     # e.g. an unwritable path: Blender's or the system's message
         raise SystemExit(f"error: could not write the image: {e}")
+    if interrupted:
+        done = [s.get('samples_done', 0) for s in last_render_stats().values()]
+        print(f"DACRT: interrupted after {min(done, default=0)} samples; wrote the partial image to "
+              f"{' and '.join(written)}")
+        raise SystemExit(130)
     print(f"DACRT: wrote {' and '.join(written)}")
+
+
+@contextlib.contextmanager
+def _ctrl_c_cancels():
+    """Within the block, the first SIGINT asks the engine to cancel (it stops at its next
+    step and keeps the samples done; Python's KeyboardInterrupt would end the render inside
+    the engine with a traceback instead); the second raises KeyboardInterrupt. Yields a list
+    that is non-empty once interrupted."""
+    interrupted = []
+
+    def on_sigint(signum, frame):
+        if interrupted:
+            raise KeyboardInterrupt
+        interrupted.append(signum)
+        engine.request_cancel()
+    engine.clear_cancel()
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield interrupted
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        engine.clear_cancel()
 
 
 def main(argv=None):

@@ -28,6 +28,20 @@ RESULT_PASS_NAME = {p[0]: result_name(p[0], bpy.app.version) for p in PASSES}
 LAST_RENDER_STATS = {}
 
 
+# A cancel asked from outside Blender's interface, for the render in progress: the command
+# line's Ctrl-C (headless, test_break never turns true). Set by request_cancel(), cleared by
+# clear_cancel() before the next render.
+_CANCEL_ASKED = [False]
+
+
+def request_cancel():
+    _CANCEL_ASKED[0] = True
+
+
+def clear_cancel():
+    _CANCEL_ASKED[0] = False
+
+
 def _clock(seconds):
     seconds = float(seconds)
     if not math.isfinite(seconds):
@@ -61,8 +75,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         super().__init__(*args, **kwargs)
 
     def cancel_requested(self):
-        """Esc / test_break: the one place the engine asks (polled between steps)."""
-        return self.test_break()
+        """Esc / test_break, or request_cancel(): the one place the engine asks (polled
+        between steps)."""
+        return self.test_break() or _CANCEL_ASKED[0]
 
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
