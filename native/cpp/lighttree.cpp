@@ -122,6 +122,7 @@ F4 clamp1(F4 x) {
     return x > one ? one : x;
 }
 F4 max4(F4 a, F4 b) { return a > b ? a : b; }
+F4 min4(F4 a, F4 b) { return a < b ? a : b; }
 
 // Lanes o..o+3 of stop q weighed at P (and N), as weigh() does, in float and side by side:
 // this is most of a many-light render's light sampling. Float is enough for a sampling
@@ -139,18 +140,23 @@ bool weigh4_float(const LightTree::Stop& q, int o, const float P[3], const float
     const F4 denom = inside ? max4(dd, r2 * 0.25f) : dd;
     const M4 ok = (denom >= 1e-30f) & (dd <= 1e30f) & (r2 <= 1e30f);
     if (!(ok[0] & ok[1] & ok[2] & ok[3])) return false;
-    const F4 inv_d = one / sqrt4(dd);
-    const F4 sin_u = r * inv_d < one ? r * inv_d : one;
-    const F4 cos_u = sqrt4(max4(one - sin_u * sin_u, zero));
+    // Every sine and cosine from dd and one product each (cos_u = sqrt(dd - r^2) / d, sin_i =
+    // sqrt(dd - (N.v)^2) / d, ...) rather than from one another: the four roots and the two
+    // divisions then run side by side instead of one after another.
+    const F4 av = -(load4(q.axis[0] + o) * v0 + load4(q.axis[1] + o) * v1 + load4(q.axis[2] + o) * v2);
+    const F4 nv = kNormal ? N[0] * v0 + N[1] * v1 + N[2] * v2 : zero;
+    const F4 inv_d = one / sqrt4(dd), inv_denom = one / denom;
+    const F4 root_u = sqrt4(max4(dd - r2, zero)), root_i = sqrt4(max4(dd - nv * nv, zero)),
+             root_t = sqrt4(max4(dd - av * av, zero));
+    const F4 sin_u = min4(r * inv_d, one), cos_u = min4(root_u * inv_d, one);
     M4 culled = {0, 0, 0, 0}, out_culled = {0, 0, 0, 0};  // out_culled: outside the bounds only
     F4 f = one;
     if (kNormal) {
-        const F4 nv = N[0] * v0 + N[1] * v1 + N[2] * v2;
         const F4 spread = std::fabs(N[0]) * load4(q.half[0] + o) + std::fabs(N[1]) * load4(q.half[1] + o) +
                           std::fabs(N[2]) * load4(q.half[2] + o);
         const F4 reach = nv + spread, nv_abs = nv < zero ? -nv : nv;
         culled = !(reach > -(margin * (nv_abs + spread)));
-        const F4 ci = clamp1(nv * inv_d), sin_i = sqrt4(max4(one - ci * ci, zero));
+        const F4 ci = clamp1(nv * inv_d), sin_i = min4(root_i * inv_d, one);
         const F4 c = ci * cos_u + sin_i * sin_u;
         const M4 below = ci < cos_u;
         out_culled = below & !(c > -margin);
@@ -158,14 +164,13 @@ bool weigh4_float(const LightTree::Stop& q, int o, const float P[3], const float
     }
     const F4 co = load4(q.cos_o + o), so = load4(q.sin_o + o);
     const F4 cos_p = co * cos_u - so * sin_u, sin_p = so * cos_u + co * sin_u;
-    const F4 ct = clamp1(-(load4(q.axis[0] + o) * v0 + load4(q.axis[1] + o) * v1 + load4(q.axis[2] + o) * v2) * inv_d);
-    const F4 sin_t = sqrt4(max4(one - ct * ct, zero));
+    const F4 ct = clamp1(av * inv_d), sin_t = min4(root_t * inv_d, one);
     const F4 cos_r = ct * cos_p + sin_t * sin_p;
     const M4 beyond = (co > -one) & (sin_p >= zero) & (ct < cos_p);
     out_culled |= beyond & (cos_r <= load4(q.cos_e + o) - margin);
     f = beyond ? f * max4(cos_r, margin) : f;
     culled |= ~inside & out_culled;
-    const F4 g = culled ? zero : (inside ? one : f) / denom;
+    const F4 g = culled ? zero : (inside ? one : f) * inv_denom;
     for (int k = 0; k < 4; ++k) imp[k] = q.energy[o + k] * double(g[k]);
     return true;
 }

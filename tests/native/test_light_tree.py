@@ -82,7 +82,8 @@ def test_the_float_path_weighs_as_the_float64_path():
     assert (pdfs[1.0] > 0).sum() > 0.3 * pdfs[1.0].size         # (a test of weighing, not of culling alone)
     for scale in (1e17, 1e-17):
         np.testing.assert_array_equal(pdfs[scale] > 0, pdfs[1.0] > 0)
-        np.testing.assert_allclose(pdfs[scale], pdfs[1.0], rtol=2e-4, atol=1e-12)
+        # float's sines near a cosine of 1 carry ~sqrt(float eps) = 3e-4 of the pdf's factor
+        np.testing.assert_allclose(pdfs[scale], pdfs[1.0], rtol=1e-3, atol=1e-12)
 
 
 def importance(center, radius, energy, P, axis=None, one_sided=False):
