@@ -143,6 +143,35 @@ def source(socket):
     return None, carrier
 
 
+def output_key(node, identifier):
+    """What names an output of a node reached through groups (a GraphNode or a Blender node),
+    for used_outputs."""
+    groups = getattr(node, 'groups', ())
+    return tuple(g.as_pointer() for g in groups), unwrap(node).as_pointer(), identifier
+
+
+def used_outputs(ntree):
+    """The outputs (output_key) whose values reach ntree's active output node, following
+    links back as source() does (through reroutes, muted nodes and groups). Cycles removes
+    every other node before it compiles a shader, so an output linked only to something unused
+    (a leftover Math node, a node feeding nothing) counts as unlinked."""
+    out = output_node(ntree)
+    used, seen = set(), set()
+    todo = [GraphNode(out)] if out is not None else []
+    while todo:
+        node = todo.pop()
+        for i in range(len(node.inputs)):
+            link = source(node.inputs[i])[0]
+            if link is None:
+                continue
+            used.add(output_key(link.from_node, link.from_socket.identifier))
+            key = output_key(link.from_node, None)
+            if key not in seen:
+                seen.add(key)
+                todo.append(link.from_node)
+    return used
+
+
 def linked_link(socket):
     """The GraphLink feeding `socket` (see source), or None."""
     return source(socket)[0]

@@ -13,7 +13,7 @@ from .. import emissionsampling, nodeeval, principled, roughdiffuse, specular
 from .. import scenedata as sd
 from ..mapping import texture_transform, uv_map_name
 from ..nodeeval import constant_color, constant_value
-from ..nodegraph import input_socket, linked_link, linked_node, output_node
+from ..nodegraph import input_socket, linked_link, linked_node, output_key, output_node, used_outputs
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
 from .aovs import shader_aovs
 from .closure import Closure, Texture, is_image_alpha
@@ -68,6 +68,7 @@ class MaterialBuilder:
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
         self._images = {}          # (image pointer, unassociated) -> its pixels
+        self._used_outputs = None  # the material being built: nodegraph.used_outputs of its tree
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
         # per material: None; ('mesh', attribute name, w (3,), k (3,)): its albedo is w x the
@@ -301,6 +302,7 @@ class MaterialBuilder:
         if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
             closure = Closure(const=tuple(mat.diffuse_color[:3]))
         else:
+            self._used_outputs = used_outputs(ntree)
             out = output_node(ntree)
             if out is None or not out.inputs['Surface'].is_linked:
                 # Cycles: no surface shader renders black, but a volume-only material's
@@ -690,9 +692,12 @@ class MaterialBuilder:
         if img is None:
             reasons.append("Image Texture without an image (magenta, as Cycles)")
             return None
-        # Cycles: with the Alpha output linked, the Color output of an image stored with
-        # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0)
-        unassociate = bool(node.outputs['Alpha'].is_linked and associates_alpha(img))
+        # Cycles: with the Alpha output used, the Color output of an image stored with
+        # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0); an Alpha
+        # linked only to nodes the shader does not use is not (Cycles removes those first)
+        alpha_used = output_key(node, node.outputs['Alpha'].identifier) in self._used_outputs \
+            if self._used_outputs is not None else node.outputs['Alpha'].is_linked
+        unassociate = bool(alpha_used and associates_alpha(img))
         key = img.as_pointer()
         pixels = self._images.get((key, unassociate))
         if pixels is None:

@@ -246,3 +246,32 @@ def test_fair_editor_edits_inside_groups(scene, exported):
     # the metal's albedo (what the export renders for it) folded into the base colour
     want = specular.metal_albedo(0.5, (0.4, 0.5, 0.6), (1, 1, 1))
     assert np.allclose(table["Metal"].base_color, want, atol=1e-6) and want[0] < 0.39
+
+
+def test_used_outputs_follow_links_back_through_groups_and_mutes(scene):
+    """used_outputs: what reaches the active output, as source() follows links (groups,
+    reroutes, muted nodes); an output linked only to a node nothing uses is not among them."""
+    g, gi, go = _group("Lookup", outputs=(('Color', 'NodeSocketColor'), ('Alpha', 'NodeSocketFloat')))
+    inner = g.nodes.new('ShaderNodeTexImage')
+    g.links.new(inner.outputs['Color'], go.inputs['Color'])
+    g.links.new(inner.outputs['Alpha'], go.inputs['Alpha'])
+    mat, nt, out = scenes._material("Used outputs")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    group = nt.nodes.new('ShaderNodeGroup')
+    group.node_tree = g
+    nt.links.new(group.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    leftover = nt.nodes.new('ShaderNodeMath')           # feeds nothing
+    nt.links.new(tex.outputs['Alpha'], leftover.inputs[0])
+    muted = nt.nodes.new('ShaderNodeInvert')             # muted: Color passes through to Roughness
+    muted.mute = True
+    nt.links.new(tex.outputs['Color'], muted.inputs['Color'])
+    nt.links.new(muted.outputs['Color'], d.inputs['Roughness'])
+    used = nodegraph.used_outputs(nt)
+    inner_key = lambda s: nodegraph.output_key(nodegraph.GraphNode(inner, (group,)), s)  # noqa: E731
+    assert inner_key('Color') in used and inner_key('Alpha') not in used
+    assert nodegraph.output_key(tex, 'Color') in used
+    assert nodegraph.output_key(tex, 'Alpha') not in used and nodegraph.output_key(leftover, 'Value') not in used
+    nt.links.new(group.outputs['Alpha'], d.inputs['Roughness'])     # now the group's Alpha is used
+    assert inner_key('Alpha') in nodegraph.used_outputs(nt)
