@@ -91,6 +91,8 @@ def texture_transform(tex_node, reasons):
         elif vec.type == 'TEX_COORD':
             if link.from_socket.name != 'UV':
                 reasons.append(f"{link.from_socket.name} texture coordinates read as the UV map")
+            elif vec.from_instancer:
+                reasons.append(f"UV coordinates from the instancer ('{vec.name}') read as the object's own")
         elif vec.type == 'MAPPING':
             reasons.append("Mapping chain too long; read as the UV map")
         else:

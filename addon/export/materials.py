@@ -67,7 +67,7 @@ class MaterialBuilder:
                                       base_color=np.array(DEFAULT_SURFACE_ALBEDO, np.float32),
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
-        self._images = {}          # (image pointer, unassociated) -> its pixels
+        self._images = {}          # (image pointer, unassociated) -> (its pixels, what loading said)
         self._used_outputs = None  # the material being built: nodegraph.used_outputs of its tree
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
@@ -699,14 +699,19 @@ class MaterialBuilder:
             if self._used_outputs is not None else node.outputs['Alpha'].is_linked
         unassociate = bool(alpha_used and associates_alpha(img))
         key = img.as_pointer()
-        pixels = self._images.get((key, unassociate))
+        cached = self._images.get((key, unassociate))
+        if cached is None:
+            # what loading it says is said again by every material that reads it (and by each
+            # rebuild of one: _build's probes and _product_map start with fresh reasons)
+            notes = []
+            pixels = image_pixels(img, notes, unassociate)
+            if pixels is not None and img.source == 'TILED':
+                pixels = udim_tiles(img, pixels, notes, unassociate)
+            cached = self._images[key, unassociate] = (pixels, notes)
+        pixels, notes = cached
+        reasons.extend(notes)
         if pixels is None:
-            pixels = image_pixels(img, reasons, unassociate)
-            if pixels is None:
-                return None
-            if img.source == 'TILED':
-                pixels = udim_tiles(img, pixels, reasons, unassociate)
-            self._images[key, unassociate] = pixels
+            return None
         udim = pixels if isinstance(pixels, UdimTiles) else None
         where = None if transform is None else tuple(transform.ravel())
         if self._image_probe is not None:        # probing how a chain combines it with an attribute

@@ -318,3 +318,30 @@ def test_blackbody_is_blenders_light_temperature_colour(scene):
         want = np.array(ob.evaluated_get(dg).data.temperature_color)
         np.testing.assert_allclose(cn.blackbody(np.array([[kelvin]]))[0], want, rtol=1e-5, atol=1e-6,
                                    err_msg=f"{kelvin} K")
+
+
+def test_what_loading_an_image_says_reaches_every_material_that_reads_it(scene, monkeypatch):
+    """Images are loaded once per export; what loading one says (a colour space read as
+    another, say) is said in every material reading it. A material that read an image already
+    loaded by another had lost those notes, and _build's rebuilds (a colour attribute beside
+    an image, the glTF wiring) always did."""
+    from addon.export import materials
+    load = materials.image_pixels
+
+    def noting(img, reasons, unassociate=False):
+        reasons.append(f"loaded '{img.name}'")
+        return load(img, reasons, unassociate)
+    monkeypatch.setattr(materials, 'image_pixels', noting)
+    image = scenes.float_image("Shared", PX)
+
+    def material(name):
+        mat, nt, out = scenes._material(name)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        tex = nt.nodes.new('ShaderNodeTexImage')
+        tex.image = image
+        nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        return mat
+    builder = export.materials.MaterialBuilder()
+    first, second = (builder.materials[builder.index(material(n))] for n in ("First", "Second"))
+    assert "loaded 'Shared'" in first.approximated and "loaded 'Shared'" in second.approximated

@@ -122,6 +122,12 @@ def test_mapping_inside_a_group_and_unsupported_sources(dacrt_addon):
     reasons = []
     assert np.allclose(mapping.texture_transform(tex, reasons), [[4, 0, 0], [0, 4, 0]])
     assert reasons == ["Generated texture coordinates read as the UV map"]
+    coords = nt.nodes.new('ShaderNodeTexCoord')          # UV from the instancer: reported
+    coords.from_instancer = True
+    nt.links.new(coords.outputs['UV'], node.inputs['UV'])
+    reasons = []
+    mapping.texture_transform(tex, reasons)
+    assert reasons == [f"UV coordinates from the instancer ('{coords.name}') read as the object's own"]
     m.vector_type = 'NORMAL'
     assert "Normal read without its normalisation" in mapping.coordinates_approximation(tex)
 
