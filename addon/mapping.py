@@ -13,7 +13,7 @@ through nodegraph so groups and reroutes are transparent).
 import numpy as np
 
 from .nodeeval import constant
-from .nodegraph import linked_link, source
+from .nodegraph import linked_link, source, unwrap
 
 # Texture Coordinate outputs that are the ray direction in a world shader
 _DIRECTION_COORDINATES = ('Generated', 'Normal', 'Object')
@@ -72,7 +72,13 @@ def texture_transform(tex_node, reasons):
     nodes compose exactly; a Mapping with nothing linked maps its own (constant) vector. Other
     sources are read as the UV map, with the reason in reasons."""
     M, t = np.eye(3), np.zeros(3)         # from the vector reached so far to the image's
-    link = linked_link(tex_node.inputs['Vector'])
+    own = tex_node.inputs['Vector']
+    link, carrier = source(own)
+    if link is None and unwrap(carrier).as_pointer() != unwrap(own).as_pointer():
+        # unlinked past a group boundary (a Group node's Vector input left at its value): a
+        # constant point, as Cycles reads it, not the UV map an unlinked Vector means
+        p = np.array(carrier.default_value[:3], np.float64)
+        return np.array([[0.0, 0.0, p[0]], [0.0, 0.0, p[1]]])
     for _ in range(_MAX_CHAIN):
         if link is None or link.from_node.type != 'MAPPING':
             break

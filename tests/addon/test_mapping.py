@@ -8,7 +8,7 @@ import bpy
 import numpy as np
 from mathutils import Euler
 
-from addon import mapping
+from addon import mapping, nodegraph
 from tests.bench import fairmaterials
 
 from . import scenes
@@ -179,3 +179,27 @@ def test_mapping_inputs_driven_by_constant_nodes(dacrt_addon):
     assert reasons == ["Mapping Scale driven by nodes; its own value used"]
     want = R @ (7.0 * np.array([1.0, 0.0, 0.0])) + np.array([0.25, 0.5, 0.0])
     assert np.allclose(_apply(T, 1.0, 0.0), want[:2], atol=1e-12)
+
+
+def test_an_unlinked_group_input_is_a_constant_point(dacrt_addon):
+    """An Image Texture inside a group whose Vector comes from the Group Input, the Group node's
+    Vector left at its value: Cycles reads that one point (one texel everywhere), not the UV
+    map an unlinked Vector means (read as the UV map: 0.40/2.43/0.77x Cycles' mean)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    g, gi, go = _group("Lookup", inputs=(('Vector', 'NodeSocketVector'),), outputs=(('Color', 'NodeSocketColor'),))
+    inner = g.nodes.new('ShaderNodeTexImage')
+    g.links.new(gi.outputs['Vector'], inner.inputs['Vector'])
+    g.links.new(inner.outputs['Color'], go.inputs['Color'])
+    mat, nt, out = scenes._material("Group vector")
+    node = nt.nodes.new('ShaderNodeGroup')
+    node.node_tree = g
+    node.inputs['Vector'].default_value = (0.3, 0.6, 0.0)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(node.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    tex = nodegraph.linked_node(node.outputs['Color'].links[0].to_socket)   # as the export reaches it
+    assert tex.node == inner and tex.groups[0] == node
+    reasons = []
+    assert np.allclose(mapping.texture_transform(tex, reasons), [[0, 0, 0.3], [0, 0, 0.6]]) and reasons == []
+    unlinked = nt.nodes.new('ShaderNodeTexImage')        # the image's own Vector unlinked: the UV map
+    assert mapping.texture_transform(unlinked, reasons) is None and reasons == []
