@@ -345,3 +345,27 @@ def test_what_loading_an_image_says_reaches_every_material_that_reads_it(scene, 
     builder = export.materials.MaterialBuilder()
     first, second = (builder.materials[builder.index(material(n))] for n in ("First", "Second"))
     assert "loaded 'Shared'" in first.approximated and "loaded 'Shared'" in second.approximated
+
+
+def test_an_image_into_emission_strength_is_blended_as_stored(scene):
+    """An 8-bit sRGB image (and nodes reading it) into an Emission's Strength: Cycles blends the
+    stored bytes, decodes, runs the nodes, then scales the colour; baked before the blend, the
+    hunter's screen emitted 5-6% more than Cycles. Halfway between texels 0 and 255 the strength
+    is decode(0.5) = 0.214, not the mean of the decoded texels, 0.5."""
+    from addon.texture import srgb_to_linear, stored_texels
+    img = bpy.data.images.new("Strength map", 2, 1)
+    img.pixels.foreach_set(np.array([0, 0, 0, 1, 1, 1, 1, 1], np.float32))
+    mat, nt, out = scenes._material("Strength")
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    em = nt.nodes.new('ShaderNodeEmission')
+    em.inputs['Color'].default_value = (1.0, 0.5, 0.25, 1.0)
+    nt.links.new(tex.outputs['Color'], em.inputs['Strength'])
+    nt.links.new(em.outputs[0], out.inputs['Surface'])
+    m = _exported_material(mat)
+    stored = stored_texels(m.emission_texture)
+    assert stored is not None
+    got = stored.lookup(np.array([0.5], np.float32), np.array([0.5], np.float32), 'Linear', 'REPEAT')[:, 0]
+    assert np.allclose(got, srgb_to_linear(0.5) * np.array([1.0, 0.5, 0.25]), rtol=1e-5)
+    # what the light's choice and 'Closest' read: the texels themselves
+    assert np.allclose(m.emission_texture[0, :, :3], [[0, 0, 0], [1.0, 0.5, 0.25]], atol=1e-6)
