@@ -3,7 +3,8 @@
 Inside a bpy process that has the add-on registered, `Instrument` wraps (for the duration of a
 `with` block, restoring everything afterwards) the three seams the engine calls through its
 modules' attributes:
-- addon.export.export_scene: wall seconds of the scene export;
+- addon.export.export_scene: wall seconds of the scene export, and its warnings (what the
+  render reports it skipped or approximated);
 - addon.integrator.Integrator: the integrator of each render, to read its `stats` afterwards
   (setup, tracer scene creation, trace seconds, Python seconds = ray generation + shading);
 - addon.integrator.dacrt.Scene: every tracer call's `last_stats`, summed (native per-phase
@@ -74,6 +75,7 @@ class Instrument:
         self.native = {k: 0.0 for k in NATIVE_SUMS}
         self.native_calls = 0
         self.threads = 0
+        self.messages = []           # the export's (level, text) messages: what the render reports
 
     def __enter__(self):
         real_export = self._export.export_scene
@@ -84,7 +86,9 @@ class Instrument:
         def export_scene(*a, **k):
             t0 = time.perf_counter()
             try:
-                return real_export(*a, **k)
+                scene_data = real_export(*a, **k)
+                me.messages += list(getattr(scene_data, 'messages', ()))
+                return scene_data
             finally:
                 me.export_seconds += time.perf_counter() - t0
 
@@ -137,6 +141,7 @@ class Instrument:
             if key in stats:
                 out[key] = stats[key]
         out["native"] = dict(self.native)
+        out["warnings"] = list(dict.fromkeys(text for level, text in self.messages if level in ('WARNING', 'ERROR')))
         self._clear()
         return out
 

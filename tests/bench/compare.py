@@ -99,6 +99,14 @@ def _print_materials(m) -> None:
         print(f"  DACRT approximates '{name}': {why}")
 
 
+def _print_warnings(warnings) -> None:
+    """What the DACRT render reported beyond its materials (listed by _print_materials): the
+    world, lights, camera, skipped objects."""
+    for text in warnings:
+        if "material(s) approximated" not in text:
+            print(f"  DACRT reports: {text}")
+
+
 def run(args) -> int:
     if args.samples < 1:
         raise ValueError("--samples must be >= 1")
@@ -178,5 +186,6 @@ def run(args) -> int:
           + "   (Cycles seed vs seed: " + " ".join(f"{x:.4f}" for x in
                                                    doc["mean_ratio_rgb_cycles_seeds"]) + ")")
     _print_materials(d.get("materials"))
+    _print_warnings(d.get("breakdown", {}).get("warnings", ()))
     print(f"wrote {out}/side_by_side.png, difference.png, dacrt.exr, cycles.exr, compare.json")
     return 0

@@ -70,3 +70,13 @@ def test_blend_materials_mode_is_checked_and_keys_the_cycles_reference(tmp_path)
     assert renderspec.reference_key(fair, 64, [0]) == renderspec.reference_key(
         renderspec.scene_spec(str(blend)), 64, [0])
     assert renderspec.scene_spec("cornell").blend is None      # built-in scenes are diffuse already
+
+
+def test_compare_prints_what_dacrt_reported_beyond_its_materials(capsys):
+    """A world node DACRT does not evaluate (a Sky Texture, rendered 0.3x Cycles) was said only
+    in the render's log: compare printed the materials' approximations alone."""
+    compare._print_warnings(["world approximated: Sky Texture not evaluated",
+                             "2 material(s) approximated as diffuse: A, B"])
+    out = capsys.readouterr().out
+    assert "DACRT reports: world approximated: Sky Texture not evaluated" in out
+    assert "material(s)" not in out          # those are listed per material by _print_materials
