@@ -125,12 +125,16 @@ def _specular_mu(node, reasons):
 
 def _metal(node, reasons):
     """(metallic, roughness, tint) of the metal layer when Cycles renders one that the export
-    keeps (a constant Metallic > 0 without transmission), else None; whether the dielectric
-    specular layer is kept (not under transmission, nor under a node-driven metallic)."""
+    keeps (Metallic > 0, a node-driven one at its own value, without transmission), else None;
+    whether the dielectric specular layer is kept (not under transmission)."""
     (metallic,), m_ok = _values(node, ('Metallic',))
     (transmission,), t_ok = _values(node, ('Transmission Weight',))
     metallic = min(max(metallic, 0.0), 1.0)
-    if m_ok and t_ok and transmission == 0.0 and metallic > 0.0:
+    if not m_ok:
+        # a metallic map: its own value, as every node-driven input here (dropping the metal
+        # and the specular layer with it rendered a map of zeros 18% darker than Cycles)
+        reasons.append(f"Principled Metallic driven by nodes; its own value {metallic:g} used")
+    if t_ok and transmission == 0.0 and metallic > 0.0:
         (roughness,), r_ok = _values(node, ('Roughness',))
         tint, c_ok = _color(node, 'Specular Tint')
         if not (r_ok and c_ok):
@@ -138,10 +142,9 @@ def _metal(node, reasons):
         reasons.append(f"Principled metal as diffuse: its albedo averaged over view directions "
                        f"(Metallic {metallic:g})")
         return (metallic, roughness, tint), metallic < 1.0
-    if metallic != 0.0 or not m_ok:        # driven by nodes, or under transmission: as before
+    if metallic != 0.0:                    # under transmission: as before
         reasons.append("Principled metallic ignored")
-    keep = m_ok and t_ok and transmission == 0.0
-    return None, keep
+    return None, t_ok and transmission == 0.0
 
 
 def _coat_mu(node, reasons):
