@@ -467,6 +467,8 @@ class MaterialBuilder:
         if alpha is None:
             return c
         opacity = self._image_alpha(alpha, reasons)
+        if opacity is None:
+            opacity = self._evaluated_alpha(alpha, reasons)
         if opacity is not None:
             c.opacity, c.transparent = opacity, np.ones(3)
             return c
@@ -486,6 +488,33 @@ class MaterialBuilder:
             return None
         tex = self._texture(link.from_node, reasons)
         return None if tex is None else (tex, inverted)
+
+    def _evaluated_alpha(self, socket, reasons):
+        """(Texture, False) whose alpha is what nodes compute from one image (Blender's glTF
+        importer's alpha mask: 1 - (alpha < cutoff) into the Principled Alpha), evaluated per
+        texel; None when nothing of an image reaches the socket. Cycles blends the image, then
+        runs the nodes: a texel-wise cut-out keeps the coverage, with edges one texel soft
+        where Cycles' are sharp (reported unless looked up 'Closest')."""
+        link = linked_link(socket)
+        if link is None:
+            return None
+        notes = []
+        f = nodeeval.Evaluator(self._texture, notes, MISSING_IMAGE).input(socket, False)
+        src = f.tex
+        if src is None or src.attribute is not None or src.udim is not None:
+            return None
+        h, w = src.pixels.shape[:2]
+        a = np.asarray(f.value, np.float32)
+        if a.size != h * w:
+            return None
+        reasons.extend(notes)
+        px = np.zeros((h, w, 4), np.float32)
+        px[..., 3] = np.clip(np.nan_to_num(a.reshape(h, w), nan=1.0), 0.0, 1.0)
+        if src.interpolation != 'Closest':
+            reasons.append(f"alpha from nodes on image '{src.name}' evaluated per texel before the blend "
+                           "(Cycles: after it; cut-out edges one texel soft)")
+        return Texture(('alpha', src.key, id(px)), px, src.interpolation, src.extension, src.transform, None,
+                       src.name), False
 
     def _alpha_mix(self, node, reasons, depth):
         """A Mix Shader whose factor is an image's alpha, between a purely transparent shader and

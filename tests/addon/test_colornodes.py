@@ -369,3 +369,30 @@ def test_an_image_into_emission_strength_is_blended_as_stored(scene):
     assert np.allclose(got, srgb_to_linear(0.5) * np.array([1.0, 0.5, 0.25]), rtol=1e-5)
     # what the light's choice and 'Closest' read: the texels themselves
     assert np.allclose(m.emission_texture[0, :, :3], [[0, 0, 0], [1.0, 0.5, 0.25]], atol=1e-6)
+
+
+@pytest.mark.parametrize("interpolation", ['Closest', 'Linear'])
+def test_alpha_mask_through_math_nodes_is_an_opacity_texture(scene, interpolation):
+    """Blender's glTF importer wires an alpha mask as Principled Alpha <- 1 - (image alpha <
+    cutoff): evaluated per texel into the opacity texture (before: 'driven by nodes; its own
+    value used', an opaque card, 0.05x Cycles where the cut-out showed the ground)."""
+    px = np.ones((2, 2, 4), np.float32)
+    px[..., 3] = [[0.2, 0.7], [0.5, 0.0]]
+    mat, nt, out = scenes._material(f"Mask {interpolation}")
+    p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image(f"Leaf {interpolation}", px)
+    tex.interpolation = interpolation
+    less = nt.nodes.new('ShaderNodeMath')
+    less.operation, less.inputs[1].default_value = 'LESS_THAN', 0.5
+    sub = nt.nodes.new('ShaderNodeMath')
+    sub.operation, sub.inputs[0].default_value = 'SUBTRACT', 1.0
+    nt.links.new(tex.outputs['Alpha'], less.inputs[0])
+    nt.links.new(less.outputs[0], sub.inputs[1])
+    nt.links.new(sub.outputs[0], p.inputs['Alpha'])
+    nt.links.new(p.outputs[0], out.inputs['Surface'])
+    m = _exported_material(mat)
+    assert m.opacity is not None and "Principled alpha driven by nodes" not in m.approximated
+    np.testing.assert_array_equal(m.opacity[..., 0], [[0, 1], [1, 0]])
+    assert m.opacity_interpolation == interpolation
+    assert ("evaluated per texel before the blend" in m.approximated) == (interpolation != 'Closest')
