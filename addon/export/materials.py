@@ -428,6 +428,9 @@ class MaterialBuilder:
             alpha_mix = self._alpha_mix(node, reasons, depth)
             if alpha_mix is not None:
                 return alpha_mix
+            textured = self._textured_mix(node, reasons, depth)
+            if textured is not None:
+                return textured
             fac = mix_factor(node, reasons, "Mix Shader")
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
@@ -488,6 +491,50 @@ class MaterialBuilder:
             return None
         tex = self._texture(link.from_node, reasons)
         return None if tex is None else (tex, inverted)
+
+    def _textured_mix(self, node, reasons, depth):
+        """A Mix Shader whose factor nodes compute from one image, between two shaders of
+        constant albedo (no emission, transparency or holdout): the albedo per texel, a + (b -
+        a) x factor. Cycles blends the image, runs the nodes, then mixes; so does the lookup
+        here where the factor's nodes read the image's colour alone (else they run per texel
+        before the blend, reported). None otherwise (the factor at its own value)."""
+        fac_socket = node.inputs['Fac']
+        if linked_link(fac_socket) is None:
+            return None
+        notes = []
+        f = nodeeval.Evaluator(self._texture, notes, MISSING_IMAGE).input(fac_socket, False)
+        src = f.tex
+        if src is None or src.attribute is not None or src.udim is not None:
+            return None
+        h, w = src.pixels.shape[:2]
+        fac = np.asarray(f.value, np.float64)
+        if fac.size != h * w:
+            return None
+        sides = []
+        for socket in (node.inputs[1], node.inputs[2]):
+            c = self._shader(socket, [], depth + 1)
+            if c.texture is not None or c.emission.any() or c.emission_tex is not None or c.transparent.any() \
+                    or c.holdout or c.opacity is not None:
+                return None
+            sides.append(c)
+        for socket in (node.inputs[1], node.inputs[2]):       # now for the record, once each
+            self._shader(socket, reasons, depth + 1)
+        reasons.extend(notes)
+        a, b = sides[0].const, sides[1].const
+        fac = np.clip(np.nan_to_num(fac.reshape(h, w, 1), nan=0.0), 0.0, 1.0)
+        baked = np.empty((h, w, 4), np.float32)
+        baked[..., :3] = a + (b - a) * fac
+        baked[..., 3] = 1.0
+        after = self._after_lookup(fac_socket, src, stored_texels(src.pixels), False)
+        if after is not None:
+            lo, span = a.astype(np.float32), (b - a).astype(np.float32)
+            baked = ImageTexels(baked, after.followed_by(lambda g: lo + span * np.clip(g, 0.0, 1.0)))
+        elif src.interpolation != 'Closest':
+            reasons.append(f"Mix Shader factor from nodes on image '{src.name}' evaluated per texel before the "
+                           "blend (Cycles blends, then runs them)")
+        tex = Texture(('mix', src.key, id(baked)), baked, src.interpolation, src.extension, src.transform, None,
+                      src.name)
+        return Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
 
     def _evaluated_alpha(self, socket, reasons):
         """(Texture, False) whose alpha is what nodes compute from one image (Blender's glTF

@@ -396,3 +396,31 @@ def test_alpha_mask_through_math_nodes_is_an_opacity_texture(scene, interpolatio
     np.testing.assert_array_equal(m.opacity[..., 0], [[0, 1], [1, 0]])
     assert m.opacity_interpolation == interpolation
     assert ("evaluated per texel before the blend" in m.approximated) == (interpolation != 'Closest')
+
+
+def test_mix_shader_with_an_image_factor_mixes_per_texel(scene):
+    """A Mix Shader between two constant diffuse colours, its factor an 8-bit image: the
+    albedo per texel, a + (b - a) x factor, the factor looked up as stored and decoded first
+    (as Cycles blends, decodes, then mixes). It was mixed at the factor's own value, 0.5:
+    0.83/1.00/1.24x Cycles' mean on the hunter's scene."""
+    from addon.texture import srgb_to_linear, stored_texels
+    img = bpy.data.images.new("Factor map", 2, 1)
+    img.pixels.foreach_set(np.array([0, 0, 0, 1, 1, 1, 1, 1], np.float32))
+    mat, nt, out = scenes._material("Mixed by an image")
+    red, blue = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeBsdfDiffuse')
+    red.inputs['Color'].default_value = (0.8, 0.1, 0.1, 1.0)
+    blue.inputs['Color'].default_value = (0.1, 0.2, 0.9, 1.0)
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    nt.links.new(tex.outputs['Color'], mix.inputs['Fac'])
+    nt.links.new(red.outputs[0], mix.inputs[1])
+    nt.links.new(blue.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    m = _exported_material(mat)
+    a, b = np.array([0.8, 0.1, 0.1]), np.array([0.1, 0.2, 0.9])
+    assert "factor driven by nodes" not in m.approximated
+    np.testing.assert_allclose(m.texture[0, :, :3], [a, b], atol=1e-6)
+    got = stored_texels(m.texture).lookup(np.array([0.5], np.float32), np.array([0.5], np.float32),
+                                          'Linear', 'REPEAT')[:, 0]
+    np.testing.assert_allclose(got, a + (b - a) * srgb_to_linear(0.5), rtol=1e-5)
