@@ -20,7 +20,7 @@ from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .normalmaps import tangent_normal_map
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
-from .reflectors import diffuse_roughness, reflector_albedo
+from .reflectors import diffuse_roughness, glass_albedos, reflector_albedo
 from .shadersockets import mix_factor, value_emission
 
 # The grey of the diffuse fallbacks (a muted node, a shader without a colour)
@@ -438,6 +438,9 @@ class MaterialBuilder:
         reflector = reflector_albedo(node, reasons)
         if reflector is not None:
             return Closure(const=reflector)
+        if t == 'BSDF_GLASS':
+            reflect, transmit = glass_albedos(node, reasons)
+            return Closure(const=reflect, transparent=transmit)
         # Documented approximation: a diffuse surface of the node's constant colour.
         reasons.append(f"{node.bl_label} as diffuse")
         sock = input_socket(node, 'Color', 'Base Color')

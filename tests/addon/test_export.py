@@ -974,12 +974,17 @@ def test_material_table(scene, exported):
               "Emission": ((0, 0, 0), (1.5, 1.5, 1.5)),
               "Mix": ((0.75, 0, 0.25), (0, 0, 0)),
               "Furnace": ((0.5, 0.5, 0.5), (1, 1, 1)),
-              "Glass": ((0.9, 0.8, 0.7), (0, 0, 0)),
               "Shiny": (tuple(specular.metal_albedo(0.5, (0.5, 0.5, 0.5), (1, 1, 1))), (0, 0, 0))}
     for name, (base, emit) in expect.items():
         assert np.allclose(table[name].base_color, base, atol=1e-6), name
         assert np.allclose(table[name].emission, emit, atol=1e-6), name
     assert {n for n, m in table.items() if m.approximated} == {"Glass", "Shiny"}
+    # glass: its reflection as a grey diffuse albedo (a few percent at IOR 1.5), the rest of its
+    # colour let through, unbent (it was an opaque surface of its colour)
+    reflect = table["Glass"].base_color
+    assert np.ptp(reflect) < 1e-6 and 0.03 < reflect[0] < 0.12
+    np.testing.assert_allclose(table["Glass"].transparency, np.array([0.9, 0.8, 0.7]) * (1 - reflect[0]), rtol=1e-5)
+    assert "Glass BSDF as a transparent surface" in table["Glass"].approximated
     # fully metallic: the metal (its albedo as diffuse, 0.48 for base 0.5 at roughness 0.5)
     # replaces the dielectric specular layer
     assert 0.47 < table["Shiny"].base_color[0] < 0.49
