@@ -10,7 +10,7 @@ Squares and rectangles are sampled by solid angle, as Cycles does (area_light_re
 Urena et al. 2013, "An Area-Preserving Parametrization for Spherical Rectangles"): pdf = 1 / S,
 S the solid angle of the rectangle seen from the shading point, so a large light close to a
 surface costs no variance from t^2 / cos_l varying across it. S is the spherical rectangle's
-angle excess, sum(g_i) - 2 pi; each g_i - pi/2 is an atan2 of exact sine and cosine, which keeps
+angle excess, sum(g_i) - 2 pi, summed as sum(g_i - pi/2) from exact sines and cosines, which keeps
 S to ~3e-7 of itself above the light at any distance in float32 (Cycles' acos form loses up to
 2e-3 near grazing). Where float32 still cannot do it well (S < 1e-3 sr, or the light seen under
 less than ~3 degrees of elevation: tan < 0.05) the rectangle is sampled by area instead; that
@@ -163,21 +163,29 @@ class AreaLight(Lamp):
         y0, y1 = (lo_y - fy) * self._len_y, (hi_y - fy) * self._len_y
         h2 = h * h
         with np.errstate(divide='ignore', invalid='ignore', over='ignore', under='ignore'):
-            r0, r1, r2, r3 = np.sqrt(h2 + y0 * y0), np.sqrt(h2 + x1 * x1), np.sqrt(h2 + y1 * y1), np.sqrt(h2 + x0 * x0)
+            # 1 / distances to the edges' lines
+            one = F32(1.0)
+            i0, i1 = one / np.sqrt(h2 + y0 * y0), one / np.sqrt(h2 + x1 * x1)
+            i2, i3 = one / np.sqrt(h2 + y1 * y1), one / np.sqrt(h2 + x0 * x0)
             # z components of the unit normals of the planes through X and each edge, and their
             # in-plane components (n_i^2 + a_i^2 = 1)
-            n0, n1, n2, n3 = -y0 / r0, x1 / r1, y1 / r2, -x0 / r3
-            a0, a1, a2, a3 = h / r0, h / r1, h / r2, h / r3
-            d0, d1 = _corner_excess(n0, a0, n1, a1), _corner_excess(n1, a1, n2, a2)
-            d2, d3 = _corner_excess(n2, a2, n3, a3), _corner_excess(n3, a3, n0, a0)
-            d23 = d2 + d3
-            S = (d0 + d1) + d23
+            n0, n1, n2, n3 = -y0 * i0, x1 * i1, y1 * i2, -x0 * i3
+            a0, a1, a2, a3 = h * i0, h * i1, h * i2, h * i3
+            # each corner's inner angle g_i as e^(i d_i), d_i = g_i - pi/2 in (-pi/2, pi/2):
+            # (sin g_i, -cos g_i); d0 + d1 and d2 + d3 as arguments of their products
+            s0, c0 = _corner_turn(n0, a0, n1, a1)
+            s1, c1 = _corner_turn(n1, a1, n2, a2)
+            s2, c2 = _corner_turn(n2, a2, n3, a3)
+            s3, c3 = _corner_turn(n3, a3, n0, a0)
+            d01 = _atan2(s0 * c1 + c0 * s1, s0 * s1 - c0 * c1)
+            d23 = _atan2(s2 * c3 + c2 * s3, s2 * s3 - c2 * c3)
+            S = d01 + d23
             # the light's elevation at X: h over the horizontal distance to the rectangle
             dx = np.maximum(F32(0.0), np.maximum(x0, -x1))
             dy = np.maximum(F32(0.0), np.maximum(y0, -y1))
             far2 = np.maximum(x0 * x0, x1 * x1) + np.maximum(y0 * y0, y1 * y1) + h2
             t2 = SA_MIN_TAN_ELEVATION * SA_MIN_TAN_ELEVATION
-            use = ((h > 0) & (h2 >= np.finfo(F32).tiny) & (far2 <= np.finfo(F32).max) & (h2 >= t2 * (dx * dx + dy * dy))
+            use = ((h > 0) & (h2 >= np.finfo(F32).tiny) & (s0 > 0) & (s1 > 0) & (s2 > 0) & (s3 > 0) & (far2 <= np.finfo(F32).max) & (h2 >= t2 * (dx * dx + dy * dy))
                    & (S >= SA_MIN_SOLID_ANGLE) & (hi_x > lo_x) & (hi_y > lo_y))
         return dict(x0=x0, x1=x1, y0=y0, y1=y1, h=h, b0=n0, b1=n2, d23=d23, S=S, use=use)
 
@@ -323,12 +331,32 @@ class AreaLight(Lamp):
         return idx, outer(self.emit, self._spread(np.ones(len(idx), F32), cos_l, np.take(D, idx, axis=1))), pdf
 
 
-def _corner_excess(na, aa, nb, ab):
-    """g - pi/2 for the inner angle g of a spherical rectangle at the corner between planes whose
-    unit normals have z components na, nb and in-plane components aa, ab: cos g = -na nb, and
-    sin g = |n_a x n_b| from the components (not 1 - cos^2, which loses g near 0 and pi)."""
-    sin_g = np.sqrt(aa * aa * nb * nb + na * na * ab * ab + aa * aa * ab * ab)
-    return np.arctan2(na * nb, sin_g)
+def _corner_turn(na, aa, nb, ab):
+    """The inner angle g of a spherical rectangle at the corner between planes whose unit normals
+    have z components na, nb and in-plane components aa, ab, as (sin g, -cos g) =
+    (|n_a x n_b|, na nb): the sine from the components (not 1 - cos^2, which loses g near 0 and
+    pi)."""
+    return np.sqrt(aa * aa * nb * nb + na * na * ab * ab + aa * aa * ab * ab), na * nb
+
+
+def _atan2(y, x):
+    """atan2 in float32: Cephes' atanf polynomial after reducing |y| / |x| to at most tan(pi/8)
+    (within 3 ULPs); lamps.h atan2f_poly, which avoids glibc's slow atan2f, with the same
+    operations (so the same bits)."""
+    ax, ay = np.abs(x), np.abs(y)
+    swap = ay > ax                                  # beyond pi/4: pi/2 - atan(|x| / |y|)
+    num, den = np.where(swap, ax, ay), np.where(swap, ay, ax)
+    mid = num > F32(0.41421356) * den               # beyond pi/8: pi/4 + atan((t - 1) / (t + 1))
+    r = np.where(mid, num - den, num) / np.where(mid, num + den, den)
+    z = r * r
+    p = F32(8.05374449538e-2) * z - F32(1.38776856032e-1)
+    p = p * z + F32(1.99777106478e-1)
+    p = p * z - F32(3.33329491539e-1)
+    a = p * z * r + r
+    a = a + np.where(mid, F32(np.pi / 4), F32(0.0))
+    a = np.where(swap, F32(np.pi / 2) - a, a)
+    a = np.where(x < 0, F32(np.pi) - a, a)
+    return np.where(y < 0, -a, a)
 
 
 def _clamp(x, lo, hi):
