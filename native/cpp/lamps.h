@@ -254,14 +254,14 @@ inline float area_box_area(const LampRecord& L, int shape, bool full) {
 // of S near grazing (acos near +-1), and g0 + g1 + g2 + g3 - 2 pi cancels far away; here the
 // d_i = g_i - pi/2 come from exact sines and cosines, summed as arguments of complex products,
 // so S = sum d_i keeps ~3e-7 of itself above the lamp at any distance, and the warp works with
-// phi = au - pi (Cycles' au near pi) from the same sums. Where float32 still cannot (measured with a float64 twin on 2 x 3000
-// random lamps and points: a 256^2 grid of warped samples' irradiance), the lamp is sampled by
-// area instead: below SA_MIN_SOLID_ANGLE, or where the lamp is seen under less than ~3 degrees
-// of elevation (tan < SA_MIN_TAN_ELEVATION; a sliver near P's horizon, where the warp's
-// 1 - cu^2 and 1 - hv^2 cancel). Within both, the warped estimate of irradiance was within
-// 7e-5 of S's; outside, area sampling loses little: a small or far-off-axis lamp's t^2 / cos_l
-// hardly varies. sample_lamp and hit_area decide at the same point with the same float32
-// operations, so MIS sees one pdf.
+// phi = au - pi (Cycles' au near pi) from the same sums. Where float32 still cannot (measured
+// with a float64 twin on 2 x 3000 random lamps and points: a 256^2 grid of warped samples'
+// irradiance), the lamp is sampled by area instead: below SA_MIN_SOLID_ANGLE, or where the lamp
+// is seen under less than ~3 degrees of elevation (tan < SA_MIN_TAN_ELEVATION; a sliver near
+// P's horizon, where the warp's 1 - cu^2 and 1 - hv^2 cancel). Within both, the warped estimate
+// of irradiance was within 7e-5 of S's; outside, area sampling loses little: a small or
+// far-off-axis lamp's t^2 / cos_l hardly varies. sample_lamp and hit_area decide at the same
+// point with the same float32 operations, so MIS sees one pdf.
 struct SphRect {
     float x0, x1, y0, y1, h;  // the rectangle relative to P (world lengths), h > 0 above it
     float b0, b1, d23, S;     // n0.z, n2.z, d2 + d3, solid angle
