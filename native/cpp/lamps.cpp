@@ -19,7 +19,7 @@ std::string lamp_record_error(const LampRecord& r) {
     const int kind = int(r.kind), shape = int(r.shape);
     if (float(kind) != r.kind || kind < 0 || kind >= LAMP_NUM_KINDS)
         return "kind " + std::to_string(r.kind) + " is not a lamp kind code 0.." + std::to_string(LAMP_NUM_KINDS - 1);
-    static const int shapes[LAMP_NUM_KINDS] = {3, 3, 2, 2, 1};  // shape codes per kind
+    static const int shapes[LAMP_NUM_KINDS] = {3, 3, 2, 3, 1};  // shape codes per kind
     if (float(shape) != r.shape || shape < 0 || shape >= shapes[kind])
         return "shape " + std::to_string(r.shape) + " is not a shape code 0.." + std::to_string(shapes[kind] - 1) +
                " of lamp kind " + std::to_string(kind);
