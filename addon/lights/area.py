@@ -42,6 +42,7 @@ SHAPE_RECT, SHAPE_ELLIPSE, SHAPE_PARALLELOGRAM = range(3)   # record shape codes
 # the warped samples' irradiance was within 7e-5 of S's), else by area. lamps.h SA_MIN_*.
 SA_MIN_SOLID_ANGLE = F32(1e-3)
 SA_MIN_TAN_ELEVATION = F32(0.05)
+SA_SMALL = F32(0.5)      # a lamp whose half-diagonal is below this x its centre's distance: by area
 FULL_BOX = (F32(-0.5), F32(0.5), F32(-0.5), F32(0.5))
 
 
@@ -187,7 +188,11 @@ class AreaLight(Lamp):
             t2 = SA_MIN_TAN_ELEVATION * SA_MIN_TAN_ELEVATION
             # X in front (one-sided), h^2 normal, every square finite, every corner's sine > 0
             # (the sums' arguments unambiguous), the thresholds, a non-empty box
-            use = ((h > 0) & (h2 >= np.finfo(F32).tiny) & (far2 <= np.finfo(F32).max)
+            # small as seen from X: by area (cheaper, and as good there), as lamps.h decides
+            cx, cy = F32(0.5) * (x0 + x1), F32(0.5) * (y0 + y1)
+            ex, ey = x1 - x0, y1 - y0
+            small = F32(0.25) * (ex * ex + ey * ey) < (SA_SMALL * SA_SMALL) * (cx * cx + cy * cy + h2)
+            use = (~small & (h > 0) & (h2 >= np.finfo(F32).tiny) & (far2 <= np.finfo(F32).max)
                    & (s0 > 0) & (s1 > 0) & (s2 > 0) & (s3 > 0)
                    & (h2 >= t2 * (dx * dx + dy * dy)) & (S >= SA_MIN_SOLID_ANGLE) & (hi_x > lo_x) & (hi_y > lo_y))
         return dict(x0=x0, x1=x1, y0=y0, y1=y1, h=h, b0=n0, b1=n2, d23=d23, S=S, use=use)

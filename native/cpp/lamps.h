@@ -271,6 +271,14 @@ struct SphRect {
 
 constexpr float SA_MIN_SOLID_ANGLE = 1e-3f;
 constexpr float SA_MIN_TAN_ELEVATION = 0.05f;
+// A lamp that looks small from P (its half-diagonal below SA_SMALL x the distance to its
+// centre) is sampled by area, which costs a seventh as much per sample and loses little there:
+// t^2 / cos_l varies little over it. Measured (python -m tests.bench errortime --scenes cornell,
+// 64 spp): on the Cornell box (a 0.5 m square under the ceiling) solid angle everywhere cut
+// relMSE 8% for 40% more render time (efficiency 357 -> 277); at 0.25, 5% for 17% (341 ->
+// 312); at 0.5 the box is all by area, as before, while a 4 m square 0.5 m above a cube keeps
+// its gain (1.6x -> 1.02x Cycles' seed-to-seed error).
+constexpr float SA_SMALL = 0.5f;
 
 // Four float32 lanes for sph_rect, whose four corners and two angle sums are independent: SSE2
 // where there is one, else loops, the same IEEE operations per lane either way (so the same
@@ -360,6 +368,14 @@ inline SphRect sph_rect(const LampRecord& L, const float P[3], float lo_x, float
     r.y0 = (lo_y - fy) * r.ly;
     r.y1 = (hi_y - fy) * r.ly;
     const float h2 = r.h * r.h;
+    {
+        const float cx = 0.5f * (r.x0 + r.x1), cy = 0.5f * (r.y0 + r.y1), ex = r.x1 - r.x0, ey = r.y1 - r.y0;
+        if (0.25f * (ex * ex + ey * ey) < (SA_SMALL * SA_SMALL) * (cx * cx + cy * cy + h2)) {  // (NaN: not small)
+            r.b0 = r.b1 = r.d23 = r.S = 0.0f;
+            r.use = false;
+            return r;
+        }
+    }
     // per edge (y0, x1, y1, x0): 1 / the distance to its line, and the unit normal of the plane
     // through P and it, as its z component n (along the lamp's normal) and in-plane part a
     const F4 inv = f4(1.0f) / sqrt4(f4(h2) + f4(r.y0, r.x1, r.y1, r.x0) * f4(r.y0, r.x1, r.y1, r.x0));
