@@ -18,6 +18,7 @@ from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
 from .aovs import shader_aovs
 from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
+from .imageuser import user_frame
 from .normalmaps import tangent_normal_map
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 from .reflectors import diffuse_roughness, reflector_albedo
@@ -67,7 +68,7 @@ class MaterialBuilder:
                                       base_color=np.array(DEFAULT_SURFACE_ALBEDO, np.float32),
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
-        self._images = {}          # (image pointer, unassociated) -> its pixels
+        self._images = {}          # (image pointer, unassociated, sequence frame) -> its pixels
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
         # per material: None; ('mesh', attribute name, w (3,), k (3,)): its albedo is w x the
@@ -694,22 +695,23 @@ class MaterialBuilder:
         # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0)
         unassociate = bool(node.outputs['Alpha'].is_linked and associates_alpha(img))
         key = img.as_pointer()
-        pixels = self._images.get((key, unassociate))
+        frame = user_frame(img, node.image_user)        # an image sequence's frames differ
+        pixels = self._images.get((key, unassociate, frame))
         if pixels is None:
-            pixels = image_pixels(img, reasons, unassociate)
+            pixels = image_pixels(img, reasons, unassociate, node.image_user)
             if pixels is None:
                 return None
             if img.source == 'TILED':
                 pixels = udim_tiles(img, pixels, reasons, unassociate)
-            self._images[key, unassociate] = pixels
+            self._images[key, unassociate, frame] = pixels
         udim = pixels if isinstance(pixels, UdimTiles) else None
         where = None if transform is None else tuple(transform.ravel())
         if self._image_probe is not None:        # probing how a chain combines it with an attribute
-            t = Texture((key, unassociate, interp, ext, where), self._image_probe, interp, ext, transform,
+            t = Texture((key, unassociate, interp, ext, where, frame), self._image_probe, interp, ext, transform,
                          None, img.name)
             t.aligned = True
             return t
-        return Texture((key, unassociate, interp, ext, where), pixels if udim is None else udim.flat,
+        return Texture((key, unassociate, interp, ext, where, frame), pixels if udim is None else udim.flat,
                         interp, ext, transform, udim, img.name)
 
 
