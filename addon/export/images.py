@@ -1,8 +1,9 @@
 """Image pixels as Cycles reads them: scene-linear float32 RGBA with alpha associated as Cycles
-stores it, byte images decoded by their colour space, premultiplied bytes as stored, UDIM tiles
-read from their files (OpenImageIO), and, for Cycles' blend-then-decode lookups, the texels as
-Cycles stores them (texture.EncodedTexels). Missing or unreadable images are magenta, as in
-Cycles. Part of the export layer."""
+stores it, byte images decoded or converted by their colour space (colorspaces), premultiplied
+bytes as stored; UDIM tiles, an image sequence's frame (imageuser) and grey+alpha files read
+from their files (OpenImageIO), as Cycles reads them; and, for Cycles' blend-then-decode
+lookups, the texels as Cycles stores them (texture.EncodedTexels). Missing or unreadable images
+are magenta, as in Cycles. Part of the export layer."""
 
 import os
 
@@ -41,7 +42,7 @@ def udim_tiles(img, first, reasons, unassociate):
     if not rest:
         return _stacked_tiles(tiles)
     try:
-        import OpenImageIO  # noqa: F401  (read_file_texels needs it)
+        import OpenImageIO  # noqa: F401  (_file_texels reads the tiles with it)
     except ImportError:
         reasons.append(f"UDIM image '{img.name}': OpenImageIO is not available to read tiles "
                        f"{', '.join(map(str, rest))} (magenta)")
