@@ -195,13 +195,13 @@ def stored_texels(texture):
 
 
 def lookup_texels(texture, interpolation):
-    """What texture_lookup reads for a scene texture: the stored encoding when the image has one
-    and the lookup blends; 'Closest' reads one texel, where decoding (or dividing by alpha)
-    before or after is the same, so the scene-linear texels are read as they always were."""
+    """What texture_lookup reads for a scene texture: the stored encoding when the image has one,
+    for every interpolation. 'Closest' reads one texel, where decoding before or after is the
+    same, but the scene-linear texels are Blender's, which for a deeper image with alpha were
+    associated after the colour conversion where Cycles associates before it (a 16-bit sRGB
+    PNG, texel (1, 0.5, 0.2) at alpha 0.25: 4.6x / 3.7x / 2.8x Cycles' colour)."""
     stored = stored_texels(texture)
-    if stored is not None and (interpolation != 'Closest' or texture is stored):
-        return stored
-    return texture
+    return texture if stored is None else stored
 
 
 def texture_lookup(tex, u: np.ndarray, v: np.ndarray, interpolation: str, extension: str) -> np.ndarray:

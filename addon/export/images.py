@@ -1,13 +1,18 @@
 """Image pixels as Cycles reads them: scene-linear float32 RGBA with alpha associated as Cycles
-stores it, byte images decoded by their colour space, premultiplied bytes as stored, UDIM tiles
-read from their files (OpenImageIO), and, for Cycles' blend-then-decode lookups, the texels as
-Cycles stores them (texture.EncodedTexels). Missing or unreadable images are magenta, as in
-Cycles. Part of the export layer."""
+stores it, byte images decoded or converted by their colour space (colorspaces), premultiplied
+bytes as stored; UDIM tiles, an image sequence's frame (imageuser) and grey+alpha files read
+from their files (OpenImageIO), as Cycles reads them; and, for Cycles' blend-then-decode
+lookups, the texels as Cycles stores them (texture.EncodedTexels). Missing or unreadable images
+are magenta, as in Cycles. Part of the export layer."""
+
+import os
 
 import bpy
 import numpy as np
 
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stored_texels
+from .colorspaces import CONVERT, DATA, LINEAR, SRGB, space_kind, to_scene_linear
+from .imageuser import sequence_path, user_frame
 
 MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
 
@@ -37,27 +42,21 @@ def udim_tiles(img, first, reasons, unassociate):
     if not rest:
         return _stacked_tiles(tiles)
     try:
-        import OpenImageIO as oiio
+        import OpenImageIO  # noqa: F401  (_file_texels reads the tiles with it)
     except ImportError:
         reasons.append(f"UDIM image '{img.name}': OpenImageIO is not available to read tiles "
                        f"{', '.join(map(str, rest))} (magenta)")
         return _stacked_tiles(tiles)
     pattern = bpy.path.abspath(img.filepath_raw, library=img.library)
-    straight = oiio.ImageSpec()   # a byte file's alpha as stored (straight, as Blender keeps it)
-    straight.attribute('oiio:UnassociatedAlpha', 1)
     unread = []
     for number in rest:
         tx, ty = (number - 1001) % 10, (number - 1001) // 10
         path = pattern.replace('<UDIM>', str(number)).replace('<UVTILE>', f"u{tx + 1}_v{ty + 1}")
-        buf = oiio.ImageBuf(path, 0, 0, straight) if '<' not in path and path != pattern else None
-        spec = buf.spec() if buf is not None and not buf.has_error else None
-        if spec is None or spec.width < 1 or spec.height < 1 or spec.nchannels < 1:
+        texels = _file_texels(path, img, reasons, unassociate) if '<' not in path and path != pattern else None
+        if texels is None:
             unread.append(number)
-            continue
-        raw = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32).reshape(spec.height, spec.width, -1)[::-1]
-        # byte files are byte buffers in Blender; deeper ones float buffers in the image's space
-        tiles[number] = _linear_rgba(np.ascontiguousarray(raw), img, reasons, unassociate,
-                                     byte=spec.format.basetype == oiio.UINT8, encoded=True)
+        else:
+            tiles[number] = texels
     if unread:
         reasons.append(f"UDIM image '{img.name}': tile{'s' if len(unread) > 1 else ''} "
                        f"{', '.join(map(str, unread))} could not be read from '{pattern}' (magenta); "
@@ -65,6 +64,38 @@ def udim_tiles(img, first, reasons, unassociate):
         for number in unread:
             tiles[number] = np.array(MISSING_IMAGE + (1.0,), np.float32).reshape(1, 1, 4)
     return _stacked_tiles(tiles)
+
+
+def _open_straight(path):
+    """(OpenImageIO.ImageBuf, spec) of an image file with its alpha as stored (straight, as
+    Blender keeps byte images and Cycles reads files), or (None, None) if it cannot be read."""
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        return None, None
+    straight = oiio.ImageSpec()
+    straight.attribute('oiio:UnassociatedAlpha', 1)
+    buf = oiio.ImageBuf(path, 0, 0, straight) if path and os.path.isfile(path) else None
+    spec = buf.spec() if buf is not None and not buf.has_error else None
+    if spec is None or spec.width < 1 or spec.height < 1 or spec.nchannels < 1:
+        if buf is not None:
+            buf.geterror()      # read, so OpenImageIO does not print it
+        return None, None
+    return buf, spec
+
+
+def _file_texels(path, img, reasons, unassociate):
+    """The texels (ImageTexels) of the image file at `path` read as Cycles reads `img`'s file
+    (a UDIM tile, a sequence's frame, a grey+alpha file), converted as Blender converts it; None
+    if it cannot be read."""
+    import OpenImageIO as oiio
+    buf, spec = _open_straight(path)
+    if spec is None:
+        return None
+    raw = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32).reshape(spec.height, spec.width, -1)[::-1]
+    # byte files are byte buffers in Blender; deeper ones float buffers in the image's space
+    return _linear_rgba(np.ascontiguousarray(raw), img, reasons, unassociate,
+                        byte=spec.format.basetype == oiio.UINT8, encoded=True)
 
 
 def _stacked_tiles(tiles):
@@ -90,12 +121,15 @@ def _srgb_to_linear(c):
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
-def image_pixels(img, reasons, unassociate=False):
+def image_pixels(img, reasons, unassociate=False, user=None):
     """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels.
     The colour is associated with alpha as Cycles stores the image (associates_alpha), or with
     `unassociate` divided by it again as Cycles' lookup does for a linked Alpha output. A
     texture.ImageTexels: it also carries the texels as Cycles stores them for its lookup
-    (_stored_texels), which blends those and decodes after."""
+    (_stored_texels), which blends those and decodes after. `user`: the node's image user,
+    which picks an image sequence's frame."""
+    if img.source == 'SEQUENCE':     # bpy holds no frame's pixels in background renders
+        return _sequence_frame(img, reasons, unassociate, user)
     try:
         w, h = img.size
         ch = img.channels
@@ -107,11 +141,49 @@ def image_pixels(img, reasons, unassociate=False):
     except (RuntimeError, ValueError, ReferenceError):
         reasons.append(f"image '{img.name}' could not be loaded (magenta, as Cycles)")
         return None
+    if img.source == 'MOVIE':
+        reasons.append(f"movie image '{img.name}': the frame Blender has loaded is read, not necessarily "
+                       f"frame {user_frame(img, user)} that Cycles shows (movie frames are not read here)")
     buf = buf.reshape(h, w, ch)
     from_file = not _read_from_blender(img)
+    if from_file and associates_alpha(img):
+        # Blender gives a grey+alpha file 4 channels and associates it; Cycles reads the file's
+        # 2 channels and associates only 4-channel ones: read it as Cycles does
+        path = bpy.path.abspath(img.filepath_raw, library=img.library)
+        if _grey_alpha_integer_file(path):
+            texels = _file_texels(path, img, reasons, unassociate)
+            if texels is not None:
+                return texels
     if not img.is_float and ch == 4 and img.alpha_mode == 'PREMUL':
         buf = _premultiplied_bytes(img, buf, from_file, reasons)
     return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file)
+
+
+def _sequence_frame(img, reasons, unassociate, user):
+    """The texels of an image sequence's file at the frame its user shows (Cycles reads that
+    file, imageuser.user_frame / sequence_path), or None (magenta, as Cycles) if unreadable."""
+    frame = user_frame(img, user)
+    path = sequence_path(img, frame) or bpy.path.abspath(img.filepath_raw, library=img.library)
+    texels = _file_texels(path, img, reasons, unassociate)
+    if texels is None:
+        reasons.append(f"image sequence '{img.name}': frame {frame} could not be read from '{path}' "
+                       "(magenta, as Cycles)")
+    return texels
+
+
+def _grey_alpha_integer_file(path):
+    """Whether the file at path has 2 channels (grey + alpha) of integers (8 or 16 bits)."""
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        return False
+    inp = oiio.ImageInput.open(path) if os.path.isfile(path) else None
+    if inp is None:
+        oiio.geterror()
+        return False
+    spec = inp.spec()
+    inp.close()
+    return spec.nchannels == 2 and spec.format.basetype in (oiio.UINT8, oiio.UINT16)
 
 
 def _premultiplied_bytes(img, buf, from_file, reasons):
@@ -143,7 +215,8 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
     unless `encoded` (a deeper-than-byte file read directly: in the image's colour space,
     converted and associated here as Blender does on load). A texture.ImageTexels carrying the
     texels as Cycles stores them for lookup (_stored_texels; from_file: Cycles reads the image's
-    file, not Blender's buffer)."""
+    file, not Blender's buffer). Spaces other than sRGB and scene linear are converted through
+    OpenColorIO (colorspaces) from the values Cycles stores, as its loader converts them."""
     h, w, ch = buf.shape
     rgba = np.empty((h, w, 4), np.float32)
     rgba[..., :min(ch, 4)] = buf[..., :4]
@@ -153,37 +226,51 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
         rgba[..., 1] = rgba[..., 2] = buf[..., 0]
         rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
     k8 = None
+    # Cycles associates only 4-channel files (a grey+alpha one stays straight), yet divides by
+    # alpha at a linked Alpha output all the same
     associate = ch == 4 and associates_alpha(img)
     if byte:   # the bytes, once: Blender's byte pixels are k x (1/255) in float32
         k8 = np.rint(rgba * 255.0).astype(np.uint8)
         if associate:                            # integer c * a / 255, as Cycles associates
             c = k8[..., :3].astype(np.uint16) * k8[..., 3:4]
             k8[..., :3] = (c + 1 + (c >> 8)) >> 8       # c // 255 for c <= 255^2, without a division
-    stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, ch, k8)
+    kind = space_kind(img, reasons) if byte or encoded else None
+    if kind == CONVERT:
+        # Cycles converts what it stores (bytes associated as above; a deeper file's values,
+        # associated) to scene linear; its lookup blends those and divides by alpha after
+        if byte:
+            rgba[..., :3] = k8[..., :3] / np.float32(255.0)
+        elif associate:
+            rgba[..., :3] *= rgba[..., 3:4]
+        rgba = to_scene_linear(rgba, img, keep_alpha_out=img.alpha_mode == 'CHANNEL_PACKED')
+        stored = EncodedTexels(rgba.copy(), False, True) if unassociate else None
+        return ImageTexels(_unassociated(rgba) if unassociate else rgba, stored)
+    stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, associate, kind, k8)
     if byte:   # byte buffers are in the image's colour space; float ones are linear
-        decode = _decodes_srgb(img, reasons)
-        if associate:
-            # Blender keeps byte images straight; Cycles associates them on load (integer
-            # c * a / 255) and unassociates at lookup, both in the image's own encoding, before
-            # the colour conversion: a linked Alpha gives nearly the straight colour again
-            if unassociate:
-                rgba[..., :3] = k8[..., :3] / np.float32(255.0)
-                rgba = _unassociated(rgba)
-            else:      # a table per byte value: ~15 ns a texel, not ~250 (4K image: 5 s)
-                rgba[..., :3] = _byte_table('divided', decode)[k8[..., :3]]
-                decode = False
+        decode = kind == SRGB
+        if unassociate and (associate or ch == 2):
+            # Cycles divides the colour it stores (associated in bytes, c * a / 255, or a grey
+            # image's straight one) by alpha at lookup, in the image's own encoding, before
+            # decoding it: an associated colour comes back nearly straight
+            rgba[..., :3] = k8[..., :3] / np.float32(255.0)
+            rgba = _unassociated(rgba)
+        elif associate:    # a table per byte value: ~15 ns a texel, not ~250 (4K image: 5 s)
+            rgba[..., :3] = _byte_table('divided', decode)[k8[..., :3]]
+            decode = False
         elif decode and np.array_equal(rgba[..., :3], _byte_table('blender', False)[k8[..., :3]]):
             rgba[..., :3] = _byte_table('blender', True)[k8[..., :3]]   # Blender's own byte floats
             decode = False
         if decode:
             rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
     elif encoded:          # a deeper file: converted, then associated, as Blender loads it
-        if _decodes_srgb(img, reasons):
-            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
-        if associates_alpha(img):
-            rgba[..., :3] *= rgba[..., 3:4]
-        if unassociate:
+        if unassociate and not associate:    # divided in the file's encoding, as Cycles
             rgba = _unassociated(rgba)
+        if kind == SRGB:
+            rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+        if associate:
+            rgba[..., :3] *= rgba[..., 3:4]
+            if unassociate:
+                rgba = _unassociated(rgba)
     elif unassociate:      # float buffers are linear and associated
         rgba = _unassociated(rgba)
     return ImageTexels(rgba, stored)
@@ -193,7 +280,7 @@ def _keeps_srgb(img):
     """Whether Cycles keeps the image in its sRGB encoding (compress_as_srgb: its colour space is
     sRGB; ImageMetaData::detect_colorspace), decoding after its lookup's blend. Other display
     spaces are converted to linear on load, texel by texel, as here."""
-    return not img.colorspace_settings.is_data and img.colorspace_settings.name == 'sRGB'
+    return space_kind(img) == SRGB
 
 
 def _read_from_blender(img):
@@ -220,18 +307,18 @@ def _byte_table(kind, decode):
     return _BYTE_TABLES[key]
 
 
-def _stored_texels(rgba, img, unassociate, byte, encoded, from_file, channels, k8=None):
+def _stored_texels(rgba, img, unassociate, byte, encoded, from_file, associates, kind, k8=None):
     """The image as Cycles stores it for lookup when that is not the scene-linear texels
     _linear_rgba makes (texture.EncodedTexels), else None, from its buffer's RGBA (straight
     bytes / 255; a deeper file's straight values; Blender's linear float buffer, associated).
     An sRGB image is kept in its encoding, its colour associated with alpha in it (bytes
-    integer, c a / 255), and decoded after the blend, when Cycles reads it from its file at any
-    depth or from Blender's byte buffer; a linked Alpha output divides by the blended alpha
-    (Cycles: the associated texels are blended, then divided). Exact for those; images in
-    other display spaces are converted texel by texel before the blend, as before."""
-    associates = associates_alpha(img)
+    integer, c a / 255) where Cycles associates (`associates`: 4 channels), and decoded after
+    the blend, when Cycles reads it from its file at any depth or from Blender's byte buffer; a
+    linked Alpha output divides by the blended alpha (Cycles: the stored texels are blended,
+    then divided). `kind`: the colour space's (colorspaces.space_kind) for byte and deeper
+    files; images converted through OpenColorIO are handled by _linear_rgba."""
     srgb = _keeps_srgb(img)
-    linear_space = not _decodes_srgb(img, [])
+    linear_space = kind in (LINEAR, DATA)
     if byte:   # k8: the bytes, associated where Cycles associates (_linear_rgba made them)
         if srgb or (linear_space and unassociate):
             return EncodedTexels(k8.copy(), srgb, unassociate, 1.0 / 255.0)
@@ -267,17 +354,3 @@ def encoded_environment(pixels, interpolation):
         return None
     rgb = stored.texels[..., :3].astype(np.float32) * stored.scale
     return rgb if np.isfinite(rgb).all() and (rgb >= 0).all() else None
-
-
-def _decodes_srgb(img, reasons):
-    """Whether the image's colour space is read as sRGB (every space but linear and data ones;
-    other display spaces are noted as approximated so)."""
-    space = img.colorspace_settings.name
-    if space in ('sRGB', 'Filmic sRGB', 'AgX Base sRGB') or space.startswith('sRGB'):
-        if space != 'sRGB':
-            reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
-        return True
-    if img.colorspace_settings.is_data or space.startswith('Linear') or space in ('Non-Color', 'Working Space'):
-        return False
-    reasons.append(f"image '{img.name}' colour space {space} read as sRGB")
-    return True

@@ -18,6 +18,7 @@ from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
 from .aovs import shader_aovs
 from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
+from .imageuser import user_frame
 from .normalmaps import tangent_normal_map
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 from .reflectors import diffuse_roughness, glass_albedos, reflector_albedo
@@ -67,7 +68,7 @@ class MaterialBuilder:
                                       base_color=np.array(DEFAULT_SURFACE_ALBEDO, np.float32),
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
-        self._images = {}          # (image pointer, unassociated) -> (its pixels, what loading said)
+        self._images = {}          # (image pointer, unassociated, sequence frame) -> (its pixels, what loading said)
         self._used_outputs = None  # the material being built: nodegraph.used_outputs of its tree
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
@@ -791,15 +792,16 @@ class MaterialBuilder:
             if self._used_outputs is not None else node.outputs['Alpha'].is_linked
         unassociate = bool(alpha_used and associates_alpha(img))
         key = img.as_pointer()
-        cached = self._images.get((key, unassociate))
+        frame = user_frame(img, node.image_user)        # an image sequence's frames differ
+        cached = self._images.get((key, unassociate, frame))
         if cached is None:
             # what loading it says is said again by every material that reads it (and by each
             # rebuild of one: _build's probes and _product_map start with fresh reasons)
             notes = []
-            pixels = image_pixels(img, notes, unassociate)
+            pixels = image_pixels(img, notes, unassociate, node.image_user)
             if pixels is not None and img.source == 'TILED':
                 pixels = udim_tiles(img, pixels, notes, unassociate)
-            cached = self._images[key, unassociate] = (pixels, notes)
+            cached = self._images[key, unassociate, frame] = (pixels, notes)
         pixels, notes = cached
         reasons.extend(notes)
         if pixels is None:
@@ -807,11 +809,11 @@ class MaterialBuilder:
         udim = pixels if isinstance(pixels, UdimTiles) else None
         where = None if transform is None else tuple(transform.ravel())
         if self._image_probe is not None:        # probing how a chain combines it with an attribute
-            t = Texture((key, unassociate, interp, ext, where), self._image_probe, interp, ext, transform,
+            t = Texture((key, unassociate, interp, ext, where, frame), self._image_probe, interp, ext, transform,
                          None, img.name)
             t.aligned = True
             return t
-        return Texture((key, unassociate, interp, ext, where), pixels if udim is None else udim.flat,
+        return Texture((key, unassociate, interp, ext, where, frame), pixels if udim is None else udim.flat,
                         interp, ext, transform, udim, img.name)
 
 

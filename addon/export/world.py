@@ -130,7 +130,7 @@ def _environment(node, strength, reasons, chain=None):
         reasons.append(f"Background Strength {float(strength):g} is negative or not finite; rendered black")
         return np.zeros(3, np.float32), None
     img = node.image
-    pixels = None if img is None else image_pixels(img, reasons)
+    pixels = None if img is None else image_pixels(img, reasons, user=node.image_user)
     if pixels is None:
         if img is None:
             reasons.append("Environment Texture without an image (magenta, as Cycles)")

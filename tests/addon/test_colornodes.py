@@ -328,9 +328,9 @@ def test_what_loading_an_image_says_reaches_every_material_that_reads_it(scene, 
     from addon.export import materials
     load = materials.image_pixels
 
-    def noting(img, reasons, unassociate=False):
+    def noting(img, reasons, *args):
         reasons.append(f"loaded '{img.name}'")
-        return load(img, reasons, unassociate)
+        return load(img, reasons, *args)
     monkeypatch.setattr(materials, 'image_pixels', noting)
     image = scenes.float_image("Shared", PX)
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from addon import export
-from addon.texture import EncodedTexels, UdimTiles, lookup_texels, srgb_to_linear, stored_texels
+from addon.texture import EncodedTexels, UdimTiles, lookup_texels, srgb_to_linear, stored_texels, texture_lookup
 
 from . import scenes
 
@@ -111,12 +111,31 @@ def test_linear_float_with_linked_alpha_divides_after_the_blend():
     assert _stored(scenes.float_image("G", px))[1] is None        # alpha not linked: the texels
 
 
-def test_closest_reads_the_linear_texels():
+def test_closest_reads_the_stored_texels():
+    """'Closest' reads the stored texels as 'Linear' does: one byte texel decoded after the pick
+    is the linear texel (within float rounding)."""
     img = bpy.data.images.new("gen", 2, 1)
     img.pixels.foreach_set((BYTES / 255.0).astype(np.float32).ravel())
     m = _material(img, interpolation='Closest')
-    assert lookup_texels(m.texture, 'Closest') is m.texture
-    assert isinstance(lookup_texels(m.texture, 'Linear'), EncodedTexels)
+    stored = lookup_texels(m.texture, 'Closest')
+    assert isinstance(stored, EncodedTexels) and stored is lookup_texels(m.texture, 'Linear')
+    u, v = np.array([0.25, 0.75], np.float32), np.full(2, 0.5, np.float32)
+    got = texture_lookup(stored, u, v, 'Closest', 'REPEAT')
+    assert np.allclose(got.T, m.texture[0, :, :3], rtol=1e-6, atol=1e-7)
+
+
+def test_closest_16bit_alpha_associates_before_decoding(tmp_path):
+    """A 16-bit sRGB RGBA PNG read 'Closest': Cycles associates the file's values in their
+    encoding and decodes the picked texel, decode(c a); Blender's linear texels are decode(c) a
+    (texel (1, 0.5, 0.2) at alpha 0.25: 0.051 / 0.014 / 0.004 against 0.25 / 0.054 / 0.008)."""
+    straight = np.array([1.0, 0.5, 0.2, 0.25])
+    words = np.broadcast_to(np.rint(straight * 65535), (2, 2, 4)).astype(np.uint16)
+    m = _material(bpy.data.images.load(_write(tmp_path / "a16.png", words, 'uint16')), interpolation='Closest')
+    u = v = np.array([0.25, 0.75], np.float32)
+    got = texture_lookup(lookup_texels(m.texture, 'Closest'), u, v, 'Closest', 'REPEAT')
+    c = words[0, 0] / 65535.0
+    want = srgb_to_linear(c[:3] * c[3])
+    assert np.allclose(got.T, want, rtol=1e-4), (got.T, want)
 
 
 def test_colour_nodes_after_an_encoded_image():

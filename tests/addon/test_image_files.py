@@ -1,0 +1,127 @@
+"""Which file and colour space the export reads an image from, as Cycles (the renders are
+compared in tests/parity/test_image_files.py): an image sequence's frame from its image user
+(imageuser.py, Blender's BKE_image_user_frame_get: start, duration clamped or cyclic, then the
+offset; the file name's last digits replaced, zero-padded), for Image and Environment Textures
+alike; colour spaces resolved through Blender's OCIO config (colorspaces.py: roles such as
+'scene_linear' are the space they name)."""
+import bpy
+import numpy as np
+import pytest
+
+from addon import export
+from addon.export import colorspaces
+from addon.export.imageuser import sequence_path, user_frame
+from addon.texture import srgb_to_linear
+
+from . import scenes
+
+FRAMES = [[200, 30, 30], [30, 200, 30], [30, 30, 200]]
+
+
+def _sequence(tmp_path):
+    for i, rgb in enumerate(FRAMES):
+        scenes.write_image(tmp_path / f"seq_{i + 1:03d}.png", np.array([[rgb]], np.uint8))
+    img = bpy.data.images.load(str(tmp_path / "seq_001.png"))
+    img.source = 'SEQUENCE'
+    return img
+
+
+@pytest.mark.parametrize('scene_frame, start, duration, offset, cyclic, want', [
+    (2, 1, 3, 0, False, 2),
+    (9, 1, 3, 0, False, 3),        # clamped to the duration
+    (-4, 1, 3, 0, False, 0),       # ... and to 0
+    (5, 1, 3, 0, True, 2),         # wrapped
+    (3, 1, 3, 0, True, 3),         # a wrap's 0 is the last frame
+    (-1, 1, 3, 0, True, 2),
+    (8, 4, 3, 2, True, 4),         # the offset after the wrap (Cycles: frame 4, not 1)
+    (2, 1, 3, 10, False, 12),
+    (2, 1, 0, 5, False, 0),        # no duration: frame 0
+])
+def test_user_frame_as_blender(tmp_path, scene_frame, start, duration, offset, cyclic, want):
+    img = _sequence(tmp_path)
+    mat, nt, out = scenes._material("M")
+    user = nt.nodes.new('ShaderNodeTexImage').image_user
+    user.frame_start, user.frame_duration, user.frame_offset, user.use_cyclic = start, duration, offset, cyclic
+    assert user_frame(img, user, scene_frame) == want
+
+
+def test_sequence_path_pads_the_last_digits(tmp_path):
+    img = _sequence(tmp_path)
+    assert sequence_path(img, 7) == str(tmp_path / "seq_007.png")
+    assert sequence_path(img, 1234) == str(tmp_path / "seq_1234.png")
+    assert sequence_path(img, -2) == str(tmp_path / "seq_-002.png")
+
+
+def _diffuse_of(img, user_settings):
+    mat, nt, out = scenes._material("Seq " + img.name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    user_settings(tex.image_user)
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    builder = export.materials.MaterialBuilder()
+    return builder.materials[builder.index(mat)]
+
+
+def test_sequence_texture_reads_the_frame_shown(tmp_path):
+    """At scene frame 2 the user shows frame 2 (green); a second node offset by 1 shows frame 3
+    (blue): the two are read apart, not shared as one image."""
+    img = _sequence(tmp_path)
+    bpy.context.scene.frame_set(2)
+
+    def frames(offset):
+        def settings(user):
+            user.frame_start, user.frame_duration, user.frame_offset = 1, 3, offset
+        return settings
+
+    for offset, want in ((0, FRAMES[1]), (1, FRAMES[2])):
+        m = _diffuse_of(img, frames(offset))
+        assert not m.approximated, m.approximated
+        np.testing.assert_allclose(m.texture[0, 0, :3], srgb_to_linear(np.array(want) / 255.0), atol=1e-6)
+
+
+def test_missing_frame_is_magenta_and_reported(tmp_path):
+    img = _sequence(tmp_path)
+    bpy.context.scene.frame_set(2)
+
+    def settings(user):
+        user.frame_start, user.frame_duration, user.frame_offset = 1, 3, 5     # frame 7: no file
+    m = _diffuse_of(img, settings)
+    assert "frame 7 could not be read" in m.approximated and "seq_007.png" in m.approximated
+
+
+def test_environment_sequence_reads_the_frame_shown(tmp_path):
+    img = _sequence(tmp_path)
+    bpy.context.scene.frame_set(3)
+    world = scenes.environment_world(img)
+    node = next(n for n in world.node_tree.nodes if n.type == 'TEX_ENVIRONMENT')
+    node.image_user.frame_start, node.image_user.frame_duration = 1, 3
+    reasons = []
+    pixels = export.images.image_pixels(img, reasons, user=node.image_user)
+    assert not reasons, reasons
+    np.testing.assert_allclose(pixels[0, 0, :3], srgb_to_linear(np.array(FRAMES[2]) / 255.0), atol=1e-6)
+
+
+@pytest.mark.parametrize('space, kind', [
+    ('sRGB', colorspaces.SRGB), ('Linear Rec.709', colorspaces.LINEAR), ('scene_linear', colorspaces.LINEAR),
+    ('Non-Color', colorspaces.DATA), ('Linear Rec.2020', colorspaces.CONVERT), ('ACEScg', colorspaces.CONVERT),
+    ('Filmic sRGB', colorspaces.CONVERT), ('AgX Base sRGB', colorspaces.CONVERT),
+])
+def test_colour_space_kinds(space, kind):
+    img = bpy.data.images.new("cs", 1, 1)
+    img.colorspace_settings.name = space
+    reasons = []
+    assert colorspaces.space_kind(img, reasons) == kind and not reasons
+
+
+def test_8bit_rec2020_is_converted_by_its_matrix(tmp_path):
+    """An 8-bit file in Linear Rec.2020: its bytes / 255 times the Rec.2020 -> Rec.709 matrix
+    (ITU-R BT.2087), as OCIO's conversion gives it."""
+    rec2020_to_709 = np.array([[1.6605, -0.5876, -0.0728], [-0.1246, 1.1329, -0.0083], [-0.0182, -0.1006, 1.1187]])
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "c.png", np.array([[[179, 77, 38]]], np.uint8)))
+    img.colorspace_settings.name = 'Linear Rec.2020'
+    reasons = []
+    got = export.images.image_pixels(img, reasons)[0, 0, :3]
+    assert not reasons, reasons
+    np.testing.assert_allclose(got, rec2020_to_709 @ (np.array([179, 77, 38]) / 255.0), atol=2e-4)
