@@ -496,6 +496,21 @@ class MaterialBuilder:
         tex = self._texture(link.from_node, reasons)
         return None if tex is None else (tex, inverted)
 
+    def _float_per_texel(self, socket):
+        """(image Texture, values (h, w) float32, notes) of a float socket that nodes compute
+        from one image (not an attribute, not UDIM), evaluated at each of its texels; None when
+        no image reaches it."""
+        if linked_link(socket) is None:
+            return None
+        notes = []
+        f = nodeeval.Evaluator(self._texture, notes, MISSING_IMAGE).input(socket, False)
+        src = f.tex
+        if src is None or src.attribute is not None or src.udim is not None:
+            return None
+        h, w = src.pixels.shape[:2]
+        values = np.asarray(f.value, np.float32)
+        return None if values.size != h * w else (src, values.reshape(h, w), notes)
+
     def _textured_mix(self, node, reasons, depth):
         """A Mix Shader whose factor nodes compute from one image, between two shaders of
         constant albedo (no emission, transparency or holdout): the albedo per texel, a + (b -
@@ -503,17 +518,10 @@ class MaterialBuilder:
         here where the factor's nodes read the image's colour alone (else they run per texel
         before the blend, reported). None otherwise (the factor at its own value)."""
         fac_socket = node.inputs['Fac']
-        if linked_link(fac_socket) is None:
+        per_texel = self._float_per_texel(fac_socket)
+        if per_texel is None:
             return None
-        notes = []
-        f = nodeeval.Evaluator(self._texture, notes, MISSING_IMAGE).input(fac_socket, False)
-        src = f.tex
-        if src is None or src.attribute is not None or src.udim is not None:
-            return None
-        h, w = src.pixels.shape[:2]
-        fac = np.asarray(f.value, np.float64)
-        if fac.size != h * w:
-            return None
+        src, fac, notes = per_texel
         sides = []
         for socket in (node.inputs[1], node.inputs[2]):
             c = self._shader(socket, [], depth + 1)
@@ -525,8 +533,8 @@ class MaterialBuilder:
             self._shader(socket, reasons, depth + 1)
         reasons.extend(notes)
         a, b = sides[0].const, sides[1].const
-        fac = np.clip(np.nan_to_num(fac.reshape(h, w, 1), nan=0.0), 0.0, 1.0)
-        baked = np.empty((h, w, 4), np.float32)
+        fac = np.clip(np.nan_to_num(fac[..., None].astype(np.float64), nan=0.0), 0.0, 1.0)
+        baked = np.empty(fac.shape[:2] + (4,), np.float32)
         baked[..., :3] = a + (b - a) * fac
         baked[..., 3] = 1.0
         after = self._after_lookup(fac_socket, src, stored_texels(src.pixels), False)
@@ -546,21 +554,13 @@ class MaterialBuilder:
         texel; None when nothing of an image reaches the socket. Cycles blends the image, then
         runs the nodes: a texel-wise cut-out keeps the coverage, with edges one texel soft
         where Cycles' are sharp (reported unless looked up 'Closest')."""
-        link = linked_link(socket)
-        if link is None:
+        per_texel = self._float_per_texel(socket)
+        if per_texel is None:
             return None
-        notes = []
-        f = nodeeval.Evaluator(self._texture, notes, MISSING_IMAGE).input(socket, False)
-        src = f.tex
-        if src is None or src.attribute is not None or src.udim is not None:
-            return None
-        h, w = src.pixels.shape[:2]
-        a = np.asarray(f.value, np.float32)
-        if a.size != h * w:
-            return None
+        src, a, notes = per_texel
         reasons.extend(notes)
-        px = np.zeros((h, w, 4), np.float32)
-        px[..., 3] = np.clip(np.nan_to_num(a.reshape(h, w), nan=1.0), 0.0, 1.0)
+        px = np.zeros(a.shape + (4,), np.float32)
+        px[..., 3] = np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)
         if src.interpolation != 'Closest':
             reasons.append(f"alpha from nodes on image '{src.name}' evaluated per texel before the blend "
                            "(Cycles: after it; cut-out edges one texel soft)")
