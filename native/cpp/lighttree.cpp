@@ -324,8 +324,7 @@ struct Builder {
     }
 
     // Fills node `at` over items order[b, e); returns its box (lo, hi) and cone.
-    void build(size_t at, size_t b, size_t e, int32_t parent, double lo[3], double hi[3], Cone& cone) {
-        nodes[at].parent = parent;
+    void build(size_t at, size_t b, size_t e, double lo[3], double hi[3], Cone& cone) {
         if (e - b == 1) {
             const int32_t i = order[b];
             const Item& it = items[size_t(i)];
@@ -360,8 +359,8 @@ struct Builder {
             nodes.resize(child + 2);
             double llo[3], lhi[3], rlo[3], rhi[3];
             Cone lc, rc;
-            build(child, b, mid, int32_t(at), llo, lhi, lc);
-            build(child + 1, mid, e, int32_t(at), rlo, rhi, rc);
+            build(child, b, mid, llo, lhi, lc);
+            build(child + 1, mid, e, rlo, rhi, rc);
             for (int k = 0; k < 3; ++k) lo[k] = std::min(llo[k], rlo[k]), hi[k] = std::max(lhi[k], rhi[k]);
             cone = merge(lc, rc);
             nodes[at].energy = nodes[child].energy + nodes[child + 1].energy;
@@ -468,7 +467,7 @@ LightTree::LightTree(const LightTreeInput& in) {
     std::iota(bld.order.begin(), bld.order.end(), 0);
     double lo[3], hi[3];
     Cone cone;
-    bld.build(0, 0, items.size(), -1, lo, hi, cone);
+    bld.build(0, 0, items.size(), lo, hi, cone);
     for (size_t g = 0; g < items.size(); ++g)
         for (int32_t j = item_start_[g]; j < item_start_[g + 1]; ++j)
             leaf_of_key_[size_t(member_key_[size_t(j)])] = leaf_of_item[g];

@@ -42,7 +42,6 @@ struct LightTreeNode {
     double energy;            // summed energy of the lights below (> 0; double: sums of float
                               // energies overflow float, and importances divide it by d^2)
     int32_t child;            // inner node: left child (right = child + 1); leaf: -1 - member
-    int32_t parent;           // -1 at the root
 };
 
 // The lights of a tree, m members, each with an axis-aligned box (lo, hi: 3 rows of m), an
