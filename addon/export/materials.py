@@ -21,7 +21,7 @@ from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
 from .normalmaps import tangent_normal_map
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
-from .reflectors import diffuse_roughness, glass_albedos, reflector_albedo
+from .reflectors import diffuse_roughness, glass_albedos, glossy_map, reflector_albedo
 from .shadersockets import mix_factor, value_emission
 
 # The grey of the diffuse fallbacks (a muted node, a shader without a colour)
@@ -436,6 +436,10 @@ class MaterialBuilder:
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
             return a.plus(b, reasons)
+        if t == 'BSDF_GLOSSY' and linked_link(node.inputs['Color']) is not None:
+            gmap = glossy_map(node, reasons)        # a textured colour: its albedo per texel
+            if gmap is not None:
+                return self._color_closure(node.inputs['Color'], reasons).mapped(gmap)
         reflector = reflector_albedo(node, reasons)
         if reflector is not None:
             return Closure(const=reflector)

@@ -22,6 +22,46 @@ def diffuse_roughness(node, reasons):
     return rough
 
 
+class GlossyMap:
+    """A Glossy BSDF's colour -> its albedo averaged over view directions (specular.
+    glossy_albedo, per channel), for a textured colour (export.closure.Closure.mapped): exact
+    for a constant colour; texels through a table of 129 steps per channel over 0..1 (nonlinear
+    with Multiscatter GGX's energy compensation; colours beyond 1 read as 1)."""
+
+    _GRID = np.linspace(0.0, 1.0, 129)
+
+    def __init__(self, roughness, multiscatter, beckmann):
+        self.roughness, self.multiscatter, self.beckmann = float(roughness), bool(multiscatter), bool(beckmann)
+        self.key = ('glossy', self.roughness, self.multiscatter, self.beckmann)
+        self._table = None
+
+    def exact(self, rgb):
+        return specular.glossy_albedo(self.roughness, rgb, self.multiscatter, self.beckmann)
+
+    def __call__(self, x):
+        if self._table is None:
+            self._table = np.array([self.exact((v, v, v))[0] for v in self._GRID])
+        x = np.asarray(x, np.float64)
+        return np.interp(np.clip(x, 0.0, 1.0), self._GRID, self._table)
+
+
+def glossy_map(node, reasons):
+    """The GlossyMap of a Glossy BSDF whose colour nodes drive (its roughness at its own value
+    where nodes drive it too, reported), or None for other nodes and distributions
+    (reflector_albedo's)."""
+    if node.type != 'BSDF_GLOSSY':
+        return None
+    dist = getattr(node, 'distribution', 'MULTI_GGX')
+    if dist not in ('GGX', 'MULTI_GGX', 'BECKMANN'):
+        return None
+    rough, r_ok = constant_value(node.inputs['Roughness'])
+    reasons.append(f"{node.bl_label} as diffuse: its albedo averaged over view directions")
+    if not r_ok:
+        reasons.append(f"{node.bl_label} roughness driven by nodes; its own value used")
+    return GlossyMap(min(max(rough, 0.0), 1.0) if np.isfinite(rough) else 0.5, dist == 'MULTI_GGX',
+                     dist == 'BECKMANN')
+
+
 def reflector_albedo(node, reasons):
     """A Glossy BSDF's, or a Metallic BSDF's in F82 mode, albedo averaged over view directions
     (specular.py) for its constant inputs (their own values where nodes drive them, reported),
