@@ -536,17 +536,6 @@ void LightTree::build_stops() {
     }
 }
 
-// One point's way down (sample()): u stays as drawn, and the node's share of [0, 1) narrows to
-// [lo, lo + w) on the way down (no rescaling of u: one division per level, in shares).
-struct LightTree::Walk {
-    size_t at;
-    double lo, w, u;
-};
-
-inline LightTree::Walk LightTree::start(double u) const {
-    return {0, 0.0, 1.0, u >= 0.0 ? u : 0.0};  // (NaN: 0)
-}
-
 inline void LightTree::probs_at(size_t at, const float P[3], const float* N, uint64_t receivers,
                                 double p[4]) const {
     const size_t qi = size_t(stop_of_[at]);
@@ -554,45 +543,42 @@ inline void LightTree::probs_at(size_t at, const float P[3], const float* N, uin
     target_probs(nodes_.data(), stops_[qi], lane_sets, P, N, receivers, p);
 }
 
-inline void LightTree::step(Walk& k, const float P[3], const float* N, uint64_t receivers) const {
-    double p[4];
-    probs_at(k.at, P, N, receivers, p);
-    // the first target (of those possible) whose share of [lo, lo + w) holds u; the last
-    // possible one where rounding leaves u past them all
-    double run = k.lo, pick_lo = k.lo;
-    int pick = 0;
-    for (int j = 0; j < 4; ++j) {
-        if (!(p[j] > 0.0)) continue;
-        pick = j;
-        pick_lo = run;
-        run += k.w * p[j];
-        if (k.u < run) break;
+int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers) const {
+    // u stays as drawn; the node's share of [0, 1) narrows to [lo, lo + w) on the way down
+    // (no rescaling of u: one division per stop, in the probabilities)
+    size_t at = 0;
+    double lo = 0.0, w = 1.0;
+    if (!(u >= 0.0)) u = 0.0;  // (NaN too)
+    while (nodes_[at].child >= 0) {
+        double p[4];
+        probs_at(at, P, N, receivers, p);
+        // the first target (of those possible) whose share of [lo, lo + w) holds u; the last
+        // possible one where rounding leaves u past them all
+        double run = lo, pick_lo = lo;
+        int pick = 0;
+        for (int j = 0; j < 4; ++j) {
+            if (!(p[j] > 0.0)) continue;
+            pick = j;
+            pick_lo = run;
+            run += w * p[j];
+            if (u < run) break;
+        }
+        lo = pick_lo;
+        w *= p[pick];
+        at = size_t(stops_[size_t(stop_of_[at])].target[pick]);
     }
-    k.lo = pick_lo;
-    k.w *= p[pick];
-    k.at = size_t(stops_[size_t(stop_of_[k.at])].target[pick]);
-}
-
-inline int32_t LightTree::finish(const Walk& k, double& prob) const {
     // the leaf's group: a member by energy, with what is left of u
-    const size_t g = size_t(-1 - nodes_[k.at].child);
+    const size_t g = size_t(-1 - nodes_[at].child);
     const int32_t b = item_start_[g], e = item_start_[g + 1];
     int32_t slot = b;
-    double w = k.w;
     if (e - b > 1) {
-        const double t = std::clamp(w > 0.0 ? (k.u - k.lo) / w : 0.0, 0.0, 1.0);
+        const double t = std::clamp(w > 0.0 ? (u - lo) / w : 0.0, 0.0, 1.0);
         slot = int32_t(std::upper_bound(member_cdf_.begin() + b, member_cdf_.begin() + e, t) - member_cdf_.begin());
         slot = std::min(slot, e - 1);
         w *= member_share_[size_t(slot)];
     }
     prob = w;
     return member_key_[size_t(slot)];
-}
-
-int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers) const {
-    Walk k = start(u);
-    while (nodes_[k.at].child >= 0) step(k, P, N, receivers);
-    return finish(k, prob);
 }
 
 double LightTree::pdf(const float P[3], const float* N, int64_t key, uint64_t receivers) const {

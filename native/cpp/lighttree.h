@@ -106,12 +106,8 @@ public:
     };
 
 private:
-    struct Walk;
     void build_stops();
-    Walk start(double u) const;
-    void step(Walk& k, const float P[3], const float* N, uint64_t receivers) const;
     void probs_at(size_t at, const float P[3], const float* N, uint64_t receivers, double p[4]) const;
-    int32_t finish(const Walk& k, double& prob) const;
 
     std::vector<LightTreeNode> nodes_;
     std::vector<Stop> stops_;
