@@ -69,7 +69,7 @@ class MaterialBuilder:
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
         self._images = {}          # (image pointer, unassociated, sequence frame) -> (its pixels, what loading said)
-        self._used_outputs = None  # the material being built: nodegraph.used_outputs of its tree
+        self._used_outputs = None  # the material being built: nodegraph.used_outputs of its tree (None: none)
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
         # per material: None; ('mesh', attribute name, w (3,), k (3,)): its albedo is w x the
@@ -300,10 +300,10 @@ class MaterialBuilder:
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
+        self._used_outputs = used_outputs(ntree) if ntree is not None else None
         if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
             closure = Closure(const=tuple(mat.diffuse_color[:3]))
         else:
-            self._used_outputs = used_outputs(ntree)
             out = output_node(ntree)
             if out is None or not out.inputs['Surface'].is_linked:
                 # Cycles: no surface shader renders black, but a volume-only material's
@@ -528,13 +528,11 @@ class MaterialBuilder:
         src, fac, notes = per_texel
         sides = []
         for socket in (node.inputs[1], node.inputs[2]):
-            c = self._shader(socket, [], depth + 1)
+            c = self._shader(socket, notes, depth + 1)       # (said only if this mix is taken)
             if c.texture is not None or c.emission.any() or c.emission_tex is not None or c.transparent.any() \
                     or c.holdout or c.opacity is not None:
                 return None
             sides.append(c)
-        for socket in (node.inputs[1], node.inputs[2]):       # now for the record, once each
-            self._shader(socket, reasons, depth + 1)
         reasons.extend(notes)
         a, b = sides[0].const, sides[1].const
         fac = np.clip(np.nan_to_num(fac[..., None].astype(np.float64), nan=0.0), 0.0, 1.0)
