@@ -12,23 +12,24 @@ every view cosine the stack is affine in the base colour without metal, so the a
 step (dim (3,), add (3,)), base -> base x dim + add, exact for any base, textured or not
 (export.closure.Closure.layered; the fair-material override folds it into a base colour). With metal
 it is a BaseMap, a per-channel function of the base (exact for a constant, through a table per
-texel). Sheen, transmission and subsurface are dropped and reported, as before.
+texel). The sheen lies over the coat (sheen.py), one more (dim, add) pair at each view cosine.
+Transmission and subsurface are dropped and reported, as before.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import roughdiffuse, specular
+from . import roughdiffuse, sheen, specular
 from .nodeeval import constant_color, constant_value
 
 # inputs whose layers the steps render
-HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic', 'Diffuse Roughness')
+HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic', 'Diffuse Roughness', 'Sheen Weight')
 
 
 # what Cycles uses for an input a Principled BSDF of another Blender version lacks
 _DEFAULTS = {'Metallic': 0.0, 'Transmission Weight': 0.0, 'Roughness': 0.5, 'IOR': 1.5, 'Coat Roughness': 0.03,
-             'Coat IOR': 1.5, 'Diffuse Roughness': 0.0}
+             'Coat IOR': 1.5, 'Diffuse Roughness': 0.0, 'Sheen Roughness': 0.5}
 
 
 def _values(node, names):
@@ -169,6 +170,41 @@ def _coat_mu(node, reasons):
     return (1.0 - albedo.max(axis=0)) * absorb, albedo
 
 
+def _sheen_mu(node, reasons):
+    """(dim (len(_MU),), add (3, len(_MU))) of the sheen layer per view cosine, or None: Cycles'
+    microfiber sheen of weight x tint, dimming the layers below by 1 - max over channels of its
+    albedo (closure_layering_weight)."""
+    weight_socket = node.inputs.get('Sheen Weight')
+    if weight_socket is None:
+        return None
+    weight, ok = constant_value(weight_socket)
+    weight = max(weight, 0.0) if np.isfinite(weight) else 0.0
+    if weight == 0.0:
+        if not ok:
+            reasons.append("Principled sheen driven by nodes; its own value 0 used")
+        return None
+    (roughness,), r_ok = _values(node, ('Sheen Roughness',))
+    tint, t_ok = _color(node, 'Sheen Tint')
+    if not (ok and r_ok and t_ok):
+        reasons.append("Principled sheen inputs driven by nodes; their own values used")
+    tint = np.clip(np.nan_to_num(np.asarray(tint, np.float64)[:3]), 0.0, None)
+    albedo = weight * tint[:, None] * sheen.microfiber_albedo_mu(min(max(roughness, 0.0), 1.0))[None, :]
+    reasons.append(f"Principled sheen as diffuse: its albedo averaged over view directions, "
+                   f"{(albedo @ specular.VIEW).max():.3f}")
+    return np.maximum(1.0 - albedo.max(axis=0), 0.0), albedo
+
+
+def _top_mu(node, reasons):
+    """(dim, add) per view cosine, each (3, len(_MU)), of the layers over the specular layer and
+    the metal: the coat under the sheen; None without either."""
+    coat, top = _coat_mu(node, reasons), _sheen_mu(node, reasons)
+    if top is None:
+        return coat
+    n = len(specular.VIEW)
+    dim_c, add_c = (np.ones((3, n)), np.zeros((3, n))) if coat is None else coat
+    return top[0] * dim_c, top[0] * add_c + top[1]
+
+
 def layer_steps(node, reasons) -> list:
     """The steps from a Principled BSDF's base colour to its albedo, in order: [] for a plain
     Lambertian base; a rough diffuse base's RoughDiffuse map; then one step for the layers
@@ -181,7 +217,7 @@ def layer_steps(node, reasons) -> list:
         level, ok = constant_value(node.inputs['Specular IOR Level'])
         if level != 0.0 or not ok:
             reasons.append("Principled specular layer ignored")
-    coat = _coat_mu(node, reasons)
+    coat = _top_mu(node, reasons)
     diffuse = _diffuse_roughness(node, reasons)
     if metal is None and spec is None and coat is None:
         return [] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse)]
@@ -196,11 +232,10 @@ def layer_steps(node, reasons) -> list:
 
 
 def emission_dim(node):
-    """(3,) what the coat lets through of the Principled's emission: Cycles adds the emission
-    under sheen and coat (svm/closure.h, 'attenuated by sheen and coat'), dimmed and tinted by
-    the coat as the layers below are, per view direction; averaged over view directions as
-    everything here (sheen is dropped, reported with it)."""
-    coat = _coat_mu(node, [])
+    """(3,) what the sheen and coat let through of the Principled's emission: Cycles adds the
+    emission under them (svm/closure.h, 'attenuated by sheen and coat'), dimmed and tinted as
+    the layers below are, per view direction; averaged over view directions as everything here."""
+    coat = _top_mu(node, [])
     return np.ones(3) if coat is None else coat[0] @ specular.VIEW
 
 

@@ -21,7 +21,7 @@ from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
 from .normalmaps import tangent_normal_map
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
-from .reflectors import diffuse_roughness, glass_albedos, glossy_map, reflector_albedo
+from .reflectors import diffuse_roughness, glass_albedos, glossy_map, reflector_albedo, sheen_albedo
 from .shadersockets import mix_factor, value_emission
 
 # The grey of the diffuse fallbacks (a muted node, a shader without a colour)
@@ -440,6 +440,10 @@ class MaterialBuilder:
             gmap = glossy_map(node, reasons)        # a textured colour: its albedo per texel
             if gmap is not None:
                 return self._color_closure(node.inputs['Color'], reasons).mapped(gmap)
+        if t == 'BSDF_SHEEN':
+            self._normal_input(node, reasons)
+            e = sheen_albedo(node, reasons)
+            return self._color_closure(node.inputs['Color'], reasons).layered(np.full(3, e), np.zeros(3))
         reflector = reflector_albedo(node, reasons)
         if reflector is not None:
             return Closure(const=reflector)

@@ -1,11 +1,12 @@
 """BSDF nodes a diffuse renderer keeps as an albedo: a rough Diffuse BSDF (Oren-Nayar, as its
 albedo averaged over view directions, roughdiffuse.py) and the Glossy and Metallic BSDFs (their
-albedo averaged over view directions, specular.py), and the Glass BSDF as a see-through
-surface with its reflection. Part of the export layer."""
+albedo averaged over view directions, specular.py), the Sheen BSDF (its albedo averaged over
+view directions, sheen.py), and the Glass BSDF as a see-through surface with its reflection.
+Part of the export layer."""
 
 import numpy as np
 
-from .. import specular
+from .. import sheen, specular
 from ..nodeeval import constant_color, constant_value
 
 
@@ -91,6 +92,21 @@ def reflector_albedo(node, reasons):
     if aniso is not None and constant_value(aniso)[0] != 0.0:
         reasons.append(f"{node.bl_label} anisotropy ignored")
     return albedo
+
+
+def sheen_albedo(node, reasons):
+    """A Sheen BSDF's albedo per unit of its colour, averaged over view directions (sheen.py),
+    for its distribution and roughness (its own value where nodes drive it, reported). Its colour
+    is the lobe's weight (Cycles' svm), so the albedo is linear in it, textured or not."""
+    dist = getattr(node, 'distribution', 'MICROFIBER')
+    rough, ok = constant_value(node.inputs['Roughness'])
+    if dist not in sheen.DISTRIBUTIONS:
+        reasons.append(f"Sheen BSDF distribution {dist} read as Microfiber")
+    if not ok:
+        reasons.append("Sheen BSDF roughness driven by nodes; its own value used")
+    e = sheen.albedo(dist, rough)
+    reasons.append(f"Sheen BSDF as diffuse: its albedo averaged over view directions, {e:.3f} x its colour")
+    return e
 
 
 def glass_albedos(node, reasons):

@@ -7,7 +7,7 @@ import math
 import bpy
 import numpy as np
 
-from addon import export, nodeeval, specular
+from addon import export, nodeeval, sheen, specular
 from tests.bench import fairmaterials
 
 from . import scenes
@@ -29,11 +29,20 @@ def _non_diffuse_materials():
     nt.links.new(g.outputs[0], out.inputs['Surface'])
     mats.append(mat)
 
+    mat, nt, out = _tree("Velvet")                      # a Sheen BSDF: its albedo as diffuse
+    v = nt.nodes.new('ShaderNodeBsdfSheen')
+    v.distribution = 'ASHIKHMIN'
+    v.inputs['Color'].default_value = (0.7, 0.6, 0.5, 1)
+    v.inputs['Roughness'].default_value = 0.4
+    nt.links.new(v.outputs[0], out.inputs['Surface'])
+    mats.append(mat)
+
     mat, nt, out = _tree("Shiny")                       # Principled layers, a bump map
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     p.inputs['Base Color'].default_value = (0.5, 0.4, 0.3, 1)
     p.inputs['Metallic'].default_value = 1.0
     p.inputs['Coat Weight'].default_value = 0.3
+    p.inputs['Sheen Weight'].default_value = 0.6
     p.inputs['Alpha'].default_value = 0.5
     bump = nt.nodes.new('ShaderNodeBump')
     noise = nt.nodes.new('ShaderNodeTexNoise')
@@ -169,6 +178,10 @@ def test_override_sets_the_reference_fair_principled_inputs(scene):
     # the Glossy BSDF's albedo (default roughness 0.5, Multiscatter GGX), as the export renders it
     want = specular.glossy_albedo(0.5, (0.7, 0.6, 0.5))
     assert tuple(node.inputs['Color'].default_value)[:3] == tuple(np.float32(want)) and want[0] < 0.69
+    velvet = bpy.data.materials["Velvet"].node_tree.get_output_node('ALL').inputs['Surface'].links[0].from_node
+    want = np.array([0.7, 0.6, 0.5]) * sheen.albedo('ASHIKHMIN', 0.4)
+    assert velvet.type == 'BSDF_DIFFUSE'
+    np.testing.assert_allclose(tuple(velvet.inputs['Color'].default_value)[:3], want, rtol=1e-6)
     plastic = next(n for n in bpy.data.materials["Plastic"].node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
     e = specular.layer_albedo(0.3, 1.5, 0.5, (1, 1, 1))
     assert plastic.inputs['Specular IOR Level'].default_value == 0.0

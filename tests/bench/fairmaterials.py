@@ -249,6 +249,8 @@ class _Editor:
             reflector = export.reflectors.reflector_albedo(node, [])     # a Glossy or Metallic BSDF's albedo
             if reflector is not None:
                 color = reflector
+            if t == 'BSDF_SHEEN':        # its colour x the lobe's albedo, as the export renders it
+                color = np.asarray(color[:3], np.float64) * export.reflectors.sheen_albedo(node, [])
             self._replace(socket, node, tuple(float(v) for v in color[:3]), f"{node.bl_label} as diffuse")
 
     def _fold_layers(self, socket, steps):
