@@ -21,7 +21,8 @@ from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
 from .normalmaps import tangent_normal_map
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
-from .reflectors import diffuse_roughness, glass_albedos, glossy_map, reflector_albedo, sheen_albedo
+from .reflectors import (diffuse_roughness, glass_albedos, glossy_map, reflector_albedo, refraction_transmittance,
+                         sheen_albedo)
 from .shadersockets import mix_factor, value_emission
 
 # The grey of the diffuse fallbacks (a muted node, a shader without a colour)
@@ -450,6 +451,8 @@ class MaterialBuilder:
         if t == 'BSDF_GLASS':
             reflect, transmit = glass_albedos(node, reasons)
             return Closure(const=reflect, transparent=transmit)
+        if t == 'BSDF_REFRACTION':
+            return Closure(transparent=refraction_transmittance(node, reasons))
         # Documented approximation: a diffuse surface of the node's constant colour.
         reasons.append(f"{node.bl_label} as diffuse")
         sock = input_socket(node, 'Color', 'Base Color')

@@ -1,8 +1,8 @@
 """BSDF nodes a diffuse renderer keeps as an albedo: a rough Diffuse BSDF (Oren-Nayar, as its
 albedo averaged over view directions, roughdiffuse.py) and the Glossy and Metallic BSDFs (their
 albedo averaged over view directions, specular.py), the Sheen BSDF (its albedo averaged over
-view directions, sheen.py), and the Glass BSDF as a see-through surface with its reflection.
-Part of the export layer."""
+view directions, sheen.py), the Glass BSDF as a see-through surface with its reflection, and
+the Refraction BSDF as a see-through surface. Part of the export layer."""
 
 import numpy as np
 
@@ -127,3 +127,15 @@ def glass_albedos(node, reasons):
     if not (r_ok and i_ok and c_ok):
         reasons.append("Glass BSDF inputs driven by nodes; their own values used")
     return reflect, transmit
+
+
+def refraction_transmittance(node, reasons):
+    """(3,) what a Refraction BSDF lets through: its colour, unbent. Cycles' Refraction BSDF
+    refracts all that reaches it (no Fresnel reflection), so a see-through surface of its colour
+    has its brightness; as a diffuse surface of its colour (as other unknown BSDFs) it hid
+    everything behind it."""
+    color, ok = constant_color(node.inputs['Color'])
+    reasons.append("Refraction BSDF as a transparent surface of its colour (no refraction)")
+    if not ok:
+        reasons.append("Refraction BSDF colour driven by nodes; its own value used")
+    return np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0)

@@ -964,6 +964,13 @@ def test_material_table(scene, exported):
     gnode.inputs['Color'].default_value = (0.9, 0.8, 0.7, 1)
     g.links.new(gnode.outputs[0], gout.inputs['Surface'])
     mats.append(glass)
+    refraction = bpy.data.materials.new("Refraction")
+    r = refraction.node_tree
+    r.nodes.clear()
+    rnode = r.nodes.new('ShaderNodeBsdfRefraction')
+    rnode.inputs['Color'].default_value = (0.9, 0.5, 0.2, 1)
+    r.links.new(rnode.outputs[0], r.nodes.new('ShaderNodeOutputMaterial').inputs['Surface'])
+    mats.append(refraction)
     mats.append(scenes.principled("Shiny", (0.5, 0.5, 0.5), specular=0.5, metallic=1.0))
     for i, mat in enumerate(mats):
         scenes.plane(mat.name, location=(3 * i, 0, 0), materials=(mat,))
@@ -978,7 +985,12 @@ def test_material_table(scene, exported):
     for name, (base, emit) in expect.items():
         assert np.allclose(table[name].base_color, base, atol=1e-6), name
         assert np.allclose(table[name].emission, emit, atol=1e-6), name
-    assert {n for n, m in table.items() if m.approximated} == {"Glass", "Shiny"}
+    assert {n for n, m in table.items() if m.approximated} == {"Glass", "Refraction", "Shiny"}
+    # refraction: all of its colour let through, unbent, nothing reflected (it was an opaque
+    # diffuse surface of its colour)
+    assert not table["Refraction"].base_color.any()
+    np.testing.assert_allclose(table["Refraction"].transparency, (0.9, 0.5, 0.2), rtol=1e-6)
+    assert "Refraction BSDF as a transparent surface" in table["Refraction"].approximated
     # glass: its reflection as a grey diffuse albedo (a few percent at IOR 1.5), the rest of its
     # colour let through, unbent (it was an opaque surface of its colour)
     reflect = table["Glass"].base_color
@@ -990,7 +1002,7 @@ def test_material_table(scene, exported):
     assert 0.47 < table["Shiny"].base_color[0] < 0.49
     assert "metal as diffuse" in table["Shiny"].approximated and "specular" not in table["Shiny"].approximated
     approx = [t for _, t in data.messages if "approximated" in t]
-    assert len(approx) == 1 and "'Glass'" in approx[0] and "'Shiny'" in approx[0]
+    assert len(approx) == 1 and all(f"'{n}'" in approx[0] for n in ("Glass", "Refraction", "Shiny"))
 
 
 def _shader_material(name):
