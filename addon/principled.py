@@ -13,7 +13,9 @@ step (dim (3,), add (3,)), base -> base x dim + add, exact for any base, texture
 (export.closure.Closure.layered; the fair-material override folds it into a base colour). With metal
 it is a BaseMap, a per-channel function of the base (exact for a constant, through a table per
 texel). The sheen lies over the coat (sheen.py), one more (dim, add) pair at each view cosine.
-Transmission and subsurface are dropped and reported, as before.
+The transmission (Cycles' glass under the metal, over the specular layer and base) is as the
+Glass BSDF: its reflection a diffuse albedo, the rest let straight through (transmittance).
+Subsurface is dropped and reported, as before.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ from . import roughdiffuse, sheen, specular
 from .nodeeval import constant_color, constant_value
 
 # inputs whose layers the steps render
-HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic', 'Diffuse Roughness', 'Sheen Weight')
+HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic', 'Diffuse Roughness', 'Sheen Weight',
+           'Transmission Weight')
 
 
 # what Cycles uses for an input a Principled BSDF of another Blender version lacks
@@ -125,17 +128,16 @@ def _specular_mu(node, reasons):
 
 
 def _metal(node, reasons):
-    """(metallic, roughness, tint) of the metal layer when Cycles renders one that the export
-    keeps (Metallic > 0, a node-driven one at its own value, without transmission), else None;
-    whether the dielectric specular layer is kept (not under transmission)."""
+    """(metallic, roughness, tint) of the metal layer when Cycles renders one (Metallic > 0, a
+    node-driven one at its own value), else None; whether the dielectric layers (the specular
+    layer over the base, and the transmission) are kept (Metallic < 1)."""
     (metallic,), m_ok = _values(node, ('Metallic',))
-    (transmission,), t_ok = _values(node, ('Transmission Weight',))
     metallic = min(max(metallic, 0.0), 1.0)
     if not m_ok:
         # a metallic map: its own value, as every node-driven input here (dropping the metal
         # and the specular layer with it rendered a map of zeros 18% darker than Cycles)
         reasons.append(f"Principled Metallic driven by nodes; its own value {metallic:g} used")
-    if t_ok and transmission == 0.0 and metallic > 0.0:
+    if metallic > 0.0:
         (roughness,), r_ok = _values(node, ('Roughness',))
         tint, c_ok = _color(node, 'Specular Tint')
         if not (r_ok and c_ok):
@@ -143,9 +145,51 @@ def _metal(node, reasons):
         reasons.append(f"Principled metal as diffuse: its albedo averaged over view directions "
                        f"(Metallic {metallic:g})")
         return (metallic, roughness, tint), metallic < 1.0
-    if metallic != 0.0:                    # under transmission: as before
-        reasons.append("Principled metallic ignored")
-    return None, t_ok and transmission == 0.0
+    return None, True
+
+
+def _transmission(node, reasons):
+    """(weight, reflection (3, len(_MU)), transmittance (len(_MU),)) per view cosine of the
+    Principled's glass (Transmission Weight > 0; Cycles' GGX glass of the Roughness and IOR under
+    the metal, over the specular layer and base, which it dims by 1 - weight), or None. As the
+    Glass BSDF (export.reflectors.glass_albedos): its reflection (tinted by Specular Tint) a
+    diffuse albedo, the rest let straight through (no refraction)."""
+    sock = node.inputs.get('Transmission Weight')
+    if sock is None:
+        return None
+    weight, ok = constant_value(sock)
+    weight = min(max(weight, 0.0), 1.0) if np.isfinite(weight) else 0.0
+    if weight == 0.0:
+        if not ok:
+            reasons.append("Principled transmission driven by nodes; its own value 0 used")
+        return None
+    (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
+    tint, t_ok = _color(node, 'Specular Tint')
+    if not (ok and v_ok and t_ok):
+        reasons.append("Principled transmission inputs driven by nodes; their own values used")
+    ior = ior if np.isfinite(ior) and ior > 0.0 else 1.5
+    reflect = specular.layer_albedo_mu(roughness, ior, 0.5, tint, True)
+    plain = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True)
+    reasons.append(f"Principled transmission as a transparent surface (no refraction) with its reflection "
+                   f"as diffuse (Transmission Weight {weight:g})")
+    return weight, reflect, 1.0 - plain.max(axis=0)
+
+
+def transmittance(node, base) -> np.ndarray:
+    """(3,) what a Principled BSDF lets straight through for the base colour `base`: the
+    glass's weight x (1 - Metallic) x its transmittance, under the coat and sheen, averaged over
+    view directions, tinted by sqrt(base) (Cycles' transmission tint: a closed object, entered
+    and left, is tinted by the base colour); zeros without transmission."""
+    trans = _transmission(node, [])
+    if trans is None:
+        return np.zeros(3)
+    weight, _, through = trans
+    metal, _ = _metal(node, [])
+    m = 0.0 if metal is None else metal[0]
+    top = _top_mu(node, [])
+    dim = np.ones((3, len(specular.VIEW))) if top is None else top[0]
+    tint = np.sqrt(np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, 1.0))
+    return (1.0 - m) * weight * tint * ((dim * through) @ specular.VIEW)
 
 
 def _coat_mu(node, reasons):
@@ -209,21 +253,21 @@ def layer_steps(node, reasons) -> list:
     """The steps from a Principled BSDF's base colour to its albedo, in order: [] for a plain
     Lambertian base; a rough diffuse base's RoughDiffuse map; then one step for the layers
     over it, (dim (3,), add (3,)), or a BaseMap (which includes the rough diffuse) with metal."""
-    metal, keep_specular = _metal(node, reasons)
-    spec = None
-    if keep_specular:
+    metal, dielectric = _metal(node, reasons)
+    spec = trans = None
+    if dielectric:
         spec = _specular_mu(node, reasons)
-    elif metal is None and node.inputs.get('Specular IOR Level') is not None:
-        level, ok = constant_value(node.inputs['Specular IOR Level'])
-        if level != 0.0 or not ok:
-            reasons.append("Principled specular layer ignored")
+        trans = _transmission(node, reasons)
     coat = _top_mu(node, reasons)
     diffuse = _diffuse_roughness(node, reasons)
-    if metal is None and spec is None and coat is None:
+    if metal is None and spec is None and coat is None and trans is None:
         return [] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse)]
     n = len(specular.VIEW)
     dim_s = np.ones(n) if spec is None else 1.0 - spec.max(axis=0)
     add_s = np.zeros((3, n)) if spec is None else spec
+    if trans is not None:          # the glass over the specular layer and base, its reflection added
+        weight, reflect, _ = trans
+        dim_s, add_s = (1.0 - weight) * dim_s, (1.0 - weight) * add_s + weight * reflect
     dim_c, add_c = (np.ones((3, n)), np.zeros((3, n))) if coat is None else coat
     if metal is not None:
         return [BaseMap(metal[0], metal[1], metal[2], _multiscatter(node), dim_s, add_s, dim_c, add_c, diffuse)]

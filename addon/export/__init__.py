@@ -36,7 +36,8 @@ the colour nodes above uses its own value (the socket's, or where its chain left
 but Fresnel and Layer Weight nodes give their average over view directions (fresnel.py); the
 Principled BSDF keeps its diffuse base, with its metal, dielectric specular layer and coat as
 those layers' albedos averaged over view directions (principled.py, specular.py) and its
-sheen, as the Sheen BSDF, its albedo so averaged (sheen.py; no transmission or subsurface); a rough diffuse (Cycles' Oren-Nayar) as its albedo averaged over
+sheen, as the Sheen BSDF, its albedo so averaged (sheen.py), and its transmission as the Glass
+BSDF (see-through, unbent; no subsurface); a rough diffuse (Cycles' Oren-Nayar) as its albedo averaged over
 view directions (roughdiffuse.py); a
 BSDF's Normal input other than a tangent-space normal map of an image (bump, other normal
 maps) and the output's Volume and Displacement are ignored (a volume-only material is clear);

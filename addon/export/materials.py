@@ -472,6 +472,12 @@ class MaterialBuilder:
         c = self._color_closure(node.inputs['Base Color'], reasons)
         for step in principled.layer_steps(node, reasons):
             c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
+        base, base_ok = constant_color(node.inputs['Base Color'])
+        through = principled.transmittance(node, base)
+        if through.any():
+            c.transparent = c.transparent + through
+            if not base_ok:
+                reasons.append("Principled transmission tinted by the base colour's own value, not its nodes")
         es = input_socket(node, 'Emission Strength')
         ec = input_socket(node, 'Emission Color', 'Emission')
         if es is not None and ec is not None:

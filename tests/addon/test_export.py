@@ -971,6 +971,11 @@ def test_material_table(scene, exported):
     rnode.inputs['Color'].default_value = (0.9, 0.5, 0.2, 1)
     r.links.new(rnode.outputs[0], r.nodes.new('ShaderNodeOutputMaterial').inputs['Surface'])
     mats.append(refraction)
+    bottle = scenes.principled("Bottle", (0.3, 0.8, 0.4), specular=0.5)
+    bnode = next(n for n in bottle.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+    bnode.inputs['Transmission Weight'].default_value = 1.0
+    bnode.inputs['Roughness'].default_value = 0.0
+    mats.append(bottle)
     mats.append(scenes.principled("Shiny", (0.5, 0.5, 0.5), specular=0.5, metallic=1.0))
     for i, mat in enumerate(mats):
         scenes.plane(mat.name, location=(3 * i, 0, 0), materials=(mat,))
@@ -985,7 +990,13 @@ def test_material_table(scene, exported):
     for name, (base, emit) in expect.items():
         assert np.allclose(table[name].base_color, base, atol=1e-6), name
         assert np.allclose(table[name].emission, emit, atol=1e-6), name
-    assert {n for n, m in table.items() if m.approximated} == {"Glass", "Refraction", "Shiny"}
+    assert {n for n, m in table.items() if m.approximated} == {"Glass", "Refraction", "Bottle", "Shiny"}
+    # Principled transmission: the Glass BSDF's reflection (the same roughness and IOR), the rest
+    # let through tinted by sqrt(base) as Cycles' glass (it was an opaque diffuse of its base)
+    np.testing.assert_allclose(table["Bottle"].base_color, table["Glass"].base_color, rtol=1e-6)
+    np.testing.assert_allclose(table["Bottle"].transparency,
+                               np.sqrt([0.3, 0.8, 0.4]) * (1 - table["Glass"].base_color[0]), rtol=1e-5)
+    assert "Principled transmission as a transparent surface" in table["Bottle"].approximated
     # refraction: all of its colour let through, unbent, nothing reflected (it was an opaque
     # diffuse surface of its colour)
     assert not table["Refraction"].base_color.any()
@@ -1002,7 +1013,7 @@ def test_material_table(scene, exported):
     assert 0.47 < table["Shiny"].base_color[0] < 0.49
     assert "metal as diffuse" in table["Shiny"].approximated and "specular" not in table["Shiny"].approximated
     approx = [t for _, t in data.messages if "approximated" in t]
-    assert len(approx) == 1 and all(f"'{n}'" in approx[0] for n in ("Glass", "Refraction", "Shiny"))
+    assert len(approx) == 1 and all(f"'{n}'" in approx[0] for n in ("Glass", "Refraction", "Bottle", "Shiny"))
 
 
 def _shader_material(name):
