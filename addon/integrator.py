@@ -90,6 +90,7 @@ _DIM_LENS = 1 << 20
 # (opaque scenes draw the same numbers as before).
 _DIM_TRANSPARENT = 1 << 21
 _DIM_PASSED = 1 << 22     # light sampling at passed semi-transparent surfaces (+ k << 11 + 2 layer)
+_DIM_LOBE = 1 << 23       # reflection or diffuse transmission at translucent surfaces (+ k)
 # internal visibility bit: transparent triangles shadow rays pass (their own tracer scene)
 _VIS_THROUGH = 16
 # Cryptomatte's arrival order of a sample's surfaces: sample x _MAX_CHAIN + depth along the ray
@@ -224,7 +225,14 @@ class Integrator:
         self._albedo_varies = bool(self.mats.textures) or (self.tri.colors is not None and bool(self.mats.colored.any()))
         # normal maps bend shading normals (they need the tangents the export made)
         self._bumped = bool(self.mats.normal_maps) and self.tri.tangents is not None
-        self._tri_live = max3(self._tri_albedo) > 0
+        # diffuse transmission (Translucent BSDF): continue_paths multiplies in 1 on such
+        # triangles, _lobes then weighs the reflection or transmission lobe it picks
+        tri_translucent = self.mats.translucent[self.tri.material]
+        self._any_translucent = bool(tri_translucent.any())
+        self._tri_live = (max3(self._tri_albedo) > 0) | tri_translucent
+        self._tri_scatter = self._tri_albedo
+        if self._any_translucent:
+            self._tri_scatter = np.ascontiguousarray(np.where(tri_translucent, F32(1.0), self._tri_albedo))
         self._tri_any = np.ones(len(self.tri), bool)   # every triangle shades (SKIP_WORK off)
         self._area32 = self.tri.area.astype(F32)
         self._any_holdout = bool(np.any(self.tri.visibility & HOLDOUT))
@@ -854,7 +862,7 @@ class Integrator:
         tex = self._albedo_varies
         uv = tex or self._bumped or (self.tri.term_cutoff is not None and bool(self.lights))   # the lift needs u, v
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
-            hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_albedo, path.thr,
+            hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_scatter, path.thr,
             u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),
             take=(path.pid, path.keys, u_pick if need_pick else None,
                   hits['u'] if uv else None, hits['v'] if uv else None))
@@ -862,8 +870,11 @@ class Integrator:
         self._ended['roulette'] += n_rr
         if len(idx) == 0:
             return None
+        # translucent hits (continue_paths left their throughput before any albedo): thr takes
+        # the reflection's albedo R, far (sel, thr_far) the transmission's T
+        far = self._translucent_hits(prim, thr) if self._any_translucent else None
         if tex:
-            self._albedo_maps(prim, u, v, thr)
+            self._albedo_maps(prim, u, v, thr)        # the albedo's maps are the reflection's
         ns, bump = self._bent_normals(prim, u, v, ns, ng)
         tb = None if path.tb is None else np.take(path.tb, idx)
         nee = None if path.nee is None else np.take(path.nee, idx)
@@ -871,11 +882,21 @@ class Integrator:
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr if nee is None else thr * nee, pid, keys, u_pick,
                              sinks.sampled(k), tb, u, v, sinks.groups, bump)
+            if far is not None:                       # and the transmission's, from the far side
+                sel, thr_far, _ = far
+                fP, fng, fns, fP_off, fbump = _far_side(sel, P, ng, ns, P_off, bump)
+                take = lambda a: None if a is None else np.take(a, sel, axis=-1)  # noqa: E731
+                self._next_event(k, fP, fP_off, take(prim), fng, fns,
+                                 thr_far if nee is None else thr_far * take(nee), take(pid), take(keys),
+                                 take(u_pick), sinks.sampled(k), take(tb), take(u), take(v), sinks.groups, fbump,
+                                 dims=_DIM_LOBE + 2 * k + 1)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
+        if far is not None:                           # one lobe for the bounce
+            ns, ng, P_off, bump = self._choose_lobes(k, far, keys, thr, P, ns, ng, P_off, bump)
         # cosine-weighted BSDF sample around the shading normal; reject directions below the
-        # geometric surface (a diffuse BSDF only reflects)
+        # geometric surface (a diffuse BSDF only reflects; a transmitting one is turned around)
         ka, kb = self.rng.dim_words(_dim(k, 2))
         # (and Cycles' shadow terminator shading offset on their throughput, closure/bsdf.h)
         offset = None if self.tri.term_freq is None else (self.tri.term_freq, prim, thr)
@@ -895,6 +916,51 @@ class Integrator:
                       N=ns if self.lights.tree is not None else None)
 
     # --- surfaces -------------------------------------------------------------------------------
+
+    def _translucent_hits(self, prim, thr):
+        """Diffuse transmission (Translucent BSDF): at hits on translucent materials, whose
+        throughput continue_paths left before any albedo, thr takes the reflection's albedo R
+        (the base colour; its maps follow) in place, and the transmission's throughput x T is
+        returned beside the hits: (sel (j,) their columns, thr_far (3, j), the same per-lobe
+        probability's data for _choose_lobes: p_far (j,)); None when no hit is on one. Light
+        sampling then takes both lobes (T's from the far side, _far_side), as Cycles evaluates
+        every closure; the bounce takes one (_choose_lobes)."""
+        mat = np.take(self.tri.material, prim)
+        sel = np.flatnonzero(np.take(self.mats.translucent, mat))
+        if not len(sel):
+            return None
+        m = np.take(mat, sel)
+        R = np.take(self.mats.base, m, axis=1)
+        T = np.take(self.mats.translucency, m, axis=1)
+        before = np.take(thr, sel, axis=1)
+        thr[:, sel] = before * R
+        rt, tt = max3(R), max3(T)
+        return sel, before * T, tt / (rt + tt)           # tt > 0 on translucent materials
+
+    def _choose_lobes(self, k, far, keys, thr, P, ns, ng, P_off, bump):
+        """The bounce's lobe at translucent hits (far: _translucent_hits'): the transmission with
+        probability p = max(T) / (max(R) + max(T)), its throughput / p, else the reflection's
+        (in thr, with its maps) / (1 - p); the transmitting vertices moved to the far side. The
+        bounce's pdf for MIS stays the lobe's cosine (p left out on both sides of the
+        heuristic: the weights still sum to one, and p > 0 wherever a lobe's albedo is).
+        Returns (ns, ng, P_off, bump)."""
+        sel, thr_far, p = far
+        u, _ = self.rng.uniform2(np.take(keys, sel, axis=1), _DIM_LOBE + 2 * k)
+        go = u < p
+        near = np.take(thr, sel, axis=1) / np.where(go, F32(1.0), F32(1.0) - p)
+        thr[:, sel] = np.where(go, thr_far / p, near)
+        if not go.any():
+            return ns, ng, P_off, bump
+        moved = np.zeros(len(ns[0]), bool)
+        moved[sel[go]] = True
+        flip = np.where(moved, F32(-1.0), F32(1.0))
+        ns2 = ns * flip
+        ng2 = ns2 if ng is ns else ng * flip
+        P_off2 = np.where(moved, P + (P - P_off), P_off).astype(F32)
+        if bump is not None:
+            bump = bump.copy()
+            bump[:3] *= flip
+        return ns2, ng2, P_off2, bump
 
     def _surface(self, hits, sel, D):
         """Hit points P, geometric and shading normals facing the incoming rays, and the points
@@ -1612,6 +1678,21 @@ def _light_set(linking, lamp) -> int:
     """A lamp's light set in linking (lights/linking.py, light or shadow linking): its own by
     name; the world's is 0, every object's."""
     return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.name)
+
+
+def _far_side(sel, P, ng, ns, P_off, bump):
+    """The vertices sel seen from the far side of their surface, for its diffuse transmission:
+    (P, ng, ns, P_off, bump) of those columns with the normals turned (the smooth one in bump
+    too) and the offset point mirrored through the hit point, so light sampling treats each as
+    a reflector facing away from the incoming ray."""
+    fP, fPo = np.take(P, sel, axis=1), np.take(P_off, sel, axis=1)
+    fns = -np.take(ns, sel, axis=1)
+    fng = fns if ng is ns else -np.take(ng, sel, axis=1)
+    fbump = None
+    if bump is not None:
+        fbump = np.take(bump, sel, axis=1)
+        fbump[:3] *= F32(-1.0)
+    return fP, fng, fns, (fP + (fP - fPo)).astype(F32), fbump
 
 
 def _seen_through(alpha, path, rows):

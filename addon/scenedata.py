@@ -144,6 +144,9 @@ class Material:
     # or UdimTiles, the opacity in R, G and B; read on the UV map like `texture`) the shader at a
     # hit is opacity x (base_color, emission) + (1 - opacity) x transparency instead.
     transparency: Optional[np.ndarray] = None
+    # Diffuse transmission (Translucent BSDF): the colour x mix weights (3,) of a Lambertian lobe
+    # on the far side of the surface, beside the reflection of base_color; None: none
+    translucency: Optional[np.ndarray] = None
     opacity: Optional[np.ndarray] = None
     opacity_interpolation: str = 'Linear'
     opacity_extension: str = 'REPEAT'

@@ -154,6 +154,18 @@ class Materials:
                 self.opacity.append((i, *texture_entry(mat.name, 'opacity', mat.opacity, mat.opacity_interpolation,
                                                         mat.opacity_extension, mat.opacity_transform)))
         self.transparent = self.transparency.max(axis=0) > 0
+        # diffuse transmission (3, materials), scenedata.Material.translucency
+        self.translucency = np.zeros((3, len(materials)), F32)
+        for i, mat in enumerate(materials):
+            t = getattr(mat, 'translucency', None)
+            if t is None:
+                continue
+            t = np.asarray(t, np.float64)
+            if t.shape != (3,) or not np.isfinite(t).all() or (t < 0).any():
+                raise ValueError(f"material {mat.name!r}: translucency must be 3 finite non-negative "
+                                 f"numbers, got {t!r}")
+            self.translucency[:, i] = t
+        self.translucent = self.translucency.max(axis=0) > 0
         # images that write AOVs: (AOV name, 'color' | 'value') -> [(material index, texture,
         # interpolation, extension, uv transform)]
         self.aov_textures = {}

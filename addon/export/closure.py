@@ -1,6 +1,7 @@
 """What a material's shader graph sums to for a diffuse renderer: `Closure`, a linear
 combination of a constant albedo, one image texture's albedo, emission (constant or one
-image's), transparency (with an image's alpha as opacity) and holdout; and `Texture`, an image
+image's), transparency (with an image's alpha as opacity), diffuse transmission (a Translucent
+BSDF's colour) and holdout; and `Texture`, an image
 as the graph reads it (texels shared between materials, a UV transform, a UDIM layout). Add and
 Mix Shaders combine closures; principled.py's layers scale or map them. Part of the export
 layer."""
@@ -41,11 +42,12 @@ class Texture:
 
 class Closure:
     """Linear combination of what a diffuse renderer keeps:
-    albedo = const + tex_weight * texture, emission constant, and the weight of transparent
-    closures (`transparent`, rgb). `opacity` (an image's alpha, (Texture, inverted)) makes the
+    albedo = const + tex_weight * texture, emission constant, the weight of transparent
+    closures (`transparent`, rgb) and the diffuse transmission (`translucent`, rgb: Translucent
+    BSDFs' colour x their weights). `opacity` (an image's alpha, (Texture, inverted)) makes the
     shader opacity x (everything else) + (1 - opacity) x transparent at each hit."""
     def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0,
-                 transparent=(0, 0, 0), opacity=None, emission_tex=None):
+                 transparent=(0, 0, 0), opacity=None, emission_tex=None, translucent=(0, 0, 0)):
         self.const = np.array(const, np.float64)
         self.emission = np.array(emission, np.float64)
         self.texture = texture
@@ -56,39 +58,41 @@ class Closure:
         # an image's emission, (Texture, weight (3,)): weight x the image; `emission` is then
         # its average over the image's texels (what chooses it as a light)
         self.emission_tex = emission_tex
+        self.translucent = np.array(translucent, np.float64)
 
     def layered(self, dim, add):
         """Under a layer (principled.py): the albedo x dim (3,) + add (3,); emission,
         transparency and holdout are set after the layers."""
         return Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
-                        self.transparent, self.opacity, self.emission_tex)
+                        self.transparent, self.opacity, self.emission_tex, self.translucent)
 
     def mapped(self, f):
         """Under a nonlinear map of the albedo (principled.BaseMap): exact for a constant
         albedo; a textured one becomes a texture of the mapped texels (weight 1)."""
         if self.texture is None or not self.tex_weight.any():
             return Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
-                            self.opacity, self.emission_tex)
+                            self.opacity, self.emission_tex, self.translucent)
         t = self.texture
         w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
         mapped = Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
                           t.baked(lambda rgb: f(rgb * w + k)), t.interpolation, t.extension, t.transform, t.udim,
                           t.name, t.attribute)
         return Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
-                        self.emission_tex)
+                        self.emission_tex, self.translucent)
 
     def scaled(self, f):
         etex = None if self.emission_tex is None else (self.emission_tex[0], self.emission_tex[1] * f)
         return Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
-                        self.transparent * f, self.opacity, etex)
+                        self.transparent * f, self.opacity, etex, self.translucent * f)
 
     def only_transparent(self):
         return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
-                                                      self.tex_weight.any() or self.holdout or self.opacity)
+                                                      self.tex_weight.any() or self.holdout or self.opacity or
+                                                      self.translucent.any())
 
     def is_empty(self):
         return not (self.const.any() or self.emission.any() or self.tex_weight.any() or self.holdout
-                    or self.transparent.any())
+                    or self.transparent.any() or self.translucent.any())
 
     def _emission_sum(self, other, reasons):
         """The image emission of self + other: one image (or the same one twice) stays an image;
@@ -123,9 +127,11 @@ class Closure:
                 mean = other.texture.pixels[..., :3].reshape(-1, 3).mean(0)
                 return Closure(self.const + other.const + other.tex_weight * mean,
                                 self.emission + other.emission, tex, w, self.holdout + other.holdout,
-                                self.transparent + other.transparent, opacity, etex)
+                                self.transparent + other.transparent, opacity, etex,
+                                self.translucent + other.translucent)
         return Closure(self.const + other.const, self.emission + other.emission, tex, w,
-                        self.holdout + other.holdout, self.transparent + other.transparent, opacity, etex)
+                        self.holdout + other.holdout, self.transparent + other.transparent, opacity, etex,
+                        self.translucent + other.translucent)
 
 
 def is_image_alpha(link):

@@ -329,6 +329,8 @@ class MaterialBuilder:
         if 0.0 < closure.holdout and not holdout:
             reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")
         transparency = opacity = None
+        translucency = _nonnegative(closure.translucent.astype(np.float32), "translucency", reasons) \
+            if closure.translucent.any() and not holdout else None
         o_interp, o_ext, o_transform = 'Linear', 'REPEAT', None
         if closure.transparent.any() and not holdout:
             transparency = _nonnegative(closure.transparent.astype(np.float32), "transparency", reasons)
@@ -375,7 +377,8 @@ class MaterialBuilder:
                            emission=emission, texture=texture,
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
-                           transparency=transparency, opacity=opacity, opacity_interpolation=o_interp,
+                           transparency=transparency, translucency=translucency,
+                           opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
                            pass_index=int(mat.pass_index), aovs=aovs, visibility=visibility,
@@ -451,6 +454,13 @@ class MaterialBuilder:
         if t == 'BSDF_GLASS':
             reflect, transmit = glass_albedos(node, reasons)
             return Closure(const=reflect, transparent=transmit)
+        if t == 'BSDF_TRANSLUCENT':
+            # diffuse transmission: rendered as Cycles does (the integrator's lobe choice)
+            self._normal_input(node, reasons)
+            color, ok = constant_color(node.inputs['Color'])
+            if not ok:
+                reasons.append("Translucent BSDF colour driven by nodes; its own value used")
+            return Closure(translucent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
         if t == 'BSDF_REFRACTION':
             return Closure(transparent=refraction_transmittance(node, reasons))
         # Documented approximation: a diffuse surface of the node's constant colour.
@@ -543,7 +553,7 @@ class MaterialBuilder:
         for socket in (node.inputs[1], node.inputs[2]):
             c = self._shader(socket, notes, depth + 1)       # (said only if this mix is taken)
             if c.texture is not None or c.emission.any() or c.emission_tex is not None or c.transparent.any() \
-                    or c.holdout or c.opacity is not None:
+                    or c.holdout or c.opacity is not None or c.translucent.any():
                 return None
             sides.append(c)
         reasons.extend(notes)
@@ -600,7 +610,7 @@ class MaterialBuilder:
         if opacity is None:
             return None
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
-                        clear.transparent, opacity)
+                        clear.transparent, opacity, translucent=opaque.translucent)
 
     def _color_closure(self, socket, reasons):
         """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes

@@ -976,6 +976,18 @@ def test_material_table(scene, exported):
     bnode.inputs['Transmission Weight'].default_value = 1.0
     bnode.inputs['Roughness'].default_value = 0.0
     mats.append(bottle)
+    leaf = bpy.data.materials.new("Leaf")
+    lt = leaf.node_tree
+    lt.nodes.clear()
+    ld, ltr = lt.nodes.new('ShaderNodeBsdfDiffuse'), lt.nodes.new('ShaderNodeBsdfTranslucent')
+    ld.inputs['Color'].default_value = (0.2, 0.4, 0.1, 1)
+    ltr.inputs['Color'].default_value = (0.6, 0.8, 0.2, 1)
+    lmix = lt.nodes.new('ShaderNodeMixShader')
+    lmix.inputs['Fac'].default_value = 0.25
+    lt.links.new(ld.outputs[0], lmix.inputs[1])
+    lt.links.new(ltr.outputs[0], lmix.inputs[2])
+    lt.links.new(lmix.outputs[0], lt.nodes.new('ShaderNodeOutputMaterial').inputs['Surface'])
+    mats.append(leaf)
     mats.append(scenes.principled("Shiny", (0.5, 0.5, 0.5), specular=0.5, metallic=1.0))
     for i, mat in enumerate(mats):
         scenes.plane(mat.name, location=(3 * i, 0, 0), materials=(mat,))
@@ -997,6 +1009,10 @@ def test_material_table(scene, exported):
     np.testing.assert_allclose(table["Bottle"].transparency,
                                np.sqrt([0.3, 0.8, 0.4]) * (1 - table["Glass"].base_color[0]), rtol=1e-5)
     assert "Principled transmission as a transparent surface" in table["Bottle"].approximated
+    # a Translucent BSDF is diffuse transmission, rendered as such (it was a diffuse reflector)
+    np.testing.assert_allclose(table["Leaf"].base_color, np.array([0.2, 0.4, 0.1]) * 0.75, rtol=1e-6)
+    np.testing.assert_allclose(table["Leaf"].translucency, np.array([0.6, 0.8, 0.2]) * 0.25, rtol=1e-6)
+    assert table["Diffuse"].translucency is None
     # refraction: all of its colour let through, unbent, nothing reflected (it was an opaque
     # diffuse surface of its colour)
     assert not table["Refraction"].base_color.any()

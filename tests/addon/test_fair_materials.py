@@ -37,6 +37,15 @@ def _non_diffuse_materials():
     nt.links.new(v.outputs[0], out.inputs['Surface'])
     mats.append(mat)
 
+    mat, nt, out = _tree("Leaf")                        # a Translucent BSDF stays, a bump map goes
+    tl = nt.nodes.new('ShaderNodeBsdfTranslucent')
+    tl.inputs['Color'].default_value = (0.5, 0.7, 0.2, 1)
+    bump = nt.nodes.new('ShaderNodeBump')
+    nt.links.new(nt.nodes.new('ShaderNodeTexNoise').outputs['Fac'], bump.inputs['Height'])
+    nt.links.new(bump.outputs['Normal'], tl.inputs['Normal'])
+    nt.links.new(tl.outputs[0], out.inputs['Surface'])
+    mats.append(mat)
+
     mat, nt, out = _tree("Shiny")                       # Principled layers, a bump map
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     p.inputs['Base Color'].default_value = (0.5, 0.4, 0.3, 1)
@@ -178,6 +187,8 @@ def test_override_sets_the_reference_fair_principled_inputs(scene):
     # the Glossy BSDF's albedo (default roughness 0.5, Multiscatter GGX), as the export renders it
     want = specular.glossy_albedo(0.5, (0.7, 0.6, 0.5))
     assert tuple(node.inputs['Color'].default_value)[:3] == tuple(np.float32(want)) and want[0] < 0.69
+    leaf = bpy.data.materials["Leaf"].node_tree.get_output_node('ALL').inputs['Surface'].links[0].from_node
+    assert leaf.type == 'BSDF_TRANSLUCENT' and not leaf.inputs['Normal'].is_linked
     velvet = bpy.data.materials["Velvet"].node_tree.get_output_node('ALL').inputs['Surface'].links[0].from_node
     want = np.array([0.7, 0.6, 0.5]) * sheen.albedo('ASHIKHMIN', 0.4)
     assert velvet.type == 'BSDF_DIFFUSE'

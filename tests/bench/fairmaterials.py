@@ -12,7 +12,7 @@ export renders exactly, following the export's own rules (addon/export/materials
   which the export renders as diffuse (addon/principled.py), folded into the base colour
   first; Alpha kept (the export renders a constant one and an Image Texture's Alpha output;
   anything else feeding it is unlinked);
-- Transparent BSDF kept (its colour as the export reads it), and a Mix Shader's factor kept
+- Transparent and Translucent BSDFs kept (their colour as the export reads it), and a Mix Shader's factor kept
   when it is an Image Texture's Alpha output;
 - Diffuse BSDF: roughness 0, normal unlinked;
 - any other shader node (Glossy, Glass, ...): replaced by a Diffuse BSDF of the colour the
@@ -234,6 +234,9 @@ class _Editor:
             self._shader(node.inputs[1], depth + 1)
         elif t == 'BSDF_TRANSPARENT':
             self._own_value(node.inputs['Color'])
+        elif t == 'BSDF_TRANSLUCENT':               # diffuse transmission: rendered as it is
+            self._own_value(node.inputs['Color'])
+            self._normals(node)
         elif t == 'MIX_SHADER':
             keep = (_image_alpha(node.inputs['Fac']) and _one_side_transparent(node)) or \
                 (depth == 0 and _ray_type_mix(node))

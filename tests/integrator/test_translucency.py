@@ -1,0 +1,54 @@
+"""Diffuse transmission (a Translucent BSDF, scenedata.Material.translucency) against closed
+forms: a large plane lit from one side by a sun or from both by a uniform world, seen from
+either side by a tiny orthographic camera. A Lambertian lobe of albedo T on the far side gives
+T E / pi there, beside R E / pi of the reflection on the lit side (reference blender-cycles.md
+2.2 for the units); under a white world of radiance 1 both sides see R + T."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from addon import scenedata as sd
+
+from .scenes import ALL_VIS, geometry, light, material, ortho_down, pixel_stats, quad, render, rotation_x, translation
+
+
+def _plane(R, T, lights, world=(0.0, 0.0, 0.0), below=False, samples=256):
+    v, t = quad((0.0, 0.0, 0.0), 1000.0, 1000.0)
+    mats = [material('default'), material('leaf', (R,) * 3, translucency=np.full(3, T, np.float32))]
+    cam = ortho_down()
+    if below:                                   # the same camera turned to look up at the plane
+        cam = dataclasses.replace(cam, matrix=translation(0, 0, -0.5) @ rotation_x(np.pi))
+    return sd.SceneData(cam, geometry([(v, t, 1, ALL_VIS)]), mats, list(lights), np.asarray(world, np.float32),
+                        sd.Settings(samples=samples, max_bounces=0, filter_type='BOX'))
+
+
+def _check(scene, expected, rel=0.01):
+    mean, err = pixel_stats(render(scene))
+    if expected == 0.0:
+        assert mean == 0.0
+        return
+    assert err < 0.3 * rel * expected, f"too noisy to decide: stderr {err:.5f} for {expected:.5f}"
+    assert mean == pytest.approx(expected, rel=rel), f"got {mean:.5f}, expected {expected:.5f} (+-{err:.5f})"
+
+
+SUN = 3.0
+
+
+@pytest.mark.parametrize('R, T', [(0.5, 0.3), (0.0, 0.7), (0.2, 0.8)])
+def test_sunlit_leaf_reflects_on_the_lit_side_and_transmits_to_the_other(R, T):
+    sun = light('SUN', SUN, np.eye(4))          # straight down onto the plane's top
+    _check(_plane(R, T, [sun]), R * SUN / np.pi)
+    _check(_plane(R, T, [sun], below=True), T * SUN / np.pi)
+
+
+@pytest.mark.parametrize('R, T', [(0.5, 0.3), (0.0, 0.9)])
+def test_white_world_on_both_sides_gives_r_plus_t(R, T):
+    for below in (False, True):
+        _check(_plane(R, T, [], world=(1.0, 1.0, 1.0), below=below), R + T)
+
+
+def test_translucent_material_with_black_reflection_is_not_skipped_as_black():
+    sun = light('SUN', SUN, np.eye(4))
+    integ = render(_plane(0.0, 0.5, [sun], below=True, samples=16))
+    assert integ.film.combined()[..., 0].mean() > 0.4 * 0.5 * SUN / np.pi
