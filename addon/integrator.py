@@ -487,7 +487,14 @@ class Integrator:
         idx = np.flatnonzero(hits['prim'] >= 0)
         if not len(idx):
             return
-        _, _, ns, P_off = self._surface(hits, idx, D)
+        P, _, ns, P_off = self._surface(hits, idx, D)
+        if self._any_translucent:
+            # a translucent point is lit from its far side too: probed there as well (from the
+            # near side alone, a leaf lit from behind, beside a sun, had 5x Cycles' noise; 2.5x)
+            far = np.flatnonzero(np.take(self.mats.translucent, np.take(self.tri.material, hits['prim'][idx])))
+            if len(far):
+                _, _, fns, fPo, _ = _far_side(far, P, ns, ns, P_off, None)
+                P_off, ns = np.concatenate([P_off, fPo], axis=1), np.concatenate([ns, fns], axis=1)
         self.lights.reweight(P_off, rng, N=ns)
         self._selection_table()
 
