@@ -65,6 +65,7 @@ class Exporter:
         self.camera = camera
         self.world = effective_world(self.scene, self.view_layer)
         # whether any shader reads Object Info: else no instance's values are gathered
+        self._evaluated_of = {}
         self._object_info = any(n.type == 'OBJECT_INFO' or (n.type == 'ATTRIBUTE' and n.attribute_type == 'OBJECT')
                                 for t in _shader_trees() for n in t.nodes)
         self.check_break = check_break or (lambda: False)
@@ -177,7 +178,7 @@ class Exporter:
             if slots is None:
                 slots = self._slots_of[names[0], key] = \
                     [override] if override is not None else [s.material for s in ob.material_slots]
-            info = (ob.original, inst.random_id, inst.is_instance) if self._object_info else None
+            info = (self._evaluated(ob), inst.random_id, inst.is_instance) if self._object_info else None
             terminator = self._terminator_of.get(names[0])
             if terminator is None:
                 terminator = self._terminator_of[names[0]] = _terminator(ob)
@@ -264,10 +265,21 @@ class Exporter:
         if self.meshes[key] is None:
             return
         slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
-        info = (ob.original, inst.random_id, inst.is_instance)      # the emitter's, as Cycles' hair
+        info = (self._evaluated(ob), inst.random_id, inst.is_instance)   # the emitter's, as Cycles' hair
         self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
                                                self._object_id(ob), ob.name, info=info))
 
+
+    def _evaluated(self, ob):
+        """The depsgraph's own evaluated object for an instance's object (alive through the
+        export, unlike an instance's temporary one): what Object Info and Object attributes read.
+        The original keeps the saved frame's values in an animation render (a keyframed Object
+        Color stayed at frame 1's: relMSE 0.67 against Cycles at frame 4)."""
+        key = ob.original.as_pointer()
+        ev = self._evaluated_of.get(key)
+        if ev is None:
+            ev = self._evaluated_of[key] = ob.original.evaluated_get(self.depsgraph)
+        return ev
 
     def _read_geometry(self, ob):
         """Read (once) the evaluated geometry of `ob`; returns its cache key or None."""

@@ -49,9 +49,10 @@ def exported(monkeypatch):
 
     monkeypatch.setattr(export, 'export_scene', capture)
 
-    def run():
+    def run(animation=False):
+        """animation: as Ctrl-F12 or `blender -a` (the frame range; originals not updated)."""
         captured.clear()
-        bpy.ops.render.render()
+        bpy.ops.render.render(animation=animation)
         assert len(captured) == 1, "the engine did not export exactly once"
         return captured[0]
     return run

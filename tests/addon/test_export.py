@@ -2263,6 +2263,39 @@ def test_object_info_indices_per_object(scene, exported):
         assert np.allclose(data.geometry.colors[of_object(data, f"P{index}")], 0.1 * index + 5.0), index
 
 
+def test_object_info_reads_the_rendered_frame_in_an_animation_render(scene, exported, tmp_path):
+    """An animation render (Ctrl-F12, `blender -a`, `-f N`) does not write animated values back
+    to the original objects: Object Info's Color and an Object attribute are read from the
+    depsgraph's evaluated object, at the frame rendered (they stayed at the file's frame)."""
+    setup(scene)
+    made = []
+    for name, output in (("Info", 'Color'), ("Attr", None)):
+        mat, nt, out = _shader_material(name)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        if output:
+            src = nt.nodes.new('ShaderNodeObjectInfo').outputs[output]
+        else:
+            attr = nt.nodes.new('ShaderNodeAttribute')
+            attr.attribute_type, attr.attribute_name = 'OBJECT', 'tint'
+            src = attr.outputs['Color']
+        nt.links.new(src, d.inputs['Color'])
+        made.append(mat)
+    info = scenes.plane("Info", materials=(made[0],))
+    attr = scenes.plane("Attr", location=(3, 0, 0), materials=(made[1],))
+    for frame, rgb in ((1, (0.1, 0.8, 0.1)), (4, (0.9, 0.1, 0.9))):
+        info.color = (*rgb, 1.0)
+        info.keyframe_insert('color', frame=frame)
+        attr['tint'] = rgb
+        attr.keyframe_insert('["tint"]', frame=frame)
+    scene.frame_set(1)
+    scene.frame_start = scene.frame_end = 4
+    scene.render.filepath = str(tmp_path / "frame_")
+    data = exported(animation=True)
+    for name in ("Info", "Attr"):
+        assert np.allclose(data.geometry.colors[of_object(data, name)][..., :3], (0.9, 0.1, 0.9), atol=1e-6), name
+
+
 def test_object_attribute_per_object(scene, exported):
     """An Attribute node of type Object reads each object's value as Cycles does (custom
     property, else RNA path such as 'color', else the object data's property; none: 0): the
