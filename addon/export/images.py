@@ -121,15 +121,16 @@ def _srgb_to_linear(c):
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
-def image_pixels(img, reasons, unassociate=False, user=None):
+def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels.
     The colour is associated with alpha as Cycles stores the image (associates_alpha), or with
     `unassociate` divided by it again as Cycles' lookup does for a linked Alpha output. A
     texture.ImageTexels: it also carries the texels as Cycles stores them for its lookup
     (_stored_texels), which blends those and decodes after. `user`: the node's image user,
-    which picks an image sequence's frame."""
+    which picks an image sequence's frame at the scene frame `frame` (the rendered scene's;
+    imageuser.user_frame)."""
     if img.source == 'SEQUENCE':     # bpy holds no frame's pixels in background renders
-        return _sequence_frame(img, reasons, unassociate, user)
+        return _sequence_frame(img, reasons, unassociate, user, frame)
     try:
         w, h = img.size
         ch = img.channels
@@ -143,7 +144,7 @@ def image_pixels(img, reasons, unassociate=False, user=None):
         return None
     if img.source == 'MOVIE':
         reasons.append(f"movie image '{img.name}': the frame Blender has loaded is read, not necessarily "
-                       f"frame {user_frame(img, user)} that Cycles shows (movie frames are not read here)")
+                       f"frame {user_frame(img, user, frame)} that Cycles shows (movie frames are not read here)")
     buf = buf.reshape(h, w, ch)
     from_file = not _read_from_blender(img)
     if from_file and associates_alpha(img):
@@ -159,10 +160,10 @@ def image_pixels(img, reasons, unassociate=False, user=None):
     return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file)
 
 
-def _sequence_frame(img, reasons, unassociate, user):
+def _sequence_frame(img, reasons, unassociate, user, scene_frame):
     """The texels of an image sequence's file at the frame its user shows (Cycles reads that
     file, imageuser.user_frame / sequence_path), or None (magenta, as Cycles) if unreadable."""
-    frame = user_frame(img, user)
+    frame = user_frame(img, user, scene_frame)
     path = sequence_path(img, frame) or bpy.path.abspath(img.filepath_raw, library=img.library)
     texels = _file_texels(path, img, reasons, unassociate)
     if texels is None:

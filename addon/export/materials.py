@@ -64,7 +64,8 @@ def _nonnegative(v, label, reasons):
 class MaterialBuilder:
     """Evaluates Blender materials into scenedata.Material, one per material."""
 
-    def __init__(self):
+    def __init__(self, frame=None):
+        self.frame = frame         # the rendered scene's frame (image sequences; None: the context's)
         self.materials = [sd.Material(name='(default)',
                                       base_color=np.array(DEFAULT_SURFACE_ALBEDO, np.float32),
                                       emission=np.zeros(3, np.float32))]
@@ -817,13 +818,13 @@ class MaterialBuilder:
             if self._used_outputs is not None else node.outputs['Alpha'].is_linked
         unassociate = bool(alpha_used and associates_alpha(img))
         key = img.as_pointer()
-        frame = user_frame(img, node.image_user)        # an image sequence's frames differ
+        frame = user_frame(img, node.image_user, self.frame)   # an image sequence's frames differ
         cached = self._images.get((key, unassociate, frame))
         if cached is None:
             # what loading it says is said again by every material that reads it (and by each
             # rebuild of one: _build's probes and _product_map start with fresh reasons)
             notes = []
-            pixels = image_pixels(img, notes, unassociate, node.image_user)
+            pixels = image_pixels(img, notes, unassociate, node.image_user, self.frame)
             if pixels is not None and img.source == 'TILED':
                 pixels = udim_tiles(img, pixels, notes, unassociate)
             cached = self._images[key, unassociate, frame] = (pixels, notes)

@@ -70,7 +70,7 @@ class Exporter:
                                 for t in _shader_trees() for n in t.nodes)
         self.check_break = check_break or (lambda: False)
         self.messages = []
-        self.materials = MaterialBuilder()
+        self.materials = MaterialBuilder(self.scene.frame_current)
         self.object_names = []
         self.object_pass_index = []
         self.light_links = {}         # emitter name -> (included, excluded) receiver names

@@ -51,7 +51,7 @@ def export_world(scene, view_layer=None, camera=None, by_ray=None):
     if volume is not None and linked_link(volume) is not None:
         reasons.append("world volume ignored")      # a world's fog or haze: no volumes here
     uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, camera,
-                                  by_ray if by_ray is not None else [])
+                                  by_ray if by_ray is not None else [], scene.frame_current)
     return uniform.astype(np.float32), env, '; '.join(dict.fromkeys(reasons))
 
 
@@ -61,7 +61,7 @@ def _is_camera_ray(socket):
     return link is not None and link.from_node.type == 'LIGHT_PATH' and link.from_socket.name == 'Is Camera Ray'
 
 
-def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()):
+def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=(), frame=None):
     """(uniform radiance, Environment or None) of what feeds a world shader socket at
     `weight`: Background and Emission (the same for the world in Cycles), Add Shader and Mix
     Shader (constant factor) of them, a colour or value (an emission of it, as Cycles converts
@@ -85,7 +85,8 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
             fac = mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
-        (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1, camera, by_ray)
+        (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1, camera, by_ray,
+                                             frame)
                               for i, w in enumerate(weights))
         if ea is not None and eb is not None:
             reasons.append("two environment textures in the world; the second ignored")
@@ -95,7 +96,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
         reasons.append(f"world {node.bl_label} Strength driven by nodes; its own value used")
     tex = linked_node(node.inputs['Color'])
     if tex is not None and tex.type == 'TEX_ENVIRONMENT':
-        return _environment(tex, np.float32(s * weight), reasons)
+        return _environment(tex, np.float32(s * weight), reasons, frame=frame)
     c, c_ok = constant_color(node.inputs['Color'])
     if not c_ok:
         # colour nodes on an Environment Texture (a tint, a Hue/Saturation, a ramp): applied to
@@ -107,7 +108,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
             except nodeeval.NotCompiled:
                 chain = None
             if chain is not None:
-                return _environment(envs[0], np.float32(s * weight), reasons, chain)
+                return _environment(envs[0], np.float32(s * weight), reasons, chain, frame)
         source = linked_node(node.inputs['Color'])
         what = f"'{source.bl_label}'" if source is not None else "nodes"
         reasons.append(f"world {node.bl_label} Color from {what}, which is not evaluated; the socket's own "
@@ -123,14 +124,14 @@ def world_visibility(world):
     return (sd.VIS_CAMERA if vis.camera else 0) | (sd.VIS_DIFFUSE if vis.diffuse else 0)
 
 
-def _environment(node, strength, reasons, chain=None):
+def _environment(node, strength, reasons, chain=None, frame=None):
     """(uniform radiance, scenedata.Environment or None) of an Environment Texture node; chain:
     the colour nodes after it (nodeeval.compile_image_chain), applied to its texels."""
     if not (np.isfinite(strength) and strength >= 0):
         reasons.append(f"Background Strength {float(strength):g} is negative or not finite; rendered black")
         return np.zeros(3, np.float32), None
     img = node.image
-    pixels = None if img is None else image_pixels(img, reasons, user=node.image_user)
+    pixels = None if img is None else image_pixels(img, reasons, user=node.image_user, frame=frame)
     if pixels is None:
         if img is None:
             reasons.append("Environment Texture without an image (magenta, as Cycles)")

@@ -81,6 +81,47 @@ def test_sequence_texture_reads_the_frame_shown(tmp_path):
         np.testing.assert_allclose(m.texture[0, 0, :3], srgb_to_linear(np.array(want) / 255.0), atol=1e-6)
 
 
+def test_sequence_frame_is_the_rendered_scenes(tmp_path, monkeypatch):
+    """The frame is the rendered scene's, not the context's: a sequencer scene strip renders
+    its scene at the strip's frame (here the main scene's frame 10 shows the strip's frame 3),
+    and the image sequence must show that frame's file (it read the context scene's: frame 10,
+    clamped to 3 frames, not the same file in general)."""
+    img = _sequence(tmp_path)
+    main = bpy.context.scene
+    shot = bpy.data.scenes.new("Shot")
+    shot.render.engine = 'DACRT'
+    mat, nt, out = scenes._material("Seq")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    tex.image_user.frame_start, tex.image_user.frame_duration, tex.image_user.use_cyclic = 1, 3, True
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    shot.camera = scenes.camera(scene=shot)
+    scenes.plane("P", materials=(mat,), scene=shot)
+    world = scenes.environment_world(img, scene=shot)
+    node = next(n for n in world.node_tree.nodes if n.type == 'TEX_ENVIRONMENT')
+    node.image_user.frame_start, node.image_user.frame_duration, node.image_user.use_cyclic = 1, 3, True
+    main.render.use_sequencer = True
+    strips = main.sequence_editor_create()
+    strips = strips.strips if hasattr(strips, 'strips') else strips.sequences
+    strips.new_scene("S", shot, channel=1, frame_start=8)     # main frame 10: the shot's frame 3
+    main.frame_set(10)                                        # (cyclic: frame 10 would show 1)
+    captured = []
+    real = export.export_scene
+
+    def capture(depsgraph, check_break=None, camera=None):
+        captured.append(real(depsgraph, check_break, camera))
+        raise export.ExportCancelled()
+    monkeypatch.setattr(export, 'export_scene', capture)
+    bpy.ops.render.render()
+    data = captured[0]
+    blue = srgb_to_linear(np.array(FRAMES[2]) / 255.0)
+    m = next(m for m in data.materials if m.name == "Seq")
+    np.testing.assert_allclose(m.texture[0, 0, :3], blue, atol=1e-6)
+    np.testing.assert_allclose(data.environment.pixels[0, 0, :3], blue, atol=1e-6)
+
+
 def test_missing_frame_is_magenta_and_reported(tmp_path):
     img = _sequence(tmp_path)
     bpy.context.scene.frame_set(2)
