@@ -5,7 +5,8 @@
 
 Registers the add-on, opens the .blend (or builds the demo scene), renders every enabled view
 layer with DACRT and writes a PNG (view transform applied) and a linear float EXR next to each
-other. `python3 build.py render ...` forwards here. Exit status 1 with the reason on failure.
+other; the EXR is a multilayer one holding every layer and pass when more than one layer or any
+pass beyond Combined was rendered (the PNG shows the first layer's Combined). `python3 build.py render ...` forwards here. Exit status 1 with the reason on failure.
 Ctrl-C cancels the render as Esc does in Blender: the samples done so far are written and the
 exit status is 130; a second Ctrl-C stops at once.
 """
@@ -17,7 +18,9 @@ import sys
 
 import bpy
 
-from . import engine, last_render_stats, register
+from . import cryptomatte, engine, last_render_stats, register
+from .engine import EXTRA_PASSES
+from .passes import enabled
 
 
 def parse_args(argv):
@@ -57,11 +60,15 @@ def save_render(scene, png, exr):
     multiview render: one per view, Blender's view suffix before the extension)."""
     image = bpy.data.images['Render Result']
     settings = scene.render.image_settings
+    media = getattr(settings, 'media_type', None)
     saved = (settings.file_format, settings.color_mode, settings.color_depth)
     written = []
     try:
-        for path, fmt, depth in ((png, 'PNG', '8'), (exr, 'OPEN_EXR', '32')):
+        exr_format = 'OPEN_EXR_MULTILAYER' if _layers_or_passes(scene) else 'OPEN_EXR'
+        for path, fmt, depth in ((png, 'PNG', '8'), (exr, exr_format, '32')):
             os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+            if hasattr(settings, 'media_type'):        # Blender 5: the format lists follow it
+                settings.media_type = 'MULTI_LAYER_IMAGE' if fmt == 'OPEN_EXR_MULTILAYER' else 'IMAGE'
             settings.file_format = fmt
             settings.color_mode = 'RGBA'
             settings.color_depth = depth
@@ -76,8 +83,26 @@ def save_render(scene, png, exr):
                     raise
                 written.extend(views)
     finally:
+        if media is not None:
+            settings.media_type = media
         settings.file_format, settings.color_mode, settings.color_depth = saved
     return written
+
+
+def _layers_or_passes(scene) -> bool:
+    """Whether the render holds more than one view layer or any pass beyond Combined (the
+    engine's update_render_passes registers them): a plain EXR would keep only the first
+    layer's Combined."""
+    if scene.render.use_single_layer:                # the active layer alone
+        active = scene.view_layers.get(getattr(bpy.context.view_layer, 'name', ''))
+        layers = [active if active is not None else scene.view_layers[0]]
+    else:
+        layers = [layer for layer in scene.view_layers if layer.use]
+    if len(layers) > 1:
+        return True
+    return any(enabled(layer, toggle) for layer in layers for _, toggle, *_ in EXTRA_PASSES) or \
+        any(len(getattr(layer, 'lightgroups', ())) or len(getattr(layer, 'aovs', ())) or
+            any(getattr(layer, toggle, False) for _, toggle in cryptomatte.KINDS) for layer in layers)
 
 
 def _view_files(scene, path):

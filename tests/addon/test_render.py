@@ -437,6 +437,23 @@ def test_cli_renders_a_blend_file_and_explains_failures(scene, tmp_path):
     assert "Traceback" not in off.stderr and not (tmp_path / "off.png").exists()
 
 
+def test_cli_writes_every_layer_and_pass_to_a_multilayer_exr(scene, tmp_path):
+    """Two view layers, one with a Depth pass: the EXR holds both layers' Combined and the
+    pass (a plain EXR kept the first layer's Combined alone)."""
+    lit_plane_scene(scene, size=(20, 10))
+    second = scene.view_layers.new("Second")
+    second.use_pass_z = True
+    blend = tmp_path / "layers.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    out = run_cli([str(blend), "--samples", "1"], tmp_path)
+    assert out.returncode == 0, out.stdout + out.stderr
+    channels = scenes.read_exr(tmp_path / "render" / "layers.exr")
+    first = scene.view_layers[0].name
+    for name in (f"{first}.Combined.R", "Second.Combined.A", "Second.Depth.Z"):
+        assert name in channels, sorted(channels)
+    assert channels["Second.Combined.R"].shape == (10, 20) and channels["Second.Combined.R"].mean() > 0
+
+
 def test_cli_output_names_and_stereo(scene, tmp_path):
     """--out as a directory (existing or ending in a separator) writes <name> inside it, not a
     file beside it or a hidden '.png'; a stereo render writes one file per view and succeeds
