@@ -102,6 +102,11 @@ def export_light(ob, matrix, messages):
     else:
         messages.append(('WARNING', f"light '{ob.name}' of type {light.type} is not supported; skipped"))
         return None
+    bad = [k for k in ('radius', 'spot_size', 'spot_blend', 'angle', 'size_x', 'size_y', 'spread')
+           if k in kw and not np.isfinite(kw[k])]
+    if bad:     # (set from Python: Blender's ranges let NaN through) the rest of the scene renders
+        messages.append(('WARNING', f"light '{ob.name}' has a non-finite {', '.join(bad)}; skipped"))
+        return None
     return sd.Light(**kw)
 
 

@@ -1292,6 +1292,14 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     # a NaN location or rotation: skipped, not a failed render (it was)
     scenes.light('POINT', 100.0, (float('nan'), 0, 2), name="Lost")
     scenes.light('AREA', 100.0, (0, 0, 2), name="Spun").rotation_euler = (float('nan'), 0.0, 0.0)
+    # a NaN size, angle or radius set from Python (Blender's ranges let it through): skipped,
+    # where it failed the whole render
+    nan = float('nan')
+    scenes.light('SPOT', 100.0, (0, 0, 2), name="NanCone", spot_size=nan)
+    scenes.light('SPOT', 100.0, (0, 0, 2), name="NanBlend", spot_blend=nan)
+    scenes.light('POINT', 100.0, (0, 0, 2), name="NanRadius", shadow_soft_size=nan)
+    scenes.light('SUN', 3.0, name="NanSun", angle=nan)
+    scenes.light('AREA', 100.0, (0, 0, 2), name="NanSpread", spread=nan)
     data = exported()
     assert [l.name for l in data.lights] == ["Beam", "Fine", "WideSun"]
     assert data.lights[0].spread == export.lights.MIN_SPREAD            # Cycles: a beam, not nothing
@@ -1299,7 +1307,10 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     warnings = [t for lvl, t in data.messages if lvl == 'WARNING']
     for name, why in (("NoSize", "zero area"), ("Squashed", "zero area"), ("Negative", "negative strength"),
                       ("Infinite", "non-finite strength"), ("NoCone", "zero object scale"),
-                      ("Lost", "non-finite transform"), ("Spun", "non-finite transform")):
+                      ("Lost", "non-finite transform"), ("Spun", "non-finite transform"),
+                      ("NanCone", "non-finite spot_size"), ("NanBlend", "non-finite spot_blend"),
+                      ("NanRadius", "non-finite radius"), ("NanSun", "non-finite angle"),
+                      ("NanSpread", "non-finite spread")):
         assert any(f"'{name}'" in t and why in t for t in warnings), (name, warnings)
     lamps = [ls.make_lamp(l) for l in data.lights]              # the integrator takes them
     assert ls.LightSet(lamps, None, 0).num_lamps == 3
