@@ -120,7 +120,11 @@ class Exporter:
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
         self._summarize(geometry, world, environment)
-        self.counts['objects_hidden'] = sum(1 for ob in self.scene.objects if ob.hide_render)
+        # (an animated Disable in Renders: the frame's value is the evaluated object's; an
+        # animation render leaves the original at the file's)
+        self.counts['objects_hidden'] = sum(
+            1 for ob in self.scene.objects
+            if (ob.evaluated_get(self.depsgraph).hide_render if ob.animation_data else ob.hide_render))
         return sd.SceneData(camera=camera, geometry=geometry, materials=self.materials.materials,
                             lights=self.lights, world=world, settings=settings,
                             object_names=self.object_names, messages=self.messages,

@@ -747,6 +747,21 @@ def test_compact_rows_equals_boolean_indexing(pattern):
         np.testing.assert_array_equal(got, expect)
 
 
+def test_animated_hide_render_counts_the_rendered_frame(scene, exported, tmp_path):
+    """Disable in Renders keyframed off by frame 4: an animation render of frame 4 (the file
+    at frame 1, hidden there) exports the plane and counts nothing hidden."""
+    setup(scene)
+    ob = scenes.plane("Blink")
+    for frame, hidden in ((1, True), (4, False)):
+        ob.hide_render = hidden
+        ob.keyframe_insert('hide_render', frame=frame)
+    scene.frame_set(1)
+    scene.frame_start = scene.frame_end = 4
+    scene.render.filepath = str(tmp_path / "frame_")
+    data = exported(animation=True)
+    assert "Blink" in data.object_names and data.skipped['objects_hidden'] == 0
+
+
 def test_hidden_and_ray_visibility(scene, exported):
     setup(scene)
     scenes.plane("Shown")
