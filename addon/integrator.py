@@ -891,12 +891,10 @@ class Integrator:
                              sinks.sampled(k), tb, u, v, sinks.groups, bump)
             if far is not None:                       # and the transmission's, from the far side
                 sel, thr_far, _ = far
-                fP, fng, fns, fP_off, fbump = _far_side(sel, P, ng, ns, P_off, bump)
-                take = lambda a: None if a is None else np.take(a, sel, axis=-1)  # noqa: E731
-                self._next_event(k, fP, fP_off, take(prim), fng, fns,
-                                 thr_far if nee is None else thr_far * take(nee), take(pid), take(keys),
-                                 take(u_pick), sinks.sampled(k), take(tb), take(u), take(v), sinks.groups, fbump,
-                                 dims=_DIM_LOBE + 2 * k + 1)
+                if nee is not None:
+                    thr_far = thr_far * np.take(nee, sel)
+                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, bump, prim, pid, keys, u_pick, sinks,
+                                     tb, u, v, _DIM_LOBE + 2 * k + 1)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
@@ -943,6 +941,17 @@ class Integrator:
         thr[:, sel] = before * R
         rt, tt = max3(R), max3(T)
         return sel, before * T, tt / (rt + tt)           # tt > 0 on translucent materials
+
+    def _next_event_far(self, k, sel, thr_far, P, ng, ns, P_off, bump, prim, pid, keys, u_pick, sinks, tb, u, v,
+                        dims):
+        """Light sampling of the transmission lobe at the vertices sel (columns of the other
+        arrays) of translucent surfaces, from their far side (_far_side), with throughput
+        thr_far (3, len(sel)) and random dimensions dims of its own."""
+        fP, fng, fns, fP_off, fbump = _far_side(sel, P, ng, ns, P_off, bump)
+        take = lambda a: None if a is None else np.take(a, sel, axis=-1)  # noqa: E731
+        self._next_event(k, fP, fP_off, take(prim), fng, fns, np.ascontiguousarray(thr_far, F32), take(pid),
+                         np.ascontiguousarray(take(keys)), take(u_pick), sinks.sampled(k), take(tb), take(u),
+                         take(v), sinks.groups, fbump, dims=dims)
 
     def _choose_lobes(self, k, far, keys, thr, P, ns, ng, P_off, bump):
         """The bounce's lobe at translucent hits (far: _translucent_hits'): the transmission with
@@ -1239,6 +1248,14 @@ class Integrator:
                          np.ascontiguousarray(ns), np.ascontiguousarray(thr, F32), np.take(path.pid, rows), keys,
                          u_pick, sinks.sampled(k), tb, u, v, sinks.groups, bump,
                          dims=_DIM_PASSED + (k << 11) + 2 * j + 1)
+        if self._any_translucent:             # a translucent surface's transmission, from the far side
+            mat = np.take(self.tri.material, prim)
+            sel = np.flatnonzero(np.take(self.mats.translucent, mat))
+            if len(sel):
+                T = np.take(self.mats.translucency, np.take(mat, sel), axis=1)
+                thr_far = T * np.take(opacity, sel) * np.take(path.thr, np.take(rows, sel), axis=1)
+                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, bump, prim, np.take(path.pid, rows), keys,
+                                     u_pick, sinks, tb, u, v, _DIM_LOBE + (1 << 20) + (k << 11) + j)
 
     def _gather_segment(self, seg, sub, t0, sinks, k):
         """Lamps beyond distance t0 along a segment past a transparent surface, and the world
