@@ -176,9 +176,10 @@ class Materials:
         # the Material Index pass's value of each material (Blender's material pass index)
         self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
-        # picks closures by their mean weight): its albedo, or 1 where it only emits
-        self.opaque_weight = np.where(self.emissive, np.maximum(self.base.mean(axis=0), 1.0),
-                                      self.base.mean(axis=0)).astype(F32)
+        # picks closures by their mean weight): its albedo and diffuse transmission, or 1 where it
+        # only emits (a translucent-only part weighed 0: paths always passed, never scattered)
+        scatter = (self.base + self.translucency).mean(axis=0)
+        self.opaque_weight = np.where(self.emissive, np.maximum(scatter, 1.0), scatter).astype(F32)
 
 
 def texture_entry(name, label, texture, interpolation, extension, transform):
