@@ -1345,6 +1345,8 @@ class Integrator:
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1)
             if self._albedo_varies:
                 self._albedo_maps(prim, hu, hv, albedo)
+            if self._any_translucent:                 # Cycles' diffuse closures include it
+                albedo += np.take(self.mats.translucency, np.take(self.tri.material, prim), axis=1)
             P, ng, ns, _ = self._surface(hits, idx, path.D)
             ns = self._bent_normals(prim, hu, hv, ns, ng)[0]          # Cycles: the bent normal
         else:
@@ -1478,6 +1480,8 @@ class Integrator:
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
             if self._albedo_varies:
                 self._albedo_maps(prim, u, v, albedo)
+            if self._any_translucent:
+                albedo += np.take(self.mats.translucency, np.take(self.tri.material, prim), axis=1) * weight
             if denoise is not None:
                 denoise.surface(cols, ns, albedo, P, tau)
             diff[:, cols] += thr * albedo

@@ -11,6 +11,7 @@ import bpy
 import numpy as np
 import pytest
 
+from addon.passes import result_name
 from tests.addon import scenes
 from tests.parity import rendering as fair
 
@@ -62,3 +63,17 @@ def test_backlit_leaf_matches_cycles(fac, clear, tmp_path):
     # one (fac 1) was always passed, never scattered: 0.90 / 0.90 / 0.93
     np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.015)
     assert means['CYCLES'][1] > 0.2        # the leaf glows: most of the image is its transmission
+
+
+def test_diffuse_color_pass_counts_the_transmission(tmp_path):
+    """Cycles' Diffuse Color pass sums its diffuse closures, the Translucent BSDF among them."""
+    sc = _leaf_scene()
+    sc.render.resolution_x, sc.render.resolution_y = 32, 24
+    sc.view_layers[0].use_pass_diffuse_color = True
+    layer = sc.view_layers[0].name
+    sc.cycles.samples = sc.dacrt.samples = 16
+    means, name = {}, result_name('DiffCol', bpy.app.version)
+    for engine, exr in scenes.render_engines(sc, tmp_path).items():
+        means[engine] = np.array([exr[f"{layer}.{name}.{c}"].mean() for c in 'RGB'])
+    # measured within 0.05% (the reflection's colour alone: 0.4x Cycles' in G)
+    np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.01)
