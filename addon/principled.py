@@ -148,21 +148,32 @@ def _metal(node, reasons):
     return None, True
 
 
+def _layer_weight(node, name, unused, reasons, most=1.0):
+    """(weight, exact) of a layer's weight input `name`, clipped to [0, most] (NaN: 0); None
+    where the node has no such input or the weight is 0 (a node-driven 0 reported as `unused`)."""
+    sock = node.inputs.get(name)
+    if sock is None:
+        return None
+    weight, ok = constant_value(sock)
+    weight = min(max(weight, 0.0), most) if np.isfinite(weight) else 0.0
+    if weight == 0.0:
+        if not ok:
+            reasons.append(unused)
+        return None
+    return weight, ok
+
+
 def _transmission(node, reasons):
     """(weight, reflection (3, len(_MU)), transmittance (len(_MU),)) per view cosine of the
     Principled's glass (Transmission Weight > 0; Cycles' GGX glass of the Roughness and IOR under
     the metal, over the specular layer and base, which it dims by 1 - weight), or None. As the
     Glass BSDF (export.reflectors.glass_albedos): its reflection (tinted by Specular Tint) a
     diffuse albedo, the rest let straight through (no refraction)."""
-    sock = node.inputs.get('Transmission Weight')
-    if sock is None:
+    found = _layer_weight(node, 'Transmission Weight', "Principled transmission driven by nodes; its own value 0 used",
+                          reasons)
+    if found is None:
         return None
-    weight, ok = constant_value(sock)
-    weight = min(max(weight, 0.0), 1.0) if np.isfinite(weight) else 0.0
-    if weight == 0.0:
-        if not ok:
-            reasons.append("Principled transmission driven by nodes; its own value 0 used")
-        return None
+    weight, ok = found
     (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
     tint, t_ok = _color(node, 'Specular Tint')
     if not (ok and v_ok and t_ok):
@@ -194,15 +205,11 @@ def transmittance(node, base) -> np.ndarray:
 
 def _coat_mu(node, reasons):
     """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None."""
-    weight_socket = node.inputs.get('Coat Weight')
-    if weight_socket is None:
+    # (driven by nodes, own value 0: reported, as before the coat was kept)
+    found = _layer_weight(node, 'Coat Weight', "Principled coat ignored", reasons)
+    if found is None:
         return None
-    weight, ok = constant_value(weight_socket)
-    weight = min(max(weight, 0.0), 1.0)
-    if weight == 0.0:
-        if not ok:       # driven by nodes, own value 0: reported, as before the coat was kept
-            reasons.append("Principled coat ignored")
-        return None
+    weight, ok = found
     (roughness, ior), v_ok = _values(node, ('Coat Roughness', 'Coat IOR'))
     tint, t_ok = _color(node, 'Coat Tint')
     if not (ok and v_ok and t_ok):
@@ -218,15 +225,11 @@ def _sheen_mu(node, reasons):
     """(dim (len(_MU),), add (3, len(_MU))) of the sheen layer per view cosine, or None: Cycles'
     microfiber sheen of weight x tint, dimming the layers below by 1 - max over channels of its
     albedo (closure_layering_weight)."""
-    weight_socket = node.inputs.get('Sheen Weight')
-    if weight_socket is None:
+    found = _layer_weight(node, 'Sheen Weight', "Principled sheen driven by nodes; its own value 0 used", reasons,
+                          most=np.inf)
+    if found is None:
         return None
-    weight, ok = constant_value(weight_socket)
-    weight = max(weight, 0.0) if np.isfinite(weight) else 0.0
-    if weight == 0.0:
-        if not ok:
-            reasons.append("Principled sheen driven by nodes; its own value 0 used")
-        return None
+    weight, ok = found
     (roughness,), r_ok = _values(node, ('Sheen Roughness',))
     tint, t_ok = _color(node, 'Sheen Tint')
     if not (ok and r_ok and t_ok):

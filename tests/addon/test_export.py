@@ -952,24 +952,28 @@ def test_image_texture_uvs_and_linear_pixels(scene, exported, tmp_path):
     assert np.allclose(np.sort(corners_uv, axis=0), np.sort(loops_uv, axis=0))
 
 
+
+def _mixed(name, a_type, a_color, b_type, b_color, fac):
+    """A material: Mix Shader (factor fac) of a node a_type of colour a_color and one of b."""
+    mat = bpy.data.materials.new(name)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    a, b = nt.nodes.new(a_type), nt.nodes.new(b_type)
+    a.inputs['Color'].default_value = (*a_color, 1)
+    b.inputs['Color'].default_value = (*b_color, 1)
+    m = nt.nodes.new('ShaderNodeMixShader')
+    m.inputs['Fac'].default_value = fac
+    nt.links.new(a.outputs[0], m.inputs[1])
+    nt.links.new(b.outputs[0], m.inputs[2])
+    nt.links.new(m.outputs[0], nt.nodes.new('ShaderNodeOutputMaterial').inputs['Surface'])
+    return mat
+
 def test_material_table(scene, exported):
     setup(scene)
     mats = [scenes.diffuse("Diffuse", (0.2, 0.4, 0.6)),
             scenes.principled("Principled", (0.1, 0.2, 0.3), (1.0, 0.5, 0.0), 4.0),
             scenes.emission("Emission", (0.3, 0.3, 0.3), 5.0)]
-    mix = bpy.data.materials.new("Mix")
-    nt = mix.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new('ShaderNodeOutputMaterial')
-    a, b = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeBsdfDiffuse')
-    a.inputs['Color'].default_value = (1, 0, 0, 1)
-    b.inputs['Color'].default_value = (0, 0, 1, 1)
-    m = nt.nodes.new('ShaderNodeMixShader')
-    m.inputs['Fac'].default_value = 0.25
-    nt.links.new(a.outputs[0], m.inputs[1])
-    nt.links.new(b.outputs[0], m.inputs[2])
-    nt.links.new(m.outputs[0], out.inputs['Surface'])
-    mats.append(mix)
+    mats.append(_mixed("Mix", 'ShaderNodeBsdfDiffuse', (1, 0, 0), 'ShaderNodeBsdfDiffuse', (0, 0, 1), 0.25))
     mats.append(scenes.emissive_diffuse("Furnace", 0.5, 1.0))
     glass = bpy.data.materials.new("Glass")
     g = glass.node_tree
@@ -991,18 +995,8 @@ def test_material_table(scene, exported):
     bnode.inputs['Transmission Weight'].default_value = 1.0
     bnode.inputs['Roughness'].default_value = 0.0
     mats.append(bottle)
-    leaf = bpy.data.materials.new("Leaf")
-    lt = leaf.node_tree
-    lt.nodes.clear()
-    ld, ltr = lt.nodes.new('ShaderNodeBsdfDiffuse'), lt.nodes.new('ShaderNodeBsdfTranslucent')
-    ld.inputs['Color'].default_value = (0.2, 0.4, 0.1, 1)
-    ltr.inputs['Color'].default_value = (0.6, 0.8, 0.2, 1)
-    lmix = lt.nodes.new('ShaderNodeMixShader')
-    lmix.inputs['Fac'].default_value = 0.25
-    lt.links.new(ld.outputs[0], lmix.inputs[1])
-    lt.links.new(ltr.outputs[0], lmix.inputs[2])
-    lt.links.new(lmix.outputs[0], lt.nodes.new('ShaderNodeOutputMaterial').inputs['Surface'])
-    mats.append(leaf)
+    mats.append(_mixed("Leaf", 'ShaderNodeBsdfDiffuse', (0.2, 0.4, 0.1), 'ShaderNodeBsdfTranslucent',
+                       (0.6, 0.8, 0.2), 0.25))
     mats.append(scenes.principled("Shiny", (0.5, 0.5, 0.5), specular=0.5, metallic=1.0))
     for i, mat in enumerate(mats):
         scenes.plane(mat.name, location=(3 * i, 0, 0), materials=(mat,))

@@ -81,7 +81,7 @@ def test_sequence_texture_reads_the_frame_shown(tmp_path):
         np.testing.assert_allclose(m.texture[0, 0, :3], srgb_to_linear(np.array(want) / 255.0), atol=1e-6)
 
 
-def test_sequence_frame_is_the_rendered_scenes(tmp_path, monkeypatch):
+def test_sequence_frame_is_the_rendered_scenes(tmp_path, exported):
     """The frame is the rendered scene's, not the context's: a sequencer scene strip renders
     its scene at the strip's frame (here the main scene's frame 10 shows the strip's frame 3),
     and the image sequence must show that frame's file (it read the context scene's: frame 10,
@@ -107,15 +107,7 @@ def test_sequence_frame_is_the_rendered_scenes(tmp_path, monkeypatch):
     strips = strips.strips if hasattr(strips, 'strips') else strips.sequences
     strips.new_scene("S", shot, channel=1, frame_start=8)     # main frame 10: the shot's frame 3
     main.frame_set(10)                                        # (cyclic: frame 10 would show 1)
-    captured = []
-    real = export.export_scene
-
-    def capture(depsgraph, check_break=None, camera=None):
-        captured.append(real(depsgraph, check_break, camera))
-        raise export.ExportCancelled()
-    monkeypatch.setattr(export, 'export_scene', capture)
-    bpy.ops.render.render()
-    data = captured[0]
+    data = exported()                         # the strip's scene, the one the engine renders
     blue = srgb_to_linear(np.array(FRAMES[2]) / 255.0)
     m = next(m for m in data.materials if m.name == "Seq")
     np.testing.assert_allclose(m.texture[0, 0, :3], blue, atol=1e-6)

@@ -13,26 +13,9 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
-from tests.parity.test_specular import _disk_means
+from tests.parity.test_specular import _disk_means, sphere_scene
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
-
-
-def _sphere_scene(make_material):
-    """The scene, made after the factory reset (which would remove a material made before)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    mat = make_material()
-    sc = bpy.context.scene
-    sc.render.resolution_x = sc.render.resolution_y = 48
-    sc.render.film_transparent = True
-    scenes.camera(location=(0, -5, 0), rotation=(np.pi / 2, 0, 0), kind='ORTHO', ortho_scale=2.1)
-    scenes.uv_sphere(radius=1.0, segments=96, rings=48, smooth=True, materials=[mat])
-    scenes.world((1.0, 1.0, 1.0), 1.0)
-    sc.cycles.samples = sc.dacrt.samples = 64
-    sc.cycles.use_denoising = False
-    sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.cycles.glossy_bounces = 0
-    sc.dacrt.max_bounces = 0
-    return sc
 
 
 def _sheen_material(distribution, color, roughness):
@@ -61,7 +44,7 @@ SHEEN_NODE = {  # distribution, colour, roughness
 @pytest.mark.parametrize('case', sorted(SHEEN_NODE))
 def test_sheen_bsdf_matches_cycles_on_a_sphere(case, tmp_path):
     dist, color, rough = SHEEN_NODE[case]
-    d, c = _disk_means(_sphere_scene(lambda: _sheen_material(dist, color, rough)), tmp_path)
+    d, c = _disk_means(sphere_scene(lambda: _sheen_material(dist, color, rough)), tmp_path)
     # the velvet's albedo is integrated from Cycles' own BRDF, the microfiber's is the paper's fit
     # of the table Cycles reads: measured within 1% (velvet) and 1.7% (microfiber, roughness 0.2)
     np.testing.assert_allclose(d, c, rtol=0.02)
@@ -88,5 +71,5 @@ def test_principled_sheen_matches_cycles_on_a_sphere(case, tmp_path):
         p.inputs['Coat Weight'].default_value = coat
         return mat
 
-    d, c = _disk_means(_sphere_scene(cloth), tmp_path)
+    d, c = _disk_means(sphere_scene(cloth), tmp_path)
     np.testing.assert_allclose(d, c, rtol=0.02)

@@ -18,21 +18,16 @@ from tests.addon import scenes
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0), coat=None):
+def sphere_scene(make_material):
+    """A fresh scene: a sphere of make_material() (made after the factory reset, which would
+    remove one made before) under a uniform white world, seen by an orthographic camera, with
+    no bounces past the first and a transparent film (_disk_means)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat = make_material()
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
     sc.render.film_transparent = True
     scenes.camera(location=(0, -5, 0), rotation=(np.pi / 2, 0, 0), kind='ORTHO', ortho_scale=2.1)
-    mat = scenes.principled("Plastic", base, specular=level)
-    p = next(n for n in mat.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
-    p.inputs['Roughness'].default_value = roughness
-    p.inputs['IOR'].default_value = ior
-    p.inputs['Specular Tint'].default_value = (*tint, 1.0)
-    if coat is not None:                   # weight, roughness, IOR, tint
-        for name, value in zip(('Coat Weight', 'Coat Roughness', 'Coat IOR'), coat[:3]):
-            p.inputs[name].default_value = value
-        p.inputs['Coat Tint'].default_value = (*coat[3], 1.0)
     scenes.uv_sphere(radius=1.0, segments=96, rings=48, smooth=True, materials=[mat])
     scenes.world((1.0, 1.0, 1.0), 1.0)
     sc.cycles.samples = sc.dacrt.samples = 64
@@ -40,6 +35,21 @@ def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0), coat=None):
     sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.cycles.glossy_bounces = 0
     sc.dacrt.max_bounces = 0
     return sc
+
+
+def _scene(base, level, roughness, ior=1.5, tint=(1.0, 1.0, 1.0), coat=None):
+    def plastic():
+        mat = scenes.principled("Plastic", base, specular=level)
+        p = next(n for n in mat.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+        p.inputs['Roughness'].default_value = roughness
+        p.inputs['IOR'].default_value = ior
+        p.inputs['Specular Tint'].default_value = (*tint, 1.0)
+        if coat is not None:                   # weight, roughness, IOR, tint
+            for name, value in zip(('Coat Weight', 'Coat Roughness', 'Coat IOR'), coat[:3]):
+                p.inputs[name].default_value = value
+            p.inputs['Coat Tint'].default_value = (*coat[3], 1.0)
+        return mat
+    return sphere_scene(plastic)
 
 
 def _disk_means(sc, tmp_path):
