@@ -31,6 +31,20 @@ def test_black_surfaces_end_paths_without_changing_the_image(monkeypatch):
     assert fast.stats['rays']['shadow'] < slow.stats['rays']['shadow']
 
 
+def test_translucent_surfaces_keep_the_skips_exact(monkeypatch):
+    """A wall of black reflection but translucent (diffuse transmission) is not a black surface:
+    its paths go on, and the skips (light samples behind a side, black walls) leave the image
+    as every piece of work would."""
+    scene = cornell_box(40, 30, 16, 4, area_light=True)
+    scene.materials[2].base_color = np.zeros(3, np.float32)
+    scene.materials[2].translucency = np.full(3, 0.6, np.float32)
+    scene.materials[3].base_color = np.zeros(3, np.float32)        # and a truly black one
+    fast, slow = _both(scene, monkeypatch)
+    assert np.array_equal(fast.film.combined(), slow.film.combined())
+    assert fast.stats['skipped']['detail']['bounce_rays_black'] > 0
+    assert fast.film.combined()[..., :3].mean() > 0
+
+
 def test_light_samples_that_cannot_contribute_cast_no_shadow_ray(monkeypatch):
     # a spot light aimed away from most of the plane, and a point light below it: most light
     # samples are outside the cone or behind the surface
