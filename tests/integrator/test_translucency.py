@@ -52,3 +52,21 @@ def test_translucent_material_with_black_reflection_is_not_skipped_as_black():
     sun = light('SUN', SUN, np.eye(4))
     integ = render(_plane(0.0, 0.5, [sun], below=True, samples=16))
     assert integ.film.combined()[..., 0].mean() > 0.4 * 0.5 * SUN / np.pi
+
+
+@pytest.mark.parametrize('use_mis', [True, False])
+def test_area_light_behind_the_surface_is_unbiased_with_and_without_mis(use_mis):
+    """A 1 m square light 1 m below the plane, facing it: seen from above, the plane shows T x
+    the closed-form irradiance / pi. With MIS the transmission lobe's light samples and the
+    BSDF rays that leave through the far side meet the same light: their weights must still
+    sum to one (the lobe's probability is left out of both sides of the heuristic)."""
+    from .test_lights import rect_irradiance
+    R, T = 0.3, 0.5
+    expected = T * 4 * rect_irradiance(100.0 / np.pi, 0.5, 0.5, 1.0) / np.pi
+    area = light('AREA', 100.0, translation(z=-1.0) @ rotation_x(np.pi), shape='SQUARE', size_x=1.0,
+                 use_mis=use_mis)
+    v, t = quad((0.0, 0.0, 0.0), 1000.0, 1000.0)
+    mats = [material('default'), material('leaf', (R,) * 3, translucency=np.full(3, T, np.float32))]
+    scene = sd.SceneData(ortho_down(width=32, px=32), geometry([(v, t, 1, ALL_VIS)]), mats, [area],
+                         np.zeros(3, np.float32), sd.Settings(samples=1024, max_bounces=1, seed=11, filter_type='BOX'))
+    _check(scene, expected, rel=1.5e-3)
