@@ -6,7 +6,8 @@
 Registers the add-on, opens the .blend (or builds the demo scene), renders every enabled view
 layer with DACRT and writes a PNG (view transform applied) and a linear float EXR next to each
 other; the EXR is a multilayer one holding every layer and pass when more than one layer or any
-pass beyond Combined was rendered (the PNG shows the first layer's Combined). `python3 build.py render ...` forwards here. Exit status 1 with the reason on failure.
+pass beyond Combined was rendered (the PNG shows the first layer's Combined). `python3
+build.py render ...` forwards here. Exit status 1 with the reason on failure.
 Ctrl-C cancels the render as Esc does in Blender: the samples done so far are written and the
 exit status is 130; a second Ctrl-C stops at once.
 """

@@ -91,6 +91,7 @@ _DIM_LENS = 1 << 20
 _DIM_TRANSPARENT = 1 << 21
 _DIM_PASSED = 1 << 22     # light sampling at passed semi-transparent surfaces (+ k << 11 + 2 layer)
 _DIM_LOBE = 1 << 23       # reflection or diffuse transmission at translucent surfaces (+ k)
+_DIM_GLASS = 1 << 24      # glass or clear transparency, camera rays under transparent film (+ j)
 # internal visibility bit: transparent triangles shadow rays pass (their own tracer scene)
 _VIS_THROUGH = 16
 # Cryptomatte's arrival order of a sample's surfaces: sample x _MAX_CHAIN + depth along the ray
@@ -219,6 +220,11 @@ class Integrator:
                              for name in ('sample_clamp_direct', 'sample_clamp_indirect'))
         self._tri_transparent = self.mats.transparent[self.tri.material] & (self.tri.visibility != 0)
         self._any_transparent = bool(self._tri_transparent.any())
+        # transparent film without Transparent Glass: a camera ray that passes glass sees the
+        # world behind it, drawn at alpha 1 (Cycles' refraction), where a Transparent BSDF's
+        # background is left out
+        self._glass_film = self.transparent and not getattr(s, 'film_transparent_glass', False) and \
+            bool((self.mats.refraction.max(axis=0) > 0)[self.tri.material][self._tri_transparent].any())
         # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
         self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))
         # textures or attribute colours vary the albedo over a triangle: hits need (u, v) for them
@@ -839,6 +845,8 @@ class Integrator:
             alpha[np.take(path.pid, miss)] = 1.0
         elif len(miss) and camera and path.thr is not None:
             _seen_through(alpha, path, miss)          # transparent film behind transparent surfaces
+            if path.refracted is not None:            # ... but behind glass the world is drawn
+                alpha[np.take(path.pid, miss[np.take(path.refracted, miss)])] = 1.0
         if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
             if camera and self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
@@ -1204,7 +1212,11 @@ class Integrator:
             rows = rows[go]
             if not len(rows):
                 return
-            thr[:, rows] *= tau[:, go] / p[go]
+            if camera and self._glass_film:
+                self._glass_or_clear(path, rows, mat[go], tau[:, go], p[go],
+                                     self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_GLASS + j)[0])
+            else:
+                thr[:, rows] *= tau[:, go] / p[go]
             path.tb[rows] += 1
             # on from just behind the surface (P stepped off it away from the ray's side)
             if surface is None:
@@ -1221,10 +1233,26 @@ class Integrator:
                          np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
                          None if path.pdf is None else np.take(path.pdf, rows),
                          None if path.prim is None else np.take(path.prim, rows),
-                         N=None if path.N is None else np.ascontiguousarray(np.take(path.N, rows, axis=1)))
+                         N=None if path.N is None else np.ascontiguousarray(np.take(path.N, rows, axis=1)),
+                         refracted=None if path.refracted is None else np.take(path.refracted, rows))
             self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
             j += 1
+
+    def _glass_or_clear(self, path, rows, mat, tau, p, u):
+        """Camera paths rows passing surfaces of materials mat with transparency tau (3, k),
+        under a transparent film (_glass_film): each passes as glass (its refraction part, with
+        probability mean(glass) / mean(tau)) or as clear transparency (the rest), weighted by
+        the part over its probability (and p, the pass's); those that pass glass are refracted
+        from then on (path.refracted)."""
+        glass = np.minimum(np.take(self.mats.refraction, mat, axis=1), tau)
+        q = np.where(tau.mean(axis=0) > 0, glass.mean(axis=0) / np.maximum(tau.mean(axis=0), 1e-30), 0.0)
+        go = u < q
+        part = np.where(go, glass / np.where(go, q, 1.0), (tau - glass) / np.where(go, 1.0, 1.0 - q))
+        path.thr[:, rows] *= (part / p).astype(F32)
+        if path.refracted is None:
+            path.refracted = np.zeros(len(path.pid), bool)
+        path.refracted[rows[go]] = True
 
     def _light_passed(self, k, j, path, hits, sinks, rows, prim, opacity, surface, go):
         """Light sampling at the semi-transparent surfaces (layer j) that paths rows pass: the
@@ -1276,6 +1304,25 @@ class Integrator:
                                         np.zeros(len(t0), bool), seg.pid, out, thr=thr,
                                         pdf_bsdf=None if camera else seg.pdf, clamp=self._found_clamp(k),
                                         **self._lamp_mis(camera, seg))
+        if camera and seg.refracted is not None:
+            self._world_through_glass(seg, sub, ~hit & seg.refracted, sinks)
+
+    def _world_through_glass(self, seg, sub, where, sinks):
+        """The world camera rays see through glass under a transparent film (_glass_film), where
+        `where` (bool per ray of seg) they missed after passing it: into Combined (and the world's
+        light group) as through an opaque film; the Environment pass has it already."""
+        if not where.any():
+            return
+        outs = [sinks.L]
+        if sinks.groups and self._world_group >= 0:
+            outs.append(sinks.groups[self._world_group])
+        clamp = self._found_clamp(0)
+        for out in outs:
+            if self._camera_env_pass is not None:
+                self._camera_env_pass.native.gather(0.0, seg.D, where, seg.thr, None, seg.pid, out, clamp)
+            if len(self._camera_world):
+                dacrt.lamps.lamp_gather(self._lamp_records, self._camera_world, seg.O, seg.D, sub['t'], where,
+                                        seg.pid, out, thr=seg.thr, pdf_bsdf=None, clamp=clamp)
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None, kind='through'):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'

@@ -79,3 +79,5 @@ class Paths:
     # a path that stopped at a semi-transparent surface (_through), whose bounce carries 1 / (1 - p)
     nee: np.ndarray | None = None
     N: np.ndarray | None = None      # shading normals (3,n) the rays' vertex sampled lights with
+    # camera paths that passed glass (a transparent film's background is drawn behind it)
+    refracted: np.ndarray | None = None

@@ -25,10 +25,6 @@ import numpy as np
 from . import roughdiffuse, sheen, specular
 from .nodeeval import constant_color, constant_value
 
-# what every glass stand-in's note says (Glass, Refraction, Principled transmission): the export
-# finds such materials by it (a transparent film's alpha, export.scene)
-SEE_THROUGH = "as a transparent surface (no refraction)"
-
 # inputs whose layers the steps render
 HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic', 'Diffuse Roughness', 'Sheen Weight',
            'Transmission Weight')
@@ -185,7 +181,7 @@ def _transmission(node, reasons):
     ior = ior if np.isfinite(ior) and ior > 0.0 else 1.5
     reflect = specular.layer_albedo_mu(roughness, ior, 0.5, tint, True)
     plain = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True)
-    reasons.append(f"Principled transmission {SEE_THROUGH} with its reflection "
+    reasons.append(f"Principled transmission as a transparent surface (no refraction) with its reflection "
                    f"as diffuse (Transmission Weight {weight:g})")
     return weight, reflect, 1.0 - plain.max(axis=0)
 

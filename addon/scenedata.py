@@ -147,6 +147,10 @@ class Material:
     # Diffuse transmission (Translucent BSDF): the colour x mix weights (3,) of a Lambertian lobe
     # on the far side of the surface, beside the reflection of base_color; None: none
     translucency: Optional[np.ndarray] = None
+    # the part of `transparency` that stands in for glass (Glass and Refraction BSDFs, the
+    # Principled's transmission): light through it is refracted light to Cycles, so a camera
+    # ray that passes it sees the world behind even with a transparent film; None: none
+    refraction: Optional[np.ndarray] = None
     opacity: Optional[np.ndarray] = None
     opacity_interpolation: str = 'Linear'
     opacity_extension: str = 'REPEAT'
@@ -227,6 +231,9 @@ class Settings:
     adaptive_threshold: float = 0.01   # Cycles' scale; 0 = automatic (from samples)
     adaptive_min_samples: int = 0      # 0 = automatic (from the threshold)
     film_transparent: bool = False
+    # Cycles' Film > Transparent Glass: with a transparent film, what glass lets through leaves
+    # alpha holes; off, the world seen through it is drawn (alpha 1), as through any surface
+    film_transparent_glass: bool = False
     film_exposure: float = 1.0     # Cycles' Film > Exposure: scales Combined RGB and the light passes
     use_light_tree: bool = True    # Cycles' Lights > Light Tree: a light per point by its contribution
     passes: tuple = ()             # extra passes wanted (passes.py): data passes 'Depth', 'Mist',

@@ -154,6 +154,15 @@ class Materials:
                 self.opacity.append((i, *texture_entry(mat.name, 'opacity', mat.opacity, mat.opacity_interpolation,
                                                         mat.opacity_extension, mat.opacity_transform)))
         self.transparent = self.transparency.max(axis=0) > 0
+        # the glass part of it (scenedata.Material.refraction), at most the transparency
+        self.refraction = np.zeros((3, len(materials)), F32)
+        for i, mat in enumerate(materials):
+            r = getattr(mat, 'refraction', None)
+            if r is not None and mat.transparency is not None:
+                r = np.asarray(r, np.float64)
+                if r.shape != (3,) or not np.isfinite(r).all():
+                    raise ValueError(f"material {mat.name!r}: refraction must be 3 finite numbers, got {r!r}")
+                self.refraction[:, i] = np.clip(r, 0.0, self.transparency[:, i])
         # diffuse transmission (3, materials), scenedata.Material.translucency
         self.translucency = np.zeros((3, len(materials)), F32)
         for i, mat in enumerate(materials):

@@ -85,6 +85,11 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
         sub.enabled = render.threads_mode == 'FIXED'
         sub.prop(render, "threads")
         layout.prop(render, "film_transparent")
+        cycles = getattr(context.scene, 'cycles', None)
+        if cycles is not None and hasattr(cycles, 'film_transparent_glass'):   # Cycles' own setting
+            sub = layout.column()
+            sub.active = render.film_transparent
+            sub.prop(cycles, "film_transparent_glass", text="Transparent Glass")
 
 
 class VIEWLAYER_PT_dacrt_passes(DACRTPanel, Panel):

@@ -43,11 +43,13 @@ class Texture:
 class Closure:
     """Linear combination of what a diffuse renderer keeps:
     albedo = const + tex_weight * texture, emission constant, the weight of transparent
-    closures (`transparent`, rgb) and the diffuse transmission (`translucent`, rgb: Translucent
-    BSDFs' colour x their weights). `opacity` (an image's alpha, (Texture, inverted)) makes the
-    shader opacity x (everything else) + (1 - opacity) x transparent at each hit."""
+    closures (`transparent`, rgb; `glass` the part of it that stands in for refraction) and the
+    diffuse transmission (`translucent`, rgb: Translucent BSDFs' colour x their weights).
+    `opacity` (an image's alpha, (Texture, inverted)) makes the shader opacity x (everything
+    else) + (1 - opacity) x transparent at each hit."""
     def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0,
-                 transparent=(0, 0, 0), opacity=None, emission_tex=None, translucent=(0, 0, 0)):
+                 transparent=(0, 0, 0), opacity=None, emission_tex=None, translucent=(0, 0, 0),
+                 glass=(0, 0, 0)):
         self.const = np.array(const, np.float64)
         self.emission = np.array(emission, np.float64)
         self.texture = texture
@@ -59,31 +61,32 @@ class Closure:
         # its average over the image's texels (what chooses it as a light)
         self.emission_tex = emission_tex
         self.translucent = np.array(translucent, np.float64)
+        self.glass = np.array(glass, np.float64)
 
     def layered(self, dim, add):
         """Under a layer (principled.py): the albedo x dim (3,) + add (3,); emission,
         transparency and holdout are set after the layers."""
         return Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
-                        self.transparent, self.opacity, self.emission_tex, self.translucent)
+                        self.transparent, self.opacity, self.emission_tex, self.translucent, self.glass)
 
     def mapped(self, f):
         """Under a nonlinear map of the albedo (principled.BaseMap): exact for a constant
         albedo; a textured one becomes a texture of the mapped texels (weight 1)."""
         if self.texture is None or not self.tex_weight.any():
             return Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
-                            self.opacity, self.emission_tex, self.translucent)
+                            self.opacity, self.emission_tex, self.translucent, self.glass)
         t = self.texture
         w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
         mapped = Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
                           t.baked(lambda rgb: f(rgb * w + k)), t.interpolation, t.extension, t.transform, t.udim,
                           t.name, t.attribute)
         return Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
-                        self.emission_tex, self.translucent)
+                        self.emission_tex, self.translucent, self.glass)
 
     def scaled(self, f):
         etex = None if self.emission_tex is None else (self.emission_tex[0], self.emission_tex[1] * f)
         return Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
-                        self.transparent * f, self.opacity, etex, self.translucent * f)
+                        self.transparent * f, self.opacity, etex, self.translucent * f, self.glass * f)
 
     def only_transparent(self):
         return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
@@ -128,10 +131,10 @@ class Closure:
                 return Closure(self.const + other.const + other.tex_weight * mean,
                                 self.emission + other.emission, tex, w, self.holdout + other.holdout,
                                 self.transparent + other.transparent, opacity, etex,
-                                self.translucent + other.translucent)
+                                self.translucent + other.translucent, self.glass + other.glass)
         return Closure(self.const + other.const, self.emission + other.emission, tex, w,
                         self.holdout + other.holdout, self.transparent + other.transparent, opacity, etex,
-                        self.translucent + other.translucent)
+                        self.translucent + other.translucent, self.glass + other.glass)
 
 
 def is_image_alpha(link):

@@ -329,12 +329,14 @@ class MaterialBuilder:
         holdout = closure.holdout >= 1.0 - 1e-6
         if 0.0 < closure.holdout and not holdout:
             reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")
-        transparency = opacity = None
+        transparency = opacity = refraction = None
         translucency = _nonnegative(closure.translucent.astype(np.float32), "translucency", reasons) \
             if closure.translucent.any() and not holdout else None
         o_interp, o_ext, o_transform = 'Linear', 'REPEAT', None
         if closure.transparent.any() and not holdout:
             transparency = _nonnegative(closure.transparent.astype(np.float32), "transparency", reasons)
+            if closure.glass.any():
+                refraction = np.minimum(np.maximum(closure.glass, 0.0), transparency).astype(np.float32)
             if closure.opacity is not None:
                 tex, inverted = closure.opacity
                 a = tex.pixels[..., 3:4]
@@ -378,7 +380,7 @@ class MaterialBuilder:
                            emission=emission, texture=texture,
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
-                           transparency=transparency, translucency=translucency,
+                           transparency=transparency, translucency=translucency, refraction=refraction,
                            opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
@@ -454,7 +456,7 @@ class MaterialBuilder:
             return Closure(const=reflector)
         if t == 'BSDF_GLASS':
             reflect, transmit = glass_albedos(node, reasons)
-            return Closure(const=reflect, transparent=transmit)
+            return Closure(const=reflect, transparent=transmit, glass=transmit)
         if t == 'BSDF_TRANSLUCENT':
             # diffuse transmission: rendered as Cycles does (the integrator's lobe choice)
             self._normal_input(node, reasons)
@@ -463,7 +465,8 @@ class MaterialBuilder:
                 reasons.append("Translucent BSDF colour driven by nodes; its own value used")
             return Closure(translucent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
         if t == 'BSDF_REFRACTION':
-            return Closure(transparent=refraction_transmittance(node, reasons))
+            through = refraction_transmittance(node, reasons)
+            return Closure(transparent=through, glass=through)
         # Documented approximation: a diffuse surface of the node's constant colour.
         reasons.append(f"{node.bl_label} as diffuse")
         sock = input_socket(node, 'Color', 'Base Color')
@@ -487,6 +490,7 @@ class MaterialBuilder:
         through = principled.transmittance(node, base)
         if through.any():
             c.transparent = c.transparent + through
+            c.glass = c.glass + through
             if not base_ok:
                 reasons.append("Principled transmission tinted by the base colour's own value, not its nodes")
         es = input_socket(node, 'Emission Strength')
@@ -505,7 +509,7 @@ class MaterialBuilder:
         if opacity is None:
             opacity = self._evaluated_alpha(alpha, reasons)
         if opacity is not None:
-            c.opacity, c.transparent = opacity, np.ones(3)
+            c.opacity, c.transparent, c.glass = opacity, np.ones(3), np.zeros(3)
             return c
         a, ok = constant_value(alpha)
         if not ok:
@@ -611,7 +615,7 @@ class MaterialBuilder:
         if opacity is None:
             return None
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
-                        clear.transparent, opacity, translucent=opaque.translucent)
+                        clear.transparent, opacity, translucent=opaque.translucent, glass=clear.glass)
 
     def _color_closure(self, socket, reasons):
         """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes

@@ -7,7 +7,6 @@ the Refraction BSDF as a see-through surface. Part of the export layer."""
 import numpy as np
 
 from .. import sheen, specular
-from ..principled import SEE_THROUGH
 from ..nodeeval import constant_color, constant_value
 
 
@@ -124,7 +123,7 @@ def glass_albedos(node, reasons):
     ior = ior if np.isfinite(ior) and ior > 0.0 else 1.5
     reflect = specular.layer_albedo(rough, ior, 0.5, (1.0, 1.0, 1.0), True)
     transmit = np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0) * (1.0 - reflect)
-    reasons.append(f"Glass BSDF {SEE_THROUGH} with its reflection as diffuse")
+    reasons.append("Glass BSDF as a transparent surface (no refraction) with its reflection as diffuse")
     if not (r_ok and i_ok and c_ok):
         reasons.append("Glass BSDF inputs driven by nodes; their own values used")
     return reflect, transmit
@@ -136,7 +135,7 @@ def refraction_transmittance(node, reasons):
     has its brightness; as a diffuse surface of its colour (as other unknown BSDFs) it hid
     everything behind it."""
     color, ok = constant_color(node.inputs['Color'])
-    reasons.append(f"Refraction BSDF {SEE_THROUGH}, of its colour")
+    reasons.append("Refraction BSDF as a transparent surface (no refraction), of its colour")
     if not ok:
         reasons.append("Refraction BSDF colour driven by nodes; its own value used")
     return np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0)

@@ -9,7 +9,6 @@ import bpy
 import numpy as np
 
 from .. import scenedata as sd
-from ..principled import SEE_THROUGH
 from .assembly import Assembly
 from .camera import export_camera
 from .errors import ExportCancelled
@@ -120,7 +119,6 @@ class Exporter:
             world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
-        self._glass_under_transparent_film(settings)
         self._summarize(geometry, world, environment)
         # (an animated Disable in Renders: the frame's value is the evaluated object's; an
         # animation render leaves the original at the file's)
@@ -275,19 +273,6 @@ class Exporter:
         self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
                                                self._object_id(ob), ob.name, info=info))
 
-
-    def _glass_under_transparent_film(self, settings):
-        """Say it where glass stand-ins (see-through, principled.SEE_THROUGH) meet a transparent
-        film: their see-through part leaves alpha holes, as Cycles' Film > Transparent Glass
-        renders glass, where Cycles' default shows the world through it at alpha 1."""
-        if not settings.film_transparent or getattr(getattr(self.scene, 'cycles', None), 'film_transparent_glass',
-                                                    False):
-            return
-        glass = [m.name for m in self.materials.materials if SEE_THROUGH in m.approximated]
-        if glass:
-            self.messages.append(('WARNING', f"transparent film: glass ({', '.join(repr(n) for n in glass)}) leaves "
-                                             "alpha holes where it lets light through, as Cycles' Film > "
-                                             "Transparent Glass; Cycles' default shows the world through it"))
 
     def _evaluated(self, ob):
         """The depsgraph's own evaluated object for an instance's object (alive through the

@@ -60,6 +60,8 @@ def export_settings(scene, vl, messages):
                        filter_width=d.filter_width, seed=d.seed,
                        threads=0 if r.threads_mode == 'AUTO' else r.threads,
                        partition=d.partition.lower(), film_transparent=r.film_transparent,
+                       film_transparent_glass=bool(getattr(getattr(scene, 'cycles', None),
+                                                           'film_transparent_glass', False)),
                        film_exposure=float(getattr(d, 'film_exposure', 1.0)),
                        use_light_tree=bool(getattr(d, 'use_light_tree', True)),
                        passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,

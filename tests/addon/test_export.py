@@ -747,22 +747,6 @@ def test_compact_rows_equals_boolean_indexing(pattern):
         np.testing.assert_array_equal(got, expect)
 
 
-def test_glass_under_a_transparent_film_is_reported(scene, exported):
-    """A glass stand-in lets light through as a transparent surface: under a transparent film
-    that leaves alpha holes (Cycles' Transparent Glass), unlike Cycles' default; said so, naming
-    the materials, unless the film is opaque or Transparent Glass is on."""
-    setup(scene)
-    mat = scenes.principled("Bottle", (0.9, 0.9, 0.9))
-    next(n for n in mat.node_tree.nodes if n.type == 'BSDF_PRINCIPLED').inputs['Transmission Weight'].default_value = 1
-    scenes.plane("Pane", materials=(mat,))
-    said = lambda: [t for lvl, t in exported().messages if "transparent film" in t]  # noqa: E731
-    assert said() == []
-    scene.render.film_transparent = True
-    assert len(said()) == 1 and "'Bottle'" in said()[0]
-    scene.cycles.film_transparent_glass = True
-    assert said() == []
-
-
 def test_animated_hide_render_counts_the_rendered_frame(scene, exported, tmp_path):
     """Disable in Renders keyframed off by frame 4: an animation render of frame 4 (the file
     at frame 1, hidden there) exports the plane and counts nothing hidden."""

@@ -45,6 +45,22 @@ def test_transparent_film_alpha_is_one_minus_the_transparency():
     assert img[..., 3].mean() == pytest.approx(0.6, rel=0.02)
 
 
+@pytest.mark.parametrize('transparent_glass', [False, True])
+def test_transparent_film_draws_the_world_behind_glass(transparent_glass):
+    """Glass (a transparency that stands in for refraction, Material.refraction) beside a clear
+    Transparent BSDF part, under a transparent film: Cycles draws the world a camera ray sees
+    through glass (refracted light) at alpha 1, and leaves out what it sees through the clear
+    part, whose alpha is 1 - that transparency; with Film > Transparent Glass the glass leaves
+    its hole in alpha too. Sheet: reflection 0.1, glass 0.5, clear 0.3."""
+    tau, glass = np.full(3, 0.8, np.float32), np.full(3, 0.5, np.float32)
+    sheet = material('sheet', (0.1,) * 3, transparency=tau, refraction=glass)
+    integ = render(sheet_scene(sheet, samples=256, film_transparent=True, film_transparent_glass=transparent_glass))
+    img = integ.film.combined()
+    through = 0.0 if transparent_glass else 0.5
+    assert img[..., 0].mean() == pytest.approx((0.1 + through) * WORLD[0], rel=0.02)
+    assert img[..., 3].mean() == pytest.approx(1.0 - (0.8 if transparent_glass else 0.3), rel=0.02)
+
+
 def test_tinted_transparency_multiplies_light_through_it():
     """A black Transparent BSDF of colour tau: the camera sees tau x W, and a floor lit by a
     sun through it gets tau x its light, seen through the sheet again: 0.8 tau^2."""
