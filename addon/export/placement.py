@@ -16,9 +16,10 @@ class Placement:
         self.matrix, self.slots, self.slot_map = matrix, slots, None
         self.visibility, self.object_index, self.name = visibility, object_index, name
         self.terminator = terminator      # (geometry offset, shading offset), Cycles' object settings
-        # (original object, random_id, is an instance): what its Object Info nodes read, looked
-        # up only for materials that have one (20,000 instances' colours read up front cost 15%);
-        # the original, as an instance's evaluated object is freed once the iteration moves on
+        # (object, random_id, is an instance): what its Object Info nodes read, looked up only
+        # for materials that have one (20,000 instances' colours read up front cost 15%); the
+        # depsgraph's evaluated object of the instance's original (Exporter._evaluated), as an
+        # instance's own is freed once the iteration moves on
         self.info = info
         self.object_albedo = {}           # material index -> albedo (3,) of an Object Info material
 

@@ -98,6 +98,7 @@ class Exporter:
         settings = export_settings(self.scene, self.view_layer, self.messages)
         self._walk_instances()
         geometry = Assembly(self).geometry(uv_pass='UV' in settings.passes)
+        self._see_through_strands()
         by_ray = []
         world, environment, world_reason = export_world(self.scene, self.view_layer, camera=False, by_ray=by_ray)
         camera_world = None
@@ -273,6 +274,22 @@ class Exporter:
         self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
                                                self._object_id(ob), ob.name, info=info))
 
+
+    def _see_through_strands(self):
+        """Say which hair, curves and point clouds have a see-through or translucent material:
+        tessellated into tubes and spheres, their light crosses two surfaces where Cycles'
+        curves and points are one (measured: a translucent point 0.39 / 0.26 / 0.13 of Cycles',
+        half-transparent hair 0.88 of it)."""
+        mats = self.materials.materials
+        clear = {i for i, m in enumerate(mats) if m.transparency is not None or m.translucency is not None}
+        for key, placements in self.placements.items():
+            if key[0] not in ('HAIR', 'POINTCLOUD', 'CURVES') or not clear:
+                continue
+            for p in placements:
+                if p.slot_map is not None and clear.intersection(p.slot_map.tolist()):
+                    self.ignore("hair, curves and point clouds are tessellated tubes and spheres: light through a "
+                                "see-through or translucent one crosses two surfaces where Cycles' crosses one",
+                                p.name)
 
     def _evaluated(self, ob):
         """The depsgraph's own evaluated object for an instance's object (alive through the

@@ -820,6 +820,19 @@ def test_indirect_only_collection_is_hidden_from_camera_rays_only(scene, exporte
     assert np.all(vis["Direct"] == sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)
 
 
+def test_see_through_hair_and_points_are_reported(scene, exported):
+    """Points and hair curves are tessellated spheres and tubes: light through a translucent or
+    see-through one crosses two surfaces where Cycles' curve or point is one; said, naming the
+    object, only where the material lets light through."""
+    setup(scene)
+    leaf = _mixed("Leafy", 'ShaderNodeBsdfDiffuse', (0.2, 0.4, 0.1), 'ShaderNodeBsdfTranslucent', (0.6, 0.8, 0.2),
+                  0.5)
+    scenes.point_cloud("Seeds", np.array([(0.0, 0.0, 0.5)]), 0.2, leaf)
+    scenes.hair_curves("Fur", [np.array([(1.0, 0.0, 0.0), (1.0, 0.0, 1.0)])], 0.05, scenes.diffuse("Fur", (0.5,) * 3))
+    said = [m for _, m in exported().messages if "crosses two surfaces" in m]
+    assert len(said) == 1 and said[0].startswith("'Seeds':") and "'Fur'" not in said[0]
+
+
 def test_features_rendered_without_are_reported(scene, exported):
     """Shadow catchers and motion blur are Cycles features DACRT does not render: the objects
     render as ordinary ones and the render says so. Light and shadow linking (receiver and
