@@ -499,7 +499,7 @@ class Integrator:
             # near side alone, a leaf lit from behind, beside a sun, had 5x Cycles' noise; 2.5x)
             far = np.flatnonzero(np.take(self.mats.translucent, np.take(self.tri.material, hits['prim'][idx])))
             if len(far):
-                _, _, fns, fPo, _ = _far_side(far, P, ns, ns, P_off, None)
+                _, _, fns, fPo = _far_side(far, P, ns, ns, P_off)
                 P_off, ns = np.concatenate([P_off, fPo], axis=1), np.concatenate([ns, fns], axis=1)
         self.lights.reweight(P_off, rng, N=ns)
         self._selection_table()
@@ -891,6 +891,11 @@ class Integrator:
         if tex:
             self._albedo_maps(prim, u, v, thr)        # the albedo's maps are the reflection's
         ns, bump = self._bent_normals(prim, u, v, ns, ng)
+        ns_far = None                                 # the transmission's normal (front-facing)
+        if far is not None and bump is not None:
+            sel = far[0]
+            ns_far = _valid_reflection_normal(np.take(ng, sel, axis=1), -np.take(path.D, np.take(idx, sel), axis=1),
+                                              np.take(ns, sel, axis=1), np.take(bump[3], sel) != 0)
         tb = None if path.tb is None else np.take(path.tb, idx)
         nee = None if path.nee is None else np.take(path.nee, idx)
         del hits, path
@@ -901,22 +906,28 @@ class Integrator:
                 sel, thr_far, _ = far
                 if nee is not None:
                     thr_far = thr_far * np.take(nee, sel)
-                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, bump, prim, pid, keys, u_pick, sinks,
-                                     tb, u, v, _DIM_LOBE + 2 * k + 1)
+                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys, u_pick, sinks,
+                                     tb, u, v, _DIM_LOBE + 2 * k + 1, ns_far)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
+        moved = None
         if far is not None:                           # one lobe for the bounce
-            ns, ng, P_off, bump = self._choose_lobes(k, far, keys, thr, P, ns, ng, P_off, bump)
+            ns, ng, P_off, moved = self._choose_lobes(k, far, keys, thr, P, ns, ng, P_off, ns_far)
         # cosine-weighted BSDF sample around the shading normal; reject directions below the
         # geometric surface (a diffuse BSDF only reflects; a transmitting one is turned around)
         ka, kb = self.rng.dim_words(_dim(k, 2))
         # (and Cycles' shadow terminator shading offset on their throughput, closure/bsdf.h)
         offset = None if self.tri.term_freq is None else (self.tri.term_freq, prim, thr)
+        # (Cycles applies neither that offset nor bump shadowing to a transmitted sample)
+        kept_thr = None if moved is None or offset is None else thr[:, moved]
         wi, pdf, ok, rays = dacrt.shading.cosine_scatter(keys, ka, kb, ns, None if ns is ng else ng, origins=P_off,
                                                          shading_offset=offset)
+        if kept_thr is not None:
+            thr[:, moved] = kept_thr
         if bump is not None:              # Cycles' bsdf_sample: eval x bump_shadowing_term
-            thr *= bump_shadowing(bump[:3], ns, wi, bump[3] != 0)
+            g = bump_shadowing(bump[:3], ns, wi, bump[3] != 0)
+            thr *= g if moved is None else np.where(moved, F32(1.0), g)
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
             kept = np.flatnonzero(ok)
@@ -950,41 +961,45 @@ class Integrator:
         rt, tt = max3(R), max3(T)
         return sel, before * T, tt / (rt + tt)           # tt > 0 on translucent materials
 
-    def _next_event_far(self, k, sel, thr_far, P, ng, ns, P_off, bump, prim, pid, keys, u_pick, sinks, tb, u, v,
-                        dims):
+    def _next_event_far(self, k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys, u_pick, sinks, tb, u, v, dims,
+                        ns_far=None):
         """Light sampling of the transmission lobe at the vertices sel (columns of the other
         arrays) of translucent surfaces, from their far side (_far_side), with throughput
-        thr_far (3, len(sel)) and random dimensions dims of its own."""
-        fP, fng, fns, fP_off, fbump = _far_side(sel, P, ng, ns, P_off, bump)
+        thr_far (3, len(sel)) and random dimensions dims of its own; ns_far (3, len(sel)): the
+        lobe's own normal where it is not ns (_valid_reflection_normal)."""
+        fP, fng, fns, fP_off = _far_side(sel, P, ng, ns, P_off, ns_far)
         take = lambda a: None if a is None else np.take(a, sel, axis=-1)  # noqa: E731
+        # (Cycles applies neither bump shadowing nor the terminator's shading offset to a
+        # transmitted sample: measured 0.93 / 0.91 / 0.96 of its mean with a normal map, 0.69 /
+        # 0.72 / 0.81 with a shading offset of 0.3, when they were)
         self._next_event(k, fP, fP_off, take(prim), fng, fns, np.ascontiguousarray(thr_far, F32), take(pid),
                          np.ascontiguousarray(take(keys)), take(u_pick), sinks.sampled(k), take(tb), take(u),
-                         take(v), sinks.groups, fbump, dims=dims)
+                         take(v), sinks.groups, None, dims=dims, shading_offset=False)
 
-    def _choose_lobes(self, k, far, keys, thr, P, ns, ng, P_off, bump):
+    def _choose_lobes(self, k, far, keys, thr, P, ns, ng, P_off, ns_far=None):
         """The bounce's lobe at translucent hits (far: _translucent_hits'): the transmission with
         probability p = max(T) / (max(R) + max(T)), its throughput / p, else the reflection's
         (in thr, with its maps) / (1 - p); the transmitting vertices moved to the far side. The
         bounce's pdf for MIS stays the lobe's cosine (p left out on both sides of the
         heuristic: the weights still sum to one, and p > 0 wherever a lobe's albedo is).
-        Returns (ns, ng, P_off, bump)."""
+        Returns (ns, ng, P_off, moved: the transmitting columns, or None)."""
         sel, thr_far, p = far
         u, _ = self.rng.uniform2(np.take(keys, sel, axis=1), _DIM_LOBE + 2 * k)
         go = u < p
         near = np.take(thr, sel, axis=1) / np.where(go, F32(1.0), F32(1.0) - p)
         thr[:, sel] = np.where(go, thr_far / p, near)
         if not go.any():
-            return ns, ng, P_off, bump
+            return ns, ng, P_off, None
         moved = np.zeros(len(ns[0]), bool)
         moved[sel[go]] = True
         flip = np.where(moved, F32(-1.0), F32(1.0))
+        if ns_far is not None:                    # the transmission's own normal
+            ns = ns.copy()
+            ns[:, sel[go]] = ns_far[:, go]
         ns2 = ns * flip
         ng2 = ns2 if ng is ns else ng * flip
         P_off2 = np.where(moved, P + (P - P_off), P_off).astype(F32)
-        if bump is not None:
-            bump = bump.copy()
-            bump[:3] *= flip
-        return ns2, ng2, P_off2, bump
+        return ns2, ng2, P_off2, moved
 
     def _surface(self, hits, sel, D):
         """Hit points P, geometric and shading normals facing the incoming rays, and the points
@@ -1282,7 +1297,7 @@ class Integrator:
             if len(sel):
                 T = np.take(self.mats.translucency, np.take(mat, sel), axis=1)
                 thr_far = T * np.take(opacity, sel) * np.take(path.thr, np.take(rows, sel), axis=1)
-                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, bump, prim, np.take(path.pid, rows), keys,
+                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, np.take(path.pid, rows), keys,
                                      u_pick, sinks, tb, u, v, _DIM_LOBE + (1 << 20) + (k << 11) + j)
 
     def _gather_segment(self, seg, sub, t0, sinks, k):
@@ -1689,7 +1704,7 @@ class Integrator:
     # --- next-event estimation --------------------------------------------------------------------
 
     def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None,
-                    groups=(), bump=None, dims=None):
+                    groups=(), bump=None, dims=None, shading_offset=True):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
         the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
@@ -1701,8 +1716,8 @@ class Integrator:
         smooth surface and samples are dimmed by the shading offset."""
         ka, kb = self.rng.dim_words(_dim(k, 1) if dims is None else dims)
         t = self.tri
-        term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff, t.term_freq, u, v) \
-            if t.terminator else None
+        term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff,
+                t.term_freq if shading_offset else None, u, v) if t.terminator else None
         textured = self._tri_emit_tex is not None
         # past the world's Max Bounces its samples are still chosen but light nothing, as Cycles
         # rejects them (light_select_reached_max_bounces) while BSDF rays keep their MIS weight
@@ -1755,19 +1770,42 @@ def _light_set(linking, lamp) -> int:
     return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.name)
 
 
-def _far_side(sel, P, ng, ns, P_off, bump):
+def _far_side(sel, P, ng, ns, P_off, ns_sel=None):
     """The vertices sel seen from the far side of their surface, for its diffuse transmission:
-    (P, ng, ns, P_off, bump) of those columns with the normals turned (the smooth one in bump
-    too) and the offset point mirrored through the hit point, so light sampling treats each as
-    a reflector facing away from the incoming ray."""
+    (P, ng, ns, P_off) of those columns with the normals turned (ns_sel: the shading normals of
+    those columns to turn instead of ns's) and the offset point mirrored through the hit point,
+    so light sampling treats each as a reflector facing away from the incoming ray."""
     fP, fPo = np.take(P, sel, axis=1), np.take(P_off, sel, axis=1)
-    fns = -np.take(ns, sel, axis=1)
+    fns = -(np.take(ns, sel, axis=1) if ns_sel is None else ns_sel)
     fng = fns if ng is ns else -np.take(ng, sel, axis=1)
-    fbump = None
-    if bump is not None:
-        fbump = np.take(bump, sel, axis=1)
-        fbump[:3] *= F32(-1.0)
-    return fP, fng, fns, (fP + (fP - fPo)).astype(F32), fbump
+    return fP, fng, fns, (fP + (fP - fPo)).astype(F32)
+
+
+def _valid_reflection_normal(Ng, I, N, correction):
+    """Cycles' ensure_valid_specular_reflection (closure/bsdf_util.h), which it gives the
+    Translucent BSDF's normal under Bump Map Correction (correction (k,) bool; its
+    maybe_ensure_valid_specular_reflection): a bent normal N whose mirror reflection of the
+    view direction I would dip below the geometric normal Ng's plane is raised toward Ng just
+    enough; all (3, k), Ng and N facing I. Float64 inside, float32 out."""
+    Ng, I, N = (np.asarray(a, np.float64) for a in (Ng, I, N))
+    dot = lambda a, b: (a * b).sum(axis=0)  # noqa: E731
+    R = 2.0 * dot(N, I) * N - I
+    Iz = dot(I, Ng)
+    t = np.minimum(0.9 * Iz, 0.01)
+    keep = ~correction | (dot(Ng, R) >= t)
+    X = N - dot(N, Ng) * Ng
+    length = np.sqrt(dot(X, X))
+    X = np.where(length > 0, X / np.where(length > 0, length, 1.0), N)
+    Ix = dot(I, X)
+    a = Ix * Ix + Iz * Iz
+    b = 2.0 * (a + Iz * t)
+    c = (t + Iz) ** 2
+    root = np.sqrt(np.maximum(b * b - 4.0 * a * c, 0.0))
+    with np.errstate(divide='ignore', invalid='ignore'):
+        Nz2 = np.where(Ix < 0, 0.25 * (b + root) / a, 0.25 * (b - root) / a)
+    Nz2 = np.nan_to_num(Nz2, nan=1.0)
+    raised = np.sqrt(np.maximum(1.0 - Nz2, 0.0)) * X + np.sqrt(np.maximum(Nz2, 0.0)) * Ng
+    return np.where(keep, N, raised).astype(F32)
 
 
 def _seen_through(alpha, path, rows):

@@ -70,3 +70,29 @@ def test_area_light_behind_the_surface_is_unbiased_with_and_without_mis(use_mis)
     scene = sd.SceneData(ortho_down(width=32, px=32), geometry([(v, t, 1, ALL_VIS)]), mats, [area],
                          np.zeros(3, np.float32), sd.Settings(samples=1024, max_bounces=1, seed=11, filter_type='BOX'))
     _check(scene, expected, rel=1.5e-3)
+
+
+def test_valid_reflection_normal_lifts_the_reflection_to_the_threshold():
+    """Cycles' ensure_valid_specular_reflection: a bent normal whose mirror reflection of the view
+    direction dips below the surface is raised toward Ng until that reflection leaves at
+    min(0.9 cos_view, 0.01) above it; a valid one, or any without Bump Map Correction, stays."""
+    from addon.integrator import _valid_reflection_normal
+    rng = np.random.default_rng(5)
+    n = 2000
+    Ng = np.tile([[0.0], [0.0], [1.0]], n)
+    I = rng.normal(size=(3, n))
+    I[2] = np.abs(I[2]) + 0.05
+    I /= np.linalg.norm(I, axis=0)
+    N = rng.normal(size=(3, n)) * [[1.0], [1.0], [0.3]]
+    N[2] = np.abs(N[2]) + 0.01
+    N /= np.linalg.norm(N, axis=0)
+    out = _valid_reflection_normal(Ng, I, N, np.ones(n, bool)).astype(np.float64)
+    R = lambda m: 2 * (m * I).sum(axis=0) * m - I  # noqa: E731
+    t = np.minimum(0.9 * I[2], 0.01)
+    valid = R(N)[2] >= t
+    assert 0.05 < valid.mean() < 0.95                         # both kinds are tested
+    np.testing.assert_allclose(out[:, valid], N[:, valid], atol=1e-6)
+    np.testing.assert_allclose(R(out)[2][~valid], t[~valid], atol=2e-4)
+    np.testing.assert_allclose(np.linalg.norm(out, axis=0), 1.0, atol=1e-5)
+    assert np.all(out[2] > 0)
+    np.testing.assert_allclose(_valid_reflection_normal(Ng, I, N, np.zeros(n, bool)), N, atol=1e-6)
