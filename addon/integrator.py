@@ -944,11 +944,11 @@ class Integrator:
     def _translucent_hits(self, prim, thr):
         """Diffuse transmission (Translucent BSDF): at hits on translucent materials, whose
         throughput continue_paths left before any albedo, thr takes the reflection's albedo R
-        (the base colour; its maps follow) in place, and the transmission's throughput x T is
-        returned beside the hits: (sel (j,) their columns, thr_far (3, j), the same per-lobe
-        probability's data for _choose_lobes: p_far (j,)); None when no hit is on one. Light
-        sampling then takes both lobes (T's from the far side, _far_side), as Cycles evaluates
-        every closure; the bounce takes one (_choose_lobes)."""
+        (the base colour; its maps follow) in place, and (sel (j,) those hits' columns, thr_far
+        (3, j) their throughput x T, p (j,) the transmission's pick probability for
+        _choose_lobes) is returned; None when no hit is on one. Light sampling then takes both
+        lobes (T's from the far side, _far_side), as Cycles evaluates every closure; the bounce
+        takes one (_choose_lobes)."""
         mat = np.take(self.tri.material, prim)
         sel = np.flatnonzero(np.take(self.mats.translucent, mat))
         if not len(sel):
