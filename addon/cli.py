@@ -19,9 +19,8 @@ import sys
 
 import bpy
 
-from . import cryptomatte, engine, last_render_stats, register
-from .engine import EXTRA_PASSES
-from .passes import enabled
+from . import engine, last_render_stats, register
+from .engine import extra_passes
 
 
 def parse_args(argv):
@@ -91,9 +90,8 @@ def save_render(scene, png, exr):
 
 
 def _layers_or_passes(scene) -> bool:
-    """Whether the render holds more than one view layer or any pass beyond Combined (the
-    engine's update_render_passes registers them): a plain EXR would keep only the first
-    layer's Combined."""
+    """Whether the render holds more than one view layer or any pass beyond Combined
+    (engine.extra_passes): a plain EXR would keep only the first layer's Combined."""
     if scene.render.use_single_layer:                # the active layer alone
         active = scene.view_layers.get(getattr(bpy.context.view_layer, 'name', ''))
         layers = [active if active is not None else scene.view_layers[0]]
@@ -101,9 +99,7 @@ def _layers_or_passes(scene) -> bool:
         layers = [layer for layer in scene.view_layers if layer.use]
     if len(layers) > 1:
         return True
-    return any(enabled(layer, toggle) for layer in layers for _, toggle, *_ in EXTRA_PASSES) or \
-        any(len(getattr(layer, 'lightgroups', ())) or len(getattr(layer, 'aovs', ())) or
-            any(getattr(layer, toggle, False) for _, toggle in cryptomatte.KINDS) for layer in layers)
+    return any(next(extra_passes(layer), None) is not None for layer in layers)
 
 
 def _view_files(scene, path):

@@ -23,6 +23,23 @@ EXTRA_PASSES = tuple(p[:5] for p in PASSES)
 RESULT_PASS_NAME = {p[0]: result_name(p[0], bpy.app.version) for p in PASSES}
 
 
+def extra_passes(layer):
+    """The passes beyond Combined a view layer's render holds, as the engine registers them:
+    (Blender's name, channels, chan_id, type) of each."""
+    for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
+        if enabled(layer, toggle):
+            yield RESULT_PASS_NAME[name], channels, chan_id, kind
+    for group in dict.fromkeys(g.name for g in getattr(layer, 'lightgroups', ())):
+        yield LIGHTGROUP_PREFIX + group, 3, "RGB", 'COLOR'
+    for aov in getattr(layer, 'aovs', ()):      # as Cycles' engine.py registers them
+        if aov.is_valid:
+            yield (aov.name, *AOV_CHANNELS.get(aov.type, AOV_CHANNELS['COLOR']))
+    for kind, toggle in cryptomatte.KINDS:
+        if getattr(layer, toggle, False):
+            for name in cryptomatte.pass_names(kind, getattr(layer, 'pass_cryptomatte_depth', 6)):
+                yield name, 4, "rgba", 'COLOR'   # as Cycles
+
+
 # Stats of the latest render per view layer, for scripts (addon.last_render_stats()); replaced
 # by each render, so nothing of a frame outlives the next one.
 LAST_RENDER_STATS = {}
@@ -81,18 +98,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
 
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
-        for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
-            if enabled(renderlayer, toggle):
-                self.register_pass(scene, renderlayer, RESULT_PASS_NAME[name], channels, chan_id, kind)
-        for group in dict.fromkeys(g.name for g in getattr(renderlayer, 'lightgroups', ())):
-            self.register_pass(scene, renderlayer, LIGHTGROUP_PREFIX + group, 3, "RGB", 'COLOR')
-        for aov in getattr(renderlayer, 'aovs', ()):      # as Cycles' engine.py registers them
-            if aov.is_valid:
-                self.register_pass(scene, renderlayer, aov.name, *AOV_CHANNELS.get(aov.type, AOV_CHANNELS['COLOR']))
-        for kind, toggle in cryptomatte.KINDS:
-            if getattr(renderlayer, toggle, False):
-                for name in cryptomatte.pass_names(kind, getattr(renderlayer, 'pass_cryptomatte_depth', 6)):
-                    self.register_pass(scene, renderlayer, name, 4, "rgba", 'COLOR')   # as Cycles
+        for args in extra_passes(renderlayer):
+            self.register_pass(scene, renderlayer, *args)
 
     def render(self, depsgraph):
         try:

@@ -232,7 +232,7 @@ class Integrator:
         # normal maps bend shading normals (they need the tangents the export made)
         self._bumped = bool(self.mats.normal_maps) and self.tri.tangents is not None
         # diffuse transmission (Translucent BSDF): continue_paths multiplies in 1 on such
-        # triangles, _lobes then weighs the reflection or transmission lobe it picks
+        # triangles, _translucent_hits and _choose_lobes then weigh the lobes
         tri_translucent = self.mats.translucent[self.tri.material]
         self._any_translucent = bool(tri_translucent.any())
         self._tri_live = (max3(self._tri_albedo) > 0) | tri_translucent
@@ -990,16 +990,19 @@ class Integrator:
         thr[:, sel] = np.where(go, thr_far / p, near)
         if not go.any():
             return ns, ng, P_off, None
+        cols = sel[go]
         moved = np.zeros(len(ns[0]), bool)
-        moved[sel[go]] = True
-        flip = np.where(moved, F32(-1.0), F32(1.0))
-        if ns_far is not None:                    # the transmission's own normal
-            ns = ns.copy()
-            ns[:, sel[go]] = ns_far[:, go]
-        ns2 = ns * flip
-        ng2 = ns2 if ng is ns else ng * flip
-        P_off2 = np.where(moved, P + (P - P_off), P_off).astype(F32)
-        return ns2, ng2, P_off2, moved
+        moved[cols] = True
+        _, fng, fns, fP_off = _far_side(cols, P, ng, ns, P_off, None if ns_far is None else ns_far[:, go])
+        shared = ng is ns
+        ns, P_off = ns.copy(), P_off.copy()
+        ns[:, cols], P_off[:, cols] = fns, fP_off
+        if shared:
+            ng = ns
+        else:
+            ng = ng.copy()
+            ng[:, cols] = fng
+        return ns, ng, P_off, moved
 
     def _surface(self, hits, sel, D):
         """Hit points P, geometric and shading normals facing the incoming rays, and the points

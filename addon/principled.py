@@ -57,7 +57,7 @@ class BaseMap:
     + add_c, per channel: the metal of weight m (A: specular.metal_albedo_mu at this roughness
     and tint) mixed with the dielectric specular layer over the diffuse base (dim_s, add_s; 1
     and 0 without one; D: the rough diffuse's albedo, roughdiffuse.py, the colour itself at
-    roughness 0), under the coat (dim_c, add_c; 1 and 0 without one), each (.., len(_MU)).
+    roughness 0), under the coat and sheen (dim_c, add_c; 1 and 0 without them), each (.., len(_MU)).
     Exact for a constant base (exact); a texture's texels go through a table of the function
     (__call__, 129 F0 steps per channel: within 1e-4 of exact)."""
 
@@ -261,9 +261,9 @@ def layer_steps(node, reasons) -> list:
     if dielectric:
         spec = _specular_mu(node, reasons)
         trans = _transmission(node, reasons)
-    coat = _top_mu(node, reasons)
+    top = _top_mu(node, reasons)
     diffuse = _diffuse_roughness(node, reasons)
-    if metal is None and spec is None and coat is None and trans is None:
+    if metal is None and spec is None and top is None and trans is None:
         return [] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse)]
     n = len(specular.VIEW)
     dim_s = np.ones(n) if spec is None else 1.0 - spec.max(axis=0)
@@ -271,7 +271,7 @@ def layer_steps(node, reasons) -> list:
     if trans is not None:          # the glass over the specular layer and base, its reflection added
         weight, reflect, _ = trans
         dim_s, add_s = (1.0 - weight) * dim_s, (1.0 - weight) * add_s + weight * reflect
-    dim_c, add_c = (np.ones((3, n)), np.zeros((3, n))) if coat is None else coat
+    dim_c, add_c = (np.ones((3, n)), np.zeros((3, n))) if top is None else top
     if metal is not None:
         return [BaseMap(metal[0], metal[1], metal[2], _multiscatter(node), dim_s, add_s, dim_c, add_c, diffuse)]
     step = ((dim_c * dim_s) @ specular.VIEW, (dim_c * add_s + add_c) @ specular.VIEW)
@@ -282,8 +282,8 @@ def emission_dim(node):
     """(3,) what the sheen and coat let through of the Principled's emission: Cycles adds the
     emission under them (svm/closure.h, 'attenuated by sheen and coat'), dimmed and tinted as
     the layers below are, per view direction; averaged over view directions as everything here."""
-    coat = _top_mu(node, [])
-    return np.ones(3) if coat is None else coat[0] @ specular.VIEW
+    top = _top_mu(node, [])
+    return np.ones(3) if top is None else top[0] @ specular.VIEW
 
 
 def _diffuse_roughness(node, reasons):

@@ -2,8 +2,9 @@
 renderer keeps it: its albedo per view cosine (specular._MU) and averaged over view directions.
 
 A sheen lobe reflects little: a few percent of its colour at normal view, more towards grazing.
-Taken as a diffuse surface of its colour, the bmw27 floor (a Velvet/Sheen BSDF mixed with a
-Glossy) rendered 6-9x Cycles' brightness. Cycles has two distributions:
+The Velvet of bmw27's floor (roughness 0.4, mixed with a Glossy) reflects 0.132 of its colour
+averaged over view directions, so taken as a diffuse surface of its colour it was 7.6x too
+bright. Cycles has two distributions:
 
 - Microfiber (the default; closure/bsdf_sheen.h): Zeltner, Burley and Chiang's "Practical
   Multiple-Scattering Sheen Using Linearly Transformed Cosines" (2022). The lobe is a normalised

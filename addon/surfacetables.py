@@ -106,12 +106,7 @@ class Materials:
         self.emission_textures = []  # the same, of the materials whose emission is an image's
         self.normal_maps = []       # (index, texture, interpolation, extension, uv transform, strength)
         for i, mat in enumerate(materials):
-            b = np.asarray(mat.base_color, np.float64)
-            e = np.asarray(mat.emission, np.float64)
-            for label, val in (('base_color', b), ('emission', e)):
-                if val.shape != (3,) or not np.isfinite(val).all() or (val < 0).any():
-                    raise ValueError(f"material {mat.name!r}: {label} must be 3 finite non-negative "
-                                     f"numbers, got {val!r}")
+            b, e = _rgb(mat, 'base_color', mat.base_color), _rgb(mat, 'emission', mat.emission)
             base.append(b)
             emit.append(e)
             if mat.texture is not None:
@@ -140,40 +135,26 @@ class Materials:
                                        for m in materials], bool)
         # transparency (3, materials) and the opacity textures (index, texture, interpolation,
         # extension, uv transform), as scenedata.Material describes them
+        # and the glass part of the transparency (scenedata.Material.refraction), at most it
         self.transparency = np.zeros((3, len(materials)), F32)
+        self.refraction = np.zeros((3, len(materials)), F32)
         self.opacity = []
         for i, mat in enumerate(materials):
             if mat.transparency is None:
                 continue
-            t = np.asarray(mat.transparency, np.float64)
-            if t.shape != (3,) or not np.isfinite(t).all() or (t < 0).any():
-                raise ValueError(f"material {mat.name!r}: transparency must be 3 finite non-negative "
-                                 f"numbers, got {t!r}")
-            self.transparency[:, i] = t
+            self.transparency[:, i] = _rgb(mat, 'transparency', mat.transparency)
+            if getattr(mat, 'refraction', None) is not None:
+                self.refraction[:, i] = np.clip(_rgb(mat, 'refraction', mat.refraction, nonnegative=False), 0.0,
+                                                self.transparency[:, i])
             if mat.opacity is not None:
                 self.opacity.append((i, *texture_entry(mat.name, 'opacity', mat.opacity, mat.opacity_interpolation,
                                                         mat.opacity_extension, mat.opacity_transform)))
         self.transparent = self.transparency.max(axis=0) > 0
-        # the glass part of it (scenedata.Material.refraction), at most the transparency
-        self.refraction = np.zeros((3, len(materials)), F32)
-        for i, mat in enumerate(materials):
-            r = getattr(mat, 'refraction', None)
-            if r is not None and mat.transparency is not None:
-                r = np.asarray(r, np.float64)
-                if r.shape != (3,) or not np.isfinite(r).all():
-                    raise ValueError(f"material {mat.name!r}: refraction must be 3 finite numbers, got {r!r}")
-                self.refraction[:, i] = np.clip(r, 0.0, self.transparency[:, i])
         # diffuse transmission (3, materials), scenedata.Material.translucency
         self.translucency = np.zeros((3, len(materials)), F32)
         for i, mat in enumerate(materials):
-            t = getattr(mat, 'translucency', None)
-            if t is None:
-                continue
-            t = np.asarray(t, np.float64)
-            if t.shape != (3,) or not np.isfinite(t).all() or (t < 0).any():
-                raise ValueError(f"material {mat.name!r}: translucency must be 3 finite non-negative "
-                                 f"numbers, got {t!r}")
-            self.translucency[:, i] = t
+            if getattr(mat, 'translucency', None) is not None:
+                self.translucency[:, i] = _rgb(mat, 'translucency', mat.translucency)
         self.translucent = self.translucency.max(axis=0) > 0
         # images that write AOVs: (AOV name, 'color' | 'value') -> [(material index, texture,
         # interpolation, extension, uv transform)]
@@ -189,6 +170,16 @@ class Materials:
         # only emits (a translucent-only part weighed 0: paths always passed, never scattered)
         scatter = (self.base + self.translucency).mean(axis=0)
         self.opaque_weight = np.where(self.emissive, np.maximum(scatter, 1.0), scatter).astype(F32)
+
+
+def _rgb(mat, label, value, nonnegative=True):
+    """A material's colour-like field as 3 float64s, checked: finite (and non-negative), else a
+    ValueError naming the material and the field."""
+    v = np.asarray(value, np.float64)
+    if v.shape != (3,) or not np.isfinite(v).all() or (nonnegative and (v < 0).any()):
+        raise ValueError(f"material {mat.name!r}: {label} must be 3 finite{' non-negative' if nonnegative else ''} "
+                         f"numbers, got {v!r}")
+    return v
 
 
 def texture_entry(name, label, texture, interpolation, extension, transform):
