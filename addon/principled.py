@@ -148,10 +148,12 @@ def _metal(node, reasons):
     return None, True
 
 
-def _layer_weight(node, name, unused, reasons, most=1.0):
-    """(weight, exact) of a layer's weight input `name`, clipped to [0, most] (NaN: 0); None
-    where the node has no such input or the weight is 0 (a node-driven 0 reported as `unused`)."""
-    sock = node.inputs.get(name)
+def _layer_inputs(node, weight_name, names, tint_name, what, unused, reasons, most=1.0):
+    """(weight, values of the float inputs `names`, the colour input `tint_name`) of a layer
+    whose weight is input `weight_name`, clipped to [0, most] (NaN: 0), node-driven inputs at
+    their own values (reported for the layer `what`); None where the node has no such input or
+    the weight is 0 (a node-driven 0 reported as `unused`)."""
+    sock = node.inputs.get(weight_name)
     if sock is None:
         return None
     weight, ok = constant_value(sock)
@@ -160,7 +162,11 @@ def _layer_weight(node, name, unused, reasons, most=1.0):
         if not ok:
             reasons.append(unused)
         return None
-    return weight, ok
+    values, v_ok = _values(node, names)
+    tint, t_ok = _color(node, tint_name)
+    if not (ok and v_ok and t_ok):
+        reasons.append(f"Principled {what} inputs driven by nodes; their own values used")
+    return weight, values, tint
 
 
 def _transmission(node, reasons):
@@ -169,15 +175,11 @@ def _transmission(node, reasons):
     the metal, over the specular layer and base, which it dims by 1 - weight), or None. As the
     Glass BSDF (export.reflectors.glass_albedos): its reflection (tinted by Specular Tint) a
     diffuse albedo, the rest let straight through (no refraction)."""
-    found = _layer_weight(node, 'Transmission Weight', "Principled transmission driven by nodes; its own value 0 used",
-                          reasons)
+    found = _layer_inputs(node, 'Transmission Weight', ('Roughness', 'IOR'), 'Specular Tint', "transmission",
+                          "Principled transmission driven by nodes; its own value 0 used", reasons)
     if found is None:
         return None
-    weight, ok = found
-    (roughness, ior), v_ok = _values(node, ('Roughness', 'IOR'))
-    tint, t_ok = _color(node, 'Specular Tint')
-    if not (ok and v_ok and t_ok):
-        reasons.append("Principled transmission inputs driven by nodes; their own values used")
+    weight, (roughness, ior), tint = found
     ior = ior if np.isfinite(ior) and ior > 0.0 else 1.5
     reflect = specular.layer_albedo_mu(roughness, ior, 0.5, tint, True)
     plain = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True)
@@ -206,14 +208,11 @@ def transmittance(node, base) -> np.ndarray:
 def _coat_mu(node, reasons):
     """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None."""
     # (driven by nodes, own value 0: reported, as before the coat was kept)
-    found = _layer_weight(node, 'Coat Weight', "Principled coat ignored", reasons)
+    found = _layer_inputs(node, 'Coat Weight', ('Coat Roughness', 'Coat IOR'), 'Coat Tint', "coat",
+                          "Principled coat ignored", reasons)
     if found is None:
         return None
-    weight, ok = found
-    (roughness, ior), v_ok = _values(node, ('Coat Roughness', 'Coat IOR'))
-    tint, t_ok = _color(node, 'Coat Tint')
-    if not (ok and v_ok and t_ok):
-        reasons.append("Principled coat inputs driven by nodes; their own values used")
+    weight, (roughness, ior), tint = found
     albedo = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True) * weight
     absorb = 1.0 + weight * (specular.coat_tint_mu(tint, ior) - 1.0)
     reasons.append(f"Principled coat as diffuse: its albedo averaged over view directions, "
@@ -225,15 +224,11 @@ def _sheen_mu(node, reasons):
     """(dim (len(_MU),), add (3, len(_MU))) of the sheen layer per view cosine, or None: Cycles'
     microfiber sheen of weight x tint, dimming the layers below by 1 - max over channels of its
     albedo (closure_layering_weight)."""
-    found = _layer_weight(node, 'Sheen Weight', "Principled sheen driven by nodes; its own value 0 used", reasons,
-                          most=np.inf)
+    found = _layer_inputs(node, 'Sheen Weight', ('Sheen Roughness',), 'Sheen Tint', "sheen",
+                          "Principled sheen driven by nodes; its own value 0 used", reasons, most=np.inf)
     if found is None:
         return None
-    weight, ok = found
-    (roughness,), r_ok = _values(node, ('Sheen Roughness',))
-    tint, t_ok = _color(node, 'Sheen Tint')
-    if not (ok and r_ok and t_ok):
-        reasons.append("Principled sheen inputs driven by nodes; their own values used")
+    weight, (roughness,), tint = found
     tint = np.clip(np.nan_to_num(np.asarray(tint, np.float64)[:3]), 0.0, None)
     albedo = weight * tint[:, None] * sheen.microfiber_albedo_mu(min(max(roughness, 0.0), 1.0))[None, :]
     reasons.append(f"Principled sheen as diffuse: its albedo averaged over view directions, "
