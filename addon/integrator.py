@@ -64,6 +64,7 @@ from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DENOISE as DENOISE_PASSES
 from .passes import FIRST_SAMPLE
 from .pathstate import Paths, Sinks, compact
+from .procedural import ProceduralTexels
 from .sampling import RandomStream, max3
 from .sceneprep import recentred, validate
 from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
@@ -1146,9 +1147,33 @@ class Integrator:
         uvc = np.take(self.tri.uvs, prim, axis=1)
         return uvc[0] + uvc[2] * u + uvc[4] * v, uvc[1] + uvc[3] * u + uvc[5] * v
 
+    def _coordinates(self, needs, prim, u, v):
+        """{name: (k, 3) float32} of the texture coordinates `needs` names at hits (prim, u, v):
+        'uv' (u, v, 0) of the active UV map, 'generated' and 'object' interpolated from the
+        corners (Geometry.coords; 0 where the export gave none, as Cycles reads a missing
+        attribute)."""
+        out = {}
+        if 'uv' in needs:
+            tu, tv = self._uv(prim, u, v)
+            out['uv'] = np.stack([tu, tv, np.zeros_like(tu)], axis=1)
+        rows = self.tri.coords
+        for k, name in enumerate(('generated', 'object')):
+            if name not in needs:
+                continue
+            if rows is None:
+                out[name] = np.zeros((len(prim), 3), F32)
+                continue
+            r = np.take(rows, prim, axis=1)
+            c = r[3 * k:3 * k + 3] + r[6 + 3 * k:9 + 3 * k] * u + r[12 + 3 * k:15 + 3 * k] * v
+            out[name] = np.ascontiguousarray(c.T, F32)
+        return out
+
     def _lookup(self, tex, interp, ext, xf, prim, u, v):
         """RGB (3,k) of a texture at hits (prim, u, v) on the UV map (no UV map: (0, 0), as
-        Cycles reads a missing attribute), through its affine map xf (or None)."""
+        Cycles reads a missing attribute), through its affine map xf (or None); a procedural
+        texture at the hits' texture coordinates."""
+        if isinstance(tex, ProceduralTexels):
+            return tex.evaluate(self._coordinates(tex.needs, prim, u, v))
         tu, tv = self._uv(prim, u, v)
         if xf is not None:
             tu, tv = xf[0, 0] * tu + xf[0, 1] * tv + xf[0, 2], xf[1, 0] * tu + xf[1, 1] * tv + xf[1, 2]

@@ -202,6 +202,10 @@ class Geometry:
     # (M,3,3) float32 per corner: the albedo factor of triangles whose material reads a mesh
     # attribute (Material.color_attribute), interpolated like UVs; 1 elsewhere; None: none does
     colors: Optional[np.ndarray] = None
+    # (M,3,6) float32 per corner: Generated (0:3) and Object (3:6) texture coordinates of the
+    # triangles whose material has a procedural texture reading them, interpolated like UVs;
+    # 0 elsewhere; None: no material reads them
+    coords: Optional[np.ndarray] = None
 
     @staticmethod
     def empty() -> 'Geometry':

@@ -66,6 +66,8 @@ def validate(sd: SceneData):
          f"geometry.tangents must be None or ({m}, 3, 4)"),
         (getattr(g, 'colors', None) is None or np.asarray(g.colors).shape == (m, 3, 3),
          f"geometry.colors must be None or ({m}, 3, 3)"),
+        (getattr(g, 'coords', None) is None or np.asarray(g.coords).shape == (m, 3, 6),
+         f"geometry.coords must be None or ({m}, 3, 6)"),
     ]
     for ok, msg in checks:
         if not ok:

@@ -8,6 +8,7 @@ import numpy as np
 
 import dacrt
 
+from .procedural import ProceduralTexels
 from .texture import EncodedTexels, UdimTiles, lookup_texels
 
 F32 = np.float32
@@ -79,6 +80,11 @@ class Triangles:
         colors = getattr(geometry, 'colors', None)
         self.colors = None if colors is None else dacrt.shading.corner_rows(
             np.nan_to_num(np.maximum(np.asarray(colors, F32), 0.0), posinf=0.0))
+        # rows: corner 0 generated and object coordinates (0:6), corner 1 - corner 0 (6:12),
+        # corner 2 - corner 0 (12:18), for procedural textures (scenedata.Geometry.coords)
+        coords = getattr(geometry, 'coords', None)
+        self.coords = None if coords is None else dacrt.shading.corner_rows(
+            np.nan_to_num(np.asarray(coords, F32), nan=0.0, posinf=0.0, neginf=0.0))
         self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
             np.asarray(geometry.has_uv, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
@@ -192,6 +198,8 @@ def texture_entry(name, label, texture, interpolation, extension, transform):
 def _texture_array(name, label, texture, interpolation):
     """A material's texture as the lookups read it: (h, w, 4) float32, UdimTiles, or the
     EncodedTexels an image carries (texture.lookup_texels: blended in Cycles' stored encoding)."""
+    if isinstance(texture, ProceduralTexels):   # computed per shading point, nothing to check
+        return texture
     texture = lookup_texels(texture, interpolation)
     if isinstance(texture, EncodedTexels):  # checked when it was made
         return texture

@@ -7,6 +7,7 @@ import dacrt
 import numpy as np
 
 from .. import scenedata as sd
+from ..procedural import ProceduralTexels
 from .errors import ExportCancelled
 
 # The largest world coordinate a vertex may have: half float32's range, so that the edges and
@@ -34,6 +35,7 @@ class _Out:
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
+        self.coords = None                # (m, 3, 6), allocated by the first procedurally textured mesh
         self.keep = None
 
     def drop(self, rows, keep):
@@ -46,7 +48,7 @@ class _Out:
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, instance=self.instance,
                        uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
-                       colors=self.colors)
+                       colors=self.colors, coords=self.coords)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
         # per placement (instance id), for the object-space tangents of normal maps
@@ -281,7 +283,10 @@ class Assembly:
                 out.terminator[t0 + i * nt:t0 + (i + 1) * nt] = term
         # the materials whose albedo follows an attribute or Object Info (most scenes: none)
         attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
-        per_placement = out.uvs is not None or self.materials.normal_mapped or attributed
+        # the materials whose procedural textures read Generated or Object coordinates
+        coordinated = {k for k, m in enumerate(self.materials.materials)
+                       if isinstance(m.texture, ProceduralTexels) and m.texture.needs & {'generated', 'object'}}
+        per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated
         for i, p in enumerate(places if per_placement else ()):
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
             if out.uvs is not None:
@@ -299,6 +304,8 @@ class Assembly:
                 self._world_tangents(a, p, i in mirrored, out, S)
             if attributed and not attributed.isdisjoint(p.slot_map.tolist()):
                 self._attribute_colors(a, p, i in mirrored, out, S)
+            if coordinated and not coordinated.isdisjoint(p.slot_map.tolist()):
+                self._texture_coordinates(a, coordinated, i in mirrored, out, S)
         out.instances += k
         out.linear.append(lin)
         return bad, deg
@@ -346,6 +353,18 @@ class Assembly:
             block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)   # (no negative albedo)
             if mirrored:                     # corners 1 and 2 were swapped for these triangles
                 block[rows] = block[rows][:, [0, 2, 1]]
+
+    def _texture_coordinates(self, a, materials, mirrored, out, S):
+        """The Generated and Object texture coordinates at the corners of one instance's
+        triangles whose material is one of `materials` (procedural textures read them; object
+        space, so every instance of a mesh has the same); 0 on the frame's other triangles."""
+        if out.coords is None:
+            out.coords = np.zeros((len(out.triangles), 3, 6), np.float32)
+        rows = np.flatnonzero(np.isin(out.material[S], list(materials)))
+        block = a.corner_coordinates()[rows]
+        if mirrored:                        # corners 1 and 2 were swapped for these triangles
+            block = block[:, [0, 2, 1]]
+        out.coords[S][rows] = block
 
     def _world_tangents(self, a, place, mirrored, out, S):
         """The object-space tangents (unit) and bitangent signs of one instance's triangles whose

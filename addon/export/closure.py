@@ -9,6 +9,7 @@ layer."""
 import numpy as np
 
 from .. import nodeeval
+from ..procedural import ProceduralTexels
 from ..texture import baked as after_lookup
 
 
@@ -31,10 +32,18 @@ class Texture:
         """pixels (these texels, or a colour baked into them) as the scene data holds a texture."""
         return pixels if self.udim is None else self.udim.with_texels(pixels)
 
+    def mean(self):
+        """The mean colour (3,) of these texels (a procedural texture's over the unit cube)."""
+        if isinstance(self.pixels, ProceduralTexels):
+            return self.pixels.mean()
+        return np.asarray(self.pixels[..., :3], np.float64).reshape(-1, 3).mean(0)
+
     def baked(self, fn):
         """These texels with the colour map fn ((..., 3) -> (..., 3)) applied to their RGB; an
         image Cycles keeps encoded applies fn after its lookup instead, in Cycles' order
         (texture.baked)."""
+        if isinstance(self.pixels, ProceduralTexels):
+            return self.pixels.followed_by(fn)
         px = self.pixels.copy()
         px[..., :3] = fn(self.pixels[..., :3])
         return after_lookup(self.pixels, px, fn)
@@ -127,7 +136,7 @@ class Closure:
                 tex, w = other.texture, w + other.tex_weight
             else:   # two different images: keep the first, the other contributes its mean
                 reasons.append(nodeeval.TWO_IMAGES)
-                mean = other.texture.pixels[..., :3].reshape(-1, 3).mean(0)
+                mean = other.texture.mean()
                 return Closure(self.const + other.const + other.tex_weight * mean,
                                 self.emission + other.emission, tex, w, self.holdout + other.holdout,
                                 self.transparent + other.transparent, opacity, etex,

@@ -20,6 +20,7 @@ from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
 from .normalmaps import tangent_normal_map
+from . import procedurals
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 from .reflectors import (diffuse_roughness, glass_albedos, glossy_map, reflector_albedo, refraction_transmittance,
                          sheen_albedo)
@@ -621,6 +622,10 @@ class MaterialBuilder:
         """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes
         and float nodes (nodeeval.py) on constants and one image, baked into a texture."""
         link = linked_link(socket)
+        found = procedurals.compile_color(socket, reasons) if link is not None else None
+        if found is not None:       # evaluated at each shading point (procedural.py)
+            return Closure(texture=Texture(('procedural', id(found)), found, 'Linear', 'REPEAT', None, None, found.name),
+                           tex_weight=(1.0, 1.0, 1.0))
         if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
                                  link.from_node.type in nodeeval.VIEW_NODE_TYPES or
                                  link.from_node.type in nodeeval.ATTRIBUTE_NODE_TYPES or is_image_alpha(link)):

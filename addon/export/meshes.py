@@ -87,7 +87,8 @@ class MeshArrays:
     (RNA's per-item path, ~0.1 s per million triangles) is skipped and per-corner data
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
-                 'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes')
+                 'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes', '_coords',
+                 'original')
 
     def __init__(self, me, want_uvs):
         nv = len(me.vertices)
@@ -136,6 +137,7 @@ class MeshArrays:
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
             self.normal_rows = self.normal_index = None
         self.mesh, self._tangents, self._attributes = None, {}, {}   # depsgraph meshes: read on demand
+        self._coords = self.original = None
         # every UV map by name (a material may read one by a UV Map node); corner_uvs: the
         # active render one, which textures read otherwise
         self.uv_layers = self._read_uvs(me) if want_uvs else {}
@@ -150,7 +152,7 @@ class MeshArrays:
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
         a.corners, a.slot, a.corner_uvs, a.uv_layers, a.active_uv, a.domain = None, None, None, {}, '', 'POINT'
-        a.mesh, a._tangents, a._attributes = None, {}, {}
+        a.mesh, a._tangents, a._attributes, a._coords, a.original = None, {}, {}, None, None
         a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
         return a
 
@@ -178,6 +180,44 @@ class MeshArrays:
                 out = None
         self._tangents[uv_map] = out
         return out
+
+    def texture_space(self):
+        """(location, size) (3,) of the mesh's texture space, which Generated coordinates map to
+        0..1: Blender's own (auto or set by the user) for a depsgraph mesh, else the bounds
+        as Blender's automatic one computes them (a flat axis spans 1)."""
+        if self.mesh is not None:
+            return (np.array(self.mesh.texspace_location, np.float64),
+                    np.array(self.mesh.texspace_size, np.float64))
+        p = self.positions.astype(np.float64)
+        lo, hi = (p.min(axis=0), p.max(axis=0)) if len(p) else (-np.ones(3), np.ones(3))
+        loc, size = (lo + hi) / 2, (hi - lo) / 2
+        size = np.where(size == 0, 1.0, np.maximum(size, 1e-5))
+        return loc, size
+
+    def _undeformed(self):
+        """The positions Generated coordinates are of: Cycles reads the mesh's coordinates
+        before deforming modifiers and shape keys (ORCO), which Python cannot read; where the
+        evaluated mesh has the original's vertex count (modifiers that move vertices only: a
+        Displace, an Armature, shape keys) they are the original mesh's, otherwise (a
+        Subdivision, whose ORCO is the subdivided cage) the evaluated positions."""
+        me = self.original
+        if me is not None and len(me.vertices) == len(self.positions):
+            p = np.empty(len(self.positions) * 3, np.float32)
+            me.attributes['position'].data.foreach_get('vector', p)
+            return p.reshape(-1, 3)
+        return self.positions
+
+    def corner_coordinates(self):
+        """(nt, 3, 6) float32 per triangle corner: Generated (0:3) and Object (3:6) texture
+        coordinates, as Cycles computes them (generated = (co - loc) / (2 size) + 1/2 of the
+        texture space, co undeformed (_undeformed); 1/2 on an axis of size 0); once per mesh."""
+        if self._coords is None:
+            loc, size = self.texture_space()
+            scale = np.where(size != 0, 0.5 / np.where(size != 0, size, 1.0), 0.0)
+            co = self._undeformed().astype(np.float64)
+            rows = np.concatenate([(co - loc) * scale + 0.5, self.positions], axis=1).astype(np.float32)
+            self._coords = np.take(rows, self.triangles, axis=0)
+        return self._coords
 
     def corner_attribute(self, name):
         """(nt, 3, 4) float32 per triangle corner: the mesh attribute `name` ('' the render

@@ -314,6 +314,9 @@ class Exporter:
             arrays = mesh_arrays(ob.data, want_uvs=True)
             if arrays is not None:
                 arrays.mesh = ob.data       # the depsgraph's mesh, alive through the export
+                source = ob.original.data if ob.original is not None else None
+                if isinstance(source, bpy.types.Mesh) and source is not ob.data:
+                    arrays.original = source    # before modifiers (Generated coordinates)
         else:
             arrays = tessellated(ob, self)
         if arrays is None or len(arrays.triangles) == 0:

@@ -71,7 +71,8 @@ def _non_diffuse_materials():
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
     noise = nt.nodes.new('ShaderNodeTexNoise')
     nt.links.new(noise.outputs['Color'], nmap.inputs['Color'])     # (a flat default map is exact)
-    nt.links.new(noise.outputs['Color'], d.inputs['Color'])
+    wave = nt.nodes.new('ShaderNodeTexWave')                       # (a Noise the export evaluates)
+    nt.links.new(wave.outputs['Color'], d.inputs['Color'])
     e = nt.nodes.new('ShaderNodeEmission')
     e.inputs['Strength'].default_value = 2.0
     math_node = nt.nodes.new('ShaderNodeMath')
@@ -239,3 +240,19 @@ def test_override_keeps_a_light_path_ray_type_mix(scene):
     fairmaterials.make_diffuse([exact, other])
     assert mix.inputs['Fac'].is_linked and not mix2.inputs['Fac'].is_linked
     assert fairmaterials.remaining_approximations([exact, other]) == {}
+
+
+def test_override_keeps_procedural_colour_chains(scene):
+    """A Noise into a Color Ramp into a Diffuse colour is rendered per point by the export
+    (procedural textures): the fair override leaves it linked, with nothing to report."""
+    mat, nt, out = _tree("Marble")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    noise = nt.nodes.new('ShaderNodeTexNoise')
+    ramp = nt.nodes.new('ShaderNodeValToRGB')
+    nt.links.new(noise.outputs['Fac'], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    scenes.plane("Plane", materials=(mat,))
+    assert fairmaterials.make_diffuse() == {}
+    assert d.inputs['Color'].is_linked and ramp.inputs['Fac'].is_linked
+    assert fairmaterials.remaining_approximations() == {}

@@ -20,7 +20,7 @@ export renders exactly, following the export's own rules (addon/export/materials
 - a Fresnel or Layer Weight node (in a factor or colour chain): the socket it feeds set to the
   average over view directions the export renders it as;
 - a linked colour or factor the export reads as the socket's own value (not an Image Texture,
-  a constant chain of RGB or Value nodes through the nodes the export evaluates, or for a
+  a procedural chain it evaluates per point (export/procedurals.py), a constant chain of RGB or Value nodes through the nodes the export evaluates, or for a
   diffuse colour those nodes on an image):
   unlinked, so Cycles uses that value too; Image Textures and those colour nodes are kept,
   with the coordinates, projection, interpolation and extension the export uses;
@@ -321,16 +321,19 @@ class _Editor:
             sock.default_value = float(value[0])
         self.done.append(f"'{socket.name}' from a view-dependent node as its average over view directions")
 
-    def _color(self, socket):
+    def _color(self, socket, whole=True):
         """A diffuse colour input: constants, images and the colour nodes between them stay (the
-        export renders them); any other node feeding the chain is unlinked where the export
-        reads its own value."""
+        export renders them), and so does a whole chain the export evaluates as procedural
+        textures; any other node feeding the chain is unlinked where the export reads its own
+        value. whole: socket is the BSDF's input (not a node's inside its chain)."""
         link, carrier = nodegraph.source(socket)
         if link is None:
             return
         node = link.from_node
         if node.type in ('RGB', 'VALUE'):
             return
+        if whole and export.procedurals.compile_color(socket, []) is not None:
+            return                  # procedural textures the export evaluates per point
         if node.type == 'TEX_IMAGE':
             self._image(node)
             return
@@ -346,7 +349,7 @@ class _Editor:
             self._unlink(carrier, f"'{socket.name}' from '{node.bl_label}' as its own value")
             return
         for ident in roles.values():
-            self._color(nodegraph.input_by_id(node, ident))
+            self._color(nodegraph.input_by_id(node, ident), False)
 
     def _image(self, node):
         if mapping.coordinates_approximation(node):

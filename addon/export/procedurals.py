@@ -1,0 +1,158 @@
+"""Colour chains that read procedural textures (Noise, Checker, Gradient): compiled into a
+function of the shading point's texture coordinates (procedural.ProceduralTexels), which the
+integrator evaluates at every hit, as Cycles' SVM does. The chain may hold the colour and float
+nodes nodeeval computes, RGB and Value nodes, Mapping nodes and Texture Coordinate's
+Generated, Object and UV outputs (an unlinked Vector: Generated, as in Cycles); texture inputs
+(Scale, Detail, ...) may themselves vary over the surface. Anything else (an image, an
+attribute, another texture or coordinate kind) leaves the chain to nodeeval's evaluation, which
+reads the procedural node's own value and says so. Part of the export layer: every node setting
+is read here, so the compiled function reads no Blender data.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import nodeeval, nodegraph
+from .. import procedural as pr
+from ..mapping import mapping_affine
+
+PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT'})
+_COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
+_NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
+
+
+class _Chain:
+    """One compile: the coordinates the chain reads, the textures it met, the notes it makes."""
+
+    def __init__(self, reasons):
+        self.needs, self.textures, self.reasons = set(), [], reasons
+
+
+def compile_color(socket, reasons):
+    """A ProceduralTexels for what feeds a colour socket, or None when the chain reads no
+    procedural texture or something compile cannot follow (nodeeval then evaluates it)."""
+    if not _reaches_procedural(socket, set()):
+        return None
+    chain = _Chain([])
+    try:
+        fn = _socket(socket, True, chain, 0)
+    except nodeeval.NotCompiled:
+        return None
+    reasons.extend(chain.reasons)
+    name = ', '.join(dict.fromkeys(chain.textures))
+    return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), chain.needs or {'generated'}, name)
+
+
+def _reaches_procedural(socket, seen):
+    link, _ = nodegraph.source(socket)
+    if link is None:
+        return False
+    node = link.from_node
+    if node.type in PROCEDURAL_TYPES:
+        return True
+    key = nodegraph.unwrap(node).as_pointer()
+    if key in seen:                  # (a node feeding several inputs is walked once)
+        return False
+    seen.add(key)
+    return any(_reaches_procedural(s, seen) for s in node.inputs if s.enabled)
+
+
+def _socket(socket, color, chain, depth):
+    """fn(coords) -> (n, 3) or (1, 3) colour/vector (color) or (n, 1) / (1, 1) float."""
+    link, carrier = nodegraph.source(socket)
+    if link is None:
+        const = nodeeval._own(carrier.default_value, color)[None]
+        return lambda c: const
+    if depth >= nodeeval.Evaluator.MAX_DEPTH:
+        raise nodeeval.NotCompiled("too deep")
+    f, vector = _node(link.from_node, link.from_socket, chain, depth)
+    return lambda c: nodeeval._as_kind(np.asarray(f(c), np.float64), vector, color)
+
+
+def _vector(node, chain, depth):
+    """fn(coords) -> (n, 3) float32 of a texture's Vector input: its link, or Generated."""
+    own = nodegraph.input_by_id(node, 'Vector')
+    link, carrier = nodegraph.source(own)
+    if link is None and nodegraph.unwrap(carrier).as_pointer() == nodegraph.unwrap(own).as_pointer():
+        chain.needs.add('generated')
+        return lambda c: c['generated']
+    f = _socket(own, True, chain, depth + 1)
+    return lambda c: np.asarray(f(c), np.float32)
+
+
+def _float(node, ident, chain, depth):
+    """fn(coords) -> (n,) or (1,) float32 of a float input."""
+    f = _socket(nodegraph.input_by_id(node, ident), False, chain, depth + 1)
+    return lambda c: np.asarray(f(c), np.float32)[:, 0]
+
+
+def _node(node, out, chain, depth):
+    t = node.type
+    if t == 'RGB':
+        const = np.array(tuple(out.default_value[:3]), np.float64)[None]
+        return (lambda c: const), False
+    if t == 'VALUE':
+        const = np.array((out.default_value,), np.float64)[None]
+        return (lambda c: const), False
+    if t == 'TEX_COORD':
+        kind = _COORDINATES.get(out.name)
+        if kind is None or node.from_instancer or (kind == 'object' and node.object is not None):
+            raise nodeeval.NotCompiled(f"{out.name} coordinates")
+        chain.needs.add(kind)
+        return (lambda c: c[kind]), True
+    if t == 'MAPPING':
+        if node.vector_type == 'NORMAL':
+            raise nodeeval.NotCompiled("Normal mapping")
+        M, off = mapping_affine(node, chain.reasons)
+        v = _socket(nodegraph.input_by_id(node, 'Vector'), True, chain, depth + 1)
+        M32, off32 = M.T.astype(np.float32), off.astype(np.float32)
+        return (lambda c: np.asarray(v(c), np.float32) @ M32 + off32), True
+    if t in PROCEDURAL_TYPES:
+        return _texture(node, out, chain, depth)
+    roles = nodeeval.node_inputs(node)
+    if roles is None or t in nodeeval.VIEW_NODE_TYPES:
+        raise nodeeval.NotCompiled(node.bl_label)
+    float_node = (t == 'MIX' and node.data_type == 'FLOAT') or t in nodeeval._FLOAT_NODES
+    parts = {role: _socket(nodegraph.input_by_id(node, ident), role in nodeeval._COLOR_ROLES and not float_node,
+                           chain, depth + 1)
+             for role, ident in roles.items()}
+    frozen, frozen_out = nodeeval.Frozen(node), nodeeval.Frozen(out)
+    return (lambda c: nodeeval._compute(frozen, frozen_out, {role: g(c) for role, g in parts.items()})), \
+        t == 'COMBXYZ'
+
+
+def _texture(node, out, chain, depth):
+    """(fn, False): a procedural texture's Fac (n, 1) or Color (n, 3)."""
+    t = node.type
+    vec = _vector(node, chain, depth)
+    chain.textures.append(node.bl_label)
+    fac = out.identifier == 'Fac'
+    if t == 'TEX_NOISE':
+        dims = _NOISE_DIMENSIONS.get(node.noise_dimensions)
+        if dims is None or getattr(node, 'noise_type', 'FBM') != 'FBM':
+            raise nodeeval.NotCompiled(f"{node.noise_dimensions} {getattr(node, 'noise_type', '')} noise")
+        params = [_float(node, k, chain, depth) for k in ('Scale', 'Detail', 'Roughness', 'Lacunarity',
+                                                          'Distortion')]
+        normalize = bool(node.normalize)
+
+        def noise(c):
+            scale, detail, rough, lac, dist = (p(c) for p in params)
+            value, color = pr.noise_texture(vec(c), scale, detail, rough, lac, dist, normalize, dims, not fac)
+            return value[:, None] if fac else color
+        return noise, False
+    if t == 'TEX_CHECKER':
+        scale = _float(node, 'Scale', chain, depth)
+        c1 = _socket(nodegraph.input_by_id(node, 'Color1'), True, chain, depth + 1)
+        c2 = _socket(nodegraph.input_by_id(node, 'Color2'), True, chain, depth + 1)
+
+        def checker(c):
+            f = pr.checker(vec(c), scale(c))[:, None]
+            return f if fac else np.where(f == 1.0, c1(c), c2(c))
+        return checker, False
+    kind = node.gradient_type
+
+    def gradient(c):
+        f = pr.gradient(vec(c), kind)[:, None]
+        return f if fac else np.repeat(f, 3, axis=1)
+    return gradient, False

@@ -1,0 +1,87 @@
+"""The export of procedural textures (addon/export/procedurals.py): which chains become a
+per-point texture (procedural.ProceduralTexels) and which fall back to the node's own value
+with a reason, and the texture coordinates the geometry carries for them (Generated from the
+undeformed mesh in its texture space, Object in object space, per instance). Images against
+Cycles are in tests/parity/test_procedural.py."""
+import bpy
+import numpy as np
+
+from addon.procedural import ProceduralTexels
+from tests.addon import scenes
+
+
+def _noise_material(name, noise_type='FBM', dimensions='3D', coordinates=None):
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nz = nt.nodes.new('ShaderNodeTexNoise')
+    nz.noise_type, nz.noise_dimensions = noise_type, dimensions
+    if coordinates:
+        tc = nt.nodes.new('ShaderNodeTexCoord')
+        nt.links.new(tc.outputs[coordinates], nz.inputs['Vector'])
+    nt.links.new(nz.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _material(data, name):
+    return next(m for m in data.materials if m.name == name)
+
+
+def test_noise_chain_is_a_procedural_texture(scene, exported):
+    scenes.camera()
+    scenes.cube("Cube", materials=(_noise_material("Noise"),))
+    m = _material(exported(), "Noise")
+    assert isinstance(m.texture, ProceduralTexels)
+    assert m.texture.needs == {'generated'}
+    assert not m.approximated, m.approximated
+
+
+def test_unsupported_noise_keeps_its_own_value_and_says_so(scene, exported):
+    scenes.camera()
+    scenes.cube("Cube", materials=(_noise_material("Ridged", noise_type='RIDGED_MULTIFRACTAL'),))
+    scenes.cube("Cube2", location=(3, 0, 0), materials=(_noise_material("FourD", dimensions='4D'),))
+    data = exported()
+    for name in ("Ridged", "FourD"):
+        m = _material(data, name)
+        assert not isinstance(m.texture, ProceduralTexels)
+        assert "Noise Texture" in m.approximated, (name, m.approximated)
+
+
+def test_generated_coordinates_are_undeformed_and_object_coordinates_are_not(scene, exported):
+    """A Displace modifier (strength 0.3, midlevel 0.5, no texture) pushes the cube's corners
+    out by 0.15 along their normals: Cycles'
+    Generated coordinates stay those of the undeformed cube (its texture space 0..1), Object
+    coordinates are where the surface is."""
+    scenes.camera()
+    cube = scenes.cube("Cube", size=2.0, materials=(_noise_material("Noise", coordinates='Object'),))
+    gen = scenes.cube("Gen", size=2.0, location=(4, 0, 0), materials=(_noise_material("Gen"),))
+    for ob in (cube, gen):
+        ob.modifiers.new("d", 'DISPLACE').strength = 0.3
+    data = exported()
+    g = data.geometry
+    assert g.coords is not None
+    rows, names = np.asarray(g.coords), [m.name for m in data.materials]
+    gen_rows = rows[np.asarray(g.material) == names.index("Gen")]
+    np.testing.assert_allclose(np.sort(np.unique(gen_rows[..., 0:3].round(5))), [0.0, 1.0])
+    obj_rows = rows[np.asarray(g.material) == names.index("Noise")]
+    corner = 1.0 + 0.15 / np.sqrt(3.0)          # displaced along the corner's smooth normal
+    np.testing.assert_allclose(np.abs(obj_rows[..., 3:6]), corner, rtol=1e-5)
+
+
+def test_mirrored_instances_keep_object_coordinates_per_corner(scene, exported):
+    """Two instances, one mirrored (its corners rewound): each exported corner's Object
+    coordinate is its vertex's object-space position."""
+    scenes.camera()
+    a = scenes.cube("A", size=1.0, materials=(_noise_material("Obj", coordinates='Object'),))
+    b = bpy.data.objects.new("B", a.data)
+    b.location, b.scale = (3, 0, 0), (-1, 1, 1)
+    bpy.context.scene.collection.objects.link(b)
+    g = exported().geometry
+    V, T = np.asarray(g.vertices, np.float64), np.asarray(g.triangles)
+    world = V[T]                                  # (m, 3, 3) corners in world space
+    obj = np.asarray(g.coords)[..., 3:6]
+    # instance A sits at the origin, B at x = 3 mirrored: world = (sx (x) + tx, y, z)
+    sx = np.where(world[..., 0].mean(axis=1, keepdims=True) > 1.5, -1.0, 1.0)
+    tx = np.where(sx > 0, 0.0, 3.0)
+    np.testing.assert_allclose(world[..., 0], sx * obj[..., 0] + tx, atol=1e-5)
+    np.testing.assert_allclose(world[..., 1:], obj[..., 1:], atol=1e-5)
