@@ -176,10 +176,8 @@ class Film:
             return self._first[name].T.reshape(self.height, self.width, -1).copy()
         if name == 'Mist':
             return 1.0 - self._mean(self._pass_sum[name])
-        if name in DIVIDED_BY_COLOR:                # Cycles: light / colour, 0 where no colour
-            color = self._pass_sum['DiffCol']
-            with np.errstate(divide='ignore', invalid='ignore'):
-                ratio = np.where(color != 0, self._pass_sum[name] / color, 0.0)
+        if name in DIVIDED_BY_COLOR:                # Cycles: light / colour, even where no colour
+            ratio = divide_even_color(self._pass_sum[name], self._pass_sum['DiffCol'])
             return ratio.T.reshape(self.height, self.width, 3).astype(np.float32)
         if name == 'DenoiseAlbedo':                 # the diffuse albedo + emitters and world seen
             return self._mean(self._pass_sum[name] + self._pass_sum['Emit'] + self._pass_sum['Env'])
@@ -188,6 +186,25 @@ class Film:
     def sample_counts(self) -> np.ndarray:
         """(H, W) number of accepted samples per pixel."""
         return self._count.reshape(self.height, self.width).copy()
+
+
+def divide_even_color(a, b):
+    """a / b per channel, rows (3, n), as Cycles' safe_divide_even_color reads the light passes
+    (Diffuse Direct and Indirect = light / Diffuse Color): a channel without colour takes the
+    others' ratio (the mean of two, the one left of one), so a pure red surface's Diffuse
+    Direct is grey, not red; all three without colour: 0."""
+    zero = b == 0
+    with np.errstate(divide='ignore', invalid='ignore'):
+        r = np.where(zero, 0.0, a / np.where(zero, 1.0, b))
+    x, y, z = r
+    bx, by, bz = zero
+    out = r.copy()
+    # Cycles' branches, in its order
+    out[0] = np.where(bx & by, z, np.where(bx & bz, y, np.where(bx, 0.5 * (y + z), x)))
+    out[1] = np.where(bx & by, z, np.where(bx & bz, y, np.where(by & bz, x, np.where(by, 0.5 * (x + z), y))))
+    out[2] = np.where(bx & by, z, np.where(bx & bz, y, np.where(by & bz, x, np.where(bz & ~bx & ~by, 0.5 * (x + y),
+                                                                                     z))))
+    return out
 
 
 def _as_slice(pixels):

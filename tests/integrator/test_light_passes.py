@@ -25,6 +25,29 @@ def test_a_sunlit_plane_is_all_diffuse_direct():
     assert 'DiffCol' in f.passes                      # kept as the divisor, not requested
 
 
+def test_a_saturated_colour_divides_evenly_as_cycles():
+    """A pure red plane (albedo (0.8, 0, 0)) under a sun of irradiance pi: its Diffuse Direct is
+    grey 1 (Cycles' safe_divide_even_color: the channels without colour take the red ratio),
+    not (1, 0, 0); Combined is still DiffCol x DiffDir."""
+    scene = plane_scene([light('SUN', np.pi, rotation_x(0.0))], samples=4, max_bounces=0, passes=LIGHT)
+    scene.materials[1].base_color = np.array([0.8, 0.0, 0.0], np.float32)
+    f = render(scene).film
+    assert np.allclose(f.pass_image('DiffDir'), 1.0, rtol=1e-5)
+    assert np.allclose(f.pass_image('DiffCol') * f.pass_image('DiffDir'), f.combined()[..., :3], rtol=1e-5)
+
+
+@pytest.mark.parametrize('color, light, expected', [
+    ((0.5, 0.0, 0.25), (1.0, 9.0, 1.0), (2.0, 3.0, 4.0)),      # one channel without colour: the others' mean
+    ((0.0, 0.5, 0.0), (7.0, 1.0, 7.0), (2.0, 2.0, 2.0)),       # two without: the one left
+    ((0.0, 0.0, 0.0), (1.0, 2.0, 3.0), (0.0, 0.0, 0.0)),       # none: 0
+    ((0.5, 0.25, 0.1), (1.0, 1.0, 1.0), (2.0, 4.0, 10.0)),     # all: plain division
+])
+def test_divide_even_color_follows_cycles(color, light, expected):
+    from addon.film import divide_even_color
+    got = divide_even_color(np.array(light, np.float64)[:, None], np.array(color, np.float64)[:, None])
+    np.testing.assert_allclose(got[:, 0], expected)
+
+
 def test_world_seen_and_reflected():
     """A small plane of albedo 0.5 under a uniform world W: camera rays that miss it see W in
     Env; on the plane the world found by vertex 0's BSDF rays is direct light, W in DiffDir."""
