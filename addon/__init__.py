@@ -66,6 +66,7 @@ def register():
     properties.register()
     _registered.append(properties)
     bpy.utils.register_class(engine.DACRTRenderEngine)
+    engine.register_handlers()
     _registered.append(engine)
     ui.register()
     _registered.append(ui)
@@ -76,6 +77,7 @@ def unregister():
     while _registered:
         module = _registered.pop()
         if hasattr(module, 'DACRTRenderEngine'):
+            module.unregister_handlers()
             bpy.utils.unregister_class(module.DACRTRenderEngine)
         else:
             module.unregister()

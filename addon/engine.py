@@ -40,9 +40,26 @@ def extra_passes(layer):
                 yield name, 4, "rgba", 'COLOR'   # as Cycles
 
 
-# Stats of the latest render per view layer, for scripts (addon.last_render_stats()); replaced
-# by each render, so nothing of a frame outlives the next one.
+# Stats of the latest render per view layer, for scripts (addon.last_render_stats()); emptied
+# when a frame's render begins (render_pre, once for all its view layers; an engine kept with
+# Persistent Data renders many frames), so a layer of an earlier render or scene, or a frame
+# that failed, leaves nothing behind.
 LAST_RENDER_STATS = {}
+
+
+@bpy.app.handlers.persistent
+def _new_frame(*_args):
+    LAST_RENDER_STATS.clear()
+
+
+def register_handlers():
+    if _new_frame not in bpy.app.handlers.render_pre:
+        bpy.app.handlers.render_pre.append(_new_frame)
+
+
+def unregister_handlers():
+    while _new_frame in bpy.app.handlers.render_pre:
+        bpy.app.handlers.render_pre.remove(_new_frame)
 
 
 # A cancel asked from outside Blender's interface, for the render in progress: the command

@@ -255,6 +255,23 @@ def test_failed_render_reports_the_reason(scene):
         bpy.ops.render.render()
 
 
+def test_render_stats_hold_the_latest_frame_only(scene):
+    """addon.last_render_stats() is the latest frame's: a view layer of an earlier render is
+    gone, and a frame that failed leaves no stats (a script can tell it failed)."""
+    lit_plane_scene(scene)
+    scene.view_layers.new("Second")
+    bpy.ops.render.render()
+    assert set(addon.last_render_stats()) == {v.name for v in scene.view_layers}
+    scene.view_layers["Second"].use = False
+    bpy.ops.render.render()
+    assert set(addon.last_render_stats()) == {bpy.context.view_layer.name}
+    scene.camera.data.type = 'PANO'
+    scene.camera.data.panorama_type = 'CENTRAL_CYLINDRICAL'
+    with pytest.raises(RuntimeError):
+        bpy.ops.render.render()
+    assert addon.last_render_stats() == {}
+
+
 def test_rerendering_keeps_memory_flat(scene):
     build_demo_scene(scene, resolution=96, samples=2)
     # ~125k triangles: each render allocates tens of MB, so keeping any of it would show
