@@ -29,6 +29,17 @@ _UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
 MIST_FALLOFF = {'QUADRATIC': 2.0, 'LINEAR': 1.0, 'INVERSE_QUADRATIC': 0.5}
 
 
+def layer_samples(scene, vl, samples):
+    """The samples of view layer vl as Cycles' Layer Samples setting (scene.cycles.
+    use_layer_samples) reads its override (0: none): 'USE' the override, 'BOUNDED' at most the
+    scene's, 'IGNORE' the scene's."""
+    layer = int(getattr(vl, 'samples', 0))
+    mode = getattr(getattr(scene, 'cycles', None), 'use_layer_samples', 'USE')
+    if not layer or mode == 'IGNORE':
+        return samples
+    return min(layer, samples) if mode == 'BOUNDED' else layer
+
+
 def export_settings(scene, vl, messages):
     """scenedata.Settings of one view layer `vl` of the evaluated scene. Passes Cycles would
     write there and DACRT does not are named in a warning appended to messages."""
@@ -51,8 +62,7 @@ def export_settings(scene, vl, messages):
     mist = mist_world.mist_settings if mist_world is not None else None
     mist = (0.0, 100.0, 1.0) if mist is None else (
         float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
-    # a view layer's Samples override (0: the scene's), as Cycles' default 'Use' layer samples
-    samples = int(getattr(vl, 'samples', 0)) or d.samples
+    samples = layer_samples(scene, vl, int(d.samples))
     return sd.Settings(samples=samples, max_bounces=d.max_bounces,
                        transparent_max_bounces=d.transparent_max_bounces,
                        sample_clamp_direct=d.sample_clamp_direct,

@@ -1984,6 +1984,13 @@ def test_view_layer_world_override_samples_and_filters(scene, exported):
     vl.samples = 3                            # Cycles' default 'Use' layer samples: overrides
     data = exported()
     assert np.allclose(data.world, (0.0, 1.0, 0.0)) and data.settings.samples == 3
+    scene.cycles.use_layer_samples = 'IGNORE'         # Cycles then renders the scene's samples
+    assert exported().settings.samples == 64
+    scene.cycles.use_layer_samples = 'BOUNDED'        # ... or the layer's, at most the scene's
+    assert exported().settings.samples == 3
+    vl.samples = 100
+    assert exported().settings.samples == 64
+    scene.cycles.use_layer_samples, vl.samples = 'USE', 3
     vl.use_sky = False                        # Environment filter off: no world at all
     assert np.allclose(exported().world, 0.0)
     vl.use_sky, vl.samples = True, 0
