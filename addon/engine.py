@@ -186,6 +186,12 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             cam_ob = self.camera_override or scene.camera
             view_cam = (self.camera_model_matrix(cam_ob, use_spherical_stereo=False),
                         self.camera_shift_x(cam_ob, use_spherical_stereo=False))
+            data = cam_ob.data
+            if getattr(data, 'type', None) == 'PANO' and data.stereo.use_spherical_stereo:
+                # Cycles moves each ray's eye around the panorama's centre (spherical stereo);
+                # each view here is an ordinary panorama from that eye's position
+                self.report({'WARNING'}, f"DACRT: view '{view}': Spherical Stereo is not rendered; each "
+                                         "eye is a panorama from the eye's position")
             try:
                 scene_data.camera = export.export_camera(scene, None, view_cam, camera=cam_ob)
             except export.ExportError as e:

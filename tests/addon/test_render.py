@@ -372,6 +372,22 @@ def test_write_still_like_blender_b(scene, tmp_path):
     assert buf.get_pixels().mean() > 0
 
 
+def test_spherical_stereo_panorama_is_reported(scene, capfd):
+    """Cycles offsets each ray's eye around a stereo panorama's centre (Spherical Stereo); DACRT
+    renders each eye as a plain panorama from the eye's position and says so, per view."""
+    lit_plane_scene(scene, size=(32, 16))
+    cam = scene.camera
+    cam.data.type, cam.data.panorama_type = 'PANO', 'EQUIRECTANGULAR'
+    scene.render.use_multiview, scene.render.views_format = True, 'STEREO_3D'
+    cam.data.stereo.use_spherical_stereo = False
+    bpy.ops.render.render()
+    assert "Spherical Stereo" not in capfd.readouterr().out
+    cam.data.stereo.use_spherical_stereo = True
+    bpy.ops.render.render()
+    out = capfd.readouterr().out
+    assert "view 'left': Spherical Stereo is not rendered" in out and "view 'right'" in out
+
+
 def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path, monkeypatch):
     """Stereo 3D with parallel eyes about the centre: each view is the mono render of the camera
     moved half the interocular distance along its own x axis (Blender's eye cameras, which the
