@@ -129,7 +129,8 @@ def hsv_to_rgb(hsv):
     i = np.floor(h6)
     f = h6 - i
     p, q, t = v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f))
-    sector = [np.mod(i, 6) == k for k in range(5)]           # sector 5 is the default
+    # Cycles: sectors i == 0..4, anything else sector 5 (a hue outside [0, 1) is not wrapped)
+    sector = [i == k for k in range(5)]
     rgb = np.stack([np.select(sector, [v, q, p, p, t], v), np.select(sector, [t, v, v, q, p], p),
                     np.select(sector, [p, p, t, v, v], q)], axis=-1)
     return np.where((s != 0.0)[..., None], rgb, v[..., None])

@@ -210,7 +210,9 @@ def _compute(node, out, v):
     if t == 'MIX':
         fac = np.clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
         r = cn.mix('MIX' if node.data_type == 'FLOAT' else node.blend_type, fac, v['a'], v['b'])
-        return np.clip(r, 0.0, 1.0) if node.clamp_result else r
+        # Cycles' float Mix has no result clamp: clamp_result (kept, hidden, after a switch from
+        # Color to Float) applies to colour data only
+        return np.clip(r, 0.0, 1.0) if node.clamp_result and node.data_type == 'RGBA' else r
     if t == 'MIX_RGB':         # Cycles' legacy MixNode: factor clamped to [0, 1] always
         r = cn.mix(node.blend_type, np.clip(v['fac'], 0.0, 1.0), v['a'], v['b'])
         return np.clip(r, 0.0, 1.0) if node.use_clamp else r

@@ -220,7 +220,8 @@ class MaterialBuilder:
         line = _channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), _probe_albedo(m), 1e-5)
         self._attribute_pixels = self._ATTRIBUTE_ALPHAS
         reads_alpha = np.ptp(_probe_albedo(self._build_material(mat)), axis=0).max() >= 1e-7
-        if line is not None and not reads_alpha and (line[1] >= 0).all() and (line[1] + line[0] >= -1e-9).all():
+        # (float32 rounding leaves a plain tint's offset a few 1e-9 below 0)
+        if line is not None and not reads_alpha and (line[1] >= -1e-6).all() and (line[1] + line[0] >= -1e-6).all():
             w, k = line
             self._attribute_pixels = None
             self._attribute_map = ('mesh', name, w, k)
@@ -682,6 +683,9 @@ class MaterialBuilder:
                 if after is not None:
                     s = np.float32(strength.value.reshape(-1)[0])
                     px = ImageTexels(px, after.followed_by(lambda rgb: rgb * s))
+                elif stored_texels(color.tex.pixels) is not None:   # said as _evaluated_closure says it
+                    reasons.append(f"colour nodes after image '{color.tex.name}' applied to its texels before the "
+                                   "blend (Cycles blends, decodes, then applies them)")
             elif color.tex is None and strength.tex is not None and strength.tex.attribute is None \
                     and bool(np.isfinite(strength.tex.pixels).all()):
                 # an image (and nodes reading it) into the Strength: looked up as stored, then

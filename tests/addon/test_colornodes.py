@@ -138,6 +138,29 @@ def test_chain_on_an_image_is_baked_per_texel(scene):
     assert np.allclose(m.base_color, 1.0)
 
 
+def test_hue_outside_the_unit_range_falls_in_cycles_last_sector():
+    """Cycles' hsv_to_rgb takes sectors 0-4 by i == k and everything else as sector 5, without
+    wrapping the hue: Combine Color (HSV) of hue 1.2 is (v, p, q), not hue 0.2's (q, v, p)."""
+    assert np.allclose(cn.hsv_to_rgb([1.2, 1.0, 0.8]), (0.8, 0.0, 0.64))
+    assert np.allclose(cn.hsv_to_rgb([-0.25, 1.0, 0.8]), (0.8, 0.0, 0.4))
+
+
+def test_float_mix_ignores_a_hidden_clamp_result(scene):
+    """Clamp Result set in Color mode stays set (hidden) after a switch to Float; Cycles' float
+    Mix has no result clamp: 0.4 and 2 mixed half and half are 1.2, not 1."""
+    mat, nt, out = scenes._material("FloatMix")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    mix = nt.nodes.new('ShaderNodeMix')
+    mix.clamp_result = True
+    mix.data_type = 'FLOAT'
+    mix.inputs['Factor'].default_value = 0.5
+    mix.inputs['A'].default_value, mix.inputs['B'].default_value = 0.4, 2.0
+    nt.links.new(mix.outputs['Result'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    m = _exported_material(mat)
+    assert np.allclose(m.base_color, 1.2, atol=1e-6), m.base_color
+
+
 def test_constant_chain_folds_to_a_colour(scene):
     mat, nt, out = scenes._material("Folded")
     d = nt.nodes.new('ShaderNodeBsdfDiffuse')
@@ -424,3 +447,22 @@ def test_mix_shader_with_an_image_factor_mixes_per_texel(scene):
     got = stored_texels(m.texture).lookup(np.array([0.5], np.float32), np.array([0.5], np.float32),
                                           'Linear', 'REPEAT')[:, 0]
     np.testing.assert_allclose(got, a + (b - a) * srgb_to_linear(0.5), rtol=1e-5)
+
+
+@pytest.mark.parametrize('shader', ['diffuse', 'emission'])
+def test_alpha_reading_chain_on_an_8bit_image_is_reported_for_emission_too(scene, tmp_path, shader):
+    """An 8-bit RGBA image's Alpha mixing its colour over a constant (a decal) is baked into the
+    texels before the blend, which Cycles blends as stored first: a documented approximation,
+    said for an emission colour as it is for a diffuse one."""
+    path = scenes.write_image(tmp_path / "decal.png", (PX * 255).round().astype(np.uint8))
+    mat, nt, out = scenes._material("Decal")
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = bpy.data.images.load(path)
+    mix = scenes.mix_node(nt, 'MIX', (0.2, 0.3, 0.4), tex.outputs['Color'], 0.5)
+    nt.links.new(tex.outputs['Alpha'], mix.inputs['Factor'])
+    node = nt.nodes.new('ShaderNodeEmission' if shader == 'emission' else 'ShaderNodeBsdfDiffuse')
+    nt.links.new(mix.outputs['Result'], node.inputs['Color'])
+    nt.links.new(node.outputs[0], out.inputs['Surface'])
+    m = _exported_material(mat)
+    assert "colour nodes after image 'decal.png' applied to its texels before the blend" in m.approximated, \
+        m.approximated

@@ -2152,6 +2152,20 @@ def test_attribute_factor_is_the_colours_average(scene, exported):
                                atol=1e-6)
 
 
+def test_a_tint_of_byte_corner_colours_is_applied_per_point(scene, exported):
+    """A tint (1, 0.5, 0.8) of a byte corner attribute is a scale of its colour: applied per
+    point, nothing reported (float32 rounding had left its fitted offset a few 1e-9 below 0,
+    and the tint was evaluated at the corners with a note)."""
+    setup(scene)
+    ob = scenes.mesh("Tinted", [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], [(0, 1, 2, 3)],
+                     materials=(_attribute_material("MTint", chain=lambda nt, s: scenes.mix_node(
+                         nt, 'MULTIPLY', s, (1.0, 0.5, 0.8), 1.0).outputs['Result']),))
+    attr = ob.data.color_attributes.new('Col', 'BYTE_COLOR', 'CORNER')
+    attr.data.foreach_set('color', np.random.default_rng(5).random(len(attr.data) * 4).astype(np.float32))
+    m = {m.name: m for m in exported().materials}["MTint"]
+    assert m.color_attribute == 'Col' and m.approximated == '', m.approximated
+
+
 def test_colour_attributes_per_corner(scene, exported):
     """A Color Attribute (or Attribute) node into the diffuse colour: the material is marked
     with the attribute, Geometry.colors holds w x the attribute + k per triangle corner (point,
