@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "bindargs.h"
+#include "noise.h"
 #include "shading.h"
 
 namespace py = pybind11;
@@ -519,6 +520,38 @@ py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c
     return py::make_tuple(geo, area);
 }
 
+// A Noise Texture parameter: n values or one for all.
+size_t param_len(const F32Array& a, size_t n, const char* name) {
+    if (a.ndim() != 1 || (size_t(a.shape(0)) != n && a.shape(0) != 1))
+        throw py::value_error(std::string(name) + " must have shape (" + std::to_string(n) + ",) or (1,), got " +
+                              shape_str(a));
+    return size_t(a.shape(0));
+}
+
+py::tuple noise_texture_py(F32Array points, F32Array scale, F32Array detail, F32Array roughness,
+                           F32Array lacunarity, F32Array distortion, bool normalize, bool color) {
+    if (points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3))
+        throw py::value_error("points must have shape (n, 2) or (n, 3), got " + shape_str(points));
+    const size_t n = size_t(points.shape(0));
+    const int dims = int(points.shape(1));
+    NoiseParams k{scale.data(), detail.data(), roughness.data(), lacunarity.data(), distortion.data(),
+                  param_len(scale, n, "scale"), param_len(detail, n, "detail"), param_len(roughness, n, "roughness"),
+                  param_len(lacunarity, n, "lacunarity"), param_len(distortion, n, "distortion"), normalize};
+    F32Array fac{py::ssize_t(n)};
+    py::object col = py::none();
+    float* c = nullptr;
+    if (color) {
+        F32Array rgb({py::ssize_t(n), py::ssize_t(3)});
+        c = rgb.mutable_data();
+        col = rgb;
+    }
+    {
+        py::gil_scoped_release nogil;
+        noise_texture(points.data(), n, dims, k, fac.mutable_data(), c);
+    }
+    return py::make_tuple(fac, col);
+}
+
 }  // namespace
 
 void register_shading(py::module_& m) {
@@ -555,4 +588,6 @@ void register_shading(py::module_& m) {
           py::arg("out"));
     m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
+    m.def("noise_texture", &noise_texture_py, py::arg("points"), py::arg("scale"), py::arg("detail"),
+          py::arg("roughness"), py::arg("lacunarity"), py::arg("distortion"), py::arg("normalize"), py::arg("color"));
 }

@@ -13,7 +13,7 @@ from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
 __all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
-           "LightChoice", "next_event", "accumulate_masked"]
+           "LightChoice", "next_event", "accumulate_masked", "noise_texture"]
 
 _F32 = np.float32
 
@@ -450,3 +450,14 @@ def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None, surface=None, t
         ng = surf[3:6]
         points = (surf[0:3], ng, ng if normals is None else surf[9:12], surf[6:9])
     return idx, thr_out, black, rr, points, prim, _refill(take, taken)
+
+
+def noise_texture(points, scale, detail, roughness, lacunarity, distortion, normalize: bool, color: bool):
+    """Cycles' Noise Texture (fBM) at points (n, 2) or (n, 3): (fac (n,), colour (n, 3) or
+    None). Parameters: one value, or one per point (n,). Perlin noise on Bob Jenkins' lookup3
+    hash, octaves summed as Cycles' noise_fbm (the fractional octave mixed in), the colour's
+    other channels at Cycles' seeded offsets; float32 in Cycles' order. One threaded pass."""
+    def param(v):
+        return np.ascontiguousarray(np.atleast_1d(np.asarray(v, _F32)).reshape(-1))
+    return _core.noise_texture(np.ascontiguousarray(points, _F32), param(scale), param(detail), param(roughness),
+                               param(lacunarity), param(distortion), bool(normalize), bool(color))

@@ -1,0 +1,180 @@
+// Cycles' Noise Texture (see noise.h): every operation in Cycles' order, in float32.
+#include "noise.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "parallel.h"
+
+namespace dacrt {
+
+namespace {
+
+inline uint32_t rot(uint32_t x, int k) { return (x << k) | (x >> (32 - k)); }
+
+// Bob Jenkins' lookup3 final mix, as Cycles' util/hash.h.
+inline uint32_t final_mix(uint32_t a, uint32_t b, uint32_t c) {
+    c ^= b; c -= rot(b, 14);
+    a ^= c; a -= rot(c, 11);
+    b ^= a; b -= rot(a, 25);
+    c ^= b; c -= rot(b, 16);
+    a ^= c; a -= rot(c, 4);
+    b ^= a; b -= rot(a, 14);
+    c ^= b; c -= rot(b, 24);
+    return c;
+}
+
+inline uint32_t hash_uint2(uint32_t kx, uint32_t ky) {
+    uint32_t a = 0xdeadbeefu + (2u << 2) + 13u, b = a, c = a;
+    b += ky;
+    a += kx;
+    return final_mix(a, b, c);
+}
+
+inline uint32_t hash_uint3(uint32_t kx, uint32_t ky, uint32_t kz) {
+    uint32_t a = 0xdeadbeefu + (3u << 2) + 13u, b = a, c = a;
+    c += kz;
+    b += ky;
+    a += kx;
+    return final_mix(a, b, c);
+}
+
+inline uint32_t bits(float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return u;
+}
+
+// Cycles' random_float3_offset / random_float2_offset component k of a seed.
+inline float random_offset(float seed, int k) {
+    const float h = float(hash_uint2(bits(seed), bits(float(k)))) / float(0xFFFFFFFFu);
+    return 100.0f + h * 100.0f;
+}
+
+inline float fade(float t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); }
+
+inline float negate_if(float v, uint32_t flag) { return flag ? -v : v; }
+
+inline float grad3(uint32_t h, float x, float y, float z) {
+    h &= 15u;
+    const float u = h < 8 ? x : y;
+    const float vt = (h == 12 || h == 14) ? x : z;
+    const float v = h < 4 ? y : vt;
+    return negate_if(u, h & 1u) + negate_if(v, h & 2u);
+}
+
+inline float grad2(uint32_t h, float x, float y) {
+    h &= 7u;
+    const float u = h < 4 ? x : y;
+    const float v = 2.0f * (h < 4 ? y : x);
+    return negate_if(u, h & 1u) + negate_if(v, h & 2u);
+}
+
+// x - floor(x) and floor(x) as an integer (0 where x is not finite; wraps as Cycles' int).
+inline float floorfrac(float x, uint32_t& i) {
+    const float f = std::floor(x);
+    // (beyond int64's range numpy's conversion, which the reference uses, gives 0 bits too)
+    i = std::fabs(f) < 9.2e18f ? uint32_t(uint64_t(int64_t(f))) : 0u;
+    return x - f;
+}
+
+float perlin_3d(const float* p) {
+    uint32_t X, Y, Z;
+    const float fx = floorfrac(p[0], X), fy = floorfrac(p[1], Y), fz = floorfrac(p[2], Z);
+    const float u = fade(fx), v = fade(fy), w = fade(fz);
+    float g[8];
+    for (uint32_t k = 0; k < 2; ++k)
+        for (uint32_t j = 0; j < 2; ++j)
+            for (uint32_t i = 0; i < 2; ++i)
+                g[4 * k + 2 * j + i] = grad3(hash_uint3(X + i, Y + j, Z + k), fx - float(i), fy - float(j), fz - float(k));
+    const float x1 = 1.0f - u, y1 = 1.0f - v, z1 = 1.0f - w;
+    return z1 * (y1 * (g[0] * x1 + g[1] * u) + v * (g[2] * x1 + g[3] * u)) +
+           w * (y1 * (g[4] * x1 + g[5] * u) + v * (g[6] * x1 + g[7] * u));
+}
+
+float perlin_2d(const float* p) {
+    uint32_t X, Y;
+    const float fx = floorfrac(p[0], X), fy = floorfrac(p[1], Y);
+    const float u = fade(fx), v = fade(fy);
+    float g[4];
+    for (uint32_t j = 0; j < 2; ++j)
+        for (uint32_t i = 0; i < 2; ++i) g[2 * j + i] = grad2(hash_uint2(X + i, Y + j), fx - float(i), fy - float(j));
+    const float x1 = 1.0f - u;
+    return (1.0f - v) * (g[0] * x1 + g[1] * u) + v * (g[2] * x1 + g[3] * u);
+}
+
+// Cycles' snoise_2d / snoise_3d: scaled, 0 where not finite.
+inline float snoise(const float* p, int dims) {
+    float r = dims == 3 ? perlin_3d(p) : perlin_2d(p);
+    if (!std::isfinite(r)) r = 0.0f;
+    return (dims == 3 ? 0.9820f : 0.6616f) * r;
+}
+
+// Cycles' noise_fbm of point p (dims), offset by off (dims) first.
+float fbm(const float* p, const float* off, int dims, float detail, float roughness, float lacunarity,
+          bool normalize) {
+    float q[3], s[3];
+    for (int a = 0; a < dims; ++a) q[a] = off ? p[a] + off[a] : p[a];
+    float fscale = 1.0f, amp = 1.0f, maxamp = 0.0f, sum = 0.0f;
+    const int octaves = int(std::floor(detail));
+    for (int i = 0; i <= octaves; ++i) {
+        for (int a = 0; a < dims; ++a) s[a] = fscale * q[a];
+        const float t = snoise(s, dims);
+        sum = sum + t * amp;
+        maxamp = maxamp + amp;
+        amp = amp * roughness;
+        fscale = fscale * lacunarity;
+    }
+    const float rmd = detail - std::floor(detail);
+    const float whole = normalize ? 0.5f * sum / maxamp + 0.5f : sum;
+    if (rmd == 0.0f) return whole;
+    for (int a = 0; a < dims; ++a) s[a] = fscale * q[a];
+    const float t = snoise(s, dims);
+    const float sum2 = sum + t * amp;
+    if (normalize) {
+        const float part = 0.5f * sum2 / (maxamp + amp) + 0.5f;
+        return (1.0f - rmd) * whole + rmd * part;
+    }
+    return (1.0f - rmd) * sum + rmd * sum2;
+}
+
+inline float at(const float* a, size_t count, size_t i) { return a[count == 1 ? 0 : i]; }
+
+}  // namespace
+
+void noise_texture(const float* p, size_t n, int dims, const NoiseParams& k, float* fac, float* color) {
+    float offsets[5][3];    // seeds 0..dims-1: distortion; dims, dims + 1: the colour's channels
+    for (int seed = 0; seed < 5; ++seed)
+        for (int a = 0; a < 3; ++a) offsets[seed][a] = random_offset(float(seed), a);
+    parallel_for(n, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            const float scale = at(k.scale, k.scale_n, i);
+            float detail = std::min(std::max(at(k.detail, k.detail_n, i), 0.0f), 15.0f);
+            if (!(detail >= 0.0f)) detail = 0.0f;    // NaN: one octave
+            const float rough = std::max(at(k.roughness, k.roughness_n, i), 0.0f);
+            const float lac = at(k.lacunarity, k.lacunarity_n, i);
+            const float dist = at(k.distortion, k.distortion_n, i);
+            float q[3];
+            for (int a = 0; a < dims; ++a) q[a] = p[i * size_t(dims) + a] * scale;
+            if (dist != 0.0f) {
+                float shift[3], s[3];
+                for (int c = 0; c < dims; ++c) {
+                    for (int a = 0; a < dims; ++a) s[a] = q[a] + offsets[c][a];
+                    shift[c] = snoise(s, dims);
+                }
+                for (int a = 0; a < dims; ++a) q[a] = q[a] + shift[a] * dist;
+            }
+            const float value = fbm(q, nullptr, dims, detail, rough, lac, k.normalize);
+            fac[i] = value;
+            if (color) {
+                color[3 * i] = value;
+                color[3 * i + 1] = fbm(q, offsets[dims], dims, detail, rough, lac, k.normalize);
+                color[3 * i + 2] = fbm(q, offsets[dims + 1], dims, detail, rough, lac, k.normalize);
+            }
+        }
+    }, size_t(1) << 12);
+}
+
+}  // namespace dacrt

@@ -1,0 +1,24 @@
+// Perlin noise and its fractal sum as Cycles' Noise Texture computes them (kernel/svm/noise.h,
+// fractal_noise.h, noise_texture: lookup3 hash, fBM octaves, seeded offsets for distortion and
+// the colour's channels), for a renderer evaluating procedural textures at shading points.
+// Float32 arithmetic in Cycles' order (the build contracts no FMA): a renderer's numpy
+// reference of the same formulas gives the same bits.
+#pragma once
+
+#include <cstddef>
+
+namespace dacrt {
+
+// The Noise Texture (fBM) at n points p (n, dims) row-major, dims 2 or 3, each point's Vector.
+// Per-point parameters are arrays of length n, or of length 1 for one value for all (the
+// *_n arguments give each length). fac (n,) gets the Fac output; color (n, 3) row-major, when
+// not null, the Color output. Threaded.
+struct NoiseParams {
+    const float *scale, *detail, *roughness, *lacunarity, *distortion;
+    size_t scale_n, detail_n, roughness_n, lacunarity_n, distortion_n;
+    bool normalize;
+};
+
+void noise_texture(const float* p, size_t n, int dims, const NoiseParams& params, float* fac, float* color);
+
+}  // namespace dacrt

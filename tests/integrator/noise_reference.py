@@ -1,0 +1,177 @@
+"""A float32 numpy reference of Cycles' Noise Texture (kernel/svm/noise.h, fractal_noise.h,
+noise_texture), written from Cycles' formulas operation by operation, for the native kernel
+dacrt.shading.noise_texture to match bit for bit (tests/integrator/test_noise.py). Cycles itself
+is the reference of both in tests/parity/test_procedural.py."""
+import numpy as np
+
+F32 = np.float32
+U32 = np.uint32
+
+
+def _rot(x, k):
+    return (x << U32(k)) | (x >> U32(32 - k))
+
+
+def _final(a, b, c):
+    c ^= b; c -= _rot(b, 14)       # noqa: E702 (lookup3's final mix, line by line as Jenkins')
+    a ^= c; a -= _rot(c, 11)       # noqa: E702
+    b ^= a; b -= _rot(a, 25)       # noqa: E702
+    c ^= b; c -= _rot(b, 16)       # noqa: E702
+    a ^= c; a -= _rot(c, 4)        # noqa: E702
+    b ^= a; b -= _rot(a, 14)       # noqa: E702
+    c ^= b; c -= _rot(b, 24)       # noqa: E702
+    return c
+
+
+def hash_uint2(kx, ky):
+    with np.errstate(over='ignore'):
+        a = np.full(np.shape(kx), 0xdeadbeef + (2 << 2) + 13, U32)
+        b, c = a.copy(), a.copy()
+        b += ky.astype(U32)
+        a += kx.astype(U32)
+        return _final(a, b, c)
+
+
+def hash_uint3(kx, ky, kz):
+    with np.errstate(over='ignore'):
+        a = np.full(np.shape(kx), 0xdeadbeef + (3 << 2) + 13, U32)
+        b, c = a.copy(), a.copy()
+        c += kz.astype(U32)
+        b += ky.astype(U32)
+        a += kx.astype(U32)
+        return _final(a, b, c)
+
+
+def _hash_float2_to_float(x, y):
+    """Cycles' hash_float2_to_float of two scalars (their bit patterns hashed)."""
+    bits = np.array([x, y], F32).view(U32)
+    h = hash_uint2(bits[:1], bits[1:])[0]
+    return F32(h) / F32(0xFFFFFFFF)
+
+
+def random_offset(seed: float, dims: int) -> np.ndarray:
+    """Cycles' random_float3_offset / random_float2_offset: 100 + hash x 100 per axis."""
+    return np.array([F32(100.0) + _hash_float2_to_float(seed, float(k)) * F32(100.0) for k in range(dims)], F32)
+
+
+# --- Perlin noise ----------------------------------------------------------------------------------
+
+def _fade(t):
+    return t * t * t * (t * (t * F32(6.0) - F32(15.0)) + F32(10.0))
+
+
+def _negate_if(v, flag):
+    return np.where(flag != 0, -v, v)
+
+
+def _grad3(h, x, y, z):
+    h = h & U32(15)
+    u = np.where(h < 8, x, y)
+    vt = np.where((h == 12) | (h == 14), x, z)
+    v = np.where(h < 4, y, vt)
+    return _negate_if(u, h & U32(1)) + _negate_if(v, h & U32(2))
+
+
+def _grad2(h, x, y):
+    h = h & U32(7)
+    u = np.where(h < 4, x, y)
+    v = F32(2.0) * np.where(h < 4, y, x)
+    return _negate_if(u, h & U32(1)) + _negate_if(v, h & U32(2))
+
+
+def _floorfrac(x):
+    f = np.floor(x)
+    with np.errstate(invalid='ignore'):
+        i = np.where(np.isfinite(f), f, 0).astype(np.int64).astype(np.int32)
+    return x - f, i
+
+
+def perlin_3d(p):
+    """Cycles' perlin_3d of points p (n, 3) float32: unscaled, in about [-1, 1]."""
+    (fx, X), (fy, Y), (fz, Z) = (_floorfrac(p[:, k]) for k in range(3))
+    u, v, w = _fade(fx), _fade(fy), _fade(fz)
+    one = F32(1.0)
+    g = [_grad3(hash_uint3(X + i, Y + j, Z + k), fx - F32(i), fy - F32(j), fz - F32(k))
+         for k in (0, 1) for j in (0, 1) for i in (0, 1)]
+    x1, y1, z1 = one - u, one - v, one - w
+    return z1 * (y1 * (g[0] * x1 + g[1] * u) + v * (g[2] * x1 + g[3] * u)) + \
+        w * (y1 * (g[4] * x1 + g[5] * u) + v * (g[6] * x1 + g[7] * u))
+
+
+def perlin_2d(p):
+    """Cycles' perlin_2d of points p (n, 2) float32."""
+    (fx, X), (fy, Y) = (_floorfrac(p[:, k]) for k in range(2))
+    u, v = _fade(fx), _fade(fy)
+    g = [_grad2(hash_uint2(X + i, Y + j), fx - F32(i), fy - F32(j)) for j in (0, 1) for i in (0, 1)]
+    x1 = F32(1.0) - u
+    return (F32(1.0) - v) * (g[0] * x1 + g[1] * u) + v * (g[2] * x1 + g[3] * u)
+
+
+_NOISE_SCALE = {2: F32(0.6616), 3: F32(0.9820)}
+
+
+def snoise(p):
+    """Cycles' signed noise snoise_2d / snoise_3d (p (n, 2) or (n, 3)): scaled Perlin noise, 0
+    where it is not finite."""
+    d = p.shape[1]
+    r = perlin_3d(p) if d == 3 else perlin_2d(p)
+    r = np.where(np.isfinite(r), r, F32(0.0))
+    return _NOISE_SCALE[d] * r
+
+
+def noise_fbm(p, detail, roughness, lacunarity, normalize):
+    """Cycles' noise_fbm (fractal_noise.h) with per-point parameters (n,) or scalars."""
+    fscale, amp = F32(1.0), F32(1.0)
+    n = len(p)
+    detail = np.broadcast_to(np.asarray(detail, F32), (n,))
+    roughness = np.broadcast_to(np.asarray(roughness, F32), (n,))
+    lacunarity = np.broadcast_to(np.asarray(lacunarity, F32), (n,))
+    octaves = np.floor(detail).astype(np.int32)
+    fscale = np.ones(n, F32)
+    amp = np.ones(n, F32)
+    maxamp = np.zeros(n, F32)
+    total = np.zeros(n, F32)
+    for i in range(int(octaves.max(initial=0)) + 1):
+        on = i <= octaves
+        t = snoise(fscale[:, None] * p)
+        total = np.where(on, total + t * amp, total)
+        maxamp = np.where(on, maxamp + amp, maxamp)
+        amp = np.where(on, amp * roughness, amp)
+        fscale = np.where(on, fscale * lacunarity, fscale)
+    rmd = detail - np.floor(detail)
+    half = F32(0.5)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        if normalize:
+            whole = half * total / maxamp + half
+        else:
+            whole = total
+        if (rmd != 0).any():
+            t = snoise(fscale[:, None] * p)
+            total2 = total + t * amp
+            if normalize:
+                part = half * total2 / (maxamp + amp) + half
+                mixed = (F32(1.0) - rmd) * whole + rmd * part
+            else:
+                mixed = (F32(1.0) - rmd) * total + rmd * total2
+            whole = np.where(rmd != 0, mixed, whole)
+    return whole
+
+
+def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color):
+    """The Noise Texture node (FBM type) at points co (n, 3): (Fac (n,), Color (n, 3) or None).
+    dims 2 reads co's x and y. Parameters are (n,) arrays or scalars."""
+    n = len(co)
+    p = (co[:, :dims] * np.asarray(scale, F32).reshape(-1, 1)).astype(F32)
+    detail = np.clip(np.asarray(detail, F32), F32(0.0), F32(15.0))
+    roughness = np.maximum(np.asarray(roughness, F32), F32(0.0))
+    distortion = np.broadcast_to(np.asarray(distortion, F32), (n,))
+    if (distortion != 0).any():
+        shift = np.stack([snoise(p + random_offset(float(k), dims)) for k in range(dims)], axis=1)
+        p = np.where((distortion != 0)[:, None], p + shift * distortion[:, None], p)
+    value = noise_fbm(p, detail, roughness, lacunarity, normalize)
+    if not want_color:
+        return value, None
+    # the colour's other channels: the noise at offsets of the seeds after distortion's
+    color = np.stack([value] + [noise_fbm(p + random_offset(float(k), dims), detail, roughness, lacunarity,
+                                          normalize) for k in (dims, dims + 1)], axis=1)
+    return value, color
