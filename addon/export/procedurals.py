@@ -1,7 +1,7 @@
 """Colour chains that read procedural textures (Noise, Checker, Gradient): compiled into a
 function of the shading point's texture coordinates (procedural.ProceduralTexels), which the
-integrator evaluates at every hit, as Cycles' SVM does. The chain may hold the colour and float
-nodes nodeeval computes, RGB and Value nodes, Mapping nodes and Texture Coordinate's
+integrator evaluates at every hit, as Cycles' SVM does. Voronoi (F1)
+as well. The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping nodes and Texture Coordinate's
 Generated, Object and UV outputs (an unlinked Vector: Generated, as in Cycles); texture inputs
 (Scale, Detail, ...) may themselves vary over the surface. Anything else (an image, an
 attribute, another texture or coordinate kind) leaves the chain to nodeeval's evaluation, which
@@ -17,9 +17,11 @@ from .. import nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine
 
-PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT'})
+PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
+_VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
+_VORONOI_OUTPUTS = {'Distance': 0, 'Color': 1, 'Position': 2}
 
 
 class _Chain:
@@ -123,7 +125,8 @@ def _node(node, out, chain, depth):
 
 
 def _texture(node, out, chain, depth):
-    """(fn, False): a procedural texture's Fac (n, 1) or Color (n, 3)."""
+    """(fn, vector): a procedural texture's output, a float (n, 1) or a colour or vector
+    (n, 3); vector: a Voronoi Position."""
     t = node.type
     vec = _vector(node, chain, depth)
     chain.textures.append(node.bl_label)
@@ -150,9 +153,30 @@ def _texture(node, out, chain, depth):
             f = pr.checker(vec(c), scale(c))[:, None]
             return f if fac else np.where(f == 1.0, c1(c), c2(c))
         return checker, False
+    if t == 'TEX_VORONOI':
+        return _voronoi(node, out, vec, chain, depth)
     kind = node.gradient_type
 
     def gradient(c):
         f = pr.gradient(vec(c), kind)[:, None]
         return f if fac else np.repeat(f, 3, axis=1)
     return gradient, False
+
+
+def _voronoi(node, out, vec, chain, depth):
+    """(fn, vector) of a Voronoi Texture's Distance, Color or Position: F1 of one octave (Cycles
+    takes one when Detail or Roughness is 0), 2D or 3D, Euclidean, Manhattan or Chebychev."""
+    dims = _NOISE_DIMENSIONS.get(node.voronoi_dimensions)
+    which = _VORONOI_OUTPUTS.get(out.identifier)
+    one_octave = any(nodeeval.constant_value(nodegraph.input_by_id(node, k)) == (0.0, True)
+                     for k in ('Detail', 'Roughness'))
+    if dims is None or which is None or node.feature != 'F1' or node.distance not in _VORONOI_METRICS \
+            or not one_octave:
+        raise nodeeval.NotCompiled(f"Voronoi {node.feature} {node.distance} {node.voronoi_dimensions}")
+    scale, randomness = _float(node, 'Scale', chain, depth), _float(node, 'Randomness', chain, depth)
+    metric, normalize = node.distance, bool(node.normalize)
+
+    def voronoi(c):
+        outputs = pr.voronoi_f1(vec(c), scale(c), randomness(c), metric, dims, normalize)
+        return outputs[0][:, None] if which == 0 else outputs[which]
+    return voronoi, which == 2

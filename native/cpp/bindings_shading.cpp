@@ -13,6 +13,7 @@
 #include "bindargs.h"
 #include "noise.h"
 #include "shading.h"
+#include "voronoi.h"
 
 namespace py = pybind11;
 using namespace dacrt;
@@ -552,6 +553,23 @@ py::tuple noise_texture_py(F32Array points, F32Array scale, F32Array detail, F32
     return py::make_tuple(fac, col);
 }
 
+py::tuple voronoi_f1_py(F32Array points, F32Array randomness, int metric) {
+    if (points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3))
+        throw py::value_error("points must have shape (n, 2) or (n, 3), got " + shape_str(points));
+    if (metric < VORONOI_EUCLIDEAN || metric > VORONOI_CHEBYCHEV)
+        throw py::value_error("metric must be 0 (Euclidean), 1 (Manhattan) or 2 (Chebychev), got " +
+                              std::to_string(metric));
+    const size_t n = size_t(points.shape(0));
+    const size_t rn = param_len(randomness, n, "randomness");
+    F32Array dist{py::ssize_t(n)}, color({py::ssize_t(n), py::ssize_t(3)}), position({py::ssize_t(n), py::ssize_t(3)});
+    {
+        py::gil_scoped_release nogil;
+        voronoi_f1(points.data(), n, int(points.shape(1)), randomness.data(), rn, metric, dist.mutable_data(),
+                   color.mutable_data(), position.mutable_data());
+    }
+    return py::make_tuple(dist, color, position);
+}
+
 }  // namespace
 
 void register_shading(py::module_& m) {
@@ -590,4 +608,5 @@ void register_shading(py::module_& m) {
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
     m.def("noise_texture", &noise_texture_py, py::arg("points"), py::arg("scale"), py::arg("detail"),
           py::arg("roughness"), py::arg("lacunarity"), py::arg("distortion"), py::arg("normalize"), py::arg("color"));
+    m.def("voronoi_f1", &voronoi_f1_py, py::arg("points"), py::arg("randomness"), py::arg("metric"));
 }

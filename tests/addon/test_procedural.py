@@ -85,3 +85,33 @@ def test_mirrored_instances_keep_object_coordinates_per_corner(scene, exported):
     tx = np.where(sx > 0, 0.0, 3.0)
     np.testing.assert_allclose(world[..., 0], sx * obj[..., 0] + tx, atol=1e-5)
     np.testing.assert_allclose(world[..., 1:], obj[..., 1:], atol=1e-5)
+
+
+def _voronoi_material(name, **settings):
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    v = nt.nodes.new('ShaderNodeTexVoronoi')
+    for k, value in settings.items():
+        if k in v.inputs:
+            v.inputs[k].default_value = value
+        else:
+            setattr(v, k, value)
+    nt.links.new(v.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_voronoi_of_one_octave_is_evaluated_and_other_features_are_reported(scene, exported):
+    """Voronoi F1 with Detail 0 (or Roughness 0: Cycles then takes one octave too) is evaluated
+    per point; fractal octaves, F2 and Minkowski keep the node's own value, said."""
+    scenes.camera()
+    cases = {"F1": {}, "OneOctave": {'Detail': 3.0, 'Roughness': 0.0}, "Fractal": {'Detail': 2.0},
+             "F2": {'feature': 'F2'}, "Minkowski": {'distance': 'MINKOWSKI'}}
+    for i, (name, settings) in enumerate(cases.items()):
+        scenes.cube(name, location=(3 * i, 0, 0), materials=(_voronoi_material(name, **settings),))
+    data = exported()
+    for name in cases:
+        m = _material(data, name)
+        supported = name in ("F1", "OneOctave")
+        assert isinstance(m.texture, ProceduralTexels) == supported, name
+        assert ("Voronoi Texture" in m.approximated) != supported, (name, m.approximated)
