@@ -51,13 +51,16 @@ class ProceduralTexels:
         return self.evaluate({k: p for k in self.needs}).mean(axis=1).astype(np.float64)
 
 
-def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color):
-    """The Noise Texture node (FBM type) at points co (n, 3): (Fac (n,), Color (n, 3) or None).
-    dims 2 reads co's x and y. Parameters are (n,) arrays or scalars. Cycles' Perlin noise and
-    fBM in the native kernel (dacrt.shading.noise_texture: one threaded pass, ~16x numpy's
-    per-operation passes), which tests/integrator/noise_reference.py checks bit for bit."""
+def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color, kind='FBM',
+                  offset=0.0, gain=1.0):
+    """The Noise Texture node at points co (n, 3): (Fac (n,), Color (n, 3) or None). dims 2
+    reads co's x and y; kind: its type (fBM or a multifractal, which read offset and gain).
+    Parameters are (n,) arrays or scalars. Cycles' Perlin noise and its fractal sums in the
+    native kernel (dacrt.shading.noise_texture: one threaded pass, ~16x numpy's per-operation
+    passes), which tests/integrator/noise_reference.py checks bit for bit."""
     co = np.ascontiguousarray(np.asarray(co, F32)[:, :dims])
-    return dacrt.shading.noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, want_color)
+    return dacrt.shading.noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, want_color,
+                                       kind, offset, gain)
 
 
 def voronoi_f1(co, scale, randomness, metric, dims, normalize):

@@ -28,7 +28,7 @@ Materials (what a diffuse renderer can represent exactly):
 - transparency: the Transparent BSDF (its colour) and the Principled BSDF's Alpha (constant, or
   an Image Texture's Alpha output), and a Mix Shader between a Transparent BSDF and another
   shader whose factor is an Image Texture's Alpha (cut-outs);
-- Noise (fBM, 2D, 3D), Voronoi (F1, one octave), Checker and Gradient textures into a diffuse
+- Noise (2D, 3D, every type), Voronoi (F1, one octave), Checker and Gradient textures into a diffuse
   colour, with the colour,
   float and Mapping nodes around them, compiled into a function of the Generated, Object and UV
   coordinates evaluated per shading point (procedurals.py; Geometry.coords per corner);

@@ -133,15 +133,17 @@ def _texture(node, out, chain, depth):
     fac = out.identifier == 'Fac'
     if t == 'TEX_NOISE':
         dims = _NOISE_DIMENSIONS.get(node.noise_dimensions)
-        if dims is None or getattr(node, 'noise_type', 'FBM') != 'FBM':
-            raise nodeeval.NotCompiled(f"{node.noise_dimensions} {getattr(node, 'noise_type', '')} noise")
+        kind = getattr(node, 'noise_type', 'FBM')
+        if dims is None:
+            raise nodeeval.NotCompiled(f"{node.noise_dimensions} noise")
         params = [_float(node, k, chain, depth) for k in ('Scale', 'Detail', 'Roughness', 'Lacunarity',
-                                                          'Distortion')]
+                                                          'Distortion', 'Offset', 'Gain')]
         normalize = bool(node.normalize)
 
         def noise(c):
-            scale, detail, rough, lac, dist = (p(c) for p in params)
-            value, color = pr.noise_texture(vec(c), scale, detail, rough, lac, dist, normalize, dims, not fac)
+            scale, detail, rough, lac, dist, offset, gain = (p(c) for p in params)
+            value, color = pr.noise_texture(vec(c), scale, detail, rough, lac, dist, normalize, dims, not fac, kind,
+                                            offset, gain)
             return value[:, None] if fac else color
         return noise, False
     if t == 'TEX_CHECKER':

@@ -530,14 +530,20 @@ size_t param_len(const F32Array& a, size_t n, const char* name) {
 }
 
 py::tuple noise_texture_py(F32Array points, F32Array scale, F32Array detail, F32Array roughness,
-                           F32Array lacunarity, F32Array distortion, bool normalize, bool color) {
+                           F32Array lacunarity, F32Array distortion, bool normalize, bool color, int type,
+                           F32Array offset, F32Array gain) {
     if (points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3))
         throw py::value_error("points must have shape (n, 2) or (n, 3), got " + shape_str(points));
+    if (type < NOISE_FBM || type > NOISE_HETERO_TERRAIN)
+        throw py::value_error("type must be 0..4 (fBM, multifractal, hybrid, ridged, hetero terrain), got " +
+                              std::to_string(type));
     const size_t n = size_t(points.shape(0));
     const int dims = int(points.shape(1));
-    NoiseParams k{scale.data(), detail.data(), roughness.data(), lacunarity.data(), distortion.data(),
-                  param_len(scale, n, "scale"), param_len(detail, n, "detail"), param_len(roughness, n, "roughness"),
-                  param_len(lacunarity, n, "lacunarity"), param_len(distortion, n, "distortion"), normalize};
+    NoiseParams k{scale.data(), detail.data(), roughness.data(), lacunarity.data(), distortion.data(), offset.data(),
+                  gain.data(), param_len(scale, n, "scale"), param_len(detail, n, "detail"),
+                  param_len(roughness, n, "roughness"), param_len(lacunarity, n, "lacunarity"),
+                  param_len(distortion, n, "distortion"), param_len(offset, n, "offset"), param_len(gain, n, "gain"),
+                  normalize, type};
     F32Array fac{py::ssize_t(n)};
     py::object col = py::none();
     float* c = nullptr;
@@ -607,6 +613,7 @@ void register_shading(py::module_& m) {
     m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
     m.def("noise_texture", &noise_texture_py, py::arg("points"), py::arg("scale"), py::arg("detail"),
-          py::arg("roughness"), py::arg("lacunarity"), py::arg("distortion"), py::arg("normalize"), py::arg("color"));
+          py::arg("roughness"), py::arg("lacunarity"), py::arg("distortion"), py::arg("normalize"), py::arg("color"),
+          py::arg("type"), py::arg("offset"), py::arg("gain"));
     m.def("voronoi_f1", &voronoi_f1_py, py::arg("points"), py::arg("randomness"), py::arg("metric"));
 }

@@ -140,6 +140,98 @@ float fbm(const float* p, const float* off, int dims, float detail, float roughn
     return (1.0f - rmd) * sum + rmd * sum2;
 }
 
+// The multifractals of fractal_noise.h: the point itself scaled by the lacunarity each octave
+// (p *= lacunarity, not fBM's running fscale x p: other roundings, as in Cycles).
+inline void scale_point(float* p, int dims, float lacunarity) {
+    for (int a = 0; a < dims; ++a) p[a] = p[a] * lacunarity;
+}
+
+float multi_fractal(float* p, int dims, float detail, float roughness, float lacunarity) {
+    float value = 1.0f, pwr = 1.0f;
+    const int octaves = int(std::floor(detail));
+    for (int i = 0; i <= octaves; ++i) {
+        value = value * (pwr * snoise(p, dims) + 1.0f);
+        pwr = pwr * roughness;
+        scale_point(p, dims, lacunarity);
+    }
+    const float rmd = detail - std::floor(detail);
+    if (rmd != 0.0f) value = value * (rmd * pwr * snoise(p, dims) + 1.0f);
+    return value;
+}
+
+float hetero_terrain(float* p, int dims, float detail, float roughness, float lacunarity, float offset) {
+    float pwr = roughness;
+    float value = offset + snoise(p, dims);
+    scale_point(p, dims, lacunarity);
+    const int octaves = int(std::floor(detail));
+    for (int i = 1; i <= octaves; ++i) {
+        const float increment = (snoise(p, dims) + offset) * pwr * value;
+        value = value + increment;
+        pwr = pwr * roughness;
+        scale_point(p, dims, lacunarity);
+    }
+    const float rmd = detail - std::floor(detail);
+    if (rmd != 0.0f) {
+        const float increment = (snoise(p, dims) + offset) * pwr * value;
+        value = value + rmd * increment;
+    }
+    return value;
+}
+
+float hybrid_multi_fractal(float* p, int dims, float detail, float roughness, float lacunarity, float offset,
+                           float gain) {
+    float pwr = 1.0f, value = 0.0f, weight = 1.0f;
+    const int octaves = int(std::floor(detail));
+    for (int i = 0; (weight > 0.001f) && (i <= octaves); ++i) {
+        weight = std::fmin(weight, 1.0f);
+        const float signal = (snoise(p, dims) + offset) * pwr;
+        pwr = pwr * roughness;
+        value = value + weight * signal;
+        weight = weight * (gain * signal);
+        scale_point(p, dims, lacunarity);
+    }
+    const float rmd = detail - std::floor(detail);
+    if ((rmd != 0.0f) && (weight > 0.001f)) {
+        weight = std::fmin(weight, 1.0f);
+        const float signal = (snoise(p, dims) + offset) * pwr;
+        value = value + rmd * weight * signal;
+    }
+    return value;
+}
+
+float ridged_multi_fractal(float* p, int dims, float detail, float roughness, float lacunarity, float offset,
+                           float gain) {
+    float pwr = roughness;
+    float signal = offset - std::fabs(snoise(p, dims));
+    signal = signal * signal;
+    float value = signal, weight = 1.0f;
+    const int octaves = int(std::floor(detail));
+    for (int i = 1; i <= octaves; ++i) {
+        scale_point(p, dims, lacunarity);
+        weight = std::min(std::max(signal * gain, 0.0f), 1.0f);
+        signal = offset - std::fabs(snoise(p, dims));
+        signal = signal * signal;
+        signal = signal * weight;
+        value = value + signal * pwr;
+        pwr = pwr * roughness;
+    }
+    return value;
+}
+
+// Cycles' noise_select: the texture's type at point p (dims), offset by off (dims) first.
+float noise_select(const float* p, const float* off, int dims, int type, float detail, float roughness,
+                   float lacunarity, float offset, float gain, bool normalize) {
+    if (type == NOISE_FBM) return fbm(p, off, dims, detail, roughness, lacunarity, normalize);
+    float q[3];
+    for (int a = 0; a < dims; ++a) q[a] = off ? p[a] + off[a] : p[a];
+    switch (type) {
+        case NOISE_MULTIFRACTAL: return multi_fractal(q, dims, detail, roughness, lacunarity);
+        case NOISE_HYBRID_MULTIFRACTAL: return hybrid_multi_fractal(q, dims, detail, roughness, lacunarity, offset, gain);
+        case NOISE_RIDGED_MULTIFRACTAL: return ridged_multi_fractal(q, dims, detail, roughness, lacunarity, offset, gain);
+        default: return hetero_terrain(q, dims, detail, roughness, lacunarity, offset);
+    }
+}
+
 inline float at(const float* a, size_t count, size_t i) { return a[count == 1 ? 0 : i]; }
 
 }  // namespace
@@ -166,12 +258,14 @@ void noise_texture(const float* p, size_t n, int dims, const NoiseParams& k, flo
                 }
                 for (int a = 0; a < dims; ++a) q[a] = q[a] + shift[a] * dist;
             }
-            const float value = fbm(q, nullptr, dims, detail, rough, lac, k.normalize);
+            const float offset = at(k.offset, k.offset_n, i), gain = at(k.gain, k.gain_n, i);
+            const float value = noise_select(q, nullptr, dims, k.type, detail, rough, lac, offset, gain, k.normalize);
             fac[i] = value;
             if (color) {
                 color[3 * i] = value;
-                color[3 * i + 1] = fbm(q, offsets[dims], dims, detail, rough, lac, k.normalize);
-                color[3 * i + 2] = fbm(q, offsets[dims + 1], dims, detail, rough, lac, k.normalize);
+                for (int c = 1; c < 3; ++c)
+                    color[3 * i + c] = noise_select(q, offsets[dims + c - 1], dims, k.type, detail, rough, lac, offset,
+                                                    gain, k.normalize);
             }
         }
     }, size_t(1) << 12);

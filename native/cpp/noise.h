@@ -9,14 +9,19 @@
 
 namespace dacrt {
 
-// The Noise Texture (fBM) at n points p (n, dims) row-major, dims 2 or 3, each point's Vector.
+// The Noise Texture (its five types: fBM and the multifractals, Offset and Gain where they read
+// them) at n points p (n, dims) row-major, dims 2 or 3, each point's Vector.
 // Per-point parameters are arrays of length n, or of length 1 for one value for all (the
 // *_n arguments give each length). fac (n,) gets the Fac output; color (n, 3) row-major, when
 // not null, the Color output. Threaded.
+enum NoiseType { NOISE_FBM = 0, NOISE_MULTIFRACTAL = 1, NOISE_HYBRID_MULTIFRACTAL = 2,
+                 NOISE_RIDGED_MULTIFRACTAL = 3, NOISE_HETERO_TERRAIN = 4 };
+
 struct NoiseParams {
-    const float *scale, *detail, *roughness, *lacunarity, *distortion;
-    size_t scale_n, detail_n, roughness_n, lacunarity_n, distortion_n;
-    bool normalize;
+    const float *scale, *detail, *roughness, *lacunarity, *distortion, *offset, *gain;
+    size_t scale_n, detail_n, roughness_n, lacunarity_n, distortion_n, offset_n, gain_n;
+    bool normalize;     // (fBM only, as Cycles)
+    int type;           // NoiseType
 };
 
 void noise_texture(const float* p, size_t n, int dims, const NoiseParams& params, float* fac, float* color);

@@ -37,11 +37,14 @@ def test_noise_chain_is_a_procedural_texture(scene, exported):
 
 
 def test_unsupported_noise_keeps_its_own_value_and_says_so(scene, exported):
+    """1D and 4D noise keep the node's own value, said; every noise type of 2D and 3D is read."""
     scenes.camera()
     scenes.cube("Cube", materials=(_noise_material("Ridged", noise_type='RIDGED_MULTIFRACTAL'),))
     scenes.cube("Cube2", location=(3, 0, 0), materials=(_noise_material("FourD", dimensions='4D'),))
+    scenes.cube("Cube3", location=(6, 0, 0), materials=(_noise_material("OneD", dimensions='1D'),))
     data = exported()
-    for name in ("Ridged", "FourD"):
+    assert isinstance(_material(data, "Ridged").texture, ProceduralTexels)
+    for name in ("FourD", "OneD"):
         m = _material(data, name)
         assert not isinstance(m.texture, ProceduralTexels)
         assert "Noise Texture" in m.approximated, (name, m.approximated)

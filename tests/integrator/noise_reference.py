@@ -157,7 +157,105 @@ def noise_fbm(p, detail, roughness, lacunarity, normalize):
     return whole
 
 
-def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color):
+def _octaves(detail, n):
+    detail = np.broadcast_to(np.asarray(detail, F32), (n,))
+    return detail, np.floor(detail).astype(np.int32), detail - np.floor(detail)
+
+
+def multi_fractal(p, detail, roughness, lacunarity):
+    """Cycles' noise_multi_fractal (the point scaled in place each octave)."""
+    n = len(p)
+    detail, octaves, rmd = _octaves(detail, n)
+    rough = np.broadcast_to(np.asarray(roughness, F32), (n,))
+    lac = np.broadcast_to(np.asarray(lacunarity, F32), (n,))[:, None]
+    value, pwr, p = np.ones(n, F32), np.ones(n, F32), p.copy()
+    for i in range(int(octaves.max(initial=0)) + 1):
+        on = i <= octaves
+        value = np.where(on, value * (pwr * snoise(p) + F32(1.0)), value)
+        pwr = np.where(on, pwr * rough, pwr)
+        p = np.where(on[:, None], p * lac, p)
+    return np.where(rmd != 0, value * (rmd * pwr * snoise(p) + F32(1.0)), value)
+
+
+def hetero_terrain(p, detail, roughness, lacunarity, offset):
+    n = len(p)
+    detail, octaves, rmd = _octaves(detail, n)
+    rough = np.broadcast_to(np.asarray(roughness, F32), (n,))
+    lac = np.broadcast_to(np.asarray(lacunarity, F32), (n,))[:, None]
+    off = np.broadcast_to(np.asarray(offset, F32), (n,))
+    pwr = rough.copy()
+    value = off + snoise(p)
+    p = p * lac
+    for i in range(1, int(octaves.max(initial=0)) + 1):
+        on = i <= octaves
+        increment = (snoise(p) + off) * pwr * value
+        value = np.where(on, value + increment, value)
+        pwr = np.where(on, pwr * rough, pwr)
+        p = np.where(on[:, None], p * lac, p)
+    increment = (snoise(p) + off) * pwr * value
+    return np.where(rmd != 0, value + rmd * increment, value)
+
+
+def hybrid_multi_fractal(p, detail, roughness, lacunarity, offset, gain):
+    n = len(p)
+    detail, octaves, rmd = _octaves(detail, n)
+    rough = np.broadcast_to(np.asarray(roughness, F32), (n,))
+    lac = np.broadcast_to(np.asarray(lacunarity, F32), (n,))[:, None]
+    off = np.broadcast_to(np.asarray(offset, F32), (n,))
+    g = np.broadcast_to(np.asarray(gain, F32), (n,))
+    pwr, value, weight, p = np.ones(n, F32), np.zeros(n, F32), np.ones(n, F32), p.copy()
+    for i in range(int(octaves.max(initial=0)) + 1):
+        on = (weight > F32(0.001)) & (i <= octaves)
+        w = np.fmin(weight, F32(1.0))
+        signal = (snoise(p) + off) * pwr
+        pwr = np.where(on, pwr * rough, pwr)
+        value = np.where(on, value + w * signal, value)
+        weight = np.where(on, w * (g * signal), weight)
+        p = np.where(on[:, None], p * lac, p)
+    last = (rmd != 0) & (weight > F32(0.001))
+    w = np.fmin(weight, F32(1.0))
+    signal = (snoise(p) + off) * pwr
+    return np.where(last, value + rmd * w * signal, value)
+
+
+def ridged_multi_fractal(p, detail, roughness, lacunarity, offset, gain):
+    n = len(p)
+    detail, octaves, _ = _octaves(detail, n)
+    rough = np.broadcast_to(np.asarray(roughness, F32), (n,))
+    lac = np.broadcast_to(np.asarray(lacunarity, F32), (n,))[:, None]
+    off = np.broadcast_to(np.asarray(offset, F32), (n,))
+    g = np.broadcast_to(np.asarray(gain, F32), (n,))
+    pwr = rough.copy()
+    signal = off - np.abs(snoise(p))
+    signal = signal * signal
+    value = signal.copy()
+    for i in range(1, int(octaves.max(initial=0)) + 1):
+        on = i <= octaves
+        p = np.where(on[:, None], p * lac, p)
+        weight = np.clip(signal * g, F32(0.0), F32(1.0))
+        s = off - np.abs(snoise(p))
+        s = s * s
+        s = s * weight
+        signal = np.where(on, s, signal)
+        value = np.where(on, value + s * pwr, value)
+        pwr = np.where(on, pwr * rough, pwr)
+    return value
+
+
+def noise_select(p, kind, detail, roughness, lacunarity, offset, gain, normalize):
+    if kind == 'FBM':
+        return noise_fbm(p, detail, roughness, lacunarity, normalize)
+    if kind == 'MULTIFRACTAL':
+        return multi_fractal(p, detail, roughness, lacunarity)
+    if kind == 'HETERO_TERRAIN':
+        return hetero_terrain(p, detail, roughness, lacunarity, offset)
+    if kind == 'HYBRID_MULTIFRACTAL':
+        return hybrid_multi_fractal(p, detail, roughness, lacunarity, offset, gain)
+    return ridged_multi_fractal(p, detail, roughness, lacunarity, offset, gain)
+
+
+def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color, kind='FBM',
+                  offset=0.0, gain=1.0):
     """The Noise Texture node (FBM type) at points co (n, 3): (Fac (n,), Color (n, 3) or None).
     dims 2 reads co's x and y. Parameters are (n,) arrays or scalars."""
     n = len(co)
@@ -168,10 +266,10 @@ def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normaliz
     if (distortion != 0).any():
         shift = np.stack([snoise(p + random_offset(float(k), dims)) for k in range(dims)], axis=1)
         p = np.where((distortion != 0)[:, None], p + shift * distortion[:, None], p)
-    value = noise_fbm(p, detail, roughness, lacunarity, normalize)
+    value = noise_select(p, kind, detail, roughness, lacunarity, offset, gain, normalize)
     if not want_color:
         return value, None
     # the colour's other channels: the noise at offsets of the seeds after distortion's
-    color = np.stack([value] + [noise_fbm(p + random_offset(float(k), dims), detail, roughness, lacunarity,
-                                          normalize) for k in (dims, dims + 1)], axis=1)
+    color = np.stack([value] + [noise_select(p + random_offset(float(k), dims), kind, detail, roughness, lacunarity,
+                                             offset, gain, normalize) for k in (dims, dims + 1)], axis=1)
     return value, color

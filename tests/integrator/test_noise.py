@@ -34,6 +34,26 @@ def test_native_noise_matches_the_reference_bit_for_bit(case, dims):
     assert c2 is None and np.array_equal(f2, f1)
 
 
+@pytest.mark.parametrize('kind', ['MULTIFRACTAL', 'HYBRID_MULTIFRACTAL', 'RIDGED_MULTIFRACTAL', 'HETERO_TERRAIN'])
+@pytest.mark.parametrize('dims', [2, 3])
+def test_multifractals_match_the_reference_bit_for_bit(kind, dims):
+    rng = np.random.default_rng(dims + len(kind))
+    n = 20000
+    p = ((rng.random((n, 3)) - 0.5) * 20).astype(np.float32)
+    # per point: Detail (whole on some: no fractional octave), Roughness, Lacunarity, Offset, Gain
+    detail = rng.uniform(0, 6, n).astype(np.float32)
+    detail[::5] = np.floor(detail[::5])
+    rough, lac = rng.uniform(0, 1, n).astype(np.float32), rng.uniform(1.5, 3, n).astype(np.float32)
+    offset, gain = rng.uniform(-0.5, 1.5, n).astype(np.float32), rng.uniform(0, 3, n).astype(np.float32)
+    for normalize in (True, False):                 # (read by fBM only)
+        f0, c0 = ref.noise_texture(p, 3.0, detail, rough, lac, 0.3, normalize, dims, True, kind, offset, gain)
+        f1, c1 = dacrt.shading.noise_texture(p[:, :dims], 3.0, detail, rough, lac, 0.3, normalize, True, kind,
+                                             offset, gain)
+        np.testing.assert_array_equal(f1, f0)
+        np.testing.assert_array_equal(c1, c0)
+    assert np.ptp(f1) > 0.3
+
+
 def test_per_point_parameters_are_each_points_own():
     rng = np.random.default_rng(9)
     n = 5000
@@ -59,5 +79,7 @@ def test_non_finite_points_and_detail_stay_finite():
 def test_bad_shapes_are_refused():
     with pytest.raises(ValueError, match="points must have shape"):
         dacrt.shading.noise_texture(np.zeros((4, 4), np.float32), 1.0, 2.0, 0.5, 2.0, 0.0, True, False)
+    with pytest.raises(ValueError, match="kind must be one of"):
+        dacrt.shading.noise_texture(np.zeros((4, 3), np.float32), 1.0, 2.0, 0.5, 2.0, 0.0, True, False, 'PERLIN')
     with pytest.raises(ValueError, match="scale must have shape"):
         dacrt.shading.noise_texture(np.zeros((4, 3), np.float32), np.ones(3), 2.0, 0.5, 2.0, 0.0, True, False)

@@ -60,12 +60,19 @@ def _centres():
     return np.stack([X.ravel(), Y.ravel(), np.zeros(W * W)], axis=1).astype(np.float32)
 
 
+def _own(node, identifier):
+    """An input's value, also when unavailable (Offset and Gain of an fBM noise: by name, Blender
+    finds available inputs only)."""
+    return float(next(s for s in node.inputs if s.identifier == identifier).default_value)
+
+
 def _noise(tex, p, output):
     g = {k: float(tex.inputs[k].default_value) for k in ('Scale', 'Detail', 'Roughness', 'Lacunarity',
                                                          'Distortion')}
     dims = int(tex.noise_dimensions[0])
     f, c = pr.noise_texture(p, g['Scale'], g['Detail'], g['Roughness'], g['Lacunarity'], g['Distortion'],
-                            tex.normalize, dims, output == 'Color')
+                            tex.normalize, dims, output == 'Color', tex.noise_type,
+                            _own(tex, 'Offset'), _own(tex, 'Gain'))
     return c if output == 'Color' else np.repeat(f[:, None], 3, axis=1)
 
 
@@ -78,6 +85,13 @@ POINTWISE = {
     'noise_2d_distorted': ('ShaderNodeTexNoise', 'Color', {'noise_dimensions': '2D', 'Distortion': 2.0}),
     'noise_not_normalized': ('ShaderNodeTexNoise', 'Fac', {'normalize': False, 'Detail': 2.5}),
     'checker': ('ShaderNodeTexChecker', 'Fac', {'Scale': 3.0}),
+    'multifractal': ('ShaderNodeTexNoise', 'Fac', {'noise_type': 'MULTIFRACTAL', 'Detail': 3.5}),
+    'ridged_color': ('ShaderNodeTexNoise', 'Color', {'noise_type': 'RIDGED_MULTIFRACTAL', 'Offset': 1.0,
+                                                     'Gain': 2.0}),
+    'hybrid_2d': ('ShaderNodeTexNoise', 'Fac', {'noise_type': 'HYBRID_MULTIFRACTAL', 'noise_dimensions': '2D',
+                                                'Offset': 0.5, 'Gain': 1.5, 'Detail': 2.5}),
+    'hetero_terrain_distorted': ('ShaderNodeTexNoise', 'Fac', {'noise_type': 'HETERO_TERRAIN', 'Offset': 0.3,
+                                                               'Distortion': 0.5, 'Detail': 1.5}),
 }
 for _name, _out, _settings in (
         ('voronoi_distance', 'Distance', {'Scale': 3.0}),

@@ -452,15 +452,26 @@ def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None, surface=None, t
     return idx, thr_out, black, rr, points, prim, _refill(take, taken)
 
 
-def noise_texture(points, scale, detail, roughness, lacunarity, distortion, normalize: bool, color: bool):
-    """Cycles' Noise Texture (fBM) at points (n, 2) or (n, 3): (fac (n,), colour (n, 3) or
-    None). Parameters: one value, or one per point (n,). Perlin noise on Bob Jenkins' lookup3
-    hash, octaves summed as Cycles' noise_fbm (the fractional octave mixed in), the colour's
-    other channels at Cycles' seeded offsets; float32 in Cycles' order. One threaded pass."""
+NOISE_TYPES = {'FBM': 0, 'MULTIFRACTAL': 1, 'HYBRID_MULTIFRACTAL': 2, 'RIDGED_MULTIFRACTAL': 3,
+               'HETERO_TERRAIN': 4}
+
+
+def noise_texture(points, scale, detail, roughness, lacunarity, distortion, normalize: bool, color: bool,
+                  kind: str = 'FBM', offset=0.0, gain=1.0):
+    """Cycles' Noise Texture at points (n, 2) or (n, 3): (fac (n,), colour (n, 3) or None).
+    Parameters: one value, or one per point (n,). Perlin noise on Bob Jenkins' lookup3 hash,
+    octaves summed as Cycles' noise_fbm (the fractional octave mixed in; normalize: fBM only)
+    or its multifractals (kind, a NOISE_TYPES name, reading offset and gain where Cycles does),
+    the colour's other channels at Cycles' seeded offsets; float32 in Cycles' order. One
+    threaded pass."""
+    if kind not in NOISE_TYPES:
+        raise ValueError(f"kind must be one of {', '.join(NOISE_TYPES)}, got {kind!r}")
+
     def param(v):
         return np.ascontiguousarray(np.atleast_1d(np.asarray(v, _F32)).reshape(-1))
     return _core.noise_texture(np.ascontiguousarray(points, _F32), param(scale), param(detail), param(roughness),
-                               param(lacunarity), param(distortion), bool(normalize), bool(color))
+                               param(lacunarity), param(distortion), bool(normalize), bool(color),
+                               NOISE_TYPES[kind], param(offset), param(gain))
 
 
 VORONOI_METRICS = {'EUCLIDEAN': 0, 'MANHATTAN': 1, 'CHEBYCHEV': 2}
