@@ -1,5 +1,5 @@
 """Procedural textures evaluated at shading points, as Cycles' SVM computes them: Checker
-(svm_checker), Gradient (svm_gradient) in numpy and Noise (kernel/svm/noise.h, fractal_noise.h, noise_texture:
+(svm_checker), Gradient (svm_gradient), Wave (svm_wave) in numpy and Noise (kernel/svm/noise.h, fractal_noise.h, noise_texture:
 Perlin noise on Bob Jenkins' lookup3 hash, fBM octaves) in the native kernel; float32, the
 precision Cycles computes in, so a pattern's edges fall where Cycles puts them.
 
@@ -89,6 +89,40 @@ def voronoi_f1(co, scale, randomness, metric, dims, normalize):
     with np.errstate(divide='ignore', invalid='ignore'):
         position[:, :dims] = np.where(scale != 0, position[:, :dims] / scale, F32(0.0))
     return d, color, position
+
+
+_BANDS = {'X': (1, 0, 0), 'Y': (0, 1, 0), 'Z': (0, 0, 1)}
+_RINGS = {'X': (0, 1, 1), 'Y': (1, 0, 1), 'Z': (1, 1, 0), 'SPHERICAL': (1, 1, 1)}
+
+
+def wave(co, scale, distortion, detail, detail_scale, detail_roughness, phase, kind, direction, profile):
+    """The Wave Texture's factor (n,) at points co (n, 3), as Cycles' svm_wave: bands along an
+    axis or the diagonal, or rings around an axis or a point, 20 units to 2 pi, shifted by the
+    phase and by distortion x (an fBM noise of the point, from the native kernel, x 2 - 1);
+    then a sine, saw or triangle profile. Parameters are (n,) arrays or scalars."""
+    def col(v):
+        return np.asarray(v, F32).reshape(-1)
+    p = (np.asarray(co, F32) * col(scale)[:, None]).astype(F32)
+    p = (p + F32(0.000001)) * F32(0.999999)        # Cycles: away from exact unit coordinates
+    if kind == 'BANDS':
+        if direction == 'DIAGONAL':
+            n = (p[:, 0] + p[:, 1] + p[:, 2]) * F32(10.0)
+        else:
+            n = p[:, 'XYZ'.index(direction)] * F32(20.0)
+    else:
+        rp = p * np.array(_RINGS[direction], F32)
+        n = np.sqrt(rp[:, 0] * rp[:, 0] + rp[:, 1] * rp[:, 1] + rp[:, 2] * rp[:, 2]) * F32(20.0)
+    n = n + col(phase)
+    dist = np.broadcast_to(col(distortion), n.shape)
+    if (dist != 0).any():
+        f, _ = dacrt.shading.noise_texture(p, detail_scale, detail, detail_roughness, 2.0, 0.0, True, False)
+        n = np.where(dist != 0, n + dist * (f * F32(2.0) - F32(1.0)), n)
+    if profile == 'SIN':
+        return (F32(0.5) + F32(0.5) * np.sin(n - F32(np.pi / 2))).astype(F32)
+    n = n / F32(2.0 * np.pi)
+    if profile == 'SAW':
+        return (n - np.floor(n)).astype(F32)
+    return (np.abs(n - np.floor(n + F32(0.5))) * F32(2.0)).astype(F32)
 
 
 def checker(co, scale):

@@ -28,10 +28,10 @@ Materials (what a diffuse renderer can represent exactly):
 - transparency: the Transparent BSDF (its colour) and the Principled BSDF's Alpha (constant, or
   an Image Texture's Alpha output), and a Mix Shader between a Transparent BSDF and another
   shader whose factor is an Image Texture's Alpha (cut-outs);
-- Noise (2D, 3D, every type), Voronoi (F1, one octave), Checker and Gradient textures into a diffuse
-  colour, with the colour,
-  float and Mapping nodes around them, compiled into a function of the Generated, Object and UV
-  coordinates evaluated per shading point (procedurals.py; Geometry.coords per corner);
+- Noise (2D, 3D, every type), Voronoi (F1, one octave), Wave, Checker and Gradient textures
+  into a diffuse colour, with the colour, float and Mapping nodes around them, compiled into a
+  function of the Generated, Object and UV coordinates evaluated per shading point
+  (procedurals.py; Geometry.coords per corner);
 - node groups and reroutes are transparent, as Cycles flattens them (nodegraph.py).
 Documented diffuse approximation of everything else: a shader node of another kind becomes a
 diffuse surface with its constant 'Color' (or 'Base Color') input, 0.8 grey without one; a

@@ -1,7 +1,7 @@
 """Colour chains that read procedural textures (Noise, Checker, Gradient): compiled into a
 function of the shading point's texture coordinates (procedural.ProceduralTexels), which the
 integrator evaluates at every hit, as Cycles' SVM does. Voronoi (F1)
-as well. The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping nodes and Texture Coordinate's
+and Wave as well. The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping nodes and Texture Coordinate's
 Generated, Object and UV outputs (an unlinked Vector: Generated, as in Cycles); texture inputs
 (Scale, Detail, ...) may themselves vary over the surface. Anything else (an image, an
 attribute, another texture or coordinate kind) leaves the chain to nodeeval's evaluation, which
@@ -17,7 +17,7 @@ from .. import nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine
 
-PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI'})
+PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
@@ -157,6 +157,16 @@ def _texture(node, out, chain, depth):
         return checker, False
     if t == 'TEX_VORONOI':
         return _voronoi(node, out, vec, chain, depth)
+    if t == 'TEX_WAVE':
+        params = [_float(node, k, chain, depth) for k in ('Scale', 'Distortion', 'Detail', 'Detail Scale',
+                                                          'Detail Roughness', 'Phase Offset')]
+        kind, profile = node.wave_type, node.wave_profile
+        direction = node.bands_direction if kind == 'BANDS' else node.rings_direction
+
+        def wave(c):
+            f = pr.wave(vec(c), *(q(c) for q in params), kind, direction, profile)[:, None]
+            return f if fac else np.repeat(f, 3, axis=1)
+        return wave, False
     kind = node.gradient_type
 
     def gradient(c):

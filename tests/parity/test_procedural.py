@@ -103,6 +103,14 @@ for _name, _out, _settings in (
         ('voronoi_2d_normalized', 'Distance', {'voronoi_dimensions': '2D', 'normalize': True}),
         ('voronoi_rough_zero_detail_two', 'Distance', {'Detail': 2.0, 'Roughness': 0.0, 'Randomness': 1.7})):
     POINTWISE[_name] = ('ShaderNodeTexVoronoi', _out, _settings)
+for _name, _settings in (
+        ('wave_bands_sin', {'Scale': 2.0}),
+        ('wave_bands_diagonal_saw_distorted', {'bands_direction': 'DIAGONAL', 'wave_profile': 'SAW',
+                                               'Distortion': 3.0, 'Detail': 2.5, 'Phase Offset': 1.0}),
+        ('wave_rings_z_tri', {'wave_type': 'RINGS', 'rings_direction': 'Z', 'wave_profile': 'TRI', 'Scale': 1.5}),
+        ('wave_rings_spherical_distorted', {'wave_type': 'RINGS', 'rings_direction': 'SPHERICAL', 'Distortion': 1.5,
+                                            'Detail Scale': 3.0, 'Detail Roughness': 0.7})):
+    POINTWISE[_name] = ('ShaderNodeTexWave', 'Fac', _settings)
 GRADIENTS = ('LINEAR', 'QUADRATIC', 'EASING', 'DIAGONAL', 'SPHERICAL', 'QUADRATIC_SPHERE', 'RADIAL')
 for _g in GRADIENTS:
     POINTWISE[f'gradient_{_g.lower()}'] = ('ShaderNodeTexGradient', 'Fac', {'gradient_type': _g})
@@ -122,6 +130,11 @@ def test_procedural_texture_matches_cycles_pointwise(case, tmp_path):
                                            float(tex.inputs['Randomness'].default_value), tex.distance,
                                            int(tex.voronoi_dimensions[0]), tex.normalize)
         mine = {'Distance': np.repeat(d[:, None], 3, axis=1), 'Color': color, 'Position': position}[output]
+    elif kind == 'ShaderNodeTexWave':
+        f = pr.wave(p, *(_own(tex, k) for k in ('Scale', 'Distortion', 'Detail', 'Detail Scale', 'Detail Roughness',
+                                                 'Phase Offset')), tex.wave_type,
+                    tex.bands_direction if tex.wave_type == 'BANDS' else tex.rings_direction, tex.wave_profile)
+        mine = np.repeat(f[:, None], 3, axis=1)
     elif kind == 'ShaderNodeTexChecker':
         mine = np.repeat(pr.checker(p, float(tex.inputs['Scale'].default_value))[:, None], 3, axis=1)
     else:
@@ -204,6 +217,18 @@ def voronoi_cells_color(nt, diffuse):
     nt.links.new(v.outputs['Color'], diffuse.inputs['Color'])
 
 
+def wave_rings_ramp(nt, diffuse):
+    """Distorted rings (wood) through a Color Ramp, on Generated coordinates."""
+    w = nt.nodes.new('ShaderNodeTexWave')
+    w.wave_type, w.wave_profile = 'RINGS', 'SAW'
+    w.inputs['Scale'].default_value, w.inputs['Distortion'].default_value = 0.5, 4.0
+    ramp = nt.nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.elements[0].color = (0.6, 0.35, 0.1, 1)
+    ramp.color_ramp.elements[1].color = (0.2, 0.08, 0.02, 1)
+    nt.links.new(w.outputs['Fac'], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], diffuse.inputs['Color'])
+
+
 def _wire(chain):
     def wire(nt, tex, diffuse):
         nt.nodes.remove(tex)
@@ -217,7 +242,7 @@ def _blocks(engine, tmp_path):
 
 
 @pytest.mark.parametrize('chain', [checker_object_mapped, noise_generated_ramp, gradient_uv_times_noise,
-                                   checker_scaled_by_gradient, voronoi_cells_color], ids=lambda c: c.__name__)
+                                   checker_scaled_by_gradient, voronoi_cells_color, wave_rings_ramp], ids=lambda c: c.__name__)
 def test_procedural_colour_renders_as_cycles(chain, tmp_path):
     sunplane.build(np.ones((1, 1, 4), np.float32), _wire(chain), RES, 16)
     dacrt, cycles = _blocks('DACRT', tmp_path), _blocks('CYCLES', tmp_path)
