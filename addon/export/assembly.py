@@ -305,7 +305,7 @@ class Assembly:
             if attributed and not attributed.isdisjoint(p.slot_map.tolist()):
                 self._attribute_colors(a, p, i in mirrored, out, S)
             if coordinated and not coordinated.isdisjoint(p.slot_map.tolist()):
-                self._texture_coordinates(a, coordinated, i in mirrored, out, S)
+                self._texture_coordinates(a, p, coordinated, i in mirrored, out, S)
         out.instances += k
         out.linear.append(lin)
         return bad, deg
@@ -354,12 +354,15 @@ class Assembly:
             if mirrored:                     # corners 1 and 2 were swapped for these triangles
                 block[rows] = block[rows][:, [0, 2, 1]]
 
-    def _texture_coordinates(self, a, materials, mirrored, out, S):
+    def _texture_coordinates(self, a, place, materials, mirrored, out, S):
         """The Generated and Object texture coordinates at the corners of one instance's
         triangles whose material is one of `materials` (procedural textures read them; object
         space, so every instance of a mesh has the same); 0 on the frame's other triangles."""
         if out.coords is None:
             out.coords = np.zeros((len(out.triangles), 3, 6), np.float32)
+        if a.rebuilt:
+            self.ignore(f"Generated coordinates of a mesh both deformed and rebuilt by modifiers "
+                        f"({', '.join(a.rebuilt)}) approximated", place.name)
         rows = np.flatnonzero(np.isin(out.material[S], list(materials)))
         block = a.corner_coordinates()[rows]
         if mirrored:                        # corners 1 and 2 were swapped for these triangles

@@ -53,7 +53,7 @@ def _reaches_procedural(socket, seen):
     node = link.from_node
     if node.type in PROCEDURAL_TYPES:
         return True
-    key = nodegraph.unwrap(node).as_pointer()
+    key = nodegraph.output_key(node, None)     # (with its group path: a group used twice differs)
     if key in seen:                  # (a node feeding several inputs is walked once)
         return False
     seen.add(key)

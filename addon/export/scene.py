@@ -53,6 +53,15 @@ def _shader_trees():
     return [m.node_tree for m in bpy.data.materials if m.node_tree is not None] + list(bpy.data.node_groups)
 
 
+
+# modifiers Blender applies as deformations only (ModifierTypeType::OnlyDeform): left out of ORCO
+_DEFORM_ONLY = frozenset({'ARMATURE', 'CAST', 'CURVE', 'DISPLACE', 'HOOK', 'LAPLACIANDEFORM', 'LAPLACIANSMOOTH',
+                          'LATTICE', 'MESH_DEFORM', 'SHRINKWRAP', 'SIMPLE_DEFORM', 'SMOOTH', 'CORRECTIVE_SMOOTH',
+                          'SURFACE_DEFORM', 'WARP', 'WAVE', 'MESH_CACHE', 'CLOTH', 'SOFT_BODY', 'COLLISION'})
+# modifiers that leave the positions and vertex count alone
+_NO_GEOMETRY = frozenset({'DATA_TRANSFER', 'NORMAL_EDIT', 'WEIGHTED_NORMAL', 'UV_PROJECT', 'UV_WARP',
+                          'VERTEX_WEIGHT_EDIT', 'VERTEX_WEIGHT_MIX', 'VERTEX_WEIGHT_PROXIMITY'})
+
 class Exporter:
     """One frame's export: walks the depsgraph's instances (lights, meshes and their placements,
     hair, point clouds), then assembles the geometry, reads the world and the settings, and
@@ -315,6 +324,21 @@ class Exporter:
             if arrays is not None:
                 arrays.mesh = ob.data       # the depsgraph's mesh, alive through the export
                 source = ob.original.data if ob.original is not None else None
+                # a Geometry Nodes instance's `original` is its instancer, whose mesh is not
+                # this one's source: only an object that evaluates to this mesh has it
+                if source is not None and ob.original.evaluated_get(self.depsgraph).data != ob.data:
+                    source = None
+                # Blender's ORCO: the modifier stack run on the undeformed mesh with the deform-only
+                # modifiers (and shape keys) left out; the original positions only when nothing else
+                # changes the mesh, the evaluated ones when nothing deforms it
+                if source is not None:
+                    mods = [m for m in ob.original.modifiers if m.show_render]
+                    deforms = bool(source.shape_keys) or any(m.type in _DEFORM_ONLY for m in mods)
+                    builds = [m for m in mods if m.type not in _DEFORM_ONLY and m.type not in _NO_GEOMETRY]
+                    if not deforms:
+                        source = None
+                    elif builds:            # said if a procedural texture reads them (assembly)
+                        arrays.rebuilt = tuple(m.name for m in builds)
                 if isinstance(source, bpy.types.Mesh) and source is not ob.data:
                     arrays.original = source    # before modifiers (Generated coordinates)
         else:

@@ -105,9 +105,14 @@ float perlin_2d(const float* p) {
     return (1.0f - v) * (g[0] * x1 + g[1] * u) + v * (g[2] * x1 + g[3] * u);
 }
 
-// Cycles' snoise_2d / snoise_3d: scaled, 0 where not finite.
+// Cycles' snoise_2d / snoise_3d: the noise repeats every 100000 on each axis (fmod, against
+// float32's spacing far out; past 1e6 the point also moves half a cell), scaled, 0 where not
+// finite.
 inline float snoise(const float* p, int dims) {
-    float r = dims == 3 ? perlin_3d(p) : perlin_2d(p);
+    float q[3];
+    for (int a = 0; a < dims; ++a)
+        q[a] = std::fmod(p[a], 100000.0f) + 0.5f * float(std::fabs(p[a]) >= 1000000.0f);
+    float r = dims == 3 ? perlin_3d(q) : perlin_2d(q);
     if (!std::isfinite(r)) r = 0.0f;
     return (dims == 3 ? 0.9820f : 0.6616f) * r;
 }

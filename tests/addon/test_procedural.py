@@ -118,3 +118,75 @@ def test_voronoi_of_one_octave_is_evaluated_and_other_features_are_reported(scen
         supported = name in ("F1", "OneOctave")
         assert isinstance(m.texture, ProceduralTexels) == supported, name
         assert ("Voronoi Texture" in m.approximated) != supported, (name, m.approximated)
+
+
+def test_a_group_used_twice_reaches_its_noise_on_the_second_use(scene, exported):
+    """One 'Tint' group (a Multiply of its input) used twice, fed by an RGB node and by a Noise:
+    the Noise is found through the second use (the walk had marked the group's inner node as
+    texture-free on the first), so the chain is evaluated per point, nothing reported."""
+    g = bpy.data.node_groups.new("Tint", 'ShaderNodeTree')
+    g.interface.new_socket("In", in_out='INPUT', socket_type='NodeSocketColor')
+    g.interface.new_socket("Out", in_out='OUTPUT', socket_type='NodeSocketColor')
+    gi, go = g.nodes.new('NodeGroupInput'), g.nodes.new('NodeGroupOutput')
+    mul = scenes.mix_node(g, 'MULTIPLY', gi.outputs[0], (0.9, 0.7, 0.5), 1.0)
+    g.links.new(mul.outputs['Result'], go.inputs[0])
+    mat, nt, out = scenes._material("Twice")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    first, second = nt.nodes.new('ShaderNodeGroup'), nt.nodes.new('ShaderNodeGroup')
+    first.node_tree = second.node_tree = g
+    rgb = nt.nodes.new('ShaderNodeRGB')
+    rgb.outputs[0].default_value = (0.2, 0.4, 0.6, 1.0)
+    noise = nt.nodes.new('ShaderNodeTexNoise')
+    nt.links.new(rgb.outputs[0], first.inputs[0])
+    nt.links.new(noise.outputs['Color'], second.inputs[0])
+    both = scenes.mix_node(nt, 'MIX', first.outputs[0], second.outputs[0], 0.5)
+    nt.links.new(both.outputs['Result'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    scenes.camera()
+    scenes.cube("Cube", materials=(mat,))
+    m = _material(exported(), "Twice")
+    assert isinstance(m.texture, ProceduralTexels) and not m.approximated, m.approximated
+
+
+def test_geometry_nodes_instances_read_their_own_generated_coordinates(scene, exported):
+    """A plane instanced on a host plane's points by Geometry Nodes (not realized): its
+    Generated coordinates span its own texture space, 0..1 (the instance's `original` is the
+    host, whose mesh of the same vertex count had stood in for the instance's)."""
+    scenes.camera()
+    mat = _noise_material("Gen")
+    inst = scenes.plane("Inst", 0.6, location=(0, 0, -50), materials=(mat,))
+    inst.hide_render = True
+    host = scenes.plane("Host", 2.0)
+    ng = bpy.data.node_groups.new("G", 'GeometryNodeTree')
+    ng.interface.new_socket("Geometry", in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gi, go = ng.nodes.new('NodeGroupInput'), ng.nodes.new('NodeGroupOutput')
+    pts, iop = ng.nodes.new('GeometryNodeMeshToPoints'), ng.nodes.new('GeometryNodeInstanceOnPoints')
+    info = ng.nodes.new('GeometryNodeObjectInfo')
+    info.inputs['Object'].default_value = inst
+    ng.links.new(gi.outputs[0], pts.inputs['Mesh'])
+    ng.links.new(pts.outputs[0], iop.inputs['Points'])
+    ng.links.new(info.outputs['Geometry'], iop.inputs['Instance'])
+    ng.links.new(iop.outputs[0], go.inputs[0])
+    host.modifiers.new("D", 'DISPLACE').strength = 0.0     # (a deforming modifier on the host too)
+    host.modifiers.new("GN", 'NODES').node_group = ng
+    data = exported()
+    g = data.geometry
+    rows = np.asarray(g.coords)[np.asarray(g.material) == [m.name for m in data.materials].index("Gen")]
+    assert len(rows) == 4 * 2                   # four instances of the two-triangle plane
+    np.testing.assert_allclose(np.sort(np.unique(rows[..., 0:2].round(5))), [0.0, 1.0])
+    np.testing.assert_allclose(rows[..., 2], 0.5)          # a flat axis: Cycles' 1/2
+
+
+def test_a_deformed_and_rebuilt_mesh_says_its_generated_coordinates_are_approximate(scene, exported):
+    """A Displace after a Subdivision: Cycles' undeformed coordinates are the subdivided cage,
+    which Python cannot read; the evaluated positions stand in, and the render says so (only
+    for meshes a procedural texture reads them on)."""
+    scenes.camera()
+    a = scenes.cube("Textured", materials=(_noise_material("Gen"),))
+    b = scenes.cube("Plain", location=(4, 0, 0), materials=(scenes.diffuse("Plain", (0.5, 0.5, 0.5)),))
+    for ob in (a, b):
+        ob.modifiers.new("S", 'SUBSURF')
+        ob.modifiers.new("D", 'DISPLACE').strength = 0.2
+    said = [t for _, t in exported().messages if "Generated coordinates of a mesh both deformed and rebuilt" in t]
+    assert said and "'Textured'" in said[0] and "'Plain'" not in said[0] and "(S)" in said[0], said

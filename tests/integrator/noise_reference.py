@@ -114,6 +114,10 @@ def snoise(p):
     """Cycles' signed noise snoise_2d / snoise_3d (p (n, 2) or (n, 3)): scaled Perlin noise, 0
     where it is not finite."""
     d = p.shape[1]
+    # Cycles repeats the noise every 100000 on each axis (fmod), and past 1e6 moves the point
+    # half a cell
+    with np.errstate(invalid='ignore'):
+        p = (np.fmod(p, F32(100000.0)) + F32(0.5) * (np.abs(p) >= F32(1000000.0))).astype(F32)
     r = perlin_3d(p) if d == 3 else perlin_2d(p)
     r = np.where(np.isfinite(r), r, F32(0.0))
     return _NOISE_SCALE[d] * r

@@ -36,12 +36,19 @@ def _emission_plane(texture_type, output, settings):
     em = nt.nodes.new('ShaderNodeEmission')
     tc = nt.nodes.new('ShaderNodeTexCoord')
     tex = nt.nodes.new(texture_type)
+    offset = settings.pop('offset', None)
     for k, v in settings.items():
         if k in tex.inputs:
             tex.inputs[k].default_value = v
         else:
             setattr(tex, k, v)
-    nt.links.new(tc.outputs['Object'], tex.inputs['Vector'])
+    if offset is None:
+        nt.links.new(tc.outputs['Object'], tex.inputs['Vector'])
+    else:                               # the coordinates moved far from the origin
+        m = nt.nodes.new('ShaderNodeMapping')
+        m.inputs['Location'].default_value = offset
+        nt.links.new(tc.outputs['Object'], m.inputs['Vector'])
+        nt.links.new(m.outputs[0], tex.inputs['Vector'])
     nt.links.new(tex.outputs[output], em.inputs['Color'])
     nt.links.new(em.outputs[0], out.inputs['Surface'])
     scenes.plane("Plane", size=4.0, materials=(mat,))
@@ -86,6 +93,8 @@ POINTWISE = {
     'noise_not_normalized': ('ShaderNodeTexNoise', 'Fac', {'normalize': False, 'Detail': 2.5}),
     'checker': ('ShaderNodeTexChecker', 'Fac', {'Scale': 3.0}),
     'multifractal': ('ShaderNodeTexNoise', 'Fac', {'noise_type': 'MULTIFRACTAL', 'Detail': 3.5}),
+    # Cycles repeats the noise every 100000 (fmod): 0.47 off where procedural.py did not
+    'noise_far_from_the_origin': ('ShaderNodeTexNoise', 'Fac', {'offset': (1.5e5, -2.5e4, 3.0e4), 'Scale': 1.0}),
     'ridged_color': ('ShaderNodeTexNoise', 'Color', {'noise_type': 'RIDGED_MULTIFRACTAL', 'Offset': 1.0,
                                                      'Gain': 2.0}),
     'hybrid_2d': ('ShaderNodeTexNoise', 'Fac', {'noise_type': 'HYBRID_MULTIFRACTAL', 'noise_dimensions': '2D',
@@ -119,10 +128,12 @@ for _g in GRADIENTS:
 @pytest.mark.parametrize('case', sorted(POINTWISE))
 def test_procedural_texture_matches_cycles_pointwise(case, tmp_path):
     kind, output, settings = POINTWISE[case]
+    settings = dict(settings)
+    offset = np.array(settings.get('offset', (0.0, 0.0, 0.0)), np.float32)
     tex = _emission_plane(kind, output, settings)
     r = scenes.read_exr(scenes.render_exr(tmp_path / "cycles.exr"))
     cycles = np.stack([r['R'], r['G'], r['B']], -1).reshape(-1, 3)
-    p = _centres()
+    p = _centres() + offset
     if kind == 'ShaderNodeTexNoise':
         mine = _noise(tex, p, output)
     elif kind == 'ShaderNodeTexVoronoi':
