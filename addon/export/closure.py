@@ -134,6 +134,9 @@ class Closure:
         if other.texture is not None:
             if tex is None or tex.key == other.texture.key:
                 tex, w = other.texture, w + other.tex_weight
+            elif isinstance(tex.pixels, ProceduralTexels) and isinstance(other.texture.pixels, ProceduralTexels):
+                # two procedural textures: their weighted sum, per shading point
+                tex, w = _procedural_sum(tex, w, other.texture, other.tex_weight), np.ones(3)
             else:   # two different images: keep the first, the other contributes its mean
                 reasons.append(nodeeval.TWO_IMAGES)
                 mean = other.texture.mean()
@@ -149,3 +152,15 @@ class Closure:
 def is_image_alpha(link):
     """Whether a link (or None) comes straight from an Image Texture's Alpha output."""
     return link is not None and link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha'
+
+
+def _procedural_sum(a, wa, b, wb):
+    """A Texture computing wa x a + wb x b of two procedural textures' colours."""
+    pa, pb = a.pixels, b.pixels
+    wa, wb = np.asarray(wa, np.float64), np.asarray(wb, np.float64)
+
+    def both(coords):
+        return wa * pa.evaluate(coords).T + wb * pb.evaluate(coords).T
+    name = ', '.join(dict.fromkeys(n for n in (pa.name, pb.name) if n))
+    tex = ProceduralTexels(both, pa.needs | pb.needs, name)
+    return Texture(('procedural', id(tex)), tex, 'Linear', 'REPEAT', None, None, name)

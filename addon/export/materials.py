@@ -14,6 +14,7 @@ from .. import scenedata as sd
 from ..mapping import texture_transform, uv_map_name
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import input_socket, linked_link, linked_node, output_key, output_node, used_outputs
+from ..procedural import ProceduralTexels
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
 from .aovs import shader_aovs
 from .closure import Closure, Texture, is_image_alpha
@@ -441,6 +442,9 @@ class MaterialBuilder:
             textured = self._textured_mix(node, reasons, depth)
             if textured is not None:
                 return textured
+            varying = self._procedural_mix(node, reasons, depth)
+            if varying is not None:
+                return varying
             fac = mix_factor(node, reasons, "Mix Shader")
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
@@ -579,6 +583,39 @@ class MaterialBuilder:
         tex = Texture(('mix', src.key, id(baked)), baked, src.interpolation, src.extension, src.transform, None,
                       src.name)
         return Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
+
+    def _procedural_mix(self, node, reasons, depth):
+        """A Mix Shader whose factor procedural textures compute (procedurals.py), between two
+        shaders that have an albedo only (a constant, or a procedural texture's): the albedo
+        per shading point, a + (b - a) x factor, the factor clamped to [0, 1] as Cycles' Mix
+        Shader clamps it. None otherwise (the factor at its own value)."""
+        found = procedurals.compile_socket(node.inputs['Fac'], False, [])
+        if found is None:
+            return None
+        fac_fn, needs, name = found
+        notes, sides = [], []
+        for socket in (node.inputs[1], node.inputs[2]):
+            c = self._shader(socket, notes, depth + 1)       # (said only if this mix is taken)
+            procedural = c.texture is not None and isinstance(c.texture.pixels, ProceduralTexels)
+            if (c.texture is not None and not procedural) or c.emission.any() or c.emission_tex is not None \
+                    or c.transparent.any() or c.holdout or c.opacity is not None or c.translucent.any():
+                return None
+            sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
+                          c.texture.pixels if procedural else None))
+            needs |= c.texture.pixels.needs if procedural else frozenset()
+        reasons.extend(notes)
+
+        def albedo(side, coords):
+            const, weight, tex = side
+            return const if tex is None else const + weight * tex.evaluate(coords).T.astype(np.float64)
+
+        def mixed(coords):      # reads no Blender data: it runs during the render's lookups
+            f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+            a = albedo(sides[0], coords)
+            return a + (albedo(sides[1], coords) - a) * f
+        tex = ProceduralTexels(mixed, needs, name)
+        return Closure(texture=Texture(('procedural', id(tex)), tex, 'Linear', 'REPEAT', None, None, name),
+                       tex_weight=(1.0, 1.0, 1.0))
 
     def _evaluated_alpha(self, socket, reasons):
         """(Texture, False) whose alpha is what nodes compute from one image (Blender's glTF

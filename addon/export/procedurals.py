@@ -34,16 +34,25 @@ class _Chain:
 def compile_color(socket, reasons):
     """A ProceduralTexels for what feeds a colour socket, or None when the chain reads no
     procedural texture or something compile cannot follow (nodeeval then evaluates it)."""
+    found = compile_socket(socket, True, reasons)
+    if found is None:
+        return None
+    fn, needs, name = found
+    return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), needs, name)
+
+
+def compile_socket(socket, color, reasons):
+    """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures'
+    names) for what feeds a colour (color) or float socket, or None as compile_color."""
     if not _reaches_procedural(socket, set()):
         return None
     chain = _Chain([])
     try:
-        fn = _socket(socket, True, chain, 0)
+        fn = _socket(socket, color, chain, 0)
     except nodeeval.NotCompiled:
         return None
     reasons.extend(chain.reasons)
-    name = ', '.join(dict.fromkeys(chain.textures))
-    return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), chain.needs or {'generated'}, name)
+    return fn, frozenset(chain.needs or {'generated'}), ', '.join(dict.fromkeys(chain.textures))
 
 
 def _reaches_procedural(socket, seen):

@@ -240,6 +240,61 @@ def wave_rings_ramp(nt, diffuse):
     nt.links.new(ramp.outputs['Color'], diffuse.inputs['Color'])
 
 
+def _surface(nt, shader):
+    """Mark shader as the material's surface: linked in place of the Diffuse BSDF once
+    sunplane.build has wired that (_relink_surface)."""
+    shader.node.name = "Surface"
+
+
+def _relink_surface():
+    nt = bpy.data.materials["Textured"].node_tree
+    if "Surface" in nt.nodes:
+        out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+        nt.links.new(nt.nodes["Surface"].outputs[0], out.inputs['Surface'])
+
+
+def mix_shader_by_noise(nt, diffuse):
+    """Two materials mixed by a noise (the factor per point): a red diffuse and a Principled
+    whose base is a checker."""
+    diffuse.inputs['Color'].default_value = (0.8, 0.1, 0.05, 1)
+    p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    p.inputs['Specular IOR Level'].default_value = 0.0
+    ck = nt.nodes.new('ShaderNodeTexChecker')
+    ck.inputs['Scale'].default_value = 3.0
+    nt.links.new(ck.outputs['Color'], p.inputs['Base Color'])
+    nz = nt.nodes.new('ShaderNodeTexNoise')
+    nz.inputs['Scale'].default_value = 2.0
+    ramp = nt.nodes.new('ShaderNodeMapRange')
+    ramp.inputs['From Min'].default_value, ramp.inputs['From Max'].default_value = 0.4, 0.6
+    nt.links.new(nz.outputs['Fac'], ramp.inputs['Value'])
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    nt.links.new(ramp.outputs['Result'], mix.inputs['Fac'])
+    nt.links.new(diffuse.outputs[0], mix.inputs[1])
+    nt.links.new(p.outputs[0], mix.inputs[2])
+    _surface(nt, mix.outputs[0])
+
+
+def add_shader_of_two_textures(nt, diffuse):
+    """A Voronoi-coloured diffuse plus a Gradient-coloured one, halved: two procedural textures
+    summed."""
+    v = nt.nodes.new('ShaderNodeTexVoronoi')
+    v.inputs['Scale'].default_value = 2.0
+    nt.links.new(v.outputs['Color'], diffuse.inputs['Color'])
+    other = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    g = nt.nodes.new('ShaderNodeTexGradient')            # (0..1 across the plane: Generated)
+    nt.links.new(g.outputs['Color'], other.inputs['Color'])
+    add = nt.nodes.new('ShaderNodeAddShader')
+    nt.links.new(diffuse.outputs[0], add.inputs[0])
+    nt.links.new(other.outputs[0], add.inputs[1])
+    half = nt.nodes.new('ShaderNodeMixShader')
+    half.inputs['Fac'].default_value = 0.5
+    black = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    black.inputs['Color'].default_value = (0, 0, 0, 1)
+    nt.links.new(add.outputs[0], half.inputs[1])
+    nt.links.new(black.outputs[0], half.inputs[2])
+    _surface(nt, half.outputs[0])
+
+
 def _wire(chain):
     def wire(nt, tex, diffuse):
         nt.nodes.remove(tex)
@@ -253,9 +308,11 @@ def _blocks(engine, tmp_path):
 
 
 @pytest.mark.parametrize('chain', [checker_object_mapped, noise_generated_ramp, gradient_uv_times_noise,
-                                   checker_scaled_by_gradient, voronoi_cells_color, wave_rings_ramp], ids=lambda c: c.__name__)
+                                   checker_scaled_by_gradient, voronoi_cells_color, wave_rings_ramp,
+                                   mix_shader_by_noise, add_shader_of_two_textures], ids=lambda c: c.__name__)
 def test_procedural_colour_renders_as_cycles(chain, tmp_path):
     sunplane.build(np.ones((1, 1, 4), np.float32), _wire(chain), RES, 16)
+    _relink_surface()
     dacrt, cycles = _blocks('DACRT', tmp_path), _blocks('CYCLES', tmp_path)
     assert np.ptp(cycles[..., 0]) > 0.1 * cycles.max(), "the pattern should show"
     err = np.abs(dacrt - cycles).max() / cycles.max()
