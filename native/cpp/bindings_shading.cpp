@@ -529,16 +529,21 @@ size_t param_len(const F32Array& a, size_t n, const char* name) {
     return size_t(a.shape(0));
 }
 
+// Procedural texture points: (n, 2) or (n, 3); returns the dimension.
+int points_dims(const F32Array& points) {
+    if (points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3))
+        throw py::value_error("points must have shape (n, 2) or (n, 3), got " + shape_str(points));
+    return int(points.shape(1));
+}
+
 py::tuple noise_texture_py(F32Array points, F32Array scale, F32Array detail, F32Array roughness,
                            F32Array lacunarity, F32Array distortion, bool normalize, bool color, int type,
                            F32Array offset, F32Array gain) {
-    if (points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3))
-        throw py::value_error("points must have shape (n, 2) or (n, 3), got " + shape_str(points));
+    const int dims = points_dims(points);
     if (type < NOISE_FBM || type > NOISE_HETERO_TERRAIN)
         throw py::value_error("type must be 0..4 (fBM, multifractal, hybrid, ridged, hetero terrain), got " +
                               std::to_string(type));
     const size_t n = size_t(points.shape(0));
-    const int dims = int(points.shape(1));
     NoiseParams k{scale.data(), detail.data(), roughness.data(), lacunarity.data(), distortion.data(), offset.data(),
                   gain.data(), param_len(scale, n, "scale"), param_len(detail, n, "detail"),
                   param_len(roughness, n, "roughness"), param_len(lacunarity, n, "lacunarity"),
@@ -560,8 +565,7 @@ py::tuple noise_texture_py(F32Array points, F32Array scale, F32Array detail, F32
 }
 
 py::tuple voronoi_f1_py(F32Array points, F32Array randomness, int metric) {
-    if (points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3))
-        throw py::value_error("points must have shape (n, 2) or (n, 3), got " + shape_str(points));
+    const int dims = points_dims(points);
     if (metric < VORONOI_EUCLIDEAN || metric > VORONOI_CHEBYCHEV)
         throw py::value_error("metric must be 0 (Euclidean), 1 (Manhattan) or 2 (Chebychev), got " +
                               std::to_string(metric));
@@ -570,7 +574,7 @@ py::tuple voronoi_f1_py(F32Array points, F32Array randomness, int metric) {
     F32Array dist{py::ssize_t(n)}, color({py::ssize_t(n), py::ssize_t(3)}), position({py::ssize_t(n), py::ssize_t(3)});
     {
         py::gil_scoped_release nogil;
-        voronoi_f1(points.data(), n, int(points.shape(1)), randomness.data(), rn, metric, dist.mutable_data(),
+        voronoi_f1(points.data(), n, dims, randomness.data(), rn, metric, dist.mutable_data(),
                    color.mutable_data(), position.mutable_data());
     }
     return py::make_tuple(dist, color, position);

@@ -161,17 +161,19 @@ def noise_fbm(p, detail, roughness, lacunarity, normalize):
     return whole
 
 
-def _octaves(detail, n):
+def _params(n, detail, roughness, lacunarity, offset=0.0, gain=1.0):
+    """Per point (n,): detail, its whole octaves and fraction, roughness, lacunarity (n, 1),
+    offset and gain."""
     detail = np.broadcast_to(np.asarray(detail, F32), (n,))
-    return detail, np.floor(detail).astype(np.int32), detail - np.floor(detail)
+    each = [np.broadcast_to(np.asarray(v, F32), (n,)) for v in (roughness, lacunarity, offset, gain)]
+    return detail, np.floor(detail).astype(np.int32), detail - np.floor(detail), each[0], each[1][:, None], \
+        each[2], each[3]
 
 
 def multi_fractal(p, detail, roughness, lacunarity):
     """Cycles' noise_multi_fractal (the point scaled in place each octave)."""
     n = len(p)
-    detail, octaves, rmd = _octaves(detail, n)
-    rough = np.broadcast_to(np.asarray(roughness, F32), (n,))
-    lac = np.broadcast_to(np.asarray(lacunarity, F32), (n,))[:, None]
+    detail, octaves, rmd, rough, lac, _, _ = _params(n, detail, roughness, lacunarity)
     value, pwr, p = np.ones(n, F32), np.ones(n, F32), p.copy()
     for i in range(int(octaves.max(initial=0)) + 1):
         on = i <= octaves
@@ -183,10 +185,7 @@ def multi_fractal(p, detail, roughness, lacunarity):
 
 def hetero_terrain(p, detail, roughness, lacunarity, offset):
     n = len(p)
-    detail, octaves, rmd = _octaves(detail, n)
-    rough = np.broadcast_to(np.asarray(roughness, F32), (n,))
-    lac = np.broadcast_to(np.asarray(lacunarity, F32), (n,))[:, None]
-    off = np.broadcast_to(np.asarray(offset, F32), (n,))
+    detail, octaves, rmd, rough, lac, off, _ = _params(n, detail, roughness, lacunarity, offset)
     pwr = rough.copy()
     value = off + snoise(p)
     p = p * lac
@@ -202,11 +201,7 @@ def hetero_terrain(p, detail, roughness, lacunarity, offset):
 
 def hybrid_multi_fractal(p, detail, roughness, lacunarity, offset, gain):
     n = len(p)
-    detail, octaves, rmd = _octaves(detail, n)
-    rough = np.broadcast_to(np.asarray(roughness, F32), (n,))
-    lac = np.broadcast_to(np.asarray(lacunarity, F32), (n,))[:, None]
-    off = np.broadcast_to(np.asarray(offset, F32), (n,))
-    g = np.broadcast_to(np.asarray(gain, F32), (n,))
+    detail, octaves, rmd, rough, lac, off, g = _params(n, detail, roughness, lacunarity, offset, gain)
     pwr, value, weight, p = np.ones(n, F32), np.zeros(n, F32), np.ones(n, F32), p.copy()
     for i in range(int(octaves.max(initial=0)) + 1):
         on = (weight > F32(0.001)) & (i <= octaves)
@@ -224,11 +219,7 @@ def hybrid_multi_fractal(p, detail, roughness, lacunarity, offset, gain):
 
 def ridged_multi_fractal(p, detail, roughness, lacunarity, offset, gain):
     n = len(p)
-    detail, octaves, _ = _octaves(detail, n)
-    rough = np.broadcast_to(np.asarray(roughness, F32), (n,))
-    lac = np.broadcast_to(np.asarray(lacunarity, F32), (n,))[:, None]
-    off = np.broadcast_to(np.asarray(offset, F32), (n,))
-    g = np.broadcast_to(np.asarray(gain, F32), (n,))
+    detail, octaves, _, rough, lac, off, g = _params(n, detail, roughness, lacunarity, offset, gain)
     pwr = rough.copy()
     signal = off - np.abs(snoise(p))
     signal = signal * signal
