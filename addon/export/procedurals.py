@@ -51,6 +51,11 @@ def compile_socket(socket, color, reasons):
         fn = _socket(socket, color, chain, 0)
     except nodeeval.NotCompiled:
         return None
+    except (AttributeError, KeyError, TypeError, ValueError) as e:
+        # a node of another Blender version (a socket or setting missing): the evaluation
+        # reads the chain's own values instead, and says why
+        reasons.append(f"procedural texture chain not evaluated per point ({type(e).__name__}: {e})")
+        return None
     reasons.extend(chain.reasons)
     return fn, frozenset(chain.needs or {'generated'}), ', '.join(dict.fromkeys(chain.textures))
 

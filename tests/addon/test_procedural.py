@@ -190,3 +190,18 @@ def test_a_deformed_and_rebuilt_mesh_says_its_generated_coordinates_are_approxim
         ob.modifiers.new("D", 'DISPLACE').strength = 0.2
     said = [t for _, t in exported().messages if "Generated coordinates of a mesh both deformed and rebuilt" in t]
     assert said and "'Textured'" in said[0] and "'Plain'" not in said[0] and "(S)" in said[0], said
+
+
+def test_a_chain_that_cannot_be_read_falls_back_and_says_why(scene, exported, monkeypatch):
+    """A node the compile cannot read (a socket missing, as in another Blender version) leaves
+    the chain to the nodes' own values, with the reason, instead of failing the render."""
+    from addon.export import procedurals
+
+    def missing(node, ident, chain, depth):
+        raise KeyError(f"no input {ident!r}")
+    monkeypatch.setattr(procedurals, '_float', missing)
+    scenes.camera()
+    scenes.cube("Cube", materials=(_noise_material("Noise"),))
+    m = _material(exported(), "Noise")
+    assert not isinstance(m.texture, ProceduralTexels)
+    assert "procedural texture chain not evaluated per point (KeyError" in m.approximated, m.approximated
