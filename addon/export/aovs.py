@@ -1,12 +1,14 @@
 """Shader AOVs: what a material's or world's AOV Output nodes write, as constants and, for
-materials, as per-texel images of what an Image Texture and the nodes after it compute. Part of
-the export layer."""
+materials, as per-texel images of what an Image Texture and the nodes after it compute, or as
+procedural textures computed per shading point (procedurals.py). Part of the export layer."""
 
 import numpy as np
 
 from .. import nodeeval
 from ..nodeeval import constant
 from ..nodegraph import aov_outputs
+from ..procedural import ProceduralTexels
+from . import procedurals
 from .closure import Texture
 from .images import MISSING_IMAGE
 
@@ -32,6 +34,14 @@ def shader_aovs(ntree, reasons, texture=None):
                     reasons.append(f"AOV '{name}' is fed by an image or an unsupported node: its input's own "
                                    f"value is written")
                 parts[kind] = np.asarray(v, np.float32)
+                continue
+            found = procedurals.compile_socket(socket, color, reasons) if (name, kind) not in textures else None
+            if found is not None:           # procedural textures: computed per shading point
+                fn, needs, label = found
+                tex = ProceduralTexels(fn, needs, label)
+                textures[name, kind] = Texture(('aov', 'procedural', id(tex)), tex, 'Linear', 'REPEAT', None, None,
+                                               label)
+                parts[kind] = np.zeros(3 if color else 1, np.float32)
                 continue
             f = nodeeval.Evaluator(texture, reasons, MISSING_IMAGE).input(socket, color)
             v = np.asarray(f.value, np.float32)

@@ -284,8 +284,7 @@ class Assembly:
         # the materials whose albedo follows an attribute or Object Info (most scenes: none)
         attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
         # the materials whose procedural textures read Generated or Object coordinates
-        coordinated = {k for k, m in enumerate(self.materials.materials)
-                       if isinstance(m.texture, ProceduralTexels) and m.texture.needs & {'generated', 'object'}}
+        coordinated = {k for k, m in enumerate(self.materials.materials) if _coordinates_read(m)}
         per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated
         for i, p in enumerate(places if per_placement else ()):
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
@@ -411,3 +410,10 @@ class Assembly:
             index = a.corners[rows] if a.corners is not None else \
                 3 * rows[:, None] + np.arange(3)[None, :]
             uvs[rows] = layer[index]
+
+
+def _coordinates_read(material):
+    """Whether a procedural texture of the material (its colour's or an AOV's) reads Generated or
+    Object coordinates."""
+    textures = [material.texture] + [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
+    return any(isinstance(t, ProceduralTexels) and t.needs & {'generated', 'object'} for t in textures)

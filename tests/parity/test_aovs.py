@@ -103,3 +103,36 @@ def test_shader_aovs_match_cycles(tmp_path):
     assert min(np.sum(e['tint'][..., 1] > 0.8) for e in (c, d)) >= 3
     # the mostly transparent sheet adds its value (1) to the red wall's behind it (0.75)
     assert c['mask'].max() > 1.5 and d['mask'].max() > 1.5
+
+
+def test_procedural_aovs_match_cycles(tmp_path):
+    """AOVs fed by procedural textures (addon/export/procedurals.py) are computed per shading
+    point: a COLOR AOV of a Noise's colour on Generated coordinates and a VALUE AOV of a Voronoi
+    distance on Object coordinates, on the Cornell box's back wall (they were 0, reported)."""
+    sc = rendering.small_cornell()
+    vl = sc.view_layers[0]
+    for name, kind in (("grain", 'COLOR'), ("cells", 'VALUE')):
+        aov = vl.aovs.add()
+        aov.name, aov.type = name, kind
+    mat = scenes.diffuse("Wall", (0.7, 0.7, 0.7))
+    nt = mat.node_tree
+    noise = nt.nodes.new('ShaderNodeTexNoise')
+    noise.inputs['Scale'].default_value = 3.0
+    nt.links.new(noise.outputs['Color'], _aov(mat, "grain").inputs['Color'])
+    coords = nt.nodes.new('ShaderNodeTexCoord')
+    cells = nt.nodes.new('ShaderNodeTexVoronoi')
+    cells.inputs['Scale'].default_value = 4.0
+    nt.links.new(coords.outputs['Object'], cells.inputs['Vector'])
+    nt.links.new(cells.outputs['Distance'], _aov(mat, "cells").inputs['Value'])
+    wall = scenes.plane("Wall", size=1.6, location=(0.0, 0.97, 1.0), materials=[mat])
+    wall.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    spec = SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
+                           filter_type='BLACKMAN_HARRIS', filter_width=1.5)
+    got = {engine: {'grain': np.stack([exr[f"{vl.name}.grain.{c}"] for c in "RGB"], axis=-1),
+                    'cells': exr[f"{vl.name}.cells.X"]}
+           for engine, exr in rendering.render_layers(sc, spec, tmp_path).items()}
+    c, d = got['CYCLES'], got['DACRT']
+    assert np.ptp(c['cells']) > 0.3 and np.ptp(c['grain'][..., 0]) > 0.3     # the patterns show
+    for key in ('grain', 'cells'):
+        diff = np.abs(d[key] - c[key])
+        assert diff.mean() < 0.01 and np.mean(diff > 0.05) < 0.03, (key, diff.mean(), np.mean(diff > 0.05))
