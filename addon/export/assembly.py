@@ -98,6 +98,8 @@ class Assembly:
         degenerate = 0
         self._resolve_materials()
         self._object_info_albedos()
+        # the materials whose procedural textures read Generated or Object coordinates
+        self._coordinated = {k for k, m in enumerate(self.materials.materials) if _coordinates_read(m)}
         need_uvs = uv_pass or any(self.materials.uses_texture)
         batches = []
         for key, places in self.placements.items():
@@ -283,8 +285,7 @@ class Assembly:
                 out.terminator[t0 + i * nt:t0 + (i + 1) * nt] = term
         # the materials whose albedo follows an attribute or Object Info (most scenes: none)
         attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
-        # the materials whose procedural textures read Generated or Object coordinates
-        coordinated = {k for k, m in enumerate(self.materials.materials) if _coordinates_read(m)}
+        coordinated = self._coordinated
         per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated
         for i, p in enumerate(places if per_placement else ()):
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
