@@ -39,6 +39,26 @@ def _aov(mat, name, color=None, value=None, group=False):
     return node
 
 
+def _aov_passes(sc, tmp_path, channels):
+    """(Cycles', DACRT's) {AOV name: its pass, (H, W, C) of the channels named, (H, W) for one}
+    of the scene's first view layer, both engines at the same 64 spp, one bounce."""
+    vl = sc.view_layers[0]
+    spec = SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
+                           filter_type='BLACKMAN_HARRIS', filter_width=1.5)
+
+    def passes(exr):
+        return {name: exr[f"{vl.name}.{name}.{cs}"] if len(cs) == 1 else
+                np.stack([exr[f"{vl.name}.{name}.{c}"] for c in cs], axis=-1) for name, cs in channels.items()}
+    got = {engine: passes(exr) for engine, exr in rendering.render_layers(sc, spec, tmp_path).items()}
+    return got['CYCLES'], got['DACRT']
+
+
+def _pixels_agree(key, dacrt, cycles):
+    """The same values away from edges, where the filter's samples split."""
+    diff = np.abs(dacrt - cycles)
+    assert diff.mean() < 0.01 and np.mean(diff > 0.05) < 0.03, (key, diff.mean(), np.mean(diff > 0.05))
+
+
 def test_shader_aovs_match_cycles(tmp_path):
     sc = rendering.small_cornell()
     vl = sc.view_layers[0]
@@ -83,12 +103,7 @@ def test_shader_aovs_match_cycles(tmp_path):
     world.aov_name, world.inputs['Color'].default_value = "tint", (0.3, 0.3, 0.0, 1.0)
     world = sc.world.node_tree.nodes.new('ShaderNodeOutputAOV')
     world.aov_name, world.inputs['Value'].default_value = "mask", 0.125
-    spec = SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
-                           filter_type='BLACKMAN_HARRIS', filter_width=1.5)
-    got = {engine: {'tint': np.stack([exr[f"{vl.name}.tint.{c}"] for c in "RGBA"], axis=-1),
-                    'mask': exr[f"{vl.name}.mask.X"]}
-           for engine, exr in rendering.render_layers(sc, spec, tmp_path).items()}
-    c, d = got['CYCLES'], got['DACRT']
+    c, d = _aov_passes(sc, tmp_path, {'tint': "RGBA", 'mask': "X"})
     # the AOVs are there and tell the surfaces apart (not a blank or a copy of another pass)
     assert c['tint'][..., 3].max() > 0.99 and c['tint'][..., 2].max() > 0.6 and c['mask'].max() > 0.99
     assert np.ptp(c['mask']) > 0.5 and np.ptp(c['tint'][..., 0]) > 0.5
@@ -96,9 +111,7 @@ def test_shader_aovs_match_cycles(tmp_path):
         cm = c[key].reshape(-1, 1 if key == 'mask' else 4).mean(axis=0)
         dm = d[key].reshape(-1, 1 if key == 'mask' else 4).mean(axis=0)
         assert np.all(np.abs(dm - cm) < 0.01 * np.maximum(cm, 0.05)), (key, dm, cm)
-        # pixels: the same values away from edges, where the filter's samples split
-        diff = np.abs(d[key] - c[key])
-        assert diff.mean() < 0.01 and np.mean(diff > 0.05) < 0.03, (key, diff.mean(), np.mean(diff > 0.05))
+        _pixels_agree(key, d[key], c[key])
     # the poster's image: green above 0.8 is written by nothing else
     assert min(np.sum(e['tint'][..., 1] > 0.8) for e in (c, d)) >= 3
     # the mostly transparent sheet adds its value (1) to the red wall's behind it (0.75)
@@ -126,13 +139,7 @@ def test_procedural_aovs_match_cycles(tmp_path):
     nt.links.new(cells.outputs['Distance'], _aov(mat, "cells").inputs['Value'])
     wall = scenes.plane("Wall", size=1.6, location=(0.0, 0.97, 1.0), materials=[mat])
     wall.rotation_euler = (np.pi / 2, 0.0, 0.0)
-    spec = SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
-                           filter_type='BLACKMAN_HARRIS', filter_width=1.5)
-    got = {engine: {'grain': np.stack([exr[f"{vl.name}.grain.{c}"] for c in "RGB"], axis=-1),
-                    'cells': exr[f"{vl.name}.cells.X"]}
-           for engine, exr in rendering.render_layers(sc, spec, tmp_path).items()}
-    c, d = got['CYCLES'], got['DACRT']
+    c, d = _aov_passes(sc, tmp_path, {'grain': "RGB", 'cells': "X"})
     assert np.ptp(c['cells']) > 0.3 and np.ptp(c['grain'][..., 0]) > 0.3     # the patterns show
     for key in ('grain', 'cells'):
-        diff = np.abs(d[key] - c[key])
-        assert diff.mean() < 0.01 and np.mean(diff > 0.05) < 0.03, (key, diff.mean(), np.mean(diff > 0.05))
+        _pixels_agree(key, d[key], c[key])
