@@ -360,11 +360,11 @@ class Assembly:
         space, so every instance of a mesh has the same); 0 on the frame's other triangles."""
         if out.coords is None:
             out.coords = np.zeros((len(out.triangles), 3, 6), np.float32)
-        if a.rebuilt:
-            self.ignore(f"Generated coordinates of a mesh both deformed and rebuilt by modifiers "
-                        f"({', '.join(a.rebuilt)}) approximated", place.name)
         rows = np.flatnonzero(np.isin(out.material[S], list(materials)))
         block = a.corner_coordinates()[rows]
+        if a.rebuilt:                       # (known once the coordinates are computed)
+            self.ignore(f"Generated coordinates of a mesh both deformed and rebuilt by modifiers "
+                        f"({', '.join(a.rebuilt)}) approximated", place.name)
         if mirrored:                        # corners 1 and 2 were swapped for these triangles
             block = block[:, [0, 2, 1]]
         out.coords[S][rows] = block

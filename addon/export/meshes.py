@@ -88,7 +88,7 @@ class MeshArrays:
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
                  'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes', '_coords',
-                 'original', 'rebuilt')
+                 'undeformed', 'rebuilt')
 
     def __init__(self, me, want_uvs):
         nv = len(me.vertices)
@@ -137,7 +137,7 @@ class MeshArrays:
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
             self.normal_rows = self.normal_index = None
         self.mesh, self._tangents, self._attributes = None, {}, {}   # depsgraph meshes: read on demand
-        self._coords = self.original = None
+        self._coords = self.undeformed = None
         self.rebuilt = ()
         # every UV map by name (a material may read one by a UV Map node); corner_uvs: the
         # active render one, which textures read otherwise
@@ -153,7 +153,7 @@ class MeshArrays:
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
         a.corners, a.slot, a.corner_uvs, a.uv_layers, a.active_uv, a.domain = None, None, None, {}, '', 'POINT'
-        a.mesh, a._tangents, a._attributes, a._coords, a.original, a.rebuilt = None, {}, {}, None, None, ()
+        a.mesh, a._tangents, a._attributes, a._coords, a.undeformed, a.rebuilt = None, {}, {}, None, None, ()
         a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
         return a
 
@@ -197,12 +197,12 @@ class MeshArrays:
 
     def _undeformed(self):
         """The positions Generated coordinates are of: Cycles reads the mesh's coordinates
-        before deforming modifiers and shape keys (ORCO: the modifier stack run without its
-        deform-only modifiers), which Python cannot read. `original` (the mesh before modifiers,
-        set by the export where something deforms the mesh) where the evaluated mesh has its
-        vertex count; otherwise the evaluated positions, exact where nothing deforms the mesh (a
-        Subdivision alone); `rebuilt` names the modifiers that make it approximate."""
-        me = self.original
+        before deforming modifiers and shape keys (ORCO), which Python cannot read.
+        `undeformed()` (set by the export: (the mesh before modifiers where something deforms
+        this one, or None; the modifiers that also rebuild it)) gives the source; its positions
+        where the vertex counts match, otherwise the evaluated ones, exact where nothing deforms
+        the mesh (a Subdivision alone). Sets `rebuilt`: the modifiers that make it approximate."""
+        me, self.rebuilt = self.undeformed() if self.undeformed is not None else (None, ())
         if me is not None and len(me.vertices) == len(self.positions):
             p = np.empty(len(self.positions) * 3, np.float32)
             me.attributes['position'].data.foreach_get('vector', p)

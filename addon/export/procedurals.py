@@ -1,11 +1,11 @@
-"""Colour chains that read procedural textures (Noise, Checker, Gradient): compiled into a
-function of the shading point's texture coordinates (procedural.ProceduralTexels), which the
-integrator evaluates at every hit, as Cycles' SVM does. Voronoi (F1)
-and Wave as well. The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping nodes and Texture Coordinate's
-Generated, Object and UV outputs (an unlinked Vector: Generated, as in Cycles); texture inputs
-(Scale, Detail, ...) may themselves vary over the surface. Anything else (an image, an
-attribute, another texture or coordinate kind) leaves the chain to nodeeval's evaluation, which
-reads the procedural node's own value and says so. Part of the export layer: every node setting
+"""Colour chains that read procedural textures (Noise, Voronoi F1, Wave, Checker, Gradient):
+compiled into a function of the shading point's texture coordinates (procedural.
+ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does. The chain
+may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping nodes and
+Texture Coordinate's Generated, Object and UV outputs (an unlinked Vector: Generated, as in
+Cycles); texture inputs (Scale, Detail, ...) may themselves vary over the surface. Anything
+else (an image, an attribute, another texture or coordinate kind) leaves the chain to
+nodeeval's evaluation, which reads the procedural node's own value and says so. Part of the export layer: every node setting
 is read here, so the compiled function reads no Blender data.
 """
 

@@ -5,6 +5,8 @@ then assembles the geometry (assembly.py) and reads camera, world and settings i
 scenedata.SceneData. Skipped objects, ignored features and approximated materials are
 collected as messages. Part of the export layer."""
 
+import functools
+
 import bpy
 import numpy as np
 
@@ -53,7 +55,6 @@ def _shader_trees():
     return [m.node_tree for m in bpy.data.materials if m.node_tree is not None] + list(bpy.data.node_groups)
 
 
-
 # modifiers Blender applies as deformations only (ModifierTypeType::OnlyDeform): left out of ORCO
 _DEFORM_ONLY = frozenset({'ARMATURE', 'CAST', 'CURVE', 'DISPLACE', 'HOOK', 'LAPLACIANDEFORM', 'LAPLACIANSMOOTH',
                           'LATTICE', 'MESH_DEFORM', 'SHRINKWRAP', 'SIMPLE_DEFORM', 'SMOOTH', 'CORRECTIVE_SMOOTH',
@@ -61,6 +62,7 @@ _DEFORM_ONLY = frozenset({'ARMATURE', 'CAST', 'CURVE', 'DISPLACE', 'HOOK', 'LAPL
 # modifiers that leave the positions and vertex count alone
 _NO_GEOMETRY = frozenset({'DATA_TRANSFER', 'NORMAL_EDIT', 'WEIGHTED_NORMAL', 'UV_PROJECT', 'UV_WARP',
                           'VERTEX_WEIGHT_EDIT', 'VERTEX_WEIGHT_MIX', 'VERTEX_WEIGHT_PROXIMITY'})
+
 
 class Exporter:
     """One frame's export: walks the depsgraph's instances (lights, meshes and their placements,
@@ -300,6 +302,24 @@ class Exporter:
                                 "see-through or translucent one crosses two surfaces where Cycles' crosses one",
                                 p.name)
 
+    def _undeformed_source(self, original, mesh):
+        """(the mesh Generated coordinates are of, or None for the evaluated one; the modifiers
+        that make that approximate) for the evaluated mesh `mesh` of an instance whose original
+        object is `original`. Blender's ORCO: the modifier stack run on the undeformed mesh
+        with the deform-only modifiers (and shape keys) left out, so the original positions
+        only when nothing else changes the mesh, the evaluated ones when nothing deforms it. A
+        Geometry Nodes instance's `original` is its instancer, whose mesh is not this one's
+        source: only an object that evaluates to this mesh has it."""
+        source = original.data if original is not None else None
+        if not isinstance(source, bpy.types.Mesh) or self._evaluated(original).data != mesh:
+            return None, ()
+        mods = [m for m in original.modifiers if m.show_render]
+        deforms = bool(source.shape_keys) or any(m.type in _DEFORM_ONLY for m in mods)
+        if not deforms:
+            return None, ()
+        rebuilt = tuple(m.name for m in mods if m.type not in _DEFORM_ONLY and m.type not in _NO_GEOMETRY)
+        return (source if source is not mesh else None), rebuilt
+
     def _evaluated(self, ob):
         """The depsgraph's own evaluated object for an instance's object (alive through the
         export, unlike an instance's temporary one): what Object Info and Object attributes read.
@@ -323,24 +343,9 @@ class Exporter:
             arrays = mesh_arrays(ob.data, want_uvs=True)
             if arrays is not None:
                 arrays.mesh = ob.data       # the depsgraph's mesh, alive through the export
-                source = ob.original.data if ob.original is not None else None
-                # a Geometry Nodes instance's `original` is its instancer, whose mesh is not
-                # this one's source: only an object that evaluates to this mesh has it
-                if source is not None and ob.original.evaluated_get(self.depsgraph).data != ob.data:
-                    source = None
-                # Blender's ORCO: the modifier stack run on the undeformed mesh with the deform-only
-                # modifiers (and shape keys) left out; the original positions only when nothing else
-                # changes the mesh, the evaluated ones when nothing deforms it
-                if source is not None:
-                    mods = [m for m in ob.original.modifiers if m.show_render]
-                    deforms = bool(source.shape_keys) or any(m.type in _DEFORM_ONLY for m in mods)
-                    builds = [m for m in mods if m.type not in _DEFORM_ONLY and m.type not in _NO_GEOMETRY]
-                    if not deforms:
-                        source = None
-                    elif builds:            # said if a procedural texture reads them (assembly)
-                        arrays.rebuilt = tuple(m.name for m in builds)
-                if isinstance(source, bpy.types.Mesh) and source is not ob.data:
-                    arrays.original = source    # before modifiers (Generated coordinates)
+                # what Generated coordinates are of, looked up only if a procedural texture reads
+                # them (MeshArrays.corner_coordinates); the original object outlives the export
+                arrays.undeformed = functools.partial(self._undeformed_source, ob.original, ob.data)
         else:
             arrays = tessellated(ob, self)
         if arrays is None or len(arrays.triangles) == 0:
