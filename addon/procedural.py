@@ -1,12 +1,11 @@
 """Procedural textures evaluated at shading points, as Cycles' SVM computes them: Checker
-(svm_checker), Gradient (svm_gradient), Wave (svm_wave) in numpy and Noise (kernel/svm/noise.h, fractal_noise.h, noise_texture:
-Perlin noise on Bob Jenkins' lookup3 hash, fBM octaves) in the native kernel; float32, the
-precision Cycles computes in, so a pattern's edges fall where Cycles puts them.
-
-Voronoi (kernel/svm/voronoi.h, its F1 feature) runs in the native kernel too.
+(svm_checker), Gradient (svm_gradient) and Wave (svm_wave) in numpy, Noise (kernel/svm/noise.h,
+fractal_noise.h, noise_texture: Perlin noise on Bob Jenkins' lookup3 hash, fBM and the
+multifractals) and Voronoi (kernel/svm/voronoi.h, its F1 feature) in native kernels; float32,
+the precision Cycles computes in, so a pattern's edges fall where Cycles puts them.
 
 `ProceduralTexels` is what a material's colour texture is when its colour comes from these
-nodes: the export compiles the node chain (nodeeval.compile_procedural_chain) into a function
+nodes: the export compiles the node chain (export/procedurals.py) into a function
 of the shading point's texture coordinates, and the integrator calls `evaluate` with the
 coordinates it needs ('generated', 'object', 'uv'; each (n, 3)) at its hits instead of looking
 an image up.
@@ -91,7 +90,6 @@ def voronoi_f1(co, scale, randomness, metric, dims, normalize):
     return d, color, position
 
 
-_BANDS = {'X': (1, 0, 0), 'Y': (0, 1, 0), 'Z': (0, 0, 1)}
 _RINGS = {'X': (0, 1, 1), 'Y': (1, 0, 1), 'Z': (1, 1, 0), 'SPHERICAL': (1, 1, 1)}
 
 
@@ -103,7 +101,7 @@ def wave(co, scale, distortion, detail, detail_scale, detail_roughness, phase, k
     def col(v):
         return np.asarray(v, F32).reshape(-1)
     p = (np.asarray(co, F32) * col(scale)[:, None]).astype(F32)
-    p = (p + F32(0.000001)) * F32(0.999999)        # Cycles: away from exact unit coordinates
+    p = _off_unit(p)
     if kind == 'BANDS':
         if direction == 'DIAGONAL':
             n = (p[:, 0] + p[:, 1] + p[:, 2]) * F32(10.0)
@@ -125,10 +123,16 @@ def wave(co, scale, distortion, detail, detail_scale, detail_roughness, phase, k
     return (np.abs(n - np.floor(n + F32(0.5))) * F32(2.0)).astype(F32)
 
 
+def _off_unit(p):
+    """Cycles' guard of the Checker and Wave textures against precision issues on exact unit
+    coordinates: (p + 1e-6) x 0.999999."""
+    return (p + F32(0.000001)) * F32(0.999999)
+
+
 def checker(co, scale):
     """The Checker Texture's factor (n,) at points co (n, 3): 1 on the first colour's cells."""
     p = (co * np.asarray(scale, F32).reshape(-1, 1)).astype(F32)
-    p = (p + F32(0.000001)) * F32(0.999999)        # Cycles: away from exact unit coordinates
+    p = _off_unit(p)
     with np.errstate(invalid='ignore'):
         f = np.floor(p)
         i = np.abs(np.where(np.isfinite(f), f, 0).astype(np.int64)) % 2

@@ -37,10 +37,7 @@ def shader_aovs(ntree, reasons, texture=None):
                 continue
             found = procedurals.compile_socket(socket, color, reasons) if (name, kind) not in textures else None
             if found is not None:           # procedural textures: computed per shading point
-                fn, needs, label = found
-                tex = ProceduralTexels(fn, needs, label)
-                textures[name, kind] = Texture(('aov', 'procedural', id(tex)), tex, 'Linear', 'REPEAT', None, None,
-                                               label)
+                textures[name, kind] = Texture.procedural(ProceduralTexels(*found), 'aov')
                 parts[kind] = np.zeros(3 if color else 1, np.float32)
                 continue
             f = nodeeval.Evaluator(texture, reasons, MISSING_IMAGE).input(socket, color)

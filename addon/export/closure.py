@@ -32,6 +32,12 @@ class Texture:
         """pixels (these texels, or a colour baked into them) as the scene data holds a texture."""
         return pixels if self.udim is None else self.udim.with_texels(pixels)
 
+    @classmethod
+    def procedural(cls, texels, kind='procedural'):
+        """A procedural texture (procedural.ProceduralTexels) as a material holds a texture: its
+        own key (never merged with another), read without UV map or filtering."""
+        return cls((kind, id(texels)), texels, 'Linear', 'REPEAT', None, None, texels.name)
+
     def mean(self):
         """The mean colour (3,) of these texels (a procedural texture's over the unit cube)."""
         if isinstance(self.pixels, ProceduralTexels):
@@ -162,5 +168,4 @@ def _procedural_sum(a, wa, b, wb):
     def both(coords):
         return wa * pa.evaluate(coords).T + wb * pb.evaluate(coords).T
     name = ', '.join(dict.fromkeys(n for n in (pa.name, pb.name) if n))
-    tex = ProceduralTexels(both, pa.needs | pb.needs, name)
-    return Texture(('procedural', id(tex)), tex, 'Linear', 'REPEAT', None, None, name)
+    return Texture.procedural(ProceduralTexels(both, pa.needs | pb.needs, name))

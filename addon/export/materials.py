@@ -613,9 +613,7 @@ class MaterialBuilder:
             f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
             a = albedo(sides[0], coords)
             return a + (albedo(sides[1], coords) - a) * f
-        tex = ProceduralTexels(mixed, needs, name)
-        return Closure(texture=Texture(('procedural', id(tex)), tex, 'Linear', 'REPEAT', None, None, name),
-                       tex_weight=(1.0, 1.0, 1.0))
+        return Closure(texture=Texture.procedural(ProceduralTexels(mixed, needs, name)), tex_weight=(1.0, 1.0, 1.0))
 
     def _evaluated_alpha(self, socket, reasons):
         """(Texture, False) whose alpha is what nodes compute from one image (Blender's glTF
@@ -662,8 +660,7 @@ class MaterialBuilder:
         link = linked_link(socket)
         found = procedurals.compile_color(socket, reasons) if link is not None else None
         if found is not None:       # evaluated at each shading point (procedural.py)
-            return Closure(texture=Texture(('procedural', id(found)), found, 'Linear', 'REPEAT', None, None, found.name),
-                           tex_weight=(1.0, 1.0, 1.0))
+            return Closure(texture=Texture.procedural(found), tex_weight=(1.0, 1.0, 1.0))
         if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
                                  link.from_node.type in nodeeval.VIEW_NODE_TYPES or
                                  link.from_node.type in nodeeval.ATTRIBUTE_NODE_TYPES or is_image_alpha(link)):

@@ -5,8 +5,8 @@ may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapp
 Texture Coordinate's Generated, Object and UV outputs (an unlinked Vector: Generated, as in
 Cycles); texture inputs (Scale, Detail, ...) may themselves vary over the surface. Anything
 else (an image, an attribute, another texture or coordinate kind) leaves the chain to
-nodeeval's evaluation, which reads the procedural node's own value and says so. Part of the export layer: every node setting
-is read here, so the compiled function reads no Blender data.
+nodeeval's evaluation, which reads the procedural node's own value and says so. Part of the
+export layer: every node setting is read here, so the compiled function reads no Blender data.
 """
 
 from __future__ import annotations
