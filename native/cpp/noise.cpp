@@ -117,11 +117,9 @@ inline float snoise(const float* p, int dims) {
     return (dims == 3 ? 0.9820f : 0.6616f) * r;
 }
 
-// Cycles' noise_fbm of point p (dims), offset by off (dims) first.
-float fbm(const float* p, const float* off, int dims, float detail, float roughness, float lacunarity,
-          bool normalize) {
-    float q[3], s[3];
-    for (int a = 0; a < dims; ++a) q[a] = off ? p[a] + off[a] : p[a];
+// Cycles' noise_fbm of point q (dims).
+float fbm(const float* q, int dims, float detail, float roughness, float lacunarity, bool normalize) {
+    float s[3];
     float fscale = 1.0f, amp = 1.0f, maxamp = 0.0f, sum = 0.0f;
     const int octaves = int(std::floor(detail));
     for (int i = 0; i <= octaves; ++i) {
@@ -226,10 +224,10 @@ float ridged_multi_fractal(float* p, int dims, float detail, float roughness, fl
 // Cycles' noise_select: the texture's type at point p (dims), offset by off (dims) first.
 float noise_select(const float* p, const float* off, int dims, int type, float detail, float roughness,
                    float lacunarity, float offset, float gain, bool normalize) {
-    if (type == NOISE_FBM) return fbm(p, off, dims, detail, roughness, lacunarity, normalize);
     float q[3];
     for (int a = 0; a < dims; ++a) q[a] = off ? p[a] + off[a] : p[a];
     switch (type) {
+        case NOISE_FBM: return fbm(q, dims, detail, roughness, lacunarity, normalize);
         case NOISE_MULTIFRACTAL: return multi_fractal(q, dims, detail, roughness, lacunarity);
         case NOISE_HYBRID_MULTIFRACTAL: return hybrid_multi_fractal(q, dims, detail, roughness, lacunarity, offset, gain);
         case NOISE_RIDGED_MULTIFRACTAL: return ridged_multi_fractal(q, dims, detail, roughness, lacunarity, offset, gain);
