@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "arealanes.h"
 #include "parallel.h"
 #include "pathvertex.h"
 #include "random.h"
@@ -25,6 +26,65 @@ struct Pending {  // a shadow ray before its block's place in the output is know
     int32_t skip;  // the triangle it leaves, or -1 when it is meant to be able to hit it
 };
 
+// A light sample of one point, weighted (nee_scale): direction, distance, value and whether
+// it can contribute.
+struct Drawn {
+    float wi[3], dist, value[3];
+    bool ok;
+};
+
+// What event_block's first steps give the cnt points i0.. (words wa, wb) when every point
+// samples the one area lamp `lamp` (entry 0, selection probability p_sel, no_mis): sample_lamp
+// and nee_scale, kLampLanes points at a time (arealanes.h; a short last group repeats its last
+// point), the same operations per lane, so the same bits.
+void draw_area_lanes(const LampRecord& lamp, float p_sel, bool no_mis, const VertexPoints& p, size_t i0, size_t cnt,
+                     const uint32_t* wa, const uint32_t* wb, Drawn* out) {
+    constexpr size_t K = kLampLanes;
+    const size_t n = p.n;
+    for (size_t j0 = 0; j0 < cnt; j0 += K) {
+        float P[3][K], ns[3][K], thr[3][K], u1[K], u2[K];
+        for (size_t k = 0; k < K; ++k) {
+            const size_t i = i0 + std::min(j0 + k, cnt - 1);
+            for (int a = 0; a < 3; ++a) {
+                P[a][k] = p.P[size_t(a) * n + i];
+                ns[a][k] = p.ns[size_t(a) * n + i];
+                thr[a][k] = p.thr ? p.thr[size_t(a) * n + i] : 1.0f;
+            }
+            u1[k] = unit24(wa[i - i0]);
+            u2[k] = unit24(wb[i - i0]);
+        }
+        LampLanes s;
+        sample_area_lanes(lamp, P[0], P[1], P[2], u1, u2, s);
+        int ok[K];
+        for (size_t k = 0; k < K; ++k) {  // nee_scale, its divisions in every lane
+            const float inv_pi = 0.3183098861837907f;
+            const float pdf = no_mis ? lampmath::INF : s.pdf[k];
+            const float cos_s = ns[0][k] * s.wi[0][k] + ns[1][k] * s.wi[1][k] + ns[2][k] * s.wi[2][k];
+            float r = cos_s * inv_pi;
+            r /= p_sel * pdf;
+            r *= r;
+            r += 1.0f;
+            float scale = cos_s * inv_pi;
+            scale /= r * p_sel;
+            float m = -1.0f;
+            for (int a = 0; a < 3; ++a) {
+                float v = s.value[a][k];
+                v *= thr[a][k];  // (1 without a throughput: the same bits)
+                v *= scale;
+                s.value[a][k] = v;
+                m = m < v ? v : m;
+            }
+            ok[k] = (cos_s > 0) & (m > 0);
+        }
+        for (size_t k = 0; k < K && j0 + k < cnt; ++k) {
+            Drawn& o = out[j0 + k];
+            for (int a = 0; a < 3; ++a) o.wi[a] = s.wi[a][k], o.value[a] = s.value[a][k];
+            o.dist = s.dist[k];
+            o.ok = ok[k];
+        }
+    }
+}
+
 // Paths [b, e): value and contrib in place, shadow rays to pending[b, b + count); returns the
 // count. Arguments by value, so the loop reads them from registers or its own stack (see
 // lamps.cpp).
@@ -32,7 +92,11 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                    float* point_out, Pending* pending, size_t b, size_t e, size_t* skipped) {
     const size_t n = p.n, T = L.num_tris;
     size_t m = b, bad = 0;
+    // one area lamp, every point's entry: its samples drawn kLampLanes points at a time
+    const bool lanes = !p.pick && L.num_lamps > 0 && area_lanes_apply(L.lamps[0]);
+    Drawn drawn[kWordChunk];
     for_words(p.keys, n, p.ka, p.kb, b, e, [&](size_t i0, size_t cnt, const uint32_t* wa, const uint32_t* wb) {
+        if (lanes) draw_area_lanes(L.lamps[0], L.prob[0], L.no_mis[0], p, i0, cnt, wa, wb, drawn);
         for (size_t j = 0; j < cnt; ++j) {
             const size_t i = i0 + j;
             const float u1 = unit24(wa[j]), u2 = unit24(wb[j]);
@@ -50,7 +114,11 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             if (entry_out) entry_out[i] = int32_t(entry);
             float wi[3], dist, pdf, value[3], target[3];
             const bool lamp = entry < L.num_lamps;
-            if (lamp) {
+            if (lanes) {  // drawn and weighted already
+                for (int a = 0; a < 3; ++a) wi[a] = drawn[j].wi[a], value[a] = drawn[j].value[a];
+                dist = drawn[j].dist;
+                pdf = 0.0f;  // (weighted with it)
+            } else if (lamp) {
                 const LampSample s = sample_lamp(L.lamps[entry], P, u1, u2);
                 for (int a = 0; a < 3; ++a) wi[a] = s.wi[a], value[a] = s.value[a];
                 dist = s.dist;
@@ -76,7 +144,8 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             // In front of the shading normal is enough: a sample below the geometric one is
             // the shadow ray's to decide (it leaves through its own, skipped, triangle), as in
             // Cycles, whose diffuse eval has no geometric test.
-            bool ok = p_sel > 0.0f && nee_scale(ns, nullptr, wi, pdf, p_sel, p.thr ? thr : nullptr, value);
+            bool ok = p_sel > 0.0f &&
+                      (lanes ? drawn[j].ok : nee_scale(ns, nullptr, wi, pdf, p_sel, p.thr ? thr : nullptr, value));
             if (!(p_sel > 0.0f)) value[0] = value[1] = value[2] = 0.0f;  // (a tree pick below float's range)
             if (p.bump) {  // a normal-mapped point: Cycles' bump shadowing of the sample
                 const float Ns[3] = {p.bump[i], p.bump[n + i], p.bump[2 * n + i]};

@@ -81,9 +81,10 @@ void sample_words(const uint32_t* pixel, const uint32_t* sample, size_t n, uint3
 
 // body(i0, count, a, b) for consecutive chunks of paths [begin, end) with their sample words;
 // keys: rows pixel seed, sample index (stride n). Chunks of 512 words stay in L1 and vectorise.
+constexpr size_t kWordChunk = 512;
 template <class F>
 void for_words(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, size_t begin, size_t end, F&& body) {
-    constexpr size_t kChunk = 512;
+    constexpr size_t kChunk = kWordChunk;
     uint32_t a[kChunk], b[kChunk];
     for (size_t i0 = begin; i0 < end; i0 += kChunk) {
         const size_t m = kChunk < end - i0 ? kChunk : end - i0;

@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 from dacrt import shading
 
-from addon.lights import lamp_records
+from addon.lights import lamp_records, make_lamp
 from addon.lights.base import RECORD_WIDTH
 
 from ..native.test_shading import _geo, _unit
-from .test_native_lamps import NAMES, make, points
+from .scenes import light
+from .test_native_lamps import NAMES, TILT, make, points
 
 F32 = np.float32
 SHORTEN = F32(1.0 - 2.0 ** -16)
@@ -200,6 +201,48 @@ def test_single_light_needs_no_pick_and_more_lights_do():
     lc = _lights(rng, True, True)
     with pytest.raises(ValueError, match='pick'):
         shading.next_event(lc, P, P_off, ns, ng, thr, keys, 3, 4)
+
+
+@pytest.mark.parametrize('name', ['area_square', 'area_rectangle', 'area_disk', 'area_ellipse',
+                                  'area_rectangle_unnormalized', 'area_square_spread', 'sheared'])
+@pytest.mark.parametrize('thr,no_mis', [(True, False), (False, True)])
+def test_one_area_lamp_drawn_lane_by_lane_equals_the_composed_kernels(name, thr, no_mis):
+    """With one lamp and no pick, next_event draws an area lamp's samples and weights them
+    eight points at a time (native/cpp/arealanes.h): bit for bit lamp_sample + nee_weight +
+    shadow_rays, where the lamp looks small (drawn by area) and large (by solid angle), for
+    points behind it, on its plane, at its centre, at its corners, far off or not finite, and a
+    point count that is no multiple of eight (the last group repeats its last point)."""
+    rng = np.random.default_rng(len(name) + 7 * thr)
+    lamp = make(name) if name != 'sheared' else make_lamp(light('AREA', (4.0, 2.0, 1.0),
+                                                                 np.diag([1.0, 2.5, 0.4, 1.0]) @ TILT, shape='SQUARE'))
+    rec = lamp_records([lamp])
+    one = shading.LightChoice(rec, [1.0], [1.0], [no_mis], [True])
+    n = 20_003
+    P, P_off, ns, ng, th, keys = _points(rng, n, flat=False, thr=thr)
+    r = rec[0]
+    pos, ax, ay, normal = r[5:8], r[14:17], r[17:20], r[26:29]
+    special = [pos, pos + 0.5 * ax + 0.5 * ay, pos + 0.3 * ax, pos + 0.5 * ax + 1e-3 * normal,
+               pos + 1e-6 * normal, pos - 0.2 * normal, pos + 1e6 * normal + 3e5 * ax, pos + 0.01 * normal,
+               [np.nan, 0.0, 0.0], [np.inf, 1.0, 2.0], pos + 40.0 * ay + 0.1 * normal]
+    P[:, :len(special)] = np.asarray(special, F32).T
+    P_off[:, :len(special)] = P[:, :len(special)]
+    # near the lamp, where it is large: sampled by solid angle there
+    near = slice(len(special), 4000)
+    P[:, near] = (pos[:, None] + ax[:, None] * rng.uniform(-1, 1, 4000 - len(special)).astype(F32)
+                  + normal[:, None] * rng.uniform(-0.05, 0.6, 4000 - len(special)).astype(F32))
+    P_off[:, near] = P[:, near]
+    with np.errstate(invalid='ignore', over='ignore'):
+        got = shading.next_event(one, P, P_off, ns, ng, th, keys, 3, 4)
+        ref = _composed(one, P, P_off, ns, ng, th, keys, 3, 4, None, None, True)
+        picked = shading.next_event(one, P, P_off, ns, ng, th, keys, 3, 4, pick=rng.random(n))  # the scalar path
+    for name_, a, b, c in zip(('value', 'contrib', 'rays', 'send'), got[:4], ref[:4], picked[:4]):
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), f'{name_} differs from the composed kernels'
+        assert np.array_equal(a.view(np.uint8), c.view(np.uint8)), f'{name_} differs from the scalar path'
+    assert got[5] == ref[5] and 0 < got[5] < n
+    if getattr(lamp, 'solid_angle', False) and lamp.tan_half_spread is None:   # both draws occurred
+        with np.errstate(invalid='ignore', over='ignore'):
+            use = lamp._sph_rect(P, -0.5, 0.5, -0.5, 0.5)['use']
+        assert 0.05 < use.mean() < 0.95
 
 
 def test_next_event_checks_its_arguments():
