@@ -348,20 +348,23 @@ def _no_texture(node, reasons):
     raise _NotConstant
 
 
-def constant(socket, color, notes=None):
+def constant(socket, color, notes=None, why=None):
     """(value, exact): the constant feeding a colour or vector input (color True: (3,)) or a
     float input ((1,)), computed through RGB and Value nodes and the nodes above (Cycles
     converts a float to (v, v, v), a colour to its luminance). Where an image or a node the
-    evaluation cannot compute feeds it: the carrier's own value and exact False. With a list
-    `notes`, view-dependent nodes count as their average over view directions (noted there);
-    without one they are nodes it cannot compute."""
+    evaluation cannot compute feeds it: the carrier's own value and exact False, and with a
+    list `why` what could not be computed there (e.g. "value from 'Light Path' node"). With a
+    list `notes`, view-dependent nodes count as their average over view directions (noted
+    there); without one they are nodes it cannot compute."""
     reasons = []
     kept = []
     try:
         f = Evaluator(_no_texture, reasons, None, notes=kept if notes is not None else None).input(socket, color)
     except _NotConstant:
-        reasons.append("image")
+        reasons.append("an image")
     if reasons:
+        if why is not None:      # what was not computed, without what the caller says it used
+            why.extend(r.split(" as its average")[0].removesuffix("; its own value used") for r in reasons)
         return _own(nodegraph.source(socket)[1].default_value, color), False
     if notes is not None:
         notes.extend(kept)
@@ -374,9 +377,9 @@ def constant_color(socket):
     return tuple(float(x) for x in v), exact
 
 
-def constant_value(socket, notes=None):
+def constant_value(socket, notes=None, why=None):
     """(float, exact) of a float input: see constant."""
-    v, exact = constant(socket, False, notes)
+    v, exact = constant(socket, False, notes, why)
     return float(v[0]), exact
 
 

@@ -35,9 +35,10 @@ def mix_factor(node, reasons, label, surface=True):
     export evaluates, on a surface a Fresnel or Layer Weight (a clear coat's blend) as its
     average over view directions (fresnel.py; not in the world, which has no surface to view);
     otherwise at its own value."""
-    notes = []
-    fac, ok = constant_value(node.inputs['Fac'], notes if surface else None)
+    notes, why = [], []
+    fac, ok = constant_value(node.inputs['Fac'], notes if surface else None, why)
     reasons.extend(f"{label} factor from {n}" for n in notes)
     if not ok:
-        reasons.append(f"{label} factor driven by nodes; its own value used")
+        what = ", ".join(dict.fromkeys(why)) or "nodes"
+        reasons.append(f"{label} factor not computed ({what}); its own value {fac:.3g} used")
     return min(max(fac, 0.0), 1.0)

@@ -119,4 +119,5 @@ def test_world_mix_factor_keeps_its_own_value(scene):
     nt.links.new(mix.outputs[0], out.inputs['Surface'])
     uniform, env, reason = export.export_world(scene)
     np.testing.assert_allclose(uniform, (0.75, 0.0, 0.25))
-    assert env is None and "world Mix Shader factor driven by nodes; its own value used" in reason
+    assert env is None and ("world Mix Shader factor not computed ('Layer Weight Facing' (view-dependent)); "
+                            "its own value 0.25 used") in reason

@@ -205,3 +205,25 @@ def test_a_chain_that_cannot_be_read_falls_back_and_says_why(scene, exported, mo
     m = _material(exported(), "Noise")
     assert not isinstance(m.texture, ProceduralTexels)
     assert "procedural texture chain not evaluated per point (KeyError" in m.approximated, m.approximated
+
+
+def test_a_mix_factor_that_is_not_computed_names_its_source(scene, exported):
+    """A Mix Shader factor the export cannot compute is reported with the node it comes from and
+    the value used instead; a procedural factor between an image and a colour says why it is
+    not evaluated per point."""
+    scenes.camera()
+    trick, nt, mix, _, _ = scenes.mix_shader_material("Trick", 'ShaderNodeBsdfPrincipled', 'ShaderNodeEmission', 0.3)
+    nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Diffuse Ray'], mix.inputs['Fac'])
+    imaged, nt, mix, _, b = scenes.mix_shader_material("Imaged", 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image("Imaged image", np.ones((2, 2, 4), np.float32))
+    nt.links.new(tex.outputs['Color'], b.inputs['Color'])
+    noise, ramp = nt.nodes.new('ShaderNodeTexNoise'), nt.nodes.new('ShaderNodeMapRange')
+    nt.links.new(noise.outputs['Fac'], ramp.inputs[0])
+    nt.links.new(ramp.outputs[0], mix.inputs['Fac'])
+    scenes.plane("A", materials=(trick,))
+    scenes.plane("B", location=(3, 0, 0), materials=(imaged,))
+    data = exported()
+    text = _material(data, "Trick").approximated + " | " + _material(data, "Imaged").approximated
+    assert "Mix Shader factor not computed (value from 'Light Path' node); its own value 0.3 used" in text
+    assert "Mix Shader factor from procedural textures" in text and "an image" in text
