@@ -1,5 +1,5 @@
-// Argument checks the pybind11 binding files share: shapes named in the message, output arrays
-// written in place, and the light clamp limit.
+// Argument checks the pybind11 binding files share: shapes named in the message, triangle
+// indices, output arrays written in place, and the light clamp limit.
 #pragma once
 
 #include <pybind11/numpy.h>
@@ -29,6 +29,14 @@ inline void need_shape(const py::array& a, py::ssize_t rows, size_t n, const cha
         throw py::value_error(std::string(name) + " must have shape " +
                               (rows > 0 ? "(" + std::to_string(rows) + ", " : "(") + std::to_string(n) +
                               (rows > 0 ? ")" : ",)") + ", got " + shape_str(a));
+}
+
+// Each of the n triangle indices p in [0, M).
+inline void check_prim(const int32_t* p, size_t n, size_t M, const char* name) {
+    for (size_t j = 0; j < n; ++j)
+        if (p[j] < 0 || size_t(p[j]) >= M)
+            throw py::value_error(std::string(name) + "[" + std::to_string(j) + "] = " + std::to_string(p[j]) +
+                                  " is outside 0.." + std::to_string(M ? M - 1 : 0));
 }
 
 // A caller-provided output array the kernel writes in place.

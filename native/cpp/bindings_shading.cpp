@@ -52,13 +52,22 @@ const float* optional_rows(const py::object& o, py::ssize_t rows, size_t n, cons
     return keep.data();
 }
 
-// A contiguous (n,) array of Record-sized records (rays or hits), as a pointer to them.
+// A contiguous (n,) array of Record-sized records (rays or hits) to read.
 template <class Record>
-Record* records(const py::array& a, size_t n, const char* what) {
+const Record* records(const py::array& a, size_t n, const char* what) {
     if (a.ndim() != 1 || size_t(a.shape(0)) != n || a.itemsize() != sizeof(Record) || !(a.flags() & py::array::c_style))
         throw py::value_error(std::string(what) + " must be a contiguous (" + std::to_string(n) + ",) array of " +
                               std::to_string(sizeof(Record)) + "-byte records");
-    return static_cast<Record*>(const_cast<void*>(a.data()));
+    return static_cast<const Record*>(a.data());
+}
+
+// The same, to write: also writeable (a read-only array, e.g. over bytes or a read-only
+// memory map, would be overwritten or fault).
+template <class Record>
+Record* out_records(py::array a, size_t n, const char* what) {
+    records<Record>(a, n, what);
+    if (!a.writeable()) throw py::value_error(std::string(what) + " must be writeable (written in place)");
+    return static_cast<Record*>(a.mutable_data());
 }
 
 // An optional one-dimensional index array, each entry in [0, limit); null when absent.
@@ -74,7 +83,7 @@ void pack_rays_py(F32Array O, F32Array D, F32Array tfar, py::array out) {
     size_t n = rows_of(O, 3, "O");
     if (rows_of(D, 3, "D") != n) throw py::value_error("D must have the shape of O");
     need_len(tfar, n, "tfar");
-    Ray* r = records<Ray>(out, n, "out");
+    Ray* r = out_records<Ray>(out, n, "out");
     py::gil_scoped_release nogil;
     pack_rays(O.data(), D.data(), tfar.data(), n, r);
 }
@@ -130,7 +139,7 @@ py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns
     Ray* r = nullptr;
     if (o) {
         if (rays.is_none()) throw py::value_error("origins need a rays array to fill");
-        r = records<Ray>(rays.cast<py::array>(), n, "rays");
+        r = out_records<Ray>(rays.cast<py::array>(), n, "rays");
     }
     ShadingOffset off{};
     F32Array freq_keep;
@@ -145,6 +154,7 @@ py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns
         off.M = size_t(freq_keep.shape(0));
         prim_keep = t[1].cast<py::array_t<int32_t, py::array::c_style>>();
         need_shape(prim_keep, 0, n, "shading_offset prim");
+        check_prim(prim_keep.data(), size_t(prim_keep.shape(0)), off.M, "shading_offset prim");
         off.prim = prim_keep.data();
         off.thr = out_array(t[2].cast<py::array>(), 3, n, "shading_offset thr");
     }
@@ -206,7 +216,7 @@ py::array_t<bool> shadow_rays_py(F32Array O, F32Array wi, F32Array dist, py::obj
     if (idx.ndim() != 1) throw py::value_error("idx must be one-dimensional");
     check_index(idx, n, "idx");
     size_t k = size_t(idx.shape(0));
-    Ray* r = records<Ray>(out, k, "out");
+    Ray* r = out_records<Ray>(out, k, "out");
     py::array_t<bool> valid{py::ssize_t(k)};
     {
         py::gil_scoped_release nogil;
@@ -402,7 +412,7 @@ py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, p
         need_len(lv, n, "lv");
     }
     F32Array O({py::ssize_t(3), py::ssize_t(n)}), D({py::ssize_t(3), py::ssize_t(n)}), tmax{py::ssize_t(n)};
-    Ray* rec = rays.is_none() ? nullptr : records<Ray>(rays.cast<py::array>(), n, "rays");
+    Ray* rec = rays.is_none() ? nullptr : out_records<Ray>(rays.cast<py::array>(), n, "rays");
     {
         py::gil_scoped_release nogil;
         camera_rays(c, rx.data(), ry.data(), n, O.mutable_data(), D.mutable_data(), tmax.mutable_data(), rec,

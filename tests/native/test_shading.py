@@ -566,3 +566,60 @@ def test_transform_points_is_the_float64_affine_map_rounded_once(k, n, dtype):
         shading.transform_points(p, lin, off, np.empty((k, n + 1, 3), dtype))
     with pytest.raises(ValueError, match="offset must be None or have shape"):
         shading.transform_points(p, lin, np.zeros((k + 1, 3)), np.empty((k, n, 3), dtype))
+
+
+def test_ray_outputs_must_be_writeable():
+    """A read-only ray array handed to a kernel that writes rays is refused and left as it was
+    (an array over immutable bytes had been overwritten; a read-only memory map crashed the
+    process)."""
+    n = 4
+    O, D, tfar = np.zeros((3, n), F32), np.ones((3, n), F32), np.ones(n, F32)
+    buf = bytes(32 * n)
+    out = np.frombuffer(buf, dacrt.RAY_DTYPE)
+    with pytest.raises(ValueError, match="out must be writeable"):
+        shading.pack_rays(O, D, tfar, out=out)
+    assert buf == bytes(32 * n)
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "rays.bin")
+        with open(path, "wb") as f:
+            f.write(bytes(32 * n))
+        mapped = np.memmap(path, dtype=dacrt.RAY_DTYPE, mode='r', shape=(n,))
+        with pytest.raises(ValueError, match="out must be writeable"):
+            shading.pack_rays(O, D, tfar, out=mapped)
+        del mapped
+
+
+def test_triangle_indices_out_of_range_are_refused():
+    """prim arrays (the shading offset's, next_event's with a terminator) name their first
+    index outside the triangle table instead of reading another triangle's data, and an int64
+    index beyond int32 is refused rather than wrapped."""
+    rng = np.random.default_rng(4)
+    n = 50
+    keys = rng.integers(0, 2 ** 32, (2, n), dtype=np.uint64).astype(np.uint32)
+    ns = _unit(rng, n)
+    freq, thr = np.array([1.0, 1.5], F32), np.ones((3, n), F32)
+    for bad, where in ((7, "= 7 is outside 0..1"), (-1, "= -1 is outside"), (2 ** 31 - 1, "= 2147483647 is outside")):
+        prim = np.zeros(n, np.int32)
+        prim[3] = bad
+        with pytest.raises(ValueError, match=r"shading_offset prim\[3\] " + where):
+            shading.cosine_scatter(keys, 5, 9, ns, ns, shading_offset=(freq, prim, thr))
+    prim = np.zeros(n, np.int64)
+    prim[5] = 2 ** 32
+    with pytest.raises(ValueError, match=r"shading_offset prim\[5\] = 4294967296 is not a triangle index"):
+        shading.cosine_scatter(keys, 5, 9, ns, ns, shading_offset=(freq, prim, thr))
+    with pytest.raises(ValueError, match="must be an integer array"):
+        shading.cosine_scatter(keys, 5, 9, ns, ns, shading_offset=(freq, np.zeros(n), thr))
+    # next_event: a terminator reads the triangle of each point
+    geo, _ = _geo(rng, 3)
+    rec = np.zeros((1, dacrt._core.LAMP_RECORD_WIDTH), F32)
+    rec[0, 0], rec[0, 2:5], rec[0, 5:8] = 0, 1.0, (0.0, 0.0, 5.0)        # a point lamp
+    one = shading.LightChoice(rec, [1.0], [1.0], [False], [True])
+    P = rng.random((3, n)).astype(F32)
+    prim = np.zeros(n, np.int32)
+    prim[9] = 3
+    with pytest.raises(ValueError, match=r"prim\[9\] = 3 is outside 0..2"):
+        shading.next_event(one, P, P, ns, None, None, keys, 1, 2, prim=prim,
+                           terminator=(geo, None, None, np.full(3, 1.5, F32), None, None))
+    ok = shading.next_event(one, P, P, ns, None, None, keys, 1, 2, prim=np.minimum(prim, 2),
+                            terminator=(geo, None, None, np.full(3, 1.5, F32), None, None))
+    assert ok[0].shape == (3, n)

@@ -25,6 +25,18 @@ def _rows(a, rows: int, name: str, dtype=_F32) -> np.ndarray:
     return a
 
 
+def _prim32(prim, name: str) -> np.ndarray:
+    """prim as int32 for the kernels, refused (not wrapped) where a value does not fit."""
+    prim = np.asarray(prim)
+    if prim.size and prim.dtype.kind not in "iu":
+        raise ValueError(f"{name} must be an integer array, got dtype {prim.dtype}")
+    if prim.size and prim.dtype != np.int32:
+        bad = np.flatnonzero((prim < -1) | (prim > np.iinfo(np.int32).max))
+        if len(bad):
+            raise ValueError(f"{name}[{bad[0]}] = {prim.flat[bad[0]]} is not a triangle index")
+    return np.ascontiguousarray(prim, np.int32)
+
+
 def _check_added_to(L) -> None:
     """L is added to in place, so it must be float32 and C-contiguous as it is (a converted copy
     would silently lose the result)."""
@@ -126,7 +138,7 @@ def cosine_scatter(keys, ka: int, kb: int, ns, ng=None, origins=None, shading_of
         ng = _rows(ng, 3, "ng")
     if shading_offset is not None:
         freq, prim, thr = shading_offset
-        shading_offset = (np.ascontiguousarray(freq, _F32), np.ascontiguousarray(prim, np.int32), thr)
+        shading_offset = (np.ascontiguousarray(freq, _F32), _prim32(prim, "shading_offset prim"), thr)
     if origins is None:
         return _core.cosine_scatter(keys, int(ka), int(kb), ns, ng, None, None, shading_offset)
     rays = np.empty(keys.shape[1], RAY_DTYPE)
@@ -275,7 +287,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         lights.tri_emission, lights.environment, P, _rows(P_off, 3, "P_off"), _rows(ns, 3, "ns"), opt(ng, "ng"), opt(thr, "thr"),
         _rows(keys, 2, "keys", np.uint32), int(ka), int(kb),
         None if pick is None else np.ascontiguousarray(pick, np.float64),
-        None if prim is None else np.ascontiguousarray(prim, np.int32), float(shorten), bool(skip_work),
+        None if prim is None else _prim32(prim, "prim"), float(shorten), bool(skip_work),
         value, contrib, rays, send, skip, _terminator(terminator),
         None if linking is None else (np.ascontiguousarray(linking[0], np.uint8),
                                       np.ascontiguousarray(linking[1], np.uint64)), entry, point,
