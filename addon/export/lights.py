@@ -48,9 +48,25 @@ def export_light(ob, matrix, messages):
     if (strength < 0).any():
         # Cycles subtracts a negative light's contribution; next-event estimation here only
         # adds light, so such a lamp is left out rather than failing the render
-        messages.append(('WARNING', f"light '{ob.name}' has a negative strength "
-                                    f"({light.energy:g} W): negative lights are not supported; skipped"))
+        shown = ", ".join(f"{v:g}" for v in strength)
+        messages.append(('WARNING', f"light '{ob.name}' has a negative strength ({shown} W per channel, "
+                                    "colour x power x its node tree): negative lights are not supported; skipped"))
         return None
+    m = np.array(matrix, np.float64)
+    if light.type in ('SUN', 'AREA') and not np.linalg.norm(m[:3, 2]) > 0:
+        # Cycles takes a sun's direction and an area light's facing from the object's Z axis:
+        # with a zero Z scale there is none, and Cycles gets no light from it
+        messages.append(('WARNING', f"{light.type.lower()} light '{ob.name}' has a zero object scale along Z: it "
+                                    "faces no direction and emits nothing, as in Cycles; skipped"))
+        return None
+    if light.type == 'SPOT' and not np.linalg.norm(m[:3, 2]) > 0 and np.linalg.norm(np.cross(m[:3, 0], m[:3, 1])) > 0:
+        # Cycles renders a spot of zero Z scale as the limit of a tiny one (measured: Z scale 0
+        # and 1e-3 give the same image): the cone stretched to the whole half-space in front.
+        # That limit, along the axes' normal (the mirrored case, X or Y scale negative, would
+        # face the other way in Cycles' limit; the singular matrix cannot tell)
+        z = np.cross(m[:3, 0], m[:3, 1])
+        m[:3, 2] = z / np.linalg.norm(z) * 1e-9 * np.sqrt(np.linalg.norm(m[:3, 0]) * np.linalg.norm(m[:3, 1]))
+        matrix = m
     cycles = getattr(light, 'cycles', None)
     kw = dict(kind=light.type, strength=strength.astype(np.float32),
               matrix=np.array(matrix, np.float64), normalize=bool(getattr(light, 'normalize', True)),
@@ -69,6 +85,13 @@ def export_light(ob, matrix, messages):
                 messages.append(('WARNING', f"spot light '{ob.name}' has a zero object scale: "
                                             "its cone is empty; skipped"))
                 return None
+            if sheared(np.array(matrix, np.float64)[:3, :3]):
+                # measured: a rotated child of a (3, 1, 0.3) parent lights ~1.8x the floor area
+                # Cycles does; neither the inverse transform nor the axes' projections (the
+                # kernel's spot_light_attenuation over the columns) reproduce Cycles' cone there
+                messages.append(('WARNING', f"spot light '{ob.name}' has a sheared transform (a rotation under "
+                                            "a non-uniform scale): its cone follows the inverse transform; "
+                                            "Cycles' cone differs"))
             kw.update(spot_size=float(light.spot_size), spot_blend=float(light.spot_blend))
     elif light.type == 'SUN':
         kw.update(angle=float(light.angle))
@@ -140,7 +163,7 @@ def _light_surface(socket, reasons, depth):
     if depth > 32:
         reasons.append("shader graph too deep")
         return np.zeros(3)
-    if node.type == 'EMISSION':
+    if node.type in ('EMISSION', 'BACKGROUND'):      # Cycles: a Background shader emits there too
         color, ok = constant_color(node.inputs['Color'])
         if not ok:
             reasons.append("Emission colour driven by nodes; its own value used")

@@ -420,8 +420,8 @@ class MaterialBuilder:
             return c if rough == 0.0 else c.mapped(roughdiffuse.RoughDiffuse(rough))
         if t == 'BSDF_PRINCIPLED':
             return self._principled(node, reasons)
-        if t == 'EMISSION':
-            emission, etex = self._emission(node.inputs['Color'], node.inputs['Strength'], "Emission", reasons)
+        if t in ('EMISSION', 'BACKGROUND'):     # Cycles: a Background shader on a surface emits
+            emission, etex = self._emission(node.inputs['Color'], node.inputs['Strength'], node.bl_label, reasons)
             return Closure(emission=emission, emission_tex=etex)
         if t == 'HOLDOUT':
             # Cycles: camera rays see through it (alpha 0); other rays meet a black absorber

@@ -92,6 +92,7 @@ class Exporter:
         self.meshes = {}          # key -> MeshArrays
         self.placements = {}      # key -> [Placement]
         self.lights = []
+        self.lights_skipped = 0   # light objects that give no light here (portals, skipped ones)
         self.skipped = {}         # reason -> [object names]
         self.ignored = {}         # reason -> [object names]: rendered, without a feature Cycles has
         self._noted = set()       # objects whose ignored features are noted (instances repeat them)
@@ -163,6 +164,8 @@ class Exporter:
                 light = self._light(inst, ob)
                 if light is not None:
                     self.lights.append(light)
+                else:
+                    self.lights_skipped += 1
                 continue
             if getattr(ob, 'particle_systems', None) and hair_systems(ob):
                 self._particle_hair(ob, override, inst)
@@ -218,6 +221,8 @@ class Exporter:
         if light is not None and parent is not ob:
             light.visible_camera = light.visible_camera and bool(parent.visible_camera)
             light.visible_diffuse = light.visible_diffuse and bool(parent.visible_diffuse)
+        if light is not None and self._collection_flag(parent, 'indirect_only_get'):
+            light.visible_camera = False    # as _visibility: Cycles does not show it to the camera
         return light
 
     def _visibility(self, ob, parent):
@@ -397,9 +402,10 @@ class Exporter:
         has_emission = any(np.any(m.emission > 0) for m in self.materials.materials)
         lit_world = np.any(world > 0) or (environment is not None and np.any(environment.strength > 0)
                                            and np.any(environment.pixels > 0))
+        skipped = f" ({self.lights_skipped} light object(s) give none)" if self.lights_skipped else ""
         if not self.lights and not lit_world and not has_emission:
-            self.messages.append(('WARNING', "the scene has no lights, no emissive materials and "
+            self.messages.append(('WARNING', f"the scene has no lights{skipped}, no emissive materials and "
                                              "a black world: the image will be black"))
         elif not self.lights:
-            self.messages.append(('INFO', "the scene has no light objects; lit by the world and "
+            self.messages.append(('INFO', f"the scene has no light objects{skipped}; lit by the world and "
                                           "emissive materials only"))

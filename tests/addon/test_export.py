@@ -1311,6 +1311,10 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
     cone.scale = (1.0, 0.0, 1.0)
     scenes.light('AREA', 100.0, (0, 0, 3), name="Fine", size=0.5)
     scenes.light('SUN', 3.0, name="WideSun", angle=math.pi)     # 180 degrees: float32 pi > pi
+    # a zero Z scale: a sun and an area light face no direction (no light in Cycles; the sun
+    # failed the whole render)
+    scenes.light('SUN', 3.0, name="FlatSun").scale = (1.0, 1.0, 0.0)
+    scenes.light('AREA', 100.0, (0, 0, 2), name="FlatArea", size=0.5).scale = (1.0, 1.0, 0.0)
     # a NaN location or rotation: skipped, not a failed render (it was)
     scenes.light('POINT', 100.0, (float('nan'), 0, 2), name="Lost")
     scenes.light('AREA', 100.0, (0, 0, 2), name="Spun").rotation_euler = (float('nan'), 0.0, 0.0)
@@ -1332,11 +1336,79 @@ def test_degenerate_and_negative_lights_skipped_with_a_message(scene, exported):
                       ("Lost", "non-finite transform"), ("Spun", "non-finite transform"),
                       ("NanCone", "non-finite spot_size"), ("NanBlend", "non-finite spot_blend"),
                       ("NanRadius", "non-finite radius"), ("NanSun", "non-finite angle"),
-                      ("NanSpread", "non-finite spread")):
+                      ("NanSpread", "non-finite spread"), ("FlatSun", "zero object scale along Z"),
+                      ("FlatArea", "zero object scale along Z")):
         assert any(f"'{name}'" in t and why in t for t in warnings), (name, warnings)
     lamps = [ls.make_lamp(l) for l in data.lights]              # the integrator takes them
     assert ls.LightSet(lamps, None, 0).num_lamps == 3
     assert lamps[2].omc == 1.0                                   # the lights layer: a hemisphere
+
+
+def test_light_edge_cases_as_cycles_renders_them(scene, exported):
+    """A spot of zero Z scale is Cycles' limit of a tiny one (the cone stretched to the half-space
+    in front; it was skipped); a Background shader in a light's node tree or on a surface emits
+    (it lit nothing, or was rendered as diffuse); a light in an Indirect Only collection is not
+    seen by the camera; a negative strength from the node tree is reported as the strength the
+    light has, and the 'no lights' message counts the lights skipped."""
+    setup(scene)
+    flat = scenes.light('SPOT', 100.0, (0, 0, 2), name="FlatSpot", spot_size=math.radians(40.0))
+    flat.scale = (1.0, 1.0, 0.0)
+    thin = scenes.light('SPOT', 100.0, (0, 0, 2), name="ThinSpot", spot_size=math.radians(40.0))
+    thin.scale = (1.0, 1.0, 1e-6)
+    scaled = bpy.data.objects.new("Scaled", None)        # a rotated child of a scaled parent
+    scene.collection.objects.link(scaled)
+    scaled.scale = (3.0, 1.0, 0.3)
+    leaning = scenes.light('SPOT', 100.0, (0, 0, 2), name="Leaning")
+    leaning.parent, leaning.rotation_euler = scaled, (0.3, 0.25, 0.0)
+    bg = scenes.light('AREA', 10.0, (0, 0, 3), name="BgLight", size=1.0)
+    bg.data.use_nodes = True
+    nt = bg.data.node_tree
+    back = nt.nodes.new('ShaderNodeBackground')
+    back.inputs['Color'].default_value = (0.2, 0.5, 1.0, 1.0)
+    back.inputs['Strength'].default_value = 2.0
+    out = next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT')
+    nt.links.new(back.outputs[0], out.inputs['Surface'])
+    hidden = bpy.data.collections.new("Bounce")
+    scene.collection.children.link(hidden)
+    lamp = scenes.light('POINT', 100.0, (0, 0, 2), name="InBounce")
+    lamp.visible_camera = True
+    for c in lamp.users_collection:
+        c.objects.unlink(lamp)
+    hidden.objects.link(lamp)
+    scene.view_layers[0].layer_collection.children["Bounce"].indirect_only = True
+    mat, nt, out = scenes._material("Backdrop")
+    back = nt.nodes.new('ShaderNodeBackground')
+    back.inputs['Color'].default_value = (0.1, 0.2, 0.3, 1.0)
+    back.inputs['Strength'].default_value = 3.0
+    nt.links.new(back.outputs[0], out.inputs['Surface'])
+    scenes.plane("Wall", materials=(mat,))
+    data = exported()
+    lights = {l.name: l for l in data.lights}
+    assert set(lights) == {"FlatSpot", "ThinSpot", "BgLight", "InBounce", "Leaning"}
+    text = " | ".join(t for _, t in data.messages)
+    assert "spot light 'Leaning' has a sheared transform" in text and "'ThinSpot' has a sheared" not in text
+    np.testing.assert_allclose(lights["BgLight"].strength, 10.0 * 2.0 * np.array([0.2, 0.5, 1.0]), rtol=1e-6)
+    assert not lights["InBounce"].visible_camera and lights["InBounce"].visible_diffuse
+    backdrop = next(m for m in data.materials if m.name == "Backdrop")
+    np.testing.assert_allclose(backdrop.emission, [0.3, 0.6, 0.9], rtol=1e-6)
+    assert "as diffuse" not in backdrop.approximated
+    # the zero-scale spot lights as the 1e-6 one does, the whole half-space below it
+    rng = np.random.default_rng(3)
+    P = np.stack([rng.uniform(-20, 20, 400), rng.uniform(-20, 20, 400), np.full(400, -1.0)]).astype(np.float32)
+    u = rng.random((2, 400)).astype(np.float32)
+    flat_s, thin_s = (ls.make_lamp(lights[n]).sample(P, u[0], u[1]) for n in ("FlatSpot", "ThinSpot"))
+    np.testing.assert_allclose(flat_s.value, thin_s.value, rtol=1e-3, atol=1e-9)
+    assert (flat_s.value > 0).all()                  # no cone left: every point below is lit
+
+    bpy.data.objects.remove(flat)
+    bpy.data.objects.remove(thin)
+    bpy.data.objects.remove(lamp)
+    bpy.data.objects.remove(leaning)
+    bg.data.node_tree.nodes['Background'].inputs['Strength'].default_value = -1.0
+    data = exported()
+    text = " | ".join(t for _, t in data.messages)
+    assert "'BgLight' has a negative strength (-2, -5, -10 W per channel" in text, text
+    assert "no light objects (1 light object(s) give none)" in text, text
 
 
 def test_portal_area_lights_emit_nothing(scene, exported):
