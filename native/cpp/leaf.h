@@ -216,8 +216,9 @@ __attribute__((always_inline)) inline uint32_t hits_on_segment(const RayGroup<W>
 // formulas round a sum of terms bounded by max|Pz| |det| (scaled by |den|): they differ by
 // under 16 eps max|Pz| |det| + 4 eps |s|, so the margins here (2^-16 = 256 eps, and 2^-80
 // absolute for denormal products) only cull lanes the exact test rejects: results are bit for
-// bit those of dividing everywhere. NaN (overflowed products) and tiny |den| (< 2^-60, where
-// den loses precision) are never culled.
+// bit those of dividing everywhere, also where t is a denormal (its rounding is absolute
+// there: the limit gets 2^-148 more). NaN (overflowed products) and tiny |den| (< 2^-60,
+// where den loses precision) are never culled.
 template <int W>
 __attribute__((always_inline)) inline vbool<W> beyond_limit(vfloat<W> U, vfloat<W> V, vfloat<W> Wf, vfloat<W> det,
                                                             const vfloat<W> Pz[3], vfloat<W> dz, vfloat<W> limit) {
@@ -229,7 +230,9 @@ __attribute__((always_inline)) inline vbool<W> beyond_limit(vfloat<W> U, vfloat<
     const vfloat<W> E = splat<W>(kRel) * (M * vabs(det)) + splat<W>(0x1p-80f);
     const vfloat<W> zero = splat<W>(0.0f);
     const vbool<W> behind = cmplt(s, zero - E);
-    const vbool<W> beyond = cmplt(limit * aden + E, s - splat<W>(kRel) * vabs(s));
+    // (limit + 2^-148: a t in float's denormal range rounds to a multiple of 2^-149, up to half
+    // of t; one just beyond the limit can round onto it and must be divided and compared)
+    const vbool<W> beyond = cmplt((limit + splat<W>(0x1p-148f)) * aden + E, s - splat<W>(kRel) * vabs(s));
     return (behind | beyond) & cmple(splat<W>(0x1p-60f), aden);
 }
 

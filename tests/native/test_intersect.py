@@ -134,6 +134,37 @@ def test_hit_distance_as_tfar_is_not_occluded():
     assert not mask.any(), f"{mask.sum()} rays are occluded before their own closest hit"
 
 
+@pytest.mark.parametrize("isa", ISAS)
+def test_denormal_hit_distances_keep_the_contract(monkeypatch, isa):
+    """Directions of ~1e38 reach triangles ~1e-6 away at t ~1e-44, a float denormal, where t
+    rounds to a multiple of 2^-149 (up to half of t). A hit there is found again with tfar =
+    its t (t in (0, tfar]), and two triangles whose t rounds to the same denormal tie to the
+    lower index for every leaf size (the leaf's division-free cull had dropped them: the hit
+    lost, the tie decided by the order the leaves were visited)."""
+    monkeypatch.setenv("DACRT_ISA", isa)
+    def plane(x, s=1e-5):                      # a triangle in the plane X = x around the axis
+        return np.array([[x, -s, -s], [x, 3 * s, -s], [x, -s, 3 * s]], np.float32)
+    n = 40
+    o, d = np.zeros((n, 3), np.float32), np.tile(np.float32([1e38, 0, 0]), (n, 1))
+    d[:, 1:] = np.random.default_rng(2).uniform(-1e31, 1e31, (n, 2)).astype(np.float32)
+    one = dacrt.Scene(plane(1.05e-6), np.array([[0, 1, 2]], np.int32))
+    rays = dacrt.make_rays(o, d)
+    first = one.intersect(rays)
+    assert (first["prim"] == 0).all() and (first["t"] < np.finfo(np.float32).tiny).all()
+    np.testing.assert_array_equal(one.intersect(rays), first)      # tfar now = t
+    assert not one.occluded(rays).any()
+    v = np.vstack([plane(1.05e-6), plane(0.98e-6)])
+    t = np.array([[0, 1, 2], [3, 4, 5]], np.int32)
+    alone = [dacrt.Scene(v, t[k:k + 1]).intersect(dacrt.make_rays(o, d))["t"] for k in (0, 1)]
+    tie = alone[0] == alone[1]
+    assert tie.sum() >= n // 2
+    for leaf_size, leaf_rays in ((None, 32), (1, 1), (2, 4)):
+        hits = dacrt.Scene(v, t, leaf_size=leaf_size, leaf_rays=leaf_rays).intersect(dacrt.make_rays(o, d),
+                                                                                    threads=1)
+        assert (hits["prim"][tie] == 0).all(), (leaf_size, leaf_rays, hits["prim"][tie])
+        np.testing.assert_array_equal(hits["t"], np.minimum(alone[0], alone[1]))
+
+
 def _watertight_rays(vertices, triangles, origin):
     """Rays from an interior point aimed exactly (after float32 rounding) at every vertex, edge
     midpoint and centroid of a closed mesh: the hardest directions for a leaky test."""
