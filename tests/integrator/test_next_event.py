@@ -207,7 +207,7 @@ def test_single_light_needs_no_pick_and_more_lights_do():
                                   'area_rectangle_unnormalized', 'area_square_spread', 'sheared'])
 @pytest.mark.parametrize('thr,no_mis', [(True, False), (False, True)])
 def test_one_area_lamp_drawn_lane_by_lane_equals_the_composed_kernels(name, thr, no_mis):
-    """With one lamp and no pick, next_event draws an area lamp's samples and weights them
+    """next_event draws the samples of points that picked an area lamp and weights them
     eight points at a time (native/cpp/arealanes.h): bit for bit lamp_sample + nee_weight +
     shadow_rays, where the lamp looks small (drawn by area) and large (by solid angle), for
     points behind it, on its plane, at its centre, at its corners, far off or not finite, and a
@@ -234,10 +234,10 @@ def test_one_area_lamp_drawn_lane_by_lane_equals_the_composed_kernels(name, thr,
     with np.errstate(invalid='ignore', over='ignore'):
         got = shading.next_event(one, P, P_off, ns, ng, th, keys, 3, 4)
         ref = _composed(one, P, P_off, ns, ng, th, keys, 3, 4, None, None, True)
-        picked = shading.next_event(one, P, P_off, ns, ng, th, keys, 3, 4, pick=rng.random(n))  # the scalar path
+        picked = shading.next_event(one, P, P_off, ns, ng, th, keys, 3, 4, pick=rng.random(n))  # by the table
     for name_, a, b, c in zip(('value', 'contrib', 'rays', 'send'), got[:4], ref[:4], picked[:4]):
         assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), f'{name_} differs from the composed kernels'
-        assert np.array_equal(a.view(np.uint8), c.view(np.uint8)), f'{name_} differs from the scalar path'
+        assert np.array_equal(a.view(np.uint8), c.view(np.uint8)), f'{name_} differs when picked by the table'
     assert got[5] == ref[5] and 0 < got[5] < n
     if getattr(lamp, 'solid_angle', False) and lamp.tan_half_spread is None:   # both draws occurred
         with np.errstate(invalid='ignore', over='ignore'):
