@@ -426,6 +426,35 @@ def test_gather_many_lamps_equals_lamp_by_lamp(mode):
     np.testing.assert_array_equal(L, one_by_one)
 
 
+@pytest.mark.parametrize('name', ['area_square', 'area_rectangle', 'area_disk', 'area_ellipse',
+                                  'area_rectangle_unnormalized'])
+@pytest.mark.parametrize('bsdf', [False, True])
+def test_gather_area_lanes_equal_ray_by_ray(name, bsdf):
+    """lamp_gather meets an area lamp without spread eight rays at a time (lamps.cpp
+    gather_area_lanes); a call of fewer rays than that goes ray by ray (gather_one). The sums
+    must be bit for bit the same, for rays that meet the lamp from in front, from behind,
+    edge-on, stopped short by a surface, and near it (its solid-angle pdf)."""
+    rng = np.random.default_rng(len(name) + bsdf)
+    lamp = make(name)
+    rec = lamp_records([lamp])
+    n = 3001
+    O, D, t_surf, miss = gather_rays(rng, [lamp], n)
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=np.asarray([0.4], F32), clamp=30.0)
+    pid = np.arange(n)
+    L = np.zeros((3, n), F32)
+    dacrt.lamps.lamp_gather(rec, [0], O, D, t_surf, miss, pid, L, **kw)
+    by_ray = np.zeros((3, n), F32)
+    for i in range(n):
+        sub = {k: (v[..., i:i + 1] if k in ('thr', 'pdf_bsdf') else v) for k, v in kw.items()}
+        dacrt.lamps.lamp_gather(rec, [0], O[:, i:i + 1], D[:, i:i + 1], t_surf[i:i + 1], miss[i:i + 1],
+                                np.array([i]), by_ray, **sub)
+    assert (L.max(axis=0) > 0).sum() > 100, 'too few rays meet the lamp to test it'
+    np.testing.assert_array_equal(L.view(np.uint32), by_ray.view(np.uint32))
+
+
 def test_delta_lamps_are_never_gathered():
     rng = np.random.default_rng(3)
     lamps = [make('point_delta'), make('spot_hard'), make('sun_delta')]
