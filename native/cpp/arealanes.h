@@ -4,7 +4,7 @@
 // divisions and square roots at a time, with branches between them; here each step runs for
 // every lane, both of a rectangle's draws (by solid angle and by area) are computed and the lane
 // keeps the one sample_lamp would take, so the compiler keeps the lanes in vector registers.
-// Per lane the bits are sample_lamp's (tests/native/test_shading_kernels.py compares them).
+// Per lane the bits are sample_lamp's (tests/integrator/test_next_event.py compares them).
 #pragma once
 
 #include <cmath>

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "arealanes.h"
+#include "gather.h"
 #include <vector>
 
 #include "lampbvh.h"
@@ -62,134 +63,8 @@ void sample_range(const LampRecord* rec, size_t R, const int32_t* entry, const f
     }
 }
 
-// lamp_gather's arguments (see lamps.h), passed by value like sample_range's.
-struct Gather {
-    const LampRecord* rec;
-    const int32_t* lamps;
-    size_t nl;
-    const float *lamp_prob, *O, *D, *t_surf;
-    const uint8_t* miss;
-    const float *thr, *pdf_bsdf;
-    const int64_t* pid;
-    size_t n;
-    float* L;
-    size_t N;
-    float clamp;
-    const LightTree* tree;
-    const int32_t* lamp_key;
-    const float* normal;
-    const uint64_t* receivers;
-};
-
-// Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
-// caller). The add is selected, not branched on: whether a ray sees a lamp follows no pattern.
-__attribute__((always_inline)) inline void gather_one(const Gather& g, const LampRecord& lamp, int kind, int32_t key,
-                                                      size_t k, size_t i) {
-    const size_t n = g.n;
-    const float o[3] = {g.O[i], g.O[n + i], g.O[2 * n + i]};
-    const float d[3] = {g.D[i], g.D[n + i], g.D[2 * n + i]};
-    float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
-    const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
-                                                                  : hit_lamp(lamp, o, d, g.t_surf[i], Le, pdf_l);
-    float w = 1.0f;
-    if (g.lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
-        float p_sel = g.lamp_prob[g.lamps[k]];
-        if (key >= 0 && seen)  // as picked from o with the vertex's normal
-            p_sel = float(double(p_sel) * g.tree->pdf(o, g.normal, n, i, key,
-                                                      g.receivers ? g.receivers[i] : LightTree::kAllSets));
-        float r = p_sel * pdf_l / g.pdf_bsdf[i];
-        r *= r;
-        r += 1.0f;
-        w = 1.0f / r;
-    }
-    float* out = g.L + index_at(g.pid, i, g.N);
-    float v[3];
-    for (int a = 0; a < 3; ++a) {
-        v[a] = Le[a];
-        if (g.thr) v[a] *= g.thr[size_t(a) * n + i];
-        if (g.lamp_prob) v[a] *= w;
-    }
-    clamp_light(v, g.clamp);  // each lamp a ray meets is its own contribution, as in Cycles
-    for (int a = 0; a < 3; ++a) out[size_t(a) * g.N] += seen ? v[a] : 0.0f;
-}
-
 inline int32_t tree_key(const Gather& g, size_t k) {  // the lamp's key in the light tree, or -1
     return g.tree && g.lamp_key ? g.lamp_key[g.lamps[k]] : -1;
-}
-
-// gather_one for an area lamp without spread (area_lanes_apply) over rays [b, e), kLampLanes
-// at a time: hit_area<false>'s and the MIS weight's float32 operations as lane loops that
-// vectorise (the same bits; the divisions were one latency-bound chain per ray), the solid-
-// angle pdf (sph_rect) and the tree's pdf only for the lanes that meet the lamp. A last short
-// group goes through gather_one.
-void gather_area_lanes(const Gather& g, const LampRecord& lamp, int32_t key, size_t k, size_t b, size_t e) {
-    using namespace lampmath;
-    constexpr size_t K = kLampLanes;
-    const size_t n = g.n;
-    const bool ellipse = int(lamp.shape) == AREA_ELLIPSE, rect = int(lamp.shape) == AREA_RECT;
-    const float plane = dot3(lamp.pos, lamp.normal);
-    const float* N = lamp.normal;
-    const float *Ox = g.O, *Oy = g.O + n, *Oz = g.O + 2 * n, *Dx = g.D, *Dy = g.D + n, *Dz = g.D + 2 * n;
-    const float sel0 = g.lamp_prob ? g.lamp_prob[g.lamps[k]] : 1.0f;
-    size_t i0 = b;
-    for (; i0 + K <= e; i0 += K) {
-        float pdf[K], tmax[K], thr[3][K], pb[K], v[3][K];
-        int hit[K];
-        for (size_t q = 0; q < K; ++q) tmax[q] = g.t_surf[i0 + q];
-        for (int a = 0; a < 3; ++a)
-            for (size_t q = 0; q < K; ++q) thr[a][q] = g.thr ? g.thr[size_t(a) * n + i0 + q] : 1.0f;
-        for (size_t q = 0; q < K; ++q) pb[q] = g.lamp_prob ? g.pdf_bsdf[i0 + q] : 1.0f;
-        float O[3][K], D[3][K];
-        for (size_t q = 0; q < K; ++q) {
-            O[0][q] = Ox[i0 + q], O[1][q] = Oy[i0 + q], O[2][q] = Oz[i0 + q];
-            D[0][q] = Dx[i0 + q], D[1][q] = Dy[i0 + q], D[2][q] = Dz[i0 + q];
-        }
-        for (size_t q = 0; q < K; ++q) {  // hit_area<false>
-            const float o0 = O[0][q], o1 = O[1][q], o2 = O[2][q], d0 = D[0][q], d1 = D[1][q], d2 = D[2][q];
-            const float denom = d0 * N[0] + d1 * N[1] + d2 * N[2];
-            const float t = (plane - (o0 * N[0] + o1 * N[1] + o2 * N[2])) / denom;
-            const float r0 = (d0 * t + o0) - lamp.pos[0], r1 = (d1 * t + o1) - lamp.pos[1],
-                        r2 = (d2 * t + o2) - lamp.pos[2];
-            const float lx = r0 * lamp.inv_x[0] + r1 * lamp.inv_x[1] + r2 * lamp.inv_x[2];
-            const float ly = r0 * lamp.inv_y[0] + r1 * lamp.inv_y[1] + r2 * lamp.inv_y[2];
-            // (ints, not bools: mixed mask types keep the loop scalar)
-            const int in_ellipse = lx * lx + ly * ly <= 0.25f;
-            const int in_rect = int(std::fabs(lx) <= 0.5f) & int(std::fabs(ly) <= 0.5f);
-            pdf[q] = t * t / (lamp.area * -denom);
-            hit[q] = int(denom < 0) & int(t > 0) & int(t < tmax[q]) & (ellipse ? in_ellipse : in_rect);
-        }
-        float p_sel[K];
-        for (size_t q = 0; q < K; ++q) {  // what only a ray that meets the lamp needs
-            p_sel[q] = sel0;
-            if (!hit[q]) continue;
-            const size_t i = i0 + q;
-            const float o[3] = {Ox[i], Oy[i], Oz[i]};
-            if (rect) {
-                const SphRect r = sph_rect(lamp, o, -0.5f, 0.5f, -0.5f, 0.5f);
-                pdf[q] = r.use ? 1.0f / r.S : pdf[q];
-            }
-            if (g.lamp_prob && key >= 0)
-                p_sel[q] = float(double(p_sel[q]) * g.tree->pdf(o, g.normal, n, i, key,
-                                                                g.receivers ? g.receivers[i] : LightTree::kAllSets));
-        }
-        const bool mis = g.lamp_prob != nullptr;
-        for (size_t q = 0; q < K; ++q) {  // the power heuristic and the throughput
-            float r = p_sel[q] * pdf[q] / pb[q];
-            r *= r;
-            r += 1.0f;
-            const float w = mis ? 1.0f / r : 1.0f;  // (x 1: the same bits as no weight)
-            v[0][q] = lamp.emit[0] * thr[0][q] * w;
-            v[1][q] = lamp.emit[1] * thr[1][q] * w;
-            v[2][q] = lamp.emit[2] * thr[2][q] * w;
-        }
-        for (size_t q = 0; q < K; ++q) {
-            float c[3] = {v[0][q], v[1][q], v[2][q]};
-            clamp_light(c, g.clamp);
-            float* out = g.L + index_at(g.pid, i0 + q, g.N);
-            for (int a = 0; a < 3; ++a) out[size_t(a) * g.N] += hit[q] ? c[a] : 0.0f;
-        }
-    }
-    for (size_t i = i0; i < e; ++i) gather_one(g, lamp, LAMP_AREA, key, k, i);
 }
 
 // Lamp by lamp over the rays (each ray still adds its lamps in list order).

@@ -4,10 +4,12 @@
 #include "nextevent.h"
 
 #include <algorithm>
+#include <type_traits>
 #include <atomic>
 #include <memory>
 #include <vector>
 
+#include "areadraws.h"
 #include "arealanes.h"
 #include "parallel.h"
 #include "pathvertex.h"
@@ -26,140 +28,52 @@ struct Pending {  // a shadow ray before its block's place in the output is know
     int32_t skip;  // the triangle it leaves, or -1 when it is meant to be able to hit it
 };
 
-// A light sample of one point, weighted (nee_scale): direction, distance, value and whether
-// it can contribute.
-struct Drawn {
-    float wi[3], dist, value[3];
-    bool ok;
-};
-
-// What event_block's first steps give the chunk's points js[0..m) (positions in the chunk of
-// points i0.., words wa, wb) that all picked the area lamp `lamp` (area_lanes_apply) with
-// selection probabilities p_sel (per position) and its no_mis: sample_lamp and nee_scale,
-// kLampLanes points at a time (arealanes.h; a short last group repeats its last point), the
-// same operations per lane, so the same bits; out[js[k]] gets each.
-void draw_area_lanes(const LampRecord& lamp, bool no_mis, const float* p_sel, const VertexPoints& p, size_t i0,
-                     const uint16_t* js, size_t m, const uint32_t* wa, const uint32_t* wb, Drawn* out) {
-    constexpr size_t K = kLampLanes;
-    const size_t n = p.n;
-    for (size_t k0 = 0; k0 < m; k0 += K) {
-        float P[3][K], ns[3][K], thr[3][K], u1[K], u2[K], sel[K];
-        for (size_t k = 0; k < K; ++k) {
-            const size_t j = js[std::min(k0 + k, m - 1)], i = i0 + j;
-            for (int a = 0; a < 3; ++a) {
-                P[a][k] = p.P[size_t(a) * n + i];
-                ns[a][k] = p.ns[size_t(a) * n + i];
-                thr[a][k] = p.thr ? p.thr[size_t(a) * n + i] : 1.0f;
-            }
-            u1[k] = unit24(wa[j]);
-            u2[k] = unit24(wb[j]);
-            sel[k] = p_sel[j];
-        }
-        LampLanes s;
-        sample_area_lanes(lamp, P[0], P[1], P[2], u1, u2, s);
-        int ok[K];
-        for (size_t k = 0; k < K; ++k) {  // nee_scale, its divisions in every lane
-            const float inv_pi = 0.3183098861837907f;
-            const float pdf = no_mis ? lampmath::INF : s.pdf[k];
-            const float cos_s = ns[0][k] * s.wi[0][k] + ns[1][k] * s.wi[1][k] + ns[2][k] * s.wi[2][k];
-            float r = cos_s * inv_pi;
-            r /= sel[k] * pdf;
-            r *= r;
-            r += 1.0f;
-            float scale = cos_s * inv_pi;
-            scale /= r * sel[k];
-            float mx = -1.0f;
-            for (int a = 0; a < 3; ++a) {
-                float v = s.value[a][k];
-                v *= thr[a][k];  // (1 without a throughput: the same bits)
-                v *= scale;
-                s.value[a][k] = v;
-                mx = mx < v ? v : mx;
-            }
-            ok[k] = (cos_s > 0) & (mx > 0);
-        }
-        for (size_t k = 0; k < K && k0 + k < m; ++k) {
-            Drawn& o = out[js[k0 + k]];
-            for (int a = 0; a < 3; ++a) o.wi[a] = s.wi[a][k], o.value[a] = s.value[a][k];
-            o.dist = s.dist[k];
-            o.ok = ok[k];
-        }
-    }
-}
-
-// The entries the chunk's cnt points (i0..) pick and their selection probabilities: entry 0
-// with prob[0] without a pick, else the first with cdf > u (numpy's searchsorted side='right')
-// or the tree's pick at the shadow ray's origin.
-void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, uint32_t* entry, float* p_sel) {
-    const size_t n = p.n;
-    for (size_t j = 0; j < cnt; ++j) {
-        const size_t i = i0 + j;
-        p_sel[j] = L.prob[0];
-        entry[j] = 0;
-        if (p.pick) {
-            const float Q[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
-            const float N[3] = {p.ns[i], p.ns[n + i], p.ns[2 * n + i]};
-            entry[j] = uint32_t(choose_light(L, Q, N, p.pick[i], p_sel[j],
-                                             L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets));
-        }
-    }
-}
-
-// Draws the samples of the chunk's points that picked an area lamp (area_lanes_apply) lamp by
-// lamp, kLampLanes at a time; drawn[j] says which. A chunk that reaches more than kMaxLamps
-// such lamps leaves the points of the others to sample_lamp, one at a time.
-void draw_chunk(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, const uint32_t* entry,
-                const float* p_sel, const uint32_t* wa, const uint32_t* wb, Drawn* out, uint8_t* drawn) {
-    constexpr int kMaxLamps = 4;
-    uint32_t lamps[kMaxLamps];
-    int nl = 0;
-    uint16_t js[kWordChunk];
-    for (size_t j = 0; j < cnt; ++j) {
-        drawn[j] = 0;
-        const uint32_t e = entry[j];
-        if (e >= L.num_lamps || !area_lanes_apply(L.lamps[e])) continue;
-        int k = 0;
-        while (k < nl && lamps[k] != e) ++k;
-        if (k == nl && nl < kMaxLamps) lamps[nl++] = e;
-    }
-    for (int k = 0; k < nl; ++k) {
-        size_t m = 0;
-        for (size_t j = 0; j < cnt; ++j)
-            if (entry[j] == lamps[k]) js[m++] = uint16_t(j), drawn[j] = 1;
-        draw_area_lanes(L.lamps[lamps[k]], L.no_mis[lamps[k]], p_sel, p, i0, js, m, wa, wb, out);
-    }
-}
-
-// Paths [b, e): value and contrib in place, shadow rays to pending[b, b + count); returns the
-// count. Arguments by value, so the loop reads them from registers or its own stack (see
-// lamps.cpp).
+// AREAS: some lamp is drawn lane by lane (area_lanes_apply): its points are drawn first per chunk
+// (draw_chunk). Without, the loop is that of one point at a time only: the chunk's arrays and
+// its pass picking the entries first had cost scenes without area lamps ~11%.
+template <bool AREAS>
 size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* contrib, int32_t* entry_out,
                    float* point_out, Pending* pending, size_t b, size_t e, size_t* skipped) {
     const size_t n = p.n, T = L.num_tris;
     size_t m = b, bad = 0;
-    // area lamps' samples are drawn kLampLanes points at a time (draw_chunk), the rest one by one
-    bool areas = false;
-    for (size_t k = 0; k < L.num_lamps; ++k) areas |= area_lanes_apply(L.lamps[k]);
-    Drawn drawn[kWordChunk];
-    uint8_t is_drawn[kWordChunk];
-    uint32_t entries[kWordChunk];
-    float sels[kWordChunk];
+    struct Chunk {
+        Drawn drawn[kWordChunk];
+        uint8_t is_drawn[kWordChunk];
+        uint32_t entries[kWordChunk];
+        float sels[kWordChunk];
+    };
+    struct None {};
+    std::conditional_t<AREAS, Chunk, None> c;
     for_words(p.keys, n, p.ka, p.kb, b, e, [&](size_t i0, size_t cnt, const uint32_t* wa, const uint32_t* wb) {
-        pick_entries(L, p, i0, cnt, entries, sels);
-        if (areas) draw_chunk(L, p, i0, cnt, entries, sels, wa, wb, drawn, is_drawn);
+        if constexpr (AREAS) {
+            pick_entries(L, p, i0, cnt, c.entries, c.sels);
+            draw_chunk(L, p, i0, cnt, c.entries, c.sels, wa, wb, c.drawn, c.is_drawn);
+        }
         for (size_t j = 0; j < cnt; ++j) {
             const size_t i = i0 + j;
             const float u1 = unit24(wa[j]), u2 = unit24(wb[j]);
             const float P[3] = {p.P[i], p.P[n + i], p.P[2 * n + i]};
-            const float p_sel = sels[j];
-            const size_t entry = entries[j];
-            const bool lanes = areas && is_drawn[j];
+            float p_sel = L.prob[0];
+            size_t entry = 0;
+            bool lanes = false;
+            if constexpr (AREAS) {
+                p_sel = c.sels[j];
+                entry = c.entries[j];
+                lanes = c.is_drawn[j];
+            } else if (p.pick) {  // the first entry with cdf > u, or the tree's pick
+                const float Q[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
+                const float N[3] = {p.ns[i], p.ns[n + i], p.ns[2 * n + i]};
+                entry = choose_light(L, Q, N, p.pick[i], p_sel,
+                                     L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets);
+            }
             if (entry_out) entry_out[i] = int32_t(entry);
             float wi[3], dist, pdf, value[3], target[3];
             const bool lamp = entry < L.num_lamps;
             if (lanes) {  // drawn and weighted already
-                for (int a = 0; a < 3; ++a) wi[a] = drawn[j].wi[a], value[a] = drawn[j].value[a];
-                dist = drawn[j].dist;
+                if constexpr (AREAS) {
+                    for (int a = 0; a < 3; ++a) wi[a] = c.drawn[j].wi[a], value[a] = c.drawn[j].value[a];
+                    dist = c.drawn[j].dist;
+                }
                 pdf = 0.0f;  // (weighted with it)
             } else if (lamp) {
                 const LampSample s = sample_lamp(L.lamps[entry], P, u1, u2);
@@ -187,8 +101,10 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             // In front of the shading normal is enough: a sample below the geometric one is
             // the shadow ray's to decide (it leaves through its own, skipped, triangle), as in
             // Cycles, whose diffuse eval has no geometric test.
+            bool weighed = false;  // by draw_chunk already
+            if constexpr (AREAS) weighed = c.drawn[j].ok;
             bool ok = p_sel > 0.0f &&
-                      (lanes ? drawn[j].ok : nee_scale(ns, nullptr, wi, pdf, p_sel, p.thr ? thr : nullptr, value));
+                      (lanes ? weighed : nee_scale(ns, nullptr, wi, pdf, p_sel, p.thr ? thr : nullptr, value));
             if (!(p_sel > 0.0f)) value[0] = value[1] = value[2] = 0.0f;  // (a tree pick below float's range)
             if (p.bump) {  // a normal-mapped point: Cycles' bump shadowing of the sample
                 const float Ns[3] = {p.bump[i], p.bump[n + i], p.bump[2 * n + i]};
@@ -266,9 +182,11 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
     const size_t n = pts.n, blocks = (n + kBlock - 1) / kBlock;
     std::unique_ptr<Pending[]> pending(new Pending[n ? n : 1]);
     std::vector<size_t> count(blocks), bad(blocks), offset(blocks);
+    bool areas = false;  // area lamps' samples are drawn kLampLanes points at a time
+    for (size_t k = 0; k < lights.num_lamps; ++k) areas |= area_lanes_apply(lights.lamps[k]);
     parallel_for(blocks, [&](size_t b0, size_t b1) {
         for (size_t k = b0; k < b1; ++k)
-            count[k] = event_block(lights, pts, out.value, out.contrib, out.entry, out.point, pending.get(), k * kBlock,
+            count[k] = (areas ? event_block<true> : event_block<false>)(lights, pts, out.value, out.contrib, out.entry, out.point, pending.get(), k * kBlock,
                                    std::min(n, (k + 1) * kBlock), &bad[k]);
     }, 1);
     size_t m = 0, skip_count = 0;

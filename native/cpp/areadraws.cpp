@@ -1,0 +1,114 @@
+// Next-event estimation's area-lamp draws (areadraws.h). Compiled with -fno-trapping-math
+// (CMakeLists.txt): the lane loops vectorise only when a select after a division or a
+// comparison is not kept for a possible floating-point trap (values are IEEE's either way); on
+// all of nextevent.cpp the flag made its point-by-point loop ~11% slower.
+#include "areadraws.h"
+
+#include <algorithm>
+
+#include "arealanes.h"
+#include "random.h"
+
+namespace dacrt {
+
+namespace {
+
+
+// What event_block's first steps give the chunk's points js[0..m) (positions in the chunk of
+// points i0.., words wa, wb) that all picked the area lamp `lamp` (area_lanes_apply) with
+// selection probabilities p_sel (per position) and its no_mis: sample_lamp and nee_scale,
+// kLampLanes points at a time (arealanes.h; a short last group repeats its last point), the
+// same operations per lane, so the same bits; out[js[k]] gets each.
+void draw_area_lanes(const LampRecord& lamp, bool no_mis, const float* p_sel, const VertexPoints& p, size_t i0,
+                     const uint16_t* js, size_t m, const uint32_t* wa, const uint32_t* wb, Drawn* out) {
+    constexpr size_t K = kLampLanes;
+    const size_t n = p.n;
+    for (size_t k0 = 0; k0 < m; k0 += K) {
+        float P[3][K], ns[3][K], thr[3][K], u1[K], u2[K], sel[K];
+        for (size_t k = 0; k < K; ++k) {
+            const size_t j = js[std::min(k0 + k, m - 1)], i = i0 + j;
+            for (int a = 0; a < 3; ++a) {
+                P[a][k] = p.P[size_t(a) * n + i];
+                ns[a][k] = p.ns[size_t(a) * n + i];
+                thr[a][k] = p.thr ? p.thr[size_t(a) * n + i] : 1.0f;
+            }
+            u1[k] = unit24(wa[j]);
+            u2[k] = unit24(wb[j]);
+            sel[k] = p_sel[j];
+        }
+        LampLanes s;
+        sample_area_lanes(lamp, P[0], P[1], P[2], u1, u2, s);
+        int ok[K];
+        for (size_t k = 0; k < K; ++k) {  // nee_scale, its divisions in every lane
+            const float inv_pi = 0.3183098861837907f;
+            const float pdf = no_mis ? lampmath::INF : s.pdf[k];
+            const float cos_s = ns[0][k] * s.wi[0][k] + ns[1][k] * s.wi[1][k] + ns[2][k] * s.wi[2][k];
+            float r = cos_s * inv_pi;
+            r /= sel[k] * pdf;
+            r *= r;
+            r += 1.0f;
+            float scale = cos_s * inv_pi;
+            scale /= r * sel[k];
+            float mx = -1.0f;
+            for (int a = 0; a < 3; ++a) {
+                float v = s.value[a][k];
+                v *= thr[a][k];  // (1 without a throughput: the same bits)
+                v *= scale;
+                s.value[a][k] = v;
+                mx = mx < v ? v : mx;
+            }
+            ok[k] = (cos_s > 0) & (mx > 0);
+        }
+        for (size_t k = 0; k < K && k0 + k < m; ++k) {
+            Drawn& o = out[js[k0 + k]];
+            for (int a = 0; a < 3; ++a) o.wi[a] = s.wi[a][k], o.value[a] = s.value[a][k];
+            o.dist = s.dist[k];
+            o.ok = ok[k];
+        }
+    }
+}
+
+}  // namespace
+
+void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, uint32_t* entry, float* p_sel) {
+    const size_t n = p.n;
+    for (size_t j = 0; j < cnt; ++j) {
+        const size_t i = i0 + j;
+        p_sel[j] = L.prob[0];
+        entry[j] = 0;
+        if (p.pick) {
+            const float Q[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
+            const float N[3] = {p.ns[i], p.ns[n + i], p.ns[2 * n + i]};
+            entry[j] = uint32_t(choose_light(L, Q, N, p.pick[i], p_sel[j],
+                                             L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets));
+        }
+    }
+}
+
+void draw_chunk(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, const uint32_t* entry,
+                const float* p_sel, const uint32_t* wa, const uint32_t* wb, Drawn* out, uint8_t* drawn) {
+    constexpr int kMaxLamps = 4;
+    uint32_t lamps[kMaxLamps];
+    int nl = 0;
+    uint16_t js[kWordChunk];
+    for (size_t j = 0; j < cnt; ++j) {
+        drawn[j] = 0;
+        const uint32_t e = entry[j];
+        if (e >= L.num_lamps || !area_lanes_apply(L.lamps[e])) continue;
+        int k = 0;
+        while (k < nl && lamps[k] != e) ++k;
+        if (k == nl && nl < kMaxLamps) lamps[nl++] = e;
+    }
+    for (int k = 0; k < nl; ++k) {
+        size_t m = 0;
+        for (size_t j = 0; j < cnt; ++j)
+            if (entry[j] == lamps[k]) js[m++] = uint16_t(j), drawn[j] = 1;
+        draw_area_lanes(L.lamps[lamps[k]], L.no_mis[lamps[k]], p_sel, p, i0, js, m, wa, wb, out);
+    }
+}
+
+// Paths [b, e): value and contrib in place, shadow rays to pending[b, b + count); returns the
+// count. Arguments by value, so the loop reads them from registers or its own stack (see
+// lamps.cpp).
+
+}  // namespace dacrt

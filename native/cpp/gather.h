@@ -1,0 +1,69 @@
+// What lamp_gather (lamps.cpp) adds for each ray and lamp, and its arguments: gather_one, ray
+// by ray, and gather_area_lanes (gatherlanes.cpp), the same for an area lamp eight rays at a
+// time.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "lamps.h"
+#include "shading.h"
+
+namespace dacrt {
+
+// lamp_gather's arguments (see lamps.h), passed by value like sample_range's.
+struct Gather {
+    const LampRecord* rec;
+    const int32_t* lamps;
+    size_t nl;
+    const float *lamp_prob, *O, *D, *t_surf;
+    const uint8_t* miss;
+    const float *thr, *pdf_bsdf;
+    const int64_t* pid;
+    size_t n;
+    float* L;
+    size_t N;
+    float clamp;
+    const LightTree* tree;
+    const int32_t* lamp_key;
+    const float* normal;
+    const uint64_t* receivers;
+};
+
+// Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
+// caller). The add is selected, not branched on: whether a ray sees a lamp follows no pattern.
+__attribute__((always_inline)) inline void gather_one(const Gather& g, const LampRecord& lamp, int kind, int32_t key,
+                                                      size_t k, size_t i) {
+    const size_t n = g.n;
+    const float o[3] = {g.O[i], g.O[n + i], g.O[2 * n + i]};
+    const float d[3] = {g.D[i], g.D[n + i], g.D[2 * n + i]};
+    float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
+    const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
+                                                                  : hit_lamp(lamp, o, d, g.t_surf[i], Le, pdf_l);
+    float w = 1.0f;
+    if (g.lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
+        float p_sel = g.lamp_prob[g.lamps[k]];
+        if (key >= 0 && seen)  // as picked from o with the vertex's normal
+            p_sel = float(double(p_sel) * g.tree->pdf(o, g.normal, n, i, key,
+                                                      g.receivers ? g.receivers[i] : LightTree::kAllSets));
+        float r = p_sel * pdf_l / g.pdf_bsdf[i];
+        r *= r;
+        r += 1.0f;
+        w = 1.0f / r;
+    }
+    float* out = g.L + index_at(g.pid, i, g.N);
+    float v[3];
+    for (int a = 0; a < 3; ++a) {
+        v[a] = Le[a];
+        if (g.thr) v[a] *= g.thr[size_t(a) * n + i];
+        if (g.lamp_prob) v[a] *= w;
+    }
+    clamp_light(v, g.clamp);  // each lamp a ray meets is its own contribution, as in Cycles
+    for (int a = 0; a < 3; ++a) out[size_t(a) * g.N] += seen ? v[a] : 0.0f;
+}
+
+// gather_one for an area lamp without spread (area_lanes_apply) at list position k, tree key
+// key, over rays [b, e) (gatherlanes.cpp).
+void gather_area_lanes(const Gather& g, const LampRecord& lamp, int32_t key, size_t k, size_t b, size_t e);
+
+}  // namespace dacrt
