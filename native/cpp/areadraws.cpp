@@ -13,7 +13,6 @@ namespace dacrt {
 
 namespace {
 
-
 // What event_block's first steps give the chunk's points js[0..m) (positions in the chunk of
 // points i0.., words wa, wb) that all picked the area lamp `lamp` (area_lanes_apply) with
 // selection probabilities p_sel (per position) and its no_mis: sample_lamp and nee_scale,

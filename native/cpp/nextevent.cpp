@@ -184,10 +184,11 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
     std::vector<size_t> count(blocks), bad(blocks), offset(blocks);
     bool areas = false;  // area lamps' samples are drawn kLampLanes points at a time
     for (size_t k = 0; k < lights.num_lamps; ++k) areas |= area_lanes_apply(lights.lamps[k]);
+    const auto block = areas ? event_block<true> : event_block<false>;
     parallel_for(blocks, [&](size_t b0, size_t b1) {
         for (size_t k = b0; k < b1; ++k)
-            count[k] = (areas ? event_block<true> : event_block<false>)(lights, pts, out.value, out.contrib, out.entry, out.point, pending.get(), k * kBlock,
-                                   std::min(n, (k + 1) * kBlock), &bad[k]);
+            count[k] = block(lights, pts, out.value, out.contrib, out.entry, out.point, pending.get(), k * kBlock,
+                             std::min(n, (k + 1) * kBlock), &bad[k]);
     }, 1);
     size_t m = 0, skip_count = 0;
     for (size_t k = 0; k < blocks; ++k) {
