@@ -364,6 +364,8 @@ class Integrator:
         # does not
         self._camera_world = pick(lambda world: world)
         self._camera_emitters = pick(lambda world: not world)
+        # light groups hold the world camera rays see even behind transparent film (as Cycles)
+        self._camera_grouped = pick(lambda world: True)
         self._camera_env_pass = camera_env if (camera_env is not None and wv & VIS_CAMERA
                                                and not camera_env.dark) else None
         self._bsdf_lamps = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf], np.int32)
@@ -1660,8 +1662,9 @@ class Integrator:
 
     def _group_lamps(self, camera, sinks):
         """[(lamp records, light group's array)]: per light group, the records of its lamps
-        among those Combined gathers from camera or BSDF rays (none: left out)."""
-        combined = self._bsdf_lamps if not camera else self._camera_lamps
+        among those Combined gathers from camera or BSDF rays, and the world behind transparent
+        film (none: left out)."""
+        combined = self._bsdf_lamps if not camera else self._camera_grouped
         if not sinks.groups or not len(combined):
             return []
         mine = ((combined[self._record_group[combined] == g], G) for g, G in enumerate(sinks.groups))
@@ -1681,8 +1684,9 @@ class Integrator:
             env, groups = self._camera_env_pass, ((self._camera_emitters, L), (self._camera_world, L_env))
         else:
             env, groups = self._camera_env, ((self._camera_lamps, L),)
-        # what goes to Combined, for the light groups (not the world behind transparent film)
-        combined_env = self.lights.environment if not camera else self._camera_env
+        # what goes to the light groups: Combined's, and the world behind transparent film too
+        # (Cycles writes it to the world's group, though Combined leaves it out)
+        combined_env = self.lights.environment if not camera else self._camera_env_pass
         envs = [(env, L_env)] if env is not None else []
         if sinks.groups and combined_env is not None and self._world_group >= 0:
             envs.append((combined_env, sinks.groups[self._world_group]))

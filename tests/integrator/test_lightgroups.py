@@ -38,6 +38,20 @@ def test_light_groups_add_up_to_combined():
     assert groups['sky'].max() > 0.19
 
 
+def test_world_group_holds_the_world_behind_transparent_film():
+    """With Film > Transparent, Combined leaves out the world the camera sees (alpha 0 there),
+    but Cycles still writes it into the world's light group (relighting a sky from the groups
+    needs it); the world's light on surfaces is there either way."""
+    opaque = render(_box(lightgroups=('sky',))).film
+    clear = render(_box(lightgroups=('sky',), film_transparent=True)).film
+    sky_o, sky_c = opaque.pass_image('Combined_sky'), clear.pass_image('Combined_sky')
+    background = clear.combined()[..., 3] == 0
+    assert background.sum() > 20
+    assert not clear.combined()[background, :3].any()
+    np.testing.assert_allclose(sky_c[background], 0.2, rtol=1e-6)       # the world's colour
+    np.testing.assert_array_equal(sky_c, sky_o)
+
+
 def test_emitters_outside_the_view_layer_groups_are_only_in_combined():
     scene = _box(lightgroups=('panel', 'sky'))            # 'key' and 'fill' are not view-layer groups
     film = render(scene).film
