@@ -58,8 +58,9 @@ def export_settings(scene, vl, messages):
                                           + ['Cryptomatte', 'light groups', 'shader AOVs']))
         messages.append(('WARNING', f"view layer '{vl.name}': DACRT writes Combined, {written} "
                                         f"only; not in the result: {', '.join(missing)}"))
-    mist_world = getattr(vl, 'world_override', None) or scene.world
-    mist = mist_world.mist_settings if mist_world is not None else None
+    # Cycles reads the Mist pass's start, depth and falloff from the scene's world, also where a
+    # view layer's World Override renders another (measured: an override's own mist is ignored)
+    mist = scene.world.mist_settings if scene.world is not None else None
     mist = (0.0, 100.0, 1.0) if mist is None else (
         float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
     samples = layer_samples(scene, vl, int(d.samples))

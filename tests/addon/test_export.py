@@ -2052,10 +2052,13 @@ def test_view_layer_world_override_samples_and_filters(scene, exported):
     assert scene.dacrt.use_light_tree and exported().settings.use_light_tree      # on, as Cycles'
     scene.dacrt.use_light_tree = False
     assert not exported().settings.use_light_tree
+    scene.world.mist_settings.start, scene.world.mist_settings.depth = 1.0, 20.0
+    green.mist_settings.start, green.mist_settings.depth = 4.0, 5.0
     vl.world_override = green                 # the layer's world, lights and background alike
     vl.samples = 3                            # Cycles' default 'Use' layer samples: overrides
     data = exported()
     assert np.allclose(data.world, (0.0, 1.0, 0.0)) and data.settings.samples == 3
+    assert data.settings.mist[:2] == (1.0, 20.0)      # but Cycles' mist stays the scene world's
     scene.cycles.use_layer_samples = 'IGNORE'         # Cycles then renders the scene's samples
     assert exported().settings.samples == 64
     scene.cycles.use_layer_samples = 'BOUNDED'        # ... or the layer's, at most the scene's
