@@ -855,6 +855,7 @@ class Integrator:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
             return None
         if camera:
+            held = None
             if self._any_holdout:                     # holdout: transparent, nothing behind it
                 held = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0)
                 hit &= ~held
@@ -862,7 +863,7 @@ class Integrator:
                     _seen_through(alpha, path, np.flatnonzero(held))
             alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
             if self._data_passes:
-                self._write_passes(path, hits, hit, data, pix, samp, chain)
+                self._write_passes(path, hits, hit, data, pix, samp, chain, held)
         if self._any_emissive:
             self._gather_emission(camera, hit, hits, path, sinks.found(k), self._found_clamp(k), sinks.groups)
         if k == K + 1:
@@ -1422,11 +1423,13 @@ class Integrator:
             r = self._ray_array(np.ascontiguousarray(P + P - P_off), D, tfar)
         value[:, cols] *= atten
 
-    def _write_passes(self, path, hits, hit, data, pix, samp, chain=None):
+    def _write_passes(self, path, hits, hit, data, pix, samp, chain=None, held=None):
         """Data passes from the first visible surface (holdouts and background stay 0); with
-        transparent surfaces on the way (chain), as Cycles writes them along it."""
+        transparent surfaces on the way (chain), as Cycles writes them along it. held (n,) bool
+        or None: the held-out surfaces the camera rays met, whose shaders still write their
+        AOVs (Cycles evaluates a holdout's shader, AOV nodes included, before the path ends)."""
         if chain:
-            return self._write_chain_passes(path, hits, hit, data, pix, samp, chain)
+            return self._write_chain_passes(path, hits, hit, data, pix, samp, chain, held)
         n = len(pix)                                # the block's paths (camera rays: path.pid)
         idx = np.flatnonzero(hit)
         cols = np.take(path.pid, idx)
@@ -1471,7 +1474,22 @@ class Integrator:
         for key, table in self._aovs.items():
             data[key] = np.zeros((table.shape[0], n), F32)
             data[key][:, cols] = self._aov_values(key, table, prim, hu, hv)
+        self._held_aovs(data, path, hits, held)
         self._world_aov(data, path, hits)
+
+    def _held_aovs(self, data, path, hits, held, done=None):
+        """The AOVs the shaders of held-out surfaces write (held: see _write_passes), where the
+        pass is not done (done (n,), per block path)."""
+        if held is None or not self._aovs or not held.any():
+            return
+        idx = np.flatnonzero(held)
+        cols = np.take(path.pid, idx)
+        if done is not None:
+            keep = ~done[cols]
+            idx, cols = idx[keep], cols[keep]
+        prim, u, v = np.take(hits['prim'], idx), np.take(hits['u'], idx), np.take(hits['v'], idx)
+        for key, table in self._aovs.items():
+            data[key][:, cols] += self._aov_values(key, table, prim, u, v)
 
     def _world_aov(self, data, path, hits, done=None):
         """The world's AOVs added where the block's camera rays missed everything (and their
@@ -1546,7 +1564,7 @@ class Integrator:
         m = np.clip((self.camera.distance(P) - F32(start)) * F32(1.0 / depth if depth > 0 else 0.0), 0.0, 1.0)
         return m ** F32(falloff)
 
-    def _write_chain_passes(self, path, hits, hit, data, pix, samp, chain):
+    def _write_chain_passes(self, path, hits, hit, data, pix, samp, chain, held=None):
         """Cycles' data passes for camera rays that met transparent surfaces (film/data_passes.h):
         at every surface of the chain, before its pass-or-stop pick, Diffuse Color adds
         throughput x the surface's diffuse weight and Mist (1 - mist) x mean(throughput x
@@ -1618,6 +1636,7 @@ class Integrator:
         if denoise is not None:
             denoise.finish(data)
         data.update(aovs)
+        self._held_aovs(data, path, hits, held, done)
         self._world_aov(data, path, hits, done)
         missed = np.take(path.pid, np.flatnonzero(~hit))
         first_prim[missed[~done[missed]]] = -1       # passed every surface below the threshold

@@ -120,3 +120,36 @@ def test_images_write_aovs_on_the_uv_map():
     _, _, mask = _passes(veil)               # through the pane: the floor's left texel, 0.25
     passed = (mask[:, 0:3] - 1.0) / (0.5 + 0.25)
     assert np.all((passed >= -1e-6) & (passed <= 1 + 1e-6)) and 0.4 < passed.mean() < 0.8
+
+
+@pytest.mark.parametrize('how', ['object', 'shader'])
+@pytest.mark.parametrize('pane', [False, True])
+def test_held_out_surfaces_write_their_aovs(how, pane):
+    """A held-out surface (object or collection holdout, or a Holdout shader) is transparent to
+    the camera and its light and data passes stay 0, but Cycles evaluates its shader, AOV nodes
+    included, before the path ends: the floor's AOVs are written there (they were 0), also
+    seen through the transparent pane."""
+    scene = _scene(0.8, samples=16)
+    g = scene.geometry
+    floor = g.material == 1
+    if how == 'object':
+        vis = g.visibility.copy()
+        vis[floor] |= sd.HOLDOUT
+        scene = dataclasses.replace(scene, geometry=dataclasses.replace(g, visibility=vis))
+    else:
+        mats = list(scene.materials)
+        mats[1] = dataclasses.replace(mats[1], holdout=True)
+        scene = dataclasses.replace(scene, materials=mats)
+    if not pane:
+        keep = g.material != 3
+        g = scene.geometry
+        scene = dataclasses.replace(scene, geometry=dataclasses.replace(
+            g, triangles=g.triangles[keep], material=g.material[keep], normals=g.normals[keep],
+            visibility=g.visibility[keep], object_index=g.object_index[keep]))
+    film, tint, mask = _passes(scene)
+    np.testing.assert_allclose(mask[:, 4:6], 0.5, rtol=1e-6)
+    np.testing.assert_allclose(tint[:, 4:6], np.broadcast_to([0.2, 0.4, 0.6, 1.0], tint[:, 4:6].shape), rtol=1e-6)
+    assert not film.combined()[:, 4:6].any()            # held out: no light, alpha 0
+    if pane:                                             # under the pane (alpha 0.2): pane + floor where passed
+        passed = mask[:, 0:3] - 1.0
+        assert 0.3 < (passed / 0.5).mean() < 0.9
