@@ -57,6 +57,15 @@ class CameraModel:
         self.rot = rot / norms
         self.pos = m[:3, 3].copy()
         self.forward = -self.rot[:, 2]
+        # world -> Cycles' camera space (blender_camera_matrix: x right, y up, z into the view;
+        # a panorama's frame turned so that it looks along the object's +X (a mirror ball: -Y),
+        # as an environment texture is centred), for the Denoising Normal pass
+        frame = np.diag([1.0, 1.0, -1.0])
+        if self.pano is not None:
+            frame = (np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
+                     if cam.panorama_type == 'MIRRORBALL' else
+                     np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]))
+        self.to_camera = (self.rot @ frame).T
         self.aperture = float(cam.aperture)
         self.focal_distance = float(cam.focal_distance)
         self.aperture_blades = int(cam.aperture_blades)

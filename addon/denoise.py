@@ -18,7 +18,7 @@ class DenoiseFeatures:
     mostly transparent surface carries its features on to the next bounce's surface."""
 
     def __init__(self, integ, n):
-        self.rot = integ.camera.rot.astype(F32)     # camera axes in world space (columns)
+        self.to_camera = integ.camera.to_camera.astype(F32)     # world -> Cycles' camera space
         self.want = integ.film.passes
         self.normal, self.albedo = np.zeros((3, n), F32), np.zeros((3, n), F32)
         self.depth = np.zeros(n, F32)
@@ -27,10 +27,10 @@ class DenoiseFeatures:
         self.done = np.zeros(n, bool)
 
     @staticmethod
-    def camera_normal(rot, ns, weight):
-        """Shading normals ns (3,k) in Cycles' camera space (x right, y up, z into the view;
-        rot: the camera's world axes as columns), 0 where the closures' weight (k,) is 0."""
-        cam = np.asarray(rot, F32).T @ ns * np.array([[1], [1], [-1]], F32)
+    def camera_normal(to_camera, ns, weight):
+        """Shading normals ns (3,k) in Cycles' camera space (to_camera: Camera.to_camera, the
+        world -> camera rotation), 0 where the closures' weight (k,) is 0."""
+        cam = np.asarray(to_camera, F32) @ ns
         return np.where(weight > 0, cam, F32(0))
 
     def surface(self, cols, ns, albedo, P, tau=None):
@@ -46,7 +46,7 @@ class DenoiseFeatures:
         write = todo & ((total == 0) | (4 * diffuse > total))
         w, c = np.flatnonzero(write), cols[write]
         if 'DenoiseNormal' in self.want:
-            self.normal[:, c] = self.camera_normal(self.rot, ns[:, w], total[w])
+            self.normal[:, c] = self.camera_normal(self.to_camera, ns[:, w], total[w])
         self.albedo[:, c] = self.thr[:, c] * albedo[:, w]
         self.done[c] = True
         go = np.flatnonzero(todo & ~write)          # mostly transparent: on to the next surface

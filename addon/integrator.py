@@ -1452,7 +1452,7 @@ class Integrator:
         if any(p in want for p in DENOISE_PASSES):    # opaque first surfaces: written there
             if 'DenoiseNormal' in want:
                 data['DenoiseNormal'] = np.zeros((3, n), F32)
-                data['DenoiseNormal'][:, cols] = DenoiseFeatures.camera_normal(self.camera.rot, ns, albedo.mean(axis=0))
+                data['DenoiseNormal'][:, cols] = DenoiseFeatures.camera_normal(self.camera.to_camera, ns, albedo.mean(axis=0))
             if 'DenoiseAlbedo' in want:
                 data['DenoiseAlbedo'] = np.zeros((3, n), F32)
                 data['DenoiseAlbedo'][:, cols] = albedo
