@@ -643,7 +643,10 @@ class Integrator:
                           + self.tri.num_nonfinite + self._tris_unreachable),
             'lights': len(self.lights.skipped_lamps) + len(self.lights.unseen_lamps),
             'shadow_rays': self._skipped_shadow,
-            'bounce_rays': sum(self._ended.values()),
+            # paths ended where their bounce could not change the image (a black surface, the
+            # last bounce with nothing to find); roulette and directions below the surface end
+            # paths with the skips off too: they are the estimator, not work skipped
+            'bounce_rays': self._ended['black'] + self._ended['last_bounce'],
             'samples': self._samples_skipped,
             'detail': dict(e, triangles_unreachable=self._tris_unreachable,
                            triangles_nonfinite_render=self.tri.num_nonfinite,

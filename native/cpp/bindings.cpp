@@ -212,7 +212,7 @@ PYBIND11_MODULE(_core, m) {
 #else
     m.attr("ROBUST") = true;
 #endif
-    py::class_<NativeScene>(m, "NativeScene")
+    py::class_<NativeScene>(m, "NativeScene", py::module_local())  // (see LightTree's)
         .def(py::init<py::array_t<float, py::array::c_style>, py::array_t<uint32_t, py::array::c_style>, bool, py::object,
                       bool>(),
              py::arg("vertices"), py::arg("triangles"), py::arg("keep_top"), py::arg("masks"), py::arg("spatial_order"))

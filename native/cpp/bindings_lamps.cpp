@@ -535,8 +535,11 @@ void register_lamps(py::module_& m) {
           py::arg("D"), py::arg("t_surf"), py::arg("miss"), py::arg("thr"), py::arg("pdf_bsdf"), py::arg("pid"),
           py::arg("L"), py::arg("clamp") = std::numeric_limits<float>::infinity(), py::arg("tree") = py::none(),
           py::arg("lamp_key") = py::none(), py::arg("normal") = py::none(), py::arg("receivers") = py::none());
+    // module_local: the benchmark's non-robust build is loaded beside this module, and two
+    // modules registering one C++ type globally fail to import ("already registered")
     py::class_<LightTree, std::shared_ptr<LightTree>>(
-        m, "LightTree", "Many-light sampling: a light per point by its estimated contribution (lighttree.h)")
+        m, "LightTree", "Many-light sampling: a light per point by its estimated contribution (lighttree.h)",
+        py::module_local())
         .def(py::init(&make_tree), py::arg("lo"), py::arg("hi"), py::arg("axis"), py::arg("cos_o"), py::arg("cos_e"),
              py::arg("energy"), py::arg("key"), py::arg("group") = py::none(), py::arg("set") = py::none())
         .def_property_readonly("members", &LightTree::members)
@@ -553,7 +556,8 @@ void register_lamps(py::module_& m) {
           py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none(),
           py::arg("bump") = py::none(), py::arg("tree") = py::none());
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
-        m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)")
+        m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)",
+        py::module_local())
         .def(py::init(&make_environment), py::arg("rgb"), py::arg("to_map"), py::arg("closest"),
              py::arg("srgb") = false, py::arg("scale") = py::none())
         .def_property_readonly("width", [](const EnvironmentMap& e) { return e.width; })

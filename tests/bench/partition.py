@@ -82,6 +82,8 @@ def _first_hits(dacrt, scene):
 def run(args) -> int:
     if args.rays < 1 or args.repeat < 1:
         raise ValueError("--rays and --repeat must be >= 1")
+    if args.seed < 0:
+        raise ValueError(f"--seed must be >= 0 (got {args.seed})")
     if not args.ratios or min(args.ratios) < 0:
         raise ValueError("--ratios must be numbers >= 0")
     threads = _parse_threads(args.threads)

@@ -31,9 +31,10 @@ class Progress:
         self.stream.flush()
 
     def step(self, label: str = "") -> None:
-        """Mark one step finished (and show the next label, if any)."""
+        """Mark one step finished (and show the next label, if any); in a log, a step with a
+        label prints its line (a benchmark that only steps shows its progress there too)."""
         self.done += 1
-        if self.tty and label:
+        if label:
             self.show(label)
 
     def close(self) -> None:

@@ -2,7 +2,8 @@
 tracer makes them, all as float32 (org, dir, tfar) arrays ready for both tracers.
 
 - camera: pinhole camera, 640x400 pixels, jittered, in progressive passes (pass-major, scanline
-  order inside a pass), as many passes as needed for the requested count.
+  order inside a pass), as many passes as needed for the requested count; a last partial pass
+  takes pixels evenly spread over the image.
 - diffuse: from the first hits of the camera rays (hit point from float64 barycentrics), origin
   pushed off the surface along the geometric normal facing the incoming side with the Ray
   Tracing Gems ch. 6 offset (neither tracer takes a tnear, so origins must be pre-offset),
@@ -73,7 +74,11 @@ def camera_rays(cam: Camera, n: int, rng: np.random.Generator) -> RaySet:
     tv = np.tan(np.radians(cam.vfov) / 2)
     th = tv * WIDTH / HEIGHT
     k = np.arange(n)
-    pix = k % (WIDTH * HEIGHT)                                     # pass-major, scanline order
+    P = WIDTH * HEIGHT
+    pix = k % P                                                    # pass-major, scanline order
+    full = (n // P) * P                 # a last partial pass spreads over the whole image (a small
+    if full < n:                        # --rays had traced only the top scanlines)
+        pix[full:] = (np.arange(n - full) * P) // (n - full)
     x = (pix % WIDTH + rng.random(n)) / WIDTH * 2 - 1
     y = 1 - (pix // WIDTH + rng.random(n)) / HEIGHT * 2
     d = fwd + (x * th)[:, None] * right + (y * tv)[:, None] * up

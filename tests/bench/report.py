@@ -168,7 +168,7 @@ def print_errortime(doc: dict) -> None:
         if ref:
             print(f"{'':<12} reference noise floor relMSE {_g(ref['floor'])} "
                   f"({'cached' if ref['cached'] else 'rendered now'}, "
-                  f"{ref['seconds']:.0f} s of Cycles)")
+                  f"{ref['seconds']:.1f} s of Cycles)")
         for q in sc.get("equal_error", []):
             print(f"{'':<12} time to relMSE {q['relmse']:.3e} (Cycles {q['cycles_samples']} spp): "
                   f"{_LABEL[q['engine']]} / Cycles = {q['ratio']:.2f}"
@@ -191,12 +191,12 @@ def _print_breakdown(doc: dict) -> None:
         return
     print("\nWhere DACRT's render time goes (largest sample count, mean over seeds; seconds; "
           "tracer phases = its thread-seconds scaled to its wall time):")
-    head = (f"{'scene':<12} {'spp':>4} {'wall':>7} | " + " ".join(f"{k:>9}" for k in _PARTS)
+    head = (f"{'scene':<12} {'engine':<15} {'spp':>4} {'wall':>7} | " + " ".join(f"{k:>9}" for k in _PARTS)
             + f" | {'peak MiB':>8}")
     print(head)
     for name, engine, p in rows:
         b = p["breakdown"]
-        print(f"{name[:12]:<12} {p['samples']:>4} {p['seconds']:7.3f} | "
+        print(f"{name[:12]:<12} {_LABEL[engine]:<15} {p['samples']:>4} {p['seconds']:7.3f} | "
               + " ".join(f"{b[k]:9.3f}" for k in _PARTS) + f" | {p.get('peak_mib', 0):8.0f}")
     print("export = scene export to numpy; setup = integrator set-up incl. tracer scene creation; "
           "python = ray generation + shading; trace_other = tracer calls outside the recursion "
@@ -321,10 +321,10 @@ def scaling_markdown(doc: dict) -> str:
             f"{doc['machine']['load_avg_start']:.1f}): {s['kind']} rays, seconds, medians of "
             f"{s['repeat']}; triangle sweep on generated rooms with "
             f"{s['tri_sweep_rays']:,} rays, ray sweep on {s['ray_scene']}. Plot: "
-            f"bench-out/scaling.png.\n\n"
+            f"{doc.get('plot', 'bench-out/scaling.png')}.\n\n"
             + markdown_table(["sweep", "triangles", "rays", "threads", "DACRT create+trace s",
-                              "Embree build+trace s", "Embree trace s", "DACRT / Embree b+t"],
-                             rows))
+                              "Embree build+trace s", "Embree trace s",
+                              "DACRT / Embree b+t time (< 1: DACRT faster)"], rows))
 
 
 # --------------------------------------------------------------------------- animation

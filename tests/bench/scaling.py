@@ -22,7 +22,7 @@ import numpy as np
 from . import embree_peer, plots, readme, report
 from .progress import Progress
 from .rays import RaySet, camera_rays, diffuse_rays, first_hits, shadow_rays
-from .scenes import OUT, check_scene, load_scene
+from .scenes import OUT, REPO, check_scene, load_scene
 from .tracer import _Dacrt, _bench_set, _import_dacrt, _median, _parse_threads
 
 TRIS = [1, 4, 16, 64, 256, 1024, 2048]          # thousands
@@ -91,6 +91,8 @@ def measure(scene, n_rays, args, threads, dmaker, progress, label) -> dict:
 def run(args) -> int:
     if args.repeat < 1 or min(args.tris + args.rays + [args.tri_sweep_rays]) < 1:
         raise ValueError("--repeat, --tris, --rays and --tri-sweep-rays must be >= 1")
+    if args.seed < 0:
+        raise ValueError(f"--seed must be >= 0 (got {args.seed})")
     if max(args.tris) > 20_000:
         raise ValueError("--tris: at most 20000 (thousand triangles)")
     check_scene(args.ray_scene)
@@ -125,8 +127,9 @@ def run(args) -> int:
                triangle_sweep=tri_sweep, ray_sweep=ray_sweep)
     report.print_scaling(doc)
     json_path = args.json or OUT / "scaling.json"
-    report.write_json(doc, json_path)
     png = json_path.with_suffix(".png")
+    doc["plot"] = str(png.relative_to(REPO)) if png.is_relative_to(REPO) else str(png)
+    report.write_json(doc, json_path)
     _plot(doc, png)
     print(f"\nall numbers: {json_path}\nplot: {png}")
     if args.update_readme:

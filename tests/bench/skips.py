@@ -70,6 +70,13 @@ def _render(data, skip: bool):
 
 
 def run(args) -> int:
+    if args.samples < 1:
+        raise ValueError(f"--samples must be >= 1 (got {args.samples})")
+    if args.repeat < 1:
+        raise ValueError(f"--repeat must be >= 1 (got {args.repeat})")
+    unknown = [n for n in args.scenes if n not in BUILTIN + PARITY]
+    if unknown:      # before bpy loads and any scene is built
+        raise ValueError(f"unknown scene {unknown[0]!r} (have {', '.join(BUILTIN + PARITY)})")
     import addon
     addon.register()
     rows = []

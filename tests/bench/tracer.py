@@ -76,6 +76,9 @@ def _parse_threads(items: list[str]) -> list[int]:
                 n = int(tok)
             else:
                 raise ValueError(f"--threads: {tok!r} is not a positive integer or 'all'")
+            if n > _cores():     # DACRT caps there; the rows must say what both tracers used
+                print(f"--threads {n}: capped to the machine's {_cores()} cores", file=sys.stderr)
+                n = _cores()
             if n not in out:
                 out.append(n)
     if not out:
@@ -88,6 +91,8 @@ def _check_args(args) -> None:
         raise ValueError(f"--rays must be >= 1 (got {args.rays})")
     if args.repeat < 1:
         raise ValueError(f"--repeat must be >= 1 (got {args.repeat})")
+    if args.seed < 0:
+        raise ValueError(f"--seed must be >= 0 (got {args.seed})")
     if args.leaf_size is not None and args.leaf_size < 1:
         raise ValueError(f"--leaf-size must be >= 1 (got {args.leaf_size})")
     if args.leaf_rays is not None and args.leaf_rays < 1:
