@@ -16,6 +16,7 @@ import contextlib
 import os
 import signal
 import sys
+import tempfile
 
 import bpy
 
@@ -140,6 +141,7 @@ def render(args):
     if args.frame is not None:
         scene.frame_set(args.frame)
     png, exr = output_paths(args.out, args.blend)
+    _check_writable(png)
     if not scene.render.use_single_layer and not any(layer.use for layer in scene.view_layers):
         # Blender renders nothing then, without a word, and the result cannot be saved
         raise SystemExit(f"error: scene '{scene.name}' has no view layer enabled for rendering "
@@ -159,6 +161,18 @@ def render(args):
               f"{' and '.join(written)}")
         raise SystemExit(130)
     print(f"DACRT: wrote {' and '.join(written)}")
+
+
+def _check_writable(path):
+    """Refuse before rendering an output whose folder cannot be made or written to (the
+    render would be lost after it finished)."""
+    folder = os.path.dirname(os.path.abspath(path))
+    try:
+        os.makedirs(folder, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder):
+            pass
+    except OSError as e:
+        raise SystemExit(f"error: cannot write {path}: {e.strerror or e}")
 
 
 @contextlib.contextmanager

@@ -468,6 +468,14 @@ def test_cli_renders_a_blend_file_and_explains_failures(scene, tmp_path):
     off = run_cli([str(blend), "--samples", "1", "--out", str(tmp_path / "off.png")], tmp_path)
     assert off.returncode != 0 and "no view layer enabled for rendering" in off.stderr
     assert "Traceback" not in off.stderr and not (tmp_path / "off.png").exists()
+    # an output that cannot be written (its folder would be a file) is refused before the
+    # render, not after it
+    scene.view_layers[0].use = True
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    (tmp_path / "file").write_text("")
+    denied = run_cli([str(blend), "--samples", "1", "--out", str(tmp_path / "file" / "x.png")], tmp_path)
+    assert denied.returncode != 0 and "cannot write" in denied.stderr, denied.stderr
+    assert "Traceback" not in denied.stderr and "Info: DACRT:" not in denied.stdout + denied.stderr   # not rendered
 
 
 def test_cli_writes_every_layer_and_pass_to_a_multilayer_exr(scene, tmp_path):

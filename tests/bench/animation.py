@@ -44,6 +44,7 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
+    report.check_writable(args.json or OUT / "animation.json")
     if args.grid < 2 or args.frames < 1 or args.samples < 1 or min(args.resolution) < 1:
         raise ValueError("--grid >= 2, --frames >= 1, --samples >= 1 and a positive "
                          "--resolution are required")

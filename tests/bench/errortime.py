@@ -231,6 +231,7 @@ def _equal_error(sc: dict) -> list[dict]:
 
 
 def run(args) -> int:
+    report.check_writable(args.json or OUT / "errortime.json")
     specs = _check(args)
     engines = _engines(args)
     json_path = args.json or OUT / "errortime.json"

@@ -80,6 +80,7 @@ def _first_hits(dacrt, scene):
 
 
 def run(args) -> int:
+    report.check_writable(args.json or OUT / "partition.json")
     if args.rays < 1 or args.repeat < 1:
         raise ValueError("--rays and --repeat must be >= 1")
     if args.seed < 0:

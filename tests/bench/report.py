@@ -4,6 +4,7 @@ file holding every number (numpy values converted, parent folders created)."""
 from __future__ import annotations
 
 import json
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -121,6 +122,18 @@ def _plain(x):
     if isinstance(x, float) and not np.isfinite(x):
         return str(x)  # JSON has no inf/nan
     return x
+
+
+def check_writable(path: Path) -> None:
+    """Refuse, before a run, an output path whose folder cannot be made or written to (found
+    only after a long run otherwise)."""
+    folder = Path(path).parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
 def write_json(doc: dict, path: Path) -> None:

@@ -126,6 +126,7 @@ def leak_rows(builds, progress) -> dict:
 
 
 def run(args) -> int:
+    report.check_writable(args.json or OUT / "robustness.json")
     names = args.scenes or default_names()
     for n in names:
         check_scene(n)

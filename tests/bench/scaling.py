@@ -89,6 +89,7 @@ def measure(scene, n_rays, args, threads, dmaker, progress, label) -> dict:
 
 
 def run(args) -> int:
+    report.check_writable(args.json or OUT / "scaling.json")
     if args.repeat < 1 or min(args.tris + args.rays + [args.tri_sweep_rays]) < 1:
         raise ValueError("--repeat, --tris, --rays and --tri-sweep-rays must be >= 1")
     if args.seed < 0:

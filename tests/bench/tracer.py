@@ -270,6 +270,7 @@ def _target(results: list[dict]) -> dict | None:
 
 
 def run(args) -> int:
+    report.check_writable(args.json or OUT / "tracer.json")
     _check_args(args)
     threads = _parse_threads(args.threads)
     names = args.scenes or default_names()

@@ -1,9 +1,16 @@
 """Pure summaries of the benchmarks: partition scoring, error-vs-time aggregation, the display
-conversion of `compare`."""
+conversion of `compare`; and their argument checks."""
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from tests.bench import compare, errortime, partition
+
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _case(times):
@@ -80,3 +87,23 @@ def test_compare_prints_what_dacrt_reported_beyond_its_materials(capsys):
     out = capsys.readouterr().out
     assert "DACRT reports: world approximated: Sky Texture not evaluated" in out
     assert "material(s)" not in out          # those are listed per material by _print_materials
+
+
+@pytest.mark.parametrize('argv, message', [
+    (['skips', '--repeat', '0'], '--repeat must be >= 1'),
+    (['skips', '--samples', '-3'], '--samples must be >= 1'),
+    (['skips', 'nosuch'], "unknown scene 'nosuch'"),
+    (['tracer', '--seed', '-1'], '--seed must be >= 0'),
+    (['scaling', '--seed', '-1'], '--seed must be >= 0'),
+    (['partition', '--seed', '-1'], '--seed must be >= 0'),
+    (['errortime', '--json', '/dev/null/x.json'], 'cannot write /dev/null/x.json'),
+    (['tracer', '--json', '/dev/null/x.json'], 'cannot write /dev/null/x.json'),
+])
+def test_bad_benchmark_arguments_are_refused_before_any_work(argv, message):
+    """A helper's review: these ran (a negative seed failed deep in numpy, --repeat 0 in a
+    KeyError, --samples -3 rendered at 1 spp and said -3, an unwritable --json only after the
+    whole run); each is now one line naming the argument, exit 2, before any scene is built."""
+    out = subprocess.run([sys.executable, '-m', 'tests.bench', *argv], cwd=str(ROOT), capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 2 and message in out.stderr, out.stderr
+    assert 'Traceback' not in out.stderr
