@@ -163,7 +163,8 @@ def run(args) -> int:
                dacrt_seconds=d["seconds"], cycles_seconds=c[0]["seconds"],
                cycles_other_seed_seconds=c[1]["seconds"],
                relmse_dacrt_vs_cycles=rel, relmse_cycles_vs_cycles_other_seed=noise,
-               relmse_ratio=rel / noise if noise > 0 else float("inf"),
+               # (both 0: the images are identical, e.g. an empty scene's black frame: ratio 1)
+               relmse_ratio=rel / noise if noise > 0 else (1.0 if rel == 0 else float("inf")),
                mean_ratio_rgb=channel_mean_ratio(dimg, cimg),
                mean_ratio_rgb_cycles_seeds=channel_mean_ratio(cimg2, cimg),
                materials=d.get("materials"),
@@ -182,9 +183,13 @@ def run(args) -> int:
     print(f"  relMSE DACRT vs Cycles          {rel:.4e}")
     print(f"  relMSE Cycles vs Cycles seed {other_seed:<3} {noise:.4e}   (noise alone; ratio "
           f"{doc['relmse_ratio']:.2f}: same order = noise, a large multiple = noise or bias)")
-    print("  mean DACRT / Cycles per R,G,B  " + " ".join(f"{x:.4f}" for x in doc["mean_ratio_rgb"])
-          + "   (Cycles seed vs seed: " + " ".join(f"{x:.4f}" for x in
-                                                   doc["mean_ratio_rgb_cycles_seeds"]) + ")")
+    if all(np.isnan(doc["mean_ratio_rgb"])):      # Cycles' image is black in every channel
+        print("  mean DACRT / Cycles per R,G,B  n/a: Cycles' image is black (DACRT's mean "
+              + " ".join(f"{x:.4g}" for x in np.asarray(dimg, np.float64)[..., :3].mean(axis=(0, 1))) + ")")
+    else:
+        print("  mean DACRT / Cycles per R,G,B  " + " ".join(f"{x:.4f}" for x in doc["mean_ratio_rgb"])
+              + "   (Cycles seed vs seed: " + " ".join(f"{x:.4f}" for x in
+                                                       doc["mean_ratio_rgb_cycles_seeds"]) + ")")
     _print_materials(d.get("materials"))
     _print_warnings(d.get("breakdown", {}).get("warnings", ()))
     print(f"wrote {out}/side_by_side.png, difference.png, dacrt.exr, cycles.exr, compare.json")

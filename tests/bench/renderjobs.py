@@ -54,8 +54,8 @@ def run_jobs(engine: str, renders: list[dict], workdir: Path, progress=None, lab
                         continue
                     rec = json.loads(line)
                     if "error" in rec:
-                        raise WorkerError(f"{engine} worker failed: {rec['error']} "
-                                          f"(log: {log_path}){_tail(log_path)}")
+                        raise WorkerError(f"{engine} worker failed: {rec['error']} (log: {log_path})"
+                                          + ("" if rec.get("expected") else _tail(log_path)))
                     if "unavailable" in rec:
                         raise Unavailable(rec["unavailable"])
                     records.append(rec)

@@ -127,8 +127,11 @@ def main(argv):
         run(job)
     except Exception as exc:  # reported to the parent through the results file
         traceback.print_exc()
+        # a ValueError is the scene's or the arguments' fault, said in its message: the parent
+        # prints that alone; anything else is a bug, shown with the log's tail
         with open(job["results"], "a") as f:
-            f.write(json.dumps(dict(error=f"{type(exc).__name__}: {exc}")) + "\n")
+            f.write(json.dumps(dict(error=f"{type(exc).__name__}: {exc}",
+                                    expected=isinstance(exc, ValueError))) + "\n")
         return 1
     return 0
 
