@@ -206,6 +206,10 @@ def summarise(records: list[dict], refs: dict) -> dict:
             summary[name][engine] = dict(points=pts, slope=errorstats.loglog_slope(
                 [p["seconds"] for p in pts], [p["relmse"] for p in pts]))
         summary[name]["equal_error"] = _equal_error(summary[name])
+        # what DACRT reported beyond its materials (an empty scene, skipped lights, ...), once
+        said = (w for by_spp in engines.values() for rs in by_spp.values() for r in rs
+                for w in r.get("breakdown", {}).get("warnings", ()))
+        summary[name]["dacrt_reports"] = [w for w in dict.fromkeys(said) if "material(s) approximated" not in w]
     return summary
 
 

@@ -186,6 +186,8 @@ def print_errortime(doc: dict) -> None:
             print(f"{'':<12} time to relMSE {q['relmse']:.3e} (Cycles {q['cycles_samples']} spp): "
                   f"{_LABEL[q['engine']]} / Cycles = {q['ratio']:.2f}"
                   + (" (extrapolated)" if q["extrapolated"] else ""))
+        for text in sc.get("dacrt_reports", []):
+            print(f"{'':<12} DACRT reports: {text}")
         print("-" * len(head))
     print("time-to-equal-error ratio < 1: DACRT reaches that error sooner. Efficiency = "
           "1/(relMSE x seconds): higher is better, flat in spp when unbiased.")

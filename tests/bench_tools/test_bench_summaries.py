@@ -34,6 +34,19 @@ def _rec(engine, spp, seed, seconds, rel):
     return dict(scene="s", engine=engine, samples=spp, seed=seed, seconds=seconds, relmse=rel)
 
 
+def test_errortime_summary_keeps_what_dacrt_reported_once():
+    """What DACRT said about a scene (e.g. an empty one, black in both engines) must
+    reach the summary (it was dropped), once per scene, without the materials line."""
+    said = ["the scene has no renderable geometry; only the world background is rendered",
+            "2 material(s) approximated as diffuse: 'A'"]
+    native = dict(seconds=0.01, filter_seconds=0.0, partition_seconds=0.0, leaf_seconds=0.0)
+    breakdown = dict(wall_seconds=0.1, native=native, warnings=said)
+    recs = [dict(_rec("DACRT", spp, seed, 0.1, 0.01 / spp), breakdown=breakdown, memory=dict(peak_above_start_mib=1))
+            for spp in (1, 2) for seed in range(2)] + [_rec("CYCLES", 1, 0, 0.1, 0.01)]
+    s = errortime.summarise(recs, {})["s"]
+    assert s["dacrt_reports"] == [said[0]]
+
+
 def test_errortime_summary_means_efficiency_and_equal_error():
     recs = []
     for seed in range(2):
