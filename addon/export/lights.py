@@ -40,7 +40,8 @@ def export_light(ob, matrix, messages):
     if not np.isfinite(strength).all():
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
         return None
-    if not np.isfinite(np.array(matrix, np.float64)).all():
+    m = np.array(matrix, np.float64)          # (a copy: a zero-Z spot's is completed below)
+    if not np.isfinite(m).all():
         # (a NaN location, rotation or scale: where it is and what it faces are undefined)
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite transform (location, rotation or "
                                     "scale); skipped"))
@@ -52,7 +53,6 @@ def export_light(ob, matrix, messages):
         messages.append(('WARNING', f"light '{ob.name}' has a negative strength ({shown} W per channel, "
                                     "colour x power x its node tree): negative lights are not supported; skipped"))
         return None
-    m = np.array(matrix, np.float64)
     if light.type in ('SUN', 'AREA') and not np.linalg.norm(m[:3, 2]) > 0:
         # Cycles takes a sun's direction and an area light's facing from the object's Z axis:
         # with a zero Z scale there is none, and Cycles gets no light from it
@@ -66,10 +66,9 @@ def export_light(ob, matrix, messages):
         # face the other way in Cycles' limit; the singular matrix cannot tell)
         z = np.cross(m[:3, 0], m[:3, 1])
         m[:3, 2] = z / np.linalg.norm(z) * 1e-9 * np.sqrt(np.linalg.norm(m[:3, 0]) * np.linalg.norm(m[:3, 1]))
-        matrix = m
     cycles = getattr(light, 'cycles', None)
     kw = dict(kind=light.type, strength=strength.astype(np.float32),
-              matrix=np.array(matrix, np.float64), normalize=bool(getattr(light, 'normalize', True)),
+              matrix=m, normalize=bool(getattr(light, 'normalize', True)),
               cast_shadow=bool(light.use_shadow),
               use_mis=bool(getattr(cycles, 'use_multiple_importance_sampling', True)),
               name=ob.name,
@@ -80,12 +79,12 @@ def export_light(ob, matrix, messages):
         kw.update(radius=float(light.shadow_soft_size),
                   soft_falloff=bool(getattr(light, 'use_soft_falloff', True)))
         if light.type == 'SPOT':
-            if abs(np.linalg.det(np.array(matrix, np.float64)[:3, :3])) < 1e-30:
+            if abs(np.linalg.det(m[:3, :3])) < 1e-30:
                 # the cone's shape comes from the object's scale; a zero scale leaves none
                 messages.append(('WARNING', f"spot light '{ob.name}' has a zero object scale: "
                                             "its cone is empty; skipped"))
                 return None
-            if sheared(np.array(matrix, np.float64)[:3, :3]):
+            if sheared(m[:3, :3]):
                 # measured: a rotated child of a (3, 1, 0.3) parent lights ~1.8x the floor area
                 # Cycles does; neither the inverse transform nor the axes' projections (the
                 # kernel's spot_light_attenuation over the columns) reproduce Cycles' cone there
@@ -102,7 +101,6 @@ def export_light(ob, matrix, messages):
             return None
         two = light.shape in ('RECTANGLE', 'ELLIPSE')
         sx, sy = float(light.size), float(light.size_y if two else light.size)
-        m = np.array(matrix, np.float64)
         if not (sx * np.linalg.norm(m[:3, 0]) > 0 and sy * np.linalg.norm(m[:3, 1]) > 0):
             # zero area (a size or the object's scale is 0): Cycles gets no light from it
             messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} "

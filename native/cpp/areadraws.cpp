@@ -70,18 +70,7 @@ void draw_area_lanes(const LampRecord& lamp, bool no_mis, const float* p_sel, co
 }  // namespace
 
 void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, uint32_t* entry, float* p_sel) {
-    const size_t n = p.n;
-    for (size_t j = 0; j < cnt; ++j) {
-        const size_t i = i0 + j;
-        p_sel[j] = L.prob[0];
-        entry[j] = 0;
-        if (p.pick) {
-            const float Q[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
-            const float N[3] = {p.ns[i], p.ns[n + i], p.ns[2 * n + i]};
-            entry[j] = uint32_t(choose_light(L, Q, N, p.pick[i], p_sel[j],
-                                             L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets));
-        }
-    }
+    for (size_t j = 0; j < cnt; ++j) entry[j] = uint32_t(pick_entry(L, p, i0 + j, p_sel[j]));
 }
 
 void draw_chunk(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, const uint32_t* entry,
@@ -105,9 +94,5 @@ void draw_chunk(const LightChoice& L, const VertexPoints& p, size_t i0, size_t c
         draw_area_lanes(L.lamps[lamps[k]], L.no_mis[lamps[k]], p_sel, p, i0, js, m, wa, wb, out);
     }
 }
-
-// Paths [b, e): value and contrib in place, shadow rays to pending[b, b + count); returns the
-// count. Arguments by value, so the loop reads them from registers or its own stack (see
-// lamps.cpp).
 
 }  // namespace dacrt

@@ -18,9 +18,8 @@ struct Drawn {
     bool ok;
 };
 
-// The entries the chunk's cnt points (i0..) pick and their selection probabilities: entry 0
-// with prob[0] without a pick, else the first with cdf > u (numpy's searchsorted side='right')
-// or the tree's pick at the shadow ray's origin.
+// The entries the chunk's cnt points (i0..) pick and their selection probabilities (pick_entry,
+// nextevent.h), for the whole chunk before its draws.
 void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, uint32_t* entry, float* p_sel);
 
 // Draws the samples of the chunk's points (i0.., words wa, wb; entries and p_sel from

@@ -31,12 +31,13 @@ inline void need_shape(const py::array& a, py::ssize_t rows, size_t n, const cha
                               (rows > 0 ? ")" : ",)") + ", got " + shape_str(a));
 }
 
-// Each of the n triangle indices p in [0, M).
-inline void check_prim(const int32_t* p, size_t n, size_t M, const char* name) {
+// Each of the n indices ix in [0, limit) (int32 triangle indices, int64 columns, ...).
+template <class T>
+void check_index(const T* ix, size_t n, size_t limit, const char* name) {
     for (size_t j = 0; j < n; ++j)
-        if (p[j] < 0 || size_t(p[j]) >= M)
-            throw py::value_error(std::string(name) + "[" + std::to_string(j) + "] = " + std::to_string(p[j]) +
-                                  " is outside 0.." + std::to_string(M ? M - 1 : 0));
+        if (ix[j] < 0 || size_t(ix[j]) >= limit)
+            throw py::value_error(std::string(name) + "[" + std::to_string(j) + "] = " + std::to_string(ix[j]) +
+                                  " is outside 0.." + std::to_string(limit ? limit - 1 : 0));
 }
 
 // A caller-provided output array the kernel writes in place.

@@ -362,7 +362,7 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
             throw py::value_error("terminator geo must have shape (15, M), got " + shape_str(term_keep[0]));
         term.M = size_t(term_keep[0].shape(1));
         if (term.M == 0) throw py::value_error("terminator geo has no triangles");
-        check_prim(pts.prim, n, term.M, "prim");
+        check_index(pts.prim, n, term.M, "prim");
         term.geo = term_keep[0].data();
         term.normals = optional_f32(t[1], 9, term.M, "terminator normals", term_keep[1]);
         term.cutoff = optional_f32(t[2], 0, term.M, "terminator cutoff", term_keep[2]);

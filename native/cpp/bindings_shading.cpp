@@ -37,11 +37,7 @@ void need_len(const py::array& a, size_t n, const char* name) {
 }
 
 void check_index(const I64Array& idx, size_t limit, const char* name) {
-    const int64_t* ix = idx.data();
-    for (py::ssize_t j = 0; j < idx.shape(0); ++j)
-        if (ix[j] < 0 || size_t(ix[j]) >= limit)
-            throw py::value_error(std::string(name) + "[" + std::to_string(j) + "] = " + std::to_string(ix[j]) +
-                                  " is outside 0.." + std::to_string(limit ? limit - 1 : 0));
+    bindargs::check_index(idx.data(), size_t(idx.shape(0)), limit, name);
 }
 
 const float* optional_rows(const py::object& o, py::ssize_t rows, size_t n, const char* name, F32Array& keep) {
@@ -154,7 +150,7 @@ py::tuple cosine_scatter_py(U32Array keys, uint32_t ka, uint32_t kb, F32Array ns
         off.M = size_t(freq_keep.shape(0));
         prim_keep = t[1].cast<py::array_t<int32_t, py::array::c_style>>();
         need_shape(prim_keep, 0, n, "shading_offset prim");
-        check_prim(prim_keep.data(), size_t(prim_keep.shape(0)), off.M, "shading_offset prim");
+        bindargs::check_index(prim_keep.data(), size_t(prim_keep.shape(0)), off.M, "shading_offset prim");
         off.prim = prim_keep.data();
         off.thr = out_array(t[2].cast<py::array>(), 3, n, "shading_offset thr");
     }

@@ -4,11 +4,10 @@
 #include "lamps.h"
 
 #include <algorithm>
+#include <vector>
 
 #include "arealanes.h"
 #include "gather.h"
-#include <vector>
-
 #include "lampbvh.h"
 #include "parallel.h"
 #include "shading.h"

@@ -4,9 +4,9 @@
 #include "nextevent.h"
 
 #include <algorithm>
-#include <type_traits>
 #include <atomic>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #include "areadraws.h"
@@ -53,18 +53,15 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             const size_t i = i0 + j;
             const float u1 = unit24(wa[j]), u2 = unit24(wb[j]);
             const float P[3] = {p.P[i], p.P[n + i], p.P[2 * n + i]};
-            float p_sel = L.prob[0];
-            size_t entry = 0;
+            float p_sel;
+            size_t entry;
             bool lanes = false;
             if constexpr (AREAS) {
                 p_sel = c.sels[j];
                 entry = c.entries[j];
                 lanes = c.is_drawn[j];
-            } else if (p.pick) {  // the first entry with cdf > u, or the tree's pick
-                const float Q[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
-                const float N[3] = {p.ns[i], p.ns[n + i], p.ns[2 * n + i]};
-                entry = choose_light(L, Q, N, p.pick[i], p_sel,
-                                     L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets);
+            } else {
+                entry = pick_entry(L, p, i, p_sel);
             }
             if (entry_out) entry_out[i] = int32_t(entry);
             float wi[3], dist, pdf, value[3], target[3];

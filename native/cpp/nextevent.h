@@ -103,6 +103,17 @@ struct VertexPoints {
     const float* bump = nullptr;
 };
 
+// The entry point i picks and its selection probability p_sel: entry 0 without a pick, else
+// choose_light at its shadow ray's origin with its shading normal (and receiver mask).
+inline size_t pick_entry(const LightChoice& L, const VertexPoints& p, size_t i, float& p_sel) {
+    p_sel = L.prob[0];
+    if (!p.pick) return 0;
+    const size_t n = p.n;
+    const float Q[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
+    const float N[3] = {p.ns[i], p.ns[n + i], p.ns[2 * n + i]};
+    return choose_light(L, Q, N, p.pick[i], p_sel, L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets);
+}
+
 // value (3 rows of n): the sample's contribution, thr x radiance / pdf x cos/pi x MIS / p_sel;
 // contrib[i] = 1 where it adds to the image unless its shadow ray is occluded. The shadow rays
 // (ids 0..m-1, in path order) go to rays[0..m), their path columns to send and, with prim, the
