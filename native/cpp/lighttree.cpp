@@ -106,73 +106,110 @@ double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
 typedef float F4 __attribute__((vector_size(16)));
 typedef int32_t M4 __attribute__((vector_size(16)));
 
-F4 load4(const float* p) {
-    F4 v;
-    std::memcpy(&v, p, sizeof v);
+// Eight lanes as two of four, each operation written out for both halves: a stop's eight lanes
+// weigh in one pass, so that the two halves' chains of roots and divisions overlap (weighed
+// as two passes of four, the second waited on the first; target_probs was 11% of a many-light
+// render). A 32-byte vector extension type is no substitute without AVX: GCC turns its
+// comparisons and selects into scalar code, 3x slower.
+struct F8 {
+    F4 lo, hi;
+};
+struct M8 {
+    M4 lo, hi;
+};
+inline F8 operator+(F8 a, F8 b) { return {a.lo + b.lo, a.hi + b.hi}; }
+inline F8 operator-(F8 a, F8 b) { return {a.lo - b.lo, a.hi - b.hi}; }
+inline F8 operator*(F8 a, F8 b) { return {a.lo * b.lo, a.hi * b.hi}; }
+inline F8 operator/(F8 a, F8 b) { return {a.lo / b.lo, a.hi / b.hi}; }
+inline F8 operator-(F8 a) { return {-a.lo, -a.hi}; }
+inline F8 operator-(F8 a, float b) { return {a.lo - b, a.hi - b}; }
+inline F8 operator*(F8 a, float b) { return {a.lo * b, a.hi * b}; }
+inline F8 operator*(float a, F8 b) { return {a * b.lo, a * b.hi}; }
+inline M8 operator<(F8 a, F8 b) { return {a.lo < b.lo, a.hi < b.hi}; }
+inline M8 operator>(F8 a, F8 b) { return {a.lo > b.lo, a.hi > b.hi}; }
+inline M8 operator<=(F8 a, F8 b) { return {a.lo <= b.lo, a.hi <= b.hi}; }
+inline M8 operator>=(F8 a, F8 b) { return {a.lo >= b.lo, a.hi >= b.hi}; }
+inline M8 operator>=(F8 a, float b) { return {a.lo >= b, a.hi >= b}; }
+inline M8 operator<=(F8 a, float b) { return {a.lo <= b, a.hi <= b}; }
+inline M8 operator&(M8 a, M8 b) { return {a.lo & b.lo, a.hi & b.hi}; }
+inline M8 operator|(M8 a, M8 b) { return {a.lo | b.lo, a.hi | b.hi}; }
+inline M8 operator!(M8 a) { return {!a.lo, !a.hi}; }
+inline M8 operator~(M8 a) { return {~a.lo, ~a.hi}; }
+inline F8 sel(M8 m, F8 a, F8 b) { return {m.lo ? a.lo : b.lo, m.hi ? a.hi : b.hi}; }
+inline F8 splat8(float x) { return {F4{x, x, x, x}, F4{x, x, x, x}}; }
+
+inline F8 load8(const float* p) {
+    F8 v;
+    std::memcpy(&v.lo, p, sizeof v.lo);
+    std::memcpy(&v.hi, p + 4, sizeof v.hi);
     return v;
 }
-F4 sqrt4(F4 x) {  // of x >= 0 lanes (a lane loop the compiler turns into one sqrtps)
+inline F4 sqrt4(F4 x) {  // of x >= 0 lanes (a lane loop the compiler turns into one sqrtps)
     F4 r;
     for (int k = 0; k < 4; ++k) r[k] = std::sqrt(x[k]);
     return r;
 }
-F4 clamp1(F4 x) {
-    const F4 one = {1.0f, 1.0f, 1.0f, 1.0f};
-    x = x < -one ? -one : x;
-    return x > one ? one : x;
+inline F8 sqrt8(F8 x) { return {sqrt4(x.lo), sqrt4(x.hi)}; }
+inline F8 max8(F8 a, F8 b) { return sel(a > b, a, b); }
+inline F8 min8(F8 a, F8 b) { return sel(a < b, a, b); }
+inline F8 clamp1(F8 x) {  // (NaN stays NaN)
+    x = sel(x < splat8(-1.0f), splat8(-1.0f), x);
+    return sel(x > splat8(1.0f), splat8(1.0f), x);
 }
-F4 max4(F4 a, F4 b) { return a > b ? a : b; }
-F4 min4(F4 a, F4 b) { return a < b ? a : b; }
+inline bool all4(M4 m) { return m[0] & m[1] & m[2] & m[3]; }
 
-// Lanes o..o+3 of stop q weighed at P (and N), as weigh() does, in float and side by side:
+// The eight lanes of stop q weighed at P (and N), as weigh() does, in float and side by side:
 // this is most of a many-light render's light sampling. Float is enough for a sampling
 // estimate once distances are in range: the culling tests keep a margin of float's rounding,
 // so no lane weighs 0 that weigh() would not, and a lane not culled weighs more than 0.
-// Returns false (imp untouched) when some lane's squared distance lies outside [1e-30, 1e30]
-// or is NaN: those take weigh() in float64.
+// Returns, per four lanes (bit 0: lanes 0-3, bit 1: lanes 4-7), whether some lane's squared
+// distance lies outside [1e-30, 1e30] or is NaN: those four take weigh() in float64 (their imp
+// is left to the caller).
 template <bool kNormal>
-bool weigh4_float(const LightTree::Stop& q, int o, const float P[3], const float* N, double imp[4]) {
-    const F4 zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
-    const F4 margin = one * 1e-5f;  // ~100 float ULPs of a cosine
-    const F4 v0 = load4(q.center[0] + o) - P[0], v1 = load4(q.center[1] + o) - P[1], v2 = load4(q.center[2] + o) - P[2];
-    const F4 dd = v0 * v0 + v1 * v1 + v2 * v2, r = load4(q.radius + o), r2 = r * r;
-    const M4 inside = !(dd > r2);
-    const F4 denom = inside ? max4(dd, r2 * 0.25f) : dd;
-    const M4 ok = (denom >= 1e-30f) & (dd <= 1e30f) & (r2 <= 1e30f);
-    if (!(ok[0] & ok[1] & ok[2] & ok[3])) return false;
+int weigh8_float(const LightTree::Stop& q, const float P[3], const float* N, double imp[8]) {
+    const F8 zero = splat8(0.0f), one = splat8(1.0f);
+    const F8 margin = splat8(1e-5f);  // ~100 float ULPs of a cosine
+    const F8 v0 = load8(q.center[0]) - P[0], v1 = load8(q.center[1]) - P[1], v2 = load8(q.center[2]) - P[2];
+    const F8 dd = v0 * v0 + v1 * v1 + v2 * v2, r = load8(q.radius), r2 = r * r;
+    const M8 inside = !(dd > r2);
+    const F8 denom = sel(inside, max8(dd, r2 * 0.25f), dd);
+    const M8 ok = (denom >= 1e-30f) & (dd <= 1e30f) & (r2 <= 1e30f);
+    const int bad = (all4(ok.lo) ? 0 : 1) | (all4(ok.hi) ? 0 : 2);
+    if (bad == 3) return bad;
     // Every sine and cosine from dd and one product each (cos_u = sqrt(dd - r^2) / d, sin_i =
-    // sqrt(dd - (N.v)^2) / d, ...) rather than from one another: the four roots and the two
+    // sqrt(dd - (N.v)^2) / d, ...) rather than from one another: the roots and the two
     // divisions then run side by side instead of one after another.
-    const F4 av = -(load4(q.axis[0] + o) * v0 + load4(q.axis[1] + o) * v1 + load4(q.axis[2] + o) * v2);
-    const F4 nv = kNormal ? N[0] * v0 + N[1] * v1 + N[2] * v2 : zero;
-    const F4 inv_d = one / sqrt4(dd), inv_denom = one / denom;
-    const F4 root_u = sqrt4(max4(dd - r2, zero)), root_i = sqrt4(max4(dd - nv * nv, zero)),
-             root_t = sqrt4(max4(dd - av * av, zero));
-    const F4 sin_u = min4(r * inv_d, one), cos_u = min4(root_u * inv_d, one);
-    M4 culled = {0, 0, 0, 0}, out_culled = {0, 0, 0, 0};  // out_culled: outside the bounds only
-    F4 f = one;
+    const F8 av = -(load8(q.axis[0]) * v0 + load8(q.axis[1]) * v1 + load8(q.axis[2]) * v2);
+    const F8 nv = kNormal ? N[0] * v0 + N[1] * v1 + N[2] * v2 : zero;
+    const F8 inv_d = one / sqrt8(dd), inv_denom = one / denom;
+    const F8 root_u = sqrt8(max8(dd - r2, zero)), root_i = sqrt8(max8(dd - nv * nv, zero)),
+             root_t = sqrt8(max8(dd - av * av, zero));
+    const F8 sin_u = min8(r * inv_d, one), cos_u = min8(root_u * inv_d, one);
+    M8 culled = {}, out_culled = {};  // out_culled: outside the bounds only
+    F8 f = one;
     if (kNormal) {
-        const F4 spread = std::fabs(N[0]) * load4(q.half[0] + o) + std::fabs(N[1]) * load4(q.half[1] + o) +
-                          std::fabs(N[2]) * load4(q.half[2] + o);
-        const F4 reach = nv + spread, nv_abs = nv < zero ? -nv : nv;
+        const F8 spread = std::fabs(N[0]) * load8(q.half[0]) + std::fabs(N[1]) * load8(q.half[1]) +
+                          std::fabs(N[2]) * load8(q.half[2]);
+        const F8 reach = nv + spread, nv_abs = sel(nv < zero, -nv, nv);
         culled = !(reach > -(margin * (nv_abs + spread)));
-        const F4 ci = clamp1(nv * inv_d), sin_i = min4(root_i * inv_d, one);
-        const F4 c = ci * cos_u + sin_i * sin_u;
-        const M4 below = ci < cos_u;
+        const F8 ci = clamp1(nv * inv_d), sin_i = min8(root_i * inv_d, one);
+        const F8 c = ci * cos_u + sin_i * sin_u;
+        const M8 below = ci < cos_u;
         out_culled = below & !(c > -margin);
-        f = below ? max4(c, margin) : one;
+        f = sel(below, max8(c, margin), one);
     }
-    const F4 co = load4(q.cos_o + o), so = load4(q.sin_o + o);
-    const F4 cos_p = co * cos_u - so * sin_u, sin_p = so * cos_u + co * sin_u;
-    const F4 ct = clamp1(av * inv_d), sin_t = min4(root_t * inv_d, one);
-    const F4 cos_r = ct * cos_p + sin_t * sin_p;
-    const M4 beyond = (co > -one) & (sin_p >= zero) & (ct < cos_p);
-    out_culled |= beyond & (cos_r <= load4(q.cos_e + o) - margin);
-    f = beyond ? f * max4(cos_r, margin) : f;
-    culled |= ~inside & out_culled;
-    const F4 g = culled ? zero : (inside ? one : f) * inv_denom;
-    for (int k = 0; k < 4; ++k) imp[k] = q.energy[o + k] * double(g[k]);
-    return true;
+    const F8 co = load8(q.cos_o), so = load8(q.sin_o);
+    const F8 cos_p = co * cos_u - so * sin_u, sin_p = so * cos_u + co * sin_u;
+    const F8 ct = clamp1(av * inv_d), sin_t = min8(root_t * inv_d, one);
+    const F8 cos_r = ct * cos_p + sin_t * sin_p;
+    const M8 beyond = (co > -one) & (sin_p >= zero) & (ct < cos_p);
+    out_culled = out_culled | (beyond & (cos_r <= load8(q.cos_e) - margin));
+    f = sel(beyond, f * max8(cos_r, margin), f);
+    culled = culled | (~inside & out_culled);
+    const F8 g = sel(culled, zero, sel(inside, one, f) * inv_denom);
+    for (int k = 0; k < 4; ++k) imp[k] = q.energy[k] * double(g.lo[k]);
+    for (int k = 0; k < 4; ++k) imp[4 + k] = q.energy[4 + k] * double(g.hi[k]);
+    return bad;
 }
 
 // The probabilities at P of a walk at stop q going on to each of its targets (see
@@ -188,8 +225,9 @@ bool weigh4_float(const LightTree::Stop& q, int o, const float P[3], const float
 void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const float P[3],
                   const float* N, uint64_t receivers, double p[4]) {
     double imp[8];
+    const int bad = N ? weigh8_float<true>(q, P, N, imp) : weigh8_float<false>(q, P, N, imp);
     for (int o = 0; o < 8; o += 4)
-        if (!(N ? weigh4_float<true>(q, o, P, N, imp + o) : weigh4_float<false>(q, o, P, N, imp + o)))
+        if (bad & (1 << (o / 4)))
             for (int k = o; k < o + 4; ++k) imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], P, N);
     if (lane_sets)
         for (int k = 0; k < 8; ++k) imp[k] = (lane_sets[k] & receivers) ? imp[k] : 0.0;
@@ -553,16 +591,21 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
         double p[4];
         probs_at(at, P, N, receivers, p);
         // the first target (of those possible) whose share of [lo, lo + w) holds u; the last
-        // possible one where rounding leaves u past them all
-        double run = lo, pick_lo = lo;
-        int pick = 0;
+        // possible one where rounding leaves u past them all. Without branches (selects): which
+        // target a point takes is random, and a mispredicted pick stalled every stop.
+        double run = lo, pick_lo = lo, last_lo = lo;
+        int pick = -1, last = 0;
         for (int j = 0; j < 4; ++j) {
-            if (!(p[j] > 0.0)) continue;
-            pick = j;
-            pick_lo = run;
-            run += w * p[j];
-            if (u < run) break;
+            const bool possible = p[j] > 0.0;
+            const double next = run + w * p[j];  // (+ 0 where impossible: run unchanged)
+            last = possible ? j : last;
+            last_lo = possible ? run : last_lo;
+            const bool here = possible & (pick < 0) & (u < next);
+            pick_lo = here ? run : pick_lo;
+            pick = here ? j : pick;
+            run = next;
         }
+        if (pick < 0) pick = last, pick_lo = last_lo;
         lo = pick_lo;
         w *= p[pick];
         at = size_t(stops_[size_t(stop_of_[at])].target[pick]);

@@ -22,7 +22,7 @@
 // their only estimator is light sampling, and every node on their way keeps a probability > 0
 // (targets whose importances are all 0 or overflow split by energy).
 //
-// Two levels per step and four weighs side by side in float (falling back to float64 where
+// Two levels per step and eight weighs side by side in float (falling back to float64 where
 // distances leave float's range) made picking a light about twice as fast as one level per
 // step in float64, the same look-ahead.
 #pragma once
@@ -96,7 +96,7 @@ public:
     // on to one of its four targets, its children's children (a leaf child stands for itself:
     // targets 1 and 3 then -1), by their importance at the point, each the sum of its two lanes'
     // weighs (lookahead: its children, or itself when a leaf). The lanes' bounds side by side in
-    // float, so that four are weighed at once (lighttree.cpp); an empty lane has energy 0.
+    // float, so that all eight are weighed at once (lighttree.cpp); an empty lane has energy 0.
     struct Stop {
         float center[3][8], half[3][8], radius[8];
         float axis[3][8], cos_o[8], sin_o[8], cos_e[8];
