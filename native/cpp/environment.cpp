@@ -105,28 +105,32 @@ inline float sample_linear(float u, float a, float b) {
     return std::min(std::max(x, 0.0f), 0x1.fffffep-1f);
 }
 
-// The index k with cdf[k] <= u < cdf[k + 1] among cdf[0..count], at most count - 1.
-template <class T>
-inline size_t find_interval(const T* cdf, size_t count, T u) {
-    // std::upper_bound, not a branch-free search: its speculation runs ahead through a big
-    // map's CDF rows, where the dependent loads of a branch-free one made a 2K x 1K map's
-    // samples 8-20% slower (and a 96 x 48 one's no faster)
-    const size_t k = size_t(std::upper_bound(cdf, cdf + count + 1, u) - cdf);
-    return k == 0 ? 0 : std::min(k - 1, count - 1);
-}
-
-// The guide of one CDF row c[0..count]: g[b] = std::upper_bound's position of b / G, b = 0..G.
+// The guide of one CDF c[0..count]: g[b] = std::upper_bound's position of b / G, b = 0..G.
 // For u in [b/G, (b+1)/G) (exact: G is a power of two) the position of u lies in [g[b], g[b+1]]
 // (monotone), so searching c[g[b], g[b+1]) finds the same one: one or two cache lines of a row
-// instead of ~11 dependent loads through a big map's rows (cutpoint method, Chen and Asau 1974).
-void build_guide(const float* c, size_t count, uint32_t G, uint32_t* g) {
+// instead of ~11 dependent loads through a big map's rows (cutpoint method, Chen and Asau 1974),
+// and, for the rows' CDF, one or two mispredicted branches instead of ~log2(height) / 2 (the
+// search over the rows was a quarter of a small map's sampling).
+template <class T>
+void build_guide(const T* c, size_t count, uint32_t G, uint32_t* g) {
     for (uint32_t b = 0; b <= G; ++b)
-        g[b] = uint32_t(std::upper_bound(c, c + count + 1, float(b) / float(G)) - c);
+        g[b] = uint32_t(std::upper_bound(c, c + count + 1, T(b) / T(G)) - c);
 }
 
-// find_interval(c, count, u) for a guided row.
-inline size_t find_guided(const float* c, size_t count, const uint32_t* g, uint32_t G, float u) {
-    const uint32_t b = std::min(uint32_t(u * float(G)), G - 1);
+// G for a CDF of count entries: about 8 entries a bucket, at most 1024 buckets.
+uint32_t guide_size(size_t count) {
+    uint32_t G = 1;
+    while (G < 1024 && size_t(G) * 8 < count) G *= 2;
+    return G;
+}
+
+// The index k with c[k] <= u < c[k + 1] among c[0..count], at most count - 1, for a guided CDF.
+// std::upper_bound within the bucket, not a branch-free search: its speculation runs ahead
+// through a big map's CDF rows, where the dependent loads of a branch-free one made a 2K x 1K
+// map's samples 8-20% slower (and a 96 x 48 one's no faster).
+template <class T>
+inline size_t find_guided(const T* c, size_t count, const uint32_t* g, uint32_t G, T u) {
+    const uint32_t b = std::min(uint32_t(u * T(G)), G - 1);
     const size_t k = size_t(std::upper_bound(c + g[b], c + g[b + 1], u) - c);
     return k == 0 ? 0 : std::min(k - 1, count - 1);
 }
@@ -217,8 +221,7 @@ std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t wi
     env.row_cdf.assign(size_t(height) + 1, 0.0);
     env.col_cdf.assign(size_t(height) * (width + 1), 0.0f);
     env.cell_pdf.assign(cells, 0.0f);
-    env.guide_buckets = 1;
-    while (env.guide_buckets < 1024 && env.guide_buckets * 8 < width) env.guide_buckets *= 2;
+    env.guide_buckets = guide_size(width);
     env.col_guide.assign(size_t(height) * (env.guide_buckets + 1), 0u);
     std::vector<double> row(width);
     double total = 0;
@@ -240,6 +243,9 @@ std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t wi
     if (total > 0) {
         for (uint32_t i = 0; i <= height; ++i) env.row_cdf[i] /= total;
         env.row_cdf[height] = 1.0;
+        env.row_buckets = guide_size(height);
+        env.row_guide.assign(size_t(env.row_buckets) + 1, 0u);
+        build_guide(env.row_cdf.data(), height, env.row_buckets, env.row_guide.data());
         // pdf over (u, v) = P(cell) w h x (the blend / its mean over the cell)
         const double scale = double(width) * height / total;
         for (uint32_t i = 0; i < height; ++i)
@@ -277,7 +283,7 @@ void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[
         return;
     }
     const uint32_t w = env.width, h = env.height;
-    const size_t i = find_interval(env.row_cdf.data(), h, double(u1));
+    const size_t i = find_guided(env.row_cdf.data(), h, env.row_guide.data(), env.row_buckets, double(u1));
     const double r0 = env.row_cdf[i], r1 = env.row_cdf[i + 1];
     const float fv = std::min(std::max(float((double(u1) - r0) / (r1 - r0)), 0.0f), 0x1.fffffep-1f);
     const float* c = env.col_cdf.data() + i * (size_t(w) + 1);

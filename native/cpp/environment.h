@@ -41,6 +41,8 @@ struct EnvironmentMap {
     float scale[3] = {1, 1, 1};         // multiplies an sRGB map's decoded radiance
     std::vector<float> rgb;             // height x width x 3, row 0 at the bottom
     std::vector<double> row_cdf;        // height + 1: cumulative row weights / total, [0] = 0, [h] = 1
+    uint32_t row_buckets = 1;           // the same guide (below) for row_cdf: R + 1 entries
+    std::vector<uint32_t> row_guide;
     std::vector<float> col_cdf;         // height x (width + 1): per row, cumulative / row total
     uint32_t guide_buckets = 1;         // G, a power of two: u2 in [b/G, (b+1)/G) is bucket b
     std::vector<uint32_t> col_guide;    // height x (G + 1): per row, where u2 = b/G lands in its

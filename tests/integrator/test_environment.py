@@ -179,6 +179,33 @@ def test_column_search_at_guide_bucket_edges():
     assert gap.max() < 1e-5
 
 
+def test_row_search_at_guide_bucket_edges():
+    """Samples search the rows' CDF only between two guide entries too (64 rows -> 8
+    buckets). At every bucket edge u1 = b/8, one float either side and in between, the sample
+    lies in the row a float64 inversion of the row CDF (rows by luminance x the integral of
+    sin(theta) over them, 'Closest') puts it, at the same place within the row; black bands
+    of rows, 8 rows each, begin and end on bucket edges, so an off-by-one bucket would land in one."""
+    w, h = 8, 64
+    weights = np.where((np.arange(h) // 8) % 2 == 1, 1.0, 0.0) * (1 + np.arange(h) % 3)
+    px = np.zeros((h, w, 3), F32)
+    px[:] = weights[:, None, None]
+    env = environment(px, interpolation='Closest').native
+    edges = np.arange(9) / 8
+    u1 = np.concatenate([edges, np.nextafter(edges, 0), np.nextafter(edges, 1),
+                         np.random.default_rng(3).random(200)]).astype(F32)
+    u1 = np.unique(u1[(u1 >= 0) & (u1 < 1)])
+    wi, value, pdf = env.sample(u1, np.full(len(u1), F32(0.3)))
+    assert (pdf > 0).all()
+    theta = np.pi * (1.0 - np.arange(h + 1) / h)
+    row_w = weights * (np.cos(theta[1:]) - np.cos(theta[:-1])) / np.pi * h
+    cdf = np.concatenate([[0.0], np.cumsum(row_w) / row_w.sum()])
+    row = np.minimum(np.searchsorted(cdf, u1.astype(np.float64), side='right') - 1, h - 1)
+    assert (weights[row] > 0).all() and (np.diff(row) >= 0).all()
+    fv = np.clip((u1 - cdf[row]) / (cdf[row + 1] - cdf[row]), 0, 1)
+    v = 1.0 - np.arccos(np.clip(wi[2].astype(np.float64), -1, 1)) / np.pi
+    assert np.abs(v - (row + fv) / h).max() < 1e-5
+
+
 def test_gather_adds_miss_rays_with_mis_weight():
     ref = environment(sky_map())
     env = ref.native
