@@ -215,6 +215,10 @@ class Integrator:
             self.tri.visibility |= np.where(seen & holdout[self.tri.material], HOLDOUT, 0).astype(np.uint8)
         self._tri_emissive = self.mats.emissive[self.tri.material] & (self.tri.area > 0)
         self.max_transparent = max(0, int(getattr(s, 'transparent_max_bounces', 8)))
+        # Cycles sets PATH_RAY_TERMINATE_ON_NEXT_SURFACE when a pass through a transparent surface
+        # brings the path's count to the limit: the next surface only emits. Counted in passes,
+        # so at a limit of 0 the first surface is still passed.
+        self._transparent_stop = max(1, self.max_transparent)
         # Cycles' sample clamps as the kernel applies them (scene/integrator.cpp): a limit on a
         # contribution's absolute channel sum, 3 x the setting; 0 is none
         self._clamps = tuple(_clamp_limit(name, getattr(s, name, 0.0))
@@ -871,6 +875,8 @@ class Integrator:
             self._gather_emission(camera, hit, hits, path, sinks.found(k), self._found_clamp(k), sinks.groups)
         if k == K + 1:
             return None
+        if path.tb is not None:                       # past Transparent Max Bounces: emission only
+            hit &= path.tb < self._transparent_stop
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)),
         # in one native pass; thr becomes albedo x thr / q, the throughput after this
@@ -1210,8 +1216,8 @@ class Integrator:
         the lamps along the new segment and the world where it then misses; stopping
         multiplies it by opacity / (1 - p), so all the surface does next (emission, reflection,
         light sampling) carries its weight. hits, path.thr and path.tb (surfaces passed) change in
-        place; a path that has passed max_transparent transparent surfaces ends at the next one
-        (throughput 0: Cycles counts them over the whole path and ends it there)."""
+        place; a path that has passed max_transparent transparent surfaces (at least one) stops
+        at the next one (Cycles' PATH_RAY_TERMINATE_ON_NEXT_SURFACE, _vertex)."""
         kind = 'camera' if camera else 'bounce'
         thr = path.thr
         rows = None                             # all rays, then those that passed
@@ -1226,14 +1232,10 @@ class Integrator:
                 thr = path.thr = np.ones((3, len(hits)), F32)
             if path.tb is None:
                 path.tb = np.zeros(len(hits), np.int32)
-            # Cycles counts transparent surfaces over the whole path; past the limit it ends
-            spent = np.take(path.tb, rows) >= self.max_transparent
-            if spent.any():
-                thr[:, rows[spent]] = 0.0
-                keep = ~spent
-                rows, prim = rows[keep], prim[keep]
-                if not len(rows):
-                    return
+            # Cycles counts transparent surfaces over the whole path: once a pass reaches the
+            # limit, the next surface, this one too, is not passed (nor lit, nor bounced off:
+            # _vertex); what it emits still counts
+            spent = np.take(path.tb, rows) >= self._transparent_stop
             tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows))
             surface = None
             if chain is not None:                   # what the data passes read here, before the pick
@@ -1243,6 +1245,7 @@ class Integrator:
             t_mean = tau.mean(axis=0)
             total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
+            p[spent] = 0.0                      # stops, at its opaque part's weight
             u = self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_TRANSPARENT + (k << 11) + j)[0]
             go = u < p
             stop = ~go

@@ -157,6 +157,49 @@ def test_area_lamp_through_a_sheet_weighs_both_strategies_alike():
         assert img[..., c].mean() == pytest.approx(tau[c] ** 2 * bare[..., c].mean(), rel=0.02)
 
 
+@pytest.mark.parametrize('limit, lit', [(0, False), (1, False), (2, True)])
+def test_past_the_limit_the_next_surface_of_any_kind_only_emits(limit, lit):
+    """One clear sheet over a 0.8 floor lit by a point lamp between them (its light never
+    crosses the sheet): once the camera's pass brings the count to the limit, the floor behind
+    is neither lit nor bounced off (Cycles' PATH_RAY_TERMINATE_ON_NEXT_SURFACE: 0.0000 at
+    limits 0 and 1, 0.3820 at 2 on the same setup with a sun from the side); only the limit's
+    own count of passes decides, not a following transparent surface."""
+    clear = material('sheet', (0.0,) * 3, transparency=np.ones(3, np.float32))
+    lamp = light('POINT', 20.0, translation(z=0.1), radius=0.0)
+    img = render(sheet_scene(clear, floor=True, lights=[lamp], world=np.zeros(3), sheets=(0.3,),
+                             transparent_max_bounces=limit)).film.combined()
+    if lit:
+        assert img[..., :3].min() > 0.1
+    else:
+        assert np.all(img[..., :3] == 0.0)
+
+
+@pytest.mark.parametrize('limit', [0, 1])
+def test_past_the_limit_the_world_is_still_seen(limit):
+    """Past the limit only surfaces are cut: a camera ray that has passed its last allowed
+    clear sheet and meets nothing sees the world (Cycles' background is no surface), also at
+    a limit of 0, where the first sheet is still passed."""
+    clear = material('sheet', (0.0,) * 3, transparency=np.ones(3, np.float32))
+    img = render(sheet_scene(clear, sheets=(0.3,), transparent_max_bounces=limit)).film.combined()
+    assert np.allclose(img[..., :3], WORLD, rtol=1e-5)
+
+
+def test_past_the_limit_an_emissive_sheet_still_emits():
+    """A clear sheet, then a half-transparent emissive one (emission 2, opacity 0.5): at a limit
+    of 1 the second is not passed, but what it emits counts, at its opaque part's weight
+    (Cycles adds a surface's emission before ending the path there)."""
+    clear = material('sheet', (0.0,) * 3, transparency=np.ones(3, np.float32))
+    glow = material('glow', (0.0,) * 3, emission=(2.0, 2.0, 2.0), transparency=np.full(3, 0.5, np.float32))
+    scene = sheet_scene(clear, sheets=(0.3,), world=np.zeros(3), transparent_max_bounces=1)
+    scene.materials.append(glow)
+    scene.geometry = geometry([(*quad((0.0, 0.0, 0.3), 100.0, 100.0), 2, ALL_VIS),
+                               (*quad((0.0, 0.0, 0.2), 100.0, 100.0), 3, ALL_VIS)])
+    open_img = render(scene).film.combined()[..., :3]
+    scene.transparent_max_bounces = 8
+    assert np.allclose(render(scene).film.combined()[..., :3], open_img, rtol=1e-5)
+    assert open_img.min() > 0.0
+
+
 @pytest.mark.parametrize('limit, lit', [(2, False), (3, False), (4, True)])
 def test_transparent_bounces_count_over_the_whole_path(limit, lit):
     """Two clear sheets over a 0.8 floor under a uniform world: the camera passes two, the
