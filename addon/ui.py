@@ -7,14 +7,18 @@ settings, view-layer passes, the light in Cycles' units, a panoramic camera's pr
 material and world surface node views — has a small panel here, modelled on Cycles'.
 """
 import bpy
+from bl_ui.properties_view_layer import ViewLayerAOVPanelHelper, ViewLayerLightgroupsPanelHelper
 from bpy.types import Panel
 
 ENGINE = 'DACRT'
 # Generic panels we replace with our own (like Cycles does).
-EXCLUDE = {'VIEWLAYER_PT_filter', 'VIEWLAYER_PT_layer_passes', 'DATA_PT_light'}
+EXCLUDE = {'VIEWLAYER_PT_filter', 'VIEWLAYER_PT_layer_passes', 'DATA_PT_light', 'NODE_DATA_PT_light'}
 # Panels of other engines that are the generic UI for a concept (the material slot list, the
-# camera's depth of field and its aperture: Blender's own, which Cycles replaces with a copy).
-EXTRA_GENERIC = ('EEVEE_MATERIAL_PT_context_material', 'DATA_PT_camera_dof', 'DATA_PT_camera_dof_aperture')
+# camera's depth of field and its aperture: Blender's own, which Cycles replaces with a copy;
+# the view layer's material, world and samples overrides; the object's shadow terminator
+# offsets, under Object > Shading), each drawing only settings DACRT renders.
+EXTRA_GENERIC = ('EEVEE_MATERIAL_PT_context_material', 'DATA_PT_camera_dof', 'DATA_PT_camera_dof_aperture',
+                 'VIEWLAYER_PT_override', 'OBJECT_PT_shadow_terminator')
 
 
 def generic_panels():
@@ -127,6 +131,35 @@ class VIEWLAYER_PT_dacrt_passes(DACRTPanel, Panel):
         col.prop(vl, "use_pass_diffuse_indirect", text="Diffuse Indirect")
         col.prop(vl, "use_pass_emit", text="Emission")
         col.prop(vl, "use_pass_environment", text="Environment")
+        # the data passes (depth, normal, ...) are written through surfaces less opaque than this
+        layout.prop(vl, "pass_alpha_threshold")
+
+
+class VIEWLAYER_PT_dacrt_aov(DACRTPanel, ViewLayerAOVPanelHelper, Panel):
+    bl_parent_id = "VIEWLAYER_PT_dacrt_passes"
+    bl_context = 'view_layer'
+
+
+class VIEWLAYER_PT_dacrt_lightgroups(DACRTPanel, ViewLayerLightgroupsPanelHelper, Panel):
+    bl_parent_id = "VIEWLAYER_PT_dacrt_passes"
+    bl_context = 'view_layer'
+
+
+class VIEWLAYER_PT_dacrt_filter(DACRTPanel, Panel):
+    """The view layer's filter (Blender's own panel is EEVEE's): what DACRT leaves out."""
+    bl_label = "Filter"
+    bl_context = 'view_layer'
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        vl = context.view_layer
+        col = layout.column(heading="Include")
+        col.prop(vl, "use_sky", text="Environment")
+        col.prop(vl, "use_solid", text="Surfaces")
+        col.prop(vl, "use_strand", text="Curves")
 
 
 class DATA_PT_dacrt_light(DACRTPanel, Panel):
@@ -166,6 +199,38 @@ class DATA_PT_dacrt_light(DACRTPanel, Panel):
                 col.prop(light, "size_y", text="Y")
             col.prop(light, "spread")
         layout.prop(light, "use_shadow", text="Cast Shadow")
+        cycles = getattr(light, 'cycles', None)
+        if cycles is not None:           # Cycles' per-light settings, which DACRT renders too
+            col = layout.column()
+            col.prop(cycles, "max_bounces")
+            col.prop(cycles, "use_multiple_importance_sampling", text="Multiple Importance")
+
+
+class OBJECT_PT_dacrt_visibility(DACRTPanel, Panel):
+    """Ray visibility and light group of an object (Cycles' panels draw them for Cycles only;
+    Blender's Visibility panel draws Holdout)."""
+    bl_label = "DACRT Visibility"
+    bl_context = 'object'
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return context.object is not None and super().poll(context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        ob = context.object
+        col = layout.column(heading="Ray Visibility")
+        col.prop(ob, "visible_camera", text="Camera")
+        col.prop(ob, "visible_diffuse", text="Diffuse")
+        col.prop(ob, "visible_transmission", text="Transmission")
+        if ob.type != 'LIGHT':
+            col.prop(ob, "visible_shadow", text="Shadow")
+        if hasattr(ob, "lightgroup"):
+            layout.prop_search(ob, "lightgroup", context.view_layer, "lightgroups", text="Light Group",
+                               results_are_suggestions=True)
 
 
 class DATA_PT_dacrt_panorama(DACRTPanel, Panel):
@@ -218,6 +283,26 @@ class MATERIAL_PT_dacrt_surface(DACRTPanel, Panel):
             node_view(self.layout, mat.node_tree, 'Surface')
 
 
+class MATERIAL_PT_dacrt_settings(DACRTPanel, Panel):
+    bl_label = "Settings"
+    bl_context = 'material'
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return context.material is not None and super().poll(context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        mat = context.material
+        cycles = getattr(mat, 'cycles', None)
+        if cycles is not None:
+            layout.prop(cycles, "emission_sampling")
+        layout.prop(mat, "pass_index")
+
+
 class WORLD_PT_dacrt_surface(DACRTPanel, Panel):
     bl_label = "Surface"
     bl_context = 'world'
@@ -234,19 +319,53 @@ class WORLD_PT_dacrt_surface(DACRTPanel, Panel):
             node_view(self.layout, world.node_tree, 'Surface')
 
 
-CLASSES = (RENDER_PT_dacrt, VIEWLAYER_PT_dacrt_passes, DATA_PT_dacrt_light, DATA_PT_dacrt_panorama,
-           MATERIAL_PT_dacrt_surface, WORLD_PT_dacrt_surface)
+class WORLD_PT_dacrt_settings(DACRTPanel, Panel):
+    """The world's ray visibility, light group and mist (Cycles' panels draw them for Cycles only)."""
+    bl_label = "Settings"
+    bl_context = 'world'
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return context.world is not None and super().poll(context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        world = context.world
+        vis = getattr(world, 'cycles_visibility', None)
+        if vis is not None:
+            col = layout.column(heading="Ray Visibility")
+            col.prop(vis, "camera")
+            col.prop(vis, "diffuse")
+        if hasattr(world, "lightgroup"):
+            layout.prop_search(world, "lightgroup", context.view_layer, "lightgroups", text="Light Group",
+                               results_are_suggestions=True)
+        if any(vl.use_pass_mist for vl in context.scene.view_layers):
+            col = layout.column(heading="Mist Pass", align=True)
+            col.prop(world.mist_settings, "start")
+            col.prop(world.mist_settings, "depth")
+            col.prop(world.mist_settings, "falloff")
+
+
+CLASSES = (RENDER_PT_dacrt, VIEWLAYER_PT_dacrt_passes, VIEWLAYER_PT_dacrt_aov, VIEWLAYER_PT_dacrt_lightgroups,
+           VIEWLAYER_PT_dacrt_filter, DATA_PT_dacrt_light, DATA_PT_dacrt_panorama, OBJECT_PT_dacrt_visibility,
+           MATERIAL_PT_dacrt_surface, MATERIAL_PT_dacrt_settings, WORLD_PT_dacrt_surface, WORLD_PT_dacrt_settings)
 
 
 def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
+    # A new set on each class, never .add(): Blender makes some panels by copying another's class
+    # dict (space_node.node_panel: NODE_DATA_PT_light from DATA_PT_light), so they share one set,
+    # and adding to it showed DATA_PT_light, which DACRT replaces, beside DACRT's own.
     for panel in generic_panels():
-        panel.COMPAT_ENGINES.add(ENGINE)
+        panel.COMPAT_ENGINES = set(panel.COMPAT_ENGINES) | {ENGINE}
 
 
 def unregister():
     for panel in generic_panels():
-        panel.COMPAT_ENGINES.discard(ENGINE)
+        panel.COMPAT_ENGINES = set(panel.COMPAT_ENGINES) - {ENGINE}
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

@@ -5,6 +5,7 @@ import shutil
 import subprocess
 import sys
 import textwrap
+from types import SimpleNamespace
 
 import bpy
 import pytest
@@ -152,16 +153,36 @@ class FakeLayout:
     def label(self, **_):
         self.drawn.append('label')
 
+    def prop_search(self, data, name, search_data, search_name, **_):
+        assert hasattr(data, name) and hasattr(search_data, search_name), name
+        self.drawn.append(name)
+
+    def template_list(self, list_type, list_id, data, name, active_data, active_name, **_):
+        assert hasattr(data, name) and hasattr(active_data, active_name), name
+        self.drawn.append(name)
+
+    def operator(self, idname, **_):
+        self.drawn.append(idname)
+        return SimpleNamespace()
+
+    def menu(self, idname, **_):
+        self.drawn.append(idname)
+
+    def separator(self, **_):
+        pass
+
     def row(self, **_):
         return self
 
     def column(self, **_):
         return self
 
+    def grid_flow(self, **_):
+        return self
+
 
 def test_panels_draw_existing_properties(scene):
     from . import scenes
-    from types import SimpleNamespace
     light = scenes.light('AREA', 10.0).data
     mat = scenes.diffuse("M", (1, 1, 1))
     world = scenes.world((1, 1, 1))
@@ -200,3 +221,41 @@ def test_panels_draw_existing_properties(scene):
         layout = FakeLayout()
         bpy.types.DATA_PT_dacrt_panorama.draw(SimpleNamespace(layout=layout), ctx)
         assert set(layout.drawn) == {'panorama_type'} | props, (kind, layout.drawn)
+
+
+def test_every_setting_the_render_reads_has_a_panel(scene):
+    """What the export reads from Blender (the README's settings) is drawn by a panel shown for
+    DACRT: its own, or a generic one enabled for it; Blender's Light panel, which DACRT
+    replaces, stays hidden though Blender's node editor copy shares its engine set."""
+    from . import scenes
+    light_ob = scenes.light('AREA', 10.0)
+    ctx = SimpleNamespace(scene=scene, view_layer=bpy.context.view_layer, light=light_ob.data,
+                          material=scenes.diffuse("M", (1, 1, 1)), world=scenes.world((1, 1, 1)),
+                          object=scenes.cube("C"), engine='DACRT')
+    scene.view_layers[0].use_pass_mist = True
+    drawn = {}
+    from addon import ui
+    names = [c.__name__ for c in ui.CLASSES] + ['VIEWLAYER_PT_override', 'OBJECT_PT_shadow_terminator',
+                                                'OBJECT_PT_visibility']
+    for name in names:
+        panel = getattr(bpy.types, name)
+        assert 'DACRT' in panel.COMPAT_ENGINES, name
+        if not panel.poll(ctx):                 # (the panorama panel: no camera here)
+            continue
+        layout = FakeLayout()
+        panel.draw(SimpleNamespace(layout=layout), ctx)
+        for prop in layout.drawn:
+            drawn.setdefault(prop, name)
+    wanted = {  # the view layer's overrides, filter, AOVs, light groups and data-pass threshold
+        'material_override', 'world_override', 'samples', 'use_sky', 'use_solid', 'use_strand',
+        'aovs', 'lightgroups', 'pass_alpha_threshold',
+        # the object's ray visibility, holdout, light group and shadow terminator offsets
+        'visible_camera', 'visible_diffuse', 'visible_shadow', 'visible_transmission', 'is_holdout',
+        'lightgroup', 'shadow_terminator_geometry_offset', 'shadow_terminator_shading_offset',
+        # the light's bounces and MIS, the material's emission sampling and pass index, the
+        # world's ray visibility and mist
+        'max_bounces', 'use_multiple_importance_sampling', 'emission_sampling', 'pass_index',
+        'camera', 'diffuse', 'start', 'depth', 'falloff'}
+    assert wanted <= set(drawn), sorted(wanted - set(drawn))
+    assert 'DACRT' not in bpy.types.DATA_PT_light.COMPAT_ENGINES
+    assert 'DACRT' not in getattr(bpy.types, 'NODE_DATA_PT_light', bpy.types.DATA_PT_light).COMPAT_ENGINES
