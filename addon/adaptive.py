@@ -55,7 +55,8 @@ class AdaptiveSampling:
         """Samples between checks: Cycles' 16, doubled until a block of the still-sampling
         pixels holds min_batch paths. The tracer's cost per ray grows as batches shrink (each
         batch partitions the scene anew), so checking every 16 samples of a few thousand pixels
-        cost more than the samples it saved (measured: 100K-triangle scene, 256 spp)."""
+        cost more than the samples it saved (measured: 100K-triangle scene, 256 spp); the
+        integrator scales min_batch with the triangle count."""
         step = STEP
         while active_pixels * step < min_batch and step < (1 << 20):
             step *= 2

@@ -110,13 +110,16 @@ class Film:
     def adaptive_error(self, pixels: np.ndarray) -> np.ndarray:
         """Cycles' per-pixel error estimate (film_adaptive_sampling_convergence_check): the mean
         absolute RGB difference between all samples and the odd-numbered ones (x2), over
-        1e-4 + sqrt of the mean RGB sum. Needs adaptive=True; pixels: film indices."""
+        1e-4 + the square root of the mean RGB sum, or the sum itself where it is 1 or more
+        (Cycles: brighter pixels are overexposed and need fewer samples), both taken after the
+        film exposure, as Cycles scales them. Needs adaptive=True; pixels: film indices."""
         if self._odd is None:
             raise RuntimeError("this Film was made without adaptive=True")
-        n = np.maximum(self._count[pixels], 1).astype(np.float64)
+        scale = self.exposure / np.maximum(self._count[pixels], 1).astype(np.float64)
         total = self._sum[:3, pixels]
-        diff = np.abs(total - self._odd[:, pixels]).sum(axis=0) / n
-        norm = np.sqrt(np.maximum(total.sum(axis=0), 0.0) / n)
+        diff = np.abs(total - self._odd[:, pixels]).sum(axis=0) * scale
+        intensity = np.maximum(total.sum(axis=0), 0.0) * scale
+        norm = np.where(intensity < 1.0, np.sqrt(intensity), intensity)
         return diff / (1e-4 + norm)
 
     def set_first(self, name: str, pixels: np.ndarray, values: np.ndarray):

@@ -129,8 +129,14 @@ _FIRST_PATHS_PER_TRIANGLE = 4
 # frame at 4 spp, 0.2 paths per triangle, would lose ~10 ms a frame).
 _SPATIAL_ORDER_PATHS_PER_TRIANGLE = 2
 # Adaptive sampling checks pixels every 16 samples (Cycles), less often once so few pixels are
-# left that a block between two checks would hold fewer paths than this (AdaptiveSampling.step_for).
+# left that a block between two checks would hold fewer paths than _ADAPTIVE_PATHS_PER_TRIANGLE
+# per triangle, at most _ADAPTIVE_MIN_BATCH (AdaptiveSampling.step_for): each batch partitions
+# the triangles anew, so small batches cost per ray in proportion to the triangles (checks every
+# 16 samples of a few thousand pixels of a 100K-triangle scene cost more than they saved), while
+# a small scene's batches stay cheap and a small frame of it is checked as Cycles checks it (a
+# fixed 2^19 paths left a 64 x 48 frame at 256 spp never checked: adaptive sampling did nothing).
 _ADAPTIVE_MIN_BATCH = 1 << 19
+_ADAPTIVE_PATHS_PER_TRIANGLE = 4
 
 # A shadow ray that must end at an emitter triangle ends at a point pushed off it by the same
 # step, and a little short (dacrt.shading.next_event; the end of a float32 ray drifts by a few
@@ -681,7 +687,8 @@ class Integrator:
                     t0 = time.perf_counter()
                     nact = len(film_pix)
                     if adaptive is not None:
-                        interval = adaptive.step_for(nact, _ADAPTIVE_MIN_BATCH)
+                        interval = adaptive.step_for(nact, min(_ADAPTIVE_MIN_BATCH,
+                                                               _ADAPTIVE_PATHS_PER_TRIANGLE * len(self.tri)))
                     if offset == 0 and target >= nact:
                         left = self.samples - sample
                         ns = int(min(max(target // nact, 1), left))

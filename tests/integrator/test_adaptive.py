@@ -63,10 +63,44 @@ def test_checks_spread_out_when_few_pixels_remain():
     assert a.align(80, 1000, 64) == 48 and a.align(128, 1000, 64) == 64
 
 
-def test_large_check_interval_keeps_stops_on_its_grid():
-    integ = render(_scene(True, samples=512))            # 1,200 pixels: checks 512 apart
+def test_large_check_interval_keeps_stops_on_its_grid(monkeypatch):
+    # as a scene of 2^17 triangles or more would: 1,200 pixels, checks 512 apart
+    monkeypatch.setattr(integrator_module, '_ADAPTIVE_PATHS_PER_TRIANGLE', 1 << 20)
+    integ = render(_scene(True, samples=512))
     counts = integ.film.sample_counts()
     assert (counts == 512).all() and integ.stats['samples_skipped'] == 0
+
+
+def test_a_small_frame_of_a_small_scene_is_checked_every_16_samples():
+    """A 40 x 30 Cornell box (a few dozen triangles: its batches stay cheap however small) is
+    checked as Cycles checks it, and its pixels stop (a fixed minimum batch of 2^19 paths had
+    put the checks 512 samples apart: nothing stopped)."""
+    integ = render(_scene(True, samples=256, threshold=0.1))
+    counts = integ.film.sample_counts()
+    first = (integ.adaptive.min_samples + 1) | (STEP - 1)
+    stopped = counts[counts < 256]
+    assert len(stopped) > 0.3 * counts.size and integ.stats['samples_skipped'] > 0
+    assert np.all((stopped - (first + 1)) % STEP == 0)
+    assert len(np.unique(stopped)) > 1                  # at more than one check
+
+
+def test_the_error_estimate_follows_the_film_exposure():
+    """Cycles scales its convergence test by the film exposure (an image twice as bright
+    converges later), and normalises by the brightness itself from R+G+B = 1 up."""
+    from addon.film import Film
+    x = np.random.default_rng(2).random((4, 1, 32)).astype(np.float32) * 0.1
+    errs = []
+    for exposure in (1.0, 4.0, 40.0):
+        f = Film(1, 1, adaptive=True, exposure=exposure)
+        f.add_samples(np.array([0]), x, first_sample=0)
+        errs.append(f.adaptive_error(np.array([0]))[0])
+    total = x[:3].sum(axis=2, dtype=np.float64)[:, 0]
+    diff = np.abs(total - 2 * x[:3, 0, 1::2].sum(axis=1, dtype=np.float64)).sum() / 32
+    i1 = total.sum() / 32
+    assert i1 < 1.0 / 4.0 and i1 * 40.0 > 1.0             # below 1, then above
+    np.testing.assert_allclose(errs[0], diff / (1e-4 + np.sqrt(i1)), rtol=1e-12)
+    np.testing.assert_allclose(errs[1], 4 * diff / (1e-4 + np.sqrt(4 * i1)), rtol=1e-12)
+    np.testing.assert_allclose(errs[2], 40 * diff / (1e-4 + 40 * i1), rtol=1e-12)
 
 
 def _scene(adaptive, samples=256, threshold=0.05, min_samples=0, **kw):
@@ -135,7 +169,9 @@ def test_error_estimate_is_cycles_formula():
     f.add_samples(np.array([0, 1]), x[:, :, 16:], first_sample=16)
     total = x[:3].sum(axis=2, dtype=np.float64)
     odd = 2 * x[:3, :, 1::2].sum(axis=2, dtype=np.float64)
-    expect = np.abs(total - odd).sum(axis=0) / 32 / (1e-4 + np.sqrt(total.sum(axis=0) / 32))
+    intensity = total.sum(axis=0) / 32
+    assert intensity.min() >= 1.0            # (below 1: the other test)
+    expect = np.abs(total - odd).sum(axis=0) / 32 / (1e-4 + intensity)
     np.testing.assert_allclose(f.adaptive_error(np.array([0, 1])), expect, rtol=1e-12)
     with pytest.raises(RuntimeError):
         Film(2, 1).adaptive_error(np.array([0]))
