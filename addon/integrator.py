@@ -67,7 +67,7 @@ from .pathstate import Paths, Sinks, compact
 from .procedural import ProceduralTexels
 from .sampling import RandomStream, max3
 from .sceneprep import recentred, validate
-from .scenedata import HOLDOUT, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
+from .scenedata import HOLDOUT, NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 from .surfacetables import Materials, Triangles
 from .texture import texture_lookup
 
@@ -92,9 +92,11 @@ _DIM_LENS = 1 << 20
 _DIM_TRANSPARENT = 1 << 21
 _DIM_PASSED = 1 << 22     # light sampling at passed semi-transparent surfaces (+ k << 11 + 2 layer)
 _DIM_LOBE = 1 << 23       # reflection or diffuse transmission at translucent surfaces (+ k)
-_DIM_GLASS = 1 << 24      # glass or clear transparency, camera rays under transparent film (+ j)
+_DIM_GLASS = 1 << 24      # glass or clear transparency at a pass (+ k << 11 + j, as _DIM_TRANSPARENT)
 # internal visibility bit: transparent triangles shadow rays pass (their own tracer scene)
 _VIS_THROUGH = 16
+# internal visibility bit: triangles rays see past glass (Cycles' transmission rays)
+_VIS_TRANSMIT = 64
 # Cryptomatte's arrival order of a sample's surfaces: sample x _MAX_CHAIN + depth along the ray
 _MAX_CHAIN = 1 << 12
 
@@ -236,6 +238,16 @@ class Integrator:
         # background is left out
         self._glass_film = self.transparent and not getattr(s, 'film_transparent_glass', False) and \
             bool((self.mats.refraction.max(axis=0) > 0)[self.tri.material][self._tri_transparent].any())
+        # Rays past glass are Cycles' transmission rays: they see objects by their Transmission
+        # visibility and no holdout. Passes pick glass or clear transparency (as under a
+        # transparent film) only where that changes what they see: glass in the scene and some
+        # object seen differently by transmission rays than by camera or diffuse rays, or held out
+        vis = self.tri.visibility
+        glass = (self.mats.refraction.max(axis=0) > 0)[self.tri.material] & self._tri_transparent
+        self._tri_transmit = ((vis & NO_TRANSMISSION) == 0) & ((vis & ~np.uint8(NO_TRANSMISSION)) != 0)
+        self._transmit_split = bool(glass.any()) and bool(
+            ((vis & HOLDOUT) != 0).any() or (self._tri_transmit != ((vis & VIS_CAMERA) != 0)).any()
+            or (self._tri_transmit != ((vis & VIS_DIFFUSE) != 0)).any())
         # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
         self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))
         # textures or attribute colours vary the albedo over a triangle: hits need (u, v) for them
@@ -531,6 +543,10 @@ class Integrator:
         wanted = {'camera': VIS_CAMERA}
         if self._bounce_rays:
             wanted['bounce'] = VIS_DIFFUSE
+        if self._transmit_split:
+            vis = vis.copy()
+            vis[self._tri_transmit] |= np.uint8(_VIS_TRANSMIT)
+            wanted['transmission'] = _VIS_TRANSMIT
         if self.lights:
             wanted['shadow'] = VIS_SHADOW
         self._scenes, self._maps, self._local, self._visible = {}, {}, {}, {}
@@ -872,6 +888,8 @@ class Integrator:
             held = None
             if self._any_holdout:                     # holdout: transparent, nothing behind it
                 held = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0)
+                if path.transmit is not None:
+                    held &= ~path.transmit          # past glass: a transmission ray, no holdout
                 hit &= ~held
                 if path.thr is not None and held.any():
                     _seen_through(alpha, path, np.flatnonzero(held))
@@ -1271,9 +1289,9 @@ class Integrator:
             rows = rows[go]
             if not len(rows):
                 return
-            if camera and self._glass_film:
-                self._glass_or_clear(path, rows, mat[go], tau[:, go], p[go],
-                                     self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_GLASS + j)[0])
+            if (camera and self._glass_film) or self._transmit_split:
+                self._glass_or_clear(camera, path, rows, mat[go], tau[:, go], p[go],
+                                     self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_GLASS + (k << 11) + j)[0])
             else:
                 thr[:, rows] *= tau[:, go] / p[go]
             path.tb[rows] += 1
@@ -1285,8 +1303,8 @@ class Integrator:
             D = np.ascontiguousarray(np.take(path.D, rows, axis=1))
             t0 = np.take(hits['t'], rows)
             tmax = np.take(path.tmax, rows) - t0
-            sub = self._intersect(kind, np.ascontiguousarray(P + P - P_off), D, tmax.astype(F32),
-                                  np.take(hits['prim'], rows))
+            sub = self._intersect_past(kind, path.transmit, rows, np.ascontiguousarray(P + P - P_off), D,
+                                       tmax.astype(F32), np.take(hits['prim'], rows))
             sub['t'] += t0                      # distances from the path vertex, for lamps and MIS
             seg = Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
                          np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
@@ -1298,20 +1316,39 @@ class Integrator:
             hits[rows] = sub
             j += 1
 
-    def _glass_or_clear(self, path, rows, mat, tau, p, u):
-        """Camera paths rows passing surfaces of materials mat with transparency tau (3, k),
-        under a transparent film (_glass_film): each passes as glass (its refraction part, with
-        probability mean(glass) / mean(tau)) or as clear transparency (the rest), weighted by
-        the part over its probability (and p, the pass's); those that pass glass are refracted
-        from then on (path.refracted)."""
+    def _glass_or_clear(self, camera, path, rows, mat, tau, p, u):
+        """Paths rows passing surfaces of materials mat with transparency tau (3, k): each passes
+        as glass (its refraction part, with probability mean(glass) / mean(tau)) or as clear
+        transparency (the rest), weighted by the part over its probability (and p, the pass's).
+        Those that pass glass go on as transmission rays (path.transmit) and, camera paths under
+        a transparent film (_glass_film), are refracted from then on (path.refracted)."""
         glass = np.minimum(np.take(self.mats.refraction, mat, axis=1), tau)
         q = np.where(tau.mean(axis=0) > 0, glass.mean(axis=0) / np.maximum(tau.mean(axis=0), 1e-30), 0.0)
         go = u < q
         part = np.where(go, glass / np.where(go, q, 1.0), (tau - glass) / np.where(go, 1.0, 1.0 - q))
         path.thr[:, rows] *= (part / p).astype(F32)
-        if path.refracted is None:
-            path.refracted = np.zeros(len(path.pid), bool)
-        path.refracted[rows[go]] = True
+        if path.transmit is None:
+            path.transmit = np.zeros(len(path.pid), bool)
+        path.transmit[rows[go]] = True
+        if camera and self._glass_film:
+            if path.refracted is None:
+                path.refracted = np.zeros(len(path.pid), bool)
+            path.refracted[rows[go]] = True
+
+    def _intersect_past(self, kind, transmit, rows, O, D, tfar, skip):
+        """Closest hits of rays (O, D, tfar; skip: the triangle each leaves) that paths rows trace
+        on past a transparent surface: as `kind`, or as transmission rays where transmit[rows]
+        (they passed glass), which see triangles by their Transmission visibility."""
+        tx = None if transmit is None or 'transmission' not in self._scenes else np.take(transmit, rows)
+        if tx is None or not tx.any():
+            return self._intersect(kind, O, D, tfar, skip)
+        if tx.all():
+            return self._intersect('transmission', O, D, tfar, skip)
+        hits = np.empty(len(rows), dacrt.HIT_DTYPE)
+        for sel, k in ((np.flatnonzero(~tx), kind), (np.flatnonzero(tx), 'transmission')):
+            hits[sel] = self._intersect(k, np.ascontiguousarray(O[:, sel]), np.ascontiguousarray(D[:, sel]),
+                                        np.ascontiguousarray(tfar[sel]), np.take(skip, sel))
+        return hits
 
     def _light_passed(self, k, j, path, hits, sinks, rows, prim, opacity, surface, go):
         """Light sampling at the semi-transparent surfaces (layer j) that paths rows pass: the

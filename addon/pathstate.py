@@ -81,3 +81,6 @@ class Paths:
     N: np.ndarray | None = None      # shading normals (3,n) the rays' vertex sampled lights with
     # camera paths that passed glass (a transparent film's background is drawn behind it)
     refracted: np.ndarray | None = None
+    # paths whose current segment passed glass: Cycles' transmission rays from there (object
+    # Transmission visibility, no holdout)
+    transmit: np.ndarray | None = None

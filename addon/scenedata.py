@@ -22,6 +22,9 @@ VIS_CAMERA = 1
 VIS_DIFFUSE = 2
 VIS_SHADOW = 4
 HOLDOUT = 8
+# Object > Visibility > Ray Visibility > Transmission off: rays past glass (Cycles' transmission
+# rays) do not see it. A bit that hides, so that visibility written without it keeps its meaning.
+NO_TRANSMISSION = 32
 
 
 @dataclass
@@ -179,7 +182,7 @@ class Geometry:
     normals: np.ndarray            # (M,3,3) float32 shading normal per triangle corner (unit, world)
     uvs: Optional[np.ndarray]      # (M,3,2) float32 per corner, on the UV map the triangle's
                                    # material reads (Material.uv_map), or None
-    visibility: np.ndarray         # (M,) uint8 bits VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW | HOLDOUT
+    visibility: np.ndarray         # (M,) uint8 bits VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW | HOLDOUT | NO_TRANSMISSION
     object_index: np.ndarray       # (M,) int32 index into SceneData.object_names
     # (M,) int32 the placement (object or instance of one) each triangle comes from: the light
     # tree makes each emissive instance a light of its own; None: object_index stands in

@@ -136,7 +136,7 @@ class Assembly:
         # materials hidden from some ray kinds (a Light Path ray-type mix, see _ray_type_mix)
         mvis = np.array([m.visibility for m in self.materials.materials], np.uint8)
         if len(geometry.material) and (mvis != (sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)).any():
-            keep = mvis | np.uint8(sd.HOLDOUT)
+            keep = mvis | np.uint8(sd.HOLDOUT | sd.NO_TRANSMISSION)
             geometry.visibility &= keep[geometry.material]
         return geometry
 

@@ -232,6 +232,8 @@ class Exporter:
                     | (sd.VIS_DIFFUSE if o.visible_diffuse else 0)
                     | (sd.VIS_SHADOW if o.visible_shadow else 0))
         vis = bits(ob) & bits(parent)
+        if vis and not (getattr(ob, 'visible_transmission', True) and getattr(parent, 'visible_transmission', True)):
+            vis |= sd.NO_TRANSMISSION
         if vis and (parent.is_holdout or self._collection_flag(parent, 'holdout_get')):
             vis |= sd.HOLDOUT
         elif self._collection_flag(parent, 'indirect_only_get'):

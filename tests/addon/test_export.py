@@ -773,6 +773,7 @@ def test_hidden_and_ray_visibility(scene, exported):
     held.is_holdout = True
     gone = scenes.plane("Gone", location=(15, 0, 0))
     gone.visible_camera = gone.visible_diffuse = gone.visible_shadow = False
+    scenes.plane("NoTransmission", location=(18, 0, 0)).visible_transmission = False
     data = exported()
     assert "Hidden" not in data.object_names and "Gone" not in data.object_names
     assert data.skipped['objects_hidden'] == 1 and data.skipped['objects_invisible'] == 1
@@ -782,6 +783,7 @@ def test_hidden_and_ray_visibility(scene, exported):
     assert vis["NoCamera"] == {sd.VIS_DIFFUSE | sd.VIS_SHADOW}
     assert vis["NoShadow"] == {sd.VIS_CAMERA | sd.VIS_DIFFUSE}
     assert vis["Held"] == {full | sd.HOLDOUT}
+    assert vis["NoTransmission"] == {full | sd.NO_TRANSMISSION}    # seen past glass no more
 
 
 def test_holdout_and_excluded_collections(scene, exported):

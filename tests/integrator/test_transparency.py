@@ -221,6 +221,46 @@ def test_shadow_rays_get_what_the_path_has_left_of_the_limit(limit, lit):
     assert np.allclose(img[..., :3], 0.8 if lit else 0.0, rtol=1e-5, atol=1e-7)
 
 
+def _behind_a_pane(glass, floor_vis, film_transparent=False):
+    """A 0.8 floor with visibility bits floor_vis seen down through a clear pane, glass
+    (Material.refraction: Cycles' refraction, see-through here) or a Transparent BSDF, under
+    the uniform world; no bounces, so the floor is 0.8 x the world where seen."""
+    ones = np.ones(3, np.float32)
+    pane = material('pane', (0.0,) * 3, transparency=ones, refraction=ones if glass else None)
+    scene = sheet_scene(pane, floor=True, film_transparent=film_transparent)
+    scene.geometry = geometry([(*quad((0.0, 0.0, 0.0), 100.0, 100.0), 1, floor_vis),
+                               (*quad((0.0, 0.0, 0.25), 100.0, 100.0), 2, ALL_VIS)])
+    return render(scene).film.combined()
+
+
+@pytest.mark.parametrize('glass', [False, True])
+def test_past_glass_rays_see_by_transmission_visibility(glass):
+    """Past glass a camera ray is Cycles' transmission ray: an object hidden from the camera
+    (an Indirect Only collection) is seen there, one with Transmission visibility off is not;
+    past a Transparent BSDF the ray is still a camera ray (measured in Cycles 5.0 on a red
+    cube behind a pane: Glass or Refraction BSDF show the camera-hidden cube and hide the
+    transmission-hidden one, a Transparent BSDF pane the reverse)."""
+    floor, world = 0.8 * WORLD, WORLD
+    img = _behind_a_pane(glass, sd.VIS_DIFFUSE | sd.VIS_SHADOW)
+    assert np.allclose(img[..., :3], floor if glass else world, rtol=1e-5)
+    img = _behind_a_pane(glass, ALL_VIS | sd.NO_TRANSMISSION)
+    assert np.allclose(img[..., :3], world if glass else floor, rtol=1e-5)
+    img = _behind_a_pane(glass, ALL_VIS)
+    assert np.allclose(img[..., :3], floor, rtol=1e-5)
+
+
+@pytest.mark.parametrize('glass', [False, True])
+def test_past_glass_nothing_is_held_out(glass):
+    """A held-out floor under transparent film: seen through a Transparent BSDF it leaves its
+    hole (alpha 0, black), through glass it is rendered (Cycles: a transmission ray has no
+    transparent background, holdout does not apply)."""
+    img = _behind_a_pane(glass, ALL_VIS | sd.HOLDOUT, film_transparent=True)
+    if glass:
+        assert np.allclose(img[..., :3], 0.8 * WORLD, rtol=1e-5) and np.all(img[..., 3] == 1.0)
+    else:
+        assert np.all(img == 0.0)
+
+
 def test_non_finite_opacity_reads_as_opaque():
     tex = np.full((1, 1, 4), np.nan, np.float32)
     sheet = material('sheet', (0.5,) * 3, transparency=np.ones(3, np.float32), opacity=tex)
