@@ -135,6 +135,11 @@ def tubes(positions, radii, offsets, level: tuple | None = None):
     a = ring[:, None] * sides + j[None, :]
     a1 = ring[:, None] * sides + ((j + 1) % sides)[None, :]
     c, c1 = a + sides, a1 + sides
-    triangles = np.concatenate([np.stack([a, a1, c], -1), np.stack([a1, c1, c], -1)], axis=1).reshape(-1, 3)
+    # where a ring has radius 0 (a tip) its points coincide: of each quad only the triangle
+    # with one corner there is kept (a cone), the other would have no area (and be reported
+    # as the user's degenerate geometry)
+    quads = np.stack([np.stack([a, a1, c], -1), np.stack([a1, c1, c], -1)], axis=1)   # (rings, 2, sides, 3)
+    keep = np.stack([r[ring] > 0, r[ring + 1] > 0], axis=1)
+    triangles = quads[keep].reshape(-1, 3)
     return (vertices.astype(np.float32), triangles.astype(np.int32),
             radial.reshape(-1, 3).astype(np.float32), len(counts))

@@ -96,6 +96,24 @@ def test_tube_follows_catmull_rom_through_its_keys_without_twisting():
     assert (np.einsum('ij,ij->i', tn, n[t].mean(axis=1)) > 0).all()
 
 
+def test_a_tip_of_radius_zero_closes_the_tube_as_a_cone():
+    """Hair's default tip radius 0: the last ring is one point, so its quads are triangles of
+    a cone, each with area (none degenerate: the render had reported 16 per strand as the
+    user's degenerate geometry), and the lateral area is the frustum's and the cone's."""
+    p, _ = _straight(length=2.0, keys=3)
+    r = np.array([0.1, 0.1, 0.0])
+    sides, steps = 8, 1
+    v, t, n, kept = hair.tubes(p, r, [0, len(p)], (sides, steps))
+    area = 0.5 * np.linalg.norm(_tri_normals(v, t), axis=1)
+    assert len(t) == sides * 2 + sides and (area > 0).all()
+    # the polygon ring has the circle's perimeter: lateral areas 2 pi r h and pi r slant
+    expect = 2 * np.pi * 0.1 * 1.0 + np.pi * 0.1 * np.hypot(0.1 * np.pi / (sides * np.sin(np.pi / sides)) *
+                                                               np.cos(np.pi / sides), 1.0)
+    assert area.sum() == pytest.approx(expect, rel=2e-3)
+    v, t, n, kept = hair.tubes(p, np.zeros(3), [0, len(p)], (sides, steps))
+    assert len(t) == 0                          # no width anywhere: nothing (Cycles: none)
+
+
 def test_curves_of_one_point_are_dropped_and_offsets_respected():
     a, _ = _straight(keys=3)
     pts = np.concatenate([a, [[5, 5, 5]], a + [3, 0, 0]])
