@@ -537,7 +537,7 @@ class Integrator:
         if self._any_transparent:
             # shadow rays pass transparent triangles (their own scene, 'through') and stop at the rest
             vis = vis.copy()
-            through = self._tri_transparent & ((vis & VIS_SHADOW) != 0)
+            through = self._tri_transparent & ((vis & VIS_SHADOW) != 0) & self.mats.shadow_passes[self.tri.material]
             vis[through] = (vis[through] & ~np.uint8(VIS_SHADOW)) | np.uint8(_VIS_THROUGH)
         self._bounce_rays = self.max_bounces > 0 or self.lights.seen_by_bsdf or not SKIP_WORK
         wanted = {'camera': VIS_CAMERA}

@@ -154,6 +154,9 @@ class Material:
     # Principled's transmission): light through it is refracted light to Cycles, so a camera
     # ray that passes it sees the world behind even with a transparent film; None: none
     refraction: Optional[np.ndarray] = None
+    # Material > Settings > Transparent Shadows (Cycles reads it): off, shadow rays stop at the
+    # material as at an opaque one, while camera and bounce rays still pass it
+    transparent_shadow: bool = True
     opacity: Optional[np.ndarray] = None
     opacity_interpolation: str = 'Linear'
     opacity_extension: str = 'REPEAT'

@@ -156,6 +156,9 @@ class Materials:
                 self.opacity.append((i, *texture_entry(mat.name, 'opacity', mat.opacity, mat.opacity_interpolation,
                                                         mat.opacity_extension, mat.opacity_transform)))
         self.transparent = self.transparency.max(axis=0) > 0
+        # transparent materials shadow rays pass (Transparent Shadows on); the rest block them
+        self.shadow_passes = self.transparent & np.array([bool(getattr(m, 'transparent_shadow', True))
+                                                          for m in materials], bool)
         # diffuse transmission (3, materials), scenedata.Material.translucency
         self.translucency = np.zeros((3, len(materials)), F32)
         for i, mat in enumerate(materials):

@@ -384,6 +384,7 @@ class MaterialBuilder:
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, translucency=translucency, refraction=refraction,
+                           transparent_shadow=bool(getattr(mat, 'use_transparent_shadow', True)),
                            opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
