@@ -300,6 +300,8 @@ class MATERIAL_PT_dacrt_settings(DACRTPanel, Panel):
         cycles = getattr(mat, 'cycles', None)
         if cycles is not None:
             layout.prop(cycles, "emission_sampling")
+        if hasattr(mat, "use_transparent_shadow"):
+            layout.prop(mat, "use_transparent_shadow")
         layout.prop(mat, "pass_index")
 
 

@@ -255,6 +255,7 @@ def test_every_setting_the_render_reads_has_a_panel(scene):
         # the light's bounces and MIS, the material's emission sampling and pass index, the
         # world's ray visibility and mist
         'max_bounces', 'use_multiple_importance_sampling', 'emission_sampling', 'pass_index',
+        'use_transparent_shadow',
         'camera', 'diffuse', 'start', 'depth', 'falloff'}
     assert wanted <= set(drawn), sorted(wanted - set(drawn))
     assert 'DACRT' not in bpy.types.DATA_PT_light.COMPAT_ENGINES
