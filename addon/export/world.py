@@ -7,7 +7,7 @@ colour, reported. Part of the export layer."""
 import bpy
 import numpy as np
 
-from .. import nodeeval
+from .. import nodeeval, nodegraph
 from .. import scenedata as sd
 from ..mapping import environment_rotation
 from ..nodeeval import constant_color, constant_value
@@ -71,6 +71,10 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
     if link is None or weight == 0.0:
         return none, None
     if link.from_socket.type != 'SHADER':
+        if _environments_feeding(socket):
+            # a map's colour straight into the world's surface: Cycles' emission of it, which
+            # for the world is a Background of that colour, strength 1
+            return _color_light(socket, np.float32(weight), "world surface", reasons, frame)
         return value_emission(link, reasons).astype(np.float32) * np.float32(weight), None
     node = link.from_node
     t = node.type
@@ -94,26 +98,50 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
     s, s_ok = constant_value(node.inputs['Strength'])
     if not s_ok:
         reasons.append(f"world {node.bl_label} Strength driven by nodes; its own value used")
-    tex = linked_node(node.inputs['Color'])
+    return _color_light(node.inputs['Color'], np.float32(s * weight), f"world {node.bl_label} Color", reasons, frame)
+
+
+def _color_light(socket, strength, what, reasons, frame):
+    """(uniform radiance, Environment or None) of a world colour socket at `strength`: an
+    Environment Texture's map, with the colour nodes between them applied to its texels (a
+    tint, a Hue/Saturation, a ramp), or a constant colour."""
+    tex = linked_node(socket)
     if tex is not None and tex.type == 'TEX_ENVIRONMENT':
-        return _environment(tex, np.float32(s * weight), reasons, frame=frame)
-    c, c_ok = constant_color(node.inputs['Color'])
+        return _environment(tex, strength, reasons, frame=frame)
+    c, c_ok = constant_color(socket)
     if not c_ok:
-        # colour nodes on an Environment Texture (a tint, a Hue/Saturation, a ramp): applied to
-        # the map's texels
-        envs = [n for n in node.id_data.nodes if n.type == 'TEX_ENVIRONMENT' and n.image is not None and not n.mute]
+        envs = _environments_feeding(socket)
         if len(envs) == 1:
             try:
-                chain = nodeeval.compile_image_chain(node.inputs['Color'], True, envs[0].image.as_pointer())
+                chain = nodeeval.compile_image_chain(socket, True, envs[0].image.as_pointer())
             except nodeeval.NotCompiled:
                 chain = None
             if chain is not None:
-                return _environment(envs[0], np.float32(s * weight), reasons, chain, frame)
-        source = linked_node(node.inputs['Color'])
-        what = f"'{source.bl_label}'" if source is not None else "nodes"
-        reasons.append(f"world {node.bl_label} Color from {what}, which is not evaluated; the socket's own "
-                       f"colour {tuple(round(float(x), 3) for x in c[:3])} used")
-    return np.array(c, np.float32) * np.float32(s * weight), None
+                return _environment(envs[0], strength, reasons, chain, frame)
+        source = linked_node(socket)
+        name = f"'{source.bl_label}'" if source is not None else "nodes"
+        why = "two environment textures feed it" if len(envs) > 1 else "which is not evaluated"
+        reasons.append(f"{what} from {name}, {why}; the socket's own colour "
+                       f"{tuple(round(float(x), 3) for x in c[:3])} used")
+    return np.array(c, np.float32) * strength, None
+
+
+def _environments_feeding(socket, depth=0):
+    """The Environment Texture nodes (with an image) whose output reaches `socket`, followed
+    back through its links as Cycles compiles them (reroutes, muted nodes, groups): a stray
+    map elsewhere in the tree is not one of them."""
+    link, _ = nodegraph.source(socket)
+    if link is None or depth > 64:
+        return []
+    node = link.from_node
+    if node.type == 'TEX_ENVIRONMENT':
+        return [node] if node.image is not None else []
+    found = []
+    for i in range(len(node.inputs)):
+        for env in _environments_feeding(node.inputs[i], depth + 1):
+            if all(nodegraph.unwrap(env) != nodegraph.unwrap(e) for e in found):
+                found.append(env)
+    return found
 
 
 def world_visibility(world):

@@ -1235,6 +1235,66 @@ def test_world_environment_texture(scene, exported):
         assert not any("world approximated" in t for _, t in data.messages), kind
 
 
+def test_world_environment_found_by_its_links(scene, exported):
+    """The map a world's colour comes from is found by following the links back (Cycles
+    compiles only what reaches the output): linked straight into the World Output's Surface
+    (Cycles: an emission of it, strength 1), tinted inside a node group, or tinted beside a
+    stray, unconnected second Environment Texture; each is the tinted map, not a constant."""
+    setup(scene)
+    px = _sky_pixels()
+    img = scenes.float_image("Sky", px)
+    tint = (0.5, 0.25, 1.0)
+
+    def tinted(nt, env):
+        mix = nt.nodes.new('ShaderNodeMix')
+        mix.data_type, mix.blend_type = 'RGBA', 'MULTIPLY'
+        mix.inputs['Factor'].default_value = 1.0
+        mix.inputs['B'].default_value = (*tint, 1.0)
+        nt.links.new(env.outputs['Color'], mix.inputs['A'])
+        return mix.outputs['Result']
+
+    w, nt, out = scenes.world_tree()
+    env = nt.nodes.new('ShaderNodeTexEnvironment')
+    env.image = img
+    nt.links.new(env.outputs['Color'], out.inputs['Surface'])
+    data = exported()
+    assert data.environment is not None and np.allclose(data.environment.pixels, px[..., :3])
+    assert np.allclose(data.environment.strength, 1.0) and not data.world.any()
+
+    w = scenes.environment_world(img, 2.0)
+    nt = w.node_tree
+    env = next(n for n in nt.nodes if n.type == 'TEX_ENVIRONMENT')
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    nt.links.new(tinted(nt, env), bg.inputs['Color'])
+    nt.nodes.new('ShaderNodeTexEnvironment').image = img          # stray, linked to nothing
+    data = exported()
+    assert data.environment is not None
+    assert np.allclose(data.environment.pixels, px[..., :3] * tint, rtol=1e-5)
+    assert not any("not evaluated" in t for _, t in data.messages)
+
+    g = bpy.data.node_groups.new("Tint", 'ShaderNodeTree')
+    g.interface.new_socket("Color", in_out='INPUT', socket_type='NodeSocketColor')
+    g.interface.new_socket("Color", in_out='OUTPUT', socket_type='NodeSocketColor')
+    gin, gout = g.nodes.new('NodeGroupInput'), g.nodes.new('NodeGroupOutput')
+    mix = g.nodes.new('ShaderNodeMix')
+    mix.data_type, mix.blend_type = 'RGBA', 'MULTIPLY'
+    mix.inputs['Factor'].default_value = 1.0
+    mix.inputs['B'].default_value = (*tint, 1.0)
+    g.links.new(gin.outputs[0], mix.inputs['A'])
+    g.links.new(mix.outputs['Result'], gout.inputs[0])
+    w = scenes.environment_world(img, 1.0)
+    nt = w.node_tree
+    env = next(n for n in nt.nodes if n.type == 'TEX_ENVIRONMENT')
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    group = nt.nodes.new('ShaderNodeGroup')
+    group.node_tree = g
+    nt.links.new(env.outputs['Color'], group.inputs[0])
+    nt.links.new(group.outputs[0], bg.inputs['Color'])
+    data = exported()
+    assert data.environment is not None
+    assert np.allclose(data.environment.pixels, px[..., :3] * tint, rtol=1e-5)
+
+
 def test_world_environment_approximations_are_reported(scene, exported):
     setup(scene)
     px = _sky_pixels()
