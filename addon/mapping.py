@@ -75,6 +75,8 @@ def texture_transform(tex_node, reasons):
     own = tex_node.inputs['Vector']
     link, carrier = source(own)
     if link is None and unwrap(carrier).as_pointer() != unwrap(own).as_pointer():
+        if getattr(unwrap(carrier), 'hide_value', False):
+            return None     # a group input with Hide Value has no value: the image reads its UV map (Cycles)
         # unlinked past a group boundary (a Group node's Vector input left at its value): a
         # constant point, as Cycles reads it, not the UV map an unlinked Vector means
         p = np.array(carrier.default_value[:3], np.float64)

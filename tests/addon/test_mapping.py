@@ -203,3 +203,9 @@ def test_an_unlinked_group_input_is_a_constant_point(dacrt_addon):
     assert np.allclose(mapping.texture_transform(tex, reasons), [[0, 0, 0.3], [0, 0, 0.6]]) and reasons == []
     unlinked = nt.nodes.new('ShaderNodeTexImage')        # the image's own Vector unlinked: the UV map
     assert mapping.texture_transform(unlinked, reasons) is None and reasons == []
+    # ... unless the group's Vector input has Hide Value: it has no value, and the image inside
+    # reads its UV map (Cycles: the same image as outside the group; the texel at (0.3, 0.6)
+    # everywhere had been 0.86 off in places)
+    g.interface.items_tree['Vector'].hide_value = True
+    assert node.inputs['Vector'].hide_value
+    assert mapping.texture_transform(tex, reasons) is None and reasons == []
