@@ -391,6 +391,14 @@ class Exporter:
         if self.scene.render.use_motion_blur:
             self.messages.append(('WARNING', "motion blur is not rendered: every object is drawn at "
                                              "its position on the frame"))
+        space = getattr(getattr(bpy.data, 'colorspace', None), 'working_space', 'Linear Rec.709')
+        if space and space != 'Linear Rec.709':
+            # Blender 5.0's file working space: Cycles renders in its primaries; the export's
+            # colour conversions assume Rec.709 ones
+            self.messages.append(('WARNING', f"working colour space '{space}': DACRT decodes 8-bit (sRGB) images, "
+                                             "converts image colour spaces and computes RGB to BW and "
+                                             "Blackbody in Linear Rec.709 primaries, so those colours differ "
+                                             "from Cycles'; constant and float colours are as Cycles has them"))
         approx = [f"'{m.name}' ({m.approximated})" for m in self.materials.materials if m.approximated]
         if len(geometry.material) and not geometry.material.all():     # material 0 is in use
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "

@@ -855,6 +855,14 @@ def test_features_rendered_without_are_reported(scene, exported):
     lamp.light_linking.blocker_collection = None
     text = " | ".join(m for _, m in exported().messages)
     assert "shadow catcher" not in text and "linking" not in text and "motion blur" not in text
+    assert "working colour space" not in text
+    # Blender 5.0's file working space other than Rec.709: image and blackbody colours differ
+    bpy.ops.wm.set_working_color_space(working_space='ACEScg', convert_colors=False)
+    try:
+        text = " | ".join(m for _, m in exported().messages)
+        assert "working colour space 'ACEScg'" in text
+    finally:
+        bpy.ops.wm.set_working_color_space(working_space='Linear Rec.709', convert_colors=False)
 
 
 def test_light_linking_receivers_exported(scene, exported):
