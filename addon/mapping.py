@@ -66,20 +66,61 @@ def mapping_affine(node, reasons):
     return rot * scale[None, :], np.zeros(3)      # VECTOR
 
 
+def node_texture_mapping(node, reasons):
+    """(M, t): a texture node's own Texture Mapping (node.texture_mapping: the editor sidebar's
+    panel, old files, scripts) as v -> M v + t, which Cycles applies to the node's vector before
+    anything else (TextureMapping::compute_transform: the axis remapping, then the transform
+    of its type, scale kept off 0 for Texture and Normal); None where it changes nothing
+    (TextureMapping::skip). Its min/max clamp and the Normal type's normalisation are no affine
+    map: reported, and left out."""
+    tm = getattr(node, 'texture_mapping', None)
+    if tm is None:
+        return None
+    loc = np.array(tm.translation, np.float64)
+    rot = np.array(tm.rotation, np.float64)
+    scale = np.array(tm.scale, np.float64)
+    axes = (tm.mapping_x, tm.mapping_y, tm.mapping_z)
+    clamp = bool(tm.use_min or tm.use_max)
+    if not loc.any() and not rot.any() and (scale == 1.0).all() and axes == ('X', 'Y', 'Z') and not clamp:
+        return None
+    remap = np.zeros((3, 3))
+    for row, axis in enumerate(axes):
+        if axis != 'NONE':
+            remap[row, 'XYZ'.index(axis)] = 1.0
+    kind = tm.vector_type
+    if kind in ('TEXTURE', 'NORMAL'):       # kept invertible, as Cycles does
+        scale = np.where(np.abs(scale) < 1e-5, np.where(scale < 0, -1e-5, 1e-5), scale)
+    A = _rotation(rot) * scale[None, :]
+    if kind == 'TEXTURE':
+        M = np.linalg.inv(A)
+        t = -M @ loc
+    elif kind == 'POINT':
+        M, t = A, loc
+    elif kind == 'NORMAL':
+        M, t = np.linalg.inv(A).T, np.zeros(3)
+        reasons.append(f"'{node.name}' Texture Mapping of type Normal read without its normalisation")
+    else:                                   # VECTOR
+        M, t = A, np.zeros(3)
+    if clamp:
+        reasons.append(f"'{node.name}' Texture Mapping's min/max clamp ignored")
+    return M @ remap, t
+
+
 def texture_transform(tex_node, reasons):
     """How an Image Texture's Vector input maps the active render UV map (u, v, 0): a (2, 3)
     float64 T with (x, y) = T @ (u, v, 1), or None for the UV map itself. Chains of Mapping
     nodes compose exactly; a Mapping with nothing linked maps its own (constant) vector. Other
     sources are read as the UV map, with the reason in reasons."""
-    M, t = np.eye(3), np.zeros(3)         # from the vector reached so far to the image's
+    # from the vector reached so far to the image's: the node's own Texture Mapping first
+    M, t = node_texture_mapping(tex_node, reasons) or (np.eye(3), np.zeros(3))
     own = tex_node.inputs['Vector']
     link, carrier = source(own)
-    if link is None and unwrap(carrier).as_pointer() != unwrap(own).as_pointer():
-        if getattr(unwrap(carrier), 'hide_value', False):
-            return None     # a group input with Hide Value has no value: the image reads its UV map (Cycles)
+    if link is None and unwrap(carrier).as_pointer() != unwrap(own).as_pointer() \
+            and not getattr(unwrap(carrier), 'hide_value', False):
         # unlinked past a group boundary (a Group node's Vector input left at its value): a
-        # constant point, as Cycles reads it, not the UV map an unlinked Vector means
-        p = np.array(carrier.default_value[:3], np.float64)
+        # constant point, as Cycles reads it, not the UV map an unlinked Vector means (a group
+        # input with Hide Value has no value: the image reads its UV map, as Cycles)
+        p = M @ np.array(carrier.default_value[:3], np.float64) + t
         return np.array([[0.0, 0.0, p[0]], [0.0, 0.0, p[1]]])
     for _ in range(_MAX_CHAIN):
         if link is None or link.from_node.type != 'MAPPING':
@@ -134,6 +175,10 @@ def environment_rotation(node, reasons):
     """(3, 3) orthogonal world -> map-frame matrix from the Environment Texture's Vector input:
     the view direction, optionally through a Mapping node (its rotation and the signs of its
     scale are exact for directions; non-uniform scale and location are not representable)."""
+    return _own_direction_mapping(node, reasons) @ _vector_direction(node, reasons)
+
+
+def _vector_direction(node, reasons):
     link = linked_link(node.inputs['Vector'])
     if link is None:
         return np.eye(3)
@@ -148,6 +193,25 @@ def environment_rotation(node, reasons):
         reasons.append(f"environment coordinates from '{src.bl_label}' {link.from_socket.name} read as the "
                        "view direction")
     return np.eye(3)
+
+
+def _own_direction_mapping(node, reasons):
+    """The direction part of an Environment Texture's own Texture Mapping: exact where it is a
+    rotation with axis flips (a uniform scale does not change a direction); otherwise reported
+    and left out."""
+    found = node_texture_mapping(node, reasons)
+    if found is None:
+        return np.eye(3)
+    M, t = found
+    n = np.linalg.norm(M, axis=0)
+    if not (n > 0).all() or not np.allclose(n, n[0], rtol=1e-6) or not np.allclose((M / n[0]).T @ (M / n[0]),
+                                                                                     np.eye(3), atol=1e-6):
+        reasons.append(f"'{node.name}' Texture Mapping that is not a rotation (a non-uniform scale or an axis "
+                       "dropped or repeated) ignored")
+        return np.eye(3)
+    if t.any():
+        reasons.append(f"'{node.name}' Texture Mapping translation ignored (the map is looked up by direction)")
+    return M / n[0]
 
 
 def _is_direction(link):

@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import nodeeval, nodegraph
 from .. import procedural as pr
-from ..mapping import mapping_affine
+from ..mapping import mapping_affine, node_texture_mapping
 
 PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
@@ -87,14 +87,20 @@ def _socket(socket, color, chain, depth):
 
 
 def _vector(node, chain, depth):
-    """fn(coords) -> (n, 3) float32 of a texture's Vector input: its link, or Generated."""
+    """fn(coords) -> (n, 3) float32 of a texture's Vector input: its link, or Generated, then
+    the node's own Texture Mapping (mapping.node_texture_mapping)."""
     own = nodegraph.input_by_id(node, 'Vector')
     link, carrier = nodegraph.source(own)
     if link is None and nodegraph.unwrap(carrier).as_pointer() == nodegraph.unwrap(own).as_pointer():
         chain.needs.add('generated')
-        return lambda c: c['generated']
-    f = _socket(own, True, chain, depth + 1)
-    return lambda c: np.asarray(f(c), np.float32)
+        f = lambda c: c['generated']  # noqa: E731
+    else:
+        f = _socket(own, True, chain, depth + 1)
+    found = node_texture_mapping(node, chain.reasons)
+    if found is None:
+        return lambda c: np.asarray(f(c), np.float32)
+    M, t = found
+    return lambda c: (np.asarray(f(c), np.float64) @ M.T + t).astype(np.float32)
 
 
 def _float(node, ident, chain, depth):

@@ -227,3 +227,21 @@ def test_a_mix_factor_that_is_not_computed_names_its_source(scene, exported):
     text = _material(data, "Trick").approximated + " | " + _material(data, "Imaged").approximated
     assert "Mix Shader factor not computed (value from 'Light Path' node); its own value 0.3 used" in text
     assert "Mix Shader factor from procedural textures" in text and "an image" in text
+
+
+def test_a_procedurals_own_texture_mapping_moves_its_coordinates(scene, exported):
+    """A noise with its node's own Texture Mapping (scale 2, moved 0.5) reads at the mapped
+    point: its texture at p equals the unmapped one's at 2 p + 0.5 (Cycles applies
+    node.texture_mapping before the texture; a checker so mapped matches Cycles within 0.004)."""
+    scenes.camera()
+    plain, moved = _noise_material("Plain"), _noise_material("Moved")
+    nz = next(n for n in moved.node_tree.nodes if n.type == 'TEX_NOISE')
+    nz.texture_mapping.scale = (2.0, 2.0, 2.0)
+    nz.texture_mapping.translation = (0.5, 0.5, 0.5)
+    scenes.cube("A", materials=(plain,))
+    scenes.cube("B", location=(4, 0, 0), materials=(moved,))
+    data = exported()
+    a, b = _material(data, "Plain").texture, _material(data, "Moved").texture
+    p = np.random.default_rng(0).random((64, 3)).astype(np.float32)
+    np.testing.assert_allclose(b.evaluate({'generated': p}), a.evaluate({'generated': 2 * p + 0.5}), atol=1e-5)
+    assert not np.allclose(b.evaluate({'generated': p}), a.evaluate({'generated': p}), atol=1e-3)
