@@ -256,10 +256,18 @@ class Exporter:
                 self.ignore(f"adaptive subdivision is not rendered (Cycles dices by the dicing rate); the "
                              f"Subdivision modifier's Render Levels ({mod.render_levels}) are used", ob.name)
         linking = getattr(ob, 'light_linking', None)
-        if linking is not None and linking.receiver_collection is not None:
-            self.light_links[ob.name] = light_link_receivers(linking.receiver_collection)
-        if linking is not None and linking.blocker_collection is not None:
-            self.shadow_links[ob.name] = light_link_receivers(linking.blocker_collection)
+        for kind, attr, links in (('receiver', 'receiver_collection', self.light_links),
+                                  ('blocker', 'blocker_collection', self.shadow_links)):
+            collection = getattr(linking, attr, None) if linking is not None else None
+            if collection is None:
+                continue
+            links[ob.name] = light_link_receivers(collection)
+            # objects are linked by their own names; the instances an instancer (a collection
+            # instance, vertex or face instancing, particles) makes are not linked through it
+            for inst in collection.all_objects:
+                if inst.instance_type != 'NONE' or any(m.type == 'PARTICLE_SYSTEM' for m in inst.modifiers):
+                    self.ignore(f"instancer '{inst.name}' in its {kind} collection: the instances it makes are "
+                                "not linked (link their source objects instead)", ob.name)
 
     def ignore(self, reason, name):
         """Note that object `name` is rendered without a feature Cycles has (`reason`)."""

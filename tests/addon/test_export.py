@@ -885,7 +885,17 @@ def test_light_linking_receivers_exported(scene, exported):
     lamp.light_linking.receiver_collection = recv
     s = exported()
     assert s.light_links == {"Key": (frozenset({"A"}), frozenset({"B", "C", "D"}))}
-    assert not any("linking" in m for _, m in s.messages)
+    assert not any("linking" in m or "instancer" in m for _, m in s.messages)
+    # a collection instance in it: its instances are not linked through it, and the render says so
+    # (Cycles lights them; silently unlit before)
+    src = bpy.data.collections.new("Source")
+    src.objects.link(scenes.plane("Instanced", location=(5, 0, 0)))
+    empty = bpy.data.objects.new("Instancer", None)
+    empty.instance_type, empty.instance_collection = 'COLLECTION', src
+    scene.collection.objects.link(empty)
+    recv.objects.link(empty)
+    text = " | ".join(m for _, m in exported().messages)
+    assert "instancer 'Instancer' in its receiver collection" in text and "'Key'" in text
 
 
 def test_passes_dacrt_does_not_write_are_reported(scene, exported):
