@@ -386,8 +386,12 @@ class Integrator:
         # does not
         self._camera_world = pick(lambda world: world)
         self._camera_emitters = pick(lambda world: not world)
-        # light groups hold the world camera rays see even behind transparent film (as Cycles)
-        self._camera_grouped = pick(lambda world: True)
+        # Light groups: the world camera rays see behind transparent film too, but only when
+        # the Environment pass is asked for: Cycles evaluates the background of a transparent
+        # camera ray only for that pass (integrate_background), and its light group then takes
+        # it (Cycles 5.0: sky pixels in the world's group 0.5 with the pass, 0.0 without)
+        self._env_requested = 'Env' in tuple(getattr(self.settings, 'passes', ()))
+        self._camera_grouped = pick(lambda world: True) if self._env_requested else self._camera_lamps
         self._camera_env_pass = camera_env if (camera_env is not None and wv & VIS_CAMERA
                                                and not camera_env.dark) else None
         self._bsdf_lamps = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf], np.int32)
@@ -1753,9 +1757,11 @@ class Integrator:
             env, groups = self._camera_env_pass, ((self._camera_emitters, L), (self._camera_world, L_env))
         else:
             env, groups = self._camera_env, ((self._camera_lamps, L),)
-        # what goes to the light groups: Combined's, and the world behind transparent film too
-        # (Cycles writes it to the world's group, though Combined leaves it out)
-        combined_env = self.lights.environment if not camera else self._camera_env_pass
+        # what goes to the light groups: Combined's, and, with the Environment pass, the world
+        # behind transparent film too (Cycles writes it to the world's group then, though
+        # Combined leaves it out)
+        combined_env = (self.lights.environment if not camera else
+                        self._camera_env_pass if self._env_requested else self._camera_env)
         envs = [(env, L_env)] if env is not None else []
         if sinks.groups and combined_env is not None and self._world_group >= 0:
             envs.append((combined_env, sinks.groups[self._world_group]))

@@ -38,18 +38,25 @@ def test_light_groups_add_up_to_combined():
     assert groups['sky'].max() > 0.19
 
 
-def test_world_group_holds_the_world_behind_transparent_film():
-    """With Film > Transparent, Combined leaves out the world the camera sees (alpha 0 there),
-    but Cycles still writes it into the world's light group (relighting a sky from the groups
-    needs it); the world's light on surfaces is there either way."""
+def test_world_group_holds_the_world_behind_transparent_film_with_the_environment_pass():
+    """With Film > Transparent, Combined leaves out the world the camera sees (alpha 0 there).
+    Cycles evaluates that world only for the Environment pass, and then its light group takes
+    it too (Cycles 5.0, a floor under a uniform world in group 'sky': the group's sky pixels
+    0.5 with the pass, 0.0 without, Combined 0 both ways); the world's light on surfaces is
+    there either way."""
     opaque = render(_box(lightgroups=('sky',))).film
     clear = render(_box(lightgroups=('sky',), film_transparent=True)).film
-    sky_o, sky_c = opaque.pass_image('Combined_sky'), clear.pass_image('Combined_sky')
+    with_env = render(_box(lightgroups=('sky',), film_transparent=True, passes=('Env',))).film
+    sky_o, sky_c, sky_e = (f.pass_image('Combined_sky') for f in (opaque, clear, with_env))
     background = clear.combined()[..., 3] == 0
     assert background.sum() > 20
-    assert not clear.combined()[background, :3].any()
-    np.testing.assert_allclose(sky_c[background], 0.2, rtol=1e-6)       # the world's colour
-    np.testing.assert_array_equal(sky_c, sky_o)
+    assert not clear.combined()[background, :3].any() and not with_env.combined()[background, :3].any()
+    assert not sky_c[background].any()
+    np.testing.assert_allclose(sky_e[background], 0.2, rtol=1e-6)       # the world's colour
+    np.testing.assert_array_equal(sky_e, sky_o)
+    solid = clear.combined()[..., 3] == 1.0                  # (edge pixels blend in some world)
+    assert solid.sum() > 200
+    np.testing.assert_array_equal(sky_c[solid], sky_o[solid])
 
 
 def test_emitters_outside_the_view_layer_groups_are_only_in_combined():
