@@ -416,7 +416,8 @@ class Integrator:
             np.concatenate([[not l.seen_by_bsdf for l in lights.lamps], np.zeros(ntri + nenv, bool)]),
             np.concatenate([[l.cast_shadow for l in lights.lamps], np.ones(ntri + nenv, bool)]),
             *((None, None, None) if tris is None else (tris.geo, tris.area, tris.emission)),
-            environment=None if env is None else env.native, tree=lights.tree)
+            environment=None if env is None else env.native, tree=lights.tree,
+            tri_prim=None if tris is None else tris.index)       # (no point lights itself)
         # the light tree's keys of the lamp records and of the triangles (-1: not in it), for
         # the MIS weights of BSDF rays that meet them
         self._record_key = self._tri_key = None
@@ -501,7 +502,7 @@ class Integrator:
             records[past, off:off + width] = 0.0
             self._choice_at[key] = dacrt.shading.LightChoice(
                 records, c.cdf, c.prob, c.no_mis, c.shadow, c.tri_geo, c.tri_area, c.tri_emission, c.environment,
-                c.tree)
+                c.tree, c.tri_prim)
         return self._choice_at[key]
 
     def _weight_lights(self, probes: int = 32):

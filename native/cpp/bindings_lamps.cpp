@@ -293,7 +293,8 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
                      uint32_t ka, uint32_t kb, py::object pick, py::object prim, float shorten, bool skip_work,
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
                      py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator,
-                     py::object linking, py::object entry, py::object point, py::object bump, py::object tree) {
+                     py::object linking, py::object entry, py::object point, py::object bump, py::object tree,
+                     py::object tri_prim) {
     F32Array keep[3], ng_keep, thr_keep, bump_keep;
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
@@ -328,11 +329,16 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     } else if (lights.entries > 1) {
         throw py::value_error("pick (the light-choice uniforms) is needed with more than one light");
     }
-    I32Array prim_keep;
+    I32Array prim_keep, tri_prim_keep;
     if (!prim.is_none()) {
         prim_keep = prim.cast<I32Array>();
         need_shape(prim_keep, 0, n, "prim");
         pts.prim = prim_keep.data();
+    }
+    if (!tri_prim.is_none()) {
+        tri_prim_keep = tri_prim.cast<I32Array>();
+        need_shape(tri_prim_keep, 0, lights.num_tris, "tri_prim");
+        lights.tri_prim = tri_prim_keep.data();
     }
     pts.shorten = shorten;
     pts.skip_work = skip_work;
@@ -554,7 +560,7 @@ void register_lamps(py::module_& m) {
           py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
           py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"),
           py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none(),
-          py::arg("bump") = py::none(), py::arg("tree") = py::none());
+          py::arg("bump") = py::none(), py::arg("tree") = py::none(), py::arg("tri_prim") = py::none());
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)",
         py::module_local())

@@ -66,6 +66,7 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             if (entry_out) entry_out[i] = int32_t(entry);
             float wi[3], dist, pdf, value[3], target[3];
             const bool lamp = entry < L.num_lamps;
+            bool own = false;  // the point's own emissive triangle: it adds nothing
             if (lanes) {  // drawn and weighted already
                 if constexpr (AREAS) {
                     for (int a = 0; a < 3; ++a) wi[a] = c.drawn[j].wi[a], value[a] = c.drawn[j].value[a];
@@ -82,6 +83,7 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                 dist = lampmath::INF;
             } else {
                 const size_t w = entry - L.num_lamps;
+                own = L.tri_prim && p.prim && L.tri_prim[w] == p.prim[i];
                 triangle_light(L.tri_geo, L.tri_area, T, w, P, u1, u2, wi, dist, pdf, target);
                 if (point_out)
                     for (int a = 0; a < 3; ++a) point_out[size_t(a) * n + i] = target[a];
@@ -102,7 +104,8 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             if constexpr (AREAS) weighed = c.drawn[j].ok;
             bool ok = p_sel > 0.0f &&
                       (lanes ? weighed : nee_scale(ns, nullptr, wi, pdf, p_sel, p.thr ? thr : nullptr, value));
-            if (!(p_sel > 0.0f)) value[0] = value[1] = value[2] = 0.0f;  // (a tree pick below float's range)
+            if (!(p_sel > 0.0f) || own) value[0] = value[1] = value[2] = 0.0f;  // (a tree pick below float's range)
+            ok = ok && !own;
             if (p.bump) {  // a normal-mapped point: Cycles' bump shadowing of the sample
                 const float Ns[3] = {p.bump[i], p.bump[n + i], p.bump[2 * n + i]};
                 const float g = bump_shadowing(Ns, ns, wi, p.bump[3 * n + i] != 0.0f);

@@ -41,6 +41,10 @@ struct LightChoice {
     // mass; a pick that lands there picks the member by the tree at the point (lighttree.h),
     // its probability prob x the tree's.
     const LightTree* tree = nullptr;
+    // (null: unknown) the triangle each emissive triangle entry is, in the points' prim
+    // numbering: a point never lights itself from its own triangle (a plane emits nothing
+    // into itself; from within rounding of it, solid-angle sampling saw half the sphere)
+    const int32_t* tri_prim = nullptr;
 };
 
 // The light entry a point at P (the shadow ray's origin, as a BSDF ray's MIS sees it) with

@@ -146,6 +146,39 @@ def test_point_is_each_triangle_samples_target():
         shading.next_event(lc, P, P_off, ns, ng, th, keys, ka, kb, pick=pick, point=np.zeros((3, n)))
 
 
+def test_a_point_on_an_emissive_triangle_is_not_lit_by_it():
+    """tri_prim names the triangle each emissive entry is: a point whose prim is the triangle it
+    picked adds nothing and traces no ray (value 0, contrib False, counted as skipped); every
+    other point's outputs are those of the call without tri_prim, bit for bit."""
+    rng = np.random.default_rng(8)
+    lc = _lights(rng, True, True)
+    R, T = len(lc.records), lc.tri_geo.shape[1]
+    n = 20_000
+    P, P_off, ns, ng, th, keys = _points(rng, n, flat=False, thr=True)
+    pick = rng.random(n)
+    ka, kb = 0x1234567, 0x89ABCDE
+    tri_prim = rng.permutation(1000)[:T].astype(np.int32)          # the emitters among 1000 triangles
+    entry = np.empty(n, np.int32)
+    plain = shading.next_event(lc, P, P_off, ns, ng, th, keys, ka, kb, pick=pick,
+                               prim=rng.integers(0, 1000, n).astype(np.int32), entry=entry)
+    # half the points that pick a triangle lie on it; the rest, and those picking lamps, elsewhere
+    own = (entry >= R) & (rng.random(n) < 0.5)
+    prim = np.where(own, tri_prim[np.clip(entry - R, 0, T - 1)], 1000 + rng.integers(0, 1000, n)).astype(np.int32)
+    base = shading.next_event(lc, P, P_off, ns, ng, th, keys, ka, kb, pick=pick, prim=prim)
+    mine = shading.LightChoice(lc.records, lc.cdf, lc.prob, lc.no_mis, lc.shadow, lc.tri_geo, lc.tri_area,
+                               lc.tri_emission, tri_prim=tri_prim)
+    got = shading.next_event(mine, P, P_off, ns, ng, th, keys, ka, kb, pick=pick, prim=prim)
+    assert own.sum() > 100 and (base[1] & own).any()
+    assert not got[0][:, own].any() and not got[1][own].any() and not np.isin(np.flatnonzero(own), got[3]).any()
+    assert np.array_equal(got[0][:, ~own], base[0][:, ~own]) and np.array_equal(got[1][~own], base[1][~own])
+    assert got[5] == base[5] + int(np.count_nonzero(base[1] & own))
+    assert plain[1].any()
+    with pytest.raises(ValueError, match="tri_prim"):
+        shading.next_event(shading.LightChoice(lc.records, lc.cdf, lc.prob, lc.no_mis, lc.shadow, lc.tri_geo,
+                                               lc.tri_area, lc.tri_emission, tri_prim=tri_prim[:-1]),
+                           P, P_off, ns, ng, th, keys, ka, kb, pick=pick, prim=prim)
+
+
 def test_light_linking_rejects_the_samples_of_lights_a_point_does_not_receive():
     """linking = (light set per entry, receiver mask per point): a sample of an entry whose set
     the point does not receive adds nothing and traces no ray; every other sample, and its

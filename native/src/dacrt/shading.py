@@ -202,10 +202,14 @@ class LightChoice:
     members share one slot of cdf (the first member in entry order holds the mass, the others
     none) and each has prob = that mass; a pick in the slot is passed on to the tree at the
     shadow ray's origin with the shading normal, so a member's selection probability is prob x
-    the tree's pdf there."""
+    the tree's pdf there.
+
+    tri_prim (T,) int32 (None: not known): the triangle each emissive triangle is, in the
+    numbering of next_event's prim: a point on an emissive triangle is not lit by it (a plane
+    emits nothing into itself; the sample adds nothing and traces no ray)."""
 
     def __init__(self, records, cdf, prob, no_mis, shadow, tri_geo=None, tri_area=None, tri_emission=None,
-                 environment=None, tree=None):
+                 environment=None, tree=None, tri_prim=None):
         self.records = np.ascontiguousarray(np.asarray(records, _F32).reshape(-1, _core.LAMP_RECORD_WIDTH))
         self.cdf = np.ascontiguousarray(cdf, np.float64)
         self.prob = np.ascontiguousarray(prob, _F32)
@@ -214,6 +218,7 @@ class LightChoice:
         self.tri_geo = None if tri_geo is None else _rows(tri_geo, 15, "tri_geo")
         self.tri_area = None if tri_area is None else np.ascontiguousarray(tri_area, _F32)
         self.tri_emission = None if tri_emission is None else _rows(tri_emission, 3, "tri_emission")
+        self.tri_prim = None if tri_prim is None else _prim32(tri_prim, "tri_prim")
         if environment is not None and not isinstance(environment, _core.EnvironmentMap):
             raise ValueError(f"environment must be a dacrt.lamps.EnvironmentMap or None, got {type(environment).__name__}")
         self.environment = environment
@@ -291,7 +296,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         value, contrib, rays, send, skip, _terminator(terminator),
         None if linking is None else (np.ascontiguousarray(linking[0], np.uint8),
                                       np.ascontiguousarray(linking[1], np.uint64)), entry, point,
-        None if bump is None else _rows(bump, 4, "bump"), lights.tree)
+        None if bump is None else _rows(bump, 4, "bump"), lights.tree, lights.tri_prim)
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
 
 
