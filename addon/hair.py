@@ -108,18 +108,21 @@ def _frames(p, counts, sector=0.0):
     return t, n
 
 
-def tubes(positions, radii, offsets, level: tuple | None = None):
+def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool = False):
     """Tube meshes of the curves (offsets: c + 1 first-point indices, the last = point count):
     (vertices float32 (v, 3), triangles int32 (t, 3) wound outward, vertex normals float32
-    (v, 3), curves rendered). Curves of fewer than 2 points are not rendered; a sample of
-    radius 0 or less closes the tube there (Cycles gives it no width)."""
+    (v, 3), curves rendered), and with curve_of the curve (index into offsets) each triangle
+    belongs to (t,) int64. Curves of fewer than 2 points are not rendered; a sample of radius 0
+    or less closes the tube there (Cycles gives it no width), so a curve's triangle count
+    depends on its radii."""
     positions = np.asarray(positions, np.float64).reshape(-1, 3)
     keys = np.concatenate([positions, np.asarray(radii, np.float64).reshape(-1, 1)], axis=1)
     offsets = np.asarray(offsets, np.int64)
     sides, steps = level_for(len(positions)) if level is None else level
     samples, counts = _samples(keys, offsets, steps)
     if not len(counts):
-        return (np.empty((0, 3), np.float32), np.empty((0, 3), np.int32), np.empty((0, 3), np.float32), 0)
+        empty = (np.empty((0, 3), np.float32), np.empty((0, 3), np.int32), np.empty((0, 3), np.float32), 0)
+        return empty + (np.empty(0, np.int64),) if curve_of else empty
     p, r = samples[:, :3], np.maximum(samples[:, 3], 0.0)
     t, n = _frames(p, counts, 2.0 * np.pi / sides)
     b = np.cross(t, n)
@@ -141,5 +144,10 @@ def tubes(positions, radii, offsets, level: tuple | None = None):
     quads = np.stack([np.stack([a, a1, c], -1), np.stack([a1, c1, c], -1)], axis=1)   # (rings, 2, sides, 3)
     keep = np.stack([r[ring] > 0, r[ring + 1] > 0], axis=1)
     triangles = quads[keep].reshape(-1, 3)
-    return (vertices.astype(np.float32), triangles.astype(np.int32),
-            radial.reshape(-1, 3).astype(np.float32), len(counts))
+    out = (vertices.astype(np.float32), triangles.astype(np.int32), radial.reshape(-1, 3).astype(np.float32),
+           len(counts))
+    if not curve_of:
+        return out
+    curves = np.flatnonzero(np.diff(offsets) >= 2)            # the curves _samples kept, in order
+    ring_curve = curves[np.repeat(np.arange(len(counts)), counts)[ring]]
+    return out + (np.broadcast_to(ring_curve[:, None, None], quads.shape[:3])[keep].reshape(-1),)

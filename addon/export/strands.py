@@ -87,13 +87,11 @@ def hair_arrays(ob, notes):
     positions, radii = np.concatenate(positions), np.concatenate(radii)
     curve_slot = np.concatenate(slots)
     sides, steps = hair.level_for(len(positions))
-    v, t, n, kept = hair.tubes(positions, radii, np.array(offsets), (sides, steps))
+    v, t, n, kept, curve = hair.tubes(positions, radii, np.array(offsets), (sides, steps), curve_of=True)
     if not len(t):
         return None
     arrays = MeshArrays.from_arrays(v, t, n)
-    # every strand has 2+ points, so hair.tubes keeps them all, in order, each with
-    # (points - 1) x steps x sides x 2 triangles
-    arrays.slot = np.repeat(curve_slot, (np.diff(offsets) - 1) * steps * sides * 2).astype(np.int32)
+    arrays.slot = curve_slot[curve].astype(np.int32)     # (a tip of radius 0 has fewer triangles)
     notes.ignore(f"hair particles rendered as tubes of {sides} sides, {steps} step(s) a segment, "
                  "open ends", ob.name)
     return arrays

@@ -112,6 +112,14 @@ def test_a_tip_of_radius_zero_closes_the_tube_as_a_cone():
     assert area.sum() == pytest.approx(expect, rel=2e-3)
     v, t, n, kept = hair.tubes(p, np.zeros(3), [0, len(p)], (sides, steps))
     assert len(t) == 0                          # no width anywhere: nothing (Cycles: none)
+    # with a tip, strands differ in triangle count: each triangle says its curve (a lone point,
+    # curve 1, is not rendered)
+    pts = np.concatenate([p, [[9.0, 9.0, 9.0]], p + [3, 0, 0]])
+    v, t, n, kept, curve = hair.tubes(pts, np.concatenate([r, [0.1], [0.1, 0.1, 0.1]]), [0, 3, 4, 7],
+                                      (sides, steps), curve_of=True)
+    assert kept == 2 and len(curve) == len(t) == 3 * sides + 4 * sides
+    assert (curve[:3 * sides] == 0).all() and (curve[3 * sides:] == 2).all()
+    assert (v[t[curve == 2]][..., 0] > 2.5).all() and (v[t[curve == 0]][..., 0] < 0.5).all()
 
 
 def test_curves_of_one_point_are_dropped_and_offsets_respected():
