@@ -32,10 +32,12 @@ class DACRTPanel:
     bl_space_type = 'PROPERTIES'
     bl_region_type = 'WINDOW'
     COMPAT_ENGINES = {ENGINE}
+    needs = None        # the context member the panel draws (e.g. 'material'): shown only with one
 
     @classmethod
     def poll(cls, context):
-        return context.engine in cls.COMPAT_ENGINES
+        return context.engine in cls.COMPAT_ENGINES and (cls.needs is None or getattr(context, cls.needs, None)
+                                                         is not None)
 
 
 def node_view(layout, ntree, input_name):
@@ -165,10 +167,7 @@ class VIEWLAYER_PT_dacrt_filter(DACRTPanel, Panel):
 class DATA_PT_dacrt_light(DACRTPanel, Panel):
     bl_label = "Light"
     bl_context = 'data'
-
-    @classmethod
-    def poll(cls, context):
-        return context.light is not None and super().poll(context)
+    needs = 'light'
 
     def draw(self, context):
         layout = self.layout
@@ -212,10 +211,7 @@ class OBJECT_PT_dacrt_visibility(DACRTPanel, Panel):
     bl_label = "DACRT Visibility"
     bl_context = 'object'
     bl_options = {'DEFAULT_CLOSED'}
-
-    @classmethod
-    def poll(cls, context):
-        return context.object is not None and super().poll(context)
+    needs = 'object'
 
     def draw(self, context):
         layout = self.layout
@@ -270,10 +266,7 @@ class DATA_PT_dacrt_panorama(DACRTPanel, Panel):
 class MATERIAL_PT_dacrt_surface(DACRTPanel, Panel):
     bl_label = "Surface"
     bl_context = 'material'
-
-    @classmethod
-    def poll(cls, context):
-        return context.material is not None and super().poll(context)
+    needs = 'material'
 
     def draw(self, context):
         mat = context.material
@@ -287,10 +280,7 @@ class MATERIAL_PT_dacrt_settings(DACRTPanel, Panel):
     bl_label = "Settings"
     bl_context = 'material'
     bl_options = {'DEFAULT_CLOSED'}
-
-    @classmethod
-    def poll(cls, context):
-        return context.material is not None and super().poll(context)
+    needs = 'material'
 
     def draw(self, context):
         layout = self.layout
@@ -308,10 +298,7 @@ class MATERIAL_PT_dacrt_settings(DACRTPanel, Panel):
 class WORLD_PT_dacrt_surface(DACRTPanel, Panel):
     bl_label = "Surface"
     bl_context = 'world'
-
-    @classmethod
-    def poll(cls, context):
-        return context.world is not None and super().poll(context)
+    needs = 'world'
 
     def draw(self, context):
         world = context.world
@@ -326,10 +313,7 @@ class WORLD_PT_dacrt_settings(DACRTPanel, Panel):
     bl_label = "Settings"
     bl_context = 'world'
     bl_options = {'DEFAULT_CLOSED'}
-
-    @classmethod
-    def poll(cls, context):
-        return context.world is not None and super().poll(context)
+    needs = 'world'
 
     def draw(self, context):
         layout = self.layout
