@@ -40,6 +40,13 @@ class DACRTPanel:
                                                          is not None)
 
 
+def split_layout(layout):
+    """layout with Blender's property split (labels left, values right) and no decorators."""
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    return layout
+
+
 def node_view(layout, ntree, input_name):
     node = ntree.get_output_node('CYCLES') or ntree.get_output_node('ALL')
     if node is None:
@@ -57,9 +64,7 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
     bl_context = 'render'
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = split_layout(self.layout)
         settings = context.scene.dacrt
         render = context.scene.render
         col = layout.column()
@@ -103,9 +108,7 @@ class VIEWLAYER_PT_dacrt_passes(DACRTPanel, Panel):
     bl_context = 'view_layer'
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = split_layout(self.layout)
         vl = context.view_layer
         col = layout.column(heading="Include", align=True)
         col.prop(vl, "use_pass_combined")
@@ -154,9 +157,7 @@ class VIEWLAYER_PT_dacrt_filter(DACRTPanel, Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = split_layout(self.layout)
         vl = context.view_layer
         col = layout.column(heading="Include")
         col.prop(vl, "use_sky", text="Environment")
@@ -214,9 +215,7 @@ class OBJECT_PT_dacrt_visibility(DACRTPanel, Panel):
     needs = 'object'
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = split_layout(self.layout)
         ob = context.object
         col = layout.column(heading="Ray Visibility")
         col.prop(ob, "visible_camera", text="Camera")
@@ -283,9 +282,7 @@ class MATERIAL_PT_dacrt_settings(DACRTPanel, Panel):
     needs = 'material'
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = split_layout(self.layout)
         mat = context.material
         cycles = getattr(mat, 'cycles', None)
         if cycles is not None:
@@ -316,9 +313,7 @@ class WORLD_PT_dacrt_settings(DACRTPanel, Panel):
     needs = 'world'
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = split_layout(self.layout)
         world = context.world
         vis = getattr(world, 'cycles_visibility', None)
         if vis is not None:
