@@ -378,9 +378,24 @@ def constant_color(socket):
 
 
 def constant_value(socket, notes=None, why=None):
-    """(float, exact) of a float input: see constant."""
+    """(float, exact) of a float input: see constant. NaN reads as 0, as Cycles' clamps of its
+    inputs (fmaxf / saturate) turn it into their lower bound, not into a NaN image (the
+    material export reports such inputs: nan_inputs)."""
     v, exact = constant(socket, False, notes, why)
-    return float(v[0]), exact
+    v = float(v[0])
+    return (0.0 if v != v else v), exact
+
+
+def nan_inputs(ntree):
+    """'input' of 'node' for each unlinked float input of ntree's nodes whose value is NaN
+    (a script's or driver's), which constant_value reads as 0."""
+    found = []
+    for node in getattr(ntree, 'nodes', ()):
+        for sock in node.inputs:
+            v = getattr(sock, 'default_value', None)
+            if isinstance(v, float) and v != v and not sock.is_linked:
+                found.append(f"'{sock.name}' of '{node.name}'")
+    return found
 
 
 def _own(v, color):

@@ -12,7 +12,7 @@ import numpy as np
 from .. import emissionsampling, nodeeval, principled, roughdiffuse, specular
 from .. import scenedata as sd
 from ..mapping import texture_transform, uv_map_name
-from ..nodeeval import constant_color, constant_value
+from ..nodeeval import constant_color, constant_value, nan_inputs
 from ..nodegraph import input_socket, linked_link, linked_node, output_key, output_node, used_outputs
 from ..procedural import ProceduralTexels
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
@@ -309,6 +309,9 @@ class MaterialBuilder:
         if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
             closure = Closure(const=tuple(mat.diffuse_color[:3]))
         else:
+            bad = nan_inputs(ntree)
+            if bad:
+                reasons.append(f"NaN read as 0 (as Cycles clamps it) for {', '.join(bad)}")
             out = output_node(ntree)
             if out is None or not out.inputs['Surface'].is_linked:
                 # Cycles: no surface shader renders black, but a volume-only material's
@@ -339,7 +342,8 @@ class MaterialBuilder:
         if closure.transparent.any() and not holdout:
             transparency = _nonnegative(closure.transparent.astype(np.float32), "transparency", reasons)
             if closure.glass.any():
-                refraction = np.minimum(np.maximum(closure.glass, 0.0), transparency).astype(np.float32)
+                glass = np.nan_to_num(closure.glass, nan=0.0, posinf=0.0, neginf=0.0)
+                refraction = np.minimum(np.maximum(glass, 0.0), transparency).astype(np.float32)
             if closure.opacity is not None:
                 tex, inverted = closure.opacity
                 a = tex.pixels[..., 3:4]

@@ -41,4 +41,4 @@ def mix_factor(node, reasons, label, surface=True):
     if not ok:
         what = ", ".join(dict.fromkeys(why)) or "nodes"
         reasons.append(f"{label} factor not computed ({what}); its own value {fac:.3g} used")
-    return min(max(fac, 0.0), 1.0)
+    return min(max(fac, 0.0), 1.0) if fac == fac else 0.0     # (NaN: Cycles' saturate gives 0)
