@@ -75,8 +75,11 @@ class Film:
         first_sample + S - 1; data holds the averaged passes' per-sample values ('Normal', 'UV',
         'DiffCol': (3, P, S); 'Mist': (1, P, S) of 1 - mist).
 
-        A sample with any non-finite Combined or pass value is dropped whole (counted in
-        nan_dropped, not in its pixel's sample count). Returns the number dropped."""
+        A NaN or infinite channel of a sample (Combined or a pass) counts 0, the rest of the
+        sample as it is, as Cycles' ensure_finite zeroes the bad component of a contribution
+        (dropping the whole sample had left pixels with no finite sample transparent black,
+        alpha 0, in an opaque render). Returns the number of samples with such a channel
+        (added to nan_dropped)."""
         data = {k: v for k, v in (data or {}).items() if k in self._pass_sum}
         pixels = _as_slice(pixels)          # a run of pixels: slices, not a gather and scatter each
         # The sums (one native pass each) are finite exactly when every sample is (NaN and
@@ -86,17 +89,17 @@ class Film:
         pass_sums = {name: dacrt.shading.sample_sums(values) for name, values in data.items()}
         dropped = 0
         if not (np.isfinite(sums).all() and all(np.isfinite(v).all() for v in pass_sums.values())):
-            ok = np.isfinite(rgba).all(axis=0)
-            for values in data.values():
-                ok &= np.isfinite(values).all(axis=0)
+            finite = np.isfinite(rgba)
+            ok = finite.all(axis=0)
+            data_finite = {k: np.isfinite(v) for k, v in data.items()}
+            for f in data_finite.values():
+                ok &= f.all(axis=0)
             dropped = int(ok.size - np.count_nonzero(ok))
-            rgba = np.where(ok, rgba, 0.0)
-            data = {k: np.where(ok, v, 0.0) for k, v in data.items()}
+            rgba = np.where(finite, rgba, np.float32(0.0))
+            data = {k: np.where(data_finite[k], v, np.float32(0.0)) for k, v in data.items()}
             sums = dacrt.shading.sample_sums(rgba)
             pass_sums = {name: dacrt.shading.sample_sums(values) for name, values in data.items()}
-            self._count[pixels] += ok.sum(axis=1)
-        else:
-            self._count[pixels] += rgba.shape[2]
+        self._count[pixels] += rgba.shape[2]
         self._sum[:, pixels] += sums
         if self._odd is not None:
             odd = (first_sample + np.arange(rgba.shape[2])) % 2 == 1

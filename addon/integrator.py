@@ -756,8 +756,8 @@ class Integrator:
                 self._render_seconds = time.perf_counter() - t_render
                 self.close()
                 if self.film.nan_dropped:
-                    self.messages.append(('WARNING', f"dropped {self.film.nan_dropped} sample(s) that were "
-                                                     f"NaN or infinite (pixels average the others)"))
+                    self.messages.append(('WARNING', f"{self.film.nan_dropped} sample(s) had NaN or infinite "
+                                                     f"channels; those channels counted 0 (as Cycles' ensure_finite)"))
 
     def _progress(self, fraction):
         elapsed = self._render_seconds
