@@ -67,7 +67,9 @@ def export_light(ob, matrix, messages):
         z = np.cross(m[:3, 0], m[:3, 1])
         m[:3, 2] = z / np.linalg.norm(z) * 1e-9 * np.sqrt(np.linalg.norm(m[:3, 0]) * np.linalg.norm(m[:3, 1]))
     cycles = getattr(light, 'cycles', None)
-    kw = dict(kind=light.type, strength=strength.astype(np.float32),
+    with np.errstate(over='ignore'):        # (beyond float32: _fits_float32 says so below)
+        strength32 = strength.astype(np.float32)
+    kw = dict(kind=light.type, strength=strength32,
               matrix=m, normalize=bool(getattr(light, 'normalize', True)),
               cast_shadow=bool(light.use_shadow),
               use_mis=bool(getattr(cycles, 'use_multiple_importance_sampling', True)),
@@ -128,7 +130,25 @@ def export_light(ob, matrix, messages):
     if bad:     # (set from Python: Blender's ranges let NaN through) the rest of the scene renders
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite {', '.join(bad)}; skipped"))
         return None
-    return sd.Light(**kw)
+    out = sd.Light(**kw)
+    if not _fits_float32(out):
+        # (a size of 1e20 or 1e-20, a radius of 1e-20, an angle of 1e-25, an energy near
+        # float32's limit) the renderer's float32 lamp would hold an infinity: one lamp
+        # skipped, not the whole render failed
+        messages.append(('WARNING', f"light '{ob.name}': its size, radius, angle or strength is beyond float32's "
+                                    "range (its radiance or area would be infinite or 0); skipped"))
+        return None
+    return out
+
+
+def _fits_float32(light):
+    """Whether the renderer's float32 record of light is finite (lights.make_lamp, record)."""
+    from ..lights import make_lamp     # (the renderer's lamp model: no Blender in it)
+    try:
+        with np.errstate(all='ignore'):
+            return bool(np.isfinite(make_lamp(light).record()).all())
+    except (ValueError, ZeroDivisionError, OverflowError, FloatingPointError):
+        return False
 
 
 def _light_shader_factor(light, name, messages):

@@ -2603,3 +2603,24 @@ def test_nan_shader_inputs_read_as_zero_and_are_named(scene, exported):
     assert "NaN read as 0" in text
     assert "'Fac' of 'Mix Shader'" in text or "'Factor' of 'Mix Shader'" in text
     assert "'Roughness' of 'Principled BSDF'" in text
+
+
+def test_lights_beyond_float32_are_skipped_not_the_render(scene, exported):
+    """Sizes, radii, angles and strengths whose float32 lamp would hold an infinity (an area
+    light of size 1e20 or 1e-20, a point radius 1e-20, a sun angle 1e-25, energy 1e36 x 2^10):
+    each skipped with a warning naming it, the rest exported (the render had failed with
+    'records[0]: field 13 is not finite')."""
+    setup(scene)
+    scenes.plane("Floor")
+    scenes.light('POINT', 100.0, (0, 0, 3), name="Fine")
+    scenes.light('AREA', 100.0, (0, 0, 3), name="Huge").data.size = 1e20
+    scenes.light('AREA', 100.0, (0, 0, 3), name="Tiny").data.size = 1e-20
+    scenes.light('POINT', 100.0, (0, 0, 3), name="Dot").data.shadow_soft_size = 1e-20
+    scenes.light('SUN', 1.0, (0, 0, 3), name="Needle").data.angle = 1e-25
+    bright = scenes.light('POINT', 1e36, (0, 0, 3), name="Bright")
+    bright.data.exposure = 10.0
+    data = exported()
+    assert [l.name for l in data.lights] == ["Fine"]
+    text = " | ".join(m for _, m in data.messages)
+    for name in ("Huge", "Tiny", "Dot", "Needle", "Bright"):
+        assert f"light '{name}': its size, radius, angle or strength is beyond float32's range" in text, name
