@@ -126,21 +126,26 @@ def _color_light(socket, strength, what, reasons, frame):
     return np.array(c, np.float32) * strength, None
 
 
-def _environments_feeding(socket, depth=0):
+def _environments_feeding(socket):
     """The Environment Texture nodes (with an image) whose output reaches `socket`, followed
     back through its links as Cycles compiles them (reroutes, muted nodes, groups): a stray
-    map elsewhere in the tree is not one of them."""
-    link, _ = nodegraph.source(socket)
-    if link is None or depth > 64:
-        return []
-    node = link.from_node
-    if node.type == 'TEX_ENVIRONMENT':
-        return [node] if node.image is not None else []
-    found = []
-    for i in range(len(node.inputs)):
-        for env in _environments_feeding(node.inputs[i], depth + 1):
-            if all(nodegraph.unwrap(env) != nodegraph.unwrap(e) for e in found):
-                found.append(env)
+    map elsewhere in the tree is not one of them. Each node (in its group context) is visited
+    once: a chain of nodes that each read the one before twice stays linear."""
+    found, seen, todo = [], set(), [socket]
+    while todo and len(seen) < 100_000:
+        link, _ = nodegraph.source(todo.pop())
+        if link is None:
+            continue
+        node = link.from_node
+        key = nodegraph.output_key(node, '')
+        if key in seen:
+            continue
+        seen.add(key)
+        if node.type == 'TEX_ENVIRONMENT':
+            if node.image is not None:
+                found.append(node)
+            continue
+        todo.extend(node.inputs[i] for i in range(len(node.inputs)))
     return found
 
 
