@@ -22,12 +22,20 @@
 // cost 14-20% of the trace throughput on AVX-512 and 3-7% on AVX2 (San Francisco rays, 1
 // thread), so only a batch with such a component (found by the field check) pays for it.
 // (Marking the NaN slabs of zero components on every batch as well cost 2-3.5%.)
-template <int W, bool Odd>
+// Precise: the widening is relative to t, so a box t = 10^4 away from the origin was kept by rays
+// passing ~10 from it: rays from far origins (a 10 km dome, dispatch.cpp) were tested against
+// every small triangle near their path. Their groups divide instead (correctly rounded 1/d;
+// with the subtraction and product, t is within 3 * 2^-24 relative: widened by 2^-20) and take
+// the odd check, as a division overflows for denormal d as the reciprocal does.
+enum FilterKind { kFast, kOdd, kPrecise };
+
+template <int W, int Kind>
 __attribute__((always_inline)) inline vbool<W> box_test(const vfloat<W> r[8], const float lo[3], const float hi[3]) {
-    constexpr float kWiden = 0x1p-10f;
+    constexpr bool Odd = Kind != kFast;
+    constexpr float kWiden = Kind == kPrecise ? 0x1p-20f : 0x1p-10f;
     vfloat<W> tmin = splat<W>(0.0f), tmax = r[6];
     for (int a = 0; a < 3; ++a) {
-        const vfloat<W> inv = rcp(r[3 + a]);
+        const vfloat<W> inv = Kind == kPrecise ? splat<W>(1.0f) / r[3 + a] : rcp(r[3 + a]);
         const vfloat<W> t0 = (splat<W>(lo[a]) - r[a]) * inv;
         const vfloat<W> t1 = (splat<W>(hi[a]) - r[a]) * inv;
         if (!Odd) {
@@ -51,20 +59,20 @@ inline void swap_records(Ray* a, Ray* b) {
     std::memcpy(b, &ta, sizeof(Ray));
 }
 
-template <int W, bool Odd>
+template <int W, int Kind>
 __attribute__((always_inline)) inline uint32_t block_active(const Ray* rays, const float lo[3], const float hi[3]) {
     vfloat<W> r[8];
     load_rays<W>(reinterpret_cast<const float*>(rays), r);
-    return bits(box_test<W, Odd>(r, lo, hi));
+    return bits(box_test<W, Kind>(r, lo, hi));
 }
 
 // The box test of the 64 rays from `rays` on, one bit per ray.
 constexpr size_t kRunRays = 64;
-template <int W, bool Odd>
+template <int W, int Kind>
 __attribute__((always_inline)) inline uint64_t run_active(const Ray* rays, const float lo[3], const float hi[3]) {
     static_assert(kRunRays % W == 0, "W-ray blocks must tile a run");
     uint64_t m = 0;
-    for (size_t b = 0; b < kRunRays / W; ++b) m |= uint64_t(block_active<W, Odd>(rays + b * W, lo, hi)) << (b * W);
+    for (size_t b = 0; b < kRunRays / W; ++b) m |= uint64_t(block_active<W, Kind>(rays + b * W, lo, hi)) << (b * W);
     return m;
 }
 
@@ -72,7 +80,7 @@ __attribute__((always_inline)) inline uint64_t run_active(const Ray* rays, const
 // per run, not per block), the last run padded. The mask is taken before the run's swaps:
 // they exchange each active ray with the inactive one at w <= its position, never touching a
 // later position of the run.
-template <int W, bool Odd>
+template <int W, int Kind>
 size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
     size_t w = 0;
     for (size_t i = 0; i < n; i += kRunRays) {
@@ -80,7 +88,7 @@ size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
         for (size_t b = 0; b < kRunRays / W && i + b * W < n; ++b) {
             vfloat<W> r[8];
             const uint32_t valid = load_block<W>(rays, i + b * W, n, kInactiveRay, r);
-            m |= uint64_t(bits(box_test<W, Odd>(r, lo, hi)) & valid) << (b * W);
+            m |= uint64_t(bits(box_test<W, Kind>(r, lo, hi)) & valid) << (b * W);
         }
         while (m) {
             swap_records(rays + i + size_t(__builtin_ctzll(m)), rays + w);
@@ -98,7 +106,7 @@ size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
 // a mispredicted branch, as does each test for an empty mask, and with W = 16 those cost about
 // a tenth of the whole trace (San Francisco diffuse rays, 1 thread: runs of 64 +10%, of 32
 // +8%; of 128, with two mask words, -28%).
-template <int W, bool Odd>
+template <int W, int Kind>
 size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], Stats& st) {
     st.box_tests += n;
     size_t i = 0, j = n;    // [0, i) settled active (but a pending left run), [j, n) inactive
@@ -106,13 +114,13 @@ size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], St
     uint64_t ml = 0, mr = 0;  // inactive rays of the left run, active rays of the right run
     for (;;) {
         while (ml == 0 && j - i >= kRunRays) {
-            ml = ~run_active<W, Odd>(rays + i, lo, hi);
+            ml = ~run_active<W, Kind>(rays + i, lo, hi);
             li = i;
             i += kRunRays;
         }
         while (mr == 0 && j - i >= kRunRays) {
             j -= kRunRays;
-            mr = run_active<W, Odd>(rays + j, lo, hi);
+            mr = run_active<W, Kind>(rays + j, lo, hi);
             rj = j;
         }
         if (ml == 0 || mr == 0) break;
@@ -123,5 +131,5 @@ size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], St
         } while (ml && mr);
     }
     const size_t b = ml ? li : i, e = mr ? rj + kRunRays : j;
-    return b + filter_small<W, Odd>(rays + b, e - b, lo, hi);
+    return b + filter_small<W, Kind>(rays + b, e - b, lo, hi);
 }

@@ -71,6 +71,7 @@ struct SharedTop {
 struct BatchInfo {
     float origin_abs_max = 0.0f;  // largest |origin coordinate| (box padding)
     bool odd_dirs = false;        // a direction component is denormal or > 2^125 in size (filter.h)
+    bool far_origins = false;     // set per group by trace() (dispatch.cpp): the precise box test
     // Input: the index of the first checked ray in the batch. Output: whether every checked
     // ray k has id first_id + k (then the ids are a permutation without any id marking).
     size_t first_id = 0;

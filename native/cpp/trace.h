@@ -37,7 +37,7 @@ struct Tracer {
     size_t num_ids;
     Config cfg;
     float origin_abs_max;
-    bool odd_dirs;  // some direction component needs the box test's check (filter.h)
+    int filter_kind;  // FilterKind (filter.h): odd direction components, far origins
     SharedTop* top;
     uint32_t* priv;  // this thread's id scratch
     Stats st;
@@ -58,12 +58,12 @@ struct Tracer {
     // time -5 to -7% on diffuse, camera and shadow rays, for thresholds of 18-22 of 32.
     static constexpr size_t kSampledRays = 1024;
     static constexpr int kSampledKept = 20;
-    template <bool Odd>
+    template <int Kind>
     static bool most_inside(const Ray* rays, size_t n, const float lo[3], const float hi[3]) {
         alignas(64) Ray s[32];
         for (size_t k = 0; k < 32; ++k) std::memcpy(&s[k], rays + (k * n) / 32, sizeof(Ray));
         int kept = 0;
-        for (int b = 0; b < 32; b += W) kept += __builtin_popcount(block_active<W, Odd>(s + b, lo, hi));
+        for (int b = 0; b < 32; b += W) kept += __builtin_popcount(block_active<W, Kind>(s + b, lo, hi));
         return kept >= kSampledKept;
     }
 
@@ -84,11 +84,14 @@ struct Tracer {
 #endif
         for (int a = 0; a < 3; ++a) { lo[a] = nb.lo[a] - pad; hi[a] = nb.hi[a] + pad; }
         if (n >= kSampledRays && !is_leaf(n, nt) &&
-            (odd_dirs ? most_inside<true>(rays, n, lo, hi) : most_inside<false>(rays, n, lo, hi))) {
+            (filter_kind == kFast ? most_inside<kFast>(rays, n, lo, hi)
+                                  : filter_kind == kOdd ? most_inside<kOdd>(rays, n, lo, hi) : most_inside<kPrecise>(rays, n, lo, hi))) {
             ++st.filter_skips;
             return n;
         }
-        const size_t na = odd_dirs ? filter_rays<W, true>(rays, n, lo, hi, st) : filter_rays<W, false>(rays, n, lo, hi, st);
+        const size_t na = filter_kind == kFast ? filter_rays<W, kFast>(rays, n, lo, hi, st)
+                          : filter_kind == kOdd ? filter_rays<W, kOdd>(rays, n, lo, hi, st)
+                                                : filter_rays<W, kPrecise>(rays, n, lo, hi, st);
         st.box_hits += na;
         return na;
     }
@@ -226,7 +229,8 @@ template <int W, Query Q>
 void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
     const TriangleSet& ts = *job.ts;
     Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), ts.prim.data(), job.hits, job.occluded, job.skip, job.mask, job.visible,
-                    job.num_ids, job.cfg, job.batch.origin_abs_max, job.batch.odd_dirs,
+                    job.num_ids, job.cfg, job.batch.origin_abs_max,
+                    job.batch.far_origins ? kPrecise : job.batch.odd_dirs ? kOdd : kFast,
                     job.top, ids, Stats{}};
     NodeBounds root;
     for (int a = 0; a < 3; ++a) {

@@ -231,6 +231,16 @@ TriangleSet::TriangleSet(const float* V, size_t num_vertices, const uint32_t* I,
         out += !bad[s];
     }
     valid_ids.pop_back();
+    const size_t nv = valid_ids.size(), samples = std::min<size_t>(nv, 1024);
+    std::vector<float> extent(samples);
+    for (size_t k = 0; k < samples; ++k) {
+        const Box& bx = boxes[valid_ids[k * nv / samples]];
+        extent[k] = std::max(bx.hi[0] - bx.lo[0], std::max(bx.hi[1] - bx.lo[1], bx.hi[2] - bx.lo[2]));
+    }
+    if (samples) {
+        std::nth_element(extent.begin(), extent.begin() + samples / 4, extent.end());
+        fine_extent = extent[samples / 4];
+    }
 }
 
 }  // namespace dacrt

@@ -74,6 +74,9 @@ struct TriangleSet {
     Bounds3 bounds{};                 // AABB of the valid triangles
     Bounds3 centroid_bounds{};        // AABB of their box centres
     float abs_max = 0.0f;             // largest |coordinate| of any valid vertex
+    // A small triangle's size: the lower quartile of the valid triangles' largest box extent,
+    // from up to 1024 evenly spaced ones (dispatch.cpp: which ray origins count as far).
+    float fine_extent = 0.0f;
     size_t num_degenerate = 0;
 
     // vertices: V x 3 floats (finite, checked by the caller); indices: M x 3, each < V.
