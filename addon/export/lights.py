@@ -5,10 +5,10 @@ warning; negative lights are not supported. Part of the export layer."""
 
 import numpy as np
 
-from .. import scenedata as sd
+from .. import principled, scenedata as sd
 from ..lights.area import sheared
 from ..nodeeval import constant_color, constant_value
-from ..nodegraph import linked_link, output_node
+from ..nodegraph import input_socket, linked_link, output_node
 from .shadersockets import mix_factor, value_emission
 
 
@@ -192,8 +192,30 @@ def _light_surface(socket, reasons, depth):
         fac = mix_factor(node, reasons, "light Mix Shader", surface=False)
         return (1.0 - fac) * _light_surface(node.inputs[1], reasons, depth + 1) + \
             fac * _light_surface(node.inputs[2], reasons, depth + 1)
+    if node.type == 'BSDF_PRINCIPLED':   # its emission layer lights; its BSDFs do not
+        return _principled_emission(node, reasons)
     reasons.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")
     return np.zeros(3)
+
+
+def _principled_emission(node, reasons):
+    """A Principled BSDF's emission in a light's shader: Emission Color x Emission Strength,
+    under its coat and sheen (principled.emission_dim) and scaled by its alpha, as its weight
+    in Cycles' closure."""
+    color_socket = input_socket(node, 'Emission Color', 'Emission')
+    strength_socket = input_socket(node, 'Emission Strength')
+    if color_socket is None or strength_socket is None:
+        return np.zeros(3)
+    color, ok = constant_color(color_socket)
+    if not ok:
+        reasons.append("Principled emission colour driven by nodes; its own value used")
+    strength = _light_strength(strength_socket, reasons)
+    alpha_socket = node.inputs.get('Alpha')   # (`in` on an evaluated tree's inputs: False)
+    alpha, ok = (1.0, True) if alpha_socket is None else constant_value(alpha_socket)
+    if not ok:
+        reasons.append("Principled alpha driven by nodes; its own value used")
+    alpha = min(max(float(alpha), 0.0), 1.0) if np.isfinite(alpha) else 1.0
+    return np.array(color[:3], np.float64) * strength * alpha * principled.emission_dim(node)
 
 
 def _light_strength(socket, reasons):

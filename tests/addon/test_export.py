@@ -1943,6 +1943,19 @@ def test_light_node_trees_as_cycles_evaluates_them(scene, exported):
     nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], out.inputs['Surface'])
     s, warned = strength()
     assert np.allclose(s, 0.0) and any("emits no light" in t for t in warned)
+    # a Principled BSDF lights by its emission layer (measured in Cycles: Emission Color
+    # (1, 0.5, 0.2) x Strength 2 gave 2.08, 1.04, 0.42 of the 1.04 of a plain area light; DACRT
+    # had rendered 0 with "emits no light")
+    p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    p.inputs['Emission Color'].default_value = (1.0, 0.5, 0.2, 1.0)
+    p.inputs['Emission Strength'].default_value = 2.0
+    nt.links.new(p.outputs[0], out.inputs['Surface'])
+    s, warned = strength()
+    assert np.allclose(s, [2.0, 1.0, 0.4]) and not warned
+    p.inputs['Alpha'].default_value = 0.5
+    nt.links.new(p.outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], out.inputs['Surface'])
+    assert np.allclose(strength()[0], [7.0, 3.5, 1.75] + 0.5 * np.array([2.0, 1.0, 0.4]))
 
 
 def test_missing_image_is_magenta_like_cycles(scene, exported):
