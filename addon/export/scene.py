@@ -202,7 +202,7 @@ class Exporter:
             if terminator is None:
                 terminator = self._terminator_of[names[0]] = _terminator(ob)
             self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64),
-                                                   slots, vis, self._object_id(ob), ob.name,
+                                                   slots, vis, self._object_id(ob, parent), ob.name,
                                                    terminator, info))
 
     def _light(self, inst, ob):
@@ -217,7 +217,7 @@ class Exporter:
         if light is not None and limit is not None:
             light.max_bounces = int(limit)
         if light is not None:
-            light.lightgroup = getattr(ob, 'lightgroup', '')
+            light.lightgroup = _lightgroup(ob, parent)
         if light is not None and parent is not ob:
             light.visible_camera = light.visible_camera and bool(parent.visible_camera)
             light.visible_diffuse = light.visible_diffuse and bool(parent.visible_diffuse)
@@ -298,7 +298,7 @@ class Exporter:
         slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
         info = (self._evaluated(ob), inst.random_id, inst.is_instance)   # the emitter's, as Cycles' hair
         self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
-                                               self._object_id(ob), ob.name, info=info))
+                                               self._object_id(ob, parent), ob.name, info=info))
 
 
     def _see_through_strands(self):
@@ -371,17 +371,20 @@ class Exporter:
         return key
 
 
-    def _object_id(self, ob):
-        idx = self._object_index.get(ob.name)
+    def _object_id(self, ob, parent):
+        """The index of the object's entry (name, pass index, asset, light group); instances of
+        one object under instancers of other light groups get an entry each."""
+        group = _lightgroup(ob, parent)
+        idx = self._object_index.get((ob.name, group))
         if idx is None:
-            idx = self._object_index[ob.name] = len(self.object_names)
+            idx = self._object_index[ob.name, group] = len(self.object_names)
             self.object_names.append(ob.name)
             self.object_pass_index.append(ob.pass_index)   # Cycles: the instanced object's own
             top = ob
             while top.parent is not None:                 # Cryptomatte's asset: the topmost parent
                 top = top.parent
             self.object_assets.append(top.name)
-            self.object_lightgroups.append(getattr(ob, 'lightgroup', ''))
+            self.object_lightgroups.append(group)
         return idx
 
     def skip(self, reason, name):
@@ -427,3 +430,9 @@ class Exporter:
         elif not self.lights:
             self.messages.append(('INFO', f"the scene has no light objects{skipped}; lit by the world and "
                                           "emissive materials only"))
+
+
+def _lightgroup(ob, parent):
+    """The light group of an object or its instance: its own, or when it has none its
+    instancer's (Cycles' sync: `if (lightgroup.empty()) lightgroup = b_parent.lightgroup()`)."""
+    return getattr(ob, 'lightgroup', '') or (getattr(parent, 'lightgroup', '') if parent is not ob else '')

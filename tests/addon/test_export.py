@@ -1991,6 +1991,43 @@ def test_light_groups_exported(scene, exported):
     assert not any("light group" in m for _, m in s.messages)
 
 
+def test_instances_take_their_instancers_light_group(scene, exported):
+    """An instanced light or emitter without a light group of its own is in its instancer's
+    (Cycles' sync); instances of one object under instancers of two groups are in both. Both
+    had stayed in no group (Cycles: Combined_Key 0.329 = Combined, DACRT 0.0)."""
+    setup(scene)
+    vl = bpy.context.view_layer
+    vl.lightgroups.add(name="key")
+    vl.lightgroups.add(name="own")
+    props = bpy.data.collections.new("Props")          # not linked to the scene: instanced only
+    lamp = scenes.light('POINT', 100.0, (0, 0, 3), name="Bulb")
+    panel = scenes.plane("Panel", materials=[scenes.emission("Glow", (1, 1, 1), 2.0)])
+    tagged = scenes.plane("Tagged", location=(3, 0, 0), materials=[scenes.emission("Glow2", (1, 1, 1), 2.0)])
+    tagged.lightgroup = "own"                           # its own group wins
+    for ob in (lamp, panel, tagged):
+        for c in list(ob.users_collection):
+            c.objects.unlink(ob)
+        props.objects.link(ob)
+    for i, group in enumerate(("key", "")):
+        empty = bpy.data.objects.new(f"Instancer{i}", None)
+        empty.instance_type, empty.instance_collection = 'COLLECTION', props
+        empty.location = (0, 10 * i, 0)
+        empty.lightgroup = group
+        scene.collection.objects.link(empty)
+    s = exported()
+    assert sorted(l.lightgroup for l in s.lights if l.name == "Bulb") == ["", "key"]
+    groups = sorted(g for n, g in zip(s.object_names, s.object_lightgroups) if n == "Panel")
+    assert groups == ["", "key"]
+    assert [g for n, g in zip(s.object_names, s.object_lightgroups) if n == "Tagged"] == ["own"]
+    # each instance's triangles point at the entry of its own group (instancer 0 at y = 0)
+    geo = s.geometry
+    y = geo.vertices[geo.triangles][:, :, 1].mean(axis=1)
+    names = np.array(s.object_names)[geo.object_index]
+    groups = np.array(s.object_lightgroups)[geo.object_index]
+    panel = names == "Panel"
+    assert panel.sum() == 4 and set(groups[panel & (y < 5)]) == {"key"} and set(groups[panel & (y > 5)]) == {""}
+
+
 def test_shader_aovs_exported(scene, exported):
     """The view layer's AOVs (name, type) and what each material's AOV Output nodes write:
     constants, through a Math node and a node group, nodes of one name adding up, an image
