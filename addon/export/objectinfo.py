@@ -18,20 +18,22 @@ OBJECT_ATTRIBUTE = 'Object Attribute:'
 def object_value(info, location, output, material=None):
     """The (4,) value an Object Info output has for an object placed at `location` (3,) shading
     `material` (RGB, alpha; a number in all four, a location with alpha 1), or for an
-    OBJECT_ATTRIBUTE + name output the object's attribute. info: (original object, random_id,
-    is an instance)."""
-    ob, random_id, is_instance = info
+    OBJECT_ATTRIBUTE + name output the object's attribute. info: (evaluated object, random_id,
+    is an instance, the instance's colour: an instance's object carries its instancer's)."""
+    ob, random_id, is_instance, color = info
     if output.startswith(OBJECT_ATTRIBUTE):
         # Cycles (BKE_object_dupli_find_rgba_attribute): the object's own, then its data's;
-        # none: 0
+        # none: 0. Its own 'color' is the instance's (the one property of an instance's
+        # object that Blender's dupli iterator sets from the instancer and a path can read)
         name = output[len(OBJECT_ATTRIBUTE):]
+        if name == 'color':
+            return np.asarray(color, np.float64)
         return next((v for v in (_rgba_attribute(o, name) for o in (ob, getattr(ob, 'data', None))
                                  if o is not None) if v is not None), np.zeros(4))
     if output in ('Random', 'Object Index', 'Material Index'):
         v = (object_random(ob.name, random_id, is_instance) if output == 'Random' else
              float(ob.pass_index) if output == 'Object Index' else float(getattr(material, 'pass_index', 0)))
         return np.array([v, v, v, 1.0])
-    color = tuple(ob.color)
     if output == 'Alpha':
         return np.full(4, color[3])
     if output == 'Location':

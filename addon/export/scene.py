@@ -197,7 +197,12 @@ class Exporter:
             if slots is None:
                 slots = self._slots_of[names[0], key] = \
                     [override] if override is not None else [s.material for s in ob.material_slots]
-            info = (self._evaluated(ob), inst.random_id, inst.is_instance) if self._object_info else None
+            # An instance's colour is its instancer's: Blender's dupli iterator copies it onto the
+            # instance's object, where Cycles reads it. Read from the instancer: once
+            # evaluated_get has been called for an object (Exporter._evaluated), the iterator's
+            # later copies of it keep their own colour (Blender 5.0.1)
+            info = (self._evaluated(ob), inst.random_id, inst.is_instance, tuple(parent.color)) \
+                if self._object_info else None
             terminator = self._terminator_of.get(names[0])
             if terminator is None:
                 terminator = self._terminator_of[names[0]] = _terminator(ob)
@@ -296,7 +301,7 @@ class Exporter:
         if self.meshes[key] is None:
             return
         slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
-        info = (self._evaluated(ob), inst.random_id, inst.is_instance)   # the emitter's, as Cycles' hair
+        info = (self._evaluated(ob), inst.random_id, inst.is_instance, tuple(parent.color))   # the emitter's, as Cycles' hair
         self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
                                                self._object_id(ob, parent), ob.name, info=info))
 

@@ -2555,6 +2555,49 @@ def test_object_info_reads_the_rendered_frame_in_an_animation_render(scene, expo
         assert np.allclose(data.geometry.colors[of_object(data, name)][..., :3], (0.9, 0.1, 0.9), atol=1e-6), name
 
 
+def test_instances_read_their_instancers_object_colour(scene, exported):
+    """An instance's Object Info Color and Alpha, and an Object attribute 'color', are its
+    instancer's (Blender's dupli iterator gives the instance's object the instancer's colour;
+    Cycles reads it there): measured in Cycles, a red cube under a blue instancer renders
+    blue (0.924 blue; DACRT had rendered it red). Object Index stays the object's own."""
+    setup(scene)
+    made = []
+    for name, output in (("InfoColor", 'Color'), ("InfoAlpha", 'Alpha'), ("AttrColor", None)):
+        mat, nt, out = _shader_material(name)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        if output:
+            src = nt.nodes.new('ShaderNodeObjectInfo').outputs[output]
+        else:
+            attr = nt.nodes.new('ShaderNodeAttribute')
+            attr.attribute_type, attr.attribute_name = 'OBJECT', 'color'
+            src = attr.outputs['Color']
+        nt.links.new(src, d.inputs['Color'])
+        made.append(mat)
+    props = bpy.data.collections.new("Props")            # instanced only
+    for i, mat in enumerate(made):
+        ob = scenes.plane(f"Src{i}", location=(3 * i, 0, 0), materials=(mat,))
+        ob.color = (1.0, 0.0, 0.0, 0.9)
+        for c in list(ob.users_collection):
+            c.objects.unlink(ob)
+        props.objects.link(ob)
+    for j, rgba in enumerate(((0.0, 0.0, 1.0, 0.3), (0.0, 1.0, 0.0, 0.6))):
+        empty = bpy.data.objects.new(f"Instancer{j}", None)
+        empty.instance_type, empty.instance_collection = 'COLLECTION', props
+        empty.location, empty.color = (0, 10 * j, 0), rgba
+        scene.collection.objects.link(empty)
+    data = exported()
+    geo = data.geometry
+    y = geo.vertices[geo.triangles][:, :, 1].mean(axis=1)
+    for i in range(3):
+        tris = of_object(data, f"Src{i}")
+        for j, rgba in enumerate(((0.0, 0.0, 1.0, 0.3), (0.0, 1.0, 0.0, 0.6))):
+            here = tris & ((y > 5) == bool(j))
+            assert here.sum() == 2, (i, j)
+            want = (rgba[3],) * 3 if i == 1 else rgba[:3]
+            assert np.allclose(geo.colors[here][..., :3], want, atol=1e-6), (i, j, geo.colors[here][0])
+
+
 def test_object_attribute_per_object(scene, exported):
     """An Attribute node of type Object reads each object's value as Cycles does (custom
     property, else RNA path such as 'color', else the object data's property; none: 0): the
