@@ -180,8 +180,9 @@ class Film:
     def _pass_image(self, name: str) -> np.ndarray:
         if name in FIRST_SAMPLE:
             return self._first[name].T.reshape(self.height, self.width, -1).copy()
-        if name == 'Mist':
-            return 1.0 - self._mean(self._pass_sum[name])
+        if name == 'Mist':                          # Cycles' film_get_pass_pixel_mist: saturated
+            # (paths through transparent layers can sum more than 1 of 1 - mist)
+            return np.clip(1.0 - self._mean(self._pass_sum[name]), 0.0, 1.0)
         if name in DIVIDED_BY_COLOR:                # Cycles: light / colour, even where no colour
             ratio = divide_even_color(self._pass_sum[name], self._pass_sum['DiffCol'])
             return ratio.T.reshape(self.height, self.width, 3).astype(np.float32)

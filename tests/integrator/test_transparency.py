@@ -338,3 +338,15 @@ def test_data_passes_of_a_path_that_passed_to_the_background():
     depth, index = film.pass_image('Depth')[..., 0], film.pass_image('IndexOB')[..., 0]
     assert set(np.round(np.unique(depth), 4)) == {0.25, 1e10}
     assert np.all((index == 5) == (depth == np.float32(0.25)))
+
+
+def test_mist_stays_within_0_and_1_through_transparent_layers():
+    """Everything nearer than Mist Start: Mist 0. A path's 1 - mist summed over the layers it
+    passes can exceed 1 by their weights' rounding and the random pass/stop choice; Cycles
+    saturates the pixel (film_get_pass_pixel_mist), where DACRT had written down to -0.01."""
+    sheet = material('sheet', (0.3,) * 3, transparency=np.array([0.1, 0.5, 0.9], np.float32))
+    scene = sheet_scene(sheet, floor=True, samples=16, passes=('Mist',), mist=(10.0, 1.0, 1.0),
+                        sheets=(0.2, 0.25, 0.3))
+    mist = render(scene).film.pass_image('Mist')[..., 0]
+    assert mist.min() >= 0.0 and mist.max() <= 1.0
+    assert (mist == 0.0).mean() > 0.25      # the pixels whose samples summed more than 1
