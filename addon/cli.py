@@ -93,11 +93,9 @@ def save_render(scene, png, exr):
 def _layers_or_passes(scene) -> bool:
     """Whether the render holds more than one view layer or any pass beyond Combined
     (engine.extra_passes): a plain EXR would keep only the first layer's Combined."""
-    if scene.render.use_single_layer:                # the active layer alone
-        active = scene.view_layers.get(getattr(bpy.context.view_layer, 'name', ''))
-        layers = [active if active is not None else scene.view_layers[0]]
-    else:
-        layers = [layer for layer in scene.view_layers if layer.use]
+    # every enabled layer: a headless render ignores Render Single Layer (a window's setting;
+    # measured: both of two enabled layers rendered with it on)
+    layers = [layer for layer in scene.view_layers if layer.use]
     if len(layers) > 1:
         return True
     return any(next(extra_passes(layer), None) is not None for layer in layers)
@@ -142,7 +140,7 @@ def render(args):
         scene.frame_set(args.frame)
     png, exr = output_paths(args.out, args.blend)
     _check_writable(png)
-    if not scene.render.use_single_layer and not any(layer.use for layer in scene.view_layers):
+    if not any(layer.use for layer in scene.view_layers):
         # Blender renders nothing then, without a word, and the result cannot be saved
         raise SystemExit(f"error: scene '{scene.name}' has no view layer enabled for rendering "
                          "(View Layer Properties > Use for Rendering)")

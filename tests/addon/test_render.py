@@ -480,7 +480,7 @@ def test_cli_renders_a_blend_file_and_explains_failures(scene, tmp_path):
 
 def test_cli_writes_every_layer_and_pass_to_a_multilayer_exr(scene, tmp_path):
     """Two view layers, one with a Depth pass: the EXR holds both layers' Combined and the
-    pass (a plain EXR kept the first layer's Combined alone)."""
+    pass (a plain EXR kept the first layer's Combined alone); with Render Single Layer too."""
     lit_plane_scene(scene, size=(20, 10))
     second = scene.view_layers.new("Second")
     second.use_pass_z = True
@@ -493,6 +493,14 @@ def test_cli_writes_every_layer_and_pass_to_a_multilayer_exr(scene, tmp_path):
     for name in (f"{first}.Combined.R", "Second.Combined.A", "Second.Depth.Z"):
         assert name in channels, sorted(channels)
     assert channels["Second.Combined.R"].shape == (10, 20) and channels["Second.Combined.R"].mean() > 0
+    # Render Single Layer is a window's setting: headless, both layers still render, and
+    # both are written (the CLI had written a plain EXR of the first alone)
+    scene.render.use_single_layer, second.use_pass_z = True, False
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    out = run_cli([str(blend), "--samples", "1"], tmp_path)
+    assert out.returncode == 0, out.stdout + out.stderr
+    channels = scenes.read_exr(tmp_path / "render" / "layers.exr")
+    assert f"{first}.Combined.R" in channels and "Second.Combined.R" in channels, sorted(channels)
 
 
 def test_cli_output_names_and_stereo(scene, tmp_path):
