@@ -108,8 +108,9 @@ def _frames(p, counts, sector=0.0):
     return t, n
 
 
-def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool = False):
-    """Tube meshes of the curves (offsets: c + 1 first-point indices, the last = point count):
+def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool = False, linear: bool = False):
+    """Tube meshes of the curves (offsets: c + 1 first-point indices, the last = point count),
+    Catmull-Rom, or with `linear` straight between the points (POLY curves, as Cycles draws them):
     (vertices float32 (v, 3), triangles int32 (t, 3) wound outward, vertex normals float32
     (v, 3), curves rendered), and with curve_of the curve (index into offsets) each triangle
     belongs to (t,) int64. Curves of fewer than 2 points are not rendered; a sample of radius 0
@@ -119,7 +120,7 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
     keys = np.concatenate([positions, np.asarray(radii, np.float64).reshape(-1, 1)], axis=1)
     offsets = np.asarray(offsets, np.int64)
     sides, steps = level_for(len(positions)) if level is None else level
-    samples, counts = _samples(keys, offsets, steps)
+    samples, counts = _samples(keys, offsets, 1 if linear else steps)   # 1 step: the points
     if not len(counts):
         empty = (np.empty((0, 3), np.float32), np.empty((0, 3), np.int32), np.empty((0, 3), np.float32), 0)
         return empty + (np.empty(0, np.int64),) if curve_of else empty

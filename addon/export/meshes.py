@@ -88,9 +88,10 @@ class MeshArrays:
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
                  'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes', '_coords',
-                 'undeformed', 'rebuilt')
+                 'undeformed', 'rebuilt', 'texspace')
 
     def __init__(self, me, want_uvs):
+        self.texspace = None         # (location, size) where not the mesh's own (from_arrays)
         nv = len(me.vertices)
         self.positions = np.empty(nv * 3, np.float32)
         me.attributes['position'].data.foreach_get('vector', self.positions)
@@ -146,10 +147,12 @@ class MeshArrays:
         self.corner_uvs = self.uv_layers.get(self.active_uv)
 
     @classmethod
-    def from_arrays(cls, positions, triangles, vertex_normals):
+    def from_arrays(cls, positions, triangles, vertex_normals, generated_is_object=False):
         """A mesh made here (tessellated points or curves): smooth per-vertex normals, one
-        material slot, no UV map."""
+        material slot, no UV map; Generated coordinates its bounds mapped to 0..1, or with
+        generated_is_object its object-space positions."""
         a = cls.__new__(cls)
+        a.texspace = (np.full(3, 0.5), np.full(3, 0.5)) if generated_is_object else None
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
         a.corners, a.slot, a.corner_uvs, a.uv_layers, a.active_uv, a.domain = None, None, None, {}, '', 'POINT'
@@ -189,6 +192,8 @@ class MeshArrays:
         if self.mesh is not None:
             return (np.array(self.mesh.texspace_location, np.float64),
                     np.array(self.mesh.texspace_size, np.float64))
+        if self.texspace is not None:    # (0.5, 0.5): (co - 0.5) x 1 + 0.5, co itself
+            return self.texspace
         p = self.positions.astype(np.float64)
         lo, hi = (p.min(axis=0), p.max(axis=0)) if len(p) else (-np.ones(3), np.ones(3))
         loc, size = (lo + hi) / 2, (hi - lo) / 2

@@ -122,9 +122,21 @@ def tessellated(ob, notes):
         offsets = np.empty(len(data.curves) + 1, np.int32)
         data.curve_offset_data.foreach_get('value', offsets)
         sides, steps = hair.level_for(len(positions))
-        v, t, n, kept = hair.tubes(positions, radii, offsets, (sides, steps))
-        what = f"hair curves rendered as tubes of {sides} sides, {steps} step(s) a segment, open ends"
+        types = data.attributes.get('curve_type')        # absent: all Catmull-Rom
+        linear = types is not None and _all_poly(types, len(data.curves))
+        v, t, n, kept = hair.tubes(positions, radii, offsets, (sides, steps), linear=linear)
+        what = (f"hair curves rendered as tubes of {sides} sides, "
+                + ("straight between their points (Poly)" if linear else f"{steps} step(s) a segment")
+                + ", open ends")
         if kept < len(data.curves):
             notes.ignore("curves of fewer than 2 points are not rendered", ob.name)
     notes.ignore(what, ob.name)
-    return MeshArrays.from_arrays(v, t, n) if len(t) else None
+    # Cycles' Generated coordinates of points and curves are their object-space positions
+    return MeshArrays.from_arrays(v, t, n, generated_is_object=True) if len(t) else None
+
+
+def _all_poly(types, curves):
+    """Whether every curve is of type Poly (1; Cycles then draws straight segments)."""
+    values = np.empty(curves, np.int8)
+    types.data.foreach_get('value', values)
+    return bool(len(values)) and bool((values == 1).all())

@@ -353,6 +353,52 @@ def test_point_cloud_default_radius_and_hair_curves(scene, exported):
     assert "off in the view layer" in " | ".join(m for _, m in data.messages)
 
 
+def test_poly_curves_are_straight_between_their_points(scene, exported):
+    """Curves of type Poly (what Curve Line, Curve Circle, Mesh to Curve and Resample make) are
+    straight between their points, as Cycles draws them: every tube vertex lies within the
+    ring's radius of a segment of the zig-zag (a Catmull-Rom tube had rounded the corners off,
+    in Cycles 24 strand pixels at the peaks, DACRT 15); Catmull-Rom curves stay smooth."""
+    setup(scene)
+    zig = np.array([[0, 0, 0], [1, 0, 1], [2, 0, 0], [3, 0, 1]], np.float64)
+    poly = scenes.hair_curves("Poly", [zig], radius=0.01)
+    poly.data.set_types(type='POLY')
+    scenes.hair_curves("Smooth", [zig + (0, 5, 0)], radius=0.01)
+    data = exported()
+    sides, _ = hair.level_for(8)
+    assert of_object(data, "Poly").sum() == 3 * sides * 2            # one step a segment
+    ring = 0.01 * np.pi / (sides * np.sin(np.pi / sides))
+
+    def off_the_zigzag(name, shift):
+        pts = corners(data.geometry, of_object(data, name)).reshape(-1, 3) - shift
+        a, b = zig[:-1], zig[1:]
+        u = np.clip(np.einsum('psk,sk->ps', pts[:, None] - a[None], b - a) / ((b - a) ** 2).sum(1), 0, 1)
+        return np.linalg.norm(pts[:, None] - (a + u[..., None] * (b - a)), axis=2).min(axis=1).max()
+    # a mitred joint's ring sits on the bisector: up to ring / cos(45 deg) from a segment
+    assert off_the_zigzag("Poly", 0.0) <= ring / np.cos(np.pi / 4) * 1.001
+    assert off_the_zigzag("Smooth", np.array([0, 5, 0])) > 0.05      # Catmull-Rom cuts inside
+    assert "straight between their points" in " | ".join(m for _, m in data.messages)
+
+
+def test_points_and_curves_generated_coordinates_are_object_space(scene):
+    """Cycles' Generated coordinates of a point cloud's spheres and a Curves object's tubes are
+    their object-space positions (a Gradient along x on three points at -1.2, 0, 1.2 reads 0,
+    0.03, 1 there; mapping the tessellation's bounds to 0..1 had read 0.15, 0.49, 0.84)."""
+    from addon.export import strands
+
+    class Notes:
+        def ignore(self, *a):
+            pass
+    cloud = scenes.point_cloud("Dots", np.array([[-1.2, 0, 0], [0, 0, 0], [1.2, 0, 0]]), radius=0.1)
+    fur = scenes.hair_curves("Fur", [np.array([[-1.2, 0, 0], [1.2, 0, 0.5]])], radius=0.05)
+    seen = []
+    for inst in bpy.context.evaluated_depsgraph_get().object_instances:
+        if inst.object.type in ('POINTCLOUD', 'CURVES'):     # the cloud: a GN output instance
+            coords = strands.tessellated(inst.object, Notes()).corner_coordinates()
+            assert np.allclose(coords[..., :3], coords[..., 3:6], atol=1e-6), inst.object.name
+            seen.append(inst.object.type)
+    assert sorted(seen) == ['CURVES', 'POINTCLOUD'] and cloud and fur
+
+
 def test_light_path_ray_type_mix_hides_the_material(scene, exported):
     """A Mix Shader by Light Path Is Camera Ray / Is Shadow Ray with a white Transparent BSDF on
     one side: the triangles lose the ray kinds that see through it and keep the other shader;
