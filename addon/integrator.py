@@ -201,9 +201,11 @@ class Integrator:
                          lightgroups=tuple(getattr(s, 'lightgroups', ())), aovs=aovs,
                          exposure=float(getattr(s, 'film_exposure', 1.0)))
         self._aovs = _aov_tables(aovs, [getattr(m, 'aovs', None) for m in scene_data.materials])
-        # the world's AOVs, where camera rays miss: not with transparent film or a world camera
-        # rays cannot see (Cycles does not run the background shader for them)
-        sees_world = not self.transparent and scene_data.world_visibility & VIS_CAMERA
+        # the world's AOVs, where camera rays miss: not where Cycles does not run the background
+        # shader for them: a world camera rays cannot see, or transparent film unless the
+        # Environment pass is asked for (integrate_background evaluates it for that pass)
+        env_pass = 'Env' in tuple(getattr(s, 'passes', ()))
+        sees_world = (not self.transparent or env_pass) and scene_data.world_visibility & VIS_CAMERA
         world = _aov_tables(aovs, [scene_data.world_aovs if sees_world else None])
         self._world_aovs = {key: table[:, 0] for key, table in world.items() if table.any()}
         self._light_passes = tuple(p for p in LIGHT_PASSES if p in self.film.passes)
@@ -384,13 +386,16 @@ class Integrator:
         # with light passes, camera rays' lamps go to Emission and their world to Environment,
         # which holds the world seen through transparent film too (as Cycles), though Combined
         # does not
-        self._camera_world = pick(lambda world: world)
-        self._camera_emitters = pick(lambda world: not world)
         # Light groups: the world camera rays see behind transparent film too, but only when
         # the Environment pass is asked for: Cycles evaluates the background of a transparent
         # camera ray only for that pass (integrate_background), and its light group then takes
-        # it (Cycles 5.0: sky pixels in the world's group 0.5 with the pass, 0.0 without)
+        # it (Cycles 5.0: sky pixels in the world's group 0.5 with the pass, 0.0 without). Not
+        # when the film adds Environment itself (for Denoising Albedo): the world is then not
+        # evaluated, and the albedo has none of it (Cycles 0 there)
         self._env_requested = 'Env' in tuple(getattr(self.settings, 'passes', ()))
+        self._world_lamps = pick(lambda world: world)
+        self._camera_world = self._world_lamps if self._env_requested or not self.transparent else pick(lambda world: False)
+        self._camera_emitters = pick(lambda world: not world)
         self._camera_grouped = pick(lambda world: True) if self._env_requested else self._camera_lamps
         self._camera_env_pass = camera_env if (camera_env is not None and wv & VIS_CAMERA
                                                and not camera_env.dark) else None
@@ -1428,8 +1433,8 @@ class Integrator:
         for out in outs:
             if self._camera_env_pass is not None:
                 self._camera_env_pass.native.gather(0.0, seg.D, where, seg.thr, None, seg.pid, out, clamp)
-            if len(self._camera_world):
-                dacrt.lamps.lamp_gather(self._lamp_records, self._camera_world, seg.O, seg.D, sub['t'], where,
+            if len(self._world_lamps):
+                dacrt.lamps.lamp_gather(self._lamp_records, self._world_lamps, seg.O, seg.D, sub['t'], where,
                                         seg.pid, out, thr=seg.thr, pdf_bsdf=None, clamp=clamp)
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None, kind='through'):
@@ -1765,7 +1770,8 @@ class Integrator:
         if not camera:
             env, groups = self.lights.environment, ((self._bsdf_lamps, L),)
         elif sinks.split:
-            env, groups = self._camera_env_pass, ((self._camera_emitters, L), (self._camera_world, L_env))
+            env = self._camera_env_pass if self._env_requested else self._camera_env
+            groups = ((self._camera_emitters, L), (self._camera_world, L_env))
         else:
             env, groups = self._camera_env, ((self._camera_lamps, L),)
         # what goes to the light groups: Combined's, and, with the Environment pass, the world

@@ -76,7 +76,8 @@ def test_aovs_change_nothing_else():
 
 def test_world_aovs_where_camera_rays_miss():
     """The world's AOVs where camera rays miss (through the pane too, when the pass is not
-    done there), not with transparent film, and not where the world is hidden from the camera."""
+    done there), not with transparent film unless the Environment pass is on, and not where
+    the world is hidden from the camera."""
     scene = _scene(0.3, samples=16)
     floor = scene.geometry.material == 1
     g = scene.geometry
@@ -96,6 +97,11 @@ def test_world_aovs_where_camera_rays_miss():
     assert np.all((passed >= -1e-6) & (passed <= 1 + 1e-6)) and 0.4 < passed.mean() < 0.8
     hidden = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, film_transparent=True))
     assert not _passes(hidden)[2][:, 4:6].any()
+    # transparent film with the Environment pass: Cycles runs the background shader for it, and
+    # its AOVs write (Cycles: (0.2, 0.3, 0.4, 1) of a world AOV; DACRT had written 0)
+    env = dataclasses.replace(hidden, settings=dataclasses.replace(
+        hidden.settings, passes=tuple(hidden.settings.passes) + ('Env',)))
+    np.testing.assert_allclose(_passes(env)[2][:, 4:6], 0.125)
     hidden = dataclasses.replace(scene, world_visibility=sd.VIS_DIFFUSE)
     assert not _passes(hidden)[2][:, 4:6].any()
 

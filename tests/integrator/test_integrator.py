@@ -1,5 +1,7 @@
 """The render loop: determinism, pass blocking, robustness (NaN, empty scenes, bad input),
 ray visibility, holdout and transparency, data passes, textures and the engine-facing API."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -480,6 +482,16 @@ def test_denoising_data_closed_form():
     assert np.allclose(albedo[:, :3], 0.8, rtol=1e-6) and np.allclose(albedo[:, 5:], 0.25, rtol=1e-6)
     assert np.allclose(depth[:, :3], 0.5 - 1e-3, rtol=1e-5) and np.all(depth[:, 5:] == 0)
     assert 'Emit' not in scene.settings.passes and 'Env' in film.passes   # kept for the albedo
+    # transparent film: the world camera rays miss into is not evaluated (Cycles: 0 in the
+    # albedo there, the world again with the Environment pass on; DACRT had added it always)
+    clear = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, film_transparent=True))
+    albedo = render(clear).film.pass_image('DenoiseAlbedo')
+    assert np.allclose(albedo[:, :3], 0.8, rtol=1e-6) and np.all(albedo[:, 5:] == 0)
+    env = dataclasses.replace(clear, settings=dataclasses.replace(
+        clear.settings, passes=tuple(clear.settings.passes) + ('Env',)))
+    film = render(env).film
+    assert np.allclose(film.pass_image('DenoiseAlbedo')[:, 5:], 0.25, rtol=1e-6)
+    assert np.allclose(film.pass_image('Env')[:, 5:], 0.25, rtol=1e-6)
 
 
 @pytest.mark.parametrize('start,depth,falloff', [(0.1, 1.0, 2.0), (0.2, 0.5, 1.0), (0.0, 2.0, 0.5),
