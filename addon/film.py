@@ -58,6 +58,10 @@ class Film:
         self._crypto = {kind: (np.asarray(id_values, np.float32), int(levels), Coverage(len(id_values)))
                         for kind, (id_values, levels) in (cryptomatte or {}).items()}
         self.nan_dropped = 0
+        # writes of a pass in progress (sample 0's passes, Cryptomatte coverage), applied with
+        # its samples (add_samples) or dropped with it (discard_pass): a cancelled pass had
+        # left coverage without its samples (per-pixel coverage up to 1.25)
+        self._staged = None
         # Cycles' Film > Exposure: a scale of what is light (Combined RGB, light passes and light
         # groups) applied when they are read, never to alpha or data passes
         if not (np.isfinite(exposure) and exposure >= 0):
@@ -80,6 +84,7 @@ class Film:
         (dropping the whole sample had left pixels with no finite sample transparent black,
         alpha 0, in an opaque render). Returns the number of samples with such a channel
         (added to nan_dropped)."""
+        self._apply_staged()
         data = {k: v for k, v in (data or {}).items() if k in self._pass_sum}
         pixels = _as_slice(pixels)          # a run of pixels: slices, not a gather and scatter each
         # The sums (one native pass each) are finite exactly when every sample is (NaN and
@@ -132,7 +137,12 @@ class Film:
         first = self._first.get(name)
         if first is not None:
             v = np.asarray(values, np.float32).reshape(first.shape[0], -1)
-            first[:, pixels] = np.where(np.isfinite(v), v, np.float32(FIRST_SAMPLE[name]))
+            v = np.where(np.isfinite(v), v, np.float32(FIRST_SAMPLE[name]))
+            if self._staged is not None:
+                px = np.array(pixels, copy=True)
+                self._staged.append(lambda: first.__setitem__((slice(None), px), v))
+            else:
+                first[:, pixels] = v
 
     def add_coverage(self, kind: str, pixels: np.ndarray, index: np.ndarray, weight: np.ndarray, order=None):
         """Cryptomatte: samples of pixels (k,) saw ID index (k,) with weight (k,) (1 for an
@@ -140,7 +150,27 @@ class Film:
         ranks these as Cycles makes them (Coverage.add). Ignored when the kind was not
         requested."""
         if kind in self._crypto:
-            self._crypto[kind][2].add(pixels, index, weight, order)
+            cov = self._crypto[kind][2]
+            if self._staged is not None:
+                args = tuple(np.array(a, copy=True) if a is not None else None
+                             for a in (pixels, index, weight, order))
+                self._staged.append(lambda: cov.add(*args))
+            else:
+                cov.add(pixels, index, weight, order)
+
+    def begin_pass(self):
+        """From now on, sample 0's passes and Cryptomatte coverage wait for the pass's samples
+        (add_samples applies them) or its cancellation (discard_pass)."""
+        self._staged = []
+
+    def discard_pass(self):
+        """Drop what the cancelled pass wrote; later writes are immediate again."""
+        self._staged = None
+
+    def _apply_staged(self):
+        staged, self._staged = self._staged, None
+        for write in staged or ():
+            write()
 
     def cryptomatte_images(self) -> dict:
         """{pass name ('CryptoObject00', ...): (H, W, 4) float32}: two ranks per pass, (ID,

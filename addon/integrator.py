@@ -829,9 +829,11 @@ class Integrator:
 
     def _pass(self, film_pix, frame_pix, s0, ns):
         """Render one block of paths into the film; False when it was cancelled midway."""
+        self.film.begin_pass()
         try:
             self._render_block(film_pix, frame_pix, s0, ns)
         except _PassCancelled:
+            self.film.discard_pass()
             return False
         return True
 

@@ -666,7 +666,8 @@ def test_cancel_is_polled_per_bounce_and_drops_the_unfinished_pass():
     t = t[:, ::-1].copy()                                  # facing inward: the camera is inside
     mats = [material('default'), material('furnace', (0.999,) * 3, emission=(1.0, 1.0, 1.0))]
     scene = sd.SceneData(ortho_down(height=0.0, width=8, px=8, view=1.0), geometry([(v, t, 1, ALL_VIS)]),
-                         mats, [], np.zeros(3, np.float32), sd.Settings(samples=4, max_bounces=1000))
+                         mats, [], np.zeros(3, np.float32),
+                         sd.Settings(samples=4, max_bounces=1000, passes=('Depth',), cryptomatte=('CryptoObject',)))
     state = {'armed': False, 'polls': 0}
 
     def check_break():                                   # Esc 5 bounces into the second pass
@@ -688,6 +689,11 @@ def test_cancel_is_polled_per_bounce_and_drops_the_unfinished_pass():
     steps.close()
     assert np.array_equal(img, first.film.combined())     # exactly the first pass, nothing more
     assert not np.array_equal(img, full.film.combined())
+    # nor its Cryptomatte coverage or sample-0 passes (coverage had reached 1.25 a pixel)
+    crypto = integ.film.cryptomatte_images()['CryptoObject00']
+    assert np.allclose(crypto[..., 1], 1.0)
+    assert np.array_equal(crypto, first.film.cryptomatte_images()['CryptoObject00'])
+    assert np.array_equal(integ.film.pass_image('Depth'), first.film.pass_image('Depth'))
 
 
 
