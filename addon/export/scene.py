@@ -213,10 +213,19 @@ class Exporter:
     def _light(self, inst, ob):
         # instances also take their instancer's ray visibility (as Cycles)
         parent = inst.parent if inst.is_instance and inst.parent is not None else ob
-        if not ((ob.visible_diffuse and parent.visible_diffuse) or (ob.visible_camera and parent.visible_camera)):
-            self.skip("lights with camera and diffuse ray visibility off light nothing here, where "
-                       "every surface is diffuse (Cycles still lights glossy layers with them)", ob.name)
+        diffuse = ob.visible_diffuse and parent.visible_diffuse
+        glossy = getattr(ob, 'visible_glossy', True) and getattr(parent, 'visible_glossy', True)
+        if not (diffuse or (ob.visible_camera and parent.visible_camera)):
+            self.skip("lights with camera and diffuse ray visibility off (their own or their "
+                      "instancer's) light nothing here, where every surface is diffuse"
+                      + (" (Cycles still lights glossy layers with them)" if glossy else ""), ob.name)
             return None
+        if glossy != diffuse:
+            # glossy layers render as diffuse (approximated, reported per material): they take
+            # the light as diffuse surfaces do
+            self.ignore(f"ray visibility Glossy {'on' if glossy else 'off'} with Diffuse "
+                        f"{'on' if diffuse else 'off'}: glossy layers (rendered as diffuse) take "
+                        "this light by its Diffuse visibility", ob.name)
         light = export_light(ob, inst.matrix_world, self.messages)
         limit = getattr(getattr(ob.data, 'cycles', None), 'max_bounces', None)
         if light is not None and limit is not None:

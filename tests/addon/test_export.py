@@ -1835,6 +1835,13 @@ def test_light_ray_visibility(scene, exported):
     assert (L["Inst"].visible_camera, L["Inst"].visible_diffuse) == (True, False)
     assert L["Inst"].matrix[0, 3] == pytest.approx(5.0)
     assert any("Ghost" in t for _, t in data.messages)
+    # Glossy visibility apart from Diffuse: glossy layers (rendered as diffuse) follow Diffuse,
+    # said per light (Cycles: a metallic floor under a Glossy-off light 0.0, DACRT 1.02, silent)
+    glossy = [t for _, t in data.messages if "ray visibility Glossy" in t]
+    assert len(glossy) == 1 and "'CameraOnly', 'Inst'" in glossy[0] and "Glossy on with Diffuse off" in glossy[0]
+    seen.visible_glossy = False
+    text = " | ".join(t for _, t in exported().messages)
+    assert "Glossy off with Diffuse on" in text and "'Seen'" in text
 
 
 def test_instanced_lights(scene, exported):
