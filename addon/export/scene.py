@@ -20,7 +20,7 @@ from .meshes import mesh_arrays
 from .placement import Placement
 from .aovs import shader_aovs
 from .settings import export_settings
-from .strands import hair_arrays, hair_systems, tessellated
+from .strands import StrandSource, hair_arrays, hair_systems, read_strands, tessellate
 from .world import effective_world, export_world, world_visibility
 
 # object types that render as geometry (curves, surfaces, text, metaballs through their mesh)
@@ -109,6 +109,7 @@ class Exporter:
         camera = export_camera(self.scene, self.messages, camera=self.camera)
         settings = export_settings(self.scene, self.view_layer, self.messages)
         self._walk_instances()
+        self._tessellate_strands()
         geometry = Assembly(self).geometry(uv_pass='UV' in settings.passes)
         self._see_through_strands()
         by_ray = []
@@ -315,6 +316,23 @@ class Exporter:
                                                self._object_id(ob, parent), ob.name, info=info))
 
 
+    def _tessellate_strands(self):
+        """Tessellate the point clouds and Curves read in the walk, at the level for all the
+        points of their kind in the frame, instances included."""
+        sources = {k: m for k, m in self.meshes.items() if isinstance(m, StrandSource)}
+        frame_points = {}
+        for key, src in sources.items():
+            frame_points[src.kind] = frame_points.get(src.kind, 0) + len(src.positions) * len(self.placements[key])
+        for key, src in sources.items():
+            if self.check_break():
+                raise ExportCancelled()
+            arrays = tessellate(src, frame_points[src.kind], self)
+            if arrays is None:
+                self.meshes[key] = None
+                del self.placements[key]
+            else:
+                self.meshes[key] = arrays
+
     def _see_through_strands(self):
         """Say which hair, curves and point clouds have a see-through or translucent material:
         tessellated into tubes and spheres, their light crosses two surfaces where Cycles'
@@ -375,8 +393,11 @@ class Exporter:
                 # what Generated coordinates are of, looked up only if a procedural texture reads
                 # them (MeshArrays.corner_coordinates); the original object outlives the export
                 arrays.undeformed = functools.partial(self._undeformed_source, ob.original, ob.data)
-        else:
-            arrays = tessellated(ob, self)
+        else:           # tessellated once the frame's instances are counted (_tessellate_strands)
+            arrays = read_strands(ob, self)
+            if arrays is not None:
+                self.meshes[key], self.placements[key] = arrays, []
+                return key
         if arrays is None or len(arrays.triangles) == 0:
             self.meshes[key] = None
             return None
