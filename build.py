@@ -367,11 +367,17 @@ def cmd_test(args: List[str]) -> int:
             env = ensure_sanitized_native(req)
             # the tracer tests and the cheap (default) stress tests, not the renderer ones
             paths = ["tests/native", "tests/stress", "--ignore=tests/stress/test_renderer.py"]
-    if any(not a.startswith("-") and (ROOT / a.split("::")[0]).exists() for a in rest):
+    named = any(not a.startswith("-") and (ROOT / a.split("::")[0]).exists() for a in rest)
+    if named:
         paths = []  # the caller named what to run
+    # A whole tier runs on every core (pytest-xdist, one worker process per core; work is
+    # stolen between them, so a long parity file does not hold one worker): most tests are
+    # single-threaded Python and bpy. Named tests, or a -n of the caller's, run as asked.
+    workers = [] if named or sanitize or any(a == "-n" or a.startswith(("-n", "--numprocesses"))
+                                             for a in rest) else ["-n", "auto", "--dist", "worksteal"]
     # Stress tests are deselected by tests/conftest.py unless --stress is given.
     cmd = [str(VPY), "-m", "pytest", f"--rootdir={ROOT}", *(["--stress"] if stress else []),
-           *paths, *rest]
+           *workers, *paths, *rest]
     say("running: " + " ".join(cmd[1:]) + (" (sanitized build)" if sanitize else ""))
     return subprocess.call(cmd, cwd=ROOT, env=env)
 
