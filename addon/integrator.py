@@ -238,8 +238,16 @@ class Integrator:
         # transparent film without Transparent Glass: a camera ray that passes glass sees the
         # world behind it, drawn at alpha 1 (Cycles' refraction), where a Transparent BSDF's
         # background is left out
-        self._glass_film = self.transparent and not getattr(s, 'film_transparent_glass', False) and \
-            bool((self.mats.refraction.max(axis=0) > 0)[self.tri.material][self._tri_transparent].any())
+        # With Transparent Glass, glass rougher than its Roughness Threshold stays so (Cycles
+        # compares the closure's roughness: a roughness 0.5 pane under the default 0.1 kept
+        # alpha 1 in Cycles, 0.06 here before)
+        threshold = float(getattr(s, 'film_transparent_roughness', 0.1))
+        self._film_refracts = np.array(
+            [self.transparent and (not getattr(s, 'film_transparent_glass', False)
+                                   or float(getattr(m, 'glass_roughness', 0.0)) > threshold)
+             for m in scene_data.materials], bool)
+        self._glass_film = bool(((self.mats.refraction.max(axis=0) > 0) & self._film_refracts)
+                                [self.tri.material][self._tri_transparent].any())
         # Rays past glass are Cycles' transmission rays: they see objects by their Transmission
         # visibility and no holdout. Passes pick glass or clear transparency (as under a
         # transparent film) only where that changes what they see: glass in the scene and some
@@ -1352,7 +1360,7 @@ class Integrator:
         if camera and self._glass_film:
             if path.refracted is None:
                 path.refracted = np.zeros(len(path.pid), bool)
-            path.refracted[rows[go]] = True
+            path.refracted[rows[go & np.take(self._film_refracts, mat)]] = True
 
     def _intersect_past(self, kind, transmit, rows, O, D, tfar, skip):
         """Closest hits of rays (O, D, tfar; skip: the triangle each leaves) that paths rows trace

@@ -154,6 +154,9 @@ class Material:
     # Principled's transmission): light through it is refracted light to Cycles, so a camera
     # ray that passes it sees the world behind even with a transparent film; None: none
     refraction: Optional[np.ndarray] = None
+    # the largest roughness of that glass (Film > Transparent Glass leaves glass rougher than
+    # its Roughness Threshold opaque)
+    glass_roughness: float = 0.0
     # Material > Settings > Transparent Shadows (Cycles reads it): off, shadow rays stop at the
     # material as at an opaque one, while camera and bounce rays still pass it
     transparent_shadow: bool = True
@@ -244,6 +247,7 @@ class Settings:
     # Cycles' Film > Transparent Glass: with a transparent film, what glass lets through leaves
     # alpha holes; off, the world seen through it is drawn (alpha 1), as through any surface
     film_transparent_glass: bool = False
+    film_transparent_roughness: float = 0.1   # Cycles' Roughness Threshold of Transparent Glass
     film_exposure: float = 1.0     # Cycles' Film > Exposure: scales Combined RGB and the light passes
     use_light_tree: bool = True    # Cycles' Lights > Light Tree: a light per point by its contribution
     passes: tuple = ()             # extra passes wanted (passes.py): data passes 'Depth', 'Mist',

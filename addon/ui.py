@@ -101,6 +101,9 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
             sub = layout.column()
             sub.active = render.film_transparent
             sub.prop(cycles, "film_transparent_glass", text="Transparent Glass")
+            rough = sub.column()
+            rough.active = render.film_transparent and cycles.film_transparent_glass
+            rough.prop(cycles, "film_transparent_roughness", text="Roughness Threshold")
 
 
 class VIEWLAYER_PT_dacrt_passes(DACRTPanel, Panel):

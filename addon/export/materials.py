@@ -300,6 +300,7 @@ class MaterialBuilder:
 
     def _build_material(self, mat):
         reasons = []
+        glass_rough = 0.0
         self._uv_names = []           # the UV map each image this material reads asks for
         self._normal_maps = []        # (Texture, strength, UV map) of its BSDFs' normal maps
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
@@ -323,6 +324,7 @@ class MaterialBuilder:
                 closure, visibility = self._ray_type_mix(out.inputs['Surface'], reasons)
                 if closure is None:
                     closure = self._shader(out.inputs['Surface'], reasons, 0)
+                glass_rough = glass_roughness(out.inputs['Surface'])
             for socket in IGNORED_OUTPUTS:
                 if out is not None and out.inputs.get(socket) is not None and \
                         linked_node(out.inputs[socket]) is not None:
@@ -388,6 +390,7 @@ class MaterialBuilder:
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, translucency=translucency, refraction=refraction,
+                           glass_roughness=glass_rough if refraction is not None else 0.0,
                            transparent_shadow=bool(getattr(mat, 'use_transparent_shadow', True)),
                            opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
@@ -913,3 +916,24 @@ def _channel_line(x, y, tolerance):
 def _probe_albedo(m):
     """The albedo (n, 3) float64 a material built on probe values has at each of them."""
     return m.base_color.astype(np.float64) * np.asarray(m.texture, np.float64)[0, :, :3]
+
+
+def glass_roughness(socket, depth=0):
+    """The largest roughness of the Glass, Refraction and transmitting Principled BSDFs that
+    feed a shader socket (through Mix and Add Shaders and node groups): what Cycles' Film >
+    Transparent Glass compares with its Roughness Threshold (rougher glass stays opaque)."""
+    link = linked_link(socket)
+    if link is None or depth > 64:
+        return 0.0
+    node = link.from_node
+    if node.type in ('MIX_SHADER', 'ADD_SHADER'):
+        return max((glass_roughness(s, depth + 1) for s in node.inputs if s.type == 'SHADER'), default=0.0)
+    if node.type in ('BSDF_GLASS', 'BSDF_REFRACTION', 'BSDF_PRINCIPLED'):
+        if node.type == 'BSDF_PRINCIPLED':
+            weight = input_socket(node, 'Transmission Weight', 'Transmission')
+            if weight is None or (constant_value(weight)[0] <= 0.0 and not weight.is_linked):
+                return 0.0
+        rough = input_socket(node, 'Roughness')
+        v = constant_value(rough)[0] if rough is not None else 0.0
+        return min(max(v, 0.0), 1.0) if np.isfinite(v) else 0.0
+    return 0.0

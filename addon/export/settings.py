@@ -73,6 +73,8 @@ def export_settings(scene, vl, messages):
                        partition=d.partition.lower(), film_transparent=r.film_transparent,
                        film_transparent_glass=bool(getattr(getattr(scene, 'cycles', None),
                                                            'film_transparent_glass', False)),
+                       film_transparent_roughness=float(getattr(getattr(scene, 'cycles', None),
+                                                                'film_transparent_roughness', 0.1)),
                        film_exposure=float(getattr(d, 'film_exposure', 1.0)),
                        use_light_tree=bool(getattr(d, 'use_light_tree', True)),
                        passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,

@@ -423,6 +423,36 @@ def test_instanced_curves_are_tessellated_for_the_frames_point_count(scene, expo
     assert of_object(data, "Tuft").sum() == 300 * 10 * 7 * steps * sides * 2
 
 
+def test_glass_roughness_and_the_transparent_glass_threshold_exported(scene, exported):
+    """Each material's glass roughness (Glass, Refraction, transmitting Principled; the largest
+    through Mix Shaders), which Film > Transparent Glass compares with its Roughness Threshold
+    (read from Cycles' setting)."""
+    setup(scene)
+    made = {}
+    for name, kind, rough in (("Frosted", 'ShaderNodeBsdfGlass', 0.5), ("Clear", 'ShaderNodeBsdfRefraction', 0.0),
+                              ("Principled", 'ShaderNodeBsdfPrincipled', 0.3), ("Mixed", 'ShaderNodeBsdfGlass', 0.05)):
+        mat, nt, out = _shader_material(name)
+        node = nt.nodes.new(kind)
+        node.inputs['Roughness'].default_value = rough
+        if kind == 'ShaderNodeBsdfPrincipled':
+            node.inputs['Transmission Weight'].default_value = 1.0
+        src = node.outputs[0]
+        if name == "Mixed":
+            mix = nt.nodes.new('ShaderNodeMixShader')
+            nt.links.new(src, mix.inputs[1])
+            nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], mix.inputs[2])
+            src = mix.outputs[0]
+        nt.links.new(src, out.inputs['Surface'])
+        made[name] = rough
+        scenes.plane(name, location=(3 * len(made), 0, 0), materials=(mat,))
+    scene.cycles.film_transparent_roughness = 0.25
+    data = exported()
+    got = {m.name: m.glass_roughness for m in data.materials}
+    for name, rough in made.items():
+        assert got[name] == pytest.approx(rough, abs=1e-6), (name, got)
+    assert data.settings.film_transparent_roughness == pytest.approx(0.25)
+
+
 def test_light_path_ray_type_mix_hides_the_material(scene, exported):
     """A Mix Shader by Light Path Is Camera Ray / Is Shadow Ray with a white Transparent BSDF on
     one side: the triangles lose the ray kinds that see through it and keep the other shader;
