@@ -158,6 +158,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             for field, value in cryptomatte.metadata(layer, kind, names).items():
                 self.get_result().stamp_data_add_field(field, value)
         views = [v.name for v in result.views]
+        per_view = []                   # each view's stats: the summary is the frame's
         try:
             for view in views if len(views) > 1 else [None]:
                 if view is not None or integ is None:   # each view's camera, the same geometry
@@ -169,12 +170,13 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
                     self._integrate(integ, result, scene_data, t0, view)
                 finally:
                     self._report_messages(integ.messages)    # also when integration failed
+                    per_view.append(integ.stats or {})
                 if self.cancel_requested():
                     break
         finally:
             self.end_result(result)
         if integ is not None:
-            self._report_summary(integ, scene_data, layer, export_seconds)
+            self._report_summary(frame_stats(per_view), scene_data, layer, export_seconds)
 
     def _view_integrator(self, depsgraph, scene_data, view):
         """The integrator of the frame's export (view None) or of one view of a multiview
@@ -290,8 +292,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             for i, part in enumerate(_report_chunks(text)):
                 self.report(kind, f"DACRT: {part}" if i == 0 else f"DACRT (continued): {part}")
 
-    def _report_summary(self, integ, scene_data, layer, export_seconds):
-        s = dict(integ.stats or {}, export_seconds=export_seconds)
+    def _report_summary(self, stats, scene_data, layer, export_seconds):
+        s = dict(stats, export_seconds=export_seconds)
         LAST_RENDER_STATS[layer] = s
         parts = [f"{len(scene_data.geometry.triangles)} triangles",
                  f"{len(scene_data.lights)} lights"]
@@ -340,3 +342,36 @@ def _skipped_text(skipped) -> str:
         if n:
             parts.append(f"{n / 1e6:.1f}M {label}" if n >= 10 ** 6 else f"{n} {label}")
     return ", ".join(parts)
+
+
+# stats that add up over the views of a multiview render (the rest are the last view's)
+_SUMMED = ('rays_total', 'shadow_rays_skipped', 'trace_seconds', 'python_seconds', 'render_seconds',
+           'total_seconds', 'filter_seconds', 'partition_seconds', 'leaf_seconds', 'setup_seconds',
+           'scene_build_seconds', 'paths', 'passes', 'nan_dropped', 'pixels_converged', 'samples_skipped')
+
+
+def frame_stats(per_view: list) -> dict:
+    """The frame's stats from its views' (one for a mono render): counts and times summed,
+    rays by kind and skipped work summed, throughput and trace share recomputed; 'views'."""
+    if len(per_view) == 1:
+        return dict(per_view[0], views=1)
+    out = dict(per_view[-1], views=len(per_view))
+    for key in _SUMMED:
+        if all(key in v for v in per_view):
+            out[key] = sum(v[key] for v in per_view)
+    if all(isinstance(v.get('rays'), dict) for v in per_view):
+        out['rays'] = {k: sum(v['rays'].get(k, 0) for v in per_view) for k in per_view[-1]['rays']}
+    if all(isinstance(v.get('skipped'), dict) for v in per_view):
+        # the render's skips add up; the export's (objects, materials, triangles, lights) are
+        # the frame's once
+        skipped = out['skipped'] = dict(per_view[-1]['skipped'])
+        for k in ('shadow_rays', 'bounce_rays', 'samples'):
+            skipped[k] = sum(v['skipped'].get(k, 0) for v in per_view)
+        if isinstance(skipped.get('detail'), dict):
+            detail = skipped['detail'] = dict(skipped['detail'])
+            for k in [k for k in detail if k.startswith('bounce_rays_')]:
+                detail[k] = sum(v['skipped'].get('detail', {}).get(k, 0) for v in per_view)
+    trace, render = out.get('trace_seconds', 0.0), out.get('render_seconds', 0.0)
+    out['mrays_per_s'] = out.get('rays_total', 0) / trace * 1e-6 if trace > 0 else 0.0
+    out['trace_share'] = trace / render if render > 0 else 0.0
+    return out

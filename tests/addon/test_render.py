@@ -255,6 +255,21 @@ def test_failed_render_reports_the_reason(scene):
         bpy.ops.render.render()
 
 
+def test_a_stereo_frames_stats_count_both_views(scene):
+    """A stereo render's stats and summary are the frame's: rays and times of both views (they
+    had described the last eye alone, the same rays as a mono render)."""
+    lit_plane_scene(scene)
+    bpy.ops.render.render()
+    mono = addon.last_render_stats()[bpy.context.view_layer.name]
+    scene.render.use_multiview = True
+    bpy.ops.render.render()
+    stereo = addon.last_render_stats()[bpy.context.view_layer.name]
+    assert mono['views'] == 1 and stereo['views'] == 2
+    assert stereo['rays']['camera'] == 2 * mono['rays']['camera']
+    assert stereo['rays_total'] == sum(stereo['rays'].values())
+    assert stereo['mrays_per_s'] == pytest.approx(stereo['rays_total'] / stereo['trace_seconds'] * 1e-6)
+
+
 def test_render_stats_hold_the_latest_frame_only(scene):
     """addon.last_render_stats() is the latest frame's: a view layer of an earlier render is
     gone, and a frame that failed leaves no stats (a script can tell it failed)."""
