@@ -42,8 +42,9 @@ def _catmull_rom(p0, p1, p2, p3, u):
                   + (3.0 * p1 - p0 - 3.0 * p2 + p3) * u3)
 
 
-def _samples(keys, offsets, steps):
-    """Points along every curve of 2+ keys: (samples (s, 4) = xyz + radius, per-curve counts)."""
+def _samples(keys, offsets, steps, between=False):
+    """Points along every curve of 2+ keys: (samples (s, 4) = xyz + radius, per-curve counts),
+    and with `between` each sample's key k1 (s,) and place u (s,) from it towards k1 + 1."""
     counts = np.diff(offsets)
     curves = np.flatnonzero(counts >= 2)
     first, n = offsets[curves], counts[curves]
@@ -64,7 +65,15 @@ def _samples(keys, offsets, steps):
     seg_rows = (starts[seg_curve] + seg_j * steps)[:, None] + np.arange(steps)[None, :]
     out[seg_rows.reshape(-1)] = pts.reshape(-1, 4)
     out[starts + per_curve - 1] = keys[first + n - 1]
-    return out, per_curve
+    if not between:
+        return out, per_curve
+    k = np.empty(len(out), np.int64)
+    w = np.zeros(len(out))
+    k[seg_rows.reshape(-1)] = np.repeat(k1, steps)
+    w[seg_rows.reshape(-1)] = np.tile(np.arange(steps) / steps, len(k1))
+    last = starts + per_curve - 1
+    k[last], w[last] = first + n - 2, 1.0          # the last key: the end of the last segment
+    return out, per_curve, k, w
 
 
 def _frames(p, counts, sector=0.0):
@@ -108,7 +117,8 @@ def _frames(p, counts, sector=0.0):
     return t, n
 
 
-def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool = False, linear: bool = False):
+def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool = False, linear: bool = False,
+          vertex_keys: bool = False):
     """Tube meshes of the curves (offsets: c + 1 first-point indices, the last = point count),
     Catmull-Rom, or with `linear` straight between the points (POLY curves, as Cycles draws them):
     (vertices float32 (v, 3), triangles int32 (t, 3) wound outward, vertex normals float32
@@ -120,10 +130,11 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
     keys = np.concatenate([positions, np.asarray(radii, np.float64).reshape(-1, 1)], axis=1)
     offsets = np.asarray(offsets, np.int64)
     sides, steps = level_for(len(positions)) if level is None else level
-    samples, counts = _samples(keys, offsets, 1 if linear else steps)   # 1 step: the points
+    samples, counts, key, u = _samples(keys, offsets, 1 if linear else steps, between=True)   # 1 step: the points
     if not len(counts):
         empty = (np.empty((0, 3), np.float32), np.empty((0, 3), np.int32), np.empty((0, 3), np.float32), 0)
-        return empty + (np.empty(0, np.int64),) if curve_of else empty
+        empty += (np.empty(0, np.int64),) if curve_of else ()
+        return empty + ((np.empty(0, np.int64), np.empty(0)),) if vertex_keys else empty
     p, r = samples[:, :3], np.maximum(samples[:, 3], 0.0)
     t, n = _frames(p, counts, 2.0 * np.pi / sides)
     b = np.cross(t, n)
@@ -147,8 +158,10 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
     triangles = quads[keep].reshape(-1, 3)
     out = (vertices.astype(np.float32), triangles.astype(np.int32), radial.reshape(-1, 3).astype(np.float32),
            len(counts))
-    if not curve_of:
-        return out
-    curves = np.flatnonzero(np.diff(offsets) >= 2)            # the curves _samples kept, in order
-    ring_curve = curves[np.repeat(np.arange(len(counts)), counts)[ring]]
-    return out + (np.broadcast_to(ring_curve[:, None, None], quads.shape[:3])[keep].reshape(-1),)
+    if curve_of:
+        curves = np.flatnonzero(np.diff(offsets) >= 2)            # the curves _samples kept, in order
+        ring_curve = curves[np.repeat(np.arange(len(counts)), counts)[ring]]
+        out += (np.broadcast_to(ring_curve[:, None, None], quads.shape[:3])[keep].reshape(-1),)
+    if vertex_keys:     # each vertex's key k (v,) and place u (v,) towards key k + 1 (attributes)
+        out += ((np.repeat(key, sides), np.repeat(u, sides)),)
+    return out

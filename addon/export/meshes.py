@@ -88,10 +88,11 @@ class MeshArrays:
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
                  'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes', '_coords',
-                 'undeformed', 'rebuilt', 'texspace')
+                 'undeformed', 'rebuilt', 'texspace', 'strand')
 
     def __init__(self, me, want_uvs):
         self.texspace = None         # (location, size) where not the mesh's own (from_arrays)
+        self.strand = None           # a tessellation's attributes (from_arrays)
         nv = len(me.vertices)
         self.positions = np.empty(nv * 3, np.float32)
         me.attributes['position'].data.foreach_get('vector', self.positions)
@@ -147,12 +148,15 @@ class MeshArrays:
         self.corner_uvs = self.uv_layers.get(self.active_uv)
 
     @classmethod
-    def from_arrays(cls, positions, triangles, vertex_normals, generated_is_object=False):
+    def from_arrays(cls, positions, triangles, vertex_normals, generated_is_object=False, strand=None):
         """A mesh made here (tessellated points or curves): smooth per-vertex normals, one
         material slot, no UV map; Generated coordinates its bounds mapped to 0..1, or with
-        generated_is_object its object-space positions."""
+        generated_is_object its object-space positions. strand: (the source's attributes
+        {name: (domain, (n, 4) rows)}, its render colour attribute's name or None, a function
+        giving per-vertex rows of a domain's rows), so Attribute nodes read them."""
         a = cls.__new__(cls)
         a.texspace = (np.full(3, 0.5), np.full(3, 0.5)) if generated_is_object else None
+        a.strand = strand
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
         a.corners, a.slot, a.corner_uvs, a.uv_layers, a.active_uv, a.domain = None, None, None, {}, '', 'POINT'
@@ -236,7 +240,14 @@ class MeshArrays:
             return self._attributes[name]
         out = None
         me = self.mesh
-        if me is not None:
+        if me is None and self.strand is not None:
+            attributes, render_color, per_vertex = self.strand
+            found = attributes.get(name if name else render_color)
+            if found is not None:
+                rows = per_vertex(*found)
+                out = None if rows is None else self.per_corner(rows, self.triangles,
+                                                                np.empty((len(self.triangles), 3, 4), np.float32))
+        elif me is not None:
             if not name:
                 colors = me.color_attributes
                 i = colors.render_color_index
@@ -249,25 +260,8 @@ class MeshArrays:
         return out
 
     def _attribute_corners(self, me, attr):
-        n = len(attr.data)
-        kind = attr.data_type
-        if kind in ('FLOAT_COLOR', 'BYTE_COLOR'):
-            v = np.empty(n * 4, np.float32)
-            attr.data.foreach_get('color', v)
-            rows = v.reshape(n, 4)
-        elif kind in ('FLOAT_VECTOR', 'FLOAT2'):
-            width = 3 if kind == 'FLOAT_VECTOR' else 2
-            v = np.empty(n * width, np.float32)
-            attr.data.foreach_get('vector', v)
-            rows = np.zeros((n, 4), np.float32)
-            rows[:, :width] = v.reshape(n, width)
-            rows[:, 3] = 1.0
-        elif kind in ('FLOAT', 'INT', 'INT8', 'BOOLEAN'):
-            v = np.empty(n, np.float32 if kind == 'FLOAT' else (bool if kind == 'BOOLEAN' else np.int32))
-            attr.data.foreach_get('value', v)
-            rows = np.ones((n, 4), np.float32)
-            rows[:, :3] = v.astype(np.float32)[:, None]
-        else:
+        rows = attribute_rows(attr)
+        if rows is None:
             return None
         nt = len(self.triangles)
         if attr.domain == 'POINT':
@@ -308,3 +302,30 @@ class MeshArrays:
         else:   # indices come from Blender's validated mesh; mode='clip' avoids take's buffered copy
             np.take(rows, index, axis=rows.ndim - 2, out=out, mode='clip')
         return out
+
+
+def attribute_rows(attr):
+    """(n, 4) float32 of a Blender attribute as Cycles' Attribute nodes read it: a colour as
+    stored (RGBA; bytes in linear), a vector or 2D vector (x, y, z, 1) / (x, y, 0, 1), a number
+    (v, v, v, 1); None for other types."""
+    n = len(attr.data)
+    kind = attr.data_type
+    if kind in ('FLOAT_COLOR', 'BYTE_COLOR'):
+        v = np.empty(n * 4, np.float32)
+        attr.data.foreach_get('color', v)
+        return v.reshape(n, 4)
+    if kind in ('FLOAT_VECTOR', 'FLOAT2'):
+        width = 3 if kind == 'FLOAT_VECTOR' else 2
+        v = np.empty(n * width, np.float32)
+        attr.data.foreach_get('vector', v)
+        rows = np.zeros((n, 4), np.float32)
+        rows[:, :width] = v.reshape(n, width)
+        rows[:, 3] = 1.0
+        return rows
+    if kind in ('FLOAT', 'INT', 'INT8', 'BOOLEAN'):
+        v = np.empty(n, np.float32 if kind == 'FLOAT' else (bool if kind == 'BOOLEAN' else np.int32))
+        attr.data.foreach_get('value', v)
+        rows = np.ones((n, 4), np.float32)
+        rows[:, :3] = v.astype(np.float32)[:, None]
+        return rows
+    return None

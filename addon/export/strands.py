@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import hair, pointcloud
 from .errors import ExportCancelled
-from .meshes import MeshArrays
+from .meshes import MeshArrays, attribute_rows
 
 def hair_systems(ob):
     """ob's particle systems whose hair Cycles renders as strands (Hair, Render As Path)."""
@@ -102,11 +102,32 @@ class StrandSource:
     once the frame's instances are counted (tessellate): the level follows the points the frame
     holds, instances included, so a scatter of hair tufts does not multiply the finest level
     (400 tufts of 30 curves had made 10.75M triangles and 3.4 GB; Cycles 282 MB)."""
-    __slots__ = ('kind', 'name', 'positions', 'radii', 'offsets', 'linear')
+    __slots__ = ('kind', 'name', 'positions', 'radii', 'offsets', 'linear', 'attributes', 'render_color')
 
-    def __init__(self, kind, name, positions, radii, offsets=None, linear=False):
+    def __init__(self, kind, name, positions, radii, offsets=None, linear=False, attributes=None,
+                 render_color=None):
         self.kind, self.name, self.positions, self.radii = kind, name, positions, radii
         self.offsets, self.linear = offsets, linear
+        # {name: (domain 'POINT' or 'CURVE', (n, 4) float32)} of what Attribute nodes may read
+        self.attributes, self.render_color = attributes or {}, render_color
+
+
+def _attributes(data):
+    """The point and curve attributes of a point cloud or Curves as Attribute nodes read them
+    (meshes.attribute_rows), and the render colour attribute's name (None: none)."""
+    out = {}
+    for attr in data.attributes:
+        if attr.name.startswith('.') or attr.domain not in ('POINT', 'CURVE') or attr.name == 'position':
+            continue
+        rows = attribute_rows(attr)
+        if rows is not None:
+            out[attr.name] = (attr.domain, rows)
+    colors = getattr(data, 'color_attributes', None)
+    render = None
+    if colors is not None:
+        i = getattr(colors, 'render_color_index', 0)
+        render = colors[i].name if 0 <= i < len(colors) else None
+    return out, render
 
 
 def read_strands(ob, notes):
@@ -119,15 +140,17 @@ def read_strands(ob, notes):
     if positions is None:
         return None
     radii = point_attribute(data, 'radius', 'FLOAT', 1)
+    attributes, render_color = _attributes(data)
     if ob.type == 'POINTCLOUD':
         radii = np.full(len(positions), pointcloud.DEFAULT_RADIUS) if radii is None else radii
-        return StrandSource('POINTCLOUD', ob.name, positions, radii)
+        return StrandSource('POINTCLOUD', ob.name, positions, radii, attributes=attributes,
+                            render_color=render_color)
     radii = np.full(len(positions), hair.DEFAULT_RADIUS) if radii is None else radii
     offsets = np.empty(len(data.curves) + 1, np.int32)
     data.curve_offset_data.foreach_get('value', offsets)
     types = data.attributes.get('curve_type')        # absent: all Catmull-Rom
     linear = types is not None and _all_poly(types, len(data.curves))
-    return StrandSource('CURVES', ob.name, positions, radii, offsets, linear)
+    return StrandSource('CURVES', ob.name, positions, radii, offsets, linear, attributes, render_color)
 
 
 def tessellate(src, frame_points, notes):
@@ -138,12 +161,27 @@ def tessellate(src, frame_points, notes):
     if src.kind == 'POINTCLOUD':
         level = pointcloud.level_for(frame_points)
         v, t, n, kept = pointcloud.spheres(src.positions, src.radii, level)
+        # each sphere vertex's point (spheres keeps the points of radius > 0, in order)
+        point = np.repeat(np.flatnonzero(np.asarray(src.radii) > 0), len(pointcloud.unit_sphere(level)[0]))
+
+        def per_vertex(domain, rows):
+            return rows[point] if domain == 'POINT' else None
         what = f"point clouds rendered as spheres of {len(pointcloud.unit_sphere(level)[1])} triangles"
         if kept < len(src.positions):
             notes.ignore("points of radius 0 or less are not rendered", src.name)
     else:
         sides, steps = hair.level_for(frame_points)
-        v, t, n, kept = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps), linear=src.linear)
+        v, t, n, kept, (key, u) = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps),
+                                              linear=src.linear, vertex_keys=True)
+        curve = np.searchsorted(src.offsets, key, side='right') - 1
+        u32 = u.astype(np.float32)[:, None]
+
+        def per_vertex(domain, rows):
+            # a point attribute between a segment's two keys linearly (Cycles' curve key
+            # attributes), a curve attribute the curve's
+            if domain == 'CURVE':
+                return rows[curve]
+            return rows[key] * (1.0 - u32) + rows[np.minimum(key + 1, len(rows) - 1)] * u32
         what = (f"hair curves rendered as tubes of {sides} sides, "
                 + ("straight between their points (Poly)" if src.linear else f"{steps} step(s) a segment")
                 + ", open ends")
@@ -151,7 +189,10 @@ def tessellate(src, frame_points, notes):
             notes.ignore("curves of fewer than 2 points are not rendered", src.name)
     notes.ignore(what, src.name)
     # Cycles' Generated coordinates of points and curves are their object-space positions
-    return MeshArrays.from_arrays(v, t, n, generated_is_object=True) if len(t) else None
+    if not len(t):
+        return None
+    strand = (src.attributes, src.render_color, per_vertex) if src.attributes else None
+    return MeshArrays.from_arrays(v, t, n, generated_is_object=True, strand=strand)
 
 
 def _all_poly(types, curves):

@@ -2478,6 +2478,49 @@ def test_a_tint_of_byte_corner_colours_is_applied_per_point(scene, exported):
     assert m.color_attribute == 'Col' and m.approximated == '', m.approximated
 
 
+def test_curves_attributes_are_read_per_point_and_per_curve(scene, exported):
+    """An Attribute node on a Curves object reads its point attributes (between a segment's
+    keys linearly, as Cycles' curve keys) and its curve attributes (the curve's); they had read
+    0 under a message saying Cycles does the same (Cycles: red and green halves)."""
+    setup(scene)
+    z = np.linspace(0, 1, 3)[:, None] * (0, 0, 1)
+    mats = [_attribute_material(f"M{n}", 'ShaderNodeAttribute', attribute=n) for n in ("PCol", "CCol")]
+    fur = scenes.hair_curves("Fur", [z, z + (1, 0, 0)], radius=0.05, material=mats[0])
+    pattr = fur.data.attributes.new('PCol', 'FLOAT_COLOR', 'POINT')
+    pvals = np.array([[1, 0, 0, 1], [0, 1, 0, 1], [0, 0, 1, 1]] * 2, np.float32)
+    pattr.data.foreach_set('color', pvals.ravel())
+    tuft = scenes.hair_curves("Tuft", [z + (3, 0, 0), z + (4, 0, 0)], radius=0.05, material=mats[1])
+    cattr = tuft.data.attributes.new('CCol', 'FLOAT_COLOR', 'CURVE')
+    cattr.data.foreach_set('color', np.array([[1, 0, 0, 1], [0, 1, 0, 1]], np.float32).ravel())
+    data = exported()
+    g = data.geometry
+    assert not any("no attribute" in t for _, t in data.messages)
+    P = g.vertices[g.triangles]                       # (nt, 3, 3) corners
+    fur_t = of_object(data, "Fur")
+    c, p = g.colors[fur_t][..., :3].reshape(-1, 3), P[fur_t].reshape(-1, 3)
+    height = p[:, 2]
+    # red at the root, green at the middle key, blue at the tip; in between the blend
+    want = np.where(height[:, None] <= 0.5,
+                    np.outer(1 - 2 * height, [1, 0, 0]) + np.outer(2 * height, [0, 1, 0]),
+                    np.outer(2 - 2 * height, [0, 1, 0]) + np.outer(2 * height - 1, [0, 0, 1]))
+    assert np.abs(c - want).max() < 0.35       # Catmull-Rom samples sit near, not on, the keys' heights
+    assert np.allclose(c[height < 0.01], [1, 0, 0], atol=1e-5) and np.allclose(c[height > 0.99], [0, 0, 1], atol=1e-5)
+    tuft_t = of_object(data, "Tuft")
+    x = P[tuft_t][..., 0].mean(axis=1)
+    assert np.allclose(g.colors[tuft_t][x < 3.5][..., :3], [1, 0, 0]) and np.allclose(g.colors[tuft_t][x > 3.5][..., :3], [0, 1, 0])
+    # a point cloud (Mesh to Points carries the mesh's point attribute): each sphere its point's
+    dots = scenes.point_cloud("Dots", np.array([[0, 5, 0], [2, 5, 0]]), radius=0.1,
+                              material=_attribute_material("MDots", 'ShaderNodeAttribute', attribute="DCol"))
+    dattr = dots.data.attributes.new('DCol', 'FLOAT_COLOR', 'POINT')
+    dattr.data.foreach_set('color', np.array([[0.2, 0.4, 0.6, 1], [0.9, 0.1, 0.3, 1]], np.float32).ravel())
+    data = exported()
+    g = data.geometry
+    sel = np.isin(g.material, [i for i, m in enumerate(data.materials) if m.name == "MDots"])
+    x = g.vertices[g.triangles[sel]][..., 0].mean(axis=1)
+    assert sel.sum() > 0 and not any("no attribute" in t for _, t in data.messages)
+    assert np.allclose(g.colors[sel][x < 1][..., :3], [0.2, 0.4, 0.6]) and np.allclose(g.colors[sel][x > 1][..., :3], [0.9, 0.1, 0.3])
+
+
 def test_colour_attributes_per_corner(scene, exported):
     """A Color Attribute (or Attribute) node into the diffuse colour: the material is marked
     with the attribute, Geometry.colors holds w x the attribute + k per triangle corner (point,
