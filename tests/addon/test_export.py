@@ -2672,24 +2672,28 @@ def test_object_info_indices_per_object(scene, exported):
         assert np.allclose(data.geometry.colors[of_object(data, f"P{index}")], 0.1 * index + 5.0), index
 
 
+def _object_value_material(name, output, attribute=None):
+    """A diffuse material coloured by an Object Info output, or (output None) by an Attribute
+    node of type Object reading `attribute`."""
+    mat, nt, out = _shader_material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    if output:
+        src = nt.nodes.new('ShaderNodeObjectInfo').outputs[output]
+    else:
+        attr = nt.nodes.new('ShaderNodeAttribute')
+        attr.attribute_type, attr.attribute_name = 'OBJECT', attribute
+        src = attr.outputs['Color']
+    nt.links.new(src, d.inputs['Color'])
+    return mat
+
+
 def test_object_info_reads_the_rendered_frame_in_an_animation_render(scene, exported, tmp_path):
     """An animation render (Ctrl-F12, `blender -a`, `-f N`) does not write animated values back
     to the original objects: Object Info's Color and an Object attribute are read from the
     depsgraph's evaluated object, at the frame rendered (they stayed at the file's frame)."""
     setup(scene)
-    made = []
-    for name, output in (("Info", 'Color'), ("Attr", None)):
-        mat, nt, out = _shader_material(name)
-        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-        nt.links.new(d.outputs[0], out.inputs['Surface'])
-        if output:
-            src = nt.nodes.new('ShaderNodeObjectInfo').outputs[output]
-        else:
-            attr = nt.nodes.new('ShaderNodeAttribute')
-            attr.attribute_type, attr.attribute_name = 'OBJECT', 'tint'
-            src = attr.outputs['Color']
-        nt.links.new(src, d.inputs['Color'])
-        made.append(mat)
+    made = [_object_value_material("Info", 'Color'), _object_value_material("Attr", None, 'tint')]
     info = scenes.plane("Info", materials=(made[0],))
     attr = scenes.plane("Attr", location=(3, 0, 0), materials=(made[1],))
     for frame, rgb in ((1, (0.1, 0.8, 0.1)), (4, (0.9, 0.1, 0.9))):
@@ -2711,19 +2715,8 @@ def test_instances_read_their_instancers_object_colour(scene, exported):
     Cycles reads it there): measured in Cycles, a red cube under a blue instancer renders
     blue (0.924 blue; DACRT had rendered it red). Object Index stays the object's own."""
     setup(scene)
-    made = []
-    for name, output in (("InfoColor", 'Color'), ("InfoAlpha", 'Alpha'), ("AttrColor", None)):
-        mat, nt, out = _shader_material(name)
-        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-        nt.links.new(d.outputs[0], out.inputs['Surface'])
-        if output:
-            src = nt.nodes.new('ShaderNodeObjectInfo').outputs[output]
-        else:
-            attr = nt.nodes.new('ShaderNodeAttribute')
-            attr.attribute_type, attr.attribute_name = 'OBJECT', 'color'
-            src = attr.outputs['Color']
-        nt.links.new(src, d.inputs['Color'])
-        made.append(mat)
+    made = [_object_value_material("InfoColor", 'Color'), _object_value_material("InfoAlpha", 'Alpha'),
+            _object_value_material("AttrColor", None, 'color')]
     props = bpy.data.collections.new("Props")            # instanced only
     for i, mat in enumerate(made):
         ob = scenes.plane(f"Src{i}", location=(3 * i, 0, 0), materials=(mat,))
