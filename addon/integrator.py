@@ -255,7 +255,8 @@ class Integrator:
         vis = self.tri.visibility
         glass = (self.mats.refraction.max(axis=0) > 0)[self.tri.material] & self._tri_transparent
         self._tri_transmit = ((vis & NO_TRANSMISSION) == 0) & ((vis & ~np.uint8(NO_TRANSMISSION)) != 0)
-        self._transmit_split = bool(glass.any()) and bool(
+        self._any_glass = bool(glass.any())
+        self._transmit_split = self._any_glass and bool(
             ((vis & HOLDOUT) != 0).any() or (self._tri_transmit != ((vis & VIS_CAMERA) != 0)).any()
             or (self._tri_transmit != ((vis & VIS_DIFFUSE) != 0)).any())
         # per-triangle albedo (before textures), so a bounce gathers it once for the paths that go on
@@ -370,7 +371,7 @@ class Integrator:
         self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None,
                                use_tree=bool(getattr(self.settings, 'use_light_tree', True)), light_sets=sets,
                                tri_object=ob if sd.geometry.instance is None else sd.geometry.instance,
-                               unsampled_emitters=bool((hittable & ~sampled).any()))
+                               unsampled_emitters=bool((hittable & ~sampled).any()), glass=self._any_glass)
         self._camera_env = camera_env if (camera_env is not None and wv & VIS_CAMERA and not self.transparent
                                           and not camera_env.dark) else None
         if self.lights.skipped_lamps:
@@ -387,8 +388,17 @@ class Integrator:
         every = self._record_lamps = diffuse + self.lights.camera_lamps
         self._lamp_records = lamp_records(every)
         self._nee_records = np.ascontiguousarray(self._lamp_records[:nl])
+        # Camera rays past glass are Cycles' transmission rays: they see lamps by their
+        # Transmission visibility (a lamp hidden from the camera seen through a pane, one hidden
+        # from transmission not). The camera lists hold lamps seen either way; _linked masks
+        # each kind out of the other's rays
+        self._record_camera = np.array([l.seen_by_camera for l in every], bool)
+        self._record_transmit = np.array([l.seen_by_transmission for l in every], bool)
+        self._lamps_transmit_apart = self._any_glass and bool((self._record_camera != self._record_transmit).any())
+        self._transmit_split = self._transmit_split or self._lamps_transmit_apart
         # camera rays' lamps: (record index, is the world), in record order
-        seen = [(j, isinstance(l, BackgroundLight)) for j, l in enumerate(every) if l.seen_by_camera]
+        seen = [(j, isinstance(l, BackgroundLight)) for j, l in enumerate(every)
+                if l.seen_by_camera or (self._lamps_transmit_apart and l.seen_by_transmission)]
         pick = lambda keep: np.array([j for j, world in seen if keep(world)], np.int32)
         self._camera_lamps = pick(lambda world: not (world and self.transparent))   # transparent film: no world
         # with light passes, camera rays' lamps go to Emission and their world to Environment,
@@ -1338,7 +1348,8 @@ class Integrator:
                          None if path.pdf is None else np.take(path.pdf, rows),
                          None if path.prim is None else np.take(path.prim, rows),
                          N=None if path.N is None else np.ascontiguousarray(np.take(path.N, rows, axis=1)),
-                         refracted=None if path.refracted is None else np.take(path.refracted, rows))
+                         refracted=None if path.refracted is None else np.take(path.refracted, rows),
+                         transmit=None if path.transmit is None else np.take(path.transmit, rows))
             self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
             j += 1
@@ -1828,12 +1839,30 @@ class Integrator:
         """(lamp records, throughput) pairs to gather with: per light set of the lamps, the
         throughput 0 on BSDF rays leaving objects that set does not light (light linking;
         camera rays see every lamp)."""
-        if self._link is None or camera or path.prim is None:
+        if camera:
+            return self._seen_apart(lamps, path, thr)
+        if self._link is None or path.prim is None:
             return [(lamps, thr)]
         recv = self._receivers(path.prim)
         sets = self._record_set[lamps]
         return [(lamps[sets == s], thr if s == 0 else thr * reached(recv, s).astype(F32))
                 for s in np.unique(sets)]
+
+    def _seen_apart(self, lamps, path, thr):
+        """Camera rays' (lamp records, throughput) pairs: lamps seen by camera and transmission
+        rays alike with thr; those only one kind sees with thr 0 on the other's rays (the paths
+        that passed glass, path.transmit)."""
+        if not self._lamps_transmit_apart:
+            return [(lamps, thr)]
+        cam, trans = self._record_camera[lamps], self._record_transmit[lamps]
+        t = np.zeros(len(path.pid), bool) if path.transmit is None else path.transmit
+        base = np.ones((3, len(t)), F32) if thr is None else thr
+        out = [(lamps[cam & trans], thr)]
+        if (cam & ~trans).any():
+            out.append((lamps[cam & ~trans], base * (~t).astype(F32)))
+        if (trans & ~cam).any() and t.any():
+            out.append((lamps[trans & ~cam], base * t.astype(F32)))
+        return [(l, w) for l, w in out if len(l)]
 
     # --- next-event estimation --------------------------------------------------------------------
 

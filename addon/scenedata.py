@@ -81,6 +81,7 @@ class Light:
     name: str = ''
     visible_camera: bool = True    # object ray visibility (Cycles: a light seen by camera rays)
     visible_diffuse: bool = True   # object ray visibility (Cycles: BSDF rays collect the light)
+    visible_transmission: bool = True   # object ray visibility (Cycles: rays past glass see it)
     max_bounces: int = 1024        # Cycles' Light > Max Bounces: light sampling skips it deeper
     lightgroup: str = ''           # the light's Light Group (its light also goes to that pass)
 

@@ -76,7 +76,9 @@ def export_light(ob, matrix, messages):
               name=ob.name,
               # object ray visibility (Object > Visibility > Ray Visibility; a new light object
               # has Camera off): camera rays see the lamp, diffuse surfaces receive its light
-              visible_camera=bool(ob.visible_camera), visible_diffuse=bool(ob.visible_diffuse))
+              visible_camera=bool(ob.visible_camera), visible_diffuse=bool(ob.visible_diffuse),
+              # rays past glass (Cycles' transmission rays) see it by this one
+              visible_transmission=bool(getattr(ob, 'visible_transmission', True)))
     if light.type in ('POINT', 'SPOT'):
         kw.update(radius=float(light.shadow_soft_size),
                   soft_falloff=bool(getattr(light, 'use_soft_falloff', True)))

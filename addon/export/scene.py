@@ -235,6 +235,7 @@ class Exporter:
             light.lightgroup = _lightgroup(ob, parent)
         if light is not None and parent is not ob:
             light.visible_camera = light.visible_camera and bool(parent.visible_camera)
+            light.visible_transmission = light.visible_transmission and bool(getattr(parent, 'visible_transmission', True))
             light.visible_diffuse = light.visible_diffuse and bool(parent.visible_diffuse)
         if light is not None and self._collection_flag(parent, 'indirect_only_get'):
             light.visible_camera = False    # as _visibility: Cycles does not show it to the camera

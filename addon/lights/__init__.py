@@ -67,10 +67,11 @@ class LightSet:
 
     def __init__(self, lamps, triangles: EmissiveTriangles | None, num_triangles: int,
                  environment: EnvironmentLight | None = None, use_tree: bool = True, tri_object=None,
-                 unsampled_emitters: bool = False, light_sets=None):
+                 unsampled_emitters: bool = False, light_sets=None, glass: bool = False):
         """light_sets: None, or with light linking (lamp -> its light set, (num_triangles,) the
         light set of each triangle as an emitter): the tree then never picks a light of a set
-        the shading point's object is not lit by."""
+        the shading point's object is not lit by. glass: camera rays may pass glass (then a lamp
+        they see by its Transmission visibility alone is kept)."""
         lit = [l for l in lamps if not l.dark]
         # emissive triangles light sampling never picks (Emission Sampling None): BSDF rays
         # still find them
@@ -85,8 +86,10 @@ class LightSet:
         self.lamps = [l for l in lit if l.visible_diffuse and l.light_sampled]
         # lamps only BSDF (and camera) rays find: never chosen, so a BSDF hit weighs 1
         self.unsampled_lamps = [l for l in lit if l.visible_diffuse and not l.light_sampled]
-        self.camera_lamps = [l for l in lit if not l.visible_diffuse and l.seen_by_camera]
-        self.unseen_lamps = [l.name for l in lit if not l.visible_diffuse and not l.seen_by_camera]
+        # (camera rays past glass see by Transmission visibility: the integrator tells them apart)
+        seen = [l.seen_by_camera or (glass and l.seen_by_transmission) for l in lit]
+        self.camera_lamps = [l for l, c in zip(lit, seen) if not l.visible_diffuse and c]
+        self.unseen_lamps = [l.name for l, c in zip(lit, seen) if not l.visible_diffuse and not c]
         self.triangles = triangles if triangles is not None and len(triangles) else None
         self.num_lamps = len(self.lamps)
         self._num_triangles = num_triangles

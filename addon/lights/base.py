@@ -103,6 +103,7 @@ class Lamp(ABC):
             self.cast_shadow = bool(light.cast_shadow)
             self.visible_camera = bool(getattr(light, 'visible_camera', True))
             self.visible_diffuse = bool(getattr(light, 'visible_diffuse', True))
+            self.visible_transmission = bool(getattr(light, 'visible_transmission', True))
             self.normalize = bool(light.normalize)
             # Cycles' Light > Max Bounces: light sampling skips the light at shading points
             # deeper than this many bounces (light_select_reached_max_bounces)
@@ -112,6 +113,7 @@ class Lamp(ABC):
             self.name = 'World'
             self.color = np.asarray(color, np.float64)
             self.use_mis = self.cast_shadow = self.visible_camera = self.visible_diffuse = True
+            self.visible_transmission = True
             self.normalize = True
             self.max_bounces = MAX_BOUNCES_UNLIMITED
             self.lightgroup = ''            # the integrator gives the world's
@@ -121,6 +123,11 @@ class Lamp(ABC):
         """Camera rays see this light: as Cycles, not a light without MIS, which no ray
         intersects (a point light of MIS off rendered its disc 3.7-4.8x Cycles' image)."""
         return self.visible_camera and self.use_mis and not self.delta
+
+    @property
+    def seen_by_transmission(self) -> bool:
+        """Camera rays that passed glass (Cycles' transmission rays) see this light."""
+        return self.visible_transmission and self.use_mis and not self.delta
 
     @property
     def seen_by_bsdf(self) -> bool:
