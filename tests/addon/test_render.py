@@ -547,16 +547,18 @@ def test_cli_output_names_and_stereo(scene, tmp_path):
     assert bad.returncode != 0 and "could not open" in bad.stderr and "Traceback" not in bad.stderr
 
 
-# The CLI with a Ctrl-C half a second into the render (the engine's render wrapped before the
-# add-on registers it: a signal timed from outside would race the start-up)
+# The CLI with a Ctrl-C right after the render's first pass (the integrator's passes wrapped
+# before the add-on registers: a signal timed from outside would race the start-up)
 _CTRL_C_CLI = """
-import os, signal, sys, threading
-from addon import engine
-render = engine.DACRTRenderEngine.render
-def interrupted_render(self, depsgraph):
-    threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
-    return render(self, depsgraph)
-engine.DACRTRenderEngine.render = interrupted_render
+import os, signal, sys
+from addon import integrator
+passes = integrator.Integrator.passes
+def interrupted_passes(self):
+    for i, progress in enumerate(passes(self)):
+        yield progress
+        if i == 0:      # Ctrl-C once the first pass is done (a timer raced it on a loaded machine)
+            os.kill(os.getpid(), signal.SIGINT)
+integrator.Integrator.passes = interrupted_passes
 from addon.cli import main
 main(sys.argv[1:])
 """
