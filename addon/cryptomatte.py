@@ -163,8 +163,8 @@ def layer_names(scene_data, kind: str) -> list:
     """The names a Cryptomatte kind tells apart, indexed as triangle_ids indexes them: objects,
     materials (index 0, no material: Cycles' default shader) or assets (each object's topmost
     parent, the object itself without one)."""
-    if kind == 'CryptoObject':
-        return _objects(scene_data)
+    if kind == 'CryptoObject':      # one entry per name (an object can have several: its light groups)
+        return list(dict.fromkeys(_objects(scene_data)))
     if kind == 'CryptoMaterial':
         return [DEFAULT_MATERIAL] + [m.name for m in scene_data.materials[1:]]
     return list(dict.fromkeys(_assets(scene_data)))
@@ -173,11 +173,9 @@ def layer_names(scene_data, kind: str) -> list:
 def triangle_ids(scene_data, kind: str) -> np.ndarray:
     """(M,) int64: each triangle's index into layer_names(scene_data, kind)."""
     g = scene_data.geometry
-    if kind == 'CryptoObject':
-        return np.asarray(g.object_index, np.int64)
     if kind == 'CryptoMaterial':
         return np.asarray(g.material, np.int64)
-    assets = _assets(scene_data)
-    where = {name: i for i, name in enumerate(dict.fromkeys(assets))}
-    of_object = np.array([where[a] for a in assets] or [0], np.int64)
+    names = _objects(scene_data) if kind == 'CryptoObject' else _assets(scene_data)
+    where = {name: i for i, name in enumerate(dict.fromkeys(names))}
+    of_object = np.array([where[a] for a in names] or [0], np.int64)
     return np.take(of_object, np.asarray(g.object_index, np.int64))

@@ -97,6 +97,17 @@ def _two_quads(**settings):
                         object_names=['A', 'B'], object_assets=['Rig', 'Rig'])
 
 
+def test_one_object_under_two_entries_is_one_cryptomatte_id():
+    """An object's instances under instancers of two light groups are two object entries of
+    one name: Cryptomatte counts them as the one object (one ID, coverage 1 where both meet)."""
+    scene = _two_quads()
+    scene.object_names = ['A', 'A']
+    img = render(scene).film.cryptomatte_images()["CryptoObject00"]
+    assert cm.layer_names(scene, 'CryptoObject') == ['A']
+    assert np.all(img[:, :7, 0] == cm.ids(["A"])[0]) and np.allclose(img[:, :7, 1], 1.0)
+    assert np.all(img[:, :7, 2:] == 0)
+
+
 def test_cryptomatte_passes_of_two_quads():
     film = render(_two_quads()).film
     img = film.cryptomatte_images()
