@@ -174,7 +174,11 @@ class Exporter:
                 self.skip("hair curves are off in the view layer's filter (Hair)", ob.name)
                 continue
             if ob.type in UNSUPPORTED_TYPES:
-                self.skip(f"{UNSUPPORTED_TYPES[ob.type]} objects are not rendered", ob.name)
+                made = inst.is_instance and inst.parent is not None and inst.parent.name == ob.name
+                # (a Geometry Nodes output of the object itself: its other geometry renders)
+                self.skip(f"{UNSUPPORTED_TYPES[ob.type]} geometry its Geometry Nodes make is not rendered "
+                          "(the rest of the object is)" if made else
+                          f"{UNSUPPORTED_TYPES[ob.type]} objects are not rendered", ob.name)
                 continue
             if ob.type not in SYNCED_TYPES or not inst.show_self:
                 continue

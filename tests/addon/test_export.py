@@ -2328,6 +2328,30 @@ def test_camera_override_renders_through_that_camera(scene):
     assert np.allclose(data.camera.matrix, np.array(other.matrix_world))
 
 
+def test_a_volume_made_by_geometry_nodes_is_reported_as_that(scene, exported):
+    """Geometry Nodes joining an object's mesh with a Mesh to Volume: the mesh renders and the
+    message says the volume part is left out (it had said the object was skipped); a volume
+    object of its own is skipped as such."""
+    setup(scene)
+    ob = scenes.mesh("Cube", [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], [(0, 1, 2, 3)])
+    ng = bpy.data.node_groups.new("Vol", 'GeometryNodeTree')
+    ng.interface.new_socket('Geometry', in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gin, gout = ng.nodes.new('NodeGroupInput'), ng.nodes.new('NodeGroupOutput')
+    to_volume, join = ng.nodes.new('GeometryNodeMeshToVolume'), ng.nodes.new('GeometryNodeJoinGeometry')
+    ng.links.new(gin.outputs[0], to_volume.inputs[0])
+    ng.links.new(gin.outputs[0], join.inputs[0])
+    ng.links.new(to_volume.outputs[0], join.inputs[0])
+    ng.links.new(join.outputs[0], gout.inputs[0])
+    ob.modifiers.new("GN", 'NODES').node_group = ng
+    scenes.link(bpy.data.objects.new("Fog", bpy.data.volumes.new("Fog")))
+    data = exported()
+    text = " | ".join(t for _, t in data.messages)
+    assert of_object(data, "Cube").sum() == 2
+    assert "'Cube': volume geometry its Geometry Nodes make is not rendered (the rest of the object is)" in text
+    assert "'Fog': volume objects are not rendered" in text
+
+
 def test_volume_only_material_has_a_clear_surface(scene, exported):
     """Cycles: a material with only a Volume output (a fog box) has a surface every ray passes
     (SD_HAS_ONLY_VOLUME); with neither output linked it is black. The volume is reported."""
