@@ -159,6 +159,11 @@ class MaterialBuilder:
         build (probe values, or each corner's or object's: _build, evaluated_albedo), as a texture marked with
         the attribute's name (OBJECT_INFO + the output's, for Object Info); None where they
         are not read."""
+        if node.type == 'ATTRIBUTE' and node.attribute_type not in ('OBJECT', 'GEOMETRY'):
+            # (said in every build: the material's final one reads no attributes)
+            reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
+                           f"'{node.attribute_name}' not read")
+            return None
         if self._attribute_pixels is None:
             return None
         self._attributes_read = True
@@ -174,10 +179,6 @@ class MaterialBuilder:
                 name = f"{OBJECT_INFO}{OBJECT_ATTRIBUTE}{node.attribute_name}"
                 return Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
                                 f"object attribute '{node.attribute_name}'", name)
-            if node.attribute_type != 'GEOMETRY':
-                reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
-                               f"'{node.attribute_name}' not read")
-                return None
             name = node.attribute_name
         else:
             name = node.layer_name          # '' the mesh's render colour attribute, as Cycles

@@ -2545,6 +2545,17 @@ def test_curves_attributes_are_read_per_point_and_per_curve(scene, exported):
     assert np.allclose(g.colors[sel][x < 1][..., :3], [0.2, 0.4, 0.6]) and np.allclose(g.colors[sel][x > 1][..., :3], [0.9, 0.1, 0.3])
 
 
+def test_an_instancer_attribute_is_named_in_the_report(scene, exported):
+    """An Attribute node of type Instancer (Geometry Nodes instance attributes, which Python
+    cannot read) is reported by name, not only as a node whose own value is used."""
+    setup(scene)
+    mat = _attribute_material("MInst", 'ShaderNodeAttribute', attribute='col')
+    next(n for n in mat.node_tree.nodes if n.type == 'ATTRIBUTE').attribute_type = 'INSTANCER'
+    scenes.plane("P", materials=(mat,))
+    m = {m.name: m for m in exported().materials}["MInst"]
+    assert "instancer attribute 'col' not read" in m.approximated, m.approximated
+
+
 def test_colour_attributes_per_corner(scene, exported):
     """A Color Attribute (or Attribute) node into the diffuse colour: the material is marked
     with the attribute, Geometry.colors holds w x the attribute + k per triangle corner (point,
