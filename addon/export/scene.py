@@ -322,16 +322,18 @@ class Exporter:
 
 
     def _tessellate_strands(self):
-        """Tessellate the point clouds and Curves read in the walk, at the level for all the
-        points of their kind in the frame, instances included."""
+        """Tessellate the point clouds, Curves and hair particles read in the walk, at the level
+        for all the points of their kind (spheres, tubes) in the frame, instances included."""
         sources = {k: m for k, m in self.meshes.items() if isinstance(m, StrandSource)}
-        frame_points = {}
+        frame_points = {}               # spheres, and tubes (Curves objects and hair particles)
+        budget = lambda src: 'spheres' if src.kind == 'POINTCLOUD' else 'tubes'
         for key, src in sources.items():
-            frame_points[src.kind] = frame_points.get(src.kind, 0) + len(src.positions) * len(self.placements[key])
+            b = budget(src)
+            frame_points[b] = frame_points.get(b, 0) + len(src.positions) * len(self.placements[key])
         for key, src in sources.items():
             if self.check_break():
                 raise ExportCancelled()
-            arrays = tessellate(src, frame_points[src.kind], self)
+            arrays = tessellate(src, frame_points[budget(src)], self)
             if arrays is None:
                 self.meshes[key] = None
                 del self.placements[key]

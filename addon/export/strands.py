@@ -45,8 +45,9 @@ def point_attribute(data, name, data_type, width):
 
 
 def hair_arrays(ob, notes):
-    """ob's hair as object-space tube arrays (with their material slots), or None. notes: the
-    exporter (its skip, ignore and check_break), as for tessellated."""
+    """ob's hair particles as an object-space StrandSource (each curve's material slot in
+    curve_slot; tessellated with the frame's other tubes), or None. notes: the exporter (its
+    skip, ignore and check_break)."""
     systems = hair_systems(ob)
     positions, radii, offsets, slots = [], [], [0], []
     n_slots = max(len(ob.material_slots), 1)
@@ -85,16 +86,9 @@ def hair_arrays(ob, notes):
     if not positions:
         return None
     positions, radii = np.concatenate(positions), np.concatenate(radii)
-    curve_slot = np.concatenate(slots)
-    sides, steps = hair.level_for(len(positions))
-    v, t, n, kept, curve = hair.tubes(positions, radii, np.array(offsets), (sides, steps), curve_of=True)
-    if not len(t):
-        return None
-    arrays = MeshArrays.from_arrays(v, t, n)
-    arrays.slot = curve_slot[curve].astype(np.int32)     # (a tip of radius 0 has fewer triangles)
-    notes.ignore(f"hair particles rendered as tubes of {sides} sides, {steps} step(s) a segment, "
-                 "open ends", ob.name)
-    return arrays
+    src = StrandSource('HAIR', ob.name, positions, radii, np.array(offsets))
+    src.curve_slot = np.concatenate(slots)
+    return src
 
 
 class StrandSource:
@@ -102,7 +96,8 @@ class StrandSource:
     once the frame's instances are counted (tessellate): the level follows the points the frame
     holds, instances included, so a scatter of hair tufts does not multiply the finest level
     (400 tufts of 30 curves had made 10.75M triangles and 3.4 GB; Cycles 282 MB)."""
-    __slots__ = ('kind', 'name', 'positions', 'radii', 'offsets', 'linear', 'attributes', 'render_color')
+    __slots__ = ('kind', 'name', 'positions', 'radii', 'offsets', 'linear', 'attributes', 'render_color',
+                 'curve_slot')
 
     def __init__(self, kind, name, positions, radii, offsets=None, linear=False, attributes=None,
                  render_color=None):
@@ -110,6 +105,7 @@ class StrandSource:
         self.offsets, self.linear = offsets, linear
         # {name: (domain 'POINT' or 'CURVE', (n, 4) float32)} of what Attribute nodes may read
         self.attributes, self.render_color = attributes or {}, render_color
+        self.curve_slot = None      # hair particles: each curve's material slot
 
 
 def _attributes(data):
@@ -158,6 +154,16 @@ def tessellate(src, frame_points, notes):
     space at the level for frame_points (the points of its kind in the frame, instances
     included), or None when nothing in it has a size. Cycles shades all of them with the first
     material slot; the tessellation is reported once per object through notes.ignore."""
+    if src.kind == 'HAIR':          # hair particles: tubes, each curve in its system's slot
+        sides, steps = hair.level_for(frame_points)
+        v, t, n, kept, curve = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps), curve_of=True)
+        notes.ignore(f"hair particles rendered as tubes of {sides} sides, {steps} step(s) a segment, "
+                     "open ends", src.name)
+        if not len(t):
+            return None
+        arrays = MeshArrays.from_arrays(v, t, n)
+        arrays.slot = src.curve_slot[curve].astype(np.int32)     # (a tip of radius 0 has fewer triangles)
+        return arrays
     if src.kind == 'POINTCLOUD':
         level = pointcloud.level_for(frame_points)
         v, t, n, kept = pointcloud.spheres(src.positions, src.radii, level)

@@ -226,6 +226,35 @@ def test_curve_text_and_metaball_become_triangles(scene, exported, monkeypatch):
     assert np.abs(blob.mean(axis=0) - (0, 0, -3)).max() < 0.1
 
 
+def test_instanced_hair_emitters_share_the_frames_tube_budget(scene, exported):
+    """An emitter with hair particles instanced 400 times: its strands are tessellated at the
+    level for all the frame's hair points (each instance had taken the level of one emitter's
+    strands), and each strand keeps its system's material slot."""
+    setup(scene)
+    props = bpy.data.collections.new("Props")
+    emitter = scenes.plane("Emitter", size=1, materials=[scenes.diffuse("Skin", (0.2, 0.2, 0.2)),
+                                                         scenes.diffuse("Fur", (0.9, 0.6, 0.3))])
+    for c in list(emitter.users_collection):
+        c.objects.unlink(emitter)
+    props.objects.link(emitter)
+    emitter.modifiers.new("hair", 'PARTICLE_SYSTEM')
+    hs = emitter.particle_systems[0].settings
+    hs.type, hs.count, hs.hair_length, hs.material = 'HAIR', 10, 0.5, 2
+    for i in range(400):
+        empty = bpy.data.objects.new(f"I{i}", None)
+        empty.instance_type, empty.instance_collection = 'COLLECTION', props
+        empty.location = (i % 20, i // 20, 0)
+        scene.collection.objects.link(empty)
+    data = exported()
+    g = data.geometry
+    names = np.array([m.name for m in data.materials])[g.material]
+    fur = of_object(data, "Emitter") & (names == "Fur")
+    sides, steps = hair.level_for(400 * 10 * 9)
+    assert (sides, steps) != hair.level_for(10 * 9)
+    per_strand = 8 * steps * sides * 2 - sides        # 2^3 + 1 points; the closed tip a cone
+    assert fur.sum() == 400 * 10 * per_strand, (fur.sum(), 400 * 10 * per_strand)
+
+
 def test_particle_instances_and_hair_strands(scene, exported):
     """Object particles are instances; hair particles are strands rendered as tubes, as Cycles
     reads them: co_hair's points (2^render_step + 1 a strand), children instead of the parents
