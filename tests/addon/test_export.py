@@ -226,25 +226,31 @@ def test_curve_text_and_metaball_become_triangles(scene, exported, monkeypatch):
     assert np.abs(blob.mean(axis=0) - (0, 0, -3)).max() < 0.1
 
 
+def _instanced_in_a_grid(scene, ob, count):
+    """Move ob into a collection of its own (not in the scene) and instance that collection
+    `count` times, 20 to a row, 1 apart."""
+    props = bpy.data.collections.new(ob.name + "Set")
+    for c in list(ob.users_collection):
+        c.objects.unlink(ob)
+    props.objects.link(ob)
+    for i in range(count):
+        empty = bpy.data.objects.new(f"{ob.name}{i}", None)
+        empty.instance_type, empty.instance_collection = 'COLLECTION', props
+        empty.location = (i % 20, i // 20, 0)
+        scene.collection.objects.link(empty)
+
+
 def test_instanced_hair_emitters_share_the_frames_tube_budget(scene, exported):
     """An emitter with hair particles instanced 400 times: its strands are tessellated at the
     level for all the frame's hair points (each instance had taken the level of one emitter's
     strands), and each strand keeps its system's material slot."""
     setup(scene)
-    props = bpy.data.collections.new("Props")
     emitter = scenes.plane("Emitter", size=1, materials=[scenes.diffuse("Skin", (0.2, 0.2, 0.2)),
                                                          scenes.diffuse("Fur", (0.9, 0.6, 0.3))])
-    for c in list(emitter.users_collection):
-        c.objects.unlink(emitter)
-    props.objects.link(emitter)
     emitter.modifiers.new("hair", 'PARTICLE_SYSTEM')
     hs = emitter.particle_systems[0].settings
     hs.type, hs.count, hs.hair_length, hs.material = 'HAIR', 10, 0.5, 2
-    for i in range(400):
-        empty = bpy.data.objects.new(f"I{i}", None)
-        empty.instance_type, empty.instance_collection = 'COLLECTION', props
-        empty.location = (i % 20, i // 20, 0)
-        scene.collection.objects.link(empty)
+    _instanced_in_a_grid(scene, emitter, 400)
     data = exported()
     g = data.geometry
     names = np.array([m.name for m in data.materials])[g.material]
@@ -436,16 +442,7 @@ def test_instanced_curves_are_tessellated_for_the_frames_point_count(scene, expo
     3.4 GB, and 1600 failed to allocate; Cycles 282 MB)."""
     setup(scene)
     tuft = [np.array([[0.1 * i, 0, 0.1 * j] for j in range(8)]) for i in range(10)]
-    props = bpy.data.collections.new("Props")
-    ob = scenes.hair_curves("Tuft", tuft, radius=0.01)
-    for c in list(ob.users_collection):
-        c.objects.unlink(ob)
-    props.objects.link(ob)
-    for i in range(300):
-        empty = bpy.data.objects.new(f"I{i}", None)
-        empty.instance_type, empty.instance_collection = 'COLLECTION', props
-        empty.location = (i % 20, i // 20, 0)
-        scene.collection.objects.link(empty)
+    _instanced_in_a_grid(scene, scenes.hair_curves("Tuft", tuft, radius=0.01), 300)
     data = exported()
     sides, steps = hair.level_for(300 * 80)
     assert (sides, steps) != hair.level_for(80)
