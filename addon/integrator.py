@@ -204,8 +204,8 @@ class Integrator:
         # the world's AOVs, where camera rays miss: not where Cycles does not run the background
         # shader for them: a world camera rays cannot see, or transparent film unless the
         # Environment pass is asked for (integrate_background evaluates it for that pass)
-        env_pass = 'Env' in tuple(getattr(s, 'passes', ()))
-        sees_world = (not self.transparent or env_pass) and scene_data.world_visibility & VIS_CAMERA
+        self._env_requested = 'Env' in tuple(getattr(s, 'passes', ()))
+        sees_world = (not self.transparent or self._env_requested) and scene_data.world_visibility & VIS_CAMERA
         world = _aov_tables(aovs, [scene_data.world_aovs if sees_world else None])
         self._world_aovs = {key: table[:, 0] for key, table in world.items() if table.any()}
         self._light_passes = tuple(p for p in LIGHT_PASSES if p in self.film.passes)
@@ -410,9 +410,9 @@ class Integrator:
         # it (Cycles 5.0: sky pixels in the world's group 0.5 with the pass, 0.0 without). Not
         # when the film adds Environment itself (for Denoising Albedo): the world is then not
         # evaluated, and the albedo has none of it (Cycles 0 there)
-        self._env_requested = 'Env' in tuple(getattr(self.settings, 'passes', ()))
         self._world_lamps = pick(lambda world: world)
-        self._camera_world = self._world_lamps if self._env_requested or not self.transparent else pick(lambda world: False)
+        self._camera_world = self._world_lamps if self._env_requested or not self.transparent \
+            else np.zeros(0, np.int32)
         self._camera_emitters = pick(lambda world: not world)
         self._camera_grouped = pick(lambda world: True) if self._env_requested else self._camera_lamps
         self._camera_env_pass = camera_env if (camera_env is not None and wv & VIS_CAMERA
@@ -1837,8 +1837,8 @@ class Integrator:
 
     def _linked(self, lamps, path, thr, camera):
         """(lamp records, throughput) pairs to gather with: per light set of the lamps, the
-        throughput 0 on BSDF rays leaving objects that set does not light (light linking;
-        camera rays see every lamp)."""
+        throughput 0 on BSDF rays leaving objects that set does not light (light linking);
+        camera rays see every lamp by their kind's visibility (_seen_apart)."""
         if camera:
             return self._seen_apart(lamps, path, thr)
         if self._link is None or path.prim is None:

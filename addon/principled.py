@@ -273,6 +273,15 @@ def layer_steps(node, reasons) -> list:
     return [step] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse), step]
 
 
+def constant_alpha(socket, reasons) -> float:
+    """A Principled BSDF's Alpha as a constant in [0, 1] (a non-finite value: 1), with a
+    reason where nodes drive it (their own value used)."""
+    a, ok = constant_value(socket)
+    if not ok:
+        reasons.append("Principled alpha driven by nodes; its own value used")
+    return min(max(float(a), 0.0), 1.0) if np.isfinite(a) else 1.0
+
+
 def emission_dim(node):
     """(3,) what the sheen and coat let through of the Principled's emission: Cycles adds the
     emission under them (svm/closure.h, 'attenuated by sheen and coat'), dimmed and tinted as

@@ -213,10 +213,7 @@ def _principled_emission(node, reasons):
         reasons.append("Principled emission colour driven by nodes; its own value used")
     strength = _light_strength(strength_socket, reasons)
     alpha_socket = node.inputs.get('Alpha')   # (`in` on an evaluated tree's inputs: False)
-    alpha, ok = (1.0, True) if alpha_socket is None else constant_value(alpha_socket)
-    if not ok:
-        reasons.append("Principled alpha driven by nodes; its own value used")
-    alpha = min(max(float(alpha), 0.0), 1.0) if np.isfinite(alpha) else 1.0
+    alpha = 1.0 if alpha_socket is None else principled.constant_alpha(alpha_socket, reasons)
     return np.array(color[:3], np.float64) * strength * alpha * principled.emission_dim(node)
 
 

@@ -526,10 +526,7 @@ class MaterialBuilder:
         if opacity is not None:
             c.opacity, c.transparent, c.glass = opacity, np.ones(3), np.zeros(3)
             return c
-        a, ok = constant_value(alpha)
-        if not ok:
-            reasons.append("Principled alpha driven by nodes; its own value used")
-        a = min(max(float(a), 0.0), 1.0) if np.isfinite(a) else 1.0
+        a = principled.constant_alpha(alpha, reasons)
         if a < 1.0:
             c = c.scaled(a)
             c.transparent = c.transparent + (1.0 - a)

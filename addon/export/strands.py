@@ -152,18 +152,9 @@ def read_strands(ob, notes):
 def tessellate(src, frame_points, notes):
     """A StrandSource's spheres or tubes (pointcloud.py, hair.py) as mesh arrays in object
     space at the level for frame_points (the points of its kind in the frame, instances
-    included), or None when nothing in it has a size. Cycles shades all of them with the first
-    material slot; the tessellation is reported once per object through notes.ignore."""
-    if src.kind == 'HAIR':          # hair particles: tubes, each curve in its system's slot
-        sides, steps = hair.level_for(frame_points)
-        v, t, n, kept, curve = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps), curve_of=True)
-        notes.ignore(f"hair particles rendered as tubes of {sides} sides, {steps} step(s) a segment, "
-                     "open ends", src.name)
-        if not len(t):
-            return None
-        arrays = MeshArrays.from_arrays(v, t, n)
-        arrays.slot = src.curve_slot[curve].astype(np.int32)     # (a tip of radius 0 has fewer triangles)
-        return arrays
+    included), or None when nothing in it has a size. Cycles shades point clouds and Curves
+    with the first material slot, hair particles with their systems'; the tessellation is
+    reported once per object through notes.ignore."""
     if src.kind == 'POINTCLOUD':
         level = pointcloud.level_for(frame_points)
         v, t, n, kept = pointcloud.spheres(src.positions, src.radii, level)
@@ -175,10 +166,10 @@ def tessellate(src, frame_points, notes):
         what = f"point clouds rendered as spheres of {len(pointcloud.unit_sphere(level)[1])} triangles"
         if kept < len(src.positions):
             notes.ignore("points of radius 0 or less are not rendered", src.name)
-    else:
+    else:       # Curves objects and hair particles
         sides, steps = hair.level_for(frame_points)
-        v, t, n, kept, (key, u) = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps),
-                                              linear=src.linear, vertex_keys=True)
+        v, t, n, kept, tri_curve, (key, u) = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps),
+                                                         curve_of=True, linear=src.linear, vertex_keys=True)
         curve = np.searchsorted(src.offsets, key, side='right') - 1
         u32 = u.astype(np.float32)[:, None]
 
@@ -188,15 +179,19 @@ def tessellate(src, frame_points, notes):
             if domain == 'CURVE':
                 return rows[curve]
             return rows[key] * (1.0 - u32) + rows[np.minimum(key + 1, len(rows) - 1)] * u32
-        what = (f"hair curves rendered as tubes of {sides} sides, "
+        what = (f"hair {'particles' if src.kind == 'HAIR' else 'curves'} rendered as tubes of {sides} sides, "
                 + ("straight between their points (Poly)" if src.linear else f"{steps} step(s) a segment")
                 + ", open ends")
         if kept < len(src.offsets) - 1:
             notes.ignore("curves of fewer than 2 points are not rendered", src.name)
     notes.ignore(what, src.name)
-    # Cycles' Generated coordinates of points and curves are their object-space positions
     if not len(t):
         return None
+    if src.kind == 'HAIR':      # Generated coordinates over the strands' bounds; each curve's slot
+        arrays = MeshArrays.from_arrays(v, t, n)
+        arrays.slot = src.curve_slot[tri_curve].astype(np.int32)     # (a tip of radius 0 has fewer triangles)
+        return arrays
+    # Cycles' Generated coordinates of points and curves are their object-space positions
     strand = (src.attributes, src.render_color, per_vertex) if src.attributes else None
     return MeshArrays.from_arrays(v, t, n, generated_is_object=True, strand=strand)
 
