@@ -373,8 +373,8 @@ def cmd_test(args: List[str]) -> int:
     # A whole tier runs on every core (pytest-xdist, one worker process per core; work is
     # stolen between them, so a long parity file does not hold one worker): most tests are
     # single-threaded Python and bpy. Named tests, or a -n of the caller's, run as asked.
-    workers = [] if named or sanitize or any(a == "-n" or a.startswith(("-n", "--numprocesses"))
-                                             for a in rest) else ["-n", "auto", "--dist", "worksteal"]
+    workers = [] if named or sanitize or any(a.startswith(("-n", "--numprocesses")) for a in rest) \
+        else ["-n", "auto", "--dist", "worksteal"]
     # Stress tests are deselected by tests/conftest.py unless --stress is given.
     cmd = [str(VPY), "-m", "pytest", f"--rootdir={ROOT}", *(["--stress"] if stress else []),
            *workers, *paths, *rest]

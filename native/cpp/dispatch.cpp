@@ -194,7 +194,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
                                                 : std::min(size_t(T), (m + min_chunk - 1) / min_chunk);
             return std::max<size_t>(1, c);
         };
-        const size_t chunk = (n + chunks_of(n) - 1) / chunks_of(n);
+        const size_t whole = chunks_of(n), chunk = (n + whole - 1) / whole;
         // The origin groups and, for each, the number of the chunks before its first (a chunk's
         // group found by a scan: groups are few, chunks may be one per ray).
         const std::vector<Span> groups = origin_groups(ts, rays, n, job.batch.origin_abs_max);

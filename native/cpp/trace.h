@@ -83,15 +83,19 @@ struct Tracer {
         const float pad = 0.0f;
 #endif
         for (int a = 0; a < 3; ++a) { lo[a] = nb.lo[a] - pad; hi[a] = nb.hi[a] + pad; }
-        if (n >= kSampledRays && !is_leaf(n, nt) &&
-            (filter_kind == kFast ? most_inside<kFast>(rays, n, lo, hi)
-                                  : filter_kind == kOdd ? most_inside<kOdd>(rays, n, lo, hi) : most_inside<kPrecise>(rays, n, lo, hi))) {
+        return filter_kind == kFast ? filter_box<kFast>(rays, n, nt, lo, hi)
+               : filter_kind == kOdd ? filter_box<kOdd>(rays, n, nt, lo, hi)
+                                     : filter_box<kPrecise>(rays, n, nt, lo, hi);
+    }
+
+    // filter() with the box test of FilterKind Kind (filter.h).
+    template <int Kind>
+    size_t filter_box(Ray* rays, size_t n, size_t nt, const float lo[3], const float hi[3]) {
+        if (n >= kSampledRays && !is_leaf(n, nt) && most_inside<Kind>(rays, n, lo, hi)) {
             ++st.filter_skips;
             return n;
         }
-        const size_t na = filter_kind == kFast ? filter_rays<W, kFast>(rays, n, lo, hi, st)
-                          : filter_kind == kOdd ? filter_rays<W, kOdd>(rays, n, lo, hi, st)
-                                                : filter_rays<W, kPrecise>(rays, n, lo, hi, st);
+        const size_t na = filter_rays<W, Kind>(rays, n, lo, hi, st);
         st.box_hits += na;
         return na;
     }
