@@ -88,9 +88,11 @@ def _burn(t, c1, c2):
 
 
 def _mix_hsv(blend, t, c1, c2):
-    c1, c2 = np.broadcast_arrays(np.asarray(c1, np.float64), np.asarray(c2, np.float64))
+    # broadcast against the factor too: constant colours under a per-texel factor (a mask)
     t = np.asarray(t, np.float64)
-    tt = t[..., 0] if t.ndim else t        # the factor against one HSV component
+    c1, c2, tb = np.broadcast_arrays(np.asarray(c1, np.float64), np.asarray(c2, np.float64),
+                                     t if t.ndim else t[None])
+    tt = tb[..., 0]                        # the factor against one HSV component
     h1, h2 = rgb_to_hsv(c1), rgb_to_hsv(c2)
     hsv = h1.copy()
     if blend == 'VALUE':
@@ -196,7 +198,10 @@ def brightness_contrast(c, bright, contrast):
 
 
 def hue_saturation(c, hue, sat, val, fac):
-    """Hue/Saturation/Value node (Cycles' svm_node_hsv)."""
+    """Hue/Saturation/Value node (Cycles' svm_node_hsv). hue, sat, val: floats or per texel
+    (...,), against which a constant colour is broadcast."""
+    c = np.asarray(c, np.float64)
+    c = np.broadcast_to(c, np.broadcast_shapes(c.shape[:-1], np.shape(hue), np.shape(sat), np.shape(val)) + (3,))
     hsv = rgb_to_hsv(c)
     hsv[..., 0] = np.mod(hsv[..., 0] + hue + 0.5, 1.0)
     hsv[..., 1] = np.clip(hsv[..., 1] * sat, 0.0, 1.0)

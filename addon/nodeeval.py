@@ -79,6 +79,11 @@ class Field:
     def __init__(self, value, tex=None, vector=False):
         self.value, self.tex, self.vector = np.asarray(value, np.float64), tex, vector
 
+    def through(self, crossed):
+        """This value as it arrives past the sockets `crossed` (nodegraph.source)."""
+        value, vector = _cross(self.value, self.vector, crossed)
+        return Field(value, self.tex, vector)
+
     def as_kind(self, color):
         """This value as a colour or vector (color True: colours and vectors pass unchanged) or
         a float, as Cycles converts sockets (svm_node_convert)."""
@@ -114,19 +119,19 @@ class Evaluator:
     def input(self, socket, color, depth=0):
         link, carrier = nodegraph.source(socket)
         if link is None:
-            return Field(_own(carrier.default_value, color))
+            return Field(own_value(carrier, color))
         f = self._node(link.from_node, link.from_socket, depth) if depth < self.MAX_DEPTH else None
         if f is None:
             what = 'colour' if color else 'value'
             self.reasons.append(f"{what} from '{link.from_node.bl_label}' node; its own value used")
-            return Field(_own(carrier.default_value, color))
-        return f.as_kind(color)
+            return Field(own_value(carrier, color))
+        return f.through(link.crossed).as_kind(color)
 
     def output(self, link, color):
         """What the output a GraphLink comes from computes, as a colour or float Field, or None
         where the evaluation cannot compute its node."""
         f = self._node(link.from_node, link.from_socket, 0)
-        return None if f is None else f.as_kind(color)
+        return None if f is None else f.through(link.crossed).as_kind(color)
 
     def _node(self, node, out, depth):
         t = node.type
@@ -307,12 +312,12 @@ def compile_image_chain(socket, color, image_pointer, depth=0):
     constants and the colour and float nodes."""
     link, carrier = nodegraph.source(socket)
     if link is None:
-        const = _own(carrier.default_value, color)
+        const = own_value(carrier, color)
         return lambda px: const
     if depth >= Evaluator.MAX_DEPTH:
         raise NotCompiled("too deep")
     f, vector = _compile_node(link.from_node, link.from_socket, image_pointer, depth)
-    return lambda px: _as_kind(np.asarray(f(px), np.float64), vector, color)
+    return lambda px: linked_value(np.asarray(f(px), np.float64), vector, link.crossed, color)
 
 
 def _compile_node(node, out, image_pointer, depth):
@@ -365,7 +370,7 @@ def constant(socket, color, notes=None, why=None):
     if reasons:
         if why is not None:      # what was not computed, without what the caller says it used
             why.extend(r.split(" as its average")[0].removesuffix("; its own value used") for r in reasons)
-        return _own(nodegraph.source(socket)[1].default_value, color), False
+        return own_value(nodegraph.source(socket)[1], color), False
     if notes is not None:
         notes.extend(kept)
     return f.value, True
@@ -398,12 +403,38 @@ def nan_inputs(ntree):
     return found
 
 
-def _own(v, color):
-    """A socket's own value as a colour (3,) or float (1,) array."""
+def own_value(carrier, color):
+    """A source's carrier's own value (nodegraph.source) as it reaches the input: a colour
+    (3,) or float (1,) array, converted as its own socket type holds it and at the sockets it
+    crosses (a group's Vector input read as a float is its average, a Color one its
+    luminance)."""
+    v = carrier.default_value
     if hasattr(v, '__len__'):
-        c = np.array(v[:3], np.float64)
-        return c if color else cn.gray(c)
-    return np.full(3 if color else 1, float(v))
+        value, vector = np.array(v[:3], np.float64), getattr(carrier, 'type', None) == 'VECTOR'
+    else:
+        value, vector = np.array([float(v)]), False
+    return linked_value(value, vector, getattr(carrier, 'crossed', ()), color)
+
+
+def linked_value(value, vector, crossed, color):
+    """A value (..., 3) or (..., 1) (vector: a vector's) past the sockets `crossed`, as a
+    colour or a float input reads it."""
+    return _as_kind(*_cross(value, vector, crossed), color)
+
+
+# socket type -> (holds three components, is a vector), for the conversions at crossed sockets
+_SOCKET_KINDS = {'VALUE': (False, False), 'RGBA': (True, False), 'VECTOR': (True, True)}
+
+
+def _cross(value, vector, crossed):
+    """(value, vector) past sockets of the types `crossed` (nearest the reader first, so taken
+    from the end): each converts as Cycles' proxy of its type does (svm_node_convert: a
+    vector to a float by its average, a colour by its luminance, a float to three copies)."""
+    for kind in reversed(crossed):
+        k = _SOCKET_KINDS.get(kind)
+        if k is not None:
+            value, vector = _as_kind(value, vector, k[0]), k[1]
+    return value, vector
 
 
 def _scalar(v):

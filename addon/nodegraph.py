@@ -20,11 +20,12 @@ MAX_HOPS = 256      # reroutes and group boundaries followed before a chain coun
 
 
 class GraphSocket:
-    """A socket and the Group nodes (outermost first) its node was reached through."""
-    __slots__ = ('socket', 'groups')
+    """A socket and the Group nodes (outermost first) its node was reached through; as a
+    source's carrier, crossed: the socket types between it and the input (see source)."""
+    __slots__ = ('socket', 'groups', 'crossed')
 
-    def __init__(self, socket, groups=()):
-        self.socket, self.groups = socket, groups
+    def __init__(self, socket, groups=(), crossed=()):
+        self.socket, self.groups, self.crossed = socket, groups, crossed
 
     def __getattr__(self, name):
         return getattr(self.socket, name)
@@ -47,11 +48,11 @@ class GraphNode:
 
 class GraphLink:
     """The link that produces a socket's value: from_node (a GraphNode), from_socket and
-    to_socket (Blender sockets), and the Blender link itself."""
-    __slots__ = ('link', 'from_node')
+    to_socket (Blender sockets), the Blender link itself, and crossed (see source)."""
+    __slots__ = ('link', 'from_node', 'crossed')
 
-    def __init__(self, link, groups):
-        self.link, self.from_node = link, GraphNode(link.from_node, groups)
+    def __init__(self, link, groups, crossed=()):
+        self.link, self.from_node, self.crossed = link, GraphNode(link.from_node, groups), crossed
 
     @property
     def from_socket(self):
@@ -100,12 +101,18 @@ def source(socket):
     does (unlinked, muted link, a group without an output for it). carrier: the GraphSocket
     whose own value Cycles uses when link is None, and which the export reads when it cannot
     evaluate the linked node: the socket itself, or the input where the chain last crossed a
-    group boundary (a Group Output's input, or a Group node's input)."""
+    group boundary (a Group Output's input, or a Group node's input).
+
+    Both carry `crossed`: the types of the sockets the value passes between them and the input
+    (group interface sockets, reroutes, a muted node's input and output), nearest the input
+    first. Cycles turns each into a conversion proxy of its type, so a vector through a group's
+    Float socket arrives as its average, not as a colour (nodeeval converts by it)."""
     if isinstance(socket, GraphSocket):
         sock, groups = socket.socket, socket.groups
     else:
         sock, groups = socket, ()
     carrier = GraphSocket(sock, groups)
+    crossed = ()
     for _ in range(MAX_HOPS):
         if not sock.is_linked:
             return None, carrier
@@ -114,6 +121,7 @@ def source(socket):
             return None, carrier
         node = link.from_node
         if node.type == 'REROUTE':
+            crossed += (_type(link.from_socket),)
             sock = node.inputs[0]
             continue
         if node.mute:
@@ -124,23 +132,31 @@ def source(socket):
             sock = _passed_through(node, link.from_socket)
             if sock is None:
                 return None, carrier
+            crossed += (_type(link.from_socket), _type(sock))
             continue
         if node.type == 'GROUP' and node.node_tree is not None:
             inner = _matching(_group_output(node.node_tree), 'inputs', link.from_socket.identifier)
             if inner is None:
                 return None, carrier
             sock, groups = inner, groups + (node,)
-            carrier = GraphSocket(sock, groups)
+            carrier = GraphSocket(sock, groups, crossed)
+            crossed += (_type(link.from_socket),)
             continue
         if node.type == 'GROUP_INPUT':
             outer = _matching(groups[-1] if groups else None, 'inputs', link.from_socket.identifier)
             if outer is None:
                 return None, carrier
             sock, groups = outer, groups[:-1]
-            carrier = GraphSocket(sock, groups)
+            carrier = GraphSocket(sock, groups, crossed)
+            crossed += (_type(link.from_socket),)
             continue
-        return GraphLink(link, groups), carrier
+        return GraphLink(link, groups, crossed), carrier
     return None, carrier
+
+
+def _type(socket):
+    """A socket's data type ('VALUE', 'RGBA', 'VECTOR', ...), None where it has none."""
+    return getattr(socket, 'type', None)
 
 
 def output_key(node, identifier):

@@ -78,12 +78,12 @@ def _socket(socket, color, chain, depth):
     """fn(coords) -> (n, 3) or (1, 3) colour/vector (color) or (n, 1) / (1, 1) float."""
     link, carrier = nodegraph.source(socket)
     if link is None:
-        const = nodeeval._own(carrier.default_value, color)[None]
+        const = nodeeval.own_value(carrier, color)[None]
         return lambda c: const
     if depth >= nodeeval.Evaluator.MAX_DEPTH:
         raise nodeeval.NotCompiled("too deep")
     f, vector = _node(link.from_node, link.from_socket, chain, depth)
-    return lambda c: nodeeval._as_kind(np.asarray(f(c), np.float64), vector, color)
+    return lambda c: nodeeval.linked_value(np.asarray(f(c), np.float64), vector, link.crossed, color)
 
 
 def _vector(node, chain, depth):

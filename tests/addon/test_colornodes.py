@@ -81,6 +81,27 @@ def test_hsv_blends_and_hue_saturation():
         assert np.allclose(cn.hue_saturation(a[i], 0.1, 1.5, 0.8, 0.7), ref)
 
 
+def test_constant_colours_under_per_texel_inputs_broadcast():
+    """A constant colour under a per-texel Hue, Saturation or Value (Hue/Saturation/Value node)
+    or factor (Mix in Value or Saturation blend) is each texel's own result (it raised a numpy
+    broadcast error, failing the render)."""
+    c, c2 = np.array([0.8, 0.3, 0.1]), np.array([0.2, 0.5, 0.9])
+    per = np.array([[0.0, 0.25], [0.6, 1.0]])
+    for k in range(3):
+        args = [0.0, 1.0, 1.0]
+        args[k] = per
+        got = cn.hue_saturation(c, *args, 1.0)
+        assert got.shape == (2, 2, 3)
+        for i in np.ndindex(per.shape):
+            one = [a[i] if np.ndim(a) else a for a in args]
+            assert np.allclose(got[i], cn.hue_saturation(c, *one, 1.0)), (k, i)
+    for blend in ('VALUE', 'SATURATION', 'HUE', 'COLOR'):
+        got = cn.mix(blend, per[..., None], c, c2)
+        assert got.shape == (2, 2, 3)
+        for i in np.ndindex(per.shape):
+            assert np.allclose(got[i], cn.mix(blend, per[i], c, c2)), (blend, i)
+
+
 def test_simple_nodes():
     c = np.array([0.0, 0.25, 2.0])
     assert np.allclose(cn.invert(0.5, c), 0.5)
@@ -196,6 +217,23 @@ def test_ramp_of_an_alpha_mask_and_unreadable_inputs(scene):
     assert np.allclose(m.texture[..., :3], 0.5 * ramp + 0.25, atol=1e-2)       # table of 256 entries
     assert "colour from 'Noise Texture' node; its own value used" in m.approximated
     assert "two image textures mixed" in m.approximated
+
+
+@pytest.mark.parametrize('which', ['Hue', 'Saturation', 'Value'])
+def test_an_image_into_hue_saturation_of_a_constant_colour(scene, which):
+    """An image's texels into one of a Hue/Saturation/Value node's scalar inputs over a constant
+    Color: baked per texel (the render failed with a broadcast error)."""
+    def chain(nt, tex):
+        hs = nt.nodes.new('ShaderNodeHueSaturation')
+        hs.inputs['Color'].default_value = (0.8, 0.3, 0.1, 1.0)
+        nt.links.new(tex.outputs['Color'], hs.inputs[which])
+        return hs.outputs['Color']
+    m = _exported_material(_image_material("HSV " + which, PX, chain))
+    args = {'Hue': 0.5, 'Saturation': 1.0, 'Value': 1.0}
+    args[which] = cn.gray(PX[..., :3].astype(np.float64))[..., 0]
+    expect = cn.hue_saturation(np.array([0.8, 0.3, 0.1]), args['Hue'], args['Saturation'], args['Value'], 1.0)
+    assert not m.approximated and m.texture is not None
+    assert np.allclose(m.texture[..., :3], expect, atol=1e-6)
 
 
 def _alpha_used(nt, tex):

@@ -6,7 +6,7 @@ import math
 import bpy
 import numpy as np
 
-from addon import nodeeval, nodegraph, specular
+from addon import colornodes, nodeeval, nodegraph, specular
 from tests.bench import fairmaterials
 
 from . import scenes
@@ -150,6 +150,53 @@ def test_group_shaders_mixed_and_unreadable_parts_reported(scene, exported):
     assert "Glossy BSDF as diffuse" in table["Blend"].approximated
     assert np.allclose(table["Black"].base_color, 0) and np.allclose(table["Black"].emission, 0)
     assert not table["Black"].approximated
+
+
+def test_group_sockets_convert_values_as_cycles(scene, exported):
+    """Cycles converts a value at each group socket of another type: a vector through a Float
+    socket is its average, also when the socket's own value is used; a vector through a Color
+    socket read as a float is a colour's luminance (it was passed through as a colour: the
+    vector (0.8, 0.3, 0.1) drew that colour, Cycles a grey 0.4)."""
+    setup(scene)
+    vec = (0.8, 0.3, 0.1)
+    # a float input wired straight to a colour output
+    grey, gi, go = _group("Grey", inputs=(('Amount', 'NodeSocketFloat'),), outputs=(('Colour', 'NodeSocketColor'),))
+    grey.links.new(gi.outputs['Amount'], go.inputs['Colour'])
+    # a vector or colour input into a Math node, its float out as the colour
+    def summed(name, socket_type):
+        g, gi, go = _group(name, inputs=(('In', socket_type),), outputs=(('Out', 'NodeSocketFloat'),))
+        add = g.nodes.new('ShaderNodeMath')
+        add.inputs[1].default_value = 0.0
+        g.links.new(gi.outputs['In'], add.inputs[0])
+        g.links.new(add.outputs[0], go.inputs['Out'])
+        return g
+    vsum, csum = summed("VectorSum", 'NodeSocketVector'), summed("ColourSum", 'NodeSocketColor')
+
+    def material(name, group, feed=None, own=None):
+        mat, nt, out = scenes._material(name)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        node = nt.nodes.new('ShaderNodeGroup')
+        node.node_tree = group
+        if feed is not None:
+            xyz = nt.nodes.new('ShaderNodeCombineXYZ')
+            for i, x in enumerate(feed):
+                xyz.inputs[i].default_value = x
+            nt.links.new(xyz.outputs[0], node.inputs[0])
+        if own is not None:
+            node.inputs[0].default_value = own
+        nt.links.new(node.outputs[0], d.inputs['Color'])
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        return mat
+
+    mats = [material("VecThroughFloat", grey, feed=vec), material("VecOwnToFloat", vsum, own=vec),
+            material("VecThroughColour", csum, feed=vec), material("VecToVector", vsum, feed=vec)]
+    table, _ = _materials(exported, *mats)
+    average, luminance = np.mean(vec), float(colornodes.gray(np.array(vec))[0])
+    assert abs(average - luminance) > 0.005
+    for name, want in (("VecThroughFloat", average), ("VecOwnToFloat", average), ("VecThroughColour", luminance),
+                       ("VecToVector", average)):
+        assert np.allclose(table[name].base_color, want, atol=1e-6), (name, table[name].base_color, want)
+        assert not table[name].approximated, table[name].approximated
 
 
 def test_image_texture_inside_a_group(scene, exported):
