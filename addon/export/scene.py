@@ -457,7 +457,9 @@ class Exporter:
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "
                              "BSDF: specular layer as diffuse)")
         if approx:
-            self.messages.append(('WARNING', f"{len(approx)} material(s) approximated as diffuse: "
+            # (not "as diffuse": a reason may be about an emission's colour, which stays emission)
+            self.messages.append(('WARNING', f"{len(approx)} material(s) approximated (DACRT renders diffuse "
+                                             "surfaces and emission; each says what differs): "
                                              + "; ".join(approx)))
         if len(geometry.triangles) == 0:
             self.messages.append(('WARNING', "the scene has no renderable geometry; only the "

@@ -243,7 +243,7 @@ def test_approximated_materials_reported_once(scene, capfd):
     scenes.plane("A", location=(0, 0, 1), materials=(glass,))
     scenes.plane("B", location=(3, 0, 1), materials=(glass,))
     bpy.ops.render.render()
-    lines = [l for l in capfd.readouterr().out.splitlines() if "approximated as diffuse" in l]
+    lines = [l for l in capfd.readouterr().out.splitlines() if "material(s) approximated" in l]
     assert len(lines) == 1 and "'Glassy'" in lines[0] and lines[0].startswith("Warning")
 
 
