@@ -17,6 +17,11 @@ namespace dacrt {
 
 // Hit point P, geometric and shading normals facing the incoming direction d, and P stepped
 // off the surface toward d's side (geo: 15 rows of M; normals: 9 rows of M or null = flat).
+// The step (8 ULPs of the triangle's largest coordinate, surfacetables.py) is cut to half the
+// distance the ray's origin lay off the triangle's plane (h.t |ng . d|): the point never moves
+// back past where the ray came from. A step larger than a wall's thickness had carried points
+// through it where a ray met the wall's back from inside at t ~ 0 (a corner of a 2 mm wall 10
+// km from the origin: 8 ULPs are 7.8 mm there), and their light samples then saw the far room.
 struct SurfacePoint {
     float P[3], ng[3], ns[3], P_off[3];
 };
@@ -34,9 +39,13 @@ inline void surface_point(const float* geo, size_t M, const float* normals, cons
     }
     const float dn = g(9) * d[0] + g(10) * d[1] + g(11) * d[2];
     const float flip = dn > 0 ? -1.0f : 1.0f;
+    float step = flip;  // the step's scale: its sign, cut where the origin was nearer the plane
+    const float half_back = 0.5f * h.t * std::fabs(dn);
+    const float len2 = g(12) * g(12) + g(13) * g(13) + g(14) * g(14);
+    if (half_back * half_back < len2) step *= half_back / std::sqrt(len2);  // (t NaN: the full step)
     for (int a = 0; a < 3; ++a) {
         s.ng[a] = g(9 + a) * flip;
-        s.P_off[a] = s.P[a] + g(12 + a) * flip;
+        s.P_off[a] = s.P[a] + g(12 + a) * step;
         s.ns[a] = s.ng[a];
     }
     if (normals) {

@@ -189,7 +189,7 @@ SURFACES = {
 
 def _surface_points(integ, tris, n, rng):
     """Points on the given triangles as the render loop makes them (half of them within a
-    hair of an edge), arriving from the front; returns prim, P, P_off, ng."""
+    hair of an edge), arriving from the front from afar; returns prim, P, P_off, ng."""
     prim = rng.choice(tris, n).astype(np.int32)
     r = rng.random((2, n))
     su = np.sqrt(r[0])
@@ -199,7 +199,8 @@ def _surface_points(integ, tris, n, rng):
     v = np.minimum(v, 1.0 - u)
     ng = integ.tri.geo[9:12][:, prim]
     hits = np.zeros(n, dacrt.HIT_DTYPE)
-    hits['prim'], hits['u'], hits['v'] = prim, u, v
+    # arriving from afar: the full step (one is cut only for rays from next to the plane)
+    hits['prim'], hits['u'], hits['v'], hits['t'] = prim, u, v, np.inf
     P, ng, _, P_off = integ._surface(hits, None, np.ascontiguousarray(-ng))
     return prim, P, P_off, ng
 

@@ -74,6 +74,8 @@ def test_surface_matches_float64(smooth, select):
     hits["prim"] = rng.integers(0, m, n)
     su = np.sqrt(rng.random(n))
     hits["u"], hits["v"] = rng.random(n) * su, 1 - su
+    # distances from far off to next to the plane (a tenth of the rays: within the step)
+    hits["t"] = np.where(rng.random(n) < 0.1, rng.random(n) * 1e-6, rng.random(n) * 10)
     D = _unit(rng, n)
     idx = np.sort(rng.choice(n, n // 3, replace=False)) if select else None
     P, ng, ns, P_off = shading.surface(geo, normals, hits, idx, D)
@@ -83,7 +85,14 @@ def test_surface_matches_float64(smooth, select):
     np.testing.assert_allclose(P, g[0:3] + g[3:6] * u + g[6:9] * v, atol=2e-6 * np.abs(g).max())
     flip = np.where(np.einsum("ij,ij->j", g[9:12], D[:, sel]) > 0, -1.0, 1.0)
     np.testing.assert_array_equal(ng, (g[9:12] * flip).astype(F32))
-    np.testing.assert_allclose(P_off - P, g[12:15] * flip, atol=1e-6)
+    # the step off the surface, at most half the way back to the plane's distance of the origin
+    dn = np.abs(np.einsum("ij,ij->j", g[9:12], D[:, sel]))
+    step = np.linalg.norm(g[12:15], axis=0)
+    scale = np.minimum(1.0, 0.5 * hits["t"][sel] * dn / step)
+    assert (scale < 1).mean() > 0.05
+    np.testing.assert_allclose(P_off - P, g[12:15] * flip * scale, atol=1e-6)
+    back = np.abs(np.einsum("ij,ij->j", ng.astype(float), P_off.astype(float) - P))
+    assert (back <= 0.5 * hits["t"][sel] * dn * (1 + 1e-5) + 1e-6 * np.abs(g).max()).all()
     if smooth:
         nn = normals.astype(float)[:, p]
         s = nn[0:3] + nn[3:6] * u + nn[6:9] * v
