@@ -57,41 +57,42 @@ inline vi8 selecti(vb8 m, vi8 a, vi8 b) {
 inline void storei(int32_t* p, vi8 a) { _mm256_storeu_si256((__m256i*)p, a.v); }
 template <int W> vint<W> loadi(const int32_t* p);
 template <> inline vi8 loadi<8>(const int32_t* p) { return {_mm256_loadu_si256((const __m256i*)p)}; }
+// table4[idx] per lane: the table in both 128-bit halves and an in-lane permute (vpermilps),
+// not a cross-lane vpermps (3 uops with a throughput of one per 4 cycles on Zen 1, where the
+// leaf test's nine per triangle outweighed its arithmetic; the same one uop on Intel).
 inline vf8 permute(const float* table4, vi8 idx) {
-    return {_mm256_permutevar8x32_ps(_mm256_castps128_ps256(_mm_loadu_ps(table4)), idx.v)};
+    return {_mm256_permutevar_ps(_mm256_broadcast_ps(reinterpret_cast<const __m128*>(table4)), idx.v)};
 }
 
-// 8x8 transpose of 8 loaded 32-byte records: shuffles, as in the paper.
-inline void transpose8(const __m256 r[8], __m256 out[8]) {
-    const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
-    const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
-    const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
-    const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
-    const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xEE);
-    const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xEE);
-    const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xEE);
-    const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xEE);
-    out[0] = _mm256_permute2f128_ps(s0, s4, 0x20); out[1] = _mm256_permute2f128_ps(s1, s5, 0x20);
-    out[2] = _mm256_permute2f128_ps(s2, s6, 0x20); out[3] = _mm256_permute2f128_ps(s3, s7, 0x20);
-    out[4] = _mm256_permute2f128_ps(s0, s4, 0x31); out[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
-    out[6] = _mm256_permute2f128_ps(s2, s6, 0x31); out[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
+// 8 records (rows[j]: record j's 8 floats) transposed into 8 field vectors, as the paper's
+// shuffles: each record's halves are loaded into the 128-bit lanes where they end up (records
+// j and j + 4 share a vector), so only in-lane unpacks and shuffles follow. Transposing whole
+// rows took 8 cross-lane vperm2f128, 8 uops each on Zen 1.
+inline void transpose_rows8(const float* const rows[8], vf8 out[8]) {
+    for (int h = 0; h < 2; ++h) {  // fields 0-3, then 4-7
+        __m256 r[4];
+        for (int j = 0; j < 4; ++j)
+            r[j] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(rows[j] + 4 * h)),
+                                        _mm_loadu_ps(rows[j + 4] + 4 * h), 1);
+        const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+        const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+        out[4 * h + 0].v = _mm256_shuffle_ps(t0, t2, 0x44); out[4 * h + 1].v = _mm256_shuffle_ps(t0, t2, 0xEE);
+        out[4 * h + 2].v = _mm256_shuffle_ps(t1, t3, 0x44); out[4 * h + 3].v = _mm256_shuffle_ps(t1, t3, 0xEE);
+    }
 }
 
 template <int W> void load_rays(const float* rec, vfloat<W> out[8]);
 template <> inline void load_rays<8>(const float* rec, vf8 out[8]) {
-    __m256 r[8], o[8];
-    for (int j = 0; j < 8; ++j) r[j] = _mm256_loadu_ps(rec + 8 * j);
-    transpose8(r, o);
-    for (int f = 0; f < 8; ++f) out[f].v = o[f];
+    const float* rows[8];
+    for (int j = 0; j < 8; ++j) rows[j] = rec + 8 * j;
+    transpose_rows8(rows, out);
 }
 // Records rec[0, k) (k < W) as load_rays, the lanes from k holding the record `pad`: loaded
 // where they are (copying a short tail into a padded buffer stalled its reload on store
 // forwarding, a fixed cost that dominated nodes of a few rays).
 template <int W> void load_rays_tail(const float* rec, size_t k, const float* pad, vfloat<W> out[8]);
 template <> inline void load_rays_tail<8>(const float* rec, size_t k, const float* pad, vf8 out[8]) {
-    const __m256 p = _mm256_loadu_ps(pad);
-    __m256 r[8], o[8];
-    for (size_t j = 0; j < 8; ++j) r[j] = j < k ? _mm256_loadu_ps(rec + 8 * j) : p;
-    transpose8(r, o);
-    for (int f = 0; f < 8; ++f) out[f].v = o[f];
+    const float* rows[8];
+    for (size_t j = 0; j < 8; ++j) rows[j] = j < k ? rec + 8 * j : pad;
+    transpose_rows8(rows, out);
 }
