@@ -1096,10 +1096,11 @@ class Integrator:
                 rows = np.take(self.tri.colors, p, axis=1)
                 albedo[:, sel] *= rows[0:3] + rows[3:6] * np.take(u, sel) + rows[6:9] * np.take(v, sel)
 
-    def _texture(self, prim, u, v, albedo, textures=None):
+    def _texture(self, prim, u, v, albedo, textures=None, signed=False):
         """Multiply image textures (on the UV map, through each texture's affine map) into
         albedo (3,k) (or a throughput that includes it) in place: the materials' colour
-        textures, or the entries `textures` lists (material, texture, modes) instead."""
+        textures, or the entries `textures` lists (material, texture, modes) instead. signed:
+        negative texels kept (emission), else 0 (albedo); NaN ones are 0 either way."""
         if self.tri.uvs is None:
             return
         mat = np.take(self.tri.material, prim)
@@ -1109,8 +1110,10 @@ class Integrator:
                 # a texel may be negative (a float image's own values, or a wide-gamut space such
                 # as ACEScg converted to scene linear): Cycles' closure weight is not, so a
                 # negative blend is 0 there (and NaN too), not a negative albedo
-                albedo[:, sel] *= np.fmax(self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel),
-                                                       np.take(v, sel)), F32(0.0))
+                # (an emission's is not a closure weight: Cycles keeps it signed, so a wide-gamut
+                # screen's out-of-gamut texels subtract as there)
+                texel = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))
+                albedo[:, sel] *= np.nan_to_num(texel, nan=0.0) if signed else np.fmax(texel, F32(0.0))
 
     def _bent_normals(self, prim, u, v, ns, ng):
         """(shading normals with the materials' normal maps applied, bump or None): bump (4, k)
@@ -1184,7 +1187,7 @@ class Integrator:
     def _emission_at(self, prim, u, v):
         """Radiance (3, k) of image-emission triangles prim at barycentrics (u, v)."""
         out = np.ones((3, len(prim)), F32)
-        self._texture(prim, u, v, out, self.mats.emission_textures)
+        self._texture(prim, u, v, out, self.mats.emission_textures, signed=True)
         return out
 
     def _textured_samples(self, value, entry, point):

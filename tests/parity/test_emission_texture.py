@@ -57,3 +57,38 @@ def test_image_emission_matches_cycles(shader, tmp_path):
     np.testing.assert_allclose(d.mean((0, 1)), c.mean((0, 1)), rtol=0.01)
     left, right = c[rows, 4:28].mean((0, 1)), c[rows, 36:60].mean((0, 1))
     assert left[0] > 1.2 * right[0] and right[2] > 1.2 * left[2], "the floor must show the image's halves"
+
+
+def test_wide_gamut_emission_keeps_its_negative_channels(tmp_path):
+    """An 8-bit Display P3 image as emission, seen straight on: its pure green and red texels
+    lie outside Rec.709's gamut, so some of their channels are negative, and Cycles keeps them
+    (emission is no closure weight). DACRT had set them to 0 per texel without a word: P3 green
+    (0, 1.042, 0) where Cycles has (-0.225, 1.042, -0.079); under AgX its PNG red 113 of 255,
+    Cycles' 14."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 32, 8
+    chart = np.array([[[0, 255, 0], [255, 0, 0], [255, 255, 255], [255, 255, 255]]], np.uint8)
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "chart.png", chart))
+    img.colorspace_settings.name = 'Display P3'
+    mat, nt, out = scenes._material("Chart")
+    tex, em = nt.nodes.new('ShaderNodeTexImage'), nt.nodes.new('ShaderNodeEmission')
+    tex.image, tex.interpolation = img, 'Closest'
+    nt.links.new(tex.outputs['Color'], em.inputs['Color'])
+    nt.links.new(em.outputs[0], out.inputs['Surface'])
+    plane = scenes.plane("Chart", size=2.0, materials=(mat,))
+    plane.scale = (2.0, 1.0, 1.0)
+    plane.data.uv_layers.new(name="UVMap")
+    scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=4.0)
+    sc.cycles.samples = sc.dacrt.samples = 4
+    sc.cycles.use_denoising = False
+    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    layer = sc.view_layers[0].name
+    img = {e: np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], axis=-1)
+           for e, exr in scenes.render_engines(sc, tmp_path).items()}
+    green, red = (slice(2, 6), slice(1, 7)), (slice(2, 6), slice(9, 15))
+    for texel in (green, red):
+        c, d = img['CYCLES'][texel].mean((0, 1)), img['DACRT'][texel].mean((0, 1))
+        assert c.min() < -0.01, c                       # out of gamut: some channel negative
+        np.testing.assert_allclose(d, c, atol=2e-3)
