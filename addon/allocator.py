@@ -48,6 +48,24 @@ def _libc():
         return None
 
 
+class _MallInfo2(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in ('arena', 'ordblks', 'smblks', 'hblks', 'hblkhd', 'usmblks',
+                                                     'fsmblks', 'uordblks', 'fordblks', 'keepcost')]
+
+
+def heap_in_use():
+    """Bytes the C heap has handed out and not got back (glibc's mallinfo2: every arena's
+    blocks in use plus mmapped ones), or None where that cannot be read. numpy's arrays and
+    Blender's own buffers come from it, so its growth over a render is what the render holds
+    (the held heap's free blocks are not counted)."""
+    fn = getattr(_LIBC, 'mallinfo2', None) if _LIBC is not None else None
+    if fn is None:
+        return None
+    fn.restype = _MallInfo2
+    info = fn()
+    return int(info.uordblks) + int(info.hblkhd)
+
+
 def _numpy_madvise_switch():
     """numpy's switch for its per-array huge-page advice (returns the previous setting), or
     None where this numpy has none."""
