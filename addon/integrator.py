@@ -343,15 +343,19 @@ class Integrator:
         self._world_max_bounces = int(getattr(sd, 'world_max_bounces', 1024))
         self._group_index = group
         camera_world = getattr(sd, 'camera_world', None)
+        # camera rays past glass are transmission rays: they see the world by its Transmission
+        # visibility, and the world itself where a Light Path's Is Camera Ray picks another
+        world_transmit = not wv & NO_TRANSMISSION
         if world.max() > 0:
             bg = BackgroundLight(world)
             bg.visible_camera, bg.visible_diffuse = bool(wv & VIS_CAMERA), bool(wv & VIS_DIFFUSE)
+            bg.visible_transmission = world_transmit
             if camera_world is not None:        # camera rays see camera_world's instead
                 bg.visible_camera = False
             lamps.append(bg)
         if camera_world is not None and np.asarray(camera_world[0]).max() > 0 and wv & VIS_CAMERA:
             bgc = BackgroundLight(np.asarray(camera_world[0], F32))
-            bgc.visible_camera, bgc.visible_diffuse = True, False
+            bgc.visible_camera, bgc.visible_diffuse, bgc.visible_transmission = True, False, False
             lamps.append(bgc)
         vis = self.tri.visibility
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
@@ -374,6 +378,12 @@ class Integrator:
                                unsampled_emitters=bool((hittable & ~sampled).any()), glass=self._any_glass)
         self._camera_env = camera_env if (camera_env is not None and wv & VIS_CAMERA and not self.transparent
                                           and not camera_env.dark) else None
+        # the map camera rays past glass see instead (an opaque film; under a transparent one the
+        # world behind glass is _world_through_glass's), where it differs from _camera_env
+        transmit_env = env if (env is not None and world_transmit and not self.transparent and not env.dark) \
+            else None
+        self._env_apart = self._any_glass and transmit_env is not self._camera_env
+        self._transmit_env = transmit_env if self._env_apart else None
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
                                           f"strength: {', '.join(self.lights.skipped_lamps)}"))
@@ -395,7 +405,7 @@ class Integrator:
         self._record_camera = np.array([l.seen_by_camera for l in every], bool)
         self._record_transmit = np.array([l.seen_by_transmission for l in every], bool)
         self._lamps_transmit_apart = self._any_glass and bool((self._record_camera != self._record_transmit).any())
-        self._transmit_split = self._transmit_split or self._lamps_transmit_apart
+        self._transmit_split = self._transmit_split or self._lamps_transmit_apart or self._env_apart
         # camera rays' lamps: (record index, is the world), in record order
         seen = [(j, isinstance(l, BackgroundLight)) for j, l in enumerate(every)
                 if l.seen_by_camera or (self._lamps_transmit_apart and l.seen_by_transmission)]
@@ -1808,9 +1818,15 @@ class Integrator:
             envs.append((combined_env, sinks.groups[self._world_group]))
         groups = [(lamps, out) for lamps, out in groups if len(lamps)] + self._group_lamps(camera, sinks)
         miss = ~hit
+        # camera rays past glass see the map by the world's Transmission visibility (_env_apart)
+        past = path.transmit if camera and self._env_apart and path.transmit is not None else None
         for e, out in envs:
-            e.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss, path.thr,
-                            None if camera else path.pdf, path.pid, out, clamp)
+            e.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss if past is None else miss & ~past,
+                            path.thr, None if camera else path.pdf, path.pid, out, clamp)
+        if past is not None and self._transmit_env is not None and past.any():
+            outs = [L_env] + ([sinks.groups[self._world_group]] if sinks.groups and self._world_group >= 0 else [])
+            for out in outs:
+                self._transmit_env.native.gather(0.0, path.D, miss & past, path.thr, None, path.pid, out, clamp)
         if not groups:
             return
         # a lamp counts in front of the surface hit, or of the ray's end where it missed (the

@@ -286,7 +286,8 @@ class SceneData:
     # Camera Ray picks it (a Mix Shader in the world): ((3,) uniform radiance, Environment or None)
     camera_world: Optional[tuple] = None
     # which rays see the world (colour and image): VIS_CAMERA | VIS_DIFFUSE, Cycles' World >
-    # Ray Visibility; the camera bit off leaves the background black (alpha 1, as Cycles)
+    # Ray Visibility; the camera bit off leaves the background black (alpha 1, as Cycles);
+    # NO_TRANSMISSION: camera rays past glass (transmission rays) do not see it
     world_visibility: int = VIS_CAMERA | VIS_DIFFUSE
     # (len(object_names),) each object's pass index (Object Index pass); None: all 0
     object_pass_index: Optional[np.ndarray] = None

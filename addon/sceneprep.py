@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .scenedata import VIS_CAMERA, VIS_DIFFUSE, SceneData
+from .scenedata import NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, SceneData
 
 F32 = np.float32
 
@@ -87,8 +87,8 @@ def validate(sd: SceneData):
     if w.shape != (3,) or not np.isfinite(w).all() or (w < 0).any():
         raise ValueError(f"world must be 3 finite non-negative numbers, got {sd.world!r}")
     wv = sd.world_visibility
-    if not isinstance(wv, (int, np.integer)) or int(wv) & ~(VIS_CAMERA | VIS_DIFFUSE):
-        raise ValueError(f"world_visibility must be bits of VIS_CAMERA | VIS_DIFFUSE, got {wv!r}")
+    if not isinstance(wv, (int, np.integer)) or int(wv) & ~(VIS_CAMERA | VIS_DIFFUSE | NO_TRANSMISSION):
+        raise ValueError(f"world_visibility must be bits of VIS_CAMERA | VIS_DIFFUSE | NO_TRANSMISSION, got {wv!r}")
     env = sd.environment
     if env is not None:
         px, st = np.asarray(env.pixels), np.asarray(env.strength, np.float64)

@@ -150,11 +150,13 @@ def _environments_feeding(socket):
 
 
 def world_visibility(world):
-    """The rays that see the world (World > Ray Visibility): VIS_CAMERA | VIS_DIFFUSE bits."""
+    """The rays that see the world (World > Ray Visibility): VIS_CAMERA | VIS_DIFFUSE bits, and
+    NO_TRANSMISSION where rays past glass (Cycles' transmission rays) do not see it."""
     vis = getattr(world, 'cycles_visibility', None)
     if vis is None:
         return sd.VIS_CAMERA | sd.VIS_DIFFUSE
-    return (sd.VIS_CAMERA if vis.camera else 0) | (sd.VIS_DIFFUSE if vis.diffuse else 0)
+    return (sd.VIS_CAMERA if vis.camera else 0) | (sd.VIS_DIFFUSE if vis.diffuse else 0) \
+        | (0 if getattr(vis, 'transmission', True) else sd.NO_TRANSMISSION)
 
 
 def _environment(node, strength, reasons, chain=None, frame=None):

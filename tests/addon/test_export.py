@@ -1334,7 +1334,7 @@ def test_world_light_path_camera_ray_splits_the_world(scene, exported):
 
 
 def test_world_ray_visibility(scene, exported):
-    """World > Ray Visibility's camera and diffuse toggles reach SceneData as bits."""
+    """World > Ray Visibility's camera, diffuse and transmission toggles reach SceneData as bits."""
     setup(scene)
     scenes.world((0.5, 0.25, 1.0), 2.0)
     assert exported().world_visibility == sd.VIS_CAMERA | sd.VIS_DIFFUSE
@@ -1342,6 +1342,8 @@ def test_world_ray_visibility(scene, exported):
     for camera, diffuse in ((False, True), (True, False), (False, False)):
         vis.camera, vis.diffuse = camera, diffuse
         assert exported().world_visibility == (sd.VIS_CAMERA if camera else 0) | (sd.VIS_DIFFUSE if diffuse else 0)
+    vis.camera, vis.diffuse, vis.transmission = True, True, False
+    assert exported().world_visibility == sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.NO_TRANSMISSION
     scene.world = None
     assert exported().world_visibility == sd.VIS_CAMERA | sd.VIS_DIFFUSE
 

@@ -84,3 +84,29 @@ def test_camera_world_is_what_the_camera_sees(kind):
     img, plane, bg = regions(render(s))
     np.testing.assert_allclose(img[bg][:, :3], np.broadcast_to(C, (bg.sum(), 3)), rtol=1e-5)
     np.testing.assert_allclose(img[plane][:, :3].mean(axis=0), RHO * L, rtol=0.02)
+
+
+@pytest.mark.parametrize('kind', ['uniform', 'environment'])
+def test_past_glass_the_world_is_seen_by_its_transmission_visibility(kind):
+    """Camera rays past a glass pane are Cycles' transmission rays: they see the world by its
+    Transmission visibility, not its Camera one. Measured in Cycles 5.0 (a clear IOR-1 pane over
+    the left half of an orthographic view of a (0.2, 0.4, 0.8) world): Camera on / Transmission
+    off: black through the pane, the world beside it; Camera off / Transmission on: the world
+    through the pane, black beside it. DACRT had drawn the world through the pane in the first."""
+    from .scenes import ALL_VIS, geometry, material, quad
+    ones = np.ones(3, F32)
+    pane = material('pane', (0.0,) * 3, transparency=ones, refraction=ones)
+
+    def render_with(visibility):
+        s = scene(kind, visibility)
+        s.materials = [material('default'), pane]
+        s.geometry = geometry([(*quad((-0.5, 0.0, 0.25), 0.5, 2.0), 1, ALL_VIS)])   # over x < 0
+        img = render(s).film.combined()
+        h, w = img.shape[:2]
+        return img[:, 1:w // 2 - 1, :3], img[:, w // 2 + 1:-1, :3]     # through the pane, beside it
+    through, beside = render_with(sd.VIS_CAMERA | sd.VIS_DIFFUSE)
+    assert np.allclose(through, L, rtol=1e-5) and np.allclose(beside, L, rtol=1e-5)
+    through, beside = render_with(sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.NO_TRANSMISSION)
+    assert np.all(through == 0.0) and np.allclose(beside, L, rtol=1e-5)
+    through, beside = render_with(sd.VIS_DIFFUSE)
+    assert np.allclose(through, L, rtol=1e-5) and np.all(beside == 0.0)
