@@ -97,8 +97,13 @@ def test_past_glass_the_world_is_seen_by_its_transmission_visibility(kind):
     ones = np.ones(3, F32)
     pane = material('pane', (0.0,) * 3, transparency=ones, refraction=ones)
 
-    def render_with(visibility):
+    C = np.array([0.9, 0.1, 0.3], F32)
+
+    def render_with(visibility, camera_world=False):
         s = scene(kind, visibility)
+        if camera_world:        # a Light Path's Is Camera Ray in the world: C for camera rays
+            s.camera_world = (C, None) if kind == 'uniform' else (np.zeros(3, F32), sd.Environment(
+                np.broadcast_to(C, (8, 16, 3)).copy(), np.ones(3, F32), np.eye(3), 'Linear'))
         s.materials = [material('default'), pane]
         s.geometry = geometry([(*quad((-0.5, 0.0, 0.25), 0.5, 2.0), 1, ALL_VIS)])   # over x < 0
         img = render(s).film.combined()
@@ -110,3 +115,6 @@ def test_past_glass_the_world_is_seen_by_its_transmission_visibility(kind):
     assert np.all(through == 0.0) and np.allclose(beside, L, rtol=1e-5)
     through, beside = render_with(sd.VIS_DIFFUSE)
     assert np.allclose(through, L, rtol=1e-5) and np.all(beside == 0.0)
+    # past glass a ray is no camera ray: Is Camera Ray picks the world's other side there
+    through, beside = render_with(sd.VIS_CAMERA | sd.VIS_DIFFUSE, camera_world=True)
+    assert np.allclose(through, L, rtol=1e-5) and np.allclose(beside, C, rtol=1e-5)
