@@ -659,6 +659,24 @@ def test_sharp_edges_mixed_normals(scene, exported):
     flat = np.all(np.isclose(g.normals[:, 0], g.normals[:, 1], atol=1e-6), axis=1) & \
         np.all(np.isclose(g.normals[:, 0], g.normals[:, 2], atol=1e-6), axis=1)
     assert flat[centroid[:, 2] > 0.05].all() and not flat[centroid[:, 2] < -0.05].any()
+    # flat faces are all that is sharp: the smooth faces take the vertex normals, averaged over
+    # every face around a vertex (Cycles' normals_domain(true), POINT), not corner normals that
+    # split at the flat faces (a roof's smooth half had shaded flat, 0.68x Cycles); flat ones
+    # their own geometric normal
+    vn = np.array([v.vector for v in ob.data.vertex_normals])
+    smooth = centroid[:, 2] < -0.05
+    assert len(g.vertices) == len(vn)
+    np.testing.assert_allclose(g.normals[smooth], vn[g.triangles[smooth]], atol=1e-5)
+    e1, e2 = (g.vertices[g.triangles[:, k]] - g.vertices[g.triangles[:, 0]] for k in (1, 2))
+    n = np.cross(e1, e2)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    top = centroid[:, 2] > 0.05
+    np.testing.assert_allclose(g.normals[top], np.repeat(n[top][:, None], 3, axis=1), atol=1e-5)
+    # a sharp edge as well: Blender's corner normals, as Cycles (CORNER either way)
+    ob.data.attributes.new("sharp_edge", 'BOOLEAN', 'EDGE').data[0].value = True
+    ob.data.update()
+    corner = np.array([[ob.data.corner_normals[c].vector for c in t.loops] for t in ob.data.loop_triangles])
+    np.testing.assert_allclose(exported().geometry.normals, corner, atol=1e-5)
 
 
 def _reference_corners(ob, uv_map=None):
