@@ -160,8 +160,9 @@ def render(args):
             raise SystemExit(f"error: --samples must be at most {most}")
         scene.dacrt.samples = args.samples
         # every layer: a view layer's Samples override would otherwise set its count silently
+        ignored = getattr(getattr(scene, 'cycles', None), 'use_layer_samples', 'USE') == 'IGNORE'
         for layer in scene.view_layers:
-            if layer.use and layer.samples:
+            if layer.use and layer.samples and not ignored:
                 print(f"DACRT: --samples {args.samples} replaces view layer '{layer.name}''s "
                       f"Samples override ({layer.samples})")
                 layer.samples = 0

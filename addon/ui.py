@@ -25,7 +25,16 @@ def generic_panels():
     panels = [p for p in bpy.types.Panel.__subclasses__()
               if 'BLENDER_RENDER' in getattr(p, 'COMPAT_ENGINES', ()) and p.__name__ not in EXCLUDE]
     panels += [getattr(bpy.types, name) for name in EXTRA_GENERIC if hasattr(bpy.types, name)]
-    return panels
+    # a child panel whose parent is not shown for DACRT is never drawn (DATA_PT_spot, under
+    # EEVEE's light panel): DACRT's own panels draw what it would
+    names = {p.__name__ for p in panels}
+    return [p for p in panels if not _parent_hidden(p, names)]
+
+
+def _parent_hidden(panel, shown):
+    """Whether panel is a child of an engine-specific panel not among those shown for DACRT."""
+    parent = getattr(bpy.types, getattr(panel, 'bl_parent_id', '') or '', None)
+    return parent is not None and hasattr(parent, 'COMPAT_ENGINES') and parent.__name__ not in shown
 
 
 class DACRTPanel:
@@ -191,6 +200,13 @@ class DATA_PT_dacrt_light(DACRTPanel, Panel):
         if light.type in {'POINT', 'SPOT'}:
             col.prop(light, "shadow_soft_size", text="Radius")
             col.prop(light, "use_soft_falloff")
+            if light.type == 'SPOT':
+                # the beam here: Blender's Beam Shape panel is a child of EEVEE's light panel,
+                # which is never drawn for DACRT (Cycles draws its own copy too)
+                col = layout.column()
+                col.prop(light, "spot_size", text="Spot Size")
+                col.prop(light, "spot_blend", text="Blend")
+                col.prop(light, "show_cone")
         elif light.type == 'SUN':
             col.prop(light, "angle")
         elif light.type == 'AREA':

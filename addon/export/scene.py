@@ -29,7 +29,9 @@ GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CUR
 # or metaball object is listed once as itself and once as an instance of its evaluated mesh,
 # and only that mesh is rendered (read both, an emissive text gave 1.06-1.17x Cycles' light)
 SYNCED_TYPES = {'MESH', 'POINTCLOUD', 'CURVES'}
-UNSUPPORTED_TYPES = {'VOLUME': "volume", 'GREASEPENCIL': "Grease Pencil"}
+UNSUPPORTED_TYPES = {'VOLUME': "volume"}
+# drawn by Blender over an external engine's render (Cycles' too), not traced by either
+DRAWN_OVER = {'GREASEPENCIL', 'GPENCIL'}
 CHECK_EVERY = 64                          # instances between cancel checks
 
 
@@ -95,6 +97,7 @@ class Exporter:
         self.lights_skipped = 0   # light objects that give no light here (portals, skipped ones)
         self.skipped = {}         # reason -> [object names]
         self.ignored = {}         # reason -> [object names]: rendered, without a feature Cycles has
+        self.drawn_over = []      # Grease Pencil objects: Blender draws them over the render
         self._noted = set()       # objects whose ignored features are noted (instances repeat them)
         # per object (visibility: and instancer): its ray visibility, shadow terminator and
         # material slots, read once for all its instances (a scatter of 100K: ~12 us of RNA
@@ -172,6 +175,10 @@ class Exporter:
                 self._particle_hair(ob, override, inst)
             if ob.type == 'CURVES' and not getattr(self.view_layer, 'use_strand', True):
                 self.skip("hair curves are off in the view layer's filter (Hair)", ob.name)
+                continue
+            if ob.type in DRAWN_OVER:
+                if ob.name not in self.drawn_over:
+                    self.drawn_over.append(ob.name)
                 continue
             if ob.type in UNSUPPORTED_TYPES:
                 made = inst.is_instance and inst.parent is not None and inst.parent.name == ob.name
@@ -441,6 +448,10 @@ class Exporter:
             self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
         for reason, names in self.ignored.items():
             self.messages.append(('WARNING', f"{', '.join(repr(n) for n in names)}: {reason}"))
+        if self.drawn_over:
+            self.messages.append(('INFO', f"Grease Pencil {', '.join(repr(n) for n in self.drawn_over)}: drawn by "
+                                          "Blender over the render, unlit and casting no shadows, as for "
+                                          "Cycles (not traced)"))
         if self.scene.render.use_motion_blur:
             self.messages.append(('WARNING', "motion blur is not rendered: every object is drawn at "
                                              "its position on the frame"))

@@ -2941,3 +2941,16 @@ def test_lights_beyond_float32_are_skipped_not_the_render(scene, exported):
     text = " | ".join(m for _, m in data.messages)
     for name in ("Huge", "Tiny", "Dot", "Needle", "Bright"):
         assert f"light '{name}': its size, radius, angle or strength is beyond float32's range" in text, name
+
+
+def test_grease_pencil_is_said_to_be_drawn_over_the_render(scene, exported):
+    """Blender draws Grease Pencil over an external engine's render, as over Cycles' (a helper
+    measured the same 147 pixels changed in both): not 'skipped ... not rendered'."""
+    setup(scene)
+    scenes.plane("Floor", size=4.0)
+    bpy.ops.object.grease_pencil_add(type='MONKEY')
+    data = exported()
+    said = [t for _, t in data.messages if "Grease Pencil" in t]
+    assert len(said) == 1 and "drawn by Blender over the render" in said[0], data.messages
+    assert not any("skipped" in t and "Suzanne" in t for _, t in data.messages), data.messages
+    assert data.skipped.get('objects_unsupported', 0) == 0

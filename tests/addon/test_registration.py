@@ -10,6 +10,8 @@ from types import SimpleNamespace
 import bpy
 import pytest
 
+from addon import ui
+
 from . import conftest
 
 
@@ -46,7 +48,7 @@ def test_panels_shown_for_the_engine(scene):
     assert 'DACRT' in bpy.context.engine or bpy.context.engine == 'DACRT'
     assert bpy.types.RENDER_PT_dacrt.poll(bpy.context)
     for name in ('RENDER_PT_format', 'RENDER_PT_output', 'RENDER_PT_color_management',
-                 'RENDER_PT_frame_range', 'DATA_PT_spot', 'DATA_PT_context_light',
+                 'RENDER_PT_frame_range', 'DATA_PT_context_light',
                  'WORLD_PT_context_world', 'EEVEE_MATERIAL_PT_context_material',
                  'OBJECT_PT_visibility', 'DATA_PT_lens', 'DATA_PT_camera_dof',
                  'DATA_PT_camera_dof_aperture'):
@@ -54,8 +56,36 @@ def test_panels_shown_for_the_engine(scene):
     for name in ('DATA_PT_dacrt_light', 'MATERIAL_PT_dacrt_surface', 'WORLD_PT_dacrt_surface',
                  'VIEWLAYER_PT_dacrt_passes', 'DATA_PT_dacrt_panorama'):
         assert hasattr(bpy.types, name), name
+    # a child of a panel hidden for DACRT would never draw: Beam Shape (DATA_PT_spot) sits
+    # under EEVEE's light panel, so the spot's cone is in DACRT's own light panel
+    for panel in ui.generic_panels():
+        parent = getattr(bpy.types, getattr(panel, 'bl_parent_id', '') or '', None)
+        if parent is not None and hasattr(parent, 'COMPAT_ENGINES'):
+            assert 'DACRT' in parent.COMPAT_ENGINES, (panel.__name__, parent.__name__)
+    assert 'DACRT' not in bpy.types.DATA_PT_spot.COMPAT_ENGINES
+    drawn = _drawn_props(bpy.types.DATA_PT_dacrt_light, light=bpy.data.lights.new("Spot", 'SPOT'))
+    assert {'spot_size', 'spot_blend', 'show_cone'} <= drawn, drawn
     scene.render.engine = 'CYCLES'
     assert not bpy.types.RENDER_PT_dacrt.poll(bpy.context)
+
+
+def _drawn_props(panel, **context):
+    """The property names a panel's draw puts in its layout, with a recording layout and the
+    given context members."""
+    drawn = set()
+
+    class Layout:
+        use_property_split = use_property_decorate = False
+
+        def prop(self, data, name, **kw):
+            drawn.add(name)
+
+        def __getattr__(self, name):            # row(), column(), split(), ...: the same recorder
+            return lambda *a, **kw: self
+
+    fake = SimpleNamespace(layout=Layout())
+    panel.draw(fake, SimpleNamespace(**context))
+    return drawn
 
 
 def run_python(code, tmp_path):
