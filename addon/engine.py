@@ -136,7 +136,12 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
 
     def render(self, depsgraph):
         try:
-            with render_heap():     # export, set-up and passes reuse each other's freed arrays
+            import dacrt            # (loaded at registration: the add-on refuses to load without it)
+            r = depsgraph.scene.render
+            # Render > Performance > Threads: Fixed caps every native pass of the frame (export,
+            # set-up, shading kernels), not the tracer alone
+            limit = int(r.threads) if r.threads_mode == 'FIXED' else 0
+            with render_heap(), dacrt.thread_limit(limit):   # (heap: passes reuse freed arrays)
                 self._heap0 = heap_in_use()
                 self._render(depsgraph)
         except export.ExportCancelled:

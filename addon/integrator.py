@@ -229,11 +229,18 @@ class Integrator:
         # brings the path's count to the limit: the next surface only emits. Counted in passes,
         # so at a limit of 0 the first surface is still passed.
         self._transparent_stop = max(1, self.max_transparent)
+        # glass passes count against their own limit, as Cycles' transmission bounces (12, where
+        # Transparent's 8 had cut a path at its fourth pane: a wall behind three boxes of glass
+        # 0.34 where Cycles gives 0.80); a pass through glass is no transparent pass
+        self._glass_stop = max(0, int(getattr(s, 'transmission_max_bounces', 12)))
         # Cycles' sample clamps as the kernel applies them (scene/integrator.cpp): a limit on a
         # contribution's absolute channel sum, 3 x the setting; 0 is none
         self._clamps = tuple(_clamp_limit(name, getattr(s, name, 0.0))
                              for name in ('sample_clamp_direct', 'sample_clamp_indirect'))
         self._tri_transparent = self.mats.transparent[self.tri.material] & (self.tri.visibility != 0)
+        # materials whose passes count as glass: mostly refraction (Glass, Refraction, Principled
+        # transmission), the rest as transparent
+        self._mat_glass = 2.0 * self.mats.refraction.mean(axis=0) > self.mats.transparency.mean(axis=0)
         self._any_transparent = bool(self._tri_transparent.any())
         # transparent film without Transparent Glass: a camera ray that passes glass sees the
         # world behind it, drawn at alpha 1 (Cycles' refraction), where a Transparent BSDF's
@@ -949,6 +956,8 @@ class Integrator:
             return None
         if path.tb is not None:                       # past Transparent Max Bounces: emission only
             hit &= path.tb < self._transparent_stop
+        if path.gb is not None:                       # past Transmission Max Bounces: the same
+            hit &= path.gb < self._glass_stop
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)),
         # in one native pass; thr becomes albedo x thr / q, the throughput after this
@@ -982,6 +991,7 @@ class Integrator:
             ns_far = _valid_reflection_normal(np.take(ng, sel, axis=1), -np.take(path.D, np.take(idx, sel), axis=1),
                                               np.take(ns, sel, axis=1), np.take(bump[3], sel) != 0)
         tb = None if path.tb is None else np.take(path.tb, idx)
+        gb = None if path.gb is None else np.take(path.gb, idx)
         nee = None if path.nee is None else np.take(path.nee, idx)
         del hits, path
         if self.lights:
@@ -1018,10 +1028,11 @@ class Integrator:
             kept = np.flatnonzero(ok)
             P_off, wi, thr, pid, keys, pdf, prim, ns = compact(kept, P_off, wi, thr, pid, keys, pdf, prim, ns)
             tb = None if tb is None else np.take(tb, kept)
+            gb = None if gb is None else np.take(gb, kept)
             rays = None                                # repacked with the survivors' ids
         if len(pid) == 0:
             return None
-        return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb,
+        return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb, gb=gb,
                       N=ns if self.lights.tree is not None else None)
 
     # --- surfaces -------------------------------------------------------------------------------
@@ -1307,11 +1318,14 @@ class Integrator:
                 thr = path.thr = np.ones((3, len(hits)), F32)
             if path.tb is None:
                 path.tb = np.zeros(len(hits), np.int32)
+                path.gb = np.zeros(len(hits), np.int32)
             # Cycles counts transparent surfaces over the whole path: once a pass reaches the
             # limit, the next surface, this one too, is not passed (nor lit, nor bounced off:
-            # _vertex); what it emits still counts
-            spent = np.take(path.tb, rows) >= self._transparent_stop
+            # _vertex); what it emits still counts. Glass: against its own limit
             tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows))
+            glass = np.take(self._mat_glass, mat)
+            spent = np.where(glass, np.take(path.gb, rows) >= self._glass_stop,
+                             np.take(path.tb, rows) >= self._transparent_stop)
             surface = None
             if chain is not None:                   # what the data passes read here, before the pick
                 surface = self._surface(hits, rows, path.D)
@@ -1336,7 +1350,7 @@ class Integrator:
                     path.nee = np.ones(len(hits), F32)
                 path.nee[rows[stop]] = 1.0 - p[stop]
             thr[:, rows[stop]] *= opacity[stop] / (1.0 - p[stop])
-            rows = rows[go]
+            rows, glass = rows[go], glass[go]
             if not len(rows):
                 return
             if (camera and self._glass_film) or self._transmit_split:
@@ -1344,7 +1358,8 @@ class Integrator:
                                      self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_GLASS + (k << 11) + j)[0])
             else:
                 thr[:, rows] *= tau[:, go] / p[go]
-            path.tb[rows] += 1
+            path.tb[rows[~glass]] += 1
+            path.gb[rows[glass]] += 1
             # on from just behind the surface (P stepped off it away from the ray's side)
             if surface is None:
                 P, _, _, P_off = self._surface(hits, rows, path.D)

@@ -75,6 +75,7 @@ class Paths:
     prim: np.ndarray | None  # triangle the rays leave (global index; None for camera rays)
     rays: np.ndarray | None = None   # their RAY_DTYPE records when already packed
     tb: np.ndarray | None = None     # transparent surfaces passed so far (None: none yet)
+    gb: np.ndarray | None = None     # glass surfaces passed so far, with tb (their own limit)
     # light sampling's share of the throughput at the next vertex (None: all of it): 1 - p of
     # a path that stopped at a semi-transparent surface (_through), whose bounce carries 1 / (1 - p)
     nee: np.ndarray | None = None

@@ -35,6 +35,12 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
                     "through before it stops, as Cycles' Light Paths > Transparent; they do not "
                     "count as diffuse bounces",
         default=8, min=0, max=1024, soft_max=64)
+    transmission_max_bounces: IntProperty(
+        name="Transmission Max Bounces",
+        description="Glass surfaces (Glass, Refraction, Principled transmission: see-through here) "
+                    "a path passes through before it stops, as Cycles' Light Paths > Transmission "
+                    "(with its Total, both 12 by default); they do not count as transparent passes",
+        default=12, min=0, max=1024, soft_max=64)
     # Cycles' Light Paths > Clamping, with its defaults (direct off, indirect 10)
     sample_clamp_direct: FloatProperty(
         name="Clamp Direct",

@@ -80,6 +80,7 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
         col.prop(settings, "samples")
         col.prop(settings, "max_bounces")
         col.prop(settings, "transparent_max_bounces", text="Transparent")
+        col.prop(settings, "transmission_max_bounces", text="Transmission")
         col.prop(settings, "seed")
         col = layout.column(heading="Adaptive Sampling")
         col.prop(settings, "use_adaptive_sampling", text="")

@@ -66,6 +66,7 @@ def export_settings(scene, vl, messages):
     samples = layer_samples(scene, vl, int(d.samples))
     return sd.Settings(samples=samples, max_bounces=d.max_bounces,
                        transparent_max_bounces=d.transparent_max_bounces,
+                       transmission_max_bounces=d.transmission_max_bounces,
                        sample_clamp_direct=d.sample_clamp_direct,
                        sample_clamp_indirect=d.sample_clamp_indirect, filter_type=d.filter_type,
                        filter_width=d.filter_width, seed=d.seed,

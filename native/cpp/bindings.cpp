@@ -207,6 +207,9 @@ PYBIND11_MODULE(_core, m) {
     m.def("check_isa", [](const std::string& s) { return isa_name(resolve_isa(s)); },
           "Resolve an ISA request ('' = best); raises RuntimeError if the CPU lacks it");
     m.def("hardware_threads", &hardware_threads);
+    m.def("set_thread_limit", &set_thread_limit, py::arg("limit"),
+          "Cap every native pass (kernels, and traces given no thread count) at `limit` threads; 0: none");
+    m.def("thread_limit", &thread_limit);
 #ifdef DACRT_NONROBUST
     m.attr("ROBUST") = false;
 #else

@@ -133,7 +133,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
     ChunkFn fn = isa == Isa::Avx512 ? avx512::trace_chunk : (isa == Isa::Avx2 ? avx2::trace_chunk : portable::trace_chunk);
     const size_t nt = ts.valid_ids.size();
     if (n > 0 && nt > 0) {
-        int T = threads > 0 ? std::min(threads, max_workers()) : hardware_threads();
+        int T = threads > 0 ? std::min(threads, max_workers()) : default_threads();
         int levels = 0;  // a balanced tree's depth to nodes of about kSharedMinTris triangles
         while ((nt >> levels) > kSharedMinTris) ++levels;
         std::vector<uint32_t> own_ids;

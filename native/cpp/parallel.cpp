@@ -30,6 +30,19 @@ int hardware_threads() {
     return h ? int(h) : 1;
 }
 
+namespace {
+std::atomic<int> g_thread_limit{0};
+}
+
+void set_thread_limit(int limit) { g_thread_limit.store(std::max(0, limit), std::memory_order_relaxed); }
+
+int thread_limit() { return g_thread_limit.load(std::memory_order_relaxed); }
+
+int default_threads() {
+    const int h = hardware_threads(), limit = thread_limit();
+    return limit > 0 ? std::min(h, limit) : h;
+}
+
 int max_workers() {
     return std::max(hardware_threads(), int(std::thread::hardware_concurrency()));
 }

@@ -13,6 +13,16 @@ namespace dacrt {
 // Cores this process may run on (its CPU affinity), at least 1.
 int hardware_threads();
 
+// The process-wide thread limit (0: none), set by a renderer that was told to use fewer cores
+// (Blender's Render > Performance > Threads: Fixed): every kernel and the tracer's default
+// use at most this many threads. Results never depend on it.
+void set_thread_limit(int limit);
+int thread_limit();
+
+// The threads a pass may use when its caller gives no count: hardware_threads(), capped by
+// the thread limit.
+int default_threads();
+
 // The most workers a call asking for a thread count uses: the machine's hardware threads (at
 // least hardware_threads()). Results never depend on the count, and every worker beyond it
 // would only time-share a core and then stay parked in the pool for the life of the process.
@@ -25,7 +35,7 @@ void run_workers(int workers, const std::function<void(int)>& job);
 
 // Threads worth using on n items of which each thread should get at least min_per_thread.
 inline int threads_for(size_t n, size_t min_per_thread) {
-    return int(std::min(size_t(hardware_threads()), std::max<size_t>(1, n / min_per_thread)));
+    return int(std::min(size_t(default_threads()), std::max<size_t>(1, n / min_per_thread)));
 }
 
 // Splits [0, n) into one contiguous range per thread; small inputs run on the calling thread.

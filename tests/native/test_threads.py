@@ -130,3 +130,46 @@ def test_thread_counts_are_capped_at_the_hardware_threads():
     assert same == 1, "threads=1000 changed the hits"
     assert 1 <= used <= hw, f"the call used {used} threads on a machine of {hw}"
     assert after - before <= hw - 1, f"{after - before} new OS threads for a call on {hw} hardware threads"
+
+
+def _thread_cpu_seconds():
+    """{thread id: CPU seconds} of this process's threads (Linux /proc), or None elsewhere."""
+    import os
+    try:
+        tids = os.listdir("/proc/self/task")
+    except OSError:
+        return None
+    out = {}
+    for tid in tids:
+        try:
+            with open(f"/proc/self/task/{tid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        out[tid] = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    return out
+
+
+def test_the_thread_limit_keeps_kernels_and_traces_on_that_many_threads():
+    """dacrt.thread_limit(1) (Blender's Threads: Fixed 1, for a whole frame): shading kernels
+    and traces given no thread count run on the calling thread alone, with the same results;
+    only the tracer had honoured the setting, the kernels ran on every core."""
+    import pytest
+    if dacrt._core.hardware_threads() < 2 or _thread_cpu_seconds() is None:
+        pytest.skip("needs two cores and Linux /proc to see which threads ran")
+    keys = np.arange(4_000_000, dtype=np.uint32).reshape(2, -1)
+    case = build_case(*CASE)
+    scene = dacrt.Scene(case.vertices.copy(), case.triangles.copy())
+    free = (dacrt.shading.uniform2(keys, 1, 2), _trace(scene, case, threads=0))
+    me = str(threading.get_native_id())
+    with dacrt.thread_limit(1):
+        assert dacrt._core.thread_limit() == 1
+        before = _thread_cpu_seconds()
+        for _ in range(5):
+            limited = (dacrt.shading.uniform2(keys, 1, 2), _trace(scene, case, threads=0))
+        after = _thread_cpu_seconds()
+    assert dacrt._core.thread_limit() == 0
+    others = sum(after[t] - before.get(t, 0.0) for t in after if t != me)
+    mine = after[me] - before[me]
+    assert mine > 0.2 and others < 0.1 * mine, (mine, others)
+    assert all(np.array_equal(a, b) for a, b in zip(free[0], limited[0])) and _same(free[1], limited[1])

@@ -10,13 +10,14 @@ Nothing built for tracing outlives a Scene object: a frame builds one, traces, d
 """
 from __future__ import annotations
 
+import contextlib
 import os
 
 import numpy as np
 
 from . import _core
 
-__all__ = ["RAY_DTYPE", "HIT_DTYPE", "Scene", "make_rays", "isa", "supported_isas", "PARTITIONS"]
+__all__ = ["RAY_DTYPE", "HIT_DTYPE", "Scene", "make_rays", "isa", "supported_isas", "thread_limit", "PARTITIONS"]
 
 RAY_DTYPE = np.dtype([("org", "<f4", (3,)), ("dir", "<f4", (3,)), ("tfar", "<f4"), ("id", "<u4")])
 HIT_DTYPE = np.dtype([("t", "<f4"), ("prim", "<i4"), ("u", "<f4"), ("v", "<f4")])
@@ -38,6 +39,19 @@ def _requested_isa() -> str:
 def isa() -> str:
     """The instruction set the next trace call uses: DACRT_ISA if set (checked), else the best."""
     return _core.check_isa(_requested_isa())
+
+
+@contextlib.contextmanager
+def thread_limit(limit: int):
+    """Within the block, every native pass (shading kernels, and traces not given a thread
+    count) uses at most `limit` threads (0 or less: no limit); the previous limit after it. A
+    renderer told to use fewer cores (Blender's Threads: Fixed) sets it for its frame."""
+    before = _core.thread_limit()
+    _core.set_thread_limit(max(0, int(limit)))
+    try:
+        yield
+    finally:
+        _core.set_thread_limit(before)
 
 
 def _float32(a, name: str) -> np.ndarray:
