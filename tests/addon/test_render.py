@@ -764,3 +764,24 @@ def test_memory_stats_count_what_the_render_holds(scene):
     stats = next(iter(addon.last_render_stats().values()))
     film = 640 * 480 * 4 * 4 / 2 ** 20          # one float32 RGBA image: 4.7 MB
     assert stats['memory_peak_mb'] > film, stats['memory_peak_mb']
+
+
+def test_fixed_threads_cap_every_native_pass_of_the_frame(scene, monkeypatch):
+    """Render > Performance > Threads: Fixed 1 holds the process-wide thread limit at 1 for the
+    frame (export, set-up and every kernel, not the tracer alone), and lifts it after; Auto
+    sets none (tests/native/test_threads.py shows the limit keeps kernels on one thread)."""
+    import dacrt
+    from addon import integrator
+    seen = []
+    passes = integrator.Integrator.passes
+
+    def recording(self):
+        seen.append(dacrt._core.thread_limit())
+        yield from passes(self)
+    monkeypatch.setattr(integrator.Integrator, 'passes', recording)
+    lit_plane_scene(scene)
+    scene.render.threads_mode, scene.render.threads = 'FIXED', 1
+    bpy.ops.render.render()
+    scene.render.threads_mode = 'AUTO'
+    bpy.ops.render.render()
+    assert seen == [1, 0] and dacrt._core.thread_limit() == 0
