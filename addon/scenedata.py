@@ -132,6 +132,7 @@ class Material:
     normal_extension: str = 'REPEAT'
     normal_transform: Optional[np.ndarray] = None
     normal_strength: float = 1.0
+    normal_uv_map: str = ''       # the UV map whose tangents the Normal Map node reads ('' the active render one)
     bump_correction: bool = True                  # Material > Settings > Bump Map Correction (Cycles)
     # a Color Attribute or Attribute node's colour into the albedo: the attribute's name ('' the
     # render colour attribute); base_color then multiplies each point's Geometry.colors

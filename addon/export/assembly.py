@@ -381,7 +381,10 @@ class Assembly:
         wants = {k for k in set(place.slot_map) if mats[k].normal_texture is not None}
         if not wants:
             return
-        names = {self.materials.uv_maps[k] for k in wants}
+        # the tangents of the Normal Map node's own UV map ('' the active render one), not of
+        # the map its image is read on (a default node over an image on a mirrored second map
+        # had bent normals by that map's tangents: 0.11 where Cycles gives 0.62)
+        names = {getattr(mats[k], 'normal_uv_map', '') for k in wants}
         tan = a.corner_tangents(sorted(names)[0])
         if tan is None:
             self.ignore("normal map not applied: no tangents (the mesh has no such UV map, n-gons, or is "

@@ -367,13 +367,14 @@ class MaterialBuilder:
             e_tex, e_interp, e_ext, e_xf = t.texels(t.baked(lambda rgb: rgb * w32)), t.interpolation, \
                 t.extension, t.transform
         n_tex = n_interp = n_ext = n_xf = None
+        n_uv = ''
         n_strength = 1.0
         if self._normal_maps:
             t, n_strength, n_uv = self._normal_maps[0]
             if len({(m[0].key, m[1]) for m in self._normal_maps}) > 1:
                 reasons.append("BSDFs with different normal maps; the first one's for all")
-            if n_uv and n_uv not in self._uv_names:
-                reasons.append(f"normal map tangents of UV map '{n_uv}' read on the image's UV map")
+            # (tangents from the Normal Map node's UV map, '' the active render one, whichever
+            # map the image is read on: Cycles' node reads its map's tangent attribute)
             n_tex, n_interp, n_ext, n_xf = t.texels(t.pixels), t.interpolation, t.extension, t.transform
             self.normal_mapped = True
         uv_names = list(dict.fromkeys(self._uv_names))
@@ -385,6 +386,7 @@ class MaterialBuilder:
                            emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,
                            normal_texture=n_tex, normal_interpolation=n_interp or 'Linear',
                            normal_extension=n_ext or 'REPEAT', normal_transform=n_xf, normal_strength=n_strength,
+                           normal_uv_map=n_uv,
                            bump_correction=bool(getattr(getattr(mat, 'cycles', None), 'use_bump_map_correction',
                                                         True)),
                            emission=emission, texture=texture,

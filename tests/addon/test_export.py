@@ -2954,3 +2954,36 @@ def test_grease_pencil_is_said_to_be_drawn_over_the_render(scene, exported):
     assert len(said) == 1 and "drawn by Blender over the render" in said[0], data.messages
     assert not any("skipped" in t and "Suzanne" in t for _, t in data.messages), data.messages
     assert data.skipped.get('objects_unsupported', 0) == 0
+
+
+@pytest.mark.parametrize("node_map", ["", "UVMap", "Second"])
+def test_normal_map_tangents_are_of_the_normal_map_nodes_uv_map(scene, exported, node_map):
+    """The image of a normal map is read on its own UV map (a UV Map node: 'Second', mirrored in
+    u), but the tangents are those of the Normal Map node's map ('' the active render one), as
+    Cycles reads that map's tangent attribute: DACRT took the image's map's (a helper's plane
+    0.11 where Cycles gives 0.62), silently for the node's default."""
+    setup(scene)
+    img = bpy.data.images.new("Normals", 2, 2)
+    img.colorspace_settings.name = 'Non-Color'
+    mat = scenes.normal_map_material("Mapped", img)
+    nt = mat.node_tree
+    uv_node = nt.nodes.new('ShaderNodeUVMap')
+    uv_node.uv_map = 'Second'
+    nt.links.new(uv_node.outputs[0], nt.nodes['Image Texture'].inputs['Vector'])
+    nt.nodes['Normal Map'].uv_map = node_map
+    ob = scenes.plane("P", materials=(mat,))
+    me = ob.data
+    first, second = me.uv_layers[0] if len(me.uv_layers) else me.uv_layers.new(name='UVMap'), None
+    first.name = 'UVMap'
+    second = me.uv_layers.new(name='Second')
+    for i, loop in enumerate(me.loops):
+        u, v = first.data[i].uv
+        second.data[i].uv = (1.0 - u, v)
+    me.uv_layers['UVMap'].active_render = True
+    data = exported()
+    me.calc_tangents(uvmap=node_map or 'UVMap')
+    want = np.array([[list(me.loops[c].tangent) + [me.loops[c].bitangent_sign] for c in t.loops]
+                     for t in me.loop_triangles])
+    got = data.geometry.tangents[data.geometry.object_index == data.object_names.index("P")]
+    np.testing.assert_allclose(got, want, atol=1e-5)
+    assert not any("normal map" in t for _, t in data.messages), data.messages
