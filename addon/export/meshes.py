@@ -176,7 +176,7 @@ class MeshArrays:
         self.rebuilt = ()
         # every UV map by name (a material may read one by a UV Map node); corner_uvs: the
         # active render one, which textures read otherwise
-        self.uv_layers = self._read_uvs(me) if want_uvs else {}
+        self.uv_layers = self._read_uvs(me, corner_vert) if want_uvs else {}
         self.active_uv = next((l.name for l in me.uv_layers if l.active_render), '')
         self.corner_uvs = self.uv_layers.get(self.active_uv)
 
@@ -313,8 +313,11 @@ class MeshArrays:
         return self.per_corner(rows, index, np.empty((nt, 3, 4), np.float32))
 
     @staticmethod
-    def _read_uvs(me):
-        """{name: (corners, 2) float32} of every UV map of the mesh."""
+    def _read_uvs(me, corner_vert):
+        """{name: (corners, 2) float32} of every UV map of the mesh, and of every 2D vector
+        attribute on points or faces (a Geometry Nodes Store Named Attribute's, on Points by
+        default), per corner: Cycles' UV Map node reads an attribute of that name on any
+        domain (they had read (0, 0), silently)."""
         nl = len(me.loops)
         layers = {}
         for layer in me.uv_layers:
@@ -325,6 +328,22 @@ class MeshArrays:
             else:
                 layer.uv.foreach_get('vector', uv)
             layers[layer.name] = uv.reshape(nl, 2)
+        corner_face = None
+        for attr in me.attributes:
+            if attr.data_type != 'FLOAT2' or attr.domain not in ('POINT', 'FACE') or attr.name in layers \
+                    or attr.name.startswith('.'):
+                continue
+            rows = np.empty(len(attr.data) * 2, np.float32)
+            attr.data.foreach_get('vector', rows)
+            rows = rows.reshape(-1, 2)
+            if attr.domain == 'POINT':
+                layers[attr.name] = rows[corner_vert]
+            else:
+                if corner_face is None:
+                    sizes = np.empty(len(me.polygons), np.int32)
+                    me.polygons.foreach_get('loop_total', sizes)
+                    corner_face = np.repeat(np.arange(len(sizes), dtype=np.int32), sizes)
+                layers[attr.name] = rows[corner_face]
         return layers
 
     def per_corner(self, rows, index, out):

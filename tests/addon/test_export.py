@@ -799,6 +799,27 @@ def test_uv_map_node_reads_its_map_by_name(scene, exported):
     assert "images on several UV maps ('UVMap', 'Detail')" in table["Two"].approximated
 
 
+@pytest.mark.parametrize("domain", ["POINT", "FACE"])
+def test_uv_map_node_reads_a_2d_vector_attribute_on_points_or_faces(scene, exported, domain):
+    """A UV Map node naming a 2D vector attribute on points or faces (Geometry Nodes' Store
+    Named Attribute writes Points by default) reads it per corner, as Cycles reads an attribute
+    of that name on any domain; it had read (0, 0), silently."""
+    setup(scene)
+    img = bpy.data.images.new("Grey", 2, 2)
+    rng = np.random.default_rng(8)
+    verts = [(x, y, 0.0) for x in range(3) for y in range(3)]
+    polys = [(0, 3, 4, 1), (1, 4, 5, 2), (3, 6, 7, 4), (4, 7, 8, 5)]
+    ob = scenes.mesh("G", verts, polys, materials=(_uv_map_material("ByName", img, "gnuv"),))
+    me = ob.data
+    attr = me.attributes.new("gnuv", 'FLOAT2', domain)
+    values = rng.random((len(attr.data), 2)).astype(np.float32)
+    attr.data.foreach_set('vector', values.ravel())
+    data = exported()
+    want = np.array([[values[me.loops[c].vertex_index if domain == 'POINT' else t.polygon_index]
+                      for c in t.loops] for t in me.loop_triangles], np.float32)
+    np.testing.assert_array_equal(data.geometry.uvs[of_object(data, "G")], want)
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_quad_tessellation_is_blenders(scene, seed):
     """Meshes of triangles and quads are tessellated here as Blender does (reading its
