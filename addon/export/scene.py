@@ -424,9 +424,12 @@ class Exporter:
         """The index of the object's entry (name, pass index, asset, light group); instances of
         one object under instancers of other light groups get an entry each."""
         group = _lightgroup(ob, parent)
-        idx = self._object_index.get((ob.name, group))
+        # by the full name: a library-linked object may share a local one's name ('Cube' and
+        # 'Cube [lib.blend]', whose pass indices had merged); the entry keeps Blender's name
+        key = (getattr(ob, 'name_full', ob.name), group)
+        idx = self._object_index.get(key)
         if idx is None:
-            idx = self._object_index[ob.name, group] = len(self.object_names)
+            idx = self._object_index[key] = len(self.object_names)
             self.object_names.append(ob.name)
             self.object_pass_index.append(ob.pass_index)   # Cycles: the instanced object's own
             top = ob

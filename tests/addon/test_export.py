@@ -3008,3 +3008,24 @@ def test_normal_map_tangents_are_of_the_normal_map_nodes_uv_map(scene, exported,
     got = data.geometry.tangents[data.geometry.object_index == data.object_names.index("P")]
     np.testing.assert_allclose(got, want, atol=1e-5)
     assert not any("normal map" in t for _, t in data.messages), data.messages
+
+
+def test_a_linked_object_named_as_a_local_one_keeps_its_own_entry(scene, exported, tmp_path):
+    """An object linked from a library beside a local object of the same name ('Cube' and
+    'Cube [lib.blend]') keeps its own entry: its pass index (Object Index pass) had been the
+    local one's, as entries were keyed by the short name."""
+    setup(scene)
+    cube = scenes.plane("Cube")
+    cube.pass_index = 5
+    lib = tmp_path / "lib.blend"
+    bpy.data.libraries.write(str(lib), {cube})
+    cube.pass_index, cube.location.x = 1, 3.0
+    with bpy.data.libraries.load(str(lib), link=True) as (_, linked):
+        linked.objects = ["Cube"]
+    scene.collection.objects.link(linked.objects[0])
+    assert linked.objects[0].name == cube.name and linked.objects[0].name_full != cube.name_full
+    data = exported()
+    g = data.geometry
+    x = g.vertices[g.triangles].mean(axis=1)[:, 0]
+    index = np.asarray(data.object_pass_index)[g.object_index]
+    assert set(index[x > 2.0]) == {1} and set(index[x < 1.0]) == {5}, (data.object_names, data.object_pass_index)
