@@ -394,7 +394,7 @@ class Assembly:
         names = {getattr(mats[k], 'normal_uv_map', '') for k in wants}
         tan = a.corner_tangents(sorted(names)[0])
         if tan is None:
-            self.ignore("normal map not applied: no tangents (the mesh has no such UV map, n-gons, or is "
+            self.ignore("normal map not applied: no tangents (the mesh has no such UV map, or is "
                          "a curve, text or metaball; Cycles derives them from generated coordinates)", place.name)
             return
         if out.tangents is None:

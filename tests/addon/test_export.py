@@ -3037,3 +3037,31 @@ def test_a_linked_object_named_as_a_local_one_keeps_its_own_entry(scene, exporte
     x = g.vertices[g.triangles].mean(axis=1)[:, 0]
     index = np.asarray(data.object_pass_index)[g.object_index]
     assert set(index[x > 2.0]) == {1} and set(index[x < 1.0]) == {5}, (data.object_names, data.object_pass_index)
+
+
+def test_a_mesh_with_n_gons_keeps_its_normal_map(scene, exported):
+    """Blender's calc_tangents refuses n-gons, and one n-gon (a default cylinder's caps) had
+    dropped the normal map of the whole mesh; the tangents now come from the render's own
+    triangles (as Cycles runs mikktspace on its triangles): the sides' are those of the same
+    cylinder with triangle-fan caps, and nothing is reported."""
+    setup(scene)
+    img = bpy.data.images.new("Normals", 2, 2)
+    img.colorspace_settings.name = 'Non-Color'
+    mat = scenes.normal_map_material("Mapped", img)
+    sides = {}
+    for fill, x in (('NGON', 0.0), ('TRIFAN', 5.0)):
+        bpy.ops.mesh.primitive_cylinder_add(vertices=12, location=(x, 0, 0), end_fill_type=fill)
+        ob = bpy.context.active_object
+        ob.name = fill
+        ob.data.materials.append(mat)
+    data = exported()
+    g = data.geometry
+    assert g.tangents is not None and not any("normal map" in t for _, t in data.messages), data.messages
+    for fill in ('NGON', 'TRIFAN'):
+        sel = of_object(data, fill)
+        side = np.abs(g.normals[sel][:, 0, 2]) < 0.5
+        key = np.round(g.vertices[g.triangles[sel][side]].mean(axis=1) - (5.0 if fill == 'TRIFAN' else 0.0, 0, 0), 4)
+        order = np.lexsort(key.T)
+        sides[fill] = g.tangents[sel][side][order]
+        assert np.abs(sides[fill][..., :3]).sum(axis=2).min() > 0.5       # every side corner has one
+    np.testing.assert_allclose(sides['NGON'], sides['TRIFAN'], atol=1e-5)
