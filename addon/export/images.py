@@ -93,9 +93,17 @@ def _file_texels(path, img, reasons, unassociate):
     if spec is None:
         return None
     raw = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32).reshape(spec.height, spec.width, -1)[::-1]
+    raw = np.ascontiguousarray(raw)
+    ch = raw.shape[2]
+    if img.alpha_mode == 'NONE' and ch in (2, 4):
+        raw[..., ch - 1] = 1.0          # alpha ignored, as Blender's own buffer has it
+    elif ch == 4 and not spec.get_int_attribute('oiio:UnassociatedAlpha', 0):
+        # a file stored associated (OpenEXR always; TIFFs other tools write) comes back so
+        # whatever was asked: straight here, as _linear_rgba expects, which associates it again
+        # (an EXR sequence's frame or a UDIM tile had its alpha applied twice: 0.53-0.78x Cycles)
+        raw = _unassociated(raw)
     # byte files are byte buffers in Blender; deeper ones float buffers in the image's space
-    return _linear_rgba(np.ascontiguousarray(raw), img, reasons, unassociate,
-                        byte=spec.format.basetype == oiio.UINT8, encoded=True)
+    return _linear_rgba(raw, img, reasons, unassociate, byte=spec.format.basetype == oiio.UINT8, encoded=True)
 
 
 def _stacked_tiles(tiles):
@@ -194,6 +202,10 @@ def _premultiplied_bytes(img, buf, from_file, reasons):
     stand in for Blender's (h, w, 4) buffer; a packed image or an unreadable file keeps
     Blender's, reported."""
     path = bpy.path.abspath(img.filepath_raw, library=img.library) if from_file else ''
+    if img.source == 'TILED' and len(img.tiles):     # the first tile's file (Blender's pixels are its)
+        number = img.tiles[0].number
+        tx, ty = (number - 1001) % 10, (number - 1001) // 10
+        path = path.replace('<UDIM>', str(number)).replace('<UVTILE>', f"u{tx + 1}_v{ty + 1}")
     try:
         import OpenImageIO as oiio
         as_stored = oiio.ImageSpec()

@@ -697,6 +697,8 @@ class MaterialBuilder:
         color, strength = evaluate.input(color_socket, True), evaluate.input(strength_socket, False)
         if color.tex is None and strength.tex is None:
             return np.asarray(color.value, np.float64).reshape(3) * float(strength.value.reshape(-1)[0]), None
+        if color.tex is not None and strength.tex is not None:
+            strength = self._strength_beside(color.tex, strength, label, reasons)
         link = linked_link(color_socket)
         # an image with non-finite texels is baked below, where they become 0 (noted): its
         # average would be NaN, and the emitter lost that colour channel altogether
@@ -745,6 +747,27 @@ class MaterialBuilder:
             weight = np.ones(3)
         mean = np.asarray(tex.pixels[..., :3], np.float64).reshape(-1, 3).mean(axis=0)
         return mean * weight, (tex, weight)
+
+    @staticmethod
+    def _strength_beside(ctex, strength, label, reasons):
+        """The Strength of an emission whose colour is an image too: per texel where it reads
+        the same image on the same grid (multiplied before the blend, where Cycles blends each
+        and then multiplies: said unless lookups are Closest), else its average (said). Two
+        images of other sizes had failed the render with a broadcast error."""
+        stex = strength.tex
+        same = (stex.key == ctex.key and stex.pixels.shape[:2] == ctex.pixels.shape[:2]
+                and stex.interpolation == ctex.interpolation and stex.extension == ctex.extension
+                and np.array_equal(np.asarray(stex.transform if stex.transform is not None else np.eye(3)),
+                                   np.asarray(ctex.transform if ctex.transform is not None else np.eye(3))))
+        if same:
+            if ctex.interpolation != 'Closest':
+                reasons.append(f"{label} colour and strength from image '{ctex.name}' multiplied per texel "
+                               "before the blend (Cycles blends each, then multiplies)")
+            return strength
+        reasons.append(f"{label} strength from image '{stex.name}' beside a colour from image '{ctex.name}': "
+                       "the strength's average over its texels used")
+        value = np.asarray(strength.value, np.float64)
+        return nodeeval.Field(value.reshape(-1, value.shape[-1]).mean(axis=0))
 
     def _evaluated_closure(self, socket, reasons):
         f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE, attribute=self._attribute).input(socket, True)

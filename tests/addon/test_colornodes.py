@@ -504,3 +504,30 @@ def test_alpha_reading_chain_on_an_8bit_image_is_reported_for_emission_too(scene
     m = _exported_material(mat)
     assert "colour nodes after image 'decal.png' applied to its texels before the blend" in m.approximated, \
         m.approximated
+
+
+def test_emission_colour_and_strength_from_two_images(scene):
+    """An emission's Color from one image and its Strength from another of another size: the
+    strength's average, said (the render had failed: 'operands could not be broadcast together
+    with shapes (4,4,3) (3,5,1)'); from the same image, multiplied per texel and said unless
+    the lookup is Closest."""
+    colour = scenes.float_image("Colour", np.full((4, 4, 4), 0.5, np.float32))
+    mask_px = np.zeros((3, 5, 4), np.float32)
+    mask_px[..., :3] = np.linspace(0, 1, 15, dtype=np.float32).reshape(3, 5)[..., None]
+    mask_px[..., 3] = 1.0
+    mask = scenes.float_image("Mask", mask_px)
+
+    def material(name, strength_image):
+        mat, nt, out = scenes._material(name)
+        em = nt.nodes.new('ShaderNodeEmission')
+        a, b = nt.nodes.new('ShaderNodeTexImage'), nt.nodes.new('ShaderNodeTexImage')
+        a.image, b.image = colour, strength_image
+        nt.links.new(a.outputs['Color'], em.inputs['Color'])
+        nt.links.new(b.outputs['Color'], em.inputs['Strength'])
+        nt.links.new(em.outputs[0], out.inputs['Surface'])
+        return _exported_material(mat)
+    two = material("Two", mask)
+    assert "strength from image 'Mask' beside a colour from image 'Colour'" in two.approximated
+    np.testing.assert_allclose(two.emission, 0.5 * cn.gray(mask_px[..., :3]).mean(), rtol=1e-5)
+    same = material("Same", colour)
+    assert "colour and strength from image 'Colour' multiplied per texel" in same.approximated
