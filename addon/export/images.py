@@ -242,17 +242,25 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
     # Cycles associates only 4-channel files (a grey+alpha one stays straight), yet divides by
     # alpha at a linked Alpha output all the same
     associate = ch == 4 and associates_alpha(img)
+    straight8 = None
     if byte:   # the bytes, once: Blender's byte pixels are k x (1/255) in float32
         k8 = np.rint(rgba * 255.0).astype(np.uint8)
+        straight8 = k8
         if associate:                            # integer c * a / 255, as Cycles associates
+            k8 = k8.copy()
             c = k8[..., :3].astype(np.uint16) * k8[..., 3:4]
             k8[..., :3] = (c + 1 + (c >> 8)) >> 8       # c // 255 for c <= 255^2, without a division
     kind = space_kind(img, reasons) if byte or encoded else None
     if kind == CONVERT:
-        # Cycles converts what it stores (bytes associated as above; a deeper file's values,
-        # associated) to scene linear; its lookup blends those and divides by alpha after
+        # Cycles converts what it stores to scene linear (a byte image it must convert is
+        # loaded as half floats and associated in float, not in bytes: the truncating byte
+        # product had darkened low-alpha texels, (242, 163, 102, 40) in ACEScg 0.97x and P3
+        # (200, 120, 60, 12) blue 0.18x Cycles; a deeper file's values, associated); its
+        # lookup blends those and divides by alpha after
         if byte:
-            rgba[..., :3] = k8[..., :3] / np.float32(255.0)
+            rgba[..., :3] = straight8[..., :3] / np.float32(255.0)
+            if associate:
+                rgba[..., :3] *= straight8[..., 3:4] / np.float32(255.0)
         elif associate:
             rgba[..., :3] *= rgba[..., 3:4]
         rgba = to_scene_linear(rgba, img, keep_alpha_out=img.alpha_mode == 'CHANNEL_PACKED')
