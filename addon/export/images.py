@@ -163,6 +163,16 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
             texels = _file_texels(path, img, reasons, unassociate)
             if texels is not None:
                 return texels
+    if from_file and ch == 4 and associates_alpha(img):
+        # Cycles reads the file and its own alpha flag decides, not Blender's Straight /
+        # Premultiplied switch: where the two disagree Blender's buffer is not what Cycles
+        # renders (a 16-bit PNG set to Premultiplied 3.4-9.8x Cycles; a TIFF stored
+        # associated, or an EXR set to Straight, 0.40-0.64x): read the file as Cycles does
+        path = bpy.path.abspath(img.filepath_raw, library=img.library)
+        if _file_alpha_differs(path, img):
+            texels = _file_texels(path, img, reasons, unassociate)
+            if texels is not None:
+                return texels
     if not img.is_float and ch == 4 and img.alpha_mode == 'PREMUL':
         buf = _premultiplied_bytes(img, buf, from_file, reasons)
     return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file)
@@ -178,6 +188,33 @@ def _sequence_frame(img, reasons, unassociate, user, scene_frame):
         reasons.append(f"image sequence '{img.name}': frame {frame} could not be read from '{path}' "
                        "(magenta, as Cycles)")
     return texels
+
+
+def _file_alpha_differs(path, img):
+    """Whether the RGBA file at path stores its alpha otherwise than Blender's buffer of `img`
+    takes it: associated (OpenEXR, a TIFF written so) where the image is not a float one set to
+    Premultiplied, or straight in more than 8 bits where it is set to Premultiplied (8-bit ones:
+    _premultiplied_bytes)."""
+    if img.source == 'TILED':
+        return False         # (tiles: udim_tiles reads the others; the first as Blender has it)
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        return False
+    config = oiio.ImageSpec()
+    config.attribute('oiio:UnassociatedAlpha', 1)
+    inp = oiio.ImageInput.open(path, config) if os.path.isfile(path) else None
+    if inp is None:
+        oiio.geterror()
+        return False
+    spec = inp.spec()
+    inp.close()
+    if spec.nchannels != 4:
+        return False
+    associated = not spec.get_int_attribute('oiio:UnassociatedAlpha', 0)
+    if associated:
+        return not (img.is_float and img.alpha_mode == 'PREMUL')
+    return img.alpha_mode == 'PREMUL' and spec.format.basetype != oiio.UINT8
 
 
 def _grey_alpha_integer_file(path):
