@@ -646,7 +646,7 @@ def test_progressive_redraws_take_at_most_a_fifth_of_the_time(monkeypatch):
             clock[0] += 1.0
             draws.append(final)
 
-        update_result = update_progress = update_stats = lambda self, *a, **k: None
+        update_result = update_progress = update_stats = update_memory_stats = lambda self, *a, **k: None
         _status = staticmethod(lambda p, elapsed: "")
         cancel_requested = lambda self: False
 
@@ -656,7 +656,8 @@ def test_progressive_redraws_take_at_most_a_fifth_of_the_time(monkeypatch):
             yield types.SimpleNamespace(samples_done=i, samples_total=n, fraction=i / n)
 
     integ = types.SimpleNamespace(film=None)
-    engine_module.DACRTRenderEngine._steps(Fake(), passes(100), integ, None, None, 0.0, 0.0, None)
+    engine_module.DACRTRenderEngine._steps(Fake(), passes(100), integ, None, None, 0.0, engine_module._Memory(0, None),
+                                           None)
     assert draws[-1] is True and draws.count(True) == 1
     assert 5 <= len(draws) <= 10, len(draws)        # every ~4 s of a 30 s render (was: every pass)
 
