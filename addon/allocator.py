@@ -66,6 +66,37 @@ def heap_in_use():
     return int(info.uordblks) + int(info.hblkhd)
 
 
+def _status_kb(field):
+    try:
+        with open('/proc/self/status') as f:
+            for line in f:
+                if line.startswith(field + ':'):
+                    return int(line.split()[1])
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def rss_peak_reset():
+    """Reset the process's peak resident size to its current one (Linux clear_refs 5) and
+    return that size in bytes, or None where it cannot be done."""
+    try:
+        with open('/proc/self/clear_refs', 'w') as f:
+            f.write('5')
+    except OSError:
+        return None
+    kb = _status_kb('VmRSS')
+    return None if kb is None else kb * 1024
+
+
+def rss_peak():
+    """The process's peak resident size in bytes since rss_peak_reset (VmHWM), or None: it
+    sees the export's temporaries (an 8K image's conversion) that heap samples between the
+    passes miss."""
+    kb = _status_kb('VmHWM')
+    return None if kb is None else kb * 1024
+
+
 def _numpy_madvise_switch():
     """numpy's switch for its per-array huge-page advice (returns the previous setting), or
     None where this numpy has none."""

@@ -786,3 +786,53 @@ def test_fixed_threads_cap_every_native_pass_of_the_frame(scene, monkeypatch):
     scene.render.threads_mode = 'AUTO'
     bpy.ops.render.render()
     assert seen == [1, 0] and dacrt._core.thread_limit() == 0
+
+
+def test_a_frames_export_is_freed_without_a_cyclic_collection(scene, monkeypatch):
+    """After a render nothing of its export stays alive waiting for Python's cyclic garbage
+    collector, which big numpy arrays never prompt: the exporter's tables referred back to it,
+    and every re-render of a scene with a 4K texture kept that frame's texels (+576 MB each,
+    a helper measured; Cycles stays flat)."""
+    import gc
+    import weakref
+    from addon.export import scene as export_scene
+    made = []
+    init = export_scene.Exporter.__init__
+
+    def recording(self, *args, **kwargs):
+        made.append(weakref.ref(self))
+        init(self, *args, **kwargs)
+    monkeypatch.setattr(export_scene.Exporter, '__init__', recording)
+    lit_plane_scene(scene)
+    mat, nt, out = scenes._material("Textured")
+    d, tex = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image("Tex", np.full((64, 64, 4), 0.5, np.float32))
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    scenes.plane("Textured", size=2.0, location=(0, 0, 0.5), materials=(mat,)).data.uv_layers.new(name="UVMap")
+    gc.collect()
+    gc.disable()
+    try:
+        bpy.ops.render.render()
+        bpy.ops.render.render()
+        assert made and all(ref() is None for ref in made), "an export outlived its render"
+    finally:
+        gc.enable()
+
+
+def test_memory_peak_counts_the_exports_temporaries(scene, monkeypatch):
+    """The reported peak counts what the export held for a moment (an 8K image's conversion:
+    4.4 GB where samples between the passes saw 1.6): 200 MB touched and freed in the export
+    are in it."""
+    from addon import export
+    real = export.export_scene
+
+    def heavy(*args, **kwargs):
+        block = np.ones(200 * 2 ** 20 // 8)          # touched: resident
+        del block
+        return real(*args, **kwargs)
+    monkeypatch.setattr(export, 'export_scene', heavy)
+    lit_plane_scene(scene)
+    bpy.ops.render.render()
+    peak = next(iter(addon.last_render_stats().values()))['memory_peak_mb']
+    assert peak > 150, peak
