@@ -64,6 +64,7 @@ materials (closure, aovs, images, normalmaps, reflectors, shadersockets, objecti
 (meshes, strands, placement, assembly), errors.
 """
 
+from . import images
 from .camera import export_camera
 from .errors import ExportCancelled, ExportError
 from .scene import Exporter
@@ -80,9 +81,11 @@ def export_scene(depsgraph, check_break=None, camera=None):
     the scene's camera (RenderEngine.camera_override: a sequencer strip's camera), or None.
     """
     exporter = Exporter(depsgraph, check_break, camera)
+    images._check_break[0] = check_break
     try:
         return exporter.run()
     finally:
+        images._check_break[0] = None
         # the exporter's tables refer back to it (a mesh's lazy Generated-coordinates source is
         # one of its methods): dropped here, the frame's export (image texels included) goes
         # with the SceneData it made, not at some later cyclic collection (a 4K texture's

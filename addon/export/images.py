@@ -12,9 +12,21 @@ import numpy as np
 
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stored_texels
 from .colorspaces import CONVERT, DATA, LINEAR, SRGB, space_kind, to_scene_linear
+from .errors import ExportCancelled
 from .imageuser import sequence_path, user_frame
 
 MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
+
+# The running export's cancel check (export_scene sets it): a big image's conversion takes
+# seconds (an 8K PNG ~11 s here), where polling between objects alone answered Esc 14-18 s late
+_check_break = [None]
+
+
+def poll():
+    """Raise ExportCancelled if the user cancelled the running export."""
+    check = _check_break[0]
+    if check is not None and check():
+        raise ExportCancelled()
 
 
 def associates_alpha(img):
@@ -145,8 +157,10 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
         n = w * h * ch
         if n == 0:
             raise ValueError
+        poll()
         buf = np.empty(n, np.float32)
         img.pixels.foreach_get(buf)
+        poll()
     except (RuntimeError, ValueError, ReferenceError):
         reasons.append(f"image '{img.name}' could not be loaded (magenta, as Cycles)")
         return None
@@ -267,6 +281,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
     texels as Cycles stores them for lookup (_stored_texels; from_file: Cycles reads the image's
     file, not Blender's buffer). Spaces other than sRGB and scene linear are converted through
     OpenColorIO (colorspaces) from the values Cycles stores, as its loader converts them."""
+    poll()
     h, w, ch = buf.shape
     rgba = np.empty((h, w, 4), np.float32)
     rgba[..., :min(ch, 4)] = buf[..., :4]
@@ -287,6 +302,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
             k8 = k8.copy()
             c = k8[..., :3].astype(np.uint16) * k8[..., 3:4]
             k8[..., :3] = (c + 1 + (c >> 8)) >> 8       # c // 255 for c <= 255^2, without a division
+    poll()
     kind = space_kind(img, reasons) if byte or encoded else None
     if kind == CONVERT:
         # Cycles converts what it stores to scene linear (a byte image it must convert is
@@ -304,6 +320,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
         stored = EncodedTexels(rgba.copy(), False, True) if unassociate else None
         return ImageTexels(_unassociated(rgba) if unassociate else rgba, stored)
     stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, associate, kind, k8)
+    poll()
     if byte:   # byte buffers are in the image's colour space; float ones are linear
         decode = kind == SRGB
         if unassociate and (associate or ch == 2):
@@ -331,6 +348,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
                 rgba = _unassociated(rgba)
     elif unassociate:      # float buffers are linear and associated
         rgba = _unassociated(rgba)
+    poll()
     return ImageTexels(rgba, stored)
 
 

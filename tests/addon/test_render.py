@@ -836,3 +836,30 @@ def test_memory_peak_counts_the_exports_temporaries(scene, monkeypatch):
     bpy.ops.render.render()
     peak = next(iter(addon.last_render_stats().values()))['memory_peak_mb']
     assert peak > 150, peak
+
+
+def test_cancel_is_answered_inside_an_images_conversion(scene, monkeypatch, capfd):
+    """An 8K image's conversion takes seconds (~11 s here): Esc pressed while it runs is
+    answered between its steps, not after it (the export polled between objects only, and a
+    helper's cancel came back 14-18 s after it was asked)."""
+    from addon.export import images
+    state = {'converting': False, 'finished': 0}
+    real = images._linear_rgba
+
+    def converting(*args, **kwargs):
+        state['converting'] = True
+        out = real(*args, **kwargs)
+        state['finished'] += 1
+        return out
+    monkeypatch.setattr(images, '_linear_rgba', converting)
+    monkeypatch.setattr(engine_module.DACRTRenderEngine, 'cancel_requested', lambda self: state['converting'])
+    lit_plane_scene(scene)
+    mat, nt, out = scenes._material("Textured")
+    d, tex = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image("Tex", np.full((64, 64, 4), 0.5, np.float32))
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    scenes.plane("Textured", size=2.0, location=(0, 0, 0.5), materials=(mat,))
+    bpy.ops.render.render()
+    assert state['converting'] and state['finished'] == 0
+    assert "render cancelled during scene export" in capfd.readouterr().out
