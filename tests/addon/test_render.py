@@ -27,6 +27,17 @@ def lit_plane_scene(scene, albedo=(0.2, 0.4, 0.6), size=(16, 12)):
     scene.dacrt.samples = 4
 
 
+def textured_plane_scene(scene):
+    """lit_plane_scene with a plane above the ground whose diffuse colour is a 64x64 image."""
+    lit_plane_scene(scene)
+    mat, nt, out = scenes._material("Textured")
+    d, tex = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image("Tex", np.full((64, 64, 4), 0.5, np.float32))
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    scenes.plane("Textured", size=2.0, location=(0, 0, 0.5), materials=(mat,)).data.uv_layers.new(name="UVMap")
+
+
 def rss_mb():
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
@@ -803,13 +814,7 @@ def test_a_frames_export_is_freed_without_a_cyclic_collection(scene, monkeypatch
         made.append(weakref.ref(self))
         init(self, *args, **kwargs)
     monkeypatch.setattr(export_scene.Exporter, '__init__', recording)
-    lit_plane_scene(scene)
-    mat, nt, out = scenes._material("Textured")
-    d, tex = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeTexImage')
-    tex.image = scenes.float_image("Tex", np.full((64, 64, 4), 0.5, np.float32))
-    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
-    scenes.plane("Textured", size=2.0, location=(0, 0, 0.5), materials=(mat,)).data.uv_layers.new(name="UVMap")
+    textured_plane_scene(scene)
     gc.collect()
     gc.disable()
     try:
@@ -828,8 +833,11 @@ def test_memory_peak_counts_the_exports_temporaries(scene, monkeypatch):
     real = export.export_scene
 
     def heavy(*args, **kwargs):
-        block = np.ones(200 * 2 ** 20 // 8)          # touched: resident
-        del block
+        import mmap
+        # pages of its own (not the heap's free blocks an earlier test left resident), touched
+        block = mmap.mmap(-1, 200 * 2 ** 20)
+        np.frombuffer(block, np.uint8)[::4096] = 1
+        block.close()
         return real(*args, **kwargs)
     monkeypatch.setattr(export, 'export_scene', heavy)
     lit_plane_scene(scene)
@@ -853,13 +861,7 @@ def test_cancel_is_answered_inside_an_images_conversion(scene, monkeypatch, capf
         return out
     monkeypatch.setattr(images, '_linear_rgba', converting)
     monkeypatch.setattr(engine_module.DACRTRenderEngine, 'cancel_requested', lambda self: state['converting'])
-    lit_plane_scene(scene)
-    mat, nt, out = scenes._material("Textured")
-    d, tex = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeTexImage')
-    tex.image = scenes.float_image("Tex", np.full((64, 64, 4), 0.5, np.float32))
-    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
-    scenes.plane("Textured", size=2.0, location=(0, 0, 0.5), materials=(mat,))
+    textured_plane_scene(scene)
     bpy.ops.render.render()
     assert state['converting'] and state['finished'] == 0
     assert "render cancelled during scene export" in capfd.readouterr().out
