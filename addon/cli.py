@@ -94,7 +94,6 @@ def save_render(scene, png, exr):
             settings.color_depth = depth
             if fmt != 'PNG':    # lossless, whatever the .blend's output uses (DWAA: up to 7.6% off)
                 settings.exr_codec = 'ZIP'
-
             try:
                 image.save_render(filepath=os.path.abspath(path), scene=scene)
                 written.append(path)

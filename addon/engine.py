@@ -196,7 +196,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
                     self._integrate(integ, result, scene_data, t0, view)
                 finally:
                     self._report_messages(integ.messages)    # also when integration failed
-                    per_view.append(dict(integ.stats or {}, memory_peak_mb=getattr(self, '_memory_peak', 0.0)))
+                    memory = getattr(self, '_memory', None)
+                    per_view.append(dict(integ.stats or {}, memory_peak_mb=memory.peak if memory else 0.0))
                 if self.cancel_requested():
                     break
         finally:
@@ -246,7 +247,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
     def _integrate(self, integ, result, scene_data, t0, view=None):
         memory = _Memory(_scene_bytes(scene_data), getattr(self, '_heap0', None), getattr(self, '_rss0', None))
         self.update_memory_stats(memory_used=memory.sample(), memory_peak=memory.peak)
-        self._memory_peak = memory.peak
+        self._memory = memory           # (its peak goes into the view's stats)
         steps = integ.passes()
         try:
             self._steps(steps, integ, result, scene_data, t0, memory, view)
@@ -274,7 +275,6 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             used = memory.sample()
             self.update_memory_stats(memory_used=used, memory_peak=memory.peak)
             self.update_stats(f"Mem:{used:.1f}M, Peak:{memory.peak:.1f}M", self._status(progress, now - t0))
-            self._memory_peak = memory.peak
             if self.cancel_requested():
                 break
         if progress is None or progress.samples_done < progress.samples_total or last_draw == 0:

@@ -62,8 +62,7 @@ def udim_tiles(img, first, reasons, unassociate):
     pattern = bpy.path.abspath(img.filepath_raw, library=img.library)
     unread = []
     for number in rest:
-        tx, ty = (number - 1001) % 10, (number - 1001) // 10
-        path = pattern.replace('<UDIM>', str(number)).replace('<UVTILE>', f"u{tx + 1}_v{ty + 1}")
+        path = _tile_path(pattern, number)
         texels = _file_texels(path, img, reasons, unassociate) if '<' not in path and path != pattern else None
         if texels is None:
             unread.append(number)
@@ -76,6 +75,13 @@ def udim_tiles(img, first, reasons, unassociate):
         for number in unread:
             tiles[number] = np.array(MISSING_IMAGE + (1.0,), np.float32).reshape(1, 1, 4)
     return _stacked_tiles(tiles)
+
+
+def _tile_path(pattern, number):
+    """The file of UDIM tile `number` of an image whose path is `pattern` ('<UDIM>' or
+    '<UVTILE>' in it)."""
+    tx, ty = (number - 1001) % 10, (number - 1001) // 10
+    return pattern.replace('<UDIM>', str(number)).replace('<UVTILE>', f"u{tx + 1}_v{ty + 1}")
 
 
 def _open_straight(path):
@@ -170,20 +176,15 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     buf = buf.reshape(h, w, ch)
     from_file = not _read_from_blender(img)
     if from_file and associates_alpha(img):
-        # Blender gives a grey+alpha file 4 channels and associates it; Cycles reads the file's
-        # 2 channels and associates only 4-channel ones: read it as Cycles does
+        # Cycles reads the file, where Blender's buffer is not what it renders: a grey+alpha
+        # file (Blender gives it 4 channels and associates it; Cycles associates only
+        # 4-channel files), or an RGBA file whose own alpha flag disagrees with Blender's
+        # Straight / Premultiplied switch, which Cycles ignores for files (a 16-bit PNG set to
+        # Premultiplied 3.4-9.8x Cycles; a TIFF stored associated, or an EXR set to Straight,
+        # 0.40-0.64x): read it as Cycles does
         path = bpy.path.abspath(img.filepath_raw, library=img.library)
-        if _grey_alpha_integer_file(path):
-            texels = _file_texels(path, img, reasons, unassociate)
-            if texels is not None:
-                return texels
-    if from_file and ch == 4 and associates_alpha(img):
-        # Cycles reads the file and its own alpha flag decides, not Blender's Straight /
-        # Premultiplied switch: where the two disagree Blender's buffer is not what Cycles
-        # renders (a 16-bit PNG set to Premultiplied 3.4-9.8x Cycles; a TIFF stored
-        # associated, or an EXR set to Straight, 0.40-0.64x): read the file as Cycles does
-        path = bpy.path.abspath(img.filepath_raw, library=img.library)
-        if _file_alpha_differs(path, img):
+        spec = _file_header(path)
+        if spec is not None and (_grey_alpha_integer(spec) or (ch == 4 and _file_alpha_differs(spec, img))):
             texels = _file_texels(path, img, reasons, unassociate)
             if texels is not None:
                 return texels
@@ -204,45 +205,40 @@ def _sequence_frame(img, reasons, unassociate, user, scene_frame):
     return texels
 
 
-def _file_alpha_differs(path, img):
-    """Whether the RGBA file at path stores its alpha otherwise than Blender's buffer of `img`
-    takes it: associated (OpenEXR, a TIFF written so) where the image is not a float one set to
-    Premultiplied, or straight in more than 8 bits where it is set to Premultiplied (8-bit ones:
-    _premultiplied_bytes)."""
-    if img.source == 'TILED':
-        return False         # (tiles: udim_tiles reads the others; the first as Blender has it)
+def _file_header(path):
+    """The spec of the image file at path as read with its alpha as stored (the file's own
+    'oiio:UnassociatedAlpha' flag), or None if there is none or it cannot be opened."""
     try:
         import OpenImageIO as oiio
     except ImportError:
-        return False
+        return None
     config = oiio.ImageSpec()
     config.attribute('oiio:UnassociatedAlpha', 1)
     inp = oiio.ImageInput.open(path, config) if os.path.isfile(path) else None
     if inp is None:
         oiio.geterror()
-        return False
+        return None
     spec = inp.spec()
     inp.close()
-    if spec.nchannels != 4:
-        return False
-    associated = not spec.get_int_attribute('oiio:UnassociatedAlpha', 0)
-    if associated:
+    return spec
+
+
+def _file_alpha_differs(spec, img):
+    """Whether the RGBA file of header `spec` stores its alpha otherwise than Blender's buffer
+    of `img` takes it: associated (OpenEXR, a TIFF written so) where the image is not a float
+    one set to Premultiplied, or straight in more than 8 bits where it is set to Premultiplied
+    (8-bit ones: _premultiplied_bytes)."""
+    import OpenImageIO as oiio
+    if img.source == 'TILED' or spec.nchannels != 4:
+        return False         # (tiles: udim_tiles reads the others; the first as Blender has it)
+    if not spec.get_int_attribute('oiio:UnassociatedAlpha', 0):
         return not (img.is_float and img.alpha_mode == 'PREMUL')
     return img.alpha_mode == 'PREMUL' and spec.format.basetype != oiio.UINT8
 
 
-def _grey_alpha_integer_file(path):
-    """Whether the file at path has 2 channels (grey + alpha) of integers (8 or 16 bits)."""
-    try:
-        import OpenImageIO as oiio
-    except ImportError:
-        return False
-    inp = oiio.ImageInput.open(path) if os.path.isfile(path) else None
-    if inp is None:
-        oiio.geterror()
-        return False
-    spec = inp.spec()
-    inp.close()
+def _grey_alpha_integer(spec):
+    """Whether a file of header `spec` has 2 channels (grey + alpha) of integers (8 or 16 bits)."""
+    import OpenImageIO as oiio
     return spec.nchannels == 2 and spec.format.basetype in (oiio.UINT8, oiio.UINT16)
 
 
@@ -254,9 +250,7 @@ def _premultiplied_bytes(img, buf, from_file, reasons):
     Blender's, reported."""
     path = bpy.path.abspath(img.filepath_raw, library=img.library) if from_file else ''
     if img.source == 'TILED' and len(img.tiles):     # the first tile's file (Blender's pixels are its)
-        number = img.tiles[0].number
-        tx, ty = (number - 1001) % 10, (number - 1001) // 10
-        path = path.replace('<UDIM>', str(number)).replace('<UVTILE>', f"u{tx + 1}_v{ty + 1}")
+        path = _tile_path(path, img.tiles[0].number)
     try:
         import OpenImageIO as oiio
         as_stored = oiio.ImageSpec()

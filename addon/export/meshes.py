@@ -81,7 +81,7 @@ def mesh_arrays(me, want_uvs):
 def _sharp_faces_alone(me, tri_poly):
     """Per triangle, whether its face is flat (bool (nt,)), where flat faces are all that makes
     Blender answer CORNER for the mesh's normals (no custom normals, no sharp edges); None
-    otherwise. tri_poly: each triangle's face (None: triangle i is face i)."""
+    otherwise. tri_poly: each triangle's face."""
     if getattr(me, 'has_custom_normals', False):
         return None
     edge = me.attributes.get('sharp_edge')
@@ -95,7 +95,7 @@ def _sharp_faces_alone(me, tri_poly):
         return None
     flat = np.empty(len(me.polygons), bool)
     face.data.foreach_get('value', flat)
-    return flat if tri_poly is None else flat[tri_poly]
+    return flat[tri_poly]
 
 
 def _triangle_tangents(me, uv_name, triangles, corners):
@@ -188,24 +188,22 @@ class MeshArrays:
             mi.data.foreach_get('value', per_face)
             self.slot = per_face if self.corners is None else per_face[tri_poly]
         self.domain = me.normals_domain
-        sharp = _sharp_faces_alone(me, tri_poly if self.corners is not None else None) \
-            if self.domain == 'CORNER' else None
-        if sharp is not None:
-            # Flat faces beside smooth ones, nothing else sharp: Cycles asks for the normals'
-            # domain with sharp faces supported (normals_domain(true): POINT), so smooth faces
-            # take the vertex normals, averaged over every face around a vertex, and flat ones
-            # their own; Blender's corner normals (normals_domain's answer here) would split
-            # the smooth faces at each flat one (a roof's smooth half shaded flat: 0.68x Cycles).
-            # A flat triangle's corners read a zero row: the world geometric normal (assembly)
-            vn = np.empty(nv * 3, np.float32)
-            me.vertex_normals.foreach_get('vector', vn)
-            self.normal_rows = np.concatenate([vn.reshape(nv, 3), np.zeros((1, 3), np.float32)])
-            self.normal_index = np.where(sharp[:, None], np.int32(nv), self.triangles).astype(np.int32)
-        elif self.domain == 'POINT':
+        sharp = _sharp_faces_alone(me, tri_poly) if self.domain == 'CORNER' else None
+        if self.domain == 'POINT' or sharp is not None:
             vn = np.empty(nv * 3, np.float32)
             me.vertex_normals.foreach_get('vector', vn)
             # per-vertex normals and each corner's row: transformed once per vertex, not per corner
             self.normal_rows, self.normal_index = vn.reshape(nv, 3), self.triangles
+            if sharp is not None:
+                # Flat faces beside smooth ones, nothing else sharp: Cycles asks for the normals'
+                # domain with sharp faces supported (normals_domain(true): POINT), so smooth faces
+                # take the vertex normals, averaged over every face around a vertex, and flat ones
+                # their own; Blender's corner normals (normals_domain's answer here) would split
+                # the smooth faces at each flat one (a roof's smooth half shaded flat: 0.68x
+                # Cycles). A flat triangle's corners read a zero row: the world geometric normal
+                # (assembly)
+                self.normal_rows = np.concatenate([self.normal_rows, np.zeros((1, 3), np.float32)])
+                self.normal_index = np.where(sharp[:, None], np.int32(nv), self.triangles).astype(np.int32)
         elif self.domain == 'CORNER':
             cn = np.empty(nl * 3, np.float32)
             me.corner_normals.foreach_get('vector', cn)
