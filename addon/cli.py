@@ -41,14 +41,17 @@ def parse_args(argv):
 
 def blender_path(out, frame, blend):
     """--out in Blender's path syntax, as `blender -o` reads it: a leading '//' is the .blend's
-    folder (the working directory for the demo scene), and the last run of '#' is the frame
-    number padded to the run's length."""
+    folder (the working directory for the demo scene), and the last run of '#' in the file name
+    is the frame number padded to the run's length as C's %.*d pads it (-3 in '###': '-003');
+    '#' in a folder name is kept."""
     if out.startswith("//"):
         out = os.path.join(os.path.dirname(os.path.abspath(blend)) if blend else ".", out[2:])
-    runs = list(re.finditer(r"#+", out))
+    folder, name = os.path.split(out)
+    runs = list(re.finditer(r"#+", name))
     if runs:
-        m = runs[-1]
-        out = out[:m.start()] + f"{frame:0{len(m.group())}d}" + out[m.end():]
+        m, n = runs[-1], len(runs[-1].group())
+        number = f"-{-frame:0{n}d}" if frame < 0 else f"{frame:0{n}d}"
+        out = os.path.join(folder, name[:m.start()] + number + name[m.end():])
     return out
 
 

@@ -15,7 +15,8 @@ import numpy as np
 from .nodeeval import constant
 from .nodegraph import linked_link, source, unwrap
 
-# Texture Coordinate outputs that are the ray direction in a world shader
+# Texture Coordinate outputs that are the ray direction D in a world shader; Normal is -D
+# (Cycles' shader_setup_from_background: N = -D)
 _DIRECTION_COORDINATES = ('Generated', 'Normal', 'Object')
 _MAX_CHAIN = 64
 
@@ -188,11 +189,18 @@ def _vector_direction(node, reasons):
         if inner is None or not _is_direction(inner):
             what = 'nothing' if inner is None else f"'{inner.from_node.bl_label}' {inner.from_socket.name}"
             reasons.append(f"Mapping node fed by {what}: read as the view direction")
-        return _direction_matrix(src, reasons)
+        # (every Mapping type is linear in its vector: mapping -D is -(mapping D))
+        return _direction_matrix(src, reasons) * _direction_sign(inner)
     if not _is_direction(link):
         reasons.append(f"environment coordinates from '{src.bl_label}' {link.from_socket.name} read as the "
                        "view direction")
-    return np.eye(3)
+        return np.eye(3)
+    return np.eye(3) * _direction_sign(link)
+
+
+def _direction_sign(link):
+    """-1 for a Texture Coordinate Normal (-D in a world shader), else 1."""
+    return -1.0 if link is not None and _is_direction(link) and link.from_socket.name == 'Normal' else 1.0
 
 
 def _own_direction_mapping(node, reasons):

@@ -75,8 +75,12 @@ class Exporter:
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
         self.view_layer = depsgraph.view_layer
+        # its overrides (World, Material) as evaluated at this frame: the original layer's refer
+        # to the original IDs, whose animated values stay at the file's frame in an animation
+        # render (an override world keyed 1 -> 8 rendered 1 on every frame)
+        self.layer_eval = getattr(depsgraph, 'view_layer_eval', None) or self.view_layer
         self.camera = camera
-        self.world = effective_world(self.scene, self.view_layer)
+        self.world = effective_world(self.scene, self.layer_eval)
         # whether any shader reads Object Info: else no instance's values are gathered
         self._evaluated_of = {}
         self._object_info = any(n.type == 'OBJECT_INFO' or (n.type == 'ATTRIBUTE' and n.attribute_type == 'OBJECT')
@@ -116,10 +120,10 @@ class Exporter:
         geometry = Assembly(self).geometry(uv_pass='UV' in settings.passes)
         self._see_through_strands()
         by_ray = []
-        world, environment, world_reason = export_world(self.scene, self.view_layer, camera=False, by_ray=by_ray)
+        world, environment, world_reason = export_world(self.scene, self.layer_eval, camera=False, by_ray=by_ray)
         camera_world = None
         if by_ray:      # a Light Path's Is Camera Ray picks what the camera sees of the world
-            cw, cenv, creason = export_world(self.scene, self.view_layer, camera=True)
+            cw, cenv, creason = export_world(self.scene, self.layer_eval, camera=True)
             world_reason = '; '.join(dict.fromkeys(r for r in (world_reason, creason) if r))
             if not (np.isfinite(cw).all() and (cw >= 0).all()):
                 cw = np.zeros(3, np.float32)
@@ -157,7 +161,7 @@ class Exporter:
 
 
     def _walk_instances(self):
-        override = self.view_layer.material_override
+        override = self.layer_eval.material_override
         for n, inst in enumerate(self.depsgraph.object_instances):
             if n % CHECK_EVERY == 0 and self.check_break():
                 raise ExportCancelled()
@@ -374,7 +378,9 @@ class Exporter:
         source = original.data if original is not None else None
         if not isinstance(source, bpy.types.Mesh) or self._evaluated(original).data != mesh:
             return None, ()
-        mods = [m for m in original.modifiers if m.show_render]
+        # the evaluated object's: its Render switches at this frame (the original's stay at the
+        # file's frame in an animation render, a keyed Taper's coordinates slid with it)
+        mods = [m for m in self._evaluated(original).modifiers if m.show_render]
         deforms = bool(source.shape_keys) or any(m.type in _DEFORM_ONLY for m in mods)
         if not deforms:
             return None, ()
@@ -455,7 +461,8 @@ class Exporter:
             self.messages.append(('INFO', f"Grease Pencil {', '.join(repr(n) for n in self.drawn_over)}: drawn by "
                                           "Blender over the render, unlit and casting no shadows, as for "
                                           "Cycles (not traced)"))
-        if self.scene.render.use_motion_blur:
+        if self.scene.render.use_motion_blur and getattr(self.view_layer, 'use_motion_blur', True):
+            # (Cycles blurs nothing of a view layer whose own Motion Blur switch is off)
             self.messages.append(('WARNING', "motion blur is not rendered: every object is drawn at "
                                              "its position on the frame"))
         space = getattr(getattr(bpy.data, 'colorspace', None), 'working_space', 'Linear Rec.709')

@@ -1022,6 +1022,8 @@ def test_features_rendered_without_are_reported(scene, exported):
     text = " | ".join(m for _, m in s.messages)
     assert "'Catcher': shadow catcher is not supported" in text
     assert "motion blur is not rendered" in text
+    scene.view_layers[0].use_motion_blur = False    # the layer's own switch: Cycles blurs nothing
+    assert "motion blur" not in " | ".join(m for _, m in exported().messages)
     assert "linking" not in text and s.shadow_links == {"Linked": (frozenset(), frozenset())}
     scene.render.use_motion_blur = False
     catcher.is_shadow_catcher = False
@@ -1426,6 +1428,30 @@ def test_world_environment_texture(scene, exported):
         assert np.allclose(data.environment.to_map, expect, atol=1e-6), kind
         assert data.environment.interpolation == 'Closest'
         assert not any("world approximated" in t for _, t in data.messages), kind
+
+
+def test_world_normal_coordinates_are_minus_the_view_direction(scene, exported):
+    """Texture Coordinate > Normal in a world shader is -D (Cycles' shader_setup_from_background:
+    N = -ray D), straight into the map or through a Mapping node: the map's other side (it had
+    been read as D: red where Cycles shows blue, silently)."""
+    setup(scene)
+    img = scenes.float_image("Sky", _sky_pixels())
+    rot = (0.3, -0.2, 1.2)
+    R = np.array(Euler(rot, 'XYZ').to_matrix())
+    w = scenes.environment_world(img, 1.0, rotation=rot)
+    nt = w.node_tree
+    coords = next(n for n in nt.nodes if n.type == 'TEX_COORD')
+    mapping = next(n for n in nt.nodes if n.type == 'MAPPING')
+    env = next(n for n in nt.nodes if n.type == 'TEX_ENVIRONMENT')
+    nt.links.new(coords.outputs['Normal'], mapping.inputs['Vector'])
+    data = exported()
+    assert np.allclose(data.environment.to_map, -R, atol=1e-6)
+    nt.links.new(coords.outputs['Normal'], env.inputs['Vector'])
+    data = exported()
+    assert np.allclose(data.environment.to_map, -np.eye(3), atol=1e-6)
+    assert not any("world approximated" in t for _, t in data.messages)
+    nt.links.new(coords.outputs['Generated'], env.inputs['Vector'])
+    assert np.allclose(exported().environment.to_map, np.eye(3), atol=1e-6)
 
 
 def test_world_environment_found_by_its_links(scene, exported):
@@ -2817,6 +2843,33 @@ def test_object_info_reads_the_rendered_frame_in_an_animation_render(scene, expo
     data = exported(animation=True)
     for name in ("Info", "Attr"):
         assert np.allclose(data.geometry.colors[of_object(data, name)][..., :3], (0.9, 0.1, 0.9), atol=1e-6), name
+
+
+def test_view_layer_overrides_are_read_at_the_rendered_frame_in_an_animation_render(scene, exported, tmp_path):
+    """A view layer's World and Material Overrides with keyed values render with the values of
+    the frame rendered (the original layer's overrides are the original IDs, which keep the
+    file's frame in an animation render: a world keyed 1 -> 8 rendered 1 on every frame)."""
+    setup(scene)
+    scenes.plane("P")
+    world = bpy.data.worlds.new("Override")
+    strength = next(n for n in world.node_tree.nodes if n.type == 'BACKGROUND').inputs['Strength']
+    clay = scenes.diffuse("Clay", (0.8, 0.8, 0.8))
+    colour = next(n for n in clay.node_tree.nodes if n.type == 'BSDF_DIFFUSE').inputs['Color']
+    for frame, k, rgb in ((1, 1.0, (0.8, 0.8, 0.8, 1.0)), (4, 8.0, (0.8, 0.0, 0.0, 1.0))):
+        strength.default_value = k
+        strength.keyframe_insert('default_value', frame=frame)
+        colour.default_value = rgb
+        colour.keyframe_insert('default_value', frame=frame)
+    vl = scene.view_layers[0]
+    vl.world_override, vl.material_override = world, clay
+    scene.frame_set(1)
+    scene.frame_start = scene.frame_end = 4
+    scene.render.filepath = str(tmp_path / "frame_")
+    data = exported(animation=True)
+    grey = np.array(world.color)[:3]
+    assert np.allclose(data.world, 8.0 * grey, rtol=1e-5)
+    clay_out = next(m for m in data.materials if m.name == 'Clay')
+    assert np.allclose(clay_out.base_color, (0.8, 0.0, 0.0), atol=1e-6)
 
 
 def test_instances_read_their_instancers_object_colour(scene, exported):

@@ -71,6 +71,27 @@ def test_generated_coordinates_are_undeformed_and_object_coordinates_are_not(sce
     np.testing.assert_allclose(np.abs(obj_rows[..., 3:6]), corner, rtol=1e-5)
 
 
+def test_a_modifiers_keyed_render_switch_counts_at_the_rendered_frame(scene, exported, tmp_path):
+    """Generated coordinates follow the modifiers on at the frame rendered: a Displace keyed
+    on by frame 4 is left out of them (the undeformed cube, 0..1) in an animation render of
+    frame 4 from a file at frame 1, where it is off (they had moved with the displaced
+    surface), as in a still render of frame 4."""
+    scenes.camera()
+    cube = scenes.cube("Gen", size=2.0, materials=(_noise_material("Gen"),))
+    mod = cube.modifiers.new("d", 'DISPLACE')
+    mod.strength = 0.3
+    for frame, on in ((1, False), (4, True)):
+        mod.show_render = on
+        mod.keyframe_insert('show_render', frame=frame)
+    scene.frame_set(1)
+    scene.frame_start = scene.frame_end = 4
+    scene.render.filepath = str(tmp_path / "frame_")
+    g = exported(animation=True).geometry
+    assert g.coords is not None
+    assert np.abs(g.vertices).max() > 1.05                      # displaced at frame 4
+    np.testing.assert_allclose(np.sort(np.unique(np.asarray(g.coords)[..., 0:3].round(5))), [0.0, 1.0])
+
+
 def test_mirrored_instances_keep_object_coordinates_per_corner(scene, exported):
     """Two instances, one mirrored (its corners rewound): each exported corner's Object
     coordinate is its vertex's object-space position."""

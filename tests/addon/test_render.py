@@ -567,6 +567,11 @@ def test_cli_reads_blender_paths_every_layers_samples_and_writes_lossless_exr(sc
     from addon.cli import blender_path, output_paths
     assert blender_path("//shots/f_###.png", 3, "/a/b.blend") == "/a/shots/f_003.png"
     assert blender_path("x_#_##", 12, None) == "x_#_12"
+    # negative frames padded as Blender pads them (%.*d: '-003', was '-03'); '#' in a folder
+    # name is not the frame (was: 'take_07/beauty')
+    assert blender_path("f_###", -3, None) == "f_-003"
+    assert blender_path("f_####", -12, None) == "f_-0012"
+    assert blender_path("take_##/beauty_#", 7, None) == "take_##/beauty_7"
     assert output_paths("//r/", "/a/b.blend", 1) == ("/a/r/b.png", "/a/r/b.exr")
     lit_plane_scene(scene, size=(16, 8))
     scene.view_layers[0].samples = 1
