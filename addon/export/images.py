@@ -8,6 +8,7 @@ are magenta, as in Cycles. Part of the export layer."""
 import os
 
 import bpy
+import dacrt
 import numpy as np
 
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stored_texels
@@ -277,25 +278,27 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
     OpenColorIO (colorspaces) from the values Cycles stores, as its loader converts them."""
     poll()
     h, w, ch = buf.shape
-    rgba = np.empty((h, w, 4), np.float32)
-    rgba[..., :min(ch, 4)] = buf[..., :4]
-    if ch == 3:
-        rgba[..., 3] = 1.0
-    if ch < 3:     # grey (+alpha) images
-        rgba[..., 1] = rgba[..., 2] = buf[..., 0]
-        rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
-    k8 = None
     # Cycles associates only 4-channel files (a grey+alpha one stays straight), yet divides by
     # alpha at a linked Alpha output all the same
     associate = ch == 4 and associates_alpha(img)
-    straight8 = None
-    if byte:   # the bytes, once: Blender's byte pixels are k x (1/255) in float32
-        k8 = np.rint(rgba * 255.0).astype(np.uint8)
-        straight8 = k8
-        if associate:                            # integer c * a / 255, as Cycles associates
-            k8 = k8.copy()
-            c = k8[..., :3].astype(np.uint16) * k8[..., 3:4]
-            k8[..., :3] = (c + 1 + (c >> 8)) >> 8       # c // 255 for c <= 255^2, without a division
+    k8 = straight8 = None
+    exact = False
+    if byte:
+        # the bytes, once (Blender's byte pixels are k x (1/255) in float32; exact: all are),
+        # and associated as Cycles associates them, integer c a / 255: one native pass (numpy's
+        # pass per operation took an 8K texture ~12 s)
+        rgba, straight8, k8, exact = dacrt.shading.byte_texels(buf[..., :4], _byte_table('blender', False),
+                                                               associate)
+        if k8 is None:
+            k8 = straight8
+    else:
+        rgba = np.empty((h, w, 4), np.float32)
+        rgba[..., :min(ch, 4)] = buf[..., :4]
+        if ch == 3:
+            rgba[..., 3] = 1.0
+        if ch < 3:     # grey (+alpha) images
+            rgba[..., 1] = rgba[..., 2] = buf[..., 0]
+            rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
     poll()
     kind = space_kind(img, reasons) if byte or encoded else None
     if kind == CONVERT:
@@ -323,11 +326,11 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
             # decoding it: an associated colour comes back nearly straight
             rgba[..., :3] = k8[..., :3] / np.float32(255.0)
             rgba = _unassociated(rgba)
-        elif associate:    # a table per byte value: ~15 ns a texel, not ~250 (4K image: 5 s)
-            rgba[..., :3] = _byte_table('divided', decode)[k8[..., :3]]
+        elif associate:    # a table per byte value, not the formula per texel
+            dacrt.shading.byte_lookup(k8, _byte_table('divided', decode), rgba)
             decode = False
-        elif decode and np.array_equal(rgba[..., :3], _byte_table('blender', False)[k8[..., :3]]):
-            rgba[..., :3] = _byte_table('blender', True)[k8[..., :3]]   # Blender's own byte floats
+        elif decode and exact:                   # Blender's own byte floats: by table too
+            dacrt.shading.byte_lookup(k8, _byte_table('blender', True), rgba)
             decode = False
         if decode:
             rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
@@ -389,9 +392,9 @@ def _stored_texels(rgba, img, unassociate, byte, encoded, from_file, associates,
     files; images converted through OpenColorIO are handled by _linear_rgba."""
     srgb = _keeps_srgb(img)
     linear_space = kind in (LINEAR, DATA)
-    if byte:   # k8: the bytes, associated where Cycles associates (_linear_rgba made them)
+    if byte:   # k8: the bytes, associated where Cycles associates (_linear_rgba made them, for this)
         if srgb or (linear_space and unassociate):
-            return EncodedTexels(k8.copy(), srgb, unassociate, 1.0 / 255.0)
+            return EncodedTexels(k8, srgb, unassociate, 1.0 / 255.0)
         return None
     if encoded:            # a deeper file's values, straight, in the image's colour space
         if not (srgb or (linear_space and unassociate)):

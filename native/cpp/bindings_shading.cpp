@@ -13,6 +13,7 @@
 #include "bindargs.h"
 #include "noise.h"
 #include "shading.h"
+#include "texels.h"
 #include "voronoi.h"
 
 namespace py = pybind11;
@@ -586,6 +587,58 @@ py::tuple voronoi_f1_py(F32Array points, F32Array randomness, int metric) {
     return py::make_tuple(dist, color, position);
 }
 
+// The leading shape of an image array (..., c) and its texel count; c must be in [lo, hi].
+std::pair<std::vector<py::ssize_t>, size_t> texel_shape(const py::array& a, py::ssize_t lo, py::ssize_t hi,
+                                                        const char* name) {
+    if (a.ndim() < 1 || a.shape(a.ndim() - 1) < lo || a.shape(a.ndim() - 1) > hi)
+        throw py::value_error(std::string(name) + " must have shape (..., c) with " + std::to_string(lo) +
+                              " <= c <= " + std::to_string(hi));
+    std::vector<py::ssize_t> lead(a.shape(), a.shape() + a.ndim() - 1);
+    size_t n = 1;
+    for (py::ssize_t d : lead) n *= size_t(d);
+    return {lead, n};
+}
+
+const float* byte_table(const F32Array& table, const char* name) {
+    if (table.ndim() != 1 || table.shape(0) != 256) throw py::value_error(std::string(name) + " must have shape (256,)");
+    return table.data();
+}
+
+py::tuple byte_texels_py(F32Array buf, F32Array byte_floats, bool associate) {
+    auto [lead, n] = texel_shape(buf, 1, 4, "buf");
+    const float* bf = byte_table(byte_floats, "byte_floats");
+    std::vector<py::ssize_t> shape = lead;
+    shape.push_back(4);
+    F32Array rgba(shape);
+    py::array_t<uint8_t> k8(shape);
+    py::object assoc = py::none();
+    uint8_t* ka = nullptr;
+    if (associate) {
+        py::array_t<uint8_t> a(shape);
+        ka = a.mutable_data();
+        assoc = a;
+    }
+    const int ch = int(buf.shape(buf.ndim() - 1));
+    bool exact;
+    {
+        py::gil_scoped_release nogil;
+        exact = byte_texels(buf.data(), n, ch, bf, rgba.mutable_data(), k8.mutable_data(), ka);
+    }
+    return py::make_tuple(rgba, k8, assoc, exact);
+}
+
+void byte_lookup_py(py::array_t<uint8_t, py::array::c_style> k8, F32Array table, py::array rgba) {
+    auto [lead, n] = texel_shape(k8, 4, 4, "k8");
+    const float* t = byte_table(table, "table");
+    auto [lead_out, n_out] = texel_shape(rgba, 4, 4, "rgba");
+    if (lead_out != lead) throw py::value_error("rgba must have k8's shape");
+    if (!py::isinstance<py::array_t<float>>(rgba) || !(rgba.flags() & py::array::c_style) || !rgba.writeable())
+        throw py::value_error("rgba must be a writeable C-contiguous float32 array (written in place)");
+    float* out = static_cast<float*>(rgba.mutable_data());
+    py::gil_scoped_release nogil;
+    byte_lookup(k8.data(), n, t, out);
+}
+
 }  // namespace
 
 void register_shading(py::module_& m) {
@@ -625,5 +678,7 @@ void register_shading(py::module_& m) {
     m.def("noise_texture", &noise_texture_py, py::arg("points"), py::arg("scale"), py::arg("detail"),
           py::arg("roughness"), py::arg("lacunarity"), py::arg("distortion"), py::arg("normalize"), py::arg("color"),
           py::arg("type"), py::arg("offset"), py::arg("gain"));
+    m.def("byte_texels", &byte_texels_py, py::arg("buf"), py::arg("byte_floats"), py::arg("associate"));
+    m.def("byte_lookup", &byte_lookup_py, py::arg("k8"), py::arg("table"), py::arg("rgba"));
     m.def("voronoi_f1", &voronoi_f1_py, py::arg("points"), py::arg("randomness"), py::arg("metric"));
 }

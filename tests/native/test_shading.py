@@ -632,3 +632,47 @@ def test_triangle_indices_out_of_range_are_refused():
     ok = shading.next_event(one, P, P, ns, None, None, keys, 1, 2, prim=np.minimum(prim, 2),
                             terminator=(geo, None, None, np.full(3, 1.5, F32), None, None))
     assert ok[0].shape == (3, n)
+
+
+@pytest.mark.parametrize("ch", [1, 2, 3, 4])
+def test_byte_texels_are_numpys_bytes_association_and_exactness(ch):
+    """byte_texels against numpy: RGBA with grey and alpha expanded, rint(255 v) as bytes,
+    Cycles' integer association c a / 255 (rounded down), and whether every colour value is the
+    table's float for its byte; byte_lookup is the table per colour byte, alpha untouched."""
+    rng = np.random.default_rng(ch)
+    k = rng.integers(0, 256, (37, 53, ch)).astype(np.uint8)
+    k[0, 0, :] = 0
+    k[0, 1, :] = 255
+    table = np.arange(256, dtype=F32) * F32(1.0 / 255.0)
+    buf = table[k]
+    rgba, k8, assoc, exact = shading.byte_texels(buf, table, associate=True)
+    expect = np.empty((37, 53, 4), F32)
+    if ch >= 3:
+        expect[..., :3] = buf[..., :3]
+        expect[..., 3] = buf[..., 3] if ch == 4 else 1.0
+    else:
+        expect[..., :3] = buf[..., :1]
+        expect[..., 3] = buf[..., 1] if ch == 2 else 1.0
+    np.testing.assert_array_equal(rgba, expect)
+    np.testing.assert_array_equal(k8, np.rint(expect * 255.0).astype(np.uint8))
+    c = k8[..., :3].astype(np.int64) * k8[..., 3:4]
+    np.testing.assert_array_equal(assoc[..., :3], c // 255)
+    np.testing.assert_array_equal(assoc[..., 3], k8[..., 3])
+    assert exact
+    assert shading.byte_texels(buf, table, associate=False)[2] is None
+    off = buf.copy()
+    off[5, 7, 0] = np.nextafter(off[5, 7, 0], F32(2))      # one value not a byte's float
+    assert not shading.byte_texels(off, table)[3]
+    nan = buf.copy()
+    nan[3, 2, 0] = np.nan
+    r = shading.byte_texels(nan, table)
+    assert not r[3] and r[1][3, 2, 0] == 0                   # (clamped, not undefined)
+    lut = (np.arange(256, dtype=F32) / F32(255)) ** F32(2.2)
+    out = rgba.copy()
+    shading.byte_lookup(k8, lut, out)
+    np.testing.assert_array_equal(out[..., :3], lut[k8[..., :3]])
+    np.testing.assert_array_equal(out[..., 3], rgba[..., 3])
+    with pytest.raises(ValueError, match="rgba must have k8's shape"):
+        shading.byte_lookup(k8, lut, out[:-1])
+    with pytest.raises(ValueError, match="byte_floats must have shape"):
+        shading.byte_texels(buf, table[:5])

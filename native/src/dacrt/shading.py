@@ -503,3 +503,18 @@ def voronoi_f1(points, randomness, metric: str = 'EUCLIDEAN'):
         raise ValueError(f"metric must be one of {', '.join(VORONOI_METRICS)}, got {metric!r}")
     r = np.ascontiguousarray(np.atleast_1d(np.asarray(randomness, _F32)).reshape(-1))
     return _core.voronoi_f1(np.ascontiguousarray(points, _F32), r, VORONOI_METRICS[metric])
+
+
+def byte_texels(buf, byte_floats, associate: bool = False):
+    """An 8-bit image's texels from Blender's float buffer buf (..., c), c in 1..4 (its values
+    k/255): (rgba (..., 4) float32 with grey and alpha expanded, bytes (..., 4) uint8
+    rint(255 rgba), those associated as Cycles does in bytes (c a / 255) or None, exact: whether
+    every colour value is byte_floats[its byte], Blender's own float for it). One threaded pass."""
+    table = np.ascontiguousarray(byte_floats, _F32)
+    return _core.byte_texels(np.ascontiguousarray(buf, _F32), table, bool(associate))
+
+
+def byte_lookup(k8, table, rgba) -> None:
+    """rgba[..., :3] = table[k8[..., :3]] in place: bytes (..., 4) uint8 to floats by a (256,)
+    table (rgba (..., 4) float32, alpha untouched). One threaded pass."""
+    _core.byte_lookup(np.ascontiguousarray(k8, np.uint8), np.ascontiguousarray(table, _F32), rgba)

@@ -1,0 +1,67 @@
+// 8-bit image texels back to bytes and to scene-linear floats (see texels.h).
+#include "texels.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "parallel.h"
+
+namespace dacrt {
+
+namespace {
+
+inline uint8_t to_byte(float v) {
+    // as numpy's rint(v * 255).astype(uint8) for v in [0, 1] (float32 product, ties to even);
+    // NaN and out-of-range values clamp (a byte image has none)
+    const float k = std::nearbyint(v * 255.0f);
+    return uint8_t(k >= 0.0f ? std::min(k, 255.0f) : 0.0f);
+}
+
+inline uint8_t associated(uint8_t c, uint8_t a) {
+    const uint32_t p = uint32_t(c) * a;          // c a / 255 rounded down, without a division
+    return uint8_t((p + 1 + (p >> 8)) >> 8);
+}
+
+}  // namespace
+
+bool byte_texels(const float* buf, size_t n, int ch, const float* byte_floats, float* rgba, uint8_t* k8,
+                 uint8_t* k8_assoc) {
+    std::atomic<bool> exact{true};
+    parallel_for(n, [&](size_t b, size_t e) {
+        bool same = true;
+        for (size_t i = b; i < e; ++i) {
+            const float* s = buf + i * size_t(ch);
+            float v[4];
+            if (ch >= 3) {
+                v[0] = s[0], v[1] = s[1], v[2] = s[2];
+                v[3] = ch == 4 ? s[3] : 1.0f;
+            } else {
+                v[0] = v[1] = v[2] = s[0];
+                v[3] = ch == 2 ? s[1] : 1.0f;
+            }
+            uint8_t k[4];
+            for (int c = 0; c < 4; ++c) {
+                rgba[4 * i + size_t(c)] = v[c];
+                k[c] = to_byte(v[c]);
+                k8[4 * i + size_t(c)] = k[c];
+            }
+            for (int c = 0; c < 3; ++c) same &= v[c] == byte_floats[k[c]];
+            if (k8_assoc) {
+                for (int c = 0; c < 3; ++c) k8_assoc[4 * i + size_t(c)] = associated(k[c], k[3]);
+                k8_assoc[4 * i + 3] = k[3];
+            }
+        }
+        if (!same) exact.store(false, std::memory_order_relaxed);
+    }, size_t(1) << 16);
+    return exact.load();
+}
+
+void byte_lookup(const uint8_t* k8, size_t n, const float* table, float* rgba) {
+    parallel_for(n, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i)
+            for (int c = 0; c < 3; ++c) rgba[4 * i + size_t(c)] = table[k8[4 * i + size_t(c)]];
+    }, size_t(1) << 16);
+}
+
+}  // namespace dacrt
