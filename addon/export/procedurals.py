@@ -49,7 +49,10 @@ def compile_socket(socket, color, reasons):
     chain = _Chain([])
     try:
         fn = _socket(socket, color, chain, 0)
-    except nodeeval.NotCompiled:
+    except nodeeval.NotCompiled as e:
+        # the evaluation then reads the texture node's own value and says so, naming the texture
+        # (supported); this names what in its chain is not read (users had been left to guess)
+        reasons.append(f"procedural texture not evaluated per point ({e} is not read there)")
         return None
     except (AttributeError, KeyError, TypeError, ValueError) as e:
         # a node of another Blender version (a socket or setting missing): the evaluation
@@ -81,7 +84,7 @@ def _socket(socket, color, chain, depth):
         const = nodeeval.own_value(carrier, color)[None]
         return lambda c: const
     if depth >= nodeeval.Evaluator.MAX_DEPTH:
-        raise nodeeval.NotCompiled("too deep")
+        raise nodeeval.NotCompiled(f"a chain deeper than {nodeeval.Evaluator.MAX_DEPTH} nodes")
     f, vector = _node(link.from_node, link.from_socket, chain, depth)
     return lambda c: nodeeval.linked_value(np.asarray(f(c), np.float64), vector, link.crossed, color)
 
@@ -120,12 +123,13 @@ def _node(node, out, chain, depth):
     if t == 'TEX_COORD':
         kind = _COORDINATES.get(out.name)
         if kind is None or node.from_instancer or (kind == 'object' and node.object is not None):
-            raise nodeeval.NotCompiled(f"{out.name} coordinates")
+            raise nodeeval.NotCompiled(f"Texture Coordinate {out.name}" + (" from the instancer" if node.from_instancer
+                                       else " of another object" if kind == 'object' else ""))
         chain.needs.add(kind)
         return (lambda c: c[kind]), True
     if t == 'MAPPING':
         if node.vector_type == 'NORMAL':
-            raise nodeeval.NotCompiled("Normal mapping")
+            raise nodeeval.NotCompiled("a Normal-type Mapping")
         M, off = mapping_affine(node, chain.reasons)
         v = _socket(nodegraph.input_by_id(node, 'Vector'), True, chain, depth + 1)
         M32, off32 = M.T.astype(np.float32), off.astype(np.float32)
@@ -134,7 +138,7 @@ def _node(node, out, chain, depth):
         return _texture(node, out, chain, depth)
     roles = nodeeval.node_inputs(node)
     if roles is None or t in nodeeval.VIEW_NODE_TYPES:
-        raise nodeeval.NotCompiled(node.bl_label)
+        raise nodeeval.NotCompiled(f"'{node.bl_label}' node")
     float_node = (t == 'MIX' and node.data_type == 'FLOAT') or t in nodeeval._FLOAT_NODES
     parts = {role: _socket(nodegraph.input_by_id(node, ident), role in nodeeval._COLOR_ROLES and not float_node,
                            chain, depth + 1)

@@ -48,6 +48,38 @@ def test_unsupported_noise_keeps_its_own_value_and_says_so(scene, exported):
         m = _material(data, name)
         assert not isinstance(m.texture, ProceduralTexels)
         assert "Noise Texture" in m.approximated, (name, m.approximated)
+        dims = {"FourD": "4D", "OneD": "1D"}[name]
+        assert f"({dims} noise is not read there)" in m.approximated, (name, m.approximated)
+
+
+def test_what_a_procedural_chain_cannot_read_is_named(scene, exported):
+    """A supported texture fed by something the per-point evaluation does not read falls back
+    to its own value, and the message names that thing (it had blamed the Checker alone:
+    "colour from 'Checker Texture' node; its own value used")."""
+    scenes.camera()
+    for i, (name, build) in enumerate((("VMath", 'VECT_MATH'), ("ObjCoords", 'OBJECT'), ("Camera", 'Camera'))):
+        mat = bpy.data.materials.new(name)
+        nt = mat.node_tree
+        bsdf = next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
+        checker = nt.nodes.new('ShaderNodeTexChecker')
+        coords = nt.nodes.new('ShaderNodeTexCoord')
+        nt.links.new(checker.outputs['Color'], bsdf.inputs['Base Color'])
+        if build == 'VECT_MATH':
+            vm = nt.nodes.new('ShaderNodeVectorMath')
+            nt.links.new(coords.outputs['Object'], vm.inputs[0])
+            nt.links.new(vm.outputs['Vector'], checker.inputs['Vector'])
+            expect = "('Vector Math' node is not read there)"
+        elif build == 'OBJECT':
+            coords.object = scenes.camera()
+            nt.links.new(coords.outputs['Object'], checker.inputs['Vector'])
+            expect = "(Texture Coordinate Object of another object is not read there)"
+        else:
+            nt.links.new(coords.outputs['Camera'], checker.inputs['Vector'])
+            expect = "(Texture Coordinate Camera is not read there)"
+        scenes.cube(name, location=(3 * i, 0, 0), materials=(mat,))
+        m = _material(exported(), name)
+        assert not isinstance(m.texture, ProceduralTexels)
+        assert expect in m.approximated and "Checker Texture" in m.approximated, m.approximated
 
 
 def test_generated_coordinates_are_undeformed_and_object_coordinates_are_not(scene, exported):
