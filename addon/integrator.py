@@ -518,7 +518,7 @@ class Integrator:
         if not (links or shadow_links) or not len(self.tri):
             return
         ob = np.asarray(sd.geometry.object_index, np.int64)
-        names = sd.per_object(sd.object_names, lambda i: None)
+        names = sd.per_object(getattr(sd, 'object_keys', None) or sd.object_names, lambda i: None)
         link = LightLinking(links, names, self.messages)
         if link.active:
             self._link = link
@@ -1963,8 +1963,8 @@ class Integrator:
 
 def _light_set(linking, lamp) -> int:
     """A lamp's light set in linking (lights/linking.py, light or shadow linking): its own by
-    name; the world's is 0, every object's."""
-    return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.name)
+    unique name (Light.key); the world's is 0, every object's."""
+    return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.key)
 
 
 def _far_side(sel, P, ng, ns, P_off, ns_sel=None):

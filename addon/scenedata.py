@@ -79,6 +79,7 @@ class Light:
     cast_shadow: bool = True
     use_mis: bool = True
     name: str = ''
+    key: str = ''                  # the object's unique name (name_full) light linking knows it by; '': name
     visible_camera: bool = True    # object ray visibility (Cycles: a light seen by camera rays)
     visible_diffuse: bool = True   # object ray visibility (Cycles: BSDF rays collect the light)
     visible_transmission: bool = True   # object ray visibility (Cycles: rays past glass see it)
@@ -281,6 +282,9 @@ class SceneData:
     world: np.ndarray              # (3,) uniform background radiance (colour x strength)
     settings: Settings
     object_names: list = field(default_factory=list)
+    # each object's unique name (name_full: a library-linked object may be named as a local
+    # one), what light linking matches; empty: object_names
+    object_keys: list = field(default_factory=list)
     messages: list = field(default_factory=list)   # (level, text): 'WARNING'/'INFO'/'ERROR' for RenderEngine.report
     skipped: dict = field(default_factory=dict)    # export's counts of work not done (objects_hidden, ...)
     environment: Optional[Environment] = None      # an image around the scene, added to `world`
@@ -296,9 +300,10 @@ class SceneData:
     # each object's Cryptomatte asset: the name of its topmost parent (its own without one);
     # empty: the object names
     object_assets: list = field(default_factory=list)
-    # light linking: emitter (light or emissive object) name -> (included, excluded) names of
-    # the objects it lights: with any included, only those not excluded; else all but the
-    # excluded (Blender's receiver collection); emitters not listed light every object
+    # light linking: emitter (light or emissive object) unique name (name_full) -> (included,
+    # excluded) unique names of the objects it lights: with any included, only those not
+    # excluded; else all but the excluded (Blender's receiver collection); emitters not listed
+    # light every object
     light_links: dict = field(default_factory=dict)
     # shadow linking: emitter name -> (included, excluded) names of the objects that block its
     # light, with the same rule (Blender's blocker collection); unlisted emitters: every object

@@ -16,14 +16,15 @@ MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_l
 
 
 def light_link_receivers(collection):
-    """An emitter's light linking receiver collection as (included, excluded) object names,
-    as Blender reads it: each object of the collection by its own Include / Exclude state, the
+    """An emitter's light linking receiver collection as (included, excluded) object keys
+    (name_full: a library object may share its name with a local one; Cycles links objects, not
+    names), as Blender reads it: each object of the collection by its own Include / Exclude state, the
     objects of a child collection (all levels down) by that child's state."""
     included, excluded = set(), set()
     for ob, item in zip(collection.objects, collection.collection_objects):
-        (included if item.light_linking.link_state == 'INCLUDE' else excluded).add(ob.name)
+        (included if item.light_linking.link_state == 'INCLUDE' else excluded).add(ob.name_full)
     for child, item in zip(collection.children, collection.collection_children):
-        names = {ob.name for ob in child.all_objects}
+        names = {ob.name_full for ob in child.all_objects}
         (included if item.light_linking.link_state == 'INCLUDE' else excluded).update(names)
     return frozenset(included), frozenset(excluded)
 
@@ -73,7 +74,7 @@ def export_light(ob, matrix, messages):
               matrix=m, normalize=bool(getattr(light, 'normalize', True)),
               cast_shadow=bool(light.use_shadow),
               use_mis=bool(getattr(cycles, 'use_multiple_importance_sampling', True)),
-              name=ob.name,
+              name=ob.name, key=ob.name_full,
               # object ray visibility (Object > Visibility > Ray Visibility; a new light object
               # has Camera off): camera rays see the lamp, diffuse surfaces receive its light
               visible_camera=bool(ob.visible_camera), visible_diffuse=bool(ob.visible_diffuse),

@@ -89,6 +89,7 @@ class Exporter:
         self.messages = []
         self.materials = MaterialBuilder(self.scene.frame_current)
         self.object_names = []
+        self.object_keys = []         # name_full of each: light linking's names
         self.object_pass_index = []
         self.light_links = {}         # emitter name -> (included, excluded) receiver names
         self.shadow_links = {}        # emitter name -> (included, excluded) blocker names
@@ -148,7 +149,8 @@ class Exporter:
             if (ob.evaluated_get(self.depsgraph).hide_render if ob.animation_data else ob.hide_render))
         return sd.SceneData(camera=camera, geometry=geometry, materials=self.materials.materials,
                             lights=self.lights, world=world, settings=settings,
-                            object_names=self.object_names, messages=self.messages,
+                            object_names=self.object_names, object_keys=self.object_keys,
+                            messages=self.messages,
                             skipped=dict(self.counts), environment=environment, camera_world=camera_world,
                             world_visibility=world_visibility(self.world),
                             object_pass_index=np.array(self.object_pass_index, np.int32),
@@ -292,7 +294,7 @@ class Exporter:
             collection = getattr(linking, attr, None) if linking is not None else None
             if collection is None:
                 continue
-            links[ob.name] = light_link_receivers(collection)
+            links[ob.name_full] = light_link_receivers(collection)
             # objects are linked by their own names; the instances an instancer (a collection
             # instance, vertex or face instancing, particles) makes are not linked through it
             for inst in collection.all_objects:
@@ -437,6 +439,7 @@ class Exporter:
         if idx is None:
             idx = self._object_index[key] = len(self.object_names)
             self.object_names.append(ob.name)
+            self.object_keys.append(key[0])
             self.object_pass_index.append(ob.pass_index)   # Cycles: the instanced object's own
             top = ob
             while top.parent is not None:                 # Cryptomatte's asset: the topmost parent

@@ -98,6 +98,7 @@ class Lamp(ABC):
     def __init__(self, light=None, color=None):
         if light is not None:
             self.name = light.name
+            self.key = getattr(light, 'key', '') or light.name     # (light linking's name for it)
             self.color = np.asarray(light.strength, np.float64)
             self.use_mis = bool(light.use_mis)
             self.cast_shadow = bool(light.cast_shadow)
@@ -110,7 +111,7 @@ class Lamp(ABC):
             self.max_bounces = int(getattr(light, 'max_bounces', MAX_BOUNCES_UNLIMITED))
             self.lightgroup = str(getattr(light, 'lightgroup', ''))
         else:
-            self.name = 'World'
+            self.name = self.key = 'World'
             self.color = np.asarray(color, np.float64)
             self.use_mis = self.cast_shadow = self.visible_camera = self.visible_diffuse = True
             self.visible_transmission = True

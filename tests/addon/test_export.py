@@ -1040,6 +1040,38 @@ def test_features_rendered_without_are_reported(scene, exported):
         bpy.ops.wm.set_working_color_space(working_space='Linear Rec.709', convert_colors=False)
 
 
+def test_light_linking_tells_library_objects_from_local_ones_of_the_same_name(scene, tmp_path):
+    """Light linking matches objects, not names: a library plane named as a local one ('Plane'
+    and 'Plane [lib.blend]') is not lit by a lamp whose receiver collection holds the local
+    one (it was: 0.110 where Cycles renders 0), and a library lamp named as a local, linked one
+    lights everything (it had taken the local lamp's linking: black where Cycles gives 0.4)."""
+    setup(scene)
+    plane = scenes.plane("Plane", size=2.0)
+    lamp = scenes.light('POINT', 200.0, (0, 0, 2), name="Lamp")
+    lib = tmp_path / "lib.blend"
+    bpy.data.libraries.write(str(lib), {plane, lamp})
+    with bpy.data.libraries.load(str(lib), link=True) as (_, linked):
+        linked.objects = ["Plane", "Lamp"]
+    far_plane, far_lamp = linked.objects
+    plane.location.x, lamp.location.x = -3.0, -3.0    # the library's stay at x = 0
+    recv = bpy.data.collections.new("Receivers")
+    recv.objects.link(plane)
+    lamp.light_linking.receiver_collection = recv
+    scene.collection.objects.link(far_plane)
+    cam = scenes.camera(location=(-1.5, 0, 8), kind='ORTHO', ortho_scale=6.0)
+    scene.render.resolution_x, scene.render.resolution_y = 24, 8
+    scene.render.engine = 'DACRT'
+    scene.dacrt.samples, scene.dacrt.max_bounces = 4, 0
+    scenes.black_world()
+    img = scenes.read_exr(scenes.render_exr(tmp_path / "a.exr"))["R"]
+    left, right = img[:, 4:8].mean(), img[:, 16:20].mean()
+    assert left > 0.02 and right == 0.0, (left, right)
+    # the library lamp over the library plane lights it: the local lamp's linking is its own
+    scene.collection.objects.link(far_lamp)
+    img = scenes.read_exr(scenes.render_exr(tmp_path / "b.exr"))["R"]
+    assert img[:, 16:20].mean() > 0.02, img[:, 16:20].mean()
+
+
 def test_light_linking_receivers_exported(scene, exported):
     """An emitter's receiver collection as (included, excluded) names: objects by their own
     state, a child collection's objects (all levels) by the child's state."""
