@@ -286,8 +286,11 @@ class Exporter:
             self.ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
         for mod in getattr(ob, 'modifiers', ()):
             if mod.type == 'SUBSURF' and mod.show_render and getattr(mod, 'use_adaptive_subdivision', False):
+                levels, r = mod.render_levels, self.scene.render
+                if r.use_simplify:            # Simplify > Max Subdivision caps what Blender evaluates
+                    levels = min(levels, r.simplify_subdivision_render)
                 self.ignore(f"adaptive subdivision is not rendered (Cycles dices by the dicing rate); the "
-                             f"Subdivision modifier's Render Levels ({mod.render_levels}) are used", ob.name)
+                            f"Subdivision modifier's Render Levels ({levels}) are used", ob.name)
         linking = getattr(ob, 'light_linking', None)
         for kind, attr, links in (('receiver', 'receiver_collection', self.light_links),
                                   ('blocker', 'blocker_collection', self.shadow_links)):

@@ -2774,6 +2774,13 @@ def test_adaptive_subdivision_is_reported(scene, exported):
     data = exported()
     assert any("'Smooth'" in t and "adaptive subdivision is not rendered" in t and "Render Levels (1)" in t
                for _, t in data.messages)
+    # under Simplify > Max Subdivision the levels rendered are capped, and said so (it named the
+    # modifier's 3 where 1 was rendered)
+    mod.render_levels = 3
+    scene.render.use_simplify, scene.render.simplify_subdivision_render = True, 1
+    data = exported()
+    assert len(data.geometry.triangles) == 48
+    assert any("Render Levels (1)" in t for _, t in data.messages), data.messages
 
 
 def test_object_random_is_cycles(scene):
