@@ -54,7 +54,8 @@ def last_render_stats() -> dict:
     """Statistics of the latest DACRT render, per view layer name (the Integrator's stats:
     rays, timings (export, setup, trace and the tracer's filter / partition / leaf phases,
     Python), trace share, samples, and 'skipped': the objects, materials, triangles, lights,
-    shadow and bounce rays and samples the render did not need). Empty before any."""
+    shadow and bounce rays and samples the render did not need). Empty before any. A layer of
+    another scene the render pulls in (a compositor Render Layers node) is keyed 'Scene / Layer'."""
     from . import engine
     return {layer: dict(stats) for layer, stats in engine.LAST_RENDER_STATS.items()}
 

@@ -43,13 +43,22 @@ def extra_passes(layer):
 # Stats of the latest render per view layer, for scripts (addon.last_render_stats()); emptied
 # when a frame's render begins (render_pre, once for all its view layers; an engine kept with
 # Persistent Data renders many frames), so a layer of an earlier render or scene, or a frame
-# that failed, leaves nothing behind.
+# that failed, leaves nothing behind. Keyed by view layer name; a layer of another scene the
+# render pulls in (a compositor Render Layers node) as 'Scene / Layer', so that two scenes'
+# default 'ViewLayer's do not overwrite each other.
 LAST_RENDER_STATS = {}
+_RENDERED_SCENE = ['']     # the scene the render operation renders (render_pre's)
 
 
 @bpy.app.handlers.persistent
-def _new_frame(*_args):
+def _new_frame(scene=None, *_args):
     LAST_RENDER_STATS.clear()
+    _RENDERED_SCENE[0] = getattr(scene, 'name', '')
+
+
+def stats_key(scene_name, layer):
+    """LAST_RENDER_STATS' key of a view layer of the scene named scene_name."""
+    return layer if scene_name == _RENDERED_SCENE[0] or not _RENDERED_SCENE[0] else f"{scene_name} / {layer}"
 
 
 def register_handlers():
@@ -203,7 +212,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         finally:
             self.end_result(result)
         if integ is not None:
-            self._report_summary(frame_stats(per_view), scene_data, layer, export_seconds)
+            self._report_summary(frame_stats(per_view), scene_data, stats_key(depsgraph.scene.name, layer),
+                                 export_seconds)
 
     def _view_integrator(self, depsgraph, scene_data, view):
         """The integrator of the frame's export (view None) or of one view of a multiview

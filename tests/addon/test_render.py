@@ -870,3 +870,34 @@ def test_cancel_is_answered_inside_an_images_conversion(scene, monkeypatch, capf
     bpy.ops.render.render()
     assert state['converting'] and state['finished'] == 0
     assert "render cancelled during scene export" in capfd.readouterr().out
+
+
+def test_stats_of_a_scene_the_compositor_pulls_in_keep_their_own_key(scene):
+    """A render whose compositor reads another scene's layer keeps both layers' stats: the
+    other's under 'Scene / Layer' (both named 'ViewLayer', the other's had replaced the
+    rendered scene's: 4 samples where 8 were rendered)."""
+    def setup(s, samples):
+        s.render.resolution_x, s.render.resolution_y = 16, 12
+        s.render.engine = 'DACRT'
+        s.dacrt.samples = samples
+        scenes.camera(scene=s, name="Cam" + s.name)
+
+    setup(scene, 8)
+    other = bpy.data.scenes.new("Other")
+    setup(other, 4)
+    ng = bpy.data.node_groups.new("Comp", 'CompositorNodeTree')
+    scene.compositing_node_group = ng
+    scene.render.use_compositing = True
+    ng.interface.new_socket('Image', in_out='OUTPUT', socket_type='NodeSocketColor')
+    mine, theirs = ng.nodes.new('CompositorNodeRLayers'), ng.nodes.new('CompositorNodeRLayers')
+    mine.scene, theirs.scene = scene, other
+    mix = ng.nodes.new('ShaderNodeMix')
+    mix.data_type, mix.blend_type = 'RGBA', 'ADD'
+    ng.links.new(mine.outputs['Image'], mix.inputs[6])
+    ng.links.new(theirs.outputs['Image'], mix.inputs[7])
+    ng.links.new(mix.outputs[2], ng.nodes.new('NodeGroupOutput').inputs[0])
+    layer = scene.view_layers[0].name
+    assert other.view_layers[0].name == layer
+    bpy.ops.render.render(scene=scene.name)
+    stats = addon.last_render_stats()
+    assert stats[layer]['samples_done'] == 8 and stats[f"Other / {layer}"]['samples_done'] == 4, stats
