@@ -52,11 +52,11 @@ class Texture:
             return self.pixels.followed_by(fn)
         src = np.asarray(self.pixels).view(np.ndarray)
         px = np.empty_like(src)
-        px[..., 3:] = src[..., 3:]
         # by blocks of rows, so fn's temporaries stay in cache (whole-image temporaries made an
         # 8K texture's bake ~5 s); fn maps each texel on its own
         step = max(1, (1 << 18) // max(1, src[:1].size)) if src.ndim > 1 else len(src)
         for i in range(0, len(src), step):
+            px[i:i + step, ..., 3:] = src[i:i + step, ..., 3:]
             px[i:i + step, ..., :3] = fn(src[i:i + step, ..., :3])
         return after_lookup(self.pixels, px, fn)
 

@@ -111,6 +111,16 @@ def _file_texels(path, img, reasons, unassociate):
     buf, spec = _open_straight(path)
     if spec is None:
         return None
+    ch = spec.nchannels
+    stored_associated = ch == 4 and not spec.get_int_attribute('oiio:UnassociatedAlpha', 0)
+    if spec.format.basetype == oiio.UINT8 and not (stored_associated and img.alpha_mode != 'NONE'):
+        # the bytes as stored (a quarter of the floats' memory, and no conversion): what Cycles
+        # reads, and what Blender's byte buffer holds
+        raw = np.asarray(buf.get_pixels(oiio.UINT8), np.uint8).reshape(spec.height, spec.width, -1)[::-1]
+        raw = np.ascontiguousarray(raw)
+        if img.alpha_mode == 'NONE' and ch in (2, 4):
+            raw[..., ch - 1] = 255
+        return _linear_rgba(raw, img, reasons, unassociate, byte=True, encoded=True)
     raw = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32).reshape(spec.height, spec.width, -1)[::-1]
     raw = np.ascontiguousarray(raw)
     ch = raw.shape[2]
@@ -158,6 +168,18 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     imageuser.user_frame)."""
     if img.source == 'SEQUENCE':     # bpy holds no frame's pixels in background renders
         return _sequence_frame(img, reasons, unassociate, user, frame)
+    if not _read_from_blender(img):
+        # Cycles reads an image that has a file from that file at every render, not from
+        # Blender's buffer: a file rewritten since Blender loaded it renders as it is now (it
+        # had rendered as first loaded), a painted but unsaved image as its file. Blender's
+        # buffer stands in where the file cannot be read.
+        path = bpy.path.abspath(img.filepath_raw, library=img.library)
+        if img.source == 'TILED' and len(img.tiles):
+            path = _tile_path(path, img.tiles[0].number)
+        poll()
+        texels = _file_texels(path, img, reasons, unassociate) if '<' not in path else None
+        if texels is not None:
+            return texels
     try:
         w, h = img.size
         ch = img.channels
@@ -270,7 +292,8 @@ def _premultiplied_bytes(img, buf, from_file, reasons):
 
 def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
     """(h, w, 4) scene-linear RGBA of an image buffer (h, w, channels) of `img`: a byte buffer
-    is in the image's colour space with straight alpha; a float one is linear and associated
+    (Blender's floats k/255, or the bytes themselves as uint8) is in the image's colour space
+    with straight alpha; a float one is linear and associated
     unless `encoded` (a deeper-than-byte file read directly: in the image's colour space,
     converted and associated here as Blender does on load). A texture.ImageTexels carrying the
     texels as Cycles stores them for lookup (_stored_texels; from_file: Cycles reads the image's

@@ -604,7 +604,11 @@ const float* byte_table(const F32Array& table, const char* name) {
     return table.data();
 }
 
-py::tuple byte_texels_py(F32Array buf, F32Array byte_floats, bool associate) {
+py::tuple byte_texels_py(py::array buf, F32Array byte_floats, bool associate) {
+    const bool bytes = py::isinstance<py::array_t<uint8_t>>(buf);
+    if (!bytes && !py::isinstance<py::array_t<float>>(buf))
+        throw py::value_error("buf must be a float32 or uint8 array");
+    if (!(buf.flags() & py::array::c_style)) throw py::value_error("buf must be C-contiguous");
     auto [lead, n] = texel_shape(buf, 1, 4, "buf");
     const float* bf = byte_table(byte_floats, "byte_floats");
     std::vector<py::ssize_t> shape = lead;
@@ -619,10 +623,14 @@ py::tuple byte_texels_py(F32Array buf, F32Array byte_floats, bool associate) {
         assoc = a;
     }
     const int ch = int(buf.shape(buf.ndim() - 1));
-    bool exact;
+    bool exact = true;
     {
         py::gil_scoped_release nogil;
-        exact = byte_texels(buf.data(), n, ch, bf, rgba.mutable_data(), k8.mutable_data(), ka);
+        if (bytes)
+            byte_texels(static_cast<const uint8_t*>(buf.data()), n, ch, bf, rgba.mutable_data(), k8.mutable_data(), ka);
+        else
+            exact = byte_texels(static_cast<const float*>(buf.data()), n, ch, bf, rgba.mutable_data(),
+                                k8.mutable_data(), ka);
     }
     return py::make_tuple(rgba, k8, assoc, exact);
 }

@@ -23,6 +23,27 @@ inline uint8_t associated(uint8_t c, uint8_t a) {
     return uint8_t((p + 1 + (p >> 8)) >> 8);
 }
 
+// One texel's channels as RGBA: grey and alpha expanded (one: grey; two: grey, alpha; three:
+// alpha `one`).
+template <class T>
+inline void expand(const T* s, int ch, T one, T v[4]) {
+    if (ch >= 3) {
+        v[0] = s[0], v[1] = s[1], v[2] = s[2];
+        v[3] = ch == 4 ? s[3] : one;
+    } else {
+        v[0] = v[1] = v[2] = s[0];
+        v[3] = ch == 2 ? s[1] : one;
+    }
+}
+
+inline void store_bytes(const uint8_t k[4], size_t i, uint8_t* k8, uint8_t* k8_assoc) {
+    for (int c = 0; c < 4; ++c) k8[4 * i + size_t(c)] = k[c];
+    if (k8_assoc) {
+        for (int c = 0; c < 3; ++c) k8_assoc[4 * i + size_t(c)] = associated(k[c], k[3]);
+        k8_assoc[4 * i + 3] = k[3];
+    }
+}
+
 }  // namespace
 
 bool byte_texels(const float* buf, size_t n, int ch, const float* byte_floats, float* rgba, uint8_t* k8,
@@ -31,30 +52,31 @@ bool byte_texels(const float* buf, size_t n, int ch, const float* byte_floats, f
     parallel_for(n, [&](size_t b, size_t e) {
         bool same = true;
         for (size_t i = b; i < e; ++i) {
-            const float* s = buf + i * size_t(ch);
             float v[4];
-            if (ch >= 3) {
-                v[0] = s[0], v[1] = s[1], v[2] = s[2];
-                v[3] = ch == 4 ? s[3] : 1.0f;
-            } else {
-                v[0] = v[1] = v[2] = s[0];
-                v[3] = ch == 2 ? s[1] : 1.0f;
-            }
+            expand(buf + i * size_t(ch), ch, 1.0f, v);
             uint8_t k[4];
             for (int c = 0; c < 4; ++c) {
                 rgba[4 * i + size_t(c)] = v[c];
                 k[c] = to_byte(v[c]);
-                k8[4 * i + size_t(c)] = k[c];
             }
             for (int c = 0; c < 3; ++c) same &= v[c] == byte_floats[k[c]];
-            if (k8_assoc) {
-                for (int c = 0; c < 3; ++c) k8_assoc[4 * i + size_t(c)] = associated(k[c], k[3]);
-                k8_assoc[4 * i + 3] = k[3];
-            }
+            store_bytes(k, i, k8, k8_assoc);
         }
         if (!same) exact.store(false, std::memory_order_relaxed);
     }, size_t(1) << 16);
     return exact.load();
+}
+
+void byte_texels(const uint8_t* buf, size_t n, int ch, const float* byte_floats, float* rgba, uint8_t* k8,
+                 uint8_t* k8_assoc) {
+    parallel_for(n, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            uint8_t k[4];
+            expand(buf + i * size_t(ch), ch, uint8_t(255), k);
+            for (int c = 0; c < 4; ++c) rgba[4 * i + size_t(c)] = byte_floats[k[c]];
+            store_bytes(k, i, k8, k8_assoc);
+        }
+    }, size_t(1) << 16);
 }
 
 void byte_lookup(const uint8_t* k8, size_t n, const float* table, float* rgba) {

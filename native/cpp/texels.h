@@ -16,6 +16,9 @@ namespace dacrt {
 // own float for byte k), i.e. whether a lookup by byte reproduces rgba.
 bool byte_texels(const float* buf, size_t n, int ch, const float* byte_floats, float* rgba, uint8_t* k8,
                  uint8_t* k8_assoc);
+// The same from the bytes themselves (an 8-bit file read as stored): rgba is byte_floats[k].
+void byte_texels(const uint8_t* buf, size_t n, int ch, const float* byte_floats, float* rgba, uint8_t* k8,
+                 uint8_t* k8_assoc);
 
 // rgba[4 i + c] = table[k8[4 i + c]] for the colour channels c < 3 (alpha untouched).
 void byte_lookup(const uint8_t* k8, size_t n, const float* table, float* rgba);

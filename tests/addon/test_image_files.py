@@ -175,3 +175,23 @@ def test_8bit_rgba_in_a_converted_space_is_associated_in_float(tmp_path):
     want = rec2020_to_709 @ (texel[:3] / 255.0 * texel[3] / 255.0)
     np.testing.assert_allclose(got[:3], want, rtol=2e-3)
     assert got[3] == np.float32(40 / 255.0)
+
+
+def test_a_file_image_is_read_from_its_file_at_each_render(tmp_path):
+    """Cycles reads an image that has a file from the file at every render (image_is_builtin
+    only for packed, generated and movie images): a PNG rewritten between two renders in one
+    process renders as rewritten (it had kept the first render's red, Blender's cached
+    buffer); a packed image is read from Blender, as Cycles does."""
+    path = tmp_path / "swap.png"
+    scenes.write_image(path, np.array([[[230, 20, 20]]], np.uint8))
+    img = bpy.data.images.load(str(path))
+    first = np.asarray(export.images.image_pixels(img, []))
+    assert np.allclose(first[0, 0, :3], srgb_to_linear(np.array([230, 20, 20]) / 255.0), atol=1e-6)
+    assert np.allclose(img.pixels[:3], np.array([230, 20, 20]) / 255.0, atol=1e-6)   # Blender's, loaded
+    scenes.write_image(path, np.array([[[20, 20, 230]]], np.uint8))
+    again = np.asarray(export.images.image_pixels(img, []))
+    assert np.allclose(again[0, 0, :3], srgb_to_linear(np.array([20, 20, 230]) / 255.0), atol=1e-6)
+    assert np.allclose(img.pixels[:3], np.array([230, 20, 20]) / 255.0, atol=1e-6)   # Blender's still red
+    img.pack()
+    packed = np.asarray(export.images.image_pixels(img, []))
+    assert np.allclose(packed[0, 0, :3], first[0, 0, :3], atol=1e-6)
