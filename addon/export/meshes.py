@@ -149,11 +149,12 @@ class MeshArrays:
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
                  'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes', '_coords',
-                 'undeformed', 'rebuilt', 'texspace', 'strand')
+                 'undeformed', 'rebuilt', 'texspace', 'strand', 'orco')
 
     def __init__(self, me, want_uvs):
         self.texspace = None         # (location, size) where not the mesh's own (from_arrays)
         self.strand = None           # a tessellation's attributes (from_arrays)
+        self.orco = None             # the positions Generated coordinates are of, where set (from_arrays)
         nv = len(me.vertices)
         self.positions = np.empty(nv * 3, np.float32)
         me.attributes['position'].data.foreach_get('vector', self.positions)
@@ -220,14 +221,20 @@ class MeshArrays:
         self.corner_uvs = self.uv_layers.get(self.active_uv)
 
     @classmethod
-    def from_arrays(cls, positions, triangles, vertex_normals, generated_is_object=False, strand=None):
+    def from_arrays(cls, positions, triangles, vertex_normals, generated_is_object=False, strand=None,
+                    generated_of=None):
         """A mesh made here (tessellated points or curves): smooth per-vertex normals, one
-        material slot, no UV map; Generated coordinates its bounds mapped to 0..1, or with
-        generated_is_object its object-space positions. strand: (the source's attributes
+        material slot, no UV map; Generated coordinates its bounds mapped to 0..1, with
+        generated_is_object its object-space positions, with generated_of ((v, 3) positions,
+        (location, size)) those positions mapped through that texture space (hair particles:
+        each vertex's strand root in the emitter's). strand: (the source's attributes
         {name: (domain, (n, 4) rows)}, its render colour attribute's name or None, a function
         giving per-vertex rows of a domain's rows), so Attribute nodes read them."""
         a = cls.__new__(cls)
         a.texspace = (np.full(3, 0.5), np.full(3, 0.5)) if generated_is_object else None
+        a.orco = None
+        if generated_of is not None:
+            a.orco, a.texspace = np.asarray(generated_of[0], np.float32), generated_of[1]
         a.strand = strand
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
@@ -282,7 +289,10 @@ class MeshArrays:
         `undeformed()` (set by the export: (the mesh before modifiers where something deforms
         this one, or None; the modifiers that also rebuild it)) gives the source; its positions
         where the vertex counts match, otherwise the evaluated ones, exact where nothing deforms
-        the mesh (a Subdivision alone). Sets `rebuilt`: the modifiers that make it approximate."""
+        the mesh (a Subdivision alone); `orco` where a tessellation set them. Sets `rebuilt`:
+        the modifiers that make it approximate."""
+        if self.orco is not None:
+            return self.orco
         me, self.rebuilt = self.undeformed() if self.undeformed is not None else (None, ())
         if me is not None and len(me.vertices) == len(self.positions):
             p = np.empty(len(self.positions) * 3, np.float32)

@@ -46,8 +46,8 @@ def point_attribute(data, name, data_type, width):
 
 def hair_arrays(ob, notes):
     """ob's hair particles as an object-space StrandSource (each curve's material slot in
-    curve_slot; tessellated with the frame's other tubes), or None. notes: the exporter (its
-    skip, ignore and check_break)."""
+    curve_slot, the emitter's texture space; tessellated with the frame's other tubes), or
+    None. notes: the exporter (its skip, ignore and check_break)."""
     systems = hair_systems(ob)
     positions, radii, offsets, slots = [], [], [0], []
     n_slots = max(len(ob.material_slots), 1)
@@ -88,6 +88,8 @@ def hair_arrays(ob, notes):
     positions, radii = np.concatenate(positions), np.concatenate(radii)
     src = StrandSource('HAIR', ob.name, positions, radii, np.array(offsets))
     src.curve_slot = np.concatenate(slots)
+    me = ob.data        # the emitter, whose texture space Cycles maps each root through
+    src.texspace = (np.array(me.texspace_location, np.float64), np.array(me.texspace_size, np.float64))
     return src
 
 
@@ -97,7 +99,7 @@ class StrandSource:
     holds, instances included, so a scatter of hair tufts does not multiply the finest level
     (400 tufts of 30 curves had made 10.75M triangles and 3.4 GB; Cycles 282 MB)."""
     __slots__ = ('kind', 'name', 'positions', 'radii', 'offsets', 'linear', 'attributes', 'render_color',
-                 'curve_slot')
+                 'curve_slot', 'texspace')
 
     def __init__(self, kind, name, positions, radii, offsets=None, linear=False, attributes=None,
                  render_color=None):
@@ -106,6 +108,7 @@ class StrandSource:
         # {name: (domain 'POINT' or 'CURVE', (n, 4) float32)} of what Attribute nodes may read
         self.attributes, self.render_color = attributes or {}, render_color
         self.curve_slot = None      # hair particles: each curve's material slot
+        self.texspace = None        # hair particles: the emitter's texture space (location, size)
 
 
 def _attributes(data):
@@ -187,8 +190,11 @@ def tessellate(src, frame_points, notes):
     notes.ignore(what, src.name)
     if not len(t):
         return None
-    if src.kind == 'HAIR':      # Generated coordinates over the strands' bounds; each curve's slot
-        arrays = MeshArrays.from_arrays(v, t, n)
+    if src.kind == 'HAIR':
+        # Cycles' Generated coordinates of hair particles: each strand's root in the emitter's
+        # texture space, one value along the strand (curves.cpp); each curve's slot
+        roots = src.positions[src.offsets[:-1]]
+        arrays = MeshArrays.from_arrays(v, t, n, generated_of=(roots[curve], src.texspace))
         arrays.slot = src.curve_slot[tri_curve].astype(np.int32)     # (a tip of radius 0 has fewer triangles)
         return arrays
     # Cycles' Generated coordinates of points and curves are their object-space positions
