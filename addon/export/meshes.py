@@ -222,14 +222,15 @@ class MeshArrays:
 
     @classmethod
     def from_arrays(cls, positions, triangles, vertex_normals, generated_is_object=False, strand=None,
-                    generated_of=None):
+                    generated_of=None, uvs=None):
         """A mesh made here (tessellated points or curves): smooth per-vertex normals, one
-        material slot, no UV map; Generated coordinates its bounds mapped to 0..1, with
+        material slot; Generated coordinates its bounds mapped to 0..1, with
         generated_is_object its object-space positions, with generated_of ((v, 3) positions,
         (location, size)) those positions mapped through that texture space (hair particles:
         each vertex's strand root in the emitter's). strand: (the source's attributes
         {name: (domain, (n, 4) rows)}, its render colour attribute's name or None, a function
-        giving per-vertex rows of a domain's rows), so Attribute nodes read them."""
+        giving per-vertex rows of a domain's rows), so Attribute nodes read them. uvs:
+        ({name: (v, 2) per vertex}, the active render map's name or '') (None: no UV map)."""
         a = cls.__new__(cls)
         a.texspace = (np.full(3, 0.5), np.full(3, 0.5)) if generated_is_object else None
         a.orco = None
@@ -238,7 +239,12 @@ class MeshArrays:
         a.strand = strand
         a.positions = np.ascontiguousarray(positions, np.float32)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
-        a.corners, a.slot, a.corner_uvs, a.uv_layers, a.active_uv, a.domain = None, None, None, {}, '', 'POINT'
+        a.corners, a.slot, a.domain = None, None, 'POINT'
+        # per corner, as a mesh's: triangle i's corners are 3i, 3i + 1, 3i + 2
+        layers, active = uvs if uvs is not None else ({}, '')
+        a.uv_layers = {name: np.ascontiguousarray(rows, np.float32)[a.triangles].reshape(-1, 2)
+                       for name, rows in layers.items()}
+        a.active_uv, a.corner_uvs = active, a.uv_layers.get(active)
         a.mesh, a._tangents, a._attributes, a._coords, a.undeformed, a.rebuilt = None, {}, {}, None, None, ()
         a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
         return a

@@ -44,12 +44,34 @@ def point_attribute(data, name, data_type, width):
     return out.reshape(n, width).astype(np.float64) if width > 1 else out.astype(np.float64)
 
 
+def _root_uvs(ps, modifier, first, uv_no, notes):
+    """(strands, 2): each rendered strand's UV at its root on the emitter's UV map uv_no, as
+    Cycles reads it (ObtainCacheParticleUV: uv_on_emitter, from the first rendered particle,
+    children given the first parent). bpy has only this per-particle call: ~4 us, 0.04 s a UV
+    map for 10K strands (their co_hair points take 0.16 s)."""
+    parents = ps.particles
+    total = len(parents) + len(ps.child_particles)
+    out = np.empty((total - first, 2))
+    for i, no in enumerate(range(first, total)):
+        if i % 4096 == 0 and notes.check_break():
+            raise ExportCancelled()
+        out[i] = ps.uv_on_emitter(modifier, parents[no] if no < len(parents) else parents[0],
+                                  particle_no=no, uv_no=uv_no)
+    return out
+
+
 def hair_arrays(ob, notes):
     """ob's hair particles as an object-space StrandSource (each curve's material slot in
-    curve_slot, the emitter's texture space; tessellated with the frame's other tubes), or
-    None. notes: the exporter (its skip, ignore and check_break)."""
+    curve_slot, the emitter's texture space and each strand's UVs on its UV maps; tessellated
+    with the frame's other tubes), or None. notes: the exporter (its skip, ignore and
+    check_break)."""
     systems = hair_systems(ob)
     positions, radii, offsets, slots = [], [], [0], []
+    # the emitter: Cycles maps each root through its texture space and reads every one of its
+    # UV maps there (one value a strand)
+    me = ob.data
+    uv_names = [layer.name for layer in me.uv_layers]
+    uvs = {name: [] for name in uv_names}
     n_slots = max(len(ob.material_slots), 1)
     # co_hair gives world space; the tubes are made round in object space and placed by
     # the object's matrix, as Cycles makes them (on a non-uniformly scaled emitter its
@@ -83,13 +105,17 @@ def hair_arrays(ob, notes):
         radii.append(radius.reshape(-1))
         offsets.extend((offsets[-1] + points * np.arange(1, len(co) + 1)).tolist())
         slots.append(np.full(len(co), min(max(s.material - 1, 0), n_slots - 1)))
+        modifier = next(m for m in ob.modifiers if m.type == 'PARTICLE_SYSTEM' and m.particle_system == ps)
+        for k, name in enumerate(uv_names):
+            uvs[name].append(_root_uvs(ps, modifier, first, k, notes))
     if not positions:
         return None
     positions, radii = np.concatenate(positions), np.concatenate(radii)
     src = StrandSource('HAIR', ob.name, positions, radii, np.array(offsets))
     src.curve_slot = np.concatenate(slots)
-    me = ob.data        # the emitter, whose texture space Cycles maps each root through
     src.texspace = (np.array(me.texspace_location, np.float64), np.array(me.texspace_size, np.float64))
+    src.uv_maps = ({name: ('CURVE', np.concatenate(rows)) for name, rows in uvs.items()},
+                   next((layer.name for layer in me.uv_layers if layer.active_render), ''))
     return src
 
 
@@ -99,7 +125,7 @@ class StrandSource:
     holds, instances included, so a scatter of hair tufts does not multiply the finest level
     (400 tufts of 30 curves had made 10.75M triangles and 3.4 GB; Cycles 282 MB)."""
     __slots__ = ('kind', 'name', 'positions', 'radii', 'offsets', 'linear', 'attributes', 'render_color',
-                 'curve_slot', 'texspace')
+                 'curve_slot', 'texspace', 'uv_maps')
 
     def __init__(self, kind, name, positions, radii, offsets=None, linear=False, attributes=None,
                  render_color=None):
@@ -109,6 +135,8 @@ class StrandSource:
         self.attributes, self.render_color = attributes or {}, render_color
         self.curve_slot = None      # hair particles: each curve's material slot
         self.texspace = None        # hair particles: the emitter's texture space (location, size)
+        # ({name: (domain, (n, 2) rows)}, the active render map's name or ''): the UV maps
+        self.uv_maps = ({}, '')
 
 
 def _attributes(data):
@@ -149,7 +177,14 @@ def read_strands(ob, notes):
     data.curve_offset_data.foreach_get('value', offsets)
     types = data.attributes.get('curve_type')        # absent: all Catmull-Rom
     linear = types is not None and _all_poly(types, len(data.curves))
-    return StrandSource('CURVES', ob.name, positions, radii, offsets, linear, attributes, render_color)
+    src = StrandSource('CURVES', ob.name, positions, radii, offsets, linear, attributes, render_color)
+    # Cycles' UV of curves is their 'surface_uv_coordinate' on curves (ATTR_STD_UV); a UV Map
+    # node reads any 2D vector attribute by its name
+    surface = 'surface_uv_coordinate'
+    float2 = {a.name for a in data.attributes if a.data_type == 'FLOAT2'}.intersection(attributes)
+    src.uv_maps = ({name: (attributes[name][0], attributes[name][1][:, :2]) for name in float2},
+                   surface if surface in float2 and attributes[surface][0] == 'CURVE' else '')
+    return src
 
 
 def tessellate(src, frame_points, notes):
@@ -190,16 +225,18 @@ def tessellate(src, frame_points, notes):
     notes.ignore(what, src.name)
     if not len(t):
         return None
+    layers, active = src.uv_maps
+    uvs = ({name: per_vertex(*found) for name, found in layers.items()}, active) if layers else None
     if src.kind == 'HAIR':
         # Cycles' Generated coordinates of hair particles: each strand's root in the emitter's
         # texture space, one value along the strand (curves.cpp); each curve's slot
         roots = src.positions[src.offsets[:-1]]
-        arrays = MeshArrays.from_arrays(v, t, n, generated_of=(roots[curve], src.texspace))
+        arrays = MeshArrays.from_arrays(v, t, n, generated_of=(roots[curve], src.texspace), uvs=uvs)
         arrays.slot = src.curve_slot[tri_curve].astype(np.int32)     # (a tip of radius 0 has fewer triangles)
         return arrays
     # Cycles' Generated coordinates of points and curves are their object-space positions
     strand = (src.attributes, src.render_color, per_vertex) if src.attributes else None
-    return MeshArrays.from_arrays(v, t, n, generated_is_object=True, strand=strand)
+    return MeshArrays.from_arrays(v, t, n, generated_is_object=True, strand=strand, uvs=uvs)
 
 
 def _all_poly(types, curves):

@@ -1,7 +1,8 @@
-"""Texture coordinates on hair (addon/export/strands.py): Cycles gives each hair particle strand
-one Generated coordinate, its root in the emitter's texture space, constant along it
-(blender/curves.cpp). Checked on the exported corners; the repro renders agree with Cycles
-within its noise."""
+"""Texture coordinates on hair (addon/export/strands.py): Cycles gives each strand one Generated
+coordinate and one UV, both at its root and constant along it (blender/curves.cpp): a hair
+particle strand its root in the emitter's texture space and the emitter's UV maps there
+(uv_on_emitter), a Curves object's strands their 'surface_uv_coordinate'. Checked on the
+exported corners; the repro renders agree with Cycles within its noise."""
 import numpy as np
 
 from tests.addon import scenes
@@ -9,6 +10,21 @@ from tests.addon import scenes
 
 def _names(data):
     return np.array([m.name for m in data.materials])[data.geometry.material]
+
+
+def _image_material(name, uv_map=''):
+    """A diffuse coloured by an image on the active UV map, or on uv_map by a UV Map node."""
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image(name, np.ones((2, 2, 4), np.float32))
+    if uv_map:
+        uv = nt.nodes.new('ShaderNodeUVMap')
+        uv.uv_map = uv_map
+        nt.links.new(uv.outputs['UV'], tex.inputs['Vector'])
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
 
 
 def _generated_material(name):
@@ -54,3 +70,65 @@ def test_hair_particle_generated_is_the_root_in_the_emitter_texture_space(scene,
     # of its root
     want = np.stack([(at[:, 0] - 3) / 4 + 0.5, at[:, 1] / 2 + 0.5], axis=1)
     assert np.abs(gen[:, :2] - want).max() < 0.0061
+
+
+def test_hair_particle_uv_is_the_emitter_uv_at_the_root(scene, exported):
+    """Cycles reads every UV map of the emitter at each strand's root (uv_on_emitter, the map
+    by its index; children by their own index): an image on the active map reads (x - 1) / 4,
+    (y + 1) / 2 here, one by a UV Map node on 'Second' that map's (1 - u, 1 - v), on parents
+    and on interpolated children. Every strand had read UV (0, 0), the image's corner texel (a
+    repro's 2x2 image: hair (0.482, 0, 0) where Cycles gives (0.241, 0.211, 0.173))."""
+    scenes.camera()
+    em = _emitter([_image_material("Fur"), _image_material("Fur2", uv_map="Second")], systems=2)
+    me = em.data
+    x = np.array([me.vertices[l.vertex_index].co.x for l in me.loops])
+    y = np.array([me.vertices[l.vertex_index].co.y for l in me.loops])
+    first = np.stack([(x - 1) / 4, (y + 1) / 2], axis=1)
+    me.uv_layers.new(name="UVMap").uv.foreach_set('vector', first.astype(np.float32).ravel())
+    me.uv_layers.new(name="Second").uv.foreach_set('vector', (1 - first).astype(np.float32).ravel())
+    me.uv_layers["UVMap"].active_render = True
+    for children in (False, True):
+        if children:
+            for ps in em.particle_systems:
+                ps.settings.child_type, ps.settings.rendered_child_count = 'INTERPOLATED', 3
+        data = exported()
+        g = data.geometry
+        names = _names(data)
+        for name, flip in (("Fur", False), ("Fur2", True)):
+            hair = names == name
+            assert hair.sum() > 0
+            at = np.asarray(g.vertices)[g.triangles[hair]].reshape(-1, 3)
+            want = np.stack([(at[:, 0] - 1) / 4, (at[:, 1] + 1) / 2], axis=1)
+            want = 1 - want if flip else want
+            uv = np.asarray(g.uvs)[hair].reshape(-1, 2)
+            assert np.abs(uv - want).max() < 0.0061, (name, children)     # within the radius of the root
+            assert g.has_uv is None or np.asarray(g.has_uv)[hair].all()
+
+
+def test_curves_uv_is_their_surface_uv_coordinate(scene, exported):
+    """A Curves object's UV in Cycles is its 'surface_uv_coordinate' (2D, on curves), one
+    value along each curve; a UV Map node reads a 2D attribute by name, a point one between
+    the curve's points. They had read (0, 0) (a repro's 8 curves: (0.479, 0, 0) where Cycles
+    gives (0.302, 0.182, 0))."""
+    scenes.camera()
+    z = np.array([[0, 0, 0], [0, 0, 0.5], [0, 0, 1.0]])
+    fur = scenes.hair_curves("Fur", [z, z + (1, 0, 0)], radius=0.05, material=_image_material("Fur"))
+    uv = fur.data.attributes.new('surface_uv_coordinate', 'FLOAT2', 'CURVE')
+    uv.data.foreach_set('vector', np.array([0.2, 0.3, 0.7, 0.9], np.float32))
+    named = _image_material("Named", uv_map="along")
+    strip = scenes.hair_curves("Strip", [z + (3, 0, 0)], radius=0.05, material=named)
+    along = strip.data.attributes.new('along', 'FLOAT2', 'POINT')
+    along.data.foreach_set('vector', np.array([[0, h] for h in (0, 0.5, 1)], np.float32).ravel())
+    strip.data.set_types(type='POLY')       # straight: v follows z between the points
+    data = exported()
+    g = data.geometry
+    names = _names(data)
+    hair = names == "Fur"
+    at = np.asarray(g.vertices)[g.triangles[hair]].reshape(-1, 3)
+    want = np.where((at[:, 0] < 0.5)[:, None], [0.2, 0.3], [0.7, 0.9])
+    np.testing.assert_allclose(np.asarray(g.uvs)[hair].reshape(-1, 2), want, atol=1e-6)
+    named = names == "Named"        # the point attribute by name, between the points linearly
+    assert named.sum() > 0
+    at = np.asarray(g.vertices)[g.triangles[named]].reshape(-1, 3)
+    np.testing.assert_allclose(np.asarray(g.uvs)[named].reshape(-1, 2), np.stack([0 * at[:, 2], at[:, 2]], 1),
+                               atol=1e-5)
