@@ -111,18 +111,20 @@ def sheen_albedo(node, reasons):
 
 def glass_albedos(node, reasons):
     """(reflected (3,), transmitted (3,)) standing in for a Glass BSDF: its dielectric reflection
-    as a diffuse albedo (GGX, averaged over view directions, specular.py) and the rest, times
-    its colour, let straight through, as a transparent surface does: no refraction, so a thin
-    pane is close and a solid glass object shows what lies behind it unbent. (A diffuse surface
-    of the colour, as other unknown BSDFs, made a pane an opaque white wall: 1.8-2.7x Cycles'
-    mean and every object behind it gone.)"""
+    as a diffuse albedo (GGX, averaged over view directions, specular.py) and the rest let
+    straight through, as a transparent surface does: no refraction, so a thin pane is close and
+    a solid glass object shows what lies behind it unbent. Both times its colour: Cycles weighs
+    the whole closure by it (a white reflection under a red pane's (1, 0.2, 0.2) made it (1,
+    0.27, 0.27) before a white world). (A diffuse surface of the colour, as other unknown BSDFs,
+    made a pane an opaque white wall: 1.8-2.7x Cycles' mean and every object behind it gone.)"""
     rough, r_ok = constant_value(node.inputs['Roughness'])
     ior, i_ok = constant_value(node.inputs['IOR'])
     color, c_ok = constant_color(node.inputs['Color'])
     rough = min(max(rough, 0.0), 1.0) if np.isfinite(rough) else 0.0
     ior = ior if np.isfinite(ior) and ior > 0.0 else 1.5
-    reflect = specular.layer_albedo(rough, ior, 0.5, (1.0, 1.0, 1.0), True)
-    transmit = np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0) * (1.0 - reflect)
+    fresnel = specular.layer_albedo(rough, ior, 0.5, (1.0, 1.0, 1.0), True)
+    color = np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0)
+    reflect, transmit = color * fresnel, color * (1.0 - fresnel)
     reasons.append("Glass BSDF as a transparent surface (no refraction) with its reflection as diffuse")
     if not (r_ok and i_ok and c_ok):
         reasons.append("Glass BSDF inputs driven by nodes; their own values used")
