@@ -663,7 +663,7 @@ class MaterialBuilder:
         if opacity is None:
             return None
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
-                        clear.transparent, opacity, translucent=opaque.translucent, glass=clear.glass)
+                        clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass)
 
     def _color_closure(self, socket, reasons):
         """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes

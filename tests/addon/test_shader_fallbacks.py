@@ -44,3 +44,29 @@ def test_glass_colour_tints_its_reflection(scene, exported):
     np.testing.assert_allclose(m.transparency, np.array([1.0, 0.2, 0.2]) * (1.0 - fresnel), rtol=1e-5)
     # before a white world: reflection + transmission = the colour
     np.testing.assert_allclose(m.base_color + m.transparency, (1.0, 0.2, 0.2), rtol=1e-5)
+
+
+def test_alpha_cut_out_keeps_its_emission_image(scene, exported):
+    """A sign cut out by a Mix Shader on an image's Alpha, between a Transparent BSDF and an
+    Emission of the same image's Color (strength 2): Cycles emits the image, red (2, 0, 0) on
+    the left half and blue (0, 0, 2) on the right. The cut-out rebuilt the shader without its
+    emission image, so the whole sign emitted the image's average, (1, 0, 1)."""
+    px = np.zeros((2, 2, 4), np.float32)
+    px[:, 0] = (1.0, 0.0, 0.0, 1.0)
+    px[:, 1] = (0.0, 0.0, 1.0, 1.0)
+    px[1, :, 3] = 0.0                                  # the top row cut out
+    mat, nt, out = _material("Sign")
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.interpolation = scenes.float_image("Sign", px), 'Closest'
+    e = nt.nodes.new('ShaderNodeEmission')
+    e.inputs['Strength'].default_value = 2.0
+    nt.links.new(tex.outputs['Color'], e.inputs['Color'])
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    nt.links.new(tex.outputs['Alpha'], mix.inputs['Fac'])
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfTransparent').outputs[0], mix.inputs[1])
+    nt.links.new(e.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    m = _table(exported, mat)["Sign"]
+    assert m.emission_texture is not None and m.opacity is not None
+    np.testing.assert_allclose(np.asarray(m.emission_texture)[..., :3], 2.0 * px[..., :3], rtol=1e-6)
+    np.testing.assert_allclose(np.asarray(m.opacity)[..., 0], px[..., 3])
