@@ -241,6 +241,10 @@ class Integrator:
         # materials whose passes count as glass: mostly refraction (Glass, Refraction, Principled
         # transmission), the rest as transparent
         self._mat_glass = 2.0 * self.mats.refraction.mean(axis=0) > self.mats.transparency.mean(axis=0)
+        # glass under an opacity texture (a Principled's transmission under an image's Alpha):
+        # glass where opaque, clear where cut out, so a pass counts as either per hit
+        self._opaque_glass = bool(self.mats.opaque_refraction.any())
+        refracts = (self.mats.refraction + self.mats.opaque_refraction).max(axis=0) > 0
         self._any_transparent = bool(self._tri_transparent.any())
         # transparent film without Transparent Glass: a camera ray that passes glass sees the
         # world behind it, drawn at alpha 1 (Cycles' refraction), where a Transparent BSDF's
@@ -253,14 +257,14 @@ class Integrator:
             [self.transparent and (not getattr(s, 'film_transparent_glass', False)
                                    or float(getattr(m, 'glass_roughness', 0.0)) > threshold)
              for m in scene_data.materials], bool)
-        self._glass_film = bool(((self.mats.refraction.max(axis=0) > 0) & self._film_refracts)
+        self._glass_film = bool((refracts & self._film_refracts)
                                 [self.tri.material][self._tri_transparent].any())
         # Rays past glass are Cycles' transmission rays: they see objects by their Transmission
         # visibility and no holdout. Passes pick glass or clear transparency (as under a
         # transparent film) only where that changes what they see: glass in the scene and some
         # object seen differently by transmission rays than by camera or diffuse rays, or held out
         vis = self.tri.visibility
-        glass = (self.mats.refraction.max(axis=0) > 0)[self.tri.material] & self._tri_transparent
+        glass = refracts[self.tri.material] & self._tri_transparent
         self._tri_transmit = ((vis & NO_TRANSMISSION) == 0) & ((vis & ~np.uint8(NO_TRANSMISSION)) != 0)
         self._any_glass = bool(glass.any())
         self._transmit_split = self._any_glass and bool(
@@ -1281,7 +1285,8 @@ class Integrator:
 
     def _transparency(self, prim, u, v):
         """At hits (prim, u, v) on transparent triangles: the weight rays pass with (3,k) and
-        the opacity (k,) the rest of the shader carries (1 but under opacity textures)."""
+        the opacity (k,) the rest of the shader carries (1 but under opacity textures; the
+        opaque part's own glass passes at that opacity, the transparency at 1 - opacity)."""
         mat = np.take(self.tri.material, prim)
         tau = np.take(self.mats.transparency, mat, axis=1)
         opacity = np.ones(len(prim), F32)
@@ -1291,7 +1296,7 @@ class Integrator:
                 a = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))[0]
                 a = np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)    # a NaN texel: opaque
                 opacity[sel] = a
-                tau[:, sel] *= 1.0 - a
+                tau[:, sel] = tau[:, sel] * (1.0 - a) + self.mats.opaque_refraction[:, m:m + 1] * a
         return tau, opacity, mat
 
     def _through(self, k, camera, path, hits, sinks, chain=None):
@@ -1324,6 +1329,8 @@ class Integrator:
             # _vertex); what it emits still counts. Glass: against its own limit
             tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows))
             glass = np.take(self._mat_glass, mat)
+            if self._opaque_glass:
+                glass = 2.0 * self._glass_part(mat, tau, opacity).mean(axis=0) > tau.mean(axis=0)
             spent = np.where(glass, np.take(path.gb, rows) >= self._glass_stop,
                              np.take(path.tb, rows) >= self._transparent_stop)
             surface = None
@@ -1354,7 +1361,7 @@ class Integrator:
             if not len(rows):
                 return
             if (camera and self._glass_film) or self._transmit_split:
-                self._glass_or_clear(camera, path, rows, mat[go], tau[:, go], p[go],
+                self._glass_or_clear(camera, path, rows, mat[go], tau[:, go], opacity[go], p[go],
                                      self.rng.uniform2(np.take(path.keys, rows, axis=1), _DIM_GLASS + (k << 11) + j)[0])
             else:
                 thr[:, rows] *= tau[:, go] / p[go]
@@ -1382,13 +1389,18 @@ class Integrator:
             hits[rows] = sub
             j += 1
 
-    def _glass_or_clear(self, camera, path, rows, mat, tau, p, u):
+    def _glass_part(self, mat, tau, opacity):
+        """(3, k) the glass part of transparency tau at hits on materials mat of opacity (k,)."""
+        return np.minimum(np.take(self.mats.refraction, mat, axis=1)
+                          + np.take(self.mats.opaque_refraction, mat, axis=1) * opacity, tau)
+
+    def _glass_or_clear(self, camera, path, rows, mat, tau, opacity, p, u):
         """Paths rows passing surfaces of materials mat with transparency tau (3, k): each passes
         as glass (its refraction part, with probability mean(glass) / mean(tau)) or as clear
         transparency (the rest), weighted by the part over its probability (and p, the pass's).
         Those that pass glass go on as transmission rays (path.transmit) and, camera paths under
         a transparent film (_glass_film), are refracted from then on (path.refracted)."""
-        glass = np.minimum(np.take(self.mats.refraction, mat, axis=1), tau)
+        glass = self._glass_part(mat, tau, opacity)
         q = np.where(tau.mean(axis=0) > 0, glass.mean(axis=0) / np.maximum(tau.mean(axis=0), 1e-30), 0.0)
         go = u < q
         part = np.where(go, glass / np.where(go, q, 1.0), (tau - glass) / np.where(go, 1.0, 1.0 - q))

@@ -164,6 +164,10 @@ class Material:
     # material as at an opaque one, while camera and bounce rays still pass it
     transparent_shadow: bool = True
     opacity: Optional[np.ndarray] = None
+    # with an `opacity` texture: the glass the opaque part itself lets through (3,) (a
+    # Principled's transmission under an image's Alpha), opacity x it beside (1 - opacity) x
+    # transparency; None: none
+    opaque_refraction: Optional[np.ndarray] = None
     opacity_interpolation: str = 'Linear'
     opacity_extension: str = 'REPEAT'
     opacity_transform: Optional[np.ndarray] = None

@@ -141,9 +141,11 @@ class Materials:
                                        for m in materials], bool)
         # transparency (3, materials) and the opacity textures (index, texture, interpolation,
         # extension, uv transform), as scenedata.Material describes them
-        # and the glass part of the transparency (scenedata.Material.refraction), at most it
+        # and the glass part of the transparency (scenedata.Material.refraction), at most it, and
+        # the opaque part's own glass under an opacity texture (Material.opaque_refraction)
         self.transparency = np.zeros((3, len(materials)), F32)
         self.refraction = np.zeros((3, len(materials)), F32)
+        self.opaque_refraction = np.zeros((3, len(materials)), F32)
         self.opacity = []
         for i, mat in enumerate(materials):
             if mat.transparency is None:
@@ -155,6 +157,8 @@ class Materials:
             if mat.opacity is not None:
                 self.opacity.append((i, *texture_entry(mat.name, 'opacity', mat.opacity, mat.opacity_interpolation,
                                                         mat.opacity_extension, mat.opacity_transform)))
+                if getattr(mat, 'opaque_refraction', None) is not None:
+                    self.opaque_refraction[:, i] = _rgb(mat, 'opaque refraction', mat.opaque_refraction)
         self.transparent = self.transparency.max(axis=0) > 0
         # transparent materials shadow rays pass (Transparent Shadows on); the rest block them
         self.shadow_passes = self.transparent & np.array([bool(getattr(m, 'transparent_shadow', True))

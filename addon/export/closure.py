@@ -67,10 +67,11 @@ class Closure:
     closures (`transparent`, rgb; `glass` the part of it that stands in for refraction) and the
     diffuse transmission (`translucent`, rgb: Translucent BSDFs' colour x their weights).
     `opacity` (an image's alpha, (Texture, inverted)) makes the shader opacity x (everything
-    else) + (1 - opacity) x transparent at each hit."""
+    else) + (1 - opacity) x transparent at each hit; everything else includes `opaque_glass`,
+    the glass the opaque part itself lets through (a Principled's transmission under its Alpha)."""
     def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0,
                  transparent=(0, 0, 0), opacity=None, emission_tex=None, translucent=(0, 0, 0),
-                 glass=(0, 0, 0)):
+                 glass=(0, 0, 0), opaque_glass=(0, 0, 0)):
         self.const = np.array(const, np.float64)
         self.emission = np.array(emission, np.float64)
         self.texture = texture
@@ -83,31 +84,34 @@ class Closure:
         self.emission_tex = emission_tex
         self.translucent = np.array(translucent, np.float64)
         self.glass = np.array(glass, np.float64)
+        self.opaque_glass = np.array(opaque_glass, np.float64)
 
     def layered(self, dim, add):
         """Under a layer (principled.py): the albedo x dim (3,) + add (3,); emission,
         transparency and holdout are set after the layers."""
         return Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
-                        self.transparent, self.opacity, self.emission_tex, self.translucent, self.glass)
+                        self.transparent, self.opacity, self.emission_tex, self.translucent, self.glass,
+                        self.opaque_glass)
 
     def mapped(self, f):
         """Under a nonlinear map of the albedo (principled.BaseMap): exact for a constant
         albedo; a textured one becomes a texture of the mapped texels (weight 1)."""
         if self.texture is None or not self.tex_weight.any():
             return Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
-                            self.opacity, self.emission_tex, self.translucent, self.glass)
+                            self.opacity, self.emission_tex, self.translucent, self.glass, self.opaque_glass)
         t = self.texture
         w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
         mapped = Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
                           t.baked(lambda rgb: f(rgb * w + k)), t.interpolation, t.extension, t.transform, t.udim,
                           t.name, t.attribute)
         return Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
-                        self.emission_tex, self.translucent, self.glass)
+                        self.emission_tex, self.translucent, self.glass, self.opaque_glass)
 
     def scaled(self, f):
         etex = None if self.emission_tex is None else (self.emission_tex[0], self.emission_tex[1] * f)
         return Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
-                        self.transparent * f, self.opacity, etex, self.translucent * f, self.glass * f)
+                        self.transparent * f, self.opacity, etex, self.translucent * f, self.glass * f,
+                        self.opaque_glass * f)
 
     def only_transparent(self):
         return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
@@ -136,12 +140,16 @@ class Closure:
     def plus(self, other, reasons):
         etex = self._emission_sum(other, reasons)
         opacity = self.opacity or other.opacity
+        transparent, glass = self.transparent + other.transparent, self.glass + other.glass
+        opaque_glass = self.opaque_glass + other.opaque_glass
         # (a closure with an opacity always has a transparent part, so it is never empty)
         if (self.opacity is not None and not other.is_empty()) or \
                 (other.opacity is not None and not self.is_empty()):
             # opacity multiplies the whole opaque part: a sum with other shaders has none
             reasons.append("image alpha combined with other shaders; alpha ignored")
             opacity = None
+        if opacity is None and opaque_glass.any():     # no opacity left to pass it at: plain glass
+            transparent, glass, opaque_glass = transparent + opaque_glass, glass + opaque_glass, np.zeros(3)
         tex, w = self.texture, self.tex_weight
         if other.texture is not None:
             if tex is None or tex.key == other.texture.key:
@@ -154,11 +162,10 @@ class Closure:
                 mean = other.texture.mean()
                 return Closure(self.const + other.const + other.tex_weight * mean,
                                 self.emission + other.emission, tex, w, self.holdout + other.holdout,
-                                self.transparent + other.transparent, opacity, etex,
-                                self.translucent + other.translucent, self.glass + other.glass)
+                                transparent, opacity, etex, self.translucent + other.translucent, glass, opaque_glass)
         return Closure(self.const + other.const, self.emission + other.emission, tex, w,
-                        self.holdout + other.holdout, self.transparent + other.transparent, opacity, etex,
-                        self.translucent + other.translucent, self.glass + other.glass)
+                        self.holdout + other.holdout, transparent, opacity, etex,
+                        self.translucent + other.translucent, glass, opaque_glass)
 
 
 def is_image_alpha(link):

@@ -338,7 +338,7 @@ class MaterialBuilder:
         holdout = closure.holdout >= 1.0 - 1e-6
         if 0.0 < closure.holdout and not holdout:
             reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")
-        transparency = opacity = refraction = None
+        transparency = opacity = refraction = opaque_refraction = None
         translucency = _nonnegative(closure.translucent.astype(np.float32), "translucency", reasons) \
             if closure.translucent.any() and not holdout else None
         o_interp, o_ext, o_transform = 'Linear', 'REPEAT', None
@@ -357,6 +357,9 @@ class MaterialBuilder:
                 a = np.clip(1.0 - a if inverted else a, 0.0, 1.0).astype(np.float32)
                 opacity = tex.texels(np.ascontiguousarray(np.concatenate([a, a, a, np.ones_like(a)], axis=-1)))
                 o_interp, o_ext, o_transform = tex.interpolation, tex.extension, tex.transform
+                if closure.opaque_glass.any():
+                    opaque_refraction = _nonnegative(closure.opaque_glass.astype(np.float32), "transmission",
+                                                     reasons)
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
         aovs, aov_textures = shader_aovs(ntree, reasons, self._texture) if ntree is not None else ({}, {})
@@ -393,7 +396,9 @@ class MaterialBuilder:
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, translucency=translucency, refraction=refraction,
-                           glass_roughness=glass_rough if refraction is not None else 0.0,
+                           opaque_refraction=opaque_refraction,
+                           glass_roughness=glass_rough if refraction is not None or opaque_refraction is not None
+                           else 0.0,
                            transparent_shadow=bool(getattr(mat, 'use_transparent_shadow', True)),
                            opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
@@ -526,7 +531,10 @@ class MaterialBuilder:
         if opacity is None:
             opacity = self._evaluated_alpha(alpha, reasons)
         if opacity is not None:
-            c.opacity, c.transparent, c.glass = opacity, np.ones(3), np.zeros(3)
+            # the transmission (all of its transparency) stays the opaque part's glass, passed
+            # at the opacity (overwritten by the cut-out's white, the glass went opaque where
+            # alpha is 1: at IOR 1 black, where Cycles sees all behind it)
+            c.opacity, c.opaque_glass, c.transparent, c.glass = opacity, c.transparent, np.ones(3), np.zeros(3)
             return c
         a = principled.constant_alpha(alpha, reasons)
         if a < 1.0:

@@ -70,3 +70,53 @@ def test_alpha_cut_out_keeps_its_emission_image(scene, exported):
     assert m.emission_texture is not None and m.opacity is not None
     np.testing.assert_allclose(np.asarray(m.emission_texture)[..., :3], 2.0 * px[..., :3], rtol=1e-6)
     np.testing.assert_allclose(np.asarray(m.opacity)[..., 0], px[..., 3])
+
+
+def _masked_glass(ior):
+    """A Principled BSDF of Transmission 1, roughness 0 and IOR ior whose Alpha is an image's:
+    opaque on its left texel, cut out on its right."""
+    px = np.ones((1, 2, 4), np.float32)
+    px[0, 1, 3] = 0.0
+    mat, nt, out = _material("Masked glass")
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.interpolation = scenes.float_image("Mask", px), 'Closest'
+    p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    p.inputs['Transmission Weight'].default_value = 1.0
+    p.inputs['Roughness'].default_value = 0.0
+    p.inputs['IOR'].default_value = ior
+    p.inputs['Base Color'].default_value = (1.0, 1.0, 1.0, 1.0)
+    nt.links.new(tex.outputs['Alpha'], p.inputs['Alpha'])
+    nt.links.new(p.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_principled_transmission_stays_glass_under_an_image_alpha(scene, exported):
+    """Cycles: a Principled BSDF with Alpha is alpha x the BSDF (its transmission included) +
+    (1 - alpha) x a white Transparent BSDF. Under an image's Alpha the transmission was replaced
+    by the cut-out's transparency, so where alpha is 1 the glass was an opaque wall of its
+    reflection albedo: before a red emitter (1, 0.084, 0.084) at IOR 1.45 where Cycles gives
+    (1, 0.034, 0.034) (its mirror reflection of the white world), black at IOR 1 where Cycles
+    gives (1, 0, 0). Its transmission is now the opaque part's glass, as under a constant
+    Alpha."""
+    m = _table(exported, _masked_glass(1.45))["Masked glass"]
+    plain = specular.layer_albedo(0.0, 1.45, 0.5, (1.0, 1.0, 1.0), True)
+    assert m.opacity is not None
+    np.testing.assert_allclose(m.transparency, (1.0, 1.0, 1.0))          # the cut-out's
+    np.testing.assert_allclose(m.opaque_refraction, 1.0 - plain, rtol=1e-5)
+    np.testing.assert_allclose(m.base_color, plain, rtol=1e-5)
+
+
+def test_principled_transmission_under_an_image_alpha_renders_what_lies_behind(scene, tmp_path):
+    """The render of test_principled_transmission_stays_glass_under_an_image_alpha's material
+    at IOR 1 (no reflection) before a red emitter: red (1, 0, 0) on both halves, as in Cycles;
+    the opaque half had been black."""
+    scene.render.resolution_x, scene.render.resolution_y = 32, 16
+    scene.dacrt.samples = 4
+    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)
+    glass = scenes.plane("Glass", size=2.0, materials=(_masked_glass(1.0),))
+    glass.data.uv_layers.new(name="UVMap").data.foreach_set('uv', [0, 0, 1, 0, 1, 1, 0, 1])
+    red = scenes.emission("Red", (1.0, 0.0, 0.0), 1.0)
+    scenes.plane("Backdrop", size=20.0, location=(0, 0, -1), materials=(red,))
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "glass.exr")))[..., :3]
+    for half in (img[2:-2, 2:14], img[2:-2, 18:-2]):
+        np.testing.assert_allclose(half.mean(axis=(0, 1)), (1.0, 0.0, 0.0), atol=1e-3)
