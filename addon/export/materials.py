@@ -46,6 +46,10 @@ PRINCIPLED_IGNORED = (('Metallic', "metallic"), ('Transmission Weight', "transmi
                       ('Anisotropic', "anisotropy (its layers as isotropic)"),
                       ('Thin Film Thickness', "thin film"))
 IGNORED_OUTPUTS = ('Volume', 'Displacement')
+# shader nodes that give Cycles no surface closure: volume shaders, and EEVEE's Specular BSDF,
+# which Cycles does not implement; in a surface shader they add nothing (black alone)
+NO_SURFACE_CLOSURE = ('VOLUME_SCATTER', 'VOLUME_ABSORPTION', 'PRINCIPLED_VOLUME', 'VOLUME_COEFFICIENTS',
+                      'EEVEE_SPECULAR')
 TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR')
 
 
@@ -489,6 +493,10 @@ class MaterialBuilder:
         if t == 'BSDF_REFRACTION':
             through = refraction_transmittance(node, reasons)
             return Closure(transparent=through, glass=through)
+        if t in NO_SURFACE_CLOSURE:
+            # (a lit diffuse of its colour before: a Volume Scatter surface 0.8 where Cycles is black)
+            reasons.append(f"{node.bl_label} in a surface shader renders nothing, as in Cycles")
+            return Closure()
         # Documented approximation: a diffuse surface of the node's constant colour.
         reasons.append(f"{node.bl_label} as diffuse")
         sock = input_socket(node, 'Color', 'Base Color')

@@ -120,3 +120,28 @@ def test_principled_transmission_under_an_image_alpha_renders_what_lies_behind(s
     img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "glass.exr")))[..., :3]
     for half in (img[2:-2, 2:14], img[2:-2, 18:-2]):
         np.testing.assert_allclose(half.mean(axis=(0, 1)), (1.0, 0.0, 0.0), atol=1e-3)
+
+
+def test_shaders_without_a_surface_closure_render_nothing(scene, exported):
+    """Volume shaders and EEVEE's Specular BSDF give Cycles no surface closure: alone in the
+    Surface socket they render black (a pane under a white world: 0), mixed 0.5 with a red
+    Diffuse they add nothing (that Diffuse at 0.5: Cycles (0.326, 0.081, 0.081) on a sphere).
+    They had been the diffuse fallback of their colour: 0.8 (0.5 for a Principled Volume), and
+    the mix (0.656, 0.408, 0.408), reported as "... as diffuse"."""
+    kinds = ('ShaderNodeVolumeScatter', 'ShaderNodeVolumeAbsorption', 'ShaderNodeVolumePrincipled',
+             'ShaderNodeEeveeSpecular')
+    mats = []
+    for kind in kinds:
+        mat, nt, out = _material(kind)
+        nt.links.new(nt.nodes.new(kind).outputs[0], out.inputs['Surface'])
+        mats.append(mat)
+    mixed, _, _, red, absorb = scenes.mix_shader_material("Mixed", 'ShaderNodeBsdfDiffuse',
+                                                          'ShaderNodeVolumeAbsorption')
+    red.inputs['Color'].default_value = (0.8, 0.2, 0.2, 1.0)
+    table = _table(exported, *mats, mixed)
+    for kind in kinds:
+        m = table[kind]
+        assert not m.base_color.any() and not m.emission.any() and m.transparency is None, kind
+        assert "renders nothing, as in Cycles" in m.approximated and "as diffuse" not in m.approximated, kind
+    np.testing.assert_allclose(table["Mixed"].base_color, (0.4, 0.1, 0.1), rtol=1e-6)
+    assert "Volume Absorption in a surface shader renders nothing" in table["Mixed"].approximated
