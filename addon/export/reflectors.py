@@ -63,6 +63,17 @@ def glossy_map(node, reasons):
                      dist == 'BECKMANN')
 
 
+def _thin_film(node, reasons):
+    """Report a Metallic or Glass BSDF's thin film (Thickness above 0, or driven by nodes): its
+    interference colours are not rendered, as the Principled's are not."""
+    sock = node.inputs.get('Thin Film Thickness')
+    if sock is None:
+        return
+    v, ok = constant_value(sock)
+    if v > 0.0 or not ok:
+        reasons.append(f"{node.bl_label} thin film ignored")
+
+
 def reflector_albedo(node, reasons):
     """A Glossy BSDF's, or a Metallic BSDF's in F82 mode, albedo averaged over view directions
     (specular.py) for its constant inputs (their own values where nodes drive them, reported),
@@ -71,6 +82,7 @@ def reflector_albedo(node, reasons):
     t = node.type
     if t not in ('BSDF_GLOSSY', 'BSDF_METALLIC'):
         return None
+    _thin_film(node, reasons)       # (any mode, distribution)
     dist = getattr(node, 'distribution', 'MULTI_GGX')
     if dist not in ('GGX', 'MULTI_GGX', 'BECKMANN') or \
             (t == 'BSDF_METALLIC' and getattr(node, 'fresnel_type', 'F82') != 'F82'):
@@ -126,6 +138,7 @@ def glass_albedos(node, reasons):
     color = np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0)
     reflect, transmit = color * fresnel, color * (1.0 - fresnel)
     reasons.append("Glass BSDF as a transparent surface (no refraction) with its reflection as diffuse")
+    _thin_film(node, reasons)
     if not (r_ok and i_ok and c_ok):
         reasons.append("Glass BSDF inputs driven by nodes; their own values used")
     return reflect, transmit
