@@ -190,6 +190,26 @@ def metal_albedo_mu(roughness: float, f0, tint, multiscatter: bool = True, beckm
     return _compensated(single, e, f0 + (1.0 - f0) / 21.0 - b / 126.0, multiscatter)
 
 
+def conductor_f82(n, k) -> tuple[np.ndarray, np.ndarray]:
+    """(F0, F82 tint) per channel of the F82-tint Fresnel that meets a conductor's (complex IOR
+    n + ik, the Metallic BSDF's Physical Conductor mode) at normal incidence, at cos 1/7 (where
+    the F82 tint is defined: F there = Schlick's x tint) and at grazing; in between it stands
+    in for the conductor's curve (copper at roughness 0.3: albedo within 0.2% of Cycles' seen
+    head-on)."""
+    n = np.nan_to_num(np.asarray(n, np.float64)[:3])
+    k = np.nan_to_num(np.asarray(k, np.float64)[:3])
+    eta = np.maximum(n, 1e-5) + 1j * np.maximum(k, 0.0)
+
+    def fresnel(c):
+        cos_t = np.sqrt(1.0 - (1.0 - c * c) / (eta * eta))
+        rs = (c - eta * cos_t) / (c + eta * cos_t)
+        rp = (eta * c - cos_t) / (eta * c + cos_t)
+        return 0.5 * (np.abs(rs) ** 2 + np.abs(rp) ** 2)
+    f0 = np.clip(fresnel(1.0), 0.0, 1.0)
+    schlick = f0 + (1.0 - f0) * (6.0 / 7.0) ** 5
+    return f0, np.clip(fresnel(1.0 / 7.0) / schlick, 0.0, 1.0)
+
+
 def glossy_albedo(roughness: float, color, multiscatter: bool = True, beckmann: bool = False) -> np.ndarray:
     """Per channel, the albedo of Cycles' Glossy BSDF averaged over view directions: GGX
     reflection of constant Fresnel = its colour, with the energy compensation for Multiscatter

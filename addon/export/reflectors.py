@@ -75,29 +75,40 @@ def _thin_film(node, reasons):
 
 
 def reflector_albedo(node, reasons):
-    """A Glossy BSDF's, or a Metallic BSDF's in F82 mode, albedo averaged over view directions
-    (specular.py) for its constant inputs (their own values where nodes drive them, reported),
-    as the diffuse colour that stands in for it: GGX, Multiscatter GGX and Beckmann; None for
-    other nodes, Ashikhmin-Shirley and the physical-conductor mode (they keep their colour)."""
+    """A Glossy BSDF's or a Metallic BSDF's albedo averaged over view directions (specular.py)
+    for its constant inputs (their own values where nodes drive them, reported), as the diffuse
+    colour that stands in for it: GGX, Multiscatter GGX and Beckmann; the Metallic's Physical
+    Conductor mode through the F82-tint Fresnel fitted to its IOR and extinction (specular.
+    conductor_f82; Blender hides its Base Color there, so the fallback's grey 0.8 had stood in:
+    copper 0.8 where Cycles gives (0.93, 0.72, 0.50)). None for other nodes and
+    Ashikhmin-Shirley (they keep their colour)."""
     t = node.type
     if t not in ('BSDF_GLOSSY', 'BSDF_METALLIC'):
         return None
     _thin_film(node, reasons)       # (any mode, distribution)
     dist = getattr(node, 'distribution', 'MULTI_GGX')
+    conductor = t == 'BSDF_METALLIC' and getattr(node, 'fresnel_type', 'F82') == 'PHYSICAL_CONDUCTOR'
     if dist not in ('GGX', 'MULTI_GGX', 'BECKMANN') or \
-            (t == 'BSDF_METALLIC' and getattr(node, 'fresnel_type', 'F82') != 'F82'):
+            (t == 'BSDF_METALLIC' and not conductor and getattr(node, 'fresnel_type', 'F82') != 'F82'):
         return None
     multi, beckmann = dist == 'MULTI_GGX', dist == 'BECKMANN'
     rough, r_ok = constant_value(node.inputs['Roughness'])
     if t == 'BSDF_GLOSSY':
         color, c_ok = constant_color(node.inputs['Color'])
         albedo = specular.glossy_albedo(rough, color, multi, beckmann)
+    elif conductor:
+        n, n_ok = constant_color(node.inputs['IOR'])
+        k, k_ok = constant_color(node.inputs['Extinction'])
+        c_ok = n_ok and k_ok
+        albedo = specular.metal_albedo(rough, *specular.conductor_f82(n, k), multi, beckmann)
     else:
         color, c_ok = constant_color(node.inputs['Base Color'])
         tint, t_ok = constant_color(node.inputs['Edge Tint'])
         c_ok = c_ok and t_ok
         albedo = specular.metal_albedo(rough, color, tint, multi, beckmann)
     reasons.append(f"{node.bl_label} as diffuse: its albedo averaged over view directions")
+    if conductor:
+        reasons.append(f"{node.bl_label} physical conductor's Fresnel as F82-tint, fitted to its IOR and extinction")
     if not (r_ok and c_ok):
         reasons.append(f"{node.bl_label} inputs driven by nodes; their own values used")
     aniso = node.inputs.get('Anisotropy')

@@ -164,3 +164,26 @@ def test_thin_film_on_metallic_and_glass_is_reported(scene, exported):
     assert "Metallic BSDF thin film ignored" in table["Metal film"].approximated
     assert "Glass BSDF thin film ignored" in table["Glass film"].approximated
     assert "thin film" not in table["Metal"].approximated
+
+
+def test_physical_conductor_metal_takes_its_colour_from_ior_and_extinction(scene, exported):
+    """A Metallic BSDF in Physical Conductor mode (copper: IOR (0.271, 0.677, 1.316), Extinction
+    (3.609, 2.625, 2.292), roughness 0.3): Blender hides its Base Color in that mode, so the
+    diffuse fallback's grey 0.8 stood in. Its albedo now comes from F0 = ((n - 1)^2 + k^2) /
+    ((n + 1)^2 + k^2) = (0.926, 0.721, 0.504) and the conductor's Fresnel at cos 1/7 as the F82
+    tint: a sphere under a white world (0.924, 0.724, 0.512), Cycles (0.921, 0.721, 0.513)."""
+    n, k = (0.27105, 0.67693, 1.31640), (3.60920, 2.62480, 2.29210)
+    mat, nt, out = _material("Copper")
+    metal = nt.nodes.new('ShaderNodeBsdfMetallic')
+    metal.fresnel_type = 'PHYSICAL_CONDUCTOR'
+    metal.inputs['IOR'].default_value = n
+    metal.inputs['Extinction'].default_value = k
+    metal.inputs['Roughness'].default_value = 0.3
+    nt.links.new(metal.outputs[0], out.inputs['Surface'])
+    m = _table(exported, mat)["Copper"]
+    f0, tint = specular.conductor_f82(n, k)
+    n, k = np.array(n), np.array(k)
+    np.testing.assert_allclose(f0, ((n - 1) ** 2 + k ** 2) / ((n + 1) ** 2 + k ** 2), rtol=1e-9)
+    assert np.all((0.9 < tint) & (tint < 1.0)), tint
+    np.testing.assert_allclose(m.base_color, (0.921, 0.721, 0.513), rtol=0.01)
+    assert "physical conductor's Fresnel as F82-tint" in m.approximated
