@@ -20,7 +20,7 @@ from .aovs import shader_aovs
 from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
-from .normalmaps import tangent_normal_map
+from .normalmaps import bends_normal, tangent_normal_map
 from . import procedurals
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 from .reflectors import (diffuse_roughness, glass_albedos, glossy_map, reflector_albedo, refraction_transmittance,
@@ -469,6 +469,11 @@ class MaterialBuilder:
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
             return a.plus(b, reasons)
+        if t in ('BSDF_GLOSSY', 'BSDF_METALLIC', 'BSDF_GLASS'):
+            # their diffuse stand-ins shade with the map as a Diffuse BSDF does (the Normal had
+            # been dropped silently: a Glossy of roughness 1 tilted towards a low sun and away
+            # from it 0.296 on both halves, Cycles 0.442 and 0)
+            self._normal_input(node, reasons)
         if t == 'BSDF_GLOSSY' and linked_link(node.inputs['Color']) is not None:
             gmap = glossy_map(node, reasons)        # a textured colour: its albedo per texel
             if gmap is not None:
@@ -492,13 +497,17 @@ class MaterialBuilder:
             return Closure(translucent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
         if t == 'BSDF_REFRACTION':
             through = refraction_transmittance(node, reasons)
+            if bends_normal(node.inputs.get('Normal')):
+                reasons.append("Refraction BSDF Normal input ignored: its light passes unbent")
             return Closure(transparent=through, glass=through)
         if t in NO_SURFACE_CLOSURE:
             # (a lit diffuse of its colour before: a Volume Scatter surface 0.8 where Cycles is black)
             reasons.append(f"{node.bl_label} in a surface shader renders nothing, as in Cycles")
             return Closure()
-        # Documented approximation: a diffuse surface of the node's constant colour.
+        # Documented approximation: a diffuse surface of the node's constant colour, shaded with
+        # the node's normal map as a Diffuse BSDF
         reasons.append(f"{node.bl_label} as diffuse")
+        self._normal_input(node, reasons)
         sock = input_socket(node, 'Color', 'Base Color')
         if sock is not None and sock.type == 'RGBA':
             color, _ = constant_color(sock)
@@ -513,6 +522,11 @@ class MaterialBuilder:
                 if v != 0.0 or not ok:
                     reasons.append(f"Principled {what} ignored")
         self._normal_input(node, reasons)
+        coat = node.inputs.get('Coat Weight')
+        coat, coat_ok = constant_value(coat) if coat is not None else (0.0, True)
+        if (coat != 0.0 or not coat_ok) and bends_normal(node.inputs.get('Coat Normal')):
+            # (the coat is part of one diffuse albedo, shaded with the base's normal)
+            reasons.append("Principled Coat Normal ignored: the coat shades with the base's normal")
         c = self._color_closure(node.inputs['Base Color'], reasons)
         for step in principled.layer_steps(node, reasons):
             c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)

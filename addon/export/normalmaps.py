@@ -36,6 +36,11 @@ def _normal_link(socket):
         return link
 
 
+def bends_normal(socket):
+    """Whether a Normal input (or None) receives a normal other than the shading normal."""
+    return socket is not None and _normal_link(socket) is not None
+
+
 def tangent_normal_map(node, reasons):
     """(image node, strength, UV map name) of a BSDF's Normal input fed by a tangent-space
     Normal Map node whose Color is an Image Texture's (the common baked normal map), or None

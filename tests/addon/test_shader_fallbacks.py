@@ -187,3 +187,51 @@ def test_physical_conductor_metal_takes_its_colour_from_ior_and_extinction(scene
     assert np.all((0.9 < tint) & (tint < 1.0)), tint
     np.testing.assert_allclose(m.base_color, (0.921, 0.721, 0.513), rtol=0.01)
     assert "physical conductor's Fresnel as F82-tint" in m.approximated
+
+
+def _normal_mapped(name, kind, socket='Normal'):
+    """A material of one shader node (bl_idname kind) whose `socket` is a tangent-space Normal
+    Map of an image tilted 40 degrees along x: (material, node)."""
+    mat, nt, out = _material(name)
+    node = nt.nodes.new(kind)
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    s = np.sin(np.radians(40.0))
+    tex.image = scenes.float_image("Tilt", np.array([[[0.5 + 0.5 * s, 0.5, 0.5 + 0.5 * np.cos(np.radians(40.0)),
+                                                       1.0]]], np.float32))
+    tex.image.colorspace_settings.name = 'Non-Color'
+    nmap = nt.nodes.new('ShaderNodeNormalMap')
+    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
+    nt.links.new(nmap.outputs['Normal'], node.inputs[socket])
+    nt.links.new(node.outputs[0], out.inputs['Surface'])
+    return mat, node
+
+
+def test_normal_inputs_of_stand_in_shaders_are_used_or_reported(scene, exported):
+    """A Normal input on the Glossy, Metallic, Glass or Toon BSDF (diffuse stand-ins), on the
+    Refraction BSDF and the Principled's Coat Normal had been dropped without a word: a Glossy
+    of roughness 1 on a floor whose normal map tilts it towards a low sun and away from it
+    rendered 0.296 on both halves where Cycles gives 0.442 and 0 (now 0.524 and 0, as a Diffuse
+    stand-in under that map). The stand-ins now shade with the map, as the Diffuse BSDF does
+    (a Bump there is reported as on a Diffuse); the Refraction's light passes unbent and the
+    coat shades with the base's normal, both said."""
+    mats = []
+    for kind in ('ShaderNodeBsdfGlossy', 'ShaderNodeBsdfMetallic', 'ShaderNodeBsdfGlass', 'ShaderNodeBsdfToon',
+                 'ShaderNodeBsdfRefraction'):
+        mats.append(_normal_mapped(kind, kind)[0])
+    coat, p = _normal_mapped("Coat", 'ShaderNodeBsdfPrincipled', 'Coat Normal')
+    p.inputs['Coat Weight'].default_value = 1.0
+    no_coat, _ = _normal_mapped("No coat", 'ShaderNodeBsdfPrincipled', 'Coat Normal')
+    bumped, nt, out = _material("Bumped")
+    glossy = nt.nodes.new('ShaderNodeBsdfGlossy')
+    bump = nt.nodes.new('ShaderNodeBump')
+    nt.links.new(nt.nodes.new('ShaderNodeTexNoise').outputs['Fac'], bump.inputs['Height'])
+    nt.links.new(bump.outputs['Normal'], glossy.inputs['Normal'])
+    nt.links.new(glossy.outputs[0], out.inputs['Surface'])
+    table = _table(exported, *mats, coat, no_coat, bumped)
+    for kind in ('ShaderNodeBsdfGlossy', 'ShaderNodeBsdfMetallic', 'ShaderNodeBsdfGlass', 'ShaderNodeBsdfToon'):
+        assert table[kind].normal_texture is not None, kind
+    assert table['ShaderNodeBsdfRefraction'].normal_texture is None
+    assert "Refraction BSDF Normal input ignored" in table['ShaderNodeBsdfRefraction'].approximated
+    assert "Principled Coat Normal ignored" in table["Coat"].approximated
+    assert "Coat Normal" not in table["No coat"].approximated        # no coat: nothing dropped
+    assert "Normal input ('Bump') ignored" in table["Bumped"].approximated
