@@ -391,19 +391,25 @@ class Assembly:
         # the tangents of the Normal Map node's own UV map ('' the active render one), not of
         # the map its image is read on (a default node over an image on a mirrored second map
         # had bent normals by that map's tangents: 0.11 where Cycles gives 0.62)
-        names = {getattr(mats[k], 'normal_uv_map', '') for k in wants}
-        tan = a.corner_tangents(sorted(names)[0])
-        if tan is None:
-            self.ignore("normal map not applied: no tangents (the mesh has no such UV map, or is "
-                         "a curve, text or metaball; Cycles derives them from generated coordinates)", place.name)
-            return
-        if out.tangents is None:
-            out.tangents = np.zeros((len(out.triangles), 3, 4), np.float32)
-        rows = np.flatnonzero(np.isin(out.material[S], list(wants)))
-        block = out.tangents[S]
-        block[rows] = tan[rows]
-        if mirrored:                      # corners 1 and 2 were swapped for these triangles
-            block[rows] = block[rows][:, [0, 2, 1]]
+        # each material's own map: two materials of one mesh on two maps had both taken the
+        # first name's tangents (0.13 where Cycles gives 0.75)
+        by_map = {}
+        for k in wants:
+            by_map.setdefault(getattr(mats[k], 'normal_uv_map', ''), []).append(k)
+        for name, ks in sorted(by_map.items()):
+            tan = a.corner_tangents(name)
+            if tan is None:
+                self.ignore("normal map not applied: no tangents (the mesh has no such UV map, or is "
+                            "a curve, text or metaball; Cycles derives them from generated coordinates)",
+                            place.name)
+                continue
+            if out.tangents is None:
+                out.tangents = np.zeros((len(out.triangles), 3, 4), np.float32)
+            rows = np.flatnonzero(np.isin(out.material[S], ks))
+            block = out.tangents[S]
+            block[rows] = tan[rows]
+            if mirrored:                  # corners 1 and 2 were swapped for these triangles
+                block[rows] = block[rows][:, [0, 2, 1]]
 
     def _named_uvs(self, a, place, material, uvs):
         """Triangles whose material reads a UV map by name get that map's coordinates (0, 0 on

@@ -3110,6 +3110,42 @@ def test_normal_map_tangents_are_of_the_normal_map_nodes_uv_map(scene, exported,
     assert not any("normal map" in t for _, t in data.messages), data.messages
 
 
+def test_two_materials_of_one_mesh_keep_their_own_normal_maps_tangents(scene, exported):
+    """Two materials on one mesh, their Normal Map nodes on two UV maps ('UVMap', and 'Second'
+    mirrored in u): each half gets its own map's tangents (both had taken the first name's:
+    0.13 where Cycles gives 0.75 on the half whose map runs the other way)."""
+    setup(scene)
+    img = bpy.data.images.new("Normals", 2, 2)
+    img.colorspace_settings.name = 'Non-Color'
+    a, b = scenes.normal_map_material("A", img), scenes.normal_map_material("B", img)
+    a.node_tree.nodes['Normal Map'].uv_map = 'UVMap'
+    b.node_tree.nodes['Normal Map'].uv_map = 'Second'
+    ob = scenes.mesh("P", [(-2, -1, 0), (0, -1, 0), (0, 1, 0), (-2, 1, 0), (2, -1, 0), (2, 1, 0)],
+                     [(0, 1, 2, 3), (1, 4, 5, 2)], materials=(a, b))
+    me = ob.data
+    me.polygons[1].material_index = 1
+    first = me.uv_layers[0] if len(me.uv_layers) else me.uv_layers.new(name='UVMap')
+    first.name = 'UVMap'
+    for i, loop in enumerate(me.loops):
+        co = me.vertices[loop.vertex_index].co
+        first.data[i].uv = ((co.x + 2) / 4, (co.y + 1) / 2)
+    second = me.uv_layers.new(name='Second')
+    for i in range(len(me.loops)):
+        u, v = first.data[i].uv
+        second.data[i].uv = (1.0 - u, v)
+    data = exported()
+    got = data.geometry.tangents[data.geometry.object_index == data.object_names.index("P")]
+    names = [data.materials[k].name for k in data.geometry.material[data.geometry.object_index
+                                                                      == data.object_names.index("P")]]
+    for name, uv in (("A", 'UVMap'), ("B", 'Second')):
+        me.calc_tangents(uvmap=uv)
+        want = np.array([[list(me.loops[c].tangent) + [me.loops[c].bitangent_sign] for c in t.loops]
+                         for t in me.loop_triangles])
+        rows = [i for i, n in enumerate(names) if n == name]
+        np.testing.assert_allclose(got[rows], want[rows], atol=1e-5, err_msg=name)
+    assert not any("normal map" in t for _, t in data.messages), data.messages
+
+
 def test_a_linked_object_named_as_a_local_one_keeps_its_own_entry(scene, exported, tmp_path):
     """An object linked from a library beside a local object of the same name ('Cube' and
     'Cube [lib.blend]') keeps its own entry: its pass index (Object Index pass) had been the
