@@ -385,9 +385,15 @@ class MaterialBuilder:
             n_tex, n_interp, n_ext, n_xf = t.texels(t.pixels), t.interpolation, t.extension, t.transform
             self.normal_mapped = True
         uv_names = list(dict.fromkeys(self._uv_names))
+        # a procedural texture on Texture Coordinate UV reads the active render map: beside an
+        # image on a named map it reads that map too (it had, silently: a gradient across the
+        # other map's direction, 0.45 / 0.45 where Cycles gives 0.11 / 0.79)
+        procedurals = [texture] + [t.pixels for t in aov_textures.values()]
+        if uv_names and any(isinstance(t, ProceduralTexels) and 'uv' in t.needs for t in procedurals):
+            uv_names = list(dict.fromkeys(uv_names + ['']))
         if len(uv_names) > 1:       # one UV map per triangle here
             shown = ', '.join(repr(n) if n else 'the active render map' for n in uv_names)
-            reasons.append(f"images on several UV maps ({shown}); all read on the first")
+            reasons.append(f"textures on several UV maps ({shown}); all read on the first")
         return sd.Material(name=name, base_color=base, uv_map=uv_names[0] if uv_names else '',
                            emission_texture=e_tex, emission_interpolation=e_interp or 'Linear',
                            emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,

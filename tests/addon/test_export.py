@@ -804,7 +804,7 @@ def test_uv_map_node_reads_its_map_by_name(scene, exported):
     assert np.all(g.uvs[of_object(data, "NoDetail")] == 0.0)
     table = {m.name: m for m in data.materials}
     assert table["Detail"].uv_map == "Detail" and table["Unnamed"].uv_map == "" and not table["Detail"].approximated
-    assert "images on several UV maps ('UVMap', 'Detail')" in table["Two"].approximated
+    assert "textures on several UV maps ('UVMap', 'Detail')" in table["Two"].approximated
 
 
 @pytest.mark.parametrize("domain", ["POINT", "FACE"])

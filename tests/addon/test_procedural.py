@@ -298,3 +298,26 @@ def test_a_procedurals_own_texture_mapping_moves_its_coordinates(scene, exported
     p = np.random.default_rng(0).random((64, 3)).astype(np.float32)
     np.testing.assert_allclose(b.evaluate({'generated': p}), a.evaluate({'generated': 2 * p + 0.5}), atol=1e-5)
     assert not np.allclose(b.evaluate({'generated': p}), a.evaluate({'generated': p}), atol=1e-3)
+
+
+def test_a_procedural_on_uv_beside_an_image_on_a_named_map_is_reported(scene, exported):
+    """A procedural on Texture Coordinate UV reads the active render map; beside an image read
+    on another map (a UV Map node) one map serves the material's triangles, and the render says
+    so (it had silently read the procedural on the image's map: 0.45 / 0.45 across a gradient
+    where Cycles gives 0.11 / 0.79)."""
+    scenes.camera()
+    mat = _noise_material("Mixed", coordinates='UV')
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    img = bpy.data.images.new("Normals", 2, 2)
+    img.colorspace_settings.name = 'Non-Color'
+    tex, nmap, uv = (nt.nodes.new(t) for t in ('ShaderNodeTexImage', 'ShaderNodeNormalMap', 'ShaderNodeUVMap'))
+    tex.image, uv.uv_map = img, 'Second'
+    nt.links.new(uv.outputs[0], tex.inputs['Vector'])
+    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
+    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
+    scenes.cube("Cube", materials=(mat,))
+    m = _material(exported(), "Mixed")
+    assert "textures on several UV maps ('Second', the active render map)" in m.approximated, m.approximated
+    nt.links.remove(uv.outputs[0].links[0])                  # both on the active map: nothing to say
+    assert "several UV maps" not in _material(exported(), "Mixed").approximated
