@@ -341,3 +341,18 @@ def normal_map_material(name, image, strength=1.0, interpolation='Linear'):
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
     nt.links.new(d.outputs[0], out.inputs['Surface'])
     return mat
+
+
+def keyed(owner, prop, by_frame):
+    """owner.prop keyframed to each {frame: value} of by_frame."""
+    for frame, value in by_frame.items():
+        setattr(owner, prop, value)
+        owner.keyframe_insert(prop, frame=frame)
+
+
+def animation_of_one_frame(scene, frame, directory):
+    """The scene set to render only `frame` as an animation render (Ctrl-F12, `blender -a`:
+    the originals are not moved to it) from a file standing at frame 1, writing to directory."""
+    scene.frame_set(1)
+    scene.frame_start = scene.frame_end = frame
+    scene.render.filepath = str(Path(directory) / "frame_")

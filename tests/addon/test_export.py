@@ -925,12 +925,8 @@ def test_animated_hide_render_counts_the_rendered_frame(scene, exported, tmp_pat
     at frame 1, hidden there) exports the plane and counts nothing hidden."""
     setup(scene)
     ob = scenes.plane("Blink")
-    for frame, hidden in ((1, True), (4, False)):
-        ob.hide_render = hidden
-        ob.keyframe_insert('hide_render', frame=frame)
-    scene.frame_set(1)
-    scene.frame_start = scene.frame_end = 4
-    scene.render.filepath = str(tmp_path / "frame_")
+    scenes.keyed(ob, 'hide_render', {1: True, 4: False})
+    scenes.animation_of_one_frame(scene, 4, tmp_path)
     data = exported(animation=True)
     assert "Blink" in data.object_names and data.skipped['objects_hidden'] == 0
 
@@ -2876,9 +2872,7 @@ def test_object_info_reads_the_rendered_frame_in_an_animation_render(scene, expo
         info.keyframe_insert('color', frame=frame)
         attr['tint'] = rgb
         attr.keyframe_insert('["tint"]', frame=frame)
-    scene.frame_set(1)
-    scene.frame_start = scene.frame_end = 4
-    scene.render.filepath = str(tmp_path / "frame_")
+    scenes.animation_of_one_frame(scene, 4, tmp_path)
     data = exported(animation=True)
     for name in ("Info", "Attr"):
         assert np.allclose(data.geometry.colors[of_object(data, name)][..., :3], (0.9, 0.1, 0.9), atol=1e-6), name
@@ -2901,9 +2895,7 @@ def test_view_layer_overrides_are_read_at_the_rendered_frame_in_an_animation_ren
         colour.keyframe_insert('default_value', frame=frame)
     vl = scene.view_layers[0]
     vl.world_override, vl.material_override = world, clay
-    scene.frame_set(1)
-    scene.frame_start = scene.frame_end = 4
-    scene.render.filepath = str(tmp_path / "frame_")
+    scenes.animation_of_one_frame(scene, 4, tmp_path)
     data = exported(animation=True)
     grey = np.array(world.color)[:3]
     assert np.allclose(data.world, 8.0 * grey, rtol=1e-5)

@@ -112,12 +112,8 @@ def test_a_modifiers_keyed_render_switch_counts_at_the_rendered_frame(scene, exp
     cube = scenes.cube("Gen", size=2.0, materials=(_noise_material("Gen"),))
     mod = cube.modifiers.new("d", 'DISPLACE')
     mod.strength = 0.3
-    for frame, on in ((1, False), (4, True)):
-        mod.show_render = on
-        mod.keyframe_insert('show_render', frame=frame)
-    scene.frame_set(1)
-    scene.frame_start = scene.frame_end = 4
-    scene.render.filepath = str(tmp_path / "frame_")
+    scenes.keyed(mod, 'show_render', {1: False, 4: True})
+    scenes.animation_of_one_frame(scene, 4, tmp_path)
     g = exported(animation=True).geometry
     assert g.coords is not None
     assert np.abs(g.vertices).max() > 1.05                      # displaced at frame 4
