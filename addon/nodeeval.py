@@ -428,9 +428,14 @@ _SOCKET_KINDS = {'VALUE': (False, False), 'RGBA': (True, False), 'VECTOR': (True
 
 def _cross(value, vector, crossed):
     """(value, vector) past sockets of the types `crossed` (nearest the reader first, so taken
-    from the end): each converts as Cycles' proxy of its type does (svm_node_convert: a
-    vector to a float by its average, a colour by its luminance, a float to three copies)."""
+    from the end): each converts a vector or a float as Cycles' proxy of its type does
+    (svm_node_convert: a vector to a float by its average, to a colour as it is; a float to
+    three copies), while a colour passes them all unchanged and is converted only where it is
+    read (measured in Cycles 5.0: red through a group's Float socket or a muted Math node stays
+    red, through a Vector socket into a Math node is its luminance 0.2126, not the average)."""
     for kind in reversed(crossed):
+        if value.shape[-1] != 1 and not vector:
+            break
         k = _SOCKET_KINDS.get(kind)
         if k is not None:
             value, vector = _as_kind(value, vector, k[0]), k[1]

@@ -322,3 +322,45 @@ def test_used_outputs_follow_links_back_through_groups_and_mutes(scene):
     assert nodegraph.output_key(tex, 'Alpha') not in used and nodegraph.output_key(leftover, 'Value') not in used
     nt.links.new(group.outputs['Alpha'], d.inputs['Roughness'])     # now the group's Alpha is used
     assert inner_key('Alpha') in nodegraph.used_outputs(nt)
+
+
+def test_a_colour_passes_group_sockets_and_muted_nodes_unconverted(scene, exported):
+    """A colour crosses a group's Float or Vector socket, or a muted Math node, as it is, and is
+    converted only where it is read, as Cycles 5.0 renders it (measured: red through a Float
+    socket stays red, where DACRT had drawn its luminance grey 0.21; through a Vector socket
+    into a Math node it is the luminance 0.2126, where DACRT had taken the average 0.333);
+    a vector is converted at the sockets (test_group_sockets_convert_values_as_cycles)."""
+    setup(scene)
+    red = (1.0, 0.0, 0.0)
+
+    def through(name, socket_type, then_math=False, muted=False):
+        mat, nt, out = scenes._material(name)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        rgb = nt.nodes.new('ShaderNodeRGB')
+        rgb.outputs[0].default_value = (*red, 1.0)
+        if muted:
+            node = nt.nodes.new('ShaderNodeMath')
+            node.operation, node.mute = 'SQRT', True
+        else:
+            g, gi, go = _group(name + "Group", inputs=(('In', socket_type),), outputs=(('Out', socket_type),))
+            g.links.new(gi.outputs['In'], go.inputs['Out'])
+            node = nt.nodes.new('ShaderNodeGroup')
+            node.node_tree = g
+        nt.links.new(rgb.outputs[0], node.inputs[0])
+        result = node.outputs[0]
+        if then_math:
+            add = nt.nodes.new('ShaderNodeMath')
+            add.inputs[1].default_value = 0.0
+            nt.links.new(result, add.inputs[0])
+            result = add.outputs[0]
+        nt.links.new(result, d.inputs['Color'])
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        return mat
+
+    mats = [through("FloatSocket", 'NodeSocketFloat'), through("Muted", None, muted=True),
+            through("VectorSocketMath", 'NodeSocketVector', then_math=True)]
+    table, _ = _materials(exported, *mats)
+    luminance = float(colornodes.gray(np.array(red))[0])
+    for name, want in (("FloatSocket", red), ("Muted", red), ("VectorSocketMath", (luminance,) * 3)):
+        assert np.allclose(table[name].base_color, want, atol=1e-6), (name, table[name].base_color, want)
+        assert not table[name].approximated, table[name].approximated
