@@ -122,7 +122,9 @@ def _smootherstep(e0, e1, x):
 
 def map_range(interpolation, value, from_min, from_max, to_min, to_max, steps, clamp):
     """Map Range node, float data (Cycles' svm_node_map_range; the clamp, which Cycles adds as a
-    Clamp node of type Range for Linear and Stepped, keeps the result between To Min and To Max)."""
+    Clamp node of type Range whatever the interpolation (MapRangeNode::expand; Blender hides the
+    switch for the smooth ones, on by default), keeps the result between To Min and To Max: it
+    shows where From Min = From Max, 0 clamped to To Min's side)."""
     v, f0, f1, t0, t1, st = (np.asarray(x, np.float64) for x in (value, from_min, from_max, to_min, to_max, steps))
     linear = _safe_divide(v - f0, f1 - f0)
     if interpolation == 'STEPPED':
@@ -134,7 +136,7 @@ def map_range(interpolation, value, from_min, from_max, to_min, to_max, steps, c
     else:
         fac = linear
     r = np.where(f1 != f0, t0 + fac * (t1 - t0), 0.0)
-    if clamp and interpolation in ('LINEAR', 'STEPPED'):
+    if clamp:
         r = clamp_range(r, t0, t1)
     return r
 

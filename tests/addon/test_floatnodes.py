@@ -62,6 +62,11 @@ def test_map_range_and_clamp_worked_by_hand():
     assert mr('SMOOTHSTEP', 0.75, 0.8, 0.1, 0, 1, 4, True) == pytest.approx(1 - (3 - 2 * t) * t * t)
     assert mr('SMOOTHERSTEP', 0.75, 0.1, 0.8, 0, 1, 4, True) == pytest.approx(t ** 3 * (t * (6 * t - 15) + 10))
     assert mr('SMOOTHERSTEP', 2.0, 0.1, 0.8, 0, 1, 4, True) == pytest.approx(1.0)
+    # the clamp holds for the smooth types too (Cycles' MapRangeNode::expand adds it for every
+    # type): an empty From range gives 0, clamped to To Min 0.3 (it had stayed 0; Cycles 0.3)
+    for kind in ('SMOOTHSTEP', 'SMOOTHERSTEP'):
+        assert mr(kind, 0.6, 0.5, 0.5, 0.3, 0.8, 4, True) == pytest.approx(0.3), kind
+        assert mr(kind, 0.6, 0.5, 0.5, 0.3, 0.8, 4, False) == 0.0, kind
     assert fn.clamp_range(0.2, 0.85, 0.3) == pytest.approx(0.3)
     assert fn.clamp_min_max(0.2, 0.85, 0.3) == pytest.approx(0.3)
     assert fn.clamp_min_max(0.9, 0.85, 0.3) == pytest.approx(0.3)                 # min > max: max wins
