@@ -141,10 +141,14 @@ class MaterialBuilder:
         return closure, vis
 
     # colours an image's texels are replaced by to see how a node chain maps them: random RGB
-    # at alpha 1, then one RGB at random alphas (a chain may read either)
+    # at alpha 1, then one RGB at random alphas (a chain may read either); a quarter of them
+    # above 1, up to 10, as float images' texels go, so a clamp to [0, 1] after the image is not
+    # taken for a scale and offset (a Mix with Clamp Result on a float image of texels 0 and 4
+    # had been baked before the blend, 16% dark, and dropped on an sRGB EXR, texels kept at 6.7)
     _PROBE = np.random.default_rng(7).random((64, 4)).astype(np.float32)
     _PROBE[:, 3] = 1.0
     _PROBE[:5, :3] = [[0, 0, 0], [1, 1, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    _PROBE[48:, :3] = 1.0 + 9.0 * _PROBE[48:, :3]
     _ALPHA_PROBE = np.concatenate([np.full((16, 3), 0.5), np.linspace(0, 1, 16)[:, None]], axis=1).astype(np.float32)
 
     # what a mesh attribute reads as in a build, (1, n, 4) like an image's texels: random

@@ -309,3 +309,30 @@ def test_a_files_own_alpha_flag_decides_as_in_cycles(tmp_path):
         return np.asarray(export.images.image_pixels(img, []))
     np.testing.assert_allclose(texels(png, "PREMUL"), texels(png, "STRAIGHT"), rtol=1e-4, atol=1e-6)
     np.testing.assert_allclose(texels(exr, 'STRAIGHT'), texels(exr, 'PREMUL'), rtol=1e-3, atol=1e-4)
+
+
+def test_a_clamp_after_a_float_image_runs_after_the_blend():
+    """A Mix (0.5 with grey 0.5, Clamp Result) after a float image of texels 0 and 4: linear on
+    texels in [0, 1] but not beyond, so it is not taken for a scale and offset; it runs on the
+    blended colour, as Cycles (halfway between the texels clamp(0.5 x 2 + 0.25) = 1; baked into
+    the texels first it had read 0.5 x (0.25 + 1) = 0.625, 16% dark in the mean)."""
+    px = np.array([[[0.0, 0.0, 0.0, 1.0], [4.0, 4.0, 4.0, 1.0]]], np.float32)
+    img = scenes.float_image("Hot", px)
+    mat, nt, out = scenes._material("Clamped")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.extension = img, 'EXTEND'
+    mix = nt.nodes.new('ShaderNodeMix')
+    mix.data_type, mix.clamp_result = 'RGBA', True
+    mix.inputs['Factor'].default_value = 0.5
+    mix.inputs['B'].default_value = (0.5, 0.5, 0.5, 1.0)
+    nt.links.new(tex.outputs['Color'], mix.inputs['A'])
+    nt.links.new(mix.outputs['Result'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    builder = export.materials.MaterialBuilder()
+    m = builder.materials[builder.index(mat)]
+    stored = lookup_texels(m.texture, 'Linear')
+    u = np.array([0.25, 0.5, 0.75], np.float32)
+    got = texture_lookup(stored, u, np.full(3, 0.5, np.float32), 'Linear', 'EXTEND')[0]
+    want = np.clip(0.5 * np.array([0.0, 2.0, 4.0]) + 0.25, 0.0, 1.0)
+    assert np.allclose(got, want, atol=1e-6), (got, want)
