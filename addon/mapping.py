@@ -15,9 +15,10 @@ import numpy as np
 from .nodeeval import constant
 from .nodegraph import linked_link, source, unwrap
 
-# Texture Coordinate outputs that are the ray direction D in a world shader; Normal is -D
-# (Cycles' shader_setup_from_background: N = -D)
-_DIRECTION_COORDINATES = ('Generated', 'Normal', 'Object')
+# Texture Coordinate outputs that are the ray direction D in a world shader; Normal and
+# Reflection are -D (Cycles' shader_setup_from_background: N = I = -D, and Reflection is I
+# where there is no object)
+_DIRECTION_COORDINATES = ('Generated', 'Normal', 'Object', 'Reflection')
 _MAX_CHAIN = 64
 
 
@@ -199,8 +200,9 @@ def _vector_direction(node, reasons):
 
 
 def _direction_sign(link):
-    """-1 for a Texture Coordinate Normal (-D in a world shader), else 1."""
-    return -1.0 if link is not None and _is_direction(link) and link.from_socket.name == 'Normal' else 1.0
+    """-1 for a Texture Coordinate Normal or Reflection (-D in a world shader), else 1."""
+    return -1.0 if link is not None and _is_direction(link) and link.from_socket.name in ('Normal', 'Reflection') \
+        else 1.0
 
 
 def _own_direction_mapping(node, reasons):

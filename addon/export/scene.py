@@ -141,7 +141,7 @@ class Exporter:
             world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
-        self._summarize(geometry, world, environment)
+        self._summarize(geometry, world, environment, camera_world)
         # (an animated Disable in Renders: the frame's value is the evaluated object's; an
         # animation render leaves the original at the file's)
         self.counts['objects_hidden'] = sum(
@@ -458,7 +458,7 @@ class Exporter:
 
 
     # -- messages ----------------------------------------------------------------------------
-    def _summarize(self, geometry, world, environment):
+    def _summarize(self, geometry, world, environment, camera_world=None):
         for reason, names in self.skipped.items():
             self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
         for reason, names in self.ignored.items():
@@ -492,10 +492,13 @@ class Exporter:
             self.messages.append(('WARNING', "the scene has no renderable geometry; only the "
                                              "world background is rendered"))
         has_emission = any(np.any(m.emission > 0) for m in self.materials.materials)
-        lit_world = np.any(world > 0) or (environment is not None and np.any(environment.strength > 0)
-                                           and np.any(environment.pixels > 0))
+        def bright(uniform, env):
+            return np.any(uniform > 0) or (env is not None and np.any(env.strength > 0) and np.any(env.pixels > 0))
+        lit_world = bright(world, environment)
+        # a world whose camera rays see a backdrop of their own (Is Camera Ray) draws it
+        seen_world = camera_world is not None and bright(*camera_world)
         skipped = f" ({self.lights_skipped} light object(s) give none)" if self.lights_skipped else ""
-        if not self.lights and not lit_world and not has_emission:
+        if not self.lights and not lit_world and not has_emission and not seen_world:
             self.messages.append(('WARNING', f"the scene has no lights{skipped}, no emissive materials and "
                                              "a black world: the image will be black"))
         elif not self.lights:

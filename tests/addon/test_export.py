@@ -1408,6 +1408,14 @@ def test_world_light_path_camera_ray_splits_the_world(scene, exported):
     uniform, env = data.camera_world
     assert np.allclose(uniform, (0.45, 0.45, 0.05)) and env is None
     assert not any("Mix Shader" in t or "Light Path" in t for _, t in data.messages), data.messages
+    # a black lighting world beside a camera backdrop, no lights: the backdrop is drawn, so the
+    # image is not black (it had said it would be)
+    for ob in [o for o in scene.objects if o.type == 'LIGHT']:
+        bpy.data.objects.remove(ob)
+    bg.inputs['Strength'].default_value = 0.0
+    data = exported()
+    assert not data.world.any() and data.camera_world[0].any()
+    assert not any("will be black" in t for _, t in data.messages), data.messages
 
 
 def test_world_ray_visibility(scene, exported):
@@ -1474,10 +1482,11 @@ def test_world_normal_coordinates_are_minus_the_view_direction(scene, exported):
     nt.links.new(coords.outputs['Normal'], mapping.inputs['Vector'])
     data = exported()
     assert np.allclose(data.environment.to_map, -R, atol=1e-6)
-    nt.links.new(coords.outputs['Normal'], env.inputs['Vector'])
-    data = exported()
-    assert np.allclose(data.environment.to_map, -np.eye(3), atol=1e-6)
-    assert not any("world approximated" in t for _, t in data.messages)
+    for out in ('Normal', 'Reflection'):        # (Reflection is I = -D where there is no object)
+        nt.links.new(coords.outputs[out], env.inputs['Vector'])
+        data = exported()
+        assert np.allclose(data.environment.to_map, -np.eye(3), atol=1e-6), out
+        assert not any("world approximated" in t for _, t in data.messages), out
     nt.links.new(coords.outputs['Generated'], env.inputs['Vector'])
     assert np.allclose(exported().environment.to_map, np.eye(3), atol=1e-6)
 
