@@ -227,7 +227,7 @@ class MaterialBuilder:
             self._attribute_map = ('object', name[len(OBJECT_INFO):], mat)
             m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
             return m
-        line = _channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), _probe_albedo(m), 1e-5)
+        line = channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), _probe_albedo(m), 1e-5)
         self._attribute_pixels = self._ATTRIBUTE_ALPHAS
         reads_alpha = np.ptp(_probe_albedo(self._build_material(mat)), axis=0).max() >= 1e-7
         # (float32 rounding leaves a plain tint's offset a few 1e-9 below 0)
@@ -277,7 +277,7 @@ class MaterialBuilder:
         if ya is None or not np.allclose(ya, ya[:1], rtol=1e-6, atol=1e-9):
             ya = None
         q = y / self._IMAGE_PROBE[0, :, :3].astype(np.float64)       # = w x attribute + k if a product
-        line = _channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), q, 1e-5)
+        line = channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), q, 1e-5)
         if ya is None or line is None or (line[1] < 0).any() or (line[0] + line[1] <= 0).any():
             return None
         w, k = line
@@ -904,7 +904,7 @@ class MaterialBuilder:
         ya = self._probe(socket, src, self._ALPHA_PROBE)
         if ya is None or np.ptp(ya, axis=0).max() > 0.0:
             return None                                     # colour and alpha both
-        line = _channel_line(self._PROBE[:, :3].astype(np.float64), y, 1e-6)
+        line = channel_line(self._PROBE[:, :3].astype(np.float64), y, 1e-6)
         if line is None or (line[1] < 0).any() or (line[1] + line[0] < -1e-9).any():
             return None                                     # (a colour in [0, 1] would go negative)
         return line
@@ -964,7 +964,7 @@ class MaterialBuilder:
                         interp, ext, transform, udim, img.name)
 
 
-def _channel_line(x, y, tolerance):
+def channel_line(x, y, tolerance):
     """(w (3,), k (3,)) with y = w x + k per channel, the least-squares line through probe
     values x, y (n, 3), when it passes every point within tolerance x (1 + max |y|); None
     otherwise. k within 1e-9 of 0 is 0 (the fit's rounding about an exact 0)."""

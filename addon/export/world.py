@@ -13,6 +13,7 @@ from ..mapping import environment_rotation
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import linked_link, linked_node, output_node
 from .images import MISSING_IMAGE, encoded_environment, image_pixels
+from .materials import channel_line
 from .shadersockets import mix_factor, value_emission
 
 
@@ -159,6 +160,17 @@ def world_visibility(world):
         | (0 if getattr(vis, 'transmission', True) else sd.NO_TRANSMISSION)
 
 
+_PROBE = np.random.default_rng(5).random((64, 4)) * np.array([10.0, 10.0, 10.0, 0.0]) + np.array([0, 0, 0, 1.0])
+
+
+def _per_channel_affine(chain):
+    """Whether the colour chain (compile_image_chain) is w x colour + k per channel on texels
+    from 0 to 10 (an HDRI's range: a clamp to [0, 1] is not)."""
+    y = np.asarray(chain(_PROBE.astype(np.float32)), np.float64)
+    y = np.broadcast_to(y.reshape(len(_PROBE), -1), (len(_PROBE), 3))
+    return bool(np.isfinite(y).all()) and channel_line(_PROBE[:, :3], y, 1e-5) is not None
+
+
 def _environment(node, strength, reasons, chain=None, frame=None):
     """(uniform radiance, scenedata.Environment or None) of an Environment Texture node; chain:
     the colour nodes after it (nodeeval.compile_image_chain), applied to its texels."""
@@ -183,7 +195,11 @@ def _environment(node, strength, reasons, chain=None, frame=None):
         px = np.concatenate([rgb, pixels[..., 3:4]], axis=-1).reshape(-1, 4)
         y = np.asarray(chain(px), np.float64).reshape(rgb.shape)
         rgb = np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0).astype(np.float32)
-        if encoded_environment(pixels, 'Linear') is not None and node.interpolation != 'Closest':
+        # exact when the map is blended as it is held (float) and the chain scales and offsets
+        # each channel; else the blend of the results is not the result of the blend (a Gamma
+        # 2.2 on 0/1 columns: 0.50 where Cycles blends, then raises, 0.32)
+        if node.interpolation != 'Closest' and (encoded_environment(pixels, 'Linear') is not None
+                                                or not _per_channel_affine(chain)):
             reasons.append(f"colour nodes after environment image '{img.name}' applied to its texels before the blend")
         pixels = None
     if node.projection != 'EQUIRECTANGULAR':

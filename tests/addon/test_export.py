@@ -1551,6 +1551,29 @@ def test_world_environment_found_by_its_links(scene, exported):
     assert np.allclose(data.environment.pixels, px[..., :3] * tint, rtol=1e-5)
 
 
+def test_nonlinear_colour_nodes_after_a_float_environment_are_reported(scene, exported):
+    """Colour nodes after a float environment map are applied to its texels, before the blend:
+    exact for a tint (a scale per channel), not for a Gamma, which is now said (it was not: a
+    Gamma 2.2 on 0/1 columns read 0.50 where Cycles gives 0.32); 'Closest' reads one texel, exact."""
+    setup(scene)
+    img = scenes.float_image("Sky", _sky_pixels())
+    w = scenes.environment_world(img, 1.0)
+    nt = w.node_tree
+    env = next(n for n in nt.nodes if n.type == 'TEX_ENVIRONMENT')
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    said = lambda: [t for _, t in exported().messages if "applied to its texels before the blend" in t]
+    for kind, nonlinear in (('ShaderNodeGamma', True), ('ShaderNodeInvert', False)):
+        node = nt.nodes.new(kind)
+        if kind == 'ShaderNodeGamma':
+            node.inputs['Gamma'].default_value = 2.2
+        nt.links.new(env.outputs['Color'], node.inputs['Color'])
+        nt.links.new(node.outputs['Color'], bg.inputs['Color'])
+        assert bool(said()) == nonlinear, kind
+        env.interpolation = 'Closest'
+        assert not said(), kind
+        env.interpolation = 'Linear'
+
+
 def test_world_environment_approximations_are_reported(scene, exported):
     setup(scene)
     px = _sky_pixels()
