@@ -395,6 +395,10 @@ class Integrator:
             else None
         self._env_apart = self._any_glass and transmit_env is not self._camera_env
         self._transmit_env = transmit_env if self._env_apart else None
+        # ... and under a transparent film (_world_through_glass): the same world, the lighting
+        # one by its Transmission visibility, never a camera backdrop (it had added both, and
+        # ignored the visibility: (1, 0.91, 0) where Cycles shows the non-camera side (1, 0, 0))
+        self._glass_env = env if (env is not None and world_transmit and not env.dark) else None
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
                                           f"strength: {', '.join(self.lights.skipped_lamps)}"))
@@ -438,6 +442,8 @@ class Integrator:
         self._camera_grouped = pick(lambda world: True) if self._env_requested else self._camera_lamps
         self._camera_env_pass = camera_env if (camera_env is not None and wv & VIS_CAMERA
                                                and not camera_env.dark) else None
+        self._glass_world_lamps = np.array([j for j, l in enumerate(every)
+                                            if isinstance(l, BackgroundLight) and l.seen_by_transmission], np.int32)
         self._bsdf_lamps = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf], np.int32)
         self._selection_table()
 
@@ -1492,10 +1498,10 @@ class Integrator:
             outs.append(sinks.groups[self._world_group])
         clamp = self._found_clamp(0)
         for out in outs:
-            if self._camera_env_pass is not None:
-                self._camera_env_pass.native.gather(0.0, seg.D, where, seg.thr, None, seg.pid, out, clamp)
-            if len(self._world_lamps):
-                dacrt.lamps.lamp_gather(self._lamp_records, self._world_lamps, seg.O, seg.D, sub['t'], where,
+            if self._glass_env is not None:
+                self._glass_env.native.gather(0.0, seg.D, where, seg.thr, None, seg.pid, out, clamp)
+            if len(self._glass_world_lamps):
+                dacrt.lamps.lamp_gather(self._lamp_records, self._glass_world_lamps, seg.O, seg.D, sub['t'], where,
                                         seg.pid, out, thr=seg.thr, pdf_bsdf=None, clamp=clamp)
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None, kind='through'):

@@ -68,6 +68,24 @@ def test_transparent_film_draws_the_world_behind_glass(transparent_glass, roughn
     assert img[..., 3].mean() == pytest.approx(1.0 - (0.8 if transparent_glass else 0.3), rel=0.02)
 
 
+def test_through_glass_under_a_transparent_film_camera_rays_see_the_transmission_world():
+    """Under a transparent film a camera ray past glass is a transmission ray: it sees the world
+    lighting the scene (not a camera backdrop of Is Camera Ray) and only by the world's
+    Transmission visibility, as through an opaque film (it had added the backdrop to the world,
+    (1, 0.91, 0) where Cycles gives (1, 0, 0), and ignored the visibility). A clear glass sheet."""
+    glass = material('glass', (0.0,) * 3, transparency=np.ones(3, np.float32), refraction=np.ones(3, np.float32))
+    backdrop = np.array([0.0, 0.9, 0.0], np.float32)
+    for film in (False, True):
+        scene = sheet_scene(glass, film_transparent=film)
+        scene.camera_world = (backdrop, None)
+        img = render(scene).film.combined()
+        assert np.allclose(img[..., :3], WORLD, rtol=1e-5), film
+        assert np.allclose(img[..., 3], 1.0), film
+        scene.world_visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.NO_TRANSMISSION
+        img = render(scene).film.combined()
+        assert np.allclose(img[..., :3], 0.0, atol=1e-6), film
+
+
 def test_tinted_transparency_multiplies_light_through_it():
     """A black Transparent BSDF of colour tau: the camera sees tau x W, and a floor lit by a
     sun through it gets tau x its light, seen through the sheet again: 0.8 tau^2."""
