@@ -1343,7 +1343,8 @@ class Integrator:
             if chain is not None:                   # what the data passes read here, before the pick
                 surface = self._surface(hits, rows, path.D)
                 chain.append(dict(rows=rows, prim=prim, u=np.take(hits['u'], rows), v=np.take(hits['v'], rows),
-                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=surface[0], ns=surface[2]))
+                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=surface[0], ns=surface[2],
+                                  glass=self._glass_part(mat, tau, opacity)))
             t_mean = tau.mean(axis=0)
             total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
@@ -1745,10 +1746,21 @@ class Integrator:
                 uv[:, cols[first]] = self._uv_pass(prim[first], u[first], v[first])
             done[cols[first]] = True
 
+        # Glass is no transparency to the passes: Cycles' refraction is a closure of the surface
+        # (its alpha there 1) and the ray past it a transmission ray, which writes none; so each
+        # column's later surfaces count by the share of its paths that passed clear (Mist and
+        # Depth had described the sky behind a pane: Mist 0.93 where Cycles gives 0.21)
+        clear = np.ones(n, F32)
         for depth, c in enumerate(chain):
             cols = np.take(path.pid, c['rows'])
-            alpha = np.clip(1.0 - c['tau'], 0.0, 1.0)
-            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'], alpha, c['opacity'], c['P'], c['ns'], depth, c['tau'])
+            tau, glass = c['tau'], c['glass']
+            alpha = np.clip(1.0 - (tau - glass), 0.0, 1.0)
+            share = np.take(clear, cols)
+            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'] * share, alpha, c['opacity'], c['P'], c['ns'], depth,
+                     tau - glass)
+            t_mean = tau.mean(axis=0)
+            clear[cols] = share * np.where(t_mean > 0, (tau - glass).mean(axis=0) / np.where(t_mean > 0, t_mean, 1.0),
+                                           1.0)
         # the surfaces the chain ended on that are not transparent (stops were counted above)
         idx = np.flatnonzero(hit)
         prim = np.take(hits['prim'], idx)
@@ -1757,6 +1769,7 @@ class Integrator:
         if len(idx):
             P, _, ns, _ = self._surface(hits, idx, path.D)
             thr = np.ones((3, len(idx)), F32) if path.thr is None else np.take(path.thr, idx, axis=1)
+            thr = thr * np.take(clear, np.take(path.pid, idx))
             surfaces(np.take(path.pid, idx), prim, np.take(hits['u'], idx), np.take(hits['v'], idx), thr,
                      np.ones((3, len(idx)), F32), np.ones(len(idx), F32), P, ns, len(chain))
         if 'Normal' in want:

@@ -308,6 +308,26 @@ def test_non_finite_opacity_reads_as_opaque():
     assert np.allclose(img[..., :3], 0.5 * WORLD, rtol=1e-5) and np.isfinite(img).all()
 
 
+def test_data_passes_stop_at_glass():
+    """Glass is no transparency to the data passes (Cycles: refraction is a closure of the
+    surface, and the ray past it a transmission ray, which writes none): a clear glass sheet
+    at 0.25 over a 0.8 floor gives the sheet's Depth and Mist (start 0, depth 1: 1 - 0.75) and
+    no Diffuse Color from the floor (it had given the floor's: Depth 0.5, Mist 1 - 0.5). A
+    sheet half glass, half clear transparency passes its clear half on."""
+    glass = material('glass', (0.0,) * 3, transparency=np.ones(3, np.float32), refraction=np.ones(3, np.float32))
+    scene = sheet_scene(glass, floor=True, samples=16, passes=('Depth', 'DiffCol', 'Mist'), mist=(0.0, 1.0, 1.0))
+    film = render(scene).film
+    assert np.allclose(film.pass_image('Depth')[..., 0], 0.25, rtol=1e-5)
+    assert np.allclose(film.pass_image('Mist')[..., 0], 0.25, atol=1e-5)
+    assert np.allclose(film.pass_image('DiffCol')[..., :3], 0.0, atol=1e-6)
+    half = material('half', (0.0,) * 3, transparency=np.ones(3, np.float32), refraction=np.full(3, 0.5, np.float32))
+    film = render(sheet_scene(half, floor=True, samples=64, passes=('DiffCol', 'Mist'),
+                              mist=(0.0, 1.0, 1.0))).film
+    # alpha 0.5 at the sheet: Mist 1 - (0.75 x 0.5 + 0.5 x 0.5), the floor seen by the clear half
+    assert np.allclose(film.pass_image('Mist')[..., 0], 1 - (0.375 + 0.25), atol=1e-5)
+    assert np.allclose(film.pass_image('DiffCol')[..., 0], 0.5 * 0.8, atol=1e-5)
+
+
 @pytest.mark.parametrize('threshold', [0.5, 0.7])
 def test_data_passes_along_transparent_surfaces(threshold):
     """Cycles' data passes through alpha 0.6 (albedo 0.5) at 0.25 over a 0.8 floor, camera at
