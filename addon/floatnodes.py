@@ -141,6 +141,24 @@ def map_range(interpolation, value, from_min, from_max, to_min, to_max, steps, c
     return r
 
 
+def map_range_vector(interpolation, value, from_min, from_max, to_min, to_max, steps, clamp):
+    """Map Range node, vector data, per component (Cycles' svm_node_vector_map_range): the
+    factor as the float node's, the smooth ones on the factor clamped to [0, 1]; To Min where
+    From Min = From Max (the float node's 0 is its own); the clamp in the node itself, every type."""
+    v, f0, f1, t0, t1, st = (np.asarray(x, np.float64) for x in (value, from_min, from_max, to_min, to_max, steps))
+    fac = _safe_divide(v - f0, f1 - f0)
+    if interpolation == 'STEPPED':
+        fac = np.where(st > 0.0, _safe_divide(np.floor(fac * (st + 1.0)), st), 0.0)
+    elif interpolation == 'SMOOTHSTEP':
+        fac = np.clip(fac, 0.0, 1.0)
+        fac = (3.0 - 2.0 * fac) * fac * fac
+    elif interpolation == 'SMOOTHERSTEP':
+        fac = np.clip(fac, 0.0, 1.0)
+        fac = fac * fac * fac * (fac * (fac * 6.0 - 15.0) + 10.0)
+    r = t0 + fac * (t1 - t0)
+    return clamp_range(r, t0, t1) if clamp else r
+
+
 def clamp_range(v, a, b):
     """Clamp node of type Range: between a and b whichever is larger."""
     return np.clip(v, np.minimum(a, b), np.maximum(a, b))

@@ -43,31 +43,53 @@ _MIX_INPUTS = {'RGBA': {'fac': 'Factor_Float', 'a': 'A_Color', 'b': 'B_Color'},
                'FLOAT': {'fac': 'Factor_Float', 'a': 'A_Float', 'b': 'B_Float'}}
 _MAP_RANGE_INPUTS = {'value': 'Value', 'f0': 'From Min', 'f1': 'From Max', 't0': 'To Min', 't1': 'To Max',
                      'steps': 'Steps'}
+# the vector Map Range's and Mix's, whose every input is a vector (roles in _COLOR_ROLES)
+_VECTOR_MAP_RANGE_INPUTS = {'vvalue': 'Vector', 'vf0': 'From_Min_FLOAT3', 'vf1': 'From_Max_FLOAT3',
+                            'vt0': 'To_Min_FLOAT3', 'vt1': 'To_Max_FLOAT3', 'vsteps': 'Steps_FLOAT3'}
 NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
 VIEW_NODE_TYPES = frozenset({'FRESNEL', 'LAYER_WEIGHT'})   # as their average over view directions
 # the note when one of two images is averaged (one image per material)
 TWO_IMAGES = "two image textures mixed; the second as its average colour"
 # Color Attribute, Attribute and Object Info: values per point or per object (export/materials.py)
 ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
-_COLOR_ROLES = {'color', 'a', 'b', 'vector'}     # colour or vector inputs (but floats in Mix FLOAT and Math)
+# colour or vector inputs (but floats in Mix FLOAT and Math)
+_COLOR_ROLES = {'color', 'a', 'b', 'vector', 'vfac', 'vvalue', 'vf0', 'vf1', 'vt0', 'vt1', 'vsteps'}
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
 _SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2, 'X': 0, 'Y': 1, 'Z': 2}
 
 
 def node_inputs(node):
     """{role: identifier} of the inputs of a node that the evaluation reads, or None when it
-    cannot evaluate the node (an unknown type or operation, a Mix or Map Range of vectors, a
-    non-uniform Mix)."""
+    cannot evaluate the node (an unknown type or operation, a Mix of rotations, a
+    non-uniform Mix of colours or floats)."""
     t = node.type
     if t == 'MIX':
+        if node.data_type == 'VECTOR':      # a factor per component where non-uniform
+            uniform = getattr(node, 'factor_mode', 'UNIFORM') == 'UNIFORM'
+            return {'fac' if uniform else 'vfac': 'Factor_Float' if uniform else 'Factor_Vector',
+                    'a': 'A_Vector', 'b': 'B_Vector'}
         if getattr(node, 'factor_mode', 'UNIFORM') != 'UNIFORM':
             return None
         return _MIX_INPUTS.get(node.data_type)
     if t == 'MAP_RANGE':
-        return _MAP_RANGE_INPUTS if node.data_type == 'FLOAT' else None
+        return {'FLOAT': _MAP_RANGE_INPUTS, 'FLOAT_VECTOR': _VECTOR_MAP_RANGE_INPUTS}.get(node.data_type)
     if t == 'MATH' and node.operation not in fn.MATH_OPERATIONS:
         return None
     return _INPUTS.get(t)
+
+
+def reads_as_color(node, role):
+    """Whether the evaluation reads a node's input of `role` as a colour or vector (else a
+    float: Math, Clamp, a float Map Range or Mix read every input so)."""
+    t = node.type
+    floats = (t == 'MIX' and node.data_type == 'FLOAT') or \
+        (t in _FLOAT_NODES and not (t == 'MAP_RANGE' and node.data_type == 'FLOAT_VECTOR'))
+    return role in _COLOR_ROLES and not floats
+
+
+def gives_vector(node, out):
+    """Whether a node's output is a vector (to a float by its average, not its luminance)."""
+    return node.type == 'COMBXYZ' or getattr(out, 'type', None) == 'VECTOR'
 
 
 class Field:
@@ -164,13 +186,12 @@ class Evaluator:
         roles = node_inputs(node)
         if roles is None:
             return None
-        float_node = (t == 'MIX' and node.data_type == 'FLOAT') or t in _FLOAT_NODES
         x = {}
         for role, ident in roles.items():
             sock = nodegraph.input_by_id(node, ident)
-            x[role] = self.input(sock, role in _COLOR_ROLES and not float_node, depth + 1)
+            x[role] = self.input(sock, reads_as_color(node, role), depth + 1)
         tex = self._join(x.values())
-        return Field(_compute(node, out, {role: f.value for role, f in x.items()}), tex, t == 'COMBXYZ')
+        return Field(_compute(node, out, {role: f.value for role, f in x.items()}), tex, gives_vector(node, out))
 
     def _view_average(self, node, out, depth):
         """A Fresnel or Layer Weight output as its average over view directions (its Normal
@@ -212,6 +233,10 @@ class Evaluator:
 def _compute(node, out, v):
     """The value of node's output `out` from its inputs' values v (by role)."""
     t = node.type
+    if t == 'MIX' and node.data_type == 'VECTOR':      # (Cycles' svm_node_mix_vector*)
+        fac = v['vfac'] if 'vfac' in v else v['fac']
+        fac = np.clip(fac, 0.0, 1.0) if node.clamp_factor else fac
+        return (1.0 - fac) * v['a'] + fac * v['b']
     if t == 'MIX':
         fac = np.clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
         r = cn.mix('MIX' if node.data_type == 'FLOAT' else node.blend_type, fac, v['a'], v['b'])
@@ -256,6 +281,9 @@ def _compute(node, out, v):
     if t == 'CLAMP':
         clamp = fn.clamp_range if node.clamp_type == 'RANGE' else fn.clamp_min_max
         return clamp(v['value'], v['lo'], v['hi'])
+    if node.data_type == 'FLOAT_VECTOR':
+        return fn.map_range_vector(node.interpolation_type, v['vvalue'], v['vf0'], v['vf1'], v['vt0'], v['vt1'],
+                                   v['vsteps'], node.clamp)
     return fn.map_range(node.interpolation_type, v['value'], v['f0'], v['f1'], v['t0'], v['t1'], v['steps'],
                         node.clamp)
 
@@ -337,12 +365,12 @@ def _compile_node(node, out, image_pointer, depth):
     roles = node_inputs(node)
     if roles is None:
         raise NotCompiled(node.bl_label)
-    float_node = (t == 'MIX' and node.data_type == 'FLOAT') or t in _FLOAT_NODES
-    parts = {role: compile_image_chain(nodegraph.input_by_id(node, ident), role in _COLOR_ROLES and not float_node,
+    parts = {role: compile_image_chain(nodegraph.input_by_id(node, ident), reads_as_color(node, role),
                                        image_pointer, depth + 1)
              for role, ident in roles.items()}
     frozen, frozen_out = Frozen(node), Frozen(out)
-    return (lambda px: _compute(frozen, frozen_out, {role: g(px) for role, g in parts.items()})), t == 'COMBXYZ'
+    return (lambda px: _compute(frozen, frozen_out, {role: g(px) for role, g in parts.items()})), \
+        gives_vector(node, out)
 
 
 class _NotConstant(Exception):

@@ -139,13 +139,11 @@ def _node(node, out, chain, depth):
     roles = nodeeval.node_inputs(node)
     if roles is None or t in nodeeval.VIEW_NODE_TYPES:
         raise nodeeval.NotCompiled(f"'{node.bl_label}' node")
-    float_node = (t == 'MIX' and node.data_type == 'FLOAT') or t in nodeeval._FLOAT_NODES
-    parts = {role: _socket(nodegraph.input_by_id(node, ident), role in nodeeval._COLOR_ROLES and not float_node,
-                           chain, depth + 1)
+    parts = {role: _socket(nodegraph.input_by_id(node, ident), nodeeval.reads_as_color(node, role), chain, depth + 1)
              for role, ident in roles.items()}
     frozen, frozen_out = nodeeval.Frozen(node), nodeeval.Frozen(out)
     return (lambda c: nodeeval._compute(frozen, frozen_out, {role: g(c) for role, g in parts.items()})), \
-        t == 'COMBXYZ'
+        nodeeval.gives_vector(node, out)
 
 
 def _texture(node, out, chain, depth):

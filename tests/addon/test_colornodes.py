@@ -198,6 +198,56 @@ def test_constant_chain_folds_to_a_colour(scene):
     assert np.allclose(m.base_color, 0.75 * c + 0.25 * (1 - c), atol=1e-6)
 
 
+def test_vector_map_range_and_mix_are_evaluated(scene):
+    """A vector Map Range and a Mix in Vector mode (uniform and non-uniform factor) are
+    evaluated (they fell back to the colour's own value, 'colour from Map Range node'); a
+    vector into a float input is its average, as every vector output's (values: Cycles 5.0's)."""
+    def node_io(node, ident, outputs=False):
+        return next(s for s in (node.outputs if outputs else node.inputs) if s.identifier == ident)
+
+    built = {}
+    for name in ("MapRange", "MixUniform", "MixPerAxis", "MapRangeToFloat"):
+        mat, nt, out = scenes._material(name)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        xyz = nt.nodes.new('ShaderNodeCombineXYZ')
+        for i, v in enumerate((0.2, 0.7, 1.6)):
+            xyz.inputs[i].default_value = v
+        if name.startswith("MapRange"):
+            n = nt.nodes.new('ShaderNodeMapRange')
+            n.data_type, n.interpolation_type = 'FLOAT_VECTOR', 'LINEAR'
+            for ident, v in (('From_Min_FLOAT3', (0.1, 0.9, 0.0)), ('From_Max_FLOAT3', (0.5, 0.3, 1.0)),
+                             ('To_Min_FLOAT3', (0.1, 0.2, 0.3)), ('To_Max_FLOAT3', (0.9, 0.6, 0.8))):
+                node_io(n, ident).default_value = v
+            nt.links.new(xyz.outputs[0], node_io(n, 'Vector'))
+            result = node_io(n, 'Vector', True)
+        else:
+            n = nt.nodes.new('ShaderNodeMix')
+            n.data_type = 'VECTOR'
+            if name == "MixPerAxis":
+                n.factor_mode = 'NON_UNIFORM'
+                node_io(n, 'Factor_Vector').default_value = (0.2, 0.5, 1.3)
+            else:
+                node_io(n, 'Factor_Float').default_value = 0.25
+            node_io(n, 'B_Vector').default_value = (0.9, 0.1, 0.4)
+            nt.links.new(xyz.outputs[0], node_io(n, 'A_Vector'))
+            result = node_io(n, 'Result_Vector', True)
+        if name == "MapRangeToFloat":
+            add = nt.nodes.new('ShaderNodeMath')
+            add.inputs[1].default_value = 0.0
+            nt.links.new(result, add.inputs[0])
+            result = add.outputs[0]
+        nt.links.new(result, d.inputs['Color'])
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        built[name] = _exported_material(mat)
+    a, b = np.array([0.2, 0.7, 1.6]), np.array([0.9, 0.1, 0.4])
+    mapped = np.array([0.3, 1.0 / 3.0, 0.8])
+    for name, want in (("MapRange", mapped), ("MixUniform", 0.75 * a + 0.25 * b),
+                       ("MixPerAxis", np.array([0.34, 0.4, 0.4])), ("MapRangeToFloat", np.full(3, mapped.mean()))):
+        m = built[name]
+        assert m.texture is None and not m.approximated, (name, m.approximated)
+        assert np.allclose(m.base_color, want, atol=1e-5), (name, m.base_color, want)
+
+
 def test_ramp_of_an_alpha_mask_and_unreadable_inputs(scene):
     """A Color Ramp fed by the image's alpha; a Noise Texture in the chain reads as the input's
     own value, and a second image as its average, each reported."""

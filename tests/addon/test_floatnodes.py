@@ -73,6 +73,19 @@ def test_map_range_and_clamp_worked_by_hand():
     assert fn.clamp_range(0.9, 0.85, 0.3) == pytest.approx(0.85)
 
 
+def test_vector_map_range_is_cycles_per_component():
+    """The vector Map Range against Cycles 5.0's values (emission read exactly) for the vector
+    (0.2, 0.7, 1.6), From (0.1, 0.9, 0) -> (0.5, 0.3, 1), To (0.1, 0.2, 0.3) -> (0.9, 0.6,
+    0.8), steps (3, 4, 2): it was not evaluated (the input's own value stood in)."""
+    args = ((0.2, 0.7, 1.6), (0.1, 0.9, 0.0), (0.5, 0.3, 1.0), (0.1, 0.2, 0.3), (0.9, 0.6, 0.8), (3, 4, 2))
+    for kind, clamp, want in (('LINEAR', True, (0.3, 0.3333, 0.8)), ('LINEAR', False, (0.3, 0.3333, 1.1)),
+                              ('STEPPED', True, (0.3667, 0.3, 0.8)), ('STEPPED', False, (0.3667, 0.3, 1.3)),
+                              ('SMOOTHSTEP', False, (0.225, 0.3037, 0.8)),
+                              ('SMOOTHERSTEP', True, (0.1828, 0.284, 0.8))):
+        got = fn.map_range_vector(kind, *[np.array(a, np.float64) for a in args], clamp)
+        assert np.allclose(got, want, atol=1e-4), (kind, clamp, got, want)
+
+
 def test_hsl_against_colorsys_and_separate_combine():
     rng = np.random.default_rng(2)
     rgb = rng.uniform(0, 1, (200, 3))
@@ -144,18 +157,18 @@ def test_export_bakes_separate_math_combine_per_texel(scene, exported):
 
 
 def test_unsupported_math_inputs_are_reported(scene, exported):
-    """A Map Range of vectors is not evaluated: its own value, reported."""
+    """A Float Curve is not evaluated: its own value, reported. (A Map Range of vectors, once
+    the example here, is: test_vector_map_range_and_mix_are_evaluated.)"""
     scenes.camera((0, 0, 5), (0, 0, 0))
-    mat, nt, out = scenes._material("VectorRange")
+    mat, nt, out = scenes._material("Curved")
     d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    r = nt.nodes.new('ShaderNodeMapRange')
-    r.data_type = 'FLOAT_VECTOR'
-    nt.links.new(r.outputs['Vector'], d.inputs['Color'])
+    r = nt.nodes.new('ShaderNodeFloatCurve')
+    nt.links.new(r.outputs[0], d.inputs['Color'])
     nt.links.new(d.outputs[0], out.inputs['Surface'])
     scenes.plane("P", materials=(mat,))
     data = exported()
     got = data.materials[data.geometry.material[0]]
-    assert "colour from 'Map Range' node; its own value used" in got.approximated
+    assert "colour from 'Float Curve' node; its own value used" in got.approximated
     assert np.allclose(got.base_color, d.inputs['Color'].default_value[:3])
 
 
