@@ -66,7 +66,8 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
     """(uniform radiance, Environment or None) of what feeds a world shader socket at
     `weight`: Background and Emission (the same for the world in Cycles), Add Shader and Mix
     Shader (constant factor) of them, a colour or value (an emission of it, as Cycles converts
-    it); anything else is the world's viewport colour, with a reason."""
+    it); any other shader (a BSDF, a volume, a Holdout) emits nothing there, as in Cycles,
+    with a reason; a tree too deep to follow is the world's viewport colour."""
     none = np.zeros(3, np.float32)
     link = linked_link(socket)        # muted nodes are passed through (nodegraph)
     if link is None or weight == 0.0:
@@ -79,9 +80,14 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
         return value_emission(link, reasons).astype(np.float32) * np.float32(weight), None
     node = link.from_node
     t = node.type
-    if depth > 32 or t not in ('BACKGROUND', 'EMISSION', 'ADD_SHADER', 'MIX_SHADER'):
-        reasons.append(f"world surface has {node.bl_label}, not a Background node; world colour used for it")
+    if depth > 32:
+        reasons.append(f"world surface nested too deep at {node.bl_label}; world colour used for it")
         return color * np.float32(weight), None
+    if t not in ('BACKGROUND', 'EMISSION', 'ADD_SHADER', 'MIX_SHADER'):
+        # (the world colour had stood in: 0.5 / 0.6 / 0.8 where Cycles renders black)
+        reasons.append(f"world surface has {node.bl_label}, not a Background node: it emits nothing (black), "
+                       "as in Cycles")
+        return none, None
     if t in ('ADD_SHADER', 'MIX_SHADER'):
         if t == 'MIX_SHADER' and camera is not None and _is_camera_ray(node.inputs['Fac']):
             fac = 1.0 if camera else 0.0      # (the background trick: what the camera sees, and the light)
