@@ -326,7 +326,8 @@ class WORLD_PT_dacrt_surface(DACRTPanel, Panel):
 
 
 class WORLD_PT_dacrt_settings(DACRTPanel, Panel):
-    """The world's ray visibility, light group and mist (Cycles' panels draw them for Cycles only)."""
+    """The world's ray visibility, max bounces, light group and mist (Cycles' panels draw them
+    for Cycles only)."""
     bl_label = "Settings"
     bl_context = 'world'
     bl_options = {'DEFAULT_CLOSED'}
@@ -340,6 +341,10 @@ class WORLD_PT_dacrt_settings(DACRTPanel, Panel):
             col = layout.column(heading="Ray Visibility")
             col.prop(vis, "camera")
             col.prop(vis, "diffuse")
+            col.prop(vis, "transmission")       # (rays past glass see the world by it)
+        cycles = getattr(world, 'cycles', None)
+        if cycles is not None and hasattr(cycles, "max_bounces"):
+            layout.prop(cycles, "max_bounces")
         if hasattr(world, "lightgroup"):
             layout.prop_search(world, "lightgroup", context.view_layer, "lightgroups", text="Light Group",
                                results_are_suggestions=True)

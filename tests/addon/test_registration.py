@@ -286,7 +286,12 @@ def test_every_setting_the_render_reads_has_a_panel(scene):
         # world's ray visibility and mist
         'max_bounces', 'use_multiple_importance_sampling', 'emission_sampling', 'pass_index',
         'use_transparent_shadow',
-        'camera', 'diffuse', 'start', 'depth', 'falloff'}
+        'camera', 'diffuse', 'transmission', 'start', 'depth', 'falloff'}
     assert wanted <= set(drawn), sorted(wanted - set(drawn))
+    # the world's own: ray visibility with Transmission and Max Bounces (both read by the render,
+    # neither had been shown)
+    layout = FakeLayout()
+    bpy.types.WORLD_PT_dacrt_settings.draw(SimpleNamespace(layout=layout), ctx)
+    assert {'camera', 'diffuse', 'transmission', 'max_bounces'} <= set(layout.drawn), layout.drawn
     assert 'DACRT' not in bpy.types.DATA_PT_light.COMPAT_ENGINES
     assert 'DACRT' not in getattr(bpy.types, 'NODE_DATA_PT_light', bpy.types.DATA_PT_light).COMPAT_ENGINES
