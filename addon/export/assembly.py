@@ -100,6 +100,13 @@ class Assembly:
         self._object_info_albedos()
         # the materials whose procedural textures read Generated or Object coordinates
         self._coordinated = {k for k, m in enumerate(self.materials.materials) if _coordinates_read(m)}
+        # per material, once for the frame (the materials are all resolved above): those whose
+        # albedo follows an attribute or Object Info (most scenes: none), and those reading each
+        # UV map by name (scanned per batch and per placement, these had made the export
+        # quadratic in objects x materials: 4.1 s of 14.5 at 4000 objects)
+        self._attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
+        uv_maps = np.array(self.materials.uv_maps, object)
+        self._uv_readers = {name: uv_maps == name for name in set(self.materials.uv_maps) - {''}}
         need_uvs = uv_pass or any(self.materials.uses_texture)
         batches = []
         for key, places in self.placements.items():
@@ -290,9 +297,7 @@ class Assembly:
                 if out.terminator is None:
                     out.terminator = np.zeros((len(out.triangles), 2), np.float32)
                 out.terminator[t0 + i * nt:t0 + (i + 1) * nt] = term
-        # the materials whose albedo follows an attribute or Object Info (most scenes: none)
-        attributed = {k for k, e in enumerate(self.materials.attribute_maps) if e is not None}
-        coordinated = self._coordinated
+        attributed, coordinated = self._attributed, self._coordinated
         per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated
         for i, p in enumerate(places if per_placement else ()):
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
@@ -416,8 +421,7 @@ class Assembly:
         a mesh without it, as in Cycles) instead of the active render map's."""
         named = {self.materials.uv_maps[k] for k in set(place.slot_map)} - {''}
         for name in named:
-            wants = np.array([self.materials.uv_maps[k] == name for k in range(len(self.materials.uv_maps))])
-            rows = np.flatnonzero(wants[material])
+            rows = np.flatnonzero(self._uv_readers[name][material])
             if not len(rows):
                 continue
             layer = a.uv_layers.get(name)
