@@ -159,6 +159,12 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
                 self._render(depsgraph)
         except export.ExportCancelled:
             self.report({'INFO'}, "DACRT: render cancelled during scene export")
+        except MemoryError as e:
+            # (numpy's own words name an array's shape, not what made the frame that big)
+            traceback.print_exc()
+            self.report({'ERROR'}, f"DACRT render failed: out of memory ({e}). DACRT holds every triangle of "
+                                   "the frame: each instance's copied out (no instancing), hair and point clouds "
+                                   "tessellated; fewer instances, Simplify or a smaller Max Subdivision lower it")
         except Exception as e:          # reported in Blender, never only printed
             traceback.print_exc()
             self.report({'ERROR'}, f"DACRT render failed: {e}")
