@@ -201,7 +201,10 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         views = [v.name for v in result.views]
         per_view = []                   # each view's stats: the summary is the frame's
         try:
-            for view in views if len(views) > 1 else [None]:
+            # every view of a stereo / multiview render through its own camera, also the only one
+            # enabled (a single view had been rendered from the mono camera: the left eye alone
+            # was the centre view)
+            for view in views if multiview else [None]:
                 if view is not None or integ is None:   # each view's camera, the same geometry
                     integ = None        # the last view's arrays go before the next view's are made
                     integ = self._view_integrator(depsgraph, scene_data, view)
@@ -229,18 +232,29 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             self.active_view_set(view)
             scene = depsgraph.scene_eval
             cam_ob = self.camera_override or scene.camera
-            view_cam = (self.camera_model_matrix(cam_ob, use_spherical_stereo=False),
-                        self.camera_shift_x(cam_ob, use_spherical_stereo=False))
-            data = cam_ob.data
-            if getattr(data, 'type', None) == 'PANO' and data.stereo.use_spherical_stereo:
-                # Cycles moves each ray's eye around the panorama's centre (spherical stereo);
-                # each view here is an ordinary panorama from that eye's position
-                self.report({'WARNING'}, f"DACRT: view '{view}': Spherical Stereo is not rendered; each "
-                                         "eye is a panorama from the eye's position")
+            # an eye is a camera's: another object looked through (a light, a mesh) is the same
+            # for every view, as in Cycles (Blender's eye calls read its data as a camera's: a spot
+            # light's size became a shift; a mesh's gave NaNs)
+            view_cam = None
+            if cam_ob is not None and cam_ob.type == 'CAMERA':
+                view_cam = (self.camera_model_matrix(cam_ob, use_spherical_stereo=False),
+                            self.camera_shift_x(cam_ob, use_spherical_stereo=False))
+                data = cam_ob.data
+                if data.type != 'ORTHO' and data.stereo.use_spherical_stereo and \
+                        scene.render.views_format == 'STEREO_3D':
+                    # Cycles moves each ray's eye around the camera's centre (spherical stereo,
+                    # perspective cameras too, in Stereo 3D only); each view here is an
+                    # ordinary camera at that eye's position
+                    self.report({'WARNING'}, f"DACRT: view '{view}': Spherical Stereo is not rendered; each "
+                                             "eye is an ordinary camera at the eye's position")
+            messages = []               # (a view's own camera says what it approximates too)
             try:
-                scene_data.camera = export.export_camera(scene, None, view_cam, camera=cam_ob)
+                scene_data.camera = export.export_camera(scene, messages, view_cam, camera=cam_ob)
             except export.ExportError as e:
                 raise RuntimeError(f"view '{view}': {e}") from None
+            said = {text for _, text in scene_data.messages}     # (the scene camera's, said for the frame)
+            self._report_messages([(level, f"view '{view}': {text}") for level, text in messages
+                                   if text not in said])
             if self.cancel_requested():
                 return None
         try:

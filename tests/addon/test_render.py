@@ -427,6 +427,14 @@ def test_spherical_stereo_panorama_is_reported(scene, capfd):
     bpy.ops.render.render()
     out = capfd.readouterr().out
     assert "view 'left': Spherical Stereo is not rendered" in out and "view 'right'" in out
+    # Cycles applies it to perspective cameras too (said now; it was not), and only in Stereo 3D
+    # (in the Multi-View format Blender applies none: it had been said there)
+    cam.data.type = 'PERSP'
+    bpy.ops.render.render()
+    assert "view 'left': Spherical Stereo is not rendered" in capfd.readouterr().out
+    scene.render.views_format = 'MULTIVIEW'
+    bpy.ops.render.render()
+    assert "Spherical Stereo" not in capfd.readouterr().out
 
 
 def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path, monkeypatch):
@@ -460,6 +468,43 @@ def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path, monkeypatch
         mono = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"mono_{side}.exr")))
         assert np.allclose(eyes[side], mono, atol=1e-5), side
     assert not np.allclose(eyes["L"], eyes["R"], atol=1e-2)
+
+
+def test_a_single_view_and_a_non_camera_are_rendered_as_cycles_renders_them(scene, tmp_path):
+    """Stereo with one view enabled renders that eye (it had rendered the mono camera, a helper's
+    left eye identical to the centre view); a light looked through as the scene camera is the
+    same for every view, as in Cycles (Blender's eye calls read its spot size as a shift: the
+    frame had moved sideways by a whole width)."""
+    lit_plane_scene(scene, size=(32, 24))
+    scenes.cube("Box", size=1.0, location=(0.0, 0.0, 0.5))
+    cam = scene.camera
+    cam.data.stereo.convergence_mode, cam.data.stereo.pivot = 'PARALLEL', 'CENTER'
+    cam.data.stereo.interocular_distance = 0.8
+    scene.render.use_multiview, scene.render.views_format = True, 'STEREO_3D'
+    settings = scene.render.image_settings
+    settings.file_format, settings.color_depth, settings.views_format = 'OPEN_EXR', '32', 'INDIVIDUAL'
+
+    def views(name):
+        scene.render.filepath = str(tmp_path / name)
+        bpy.ops.render.render(write_still=True)
+        return {p.stem[-1]: scenes.rgba(scenes.read_exr(p)) for p in tmp_path.glob(f"{name}*_?.exr")}
+
+    scene.render.views['right'].use = False
+    left_only = views("one")
+    assert set(left_only) == {"L"}
+    scene.render.views['right'].use = True
+    both = views("two")
+    assert np.allclose(left_only["L"], both["L"], atol=1e-5)
+    scene.render.use_multiview = False
+    centre = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "c.exr")))
+    assert not np.allclose(left_only["L"], centre, atol=1e-2)
+    spot = scenes.light('SPOT', 100.0, (0.0, 0.0, 5.0), name="Looking")
+    spot.data.spot_size = 1.2
+    scene.camera = spot
+    mono = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "spot.exr")))
+    scene.render.use_multiview = True
+    for side, img in views("spot_stereo").items():
+        assert np.allclose(img, mono, atol=1e-5), side
 
 
 def test_holdout_shader_is_an_object_holdout_of_a_black_surface(scene, tmp_path):
