@@ -158,6 +158,36 @@ def test_many_smooth_instances_keep_outward_normals(scene, exported):
         np.testing.assert_allclose(g.normals[sel], want, atol=1e-5, err_msg=f"instance {i} (scale {s})")
 
 
+def test_linked_duplicates_with_object_linked_materials_are_single_users(scene, exported):
+    """Two objects sharing a smooth mesh, scaled (4, 1, 1), with their material slots linked to
+    the object: Cycles gives each its own geometry, shaded as a single user (normals normalized
+    per vertex after the transform), as a copy of the mesh is; they had been shaded as
+    instances (0.80-1.11x Cycles across the bands). Data-linked slots stay instances."""
+    setup(scene)
+    ball = scenes.uv_sphere("A", radius=1.0, segments=8, rings=4, smooth=True)
+    ball.scale = (4, 1, 1)
+    twin = scenes.link(bpy.data.objects.new("B", ball.data))
+    twin.location, twin.scale = (0, 5, 0), (4, 1, 1)
+    copy = scenes.link(bpy.data.objects.new("C", ball.data.copy()))
+    copy.location, copy.scale = (0, 10, 0), (4, 1, 1)
+    paint = scenes.diffuse("Paint", (0.5, 0.5, 0.5))
+    for ob in (ball, twin, copy):
+        ob.data.materials.clear()
+        ob.data.materials.append(paint)
+    for ob in (ball, twin):
+        ob.material_slots[0].link = 'OBJECT'
+        ob.material_slots[0].material = paint
+    g = exported().geometry
+    c = g.vertices[g.triangles].astype(np.float64)
+    by_y = lambda y: np.abs(c[:, 0, 1] - y) < 2.0
+    for y in (0.0, 5.0):
+        np.testing.assert_allclose(g.normals[by_y(y)], g.normals[by_y(10.0)], atol=1e-5, err_msg=str(y))
+    for ob in (ball, twin):
+        ob.material_slots[0].link = 'DATA'
+    g = exported().geometry
+    assert not np.allclose(g.normals[by_y(0.0)], g.normals[by_y(10.0)], atol=1e-3)
+
+
 def _gn_instances(ob, points_x, points_y, size):
     ng = bpy.data.node_groups.new("Scatter", 'GeometryNodeTree')
     ng.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
