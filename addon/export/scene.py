@@ -177,7 +177,11 @@ class Exporter:
                 else:
                     self.lights_skipped += 1
                 continue
-            if getattr(ob, 'particle_systems', None) and hair_systems(ob):
+            # (not on the geometry the object's own Geometry Nodes instance: those entries are
+            # copies of it that carry its particle systems, and the hair had been placed again on
+            # each, 7 tufts for 1)
+            own_output = inst.is_instance and inst.parent is not None and inst.parent.original == ob.original
+            if getattr(ob, 'particle_systems', None) and hair_systems(ob) and not own_output:
                 self._particle_hair(ob, override, inst)
             if ob.type == 'CURVES' and not getattr(self.view_layer, 'use_strand', True):
                 self.skip("hair curves are off in the view layer's filter (Hair)", ob.name)

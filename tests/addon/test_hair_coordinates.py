@@ -3,6 +3,7 @@ coordinate and one UV, both at its root and constant along it (blender/curves.cp
 particle strand its root in the emitter's texture space and the emitter's UV maps there
 (uv_on_emitter), a Curves object's strands their 'surface_uv_coordinate'. Checked on the
 exported corners; the repro renders agree with Cycles within its noise."""
+import bpy
 import numpy as np
 
 from tests.addon import scenes
@@ -132,3 +133,34 @@ def test_curves_uv_is_their_surface_uv_coordinate(scene, exported):
     at = np.asarray(g.vertices)[g.triangles[named]].reshape(-1, 3)
     np.testing.assert_allclose(np.asarray(g.uvs)[named].reshape(-1, 2), np.stack([0 * at[:, 2], at[:, 2]], 1),
                                atol=1e-5)
+
+
+def test_hair_is_not_placed_again_on_the_emitters_own_geometry_nodes_instances(scene, exported):
+    """An emitter whose Geometry Nodes modifier adds instances (its input joined with cones on
+    points) keeps one placement of its hair, as Cycles renders it: the instance entries are
+    copies of the emitter that carry its particle systems, and the hair had been placed once
+    per cone too (7 tufts for 1)."""
+    scenes.camera()
+    em = _emitter((scenes.diffuse("Skin", (0.5, 0.5, 0.5)),))
+    ng = bpy.data.node_groups.new("Cones", 'GeometryNodeTree')
+    ng.interface.new_socket("Geometry", in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gin, gout = ng.nodes.new('NodeGroupInput'), ng.nodes.new('NodeGroupOutput')
+    grid = ng.nodes.new('GeometryNodeMeshGrid')
+    grid.inputs['Vertices X'].default_value, grid.inputs['Vertices Y'].default_value = 3, 2
+    cone, inst, join = (ng.nodes.new(t) for t in ('GeometryNodeMeshCone', 'GeometryNodeInstanceOnPoints',
+                                                  'GeometryNodeJoinGeometry'))
+    ng.links.new(grid.outputs['Mesh'], inst.inputs['Points'])
+    ng.links.new(cone.outputs['Mesh'], inst.inputs['Instance'])
+    ng.links.new(gin.outputs[0], join.inputs[0])
+    ng.links.new(inst.outputs['Instances'], join.inputs[0])
+    ng.links.new(join.outputs[0], gout.inputs[0])
+
+    def triangles():
+        return len(exported().geometry.triangles)
+    hair_and_plane = triangles()
+    em.modifiers.new("GN", 'NODES').node_group = ng
+    em.modifiers["hair0"].show_render = False
+    cones = triangles() - 2                                      # (the plane's two)
+    em.modifiers["hair0"].show_render = True
+    assert triangles() == hair_and_plane + cones, (hair_and_plane, cones)
