@@ -373,6 +373,7 @@ class Integrator:
         # same emitters; of those, the materials' Emission Sampling (None: BSDF rays alone)
         hittable = self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)
         sampled = hittable & self.mats.light_sampled[self.tri.material]
+        self._tri_sampled = sampled
         tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(), sampled,
                                  power_emission=self._tri_emission) if self._any_emissive else None
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None
@@ -1802,8 +1803,11 @@ class Integrator:
             prim = np.maximum(hits['prim'], 0)
             hit = hit & reached(self._receivers(path.prim), np.take(self._tri_set, prim))
         if self._shadow_link is not None and not camera:
-            # shadow-linked emitters light by their light samples alone (_selection_table)
-            hit = hit & (np.take(self._tri_shadow_set, np.maximum(hits['prim'], 0)) == 0)
+            # shadow-linked emitters light by their light samples alone (_selection_table); one
+            # light sampling never picks (Emission Sampling None, or Auto on a dim one) still by
+            # BSDF rays, else by nothing (it had lit nothing: 0 where Cycles gives 0.476)
+            prim = np.maximum(hits['prim'], 0)
+            hit = hit & ((np.take(self._tri_shadow_set, prim) == 0) | ~np.take(self._tri_sampled, prim))
         outs = [(hit, L)]
         if groups:
             grp = np.take(self._tri_group, np.maximum(hits['prim'], 0))

@@ -679,3 +679,30 @@ def test_a_shadow_linked_emitter_is_not_blocked_by_what_its_blockers_leave_out()
     bare, under = image(False, links), image(True, links)
     assert bare.min() > 0 and np.array_equal(under, bare)
     assert image(True, {}).max() == 0.0                         # unlinked: the plate shadows it
+
+
+def test_a_shadow_linked_emitter_light_sampling_never_picks_lights_by_bsdf_rays():
+    """An emissive panel with Emission Sampling None and a blocker collection (shadow linking
+    on): light sampling never picks it, so BSDF rays light with it, as in Cycles (it had lit
+    nothing: shadow-linked emitters gather no BSDF hits, 0 where Cycles gives 0.476); the same
+    panel sampled lights the floor alike."""
+    from .scenes import geometry, quad, ALL_VIS
+    floor = quad((0.0, 0.0, 0.0), 100.0, 100.0)
+    panel = quad((0.0, 0.0, 1.5), 3.0, 3.0)
+
+    def image(sampling, links):
+        scene = plane_scene([], samples=64, max_bounces=0)
+        scene.materials.append(material('Glow', (0.0, 0.0, 0.0), emission=(2.0, 2.0, 2.0),
+                                         emission_sampling=sampling))
+        scene.geometry = geometry([(*floor, 1, ALL_VIS), (*panel, len(scene.materials) - 1, ALL_VIS & ~sd.VIS_CAMERA)])
+        scene.object_names = ['Floor', 'Panel']
+        scene.world = np.zeros(3, np.float32)
+        scene.shadow_links = links
+        return render(scene).film.combined()[..., :3]
+
+    links = {'Panel': (frozenset({'Floor'}), frozenset())}
+    sampled, unsampled = image('FRONT_BACK', links), image('NONE', links)
+    assert sampled.mean() > 0.05
+    assert unsampled.mean() == pytest.approx(sampled.mean(), rel=0.05)
+    assert unsampled.mean() == pytest.approx(image('NONE', {}).mean(), rel=1e-6)
+
