@@ -356,3 +356,12 @@ def animation_of_one_frame(scene, frame, directory):
     scene.frame_set(1)
     scene.frame_start = scene.frame_end = frame
     scene.render.filepath = str(Path(directory) / "frame_")
+
+
+def read_as_float(nt, socket):
+    """socket through a Math node adding 0: its value as a float input reads it."""
+    add = nt.nodes.new('ShaderNodeMath')
+    add.inputs[1].default_value = 0.0
+    nt.links.new(socket, add.inputs[0])
+    return add.outputs[0]
+

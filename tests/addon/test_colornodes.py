@@ -232,10 +232,7 @@ def test_vector_map_range_and_mix_are_evaluated(scene):
             nt.links.new(xyz.outputs[0], node_io(n, 'A_Vector'))
             result = node_io(n, 'Result_Vector', True)
         if name == "MapRangeToFloat":
-            add = nt.nodes.new('ShaderNodeMath')
-            add.inputs[1].default_value = 0.0
-            nt.links.new(result, add.inputs[0])
-            result = add.outputs[0]
+            result = scenes.read_as_float(nt, result)
         nt.links.new(result, d.inputs['Color'])
         nt.links.new(d.outputs[0], out.inputs['Surface'])
         built[name] = _exported_material(mat)

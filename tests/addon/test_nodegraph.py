@@ -349,10 +349,7 @@ def test_a_colour_passes_group_sockets_and_muted_nodes_unconverted(scene, export
         nt.links.new(rgb.outputs[0], node.inputs[0])
         result = node.outputs[0]
         if then_math:
-            add = nt.nodes.new('ShaderNodeMath')
-            add.inputs[1].default_value = 0.0
-            nt.links.new(result, add.inputs[0])
-            result = add.outputs[0]
+            result = scenes.read_as_float(nt, result)
         nt.links.new(result, d.inputs['Color'])
         nt.links.new(d.outputs[0], out.inputs['Surface'])
         return mat

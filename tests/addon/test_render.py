@@ -437,6 +437,20 @@ def test_spherical_stereo_panorama_is_reported(scene, capfd):
     assert "Spherical Stereo" not in capfd.readouterr().out
 
 
+def _stereo_scene(scene):
+    """The lit plane with a box, seen in Stereo 3D with parallel eyes 0.8 apart about the
+    centre, its views written as EXR files of their own; returns the camera."""
+    lit_plane_scene(scene, size=(32, 24))
+    scenes.cube("Box", size=1.0, location=(0.0, 0.0, 0.5))
+    cam = scene.camera
+    cam.data.stereo.convergence_mode, cam.data.stereo.pivot = 'PARALLEL', 'CENTER'
+    cam.data.stereo.interocular_distance = 0.8
+    scene.render.use_multiview, scene.render.views_format = True, 'STEREO_3D'
+    settings = scene.render.image_settings
+    settings.file_format, settings.color_depth, settings.views_format = 'OPEN_EXR', '32', 'INDIVIDUAL'
+    return cam
+
+
 def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path, monkeypatch):
     """Stereo 3D with parallel eyes about the centre: each view is the mono render of the camera
     moved half the interocular distance along its own x axis (Blender's eye cameras, which the
@@ -450,14 +464,7 @@ def test_stereo_views_render_from_their_eye_cameras(scene, tmp_path, monkeypatch
         made.append(1)
         real_init(self, *args, **kw)
     monkeypatch.setattr(integrator.Integrator, '__init__', counting_init)
-    lit_plane_scene(scene, size=(32, 24))
-    scenes.cube("Box", size=1.0, location=(0.0, 0.0, 0.5))
-    cam = scene.camera
-    cam.data.stereo.convergence_mode, cam.data.stereo.pivot = 'PARALLEL', 'CENTER'
-    cam.data.stereo.interocular_distance = 0.8
-    scene.render.use_multiview, scene.render.views_format = True, 'STEREO_3D'
-    settings = scene.render.image_settings
-    settings.file_format, settings.color_depth, settings.views_format = 'OPEN_EXR', '32', 'INDIVIDUAL'
+    cam = _stereo_scene(scene)
     scene.render.filepath = str(tmp_path / "eye")
     bpy.ops.render.render(write_still=True)
     assert len(made) == 2
@@ -475,14 +482,7 @@ def test_a_single_view_and_a_non_camera_are_rendered_as_cycles_renders_them(scen
     left eye identical to the centre view); a light looked through as the scene camera is the
     same for every view, as in Cycles (Blender's eye calls read its spot size as a shift: the
     frame had moved sideways by a whole width)."""
-    lit_plane_scene(scene, size=(32, 24))
-    scenes.cube("Box", size=1.0, location=(0.0, 0.0, 0.5))
-    cam = scene.camera
-    cam.data.stereo.convergence_mode, cam.data.stereo.pivot = 'PARALLEL', 'CENTER'
-    cam.data.stereo.interocular_distance = 0.8
-    scene.render.use_multiview, scene.render.views_format = True, 'STEREO_3D'
-    settings = scene.render.image_settings
-    settings.file_format, settings.color_depth, settings.views_format = 'OPEN_EXR', '32', 'INDIVIDUAL'
+    cam = _stereo_scene(scene)
 
     def views(name):
         scene.render.filepath = str(tmp_path / name)
