@@ -1084,7 +1084,7 @@ def test_light_linking_tells_library_objects_from_local_ones_of_the_same_name(sc
     recv.objects.link(plane)
     lamp.light_linking.receiver_collection = recv
     scene.collection.objects.link(far_plane)
-    cam = scenes.camera(location=(-1.5, 0, 8), kind='ORTHO', ortho_scale=6.0)
+    scenes.camera(location=(-1.5, 0, 8), kind='ORTHO', ortho_scale=6.0)
     scene.render.resolution_x, scene.render.resolution_y = 24, 8
     scene.render.engine = 'DACRT'
     scene.dacrt.samples, scene.dacrt.max_bounces = 4, 0

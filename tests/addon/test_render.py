@@ -482,7 +482,7 @@ def test_a_single_view_and_a_non_camera_are_rendered_as_cycles_renders_them(scen
     left eye identical to the centre view); a light looked through as the scene camera is the
     same for every view, as in Cycles (Blender's eye calls read its spot size as a shift: the
     frame had moved sideways by a whole width)."""
-    cam = _stereo_scene(scene)
+    _stereo_scene(scene)
 
     def views(name):
         scene.render.filepath = str(tmp_path / name)
