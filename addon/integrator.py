@@ -390,16 +390,15 @@ class Integrator:
                                unsampled_emitters=bool((hittable & ~sampled).any()), glass=self._any_glass)
         self._camera_env = camera_env if (camera_env is not None and wv & VIS_CAMERA and not self.transparent
                                           and not camera_env.dark) else None
-        # the map camera rays past glass see instead (an opaque film; under a transparent one the
-        # world behind glass is _world_through_glass's), where it differs from _camera_env
-        transmit_env = env if (env is not None and world_transmit and not self.transparent and not env.dark) \
-            else None
+        # the map camera rays past glass see: the lighting world by its Transmission visibility,
+        # never a camera backdrop (under a transparent film, _world_through_glass had added both
+        # and ignored the visibility: (1, 0.91, 0) where Cycles shows the non-camera side (1, 0, 0))
+        self._glass_env = env if (env is not None and world_transmit and not env.dark) else None
+        # through an opaque film, where it differs from _camera_env (under a transparent one the
+        # world behind glass is _world_through_glass's)
+        transmit_env = None if self.transparent else self._glass_env
         self._env_apart = self._any_glass and transmit_env is not self._camera_env
         self._transmit_env = transmit_env if self._env_apart else None
-        # ... and under a transparent film (_world_through_glass): the same world, the lighting
-        # one by its Transmission visibility, never a camera backdrop (it had added both, and
-        # ignored the visibility: (1, 0.91, 0) where Cycles shows the non-camera side (1, 0, 0))
-        self._glass_env = env if (env is not None and world_transmit and not env.dark) else None
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
                                           f"strength: {', '.join(self.lights.skipped_lamps)}"))

@@ -105,7 +105,7 @@ def _open_straight(path):
 
 def _file_texels(path, img, reasons, unassociate):
     """The texels (ImageTexels) of the image file at `path` read as Cycles reads `img`'s file
-    (a UDIM tile, a sequence's frame, a grey+alpha file), converted as Blender converts it; None
+    (a still image's, a UDIM tile's, a sequence's frame), converted as Blender converts it; None
     if it cannot be read."""
     import OpenImageIO as oiio
     buf, spec = _open_straight(path)
@@ -113,7 +113,8 @@ def _file_texels(path, img, reasons, unassociate):
         return None
     ch = spec.nchannels
     stored_associated = ch == 4 and not spec.get_int_attribute('oiio:UnassociatedAlpha', 0)
-    if spec.format.basetype == oiio.UINT8 and not (stored_associated and img.alpha_mode != 'NONE'):
+    byte = spec.format.basetype == oiio.UINT8
+    if byte and not (stored_associated and img.alpha_mode != 'NONE'):
         # the bytes as stored (a quarter of the floats' memory, and no conversion): what Cycles
         # reads, and what Blender's byte buffer holds
         raw = np.asarray(buf.get_pixels(oiio.UINT8), np.uint8).reshape(spec.height, spec.width, -1)[::-1]
@@ -123,16 +124,15 @@ def _file_texels(path, img, reasons, unassociate):
         return _linear_rgba(raw, img, reasons, unassociate, byte=True, encoded=True)
     raw = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32).reshape(spec.height, spec.width, -1)[::-1]
     raw = np.ascontiguousarray(raw)
-    ch = raw.shape[2]
     if img.alpha_mode == 'NONE' and ch in (2, 4):
         raw[..., ch - 1] = 1.0          # alpha ignored, as Blender's own buffer has it
-    elif ch == 4 and not spec.get_int_attribute('oiio:UnassociatedAlpha', 0):
+    elif stored_associated:
         # a file stored associated (OpenEXR always; TIFFs other tools write) comes back so
         # whatever was asked: straight here, as _linear_rgba expects, which associates it again
         # (an EXR sequence's frame or a UDIM tile had its alpha applied twice: 0.53-0.78x Cycles)
         raw = _unassociated(raw)
     # byte files are byte buffers in Blender; deeper ones float buffers in the image's space
-    return _linear_rgba(raw, img, reasons, unassociate, byte=spec.format.basetype == oiio.UINT8, encoded=True)
+    return _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True)
 
 
 def _stacked_tiles(tiles):
@@ -171,7 +171,11 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     if not _read_from_blender(img):
         # Cycles reads an image that has a file from that file at every render, not from
         # Blender's buffer: a file rewritten since Blender loaded it renders as it is now (it
-        # had rendered as first loaded), a painted but unsaved image as its file. Blender's
+        # had rendered as first loaded), a painted but unsaved image as its file; and where
+        # Blender's buffer is not what Cycles renders, the file's own way is read (a grey+alpha
+        # file, which Blender gives 4 channels and associates; an RGBA file whose alpha flag
+        # disagrees with Blender's Straight / Premultiplied switch: a 16-bit PNG set to
+        # Premultiplied had been 3.4-9.8x Cycles, an EXR set to Straight 0.40-0.64x). Blender's
         # buffer stands in where the file cannot be read.
         path = bpy.path.abspath(img.filepath_raw, library=img.library)
         if img.source == 'TILED' and len(img.tiles):
@@ -198,19 +202,6 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
                        f"frame {user_frame(img, user, frame)} that Cycles shows (movie frames are not read here)")
     buf = buf.reshape(h, w, ch)
     from_file = not _read_from_blender(img)
-    if from_file and associates_alpha(img):
-        # Cycles reads the file, where Blender's buffer is not what it renders: a grey+alpha
-        # file (Blender gives it 4 channels and associates it; Cycles associates only
-        # 4-channel files), or an RGBA file whose own alpha flag disagrees with Blender's
-        # Straight / Premultiplied switch, which Cycles ignores for files (a 16-bit PNG set to
-        # Premultiplied 3.4-9.8x Cycles; a TIFF stored associated, or an EXR set to Straight,
-        # 0.40-0.64x): read it as Cycles does
-        path = bpy.path.abspath(img.filepath_raw, library=img.library)
-        spec = _file_header(path)
-        if spec is not None and (_grey_alpha_integer(spec) or (ch == 4 and _file_alpha_differs(spec, img))):
-            texels = _file_texels(path, img, reasons, unassociate)
-            if texels is not None:
-                return texels
     if not img.is_float and ch == 4 and img.alpha_mode == 'PREMUL':
         buf = _premultiplied_bytes(img, buf, from_file, reasons)
     return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file)
@@ -226,43 +217,6 @@ def _sequence_frame(img, reasons, unassociate, user, scene_frame):
         reasons.append(f"image sequence '{img.name}': frame {frame} could not be read from '{path}' "
                        "(magenta, as Cycles)")
     return texels
-
-
-def _file_header(path):
-    """The spec of the image file at path as read with its alpha as stored (the file's own
-    'oiio:UnassociatedAlpha' flag), or None if there is none or it cannot be opened."""
-    try:
-        import OpenImageIO as oiio
-    except ImportError:
-        return None
-    config = oiio.ImageSpec()
-    config.attribute('oiio:UnassociatedAlpha', 1)
-    inp = oiio.ImageInput.open(path, config) if os.path.isfile(path) else None
-    if inp is None:
-        oiio.geterror()
-        return None
-    spec = inp.spec()
-    inp.close()
-    return spec
-
-
-def _file_alpha_differs(spec, img):
-    """Whether the RGBA file of header `spec` stores its alpha otherwise than Blender's buffer
-    of `img` takes it: associated (OpenEXR, a TIFF written so) where the image is not a float
-    one set to Premultiplied, or straight in more than 8 bits where it is set to Premultiplied
-    (8-bit ones: _premultiplied_bytes)."""
-    import OpenImageIO as oiio
-    if img.source == 'TILED' or spec.nchannels != 4:
-        return False         # (tiles: udim_tiles reads the others; the first as Blender has it)
-    if not spec.get_int_attribute('oiio:UnassociatedAlpha', 0):
-        return not (img.is_float and img.alpha_mode == 'PREMUL')
-    return img.alpha_mode == 'PREMUL' and spec.format.basetype != oiio.UINT8
-
-
-def _grey_alpha_integer(spec):
-    """Whether a file of header `spec` has 2 channels (grey + alpha) of integers (8 or 16 bits)."""
-    import OpenImageIO as oiio
-    return spec.nchannels == 2 and spec.format.basetype in (oiio.UINT8, oiio.UINT16)
 
 
 def _premultiplied_bytes(img, buf, from_file, reasons):

@@ -177,9 +177,9 @@ class Exporter:
                 else:
                     self.lights_skipped += 1
                 continue
-            # (not on the geometry the object's own Geometry Nodes instance: those entries are
-            # copies of it that carry its particle systems, and the hair had been placed again on
-            # each, 7 tufts for 1)
+            # an entry of the geometry the object's own Geometry Nodes make: a copy of the object
+            # that carries its particle systems (the hair had been placed again on each such
+            # instance, 7 tufts for 1)
             own_output = inst.is_instance and inst.parent is not None and inst.parent.original == ob.original
             if getattr(ob, 'particle_systems', None) and hair_systems(ob) and not own_output:
                 self._particle_hair(ob, override, inst)
@@ -191,10 +191,9 @@ class Exporter:
                     self.drawn_over.append(ob.name)
                 continue
             if ob.type in UNSUPPORTED_TYPES:
-                made = inst.is_instance and inst.parent is not None and inst.parent.name == ob.name
                 # (a Geometry Nodes output of the object itself: its other geometry renders)
                 self.skip(f"{UNSUPPORTED_TYPES[ob.type]} geometry its Geometry Nodes make is not rendered "
-                          "(the rest of the object is)" if made else
+                          "(the rest of the object is)" if own_output else
                           f"{UNSUPPORTED_TYPES[ob.type]} objects are not rendered", ob.name)
                 continue
             if ob.type not in SYNCED_TYPES or not inst.show_self:
