@@ -8,11 +8,13 @@ message and error through `self.report` so nothing is only printed. Nothing outl
 import math
 import time
 import traceback
+import weakref
 
 import bpy
 import numpy as np
 
 from . import cryptomatte, export
+from .display import Display
 from .allocator import heap_in_use, render_heap, rss_peak, rss_peak_reset
 from .passes import AOV_CHANNELS, AOV_PREFIX, LIGHTGROUP_PREFIX, PASSES, enabled, result_name
 from .texture import stored_texels
@@ -136,6 +138,17 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
+        self._viewport = None           # the viewport's ViewportSession (Rendered shading)
+        self._view_key = None
+        self._settings_key = None
+        self._display = None
+        self._viewport_said = set()     # messages the viewport has reported (re-exports repeat them)
+
+    def __del__(self):
+        # the viewport's worker thread ends with the engine (it holds only a weak reference)
+        session = self.__dict__.get('_viewport')
+        if session is not None:
+            session.stop()
 
     def cancel_requested(self):
         """Esc / test_break, or request_cancel(): the one place the engine asks (polled
@@ -168,6 +181,72 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         except Exception as e:          # reported in Blender, never only printed
             traceback.print_exc()
             self.report({'ERROR'}, f"DACRT render failed: {e}")
+
+    # --- the viewport (3D viewport in Rendered shading) ---------------------------------
+    def view_update(self, context, depsgraph):
+        """The scene changed (or the viewport began): export it through the view's camera and
+        render it progressively on a worker thread (viewport.py). Blender calls this on its
+        main thread, where the export may read bpy. Updates that change nothing rendered
+        (a selection) keep the running samples."""
+        from .viewport import ViewportSession
+        if self._viewport is not None and not _renders_differently(depsgraph, self._settings_key):
+            return
+        if self._viewport is not None:
+            self._viewport.stop()
+        self._viewport = None
+        region, rv3d = context.region, context.region_data
+        try:
+            camera = export.viewport_camera(rv3d.view_matrix, rv3d.window_matrix, region.width, region.height)
+            scene_data = export.export_scene(depsgraph, view_camera=camera)
+        except Exception as e:          # in the viewport's status line, and reported once
+            self._viewport_report([('ERROR', f"viewport: {e}")])
+            self.update_stats("", f"DACRT | Error: {e}")
+            return
+        self._viewport_report(scene_data.messages)
+        engine = weakref.ref(self)
+
+        def redraw():               # from the worker: a new image is ready
+            live = engine()
+            if live is not None:
+                live.tag_redraw()
+        self._viewport = ViewportSession(scene_data, redraw)
+        self._view_key = _view_key(region, rv3d)
+        self._settings_key = _settings_key(depsgraph.scene_eval)
+        self._viewport.start(camera)
+
+    def view_draw(self, context, depsgraph):
+        """Draw the session's latest image; a new view (navigation, a resized region) restarts
+        its samples through the new camera on the same export."""
+        from .viewport import status_text
+        session = self._viewport
+        if session is None:
+            return
+        region, rv3d = context.region, context.region_data
+        key = _view_key(region, rv3d)
+        if key != self._view_key:
+            self._view_key = key
+            try:
+                session.start(export.viewport_camera(rv3d.view_matrix, rv3d.window_matrix,
+                                                     region.width, region.height))
+            except export.ExportError as e:
+                session.stop()
+                session.error = str(e)
+        if not session.running and session.messages:
+            self._viewport_report(session.messages)
+        self.update_stats("", status_text(session))
+        version, image = session.image()
+        if image is None:
+            return
+        if self._display is None:
+            self._display = Display()
+        self._display.draw(self, depsgraph.scene, image, version, region.width, region.height)
+
+    def _viewport_report(self, messages):
+        """Report what the viewport's export or render approximated, each message once per
+        engine (every edit re-exports the scene and would repeat them)."""
+        new = [(level, text) for level, text in messages if text not in self._viewport_said]
+        self._viewport_said.update(text for _, text in new)
+        self._report_messages(new)
 
     # ------------------------------------------------------------------------------------
     def _render(self, depsgraph):
@@ -370,6 +449,37 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         if skipped:
             self.report({'INFO'}, f"DACRT: skipped {skipped}")
             self.update_stats("", f"DACRT | Done | skipped {skipped}")
+
+
+def _view_key(region, rv3d):
+    """What a viewport's camera is made of: a change restarts its samples."""
+    return (region.width, region.height, tuple(map(tuple, rv3d.view_matrix)),
+            tuple(map(tuple, rv3d.window_matrix)))
+
+
+def _renders_differently(depsgraph, settings_key) -> bool:
+    """Whether a depsgraph update can change the rendered image: any data-block other than an
+    object or the scene, an object's geometry, transform or shading, or the scene's settings
+    (settings_key: those of the running export; a selection changes none of them, and comes as
+    an update of the scene alone)."""
+    for u in depsgraph.updates:
+        if isinstance(u.id, bpy.types.Scene):
+            if _settings_key(depsgraph.scene_eval) != settings_key:
+                return True
+        elif not isinstance(u.id, bpy.types.Object):
+            return True
+        elif u.is_updated_geometry or u.is_updated_transform or u.is_updated_shading:
+            return True
+    return False
+
+
+def _settings_key(scene):
+    """The scene settings a viewport render reads besides its data-blocks: DACRT's own, the
+    film, the frame and the world."""
+    d = scene.dacrt
+    own = tuple(getattr(d, p.identifier) for p in d.bl_rna.properties if p.identifier not in ('rna_type', 'name'))
+    r = scene.render
+    return (own, r.film_transparent, scene.frame_current, scene.world.name if scene.world else None)
 
 
 # Blender cuts a report at about 1,024 bytes (the rest was lost: 8 of a tester's 18 approximated

@@ -24,6 +24,11 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
     samples: IntProperty(
         name="Samples", description="Samples per pixel",
         default=64, min=1, max=1 << 24, soft_max=4096)
+    preview_samples: IntProperty(
+        name="Viewport Samples",
+        description="Samples per pixel of the 3D viewport's Rendered shading, as Cycles' viewport "
+                    "samples; the viewport stops refining there",
+        default=256, min=1, max=1 << 24, soft_max=4096)
     max_bounces: IntProperty(
         name="Max Bounces",
         description="Diffuse bounces K, as Cycles counts them: paths have up to K+1 diffuse "

@@ -78,6 +78,7 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
         render = context.scene.render
         col = layout.column()
         col.prop(settings, "samples")
+        col.prop(settings, "preview_samples", text="Viewport")
         col.prop(settings, "max_bounces")
         col.prop(settings, "transparent_max_bounces", text="Transparent")
         col.prop(settings, "transmission_max_bounces", text="Transmission")

@@ -65,22 +65,25 @@ materials (closure, aovs, images, normalmaps, reflectors, shadersockets, objecti
 """
 
 from . import images
-from .camera import export_camera
+from .camera import export_camera, viewport_camera
 from .errors import ExportCancelled, ExportError
 from .scene import Exporter
 from .world import effective_world, export_world
 
-__all__ = ['ExportCancelled', 'ExportError', 'effective_world', 'export_camera', 'export_scene', 'export_world']
+__all__ = ['ExportCancelled', 'ExportError', 'effective_world', 'export_camera', 'export_scene', 'export_world',
+           'viewport_camera']
 
 
-def export_scene(depsgraph, check_break=None, camera=None):
+def export_scene(depsgraph, check_break=None, camera=None, view_camera=None):
     """Build the frame's SceneData from an evaluated depsgraph.
 
     check_break: optional callable returning True when the user cancelled; polled during the
     export, which then raises ExportCancelled. camera: the object to render through instead of
     the scene's camera (RenderEngine.camera_override: a sequencer strip's camera), or None.
+    view_camera: a viewport's camera (scenedata.Camera, export.viewport_camera) to render
+    through instead; the scene's camera is then not read.
     """
-    exporter = Exporter(depsgraph, check_break, camera)
+    exporter = Exporter(depsgraph, check_break, camera, view_camera)
     images._check_break[0] = check_break
     try:
         return exporter.run()

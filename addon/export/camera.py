@@ -154,3 +154,42 @@ def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):
     return dict(aperture=float(aperture), focal_distance=max(focus, 1e-5),
                 aperture_blades=int(d.aperture_blades) if d.aperture_blades >= 3 else 0,
                 aperture_rotation=float(d.aperture_rotation), aperture_ratio=float(d.aperture_ratio))
+
+
+def viewport_camera(view_matrix, window_matrix, width, height):
+    """The camera of a 3D viewport's region (width x height pixels) as scenedata.Camera, from
+    its view (world -> view) and window (projection) matrices, as Blender draws the region:
+    a perspective or orthographic view, or a camera view with its zoom and offset, whose
+    projection Blender has already made the region's. No border and no depth of field."""
+    P = np.array(window_matrix, np.float64)
+    V = np.array(view_matrix, np.float64)
+    if P.shape != (4, 4) or V.shape != (4, 4) or not (np.isfinite(P).all() and np.isfinite(V).all()):
+        raise ExportError("the viewport's view or projection matrix is not finite")
+    if width < 1 or height < 1:
+        raise ExportError(f"the viewport region {width}x{height} is less than one pixel")
+    m = np.linalg.inv(V)
+    lengths = np.linalg.norm(m[:3, :3], axis=0)
+    if not np.all(lengths > 0):
+        raise ExportError("the viewport's view matrix is degenerate")
+    m[:3, :3] /= lengths
+    if P[3, 3] == 0.0:
+        # perspective: x_ndc = P00 * x / -z - P02, so x / -z spans (+-1 + P02) / P00 across the
+        # region; near and far from the depth row (Blender's perspective matrix)
+        kind = 'PERSP'
+        plane = ((-1 + P[0, 2]) / P[0, 0], (1 + P[0, 2]) / P[0, 0],
+                 (-1 + P[1, 2]) / P[1, 1], (1 + P[1, 2]) / P[1, 1])
+        near, far = P[2, 3] / (P[2, 2] - 1.0), P[2, 3] / (P[2, 2] + 1.0)
+    else:
+        # orthographic: x_ndc = P00 * x + P03; a viewport's near plane lies behind its eye
+        # (negative clip start), so the eye moves back to it and the rays start there
+        kind = 'ORTHO'
+        plane = ((-1 - P[0, 3]) / P[0, 0], (1 - P[0, 3]) / P[0, 0],
+                 (-1 - P[1, 3]) / P[1, 1], (1 - P[1, 3]) / P[1, 1])
+        near, far = (P[2, 3] + 1.0) / P[2, 2], (P[2, 3] - 1.0) / P[2, 2]
+        m[:3, 3] += m[:3, 2] * -near
+        near, far = 0.0, far - near
+    if not (np.isfinite(plane).all() and np.isfinite((near, far)).all()):
+        raise ExportError("the viewport's projection matrix is singular")
+    return sd.Camera(kind=kind, matrix=m, viewplane=tuple(float(v) for v in plane), tan_half_fov=1.0,
+                     clip_start=float(max(near, 0.0)), clip_end=float(max(far, near, 0.0)),
+                     width=int(width), height=int(height), border=(0, 0, int(width), int(height)))

@@ -71,7 +71,7 @@ class Exporter:
     hair, point clouds), then assembles the geometry, reads the world and the settings, and
     collects every message for the render to report."""
 
-    def __init__(self, depsgraph, check_break, camera=None):
+    def __init__(self, depsgraph, check_break, camera=None, view_camera=None):
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
         self.view_layer = depsgraph.view_layer
@@ -80,6 +80,7 @@ class Exporter:
         # render (an override world keyed 1 -> 8 rendered 1 on every frame)
         self.layer_eval = getattr(depsgraph, 'view_layer_eval', None) or self.view_layer
         self.camera = camera
+        self.view_camera = view_camera      # a viewport's (scenedata.Camera): no scene camera read
         self.world = effective_world(self.scene, self.layer_eval)
         # whether any shader reads Object Info: else no instance's values are gathered
         self._evaluated_of = {}
@@ -114,8 +115,9 @@ class Exporter:
                            materials_unused=0, triangles_degenerate=0, triangles_nonfinite=0)
 
     def run(self):
-        camera = export_camera(self.scene, self.messages, camera=self.camera)
-        settings = export_settings(self.scene, self.view_layer, self.messages)
+        camera = self.view_camera or export_camera(self.scene, self.messages, camera=self.camera)
+        settings = export_settings(self.scene, self.view_layer, self.messages,
+                                   viewport=self.view_camera is not None)
         self._walk_instances()
         self._tessellate_strands()
         geometry = Assembly(self).geometry(uv_pass='UV' in settings.passes)

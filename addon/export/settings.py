@@ -40,19 +40,21 @@ def layer_samples(scene, vl, samples):
     return min(layer, samples) if mode == 'BOUNDED' else layer
 
 
-def export_settings(scene, vl, messages):
+def export_settings(scene, vl, messages, viewport=False):
     """scenedata.Settings of one view layer `vl` of the evaluated scene. Passes Cycles would
-    write there and DACRT does not are named in a warning appended to messages."""
+    write there and DACRT does not are named in a warning appended to messages. viewport: the
+    3D viewport's (its own sample count, Combined alone: it draws no other pass)."""
     r = scene.render
     d = getattr(scene, 'dacrt', None)
     if d is None:
         raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
-    passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]))
+    passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]) and not viewport)
     missing = [label for owner, attr, label in _UNRENDERED_PASSES
-               if getattr(getattr(vl, owner) if owner else vl, attr, False)]
-    aovs = tuple(dict.fromkeys((a.name, a.type) for a in getattr(vl, 'aovs', ()) if a.is_valid))
-    missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ()) if not a.is_valid]
-    crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
+               if getattr(getattr(vl, owner) if owner else vl, attr, False) and not viewport]
+    aovs = tuple(dict.fromkeys((a.name, a.type) for a in getattr(vl, 'aovs', ()) if a.is_valid and not viewport))
+    missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ())
+                if not a.is_valid and not viewport]
+    crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False) and not viewport)
     if missing:
         written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
                                           + ['Cryptomatte', 'light groups', 'shader AOVs']))
@@ -63,7 +65,7 @@ def export_settings(scene, vl, messages):
     mist = scene.world.mist_settings if scene.world is not None else None
     mist = (0.0, 100.0, 1.0) if mist is None else (
         float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
-    samples = layer_samples(scene, vl, int(d.samples))
+    samples = int(d.preview_samples) if viewport else layer_samples(scene, vl, int(d.samples))
     return sd.Settings(samples=samples, max_bounces=d.max_bounces,
                        transparent_max_bounces=d.transparent_max_bounces,
                        transmission_max_bounces=d.transmission_max_bounces,
@@ -81,6 +83,7 @@ def export_settings(scene, vl, messages):
                        passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
                        pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
                        cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),
-                       lightgroups=tuple(dict.fromkeys(g.name for g in getattr(vl, 'lightgroups', ()))),
+                       lightgroups=() if viewport else tuple(dict.fromkeys(g.name for g in
+                                                                           getattr(vl, 'lightgroups', ()))),
                        aovs=aovs,
                        adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)

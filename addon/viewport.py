@@ -1,0 +1,104 @@
+"""The viewport's progressive render (3D viewport in Rendered shading): one exported frame
+rendered through the view's camera on a worker thread, sample block after sample block, the
+latest image kept for drawing. A new view (navigation, a resized region) restarts the samples
+on the same export; a changed scene is a new session. Knows no bpy: the engine exports the
+scene and the view camera on Blender's main thread and draws the image."""
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+
+from .integrator import Integrator, SetupCancelled
+
+
+class ViewportSession:
+    """Renders scene_data (a SceneData whose camera start() replaces) on a worker thread.
+    on_update() is called from that thread whenever a new image is ready (the engine's
+    tag_redraw); it must not hold the engine itself alive."""
+
+    def __init__(self, scene_data, on_update=None):
+        self.scene_data = scene_data
+        self._on_update = on_update or (lambda: None)
+        self._lock = threading.Lock()
+        self._image = None
+        self._version = 0
+        self._thread = None
+        self._stop = threading.Event()
+        self.samples_done = 0
+        self.samples_total = 0
+        self.error = None           # the text of what stopped the render, for the status line
+        self.messages = []          # the integrator's messages (what it approximated)
+        self.started = 0.0
+
+    def start(self, camera):
+        """(Re)start the samples through `camera` (scenedata.Camera); the previous run stops
+        first, its image stays until the new one's first block replaces it."""
+        self.stop()
+        self.scene_data.camera = camera
+        self._stop.clear()
+        self.error, self.samples_done, self.started = None, 0, time.perf_counter()
+        self.samples_total = int(self.scene_data.settings.samples)
+        self._thread = threading.Thread(target=self._run, name="DACRT viewport", daemon=True)
+        self._thread.start()
+
+    def stop(self):
+        """Stop the worker and wait for it (a pass polls the stop between its kernels)."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join()
+        self._thread = None
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def image(self):
+        """(version, (H, W, 4) float32 premultiplied linear RGBA or None): the version grows
+        with each new image, so a drawer re-uploads only when it changed."""
+        with self._lock:
+            return self._version, self._image
+
+    def _run(self):
+        try:
+            integ = Integrator(self.scene_data, check_break=self._stop.is_set)
+        except SetupCancelled:
+            return
+        except Exception as e:          # shown in the viewport's status line
+            self.error = str(e)
+            self._on_update()
+            return
+        steps = integ.passes()
+        try:
+            for progress in steps:
+                image = integ.film.combined()
+                with self._lock:
+                    self._image, self._version = image, self._version + 1
+                    self.samples_done = progress.samples_done
+                self._on_update()
+                if self._stop.is_set():
+                    break
+        except Exception as e:
+            self.error = str(e)
+            self._on_update()
+        finally:
+            steps.close()               # frees the tracer scenes now
+            self.messages = list(integ.messages)
+
+
+def status_text(session) -> str:
+    """The viewport's status line: samples and time, or why it stopped."""
+    if session is None:
+        return "DACRT | Exporting scene"
+    if session.error:
+        return f"DACRT | Error: {session.error}"
+    elapsed = time.perf_counter() - session.started
+    done = session.samples_done >= session.samples_total
+    return (f"DACRT | Sample {session.samples_done}/{session.samples_total}"
+            f"{' | Done' if done else ''} | Time {elapsed:.1f} s")
+
+
+def blank(width: int, height: int) -> np.ndarray:
+    """A transparent image of the region's size (before the first block ends)."""
+    return np.zeros((height, width, 4), np.float32)
