@@ -448,7 +448,10 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         skipped = _skipped_text(s.get('skipped'))
         if skipped:
             self.report({'INFO'}, f"DACRT: skipped {skipped}")
-            self.update_stats("", f"DACRT | Done | skipped {skipped}")
+            # (the samples and time stay in the final status line, as Cycles' keeps them)
+            done = f"Sample {s['samples_done']} | " if 'samples_done' in s else ""
+            self.update_stats("", f"DACRT | Done | {done}Time {_clock(s.get('total_seconds', 0.0))} | "
+                                  f"skipped {skipped}")
 
 
 def _view_key(region, rv3d):
@@ -503,14 +506,14 @@ def _skipped_text(skipped) -> str:
     """'3 objects, 1.2M shadow rays, ...' for the non-zero skip counters."""
     if not skipped:
         return ""
-    names = (('objects', "objects"), ('materials', "unused materials"), ('triangles', "triangles"),
-             ('lights', "lights"), ('shadow_rays', "shadow rays"), ('bounce_rays', "bounce rays"),
-             ('samples', "samples"))
+    names = (('objects', "object"), ('materials', "unused material"), ('triangles', "triangle"),
+             ('lights', "light"), ('shadow_rays', "shadow ray"), ('bounce_rays', "bounce ray"),
+             ('samples', "sample"))
     parts = []
     for key, label in names:
         n = int(skipped.get(key, 0))
         if n:
-            parts.append(f"{n / 1e6:.1f}M {label}" if n >= 10 ** 6 else f"{n} {label}")
+            parts.append(f"{n / 1e6:.1f}M {label}s" if n >= 10 ** 6 else f"{n} {label}{'' if n == 1 else 's'}")
     return ", ".join(parts)
 
 

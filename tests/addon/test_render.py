@@ -703,7 +703,7 @@ def test_adaptive_sampling_and_skip_stats_for_scripts(scene, capfd, monkeypatch)
     assert stats['export_seconds'] > 0 and stats['trace_seconds'] > 0
     assert 0 < stats['filter_seconds'] + stats['partition_seconds'] + stats['leaf_seconds']
     out = capfd.readouterr().out
-    assert "skipped 1 objects" in out and "samples" in out
+    assert "skipped 1 object," in out and "samples" in out
 
 
 def test_progressive_redraws_take_at_most_a_fifth_of_the_time(monkeypatch):
