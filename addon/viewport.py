@@ -5,12 +5,31 @@ on the same export; a changed scene is a new session. Knows no bpy: the engine e
 scene and the view camera on Blender's main thread and draws the image."""
 from __future__ import annotations
 
+import dataclasses
+import math
 import threading
 import time
 
 import numpy as np
 
 from .integrator import Integrator, SetupCancelled
+
+
+# A region of more pixels first gets one sample at a resolution of at most this many (Cycles'
+# viewport also starts coarse), drawn stretched over the region: its first full-resolution
+# sample comes in runs of pixels, which had shown the view in strips while navigating.
+PREVIEW_PIXELS = 1 << 16
+
+
+def preview_camera(camera):
+    """The camera at a resolution of at most PREVIEW_PIXELS pixels (the same view), or None
+    when the region has no more pixels than that."""
+    pixels = camera.width * camera.height
+    if pixels <= PREVIEW_PIXELS:
+        return None
+    k = math.sqrt(pixels / PREVIEW_PIXELS)
+    w, h = max(1, int(camera.width / k)), max(1, int(camera.height / k))
+    return dataclasses.replace(camera, width=w, height=h, border=(0, 0, w, h), crop=False)
 
 
 class ViewportSession:
@@ -39,6 +58,7 @@ class ViewportSession:
         self.scene_data.camera = camera
         self._stop.clear()
         self.error, self.samples_done, self.started = None, 0, time.perf_counter()
+        self.messages = []
         self.samples_total = int(self.scene_data.settings.samples)
         self._thread = threading.Thread(target=self._run, name="DACRT viewport", daemon=True)
         self._thread.start()
@@ -61,30 +81,43 @@ class ViewportSession:
             return self._version, self._image
 
     def _run(self):
+        preview = preview_camera(self.scene_data.camera)
+        if preview is not None:
+            one = dataclasses.replace(self.scene_data.settings, samples=1)
+            if not self._render(dataclasses.replace(self.scene_data, camera=preview, settings=one), preview=True):
+                return
+        self._render(self.scene_data)
+
+    def _render(self, scene_data, preview=False):
+        """Render scene_data's samples, publishing each block's image; False when stopped or
+        failed."""
         try:
-            integ = Integrator(self.scene_data, check_break=self._stop.is_set)
+            integ = Integrator(scene_data, check_break=self._stop.is_set)
         except SetupCancelled:
-            return
+            return False
         except Exception as e:          # shown in the viewport's status line
             self.error = str(e)
             self._on_update()
-            return
+            return False
         steps = integ.passes()
         try:
             for progress in steps:
                 image = integ.film.combined()
                 with self._lock:
                     self._image, self._version = image, self._version + 1
-                    self.samples_done = progress.samples_done
+                    if not preview:
+                        self.samples_done = progress.samples_done
                 self._on_update()
                 if self._stop.is_set():
-                    break
+                    return False
         except Exception as e:
             self.error = str(e)
             self._on_update()
+            return False
         finally:
             steps.close()               # frees the tracer scenes now
-            self.messages = list(integ.messages)
+            self.messages = list(dict.fromkeys(self.messages + list(integ.messages)))
+        return not self._stop.is_set()
 
 
 def status_text(session) -> str:

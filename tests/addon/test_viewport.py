@@ -193,3 +193,24 @@ def test_viewport_restarts_for_what_changes_the_image_only(scene):
         assert not edit(lambda: box.select_set(True))
     finally:
         bpy.app.handlers.depsgraph_update_post.remove(handler)
+
+
+def test_a_large_region_shows_a_coarse_sample_first(scene, monkeypatch):
+    # one sample at <= PREVIEW_PIXELS first, drawn stretched; then the region's own samples,
+    # the same as without the preview
+    from addon import viewport
+    cam = _lit_box(scene)
+    scene.dacrt.preview_samples = 2
+    w, h = 400, 300
+    data = export.export_scene(bpy.context.evaluated_depsgraph_get(), view_camera=_view_of(cam, w, h))
+    shapes = []
+    session = ViewportSession(data, lambda: shapes.append(session.image()[1].shape))
+    session.start(_view_of(cam, w, h))
+    image = _finished(session)
+    assert shapes[0][0] * shapes[0][1] <= viewport.PREVIEW_PIXELS and shapes[0][2] == 4
+    assert abs(shapes[0][1] / shapes[0][0] - w / h) < 0.02
+    assert shapes[-1] == (h, w, 4) and session.samples_done == 2
+    monkeypatch.setattr(viewport, 'PREVIEW_PIXELS', w * h)
+    plain = ViewportSession(data)
+    plain.start(_view_of(cam, w, h))
+    np.testing.assert_array_equal(image, _finished(plain))
