@@ -214,3 +214,77 @@ def test_a_large_region_shows_a_coarse_sample_first(scene, monkeypatch):
     plain = ViewportSession(data)
     plain.start(_view_of(cam, w, h))
     np.testing.assert_array_equal(image, _finished(plain))
+
+
+class _Region:
+    def __init__(self, w, h, view, window):
+        self.width, self.height = w, h
+        self.view_matrix, self.window_matrix = view, window
+
+
+class _Context:
+    """What view_update / view_draw read of Blender's context: the region and its 3D view."""
+    def __init__(self, cam_ob, w, h):
+        dg = bpy.context.evaluated_depsgraph_get()
+        self.region = _Region(w, h, None, None)
+        self.region_data = _Region(w, h, cam_ob.matrix_world.inverted(), cam_ob.calc_matrix_camera(dg, x=w, y=h))
+
+
+class _Engine:
+    """The engine's own state and the RenderEngine calls its viewport methods make, so they run
+    without Blender's viewport (a RenderEngine is only made by Blender)."""
+    def __init__(self):
+        from addon.engine import DACRTRenderEngine
+        self._viewport = self._view_key = self._settings_key = self._display = None
+        self._viewport_said = set()
+        self.status, self.reports, self.redraws = [], [], 0
+        for name in ('view_update', 'view_draw', '_viewport_report', '_report_messages'):
+            setattr(self, name, getattr(DACRTRenderEngine, name).__get__(self))
+
+    def update_stats(self, stats, info):
+        self.status.append(info)
+
+    def report(self, kind, text):
+        self.reports.append(text)
+
+    def tag_redraw(self):
+        self.redraws += 1
+
+
+def test_engine_viewport_methods_export_restart_and_draw(scene, monkeypatch):
+    from addon import display
+    drawn = []
+    monkeypatch.setattr(display.Display, 'draw', lambda self, engine, sc, image, version, w, h:
+                        drawn.append((image.shape, w, h)))
+    cam = _lit_box(scene)
+    engine = _Engine()
+    dg = bpy.context.evaluated_depsgraph_get()
+    engine.view_update(_Context(cam, 32, 24), dg)
+    first = engine._viewport
+    assert first is not None
+    image = _finished(first)
+    assert first.samples_done == 8 and image.shape == (24, 32, 4)
+    engine.view_draw(_Context(cam, 32, 24), dg)
+    assert drawn[-1] == ((24, 32, 4), 32, 24) and engine.status[-1].startswith("DACRT | Sample 8/8")
+    assert engine.redraws > 0
+    # an update that changes nothing keeps the session; the same view draws again without
+    # restarting; a new view restarts the same session
+    engine.view_update(_Context(cam, 32, 24), dg)
+    engine.view_draw(_Context(cam, 32, 24), dg)
+    assert engine._viewport is first and first.samples_done == 8
+    cam.location.z += 0.5
+    engine.view_draw(_Context(cam, 32, 24), dg)
+    assert engine._viewport is first
+    moved = _finished(first)
+    assert first.samples_done == 8 and not np.array_equal(moved, image)
+    # a scene without a camera still renders the view; an empty region is an error in the status
+    scene.camera = None
+    engine._viewport.stop()
+    engine._viewport = None
+    engine.view_update(_Context(cam, 32, 24), bpy.context.evaluated_depsgraph_get())
+    assert _finished(engine._viewport).shape == (24, 32, 4)
+    engine._viewport.stop()
+    engine._viewport = None
+    engine.view_update(_Context(cam, 0, 24), bpy.context.evaluated_depsgraph_get())
+    assert engine._viewport is None and "less than one pixel" in engine.status[-1]
+    assert any("less than one pixel" in r for r in engine.reports)
