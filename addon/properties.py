@@ -59,8 +59,9 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
         name="Clamp Indirect",
         description="If non-zero, the most one sample of indirect light (light after the first "
                     "bounce) may add, as the mean of its R, G and B, as Cycles clamps it; 0 turns it "
-                    "off. Strong clamps of several lights differ from Cycles' (lights are picked "
-                    "otherwise)",
+                    "off. With several lights the clamped image can differ from Cycles' (lights are "
+                    "picked otherwise), even at this default where bright lamps light surfaces "
+                    "close by (a lamp in a shade)",
         default=10.0, min=0.0, max=1e8, soft_max=1000.0)
     film_exposure: FloatProperty(
         name="Exposure",
