@@ -173,11 +173,13 @@ def coordinates_approximation(tex_node):
     return '; '.join(reasons)
 
 
-def environment_rotation(node, reasons):
+def environment_rotation(node, reasons, vector=True):
     """(3, 3) orthogonal world -> map-frame matrix from the Environment Texture's Vector input:
     the view direction, optionally through a Mapping node (its rotation and the signs of its
-    scale are exact for directions; non-uniform scale and location are not representable)."""
-    return _own_direction_mapping(node, reasons) @ _vector_direction(node, reasons)
+    scale are exact for directions; non-uniform scale and location are not representable).
+    vector False: the view direction (an unavailable Vector input, which Cycles does not read)."""
+    own = _own_direction_mapping(node, reasons)
+    return own @ _vector_direction(node, reasons) if vector else own
 
 
 def _vector_direction(node, reasons):

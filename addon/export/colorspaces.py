@@ -83,3 +83,29 @@ def to_scene_linear(rgba, img, keep_alpha_out):
     out[..., 3] = rgba[..., 3]
     out[..., :3] = np.where(divide, out[..., :3] * a, out[..., :3])
     return out
+
+
+# OpenColorIO's builtin ACES AP0 -> CIE XYZ (D65, Bradford), which Cycles inverts to place XYZ
+# in scene linear (ShaderManager::init_xyz_transforms)
+_AP0_TO_XYZ_D65 = np.array([[0.938280, -0.004451, 0.016628],
+                            [0.337369, 0.729522, -0.066890],
+                            [0.001174, -0.003711, 1.091595]])
+
+
+@lru_cache(maxsize=1)
+def xyz_to_scene_linear():
+    """(3, 3) CIE XYZ (D65) -> scene linear RGB as Cycles derives it from the config's
+    aces_interchange role (the Sky Texture's XYZ); None without a usable config (Cycles then
+    uses Rec.709's)."""
+    config = _config()
+    if config is None or 'aces_interchange' not in config[1].getRoles():
+        return None
+    import OpenImageIO as oiio
+    src = oiio.ImageBuf(oiio.ImageSpec(3, 1, 3, oiio.FLOAT))
+    src.set_pixels(oiio.ROI(), np.eye(3, dtype=np.float32).reshape(1, 3, 3))
+    dst = oiio.ImageBuf()
+    if not oiio.ImageBufAlgo.colorconvert(dst, src, 'aces_interchange', 'scene_linear', False, '', '',
+                                          config[0]):
+        return None
+    aces_to_rgb = np.asarray(dst.get_pixels(oiio.FLOAT), np.float64).reshape(3, 3).T   # columns: images of e_i
+    return aces_to_rgb @ np.linalg.inv(_AP0_TO_XYZ_D65)

@@ -1,6 +1,7 @@
 """The world the view layer renders with: the Background (or Emission) colour x strength, an
 Environment Texture's equirectangular image (through a Mapping node's rotation, with colour
-nodes after it applied to its texels), Add and Mix Shaders of these, the camera/light split of
+nodes after it applied to its texels), a Sky Texture's Multiple or Single Scattering sky
+(export/sky.py), Add and Mix Shaders of these, the camera/light split of
 a Light Path's Is Camera Ray, and the world's ray visibility. Other world shaders use the world
 colour, reported. Part of the export layer."""
 
@@ -15,6 +16,7 @@ from ..nodegraph import linked_link, linked_node, output_node
 from .images import MISSING_IMAGE, encoded_environment, image_pixels
 from .materials import channel_line
 from .shadersockets import mix_factor, value_emission
+from .sky import sky_environment
 
 
 LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')     # of environment maps: blended linearly (reported)
@@ -115,6 +117,10 @@ def _color_light(socket, strength, what, reasons, frame):
     tex = linked_node(socket)
     if tex is not None and tex.type == 'TEX_ENVIRONMENT':
         return _environment(tex, strength, reasons, frame=frame)
+    if tex is not None and tex.type == 'TEX_SKY':
+        found = sky_environment(tex, strength, reasons)
+        if found is not None:
+            return found
     c, c_ok = constant_color(socket)
     if not c_ok:
         envs = _environments_feeding(socket)
@@ -127,15 +133,20 @@ def _color_light(socket, strength, what, reasons, frame):
                 return _environment(envs[0], strength, reasons, chain, frame)
         source = linked_node(socket)
         name = f"'{source.bl_label}'" if source is not None else "nodes"
+        if source is not None and source.type == 'TEX_SKY':
+            name += f" of type {source.sky_type.replace('_', '-').title()}"
+        elif _environments_feeding(socket, 'TEX_SKY'):
+            name += " (after a Sky Texture)"
         why = "two environment textures feed it" if len(envs) > 1 else "which is not evaluated"
         reasons.append(f"{what} from {name}, {why}; the socket's own colour "
                        f"{tuple(round(float(x), 3) for x in c[:3])} used")
     return np.array(c, np.float32) * strength, None
 
 
-def _environments_feeding(socket):
-    """The Environment Texture nodes (with an image) whose output reaches `socket`, followed
-    back through its links as Cycles compiles them (reroutes, muted nodes, groups): a stray
+def _environments_feeding(socket, kind='TEX_ENVIRONMENT'):
+    """The Environment Texture nodes with an image (or the nodes of type `kind`) whose output
+    reaches `socket`, followed back through its links as Cycles compiles them (reroutes, muted
+    nodes, groups): a stray
     map elsewhere in the tree is not one of them. Each node (in its group context) is visited
     once: a chain of nodes that each read the one before twice stays linear."""
     found, seen, todo = [], set(), [socket]
@@ -148,8 +159,8 @@ def _environments_feeding(socket):
         if key in seen:
             continue
         seen.add(key)
-        if node.type == 'TEX_ENVIRONMENT':
-            if node.image is not None:
+        if node.type == kind:
+            if kind != 'TEX_ENVIRONMENT' or node.image is not None:
                 found.append(node)
             continue
         todo.extend(node.inputs[i] for i in range(len(node.inputs)))

@@ -1,0 +1,48 @@
+"""The world's Sky Texture node (ShaderNodeTexSky) as an environment map: the Multiple and
+Single Scattering skies are rendered by addon/sky.py, as Cycles evaluates them, into an
+equirectangular radiance image (sun disc included) that the environment light samples by
+importance. Preetham and Hosek-Wilkie are not evaluated (reported by the caller). Part of the
+export layer."""
+
+import numpy as np
+
+from .. import scenedata as sd
+from .. import sky as model
+from ..mapping import environment_rotation
+from .colorspaces import xyz_to_scene_linear
+
+EVALUATED = ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING')
+# 2048 x 1024 texels (0.18 degrees): the default sun (0.545 degrees) spans ~3 of them, and a
+# texel's row is finer than the sky's fastest change at the horizon a render resolves
+WIDTH = 2048
+
+
+def node_sky(node):
+    """The model's settings (model.Sky) of an evaluated Sky Texture node, else None."""
+    if node.sky_type not in EVALUATED:
+        return None
+    return model.Sky.from_node_values(
+        node.sky_type == 'MULTIPLE_SCATTERING', node.sun_elevation, node.sun_rotation,
+        sun_disc=bool(node.sun_disc), sun_size=float(node.sun_size), sun_intensity=float(node.sun_intensity),
+        altitude=float(node.altitude), air=float(node.air_density), aerosol=float(node.aerosol_density),
+        ozone=float(node.ozone_density))
+
+
+def sky_environment(node, strength, reasons):
+    """(uniform radiance (3,), scenedata.Environment) of a Sky Texture feeding a Background of
+    `strength`, its Vector through a Mapping rotation as an Environment Texture's; None when
+    its type is not evaluated (the caller reports it)."""
+    sky = node_sky(node)
+    if sky is None:
+        return None
+    if not (np.isfinite(strength) and strength >= 0):
+        reasons.append(f"Background Strength {float(strength):g} is negative or not finite; rendered black")
+        return np.zeros(3, np.float32), None
+    m = xyz_to_scene_linear()
+    img = model.equirect(sky, WIDTH, model.XYZ_TO_REC709 if m is None else m)
+    # Blender 5.0 makes the Vector input unavailable while the sun disc is on: Cycles then
+    # reads the view direction whatever is linked to it
+    vector = node.inputs.get('Vector')
+    rotation = environment_rotation(node, reasons, vector=vector is not None and vector.enabled)
+    env = sd.Environment(img, np.full(3, strength, np.float32), rotation, 'Linear')
+    return np.zeros(3, np.float32), env

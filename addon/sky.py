@@ -1,0 +1,505 @@
+"""The Sky Texture's physical sky models as Cycles evaluates them (Blender 5.0: intern/sky and
+kernel/svm/sky.h), and their rendering into an equirectangular radiance image for the world's
+environment light. No bpy here: the export layer (export/sky.py) reads the node.
+
+- Multiple Scattering (the 5.0 default; García Liñán's 4-wavelength model with a fitted
+  multiple-scattering term) and Single Scattering (the former Nishita, 21 wavelengths):
+  Cycles precomputes a 512 x 256 XYZ table per render (rows: elevation through a square-law
+  warp that gives the horizon more rows; columns: azimuth from the sun, mirrored), then per
+  direction reads it bilinearly (extend), converts XYZ to scene linear RGB (negatives to 0),
+  fades the single-scattering ground to black, and adds the sun disc: its radiance at the
+  disc's lowest and highest points (the transmittance toward the sun / the disc's solid
+  angle), blended by elevation, with limb darkening.
+- The tables are computed here as Cycles computes them, vectorised: everything along a view
+  ray that depends only on its elevation is computed once per row, only the terms that see
+  the sun per texel. The geometry is float64 (Cycles' float32 rounding is noise on top).
+- Preetham and Hosek-Wilkie are not modelled here (the export reports them).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+TABLE_W, TABLE_H = 512, 256                  # Cycles' SkyLoader
+
+# Cycles' fallback XYZ (D65) -> linear Rec.709; the export passes the config's own
+XYZ_TO_REC709 = np.array([[3.2404542, -1.5371385, -0.4985314],
+                          [-0.9692660, 1.8760108, 0.0415560],
+                          [0.0556434, -0.2040259, 1.0572252]])
+
+
+# ---- Multiple scattering (intern/sky/source/sky_multiple_scattering.cpp) -----------------
+_MS_EARTH = 6371.0                            # km
+_MS_THICK = 100.0
+_MS_ATMOS = _MS_EARTH + _MS_THICK
+_MS_STEPS = 64                                # transmittance and in-scattering march steps
+_TR_W, _TR_H = 256, 64                        # transmittance table: cos(sun zenith) x altitude
+_MS_SUN = np.array([1.679, 1.828, 1.986, 1.307])           # 630, 560, 490, 430 nm
+_MS_MOLECULAR = np.array([6.605e-3, 1.067e-2, 1.842e-2, 3.156e-2])
+_MS_OZONE_XS = np.array([3.472e-25, 3.914e-25, 1.349e-25, 11.03e-27]) * 334.5   # x mean Dobson
+_MS_AEROSOL_ABS = np.array([2.8722e-24, 4.6168e-24, 7.9706e-24, 1.3578e-23])
+_MS_AEROSOL_SCA = np.array([1.5908e-22, 1.7711e-22, 2.0942e-22, 2.4033e-22])
+_MS_AEROSOL_BASE, _MS_AEROSOL_BG, _MS_AEROSOL_H = 1.3681e20, 2e6, 0.73
+_MS_G = 0.8
+_MS_GROUND = 0.3
+_MS_FIT = 0.02 * np.array([0.217, 0.347, 0.594, 1.0])
+_MS_XYZ = np.array([[53.386917738564668023, 22.981337506691024754, 0.0],
+                    [43.904844466369358263, 71.347795700053393866, 0.102506867965741307],
+                    [1.6137278251608962005, 18.422960591455485011, 31.742921188390805758],
+                    [20.762668673810577145, 2.3614213523314368527, 110.48009643252140334]])
+
+
+def _ms_coefficients(h, air, aerosol, ozone):
+    """(extinction, molecular scattering, aerosol scattering), each (..., 4), at altitudes h km."""
+    aer = _MS_AEROSOL_BASE * (np.exp(-h / _MS_AEROSOL_H) + _MS_AEROSOL_BG / _MS_AEROSOL_BASE) * aerosol
+    log_h = np.log(np.maximum(h, 1e-4))
+    ozone_density = 3.78547397e20 * np.exp(-(log_h - 3.22261) ** 2 * 5.55555555 - log_h)
+    mol_sca = _MS_MOLECULAR * (np.exp(-0.07771971 * np.power(h, 1.16364243)) * air)[..., None]
+    aer_sca = _MS_AEROSOL_SCA * aer[..., None]
+    ext = (_MS_AEROSOL_ABS * aer[..., None] + aer_sca + _MS_OZONE_XS * (ozone_density * ozone)[..., None]
+           + mol_sca)
+    return ext, mol_sca, aer_sca
+
+
+def _ray_sphere(b, c):
+    """Cycles' ray_sphere_intersection from b = dot(pos, dir), c = |pos|^2 - r^2 (unit dir):
+    the exit distance from inside, the near hit from outside, -1 for none."""
+    d = b * b - c
+    root = np.sqrt(np.maximum(d, 0.0))
+    t = np.where(d >= b * b, -b + root, -b - root)
+    return np.where(((c > 0) & (b > 0)) | (d < 0), -1.0, t)
+
+
+def _ms_transmittance(cos_theta, h_norm, air, aerosol, ozone):
+    """(..., 4) transmittance from altitude h_norm x 100 km toward a sun at cos(zenith), marched."""
+    cos_theta, h_norm = np.broadcast_arrays(np.asarray(cos_theta, float), np.asarray(h_norm, float))
+    r0 = _MS_EARTH + h_norm * _MS_THICK
+    t_d = _ray_sphere(r0 * cos_theta, r0 * r0 - _MS_ATMOS ** 2)
+    dt = t_d / _MS_STEPS
+    t = (np.arange(_MS_STEPS) + 0.5) * dt[..., None]                       # (..., steps)
+    sin_theta = np.sqrt(np.maximum(1.0 - cos_theta * cos_theta, 0.0))[..., None]
+    radius = np.hypot(sin_theta * t, r0[..., None] + cos_theta[..., None] * t)
+    ext, _, _ = _ms_coefficients(np.maximum(radius - _MS_EARTH, 0.0), air, aerosol, ozone)
+    return np.exp(-ext.sum(-2) * dt[..., None])
+
+
+class _TransmittanceTable:
+    """The 256 x 64 transmittance table and Cycles' bilinear reads of it (clamped)."""
+
+    def __init__(self, air, aerosol, ozone):
+        cos = np.arange(_TR_W) / (_TR_W - 1) * 2.0 - 1.0
+        h = np.arange(_TR_H) / (_TR_H - 1)
+        self.lut = _ms_transmittance(cos[None, :], h[:, None], air, aerosol, ozone)   # (H, W, 4)
+        self.flat = self.lut.reshape(-1, 4)
+
+    def __call__(self, cos_theta, h_norm):
+        x = (_TR_W - 1) * np.clip(cos_theta * 0.5 + 0.5, 0.0, 1.0)
+        y = (_TR_H - 1) * np.clip(h_norm, 0.0, 1.0)
+        x1, y1 = x.astype(np.intp), y.astype(np.intp)
+        x2, y2 = np.minimum(x1 + 1, _TR_W - 1), np.minimum(y1 + 1, _TR_H - 1)
+        fx, fy = (x - x1)[..., None], (y - y1)[..., None]
+        f = self.flat
+        bottom = f[y1 * _TR_W + x1] * (1 - fx) + f[y1 * _TR_W + x2] * fx
+        top = f[y2 * _TR_W + x1] * (1 - fx) + f[y2 * _TR_W + x2] * fx
+        return bottom * (1 - fy) + top * fy
+
+    def at_ground(self, cos_theta):
+        x = (_TR_W - 1) * np.clip(cos_theta * 0.5 + 0.5, 0.0, 1.0)
+        x1 = x.astype(np.intp)
+        fx = (x - x1)[..., None]
+        return self.lut[0, x1] * (1 - fx) + self.lut[0, np.minimum(x1 + 1, _TR_W - 1)] * fx
+
+    def to_zenith(self, h_norm):
+        y = (_TR_H - 1) * np.clip(h_norm, 0.0, 1.0)
+        y1 = y.astype(np.intp)
+        fy = (y - y1)[..., None]
+        col = self.lut[:, -1]
+        return col[y1] * (1 - fy) + col[np.minimum(y1 + 1, _TR_H - 1)] * fy
+
+
+def _warp_elevation(v):
+    """The table rows' elevation at texture coordinate v: a signed square of 2v - 1, x pi/2."""
+    l = 2.0 * v - 1.0
+    return np.copysign(l * l, l) * (np.pi / 2)
+
+
+def multiple_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
+    """(256, 512, 3) XYZ radiance table of the multiple-scattering sky (row 0: straight down),
+    as SKY_multiple_scattering_precompute_texture; altitude in metres."""
+    tr = _TransmittanceTable(air, aerosol, ozone)
+    alt = np.clip(altitude, 1.0, 99999.0) / 1000.0
+    cz = np.cos(np.pi / 2 - sun_elevation)
+    sx, sz = -np.sqrt(max(1.0 - cz * cz, 0.0)), cz                 # sun in the x-z plane
+    half = TABLE_W // 2
+    az = 2.0 * np.pi * (np.arange(half) + 0.5) / TABLE_W
+    elev = _warp_elevation((np.arange(TABLE_H) + 0.5) / TABLE_H)
+    ce, se = np.cos(elev), np.sin(elev)
+    r0 = _MS_EARTH + alt
+    atmos = _ray_sphere(r0 * se, r0 * r0 - _MS_ATMOS ** 2)
+    ground = _ray_sphere(r0 * se, r0 * r0 - _MS_EARTH ** 2)
+    t_d = np.where(ground < 0.0, atmos, ground)                      # (rows,)
+    dt = t_d / _MS_STEPS
+    # per row and step: what depends on the ray's elevation only
+    t = (np.arange(_MS_STEPS) + 0.5) * dt[:, None]                    # (rows, steps)
+    horiz, vert = ce[:, None] * t, r0 + se[:, None] * t
+    dist = np.hypot(horiz, vert)
+    h = np.maximum(dist - _MS_EARTH, 0.0)
+    h_norm = h / _MS_THICK
+    ext, mol_sca, aer_sca = _ms_coefficients(h, air, aerosol, ozone)  # (rows, steps, 4)
+    step_tr = np.exp(-dt[:, None, None] * ext)
+    before = np.cumprod(np.concatenate([np.ones_like(step_tr[:, :1]), step_tr[:, :-1]], axis=1), axis=1)
+    weight = before * (1.0 - step_tr) / np.maximum(ext, 1e-7)        # Hillaire's step integral
+    omega = 2.0 * np.pi * (1.0 - np.sqrt(1.0 - (_MS_EARTH / dist) ** 2))
+    ground_to_sample = tr.to_zenith(np.zeros(1)) / tr.to_zenith(h_norm)
+    k_ground = (omega / (4.0 * np.pi) * (_MS_GROUND / np.pi))[..., None] * ground_to_sample
+    # the sample's cos(sun zenith) = a cos(azimuth) + b, the sun having no y component
+    a, b = horiz * sx / dist, vert * sz / dist
+    cos_view = -(ce[:, None] * np.cos(az)[None, :] * sx + se[:, None] * sz)   # dot(-ray, sun)
+    mol_phase = 3.0 / (16.0 * np.pi) * (1.0 + cos_view ** 2)
+    den = 1.0 + _MS_G ** 2 + 2.0 * _MS_G * cos_view
+    aer_phase = (1.0 - _MS_G ** 2) / (4.0 * np.pi * den * np.sqrt(den))
+    # Per point only the reads of the transmittance table at the sample's cos(sun zenith)
+    # vary; each read gathers a texel with its difference to the next column (8 floats), the
+    # row blend's rows and weight being per (row, step). float32, as Cycles
+    f32 = np.float32
+    lut = tr.lut.astype(f32)
+    cells = np.concatenate([lut, np.diff(lut, axis=1, append=lut[:, -1:])], axis=-1).reshape(-1, 8)
+    y = (_TR_H - 1) * np.clip(h_norm, 0.0, 1.0)
+    y1 = y.astype(np.intp)
+    fy = (y - y1).astype(f32)[..., None]
+    row1, row2 = y1 * _TR_W, np.minimum(y1 + 1, _TR_H - 1) * _TR_W
+    cos_az = np.cos(az).astype(f32)
+    w_mol = (weight * mol_sca).astype(f32)
+    w_aer = (weight * aer_sca).astype(f32)
+    w_all = w_mol + w_aer
+    k_ground = k_ground.astype(f32)
+    fit = _MS_FIT.astype(f32)
+    xyz = np.zeros((TABLE_H, half, 3))
+    rows = 8
+    for r in range(0, TABLE_H, rows):                 # blocks of rows bound the memory (~30 MB)
+        sl = slice(r, r + rows)
+        cs = a[sl, None, :].astype(f32) * cos_az[None, :, None] + b[sl, None, :].astype(f32)   # (r, az, steps)
+        x = (_TR_W - 1) * np.clip(cs * f32(0.5) + f32(0.5), f32(0), f32(1))
+        x1 = x.astype(np.intp)
+        fx = (x - x1)[..., None]
+        c1, c2, c0 = cells[row1[sl, None, :] + x1], cells[row2[sl, None, :] + x1], cells[x1]
+        t1 = c1[..., :4] + fx * c1[..., 4:]
+        to_sun = t1 + fy[sl, None] * (c2[..., :4] + fx * c2[..., 4:] - t1)
+        ms = fit / (f32(1) + f32(5) * np.exp(f32(-17.92) * cs))[..., None] \
+            + k_ground[sl, None] * (c0[..., :4] + fx * c0[..., 4:]) * cs[..., None]
+        light = (np.einsum('rasc,rsc->rac', to_sun, w_mol[sl]) * mol_phase[sl, :, None]
+                 + np.einsum('rasc,rsc->rac', to_sun, w_aer[sl]) * aer_phase[sl, :, None]
+                 + np.einsum('rasc,rsc->rac', ms, w_all[sl]))
+        xyz[sl] = (light * _MS_SUN) @ _MS_XYZ
+    return np.concatenate([xyz, xyz[:, ::-1]], axis=1).astype(np.float32)
+
+
+def multiple_scattering_sun(sun_elevation, diameter, altitude, air, aerosol, ozone):
+    """(bottom, top) XYZ radiance of the sun disc at its lowest and highest points."""
+    alt = np.clip(altitude, 1.0, 99999.0) / 1000.0
+    solid = 2.0 * np.pi * (1.0 - np.cos(diameter / 2))
+    elev = np.array([sun_elevation - diameter / 2, sun_elevation + diameter / 2])
+    tr = _ms_transmittance(np.cos(np.pi / 2 - elev), np.full(2, alt / _MS_THICK), air, aerosol, ozone)
+    return (_MS_SUN * tr / solid) @ _MS_XYZ
+
+
+# ---- Single scattering (intern/sky/source/sky_single_scattering.cpp) ---------------------
+_SS_RAYLEIGH_H, _SS_MIE_H, _SS_MIE, _SS_G = 8e3, 1.2e3, 2e-5, 0.76
+_SS_EARTH, _SS_ATMOS = 6360e3, 6420e3        # m
+_SS_STEPS = 32
+_SS_IRRADIANCE = np.array([
+    1.45756829855592995315, 1.56596305559738380175, 1.65148449067670455293, 1.71496242737209314555,
+    1.75797983805020541226, 1.78256407885924539336, 1.79095108475838560302, 1.78541550133410664714,
+    1.76815554864306845317, 1.74122069647250410362, 1.70647127164943679389, 1.66556087452739887134,
+    1.61993437242451854274, 1.57083597368892080581, 1.51932335059305478886, 1.46628494965214395407,
+    1.41245852740172450623, 1.35844961970384092709, 1.30474913844739281998, 1.25174963272610817455,
+    1.19975998755420620867])
+_SS_RAYLEIGH = np.array([
+    0.00005424820087636473, 0.00004418549866505454, 0.00003635151910165377, 0.00003017929012024763,
+    0.00002526320226989157, 0.00002130859310621843, 0.00001809838025320633, 0.00001547057129129042,
+    0.00001330284977336850, 0.00001150184784075764, 0.00000999557429990163, 0.00000872799973630707,
+    0.00000765513700977967, 0.00000674217203751443, 0.00000596134125832052, 0.00000529034598065810,
+    0.00000471115687557433, 0.00000420910481110487, 0.00000377218381260133, 0.00000339051255477280,
+    0.00000305591531679811])
+_SS_OZONE = np.array([
+    0.00000000325126849861, 0.00000000585395365047, 0.00000001977191155085, 0.00000007309568762914,
+    0.00000020084561514287, 0.00000040383958096161, 0.00000063551335912363, 0.00000096707041180970,
+    0.00000154797400424410, 0.00000209038647223331, 0.00000246128056164565, 0.00000273551299461512,
+    0.00000215125863128643, 0.00000159051840791988, 0.00000112356197979857, 0.00000073527551487574,
+    0.00000046450130357806, 0.00000033096079921048, 0.00000022512612292678, 0.00000014879129266490,
+    0.00000016828623364192])
+_SS_CMF = np.array([  # CIE 1931 x, y, z at 380..780 nm in 20 nm steps
+    [0.00136800000, 0.00003900000, 0.00645000100], [0.01431000000, 0.00039600000, 0.06785001000],
+    [0.13438000000, 0.00400000000, 0.64560000000], [0.34828000000, 0.02300000000, 1.74706000000],
+    [0.29080000000, 0.06000000000, 1.66920000000], [0.09564000000, 0.13902000000, 0.81295010000],
+    [0.00490000000, 0.32300000000, 0.27200000000], [0.06327000000, 0.71000000000, 0.07824999000],
+    [0.29040000000, 0.95400000000, 0.02030000000], [0.59450000000, 0.99500000000, 0.00390000000],
+    [0.91630000000, 0.87000000000, 0.00165000100], [1.06220000000, 0.63100000000, 0.00080000000],
+    [0.85444990000, 0.38100000000, 0.00019000000], [0.44790000000, 0.17500000000, 0.00002000000],
+    [0.16490000000, 0.06100000000, 0.00000000000], [0.04677000000, 0.01700000000, 0.00000000000],
+    [0.01135916000, 0.00410200000, 0.00000000000], [0.00289932700, 0.00104700000, 0.00000000000],
+    [0.00069007860, 0.00024920000, 0.00000000000], [0.00016615050, 0.00006000000, 0.00000000000],
+    [0.00004150994, 0.00001499000, 0.00000000000]]) * 20.0          # x the 20 nm step
+# Gauss-Laguerre nodes and weights (exp(x) folded in) for the optical depth toward the sun
+_SS_NODES = np.array([0.006811185292, 0.03614807107, 0.09004346519, 0.1706680068, 0.2818362161,
+                      0.4303406404, 0.6296271457, 0.9145252695])
+_SS_WEIGHTS = np.array([0.01750893642, 0.04135477391, 0.06678839063, 0.09507698807, 0.1283416365,
+                        0.1707430204, 0.2327233347, 0.3562490486])
+
+
+def _ss_density(h):
+    """(..., 3) Rayleigh, Mie and ozone densities at heights h m."""
+    return np.stack([np.exp(-h / _SS_RAYLEIGH_H), np.exp(-h / _SS_MIE_H),
+                     np.maximum(0.0, 1.0 - np.abs(h - 25000.0) / 15000.0)], axis=-1)
+
+
+def _ss_optical_depth(radius, cos_dir):
+    """(..., 3) optical depth (unscaled densities x metres) from a point at `radius` along a ray
+    at cos_dir to its zenith, out to the atmosphere's edge, by Cycles' quadrature."""
+    b = 2.0 * radius * cos_dir
+    length = (-b + np.sqrt(b * b - 4.0 * (radius * radius - _SS_ATMOS ** 2))) / 2.0
+    s = _SS_NODES * length[..., None]
+    r = np.sqrt(radius[..., None] ** 2 + 2.0 * s * (radius * cos_dir)[..., None] + s * s)
+    return np.einsum('...nk,n->...k', _ss_density(r - _SS_EARTH), _SS_WEIGHTS) * length[..., None]
+
+
+def single_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
+    """(256, 512, 3) XYZ table of the single-scattering sky, as
+    SKY_single_scattering_precompute_texture (the lower half black; altitude in metres)."""
+    alt = np.clip(altitude, 1.0, 59999.0)
+    half_w, half_h = TABLE_W // 2, TABLE_H // 2
+    out = np.zeros((TABLE_H, half_w, 3))
+    ys = np.arange(half_h + 1, TABLE_H)
+    lat = np.pi / 2 * (ys / half_h - 1.0) ** 2                 # (this table's rows are not centred)
+    lon = 2.0 * np.pi / TABLE_W * np.arange(half_w) - np.pi
+    sun = np.array([np.cos(sun_elevation), 0.0, np.sin(sun_elevation)])
+    r0 = _SS_EARTH + alt
+    scale = np.array([air, aerosol, ozone])
+    sl, cl = np.sin(lat), np.cos(lat)
+    b = 2.0 * r0 * sl
+    length = (-b + np.sqrt(b * b - 4.0 * (r0 * r0 - _SS_ATMOS ** 2))) / 2.0         # (rows,)
+    seg = length / _SS_STEPS
+    t = (np.arange(_SS_STEPS) + 0.5) * seg[:, None]                                  # (rows, steps)
+    horiz, vert = cl[:, None] * t, r0 + sl[:, None] * t
+    radius = np.hypot(horiz, vert)
+    density = scale * _ss_density(radius - _SS_EARTH)                               # (rows, steps, 3)
+    depth = np.cumsum(density, axis=1) * seg[:, None, None]        # view-ray depth through each step
+    mu = (cl[:, None] * np.cos(lon)[None, :]) * sun[0] + sl[:, None] * sun[2]        # (rows, lon)
+    ray_phase = 3.0 / (16.0 * np.pi) * (1.0 + mu * mu)
+    mie_phase = (3.0 * (1.0 - _SS_G ** 2) * (1.0 + mu * mu)) / (
+        8.0 * np.pi * (2.0 + _SS_G ** 2) * np.power(1.0 + _SS_G ** 2 - 2.0 * _SS_G * mu, 1.5))
+    coef = np.stack([_SS_RAYLEIGH, np.full(21, 1.11 * _SS_MIE), _SS_OZONE])         # (3, 21)
+    for i in range(len(ys)):
+        # the sample point's position relative to the sun: P . sun / |P| per (lon, step)
+        p_dot_sun = horiz[i][None, :] * np.cos(lon)[:, None] * sun[0] + vert[i][None, :] * sun[2]
+        rad = np.broadcast_to(radius[i][None, :], p_dot_sun.shape)
+        cos_sun = p_dot_sun / rad
+        lit = ~((sun[2] < 0) & ((2 * p_dot_sun) ** 2 - 4 * (rad * rad - _SS_EARTH ** 2) >= 0))
+        total = depth[i][None] + scale * _ss_optical_depth(rad, cos_sun)             # (lon, steps, 3)
+        atten = np.exp(-(total @ coef))                                              # (lon, steps, 21)
+        scat = (ray_phase[i][:, None, None] * density[i][None, :, 0:1] * _SS_RAYLEIGH
+                + mie_phase[i][:, None, None] * density[i][None, :, 1:2] * _SS_MIE)
+        spectrum = np.einsum('lsw,ls->lw', atten * scat, lit * seg[i]) * _SS_IRRADIANCE
+        out[ys[i]] = spectrum @ _SS_CMF
+    return np.concatenate([out, out[:, ::-1]], axis=1).astype(np.float32)
+
+
+def single_scattering_sun(sun_elevation, diameter, altitude, air, aerosol):
+    """(bottom, top) XYZ radiance of the sun disc (black below the horizon; no ozone, as Cycles)."""
+    alt = np.clip(altitude, 1.0, 59999.0)
+    half = diameter / 2
+    elev = np.maximum(np.array([sun_elevation - half, sun_elevation + half]), 0.0)
+    if not elev[1] > 0:
+        return np.zeros((2, 3))
+    solid = 2.0 * np.pi * (1.0 - np.cos(half))
+    depth = _ss_optical_depth(np.full(2, _SS_EARTH + alt), np.sin(elev))
+    tau = np.outer(depth[:, 0] * air, _SS_RAYLEIGH) + np.outer(depth[:, 1] * aerosol, np.full(21, 1.11 * _SS_MIE))
+    return (_SS_IRRADIANCE * np.exp(-tau) / solid) @ _SS_CMF
+
+
+# ---- Cycles' evaluation of a direction (kernel/svm/sky.h) --------------------------------
+@dataclass(frozen=True)
+class Sky:
+    """A Sky Texture's settings as Cycles holds them after simplify_settings: elevation in
+    [-pi/2, pi/2], rotation the kernel's (2 pi - the node's, wrapped), sizes in radians."""
+    multiple: bool
+    sun_elevation: float
+    sun_rotation: float
+    sun_disc: bool = True
+    sun_size: float = 0.009512
+    sun_intensity: float = 1.0
+    altitude: float = 100.0
+    air: float = 1.0
+    aerosol: float = 1.0
+    ozone: float = 1.0
+
+    @staticmethod
+    def from_node_values(multiple, sun_elevation, sun_rotation, **kw):
+        """The settings of a node's values, wrapped as Cycles' SkyTextureNode::simplify_settings."""
+        e, rot = np.fmod(float(sun_elevation), 2 * np.pi), float(sun_rotation)
+        if abs(e) >= np.pi:
+            e -= np.copysign(2.0, e) * np.pi
+        if e >= np.pi / 2 or e <= -np.pi / 2:
+            e = np.copysign(np.pi, e) - e
+            rot += np.pi
+        rot = np.fmod(rot, 2 * np.pi)
+        if rot < 0:
+            rot += 2 * np.pi
+        return Sky(bool(multiple), float(e), float(2 * np.pi - rot), **kw)
+
+    @property
+    def diameter(self):
+        return max(self.sun_size, 0.0005)           # Cycles' get_sun_size
+
+    def table(self):
+        return _table(self.multiple, self.sun_elevation, self.altitude, self.air, self.aerosol, self.ozone)
+
+    def sun_pixels(self):
+        if self.multiple:
+            return multiple_scattering_sun(self.sun_elevation, self.diameter, self.altitude, self.air,
+                                           self.aerosol, self.ozone)
+        return single_scattering_sun(self.sun_elevation, self.diameter, self.altitude, self.air, self.aerosol)
+
+    def sun_direction(self):
+        th, ph = self.sun_elevation - np.pi / 2, self.sun_rotation - np.pi / 2
+        return np.array([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)])
+
+    def earth_angle(self):
+        """Below this elevation the ground hides the sun (SKY_earth_intersection_angle, negated)."""
+        return -(np.pi / 2 - np.arcsin(_MS_EARTH / (_MS_EARTH + self.altitude / 1000.0)))
+
+
+@lru_cache(maxsize=8)
+def _table(multiple, sun_elevation, altitude, air, aerosol, ozone):
+    """The XYZ table, cached per parameter set (a render of several views or frames reuses it)."""
+    fn = multiple_scattering_table if multiple else single_scattering_table
+    table = fn(sun_elevation, altitude, air, aerosol, ozone)
+    table.setflags(write=False)
+    return table
+
+
+def _table_lookup(table, x, y):
+    """Cycles' bilinear image read with extend: (..., 3) at texture coordinates x, y."""
+    h, w = table.shape[:2]
+    px, py = x * w - 0.5, y * h - 0.5
+    ix, iy = np.floor(px), np.floor(py)
+    tx, ty = (px - ix)[..., None], (py - iy)[..., None]
+    ix, iy = ix.astype(np.intp), iy.astype(np.intp)
+    x0, x1 = np.clip(ix, 0, w - 1), np.clip(ix + 1, 0, w - 1)
+    y0, y1 = np.clip(iy, 0, h - 1), np.clip(iy + 1, 0, h - 1)
+    return ((table[y0, x0] * (1 - tx) + table[y0, x1] * tx) * (1 - ty)
+            + (table[y1, x0] * (1 - tx) + table[y1, x1] * tx) * ty)
+
+
+def _row_coordinate(sky, elevation, z):
+    """(table y, fade) of directions at `elevation` and z: the row warp undone; the single-
+    scattering ground reads the horizon row (y 0.508) faded to black by z = -0.4."""
+    if sky.multiple:
+        return np.sqrt(np.abs(elevation) / (np.pi / 2)) * np.where(elevation < 0, -0.5, 0.5) + 0.5, np.ones_like(z)
+    below = z < 0
+    fade = np.where(below, np.where(z < -0.4, 0.0, np.maximum(1.0 + z * 2.5, 0.0) ** 3), 1.0)
+    return np.where(below, 0.508, np.sqrt(np.maximum(elevation, 0.0) / (np.pi / 2)) * 0.5 + 0.5), fade
+
+
+def _column_coordinate(sky, phi):
+    """Table x of directions of azimuth atan2(y, x) = phi (the sun at x = 0.5)."""
+    return np.mod((-phi - np.pi / 2 + sky.sun_rotation) / (2 * np.pi), 1.0)
+
+
+def _sun_xyz(sky, dirs, elevation, pixels):
+    """(..., 3) XYZ radiance of the sun disc x its intensity in directions `dirs` (0 outside)."""
+    if not sky.sun_disc:
+        return np.zeros(dirs.shape[:-1] + (3,))
+    sun = sky.sun_direction()
+    angle = 2.0 * np.arctan2(np.linalg.norm(dirs - sun, axis=-1), np.linalg.norm(dirs + sun, axis=-1))
+    half = sky.diameter / 2
+    inside = (angle < half) & (elevation > sky.earth_angle())
+    if not sky.multiple:
+        inside &= dirs[..., 2] >= 0.0                       # the ground hides it there
+    y = ((elevation - sky.sun_elevation) / sky.diameter + 0.5)[..., None]
+    xyz = pixels[0] + y * (pixels[1] - pixels[0])
+    limb = 1.0 - 0.6 * (1.0 - np.sqrt(np.maximum(1.0 - (angle / half) ** 2, 0.0)))
+    return np.where(inside[..., None], xyz * limb[..., None], 0.0) * sky.sun_intensity
+
+
+def radiance(sky, dirs, xyz_to_rgb=XYZ_TO_REC709):
+    """(..., 3) scene linear RGB of the sky in unit directions `dirs` (..., 3), as Cycles'
+    sky_radiance: sun and sky each converted to RGB with negatives cut, then added."""
+    dirs = np.asarray(dirs, np.float64)
+    m = np.asarray(xyz_to_rgb, np.float64).T
+    elevation = np.pi / 2 - np.arccos(np.clip(dirs[..., 2], -1.0, 1.0))
+    phi = np.arctan2(dirs[..., 1], dirs[..., 0])
+    y, fade = _row_coordinate(sky, elevation, dirs[..., 2])
+    xyz = _table_lookup(sky.table(), _column_coordinate(sky, phi), y)
+    sun = _sun_xyz(sky, dirs, elevation, sky.sun_pixels())
+    return np.maximum(xyz @ m, 0.0) * fade[..., None] + np.maximum(sun @ m, 0.0)
+
+
+def _equirect_dirs(u, v):
+    """Directions at equirectangular coordinates (u, v) as the environment light maps them
+    (lights/environment.py: u = 0.5 - atan2(y, x) / 2 pi, v = 1 - acos(z) / pi)."""
+    theta, phi = (1.0 - v) * np.pi, (0.5 - u) * 2 * np.pi
+    st = np.sin(theta)
+    return np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)), axis=-1)
+
+
+def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16):
+    """(width / 2, width, 3) float32 equirectangular radiance image of the sky (row 0 at the
+    bottom, the environment light's layout). The sky is read at texel centres: a texel's
+    column fixes its azimuth and its row its elevation, so the table is blended per row, then
+    per column. Texels the sun disc touches hold the disc's mean over sun_samples^2 points, so
+    the image carries the disc's whole light (2048 texels around: ~3 across the default sun)."""
+    height = width // 2
+    m = np.asarray(xyz_to_rgb, np.float64).T
+    table = sky.table().astype(np.float64)
+    v = (np.arange(height) + 0.5) / height
+    u = (np.arange(width) + 0.5) / width
+    z = np.cos((1.0 - v) * np.pi)
+    elevation = np.pi / 2 - (1.0 - v) * np.pi
+    phi = np.angle(np.exp(1j * (0.5 - u) * 2 * np.pi))            # wrapped as atan2 returns it
+    rows_y, fade = _row_coordinate(sky, elevation, z)
+    py = rows_y * TABLE_H - 0.5
+    iy = np.floor(py)
+    ty = (py - iy)[:, None, None]
+    iy = iy.astype(np.intp)
+    by_row = table[np.clip(iy, 0, TABLE_H - 1)] * (1 - ty) + table[np.clip(iy + 1, 0, TABLE_H - 1)] * ty
+    px = _column_coordinate(sky, phi) * TABLE_W - 0.5
+    ix = np.floor(px)
+    tx = (px - ix)[None, :, None]
+    ix = ix.astype(np.intp)
+    xyz = by_row[:, np.clip(ix, 0, TABLE_W - 1)] * (1 - tx) + by_row[:, np.clip(ix + 1, 0, TABLE_W - 1)] * tx
+    img = np.maximum(xyz @ m, 0.0) * fade[:, None, None]
+    if sky.sun_disc and sky.sun_intensity > 0:
+        _add_sun(sky, img, width, height, m, sun_samples)
+    return img.astype(np.float32)
+
+
+def _add_sun(sky, img, width, height, m, n):
+    """Adds to the texels the sun disc can touch its mean radiance over n x n points in each
+    (fewer for a large disc: ~2M points at most)."""
+    sun = sky.sun_direction()
+    half = sky.diameter / 2
+    theta_s = np.arccos(np.clip(sun[2], -1.0, 1.0))
+    lo, hi = max(theta_s - half, 0.0), min(theta_s + half, np.pi)
+    rows = np.arange(max(int(np.floor((1.0 - hi / np.pi) * height)) - 1, 0),
+                     min(int(np.ceil((1.0 - lo / np.pi) * height)) + 1, height))
+    s_min = min(np.sin(lo), np.sin(hi))         # the disc's widest azimuth span is at its polar end
+    if s_min <= np.sin(half) * 1.001:
+        cols = np.arange(width)
+    else:
+        u_s = 0.5 - np.arctan2(sun[1], sun[0]) / (2 * np.pi)
+        du = np.arcsin(np.sin(half) / s_min) / (2 * np.pi)
+        cols = np.unique(np.mod(np.arange(int(np.floor((u_s - du) * width)) - 1,
+                                          int(np.ceil((u_s + du) * width)) + 1), width))
+    if not len(rows):
+        return
+    n = int(np.clip(np.sqrt(2e6 / (len(rows) * len(cols))), 2, n))
+    off = (np.arange(n) + 0.5) / n
+    uu = (cols[:, None] + off[None, :]) / width                          # (cols, n)
+    vv = (rows[:, None] + off[None, :]) / height                         # (rows, n)
+    dirs = _equirect_dirs(uu[None, :, None, :], vv[:, None, :, None])   # (rows, cols, n, n, 3)
+    elevation = np.pi / 2 - np.arccos(np.clip(dirs[..., 2], -1.0, 1.0))
+    xyz = _sun_xyz(sky, dirs, elevation, sky.sun_pixels())
+    img[rows[:, None], cols[None, :]] += np.maximum(xyz @ m, 0.0).mean(axis=(2, 3))
