@@ -51,16 +51,25 @@ _MS_XYZ = np.array([[53.386917738564668023, 22.981337506691024754, 0.0],
                     [20.762668673810577145, 2.3614213523314368527, 110.48009643252140334]])
 
 
+def _ms_densities(h, air, aerosol, ozone):
+    """(..., 3) aerosol, ozone and air densities at altitudes h km (scaled by the node's
+    densities): each coefficient is one of them times a spectrum (_MS_SPECTRA)."""
+    log_h = np.log(np.maximum(h, 1e-4))
+    aer = (np.exp(-h / _MS_AEROSOL_H) + _MS_AEROSOL_BG / _MS_AEROSOL_BASE) * (_MS_AEROSOL_BASE * aerosol)
+    oz = np.exp(-(log_h - 3.22261) ** 2 * 5.55555555 - log_h) * (3.78547397e20 * ozone)
+    # h ** 1.16364243 through the log (0 at h = 0, where the log is clamped: 1e-4 ** 1.16 ~ 2e-5)
+    mol = np.exp(-0.07771971 * np.where(h > 1e-4, np.exp(1.16364243 * log_h), h ** 1.16364243)) * air
+    return np.stack([aer, oz, mol], axis=-1)
+
+
+# rows: the extinction, molecular and aerosol scattering spectra per unit of each density
+_MS_EXTINCTION = np.stack([_MS_AEROSOL_ABS + _MS_AEROSOL_SCA, _MS_OZONE_XS, _MS_MOLECULAR])
+
+
 def _ms_coefficients(h, air, aerosol, ozone):
     """(extinction, molecular scattering, aerosol scattering), each (..., 4), at altitudes h km."""
-    aer = _MS_AEROSOL_BASE * (np.exp(-h / _MS_AEROSOL_H) + _MS_AEROSOL_BG / _MS_AEROSOL_BASE) * aerosol
-    log_h = np.log(np.maximum(h, 1e-4))
-    ozone_density = 3.78547397e20 * np.exp(-(log_h - 3.22261) ** 2 * 5.55555555 - log_h)
-    mol_sca = _MS_MOLECULAR * (np.exp(-0.07771971 * np.power(h, 1.16364243)) * air)[..., None]
-    aer_sca = _MS_AEROSOL_SCA * aer[..., None]
-    ext = (_MS_AEROSOL_ABS * aer[..., None] + aer_sca + _MS_OZONE_XS * (ozone_density * ozone)[..., None]
-           + mol_sca)
-    return ext, mol_sca, aer_sca
+    d = _ms_densities(h, air, aerosol, ozone)
+    return d @ _MS_EXTINCTION, d[..., 2:3] * _MS_MOLECULAR, d[..., 0:1] * _MS_AEROSOL_SCA
 
 
 def _ray_sphere(b, c):
@@ -81,8 +90,8 @@ def _ms_transmittance(cos_theta, h_norm, air, aerosol, ozone):
     t = (np.arange(_MS_STEPS) + 0.5) * dt[..., None]                       # (..., steps)
     sin_theta = np.sqrt(np.maximum(1.0 - cos_theta * cos_theta, 0.0))[..., None]
     radius = np.hypot(sin_theta * t, r0[..., None] + cos_theta[..., None] * t)
-    ext, _, _ = _ms_coefficients(np.maximum(radius - _MS_EARTH, 0.0), air, aerosol, ozone)
-    return np.exp(-ext.sum(-2) * dt[..., None])
+    depth = _ms_densities(np.maximum(radius - _MS_EARTH, 0.0), air, aerosol, ozone).sum(-2)
+    return np.exp(-(depth @ _MS_EXTINCTION) * dt[..., None])
 
 
 class _TransmittanceTable:
@@ -160,38 +169,43 @@ def multiple_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
     mol_phase = 3.0 / (16.0 * np.pi) * (1.0 + cos_view ** 2)
     den = 1.0 + _MS_G ** 2 + 2.0 * _MS_G * cos_view
     aer_phase = (1.0 - _MS_G ** 2) / (4.0 * np.pi * den * np.sqrt(den))
-    # Per point only the reads of the transmittance table at the sample's cos(sun zenith)
-    # vary; each read gathers a texel with its difference to the next column (8 floats), the
-    # row blend's rows and weight being per (row, step). float32, as Cycles
+    # Per point only what depends on the sample's cos(sun zenith) cs varies: the transmittance
+    # to the sun (the table read at cs and the step's altitude: the table is blended at each
+    # (row, step)'s altitude first, then one gather reads a texel and its step to the next
+    # column), the ground's light (the table's ground row at cs, x cs) and the fit's logistic
+    # in cs. float32 from here, as Cycles
     f32 = np.float32
     lut = tr.lut.astype(f32)
-    cells = np.concatenate([lut, np.diff(lut, axis=1, append=lut[:, -1:])], axis=-1).reshape(-1, 8)
+    cells = np.concatenate([lut, np.diff(lut, axis=1, append=lut[:, -1:])], axis=-1)   # (64, 256, 8)
+    ground = cells[0]
     y = (_TR_H - 1) * np.clip(h_norm, 0.0, 1.0)
     y1 = y.astype(np.intp)
-    fy = (y - y1).astype(f32)[..., None]
-    row1, row2 = y1 * _TR_W, np.minimum(y1 + 1, _TR_H - 1) * _TR_W
+    y2 = np.minimum(y1 + 1, _TR_H - 1)
+    fy = (y - y1).astype(f32)[..., None, None]
     cos_az = np.cos(az).astype(f32)
-    w_mol = (weight * mol_sca).astype(f32)
-    w_aer = (weight * aer_sca).astype(f32)
-    w_all = w_mol + w_aer
-    k_ground = k_ground.astype(f32)
+    w_sun = np.stack([weight * mol_sca, weight * aer_sca], axis=2).astype(f32)         # (rows, steps, 2, 4)
+    w_all = (weight * (mol_sca + aer_sca)).astype(f32)
+    w_ground = w_all * k_ground.astype(f32)
+    phases = np.stack([mol_phase, aer_phase], axis=-1).astype(f32)                     # (rows, az, 2)
     fit = _MS_FIT.astype(f32)
     xyz = np.zeros((TABLE_H, half, 3))
     rows = 8
-    for r in range(0, TABLE_H, rows):                 # blocks of rows bound the memory (~30 MB)
+    for r in range(0, TABLE_H, rows):                 # blocks of rows bound the memory (~40 MB)
         sl = slice(r, r + rows)
+        n = len(range(TABLE_H)[sl])
+        blend = cells[y1[sl]] + fy[sl] * (cells[y2[sl]] - cells[y1[sl]])                # (r, steps, 256, 8)
         cs = a[sl, None, :].astype(f32) * cos_az[None, :, None] + b[sl, None, :].astype(f32)   # (r, az, steps)
         x = (_TR_W - 1) * np.clip(cs * f32(0.5) + f32(0.5), f32(0), f32(1))
         x1 = x.astype(np.intp)
         fx = (x - x1)[..., None]
-        c1, c2, c0 = cells[row1[sl, None, :] + x1], cells[row2[sl, None, :] + x1], cells[x1]
-        t1 = c1[..., :4] + fx * c1[..., 4:]
-        to_sun = t1 + fy[sl, None] * (c2[..., :4] + fx * c2[..., 4:] - t1)
-        ms = fit / (f32(1) + f32(5) * np.exp(f32(-17.92) * cs))[..., None] \
-            + k_ground[sl, None] * (c0[..., :4] + fx * c0[..., 4:]) * cs[..., None]
-        light = (np.einsum('rasc,rsc->rac', to_sun, w_mol[sl]) * mol_phase[sl, :, None]
-                 + np.einsum('rasc,rsc->rac', to_sun, w_aer[sl]) * aer_phase[sl, :, None]
-                 + np.einsum('rasc,rsc->rac', ms, w_all[sl]))
+        q = blend.reshape(-1, 8)[(np.arange(n * _MS_STEPS).reshape(n, 1, _MS_STEPS) * _TR_W) + x1]
+        to_sun = q[..., :4] + fx * q[..., 4:]
+        g = ground[x1]
+        lit_ground = (g[..., :4] + fx * g[..., 4:]) * cs[..., None]
+        logistic = f32(1) / (f32(1) + f32(5) * np.exp(f32(-17.92) * cs))
+        light = (np.einsum('rakc,rak->rac', np.einsum('rasc,rskc->rakc', to_sun, w_sun[sl]), phases[sl])
+                 + np.einsum('ras,rsc->rac', logistic, w_all[sl]) * fit
+                 + np.einsum('rasc,rsc->rac', lit_ground, w_ground[sl]))
         xyz[sl] = (light * _MS_SUN) @ _MS_XYZ
     return np.concatenate([xyz, xyz[:, ::-1]], axis=1).astype(np.float32)
 

@@ -1,0 +1,169 @@
+"""The Sky Texture's models (addon/sky.py) against straightforward per-ray transcriptions of
+Blender's intern/sky (one ray, one step at a time, as the C++ loops run), and the environment
+image made from them against the per-direction evaluation: the sky at texel centres, the sun
+disc's light (its integral over the sphere) and Cycles' wrapping of the sun's angles."""
+import math
+
+import numpy as np
+import pytest
+
+from addon import sky as model
+
+E15 = math.radians(15.0)
+
+
+def _ms_ray(tr, x, y, sun_elevation, altitude=100.0, air=1.0, aerosol=1.0, ozone=1.0):
+    """XYZ of texel (x, y) of the multiple-scattering table, as get_inscattering marches it."""
+    u, v = (x + 0.5) / model.TABLE_W, (y + 0.5) / model.TABLE_H
+    az, l = 2 * math.pi * u, 2 * v - 1
+    el = math.copysign(l * l, l) * math.pi / 2
+    d = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    o = np.array([0.0, 0.0, model._MS_EARTH + altitude / 1000.0])
+    cz = math.cos(math.pi / 2 - sun_elevation)
+    sun = np.array([-math.sqrt(1 - cz * cz), 0.0, cz])
+
+    def hit(r):
+        b, c = o @ d, o @ o - r * r
+        if (c > 0 and b > 0) or b * b - c < 0:
+            return -1.0
+        return -b + math.sqrt(b * b - c) if b * b - c >= b * b else -b - math.sqrt(b * b - c)
+    ground = hit(model._MS_EARTH)
+    t_d = hit(model._MS_ATMOS) if ground < 0 else ground
+    mu = -d @ sun
+    mol_phase = 3 / (16 * math.pi) * (1 + mu * mu)
+    den = 1 + 0.64 + 1.6 * mu
+    aer_phase = (1 - 0.64) / (4 * math.pi * den * math.sqrt(den))
+    dt = t_d / 64
+    L, T = np.zeros(4), np.ones(4)
+    for i in range(64):
+        p = o + d * (i + 0.5) * dt
+        dist = np.linalg.norm(p)
+        h = max(dist - model._MS_EARTH, 0.0)
+        cs = (p / dist) @ sun
+        ext, mol, aer = (c[0] for c in model._ms_coefficients(np.array([h]), air, aerosol, ozone))
+        to_sun = tr(np.array([cs]), np.array([h / 100]))[0]
+        omega = 2 * math.pi * (1 - math.sqrt(1 - (model._MS_EARTH / dist) ** 2))
+        g2s = tr.to_zenith(np.zeros(1))[0] / tr.to_zenith(np.array([h / 100]))[0]
+        ms = model._MS_FIT / (1 + 5 * math.exp(-17.92 * cs)) \
+            + omega / (4 * math.pi) * 0.3 / math.pi * tr.at_ground(np.array([cs]))[0] * g2s * cs
+        S = model._MS_SUN * (mol * (mol_phase * to_sun + ms) + aer * (aer_phase * to_sun + ms))
+        step = np.exp(-dt * ext)
+        L += T * (S - S * step) / np.maximum(ext, 1e-7)
+        T *= step
+    return L @ model._MS_XYZ
+
+
+def test_multiple_scattering_table_is_the_per_ray_march():
+    tr = model._TransmittanceTable(1.0, 1.0, 1.0)
+    # one entry of the transmittance table, marched step by step
+    cos, h = 0.3, 10 / 63
+    r0 = model._MS_EARTH + h * 100
+    sin = math.sqrt(1 - cos * cos)
+    b, c = r0 * cos, r0 * r0 - model._MS_ATMOS ** 2
+    t_d = -b + math.sqrt(b * b - c)
+    depth = np.zeros(4)
+    for i in range(64):
+        t = (i + 0.5) * t_d / 64
+        alt = max(math.hypot(sin * t, r0 + cos * t) - model._MS_EARTH, 0.0)
+        depth += model._ms_coefficients(np.array([alt]), 1.0, 1.0, 1.0)[0][0] * t_d / 64
+    x = round((cos * 0.5 + 0.5) * 255)
+    cos = x / 255 * 2 - 1
+    np.testing.assert_allclose(tr.lut[10, x], model._ms_transmittance(cos, h, 1, 1, 1), rtol=1e-12)
+    table = model.multiple_scattering_table(E15, 100.0, 1.0, 1.0, 1.0)
+    for x, y in ((0, 200), (100, 130), (255, 128), (37, 127), (200, 60), (10, 255)):
+        ref = _ms_ray(tr, x, y, E15)
+        np.testing.assert_allclose(table[y, x], ref, rtol=2e-4, atol=1e-6 * np.abs(ref).max())
+        np.testing.assert_array_equal(table[y, x], table[y, model.TABLE_W - 1 - x])     # mirrored
+
+
+def _ss_ray(x, y, sun_elevation, altitude=100.0, dens=(1.0, 1.0, 1.0)):
+    """XYZ of texel (x, y) of the single-scattering table, as single_scattering loops it."""
+    lat = math.pi / 2 * (y / 128 - 1) ** 2
+    lon = 2 * math.pi / 512 * x - math.pi
+    d = np.array([math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat)])
+    sun = np.array([math.cos(sun_elevation), 0.0, math.sin(sun_elevation)])
+    o = np.array([0.0, 0.0, model._SS_EARTH + altitude])
+
+    def exit_length(p, w):
+        b, c = 2 * (w @ p), p @ p - model._SS_ATMOS ** 2
+        return (-b + math.sqrt(b * b - 4 * c)) / 2
+
+    def density(p):
+        h = np.linalg.norm(p) - model._SS_EARTH
+        return np.array([math.exp(-h / 8e3), math.exp(-h / 1.2e3), max(0.0, 1 - abs(h - 25e3) / 15e3)])
+    seg = exit_length(o, d) / 32
+    mu = d @ sun
+    phase = np.array([3 / (16 * math.pi) * (1 + mu * mu),
+                      3 * (1 - 0.5776) * (1 + mu * mu) / (8 * math.pi * 2.5776 * (1.5776 - 1.52 * mu) ** 1.5)])
+    depth, spectrum = np.zeros(3), np.zeros(21)
+    scale = np.array(dens)
+    for i in range(32):
+        p = o + (i + 0.5) * seg * d
+        rho = scale * density(p)
+        depth += seg * rho
+        length = exit_length(p, sun)
+        light = scale * sum(w * density(p + n * length * sun) for n, w in zip(model._SS_NODES, model._SS_WEIGHTS)) \
+            * length
+        total = depth + light
+        for wl in range(21):
+            att = math.exp(-(total @ [model._SS_RAYLEIGH[wl], 1.11 * model._SS_MIE, model._SS_OZONE[wl]]))
+            spectrum[wl] += att * (phase[0] * rho[0] * model._SS_RAYLEIGH[wl] + phase[1] * rho[1] * model._SS_MIE) \
+                * model._SS_IRRADIANCE[wl] * seg
+    return spectrum @ model._SS_CMF
+
+
+def test_single_scattering_table_is_the_per_ray_march():
+    table = model.single_scattering_table(E15, 100.0, 1.0, 1.0, 1.0)
+    assert not table[:129].any()                       # the lower half (and the horizon row) black
+    for x, y in ((0, 200), (100, 130), (255, 129), (37, 255), (255, 160)):
+        ref = _ss_ray(x, y, E15)
+        np.testing.assert_allclose(table[y, x], ref, rtol=2e-5)
+        # the other half mirrors the computed one (column 256 is 255's, not the sun's own azimuth)
+        np.testing.assert_array_equal(table[y, x], table[y, model.TABLE_W - 1 - x])
+
+
+@pytest.mark.parametrize('multiple', (True, False))
+def test_equirect_is_the_sky_at_texel_centres(multiple):
+    sky = model.Sky.from_node_values(multiple, E15, 0.7, sun_disc=False)
+    img = model.equirect(sky, 256)
+    h, w = img.shape[:2]
+    dirs = model._equirect_dirs(((np.arange(w) + 0.5) / w)[None, :], ((np.arange(h) + 0.5) / h)[:, None])
+    np.testing.assert_allclose(img, model.radiance(sky, dirs), rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize('multiple', (True, False))
+def test_equirect_carries_the_sun_discs_light(multiple):
+    """The disc's light in the image (its texels x their solid angles, the sky taken away)
+    equals its integral over the disc, by a fine quadrature of the per-direction radiance."""
+    with_disc = model.Sky.from_node_values(multiple, math.radians(40), 1.1, sun_size=math.radians(1.5))
+    without = model.Sky.from_node_values(multiple, math.radians(40), 1.1, sun_size=math.radians(1.5), sun_disc=False)
+    w = 1024
+    h = w // 2
+    diff = model.equirect(with_disc, w).astype(np.float64) - model.equirect(without, w)
+    theta = (1 - (np.arange(h) + 0.5) / h) * math.pi
+    texel = (2 * math.pi / w) * (np.cos(theta - math.pi / h / 2) - np.cos(theta + math.pi / h / 2))
+    in_image = (diff * texel[:, None, None]).sum((0, 1))
+    # quadrature on a polar grid around the sun
+    sun = with_disc.sun_direction()
+    half = with_disc.diameter / 2
+    a = np.cross(sun, [0.0, 0.0, 1.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(sun, a)
+    r = (np.arange(400) + 0.5) / 400 * half
+    phi = (np.arange(400) + 0.5) / 400 * 2 * math.pi
+    R, P = np.meshgrid(r, phi, indexing='ij')
+    dirs = np.cos(R)[..., None] * sun + np.sin(R)[..., None] * (np.cos(P)[..., None] * a + np.sin(P)[..., None] * b)
+    sun_only = model.radiance(with_disc, dirs) - model.radiance(without, dirs)
+    exact = (sun_only * (np.sin(R) * (half / 400) * (2 * math.pi / 400))[..., None]).sum((0, 1))
+    np.testing.assert_allclose(in_image, exact, rtol=2e-3)
+
+
+def test_sun_angles_wrap_as_cycles():
+    over = model.Sky.from_node_values(True, math.radians(100), math.radians(10))
+    plain = model.Sky.from_node_values(True, math.radians(80), math.radians(190))
+    assert over.sun_elevation == pytest.approx(plain.sun_elevation)
+    assert over.sun_rotation == pytest.approx(plain.sun_rotation)
+    # rotation 0 puts the sun toward +Y, 90 degrees toward +X (as Cycles renders it)
+    np.testing.assert_allclose(model.Sky.from_node_values(True, 0.0, 0.0).sun_direction(), [0, 1, 0], atol=1e-7)
+    np.testing.assert_allclose(model.Sky.from_node_values(True, 0.0, math.pi / 2).sun_direction(), [1, 0, 0],
+                               atol=1e-7)
