@@ -1,8 +1,7 @@
-"""The world's Sky Texture node (ShaderNodeTexSky) as an environment map: the Multiple and
-Single Scattering skies are rendered by addon/sky.py, as Cycles evaluates them, into an
-equirectangular radiance image (sun disc included) that the environment light samples by
-importance. Preetham and Hosek-Wilkie are not evaluated (reported by the caller). Part of the
-export layer."""
+"""The world's Sky Texture node (ShaderNodeTexSky) as an environment map: each of its skies is
+rendered, as Cycles evaluates it, into an equirectangular radiance image that the environment
+light samples by importance: Multiple and Single Scattering by addon/sky.py (sun disc
+included), Preetham and Hosek-Wilkie by addon/skyanalytic.py. Part of the export layer."""
 
 from functools import lru_cache
 
@@ -10,17 +9,26 @@ import numpy as np
 
 from .. import scenedata as sd
 from .. import sky as model
+from .. import skyanalytic
 from ..mapping import environment_rotation
 from .colorspaces import xyz_to_scene_linear
 
-EVALUATED = ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING')
+EVALUATED = ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING', 'PREETHAM', 'HOSEK_WILKIE')
 # 2048 x 1024 texels (0.18 degrees): the default sun (0.545 degrees) spans ~3 of them, and a
 # texel's row is finer than the sky's fastest change at the horizon a render resolves
 WIDTH = 2048
+ANALYTIC_WIDTH = 1024          # Preetham and Hosek-Wilkie: smooth, no disc
 
 
-def node_sky(node):
-    """The model's settings (model.Sky) of an evaluated Sky Texture node, else None."""
+def node_sky(node, reasons=None):
+    """The model's settings (model.Sky, skyanalytic.Analytic) of a Sky Texture node, else None."""
+    if node.sky_type == 'PREETHAM':
+        return skyanalytic.Analytic.preetham(tuple(node.sun_direction), float(node.turbidity))
+    if node.sky_type == 'HOSEK_WILKIE':
+        t = float(node.turbidity)
+        if not 1.0 <= t <= 10.0 and reasons is not None:
+            reasons.append(f"Sky Texture turbidity {t:g} read as {min(max(t, 1.0), 10.0):g} (the model's range)")
+        return skyanalytic.Analytic.hosek_wilkie(tuple(node.sun_direction), t, float(node.ground_albedo))
     if node.sky_type not in EVALUATED:
         return None
     return model.Sky.from_node_values(
@@ -34,7 +42,7 @@ def sky_environment(node, strength, reasons):
     """(uniform radiance (3,), scenedata.Environment) of a Sky Texture feeding a Background of
     `strength`, its Vector through a Mapping rotation as an Environment Texture's; None when
     its type is not evaluated (the caller reports it)."""
-    sky = node_sky(node)
+    sky = node_sky(node, reasons)
     if sky is None:
         return None
     if not (np.isfinite(strength) and strength >= 0):
@@ -54,6 +62,9 @@ def sky_environment(node, strength, reasons):
 def _image(sky, xyz_to_rgb):
     """The sky's equirectangular image (read-only), kept for the next render of the same sky
     (frames of an animation, the viewport's redraws): ~0.3 s to make, 25 MB."""
-    img = model.equirect(sky, WIDTH, np.array(xyz_to_rgb))
+    if isinstance(sky, skyanalytic.Analytic):
+        img = skyanalytic.equirect(sky, ANALYTIC_WIDTH, np.array(xyz_to_rgb))
+    else:
+        img = model.equirect(sky, WIDTH, np.array(xyz_to_rgb))
     img.setflags(write=False)
     return img

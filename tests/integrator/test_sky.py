@@ -167,3 +167,29 @@ def test_sun_angles_wrap_as_cycles():
     np.testing.assert_allclose(model.Sky.from_node_values(True, 0.0, 0.0).sun_direction(), [0, 1, 0], atol=1e-7)
     np.testing.assert_allclose(model.Sky.from_node_values(True, 0.0, math.pi / 2).sun_direction(), [1, 0, 0],
                                atol=1e-7)
+
+
+def test_hosek_wilkie_coefficients_are_the_published_ones():
+    """The dataset's first and last entries as sky_hosek_data.h prints them, and a sky at a
+    turbidity between the tables blends its neighbours linearly."""
+    from addon import skyanalytic
+    from addon.skyhosek_data import CONFIGS, RADIANCES
+    np.testing.assert_array_equal(CONFIGS[0, 0, 0, 0, :3], [-1.117001, -0.1867262, -11.13505])
+    np.testing.assert_array_equal(RADIANCES[0, 1, 9], [0.8574294, 1.865155, -2.364707, 4.337793, 50.92831, 25.23432])
+    np.testing.assert_array_equal(RADIANCES[2, 1, 9], [0.8640731, 0.9858301, 1.854956, -6.798097, 59.36468, 31.10255])
+    sun = (0.2, 0.4, 0.7)
+    lo, hi, mid = (skyanalytic.Analytic.hosek_wilkie(sun, t, 0.3) for t in (3.0, 4.0, 3.25))
+    np.testing.assert_allclose(mid.radiances, 0.75 * np.array(lo.radiances) + 0.25 * np.array(hi.radiances))
+    np.testing.assert_allclose(mid.configs, 0.75 * np.array(lo.configs) + 0.25 * np.array(hi.configs))
+
+
+def test_preetham_zenith_is_its_zenith_luminance():
+    """Preetham's Y at the zenith is the model's zenith luminance (x 0.06, as Cycles scales it)."""
+    from addon import skyanalytic
+    T, theta = 2.5, 0.6
+    sky = skyanalytic.Analytic.preetham((math.sin(theta), 0.0, math.cos(theta)), T)
+    chi = (4 / 9 - T / 120) * (math.pi - 2 * theta)
+    zenith_Y = ((4.0453 * T - 4.9710) * math.tan(chi) - 0.2155 * T + 2.4192) * 0.06
+    rgb_to_xyz = np.linalg.inv(model.XYZ_TO_REC709)
+    Y = (rgb_to_xyz @ skyanalytic.radiance(sky, np.array([0.0, 0.0, 1.0]), model.XYZ_TO_REC709))[1]
+    assert Y == pytest.approx(zenith_Y, rel=1e-9)
