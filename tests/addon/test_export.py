@@ -2179,10 +2179,16 @@ def test_light_node_tree_and_world_approximation_reported(scene, exported):
     sky = w.node_tree.nodes.new('ShaderNodeTexSky')
     bg = next(n for n in w.node_tree.nodes if n.type == 'BACKGROUND')
     w.node_tree.links.new(sky.outputs[0], bg.inputs['Color'])
+    data = exported()                             # a Sky Texture straight in: its map, not reported
+    assert data.environment is not None and np.allclose(data.environment.strength, 3.0)
+    assert not any("world approximated" in t for _, t in data.messages)
+    gamma = w.node_tree.nodes.new('ShaderNodeGamma')   # through other nodes: not evaluated
+    w.node_tree.links.new(sky.outputs[0], gamma.inputs['Color'])
+    w.node_tree.links.new(gamma.outputs[0], bg.inputs['Color'])
     data = exported()
     assert np.allclose(data.lights[0].strength, (200.0, 100.0, 200.0))
-    assert np.allclose(data.world, 0.6)           # the Background's own colour x strength
-    assert any(lvl == 'WARNING' and "world approximated" in t and "'Sky Texture'" in t for lvl, t in data.messages)
+    assert np.allclose(data.world, 0.6) and data.environment is None    # the Background's own colour x strength
+    assert any(lvl == 'WARNING' and "world approximated" in t and "Sky Texture" in t for lvl, t in data.messages)
     # nothing reaching the output's Surface: Cycles' light emits nothing (exact, not reported)
     emit.mute = True
     data = exported()

@@ -138,3 +138,29 @@ def test_closed_form_skies(kind, sun, tmp_path):
     for name, sl in (('sky', np.s_[H // 2 + 1:]), ('horizon', np.s_[H // 2 - 1:H // 2 + 1]),
                      ('ground', np.s_[19:H // 2 - 1]), ('plane', np.s_[:12])):
         _close(name, c[sl], d[sl], 0.01 if name != 'plane' else 0.015)
+
+
+@pytest.mark.parametrize('disc', (False, True), ids=('no_disc', 'disc'))
+def test_vector_through_a_mapping_rotation(disc, tmp_path):
+    """Generated coordinates through a Mapping node's rotation turn the sky (no disc); with the
+    disc on, Blender 5.0 makes the Vector input unavailable and Cycles ignores what is linked
+    to it, and so does DACRT (the sky unturned)."""
+    import bpy
+    _around_a_plane()
+    sky = _world('MULTIPLE_SCATTERING', 30, disc)
+    nt = bpy.context.scene.world.node_tree
+    coords, mapping = nt.nodes.new('ShaderNodeTexCoord'), nt.nodes.new('ShaderNodeMapping')
+    mapping.inputs['Rotation'].default_value = (math.radians(10), 0.0, math.radians(40))
+    nt.links.new(coords.outputs['Generated'], mapping.inputs['Vector'])
+    nt.links.new(mapping.outputs['Vector'], sky.inputs[0])
+    _settings((W, H), 16)
+    r = _renders(tmp_path)
+    c, d = r['CYCLES'], r['DACRT']
+    # columns of 4 pixels of the sky above the horizon: the sky's turn shows in each
+    cols = lambda im: im[H // 2 + 1:].reshape(H // 2 - 1, W // 4, 4, 3).mean((0, 2))
+    keep = np.ones(W // 4, bool)
+    if disc:
+        keep[(W // 2 + int(ROTATION / 360 * W)) // 4 - 1:(W // 2 + int(ROTATION / 360 * W)) // 4 + 1] = False
+    err = np.abs(cols(d)[keep] / cols(c)[keep] - 1).max()
+    assert err < 0.01, err
+    _close('plane', c[:12], d[:12], 0.01)
