@@ -492,7 +492,7 @@ def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16):
 
 def _add_sun(sky, img, width, height, m, n):
     """Adds to the texels the sun disc can touch its mean radiance over n x n points in each
-    (fewer for a large disc: ~2M points at most)."""
+    (fewer for a large disc, down to its value at the texel's centre)."""
     sun = sky.sun_direction()
     half = sky.diameter / 2
     theta_s = np.arccos(np.clip(sun[2], -1.0, 1.0))
@@ -509,11 +509,15 @@ def _add_sun(sky, img, width, height, m, n):
                                           int(np.ceil((u_s + du) * width)) + 1), width))
     if not len(rows):
         return
-    n = int(np.clip(np.sqrt(2e6 / (len(rows) * len(cols))), 2, n))
+    n = int(np.clip(np.sqrt(2e6 / (len(rows) * len(cols))), 1, n))
     off = (np.arange(n) + 0.5) / n
     uu = (cols[:, None] + off[None, :]) / width                          # (cols, n)
-    vv = (rows[:, None] + off[None, :]) / height                         # (rows, n)
-    dirs = _equirect_dirs(uu[None, :, None, :], vv[:, None, :, None])   # (rows, cols, n, n, 3)
-    elevation = np.pi / 2 - np.arccos(np.clip(dirs[..., 2], -1.0, 1.0))
-    xyz = _sun_xyz(sky, dirs, elevation, sky.sun_pixels())
-    img[rows[:, None], cols[None, :]] += np.maximum(xyz @ m, 0.0).mean(axis=(2, 3))
+    pixels = sky.sun_pixels()
+    step = max(int(2e6 // (len(cols) * n * n)), 1)        # a disc of tens of degrees: by blocks of rows
+    for r in range(0, len(rows), step):
+        block = rows[r:r + step]
+        vv = (block[:, None] + off[None, :]) / height                    # (rows, n)
+        dirs = _equirect_dirs(uu[None, :, None, :], vv[:, None, :, None])   # (rows, cols, n, n, 3)
+        elevation = np.pi / 2 - np.arccos(np.clip(dirs[..., 2], -1.0, 1.0))
+        xyz = _sun_xyz(sky, dirs, elevation, pixels)
+        img[block[:, None], cols[None, :]] += np.maximum(xyz @ m, 0.0).mean(axis=(2, 3))
