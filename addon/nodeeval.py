@@ -336,8 +336,8 @@ def compile_image_chain(socket, color, image_pointer, depth=0):
     """What feeds `socket` as a function of one image's texels: fn(px (n, 4) float) -> (n, 3)
     colour (color) or (n, 1), computed as Evaluator computes it with that image's texels
     replaced by px, but with every node's settings read now (Frozen): fn reads no Blender data.
-    Raises NotCompiled for chains reading anything but that image (by image.as_pointer()),
-    constants and the colour and float nodes."""
+    Raises NotCompiled for chains reading anything but that image (by image.as_pointer(); or a
+    Sky Texture's map, by the node's as_pointer()), constants and the colour and float nodes."""
     link, carrier = nodegraph.source(socket)
     if link is None:
         const = own_value(carrier, color)
@@ -356,6 +356,10 @@ def _compile_node(node, out, image_pointer, depth):
     if t == 'VALUE':
         const = np.array((out.default_value,), np.float64)
         return (lambda px: const), False
+    if t == 'TEX_SKY':            # a sky's map stands in for the image (export/world.py)
+        if node.as_pointer() != image_pointer:
+            raise NotCompiled("another sky")
+        return (lambda px: px[..., :3]), False
     if t in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
         if node.image is None or node.image.as_pointer() != image_pointer:
             raise NotCompiled("another image")

@@ -459,12 +459,14 @@ def _equirect_dirs(u, v):
     return np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)), axis=-1)
 
 
-def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16):
+def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16, chain=None):
     """(width / 2, width, 3) float32 equirectangular radiance image of the sky (row 0 at the
     bottom, the environment light's layout). The sky is read at texel centres: a texel's
     column fixes its azimuth and its row its elevation, so the table is blended per row, then
     per column. Texels the sun disc touches hold the disc's mean over sun_samples^2 points, so
-    the image carries the disc's whole light (2048 texels around: ~3 across the default sun)."""
+    the image carries the disc's whole light (2048 texels around: ~3 across the default sun).
+    chain: colour nodes after the sky, fn((n, 3) RGB) -> (n, 3), applied to each texel and to
+    each of the disc's points before their mean."""
     height = width // 2
     m = np.asarray(xyz_to_rgb, np.float64).T
     table = sky.table().astype(np.float64)
@@ -485,14 +487,19 @@ def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16):
     ix = ix.astype(np.intp)
     xyz = by_row[:, np.clip(ix, 0, TABLE_W - 1)] * (1 - tx) + by_row[:, np.clip(ix + 1, 0, TABLE_W - 1)] * tx
     img = np.maximum(xyz @ m, 0.0) * fade[:, None, None]
+    done = np.zeros((height, width), bool)
     if sky.sun_disc and sky.sun_intensity > 0:
-        _add_sun(sky, img, width, height, m, sun_samples)
+        done = _add_sun(sky, img, width, height, m, sun_samples, chain)
+    if chain is not None:
+        img[~done] = chain(img[~done])
     return img.astype(np.float32)
 
 
-def _add_sun(sky, img, width, height, m, n):
+def _add_sun(sky, img, width, height, m, n, chain=None):
     """Adds to the texels the sun disc can touch its mean radiance over n x n points in each
-    (fewer for a large disc, down to its value at the texel's centre)."""
+    (fewer for a large disc, down to its value at the texel's centre); with a chain, each
+    point's sky + sun goes through it before the mean. Returns the (height, width) mask of
+    the texels it set."""
     sun = sky.sun_direction()
     half = sky.diameter / 2
     theta_s = np.arccos(np.clip(sun[2], -1.0, 1.0))
@@ -507,8 +514,9 @@ def _add_sun(sky, img, width, height, m, n):
         du = np.arcsin(np.sin(half) / s_min) / (2 * np.pi)
         cols = np.unique(np.mod(np.arange(int(np.floor((u_s - du) * width)) - 1,
                                           int(np.ceil((u_s + du) * width)) + 1), width))
+    done = np.zeros((height, width), bool)
     if not len(rows):
-        return
+        return done
     n = int(np.clip(np.sqrt(2e6 / (len(rows) * len(cols))), 1, n))
     off = (np.arange(n) + 0.5) / n
     uu = (cols[:, None] + off[None, :]) / width                          # (cols, n)
@@ -519,5 +527,12 @@ def _add_sun(sky, img, width, height, m, n):
         vv = (block[:, None] + off[None, :]) / height                    # (rows, n)
         dirs = _equirect_dirs(uu[None, :, None, :], vv[:, None, :, None])   # (rows, cols, n, n, 3)
         elevation = np.pi / 2 - np.arccos(np.clip(dirs[..., 2], -1.0, 1.0))
-        xyz = _sun_xyz(sky, dirs, elevation, pixels)
-        img[block[:, None], cols[None, :]] += np.maximum(xyz @ m, 0.0).mean(axis=(2, 3))
+        sun = np.maximum(_sun_xyz(sky, dirs, elevation, pixels) @ m, 0.0)
+        at = (block[:, None], cols[None, :])
+        if chain is None:
+            img[at] += sun.mean(axis=(2, 3))
+        else:
+            points = img[at][:, :, None, None, :] + sun
+            img[at] = chain(points.reshape(-1, 3)).reshape(points.shape).mean(axis=(2, 3))
+        done[at] = True
+    return done

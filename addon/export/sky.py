@@ -38,10 +38,11 @@ def node_sky(node, reasons=None):
         ozone=float(node.ozone_density))
 
 
-def sky_environment(node, strength, reasons):
+def sky_environment(node, strength, reasons, chain=None):
     """(uniform radiance (3,), scenedata.Environment) of a Sky Texture feeding a Background of
     `strength`, its Vector through a Mapping rotation as an Environment Texture's; None when
-    its type is not evaluated (the caller reports it)."""
+    its type is not evaluated (the caller reports it). chain: the colour nodes after it,
+    fn((n, 4) RGBA) -> (n, 3) (nodeeval.compile_image_chain), applied to its map."""
     sky = node_sky(node, reasons)
     if sky is None:
         return None
@@ -49,7 +50,8 @@ def sky_environment(node, strength, reasons):
         reasons.append(f"Background Strength {float(strength):g} is negative or not finite; rendered black")
         return np.zeros(3, np.float32), None
     m = xyz_to_scene_linear()
-    img = _image(sky, tuple(map(tuple, model.XYZ_TO_REC709 if m is None else m)))
+    m = tuple(map(tuple, model.XYZ_TO_REC709 if m is None else m))
+    img = _image(sky, m) if chain is None else _make_image(sky, m, _rgb_chain(chain))
     # Blender 5.0 makes the Vector input unavailable while the sun disc is on: Cycles then
     # reads the view direction whatever is linked to it
     vector = node.inputs.get('Vector')
@@ -62,9 +64,25 @@ def sky_environment(node, strength, reasons):
 def _image(sky, xyz_to_rgb):
     """The sky's equirectangular image (read-only), kept for the next render of the same sky
     (frames of an animation, the viewport's redraws): ~0.3 s to make, 25 MB."""
-    if isinstance(sky, skyanalytic.Analytic):
-        img = skyanalytic.equirect(sky, ANALYTIC_WIDTH, np.array(xyz_to_rgb))
-    else:
-        img = model.equirect(sky, WIDTH, np.array(xyz_to_rgb))
+    img = _make_image(sky, xyz_to_rgb)
     img.setflags(write=False)
     return img
+
+
+def _make_image(sky, xyz_to_rgb, chain=None):
+    if isinstance(sky, skyanalytic.Analytic):
+        img = skyanalytic.equirect(sky, ANALYTIC_WIDTH, np.array(xyz_to_rgb))
+        if chain is not None:
+            img = chain(img.reshape(-1, 3)).reshape(img.shape).astype(np.float32)
+        return img
+    return model.equirect(sky, WIDTH, np.array(xyz_to_rgb), chain=chain)
+
+
+def _rgb_chain(chain):
+    """fn((n, 3) RGB) -> (n, 3) of a colour-node chain on RGBA texels (alpha 1), its results
+    made finite and non-negative (a world's radiance)."""
+    def rgb(px):
+        y = np.asarray(chain(np.concatenate([px, np.ones_like(px[:, :1])], axis=1)), np.float64)
+        y = np.broadcast_to(y.reshape(len(px), -1), (len(px), 3))
+        return np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0)
+    return rgb

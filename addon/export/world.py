@@ -1,9 +1,9 @@
 """The world the view layer renders with: the Background (or Emission) colour x strength, an
 Environment Texture's equirectangular image (through a Mapping node's rotation, with colour
-nodes after it applied to its texels), a Sky Texture's Multiple or Single Scattering sky
-(export/sky.py), Add and Mix Shaders of these, the camera/light split of
-a Light Path's Is Camera Ray, and the world's ray visibility. Other world shaders use the world
-colour, reported. Part of the export layer."""
+nodes after it applied to its texels), a Sky Texture's sky (export/sky.py, colour nodes after
+it likewise), Add and Mix Shaders of these, the camera/light split of a Light Path's Is Camera
+Ray, and the world's ray visibility. Other world shaders use the world colour, reported. Part
+of the export layer."""
 
 import bpy
 import numpy as np
@@ -112,8 +112,8 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
 
 def _color_light(socket, strength, what, reasons, frame):
     """(uniform radiance, Environment or None) of a world colour socket at `strength`: an
-    Environment Texture's map, with the colour nodes between them applied to its texels (a
-    tint, a Hue/Saturation, a ramp), or a constant colour."""
+    Environment Texture's map or a Sky Texture's, with the colour nodes between them applied
+    to its texels (a tint, a Hue/Saturation, a ramp), or a constant colour."""
     tex = linked_node(socket)
     if tex is not None and tex.type == 'TEX_ENVIRONMENT':
         return _environment(tex, strength, reasons, frame=frame)
@@ -131,6 +131,11 @@ def _color_light(socket, strength, what, reasons, frame):
                 chain = None
             if chain is not None:
                 return _environment(envs[0], strength, reasons, chain, frame)
+        skies = _environments_feeding(socket, 'TEX_SKY')
+        if len(skies) == 1 and not envs:
+            found = _sky_through(socket, skies[0], strength, reasons)
+            if found is not None:
+                return found
         source = linked_node(socket)
         name = f"'{source.bl_label}'" if source is not None else "nodes"
         if source is not None and source.type == 'TEX_SKY':
@@ -141,6 +146,24 @@ def _color_light(socket, strength, what, reasons, frame):
         reasons.append(f"{what} from {name}, {why}; the socket's own colour "
                        f"{tuple(round(float(x), 3) for x in c[:3])} used")
     return np.array(c, np.float32) * strength, None
+
+
+def _sky_through(socket, sky, strength, reasons):
+    """(uniform radiance, Environment) of a Sky Texture reaching a colour socket through colour
+    nodes (a Gamma, a Hue/Saturation, a tint), the nodes applied to its map's texels; None when
+    they read anything else (nodeeval.compile_image_chain) or the sky is not evaluated."""
+    try:
+        chain = nodeeval.compile_image_chain(socket, True, sky.as_pointer())
+    except nodeeval.NotCompiled:
+        return None
+    found = sky_environment(sky, strength, reasons, chain)
+    # exact where the chain scales and offsets each channel (it commutes with the blend);
+    # otherwise exact at texel centres and in the sun disc's mean, the blend between texels
+    # being of the results
+    if found is not None and found[1] is not None and not _per_channel_affine(chain):
+        reasons.append(f"colour nodes after the Sky Texture '{sky.name}' applied to its map's texels "
+                       "before the blend")
+    return found
 
 
 def _environments_feeding(socket, kind='TEX_ENVIRONMENT'):

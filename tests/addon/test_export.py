@@ -2182,9 +2182,9 @@ def test_light_node_tree_and_world_approximation_reported(scene, exported):
     data = exported()                             # a Sky Texture straight in: its map, not reported
     assert data.environment is not None and np.allclose(data.environment.strength, 3.0)
     assert not any("world approximated" in t for _, t in data.messages)
-    gamma = w.node_tree.nodes.new('ShaderNodeGamma')   # through other nodes: not evaluated
-    w.node_tree.links.new(sky.outputs[0], gamma.inputs['Color'])
-    w.node_tree.links.new(gamma.outputs[0], bg.inputs['Color'])
+    other = w.node_tree.nodes.new('ShaderNodeTexSky')    # two skies mixed: not evaluated
+    mix = scenes.mix_node(w.node_tree, 'MIX', sky.outputs[0], other.outputs[0])
+    w.node_tree.links.new(mix.outputs['Result'], bg.inputs['Color'])
     data = exported()
     assert np.allclose(data.lights[0].strength, (200.0, 100.0, 200.0))
     assert np.allclose(data.world, 0.6) and data.environment is None    # the Background's own colour x strength
