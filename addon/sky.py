@@ -90,7 +90,9 @@ def _ms_transmittance(cos_theta, h_norm, air, aerosol, ozone):
     t = (np.arange(_MS_STEPS) + 0.5) * dt[..., None]                       # (..., steps)
     sin_theta = np.sqrt(np.maximum(1.0 - cos_theta * cos_theta, 0.0))[..., None]
     radius = np.hypot(sin_theta * t, r0[..., None] + cos_theta[..., None] * t)
-    depth = _ms_densities(np.maximum(radius - _MS_EARTH, 0.0), air, aerosol, ozone).sum(-2)
+    # the densities in float32, as Cycles (1M points for the table: half the time)
+    depth = _ms_densities(np.maximum(radius - _MS_EARTH, 0.0).astype(np.float32), air, aerosol, ozone)
+    depth = depth.sum(-2, dtype=np.float64)
     return np.exp(-(depth @ _MS_EXTINCTION) * dt[..., None])
 
 
@@ -203,9 +205,11 @@ def multiple_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
         g = ground[x1]
         lit_ground = (g[..., :4] + fx * g[..., 4:]) * cs[..., None]
         logistic = f32(1) / (f32(1) + f32(5) * np.exp(f32(-17.92) * cs))
-        light = (np.einsum('rakc,rak->rac', np.einsum('rasc,rskc->rakc', to_sun, w_sun[sl]), phases[sl])
-                 + np.einsum('ras,rsc->rac', logistic, w_all[sl]) * fit
-                 + np.einsum('rasc,rsc->rac', lit_ground, w_ground[sl]))
+        # sums over the steps as batched matrix products (per row and channel)
+        by_sun = np.matmul(to_sun.transpose(0, 3, 1, 2), w_sun[sl].transpose(0, 3, 1, 2))      # (r, c, az, 2)
+        by_ground = np.matmul(lit_ground.transpose(0, 3, 1, 2), w_ground[sl].transpose(0, 2, 1)[..., None])
+        light = (np.einsum('rcak,rak->rac', by_sun, phases[sl]) + by_ground[..., 0].transpose(0, 2, 1)
+                 + np.matmul(logistic, w_all[sl]) * fit)
         xyz[sl] = (light * _MS_SUN) @ _MS_XYZ
     return np.concatenate([xyz, xyz[:, ::-1]], axis=1).astype(np.float32)
 
@@ -312,10 +316,14 @@ def single_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
         cos_sun = p_dot_sun / rad
         lit = ~((sun[2] < 0) & ((2 * p_dot_sun) ** 2 - 4 * (rad * rad - _SS_EARTH ** 2) >= 0))
         total = depth[i][None] + scale * _ss_optical_depth(rad, cos_sun)             # (lon, steps, 3)
-        atten = np.exp(-(total @ coef))                                              # (lon, steps, 21)
-        scat = (ray_phase[i][:, None, None] * density[i][None, :, 0:1] * _SS_RAYLEIGH
-                + mie_phase[i][:, None, None] * density[i][None, :, 1:2] * _SS_MIE)
-        spectrum = np.einsum('lsw,ls->lw', atten * scat, lit * seg[i]) * _SS_IRRADIANCE
+        atten = np.exp(-(total @ coef).astype(np.float32))     # (lon, steps, 21); float32, as Cycles
+        # each step scatters Rayleigh (density x phase x spectrum) plus Mie (grey): summed over
+        # the steps apart, the phases (per longitude) and spectra applied after
+        w = (lit * seg[i]).astype(np.float32)
+        rayleigh = np.einsum('lsw,ls->lw', atten, w * density[i][None, :, 0].astype(np.float32))
+        mie = np.einsum('lsw,ls->lw', atten, w * density[i][None, :, 1].astype(np.float32))
+        spectrum = (ray_phase[i][:, None] * rayleigh * _SS_RAYLEIGH + mie_phase[i][:, None] * mie * _SS_MIE) \
+            * _SS_IRRADIANCE
         out[ys[i]] = spectrum @ _SS_CMF
     return np.concatenate([out, out[:, ::-1]], axis=1).astype(np.float32)
 
