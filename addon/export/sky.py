@@ -55,7 +55,9 @@ def sky_environment(node, strength, reasons, chain=None):
     # Blender 5.0 makes the Vector input unavailable while the sun disc is on: Cycles then
     # reads the view direction whatever is linked to it
     vector = node.inputs.get('Vector')
-    rotation = environment_rotation(node, reasons, vector=vector is not None and vector.enabled)
+    mapped = []
+    rotation = environment_rotation(node, mapped, vector=vector is not None and vector.enabled)
+    reasons.extend(f"Sky Texture '{node.name}': {r}" for r in mapped)
     env = sd.Environment(img, np.full(3, strength, np.float32), rotation, 'Linear')
     return np.zeros(3, np.float32), env
 

@@ -2168,6 +2168,25 @@ def test_empty_scene_exports_and_says_so(scene, exported):
     assert "no renderable geometry" in text and "no lights" in text
 
 
+def test_sky_texture_vector_not_reproduced_is_reported(scene, exported):
+    """A Sky Texture's Vector from nodes other than a Mapping rotation: the view direction,
+    reported naming the sky and the node; every sky type gives a map."""
+    setup(scene)
+    w = scenes.world((0.2, 0.2, 0.2), 1.0)
+    nt = w.node_tree
+    sky = nt.nodes.new('ShaderNodeTexSky')
+    sky.sun_disc = False                         # (with the disc on, Blender hides the Vector input)
+    nt.links.new(sky.outputs[0], next(n for n in nt.nodes if n.type == 'BACKGROUND').inputs['Color'])
+    add = nt.nodes.new('ShaderNodeVectorMath')
+    nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Generated'], add.inputs[0])
+    nt.links.new(add.outputs[0], sky.inputs[0])
+    for kind in ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING', 'PREETHAM', 'HOSEK_WILKIE'):
+        sky.sky_type = kind
+        data = exported()
+        assert data.environment is not None and data.environment.pixels.max() > 0
+        assert any("Sky Texture 'Sky Texture'" in t and "'Vector Math'" in t for _, t in data.messages), kind
+
+
 def test_light_node_tree_and_world_approximation_reported(scene, exported):
     setup(scene)
     lamp = scenes.light('POINT', 100.0)
