@@ -45,7 +45,28 @@ def export_camera(scene, messages=None, view=None, camera=None):
     if view is not None:
         shift = (float(view[1]), shift[1])
     clip_start, clip_end = (cam.clip_start, cam.clip_end) if cam else (1e-5, 1e5)
-    if clip_end < clip_start:
+    # Settings a script or driver made NaN or infinite (or an orthographic scale of 0): Cycles'
+    # camera rays then have no valid direction or length and meet nothing, so only the world
+    # shows. The setting is named, a usable value stands in for it, and the clip range is
+    # emptied below, as for a clip end before the clip start.
+    broken = []
+
+    def usable(value, name, default, positive=True):
+        if math.isfinite(value) and (value > 0.0 or not positive):
+            return value
+        broken.append(f"{name} is {value:g}")
+        return default
+    if kind == 'PERSP':
+        lens = usable(lens, "Focal Length", 50.0)
+    sensor_width = usable(sensor_width, "Sensor Width", 36.0) if sensor_fit != 'VERTICAL' else sensor_width
+    sensor_height = usable(sensor_height, "Sensor Height", 24.0) if sensor_fit == 'VERTICAL' else sensor_height
+    if kind == 'ORTHO':
+        ortho_scale = usable(ortho_scale, "Orthographic Scale", 6.0)
+    shift = (usable(shift[0], "Shift X", 0.0, False), usable(shift[1], "Shift Y", 0.0, False))
+    if math.isnan(clip_start) or math.isnan(clip_end) or clip_start == math.inf:
+        broken.append(f"clip range is {clip_start:g} .. {clip_end:g}")
+        clip_start, clip_end = 0.1, 0.1
+    elif clip_end < clip_start:
         # Cycles' camera rays are then empty: only the world shows
         if messages is not None:
             messages.append(('WARNING', f"camera '{cam_ob.name}': clip end {clip_end:g} is before clip "
@@ -67,11 +88,6 @@ def export_camera(scene, messages=None, view=None, camera=None):
         ar = yr / xr
         ax, ay = 1.0, ar
     if kind == 'ORTHO':
-        if not ortho_scale > 0.0:          # Blender allows 0: a view of no width
-            if messages is not None:
-                messages.append(('WARNING', f"camera '{cam_ob.name}': orthographic scale {ortho_scale:g}: "
-                                            "every pixel sees the one point straight ahead of the camera"))
-            ortho_scale = 1e-30
         ax *= ortho_scale / (ar * 2.0)
         ay *= ortho_scale / (ar * 2.0)
         ar = ortho_scale / 2.0
@@ -92,8 +108,18 @@ def export_camera(scene, messages=None, view=None, camera=None):
     m = np.array(cam_ob.matrix_world if view is None else view[0], dtype=np.float64)
     lengths = np.linalg.norm(m[:3, :3], axis=0)
     if not np.all(lengths > 0) or not np.all(np.isfinite(m)):
-        raise ExportError(f"camera '{cam_ob.name}' has a zero or non-finite scale/transform")
-    m[:3, :3] /= lengths
+        # (a scale of 0 on an axis, or a NaN location / rotation: Cycles' rays have no direction)
+        broken.append("its transform has a zero scale or a NaN or infinite location, rotation or scale")
+        where = m[:3, 3] if np.isfinite(m[:3, 3]).all() else np.zeros(3)
+        m = np.eye(4)
+        m[:3, 3] = where
+    else:
+        m[:3, :3] /= lengths
+    if broken:
+        if messages is not None:
+            messages.append(('WARNING', f"camera '{cam_ob.name}': {'; '.join(broken)}, so only the world "
+                                        "is rendered (as in Cycles)"))
+        clip_end = clip_start
 
     border = (0, 0, width, height)
     crop = False

@@ -2,6 +2,8 @@
 (samples, bounces, filter, passes, AOVs, Cryptomatte, light groups, mist), as
 scenedata.Settings. Part of the export layer."""
 
+import math
+
 import bpy
 
 from .. import scenedata as sd
@@ -65,6 +67,15 @@ def export_settings(scene, vl, messages, viewport=False):
     mist = scene.world.mist_settings if scene.world is not None else None
     mist = (0.0, 100.0, 1.0) if mist is None else (
         float(mist.start), float(mist.depth), MIST_FALLOFF.get(mist.falloff, 2.0))
+    if not (math.isfinite(mist[0]) and math.isfinite(mist[1])):
+        # a script or driver's NaN or infinity: Cycles' 1 / depth is then 0 (its film keeps
+        # depth > 0 ? 1 / depth : 0), so every surface has mist 0, as a depth of 0 gives here
+        if 'Mist' in passes:
+            bad = ' and '.join(f"{name} is {v:g}" for name, v in (('Start', mist[0]), ('Depth', mist[1]))
+                               if not math.isfinite(v))
+            messages.append(('WARNING', f"world '{scene.world.name}': its Mist Pass {bad}, so the Mist pass "
+                                        "is 0 on every surface"))
+        mist = (0.0, 0.0, mist[2])
     samples = int(d.preview_samples) if viewport else layer_samples(scene, vl, int(d.samples))
     return sd.Settings(samples=samples, max_bounces=d.max_bounces,
                        transparent_max_bounces=d.transparent_max_bounces,

@@ -122,28 +122,6 @@ def test_bad_cameras_are_explained(scene):
     cam.data.type = 'CUSTOM'
     with pytest.raises(export.ExportError, match="is custom; DACRT renders"):
         export.export_camera(scene)
-    cam.data.type = 'PERSP'
-    cam.scale = (0, 1, 1)
-    bpy.context.view_layer.update()
-    with pytest.raises(export.ExportError, match="zero"):
-        export.export_camera(scene)
-
-
-def test_orthographic_scale_zero_renders_the_point_ahead_with_a_warning(scene, tmp_path):
-    """Blender accepts an orthographic scale of 0 (Cycles renders it); here it was a division by
-    zero: now every pixel looks at the point straight ahead, and the render says why."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=0.0)
-    scenes.plane("Floor", size=10, materials=(scenes.diffuse("Grey", (0.5, 0.5, 0.5)),))
-    messages = []
-    cam = export.export_camera(scene, messages)
-    left, right, bottom, top = cam.viewplane
-    assert 0 < right - left < 1e-20 and 0 < top - bottom < 1e-20
-    assert any("orthographic scale 0" in text for _, text in messages)
-    scenes.light('SUN', 2.0)
-    scene.dacrt.samples = 2
-    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "point.exr", scene)))
-    assert np.all(img[..., 3] == 1.0) and np.allclose(img[..., :3], 2.0 * 0.5 / math.pi, rtol=1e-4)  # sun on the floor
 
 
 def test_panoramic_camera_settings_as_cycles_reads_them(scene):

@@ -1,0 +1,124 @@
+"""Bad camera and mist settings (NaN or infinity from a script or driver, an orthographic
+scale of 0, a camera scaled to 0 on an axis): Cycles' camera rays then meet nothing and its
+render shows only the world; DACRT's failed the whole render with internal field names
+(camera.tan_half_fov, camera.viewplane, settings.mist), and an orthographic scale of 0 showed the
+point straight ahead in every pixel. Now: the world alone, with a warning naming the setting."""
+import math
+
+import bpy
+import numpy as np
+import pytest
+
+from addon.engine import DACRTRenderEngine
+
+from . import scenes
+
+WORLD = (0.2, 0.25, 0.3)
+NAN, INF = float('nan'), float('inf')
+
+
+@pytest.fixture
+def said(monkeypatch):
+    """The texts the engine reports during the test's renders."""
+    texts = []
+    real = DACRTRenderEngine._report_messages
+
+    def record(self, messages):
+        texts.extend(text for _, text in messages)
+        return real(self, messages)
+    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
+    return texts
+
+
+def _lit_scene(scene, kind='PERSP'):
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.world(WORLD)
+    scenes.plane("Floor", size=20, materials=(scenes.diffuse("Grey", (0.8, 0.8, 0.8)),))
+    scenes.light('SUN', 3.0)
+    return scenes.camera((0, 0, 5), kind=kind, ortho_scale=4.0)
+
+
+def _image(scene, tmp_path):
+    return scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "r.exr", scene)))
+
+
+def _world_only(img):
+    assert np.allclose(img[..., :3], WORLD, atol=1e-6), img[..., :3].mean(axis=(0, 1))
+
+
+def test_the_scene_renders_lit_without_a_bad_setting(scene, tmp_path, said):
+    """The reference: the floor fills the view, lit by the sun (far brighter than the world)."""
+    _lit_scene(scene)
+    img = _image(scene, tmp_path)
+    assert (img[..., 0] > 0.5).all() and not any("camera" in t for t in said)
+
+
+@pytest.mark.parametrize("setting, value, named", [
+    ('lens', NAN, "Focal Length is nan"),
+    ('sensor_width', NAN, "Sensor Width is nan"),
+    ('shift_x', INF, "Shift X is inf"),
+    ('shift_y', NAN, "Shift Y is nan"),
+    ('clip_end', NAN, "clip range is 0.1 .. nan"),
+    ('clip_start', NAN, "clip range is nan .. 100"),
+])
+def test_non_finite_camera_setting_renders_the_world_with_a_warning(scene, tmp_path, said, setting, value, named):
+    cam = _lit_scene(scene)
+    setattr(cam.data, setting, value)
+    img = _image(scene, tmp_path)         # had failed: "camera.tan_half_fov nan must be positive"
+    _world_only(img)
+    assert any(t.startswith("camera 'Camera': ") and named in t and "only the world" in t for t in said), said
+
+
+@pytest.mark.parametrize("how", ['scale', 'location'])
+def test_camera_of_zero_scale_or_nan_location_renders_the_world_with_a_warning(scene, tmp_path, said, how):
+    cam = _lit_scene(scene)
+    if how == 'scale':
+        cam.scale = (0, 1, 1)
+    else:
+        cam.location = (NAN, 0, 5)
+    img = _image(scene, tmp_path)         # had failed: "zero or non-finite scale/transform"
+    _world_only(img)
+    assert any("camera 'Camera': its transform has a zero scale" in t for t in said), said
+
+
+@pytest.mark.parametrize("value", [0.0, NAN])
+def test_orthographic_scale_zero_or_nan_renders_the_world(scene, tmp_path, said, value):
+    """Cycles shows only the world at an orthographic scale of 0 (the point straight ahead at
+    1e-6); every pixel had shown the lit floor's point (0.611 / 0.080 / 0.085 in a tester's
+    scene, Cycles 0.2 / 0.25 / 0.3)."""
+    cam = _lit_scene(scene, 'ORTHO')
+    cam.data.ortho_scale = value
+    img = _image(scene, tmp_path)
+    _world_only(img)
+    assert any(f"Orthographic Scale is {value:g}" in t and "only the world" in t for t in said), said
+
+
+def test_tiny_orthographic_scale_still_sees_the_point_ahead(scene, tmp_path, said):
+    cam = _lit_scene(scene, 'ORTHO')
+    cam.data.ortho_scale = 1e-6
+    img = _image(scene, tmp_path)
+    # every pixel sees the one sunlit floor point (sun 3 x 0.8 / pi, plus the world's light)
+    assert np.allclose(img[..., :3], img[0, 0, :3], rtol=1e-4) and img[0, 0, 0] > 3.0 * 0.8 / math.pi
+    assert not any("camera" in t for t in said)
+
+
+def test_infinite_clip_end_still_renders_the_objects(scene, tmp_path, said):
+    """An infinite clip end is a valid camera in Cycles (rays of any length)."""
+    cam = _lit_scene(scene)
+    cam.data.clip_end = INF
+    img = _image(scene, tmp_path)
+    assert (img[..., 0] > 0.5).all() and not any("camera" in t for t in said)
+
+
+def test_nan_mist_depth_renders_with_a_zero_mist_pass(scene, tmp_path, said):
+    """Cycles' film keeps 1 / depth only for depth > 0, so a NaN depth gives mist 0 on every
+    surface; the render had failed ("settings.mist must be ...")."""
+    _lit_scene(scene)
+    bpy.context.view_layer.use_pass_mist = True
+    scene.world.mist_settings.depth = NAN
+    ch = scenes.read_exr(scenes.render_exr(tmp_path / "m.exr", scene, multilayer=True))
+    mist = next(v for k, v in ch.items() if k.endswith('Mist.Z') or k.endswith('Mist.V') or k.endswith('Mist.X'))
+    assert np.all(mist == 0.0)
+    assert (scenes.rgba(ch, 'ViewLayer.Combined.')[..., 0] > 0.5).all()
+    assert any("world 'World': its Mist Pass Depth is nan" in t for t in said), said
