@@ -47,7 +47,10 @@ def _vector_input(node, name, default, reasons):
     value, exact = constant(sock, True)
     if not exact:
         reasons.append(f"Mapping {name} driven by nodes; its own value used")
-    return np.array(value, np.float64)
+    value = np.array(value, np.float64)
+    if not np.isfinite(value).all():        # a script or driver's NaN or infinity
+        reasons.append(f"Mapping node '{node.name}' {name} is ({', '.join(f'{v:g}' for v in value)})")
+    return value
 
 
 def mapping_affine(node, reasons):
@@ -81,6 +84,9 @@ def node_texture_mapping(node, reasons):
     loc = np.array(tm.translation, np.float64)
     rot = np.array(tm.rotation, np.float64)
     scale = np.array(tm.scale, np.float64)
+    for name, value in (('Location', loc), ('Rotation', rot), ('Scale', scale)):
+        if not np.isfinite(value).all():
+            reasons.append(f"'{node.name}' Texture Mapping {name} is ({', '.join(f'{v:g}' for v in value)})")
     axes = (tm.mapping_x, tm.mapping_y, tm.mapping_z)
     clamp = bool(tm.use_min or tm.use_max)
     if not loc.any() and not rot.any() and (scale == 1.0).all() and axes == ('X', 'Y', 'Z') and not clamp:
@@ -238,6 +244,12 @@ def _direction_matrix(node, reasons):
     kind = node.vector_type
     rot = _rotation(_vector_input(node, 'Rotation', (0, 0, 0), reasons))
     scale = _vector_input(node, 'Scale', (1, 1, 1), reasons)
+    # (the location is ignored for directions: only a NaN in it, which Cycles adds, is said)
+    loc = _vector_input(node, 'Location', (0, 0, 0), []) if kind in ('POINT', 'TEXTURE') else np.zeros(3)
+    if not np.isfinite(loc).all():
+        _vector_input(node, 'Location', (0, 0, 0), reasons)
+    if not (np.isfinite(rot).all() and np.isfinite(scale).all() and np.isfinite(loc).all()):
+        return np.full((3, 3), np.nan)      # (named in reasons: every direction is NaN in Cycles)
     if not (np.abs(scale) > 0).all():
         reasons.append("Mapping with a zero Scale ignored")
         return np.eye(3)
@@ -245,6 +257,6 @@ def _direction_matrix(node, reasons):
         reasons.append(f"Mapping Scale {tuple(float(v) for v in scale)}: only its signs used (a non-uniform "
                        "scale bends the map)")
     sign = np.diag(np.sign(scale))
-    if kind in ('POINT', 'TEXTURE') and np.any(_vector_input(node, 'Location', (0, 0, 0), []) != 0):
+    if np.any(loc != 0):
         reasons.append("Mapping Location ignored (the map is looked up by direction)")
     return sign @ rot.T if kind == 'TEXTURE' else rot @ sign

@@ -954,6 +954,13 @@ class MaterialBuilder:
         if pixels is None:
             return None
         udim = pixels if isinstance(pixels, UdimTiles) else None
+        if transform is not None and not np.isfinite(transform).all():
+            # a NaN or infinite Mapping (named in reasons): Cycles' lookup at NaN coordinates
+            # gives NaN in every channel, which its closures drop (a NaN colour is black, a NaN
+            # alpha opaque): the image is read as one black opaque texel
+            reasons.append(f"so image '{img.name}' reads black and opaque there (as in Cycles)")
+            pixels, udim = np.array([[[0.0, 0.0, 0.0, 1.0]]], np.float32), None
+            transform = np.array([[0.0, 0.0, 0.5], [0.0, 0.0, 0.5]])
         where = None if transform is None else tuple(transform.ravel())
         if self._image_probe is not None:        # probing how a chain combines it with an attribute
             t = Texture((key, unassociate, interp, ext, where, frame), self._image_probe, interp, ext, transform,

@@ -249,7 +249,13 @@ def _environment(node, strength, reasons, chain=None, frame=None):
     interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
     if node.interpolation in LINEAR_INTERPOLATIONS:
         reasons.append(f"{node.interpolation.lower()} environment interpolation as linear")
+    to_map = environment_rotation(node, reasons)
+    if not np.isfinite(to_map).all():
+        # a NaN or infinite Mapping (named in reasons): Cycles looks the image up at a NaN
+        # direction, and its background is black
+        reasons.append(f"so environment image '{img.name}' is looked up at no direction: black, as in Cycles")
+        return np.zeros(3, np.float32), None
     env = sd.Environment(np.ascontiguousarray(rgb, np.float32), np.full(3, strength, np.float32),
-                         environment_rotation(node, reasons), interp,
+                         to_map, interp,
                          encoded=None if pixels is None else encoded_environment(pixels, interp))
     return np.zeros(3, np.float32), env
