@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import principled, scenedata as sd
 from ..lights.area import sheared
-from ..nodeeval import constant_color, constant_value
+from ..nodeeval import constant_color, constant_value, nan_inputs
 from ..nodegraph import input_socket, linked_link, output_node
 from .shadersockets import mix_factor, value_emission
 
@@ -167,6 +167,9 @@ def _light_shader_factor(light, name, messages):
     if out is None:
         return np.zeros(3)
     reasons = []
+    bad = nan_inputs(light.node_tree)
+    if bad:     # (read as 0: a NaN Emission Strength gives no light, as in Cycles)
+        reasons.append(f"NaN read as 0 for {', '.join(bad)}")
     factor = _light_surface(out.inputs['Surface'], reasons, 0)
     if reasons:
         messages.append(('WARNING', f"light '{name}': node tree approximated: {'; '.join(dict.fromkeys(reasons))}"))

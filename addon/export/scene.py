@@ -11,6 +11,7 @@ import bpy
 import numpy as np
 
 from .. import scenedata as sd
+from ..nodeeval import nan_inputs
 from .assembly import Assembly
 from .camera import export_camera
 from .errors import ExportCancelled
@@ -128,14 +129,26 @@ class Exporter:
         if by_ray:      # a Light Path's Is Camera Ray picks what the camera sees of the world
             cw, cenv, creason = export_world(self.scene, self.layer_eval, camera=True)
             world_reason = '; '.join(dict.fromkeys(r for r in (world_reason, creason) if r))
-            if not (np.isfinite(cw).all() and (cw >= 0).all()):
+            cw = np.where(np.isfinite(cw), cw, 0.0).astype(np.float32)
+            if not (cw >= 0).all():
                 cw = np.zeros(3, np.float32)
             camera_world = (cw, cenv)
-        if not (np.isfinite(world).all() and (world >= 0).all()):
+        if not np.isfinite(world).all():
+            # a script's or driver's NaN (or an overflow): Cycles' film drops the channel that
+            # is not finite and keeps the others (a NaN red: a cyan world)
+            shown = ', '.join(f"{float(v):g}" for v in world)
+            world_reason = '; '.join(r for r in (world_reason, f"its colour x strength ({shown}) is not finite in "
+                                                 "some channel, rendered as 0 there (as in Cycles)") if r)
+            world = np.where(np.isfinite(world), world, 0.0).astype(np.float32)
+        if not (world >= 0).all():
             # Cycles subtracts a negative background; that is not supported here
-            world_reason = (f"its colour x strength {tuple(float(v) for v in world)} is negative or "
-                            "not finite; rendered black")
+            world_reason = (f"its colour x strength {tuple(float(v) for v in world)} is negative; "
+                            "rendered black")
             world = np.zeros(3, np.float32)
+        if self.world is not None and self.world.node_tree is not None:
+            bad = nan_inputs(self.world.node_tree)
+            if bad:         # (constant_value reads them as 0: a NaN Strength is a black world)
+                world_reason = '; '.join(r for r in (world_reason, f"NaN read as 0 for {', '.join(bad)}") if r)
         world_aovs = {}
         if settings.aovs and self.world is not None and self.world.node_tree is not None:
             reasons = []
