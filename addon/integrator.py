@@ -1144,7 +1144,11 @@ class Integrator:
                 # (an emission's is not a closure weight: Cycles keeps it signed, so a wide-gamut
                 # screen's out-of-gamut texels subtract as there)
                 texel = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))
-                albedo[:, sel] *= np.nan_to_num(texel, nan=0.0) if signed else np.fmax(texel, F32(0.0))
+                # (an infinite texel as a NaN one, as Cycles renders both: the blend is inf or NaN
+                # there, and Cycles' film drops what it reaches; a kept inf had dropped whole samples
+                # here, darkening more than Cycles around it)
+                texel = np.where(np.isfinite(texel), texel, F32(0.0))
+                albedo[:, sel] *= texel if signed else np.fmax(texel, F32(0.0))
 
     def _bent_normals(self, prim, u, v, ns, ng):
         """(shading normals with the materials' normal maps applied, bump or None): bump (4, k)

@@ -946,6 +946,12 @@ class MaterialBuilder:
             # rebuild of one: _build's probes and _product_map start with fresh reasons)
             notes = []
             pixels = image_pixels(img, notes, unassociate, node.image_user, self.frame)
+            if pixels is not None and not np.isfinite(pixels).all():
+                # (a float image's NaN or infinity, kept: Cycles blends them in, and surfaces
+                # where the blend reaches them render black, as here)
+                bad = int((~np.isfinite(pixels).all(axis=-1)).sum())
+                notes.append(f"image '{img.name}': {bad} texel(s) NaN or infinite, read as 0 by every lookup "
+                             "that blends them in (black there, as in Cycles)")
             if pixels is not None and img.source == 'TILED':
                 pixels = udim_tiles(img, pixels, notes, unassociate)
             cached = self._images[key, unassociate, frame] = (pixels, notes)
