@@ -42,6 +42,11 @@ def export_light(ob, matrix, messages):
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
         return None
     m = np.array(matrix, np.float64)          # (a copy: a zero-Z spot's is completed below)
+    if light.type == 'SUN' and np.isfinite(m[:3, :3]).all() and not np.isfinite(m[:3, 3]).all():
+        # a sun's light comes from its direction alone: Cycles lights the scene with it
+        messages.append(('WARNING', f"sun light '{ob.name}' has a NaN or infinite location; rendered from its "
+                                    "direction (a sun's location does not matter, as in Cycles)"))
+        m[:3, 3] = 0.0
     if not np.isfinite(m).all():
         # (a NaN location, rotation or scale: where it is and what it faces are undefined)
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite transform (location, rotation or "
@@ -98,7 +103,13 @@ def export_light(ob, matrix, messages):
                                             "Cycles' cone differs"))
             kw.update(spot_size=float(light.spot_size), spot_blend=float(light.spot_blend))
     elif light.type == 'SUN':
-        kw.update(angle=float(light.angle))
+        angle = float(light.angle)
+        if not np.isfinite(angle):
+            # Cycles renders a NaN angle as 0 (a sharp sun): measured, the same image
+            messages.append(('WARNING', f"sun light '{ob.name}' has an Angle of {angle:g}; rendered as 0 "
+                                        "(a sharp sun, as in Cycles)"))
+            angle = 0.0
+        kw.update(angle=angle)
     elif light.type == 'AREA':
         if getattr(cycles, 'is_portal', False):
             # a portal emits nothing in Cycles: it only guides the world's sampling there, and
@@ -123,7 +134,13 @@ def export_light(ob, matrix, messages):
                                         "Cycles treats the axes as orthogonal and its light differs"))
         # Cycles renders spread 0 as a beam straight out of the lamp (cos > 0.9999997); here
         # the narrowest spread sampled reliably, 1e-4 radians, whose light is the same
-        spread = max(float(light.spread), MIN_SPREAD)
+        spread = float(light.spread)
+        if not np.isfinite(spread):
+            # Cycles renders a NaN spread as 0 (the beam straight out of the lamp)
+            messages.append(('WARNING', f"area light '{ob.name}' has a Spread of {spread:g}; rendered as 0 "
+                                        "(as in Cycles)"))
+            spread = 0.0
+        spread = max(spread, MIN_SPREAD)
         kw.update(shape=light.shape, size_x=sx, size_y=sy, spread=spread)
     else:
         messages.append(('WARNING', f"light '{ob.name}' of type {light.type} is not supported; skipped"))

@@ -1,0 +1,65 @@
+"""A sun with a NaN location or Angle, an area light with a NaN Spread (a script or driver gone
+wrong): Cycles lights the scene with them (a sun's location does not matter; a NaN angle or
+spread renders as 0), DACRT skipped the light: a tester's frame 0.177 / 0.212 / 0.254 (the
+world alone) against Cycles' 0.504 / 0.515 / 0.557, now 0.504 / 0.515 / 0.557."""
+import bpy
+
+import numpy as np
+import pytest
+
+from addon.engine import DACRTRenderEngine
+
+from . import scenes
+
+NAN = float('nan')
+
+
+@pytest.fixture
+def said(monkeypatch):
+    texts = []
+    real = DACRTRenderEngine._report_messages
+
+    def record(self, messages):
+        texts.extend(text for _, text in messages)
+        return real(self, messages)
+    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
+    return texts
+
+
+def _render(kind, tmp_path, **props):
+    """A grey floor under a dim world, lit by one light of kind with props ('location' is the
+    object's), rendered at 8x6."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = 'DACRT'
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 4
+    scenes.world((0.05, 0.05, 0.05))
+    scenes.camera((0, 0, 4))
+    scenes.plane("Floor", size=20, materials=(scenes.diffuse("Grey", (0.8, 0.8, 0.8)),))
+    location = props.pop('location', (0, 0, 2))
+    scenes.light(kind, 3.0 if kind == 'SUN' else 50.0, location=location, rotation=(0.3, 0.2, 0), **props)
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / "r.exr", scene)))
+    assert np.isfinite(img).all()
+    return img
+
+
+def test_sun_with_a_nan_location_lights_the_scene(scene, tmp_path, said):
+    ref = _render('SUN', tmp_path)
+    img = _render('SUN', tmp_path, location=(NAN, 0, 2))
+    assert np.array_equal(img, ref) and img[..., 0].mean() > 0.5
+    assert any("sun light 'Sun' has a NaN or infinite location; rendered from its direction" in t for t in said)
+
+
+def test_sun_with_a_nan_angle_renders_as_a_sharp_sun(scene, tmp_path, said):
+    ref = _render('SUN', tmp_path, angle=0.0)
+    img = _render('SUN', tmp_path, angle=NAN)
+    assert np.array_equal(img, ref) and img[..., 0].mean() > 0.5
+    assert any("sun light 'Sun' has an Angle of nan; rendered as 0" in t for t in said), said
+
+
+def test_area_light_with_a_nan_spread_renders_as_spread_zero(scene, tmp_path, said):
+    ref = _render('AREA', tmp_path, spread=0.0, size=1.0)
+    img = _render('AREA', tmp_path, spread=NAN, size=1.0)
+    assert np.array_equal(img, ref) and img[..., 0].max() > 0.1
+    assert any("area light 'Area' has a Spread of nan; rendered as 0" in t for t in said), said
