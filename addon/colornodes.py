@@ -255,9 +255,10 @@ def curves_lookup(table, lo, hi, c, fac, extrapolate):
 
 def ramp_lookup(table, f, interpolate):
     """RGBA of the table at positions f (clamped to [0, 1]), linear between entries unless
-    the ramp is Constant (Cycles' rgb_ramp_lookup)."""
+    the ramp is Constant (Cycles' rgb_ramp_lookup; its clamp takes a NaN position to 1, the
+    last stop: measured in Cycles 5.0)."""
     n = len(table)
-    x = np.clip(np.nan_to_num(np.asarray(f, np.float64), nan=0.0), 0.0, 1.0) * (n - 1)
+    x = np.clip(np.nan_to_num(np.asarray(f, np.float64), nan=1.0), 0.0, 1.0) * (n - 1)
     i = np.minimum(x.astype(int), n - 1)
     if not interpolate:
         return table[i]

@@ -415,19 +415,23 @@ def constant_color(socket):
 
 
 def constant_value(socket, notes=None, why=None):
-    """(float, exact) of a float input: see constant. NaN reads as 0, as Cycles' clamps of its
-    inputs (fmaxf / saturate) turn it into their lower bound, not into a NaN image (the
-    material export reports such inputs: nan_inputs)."""
+    """(float, exact) of a float input: see constant. NaN reads as 0 (a shader's own input:
+    Cycles' clamps of most turn it into their lower bound, not into a NaN image; the exports
+    name such inputs: nan_inputs). Node chains computed by the Evaluator carry the NaN, as
+    Cycles computes them."""
     v, exact = constant(socket, False, notes, why)
     v = float(v[0])
     return (0.0 if v != v else v), exact
 
 
-def nan_inputs(ntree):
+def nan_inputs(ntree, types=None):
     """'input' of 'node' for each unlinked float input of ntree's nodes whose value is NaN
-    (a script's or driver's), which constant_value reads as 0."""
+    (a script's or driver's), which constant_value reads as 0; types: only nodes of those
+    types (a set of node.type), or None for all."""
     found = []
     for node in getattr(ntree, 'nodes', ()):
+        if types is not None and node.type not in types:
+            continue
         for sock in node.inputs:
             v = getattr(sock, 'default_value', None)
             if isinstance(v, float) and v != v and not sock.is_linked:

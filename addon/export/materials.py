@@ -20,6 +20,7 @@ from .aovs import shader_aovs
 from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
+from .procedurals import PROCEDURAL_TYPES
 from .normalmaps import bends_normal, tangent_normal_map
 from . import procedurals
 from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
@@ -319,9 +320,19 @@ class MaterialBuilder:
         if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
             closure = Closure(const=tuple(mat.diffuse_color[:3]))
         else:
-            bad = nan_inputs(ntree)
-            if bad:
-                reasons.append(f"NaN read as 0 (as Cycles clamps it) for {', '.join(bad)}")
+            # a script's or driver's NaN: what it becomes depends on the node, each said apart
+            # (a colour or float node computes with it as Cycles does: a Color Ramp's Factor
+            # gives its last stop, a colour computed as NaN is black; a shader's own input
+            # reads 0; a procedural texture computes with 0, where Cycles' texture differs)
+            computed = {n.type for n in ntree.nodes if nodeeval.node_inputs(n) is not None}
+            shader = {n.type for n in ntree.nodes} - computed - PROCEDURAL_TYPES
+            for types, said in ((shader, "NaN read as 0 (as Cycles clamps it) for {}"),
+                                (computed, "NaN computed through the node as Cycles computes it for {}"),
+                                (PROCEDURAL_TYPES, "NaN read as 0 for {}, where Cycles' texture differs (a Noise "
+                                                   "Texture of NaN Scale is black in Cycles)")):
+                bad = nan_inputs(ntree, types)
+                if bad:
+                    reasons.append(said.format(', '.join(bad)))
             out = output_node(ntree)
             if out is None or not out.inputs['Surface'].is_linked:
                 # Cycles: no surface shader renders black, but a volume-only material's

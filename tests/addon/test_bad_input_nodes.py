@@ -1,0 +1,63 @@
+"""NaN inputs of colour and texture nodes (a script or driver gone wrong): the export had
+said 'NaN read as 0 (as Cycles clamps it)' for every one, which is not what Cycles does: a
+Color Ramp's NaN Factor gives its last stop there (DACRT gave the first: red where Cycles
+showed blue; a tester's frame now 0.4678 / 0.5099 / 0.6024, Cycles' the same), and a NaN
+Scale of a Noise Texture is black in Cycles (DACRT: grey, computed with Scale 0)."""
+import numpy as np
+import pytest
+
+from addon.engine import DACRTRenderEngine
+
+from . import scenes
+
+NAN = float('nan')
+
+
+@pytest.fixture
+def said(monkeypatch):
+    texts = []
+    real = DACRTRenderEngine._report_messages
+
+    def record(self, messages):
+        texts.extend(text for _, text in messages)
+        return real(self, messages)
+    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
+    return texts
+
+
+def _plane_fed_by(scene, node_type, socket, value):
+    """A sunlit plane whose Diffuse colour is a new node's Color output, its input `socket`
+    set to value; returns (node, the render)."""
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.black_world()
+    scenes.light('SUN', 3.0)
+    scenes.camera((0, 0, 3))
+    mat = scenes.diffuse("Red", (0.8, 0.1, 0.1))
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    n = nt.nodes.new(node_type)
+    n.inputs[socket].default_value = value
+    if node_type == 'ShaderNodeValToRGB':
+        n.color_ramp.elements[0].color = (1, 0, 0, 1)
+        n.color_ramp.elements[1].color = (0, 0, 1, 1)
+    nt.links.new(n.outputs['Color'], d.inputs['Color'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    img = scenes.rgba(scenes.read_exr(scenes.render_exr(f"/tmp/dacrt_badnode_{id(scene)}.exr", scene)))
+    return n, img
+
+
+def test_nan_color_ramp_factor_gives_the_last_stop(scene, said):
+    _, img = _plane_fed_by(scene, 'ShaderNodeValToRGB', 'Fac', NAN)
+    assert np.all(img[..., 0] == 0.0) and np.all(img[..., 2] > 0.5)     # blue, as Cycles (was red)
+    text = " | ".join(said)
+    assert "NaN computed through the node as Cycles computes it for 'Factor' of 'Color Ramp'" in text
+    assert "as Cycles clamps it" not in text
+
+
+def test_nan_noise_scale_is_said_to_differ_from_cycles(scene, said):
+    _, img = _plane_fed_by(scene, 'ShaderNodeTexNoise', 'Scale', NAN)
+    assert np.isfinite(img).all()
+    text = " | ".join(said)
+    assert "NaN read as 0 for 'Scale' of 'Noise Texture', where Cycles' texture differs" in text
+    assert "as Cycles clamps it" not in text
