@@ -365,6 +365,14 @@ class Assembly:
             block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)   # (no negative albedo)
             if mirrored:                     # corners 1 and 2 were swapped for these triangles
                 block[rows] = block[rows][:, [0, 2, 1]]
+        # a NaN or infinite attribute value (a script's): Cycles interpolates it into every
+        # point of the triangles around it, whose closures it drops, so they render black (it
+        # had been read as 0 at that corner alone and blended into the rest of the triangle)
+        bad = ~np.isfinite(block).all(axis=(1, 2))
+        if bad.any():
+            block[bad] = 0.0
+            self.ignore(f"a colour or attribute value NaN or infinite at some corner: the {int(bad.sum())} "
+                        "triangle(s) around it render black, as in Cycles", place.name)
 
     def _texture_coordinates(self, a, place, materials, mirrored, out, S):
         """The Generated and Object texture coordinates at the corners of one instance's
