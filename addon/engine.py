@@ -300,8 +300,11 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         finally:
             self.end_result(result)
         if integ is not None:
+            # a cancel that arrives after every view's last sample cancelled nothing
+            finished = len(per_view) == (len(views) if multiview else 1) and all(
+                v.get('samples_done', 0) >= int(scene_data.settings.samples) for v in per_view)
             self._report_summary(frame_stats(per_view), scene_data, stats_key(depsgraph.scene.name, layer),
-                                 export_seconds)
+                                 export_seconds, finished)
 
     def _view_integrator(self, depsgraph, scene_data, view):
         """The integrator of the frame's export (view None) or of one view of a multiview
@@ -431,7 +434,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             for i, part in enumerate(_report_chunks(text)):
                 self.report(kind, f"DACRT: {part}" if i == 0 else f"DACRT (continued): {part}")
 
-    def _report_summary(self, stats, scene_data, layer, export_seconds):
+    def _report_summary(self, stats, scene_data, layer, export_seconds, finished=False):
         s = dict(stats, export_seconds=export_seconds)
         LAST_RENDER_STATS[layer] = s
         parts = [f"{len(scene_data.geometry.triangles)} triangles",
@@ -443,7 +446,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         # where the rest of the frame went: a scene of many instances can spend most of it here
         parts.append(f"export {export_seconds:.2f} s, set-up {s.get('setup_seconds', 0.0):.2f} s")
         # a cancelled render says so: its sample count alone read like a finished render's
-        cancelled = "render cancelled; " if self.cancel_requested() else ""
+        cancelled = "render cancelled; " if self.cancel_requested() and not finished else ""
         self.report({'INFO'}, "DACRT: " + cancelled + ", ".join(parts))
         skipped = _skipped_text(s.get('skipped'))
         if skipped:

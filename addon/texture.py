@@ -217,6 +217,13 @@ def texture_lookup(tex, u: np.ndarray, v: np.ndarray, interpolation: str, extens
 
 def _blend(tex, u, v, interpolation, extension, channels):
     """The first `channels` channels (channels, n) float32 of texels tex (h, w, c) at (u, v)."""
+    # (a NaN or infinite UV, a script's, casts to an arbitrary texel index, wrapped into the
+    # image as any other: numpy's RuntimeWarning about the cast had reached the console)
+    with np.errstate(invalid='ignore', over='ignore'):
+        return _blend_texels(tex, u, v, interpolation, extension, channels)
+
+
+def _blend_texels(tex, u, v, interpolation, extension, channels):
     h, w = tex.shape[:2]
     x = u * F32(w)
     y = v * F32(h)
