@@ -326,11 +326,14 @@ class MaterialBuilder:
             # reads 0; a procedural texture computes with 0, where Cycles' texture differs)
             computed = {n.type for n in ntree.nodes if nodeeval.node_inputs(n) is not None}
             shader = {n.type for n in ntree.nodes} - computed - PROCEDURAL_TYPES
-            for types, said in ((shader, "NaN read as 0 (as Cycles clamps it) for {}"),
-                                (computed, "NaN computed through the node as Cycles computes it for {}"),
-                                (PROCEDURAL_TYPES, "NaN read as 0 for {}, where Cycles' texture differs (a Noise "
-                                                   "Texture of NaN Scale is black in Cycles)")):
-                bad = nan_inputs(ntree, types)
+            textures = nan_inputs(ntree, PROCEDURAL_TYPES)
+            # (a Noise Texture's NaN Scale gives NaN, as in Cycles: black)
+            noise = [b for b in nan_inputs(ntree, {'TEX_NOISE'}) if b.startswith("'Scale' of ")]
+            for bad, said in ((nan_inputs(ntree, shader), "NaN read as 0 (as Cycles clamps it) for {}"),
+                              (nan_inputs(ntree, computed) + noise,
+                               "NaN computed through the node as Cycles computes it for {}"),
+                              ([b for b in textures if b not in noise],
+                               "NaN read as 0 for {}, where Cycles' texture differs")):
                 if bad:
                     reasons.append(said.format(', '.join(bad)))
             out = output_node(ntree)

@@ -166,6 +166,13 @@ def _texture(node, out, chain, depth):
             scale, detail, rough, lac, dist, offset, gain = (p(c) for p in params)
             value, color = pr.noise_texture(vec(c), scale, detail, rough, lac, dist, normalize, dims, not fac, kind,
                                             offset, gain)
+            lost = ~np.isfinite(scale)
+            if lost.any():
+                # a NaN Scale (a script's): Cycles' noise of NaN points is NaN, which its
+                # closures drop (black; a Color Ramp after it gives its last stop)
+                lost = np.broadcast_to(lost, value.shape)
+                value = np.where(lost, np.nan, value)
+                color = None if color is None else np.where(lost[:, None], np.nan, color)
             return value[:, None] if fac else color
         return noise, False
     if t == 'TEX_CHECKER':
