@@ -115,7 +115,7 @@ def test_ramp_table_lookup():
     table = cn.ramp_table(lambda p: (p, 1 - p, 0.5, 1.0))
     f = np.array([0.0, 0.1234, 0.5, 0.999, 1.0, -1.0, 2.0, np.nan])
     got = cn.ramp_lookup(table, f, True)
-    ref = np.clip(np.nan_to_num(f), 0, 1)
+    ref = np.clip(np.nan_to_num(f, nan=1.0), 0, 1)        # NaN: the last stop, as in Cycles
     assert np.allclose(got[:, 0], ref, atol=1e-12) and np.allclose(got[:, 1], 1 - ref, atol=1e-12)
     assert np.allclose(cn.ramp_lookup(table, np.array([0.5]), False)[0, 0], 127 / 255)
 
