@@ -58,8 +58,11 @@ def export_camera(scene, messages=None, view=None, camera=None):
         return default
     if kind == 'PERSP':
         lens = usable(lens, "Focal Length", 50.0)
-    sensor_width = usable(sensor_width, "Sensor Width", 36.0) if sensor_fit != 'VERTICAL' else sensor_width
-    sensor_height = usable(sensor_height, "Sensor Height", 24.0) if sensor_fit == 'VERTICAL' else sensor_height
+    if kind != 'ORTHO':                     # (the sensor that fits the frame; none in orthographic)
+        if sensor_fit == 'VERTICAL':
+            sensor_height = usable(sensor_height, "Sensor Height", 24.0)
+        else:
+            sensor_width = usable(sensor_width, "Sensor Width", 36.0)
     if kind == 'ORTHO':
         ortho_scale = usable(ortho_scale, "Orthographic Scale", 6.0)
     shift = (usable(shift[0], "Shift X", 0.0, False), usable(shift[1], "Shift Y", 0.0, False))

@@ -122,3 +122,11 @@ def test_nan_mist_depth_renders_with_a_zero_mist_pass(scene, tmp_path, said):
     assert np.all(mist == 0.0)
     assert (scenes.rgba(ch, 'ViewLayer.Combined.')[..., 0] > 0.5).all()
     assert any("world 'World': its Mist Pass Depth is nan" in t for t in said), said
+
+
+def test_nan_sensor_of_an_orthographic_camera_changes_nothing(scene, tmp_path, said):
+    """An orthographic view reads no sensor: its NaN is not a broken camera."""
+    cam = _lit_scene(scene, 'ORTHO')
+    cam.data.sensor_width = NAN
+    img = _image(scene, tmp_path)
+    assert (img[..., 0] > 0.5).all() and not any("camera" in t for t in said)
