@@ -56,3 +56,17 @@ def exported(monkeypatch):
         assert len(captured) == 1, "the engine did not export exactly once"
         return captured[0]
     return run
+
+
+@pytest.fixture
+def said(monkeypatch):
+    """The texts the engine reports (RenderEngine.report) during the test's renders."""
+    from addon.engine import DACRTRenderEngine
+    texts = []
+    real = DACRTRenderEngine._report_messages
+
+    def record(self, messages):
+        texts.extend(text for _, text in messages)
+        return real(self, messages)
+    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
+    return texts

@@ -9,25 +9,10 @@ import bpy
 import numpy as np
 import pytest
 
-from addon.engine import DACRTRenderEngine
-
 from . import scenes
 
 WORLD = (0.2, 0.25, 0.3)
 NAN, INF = float('nan'), float('inf')
-
-
-@pytest.fixture
-def said(monkeypatch):
-    """The texts the engine reports during the test's renders."""
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
 
 
 def _lit_scene(scene, kind='PERSP'):

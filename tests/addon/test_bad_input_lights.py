@@ -5,25 +5,10 @@ world alone) against Cycles' 0.504 / 0.515 / 0.557, now 0.504 / 0.515 / 0.557.""
 import bpy
 
 import numpy as np
-import pytest
-
-from addon.engine import DACRTRenderEngine
 
 from . import scenes
 
 NAN = float('nan')
-
-
-@pytest.fixture
-def said(monkeypatch):
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
 
 
 def _render(kind, tmp_path, **props):

@@ -7,23 +7,9 @@ import bpy
 import numpy as np
 import pytest
 
-from addon.engine import DACRTRenderEngine
-
 from . import scenes
 
 NAN = float('nan')
-
-
-@pytest.fixture
-def said(monkeypatch):
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
 
 
 def _scene(scene, into, which='Scale', value=(1, 1, 1), pixels=None):

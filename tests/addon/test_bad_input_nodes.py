@@ -5,25 +5,10 @@ showed blue; a tester's frame now 0.4678 / 0.5099 / 0.6024, Cycles' the same), a
 Scale of a Noise Texture is black in Cycles (DACRT: grey, computed with Scale 0). A Voronoi
 Texture's NaN Scale still differs from Cycles' (said)."""
 import numpy as np
-import pytest
-
-from addon.engine import DACRTRenderEngine
 
 from . import scenes
 
 NAN = float('nan')
-
-
-@pytest.fixture
-def said(monkeypatch):
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
 
 
 def _plane_fed_by(scene, node_type, socket, value):

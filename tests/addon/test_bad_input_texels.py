@@ -5,23 +5,8 @@ samples were dropped ("6302 sample(s) had NaN or infinite channels", naming no i
 tester's cube 0.3415 / 0.3723 / 0.4031 against Cycles' 0.3467 / 0.3775 / 0.4084."""
 import bpy
 import numpy as np
-import pytest
-
-from addon.engine import DACRTRenderEngine
 
 from . import scenes
-
-
-@pytest.fixture
-def said(monkeypatch):
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
 
 
 def _render(scene, value, tmp_path):

@@ -3,25 +3,10 @@ world channel that is not finite and keeps the others; DACRT had blacked out the
 and a NaN Strength (of the world's Background or of a light's Emission) was read as 0 without
 a word."""
 import numpy as np
-import pytest
-
-from addon.engine import DACRTRenderEngine
 
 from . import scenes
 
 NAN = float('nan')
-
-
-@pytest.fixture
-def said(monkeypatch):
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
 
 
 def _render(scene):
