@@ -16,6 +16,12 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 // Squared distances below this count as this: energy (< 1e210) / d2 stays finite.
 constexpr double kMinDist2 = 1e-60;
+// A point counts as behind a node's lights (LightTreeNode::slab) only beyond this share of
+// 2 (d + max |P_k|) + slab, d its distance to the centre: ~100 float ULPs of the lengths and
+// coordinates the lights' own float arithmetic rounds (their sample at a point on the plane,
+// or a hair behind it, may still find a cosine > 0), so that no node is culled that could
+// give the point light.
+constexpr float kBackMargin = 1e-5f;
 
 double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
@@ -69,8 +75,14 @@ double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
                              std::fabs(N[0]) * nd.half[0] + std::fabs(N[1]) * nd.half[1] + std::fabs(N[2]) * nd.half[2];
         if (!(reach > 0.0)) return 0.0;
     }
-    // within the bounds (or NaN): no culling, and the distance to the centre at least half the
-    // radius (Cycles)
+    if (nd.slab >= 0.0f) {  // every light emits within a hemisphere: P behind all of them gets 0
+        const double back = -(double(nd.axis[0]) * v[0] + double(nd.axis[1]) * v[1] + double(nd.axis[2]) * v[2]) +
+                            nd.slab;
+        const double pm = std::max({std::fabs(double(P[0])), std::fabs(double(P[1])), std::fabs(double(P[2]))});
+        if (back <= -double(kBackMargin) * (2.0 * (std::sqrt(dd) + pm) + nd.slab)) return 0.0;
+    }
+    // within the bounds (or NaN): no cone culling, and the distance to the centre at least half
+    // the radius (Cycles)
     if (!(dd > r2)) return nd.energy / std::max(std::max(dd, 0.25 * r2), kMinDist2);
     double f = 1.0;
     const double d = std::sqrt(dd);
@@ -206,6 +218,13 @@ int weigh8_float(const LightTree::Stop& q, const float P[3], const float* N, dou
     out_culled = out_culled | (beyond & (cos_r <= load8(q.cos_e) - margin));
     f = sel(beyond, f * max8(cos_r, margin), f);
     culled = culled | (~inside & out_culled);
+    {  // behind every light of a node that emits within a hemisphere, inside its sphere too
+        const F8 sl = load8(q.slab);
+        const float pm = std::max({std::fabs(P[0]), std::fabs(P[1]), std::fabs(P[2])});
+        const F8 d = dd * inv_d;  // (NaN at dd = 0: not culled, as the centre is in the box)
+        const F8 tol = kBackMargin * (2.0f * (d + splat8(pm)) + sl);
+        culled = culled | ((sl >= zero) & (av + sl <= -tol));
+    }
     const F8 g = sel(culled, zero, sel(inside, one, f) * inv_denom);
     for (int k = 0; k < 4; ++k) imp[k] = q.energy[k] * double(g.lo[k]);
     for (int k = 0; k < 4; ++k) imp[4 + k] = q.energy[4 + k] * double(g.hi[k]);
@@ -420,6 +439,14 @@ struct Builder {
         nd.cos_o = all ? -1.0f : float(std::cos(cone.theta_o));
         nd.sin_o = all ? 0.0f : float(std::sin(cone.theta_o));
         nd.cos_e = float(std::cos(std::min(cone.theta_e, kPi / 2)));
+        // every direction the node's lights emit in lies within pi/2 of the axis: a point behind
+        // the box's extent along the (stored) axis gets nothing (weigh)
+        nd.slab = -1.0f;
+        if (!all && cone.theta_o + cone.theta_e <= kPi / 2) {
+            double s = 0.0;
+            for (int k = 0; k < 3; ++k) s += std::fabs(double(nd.axis[k])) * double(nd.half[k]);
+            nd.slab = float(s * (1.0 + 1e-6));
+        }
     }
 };
 
@@ -564,6 +591,7 @@ void LightTree::build_stops() {
             q.cos_o[k] = nd.cos_o;
             q.sin_o[k] = nd.sin_o;
             q.cos_e[k] = nd.cos_e;
+            q.slab[k] = nd.slab;
             q.energy[k] = q.node[k] < 0 ? 0.0 : nd.energy;
         }
         stops_.push_back(q);

@@ -12,8 +12,10 @@
 // children's (a look one level further down, whose tighter bounds tell more); a node's own
 // importance is energy x the cosine of the smallest emission angle any of the node's lights can
 // have toward P / the squared distance to the centre (0 where no light of the node can face P;
-// inside the sphere no culling, and the distance at least half the radius, as in Cycles),
-// times the cosine of the smallest angle of incidence at the receiving point's normal N (0 for
+// inside the sphere no cone culling, and the distance at least half the radius, as in Cycles;
+// but where the node's lights emit within a hemisphere, theta_o + theta_e <= pi/2, a point
+// behind the box's extent along the axis is 0 inside the sphere too: a one-sided area light
+// gives nothing behind its plane, as Cycles' area_light_tree_parameters culls it), times the cosine of the smallest angle of incidence at the receiving point's normal N (0 for
 // a node wholly below its horizon, by its box, even where its sphere holds the point: a diffuse
 // surface gets nothing from there). A BSDF ray's MIS
 // weight evaluates the same pdf at its origin with that vertex's normal.
@@ -39,6 +41,10 @@ struct LightTreeNode {
     float half[3];            // the bounds' half extents about center (rounded up)
     float axis[3], cos_o;     // emission cone: within theta_o of axis (cos_o = -1: every direction)
     float sin_o, cos_e;       // sin theta_o; cos of the falloff angle theta_e beyond theta_o
+    float slab;               // where theta_o + theta_e <= pi/2 (every light emits only to the
+                              // front of planes normal to axis through it): the bounds' half
+                              // extent along axis, so that a point with axis . (P - center) +
+                              // slab <= 0 is behind every light (-1: no such half-space)
     double energy;            // summed energy of the lights below (> 0; double: sums of float
                               // energies overflow float, and importances divide it by d^2)
     int32_t child;            // inner node: left child (right = child + 1); leaf: -1 - member
@@ -99,7 +105,7 @@ public:
     // float, so that all eight are weighed at once (lighttree.cpp); an empty lane has energy 0.
     struct Stop {
         float center[3][8], half[3][8], radius[8];
-        float axis[3][8], cos_o[8], sin_o[8], cos_e[8];
+        float axis[3][8], cos_o[8], sin_o[8], cos_e[8], slab[8];
         double energy[8];
         int32_t node[8];    // the node each lane is (-1: empty), for the float64 path
         int32_t target[4];  // target j weighs as lanes 2j, 2j + 1
