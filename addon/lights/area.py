@@ -241,9 +241,17 @@ class AreaLight(Lamp):
                            np.where(use, value, ls.value), np.where(use, pdf, ls.pdf))
 
     def bounds(self) -> Bounds:
-        # one-sided: the front hemisphere of the normal; on-axis intensity radiance x area
+        # one-sided: the front hemisphere of the normal (theta_o = 0, theta_e = pi/2), or with a
+        # Spread s < pi only directions within s/2 of it (Cycles' light tree: theta_e = spread /
+        # 2): the profile f is 0 from s/2 on, from every point of the surface. Widened by 1e-3
+        # rad, as spots are, so that float rounding of tan(s/2) never culls a lit point; on-axis
+        # intensity radiance x area
         half = 0.5 * (np.abs(self.axis_x) + np.abs(self.axis_y))
-        return Bounds(self.center - half, self.center + half, self.normal, 1.0, 0.0,
+        cos_e = 0.0
+        if self.tan_half_spread is not None:
+            theta_e = float(np.arctan(np.float64(self.tan_half_spread))) + 1e-3
+            cos_e = float(np.cos(theta_e)) if theta_e < np.pi / 2 else 0.0
+        return Bounds(self.center - half, self.center + half, self.normal, 1.0, cos_e,
                       luminance(self.emit) * self.area)
 
     def record(self):

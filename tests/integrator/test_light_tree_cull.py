@@ -46,6 +46,27 @@ def test_points_behind_a_one_sided_area_light_pick_the_other_light():
     assert np.all(_pdf(tree, below[:3], 0, (0.0, 0.0, 1.0)) > 0.5)
 
 
+def test_points_outside_a_narrow_spread_pick_the_other_light():
+    """A 0.6 m panel at 1.2 m with Spread 20 degrees lights only the floor below it: wall points
+    pick the point light always (as they would not with Spread 180); floor points below it
+    still pick the panel."""
+    walls = [(0.99, 0.0, 0.5), (0.99, 0.5, 1.0), (0.0, 0.99, 0.3), (0.8, 0.8, 0.0)]
+    normals = [(-1, 0, 0), (-1, 0, 0), (0, -1, 0), (0, 0, 1)]
+    for deg, culled in ((180.0, False), (20.0, True)):
+        panel = make_lamp(light('AREA', 60.0, translation(0.0, 0.0, 1.2), size_x=0.6, spread=math.radians(deg)))
+        bulb = make_lamp(light('POINT', 40.0, translation(-0.5, -0.3, 1.6)))
+        tree, _ = build_tree([panel, bulb], None, 2)
+        for P, N in zip(walls, normals):
+            p = _pdf(tree, P, 0, N)[0]
+            assert (p == 0.0) if culled else (p > 0.5), (deg, P, p)
+            # the panel's own samples there: all 0 where it is culled
+            value = panel.sample(np.repeat(np.asarray(P, F32)[:, None], 64, 1),
+                                 *np.random.default_rng(1).random((2, 64), F32)).value
+            assert (not culled) or np.all(value == 0.0)
+        assert _pdf(tree, (0.0, 0.0, 0.0), 0, (0, 0, 1))[0] > 0.5
+        assert _pdf(tree, (0.25, -0.25, 0.0), 0, (0, 0, 1))[0] > 0.3
+
+
 def _random_area(rng):
     m = np.eye(4)
     q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
