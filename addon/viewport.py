@@ -86,11 +86,13 @@ class ViewportSession:
             one = dataclasses.replace(self.scene_data.settings, samples=1)
             if not self._render(dataclasses.replace(self.scene_data, camera=preview, settings=one), preview=True):
                 return
-        self._render(self.scene_data)
+        self._render(self.scene_data, hold=preview is not None)
 
-    def _render(self, scene_data, preview=False):
-        """Render scene_data's samples, publishing each block's image; False when stopped or
-        failed."""
+    def _render(self, scene_data, preview=False, hold=False):
+        """Render scene_data's samples, publishing each block's image (hold: only from the end
+        of the first sample on, so the coarse preview stays up while the first full-resolution
+        sample comes in runs of pixels, the rest of the region still empty); False when stopped
+        or failed."""
         try:
             integ = Integrator(scene_data, check_break=self._stop.is_set)
         except SetupCancelled:
@@ -102,6 +104,10 @@ class ViewportSession:
         steps = integ.passes()
         try:
             for progress in steps:
+                if hold and progress.samples_done < 1:
+                    if self._stop.is_set():
+                        return False
+                    continue
                 image = integ.film.combined()
                 with self._lock:
                     self._image, self._version = image, self._version + 1

@@ -198,18 +198,22 @@ def test_viewport_restarts_for_what_changes_the_image_only(scene):
 def test_a_large_region_shows_a_coarse_sample_first(scene, monkeypatch):
     # one sample at <= PREVIEW_PIXELS first, drawn stretched; then the region's own samples,
     # the same as without the preview
-    from addon import viewport
+    from addon import integrator, viewport
     cam = _lit_box(scene)
     scene.dacrt.preview_samples = 2
     w, h = 400, 300
     data = export.export_scene(bpy.context.evaluated_depsgraph_get(), view_camera=_view_of(cam, w, h))
     shapes = []
-    session = ViewportSession(data, lambda: shapes.append(session.image()[1].shape))
+    session = ViewportSession(data, lambda: shapes.append((session.image()[1].shape, session.samples_done)))
+    monkeypatch.setattr(integrator, '_FIRST_PATHS', 1 << 14)     # the first sample in runs of pixels
     session.start(_view_of(cam, w, h))
     image = _finished(session)
-    assert shapes[0][0] * shapes[0][1] <= viewport.PREVIEW_PIXELS and shapes[0][2] == 4
-    assert abs(shapes[0][1] / shapes[0][0] - w / h) < 0.02
-    assert shapes[-1] == (h, w, 4) and session.samples_done == 2
+    (first, _), (last, _) = shapes[0], shapes[-1]
+    assert first[0] * first[1] <= viewport.PREVIEW_PIXELS and first[2] == 4
+    assert abs(first[1] / first[0] - w / h) < 0.02
+    assert last == (h, w, 4) and session.samples_done == 2
+    # the preview stays up until the region's first sample is whole: no half-empty frame
+    assert all(done >= 1 for shape, done in shapes if shape == last)
     monkeypatch.setattr(viewport, 'PREVIEW_PIXELS', w * h)
     plain = ViewportSession(data)
     plain.start(_view_of(cam, w, h))
