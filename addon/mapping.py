@@ -245,9 +245,10 @@ def _direction_matrix(node, reasons):
     rot = _rotation(_vector_input(node, 'Rotation', (0, 0, 0), reasons))
     scale = _vector_input(node, 'Scale', (1, 1, 1), reasons)
     # (the location is ignored for directions: only a NaN in it, which Cycles adds, is said)
-    loc = _vector_input(node, 'Location', (0, 0, 0), []) if kind in ('POINT', 'TEXTURE') else np.zeros(3)
+    said = []
+    loc = _vector_input(node, 'Location', (0, 0, 0), said) if kind in ('POINT', 'TEXTURE') else np.zeros(3)
     if not np.isfinite(loc).all():
-        _vector_input(node, 'Location', (0, 0, 0), reasons)
+        reasons.extend(said)
     if not (np.isfinite(rot).all() and np.isfinite(scale).all() and np.isfinite(loc).all()):
         return np.full((3, 3), np.nan)      # (named in reasons: every direction is NaN in Cycles)
     if not (np.abs(scale) > 0).all():

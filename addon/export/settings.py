@@ -50,13 +50,16 @@ def export_settings(scene, vl, messages, viewport=False):
     d = getattr(scene, 'dacrt', None)
     if d is None:
         raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
-    passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]) and not viewport)
-    missing = [label for owner, attr, label in _UNRENDERED_PASSES
-               if getattr(getattr(vl, owner) if owner else vl, attr, False) and not viewport]
-    aovs = tuple(dict.fromkeys((a.name, a.type) for a in getattr(vl, 'aovs', ()) if a.is_valid and not viewport))
-    missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ())
-                if not a.is_valid and not viewport]
-    crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False) and not viewport)
+    if viewport:        # the viewport draws Combined alone: no pass, AOV, Cryptomatte or light group
+        passes, missing, aovs, crypto, lightgroups = (), [], (), (), ()
+    else:
+        passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]))
+        missing = [label for owner, attr, label in _UNRENDERED_PASSES
+                   if getattr(getattr(vl, owner) if owner else vl, attr, False)]
+        aovs = tuple(dict.fromkeys((a.name, a.type) for a in getattr(vl, 'aovs', ()) if a.is_valid))
+        missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ()) if not a.is_valid]
+        crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
+        lightgroups = tuple(dict.fromkeys(g.name for g in getattr(vl, 'lightgroups', ())))
     if missing:
         written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
                                           + ['Cryptomatte', 'light groups', 'shader AOVs']))
@@ -94,7 +97,6 @@ def export_settings(scene, vl, messages, viewport=False):
                        passes=passes, mist=mist, use_adaptive_sampling=d.use_adaptive_sampling,
                        pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
                        cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),
-                       lightgroups=() if viewport else tuple(dict.fromkeys(g.name for g in
-                                                                           getattr(vl, 'lightgroups', ()))),
+                       lightgroups=lightgroups,
                        aovs=aovs,
                        adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)

@@ -15,8 +15,9 @@
 // inside the sphere no cone culling, and the distance at least half the radius, as in Cycles;
 // but where the node's lights emit within a hemisphere, theta_o + theta_e <= pi/2, a point
 // behind the box's extent along the axis is 0 inside the sphere too: a one-sided area light
-// gives nothing behind its plane, as Cycles' area_light_tree_parameters culls it), times the cosine of the smallest angle of incidence at the receiving point's normal N (0 for
-// a node wholly below its horizon, by its box, even where its sphere holds the point: a diffuse
+// gives nothing behind its plane, as Cycles' area_light_tree_parameters culls it), times the
+// cosine of the smallest angle of incidence at the receiving point's normal N (0 for a node
+// wholly below its horizon, by its box, even where its sphere holds the point: a diffuse
 // surface gets nothing from there). A BSDF ray's MIS
 // weight evaluates the same pdf at its origin with that vertex's normal.
 //
