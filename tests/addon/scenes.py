@@ -1,5 +1,6 @@
 """Scene-building helpers for the add-on tests (plain bpy data API, no operators' context)."""
 import math
+import tempfile
 from pathlib import Path
 
 import bpy
@@ -313,6 +314,14 @@ def read_exr(path):
 
 def rgba(channels, prefix=''):
     return np.stack([channels[prefix + c] for c in 'RGBA'], axis=-1)
+
+
+def render_rgba(scene=None):
+    """Render and return the Combined RGBA as (H, W, 4) float32, row 0 at the BOTTOM, through an
+    EXR in a directory of its own (removed again: a fixed /tmp name had collided across test
+    workers and left files behind)."""
+    with tempfile.TemporaryDirectory(prefix="dacrt_test_") as d:
+        return rgba(read_exr(render_exr(Path(d) / "render.exr", scene)))
 
 
 def write_image(path, px, fmt='uint8'):
