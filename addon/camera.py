@@ -25,10 +25,13 @@ class CameraModel:
             if cam.panorama_type not in panorama.SUPPORTED:
                 raise ValueError(f"camera.panorama_type {cam.panorama_type!r} is not one of "
                                  f"{', '.join(panorama.SUPPORTED)}")
-            numbers = (*cam.longitude, *cam.latitude, cam.fisheye_fov, cam.fisheye_lens, *cam.sensor_mm)
-            if not np.isfinite(numbers).all() or min(cam.fisheye_lens, *cam.sensor_mm) <= 0:
-                raise ValueError(f"camera panorama settings must be finite (lens and sensor positive), "
-                                 f"got {numbers}")
+            # the settings its type reads (the export names and replaces broken ones)
+            numbers = {'EQUIRECTANGULAR': (*cam.longitude, *cam.latitude), 'MIRRORBALL': (),
+                       'FISHEYE_EQUIDISTANT': (cam.fisheye_fov,),
+                       'FISHEYE_EQUISOLID': (cam.fisheye_fov, cam.fisheye_lens, *cam.sensor_mm)}[cam.panorama_type]
+            if not np.isfinite(numbers).all() or min(numbers, default=1.0) <= 0 and cam.panorama_type != 'EQUIRECTANGULAR':
+                raise ValueError(f"camera panorama settings of {cam.panorama_type} must be finite (field of view, "
+                                 f"lens and sensor positive), got {numbers}")
             if cam.aperture > 0:
                 raise ValueError("a panoramic camera has no depth of field here (aperture must be 0)")
         self.pano = cam if cam.kind == 'PANO' else None

@@ -58,11 +58,15 @@ def export_camera(scene, messages=None, view=None, camera=None):
         return default
     if kind == 'PERSP':
         lens = usable(lens, "Focal Length", 50.0)
-    if kind != 'ORTHO':                     # (the sensor that fits the frame; none in orthographic)
+    broken_before_sensor = len(broken)
+    if kind == 'PERSP' or pano == 'FISHEYE_EQUISOLID':   # (the sensor that fits the frame; others read none)
         if sensor_fit == 'VERTICAL':
             sensor_height = usable(sensor_height, "Sensor Height", 24.0)
         else:
             sensor_width = usable(sensor_width, "Sensor Width", 36.0)
+    else:
+        sensor_width = sensor_width if math.isfinite(sensor_width) and sensor_width > 0 else 36.0
+        sensor_height = sensor_height if math.isfinite(sensor_height) and sensor_height > 0 else 24.0
     if kind == 'ORTHO':
         ortho_scale = usable(ortho_scale, "Orthographic Scale", 6.0)
     shift = (usable(shift[0], "Shift X", 0.0, False), usable(shift[1], "Shift Y", 0.0, False))
@@ -103,9 +107,8 @@ def export_camera(scene, messages=None, view=None, camera=None):
         # equisolid fisheye's sensor is fitted to the frame like a perspective camera's
         viewplane = (shift[0], 1.0 + shift[0], shift[1], 1.0 + shift[1])
         sensor_mm = (sensor, sensor * yr / xr) if horizontal else (sensor * xr / yr, sensor)
-        pano_settings = dict(panorama_type=pano, longitude=(cam.longitude_min, cam.longitude_max),
-                             latitude=(cam.latitude_min, cam.latitude_max), fisheye_fov=cam.fisheye_fov,
-                             fisheye_lens=cam.fisheye_lens, sensor_mm=sensor_mm)
+        pano_settings = _panorama_settings(cam, cam_ob.name, pano, sensor_mm, len(broken) > broken_before_sensor,
+                                           broken, messages)
 
     # Cycles clears the scale of the camera matrix (transform_clear_scale).
     m = np.array(cam_ob.matrix_world if view is None else view[0], dtype=np.float64)
@@ -145,6 +148,37 @@ def export_camera(scene, messages=None, view=None, camera=None):
     return sd.Camera(kind=kind, matrix=m, viewplane=viewplane, tan_half_fov=tan_half_fov,
                      clip_start=float(clip_start), clip_end=float(clip_end), width=width,
                      height=height, border=border, crop=crop, **dof, **pano_settings)
+
+
+def _panorama_settings(cam, cam_name, pano, sensor_mm, sensor_broken, broken, messages):
+    """The settings of a panorama type that it reads (a NaN in another one changes nothing, as in
+    Cycles). Broken ones are added to `broken` (the world only is rendered) with a usable stand-in,
+    as Cycles' rays then have NaN directions: these meet nothing and see the world everywhere
+    an equirectangular or equisolid frame has a pixel, outside the equisolid circle too, since
+    its test against NaN cuts nothing (so the stand-in lens makes the circle cover the frame);
+    the equidistant fisheye still cuts its circle. A NaN equisolid Field of View cuts no circle
+    either, while the rays within reach of the lens stay valid: read as 360 degrees."""
+    lon, lat = (cam.longitude_min, cam.longitude_max), (cam.latitude_min, cam.latitude_max)
+    fov, lens = cam.fisheye_fov, cam.fisheye_lens
+    if pano == 'EQUIRECTANGULAR' and not np.isfinite((*lon, *lat)).all():
+        broken.append(f"Longitude {lon[0]:g} .. {lon[1]:g} or Latitude {lat[0]:g} .. {lat[1]:g} is not finite")
+        lon, lat = (-math.pi, math.pi), (-0.5 * math.pi, 0.5 * math.pi)
+    elif pano == 'FISHEYE_EQUIDISTANT' and not (math.isfinite(fov) and fov > 0.0):
+        broken.append(f"Field of View is {fov:g}")
+        fov = math.pi
+    elif pano == 'FISHEYE_EQUISOLID':
+        if math.isnan(fov):
+            if messages is not None:
+                messages.append(('WARNING', f"camera '{cam_name}': Field of View is nan, read as 360 degrees "
+                                            "(as in Cycles, whose fisheye then cuts no circle from the frame)"))
+            fov = 2.0 * math.pi
+        lens_broken = not (math.isfinite(lens) and lens > 0.0)
+        if lens_broken:
+            broken.append(f"Fisheye Lens is {lens:g}")
+        if lens_broken or sensor_broken:        # (world everywhere: a circle wider than the frame)
+            fov, lens = 2.0 * math.pi, 1e30
+    return dict(panorama_type=pano, longitude=lon, latitude=lat, fisheye_fov=fov, fisheye_lens=lens,
+                sensor_mm=sensor_mm)
 
 
 def _look_through_lens(ob):
