@@ -10,7 +10,6 @@ no bpy: the film accumulates, the engine writes.
 """
 from __future__ import annotations
 
-import json
 
 import numpy as np
 
@@ -64,8 +63,11 @@ def ids(names) -> np.ndarray:
 
 
 def manifest(names) -> str:
-    """Cycles' manifest: JSON of each distinct name -> its hash as 8 hex digits."""
-    return json.dumps({n: f"{murmur3_32(n):08x}" for n in dict.fromkeys(names)}, separators=(',', ':'))
+    """Cycles' manifest, byte for byte: each distinct name -> its hash as 8 hex digits, written
+    as Blender writes it, the name raw between quotes (UTF-8, no escapes: Blender's Cryptomatte
+    node reads a JSON escape such as \\u00fc as the letters 'u00fc', so a picked matte was named
+    'Wu00fcrfel'). Names with a quote or backslash make it invalid JSON there as well."""
+    return "{" + ",".join(f'"{n}":"{murmur3_32(n):08x}"' for n in dict.fromkeys(names)) + "}"
 
 
 def metadata(layer: str, kind: str, names) -> dict:
