@@ -211,7 +211,7 @@ def _sequence_frame(img, reasons, unassociate, user, scene_frame):
     """The texels of an image sequence's file at the frame its user shows (Cycles reads that
     file, imageuser.user_frame / sequence_path), or None (magenta, as Cycles) if unreadable."""
     frame = user_frame(img, user, scene_frame)
-    path = sequence_path(img, frame) or bpy.path.abspath(img.filepath_raw, library=img.library)
+    path = sequence_path(img, frame)
     texels = _file_texels(path, img, reasons, unassociate)
     if texels is None:
         reasons.append(f"image sequence '{img.name}': frame {frame} could not be read from '{path}' "

@@ -32,14 +32,17 @@ _DIGITS = re.compile(r'(\d+)(\D*)$')
 
 
 def sequence_path(img, frame):
-    """The absolute path of an image sequence's file at `frame`: the last run of digits in the
-    file name replaced by the frame, zero-padded to that run's length; None if the name has no
-    digits (Blender then reads the one file)."""
+    """The absolute path of an image sequence's file at `frame`, as Blender's
+    BLI_path_sequence_decode / encode make it: the last run of digits before the extension
+    (os.path.splitext's, which is Blender's BLI_path_extension_or_end) replaced by the frame,
+    zero-padded to that run's length; a name without such digits gets the frame, unpadded,
+    before its extension (frame 0: nothing); a negative frame reads as 0. Digits in an
+    extension ('.jp2') are not the frame's: they had made frame 3 of img_001.jp2 'img_001.jp3'."""
     path = bpy.path.abspath(img.filepath_raw, library=img.library)
     folder, name = os.path.split(path)
-    found = _DIGITS.search(name)
-    if found is None:
-        return None
-    digits = len(found.group(1))
-    number = f"-{-frame:0{digits}d}" if frame < 0 else f"{frame:0{digits}d}"
-    return os.path.join(folder, name[:found.start(1)] + number + found.group(2))
+    stem, extension = os.path.splitext(name)
+    found = _DIGITS.search(stem)
+    head, tail = (stem[:found.start(1)], found.group(2)) if found else (stem, "")
+    digits, frame = len(found.group(1)) if found else 0, max(frame, 0)
+    number = f"{frame:0{digits}d}" if digits or frame else ""     # C's "%.*d"
+    return os.path.join(folder, head + number + tail + extension)

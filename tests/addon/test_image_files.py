@@ -45,11 +45,23 @@ def test_user_frame_as_blender(tmp_path, scene_frame, start, duration, offset, c
     assert user_frame(img, user, scene_frame) == want
 
 
-def test_sequence_path_pads_the_last_digits(tmp_path):
-    img = _sequence(tmp_path)
-    assert sequence_path(img, 7) == str(tmp_path / "seq_007.png")
-    assert sequence_path(img, 1234) == str(tmp_path / "seq_1234.png")
-    assert sequence_path(img, -2) == str(tmp_path / "seq_-002.png")
+@pytest.mark.parametrize('name', ['seq_007.png', 'img_001.jp2', 'a1b22.c3', 'plate.0001', 'nodigits.png',
+                                  'noext_01', '.hidden7', 'x..5', 'v2.tar.gz'])
+def test_sequence_path_is_the_file_blender_reads(tmp_path, name):
+    """Against Blender's own answer (Image.filepath_from_user at the image user's frame): the
+    last digits before the extension, padded; digits in an extension ('.jp2') are not the
+    frame's (frame 3 of img_001.jp2 had been read from 'img_001.jp3'); a name without digits
+    gets the frame before its extension; a negative frame reads as 0."""
+    img = bpy.data.images.new(name, 4, 4)
+    img.filepath_raw = str(tmp_path / name)
+    img.source = 'SEQUENCE'
+    mat, nt, out = scenes._material("M")
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    for frame in (0, 1, 3, 1234, -2):
+        tex.image_user.frame_current = frame
+        assert sequence_path(img, frame) == img.filepath_from_user(image_user=tex.image_user), (name, frame)
+    assert sequence_path(img, 3) != str(tmp_path / name)
 
 
 def _diffuse_of(img, user_settings):
