@@ -166,6 +166,8 @@ class Evaluator:
             if tex is None:
                 return Field(self.missing)
             return Field(tex.pixels[..., 3:4] if out.name == 'Alpha' else tex.pixels[..., :3], tex)
+        if t == 'TEX_ENVIRONMENT' and node.image is None:     # Cycles' missing image: magenta, opaque
+            return Field((1.0,) if out.name == 'Alpha' else (1.0, 0.0, 1.0))
         if t in VIEW_NODE_TYPES:
             return self._view_average(node, out, depth)
         if t in ATTRIBUTE_NODE_TYPES:

@@ -122,6 +122,9 @@ def _color_light(socket, strength, what, reasons, frame):
         if found is not None:
             return found
     c, c_ok = constant_color(socket)
+    if c_ok and _environments_feeding(socket, with_image=False):
+        # its colour nodes computed on the missing image's magenta (they had not been evaluated)
+        reasons.append(f"{what} from an Environment Texture without an image (magenta, as Cycles)")
     if not c_ok:
         envs = _environments_feeding(socket)
         if len(envs) == 1:
@@ -166,8 +169,9 @@ def _sky_through(socket, sky, strength, reasons):
     return found
 
 
-def _environments_feeding(socket, kind='TEX_ENVIRONMENT'):
-    """The Environment Texture nodes with an image (or the nodes of type `kind`) whose output
+def _environments_feeding(socket, kind='TEX_ENVIRONMENT', with_image=True):
+    """The Environment Texture nodes with an image (without one: with_image False; or the nodes
+    of type `kind`) whose output
     reaches `socket`, followed back through its links as Cycles compiles them (reroutes, muted
     nodes, groups): a stray
     map elsewhere in the tree is not one of them. Each node (in its group context) is visited
@@ -183,7 +187,7 @@ def _environments_feeding(socket, kind='TEX_ENVIRONMENT'):
             continue
         seen.add(key)
         if node.type == kind:
-            if kind != 'TEX_ENVIRONMENT' or node.image is not None:
+            if kind != 'TEX_ENVIRONMENT' or (node.image is not None) == with_image:
                 found.append(node)
             continue
         todo.extend(node.inputs[i] for i in range(len(node.inputs)))

@@ -3270,3 +3270,28 @@ def test_a_mesh_with_n_gons_keeps_its_normal_map(scene, exported):
         sides[fill] = g.tangents[sel][side][order]
         assert np.abs(sides[fill][..., :3]).sum(axis=2).min() > 0.5       # every side corner has one
     np.testing.assert_allclose(sides['NGON'], sides['TRIFAN'], atol=1e-5)
+
+
+@pytest.mark.parametrize("node, setup_node, want", [
+    ('ShaderNodeGamma', lambda n: setattr(n.inputs['Gamma'], 'default_value', 2.0), (1.0, 0.0, 1.0)),
+    ('ShaderNodeHueSaturation', lambda n: setattr(n.inputs['Hue'], 'default_value', 0.3), (0.0, 0.2, 1.0)),
+    ('ShaderNodeInvert', lambda n: None, (0.0, 1.0, 0.0)),
+])
+def test_colour_nodes_after_an_environment_texture_without_an_image_act_on_magenta(scene, exported, node,
+                                                                                     setup_node, want):
+    """Cycles' missing image is opaque magenta, and the colour nodes after it compute on that:
+    Hue 0.3 gives (0.0001, 0.199, 0.977) in a Cycles render (here exactly (0, 0.2, 1)). The nodes
+    had not been evaluated: the Background's own grey (0.05) stood in."""
+    setup(scene)
+    w = scenes.environment_world(None, 2.0)
+    nt = w.node_tree
+    env = next(n for n in nt.nodes if n.type == 'TEX_ENVIRONMENT')
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    n = nt.nodes.new(node)
+    setup_node(n)
+    nt.links.new(env.outputs['Color'], n.inputs['Color'])
+    nt.links.new(n.outputs[0], bg.inputs['Color'])
+    data = exported()
+    assert data.environment is None and np.allclose(data.world, 2.0 * np.array(want), atol=1e-5), data.world
+    assert any("Environment Texture without an image (magenta" in t for _, t in data.messages)
+    assert not any("not evaluated" in t for _, t in data.messages)
