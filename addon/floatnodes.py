@@ -1,5 +1,6 @@
-"""Cycles' float nodes as numpy functions: Math (every operation, with its clamp), Map Range
-(float: linear, stepped, smoothstep, smootherstep, with its clamp) and Clamp (min-max, range).
+"""Cycles' float nodes as numpy functions: Math (every operation, with its clamp), Vector Math
+(every operation), Map Range (float: linear, stepped, smoothstep, smootherstep, with its clamp)
+and Clamp (min-max, range).
 
 The formulas are Cycles' (kernel/svm/math_util.h svm_math, map_range.h, clamp.h, and the safe_*
 helpers of util/math_float.h that give 0 where the operation is undefined), evaluated in float64
@@ -108,6 +109,74 @@ def math(operation, a, b, c, clamp=False):
     with np.errstate(all='ignore'):
         r = _MATH[operation](a, b, c)
     return np.clip(r, 0.0, 1.0) if clamp else r
+
+
+def _dot(a, b):
+    return np.sum(a * b, axis=-1, keepdims=True)
+
+
+def _safe_normalize(a):
+    """Cycles' safe_normalize: a / |a|, or a itself (0) where |a| is 0."""
+    n = np.sqrt(_dot(a, a))
+    return np.where(n != 0.0, a / np.where(n != 0.0, n, 1.0), a)
+
+
+def _project(a, b):
+    ll = _dot(b, b)
+    return np.where(ll != 0.0, _safe_divide(_dot(a, b), ll) * b, 0.0)
+
+
+def _reflect(a, b):
+    n = _safe_normalize(b)
+    return a - 2.0 * _dot(n, a) * n
+
+
+def _refract(a, b, eta):
+    n = _safe_normalize(b)
+    d = _dot(n, a)
+    k = 1.0 - eta * eta * (1.0 - d * d)
+    return np.where(k < 0.0, 0.0, eta * a - (eta * d + np.sqrt(np.maximum(k, 0.0))) * n)
+
+
+# Vector Math (Cycles' svm_vector_math) on (..., 3) vectors a, b, c and a (..., 1) scale: the
+# Vector output, or (a float operation) the Value output; entry-wise operations are Math's
+_VECTOR_MATH = {
+    'CROSS_PRODUCT': lambda a, b, c, s: np.cross(*np.broadcast_arrays(a, b)),
+    'PROJECT': lambda a, b, c, s: _project(a, b),
+    'REFLECT': lambda a, b, c, s: _reflect(a, b),
+    'REFRACT': lambda a, b, c, s: _refract(a, b, s),
+    'FACEFORWARD': lambda a, b, c, s: np.where(_dot(c, b) < 0.0, a, -a),
+    'SCALE': lambda a, b, c, s: a * s,
+    'NORMALIZE': lambda a, b, c, s: _safe_normalize(a),
+    'FRACTION': lambda a, b, c, s: a - np.floor(a),
+    'MODULO': lambda a, b, c, s: np.fmod(a, b),    # not Math's safe modulo: NaN where b is 0, as Cycles
+    'MINIMUM': lambda a, b, c, s: np.minimum(a, b),
+    'MAXIMUM': lambda a, b, c, s: np.maximum(a, b),
+}
+_VECTOR_VALUE = {
+    'DOT_PRODUCT': lambda a, b: _dot(a, b),
+    'DISTANCE': lambda a, b: np.sqrt(_dot(a - b, a - b)),
+    'LENGTH': lambda a, b: np.sqrt(_dot(a, a)),
+}
+_ENTRY_WISE = {'ADD', 'SUBTRACT', 'MULTIPLY', 'DIVIDE', 'MULTIPLY_ADD', 'POWER', 'SIGN', 'FLOOR', 'CEIL',
+               'WRAP', 'SNAP', 'ABSOLUTE', 'SINE', 'COSINE', 'TANGENT'}
+VECTOR_MATH_OPERATIONS = frozenset(_VECTOR_MATH) | frozenset(_VECTOR_VALUE) | _ENTRY_WISE
+
+
+def vector_math(operation, output, a, b, c, scale):
+    """A Vector Math node's output ('Vector': (..., 3), 'Value': (..., 1)); the output an
+    operation does not write is 0, as in Cycles."""
+    a, b, c, scale = (np.asarray(x, np.float64) for x in (a, b, c, scale))
+    value = operation in _VECTOR_VALUE
+    if (output == 'Value') != value:
+        shape = np.broadcast_shapes(a.shape, b.shape, c.shape)
+        return np.zeros(shape[:-1] + ((1,) if value or output == 'Value' else (3,)))
+    with np.errstate(all='ignore'):
+        if value:
+            return _VECTOR_VALUE[operation](a, b)
+        if operation in _ENTRY_WISE:
+            return _MATH[operation](a, b, c)
+        return _VECTOR_MATH[operation](a, b, c, scale)
 
 
 def _smoothstep(e0, e1, x):

@@ -35,6 +35,7 @@ _INPUTS = {
     'COMBXYZ': {'x': 'X', 'y': 'Y', 'z': 'Z'},
     'SEPXYZ': {'vector': 'Vector'},
     'MATH': {'a': 'Value', 'b': 'Value_001', 'c': 'Value_002'},
+    'VECT_MATH': {'va': 'Vector', 'vb': 'Vector_001', 'vc': 'Vector_002', 'scale': 'Scale'},
     'CLAMP': {'value': 'Value', 'lo': 'Min', 'hi': 'Max'},
     'BLACKBODY': {'temp': 'Temperature'},
     'MIX_RGB': {'fac': 'Fac', 'a': 'Color1', 'b': 'Color2'},   # the legacy Mix (old files, scripts)
@@ -53,7 +54,7 @@ TWO_IMAGES = "two image textures mixed; the second as its average colour"
 # Color Attribute, Attribute and Object Info: values per point or per object (export/materials.py)
 ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 # colour or vector inputs (but floats in Mix FLOAT and Math)
-_COLOR_ROLES = {'color', 'a', 'b', 'vector', 'vfac', 'vvalue', 'vf0', 'vf1', 'vt0', 'vt1', 'vsteps'}
+_COLOR_ROLES = {'color', 'a', 'b', 'vector', 'vfac', 'vvalue', 'vf0', 'vf1', 'vt0', 'vt1', 'vsteps', 'va', 'vb', 'vc'}
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
 _SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2, 'X': 0, 'Y': 1, 'Z': 2}
 
@@ -74,6 +75,8 @@ def node_inputs(node):
     if t == 'MAP_RANGE':
         return {'FLOAT': _MAP_RANGE_INPUTS, 'FLOAT_VECTOR': _VECTOR_MAP_RANGE_INPUTS}.get(node.data_type)
     if t == 'MATH' and node.operation not in fn.MATH_OPERATIONS:
+        return None
+    if t == 'VECT_MATH' and node.operation not in fn.VECTOR_MATH_OPERATIONS:
         return None
     return _INPUTS.get(t)
 
@@ -278,6 +281,8 @@ def _compute(node, out, v):
         return v['vector'][..., k:k + 1]
     if t == 'MATH':
         return fn.math(node.operation, v['a'], v['b'], v['c'], node.use_clamp)
+    if t == 'VECT_MATH':
+        return fn.vector_math(node.operation, out.identifier, v['va'], v['vb'], v['vc'], v['scale'])
     if t == 'BLACKBODY':
         return cn.blackbody(v['temp'])
     if t == 'CLAMP':

@@ -57,18 +57,18 @@ def test_what_a_procedural_chain_cannot_read_is_named(scene, exported):
     to its own value, and the message names that thing (it had blamed the Checker alone:
     "colour from 'Checker Texture' node; its own value used")."""
     scenes.camera()
-    for i, (name, build) in enumerate((("VMath", 'VECT_MATH'), ("ObjCoords", 'OBJECT'), ("Camera", 'Camera'))):
+    for i, (name, build) in enumerate((("VRotate", 'VECT_ROTATE'), ("ObjCoords", 'OBJECT'), ("Camera", 'Camera'))):
         mat = bpy.data.materials.new(name)
         nt = mat.node_tree
         bsdf = next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
         checker = nt.nodes.new('ShaderNodeTexChecker')
         coords = nt.nodes.new('ShaderNodeTexCoord')
         nt.links.new(checker.outputs['Color'], bsdf.inputs['Base Color'])
-        if build == 'VECT_MATH':
-            vm = nt.nodes.new('ShaderNodeVectorMath')
+        if build == 'VECT_ROTATE':
+            vm = nt.nodes.new('ShaderNodeVectorRotate')
             nt.links.new(coords.outputs['Object'], vm.inputs[0])
             nt.links.new(vm.outputs['Vector'], checker.inputs['Vector'])
-            expect = "('Vector Math' node is not read there)"
+            expect = "('Vector Rotate' node is not read there)"
         elif build == 'OBJECT':
             coords.object = scenes.camera()
             nt.links.new(coords.outputs['Object'], checker.inputs['Vector'])
