@@ -200,13 +200,15 @@ class Integrator:
                          adaptive=self.adaptive is not None, cryptomatte=crypto,
                          lightgroups=tuple(getattr(s, 'lightgroups', ())), aovs=aovs,
                          exposure=float(getattr(s, 'film_exposure', 1.0)))
-        self._aovs = _aov_tables(aovs, [getattr(m, 'aovs', None) for m in scene_data.materials])
+        self._aovs = _aov_tables(aovs, [getattr(m, 'aovs', None) for m in scene_data.materials],
+                                 [getattr(m, 'aov_counts', None) for m in scene_data.materials])
         # the world's AOVs, where camera rays miss: not where Cycles does not run the background
         # shader for them: a world camera rays cannot see, or transparent film unless the
         # Environment pass is asked for (integrate_background evaluates it for that pass)
         self._env_requested = 'Env' in tuple(getattr(s, 'passes', ()))
         sees_world = (not self.transparent or self._env_requested) and scene_data.world_visibility & VIS_CAMERA
-        world = _aov_tables(aovs, [scene_data.world_aovs if sees_world else None])
+        world = _aov_tables(aovs, [scene_data.world_aovs if sees_world else None],
+                            [getattr(scene_data, 'world_aov_counts', None)])
         self._world_aovs = {key: table[:, 0] for key, table in world.items() if table.any()}
         self._light_passes = tuple(p for p in LIGHT_PASSES if p in self.film.passes)
         # what camera rays' first surfaces write: the data passes, Cryptomatte and the AOVs
@@ -2064,10 +2066,13 @@ def _seen_through(alpha, path, rows):
     alpha[np.take(path.pid, rows)] = 1.0 - np.take(path.thr, rows, axis=1).mean(axis=0)
 
 
-def _aov_tables(aovs, shaders) -> dict:
+def _aov_tables(aovs, shaders, counts=None) -> dict:
     """{film key 'AOV:<name>': (channels, shaders) float32}: what each shader's AOV Output
-    nodes (Material.aovs, or None) write per sample, as Cycles' film/aov_passes.h: a COLOR AOV
-    (r, g, b, 1), a VALUE AOV its value; 0 (alpha 0 too) for shaders that write nothing to it."""
+    nodes (Material.aovs, or None) write per sample, as Cycles' svm/aov.h: each node a COLOR
+    AOV's (r, g, b, 1), so its alpha is the count of nodes writing it (counts: per shader
+    Material.aov_counts, or None; absent: 1), a VALUE AOV its value; 0 (alpha 0 too) for
+    shaders that write nothing to it."""
+    counts = counts if counts is not None else [None] * len(shaders)
     tables = {}
     for name, kind in aovs:
         channels = AOV_CHANNELS[kind][0]
@@ -2077,7 +2082,8 @@ def _aov_tables(aovs, shaders) -> dict:
             if written is None:
                 continue
             color, value = written
-            table[:, j] = (*np.asarray(color, F32)[:3], 1.0) if kind == 'COLOR' else (value,)
+            alpha = float((counts[j] or {}).get(name, 1))
+            table[:, j] = (*np.asarray(color, F32)[:3], alpha) if kind == 'COLOR' else (value,)
         tables[AOV_PREFIX + name] = table
     return tables
 

@@ -179,6 +179,9 @@ class Material:
     # AOV Output nodes: AOV name -> (colour (3,), value), what the material writes to that
     # AOV's pass (a COLOR AOV takes the colour, a VALUE AOV the value; nodes of one name add up)
     aovs: dict = field(default_factory=dict)
+    # AOV name -> how many AOV Output nodes write it: a COLOR AOV's alpha (Cycles adds
+    # (r, g, b, 1) per node); absent: 1
+    aov_counts: dict = field(default_factory=dict)
     # what images write to AOVs, added to `aovs`: (name, 'color' | 'value') -> (texture (h, w, 4)
     # or UdimTiles whose RGB is the colour, or the value in R, per texel; interpolation,
     # extension, uv transform), read on the UV map as `texture` is
@@ -318,6 +321,8 @@ class SceneData:
     world_lightgroup: str = ''
     # the world's AOV Output nodes, as Material.aovs: written where camera rays miss
     world_aovs: dict = field(default_factory=dict)
+    # ... and how many nodes write each, as Material.aov_counts
+    world_aov_counts: dict = field(default_factory=dict)
     # Cycles' World > Settings > Light > Max Bounces: light sampling of the environment map
     # lights nothing at vertices deeper than this (BSDF rays still find the world)
     world_max_bounces: int = 1024

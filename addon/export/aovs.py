@@ -2,6 +2,8 @@
 materials, as per-texel images of what an Image Texture and the nodes after it compute, or as
 procedural textures computed per shading point (procedurals.py). Part of the export layer."""
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .. import nodeeval
@@ -13,17 +15,27 @@ from .closure import Texture
 from .images import MISSING_IMAGE
 
 
+class ShaderAovs(NamedTuple):
+    """What a material's or world's AOV Output nodes write (shader_aovs)."""
+    aovs: dict
+    textures: dict
+    counts: dict
+
+
 def shader_aovs(ntree, reasons, texture=None):
-    """(aovs, textures) of a material's or world's AOV Output nodes. aovs: {AOV name: (colour
-    (3,), value)}, the constant part of what they write (nodes of one name add up, as Cycles
-    writes each). textures: {(name, 'color' | 'value'): Texture whose RGB is what an image (and
+    """ShaderAovs (aovs, textures, counts) of a material's or world's AOV Output nodes. aovs:
+    {AOV name: (colour (3,), value)}, the constant part of what they write (nodes of one name
+    add up, as Cycles writes each). counts: {AOV name: how many nodes write it}, a COLOR AOV's
+    alpha there (Cycles' svm/aov.h adds (r, g, b, 1) per node: two nodes of one name, or a
+    group holding one used twice, write alpha 2). textures: {(name, 'color' | 'value'): Texture whose RGB is what an image (and
     the colour and float nodes after it) writes per texel}, when texture(node, reasons) reads
     Image Textures (materials; the world's inputs are read as constants). What cannot be
     computed is read as the input's own value (a second image of one AOV as its average),
     noted in reasons."""
-    aovs, textures = {}, {}
+    aovs, textures, counts = {}, {}, {}
     for node in aov_outputs(ntree):
         name = node.aov_name
+        counts[name] = counts.get(name, 0) + 1
         c0, v0 = aovs.get(name, (np.zeros(3, np.float32), 0.0))
         parts = {}
         for kind, color in (('color', True), ('value', False)):
@@ -54,4 +66,4 @@ def shader_aovs(ntree, reasons, texture=None):
                                             src.extension, src.transform, src.udim)
             parts[kind] = np.zeros(3 if color else 1, np.float32)
         aovs[name] = (c0 + parts['color'], v0 + float(parts['value'][0]))
-    return aovs, textures
+    return ShaderAovs(aovs, textures, counts)

@@ -384,7 +384,8 @@ class MaterialBuilder:
                                                      reasons)
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
-        aovs, aov_textures = shader_aovs(ntree, reasons, self._texture) if ntree is not None else ({}, {})
+        aovs, aov_textures, aov_counts = shader_aovs(ntree, reasons, self._texture) if ntree is not None \
+            else ({}, {}, {})
         e_tex = e_interp = e_ext = e_xf = None
         if closure.emission_tex is not None and emission.any():
             t, w = closure.emission_tex
@@ -431,7 +432,8 @@ class MaterialBuilder:
                            opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
-                           pass_index=int(mat.pass_index), aovs=aovs, visibility=visibility,
+                           pass_index=int(mat.pass_index), aovs=aovs, aov_counts=aov_counts,
+                           visibility=visibility,
                            aov_textures={key: (t.texels(t.pixels), t.interpolation, t.extension, t.transform)
                                          for key, t in aov_textures.items()})
 

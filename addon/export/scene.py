@@ -149,10 +149,10 @@ class Exporter:
             bad = nan_inputs(self.world.node_tree)
             if bad:         # (constant_value reads them as 0: a NaN Strength is a black world)
                 world_reason = '; '.join(r for r in (world_reason, f"NaN read as 0 for {', '.join(bad)}") if r)
-        world_aovs = {}
+        world_aovs = world_aov_counts = {}
         if settings.aovs and self.world is not None and self.world.node_tree is not None:
             reasons = []
-            world_aovs = shader_aovs(self.world.node_tree, reasons)[0]
+            world_aovs, _, world_aov_counts = shader_aovs(self.world.node_tree, reasons)
             world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
@@ -173,7 +173,7 @@ class Exporter:
                             shadow_links=self.shadow_links,
                             object_lightgroups=self.object_lightgroups,
                             world_lightgroup=getattr(self.world, 'lightgroup', '') if self.world else '',
-                            world_aovs=world_aovs,
+                            world_aovs=world_aovs, world_aov_counts=world_aov_counts,
                             world_max_bounces=int(getattr(getattr(self.world, 'cycles', None), 'max_bounces', 1024)))
 
 
