@@ -221,6 +221,8 @@ class Integrator:
         self._aov_images = {AOV_PREFIX + name: (3 if kind == 'COLOR' else 1,
                                                 self.mats.aov_textures.get((name, kind.lower()), ()))
                             for name, kind in aovs}
+        # per AOV what its inputs write per object or per corner (Geometry.aovs), as corner rows
+        self._aov_corners = {AOV_PREFIX + name: self.tri.aovs.get((name, kind.lower())) for name, kind in aovs}
         holdout = np.array([bool(m.holdout) for m in scene_data.materials])
         if holdout.any():    # a Holdout material acts as object holdout does for camera rays
             seen = (self.tri.visibility & VIS_CAMERA) != 0
@@ -1646,9 +1648,15 @@ class Integrator:
 
     def _aov_values(self, key, table, prim, u, v):
         """(channels, k): what the materials of the surfaces (prim, u, v) write to AOV key: the
-        constants of its table (_aov_tables) plus what images write there."""
+        constants of its table (_aov_tables) plus what images write there and what inputs
+        varying per object or corner write (Geometry.aovs, interpolated)."""
         mat = np.take(self.tri.material, prim)
         out = np.take(table, mat, axis=1)
+        corners = self._aov_corners.get(key)
+        if corners is not None:
+            c = corners.shape[0] // 3
+            r = np.take(corners, prim, axis=1)
+            out[:c] += r[:c] + r[c:2 * c] * u + r[2 * c:3 * c] * v
         rows, images = self._aov_images[key]
         for m, tex, interp, ext, xf in images:
             sel = np.flatnonzero(mat == m)

@@ -225,6 +225,11 @@ class Geometry:
     # triangles whose material has a procedural texture reading them, interpolated like UVs;
     # 0 elsewhere; None: no material reads them
     coords: Optional[np.ndarray] = None
+    # (AOV name, 'color' | 'value') -> (M,3,C) float32 per corner (C 3 or 1): what the AOV inputs
+    # of triangles whose material reads a value per object (Object Info) or per corner (a mesh
+    # attribute, Geometry Position) write there, interpolated like UVs and added to
+    # Material.aovs; 0 elsewhere; None: no material's AOV varies so
+    aovs: Optional[dict] = None
 
     @staticmethod
     def empty() -> 'Geometry':

@@ -68,6 +68,9 @@ def validate(sd: SceneData):
          f"geometry.colors must be None or ({m}, 3, 3)"),
         (getattr(g, 'coords', None) is None or np.asarray(g.coords).shape == (m, 3, 6),
          f"geometry.coords must be None or ({m}, 3, 6)"),
+        (all(np.asarray(a).shape == (m, 3, 3 if kind == 'color' else 1)
+             for (_, kind), a in (getattr(g, 'aovs', None) or {}).items()),
+         f"geometry.aovs must map (name, 'color' | 'value') to ({m}, 3, 3) or ({m}, 3, 1)"),
     ]
     for ok, msg in checks:
         if not ok:

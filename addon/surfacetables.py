@@ -85,6 +85,12 @@ class Triangles:
         coords = getattr(geometry, 'coords', None)
         self.coords = None if coords is None else dacrt.shading.corner_rows(
             np.nan_to_num(np.asarray(coords, F32), nan=0.0, posinf=0.0, neginf=0.0))
+        # per (AOV name, kind): rows corner 0 (0:C), corner 1 - corner 0 (C:2C), corner 2 -
+        # corner 0 (2C:3C) of what AOV inputs varying per object or corner write
+        # (scenedata.Geometry.aovs)
+        self.aovs = {key: dacrt.shading.corner_rows(np.nan_to_num(np.ascontiguousarray(a, F32), nan=0.0,
+                                                                  posinf=0.0, neginf=0.0))
+                     for key, a in (getattr(geometry, 'aovs', None) or {}).items()}
         self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
             np.asarray(geometry.has_uv, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,

@@ -1,18 +1,35 @@
 """Shader AOVs: what a material's or world's AOV Output nodes write, as constants and, for
-materials, as per-texel images of what an Image Texture and the nodes after it compute, or as
-procedural textures computed per shading point (procedurals.py). Part of the export layer."""
+materials, as per-texel images of what an Image Texture and the nodes after it compute, as
+procedural textures or texture coordinates computed per shading point (procedurals.py), or as
+values per object (Object Info, object attributes) or per mesh corner (mesh attributes, Geometry
+Position) that the assembly evaluates the nodes on (evaluate_varying), as it does for material
+colours. Part of the export layer."""
 
 from typing import NamedTuple
 
 import numpy as np
 
-from .. import nodeeval
+from .. import nodeeval, nodegraph
 from ..nodeeval import constant
 from ..nodegraph import aov_outputs
 from ..procedural import ProceduralTexels
 from . import procedurals
 from .closure import Texture
 from .images import MISSING_IMAGE
+from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
+
+# Geometry > Position: world-space corner positions, interpolated as Cycles' P is on a triangle
+GEOMETRY_POSITION = 'Geometry:Position'
+# Light Path outputs as a camera ray reads them at the surfaces it meets (AOVs are written by
+# camera rays only): Cycles keeps the camera flag past transparent surfaces; their Transparent
+# Depth counts the surfaces passed (0 at the first)
+CAMERA_LIGHT_PATH = {'Is Camera Ray': 1.0, 'Is Shadow Ray': 0.0, 'Is Diffuse Ray': 0.0, 'Is Glossy Ray': 0.0,
+                     'Is Singular Ray': 0.0, 'Is Reflection Ray': 0.0, 'Is Transmission Ray': 0.0,
+                     'Is Volume Scatter Ray': 0.0, 'Ray Depth': 0.0, 'Diffuse Depth': 0.0, 'Glossy Depth': 0.0,
+                     'Transparent Depth': 0.0, 'Transmission Depth': 0.0}
+# what a per-object or per-corner value reads while the export only looks for it
+_MARKER = np.zeros((1, 1, 4), np.float32)
+_GENERIC = "node; its own value used"     # the end of nodeeval's note for a node it cannot compute
 
 
 class ShaderAovs(NamedTuple):
@@ -20,19 +37,85 @@ class ShaderAovs(NamedTuple):
     aovs: dict
     textures: dict
     counts: dict
+    varying: dict
+
+
+def varying_key(node, out, reasons):
+    """(key, label) of what a Color Attribute, Attribute, Object Info or Geometry Position
+    output reads per object (key OBJECT_INFO + ...) or per mesh corner (an attribute's name, ''
+    the render colour attribute; GEOMETRY_POSITION), as MaterialBuilder._attribute names
+    them; (None, None) where nothing is read."""
+    t = node.type
+    if t == 'OBJECT_INFO':
+        return (OBJECT_INFO + out.name, f"Object Info {out.name}") if out.name in OBJECT_INFO_OUTPUTS \
+            else (None, None)
+    if t == 'NEW_GEOMETRY':
+        return (GEOMETRY_POSITION, "Geometry Position") if out.name == 'Position' else (None, None)
+    if t == 'ATTRIBUTE':
+        if node.attribute_type == 'OBJECT':
+            return (f"{OBJECT_INFO}{OBJECT_ATTRIBUTE}{node.attribute_name}",
+                    f"object attribute '{node.attribute_name}'")
+        if node.attribute_type != 'GEOMETRY':
+            reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
+                           f"'{node.attribute_name}' not read")
+            return None, None
+        name = node.attribute_name
+    else:
+        name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
+    return name, (f"attribute '{name}'" if name else "the render colour attribute")
+
+
+class _AovEvaluator(nodeeval.Evaluator):
+    """nodeeval's evaluation of an AOV input, reading what varies per object or per corner
+    (varying_key) as `values` (1, n, 4) (None: a marker, to find it), Light Path outputs as a
+    camera ray's (CAMERA_LIGHT_PATH), and noting the nodes it cannot compute (unread) and what
+    varies (keys: key -> label)."""
+
+    def __init__(self, texture, reasons, values=None):
+        super().__init__(texture, reasons, MISSING_IMAGE, attribute=self._varying)
+        self.values = _MARKER if values is None else values
+        self.unread, self.keys, self.depth_read = [], {}, False
+
+    def _varying(self, node, out, reasons):
+        key, label = varying_key(node, out, reasons)
+        if key is None:
+            return None
+        self.keys[key] = label
+        return Texture(('aov varying', key), self.values, 'Linear', 'REPEAT', None, None, label, key)
+
+    def _node(self, node, out, depth):
+        t = node.type
+        if t == 'NEW_GEOMETRY' and out.name == 'Position':
+            tex = self._varying(node, out, self.reasons)
+            return nodeeval.Field(tex.pixels[..., :3], tex, True)
+        if t == 'LIGHT_PATH' and out.name in CAMERA_LIGHT_PATH:
+            self.depth_read |= out.name == 'Transparent Depth'
+            return nodeeval.Field((CAMERA_LIGHT_PATH[out.name],))
+        f = super()._node(node, out, depth)
+        if f is None:
+            self.unread.append(f"'{node.bl_label}' {out.name}" if len(node.outputs) > 1 else f"'{node.bl_label}'")
+        return f
+
+
+def _written(v):
+    v = np.asarray(v, np.float64).reshape(-1)
+    return f"{float(v[0]):.4g}" if len(v) == 1 else f"({', '.join(f'{float(x):.4g}' for x in v[:3])})"
 
 
 def shader_aovs(ntree, reasons, texture=None):
-    """ShaderAovs (aovs, textures, counts) of a material's or world's AOV Output nodes. aovs:
-    {AOV name: (colour (3,), value)}, the constant part of what they write (nodes of one name
-    add up, as Cycles writes each). counts: {AOV name: how many nodes write it}, a COLOR AOV's
-    alpha there (Cycles' svm/aov.h adds (r, g, b, 1) per node: two nodes of one name, or a
-    group holding one used twice, write alpha 2). textures: {(name, 'color' | 'value'): Texture whose RGB is what an image (and
-    the colour and float nodes after it) writes per texel}, when texture(node, reasons) reads
-    Image Textures (materials; the world's inputs are read as constants). What cannot be
-    computed is read as the input's own value (a second image of one AOV as its average),
-    noted in reasons."""
-    aovs, textures, counts = {}, {}, {}
+    """ShaderAovs (aovs, textures, counts, varying) of a material's or world's AOV Output nodes.
+    aovs: {AOV name: (colour (3,), value)}, the constant part of what they write (nodes of one
+    name add up, as Cycles writes each). counts: {AOV name: how many nodes write it}, a COLOR
+    AOV's alpha there (Cycles' svm/aov.h adds (r, g, b, 1) per node: two nodes of one name, or a
+    group holding one used twice, write alpha 2). textures: {(name, 'color' | 'value'): Texture
+    whose RGB is what an image (and the colour and float nodes after it) writes per texel, or a
+    procedural texture (or Texture Coordinate Generated, Object, UV) computed per point}, when
+    texture(node, reasons) reads Image Textures (materials; the world's inputs are read as
+    constants). varying: {(name, kind): [(socket, colour, key)]}: inputs that read a value per
+    object or per mesh corner (varying_key), which evaluate_varying computes on each object's
+    or corner's. What cannot be computed is read as the input's own value (a second image of one
+    AOV as its average), noted in reasons with the AOV's name."""
+    aovs, textures, counts, varying = {}, {}, {}, {}
     for node in aov_outputs(ntree):
         name = node.aov_name
         counts[name] = counts.get(name, 0) + 1
@@ -47,13 +130,41 @@ def shader_aovs(ntree, reasons, texture=None):
                                    f"value is written")
                 parts[kind] = np.asarray(v, np.float32)
                 continue
-            found = procedurals.compile_socket(socket, color, reasons) if (name, kind) not in textures else None
+            found = procedurals.compile_socket(socket, color, reasons, coordinates=True) \
+                if (name, kind) not in textures else None
             if found is not None:           # procedural textures: computed per shading point
                 textures[name, kind] = Texture.procedural(ProceduralTexels(*found), 'aov')
                 parts[kind] = np.zeros(3 if color else 1, np.float32)
                 continue
-            f = nodeeval.Evaluator(texture, reasons, MISSING_IMAGE).input(socket, color)
+            notes = []
+            ev = _AovEvaluator(texture, notes)
+            f = ev.input(socket, color)
+            if ev.keys and (len(ev.keys) > 1 or f.tex is None or f.tex.attribute is None):
+                # two varying sources (two attributes, an attribute and an image): one per input
+                # is evaluated; read the nodes at their own values instead, said below
+                notes = [n for n in notes if n != nodeeval.TWO_IMAGES]
+                ev.unread.extend(ev.keys.values())
+                f = nodeeval.Evaluator(texture, [], MISSING_IMAGE).input(socket, color)
+            if ev.unread:
+                link, _ = nodegraph.source(socket)
+                direct = link is not None and link.from_node.type not in nodeeval.NODE_TYPES
+                reasons.append(f"AOV '{name}' {kind}: {', '.join(dict.fromkeys(ev.unread))} not evaluated for "
+                               + ("it; its input's own value " + _written(f.value) + " is written" if direct and
+                                  f.tex is None else "it; the socket it feeds read at its own value"))
+            reasons.extend(n for n in notes if not n.endswith(_GENERIC))
+            if ev.depth_read:
+                reasons.append(f"AOV '{name}' {kind}: Light Path Transparent Depth read as 0 (the first surface's; "
+                               "Cycles counts the transparent surfaces a camera ray passed)")
             v = np.asarray(f.value, np.float32)
+            if f.tex is not None and f.tex.attribute is not None:
+                # per object or per corner: the assembly evaluates the nodes on each one's value
+                key = f.tex.attribute
+                varying.setdefault((name, kind), []).append((socket, color, key))
+                if not key.startswith(OBJECT_INFO) and not _affine(socket, color, texture):
+                    reasons.append(f"AOV '{name}' {kind}: nodes after {ev.keys[key]} applied at the mesh's "
+                                   "corners, then interpolated (Cycles interpolates first)")
+                parts[kind] = np.zeros(3 if color else 1, np.float32)
+                continue
             if f.tex is None or (name, kind) in textures:
                 if f.tex is not None:
                     reasons.append(f"AOV '{name}' is fed by two images; the second as its average")
@@ -66,4 +177,29 @@ def shader_aovs(ntree, reasons, texture=None):
                                             src.extension, src.transform, src.udim)
             parts[kind] = np.zeros(3 if color else 1, np.float32)
         aovs[name] = (c0 + parts['color'], v0 + float(parts['value'][0]))
-    return ShaderAovs(aovs, textures, counts)
+    return ShaderAovs(aovs, textures, counts, varying)
+
+
+def evaluate_varying(entry, values, texture=None):
+    """(n, 3) colour or (n, 1) value an AOV input entry (socket, colour, key) of
+    ShaderAovs.varying writes where what varies reads values (n, 4) (RGB and alpha; a number
+    in all four, a position with alpha 1); non-finite results as 0."""
+    socket, color, _ = entry
+    values = np.ascontiguousarray(values, np.float32)
+    f = _AovEvaluator(texture, [], values[None]).input(socket, color)
+    v = np.asarray(f.value, np.float64)
+    v = v.reshape(-1, v.shape[-1])
+    out = np.broadcast_to(v, (len(values), v.shape[-1]))
+    return np.nan_to_num(out, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32)
+
+
+# probe values of an attribute, to see whether the nodes after it are affine (then applying
+# them at the corners and interpolating is what Cycles computes)
+_PROBE_A = np.random.default_rng(17).random((16, 4)).astype(np.float32) * 2.0
+_PROBE_B = np.random.default_rng(19).random((16, 4)).astype(np.float32) * 2.0
+
+
+def _affine(socket, color, texture):
+    a, b = (evaluate_varying((socket, color, None), p, texture) for p in (_PROBE_A, _PROBE_B))
+    mid = evaluate_varying((socket, color, None), 0.5 * (_PROBE_A + _PROBE_B), texture)
+    return bool(np.allclose(mid, 0.5 * (a + b), rtol=1e-5, atol=1e-6))

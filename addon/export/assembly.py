@@ -8,7 +8,9 @@ import numpy as np
 
 from .. import scenedata as sd
 from ..procedural import ProceduralTexels
+from .aovs import GEOMETRY_POSITION
 from .errors import ExportCancelled
+from .objectinfo import OBJECT_INFO
 
 # The largest world coordinate a vertex may have: half float32's range, so that the edges and
 # the hit points of its triangles stay finite in float32 (a triangle at 2e38 failed the render
@@ -36,6 +38,7 @@ class _Out:
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
         self.coords = None                # (m, 3, 6), allocated by the first procedurally textured mesh
+        self.aovs = {}                    # (AOV name, kind) -> (m, 3, C), allocated by the first mesh writing it
         self.keep = None
 
     def drop(self, rows, keep):
@@ -49,11 +52,13 @@ class _Out:
                        visibility=self.visibility, object_index=self.object_index, instance=self.instance,
                        uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
                        colors=self.colors, coords=self.coords)
+        aovs = dict(self.aovs)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
+            aovs = {k: _compact_rows(v, self.keep) for k, v in aovs.items()}
         # per placement (instance id), for the object-space tangents of normal maps
         xf = np.concatenate(self.linear).astype(np.float32) if self.tangents is not None else None
-        return sd.Geometry(vertices=self.vertices, tangent_xf=xf, **per_tri)
+        return sd.Geometry(vertices=self.vertices, tangent_xf=xf, aovs=aovs or None, **per_tri)
 
 
 def _rewind(rows):
@@ -90,6 +95,8 @@ class Assembly:
         self.messages, self.counts = exporter.messages, exporter.counts
         self.check_break, self.ignore = exporter.check_break, exporter.ignore
         self._corner_albedos = {}  # (material, mesh) -> per-corner albedo of a node chain on an attribute
+        self._corner_aovs = {}     # (material, mesh, AOV input) -> what it writes at each corner
+        self._aov_varying = set()  # materials whose AOV inputs read a value per object or corner
 
     def geometry(self, uv_pass=False):
         """Transform every unique mesh for all its instances at once, straight into the frame's
@@ -98,6 +105,7 @@ class Assembly:
         degenerate = 0
         self._resolve_materials()
         self._object_info_albedos()
+        self._object_info_aovs()
         # the materials whose procedural textures read Generated or Object coordinates
         self._coordinated = {k for k, m in enumerate(self.materials.materials) if _coordinates_read(m)}
         # per material, once for the frame (the materials are all resolved above): those whose
@@ -161,6 +169,73 @@ class Assembly:
             albedo = self.materials.evaluated_albedo(k, np.stack([p.object_info(entry[1], entry[2]) for p in users]))
             for p, a in zip(users, albedo):
                 p.object_albedo[k] = a
+
+    def _object_info_aovs(self):
+        """Each placement's value of the AOV inputs that read Object Info (or an object
+        attribute) in the materials it shows (Placement.object_aovs): per input, one evaluation
+        over all its placements' values (MaterialBuilder.evaluated_aov)."""
+        self._aov_varying = {k for k, e in enumerate(self.materials.aov_maps) if e is not None}
+        for k in sorted(self._aov_varying):
+            mat, varying = self.materials.aov_maps[k]
+            users = [p for places in self.placements.values() for p in places
+                     if p.slot_map is not None and k in p.slot_map]
+            for (name, kind), entries in varying.items():
+                for i, entry in enumerate(entries):
+                    key = entry[2]
+                    if not users or not key.startswith(OBJECT_INFO):
+                        continue
+                    output = key[len(OBJECT_INFO):]
+                    values = self.materials.evaluated_aov(entry, np.stack([p.object_info(output, mat) for p in users]))
+                    for p, v in zip(users, values):
+                        if p.object_aovs is None:
+                            p.object_aovs = {}
+                        p.object_aovs[k, name, kind, i] = v
+
+    def _aov_corners(self, a, place, mirrored, out, S):
+        """What the AOV inputs that vary per object or per corner write at the corners of one
+        instance's triangles of those materials (Geometry.aovs, interpolated at the hit as
+        Cycles interpolates attributes); 0 on the frame's other triangles."""
+        material = out.material[S]
+        for k in set(place.slot_map.tolist()) & self._aov_varying:
+            rows = np.flatnonzero(material == k)
+            if not len(rows):
+                continue
+            _, varying = self.materials.aov_maps[k]
+            for (name, kind), entries in varying.items():
+                arr = out.aovs.get((name, kind))
+                if arr is None:
+                    arr = out.aovs[name, kind] = np.zeros((len(out.triangles), 3, 3 if kind == 'color' else 1),
+                                                          np.float32)
+                total = np.zeros((len(rows), 3, arr.shape[2]), np.float32)
+                for i, entry in enumerate(entries):
+                    key = entry[2]
+                    if key.startswith(OBJECT_INFO):
+                        total += place.object_aovs[k, name, kind, i]
+                    elif key == GEOMETRY_POSITION:
+                        # world positions at the corners, already in the instance's corner order
+                        corners = out.vertices[out.triangles[S][rows]]
+                        values = np.concatenate([corners, np.ones(corners.shape[:2] + (1,))], axis=-1)
+                        total += self.materials.evaluated_aov(entry, values.reshape(-1, 4)).reshape(total.shape)
+                    else:
+                        per = self._corner_aov(a, k, entry, place.name)[rows]
+                        total += per[:, [0, 2, 1]] if mirrored else per
+                arr[S][rows] = total
+
+    def _corner_aov(self, a, k, entry, object_name):
+        """(nt, 3, C): what AOV input entry of material k writes at each corner of mesh a,
+        evaluated on the corners' attribute values (0 where the mesh lacks it, as Cycles); once
+        per mesh."""
+        cache = self._corner_aovs
+        if (k, id(a), id(entry)) not in cache:
+            name = entry[2]
+            values = a.corner_attribute(name)
+            if values is None:
+                self.ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
+                            "an AOV reading it reads 0, as in Cycles", object_name)
+                values = np.zeros((len(a.triangles), 3, 4), np.float32)
+            cache[k, id(a), id(entry)] = self.materials.evaluated_aov(entry, values.reshape(-1, 4)).reshape(
+                len(a.triangles), 3, -1)
+        return cache[k, id(a), id(entry)]
 
     def _resolve_materials(self):
         """Evaluate the materials of the slots some triangle uses (per mesh: its slot indices,
@@ -297,8 +372,8 @@ class Assembly:
                 if out.terminator is None:
                     out.terminator = np.zeros((len(out.triangles), 2), np.float32)
                 out.terminator[t0 + i * nt:t0 + (i + 1) * nt] = term
-        attributed, coordinated = self._attributed, self._coordinated
-        per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated
+        attributed, coordinated, varying = self._attributed, self._coordinated, self._aov_varying
+        per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated or varying
         for i, p in enumerate(places if per_placement else ()):
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
             if out.uvs is not None:
@@ -318,6 +393,8 @@ class Assembly:
                 self._attribute_colors(a, p, i in mirrored, out, S)
             if coordinated and not coordinated.isdisjoint(p.slot_map.tolist()):
                 self._texture_coordinates(a, p, coordinated, i in mirrored, out, S)
+            if varying and not varying.isdisjoint(p.slot_map.tolist()):
+                self._aov_corners(a, p, i in mirrored, out, S)
         out.instances += k
         out.linear.append(lin)
         return bad, deg

@@ -16,7 +16,7 @@ from ..nodeeval import constant_color, constant_value, nan_inputs
 from ..nodegraph import input_socket, linked_link, linked_node, output_key, output_node, used_outputs
 from ..procedural import ProceduralTexels
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
-from .aovs import shader_aovs
+from .aovs import evaluate_varying, shader_aovs
 from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
@@ -86,6 +86,10 @@ class MaterialBuilder:
         # ('corners', attribute name, material): its nodes evaluated on each corner's value; or
         # ('object', Object Info output, material): on each object's (both evaluated_albedo)
         self.attribute_maps = [None]
+        # per material: None, or (material, ShaderAovs.varying): AOV inputs that read a value per
+        # object or per mesh corner, evaluated on each one's (evaluated_aov)
+        self.aov_maps = [None]
+        self._aov_varying = None
         self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
         self._image_probe = None        # what images read instead of their texels (_product_map)
         self._uv_names = []
@@ -103,6 +107,7 @@ class MaterialBuilder:
             self.materials.append(self._build(mat))
             m = self.materials[-1]
             self.attribute_maps.append(self._attribute_map)
+            self.aov_maps.append(self._aov_varying)
             self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
                                      or m.emission_texture is not None or m.normal_texture is not None)
             self.uv_maps.append(m.uv_map)
@@ -308,6 +313,11 @@ class MaterialBuilder:
             return np.broadcast_to(m.base_color, (len(values), 3)).astype(np.float32)
         return (m.base_color * np.asarray(m.texture, np.float32)[0, :, :3]).astype(np.float32)
 
+    def evaluated_aov(self, entry, values):
+        """(n, C) what an AOV input (an entry of aov_maps' varying) writes where what it reads
+        per object or corner is values (n, 4) each: one evaluation on all."""
+        return evaluate_varying(entry, values, self._texture)
+
     def _build_material(self, mat):
         reasons = []
         glass_rough = 0.0
@@ -384,8 +394,9 @@ class MaterialBuilder:
                                                      reasons)
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
-        aovs, aov_textures, aov_counts = shader_aovs(ntree, reasons, self._texture) if ntree is not None \
-            else ({}, {}, {})
+        aovs, aov_textures, aov_counts, aov_varying = shader_aovs(ntree, reasons, self._texture) \
+            if ntree is not None else ({}, {}, {}, {})
+        self._aov_varying = (mat, aov_varying) if aov_varying else None
         e_tex = e_interp = e_ext = e_xf = None
         if closure.emission_tex is not None and emission.any():
             t, w = closure.emission_tex

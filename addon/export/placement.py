@@ -10,7 +10,7 @@ class Placement:
     materials; slot_map (slot -> global material index) is filled for the slots its mesh's
     triangles use, so a material no triangle shows is never evaluated."""
     __slots__ = ('matrix', 'slots', 'slot_map', 'visibility', 'object_index', 'name', 'terminator', 'info',
-                 'object_albedo')
+                 'object_albedo', 'object_aovs')
 
     def __init__(self, matrix, slots, visibility, object_index, name, terminator=(0.0, 0.0), info=None):
         self.matrix, self.slots, self.slot_map = matrix, slots, None
@@ -22,6 +22,9 @@ class Placement:
         # instance's own is freed once the iteration moves on
         self.info = info
         self.object_albedo = {}           # material index -> albedo (3,) of an Object Info material
+        # (material index, AOV name, kind, input) -> what an AOV input reading Object Info writes
+        # (C,); None until one is (Assembly._object_info_aovs)
+        self.object_aovs = None
 
     def object_info(self, output, material=None):
         """The (4,) value an Object Info output (or an object attribute) has for this instance

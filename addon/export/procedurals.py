@@ -41,10 +41,14 @@ def compile_color(socket, reasons):
     return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), needs, name)
 
 
-def compile_socket(socket, color, reasons):
+def compile_socket(socket, color, reasons, coordinates=False):
     """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures'
-    names) for what feeds a colour (color) or float socket, or None as compile_color."""
-    if not _reaches_procedural(socket, set()):
+    names) for what feeds a colour (color) or float socket, or None as compile_color.
+    coordinates: also a chain that reads Texture Coordinate Generated, Object or UV without a
+    procedural texture (an AOV's input; a chain that cannot be compiled is then left to the
+    evaluation silently, which says what it does not read)."""
+    textured = _reaches_procedural(socket, set())
+    if not textured and not (coordinates and _reaches_procedural(socket, set(), ('TEX_COORD',))):
         return None
     chain = _Chain([])
     try:
@@ -52,29 +56,31 @@ def compile_socket(socket, color, reasons):
     except nodeeval.NotCompiled as e:
         # the evaluation then reads the texture node's own value and says so, naming the texture
         # (supported); this names what in its chain is not read (users had been left to guess)
-        reasons.append(f"procedural texture not evaluated per point ({e} is not read there)")
+        if textured:
+            reasons.append(f"procedural texture not evaluated per point ({e} is not read there)")
         return None
     except (AttributeError, KeyError, TypeError, ValueError) as e:
         # a node of another Blender version (a socket or setting missing): the evaluation
         # reads the chain's own values instead, and says why
-        reasons.append(f"procedural texture chain not evaluated per point ({type(e).__name__}: {e})")
+        if textured:
+            reasons.append(f"procedural texture chain not evaluated per point ({type(e).__name__}: {e})")
         return None
     reasons.extend(chain.reasons)
     return fn, frozenset(chain.needs or {'generated'}), ', '.join(dict.fromkeys(chain.textures))
 
 
-def _reaches_procedural(socket, seen):
+def _reaches_procedural(socket, seen, types=PROCEDURAL_TYPES):
     link, _ = nodegraph.source(socket)
     if link is None:
         return False
     node = link.from_node
-    if node.type in PROCEDURAL_TYPES:
+    if node.type in types:
         return True
     key = nodegraph.output_key(node, None)     # (with its group path: a group used twice differs)
     if key in seen:                  # (a node feeding several inputs is walked once)
         return False
     seen.add(key)
-    return any(_reaches_procedural(s, seen) for s in node.inputs if s.enabled)
+    return any(_reaches_procedural(s, seen, types) for s in node.inputs if s.enabled)
 
 
 def _socket(socket, color, chain, depth):

@@ -152,7 +152,8 @@ class Exporter:
         world_aovs = world_aov_counts = {}
         if settings.aovs and self.world is not None and self.world.node_tree is not None:
             reasons = []
-            world_aovs, _, world_aov_counts = shader_aovs(self.world.node_tree, reasons)
+            found = shader_aovs(self.world.node_tree, reasons)
+            world_aovs, world_aov_counts = found.aovs, found.counts
             world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
