@@ -215,6 +215,16 @@ def texture_lookup(tex, u: np.ndarray, v: np.ndarray, interpolation: str, extens
     return _blend(tex, u, v, interpolation, extension, 3)
 
 
+def alpha_lookup(tex, u: np.ndarray, v: np.ndarray, interpolation: str, extension: str) -> np.ndarray:
+    """The alpha (n,) of a texture as texture_lookup reads its colour (not a UdimTiles): 1 where
+    the texels have none."""
+    if isinstance(tex, EncodedTexels):
+        if tex.texels.shape[2] < 4:
+            return np.ones(len(u), F32)
+        return _blend(tex.texels, u, v, interpolation, extension, 4)[3] * tex.scale
+    return _blend(tex, u, v, interpolation, extension, 4)[3]
+
+
 def _blend(tex, u, v, interpolation, extension, channels):
     """The first `channels` channels (channels, n) float32 of texels tex (h, w, c) at (u, v)."""
     # (a NaN or infinite UV, a script's, casts to an arbitrary texel index, wrapped into the

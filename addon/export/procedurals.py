@@ -16,6 +16,7 @@ import numpy as np
 from .. import nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping
+from ..texture import alpha_lookup, lookup_texels, texture_lookup
 
 PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
@@ -25,32 +26,38 @@ _VORONOI_OUTPUTS = {'Distance': 0, 'Color': 1, 'Position': 2}
 
 
 class _Chain:
-    """One compile: the coordinates the chain reads, the textures it met, the notes it makes."""
+    """One compile: the coordinates the chain reads, the textures it met, the notes it makes;
+    image(node, reasons): the export's Texture of an Image Texture node (or None: magenta),
+    None where image nodes are not compiled."""
 
-    def __init__(self, reasons):
-        self.needs, self.textures, self.reasons = set(), [], reasons
+    def __init__(self, reasons, image=None):
+        self.needs, self.textures, self.reasons, self.image = set(), [], reasons, image
 
 
-def compile_color(socket, reasons):
+def compile_color(socket, reasons, image=None):
     """A ProceduralTexels for what feeds a colour socket, or None when the chain reads no
-    procedural texture or something compile cannot follow (nodeeval then evaluates it)."""
-    found = compile_socket(socket, True, reasons)
+    procedural texture or something compile cannot follow (nodeeval then evaluates it).
+    image (the export's image reader, see _Chain): Image Texture nodes are looked up per point
+    too, so a chain of procedurals and images, or of two or more images (which nodeeval's
+    evaluation, one image per material, reads the second of as its average), is exact."""
+    found = compile_socket(socket, True, reasons, image=image)
     if found is None:
         return None
     fn, needs, name = found
     return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), needs, name)
 
 
-def compile_socket(socket, color, reasons, coordinates=False):
+def compile_socket(socket, color, reasons, coordinates=False, image=None):
     """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures'
     names) for what feeds a colour (color) or float socket, or None as compile_color.
     coordinates: also a chain that reads Texture Coordinate Generated, Object or UV without a
     procedural texture (an AOV's input; a chain that cannot be compiled is then left to the
     evaluation silently, which says what it does not read)."""
     textured = _reaches_procedural(socket, set())
-    if not textured and not (coordinates and _reaches_procedural(socket, set(), ('TEX_COORD',))):
+    images = image is not None and _images_reached(socket) >= 2
+    if not textured and not images and not (coordinates and _reaches_procedural(socket, set(), ('TEX_COORD',))):
         return None
-    chain = _Chain([])
+    chain = _Chain([], image)
     try:
         fn = _socket(socket, color, chain, 0)
     except nodeeval.NotCompiled as e:
@@ -67,6 +74,24 @@ def compile_socket(socket, color, reasons, coordinates=False):
         return None
     reasons.extend(chain.reasons)
     return fn, frozenset(chain.needs or {'generated'}), ', '.join(dict.fromkeys(chain.textures))
+
+
+def _images_reached(socket):
+    """How many different images (by image, or Image Texture nodes without one) feed socket."""
+    found, seen, todo = set(), set(), [socket]
+    while todo and len(seen) < 100_000:
+        link, _ = nodegraph.source(todo.pop())
+        if link is None:
+            continue
+        node = link.from_node
+        key = nodegraph.output_key(node, None)
+        if key in seen:
+            continue
+        seen.add(key)
+        if node.type == 'TEX_IMAGE':
+            found.add(node.image.as_pointer() if node.image is not None else key)
+        todo.extend(s for s in node.inputs if s.enabled)
+    return len(found)
 
 
 def _reaches_procedural(socket, seen, types=PROCEDURAL_TYPES):
@@ -142,6 +167,8 @@ def _node(node, out, chain, depth):
         return (lambda c: np.asarray(v(c), np.float32) @ M32 + off32), True
     if t in PROCEDURAL_TYPES:
         return _texture(node, out, chain, depth)
+    if t == 'TEX_IMAGE' and chain.image is not None:
+        return _image(node, out, chain)
     roles = nodeeval.node_inputs(node)
     if roles is None or t in nodeeval.VIEW_NODE_TYPES:
         raise nodeeval.NotCompiled(f"'{node.bl_label}' node")
@@ -208,6 +235,33 @@ def _texture(node, out, chain, depth):
         f = pr.gradient(vec(c), kind)[:, None]
         return f if fac else np.repeat(f, 3, axis=1)
     return gradient, False
+
+
+def _image(node, out, chain):
+    """(fn, False) of an Image Texture's Color or Alpha, looked up at each point's UV (through
+    the Mapping the export reads into the texture's transform) as the material's one image is
+    (texture.texture_lookup: Cycles' interpolation, extension and stored encoding)."""
+    tex = chain.image(node, chain.reasons)
+    alpha = out.name == 'Alpha'
+    chain.textures.append(f"image '{node.image.name}'" if node.image is not None else "Image Texture")
+    if tex is None:                         # no image or unreadable: Cycles' opaque magenta
+        const = np.array([[1.0]] if alpha else [[1.0, 0.0, 1.0]])
+        return (lambda c: const), False
+    if alpha and tex.udim is not None:
+        raise nodeeval.NotCompiled(f"the Alpha of UDIM image '{tex.name}'")
+    texels = lookup_texels(tex.texels(tex.pixels), tex.interpolation)
+    interp, ext = tex.interpolation, tex.extension
+    M = None if tex.transform is None else np.asarray(tex.transform, np.float32)
+    chain.needs.add('uv')
+
+    def look(c):
+        u, v = c['uv'][:, 0], c['uv'][:, 1]
+        if M is not None:
+            u, v = M[0, 0] * u + M[0, 1] * v + M[0, 2], M[1, 0] * u + M[1, 1] * v + M[1, 2]
+        if alpha:
+            return alpha_lookup(texels, u, v, interp, ext)[:, None]
+        return texture_lookup(texels, u, v, interp, ext).T
+    return look, False
 
 
 def _voronoi(node, out, vec, chain, depth):
