@@ -940,10 +940,34 @@ class MaterialBuilder:
         """Note a BSDF's tangent-space normal map (tangent_normal_map) for the material."""
         found = tangent_normal_map(node, reasons)
         if found is not None:
-            image, strength, uv_map = found
+            image, strength, uv_map, chain = found
             tex = self._texture(image, reasons)
+            if tex is not None and chain is not None:
+                tex = self._normal_chain(tex, chain, reasons)
             if tex is not None:
                 self._normal_maps.append((tex, strength, uv_map))
+
+    def _normal_chain(self, tex, socket, reasons):
+        """The normal map texture tex seen through the colour nodes feeding the Normal Map's
+        Color socket (tangent_normal_map): run on each looked-up colour where Cycles keeps the
+        image encoded (after the blend, in Cycles' order), else on its texels (exact for a
+        per-channel scale and offset, such as a flipped green channel, or 'Closest' lookups;
+        otherwise reported)."""
+        compiled = nodeeval.compile_image_chain(socket, True, tex.key[0])
+
+        def chain(rgb):         # reads no Blender data: it runs during the render's lookups
+            px = np.empty(rgb.shape[:-1] + (4,), np.float32)
+            px[..., :3], px[..., 3] = rgb, 1.0
+            y = np.broadcast_to(np.asarray(compiled(px.reshape(-1, 4)), np.float64), (px[..., 0].size, 3))
+            return np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32).reshape(rgb.shape)
+        probe = self._PROBE[:, :3]
+        if stored_texels(tex.pixels) is None and tex.interpolation != 'Closest' and \
+                channel_line(probe.astype(np.float64), chain(probe).astype(np.float64), 1e-5) is None:
+            reasons.append(f"colour nodes after normal map image '{tex.name}' applied to its texels before the "
+                           "blend (Cycles blends, then applies them)")
+        px = tex.baked(chain)
+        return Texture(('normal chain', tex.key, id(px)), px, tex.interpolation, tex.extension, tex.transform,
+                       tex.udim, tex.name)
 
     def _texture(self, node, reasons):
         img = node.image

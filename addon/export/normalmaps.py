@@ -1,10 +1,12 @@
 """Which BSDF Normal inputs bend the shading normal: a tangent-space Normal Map of an Image
-Texture is rendered (the material's normal texture); the nodes that leave the normal as it is
-are looked past; anything else is reported as ignored. Part of the export layer."""
+Texture, or of colour nodes on one (a DirectX map's green channel flipped), is rendered (the
+material's normal texture); the nodes that leave the normal as it is are looked past; anything
+else is reported as ignored. Part of the export layer."""
 
 import numpy as np
 
-from ..nodeeval import constant_value
+from .. import nodegraph
+from ..nodeeval import NotCompiled, compile_image_chain, constant_value
 from ..nodegraph import linked_link
 
 
@@ -42,22 +44,58 @@ def bends_normal(socket):
 
 
 def tangent_normal_map(node, reasons):
-    """(image node, strength, UV map name) of a BSDF's Normal input fed by a tangent-space
-    Normal Map node whose Color is an Image Texture's (the common baked normal map), or None
-    (an unlinked Normal; anything else is reported as ignored)."""
+    """(image node, strength, UV map name, chain) of a BSDF's Normal input fed by a
+    tangent-space Normal Map node whose Color is an Image Texture's (the common baked normal
+    map; chain None) or colour nodes on one image's colour (chain: the Normal Map's Color
+    socket, which nodeeval.compile_image_chain compiles), or None (an unlinked Normal; anything
+    else is reported as ignored)."""
     socket = node.inputs.get('Normal')
     link = _normal_link(socket) if socket is not None else None
     if link is None:
         return None
     nmap = link.from_node
     image = linked_link(nmap.inputs['Color']) if nmap.type == 'NORMAL_MAP' else None
-    if nmap.type != 'NORMAL_MAP' or nmap.space != 'TANGENT' or image is None \
-            or image.from_node.type != 'TEX_IMAGE' or image.from_socket.name != 'Color':
+    direct = image is not None and image.from_node.type == 'TEX_IMAGE' and image.from_socket.name == 'Color'
+    through = None if direct or image is None else _one_image_through_nodes(nmap.inputs['Color'])
+    if nmap.type != 'NORMAL_MAP' or nmap.space != 'TANGENT' or not (direct or through is not None):
         what = f"{nmap.space.lower().replace('_', ' ')} space normal map" if nmap.type == 'NORMAL_MAP' else \
             f"'{nmap.bl_label}'"
-        reasons.append(f"Normal input ({what}) ignored: tangent-space normal maps of an image only")
+        reasons.append(f"Normal input ({what}) ignored: tangent-space normal maps of an image, or of colour "
+                       "nodes on one image's colour, only")
         return None
     strength, ok = constant_value(nmap.inputs['Strength'])
     if not ok:
         reasons.append("Normal Map strength driven by nodes; its own value used")
-    return image.from_node, max(float(strength), 0.0), str(nmap.uv_map)
+    if direct:
+        return image.from_node, max(float(strength), 0.0), str(nmap.uv_map), None
+    return through, max(float(strength), 0.0), str(nmap.uv_map), nmap.inputs['Color']
+
+
+def _one_image_through_nodes(socket):
+    """The Image Texture node (with an image, its Color read) that the colour nodes feeding
+    socket read alone, or None: another source, its Alpha, or nodes the evaluation cannot
+    compile."""
+    nodes, seen, todo = [], set(), [socket]
+    while todo and len(seen) < 10_000:
+        link, _ = nodegraph.source(todo.pop())
+        if link is None:
+            continue
+        node = link.from_node
+        key = nodegraph.output_key(node, None)
+        if node.type == 'TEX_IMAGE':
+            if link.from_socket.name != 'Color' or node.image is None:
+                return None
+            nodes.append(node)
+            continue
+        if key in seen:
+            continue
+        seen.add(key)
+        todo.extend(s for s in node.inputs if s.enabled)
+    if not nodes or len({n.image.as_pointer() for n in nodes}) != 1 or \
+            len({nodegraph.output_key(n, None) for n in nodes}) != 1:
+        return None
+    try:
+        compile_image_chain(socket, True, nodes[0].image.as_pointer())
+    except NotCompiled:
+        return None
+    return nodes[0]
