@@ -9,6 +9,7 @@ import pytest
 
 from addon import colornodes as cn
 from addon import export
+from addon.procedural import ProceduralTexels
 
 from . import scenes
 
@@ -245,9 +246,10 @@ def test_vector_map_range_and_mix_are_evaluated(scene):
         assert np.allclose(m.base_color, want, atol=1e-5), (name, m.base_color, want)
 
 
-def test_ramp_of_an_alpha_mask_and_unreadable_inputs(scene):
-    """A Color Ramp fed by the image's alpha; a Noise Texture in the chain reads as the input's
-    own value, and a second image as its average, each reported."""
+def test_ramp_of_an_alpha_mask_beside_a_noise_and_a_second_image(scene):
+    """A Color Ramp fed by the image's alpha, mixed with a Noise Texture (at factor 0) and a
+    second image: the chain is compiled per point with both images looked up there (the Noise
+    had read as its own value and the second image as its average, each reported)."""
     def chain(nt, tex):
         ramp = nt.nodes.new('ShaderNodeValToRGB')
         ramp.color_ramp.elements[0].color = (1, 0, 0, 1)
@@ -261,9 +263,11 @@ def test_ramp_of_an_alpha_mask_and_unreadable_inputs(scene):
     m = _exported_material(_image_material("Ramp", PX, chain))
     a = PX[..., 3:4].astype(np.float64)
     ramp = np.concatenate([1 - a, 0 * a, a], axis=-1)
-    assert np.allclose(m.texture[..., :3], 0.5 * ramp + 0.25, atol=1e-2)       # table of 256 entries
-    assert "colour from 'Noise Texture' node; its own value used" in m.approximated
-    assert "two image textures mixed" in m.approximated
+    assert isinstance(m.texture, ProceduralTexels) and 'uv' in m.texture.needs
+    centres = np.array([[(j + 0.5) / 2, (i + 0.5) / 2, 0.0] for i in range(2) for j in range(2)], np.float32)
+    got = m.texture.evaluate({'uv': centres, 'generated': centres, 'object': centres}).T.reshape(2, 2, 3)
+    assert np.allclose(got, 0.5 * ramp + 0.25, atol=1e-5), got
+    assert "Noise" not in m.approximated and "two image textures" not in m.approximated, m.approximated
 
 
 @pytest.mark.parametrize('which', ['Hue', 'Saturation', 'Value'])
@@ -380,20 +384,20 @@ def test_udim_tile_without_a_file_reported_and_magenta(scene):
 
 def test_fair_editor_keeps_colour_nodes(scene):
     """The benchmark's fair-material editor keeps what the export evaluates (the image, the Mix
-    and Hue/Saturation nodes) and unlinks only the Noise Texture, where the export reads the
-    Mix input's own value."""
+    and Hue/Saturation nodes) and unlinks only the Magic Texture (not evaluated), where the
+    export reads the Mix input's own value."""
     from tests.bench import fairmaterials
     state = {}
 
     def chain(nt, tex):
-        noise = nt.nodes.new('ShaderNodeTexNoise')
+        noise = nt.nodes.new('ShaderNodeTexMagic')
         m = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], noise.outputs['Color'], 0.5)
         hs = nt.nodes.new('ShaderNodeHueSaturation')
         nt.links.new(m.outputs['Result'], hs.inputs['Color'])
         state.update(noise=noise, mix=m, hs=hs)
         return hs.outputs['Color']
     mat = _image_material("Kept", PX, chain)
-    assert "Noise Texture" in fairmaterials.remaining_approximations([mat])["Kept"]
+    assert "Magic Texture" in fairmaterials.remaining_approximations([mat])["Kept"]
     fairmaterials.make_diffuse([mat])
     assert fairmaterials.remaining_approximations([mat]) == {}
     assert not state['noise'].outputs['Color'].is_linked
