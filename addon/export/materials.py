@@ -693,10 +693,11 @@ class MaterialBuilder:
             return a + (albedo(sides[1], coords) - a) * f
         return Closure(texture=Texture.procedural(ProceduralTexels(mixed, needs, name)), tex_weight=(1.0, 1.0, 1.0))
 
-    def _evaluated_alpha(self, socket, reasons):
+    def _evaluated_alpha(self, socket, reasons, inverted=False):
         """(Texture, False) whose alpha is what nodes compute from one image (Blender's glTF
-        importer's alpha mask: 1 - (alpha < cutoff) into the Principled Alpha), evaluated per
-        texel; None when nothing of an image reaches the socket. Cycles blends the image, then
+        importer's alpha mask: 1 - (alpha < cutoff) into the Principled Alpha; a black-and-white
+        opacity map's colour into a Mix Shader's factor), evaluated per texel (inverted: 1 minus
+        it); None when nothing of an image reaches the socket. Cycles blends the image, then
         runs the nodes: a texel-wise cut-out keeps the coverage, with edges one texel soft
         where Cycles' are sharp (reported unless looked up 'Closest')."""
         per_texel = self._float_per_texel(socket)
@@ -704,6 +705,8 @@ class MaterialBuilder:
             return None
         src, a, notes = per_texel
         reasons.extend(notes)
+        if inverted:
+            a = 1.0 - np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)
         px = np.zeros(a.shape + (4,), np.float32)
         px[..., 3] = np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)
         if src.interpolation != 'Closest':
@@ -713,12 +716,15 @@ class MaterialBuilder:
                        src.name), False
 
     def _alpha_mix(self, node, reasons, depth):
-        """A Mix Shader whose factor is an image's alpha, between a purely transparent shader and
-        another one (the usual cut-out leaf): that shader with the image as its opacity."""
-        if not is_image_alpha(linked_link(node.inputs['Fac'])):
+        """A Mix Shader whose factor is an image's alpha, or what nodes compute from one image (a
+        black-and-white opacity map's colour, an alpha through Greater Than or Invert), between a
+        purely transparent shader and another one (the usual cut-out leaf): that shader with
+        the factor as its opacity."""
+        if not is_image_alpha(linked_link(node.inputs['Fac'])) and self._float_per_texel(node.inputs['Fac']) is None:
             return None
-        a = self._shader(node.inputs[1], reasons, depth + 1)
-        b = self._shader(node.inputs[2], reasons, depth + 1)
+        notes = []              # (said only if this mix is taken: else the shaders are read again)
+        a = self._shader(node.inputs[1], notes, depth + 1)
+        b = self._shader(node.inputs[2], notes, depth + 1)
         clear_a, clear_b = a.only_transparent(), b.only_transparent()
         if clear_a == clear_b or a.opacity is not None or b.opacity is not None:
             return None
@@ -726,9 +732,12 @@ class MaterialBuilder:
         if opaque.transparent.any() or opaque.holdout:
             return None
         # Mix = (1 - fac) A + fac B: fac is the opacity when A is the transparent one
-        opacity = self._image_alpha(node.inputs['Fac'], reasons, inverted=not clear_a)
+        opacity = self._image_alpha(node.inputs['Fac'], notes, inverted=not clear_a)
+        if opacity is None and not is_image_alpha(linked_link(node.inputs['Fac'])):
+            opacity = self._evaluated_alpha(node.inputs['Fac'], notes, inverted=not clear_a)
         if opacity is None:
             return None
+        reasons.extend(notes)
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
                         clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass)
 
