@@ -77,6 +77,11 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
     seed: IntProperty(
         name="Seed", description="Random seed; the same seed gives the same image",
         default=0, min=0)
+    use_animated_seed: BoolProperty(
+        name="Use Animated Seed",
+        description="Use a different seed on each frame (as Cycles' option), so an animation's noise "
+                    "changes from frame to frame instead of staying fixed on the screen",
+        default=False)
     use_adaptive_sampling: BoolProperty(
         name="Adaptive Sampling",
         description="Stop sampling pixels whose estimated noise is below the threshold "

@@ -42,6 +42,26 @@ def layer_samples(scene, vl, samples):
     return min(layer, samples) if mode == 'BOUNDED' else layer
 
 
+def _fmix32(x):
+    """MurmurHash3's 32-bit finaliser on a Python int."""
+    x &= 0xFFFFFFFF
+    x ^= x >> 16
+    x = (x * 0x85EBCA6B) & 0xFFFFFFFF
+    x ^= x >> 13
+    x = (x * 0xC2B2AE35) & 0xFFFFFFFF
+    return x ^ (x >> 16)
+
+
+def frame_seed(seed, frame, subframe=0.0):
+    """The seed of a frame under Use Animated Seed (Cycles hashes the frame with the seed, and a
+    subframe too): the seed, frame and subframe mixed into 0 .. 2^31 - 1, the same for the same
+    frame on every render."""
+    h = _fmix32(_fmix32(int(seed) ^ 0x9E3779B9) ^ (int(frame) & 0xFFFFFFFF))
+    if subframe:
+        h = _fmix32(h ^ int(float(subframe) * 0x7FFFFFFF))
+    return h & 0x7FFFFFFF
+
+
 def export_settings(scene, vl, messages, viewport=False):
     """scenedata.Settings of one view layer `vl` of the evaluated scene. Passes Cycles would
     write there and DACRT does not are named in a warning appended to messages. viewport: the
@@ -60,6 +80,13 @@ def export_settings(scene, vl, messages, viewport=False):
         missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ()) if not a.is_valid]
         crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
         lightgroups = tuple(dict.fromkeys(g.name for g in getattr(vl, 'lightgroups', ())))
+    cyc = getattr(scene, 'cycles', None)
+    culled = [what for what, toggle in (("camera", 'use_camera_cull'), ("distance", 'use_distance_cull'))
+              if r.use_simplify and getattr(cyc, toggle, False)]
+    if culled:
+        # (Cycles' own Simplify panel; a scene made for Cycles keeps it on)
+        messages.append(('WARNING', f"Cycles' Simplify > Culling ({' and '.join(culled)}) is not applied: "
+                                    "objects Cycles culls are rendered"))
     if missing:
         written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
                                           + ['Cryptomatte', 'light groups', 'shader AOVs']))
@@ -85,7 +112,9 @@ def export_settings(scene, vl, messages, viewport=False):
                        transmission_max_bounces=d.transmission_max_bounces,
                        sample_clamp_direct=d.sample_clamp_direct,
                        sample_clamp_indirect=d.sample_clamp_indirect, filter_type=d.filter_type,
-                       filter_width=d.filter_width, seed=d.seed,
+                       filter_width=d.filter_width,
+                       seed=frame_seed(d.seed, scene.frame_current, scene.frame_subframe)
+                       if getattr(d, 'use_animated_seed', False) else d.seed,
                        threads=0 if r.threads_mode == 'AUTO' else r.threads,
                        partition=d.partition.lower(), film_transparent=r.film_transparent,
                        film_transparent_glass=bool(getattr(getattr(scene, 'cycles', None),
