@@ -197,7 +197,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self._viewport = None
         region, rv3d = context.region, context.region_data
         try:
-            camera = export.viewport_camera(rv3d.view_matrix, rv3d.window_matrix, region.width, region.height)
+            camera = _region_camera(context)
             scene_data = export.export_scene(depsgraph, view_camera=camera)
         except Exception as e:          # in the viewport's status line, and reported once
             self._viewport_report([('ERROR', f"viewport: {e}")])
@@ -227,8 +227,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         if key != self._view_key:
             self._view_key = key
             try:
-                session.start(export.viewport_camera(rv3d.view_matrix, rv3d.window_matrix,
-                                                     region.width, region.height))
+                session.start(_region_camera(context))
             except export.ExportError as e:
                 session.stop()
                 session.error = str(e)
@@ -456,6 +455,17 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             done = f"Sample {s['samples_done']} | " if 'samples_done' in s else ""
             self.update_stats("", f"DACRT | Done | {done}Time {_clock(s.get('total_seconds', 0.0))} | "
                                   f"skipped {skipped}")
+
+
+def _region_camera(context):
+    """The camera of the viewport's region (export.viewport_camera), its clip range the view's
+    own (space_data.clip_start / clip_end, as Cycles' viewport reads it) where the context has
+    a 3D view."""
+    region, rv3d, space = context.region, context.region_data, getattr(context, 'space_data', None)
+    clip = None
+    if space is not None and hasattr(space, 'clip_start'):
+        clip = (float(space.clip_start), float(space.clip_end))
+    return export.viewport_camera(rv3d.view_matrix, rv3d.window_matrix, region.width, region.height, clip=clip)
 
 
 def _view_key(region, rv3d):

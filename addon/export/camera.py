@@ -219,11 +219,16 @@ def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):
                 aperture_rotation=float(d.aperture_rotation), aperture_ratio=float(d.aperture_ratio))
 
 
-def viewport_camera(view_matrix, window_matrix, width, height):
+def viewport_camera(view_matrix, window_matrix, width, height, clip=None):
     """The camera of a 3D viewport's region (width x height pixels) as scenedata.Camera, from
     its view (world -> view) and window (projection) matrices, as Blender draws the region:
     a perspective or orthographic view, or a camera view with its zoom and offset, whose
-    projection Blender has already made the region's. No border and no depth of field."""
+    projection Blender has already made the region's. No border and no depth of field.
+    clip: the view's (clip_start, clip_end) (View3DSpace's), which Cycles' viewport reads
+    directly (an orthographic view from -clip_end / 2 to clip_end / 2 around its eye, as
+    Blender and Cycles set it); None reads the range back from the projection matrix, whose
+    far plane a float32 matrix holds only roughly (P22 + 1 cancels: a clip end of 10000 with
+    a clip start of 0.001 read back as 8389)."""
     P = np.array(window_matrix, np.float64)
     V = np.array(view_matrix, np.float64)
     if P.shape != (4, 4) or V.shape != (4, 4) or not (np.isfinite(P).all() and np.isfinite(V).all()):
@@ -235,20 +240,29 @@ def viewport_camera(view_matrix, window_matrix, width, height):
     if not np.all(lengths > 0):
         raise ExportError("the viewport's view matrix is degenerate")
     m[:3, :3] /= lengths
+    if clip is not None and not np.isfinite(clip).all():
+        raise ExportError(f"the view's clip range {clip[0]:g} .. {clip[1]:g} is not finite")
     if P[3, 3] == 0.0:
         # perspective: x_ndc = P00 * x / -z - P02, so x / -z spans (+-1 + P02) / P00 across the
         # region; near and far from the depth row (Blender's perspective matrix)
         kind = 'PERSP'
         plane = ((-1 + P[0, 2]) / P[0, 0], (1 + P[0, 2]) / P[0, 0],
                  (-1 + P[1, 2]) / P[1, 1], (1 + P[1, 2]) / P[1, 1])
-        near, far = P[2, 3] / (P[2, 2] - 1.0), P[2, 3] / (P[2, 2] + 1.0)
+        if clip is not None:
+            near, far = float(clip[0]), float(clip[1])
+        else:
+            with np.errstate(divide='ignore', invalid='ignore'):
+                near, far = P[2, 3] / (P[2, 2] - 1.0), P[2, 3] / (P[2, 2] + 1.0)
     else:
         # orthographic: x_ndc = P00 * x + P03; a viewport's near plane lies behind its eye
         # (negative clip start), so the eye moves back to it and the rays start there
         kind = 'ORTHO'
         plane = ((-1 - P[0, 3]) / P[0, 0], (1 - P[0, 3]) / P[0, 0],
                  (-1 - P[1, 3]) / P[1, 1], (1 - P[1, 3]) / P[1, 1])
-        near, far = (P[2, 3] + 1.0) / P[2, 2], (P[2, 3] - 1.0) / P[2, 2]
+        if clip is not None:
+            near, far = -0.5 * float(clip[1]), 0.5 * float(clip[1])
+        else:
+            near, far = (P[2, 3] + 1.0) / P[2, 2], (P[2, 3] - 1.0) / P[2, 2]
         m[:3, 3] += m[:3, 2] * -near
         near, far = 0.0, far - near
     if not (np.isfinite(plane).all() and np.isfinite((near, far)).all()):

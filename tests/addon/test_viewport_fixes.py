@@ -1,0 +1,112 @@
+"""The viewport (Rendered shading) against the final render and Cycles' viewport: the view's
+own clip range, updates that hide objects or change collection flags, hair at the display
+steps, the scene camera rendered in camera view (panorama, depth of field, broken settings),
+the Render Region, and what the viewport reports. Driven without a GPU through the stand-ins
+of test_viewport.py."""
+import math
+
+import numpy as np
+
+import bpy
+import mathutils
+
+from addon import export
+
+from . import scenes
+from .test_viewport import _Engine, _finished, _lit_box
+
+
+class _Obj:
+    def __init__(self, **kw):
+        self.__dict__.update(kw)
+
+
+def _f32(m):
+    """A matrix as Blender hands it over (float32)."""
+    return mathutils.Matrix(np.array(m, np.float32).astype(np.float64).tolist())
+
+
+class _Context:
+    """The region, its 3D view data and the 3D view space, as view_update / view_draw read them."""
+    def __init__(self, view, window, w, h, space=None, perspective=None):
+        window = np.array(window, np.float64)
+        self.region = _Obj(width=w, height=h)
+        self.region_data = _Obj(view_matrix=_f32(view), window_matrix=_f32(window),
+                                view_perspective=perspective or ('PERSP' if window[3, 3] == 0.0 else 'ORTHO'))
+        self.space_data = space
+
+
+def _space(clip_start=0.01, clip_end=1000.0, **kw):
+    return _Obj(clip_start=clip_start, clip_end=clip_end, use_render_border=False, render_border_min_x=0.0,
+                render_border_max_x=1.0, render_border_min_y=0.0, render_border_max_y=1.0,
+                use_local_camera=False, camera=None, **kw)
+
+
+def _persp_window(lens, w, h, n, f, sensor=36.0, zoom=2.0):
+    """Blender's free perspective view's projection (BKE_camera_params_from_view3d, sensor fit
+    AUTO over the region, CAMERA_PARAM_ZOOM_INIT_PERSP = 2)."""
+    pix = sensor * n / lens * zoom / max(w, h)
+    r, t = 0.5 * w * pix, 0.5 * h * pix
+    return np.array([[n / r, 0, 0, 0], [0, n / t, 0, 0],
+                     [0, 0, -(f + n) / (f - n), -2 * f * n / (f - n)], [0, 0, -1, 0]])
+
+
+def _ortho_window(scale, w, h, clip_end):
+    """Blender's free orthographic view: from -clip_end / 2 to clip_end / 2 around the eye."""
+    f = 0.5 * clip_end
+    r, t = 0.5 * scale, 0.5 * scale * h / w
+    return np.array([[1 / r, 0, 0, 0], [0, 1 / t, 0, 0], [0, 0, -1 / f, 0], [0, 0, 0, 1]])
+
+
+def _wall_ahead(distance):
+    """An emissive wall (strength 1, white) `distance` ahead of an eye at the origin looking
+    along +Y, a black world; the view matrix of that eye."""
+    wall = scenes.plane("Wall", size=4.0 * distance, location=(0, distance, 0),
+                        materials=[scenes.emission("e", (1, 1, 1), 1.0)])
+    wall.rotation_euler = (math.pi / 2, 0, 0)
+    scenes.world((0, 0, 0))
+    return np.array(mathutils.Matrix.Rotation(math.pi / 2, 4, 'X').inverted())
+
+
+def _viewport(engine, context):
+    engine.view_update(context, bpy.context.evaluated_depsgraph_get())
+    assert engine._viewport is not None, engine.status[-1:]
+    return _finished(engine._viewport)
+
+
+# --- 1. the far clip is the view's clip end ----------------------------------------------------
+
+def test_free_view_clips_at_the_views_clip_end_not_the_float32_matrixs(scene):
+    # a wall 9000 units ahead: Cycles' viewport (and a camera with the same clip range) shows it
+    # for a clip end of 10000 whatever the clip start; read back from the float32 projection the
+    # far plane had been 9869 (clip start 0.01), 8389 (0.001: the wall gone), 998.65 for
+    # Blender's default 0.01 .. 1000, and 0.001 .. 100000 failed as a singular matrix
+    scene.dacrt.samples = scene.dacrt.preview_samples = 1
+    view = _wall_ahead(9000.0)
+    for start, end, visible in ((0.01, 10000.0, True), (0.001, 10000.0, True), (0.001, 100000.0, True),
+                                (0.01, 1000.0, False), (0.01, 8999.0, False)):
+        engine = _Engine()
+        image = _viewport(engine, _Context(view, _persp_window(50.0, 16, 12, start, end), 16, 12,
+                                           _space(start, end)))
+        cam = engine._viewport.scene_data.camera
+        assert (cam.clip_start, cam.clip_end) == (start, end)
+        np.testing.assert_allclose(image[..., :3].mean(), 1.0 if visible else 0.0, atol=1e-4)
+        engine._viewport.stop()
+    # Blender's default range, a closed form: the far plane is 1000 (not 998.65)
+    cam = export.viewport_camera(_f32(view), _f32(_persp_window(50.0, 16, 12, 0.01, 1000.0)), 16, 12,
+                                 clip=(0.01, 1000.0))
+    assert cam.clip_end == 1000.0
+
+
+def test_free_orthographic_view_spans_half_the_clip_end_either_side_of_its_eye(scene):
+    # Blender's and Cycles' orthographic view: from -clip_end / 2 to clip_end / 2 along the view
+    scene.dacrt.samples = scene.dacrt.preview_samples = 1
+    view = _wall_ahead(9000.0)
+    for end, visible in ((100000.0, True), (17000.0, False)):
+        engine = _Engine()
+        image = _viewport(engine, _Context(view, _ortho_window(30.0, 16, 12, end), 16, 12, _space(0.01, end)))
+        cam = engine._viewport.scene_data.camera
+        np.testing.assert_allclose(cam.matrix[:3, 3], (0.0, -0.5 * end, 0.0), atol=1e-6 * end)
+        assert (cam.clip_start, cam.clip_end) == (0.0, end)
+        np.testing.assert_allclose(image[..., :3].mean(), 1.0 if visible else 0.0, atol=1e-4)
+        engine._viewport.stop()
