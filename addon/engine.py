@@ -142,6 +142,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self._viewport = None           # the viewport's ViewportSession (Rendered shading)
         self._view_key = None
         self._settings_key = None
+        self._layer_key = None
         self._display = None
         self._viewport_said = set()     # messages the viewport has reported (re-exports repeat them)
 
@@ -190,7 +191,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         main thread, where the export may read bpy. Updates that change nothing rendered
         (a selection) keep the running samples."""
         from .viewport import ViewportSession
-        if self._viewport is not None and not _renders_differently(depsgraph, self._settings_key):
+        if self._viewport is not None and not _renders_differently(depsgraph, self._settings_key,
+                                                                   getattr(self, '_layer_key', None)):
             return
         if self._viewport is not None:
             self._viewport.stop()
@@ -213,6 +215,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self._viewport = ViewportSession(scene_data, redraw)
         self._view_key = _view_key(region, rv3d)
         self._settings_key = _settings_key(depsgraph.scene_eval)
+        self._layer_key = _layer_key(depsgraph)
         self._viewport.start(camera)
 
     def view_draw(self, context, depsgraph):
@@ -474,20 +477,40 @@ def _view_key(region, rv3d):
             tuple(map(tuple, rv3d.window_matrix)))
 
 
-def _renders_differently(depsgraph, settings_key) -> bool:
+def _renders_differently(depsgraph, settings_key, layer_key=None) -> bool:
     """Whether a depsgraph update can change the rendered image: any data-block other than an
     object or the scene, an object's geometry, transform or shading, or the scene's settings
     (settings_key: those of the running export; a selection changes none of them, and comes as
-    an update of the scene alone)."""
+    an update of the scene alone), or what the view layer shows (layer_key, _layer_key's of the
+    running export, None: not compared): hiding an object (hide_set) or setting a collection's
+    Holdout or Indirect Only also comes as an update of the scene alone."""
     for u in depsgraph.updates:
         if isinstance(u.id, bpy.types.Scene):
             if _settings_key(depsgraph.scene_eval) != settings_key:
+                return True
+            if layer_key is not None and _layer_key(depsgraph) != layer_key:
                 return True
         elif not isinstance(u.id, bpy.types.Object):
             return True
         elif u.is_updated_geometry or u.is_updated_transform or u.is_updated_shading:
             return True
     return False
+
+
+def _layer_key(depsgraph):
+    """What the view layer shows besides its objects' data: each layer collection's Exclude,
+    Hide, Holdout and Indirect Only, and the objects hidden in the viewport (the eye icon,
+    hide_set: a flag of the view layer's base, not of the object)."""
+    layer = depsgraph.view_layer
+    flags = []
+
+    def walk(lc):
+        flags.append((lc.name, lc.exclude, lc.hide_viewport, lc.holdout, lc.indirect_only))
+        for child in lc.children:
+            walk(child)
+    walk(layer.layer_collection)
+    hidden = tuple(sorted(ob.name for ob in layer.objects if ob.hide_get(view_layer=layer)))
+    return tuple(flags), hidden
 
 
 def _settings_key(scene):

@@ -110,3 +110,73 @@ def test_free_orthographic_view_spans_half_the_clip_end_either_side_of_its_eye(s
         assert (cam.clip_start, cam.clip_end) == (0.0, end)
         np.testing.assert_allclose(image[..., :3].mean(), 1.0 if visible else 0.0, atol=1e-4)
         engine._viewport.stop()
+
+
+# --- 2. hiding an object, a collection's Holdout / Indirect Only re-export ---------------------
+
+def _cam_context(cam_ob, w=32, h=24, space=None, perspective='CAMERA'):
+    dg = bpy.context.evaluated_depsgraph_get()
+    return _Context(cam_ob.matrix_world.inverted(), cam_ob.calc_matrix_camera(dg, x=w, y=h), w, h,
+                    space, perspective)
+
+
+def test_hiding_an_object_or_a_collections_holdout_re_exports_the_viewport(scene):
+    # these come as updates of the scene alone, which the viewport had taken for a selection:
+    # the hidden box stayed (red excess 0.489, a fresh export 0.000), no holdout (alpha 1.00,
+    # fresh 0.33), and undoing them did not restart either
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 4
+    box = bpy.data.objects['Box']
+    coll = bpy.data.collections.new("C")
+    scene.collection.children.link(coll)
+    coll.objects.link(box)
+    scene.collection.objects.unlink(box)
+    lc = bpy.context.view_layer.layer_collection.children['C']
+    engine, ctx = _Engine(), _cam_context(cam, perspective='PERSP')
+
+    def handler(sc, dg):            # as Blender calls view_update with the update's depsgraph
+        engine.view_update(ctx, dg)
+    dg = bpy.context.evaluated_depsgraph_get()
+    engine.view_update(ctx, dg)
+    shown = _finished(engine._viewport).copy()
+
+    def fresh():
+        other = _Engine()
+        image = _viewport(other, ctx)
+        other._viewport.stop()
+        return image
+    red = lambda im: float((im[..., 0] - im[..., 1])[8:20, 10:22].mean())   # noqa: E731
+    assert red(shown) > 0.3
+    bpy.app.handlers.depsgraph_update_post.append(handler)
+    try:
+        for do, undo in ((lambda: box.hide_set(True), lambda: box.hide_set(False)),
+                         (lambda: setattr(lc, 'holdout', True), lambda: setattr(lc, 'holdout', False)),
+                         (lambda: setattr(lc, 'indirect_only', True), lambda: setattr(lc, 'indirect_only', False))):
+            session = engine._viewport
+            do()
+            dg.update()
+            assert engine._viewport is not session
+            np.testing.assert_array_equal(_finished(engine._viewport), fresh())
+            session = engine._viewport
+            undo()
+            dg.update()
+            assert engine._viewport is not session
+            np.testing.assert_array_equal(_finished(engine._viewport), shown)
+        box.hide_set(True)
+        dg.update()
+        hidden_box = _finished(engine._viewport)
+        assert abs(red(hidden_box)) < 0.02
+        box.hide_set(False)
+        lc.holdout = True
+        dg.update()
+        assert float(_finished(engine._viewport)[8:20, 10:22, 3].mean()) < 0.5
+        lc.holdout = False
+        dg.update()
+        # a selection still keeps the running samples
+        session = engine._viewport
+        box.select_set(True)
+        dg.update()
+        assert engine._viewport is session
+    finally:
+        bpy.app.handlers.depsgraph_update_post.remove(handler)
+        engine._viewport.stop()
