@@ -331,7 +331,7 @@ class Exporter:
     def _particle_hair(self, ob, override, inst):
         """The strands of ob's hair particle systems (Render As Path), as Cycles reads them
         (blender/curves.cpp): children only when it has some (else the parents), 2^render_step
-        + 1 world-space points a strand from co_hair, the radius from the Hair Shape settings
+        + 1 world-space points a strand from co_hair (2^display_step + 1 in the viewport), the radius from the Hair Shape settings
         along the strand's length; tessellated as tubes (hair.py) in object space once per
         emitter, and placed by each instance of it (inst: the depsgraph's), as Cycles places an
         instanced emitter's hair. The object's ray visibility applies (an instance's with its

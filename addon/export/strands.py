@@ -66,6 +66,7 @@ def hair_arrays(ob, notes):
     with the frame's other tubes), or None. notes: the exporter (its skip, ignore and
     check_break)."""
     systems = hair_systems(ob)
+    viewport = getattr(notes, 'view_camera', None) is not None
     positions, radii, offsets, slots = [], [], [0], []
     # the emitter: Cycles maps each root through its texture space and reads every one of its
     # UV maps there (one value a strand)
@@ -87,7 +88,11 @@ def hair_arrays(ob, notes):
         s = ps.settings
         parents, children = len(ps.particles), len(ps.child_particles)
         first = parents if (s.child_type != 'NONE' and children) else 0
-        points = (1 << s.render_step) + 1 + (s.kink_extra_steps if s.kink == 'SPIRAL' else 0)
+        # the path cache's points: 2^render_step + 1 in a render, 2^display_step + 1 in the
+        # viewport (whose depsgraph caches the display steps, as Cycles reads them there:
+        # co_hair gives (0, 0, 0) past the cache, every strand had run to the world origin)
+        step = s.display_step if viewport else s.render_step
+        points = (1 << step) + 1 + (s.kink_extra_steps if s.kink == 'SPIRAL' else 0)
         co = np.empty((parents + children - first, points, 3))
         for i, pa in enumerate(range(first, parents + children)):
             if i % 4096 == 0 and notes.check_break():

@@ -180,3 +180,44 @@ def test_hiding_an_object_or_a_collections_holdout_re_exports_the_viewport(scene
     finally:
         bpy.app.handlers.depsgraph_update_post.remove(handler)
         engine._viewport.stop()
+
+
+# --- 3. hair particles at the viewport's display steps ------------------------------------------
+
+def test_viewport_hair_reads_the_display_steps_of_its_path_cache(scene):
+    # the viewport depsgraph caches 2^display_step + 1 points a strand; 2^render_step + 1 had
+    # been read, co_hair giving (0, 0, 0) past the cache: 6912 hair vertices at the world origin,
+    # 194 red pixels where the final render has 97, mean |diff| 0.0146
+    scene.render.resolution_x, scene.render.resolution_y = 48, 36
+    scenes.plane("Floor", size=8.0, materials=[scenes.diffuse("grey", (0.6, 0.6, 0.6))])
+    em = scenes.plane("Emitter", size=1.0, location=(1.5, 1.0, 0.02), materials=[scenes.diffuse("hair", (0.9, 0.1, 0.1))])
+    scenes.light('SUN', 3.0, rotation=(0.3, 0.2, 0))
+    scenes.world((0.05, 0.05, 0.08))
+    cam = scenes.camera(location=(0.0, -6.0, 3.0), rotation=(1.1, 0.0, 0.0))
+    scene.dacrt.samples = scene.dacrt.preview_samples = 4
+    s = em.modifiers.new("hair", 'PARTICLE_SYSTEM').particle_system.settings
+    s.type, s.count, s.hair_length, s.radius_scale = 'HAIR', 40, 0.4, 0.06
+    s.display_step, s.render_step = 2, 3
+    final = scenes.rgba(scenes.read_exr(_render_exr(scene)))
+    engine = _Engine()
+    image = _viewport(engine, _cam_context(cam, 48, 36, perspective='PERSP'))
+    engine._viewport.stop()
+    v = engine._viewport.scene_data.geometry.vertices
+    assert np.linalg.norm(v, axis=1).min() > 0.5     # (the floor's corners are 5.7 out, the emitter's 1.1)
+    hair = v[np.abs(v[:, 2]) > 0.03]        # (the floor and the emitter lie at z 0 and 0.02)
+    assert len(hair) > 0
+    # every hair vertex lies over the emitter, within the hair's length (and its tube's radius)
+    assert hair[:, 0].min() > 1.0 - 0.45 and hair[:, 0].max() < 2.0 + 0.45
+    assert hair[:, 1].min() > 0.5 - 0.45 and hair[:, 1].max() < 1.5 + 0.45
+    assert hair[:, 2].max() < 0.02 + 0.45
+    red = lambda im: int((im[..., 0] - im[..., 1] > 0.1).sum())   # noqa: E731
+    assert red(final) > 20 and abs(red(image) - red(final)) <= 0.1 * red(final), (red(image), red(final))
+    assert np.abs(image - final)[..., :3].mean() < 2e-3
+
+
+def _render_exr(scene):
+    import os
+    import tempfile
+    path = os.path.join(tempfile.mkdtemp(), 'final.exr')
+    scenes.render_exr(path, scene)
+    return path
