@@ -199,13 +199,14 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self._viewport = None
         region, rv3d = context.region, context.region_data
         try:
-            camera = _region_camera(context)
+            said = []                   # (what the camera view's camera approximates)
+            camera = _region_camera(context, depsgraph, said)
             scene_data = export.export_scene(depsgraph, view_camera=camera)
         except Exception as e:          # in the viewport's status line, and reported once
             self._viewport_report([('ERROR', f"viewport: {e}")])
             self.update_stats("", f"DACRT | Error: {e}")
             return
-        self._viewport_report(scene_data.messages)
+        self._viewport_report(said + scene_data.messages)
         engine = weakref.ref(self)
 
         def redraw():               # from the worker: a new image is ready
@@ -229,11 +230,13 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         key = _view_key(region, rv3d)
         if key != self._view_key:
             self._view_key = key
+            said = []
             try:
-                session.start(_region_camera(context))
+                session.start(_region_camera(context, depsgraph, said))
             except export.ExportError as e:
                 session.stop()
                 session.error = str(e)
+            self._viewport_report(said)
         if not session.running and session.messages:
             self._viewport_report(session.messages)
         self.update_stats("", status_text(session))
@@ -460,11 +463,27 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
                                   f"skipped {skipped}")
 
 
-def _region_camera(context):
-    """The camera of the viewport's region (export.viewport_camera), its clip range the view's
-    own (space_data.clip_start / clip_end, as Cycles' viewport reads it) where the context has
-    a 3D view."""
+def _region_camera(context, depsgraph=None, messages=None):
+    """The camera of the viewport's region: in camera view the scene camera (the view's local
+    camera where it has one) as the final render renders it, placed in the region by the view's
+    zoom and offset (export.camera_view_camera: its panorama and depth of field too, as in
+    Cycles' camera view; what it cannot use goes to `messages`); else the view's own camera
+    (export.viewport_camera), its clip range the view's (space_data.clip_start / clip_end, as
+    Cycles' viewport reads it) where the context has a 3D view."""
     region, rv3d, space = context.region, context.region_data, getattr(context, 'space_data', None)
+    cam_ob = None
+    if depsgraph is not None and getattr(rv3d, 'view_perspective', None) == 'CAMERA':
+        scene = depsgraph.scene_eval
+        cam_ob = scene.camera
+        if space is not None and getattr(space, 'use_local_camera', False) and getattr(space, 'camera', None):
+            cam_ob = space.camera.evaluated_get(depsgraph)
+    if cam_ob is not None:
+        r = scene.render
+        # the frame as Blender draws it in the view (at the render's resolution and pixel aspect)
+        frame = cam_ob.calc_matrix_camera(depsgraph, x=r.resolution_x, y=r.resolution_y,
+                                          scale_x=r.pixel_aspect_x, scale_y=r.pixel_aspect_y)
+        return export.camera_view_camera(scene, cam_ob, frame, rv3d.window_matrix, region.width, region.height,
+                                         messages)
     clip = None
     if space is not None and hasattr(space, 'clip_start'):
         clip = (float(space.clip_start), float(space.clip_end))

@@ -3,6 +3,7 @@ blender_camera_viewplane and blender/camera.cpp): resolution and percentage, sen
 perspective, orthographic and panoramic projections, shift, clip range, pixel aspect, render
 border and crop, depth of field; a non-camera object as the camera. Part of the export layer."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -270,3 +271,52 @@ def viewport_camera(view_matrix, window_matrix, width, height, clip=None):
     return sd.Camera(kind=kind, matrix=m, viewplane=tuple(float(v) for v in plane), tan_half_fov=1.0,
                      clip_start=float(max(near, 0.0)), clip_end=float(max(far, near, 0.0)),
                      width=int(width), height=int(height), border=(0, 0, int(width), int(height)))
+
+
+def camera_view_camera(scene, cam_ob, frame_matrix, window_matrix, width, height, messages=None):
+    """The scene camera `cam_ob` as a viewport's camera view renders it (width x height pixels):
+    the final render's camera (export_camera: its projection, panorama, depth of field, clip
+    range, and the settings it cannot use reported, the world alone rendered for those, as
+    Cycles) with the view's zoom and offset, which place the camera's frame in the region as
+    Blender draws it. frame_matrix: Blender's projection of the frame (the camera's
+    calc_matrix_camera at the render resolution), window_matrix the region's: the region's
+    edges in the frame's own coordinates give the region's part of the frame's viewplane, to
+    which every camera kind maps raster positions linearly (Blender draws a panorama's frame as
+    a perspective camera's, as it draws any camera view; its rays are then the final render's
+    for the same spot of the frame). Where either matrix is not finite (a NaN lens) the frame
+    fills the region."""
+    render = export_camera(scene, messages, camera=cam_ob)
+    if width < 1 or height < 1:
+        raise ExportError(f"the viewport region {width}x{height} is less than one pixel")
+    u0, u1, v0, v1 = _region_in_frame(frame_matrix, window_matrix) or (0.0, 1.0, 0.0, 1.0)
+    left, right, bottom, top = render.viewplane
+    viewplane = (left + u0 * (right - left), left + u1 * (right - left),
+                 bottom + v0 * (top - bottom), bottom + v1 * (top - bottom))
+    border = (0, 0, int(width), int(height))
+    return dataclasses.replace(render, viewplane=tuple(float(v) for v in viewplane), width=int(width),
+                               height=int(height), border=border, crop=False)
+
+
+def _region_in_frame(frame_matrix, window_matrix):
+    """(u0, u1, v0, v1): the region's edges as fractions of the camera frame (0 .. 1 across it),
+    from the two projections of one camera (the same eye and axes); None where they are not
+    finite or not of one kind."""
+    F = np.array(frame_matrix, np.float64)
+    W = np.array(window_matrix, np.float64)
+    if F.shape != (4, 4) or W.shape != (4, 4) or not (np.isfinite(F).all() and np.isfinite(W).all()):
+        return None
+    if (F[3, 3] == 0.0) != (W[3, 3] == 0.0) or 0.0 in (F[0, 0], F[1, 1], W[0, 0], W[1, 1]):
+        return None
+    # the region's edges on the view plane (x / -z in perspective, x in orthographic)
+    col = 2 if W[3, 3] == 0.0 else 3
+    sign = 1.0 if col == 2 else -1.0
+
+    def edges(P, axis):
+        return ((-1.0 + sign * P[axis, col]) / P[axis, axis], (1.0 + sign * P[axis, col]) / P[axis, axis])
+    out = []
+    for axis in (0, 1):
+        f0, f1 = edges(F, axis)
+        w0, w1 = edges(W, axis)
+        out += [(w0 - f0) / (f1 - f0), (w1 - f0) / (f1 - f0)]
+    return tuple(out) if np.isfinite(out).all() and out[1] > out[0] and out[3] > out[2] else None
+

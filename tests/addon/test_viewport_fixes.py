@@ -221,3 +221,73 @@ def _render_exr(scene):
     path = os.path.join(tempfile.mkdtemp(), 'final.exr')
     scenes.render_exr(path, scene)
     return path
+
+
+# --- 4. camera view renders the scene camera: panorama, depth of field, zoom and offset ----------
+
+def test_camera_view_renders_the_scene_cameras_panorama_and_depth_of_field(scene):
+    # Blender draws a camera view through a perspective projection whatever the camera; the
+    # viewport had rendered that (an equirectangular camera in perspective, a camera's depth
+    # of field at aperture 0), saying nothing. At zoom 1 and no offset it now draws the final
+    # render's image
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 8
+    for setup in ('PANO', 'DOF'):
+        cam.data.type, cam.data.dof.use_dof = 'PERSP', False
+        if setup == 'PANO':
+            cam.data.type, cam.data.panorama_type = 'PANO', 'EQUIRECTANGULAR'
+        else:
+            cam.data.dof.use_dof, cam.data.dof.aperture_fstop, cam.data.dof.focus_distance = True, 0.1, 1.0
+        final = scenes.rgba(scenes.read_exr(_render_exr(scene)))
+        engine = _Engine()
+        image = _viewport(engine, _cam_context(cam))
+        engine._viewport.stop()
+        c = engine._viewport.scene_data.camera
+        ref = export.export_camera(bpy.context.evaluated_depsgraph_get().scene_eval, [])
+        assert c.kind == ref.kind and c.panorama_type == ref.panorama_type
+        assert c.aperture == ref.aperture and (c.aperture > 0.2) == (setup == 'DOF')
+        assert final[..., :3].mean() > 0.02
+        diff = np.abs(image - final)[..., :3]
+        assert diff.mean() < 1e-3 * final[..., :3].mean(), (setup, diff.mean(), final[..., :3].mean())
+
+
+def _zoomed(frame, u, v):
+    """A camera view's projection showing the frame's fractions u = (u0, u1) across the region
+    and v = (v0, v1) up it (Blender's zoom and offset), from the frame's projection."""
+    W = np.array(frame, np.float64)
+    for axis, (a, b) in ((0, u), (1, v)):
+        col = 2 if W[3, 3] == 0.0 else 3
+        s = 1.0 if col == 2 else -1.0
+        e0, e1 = (-1 + s * W[axis, col]) / W[axis, axis], (1 + s * W[axis, col]) / W[axis, axis]
+        w0, w1 = e0 + a * (e1 - e0), e0 + b * (e1 - e0)
+        W[axis, axis] = 2.0 / (w1 - w0)
+        W[axis, col] = s * (w1 + w0) / (w1 - w0)
+    return W
+
+
+def test_camera_view_zoom_and_offset_place_the_final_renders_rays(scene):
+    # a region of 64 x 24 showing the 32 x 24 frame in its middle (16 pixels of passepartout
+    # either side): each region pixel over the frame has the final render's ray of that pixel,
+    # for a perspective, an orthographic and a panoramic camera (whose frame Blender draws as a
+    # perspective camera's)
+    from addon.camera import CameraModel
+    cam = _lit_box(scene)
+    for kind in ('PERSP', 'ORTHO', 'PANO'):
+        cam.data.type = kind
+        cam.data.panorama_type = 'FISHEYE_EQUISOLID'
+        cam.data.shift_x = 0.1
+        dg = bpy.context.evaluated_depsgraph_get()
+        frame = np.array(cam.calc_matrix_camera(dg, x=32, y=24))
+        ctx = _Context(cam.matrix_world.inverted(), _zoomed(frame, (-0.5, 1.5), (0.0, 1.0)), 64, 24,
+                       _space(), 'CAMERA')
+        from addon.engine import _region_camera
+        said = []
+        view = _region_camera(ctx, dg, said)
+        ref = export.export_camera(dg.scene_eval, [])
+        assert (view.width, view.height, view.border) == (64, 24, (0, 0, 64, 24))
+        rx, ry = np.meshgrid(np.arange(32) + 0.5, np.arange(24) + 0.5)
+        oa, da, ta = CameraModel(ref).rays(rx.ravel(), ry.ravel())
+        ob, db, tb = CameraModel(view).rays(rx.ravel() + 16, ry.ravel())
+        np.testing.assert_allclose(db, da, atol=1e-5)
+        np.testing.assert_allclose(ob, oa, atol=1e-4)
+        np.testing.assert_allclose(tb, ta, rtol=1e-4, atol=1e-5)
