@@ -214,7 +214,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             if live is not None:
                 live.tag_redraw()
         self._viewport = ViewportSession(scene_data, redraw)
-        self._view_key = _view_key(region, rv3d)
+        self._view_key = _view_key(region, rv3d, getattr(context, 'space_data', None), depsgraph.scene_eval)
         self._settings_key = _settings_key(depsgraph.scene_eval)
         self._layer_key = _layer_key(depsgraph)
         self._viewport.start(camera)
@@ -227,7 +227,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         if session is None:
             return
         region, rv3d = context.region, context.region_data
-        key = _view_key(region, rv3d)
+        key = _view_key(region, rv3d, getattr(context, 'space_data', None), depsgraph.scene_eval)
         if key != self._view_key:
             self._view_key = key
             said = []
@@ -467,9 +467,10 @@ def _region_camera(context, depsgraph=None, messages=None):
     """The camera of the viewport's region: in camera view the scene camera (the view's local
     camera where it has one) as the final render renders it, placed in the region by the view's
     zoom and offset (export.camera_view_camera: its panorama and depth of field too, as in
-    Cycles' camera view; what it cannot use goes to `messages`); else the view's own camera
-    (export.viewport_camera), its clip range the view's (space_data.clip_start / clip_end, as
-    Cycles' viewport reads it) where the context has a 3D view."""
+    Cycles' camera view; what it cannot use goes to `messages`; the scene's Render Region);
+    else the view's own camera (export.viewport_camera), its clip range the view's
+    (space_data.clip_start / clip_end, as Cycles' viewport reads it) where the context has a 3D
+    view, and the view's Render Region."""
     region, rv3d, space = context.region, context.region_data, getattr(context, 'space_data', None)
     cam_ob = None
     if depsgraph is not None and getattr(rv3d, 'view_perspective', None) == 'CAMERA':
@@ -487,13 +488,29 @@ def _region_camera(context, depsgraph=None, messages=None):
     clip = None
     if space is not None and hasattr(space, 'clip_start'):
         clip = (float(space.clip_start), float(space.clip_end))
-    return export.viewport_camera(rv3d.view_matrix, rv3d.window_matrix, region.width, region.height, clip=clip)
+    camera = export.viewport_camera(rv3d.view_matrix, rv3d.window_matrix, region.width, region.height, clip=clip)
+    if space is not None and getattr(space, 'use_render_border', False):
+        # the view's Render Region (View > Render Region, Ctrl-B): the region's part to render,
+        # as in Cycles' viewport (the rest stays empty)
+        camera.border = export.region_border((space.render_border_min_x, space.render_border_max_x,
+                                              space.render_border_min_y, space.render_border_max_y),
+                                             region.width, region.height)
+    return camera
 
 
-def _view_key(region, rv3d):
-    """What a viewport's camera is made of: a change restarts its samples."""
-    return (region.width, region.height, tuple(map(tuple, rv3d.view_matrix)),
-            tuple(map(tuple, rv3d.window_matrix)))
+def _view_key(region, rv3d, space=None, scene=None):
+    """What a viewport's camera is made of: a change restarts its samples. The view's clip
+    range and Render Region (a redraw, no depsgraph update) and, in camera view, the scene's
+    Render Region."""
+    key = [region.width, region.height, np.array(rv3d.view_matrix, np.float64).tobytes(),
+           np.array(rv3d.window_matrix, np.float64).tobytes(), getattr(rv3d, 'view_perspective', None)]
+    for name in ('clip_start', 'clip_end', 'use_render_border', 'render_border_min_x', 'render_border_max_x',
+                 'render_border_min_y', 'render_border_max_y', 'use_local_camera'):
+        key.append(repr(getattr(space, name, None)))
+    if scene is not None and key[4] == 'CAMERA':
+        r = scene.render
+        key.append(repr((r.use_border, r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y)))
+    return tuple(key)
 
 
 def _renders_differently(depsgraph, settings_key, layer_key=None) -> bool:

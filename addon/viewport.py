@@ -29,7 +29,12 @@ def preview_camera(camera):
         return None
     k = math.sqrt(pixels / PREVIEW_PIXELS)
     w, h = max(1, int(camera.width / k)), max(1, int(camera.height / k))
-    return dataclasses.replace(camera, width=w, height=h, border=(0, 0, w, h), crop=False)
+    # (a Render Region's border at the preview's scale, at least one pixel)
+    x0, y0, x1, y1 = camera.border
+    sx, sy = w / camera.width, h / camera.height
+    bx0, by0 = min(int(x0 * sx), w - 1), min(int(y0 * sy), h - 1)
+    border = (bx0, by0, max(min(math.ceil(x1 * sx), w), bx0 + 1), max(min(math.ceil(y1 * sy), h), by0 + 1))
+    return dataclasses.replace(camera, width=w, height=h, border=border, crop=False)
 
 
 class ViewportSession:

@@ -65,13 +65,13 @@ materials (closure, aovs, images, normalmaps, reflectors, shadersockets, objecti
 """
 
 from . import images
-from .camera import camera_view_camera, export_camera, viewport_camera
+from .camera import camera_view_camera, export_camera, region_border, viewport_camera
 from .errors import ExportCancelled, ExportError
 from .scene import Exporter
 from .world import effective_world, export_world
 
 __all__ = ['ExportCancelled', 'ExportError', 'camera_view_camera', 'effective_world', 'export_camera',
-           'export_scene', 'export_world', 'viewport_camera']
+           'export_scene', 'export_world', 'region_border', 'viewport_camera']
 
 
 def export_scene(depsgraph, check_break=None, camera=None, view_camera=None):

@@ -284,7 +284,9 @@ def camera_view_camera(scene, cam_ob, frame_matrix, window_matrix, width, height
     which every camera kind maps raster positions linearly (Blender draws a panorama's frame as
     a perspective camera's, as it draws any camera view; its rays are then the final render's
     for the same spot of the frame). Where either matrix is not finite (a NaN lens) the frame
-    fills the region."""
+    fills the region. The scene's Render Region (render.use_border) is the frame's part of the
+    region to render, as in Cycles' camera view (the rest of the region stays empty); it never
+    crops."""
     render = export_camera(scene, messages, camera=cam_ob)
     if width < 1 or height < 1:
         raise ExportError(f"the viewport region {width}x{height} is less than one pixel")
@@ -293,6 +295,12 @@ def camera_view_camera(scene, cam_ob, frame_matrix, window_matrix, width, height
     viewplane = (left + u0 * (right - left), left + u1 * (right - left),
                  bottom + v0 * (top - bottom), bottom + v1 * (top - bottom))
     border = (0, 0, int(width), int(height))
+    r = scene.render
+    if r.use_border:
+        # the border's frame fractions as fractions of the region
+        border = region_border(((r.border_min_x - u0) / (u1 - u0), (r.border_max_x - u0) / (u1 - u0),
+                                (r.border_min_y - v0) / (v1 - v0), (r.border_max_y - v0) / (v1 - v0)),
+                               width, height)
     return dataclasses.replace(render, viewplane=tuple(float(v) for v in viewplane), width=int(width),
                                height=int(height), border=border, crop=False)
 
@@ -320,3 +328,16 @@ def _region_in_frame(frame_matrix, window_matrix):
         out += [(w0 - f0) / (f1 - f0), (w1 - f0) / (f1 - f0)]
     return tuple(out) if np.isfinite(out).all() and out[1] > out[0] and out[3] > out[2] else None
 
+
+def region_border(fractions, width, height):
+    """The pixels (x0, y0, x1, y1) of a viewport's Render Region given as fractions (min x, max x,
+    min y, max y) of its region, clamped to it, rounded as Cycles' viewport does (the float32
+    product's integer part)."""
+    fx0, fx1, fy0, fy1 = (min(max(float(f), 0.0), 1.0) if math.isfinite(f) else 0.0 for f in fractions)
+
+    def edge(fraction, size):
+        return int(np.float32(fraction) * np.float32(size))
+    border = (edge(fx0, width), edge(fy0, height), edge(fx1, width), edge(fy1, height))
+    if border[2] <= border[0] or border[3] <= border[1]:
+        raise ExportError("the viewport's render region is empty (less than one pixel wide or high)")
+    return border

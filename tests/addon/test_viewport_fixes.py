@@ -291,3 +291,61 @@ def test_camera_view_zoom_and_offset_place_the_final_renders_rays(scene):
         np.testing.assert_allclose(db, da, atol=1e-5)
         np.testing.assert_allclose(ob, oa, atol=1e-4)
         np.testing.assert_allclose(tb, ta, rtol=1e-4, atol=1e-5)
+
+
+# --- 5. the Render Region ------------------------------------------------------------------------
+
+def test_viewport_renders_only_inside_the_render_region(scene):
+    # the view's Render Region in a free view, the scene's in camera view (as Cycles' viewport):
+    # the whole region had been rendered (768 of 768 pixels where the border holds 48)
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 2
+    scene.render.use_border = True
+    scene.render.border_min_x, scene.render.border_max_x = 0.25, 0.5
+    scene.render.border_min_y, scene.render.border_max_y = 0.25, 0.5
+    full = _Engine()
+    whole = _viewport(full, _cam_context(cam, space=_space(), perspective='PERSP'))
+    full._viewport.stop()
+    assert (whole[..., 3] > 0).all()
+    # a free view: its own border (the scene's is the camera view's), 8 x 6 pixels of 32 x 24
+    space = _space()
+    space.use_render_border = True
+    space.render_border_min_x, space.render_border_max_x = 0.25, 0.5
+    space.render_border_min_y, space.render_border_max_y = 0.5, 0.75
+    engine = _Engine()
+    image = _viewport(engine, _cam_context(cam, space=space, perspective='PERSP'))
+    engine._viewport.stop()
+    assert engine._viewport.scene_data.camera.border == (8, 12, 16, 18)
+    inside = np.zeros(image.shape[:2], bool)
+    inside[12:18, 8:16] = True
+    assert (image[~inside] == 0).all() and (image[inside][:, 3] > 0).all()
+    np.testing.assert_array_equal(image[inside], whole[inside])    # (the same paths)
+    # camera view: the scene's border, through the zoom and offset (the frame in the middle of
+    # a 64-pixel region: frame pixels 8 .. 16 are region pixels 24 .. 32)
+    dg = bpy.context.evaluated_depsgraph_get()
+    frame = np.array(cam.calc_matrix_camera(dg, x=32, y=24))
+    ctx = _Context(cam.matrix_world.inverted(), _zoomed(frame, (-0.5, 1.5), (0.0, 1.0)), 64, 24, _space(), 'CAMERA')
+    engine = _Engine()
+    image = _viewport(engine, ctx)
+    engine._viewport.stop()
+    assert engine._viewport.scene_data.camera.border == (24, 6, 32, 12)
+    assert int((image[..., 3] > 0).sum()) == 48 and (image[6:12, 24:32, 3] > 0).all()
+    # a border changed in the view restarts the samples through the new border
+    space.render_border_max_x = 1.0
+    engine = _Engine()
+    ctx = _cam_context(cam, space=space, perspective='PERSP')
+    engine.view_update(ctx, dg)
+    first = engine._viewport.scene_data.camera.border
+    space.render_border_min_x = 0.5
+    engine.view_draw(ctx, dg)
+    assert first == (8, 12, 32, 18) and engine._viewport.scene_data.camera.border == (16, 12, 32, 18)
+    engine._viewport.stop()
+
+
+def test_a_large_regions_coarse_first_sample_keeps_the_render_region():
+    # the preview at a quarter of the pixels: the border scaled with it
+    from addon.viewport import preview_camera
+    cam = export.viewport_camera(np.eye(4), _persp_window(50.0, 512, 512, 0.1, 100.0), 512, 512)
+    cam.border = (128, 256, 384, 512)
+    small = preview_camera(cam)
+    assert (small.width, small.height) == (256, 256) and small.border == (64, 128, 192, 256)
