@@ -6,6 +6,7 @@ of test_viewport.py."""
 import math
 
 import numpy as np
+import pytest
 
 import bpy
 import mathutils
@@ -14,6 +15,13 @@ from addon import export
 
 from . import scenes
 from .test_viewport import _Engine, _finished, _lit_box
+
+
+@pytest.fixture(autouse=True)
+def _no_gpu(monkeypatch):
+    """view_draw's drawing needs Blender's GPU, which background mode lacks."""
+    from addon import display
+    monkeypatch.setattr(display.Display, 'draw', lambda *args: None)
 
 
 class _Obj:
@@ -349,3 +357,33 @@ def test_a_large_regions_coarse_first_sample_keeps_the_render_region():
     cam.border = (128, 256, 384, 512)
     small = preview_camera(cam)
     assert (small.width, small.height) == (256, 256) and small.border == (64, 128, 192, 256)
+
+
+# --- 6. a NaN camera setting in camera view: the world, and the setting named -------------------
+
+def test_camera_view_of_a_nan_camera_setting_renders_the_world_and_names_it(scene):
+    # Blender's camera-view projection is then NaN: the viewport had failed with "the viewport's
+    # view or projection matrix is not finite"; the final render names the setting and renders
+    # the world (as Cycles), and so does the viewport now
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 2
+    for attr, said, good in (('lens', "Focal Length is nan", 50.0), ('shift_x', "Shift X is nan", 0.0),
+                             ('clip_start', "clip range is nan .. 100", 0.1),
+                             ('clip_end', "clip range is 0.1 .. nan", 100.0)):
+        cam.data.clip_start, cam.data.clip_end = 0.1, 100.0
+        setattr(cam.data, attr, float('nan'))
+        engine = _Engine()
+        ctx = _cam_context(cam)
+        image = _viewport(engine, ctx)
+        assert engine.reports == [f"DACRT: camera 'Camera': {said}, so only the world is rendered (as in Cycles)"]
+        np.testing.assert_allclose(image[..., :3], np.broadcast_to((0.05, 0.05, 0.08), image[..., :3].shape),
+                                   atol=1e-5)
+        # (the NaN projection is the same view at every redraw: no restart, said once)
+        session, done = engine._viewport, engine._viewport.samples_done
+        dg = bpy.context.evaluated_depsgraph_get()
+        engine.view_draw(ctx, dg)
+        engine.view_draw(ctx, dg)
+        assert engine._viewport is session and session.samples_done == done == 2 and session.error is None
+        assert len(engine.reports) == 1
+        session.stop()
+        setattr(cam.data, attr, good)
