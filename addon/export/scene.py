@@ -304,12 +304,17 @@ class Exporter:
         if getattr(ob, 'is_shadow_catcher', False) and ob.type != 'LIGHT':
             self.ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
         for mod in getattr(ob, 'modifiers', ()):
-            if mod.type == 'SUBSURF' and mod.show_render and getattr(mod, 'use_adaptive_subdivision', False):
-                levels, r = mod.render_levels, self.scene.render
+            # (the viewport's depsgraph evaluates the modifier as shown in the viewport: its
+            # Levels Viewport, capped by Simplify's viewport Max Subdivision)
+            viewport = self.view_camera is not None
+            shown = mod.show_viewport if viewport else mod.show_render
+            if mod.type == 'SUBSURF' and shown and getattr(mod, 'use_adaptive_subdivision', False):
+                levels, r = (mod.levels if viewport else mod.render_levels), self.scene.render
                 if r.use_simplify:            # Simplify > Max Subdivision caps what Blender evaluates
-                    levels = min(levels, r.simplify_subdivision_render)
+                    levels = min(levels, r.simplify_subdivision if viewport else r.simplify_subdivision_render)
+                which = "Levels Viewport" if viewport else "Render Levels"
                 self.ignore(f"adaptive subdivision is not rendered (Cycles dices by the dicing rate); the "
-                            f"Subdivision modifier's Render Levels ({levels}) are used", ob.name)
+                            f"Subdivision modifier's {which} ({levels}) are used", ob.name)
         linking = getattr(ob, 'light_linking', None)
         for kind, attr, links in (('receiver', 'receiver_collection', self.light_links),
                                   ('blocker', 'blocker_collection', self.shadow_links)):

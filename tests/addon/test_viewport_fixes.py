@@ -387,3 +387,34 @@ def test_camera_view_of_a_nan_camera_setting_renders_the_world_and_names_it(scen
         assert len(engine.reports) == 1
         session.stop()
         setattr(cam.data, attr, good)
+
+
+# --- 7. adaptive subdivision: the viewport names the levels it evaluates -------------------------
+
+def test_viewport_names_the_subdivision_levels_it_evaluates(scene):
+    # the viewport evaluates the modifier at its Levels Viewport; it had said "the Subdivision
+    # modifier's Render Levels (3) are used" over a box of level 1 (48 triangles, not 768)
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 1
+    m = bpy.data.objects['Box'].modifiers.new("Sub", 'SUBSURF')
+    m.levels, m.render_levels, m.use_adaptive_subdivision = 1, 3, True
+    text = ("DACRT: 'Box': adaptive subdivision is not rendered (Cycles dices by the dicing rate); "
+            "the Subdivision modifier's {} ({}) are used")
+    for simplify, levels, box_triangles in ((False, 1, 48), (True, 0, 12)):
+        scene.render.use_simplify, scene.render.simplify_subdivision = simplify, 0
+        engine = _Engine()
+        _viewport(engine, _cam_context(cam))
+        engine._viewport.stop()
+        assert len(engine._viewport.scene_data.geometry.triangles) == 2 + box_triangles
+        assert engine.reports == [text.format("Levels Viewport", levels)]
+    # shown in renders only: the viewport does not evaluate it, and says nothing
+    scene.render.use_simplify = False
+    m.show_viewport = False
+    engine = _Engine()
+    _viewport(engine, _cam_context(cam))
+    engine._viewport.stop()
+    assert len(engine._viewport.scene_data.geometry.triangles) == 2 + 12 and engine.reports == []
+    # the final render still names its Render Levels
+    m.show_viewport = True
+    data = export.export_scene(bpy.context.evaluated_depsgraph_get())
+    assert any(t == text.format("Render Levels", 3)[len("DACRT: "):] for _, t in data.messages), data.messages
