@@ -194,9 +194,11 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         if self._viewport is not None and not _renders_differently(depsgraph, self._settings_key,
                                                                    getattr(self, '_layer_key', None)):
             return
+        previous = None                 # (its last image stays up until the new one's first)
         if self._viewport is not None:
             self._viewport.stop()
-        self._viewport = None
+            previous = self._viewport.image()
+        self._viewport = None           # (its export freed before the new one is made)
         region, rv3d = context.region, context.region_data
         try:
             said = []                   # (what the camera view's camera approximates)
@@ -213,7 +215,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             live = engine()
             if live is not None:
                 live.tag_redraw()
-        self._viewport = ViewportSession(scene_data, redraw)
+        self._viewport = ViewportSession(scene_data, redraw, previous)
         self._view_key = _view_key(region, rv3d, getattr(context, 'space_data', None), depsgraph.scene_eval)
         self._settings_key = _settings_key(depsgraph.scene_eval)
         self._layer_key = _layer_key(depsgraph)

@@ -42,12 +42,14 @@ class ViewportSession:
     on_update() is called from that thread whenever a new image is ready (the engine's
     tag_redraw); it must not hold the engine itself alive."""
 
-    def __init__(self, scene_data, on_update=None):
+    def __init__(self, scene_data, on_update=None, previous=None):
+        """previous: image() of the session this one replaces (a re-export), whose image stays
+        up until this one's first block replaces it, as Cycles' viewport keeps its last frame
+        (the versions go on from its, so a drawer never takes a new image for the one it holds)."""
         self.scene_data = scene_data
         self._on_update = on_update or (lambda: None)
         self._lock = threading.Lock()
-        self._image = None
-        self._version = 0
+        self._version, self._image = previous if previous is not None else (0, None)
         self._thread = None
         self._stop = threading.Event()
         self.samples_done = 0

@@ -418,3 +418,31 @@ def test_viewport_names_the_subdivision_levels_it_evaluates(scene):
     m.show_viewport = True
     data = export.export_scene(bpy.context.evaluated_depsgraph_get())
     assert any(t == text.format("Render Levels", 3)[len("DACRT: "):] for _, t in data.messages), data.messages
+
+
+# --- a re-export keeps the last image up ---------------------------------------------------------
+
+def test_a_re_export_keeps_drawing_the_last_image_until_its_first_block(scene, monkeypatch):
+    # a new session had no image: view_draw drew nothing until its first block (Cycles keeps
+    # the last frame up)
+    from addon import display, viewport
+    drawn = []
+    monkeypatch.setattr(display.Display, 'draw', lambda self, engine, sc, image, version, w, h:
+                        drawn.append((image, version)))
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 2
+    engine, ctx = _Engine(), _cam_context(cam)
+    last = _viewport(engine, ctx).copy()
+    version = engine._viewport.image()[0]
+    monkeypatch.setattr(viewport.ViewportSession, '_run', lambda self: None)    # (no block comes)
+    dg = bpy.context.evaluated_depsgraph_get()
+    old = engine._viewport
+    monkeypatch.setattr('addon.engine._renders_differently', lambda *args: True)     # (an edit)
+    engine.view_update(ctx, dg)
+    assert engine._viewport is not old
+    engine.view_draw(ctx, dg)
+    assert len(drawn) == 1
+    np.testing.assert_array_equal(drawn[0][0], last)
+    assert drawn[0][1] == version
+    engine._viewport.stop()
+
