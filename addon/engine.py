@@ -241,6 +241,10 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             self._viewport_report(said)
         if not session.running and session.messages:
             self._viewport_report(session.messages)
+        if not session.running and session.error:
+            # (what stopped the render, the integrator's set-up too: reported once, as an
+            # export's error, besides the status line)
+            self._viewport_report([('ERROR', f"viewport: {session.error}")])
         self.update_stats("", status_text(session))
         version, image = session.image()
         if image is None:

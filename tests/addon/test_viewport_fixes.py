@@ -420,7 +420,7 @@ def test_viewport_names_the_subdivision_levels_it_evaluates(scene):
     assert any(t == text.format("Render Levels", 3)[len("DACRT: "):] for _, t in data.messages), data.messages
 
 
-# --- a re-export keeps the last image up ---------------------------------------------------------
+# --- a re-export keeps the last image up; an integrator set-up error is reported ---------------
 
 def test_a_re_export_keeps_drawing_the_last_image_until_its_first_block(scene, monkeypatch):
     # a new session had no image: view_draw drew nothing until its first block (Cycles keeps
@@ -446,3 +446,20 @@ def test_a_re_export_keeps_drawing_the_last_image_until_its_first_block(scene, m
     assert drawn[0][1] == version
     engine._viewport.stop()
 
+
+def test_an_integrator_set_up_error_in_the_viewport_is_reported_once(scene, monkeypatch):
+    # it had been in the status line alone; export errors are reported (once) too
+    from addon import viewport
+
+    def failing(*args, **kwargs):
+        raise ValueError("the scene has no usable lights")
+    monkeypatch.setattr(viewport, 'Integrator', failing)
+    cam = _lit_box(scene)
+    engine, ctx = _Engine(), _cam_context(cam)
+    dg = bpy.context.evaluated_depsgraph_get()
+    engine.view_update(ctx, dg)
+    engine._viewport._thread.join(60)
+    for _ in range(3):
+        engine.view_draw(ctx, dg)
+    assert engine.status[-1] == "DACRT | Error: the scene has no usable lights"
+    assert engine.reports == ["DACRT: viewport: the scene has no usable lights"]
