@@ -552,16 +552,23 @@ def _layer_key(depsgraph):
             walk(child)
     walk(layer.layer_collection)
     hidden = tuple(sorted(ob.name for ob in layer.objects if ob.hide_get(view_layer=layer)))
-    return tuple(flags), hidden
+    # the layer's Filter (Environment, Surfaces, ...) and material or world overrides
+    filters = tuple(getattr(layer, p, None) for p in ('use_sky', 'use_solid', 'use_strand', 'use_volumes',
+                                                      'use_motion_blur'))
+    overrides = tuple(getattr(getattr(layer, p, None), 'name', None) for p in ('material_override', 'world_override'))
+    return tuple(flags), hidden, filters, overrides
 
 
 def _settings_key(scene):
     """The scene settings a viewport render reads besides its data-blocks: DACRT's own, the
-    film, the frame and the world."""
+    film (and Cycles' Transparent Glass, shown in DACRT's panel), the frame and the world."""
     d = scene.dacrt
     own = tuple(getattr(d, p.identifier) for p in d.bl_rna.properties if p.identifier not in ('rna_type', 'name'))
     r = scene.render
-    return (own, r.film_transparent, scene.frame_current, scene.world.name if scene.world else None)
+    cyc = getattr(scene, 'cycles', None)
+    glass = (getattr(cyc, 'film_transparent_glass', None), getattr(cyc, 'film_transparent_roughness', None))
+    return (own, r.film_transparent, glass, scene.frame_current, scene.frame_subframe,
+            scene.world.name if scene.world else None)
 
 
 # Blender cuts a report at about 1,024 bytes (the rest was lost: 8 of a tester's 18 approximated
