@@ -112,27 +112,21 @@ def _file_texels(path, img, reasons, unassociate):
     if spec is None:
         return None
     ch = spec.nchannels
+    # a file stored with its alpha multiplied in (OpenEXR always; TIFFs other tools write):
+    # Cycles reads its values as stored whatever the alpha mode (its loader associates only files
+    # stored straight), so they are passed on as stored, marked so; dividing alpha out here had
+    # left data and channel-packed images divided (a Non-Color EXR texel (0.3, 0.2, 0.1) at alpha
+    # 0.5 had rendered (0.6, 0.4, 0.2)) and an 8-bit TIFF rounded twice
     stored_associated = ch == 4 and not spec.get_int_attribute('oiio:UnassociatedAlpha', 0)
     byte = spec.format.basetype == oiio.UINT8
-    if byte and not (stored_associated and img.alpha_mode != 'NONE'):
-        # the bytes as stored (a quarter of the floats' memory, and no conversion): what Cycles
-        # reads, and what Blender's byte buffer holds
-        raw = np.asarray(buf.get_pixels(oiio.UINT8), np.uint8).reshape(spec.height, spec.width, -1)[::-1]
-        raw = np.ascontiguousarray(raw)
-        if img.alpha_mode == 'NONE' and ch in (2, 4):
-            raw[..., ch - 1] = 255
-        return _linear_rgba(raw, img, reasons, unassociate, byte=True, encoded=True)
-    raw = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32).reshape(spec.height, spec.width, -1)[::-1]
-    raw = np.ascontiguousarray(raw)
+    # byte files as their bytes (a quarter of the floats' memory, and no conversion): what Cycles
+    # reads, and what Blender's byte buffer holds; deeper ones as floats in the image's space
+    raw = np.asarray(buf.get_pixels(oiio.UINT8 if byte else oiio.FLOAT), np.uint8 if byte else np.float32)
+    raw = np.ascontiguousarray(raw.reshape(spec.height, spec.width, -1)[::-1])
     if img.alpha_mode == 'NONE' and ch in (2, 4):
-        raw[..., ch - 1] = 1.0          # alpha ignored, as Blender's own buffer has it
-    elif stored_associated:
-        # a file stored associated (OpenEXR always; TIFFs other tools write) comes back so
-        # whatever was asked: straight here, as _linear_rgba expects, which associates it again
-        # (an EXR sequence's frame or a UDIM tile had its alpha applied twice: 0.53-0.78x Cycles)
-        raw = _unassociated(raw)
-    # byte files are byte buffers in Blender; deeper ones float buffers in the image's space
-    return _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True)
+        raw[..., ch - 1] = 255 if byte else 1.0      # alpha ignored, as Blender's own buffer has it
+    return _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True,
+                        preassociated=stored_associated and img.alpha_mode != 'NONE')
 
 
 def _stacked_tiles(tiles):
@@ -244,7 +238,7 @@ def _premultiplied_bytes(img, buf, from_file, reasons):
     return np.ascontiguousarray(np.asarray(file.get_pixels(oiio.FLOAT), np.float32).reshape(h, w, 4)[::-1])
 
 
-def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
+def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, preassociated=False):
     """(h, w, 4) scene-linear RGBA of an image buffer (h, w, channels) of `img`: a byte buffer
     (Blender's floats k/255, or the bytes themselves as uint8) is in the image's colour space
     with straight alpha; a float one is linear and associated
@@ -252,7 +246,9 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
     converted and associated here as Blender does on load). A texture.ImageTexels carrying the
     texels as Cycles stores them for lookup (_stored_texels; from_file: Cycles reads the image's
     file, not Blender's buffer). Spaces other than sRGB and scene linear are converted through
-    OpenColorIO (colorspaces) from the values Cycles stores, as its loader converts them."""
+    OpenColorIO (colorspaces) from the values Cycles stores, as its loader converts them.
+    `preassociated`: a file's values stored with alpha multiplied in, which Cycles keeps as
+    stored (not associated again, nor divided where it does not associate)."""
     poll()
     h, w, ch = buf.shape
     # Cycles associates only 4-channel files (a grey+alpha one stays straight), yet divides by
@@ -265,7 +261,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
         # and associated as Cycles associates them, integer c a / 255: one native pass (numpy's
         # pass per operation took an 8K texture ~12 s)
         rgba, straight8, k8, exact = dacrt.shading.byte_texels(buf[..., :4], _byte_table('blender', False),
-                                                               associate)
+                                                               associate and not preassociated)
         if k8 is None:
             k8 = straight8
     else:
@@ -286,14 +282,15 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
         # lookup blends those and divides by alpha after
         if byte:
             rgba[..., :3] = straight8[..., :3] / np.float32(255.0)
-            if associate:
+            if associate and not preassociated:
                 rgba[..., :3] *= straight8[..., 3:4] / np.float32(255.0)
-        elif associate:
+        elif associate and not preassociated:
             rgba[..., :3] *= rgba[..., 3:4]
         rgba = to_scene_linear(rgba, img, keep_alpha_out=img.alpha_mode == 'CHANNEL_PACKED')
         stored = EncodedTexels(rgba.copy(), False, True) if unassociate else None
         return ImageTexels(_unassociated(rgba) if unassociate else rgba, stored)
-    stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, associate, kind, k8)
+    stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, associate and not preassociated,
+                            kind, k8)
     poll()
     if byte:   # byte buffers are in the image's colour space; float ones are linear
         decode = kind == SRGB
@@ -311,6 +308,15 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True):
             decode = False
         if decode:
             rgba[..., :3] = _srgb_to_linear(rgba[..., :3])
+    elif encoded and preassociated and associate:
+        # stored associated: linear values as stored; sRGB ones decoded straight and associated
+        # again, as Blender loads them (alpha 0 keeps the stored colour, decoded, as Cycles)
+        if kind == SRGB:
+            a = rgba[..., 3:4]
+            straight = _srgb_to_linear(_unassociated(rgba)[..., :3])
+            rgba[..., :3] = np.where(a != 0, straight * a, _srgb_to_linear(rgba[..., :3]))
+        if unassociate:
+            rgba = _unassociated(rgba)
     elif encoded:          # a deeper file: converted, then associated, as Blender loads it
         if unassociate and not associate:    # divided in the file's encoding, as Cycles
             rgba = _unassociated(rgba)
