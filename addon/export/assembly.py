@@ -230,8 +230,7 @@ class Assembly:
             name = entry[2]
             values = a.corner_attribute(name)
             if values is None:
-                self.ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
-                            "an AOV reading it reads 0, as in Cycles", object_name)
+                self.ignore(f"{a.unread_attribute(name)}: an AOV reading it reads 0, as in Cycles", object_name)
                 values = np.zeros((len(a.triangles), 3, 4), np.float32)
             cache[k, id(a), id(entry)] = self.materials.evaluated_aov(entry, values.reshape(-1, 4)).reshape(
                 len(a.triangles), 3, -1)
@@ -406,8 +405,7 @@ class Assembly:
         if (k, id(a)) not in cache:
             values = a.corner_attribute(name)
             if values is None:
-                self.ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
-                             "its colour reads 0, as in Cycles", object_name)
+                self.ignore(f"{a.unread_attribute(name)}: its colour reads 0, as in Cycles", object_name)
                 values = np.zeros((len(a.triangles), 3, 4), np.float32)
             cache[k, id(a)] = self.materials.evaluated_albedo(k, values.reshape(-1, 4)).reshape(-1, 3, 3)
         return cache[k, id(a)]
@@ -437,8 +435,7 @@ class Assembly:
             values = a.corner_attribute(name)
             rgb = np.zeros((len(rows), 3, 3)) if values is None else values[rows, :, :3]
             if values is None:
-                self.ignore(f"{'no attribute ' + repr(name) if name else 'no colour attribute'} on the mesh: "
-                             "its colour reads 0, as in Cycles", place.name)
+                self.ignore(f"{a.unread_attribute(name)}: its colour reads 0, as in Cycles", place.name)
             block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)   # (no negative albedo)
             if mirrored:                     # corners 1 and 2 were swapped for these triangles
                 block[rows] = block[rows][:, [0, 2, 1]]

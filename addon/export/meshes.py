@@ -322,8 +322,9 @@ class MeshArrays:
         """(nt, 3, 4) float32 per triangle corner: the mesh attribute `name` ('' the render
         colour attribute) as Cycles' Attribute and Color Attribute nodes read it, RGB and alpha
         (a colour as stored, bytes in linear; a vector, 2D vector or number as (x, y, z, 1),
-        (x, y, 0, 1), (v, v, v, 1)), from its point, corner or face domain; None where the mesh
-        has none (or one on edges, which Cycles does not read either)."""
+        (x, y, 0, 1), (v, v, v, 1); a quaternion (w, x, y, z)), from its point, corner or face
+        domain; None where the mesh has none, or one Cycles does not read either (on edges, or of
+        a type attribute_rows does not read: unread_attribute says which)."""
         if name in self._attributes:
             return self._attributes[name]
         out = None
@@ -336,16 +337,22 @@ class MeshArrays:
                 out = None if rows is None else self.per_corner(rows, self.triangles,
                                                                 np.empty((len(self.triangles), 3, 4), np.float32))
         elif me is not None:
-            if not name:
-                colors = me.color_attributes
-                i = colors.render_color_index
-                name_found = colors[i].name if 0 <= i < len(colors) else None
-            else:
-                name_found = name
-            attr = me.attributes.get(name_found) if name_found else None
+            attr = _named_attribute(me, name)
             out = None if attr is None else self._attribute_corners(me, attr)
         self._attributes[name] = out
         return out
+
+    def unread_attribute(self, name):
+        """Why corner_attribute(name) is None, as a Blender user would say it: 'no attribute 'n'
+        on the mesh', or the attribute there and why Cycles does not read it either (its type,
+        or the edge domain)."""
+        found = None if self.mesh is None else _named_attribute(self.mesh, name)
+        if found is None:
+            return f"no attribute {name!r} on the mesh" if name else "no colour attribute on the mesh"
+        if found.domain not in ('POINT', 'CORNER', 'FACE'):
+            return f"attribute {found.name!r} on the mesh's {found.domain.lower()}s (a domain Cycles does not read)"
+        kind = type(found).bl_rna.properties['data_type'].enum_items[found.data_type].name
+        return f"attribute {found.name!r} on the mesh is a {kind} (a type Cycles does not read)"
 
     def _attribute_corners(self, me, attr):
         rows = attribute_rows(attr)
@@ -411,15 +418,25 @@ class MeshArrays:
         return out
 
 
+def _named_attribute(me, name):
+    """The mesh's attribute `name` ('' the render colour attribute), or None."""
+    if not name:
+        colors = me.color_attributes
+        i = colors.render_color_index
+        name = colors[i].name if 0 <= i < len(colors) else None
+    return me.attributes.get(name) if name else None
+
+
 def attribute_rows(attr):
     """(n, 4) float32 of a Blender attribute as Cycles' Attribute nodes read it: a colour as
     stored (RGBA; bytes in linear), a vector or 2D vector (x, y, z, 1) / (x, y, 0, 1), a number
-    (v, v, v, 1); None for other types."""
+    (v, v, v, 1), a quaternion (w, x, y, z) as an RGBA colour (Cycles syncs it so: colour
+    (w, x, y), alpha z); None for other types (UNREAD_ATTRIBUTE_TYPES, which Cycles reads as 0)."""
     n = len(attr.data)
     kind = attr.data_type
-    if kind in ('FLOAT_COLOR', 'BYTE_COLOR'):
+    if kind in ('FLOAT_COLOR', 'BYTE_COLOR', 'QUATERNION'):
         v = np.empty(n * 4, np.float32)
-        attr.data.foreach_get('color', v)
+        attr.data.foreach_get('value' if kind == 'QUATERNION' else 'color', v)
         return v.reshape(n, 4)
     if kind in ('FLOAT_VECTOR', 'FLOAT2'):
         width = 3 if kind == 'FLOAT_VECTOR' else 2
