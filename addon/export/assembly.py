@@ -61,6 +61,14 @@ class _Out:
         return sd.Geometry(vertices=self.vertices, tangent_xf=xf, aovs=aovs or None, **per_tri)
 
 
+def _unread_rows(nt):
+    """(nt, 3, 4) float32: what Cycles' Attribute node reads of an attribute it does not find
+    (svm_node_attr): colour and Fac 0, Alpha 1."""
+    rows = np.zeros((nt, 3, 4), np.float32)
+    rows[..., 3] = 1.0
+    return rows
+
+
 def _rewind(rows):
     """Swap corners 1 and 2 of per-triangle rows (in place): a mirrored instance's triangles and
     every per-corner array read with them."""
@@ -230,8 +238,9 @@ class Assembly:
             name = entry[2]
             values = a.corner_attribute(name)
             if values is None:
-                self.ignore(f"{a.unread_attribute(name)}: an AOV reading it reads 0, as in Cycles", object_name)
-                values = np.zeros((len(a.triangles), 3, 4), np.float32)
+                self.ignore(f"{a.unread_attribute(name)}: an AOV reading it reads colour 0 and alpha 1, "
+                            "as in Cycles", object_name)
+                values = _unread_rows(len(a.triangles))
             cache[k, id(a), id(entry)] = self.materials.evaluated_aov(entry, values.reshape(-1, 4)).reshape(
                 len(a.triangles), 3, -1)
         return cache[k, id(a), id(entry)]
@@ -405,8 +414,9 @@ class Assembly:
         if (k, id(a)) not in cache:
             values = a.corner_attribute(name)
             if values is None:
-                self.ignore(f"{a.unread_attribute(name)}: its colour reads 0, as in Cycles", object_name)
-                values = np.zeros((len(a.triangles), 3, 4), np.float32)
+                self.ignore(f"{a.unread_attribute(name)}: it reads colour 0 and alpha 1, as in Cycles",
+                            object_name)
+                values = _unread_rows(len(a.triangles))
             cache[k, id(a)] = self.materials.evaluated_albedo(k, values.reshape(-1, 4)).reshape(-1, 3, 3)
         return cache[k, id(a)]
 

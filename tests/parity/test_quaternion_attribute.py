@@ -91,3 +91,20 @@ def test_unread_type_said_as_such(tmp_path, said, kind, type_name):
     assert texts and all(f"attribute 'rot' on the mesh is a {type_name} (a type Cycles does not read)" in t
                          for t in texts), said
     assert not [t for t in said if 'no attribute' in t], said
+
+
+@pytest.mark.parametrize('kind', [None, 'INT32_2D'])
+def test_unread_attribute_alpha_is_one(tmp_path, said, kind):
+    """Cycles' Attribute node gives an attribute it does not find (none of that name, or of a
+    type it does not read) colour and Fac 0 but Alpha 1 (svm_node_attr): the Alpha into the
+    Diffuse colour renders the closed form 2 / pi in both (it had rendered 0 here)."""
+    _scene('Alpha', kind or 'FLOAT', 'FACE', [])
+    if kind is None:
+        me = bpy.data.objects['Plane'].data
+        me.attributes.remove(me.attributes['rot'])
+    said.clear()
+    got = _render(tmp_path)
+    want = 2.0 / np.pi
+    for engine, rgb in got.items():
+        assert np.abs(rgb.mean((0, 1)) - want).max() < 0.003 * want, (engine, rgb.mean((0, 1)))
+    assert [t for t in said if "'rot'" in t and 'reads colour 0 and alpha 1, as in Cycles' in t], said
