@@ -806,7 +806,8 @@ class MaterialBuilder:
                 if after is not None:
                     s = np.float32(strength.value.reshape(-1)[0])
                     px = ImageTexels(px, after.followed_by(lambda rgb: rgb * s))
-                elif stored_texels(color.tex.pixels) is not None:   # said as _evaluated_closure says it
+                elif stored_texels(color.tex.pixels) is not None and color.tex.interpolation != 'Closest':
+                    # said as _evaluated_closure says it ('Closest' blends nothing: exact)
                     reasons.append(f"colour nodes after image '{color.tex.name}' applied to its texels before the "
                                    "blend (Cycles blends, decodes, then applies them)")
             elif color.tex is None and strength.tex is not None and strength.tex.attribute is None \
@@ -866,7 +867,9 @@ class MaterialBuilder:
                 return Closure(const=affine[1], texture=src, tex_weight=affine[0])
             if affine is None:
                 after = self._after_lookup(socket, src, stored)
-                if after is None and stored is not None:
+                if after is None and stored is not None and src.interpolation != 'Closest':
+                    # ('Closest' blends nothing: the baked texel read is the nodes on the one
+                    # Cycles reads, decoded, exact)
                     reasons.append(f"colour nodes after image '{src.name}' applied to its texels before the "
                                    "blend (Cycles blends, decodes, then applies them)")
         baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
