@@ -159,3 +159,44 @@ def gradient(co, kind):
         r = np.maximum(F32(0.999999) - np.sqrt((co * co).sum(axis=1)), F32(0.0))
         f = r * r if kind == 'QUADRATIC_SPHERE' else r
     return np.clip(f, F32(0.0), F32(1.0)).astype(F32)
+
+
+def _brick_noise(n):
+    """Cycles' brick_noise, a fast integer noise of n (uint32) in [0, 1)."""
+    n = (n.astype(np.uint64) + 1013) & 0x7FFFFFFF
+    n = (n >> 13) ^ n
+    nn = (n * (n * n * 60493 + 19990303) + 1376312589) & 0x7FFFFFFF
+    return F32(0.5) * (nn.astype(F32) / F32(1073741824.0))
+
+
+def brick(co, scale, mortar_size, mortar_smooth, bias, brick_width, row_height, offset_amount, offset_frequency,
+          squash_amount, squash_frequency):
+    """The Brick Texture at points co (n, 3) (Cycles' svm_brick): (tint (n,), mortar (n,)), the
+    tint the brick's share of the second colour, mortar its weight (1 in the joints, a
+    smoothstep across Mortar Smooth). Float parameters (n,) or scalars; the frequencies ints."""
+    def arr(x):
+        return np.asarray(x, F32)
+    p = (co * arr(scale).reshape(-1, 1)).astype(F32)
+    bw, rh = np.broadcast_to(arr(brick_width), len(p)).copy(), np.broadcast_to(arr(row_height), len(p))
+    with np.errstate(all='ignore'):
+        rownum = np.floor(p[:, 1] / rh)
+        rownum = np.where(np.isfinite(rownum), rownum, 0).astype(np.int64)
+        offset = np.zeros(len(p), F32)
+        if offset_frequency and squash_frequency:
+            # C's % truncates: a negative row's remainder is 0 or negative, nonzero alike
+            bw = np.where(np.fmod(rownum, squash_frequency) != 0, bw, bw * arr(squash_amount)).astype(F32)
+            offset = np.where(np.fmod(rownum, offset_frequency) != 0, F32(0.0), bw * arr(offset_amount)).astype(F32)
+        px = (p[:, 0] + offset).astype(F32)
+        bricknum = np.floor(px / bw)
+        bricknum = np.where(np.isfinite(bricknum), bricknum, 0).astype(np.int64)
+        x = (px - bw * bricknum.astype(F32)).astype(F32)
+        y = (p[:, 1] - rh * rownum.astype(F32)).astype(F32)
+        key = ((rownum.astype(np.uint64) << 16) + (bricknum.astype(np.uint64) & 0xFFFF)) & 0xFFFFFFFF
+        tint = np.clip(_brick_noise(key) + arr(bias), F32(0.0), F32(1.0)).astype(F32)
+        d = np.minimum(np.minimum(x, y), np.minimum(bw - x, rh - y)).astype(F32)
+        ms, sm = arr(mortar_size), arr(mortar_smooth)
+        t = (F32(1.0) - d / ms).astype(F32)
+        s = np.clip(t / sm, F32(0.0), F32(1.0))
+        smooth = np.where(t < sm, s * s * (F32(3.0) - F32(2.0) * s), F32(1.0))
+        mortar = np.where(d >= ms, F32(0.0), np.where(sm == 0.0, F32(1.0), smooth)).astype(F32)
+    return tint, np.broadcast_to(mortar, len(p)).astype(F32)

@@ -18,7 +18,7 @@ from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping
 from ..texture import alpha_lookup, lookup_texels, texture_lookup
 
-PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE'})
+PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
@@ -219,6 +219,23 @@ def _texture(node, out, chain, depth):
         return checker, False
     if t == 'TEX_VORONOI':
         return _voronoi(node, out, vec, chain, depth)
+    if t == 'TEX_BRICK':
+        params = [_float(node, k, chain, depth) for k in ('Scale', 'Mortar Size', 'Mortar Smooth', 'Bias',
+                                                          'Brick Width', 'Row Height')]
+        colors = [_socket(nodegraph.input_by_id(node, k), True, chain, depth + 1) for k in ('Color1', 'Color2', 'Mortar')]
+        settings = (float(node.offset), int(node.offset_frequency), float(node.squash), int(node.squash_frequency))
+
+        def brick(c):
+            scale, size, smooth, bias, width, height = (q(c) for q in params)
+            tint, f = pr.brick(vec(c), scale, size, smooth, bias, width, height, *settings)
+            if fac:
+                return f[:, None]
+            c1, c2, m = (np.asarray(q(c), np.float32) for q in colors)
+            tint, f = tint[:, None], f[:, None]
+            # Cycles mixes in the second colour by the tint unless the point is all mortar
+            c1 = np.where(f != 1.0, (np.float32(1.0) - tint) * c1 + tint * c2, c1)
+            return c1 * (np.float32(1.0) - f) + m * f
+        return brick, False
     if t == 'TEX_WAVE':
         params = [_float(node, k, chain, depth) for k in ('Scale', 'Distortion', 'Detail', 'Detail Scale',
                                                           'Detail Roughness', 'Phase Offset')]

@@ -120,6 +120,14 @@ for _name, _settings in (
         ('wave_rings_spherical_distorted', {'wave_type': 'RINGS', 'rings_direction': 'SPHERICAL', 'Distortion': 1.5,
                                             'Detail Scale': 3.0, 'Detail Roughness': 0.7})):
     POINTWISE[_name] = ('ShaderNodeTexWave', 'Fac', _settings)
+for _name, _out, _settings in (
+        ('brick_color', 'Color', {'Scale': 2.0}),
+        ('brick_fac_smooth_mortar', 'Fac', {'Scale': 1.0, 'Mortar Smooth': 0.5, 'Mortar Size': 0.15,
+                                            'Brick Width': 1.0, 'Row Height': 0.6}),
+        ('brick_squashed_offset_biased', 'Color', {'Scale': 2.5, 'squash': 0.6, 'squash_frequency': 3,
+                                                   'offset_frequency': 2, 'Bias': -0.3,
+                                                   'Brick Width': 0.7, 'Row Height': 0.3})):
+    POINTWISE[_name] = ('ShaderNodeTexBrick', _out, _settings)
 GRADIENTS = ('LINEAR', 'QUADRATIC', 'EASING', 'DIAGONAL', 'SPHERICAL', 'QUADRATIC_SPHERE', 'RADIAL')
 for _g in GRADIENTS:
     POINTWISE[f'gradient_{_g.lower()}'] = ('ShaderNodeTexGradient', 'Fac', {'gradient_type': _g})
@@ -146,13 +154,21 @@ def test_procedural_texture_matches_cycles_pointwise(case, tmp_path):
                                                  'Phase Offset')), tex.wave_type,
                     tex.bands_direction if tex.wave_type == 'BANDS' else tex.rings_direction, tex.wave_profile)
         mine = np.repeat(f[:, None], 3, axis=1)
+    elif kind == 'ShaderNodeTexBrick':
+        g = [_own(tex, k) for k in ('Scale', 'Mortar Size', 'Mortar Smooth', 'Bias', 'Brick Width', 'Row Height')]
+        tint, f = pr.brick(p, *g, tex.offset, tex.offset_frequency, tex.squash, tex.squash_frequency)
+        c1, c2, m = (np.array(tex.inputs[k].default_value[:3], np.float32) for k in ('Color1', 'Color2', 'Mortar'))
+        mixed = np.where(f[:, None] != 1.0, (1 - tint[:, None]) * c1 + tint[:, None] * c2, c1)
+        mine = np.repeat(f[:, None], 3, axis=1) if output == 'Fac' else mixed * (1 - f[:, None]) + m * f[:, None]
     elif kind == 'ShaderNodeTexChecker':
         mine = np.repeat(pr.checker(p, float(tex.inputs['Scale'].default_value))[:, None], 3, axis=1)
     else:
         mine = np.repeat(pr.gradient(p, tex.gradient_type)[:, None], 3, axis=1)
     assert np.ptp(cycles) > 0.2, "the texture should vary over the view"
     err = np.abs(mine - cycles).max(axis=1)
-    if kind == 'ShaderNodeTexVoronoi' and output != 'Distance':
+    if (kind == 'ShaderNodeTexVoronoi' and output != 'Distance') or kind == 'ShaderNodeTexBrick':
+        # a pixel centre within the filter's jitter of a cell border (a brick's mortar edge)
+        # may fall in the other cell
         # a pixel centre within the filter's jitter of a cell border may fall in the other cell
         assert np.mean(err > 0.005) < 0.002, (case, float(np.mean(err > 0.005)))
     else:
