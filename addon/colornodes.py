@@ -9,7 +9,10 @@ exact for constants, for Closest interpolation and for transforms that are affin
 (Mix by a constant factor, Invert, Brightness/Contrast above 0); a non-linear transform of a
 linearly interpolated image is applied to the texels before filtering, where Cycles filters
 first (the two differ only within a texel). The formulas are Cycles' (kernel/svm/color_util.h,
-hsv.h, gamma.h, invert.h, ramp.h, sepcomb_color.h, math_util.h), in float64. No Blender import here.
+hsv.h, gamma.h, invert.h, ramp.h, sepcomb_color.h, math_util.h), in float32 as Cycles' SVM computes
+when given float32 (the export's evaluation, nodeeval._compute: a value on a step's edge, a
+Constant Color Ramp's stop or a hue's sector, lands on Cycles' side), else in float64. No
+Blender import here.
 """
 
 from __future__ import annotations
@@ -22,9 +25,17 @@ LUMINANCE = np.array([0.2126729, 0.7151522, 0.0721750])
 RAMP_TABLE_SIZE = 256      # Cycles samples a Color Ramp into a table of this many entries
 
 
+def _real(x):
+    """x as an array of float32 if it is one (Cycles' precision, which the export's node
+    evaluation computes in), else of float64."""
+    x = np.asarray(x)
+    return x if x.dtype == np.float32 else x.astype(np.float64)
+
+
 def gray(c):
     """Colour -> float, as Cycles converts a colour into a float socket; keeps a trailing axis."""
-    return np.asarray(c, np.float64)[..., :3] @ LUMINANCE[:, None]
+    c = _real(c)
+    return c[..., :3] @ LUMINANCE.astype(c.dtype)[:, None]
 
 
 def _lerp(a, b, t):
@@ -89,8 +100,8 @@ def _burn(t, c1, c2):
 
 def _mix_hsv(blend, t, c1, c2):
     # broadcast against the factor too: constant colours under a per-texel factor (a mask)
-    t = np.asarray(t, np.float64)
-    c1, c2, tb = np.broadcast_arrays(np.asarray(c1, np.float64), np.asarray(c2, np.float64),
+    t = _real(t)
+    c1, c2, tb = np.broadcast_arrays(_real(c1), _real(c2),
                                      t if t.ndim else t[None])
     tt = tb[..., 0]                        # the factor against one HSV component
     h1, h2 = rgb_to_hsv(c1), rgb_to_hsv(c2)
@@ -109,7 +120,7 @@ def _mix_hsv(blend, t, c1, c2):
 
 def rgb_to_hsv(c):
     """(..., 3) RGB -> HSV, hue in [0, 1) (Cycles' rgb_to_hsv)."""
-    c = np.asarray(c, np.float64)
+    c = _real(c)
     cmax, cmin = c.max(axis=-1), c.min(axis=-1)
     delta = cmax - cmin
     with np.errstate(divide='ignore', invalid='ignore'):
@@ -125,7 +136,7 @@ def rgb_to_hsv(c):
 
 def hsv_to_rgb(hsv):
     """(..., 3) HSV -> RGB (Cycles' hsv_to_rgb: hue 1 is hue 0)."""
-    hsv = np.asarray(hsv, np.float64)
+    hsv = _real(hsv)
     h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
     h6 = np.where(h == 1.0, 0.0, h) * 6.0
     i = np.floor(h6)
@@ -140,7 +151,7 @@ def hsv_to_rgb(hsv):
 
 def rgb_to_hsl(c):
     """(..., 3) RGB -> HSL, hue in [0, 1) (Cycles' rgb_to_hsl; lightness at most 1)."""
-    c = np.asarray(c, np.float64)
+    c = _real(c)
     cmax, cmin = c.max(axis=-1), c.min(axis=-1)
     lum = np.minimum(1.0, (cmax + cmin) / 2.0)
     delta = cmax - cmin
@@ -156,7 +167,7 @@ def rgb_to_hsl(c):
 
 def hsl_to_rgb(hsl):
     """(..., 3) HSL -> RGB (Cycles' hsl_to_rgb)."""
-    hsl = np.asarray(hsl, np.float64)
+    hsl = _real(hsl)
     h, s, lum = hsl[..., 0], hsl[..., 1], hsl[..., 2]
     nr = np.clip(np.abs(h * 6.0 - 3.0) - 1.0, 0.0, 1.0)
     ng = np.clip(2.0 - np.abs(h * 6.0 - 2.0), 0.0, 1.0)
@@ -171,7 +182,7 @@ def separate_color(mode, c):
         return rgb_to_hsv(c)
     if mode == 'HSL':
         return rgb_to_hsl(c)
-    return np.asarray(c, np.float64)
+    return _real(c)
 
 
 def combine_color(mode, v):
@@ -180,7 +191,7 @@ def combine_color(mode, v):
         return hsv_to_rgb(v)
     if mode == 'HSL':
         return hsl_to_rgb(v)
-    return np.asarray(v, np.float64)
+    return _real(v)
 
 
 def invert(fac, c):
@@ -200,13 +211,13 @@ def brightness_contrast(c, bright, contrast):
 def hue_saturation(c, hue, sat, val, fac):
     """Hue/Saturation/Value node (Cycles' svm_node_hsv). hue, sat, val: floats or per texel
     (...,), against which a constant colour is broadcast."""
-    c = np.asarray(c, np.float64)
+    c = _real(c)
     c = np.broadcast_to(c, np.broadcast_shapes(c.shape[:-1], np.shape(hue), np.shape(sat), np.shape(val)) + (3,))
     hsv = rgb_to_hsv(c)
     hsv[..., 0] = np.mod(hsv[..., 0] + hue + 0.5, 1.0)
     hsv[..., 1] = np.clip(hsv[..., 1] * sat, 0.0, 1.0)
     hsv[..., 2] = hsv[..., 2] * val
-    return np.maximum(_lerp(np.asarray(c, np.float64), hsv_to_rgb(hsv), fac), 0.0)
+    return np.maximum(_lerp(_real(c), hsv_to_rgb(hsv), fac), 0.0)
 
 
 def ramp_table(evaluate):
@@ -237,11 +248,11 @@ def curves_lookup(table, lo, hi, c, fac, extrapolate):
     """RGB Curves node (Cycles' svm_node_curves): each channel looked up at its position in
     [lo, hi] (linearly extrapolated beyond it when the mapping's extension is Extrapolated,
     else clamped), mixed with the input by fac."""
-    c = np.asarray(c, np.float64)
+    c = _real(c)
     with np.errstate(divide='ignore', invalid='ignore'):
         rel = (c - lo) / (hi - lo)
     n = len(table)
-    out = np.empty(np.broadcast_shapes(c.shape, (3,)), np.float64)
+    out = np.empty(np.broadcast_shapes(c.shape, (3,)), c.dtype)
     for k in range(3):
         f = rel[..., k]
         v = ramp_lookup(table[:, k:k + 1], f, True)[..., 0]
@@ -258,7 +269,7 @@ def ramp_lookup(table, f, interpolate):
     the ramp is Constant (Cycles' rgb_ramp_lookup; its clamp takes a NaN position to 1, the
     last stop: measured in Cycles 5.0)."""
     n = len(table)
-    x = np.clip(np.nan_to_num(np.asarray(f, np.float64), nan=1.0), 0.0, 1.0) * (n - 1)
+    x = np.clip(np.nan_to_num(_real(f), nan=1.0), 0.0, 1.0) * (n - 1)
     i = np.minimum(x.astype(int), n - 1)
     if not interpolate:
         return table[i]

@@ -3,9 +3,11 @@
 and Clamp (min-max, range).
 
 The formulas are Cycles' (kernel/svm/math_util.h svm_math, map_range.h, clamp.h, and the safe_*
-helpers of util/math_float.h that give 0 where the operation is undefined), evaluated in float64
-on constants or per texel (arrays broadcast). No Blender import: the export's node evaluation
-(nodeeval.py) calls these with the node's operation and input values.
+helpers of util/math_float.h that give 0 where the operation is undefined), on constants or per
+texel (arrays broadcast), in float32 as Cycles' SVM computes when given float32 (the export's
+node evaluation, nodeeval._compute: a value exactly on a step's edge, a Floor, Compare, Snap or
+Stepped Map Range, lands on Cycles' side), else in float64. No Blender import: the export's
+node evaluation (nodeeval.py) calls these with the node's operation and input values.
 """
 
 from __future__ import annotations
@@ -20,8 +22,17 @@ def _safe_divide(a, b):
         return np.where(b != 0.0, a / np.where(b != 0.0, b, 1.0), 0.0)
 
 
+def _real(*xs):
+    """The arrays, at least 1-d (numpy 1.x computes a 0-d float32 with a Python float in
+    float64), in float32 if they all are (the export's evaluation, nodeeval._compute) else in
+    float64; the shape the result takes; the dtype."""
+    xs = [np.asarray(x) for x in xs]
+    dtype = np.float32 if all(x.dtype == np.float32 for x in xs) else np.float64
+    return [np.atleast_1d(x.astype(dtype, copy=False)) for x in xs], np.broadcast_shapes(*(x.shape for x in xs)), dtype
+
+
 def _safe_pow(a, b):
-    a, b = np.broadcast_arrays(np.asarray(a, np.float64), np.asarray(b, np.float64))
+    a, b = np.broadcast_arrays(a, b)
     bad = (a < 0.0) & (b != np.trunc(b))
     with np.errstate(all='ignore'):
         return np.where(bad, 0.0, np.power(a, b))
@@ -71,10 +82,10 @@ _MATH = {
     'EXPONENT': lambda a, b, c: np.exp(a),
     'MINIMUM': lambda a, b, c: np.fmin(a, b),
     'MAXIMUM': lambda a, b, c: np.fmax(a, b),
-    'LESS_THAN': lambda a, b, c: (a < b).astype(np.float64),
-    'GREATER_THAN': lambda a, b, c: (a > b).astype(np.float64),
+    'LESS_THAN': lambda a, b, c: (a < b).astype(a.dtype),
+    'GREATER_THAN': lambda a, b, c: (a > b).astype(a.dtype),
     'SIGN': lambda a, b, c: np.sign(a),
-    'COMPARE': lambda a, b, c: ((a == b) | (np.abs(a - b) <= np.maximum(c, FLT_EPSILON))).astype(np.float64),
+    'COMPARE': lambda a, b, c: ((a == b) | (np.abs(a - b) <= np.maximum(c, FLT_EPSILON))).astype(a.dtype),
     'SMOOTH_MIN': lambda a, b, c: _smooth_min(a, b, c),
     'SMOOTH_MAX': lambda a, b, c: -_smooth_min(-a, -b, c),
     'ROUND': lambda a, b, c: np.floor(a + 0.5),
@@ -105,10 +116,11 @@ MATH_OPERATIONS = frozenset(_MATH)
 
 def math(operation, a, b, c, clamp=False):
     """Math node (Cycles' svm_math); clamp: the node's Clamp option, result in [0, 1]."""
-    a, b, c = (np.asarray(x, np.float64) for x in (a, b, c))
+    (a, b, c), shape, dtype = _real(a, b, c)
     with np.errstate(all='ignore'):
         r = _MATH[operation](a, b, c)
-    return np.clip(r, 0.0, 1.0) if clamp else r
+        r = np.clip(r, 0.0, 1.0) if clamp else r
+    return np.asarray(r, dtype).reshape(shape)
 
 
 def _dot(a, b):
@@ -166,17 +178,19 @@ VECTOR_MATH_OPERATIONS = frozenset(_VECTOR_MATH) | frozenset(_VECTOR_VALUE) | _E
 def vector_math(operation, output, a, b, c, scale):
     """A Vector Math node's output ('Vector': (..., 3), 'Value': (..., 1)); the output an
     operation does not write is 0, as in Cycles."""
-    a, b, c, scale = (np.asarray(x, np.float64) for x in (a, b, c, scale))
+    (a, b, c, scale), _, dtype = _real(a, b, c, scale)
     value = operation in _VECTOR_VALUE
     if (output == 'Value') != value:
         shape = np.broadcast_shapes(a.shape, b.shape, c.shape)
-        return np.zeros(shape[:-1] + ((1,) if value or output == 'Value' else (3,)))
+        return np.zeros(shape[:-1] + ((1,) if value or output == 'Value' else (3,)), dtype)
     with np.errstate(all='ignore'):
         if value:
-            return _VECTOR_VALUE[operation](a, b)
-        if operation in _ENTRY_WISE:
-            return _MATH[operation](a, b, c)
-        return _VECTOR_MATH[operation](a, b, c, scale)
+            r = _VECTOR_VALUE[operation](a, b)
+        elif operation in _ENTRY_WISE:
+            r = _MATH[operation](a, b, c)
+        else:
+            r = _VECTOR_MATH[operation](a, b, c, scale)
+    return np.asarray(r, dtype)
 
 
 def _smoothstep(e0, e1, x):
@@ -194,7 +208,12 @@ def map_range(interpolation, value, from_min, from_max, to_min, to_max, steps, c
     Clamp node of type Range whatever the interpolation (MapRangeNode::expand; Blender hides the
     switch for the smooth ones, on by default), keeps the result between To Min and To Max: it
     shows where From Min = From Max, 0 clamped to To Min's side)."""
-    v, f0, f1, t0, t1, st = (np.asarray(x, np.float64) for x in (value, from_min, from_max, to_min, to_max, steps))
+    (v, f0, f1, t0, t1, st), shape, dtype = _real(value, from_min, from_max, to_min, to_max, steps)
+    with np.errstate(all='ignore'):
+        return np.asarray(_map_range(interpolation, v, f0, f1, t0, t1, st, clamp), dtype).reshape(shape)
+
+
+def _map_range(interpolation, v, f0, f1, t0, t1, st, clamp):
     linear = _safe_divide(v - f0, f1 - f0)
     if interpolation == 'STEPPED':
         fac = np.where(st > 0.0, _safe_divide(np.floor(linear * (st + 1.0)), st), 0.0)
@@ -214,7 +233,7 @@ def map_range_vector(interpolation, value, from_min, from_max, to_min, to_max, s
     """Map Range node, vector data, per component (Cycles' svm_node_vector_map_range): the
     factor as the float node's, the smooth ones on the factor clamped to [0, 1]; To Min where
     From Min = From Max (the float node's 0 is its own); the clamp in the node itself, every type."""
-    v, f0, f1, t0, t1, st = (np.asarray(x, np.float64) for x in (value, from_min, from_max, to_min, to_max, steps))
+    (v, f0, f1, t0, t1, st), shape, dtype = _real(value, from_min, from_max, to_min, to_max, steps)
     fac = _safe_divide(v - f0, f1 - f0)
     if interpolation == 'STEPPED':
         fac = np.where(st > 0.0, _safe_divide(np.floor(fac * (st + 1.0)), st), 0.0)
@@ -225,14 +244,16 @@ def map_range_vector(interpolation, value, from_min, from_max, to_min, to_max, s
         fac = np.clip(fac, 0.0, 1.0)
         fac = fac * fac * fac * (fac * (fac * 6.0 - 15.0) + 10.0)
     r = t0 + fac * (t1 - t0)
-    return clamp_range(r, t0, t1) if clamp else r
+    return np.asarray(clamp_range(r, t0, t1) if clamp else r, dtype).reshape(shape)
 
 
 def clamp_range(v, a, b):
     """Clamp node of type Range: between a and b whichever is larger."""
-    return np.clip(v, np.minimum(a, b), np.maximum(a, b))
+    (v, a, b), shape, _ = _real(v, a, b)
+    return np.clip(v, np.minimum(a, b), np.maximum(a, b)).reshape(shape)
 
 
 def clamp_min_max(v, lo, hi):
     """Clamp node of type Min Max: min(max(v, lo), hi)."""
-    return np.minimum(np.maximum(v, lo), hi)
+    (v, lo, hi), shape, _ = _real(v, lo, hi)
+    return np.minimum(np.maximum(v, lo), hi).reshape(shape)

@@ -7,8 +7,8 @@ the material's texture. `constant` uses the same walk for inputs that must be co
 these nodes compute, with Cycles' socket conversions. Part of the export layer: nodes are
 Blender's (or nodegraph's wrappers).
 
-Values are float64 where Cycles computes in float32: at a discontinuity (Math Floor or Compare, a
-Stepped Map Range) a value within float32 rounding of the edge may land on the other side.
+Nodes compute in float32, as Cycles' SVM does (a value exactly on a step's edge, a Math Floor
+or Compare, a Stepped Map Range, lands on Cycles' side); values are kept in float64 between them.
 """
 
 from __future__ import annotations
@@ -236,7 +236,15 @@ class Evaluator:
 
 
 def _compute(node, out, v):
-    """The value of node's output `out` from its inputs' values v (by role)."""
+    """The value of node's output `out` from its inputs' values v (by role), in float32 as
+    Cycles' SVM computes (inputs rounded to float32 first, as a socket stores them): a value
+    on a step's edge (Math Floor, Compare, a Stepped Map Range) lands on Cycles' side."""
+    v = {role: np.asarray(x, np.float32) for role, x in v.items()}
+    with np.errstate(all='ignore'):
+        return np.asarray(_compute32(node, out, v), np.float32)
+
+
+def _compute32(node, out, v):
     t = node.type
     if t == 'MIX' and node.data_type == 'VECTOR':      # (Cycles' svm_node_mix_vector*)
         fac = v['vfac'] if 'vfac' in v else v['fac']
@@ -488,5 +496,5 @@ def _cross(value, vector, crossed):
 def _scalar(v):
     """Per-node constants such as Hue/Saturation/Value: a float, or per texel (..., 1) ->
     (...,) so they broadcast against one HSV component."""
-    v = np.asarray(v, np.float64)
+    v = np.asarray(v, np.float32)
     return v[..., 0] if v.ndim > 1 else float(v.reshape(-1)[0])
