@@ -288,9 +288,15 @@ def _voronoi(node, out, vec, chain, depth):
     which = _VORONOI_OUTPUTS.get(out.identifier)
     one_octave = any(nodeeval.constant_value(nodegraph.input_by_id(node, k)) == (0.0, True)
                      for k in ('Detail', 'Roughness'))
-    if dims is None or which is None or node.feature != 'F1' or node.distance not in _VORONOI_METRICS \
-            or not one_octave:
-        raise nodeeval.NotCompiled(f"Voronoi {node.feature} {node.distance} {node.voronoi_dimensions}")
+    unread = [what for what, no in (
+        (f"{node.voronoi_dimensions} Voronoi", dims is None),
+        (f"Voronoi feature {node.feature}", node.feature != 'F1'),
+        (f"Voronoi distance {node.distance.title()}", node.distance not in _VORONOI_METRICS),
+        (f"Voronoi {out.name} output", which is None)) if no]
+    if not one_octave and not unread:       # (its octaves: of F1 alone, the only feature read)
+        unread.append(f"a fractal Voronoi (Detail {_shown(node, 'Detail')}, Roughness {_shown(node, 'Roughness')})")
+    if unread:
+        raise nodeeval.NotCompiled(', '.join(unread))
     scale, randomness = _float(node, 'Scale', chain, depth), _float(node, 'Randomness', chain, depth)
     metric, normalize = node.distance, bool(node.normalize)
 
@@ -298,3 +304,9 @@ def _voronoi(node, out, vec, chain, depth):
         outputs = pr.voronoi_f1(vec(c), scale(c), randomness(c), metric, dims, normalize)
         return outputs[0][:, None] if which == 0 else outputs[which]
     return voronoi, which == 2
+
+
+def _shown(node, ident):
+    """A float input's value as the user sets it, or 'linked' when something varying feeds it."""
+    value, exact = nodeeval.constant_value(nodegraph.input_by_id(node, ident))
+    return f"{value:g}" if exact else "linked"
