@@ -246,13 +246,18 @@ class MaterialBuilder:
             m.color_attribute = name
             return m
         # any other chain is evaluated on each mesh's corner values (evaluated_albedo) and the
-        # results interpolated: Cycles interpolates first, so this is exact at the corners only
+        # results interpolated: Cycles interpolates first, so this is exact at the corners only,
+        # and everywhere when the chain is affine in the colour (a Fac, the channels' average,
+        # a luminance, a channel swap: interpolating commutes with it; said otherwise)
+        probe = self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64)
+        affine = not reads_alpha and _affine_fit(probe, _probe_albedo(m), 1e-5)
         self._attribute_pixels = None
         self._attribute_map = ('corners', name, mat)
         m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
-        label = f"attribute '{name}'" if name else "the render colour attribute"
-        m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
-                                               "corners, then interpolated (Cycles interpolates first)") if r)
+        if not affine:
+            label = f"attribute '{name}'" if name else "the render colour attribute"
+            m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
+                                                   "corners, then interpolated (Cycles interpolates first)") if r)
         return m
 
     # an image's probe values beside the attribute's (kept away from 0: the fit divides by them)
@@ -1050,6 +1055,14 @@ def channel_line(x, y, tolerance):
     if np.abs(x * w + k - y).max() > tolerance * (1.0 + np.abs(y).max()):
         return None
     return w, np.where(np.abs(k) < 1e-9, 0.0, k)
+
+
+def _affine_fit(x, y, tolerance):
+    """Whether y = x W + k (W (3, 3): channels mixed) through every probe value x, y (n, 3) within
+    tolerance x (1 + max |y|), y not negative there (a clamp at 0 would bend it)."""
+    a = np.concatenate([x, np.ones((len(x), 1))], axis=1)
+    coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+    return bool(np.abs(a @ coef - y).max() <= tolerance * (1.0 + np.abs(y).max()) and (y >= -1e-6).all())
 
 
 def _probe_albedo(m):

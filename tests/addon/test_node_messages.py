@@ -67,3 +67,27 @@ def test_fractal_voronoi_names_its_octaves(scene, said):
     _render(scene, 'DACRT')
     assert not any("Voronoi" in t for t in said), said
 
+
+def test_attribute_fac_into_a_colour_is_exact_and_silent(scene, said):
+    _setup(scene)
+    mat, nt, d = _diffuse("Weights")
+    a = nt.nodes.new('ShaderNodeAttribute')
+    a.attribute_name = 'w'
+    nt.links.new(a.outputs['Fac'], d.inputs['Color'])
+    ob = scenes.plane("Plane", materials=(mat,))
+    at = ob.data.attributes.new('w', 'FLOAT', 'POINT')
+    for i, e in enumerate(at.data):
+        e.value = 0.2 * (i + 1)
+    dacrt, cycles = _render(scene, 'DACRT'), _render(scene, 'CYCLES')
+    assert abs(dacrt.mean() - cycles.mean()) < 2e-3, (dacrt.mean(), cycles.mean())
+    assert abs(np.median(dacrt - cycles)) < 2e-3
+    assert not any("applied at the mesh's corners" in t for t in said), said
+    # a non-linear chain after it (Gamma 2) is evaluated at the corners: still said
+    g = nt.nodes.new('ShaderNodeGamma')
+    g.inputs['Gamma'].default_value = 2.0
+    nt.links.new(a.outputs['Color'], g.inputs['Color'])
+    nt.links.new(g.outputs['Color'], d.inputs['Color'])
+    said.clear()
+    _render(scene, 'DACRT')
+    assert any("nodes after attribute 'w' applied at the mesh's corners" in t for t in said), said
+
