@@ -466,7 +466,10 @@ class Assembly:
             out.coords = np.zeros((len(out.triangles), 3, 6), np.float32)
         rows = np.flatnonzero(np.isin(out.material[S], list(materials)))
         block = a.corner_coordinates()[rows]
-        if a.rebuilt:                       # (known once the coordinates are computed)
+        mats = self.materials.materials
+        if a.rebuilt and any(_coordinates_read(mats[k], {'generated'}) for k in set(out.material[S][rows].tolist())):
+            # (known once the coordinates are computed; Object coordinates are exact: said only
+            # when a texture of this mesh reads Generated ones)
             self.ignore(f"Generated coordinates of a mesh both deformed and rebuilt by modifiers "
                         f"({', '.join(a.rebuilt)}) approximated", place.name)
         if mirrored:                        # corners 1 and 2 were swapped for these triangles
@@ -525,8 +528,8 @@ class Assembly:
             uvs[rows] = layer[index]
 
 
-def _coordinates_read(material):
+def _coordinates_read(material, kinds=frozenset({'generated', 'object'})):
     """Whether a procedural texture of the material (its colour's or an AOV's) reads Generated or
-    Object coordinates."""
+    Object coordinates (or those of `kinds`)."""
     textures = [material.texture] + [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
-    return any(isinstance(t, ProceduralTexels) and t.needs & {'generated', 'object'} for t in textures)
+    return any(isinstance(t, ProceduralTexels) and t.needs & kinds for t in textures)

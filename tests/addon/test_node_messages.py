@@ -91,3 +91,22 @@ def test_attribute_fac_into_a_colour_is_exact_and_silent(scene, said):
     _render(scene, 'DACRT')
     assert any("nodes after attribute 'w' applied at the mesh's corners" in t for t in said), said
 
+
+def test_rebuilt_mesh_reading_object_coordinates_is_silent(scene, said):
+    _setup(scene)
+    mat, nt, d = _diffuse("ObjectChecker")
+    tc, ch = nt.nodes.new('ShaderNodeTexCoord'), nt.nodes.new('ShaderNodeTexChecker')
+    ch.inputs['Scale'].default_value = 4.0
+    nt.links.new(tc.outputs['Object'], ch.inputs['Vector'])
+    nt.links.new(ch.outputs['Color'], d.inputs['Color'])
+    ob = _grid("Grid", mat, 1.6)
+    ob.modifiers.new('ss', 'SUBSURF')
+    ob.modifiers.new('cast', 'CAST').factor = 0.5
+    dacrt, cycles = _render(scene, 'DACRT'), _render(scene, 'CYCLES')
+    assert abs(dacrt.mean() - cycles.mean()) < 5e-3, (dacrt.mean(), cycles.mean())
+    assert not any("Generated coordinates" in t for t in said), said
+    nt.links.new(tc.outputs['Generated'], ch.inputs['Vector'])      # Generated ones: still said
+    said.clear()
+    _render(scene, 'DACRT')
+    assert any("Generated coordinates of a mesh both deformed and rebuilt by modifiers" in t for t in said), said
+
