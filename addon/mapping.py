@@ -76,8 +76,9 @@ def node_texture_mapping(node, reasons):
     panel, old files, scripts) as v -> M v + t, which Cycles applies to the node's vector before
     anything else (TextureMapping::compute_transform: the axis remapping, then the transform
     of its type, scale kept off 0 for Texture and Normal); None where it changes nothing
-    (TextureMapping::skip). Its min/max clamp and the Normal type's normalisation are no affine
-    map: reported, and left out."""
+    (TextureMapping::skip). Its min/max clamp is left out, as Cycles leaves it (blender/shader.cpp
+    get_tex_mapping reads no use_min/use_max: measured the same with and without it in Cycles
+    5.0); the Normal type's normalisation is no affine map: reported, and left out."""
     tm = getattr(node, 'texture_mapping', None)
     if tm is None:
         return None
@@ -88,8 +89,7 @@ def node_texture_mapping(node, reasons):
         if not np.isfinite(value).all():
             reasons.append(f"'{node.name}' Texture Mapping {name} is ({', '.join(f'{v:g}' for v in value)})")
     axes = (tm.mapping_x, tm.mapping_y, tm.mapping_z)
-    clamp = bool(tm.use_min or tm.use_max)
-    if not loc.any() and not rot.any() and (scale == 1.0).all() and axes == ('X', 'Y', 'Z') and not clamp:
+    if not loc.any() and not rot.any() and (scale == 1.0).all() and axes == ('X', 'Y', 'Z'):
         return None
     remap = np.zeros((3, 3))
     for row, axis in enumerate(axes):
@@ -109,8 +109,6 @@ def node_texture_mapping(node, reasons):
         reasons.append(f"'{node.name}' Texture Mapping of type Normal read without its normalisation")
     else:                                   # VECTOR
         M, t = A, np.zeros(3)
-    if clamp:
-        reasons.append(f"'{node.name}' Texture Mapping's min/max clamp ignored")
     return M @ remap, t
 
 

@@ -110,3 +110,23 @@ def test_rebuilt_mesh_reading_object_coordinates_is_silent(scene, said):
     _render(scene, 'DACRT')
     assert any("Generated coordinates of a mesh both deformed and rebuilt by modifiers" in t for t in said), said
 
+
+def test_texture_mapping_min_max_is_not_read_as_in_cycles(scene, said):
+    _setup(scene)
+    mat, nt, d = _diffuse("Clamped")
+    ch = nt.nodes.new('ShaderNodeTexChecker')
+    ch.inputs['Scale'].default_value = 3.0
+    nt.links.new(ch.outputs['Color'], d.inputs['Color'])
+    scenes.plane("Plane", materials=(mat,))
+    plain = {e: _render(scene, e) for e in ('DACRT', 'CYCLES')}
+    tm = ch.texture_mapping
+    tm.use_min = tm.use_max = True
+    tm.min, tm.max = (0.4, 0.4, 0.4), (0.6, 0.6, 0.6)     # (a clamp would make it one flat colour)
+    said.clear()
+    clamped = {e: _render(scene, e) for e in ('DACRT', 'CYCLES')}
+    # Cycles renders the same with it and without it; DACRT too, and says nothing about it
+    assert np.abs(clamped['CYCLES'] - plain['CYCLES']).max() < 0.05
+    assert np.ptp(clamped['CYCLES']) > 0.3
+    assert np.abs(clamped['DACRT'] - plain['DACRT']).max() == 0.0
+    assert abs(clamped['DACRT'].mean() - clamped['CYCLES'].mean()) < 5e-3
+    assert not any("min/max" in t for t in said), said
