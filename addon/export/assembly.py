@@ -472,9 +472,30 @@ class Assembly:
             # when a texture of this mesh reads Generated ones)
             self.ignore(f"Generated coordinates of a mesh both deformed and rebuilt by modifiers "
                         f"({', '.join(a.rebuilt)}) approximated", place.name)
+        kinds = out.material[S][rows]
+        for k in set(kinds.tolist()):
+            frame = self._object_frame(mats[k], place.name)
+            if frame is not None:           # Object of another object (or of this one, named)
+                m = np.asarray(frame, np.float64).reshape(4, 4) @ place.matrix
+                sel = kinds == k
+                p = block[sel][..., 3:6].astype(np.float64)
+                block[sel, :, 3:6] = (p @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
         if mirrored:                        # corners 1 and 2 were swapped for these triangles
             block = block[:, [0, 2, 1]]
         out.coords[S][rows] = block
+
+    def _object_frame(self, material, name):
+        """The inverted world matrix (16 floats) of the object whose space the material's
+        textures read Texture Coordinate Object in (the node's Object field), or None for the
+        shaded object's own; two in one material (its colour and an AOV, two shaders' textures):
+        the first by name, said."""
+        frames = sorted({n for t in _procedurals(material) for n in t.needs if isinstance(n, tuple)},
+                        key=lambda f: (f[1] is not None, f[1] or ''))
+        if len(frames) > 1:
+            names = ', '.join(f"'{f[1]}'" if f[1] else "the shaded object" for f in frames)
+            self.ignore(f"material '{material.name}': Texture Coordinate Object of {names}: all read in the space of "
+                        + (f"'{frames[0][1]}'" if frames[0][1] else "the shaded object"), name)
+        return frames[0][2] if frames else None
 
     def _world_tangents(self, a, place, mirrored, out, S):
         """The object-space tangents (unit) and bitangent signs of one instance's triangles whose
@@ -528,8 +549,13 @@ class Assembly:
             uvs[rows] = layer[index]
 
 
+def _procedurals(material):
+    """The material's procedural textures (its colour's, its AOVs')."""
+    textures = [material.texture] + [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
+    return [t for t in textures if isinstance(t, ProceduralTexels)]
+
+
 def _coordinates_read(material, kinds=frozenset({'generated', 'object'})):
     """Whether a procedural texture of the material (its colour's or an AOV's) reads Generated or
     Object coordinates (or those of `kinds`)."""
-    textures = [material.texture] + [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
-    return any(isinstance(t, ProceduralTexels) and t.needs & kinds for t in textures)
+    return any(t.needs & kinds for t in _procedurals(material))

@@ -23,6 +23,7 @@ _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
 _VORONOI_OUTPUTS = {'Distance': 0, 'Color': 1, 'Position': 2}
+OBJECT_OF = 'object of'     # (object_frame: a chain's needs say in whose space it reads Object)
 
 
 class _Chain:
@@ -31,7 +32,7 @@ class _Chain:
     None where image nodes are not compiled."""
 
     def __init__(self, reasons, image=None):
-        self.needs, self.textures, self.reasons, self.image = set(), [], reasons, image
+        self.needs, self.textures, self.reasons, self.image, self.frames = set(), [], reasons, image, set()
 
 
 def compile_color(socket, reasons, image=None):
@@ -52,7 +53,8 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None):
     names) for what feeds a colour (color) or float socket, or None as compile_color.
     coordinates: also a chain that reads Texture Coordinate Generated, Object or UV without a
     procedural texture (an AOV's input; a chain that cannot be compiled is then left to the
-    evaluation silently, which says what it does not read)."""
+    evaluation silently, which says what it does not read). A chain reading Object coordinates
+    says in whose space among its needs (object_frame)."""
     textured = _reaches_procedural(socket, set())
     images = image is not None and _images_reached(socket) >= 2
     if not textured and not images and not (coordinates and _reaches_procedural(socket, set(), ('TEX_COORD',))):
@@ -73,7 +75,21 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None):
             reasons.append(f"procedural texture chain not evaluated per point ({type(e).__name__}: {e})")
         return None
     reasons.extend(chain.reasons)
-    return fn, frozenset(chain.needs or {'generated'}), ', '.join(dict.fromkeys(chain.textures))
+    return fn, frozenset((chain.needs or {'generated'}) | chain.frames), ', '.join(dict.fromkeys(chain.textures))
+
+
+def object_frame(ob):
+    """The need that says in whose space a chain reads Texture Coordinate Object: ('object of',
+    None, None) the shaded object's own (the node's Object field empty), else ('object of', the
+    object's name, its world matrix inverted (16 floats)), which Cycles applies to the world
+    position instead (svm_node_tex_coord with the node's ob_tfm): the assembly maps each
+    instance's object coordinates into it (the object itself: its own, as Cycles renders it)."""
+    if ob is None:
+        return OBJECT_OF, None, None
+    m = np.array(ob.matrix_world, np.float64)
+    if not np.isfinite(m).all() or abs(np.linalg.det(m[:3, :3])) < 1e-30:
+        raise nodeeval.NotCompiled(f"Texture Coordinate Object of '{ob.name}', whose matrix is singular")
+    return OBJECT_OF, ob.name, tuple(np.linalg.inv(m).ravel().tolist())
 
 
 def _images_reached(socket):
@@ -153,9 +169,13 @@ def _node(node, out, chain, depth):
         return (lambda c: const), False
     if t == 'TEX_COORD':
         kind = _COORDINATES.get(out.name)
-        if kind is None or node.from_instancer or (kind == 'object' and node.object is not None):
+        if kind is None or node.from_instancer:
             raise nodeeval.NotCompiled(f"Texture Coordinate {out.name}" + (" from the instancer" if node.from_instancer
-                                       else " of another object" if kind == 'object' else ""))
+                                                                          else ""))
+        if kind == 'object':
+            chain.frames.add(object_frame(node.object))
+            if len(chain.frames) > 1:
+                raise nodeeval.NotCompiled("Texture Coordinate Object of two objects (the shaded one counts)")
         chain.needs.add(kind)
         return (lambda c: c[kind]), True
     if t == 'MAPPING':

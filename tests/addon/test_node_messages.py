@@ -130,3 +130,50 @@ def test_texture_mapping_min_max_is_not_read_as_in_cycles(scene, said):
     assert np.abs(clamped['DACRT'] - plain['DACRT']).max() == 0.0
     assert abs(clamped['DACRT'].mean() - clamped['CYCLES'].mean()) < 5e-3
     assert not any("min/max" in t for t in said), said
+
+
+def _object_checker(name):
+    mat, nt, d = _diffuse(name)
+    tc, ch = nt.nodes.new('ShaderNodeTexCoord'), nt.nodes.new('ShaderNodeTexChecker')
+    ch.inputs['Scale'].default_value = 2.0
+    nt.links.new(tc.outputs['Object'], ch.inputs['Vector'])
+    nt.links.new(ch.outputs['Color'], d.inputs['Color'])
+    return mat, nt, tc
+
+
+def _as_cycles(scene):
+    """(DACRT's image, Cycles') and the share of pixels more than 0.3 apart (a square of the
+    wrong colour: the Checker's are 0.8 and 0.2; its edges are sampled differently)."""
+    dacrt, cycles = _render(scene, 'DACRT'), _render(scene, 'CYCLES')
+    return dacrt, cycles, (np.abs(dacrt - cycles).max(axis=-1) > 0.3).mean()
+
+
+def test_object_coordinates_of_an_object_as_cycles(scene, said):
+    """Texture Coordinate Object with its Object field set: to the object wearing the material
+    (as Cycles renders it empty), with a second object sharing the material (it reads the first
+    one's space), then to an empty moved, turned and scaled. It had fallen back to the Checker's
+    own colour (mean 0.8199 where Cycles has 0.5453), said as 'Texture Coordinate Object of
+    another object is not read there'."""
+    _setup(scene, (24, 18))
+    mat, nt, tc = _object_checker("SelfCoords")
+    ob = scenes.plane("Plane", size=1.0, location=(0.5, 0.1, 0.0), materials=(mat,))
+    other = scenes.plane("Other", size=1.0, location=(-0.5, -0.3, 0.0), materials=(mat,))
+    other.rotation_euler = (0, 0, 0.3)
+    tc.object = ob
+    dacrt, cycles, apart = _as_cycles(scene)
+    assert abs(dacrt.mean() - cycles.mean()) < 5e-3 and apart < 0.02, (dacrt.mean(), cycles.mean(), apart)
+    e = scenes.link(bpy.data.objects.new("Handle", None))
+    e.location, e.rotation_euler, e.scale = (0.3, -0.2, 0.0), (0, 0, 0.4), (0.7, 1.3, 1.0)
+    tc.object = e
+    dacrt, cycles, apart = _as_cycles(scene)
+    assert abs(dacrt.mean() - cycles.mean()) < 5e-3 and apart < 0.02, (dacrt.mean(), cycles.mean(), apart)
+    assert not any("Texture Coordinate" in t for t in said), said
+    # the shaded object's own Object coordinates and the empty's in one chain: one space is read
+    # per point, so the chain falls back, saying why
+    tc2 = nt.nodes.new('ShaderNodeTexCoord')
+    ch = next(n for n in nt.nodes if n.type == 'TEX_CHECKER')
+    nt.links.new(tc2.outputs['Object'], ch.inputs['Color1'])
+    said.clear()
+    _render(scene, 'DACRT')
+    assert any("Texture Coordinate Object of two objects (the shaded one counts) is not read there" in t
+               for t in said), said

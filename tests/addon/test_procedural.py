@@ -70,9 +70,11 @@ def test_what_a_procedural_chain_cannot_read_is_named(scene, exported):
             nt.links.new(vm.outputs['Vector'], checker.inputs['Vector'])
             expect = "('Vector Rotate' node is not read there)"
         elif build == 'OBJECT':
+            # (Object of another object is read: tests/addon/test_node_messages.py; of two, not)
             coords.object = scenes.camera()
             nt.links.new(coords.outputs['Object'], checker.inputs['Vector'])
-            expect = "(Texture Coordinate Object of another object is not read there)"
+            nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Object'], checker.inputs['Color1'])
+            expect = "(Texture Coordinate Object of two objects (the shaded one counts) is not read there)"
         else:
             nt.links.new(coords.outputs['Camera'], checker.inputs['Vector'])
             expect = "(Texture Coordinate Camera is not read there)"
