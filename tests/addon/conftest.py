@@ -13,6 +13,7 @@ import bpy  # noqa: E402  (needs the repository root on sys.path first for `addo
 
 import addon  # noqa: E402
 from addon import export  # noqa: E402
+from tests.reports import recorded_reports  # noqa: E402
 
 
 @pytest.fixture(scope='session', autouse=True)
@@ -61,12 +62,4 @@ def exported(monkeypatch):
 @pytest.fixture
 def said(monkeypatch):
     """The texts the engine reports (RenderEngine.report) during the test's renders."""
-    from addon.engine import DACRTRenderEngine
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
+    return recorded_reports(monkeypatch)

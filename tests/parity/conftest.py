@@ -30,3 +30,10 @@ def parity_addon():
     yield addon
     if mine and _registered(bpy):
         addon.unregister()
+
+
+@pytest.fixture
+def said(monkeypatch):
+    """The texts the engine reports (RenderEngine.report) during the test's renders."""
+    from tests.reports import recorded_reports
+    return recorded_reports(monkeypatch)

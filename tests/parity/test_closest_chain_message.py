@@ -22,19 +22,6 @@ PX = np.array([[[200, 40, 90, 255], [10, 220, 60, 64]], [[90, 90, 200, 128], [25
 SAID = "colour nodes after image 'rgba.png' applied to its texels before the blend"
 
 
-@pytest.fixture
-def said(monkeypatch):
-    """The texts the engine reports during the test's renders (as tests/addon's fixture)."""
-    from addon.engine import DACRTRenderEngine
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
-
 
 @pytest.mark.parametrize('target', ['diffuse', 'emission'])
 def test_closest_image_mixed_by_its_alpha_not_reported(tmp_path, said, target):

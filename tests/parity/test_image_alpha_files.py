@@ -31,19 +31,6 @@ STORED = np.array([[[0.30, 0.20, 0.10, 0.5], [0.25, 0.50, 0.05, 0.0]],
 TOP = {'uint8': 255, 'uint16': 65535}
 
 
-@pytest.fixture
-def said(monkeypatch):
-    """The texts the engine reports during the test's renders (as tests/addon's fixture)."""
-    from addon.engine import DACRTRenderEngine
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
-
 
 def _write(path, px, fmt):
     """px (h, w, 4) written with its alpha marked associated (how OpenEXR stores it, and how a

@@ -20,19 +20,6 @@ SIZE, SAMPLES = 8, 4
 QUAT = (0.5, 0.5, 0.3, 0.2)         # (w, x, y, z) as Blender stores it
 
 
-@pytest.fixture
-def said(monkeypatch):
-    """The texts the engine reports during the test's renders (as tests/addon's fixture)."""
-    from addon.engine import DACRTRenderEngine
-    texts = []
-    real = DACRTRenderEngine._report_messages
-
-    def record(self, messages):
-        texts.extend(text for _, text in messages)
-        return real(self, messages)
-    monkeypatch.setattr(DACRTRenderEngine, '_report_messages', record)
-    return texts
-
 
 def _scene(output, kind, domain, values):
     """The sun-lit plane whose Diffuse colour is the Attribute node 'rot's `output`; the plane
