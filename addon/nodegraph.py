@@ -166,6 +166,25 @@ def output_key(node, identifier):
     return tuple(g.as_pointer() for g in groups), unwrap(node).as_pointer(), identifier
 
 
+def links_feeding(socket, descend=lambda node: True, limit=100_000):
+    """Each link (GraphLink) whose output reaches `socket`, followed back as source() follows
+    them (reroutes, muted nodes, groups): every node output (in its group context) once, and past
+    a node only where descend(node). Stops after `limit` outputs (a pathological graph)."""
+    seen, todo = set(), [socket]
+    while todo and len(seen) < limit:
+        link, _ = source(todo.pop())
+        if link is None:
+            continue
+        node = link.from_node
+        key = output_key(node, link.from_socket.identifier)
+        if key in seen:
+            continue
+        seen.add(key)
+        yield link
+        if descend(node):
+            todo.extend(node.inputs[i] for i in range(len(node.inputs)))
+
+
 def used_outputs(ntree):
     """The outputs (output_key) whose values reach ntree's active output node, following
     links back as source() does (through reroutes, muted nodes and groups). Cycles removes

@@ -75,22 +75,13 @@ def _one_image_through_nodes(socket):
     """The Image Texture node (with an image, its Color read) that the colour nodes feeding
     socket read alone, or None: another source, its Alpha, or nodes the evaluation cannot
     compile."""
-    nodes, seen, todo = [], set(), [socket]
-    while todo and len(seen) < 10_000:
-        link, _ = nodegraph.source(todo.pop())
-        if link is None:
-            continue
+    nodes = []
+    for link in nodegraph.links_feeding(socket, lambda node: node.type != 'TEX_IMAGE', limit=10_000):
         node = link.from_node
-        key = nodegraph.output_key(node, None)
         if node.type == 'TEX_IMAGE':
             if link.from_socket.name != 'Color' or node.image is None:
                 return None
             nodes.append(node)
-            continue
-        if key in seen:
-            continue
-        seen.add(key)
-        todo.extend(s for s in node.inputs if s.enabled)
     if not nodes or len({n.image.as_pointer() for n in nodes}) != 1 or \
             len({nodegraph.output_key(n, None) for n in nodes}) != 1:
         return None

@@ -94,20 +94,9 @@ def object_frame(ob):
 
 def _images_reached(socket):
     """How many different images (by image, or Image Texture nodes without one) feed socket."""
-    found, seen, todo = set(), set(), [socket]
-    while todo and len(seen) < 100_000:
-        link, _ = nodegraph.source(todo.pop())
-        if link is None:
-            continue
-        node = link.from_node
-        key = nodegraph.output_key(node, None)
-        if key in seen:
-            continue
-        seen.add(key)
-        if node.type == 'TEX_IMAGE':
-            found.add(node.image.as_pointer() if node.image is not None else key)
-        todo.extend(s for s in node.inputs if s.enabled)
-    return len(found)
+    return len({link.from_node.image.as_pointer() if link.from_node.image is not None else
+                nodegraph.output_key(link.from_node, None)
+                for link in nodegraph.links_feeding(socket) if link.from_node.type == 'TEX_IMAGE'})
 
 
 def _reaches_procedural(socket, seen, types=PROCEDURAL_TYPES):

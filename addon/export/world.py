@@ -176,22 +176,10 @@ def _environments_feeding(socket, kind='TEX_ENVIRONMENT', with_image=True):
     nodes, groups): a stray
     map elsewhere in the tree is not one of them. Each node (in its group context) is visited
     once: a chain of nodes that each read the one before twice stays linear."""
-    found, seen, todo = [], set(), [socket]
-    while todo and len(seen) < 100_000:
-        link, _ = nodegraph.source(todo.pop())
-        if link is None:
-            continue
-        node = link.from_node
-        key = nodegraph.output_key(node, '')
-        if key in seen:
-            continue
-        seen.add(key)
-        if node.type == kind:
-            if kind != 'TEX_ENVIRONMENT' or (node.image is not None) == with_image:
-                found.append(node)
-            continue
-        todo.extend(node.inputs[i] for i in range(len(node.inputs)))
-    return found
+    found = {nodegraph.output_key(link.from_node, None): link.from_node
+             for link in nodegraph.links_feeding(socket, lambda node: node.type != kind)
+             if link.from_node.type == kind and (kind != 'TEX_ENVIRONMENT' or (link.from_node.image is not None) == with_image)}
+    return list(found.values())
 
 
 def world_visibility(world):
