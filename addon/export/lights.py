@@ -7,7 +7,8 @@ import numpy as np
 
 from .. import principled, scenedata as sd
 from ..lights.area import sheared
-from ..nodeeval import constant_color, constant_value, nan_inputs
+from .. import nodeeval
+from ..nodeeval import constant_value, nan_inputs
 from ..nodegraph import input_socket, linked_link, output_node
 from .shadersockets import mix_factor, value_emission
 
@@ -205,9 +206,7 @@ def _light_surface(socket, reasons, depth):
         reasons.append("shader graph too deep")
         return np.zeros(3)
     if node.type in ('EMISSION', 'BACKGROUND'):      # Cycles: a Background shader emits there too
-        color, ok = constant_color(node.inputs['Color'])
-        if not ok:
-            reasons.append("Emission colour driven by nodes; its own value used")
+        color = _light_color(node.inputs['Color'], "Emission", reasons)
         return np.array(color[:3], np.float64) * _light_strength(node.inputs['Strength'], reasons)
     if node.type == 'ADD_SHADER':
         return _light_surface(node.inputs[0], reasons, depth + 1) + _light_surface(node.inputs[1], reasons, depth + 1)
@@ -229,9 +228,7 @@ def _principled_emission(node, reasons):
     strength_socket = input_socket(node, 'Emission Strength')
     if color_socket is None or strength_socket is None:
         return np.zeros(3)
-    color, ok = constant_color(color_socket)
-    if not ok:
-        reasons.append("Principled emission colour driven by nodes; its own value used")
+    color = _light_color(color_socket, "Principled emission", reasons)
     strength = _light_strength(strength_socket, reasons)
     alpha_socket = node.inputs.get('Alpha')   # (`in` on an evaluated tree's inputs: False)
     alpha = 1.0 if alpha_socket is None else principled.constant_alpha(alpha_socket, reasons)
@@ -250,7 +247,25 @@ def _light_strength(socket, reasons):
         if link.from_socket.name != 'Quadratic' or smooth != 0.0:
             reasons.append(f"Light Falloff {link.from_socket.name} (smooth {smooth:g}) as Quadratic without smoothing")
         socket = falloff.inputs['Strength']
-    strength, ok = constant_value(socket)
+    why = []
+    strength, ok = constant_value(socket, why=why)
     if not ok:
-        reasons.append("Emission strength driven by nodes; its own value used")
+        reasons.append(f"Emission strength driven by nodes ({_named(why)}, not evaluated for a light); "
+                       f"its own value {float(strength):g} used")
     return float(strength)
+
+
+def _light_color(socket, what, reasons):
+    """The constant colour feeding a light shader's colour socket; nodes the export cannot
+    compute (an image, Light Path) stand at the socket's own value, named."""
+    why = []
+    color, ok = nodeeval.constant(socket, True, why=why)
+    if not ok:
+        reasons.append(f"{what} colour driven by nodes ({_named(why)}, not evaluated for a light); its own "
+                       f"value {tuple(round(float(c), 3) for c in color[:3])} used")
+    return tuple(float(c) for c in color)
+
+
+def _named(why):
+    """What constant() could not compute, as a phrase ('the IES Texture node's value')."""
+    return '; '.join(dict.fromkeys(why)) or "nodes"
