@@ -1,5 +1,6 @@
 """Procedural textures evaluated at shading points, as Cycles' SVM computes them: Checker
-(svm_checker), Gradient (svm_gradient) and Wave (svm_wave) in numpy, Noise (kernel/svm/noise.h,
+(svm_checker), Gradient (svm_gradient), Wave (svm_wave), Brick (svm_brick) and White Noise
+(svm_node_tex_white_noise, util/hash.h) in numpy, Noise (kernel/svm/noise.h,
 fractal_noise.h, noise_texture: Perlin noise on Bob Jenkins' lookup3 hash, fBM and the
 multifractals) and Voronoi (kernel/svm/voronoi.h, its F1 feature) in native kernels; float32,
 the precision Cycles computes in, so a pattern's edges fall where Cycles puts them.
@@ -200,3 +201,65 @@ def brick(co, scale, mortar_size, mortar_smooth, bias, brick_width, row_height, 
         smooth = np.where(t < sm, s * s * (F32(3.0) - F32(2.0) * s), F32(1.0))
         mortar = np.where(d >= ms, F32(0.0), np.where(sm == 0.0, F32(1.0), smooth)).astype(F32)
     return tint, np.broadcast_to(mortar, len(p)).astype(F32)
+
+
+def _rot(x, k):
+    return (x << np.uint32(k)) | (x >> np.uint32(32 - k))
+
+
+def _jenkins(*keys):
+    """Cycles' hash_uint .. hash_uint4 (Bob Jenkins' lookup3 on 1-4 uint32 keys): (n,) uint32."""
+    with np.errstate(over='ignore'):
+        init = np.uint32((0xdeadbeef + (len(keys) << 2) + 13) & 0xFFFFFFFF)
+        a, b, c = (np.full(np.shape(keys[0]), init, np.uint32) for _ in range(3))
+        if len(keys) == 4:
+            a, b, c = a + keys[0], b + keys[1], c + keys[2]
+            a = a - c; a ^= _rot(c, 4); c = c + b                   # noqa: E702
+            b = b - a; b ^= _rot(a, 6); a = a + c                   # noqa: E702
+            c = c - b; c ^= _rot(b, 8); b = b + a                   # noqa: E702
+            a = a - c; a ^= _rot(c, 16); c = c + b                  # noqa: E702
+            b = b - a; b ^= _rot(a, 19); a = a + c                  # noqa: E702
+            c = c - b; c ^= _rot(b, 4); b = b + a                   # noqa: E702
+            a = a + keys[3]
+        else:
+            a = a + keys[0]
+            if len(keys) > 1:
+                b = b + keys[1]
+            if len(keys) > 2:
+                c = c + keys[2]
+        c ^= b; c = c - _rot(b, 14)                                 # noqa: E702
+        a ^= c; a = a - _rot(c, 11)                                 # noqa: E702
+        b ^= a; b = b - _rot(a, 25)                                 # noqa: E702
+        c ^= b; c = c - _rot(b, 16)                                 # noqa: E702
+        a ^= c; a = a - _rot(c, 4)                                  # noqa: E702
+        b ^= a; b = b - _rot(a, 14)                                 # noqa: E702
+        c ^= b; c = c - _rot(b, 24)                                 # noqa: E702
+    return c
+
+
+def hash_floats(*ks):
+    """Cycles' hash_float_to_float .. hash_float4_to_float: the lookup3 hash of the keys' float32
+    bits, as a float in [0, 1] (uint_to_float_incl: the uint rounded to float32, times 2^-32)."""
+    bits = [np.ascontiguousarray(np.asarray(k, F32)).view(np.uint32) for k in np.broadcast_arrays(*ks)]
+    return (_jenkins(*bits).astype(F32) * F32(2.0 ** -32)).astype(F32)
+
+
+def white_noise(co, w, dims):
+    """The White Noise Texture at points co (n, 3) and w (n,) (Cycles' svm_node_tex_white_noise:
+    the hash of the coordinates' float bits; 1D reads w only, 2D x and y, 4D x, y, z and w):
+    (Value (n,), Color (n, 3)), the colour's other channels hashes with 1 and 2 (1D, 2D, 3D) or
+    the components reordered (4D) appended, as Cycles' hash_float*_to_float3."""
+    co = np.asarray(co, F32)
+    w = np.broadcast_to(np.asarray(w, F32).reshape(-1), (len(co),))
+    x, y, z = co[:, 0], co[:, 1], co[:, 2]
+    one, two = F32(1.0), F32(2.0)
+    if dims == 1:
+        channels = (hash_floats(w), hash_floats(w, one), hash_floats(w, two))
+    elif dims == 2:
+        channels = (hash_floats(x, y), hash_floats(x, y, one), hash_floats(x, y, two))
+    elif dims == 3:
+        channels = (hash_floats(x, y, z), hash_floats(x, y, z, one), hash_floats(x, y, z, two))
+    else:
+        channels = (hash_floats(x, y, z, w), hash_floats(z, x, w, y), hash_floats(w, z, y, x))
+    return channels[0], np.stack(channels, axis=1)
+

@@ -1,9 +1,9 @@
-"""Colour chains that read procedural textures (Noise, Voronoi F1, Wave, Checker, Gradient):
-compiled into a function of the shading point's texture coordinates (procedural.
-ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does. The chain
-may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping nodes and
-Texture Coordinate's Generated, Object and UV outputs (an unlinked Vector: Generated, as in
-Cycles); texture inputs (Scale, Detail, ...) may themselves vary over the surface. Anything
+"""Colour chains that read procedural textures (Noise, Voronoi F1, Wave, Checker, Gradient, Brick,
+White Noise): compiled into a function of the shading point's texture coordinates
+(procedural.ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does.
+The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping
+nodes and Texture Coordinate's Generated, Object and UV outputs (an unlinked Vector: Generated,
+as in Cycles, but White Noise's, its own value); texture inputs (Scale, Detail, ...) may themselves vary over the surface. Anything
 else (an image, an attribute, another texture or coordinate kind) leaves the chain to
 nodeeval's evaluation, which reads the procedural node's own value and says so. Part of the
 export layer: every node setting is read here, so the compiled function reads no Blender data.
@@ -18,7 +18,8 @@ from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping
 from ..texture import alpha_lookup, lookup_texels, texture_lookup
 
-PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK'})
+PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK',
+                              'TEX_WHITE_NOISE'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
@@ -192,6 +193,8 @@ def _texture(node, out, chain, depth):
     """(fn, vector): a procedural texture's output, a float (n, 1) or a colour or vector
     (n, 3); vector: a Voronoi Position."""
     t = node.type
+    if t == 'TEX_WHITE_NOISE':
+        return _white_noise(node, out, chain, depth)
     vec = _vector(node, chain, depth)
     chain.textures.append(node.bl_label)
     fac = out.identifier == 'Fac'
@@ -261,6 +264,26 @@ def _texture(node, out, chain, depth):
         f = pr.gradient(vec(c), kind)[:, None]
         return f if fac else np.repeat(f, 3, axis=1)
     return gradient, False
+
+
+def _white_noise(node, out, chain, depth):
+    """(fn, False) of a White Noise Texture's Value or Color: the hash of its Vector's (and W's)
+    float bits (procedural.white_noise). Its Vector has no Texture Mapping, and unlinked it reads
+    its own (hidden) value, (0, 0, 0), as Cycles does (its socket is not one that Cycles feeds
+    Generated coordinates to: measured, the same colour everywhere)."""
+    dims = int(node.noise_dimensions[0])
+    chain.textures.append(node.bl_label)
+    vec = _socket(nodegraph.input_by_id(node, 'Vector'), True, chain, depth + 1) if dims > 1 else None
+    w = _float(node, 'W', chain, depth) if dims in (1, 4) else None
+    value = out.identifier == 'Value'
+
+    def white_noise(c):
+        co = np.zeros((1, 3), np.float32) if vec is None else np.asarray(vec(c), np.float32)
+        ww = np.zeros(1, np.float32) if w is None else w(c)
+        n = max(len(co), len(ww))
+        found = pr.white_noise(np.broadcast_to(co, (n, 3)), np.broadcast_to(ww, (n,)), dims)
+        return found[0][:, None] if value else found[1]
+    return white_noise, False
 
 
 def _image(node, out, chain):

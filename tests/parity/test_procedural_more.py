@@ -1,0 +1,129 @@
+"""The White Noise Texture (addon/procedural.py white_noise; compiled in addon/
+export/procedurals.py) against Cycles, as tests/parity/test_procedural.py checks the others.
+
+Pointwise: Cycles renders the texture's output as emission at pixel centres (an orthographic
+view of a 4x4 plane, one sample through a 0.01 px box filter), procedural.py computes it at the
+same object coordinates; within 0.005 everywhere. White Noise hashes its input's float bits, so
+a point's value changes with the last bit of its coordinates: it is compared where its Vector
+(and W) come through a Mapping and a Floor, cells whose borders no pixel centre comes near, as
+a scene uses it (a random value per tile, brick or object).
+
+Rendered: a sun-lit plane whose Diffuse colour comes from each texture, both engines, 8x8 block
+means within 2.5% of the brightest block. Before, the nodes' own values stood in (reported).
+"""
+import bpy
+import numpy as np
+import pytest
+
+from addon import procedural as pr
+from tests.addon import scenes
+
+from . import sunplane
+from .test_procedural import BLOCK, RES, W, _blocks, _centres, _wire
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+CELLS = np.array((3.0, 3.0, 1.0), np.float32), np.array((0.3, 0.3, 0.5), np.float32)
+
+
+def _floored_cells(nt, tc):
+    """Object coordinates x 3 (x, y) shifted by 0.3 (z by 0.5), floored: integer cells, pixel
+    centres at least 0.075 cell from their borders."""
+    m = nt.nodes.new('ShaderNodeMapping')
+    m.inputs['Scale'].default_value, m.inputs['Location'].default_value = CELLS
+    fl = nt.nodes.new('ShaderNodeVectorMath')
+    fl.operation = 'FLOOR'
+    nt.links.new(tc.outputs['Object'], m.inputs['Vector'])
+    nt.links.new(m.outputs[0], fl.inputs[0])
+    return fl.outputs[0]
+
+
+def _emission_plane(texture_type, output, settings, wire):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    mat, nt, out = scenes._material("Emitter")
+    em = nt.nodes.new('ShaderNodeEmission')
+    tc = nt.nodes.new('ShaderNodeTexCoord')
+    tex = nt.nodes.new(texture_type)
+    for k, v in settings.items():
+        if k in tex.inputs:
+            tex.inputs[k].default_value = v
+        else:
+            setattr(tex, k, v)
+    wire(nt, tc, tex)
+    nt.links.new(tex.outputs[output], em.inputs['Color'])
+    nt.links.new(em.outputs[0], out.inputs['Surface'])
+    scenes.plane("Plane", size=4.0, materials=(mat,))
+    scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=4.0)
+    scenes.black_world()
+    sc.render.engine = 'CYCLES'
+    sc.render.resolution_x = sc.render.resolution_y = W
+    sc.cycles.samples, sc.cycles.use_denoising, sc.cycles.max_bounces = 1, False, 0
+    sc.cycles.pixel_filter_type, sc.cycles.filter_width = 'BOX', 0.01
+    return tex
+
+
+def _white_noise_wire(nt, tc, tex):
+    cells = _floored_cells(nt, tc)
+    if tex.noise_dimensions != '1D':              # (1D reads W only: its Vector is unavailable)
+        nt.links.new(cells, tex.inputs['Vector'])
+    if tex.noise_dimensions in ('1D', '4D'):      # W: the cell's x
+        sep = nt.nodes.new('ShaderNodeSeparateXYZ')
+        nt.links.new(cells, sep.inputs[0])
+        nt.links.new(sep.outputs['X'], tex.inputs['W'])
+
+
+def _white_noise(tex, p, output):
+    cells = np.floor(p * CELLS[0] + CELLS[1]).astype(np.float32)
+    value, color = pr.white_noise(cells, cells[:, 0], int(tex.noise_dimensions[0]))
+    return color if output == 'Color' else np.repeat(value[:, None], 3, axis=1)
+
+
+POINTWISE = {
+    'white_noise_1d': ('ShaderNodeTexWhiteNoise', 'Value', {'noise_dimensions': '1D'}, _white_noise_wire),
+    'white_noise_1d_color': ('ShaderNodeTexWhiteNoise', 'Color', {'noise_dimensions': '1D'}, _white_noise_wire),
+    'white_noise_2d_color': ('ShaderNodeTexWhiteNoise', 'Color', {'noise_dimensions': '2D'}, _white_noise_wire),
+    'white_noise_3d': ('ShaderNodeTexWhiteNoise', 'Value', {'noise_dimensions': '3D'}, _white_noise_wire),
+    'white_noise_3d_color': ('ShaderNodeTexWhiteNoise', 'Color', {'noise_dimensions': '3D'}, _white_noise_wire),
+    'white_noise_4d_color': ('ShaderNodeTexWhiteNoise', 'Color', {'noise_dimensions': '4D'}, _white_noise_wire),
+}
+
+
+@pytest.mark.parametrize('case', sorted(POINTWISE))
+def test_texture_matches_cycles_pointwise(case, tmp_path):
+    kind, output, settings, wire = POINTWISE[case]
+    tex = _emission_plane(kind, output, dict(settings), wire)
+    r = scenes.read_exr(scenes.render_exr(tmp_path / "cycles.exr"))
+    cycles = np.stack([r['R'], r['G'], r['B']], -1).reshape(-1, 3)
+    p = _centres()
+    mine = _white_noise(tex, p, output)
+    assert np.ptp(cycles) > 0.2, "the texture should vary over the view"
+    err = np.abs(mine - cycles).max(axis=1)
+    assert err.max() < 0.005, (case, float(err.max()), float(err.mean()))
+
+
+# --- rendered through the add-on ------------------------------------------------------------------
+
+def white_noise_tiles(nt, diffuse):
+    """A random colour per tile: Object coordinates x 4, floored (4x4 tiles on the 2x2 plane,
+    their borders on the 8x8 blocks' ones)."""
+    tc = nt.nodes.new('ShaderNodeTexCoord')
+    m = nt.nodes.new('ShaderNodeMapping')
+    m.inputs['Scale'].default_value, m.inputs['Location'].default_value = (4, 4, 1), (0, 0, 0.5)
+    fl = nt.nodes.new('ShaderNodeVectorMath')
+    fl.operation = 'FLOOR'
+    wn = nt.nodes.new('ShaderNodeTexWhiteNoise')
+    nt.links.new(tc.outputs['Object'], m.inputs['Vector'])
+    nt.links.new(m.outputs[0], fl.inputs[0])
+    nt.links.new(fl.outputs[0], wn.inputs['Vector'])
+    nt.links.new(wn.outputs['Color'], diffuse.inputs['Color'])
+
+
+@pytest.mark.parametrize('chain', [white_noise_tiles], ids=lambda c: c.__name__)
+def test_texture_colour_renders_as_cycles(chain, tmp_path):
+    sunplane.build(np.ones((1, 1, 4), np.float32), _wire(chain), RES, 16)
+    dacrt, cycles = _blocks('DACRT', tmp_path), _blocks('CYCLES', tmp_path)
+    assert dacrt.shape == (RES // BLOCK, RES // BLOCK, 3)
+    assert np.ptp(cycles[..., 0]) > 0.1 * cycles.max(), "the pattern should show"
+    err = np.abs(dacrt - cycles).max() / cycles.max()
+    assert err < 0.025, (err, dacrt[..., 0].round(3).tolist(), cycles[..., 0].round(3).tolist())
