@@ -1,6 +1,6 @@
 """Procedural textures evaluated at shading points, as Cycles' SVM computes them: Checker
-(svm_checker), Gradient (svm_gradient), Wave (svm_wave), Brick (svm_brick) and White Noise
-(svm_node_tex_white_noise, util/hash.h) in numpy, Noise (kernel/svm/noise.h,
+(svm_checker), Gradient (svm_gradient), Wave (svm_wave), Brick (svm_brick), White Noise
+(svm_node_tex_white_noise, util/hash.h) and Magic (svm_magic) in numpy, Noise (kernel/svm/noise.h,
 fractal_noise.h, noise_texture: Perlin noise on Bob Jenkins' lookup3 hash, fBM and the
 multifractals) and Voronoi (kernel/svm/voronoi.h, its F1 feature) in native kernels; float32,
 the precision Cycles computes in, so a pattern's edges fall where Cycles puts them.
@@ -263,3 +263,37 @@ def white_noise(co, w, dims):
         channels = (hash_floats(x, y, z, w), hash_floats(z, x, w, y), hash_floats(w, z, y, x))
     return channels[0], np.stack(channels, axis=1)
 
+
+def magic(co, scale, depth, distortion):
+    """The Magic Texture's colour (n, 3) at points co (n, 3) (Cycles' svm_magic: the coordinates
+    wrapped by fmod 2 pi, sines and cosines of their sums x 5 x Scale, then depth (0..10) turns
+    of sines and cosines of each other's distorted values); its Fac is the colour's average."""
+    co = np.asarray(co, F32)
+    n = len(co)
+    s = np.broadcast_to(np.asarray(scale, F32).reshape(-1), (n,))
+    d = np.broadcast_to(np.asarray(distortion, F32).reshape(-1), (n,))
+    tau = F32(2.0 * np.pi)
+    with np.errstate(all='ignore'):
+        px, py, pz = (np.fmod(co[:, i], tau) for i in range(3))
+        five = F32(5.0)
+        x = np.sin((px + py + pz) * five * s)
+        y = np.cos((-px + py - pz) * five * s)
+        z = -np.cos((-px - py + pz) * five * s)
+        if depth > 0:
+            x, y, z = x * d, y * d, z * d
+            y = -np.cos(x - y + z) * d
+        steps = (
+            lambda x, y, z: (np.cos(x - y - z) * d, y, z),
+            lambda x, y, z: (x, y, np.sin(-x - y - z) * d),
+            lambda x, y, z: (-np.cos(-x + y - z) * d, y, z),
+            lambda x, y, z: (x, -np.sin(-x + y + z) * d, z),
+            lambda x, y, z: (x, -np.cos(-x + y + z) * d, z),
+            lambda x, y, z: (np.cos(x + y + z) * d, y, z),
+            lambda x, y, z: (x, y, np.sin(x + y - z) * d),
+            lambda x, y, z: (-np.cos(-x - y + z) * d, y, z),
+            lambda x, y, z: (x, -np.sin(x - y + z) * d, z))
+        for step in steps[:max(0, min(int(depth), 10) - 1)]:
+            x, y, z = step(x, y, z)
+        two_d = np.where(d != 0, d * F32(2.0), F32(1.0))
+        x, y, z = x / two_d, y / two_d, z / two_d
+    return np.stack([F32(0.5) - x, F32(0.5) - y, F32(0.5) - z], axis=1).astype(F32)

@@ -1,5 +1,5 @@
 """Colour chains that read procedural textures (Noise, Voronoi F1, Wave, Checker, Gradient, Brick,
-White Noise): compiled into a function of the shading point's texture coordinates
+White Noise, Magic): compiled into a function of the shading point's texture coordinates
 (procedural.ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does.
 The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping
 nodes and Texture Coordinate's Generated, Object and UV outputs (an unlinked Vector: Generated,
@@ -19,7 +19,7 @@ from ..mapping import mapping_affine, node_texture_mapping
 from ..texture import alpha_lookup, lookup_texels, texture_lookup
 
 PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK',
-                              'TEX_WHITE_NOISE'})
+                              'TEX_WHITE_NOISE', 'TEX_MAGIC'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
@@ -248,6 +248,15 @@ def _texture(node, out, chain, depth):
             c1 = np.where(f != 1.0, (np.float32(1.0) - tint) * c1 + tint * c2, c1)
             return c1 * (np.float32(1.0) - f) + m * f
         return brick, False
+    if t == 'TEX_MAGIC':
+        scale, distortion = _float(node, 'Scale', chain, depth), _float(node, 'Distortion', chain, depth)
+        turns = int(node.turbulence_depth)
+
+        def magic(c):
+            color = pr.magic(vec(c), scale(c), turns, distortion(c))
+            # its Fac: Cycles' average(), (r + g + b) / 3 in float32
+            return ((color[:, 0] + color[:, 1] + color[:, 2]) / np.float32(3.0))[:, None] if fac else color
+        return magic, False
     if t == 'TEX_WAVE':
         params = [_float(node, k, chain, depth) for k in ('Scale', 'Distortion', 'Detail', 'Detail Scale',
                                                           'Detail Roughness', 'Phase Offset')]

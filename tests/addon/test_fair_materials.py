@@ -71,8 +71,8 @@ def _non_diffuse_materials():
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
     noise = nt.nodes.new('ShaderNodeTexNoise')
     nt.links.new(noise.outputs['Color'], nmap.inputs['Color'])     # (a flat default map is exact)
-    magic = nt.nodes.new('ShaderNodeTexMagic')       # (not a Noise: the export evaluates that per point)
-    nt.links.new(magic.outputs['Color'], d.inputs['Color'])
+    gabor = nt.nodes.new('ShaderNodeTexGabor')       # (not a Noise: the export evaluates that per point)
+    nt.links.new(gabor.outputs['Value'], d.inputs['Color'])
     e = nt.nodes.new('ShaderNodeEmission')
     e.inputs['Strength'].default_value = 2.0
     math_node = nt.nodes.new('ShaderNodeMath')

@@ -1,4 +1,4 @@
-"""The White Noise Texture (addon/procedural.py white_noise; compiled in addon/
+"""White Noise and Magic Textures (addon/procedural.py white_noise, magic; compiled in addon/
 export/procedurals.py) against Cycles, as tests/parity/test_procedural.py checks the others.
 
 Pointwise: Cycles renders the texture's output as emission at pixel centres (an orthographic
@@ -73,10 +73,28 @@ def _white_noise_wire(nt, tc, tex):
         nt.links.new(sep.outputs['X'], tex.inputs['W'])
 
 
+def _object_wire(nt, tc, tex):
+    nt.links.new(tc.outputs['Object'], tex.inputs['Vector'])
+
+
+def _moved_wire(nt, tc, tex):
+    """Far from the origin: Cycles wraps the Magic Texture's coordinates by 2 pi first."""
+    m = nt.nodes.new('ShaderNodeMapping')
+    m.inputs['Location'].default_value = (10.0, -7.0, 3.0)
+    nt.links.new(tc.outputs['Object'], m.inputs['Vector'])
+    nt.links.new(m.outputs[0], tex.inputs['Vector'])
+
+
 def _white_noise(tex, p, output):
     cells = np.floor(p * CELLS[0] + CELLS[1]).astype(np.float32)
     value, color = pr.white_noise(cells, cells[:, 0], int(tex.noise_dimensions[0]))
     return color if output == 'Color' else np.repeat(value[:, None], 3, axis=1)
+
+
+def _magic(tex, p, output, offset=(0.0, 0.0, 0.0)):
+    color = pr.magic(p + np.array(offset, np.float32), tex.inputs['Scale'].default_value, tex.turbulence_depth,
+                     tex.inputs['Distortion'].default_value)
+    return color if output == 'Color' else np.repeat(color.mean(axis=1, keepdims=True), 3, axis=1)
 
 
 POINTWISE = {
@@ -86,6 +104,15 @@ POINTWISE = {
     'white_noise_3d': ('ShaderNodeTexWhiteNoise', 'Value', {'noise_dimensions': '3D'}, _white_noise_wire),
     'white_noise_3d_color': ('ShaderNodeTexWhiteNoise', 'Color', {'noise_dimensions': '3D'}, _white_noise_wire),
     'white_noise_4d_color': ('ShaderNodeTexWhiteNoise', 'Color', {'noise_dimensions': '4D'}, _white_noise_wire),
+    'magic_default_depth': ('ShaderNodeTexMagic', 'Color', {'Scale': 1.0}, _object_wire),
+    'magic_depth_0': ('ShaderNodeTexMagic', 'Color', {'Scale': 1.5, 'turbulence_depth': 0}, _object_wire),
+    # (deep and distorted: the filter's jitter moves the colour up to ~3e-3; more distortion
+    # makes the pattern chaotic at this resolution)
+    'magic_depth_5_fac': ('ShaderNodeTexMagic', 'Fac', {'Scale': 0.3, 'turbulence_depth': 5,
+                                                        'Distortion': 1.2}, _object_wire),
+    'magic_depth_10': ('ShaderNodeTexMagic', 'Color', {'Scale': 0.2, 'turbulence_depth': 10,
+                                                       'Distortion': 1.0}, _object_wire),
+    'magic_far_wrapped': ('ShaderNodeTexMagic', 'Color', {'Scale': 1.0, 'turbulence_depth': 4}, _moved_wire),
 }
 
 
@@ -96,7 +123,10 @@ def test_texture_matches_cycles_pointwise(case, tmp_path):
     r = scenes.read_exr(scenes.render_exr(tmp_path / "cycles.exr"))
     cycles = np.stack([r['R'], r['G'], r['B']], -1).reshape(-1, 3)
     p = _centres()
-    mine = _white_noise(tex, p, output)
+    if kind == 'ShaderNodeTexWhiteNoise':
+        mine = _white_noise(tex, p, output)
+    else:
+        mine = _magic(tex, p, output, (10.0, -7.0, 3.0) if wire is _moved_wire else (0.0, 0.0, 0.0))
     assert np.ptp(cycles) > 0.2, "the texture should vary over the view"
     err = np.abs(mine - cycles).max(axis=1)
     assert err.max() < 0.005, (case, float(err.max()), float(err.mean()))
@@ -119,7 +149,15 @@ def white_noise_tiles(nt, diffuse):
     nt.links.new(wn.outputs['Color'], diffuse.inputs['Color'])
 
 
-@pytest.mark.parametrize('chain', [white_noise_tiles], ids=lambda c: c.__name__)
+def magic_generated(nt, diffuse):
+    """Nothing in the Vector input: Generated coordinates."""
+    mg = nt.nodes.new('ShaderNodeTexMagic')
+    mg.turbulence_depth = 3
+    mg.inputs['Scale'].default_value, mg.inputs['Distortion'].default_value = 1.5, 1.3
+    nt.links.new(mg.outputs['Color'], diffuse.inputs['Color'])
+
+
+@pytest.mark.parametrize('chain', [white_noise_tiles, magic_generated], ids=lambda c: c.__name__)
 def test_texture_colour_renders_as_cycles(chain, tmp_path):
     sunplane.build(np.ones((1, 1, 4), np.float32), _wire(chain), RES, 16)
     dacrt, cycles = _blocks('DACRT', tmp_path), _blocks('CYCLES', tmp_path)
