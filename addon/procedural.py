@@ -1,9 +1,10 @@
 """Procedural textures evaluated at shading points, as Cycles' SVM computes them: Checker
 (svm_checker), Gradient (svm_gradient), Wave (svm_wave), Brick (svm_brick), White Noise
-(svm_node_tex_white_noise, util/hash.h) and Magic (svm_magic) in numpy, Noise (kernel/svm/noise.h,
-fractal_noise.h, noise_texture: Perlin noise on Bob Jenkins' lookup3 hash, fBM and the
-multifractals) and Voronoi (kernel/svm/voronoi.h, its F1 feature) in native kernels; float32,
-the precision Cycles computes in, so a pattern's edges fall where Cycles puts them.
+(svm_node_tex_white_noise, util/hash.h), Magic (svm_magic) and Gabor (svm_node_tex_gabor) in
+numpy, Noise (kernel/svm/noise.h, fractal_noise.h, noise_texture: Perlin noise on Bob Jenkins'
+lookup3 hash, fBM and the multifractals) and Voronoi (kernel/svm/voronoi.h, its F1 feature) in
+native kernels; float32, the precision Cycles computes in, so a pattern's edges fall where
+Cycles puts them.
 
 `ProceduralTexels` is what a material's colour texture is when its colour comes from these
 nodes: the export compiles the node chain (export/procedurals.py) into a function
@@ -268,8 +269,8 @@ def magic(co, scale, depth, distortion):
     """The Magic Texture's colour (n, 3) at points co (n, 3) (Cycles' svm_magic: the coordinates
     wrapped by fmod 2 pi, sines and cosines of their sums x 5 x Scale, then depth (0..10) turns
     of sines and cosines of each other's distorted values); its Fac is the colour's average."""
-    co = np.asarray(co, F32)
-    n = len(co)
+    n = max(len(co), np.size(scale), np.size(distortion))
+    co = np.broadcast_to(np.asarray(co, F32), (n, 3))
     s = np.broadcast_to(np.asarray(scale, F32).reshape(-1), (n,))
     d = np.broadcast_to(np.asarray(distortion, F32).reshape(-1), (n,))
     tau = F32(2.0 * np.pi)
@@ -297,3 +298,97 @@ def magic(co, scale, depth, distortion):
         two_d = np.where(d != 0, d * F32(2.0), F32(1.0))
         x, y, z = x / two_d, y / two_d, z / two_d
     return np.stack([F32(0.5) - x, F32(0.5) - y, F32(0.5) - z], axis=1).astype(F32)
+
+
+_PI = F32(np.pi)
+
+
+def _gabor_kernel(d2, angle_dot, envelope_only=False):
+    """Cycles' compute_2d/3d_gabor_kernel from the squared distance and the position's dot with
+    the frequency vector: (real, imaginary) of the windowed Gaussian's phasor."""
+    hann = F32(0.5) + F32(0.5) * np.cos(_PI * d2)
+    envelope = np.exp(-_PI * d2) * hann
+    angle = F32(2.0) * _PI * angle_dot
+    return envelope * np.cos(angle), envelope * np.sin(angle)
+
+
+def gabor(co, scale, frequency, anisotropy, orientation, dims):
+    """The Gabor Texture at points co (n, 3) (Cycles' svm_node_tex_gabor: a sum of 8 windowed
+    Gabor kernels per cell over the 3x3 (3x3x3) cells around the point, their centres, weights
+    and (isotropic) orientations from the lookup3 hashes of the cell and the impulse's index;
+    2D reads x and y and orientation is an angle, 3D a vector, normalized): (Value, Phase,
+    Intensity), each (n,). Parameters (n,) arrays or scalars."""
+    n = max(len(co), np.size(scale), np.size(frequency), np.size(anisotropy),
+            np.size(orientation) // (3 if dims == 3 else 1))
+    co = np.broadcast_to(np.asarray(co, F32), (n, 3))
+
+    def col(v):
+        return np.broadcast_to(np.asarray(v, F32).reshape(-1), (n,))
+    p = co * col(scale)[:, None]
+    isotropy = F32(1.0) - np.clip(col(anisotropy), F32(0.0), F32(1.0))
+    freq = np.maximum(F32(0.001), col(frequency))
+    re, im = np.zeros(n, F32), np.zeros(n, F32)
+    with np.errstate(all='ignore'):
+        cell = np.floor(p[:, :dims])
+        local = p[:, :dims] - cell
+        # the hashes depend on the cell only: computed once per cell the points fall in
+        cells, back = np.unique(cell, axis=0, return_inverse=True)
+        back = back.reshape(-1)
+
+        def hashed(*ks):
+            return hash_floats(*ks)[back]
+        cell = cells
+        if dims == 2:
+            base = col(orientation)
+            for j in (-1, 0, 1):
+                for i in (-1, 0, 1):
+                    cx, cy = cell[:, 0] + F32(i), cell[:, 1] + F32(j)
+                    px, py = local[:, 0] - F32(i), local[:, 1] - F32(j)
+                    for k in range(8):
+                        ro = (hashed(cx, cy, F32(k * 3)) - F32(0.5)) * _PI
+                        angle = base + ro * isotropy
+                        seed = F32(k * 3 + 1)
+                        kx, ky = px - hashed(cx, cy, seed), py - hashed(seed, cx, cy)
+                        d2 = kx * kx + ky * ky
+                        weight = np.where(hashed(cx, cy, F32(k * 3 + 2)) < F32(0.5), F32(-1.0), F32(1.0))
+                        fx, fy = freq * np.cos(angle), freq * np.sin(angle)
+                        kr, ki = _gabor_kernel(d2, kx * fx + ky * fy)
+                        inside = d2 < F32(1.0)
+                        re = np.where(inside, re + weight * kr, re)
+                        im = np.where(inside, im + weight * ki, im)
+            norm = F32(6.0) * np.sqrt(F32(8.0) * F32(0.5) * F32(0.25))
+        else:
+            o = np.broadcast_to(np.asarray(orientation, F32).reshape(-1, 3), (n, 3))
+            o = o / np.sqrt((o * o).sum(axis=1, dtype=F32))[:, None]
+            inclination0 = np.arccos(o[:, 2])
+            azimuth0 = np.where(o[:, 1] < 0, F32(-1.0), F32(1.0)) * np.arccos(
+                o[:, 0] / np.sqrt(o[:, 0] * o[:, 0] + o[:, 1] * o[:, 1]))
+            for kk in (-1, 0, 1):
+                for j in (-1, 0, 1):
+                    for i in (-1, 0, 1):
+                        c = [cell[:, 0] + F32(i), cell[:, 1] + F32(j), cell[:, 2] + F32(kk)]
+                        q = [local[:, 0] - F32(i), local[:, 1] - F32(j), local[:, 2] - F32(kk)]
+                        for k in range(8):
+                            w0 = F32(k * 3)
+                            ra, rb = hashed(c[0], c[1], c[2], w0), hashed(c[2], c[0], w0, c[1])
+                            inc = inclination0 + ra * _PI * isotropy
+                            azi = azimuth0 + rb * _PI * isotropy
+                            ori = np.where((isotropy == 0)[:, None], o, np.stack(
+                                [np.sin(inc) * np.cos(azi), np.sin(inc) * np.sin(azi), np.cos(inc)], axis=1))
+                            w1 = F32(k * 3 + 1)
+                            centre = (hashed(c[0], c[1], c[2], w1), hashed(c[2], c[0], w1, c[1]),
+                                      hashed(w1, c[2], c[1], c[0]))
+                            kp = [q[a] - centre[a] for a in range(3)]
+                            d2 = kp[0] * kp[0] + kp[1] * kp[1] + kp[2] * kp[2]
+                            weight = np.where(hashed(c[0], c[1], c[2], F32(k * 3 + 2)) < F32(0.5),
+                                              F32(-1.0), F32(1.0))
+                            fv = ori * freq[:, None]
+                            kr, ki = _gabor_kernel(d2, kp[0] * fv[:, 0] + kp[1] * fv[:, 1] + kp[2] * fv[:, 2])
+                            inside = d2 < F32(1.0)
+                            re = np.where(inside, re + weight * kr, re)
+                            im = np.where(inside, im + weight * ki, im)
+            norm = F32(6.0) * np.sqrt(F32(8.0) * F32(0.5) * (F32(1.0) / (F32(4.0) * F32(np.sqrt(2.0)))))
+        value = (im / norm) * F32(0.5) + F32(0.5)
+        phase = (np.arctan2(im, re) + _PI) / (F32(2.0) * _PI)
+        intensity = np.sqrt(re * re + im * im) / norm
+    return value.astype(F32), phase.astype(F32), intensity.astype(F32)

@@ -1,12 +1,13 @@
 """Colour chains that read procedural textures (Noise, Voronoi F1, Wave, Checker, Gradient, Brick,
-White Noise, Magic): compiled into a function of the shading point's texture coordinates
+White Noise, Magic, Gabor): compiled into a function of the shading point's texture coordinates
 (procedural.ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does.
 The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping
 nodes and Texture Coordinate's Generated, Object and UV outputs (an unlinked Vector: Generated,
-as in Cycles, but White Noise's, its own value); texture inputs (Scale, Detail, ...) may themselves vary over the surface. Anything
-else (an image, an attribute, another texture or coordinate kind) leaves the chain to
-nodeeval's evaluation, which reads the procedural node's own value and says so. Part of the
-export layer: every node setting is read here, so the compiled function reads no Blender data.
+as in Cycles, but White Noise's, its own value); texture inputs (Scale, Detail, ...) may
+themselves vary over the surface. Anything else (an image, an attribute, another texture or
+coordinate kind) leaves the chain to nodeeval's evaluation, which reads the procedural node's
+own value and says so. Part of the export layer: every node setting is read here, so the
+compiled function reads no Blender data.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from ..mapping import mapping_affine, node_texture_mapping
 from ..texture import alpha_lookup, lookup_texels, texture_lookup
 
 PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK',
-                              'TEX_WHITE_NOISE', 'TEX_MAGIC'})
+                              'TEX_WHITE_NOISE', 'TEX_MAGIC', 'TEX_GABOR'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
@@ -257,6 +258,21 @@ def _texture(node, out, chain, depth):
             # its Fac: Cycles' average(), (r + g + b) / 3 in float32
             return ((color[:, 0] + color[:, 1] + color[:, 2]) / np.float32(3.0))[:, None] if fac else color
         return magic, False
+    if t == 'TEX_GABOR':
+        dims = _NOISE_DIMENSIONS.get(node.gabor_type)
+        if dims is None:
+            raise nodeeval.NotCompiled(f"{node.gabor_type} Gabor")
+        params = [_float(node, k, chain, depth) for k in ('Scale', 'Frequency', 'Anisotropy')]
+        if dims == 2:
+            orientation = _float(node, 'Orientation 2D', chain, depth)
+        else:
+            o3 = _socket(nodegraph.input_by_id(node, 'Orientation 3D'), True, chain, depth + 1)
+            orientation = lambda c: np.asarray(o3(c), np.float32)  # noqa: E731
+        which = ('Value', 'Phase', 'Intensity').index(out.identifier)
+
+        def gabor(c):
+            return pr.gabor(vec(c), *(q(c) for q in params), orientation(c), dims)[which][:, None]
+        return gabor, False
     if t == 'TEX_WAVE':
         params = [_float(node, k, chain, depth) for k in ('Scale', 'Distortion', 'Detail', 'Detail Scale',
                                                           'Detail Roughness', 'Phase Offset')]

@@ -384,23 +384,24 @@ def test_udim_tile_without_a_file_reported_and_magenta(scene):
 
 def test_fair_editor_keeps_colour_nodes(scene):
     """The benchmark's fair-material editor keeps what the export evaluates (the image, the Mix
-    and Hue/Saturation nodes) and unlinks only the Gabor Texture (not evaluated), where the
+    and Hue/Saturation nodes) and unlinks only the 4D Noise Texture (not evaluated), where the
     export reads the Mix input's own value."""
     from tests.bench import fairmaterials
     state = {}
 
     def chain(nt, tex):
-        noise = nt.nodes.new('ShaderNodeTexGabor')
-        m = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], noise.outputs['Value'], 0.5)
+        noise = nt.nodes.new('ShaderNodeTexNoise')
+        noise.noise_dimensions = '4D'
+        m = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], noise.outputs['Color'], 0.5)
         hs = nt.nodes.new('ShaderNodeHueSaturation')
         nt.links.new(m.outputs['Result'], hs.inputs['Color'])
         state.update(noise=noise, mix=m, hs=hs)
         return hs.outputs['Color']
     mat = _image_material("Kept", PX, chain)
-    assert "Gabor Texture" in fairmaterials.remaining_approximations([mat])["Kept"]
+    assert "Noise Texture" in fairmaterials.remaining_approximations([mat])["Kept"]
     fairmaterials.make_diffuse([mat])
     assert fairmaterials.remaining_approximations([mat]) == {}
-    assert not state['noise'].outputs['Value'].is_linked
+    assert not state['noise'].outputs['Color'].is_linked
     assert state['mix'].outputs['Result'].is_linked and state['hs'].outputs['Color'].is_linked
 
 

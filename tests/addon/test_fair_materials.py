@@ -71,8 +71,9 @@ def _non_diffuse_materials():
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
     noise = nt.nodes.new('ShaderNodeTexNoise')
     nt.links.new(noise.outputs['Color'], nmap.inputs['Color'])     # (a flat default map is exact)
-    gabor = nt.nodes.new('ShaderNodeTexGabor')       # (not a Noise: the export evaluates that per point)
-    nt.links.new(gabor.outputs['Value'], d.inputs['Color'])
+    noise4d = nt.nodes.new('ShaderNodeTexNoise')     # (4D: the export evaluates 2D and 3D per point)
+    noise4d.noise_dimensions = '4D'
+    nt.links.new(noise4d.outputs['Color'], d.inputs['Color'])
     e = nt.nodes.new('ShaderNodeEmission')
     e.inputs['Strength'].default_value = 2.0
     math_node = nt.nodes.new('ShaderNodeMath')

@@ -272,7 +272,7 @@ def test_source_carrier_and_unwrap(scene):
 
 def test_fair_editor_edits_inside_groups(scene, exported):
     """The benchmark's fair-material editor follows groups as the export does: it zeroes a
-    grouped Principled's metallic in the group's tree and unlinks a Gabor Texture (which the
+    grouped Principled's metallic in the group's tree and unlinks a 4D Noise Texture (which the
     export reads as its own value) at the Group node's input, so nothing is left approximated."""
     setup(scene)
     g, gi, go = _group("Metal", inputs=(('Tint', 'NodeSocketColor'),))
@@ -282,8 +282,9 @@ def test_fair_editor_edits_inside_groups(scene, exported):
     g.links.new(gi.outputs['Tint'], p.inputs['Base Color'])
     g.links.new(p.outputs[0], go.inputs['Shader'])
     mat, node = _material_using(g, "Metal", tint=(0.4, 0.5, 0.6))
-    gabor = mat.node_tree.nodes.new('ShaderNodeTexGabor')
-    mat.node_tree.links.new(gabor.outputs['Value'], node.inputs['Tint'])
+    noise = mat.node_tree.nodes.new('ShaderNodeTexNoise')
+    noise.noise_dimensions = '4D'
+    mat.node_tree.links.new(noise.outputs['Color'], node.inputs['Tint'])
     assert fairmaterials.remaining_approximations([mat])
     changes = fairmaterials.make_diffuse([mat])
     assert changes["Metal"]

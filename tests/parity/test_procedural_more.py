@@ -1,9 +1,10 @@
-"""White Noise and Magic Textures (addon/procedural.py white_noise, magic; compiled in addon/
-export/procedurals.py) against Cycles, as tests/parity/test_procedural.py checks the others.
+"""White Noise, Magic and Gabor Textures (addon/procedural.py white_noise, magic, gabor; compiled
+in addon/export/procedurals.py) against Cycles, as tests/parity/test_procedural.py checks the others.
 
 Pointwise: Cycles renders the texture's output as emission at pixel centres (an orthographic
 view of a 4x4 plane, one sample through a 0.01 px box filter), procedural.py computes it at the
-same object coordinates; within 0.005 everywhere. White Noise hashes its input's float bits, so
+same object coordinates; within 0.005 everywhere (Gabor's Phase: but where its phase wraps from
+1 to 0 within the filter's jitter, < 0.2% of the pixels). White Noise hashes its input's float bits, so
 a point's value changes with the last bit of its coordinates: it is compared where its Vector
 (and W) come through a Mapping and a Floor, cells whose borders no pixel centre comes near, as
 a scene uses it (a random value per tile, brick or object).
@@ -91,8 +92,16 @@ def _white_noise(tex, p, output):
     return color if output == 'Color' else np.repeat(value[:, None], 3, axis=1)
 
 
-def _magic(tex, p, output, offset=(0.0, 0.0, 0.0)):
-    color = pr.magic(p + np.array(offset, np.float32), tex.inputs['Scale'].default_value, tex.turbulence_depth,
+def _gabor(tex, p, output):
+    g = {k: tex.inputs[k].default_value for k in ('Scale', 'Frequency', 'Anisotropy')}
+    dims = int(tex.gabor_type[0])
+    orientation = tex.inputs['Orientation 2D' if dims == 2 else 'Orientation 3D'].default_value
+    found = pr.gabor(p, g['Scale'], g['Frequency'], g['Anisotropy'], np.array(orientation, np.float32), dims)
+    return np.repeat(found[('Value', 'Phase', 'Intensity').index(output)][:, None], 3, axis=1)
+
+
+def _magic(tex, p, output):
+    color = pr.magic(p, tex.inputs['Scale'].default_value, tex.turbulence_depth,
                      tex.inputs['Distortion'].default_value)
     return color if output == 'Color' else np.repeat(color.mean(axis=1, keepdims=True), 3, axis=1)
 
@@ -113,6 +122,20 @@ POINTWISE = {
     'magic_depth_10': ('ShaderNodeTexMagic', 'Color', {'Scale': 0.2, 'turbulence_depth': 10,
                                                        'Distortion': 1.0}, _object_wire),
     'magic_far_wrapped': ('ShaderNodeTexMagic', 'Color', {'Scale': 1.0, 'turbulence_depth': 4}, _moved_wire),
+    'gabor_2d_value': ('ShaderNodeTexGabor', 'Value', {'gabor_type': '2D', 'Scale': 1.5, 'Frequency': 1.5},
+                       _object_wire),
+    'gabor_2d_phase': ('ShaderNodeTexGabor', 'Phase', {'gabor_type': '2D', 'Frequency': 1.0, 'Scale': 1.0,
+                                                       'Anisotropy': 0.3}, _object_wire),
+    'gabor_2d_anisotropic_intensity': ('ShaderNodeTexGabor', 'Intensity', {
+        'gabor_type': '2D', 'Scale': 1.2, 'Frequency': 1.0, 'Anisotropy': 1.0, 'Orientation 2D': 0.4}, _object_wire),
+    'gabor_3d_value': ('ShaderNodeTexGabor', 'Value', {'gabor_type': '3D', 'Scale': 1.5, 'Frequency': 1.5},
+                       _object_wire),
+    'gabor_3d_oriented_intensity': ('ShaderNodeTexGabor', 'Intensity', {
+        'gabor_type': '3D', 'Scale': 1.0, 'Frequency': 1.0, 'Anisotropy': 0.5, 'Orientation 3D': (0.3, -0.5, 0.8)},
+        _moved_wire),
+    'gabor_3d_anisotropic_value': ('ShaderNodeTexGabor', 'Value', {
+        'gabor_type': '3D', 'Scale': 1.0, 'Frequency': 1.2, 'Anisotropy': 1.0, 'Orientation 3D': (0.3, -0.5, 0.8)},
+        _object_wire),
 }
 
 
@@ -122,14 +145,19 @@ def test_texture_matches_cycles_pointwise(case, tmp_path):
     tex = _emission_plane(kind, output, dict(settings), wire)
     r = scenes.read_exr(scenes.render_exr(tmp_path / "cycles.exr"))
     cycles = np.stack([r['R'], r['G'], r['B']], -1).reshape(-1, 3)
-    p = _centres()
+    p = _centres() + (np.float32((10.0, -7.0, 3.0)) if wire is _moved_wire else np.float32(0.0))
     if kind == 'ShaderNodeTexWhiteNoise':
         mine = _white_noise(tex, p, output)
+    elif kind == 'ShaderNodeTexGabor':
+        mine = _gabor(tex, p, output)
     else:
-        mine = _magic(tex, p, output, (10.0, -7.0, 3.0) if wire is _moved_wire else (0.0, 0.0, 0.0))
+        mine = _magic(tex, p, output)
     assert np.ptp(cycles) > 0.2, "the texture should vary over the view"
     err = np.abs(mine - cycles).max(axis=1)
-    assert err.max() < 0.005, (case, float(err.max()), float(err.mean()))
+    if output == 'Phase':           # (its wrap from 1 to 0 within the filter's jitter)
+        assert np.mean(err > 0.005) < 0.002, (case, float(np.mean(err > 0.005)))
+    else:
+        assert err.max() < 0.005, (case, float(err.max()), float(err.mean()))
 
 
 # --- rendered through the add-on ------------------------------------------------------------------
@@ -157,7 +185,19 @@ def magic_generated(nt, diffuse):
     nt.links.new(mg.outputs['Color'], diffuse.inputs['Color'])
 
 
-@pytest.mark.parametrize('chain', [white_noise_tiles, magic_generated], ids=lambda c: c.__name__)
+def gabor_generated_ramp(nt, diffuse):
+    """A 3D Gabor's Value (nothing in its Vector: Generated) through a Color Ramp."""
+    gb = nt.nodes.new('ShaderNodeTexGabor')
+    gb.inputs['Scale'].default_value, gb.inputs['Frequency'].default_value = 3.0, 1.0
+    ramp = nt.nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.elements[0].color = (0.9, 0.5, 0.1, 1)
+    ramp.color_ramp.elements[1].color = (0.05, 0.2, 0.7, 1)
+    nt.links.new(gb.outputs['Value'], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], diffuse.inputs['Color'])
+
+
+@pytest.mark.parametrize('chain', [white_noise_tiles, magic_generated, gabor_generated_ramp],
+                         ids=lambda c: c.__name__)
 def test_texture_colour_renders_as_cycles(chain, tmp_path):
     sunplane.build(np.ones((1, 1, 4), np.float32), _wire(chain), RES, 16)
     dacrt, cycles = _blocks('DACRT', tmp_path), _blocks('CYCLES', tmp_path)
