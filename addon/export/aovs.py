@@ -16,7 +16,7 @@ from ..procedural import ProceduralTexels
 from . import procedurals
 from .closure import Texture
 from .images import MISSING_IMAGE
-from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
+from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 
 # Geometry > Position: world-space corner positions, interpolated as Cycles' P is on a triangle
 GEOMETRY_POSITION = 'Geometry:Position'
@@ -52,9 +52,10 @@ def varying_key(node, out, reasons):
     if t == 'NEW_GEOMETRY':
         return (GEOMETRY_POSITION, "Geometry Position") if out.name == 'Position' else (None, None)
     if t == 'ATTRIBUTE':
-        if node.attribute_type == 'OBJECT':
-            return (f"{OBJECT_INFO}{OBJECT_ATTRIBUTE}{node.attribute_name}",
-                    f"object attribute '{node.attribute_name}'")
+        if node.attribute_type in ('OBJECT', 'INSTANCER'):
+            kind = OBJECT_ATTRIBUTE if node.attribute_type == 'OBJECT' else INSTANCER_ATTRIBUTE
+            return (f"{OBJECT_INFO}{kind}{node.attribute_name}",
+                    f"{node.attribute_type.lower()} attribute '{node.attribute_name}'")
         if node.attribute_type != 'GEOMETRY':
             reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
                            f"'{node.attribute_name}' not read")

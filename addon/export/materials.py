@@ -23,7 +23,7 @@ from .imageuser import user_frame
 from .procedurals import PROCEDURAL_TYPES
 from .normalmaps import bends_normal, tangent_normal_map
 from . import procedurals
-from .objectinfo import OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
+from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 from .reflectors import (diffuse_roughness, glass_albedos, glossy_map, reflector_albedo, refraction_transmittance,
                          sheen_albedo)
 from .shadersockets import mix_factor, value_emission
@@ -173,7 +173,7 @@ class MaterialBuilder:
         build (probe values, or each corner's or object's: _build, evaluated_albedo), as a texture marked with
         the attribute's name (OBJECT_INFO + the output's, for Object Info); None where they
         are not read."""
-        if node.type == 'ATTRIBUTE' and node.attribute_type not in ('OBJECT', 'GEOMETRY'):
+        if node.type == 'ATTRIBUTE' and node.attribute_type not in ('OBJECT', 'INSTANCER', 'GEOMETRY'):
             # (said in every build: the material's final one reads no attributes)
             reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
                            f"'{node.attribute_name}' not read")
@@ -188,11 +188,12 @@ class MaterialBuilder:
             return Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
                             f"Object Info {out.name}", name)
         if node.type == 'ATTRIBUTE':
-            if node.attribute_type == 'OBJECT':
-                # one value per object: read as Object Info is, per placement
-                name = f"{OBJECT_INFO}{OBJECT_ATTRIBUTE}{node.attribute_name}"
+            if node.attribute_type in ('OBJECT', 'INSTANCER'):
+                # one value per object (per instance): read as Object Info is, per placement
+                kind = OBJECT_ATTRIBUTE if node.attribute_type == 'OBJECT' else INSTANCER_ATTRIBUTE
+                name = f"{OBJECT_INFO}{kind}{node.attribute_name}"
                 return Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
-                                f"object attribute '{node.attribute_name}'", name)
+                                f"{node.attribute_type.lower()} attribute '{node.attribute_name}'", name)
             name = node.attribute_name
         else:
             name = node.layer_name          # '' the mesh's render colour attribute, as Cycles

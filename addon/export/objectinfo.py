@@ -9,9 +9,10 @@ OBJECT_INFO = 'Object Info:'
 OBJECT_INFO_OUTPUTS = ('Random', 'Color', 'Alpha', 'Location', 'Object Index', 'Material Index')
 # an Attribute node of type Object: OBJECT_INFO + this + the attribute's name (its outputs are
 # read from the value as the evaluation reads any attribute's)
-# (type Instancer stays unread: Cycles reads Geometry Nodes instance attributes there first,
-# which Python cannot)
 OBJECT_ATTRIBUTE = 'Object Attribute:'
+# an Attribute node of type Instancer: the same, read from the instance's particle settings,
+# Geometry Nodes instance attributes and instancer first (instanceattrs)
+INSTANCER_ATTRIBUTE = 'Instancer Attribute:'
 
 
 
@@ -19,8 +20,26 @@ def object_value(info, location, output, material=None):
     """The (4,) value an Object Info output has for an object placed at `location` (3,) shading
     `material` (RGB, alpha; a number in all four, a location with alpha 1), or for an
     OBJECT_ATTRIBUTE + name output the object's attribute. info: (evaluated object, random_id,
-    is an instance, the instance's colour: an instance's object carries its instancer's)."""
-    ob, random_id, is_instance, color = info
+    is an instance, the instance's colour: an instance's object carries its instancer's, and
+    for an INSTANCER_ATTRIBUTE output (instanceattrs.InstanceSource or None, the evaluated
+    instancer))."""
+    ob, random_id, is_instance, color = info[:4]
+    if output.startswith(INSTANCER_ATTRIBUTE):
+        # Cycles (BKE_object_dupli_find_rgba_attribute with the dupli): the particle settings',
+        # the Geometry Nodes instance attribute, the instancer's, then as type Object
+        name = output[len(INSTANCER_ATTRIBUTE):]
+        source, parent = info[4] if len(info) > 4 and info[4] is not None else (None, None)
+        if source is not None:
+            v = None if source.settings is None else _rgba_attribute(source.settings, name)
+            if v is None:
+                v = source.value(name)
+            if v is not None:
+                return v
+        if parent is not None:
+            v = np.asarray(color, np.float64) if name == 'color' else _rgba_attribute(parent, name)
+            if v is not None:
+                return v
+        output = OBJECT_ATTRIBUTE + name
     if output.startswith(OBJECT_ATTRIBUTE):
         # Cycles (BKE_object_dupli_find_rgba_attribute): the object's own, then its data's;
         # none: 0. Its own 'color' is the instance's (the one property of an instance's

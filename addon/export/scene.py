@@ -15,6 +15,7 @@ from ..nodeeval import nan_inputs
 from .assembly import Assembly
 from .camera import export_camera
 from .errors import ExportCancelled
+from .instanceattrs import InstanceAttributes
 from .lights import export_light, light_link_receivers
 from .materials import MaterialBuilder
 from .meshes import mesh_arrays
@@ -85,8 +86,13 @@ class Exporter:
         self.world = effective_world(self.scene, self.layer_eval)
         # whether any shader reads Object Info: else no instance's values are gathered
         self._evaluated_of = {}
-        self._object_info = any(n.type == 'OBJECT_INFO' or (n.type == 'ATTRIBUTE' and n.attribute_type == 'OBJECT')
-                                for t in _shader_trees() for n in t.nodes)
+        nodes = [n for t in _shader_trees() for n in t.nodes]
+        self._object_info = any(n.type == 'OBJECT_INFO' or (n.type == 'ATTRIBUTE' and n.attribute_type in ('OBJECT', 'INSTANCER'))
+                                for n in nodes)
+        # whether any reads an Instancer attribute: then each instance's place in its instancers'
+        # instances is found (instanceattrs), else never
+        self._instance_attributes = InstanceAttributes(self._evaluated) \
+            if any(n.type == 'ATTRIBUTE' and n.attribute_type == 'INSTANCER' for n in nodes) else None
         self.check_break = check_break or (lambda: False)
         self.messages = []
         self.materials = MaterialBuilder(self.scene.frame_current)
@@ -238,8 +244,7 @@ class Exporter:
             # instance's object, where Cycles reads it. Read from the instancer: once
             # evaluated_get has been called for an object (Exporter._evaluated), the iterator's
             # later copies of it keep their own colour (Blender 5.0.1)
-            info = (self._evaluated(ob), inst.random_id, inst.is_instance, tuple(parent.color)) \
-                if self._object_info else None
+            info = self._info(inst, ob, parent) if self._object_info else None
             terminator = self._terminator_of.get(names[0])
             if terminator is None:
                 terminator = self._terminator_of[names[0]] = _terminator(ob)
@@ -356,7 +361,7 @@ class Exporter:
         if self.meshes[key] is None:
             return
         slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
-        info = (self._evaluated(ob), inst.random_id, inst.is_instance, tuple(parent.color))   # the emitter's, as Cycles' hair
+        info = self._info(inst, ob, parent)      # the emitter's, as Cycles' hair
         self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
                                                self._object_id(ob, parent), ob.name, info=info))
 
@@ -415,6 +420,20 @@ class Exporter:
             return None, ()
         rebuilt = tuple(m.name for m in mods if m.type not in _DEFORM_ONLY and m.type not in _NO_GEOMETRY)
         return (source if source is not mesh else None), rebuilt
+
+    def _info(self, inst, ob, parent):
+        """What Object Info and object / instancer Attribute nodes read for instance `inst` of
+        `ob` made by `parent` (objectinfo.object_value): the object, its random id, whether an
+        instance, its colour, and for Instancer attributes where it sits in its instancers'
+        instances with the instancer (None unless some shader reads one)."""
+        source = None
+        if self._instance_attributes is not None:
+            found = self._instance_attributes.source(inst, parent) if inst.is_instance else None
+            if found is not None and found.unfollowed:
+                self.ignore(f"an Attribute node of type Instancer does not read {found.unfollowed} (their "
+                            "own instancer's attributes); the outer instancers' and objects' are read", parent.name)
+            source = (found, self._evaluated(parent) if inst.is_instance else None)
+        return (self._evaluated(ob), inst.random_id, inst.is_instance, tuple(parent.color), source)
 
     def _evaluated(self, ob):
         """The depsgraph's own evaluated object for an instance's object (alive through the
