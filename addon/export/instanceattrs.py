@@ -136,26 +136,19 @@ class InstanceAttributes:
     def _level(self, ob):
         key = ob.original.as_pointer()
         if key not in self._levels:
-            ob, level = self._evaluated(ob), None
-            try:
-                geometry = ob.evaluated_geometry()
-            except (AttributeError, RuntimeError, TypeError):
-                geometry = None
+            ob, level, geometry = self._evaluated(ob), None, None
+            # (Blender's own instances only where Geometry Nodes made them: evaluated_geometry()
+            # lists a collection instance's or particles' too, under other ids)
+            if any(m.type == 'NODES' for m in getattr(ob, 'modifiers', ())):
+                try:
+                    geometry = ob.evaluated_geometry()
+                except (AttributeError, RuntimeError, TypeError):
+                    geometry = None
             if geometry is not None:
                 level = InstancesLevel(geometry, ob.type)
                 if level.points is None:
                     level = None
             self._levels[key] = level
-        return self._levels[key]
-
-    def _makes_instances(self, parent):
-        """Whether an object of the collection `parent` instances makes Geometry Nodes instances
-        (whose attributes this walk does not reach: a collection's member order is not exposed)."""
-        coll = getattr(parent, 'instance_collection', None) if parent.instance_type == 'COLLECTION' else None
-        key = ('collection', parent.original.as_pointer())
-        if key not in self._levels:
-            self._levels[key] = coll is not None and any(
-                self._level(o) is not None for o in coll.all_objects if o.type in ('MESH', 'CURVE', 'POINTCLOUD', 'CURVES'))
         return self._levels[key]
 
     def source(self, inst, parent):
@@ -166,35 +159,56 @@ class InstanceAttributes:
         psys = getattr(inst, 'particle_system', None)
         settings = getattr(psys, 'settings', None) if psys is not None else None
         ids = [p for p in inst.persistent_id if p != _UNSET][::-1]      # outermost first
-        stack, unfollowed = [], None
-        level = self._level(parent) if settings is None else None
-        if level is None and settings is None and len(ids) > 1 and self._makes_instances(parent):
-            unfollowed = f"instances made by an object in the collection '{parent.name}' instances"
-        while level is not None and ids:
+        stack = []
+        unfollowed = self._walk_object(parent, ids, stack) if ids else None
+        return InstanceSource(settings, stack[::-1], unfollowed)
+
+    def _walk_object(self, ob, ids, stack):
+        """Follow the duplis object `ob` makes (Blender's get_dupli_generator: its Geometry Nodes
+        instances first, then a collection instance) down `ids`, pushing (level, index) on
+        `stack`; what it could not follow, or None."""
+        level = self._level(ob)
+        if level is not None:
+            return self._walk_level(level, ids, stack)
+        coll = getattr(ob, 'instance_collection', None) if getattr(ob, 'instance_type', '') == 'COLLECTION' else None
+        if coll is None or len(ids) < 2:
+            return None                  # particles, vertices, faces: no instance attributes
+        # make_duplis_collection: each member's dupli and its own duplis under its place in the
+        # collection's object cache (all_objects)
+        members = coll.all_objects
+        if not 0 <= ids[0] < len(members):
+            return f"instances made inside the collection '{coll.name}'"
+        return self._walk_object(members[ids[0]], ids[1:], stack)
+
+    def _walk_level(self, level, ids, stack):
+        while ids:
             if level.components:
                 # its own components' duplis take ids 0..n-1, its instances sit one level down
                 if len(ids) == 1 or ids[0] != level.components:
-                    break
+                    return None
                 ids = ids[1:]
             index = level.index(ids[0])
             if index is None:
-                unfollowed = "an instance id its instancer's geometry does not list"
-                break
+                return "an instance id its instancer's geometry does not list"
             stack.append((level, index))
             ids = ids[1:]
             if not ids:
-                break
+                return None
             kind, ref = level.reference(index)
             if kind == 'geometry':
                 level = ref
             elif kind == 'object':
-                # the object's own instances (its Geometry Nodes), ids from here on its dupli's
-                level = self._level(ref)
-                if level is None:
-                    unfollowed = f"instances made by '{ref.name}' inside an instance"
+                # the object's own duplis, under the same id
+                return self._walk_object(ref, ids, stack)
+            elif kind == 'collection':
+                # a collection's members: ids 2k the k-th one's dupli, 2k + 1 its own duplis
+                if len(ids) < 2 or ids[0] % 2 == 0:
+                    return None
+                members = [o for o in ref.all_objects if not o.hide_render]
+                k = ids[0] // 2
+                if k >= len(members):
+                    return f"instances made inside the collection '{ref.name}'"
+                return self._walk_object(members[k], ids[1:], stack)
             else:
-                # a collection's members (ids 0, 2, .. the members, 1, 3, .. what they instance)
-                if kind == 'collection' and len(ids) > 1:
-                    unfollowed = f"instances made by a member of collection '{ref.name}' inside an instance"
-                level = None
-        return InstanceSource(settings, stack[::-1], unfollowed)
+                return None
+        return None

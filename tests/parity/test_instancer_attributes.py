@@ -234,12 +234,86 @@ def test_geometry_nodes_instance_attributes_match_cycles(tmp_path, said):
     imgs = render_both(sc, tmp_path)
     c = np.array([at(imgs['CYCLES'], x, y) for x, y in cells])
     d = np.array([at(imgs['DACRT'], x, y) for x, y in cells])
-    import os
-    if os.environ.get('SHOW'):
-        for cell, a, b in zip(cells, c, d):
-            print(cell, a.round(4), b.round(4))
-        np.save('/tmp/wt_instancer/scratch/img.npy', np.concatenate([imgs['CYCLES'], imgs['DACRT']], axis=1))
     assert len({tuple(np.round(v, 2)) for v in c}) >= 12, c.round(3).tolist()     # they differ
     assert np.abs(c - d).max() < 2e-3, (np.abs(c - d).max(axis=1).round(4).tolist(), c.round(3).tolist(),
                                         d.round(3).tolist())
     assert not [s for s in said if 'instancer attribute' in s and 'not read' in s], said
+
+
+def ids_of(ng, index):
+    """7 - 3 (index % 2): the ids 7, 4, 7 (the third collides: Blender gives it a random one)"""
+    m = ng.nodes.new('ShaderNodeMath')
+    m.operation = 'MULTIPLY_ADD'
+    m.inputs[1].default_value, m.inputs[2].default_value = -3.0, 7.0
+    ng.links.new(odd_of(ng, index), m.inputs[0])
+    return m.outputs[0]
+
+
+def test_collection_particle_and_id_instances_match_cycles(tmp_path):
+    """Collection instances read the instancer's property (an empty's 'icol'), else the
+    member's own, else 0; particle instances the particle settings' property; Geometry Nodes
+    instances with an 'id' attribute (7, 4, 7: the third collides) their own colours; the Alpha
+    of a name nowhere (Cycles: 0, not 1) and of a stored colour (1); a Geometry Nodes instancer
+    inside a collection instance (its attribute before the empty's property) and inside a
+    Collection Info instance (the inner instancer's before the outer's)."""
+    sc = fresh()
+    col = instancer_material("Col", 'icol')
+    members = []
+    for i, (x, own) in enumerate(((-1.5, (0.1, 0.1, 0.1)), (-1.0, (0.9, 0.5, 0.2)), (-0.5, None))):
+        coll = bpy.data.collections.new(f"C{i}")
+        m = quad(f"Member{i}", location=(0, 0, 0), materials=(col,))
+        sc.collection.objects.unlink(m)
+        coll.objects.link(m)
+        if own is not None:
+            m['icol'] = own
+        e = bpy.data.objects.new(f"Empty{i}", None)
+        e.instance_type, e.instance_collection = 'COLLECTION', coll
+        e.location = (x, 1.25, 0)
+        sc.collection.objects.link(e)
+        members.append(e)
+    members[0]['icol'] = (0.3, 0.5, 0.9)              # the instancer's, before the member's
+    # particles: one on each of three vertices, the instanced quad at size 1
+    emitter = scenes.mesh("Emitter", [(x, 0.75, 0) for x in XS], [])
+    ps = emitter.modifiers.new("P", 'PARTICLE_SYSTEM').particle_system.settings
+    ps.count, ps.frame_start, ps.frame_end, ps.lifetime = 3, 1, 1, 100
+    ps.emit_from, ps.use_emit_random, ps.physics_type = 'VERT', False, 'NO'
+    ps.render_type, ps.instance_object, ps.particle_size = 'OBJECT', quad("PartSrc", materials=(col,)), 1.0
+    ps['icol'] = (0.8, 0.4, 0.6)
+    ps.normal_factor = 0.0
+    emitter.show_instancer_for_render = False
+    src = quad("Src", materials=(col,))
+    instancer("Ids", [(x, 0.25, 0) for x in XS], src, [('id', 'INT', ids_of), ('icol', 'FLOAT_COLOR', colour_of)])
+    alpha_src = quad("AlphaSrc", materials=(instancer_material("Missing", 'nowhere', 'Alpha'),))
+    instancer("Alphas", [(-1.5, -0.25, 0)], alpha_src, [('icol', 'FLOAT_COLOR', colour_of)])
+    present = quad("PresentSrc", materials=(instancer_material("Present", 'icol', 'Alpha'),))
+    instancer("Present", [(-1.0, -0.25, 0)], present, [('icol', 'FLOAT_COLOR', colour_of)])
+    # a Geometry Nodes instancer inside a collection instance (an empty with its own 'icol':
+    # the inner instancer's attribute comes first)
+    inner = instancer("InnerGN", [(x, 0, 0) for x in XS], src, [('icol', 'FLOAT_COLOR', colour_of)])
+    sc.collection.objects.unlink(inner)
+    held = bpy.data.collections.new("Held")
+    held.objects.link(inner)
+    e = bpy.data.objects.new("HeldEmpty", None)
+    e.instance_type, e.instance_collection, e.location = 'COLLECTION', held, (0, -0.75, 0)
+    e['icol'] = (0.5, 0.5, 0.5)
+    sc.collection.objects.link(e)
+    # ... and inside a collection a Geometry Nodes Collection Info instances (whose own
+    # instances store another colour)
+    deep = instancer("DeepGN", [(x, 0, 0) for x in (0.5, 1.0, 1.5)], src, [('icol', 'FLOAT_COLOR', colour_of)])
+    sc.collection.objects.unlink(deep)
+    deep_coll = bpy.data.collections.new("Deep")
+    deep_coll.objects.link(deep)
+    outer = instancer("ByCollection", [(0, -1.25, 0)], src, [('icol', 'FLOAT_COLOR', vector_of)])
+    ng = outer.modifiers[0].node_group
+    ci = ng.nodes.new('GeometryNodeCollectionInfo')
+    ci.inputs['Collection'].default_value = deep_coll
+    iop = next(n for n in ng.nodes if n.bl_idname == 'GeometryNodeInstanceOnPoints')
+    ng.links.new(ci.outputs[0], iop.inputs['Instance'])
+    cells = [(x, y) for y in (1.25, 0.75, 0.25) for x in XS] + [(-1.5, -0.25), (-1.0, -0.25)]
+    cells += [(x, -0.75) for x in XS] + [(x, -1.25) for x in (0.5, 1.0, 1.5)]
+    imgs = render_both(sc, tmp_path)
+    c = np.array([at(imgs['CYCLES'], x, y) for x, y in cells])
+    d = np.array([at(imgs['DACRT'], x, y) for x, y in cells])
+    assert len({tuple(np.round(v, 2)) for v in c}) >= 8, c.round(3).tolist()
+    assert np.abs(c - d).max() < 2e-3, (np.abs(c - d).max(axis=1).round(4).tolist(), c.round(3).tolist(),
+                                        d.round(3).tolist())
