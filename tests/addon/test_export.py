@@ -2759,15 +2759,18 @@ def test_curves_attributes_are_read_per_point_and_per_curve(scene, exported):
     assert np.allclose(g.colors[sel][x < 1][..., :3], [0.2, 0.4, 0.6]) and np.allclose(g.colors[sel][x > 1][..., :3], [0.9, 0.1, 0.3])
 
 
-def test_an_instancer_attribute_is_named_in_the_report(scene, exported):
-    """An Attribute node of type Instancer (Geometry Nodes instance attributes, which Python
-    cannot read) is reported by name, not only as a node whose own value is used."""
+def test_an_instancer_attribute_of_an_object_of_its_own_reads_its_property(scene, exported):
+    """An Attribute node of type Instancer on an object that is no instance reads the object's
+    own property, as Cycles (it had been reported 'not read'; Geometry Nodes instances:
+    tests/addon/test_instancer_attributes.py)."""
     setup(scene)
     mat = _attribute_material("MInst", 'ShaderNodeAttribute', attribute='col')
     next(n for n in mat.node_tree.nodes if n.type == 'ATTRIBUTE').attribute_type = 'INSTANCER'
-    scenes.plane("P", materials=(mat,))
-    m = {m.name: m for m in exported().materials}["MInst"]
-    assert "instancer attribute 'col' not read" in m.approximated, m.approximated
+    scenes.plane("P", materials=(mat,))['col'] = (0.7, 0.3, 0.1)
+    data = exported()
+    m = {m.name: m for m in data.materials}["MInst"]
+    assert "not read" not in m.approximated, m.approximated
+    assert np.allclose(data.geometry.colors[of_object(data, "P")][..., :3], (0.7, 0.3, 0.1), atol=1e-6)
 
 
 def test_colour_attributes_per_corner(scene, exported):
