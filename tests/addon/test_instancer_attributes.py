@@ -3,7 +3,6 @@ Geometry Nodes instance's albedo is the chain after the node evaluated on its ow
 attribute, nothing is reported for it, an AOV reading it writes each instance's value, and the
 instance ids Blender gives colliding 'id' values are matched in order. Renders against Cycles:
 tests/parity/test_instancer_attributes.py."""
-import bpy
 import numpy as np
 import pytest
 
