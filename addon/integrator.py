@@ -403,12 +403,13 @@ class Integrator:
         transmit_env = None if self.transparent else self._glass_env
         self._env_apart = self._any_glass and transmit_env is not self._camera_env
         self._transmit_env = transmit_env if self._env_apart else None
+        # each light named once (an instanced lamp's 5000 copies had been 5000 names in 34 lines)
         if self.lights.skipped_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
-                                          f"strength: {', '.join(self.lights.skipped_lamps)}"))
+                                          f"strength: {', '.join(dict.fromkeys(self.lights.skipped_lamps))}"))
         if self.lights.unseen_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.unseen_lamps)} light(s) that neither camera "
-                                          f"nor diffuse rays can see: {', '.join(self.lights.unseen_lamps)}"))
+                                          f"nor diffuse rays can see: {', '.join(dict.fromkeys(self.lights.unseen_lamps))}"))
         # Native lamp records (dacrt.lamps): the lamps light sampling may choose (0..nl-1), then
         # those only BSDF and camera rays find (the world), then those only camera rays see.
         # Record index lists per ray kind, for lamp_gather.

@@ -163,15 +163,35 @@ class Assembly:
             geometry.visibility &= keep[geometry.material]
         return geometry
 
+    def _users(self, wanted):
+        """{material index: the placements showing it} for the materials in `wanted`, in one
+        pass over the placements (one scan per material had made the export quadratic in
+        Object Info materials x objects: 150 s for 4000 x 4000, Cycles ~1 s), polling Esc."""
+        users = {k: [] for k in wanted}
+        if not users:
+            return users
+        n = 0
+        for places in self.placements.values():
+            for p in places:
+                n += 1
+                if n % 1024 == 0 and self.check_break():
+                    raise ExportCancelled()
+                if p.slot_map is not None:
+                    for k in set(np.asarray(p.slot_map).ravel().tolist()) & users.keys():
+                        users[k].append(p)
+        return users
+
     def _object_info_albedos(self):
         """Each placement's albedo for the Object Info materials it shows: per material, one
         evaluation over all its placements' values (MaterialBuilder.evaluated_albedo)."""
         maps = self.materials.attribute_maps
+        by_material = self._users({k for k, e in enumerate(maps) if e is not None and e[0] == 'object'})
         for k, entry in enumerate(maps):
             if entry is None or entry[0] != 'object':
                 continue
-            users = [p for places in self.placements.values() for p in places
-                     if p.slot_map is not None and k in p.slot_map]
+            if self.check_break():
+                raise ExportCancelled()
+            users = by_material[k]
             if not users:
                 continue
             albedo = self.materials.evaluated_albedo(k, np.stack([p.object_info(entry[1], entry[2]) for p in users]))
@@ -183,10 +203,12 @@ class Assembly:
         attribute) in the materials it shows (Placement.object_aovs): per input, one evaluation
         over all its placements' values (MaterialBuilder.evaluated_aov)."""
         self._aov_varying = {k for k, e in enumerate(self.materials.aov_maps) if e is not None}
+        by_material = self._users(self._aov_varying)
         for k in sorted(self._aov_varying):
+            if self.check_break():
+                raise ExportCancelled()
             mat, varying = self.materials.aov_maps[k]
-            users = [p for places in self.placements.values() for p in places
-                     if p.slot_map is not None and k in p.slot_map]
+            users = by_material[k]
             for (name, kind), entries in varying.items():
                 for i, entry in enumerate(entries):
                     key = entry[2]
@@ -383,6 +405,10 @@ class Assembly:
         attributed, coordinated, varying = self._attributed, self._coordinated, self._aov_varying
         per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated or varying
         for i, p in enumerate(places if per_placement else ()):
+            # (~30-170 us a placement in Python: 100K normal-mapped instances had kept Esc
+            # waiting 17 s)
+            if i % 2048 == 2047 and self.check_break():
+                raise ExportCancelled()
             S = slice(t0 + i * nt, t0 + (i + 1) * nt)
             if out.uvs is not None:
                 if a.corner_uvs is None:
