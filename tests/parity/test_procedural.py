@@ -28,8 +28,10 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 W = 48
 
 
-def _emission_plane(texture_type, output, settings):
-    """The scene: a 4x4 plane (object coordinates -2..2) emitting texture_type's output."""
+def _emission_plane(texture_type, output, settings, wire=None):
+    """The scene: a 4x4 plane (object coordinates -2..2) emitting texture_type's output; wire(nt,
+    texture coordinate node, texture node) links the texture's inputs instead of Object
+    coordinates (moved by settings' 'offset')."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     mat, nt, out = scenes._material("Emitter")
@@ -42,7 +44,9 @@ def _emission_plane(texture_type, output, settings):
             tex.inputs[k].default_value = v
         else:
             setattr(tex, k, v)
-    if offset is None:
+    if wire is not None:
+        wire(nt, tc, tex)
+    elif offset is None:
         nt.links.new(tc.outputs['Object'], tex.inputs['Vector'])
     else:                               # the coordinates moved far from the origin
         m = nt.nodes.new('ShaderNodeMapping')

@@ -12,7 +12,6 @@ a scene uses it (a random value per tile, brick or object).
 Rendered: a sun-lit plane whose Diffuse colour comes from each texture, both engines, 8x8 block
 means within 2.5% of the brightest block. Before, the nodes' own values stood in (reported).
 """
-import bpy
 import numpy as np
 import pytest
 
@@ -20,7 +19,7 @@ from addon import procedural as pr
 from tests.addon import scenes
 
 from . import sunplane
-from .test_procedural import BLOCK, RES, W, _blocks, _centres, _wire
+from .test_procedural import BLOCK, RES, _blocks, _centres, _emission_plane, _wire
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -37,31 +36,6 @@ def _floored_cells(nt, tc):
     nt.links.new(tc.outputs['Object'], m.inputs['Vector'])
     nt.links.new(m.outputs[0], fl.inputs[0])
     return fl.outputs[0]
-
-
-def _emission_plane(texture_type, output, settings, wire):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    mat, nt, out = scenes._material("Emitter")
-    em = nt.nodes.new('ShaderNodeEmission')
-    tc = nt.nodes.new('ShaderNodeTexCoord')
-    tex = nt.nodes.new(texture_type)
-    for k, v in settings.items():
-        if k in tex.inputs:
-            tex.inputs[k].default_value = v
-        else:
-            setattr(tex, k, v)
-    wire(nt, tc, tex)
-    nt.links.new(tex.outputs[output], em.inputs['Color'])
-    nt.links.new(em.outputs[0], out.inputs['Surface'])
-    scenes.plane("Plane", size=4.0, materials=(mat,))
-    scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=4.0)
-    scenes.black_world()
-    sc.render.engine = 'CYCLES'
-    sc.render.resolution_x = sc.render.resolution_y = W
-    sc.cycles.samples, sc.cycles.use_denoising, sc.cycles.max_bounces = 1, False, 0
-    sc.cycles.pixel_filter_type, sc.cycles.filter_width = 'BOX', 0.01
-    return tex
 
 
 def _white_noise_wire(nt, tc, tex):
