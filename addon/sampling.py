@@ -32,7 +32,7 @@ _INV32 = 1.0 / 2.0 ** 32
 _REV8 = np.array([int(f"{i:08b}"[::-1], 2) for i in range(256)], np.uint32)
 
 
-def _mix64_scalar(x: int) -> int:
+def mix64_scalar(x: int) -> int:
     """splitmix64 finaliser on a Python int (a bijection of 64-bit words)."""
     x &= _M64
     x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _M64
@@ -101,8 +101,8 @@ class RandomStream:
 
     def __init__(self, seed: int):
         self.seed = int(seed)
-        self._k0 = _mix64_scalar(self.seed * 0x9E3779B97F4A7C15 + 0x632BE59BD9B4E019)
-        self._k1 = _mix64_scalar(self._k0 + 0xD1B54A32D192ED03)
+        self._k0 = mix64_scalar(self.seed * 0x9E3779B97F4A7C15 + 0x632BE59BD9B4E019)
+        self._k1 = mix64_scalar(self._k0 + 0xD1B54A32D192ED03)
 
     def path_keys(self, pixel: np.ndarray, sample: np.ndarray) -> np.ndarray:
         """(2, n) uint32 keys per path: the pixel's seed and the sample index; pixel and
@@ -133,7 +133,7 @@ class RandomStream:
     def dim_words(self, dim: int):
         """The two 32-bit words that name dimension pair `dim` (for the native kernels, which
         turn them into sample words exactly as _words does)."""
-        h = _mix64_scalar(self._k1 ^ _mix64_scalar(int(dim) + 0x2545F4914F6CDD1D))
+        h = mix64_scalar(self._k1 ^ mix64_scalar(int(dim) + 0x2545F4914F6CDD1D))
         return _U32(h & _M32), _U32(h >> 32)
 
     def uniform2(self, keys: np.ndarray, dim: int):

@@ -9,6 +9,7 @@ import bpy
 from .. import scenedata as sd
 from ..cryptomatte import KINDS as CRYPTO_KINDS
 from ..passes import PASSES, enabled, result_name
+from ..sampling import mix64_scalar
 from .errors import ExportError
 
 # View-layer passes Cycles renders and DACRT does not: (settings owner, toggle, label); owner ''
@@ -42,23 +43,13 @@ def layer_samples(scene, vl, samples):
     return min(layer, samples) if mode == 'BOUNDED' else layer
 
 
-def _fmix32(x):
-    """MurmurHash3's 32-bit finaliser on a Python int."""
-    x &= 0xFFFFFFFF
-    x ^= x >> 16
-    x = (x * 0x85EBCA6B) & 0xFFFFFFFF
-    x ^= x >> 13
-    x = (x * 0xC2B2AE35) & 0xFFFFFFFF
-    return x ^ (x >> 16)
-
-
 def frame_seed(seed, frame, subframe=0.0):
     """The seed of a frame under Use Animated Seed (Cycles hashes the frame with the seed, and a
     subframe too): the seed, frame and subframe mixed into 0 .. 2^31 - 1, the same for the same
     frame on every render."""
-    h = _fmix32(_fmix32(int(seed) ^ 0x9E3779B9) ^ (int(frame) & 0xFFFFFFFF))
+    h = mix64_scalar(mix64_scalar(int(seed) + 0x9E3779B97F4A7C15) ^ (int(frame) & 0xFFFFFFFF))
     if subframe:
-        h = _fmix32(h ^ int(float(subframe) * 0x7FFFFFFF))
+        h = mix64_scalar(h ^ int(float(subframe) * 0x7FFFFFFF))
     return h & 0x7FFFFFFF
 
 
