@@ -66,6 +66,17 @@ def heap_in_use():
     return int(info.uordblks) + int(info.hblkhd)
 
 
+def heap_free():
+    """Bytes of free blocks the C heap holds (glibc's mallinfo2 fordblks), 0 where that cannot
+    be read: memory a frame gets back without asking the system (a held heap keeps the previous
+    frame's, which the system does not count as available)."""
+    fn = getattr(_LIBC, 'mallinfo2', None) if _LIBC is not None else None
+    if fn is None:
+        return 0
+    fn.restype = _MallInfo2
+    return int(fn().fordblks)
+
+
 def _status_kb(field):
     try:
         with open('/proc/self/status') as f:

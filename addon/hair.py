@@ -25,6 +25,9 @@ import numpy as np
 # 16 sides 0.5%, 32 sides 0.3%.
 LEVELS = ((20_000, 16, 4), (100_000, 8, 2), (500_000, 6, 1))
 FEWEST = (4, 1)
+# every level from the finest down: below FEWEST only when the frame would not fit in memory
+# (export/budget.py)
+LADDER = ((16, 4), (8, 2), (6, 1), (4, 1), (3, 1))
 DEFAULT_RADIUS = 0.005     # Cycles' radius for curves without a 'radius' attribute
 
 
@@ -33,6 +36,14 @@ def level_for(points: int) -> tuple:
         if points <= most:
             return sides, steps
     return FEWEST
+
+
+def triangle_count(offsets, level: tuple, linear: bool = False) -> int:
+    """The most triangles tubes() makes of curves with these offsets at `level` (fewer where a
+    radius is 0)."""
+    n = np.diff(np.asarray(offsets, np.int64))
+    sides, steps = level
+    return int((n[n >= 2] - 1).sum()) * (1 if linear else steps) * sides * 2
 
 
 def _catmull_rom(p0, p1, p2, p3, u):

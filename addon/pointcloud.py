@@ -18,6 +18,9 @@ import numpy as np
 # the 20-face icosahedron beyond 50K points; a cloud costs at most ~4M triangles up to 200K points
 # (then 20 a point)
 LEVELS = ((3_000, 3), (12_000, 2), (50_000, 1))
+# every level from the finest down: below level_for's floor only when the frame would not fit in
+# memory (export/budget.py); -1 is the octahedron (8 triangles)
+LADDER = (3, 2, 1, 0, -1)
 DEFAULT_RADIUS = 0.01      # Cycles' radius for a point cloud without a 'radius' attribute
 
 
@@ -31,7 +34,13 @@ def level_for(n: int) -> int:
 @lru_cache(maxsize=None)
 def unit_sphere(level: int):
     """(vertices (v, 3) on the unit sphere, triangles (t, 3) wound outward, area scale): an
-    icosphere of `level` subdivisions and the factor that gives it the unit sphere's area."""
+    icosphere of `level` subdivisions (-1: the octahedron) and the factor that gives it the unit
+    sphere's area."""
+    if level < 0:
+        v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], np.float64)
+        t = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]],
+                     np.int32)
+        return v, t, float(np.sqrt(4.0 * np.pi / (8 * 0.5 * np.sqrt(3.0))))
     p = (1.0 + 5.0 ** 0.5) / 2.0
     v = np.array([[-1, p, 0], [1, p, 0], [-1, -p, 0], [1, -p, 0], [0, -1, p], [0, 1, p],
                   [0, -1, -p], [0, 1, -p], [p, 0, -1], [p, 0, 1], [-p, 0, -1], [-p, 0, 1]], np.float64)
@@ -52,6 +61,11 @@ def unit_sphere(level: int):
     e1, e2 = v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]
     area = 0.5 * np.linalg.norm(np.cross(e1, e2), axis=1).sum()
     return v, t.astype(np.int32), float(np.sqrt(4.0 * np.pi / area))
+
+
+def triangle_count(radii, level: int) -> int:
+    """The triangles spheres() makes of points of these radii at `level`."""
+    return int(np.count_nonzero(np.asarray(radii) > 0)) * len(unit_sphere(level)[1])
 
 
 def spheres(positions, radii, level: int | None = None):

@@ -10,11 +10,13 @@ import functools
 import bpy
 import numpy as np
 
+from .. import hair, pointcloud
 from .. import scenedata as sd
 from ..nodeeval import nan_inputs
+from . import budget
 from .assembly import Assembly
 from .camera import export_camera
-from .errors import ExportCancelled
+from .errors import ExportCancelled, ExportError
 from .instanceattrs import InstanceAttributes
 from .lights import export_light, light_link_receivers
 from .materials import MaterialBuilder
@@ -22,7 +24,8 @@ from .meshes import mesh_arrays
 from .placement import Placement
 from .aovs import shader_aovs
 from .settings import export_settings
-from .strands import StrandSource, hair_arrays, hair_systems, read_strands, tessellate
+from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, strand_kind, tessellate,
+                      triangle_count)
 from .world import effective_world, export_world, world_visibility
 
 # object types that render as geometry (curves, surfaces, text, metaballs through their mesh)
@@ -375,17 +378,45 @@ class Exporter:
 
     def _tessellate_strands(self):
         """Tessellate the point clouds, Curves and hair particles read in the walk, at the level
-        for all the points of their kind (spheres, tubes) in the frame, instances included."""
+        for all the points of their kind (spheres, tubes) in the frame, instances included, or
+        coarser where the frame would not fit in memory (budget.py): then the biggest are left
+        out, named; a frame whose meshes alone do not fit is refused."""
         sources = {k: m for k, m in self.meshes.items() if isinstance(m, StrandSource)}
-        frame_points = {}               # spheres, and tubes (Curves objects and hair particles)
-        budget = lambda src: 'spheres' if src.kind == 'POINTCLOUD' else 'tubes'
+        mesh_triangles = sum(len(m.triangles) * len(self.placements[k]) for k, m in self.meshes.items()
+                             if m is not None and k not in sources)
+        available = budget.available_bytes()
+        if available is not None and mesh_triangles * budget.MESH_BYTES > available:
+            raise ExportError(f"the frame's meshes make {mesh_triangles:,} triangles (each instance's copied: "
+                              f"DACRT has no instancing), about {budget.gigabytes(mesh_triangles * budget.MESH_BYTES)} "
+                              f"to render, more than the {budget.gigabytes(available)} of memory available; "
+                              "fewer instances, Simplify or a smaller Max Subdivision lower it")
+        frame_points = {'spheres': 0, 'tubes': 0}
         for key, src in sources.items():
-            b = budget(src)
-            frame_points[b] = frame_points.get(b, 0) + len(src.positions) * len(self.placements[key])
+            frame_points[strand_kind(src)] += len(src.positions) * len(self.placements[key])
+        start = {'spheres': pointcloud.level_for(frame_points['spheres']),
+                 'tubes': hair.level_for(frame_points['tubes'])}
+        ladders = {'spheres': pointcloud.LADDER, 'tubes': hair.LADDER}
+        plan = [budget.Strands(key, strand_kind(src), functools.partial(triangle_count, src),
+                               len(self.placements[key])) for key, src in sources.items()]
+        levels, dropped = budget.fit(mesh_triangles, plan, start, ladders, available)
+        room = f"the {budget.gigabytes(available)} of memory available" if available is not None else ""
+        for s in dropped:
+            src = sources[s.key]
+            what = (f"a point cloud of {len(src.positions):,} points" if src.kind == 'POINTCLOUD' else
+                    f"{'hair particles' if src.kind == 'HAIR' else 'hair curves'} of {len(src.offsets) - 1:,} strands")
+            self.skip(f"{what}, even at the coarsest tessellation ({s.triangles_at(levels[s.kind]) * s.copies:,} "
+                      f"triangles, about {budget.gigabytes(s.need(levels[s.kind]))}), does not fit with the rest of "
+                      f"the frame in {room}", src.name)
+            self.meshes[s.key] = None
+            del self.placements[s.key]
         for key, src in sources.items():
+            if self.meshes[key] is None:
+                continue
             if self.check_break():
                 raise ExportCancelled()
-            arrays = tessellate(src, frame_points[budget(src)], self)
+            kind = strand_kind(src)
+            why = f", coarser than usual to fit the frame in {room}" if levels[kind] != start[kind] else ""
+            arrays = tessellate(src, levels[kind], self, why)
             if arrays is None:
                 self.meshes[key] = None
                 del self.placements[key]

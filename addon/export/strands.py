@@ -192,14 +192,25 @@ def read_strands(ob, notes):
     return src
 
 
-def tessellate(src, frame_points, notes):
-    """A StrandSource's spheres or tubes (pointcloud.py, hair.py) as mesh arrays in object
-    space at the level for frame_points (the points of its kind in the frame, instances
-    included), or None when nothing in it has a size. Cycles shades point clouds and Curves
-    with the first material slot, hair particles with their systems'; the tessellation is
-    reported once per object through notes.ignore."""
+def strand_kind(src):
+    """The tessellation a StrandSource gets: 'spheres' (point clouds) or 'tubes'."""
+    return 'spheres' if src.kind == 'POINTCLOUD' else 'tubes'
+
+
+def triangle_count(src, level):
+    """The triangles tessellate() makes of a StrandSource at `level` (at most, for tubes)."""
     if src.kind == 'POINTCLOUD':
-        level = pointcloud.level_for(frame_points)
+        return pointcloud.triangle_count(src.radii, level)
+    return hair.triangle_count(src.offsets, level, src.linear)
+
+
+def tessellate(src, level, notes, why=''):
+    """A StrandSource's spheres or tubes (pointcloud.py, hair.py) as mesh arrays in object
+    space at `level` (the kind's: for the points of its kind in the frame, instances included,
+    or coarser for memory, `why` saying so), or None when nothing in it has a size. Cycles
+    shades point clouds and Curves with the first material slot, hair particles with their
+    systems'; the tessellation is reported once per object through notes.ignore."""
+    if src.kind == 'POINTCLOUD':
         v, t, n, kept = pointcloud.spheres(src.positions, src.radii, level)
         # each sphere vertex's point (spheres keeps the points of radius > 0, in order)
         point = np.repeat(np.flatnonzero(np.asarray(src.radii) > 0), len(pointcloud.unit_sphere(level)[0]))
@@ -210,7 +221,7 @@ def tessellate(src, frame_points, notes):
         if kept < len(src.positions):
             notes.ignore("points of radius 0 or less are not rendered", src.name)
     else:       # Curves objects and hair particles
-        sides, steps = hair.level_for(frame_points)
+        sides, steps = level
         v, t, n, kept, tri_curve, (key, u) = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps),
                                                          curve_of=True, linear=src.linear, vertex_keys=True)
         curve = np.searchsorted(src.offsets, key, side='right') - 1
@@ -227,7 +238,7 @@ def tessellate(src, frame_points, notes):
                 + ", open ends")
         if kept < len(src.offsets) - 1:
             notes.ignore("curves of fewer than 2 points are not rendered", src.name)
-    notes.ignore(what, src.name)
+    notes.ignore(what + why, src.name)
     if not len(t):
         return None
     layers, active = src.uv_maps

@@ -456,6 +456,7 @@ def test_points_and_curves_generated_coordinates_are_object_space(scene):
     """Cycles' Generated coordinates of a point cloud's spheres and a Curves object's tubes are
     their object-space positions (a Gradient along x on three points at -1.2, 0, 1.2 reads 0,
     0.03, 1 there; mapping the tessellation's bounds to 0..1 had read 0.15, 0.49, 0.84)."""
+    from addon import hair, pointcloud
     from addon.export import strands
 
     class Notes:
@@ -467,7 +468,8 @@ def test_points_and_curves_generated_coordinates_are_object_space(scene):
     for inst in bpy.context.evaluated_depsgraph_get().object_instances:
         if inst.object.type in ('POINTCLOUD', 'CURVES'):     # the cloud: a GN output instance
             src = strands.read_strands(inst.object, Notes())
-            coords = strands.tessellate(src, len(src.positions), Notes()).corner_coordinates()
+            level = (pointcloud if src.kind == 'POINTCLOUD' else hair).level_for(len(src.positions))
+            coords = strands.tessellate(src, level, Notes()).corner_coordinates()
             assert np.allclose(coords[..., :3], coords[..., 3:6], atol=1e-6), inst.object.name
             seen.append(inst.object.type)
     assert sorted(seen) == ['CURVES', 'POINTCLOUD'] and cloud and fur
