@@ -577,12 +577,12 @@ REPORT_LIMIT = 900
 
 
 def _report_chunks(text: str, limit: int = REPORT_LIMIT) -> list:
-    """text in parts of at most `limit` bytes (UTF-8), cut after '; ' where one is, else hard."""
+    """text in parts of at most `limit` bytes (UTF-8), cut after '; ' where one is, else after
+    ', ' (a list of names), else hard."""
     parts = []
     while len(text.encode('utf-8')) > limit:
         head = text.encode('utf-8')[:limit].decode('utf-8', errors='ignore')
-        cut = head.rfind('; ')
-        cut = cut + 2 if cut > limit // 4 else len(head)
+        cut = next((c + 2 for c in (head.rfind('; '), head.rfind(', ')) if c > limit // 4), len(head))
         parts.append(text[:cut].rstrip())
         text = text[cut:]
     return parts + [text]

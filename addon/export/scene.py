@@ -565,13 +565,21 @@ class Exporter:
                                              "converts image colour spaces and computes RGB to BW and "
                                              "Blackbody in Linear Rec.709 primaries, so those colours differ "
                                              "from Cycles'; constant and float colours are as Cycles has them"))
-        approx = [f"'{m.name}' ({m.approximated})" for m in self.materials.materials if m.approximated]
+        # materials of one reason named together (500 default Principled materials had made 56
+        # report lines of the same words)
+        by_reason = {}
+        for m in self.materials.materials:
+            if m.approximated:
+                by_reason.setdefault(m.approximated, []).append(f"'{m.name}'")
+        approx = [f"{', '.join(names)} ({reason})" for reason, names in by_reason.items()]
+        count = sum(len(names) for names in by_reason.values())
         if len(geometry.material) and not geometry.material.all():     # material 0 is in use
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "
                              "BSDF: specular layer as diffuse)")
+            count += 1
         if approx:
             # (not "as diffuse": a reason may be about an emission's colour, which stays emission)
-            self.messages.append(('WARNING', f"{len(approx)} material(s) approximated (DACRT renders diffuse "
+            self.messages.append(('WARNING', f"{count} material(s) approximated (DACRT renders diffuse "
                                              "surfaces and emission; each says what differs): "
                                              + "; ".join(approx)))
         if len(geometry.triangles) == 0:

@@ -835,6 +835,27 @@ def test_long_reports_arrive_whole(scene, capfd):
     assert " ".join(parts) == text                     # cut after '; ', nothing lost
 
 
+def test_materials_of_one_reason_are_named_together(scene, said):
+    """Materials approximated for the same reason are named in one list before it: a scene of
+    default Principled materials said the same words once per material (500: 56 report lines)."""
+    lit_plane_scene(scene)
+    names = []
+    for i in range(30):
+        mat = bpy.data.materials.new(f"Paint{i:02d}")
+        if i % 3 == 0:
+            mat.node_tree.nodes['Principled BSDF'].inputs['Metallic'].default_value = 1.0
+        scenes.plane(mat.name, size=0.1, location=(i * 0.2, 10, 0), materials=(mat,))
+        names.append(mat.name)
+    scenes.render_rgba(scene)
+    text = " ".join(t for t in said if "material(s) approximated" in t)
+    assert text.startswith("30 material(s) approximated"), text
+    assert all(text.count(f"'{n}'") == 1 for n in names)
+    metal = ", ".join(f"'{n}'" for n in names[::3]) + " (Principled metal as diffuse"
+    plastic = ", ".join(f"'{n}'" for i, n in enumerate(names) if i % 3) + " (Principled specular layer as diffuse"
+    assert metal in text and plastic in text, text
+    assert text.count("as diffuse: its albedo averaged") == 2, text
+
+
 def test_memory_stats_count_what_the_render_holds(scene):
     """The memory Blender shows (status line, memory stats, the Memory stamp) is the C heap's
     growth over the frame: a 1-triangle-pair scene at 640x480 holds its film, path state and
