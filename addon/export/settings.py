@@ -3,6 +3,7 @@
 scenedata.Settings. Part of the export layer."""
 
 import math
+from types import SimpleNamespace
 
 import bpy
 
@@ -53,6 +54,36 @@ def frame_seed(seed, frame, subframe=0.0):
     return h & 0x7FFFFFFF
 
 
+def stored_settings(d, messages):
+    """scene.dacrt's values as the frame uses them. A file can hold what the settings do not
+    allow: a menu value of another version of the add-on (it reads as ''), a number outside a
+    setting's range or not finite (a stored value bypasses the range): such a value is
+    replaced by the setting's default, or clamped into its range, and named in a warning, as
+    Cycles' sync takes an unknown menu value as its default, instead of failing the render."""
+    values = {}
+    for prop in d.bl_rna.properties:
+        name = prop.identifier
+        if name == 'rna_type':
+            continue
+        value = fixed = getattr(d, name)
+        what = None
+        if prop.type == 'ENUM' and not prop.is_enum_flag:
+            if value not in {item.identifier for item in prop.enum_items}:
+                fixed, what = prop.default, "holds a choice this version of DACRT does not know"
+        elif prop.type in ('INT', 'FLOAT') and getattr(prop, 'array_length', 0) == 0:
+            if not math.isfinite(value):
+                fixed, what = prop.default, f"is {value}"
+            elif not prop.hard_min <= value <= prop.hard_max:
+                fixed = min(max(value, prop.hard_min), prop.hard_max)
+                num = (lambda x: f"{x:d}") if prop.type == 'INT' else (lambda x: f"{x:g}")
+                what = f"is {num(value)}, outside its range {num(prop.hard_min)} .. {num(prop.hard_max)}"
+        if what:
+            messages.append(('WARNING', f"scene.dacrt.{name} {what} (saved by another version, or set by a "
+                                        f"script): rendered with {fixed!r}"))
+        values[name] = fixed
+    return SimpleNamespace(**values)
+
+
 def export_settings(scene, vl, messages, viewport=False):
     """scenedata.Settings of one view layer `vl` of the evaluated scene. Passes Cycles would
     write there and DACRT does not are named in a warning appended to messages. viewport: the
@@ -61,6 +92,7 @@ def export_settings(scene, vl, messages, viewport=False):
     d = getattr(scene, 'dacrt', None)
     if d is None:
         raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
+    d = stored_settings(d, messages)
     if viewport:        # the viewport draws Combined alone: no pass, AOV, Cryptomatte or light group
         passes, missing, aovs, crypto, lightgroups = (), [], (), (), ()
     else:
