@@ -178,6 +178,12 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
         texels = _file_texels(path, img, reasons, unassociate) if '<' not in path else None
         if texels is not None:
             return texels
+        gone = _unreadable_file(img, path)
+        if gone:
+            # Cycles loads the file at the render: one deleted or cut short since Blender read
+            # it renders magenta there, not as the stale buffer (which had rendered silently)
+            reasons.append(f"image '{img.name}': its file {path} {gone} (magenta, as Cycles)")
+            return None
     try:
         w, h = img.size
         ch = img.channels
@@ -337,6 +343,29 @@ def _keeps_srgb(img):
     sRGB; ImageMetaData::detect_colorspace), decoding after its lookup's blend. Other display
     spaces are converted to linear on load, texel by texel, as here."""
     return space_kind(img) == SRGB
+
+
+def _oiio_extensions():
+    """The file extensions OpenImageIO has a reader for (lower case, no dot)."""
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        return frozenset()
+    listing = oiio.get_string_attribute('extension_list')
+    return frozenset(ext.lower() for fmt in listing.split(';') for ext in fmt.partition(':')[2].split(',') if ext)
+
+
+def _unreadable_file(img, path):
+    """Why the file of a still image (source File) cannot give its pixels: 'is missing', 'could
+    not be read' (a format OpenImageIO reads, so the file is damaged), or '' where Blender's
+    buffer stands in (a format OpenImageIO has no reader for)."""
+    if img.source != 'FILE':
+        return ''
+    if not os.path.isfile(path):
+        return "is missing"
+    if os.path.splitext(path)[1].lower().lstrip('.') in _oiio_extensions():
+        return "could not be read"
+    return ''
 
 
 def _read_from_blender(img):

@@ -189,6 +189,29 @@ def test_8bit_rgba_in_a_converted_space_is_associated_in_float(tmp_path):
     assert got[3] == np.float32(40 / 255.0)
 
 
+@pytest.mark.parametrize('damage', ['deleted', 'cut short'])
+def test_a_file_gone_since_blender_loaded_it_is_magenta_and_named(tmp_path, damage):
+    """Cycles loads an image's file at the render: deleted or cut short since Blender read its
+    pixels, it renders magenta there; the stale buffer had rendered silently. The message
+    names the file."""
+    path = tmp_path / "gone.png"
+    scenes.write_image(path, np.array([[[230, 20, 20]]], np.uint8))
+    img = bpy.data.images.load(str(path))
+    assert np.allclose(img.pixels[:3], np.array([230, 20, 20]) / 255.0, atol=1e-6) and img.has_data
+    if damage == 'deleted':
+        path.unlink()
+    else:
+        path.write_bytes(path.read_bytes()[:30])
+    reasons = []
+    assert export.images.image_pixels(img, reasons) is None         # the export's magenta
+    why = "is missing" if damage == 'deleted' else "could not be read"
+    assert reasons == [f"image 'gone.png': its file {path} {why} (magenta, as Cycles)"], reasons
+    m = _diffuse_of(img, lambda user: None)
+    np.testing.assert_allclose(m.base_color, (1, 0, 1), atol=1e-6)          # magenta, no texture
+    assert m.texture is None
+    assert f"its file {path} {why}" in m.approximated
+
+
 def test_a_file_image_is_read_from_its_file_at_each_render(tmp_path):
     """Cycles reads an image that has a file from the file at every render (image_is_builtin
     only for packed, generated and movie images): a PNG rewritten between two renders in one
