@@ -372,7 +372,16 @@ class MaterialBuilder:
         self._albedo_attribute = closure.texture.attribute \
             if closure.texture is not None and closure.tex_weight.any() else None
         base = _nonnegative(base, "colour", reasons)
-        emission = _nonnegative(closure.emission.astype(np.float32), "emission", reasons)
+        if closure.emission_tex is not None:
+            # an image's emission: its texels keep their sign, as Cycles emits them (an
+            # out-of-gamut texel's negative channel); only the weight's negative or non-finite
+            # channels are dropped. Its average, a channel of which may be <= 0 while texels of
+            # it are not, only weighs the light for sampling (had masked whole channels)
+            weight = np.asarray(closure.emission_tex[1], np.float32)
+            e_keep = _nonnegative(weight, "emission strength", reasons) > 0
+            emission = np.where(e_keep, np.maximum(np.nan_to_num(closure.emission), 0.0), 0.0).astype(np.float32)
+        else:
+            emission = _nonnegative(closure.emission.astype(np.float32), "emission", reasons)
         holdout = closure.holdout >= 1.0 - 1e-6
         if 0.0 < closure.holdout and not holdout:
             reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")
@@ -406,7 +415,7 @@ class MaterialBuilder:
         e_tex = e_interp = e_ext = e_xf = None
         if closure.emission_tex is not None and emission.any():
             t, w = closure.emission_tex
-            w32 = np.where(emission > 0, w, 0).astype(np.float32)   # channels _nonnegative kept
+            w32 = np.where(e_keep, w, 0).astype(np.float32)
             e_tex, e_interp, e_ext, e_xf = t.texels(t.baked(lambda rgb: rgb * w32)), t.interpolation, \
                 t.extension, t.transform
         n_tex = n_interp = n_ext = n_xf = None
