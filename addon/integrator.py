@@ -1284,6 +1284,10 @@ class Integrator:
             r = np.take(rows, prim, axis=1)
             c = r[3 * k:3 * k + 3] + r[6 + 3 * k:9 + 3 * k] * u + r[12 + 3 * k:15 + 3 * k] * v
             out[name] = np.ascontiguousarray(c.T, F32)
+        # per-object values (Object Info outputs): the hit triangle's placement's
+        for name in needs:
+            if isinstance(name, str) and name in self.tri.instance_values:
+                out[name] = self.tri.instance_values[name][self.tri.placement[prim]]
         return out
 
     def _lookup(self, tex, interp, ext, xf, prim, u, v):

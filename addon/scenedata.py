@@ -230,6 +230,10 @@ class Geometry:
     # attribute, Geometry Position) write there, interpolated like UVs and added to
     # Material.aovs; 0 elsewhere; None: no material's AOV varies so
     aovs: Optional[dict] = None
+    # need name (an Object Info output: 'Object Info:Random') -> (P,4) float32 per placement (by
+    # instance id; instance must be given): what the procedural textures reading it see on each
+    # object or instance; None: no procedural texture reads Object Info
+    instance_values: Optional[dict] = None
 
     @staticmethod
     def empty() -> 'Geometry':

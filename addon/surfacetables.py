@@ -75,6 +75,14 @@ class Triangles:
             raise ValueError("geometry.tangent_xf needs geometry.instance (the placement of each triangle)")
         self.tangent_xf = None if xf is None else np.asarray(xf, F32)
         self.instance = None if xf is None else np.asarray(geometry.instance, np.int64)
+        # Object Info outputs procedural textures read, per placement (scenedata.Geometry.
+        # instance_values), and each triangle's placement to look them up by
+        values = getattr(geometry, 'instance_values', None) or {}
+        if values and getattr(geometry, 'instance', None) is None:
+            raise ValueError("geometry.instance_values needs geometry.instance (the placement of each triangle)")
+        self.instance_values = {k: np.nan_to_num(np.asarray(v, F32), nan=0.0, posinf=0.0, neginf=0.0)
+                                for k, v in values.items()}
+        self.placement = np.asarray(geometry.instance, np.int64) if values else None
         # rows: corner 0 colour (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9): the
         # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors)
         colors = getattr(geometry, 'colors', None)

@@ -39,6 +39,7 @@ class _Out:
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
         self.coords = None                # (m, 3, 6), allocated by the first procedurally textured mesh
         self.aovs = {}                    # (AOV name, kind) -> (m, 3, C), allocated by the first mesh writing it
+        self.instance_values = {}         # Object Info need -> (placements, 4): procedural textures read them
         self.keep = None
 
     def drop(self, rows, keep):
@@ -58,7 +59,8 @@ class _Out:
             aovs = {k: _compact_rows(v, self.keep) for k, v in aovs.items()}
         # per placement (instance id), for the object-space tangents of normal maps
         xf = np.concatenate(self.linear).astype(np.float32) if self.tangents is not None else None
-        return sd.Geometry(vertices=self.vertices, tangent_xf=xf, aovs=aovs or None, **per_tri)
+        return sd.Geometry(vertices=self.vertices, tangent_xf=xf, aovs=aovs or None,
+                           instance_values=self.instance_values or None, **per_tri)
 
 
 def _unread_rows(nt):
@@ -116,6 +118,9 @@ class Assembly:
         self._object_info_aovs()
         # the materials whose procedural textures read Generated or Object coordinates
         self._coordinated = {k for k, m in enumerate(self.materials.materials) if _coordinates_read(m)}
+        # and those reading Object Info outputs (per placement, by instance id)
+        self._info_readers = {k for k, m in enumerate(self.materials.materials) if _object_info_read(m)}
+        self._info_needs = sorted({n for k in self._info_readers for n in _object_info_read(self.materials.materials[k])})
         # per material, once for the frame (the materials are all resolved above): those whose
         # albedo follows an attribute or Object Info (most scenes: none), and those reading each
         # UV map by name (scanned per batch and per placement, these had made the export
@@ -135,6 +140,9 @@ class Assembly:
         nv = sum(len(p) * len(a.positions) for a, p in batches)
         m = sum(len(p) * len(a.triangles) for a, p in batches)
         out = _Out(nv, m, need_uvs)
+        if self._info_needs:
+            total = sum(len(p) for _, p in batches)
+            out.instance_values = {n: np.zeros((total, 4), np.float32) for n in self._info_needs}
         v0 = t0 = 0
         for a, places in batches:
             if self.check_break():
@@ -394,6 +402,8 @@ class Assembly:
             arr = getattr(out, name)
             arr[rows].reshape(k, nt)[...] = np.asarray(values, arr.dtype)[:, None]
         out.instance[rows].reshape(k, nt)[...] = (out.instances + np.arange(k, dtype=np.int32))[:, None]
+        if self._info_needs:
+            self._object_info_values(places, out)
         # Cycles lifts shadow rays off smooth triangles only; the shading offset is for all
         smooth = a.normal_rows is not None
         for i, p in enumerate(places):
@@ -483,6 +493,19 @@ class Assembly:
             block[bad] = 0.0
             self.ignore(f"a colour or attribute value NaN or infinite at some corner: the {int(bad.sum())} "
                         "triangle(s) around it render black, as in Cycles", place.name)
+
+    def _object_info_values(self, places, out):
+        """The Object Info outputs procedural textures read (Random, Location, ...), one row per
+        placement of this batch (instance ids out.instances on): what Cycles' Object Info node
+        gives each object or instance; 0 for placements no such material shades."""
+        readers = self._info_readers
+        for i, p in enumerate(places):
+            if i % 2048 == 2047 and self.check_break():
+                raise ExportCancelled()
+            if readers.isdisjoint(p.slot_map.tolist()):
+                continue
+            for need, table in out.instance_values.items():
+                table[out.instances + i] = p.object_info(need[len(OBJECT_INFO):])
 
     def _texture_coordinates(self, a, place, materials, mirrored, out, S):
         """The Generated and Object texture coordinates at the corners of one instance's
@@ -579,6 +602,11 @@ def _procedurals(material):
     """The material's procedural textures (its colour's, its AOVs')."""
     textures = [material.texture] + [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
     return [t for t in textures if isinstance(t, ProceduralTexels)]
+
+
+def _object_info_read(material):
+    """The Object Info needs ('Object Info:Random', ...) of the material's procedural textures."""
+    return {n for t in _procedurals(material) for n in t.needs if isinstance(n, str) and n.startswith(OBJECT_INFO)}
 
 
 def _coordinates_read(material, kinds=frozenset({'generated', 'object'})):

@@ -18,6 +18,7 @@ from .. import nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping
 from ..texture import alpha_lookup, lookup_texels, texture_lookup
+from .objectinfo import OBJECT_INFO
 
 PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK',
                               'TEX_WHITE_NOISE', 'TEX_MAGIC', 'TEX_GABOR'})
@@ -26,6 +27,10 @@ _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
 _VORONOI_OUTPUTS = {'Distance': 0, 'Color': 1, 'Position': 2}
 OBJECT_OF = 'object of'     # (object_frame: a chain's needs say in whose space it reads Object)
+# Object Info outputs read per object or instance (objectinfo.object_value's (4,) value: which
+# columns); Material Index, the shaded material's, is left to the evaluation
+_OBJECT_INFO_OUTPUTS = {'Location': slice(0, 3), 'Color': slice(0, 3), 'Alpha': slice(0, 1), 'Random': slice(0, 1),
+                        'Object Index': slice(0, 1)}
 
 
 class _Chain:
@@ -169,6 +174,13 @@ def _node(node, out, chain, depth):
                 raise nodeeval.NotCompiled("Texture Coordinate Object of two objects (the shaded one counts)")
         chain.needs.add(kind)
         return (lambda c: c[kind]), True
+    if t == 'OBJECT_INFO':
+        # per object or instance (the assembly's table by placement): Cycles' Object Info
+        if out.name not in _OBJECT_INFO_OUTPUTS:
+            raise nodeeval.NotCompiled(f"Object Info {out.name}")
+        need, cols = OBJECT_INFO + out.name, _OBJECT_INFO_OUTPUTS[out.name]
+        chain.needs.add(need)
+        return (lambda c: np.asarray(c[need], np.float64)[:, cols]), out.type == 'VECTOR'
     if t == 'MAPPING':
         if node.vector_type == 'NORMAL':
             raise nodeeval.NotCompiled("a Normal-type Mapping")
