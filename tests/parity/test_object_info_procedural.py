@@ -7,8 +7,6 @@ import bpy
 import numpy as np
 import pytest
 
-from tests.addon import scenes
-
 from . import sunplane
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
