@@ -180,7 +180,6 @@ def _transmission(node, reasons):
     if found is None:
         return None
     weight, (roughness, ior), tint = found
-    ior = ior if np.isfinite(ior) and ior > 0.0 else 1.5
     reflect = specular.layer_albedo_mu(roughness, ior, 0.5, tint, True)
     plain = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True)
     reasons.append(f"Principled transmission as a transparent surface (no refraction) with its reflection "

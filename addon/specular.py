@@ -84,13 +84,20 @@ def fresnel_dielectric_fss(eta: float) -> float:
     return (eta - 1.0) / (4.08567 + 1.00071 * eta)
 
 
+def cycles_ior(ior) -> float:
+    """An IOR as Cycles reads it, fmaxf(ior, 1e-5f): NaN (fmaxf returns the number) and
+    anything below 1e-5 become 1e-5."""
+    ior = float(ior)
+    return 1e-5 if np.isnan(ior) else max(ior, 1e-5)
+
+
 def layer_albedo_mu(roughness: float, ior: float, level: float, tint, multiscatter: bool = True) -> np.ndarray:
     """Per channel and view cosine (3, len(_MU)), the specular layer's albedo (see the top);
     zeros without a layer (Specular IOR Level 0, IOR 1, or a black tint). With multiscatter
     (the Principled's Multiscatter GGX; a coat always), Cycles' energy compensation, with the
     generalised Schlick's average Fresnel (bsdf_microfacet_setup_fresnel_generalized_schlick)."""
     tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, None)
-    ior = max(float(ior), 1e-5)                    # front faces: eta = IOR
+    ior = cycles_ior(ior)                          # front faces: eta = IOR
     f0 = min(f0_from_ior(ior) * 2.0 * max(float(level), 0.0), 1.0 - 1e-6)
     if f0 <= 0.0 or not tint.any():
         return np.zeros((3, len(_MU)))

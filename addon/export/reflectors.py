@@ -144,7 +144,6 @@ def glass_albedos(node, reasons):
     ior, i_ok = constant_value(node.inputs['IOR'])
     color, c_ok = constant_color(node.inputs['Color'])
     rough = min(max(rough, 0.0), 1.0) if np.isfinite(rough) else 0.0
-    ior = ior if np.isfinite(ior) and ior > 0.0 else 1.5
     fresnel = specular.layer_albedo(rough, ior, 0.5, (1.0, 1.0, 1.0), True)
     color = np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0)
     reflect, transmit = color * fresnel, color * (1.0 - fresnel)
