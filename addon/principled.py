@@ -170,7 +170,7 @@ def _layer_inputs(node, weight_name, names, tint_name, what, unused, reasons, mo
 
 
 def _transmission(node, reasons):
-    """(weight, reflection (3, len(_MU)), transmittance (len(_MU),)) per view cosine of the
+    """(weight, reflection (3, len(_MU)), transmittance (3, len(_MU))) per view cosine of the
     Principled's glass (Transmission Weight > 0; Cycles' GGX glass of the Roughness and IOR under
     the metal, over the specular layer and base, which it dims by 1 - weight), or None. As the
     Glass BSDF (export.reflectors.glass_albedos): its reflection (tinted by Specular Tint) a
@@ -180,11 +180,12 @@ def _transmission(node, reasons):
     if found is None:
         return None
     weight, (roughness, ior), tint = found
-    reflect = specular.layer_albedo_mu(roughness, ior, 0.5, tint, True)
-    plain = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True)
+    # (as the Glass BSDF: GGX and its single scattering (a rough glass loses light) or
+    # Multiscatter GGX; the reflection and what passes per channel, 1 - F with F tinted)
+    reflect, through = specular.glass_albedo_mu(roughness, ior, tint, _multiscatter(node))
     reasons.append(f"Principled transmission as a transparent surface (no refraction) with its reflection "
                    f"as diffuse (Transmission Weight {weight:g})")
-    return weight, reflect, 1.0 - plain.max(axis=0)
+    return weight, reflect, through
 
 
 def transmittance(node, base) -> np.ndarray:

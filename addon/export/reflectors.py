@@ -144,9 +144,12 @@ def glass_albedos(node, reasons):
     ior, i_ok = constant_value(node.inputs['IOR'])
     color, c_ok = constant_color(node.inputs['Color'])
     rough = min(max(rough, 0.0), 1.0) if np.isfinite(rough) else 0.0
-    fresnel = specular.layer_albedo(rough, ior, 0.5, (1.0, 1.0, 1.0), True)
+    dist = getattr(node, 'distribution', 'MULTI_GGX')
+    # its distribution's albedo: GGX and Beckmann scatter once (a white GGX glass of roughness 1
+    # returns 0.81 of the light in Cycles, Beckmann 0.94), Multiscatter GGX all of it
+    r, t = specular.glass_albedo_mu(rough, ior, (1.0, 1.0, 1.0), dist == 'MULTI_GGX', dist == 'BECKMANN')
     color = np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0)
-    reflect, transmit = color * fresnel, color * (1.0 - fresnel)
+    reflect, transmit = color * (r @ specular.VIEW), color * (t @ specular.VIEW)
     reasons.append("Glass BSDF as a transparent surface (no refraction) with its reflection as diffuse")
     _thin_film(node, reasons)
     if not (r_ok and i_ok and c_ok):
