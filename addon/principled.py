@@ -206,13 +206,16 @@ def transmittance(node, base) -> np.ndarray:
 
 
 def _coat_mu(node, reasons):
-    """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None."""
+    """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None. Coat IOR as
+    Cycles, fmaxf(IOR, 1) (NaN and IORs below 1 read 1: no reflection; read raw, IOR 0.8 had
+    made a mirror-bright coat)."""
     # (driven by nodes, own value 0: reported, as before the coat was kept)
     found = _layer_inputs(node, 'Coat Weight', ('Coat Roughness', 'Coat IOR'), 'Coat Tint', "coat",
                           "Principled coat ignored", reasons)
     if found is None:
         return None
     weight, (roughness, ior), tint = found
+    ior = 1.0 if np.isnan(ior) else max(float(ior), 1.0)
     albedo = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True) * weight
     absorb = 1.0 + weight * (specular.coat_tint_mu(tint, ior) - 1.0)
     reasons.append(f"Principled coat as diffuse: its albedo averaged over view directions, "

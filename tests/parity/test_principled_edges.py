@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
+from tests.parity.test_specular import _disk_means as sphere_means
+from tests.parity.test_specular import _scene as sphere_scene
 from tests.parity.test_transmission import _disk_means as shell_means
 from tests.parity.test_transmission import _shell_scene
 
@@ -95,6 +97,17 @@ def test_rough_glass_scatters_once_with_ggx_and_beckmann(case, tmp_path):
     # measured within 0.5% of the loss (GGX: 0.2 of the disk's light, the loss 1.5% of the
     # disk's mean off on its inner part alone)
     np.testing.assert_allclose(d, c, rtol=0.01)
+
+
+@pytest.mark.parametrize('ior', [0.8, 'nan'])
+def test_coat_ior_below_one_reads_one(ior, tmp_path):
+    """Bug 3: Cycles' coat IOR is fmaxf(IOR, 1) (NaN: 1): no reflection. Read raw, IOR 0.8 had
+    made a coat of albedo 0.39 (red paint 1.34x Cycles in green) and NaN a white one."""
+    sc = sphere_scene((0.9, 0.5, 0.2), 0.5, 0.5, coat=(1.0, 0.03, 0.8 if ior != 'nan' else 1.5, (1, 1, 1)))
+    if ior == 'nan':
+        _nan_into(_node().inputs['Coat IOR'])
+    d, c = sphere_means(sc, tmp_path)
+    np.testing.assert_allclose(d, c, rtol=0.005)          # measured within 0.1%
 
 
 @pytest.mark.parametrize('ior', [0.0, 'nan'])
