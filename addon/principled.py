@@ -208,10 +208,11 @@ def transmittance(node, base) -> np.ndarray:
 def _coat_mu(node, reasons):
     """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None. Coat IOR as
     Cycles, fmaxf(IOR, 1) (NaN and IORs below 1 read 1: no reflection; read raw, IOR 0.8 had
-    made a mirror-bright coat)."""
+    made a mirror-bright coat); Coat Weight w clipped at 0 only, as Cycles (the coat's albedo x
+    w, what lies below dimmed by 1 - w x it, clipped to 0..1, and tinted by 1 + w (tint - 1))."""
     # (driven by nodes, own value 0: reported, as before the coat was kept)
     found = _layer_inputs(node, 'Coat Weight', ('Coat Roughness', 'Coat IOR'), 'Coat Tint', "coat",
-                          "Principled coat ignored", reasons)
+                          "Principled coat ignored", reasons, most=np.inf)
     if found is None:
         return None
     weight, (roughness, ior), tint = found
@@ -220,7 +221,7 @@ def _coat_mu(node, reasons):
     absorb = 1.0 + weight * (specular.coat_tint_mu(tint, ior) - 1.0)
     reasons.append(f"Principled coat as diffuse: its albedo averaged over view directions, "
                    f"{(albedo @ specular.VIEW).max():.3f}")
-    return (1.0 - albedo.max(axis=0)) * absorb, albedo
+    return np.clip(1.0 - albedo.max(axis=0), 0.0, 1.0) * absorb, albedo
 
 
 def _sheen_mu(node, reasons):

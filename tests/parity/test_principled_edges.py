@@ -110,6 +110,15 @@ def test_coat_ior_below_one_reads_one(ior, tmp_path):
     np.testing.assert_allclose(d, c, rtol=0.005)          # measured within 0.1%
 
 
+def test_coat_weight_above_one(tmp_path):
+    """Bug 4: Cycles clamps Coat Weight at 0 only: a weight 2 coat reflects twice a coat's
+    light. The export had clamped it to 1 (red paint 0.82x Cycles in blue)."""
+    sc = sphere_scene((0.9, 0.5, 0.2), 0.5, 0.5)
+    _value_into(_node().inputs['Coat Weight'], 2.0)
+    d, c = sphere_means(sc, tmp_path)
+    np.testing.assert_allclose(d, c, rtol=0.005)          # measured within 0.1%
+
+
 @pytest.mark.parametrize('ior', [0.0, 'nan'])
 def test_transmission_ior_below_its_floor(ior, tmp_path):
     """Bug 8: Cycles reads the Principled's IOR as fmaxf(IOR, 1e-5) (NaN: 1e-5): a mirror,
