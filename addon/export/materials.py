@@ -580,6 +580,15 @@ class MaterialBuilder:
             # (the coat is part of one diffuse albedo, shaded with the base's normal)
             reasons.append("Principled Coat Normal ignored: the coat shades with the base's normal")
         c = self._color_closure(node.inputs['Base Color'], reasons)
+        if c.texture is None or not c.tex_weight.any():
+            # Cycles clamps the base colour at 0 (max(base_color, 0): NaN reads 0) before its
+            # layers; clamped after them, a negative channel took the coat's and the specular
+            # layer's reflection with it
+            bad = ~(c.const >= 0.0)
+            if bad.any():
+                reasons.append(f"Principled Base Color {tuple(round(float(x), 6) for x in c.const)} clamped at 0 "
+                               f"per channel (NaN read as 0), as Cycles clamps it before its layers")
+                c.const = np.where(bad, 0.0, c.const)
         for step in principled.layer_steps(node, reasons):
             c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
         base, base_ok = constant_color(node.inputs['Base Color'])

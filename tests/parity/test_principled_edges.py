@@ -119,6 +119,22 @@ def test_coat_weight_above_one(tmp_path):
     np.testing.assert_allclose(d, c, rtol=0.005)          # measured within 0.1%
 
 
+def test_negative_base_color_keeps_the_layers_over_it(tmp_path, said):
+    """Bug 5: Cycles clamps the base colour at 0 before its layers: a base of red -0.5 under a
+    coat reflects the coat's and the specular layer's light in red. The export had clamped the
+    layered albedo instead (red 0, not Cycles' 0.27) and quoted that, not the input."""
+    sc = sphere_scene((0.0, 0.5, 0.2), 0.5, 0.5, coat=(1.0, 0.1, 2.5, (1, 1, 1)))
+    nt = bpy.data.materials["Plastic"].node_tree
+    comb = nt.nodes.new('ShaderNodeCombineColor')
+    comb.inputs[1].default_value, comb.inputs[2].default_value = 0.5, 0.2
+    _value_into(comb.inputs[0], -0.5)
+    nt.links.new(comb.outputs[0], _node().inputs['Base Color'])
+    d, c = sphere_means(sc, tmp_path)
+    np.testing.assert_allclose(d, c, rtol=0.005)          # measured within 0.1%
+    assert c[0] > 0.2, "the coat must show in the clamped channel"
+    assert any("Base Color (-0.5, 0.5, 0.2) clamped at 0" in text for text in said), said
+
+
 @pytest.mark.parametrize('ior', [0.0, 'nan'])
 def test_transmission_ior_below_its_floor(ior, tmp_path):
     """Bug 8: Cycles reads the Principled's IOR as fmaxf(IOR, 1e-5) (NaN: 1e-5): a mirror,
