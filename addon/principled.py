@@ -108,7 +108,9 @@ def _multiscatter(node):
 
 
 def _specular_mu(node, reasons):
-    """The dielectric specular layer's albedo per view cosine (3, len(_MU)), or None."""
+    """(albedo, estimate): the dielectric specular layer's albedo per view cosine (3, len(_MU))
+    and what Cycles takes it to be when it dims the layers below (specular.layer_estimate_mu:
+    with GGX a lobe of albedo 1, below IOR 1 its table read at 1 / IOR), or None."""
     level_socket = node.inputs.get('Specular IOR Level')
     if level_socket is None:
         return None
@@ -124,7 +126,8 @@ def _specular_mu(node, reasons):
         return None
     reasons.append(f"Principled specular layer as diffuse: its albedo averaged over view directions, "
                    f"{(albedo @ specular.VIEW).max():.3f}")
-    return albedo
+    # what lies below is dimmed by Cycles' estimate of the albedo, not by the albedo
+    return albedo, specular.layer_estimate_mu(roughness, ior, level, tint, _multiscatter(node))
 
 
 def _metal(node, reasons):
@@ -206,10 +209,10 @@ def transmittance(node, base) -> np.ndarray:
 
 
 def _coat_mu(node, reasons):
-    """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None. Coat IOR as
-    Cycles, fmaxf(IOR, 1) (NaN and IORs below 1 read 1: no reflection; read raw, IOR 0.8 had
-    made a mirror-bright coat); Coat Weight w clipped at 0 only, as Cycles (the coat's albedo x
-    w, what lies below dimmed by 1 - w x it, clipped to 0..1, and tinted by 1 + w (tint - 1))."""
+    """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None. As Cycles: Coat
+    Weight w clipped at 0 only (the coat's albedo x w, what lies below dimmed by 1 - w x its
+    estimate, clipped to 0..1, and tinted by 1 + w (tint - 1)), Coat IOR fmaxf(IOR, 1) (NaN and
+    IORs below 1 read 1: no reflection; read raw, IOR 0.8 had made a mirror-bright coat)."""
     # (driven by nodes, own value 0: reported, as before the coat was kept)
     found = _layer_inputs(node, 'Coat Weight', ('Coat Roughness', 'Coat IOR'), 'Coat Tint', "coat",
                           "Principled coat ignored", reasons, most=np.inf)
@@ -218,10 +221,11 @@ def _coat_mu(node, reasons):
     weight, (roughness, ior), tint = found
     ior = 1.0 if np.isnan(ior) else max(float(ior), 1.0)
     albedo = specular.layer_albedo_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True) * weight
+    estimate = specular.layer_estimate_mu(roughness, ior, 0.5, (1.0, 1.0, 1.0), True) * weight
     absorb = 1.0 + weight * (specular.coat_tint_mu(tint, ior) - 1.0)
     reasons.append(f"Principled coat as diffuse: its albedo averaged over view directions, "
                    f"{(albedo @ specular.VIEW).max():.3f}")
-    return np.clip(1.0 - albedo.max(axis=0), 0.0, 1.0) * absorb, albedo
+    return np.clip(1.0 - estimate.max(axis=0), 0.0, 1.0) * absorb, albedo
 
 
 def _sheen_mu(node, reasons):
@@ -265,8 +269,8 @@ def layer_steps(node, reasons) -> list:
     if metal is None and spec is None and top is None and trans is None:
         return [] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse)]
     n = len(specular.VIEW)
-    dim_s = np.ones(n) if spec is None else 1.0 - spec.max(axis=0)
-    add_s = np.zeros((3, n)) if spec is None else spec
+    dim_s = np.ones(n) if spec is None else np.clip(1.0 - spec[1].max(axis=0), 0.0, 1.0)
+    add_s = np.zeros((3, n)) if spec is None else spec[0]
     if trans is not None:          # the glass over the specular layer and base, its reflection added
         weight, reflect, _ = trans
         dim_s, add_s = (1.0 - weight) * dim_s, (1.0 - weight) * add_s + weight * reflect

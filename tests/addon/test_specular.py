@@ -92,7 +92,8 @@ def test_level_and_tint():
 
 def test_export_weights_the_layer_by_the_dielectric_share(scene, exported):
     """Metallic m: the dielectric (specular over diffuse) is 1 - m of the BSDF, the metal (its
-    albedo A as diffuse) m: m A + (1 - m) (base (1 - E_max) + E)."""
+    albedo A as diffuse) m: m A + (1 - m) (base (1 - C_max) + E), C Cycles' estimate of E
+    (specular.layer_estimate_mu)."""
     scenes.camera((0, -10, 0), (np.pi / 2, 0, 0))
     for i, m in enumerate((0.0, 0.5, 1.0)):
         mat = scenes.principled(f"Half{i}", (0.8, 0.3, 0.1), specular=0.5, metallic=m)
@@ -101,10 +102,11 @@ def test_export_weights_the_layer_by_the_dielectric_share(scene, exported):
         scenes.plane(f"P{i}", location=(3 * i, 0, 0), materials=(mat,))
     by_name = {x.name: x for x in exported().materials}
     e = specular.layer_albedo(0.4, 1.5, 0.5, (1, 1, 1))
+    est = specular.layer_estimate_mu(0.4, 1.5, 0.5, (1, 1, 1)) @ specular.VIEW
     for i, m in enumerate((0.0, 0.5, 1.0)):
         got = by_name[f"Half{i}"]
         base = np.array([0.8, 0.3, 0.1])
-        want = m * specular.metal_albedo(0.4, base, (1, 1, 1)) + (1 - m) * (base * (1 - e.max()) + e)
+        want = m * specular.metal_albedo(0.4, base, (1, 1, 1)) + (1 - m) * (base * (1 - est.max()) + e)
         np.testing.assert_allclose(got.base_color, want, rtol=1e-6)
         assert ("specular layer as diffuse" in got.approximated) == (m < 1)
 
