@@ -342,8 +342,9 @@ def glossy_albedo(roughness: float, color, multiscatter: bool = True, beckmann: 
     reflection of constant Fresnel = its colour, with the energy compensation for Multiscatter
     GGX (nonlinear in the colour: 0.974 x a colour of 0.8 at roughness 0.5, 0.926 x 0.4) or
     without it for GGX (the colour x the lobe's average albedo, 0.882 at roughness 0.5) and
-    Beckmann (beckmann; no compensation in Cycles either)."""
+    Beckmann (beckmann; no compensation in Cycles either). A colour above 1 is its Fresnel as
+    it is, as in Cycles (1.5 at roughness 0.5: 1.607; clipped at 1 it had been 1.5)."""
     c = np.clip(np.asarray(color, np.float64)[:3], 0.0, None)[:, None]
     r = min(max(float(roughness), 0.0), 1.0)
     e, _, _ = _ggx_moments(max(r * r, 1e-4), beckmann)
-    return _compensated(c * e, e, np.minimum(c, 1.0), multiscatter) @ VIEW
+    return np.nan_to_num(_compensated(c * e, e, c, multiscatter) @ VIEW, nan=0.0, posinf=0.0, neginf=0.0)

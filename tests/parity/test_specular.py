@@ -144,6 +144,8 @@ def test_metal_matches_cycles_on_a_sphere(case, tmp_path):
 
 REFLECTORS = {  # node, distribution, roughness, colour (Glossy) or base colour and edge tint (Metallic)
     'glossy_multiscatter': ('ShaderNodeBsdfGlossy', 'MULTI_GGX', 0.5, (0.8, 0.6, 0.4), None),
+    # a colour above 1 is Cycles' Fresnel as it is (clipped at 1 it was 7% dark in red)
+    'glossy_multiscatter_bright': ('ShaderNodeBsdfGlossy', 'MULTI_GGX', 0.5, (1.5, 0.5, 0.2), None),
     'glossy_ggx_rough': ('ShaderNodeBsdfGlossy', 'GGX', 0.8, (0.8, 0.6, 0.4), None),
     'glossy_beckmann_rough': ('ShaderNodeBsdfGlossy', 'BECKMANN', 0.8, (0.8, 0.6, 0.4), None),
     'metallic_f82_multiscatter': ('ShaderNodeBsdfMetallic', 'MULTI_GGX', 0.4, (0.9, 0.6, 0.3), (0.7, 0.9, 1.0)),
