@@ -262,8 +262,12 @@ def layer_steps(node, reasons) -> list:
     metal, dielectric = _metal(node, reasons)
     spec = trans = None
     if dielectric:
-        spec = _specular_mu(node, reasons)
+        said = []                  # (not said where the glass covers the layer whole)
+        spec = _specular_mu(node, said)
+        start = len(reasons)
         trans = _transmission(node, reasons)
+        if trans is None or not np.all(np.asarray(trans[0]) >= 1.0):
+            reasons[start:start] = said
     top = _top_mu(node, reasons)
     diffuse = _diffuse_roughness(node, reasons)
     if metal is None and spec is None and top is None and trans is None:

@@ -287,3 +287,17 @@ def test_anisotropy_and_thin_film_are_reported(scene, exported):
     assert "Principled anisotropy (its layers as isotropic) ignored" in by_name["Brushed"].approximated
     assert "Principled thin film ignored" in by_name["Oily"].approximated
     assert "ignored" not in by_name["Plain"].approximated
+
+
+def test_a_whole_transmission_does_not_name_the_specular_layer_it_covers(scene):
+    """At Transmission Weight 1 the glass covers the specular layer whole (its weight 0 in
+    Cycles); the report had named that layer's stand-in all the same."""
+    from addon import export
+    said = {}
+    for weight in (1.0, 0.5):
+        mat = bpy.data.materials.new(f"Glass {weight}")
+        mat.node_tree.nodes['Principled BSDF'].inputs['Transmission Weight'].default_value = weight
+        builder = export.materials.MaterialBuilder()
+        said[weight] = builder.materials[builder.index(mat)].approximated
+    assert "transmission as a transparent surface" in said[1.0] and "specular layer" not in said[1.0], said
+    assert "Principled specular layer as diffuse" in said[0.5], said
