@@ -68,6 +68,20 @@ def _nonnegative(v, label, reasons):
     return np.where(bad, np.float32(0), v).astype(np.float32)
 
 
+def _lookup_chain(compiled, clamp):
+    """fn(rgb (..., 3)) -> (..., 3) float32: colour nodes compiled for an image
+    (nodeeval.compile_image_chain) run on looked-up colours at alpha 1, non-finite results 0,
+    with `clamp` negative ones too (a colour; a normal map's are signed). It reads no Blender
+    data: it runs during the render's lookups."""
+    def chain(rgb):
+        px = np.empty(rgb.shape[:-1] + (4,), np.float32)
+        px[..., :3], px[..., 3] = rgb, 1.0
+        y = np.broadcast_to(np.asarray(compiled(px.reshape(-1, 4)), np.float64), (px[..., 0].size, 3))
+        y = np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0)
+        return (np.maximum(y, 0.0) if clamp else y).astype(np.float32).reshape(rgb.shape)
+    return chain
+
+
 class MaterialBuilder:
     """Evaluates Blender materials into scenedata.Material, one per material."""
 
@@ -919,16 +933,9 @@ class MaterialBuilder:
         if ya is None or np.ptp(ya, axis=0).max() > 0.0:
             return None
         try:
-            compiled = nodeeval.compile_image_chain(socket, color, src.key[0])
+            chain = _lookup_chain(nodeeval.compile_image_chain(socket, color, src.key[0]), clamp=True)
         except nodeeval.NotCompiled:
             return None
-
-        def chain(rgb):         # reads no Blender data: it runs during the render's lookups
-            px = np.empty((len(rgb), 4), np.float32)
-            px[:, :3], px[:, 3] = rgb, 1.0
-            y = np.broadcast_to(np.asarray(compiled(px), np.float64), (len(rgb), 3))
-            return np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0).astype(np.float32)
-
         # the chain as rebuilt here must be the one probed through the export's own textures
         want = self._probe(socket, src, self._PROBE, color)
         if want is None or not np.array_equal(chain(self._PROBE[:, :3]), np.maximum(want, 0.0).astype(np.float32)):
@@ -989,13 +996,7 @@ class MaterialBuilder:
         image encoded (after the blend, in Cycles' order), else on its texels (exact for a
         per-channel scale and offset, such as a flipped green channel, or 'Closest' lookups;
         otherwise reported)."""
-        compiled = nodeeval.compile_image_chain(socket, True, tex.key[0])
-
-        def chain(rgb):         # reads no Blender data: it runs during the render's lookups
-            px = np.empty(rgb.shape[:-1] + (4,), np.float32)
-            px[..., :3], px[..., 3] = rgb, 1.0
-            y = np.broadcast_to(np.asarray(compiled(px.reshape(-1, 4)), np.float64), (px[..., 0].size, 3))
-            return np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32).reshape(rgb.shape)
+        chain = _lookup_chain(nodeeval.compile_image_chain(socket, True, tex.key[0]), clamp=False)
         probe = self._PROBE[:, :3]
         if stored_texels(tex.pixels) is None and tex.interpolation != 'Closest' and \
                 channel_line(probe.astype(np.float64), chain(probe).astype(np.float64), 1e-5) is None:
