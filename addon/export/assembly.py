@@ -179,14 +179,19 @@ class Assembly:
         if not users:
             return users
         n = 0
+        shown = {}      # id(slot map) -> the wanted materials it shows (placements share slot maps)
         for places in self.placements.values():
             for p in places:
                 n += 1
                 if n % 1024 == 0 and self.check_break():
                     raise ExportCancelled()
-                if p.slot_map is not None:
-                    for k in set(np.asarray(p.slot_map).ravel().tolist()) & users.keys():
-                        users[k].append(p)
+                if p.slot_map is None:
+                    continue
+                ks = shown.get(id(p.slot_map))
+                if ks is None:
+                    ks = shown[id(p.slot_map)] = sorted(set(np.asarray(p.slot_map).ravel().tolist()) & users.keys())
+                for k in ks:
+                    users[k].append(p)
         return users
 
     def _object_info_albedos(self):
