@@ -2,8 +2,8 @@
 (svm_checker), Gradient (svm_gradient), Wave (svm_wave), Brick (svm_brick), White Noise
 (svm_node_tex_white_noise, util/hash.h), Magic (svm_magic) and Gabor (svm_node_tex_gabor) in
 numpy, Noise (kernel/svm/noise.h, fractal_noise.h, noise_texture: Perlin noise on Bob Jenkins'
-lookup3 hash, fBM and the multifractals) and Voronoi (kernel/svm/voronoi.h, its F1 feature) in
-native kernels; float32, the precision Cycles computes in, so a pattern's edges fall where
+lookup3 hash, fBM and the multifractals) and Voronoi (kernel/svm/voronoi.h: its features and
+fractal octaves) in native kernels; float32, the precision Cycles computes in, so a pattern's edges fall where
 Cycles puts them.
 
 `ProceduralTexels` is what a material's colour texture is when its colour comes from these
@@ -90,6 +90,30 @@ def voronoi_f1(co, scale, randomness, metric, dims, normalize):
     with np.errstate(divide='ignore', invalid='ignore'):
         position[:, :dims] = np.where(scale != 0, position[:, :dims] / scale, F32(0.0))
     return d, color, position
+
+
+def voronoi_texture(co, w, scale, detail, roughness, lacunarity, smoothness, exponent, randomness, feature, metric,
+                    dims, normalize, n=None):
+    """The Voronoi Texture node at points co (n, 3) (or None in 1D) and W w (n,) (1D and 4D; else
+    None), as Cycles' svm_node_tex_voronoi: {'Distance': (n,), 'Color': (n, 3), 'Position': (n, 3),
+    'W': (n,), 'Radius': (n,)}. feature and metric as the node's (F1, F2, SMOOTH_F1,
+    DISTANCE_TO_EDGE, N_SPHERE_RADIUS; EUCLIDEAN, MANHATTAN, CHEBYCHEV, MINKOWSKI, which 1D does
+    not read), dims 1 to 4; Detail's octaves (Roughness, Lacunarity, Normalize), Smoothness,
+    Exponent. Parameters are (n,) arrays or scalars; n: the point count where co and w are both
+    constant. In the native kernel (dacrt.shading.voronoi_texture, Cycles' PCG cell hashes,
+    lookup3 of the cell's float in 1D)."""
+    if n is None:
+        n = len(co) if co is not None else np.size(w)
+    cols = []
+    if dims != 1:
+        cols.append(np.broadcast_to(np.asarray(co, F32)[:, :min(dims, 3)], (n, min(dims, 3))))
+    if dims in (1, 4):
+        cols.append(np.broadcast_to(np.asarray(w, F32).reshape(-1, 1), (n, 1)))
+    p = np.ascontiguousarray(np.concatenate(cols, axis=1), F32)
+    d, color, position, radius = dacrt.shading.voronoi_texture(
+        p, scale, detail, roughness, lacunarity, smoothness, exponent, randomness, feature, metric, normalize)
+    return {'Distance': d, 'Color': color, 'Position': np.ascontiguousarray(position[:, :3]),
+            'W': np.ascontiguousarray(position[:, 3]), 'Radius': radius}
 
 
 _RINGS = {'X': (0, 1, 1), 'Y': (1, 0, 1), 'Z': (1, 1, 0), 'SPHERICAL': (1, 1, 1)}

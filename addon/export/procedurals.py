@@ -1,4 +1,4 @@
-"""Colour chains that read procedural textures (Noise, Voronoi F1, Wave, Checker, Gradient, Brick,
+"""Colour chains that read procedural textures (Noise, Voronoi, Wave, Checker, Gradient, Brick,
 White Noise, Magic, Gabor): compiled into a function of the shading point's texture coordinates
 (procedural.ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does.
 The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping
@@ -24,8 +24,10 @@ PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_V
                               'TEX_WHITE_NOISE', 'TEX_MAGIC', 'TEX_GABOR'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
+_VORONOI_DIMENSIONS = {'2D': 2, '3D': 3}
+_VORONOI_FEATURES = ('F1',)
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
-_VORONOI_OUTPUTS = {'Distance': 0, 'Color': 1, 'Position': 2}
+_VORONOI_OUTPUTS = ('Distance', 'Color', 'Position')
 OBJECT_OF = 'object of'     # (object_frame: a chain's needs say in whose space it reads Object)
 # Object Info outputs read per object or instance (objectinfo.object_value's (4,) value: which
 # columns); Material Index, the shaded material's, is left to the evaluation
@@ -208,7 +210,8 @@ def _texture(node, out, chain, depth):
     t = node.type
     if t == 'TEX_WHITE_NOISE':
         return _white_noise(node, out, chain, depth)
-    vec = _vector(node, chain, depth)
+    # (a 1D Voronoi reads W alone, its Vector hidden)
+    vec = None if t == 'TEX_VORONOI' and node.voronoi_dimensions == '1D' else _vector(node, chain, depth)
     chain.textures.append(node.bl_label)
     fac = out.identifier == 'Fac'
     if t == 'TEX_NOISE':
@@ -351,28 +354,30 @@ def _image(node, out, chain):
 
 
 def _voronoi(node, out, vec, chain, depth):
-    """(fn, vector) of a Voronoi Texture's Distance, Color or Position: F1 of one octave (Cycles
-    takes one when Detail or Roughness is 0), 2D or 3D, Euclidean, Manhattan or Chebychev."""
-    dims = _NOISE_DIMENSIONS.get(node.voronoi_dimensions)
-    which = _VORONOI_OUTPUTS.get(out.identifier)
-    one_octave = any(nodeeval.constant_value(nodegraph.input_by_id(node, k)) == (0.0, True)
-                     for k in ('Detail', 'Roughness'))
+    """(fn, vector) of a Voronoi Texture's Distance, Color, Position, W or Radius: Cycles'
+    svm_node_tex_voronoi (procedural.voronoi_texture), its features, metrics, dimensions and
+    fractal octaves."""
+    dims = _VORONOI_DIMENSIONS.get(node.voronoi_dimensions)
     unread = [what for what, no in (
         (f"{node.voronoi_dimensions} Voronoi", dims is None),
-        (f"Voronoi feature {node.feature}", node.feature != 'F1'),
-        (f"Voronoi distance {node.distance.title()}", node.distance not in _VORONOI_METRICS),
-        (f"Voronoi {out.name} output", which is None)) if no]
-    if not one_octave and not unread:       # (its octaves: of F1 alone, the only feature read)
-        unread.append(f"a fractal Voronoi (Detail {_shown(node, 'Detail')}, Roughness {_shown(node, 'Roughness')})")
+        (f"Voronoi feature {node.feature}", node.feature not in _VORONOI_FEATURES),
+        (f"Voronoi distance {node.distance.title()}", dims != 1 and node.distance not in _VORONOI_METRICS),
+        (f"Voronoi {out.name} output", out.identifier not in _VORONOI_OUTPUTS)) if no]
     if unread:
         raise nodeeval.NotCompiled(', '.join(unread))
-    scale, randomness = _float(node, 'Scale', chain, depth), _float(node, 'Randomness', chain, depth)
-    metric, normalize = node.distance, bool(node.normalize)
+    params = [_float(node, k, chain, depth) for k in ('Scale', 'Detail', 'Roughness', 'Lacunarity', 'Smoothness',
+                                                      'Exponent', 'Randomness')]
+    w = _float(node, 'W', chain, depth) if dims in (1, 4) else None
+    feature, metric, normalize, which = node.feature, node.distance, bool(node.normalize), out.identifier
 
     def voronoi(c):
-        outputs = pr.voronoi_f1(vec(c), scale(c), randomness(c), metric, dims, normalize)
-        return outputs[0][:, None] if which == 0 else outputs[which]
-    return voronoi, which == 2
+        values = [p(c) for p in params]
+        co = None if vec is None else vec(c)
+        ww = None if w is None else w(c)
+        n = max([len(v) for v in values] + [len(x) for x in (co, ww) if x is not None])
+        found = pr.voronoi_texture(co, ww, *values, feature, metric, dims, normalize, n)[which]
+        return found if found.ndim == 2 else found[:, None]
+    return voronoi, which == 'Position'
 
 
 def _shown(node, ident):

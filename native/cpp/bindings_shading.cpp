@@ -587,6 +587,35 @@ py::tuple voronoi_f1_py(F32Array points, F32Array randomness, int metric) {
     return py::make_tuple(dist, color, position);
 }
 
+py::tuple voronoi_texture_py(F32Array points, F32Array scale, F32Array detail, F32Array roughness,
+                             F32Array lacunarity, F32Array smoothness, F32Array exponent, F32Array randomness,
+                             int feature, int metric, bool normalize) {
+    if (points.ndim() != 2 || points.shape(1) < 1 || points.shape(1) > 4)
+        throw py::value_error("points must have shape (n, 1..4), got " + shape_str(points));
+    const int dims = int(points.shape(1));
+    if (metric < VORONOI_EUCLIDEAN || metric > VORONOI_MINKOWSKI)
+        throw py::value_error("metric must be 0..3 (Euclidean, Manhattan, Chebychev, Minkowski), got " +
+                              std::to_string(metric));
+    if (feature < VORONOI_F1 || feature > VORONOI_N_SPHERE_RADIUS)
+        throw py::value_error("feature must be 0..4 (F1, F2, Smooth F1, Distance to Edge, N-Sphere Radius), got " +
+                              std::to_string(feature));
+    const size_t n = size_t(points.shape(0));
+    VoronoiTextureParams k{scale.data(), detail.data(), roughness.data(), lacunarity.data(), smoothness.data(),
+                           exponent.data(), randomness.data(), param_len(scale, n, "scale"),
+                           param_len(detail, n, "detail"), param_len(roughness, n, "roughness"),
+                           param_len(lacunarity, n, "lacunarity"), param_len(smoothness, n, "smoothness"),
+                           param_len(exponent, n, "exponent"), param_len(randomness, n, "randomness"),
+                           feature, metric, normalize};
+    F32Array dist{py::ssize_t(n)}, radius{py::ssize_t(n)};
+    F32Array color({py::ssize_t(n), py::ssize_t(3)}), position({py::ssize_t(n), py::ssize_t(4)});
+    {
+        py::gil_scoped_release nogil;
+        voronoi_texture(points.data(), n, dims, k, dist.mutable_data(), color.mutable_data(),
+                        position.mutable_data(), radius.mutable_data());
+    }
+    return py::make_tuple(dist, color, position, radius);
+}
+
 // The leading shape of an image array (..., c) and its texel count; c must be in [lo, hi].
 std::pair<std::vector<py::ssize_t>, size_t> texel_shape(const py::array& a, py::ssize_t lo, py::ssize_t hi,
                                                         const char* name) {
@@ -689,4 +718,7 @@ void register_shading(py::module_& m) {
     m.def("byte_texels", &byte_texels_py, py::arg("buf"), py::arg("byte_floats"), py::arg("associate"));
     m.def("byte_lookup", &byte_lookup_py, py::arg("k8"), py::arg("table"), py::arg("rgba"));
     m.def("voronoi_f1", &voronoi_f1_py, py::arg("points"), py::arg("randomness"), py::arg("metric"));
+    m.def("voronoi_texture", &voronoi_texture_py, py::arg("points"), py::arg("scale"), py::arg("detail"),
+          py::arg("roughness"), py::arg("lacunarity"), py::arg("smoothness"), py::arg("exponent"),
+          py::arg("randomness"), py::arg("feature"), py::arg("metric"), py::arg("normalize"));
 }

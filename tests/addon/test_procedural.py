@@ -155,9 +155,10 @@ def _voronoi_material(name, **settings):
     return mat
 
 
-def test_voronoi_of_one_octave_is_evaluated_and_other_features_are_reported(scene, exported):
-    """Voronoi F1 with Detail 0 (or Roughness 0: Cycles then takes one octave too) is evaluated
-    per point; fractal octaves, F2 and Minkowski keep the node's own value, said."""
+def test_voronoi_features_are_evaluated_and_others_reported(scene, exported):
+    """Voronoi F1 of one octave (Detail 0, or Roughness 0: Cycles then takes one octave too) and
+    of Detail's octaves is evaluated per point; F2 and Minkowski keep the node's own value,
+    said."""
     scenes.camera()
     cases = {"F1": {}, "OneOctave": {'Detail': 3.0, 'Roughness': 0.0}, "Fractal": {'Detail': 2.0},
              "F2": {'feature': 'F2'}, "Minkowski": {'distance': 'MINKOWSKI'}}
@@ -166,7 +167,7 @@ def test_voronoi_of_one_octave_is_evaluated_and_other_features_are_reported(scen
     data = exported()
     for name in cases:
         m = _material(data, name)
-        supported = name in ("F1", "OneOctave")
+        supported = name in ("F1", "OneOctave", "Fractal")
         assert isinstance(m.texture, ProceduralTexels) == supported, name
         assert ("Voronoi Texture" in m.approximated) != supported, (name, m.approximated)
 

@@ -38,3 +38,37 @@ def test_bad_arguments_are_refused():
         dacrt.shading.voronoi_f1(np.zeros((3, 3), np.float32), 1.0, 'MINKOWSKI')
     with pytest.raises(ValueError, match="points must have shape"):
         dacrt.shading.voronoi_f1(np.zeros((3, 4), np.float32), 1.0)
+
+
+@pytest.mark.parametrize('metric', ['EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV'])
+@pytest.mark.parametrize('dims', [2, 3])
+def test_the_node_of_one_octave_is_f1(metric, dims):
+    """dacrt.shading.voronoi_texture (the whole node) with Detail 0 is voronoi_f1 of the scaled
+    points: the same distance and colour bits; the position divided back by Scale."""
+    rng = np.random.default_rng(10 + dims)
+    p = ((rng.random((5000, dims)) - 0.5) * 20).astype(np.float32)
+    r = rng.uniform(-0.5, 1.5, len(p)).astype(np.float32)
+    scale = np.float32(2.5)
+    d, color, position, radius = dacrt.shading.voronoi_texture(p, scale, 0.0, 0.5, 2.0, 1.0, 1.0, r, 'F1', metric)
+    want = dacrt.shading.voronoi_f1(p * scale, r, metric)
+    np.testing.assert_array_equal(d, want[0])
+    np.testing.assert_array_equal(color, want[1])
+    np.testing.assert_allclose(position[:, :3], want[2] / scale, rtol=1e-6, atol=1e-6)
+    assert (position[:, 3] == 0).all() and (radius == 0).all()
+
+
+def test_octaves_sum_as_cycles_fbm():
+    """Detail 1, Roughness 0.5, Lacunarity 2 (not normalized): F1 at the point plus half F1 at
+    twice the point, as Cycles' fractal_voronoi_x_fx sums its octaves."""
+    p = np.random.default_rng(3).uniform(-4, 4, (4000, 3)).astype(np.float32)
+    got = dacrt.shading.voronoi_texture(p, 1.5, 1.0, 0.5, 2.0, 1.0, 1.0, 1.0)[0]
+    one = dacrt.shading.voronoi_f1(p * np.float32(1.5), 1.0)[0]
+    two = dacrt.shading.voronoi_f1(p * np.float32(1.5) * np.float32(2.0), 1.0)[0]
+    np.testing.assert_allclose(got, one + np.float32(0.5) * two, rtol=1e-6)
+
+
+def test_bad_node_arguments_are_refused():
+    with pytest.raises(ValueError, match="feature must be one of"):
+        dacrt.shading.voronoi_texture(np.zeros((3, 3), np.float32), 1, 0, 0.5, 2, 1, 1, 1, 'F3')
+    with pytest.raises(ValueError, match="points must have shape"):
+        dacrt.shading.voronoi_texture(np.zeros((3, 5), np.float32), 1, 0, 0.5, 2, 1, 1, 1)

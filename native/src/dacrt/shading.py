@@ -13,7 +13,8 @@ from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
 __all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
-           "LightChoice", "next_event", "accumulate_masked", "noise_texture", "voronoi_f1"]
+           "LightChoice", "next_event", "accumulate_masked", "noise_texture", "voronoi_f1",
+           "voronoi_texture"]
 
 _F32 = np.float32
 
@@ -503,6 +504,33 @@ def voronoi_f1(points, randomness, metric: str = 'EUCLIDEAN'):
         raise ValueError(f"metric must be one of {', '.join(VORONOI_METRICS)}, got {metric!r}")
     r = np.ascontiguousarray(np.atleast_1d(np.asarray(randomness, _F32)).reshape(-1))
     return _core.voronoi_f1(np.ascontiguousarray(points, _F32), r, VORONOI_METRICS[metric])
+
+
+VORONOI_TEXTURE_METRICS = {'EUCLIDEAN': 0, 'MANHATTAN': 1, 'CHEBYCHEV': 2, 'MINKOWSKI': 3}
+VORONOI_FEATURES = {'F1': 0, 'F2': 1, 'SMOOTH_F1': 2, 'DISTANCE_TO_EDGE': 3, 'N_SPHERE_RADIUS': 4}
+
+
+def voronoi_texture(points, scale, detail, roughness, lacunarity, smoothness, exponent, randomness,
+                    feature: str = 'F1', metric: str = 'EUCLIDEAN', normalize: bool = False):
+    """Cycles' Voronoi Texture node (svm_node_tex_voronoi) at unscaled points (n, d): d 1 (W),
+    2 (x, y), 3 (x, y, z) or 4 (x, y, z, W). Parameters: one value or one per point (n,),
+    clamped as Cycles clamps them (Detail to [0, 15], Roughness and Randomness to [0, 1],
+    Smoothness / 2 to [0, 0.5]). feature: a VORONOI_FEATURES name; metric: a
+    VORONOI_TEXTURE_METRICS name (1D reads none). Returns (distance (n,), colour (n, 3), position
+    (n, 4): x, y, z and W, radius (n,)): what the feature gives, zeros elsewhere (Distance to Edge
+    a distance only, N-Sphere Radius a radius only). F1, Smooth F1 and F2 summed over Detail's
+    octaves as Cycles' fractal_voronoi_x_fx, Distance to Edge as fractal_voronoi_distance_to_edge;
+    float32 in Cycles' order. One threaded pass."""
+    if metric not in VORONOI_TEXTURE_METRICS:
+        raise ValueError(f"metric must be one of {', '.join(VORONOI_TEXTURE_METRICS)}, got {metric!r}")
+    if feature not in VORONOI_FEATURES:
+        raise ValueError(f"feature must be one of {', '.join(VORONOI_FEATURES)}, got {feature!r}")
+
+    def param(v):
+        return np.ascontiguousarray(np.atleast_1d(np.asarray(v, _F32)).reshape(-1))
+    return _core.voronoi_texture(np.ascontiguousarray(points, _F32), param(scale), param(detail), param(roughness),
+                                 param(lacunarity), param(smoothness), param(exponent), param(randomness),
+                                 VORONOI_FEATURES[feature], VORONOI_TEXTURE_METRICS[metric], bool(normalize))
 
 
 def byte_texels(buf, byte_floats, associate: bool = False):
