@@ -35,6 +35,12 @@ CASES = {
     'fractal_f1_2d_manhattan_normalized': ('Distance', {'voronoi_dimensions': '2D', 'distance': 'MANHATTAN',
                                                         'Detail': 1.5, 'normalize': True, 'Scale': 3.0}, True),
     'fractal_f1_color_normalized': ('Color', {'Detail': 2.0, 'Roughness': 0.8, 'normalize': True}, False),
+    # F2
+    'f2_distance': ('Distance', {'feature': 'F2', 'Scale': 3.0}, True),
+    'f2_color_2d': ('Color', {'feature': 'F2', 'voronoi_dimensions': '2D', 'Scale': 4.0}, False),
+    'f2_position': ('Position', {'feature': 'F2', 'Scale': 2.0, 'Randomness': 0.7}, False),
+    'f2_fractal_chebychev_normalized': ('Distance', {'feature': 'F2', 'distance': 'CHEBYCHEV', 'Detail': 1.5,
+                                                     'normalize': True, 'Scale': 2.0}, True),
 }
 
 
@@ -78,7 +84,16 @@ def fractal_f1_color(nt, diffuse):
     nt.links.new(v.outputs['Color'], diffuse.inputs['Color'])
 
 
-@pytest.mark.parametrize('chain', [fractal_f1_color], ids=lambda c: c.__name__)
+def fractal_f2_color(nt, diffuse):
+    tc = nt.nodes.new('ShaderNodeTexCoord')
+    v = nt.nodes.new(V)
+    v.feature = 'F2'
+    v.inputs['Scale'].default_value, v.inputs['Detail'].default_value = 2.0, 1.5
+    nt.links.new(tc.outputs['Object'], v.inputs['Vector'])
+    nt.links.new(v.outputs['Color'], diffuse.inputs['Color'])
+
+
+@pytest.mark.parametrize('chain', [fractal_f1_color, fractal_f2_color], ids=lambda c: c.__name__)
 def test_voronoi_feature_renders_as_cycles(chain, tmp_path):
     sunplane.build(np.ones((1, 1, 4), np.float32), _wire(chain), RES, 16)
     _relink_surface()
