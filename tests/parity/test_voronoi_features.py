@@ -41,6 +41,12 @@ CASES = {
     'f2_position': ('Position', {'feature': 'F2', 'Scale': 2.0, 'Randomness': 0.7}, False),
     'f2_fractal_chebychev_normalized': ('Distance', {'feature': 'F2', 'distance': 'CHEBYCHEV', 'Detail': 1.5,
                                                      'normalize': True, 'Scale': 2.0}, True),
+    # Smooth F1
+    'smooth_f1_distance': ('Distance', {'feature': 'SMOOTH_F1', 'Smoothness': 0.6, 'Scale': 3.0}, True),
+    'smooth_f1_color_2d': ('Color', {'feature': 'SMOOTH_F1', 'voronoi_dimensions': '2D', 'Smoothness': 1.0,
+                                     'Scale': 4.0}, True),
+    'smooth_f1_position_fractal': ('Position', {'feature': 'SMOOTH_F1', 'Smoothness': 0.3, 'Detail': 1.0,
+                                                'Scale': 2.0}, True),
 }
 
 
