@@ -47,6 +47,11 @@ CASES = {
                                      'Scale': 4.0}, True),
     'smooth_f1_position_fractal': ('Position', {'feature': 'SMOOTH_F1', 'Smoothness': 0.3, 'Detail': 1.0,
                                                 'Scale': 2.0}, True),
+    # Distance to Edge
+    'edge_3d': ('Distance', {'feature': 'DISTANCE_TO_EDGE', 'Scale': 3.0}, True),
+    'edge_2d_fractal_normalized': ('Distance', {'feature': 'DISTANCE_TO_EDGE', 'voronoi_dimensions': '2D',
+                                                'Detail': 2.5, 'normalize': True, 'Randomness': 0.8,
+                                                'Scale': 2.0}, True),
 }
 
 
@@ -99,7 +104,20 @@ def fractal_f2_color(nt, diffuse):
     nt.links.new(v.outputs['Color'], diffuse.inputs['Color'])
 
 
-@pytest.mark.parametrize('chain', [fractal_f1_color, fractal_f2_color], ids=lambda c: c.__name__)
+def edges_ramp(nt, diffuse):
+    """Distance to Edge through a Color Ramp: dark cell borders (Generated coordinates)."""
+    v = nt.nodes.new(V)
+    v.feature = 'DISTANCE_TO_EDGE'
+    v.inputs['Scale'].default_value = 3.0
+    ramp = nt.nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.elements[0].color = (0.05, 0.05, 0.1, 1)
+    ramp.color_ramp.elements[1].color = (0.9, 0.7, 0.3, 1)
+    ramp.color_ramp.elements[1].position = 0.3
+    nt.links.new(v.outputs['Distance'], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], diffuse.inputs['Color'])
+
+
+@pytest.mark.parametrize('chain', [fractal_f1_color, fractal_f2_color, edges_ramp], ids=lambda c: c.__name__)
 def test_voronoi_feature_renders_as_cycles(chain, tmp_path):
     sunplane.build(np.ones((1, 1, 4), np.float32), _wire(chain), RES, 16)
     _relink_surface()
