@@ -26,7 +26,7 @@ _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_FEATURES = ('F1', 'F2', 'SMOOTH_F1', 'DISTANCE_TO_EDGE')
-_VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV')
+_VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV', 'MINKOWSKI')
 _VORONOI_OUTPUTS = ('Distance', 'Color', 'Position')
 OBJECT_OF = 'object of'     # (object_frame: a chain's needs say in whose space it reads Object)
 # Object Info outputs read per object or instance (objectinfo.object_value's (4,) value: which

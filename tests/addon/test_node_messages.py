@@ -58,11 +58,14 @@ def test_fractal_voronoi_is_read_and_what_is_not_is_named(scene, said):
     assert not any("Voronoi" in t for t in said), said
     v.distance = 'MINKOWSKI'
     _render(scene, 'DACRT')
+    assert not any("Voronoi" in t for t in said), said
+    v.voronoi_dimensions = '4D'
+    _render(scene, 'DACRT')
     text = " | ".join(said)
-    assert "(Voronoi distance Minkowski is not read there)" in text and "fractal" not in text
+    assert "(4D Voronoi is not read there)" in text and "Minkowski" not in text
     said.clear()
-    v.inputs['Detail'].default_value = 0.0      # one octave, Euclidean: evaluated per point, silent
-    v.distance = 'EUCLIDEAN'
+    v.inputs['Detail'].default_value = 0.0      # one octave, 3D Euclidean: evaluated per point, silent
+    v.distance, v.voronoi_dimensions = 'EUCLIDEAN', '3D'
     _render(scene, 'DACRT')
     assert not any("Voronoi" in t for t in said), said
 

@@ -157,17 +157,17 @@ def _voronoi_material(name, **settings):
 
 def test_voronoi_features_are_evaluated_and_others_reported(scene, exported):
     """Voronoi F1 of one octave (Detail 0, or Roughness 0: Cycles then takes one octave too) and
-    of Detail's octaves and F2 are evaluated per point; Minkowski keeps the node's own value,
-    said."""
+    of Detail's octaves, F2 and Minkowski are evaluated per point; a 4D one keeps the node's own
+    value, said."""
     scenes.camera()
     cases = {"F1": {}, "OneOctave": {'Detail': 3.0, 'Roughness': 0.0}, "Fractal": {'Detail': 2.0},
-             "F2": {'feature': 'F2'}, "Minkowski": {'distance': 'MINKOWSKI'}}
+             "F2": {'feature': 'F2'}, "Minkowski": {'distance': 'MINKOWSKI'}, "FourD": {'voronoi_dimensions': '4D'}}
     for i, (name, settings) in enumerate(cases.items()):
         scenes.cube(name, location=(3 * i, 0, 0), materials=(_voronoi_material(name, **settings),))
     data = exported()
     for name in cases:
         m = _material(data, name)
-        supported = name in ("F1", "OneOctave", "Fractal", "F2")
+        supported = name != "FourD"
         assert isinstance(m.texture, ProceduralTexels) == supported, name
         assert ("Voronoi Texture" in m.approximated) != supported, (name, m.approximated)
 

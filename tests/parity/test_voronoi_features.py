@@ -52,6 +52,11 @@ CASES = {
     'edge_2d_fractal_normalized': ('Distance', {'feature': 'DISTANCE_TO_EDGE', 'voronoi_dimensions': '2D',
                                                 'Detail': 2.5, 'normalize': True, 'Randomness': 0.8,
                                                 'Scale': 2.0}, True),
+    # Minkowski
+    'minkowski_distance': ('Distance', {'distance': 'MINKOWSKI', 'Exponent': 1.5, 'Scale': 3.0}, True),
+    'minkowski_f2_2d_normalized': ('Distance', {'distance': 'MINKOWSKI', 'Exponent': 3.0, 'feature': 'F2',
+                                                'voronoi_dimensions': '2D', 'normalize': True, 'Scale': 3.0}, True),
+    'minkowski_color': ('Color', {'distance': 'MINKOWSKI', 'Exponent': 0.7, 'Scale': 2.0}, False),
 }
 
 
