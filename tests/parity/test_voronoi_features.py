@@ -57,6 +57,10 @@ CASES = {
     'minkowski_f2_2d_normalized': ('Distance', {'distance': 'MINKOWSKI', 'Exponent': 3.0, 'feature': 'F2',
                                                 'voronoi_dimensions': '2D', 'normalize': True, 'Scale': 3.0}, True),
     'minkowski_color': ('Color', {'distance': 'MINKOWSKI', 'Exponent': 0.7, 'Scale': 2.0}, False),
+    # N-Sphere Radius
+    'n_sphere_radius_3d': ('Radius', {'feature': 'N_SPHERE_RADIUS', 'Scale': 3.0}, False),
+    'n_sphere_radius_2d': ('Radius', {'feature': 'N_SPHERE_RADIUS', 'voronoi_dimensions': '2D', 'Randomness': 0.7,
+                                      'Scale': 4.0}, False),
 }
 
 
