@@ -24,10 +24,10 @@ PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_V
                               'TEX_WHITE_NOISE', 'TEX_MAGIC', 'TEX_GABOR'})
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
-_VORONOI_DIMENSIONS = {'2D': 2, '3D': 3}
+_VORONOI_DIMENSIONS = {'1D': 1, '2D': 2, '3D': 3, '4D': 4}
 _VORONOI_FEATURES = ('F1', 'F2', 'SMOOTH_F1', 'DISTANCE_TO_EDGE', 'N_SPHERE_RADIUS')
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV', 'MINKOWSKI')
-_VORONOI_OUTPUTS = ('Distance', 'Color', 'Position', 'Radius')
+_VORONOI_OUTPUTS = ('Distance', 'Color', 'Position', 'Radius', 'W')
 OBJECT_OF = 'object of'     # (object_frame: a chain's needs say in whose space it reads Object)
 # Object Info outputs read per object or instance (objectinfo.object_value's (4,) value: which
 # columns); Material Index, the shaded material's, is left to the evaluation

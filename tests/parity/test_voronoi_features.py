@@ -24,6 +24,15 @@ from .test_procedural import RES, _blocks, _centres, _emission_plane, _relink_su
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
+def _w_from_x(nt, tc, tex):
+    """W (1D and 4D) follows the object's x; a 4D Vector reads Object coordinates."""
+    sep = nt.nodes.new('ShaderNodeSeparateXYZ')
+    nt.links.new(tc.outputs['Object'], sep.inputs[0])
+    nt.links.new(sep.outputs['X'], tex.inputs['W'])
+    if tex.voronoi_dimensions == '4D':
+        nt.links.new(tc.outputs['Object'], tex.inputs['Vector'])
+
+
 V = 'ShaderNodeTexVoronoi'
 # name: (output, settings, continuous): continuous outputs agree everywhere
 CASES = {
@@ -61,6 +70,19 @@ CASES = {
     'n_sphere_radius_3d': ('Radius', {'feature': 'N_SPHERE_RADIUS', 'Scale': 3.0}, False),
     'n_sphere_radius_2d': ('Radius', {'feature': 'N_SPHERE_RADIUS', 'voronoi_dimensions': '2D', 'Randomness': 0.7,
                                       'Scale': 4.0}, False),
+    # 1D (W alone, from the object's x) and 4D
+    '1d_distance_fractal': ('Distance', {'voronoi_dimensions': '1D', 'Detail': 1.5, 'Scale': 3.0}, True),
+    '1d_color_f2': ('Color', {'voronoi_dimensions': '1D', 'feature': 'F2', 'Scale': 3.0}, False),
+    '1d_w_smooth': ('W', {'voronoi_dimensions': '1D', 'feature': 'SMOOTH_F1', 'Scale': 3.0}, True),
+    '1d_edge': ('Distance', {'voronoi_dimensions': '1D', 'feature': 'DISTANCE_TO_EDGE', 'Scale': 4.0}, True),
+    '1d_radius': ('Radius', {'voronoi_dimensions': '1D', 'feature': 'N_SPHERE_RADIUS', 'Scale': 4.0}, False),
+    '4d_distance': ('Distance', {'voronoi_dimensions': '4D', 'Scale': 2.0}, True),
+    '4d_color_smooth': ('Color', {'voronoi_dimensions': '4D', 'feature': 'SMOOTH_F1', 'Smoothness': 0.5,
+                                  'Scale': 2.0}, True),
+    '4d_w_f2': ('W', {'voronoi_dimensions': '4D', 'feature': 'F2', 'Scale': 2.0}, False),
+    '4d_edge_fractal': ('Distance', {'voronoi_dimensions': '4D', 'feature': 'DISTANCE_TO_EDGE',
+                                               'Detail': 1.0, 'Scale': 2.0}, True),
+    '4d_radius': ('Radius', {'voronoi_dimensions': '4D', 'feature': 'N_SPHERE_RADIUS', 'Scale': 2.0}, False),
 }
 
 
@@ -76,7 +98,8 @@ def _compiled(tex):
 def test_voronoi_feature_matches_cycles_pointwise(case, tmp_path):
     output, settings, continuous = CASES[case]
     settings = dict(settings)
-    tex = _emission_plane(V, output, settings)
+    dims = settings.get('voronoi_dimensions', '3D')
+    tex = _emission_plane(V, output, settings, wire=_w_from_x if dims in ('1D', '4D') else None)
     found, reasons = _compiled(tex)
     assert found is not None, (case, reasons)
     fn, needs, _ = found
