@@ -47,20 +47,27 @@ def f0_from_ior(eta):
     return ((eta - 1.0) / (eta + 1.0)) ** 2
 
 
-@lru_cache(maxsize=256)
-def _ggx_dielectric(alpha: float, eta: float) -> tuple:
-    """Per view cosine _MU, the GGX reflection albedo without Fresnel (F = 1) and with the
-    dielectric Fresnel of eta: (E, EF), each (len(_MU),). The half vector h is taken with
-    density D(h) cos(theta_h) (tan^2 theta_h = alpha^2 xi / (1 - xi)); per h the reflected
-    direction contributes F G2 (wo.h) / (mu_o cos theta_h)."""
+def _half_vectors(alpha: float):
+    """The GGX half vectors of the (_MU, _XI, _PHI) quadrature: (mu_o, cos theta_h, wo.h, the
+    reflected direction's z), each broadcasting to (len(_MU), len(_XI), len(_PHI)); h is taken
+    with density D(h) cos(theta_h) (tan^2 theta_h = alpha^2 xi / (1 - xi)), wo = (sin, 0, mu_o)."""
     mo = _MU[:, None, None]
     so = np.sqrt(1.0 - mo * mo)
     xi = _XI[None, :, None]
     t2 = alpha * alpha * xi / (1.0 - xi)
     ch = 1.0 / np.sqrt(1.0 + t2)
     sh = np.sqrt(t2) * ch
-    oh = so * sh * np.cos(_PHI) + mo * ch          # wo = (sin, 0, mu_o)
-    wiz = 2.0 * oh * ch - mo
+    oh = so * sh * np.cos(_PHI) + mo * ch
+    return mo, ch, oh, 2.0 * oh * ch - mo
+
+
+@lru_cache(maxsize=256)
+def _ggx_dielectric(alpha: float, eta: float) -> tuple:
+    """Per view cosine _MU, the GGX reflection albedo without Fresnel (F = 1) and with the
+    dielectric Fresnel of eta: (E, EF), each (len(_MU),). The half vector h is taken with
+    density D(h) cos(theta_h) (tan^2 theta_h = alpha^2 xi / (1 - xi)); per h the reflected
+    direction contributes F G2 (wo.h) / (mu_o cos theta_h)."""
+    mo, ch, oh, wiz = _half_vectors(alpha)
 
     def smith_lambda(c):
         c = np.clip(c, 1e-9, 1.0)
@@ -142,14 +149,7 @@ def _schlick_s(alpha: float, eta: float) -> np.ndarray:
     over GGX's visible normals (pdf G1(wo) D (wo.h) / mu_o; a reflection below the horizon
     counts 0). Integrated as _ggx_dielectric, normalised by the quadrature's visible-normal
     total (within 1% of 1 at grazing view)."""
-    mo = _MU[:, None, None]
-    so = np.sqrt(1.0 - mo * mo)
-    xi = _XI[None, :, None]
-    t2 = alpha * alpha * xi / (1.0 - xi)
-    ch = 1.0 / np.sqrt(1.0 + t2)
-    sh = np.sqrt(t2) * ch
-    oh = so * sh * np.cos(_PHI) + mo * ch
-    wiz = 2.0 * oh * ch - mo
+    mo, ch, oh, wiz = _half_vectors(alpha)
     visible = np.where(oh > 0.0, oh / (mo * ch), 0.0) * (_W_XI[None, :, None] / len(_PHI))
     f0 = f0_from_ior(eta)
     s = np.clip((fresnel_dielectric_cos(np.clip(oh, 0.0, 1.0), eta) - f0) / (1.0 - f0), 0.0, 1.0)
