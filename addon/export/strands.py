@@ -201,7 +201,7 @@ def triangle_count(src, level):
     """The triangles tessellate() makes of a StrandSource at `level` (at most, for tubes)."""
     if src.kind == 'POINTCLOUD':
         return pointcloud.triangle_count(src.radii, level)
-    return hair.triangle_count(src.offsets, level, src.linear)
+    return hair.triangle_count(src.offsets, level, src.linear, src.positions)
 
 
 def tessellate(src, level, notes, why=''):

@@ -80,10 +80,12 @@ def test_tube_follows_catmull_rom_through_its_keys_without_twisting():
     v, t, n, kept = hair.tubes(p, r, [0, len(p)], (sides, steps))
     rings = v.astype(np.float64).reshape(-1, sides, 3)
     centres = rings.mean(axis=1)
-    # every steps-th ring is centred on a key, with that key's radius (times the ring scale)
+    # every steps-th ring is centred on a key, with that key's radius (times the ring scale),
+    # stretched along the bend by the mitre of the helix's gentle turns (at most 2%)
     assert np.allclose(centres[::steps], p, atol=1e-5)
     scale = np.pi / (sides * np.sin(np.pi / sides))
-    assert np.allclose(np.linalg.norm(rings[::steps] - p[:, None], axis=2), r[:, None] * scale, rtol=1e-4)
+    reach = np.linalg.norm(rings[::steps] - p[:, None], axis=2) / (r[:, None] * scale)
+    assert reach.min() > 1 - 1e-5 and reach.max() < 1.02
     # in between, the uniform Catmull-Rom point of the segment (keys 3..6, u = 1/2)
     k = 4
     mid = 0.5 * (2 * p[k] + (p[k + 1] - p[k - 1]) * 0.5 + (2 * p[k - 1] - 5 * p[k] + 4 * p[k + 1] - p[k + 2]) * 0.25
