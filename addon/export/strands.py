@@ -92,7 +92,8 @@ def hair_arrays(ob, notes):
         # viewport (whose depsgraph caches the display steps, as Cycles reads them there:
         # co_hair gives (0, 0, 0) past the cache, every strand had run to the world origin)
         step = s.display_step if viewport else s.render_step
-        points = (1 << step) + 1 + (s.kink_extra_steps if s.kink == 'SPIRAL' else 0)
+        base = (1 << step) + 1
+        points = base + (s.kink_extra_steps if s.kink == 'SPIRAL' else 0)
         co = np.empty((parents + children - first, points, 3))
         for i, pa in enumerate(range(first, parents + children)):
             if i % 4096 == 0 and notes.check_break():
@@ -101,14 +102,29 @@ def hair_arrays(ob, notes):
                 co[i, j] = ps.co_hair(ob, particle_no=pa, step=j)
         if not len(co):
             continue
+        # a Spiral kink's extra steps: the path cache holds fewer than Cycles asks for (parents
+        # none of them, children one fewer), and bpy's co_hair gives (0, 0, 0) past it, where
+        # Cycles' call leaves the point it had (the tip): every strand had grown a tube from its
+        # tip to the world origin. bpy does not say the cache's length: the trailing points
+        # exactly at the origin among the extra steps are past it
+        real = np.full(len(co), points)
+        if points > base:
+            past_cache = ~co[:, base:].any(axis=2)
+            real -= np.cumprod(past_cache[:, ::-1], axis=1).sum(axis=1)
+        past = np.arange(points)[None, :] >= real[:, None]
+        # the tip repeated past the cache, as Cycles has it: the taper runs over the real length
+        # and a Close Tip closes the last repeated point, not the visible tip (as in Cycles); the
+        # repeats, of no length, are then dropped
+        co = np.where(past[..., None], co[np.arange(len(co)), real - 1][:, None, :], co)
         seg = np.linalg.norm(np.diff(co, axis=1), axis=2)
         along = np.concatenate([np.zeros((len(co), 1)), np.cumsum(seg, axis=1)], axis=1)
         length = along[:, -1:]
         time = np.divide(along, length, out=np.zeros_like(along), where=length > 0)
         radius = hair_radius(s, time)
-        positions.append(co.reshape(-1, 3) @ to_object[:3, :3].T + to_object[:3, 3])
-        radii.append(radius.reshape(-1))
-        offsets.extend((offsets[-1] + points * np.arange(1, len(co) + 1)).tolist())
+        keep = ~past
+        positions.append(co[keep] @ to_object[:3, :3].T + to_object[:3, 3])
+        radii.append(radius[keep])
+        offsets.extend((offsets[-1] + np.cumsum(real)).tolist())
         slots.append(np.full(len(co), min(max(s.material - 1, 0), n_slots - 1)))
         modifier = next(m for m in ob.modifiers if m.type == 'PARTICLE_SYSTEM' and m.particle_system == ps)
         for k, name in enumerate(uv_names):

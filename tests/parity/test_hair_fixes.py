@@ -56,3 +56,35 @@ def test_curves_keep_their_width_through_sharp_turns(ctype, points, tmp_path):
     # the light caught: the bright blue channel 1-2% over at the Poly joints (more light
     # between the zig-zag's legs), where it had been 26-63% short
     np.testing.assert_allclose(d[:3], c[:3], rtol=0.025, err_msg="colour")
+
+
+def _emitter(name="Emitter", size=1.0, materials=None, location=(0, 0, -0.6)):
+    em = scenes.plane(name, size=size, materials=materials or [scenes.diffuse("Fur", (0.9, 0.6, 0.3))])
+    em.location = location
+    em.show_instancer_for_render = False
+    em.modifiers.new("Hair", 'PARTICLE_SYSTEM')
+    return em, em.particle_systems[0].settings
+
+
+@pytest.mark.parametrize('children', [False, True], ids=['parents', 'children'])
+def test_spiral_kink_strands_end_at_their_tips(children, tmp_path):
+    """Kink Spiral: Cycles asks co_hair for kink_extra_steps more points than the path cache
+    holds (parents: all 4 past it, children: 1) and bpy gives (0, 0, 0) there: every strand had
+    run a tube from its tip to the world origin (alpha 0.0606 vs Cycles' 0.0283; children
+    0.0720 vs 0.0411)."""
+    sc = _small_scene(32)
+    em, s = _emitter(location=(0.8, 0, -0.8))
+    s.type, s.count, s.hair_length, s.radius_scale = 'HAIR', 30, 0.5, 0.04
+    s.kink = 'SPIRAL'
+    if children:
+        s.child_type, s.rendered_child_count = 'INTERPOLATED', 3
+    layer = sc.view_layers[0].name
+    exrs = scenes.render_engines(sc, tmp_path)
+    for engine, exr in exrs.items():      # between the tips and the world origin (row 0 at the bottom)
+        assert exr[f"{layer}.Combined.A"][28:34, 32:].max() < 1e-3, engine
+    d, c = ({e: np.array([exr[f"{layer}.Combined.{ch}"].mean() for ch in 'RGBA']) for e, exr in exrs.items()}[e]
+            for e in ('DACRT', 'CYCLES'))
+    assert c[3] > 0.01
+    np.testing.assert_allclose(d[3], c[3], rtol=0.01, err_msg="covered area (alpha)")
+    # the parents' tight curls catch 1.5% less light (so without the extra steps too)
+    np.testing.assert_allclose(d[:3], c[:3], rtol=0.02, err_msg="colour")
