@@ -361,9 +361,15 @@ class Assembly:
         if a.normal_rows is None:
             normals[...] = ng[:, None, :]
         else:
-            inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin,
-                                         np.eye(3)))    # normals transform by the inverse transpose
-            n = dacrt.shading.transform_points(a.normal_rows, inv.transpose(0, 2, 1), None,
+            if getattr(a, 'radial_normals', False):
+                # a point cloud's spheres: Cycles shades a point by normalize(P - centre) in
+                # world space, the radial direction placed by the matrix itself (the inverse
+                # transpose gave the ellipsoid's normal: scale (2, 1, 1) 6% bright)
+                xf = lin
+            else:                                   # normals transform by the inverse transpose
+                inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin, np.eye(3)))
+                xf = inv.transpose(0, 2, 1)
+            n = dacrt.shading.transform_points(a.normal_rows, np.ascontiguousarray(xf), None,
                            np.empty((k, len(a.normal_rows), 3), np.float32))
             # |n| per row from the three strided columns: 2x faster than einsum's reduction
             nlen = n[..., 0] * n[..., 0]

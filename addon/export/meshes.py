@@ -149,11 +149,12 @@ class MeshArrays:
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
                  'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes', '_coords',
-                 'undeformed', 'rebuilt', 'texspace', 'strand', 'orco')
+                 'undeformed', 'rebuilt', 'texspace', 'strand', 'orco', 'radial_normals')
 
     def __init__(self, me, want_uvs):
         self.texspace = None         # (location, size) where not the mesh's own (from_arrays)
         self.strand = None           # a tessellation's attributes (from_arrays)
+        self.radial_normals = False  # spheres' normals: placed like positions (from_arrays)
         self.orco = None             # the positions Generated coordinates are of, where set (from_arrays)
         nv = len(me.vertices)
         self.positions = np.empty(nv * 3, np.float32)
@@ -222,7 +223,7 @@ class MeshArrays:
 
     @classmethod
     def from_arrays(cls, positions, triangles, vertex_normals, generated_is_object=False, strand=None,
-                    generated_of=None, uvs=None):
+                    generated_of=None, uvs=None, radial_normals=False):
         """A mesh made here (tessellated points or curves): smooth per-vertex normals, one
         material slot; Generated coordinates its bounds mapped to 0..1, with
         generated_is_object its object-space positions, with generated_of ((v, 3) positions,
@@ -230,8 +231,12 @@ class MeshArrays:
         each vertex's strand root in the emitter's). strand: (the source's attributes
         {name: (domain, (n, 4) rows)}, its render colour attribute's name or None, a function
         giving per-vertex rows of a domain's rows), so Attribute nodes read them. uvs:
-        ({name: (v, 2) per vertex}, the active render map's name or '') (None: no UV map)."""
+        ({name: (v, 2) per vertex}, the active render map's name or '') (None: no UV map).
+        radial_normals: the normals are directions from a centre (spheres), placed by the
+        instance's matrix itself, not its inverse transpose (as Cycles shades a point:
+        normalize(P - centre) in world space)."""
         a = cls.__new__(cls)
+        a.radial_normals = radial_normals
         a.texspace = (np.full(3, 0.5), np.full(3, 0.5)) if generated_is_object else None
         a.orco = None
         if generated_of is not None:

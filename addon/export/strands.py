@@ -268,7 +268,10 @@ def tessellate(src, level, notes, why=''):
         return arrays
     # Cycles' Generated coordinates of points and curves are their object-space positions
     strand = (src.attributes, src.render_color, per_vertex) if src.attributes else None
-    return MeshArrays.from_arrays(v, t, n, generated_is_object=True, strand=strand, uvs=uvs)
+    # Cycles shades a point with its world-space radial direction: on a non-uniformly scaled
+    # object the ellipsoid is shaded as the sphere's directions stretched, not by its normal
+    return MeshArrays.from_arrays(v, t, n, generated_is_object=True, strand=strand, uvs=uvs,
+                                  radial_normals=src.kind == 'POINTCLOUD')
 
 
 def _all_poly(types, curves):
