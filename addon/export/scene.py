@@ -372,8 +372,11 @@ class Exporter:
             return
         slots_of = [override] if override is not None else [m.material for m in ob.material_slots]
         info = self._info(inst, ob, parent)      # the emitter's, as Cycles' hair
+        # the emitter's Shadow Terminator offsets, which Cycles' hair takes (it is the emitter's
+        # object): they had been dropped (a Shading Offset of 0.5 rendered the hair twice as
+        # bright as Cycles' in red)
         self.placements[key].append(Placement(np.array(inst.matrix_world, np.float64), slots_of, vis,
-                                               self._object_id(ob, parent), ob.name, info=info))
+                                               self._object_id(ob, parent), ob.name, _terminator(ob), info))
 
 
     def _tessellate_strands(self):

@@ -4,6 +4,7 @@ The scenes of test_points_curves: a sun and a white world, an orthographic camer
 transparent film (mean alpha: the area covered; mean colour: the light caught)."""
 import math
 
+
 import numpy as np
 import pytest
 
@@ -107,3 +108,16 @@ def test_points_on_a_scaled_object_are_shaded_as_in_cycles(scale, tmp_path):
     np.testing.assert_allclose(d[3], c[3], rtol=0.01, err_msg="covered area (alpha)")
     # (2, 1, 1) within 0.1%, the squashed one 1.6% dark (the facets, again), was 12-16% bright
     np.testing.assert_allclose(d[:3], c[:3], rtol=0.02, err_msg="colour")
+
+
+def test_hair_particles_take_the_emitters_shadow_terminator_offset(tmp_path):
+    """Cycles' hair is its emitter's object and takes its Shadow Terminator Shading Offset;
+    DACRT's hair had none (offset 0.5: red 0.0397 vs Cycles' 0.0196)."""
+    sc = _small_scene(64)
+    em, s = _emitter(size=2, materials=[scenes.diffuse("Blue", (0.3, 0.6, 0.9))])
+    s.type, s.count, s.hair_length, s.radius_scale = 'HAIR', 30, 1.2, 0.15
+    em.shadow_terminator_shading_offset = 0.5
+    m = _means(sc, tmp_path)
+    d, c = m['DACRT'], m['CYCLES']
+    np.testing.assert_allclose(d[3], c[3], rtol=0.01, err_msg="covered area (alpha)")
+    np.testing.assert_allclose(d[:3], c[:3], rtol=0.01, err_msg="colour")
