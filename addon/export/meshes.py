@@ -231,7 +231,8 @@ class MeshArrays:
         each vertex's strand root in the emitter's). strand: (the source's attributes
         {name: (domain, (n, 4) rows)}, its render colour attribute's name or None, a function
         giving per-vertex rows of a domain's rows), so Attribute nodes read them. uvs:
-        ({name: (v, 2) per vertex}, the active render map's name or '') (None: no UV map).
+        ({name: (v, 2) per vertex}, the active render map's name or '') (None: no UV map); a
+        4th item of strand says why a name not among them reads 0 ('{name}' formatted).
         radial_normals: the normals are directions from a centre (spheres), placed by the
         instance's matrix itself, not its inverse transpose (as Cycles shades a point:
         normalize(P - centre) in world space)."""
@@ -335,7 +336,7 @@ class MeshArrays:
         out = None
         me = self.mesh
         if me is None and self.strand is not None:
-            attributes, render_color, per_vertex = self.strand
+            attributes, render_color, per_vertex = self.strand[:3]
             found = attributes.get(name if name else render_color)
             if found is not None:
                 rows = per_vertex(*found)
@@ -352,6 +353,8 @@ class MeshArrays:
         on the mesh', or the attribute there and why Cycles does not read it either (its type,
         or the edge domain)."""
         found = None if self.mesh is None else _named_attribute(self.mesh, name)
+        if found is None and self.mesh is None and self.strand is not None and len(self.strand) > 3:
+            return self.strand[3].format(name=name) if name else "no colour attribute on the emitter's hair"
         if found is None:
             return f"no attribute {name!r} on the mesh" if name else "no colour attribute on the mesh"
         if found.domain not in ('POINT', 'CORNER', 'FACE'):

@@ -9,6 +9,11 @@ from .. import hair, pointcloud
 from .errors import ExportCancelled
 from .meshes import MeshArrays, attribute_rows
 
+# why an attribute hair particles' materials name reads 0 (as in Cycles)
+HAIR_UNREAD = ("no Face Corner Byte Color attribute {name!r} on the emitter (hair particles read only those, at "
+               "each strand's root)")
+
+
 def hair_systems(ob):
     """ob's particle systems whose hair Cycles renders as strands (Hair, Render As Path)."""
     return [ps for ps in ob.particle_systems if ps.settings.type == 'HAIR' and ps.settings.render_type == 'PATH']
@@ -60,6 +65,23 @@ def _root_uvs(ps, modifier, first, uv_no, notes):
     return out
 
 
+def _root_colors(ps, modifier, first, vcol_no, notes):
+    """(strands, 4): each rendered strand's colour at its root on the emitter's vcol_no-th Face
+    Corner Byte Color attribute, as Cycles reads it (ObtainCacheParticleVcol: mcol_on_emitter,
+    children given the first parent, sRGB bytes to linear, alpha 1)."""
+    parents = ps.particles
+    total = len(parents) + len(ps.child_particles)
+    out = np.ones((total - first, 4))
+    for i, no in enumerate(range(first, total)):
+        if i % 4096 == 0 and notes.check_break():
+            raise ExportCancelled()
+        out[i, :3] = ps.mcol_on_emitter(modifier, parents[no] if no < len(parents) else parents[0],
+                                        particle_no=no, vcol_no=vcol_no)
+    c = out[:, :3]
+    out[:, :3] = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return out
+
+
 def hair_arrays(ob, notes):
     """ob's hair particles as an object-space StrandSource (each curve's material slot in
     curve_slot, the emitter's texture space and each strand's UVs on its UV maps; tessellated
@@ -73,6 +95,10 @@ def hair_arrays(ob, notes):
     me = ob.data
     uv_names = [layer.name for layer in me.uv_layers]
     uvs = {name: [] for name in uv_names}
+    # and its Face Corner Byte Color attributes, one colour a strand (Cycles reads no other)
+    vcol_names = [a.name for a in me.attributes
+                  if a.domain == 'CORNER' and a.data_type == 'BYTE_COLOR' and not a.name.startswith('.')]
+    vcols = {name: [] for name in vcol_names}
     n_slots = max(len(ob.material_slots), 1)
     # co_hair gives world space; the tubes are made round in object space and placed by
     # the object's matrix, as Cycles makes them (on a non-uniformly scaled emitter its
@@ -129,10 +155,13 @@ def hair_arrays(ob, notes):
         modifier = next(m for m in ob.modifiers if m.type == 'PARTICLE_SYSTEM' and m.particle_system == ps)
         for k, name in enumerate(uv_names):
             uvs[name].append(_root_uvs(ps, modifier, first, k, notes))
+        for k, name in enumerate(vcol_names):
+            vcols[name].append(_root_colors(ps, modifier, first, k, notes))
     if not positions:
         return None
     positions, radii = np.concatenate(positions), np.concatenate(radii)
-    src = StrandSource('HAIR', ob.name, positions, radii, np.array(offsets))
+    attributes = {name: ('CURVE', np.concatenate(rows).astype(np.float32)) for name, rows in vcols.items()}
+    src = StrandSource('HAIR', ob.name, positions, radii, np.array(offsets), attributes=attributes)
     src.curve_slot = np.concatenate(slots)
     src.texspace = (np.array(me.texspace_location, np.float64), np.array(me.texspace_size, np.float64))
     src.uv_maps = ({name: ('CURVE', np.concatenate(rows)) for name, rows in uvs.items()},
@@ -263,7 +292,10 @@ def tessellate(src, level, notes, why=''):
         # Cycles' Generated coordinates of hair particles: each strand's root in the emitter's
         # texture space, one value along the strand (curves.cpp); each curve's slot
         roots = src.positions[src.offsets[:-1]]
-        arrays = MeshArrays.from_arrays(v, t, n, generated_of=(roots[curve], src.texspace), uvs=uvs)
+        # the emitter's colour attributes at each strand's root; an attribute not among them
+        # reads 0, as in Cycles, and is named so (HAIR_UNREAD)
+        arrays = MeshArrays.from_arrays(v, t, n, generated_of=(roots[curve], src.texspace), uvs=uvs,
+                                        strand=(src.attributes, None, per_vertex, HAIR_UNREAD))
         arrays.slot = src.curve_slot[tri_curve].astype(np.int32)     # (a tip of radius 0 has fewer triangles)
         return arrays
     # Cycles' Generated coordinates of points and curves are their object-space positions
