@@ -56,6 +56,13 @@ def _terminator(ob):
     return tuple(out)
 
 
+def _makes_instances(ob):
+    """Whether ob has a particle system that makes instances (Render As Object or Collection;
+    hair rendered as paths is the emitter's own and linked with it)."""
+    return any(m.type == 'PARTICLE_SYSTEM' and m.particle_system.settings.render_type in ('OBJECT', 'COLLECTION')
+               for m in ob.modifiers)
+
+
 def _shader_trees():
     """Every material's node tree and every node group (shader groups among them)."""
     return [m.node_tree for m in bpy.data.materials if m.node_tree is not None] + list(bpy.data.node_groups)
@@ -335,8 +342,7 @@ class Exporter:
             if key not in self._link_reads:
                 self._link_reads[key] = (light_link_receivers(collection),
                                          [inst.name for inst in collection.all_objects
-                                          if inst.instance_type != 'NONE'
-                                          or any(m.type == 'PARTICLE_SYSTEM' for m in inst.modifiers)])
+                                          if inst.instance_type != 'NONE' or _makes_instances(inst)])
             links[ob.name_full], instancers = self._link_reads[key]
             # objects are linked by their own names; the instances an instancer (a collection
             # instance, vertex or face instancing, particles) makes are not linked through it

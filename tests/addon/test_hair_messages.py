@@ -30,3 +30,33 @@ def test_hair_reading_an_emitter_attribute_cycles_does_not_names_what_it_reads(s
     text = [t for t in said if "'Col'" in t]
     assert text and all("no Face Corner Byte Color attribute 'Col' on the emitter (hair particles read only "
                         "those, at each strand's root): its colour reads 0, as in Cycles" in t for t in text), said
+
+
+def _emitter_linked(render_type):
+    import bpy
+    _camera()
+    sun = next(o for o in bpy.data.objects if o.type == 'LIGHT')
+    em = scenes.plane("Emitter", size=2)
+    em.modifiers.new("Hair", 'PARTICLE_SYSTEM')
+    s = em.particle_systems[0].settings
+    s.type, s.count, s.hair_length = 'HAIR', 10, 0.5
+    if render_type == 'OBJECT':
+        s.render_type, s.instance_object = 'OBJECT', scenes.plane("Leaf", size=0.1)
+    col = bpy.data.collections.new("Receivers")
+    col.objects.link(em)
+    sun.light_linking.receiver_collection = col
+    return em
+
+
+def test_a_hair_emitter_in_a_link_collection_is_not_called_an_instancer(scene, said):
+    """Light linking: a hair emitter (Render As Path) makes no instances and its hair is linked
+    with it; it had been warned about as an instancer whose instances are not linked."""
+    _emitter_linked('PATH')
+    scenes.render_rgba(scene)
+    assert not [t for t in said if "instancer 'Emitter'" in t], said
+
+
+def test_a_particle_instancer_in_a_link_collection_is_still_named(scene, said):
+    _emitter_linked('OBJECT')
+    scenes.render_rgba(scene)
+    assert [t for t in said if "instancer 'Emitter' in its receiver collection" in t], said
