@@ -24,8 +24,8 @@ from .procedurals import PROCEDURAL_TYPES
 from .normalmaps import bends_normal, tangent_normal_map
 from . import procedurals
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
-from .reflectors import (diffuse_roughness, glass_albedos, glossy_map, reflector_albedo, refraction_transmittance,
-                         sheen_albedo)
+from .reflectors import (diffuse_roughness, glass_albedos, glossy_map, principled_hair_color, reflector_albedo,
+                         refraction_transmittance, sheen_albedo)
 from .shadersockets import mix_factor, value_emission
 
 # The grey of the diffuse fallbacks (a muted node, a shader without a colour)
@@ -570,6 +570,11 @@ class MaterialBuilder:
             # (a lit diffuse of its colour before: a Volume Scatter surface 0.8 where Cycles is black)
             reasons.append(f"{node.bl_label} in a surface shader renders nothing, as in Cycles")
             return Closure()
+        if t == 'BSDF_HAIR_PRINCIPLED' and getattr(node, 'parametrization', 'COLOR') in ('MELANIN', 'ABSORPTION'):
+            # no Color input in these modes: the colour of the absorption Cycles gives it (it
+            # had been the 0.8 grey fallback, silently)
+            self._normal_input(node, reasons)
+            return Closure(const=principled_hair_color(node, reasons))
         # Documented approximation: a diffuse surface of the node's constant colour, shaded with
         # the node's normal map as a Diffuse BSDF
         reasons.append(f"{node.bl_label} as diffuse")

@@ -167,3 +167,55 @@ def refraction_transmittance(node, reasons):
     if not ok:
         reasons.append("Refraction BSDF colour driven by nodes; its own value used")
     return np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0)
+
+
+def _hair_roughness_factor(x):
+    """Cycles' bsdf_principled_hair_sigma_from_reflectance polynomial in the azimuthal (radial)
+    roughness x: sigma = (log(colour) / factor)^2."""
+    return (((((0.245 * x) + 5.574) * x - 10.73) * x + 2.532) * x - 0.215) * x + 5.969
+
+
+def principled_hair_color(node, reasons):
+    """The colour a Principled Hair BSDF in Melanin or Absorption Coefficient parametrization
+    renders as (diffuse, as its Direct Coloring colour does): the absorption Cycles gives it
+    (svm_node_closure_bsdf: Melanin mapped by -log(1 - m), split into eu- and pheomelanin by
+    Melanin Redness, times their absorption spectra, plus the Tint's absorption; or the
+    Absorption Coefficient itself) taken back through Cycles' colour-to-absorption map
+    (sigma = (log(colour) / f(radial roughness))^2), so it renders as the Direct Coloring
+    colour Cycles would absorb the same (DACRT renders that colour as diffuse). Reported with
+    the colour."""
+    inputs = node.inputs
+    rough_in = inputs.get('Radial Roughness')
+    if rough_in is None or not getattr(rough_in, 'enabled', True):
+        rough_in = inputs['Roughness']
+    rough, _ = constant_value(rough_in)
+    rough = min(max(rough, 0.0), 1.0)
+    factor = _hair_roughness_factor(rough)
+    driven = []
+    if node.parametrization == 'ABSORPTION':
+        sigma, ok = constant_color(inputs['Absorption Coefficient'])
+        sigma = np.maximum(np.nan_to_num(np.array(sigma[:3], np.float64)), 0.0)
+        if not ok:
+            driven.append('Absorption Coefficient')
+        what = f"Absorption Coefficient ({', '.join(f'{v:g}' for v in sigma)})"
+    else:
+        melanin, ok_m = constant_value(inputs['Melanin'])
+        redness, ok_r = constant_value(inputs['Melanin Redness'])
+        tint, ok_t = constant_color(inputs['Tint'])
+        random, ok_c = constant_value(inputs['Random Color'])
+        driven += [name for name, ok in (('Melanin', ok_m), ('Melanin Redness', ok_r), ('Tint', ok_t))
+                   if not ok]
+        m = -np.log(max(1.0 - melanin, 1e-4))
+        redness = min(max(redness, 0.0), 1.0)
+        sigma = m * (1.0 - redness) * np.array([0.506, 0.841, 1.653]) + m * redness * np.array([0.343, 0.733, 1.924])
+        tint = np.clip(np.nan_to_num(np.array(tint[:3], np.float64)), 1e-6, None)
+        sigma = sigma + (np.log(tint) / factor) ** 2
+        what = f"Melanin {melanin:g} (Melanin Redness {redness:g}, Tint ({', '.join(f'{v:g}' for v in tint)}))"
+        if random != 0.0 or not ok_c:
+            reasons.append("Principled Hair BSDF Random Color ignored: every strand has the melanin's mean")
+    color = np.exp(-factor * np.sqrt(sigma))
+    if driven:
+        reasons.append(f"Principled Hair BSDF {', '.join(driven)} driven by nodes; its own value used")
+    reasons.append(f"Principled Hair BSDF as diffuse of the colour its {what} absorbs as in Cycles' Direct "
+                   f"Coloring: ({', '.join(f'{v:.3g}' for v in color)})")
+    return color

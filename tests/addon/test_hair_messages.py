@@ -60,3 +60,16 @@ def test_a_particle_instancer_in_a_link_collection_is_still_named(scene, said):
     _emitter_linked('OBJECT')
     scenes.render_rgba(scene)
     assert [t for t in said if "instancer 'Emitter' in its receiver collection" in t], said
+
+
+def test_principled_hair_by_melanin_names_the_colour_it_renders(scene, said):
+    """Melanin mode has no Color: the message had said only 'Principled Hair BSDF as diffuse'
+    (rendering 0.8 grey); it names the melanin and the colour it renders."""
+    import numpy as np
+    from tests.parity.test_hair_fixes import _hair_material
+    _camera()
+    mat, _ = _hair_material('MELANIN', {'Melanin': 0.8})
+    scenes.hair_curves("Strands", [np.array([[0, 0, -1.0], [0, 0, 0], [0.1, 0, 1]])], radius=0.05, material=mat)
+    scenes.render_rgba(scene)
+    assert any("Principled Hair BSDF as diffuse of the colour its Melanin 0.8 (Melanin Redness 1, Tint (1, 1, 1)) "
+               "absorbs as in Cycles' Direct Coloring: (0.0126, 0.00167, 3.16e-05)" in t for t in said), said

@@ -179,3 +179,45 @@ def test_hair_particles_read_the_emitters_colour_attribute(tmp_path):
         assert painted[e][0, 0] > 3 * painted[e][0, 1] and painted[e][1, 1] > 3 * painted[e][1, 0], (e, painted[e])
     rel = {e: np.array([painted[e][0, 0] / plain[e][0, 0], painted[e][1, 1] / plain[e][1, 1]]) for e in plain}
     np.testing.assert_allclose(rel['DACRT'], rel['CYCLES'], rtol=0.01)
+
+
+def _hair_material(param, values):
+    mat = bpy.data.materials.new("Hair")
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new('ShaderNodeOutputMaterial')
+    n = nt.nodes.new('ShaderNodeBsdfHairPrincipled')
+    n.parametrization = param
+    for name, v in values.items():
+        n.inputs[name].default_value = v
+    nt.links.new(n.outputs[0], out.inputs['Surface'])
+    return mat, n
+
+
+@pytest.mark.parametrize('param,values', [
+    ('MELANIN', {'Melanin': 0.8}),
+    ('MELANIN', {'Melanin': 0.3, 'Melanin Redness': 0.4, 'Tint': (1.0, 0.7, 0.5, 1.0), 'Radial Roughness': 0.5}),
+    ('ABSORPTION', {'Absorption Coefficient': (0.2, 1.0, 3.0)}),
+], ids=['melanin', 'melanin_tinted', 'absorption'])
+def test_principled_hair_by_melanin_or_absorption_renders_as_its_direct_colouring(param, values, tmp_path):
+    """A Principled Hair BSDF in Melanin or Absorption Coefficient parametrization has no Color:
+    DACRT had rendered the 0.8 grey fallback (Melanin 0.8: (0.273, 0.273, 0.273) where Cycles
+    renders a dark brown (0.074, 0.031, 0.013)). It now renders as the Direct Coloring colour
+    Cycles' colour-to-absorption map gives the same absorption, as DACRT renders that mode (a
+    diffuse of the colour): Cycles renders the two nodes alike (which checks the derivation),
+    and so does DACRT. (The as-diffuse approximation itself is far from Cycles' hair lobes on
+    these thin strands: 0.004 vs 0.074 red for Melanin 0.8.)"""
+    from addon.export.reflectors import principled_hair_color
+    sc = _small_scene(64)
+    mat, node = _hair_material(param, values)
+    curves = [np.stack([np.full(8, x) + 0.1 * np.sin(np.linspace(0, 6, 8)), np.zeros(8), np.linspace(-1.2, 1.2, 8)], 1)
+              for x in np.linspace(-1.1, 1.1, 12)]
+    scenes.hair_curves("Strands", curves, radius=0.06, material=mat)
+    by_absorption = _means(sc, tmp_path / 'absorption')
+    color = principled_hair_color(node, [])
+    node.parametrization = 'COLOR'
+    node.inputs['Color'].default_value = (*color, 1.0)
+    by_color = _means(sc, tmp_path / 'color')
+    np.testing.assert_allclose(by_absorption['CYCLES'][:3], by_color['CYCLES'][:3], rtol=0.01, atol=2e-4,
+                               err_msg="Cycles: the derived colour is not the same absorption")
+    np.testing.assert_allclose(by_absorption['DACRT'][:3], by_color['DACRT'][:3], rtol=0.005, atol=1e-4)
