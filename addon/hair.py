@@ -212,7 +212,11 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
         empty += (np.empty(0, np.int64),) if curve_of else ()
         return empty + ((np.empty(0, np.int64), np.empty(0)),) if vertex_keys else empty
     at, t, bend, stretch, counts = _joins(samples[:, :3], counts)     # the rings, mitred
-    p, r, key, u = samples[at, :3], np.maximum(samples[at, 3], 0.0), key[at], u[at]
+    p, r, key, u = samples[at, :3], samples[at, 3], key[at], u[at]
+    # a NaN or infinite radius (its key's, spread by the spline to its neighbours' segments):
+    # no tube there (they had made NaN vertices, reported as the positions'); the export says so
+    unsized = ~np.isfinite(r)
+    r = np.where(unsized, 0.0, np.maximum(r, 0.0))
     t, n = _frames(p, counts, 2.0 * np.pi / sides, t)
     b = np.cross(t, n)
     ang = 2.0 * np.pi * np.arange(sides) / sides
@@ -235,7 +239,9 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
     # with one corner there is kept (a cone), the other would have no area (and be reported
     # as the user's degenerate geometry)
     quads = np.stack([np.stack([a, a1, c], -1), np.stack([a1, c1, c], -1)], axis=1)   # (rings, 2, sides, 3)
-    keep = np.broadcast_to(np.stack([r[ring] > 0, r[ring + 1] > 0], axis=1)[:, :, None], quads.shape[:3])
+    sized = ~(unsized[ring] | unsized[ring + 1])
+    keep = np.broadcast_to(np.stack([(r[ring] > 0) & sized, (r[ring + 1] > 0) & sized], axis=1)[:, :, None],
+                           quads.shape[:3])
     joint = np.flatnonzero(at[ring] == at[ring + 1])       # between the rings of a split turn
     if len(joint):
         # there the rings turn about the bend's axis: a point on it is in both, and its

@@ -267,6 +267,9 @@ def tessellate(src, level, notes, why=''):
             notes.ignore("points of radius 0 or less are not rendered", src.name)
     else:       # Curves objects and hair particles
         sides, steps = level
+        unsized = int(np.count_nonzero(~np.isfinite(src.radii)))
+        if unsized:
+            notes.ignore(f"{unsized} point(s) of NaN or infinite radius: no tube is rendered around them", src.name)
         v, t, n, kept, tri_curve, (key, u) = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps),
                                                          curve_of=True, linear=src.linear, vertex_keys=True)
         curve = np.searchsorted(src.offsets, key, side='right') - 1

@@ -43,3 +43,11 @@ def test_a_turn_keeps_the_width_of_each_segment(turn, linear):
     scale = np.pi / (sides * np.sin(np.pi / sides))
     np.testing.assert_allclose(_off_axis(joint[0], d_in), 0.1 * scale, rtol=1e-5)
     np.testing.assert_allclose(_off_axis(joint[-1], d_out), 0.1 * scale, rtol=1e-5)
+
+
+def test_a_nan_radius_leaves_no_nan_vertex():
+    p = np.stack([np.zeros(6), np.zeros(6), np.linspace(0, 1, 6)], 1)
+    r = np.full(6, 0.1)
+    r[2] = np.nan
+    v, t, n, kept = hair.tubes(p, r, [0, 6], (8, 2))
+    assert np.isfinite(v).all() and np.isfinite(n).all() and 0 < len(t) < hair.triangle_count([0, 6], (8, 2), False, p)

@@ -73,3 +73,17 @@ def test_principled_hair_by_melanin_names_the_colour_it_renders(scene, said):
     scenes.render_rgba(scene)
     assert any("Principled Hair BSDF as diffuse of the colour its Melanin 0.8 (Melanin Redness 1, Tint (1, 1, 1)) "
                "absorbs as in Cycles' Direct Coloring: (0.0126, 0.00167, 3.16e-05)" in t for t in said), said
+
+
+def test_a_nan_radius_is_said_as_the_radius(scene, said):
+    """A Curves point of NaN radius had made NaN tube vertices, reported as "vertices with NaN
+    ... coordinates" (the user's positions are fine): the message names the radius."""
+    import numpy as np
+    _camera()
+    ob = scenes.hair_curves("H", [np.stack([np.zeros(8), np.zeros(8), np.linspace(-1, 1, 8)], 1)], radius=0.05)
+    r = np.full(8, 0.05, np.float32)
+    r[3] = np.nan
+    ob.data.attributes['radius'].data.foreach_set('value', r)
+    scenes.render_rgba(scene)
+    assert "'H': 1 point(s) of NaN or infinite radius: no tube is rendered around them" in said, said
+    assert not [t for t in said if 'coordinates' in t], said
