@@ -163,9 +163,15 @@ class Assembly:
             self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
         self.counts['triangles_degenerate'] = degenerate
         self.counts['triangles_nonfinite'] = sum(nt for _, nt in bad.values())
-        geometry = out.geometry()
-        # materials hidden from some ray kinds (a Light Path ray-type mix, see _ray_type_mix)
+        # materials hidden from some ray kinds (a Light Path ray-type mix, see _ray_type_mix);
+        # those no ray sees (volume-only ones: Cycles' rays cross their faces as no surface)
+        # are dropped, as volume objects are
         mvis = np.array([m.visibility for m in self.materials.materials], np.uint8)
+        if len(out.material) and not mvis.all():
+            unseen = mvis[np.clip(out.material, 0, len(mvis) - 1)] == 0
+            if unseen.any():
+                out.drop(slice(None), ~unseen if out.keep is None else out.keep & ~unseen)
+        geometry = out.geometry()
         if len(geometry.material) and (mvis != (sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)).any():
             keep = mvis | np.uint8(sd.HOLDOUT | sd.NO_TRANSMISSION)
             geometry.visibility &= keep[geometry.material]

@@ -369,10 +369,17 @@ class MaterialBuilder:
             out = output_node(ntree)
             if out is None or not out.inputs['Surface'].is_linked:
                 # Cycles: no surface shader renders black, but a volume-only material's
-                # surface lets every ray through (SD_HAS_ONLY_VOLUME): a fog box is clear here
+                # surface is no surface (SD_HAS_ONLY_VOLUME): rays cross it without counting a
+                # transparent bounce, shading it or writing its AOVs, whatever its Transparent
+                # Shadows. The volume is ignored, so its triangles are seen by no ray (the
+                # export drops them): the image is the scene's without the fog box (a clear
+                # surface had counted against Transparent Max Bounces: 5 thin fog slabs black
+                # where Cycles shows the floor, 0.806)
                 volume = out is not None and out.inputs.get('Volume') is not None and \
                     linked_link(out.inputs['Volume']) is not None
                 closure = Closure(transparent=(1.0, 1.0, 1.0)) if volume else Closure()
+                if volume:
+                    visibility = 0
             else:
                 closure, visibility = self._ray_type_mix(out.inputs['Surface'], reasons)
                 if closure is None:

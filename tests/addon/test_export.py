@@ -2580,6 +2580,7 @@ def test_volume_only_material_has_a_clear_surface(scene, exported):
     scenes.cube("Other", location=(3, 0, 0), materials=(black,))
     table = {m.name: m for m in exported().materials}
     assert np.allclose(table["Fog"].transparency, 1.0) and np.allclose(table["Fog"].base_color, 0.0)
+    assert table["Fog"].visibility == 0      # no ray sees it (its faces are dropped: test_volume_clear)
     assert "volume ignored" in table["Fog"].approximated
     assert table["Nothing"].transparency is None and np.allclose(table["Nothing"].base_color, 0.0)
 
