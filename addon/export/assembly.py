@@ -175,6 +175,11 @@ class Assembly:
         if len(geometry.material) and (mvis != (sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)).any():
             keep = mvis | np.uint8(sd.HOLDOUT | sd.NO_TRANSMISSION)
             geometry.visibility &= keep[geometry.material]
+            # rays past glass are Cycles' transmission rays, whose Is Camera Ray and Is Shadow
+            # Ray are 0: they see such a material as bounce rays do (a camera-only emitter or
+            # shadow-only plate behind a pane had shown there, Cycles shows what lies behind)
+            unseen = np.where((mvis & sd.VIS_DIFFUSE) == 0, sd.NO_TRANSMISSION, 0).astype(np.uint8)
+            geometry.visibility |= unseen[geometry.material]
         return geometry
 
     def _users(self, wanted):

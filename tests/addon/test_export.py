@@ -526,8 +526,9 @@ def test_light_path_ray_type_mix_hides_the_material(scene, exported):
     setup(scene)
     cases = {"NoCam": ('Is Camera Ray', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent', (1, 1, 1),
                        sd.VIS_DIFFUSE | sd.VIS_SHADOW),
+             # (rays past glass, Cycles' transmission rays, see it as bounce rays do: not at all)
              "CamOnly": ('Is Camera Ray', 'ShaderNodeBsdfTransparent', 'ShaderNodeEmission', (1, 1, 1),
-                         sd.VIS_CAMERA),
+                         sd.VIS_CAMERA | sd.NO_TRANSMISSION),
              "NoShadow": ('Is Shadow Ray', 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTransparent', (1, 1, 1),
                           sd.VIS_CAMERA | sd.VIS_DIFFUSE),
              "Tinted": ('Is Camera Ray', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent', (0.5, 1, 1),
