@@ -3,6 +3,8 @@
 visibility, object and instance ids, UVs, tangents, attribute colours and shadow terminator;
 non-finite and degenerate triangles dropped and reported. Part of the export layer."""
 
+import dataclasses
+
 import dacrt
 import numpy as np
 
@@ -174,13 +176,62 @@ class Assembly:
         geometry = out.geometry()
         if len(geometry.material) and (mvis != (sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)).any():
             keep = mvis | np.uint8(sd.HOLDOUT | sd.NO_TRANSMISSION)
+            objects = geometry.visibility.copy()     # the objects' own ray visibility
             geometry.visibility &= keep[geometry.material]
             # rays past glass are Cycles' transmission rays, whose Is Camera Ray and Is Shadow
             # Ray are 0: they see such a material as bounce rays do (a camera-only emitter or
             # shadow-only plate behind a pane had shown there, Cycles shows what lies behind)
             unseen = np.where((mvis & sd.VIS_DIFFUSE) == 0, sd.NO_TRANSMISSION, 0).astype(np.uint8)
             geometry.visibility |= unseen[geometry.material]
+            geometry = self._camera_clear_aovs(geometry, mvis, objects)
         return geometry
+
+    def _camera_clear_aovs(self, geometry, mvis, objects):
+        """Materials a Light Path mix hides from camera rays (Is Camera Ray to a white Transparent
+        BSDF) whose AOV Output nodes write: Cycles runs the shader at the camera hit, a clear
+        surface there, and writes the AOVs (1.0 per surface crossed). Their triangles get a twin
+        the camera alone sees, of a clear material that writes those AOVs (passed as any clear
+        surface: a transparent bounce, no light, no data passes), beside the original the other
+        rays see. (They had been left out of the camera's scene: the AOV read 0.)"""
+        mats = self.materials.materials
+        twins = {k: len(mats) + i for i, k in enumerate(
+            k for k, m in enumerate(mats)
+            if mvis[k] and not mvis[k] & sd.VIS_CAMERA
+            and (m.aovs or m.aov_textures or k in self._aov_varying))}
+        if not twins:
+            return geometry
+        rows = np.flatnonzero(np.isin(geometry.material, list(twins)))
+        if not len(rows):
+            return geometry
+        b = self.materials
+        for k in twins:
+            m = mats[k]
+            mats.append(dataclasses.replace(
+                m, base_color=np.zeros(3, np.float32), emission=np.zeros(3, np.float32), texture=None,
+                emission_texture=None, normal_texture=None, color_attribute=None, holdout=False,
+                transparency=np.ones(3, np.float32), translucency=None, refraction=None,
+                opacity=None, opaque_refraction=None, visibility=sd.VIS_CAMERA, approximated=''))
+            b.attribute_maps.append(None)
+            b.aov_maps.append(b.aov_maps[k])
+            b.uses_texture.append(bool(m.aov_textures))
+            b.uv_maps.append(b.uv_maps[k])
+        lookup = np.arange(len(mats), dtype=np.int32)
+        for k, t in twins.items():
+            lookup[k] = t
+
+        def twice(a):
+            return None if a is None else np.concatenate([a, a[rows]])
+
+        # the twin: seen by camera rays only, by the object's own camera visibility and holdout
+        twin_vis = (objects[rows] & np.uint8(sd.VIS_CAMERA | sd.HOLDOUT)) | np.uint8(sd.NO_TRANSMISSION)
+        return dataclasses.replace(
+            geometry, triangles=twice(geometry.triangles), normals=twice(geometry.normals),
+            material=np.concatenate([geometry.material, lookup[geometry.material[rows]]]),
+            visibility=np.concatenate([geometry.visibility, twin_vis]),
+            object_index=twice(geometry.object_index), instance=twice(geometry.instance),
+            uvs=twice(geometry.uvs), terminator=twice(geometry.terminator), has_uv=twice(geometry.has_uv),
+            tangents=twice(geometry.tangents), colors=twice(geometry.colors), coords=twice(geometry.coords),
+            aovs=None if geometry.aovs is None else {key: twice(a) for key, a in geometry.aovs.items()})
 
     def _users(self, wanted):
         """{material index: the placements showing it} for the materials in `wanted`, in one
