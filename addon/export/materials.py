@@ -128,13 +128,16 @@ class MaterialBuilder:
             self._index[key] = idx
         return idx
 
-    def _ray_type_mix(self, socket, reasons):
+    def _ray_type_mix(self, socket, reasons, transparent_shadow=True):
         """(closure, visibility) when the surface is a Mix Shader whose factor is a Light Path
         node's Is Camera Ray or Is Shadow Ray and one of whose shaders is a white Transparent
         BSDF: those rays (factor 1: the second shader) or all others (factor 0: the first) see
         through it, as if the material were invisible to them (the common 'light plane hidden
         from the camera'), and the rest see the other shader. (None, all) otherwise: the factor
-        is then read at its own value, as any node-driven factor."""
+        is then read at its own value, as any node-driven factor. With the material's Transparent
+        Shadows off, shadow rays stop at it even where they would see the clear side (Cycles
+        takes a surface without SD_HAS_TRANSPARENT_SHADOW for an opaque blocker, whatever the
+        shader gives the shadow ray)."""
         every = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         node = linked_node(socket)
         if node is None or node.type != 'MIX_SHADER':
@@ -158,6 +161,9 @@ class MaterialBuilder:
             closure = second
         else:
             return None, every
+        if not transparent_shadow:
+            # (a Mix(Diffuse, Transparent, Is Shadow Ray) plate had cast no shadow, Cycles a full one)
+            vis |= sd.VIS_SHADOW
         return closure, vis
 
     # colours an image's texels are replaced by to see how a node chain maps them: random RGB
@@ -381,7 +387,8 @@ class MaterialBuilder:
                 if volume:
                     visibility = 0
             else:
-                closure, visibility = self._ray_type_mix(out.inputs['Surface'], reasons)
+                closure, visibility = self._ray_type_mix(out.inputs['Surface'], reasons,
+                                                         bool(getattr(mat, 'use_transparent_shadow', True)))
                 if closure is None:
                     closure = self._shader(out.inputs['Surface'], reasons, 0)
                 glass_rough = glass_roughness(out.inputs['Surface'])
