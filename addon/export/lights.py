@@ -30,14 +30,17 @@ def light_link_receivers(collection):
     return frozenset(included), frozenset(excluded)
 
 
-def export_light(ob, matrix, messages):
-    """One light object (evaluated) at `matrix` -> scenedata.Light, in Cycles' units."""
+def export_light(ob, matrix, messages, approximated=None):
+    """One light object (evaluated) at `matrix` -> scenedata.Light, in Cycles' units.
+    approximated: a {what its node tree lacks: {light names}} table the caller reports from,
+    one message per text naming every light (linked duplicates of one lamp had said it once
+    each); None: said in messages at once."""
     light = ob.data
     strength = np.array(light.color, np.float64) * light.energy
     strength *= 2.0 ** getattr(light, 'exposure', 0.0)
     if getattr(light, 'use_temperature', False):
         strength *= np.array(light.temperature_color, np.float64)[:3]
-    shader = _light_shader_factor(light, ob.name, messages)
+    shader = _light_shader_factor(light, ob.name, messages, approximated)
     strength *= shader
     if not np.isfinite(strength).all():
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
@@ -172,7 +175,7 @@ def _fits_float32(light):
         return False
 
 
-def _light_shader_factor(light, name, messages):
+def _light_shader_factor(light, name, messages, approximated=None):
     """The light's node tree (if used) as a constant RGB factor on its colour x power, as Cycles
     evaluates a light's shader: the emission reaching the output's Surface (Emission colour x
     strength, Add and Mix Shaders of them, a colour or value linked in as an emission of it);
@@ -190,7 +193,11 @@ def _light_shader_factor(light, name, messages):
         reasons.append(f"NaN read as 0 for {', '.join(bad)}")
     factor = _light_surface(out.inputs['Surface'], reasons, 0)
     if reasons:
-        messages.append(('WARNING', f"light '{name}': node tree approximated: {'; '.join(dict.fromkeys(reasons))}"))
+        text = '; '.join(dict.fromkeys(reasons))
+        if approximated is None:
+            messages.append(('WARNING', f"light '{name}': node tree approximated: {text}"))
+        else:
+            approximated.setdefault(text, {})[name] = None
     return factor
 
 

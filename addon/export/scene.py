@@ -120,6 +120,7 @@ class Exporter:
         self.lights_skipped = 0   # light objects that give no light here (portals, skipped ones)
         self.skipped = {}         # reason -> {object names} (ordered)
         self.ignored = {}         # reason -> {object names}: rendered, without a feature Cycles has
+        self.lights_approximated = {}   # what a light's node tree lacks -> {light names}
         self.drawn_over = []      # Grease Pencil objects: Blender draws them over the render
         self._noted = set()       # objects whose ignored features are noted (instances repeat them)
         # per object (visibility: and instancer): its ray visibility, shadow terminator and
@@ -278,7 +279,7 @@ class Exporter:
             self.ignore(f"ray visibility Glossy {'on' if glossy else 'off'} with Diffuse "
                         f"{'on' if diffuse else 'off'}: glossy layers (rendered as diffuse) take "
                         "this light by its Diffuse visibility", ob.name)
-        light = export_light(ob, inst.matrix_world, self.messages)
+        light = export_light(ob, inst.matrix_world, self.messages, self.lights_approximated)
         limit = getattr(getattr(ob.data, 'cycles', None), 'max_bounces', None)
         if light is not None and limit is not None:
             light.max_bounces = int(limit)
@@ -554,6 +555,11 @@ class Exporter:
 
     # -- messages ----------------------------------------------------------------------------
     def _summarize(self, geometry, world, environment, camera_world=None):
+        for text, names in self.lights_approximated.items():
+            # lights of one node tree (linked duplicates of a lamp) said together, as materials are
+            said = ', '.join(f"'{n}'" for n in names)
+            self.messages.append(('WARNING', f"light{'s' if len(names) > 1 else ''} {said}: node tree "
+                                             f"approximated: {text}"))
         for reason, names in self.skipped.items():
             self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
         for reason, names in self.ignored.items():
