@@ -183,21 +183,24 @@ class Assembly:
             # shadow-only plate behind a pane had shown there, Cycles shows what lies behind)
             unseen = np.where((mvis & sd.VIS_DIFFUSE) == 0, sd.NO_TRANSMISSION, 0).astype(np.uint8)
             geometry.visibility |= unseen[geometry.material]
-            geometry = self._camera_clear_aovs(geometry, mvis, objects)
+            geometry = self._camera_twins(geometry, mvis, objects)
         return geometry
 
-    def _camera_clear_aovs(self, geometry, mvis, objects):
+    def _camera_twins(self, geometry, mvis, objects):
         """Materials a Light Path mix hides from camera rays (Is Camera Ray to a white Transparent
         BSDF) whose AOV Output nodes write: Cycles runs the shader at the camera hit, a clear
         surface there, and writes the AOVs (1.0 per surface crossed). Their triangles get a twin
         the camera alone sees, of a clear material that writes those AOVs (passed as any clear
         surface: a transparent bounce, no light, no data passes), beside the original the other
-        rays see. (They had been left out of the camera's scene: the AOV read 0.)"""
+        rays see. (They had been left out of the camera's scene: the AOV read 0.) Materials a
+        mix holds out for camera rays alone (MaterialBuilder.camera_holdouts) get a twin of a
+        whole Holdout instead."""
         mats = self.materials.materials
+        held = self.materials.camera_holdouts
         twins = {k: len(mats) + i for i, k in enumerate(
             k for k, m in enumerate(mats)
             if mvis[k] and not mvis[k] & sd.VIS_CAMERA
-            and (m.aovs or m.aov_textures or k in self._aov_varying))}
+            and (k in held or m.aovs or m.aov_textures or k in self._aov_varying))}
         if not twins:
             return geometry
         rows = np.flatnonzero(np.isin(geometry.material, list(twins)))
@@ -208,8 +211,8 @@ class Assembly:
             m = mats[k]
             mats.append(dataclasses.replace(
                 m, base_color=np.zeros(3, np.float32), emission=np.zeros(3, np.float32), texture=None,
-                emission_texture=None, normal_texture=None, color_attribute=None, holdout=False,
-                transparency=np.ones(3, np.float32), translucency=None, refraction=None,
+                emission_texture=None, normal_texture=None, color_attribute=None, holdout=k in held,
+                transparency=None if k in held else np.ones(3, np.float32), translucency=None, refraction=None,
                 opacity=None, opaque_refraction=None, visibility=sd.VIS_CAMERA, approximated=''))
             b.attribute_maps.append(None)
             b.aov_maps.append(b.aov_maps[k])

@@ -103,6 +103,11 @@ class MaterialBuilder:
         # per material: None, or (material, ShaderAovs.varying): AOV inputs that read a value per
         # object or per mesh corner, evaluated on each one's (evaluated_aov)
         self.aov_maps = [None]
+        # materials a Light Path mix holds out for camera rays alone (Mix(Diffuse, Holdout, Is
+        # Camera Ray): the 'held out but casts shadows' matte): the export gives their triangles
+        # a holdout twin only camera rays see (assembly._camera_twins)
+        self.camera_holdouts = set()
+        self._camera_holdout = False
         self._aov_varying = None
         self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
         self._image_probe = None        # what images read instead of their texels (_product_map)
@@ -118,7 +123,10 @@ class MaterialBuilder:
         idx = self._index.get(key)
         if idx is None:
             idx = len(self.materials)
+            self._camera_holdout = False
             self.materials.append(self._build(mat))
+            if self._camera_holdout:
+                self.camera_holdouts.add(idx)
             m = self.materials[-1]
             self.attribute_maps.append(self._attribute_map)
             self.aov_maps.append(self._aov_varying)
@@ -153,6 +161,15 @@ class MaterialBuilder:
         def clear(c):
             return c.only_transparent() and c.opacity is None and np.allclose(c.transparent, 1.0)
 
+        def held(c):
+            return c.holdout >= 1.0 - 1e-6 and not c.transparent.any() and c.opacity is None
+
+        if kind == sd.VIS_CAMERA and held(second) and not (clear(first) or held(first)):
+            # a whole Holdout for camera rays, the first shader for the rest: the others see
+            # this material, camera rays its holdout twin (had been a 50% mix at alpha 1,
+            # where Cycles holds the surface out: alpha 0)
+            self._camera_holdout = True
+            return first, every & ~kind
         if clear(second) and not clear(first):
             vis = every & ~kind            # those rays see through it; the rest see the first
             closure = first
