@@ -366,6 +366,7 @@ class MaterialBuilder:
         glass_rough = 0.0
         self._uv_names = []           # the UV map each image this material reads asks for
         self._normal_maps = []        # (Texture, strength, UV map) of its BSDFs' normal maps
+        self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
@@ -499,7 +500,8 @@ class MaterialBuilder:
                            opaque_refraction=opaque_refraction,
                            glass_roughness=glass_rough if refraction is not None or opaque_refraction is not None
                            else 0.0,
-                           transparent_shadow=bool(getattr(mat, 'use_transparent_shadow', True)),
+                           transparent_shadow=bool(getattr(mat, 'use_transparent_shadow', True))
+                           and not self._portal,
                            opacity=opacity, opacity_interpolation=o_interp,
                            opacity_extension=o_ext, opacity_transform=o_transform,
                            approximated='; '.join(dict.fromkeys(reasons)), holdout=holdout,
@@ -551,6 +553,17 @@ class MaterialBuilder:
             color, ok = constant_color(node.inputs['Color'])
             if not ok:
                 reasons.append("Transparent BSDF colour driven by nodes; its own value used")
+            return Closure(transparent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
+        if t == 'BSDF_RAY_PORTAL' and linked_link(node.inputs['Position']) is None \
+                and linked_link(node.inputs['Direction']) is None:
+            # Cycles continues the ray where it hit, in its own direction, times the colour: a
+            # Transparent BSDF of that colour whose shadow rays stop there (Cycles' shadow rays
+            # do not pass portals). A plate over a floor under a sun: (0.609, 0.568, 0.549) vs
+            # Cycles (0.608, 0.568, 0.549); it had been a white diffuse, (0.699, 0.615, 0.573)
+            color, ok = constant_color(node.inputs['Color'])
+            if not ok:
+                reasons.append("Ray Portal BSDF colour driven by nodes; its own value used")
+            self._portal = True
             return Closure(transparent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
         if t == 'MIX_SHADER':
             alpha_mix = self._alpha_mix(node, reasons, depth)
