@@ -4,27 +4,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 
+#include "lookup3.h"
 #include "parallel.h"
 
 namespace dacrt {
 
 namespace {
 
-inline uint32_t rot(uint32_t x, int k) { return (x << k) | (x >> (32 - k)); }
-
-// Bob Jenkins' lookup3 final mix, as Cycles' util/hash.h.
-inline uint32_t final_mix(uint32_t a, uint32_t b, uint32_t c) {
-    c ^= b; c -= rot(b, 14);
-    a ^= c; a -= rot(c, 11);
-    b ^= a; b -= rot(a, 25);
-    c ^= b; c -= rot(b, 16);
-    a ^= c; a -= rot(c, 4);
-    b ^= a; b -= rot(a, 14);
-    c ^= b; c -= rot(b, 24);
-    return c;
-}
+using lookup3::final_mix;
 
 inline uint32_t hash_uint2(uint32_t kx, uint32_t ky) {
     uint32_t a = 0xdeadbeefu + (2u << 2) + 13u, b = a, c = a;
@@ -41,15 +29,11 @@ inline uint32_t hash_uint3(uint32_t kx, uint32_t ky, uint32_t kz) {
     return final_mix(a, b, c);
 }
 
-inline uint32_t bits(float f) {
-    uint32_t u;
-    std::memcpy(&u, &f, 4);
-    return u;
-}
 
 // Cycles' random_float3_offset / random_float2_offset component k of a seed.
 inline float random_offset(float seed, int k) {
-    const float h = float(hash_uint2(bits(seed), bits(float(k)))) / float(0xFFFFFFFFu);
+    const uint32_t h32 = hash_uint2(lookup3::float_bits(seed), lookup3::float_bits(float(k)));
+    const float h = float(h32) / float(0xFFFFFFFFu);
     return 100.0f + h * 100.0f;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "lookup3.h"
 #include "parallel.h"
 
 namespace dacrt {
@@ -132,36 +133,19 @@ inline void pcg4d(const int32_t k[4], float out[4]) {
 
 // 1D cells hash their float position with Bob Jenkins' lookup3 (util/hash.h hash_float_to_float,
 // hash_float_to_float3).
-inline uint32_t rot32(uint32_t x, int k) { return (x << k) | (x >> (32 - k)); }
-
-inline uint32_t lookup3_final(uint32_t a, uint32_t b, uint32_t c) {
-    c ^= b; c -= rot32(b, 14);
-    a ^= c; a -= rot32(c, 11);
-    b ^= a; b -= rot32(a, 25);
-    c ^= b; c -= rot32(b, 16);
-    a ^= c; a -= rot32(c, 4);
-    b ^= a; b -= rot32(a, 14);
-    c ^= b; c -= rot32(b, 24);
-    return c;
-}
-
-inline uint32_t float_bits(float f) {
-    uint32_t u;
-    std::memcpy(&u, &f, 4);
-    return u;
-}
+using lookup3::float_bits;
 
 inline float hash_float_to_float(float k) {
     uint32_t a = 0xdeadbeefu + (1u << 2) + 13u, b = a, c = a;
     a += float_bits(k);
-    return float(lookup3_final(a, b, c)) / float(0xFFFFFFFFu);
+    return float(lookup3::final_mix(a, b, c)) / float(0xFFFFFFFFu);
 }
 
 inline float hash_float2_to_float(float kx, float ky) {
     uint32_t a = 0xdeadbeefu + (2u << 2) + 13u, b = a, c = a;
     b += float_bits(ky);
     a += float_bits(kx);
-    return float(lookup3_final(a, b, c)) / float(0xFFFFFFFFu);
+    return float(lookup3::final_mix(a, b, c)) / float(0xFFFFFFFFu);
 }
 
 struct Settings {
