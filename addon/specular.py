@@ -47,17 +47,18 @@ def f0_from_ior(eta):
     return ((eta - 1.0) / (eta + 1.0)) ** 2
 
 
-def _half_vectors(alpha: float):
-    """The GGX half vectors of the (_MU, _XI, _PHI) quadrature: (mu_o, cos theta_h, wo.h, the
-    reflected direction's z), each broadcasting to (len(_MU), len(_XI), len(_PHI)); h is taken
-    with density D(h) cos(theta_h) (tan^2 theta_h = alpha^2 xi / (1 - xi)), wo = (sin, 0, mu_o)."""
+def _half_vectors(alpha: float, beckmann: bool = False, xi=None, phi=None):
+    """The microfacet half vectors of the (_MU, xi, phi) quadrature (default _XI, _PHI): (mu_o,
+    cos theta_h, wo.h, the reflected direction's z), each broadcasting to (len(_MU), len(xi),
+    len(phi)); h is taken with density D(h) cos(theta_h) (GGX: tan^2 theta_h = alpha^2 xi /
+    (1 - xi); Beckmann: -alpha^2 log(1 - xi)), wo = (sin, 0, mu_o)."""
     mo = _MU[:, None, None]
     so = np.sqrt(1.0 - mo * mo)
-    xi = _XI[None, :, None]
-    t2 = alpha * alpha * xi / (1.0 - xi)
+    xi = (_XI if xi is None else xi)[None, :, None]
+    t2 = -alpha * alpha * np.log1p(-xi) if beckmann else alpha * alpha * xi / (1.0 - xi)
     ch = 1.0 / np.sqrt(1.0 + t2)
     sh = np.sqrt(t2) * ch
-    oh = so * sh * np.cos(_PHI) + mo * ch
+    oh = so * sh * np.cos(_PHI if phi is None else phi) + mo * ch
     return mo, ch, oh, 2.0 * oh * ch - mo
 
 
@@ -183,13 +184,8 @@ def _glass_lobes(alpha: float, eta: float, beckmann: bool = False) -> tuple:
     as _ggx_moments) both lobes contribute G2 (wo.h) / (mu_o cos theta_h) (Cycles' BTDF carries
     eta^2, so its refraction integrates as its reflection), the refraction where eta lets light
     through and it leaves below."""
-    mo = _MU[:, None, None]
-    so = np.sqrt(1.0 - mo * mo)
-    xi = _XI_G[None, :, None]
-    t2 = -alpha * alpha * np.log1p(-xi) if beckmann else alpha * alpha * xi / (1.0 - xi)
-    ch = 1.0 / np.sqrt(1.0 + t2)
-    sh = np.sqrt(t2) * ch
-    oh = np.clip(so * sh * np.cos(_PHI_G) + mo * ch, -1.0, 1.0)
+    mo, ch, oh, _ = _half_vectors(alpha, beckmann, _XI_G, _PHI_G)
+    oh = np.clip(oh, -1.0, 1.0)
     wrz = 2.0 * oh * ch - mo
     ct2 = 1.0 - (1.0 - oh * oh) / (eta * eta)
     wtz = (oh / eta - np.sqrt(np.maximum(ct2, 0.0))) * ch - mo / eta
@@ -260,14 +256,7 @@ def _ggx_moments(alpha: float, beckmann: bool = False) -> tuple:
     with the Schlick weights s^5 and cos s^6 (s = 1 - wo.h): (E, S5, S6), each (len(_MU),).
     GGX, or with beckmann the Beckmann distribution and Cycles' rational approximation of its
     Smith Lambda (bsdf_microfacet.h)."""
-    mo = _MU[:, None, None]
-    so = np.sqrt(1.0 - mo * mo)
-    xi = _XI[None, :, None]
-    t2 = -alpha * alpha * np.log1p(-xi) if beckmann else alpha * alpha * xi / (1.0 - xi)
-    ch = 1.0 / np.sqrt(1.0 + t2)
-    sh = np.sqrt(t2) * ch
-    oh = so * sh * np.cos(_PHI) + mo * ch
-    wiz = 2.0 * oh * ch - mo
+    mo, ch, oh, wiz = _half_vectors(alpha, beckmann)
 
     def smith_lambda(c):
         c = np.clip(c, 1e-9, 1.0)
