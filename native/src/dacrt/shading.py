@@ -474,6 +474,11 @@ NOISE_TYPES = {'FBM': 0, 'MULTIFRACTAL': 1, 'HYBRID_MULTIFRACTAL': 2, 'RIDGED_MU
                'HETERO_TERRAIN': 4}
 
 
+def _per_point(v):
+    """A texture parameter as the kernels take it: float32 (1,) for one value, (n,) per point."""
+    return np.ascontiguousarray(np.atleast_1d(np.asarray(v, _F32)).reshape(-1))
+
+
 def noise_texture(points, scale, detail, roughness, lacunarity, distortion, normalize: bool, color: bool,
                   kind: str = 'FBM', offset=0.0, gain=1.0):
     """Cycles' Noise Texture at points (n, 2) or (n, 3): (fac (n,), colour (n, 3) or None).
@@ -484,9 +489,7 @@ def noise_texture(points, scale, detail, roughness, lacunarity, distortion, norm
     threaded pass."""
     if kind not in NOISE_TYPES:
         raise ValueError(f"kind must be one of {', '.join(NOISE_TYPES)}, got {kind!r}")
-
-    def param(v):
-        return np.ascontiguousarray(np.atleast_1d(np.asarray(v, _F32)).reshape(-1))
+    param = _per_point
     return _core.noise_texture(np.ascontiguousarray(points, _F32), param(scale), param(detail), param(roughness),
                                param(lacunarity), param(distortion), bool(normalize), bool(color),
                                NOISE_TYPES[kind], param(offset), param(gain))
@@ -502,8 +505,7 @@ def voronoi_f1(points, randomness, metric: str = 'EUCLIDEAN'):
     'EUCLIDEAN', 'MANHATTAN' or 'CHEBYCHEV'. Float32 in Cycles' order. One threaded pass."""
     if metric not in VORONOI_METRICS:
         raise ValueError(f"metric must be one of {', '.join(VORONOI_METRICS)}, got {metric!r}")
-    r = np.ascontiguousarray(np.atleast_1d(np.asarray(randomness, _F32)).reshape(-1))
-    return _core.voronoi_f1(np.ascontiguousarray(points, _F32), r, VORONOI_METRICS[metric])
+    return _core.voronoi_f1(np.ascontiguousarray(points, _F32), _per_point(randomness), VORONOI_METRICS[metric])
 
 
 VORONOI_TEXTURE_METRICS = {'EUCLIDEAN': 0, 'MANHATTAN': 1, 'CHEBYCHEV': 2, 'MINKOWSKI': 3}
@@ -525,9 +527,7 @@ def voronoi_texture(points, scale, detail, roughness, lacunarity, smoothness, ex
         raise ValueError(f"metric must be one of {', '.join(VORONOI_TEXTURE_METRICS)}, got {metric!r}")
     if feature not in VORONOI_FEATURES:
         raise ValueError(f"feature must be one of {', '.join(VORONOI_FEATURES)}, got {feature!r}")
-
-    def param(v):
-        return np.ascontiguousarray(np.atleast_1d(np.asarray(v, _F32)).reshape(-1))
+    param = _per_point
     return _core.voronoi_texture(np.ascontiguousarray(points, _F32), param(scale), param(detail), param(roughness),
                                  param(lacunarity), param(smoothness), param(exponent), param(randomness),
                                  VORONOI_FEATURES[feature], VORONOI_TEXTURE_METRICS[metric], bool(normalize))
