@@ -6,6 +6,7 @@
 #include "parallel.h"
 #include "pathvertex.h"
 #include "random.h"
+#include "scatterlanes.h"
 #include "shading.h"
 
 namespace dacrt {
@@ -32,37 +33,16 @@ void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb,
     }, size_t(1) << 16);
 }
 
-namespace {
-
-// Malley's method (uniform disk point lifted to the hemisphere) around the shading normals,
-// for one chunk of sample words.
-__attribute__((target_clones("avx512f", "avx2", "default")))
-void scatter_chunk(const uint32_t* __restrict wa, const uint32_t* __restrict wb, size_t m,
-                   const float* __restrict nx_, const float* __restrict ny_, const float* __restrict nz_,
-                   float* __restrict wx, float* __restrict wy, float* __restrict wz, float* __restrict pdf) {
-    for (size_t j = 0; j < m; ++j) {
-        const float n[3] = {nx_[j], ny_[j], nz_[j]};
-        float w[3];
-        pdf[j] = malley(unit24(wa[j]), unit24(wb[j]), n, w);
-        wx[j] = w[0];
-        wy[j] = w[1];
-        wz[j] = w[2];
-    }
-}
-
-}  // namespace
-
 void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
                     float* wi, float* pdf, uint8_t* ok, const float* O, Ray* rays, const ShadingOffset* offset) {
     parallel_for(n, [&](size_t begin, size_t end) {
         for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* wa, const uint32_t* wb) {
-            scatter_chunk(wa, wb, m, ns + i0, ns + n + i0, ns + 2 * n + i0, wi + i0, wi + n + i0, wi + 2 * n + i0,
-                          pdf + i0);
+            scatter_lanes(wa, wb, m, ns + i0, ns + n + i0, ns + 2 * n + i0, ng ? ng + i0 : nullptr,
+                          ng ? ng + n + i0 : nullptr, ng ? ng + 2 * n + i0 : nullptr, wi + i0, wi + n + i0,
+                          wi + 2 * n + i0, pdf + i0, ok + i0);
+            if (!offset && !rays) return;
             for (size_t i = i0; i < i0 + m; ++i) {
-                bool good = pdf[i] > 0;          // grazing: cos = 0
-                if (ng) good = good && (wi[i] * ng[i] + wi[n + i] * ng[n + i] + wi[2 * n + i] * ng[2 * n + i]) > 0;
-                ok[i] = good;
-                if (offset && good) {
+                if (offset && ok[i]) {
                     const float f = offset->freq[index_at(offset->prim, i, offset->M)];
                     const float c = ns[i] * wi[i] + ns[n + i] * wi[n + i] + ns[2 * n + i] * wi[2 * n + i];
                     if (f > 1.0f) {
