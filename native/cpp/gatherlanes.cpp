@@ -1,7 +1,8 @@
 // lamp_gather's lane-by-lane path for area lamps (gather.h). Compiled with -fno-trapping-math
 // (CMakeLists.txt): its lane loops vectorise only when a select after a division or a
 // comparison is not kept for a possible floating-point trap (values are IEEE's either way);
-// for all of lamps.cpp that flag made gather_one's other lamps ~2x slower.
+// for all of lamps.cpp that flag made gather_one's other lamps ~2x slower. The lane loop is
+// compiled for AVX2 too (target_clones), with the same bits (-ffp-contract=off).
 #include <cmath>
 
 #include "arealanes.h"
@@ -56,6 +57,7 @@ void add_lanes(const Gather& g, const LampRecord& lamp, int32_t key, size_t k, s
 
 }  // namespace
 
+__attribute__((target_clones("avx2", "default")))
 void gather_area_lanes(const Gather& g, const LampRecord& lamp, int32_t key, size_t k, size_t b, size_t e) {
     using namespace lampmath;
     constexpr size_t K = kLampLanes;
