@@ -54,16 +54,20 @@ def frame_seed(seed, frame, subframe=0.0):
     return h & 0x7FFFFFFF
 
 
-def stored_settings(d, messages):
+def stored_settings(d, messages, unread=()):
     """scene.dacrt's values as the frame uses them. A file can hold what the settings do not
     allow: a menu value of another version of the add-on (it reads as ''), a number outside a
     setting's range or not finite (a stored value bypasses the range): such a value is
     replaced by the setting's default, or clamped into its range, and named in a warning, as
-    Cycles' sync takes an unknown menu value as its default, instead of failing the render."""
+    Cycles' sync takes an unknown menu value as its default, instead of failing the render.
+    unread: settings this render does not read (the final render's preview_samples), not said."""
     values = {}
     for prop in d.bl_rna.properties:
         name = prop.identifier
         if name == 'rna_type':
+            continue
+        if name in unread:
+            values[name] = getattr(d, name)
             continue
         value = fixed = getattr(d, name)
         what = None
@@ -78,8 +82,9 @@ def stored_settings(d, messages):
                 num = (lambda x: f"{x:d}") if prop.type == 'INT' else (lambda x: f"{x:g}")
                 what = f"is {num(value)}, outside its range {num(prop.hard_min)} .. {num(prop.hard_max)}"
         if what:
+            shown = f"{fixed:g}" if isinstance(fixed, float) else repr(fixed)
             messages.append(('WARNING', f"scene.dacrt.{name} {what} (saved by another version, or set by a "
-                                        f"script): rendered with {fixed!r}"))
+                                        f"script): rendered with {shown}"))
         values[name] = fixed
     return SimpleNamespace(**values)
 
@@ -92,7 +97,7 @@ def export_settings(scene, vl, messages, viewport=False):
     d = getattr(scene, 'dacrt', None)
     if d is None:
         raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
-    d = stored_settings(d, messages)
+    d = stored_settings(d, messages, unread=('samples',) if viewport else ('preview_samples',))
     if viewport:        # the viewport draws Combined alone: no pass, AOV, Cryptomatte or light group
         passes, missing, aovs, crypto, lightgroups = (), [], (), (), ()
     else:

@@ -22,6 +22,7 @@ def test_stored_values_the_settings_do_not_allow_render_as_default_or_clamped(sc
     d['samples'] = 0
     d['max_bounces'] = -3
     d['filter_width'] = float('nan')
+    d['preview_samples'] = -1           # (the viewport's: not read by a final render, not said)
     stored = scenes.render_rgba(scene)
     text = " ".join(said)
     for expected in ("scene.dacrt.partition holds a choice this version of DACRT does not know (saved by another "
@@ -32,8 +33,19 @@ def test_stored_values_the_settings_do_not_allow_render_as_default_or_clamped(sc
                      "scene.dacrt.filter_width is nan (saved by another version, or set by a script): "
                      "rendered with 1.5"):
         assert expected in text, text
+    assert "preview_samples" not in text, text
     # the image is the one those values give
     d.partition, d.filter_type, d.samples, d.max_bounces, d.filter_width = 'ADAPTIVE', 'BLACKMAN_HARRIS', 1, 0, 1.5
+    d.preview_samples = 1
     said.clear()
     assert np.array_equal(scenes.render_rgba(scene), stored)
     assert not any("scene.dacrt" in t for t in said)
+
+
+def test_a_clamped_float_is_said_as_people_read_it(scene, said):
+    _scene(scene)
+    scene.dacrt['filter_width'] = 0.0
+    scenes.render_rgba(scene)
+    text = " ".join(said)
+    assert "scene.dacrt.filter_width is 0, outside its range 0.01 .. " in text and "rendered with 0.01" in text, text
+    assert "0.00999" not in text, text
