@@ -68,6 +68,10 @@ def _nonnegative(v, label, reasons):
     return np.where(bad, np.float32(0), v).astype(np.float32)
 
 
+# what _image_alpha gives for an Image Texture's Alpha whose image cannot be read
+_MISSING_ALPHA = 'missing image alpha'
+
+
 def _lookup_chain(compiled, clamp):
     """fn(rgb (..., 3)) -> (..., 3) float32: colour nodes compiled for an image
     (nodeeval.compile_image_chain) run on looked-up colours at alpha 1, non-finite results 0,
@@ -674,6 +678,8 @@ class MaterialBuilder:
         if alpha is None:
             return c
         opacity = self._image_alpha(alpha, reasons)
+        if opacity is _MISSING_ALPHA:       # alpha 1: opaque (it had read the socket's own value)
+            return c
         if opacity is None:
             opacity = self._evaluated_alpha(alpha, reasons)
         if opacity is not None:
@@ -689,12 +695,13 @@ class MaterialBuilder:
         return c
 
     def _image_alpha(self, socket, reasons, inverted=False):
-        """(Texture, inverted) when socket is linked straight to an Image Texture's Alpha output."""
+        """(Texture, inverted) when socket is linked straight to an Image Texture's Alpha output;
+        _MISSING_ALPHA when that image cannot be read (Cycles' opaque magenta: alpha 1)."""
         link = linked_link(socket)
         if not is_image_alpha(link):
             return None
         tex = self._texture(link.from_node, reasons)
-        return None if tex is None else (tex, inverted)
+        return _MISSING_ALPHA if tex is None else (tex, inverted)
 
     def _float_per_texel(self, socket):
         """(image Texture, values (h, w) float32, notes) of a float socket that nodes compute
@@ -820,6 +827,9 @@ class MaterialBuilder:
             return None
         # Mix = (1 - fac) A + fac B: fac is the opacity when A is the transparent one
         opacity = self._image_alpha(node.inputs['Fac'], notes, inverted=not clear_a)
+        if opacity is _MISSING_ALPHA:       # factor 1: the second shader alone
+            reasons.extend(notes)
+            return b
         if opacity is None and not is_image_alpha(linked_link(node.inputs['Fac'])):
             opacity = self._evaluated_alpha(node.inputs['Fac'], notes, inverted=not clear_a)
         if opacity is None:

@@ -230,3 +230,33 @@ def test_a_file_image_is_read_from_its_file_at_each_render(tmp_path):
     img.pack()
     packed = np.asarray(export.images.image_pixels(img, []))
     assert np.allclose(packed[0, 0, :3], first[0, 0, :3], atol=1e-6)
+
+
+@pytest.mark.parametrize('use', ['mix', 'principled'])
+def test_a_missing_images_alpha_is_opaque_as_cycles_magenta(tmp_path, use):
+    """A missing image is Cycles' opaque magenta: its Alpha is 1, so a cut-out Mix Shader gives
+    its second shader and a Principled its opaque self; the socket's own value had stood in
+    (a leaf half see-through where Cycles' was opaque)."""
+    path = tmp_path / "alpha.png"
+    scenes.write_image(path, np.array([[[50, 150, 80, 128]]], np.uint8))
+    img = bpy.data.images.load(str(path))
+    mat, nt, out = scenes._material("Leaf " + use)
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    if use == 'mix':
+        d, t, mix = (nt.nodes.new(k) for k in ('ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTransparent',
+                                               'ShaderNodeMixShader'))
+        nt.links.new(tex.outputs['Alpha'], mix.inputs['Fac'])
+        nt.links.new(t.outputs[0], mix.inputs[1])
+        nt.links.new(d.outputs[0], mix.inputs[2])
+        nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    else:
+        p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+        p.inputs['Alpha'].default_value = 0.3
+        nt.links.new(tex.outputs['Alpha'], p.inputs['Alpha'])
+        nt.links.new(p.outputs[0], out.inputs['Surface'])
+    path.unlink()
+    builder = export.materials.MaterialBuilder()
+    m = builder.materials[builder.index(mat)]
+    assert m.transparency is None and m.opacity is None, (m.transparency, m.opacity)
+    assert "is missing (magenta, as Cycles)" in m.approximated and "own value" not in m.approximated, m.approximated
