@@ -381,17 +381,20 @@ class MaterialBuilder:
             # a script's or driver's NaN: what it becomes depends on the node, each said apart
             # (a colour or float node computes with it as Cycles does: a Color Ramp's Factor
             # gives its last stop, a colour computed as NaN is black; a shader's own input
-            # reads 0; a procedural texture computes with 0, where Cycles' texture differs)
+            # reads 0; a procedural texture computes with it as Cycles' kernels do)
             computed = {n.type for n in ntree.nodes if nodeeval.node_inputs(n) is not None}
             shader = {n.type for n in ntree.nodes} - computed - PROCEDURAL_TYPES
             textures = nan_inputs(ntree, PROCEDURAL_TYPES)
-            # (a Noise Texture's NaN Scale gives NaN, as in Cycles: black)
-            noise = [b for b in nan_inputs(ntree, {'TEX_NOISE'}) if b.startswith("'Scale' of ")]
+            # (the textures take a NaN as Cycles' kernels do: clamped where Cycles clamps it, a
+            # Noise's NaN Scale black; but a Noise's NaN Lacunarity or Distortion and a Voronoi's
+            # NaN Scale (cells hashed from NaN) do not give Cycles' result)
+            differs = [b for b in nan_inputs(ntree, {'TEX_NOISE'})
+                       if b.startswith("'Lacunarity' of ") or b.startswith("'Distortion' of ")]
+            differs += [b for b in nan_inputs(ntree, {'TEX_VORONOI'}) if b.startswith("'Scale' of ")]
             for bad, said in ((nan_inputs(ntree, shader), "NaN read as 0 (as Cycles clamps it) for {}"),
-                              (nan_inputs(ntree, computed) + noise,
+                              (nan_inputs(ntree, computed) + [b for b in textures if b not in differs],
                                "NaN computed through the node as Cycles computes it for {}"),
-                              ([b for b in textures if b not in noise],
-                               "NaN read as 0 for {}, where Cycles' texture differs")):
+                              (differs, "NaN for {}: the texture computes with it, not as Cycles' does")):
                 if bad:
                     reasons.append(said.format(', '.join(bad)))
             out = output_node(ntree)

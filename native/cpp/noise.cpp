@@ -7,6 +7,7 @@
 
 #include "lookup3.h"
 #include "parallel.h"
+#include "svmmath.h"
 
 namespace dacrt {
 
@@ -195,7 +196,7 @@ float ridged_multi_fractal(float* p, int dims, float detail, float roughness, fl
     const int octaves = int(std::floor(detail));
     for (int i = 1; i <= octaves; ++i) {
         scale_point(p, dims, lacunarity);
-        weight = std::min(std::max(signal * gain, 0.0f), 1.0f);
+        weight = svm::clamp(signal * gain, 0.0f, 1.0f);
         signal = offset - std::fabs(snoise(p, dims));
         signal = signal * signal;
         signal = signal * weight;
@@ -230,9 +231,8 @@ void noise_texture(const float* p, size_t n, int dims, const NoiseParams& k, flo
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const float scale = at(k.scale, k.scale_n, i);
-            float detail = std::min(std::max(at(k.detail, k.detail_n, i), 0.0f), 15.0f);
-            if (!(detail >= 0.0f)) detail = 0.0f;    // NaN: one octave
-            const float rough = std::max(at(k.roughness, k.roughness_n, i), 0.0f);
+            const float detail = svm::clamp(at(k.detail, k.detail_n, i), 0.0f, 15.0f);   // NaN: one octave
+            const float rough = svm::max(at(k.roughness, k.roughness_n, i), 0.0f);
             const float lac = at(k.lacunarity, k.lacunarity_n, i);
             const float dist = at(k.distortion, k.distortion_n, i);
             float q[3];

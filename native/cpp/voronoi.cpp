@@ -9,6 +9,7 @@
 
 #include "lookup3.h"
 #include "parallel.h"
+#include "svmmath.h"
 
 namespace dacrt {
 
@@ -545,7 +546,7 @@ float fractal_voronoi_distance_to_edge(const float* coord, float randomness, con
     return distance;
 }
 
-inline float clampf(float v, float lo, float hi) { return std::min(std::max(v, lo), hi); }
+using svm::clamp;
 
 template <int D>
 void texture_point(const float* p, const VoronoiTextureParams& k, size_t i, float* dist, float* col, float* pos,
@@ -553,13 +554,13 @@ void texture_point(const float* p, const VoronoiTextureParams& k, size_t i, floa
     auto at = [i](const float* a, size_t n) { return a[n == 1 ? 0 : i]; };
     const float scale = at(k.scale, k.scale_n);
     Settings s;
-    s.randomness = clampf(at(k.randomness, k.randomness_n), 0.0f, 1.0f);
-    s.smoothness = clampf(at(k.smoothness, k.smoothness_n) / 2.0f, 0.0f, 0.5f);
+    s.randomness = clamp(at(k.randomness, k.randomness_n), 0.0f, 1.0f);
+    s.smoothness = clamp(at(k.smoothness, k.smoothness_n) / 2.0f, 0.0f, 0.5f);
     s.exponent = at(k.exponent, k.exponent_n);
     s.metric = k.metric;
     Fractal f;
-    f.detail = clampf(at(k.detail, k.detail_n), 0.0f, 15.0f);
-    f.roughness = clampf(at(k.roughness, k.roughness_n), 0.0f, 1.0f);
+    f.detail = clamp(at(k.detail, k.detail_n), 0.0f, 15.0f);
+    f.roughness = clamp(at(k.roughness, k.roughness_n), 0.0f, 1.0f);
     f.lacunarity = at(k.lacunarity, k.lacunarity_n);
     f.scale = scale;
     f.feature = k.feature;
@@ -600,7 +601,7 @@ void voronoi_f1(const float* p, size_t n, int dims, const float* randomness, siz
                 float* distance, float* color, float* position) {
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
-            const float r = std::min(std::max(randomness[randomness_n == 1 ? 0 : i], 0.0f), 1.0f);
+            const float r = svm::clamp(randomness[randomness_n == 1 ? 0 : i], 0.0f, 1.0f);
             if (dims == 3)
                 f1_point<3>(p + 3 * i, r, metric, distance + i, color + 3 * i, position + 3 * i);
             else

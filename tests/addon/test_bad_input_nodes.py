@@ -2,9 +2,11 @@
 said 'NaN read as 0 (as Cycles clamps it)' for every one, which is not what Cycles does: a
 Color Ramp's NaN Factor gives its last stop there (DACRT gave the first: red where Cycles
 showed blue; a tester's frame now 0.4678 / 0.5099 / 0.6024, Cycles' the same), and a NaN
-Scale of a Noise Texture is black in Cycles (DACRT: grey, computed with Scale 0). A Voronoi
-Texture's NaN Scale still differs from Cycles' (said)."""
+Scale of a Noise Texture is black in Cycles (DACRT: grey, computed with Scale 0); inputs Cycles
+clamps (Detail, Roughness, Randomness) render as 0 does, as in Cycles. A Voronoi Texture's NaN
+Scale still differs from Cycles' (said)."""
 import numpy as np
+import pytest
 
 from . import scenes
 
@@ -55,5 +57,41 @@ def test_nan_voronoi_scale_is_said_to_differ_from_cycles(scene, said):
     _, img = _plane_fed_by(scene, 'ShaderNodeTexVoronoi', 'Scale', NAN)
     assert np.isfinite(img).all()
     text = " | ".join(said)
-    assert "NaN read as 0 for 'Scale' of 'Voronoi Texture', where Cycles' texture differs" in text
+    assert "NaN for 'Scale' of 'Voronoi Texture': the texture computes with it, not as Cycles' does" in text
     assert "as Cycles clamps it" not in text
+
+
+def _zero_and_nan(scene, node_type, socket, **settings):
+    """The renders of a plane whose colour is a texture (Object coordinates) with `socket` 0
+    and NaN."""
+    import bpy
+    out = []
+    for value in (0.0, NAN):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        scene = bpy.context.scene
+        scene.render.engine = 'DACRT'
+        node, _ = _plane_fed_by(scene, node_type, socket, value)
+        for k, v in settings.items():
+            if k in node.inputs:
+                node.inputs[k].default_value = v
+            else:
+                setattr(node, k, v)
+        node.inputs['Scale'].default_value = 3.0
+        coords = node.id_data.nodes.new('ShaderNodeTexCoord')
+        node.id_data.links.new(coords.outputs['Object'], node.inputs['Vector'])
+        out.append(scenes.render_rgba(scene))
+    return out
+
+
+@pytest.mark.parametrize('node_type, socket, settings', [
+    ('ShaderNodeTexVoronoi', 'Detail', {}), ('ShaderNodeTexVoronoi', 'Roughness', {'Detail': 2.0}),
+    ('ShaderNodeTexVoronoi', 'Randomness', {}),
+    ('ShaderNodeTexNoise', 'Roughness', {'Detail': 2.0}), ('ShaderNodeTexNoise', 'Detail', {})])
+def test_nan_texture_inputs_cycles_clamps_render_as_zero(scene, node_type, socket, settings):
+    """Cycles clamps these inputs with its max(a, b) = a > b ? a : b, so a NaN renders as 0 does
+    (measured: Voronoi Detail, Roughness, Smoothness 0.4833 both, Randomness 0.3653, Noise
+    Roughness 0.4812); the kernels' std::max had passed the NaN on: black, or Randomness twice
+    as bright."""
+    zero, nan = _zero_and_nan(scene, node_type, socket, **settings)
+    assert np.ptp(zero[..., 0]) > 0.05
+    assert np.array_equal(zero, nan)
