@@ -959,6 +959,8 @@ class Integrator:
                 held = hit & ((np.take(self.tri.visibility, prim) & HOLDOUT) != 0)
                 if path.transmit is not None:
                     held &= ~path.transmit          # past glass: a transmission ray, no holdout
+                if path.tb is not None:             # past Transparent Max Bounces the path ends
+                    held &= path.tb < self._transparent_stop    # there, black (Cycles): no holdout
                 hit &= ~held
                 if path.thr is not None and held.any():
                     _seen_through(alpha, path, np.flatnonzero(held))
