@@ -1052,10 +1052,14 @@ class MaterialBuilder:
         if found is not None:
             image, strength, uv_map, chain = found
             tex = self._texture(image, reasons)
-            if tex is not None and chain is not None:
+            if tex is None:
+                # Cycles reads a missing image as magenta there too, a tangent-space normal
+                # (1, -1, 1) that tilts the surface (it had stayed flat under 'magenta, as Cycles')
+                px = np.array([[[*MISSING_IMAGE, 1.0]]], np.float32)
+                tex = Texture(('missing normal map', image.name), px, 'Closest', 'REPEAT', name=image.name)
+            elif chain is not None:
                 tex = self._normal_chain(tex, chain, reasons)
-            if tex is not None:
-                self._normal_maps.append((tex, strength, uv_map))
+            self._normal_maps.append((tex, strength, uv_map))
 
     def _normal_chain(self, tex, socket, reasons):
         """The normal map texture tex seen through the colour nodes feeding the Normal Map's

@@ -260,3 +260,30 @@ def test_a_missing_images_alpha_is_opaque_as_cycles_magenta(tmp_path, use):
     m = builder.materials[builder.index(mat)]
     assert m.transparency is None and m.opacity is None, (m.transparency, m.opacity)
     assert "is missing (magenta, as Cycles)" in m.approximated and "own value" not in m.approximated, m.approximated
+
+
+def test_a_missing_normal_map_image_tilts_the_surface_as_cycles_magenta(scene, tmp_path):
+    """Cycles reads a missing normal map image as magenta, the tangent-space normal (1, -1, 1):
+    a plane under an overhead sun is lit at cos = 1 / sqrt(3) (Cycles 0.4411 = 0.8 x 3 / pi /
+    sqrt(3)); it had stayed flat (0.7639) under a message saying 'magenta, as Cycles'."""
+    import math
+    path = tmp_path / "normal.png"
+    scenes.write_image(path, np.full((4, 4, 3), (128, 128, 255), np.uint8))
+    img = bpy.data.images.load(str(path))
+    img.colorspace_settings.name = 'Non-Color'
+    mat, nt, out = scenes._material("Bumpy")
+    tex, nm, d = (nt.nodes.new(k) for k in ('ShaderNodeTexImage', 'ShaderNodeNormalMap', 'ShaderNodeBsdfDiffuse'))
+    tex.image = img
+    nt.links.new(tex.outputs['Color'], nm.inputs['Color'])
+    nt.links.new(nm.outputs[0], d.inputs['Normal'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    scenes.plane("Plane", size=2.0, materials=(mat,)).data.uv_layers.new(name="UVMap")
+    scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=2.0)
+    scenes.light('SUN', 3.0)
+    scenes.black_world()
+    scene.dacrt.samples, scene.dacrt.max_bounces, scene.dacrt.filter_type = 4, 0, 'BOX'
+    flat = scenes.render_rgba(scene)[4:-4, 4:-4, :3].mean()
+    path.unlink()
+    tilted = scenes.render_rgba(scene)[4:-4, 4:-4, :3].mean()
+    assert flat == pytest.approx(0.8 * 3 / math.pi, rel=5e-3)        # (128/255: all but flat)
+    assert tilted / flat == pytest.approx(1 / math.sqrt(3), rel=5e-3)
