@@ -434,10 +434,12 @@ class MaterialBuilder:
             e_keep = _nonnegative(weight, "emission strength", reasons) > 0
             # (where a channel's mean is <= 0, the mean of its positive texels weighs it: an
             # image whose every mean is negative still has light to give)
-            signed = np.nan_to_num(np.asarray(closure.emission, np.float64))
-            texels = np.asarray(closure.emission_tex[0].pixels[..., :3], np.float64).reshape(-1, 3)
-            positive = np.maximum(np.nan_to_num(texels), 0.0).mean(axis=0) * weight
-            emission = np.where(e_keep, np.where(signed > 0, signed, positive), 0.0).astype(np.float32)
+            emission = np.nan_to_num(np.asarray(closure.emission, np.float64))
+            if (e_keep & ~(emission > 0)).any():        # (a pass over the texels only then)
+                texels = np.asarray(closure.emission_tex[0].pixels[..., :3], np.float64).reshape(-1, 3)
+                positive = np.maximum(np.nan_to_num(texels), 0.0).mean(axis=0) * weight
+                emission = np.where(emission > 0, emission, positive)
+            emission = np.where(e_keep, emission, 0.0).astype(np.float32)
         else:
             emission = _nonnegative(closure.emission.astype(np.float32), "emission", reasons)
         holdout = closure.holdout >= 1.0 - 1e-6
