@@ -122,8 +122,9 @@ class Assembly:
         self._coordinated = {k for k, m in enumerate(self.materials.materials) if _coordinates_read(m)}
         self._coordinate_rows, self._frames = {}, {}     # (_texture_coordinates, _object_frame)
         # and those reading Object Info outputs (per placement, by instance id)
-        self._info_readers = {k for k, m in enumerate(self.materials.materials) if _object_info_read(m)}
-        self._info_needs = sorted({n for k in self._info_readers for n in _object_info_read(self.materials.materials[k])})
+        info = [_object_info_read(m) for m in self.materials.materials]
+        self._info_readers = {k for k, needs in enumerate(info) if needs}
+        self._info_needs = sorted(set().union(*info))
         # per material, once for the frame (the materials are all resolved above): those whose
         # albedo follows an attribute or Object Info (most scenes: none), and those reading each
         # UV map by name (scanned per batch and per placement, these had made the export
