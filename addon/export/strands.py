@@ -6,6 +6,7 @@ Part of the export layer."""
 import numpy as np
 
 from .. import hair, pointcloud
+from ..texture import srgb_to_linear
 from .errors import ExportCancelled
 from .meshes import MeshArrays, attribute_rows
 
@@ -77,8 +78,7 @@ def _root_colors(ps, modifier, first, vcol_no, notes):
     sRGB bytes to linear, alpha 1)."""
     c = _per_strand(ps, first, 3, lambda p, no: ps.mcol_on_emitter(modifier, p, particle_no=no, vcol_no=vcol_no),
                     notes)
-    c = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-    return np.concatenate([c, np.ones((len(c), 1))], axis=1)
+    return np.concatenate([srgb_to_linear(c), np.ones((len(c), 1), np.float32)], axis=1)
 
 
 def hair_arrays(ob, notes):
