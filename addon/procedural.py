@@ -64,34 +64,6 @@ def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normaliz
                                        kind, offset, gain)
 
 
-def voronoi_f1(co, scale, randomness, metric, dims, normalize):
-    """The Voronoi Texture's F1 feature at points co (n, 3) (dims 2 reads x and y), one octave
-    (Detail 0 or Roughness 0): (Distance (n,), Color (n, 3), Position (n, 3)). The nearest point
-    in the native kernel (dacrt.shading.voronoi_f1, Cycles' PCG cell hash); Normalize divides
-    the distance by Cycles' max_distance (the metric's length of (0.5 + 0.5 randomness) per
-    axis), Position is in the texture's coordinates (Cycles' safe_divide by Scale)."""
-    scale = np.asarray(scale, F32).reshape(-1, 1)
-    p = np.ascontiguousarray(np.asarray(co, F32)[:, :dims] * scale)
-    d, color, position = dacrt.shading.voronoi_f1(p, randomness, metric)
-    if normalize:
-        h = F32(0.5) + F32(0.5) * np.clip(np.asarray(randomness, F32), F32(0.0), F32(1.0))
-        if metric == 'EUCLIDEAN':
-            m = h * h
-            for _ in range(dims - 1):
-                m = m + h * h
-            m = np.sqrt(m)
-        elif metric == 'MANHATTAN':
-            m = h
-            for _ in range(dims - 1):
-                m = m + h
-        else:
-            m = h
-        d = (d / m).astype(F32)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        position[:, :dims] = np.where(scale != 0, position[:, :dims] / scale, F32(0.0))
-    return d, color, position
-
-
 def voronoi_texture(co, w, scale, detail, roughness, lacunarity, smoothness, exponent, randomness, feature, metric,
                     dims, normalize, n=None):
     """The Voronoi Texture node at points co (n, 3) (or None in 1D) and W w (n,) (1D and 4D; else

@@ -378,9 +378,3 @@ def _voronoi(node, out, vec, chain, depth):
         found = pr.voronoi_texture(co, ww, *values, feature, metric, dims, normalize, n)[which]
         return found if found.ndim == 2 else found[:, None]
     return voronoi, which == 'Position'
-
-
-def _shown(node, ident):
-    """A float input's value as the user sets it, or 'linked' when something varying feeds it."""
-    value, exact = nodeeval.constant_value(nodegraph.input_by_id(node, ident))
-    return f"{value:g}" if exact else "linked"

@@ -149,10 +149,10 @@ def test_procedural_texture_matches_cycles_pointwise(case, tmp_path):
     if kind == 'ShaderNodeTexNoise':
         mine = _noise(tex, p, output)
     elif kind == 'ShaderNodeTexVoronoi':
-        d, color, position = pr.voronoi_f1(p, float(tex.inputs['Scale'].default_value),
-                                           float(tex.inputs['Randomness'].default_value), tex.distance,
-                                           int(tex.voronoi_dimensions[0]), tex.normalize)
-        mine = {'Distance': np.repeat(d[:, None], 3, axis=1), 'Color': color, 'Position': position}[output]
+        found = pr.voronoi_texture(p, None, *(_own(tex, k) for k in ('Scale', 'Detail', 'Roughness', 'Lacunarity',
+                                                                      'Smoothness', 'Exponent', 'Randomness')),
+                                   tex.feature, tex.distance, int(tex.voronoi_dimensions[0]), tex.normalize)
+        mine = np.repeat(found['Distance'][:, None], 3, axis=1) if output == 'Distance' else found[output]
     elif kind == 'ShaderNodeTexWave':
         f = pr.wave(p, *(_own(tex, k) for k in ('Scale', 'Distortion', 'Detail', 'Detail Scale', 'Detail Roughness',
                                                  'Phase Offset')), tex.wave_type,
