@@ -1289,7 +1289,7 @@ class Integrator:
         # per-object values (Object Info outputs): the hit triangle's placement's
         for name in needs:
             if isinstance(name, str) and name in self.tri.instance_values:
-                out[name] = self.tri.instance_values[name][self.tri.placement[prim]]
+                out[name] = self.tri.instance_values[name][self.tri.instance[prim]]
         return out
 
     def _lookup(self, tex, interp, ext, xf, prim, u, v):

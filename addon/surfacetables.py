@@ -69,20 +69,18 @@ class Triangles:
         tangents = getattr(geometry, 'tangents', None)
         self.tangents = None if tangents is None else dacrt.shading.corner_rows(np.asarray(tangents, F32))
         # (M, 3, 3) the object-to-world map of each triangle's placement: their tangents are
-        # object-space (tangent_xf, per placement, by the triangle's instance id)
-        xf = getattr(geometry, 'tangent_xf', None)
-        if xf is not None and getattr(geometry, 'instance', None) is None:
-            raise ValueError("geometry.tangent_xf needs geometry.instance (the placement of each triangle)")
-        self.tangent_xf = None if xf is None else np.asarray(xf, F32)
-        self.instance = None if xf is None else np.asarray(geometry.instance, np.int64)
+        # object-space (tangent_xf, per placement, by the triangle's instance id); and the
         # Object Info outputs procedural textures read, per placement (scenedata.Geometry.
-        # instance_values), and each triangle's placement to look them up by
+        # instance_values): both looked up by each triangle's placement, `instance`
+        xf = getattr(geometry, 'tangent_xf', None)
         values = getattr(geometry, 'instance_values', None) or {}
-        if values and getattr(geometry, 'instance', None) is None:
-            raise ValueError("geometry.instance_values needs geometry.instance (the placement of each triangle)")
+        for what, given in (('tangent_xf', xf is not None), ('instance_values', bool(values))):
+            if given and getattr(geometry, 'instance', None) is None:
+                raise ValueError(f"geometry.{what} needs geometry.instance (the placement of each triangle)")
+        self.tangent_xf = None if xf is None else np.asarray(xf, F32)
         self.instance_values = {k: np.nan_to_num(np.asarray(v, F32), nan=0.0, posinf=0.0, neginf=0.0)
                                 for k, v in values.items()}
-        self.placement = np.asarray(geometry.instance, np.int64) if values else None
+        self.instance = np.asarray(geometry.instance, np.int64) if xf is not None or values else None
         # rows: corner 0 colour (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9): the
         # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors)
         colors = getattr(geometry, 'colors', None)
