@@ -168,10 +168,9 @@ def _frames(p, counts, sector=0.0, t=None):
         t = p[nxt] - p[prv]
         length = np.linalg.norm(t, axis=1, keepdims=True)
         t = np.divide(t, length, out=np.tile([0.0, 0.0, 1.0], (m, 1)), where=length > 0)
-    across = _across
 
     n = np.empty_like(t)
-    n[starts] = across(t[starts])
+    n[starts] = _across(t[starts])
     if sector:
         # each curve's rings turned by its own share of one sector (golden-ratio sequence): a
         # polygon is wider across its corners than across its sides, and with one orientation
@@ -188,7 +187,7 @@ def _frames(p, counts, sector=0.0, t=None):
         bad = ql[:, 0] < 1e-6                  # the curve turned back on itself: start afresh
         q = np.where(bad[:, None], 0.0, q / np.where(ql > 0, ql, 1.0))
         if bad.any():
-            q[bad] = across(t[rows[bad]])
+            q[bad] = _across(t[rows[bad]])
         n[rows] = q
     return t, n
 
