@@ -77,9 +77,11 @@ def heap_free():
     return int(fn().fordblks)
 
 
-def _status_kb(field):
+def proc_kb(field, path='/proc/self/status'):
+    """A 'Field: N kB' line's N of a Linux /proc file (this process's status, /proc/meminfo),
+    or None where it cannot be read."""
     try:
-        with open('/proc/self/status') as f:
+        with open(path) as f:
             for line in f:
                 if line.startswith(field + ':'):
                     return int(line.split()[1])
@@ -96,7 +98,7 @@ def rss_peak_reset():
             f.write('5')
     except OSError:
         return None
-    kb = _status_kb('VmRSS')
+    kb = proc_kb('VmRSS')
     return None if kb is None else kb * 1024
 
 
@@ -104,7 +106,7 @@ def rss_peak():
     """The process's peak resident size in bytes since rss_peak_reset (VmHWM), or None: it
     sees the export's temporaries (an 8K image's conversion) that heap samples between the
     passes miss."""
-    kb = _status_kb('VmHWM')
+    kb = proc_kb('VmHWM')
     return None if kb is None else kb * 1024
 
 

@@ -27,17 +27,6 @@ STRAND_BYTES = 300
 HEADROOM = 0.9          # of the available memory, for images, rays and the rest of the frame
 
 
-def _meminfo_available():
-    try:
-        with open('/proc/meminfo') as f:
-            for line in f:
-                if line.startswith('MemAvailable:'):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
-
-
 def _cgroup_room():
     """Bytes left under this process's cgroup v2 memory limit (containers, systemd slices), or
     None without one."""
@@ -81,7 +70,8 @@ def available_bytes():
     if sys.platform == 'win32':
         room = _windows_available()
     elif sys.platform.startswith('linux'):
-        room = _meminfo_available()
+        kb = allocator.proc_kb('MemAvailable', '/proc/meminfo')
+        room = None if kb is None else kb * 1024
         cgroup = _cgroup_room()
         if cgroup is not None:
             room = cgroup if room is None else min(room, cgroup)
