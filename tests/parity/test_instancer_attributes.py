@@ -7,13 +7,14 @@ settings'), a name nowhere (0) and the nodes after it (a Color Ramp on a number)
 under a straight-down sun, direct light only: each quad's centre pixel is exact per sample, and
 both engines agree within 2e-3. Before, DACRT read the node's own colour (0.8) everywhere, said
 'instancer attribute ... not read'."""
-import math
 
 import bpy
 import numpy as np
 import pytest
 
 from tests.addon import scenes
+
+from .test_color_attributes import _render_both
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -167,20 +168,9 @@ def instancer(name, points, source, stores=(), join_own=False, as_instance=True,
 
 def render_both(sc, tmp_path, samples=4):
     """Both engines' RGB (H, W, 3) under an orthographic view from above and a sun straight
-    down, direct light only (exact per sample up to the pixel filter's sampling)."""
+    down, direct light only (test_color_attributes' set-up, at this file's size)."""
     sc.render.resolution_x, sc.render.resolution_y = W, H
-    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=SCALE)
-    scenes.light('SUN', math.pi, angle=0.0)
-    scenes.black_world()
-    sc.cycles.device = 'CPU'
-    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
-    sc.cycles.samples = sc.dacrt.samples = samples
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    images = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        images[engine] = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr", sc)))[..., :3]
-    return images
+    return _render_both(sc, tmp_path, SCALE, samples)
 
 
 def at(img, x, y):
