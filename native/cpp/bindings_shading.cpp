@@ -571,22 +571,6 @@ py::tuple noise_texture_py(F32Array points, F32Array scale, F32Array detail, F32
     return py::make_tuple(fac, col);
 }
 
-py::tuple voronoi_f1_py(F32Array points, F32Array randomness, int metric) {
-    const int dims = points_dims(points);
-    if (metric < VORONOI_EUCLIDEAN || metric > VORONOI_CHEBYCHEV)
-        throw py::value_error("metric must be 0 (Euclidean), 1 (Manhattan) or 2 (Chebychev), got " +
-                              std::to_string(metric));
-    const size_t n = size_t(points.shape(0));
-    const size_t rn = param_len(randomness, n, "randomness");
-    F32Array dist{py::ssize_t(n)}, color({py::ssize_t(n), py::ssize_t(3)}), position({py::ssize_t(n), py::ssize_t(3)});
-    {
-        py::gil_scoped_release nogil;
-        voronoi_f1(points.data(), n, dims, randomness.data(), rn, metric, dist.mutable_data(),
-                   color.mutable_data(), position.mutable_data());
-    }
-    return py::make_tuple(dist, color, position);
-}
-
 py::tuple voronoi_texture_py(F32Array points, F32Array scale, F32Array detail, F32Array roughness,
                              F32Array lacunarity, F32Array smoothness, F32Array exponent, F32Array randomness,
                              int feature, int metric, bool normalize) {
@@ -717,7 +701,6 @@ void register_shading(py::module_& m) {
           py::arg("type"), py::arg("offset"), py::arg("gain"));
     m.def("byte_texels", &byte_texels_py, py::arg("buf"), py::arg("byte_floats"), py::arg("associate"));
     m.def("byte_lookup", &byte_lookup_py, py::arg("k8"), py::arg("table"), py::arg("rgba"));
-    m.def("voronoi_f1", &voronoi_f1_py, py::arg("points"), py::arg("randomness"), py::arg("metric"));
     m.def("voronoi_texture", &voronoi_texture_py, py::arg("points"), py::arg("scale"), py::arg("detail"),
           py::arg("roughness"), py::arg("lacunarity"), py::arg("smoothness"), py::arg("exponent"),
           py::arg("randomness"), py::arg("feature"), py::arg("metric"), py::arg("normalize"));

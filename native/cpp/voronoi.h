@@ -1,8 +1,8 @@
 // The Voronoi Texture as Cycles computes it (kernel/svm/voronoi.h): the nearest of the points
 // jittered into the integer cells around a point (PCG-hashed cells; 1D: lookup3 of the cell's
-// float), its distance, its cell's colour and its position (voronoi_f1), and the whole node
-// (voronoi_texture: every feature, metric and dimension, and the fractal octaves); float32 in
-// Cycles' order, for a renderer evaluating procedural textures at shading points.
+// float), its distance, its cell's colour and its position, for the whole node (voronoi_texture:
+// every feature, metric and dimension, and the fractal octaves); float32 in Cycles' order, for a
+// renderer evaluating procedural textures at shading points.
 #pragma once
 
 #include <cstddef>
@@ -12,12 +12,6 @@ namespace dacrt {
 enum VoronoiMetric { VORONOI_EUCLIDEAN = 0, VORONOI_MANHATTAN = 1, VORONOI_CHEBYCHEV = 2, VORONOI_MINKOWSKI = 3 };
 enum VoronoiFeature { VORONOI_F1 = 0, VORONOI_F2 = 1, VORONOI_SMOOTH_F1 = 2, VORONOI_DISTANCE_TO_EDGE = 3,
                       VORONOI_N_SPHERE_RADIUS = 4 };
-
-// At n points p (n, dims) row-major, dims 2 or 3, already scaled (Cycles' coord x Scale), with
-// randomness per point (length n) or one for all (length 1): distance (n,), color (n, 3) and
-// position (n, 3) row-major (the nearest point in the same scaled space; z 0 in 2D). Threaded.
-void voronoi_f1(const float* p, size_t n, int dims, const float* randomness, size_t randomness_n, int metric,
-                float* distance, float* color, float* position);
 
 // The Voronoi Texture node (Cycles' svm_node_tex_voronoi) at n points p (n, dims) row-major,
 // dims 1 (W), 2 (x, y), 3 (x, y, z) or 4 (x, y, z, W), unscaled. Per-point parameters are arrays

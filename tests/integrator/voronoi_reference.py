@@ -1,7 +1,8 @@
 """A float32 numpy reference of Cycles' Voronoi F1 (kernel/svm/voronoi.h voronoi_f1, util/hash.h
 hash_pcg2d_i / hash_pcg3d_i), written from Cycles' formulas operation by operation, for the
-native kernel dacrt.shading.voronoi_f1 to match bit for bit (tests/integrator/test_voronoi.py).
-Cycles itself is the reference of both in tests/parity/test_procedural.py."""
+native node dacrt.shading.voronoi_texture of one octave to match bit for bit
+(tests/integrator/test_voronoi.py). Cycles itself is the reference of both in
+tests/parity/test_procedural.py."""
 import numpy as np
 
 F32, I32 = np.float32, np.int32

@@ -13,7 +13,7 @@ from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
 __all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
-           "LightChoice", "next_event", "accumulate_masked", "noise_texture", "voronoi_f1",
+           "LightChoice", "next_event", "accumulate_masked", "noise_texture",
            "voronoi_texture"]
 
 _F32 = np.float32
@@ -493,19 +493,6 @@ def noise_texture(points, scale, detail, roughness, lacunarity, distortion, norm
     return _core.noise_texture(np.ascontiguousarray(points, _F32), param(scale), param(detail), param(roughness),
                                param(lacunarity), param(distortion), bool(normalize), bool(color),
                                NOISE_TYPES[kind], param(offset), param(gain))
-
-
-VORONOI_METRICS = {'EUCLIDEAN': 0, 'MANHATTAN': 1, 'CHEBYCHEV': 2}
-
-
-def voronoi_f1(points, randomness, metric: str = 'EUCLIDEAN'):
-    """Cycles' Voronoi Texture F1 at scaled points (n, 2) or (n, 3): (distance (n,), colour
-    (n, 3), position (n, 3)) of the nearest feature point, one jittered into each integer cell
-    by Cycles' PCG hash (randomness: one value or one per point, clamped to [0, 1]); metric
-    'EUCLIDEAN', 'MANHATTAN' or 'CHEBYCHEV'. Float32 in Cycles' order. One threaded pass."""
-    if metric not in VORONOI_METRICS:
-        raise ValueError(f"metric must be one of {', '.join(VORONOI_METRICS)}, got {metric!r}")
-    return _core.voronoi_f1(np.ascontiguousarray(points, _F32), _per_point(randomness), VORONOI_METRICS[metric])
 
 
 VORONOI_TEXTURE_METRICS = {'EUCLIDEAN': 0, 'MANHATTAN': 1, 'CHEBYCHEV': 2, 'MINKOWSKI': 3}
