@@ -203,7 +203,10 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         try:
             said = []                   # (what the camera view's camera approximates)
             camera = _region_camera(context, depsgraph, said)
-            scene_data = export.export_scene(depsgraph, view_camera=camera)
+            r = depsgraph.scene_eval.render
+            import dacrt                # (as render(): Threads: Fixed caps the export's passes)
+            with dacrt.thread_limit(int(r.threads) if r.threads_mode == 'FIXED' else 0):
+                scene_data = export.export_scene(depsgraph, view_camera=camera)
         except Exception as e:          # in the viewport's status line, and reported once
             self._viewport_report([('ERROR', f"viewport: {e}")])
             self.update_stats("", f"DACRT | Error: {e}")

@@ -10,6 +10,7 @@ import math
 import threading
 import time
 
+import dacrt
 import numpy as np
 
 from .integrator import Integrator, SetupCancelled
@@ -88,12 +89,15 @@ class ViewportSession:
             return self._version, self._image
 
     def _run(self):
-        preview = preview_camera(self.scene_data.camera)
-        if preview is not None:
-            one = dataclasses.replace(self.scene_data.settings, samples=1)
-            if not self._render(dataclasses.replace(self.scene_data, camera=preview, settings=one), preview=True):
-                return
-        self._render(self.scene_data, hold=preview is not None)
+        # Threads: Fixed caps this thread's native passes (shading kernels, set-up), as it
+        # caps a frame's; the limit is per calling thread, so an F12 render beside it keeps its own
+        with dacrt.thread_limit(self.scene_data.settings.threads):
+            preview = preview_camera(self.scene_data.camera)
+            if preview is not None:
+                one = dataclasses.replace(self.scene_data.settings, samples=1)
+                if not self._render(dataclasses.replace(self.scene_data, camera=preview, settings=one), preview=True):
+                    return
+            self._render(self.scene_data, hold=preview is not None)
 
     def _render(self, scene_data, preview=False, hold=False):
         """Render scene_data's samples, publishing each block's image (hold: only from the end

@@ -208,7 +208,8 @@ PYBIND11_MODULE(_core, m) {
           "Resolve an ISA request ('' = best); raises RuntimeError if the CPU lacks it");
     m.def("hardware_threads", &hardware_threads);
     m.def("set_thread_limit", &set_thread_limit, py::arg("limit"),
-          "Cap every native pass (kernels, and traces given no thread count) at `limit` threads; 0: none");
+          "Cap every native pass called from this thread (kernels, and traces given no thread count) at "
+          "`limit` threads; 0: none");
     m.def("thread_limit", &thread_limit);
 #ifdef DACRT_NONROBUST
     m.attr("ROBUST") = false;

@@ -31,12 +31,14 @@ int hardware_threads() {
 }
 
 namespace {
-std::atomic<int> g_thread_limit{0};
+// Per calling thread: a viewport's worker and an F12 render each keep their own (a process-wide
+// limit, set by one and restored by the other in between, had stayed capped after both).
+thread_local int t_thread_limit = 0;
 }
 
-void set_thread_limit(int limit) { g_thread_limit.store(std::max(0, limit), std::memory_order_relaxed); }
+void set_thread_limit(int limit) { t_thread_limit = std::max(0, limit); }
 
-int thread_limit() { return g_thread_limit.load(std::memory_order_relaxed); }
+int thread_limit() { return t_thread_limit; }
 
 int default_threads() {
     const int h = hardware_threads(), limit = thread_limit();

@@ -13,9 +13,9 @@ namespace dacrt {
 // Cores this process may run on (its CPU affinity), at least 1.
 int hardware_threads();
 
-// The process-wide thread limit (0: none), set by a renderer that was told to use fewer cores
-// (Blender's Render > Performance > Threads: Fixed): every kernel and the tracer's default
-// use at most this many threads. Results never depend on it.
+// The calling thread's thread limit (0: none), set by a renderer that was told to use fewer
+// cores (Blender's Render > Performance > Threads: Fixed): every kernel and the tracer's default
+// called from that thread use at most this many threads. Results never depend on it.
 void set_thread_limit(int limit);
 int thread_limit();
 

@@ -871,7 +871,7 @@ def test_memory_stats_count_what_the_render_holds(scene):
 
 
 def test_fixed_threads_cap_every_native_pass_of_the_frame(scene, monkeypatch):
-    """Render > Performance > Threads: Fixed 1 holds the process-wide thread limit at 1 for the
+    """Render > Performance > Threads: Fixed 1 holds the render thread's thread limit at 1 for the
     frame (export, set-up and every kernel, not the tracer alone), and lifts it after; Auto
     sets none (tests/native/test_threads.py shows the limit keeps kernels on one thread)."""
     import dacrt

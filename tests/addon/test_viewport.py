@@ -292,3 +292,30 @@ def test_engine_viewport_methods_export_restart_and_draw(scene, monkeypatch):
     engine.view_update(_Context(cam, 0, 24), bpy.context.evaluated_depsgraph_get())
     assert engine._viewport is None and "less than one pixel" in engine.status[-1]
     assert any("less than one pixel" in r for r in engine.reports)
+
+
+def test_fixed_threads_cap_the_viewports_own_passes(scene, monkeypatch):
+    """Threads: Fixed 1 holds the thread limit at 1 on the viewport's worker thread (its shading
+    kernels and set-up, as it does for a frame), while the thread that started it, which an F12
+    render may run on meanwhile, keeps its own limit (the limit is per calling thread)."""
+    import dacrt
+    from addon import integrator
+    seen = []
+    passes = integrator.Integrator.passes
+
+    def recording(self):
+        seen.append(dacrt._core.thread_limit())
+        yield from passes(self)
+    monkeypatch.setattr(integrator.Integrator, 'passes', recording)
+    cam = _lit_box(scene)
+    scene.dacrt.preview_samples = 4
+    scene.render.threads_mode, scene.render.threads = 'FIXED', 1
+    data = export.export_scene(bpy.context.evaluated_depsgraph_get(), view_camera=_view_of(cam))
+    assert data.settings.threads == 1
+    session = ViewportSession(data)
+    with dacrt.thread_limit(2):         # (this thread's own, untouched by the worker's)
+        session.start(_view_of(cam))
+        _finished(session)
+        assert dacrt._core.thread_limit() == 2
+    assert seen and set(seen) == {1}, seen
+    assert dacrt._core.thread_limit() == 0

@@ -173,3 +173,29 @@ def test_the_thread_limit_keeps_kernels_and_traces_on_that_many_threads():
     mine = after[me] - before[me]
     assert mine > 0.2 and others < 0.1 * mine, (mine, others)
     assert all(np.array_equal(a, b) for a, b in zip(free[0], limited[0])) and _same(free[1], limited[1])
+
+
+def test_the_thread_limit_belongs_to_the_thread_that_sets_it():
+    """Two renders in one process (the viewport's worker and an F12 render) each hold their own
+    limit: a process-wide one, entered by one and left by the other in between, had left the
+    process capped at the first one's count after both were done."""
+    entered, left = threading.Event(), threading.Event()
+    seen = {}
+
+    def viewport():
+        with dacrt.thread_limit(1):
+            entered.set()
+            left.wait(30)
+            seen['worker'] = dacrt._core.thread_limit()
+        seen['worker after'] = dacrt._core.thread_limit()
+
+    t = threading.Thread(target=viewport)
+    with dacrt.thread_limit(2):
+        t.start()
+        assert entered.wait(30)
+        seen['main'] = dacrt._core.thread_limit()
+        left.set()
+        t.join(30)
+        seen['main after the worker left'] = dacrt._core.thread_limit()
+    seen['main after'] = dacrt._core.thread_limit()
+    assert seen == {'worker': 1, 'worker after': 0, 'main': 2, 'main after the worker left': 2, 'main after': 0}

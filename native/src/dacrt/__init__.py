@@ -43,9 +43,10 @@ def isa() -> str:
 
 @contextlib.contextmanager
 def thread_limit(limit: int):
-    """Within the block, every native pass (shading kernels, and traces not given a thread
-    count) uses at most `limit` threads (0 or less: no limit); the previous limit after it. A
-    renderer told to use fewer cores (Blender's Threads: Fixed) sets it for its frame."""
+    """Within the block, every native pass this thread calls (shading kernels, and traces not
+    given a thread count) uses at most `limit` threads (0 or less: no limit); the previous limit
+    after it. A renderer told to use fewer cores (Blender's Threads: Fixed) sets it for its
+    frame; other threads keep their own."""
     before = _core.thread_limit()
     _core.set_thread_limit(max(0, int(limit)))
     try:
