@@ -595,7 +595,7 @@ def _skipped_text(skipped) -> str:
     """'3 objects, 1.2M shadow rays, ...' for the non-zero skip counters."""
     if not skipped:
         return ""
-    names = (('objects', "object"), ('materials', "unused material"), ('triangles', "triangle"),
+    names = (('objects', "object"), ('instances', "instance"), ('materials', "unused material"), ('triangles', "triangle"),
              ('lights', "light"), ('shadow_rays', "shadow ray"), ('bounce_rays', "bounce ray"),
              ('samples', "sample"))
     parts = []

@@ -731,6 +731,8 @@ class Integrator:
         e = self._export_skipped
         return {
             'objects': e.get('objects_hidden', 0) + e.get('objects_invisible', 0) + e.get('objects_unsupported', 0),
+            # (instances no ray sees: a hidden instancer's collection of 1000 had read as 1000 objects)
+            'instances': e.get('instances_invisible', 0),
             'materials': e.get('materials_unused', 0),
             'triangles': (e.get('triangles_degenerate', 0) + e.get('triangles_nonfinite', 0)
                           + self.tri.num_nonfinite + self._tris_unreachable),

@@ -129,7 +129,7 @@ class Exporter:
         self._vis_of, self._terminator_of, self._slots_of = {}, {}, {}
         # work not done, for the render's stats: objects hidden from render or from every ray
         # type, materials no exported triangle uses (never evaluated), triangles dropped
-        self.counts = dict(objects_hidden=0, objects_invisible=0, objects_unsupported=0,
+        self.counts = dict(objects_hidden=0, objects_invisible=0, instances_invisible=0, objects_unsupported=0,
                            materials_unused=0, triangles_degenerate=0, triangles_nonfinite=0)
 
     def run(self):
@@ -241,8 +241,8 @@ class Exporter:
             vis = self._vis_of.get(names)
             if vis is None:
                 vis = self._vis_of[names] = self._visibility(ob, parent)
-            if vis == 0:
-                self.counts['objects_invisible'] += 1    # no ray type sees it
+            if vis == 0:     # no ray type sees it (an instance counted as one, not as an object)
+                self.counts['instances_invisible' if inst.is_instance else 'objects_invisible'] += 1
                 continue
             key = self._read_geometry(ob)
             if key is None:

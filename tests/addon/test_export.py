@@ -3302,3 +3302,28 @@ def test_colour_nodes_after_an_environment_texture_without_an_image_act_on_magen
     assert data.environment is None and np.allclose(data.world, 2.0 * np.array(want), atol=1e-5), data.world
     assert any("Environment Texture without an image (magenta" in t for _, t in data.messages)
     assert not any("not evaluated" in t for _, t in data.messages)
+
+
+def test_instances_no_ray_sees_are_counted_as_instances_not_objects(scene, exported):
+    """A collection instanced by 4 empties that no ray type sees: 4 instances skipped (said as
+    '4 instances'), not 4 objects, beside the one plane of the scene's own that no ray sees."""
+    setup(scene)
+    coll = bpy.data.collections.new("Props")
+    prop = bpy.data.objects.new("Prop", bpy.data.meshes.new("Prop"))
+    prop.data.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [], [(0, 1, 2)])
+    coll.objects.link(prop)
+    for i in range(4):
+        e = bpy.data.objects.new(f"Holder{i}", None)
+        e.instance_type, e.instance_collection = 'COLLECTION', coll
+        e.location.x = 3.0 * i
+        e.visible_camera = e.visible_diffuse = e.visible_glossy = e.visible_transmission = False
+        e.visible_volume_scatter = e.visible_shadow = False
+        scene.collection.objects.link(e)
+    gone = scenes.plane("Gone", location=(0, 5, 0))
+    gone.visible_camera = gone.visible_diffuse = gone.visible_glossy = gone.visible_transmission = False
+    gone.visible_volume_scatter = gone.visible_shadow = False
+    scenes.plane("Shown", location=(0, -5, 0))
+    data = exported()
+    assert data.skipped['instances_invisible'] == 4 and data.skipped['objects_invisible'] == 1
+    from addon.engine import _skipped_text
+    assert _skipped_text({'objects': 1, 'instances': 4}) == "1 object, 4 instances"
