@@ -374,3 +374,17 @@ def read_as_float(nt, socket):
     nt.links.new(socket, add.inputs[0])
     return add.outputs[0]
 
+
+def thread_limits_seen(monkeypatch):
+    """A list that gets the calling thread's native thread limit each time an Integrator starts
+    its passes (a frame's, or a viewport worker's)."""
+    import dacrt
+    from addon import integrator
+    seen = []
+    passes = integrator.Integrator.passes
+
+    def recording(self):
+        seen.append(dacrt._core.thread_limit())
+        yield from passes(self)
+    monkeypatch.setattr(integrator.Integrator, 'passes', recording)
+    return seen

@@ -875,14 +875,7 @@ def test_fixed_threads_cap_every_native_pass_of_the_frame(scene, monkeypatch):
     frame (export, set-up and every kernel, not the tracer alone), and lifts it after; Auto
     sets none (tests/native/test_threads.py shows the limit keeps kernels on one thread)."""
     import dacrt
-    from addon import integrator
-    seen = []
-    passes = integrator.Integrator.passes
-
-    def recording(self):
-        seen.append(dacrt._core.thread_limit())
-        yield from passes(self)
-    monkeypatch.setattr(integrator.Integrator, 'passes', recording)
+    seen = scenes.thread_limits_seen(monkeypatch)
     lit_plane_scene(scene)
     scene.render.threads_mode, scene.render.threads = 'FIXED', 1
     bpy.ops.render.render()

@@ -299,14 +299,7 @@ def test_fixed_threads_cap_the_viewports_own_passes(scene, monkeypatch):
     kernels and set-up, as it does for a frame), while the thread that started it, which an F12
     render may run on meanwhile, keeps its own limit (the limit is per calling thread)."""
     import dacrt
-    from addon import integrator
-    seen = []
-    passes = integrator.Integrator.passes
-
-    def recording(self):
-        seen.append(dacrt._core.thread_limit())
-        yield from passes(self)
-    monkeypatch.setattr(integrator.Integrator, 'passes', recording)
+    seen = scenes.thread_limits_seen(monkeypatch)
     cam = _lit_box(scene)
     scene.dacrt.preview_samples = 4
     scene.render.threads_mode, scene.render.threads = 'FIXED', 1
