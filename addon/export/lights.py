@@ -243,17 +243,8 @@ def _principled_emission(node, reasons):
 
 
 def _light_strength(socket, reasons):
-    """An Emission's strength in a light's shader: a Light Falloff's Quadratic output is its
-    own Strength input (the light's inverse square is the lamp's already, as Cycles computes
-    it); its Linear and Constant outputs and Smooth depend on the distance to the shaded point
-    and are read as Quadratic, reported."""
-    link = linked_link(socket)
-    if link is not None and link.from_node.type == 'LIGHT_FALLOFF':
-        falloff = link.from_node
-        smooth, _ = constant_value(falloff.inputs['Smooth'])
-        if link.from_socket.name != 'Quadratic' or smooth != 0.0:
-            reasons.append(f"Light Falloff {link.from_socket.name} (smooth {smooth:g}) as Quadratic without smoothing")
-        socket = falloff.inputs['Strength']
+    """An Emission's strength in a light's shader (a Light Falloff's output: see _past_falloff)."""
+    socket = _past_falloff(socket, reasons)
     why = []
     strength, ok = constant_value(socket, why=why)
     if not ok:
@@ -262,9 +253,34 @@ def _light_strength(socket, reasons):
     return float(strength)
 
 
+def _past_falloff(socket, reasons):
+    """The socket a light shader's input reads: a Light Falloff's Quadratic output is its own
+    Strength input (the light's inverse square is the lamp's already, as Cycles computes it);
+    its Linear and Constant outputs and Smooth depend on the distance to the shaded point and
+    are read as Quadratic, reported."""
+    link = linked_link(socket)
+    if link is None or link.from_node.type != 'LIGHT_FALLOFF':
+        return socket
+    falloff = link.from_node
+    smooth, _ = constant_value(falloff.inputs['Smooth'])
+    if link.from_socket.name != 'Quadratic' or smooth != 0.0:
+        reasons.append(f"Light Falloff {link.from_socket.name} (smooth {smooth:g}) as Quadratic without smoothing")
+    return falloff.inputs['Strength']
+
+
 def _light_color(socket, what, reasons):
-    """The constant colour feeding a light shader's colour socket; nodes the export cannot
-    compute (an image, Light Path) stand at the socket's own value, named."""
+    """The constant colour feeding a light shader's colour socket (a Light Falloff's output as
+    grey: see _past_falloff; it had stood at the socket's own value, 0.107 where Cycles
+    gives 0.320); nodes the export cannot compute (an image, Light Path) stand at the socket's
+    own value, named."""
+    falloff = _past_falloff(socket, reasons)
+    if falloff is not socket:
+        why = []
+        value, ok = constant_value(falloff, why=why)
+        if not ok:
+            reasons.append(f"{what} colour from a Light Falloff driven by nodes ({_named(why)}, not evaluated "
+                           f"for a light); its own value {float(value):g} used")
+        return (float(value),) * 3 + (1.0,)
     why = []
     color, ok = nodeeval.constant(socket, True, why=why)
     if not ok:
