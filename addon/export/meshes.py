@@ -329,8 +329,9 @@ class MeshArrays:
         colour attribute) as Cycles' Attribute and Color Attribute nodes read it, RGB and alpha
         (a colour as stored, bytes in linear; a vector, 2D vector or number as (x, y, z, 1),
         (x, y, 0, 1), (v, v, v, 1); a quaternion (w, x, y, z)), from its point, corner or face
-        domain; None where the mesh has none, or one Cycles does not read either (on edges, or of
-        a type attribute_rows does not read: unread_attribute says which)."""
+        domain, or from its edges as Blender hands them to Cycles, moved to the points
+        (_edges_to_points); None where the mesh has none, or one Cycles does not read either (of
+        a type attribute_rows does not read, or on no domain of a mesh: unread_attribute says which)."""
         if name in self._attributes:
             return self._attributes[name]
         out = None
@@ -351,13 +352,13 @@ class MeshArrays:
     def unread_attribute(self, name):
         """Why corner_attribute(name) is None, as a Blender user would say it: 'no attribute 'n'
         on the mesh', or the attribute there and why Cycles does not read it either (its type,
-        or the edge domain)."""
+        or its domain)."""
         found = None if self.mesh is None else _named_attribute(self.mesh, name)
         if found is None and self.mesh is None and self.strand is not None and len(self.strand) > 3:
             return self.strand[3].format(name=name) if name else "no colour attribute on the emitter's hair"
         if found is None:
             return f"no attribute {name!r} on the mesh" if name else "no colour attribute on the mesh"
-        if found.domain not in ('POINT', 'CORNER', 'FACE'):
+        if found.domain not in ('POINT', 'CORNER', 'FACE', 'EDGE'):
             return f"attribute {found.name!r} on the mesh's {found.domain.lower()}s (a domain Cycles does not read)"
         kind = type(found).bl_rna.properties['data_type'].enum_items[found.data_type].name
         return f"attribute {found.name!r} on the mesh is a {kind} (a type Cycles does not read)"
@@ -378,6 +379,8 @@ class MeshArrays:
                 face = np.empty(nt, np.int32)
                 me.loop_triangle_polygons.foreach_get('value', face)
             index = np.repeat(face[:, None], 3, axis=1)
+        elif attr.domain == 'EDGE':
+            rows, index = _edges_to_points(me, attr, rows), self.triangles
         else:
             return None
         return self.per_corner(rows, index, np.empty((nt, 3, 4), np.float32))
@@ -424,6 +427,64 @@ class MeshArrays:
         else:   # indices come from Blender's validated mesh; mode='clip' avoids take's buffered copy
             np.take(rows, index, axis=rows.ndim - 2, out=out, mode='clip')
         return out
+
+
+def _edges_to_points(me, attr, rows):
+    """(points, 4) float32: an edge attribute's rows (edges, 4) moved to the points as Blender
+    hands it to Cycles (its edge-to-point domain interpolation): each point the mean of its
+    edges' values, mixed as the type mixes (a number, vector or float colour the mean; an
+    integer the mean rounded; a boolean true where any of its edges is; a byte colour the mean
+    of its bytes, truncated to a byte (ColorGeometry4bMixer: sRGB, not linear); a quaternion the mean of the edges' exponential
+    maps); 0 on a point no edge uses."""
+    n, kind = len(me.vertices), attr.data_type
+    if kind == 'BYTE_COLOR':                      # the stored bytes
+        rows = np.empty(len(attr.data) * 4, np.float32)
+        attr.data.foreach_get('color_srgb', rows)
+        rows = np.round(rows.reshape(-1, 4) * 255.0)
+    ends = np.empty(len(me.edges) * 2, np.int32)
+    me.edges.foreach_get('vertices', ends)
+    count = np.bincount(ends, minlength=n).astype(np.float64)
+    each = np.repeat(rows.astype(np.float64), 2, axis=0)          # (both ends of each edge)
+    if kind == 'BOOLEAN':
+        out = np.ones((n, 4), np.float32)
+        out[:, :3] = (np.bincount(ends, weights=each[:, 0], minlength=n) > 0)[:, None]
+        return out
+    if kind == 'QUATERNION':
+        each = _quaternion_expmap(each)
+    mean = np.stack([np.bincount(ends, weights=each[:, c], minlength=n) for c in range(each.shape[1])], axis=1)
+    mean /= np.maximum(count, 1.0)[:, None]
+    if kind in ('INT', 'INT8'):                   # std::round: halves away from 0
+        mean[:, :3] = np.sign(mean[:, :3]) * np.floor(np.abs(mean[:, :3]) + 0.5)
+    elif kind == 'BYTE_COLOR':                    # to bytes again (truncated), then decoded as
+        b = np.floor(mean) / 255.0                # Cycles decodes them: sRGB colour, linear alpha
+        mean[:, :3] = np.where(b[:, :3] <= 0.04045, b[:, :3] / 12.92, ((b[:, :3] + 0.055) / 1.055) ** 2.4)
+        mean[:, 3] = b[:, 3]
+    elif kind == 'QUATERNION':
+        mean = _expmap_quaternion(mean)
+    mean[count == 0] = 0.0
+    return mean.astype(np.float32)
+
+
+def _quaternion_expmap(q):
+    """(n, 3): quaternions (n, 4) (w, x, y, z) as Blender's Quaternion.expmap() (the axis times
+    the angle of the normalised quaternion)."""
+    q = q / np.maximum(np.linalg.norm(q, axis=1, keepdims=True), 1e-30)
+    half = np.arccos(np.clip(q[:, 0], -1.0, 1.0))
+    s = np.sin(half)
+    axis = q[:, 1:] / np.where(np.abs(s) < 0.0005, 1.0, s)[:, None]
+    axis[~axis.any(axis=1), 1] = 1.0
+    return axis * (2.0 * half)[:, None]
+
+
+def _expmap_quaternion(e):
+    """(n, 4): exponential maps (n, 3) back to quaternions as Blender's Quaternion::expmap
+    (the angle wrapped to [-pi, pi]; a zero map the identity)."""
+    angle = np.linalg.norm(e, axis=1)
+    axis = e / np.where(angle > 0, angle, 1.0)[:, None]
+    half = (np.mod(angle + np.pi, 2 * np.pi) - np.pi) / 2
+    q = np.concatenate([np.cos(half)[:, None], axis * np.sin(half)[:, None]], axis=1)
+    q[angle == 0] = (1.0, 0.0, 0.0, 0.0)
+    return q
 
 
 def _named_attribute(me, name):
