@@ -224,6 +224,12 @@ class Evaluator:
             if tex is None:
                 tex = f.tex
             elif f.tex.key != tex.key:
+                if getattr(f.tex, 'attribute', None) is not None and getattr(tex, 'attribute', None) is not None:
+                    # two attributes (mesh, object, instancer, Object Info): each its own values,
+                    # one per entry alike (the export's probes, or each corner's or placement's
+                    # values of each): computed entry by entry; the export tells which the
+                    # result follows (MaterialBuilder._several_attributes)
+                    continue
                 if getattr(f.tex, 'aligned', False) and getattr(tex, 'aligned', False):
                     # probe values of an image and of an attribute, one per entry alike (the
                     # export probing how a chain combines them): computed entry by entry

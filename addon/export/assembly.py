@@ -106,7 +106,9 @@ class Assembly:
         self.materials, self.meshes, self.placements = exporter.materials, exporter.meshes, exporter.placements
         self.messages, self.counts = exporter.messages, exporter.counts
         self.check_break, self.ignore = exporter.check_break, exporter.ignore
-        self._corner_albedos = {}  # (material, mesh) -> per-corner albedo of a node chain on an attribute
+        # (material, mesh, per-object values read beside) -> per-corner albedo of a node chain on
+        # an attribute (or on several)
+        self._corner_albedos = {}
         self._corner_aovs = {}     # (material, mesh, AOV input) -> what it writes at each corner
         self._aov_varying = set()  # materials whose AOV inputs read a value per object or corner
         self._slot_sets = {}       # id(slot map) -> (slot map, the materials it shows): see _shown
@@ -283,7 +285,12 @@ class Assembly:
             users = by_material[k]
             if not users:
                 continue
-            albedo = self.materials.evaluated_albedo(k, np.stack([p.object_info(entry[1], entry[2]) for p in users]))
+            if isinstance(entry[1], tuple):          # several, each its own values
+                values = {n: np.stack([p.object_info(n[len(OBJECT_INFO):], entry[2]) for p in users])
+                          for n in entry[1]}
+            else:
+                values = np.stack([p.object_info(entry[1], entry[2]) for p in users])
+            albedo = self.materials.evaluated_albedo(k, values)
             for p, a in zip(users, albedo):
                 p.object_albedo[k] = a
 
@@ -530,18 +537,31 @@ class Assembly:
         out.linear.append(lin)
         return bad, deg
 
-    def _corner_albedo(self, a, k, name, object_name):
+    def _corner_albedo(self, a, k, name, place):
         """(nt, 3, 3): material k's albedo at each corner of mesh a, its chain evaluated on the
-        corners' attribute values (0 where the mesh lacks it, as Cycles); once per mesh."""
+        corners' attribute values (0 where the mesh lacks it, as Cycles); once per mesh. name: a
+        tuple for several attributes, each read with its own values (a per-object one with the
+        placement's: once per mesh and those values)."""
+        names = name if isinstance(name, tuple) else (name,)
+        mat = self.materials.attribute_maps[k][2]
+        own = tuple((n, tuple(place.object_info(n[len(OBJECT_INFO):], mat)))
+                    for n in names if n.startswith(OBJECT_INFO))
         cache = self._corner_albedos
-        if (k, id(a)) not in cache:
-            values = a.corner_attribute(name)
-            if values is None:
-                self.ignore(f"{a.unread_attribute(name)}: it reads colour 0 and alpha 1, as in Cycles",
-                            object_name)
-                values = _unread_rows(len(a.triangles))
-            cache[k, id(a)] = self.materials.evaluated_albedo(k, values.reshape(-1, 4)).reshape(-1, 3, 3)
-        return cache[k, id(a)]
+        if (k, id(a), own) not in cache:
+            values = {}
+            for n in names:
+                if n.startswith(OBJECT_INFO):
+                    continue
+                v = a.corner_attribute(n)
+                if v is None:
+                    self.ignore(f"{a.unread_attribute(n)}: it reads colour 0 and alpha 1, as in Cycles", place.name)
+                    v = _unread_rows(len(a.triangles))
+                values[n] = v.reshape(-1, 4)
+            count = len(a.triangles) * 3
+            values.update((n, np.broadcast_to(np.asarray(v, np.float32), (count, 4))) for n, v in own)
+            values = values if isinstance(name, tuple) else values[name]
+            cache[k, id(a), own] = self.materials.evaluated_albedo(k, values).reshape(-1, 3, 3)
+        return cache[k, id(a), own]
 
     def _attribute_colors(self, a, place, mirrored, out, S):
         """The per-corner albedo factors (w x the attribute's colour + k, Cycles' 0 where the
@@ -560,7 +580,7 @@ class Assembly:
                 block[rows] = place.object_albedo[k]
                 continue
             if entry[0] == 'corners':                # the chain evaluated at each corner
-                block[rows] = self._corner_albedo(a, k, entry[1], place.name)[rows]
+                block[rows] = self._corner_albedo(a, k, entry[1], place)[rows]
                 if mirrored:
                     block[rows] = block[rows][:, [0, 2, 1]]
                 continue

@@ -114,6 +114,7 @@ class MaterialBuilder:
         self._camera_holdout = False
         self._aov_varying = None
         self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
+        self._attribute_names = []      # the attributes a build read (_pixels_of)
         self._image_probe = None        # what images read instead of their texels (_product_map)
         self._uv_names = []
         self._normal_maps = []
@@ -226,22 +227,32 @@ class MaterialBuilder:
             if out.name not in OBJECT_INFO_OUTPUTS:
                 return None
             name = OBJECT_INFO + out.name
-            return Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
+            return Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None,
                             f"Object Info {out.name}", name)
         if node.type == 'ATTRIBUTE':
             if node.attribute_type in ('OBJECT', 'INSTANCER'):
                 # one value per object (per instance): read as Object Info is, per placement
                 kind = OBJECT_ATTRIBUTE if node.attribute_type == 'OBJECT' else INSTANCER_ATTRIBUTE
                 name = f"{OBJECT_INFO}{kind}{node.attribute_name}"
-                return Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None,
+                return Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None,
                                 f"{node.attribute_type.lower()} attribute '{node.attribute_name}'", name)
             name = node.attribute_name
         else:
             name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
         label = f"attribute '{name}'" if name else "the render colour attribute"
-        t = Texture(('attribute', name), self._attribute_pixels, 'Linear', 'REPEAT', None, None, label, name)
+        t = Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None, label, name)
         t.aligned = True
         return t
+
+    def _pixels_of(self, name):
+        """What attribute `name` reads in this build: _attribute_pixels, or its entry where that
+        is a dict per attribute (several read together: _several_attributes, evaluated_albedo;
+        one the albedo does not follow reads the first's). Notes the name read."""
+        self._attribute_names.append(name)
+        px = self._attribute_pixels
+        if isinstance(px, dict):
+            return px[name] if name in px else next(iter(px.values()))
+        return px
 
     def _build(self, mat):
         """The material, and self._attribute_map: how its albedo follows a mesh attribute (a
@@ -253,8 +264,14 @@ class MaterialBuilder:
         self._attribute_map = None
         self._attribute_pixels = self._ATTRIBUTE_PROBE
         self._attributes_read = False
+        self._attribute_names = []
         m = self._build_material(mat)
         name = self._albedo_attribute
+        names = list(dict.fromkeys(self._attribute_names))
+        if name is not None and len(names) > 1 and m.texture is not None:
+            several = self._several_attributes(mat, m, names)
+            if several is not None:
+                return several
         if self._attributes_read and (name is None or nodeeval.TWO_IMAGES in m.approximated):
             # an attribute beside an image (one varying colour per material): an image times
             # the attribute (a glTF vertex colour) is taken apart (_product_map)
@@ -300,6 +317,70 @@ class MaterialBuilder:
             label = f"attribute '{name}'" if name else "the render colour attribute"
             m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
                                                    "corners, then interpolated (Cycles interpolates first)") if r)
+        return m
+
+    def _several_probes(self, names, seed):
+        """{name: (1, 64, 4)} probe values of each attribute, each its own (as _ATTRIBUTE_PROBE:
+        up to 10 on the last entries, alpha 1)."""
+        rng = np.random.default_rng(seed)
+        probes = {}
+        for n in names:
+            p = rng.random((1, 64, 4)).astype(np.float32)
+            p[0, 40:, :3] = 1.0 + 9.0 * p[0, 40:, :3]
+            p[..., 3] = 1.0
+            probes[n] = p
+        return probes
+
+    def _albedo_on(self, mat, pixels):
+        """The albedo (64, 3) the material has where its attributes read pixels (a dict per
+        attribute); None where it then reads none."""
+        self._attribute_pixels = pixels
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attribute_pixels = None
+        return None if m.texture is None or self._albedo_attribute is None else _probe_albedo(m)
+
+    def _several_attributes(self, mat, m, names):
+        """The material when its albedo follows two or more attributes (mesh, object or
+        instancer attributes, Object Info outputs), each read with its own values: its nodes
+        evaluated on each corner's values of all of them (a per-object one at each placement's
+        value), or on each placement's where all are per object (evaluated_albedo). None when the
+        albedo follows one of them alone (the single attribute's ways apply) or reads an image too
+        (said)."""
+        probes = self._several_probes(names, 21)
+        base = self._albedo_on(mat, probes)
+        if base is None:
+            return None
+        other = self._several_probes(names, 23)
+        follows = [n for n in names
+                   if not np.allclose(self._albedo_on(mat, {**probes, n: other[n]}), base, rtol=1e-6, atol=1e-9)]
+        if len(follows) < 2:
+            return None
+        labels = ', '.join(_attribute_label(n) for n in follows)
+        if nodeeval.TWO_IMAGES in m.approximated:
+            m.approximated = '; '.join(r for r in (m.approximated, f"{labels} read together beside an image: "
+                                                   "each read as the first's values") if r)
+            return None
+        self._attribute_pixels = None
+        m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), follows[0]
+        if all(n.startswith(OBJECT_INFO) for n in follows):
+            # one value each per object: exact whatever the nodes are
+            self._attribute_map = ('object', tuple(follows), mat)
+            return m
+        self._attribute_map = ('corners', tuple(follows), mat)
+        # per-corner values interpolated: exact where the nodes are affine in the mesh
+        # attributes' colours, whatever per-object values they read beside (and read no alpha)
+        mesh = [n for n in follows if not n.startswith(OBJECT_INFO)]
+        x = np.concatenate([probes[n][0, :, :3] for n in mesh], axis=1).astype(np.float64)
+        alphas = {n: np.concatenate([p[..., :3], other[n][..., :1]], axis=-1) for n, p in probes.items()}
+        affine = np.allclose(self._albedo_on(mat, alphas), base, rtol=1e-6, atol=1e-9)
+        for row in (0, 1):                  # the per-object ones fixed, at two values
+            fixed = {n: p if n in mesh else np.repeat(p[:, row:row + 1], p.shape[1], axis=1) for n, p in probes.items()}
+            affine = affine and _affine_fit(x, self._albedo_on(mat, fixed), 1e-5)
+        if not affine:
+            said = f"nodes after {labels} applied at the mesh's corners, then interpolated (Cycles interpolates first)"
+            m.approximated = '; '.join(r for r in (m.approximated, said) if r)
         return m
 
     # an image's probe values beside the attribute's (kept away from 0: the fit divides by them)
@@ -349,9 +430,14 @@ class MaterialBuilder:
 
     def evaluated_albedo(self, index, values):
         """The albedo (n, 3) material `index` (an Object Info or per-corner attribute one) has
-        where what its node reads is values (n, 4) each: the material evaluated once on all."""
+        where what its node reads is values (n, 4) each (a dict of them per attribute, for one
+        of several attributes): the material evaluated once on all."""
         mat = self.attribute_maps[index][2]
-        self._attribute_pixels = np.ascontiguousarray(values, np.float32)[None]
+        if isinstance(values, dict):
+            self._attribute_pixels = {n: np.ascontiguousarray(v, np.float32)[None] for n, v in values.items()}
+            values = next(iter(values.values()))
+        else:
+            self._attribute_pixels = np.ascontiguousarray(values, np.float32)[None]
         try:
             m = self._build_material(mat)
         finally:
@@ -1148,6 +1234,17 @@ def channel_line(x, y, tolerance):
     if np.abs(x * w + k - y).max() > tolerance * (1.0 + np.abs(y).max()):
         return None
     return w, np.where(np.abs(k) < 1e-9, 0.0, k)
+
+
+def _attribute_label(name):
+    """An attribute's name (as _attribute marks it) as a message says it."""
+    if not name.startswith(OBJECT_INFO):
+        return f"attribute '{name}'" if name else "the render colour attribute"
+    out = name[len(OBJECT_INFO):]
+    for kind, what in ((OBJECT_ATTRIBUTE, 'object'), (INSTANCER_ATTRIBUTE, 'instancer')):
+        if out.startswith(kind):
+            return f"{what} attribute '{out[len(kind):]}'"
+    return f"Object Info {out}"
 
 
 def _affine_fit(x, y, tolerance):
