@@ -66,6 +66,20 @@ def varying_key(node, out, reasons):
     return name, (f"attribute '{name}'" if name else "the render colour attribute")
 
 
+# what an attribute Cycles does not find reads (svm_node_attr): colour, Fac and Vector 0, Alpha 1
+_NOT_FOUND = np.array([0.0, 0.0, 0.0, 1.0], np.float32)
+
+
+def unnamed_attribute(node, reasons):
+    """A Texture of what an Attribute node of type Geometry with an empty Name reads: nothing,
+    as in Cycles (colour, Fac and Vector 0, Alpha 1: only a Color Attribute node's empty layer
+    means the render colour attribute), said; None for any other node."""
+    if node.type != 'ATTRIBUTE' or node.attribute_type != 'GEOMETRY' or node.attribute_name:
+        return None
+    reasons.append(f"Attribute node '{node.name}' has no name: it reads 0, as in Cycles")
+    return Texture(('attribute', None), _NOT_FOUND, 'Linear', 'REPEAT', None, None, "no attribute")
+
+
 class _AovEvaluator(nodeeval.Evaluator):
     """nodeeval's evaluation of an AOV input, reading what varies per object or per corner
     (varying_key) as `values` (1, n, 4) (None: a marker, to find it), Light Path outputs as a
@@ -78,6 +92,9 @@ class _AovEvaluator(nodeeval.Evaluator):
         self.unread, self.keys, self.depth_read = [], {}, False
 
     def _varying(self, node, out, reasons):
+        unnamed = unnamed_attribute(node, reasons)
+        if unnamed is not None:
+            return unnamed
         key, label = varying_key(node, out, reasons)
         if key is None:
             return None

@@ -16,7 +16,7 @@ from ..nodeeval import constant_color, constant_value, nan_inputs
 from ..nodegraph import input_socket, linked_link, linked_node, output_key, output_node, used_outputs
 from ..procedural import ProceduralTexels
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
-from .aovs import evaluate_varying, shader_aovs
+from .aovs import evaluate_varying, shader_aovs, unnamed_attribute
 from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
@@ -220,6 +220,9 @@ class MaterialBuilder:
             reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
                            f"'{node.attribute_name}' not read")
             return None
+        unnamed = unnamed_attribute(node, reasons)
+        if unnamed is not None:
+            return unnamed
         if self._attribute_pixels is None:
             return None
         self._attributes_read = True

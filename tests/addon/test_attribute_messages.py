@@ -129,3 +129,22 @@ def test_two_object_attributes_say_nothing_of_images(scene, exported):
         assert sel.any() and np.allclose(colors[sel], p * q, atol=1e-6), (i, colors[sel], p * q)
     m = next(m for m in data.materials if m.name == "Objects")
     assert "image" not in m.approximated, m.approximated
+
+
+def test_an_attribute_node_without_a_name_reads_0_and_says_so(scene, exported):
+    """An Attribute node (type Geometry) with an empty Name reads nothing, as Cycles (black),
+    not the render colour attribute (only a Color Attribute node's empty layer means that), and
+    the material says which node."""
+    scenes.camera((0, 0, 5))
+    scenes.light('SUN', 3.0)
+    ob = _quads("Grid", _attribute_material("Unnamed", ''))
+    col = ob.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT')
+    col.data.foreach_set('color', np.tile([0.8, 0.3, 0.1, 1.0], len(col.data)))
+    ob.data.color_attributes.render_color_index = 0
+    data = exported()
+    m = next(m for m in data.materials if m.name == "Unnamed")
+    g = data.geometry
+    k = [x.name for x in data.materials].index("Unnamed")
+    albedo = m.base_color if g.colors is None else np.asarray(g.colors)[np.asarray(g.material) == k]
+    assert np.allclose(albedo, 0.0), albedo
+    assert "Attribute node 'Attribute' has no name: it reads 0, as in Cycles" in m.approximated, m.approximated

@@ -155,3 +155,36 @@ def test_two_instancer_attributes_match_cycles(tmp_path, said):
     assert len({tuple(np.round(v, 3)) for v in c}) == len(XS) and c.min() > 0.01
     assert np.abs(c - d).max() < 2e-3, (c.round(4).tolist(), d.round(4).tolist())
     assert not [t for t in said if 'image' in t], said
+
+
+def test_an_attribute_node_without_a_name_reads_nothing_as_cycles(tmp_path):
+    """An Attribute node (type Geometry) with an empty Name beside the mesh's render colour
+    attribute (orange): Cycles reads nothing (Color and Fac 0, Alpha 1); only a Color Attribute
+    node's empty layer means the render colour attribute (the fourth grid). It had read the
+    render colour attribute (orange where Cycles is black)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 64, 16
+    for i, output in enumerate(('Color', 'Fac', 'Alpha', 'layer')):
+        bpy.ops.mesh.primitive_grid_add(x_subdivisions=2, y_subdivisions=2, size=0.9, location=(-1.5 + i, 0, 0))
+        ob = bpy.context.object
+        col = ob.data.color_attributes.new('Col', 'FLOAT_COLOR', 'CORNER')
+        col.data.foreach_set('color', np.tile([0.8, 0.3, 0.1, 1.0], len(col.data)))
+        ob.data.color_attributes.render_color_index = 0
+        mat, nt, out = scenes._material(output)
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+        if output == 'layer':
+            node = nt.nodes.new('ShaderNodeVertexColor')
+            s = node.outputs['Color']
+        else:
+            node = nt.nodes.new('ShaderNodeAttribute')
+            node.attribute_name = ''
+            s = node.outputs[output]
+        nt.links.new(s, d.inputs['Color'])
+        nt.links.new(d.outputs[0], out.inputs['Surface'])
+        ob.data.materials.append(mat)
+    means = {e: np.array([img[4:12, 16 * i + 4:16 * i + 12].mean(axis=(0, 1)) for i in range(4)])
+             for e, img in _render_both(sc, tmp_path, 4.0, 4).items()}
+    c, d = means['CYCLES'], means['DACRT']
+    assert c[:2].max() < 1e-4 and c[2:].min() > 0.05, c.round(4).tolist()     # black, black, lit, orange
+    assert np.abs(d - c).max() < 1e-3 + 0.005 * c.max(), (c.round(4).tolist(), d.round(4).tolist())
