@@ -86,6 +86,7 @@ class Exporter:
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
         self.view_layer = depsgraph.view_layer
+        self._held_collections = None   # the view layer's held-out collections (_in_holdout_collection)
         # its overrides (World, Material) as evaluated at this frame: the original layer's refer
         # to the original IDs, whose animated values stay at the file's frame in an animation
         # render (an override world keyed 1 -> 8 rendered 1 on every frame)
@@ -302,11 +303,34 @@ class Exporter:
         vis = bits(ob) & bits(parent)
         if vis and not (getattr(ob, 'visible_transmission', True) and getattr(parent, 'visible_transmission', True)):
             vis |= sd.NO_TRANSMISSION
-        if vis and (parent.is_holdout or self._collection_flag(parent, 'holdout_get')):
+        if vis and (parent.is_holdout or self._in_holdout_collection(parent)):
             vis |= sd.HOLDOUT
         elif self._collection_flag(parent, 'indirect_only_get'):
             vis &= ~sd.VIS_CAMERA       # Cycles: an Indirect Only collection is not seen directly
         return vis
+
+    def _in_holdout_collection(self, ob):
+        """Whether the view layer holds out a collection of the object (Holdout set on it or a
+        parent layer collection), as Cycles reads it. Not Object.holdout_get: it also ORs in
+        the original object's own Holdout, the file's value, which an animation render does not
+        update (a wall keyed to become held out at frame 3 was held out from frame 1 on)."""
+        if self._held_collections is None:
+            held, stack = set(), [(self.view_layer.layer_collection, False)]
+            while stack:
+                lc, on = stack.pop()
+                if lc.exclude:
+                    continue
+                on = on or lc.holdout
+                if on:
+                    held.add(lc.collection.original.as_pointer())
+                stack.extend((c, on) for c in lc.children)
+            self._held_collections = held
+        if not self._held_collections:
+            return False
+        try:
+            return any(c.original.as_pointer() in self._held_collections for c in ob.original.users_collection)
+        except (RuntimeError, ReferenceError, AttributeError):
+            return False
 
     def _collection_flag(self, ob, getter):
         """The view layer's Holdout / Indirect Only flag of the object's collections."""

@@ -1007,6 +1007,38 @@ def test_holdout_and_excluded_collections(scene, exported):
     assert np.all(data.geometry.visibility & sd.HOLDOUT)
 
 
+def test_holdout_follows_the_rendered_frame_and_parent_collections(scene, exported, tmp_path):
+    """Object > Visibility > Holdout keyed off at frame 3 (the file at frame 1, held out): an
+    animation render of frame 3 does not hold it out (Object.holdout_get ORs in the original's
+    stale flag: a hunt's wall was held out on every frame, alpha 0.833 where Cycles gives 1);
+    a collection under a held-out one is held out, an excluded held-out one holds nothing."""
+    setup(scene)
+    wall = scenes.plane("Wall")
+    scenes.keyed(wall, 'is_holdout', {1: True, 3: False})
+    outer, inner = bpy.data.collections.new("Outer"), bpy.data.collections.new("Inner")
+    scene.collection.children.link(outer)
+    outer.children.link(inner)
+    nested = scenes.plane("Nested", location=(3, 0, 0))
+    scene.collection.objects.unlink(nested)
+    inner.objects.link(nested)
+    gone = bpy.data.collections.new("Gone")
+    scene.collection.children.link(gone)
+    gone.objects.link(bpy.data.objects["Wall"])       # (also in an excluded held-out one)
+    layer = bpy.context.view_layer
+    layer.layer_collection.children["Outer"].holdout = True
+    layer.layer_collection.children["Gone"].holdout = True
+    layer.layer_collection.children["Gone"].exclude = True
+    scenes.animation_of_one_frame(scene, 3, tmp_path)
+    assert wall.is_holdout
+    data = exported(animation=True)
+    vis = {n: set(data.geometry.visibility[of_object(data, n)].tolist()) for n in data.object_names}
+    assert not any(v & sd.HOLDOUT for v in vis["Wall"]), vis
+    assert all(v & sd.HOLDOUT for v in vis["Nested"]), vis
+    scenes.animation_of_one_frame(scene, 1, tmp_path)
+    data = exported(animation=True)
+    assert np.all(data.geometry.visibility[of_object(data, "Wall")] & sd.HOLDOUT)
+
+
 def test_indirect_only_collection_is_hidden_from_camera_rays_only(scene, exported):
     """Cycles clears camera visibility for an Indirect Only collection (unless held out): its
     objects still cast shadows and light others by bounces."""
