@@ -270,8 +270,10 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             return
         t0 = time.perf_counter()
         self.update_stats("", "DACRT | Exporting scene")
-        # a sequencer strip renders its scene through the strip's camera (Cycles reads the same)
-        scene_data = export.export_scene(depsgraph, check_break=self.cancel_requested, camera=self.camera_override)
+        # a sequencer strip renders its scene through the strip's camera (Cycles reads the same);
+        # the image has the size of the render being made (self.render), as Cycles sizes it
+        scene_data = export.export_scene(depsgraph, check_break=self.cancel_requested, camera=self.camera_override,
+                                         render=self.render)
         export_seconds = time.perf_counter() - t0
         self._report_messages(scene_data.messages)
         if self.cancel_requested():
@@ -346,7 +348,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
                                              "eye is an ordinary camera at the eye's position")
             messages = []               # (a view's own camera says what it approximates too)
             try:
-                scene_data.camera = export.export_camera(scene, messages, view_cam, camera=cam_ob)
+                scene_data.camera = export.export_camera(scene, messages, view_cam, camera=cam_ob,
+                                                         render=self.render)
             except export.ExportError as e:
                 raise RuntimeError(f"view '{view}': {e}") from None
             said = {text for _, text in scene_data.messages}     # (the scene camera's, said for the frame)

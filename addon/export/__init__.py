@@ -74,16 +74,17 @@ __all__ = ['ExportCancelled', 'ExportError', 'camera_view_camera', 'effective_wo
            'export_scene', 'export_world', 'region_border', 'viewport_camera']
 
 
-def export_scene(depsgraph, check_break=None, camera=None, view_camera=None):
+def export_scene(depsgraph, check_break=None, camera=None, view_camera=None, render=None):
     """Build the frame's SceneData from an evaluated depsgraph.
 
     check_break: optional callable returning True when the user cancelled; polled during the
     export, which then raises ExportCancelled. camera: the object to render through instead of
     the scene's camera (RenderEngine.camera_override: a sequencer strip's camera), or None.
     view_camera: a viewport's camera (scenedata.Camera, export.viewport_camera) to render
-    through instead; the scene's camera is then not read.
+    through instead; the scene's camera is then not read. render: the RenderSettings that size
+    the image (RenderEngine.render; see export_camera), or None for the scene's.
     """
-    exporter = Exporter(depsgraph, check_break, camera, view_camera)
+    exporter = Exporter(depsgraph, check_break, camera, view_camera, render)
     images._check_break[0] = check_break
     try:
         return exporter.run()

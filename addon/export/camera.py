@@ -13,12 +13,16 @@ from .. import scenedata as sd
 from .errors import ExportError
 
 
-def export_camera(scene, messages=None, view=None, camera=None):
+def export_camera(scene, messages=None, view=None, camera=None, render=None):
     """The scene camera (or `camera`, an override) as scenedata.Camera. view: None, or
     (matrix_world, shift_x) of one view of a stereo / multiview render, as the engine's
     camera_model_matrix and camera_shift_x give them for the active view (Cycles takes its eye
-    cameras from the same two calls)."""
-    r = scene.render
+    cameras from the same two calls). render: the RenderSettings that size the image (its
+    resolution, percentage, pixel aspect and border): the engine's, RenderEngine.render, as
+    Cycles reads them (a compositor's Render Layers node of another scene renders that scene at
+    the size of the render being made; a render_pre handler's edits come too late); the
+    scene's when None."""
+    r = scene.render if render is None else render
     width = r.resolution_x * r.resolution_percentage // 100
     height = r.resolution_y * r.resolution_percentage // 100
     if width < 1 or height < 1:

@@ -82,7 +82,7 @@ class Exporter:
     hair, point clouds), then assembles the geometry, reads the world and the settings, and
     collects every message for the render to report."""
 
-    def __init__(self, depsgraph, check_break, camera=None, view_camera=None):
+    def __init__(self, depsgraph, check_break, camera=None, view_camera=None, render=None):
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
         self.view_layer = depsgraph.view_layer
@@ -92,6 +92,7 @@ class Exporter:
         # render (an override world keyed 1 -> 8 rendered 1 on every frame)
         self.layer_eval = getattr(depsgraph, 'view_layer_eval', None) or self.view_layer
         self.camera = camera
+        self.render = render                # the RenderSettings sizing the image (export_camera)
         self.view_camera = view_camera      # a viewport's (scenedata.Camera): no scene camera read
         self.world = effective_world(self.scene, self.layer_eval)
         # whether any shader reads Object Info: else no instance's values are gathered
@@ -134,7 +135,7 @@ class Exporter:
                            materials_unused=0, triangles_degenerate=0, triangles_nonfinite=0)
 
     def run(self):
-        camera = self.view_camera or export_camera(self.scene, self.messages, camera=self.camera)
+        camera = self.view_camera or export_camera(self.scene, self.messages, camera=self.camera, render=self.render)
         settings = export_settings(self.scene, self.view_layer, self.messages,
                                    viewport=self.view_camera is not None)
         self._walk_instances()

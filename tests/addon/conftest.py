@@ -44,8 +44,8 @@ def exported(monkeypatch):
     captured = []
     real = export.export_scene
 
-    def capture(depsgraph, check_break=None, camera=None):
-        captured.append(real(depsgraph, check_break, camera))
+    def capture(depsgraph, check_break=None, camera=None, **kw):
+        captured.append(real(depsgraph, check_break, camera, **kw))
         raise export.ExportCancelled()
 
     monkeypatch.setattr(export, 'export_scene', capture)

@@ -952,6 +952,47 @@ def test_cancel_is_answered_inside_an_images_conversion(scene, monkeypatch, capf
     assert "render cancelled during scene export" in capfd.readouterr().out
 
 
+def test_the_image_has_the_size_of_the_render_being_made(scene):
+    """Blender renders a scene a compositor's Render Layers node reads at the size of the render
+    being made (RenderEngine.render), not at its own resolution, percentage and border, and a
+    render_pre handler's edit of the percentage comes too late for the frame: both fill the
+    whole frame, as in Cycles (the other scene at 50% had rendered a quarter-sized image in
+    one corner; its border, half a frame; a crop border of the render alone failed the render
+    with a size error)."""
+    import addon
+    lit_plane_scene(scene, size=(16, 12))
+    other = scene.copy()
+    other.name = "Other"
+    other.render.resolution_percentage = 50
+    other.render.use_border, other.render.border_min_x = True, 0.5
+    ng = bpy.data.node_groups.new("Comp", 'CompositorNodeTree')
+    scene.compositing_node_group = ng
+    scene.render.use_compositing = True
+    ng.interface.new_socket('Image', in_out='OUTPUT', socket_type='NodeSocketColor')
+    node = ng.nodes.new('CompositorNodeRLayers')
+    node.scene = other
+    ng.links.new(node.outputs['Image'], ng.nodes.new('NodeGroupOutput').inputs[0])
+    px = scenes.render_rgba(scene)
+    assert px.shape == (12, 16, 4) and (px[..., 3] == 1.0).all(), px[..., 3]
+    layer = f"Other / {scene.view_layers[0].name}"
+    stats = addon.last_render_stats()[layer]
+    assert stats['paths'] == stats['samples_done'] * 16 * 12, stats       # (the other scene's pixels)
+    scene.render.use_border = scene.render.use_crop_to_border = True
+    scene.render.border_min_x = scene.render.border_min_y = 0.25
+    px = scenes.render_rgba(scene)
+    assert px.shape == (9, 12, 4) and (px[..., 3] == 1.0).all()
+
+    def halve(sc, *_):
+        sc.render.resolution_percentage = 50
+    scene.render.use_compositing = scene.render.use_border = False
+    bpy.app.handlers.render_pre.append(halve)
+    try:
+        px = scenes.render_rgba(scene)
+    finally:
+        bpy.app.handlers.render_pre.remove(halve)
+    assert px.shape == (12, 16, 4) and (px[..., 3] == 1.0).all()
+
+
 def test_stats_of_a_scene_the_compositor_pulls_in_keep_their_own_key(scene):
     """A render whose compositor reads another scene's layer keeps both layers' stats: the
     other's under 'Scene / Layer' (both named 'ViewLayer', the other's had replaced the
