@@ -219,7 +219,7 @@ class Exporter:
             if getattr(ob, 'particle_systems', None) and hair_systems(ob) and not own_output:
                 self._particle_hair(ob, override, inst)
             if ob.type == 'CURVES' and not getattr(self.view_layer, 'use_strand', True):
-                self.skip("hair curves are off in the view layer's filter (Hair)", ob.name)
+                self.skip("hair curves are off in the view layer's filter (Curves)", ob.name)
                 continue
             if ob.type in DRAWN_OVER:
                 if ob.name not in self.drawn_over:
@@ -389,7 +389,7 @@ class Exporter:
         instanced emitter's hair. The object's ray visibility applies (an instance's with its
         instancer's); the view layer's Hair filter off skips it."""
         if not getattr(self.view_layer, 'use_strand', True):
-            self.skip("hair is off in the view layer's filter (Hair)", ob.name)
+            self.skip("hair is off in the view layer's filter (Curves)", ob.name)
             return
         parent = inst.parent if inst.is_instance and inst.parent is not None else ob
         vis = self._visibility(ob, parent)
