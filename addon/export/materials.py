@@ -86,6 +86,15 @@ def _lookup_chain(compiled, clamp):
     return chain
 
 
+def _attribute_probe(rng):
+    """(1, 64, 4) values an attribute reads while the export probes a chain: random colours
+    (up to 10 on the last entries) at alpha 1 (see MaterialBuilder._ATTRIBUTE_PROBE)."""
+    p = rng.random((1, 64, 4)).astype(np.float32)
+    p[0, 40:, :3] = 1.0 + 9.0 * p[0, 40:, :3]
+    p[..., 3] = 1.0
+    return p
+
+
 class MaterialBuilder:
     """Evaluates Blender materials into scenedata.Material, one per material."""
 
@@ -205,9 +214,7 @@ class MaterialBuilder:
     # (float colours, vectors and numbers go past 1: values up to 10 too, so a clamp to [0, 1]
     # after the attribute is not taken for a scale and offset; not below 0, where the export's
     # own clamp of a negative albedo would do the same)
-    _ATTRIBUTE_PROBE = np.random.default_rng(11).random((1, 64, 4)).astype(np.float32)
-    _ATTRIBUTE_PROBE[0, 40:, :3] = 1.0 + 9.0 * _ATTRIBUTE_PROBE[0, 40:, :3]
-    _ATTRIBUTE_PROBE[..., 3] = 1.0
+    _ATTRIBUTE_PROBE = _attribute_probe(np.random.default_rng(11))
     _ATTRIBUTE_ALPHAS = _ALPHA_PROBE[None]
 
     def _attribute(self, node, out, reasons):
@@ -322,17 +329,11 @@ class MaterialBuilder:
                                                    "corners, then interpolated (Cycles interpolates first)") if r)
         return m
 
-    def _several_probes(self, names, seed):
-        """{name: (1, 64, 4)} probe values of each attribute, each its own (as _ATTRIBUTE_PROBE:
-        up to 10 on the last entries, alpha 1)."""
+    @staticmethod
+    def _several_probes(names, seed):
+        """{name: (1, 64, 4)} probe values of each attribute, each its own (_attribute_probe)."""
         rng = np.random.default_rng(seed)
-        probes = {}
-        for n in names:
-            p = rng.random((1, 64, 4)).astype(np.float32)
-            p[0, 40:, :3] = 1.0 + 9.0 * p[0, 40:, :3]
-            p[..., 3] = 1.0
-            probes[n] = p
-        return probes
+        return {n: _attribute_probe(rng) for n in names}
 
     def _albedo_on(self, mat, pixels):
         """The albedo (64, 3) the material has where its attributes read pixels (a dict per
