@@ -377,6 +377,13 @@ class Integrator:
         # same emitters; of those, the materials' Emission Sampling (None: BSDF rays alone)
         hittable = self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)
         sampled = hittable & self.mats.light_sampled[self.tri.material]
+        if self._shadow_link is not None:
+            # shadow-linked emitters are light-sampled whatever their Emission Sampling says: a
+            # BSDF ray is stopped by every object, so only a light sample's shadow ray can be
+            # traced against the emitter's blockers alone (one left to BSDF rays had kept the
+            # shadow of a blocker its collection excludes: floor 0.44x Cycles under the plate;
+            # Cycles traces a dedicated shadow ray from the BSDF hit, the same expected image)
+            sampled |= hittable & (self._tri_shadow_set > 0)
         self._tri_sampled = sampled
         tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(), sampled,
                                  power_emission=self._tri_emission) if self._any_emissive else None
@@ -1843,11 +1850,10 @@ class Integrator:
             prim = np.maximum(hits['prim'], 0)
             hit = hit & reached(self._receivers(path.prim), np.take(self._tri_set, prim))
         if self._shadow_link is not None and not camera:
-            # shadow-linked emitters light by their light samples alone (_selection_table); one
-            # light sampling never picks (Emission Sampling None, or Auto on a dim one) still by
-            # BSDF rays, else by nothing (it had lit nothing: 0 where Cycles gives 0.476)
+            # shadow-linked emitters light by their light samples alone (_selection_table), which
+            # pick them whatever their Emission Sampling (_build_lights)
             prim = np.maximum(hits['prim'], 0)
-            hit = hit & ((np.take(self._tri_shadow_set, prim) == 0) | ~np.take(self._tri_sampled, prim))
+            hit = hit & (np.take(self._tri_shadow_set, prim) == 0)
         outs = [(hit, L)]
         if groups:
             grp = np.take(self._tri_group, np.maximum(hits['prim'], 0))

