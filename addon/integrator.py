@@ -456,7 +456,9 @@ class Integrator:
                                                and not camera_env.dark) else None
         self._glass_world_lamps = np.array([j for j, l in enumerate(every)
                                             if isinstance(l, BackgroundLight) and l.seen_by_transmission], np.int32)
-        self._bsdf_lamps = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf], np.int32)
+        self._bsdf_lamps = self._bsdf_every = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf],
+                                                       np.int32)
+        self._bsdf_linked = np.zeros(0, np.int32)
         self._selection_table()
 
     def _selection_table(self):
@@ -507,7 +509,15 @@ class Integrator:
             # over a floor had been 0.68x Cycles under a plate its blockers leave out)
             linked = self._entry_shadow_set > 0
             self._light_choice.no_mis[linked] = True
-            self._bsdf_lamps = self._bsdf_lamps[record_sets[self._bsdf_lamps] == 0]
+            self._bsdf_lamps = self._bsdf_every[record_sets[self._bsdf_every] == 0]
+            # ... but past its Max Bounces light sampling skips it, where Cycles keeps the BSDF
+            # rays' MIS share of it: those rays gather it against its blockers alone
+            # (_gather_past_limit; it had been lost there: a ceiling lit by bounced light alone
+            # went black, the Cornell box 0.963x Cycles at Max Bounces 0)
+            linked = self._bsdf_every[(record_sets[self._bsdf_every] > 0) & (self._bsdf_every < nl)]
+            self._bsdf_linked = linked[np.array([lights.lamps[j].max_bounces for j in linked], np.int64)
+                                       < self.max_bounces] if len(linked) else linked
+            self._record_shadow_set = record_sets
         if self._link is not None:          # light linking: each entry's and lamp record's light set
             self._record_set = np.array([_light_set(self._link, l) for l in every], np.uint8).reshape(-1)
             self._entry_set = self._entry_table(self._record_set, self._tri_set, 0, np.uint8)
@@ -945,6 +955,8 @@ class Integrator:
         prim = hits['prim']
         hit = prim >= 0
         self._gather_lamps(path, hit, hits, sinks, k)
+        if not camera and len(self._bsdf_linked):
+            self._gather_past_limit(path, sinks, k)
         chain = None                                  # camera rays' transparent surfaces, for the passes
         if self._any_transparent and hit.any():
             chain = [] if camera and self._data_passes else None
@@ -1880,11 +1892,12 @@ class Integrator:
         of vertex 0 (Cycles clamps it by bounce - 1 <= 0), indirect after."""
         return self._clamps[k > 1]
 
-    def _group_lamps(self, camera, sinks):
+    def _group_lamps(self, camera, sinks, combined=None):
         """[(lamp records, light group's array)]: per light group, the records of its lamps
-        among those Combined gathers from camera or BSDF rays, and the world behind transparent
-        film (none: left out)."""
-        combined = self._bsdf_lamps if not camera else self._camera_grouped
+        among those Combined gathers from camera or BSDF rays (or among `combined`), and the
+        world behind transparent film (none: left out)."""
+        if combined is None:
+            combined = self._bsdf_lamps if not camera else self._camera_grouped
         if not sinks.groups or not len(combined):
             return []
         mine = ((combined[self._record_group[combined] == g], G) for g, G in enumerate(sinks.groups))
@@ -1934,6 +1947,30 @@ class Integrator:
                 dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
                                         miss, path.pid, out, thr=thr, pdf_bsdf=None if camera else path.pdf,
                                         clamp=clamp, **self._lamp_mis(camera, path))
+
+    def _gather_past_limit(self, path, sinks, k):
+        """Shadow-linked lamps past their Max Bounces at the vertex the BSDF rays of segment k
+        leave (vertex k - 1): light sampling skips them there (_light_choice_at), and, as in
+        Cycles (which traces a dedicated shadow ray toward the lamps a BSDF ray meets, its
+        forward hit MIS-weighted), these rays gather them with their MIS weight, stopped only
+        by each lamp's blockers (its set's opaque ones: a transparent blocker lets it through)."""
+        lamps = self._bsdf_linked[self._max_bounces[self._bsdf_linked] < k - 1]
+        if not len(lamps):
+            return
+        sets = self._record_shadow_set[lamps]
+        clamp, L = self._found_clamp(k), sinks.found(k)
+        for s in np.unique(sets):
+            kind = f'shadow{s}'
+            if kind in self._scenes:
+                hits = self._intersect(kind, path.O, path.D, path.tmax, path.prim)
+                t, miss = hits['t'], hits['prim'] < 0
+            else:                           # no blockers: nothing stops the rays
+                t, miss = np.full(len(path.pid), np.inf, F32), np.ones(len(path.pid), bool)
+            mine = lamps[sets == s]
+            for recs, out in [(mine, L)] + self._group_lamps(False, sinks, mine):
+                for recs, thr in self._linked(recs, path, path.thr, False):
+                    dacrt.lamps.lamp_gather(self._lamp_records, recs, path.O, path.D, t, miss, path.pid, out,
+                                            thr=thr, pdf_bsdf=path.pdf, clamp=clamp, **self._lamp_mis(False, path))
 
     def _lamp_mis(self, camera, path):
         """lamp_gather's MIS arguments: none for camera rays; for BSDF rays each lamp record's
