@@ -19,15 +19,20 @@ MIN_SPREAD = 1e-4      # radians: an area light's narrowest spread (see export_l
 def light_link_receivers(collection):
     """An emitter's light linking receiver collection as (included, excluded) object keys
     (name_full: a library object may share its name with a local one; Cycles links objects, not
-    names), as Blender reads it: each object of the collection by its own Include / Exclude state, the
-    objects of a child collection (all levels down) by that child's state."""
-    included, excluded = set(), set()
-    for ob, item in zip(collection.objects, collection.collection_objects):
-        (included if item.light_linking.link_state == 'INCLUDE' else excluded).add(ob.name_full)
+    names), as Blender reads it (depsgraph_light_linking.cc): the objects of each child collection
+    (all levels down) by that child's Include / Exclude state, the children in order, then each
+    object of the collection by its own; where an object is met more than once the last state
+    wins (a direct state over a child collection's, a later child's over an earlier one's: an
+    exclusion had always won)."""
+    state = {}
     for child, item in zip(collection.children, collection.collection_children):
-        names = {ob.name_full for ob in child.all_objects}
-        (included if item.light_linking.link_state == 'INCLUDE' else excluded).update(names)
-    return frozenset(included), frozenset(excluded)
+        link_state = item.light_linking.link_state
+        for ob in child.all_objects:
+            state[ob.name_full] = link_state
+    for ob, item in zip(collection.objects, collection.collection_objects):
+        state[ob.name_full] = item.light_linking.link_state
+    included = frozenset(name for name, s in state.items() if s == 'INCLUDE')
+    return included, frozenset(state.keys() - included)
 
 
 def export_light(ob, matrix, messages, approximated=None):

@@ -11,7 +11,7 @@ import pytest
 
 from tests.addon import scenes
 from tests.parity import rendering
-from tests.parity.test_light_linking import _direct_light, _link, _plane_means
+from tests.parity.test_light_linking import _blockers, _direct_light, _floor_means, _link, _planes, _plane_means
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -80,3 +80,45 @@ def test_shadow_linked_lamp_past_its_max_bounces(states, tmp_path):
     means = rendering.engine_means(sc, tmp_path, 'linked')
     ratio = means['DACRT'] / means['CYCLES']
     assert np.all(np.abs(ratio - 1) < 0.01), ratio
+
+
+# --- conflicting link states ---------------------------------------------------------------------
+
+def _child_states(coll, children):
+    for cname, (state, names) in children.items():
+        child = bpy.data.collections.new(cname)
+        coll.children.link(child)
+        for name in names:
+            child.objects.link(bpy.data.objects[name])
+        coll.collection_children[-1].light_linking.link_state = state
+
+
+@pytest.mark.parametrize('states,children,lit', [
+    # A included directly and excluded by a child collection: the direct state wins
+    ({"A": 'INCLUDE'}, {"Group": ('EXCLUDE', ("A", "B"))}, (True, False, False)),
+    # two child collections: the later one's state wins
+    ({}, {"Kids": ('EXCLUDE', ("A",)), "Kids2": ('INCLUDE', ("A", "C"))}, (True, False, True)),
+])
+def test_conflicting_receiver_states(states, children, lit, tmp_path):
+    """Blender applies a linking collection's states in order, its child collections' first
+    and then its own objects', the last one met winning (depsgraph_light_linking.cc); an
+    exclusion had always won here (Cycles A 0.246, DACRT 0)."""
+    sc, emitter = _planes(False)
+    _link(emitter, states, children)
+    c, d = _plane_means(sc, 'CYCLES', tmp_path), _plane_means(sc, 'DACRT', tmp_path)
+    assert np.array_equal(c > 0.01, np.array(lit)), c
+    assert _close(d, c), (d, c)
+
+
+def test_conflicting_blocker_states(tmp_path):
+    """Shadow linking reads its blocker collection alike: plate B included directly and
+    excluded by a child collection blocks the sun (it had cast no shadow)."""
+    sc, emitter = _blockers('SUN', False)
+    coll = bpy.data.collections.new("Blockers")
+    coll.objects.link(bpy.data.objects["B"])
+    coll.collection_objects[0].light_linking.link_state = 'INCLUDE'
+    _child_states(coll, {"Group": ('EXCLUDE', ("B", "C"))})
+    emitter.light_linking.blocker_collection = coll
+    c, d = _floor_means(sc, 'CYCLES', tmp_path), _floor_means(sc, 'DACRT', tmp_path)
+    assert c[0].max() < 0.5 * c[2].max(), c           # B shadows the floor, C does not
+    assert _close(d, c), (d, c)
