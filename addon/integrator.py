@@ -551,14 +551,21 @@ class Integrator:
             return
         ob = np.asarray(sd.geometry.object_index, np.int64)
         names = sd.per_object(getattr(sd, 'object_keys', None) or sd.object_names, lambda i: None)
-        link = LightLinking(links, names, self.messages)
+        # the emitters: lamps, objects with emissive triangles and a lighting world (in no link)
+        emitters = [l.key or l.name for l in sd.lights]
+        if self._any_emissive:
+            emitters += [names[i] for i in np.unique(ob[self._tri_emissive])]
+        world = np.asarray(sd.world).max() > 0 or sd.environment is not None
+        link = LightLinking(links, names, self.messages,
+                            unlinked=world or any(e not in links for e in emitters))
         if link.active:
             self._link = link
             self._tri_recv = np.take(link.object_mask, ob)
             self._tri_set = np.take(link.sets(names), ob)
         # shadow linking: the same sets of blocker objects; a light sample's shadow ray is then
         # traced against the triangles of its emitter's blockers only
-        shadow = LightLinking(shadow_links, names, self.messages)
+        # (set 0 stays the unlinked emitters', every object blocking them: 63 sets fit)
+        shadow = LightLinking(shadow_links, names, self.messages, kind='shadow linking blocker')
         if shadow.active:
             self._shadow_link = shadow
             self._tri_blocks = np.take(shadow.object_mask, ob)
@@ -1998,7 +2005,7 @@ class Integrator:
             return [(lamps, thr)]
         recv = self._receivers(path.prim)
         sets = self._record_set[lamps]
-        return [(lamps[sets == s], thr if s == 0 else thr * reached(recv, s).astype(F32))
+        return [(lamps[sets == s], thr if s == self._link.everyone else thr * reached(recv, s).astype(F32))
                 for s in np.unique(sets)]
 
     def _seen_apart(self, lamps, path, thr):

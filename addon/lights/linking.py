@@ -3,7 +3,8 @@
 Blender's receiver collection of an emitter (a light or an emissive object) names objects to
 include or exclude (export.lights.light_link_receivers); with any included, only they are lit (less
 the excluded), else every object but the excluded. Emitters with the same receivers share a
-light set; set 0 is every object's (emitters without a receiver collection). Each object gets a
+light set; set 0 is every object's (emitters without a receiver collection; where every emitter
+has one, set 0 is a linked set's too, so 64 fit, as in Cycles). Each object gets a
 64-bit mask of the sets it receives, so a shading point is lit by an emitter when bit
 set(emitter) of its object's mask is set, as Cycles' light_link_object_match tests it. Light
 linking decides lighting only: camera rays see every emitter, and shadows are not linked.
@@ -12,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-MAX_SETS = 64          # bits of a receiver mask; set 0 is everyone's
+MAX_SETS = 64          # bits of a receiver mask; Cycles links up to 64 collections (ids 0-63)
 
 
 def receives(name, receivers) -> bool:
@@ -22,22 +23,46 @@ def receives(name, receivers) -> bool:
 
 
 class LightLinking:
-    def __init__(self, links: dict, object_names: list, messages: list):
+    def __init__(self, links: dict, object_names: list, messages: list, unlinked: bool = True,
+                 kind: str = 'light linking receiver'):
         """links: emitter name -> (included, excluded) object names (SceneData.light_links);
-        object_names: the name of each object index."""
+        object_names: the name of each object index; unlinked: whether any emitter is not in
+        links (it lights, or is blocked by, every object: set 0, bit 0 of every mask). Without
+        one, bit 0 is a linked set's too, so 64 sets fit, as in Cycles (63 had: the 64th lit
+        every object); past 64, Cycles' limit, the emitters of the sets beyond light every object
+        as in Cycles, and set 0 is theirs. kind: what the sets are, for the message."""
         specs = list(dict.fromkeys(links.values()))
-        if len(specs) > MAX_SETS - 1:
-            dropped = [name for name, spec in links.items() if spec in specs[MAX_SETS - 1:]]
-            messages.append(('WARNING', f"more than {MAX_SETS - 1} different light linking receiver sets: "
-                                        f"{', '.join(dropped)} light every object"))
-            specs = specs[:MAX_SETS - 1]
-        self._set_of = {spec: s + 1 for s, spec in enumerate(specs)}
+        over = specs[MAX_SETS:]             # past Cycles' limit: every object, as Cycles
+        room = MAX_SETS - 1 if unlinked or over else MAX_SETS
+        squeezed = specs[room:MAX_SETS]     # within Cycles' limit, beyond the bits left here
+        names = lambda dropped: ', '.join(name for name, spec in links.items() if spec in dropped)
+        if over:
+            messages.append(('WARNING', f"more than {MAX_SETS} different {kind} sets (Cycles' limit): "
+                                        f"{names(set(over))} light every object, as in Cycles"
+                                        + (f"; so do {names(set(squeezed))} here (with emitters lighting "
+                                           f"every object {MAX_SETS - 1} sets fit, not {MAX_SETS})"
+                                           if squeezed else "")))
+        elif squeezed:
+            messages.append(('WARNING', f"{MAX_SETS} different {kind} sets and emitters that are not "
+                                        f"linked (or the world): only {MAX_SETS - 1} sets fit with those (Cycles "
+                                        f"has {MAX_SETS}); {names(set(squeezed))} light every object"))
+        first = MAX_SETS - room             # 0: bit 0 is a linked set's, no set lights every object
+        self._set_of = {spec: s + first for s, spec in enumerate(specs[:room])}
+        # the set whose emitters light every object (None: there is none)
+        self.everyone = 0 if first else None
         self._links = links
-        mask = np.ones(len(object_names), np.uint64)
-        for spec, s in self._set_of.items():
-            bit = np.uint64(1) << np.uint64(s)
-            got = np.array([receives(n, spec) for n in object_names], bool)
-            mask[got] |= bit
+        n = len(object_names)
+        where = {}
+        for i, name in enumerate(object_names):
+            where.setdefault(name, []).append(i)
+        mask = np.full(n, 1 if first else 0, np.uint64)
+        for (included, excluded), s in self._set_of.items():
+            got = np.zeros(n, bool) if included else np.ones(n, bool)
+            for name in included:
+                got[where.get(name, [])] = True
+            for name in excluded:           # (excluded wins: receives)
+                got[where.get(name, [])] = False
+            mask[got] |= np.uint64(1) << np.uint64(s)
         self.object_mask = mask
 
     @property
@@ -45,7 +70,7 @@ class LightLinking:
         return bool(self._set_of)
 
     def emitter_set(self, name) -> int:
-        """The light set of the emitter called name (0: it lights every object)."""
+        """The light set of the emitter called name (0: not linked, it lights every object)."""
         spec = self._links.get(name)
         return self._set_of.get(spec, 0) if spec is not None else 0
 
