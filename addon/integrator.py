@@ -416,7 +416,9 @@ class Integrator:
                                           f"strength: {', '.join(dict.fromkeys(self.lights.skipped_lamps))}"))
         if self.lights.unseen_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.unseen_lamps)} light(s) that neither camera "
-                                          f"nor diffuse rays can see: {', '.join(dict.fromkeys(self.lights.unseen_lamps))}"))
+                                          "nor diffuse rays can see, nor camera rays past glass (the scene has "
+                                          "none, or they are hidden from its transmission rays): "
+                                          f"{', '.join(dict.fromkeys(self.lights.unseen_lamps))}"))
         # Native lamp records (dacrt.lamps): the lamps light sampling may choose (0..nl-1), then
         # those only BSDF and camera rays find (the world), then those only camera rays see.
         # Record index lists per ray kind, for lamp_gather.

@@ -25,6 +25,9 @@ HOLDOUT = 8
 # Object > Visibility > Ray Visibility > Transmission off: rays past glass (Cycles' transmission
 # rays) do not see it. A bit that hides, so that visibility written without it keeps its meaning.
 NO_TRANSMISSION = 32
+# Ray Visibility > Transmission on with Camera, Diffuse and Shadow off: rays past glass alone see
+# it (with any of those bits, transmission rays see it unless NO_TRANSMISSION says otherwise)
+VIS_TRANSMISSION = 128
 
 
 @dataclass
@@ -199,6 +202,7 @@ class Geometry:
     uvs: Optional[np.ndarray]      # (M,3,2) float32 per corner, on the UV map the triangle's
                                    # material reads (Material.uv_map), or None
     visibility: np.ndarray         # (M,) uint8 bits VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW | HOLDOUT | NO_TRANSMISSION
+                                   # (or VIS_TRANSMISSION alone)
     object_index: np.ndarray       # (M,) int32 index into SceneData.object_names
     # (M,) int32 the placement (object or instance of one) each triangle comes from: the light
     # tree makes each emissive instance a light of its own; None: object_index stands in

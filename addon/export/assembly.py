@@ -189,6 +189,7 @@ class Assembly:
         geometry = out.geometry()
         if len(geometry.material) and (mvis != (sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)).any():
             keep = mvis | np.uint8(sd.HOLDOUT | sd.NO_TRANSMISSION)
+            keep[(mvis & sd.VIS_DIFFUSE) != 0] |= np.uint8(sd.VIS_TRANSMISSION)   # (as below)
             objects = geometry.visibility.copy()     # the objects' own ray visibility
             geometry.visibility &= keep[geometry.material]
             # rays past glass are Cycles' transmission rays, whose Is Camera Ray and Is Shadow

@@ -270,9 +270,12 @@ class Exporter:
         parent = inst.parent if inst.is_instance and inst.parent is not None else ob
         diffuse = ob.visible_diffuse and parent.visible_diffuse
         glossy = getattr(ob, 'visible_glossy', True) and getattr(parent, 'visible_glossy', True)
-        if not (diffuse or (ob.visible_camera and parent.visible_camera)):
-            self.skip("lights with camera and diffuse ray visibility off (their own or their "
-                      "instancer's) light nothing here, where every surface is diffuse"
+        # (camera rays past glass are Cycles' transmission rays: they see a lamp by its
+        # Transmission visibility, kept for them; one only they see had been dropped here)
+        transmission = getattr(ob, 'visible_transmission', True) and getattr(parent, 'visible_transmission', True)
+        if not (diffuse or transmission or (ob.visible_camera and parent.visible_camera)):
+            self.skip("lights with camera, diffuse and transmission ray visibility off (their own or "
+                      "their instancer's) light and show nothing here, where every surface is diffuse"
                       + (" (Cycles still lights glossy layers with them)" if glossy else ""), ob.name)
             return None
         if glossy != diffuse:
@@ -302,8 +305,12 @@ class Exporter:
                     | (sd.VIS_DIFFUSE if o.visible_diffuse else 0)
                     | (sd.VIS_SHADOW if o.visible_shadow else 0))
         vis = bits(ob) & bits(parent)
-        if vis and not (getattr(ob, 'visible_transmission', True) and getattr(parent, 'visible_transmission', True)):
+        transmission = getattr(ob, 'visible_transmission', True) and getattr(parent, 'visible_transmission', True)
+        if vis and not transmission:
             vis |= sd.NO_TRANSMISSION
+        elif not vis and transmission:
+            # seen by rays past glass alone (Cycles' transmission rays; it had been dropped)
+            vis = sd.VIS_TRANSMISSION
         if vis and (parent.is_holdout or self._in_holdout_collection(parent)):
             vis |= sd.HOLDOUT
         elif self._collection_flag(parent, 'indirect_only_get'):

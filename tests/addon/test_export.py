@@ -974,8 +974,10 @@ def test_hidden_and_ray_visibility(scene, exported):
     held = scenes.plane("Held", location=(12, 0, 0))
     held.is_holdout = True
     gone = scenes.plane("Gone", location=(15, 0, 0))
-    gone.visible_camera = gone.visible_diffuse = gone.visible_shadow = False
+    gone.visible_camera = gone.visible_diffuse = gone.visible_shadow = gone.visible_transmission = False
     scenes.plane("NoTransmission", location=(18, 0, 0)).visible_transmission = False
+    past_glass = scenes.plane("PastGlassOnly", location=(21, 0, 0))
+    past_glass.visible_camera = past_glass.visible_diffuse = past_glass.visible_shadow = False
     data = exported()
     assert "Hidden" not in data.object_names and "Gone" not in data.object_names
     assert data.skipped['objects_hidden'] == 1 and data.skipped['objects_invisible'] == 1
@@ -986,6 +988,7 @@ def test_hidden_and_ray_visibility(scene, exported):
     assert vis["NoShadow"] == {sd.VIS_CAMERA | sd.VIS_DIFFUSE}
     assert vis["Held"] == {full | sd.HOLDOUT}
     assert vis["NoTransmission"] == {full | sd.NO_TRANSMISSION}    # seen past glass no more
+    assert vis["PastGlassOnly"] == {sd.VIS_TRANSMISSION}           # seen past glass alone
 
 
 def test_holdout_and_excluded_collections(scene, exported):
@@ -1681,7 +1684,7 @@ def test_light_values_in_cycles_units(scene, exported):
     rect.scale = (3.0, 1.0, 1.0)
     disk = scenes.light('AREA', 50.0, (0, 0, 3), name="Disk", shape='DISK', size=1.5, spread=1.0)
     unseen = scenes.light('POINT', 10.0, name="Unseen")
-    unseen.visible_diffuse = False
+    unseen.visible_diffuse = unseen.visible_transmission = False    # (camera: off by default)
     data = exported()
     L = {l.name: l for l in data.lights}
     assert set(L) == {"Point", "Spot", "Sun", "Warm", "Area", "Disk"}
@@ -2083,7 +2086,7 @@ def test_default_surface_reported_only_when_used(scene, exported):
 def test_light_ray_visibility(scene, exported):
     """A light's Object > Visibility > Ray Visibility reaches SceneData.Light: Camera (off on a
     new light object in Blender 5.0) and Diffuse; an instancer's visibility is inherited; a
-    light neither can see is skipped with a message."""
+    light no ray kind can see (Transmission off too) is skipped with a message."""
     setup(scene)
     default = scenes.light('AREA', 10.0, (0, 0, 2), name="Default")
     seen = scenes.light('AREA', 10.0, (0, 0, 3), name="Seen")
@@ -2091,7 +2094,7 @@ def test_light_ray_visibility(scene, exported):
     camera_only = scenes.light('AREA', 10.0, (0, 0, 4), name="CameraOnly")
     camera_only.visible_camera, camera_only.visible_diffuse = True, False
     ghost = scenes.light('POINT', 10.0, (0, 0, 5), name="Ghost")
-    ghost.visible_camera = ghost.visible_diffuse = False
+    ghost.visible_camera = ghost.visible_diffuse = ghost.visible_transmission = False
     # a camera-visible light instanced by an empty whose diffuse visibility is off
     col = bpy.data.collections.new("Lamps")
     scene.collection.children.link(col)

@@ -159,3 +159,43 @@ def test_64_receiver_sets(tmp_path):
     # (Cycles lights A a little less per lamp as the lamps grow many: 0.5% at 40 sets, 1.1% at
     # 63, 2% here, the same before the limit changed)
     assert _close(da, ca, rel=0.04), means
+
+
+# --- emitters only transmission rays see ------------------------------------------------------
+
+def _glass_pane():
+    """A clear glass pane (IOR 1) filling the view of a camera looking along +Y."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 24, 18
+    scenes.camera(location=(0, -5, 0), rotation=(math.pi / 2, 0, 0))
+    glass, nt, out = scenes._material("Glass")
+    g = nt.nodes.new('ShaderNodeBsdfGlass')
+    g.inputs['IOR'].default_value = 1.0
+    g.inputs['Roughness'].default_value = 0.0
+    nt.links.new(g.outputs[0], out.inputs['Surface'])
+    scenes.plane("Pane", size=6, location=(0, -2, 0), materials=[glass]).rotation_euler = (math.pi / 2, 0, 0)
+    return sc
+
+
+@pytest.mark.parametrize('emitter', ['AREA', 'MESH'])
+def test_emitter_only_transmission_rays_see(emitter, tmp_path):
+    """An area light or an emissive plane with Ray Visibility Camera and Diffuse off (and, for
+    the plane, Shadow too), Transmission on: seen through the glass pane, as Cycles' camera rays
+    past glass are transmission rays (the README's rule). Both had been dropped at export
+    (Cycles 4.24 and 0.77 through the pane, DACRT 0)."""
+    sc = _glass_pane()
+    if emitter == 'AREA':
+        ob = scenes.light('AREA', 30.0, rotation=(-math.pi / 2, 0, 0), size=1.5)
+    else:
+        ob = scenes.plane("Glow", size=1.5, materials=[scenes.emission("Glow", (1, 0.5, 0.2), 3.0)])
+        ob.rotation_euler = (math.pi / 2, 0, 0)
+        ob.visible_shadow = False
+    ob.visible_camera = ob.visible_diffuse = False
+    rendering.fair_scene_settings(sc)
+    sc.cycles.samples = sc.dacrt.samples = 16
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 2
+    sc.cycles.use_denoising = False
+    c, d = (_render(sc, e, tmp_path)[6:12, 8:16].mean(axis=(0, 1)) for e in ('CYCLES', 'DACRT'))
+    assert c.max() > 0.5, c                            # Cycles shows it through the pane
+    assert _close(d, c), (d, c)
