@@ -305,6 +305,7 @@ class Integrator:
             self._tri_emit_tex = textured[self.tri.material]
             self._tri_emission_unit = self._tri_emission.copy()
             self._tri_emission_unit[:, self._tri_emit_tex] = 1.0
+            self._procedural_emission_power()
         self._object_pass = None                # the Object Index pass's value of each triangle
         if 'IndexOB' in self.film.passes:
             ids = np.asarray(scene_data.object_pass_index if scene_data.object_pass_index is not None
@@ -1251,6 +1252,34 @@ class Integrator:
             N = np.where(back, -N, N) / np.where(good, length, 1)
             out[:, sel] = np.where(good, N, out[:, sel])
         return out
+
+    # points a procedural emission is measured at on its emitters, for the light choice
+    _POWER_POINTS = 4096
+
+    def _procedural_emission_power(self):
+        """Weigh the light choice of procedural emitters (noise-driven lava, a checker panel) by
+        their emission's magnitude averaged over their own surfaces: a few thousand points
+        spread by area over each such material's emitting triangles, evaluated as its hits are.
+        The export's guess (over the unit cube of coordinates) stays where the points find
+        none: the weight only moves noise, every emitting triangle stays a light (the table
+        gathered from holds 1 there, the light choice a positive weight)."""
+        entries = [e for e in self.mats.emission_textures if isinstance(e[1], ProceduralTexels)]
+        if not entries:
+            return
+        rng = np.random.default_rng(0x5EED)
+        n = max(512, min(self._POWER_POINTS, 65536 // len(entries)))
+        for m, tex, interp, ext, xf in entries:
+            tris = np.flatnonzero((self.tri.material == m) & self._tri_emissive)
+            if not len(tris):
+                continue
+            cdf = np.cumsum(self.tri.area[tris].astype(np.float64))
+            prim = tris[np.minimum(np.searchsorted(cdf, rng.random(n) * cdf[-1], side='right'), len(tris) - 1)]
+            s, r = np.sqrt(rng.random(n)), rng.random(n)       # uniform over each triangle
+            u, v = (s * (1.0 - r)).astype(F32), (s * r).astype(F32)
+            value = self._lookup(tex, interp, ext, xf, prim, u, v)
+            power = np.abs(np.where(np.isfinite(value), value, F32(0.0))).mean(axis=1)
+            if power.max() > 0:
+                self._tri_emission[:, tris] = power[:, None]
 
     def _emission_table(self):
         """(3, M) per triangle: the radiance emission is gathered and light-sampled with (1 on

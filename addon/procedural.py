@@ -51,6 +51,13 @@ class ProceduralTexels:
         p = np.random.default_rng(7).random((4096, 3)).astype(F32)
         return self.evaluate({k: p for k in self.needs}).mean(axis=1).astype(np.float64)
 
+    def magnitude(self) -> np.ndarray:
+        """The mean of the colour's magnitude (3,) per channel over coordinates in the unit
+        cube: a first guess at what an emission of it gives (it weighs the light choice until
+        the integrator measures it on the emitter itself, _procedural_emission_power)."""
+        p = np.random.default_rng(7).random((4096, 3)).astype(F32)
+        return np.abs(self.evaluate({k: p for k in self.needs})).mean(axis=1).astype(np.float64)
+
 
 def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color, kind='FBM',
                   offset=0.0, gain=1.0):

@@ -16,7 +16,8 @@ Materials (what a diffuse renderer can represent exactly):
 - Diffuse BSDF colour and Principled BSDF Base Color, each constant or an Image Texture on
   the UV map, directly or through Mapping nodes (mapping.py; pixels converted to float
   scene-linear);
-- Emission (colour x strength) and Principled emission (Emission Color x Emission Strength);
+- Emission (colour x strength) and Principled emission (Emission Color x Emission Strength),
+  constant, from an image, or computed per shading point by procedural textures (procedurals.py);
 - colour and float nodes between constants or an Image Texture and a diffuse colour (Mix,
   Invert, Gamma, Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp, RGB Curves,
   Separate/Combine Color, Math, Map Range, Clamp), evaluated per texel and baked into the

@@ -729,8 +729,9 @@ class Assembly:
 
 
 def _procedurals(material):
-    """The material's procedural textures (its colour's, its AOVs')."""
-    textures = [material.texture] + [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
+    """The material's procedural textures (its colour's, its emission's, its AOVs')."""
+    textures = [material.texture, getattr(material, 'emission_texture', None)] + \
+        [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
     return [t for t in textures if isinstance(t, ProceduralTexels)]
 
 
@@ -740,6 +741,6 @@ def _object_info_read(material):
 
 
 def _coordinates_read(material, kinds=frozenset({'generated', 'object'})):
-    """Whether a procedural texture of the material (its colour's or an AOV's) reads Generated or
+    """Whether a procedural texture of the material (its colour's, emission's or an AOV's) reads Generated or
     Object coordinates (or those of `kinds`)."""
     return any(t.needs & kinds for t in _procedurals(material))

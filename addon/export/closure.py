@@ -80,7 +80,8 @@ class Closure:
         self.transparent = np.array(transparent, np.float64)
         self.opacity = opacity
         # an image's emission, (Texture, weight (3,)): weight x the image; `emission` is then
-        # its average over the image's texels (what chooses it as a light)
+        # its average over the image's texels (what chooses it as a light); or a procedural
+        # one's (colour x strength per point; `emission` a guess of its magnitude's mean)
         self.emission_tex = emission_tex
         self.translucent = np.array(translucent, np.float64)
         self.glass = np.array(glass, np.float64)
@@ -128,12 +129,17 @@ class Closure:
         a, b = self.emission_tex, other.emission_tex
         if a is None or b is None:
             mine, theirs = (a, other) if b is None else (b, self)
+            if mine is not None and theirs.emission.any() and _procedural(mine):
+                # a procedural emission plus a constant one: both per point
+                return _procedural_emission(mine, None, theirs.emission), np.ones(3)
             if mine is not None and theirs.emission.any():
                 reasons.append("an image's emission added to another emission; as its average")
                 return None
             return mine
         if a[0].key == b[0].key:
             return a[0], a[1] + b[1]
+        if _procedural(a) and _procedural(b):      # two procedural emissions: summed per point
+            return _procedural_emission(a, b, np.zeros(3)), np.ones(3)
         reasons.append("two images' emission added; both as their averages")
         return None
 
@@ -182,3 +188,21 @@ def _procedural_sum(a, wa, b, wb):
         return wa * pa.evaluate(coords).T + wb * pb.evaluate(coords).T
     name = ', '.join(dict.fromkeys(n for n in (pa.name, pb.name) if n))
     return Texture.procedural(ProceduralTexels(both, pa.needs | pb.needs, name))
+
+
+def _procedural(etex):
+    """Whether an emission texture (Texture, weight) is a procedural one."""
+    return isinstance(etex[0].pixels, ProceduralTexels)
+
+
+def _procedural_emission(a, b, const):
+    """A Texture emitting wa x a + wb x b + const per point, a and b procedural emissions
+    (Texture, weight) (b None: none)."""
+    parts = [(x[0].pixels, np.asarray(x[1], np.float64)) for x in (a, b) if x is not None]
+    const = np.asarray(const, np.float64)
+
+    def summed(coords):
+        return const + sum(w * p.evaluate(coords).T.astype(np.float64) for p, w in parts)
+    name = ', '.join(dict.fromkeys(p.name for p, _ in parts if p.name))
+    return Texture.procedural(ProceduralTexels(summed, frozenset().union(*(p.needs for p, _ in parts)), name),
+                              'emission')

@@ -525,7 +525,13 @@ class MaterialBuilder:
             # (where a channel's mean is <= 0, the mean of its positive texels weighs it: an
             # image whose every mean is negative still has light to give)
             emission = np.nan_to_num(np.asarray(closure.emission, np.float64))
-            if (e_keep & ~(emission > 0)).any():        # (a pass over the texels only then)
+            if isinstance(closure.emission_tex[0].pixels, ProceduralTexels):
+                # a procedural emission: its magnitude's mean over the unit cube; the integrator
+                # measures it on the emitters (_procedural_emission_power). One that seemed dark
+                # there still emits somewhere: a small positive weight keeps it a light
+                if not (emission[e_keep] > 0).any():
+                    emission = np.where(e_keep, 1e-3 * np.abs(weight), 0.0)
+            elif (e_keep & ~(emission > 0)).any():      # (a pass over the texels only then)
                 texels = np.asarray(closure.emission_tex[0].pixels[..., :3], np.float64).reshape(-1, 3)
                 positive = np.maximum(np.nan_to_num(texels), 0.0).mean(axis=0) * weight
                 emission = np.where(emission > 0, emission, positive)
@@ -583,7 +589,7 @@ class MaterialBuilder:
         # a procedural texture on Texture Coordinate UV reads the active render map: beside an
         # image on a named map it reads that map too (it had, silently: a gradient across the
         # other map's direction, 0.45 / 0.45 where Cycles gives 0.11 / 0.79)
-        procedurals = [texture] + [t.pixels for t in aov_textures.values()]
+        procedurals = [texture, e_tex] + [t.pixels for t in aov_textures.values()]
         if uv_names and any(isinstance(t, ProceduralTexels) and 'uv' in t.needs for t in procedurals):
             uv_names = list(dict.fromkeys(uv_names + ['']))
         if len(uv_names) > 1:       # one UV map per triangle here
@@ -630,6 +636,11 @@ class MaterialBuilder:
         if link is None:
             return Closure()
         if link.from_socket.type != 'SHADER':
+            # Cycles' Emission of strength 1 of the value; per point where procedurals make it
+            emitted = procedurals.compile_emission(socket, None, reasons, image=self._texture)
+            if emitted is not None:
+                return Closure(emission=emitted.magnitude(),
+                               emission_tex=(Texture.procedural(emitted, 'emission'), np.ones(3)))
             return Closure(emission=value_emission(link, reasons, self._texture))
         node = link.from_node
         if depth > 32:
@@ -965,7 +976,14 @@ class MaterialBuilder:
         a sign, a glTF emissive map): (Texture, weight (3,)), emitting weight x the image,
         and the radiance its average over the image's texels (what picks it as a light); an
         image straight into the colour is read as Cycles reads it, colour and float nodes
-        after the image are baked into its texels (as for a diffuse colour)."""
+        after the image are baked into its texels (as for a diffuse colour). Procedural
+        textures in either: (a ProceduralTexels Texture of colour x strength, 1), the radiance
+        a first guess of its magnitude's mean (the integrator measures it on the emitters)."""
+        # procedural textures in either: colour x strength computed at each shading point
+        # (procedural.py), as Cycles' SVM does; they had read the texture's own value
+        emitted = procedurals.compile_emission(color_socket, strength_socket, reasons, image=self._texture)
+        if emitted is not None:
+            return emitted.magnitude(), (Texture.procedural(emitted, 'emission'), np.ones(3))
         evaluate = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE)
         color, strength = evaluate.input(color_socket, True), evaluate.input(strength_socket, False)
         if color.tex is None and strength.tex is None:

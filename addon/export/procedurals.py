@@ -1,6 +1,7 @@
 """Colour chains that read procedural textures (Noise, Voronoi, Wave, Checker, Gradient, Brick,
 White Noise, Magic, Gabor): compiled into a function of the shading point's texture coordinates
-(procedural.ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does.
+(procedural.ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does:
+a diffuse colour, a Mix Shader's factor, an AOV, an emission's colour x strength.
 The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping
 nodes and Texture Coordinate's Generated, Object and UV outputs (an unlinked Vector: Generated,
 as in Cycles, but White Noise's, its own value); texture inputs (Scale, Detail, ...) may
@@ -85,6 +86,36 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None):
         return None
     reasons.extend(chain.reasons)
     return fn, frozenset((chain.needs or {'generated'}) | chain.frames), ', '.join(dict.fromkeys(chain.textures))
+
+
+def compile_emission(color_socket, strength_socket, reasons, image=None):
+    """A ProceduralTexels of an emission's colour x strength per point, when procedural
+    textures feed either (the other side a constant or any chain compile follows: images are
+    looked up per point through `image`), or None (no procedural texture reaches them, or a
+    chain compile cannot follow: said, and the evaluation then reads the texture's own value).
+    Signed, as Cycles emits it (an emission is no closure weight); NaN reads 0 (evaluate).
+    strength_socket None: strength 1 (a colour or value linked into a shader input, which
+    Cycles makes an Emission of strength 1)."""
+    if not (_reaches_procedural(color_socket, set()) or
+            (strength_socket is not None and _reaches_procedural(strength_socket, set()))):
+        return None
+    chain = _Chain([], image)
+    one = np.ones((1, 1))
+    try:
+        color = _socket(color_socket, True, chain, 0)
+        strength = _socket(strength_socket, False, chain, 0) if strength_socket is not None else lambda c: one
+    except nodeeval.NotCompiled as e:
+        reasons.append(f"procedural emission not evaluated per point ({e} is not read there)")
+        return None
+    except (AttributeError, KeyError, TypeError, ValueError) as e:
+        reasons.append(f"procedural emission chain not evaluated per point ({type(e).__name__}: {e})")
+        return None
+    reasons.extend(chain.reasons)
+
+    def emitted(coords):
+        return np.asarray(color(coords), np.float64) * np.asarray(strength(coords), np.float64)
+    needs = frozenset((chain.needs or {'generated'}) | chain.frames)
+    return pr.ProceduralTexels(emitted, needs, ', '.join(dict.fromkeys(chain.textures)))
 
 
 def object_frame(ob):
