@@ -125,7 +125,9 @@ class Closure:
 
     def _emission_sum(self, other, reasons):
         """The image emission of self + other: one image (or the same one twice) stays an image;
-        an image beside another image's or a constant emission counts as its average."""
+        an image beside another image's or a constant emission counts as its average. Procedural
+        emissions, with each other or a constant one, are summed per point; beside an image's,
+        both count as their averages."""
         a, b = self.emission_tex, other.emission_tex
         if a is None or b is None:
             mine, theirs = (a, other) if b is None else (b, self)
@@ -140,6 +142,9 @@ class Closure:
             return a[0], a[1] + b[1]
         if _procedural(a) and _procedural(b):      # two procedural emissions: summed per point
             return _procedural_emission(a, b, np.zeros(3)), np.ones(3)
+        if _procedural(a) or _procedural(b):
+            reasons.append("a procedural emission added to an image's; both as their averages")
+            return None
         reasons.append("two images' emission added; both as their averages")
         return None
 
