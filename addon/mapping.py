@@ -53,13 +53,44 @@ def _vector_input(node, name, default, reasons):
     return value
 
 
+def _varies(node, name, depth=0):
+    """Whether a Mapping input is fed by something that is no constant (what Cycles' constant
+    folding leaves linked: a texture coordinate, an image), not its own value or RGB and Value
+    nodes and the evaluated nodes above them, nor a Mapping node of constant inputs."""
+    sock = node.inputs.get(name)
+    if sock is None or not sock.enabled:
+        return False
+    link = linked_link(sock)
+    if link is not None and link.from_node.type == 'MAPPING' and depth < _MAX_CHAIN:
+        return any(_varies(link.from_node, n, depth + 1) for n in ('Vector', 'Location', 'Rotation', 'Scale'))
+    return not constant(sock, True)[1]
+
+
+def folds_to_zero(node):
+    """Whether Cycles folds the Mapping node to the zero vector: a Scale of exactly (0, 0, 0)
+    that no varying node feeds, with any other input varying (ConstantFolder::fold_mapping:
+    is_zero(scale) -> make_zero, for every type; Location and Rotation then count for nothing).
+    With every input constant Cycles computes the node instead (MappingNode::constant_fold:
+    svm_mapping, a Point type then giving its Location)."""
+    sock = node.inputs.get('Scale')
+    if sock is None or not sock.enabled:
+        return False
+    scale, exact = constant(sock, True)
+    if not exact or np.any(np.asarray(scale, np.float64) != 0.0):
+        return False
+    return any(_varies(node, name) for name in ('Vector', 'Location', 'Rotation'))
+
+
 def mapping_affine(node, reasons):
     """(M, t): the Mapping node as v -> M v + t (3x3, 3), float64. The Normal type normalises
-    its result, which no affine map does: reported, and read without the normalisation."""
+    its result, which no affine map does: reported, and read without the normalisation. A
+    node Cycles folds to zero (folds_to_zero) is the zero map."""
     loc = _vector_input(node, 'Location', (0, 0, 0), reasons)
     rot = _rotation(_vector_input(node, 'Rotation', (0, 0, 0), reasons))
     scale = _vector_input(node, 'Scale', (1, 1, 1), reasons)
     kind = node.vector_type
+    if folds_to_zero(node):
+        return np.zeros((3, 3)), np.zeros(3)
     if kind == 'POINT':
         return rot * scale[None, :], loc
     if kind == 'TEXTURE':

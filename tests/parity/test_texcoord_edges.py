@@ -1,0 +1,103 @@
+"""Texture coordinate edge cases against Cycles: a 2 x 2 plane seen from above by an
+orthographic camera under a white world, no bounces, so each pixel is the albedo its material
+reads there (32 x 32, 16 samples; Closest images of a 4 x 4 gradient whose texel (i, j) is
+((i + 0.5) / 4, (j + 0.5) / 4, 0)). Compared at pixel blocks well inside the plane:
+  - a Mapping node with Scale exactly (0, 0, 0) and its Vector linked is folded to the zero
+    vector by Cycles for every type (ConstantFolder::fold_mapping), its Location unread; with
+    nothing linked it is computed (its Location for a Point Mapping);
+"""
+import numpy as np
+import pytest
+
+import bpy
+
+from .rendering import fair_scene_settings, render_combined
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+RES = 32
+# pixel blocks (rows, columns, row 0 at the bottom) well inside the plane's texels
+BOTTOM_LEFT, TOP_RIGHT, CENTRE = (slice(4, 12), slice(4, 12)), (slice(20, 28), slice(20, 28)), \
+    (slice(8, 24), slice(8, 24))
+
+
+def _scene():
+    """A factory-empty scene: orthographic camera above the origin seeing 1.8 x 1.8, a white
+    world; returns (scene, material node tree, Diffuse node) of the plane's new material."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = RES
+    sc.render.resolution_percentage = 100
+    cam = bpy.data.objects.new('Cam', bpy.data.cameras.new('Cam'))
+    cam.data.type, cam.data.ortho_scale = 'ORTHO', 1.8
+    cam.location = (0, 0, 5)
+    sc.collection.objects.link(cam)
+    sc.camera = cam
+    sc.world = bpy.data.worlds.new('W')
+    sc.world.node_tree.nodes['Background'].inputs[0].default_value = (1, 1, 1, 1)
+    m = bpy.data.materials.new('M')
+    nt = m.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new('ShaderNodeOutputMaterial')
+    dif = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(dif.outputs[0], out.inputs['Surface'])
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    bpy.context.active_object.data.materials.append(m)
+    return sc, nt, dif
+
+
+def _gradient_image(nt):
+    """A Closest Image Texture of the 4 x 4 gradient (texel (i, j): ((i+.5)/4, (j+.5)/4, 0))."""
+    img = bpy.data.images.new('Gradient', 4, 4, float_buffer=True)
+    px = np.zeros((4, 4, 4), np.float32)
+    px[..., 0] = (np.arange(4) + 0.5)[None, :] / 4
+    px[..., 1] = (np.arange(4) + 0.5)[:, None] / 4
+    px[..., 3] = 1
+    img.pixels.foreach_set(px.ravel())
+    img.pack()
+    t = nt.nodes.new('ShaderNodeTexImage')
+    t.image, t.interpolation = img, 'Closest'
+    return t
+
+
+def _render_both(sc, tmp_path):
+    """{engine: (H, W, 3) float32} of the scene rendered by Cycles and DACRT."""
+    fair_scene_settings(sc)
+    sc.view_settings.view_transform = 'Standard'
+    images = {}
+    for engine in ('CYCLES', 'DACRT'):
+        sc.render.engine = engine
+        if engine == 'CYCLES':
+            c = sc.cycles
+            c.device, c.samples, c.max_bounces = 'CPU', 16, 0
+            c.use_denoising = c.use_adaptive_sampling = False
+        else:
+            sc.dacrt.samples, sc.dacrt.max_bounces = 16, 0
+        images[engine] = render_combined(sc, tmp_path / f"{engine}.exr")[..., :3]
+    return images
+
+
+def _blocks(images, *blocks):
+    return {e: np.array([img[b].mean(axis=(0, 1)) for b in blocks]) for e, img in images.items()}
+
+
+@pytest.mark.parametrize('kind,linked', [('image', True), ('gradient', True), ('image', False)])
+def test_zero_scale_mapping(tmp_path, kind, linked):
+    """Point Mapping, Scale (0, 0, 0), Location (0.3, 0.6, 0): UV linked, Cycles gives 0 (the
+    image's texel (0, 0): (0.125, 0.125), the Gradient 0; had been the Location: 0.375, 0.625
+    and 0.3); nothing linked, Cycles gives the Location (texel (1, 2): (0.375, 0.625))."""
+    sc, nt, dif = _scene()
+    mp = nt.nodes.new('ShaderNodeMapping')
+    mp.vector_type = 'POINT'
+    mp.inputs['Scale'].default_value = (0, 0, 0)
+    mp.inputs['Location'].default_value = (0.3, 0.6, 0)
+    if linked:
+        nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['UV'], mp.inputs['Vector'])
+    t = _gradient_image(nt) if kind == 'image' else nt.nodes.new('ShaderNodeTexGradient')
+    nt.links.new(mp.outputs['Vector'], t.inputs['Vector'])
+    nt.links.new(t.outputs['Color'], dif.inputs['Color'])
+    got = _blocks(_render_both(sc, tmp_path), CENTRE)
+    want = {('image', True): (0.125, 0.125, 0), ('gradient', True): (0, 0, 0),
+            ('image', False): (0.375, 0.625, 0)}[kind, linked]
+    assert np.abs(got['CYCLES'][0] - want).max() < 0.01, got      # (the scene reads as described)
+    assert np.abs(got['DACRT'] - got['CYCLES']).max() < 0.01, got
