@@ -721,7 +721,11 @@ class Assembly:
                 continue
             layer = a.uv_layers.get(name)
             if layer is None:
-                uvs[rows] = 0.0
+                found = a.named_uvs(name)
+                uvs[rows] = 0.0 if found is None else found[rows]
+                if found is None and a.mesh is not None and a.mesh.attributes.get(name) is not None:
+                    self.ignore(f"{a.unread_attribute(name)}: the UV Map node reading it reads (0, 0), as in Cycles",
+                                place.name)
                 continue
             index = a.corners[rows] if a.corners is not None else \
                 3 * rows[:, None] + np.arange(3)[None, :]

@@ -387,10 +387,9 @@ class MeshArrays:
 
     @staticmethod
     def _read_uvs(me, corner_vert):
-        """{name: (corners, 2) float32} of every UV map of the mesh, and of every 2D vector
-        attribute on points or faces (a Geometry Nodes Store Named Attribute's, on Points by
-        default), per corner: Cycles' UV Map node reads an attribute of that name on any
-        domain (they had read (0, 0), silently)."""
+        """{name: (corners, 2) float32} of every UV map of the mesh, per corner. Another
+        attribute a UV Map node names (a Geometry Nodes Store Named Attribute's, a 2D or 3D
+        vector on any domain) is read on demand: named_uvs."""
         nl = len(me.loops)
         layers = {}
         for layer in me.uv_layers:
@@ -401,23 +400,17 @@ class MeshArrays:
             else:
                 layer.uv.foreach_get('vector', uv)
             layers[layer.name] = uv.reshape(nl, 2)
-        corner_face = None
-        for attr in me.attributes:
-            if attr.data_type != 'FLOAT2' or attr.domain not in ('POINT', 'FACE') or attr.name in layers \
-                    or attr.name.startswith('.'):
-                continue
-            rows = np.empty(len(attr.data) * 2, np.float32)
-            attr.data.foreach_get('vector', rows)
-            rows = rows.reshape(-1, 2)
-            if attr.domain == 'POINT':
-                layers[attr.name] = rows[corner_vert]
-            else:
-                if corner_face is None:
-                    sizes = np.empty(len(me.polygons), np.int32)
-                    me.polygons.foreach_get('loop_total', sizes)
-                    corner_face = np.repeat(np.arange(len(sizes), dtype=np.int32), sizes)
-                layers[attr.name] = rows[corner_face]
         return layers
+
+    def named_uvs(self, name):
+        """(nt, 3, 2) float32 per triangle corner: the (x, y) of the attribute a UV Map node
+        names where it is no UV map (Cycles' UV Map node reads any attribute of that name as its
+        Attribute node's Vector: a 2D vector (x, y, 0), a vector (x, y, z), a number (v, v, v),
+        a colour its RGB; on points, corners, faces or edges; corner_attribute), or None where
+        the mesh has none Cycles reads (it had read (0, 0) for all but a 2D vector on points or
+        faces, silently)."""
+        found = self.corner_attribute(name) if name else None
+        return None if found is None else found[..., :2]
 
     def per_corner(self, rows, index, out):
         """out (nt, 3, c) = rows (n, c) at index (nt, 3); index None: rows are the corners. With

@@ -5,6 +5,10 @@ reads there (32 x 32, 16 samples; Closest images of a 4 x 4 gradient whose texel
   - a Mapping node with Scale exactly (0, 0, 0) and its Vector linked is folded to the zero
     vector by Cycles for every type (ConstantFolder::fold_mapping), its Location unread; with
     nothing linked it is computed (its Location for a Point Mapping);
+  - a UV Map node naming an attribute that is no UV map (Geometry Nodes' Store Named
+    Attribute of the positions mapped to 0..1: a 3D or 2D vector, a number, a colour, on
+    points, corners or faces) reads its (x, y) as Cycles (had read (0, 0) but for a 2D vector
+    on points or faces);
 """
 import numpy as np
 import pytest
@@ -100,4 +104,41 @@ def test_zero_scale_mapping(tmp_path, kind, linked):
     want = {('image', True): (0.125, 0.125, 0), ('gradient', True): (0, 0, 0),
             ('image', False): (0.375, 0.625, 0)}[kind, linked]
     assert np.abs(got['CYCLES'][0] - want).max() < 0.01, got      # (the scene reads as described)
+    assert np.abs(got['DACRT'] - got['CYCLES']).max() < 0.01, got
+
+
+def _stored_attribute(ob, name, data_type, domain):
+    """Geometry Nodes on ob storing position * (0.5, 0.5, 1) + (0.5, 0.5, 0) as `name`."""
+    ng = bpy.data.node_groups.new('Store', 'GeometryNodeTree')
+    ob.modifiers.new('Store', 'NODES').node_group = ng
+    ng.interface.new_socket('Geometry', in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gi, go = ng.nodes.new('NodeGroupInput'), ng.nodes.new('NodeGroupOutput')
+    st = ng.nodes.new('GeometryNodeStoreNamedAttribute')
+    st.data_type, st.domain = data_type, domain
+    st.inputs['Name'].default_value = name
+    vm = ng.nodes.new('ShaderNodeVectorMath')
+    vm.operation = 'MULTIPLY_ADD'
+    vm.inputs[1].default_value, vm.inputs[2].default_value = (0.5, 0.5, 1), (0.5, 0.5, 0)
+    ng.links.new(ng.nodes.new('GeometryNodeInputPosition').outputs[0], vm.inputs[0])
+    ng.links.new(vm.outputs[0], st.inputs['Value'])
+    ng.links.new(gi.outputs[0], st.inputs['Geometry'])
+    ng.links.new(st.outputs[0], go.inputs[0])
+
+
+@pytest.mark.parametrize('data_type,domain', [('FLOAT_VECTOR', 'POINT'), ('FLOAT_VECTOR', 'CORNER'),
+                                              ('FLOAT2', 'POINT'), ('FLOAT', 'POINT'), ('FLOAT_COLOR', 'POINT')])
+def test_uv_map_node_naming_an_attribute(tmp_path, data_type, domain):
+    """Cycles reads the attribute's (x, y) (points: bottom-left (0.279, 0.278), top-right
+    (0.722, 0.722) for the vectors; DACRT had read (0, 0): (0.125, 0.125) everywhere, but for
+    the 2D vector)."""
+    sc, nt, dif = _scene()
+    uvn = nt.nodes.new('ShaderNodeUVMap')
+    uvn.uv_map = 'stored'
+    t = _gradient_image(nt)
+    nt.links.new(uvn.outputs['UV'], t.inputs['Vector'])
+    nt.links.new(t.outputs['Color'], dif.inputs['Color'])
+    _stored_attribute(bpy.context.active_object, 'stored', data_type, domain)
+    got = _blocks(_render_both(sc, tmp_path), BOTTOM_LEFT, TOP_RIGHT)
+    assert np.ptp(got['CYCLES'][:, :2]) > 0.2, got           # (Cycles reads the attribute)
     assert np.abs(got['DACRT'] - got['CYCLES']).max() < 0.01, got
