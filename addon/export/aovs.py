@@ -16,6 +16,7 @@ from ..procedural import ProceduralTexels
 from . import procedurals
 from .closure import Texture
 from .images import MISSING_IMAGE
+from .meshes import FAC_OF
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 
 # Geometry > Position: world-space corner positions, interpolated as Cycles' P is on a triangle
@@ -61,6 +62,8 @@ def varying_key(node, out, reasons):
                            f"'{node.attribute_name}' not read")
             return None, None
         name = node.attribute_name
+        if name and out.identifier == 'Fac':    # a 2D vector's is its x (meshes.FAC_OF)
+            return FAC_OF + name, f"attribute '{name}'"
     else:
         name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
     return name, (f"attribute '{name}'" if name else "the render colour attribute")

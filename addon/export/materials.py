@@ -20,6 +20,7 @@ from .aovs import evaluate_varying, shader_aovs, unnamed_attribute
 from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
+from .meshes import FAC_OF
 from .procedurals import PROCEDURAL_TYPES
 from .normalmaps import bends_normal, tangent_normal_map
 from . import procedurals
@@ -250,6 +251,8 @@ class MaterialBuilder:
         else:
             name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
         label = f"attribute '{name}'" if name else "the render colour attribute"
+        if node.type == 'ATTRIBUTE' and out.identifier == 'Fac':
+            name = FAC_OF + name            # a 2D vector's Fac is its x (meshes.FAC_OF)
         t = Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None, label, name)
         t.aligned = True
         return t
@@ -324,7 +327,7 @@ class MaterialBuilder:
         self._attribute_map = ('corners', name, mat)
         m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
         if not affine:
-            label = f"attribute '{name}'" if name else "the render colour attribute"
+            label = _attribute_label(name)
             m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
                                                    "corners, then interpolated (Cycles interpolates first)") if r)
         return m
@@ -361,7 +364,7 @@ class MaterialBuilder:
                    if not np.allclose(self._albedo_on(mat, {**probes, n: other[n]}), base, rtol=1e-6, atol=1e-9)]
         if len(follows) < 2:
             return None
-        labels = ', '.join(_attribute_label(n) for n in follows)
+        labels = ', '.join(dict.fromkeys(_attribute_label(n) for n in follows))     # (a Fac and a Color: one)
         if nodeeval.TWO_IMAGES in m.approximated:
             m.approximated = '; '.join(r for r in (m.approximated, f"{labels} read together beside an image: "
                                                    "each read as the first's values") if r)
@@ -1260,6 +1263,7 @@ def channel_line(x, y, tolerance):
 
 def _attribute_label(name):
     """An attribute's name (as _attribute marks it) as a message says it."""
+    name = name.removeprefix(FAC_OF)
     if not name.startswith(OBJECT_INFO):
         return f"attribute '{name}'" if name else "the render colour attribute"
     out = name[len(OBJECT_INFO):]

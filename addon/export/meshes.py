@@ -336,16 +336,19 @@ class MeshArrays:
             return self._attributes[name]
         out = None
         me = self.mesh
+        fac = name.startswith(FAC_OF)           # an Attribute node's Fac of it (FAC_OF)
         if me is None and self.strand is not None:
             attributes, render_color, per_vertex = self.strand[:3]
             found = attributes.get(name if name else render_color)
+            if found is None and fac:           # (strands hold a FAC_OF entry of 2D vectors only)
+                found = attributes.get(name[len(FAC_OF):])
             if found is not None:
                 rows = per_vertex(*found)
                 out = None if rows is None else self.per_corner(rows, self.triangles,
                                                                 np.empty((len(self.triangles), 3, 4), np.float32))
         elif me is not None:
-            attr = _named_attribute(me, name)
-            out = None if attr is None else self._attribute_corners(me, attr)
+            attr = _named_attribute(me, name[len(FAC_OF):] if fac else name)
+            out = None if attr is None else self._attribute_corners(me, attr, fac)
         self._attributes[name] = out
         return out
 
@@ -353,6 +356,7 @@ class MeshArrays:
         """Why corner_attribute(name) is None, as a Blender user would say it: 'no attribute 'n'
         on the mesh', or the attribute there and why Cycles does not read it either (its type,
         or its domain)."""
+        name = name.removeprefix(FAC_OF)
         found = None if self.mesh is None else _named_attribute(self.mesh, name)
         if found is None and self.mesh is None and self.strand is not None and len(self.strand) > 3:
             return self.strand[3].format(name=name) if name else "no colour attribute on the emitter's hair"
@@ -363,10 +367,12 @@ class MeshArrays:
         kind = type(found).bl_rna.properties['data_type'].enum_items[found.data_type].name
         return f"attribute {found.name!r} on the mesh is a {kind} (a type Cycles does not read)"
 
-    def _attribute_corners(self, me, attr):
+    def _attribute_corners(self, me, attr, fac=False):
         rows = attribute_rows(attr)
         if rows is None:
             return None
+        if fac:
+            rows = fac_rows(attr, rows)
         nt = len(self.triangles)
         if attr.domain == 'POINT':
             index = self.triangles
@@ -478,6 +484,24 @@ def _expmap_quaternion(e):
     q = np.concatenate([np.cos(half)[:, None], axis * np.sin(half)[:, None]], axis=1)
     q[angle == 0] = (1.0, 0.0, 0.0, 0.0)
     return q
+
+
+# what an Attribute node's Fac reads of a mesh attribute is named (MaterialBuilder._attribute,
+# aovs.varying_key) by this prefix and the attribute's name (no Blender name holds a NUL): its
+# rows hold the Fac in R, G and B where it is no average of them, a 2D vector's x (Cycles'
+# svm_node_attr: NODE_ATTR_FLOAT2 -> f.x; a number, vector or colour: the average, as nodeeval
+# takes a Fac of the rows)
+FAC_OF = '\x00Fac\x00'
+
+
+def fac_rows(attr, rows):
+    """rows (n, 4) of attr (attribute_rows) as the Attribute node's Fac reads them: a 2D
+    vector's (x, x, x, 1); any other's as they are (their R, G, B average is the Fac)."""
+    if attr.data_type != 'FLOAT2':
+        return rows
+    out = rows.copy()
+    out[:, 1:3] = rows[:, :1]
+    return out
 
 
 def _named_attribute(me, name):

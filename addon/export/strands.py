@@ -8,7 +8,7 @@ import numpy as np
 from .. import hair, pointcloud
 from ..texture import srgb_to_linear
 from .errors import ExportCancelled
-from .meshes import MeshArrays, attribute_rows
+from .meshes import FAC_OF, MeshArrays, attribute_rows, fac_rows
 
 # why an attribute hair particles' materials name reads 0 (as in Cycles)
 HAIR_UNREAD = ("no Face Corner Byte Color attribute {name!r} on the emitter (hair particles read only those, at "
@@ -198,6 +198,8 @@ def _attributes(data):
         rows = attribute_rows(attr)
         if rows is not None:
             out[attr.name] = (attr.domain, rows)
+            if attr.data_type == 'FLOAT2':      # an Attribute node's Fac of it: its x
+                out[FAC_OF + attr.name] = (attr.domain, fac_rows(attr, rows))
     colors = getattr(data, 'color_attributes', None)
     render = None
     if colors is not None:

@@ -9,13 +9,17 @@ reads there (32 x 32, 16 samples; Closest images of a 4 x 4 gradient whose texel
     Attribute of the positions mapped to 0..1: a 3D or 2D vector, a number, a colour, on
     points, corners or faces) reads its (x, y) as Cycles (had read (0, 0) but for a 2D vector
     on points or faces);
+  - an Attribute node's Fac of a 2D vector attribute (the UV map 'UVMap') is its x, as Cycles'
+    svm_node_attr (it had been the average of (x, y, 0)); of a 3D vector still the average;
 """
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 import bpy
 
-from .rendering import fair_scene_settings, render_combined
+from .rendering import fair_scene_settings, render_combined, render_layers
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -141,4 +145,51 @@ def test_uv_map_node_naming_an_attribute(tmp_path, data_type, domain):
     _stored_attribute(bpy.context.active_object, 'stored', data_type, domain)
     got = _blocks(_render_both(sc, tmp_path), BOTTOM_LEFT, TOP_RIGHT)
     assert np.ptp(got['CYCLES'][:, :2]) > 0.2, got           # (Cycles reads the attribute)
+    assert np.abs(got['DACRT'] - got['CYCLES']).max() < 0.01, got
+
+
+@pytest.mark.parametrize('case', ['uv_fac', 'vector_fac', 'color_plus_uv_fac'])
+def test_attribute_fac(tmp_path, case):
+    """Fac of 'UVMap' (Cycles: u, 0.275 / 0.725 / 0.724 bottom-left / bottom-right / top-right;
+    had been (u + v) / 3: 0.183 / 0.333 / 0.483); of a stored 3D vector, the average (as
+    before); the Color of 'UVMap' plus half its Fac (two outputs of one attribute, read together:
+    (u + u / 2, v + u / 2, u / 2), affine, so exact per corner)."""
+    sc, nt, dif = _scene()
+    at = nt.nodes.new('ShaderNodeAttribute')
+    at.attribute_type, at.attribute_name = 'GEOMETRY', 'stored' if case == 'vector_fac' else 'UVMap'
+    if case == 'color_plus_uv_fac':
+        mix = nt.nodes.new('ShaderNodeMix')
+        mix.data_type, mix.blend_type = 'RGBA', 'ADD'
+        mix.inputs['Factor'].default_value = 0.5
+        nt.links.new(at.outputs['Color'], mix.inputs['A'])
+        nt.links.new(at.outputs['Fac'], mix.inputs['B'])
+        nt.links.new(mix.outputs['Result'], dif.inputs['Color'])
+    else:
+        nt.links.new(at.outputs['Fac'], dif.inputs['Color'])
+    if case == 'vector_fac':
+        _stored_attribute(bpy.context.active_object, 'stored', 'FLOAT_VECTOR', 'POINT')
+    bottom_right = (slice(4, 12), slice(20, 28))
+    got = _blocks(_render_both(sc, tmp_path), BOTTOM_LEFT, bottom_right, TOP_RIGHT)
+    assert np.ptp(got['CYCLES']) > 0.2, got
+    assert np.abs(got['DACRT'] - got['CYCLES']).max() < 0.01, got
+
+
+def test_attribute_fac_into_an_aov(tmp_path):
+    """A VALUE AOV of the Fac of 'UVMap' writes u, as Cycles (it had written (u + v) / 3)."""
+    sc, nt, dif = _scene()
+    sc.view_layers[0].aovs.add().name = 'fac'
+    sc.view_layers[0].aovs['fac'].type = 'VALUE'
+    at = nt.nodes.new('ShaderNodeAttribute')
+    at.attribute_type, at.attribute_name = 'GEOMETRY', 'UVMap'
+    aov = nt.nodes.new('ShaderNodeOutputAOV')
+    aov.aov_name = 'fac'
+    nt.links.new(at.outputs['Fac'], aov.inputs['Value'])
+    fair_scene_settings(sc)
+    spec = SimpleNamespace(cycles_samples=16, dacrt_samples=16, bounces=0, clamp=(0.0, 0.0),
+                           filter_type='BOX', filter_width=1.0)
+    layers = render_layers(sc, spec, tmp_path)
+    name = f"{sc.view_layers[0].name}.fac.X"
+    got = {e: np.array([exr[name][b].mean() for b in (BOTTOM_LEFT, (slice(4, 12), slice(20, 28)), TOP_RIGHT)])
+           for e, exr in layers.items()}
+    assert np.ptp(got['CYCLES']) > 0.2, got
     assert np.abs(got['DACRT'] - got['CYCLES']).max() < 0.01, got
