@@ -127,6 +127,7 @@ class Assembly:
         bad = {}          # object name -> [non-finite vertices, triangles dropped]
         degenerate = 0
         self._resolve_materials()
+        self._several_uv_maps()
         self._object_info_albedos()
         self._object_info_aovs()
         # the materials whose procedural textures read Generated or Object coordinates
@@ -232,6 +233,7 @@ class Assembly:
             b.aov_maps.append(b.aov_maps[k])
             b.uses_texture.append(bool(m.aov_textures))
             b.uv_maps.append(b.uv_maps[k])
+            b.uv_several.append(None)
         lookup = np.arange(len(mats), dtype=np.int32)
         for k, t in twins.items():
             lookup[k] = t
@@ -394,6 +396,27 @@ class Assembly:
                             built.add(p.slots[i].as_pointer())
                 seen.update(ptr for ptr in ptrs if ptr)
         self.counts['materials_unused'] = len(seen - built)
+
+    def _several_uv_maps(self):
+        """Say "textures on several UV maps" for a material whose images read a map by name and
+        the active render one (MaterialBuilder.uv_several) where a mesh it shades has another
+        active render map: on one whose active render map it is, both are the same map."""
+        several = self.materials.uv_several
+        if not any(several):
+            return
+        said = set()
+        for key, places in self.placements.items():
+            active = self.meshes[key].active_uv if places else ''
+            if not active:          # no UV map: both read (0, 0), as in Cycles
+                continue
+            for p in places:
+                for k in self._shown(p.slot_map):
+                    entry = several[k]
+                    if entry is None or k in said or entry[0] == active:
+                        continue
+                    said.add(k)
+                    m = self.materials.materials[k]
+                    m.approximated = '; '.join(r for r in (m.approximated, entry[1]) if r)
 
     def _instance_batch(self, a, places, out, v0, t0):
         """Write the k instances of mesh `a` into out's vertex rows from v0 and triangle rows

@@ -21,7 +21,7 @@ from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
 from .meshes import FAC_OF
-from .procedurals import PROCEDURAL_TYPES
+from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
 from .normalmaps import bends_normal, tangent_normal_map
 from . import procedurals
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
@@ -109,6 +109,11 @@ class MaterialBuilder:
         self._used_outputs = None  # the material being built: nodegraph.used_outputs of its tree (None: none)
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
+        # per material: None, or (UV map name, message) where its images read that map and the
+        # active render one: one map on meshes whose active render map it is (assembly says it
+        # for the others)
+        self.uv_several = [None]
+        self._uv_several = None
         # per material: None; ('mesh', attribute name, w (3,), k (3,)): its albedo is w x the
         # mesh attribute's colour + k at each point (a Color Attribute or Attribute node);
         # ('corners', attribute name, material): its nodes evaluated on each corner's value; or
@@ -148,6 +153,7 @@ class MaterialBuilder:
             self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
                                      or m.emission_texture is not None or m.normal_texture is not None)
             self.uv_maps.append(m.uv_map)
+            self.uv_several.append(self._uv_several)
             self._index[key] = idx
         return idx
 
@@ -462,6 +468,7 @@ class MaterialBuilder:
         reasons = []
         glass_rough = 0.0
         self._uv_names = []           # the UV map each image this material reads asks for
+        self._uv_several = None
         self._normal_maps = []        # (Texture, strength, UV map) of its BSDFs' normal maps
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
@@ -592,12 +599,21 @@ class MaterialBuilder:
         # a procedural texture on Texture Coordinate UV reads the active render map: beside an
         # image on a named map it reads that map too (it had, silently: a gradient across the
         # other map's direction, 0.45 / 0.45 where Cycles gives 0.11 / 0.79)
+        # (an image inside such a chain reads its own map, named in uv_names: not the active one)
         procedurals = [texture, e_tex] + [t.pixels for t in aov_textures.values()]
-        if uv_names and any(isinstance(t, ProceduralTexels) and 'uv' in t.needs for t in procedurals):
+        if uv_names and any(isinstance(t, ProceduralTexels) and TEXCOORD_UV in t.needs for t in procedurals):
             uv_names = list(dict.fromkeys(uv_names + ['']))
+        self._uv_several = None
         if len(uv_names) > 1:       # one UV map per triangle here
             shown = ', '.join(repr(n) if n else 'the active render map' for n in uv_names)
-            reasons.append(f"textures on several UV maps ({shown}); all read on the first")
+            said = f"textures on several UV maps ({shown}); all read on the first"
+            named = [n for n in uv_names if n]
+            if len(named) > 1:
+                reasons.append(said)
+            else:
+                # one map by name beside the active render one: the same map on a mesh whose
+                # active render map it is; said where a mesh's is another (assembly)
+                self._uv_several = (named[0], said)
         return sd.Material(name=name, base_color=base, uv_map=uv_names[0] if uv_names else '',
                            emission_texture=e_tex, emission_interpolation=e_interp or 'Linear',
                            emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,

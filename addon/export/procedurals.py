@@ -30,6 +30,9 @@ _VORONOI_FEATURES = ('F1', 'F2', 'SMOOTH_F1', 'DISTANCE_TO_EDGE', 'N_SPHERE_RADI
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV', 'MINKOWSKI')
 _VORONOI_OUTPUTS = ('Distance', 'Color', 'Position', 'Radius', 'W')
 OBJECT_OF = 'object of'     # (object_frame: a chain's needs say in whose space it reads Object)
+# among a chain's needs beside 'uv' where Texture Coordinate UV (the active render UV map) is read,
+# not only an Image Texture's UV map (which names its own: MaterialBuilder's UV map names)
+TEXCOORD_UV = 'Texture Coordinate UV'
 # Object Info outputs read per object or instance (objectinfo.object_value's (4,) value: which
 # columns); Material Index, the shaded material's, is left to the evaluation
 _OBJECT_INFO_OUTPUTS = {'Location': slice(0, 3), 'Color': slice(0, 3), 'Alpha': slice(0, 1), 'Random': slice(0, 1),
@@ -206,6 +209,8 @@ def _node(node, out, chain, depth):
             if len(chain.frames) > 1:
                 raise nodeeval.NotCompiled("Texture Coordinate Object of two objects (the shaded one counts)")
         chain.needs.add(kind)
+        if kind == 'uv':
+            chain.needs.add(TEXCOORD_UV)
         return (lambda c: c[kind]), True
     if t == 'OBJECT_INFO':
         # per object or instance (the assembly's table by placement): Cycles' Object Info

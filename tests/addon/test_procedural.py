@@ -315,7 +315,9 @@ def test_a_procedural_on_uv_beside_an_image_on_a_named_map_is_reported(scene, ex
     nt.links.new(uv.outputs[0], tex.inputs['Vector'])
     nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
-    scenes.cube("Cube", materials=(mat,))
+    cube = scenes.cube("Cube", materials=(mat,))
+    for layer in ('UVMap', 'Second'):       # (on a mesh without UV maps both read (0, 0): the same)
+        cube.data.uv_layers.new(name=layer)
     m = _material(exported(), "Mixed")
     assert "textures on several UV maps ('Second', the active render map)" in m.approximated, m.approximated
     nt.links.remove(uv.outputs[0].links[0])                  # both on the active map: nothing to say

@@ -2,6 +2,12 @@
 against Cycles: tests/parity/test_texcoord_edges.py):
   - a UV Map node naming an attribute of a type Cycles does not read (a string) reads (0, 0),
     as in Cycles, and says so naming the attribute (it had been silent);
+  - "textures on several UV maps" is said only where two different maps are read: not for an
+    image on a UV Map node naming the active render map times a Checker on Generated or Object
+    coordinates (the image's own UV need had counted as Texture Coordinate UV's), nor beside an
+    image reading the active render map unnamed (the same map); still for a Checker on Texture
+    Coordinate UV beside an image on another map, and for a named map beside the unnamed one on
+    a mesh whose active render map is another;
 """
 import numpy as np
 
@@ -39,3 +45,66 @@ def test_uv_map_node_naming_an_unread_attribute_says_so(scene, exported):
     assert np.all(np.asarray(data.geometry.uvs) == 0.0)
     text = _text(data)
     assert "attribute 'label'" in text and "UV Map" in text and "(0, 0), as in Cycles" in text, text
+
+
+def _mix_multiply(nt, a, b):
+    mix = nt.nodes.new('ShaderNodeMix')
+    mix.data_type, mix.blend_type = 'RGBA', 'MULTIPLY'
+    mix.inputs['Factor'].default_value = 1.0
+    nt.links.new(a, mix.inputs['A'])
+    nt.links.new(b, mix.inputs['B'])
+    return mix.outputs['Result']
+
+
+def _several_material(name, second, uv_map='UVMap'):
+    """An image on a UV Map node naming uv_map, times a Checker on Texture Coordinate `second`
+    ('Generated', 'Object', 'UV') or (second 'image') a second image with its Vector unlinked."""
+    mat, nt, tex = _image_material(name, uv_map)
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    if second == 'image':
+        other = nt.nodes.new('ShaderNodeTexImage')
+        other.image = bpy.data.images.new(name + "Other", 4, 4)
+        b = other.outputs['Color']
+    else:
+        ck = nt.nodes.new('ShaderNodeTexChecker')
+        nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs[second], ck.inputs['Vector'])
+        b = ck.outputs['Color']
+    nt.links.new(_mix_multiply(nt, tex.outputs['Color'], b), d.inputs['Color'])
+    return mat
+
+
+def _uv_plane(name, x, material, layers=('UVMap',), active=None):
+    """A plane with UV maps `layers` (the first the active render one, or `active`)."""
+    ob = scenes.plane(name, location=(x, 0, 0), materials=(material,))
+    for layer in layers:
+        ob.data.uv_layers.new(name=layer)
+    if active is not None:
+        ob.data.uv_layers[active].active_render = True
+    return ob
+
+
+def _said_several(data):
+    return [m.name for m in data.materials if "several UV maps" in m.approximated] + \
+        (["(messages)"] if "several UV maps" in _text(data) else [])
+
+
+def test_one_uv_map_read_two_ways_is_not_said_several(scene, exported):
+    scenes.camera((0, 0, 5))
+    scenes.light('SUN', 3.0)
+    for i, second in enumerate(('Generated', 'Object', 'image')):
+        _uv_plane(f"P{i}", 3 * i, _several_material(f"M{i}", second))
+    data = exported()
+    assert not _said_several(data), _text(data)
+
+
+def test_two_uv_maps_read_are_said_several(scene, exported):
+    scenes.camera((0, 0, 5))
+    scenes.light('SUN', 3.0)
+    _uv_plane("Coords", 0, _several_material("OnDetail", 'UV', 'Detail'), ('UVMap', 'Detail'))
+    _uv_plane("OtherActive", 3, _several_material("Unnamed", 'image'), ('UVMap', 'Other'), active='Other')
+    _uv_plane("SameActive", 6, _several_material("Same", 'image'), ('Other', 'UVMap'), active='UVMap')
+    data = exported()
+    table = {m.name: m.approximated for m in data.materials}
+    assert "textures on several UV maps ('Detail', the active render map)" in table["OnDetail"], table
+    assert "textures on several UV maps ('UVMap', the active render map)" in table["Unnamed"], table
+    assert "several" not in table["Same"], table
