@@ -16,7 +16,7 @@ from ..procedural import ProceduralTexels
 from . import procedurals
 from .closure import Texture
 from .images import MISSING_IMAGE
-from .meshes import FAC_OF
+from .meshes import attribute_key, attribute_label, color_attribute_key
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 
 # Geometry > Position: world-space corner positions, interpolated as Cycles' P is on a triangle
@@ -61,12 +61,11 @@ def varying_key(node, out, reasons):
             reasons.append(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
                            f"'{node.attribute_name}' not read")
             return None, None
-        name = node.attribute_name
-        if name and out.identifier == 'Fac':    # a 2D vector's is its x (meshes.FAC_OF)
-            return FAC_OF + name, f"attribute '{name}'"
+        key = attribute_key(node.attribute_name, out.identifier == 'Fac')   # (marked: meshes)
+        return key, attribute_label(key)
     else:
-        name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
-    return name, (f"attribute '{name}'" if name else "the render colour attribute")
+        name = color_attribute_key(node.layer_name)     # '' the mesh's render colour attribute
+    return name, attribute_label(name)
 
 
 # what an attribute Cycles does not find reads (svm_node_attr): colour, Fac and Vector 0, Alpha 1

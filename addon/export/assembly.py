@@ -359,8 +359,7 @@ class Assembly:
             name = entry[2]
             values = a.corner_attribute(name)
             if values is None:
-                self.ignore(f"{a.unread_attribute(name)}: an AOV reading it reads colour 0 and alpha 1, "
-                            "as in Cycles", object_name)
+                self.ignore(a.unread_said(name, "an AOV reading it reads colour 0 and alpha 1"), object_name)
                 values = _unread_rows(len(a.triangles))
             cache[k, id(a), id(entry)] = self.materials.evaluated_aov(entry, values.reshape(-1, 4)).reshape(
                 len(a.triangles), 3, -1)
@@ -578,7 +577,7 @@ class Assembly:
                     continue
                 v = a.corner_attribute(n)
                 if v is None:
-                    self.ignore(f"{a.unread_attribute(n)}: it reads colour 0 and alpha 1, as in Cycles", place.name)
+                    self.ignore(a.unread_said(n, "it reads colour 0 and alpha 1"), place.name)
                     v = _unread_rows(len(a.triangles))
                 values[n] = v.reshape(-1, 4)
             count = len(a.triangles) * 3
@@ -612,7 +611,7 @@ class Assembly:
             values = a.corner_attribute(name)
             rgb = np.zeros((len(rows), 3, 3)) if values is None else values[rows, :, :3]
             if values is None:
-                self.ignore(f"{a.unread_attribute(name)}: its colour reads 0, as in Cycles", place.name)
+                self.ignore(a.unread_said(name, "its colour reads 0"), place.name)
             block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)   # (no negative albedo)
             if mirrored:                     # corners 1 and 2 were swapped for these triangles
                 block[rows] = block[rows][:, [0, 2, 1]]

@@ -20,7 +20,7 @@ from .aovs import evaluate_varying, shader_aovs, unnamed_attribute
 from .closure import Closure, Texture, is_image_alpha
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
-from .meshes import FAC_OF
+from .meshes import attribute_key, attribute_label, color_attribute_key
 from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
 from .normalmaps import bends_normal, tangent_normal_map
 from . import procedurals
@@ -255,10 +255,11 @@ class MaterialBuilder:
                                 f"{node.attribute_type.lower()} attribute '{node.attribute_name}'", name)
             name = node.attribute_name
         else:
-            name = node.layer_name          # '' the mesh's render colour attribute, as Cycles
-        label = f"attribute '{name}'" if name else "the render colour attribute"
-        if node.type == 'ATTRIBUTE' and out.identifier == 'Fac':
-            name = FAC_OF + name            # a 2D vector's Fac is its x (meshes.FAC_OF)
+            # '' the mesh's render colour attribute, as Cycles; a standard name none (marked)
+            name = color_attribute_key(node.layer_name)
+        if node.type == 'ATTRIBUTE':        # (a standard attribute's name, a Fac: marked)
+            name = attribute_key(name, out.identifier == 'Fac')
+        label = attribute_label(name)
         t = Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None, label, name)
         t.aligned = True
         return t
@@ -1279,9 +1280,8 @@ def channel_line(x, y, tolerance):
 
 def _attribute_label(name):
     """An attribute's name (as _attribute marks it) as a message says it."""
-    name = name.removeprefix(FAC_OF)
     if not name.startswith(OBJECT_INFO):
-        return f"attribute '{name}'" if name else "the render colour attribute"
+        return attribute_label(name)
     out = name[len(OBJECT_INFO):]
     for kind, what in ((OBJECT_ATTRIBUTE, 'object'), (INSTANCER_ATTRIBUTE, 'instancer')):
         if out.startswith(kind):

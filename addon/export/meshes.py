@@ -337,7 +337,13 @@ class MeshArrays:
         out = None
         me = self.mesh
         fac = name.startswith(FAC_OF)           # an Attribute node's Fac of it (FAC_OF)
-        if me is None and self.strand is not None:
+        base = name.removeprefix(FAC_OF)
+        if base.startswith(STANDARD_OF):
+            out = self._standard_corners(base[len(STANDARD_OF):], fac)
+        elif base.startswith(COLOR_STANDARD_OF):     # (none on a mesh; strands: their own, as before)
+            if me is None and self.strand is not None:
+                out = self.corner_attribute(base[len(COLOR_STANDARD_OF):])
+        elif me is None and self.strand is not None:
             attributes, render_color, per_vertex = self.strand[:3]
             found = attributes.get(name if name else render_color)
             if found is None and fac:           # (strands hold a FAC_OF entry of 2D vectors only)
@@ -352,11 +358,58 @@ class MeshArrays:
         self._attributes[name] = out
         return out
 
+    def _standard_corners(self, std, fac):
+        """corner_attribute of Cycles' standard attribute `std` (STANDARD_OF): Generated
+        coordinates (g, 1), the active render UV map (u, v, 0, 1) (its Fac u: a 2D vector's);
+        None for the others on a mesh (a tessellated point cloud or hair reads its own attribute
+        of that name, as before)."""
+        if std not in STANDARD_READ:
+            if self.mesh is None and self.strand is not None:
+                return self.corner_attribute((FAC_OF if fac else '') + std)
+            return None
+        nt = len(self.triangles)
+        out = np.ones((nt, 3, 4), np.float32)
+        if std == 'generated':
+            out[..., :3] = self.corner_coordinates()[..., :3]
+            return out
+        if self.corner_uvs is None:              # no UV map: Cycles reads 0 too
+            return None
+        out[..., :2] = self.per_corner(self.corner_uvs, self.corners, np.empty((nt, 3, 2), np.float32))
+        out[..., 2] = 0.0
+        if fac:
+            out[..., 1:3] = out[..., :1]
+        return out
+
+    def unread_said(self, name, reads):
+        """What to say where corner_attribute(name) is None: why (unread_attribute), and
+        `reads`, what the node then reads ('its colour reads 0'), as Cycles does; for a
+        standard attribute Cycles computes and the export does not, that it is not read here."""
+        std = name.removeprefix(FAC_OF).removeprefix(STANDARD_OF)
+        if name.removeprefix(FAC_OF).startswith(STANDARD_OF) and std in STANDARD_UNREAD:
+            return f"Cycles' standard attribute '{std}' is not read here; {reads}"
+        return f"{self.unread_attribute(name)}: {reads}, as in Cycles"
+
     def unread_attribute(self, name):
         """Why corner_attribute(name) is None, as a Blender user would say it: 'no attribute 'n'
         on the mesh', or the attribute there and why Cycles does not read it either (its type,
-        or its domain)."""
+        or its domain); a standard attribute's (STANDARD_OF) what Cycles reads instead."""
         name = name.removeprefix(FAC_OF)
+        if name.startswith(COLOR_STANDARD_OF):
+            name = name[len(COLOR_STANDARD_OF):]
+            if self.mesh is not None or self.strand is None:
+                return (f"a Color Attribute node naming {name!r}, the name of a Cycles standard attribute, reads "
+                        "no attribute (not even a colour attribute of that name)")
+        if name.startswith(STANDARD_OF):
+            std = name[len(STANDARD_OF):]
+            if self.mesh is None and self.strand is not None:
+                name = std                      # (strands read their own attribute of the name)
+            elif std == 'uv':
+                return "no UV map on the mesh for Cycles' standard attribute 'uv' (the active render UV map)"
+            elif std in STANDARD_EMPTY:
+                return (f"'{std}' is the name of a Cycles standard attribute (of volumes, curves or points, or one "
+                        "left empty on a mesh), which Cycles reads in place of any mesh attribute of that name")
+            else:
+                return f"Cycles' standard attribute '{std}' is not read here"
         found = None if self.mesh is None else _named_attribute(self.mesh, name)
         if found is None and self.mesh is None and self.strand is not None and len(self.strand) > 3:
             return self.strand[3].format(name=name) if name else "no colour attribute on the emitter's hair"
@@ -492,6 +545,53 @@ def _expmap_quaternion(e):
 # svm_node_attr: NODE_ATTR_FLOAT2 -> f.x; a number, vector or colour: the average, as nodeeval
 # takes a Fac of the rows)
 FAC_OF = '\x00Fac\x00'
+
+
+# Cycles' standard attribute names (Attribute::standard_name): an Attribute node naming one
+# asks for that standard attribute (AttributeRequestSet::add_standard), never for the mesh's
+# attribute of the name; it is read under this prefix and the name (attribute_key). Measured in
+# Cycles 5.0 on a plane, with and without a mesh attribute of the name:
+STANDARD_OF = '\x00Standard\x00'
+# read here: Generated coordinates (as the Texture Coordinate node's) and the active render UV map
+STANDARD_READ = frozenset({'generated', 'uv'})
+# computed by Cycles for a mesh (its normals, tangents, pointiness, ...), not here: said so
+STANDARD_UNREAD = frozenset({'N', 'tangent', 'tangent_sign', 'pointiness', 'random_per_island',
+                             'generated_transform', 'undisplaced_tangent', 'undisplaced_tangent_sign'})
+# those of volumes, curves and points, and ones Cycles leaves empty on a mesh rendered without
+# displacement or motion: 0 on a mesh, its own attribute of that name unread ('color' too)
+STANDARD_EMPTY = frozenset({'color', 'density', 'flame', 'heat', 'temperature', 'velocity', 'velocity_x',
+                            'velocity_y', 'velocity_z', 'curve_intercept', 'curve_length', 'curve_random',
+                            'point_random', 'particle', 'shadow_transparency', 'undeformed', 'undisplaced',
+                            'undisplaced_N', 'ptex_face_id', 'ptex_uv'})
+# ('P', 'radius' and 'vertex_color' are standard names too, but Cycles reads a mesh's attribute
+# of those names: read as any other)
+STANDARD_NAMES = STANDARD_READ | STANDARD_UNREAD | STANDARD_EMPTY
+
+
+def attribute_key(name, fac=False):
+    """The name an Attribute node (type Geometry) naming `name` reads under (corner_attribute):
+    a standard one's marked (STANDARD_OF), its Fac's marked (FAC_OF)."""
+    key = STANDARD_OF + name if name in STANDARD_NAMES else name
+    return FAC_OF + key if fac and name else key
+
+
+# a Color Attribute node naming one of STANDARD_NAMES reads nothing in Cycles, not even a colour
+# attribute of that name (measured: 'color', 'generated', 'N', 'uv', 'density', 'pointiness',
+# 'tangent'): read under this prefix and the name (color_attribute_key), as none
+COLOR_STANDARD_OF = '\x00Color Attribute standard\x00'
+
+
+def color_attribute_key(name):
+    """The name a Color Attribute node naming `name` reads under (corner_attribute)."""
+    return COLOR_STANDARD_OF + name if name in STANDARD_NAMES else name
+
+
+def attribute_label(key):
+    """The attribute a key of attribute_key or color_attribute_key names, as a message says it."""
+    name = key.removeprefix(FAC_OF).removeprefix(COLOR_STANDARD_OF)
+    if name.startswith(STANDARD_OF):
+        return f"Cycles' standard attribute '{name[len(STANDARD_OF):]}'"
+    return f"attribute '{name}'" if name else "the render colour attribute"
 
 
 def fac_rows(attr, rows):

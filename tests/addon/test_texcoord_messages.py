@@ -8,6 +8,11 @@ against Cycles: tests/parity/test_texcoord_edges.py):
     image reading the active render map unnamed (the same map); still for a Checker on Texture
     Coordinate UV beside an image on another map, and for a named map beside the unnamed one on
     a mesh whose active render map is another;
+  - an Attribute node naming a standard attribute of Cycles' that the export does not compute
+    ('N', 'pointiness', 'tangent', 'random_per_island') says it is not read here (it had said
+    "no attribute 'N' on the mesh: its colour reads 0, as in Cycles", where Cycles reads it);
+    one Cycles reads 0 for on a mesh ('density') says so, as in Cycles, as does a Color
+    Attribute node naming a standard name (Cycles reads none, not even the colour attribute);
 """
 import numpy as np
 
@@ -108,3 +113,39 @@ def test_two_uv_maps_read_are_said_several(scene, exported):
     assert "textures on several UV maps ('Detail', the active render map)" in table["OnDetail"], table
     assert "textures on several UV maps ('UVMap', the active render map)" in table["Unnamed"], table
     assert "several" not in table["Same"], table
+
+
+def _attribute_material(name, attribute, output='Color'):
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    a = nt.nodes.new('ShaderNodeAttribute')
+    a.attribute_type, a.attribute_name = 'GEOMETRY', attribute
+    nt.links.new(a.outputs[output], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_standard_attributes_not_read_here_are_said_so(scene, exported):
+    scenes.camera((0, 0, 5))
+    scenes.light('SUN', 3.0)
+    names = ('N', 'pointiness', 'tangent', 'random_per_island')
+    for i, name in enumerate(names):
+        scenes.plane(f"P{i}", location=(3 * i, 0, 0), materials=(_attribute_material(f"M{i}", name),))
+    scenes.plane("Fac", location=(0, 3, 0), materials=(_attribute_material("F", 'N', 'Fac'),))
+    scenes.plane("Density", location=(3, 3, 0), materials=(_attribute_material("D", 'density'),))
+    mat, nt, out = scenes._material("VC")
+    d, vc = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeVertexColor')
+    vc.layer_name = 'generated'
+    nt.links.new(vc.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    scenes.plane("VC", location=(6, 3, 0), materials=(mat,)).data.color_attributes.new('generated', 'FLOAT_COLOR',
+                                                                                        'POINT')
+    text = _text(exported())
+    assert "a Color Attribute node naming 'generated', the name of a Cycles standard attribute, reads no " \
+        "attribute" in text and "its colour reads 0, as in Cycles" in text, text
+    for name in names:
+        assert f"Cycles' standard attribute '{name}' is not read here; its colour reads 0" in text, text
+    assert "Cycles' standard attribute 'N' is not read here; it reads colour 0 and alpha 1" in text, text
+    assert "'density' is the name of a Cycles standard attribute" in text and "reads 0, as in Cycles" in text, text
+    assert "no attribute 'N'" not in text and "standard attribute 'N' is not read here; its colour reads 0, as in " \
+        "Cycles" not in text, text

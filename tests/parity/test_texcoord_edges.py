@@ -11,6 +11,11 @@ reads there (32 x 32, 16 samples; Closest images of a 4 x 4 gradient whose texel
     on points or faces);
   - an Attribute node's Fac of a 2D vector attribute (the UV map 'UVMap') is its x, as Cycles'
     svm_node_attr (it had been the average of (x, y, 0)); of a 3D vector still the average;
+  - an Attribute node (type Geometry) naming a Cycles standard attribute reads it as Cycles
+    does: 'generated' the Generated coordinates, 'uv' the active render UV map (its Fac u); a
+    mesh attribute named 'color' (a volume's standard attribute) reads 0 in Cycles, by an
+    Attribute or a Color Attribute node, as here now (they had read 0, and the mesh's 'color'
+    attribute where there was one);
 """
 from types import SimpleNamespace
 
@@ -192,4 +197,30 @@ def test_attribute_fac_into_an_aov(tmp_path):
     got = {e: np.array([exr[name][b].mean() for b in (BOTTOM_LEFT, (slice(4, 12), slice(20, 28)), TOP_RIGHT)])
            for e, exr in layers.items()}
     assert np.ptp(got['CYCLES']) > 0.2, got
+    assert np.abs(got['DACRT'] - got['CYCLES']).max() < 0.01, got
+
+
+@pytest.mark.parametrize('name,output', [('generated', 'Color'), ('generated', 'Fac'), ('uv', 'Color'),
+                                         ('uv', 'Fac'), ('color', 'Color'), ('color', 'Color Attribute')])
+def test_attribute_standard_names(tmp_path, name, output):
+    """Cycles: 'generated' (0.275, 0.275, 0.5) bottom-left, (0.725, 0.725, 0.5) top-right; 'uv'
+    (0.275, 0.275, 0) / (0.724, 0.725, 0), its Fac 0.275 / 0.724; a mesh attribute 'color' of
+    (0.2, 0.5, 0.8): 0, by an Attribute node or a Color Attribute node (DACRT had read 0 for the
+    first four, (0.2, 0.5, 0.8) for the last two)."""
+    sc, nt, dif = _scene()
+    if output == 'Color Attribute':
+        at, output = nt.nodes.new('ShaderNodeVertexColor'), 'Color'
+        at.layer_name = name
+    else:
+        at = nt.nodes.new('ShaderNodeAttribute')
+        at.attribute_type, at.attribute_name = 'GEOMETRY', name
+    nt.links.new(at.outputs[output], dif.inputs['Color'])
+    if name == 'color':
+        attr = bpy.context.active_object.data.attributes.new('color', 'FLOAT_COLOR', 'POINT')
+        attr.data.foreach_set('color', np.tile([0.2, 0.5, 0.8, 1.0], 4).astype(np.float32))
+    got = _blocks(_render_both(sc, tmp_path), BOTTOM_LEFT, TOP_RIGHT)
+    if name == 'color':
+        assert np.abs(got['CYCLES']).max() < 0.01, got            # (Cycles reads the standard one)
+    else:
+        assert np.ptp(got['CYCLES'][:, 0]) > 0.2, got
     assert np.abs(got['DACRT'] - got['CYCLES']).max() < 0.01, got
