@@ -408,8 +408,9 @@ class Assembly:
             active = self.meshes[key].active_uv if places else ''
             if not active:          # no UV map: both read (0, 0), as in Cycles
                 continue
-            for p in places:
-                for k in self._shown(p.slot_map):
+            # (placements sharing a slot map, 100K instances of one object: looked at once)
+            for slot_map in {id(p.slot_map): p.slot_map for p in places}.values():
+                for k in self._shown(slot_map):
                     entry = several[k]
                     if entry is None or k in said or entry[0] == active:
                         continue
