@@ -110,6 +110,13 @@ def _dim(vertex: int, slot: int) -> int:
 # emits. False does all of that work anyway: the reference the tests compare the skips against.
 SKIP_WORK = True
 
+# Diffuse vertices of the common kind (no textures, translucency, normal maps, shadow
+# terminator, light linking or light groups) are shaded by one native pass
+# (dacrt.shading.shade_bounce) instead of continue_paths, next_event and cosine_scatter with
+# the steps between them: the same numbers. False: always the general steps (the tests
+# compare the two).
+FUSED_BOUNCE = True
+
 # Pass sizing: a pass should take ~0.8 s (progressive updates, cancel within a second) while
 # keeping batches large enough for the tracer: DACRT re-partitions the triangles for every
 # batch, so the first pass holds at least _FIRST_PATHS_PER_TRIANGLE paths per triangle
@@ -318,6 +325,7 @@ class Integrator:
         self._fixed_paths = None if paths_per_pass is None else max(1, int(paths_per_pass))
         self._rays = {'camera': 0, 'bounce': 0, 'shadow': 0}
         self._skipped_shadow = 0        # light samples that could not contribute: no ray traced
+        self._fused_scene = None        # whether diffuse vertices may take one native pass (_fused)
         self._samples_skipped = 0       # (pixel, sample) paths adaptive sampling did not take
         # bounce rays not traced, by reason: the surface is black, Russian roulette, the last
         # BSDF ray could only find emission and nothing emits, the direction is below the surface
@@ -1014,6 +1022,9 @@ class Integrator:
         u_pick = u_rr = None
         if need_pick or k >= 2:
             u_pick, u_rr = self.rng.uniform_pick(path.keys, _dim(k, 0))
+        if self._fused(path, sinks, k):
+            return self._diffuse_vertex(k, path, hits, hit, sinks, u_pick if need_pick else None,
+                                        u_rr if k >= 2 else None)
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
         # (their barycentrics too where textures need them)
         tex = self._albedo_varies
@@ -1082,6 +1093,54 @@ class Integrator:
             return None
         return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb, gb=gb,
                       N=ns if self.lights.tree is not None else None)
+
+    def _fused(self, path, sinks, k):
+        """Whether vertex k of these paths is shaded by _diffuse_vertex: lit diffuse surfaces
+        with none of what only the general steps do (per scene: textures, translucency, normal
+        maps, the shadow terminator, light linking, textured emission; per bounce: light
+        groups, transparent or glass surfaces passed, a share of light sampling, the world
+        past its Max Bounces)."""
+        if self._fused_scene is None:
+            t = self.tri
+            self._fused_scene = bool(
+                FUSED_BOUNCE and self.lights and not self._albedo_varies and not self._bumped
+                and not self._any_translucent and not t.terminator and t.term_cutoff is None
+                and t.term_freq is None and self._link is None and self._shadow_link is None
+                and self._tri_emit_tex is None)
+        return (self._fused_scene and path.tb is None and path.gb is None and path.nee is None
+                and not sinks.groups
+                and not (self.lights.environment is not None and k > self._world_max_bounces))
+
+    def _diffuse_vertex(self, k, path, hits, hit, sinks, u_pick, u_rr):
+        """_vertex's shading of vertex k (survival, light sampling, the bounce) in one native
+        pass (dacrt.shading.shade_bounce), the same numbers as its general steps; then the
+        shadow rays. Returns the paths that go on."""
+        last = k == self.max_bounces and not self.lights.seen_by_bsdf and SKIP_WORK
+        t = self.tri
+        black, rr, (thr, (_, _, ns, P_off), prim, pid, keys, _), nee, bsdf = dacrt.shading.shade_bounce(
+            self._light_choice_at(k), hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_scatter,
+            path.thr, u_rr, t.geo, t.normals, path.D, path.pid, path.keys, u_pick, self.rng.dim_words(_dim(k, 1)),
+            _END_SHORTEN, SKIP_WORK, None if last else self.rng.dim_words(_dim(k, 2)))
+        self._ended['black'] += black
+        self._ended['roulette'] += rr
+        if len(pid) == 0:
+            return None
+        del hits, path
+        value, contrib, rays, send, skip, skipped = nee
+        self._shadows(k, pid, value, contrib, rays, send, skip, skipped, sinks.sampled(k))
+        if last:
+            self._ended['last_bounce'] += len(pid)
+            return None                               # the last BSDF ray could only find emission
+        wi, pdf, ok, rays = bsdf
+        if not ok.all():
+            self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
+            kept = np.flatnonzero(ok)
+            P_off, wi, thr, pid, keys, pdf, prim, ns = compact(kept, P_off, wi, thr, pid, keys, pdf, prim, ns)
+            rays = None                                # repacked with the survivors' ids
+        if len(pid) == 0:
+            return None
+        return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays,
+                     N=ns if self.lights.tree is not None else None)
 
     # --- surfaces -------------------------------------------------------------------------------
 
@@ -2103,6 +2162,12 @@ class Integrator:
             off = np.flatnonzero(entry == self.lights.num_entries - 1)     # (the map is the last entry)
             value[:, off] = 0.0
             contrib[off] = False
+        self._shadows(k, pid, value, contrib, rays, send, skip, skipped, L, tb, entry, groups)
+
+    def _shadows(self, k, pid, value, contrib, rays, send, skip, skipped, L, tb=None, entry=None, groups=()):
+        """Next-event estimation's shadow rays (next_event's rays, send, skip) traced as one
+        batch (per shadow-linked set), and the samples they do not block (value, contrib) added
+        to L at the paths pid (and each light group's share, by the entry each picked)."""
         self._skipped_shadow += skipped
         if len(send) and self._shadow_link is not None:
             # shadow linking: each set's rays against its own blockers (set 0: every object)

@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "bindargs.h"
+#include "bounce.h"
+#include "shading.h"
 #include "environment.h"
 #include "lamps.h"
 #include "nextevent.h"
@@ -423,6 +425,130 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     return py::make_tuple(m, bad);
 }
 
+// A diffuse vertex shaded in one pass (bounce.h): survivors, their throughputs and surface
+// points, light samples with shadow rays and (scatter) bounce directions with their rays. The
+// lights as next_event_py takes them; ray_dtype: the records' dtype for the rays created here.
+py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_style> cdf, F32Array prob,
+                          py::array_t<bool, py::array::c_style> no_mis, py::array_t<bool, py::array::c_style> shadow,
+                          py::object tri_geo, py::object tri_area, py::object tri_emission, py::object env,
+                          py::object tree, py::object tri_prim, py::array hits, py::array_t<bool, py::array::c_style> hit,
+                          py::array_t<bool, py::array::c_style> live, F32Array albedo, py::object thr, py::object u_rr,
+                          F32Array geo, py::object normals, F32Array D, I64Array pid,
+                          py::array_t<uint32_t, py::array::c_style> keys, py::object pick, uint32_t nee_ka,
+                          uint32_t nee_kb, float shorten, bool skip_work, bool scatter, uint32_t ka, uint32_t kb,
+                          py::object ray_dtype) {
+    F32Array keep[3];
+    std::shared_ptr<EnvironmentMap> env_keep;
+    LightChoice lights =
+        light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
+    if (!tree.is_none()) {
+        lights.tree = tree.cast<const LightTree*>();
+        if (lights.tree->key_bound() > lights.entries)
+            throw py::value_error("the light tree's keys must be entries of the light choice (0.." +
+                                  std::to_string(lights.entries - 1) + ")");
+    }
+    I32Array tri_prim_keep;
+    if (!tri_prim.is_none()) {
+        tri_prim_keep = tri_prim.cast<I32Array>();
+        need_shape(tri_prim_keep, 0, lights.num_tris, "tri_prim");
+        lights.tri_prim = tri_prim_keep.data();
+    }
+    BounceIn in{};
+    in.n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
+    const size_t n = in.n;
+    if (hits.ndim() != 1 || hits.itemsize() != sizeof(Hit) || !(hits.flags() & py::array::c_style))
+        throw py::value_error("hits must be a contiguous (n,) array of " + std::to_string(sizeof(Hit)) +
+                              "-byte records");
+    in.hits = static_cast<const Hit*>(hits.data());
+    need_shape(hit, 0, n, "hit");
+    in.hit = reinterpret_cast<const uint8_t*>(hit.data());
+    if (live.ndim() != 1) throw py::value_error("live must be one-dimensional");
+    in.M = size_t(live.shape(0));
+    in.live = reinterpret_cast<const uint8_t*>(live.data());
+    need_shape(albedo, 3, in.M, "albedo");
+    in.albedo = albedo.data();
+    F32Array thr_keep, rr_keep, nrm_keep;
+    in.thr = optional_f32(thr, 3, n, "thr", thr_keep);
+    in.u_rr = optional_f32(u_rr, 0, n, "u_rr", rr_keep);
+    need_shape(geo, 15, in.M, "geo");
+    in.geo = geo.data();
+    in.normals = optional_f32(normals, 9, in.M, "normals", nrm_keep);
+    need_shape(D, 3, n, "D");
+    in.D = D.data();
+    need_shape(pid, 0, n, "pid");
+    in.pid = pid.data();
+    need_shape(keys, 2, n, "keys");
+    in.keys = keys.data();
+    py::array_t<double, py::array::c_style> pick_keep;
+    if (!pick.is_none()) {
+        pick_keep = pick.cast<py::array_t<double, py::array::c_style>>();
+        need_shape(pick_keep, 0, n, "pick");
+        in.pick = pick_keep.data();
+    } else if (lights.entries > 1) {
+        throw py::value_error("pick (the light-choice uniforms) is needed with more than one light");
+    }
+    in.nee_ka = nee_ka, in.nee_kb = nee_kb, in.shorten = shorten, in.skip_work = skip_work;
+    in.scatter = scatter, in.ka = ka, in.kb = kb;
+    const py::dtype rd = py::dtype::from_args(ray_dtype);
+    if (size_t(rd.itemsize()) != sizeof(Ray)) throw py::value_error("ray_dtype must describe the tracer's ray records");
+    I64Array idx{py::ssize_t(n)};
+    size_t k, black, rr;
+    {
+        py::gil_scoped_release nogil;
+        k = survivors(in.hits, in.hit, n, in.live, in.M, in.thr, in.u_rr, idx.mutable_data(), &black, &rr);
+    }
+    const py::ssize_t K = py::ssize_t(k);
+    F32Array thr_out({py::ssize_t(3), K}), surf({py::ssize_t(in.normals ? 12 : 9), K});
+    I32Array prim{K};
+    I64Array pid_out{K};
+    py::array_t<uint32_t> keys_out({py::ssize_t(2), K});
+    py::object pick_out = py::none();
+    py::array_t<double> pick_arr;
+    if (in.pick) {
+        pick_arr = py::array_t<double>(K);
+        pick_out = pick_arr;
+    }
+    F32Array value({py::ssize_t(3), K});
+    py::array_t<bool> contrib{K};
+    py::array shadow_rays(rd, std::vector<py::ssize_t>{K});
+    I64Array send{K};
+    I32Array skip{K};
+    F32Array wi, pdf;
+    py::array_t<bool> ok;
+    py::array rays;
+    BounceOut out{};
+    out.thr = thr_out.mutable_data();
+    out.surf = surf.mutable_data();
+    out.prim = prim.mutable_data();
+    out.pid = pid_out.mutable_data();
+    out.keys = keys_out.mutable_data();
+    out.pick = in.pick ? pick_arr.mutable_data() : nullptr;
+    out.nee.value = value.mutable_data();
+    out.nee.contrib = reinterpret_cast<uint8_t*>(contrib.mutable_data());
+    out.nee.rays = static_cast<Ray*>(shadow_rays.mutable_data());
+    out.nee.send = send.mutable_data();
+    out.nee.skip = skip.mutable_data();
+    if (scatter) {
+        wi = F32Array({py::ssize_t(3), K});
+        pdf = F32Array(K);
+        ok = py::array_t<bool>(K);
+        rays = py::array(rd, std::vector<py::ssize_t>{K});
+        out.wi = wi.mutable_data();
+        out.pdf = pdf.mutable_data();
+        out.ok = reinterpret_cast<uint8_t*>(ok.mutable_data());
+        out.rays = static_cast<Ray*>(rays.mutable_data());
+    }
+    size_t m, bad;
+    {
+        py::gil_scoped_release nogil;
+        m = shade_bounce(in, lights, idx.data(), k, out, &bad);
+    }
+    py::tuple paths = py::make_tuple(thr_out, surf, prim, pid_out, keys_out, pick_out);
+    py::tuple nee = py::make_tuple(value, contrib, shadow_rays, send, skip, m, bad);
+    py::object bsdf = scatter ? py::object(py::make_tuple(wi, pdf, ok, rays)) : py::object(py::none());
+    return py::make_tuple(black, rr, paths, nee, bsdf);
+}
+
 void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_t<bool, py::array::c_style> mask,
                           float clamp) {
     check_clamp(clamp);
@@ -574,6 +700,12 @@ void register_lamps(py::module_& m) {
         .def("gather", &environment_gather_py, py::arg("prob"), py::arg("D"), py::arg("miss"), py::arg("thr"),
              py::arg("pdf_bsdf"), py::arg("pid"), py::arg("L"),
              py::arg("clamp") = std::numeric_limits<float>::infinity());
+    m.def("shade_bounce", &shade_bounce_py, py::arg("records"), py::arg("cdf"), py::arg("prob"), py::arg("no_mis"),
+          py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"),
+          py::arg("tree"), py::arg("tri_prim"), py::arg("hits"), py::arg("hit"), py::arg("live"), py::arg("albedo"),
+          py::arg("thr"), py::arg("u_rr"), py::arg("geo"), py::arg("normals"), py::arg("D"), py::arg("pid"),
+          py::arg("keys"), py::arg("pick"), py::arg("nee_ka"), py::arg("nee_kb"), py::arg("shorten"),
+          py::arg("skip_work"), py::arg("scatter"), py::arg("ka"), py::arg("kb"), py::arg("ray_dtype"));
     m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"),
           py::arg("clamp") = std::numeric_limits<float>::infinity());
 }

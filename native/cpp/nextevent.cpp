@@ -20,14 +20,6 @@ namespace dacrt {
 
 namespace {
 
-constexpr size_t kBlock = 4096;  // paths per block: blocks compact their shadow rays on their own
-
-struct Pending {  // a shadow ray before its block's place in the output is known
-    Ray ray;
-    int64_t path;
-    int32_t skip;  // the triangle it leaves, or -1 when it is meant to be able to hit it
-};
-
 // AREAS: some lamp is drawn lane by lane (area_lanes_apply): its points are drawn first per chunk
 // (draw_chunk). Without, the loop is that of one point at a time only: the chunk's arrays and
 // its pass picking the entries first had cost scenes without area lamps ~11%.
@@ -178,18 +170,21 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
 
 }  // namespace
 
-size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped) {
-    const size_t n = pts.n, blocks = (n + kBlock - 1) / kBlock;
-    std::unique_ptr<Pending[]> pending(new Pending[n ? n : 1]);
-    std::vector<size_t> count(blocks), bad(blocks), offset(blocks);
-    bool areas = false;  // area lamps' samples are drawn kLampLanes points at a time
+bool draws_area_lanes(const LightChoice& lights) {
+    bool areas = false;
     for (size_t k = 0; k < lights.num_lamps; ++k) areas |= area_lanes_apply(lights.lamps[k]);
+    return areas;
+}
+
+size_t event_range(const LightChoice& lights, bool areas, const VertexPoints& pts, const NextEventOut& out,
+                   Pending* pending, size_t b, size_t e, size_t* skipped) {
     const auto block = areas ? event_block<true> : event_block<false>;
-    parallel_for(blocks, [&](size_t b0, size_t b1) {
-        for (size_t k = b0; k < b1; ++k)
-            count[k] = block(lights, pts, out.value, out.contrib, out.entry, out.point, pending.get(), k * kBlock,
-                             std::min(n, (k + 1) * kBlock), &bad[k]);
-    }, 1);
+    return block(lights, pts, out.value, out.contrib, out.entry, out.point, pending, b, e, skipped);
+}
+
+size_t place_shadow_rays(const Pending* pending, const NextEventOut& out, size_t blocks, const std::vector<size_t>& count,
+                         const std::vector<size_t>& bad, size_t* skipped) {
+    std::vector<size_t> offset(blocks);
     size_t m = 0, skip_count = 0;
     for (size_t k = 0; k < blocks; ++k) {
         offset[k] = m;
@@ -198,7 +193,7 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
     }
     parallel_for(blocks, [&](size_t b0, size_t b1) {
         for (size_t k = b0; k < b1; ++k) {
-            const Pending* src = pending.get() + k * kBlock;
+            const Pending* src = pending + k * kEventBlock;
             for (size_t j = 0; j < count[k]; ++j) {
                 const size_t d = offset[k] + j;
                 out.rays[d] = src[j].ray;
@@ -210,6 +205,19 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
     }, 16);
     *skipped = skip_count;
     return m;
+}
+
+size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped) {
+    const size_t n = pts.n, blocks = (n + kEventBlock - 1) / kEventBlock;
+    std::unique_ptr<Pending[]> pending(new Pending[n ? n : 1]);
+    std::vector<size_t> count(blocks), bad(blocks);
+    const bool areas = draws_area_lanes(lights);  // area lamps' samples are drawn kLampLanes points at a time
+    parallel_for(blocks, [&](size_t b0, size_t b1) {
+        for (size_t k = b0; k < b1; ++k)
+            count[k] = event_range(lights, areas, pts, out, pending.get(), k * kEventBlock,
+                                   std::min(n, (k + 1) * kEventBlock), &bad[k]);
+    }, 1);
+    return place_shadow_rays(pending.get(), out, blocks, count, bad, skipped);
 }
 
 bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n,

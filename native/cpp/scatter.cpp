@@ -33,27 +33,33 @@ void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb,
     }, size_t(1) << 16);
 }
 
+void scatter_range(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
+                   float* wi, float* pdf, uint8_t* ok, const float* O, Ray* rays, const ShadingOffset* offset,
+                   size_t begin, size_t end) {
+    for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* wa, const uint32_t* wb) {
+        scatter_lanes(wa, wb, m, ns + i0, ns + n + i0, ns + 2 * n + i0, ng ? ng + i0 : nullptr,
+                      ng ? ng + n + i0 : nullptr, ng ? ng + 2 * n + i0 : nullptr, wi + i0, wi + n + i0,
+                      wi + 2 * n + i0, pdf + i0, ok + i0);
+        if (!offset && !rays) return;
+        for (size_t i = i0; i < i0 + m; ++i) {
+            if (offset && ok[i]) {
+                const float f = offset->freq[index_at(offset->prim, i, offset->M)];
+                const float c = ns[i] * wi[i] + ns[n + i] * wi[n + i] + ns[2 * n + i] * wi[2 * n + i];
+                if (f > 1.0f) {
+                    const float s = c > 0 ? shift_cos_in(c, f) : 0.0f;
+                    for (int a = 0; a < 3; ++a) offset->thr[size_t(a) * n + i] *= s;
+                }
+            }
+            if (rays)  // the bounce rays' records, ready for the tracer
+                ray_record(O, wi, n, i, std::numeric_limits<float>::infinity(), rays[i]);
+        }
+    });
+}
+
 void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
                     float* wi, float* pdf, uint8_t* ok, const float* O, Ray* rays, const ShadingOffset* offset) {
     parallel_for(n, [&](size_t begin, size_t end) {
-        for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* wa, const uint32_t* wb) {
-            scatter_lanes(wa, wb, m, ns + i0, ns + n + i0, ns + 2 * n + i0, ng ? ng + i0 : nullptr,
-                          ng ? ng + n + i0 : nullptr, ng ? ng + 2 * n + i0 : nullptr, wi + i0, wi + n + i0,
-                          wi + 2 * n + i0, pdf + i0, ok + i0);
-            if (!offset && !rays) return;
-            for (size_t i = i0; i < i0 + m; ++i) {
-                if (offset && ok[i]) {
-                    const float f = offset->freq[index_at(offset->prim, i, offset->M)];
-                    const float c = ns[i] * wi[i] + ns[n + i] * wi[n + i] + ns[2 * n + i] * wi[2 * n + i];
-                    if (f > 1.0f) {
-                        const float s = c > 0 ? shift_cos_in(c, f) : 0.0f;
-                        for (int a = 0; a < 3; ++a) offset->thr[size_t(a) * n + i] *= s;
-                    }
-                }
-                if (rays)  // the bounce rays' records, ready for the tracer
-                    ray_record(O, wi, n, i, std::numeric_limits<float>::infinity(), rays[i]);
-            }
-        });
+        scatter_range(keys, n, ka, kb, ns, ng, wi, pdf, ok, O, rays, offset, begin, end);
     }, size_t(1) << 15);
 }
 

@@ -138,6 +138,10 @@ struct ShadingOffset {
 void cosine_scatter(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
                     float* wi, float* pdf, uint8_t* ok, const float* O = nullptr, Ray* rays = nullptr,
                     const ShadingOffset* offset = nullptr);
+// cosine_scatter's directions [begin, end) on the calling thread.
+void scatter_range(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,
+                   float* wi, float* pdf, uint8_t* ok, const float* O, Ray* rays, const ShadingOffset* offset,
+                   size_t begin, size_t end);
 
 }  // namespace dacrt
 
@@ -206,6 +210,10 @@ void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t 
                          const int64_t* idx, size_t k, float* thr_out, const float* geo = nullptr,
                          const float* normals = nullptr, const float* D = nullptr, float* surf_out = nullptr,
                          int32_t* prim_out = nullptr);
+// survivor_throughput's survivors [b, e) on the calling thread.
+void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
+                    const int64_t* idx, size_t k, float* thr_out, const float* geo, const float* normals,
+                    const float* D, float* surf_out, int32_t* prim_out, size_t b, size_t e);
 
 // Emission that rays (origins O, unit directions D: 3 rows, stride n) meet on emissive triangles
 // (two-sided), added to L (3 rows, stride N) at column pid[i] (distinct per ray). Rays with

@@ -51,33 +51,39 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
     return k;
 }
 
+void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
+                    const int64_t* idx, size_t k, float* thr_out, const float* geo, const float* normals,
+                    const float* D, float* surf_out, int32_t* prim_out, size_t b, size_t e) {
+    for (size_t j = b; j < e; ++j) {
+        const size_t i = size_t(idx[j]);
+        const Hit& h = hits[i];
+        const size_t p = prim_at(h, M);  // checked by the first pass, but the caller's array
+        const float q = roulette ? survival(thr, n, i) : 1.0f;
+        const float inv_q = q > 0 ? 1.0f / q : 1.0f;
+        for (int a = 0; a < 3; ++a) {
+            float t = thr ? thr[size_t(a) * n + i] : 1.0f;
+            if (roulette) t = t * inv_q;
+            thr_out[size_t(a) * k + j] = albedo[size_t(a) * M + p] * t;
+        }
+        if (!geo) continue;
+        const float d[3] = {D[i], D[n + i], D[2 * n + i]};
+        SurfacePoint sp;
+        surface_point(geo, M, normals, h, d, sp);  // survivors have 0 <= prim < M
+        for (int a = 0; a < 3; ++a) {
+            surf_out[size_t(a) * k + j] = sp.P[a];
+            surf_out[size_t(3 + a) * k + j] = sp.ng[a];
+            surf_out[size_t(6 + a) * k + j] = sp.P_off[a];
+            if (normals) surf_out[size_t(9 + a) * k + j] = sp.ns[a];
+        }
+        prim_out[j] = int32_t(p);
+    }
+}
+
 void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                          const int64_t* idx, size_t k, float* thr_out, const float* geo, const float* normals,
                          const float* D, float* surf_out, int32_t* prim_out) {
     parallel_for(k, [&](size_t b, size_t e) {
-        for (size_t j = b; j < e; ++j) {
-            const size_t i = size_t(idx[j]);
-            const Hit& h = hits[i];
-            const size_t p = prim_at(h, M);  // checked by the first pass, but the caller's array
-            const float q = roulette ? survival(thr, n, i) : 1.0f;
-            const float inv_q = q > 0 ? 1.0f / q : 1.0f;
-            for (int a = 0; a < 3; ++a) {
-                float t = thr ? thr[size_t(a) * n + i] : 1.0f;
-                if (roulette) t = t * inv_q;
-                thr_out[size_t(a) * k + j] = albedo[size_t(a) * M + p] * t;
-            }
-            if (!geo) continue;
-            const float d[3] = {D[i], D[n + i], D[2 * n + i]};
-            SurfacePoint sp;
-            surface_point(geo, M, normals, h, d, sp);  // survivors have 0 <= prim < M
-            for (int a = 0; a < 3; ++a) {
-                surf_out[size_t(a) * k + j] = sp.P[a];
-                surf_out[size_t(3 + a) * k + j] = sp.ng[a];
-                surf_out[size_t(6 + a) * k + j] = sp.P_off[a];
-                if (normals) surf_out[size_t(9 + a) * k + j] = sp.ns[a];
-            }
-            prim_out[j] = int32_t(p);
-        }
+        survivor_range(hits, n, albedo, M, thr, roulette, idx, k, thr_out, geo, normals, D, surf_out, prim_out, b, e);
     });
 }
 

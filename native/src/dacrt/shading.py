@@ -301,6 +301,39 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
 
 
+def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, normals, D, pid, keys, pick,
+                 nee_words, shorten: float = 1.0, skip_work: bool = True, scatter_words=None):
+    """A diffuse path vertex in one native pass, block by block: continue_paths(hits, hit, live,
+    albedo, thr, u_rr, surface=(geo, normals, D), take=(pid, keys, pick)), then next_event at
+    the survivors (lights, their P, P_off, ns, ng (None where normals is None), thr, keys,
+    pick and prim, dimension words nee_words = (ka, kb), shorten, skip_work; no terminator,
+    linking or bump) and, with scatter_words = (ka, kb), cosine_scatter(keys, ka, kb, ns, ng,
+    origins=P_off) of the survivors: the same bits as those three calls.
+
+    Returns (black, roulette, (thr, (P, ng, ns, P_off), prim, pid, keys, pick), (value, contrib,
+    rays, send, skip, skipped) as next_event's, (wi, pdf, ok, rays) as cosine_scatter's or None
+    without scatter_words)."""
+    hits = np.asarray(hits)
+    if hits.dtype != HIT_DTYPE:
+        raise ValueError(f"hits must be a HIT_DTYPE array, got {hits.dtype}")
+    ka, kb = scatter_words if scatter_words is not None else (0, 0)
+    black, rr, paths, nee, bsdf = _core.shade_bounce(
+        lights.records, lights.cdf, lights.prob, lights.no_mis, lights.shadow, lights.tri_geo, lights.tri_area,
+        lights.tri_emission, lights.environment, lights.tree, lights.tri_prim, np.ascontiguousarray(hits),
+        np.ascontiguousarray(hit, np.bool_), np.ascontiguousarray(live, np.bool_), _rows(albedo, 3, "albedo"),
+        None if thr is None else _rows(thr, 3, "thr"), None if u_rr is None else np.ascontiguousarray(u_rr, _F32),
+        _rows(geo, 15, "geo"), None if normals is None else _rows(normals, 9, "normals"), _rows(D, 3, "D"),
+        np.ascontiguousarray(pid, np.int64), _rows(keys, 2, "keys", np.uint32),
+        None if pick is None else np.ascontiguousarray(pick, np.float64), int(nee_words[0]), int(nee_words[1]),
+        float(shorten), bool(skip_work), scatter_words is not None, int(ka), int(kb), RAY_DTYPE)
+    thr_out, surf, prim, pid_out, keys_out, pick_out = paths
+    ng = surf[3:6]
+    points = (surf[0:3], ng, ng if normals is None else surf[9:12], surf[6:9])
+    value, contrib, rays, send, skip, m, skipped = nee
+    return (black, rr, (thr_out, points, prim, pid_out, keys_out, pick_out),
+            (value, contrib, rays[:m], send[:m], skip[:m], skipped), bsdf)
+
+
 def _terminator(t):
     if t is None:
         return None

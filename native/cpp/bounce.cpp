@@ -1,0 +1,68 @@
+// A diffuse path vertex shaded in one pass (see bounce.h).
+#include "bounce.h"
+
+#include <algorithm>
+#include <atomic>
+#include <memory>
+#include <vector>
+
+#include "parallel.h"
+#include "shading.h"
+
+namespace dacrt {
+
+size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t* idx, size_t k,
+                    const BounceOut& out, size_t* skipped) {
+    const size_t n = in.n, blocks = (k + kEventBlock - 1) / kEventBlock;
+    float* surf = out.surf;
+    const float* ng = surf + 3 * k;
+    const float* P_off = surf + 6 * k;
+    const float* ns = in.normals ? surf + 9 * k : ng;
+    VertexPoints pts{};
+    pts.P = surf;
+    pts.P_off = P_off;
+    pts.ns = ns;
+    pts.ng = in.normals ? ng : nullptr;  // (flat: ns is ng)
+    pts.thr = out.thr;
+    pts.keys = out.keys;
+    pts.ka = in.nee_ka;
+    pts.kb = in.nee_kb;
+    pts.pick = out.pick;
+    pts.prim = out.prim;
+    pts.n = k;
+    pts.shorten = in.shorten;
+    pts.skip_work = in.skip_work;
+    const bool areas = draws_area_lanes(lights);
+    std::unique_ptr<Pending[]> pending(new Pending[k ? k : 1]);
+    std::vector<size_t> count(blocks), bad(blocks);
+    auto block = [&](size_t q) {
+        const size_t b = q * kEventBlock, e = std::min(k, b + kEventBlock);
+        survivor_range(in.hits, n, in.albedo, in.M, in.thr, in.u_rr != nullptr, idx, k, out.thr, in.geo, in.normals,
+                       in.D, surf, out.prim, b, e);
+        for (size_t j = b; j < e; ++j) {  // the path columns the survivors keep
+            const size_t i = size_t(idx[j]);
+            out.pid[j] = in.pid[i];
+            out.keys[j] = in.keys[i];
+            out.keys[k + j] = in.keys[n + i];
+            if (out.pick) out.pick[j] = in.pick[i];
+        }
+        count[q] = event_range(lights, areas, pts, out.nee, pending.get(), b, e, &bad[q]);
+        if (in.scatter)
+            scatter_range(out.keys, k, in.ka, in.kb, ns, in.normals ? ng : nullptr, out.wi, out.pdf, out.ok, P_off,
+                          out.rays, nullptr, b, e);
+    };
+    // blocks to whichever worker is free: one descheduled worker (a busy machine) does not
+    // hold the pass back by its share
+    const int workers = int(std::min<size_t>(size_t(default_threads()), blocks));
+    if (workers <= 1) {
+        for (size_t q = 0; q < blocks; ++q) block(q);
+    } else {
+        std::atomic<size_t> next{0};
+        run_workers(workers, [&](int) {
+            for (size_t q; (q = next.fetch_add(1, std::memory_order_relaxed)) < blocks;) block(q);
+        });
+    }
+    return place_shadow_rays(pending.get(), out.nee, blocks, count, bad, skipped);
+}
+
+}  // namespace dacrt

@@ -1,0 +1,70 @@
+"""Diffuse vertices shaded by one native pass (Integrator._diffuse_vertex, dacrt.shading.shade_bounce)
+give the image the general steps give (continue_paths, next_event, cosine_scatter and the steps
+between them): the same random numbers in the same order, the same float32 operations, so the
+same bits."""
+import numpy as np
+import pytest
+
+import dacrt
+import addon.integrator as integrator_module
+
+from .scenes import (ALL_VIS, cornell_box, geometry, icosphere, light, material, ortho_down, plane_scene, render,
+                     translation)
+
+
+def _both(scene, monkeypatch):
+    """(fused, general) renders of scene, and how many vertices the fused one shaded."""
+    calls = []
+    fused_pass = dacrt.shading.shade_bounce
+    monkeypatch.setattr(dacrt.shading, 'shade_bounce', lambda *a, **k: calls.append(1) or fused_pass(*a, **k))
+    fused = render(scene)
+    monkeypatch.setattr(integrator_module, 'FUSED_BOUNCE', False)
+    general = render(scene)
+    return fused, general, len(calls)
+
+
+def _same(fused, general):
+    assert np.array_equal(fused.film.combined(), general.film.combined())
+    assert fused.stats['rays'] == general.stats['rays']
+    assert fused.stats['skipped'] == general.stats['skipped']
+
+
+@pytest.mark.parametrize('area_light', [True, False])
+def test_cornell_box_is_bit_identical(monkeypatch, area_light):
+    """An area lamp (its lanes), or an emissive quad (triangle samples, MIS with BSDF hits)."""
+    fused, general, calls = _both(cornell_box(40, 30, 16, 4, area_light=area_light), monkeypatch)
+    assert calls > 0
+    _same(fused, general)
+    assert fused.film.combined()[..., :3].mean() > 0
+
+
+def test_several_lights_and_a_light_tree_are_bit_identical(monkeypatch):
+    """Light choice by pick (several entries) and by the tree; roulette past bounce 2."""
+    scene = cornell_box(40, 30, 16, 6, area_light=True)
+    scene.lights += [light('POINT', 5.0, translation(0.2, 0.3, 0.7)),
+                     light('SPOT', 30.0, translation(0.8, 0.5, 0.9), spot_size=np.radians(60.0))]
+    for tree in (True, False):
+        scene.settings.use_light_tree = tree
+        fused, general, calls = _both(scene, monkeypatch)
+        monkeypatch.setattr(integrator_module, 'FUSED_BOUNCE', True)
+        assert calls > 0
+        _same(fused, general)
+
+
+def test_smooth_normals_and_black_surfaces_are_bit_identical(monkeypatch):
+    """Interpolated shading normals (directions below the geometric surface are dropped) and
+    paths that end on a black surface."""
+    v, t = icosphere(0.3, 2, (0.0, 0.0, 0.3))
+    c = v[t] - np.array([0.0, 0.0, 0.3])              # the sphere's normal at each corner
+    base = plane_scene([light('AREA', 30.0, translation(0.4, 0.0, 1.5), size_x=0.5, size_y=0.5)], samples=8,
+                       max_bounces=3)
+    plane = base.geometry
+    both = geometry([(plane.vertices, plane.triangles, 2, ALL_VIS), (v, t, 1, ALL_VIS)])
+    both.normals[len(plane.triangles):] = c / np.linalg.norm(c, axis=2, keepdims=True)
+    base.geometry = both
+    base.materials = [material('default'), material('ball', (0.7, 0.6, 0.5)), material('black', (0.0, 0.0, 0.0))]
+    base.camera = ortho_down(height=2.0, width=32, px=32, view=1.2)
+    fused, general, calls = _both(base, monkeypatch)
+    assert calls > 0
+    _same(fused, general)
+    assert fused.stats['skipped']['detail']['bounce_rays_black'] > 0
