@@ -318,20 +318,20 @@ class Exporter:
         return vis
 
     def _in_holdout_collection(self, ob):
-        """Whether the view layer holds out a collection of the object (Holdout set on it or a
-        parent layer collection), as Cycles reads it. Not Object.holdout_get: it also ORs in
-        the original object's own Holdout, the file's value, which an animation render does not
-        update (a wall keyed to become held out at frame 3 was held out from frame 1 on)."""
+        """Whether the view layer holds out a collection of the object (Holdout set on that
+        layer collection itself: not inherited by its children, as Blender's bases take it), as
+        Cycles reads it. Not Object.holdout_get: it also ORs in the original object's own
+        Holdout, the file's value, which an animation render does not update (a wall keyed to
+        become held out at frame 3 was held out from frame 1 on)."""
         if self._held_collections is None:
-            held, stack = set(), [(self.view_layer.layer_collection, False)]
+            held, stack = set(), [self.view_layer.layer_collection]
             while stack:
-                lc, on = stack.pop()
-                if lc.exclude:
+                lc = stack.pop()
+                if lc.exclude:          # (its children are out of the view layer too)
                     continue
-                on = on or lc.holdout
-                if on:
+                if lc.holdout:
                     held.add(lc.collection.original.as_pointer())
-                stack.extend((c, on) for c in lc.children)
+                stack.extend(lc.children)
             self._held_collections = held
         if not self._held_collections:
             return False
