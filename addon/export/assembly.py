@@ -756,8 +756,8 @@ class Assembly:
 
 
 def _procedurals(material):
-    """The material's procedural textures (its colour's, its emission's, its AOVs')."""
-    textures = [material.texture, getattr(material, 'emission_texture', None)] + \
+    """The material's procedural textures (its colour's, its emission's, its opacity's, its AOVs')."""
+    textures = [material.texture, getattr(material, 'emission_texture', None), getattr(material, 'opacity', None)] + \
         [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
     return [t for t in textures if isinstance(t, ProceduralTexels)]
 
@@ -768,6 +768,6 @@ def _object_info_read(material):
 
 
 def _coordinates_read(material, kinds=frozenset({'generated', 'object'})):
-    """Whether a procedural texture of the material (its colour's, emission's or an AOV's) reads Generated or
+    """Whether a procedural texture of the material (its colour's, emission's, opacity's or an AOV's) reads Generated or
     Object coordinates (or those of `kinds`)."""
     return any(t.needs & kinds for t in _procedurals(material))

@@ -561,7 +561,17 @@ class MaterialBuilder:
             if closure.glass.any():
                 glass = np.nan_to_num(closure.glass, nan=0.0, posinf=0.0, neginf=0.0)
                 refraction = np.minimum(np.maximum(glass, 0.0), transparency).astype(np.float32)
-            if closure.opacity is not None:
+            if closure.opacity is not None and isinstance(closure.opacity[0].pixels, ProceduralTexels):
+                # computed per shading point (_procedural_cutout, _procedural_alpha): the
+                # opacity in R, G and B as an image's is
+                tex, inverted = closure.opacity
+                opacity = tex.pixels if not inverted else tex.pixels.followed_by(lambda o: 1.0 - o)
+                if closure.opaque_glass.any():
+                    opaque_refraction = _nonnegative(closure.opaque_glass.astype(np.float32), "transmission",
+                                                     reasons)
+                if emission.any():
+                    reasons.append("emission under a procedural alpha is not dimmed by it for light sampling")
+            elif closure.opacity is not None:
                 tex, inverted = closure.opacity
                 a = tex.pixels[..., 3:4]
                 if not np.isfinite(a).all():
@@ -601,7 +611,7 @@ class MaterialBuilder:
         # image on a named map it reads that map too (it had, silently: a gradient across the
         # other map's direction, 0.45 / 0.45 where Cycles gives 0.11 / 0.79)
         # (an image inside such a chain reads its own map, named in uv_names: not the active one)
-        procedurals = [texture, e_tex] + [t.pixels for t in aov_textures.values()]
+        procedurals = [texture, e_tex, opacity] + [t.pixels for t in aov_textures.values()]
         if uv_names and any(isinstance(t, ProceduralTexels) and TEXCOORD_UV in t.needs for t in procedurals):
             uv_names = list(dict.fromkeys(uv_names + ['']))
         self._uv_several = None
@@ -813,6 +823,8 @@ class MaterialBuilder:
             return c
         if opacity is None:
             opacity = self._evaluated_alpha(alpha, reasons)
+        if opacity is None and linked_link(alpha) is not None:
+            opacity = self._procedural_alpha(alpha, reasons)
         if opacity is not None:
             # the transmission (all of its transparency) stays the opaque part's glass, passed
             # at the opacity (overwritten by the cut-out's white, the glass went opaque where
@@ -888,20 +900,28 @@ class MaterialBuilder:
         """A Mix Shader whose factor procedural textures compute (procedurals.py), between two
         shaders that have an albedo only (a constant, or a procedural texture's): the albedo
         per shading point, a + (b - a) x factor, the factor clamped to [0, 1] as Cycles' Mix
-        Shader clamps it. None otherwise (the factor at its own value)."""
+        Shader clamps it. Between a purely transparent shader and another (the procedural
+        cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
+        (_procedural_cutout). None otherwise (the factor at its own value)."""
         found = procedurals.compile_socket(node.inputs['Fac'], False, [])
         if found is None:
             return None
         fac_fn, needs, name = found
-        notes, sides = [], []
-        for socket in (node.inputs[1], node.inputs[2]):
-            c = self._shader(socket, notes, depth + 1)       # (said only if this mix is taken)
+        notes = []
+        closures = [self._shader(socket, notes, depth + 1)     # (said only if this mix is taken)
+                    for socket in (node.inputs[1], node.inputs[2])]
+        cutout = self._procedural_cutout(closures, fac_fn, needs, name)
+        if cutout is not None:
+            reasons.extend(notes)
+            return cutout
+        sides = []
+        for c in closures:
             procedural = c.texture is not None and isinstance(c.texture.pixels, ProceduralTexels)
             if (c.texture is not None and not procedural) or c.emission.any() or c.emission_tex is not None \
                     or c.transparent.any() or c.holdout or c.opacity is not None or c.translucent.any():
                 reasons.append(f"Mix Shader factor from procedural textures ('{name}') between shaders "
-                               "that are not both plain colours (an image, emission, transparency or "
-                               "translucency): not evaluated per point")
+                               "that are not both plain colours nor a transparent one and another (an image, "
+                               "emission, translucency, or transparency on both sides): not evaluated per point")
                 return None
             sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
                           c.texture.pixels if procedural else None))
@@ -917,6 +937,42 @@ class MaterialBuilder:
             a = albedo(sides[0], coords)
             return a + (albedo(sides[1], coords) - a) * f
         return Closure(texture=Texture.procedural(ProceduralTexels(mixed, needs, name)), tex_weight=(1.0, 1.0, 1.0))
+
+    @staticmethod
+    def _procedural_cutout(closures, fac_fn, needs, name):
+        """The Mix Shader of closures (first, second) whose factor fac_fn computes per point,
+        when one side is purely transparent and the other has no transparency, holdout or
+        opacity of its own: the other side with the factor as its opacity (1 minus it when the
+        transparent side is the second), computed at each shading point as Cycles' Mix Shader
+        weighs its two closures (the factor clamped to [0, 1], NaN 0). None otherwise."""
+        a, b = closures
+        clear_a, clear_b = a.only_transparent(), b.only_transparent()
+        if clear_a == clear_b:
+            return None
+        opaque, clear = (b, a) if clear_a else (a, b)
+        if opaque.transparent.any() or opaque.holdout or opaque.opacity is not None:
+            return None
+
+        def opacity(coords):    # Mix = (1 - fac) first + fac second; reads no Blender data
+            f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+            return f if clear_a else 1.0 - f
+        tex = Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity')
+        return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
+                        clear.transparent, (tex, False), opaque.emission_tex, opaque.translucent, clear.glass)
+
+    def _procedural_alpha(self, socket, reasons):
+        """(Texture, False) of a Principled BSDF's Alpha that procedural textures compute (a
+        Noise through Greater Than, a Gradient through a Color Ramp), per shading point,
+        clamped to [0, 1] as Cycles clamps it (NaN opaque); None when none reaches it or the
+        chain cannot be compiled (said: the Alpha then reads its own value)."""
+        found = procedurals.compile_socket(socket, False, reasons, image=self._texture)
+        if found is None:
+            return None
+        fn, needs, name = found
+
+        def opacity(coords):    # reads no Blender data: it runs during the render's lookups
+            return np.clip(np.nan_to_num(np.asarray(fn(coords), np.float64), nan=1.0), 0.0, 1.0)
+        return Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity'), False
 
     def _evaluated_alpha(self, socket, reasons, inverted=False):
         """(Texture, False) whose alpha is what nodes compute from one image (Blender's glTF
