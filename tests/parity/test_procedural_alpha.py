@@ -179,3 +179,44 @@ def test_principled_alpha_from_gradient_on_object(tmp_path, said):
     assert np.abs(bd - bc).max() < 0.02 * bc.max(), (bd[..., 0].round(3).tolist(), bc[..., 0].round(3).tolist())
     np.testing.assert_allclose(d.mean((0, 1)), c.mean((0, 1)), rtol=0.02)
     assert not any("not evaluated" in t or "own value" in t for t in said), said
+
+
+def _voronoi_ramp(nt, fac, coords):
+    """A Voronoi's Distance (Scale 4) through a Color Ramp of constant interpolation (black
+    below 0.3, white above): round holes with crisp edges."""
+    vo = nt.nodes.new('ShaderNodeTexVoronoi')
+    vo.inputs['Scale'].default_value = 4.0
+    ramp = nt.nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.interpolation = 'CONSTANT'
+    ramp.color_ramp.elements[0].color = (0.0, 0.0, 0.0, 1.0)
+    ramp.color_ramp.elements[1].position = 0.3
+    ramp.color_ramp.elements[1].color = (1.0, 1.0, 1.0, 1.0)
+    nt.links.new(coords, vo.inputs['Vector'])
+    nt.links.new(vo.outputs['Distance'], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], fac)
+
+
+def test_voronoi_ramp_cutout_of_a_noise_coloured_diffuse(tmp_path, said):
+    """(e) Round holes from a Voronoi through a constant Color Ramp, the Transparent BSDF second,
+    the other side a Diffuse whose colour is a Noise's: seen over the green floor, 4 x 4 blocks
+    within 2% of Cycles' brightest (measured 0.4%), the mean within 2% (0.16%), each pixel as
+    Cycles' (edges as crisp). It had been a uniform mix (blocks 37%, the mean 47% off, pixels
+    0.16 off on average)."""
+    def material():
+        mat = _cutout_material("Holes", _voronoi_ramp, transparent_first=False)
+        nt = mat.node_tree
+        dif = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+        nz = nt.nodes.new('ShaderNodeTexNoise')
+        nz.inputs['Scale'].default_value = 2.0
+        nt.links.new(next(n for n in nt.nodes if n.type == 'TEX_COORD').outputs['Object'], nz.inputs['Vector'])
+        nt.links.new(nz.outputs['Color'], dif.inputs['Color'])
+        return mat
+    _sheet_scene(material)
+    img = _render(tmp_path, 128)
+    d, c = img['DACRT'][..., :3], img['CYCLES'][..., :3]
+    bd, bc = d.reshape(4, 8, 4, 8, 3).mean((1, 3)), c.reshape(4, 8, 4, 8, 3).mean((1, 3))
+    # crisp edges where Cycles' are: pixel by pixel (measured: mean 0.0035, the largest 0.045, 128 spp)
+    assert np.abs(d - c).mean() < 0.01 and np.abs(d - c).max() < 0.15, (np.abs(d - c).mean(), np.abs(d - c).max())
+    assert np.abs(bd - bc).max() < 0.02 * bc.max(), (bd[..., 1].round(3).tolist(), bc[..., 1].round(3).tolist())
+    np.testing.assert_allclose(d.mean((0, 1)), c.mean((0, 1)), rtol=0.02)
+    assert not any("not evaluated" in t or "own value" in t for t in said), said
