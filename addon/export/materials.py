@@ -821,10 +821,11 @@ class MaterialBuilder:
         opacity = self._image_alpha(alpha, reasons)
         if opacity is _MISSING_ALPHA:       # alpha 1: opaque (it had read the socket's own value)
             return c
+        if opacity is None and procedurals.reaches_procedural(alpha):
+            # (an image beside the procedural textures is looked up per point too)
+            opacity = self._procedural_alpha(alpha, reasons)
         if opacity is None:
             opacity = self._evaluated_alpha(alpha, reasons)
-        if opacity is None and linked_link(alpha) is not None:
-            opacity = self._procedural_alpha(alpha, reasons)
         if opacity is not None:
             # the transmission (all of its transparency) stays the opaque part's glass, passed
             # at the opacity (overwritten by the cut-out's white, the glass went opaque where
@@ -903,7 +904,7 @@ class MaterialBuilder:
         Shader clamps it. Between a purely transparent shader and another (the procedural
         cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
         (_procedural_cutout). None otherwise (the factor at its own value)."""
-        found = procedurals.compile_socket(node.inputs['Fac'], False, [])
+        found = procedurals.compile_socket(node.inputs['Fac'], False, [], image=self._texture)
         if found is None:
             return None
         fac_fn, needs, name = found
@@ -1002,6 +1003,11 @@ class MaterialBuilder:
         purely transparent shader and another one (the usual cut-out leaf): that shader with
         the factor as its opacity."""
         if not is_image_alpha(linked_link(node.inputs['Fac'])) and self._float_per_texel(node.inputs['Fac']) is None:
+            return None
+        if procedurals.reaches_procedural(node.inputs['Fac']) and \
+                procedurals.compile_socket(node.inputs['Fac'], False, [], image=self._texture) is not None:
+            # an image and procedural textures both: the procedural cut-out computes them per
+            # point (_procedural_mix; per texel here the textures had read their own values)
             return None
         notes = []              # (said only if this mix is taken: else the shaders are read again)
         a = self._shader(node.inputs[1], notes, depth + 1)

@@ -142,6 +142,11 @@ def _images_reached(socket):
                 for link in nodegraph.links_feeding(socket) if link.from_node.type == 'TEX_IMAGE'})
 
 
+def reaches_procedural(socket):
+    """Whether a procedural texture feeds socket (through any nodes)."""
+    return _reaches_procedural(socket, set())
+
+
 def _reaches_procedural(socket, seen, types=PROCEDURAL_TYPES):
     link, _ = nodegraph.source(socket)
     if link is None:
