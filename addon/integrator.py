@@ -392,6 +392,10 @@ class Integrator:
             # traced against the emitter's blockers alone (one left to BSDF rays had kept the
             # shadow of a blocker its collection excludes: floor 0.44x Cycles under the plate;
             # Cycles traces a dedicated shadow ray from the BSDF hit, the same expected image)
+            # Those Cycles would not light-sample (None, or Auto on a dim emitter) are found there
+            # by BSDF rays, whose dedicated-light search stops at any opaque object in no blocker
+            # collection: their light samples' shadow rays meet those too (_build_scenes)
+            self._tri_forced = hittable & (self._tri_shadow_set > 0) & ~sampled
             sampled |= hittable & (self._tri_shadow_set > 0)
         self._tri_sampled = sampled
         tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(), sampled,
@@ -513,6 +517,10 @@ class Integrator:
         if self._shadow_link is not None:   # shadow linking: each entry's set of blockers
             record_sets = np.array([_light_set(self._shadow_link, l) for l in every], np.int64).reshape(-1)
             self._entry_shadow_set = self._entry_table(record_sets, self._tri_shadow_set, 0)
+            # its shadow rays' scene: 2 x set, + 1 for the emitters only Cycles' BSDF rays find
+            # (their set's blockers and the objects in no blocker collection)
+            self._entry_shadow_kind = 2 * self._entry_shadow_set + self._entry_table(
+                np.zeros(len(record_sets), np.int64), self._tri_forced, 0)
             # A BSDF ray toward a shadow-linked emitter would be stopped by every object, its
             # blockers or not, so its MIS share is missing where a non-blocker stands between
             # (Cycles traces a dedicated shadow ray for it): such emitters are lit by light
@@ -581,6 +589,12 @@ class Integrator:
             self._shadow_link = shadow
             self._tri_blocks = np.take(shadow.object_mask, ob)
             self._tri_shadow_set = np.take(shadow.sets(names), ob)
+            # objects in no blocker collection (Cycles' blocker_shadow_set 0)
+            listed = set()
+            for included, excluded in shadow_links.values():
+                listed.update(included)
+                listed.update(excluded)
+            self._tri_unlisted = np.take(np.array([n not in listed for n in names], bool).reshape(-1), ob)
 
     def _receivers(self, prim):
         """The receiver masks (k,) uint64 of the shading points (or ray origins) on prim."""
@@ -675,11 +689,17 @@ class Integrator:
                 needed = needed | through
         if self.lights and self._shadow_link is not None:
             # shadow linking: per set of blockers, its opaque and transparent shadow casters
-            sets = np.unique(self._entry_shadow_set) if hasattr(self, '_entry_shadow_set') else []
-            for s in sets[sets > 0] if len(sets) else ():
-                blocks = reached(self._tri_blocks, int(s))
-                for kind, bit in ((f'shadow{s}', VIS_SHADOW), (f'through{s}', _VIS_THROUGH)):
-                    mask = blocks & ((vis & bit) != 0)
+            kinds = np.unique(self._entry_shadow_kind) if hasattr(self, '_entry_shadow_kind') else []
+            for sk in kinds[kinds > 1] if len(kinds) else ():
+                s, forced = int(sk) // 2, bool(sk % 2)
+                blocks = reached(self._tri_blocks, s)
+                # (opaque objects in no blocker collection stop the forced emitters' rays too;
+                # transparent ones do not: Cycles' BSDF ray passes them, its dedicated one too)
+                opaque = (f'shadow{s}u', blocks | self._tri_unlisted) if forced else (f'shadow{s}', blocks)
+                for kind, casters, bit in (opaque + (VIS_SHADOW,), (f'through{s}', blocks, _VIS_THROUGH)):
+                    if kind in self._scenes:
+                        continue
+                    mask = casters & ((vis & bit) != 0)
                     if mask.any():
                         self._scenes[kind], self._maps[kind], self._local[kind] = \
                             built[kind] = self._tracer_scene(mask, None)
@@ -2171,14 +2191,17 @@ class Integrator:
         self._skipped_shadow += skipped
         if len(send) and self._shadow_link is not None:
             # shadow linking: each set's rays against its own blockers (set 0: every object)
-            sset = np.take(self._entry_shadow_set, np.take(entry, send))
-            for s in np.unique(sset):
-                sel = np.flatnonzero(sset == s)
+            # (the emitters only Cycles' BSDF rays find: also against the objects in no blocker
+            # collection, _build_scenes)
+            skind = np.take(self._entry_shadow_kind, np.take(entry, send))
+            for sn in np.unique(skind):
+                s = sn // 2
+                sel = np.flatnonzero(skind == sn)
                 r = rays[sel]
                 r['id'] = np.arange(len(sel), dtype=np.uint32)
                 sk = None if skip is None else np.ascontiguousarray(skip[sel])
                 sends = send[sel]
-                occ = self._occluded_rays(r, sk, 'shadow' if s == 0 else f'shadow{s}')
+                occ = self._occluded_rays(r, sk, 'shadow' if s == 0 else f'shadow{s}' + 'u' * int(sn % 2))
                 contrib[sends[occ]] = False
                 through = 'through' if s == 0 else f'through{s}'
                 if through in self._scenes:
