@@ -79,6 +79,10 @@ class Paths:
     # light sampling's share of the throughput at the next vertex (None: all of it): 1 - p of
     # a path that stopped at a semi-transparent surface (_through), whose bounce carries 1 / (1 - p)
     nee: np.ndarray | None = None
+    # the MIS pdf of D against lamps past their Max Bounces at the previous vertex (None: pdf):
+    # pdf x (1 - p) where that vertex stopped at a semi-transparent surface, as Cycles' pdf over
+    # all closures, the transparent one too, is (Integrator._mis_pdfs)
+    dark_pdf: np.ndarray | None = None
     N: np.ndarray | None = None      # shading normals (3,n) the rays' vertex sampled lights with
     # camera paths that passed glass (a transparent film's background is drawn behind it)
     refracted: np.ndarray | None = None

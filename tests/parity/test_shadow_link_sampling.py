@@ -1,10 +1,13 @@
 """Shadow-linked emissive meshes Cycles would not light-sample (Emission Sampling None, or Auto
 on a dim emitter) are light-sampled here (test_linking_edges), yet must be shadowed as Cycles'
 BSDF rays see them: its dedicated-light search stops at opaque objects in no blocker collection
-(blocker_shadow_set 0) besides the emitter's own blockers, and passes the ones it excludes."""
+(blocker_shadow_set 0) besides the emitter's own blockers, and passes the ones it excludes.
+Also: a lamp past its Max Bounces seen by bounce rays from a semi-transparent surface (the MIS
+pdf those rays weigh it with)."""
 import math
 
 import bpy
+import numpy as np
 import pytest
 
 from tests.addon import scenes
@@ -40,3 +43,32 @@ def test_unlisted_blocker_of_a_shadow_linked_emitter(sampling, tmp_path):
     c, d = (_render(sc, e, tmp_path)[7:13, 7:13].mean() for e in ('CYCLES', 'DACRT'))
     assert c < 0.045, c                                 # the plate shadows the floor in Cycles
     assert _close(d, c), (d, c)
+
+
+# --- a lamp's Max Bounces past a semi-transparent surface ----------------------------------------
+
+@pytest.mark.parametrize('lamp_max, bounces', [(0, 1), (0, 3), (1, 2)])
+def test_lamp_max_bounces_past_a_semi_transparent_surface(lamp_max, bounces, tmp_path):
+    """The Cornell box's light (1.6 m, 200 W) at Max Bounces lamp_max, and 0.3 m under it a
+    camera-invisible veil of Mix 0.5 Transparent / Diffuse. Bounce rays that stop at the veil
+    and go on from it find the lamp past its limit, where light sampling is dark and their MIS
+    weight is all its light: it must be Cycles', whose pdf is over every closure, the
+    transparent one too (0.5 x the Diffuse's). With the Diffuse's pdf alone DACRT had been
+    1.18-1.32x Cycles (Max Bounces 0) and 1.028x (Max Bounces 1, 2 bounces)."""
+    sc = rendering.small_cornell()
+    lamp = bpy.data.objects["CeilingLight"]
+    lamp.data.cycles.max_bounces = lamp_max
+    lamp.data.size, lamp.data.energy = 1.6, 200.0
+    mat, nt, out = scenes._material("Veil")
+    clear, diffuse = nt.nodes.new('ShaderNodeBsdfTransparent'), nt.nodes.new('ShaderNodeBsdfDiffuse')
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs[0].default_value = 0.5
+    nt.links.new(clear.outputs[0], mix.inputs[1])
+    nt.links.new(diffuse.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    veil = scenes.plane("Veil", size=2.0, location=(lamp.location.x, lamp.location.y, lamp.location.z - 0.3),
+                        materials=(mat,))
+    veil.visible_camera = False
+    means = rendering.engine_means(sc, tmp_path, 'veil', samples=128, bounces=bounces)
+    ratio = means['DACRT'] / means['CYCLES']
+    assert np.all(np.abs(ratio - 1) < 0.01), ratio
