@@ -39,11 +39,10 @@ def _blocker_collection(emitter, states):
 
 # --- a shadow-linked emitter light sampling would not pick -------------------------------------
 
-@pytest.mark.parametrize('sampling', ['AUTO', 'NONE'])
-def test_shadow_link_of_an_emitter_light_sampling_skips(sampling, tmp_path):
-    """A dim emissive plate (Emission Sampling Auto: not light-sampled; or None) whose blocker
-    collection excludes the plate between it and the floor: the floor under it is lit as if the
-    plate were not there (it had kept the plate's shadow: 0.44x Cycles)."""
+def glow_over_plate(sampling, blockers, samples, tmp_path):
+    """A dim emissive plane (Emission Sampling `sampling`) 2 m over a floor, a plate hidden from
+    the camera between them, the glow's blocker collection holding {object name: state}:
+    (Cycles, DACRT) means of the floor under the plate, direct light only."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 20
@@ -56,10 +55,18 @@ def test_shadow_link_of_an_emitter_light_sampling_skips(sampling, tmp_path):
     glow = scenes.plane("Glow", size=2, location=(0, 0, 2), materials=[mat])
     glow.rotation_euler = (math.pi, 0, 0)
     glow.visible_camera = False
-    _blocker_collection(glow, {"Plate": 'EXCLUDE'})
+    _blocker_collection(glow, blockers)
     rendering.fair_scene_settings(sc)
-    _direct_light(sc, 256)
-    c, d = (_render(sc, e, tmp_path)[7:13, 7:13].mean() for e in ('CYCLES', 'DACRT'))
+    _direct_light(sc, samples)
+    return tuple(_render(sc, e, tmp_path)[7:13, 7:13].mean() for e in ('CYCLES', 'DACRT'))
+
+
+@pytest.mark.parametrize('sampling', ['AUTO', 'NONE'])
+def test_shadow_link_of_an_emitter_light_sampling_skips(sampling, tmp_path):
+    """A dim emissive plate (Emission Sampling Auto: not light-sampled; or None) whose blocker
+    collection excludes the plate between it and the floor: the floor under it is lit as if the
+    plate were not there (it had kept the plate's shadow: 0.44x Cycles)."""
+    c, d = glow_over_plate(sampling, {"Plate": 'EXCLUDE'}, 256, tmp_path)
     assert c > 0.06, c                                  # the plate casts no shadow in Cycles
     assert _close(d, c), (d, c)
 

@@ -15,21 +15,15 @@ import pytest
 from tests.addon import scenes
 
 from . import rendering
+from .test_procedural_emission import _settings
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _render(tmp_path, samples, bounces=1):
     """{engine: (H, W, 4) Combined RGBA}, row 0 at the bottom."""
+    _settings(samples, bounces)
     sc = bpy.context.scene
-    sc.cycles.device = 'CPU'
-    sc.cycles.samples = sc.dacrt.samples = samples
-    sc.cycles.use_denoising = False
-    sc.cycles.use_adaptive_sampling = False
-    sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.dacrt.max_bounces = bounces
-    sc.cycles.glossy_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
     layer = sc.view_layers[0].name
     return {e: np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGBA'], axis=-1)
             for e, exr in scenes.render_engines(sc, tmp_path).items()}

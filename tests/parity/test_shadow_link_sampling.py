@@ -4,16 +4,13 @@ BSDF rays see them: its dedicated-light search stops at opaque objects in no blo
 (blocker_shadow_set 0) besides the emitter's own blockers, and passes the ones it excludes.
 Also: a lamp past its Max Bounces seen by bounce rays from a semi-transparent surface (the MIS
 pdf those rays weigh it with)."""
-import math
-
 import bpy
 import numpy as np
 import pytest
 
 from tests.addon import scenes
 from tests.parity import rendering
-from tests.parity.test_light_linking import _direct_light
-from tests.parity.test_linking_edges import _blocker_collection, _close, _render
+from tests.parity.test_linking_edges import _close, glow_over_plate
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -25,22 +22,7 @@ def test_unlisted_blocker_of_a_shadow_linked_emitter(sampling, tmp_path):
     plate shadows the floor (0.0349 under it at 2048 samples); DACRT had lost that shadow (0.0715,
     as if light-sampled: Cycles' Front gives 0.0695 there). 1024 samples: Cycles' BSDF-only
     estimate is noisy (0.0355 at 256)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x = sc.render.resolution_y = 20
-    scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=4.0)
-    scenes.plane("Floor", size=4, materials=[scenes.diffuse("Floor", (0.8, 0.8, 0.8))])
-    scenes.plane("Plate", size=0.8, location=(0, 0, 1),
-                 materials=[scenes.diffuse("Plate", (0.8, 0.8, 0.8))]).visible_camera = False
-    mat = scenes.emission("Glow", (1, 1, 1), 0.4)
-    mat.cycles.emission_sampling = sampling
-    glow = scenes.plane("Glow", size=2, location=(0, 0, 2), materials=[mat])
-    glow.rotation_euler = (math.pi, 0, 0)
-    glow.visible_camera = False
-    _blocker_collection(glow, {"Floor": 'INCLUDE'})
-    rendering.fair_scene_settings(sc)
-    _direct_light(sc, 1024)
-    c, d = (_render(sc, e, tmp_path)[7:13, 7:13].mean() for e in ('CYCLES', 'DACRT'))
+    c, d = glow_over_plate(sampling, {"Floor": 'INCLUDE'}, 1024, tmp_path)
     assert c < 0.045, c                                 # the plate shadows the floor in Cycles
     assert _close(d, c), (d, c)
 
