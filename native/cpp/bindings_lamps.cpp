@@ -287,6 +287,35 @@ LightChoice light_choice(const F32Array& records, const py::array_t<double, py::
     return c;
 }
 
+// A light tree over the choice's entries, or none.
+void attach_tree(LightChoice& c, const py::object& tree) {
+    if (tree.is_none()) return;
+    c.tree = tree.cast<const LightTree*>();
+    if (c.tree->key_bound() > c.entries)
+        throw py::value_error("the light tree's keys must be entries of the light choice (0.." +
+                              std::to_string(c.entries - 1) + ")");
+}
+
+// The emissive triangles' primitive ids (None: not given).
+const int32_t* tri_prims(const py::object& tri_prim, size_t num_tris, I32Array& keep) {
+    if (tri_prim.is_none()) return nullptr;
+    keep = tri_prim.cast<I32Array>();
+    need_shape(keep, 0, num_tris, "tri_prim");
+    return keep.data();
+}
+
+// The light-choice uniforms of n points, needed when there is more than one light.
+const double* pick_uniforms(const py::object& pick, size_t n, size_t entries,
+                            py::array_t<double, py::array::c_style>& keep) {
+    if (pick.is_none()) {
+        if (entries > 1) throw py::value_error("pick (the light-choice uniforms) is needed with more than one light");
+        return nullptr;
+    }
+    keep = pick.cast<py::array_t<double, py::array::c_style>>();
+    need_shape(keep, 0, n, "pick");
+    return keep.data();
+}
+
 py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style> cdf, F32Array prob,
                      py::array_t<bool, py::array::c_style> no_mis, py::array_t<bool, py::array::c_style> shadow,
                      py::object tri_geo, py::object tri_area, py::object tri_emission, py::object env, F32Array P,
@@ -301,12 +330,7 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
-    if (!tree.is_none()) {
-        lights.tree = tree.cast<const LightTree*>();
-        if (lights.tree->key_bound() > lights.entries)
-            throw py::value_error("the light tree's keys must be entries of the light choice (0.." +
-                                  std::to_string(lights.entries - 1) + ")");
-    }
+    attach_tree(lights, tree);
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     VertexPoints pts{};
     pts.n = size_t(P.shape(1));
@@ -324,24 +348,14 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     pts.ka = ka;
     pts.kb = kb;
     py::array_t<double, py::array::c_style> pick_keep;
-    if (!pick.is_none()) {
-        pick_keep = pick.cast<py::array_t<double, py::array::c_style>>();
-        need_shape(pick_keep, 0, n, "pick");
-        pts.pick = pick_keep.data();
-    } else if (lights.entries > 1) {
-        throw py::value_error("pick (the light-choice uniforms) is needed with more than one light");
-    }
+    pts.pick = pick_uniforms(pick, n, lights.entries, pick_keep);
     I32Array prim_keep, tri_prim_keep;
     if (!prim.is_none()) {
         prim_keep = prim.cast<I32Array>();
         need_shape(prim_keep, 0, n, "prim");
         pts.prim = prim_keep.data();
     }
-    if (!tri_prim.is_none()) {
-        tri_prim_keep = tri_prim.cast<I32Array>();
-        need_shape(tri_prim_keep, 0, lights.num_tris, "tri_prim");
-        lights.tri_prim = tri_prim_keep.data();
-    }
+    lights.tri_prim = tri_prims(tri_prim, lights.num_tris, tri_prim_keep);
     pts.shorten = shorten;
     pts.skip_work = skip_work;
     py::array_t<uint8_t, py::array::c_style> set_keep;
@@ -441,18 +455,9 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
-    if (!tree.is_none()) {
-        lights.tree = tree.cast<const LightTree*>();
-        if (lights.tree->key_bound() > lights.entries)
-            throw py::value_error("the light tree's keys must be entries of the light choice (0.." +
-                                  std::to_string(lights.entries - 1) + ")");
-    }
+    attach_tree(lights, tree);
     I32Array tri_prim_keep;
-    if (!tri_prim.is_none()) {
-        tri_prim_keep = tri_prim.cast<I32Array>();
-        need_shape(tri_prim_keep, 0, lights.num_tris, "tri_prim");
-        lights.tri_prim = tri_prim_keep.data();
-    }
+    lights.tri_prim = tri_prims(tri_prim, lights.num_tris, tri_prim_keep);
     BounceIn in{};
     in.n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const size_t n = in.n;
@@ -480,13 +485,7 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     need_shape(keys, 2, n, "keys");
     in.keys = keys.data();
     py::array_t<double, py::array::c_style> pick_keep;
-    if (!pick.is_none()) {
-        pick_keep = pick.cast<py::array_t<double, py::array::c_style>>();
-        need_shape(pick_keep, 0, n, "pick");
-        in.pick = pick_keep.data();
-    } else if (lights.entries > 1) {
-        throw py::value_error("pick (the light-choice uniforms) is needed with more than one light");
-    }
+    in.pick = pick_uniforms(pick, n, lights.entries, pick_keep);
     in.nee_ka = nee_ka, in.nee_kb = nee_kb, in.shorten = shorten, in.skip_work = skip_work;
     in.scatter = scatter, in.ka = ka, in.kb = kb;
     const py::dtype rd = py::dtype::from_args(ray_dtype);
