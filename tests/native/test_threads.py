@@ -165,13 +165,14 @@ def test_the_thread_limit_keeps_kernels_and_traces_on_that_many_threads():
     with dacrt.thread_limit(1):
         assert dacrt._core.thread_limit() == 1
         before = _thread_cpu_seconds()
-        for _ in range(5):
+        for _ in range(10):
             limited = (dacrt.shading.uniform2(keys, 1, 2), _trace(scene, case, threads=0))
         after = _thread_cpu_seconds()
     assert dacrt._core.thread_limit() == 0
     others = sum(after[t] - before.get(t, 0.0) for t in after if t != me)
     mine = after[me] - before[me]
-    assert mine > 0.2 and others < 0.1 * mine, (mine, others)
+    # /proc counts CPU time in 10 ms ticks: work for tens of them even on a fast core
+    assert mine > 0.1 and others < 0.1 * mine, (mine, others)
     assert all(np.array_equal(a, b) for a, b in zip(free[0], limited[0])) and _same(free[1], limited[1])
 
 
