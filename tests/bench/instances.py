@@ -1,24 +1,27 @@
-"""Export time of a material reading two attributes on a mesh instanced 1600 times:
-`.venv/bin/python tests/bench/several_attributes.py [OUT.exr [RUNS]]`.
+"""Export time of a material reading two attributes on a mesh instanced grid x grid times:
+`python3 build.py bench instances [--grid 40] [--repeat 3] [--out FILE.exr]`.
 
-Scene: a 40 x 40 grid of Geometry Nodes instances (Instance on Points) of a small quad cut 3 x 3
+Scene: a grid of Geometry Nodes instances (Instance on Points) of a small quad cut 3 x 3
 (18 triangles) whose Diffuse colour is its corner colour attribute 'col' times the Instancer
 attribute 'ifac' (a float stored on the instances, fract(0.05 + 0.0137 i)): a Mix Multiply, each
-instance with its own value. Renders RUNS times (4 spp, 96 x 96) with DACRT, prints each run's
-export seconds (addon.last_render_stats()) and their median, and writes the film as a 32-bit
-EXR to OUT (default bench-out/several_attributes.exr) for comparing the image bit for bit."""
-import pathlib
-import sys
+instance with its own value. Renders it --repeat times (4 spp, 96 x 96) with DACRT, prints each
+run's export seconds (addon.last_render_stats()) and their median, and writes the film as a
+32-bit EXR (default bench-out/instances.exr) for comparing images bit for bit between builds;
+the numbers also to bench-out/instances.json."""
+from __future__ import annotations
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
+import json
+from pathlib import Path
 
-import bpy  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
 
-import addon  # noqa: E402
-from tests.addon import scenes  # noqa: E402
-from tests.parity.test_instancer_attributes import instancer  # noqa: E402
+from .scenes import OUT as OUT_DIR
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--grid", type=int, default=40, help="instances per side (default 40: 1600)")
+    p.add_argument("--repeat", type=int, default=3, help="timed renders (default 3)")
+    p.add_argument("--out", default=None, help="the film's EXR (default bench-out/instances.exr)")
 
 
 def fract_of(ng, index):
@@ -34,6 +37,10 @@ def fract_of(ng, index):
 
 
 def build(grid=40):
+    import bpy
+
+    from tests.addon import scenes
+    from tests.parity.test_instancer_attributes import instancer
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.engine = 'DACRT'
@@ -66,22 +73,27 @@ def build(grid=40):
     return sc
 
 
-def main(argv):
-    out_path = argv[0] if argv else str(ROOT / 'bench-out' / 'several_attributes.exr')
-    runs = int(argv[1]) if len(argv) > 1 else 3
-    pathlib.Path(out_path).parent.mkdir(parents=True, exist_ok=True)
+def run(args) -> int:
+    if args.grid < 1 or args.repeat < 1:
+        raise ValueError(f"--grid and --repeat must be >= 1 (got {args.grid}, {args.repeat})")
+    import bpy
+
+    import addon
+    out_path = Path(args.out) if args.out else OUT_DIR / 'instances.exr'
+    out_path.parent.mkdir(parents=True, exist_ok=True)
     addon.register()
-    sc = build()
+    sc = build(args.grid)
     sc.render.image_settings.file_format = 'OPEN_EXR'
     sc.render.image_settings.color_depth = '32'
-    sc.render.filepath = out_path
+    sc.render.filepath = str(out_path)
     times = []
-    for _ in range(runs):
+    for _ in range(args.repeat):
         bpy.ops.render.render(write_still=True)
         times.append(next(iter(addon.last_render_stats().values()))['export_seconds'])
-    print("export_seconds", [round(t, 3) for t in times], "median", round(float(np.median(times)), 3))
+    print(f"{args.grid ** 2} instances: export_seconds", [round(t, 3) for t in times],
+          "median", round(float(np.median(times)), 3))
     print("film", out_path)
-
-
-if __name__ == '__main__':
-    main(sys.argv[1:])
+    (OUT_DIR / 'instances.json').write_text(json.dumps(
+        {"instances": args.grid ** 2, "export_seconds": times, "median": float(np.median(times)),
+         "film": str(out_path)}, indent=1))
+    return 0
