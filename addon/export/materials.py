@@ -821,7 +821,7 @@ class MaterialBuilder:
         opacity = self._image_alpha(alpha, reasons)
         if opacity is _MISSING_ALPHA:       # alpha 1: opaque (it had read the socket's own value)
             return c
-        if opacity is None and procedurals.reaches_procedural(alpha):
+        if opacity is None and procedurals.varies_per_point(alpha):
             # (an image beside the procedural textures is looked up per point too)
             opacity = self._procedural_alpha(alpha, reasons)
         if opacity is None:

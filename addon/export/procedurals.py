@@ -7,8 +7,9 @@ nodes and Texture Coordinate's Generated, Object and UV outputs (an unlinked Vec
 as in Cycles, but White Noise's, its own value); texture inputs (Scale, Detail, ...) may
 themselves vary over the surface. Anything else (an image, an attribute, another texture or
 coordinate kind) leaves the chain to nodeeval's evaluation, which reads the procedural node's
-own value and says so. Part of the export layer: every node setting is read here, so the
-compiled function reads no Blender data.
+own value and says so. A chain of coordinates and those nodes without any texture is compiled
+too. Part of the export layer: every node setting is read here, so the compiled function reads
+no Blender data.
 """
 
 from __future__ import annotations
@@ -64,13 +65,15 @@ def compile_color(socket, reasons, image=None):
 def compile_socket(socket, color, reasons, coordinates=False, image=None):
     """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures'
     names) for what feeds a colour (color) or float socket, or None as compile_color.
-    coordinates: also a chain that reads Texture Coordinate Generated, Object or UV without a
-    procedural texture (an AOV's input; a chain that cannot be compiled is then left to the
-    evaluation silently, which says what it does not read). A chain reading Object coordinates
+    coordinates: also a chain that reads Texture Coordinate Generated, Object or UV through an
+    image and no procedural texture (an AOV's input); one with no image is compiled for every
+    use (_coordinate_chain). A coordinate chain that cannot be compiled is left to the
+    evaluation silently, which says what it does not read. A chain reading Object coordinates
     says in whose space among its needs (object_frame)."""
     textured = _reaches_procedural(socket, set())
     images = image is not None and _images_reached(socket) >= 2
-    if not textured and not images and not (coordinates and _reaches_procedural(socket, set(), ('TEX_COORD',))):
+    if not textured and not images and not ((coordinates or _coordinate_chain(socket))
+                                            and _reaches_procedural(socket, set(), ('TEX_COORD',))):
         return None
     chain = _Chain([], image)
     try:
@@ -99,8 +102,7 @@ def compile_emission(color_socket, strength_socket, reasons, image=None):
     Signed, as Cycles emits it (an emission is no closure weight); NaN reads 0 (evaluate).
     strength_socket None: strength 1 (a colour or value linked into a shader input, which
     Cycles makes an Emission of strength 1)."""
-    if not (_reaches_procedural(color_socket, set()) or
-            (strength_socket is not None and _reaches_procedural(strength_socket, set()))):
+    if not (varies_per_point(color_socket) or (strength_socket is not None and varies_per_point(strength_socket))):
         return None
     chain = _Chain([], image)
     one = np.ones((1, 1))
@@ -145,6 +147,20 @@ def _images_reached(socket):
 def reaches_procedural(socket):
     """Whether a procedural texture feeds socket (through any nodes)."""
     return _reaches_procedural(socket, set())
+
+
+def _coordinate_chain(socket):
+    """Whether socket's chain reads Texture Coordinate with no image on its way: a gradient
+    made of coordinates and colour/float nodes (Separate XYZ into a Color Ramp), which compile
+    follows per point as it follows procedural textures. Chains through an image keep the
+    image's own path (its UV map and Mapping)."""
+    return _images_reached(socket) == 0 and _reaches_procedural(socket, set(), ('TEX_COORD',))
+
+
+def varies_per_point(socket):
+    """Whether compile follows socket's chain per point: a procedural texture or a
+    coordinate-only chain feeds it."""
+    return _reaches_procedural(socket, set()) or _coordinate_chain(socket)
 
 
 def _reaches_procedural(socket, seen, types=PROCEDURAL_TYPES):
