@@ -424,9 +424,17 @@ class Integrator:
         self._env_apart = self._any_glass and transmit_env is not self._camera_env
         self._transmit_env = transmit_env if self._env_apart else None
         # each light named once (an instanced lamp's 5000 copies had been 5000 names in 34 lines)
-        if self.lights.skipped_lamps:
-            self.messages.append(('INFO', f"skipped {len(self.lights.skipped_lamps)} light(s) with zero "
-                                          f"strength: {', '.join(dict.fromkeys(self.lights.skipped_lamps))}"))
+        # a lamp whose node tree emits nothing (an output targeted at EEVEE, a muted Emission)
+        # is named with that cause: "zero strength" had contradicted its 300 W panel
+        why = {l.name: getattr(l, 'no_emission', '') for l in lamps if l.dark}
+        zero = [n for n in self.lights.skipped_lamps if not why.get(n)]
+        if zero:
+            self.messages.append(('INFO', f"skipped {len(zero)} light(s) with zero strength: "
+                                          f"{', '.join(dict.fromkeys(zero))}"))
+        treeless = {n: why[n] for n in self.lights.skipped_lamps if why.get(n)}
+        if treeless:
+            self.messages.append(('INFO', f"skipped {len(treeless)} light(s) whose node tree emits nothing, as in "
+                                          "Cycles: " + ', '.join(f"{n} ({w})" for n, w in treeless.items())))
         if self.lights.unseen_lamps:
             self.messages.append(('INFO', f"skipped {len(self.lights.unseen_lamps)} light(s) that neither camera "
                                           "nor diffuse rays can see, nor camera rays past glass (the scene has "

@@ -250,6 +250,29 @@ def aov_outputs(ntree, groups=(), depth=0):
     return found
 
 
+def cut_off(socket):
+    """Why a linked input gets nothing (source's link None): 'a muted link' or "the muted
+    'Emission' node" (a muted node with no pass-through for that output), followed through
+    reroutes and muted nodes; None where it is unlinked, fed, or the chain enters a group."""
+    sock = unwrap(socket)
+    for _ in range(MAX_HOPS):
+        if not sock.is_linked:
+            return None
+        link = sock.links[0]
+        if link.is_muted or not link.is_valid:
+            return 'a muted link' if link.is_muted else 'an invalid link'
+        node = link.from_node
+        if node.type == 'REROUTE':
+            sock = node.inputs[0]
+        elif node.mute:
+            sock = _passed_through(node, link.from_socket)
+            if sock is None:
+                return f"the muted '{node.name}' node"
+        else:
+            return None
+    return None
+
+
 def _passed_through(node, output):
     """The input of a muted node its internal links connect to `output`, or None."""
     key = output.as_pointer()

@@ -88,6 +88,7 @@ class Light:
     visible_transmission: bool = True   # object ray visibility (Cycles: rays past glass see it)
     max_bounces: int = 1024        # Cycles' Light > Max Bounces: light sampling skips it deeper
     lightgroup: str = ''           # the light's Light Group (its light also goes to that pass)
+    no_emission: str = ''          # why its node tree emits nothing (no Cycles output, a muted node); '': it emits
 
 
 @dataclass

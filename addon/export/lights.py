@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import principled, scenedata as sd
 from ..lights.area import sheared
-from .. import nodeeval
+from .. import nodeeval, nodegraph
 from ..nodeeval import constant_value, nan_inputs
 from ..nodegraph import input_socket, linked_link, output_node
 from .shadersockets import mix_factor, value_emission
@@ -45,7 +45,7 @@ def export_light(ob, matrix, messages, approximated=None):
     strength *= 2.0 ** getattr(light, 'exposure', 0.0)
     if getattr(light, 'use_temperature', False):
         strength *= np.array(light.temperature_color, np.float64)[:3]
-    shader = _light_shader_factor(light, ob.name, messages, approximated)
+    shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated)
     strength *= shader
     if not np.isfinite(strength).all():
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
@@ -93,7 +93,8 @@ def export_light(ob, matrix, messages, approximated=None):
               # has Camera off): camera rays see the lamp, diffuse surfaces receive its light
               visible_camera=bool(ob.visible_camera), visible_diffuse=bool(ob.visible_diffuse),
               # rays past glass (Cycles' transmission rays) see it by this one
-              visible_transmission=bool(getattr(ob, 'visible_transmission', True)))
+              visible_transmission=bool(getattr(ob, 'visible_transmission', True)),
+              no_emission=no_emission)
     if light.type in ('POINT', 'SPOT'):
         kw.update(radius=float(light.shadow_soft_size),
                   soft_falloff=bool(getattr(light, 'use_soft_falloff', True)))
@@ -181,35 +182,49 @@ def _fits_float32(light):
 
 
 def _light_shader_factor(light, name, messages, approximated=None):
-    """The light's node tree (if used) as a constant RGB factor on its colour x power, as Cycles
-    evaluates a light's shader: the emission reaching the output's Surface (Emission colour x
-    strength, Add and Mix Shaders of them, a colour or value linked in as an emission of it);
-    0 where nothing emits (unlinked, no output, a muted Emission, a BSDF: no light in Cycles).
-    What depends on the shading point (textures, a Light Falloff's distance) is read at its
-    own value, with a warning naming the light."""
+    """(factor, no_emission): the light's node tree (if used) as a constant RGB factor on its
+    colour x power, as Cycles evaluates a light's shader: the emission reaching the output's
+    Surface (Emission colour x strength, Add and Mix Shaders of them, a colour or value linked
+    in as an emission of it); 0 where nothing emits (unlinked, no output, a muted Emission, a
+    BSDF: no light in Cycles), and no_emission then says why where the tree, not a strength of
+    0, is the cause ('' otherwise: the skipped-light message names it). What depends on the
+    shading point (textures, a Light Falloff's distance) is read at its own value, with a
+    warning naming the light."""
     if not getattr(light, 'use_nodes', False) or light.node_tree is None:
-        return np.ones(3)
+        return np.ones(3), ''
     out = output_node(light.node_tree)
     if out is None:
-        return np.zeros(3)
-    reasons = []
+        # (an output targeted at EEVEE is an easy accident: the panel's power says otherwise)
+        targets = sorted({n.target for n in light.node_tree.nodes if n.type == 'OUTPUT_LIGHT'})
+        return np.zeros(3), (f"its Light Output targets {' and '.join(targets)}, not Cycles" if targets
+                             else "no Light Output in its node tree")
+    reasons, dark = [], []
     bad = nan_inputs(light.node_tree)
     if bad:     # (read as 0: a NaN Emission Strength gives no light, as in Cycles)
         reasons.append(f"NaN read as 0 for {', '.join(bad)}")
-    factor = _light_surface(out.inputs['Surface'], reasons, 0)
+    surface = out.inputs['Surface']
+    if not surface.is_linked:
+        dark.append("nothing linked into its Light Output's Surface")
+    factor = _light_surface(surface, reasons, 0, dark)
+    no_emission = '; '.join(dict.fromkeys(dark)) if not factor.any() else ''
     if reasons:
         text = '; '.join(dict.fromkeys(reasons))
         if approximated is None:
             messages.append(('WARNING', f"light '{name}': node tree approximated: {text}"))
         else:
             approximated.setdefault(text, {})[name] = None
-    return factor
+    return factor, no_emission
 
 
-def _light_surface(socket, reasons, depth):
-    """(3,) emission of what feeds a light's shader socket (see _light_shader_factor)."""
+def _light_surface(socket, reasons, depth, dark=None):
+    """(3,) emission of what feeds a light's shader socket (see _light_shader_factor); dark
+    collects what cuts the tree's emission off (a muted node or link)."""
+    dark = [] if dark is None else dark
     link = linked_link(socket)            # muted nodes are passed through (nodegraph)
     if link is None:
+        cut = nodegraph.cut_off(socket)
+        if cut is not None:
+            dark.append(f"{cut} passes no emission")
         return np.zeros(3)
     if link.from_socket.type != 'SHADER':
         return value_emission(link, reasons)
@@ -221,11 +236,12 @@ def _light_surface(socket, reasons, depth):
         color = _light_color(node.inputs['Color'], "Emission", reasons)
         return np.array(color[:3], np.float64) * _light_strength(node.inputs['Strength'], reasons)
     if node.type == 'ADD_SHADER':
-        return _light_surface(node.inputs[0], reasons, depth + 1) + _light_surface(node.inputs[1], reasons, depth + 1)
+        return _light_surface(node.inputs[0], reasons, depth + 1, dark) + \
+            _light_surface(node.inputs[1], reasons, depth + 1, dark)
     if node.type == 'MIX_SHADER':
         fac = mix_factor(node, reasons, "light Mix Shader", surface=False)
-        return (1.0 - fac) * _light_surface(node.inputs[1], reasons, depth + 1) + \
-            fac * _light_surface(node.inputs[2], reasons, depth + 1)
+        return (1.0 - fac) * _light_surface(node.inputs[1], reasons, depth + 1, dark) + \
+            fac * _light_surface(node.inputs[2], reasons, depth + 1, dark)
     if node.type == 'BSDF_PRINCIPLED':   # its emission layer lights; its BSDFs do not
         return _principled_emission(node, reasons)
     reasons.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")

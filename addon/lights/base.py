@@ -110,6 +110,7 @@ class Lamp(ABC):
             # deeper than this many bounces (light_select_reached_max_bounces)
             self.max_bounces = int(getattr(light, 'max_bounces', MAX_BOUNCES_UNLIMITED))
             self.lightgroup = str(getattr(light, 'lightgroup', ''))
+            self.no_emission = str(getattr(light, 'no_emission', ''))
         else:
             self.name = self.key = 'World'
             self.color = np.asarray(color, np.float64)

@@ -1,0 +1,43 @@
+"""Messages about lights, the Light Path node and worlds that said the wrong thing (the images
+were right): a lamp whose node tree emits nothing in Cycles called 'zero strength'; 'its own
+value used' without whose; approximation warnings where nothing emits (a world or lamp at
+strength 0) or nothing differs (a sun's Light Falloff Smooth); a split world's lighting side
+skipped as 'World', as if the camera saw none of it."""
+import math
+
+from . import scenes
+
+
+def _floor():
+    scenes.plane("Floor", size=8, materials=[scenes.diffuse("Grey", (0.6, 0.6, 0.6))])
+
+
+def _point(name, energy=300.0):
+    lamp = scenes.light('POINT', energy, location=(0, -1, 2.2), name=name)
+    lamp.data.use_nodes = True
+    return lamp.data.node_tree
+
+
+def test_lamp_tree_without_cycles_emission_says_why(scene, said):
+    """Output targeted at EEVEE, no output, a muted Emission: Cycles emits nothing from each; the
+    skipped-light message says so and why, not 'zero strength' (300 W in the panel)."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    nt = _point('EeveeOnly')
+    next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT').target = 'EEVEE'
+    nt = _point('NoOutput')
+    nt.nodes.remove(next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT'))
+    nt = _point('MutedEmission')
+    next(n for n in nt.nodes if n.type == 'EMISSION').mute = True
+    nt = _point('Unlinked')
+    nt.links.remove(next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT').inputs['Surface'].links[0])
+    _point('Dimmed', 0.0)
+    scenes.render_rgba(scene)
+    text = next(t for t in said if "node tree emits nothing" in t)
+    assert text.startswith("skipped 4 light(s) whose node tree emits nothing, as in Cycles: "), text
+    assert "EeveeOnly (its Light Output targets EEVEE, not Cycles)" in text, text
+    assert "NoOutput (no Light Output in its node tree)" in text, text
+    assert "MutedEmission (the muted 'Emission' node passes no emission)" in text, text
+    assert "Unlinked (nothing linked into its Light Output's Surface)" in text, text
+    assert "skipped 1 light(s) with zero strength: Dimmed" in said, said
+    assert not any("approximated" in t for t in said), said
