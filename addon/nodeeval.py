@@ -148,8 +148,12 @@ class Evaluator:
         f = self._node(link.from_node, link.from_socket, depth) if depth < self.MAX_DEPTH else None
         if f is None:
             what = 'colour' if color else 'value'
-            self.reasons.append(f"{what} from '{link.from_node.bl_label}' node; its own value used")
-            return Field(own_value(carrier, color))
+            own = own_value(carrier, color)
+            # the carrier may be an input deep in the chain (a Map Range's Value), not the
+            # shader's: say which, and the value that stands in (computed on downstream)
+            self.reasons.append(f"{what} from '{link.from_node.bl_label}' node; its own value used "
+                                f"({own_value_note(carrier, own)})")
+            return Field(own)
         return f.through(link.crossed).as_kind(color)
 
     def output(self, link, color):
@@ -435,7 +439,7 @@ def constant(socket, color, notes=None, why=None):
         reasons.append("an image")
     if reasons:
         if why is not None:      # what was not computed, without what the caller says it used
-            why.extend(r.split(" as its average")[0].removesuffix("; its own value used") for r in reasons)
+            why.extend(r.split(" as its average")[0].split("; its own value used")[0] for r in reasons)
         return own_value(nodegraph.source(socket)[1], color), False
     if notes is not None:
         notes.extend(kept)
@@ -484,6 +488,17 @@ def own_value(carrier, color):
     else:
         value, vector = np.array([float(v)]), False
     return linked_value(value, vector, getattr(carrier, 'crossed', ()), color)
+
+
+def own_value_note(carrier, value):
+    """Whose own value a node the evaluation cannot compute is read as, and that value: "the
+    'Map Range' node's Value input, 1" (a source's carrier: the input it is linked into, or
+    where its chain crossed a group boundary)."""
+    v = np.asarray(value, np.float64).reshape(-1)
+    shown = f"{v[0]:g}" if len(v) == 1 else str(tuple(round(float(x), 3) for x in v[:3]))
+    node = getattr(carrier, 'node', None)
+    where = f"the '{node.name}' node's {carrier.name} input" if node is not None else f"{carrier.name}"
+    return f"{where}, {shown}"
 
 
 def linked_value(value, vector, crossed, color):

@@ -30,7 +30,7 @@ CAMERA_LIGHT_PATH = {'Is Camera Ray': 1.0, 'Is Shadow Ray': 0.0, 'Is Diffuse Ray
                      'Transparent Depth': 0.0, 'Transmission Depth': 0.0}
 # what a per-object or per-corner value reads while the export only looks for it
 _MARKER = np.zeros((1, 1, 4), np.float32)
-_GENERIC = "node; its own value used"     # the end of nodeeval's note for a node it cannot compute
+_GENERIC = "node; its own value used"     # in nodeeval's note for a node it cannot compute
 
 
 class ShaderAovs(NamedTuple):
@@ -171,7 +171,7 @@ def shader_aovs(ntree, reasons, texture=None):
                 reasons.append(f"AOV '{name}' {kind}: {', '.join(dict.fromkeys(ev.unread))} not evaluated for "
                                + ("it; its input's own value " + _written(f.value) + " is written" if direct and
                                   f.tex is None else "it; the socket it feeds read at its own value"))
-            reasons.extend(n for n in notes if not n.endswith(_GENERIC))
+            reasons.extend(n for n in notes if _GENERIC not in n)
             if ev.depth_read:
                 reasons.append(f"AOV '{name}' {kind}: Light Path Transparent Depth read as 0 (the first surface's; "
                                "Cycles counts the transparent surfaces a camera ray passed)")

@@ -13,6 +13,7 @@ from .. import emissionsampling, nodeeval, principled, roughdiffuse, specular
 from .. import scenedata as sd
 from ..mapping import texture_transform, uv_map_name
 from ..nodeeval import constant_color, constant_value, nan_inputs
+from .. import nodegraph
 from ..nodegraph import input_socket, linked_link, linked_node, output_key, output_node, used_outputs
 from ..procedural import ProceduralTexels
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
@@ -1049,7 +1050,8 @@ class MaterialBuilder:
             return Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
         color, ok = constant_color(socket)
         if not ok:
-            reasons.append(f"colour from '{link.from_node.bl_label}' node; its own value used")
+            reasons.append(f"colour from '{link.from_node.bl_label}' node; its own value used "
+                           f"({nodeeval.own_value_note(nodegraph.source(socket)[1], color)})")
         return Closure(const=color)
 
     def _emission(self, color_socket, strength_socket, label, reasons):

@@ -41,3 +41,25 @@ def test_lamp_tree_without_cycles_emission_says_why(scene, said):
     assert "Unlinked (nothing linked into its Light Output's Surface)" in text, text
     assert "skipped 1 light(s) with zero strength: Dimmed" in said, said
     assert not any("approximated" in t for t in said), said
+
+
+def test_own_value_names_the_socket_and_value(scene, said):
+    """A Light Path deep in a chain stands at the own value of the input it is linked into (here
+    a Map Range's Value, 1, which the ramp maps to black), not the Diffuse Color's: the message
+    names that input and the value."""
+    mat, nt, out = scenes._material("Floor")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    lp = nt.nodes.new('ShaderNodeLightPath')
+    mr = nt.nodes.new('ShaderNodeMapRange')
+    mr.inputs['From Min'].default_value, mr.inputs['From Max'].default_value = 4.0, 12.0
+    ramp = nt.nodes.new('ShaderNodeValToRGB')
+    nt.links.new(lp.outputs['Ray Length'], mr.inputs['Value'])
+    nt.links.new(mr.outputs[0], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], d.inputs['Color'])
+    scenes.camera((0, 0, 5))
+    scenes.plane("Floor", size=10, materials=[mat])
+    scenes.light('SUN', 3.0)
+    scenes.render_rgba(scene)
+    text = next(t for t in said if "'Floor'" in t)
+    assert "value from 'Light Path' node; its own value used (the 'Map Range' node's Value input, 1)" in text, text
