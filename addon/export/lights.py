@@ -205,7 +205,7 @@ def _light_shader_factor(light, name, messages, approximated=None):
     surface = out.inputs['Surface']
     if not surface.is_linked:
         dark.append("nothing linked into its Light Output's Surface")
-    factor = _light_surface(surface, reasons, 0, dark)
+    factor = _light_surface(surface, reasons, 0, dark, light.type)
     no_emission = '; '.join(dict.fromkeys(dark)) if not factor.any() else ''
     if reasons:
         text = '; '.join(dict.fromkeys(reasons))
@@ -216,9 +216,9 @@ def _light_shader_factor(light, name, messages, approximated=None):
     return factor, no_emission
 
 
-def _light_surface(socket, reasons, depth, dark=None):
+def _light_surface(socket, reasons, depth, dark=None, kind=None):
     """(3,) emission of what feeds a light's shader socket (see _light_shader_factor); dark
-    collects what cuts the tree's emission off (a muted node or link)."""
+    collects what cuts the tree's emission off (a muted node or link); kind: the light's type."""
     dark = [] if dark is None else dark
     link = linked_link(socket)            # muted nodes are passed through (nodegraph)
     if link is None:
@@ -233,22 +233,29 @@ def _light_surface(socket, reasons, depth, dark=None):
         reasons.append("shader graph too deep")
         return np.zeros(3)
     if node.type in ('EMISSION', 'BACKGROUND'):      # Cycles: a Background shader emits there too
-        color = _light_color(node.inputs['Color'], "Emission", reasons)
-        return np.array(color[:3], np.float64) * _light_strength(node.inputs['Strength'], reasons)
+        # the strength first: at 0 nothing emits whatever the colour, so a colour the export
+        # cannot compute approximates nothing (it had warned for a lamp dimmed to 0)
+        strength = _light_strength(node.inputs['Strength'], reasons, kind)
+        if strength == 0.0:
+            return np.zeros(3)
+        color = _light_color(node.inputs['Color'], "Emission", reasons, kind)
+        return np.array(color[:3], np.float64) * strength
     if node.type == 'ADD_SHADER':
-        return _light_surface(node.inputs[0], reasons, depth + 1, dark) + \
-            _light_surface(node.inputs[1], reasons, depth + 1, dark)
+        return _light_surface(node.inputs[0], reasons, depth + 1, dark, kind) + \
+            _light_surface(node.inputs[1], reasons, depth + 1, dark, kind)
     if node.type == 'MIX_SHADER':
         fac = mix_factor(node, reasons, "light Mix Shader", surface=False)
-        return (1.0 - fac) * _light_surface(node.inputs[1], reasons, depth + 1, dark) + \
-            fac * _light_surface(node.inputs[2], reasons, depth + 1, dark)
+        # a side of weight 0 adds nothing: what it holds approximates nothing either
+        a = _light_surface(node.inputs[1], reasons, depth + 1, dark, kind) if fac != 1.0 else np.zeros(3)
+        b = _light_surface(node.inputs[2], reasons, depth + 1, dark, kind) if fac != 0.0 else np.zeros(3)
+        return (1.0 - fac) * a + fac * b
     if node.type == 'BSDF_PRINCIPLED':   # its emission layer lights; its BSDFs do not
-        return _principled_emission(node, reasons)
+        return _principled_emission(node, reasons, kind)
     reasons.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")
     return np.zeros(3)
 
 
-def _principled_emission(node, reasons):
+def _principled_emission(node, reasons, kind=None):
     """A Principled BSDF's emission in a light's shader: Emission Color x Emission Strength,
     under its coat and sheen (principled.emission_dim) and scaled by its alpha, as its weight
     in Cycles' closure."""
@@ -256,16 +263,18 @@ def _principled_emission(node, reasons):
     strength_socket = input_socket(node, 'Emission Strength')
     if color_socket is None or strength_socket is None:
         return np.zeros(3)
-    color = _light_color(color_socket, "Principled emission", reasons)
-    strength = _light_strength(strength_socket, reasons)
+    strength = _light_strength(strength_socket, reasons, kind)
+    if strength == 0.0:                 # (as an Emission's: the colour then lights nothing)
+        return np.zeros(3)
+    color = _light_color(color_socket, "Principled emission", reasons, kind)
     alpha_socket = node.inputs.get('Alpha')   # (`in` on an evaluated tree's inputs: False)
     alpha = 1.0 if alpha_socket is None else principled.constant_alpha(alpha_socket, reasons)
     return np.array(color[:3], np.float64) * strength * alpha * principled.emission_dim(node)
 
 
-def _light_strength(socket, reasons):
+def _light_strength(socket, reasons, kind=None):
     """An Emission's strength in a light's shader (a Light Falloff's output: see _past_falloff)."""
-    socket = _past_falloff(socket, reasons)
+    socket = _past_falloff(socket, reasons, kind)
     why = []
     strength, ok = constant_value(socket, why=why)
     if not ok:
@@ -274,27 +283,29 @@ def _light_strength(socket, reasons):
     return float(strength)
 
 
-def _past_falloff(socket, reasons):
+def _past_falloff(socket, reasons, kind=None):
     """The socket a light shader's input reads: a Light Falloff's Quadratic output is its own
     Strength input (the light's inverse square is the lamp's already, as Cycles computes it);
     its Linear and Constant outputs and Smooth depend on the distance to the shaded point and
-    are read as Quadratic, reported."""
+    are read as Quadratic, reported. Cycles (svm_node_light_falloff) smooths only for Smooth
+    > 0 and a finite squared ray length: a sun's is FLT_MAX, so a sun is never smoothed."""
     link = linked_link(socket)
     if link is None or link.from_node.type != 'LIGHT_FALLOFF':
         return socket
     falloff = link.from_node
     smooth, _ = constant_value(falloff.inputs['Smooth'])
-    if link.from_socket.name != 'Quadratic' or smooth != 0.0:
+    smoothed = smooth > 0.0 and kind != 'SUN'
+    if link.from_socket.name != 'Quadratic' or smoothed:
         reasons.append(f"Light Falloff {link.from_socket.name} (smooth {smooth:g}) as Quadratic without smoothing")
     return falloff.inputs['Strength']
 
 
-def _light_color(socket, what, reasons):
+def _light_color(socket, what, reasons, kind=None):
     """The constant colour feeding a light shader's colour socket (a Light Falloff's output as
     grey: see _past_falloff; it had stood at the socket's own value, 0.107 where Cycles
     gives 0.320); nodes the export cannot compute (an image, Light Path) stand at the socket's
     own value, named."""
-    falloff = _past_falloff(socket, reasons)
+    falloff = _past_falloff(socket, reasons, kind)
     if falloff is not socket:
         why = []
         value, ok = constant_value(falloff, why=why)

@@ -107,6 +107,10 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
     s, s_ok = constant_value(node.inputs['Strength'])
     if not s_ok:
         reasons.append(f"world {node.bl_label} Strength driven by nodes; its own value used")
+    if s * weight == 0.0:
+        # nothing emits whatever the colour: a texture there approximates nothing (a world
+        # dimmed to 0 had warned that its Noise colour was read at its own value)
+        return none, None
     return _color_light(node.inputs['Color'], np.float32(s * weight), f"world {node.bl_label} Color", reasons, frame)
 
 

@@ -63,3 +63,92 @@ def test_own_value_names_the_socket_and_value(scene, said):
     scenes.render_rgba(scene)
     text = next(t for t in said if "'Floor'" in t)
     assert "value from 'Light Path' node; its own value used (the 'Map Range' node's Value input, 1)" in text, text
+
+
+def test_zero_strength_world_and_lamp_warn_of_nothing(scene, said):
+    """A world of Strength 0 with a Noise colour and a lamp of node Strength 0 with a Checker
+    colour emit nothing, exactly as in Cycles: no 'approximated' warning for their colours."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    scenes.light('SUN', 3.0, name='Key')
+    nt = _point('Fill', 200.0)
+    em = next(n for n in nt.nodes if n.type == 'EMISSION')
+    em.inputs['Strength'].default_value = 0.0
+    ck = nt.nodes.new('ShaderNodeTexChecker')
+    nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Normal'], ck.inputs['Vector'])
+    nt.links.new(ck.outputs['Color'], em.inputs['Color'])
+    # a Principled emission of strength 0 with a textured colour: the same
+    nt = _point('Glow', 200.0)
+    pr = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    pr.inputs['Emission Strength'].default_value = 0.0
+    nt.links.new(nt.nodes.new('ShaderNodeTexNoise').outputs['Color'], pr.inputs['Emission Color'])
+    nt.links.new(pr.outputs[0], next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT').inputs['Surface'])
+    w, wt, out = scenes.world_tree()
+    bg = wt.nodes.new('ShaderNodeBackground')
+    bg.inputs['Strength'].default_value = 0.0
+    wt.links.new(wt.nodes.new('ShaderNodeTexNoise').outputs['Color'], bg.inputs['Color'])
+    wt.links.new(bg.outputs[0], out.inputs['Surface'])
+    scenes.render_rgba(scene)
+    assert not any("approximated" in t for t in said), said
+    assert "skipped 2 light(s) with zero strength: Fill, Glow" in said, said
+
+
+def test_zero_weight_mix_side_warns_of_nothing(scene, said):
+    """A light Mix Shader at factor 0: its second side adds nothing, so a texture there is no
+    approximation."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    nt = _point('Mixed', 100.0)
+    out = next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT')
+    em = next(n for n in nt.nodes if n.type == 'EMISSION')
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = 0.0
+    textured = nt.nodes.new('ShaderNodeEmission')
+    nt.links.new(nt.nodes.new('ShaderNodeTexChecker').outputs['Color'], textured.inputs['Color'])
+    nt.links.new(em.outputs[0], mix.inputs[1])
+    nt.links.new(textured.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    scenes.render_rgba(scene)
+    assert not any("approximated" in t for t in said), said
+
+
+def _falloff_lamp(kind, output, smooth):
+    lamp = scenes.light(kind, 3.0 if kind == 'SUN' else 100.0, location=(0, 0, 2), rotation=(0.4, 0.2, 0),
+                        name=kind.title())
+    lamp.data.use_nodes = True
+    nt = lamp.data.node_tree
+    fo = nt.nodes.new('ShaderNodeLightFalloff')
+    fo.inputs['Smooth'].default_value = smooth
+    nt.links.new(fo.outputs[output], next(n for n in nt.nodes if n.type == 'EMISSION').inputs['Strength'])
+
+
+def test_sun_falloff_smooth_is_exact(scene, said):
+    """Cycles smooths a Light Falloff only at a finite squared ray length; a sun's is FLT_MAX
+    (svm_node_light_falloff), so a sun's Smooth changes nothing: no warning. A point light's
+    Smooth does (warned), and so does a sun's Linear output; a negative Smooth is no smoothing."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    _falloff_lamp('SUN', 'Quadratic', 1.0)
+    scenes.render_rgba(scene)
+    assert not any("approximated" in t for t in said), said
+    said.clear()
+    bpy_scene_reset(scene)
+    _falloff_lamp('POINT', 'Quadratic', -1.0)
+    scenes.render_rgba(scene)
+    assert not any("approximated" in t for t in said), said
+    said.clear()
+    bpy_scene_reset(scene)
+    _falloff_lamp('POINT', 'Quadratic', 1.0)
+    _falloff_lamp('SUN', 'Linear', 1.0)
+    scenes.render_rgba(scene)
+    assert any("light 'Point': node tree approximated: Light Falloff Quadratic (smooth 1)" in t for t in said), said
+    assert any("light 'Sun': node tree approximated: Light Falloff Linear" in t for t in said), said
+
+
+def bpy_scene_reset(scene):
+    """The scene emptied of objects (the fixture's settings kept), with a camera and floor."""
+    import bpy
+    for ob in list(scene.objects):
+        bpy.data.objects.remove(ob)
+    scenes.camera((0, 0, 5))
+    _floor()
