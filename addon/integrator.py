@@ -376,6 +376,9 @@ class Integrator:
             bg.visible_transmission = world_transmit
             if camera_world is not None:        # camera rays see camera_world's instead
                 bg.visible_camera = False
+                # named so where it is skipped: the camera still sees the world's other side
+                # (a plain 'World' had read as the whole world unseen)
+                bg.name = "World (its non-camera side)"
             lamps.append(bg)
         if camera_world is not None and np.asarray(camera_world[0]).max() > 0 and wv & VIS_CAMERA:
             bgc = BackgroundLight(np.asarray(camera_world[0], F32))

@@ -152,3 +152,26 @@ def bpy_scene_reset(scene):
         bpy.data.objects.remove(ob)
     scenes.camera((0, 0, 5))
     _floor()
+
+
+def test_split_world_lighting_side_named_as_such(scene, said):
+    """A world Mix Shader by Is Camera Ray with Ray Visibility Diffuse off: the camera sees its
+    camera side; only its other side lights nothing, and the message says which side."""
+    scenes.camera((0, -6, 2.5), rotation=(math.radians(70), 0, 0))
+    _floor()
+    w, nt, out = scenes.world_tree()
+    b1 = nt.nodes.new('ShaderNodeBackground')
+    b1.inputs['Color'].default_value = (0.3, 0.5, 1.0, 1)
+    b2 = nt.nodes.new('ShaderNodeBackground')
+    b2.inputs['Color'].default_value = (1.0, 0.2, 0.1, 1)
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray'], mix.inputs['Fac'])
+    nt.links.new(b1.outputs[0], mix.inputs[1])
+    nt.links.new(b2.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    w.cycles_visibility.diffuse = False
+    scenes.light('SUN', 2.0, rotation=(0.5, 0.3, 0))
+    rgba = scenes.render_rgba(scene)
+    text = next(t for t in said if "neither camera nor diffuse" in t)
+    assert text.endswith(": World (its non-camera side)"), text
+    assert rgba[-1, :, 0].mean() > 0.5          # (the camera side, red, at the top of the frame)
