@@ -177,6 +177,9 @@ class Evaluator:
             return Field((1.0,) if out.name == 'Alpha' else (1.0, 0.0, 1.0))
         if t in VIEW_NODE_TYPES:
             return self._view_average(node, out, depth)
+        if t == 'LIGHT_FALLOFF':
+            strength = falloff_strength(node, out, self.reasons)
+            return None if strength is None else self.input(strength, False, depth + 1)
         if t in ATTRIBUTE_NODE_TYPES:
             tex = None if self.attribute is None else self.attribute(node, out, self.reasons)
             if tex is None:
@@ -398,6 +401,13 @@ def _compile_node(node, out, image_pointer, depth):
         if node.as_pointer() != image_pointer:
             raise NotCompiled("another sky")
         return (lambda px: px[..., :3]), False
+    if t == 'LIGHT_FALLOFF':
+        notes = []
+        strength = falloff_strength(node, out, notes)
+        if strength is None or notes:
+            raise NotCompiled(node.bl_label)
+        f = compile_image_chain(strength, False, image_pointer, depth + 1)
+        return f, False
     if t in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
         if node.image is None or node.image.as_pointer() != image_pointer:
             raise NotCompiled("another image")
@@ -413,6 +423,22 @@ def _compile_node(node, out, image_pointer, depth):
     frozen, frozen_out = Frozen(node), Frozen(out)
     return (lambda px: _compute(frozen, frozen_out, {role: g(px) for role, g in parts.items()})), \
         gives_vector(node, out)
+
+
+def falloff_strength(node, out, reasons):
+    """The input a Light Falloff's output reads as, or None. Cycles (svm_node_light_falloff)
+    leaves Quadratic at its Strength (it was 0.14x Cycles on an emitting mesh, read at the
+    Emission Strength's own value); Smooth > 0 then scales it by d^2 / (smooth + d^2) at the
+    ray's length d (not for a sun's, FLT_MAX), not known here: read as 0, noted. Linear and
+    Constant scale by d and d^2: None (not evaluated)."""
+    if out.identifier != 'Quadratic':
+        return None
+    smooth, ok = constant_value(nodegraph.input_by_id(node, 'Smooth'))
+    if not ok or smooth > 0.0:
+        shown = "driven by nodes" if not ok else f"{smooth:g}"
+        reasons.append(f"Light Falloff Quadratic Smooth {shown} read as 0 (Cycles scales the strength by "
+                       "d^2 / (smooth + d^2) at the ray's length d)")
+    return nodegraph.input_by_id(node, 'Strength')
 
 
 class _NotConstant(Exception):

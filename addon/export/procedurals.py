@@ -251,6 +251,11 @@ def _node(node, out, chain, depth):
         return _texture(node, out, chain, depth)
     if t == 'TEX_IMAGE' and chain.image is not None:
         return _image(node, out, chain)
+    if t == 'LIGHT_FALLOFF':
+        strength = nodeeval.falloff_strength(node, out, chain.reasons)
+        if strength is None:
+            raise nodeeval.NotCompiled(f"Light Falloff {out.name}")
+        return _socket(strength, False, chain, depth + 1), False
     roles = nodeeval.node_inputs(node)
     if roles is None or t in nodeeval.VIEW_NODE_TYPES:
         raise nodeeval.NotCompiled(f"'{node.bl_label}' node")
