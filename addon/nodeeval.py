@@ -147,12 +147,8 @@ class Evaluator:
             return Field(own_value(carrier, color))
         f = self._node(link.from_node, link.from_socket, depth) if depth < self.MAX_DEPTH else None
         if f is None:
-            what = 'colour' if color else 'value'
             own = own_value(carrier, color)
-            # the carrier may be an input deep in the chain (a Map Range's Value), not the
-            # shader's: say which, and the value that stands in (computed on downstream)
-            self.reasons.append(f"{what} from '{link.from_node.bl_label}' node; its own value used "
-                                f"({own_value_note(carrier, own)})")
+            self.reasons.append(stand_in_note(link.from_node, carrier, own, color))
             return Field(own)
         return f.through(link.crossed).as_kind(color)
 
@@ -514,6 +510,14 @@ def own_value(carrier, color):
     else:
         value, vector = np.array([float(v)]), False
     return linked_value(value, vector, getattr(carrier, 'crossed', ()), color)
+
+
+def stand_in_note(node, carrier, own, color):
+    """The note for a node not computed, read at its carrier's own value `own`: the carrier may
+    be an input deep in the chain (a Map Range's Value), not the shader's, so it says which,
+    and the value that stands in (the chain below is computed on it)."""
+    what = 'colour' if color else 'value'
+    return f"{what} from '{node.bl_label}' node; its own value used ({own_value_note(carrier, own)})"
 
 
 def own_value_note(carrier, value):

@@ -150,7 +150,7 @@ def shader_aovs(ntree, reasons, texture=None):
                                    f"value is written")
                 parts[kind] = np.asarray(v, np.float32)
                 continue
-            found = procedurals.compile_socket(socket, color, reasons, coordinates=True) \
+            found = procedurals.compile_socket(socket, color, reasons, coordinates=True, light_path=False) \
                 if (name, kind) not in textures else None
             if found is not None:           # procedural textures: computed per shading point
                 textures[name, kind] = Texture.procedural(ProceduralTexels(*found), 'aov')

@@ -905,7 +905,8 @@ class MaterialBuilder:
         Shader clamps it. Between a purely transparent shader and another (the procedural
         cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
         (_procedural_cutout). None otherwise (the factor at its own value)."""
-        found = procedurals.compile_socket(node.inputs['Fac'], False, [], image=self._texture)
+        fac_notes = []      # (said only if this mix is taken: a Light Path's stand-in)
+        found = procedurals.compile_socket(node.inputs['Fac'], False, fac_notes, image=self._texture)
         if found is None:
             return None
         fac_fn, needs, name = found
@@ -914,7 +915,7 @@ class MaterialBuilder:
                     for socket in (node.inputs[1], node.inputs[2])]
         cutout = self._procedural_cutout(closures, fac_fn, needs, name)
         if cutout is not None:
-            reasons.extend(notes)
+            reasons.extend(fac_notes + notes)
             return cutout
         sides = []
         for c in closures:
@@ -928,7 +929,7 @@ class MaterialBuilder:
             sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
                           c.texture.pixels if procedural else None))
             needs |= c.texture.pixels.needs if procedural else frozenset()
-        reasons.extend(notes)
+        reasons.extend(fac_notes + notes)
 
         def albedo(side, coords):
             const, weight, tex = side

@@ -45,8 +45,9 @@ class _Chain:
     image(node, reasons): the export's Texture of an Image Texture node (or None: magenta),
     None where image nodes are not compiled."""
 
-    def __init__(self, reasons, image=None):
+    def __init__(self, reasons, image=None, light_path=True):
         self.needs, self.textures, self.reasons, self.image, self.frames = set(), [], reasons, image, set()
+        self.light_path = light_path
 
 
 def compile_color(socket, reasons, image=None):
@@ -62,20 +63,22 @@ def compile_color(socket, reasons, image=None):
     return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), needs, name)
 
 
-def compile_socket(socket, color, reasons, coordinates=False, image=None):
+def compile_socket(socket, color, reasons, coordinates=False, image=None, light_path=True):
     """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures'
     names) for what feeds a colour (color) or float socket, or None as compile_color.
     coordinates: also a chain that reads Texture Coordinate Generated, Object or UV through an
     image and no procedural texture (an AOV's input); one with no image is compiled for every
     use (_coordinate_chain). A coordinate chain that cannot be compiled is left to the
     evaluation silently, which says what it does not read. A chain reading Object coordinates
-    says in whose space among its needs (object_frame)."""
+    says in whose space among its needs (object_frame). light_path: a Light Path output stands
+    at its carrier's own value, noted, as the evaluation reads it (a material); False: not
+    compiled (an AOV, whose evaluation reads a camera ray's values instead)."""
     textured = _reaches_procedural(socket, set())
     images = image is not None and _images_reached(socket) >= 2
     if not textured and not images and not ((coordinates or _coordinate_chain(socket))
                                             and _reaches_procedural(socket, set(), ('TEX_COORD',))):
         return None
-    chain = _Chain([], image)
+    chain = _Chain([], image, light_path)
     try:
         fn = _socket(socket, color, chain, 0)
     except nodeeval.NotCompiled as e:
@@ -185,6 +188,13 @@ def _socket(socket, color, chain, depth):
         return lambda c: const
     if depth >= nodeeval.Evaluator.MAX_DEPTH:
         raise nodeeval.NotCompiled(f"a chain deeper than {nodeeval.Evaluator.MAX_DEPTH} nodes")
+    if link.from_node.type == 'LIGHT_PATH' and chain.light_path:
+        # its carrier's own value, as the evaluation reads it, and the rest of the chain per
+        # point (it had given up on the whole chain: a Checker mixed by Is Camera Ray was flat)
+        own = nodeeval.own_value(carrier, color)
+        chain.reasons.append(nodeeval.stand_in_note(link.from_node, carrier, own, color))
+        const = own[None]
+        return lambda c: const
     f, vector = _node(link.from_node, link.from_socket, chain, depth)
     return lambda c: nodeeval.linked_value(np.asarray(f(c), np.float64), vector, link.crossed, color)
 
