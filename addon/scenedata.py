@@ -190,6 +190,10 @@ class Material:
     # or UdimTiles whose RGB is the colour, or the value in R, per texel; interpolation,
     # extension, uv transform), read on the UV map as `texture` is
     aov_textures: dict = field(default_factory=dict)
+    # the clear side of a ray-type-mix material (export/assembly.py _clear_twins): a white
+    # Transparent BSDF the ray kinds in `visibility` cross, which counts against Transparent Max
+    # Bounces; the renderer may leave it out where no path can reach that limit
+    clear_twin: bool = False
 
 
 @dataclass

@@ -199,27 +199,39 @@ class Assembly:
             # shadow-only plate behind a pane had shown there, Cycles shows what lies behind)
             unseen = np.where((mvis & sd.VIS_DIFFUSE) == 0, sd.NO_TRANSMISSION, 0).astype(np.uint8)
             geometry.visibility |= unseen[geometry.material]
-            geometry = self._camera_twins(geometry, mvis, objects)
+            geometry = self._clear_twins(geometry, mvis, objects)
         return geometry
 
-    def _camera_twins(self, geometry, mvis, objects):
-        """Materials a Light Path mix hides from camera rays (Is Camera Ray to a white Transparent
-        BSDF) whose AOV Output nodes write: Cycles runs the shader at the camera hit, a clear
-        surface there, and writes the AOVs (1.0 per surface crossed). Their triangles get a twin
-        the camera alone sees, of a clear material that writes those AOVs (passed as any clear
-        surface: a transparent bounce, no light, no data passes), beside the original the other
-        rays see. (They had been left out of the camera's scene: the AOV read 0.) Materials a
-        mix holds out for camera rays alone (MaterialBuilder.camera_holdouts) get a twin of a
-        whole Holdout instead."""
+    def _clear_twins(self, geometry, mvis, objects):
+        """Materials a Light Path mix hides from some ray kinds (Is Camera Ray or Is Shadow Ray
+        to a white Transparent BSDF, _ray_type_mix): Cycles runs the shader at those rays' hits
+        too, a clear surface there, which each pass counts against Transparent Max Bounces (a
+        shadow ray past more of them than its path has left is blocked) and whose AOV Output
+        nodes write (1.0 per surface crossed). Their triangles get a twin of a clear material
+        (no light, no data passes) that those ray kinds alone see, beside the original the
+        others see. (They had been left out of those rays' scenes: at Transparent Max Bounces 0
+        a hidden-from-camera light panel showed the floor Cycles leaves black, 2.0x the image
+        mean, and a plate hidden from shadow rays cast no shadow.) Materials a mix holds out
+        for camera rays alone (MaterialBuilder.camera_holdouts) get a camera twin of a whole
+        Holdout instead."""
+        every = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         mats = self.materials.materials
         held = self.materials.camera_holdouts
-        twins = {k: len(mats) + i for i, k in enumerate(
-            k for k, m in enumerate(mats)
-            if mvis[k] and not mvis[k] & sd.VIS_CAMERA
-            and (k in held or m.aovs or m.aov_textures or k in self._aov_varying))}
+        # per material, the ray kinds that see its clear side (0: none, or not a mix)
+        clear = np.where(mvis != 0, every & ~mvis, 0).astype(np.uint8)
+        twins = {k: len(mats) + i for i, k in enumerate(np.flatnonzero(clear).tolist())}
         if not twins:
             return geometry
-        rows = np.flatnonzero(np.isin(geometry.material, list(twins)))
+        c, obj = clear[geometry.material], objects
+        # the twin: seen by those kinds as far as the object itself is (camera rays: with its
+        # holdout); by rays past glass as bounce rays see it, when the object is seen by them
+        sees = obj & c
+        obj_transmit = ((obj & sd.NO_TRANSMISSION) == 0) & ((obj & ~np.uint8(sd.NO_TRANSMISSION)) != 0)
+        transmit = ((c & sd.VIS_DIFFUSE) != 0) & obj_transmit
+        twin_vis = (sees | np.where((c & sd.VIS_CAMERA) != 0, obj & sd.HOLDOUT, 0)
+                    | np.where(transmit, np.where(sees == 0, sd.VIS_TRANSMISSION, 0), sd.NO_TRANSMISSION)
+                    ).astype(np.uint8)
+        rows = np.flatnonzero((c != 0) & ((sees != 0) | transmit))
         if not len(rows):
             return geometry
         b = self.materials
@@ -229,7 +241,8 @@ class Assembly:
                 m, base_color=np.zeros(3, np.float32), emission=np.zeros(3, np.float32), texture=None,
                 emission_texture=None, normal_texture=None, color_attribute=None, holdout=k in held,
                 transparency=None if k in held else np.ones(3, np.float32), translucency=None, refraction=None,
-                opacity=None, opaque_refraction=None, visibility=sd.VIS_CAMERA, approximated=''))
+                opacity=None, opaque_refraction=None, visibility=int(clear[k]), approximated='',
+                clear_twin=k not in held))
             b.attribute_maps.append(None)
             b.aov_maps.append(b.aov_maps[k])
             b.uses_texture.append(bool(m.aov_textures))
@@ -242,12 +255,10 @@ class Assembly:
         def twice(a):
             return None if a is None else np.concatenate([a, a[rows]])
 
-        # the twin: seen by camera rays only, by the object's own camera visibility and holdout
-        twin_vis = (objects[rows] & np.uint8(sd.VIS_CAMERA | sd.HOLDOUT)) | np.uint8(sd.NO_TRANSMISSION)
         return dataclasses.replace(
             geometry, triangles=twice(geometry.triangles), normals=twice(geometry.normals),
             material=np.concatenate([geometry.material, lookup[geometry.material[rows]]]),
-            visibility=np.concatenate([geometry.visibility, twin_vis]),
+            visibility=np.concatenate([geometry.visibility, twin_vis[rows]]),
             object_index=twice(geometry.object_index), instance=twice(geometry.instance),
             uvs=twice(geometry.uvs), terminator=twice(geometry.terminator), has_uv=twice(geometry.has_uv),
             tangents=twice(geometry.tangents), colors=twice(geometry.colors), coords=twice(geometry.coords),

@@ -125,7 +125,7 @@ class MaterialBuilder:
         self.aov_maps = [None]
         # materials a Light Path mix holds out for camera rays alone (Mix(Diffuse, Holdout, Is
         # Camera Ray): the 'held out but casts shadows' matte): the export gives their triangles
-        # a holdout twin only camera rays see (assembly._camera_twins)
+        # a holdout twin only camera rays see (assembly._clear_twins)
         self.camera_holdouts = set()
         self._camera_holdout = False
         self._aov_varying = None

@@ -521,19 +521,22 @@ def test_glass_roughness_and_the_transparent_glass_threshold_exported(scene, exp
 
 def test_light_path_ray_type_mix_hides_the_material(scene, exported):
     """A Mix Shader by Light Path Is Camera Ray / Is Shadow Ray with a white Transparent BSDF on
-    one side: the triangles lose the ray kinds that see through it and keep the other shader;
-    a non-white transparent side or another factor source keeps the own-value mix."""
+    one side: the triangles lose the ray kinds that see through it and keep the other shader,
+    and a clear twin of them those kinds alone see stands for the Transparent side (a pass that
+    counts against Transparent Max Bounces, as Cycles counts it); a non-white transparent side
+    or another factor source keeps the own-value mix."""
     setup(scene)
+    # (the originals' visibility, the clear twins' (None: no twin))
     cases = {"NoCam": ('Is Camera Ray', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent', (1, 1, 1),
-                       sd.VIS_DIFFUSE | sd.VIS_SHADOW),
-             # (rays past glass, Cycles' transmission rays, see it as bounce rays do: not at all)
+                       sd.VIS_DIFFUSE | sd.VIS_SHADOW, sd.VIS_CAMERA | sd.NO_TRANSMISSION),
+             # (rays past glass, Cycles' transmission rays, see it as bounce rays do: its clear side)
              "CamOnly": ('Is Camera Ray', 'ShaderNodeBsdfTransparent', 'ShaderNodeEmission', (1, 1, 1),
-                         sd.VIS_CAMERA | sd.NO_TRANSMISSION),
+                         sd.VIS_CAMERA | sd.NO_TRANSMISSION, sd.VIS_DIFFUSE | sd.VIS_SHADOW),
              "NoShadow": ('Is Shadow Ray', 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTransparent', (1, 1, 1),
-                          sd.VIS_CAMERA | sd.VIS_DIFFUSE),
+                          sd.VIS_CAMERA | sd.VIS_DIFFUSE, sd.VIS_SHADOW | sd.NO_TRANSMISSION),
              "Tinted": ('Is Camera Ray', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent', (0.5, 1, 1),
-                        sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)}
-    for i, (name, (output, first, second, clear, _)) in enumerate(cases.items()):
+                        sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW, None)}
+    for i, (name, (output, first, second, clear, *_)) in enumerate(cases.items()):
         mat, nt, mix, a, b = scenes.mix_shader_material(name, first, second)
         nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs[output], mix.inputs['Fac'])
         for node in (a, b):
@@ -541,11 +544,18 @@ def test_light_path_ray_type_mix_hides_the_material(scene, exported):
                 node.inputs['Color'].default_value = (*clear, 1)
         scenes.plane(name, location=(3 * i, 0, 0), materials=(mat,))
     data = exported()
-    for name, (*_, want) in cases.items():
-        vis = np.unique(data.geometry.visibility[of_object(data, name)])
+    twin = np.array([m.clear_twin for m in data.materials])[data.geometry.material]
+    for name, (*_, want, want_twin) in cases.items():
+        rows = of_object(data, name)
+        vis = np.unique(data.geometry.visibility[rows & ~twin])
         assert vis.tolist() == [want], name
-    by_name = {m.name: m for m in data.materials}
+        assert np.unique(data.geometry.visibility[rows & twin]).tolist() == ([] if want_twin is None else [want_twin])
+        assert np.count_nonzero(rows & twin) == (0 if want_twin is None else np.count_nonzero(rows & ~twin))
+    by_name = {m.name: m for m in data.materials if not m.clear_twin}
     assert np.allclose(by_name["NoCam"].emission, 1.0) and by_name["NoCam"].transparency is None
+    for m in data.materials:
+        if m.clear_twin:        # a white Transparent BSDF: no light, no albedo
+            assert np.allclose(m.transparency, 1.0) and not m.emission.any() and not m.base_color.any()
     assert np.allclose(by_name["Tinted"].emission, 0.5)      # the own-value mix (factor 0.5)
 
 
