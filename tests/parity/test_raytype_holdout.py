@@ -1,7 +1,7 @@
 """The 'held out but casts shadows' matte: Mix(Diffuse, Holdout, Is Camera Ray). Cycles holds
 the surface out for camera rays (alpha 0, black) while bounce and shadow rays see the Diffuse:
 it shadows and lights the floor. DACRT had read the factor at its own value, a 50% mix at
-alpha 1; now camera rays see a holdout twin of its triangles (export.assembly._camera_twins)."""
+alpha 1; now camera rays see a holdout twin of its triangles (export.assembly._clear_twins)."""
 import math
 
 import bpy
