@@ -195,6 +195,15 @@ def mix_node(nt, blend, a, b, fac=0.5):
     return m
 
 
+def multiply_add(nt, x, scale, offset):
+    """A Math Multiply Add node's output: x (a socket) x scale + offset."""
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'MULTIPLY_ADD'
+    m.inputs[1].default_value, m.inputs[2].default_value = scale, offset
+    nt.links.new(x, m.inputs[0])
+    return m.outputs[0]
+
+
 def light(kind, energy, location=(0, 0, 0), rotation=(0, 0, 0), scene=None, name=None, **props):
     data = bpy.data.lights.new(name or kind.title(), kind)
     data.energy = energy

@@ -80,11 +80,7 @@ def power_material(name, kind):
 
 def fac_of(ng, index):
     """0.1 + 0.13 i (FACS)"""
-    m = ng.nodes.new('ShaderNodeMath')
-    m.operation = 'MULTIPLY_ADD'
-    m.inputs[1].default_value, m.inputs[2].default_value = 0.13, 0.1
-    ng.links.new(index, m.inputs[0])
-    return m.outputs[0]
+    return scenes.multiply_add(ng, index, 0.13, 0.1)
 
 
 def expected(material, fac, local_xy):

@@ -26,13 +26,10 @@ def add_arguments(p) -> None:
 
 def fract_of(ng, index):
     """fract(0.05 + 0.0137 i)"""
-    m = ng.nodes.new('ShaderNodeMath')
-    m.operation = 'MULTIPLY_ADD'
-    m.inputs[1].default_value, m.inputs[2].default_value = 0.0137, 0.05
-    ng.links.new(index, m.inputs[0])
+    from tests.addon import scenes
     f = ng.nodes.new('ShaderNodeMath')
     f.operation = 'FRACT'
-    ng.links.new(m.outputs[0], f.inputs[0])
+    ng.links.new(scenes.multiply_add(ng, index, 0.0137, 0.05), f.inputs[0])
     return f.outputs[0]
 
 
