@@ -100,9 +100,12 @@ class EncodedTexels:
     texels: (h, w, 4) uint8 (scale 1 / 255: an 8-bit image's bytes, 4x less memory than
     float32) or float32 ((h, w, 3) without unassociate), or a UdimTiles of float32 texels
     (missing tiles stay magenta). `then`: a per-point colour map ((k, 3) -> (k, 3)) applied to
-    the decoded RGB last, as Cycles applies what follows the image node (see `baked`)."""
+    the decoded RGB last, as Cycles applies what follows the image node (see `baked`); with
+    `reads_alpha` it gets the blended alpha beside it ((k, 4) -> (k, 3)): nodes that read the
+    image's Color and Alpha together run on what Cycles' lookup gives both outputs."""
 
-    def __init__(self, texels, srgb: bool, unassociate: bool = False, scale: float = 1.0, then=None):
+    def __init__(self, texels, srgb: bool, unassociate: bool = False, scale: float = 1.0, then=None,
+                 reads_alpha: bool = False):
         if isinstance(texels, UdimTiles):
             texels = texels.with_texels(np.ascontiguousarray(texels.flat, F32))
         else:
@@ -117,12 +120,17 @@ class EncodedTexels:
         self.srgb, self.unassociate = bool(srgb), bool(unassociate)
         self.scale = F32(scale)
         self.then = then
+        self.reads_alpha = bool(reads_alpha) and then is not None
 
-    def followed_by(self, fn) -> 'EncodedTexels':
+    def followed_by(self, fn, reads_alpha=False) -> 'EncodedTexels':
         """The same texels with the colour map fn ((k, 3) -> (k, 3)) applied after the lookup
-        (after any map already there)."""
+        (after any map already there); reads_alpha (no map there yet): fn ((k, 4) -> (k, 3))
+        gets the blended alpha too."""
+        if reads_alpha and self.then is not None:
+            raise ValueError("only the first map after the lookup reads the alpha")
         then = fn if self.then is None else (lambda rgb, first=self.then: fn(first(rgb)))
-        return EncodedTexels(self.texels, self.srgb, self.unassociate, self.scale, then)
+        return EncodedTexels(self.texels, self.srgb, self.unassociate, self.scale, then,
+                             reads_alpha or self.reads_alpha)
 
     @property
     def nbytes(self) -> int:
@@ -141,14 +149,17 @@ class EncodedTexels:
         if self.srgb:
             rgb = srgb_to_linear(rgb)
         if self.then is not None:
+            if self.reads_alpha:    # (texels without alpha: opaque, as alpha_lookup reads them)
+                a = raw[3] if len(raw) > 3 else np.ones(raw.shape[1], F32)
+                rgb = np.concatenate([rgb, a[None]], axis=0)
             return np.ascontiguousarray(np.asarray(self.then(rgb.T), F32).T)
         return np.ascontiguousarray(rgb, F32)
 
     def lookup(self, u, v, interpolation, extension):
-        channels = 4 if self.unassociate else 3
+        channels = 4 if self.unassociate or self.reads_alpha else 3
         if isinstance(self.texels, UdimTiles):
             return _udim_lookup(self.texels, u, v, interpolation, extension, channels, self.finish)
-        return self.finish(_blend(self.texels, u, v, interpolation, extension, channels))
+        return self.finish(_blend(self.texels, u, v, interpolation, extension, min(channels, self.texels.shape[2])))
 
 
 class ImageTexels(np.ndarray):

@@ -75,16 +75,18 @@ _MISSING_ALPHA = 'missing image alpha'
 
 
 def _lookup_chain(compiled, clamp):
-    """fn(rgb (..., 3)) -> (..., 3) float32: colour nodes compiled for an image
-    (nodeeval.compile_image_chain) run on looked-up colours at alpha 1, non-finite results 0,
-    with `clamp` negative ones too (a colour; a normal map's are signed). It reads no Blender
-    data: it runs during the render's lookups."""
+    """fn(rgb (..., 3), or RGBA (..., 4)) -> (..., 3) float32: colour nodes compiled for an
+    image (nodeeval.compile_image_chain) run on looked-up colours (at alpha 1 when given none),
+    non-finite results 0, with `clamp` negative ones too (a colour; a normal map's are signed).
+    It reads no Blender data: it runs during the render's lookups."""
     def chain(rgb):
         px = np.empty(rgb.shape[:-1] + (4,), np.float32)
-        px[..., :3], px[..., 3] = rgb, 1.0
+        px[..., :rgb.shape[-1]] = rgb
+        if rgb.shape[-1] == 3:
+            px[..., 3] = 1.0
         y = np.broadcast_to(np.asarray(compiled(px.reshape(-1, 4)), np.float64), (px[..., 0].size, 3))
         y = np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0)
-        return (np.maximum(y, 0.0) if clamp else y).astype(np.float32).reshape(rgb.shape)
+        return (np.maximum(y, 0.0) if clamp else y).astype(np.float32).reshape(rgb.shape[:-1] + (3,))
     return chain
 
 
@@ -215,6 +217,12 @@ class MaterialBuilder:
     _PROBE[:5, :3] = [[0, 0, 0], [1, 1, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
     _PROBE[48:, :3] = 1.0 + 9.0 * _PROBE[48:, :3]
     _ALPHA_PROBE = np.concatenate([np.full((16, 3), 0.5), np.linspace(0, 1, 16)[:, None]], axis=1).astype(np.float32)
+    # every _PROBE colour at each _ALPHA_PROBE alpha, (64 x 16, 4) colour-major: how a chain
+    # reads colour and alpha together. Apart, a Mix of grey 0.5 and the colour by the alpha
+    # read as the colour alone (at colour 0.5 the alpha changes nothing; at alpha 1 it is the
+    # colour): the alpha had been dropped, a decal over the Mix's default grey 2.7x dark
+    _JOINT_PROBE = np.concatenate([np.repeat(_PROBE[:, :3], len(_ALPHA_PROBE), axis=0),
+                                   np.tile(_ALPHA_PROBE[:, 3:], (len(_PROBE), 1))], axis=1)
 
     # what a mesh attribute reads as in a build, (1, n, 4) like an image's texels: random
     # colours at alpha 1, then one colour at alphas 0..1 (a chain reading the alpha is not a
@@ -1106,7 +1114,7 @@ class MaterialBuilder:
                 if after is not None:
                     s = np.float32(strength.value.reshape(-1)[0])
                     px = ImageTexels(px, after.followed_by(lambda rgb: rgb * s))
-                elif stored_texels(color.tex.pixels) is not None and color.tex.interpolation != 'Closest':
+                elif not self._baked_exactly(color_socket, color.tex, stored_texels(color.tex.pixels)):
                     # said as _evaluated_closure says it ('Closest' blends nothing: exact)
                     reasons.append(f"colour nodes after image '{color.tex.name}' applied to its texels before the "
                                    "blend (Cycles blends, decodes, then applies them)")
@@ -1119,6 +1127,11 @@ class MaterialBuilder:
                 if after is not None:
                     c = np.asarray(color.value, np.float32).reshape(3)
                     px = ImageTexels(px, after.followed_by(lambda rgb: rgb * c))
+                elif not self._baked_exactly(strength_socket, strength.tex, stored_texels(strength.tex.pixels),
+                                             False):
+                    # (an Alpha -> Power 4 Strength had been baked silently, +66%)
+                    reasons.append(f"{label} strength nodes after image '{strength.tex.name}' applied to its "
+                                   "texels before the blend (Cycles blends, then applies them)")
             tex = Texture(('emission', src.key, id(px)), px, src.interpolation, src.extension, src.transform,
                            src.udim)
             weight = np.ones(3)
@@ -1162,12 +1175,14 @@ class MaterialBuilder:
             # channel (a Mix tint, Invert, Bright/Contrast, an identity) is kept as weight x
             # image + constant; any other chain that reads the colour alone is evaluated on
             # the looked-up colour (EncodedTexels.then), after the blend, as Cycles does.
+            # Chains that read the alpha (a decal mixed over a base by it, a Power on it) run
+            # after the lookup on the blended colour and alpha too.
             affine = self._affine_in(socket, src)
             if isinstance(affine, tuple) and stored is not None:
                 return Closure(const=affine[1], texture=src, tex_weight=affine[0])
-            if affine is None:
+            if not isinstance(affine, tuple):
                 after = self._after_lookup(socket, src, stored)
-                if after is None and stored is not None and src.interpolation != 'Closest':
+                if after is None and not self._baked_exactly(socket, src, stored):
                     # ('Closest' blends nothing: the baked texel read is the nodes on the one
                     # Cycles reads, decoded, exact)
                     reasons.append(f"colour nodes after image '{src.name}' applied to its texels before the "
@@ -1186,25 +1201,44 @@ class MaterialBuilder:
 
     def _after_lookup(self, socket, src, stored, color=True):
         """An EncodedTexels that looks image src up as Cycles stores it and then runs the
-        chain feeding `socket` on each looked-up colour, or None when the chain reads the
-        image's alpha or anything but src (then it is baked into the texels). color False: a
-        float socket (its value, grey)."""
+        chain feeding `socket` on each looked-up colour (and alpha, where the chain reads it:
+        Cycles blends both, then runs the nodes), or None when the chain reads anything but src
+        (then it is baked into the texels). color False: a float socket (its value, grey)."""
         if src.udim is not None and stored is None:
             return None
-        ya = self._probe(socket, src, self._ALPHA_PROBE, color)
-        if ya is None or np.ptp(ya, axis=0).max() > 0.0:
+        y = self._joint(socket, src, color)
+        if y is None:
+            return None
+        reads_alpha = bool(np.ptp(y, axis=1).max() > 0.0)
+        if reads_alpha and stored is not None and stored.then is not None:
             return None
         try:
             chain = _lookup_chain(nodeeval.compile_image_chain(socket, color, src.key[0]), clamp=True)
         except nodeeval.NotCompiled:
             return None
         # the chain as rebuilt here must be the one probed through the export's own textures
-        want = self._probe(socket, src, self._PROBE, color)
-        if want is None or not np.array_equal(chain(self._PROBE[:, :3]), np.maximum(want, 0.0).astype(np.float32)):
+        probe, want = (self._JOINT_PROBE, y.reshape(-1, 3)) if reads_alpha else (self._PROBE[:, :3], y[:, -1])
+        if not np.array_equal(chain(probe), np.maximum(want, 0.0).astype(np.float32)):
             return None
         base = stored if stored is not None else \
-            EncodedTexels(np.ascontiguousarray(src.pixels[..., :3], np.float32), srgb=False)
-        return base.followed_by(chain)
+            EncodedTexels(np.ascontiguousarray(src.pixels[..., :4 if reads_alpha else 3], np.float32), srgb=False)
+        return base.followed_by(chain, reads_alpha)
+
+    def _joint(self, socket, src, color=True):
+        """What feeds `socket` on _JOINT_PROBE, (colours, alphas, 3): axis 1 varies the alpha
+        alone, axis 0 the colour alone; None as _probe."""
+        y = self._probe(socket, src, self._JOINT_PROBE, color)
+        return None if y is None else y.reshape(len(self._PROBE), len(self._ALPHA_PROBE), 3)
+
+    def _baked_exactly(self, socket, src, stored, color=True):
+        """Whether the chain feeding `socket` baked into image src's texels and then blended
+        gives what Cycles' blend-then-nodes gives: 'Closest' (one texel read), a chain affine in
+        the alpha alone, or one affine per channel in the colour of an image blended as its
+        linear texels (no stored encoding)."""
+        if src.interpolation == 'Closest':
+            return True
+        affine = self._affine_in(socket, src, color)
+        return isinstance(affine, str) or (isinstance(affine, tuple) and stored is None)
 
     def _probe(self, socket, src, pixels, color=True):
         """What feeds `socket` (n, 3) with image src's texels replaced by pixels (n, 4); None
@@ -1223,19 +1257,30 @@ class MaterialBuilder:
         y = np.broadcast_to(v, (len(pixels), 3))
         return y if np.isfinite(y).all() else None
 
-    def _affine_in(self, socket, src):
-        """How what feeds `socket` reads image src's colour, checked on probe texels: (weight
-        (3,), constant (3,)) when it is w x colour + k per channel (non-negative for colours
-        in [0, 1]) and reads no alpha; 'alpha' when it reads the alpha only (blended as
-        stored, linear: no decode stands between); None otherwise."""
-        y = self._probe(socket, src, self._PROBE)
+    def _affine_in(self, socket, src, color=True):
+        """How what feeds `socket` reads image src's colour, checked on probe texels that vary
+        colour and alpha together: (weight (3,), constant (3,)) when it is w x colour + k per
+        channel (non-negative for colours in [0, 1]) and reads no alpha; 'alpha' when it reads
+        no colour and is w x alpha + k (or a constant; blended as stored, linear: no decode
+        stands between); None otherwise (a Power or Color Ramp on the alpha, colour and alpha
+        both)."""
+        y = self._joint(socket, src, color)
         if y is None:
             return None
-        if np.ptp(y, axis=0).max() == 0.0:
-            return 'alpha'                                  # (the colour does not matter)
-        ya = self._probe(socket, src, self._ALPHA_PROBE)
-        if ya is None or np.ptp(ya, axis=0).max() > 0.0:
+        by_alpha, by_colour = np.ptp(y, axis=1).max() > 0.0, np.ptp(y, axis=0).max() > 0.0
+        if not by_colour:
+            if not by_alpha:
+                return 'alpha'                              # (nothing of the image matters)
+            # alpha only: baked per texel it must be affine, or the blend is not Cycles'
+            # (alpha -> Power 4 had been baked silently, +76%)
+            x = np.repeat(self._ALPHA_PROBE[:, 3:].astype(np.float64), 3, axis=1)
+            line = channel_line(x, y[0], 1e-6)
+            if line is None or (line[1] < -1e-9).any() or (line[1] + line[0] < -1e-9).any():
+                return None
+            return 'alpha'
+        if by_alpha:
             return None                                     # colour and alpha both
+        y = y[:, -1]                                        # (at alpha 1: _PROBE)
         line = channel_line(self._PROBE[:, :3].astype(np.float64), y, 1e-6)
         if line is None or (line[1] < 0).any() or (line[1] + line[0] < -1e-9).any():
             return None                                     # (a colour in [0, 1] would go negative)
