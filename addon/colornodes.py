@@ -22,7 +22,7 @@ import numpy as np
 # Linear Rec.709 luminance: Cycles' colour -> float conversion (film rgb_to_y) in Blender's
 # default scene-linear space
 LUMINANCE = np.array([0.2126729, 0.7151522, 0.0721750])
-RAMP_TABLE_SIZE = 256      # Cycles samples a Color Ramp into a table of this many entries
+RAMP_TABLE_SIZE = 256      # Cycles samples a Color Ramp into a table of this many entries + 1 (i / 256)
 
 
 def _real(x):
@@ -221,10 +221,13 @@ def hue_saturation(c, hue, sat, val, fac):
 
 
 def ramp_table(evaluate):
-    """The Color Ramp's table: RGBA at RAMP_TABLE_SIZE evenly spaced positions of [0, 1]
-    (evaluate: position -> RGBA, Blender's ColorRamp.evaluate)."""
+    """The Color Ramp's table: RGBA at RAMP_TABLE_SIZE + 1 evenly spaced positions of [0, 1],
+    i / RAMP_TABLE_SIZE, as Blender's Cycles sync fills it (colorramp_to_array: size + 1
+    entries), evaluate: position -> RGBA, Blender's ColorRamp.evaluate. (With 256 entries at
+    i / 255 a Constant ramp's stop at 0.5 switched at 128 / 255, Cycles' at 0.5: a ramp on a
+    blended alpha mask 0.8% off in red.)"""
     n = RAMP_TABLE_SIZE
-    return np.array([evaluate(i / (n - 1)) for i in range(n)], np.float64)
+    return np.array([evaluate(i / n) for i in range(n + 1)], np.float64)
 
 
 def curves_table(evaluate, curves):

@@ -312,7 +312,7 @@ def _compute32(node, out, v):
                         node.clamp)
 
 
-_RAMP_TABLES = {}          # a ramp's settings -> its table: 256 Python calls into Blender each
+_RAMP_TABLES = {}          # a ramp's settings -> its table: 257 Python calls into Blender each
 
 
 def _ramp(node):

@@ -119,7 +119,9 @@ def test_ramp_table_lookup():
     got = cn.ramp_lookup(table, f, True)
     ref = np.clip(np.nan_to_num(f, nan=1.0), 0, 1)        # NaN: the last stop, as in Cycles
     assert np.allclose(got[:, 0], ref, atol=1e-12) and np.allclose(got[:, 1], 1 - ref, atol=1e-12)
-    assert np.allclose(cn.ramp_lookup(table, np.array([0.5]), False)[0, 0], 127 / 255)
+    # (Cycles: 257 entries at i / 256, so a Constant ramp at 0.5 reads entry 128, position 0.5)
+    assert len(table) == cn.RAMP_TABLE_SIZE + 1
+    assert np.allclose(cn.ramp_lookup(table, np.array([0.5, 0.499]), False)[:, 0], [0.5, 127 / 256])
 
 
 # -- the export (bpy) ------------------------------------------------------------------------

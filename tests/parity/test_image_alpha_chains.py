@@ -51,7 +51,7 @@ def _blocks(rgb):
     return rgb.reshape(n, BLOCK, n, BLOCK, 3).mean((1, 3))
 
 
-def _compare(tmp_path, said, path, interpolation, chain, emission=False):
+def _compare(tmp_path, said, path, interpolation, chain, emission=False, samples=SAMPLES):
     """Render the plane, image `path` read with interpolation, chain(nt, tex, diffuse) wiring it
     into the Diffuse colour (or, emission, returning an Emission node that replaces it); returns
     the engines' relative block difference; nothing said about the image."""
@@ -59,7 +59,7 @@ def _compare(tmp_path, said, path, interpolation, chain, emission=False):
         tex.image = bpy.data.images.load(path)
         tex.image.alpha_mode = 'STRAIGHT'
         tex.interpolation, tex.extension = interpolation, 'REPEAT'
-    sunplane.build(np.ones((1, 1, 4), np.float32), wire, SIZE, SAMPLES)
+    sunplane.build(np.ones((1, 1, 4), np.float32), wire, SIZE, samples)
     nt = bpy.data.materials['Textured'].node_tree
     tex, d = (next(n for n in nt.nodes if n.type == t) for t in ('TEX_IMAGE', 'BSDF_DIFFUSE'))
     shader = chain(nt, tex, d)
@@ -198,3 +198,18 @@ def test_emission_strength_baked_before_the_blend_is_said(tmp_path, said):
     assert [t for t in _udim_said(tmp_path, said, 'Linear', chain(_power), True) if 'strength' in t], said
     assert not _udim_said(tmp_path, said, 'Linear', chain(_affine), True), said
 
+
+
+def test_alpha_constant_color_ramp_into_a_colour(tmp_path, said):
+    """Alpha -> Color Ramp (Constant, a stop at 0.5) -> Diffuse Color. Cycles' ramp table has
+    257 entries at i / 256 (colornodes.ramp_table), so the stop switches at 0.5; with 256 at
+    i / 255 it had switched at 128 / 255 (blocks 2% off, red mean 0.335 for Cycles' 0.332). (A
+    step on a blend: each pixel's colours vary, so more samples.)"""
+    def chain(nt, tex, d):
+        r = nt.nodes.new('ShaderNodeValToRGB')
+        r.color_ramp.interpolation = 'CONSTANT'
+        els = r.color_ramp.elements
+        els[0].color, els[1].color, els[1].position = (0.9, 0.1, 0.1, 1.0), (0.1, 0.1, 0.9, 1.0), 0.5
+        nt.links.new(tex.outputs['Alpha'], r.inputs['Fac'])
+        nt.links.new(r.outputs['Color'], d.inputs['Color'])
+    _compare(tmp_path, said, _png(tmp_path / 'a.png', MASK), 'Linear', chain, samples=128)
