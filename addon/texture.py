@@ -162,6 +162,22 @@ class EncodedTexels:
         return self.finish(_blend(self.texels, u, v, interpolation, extension, min(channels, self.texels.shape[2])))
 
 
+def half_as_cycles_reads(values, flush=False) -> np.ndarray:
+    """float32 half-float texels as Cycles' CPU lookup reads them (util/half.h
+    half_to_float_image: the exponent rebiased with no case for zero or denormals, so 0 reads
+    2^-15 and a denormal 2^-15 (1 + m / 1024); non-finite values kept). flush: values Cycles
+    stored itself (float_to_half_image: below 2^-14 flushed to 0, clamped to 65504). Divided by
+    such an alpha, a texel's colour under alpha 0 (an EXR glow) comes out 32768x, so a Mix by its
+    own alpha adds it to the base where 0 had dropped it."""
+    v = np.asarray(values, F32)
+    if flush:
+        v = np.where(np.abs(v) < F32(2.0 ** -14), np.copysign(F32(0.0), v), np.clip(v, F32(-65504.0), F32(65504.0)))
+    with np.errstate(over='ignore', invalid='ignore'):
+        h = v.astype(np.float16).view(np.uint16).astype(np.uint32)
+    x = ((h & 0x8000) << 16) | (((h & 0x7C00) + 0x1C000) << 13) | ((h & 0x03FF) << 13)
+    return np.where(np.isfinite(v), x.astype(np.uint32).view(F32), v).astype(F32, copy=False)
+
+
 class ImageTexels(np.ndarray):
     """An image's (h, w, 4) float32 scene-linear RGBA texels, as colour nodes and averages read
     them, that also carry how Cycles stores the image for lookup (`stored`: an EncodedTexels,

@@ -11,7 +11,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from ..texture import EncodedTexels, ImageTexels, UdimTiles, linear_to_srgb, stored_texels
+from ..texture import EncodedTexels, ImageTexels, UdimTiles, half_as_cycles_reads, linear_to_srgb, stored_texels
 from .colorspaces import CONVERT, DATA, LINEAR, SRGB, space_kind, to_scene_linear
 from .errors import ExportCancelled
 from .imageuser import sequence_path, user_frame
@@ -125,8 +125,17 @@ def _file_texels(path, img, reasons, unassociate):
     raw = np.ascontiguousarray(raw.reshape(spec.height, spec.width, -1)[::-1])
     if img.alpha_mode == 'NONE' and ch in (2, 4):
         raw[..., ch - 1] = 255 if byte else 1.0      # alpha ignored, as Blender's own buffer has it
-    return _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True,
-                        preassociated=stored_associated and img.alpha_mode != 'NONE')
+    texels = _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True,
+                          preassociated=stored_associated and img.alpha_mode != 'NONE')
+    stored = stored_texels(texels) if texels is not None else None
+    half = spec.format == oiio.HALF and all(f == oiio.HALF for f in (spec.channelformats or [oiio.HALF]))
+    if half and stored is not None and stored.texels.dtype == np.float32:
+        # Cycles keeps a half-float file's texels as halves and reads a 0 as 2^-15: with the
+        # Alpha output linked, a colour stored under alpha 0 is divided by that, and a Mix by
+        # the alpha adds it to the base (an EXR glow: Cycles 1.061 red, it had been 0.218)
+        texels.stored = EncodedTexels(half_as_cycles_reads(stored.texels, flush=space_kind(img) == CONVERT),
+                                      stored.srgb, stored.unassociate, stored.scale)
+    return texels
 
 
 def _stacked_tiles(tiles):

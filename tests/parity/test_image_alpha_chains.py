@@ -14,7 +14,8 @@ Sun-lit plane (sunplane: direct light only, box filter), an 8-bit straight-alpha
 texels magnified across the view ('Linear' blends between texels; 'Closest' reads one): blocks
 of 4x4 pixels of both engines agree within 1% of the brightest. A chain the lookup cannot run
 (a UDIM image kept as its linear texels) is baked with that said, unless it is affine in the
-alpha (exact baked)."""
+alpha (exact baked). Also: a Constant Color Ramp's switch (Cycles' 257-entry table), and a
+half-float EXR's colour under alpha 0 mixed by its alpha (Cycles reads a half 0 as 2^-15)."""
 import bpy
 import numpy as np
 import pytest
@@ -213,3 +214,39 @@ def test_alpha_constant_color_ramp_into_a_colour(tmp_path, said):
         nt.links.new(tex.outputs['Alpha'], r.inputs['Fac'])
         nt.links.new(r.outputs['Color'], d.inputs['Color'])
     _compare(tmp_path, said, _png(tmp_path / 'a.png', MASK), 'Linear', chain, samples=128)
+
+
+@pytest.mark.parametrize('fmt', ['half', 'float'])
+def test_exr_glow_under_zero_alpha_mixed_by_its_alpha(tmp_path, said, fmt):
+    """An OpenEXR (stored associated) whose texels all store (0.9, 0.2, 0.1), at alphas 1, 0,
+    0.5, 0.25, mixed over a base by its own alpha (Closest). Cycles keeps a half-float file as
+    halves and reads 0 as 2^-15 (texture.half_as_cycles_reads): the colour under alpha 0 is
+    divided by that and the Mix gives base + stored colour there (an additive glow); a float
+    file's alpha 0 is 0, the base alone. The half case's glow texel had been the base alone
+    (0.218 red for Cycles' 1.061)."""
+    import OpenImageIO as oiio
+    px = np.zeros((2, 2, 4), np.float32)
+    px[..., :3] = (0.9, 0.2, 0.1)
+    px[..., 3] = [[1.0, 0.0], [0.5, 0.25]]
+    path = str(tmp_path / "glow.exr")
+    buf = oiio.ImageBuf(oiio.ImageSpec(2, 2, 4, fmt))
+    buf.set_pixels(oiio.ROI(), px)
+    assert buf.write(path), buf.geterror()
+    base = np.array([0.2, 0.6, 0.9])
+
+    def wire(nt, tex, diffuse):
+        tex.image = bpy.data.images.load(path)
+        m, out = _mix(nt)
+        m.inputs['A'].default_value = (*base, 1.0)
+        nt.links.new(tex.outputs['Alpha'], m.inputs['Factor'])
+        nt.links.new(tex.outputs['Color'], m.inputs['B'])
+        nt.links.new(out, diffuse.inputs['Color'])
+    sunplane.build(np.ones((1, 1, 4), np.float32), wire, 8, 4)
+    said.clear()
+    got = {e: sunplane.render_rgb(e, tmp_path).reshape(2, 4, 2, 4, 3).mean((1, 3)) for e in ('DACRT', 'CYCLES')}
+    d, c = got['DACRT'], got['CYCLES']
+    assert np.abs(d - c).max() / c.max() < 0.003, (d.round(4).tolist(), c.round(4).tolist())
+    glow = d[1, 1] / (2.0 / np.pi)       # the alpha-0 texel (the file's top right; sunplane: E / pi)
+    want = base + px[0, 1, :3] if fmt == 'half' else base
+    assert np.allclose(glow, want, rtol=2e-3), (glow, want)
+    assert not [t for t in said if 'glow.exr' in t], said
