@@ -930,9 +930,11 @@ class MaterialBuilder:
             procedural = c.texture is not None and isinstance(c.texture.pixels, ProceduralTexels)
             if (c.texture is not None and not procedural) or c.emission.any() or c.emission_tex is not None \
                     or c.transparent.any() or c.holdout or c.opacity is not None or c.translucent.any():
-                reasons.append(f"Mix Shader factor from procedural textures ('{name}') between shaders "
-                               "that are not both plain colours nor a transparent one and another (an image, "
-                               "emission, translucency, or transparency on both sides): not evaluated per point")
+                if name:    # (a coordinate-only factor, no texture: the evaluation's note says it)
+                    reasons.append(f"Mix Shader factor from procedural textures ('{name}') between shaders "
+                                   "that are not both plain colours nor a transparent one and another (an "
+                                   "image, emission, translucency, or transparency on both sides): not "
+                                   "evaluated per point")
                 return None
             sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
                           c.texture.pixels if procedural else None))
