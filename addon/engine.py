@@ -103,7 +103,7 @@ def _scene_bytes(scene_data):
     arrays = [g.vertices, g.triangles, g.material, g.normals, g.uvs, g.visibility, g.object_index,
               getattr(g, 'instance', None), getattr(g, 'tangents', None), getattr(g, 'tangent_xf', None),
               getattr(g, 'colors', None), getattr(g, 'coords', None),
-              *(getattr(g, 'aovs', None) or {}).values()]
+              *(getattr(g, 'aovs', None) or {}).values(), *(getattr(g, 'attributes', None) or {}).values()]
     images = [getattr(m, k, None) for m in scene_data.materials
               for k in ('texture', 'opacity', 'emission_texture', 'normal_texture')]
     arrays += images + [stored_texels(t) for t in images if t is not None]

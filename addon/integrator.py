@@ -64,7 +64,7 @@ from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DENOISE as DENOISE_PASSES
 from .passes import FIRST_SAMPLE
 from .pathstate import Paths, Sinks, compact
-from .procedural import ProceduralTexels
+from .procedural import ATTRIBUTE_NEED, ProceduralTexels
 from .sampling import RandomStream, max3
 from .sceneprep import recentred, validate
 from .scenedata import HOLDOUT, NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
@@ -1510,10 +1510,20 @@ class Integrator:
             r = np.take(rows, prim, axis=1)
             c = r[3 * k:3 * k + 3] + r[6 + 3 * k:9 + 3 * k] * u + r[12 + 3 * k:15 + 3 * k] * v
             out[name] = np.ascontiguousarray(c.T, F32)
-        # per-object values (Object Info outputs): the hit triangle's placement's
+        # per-object values (Object Info outputs): the hit triangle's placement's; mesh
+        # attributes (procedural.ATTRIBUTE_NEED): their RGBA interpolated from the corners
         for name in needs:
             if isinstance(name, str) and name in self.tri.instance_values:
                 out[name] = self.tri.instance_values[name][self.tri.instance[prim]]
+            elif isinstance(name, str) and name.startswith(ATTRIBUTE_NEED):
+                rows = self.tri.attributes.get(name)
+                if rows is None:         # (no triangle reads it: what Cycles reads of a missing one)
+                    a = np.zeros((len(prim), 4), F32)
+                    a[:, 3] = 1.0
+                else:
+                    r = np.take(rows, prim, axis=1)
+                    a = np.ascontiguousarray((r[0:4] + r[4:8] * u + r[8:12] * v).T, F32)
+                out[name] = a
         return out
 
     def _lookup(self, tex, interp, ext, xf, prim, u, v):

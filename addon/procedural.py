@@ -21,6 +21,10 @@ import numpy as np
 F32 = np.float32
 
 COORDINATES = ('generated', 'object', 'uv')
+# a need naming a mesh attribute a chain reads per point (export/procedurals._attribute): this
+# prefix and the attribute's key (export/meshes.attribute_key); the integrator gives its RGBA
+# (n, 4) interpolated from the corners (scenedata.Geometry.attributes)
+ATTRIBUTE_NEED = 'Mesh Attribute:'
 
 
 class ProceduralTexels:

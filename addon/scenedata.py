@@ -243,6 +243,11 @@ class Geometry:
     # instance id; instance must be given): what the procedural textures reading it see on each
     # object or instance; None: no procedural texture reads Object Info
     instance_values: Optional[dict] = None
+    # need name (procedural.ATTRIBUTE_NEED + a mesh attribute's key) -> (M,3,4) float32 per
+    # corner: the attribute's RGBA (as Cycles' Attribute node reads it) at the corners of the
+    # triangles whose material's procedural textures read it (an emission coloured by a Color
+    # Attribute), interpolated like UVs; 0 elsewhere; None: none reads one
+    attributes: Optional[dict] = None
 
     @staticmethod
     def empty() -> 'Geometry':

@@ -71,6 +71,8 @@ def validate(sd: SceneData):
         (all(np.asarray(a).shape == (m, 3, 3 if kind == 'color' else 1)
              for (_, kind), a in (getattr(g, 'aovs', None) or {}).items()),
          f"geometry.aovs must map (name, 'color' | 'value') to ({m}, 3, 3) or ({m}, 3, 1)"),
+        (all(np.asarray(a).shape == (m, 3, 4) for a in (getattr(g, 'attributes', None) or {}).values()),
+         f"geometry.attributes must map names to ({m}, 3, 4)"),
     ]
     for ok, msg in checks:
         if not ok:

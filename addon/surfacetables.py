@@ -97,6 +97,12 @@ class Triangles:
         self.aovs = {key: dacrt.shading.corner_rows(np.nan_to_num(np.ascontiguousarray(a, F32), nan=0.0,
                                                                   posinf=0.0, neginf=0.0))
                      for key, a in (getattr(geometry, 'aovs', None) or {}).items()}
+        # per need (procedural.ATTRIBUTE_NEED + key): rows corner 0 (0:4), corner 1 - corner 0
+        # (4:8), corner 2 - corner 0 (8:12) of a mesh attribute's RGBA, for the procedural
+        # textures reading it per point (scenedata.Geometry.attributes)
+        self.attributes = {key: dacrt.shading.corner_rows(np.nan_to_num(np.ascontiguousarray(a, F32), nan=0.0,
+                                                                        posinf=0.0, neginf=0.0))
+                           for key, a in (getattr(geometry, 'attributes', None) or {}).items()}
         self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
             np.asarray(geometry.has_uv, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,

@@ -25,6 +25,9 @@ Materials (what a diffuse renderer can represent exactly):
   image's colour (_affine_in);
 - a Color Attribute or (geometry) Attribute node into a diffuse colour, read per point, corner
   or face (Geometry.colors), and Object Info outputs per object (materials.MaterialBuilder._build);
+  into an emission's colour or strength (or beside procedural textures), the attribute
+  interpolated at each shading point and the nodes after it run there, as Cycles does
+  (procedurals.compile_emission; Geometry.attributes per corner, instance_values per object);
 - Add Shader and Mix Shader with a constant factor, combining the above linearly;
 - transparency: the Transparent BSDF (its colour) and the Principled BSDF's Alpha (constant, or
   an Image Texture's Alpha output), and a Mix Shader between a Transparent BSDF and another

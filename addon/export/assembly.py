@@ -9,7 +9,7 @@ import dacrt
 import numpy as np
 
 from .. import scenedata as sd
-from ..procedural import ProceduralTexels
+from ..procedural import ATTRIBUTE_NEED, ProceduralTexels
 from .aovs import GEOMETRY_POSITION
 from .errors import ExportCancelled
 from .objectinfo import OBJECT_INFO
@@ -42,6 +42,7 @@ class _Out:
         self.coords = None                # (m, 3, 6), allocated by the first procedurally textured mesh
         self.aovs = {}                    # (AOV name, kind) -> (m, 3, C), allocated by the first mesh writing it
         self.instance_values = {}         # Object Info need -> (placements, 4): procedural textures read them
+        self.attributes = {}              # mesh attribute need -> (m, 3, 4), allocated by the first mesh reading it
         self.keep = None
 
     def drop(self, rows, keep):
@@ -55,14 +56,15 @@ class _Out:
                        visibility=self.visibility, object_index=self.object_index, instance=self.instance,
                        uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
                        colors=self.colors, coords=self.coords)
-        aovs = dict(self.aovs)
+        aovs, attributes = dict(self.aovs), dict(self.attributes)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
             aovs = {k: _compact_rows(v, self.keep) for k, v in aovs.items()}
+            attributes = {k: _compact_rows(v, self.keep) for k, v in attributes.items()}
         # per placement (instance id), for the object-space tangents of normal maps
         xf = np.concatenate(self.linear).astype(np.float32) if self.tangents is not None else None
         return sd.Geometry(vertices=self.vertices, tangent_xf=xf, aovs=aovs or None,
-                           instance_values=self.instance_values or None, **per_tri)
+                           instance_values=self.instance_values or None, attributes=attributes or None, **per_tri)
 
 
 def _unread_rows(nt):
@@ -138,6 +140,10 @@ class Assembly:
         info = [_object_info_read(m) for m in self.materials.materials]
         self._info_readers = {k for k, needs in enumerate(info) if needs}
         self._info_needs = sorted(set().union(*info))
+        # and those reading mesh attributes per point (an emission coloured by a Color Attribute)
+        self._attribute_needs = {k: needs for k, m in enumerate(self.materials.materials)
+                                 if (needs := _attributes_read(m))}
+        self._attribute_readers = set(self._attribute_needs)
         # per material, once for the frame (the materials are all resolved above): those whose
         # albedo follows an attribute or Object Info (most scenes: none), and those reading each
         # UV map by name (scanned per batch and per placement, these had made the export
@@ -262,7 +268,9 @@ class Assembly:
             object_index=twice(geometry.object_index), instance=twice(geometry.instance),
             uvs=twice(geometry.uvs), terminator=twice(geometry.terminator), has_uv=twice(geometry.has_uv),
             tangents=twice(geometry.tangents), colors=twice(geometry.colors), coords=twice(geometry.coords),
-            aovs=None if geometry.aovs is None else {key: twice(a) for key, a in geometry.aovs.items()})
+            aovs=None if geometry.aovs is None else {key: twice(a) for key, a in geometry.aovs.items()},
+            attributes=None if geometry.attributes is None else
+            {key: twice(a) for key, a in geometry.attributes.items()})
 
     def _users(self, wanted):
         """{material index: the placements showing it} for the materials in `wanted`, in one
@@ -543,9 +551,11 @@ class Assembly:
                     out.terminator = np.zeros((len(out.triangles), 2), np.float32)
                 out.terminator[t0 + i * nt:t0 + (i + 1) * nt] = term
         attributed, coordinated, varying = self._attributed, self._coordinated, self._aov_varying
+        per_point = self._attribute_readers
         if attributed:
             self._corner_albedos_batch(a, places)
-        per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated or varying
+        per_placement = out.uvs is not None or self.materials.normal_mapped or attributed or coordinated or varying \
+            or per_point
         for i, p in enumerate(places if per_placement else ()):
             # (~30-170 us a placement in Python: 100K normal-mapped instances had kept Esc
             # waiting 17 s)
@@ -571,6 +581,8 @@ class Assembly:
                 self._texture_coordinates(a, p, coordinated, i in mirrored, out, S)
             if varying and not varying.isdisjoint(self._shown(p.slot_map)):
                 self._aov_corners(a, p, i in mirrored, out, S)
+            if per_point and not per_point.isdisjoint(self._shown(p.slot_map)):
+                self._point_attributes(a, p, i in mirrored, out, S)
         out.instances += k
         out.linear.append(lin)
         return bad, deg
@@ -702,6 +714,31 @@ class Assembly:
             block[bad] = 0.0
             self.ignore(f"a colour or attribute value NaN or infinite at some corner: the {int(bad.sum())} "
                         "triangle(s) around it render black, as in Cycles", place.name)
+
+    def _point_attributes(self, a, place, mirrored, out, S):
+        """The corner values (RGBA, as Cycles' Attribute node reads them: mesh.corner_attribute)
+        of the mesh attributes the procedural textures of one instance's triangles read per
+        point (Geometry.attributes); a mesh without one reads colour 0 and alpha 1 there, as
+        in Cycles (said)."""
+        material = out.material[S]
+        for k in self._attribute_readers & self._shown(place.slot_map):
+            rows = np.flatnonzero(material == k)
+            if not len(rows):
+                continue
+            for need in self._attribute_needs[k]:
+                table = out.attributes.get(need)
+                if table is None:
+                    table = out.attributes[need] = np.zeros((len(out.triangles), 3, 4), np.float32)
+                name = need[len(ATTRIBUTE_NEED):]
+                values = a.corner_attribute(name)
+                if values is None:
+                    self.ignore(a.unread_said(name, "it reads colour 0 and alpha 1"), place.name)
+                    block = _unread_rows(len(rows))
+                else:
+                    block = values[rows]
+                if mirrored:                 # corners 1 and 2 were swapped for these triangles
+                    block = block[:, [0, 2, 1]]
+                table[S.start + rows] = block
 
     def _object_info_values(self, places, out):
         """The Object Info outputs procedural textures read (Random, Location, ...), one row per
@@ -843,6 +880,13 @@ def _procedurals(material):
 def _object_info_read(material):
     """The Object Info needs ('Object Info:Random', ...) of the material's procedural textures."""
     return {n for t in _procedurals(material) for n in t.needs if isinstance(n, str) and n.startswith(OBJECT_INFO)}
+
+
+def _attributes_read(material):
+    """The mesh attribute needs (procedural.ATTRIBUTE_NEED + key) of the material's procedural
+    textures, sorted."""
+    return sorted({n for t in _procedurals(material) for n in t.needs
+                   if isinstance(n, str) and n.startswith(ATTRIBUTE_NEED)})
 
 
 def _coordinates_read(material, kinds=frozenset({'generated', 'object'})):

@@ -1073,7 +1073,9 @@ class MaterialBuilder:
         image straight into the colour is read as Cycles reads it, colour and float nodes
         after the image are baked into its texels (as for a diffuse colour). Procedural
         textures in either: (a ProceduralTexels Texture of colour x strength, 1), the radiance
-        a first guess of its magnitude's mean (the integrator measures it on the emitters)."""
+        a first guess of its magnitude's mean (the integrator measures it on the emitters); so
+        are attributes (a Color Attribute, a geometry, object or instancer Attribute, Object
+        Info: an LED wall's vertex colours), read per shading point as Cycles reads them."""
         # procedural textures in either: colour x strength computed at each shading point
         # (procedural.py), as Cycles' SVM does; they had read the texture's own value
         emitted = procedurals.compile_emission(color_socket, strength_socket, reasons, image=self._texture)

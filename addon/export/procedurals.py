@@ -20,7 +20,8 @@ from .. import nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping
 from ..texture import alpha_lookup, lookup_texels, texture_lookup
-from .objectinfo import OBJECT_INFO
+from .meshes import attribute_key, color_attribute_key
+from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO
 
 PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK',
                               'TEX_WHITE_NOISE', 'TEX_MAGIC', 'TEX_GABOR'})
@@ -38,6 +39,10 @@ TEXCOORD_UV = 'Texture Coordinate UV'
 # columns); Material Index, the shaded material's, is left to the evaluation
 _OBJECT_INFO_OUTPUTS = {'Location': slice(0, 3), 'Color': slice(0, 3), 'Alpha': slice(0, 1), 'Random': slice(0, 1),
                         'Object Index': slice(0, 1)}
+# the nodes that read a value per point of a mesh (Color Attribute, Attribute of type Geometry)
+# or per object (Object Info, Attribute of type Object or Instancer): an emission chain reading
+# them is compiled too (compile_emission), each read per shading point as Cycles' SVM reads it
+ATTRIBUTE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 
 
 class _Chain:
@@ -103,9 +108,16 @@ def compile_emission(color_socket, strength_socket, reasons, image=None):
     looked up per point through `image`), or None (no procedural texture reaches them, or a
     chain compile cannot follow: said, and the evaluation then reads the texture's own value).
     Signed, as Cycles emits it (an emission is no closure weight); NaN reads 0 (evaluate).
+    Attribute nodes (ATTRIBUTE_TYPES) compile too, without a procedural texture: a mesh
+    attribute's corner values interpolated at the point (an ATTRIBUTE_NEED + key need,
+    Geometry.attributes), a per-object one the placement's (instance_values), then the chain
+    after it, as Cycles interpolates and then runs the nodes (a vertex-coloured LED wall had
+    emitted the node's own colour, flat).
     strength_socket None: strength 1 (a colour or value linked into a shader input, which
     Cycles makes an Emission of strength 1)."""
-    if not (varies_per_point(color_socket) or (strength_socket is not None and varies_per_point(strength_socket))):
+    def emits_per_point(socket):
+        return socket is not None and (varies_per_point(socket) or _reaches_procedural(socket, set(), ATTRIBUTE_TYPES))
+    if not (emits_per_point(color_socket) or emits_per_point(strength_socket)):
         return None
     chain = _Chain([], image)
     one = np.ones((1, 1))
@@ -250,6 +262,8 @@ def _node(node, out, chain, depth):
         need, cols = OBJECT_INFO + out.name, _OBJECT_INFO_OUTPUTS[out.name]
         chain.needs.add(need)
         return (lambda c: np.asarray(c[need], np.float64)[:, cols]), out.type == 'VECTOR'
+    if t in ('VERTEX_COLOR', 'ATTRIBUTE'):
+        return _attribute(node, out, chain)
     if t == 'MAPPING':
         if node.vector_type == 'NORMAL':
             raise nodeeval.NotCompiled("a Normal-type Mapping")
@@ -274,6 +288,47 @@ def _node(node, out, chain, depth):
     frozen, frozen_out = nodeeval.Frozen(node), nodeeval.Frozen(out)
     return (lambda c: nodeeval._compute(frozen, frozen_out, {role: g(c) for role, g in parts.items()})), \
         nodeeval.gives_vector(node, out)
+
+
+def _rgba(values):
+    """values (n, 3 or 4) as (n, 4): alpha 1 where none is given (the unit-cube probe of
+    ProceduralTexels.mean and magnitude gives three columns)."""
+    v = np.asarray(values, np.float64)
+    if v.shape[-1] >= 4:
+        return v
+    return np.concatenate([v, np.ones(v.shape[:-1] + (4 - v.shape[-1],))], axis=-1)
+
+
+def _attribute(node, out, chain):
+    """(fn, vector) of a Color Attribute or Attribute node's output, read as Cycles'
+    svm_node_attr reads it: Color and Vector the RGB, Fac their average (the key marks it:
+    a 2D vector's x, meshes.fac_rows), Alpha the alpha; a mesh attribute per point (need
+    ATTRIBUTE_NEED + its key, interpolated from the corners: Geometry.attributes), an Object
+    or Instancer one per placement (instance_values), an unnamed Geometry one 0 (alpha 1)."""
+    if node.type == 'ATTRIBUTE' and node.attribute_type in ('OBJECT', 'INSTANCER'):
+        kind = OBJECT_ATTRIBUTE if node.attribute_type == 'OBJECT' else INSTANCER_ATTRIBUTE
+        need = f"{OBJECT_INFO}{kind}{node.attribute_name}"
+    elif node.type == 'ATTRIBUTE' and node.attribute_type != 'GEOMETRY':
+        raise nodeeval.NotCompiled(f"{node.attribute_type.lower().replace('_', ' ')} attribute "
+                                   f"'{node.attribute_name}'")
+    elif node.type == 'ATTRIBUTE' and not node.attribute_name:
+        chain.reasons.append(f"Attribute node '{node.name}' has no name: it reads 0, as in Cycles")
+        need = None
+    elif node.type == 'ATTRIBUTE':
+        need = pr.ATTRIBUTE_NEED + attribute_key(node.attribute_name, out.identifier == 'Fac')
+    else:
+        need = pr.ATTRIBUTE_NEED + color_attribute_key(node.layer_name)
+    if need is not None:
+        chain.needs.add(need)
+    unread = np.array([[0.0, 0.0, 0.0, 1.0]])
+
+    def rgba(c):
+        return unread if need is None else _rgba(c[need])
+    if out.name == 'Alpha':
+        return (lambda c: rgba(c)[:, 3:4]), False
+    if out.identifier == 'Fac':
+        return (lambda c: rgba(c)[:, :3].mean(axis=1, keepdims=True)), False
+    return (lambda c: rgba(c)[:, :3]), out.name == 'Vector'
 
 
 def _texture(node, out, chain, depth):
