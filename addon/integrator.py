@@ -1430,6 +1430,9 @@ class Integrator:
             tris = np.flatnonzero((self.tri.material == m) & self._tri_emissive)
             if not len(tris):
                 continue
+            if not tex.name and self._ATTRIBUTE_CORNERS:
+                self._attribute_emission_power(tex, interp, ext, xf, tris)
+                continue
             n = min(budget, max(self._POWER_POINTS, self._POWER_POINTS_PER_TRIANGLE * len(tris)))
             cdf = np.cumsum(self.tri.area[tris].astype(np.float64))
             k = np.minimum(np.searchsorted(cdf, rng.random(n) * cdf[-1], side='right'), len(tris) - 1)
@@ -1445,6 +1448,33 @@ class Integrator:
             own = np.where(count > 0, own / np.maximum(count, 1), mean[:, None])
             floor = self._POWER_FLOOR
             self._tri_emission[:, tris] = (floor * mean[:, None] + (1.0 - floor) * own).astype(F32)
+
+    # an emission of attributes alone weighs each triangle by its corners (_attribute_emission_power)
+    _ATTRIBUTE_CORNERS = True
+    # where each triangle of an attribute-driven emitter is measured: its corners (a hair inside,
+    # barycentrics (u, v)) and its centre
+    _CORNER_POINTS = np.array([[1e-4, 1e-4], [1.0 - 2e-4, 1e-4], [1e-4, 1.0 - 2e-4], [1.0 / 3.0, 1.0 / 3.0]], F32)
+
+    def _attribute_emission_power(self, tex, interp, ext, xf, tris):
+        """_procedural_emission_power for an emission of attributes alone (no texture: a
+        vertex-coloured LED wall, an emission per object): each triangle weighs the mean
+        magnitude at its three corners and its centre (every triangle measured, however many:
+        the random points had left most of a large mesh at its material's mean), with the
+        same floor of 0.1 x the material's (area-weighted) mean. Moves noise only: light
+        samples read the sampled point's emission."""
+        k = len(self._CORNER_POINTS)
+        prim = np.repeat(tris, k)
+        u = np.tile(self._CORNER_POINTS[:, 0], len(tris))
+        v = np.tile(self._CORNER_POINTS[:, 1], len(tris))
+        value = self._lookup(tex, interp, ext, xf, prim, u, v)
+        value = np.abs(np.where(np.isfinite(value), value, F32(0.0))).astype(np.float64)
+        own = value.reshape(3, len(tris), k).mean(axis=2)
+        area = self.tri.area[tris].astype(np.float64)
+        mean = (own * area).sum(axis=1) / max(area.sum(), 1e-300)
+        if not mean.max() > 0:
+            return
+        floor = self._POWER_FLOOR
+        self._tri_emission[:, tris] = (floor * mean[:, None] + (1.0 - floor) * own).astype(F32)
 
     def _emission_table(self):
         """(3, M) per triangle: the radiance emission is gathered and light-sampled with (1 on

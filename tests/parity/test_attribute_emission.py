@@ -3,8 +3,8 @@ Color or Strength from a Color Attribute or Attribute node (a mesh's point, corn
 values; an object's or instancer's), through colour and float nodes, computed per shading point
 as Cycles does (the attribute interpolated at the point, then the nodes): for camera hits, BSDF
 hits and light samples (export/procedurals.compile_emission, the corner values in
-Geometry.attributes, the light choice weighed by the emission measured on each emitting
-triangle, _procedural_emission_power).
+Geometry.attributes, the light choice weighing each emitting triangle by the emission at its
+corners and centre, Integrator._attribute_emission_power).
 
 Before, such an emission read the node's own value, reported ("colour from 'Color Attribute'
 node; its own value used"): a vertex-coloured panel one flat colour."""
@@ -311,3 +311,57 @@ def test_unsupported_attribute_is_still_reported(tmp_path, said):
     sc.render.engine = 'DACRT'
     scenes.render_rgba(sc)
     assert any("procedural emission not evaluated per point (view layer attribute 'glow'" in t for t in said), said
+
+
+def _dark_panel(material):
+    """A 2 x 2 grid of 17 x 17 vertices facing down 1.2 over the floor, black but for two bright
+    corner regions of its colour attribute; hidden from the camera."""
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=16, y_subdivisions=16, size=2.0, location=(0, 0, 1.2))
+    ob = bpy.context.object
+    ob.name = "Emitter"
+    ob.data.materials.append(material)
+    attr = ob.data.color_attributes.new('Col', 'FLOAT_COLOR', 'POINT')
+    co = np.array([v.co[:] for v in ob.data.vertices])
+    bright = ((co[:, 0] > 0.6) & (co[:, 1] > 0.6)) | ((co[:, 0] < -0.7) & (co[:, 1] < -0.2) & (co[:, 1] > -0.5))
+    c = np.zeros((len(co), 4), np.float32)
+    c[:, 3] = 1.0
+    c[bright, :3] = (1.0, 0.8, 0.5)
+    attr.data.foreach_set('color', c.ravel())
+    ob.rotation_euler = (np.pi, 0.0, 0.0)
+    return ob
+
+
+def test_light_choice_follows_the_corners(tmp_path, monkeypatch):
+    """A panel black but for two bright corner regions lights a floor: each triangle of an
+    emission of attributes alone weighs its corners' and centre's emission in the light choice
+    (_attribute_emission_power), so the black triangles keep only the floor, 0.1 x the
+    material's mean, and the floor's mean stays within 2% of Cycles' (measured 0.5%). On this
+    panel at 16 spp relMSE 0.0072 (random points on the triangles 0.0075, one weight for all
+    0.20); on a 64 x 64 grid 0.0038 (random points 0.0089: 4 a triangle; one weight 0.34)."""
+    from addon import integrator
+    weights = []
+    measured = integrator.Integrator._attribute_emission_power
+
+    def kept(self, tex, interp, ext, xf, tris):
+        measured(self, tex, interp, ext, xf, tris)
+        weights.append(self._tri_emission[:, tris].max(axis=0))
+    monkeypatch.setattr(integrator.Integrator, '_attribute_emission_power', kept)
+
+    def material():
+        def wire(nt, em):
+            node = nt.nodes.new('ShaderNodeVertexColor')
+            node.layer_name = 'Col'
+            nt.links.new(node.outputs['Color'], em.inputs['Color'])
+            em.inputs['Strength'].default_value = 30.0
+        return _emitter("Corners", wire)
+    _floor_and_emitter(material, False, _dark_panel)
+    _settings(256, 1, box=False)
+    img = _rgb(tmp_path)
+    np.testing.assert_allclose(img['DACRT'].mean((0, 1)), img['CYCLES'].mean((0, 1)), rtol=0.02)
+    w = weights[0]
+    assert len(w) == 2 * 16 * 16
+    floor = w.min()
+    assert np.isclose(np.sort(w)[len(w) // 2], floor), "most triangles are black: the floor weight"
+    assert w.max() > 50 * floor
+    print(f"corners: mean {img['DACRT'].mean((0, 1)).round(4)} vs {img['CYCLES'].mean((0, 1)).round(4)}")
+
