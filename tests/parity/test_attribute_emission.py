@@ -365,3 +365,32 @@ def test_light_choice_follows_the_corners(tmp_path, monkeypatch):
     assert w.max() > 50 * floor
     print(f"corners: mean {img['DACRT'].mean((0, 1)).round(4)} vs {img['CYCLES'].mean((0, 1)).round(4)}")
 
+
+def test_procedural_texture_times_attribute_in_a_diffuse_colour(tmp_path, said):
+    """A Checker (Object coordinates) times point colours (a Mix Multiply) into a Diffuse
+    colour under a straight-down sun, direct light only: the chain, which compile had left to
+    the evaluation (the checker's own colour, said 'procedural texture not evaluated per point
+    (Color Attribute ... is not read there)'), is computed per point with the colours
+    interpolated there: 6 x 6 blocks within 1.5% of Cycles' brightest (measured 0.19%; 44% before)."""
+    import math
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat, nt, out = scenes._material("CheckerTimesColour")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tc = nt.nodes.new('ShaderNodeTexCoord')
+    ck = nt.nodes.new('ShaderNodeTexChecker')
+    ck.inputs['Scale'].default_value = 2.0
+    ck.inputs['Color1'].default_value = (0.9, 0.9, 0.9, 1)
+    ck.inputs['Color2'].default_value = (0.3, 0.3, 0.3, 1)
+    nt.links.new(tc.outputs['Object'], ck.inputs['Vector'])
+    vc = nt.nodes.new('ShaderNodeVertexColor')
+    vc.layer_name = 'Col'
+    mix = scenes.mix_node(nt, 'MULTIPLY', ck.outputs['Color'], vc.outputs['Color'], 1.0)
+    nt.links.new(mix.outputs['Result'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    ob = _grid("Panel", mat)
+    _colours(ob, 'Col', 'POINT', 'FLOAT_COLOR', _random(3))
+    sc = _seen_from_above()
+    scenes.light('SUN', math.pi, angle=0.0)
+    err = _compare_seen(_rgb(tmp_path), 0.015)
+    print(f"checker x colour: worst block {err:.4f} of Cycles' brightest")
+    _quiet(said)
