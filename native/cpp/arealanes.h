@@ -50,7 +50,8 @@ inline float atan2(float y, float x) {
 
 // Samples of area lamp L (area_lanes_apply) toward the points (Px, Py, Pz)[k] with uniforms
 // u1[k], u2[k], k < kLampLanes: what sample_lamp(L, P_k, u1[k], u2[k]) returns, per lane.
-inline void sample_area_lanes(const LampRecord& L, const float* Px, const float* Py, const float* Pz,
+// (always inlined: a caller compiled per instruction set takes its lanes into its own vectors)
+__attribute__((always_inline)) inline void sample_area_lanes(const LampRecord& L, const float* Px, const float* Py, const float* Pz,
                               const float* u1, const float* u2, LampLanes& s) {
     using namespace lampmath;
     constexpr int K = kLampLanes;
