@@ -18,7 +18,7 @@ namespace {
 // selection probabilities p_sel (per position) and its no_mis: sample_lamp and nee_scale,
 // kLampLanes points at a time (arealanes.h; a short last group repeats its last point), the
 // same operations per lane, so the same bits; out[js[k]] gets each. Cloned per instruction set:
-// baseline x86-64 ran the 8 lanes as two 4-wide halves with scalar square roots in places.
+// baseline x86-64 runs the lanes 4 wide.
 __attribute__((target_clones("avx512f", "avx2", "default")))
 void draw_area_lanes(const LampRecord& lamp, bool no_mis, const float* p_sel, const VertexPoints& p, size_t i0,
                      const uint16_t* js, size_t m, const uint32_t* wa, const uint32_t* wb, Drawn* out) {

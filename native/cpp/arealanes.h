@@ -14,7 +14,9 @@
 
 namespace dacrt {
 
-constexpr int kLampLanes = 8;
+// 16: one AVX-512 vector per step (two AVX2 ones): with 8, a Cornell render's shade_bounce took
+// 5% more CPU and its lamp_gather (AVX2 clone) 24% more.
+constexpr int kLampLanes = 16;
 
 struct LampLanes {
     float wi[3][kLampLanes], dist[kLampLanes], value[3][kLampLanes], pdf[kLampLanes];
