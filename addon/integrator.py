@@ -288,6 +288,9 @@ class Integrator:
         self._albedo_varies = bool(self.mats.textures) or (self.tri.colors is not None and bool(self.mats.colored.any()))
         # normal maps bend shading normals (they need the tangents the export made)
         self._bumped = bool(self.mats.normal_maps) and self.tri.tangents is not None
+        # procedural chains reading a normal (Geometry Normal / True Normal, Texture Coordinate
+        # Normal): their hits say which side the ray met (Cycles turns N and Ng to face it)
+        self._sided = self.mats.reads_side
         # diffuse transmission (Translucent BSDF): continue_paths multiplies in 1 on such
         # triangles, _translucent_hits and _choose_lobes then weigh the lobes
         tri_translucent = self.mats.translucent[self.tri.material]
@@ -1133,7 +1136,7 @@ class Integrator:
         # the reflection's albedo R, far (sel, thr_far) the transmission's T
         far = self._translucent_hits(prim, thr) if self._any_translucent else None
         if tex:
-            self._albedo_maps(prim, u, v, thr)        # the albedo's maps are the reflection's
+            self._albedo_maps(prim, u, v, thr, self._back(prim, ng))   # the albedo's maps are the reflection's
         ns, bump = self._bent_normals(prim, u, v, ns, ng)
         ns_far = None                                 # the transmission's normal (front-facing)
         if far is not None and bump is not None:
@@ -1305,11 +1308,19 @@ class Integrator:
         offset off the surface toward the ray's side (all (3,k)), of the rays sel (None: all)."""
         return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D)
 
-    def _albedo_maps(self, prim, u, v, albedo):
+    def _back(self, prim, n):
+        """(k,) bool: the hits on prim met from behind (n (3, k): the normals turned to face the
+        rays, or the rays' directions negated), where a chain reads a normal; else None (no
+        material reads the side)."""
+        if not self._sided:
+            return None
+        return (np.take(self.tri.geo[9:12], prim, axis=1) * n).sum(axis=0) < 0
+
+    def _albedo_maps(self, prim, u, v, albedo, back=None):
         """Multiply what varies over a surface into albedo (3, k) (or a throughput that
         includes it) at hits (prim, u, v), in place: the colour textures, then the attribute
         colours (Geometry.colors) of the materials that read one."""
-        self._texture(prim, u, v, albedo)
+        self._texture(prim, u, v, albedo, back=back)
         if self.tri.colors is not None:
             sel = np.flatnonzero(np.take(self.mats.colored, np.take(self.tri.material, prim)))
             if len(sel):
@@ -1317,7 +1328,7 @@ class Integrator:
                 rows = np.take(self.tri.colors, p, axis=1)
                 albedo[:, sel] *= rows[0:3] + rows[3:6] * np.take(u, sel) + rows[6:9] * np.take(v, sel)
 
-    def _texture(self, prim, u, v, albedo, textures=None, signed=False):
+    def _texture(self, prim, u, v, albedo, textures=None, signed=False, back=None):
         """Multiply image textures (on the UV map, through each texture's affine map) into
         albedo (3,k) (or a throughput that includes it) in place: the materials' colour
         textures, or the entries `textures` lists (material, texture, modes) instead. signed:
@@ -1333,7 +1344,8 @@ class Integrator:
                 # negative blend is 0 there (and NaN too), not a negative albedo
                 # (an emission's is not a closure weight: Cycles keeps it signed, so a wide-gamut
                 # screen's out-of-gamut texels subtract as there)
-                texel = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))
+                texel = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel),
+                                     None if back is None else np.take(back, sel))
                 # (an infinite texel as a NaN one, as Cycles renders both: the blend is inf or NaN
                 # there, and Cycles' film drops what it reaches; a kept inf had dropped whole samples
                 # here, darkening more than Cycles around it)
@@ -1481,10 +1493,11 @@ class Integrator:
         image-emission triangles, whose hits and samples are then scaled by _emission_at)."""
         return self._tri_emission if self._tri_emission_unit is None else self._tri_emission_unit
 
-    def _emission_at(self, prim, u, v):
-        """Radiance (3, k) of image-emission triangles prim at barycentrics (u, v)."""
+    def _emission_at(self, prim, u, v, back=None):
+        """Radiance (3, k) of image-emission triangles prim at barycentrics (u, v) (back: the
+        hits met from behind, for chains reading a normal; None: the front)."""
         out = np.ones((3, len(prim)), F32)
-        self._texture(prim, u, v, out, self.mats.emission_textures, signed=True)
+        self._texture(prim, u, v, out, self.mats.emission_textures, signed=True, back=back)
         return out
 
     def _textured_samples(self, value, entry, point):
@@ -1521,25 +1534,47 @@ class Integrator:
         uvc = np.take(self.tri.uvs, prim, axis=1)
         return uvc[0] + uvc[2] * u + uvc[4] * v, uvc[1] + uvc[3] * u + uvc[5] * v
 
-    def _coordinates(self, needs, prim, u, v):
+    def _coordinates(self, needs, prim, u, v, back=None):
         """{name: (k, 3) float32} of the texture coordinates `needs` names at hits (prim, u, v):
         'uv' (u, v, 0) of the active UV map, 'generated' and 'object' interpolated from the
         corners (Geometry.coords; 0 where the export gave none, as Cycles reads a missing
-        attribute)."""
+        attribute); Cycles' Geometry node's 'position' (the hit point on the triangle, world
+        space), 'normal' (the shading normal: the corner normals interpolated and normalized, or
+        the face's), 'true_normal' (the face's) and Texture Coordinate's 'object_normal' (the
+        object-space corner normals interpolated, normalized; Geometry.coords 6:9), the normals
+        turned to the ray's side where back (k,) says it met the back (Cycles' shader setup
+        negates N and Ng there); None: the front."""
         out = {}
         if 'uv' in needs:
             tu, tv = self._uv(prim, u, v)
             out['uv'] = np.stack([tu, tv, np.zeros_like(tu)], axis=1)
         rows = self.tri.coords
-        for k, name in enumerate(('generated', 'object')):
+        width = 0 if rows is None else len(rows) // 3
+        for k, name in enumerate(('generated', 'object', 'object_normal')):
             if name not in needs:
                 continue
-            if rows is None:
+            if rows is None or width < 3 * k + 3:
                 out[name] = np.zeros((len(prim), 3), F32)
                 continue
             r = np.take(rows, prim, axis=1)
-            c = r[3 * k:3 * k + 3] + r[6 + 3 * k:9 + 3 * k] * u + r[12 + 3 * k:15 + 3 * k] * v
+            c = r[3 * k:3 * k + 3] + r[width + 3 * k:width + 3 * k + 3] * u + r[2 * width + 3 * k:2 * width + 3 * k + 3] * v
+            if name == 'object_normal':
+                c = self._sided_unit(c, back)
             out[name] = np.ascontiguousarray(c.T, F32)
+        if 'position' in needs or 'normal' in needs or 'true_normal' in needs:
+            g = np.take(self.tri.geo, prim, axis=1)
+            if 'position' in needs:
+                p = g[0:3].astype(np.float64) + g[3:6] * u + g[6:9] * v + self.origin[:, None]
+                out['position'] = np.ascontiguousarray(p.T, F32)
+            if 'true_normal' in needs:
+                out['true_normal'] = np.ascontiguousarray(self._sided_unit(g[9:12], back).T, F32)
+            if 'normal' in needs:
+                if self.tri.normals is None:
+                    n = g[9:12]
+                else:
+                    nr = np.take(self.tri.normals, prim, axis=1)
+                    n = nr[0:3] + nr[3:6] * u + nr[6:9] * v
+                out['normal'] = np.ascontiguousarray(self._sided_unit(n, back).T, F32)
         # per-object values (Object Info outputs): the hit triangle's placement's; mesh
         # attributes (procedural.ATTRIBUTE_NEED): their RGBA interpolated from the corners
         for name in needs:
@@ -1556,12 +1591,19 @@ class Integrator:
                 out[name] = a
         return out
 
-    def _lookup(self, tex, interp, ext, xf, prim, u, v):
+    @staticmethod
+    def _sided_unit(n, back):
+        """n (3, k) normalized (a zero one stays 0) and negated where back."""
+        length = np.sqrt((n * n).sum(axis=0))
+        n = n / np.where(length > 0, length, 1)
+        return n if back is None else np.where(back, -n, n)
+
+    def _lookup(self, tex, interp, ext, xf, prim, u, v, back=None):
         """RGB (3,k) of a texture at hits (prim, u, v) on the UV map (no UV map: (0, 0), as
         Cycles reads a missing attribute), through its affine map xf (or None); a procedural
         texture at the hits' texture coordinates."""
         if isinstance(tex, ProceduralTexels):
-            return self._procedural(tex, prim, u, v)
+            return self._procedural(tex, prim, u, v, back)
         tu, tv = self._uv(prim, u, v)
         if xf is not None:
             tu, tv = xf[0, 0] * tu + xf[0, 1] * tv + xf[0, 2], xf[1, 0] * tu + xf[1, 1] * tv + xf[1, 2]
@@ -1571,23 +1613,24 @@ class Integrator:
     # ~35 us a point in numpy, so a bounce's hits at once had kept Esc waiting for many seconds
     _PROCEDURAL_CHUNK = 32768
 
-    def _procedural(self, tex, prim, u, v):
+    def _procedural(self, tex, prim, u, v, back=None):
         """RGB (3,k) of a procedural texture at hits (prim, u, v), in chunks with Esc polled
         between them (the pass is then dropped, as at a bounce)."""
         n, step = len(prim), self._PROCEDURAL_CHUNK
         if n <= step:
-            return tex.evaluate(self._coordinates(tex.needs, prim, u, v))
+            return tex.evaluate(self._coordinates(tex.needs, prim, u, v, back))
         out = np.empty((3, n), F32)
         for a in range(0, n, step):
             if a and self._check_break():
                 raise _PassCancelled()
             b = min(n, a + step)
-            out[:, a:b] = tex.evaluate(self._coordinates(tex.needs, prim[a:b], u[a:b], v[a:b]))
+            out[:, a:b] = tex.evaluate(self._coordinates(tex.needs, prim[a:b], u[a:b], v[a:b],
+                                                         None if back is None else back[a:b]))
         return out
 
     # --- transparent surfaces -------------------------------------------------------------------
 
-    def _transparency(self, prim, u, v):
+    def _transparency(self, prim, u, v, back=None):
         """At hits (prim, u, v) on transparent triangles: the weight rays pass with (3,k) and
         the opacity (k,) the rest of the shader carries (1 but under opacity textures; the
         opaque part's own glass passes at that opacity, the transparency at 1 - opacity)."""
@@ -1597,7 +1640,8 @@ class Integrator:
         for (m, tex, interp, ext, xf), sel in zip(self.mats.opacity,
                                                   _hits_by_material(mat, [e[0] for e in self.mats.opacity])):
             if len(sel):
-                a = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))[0]
+                a = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel),
+                                 None if back is None else np.take(back, sel))[0]
                 a = np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)    # a NaN texel: opaque
                 opacity[sel] = a
                 tau[:, sel] = tau[:, sel] * (1.0 - a) + self.mats.opaque_refraction[:, m:m + 1] * a
@@ -1631,7 +1675,9 @@ class Integrator:
             # Cycles counts transparent surfaces over the whole path: once a pass reaches the
             # limit, the next surface, this one too, is not passed (nor lit, nor bounced off:
             # _vertex); what it emits still counts. Glass: against its own limit
-            tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows))
+            tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows),
+                                                   None if not self._sided else
+                                                   self._back(prim, -np.take(path.D, rows, axis=1)))
             glass = np.take(self._mat_glass, mat)
             if self._opaque_glass:
                 glass = 2.0 * self._glass_part(mat, tau, opacity).mean(axis=0) > tau.mean(axis=0)
@@ -1745,7 +1791,7 @@ class Integrator:
             P, ng, ns, P_off = (x[:, go] for x in surface)
         thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
         if self._albedo_varies:
-            self._albedo_maps(prim, u, v, thr)
+            self._albedo_maps(prim, u, v, thr, self._back(prim, ng))
         ns, bump = self._bent_normals(prim, u, v, ns, ng)
         keys = np.ascontiguousarray(np.take(path.keys, rows, axis=1))
         u_pick = None
@@ -1844,7 +1890,9 @@ class Integrator:
                 if not len(at):
                     break
             rows_at = rows[at]
-            tau = self._transparency(hits['prim'][at], hits['u'][at], hits['v'][at])[0]
+            tau = self._transparency(hits['prim'][at], hits['u'][at], hits['v'][at],
+                                     None if not self._sided else
+                                     self._back(hits['prim'][at], -np.take(D, at, axis=1)))[0]
             tau[:, np.take(left, rows_at) <= j] = 0.0      # over the path's limit: blocked
             atten[:, rows_at] *= tau
             go = at[tau.max(axis=0) > 0]        # fully opaque there: nothing left to trace
@@ -1873,11 +1921,11 @@ class Integrator:
         hu, hv = np.take(hits['u'], idx), np.take(hits['v'], idx)
         if len(idx):
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1)
+            P, ng, ns, _ = self._surface(hits, idx, path.D)
             if self._albedo_varies:
-                self._albedo_maps(prim, hu, hv, albedo)
+                self._albedo_maps(prim, hu, hv, albedo, self._back(prim, ng))
             if self._any_translucent:                 # Cycles' diffuse closures include it
                 albedo += np.take(self.mats.translucency, np.take(self.tri.material, prim), axis=1)
-            P, ng, ns, _ = self._surface(hits, idx, path.D)
             ns = self._bent_normals(prim, hu, hv, ns, ng)[0]          # Cycles: the bent normal
         else:
             P = ns = albedo = np.zeros((3, 0), F32)
@@ -2030,7 +2078,7 @@ class Integrator:
         def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns, depth, tau=None):
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
             if self._albedo_varies:
-                self._albedo_maps(prim, u, v, albedo)
+                self._albedo_maps(prim, u, v, albedo, self._back(prim, ns))     # (ns faces the ray)
             if self._any_translucent:
                 albedo += np.take(self.mats.translucency, np.take(self.tri.material, prim), axis=1) * weight
             if denoise is not None:
@@ -2123,7 +2171,9 @@ class Integrator:
             at = np.flatnonzero(hit & np.take(self._tri_emit_tex, prim))
             if len(at):
                 thr = np.ones((3, len(hit)), F32) if thr is None else thr.copy()
-                thr[:, at] *= self._emission_at(prim[at], hits['u'][at], hits['v'][at])
+                thr[:, at] *= self._emission_at(prim[at], hits['u'][at], hits['v'][at],
+                                                None if not self._sided else
+                                                self._back(prim[at], -np.take(path.D, at, axis=1)))
         for mask, out in outs:
             dacrt.shading.gather_emission(hits, mask, self._emission_table(), self._tri_emissive,
                                           None if camera else self.lights.tri_prob, self._area32, self.tri.geo,

@@ -9,7 +9,8 @@ Cycles puts them.
 `ProceduralTexels` is what a material's colour texture is when its colour comes from these
 nodes: the export compiles the node chain (export/procedurals.py) into a function
 of the shading point's texture coordinates, and the integrator calls `evaluate` with the
-coordinates it needs ('generated', 'object', 'uv'; each (n, 3)) at its hits instead of looking
+coordinates it needs (COORDINATES: Texture Coordinate Generated, Object, UV and Normal,
+Geometry Position, Normal and True Normal; each (n, 3)) at its hits instead of looking
 an image up.
 """
 
@@ -20,7 +21,9 @@ import numpy as np
 
 F32 = np.float32
 
-COORDINATES = ('generated', 'object', 'uv')
+COORDINATES = ('generated', 'object', 'uv', 'position', 'normal', 'true_normal', 'object_normal')
+# the coordinates that depend on the side a ray meets a surface from (Cycles turns N and Ng to it)
+SIDED = frozenset({'normal', 'true_normal', 'object_normal'})
 # a need naming a mesh attribute a chain reads per point (export/procedurals._attribute): this
 # prefix and the attribute's key (export/meshes.attribute_key); the integrator gives its RGBA
 # (n, 4) interpolated from the corners (scenedata.Geometry.attributes)

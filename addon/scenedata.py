@@ -232,7 +232,8 @@ class Geometry:
     colors: Optional[np.ndarray] = None
     # (M,3,6) float32 per corner: Generated (0:3) and Object (3:6) texture coordinates of the
     # triangles whose material has a procedural texture reading them, interpolated like UVs;
-    # 0 elsewhere; None: no material reads them
+    # 0 elsewhere; None: no material reads them. (M,3,9): and the object-space normals (6:9),
+    # which Texture Coordinate Normal interpolates (normalized, turned to the ray's side)
     coords: Optional[np.ndarray] = None
     # (AOV name, 'color' | 'value') -> (M,3,C) float32 per corner (C 3 or 1): what the AOV inputs
     # of triangles whose material reads a value per object (Object Info) or per corner (a mesh

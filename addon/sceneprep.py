@@ -66,8 +66,8 @@ def validate(sd: SceneData):
          f"geometry.tangents must be None or ({m}, 3, 4)"),
         (getattr(g, 'colors', None) is None or np.asarray(g.colors).shape == (m, 3, 3),
          f"geometry.colors must be None or ({m}, 3, 3)"),
-        (getattr(g, 'coords', None) is None or np.asarray(g.coords).shape == (m, 3, 6),
-         f"geometry.coords must be None or ({m}, 3, 6)"),
+        (getattr(g, 'coords', None) is None or np.asarray(g.coords).shape in ((m, 3, 6), (m, 3, 9)),
+         f"geometry.coords must be None or ({m}, 3, 6) or ({m}, 3, 9)"),
         (all(np.asarray(a).shape == (m, 3, 3 if kind == 'color' else 1)
              for (_, kind), a in (getattr(g, 'aovs', None) or {}).items()),
          f"geometry.aovs must map (name, 'color' | 'value') to ({m}, 3, 3) or ({m}, 3, 1)"),

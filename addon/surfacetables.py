@@ -8,7 +8,7 @@ import numpy as np
 
 import dacrt
 
-from .procedural import ProceduralTexels
+from .procedural import SIDED, ProceduralTexels
 from .texture import EncodedTexels, UdimTiles, lookup_texels
 
 F32 = np.float32
@@ -87,7 +87,8 @@ class Triangles:
         self.colors = None if colors is None else dacrt.shading.corner_rows(
             np.nan_to_num(np.maximum(np.asarray(colors, F32), 0.0), posinf=0.0))
         # rows: corner 0 generated and object coordinates (0:6), corner 1 - corner 0 (6:12),
-        # corner 2 - corner 0 (12:18), for procedural textures (scenedata.Geometry.coords)
+        # corner 2 - corner 0 (12:18), for procedural textures (scenedata.Geometry.coords); with
+        # the object-space normals C = 9 columns a corner: 0:C, C:2C, 2C:3C
         coords = getattr(geometry, 'coords', None)
         self.coords = None if coords is None else dacrt.shading.corner_rows(
             np.nan_to_num(np.asarray(coords, F32), nan=0.0, posinf=0.0, neginf=0.0))
@@ -196,6 +197,11 @@ class Materials:
                     (i, *texture_entry(mat.name, f"AOV {name!r} {kind}", tex, interp, ext, xf)))
         # the Material Index pass's value of each material (Blender's material pass index)
         self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
+        # a procedural chain reads a normal (Geometry Normal or True Normal, Texture Coordinate
+        # Normal), which Cycles turns to the side the ray meets: its hits say which side that is
+        entries = self.textures + self.emission_textures + self.opacity + \
+            [e for found in self.aov_textures.values() for e in found]
+        self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
         # picks closures by their mean weight): its albedo and diffuse transmission, or 1 where it
         # only emits (a translucent-only part weighed 0: paths always passed, never scattered)

@@ -39,7 +39,7 @@ class _Out:
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
-        self.coords = None                # (m, 3, 6), allocated by the first procedurally textured mesh
+        self.coords = None                # (m, 3, 6 or 9), allocated by the first procedurally textured mesh
         self.aovs = {}                    # (AOV name, kind) -> (m, 3, C), allocated by the first mesh writing it
         self.instance_values = {}         # Object Info need -> (placements, 4): procedural textures read them
         self.attributes = {}              # mesh attribute need -> (m, 3, 4), allocated by the first mesh reading it
@@ -133,8 +133,11 @@ class Assembly:
         self._several_uv_maps()
         self._object_info_albedos()
         self._object_info_aovs()
-        # the materials whose procedural textures read Generated or Object coordinates
+        # the materials whose procedural textures read Generated or Object coordinates (or
+        # Texture Coordinate Normal: the coordinate rows then hold the object-space normals too)
         self._coordinated = {k for k, m in enumerate(self.materials.materials) if _coordinates_read(m)}
+        self._coordinate_width = 9 if any(_coordinates_read(self.materials.materials[k], {'object_normal'})
+                                          for k in self._coordinated) else 6
         self._coordinate_rows, self._frames = {}, {}     # (_texture_coordinates, _object_frame)
         # and those reading Object Info outputs (per placement, by instance id)
         info = [_object_info_read(m) for m in self.materials.materials]
@@ -760,7 +763,7 @@ class Assembly:
         What depends on the mesh and its slot map alone is worked out once for all the
         placements sharing them (per placement, 40K instances had taken 10 s)."""
         if out.coords is None:
-            out.coords = np.zeros((len(out.triangles), 3, 6), np.float32)
+            out.coords = np.zeros((len(out.triangles), 3, self._coordinate_width), np.float32)
         mats = self.materials.materials
         key = (id(a), id(place.slot_map))
         got = self._coordinate_rows.get(key)
@@ -770,6 +773,8 @@ class Assembly:
             kinds = material[rows]
             ks = sorted(set(kinds.tolist()))
             block = a.corner_coordinates()[rows]
+            if self._coordinate_width == 9:
+                block = np.concatenate([block, _object_normals(a)[rows]], axis=2)
             # (known once the coordinates are computed; Object coordinates are exact: said only
             # when a texture of this mesh reads Generated ones)
             rebuilt = bool(a.rebuilt) and any(_coordinates_read(mats[k], {'generated'}) for k in ks)
@@ -889,7 +894,24 @@ def _attributes_read(material):
                    if isinstance(n, str) and n.startswith(ATTRIBUTE_NEED)})
 
 
-def _coordinates_read(material, kinds=frozenset({'generated', 'object'})):
+def _object_normals(a):
+    """(nt, 3, 3) float32: the mesh's corner normals in object space (its faces' where flat or
+    zero), what Texture Coordinate Normal interpolates (Cycles: the world N turned back by the
+    object's transform, normalized; the same direction but under a non-uniform scale of a
+    smooth mesh, where Cycles interpolates the transformed normals)."""
+    p = np.asarray(a.positions, np.float64)[a.triangles]
+    face = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    face /= np.maximum(np.linalg.norm(face, axis=1, keepdims=True), 1e-30)
+    out = np.empty((len(a.triangles), 3, 3), np.float32)
+    out[...] = face[:, None, :]
+    if a.normal_rows is not None and not getattr(a, 'radial_normals', False):
+        n = a.per_corner(np.asarray(a.normal_rows, np.float32), a.normal_index, np.empty_like(out))
+        ok = (n * n).sum(axis=2, keepdims=True) > 1e-24
+        np.copyto(out, n, where=ok)
+    return out
+
+
+def _coordinates_read(material, kinds=frozenset({'generated', 'object', 'object_normal'})):
     """Whether a procedural texture of the material (its colour's, emission's, opacity's or an AOV's) reads Generated or
     Object coordinates (or those of `kinds`)."""
     return any(t.needs & kinds for t in _procedurals(material))

@@ -3,7 +3,8 @@ White Noise, Magic, Gabor): compiled into a function of the shading point's text
 (procedural.ProceduralTexels), which the integrator evaluates at every hit, as Cycles' SVM does:
 a diffuse colour, a Mix Shader's factor, an AOV, an emission's colour x strength.
 The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping
-nodes and Texture Coordinate's Generated, Object and UV outputs (an unlinked Vector: Generated,
+nodes, Texture Coordinate's Generated, Object, UV and Normal outputs and the Geometry node's
+Position, Normal and True Normal (world space) (an unlinked Vector: Generated,
 as in Cycles, but White Noise's, its own value); texture inputs (Scale, Detail, ...) may
 themselves vary over the surface. Anything else (an image, an attribute, another texture or
 coordinate kind) leaves the chain to nodeeval's evaluation, which reads the procedural node's
@@ -25,7 +26,13 @@ from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO
 
 PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK',
                               'TEX_WHITE_NOISE', 'TEX_MAGIC', 'TEX_GABOR'})
-_COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv'}
+_COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv', 'Normal': 'object_normal'}
+# the Geometry node's outputs read per point (world space, Cycles' P, N and Ng; the normals
+# turned to the ray's side as Cycles' shader setup turns them); its others (Backfacing, Incoming,
+# Pointiness, Parametric, Tangent, Random Per Island) are left to the evaluation
+_GEOMETRY = {'Position': 'position', 'Normal': 'normal', 'True Normal': 'true_normal'}
+# nodes a coordinate-only chain starts from
+_COORDINATE_NODES = ('TEX_COORD', 'NEW_GEOMETRY')
 _NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_DIMENSIONS = {'1D': 1, '2D': 2, '3D': 3, '4D': 4}
 _VORONOI_FEATURES = ('F1', 'F2', 'SMOOTH_F1', 'DISTANCE_TO_EDGE', 'N_SPHERE_RADIUS')
@@ -81,7 +88,7 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
     textured = _reaches_procedural(socket, set())
     images = image is not None and _images_reached(socket) >= 2
     if not textured and not images and not ((coordinates or _coordinate_chain(socket))
-                                            and _reaches_procedural(socket, set(), ('TEX_COORD',))):
+                                            and _reaches_procedural(socket, set(), _COORDINATE_NODES)):
         return None
     chain = _Chain([], image, light_path)
     try:
@@ -169,7 +176,7 @@ def _coordinate_chain(socket):
     made of coordinates and colour/float nodes (Separate XYZ into a Color Ramp), which compile
     follows per point as it follows procedural textures. Chains through an image keep the
     image's own path (its UV map and Mapping)."""
-    return _images_reached(socket) == 0 and _reaches_procedural(socket, set(), ('TEX_COORD',))
+    return _images_reached(socket) == 0 and _reaches_procedural(socket, set(), _COORDINATE_NODES)
 
 
 def varies_per_point(socket):
@@ -254,6 +261,12 @@ def _node(node, out, chain, depth):
         chain.needs.add(kind)
         if kind == 'uv':
             chain.needs.add(TEXCOORD_UV)
+        return (lambda c: c[kind]), True
+    if t == 'NEW_GEOMETRY':
+        kind = _GEOMETRY.get(out.name)
+        if kind is None:
+            raise nodeeval.NotCompiled(f"Geometry {out.name}")
+        chain.needs.add(kind)
         return (lambda c: c[kind]), True
     if t == 'OBJECT_INFO':
         # per object or instance (the assembly's table by placement): Cycles' Object Info
