@@ -1500,9 +1500,11 @@ class Integrator:
         self._texture(prim, u, v, out, self.mats.emission_textures, signed=True, back=back)
         return out
 
-    def _textured_samples(self, value, entry, point):
+    def _textured_samples(self, value, entry, point, origin=None):
         """Scale light samples (value (3, n), in place) that picked an image-emission triangle
-        by the image's radiance at the sampled point (point (3, n)), found by its barycentrics."""
+        by the image's radiance at the sampled point (point (3, n)), found by its barycentrics;
+        origin (3, n): the shading points the samples are seen from (the side of the emitter a
+        chain reading its normal sees; None: the front)."""
         tris, r = self.lights.triangles, self.lights.num_lamps
         if tris is None:
             return
@@ -1524,7 +1526,9 @@ class Integrator:
         with np.errstate(divide='ignore', invalid='ignore'):
             bu = np.where(den > 0, (d11 * d20 - d01 * d21) / den, 0.0)
             bv = np.where(den > 0, (d00 * d21 - d01 * d20) / den, 0.0)
-        value[:, idx] *= self._emission_at(prim, bu.astype(F32), bv.astype(F32))
+        back = None if origin is None or not self._sided else \
+            self._back(prim, origin[:, idx].astype(np.float64) - point[:, idx])
+        value[:, idx] *= self._emission_at(prim, bu.astype(F32), bv.astype(F32), back)
 
     def _uv(self, prim, u, v):
         """The active UV map's (u, v) (two (k,) arrays) at hits (prim, u, v); (0, 0) without
@@ -2365,7 +2369,7 @@ class Integrator:
             linking=None if self._link is None else (self._entry_set, self._receivers(prim)), entry=entry,
             point=point, bump=bump)
         if textured:
-            self._textured_samples(value, entry, point)
+            self._textured_samples(value, entry, point, P)
         if dark_world:
             off = np.flatnonzero(entry == self.lights.num_entries - 1)     # (the map is the last entry)
             value[:, off] = 0.0

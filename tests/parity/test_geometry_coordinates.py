@@ -212,3 +212,99 @@ def test_double_sided_plane_from_both_sides(tmp_path, said, output):
                                    err_msg=side)
     assert means['above']['CYCLES'][0] > 0.9 and means['below']['CYCLES'][0] < 0.1, means
     assert not any("own value" in t for t in said), said
+
+
+def _normal_color_material(socket_of):
+    """Emission of (a normal) x 0.5 + 0.5; socket_of(nt) gives the normal's socket."""
+    mat, nt, out = _material("NormalColour")
+    vm = nt.nodes.new('ShaderNodeVectorMath')
+    vm.operation = 'MULTIPLY_ADD'
+    vm.inputs[1].default_value = (0.5, 0.5, 0.5)
+    vm.inputs[2].default_value = (0.5, 0.5, 0.5)
+    nt.links.new(socket_of(nt), vm.inputs[0])
+    _emit(nt, out, color=vm.outputs['Vector'])
+    return mat
+
+
+@pytest.mark.parametrize('output', ['texcoord', 'geometry'])
+def test_normals_of_a_scaled_and_mirrored_smooth_sphere(tmp_path, said, output):
+    """The normal as a colour on a smooth sphere scaled (1.6, 0.7, -1.0) (non-uniform and
+    mirrored) and turned: Texture Coordinate Normal (Cycles: the world N turned back by the
+    object's transform and normalized; here the object-space corner normals interpolated and
+    normalized) and Geometry Normal (world), blocks within 1.5% of Cycles'."""
+    if output == 'texcoord':
+        mat = _normal_color_material(lambda nt: nt.nodes.new('ShaderNodeTexCoord').outputs['Normal'])
+    else:
+        mat = _normal_color_material(lambda nt: nt.nodes.new('ShaderNodeNewGeometry').outputs['Normal'])
+    ob = scenes.uv_sphere("Ball", 1.0, segments=24, rings=12, smooth=True, materials=(mat,))
+    ob.scale, ob.rotation_euler = (1.6, 0.7, -1.0), (0.3, 0.0, 0.5)
+    _side_camera(scale=3.6)
+    _settings(64, 0)
+    img = _rgb(tmp_path)
+    d, c = _blocks(img['DACRT']), _blocks(img['CYCLES'])
+    np.testing.assert_allclose(d, c, rtol=0.015, atol=3e-3)
+    assert not any("own value" in t for t in said), said
+
+
+def test_geometry_normal_under_a_normal_map(tmp_path, said):
+    """A Diffuse whose Normal is a Normal Map (a constant tilt toward +X) and whose Color is
+    (Geometry Normal X) x 0.5 + 0.5 through a ramp, on a plane under a sun: Cycles' Geometry
+    Normal is the surface's N, not the mapped normal the BSDF reads (the colour stays the
+    ramp's middle), and so here (the chain is read before the normal map bends the normal):
+    bands within 1.5% of Cycles'."""
+    mat, nt, out = _material("Tilted")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tilt = np.array([0.5 + 0.5 * 0.6, 0.5, 0.5 + 0.5 * 0.8, 1.0], np.float32)
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = scenes.float_image("Tilt", np.tile(tilt, (4, 4, 1)))
+    tex.image.colorspace_settings.name = 'Non-Color'
+    nmap = nt.nodes.new('ShaderNodeNormalMap')
+    nt.links.new(tex.outputs['Color'], nmap.inputs['Color'])
+    nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
+    geo = nt.nodes.new('ShaderNodeNewGeometry')
+    m = nt.nodes.new('ShaderNodeMapRange')
+    m.inputs['From Min'].default_value = -1.0
+    nt.links.new(_component(nt, geo.outputs['Normal'], 'X'), m.inputs['Value'])
+    ramp = _ramp(nt, [(0.3, (0.9, 0.1, 0.1, 1.0)), (0.7, (0.1, 0.1, 0.9, 1.0))])
+    nt.links.new(m.outputs['Result'], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    plane = scenes.plane("Plane", 4.0, materials=(mat,))
+    plane.data.uv_layers.new(name="UVMap")
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 32
+    scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=4.0)
+    scenes.black_world()
+    scenes.light('SUN', 3.0, rotation=(0.0, 0.6, 0.0))
+    _settings(16, 0)
+    img = _rgb(tmp_path)
+    dd, cc = _blocks(img['DACRT']), _blocks(img['CYCLES'])
+    np.testing.assert_allclose(dd, cc, rtol=0.015, atol=2e-3)
+    assert abs(cc[..., 0].mean() - cc[..., 2].mean()) < 0.05 * cc.mean(), "the ramp's middle: N unbent"
+    assert not any("own value" in t for t in said), said
+
+
+def test_emitter_lit_from_its_back_by_normal(tmp_path, said):
+    """A 1.5 x 1.5 emitter 1 above a floor, facing up, whose Strength is 4 x (0.5 - Normal Z / 2):
+    dark seen from its front (above), 4 from its back, which faces the floor: the floor is lit
+    by the back (Cycles turns N to each ray: light samples from the floor see -Z), blocks within
+    3% of Cycles' brightest."""
+    mat, nt, out = _material("Under")
+    geo = nt.nodes.new('ShaderNodeNewGeometry')
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'MULTIPLY_ADD'
+    m.inputs[1].default_value, m.inputs[2].default_value = -2.0, 2.0
+    nt.links.new(_component(nt, geo.outputs['Normal'], 'Z'), m.inputs[0])
+    _emit(nt, out, strength=m.outputs[0])
+    scenes.plane("Lamp", 1.5, location=(0, 0, 1.0), materials=(mat,))
+    scenes.plane("Floor", 8.0, materials=(scenes.diffuse("Grey", (0.8, 0.8, 0.8)),))
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 32
+    scenes.camera((0, -6, 2.5), (math.radians(70), 0, 0))
+    scenes.black_world()
+    _settings(128, 1)
+    img = _rgb(tmp_path)
+    dd, cc = _blocks(img['DACRT']), _blocks(img['CYCLES'])
+    np.testing.assert_allclose(dd, cc, rtol=0, atol=0.03 * cc.max())
+    np.testing.assert_allclose(dd.mean(), cc.mean(), rtol=0.02)
+    assert not any("own value" in t for t in said), said
