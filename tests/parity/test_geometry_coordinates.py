@@ -158,20 +158,23 @@ def test_object_normal_of_a_rotated_cube(tmp_path, said):
     assert not any("own value" in t for t in said), said
 
 
-def test_emission_strength_from_position(tmp_path, said):
-    """Emission Strength = Position X + 3 on a plane moved to x = 1 (world space: 1.5 .. 5.5
-    across it, where the object's X would give 0.5 .. 4.5): columns within 1% of Cycles'."""
+@pytest.mark.parametrize('x0', [1.0, 50.0], ids=['near', 'far'])
+def test_emission_strength_from_position(tmp_path, said, x0):
+    """Emission Strength = Position X + 4 - x0 on a 4 x 4 plane moved to x = x0 (world space: 2 ..
+    6 across it, where the object's X would give 2 - x0 .. 6 - x0); at x0 = 50 the render
+    recentres the scene (sceneprep.recentred), which Position undoes: columns within 1% of
+    Cycles'."""
     mat, nt, out = _material("Glow")
     geo = nt.nodes.new('ShaderNodeNewGeometry')
     m = nt.nodes.new('ShaderNodeMath')
-    m.inputs[1].default_value = 3.0
+    m.inputs[1].default_value = 4.0 - x0
     nt.links.new(_component(nt, geo.outputs['Position'], 'X'), m.inputs[0])
     em = _emit(nt, out, strength=m.outputs[0])
     em.inputs['Color'].default_value = (0.3, 0.2, 0.1, 1.0)
-    scenes.plane("Plane", 4.0, location=(1.0, 0.0, 0.0), materials=(mat,))
+    scenes.plane("Plane", 4.0, location=(x0, 0.0, 0.0), materials=(mat,))
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
-    scenes.camera((1, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=4.0)
+    scenes.camera((x0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=4.0)
     scenes.black_world()
     _settings(64, 0)
     img = _rgb(tmp_path)
