@@ -1561,7 +1561,8 @@ class Integrator:
                 out[name] = np.zeros((len(prim), 3), F32)
                 continue
             r = np.take(rows, prim, axis=1)
-            c = r[3 * k:3 * k + 3] + r[width + 3 * k:width + 3 * k + 3] * u + r[2 * width + 3 * k:2 * width + 3 * k + 3] * v
+            a, b = 3 * k, 3 * k + 3
+            c = r[a:b] + r[width + a:width + b] * u + r[2 * width + a:2 * width + b] * v
             if name == 'object_normal':
                 c = self._sided_unit(c, back)
             out[name] = np.ascontiguousarray(c.T, F32)
