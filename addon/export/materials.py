@@ -90,12 +90,14 @@ def _lookup_chain(compiled, clamp):
     return chain
 
 
-def _attribute_probe(rng):
+def _attribute_probe(rng, alpha=False):
     """(1, 64, 4) values an attribute reads while the export probes a chain: random colours
-    (up to 10 on the last entries) at alpha 1 (see MaterialBuilder._ATTRIBUTE_PROBE)."""
+    (up to 10 on the last entries) at alpha 1 (see MaterialBuilder._ATTRIBUTE_PROBE), or at
+    random alphas in [0, 1] with `alpha` (an Alpha output read is then seen to vary)."""
     p = rng.random((1, 64, 4)).astype(np.float32)
     p[0, 40:, :3] = 1.0 + 9.0 * p[0, 40:, :3]
-    p[..., 3] = 1.0
+    if not alpha:
+        p[..., 3] = 1.0
     return p
 
 
@@ -276,11 +278,13 @@ class MaterialBuilder:
     def _pixels_of(self, name):
         """What attribute `name` reads in this build: _attribute_pixels, or its entry where that
         is a dict per attribute (several read together: _several_attributes, evaluated_albedo;
-        one the albedo does not follow reads the first's). Notes the name read."""
+        one the albedo does not follow reads colour and alpha 1: its values change nothing there,
+        and it must not read another's, as an Alpha output had read the colour attribute's alpha
+        beside it). Notes the name read."""
         self._attribute_names.append(name)
         px = self._attribute_pixels
         if isinstance(px, dict):
-            return px[name] if name in px else next(iter(px.values()))
+            return px[name] if name in px else np.ones_like(next(iter(px.values())))
         return px
 
     def _build(self, mat):
@@ -350,9 +354,11 @@ class MaterialBuilder:
 
     @staticmethod
     def _several_probes(names, seed):
-        """{name: (1, 64, 4)} probe values of each attribute, each its own (_attribute_probe)."""
+        """{name: (1, 64, 4)} probe values of each attribute, each its own (_attribute_probe),
+        alphas too: an Alpha output (Object Info's, an attribute's) is followed only if its
+        probes differ (at alpha 1 in both sets it was not, and read the other attribute's)."""
         rng = np.random.default_rng(seed)
-        return {n: _attribute_probe(rng) for n in names}
+        return {n: _attribute_probe(rng, alpha=True) for n in names}
 
     def _albedo_on(self, mat, pixels):
         """The albedo (64, 3) the material has where its attributes read pixels (a dict per
@@ -392,12 +398,11 @@ class MaterialBuilder:
             self._attribute_map = ('object', tuple(follows), mat)
             return m
         self._attribute_map = ('corners', tuple(follows), mat)
-        # per-corner values interpolated: exact where the nodes are affine in the mesh
-        # attributes' colours, whatever per-object values they read beside (and read no alpha)
+        # per-corner values interpolated (alphas too): exact where the nodes are affine in the
+        # mesh attributes' colours and alphas, whatever per-object values they read beside
         mesh = [n for n in follows if not n.startswith(OBJECT_INFO)]
-        x = np.concatenate([probes[n][0, :, :3] for n in mesh], axis=1).astype(np.float64)
-        alphas = {n: np.concatenate([p[..., :3], other[n][..., :1]], axis=-1) for n, p in probes.items()}
-        affine = np.allclose(self._albedo_on(mat, alphas), base, rtol=1e-6, atol=1e-9)
+        x = np.concatenate([probes[n][0] for n in mesh], axis=1).astype(np.float64)
+        affine = True
         for row in (0, 1):                  # the per-object ones fixed, at two values
             fixed = {n: p if n in mesh else np.repeat(p[:, row:row + 1], p.shape[1], axis=1) for n, p in probes.items()}
             affine = affine and _affine_fit(x, self._albedo_on(mat, fixed), 1e-5)
