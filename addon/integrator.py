@@ -67,7 +67,7 @@ from .pathstate import Paths, Sinks, compact
 from .procedural import ATTRIBUTE_NEED, ProceduralTexels
 from .sampling import RandomStream, max3
 from .sceneprep import recentred, validate
-from .scenedata import HOLDOUT, NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
+from .scenedata import HOLDOUT, NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 from .surfacetables import Materials, Triangles
 from .texture import texture_lookup
 
@@ -439,6 +439,14 @@ class Integrator:
             self.messages.append(('INFO', f"skipped {len(zero)} light(s) with zero strength: "
                                           f"{', '.join(dict.fromkeys(zero))}"))
         treeless = {n: why[n] for n in self.lights.skipped_lamps if why.get(n)}
+        # a strength 0 only from a stand-in (a Noise into the Strength): not said "as in Cycles"
+        stood = {n: w for n, w in treeless.items() if STAND_IN_ZERO in w}
+        treeless = {n: w for n, w in treeless.items() if n not in stood}
+        if stood:
+            self.messages.append(('WARNING', f"skipped {len(stood)} light(s) whose node-tree strength reads 0 "
+                                             "here (nodes not evaluated for a light stand at their own values; "
+                                             "Cycles evaluates them): " +
+                                  ', '.join(f"{n} ({w})" for n, w in stood.items())))
         if treeless:
             self.messages.append(('INFO', f"skipped {len(treeless)} light(s) whose node tree emits nothing, as in "
                                           "Cycles: " + ', '.join(f"{n} ({w})" for n, w in treeless.items())))

@@ -28,6 +28,9 @@ NO_TRANSMISSION = 32
 # Ray Visibility > Transmission on with Camera, Diffuse and Shadow off: rays past glass alone see
 # it (with any of those bits, transmission rays see it unless NO_TRANSMISSION says otherwise)
 VIS_TRANSMISSION = 128
+# in Light.no_emission where its node-tree strength came out 0 only because a node not
+# evaluated for a light stood at its own value (Cycles may light it: not said as "as in Cycles")
+STAND_IN_ZERO = " read as 0"
 
 
 @dataclass

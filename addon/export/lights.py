@@ -235,7 +235,7 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None):
     if node.type in ('EMISSION', 'BACKGROUND'):      # Cycles: a Background shader emits there too
         # the strength first: at 0 nothing emits whatever the colour, so a colour the export
         # cannot compute approximates nothing (it had warned for a lamp dimmed to 0)
-        strength = _light_strength(node.inputs['Strength'], reasons, kind)
+        strength = _light_strength(node.inputs['Strength'], reasons, kind, dark)
         if strength == 0.0:
             return np.zeros(3)
         color = _light_color(node.inputs['Color'], "Emission", reasons, kind)
@@ -250,12 +250,12 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None):
         b = _light_surface(node.inputs[2], reasons, depth + 1, dark, kind) if fac != 0.0 else np.zeros(3)
         return (1.0 - fac) * a + fac * b
     if node.type == 'BSDF_PRINCIPLED':   # its emission layer lights; its BSDFs do not
-        return _principled_emission(node, reasons, kind)
+        return _principled_emission(node, reasons, kind, dark)
     reasons.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")
     return np.zeros(3)
 
 
-def _principled_emission(node, reasons, kind=None):
+def _principled_emission(node, reasons, kind=None, dark=None):
     """A Principled BSDF's emission in a light's shader: Emission Color x Emission Strength,
     under its coat and sheen (principled.emission_dim) and scaled by its alpha, as its weight
     in Cycles' closure."""
@@ -263,7 +263,7 @@ def _principled_emission(node, reasons, kind=None):
     strength_socket = input_socket(node, 'Emission Strength')
     if color_socket is None or strength_socket is None:
         return np.zeros(3)
-    strength = _light_strength(strength_socket, reasons, kind)
+    strength = _light_strength(strength_socket, reasons, kind, dark)
     if strength == 0.0:                 # (as an Emission's: the colour then lights nothing)
         return np.zeros(3)
     color = _light_color(color_socket, "Principled emission", reasons, kind)
@@ -272,15 +272,46 @@ def _principled_emission(node, reasons, kind=None):
     return np.array(color[:3], np.float64) * strength * alpha * principled.emission_dim(node)
 
 
-def _light_strength(socket, reasons, kind=None):
-    """An Emission's strength in a light's shader (a Light Falloff's output: see _past_falloff)."""
+def _light_strength(socket, reasons, kind=None, dark=None):
+    """An Emission's strength in a light's shader (a Light Falloff's output: see _past_falloff).
+    A node not evaluated for a light stands at the own value of the input it is linked into
+    and the rest of the chain is computed on it, as a material's evaluation does (it had read
+    the Strength socket's own value: Noise x 0 lit at 1, 25.9x Cycles). A strength of 0 from
+    that goes into `dark`, said as such (it had been "zero strength", its 300 W panel
+    contradicting it)."""
     socket = _past_falloff(socket, reasons, kind)
     why = []
     strength, ok = constant_value(socket, why=why)
-    if not ok:
+    if ok:
+        return float(strength)
+    notes = []
+    value = float(_LightEvaluator(notes).input(socket, False).value[0])
+    strength = 0.0 if value != value else value        # (NaN: 0, as constant_value reads it)
+    link, carrier = nodegraph.source(socket)
+    if link is not None and notes == [nodeeval.stand_in_note(link.from_node, carrier, strength, False)]:
+        # the node feeds the Strength itself: its own value is the strength
         reasons.append(f"Emission strength driven by nodes ({_named(why)}, not evaluated for a light); "
-                       f"its own value {float(strength):g} used")
-    return float(strength)
+                       f"its own value {strength:g} used")
+    else:
+        reasons.append(f"Emission strength driven by nodes, not evaluated for a light "
+                       f"({'; '.join(dict.fromkeys(notes))}); the chain computed on that: {strength:g}")
+    if strength == 0.0 and dark is not None:
+        dark.append(f"its node-tree Strength ({_named(why)}){sd.STAND_IN_ZERO}")
+    return strength
+
+
+class _LightEvaluator(nodeeval.Evaluator):
+    """nodeeval's evaluation of a light's shader input: what it cannot compute for a light (an
+    image, a procedural texture, Light Path, an attribute) stands at the own value of the
+    input it is linked into (noted in reasons), the colour and float nodes after it computed."""
+
+    def __init__(self, reasons):
+        super().__init__(None, reasons, None)
+
+    def _node(self, node, out, depth):
+        if node.type in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
+            return None
+        return super()._node(node, out, depth)
 
 
 def _past_falloff(socket, reasons, kind=None):
