@@ -389,7 +389,7 @@ def test_procedural_texture_times_attribute_in_a_diffuse_colour(tmp_path, said):
     nt.links.new(d.outputs[0], out.inputs['Surface'])
     ob = _grid("Panel", mat)
     _colours(ob, 'Col', 'POINT', 'FLOAT_COLOR', _random(3))
-    sc = _seen_from_above()
+    _seen_from_above()
     scenes.light('SUN', math.pi, angle=0.0)
     err = _compare_seen(_rgb(tmp_path), 0.015)
     print(f"checker x colour: worst block {err:.4f} of Cycles' brightest")
