@@ -195,6 +195,18 @@ def mix_node(nt, blend, a, b, fac=0.5):
     return m
 
 
+def colour_attribute(nt, name, by_attribute_node=False):
+    """The Color output of a Color Attribute node reading `name` (an Attribute node's when
+    by_attribute_node)."""
+    if by_attribute_node:
+        node = nt.nodes.new('ShaderNodeAttribute')
+        node.attribute_name = name
+    else:
+        node = nt.nodes.new('ShaderNodeVertexColor')
+        node.layer_name = name
+    return node.outputs['Color']
+
+
 def multiply_add(nt, x, scale, offset):
     """A Math Multiply Add node's output: x (a socket) x scale + offset."""
     m = nt.nodes.new('ShaderNodeMath')

@@ -109,13 +109,7 @@ def test_attribute_emission_seen_by_the_camera(tmp_path, said, case):
     bpy.ops.wm.read_factory_settings(use_empty=True)
 
     def wire(nt, em):
-        if case == 'face_colour':
-            node = nt.nodes.new('ShaderNodeAttribute')
-            node.attribute_name = 'Col'
-        else:
-            node = nt.nodes.new('ShaderNodeVertexColor')
-            node.layer_name = 'Col'
-        s = node.outputs['Color']
+        s = scenes.colour_attribute(nt, 'Col', by_attribute_node=case == 'face_colour')
         if case == 'corner_colour_ramp':
             hsv = nt.nodes.new('ShaderNodeHueSaturation')
             hsv.inputs['Saturation'].default_value = 1.4

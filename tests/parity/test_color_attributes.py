@@ -32,13 +32,7 @@ def _grid(name, x, domain, kind, chain):
     mat, nt, out = scenes._material(name)
     d = nt.nodes.new('ShaderNodeBsdfDiffuse')
     nt.links.new(d.outputs[0], out.inputs['Surface'])
-    if chain == 'attribute':
-        node = nt.nodes.new('ShaderNodeAttribute')
-        node.attribute_name = 'Col'
-    else:
-        node = nt.nodes.new('ShaderNodeVertexColor')
-        node.layer_name = 'Col'
-    s = node.outputs['Color']
+    s = scenes.colour_attribute(nt, 'Col', by_attribute_node=chain == 'attribute')
     if chain == 'tint':
         s = scenes.mix_node(nt, 'MULTIPLY', s, (0.5, 0.8, 1.0), 1.0).outputs['Result']
     elif chain == 'image':                    # an 8-bit image times the colours (glTF's COLOR_0)

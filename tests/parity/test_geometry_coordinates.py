@@ -58,6 +58,17 @@ def _side_camera(size=48, scale=2.4):
     return sc
 
 
+def _blocks_agree(tmp_path, said, samples, bounces, rtol, atol):
+    """Render with both engines, check DACRT's 4 x 4 block means against Cycles' and that no
+    node was read at its own value; (DACRT's, Cycles' blocks)."""
+    _settings(samples, bounces)
+    img = _rgb(tmp_path)
+    d, c = _blocks(img['DACRT']), _blocks(img['CYCLES'])
+    np.testing.assert_allclose(d, c, rtol=rtol, atol=atol)
+    assert not any("own value" in t for t in said), said
+    return d, c
+
+
 def _blocks(img, n=4, trim=1):
     """Mean colour of n x n blocks (rows bottom to top, then columns), trimmed at their edges."""
     h, w = img.shape[0] // n, img.shape[1] // n
@@ -86,12 +97,8 @@ def test_normal_z_ramp_on_a_sphere(tmp_path, said, smooth):
     mat = _normal_ramp_material()
     scenes.uv_sphere("Ball", 1.0, segments=16, rings=8, smooth=smooth, materials=(mat,))
     _side_camera()
-    _settings(64, 0)
-    img = _rgb(tmp_path)
-    d, c = _blocks(img['DACRT']), _blocks(img['CYCLES'])
-    np.testing.assert_allclose(d, c, rtol=0.015, atol=3e-3)
+    d, c = _blocks_agree(tmp_path, said, 64, 0, 0.015, 3e-3)
     assert c[3, 1:3, 2].mean() > 2 * c[1, 1:3, 2].mean(), "snow on top, rock below"
-    assert not any("own value" in t for t in said), said
 
 
 def test_true_normal_on_a_smooth_sphere(tmp_path, said):
@@ -100,11 +107,7 @@ def test_true_normal_on_a_smooth_sphere(tmp_path, said):
     mat = _normal_ramp_material('True Normal')
     scenes.uv_sphere("Ball", 1.0, segments=12, rings=6, smooth=True, materials=(mat,))
     _side_camera()
-    _settings(64, 0)
-    img = _rgb(tmp_path)
-    d, c = _blocks(img['DACRT']), _blocks(img['CYCLES'])
-    np.testing.assert_allclose(d, c, rtol=0.015, atol=3e-3)
-    assert not any("own value" in t for t in said), said
+    d, c = _blocks_agree(tmp_path, said, 64, 0, 0.015, 3e-3)
 
 
 def test_position_z_gradient_on_floor_and_cubes(tmp_path, said):
@@ -129,11 +132,7 @@ def test_position_z_gradient_on_floor_and_cubes(tmp_path, said):
     scenes.camera((0, -7, 4), (math.radians(62), 0, 0))
     scenes.black_world()
     scenes.light('SUN', 3.0, rotation=(0.5, 0.3, 0.0))
-    _settings(16, 0)
-    img = _rgb(tmp_path)
-    dd, cc = _blocks(img['DACRT']), _blocks(img['CYCLES'])
-    np.testing.assert_allclose(dd, cc, rtol=0.02, atol=4e-3)
-    assert not any("own value" in t for t in said), said
+    dd, cc = _blocks_agree(tmp_path, said, 16, 0, 0.02, 4e-3)
 
 
 def test_object_normal_of_a_rotated_cube(tmp_path, said):
@@ -151,11 +150,7 @@ def test_object_normal_of_a_rotated_cube(tmp_path, said):
     ob = scenes.cube("Box", 1.4, materials=(mat,))
     ob.rotation_euler = (0.5, 0.3, 0.8)
     _side_camera(scale=2.6)
-    _settings(64, 0)
-    img = _rgb(tmp_path)
-    d, c = _blocks(img['DACRT']), _blocks(img['CYCLES'])
-    np.testing.assert_allclose(d, c, rtol=0.015, atol=3e-3)
-    assert not any("own value" in t for t in said), said
+    d, c = _blocks_agree(tmp_path, said, 64, 0, 0.015, 3e-3)
 
 
 @pytest.mark.parametrize('x0', [1.0, 50.0], ids=['near', 'far'])
@@ -242,11 +237,7 @@ def test_normals_of_a_scaled_and_mirrored_smooth_sphere(tmp_path, said, output):
     ob = scenes.uv_sphere("Ball", 1.0, segments=24, rings=12, smooth=True, materials=(mat,))
     ob.scale, ob.rotation_euler = (1.6, 0.7, -1.0), (0.3, 0.0, 0.5)
     _side_camera(scale=3.6)
-    _settings(64, 0)
-    img = _rgb(tmp_path)
-    d, c = _blocks(img['DACRT']), _blocks(img['CYCLES'])
-    np.testing.assert_allclose(d, c, rtol=0.015, atol=3e-3)
-    assert not any("own value" in t for t in said), said
+    d, c = _blocks_agree(tmp_path, said, 64, 0, 0.015, 3e-3)
 
 
 def test_geometry_normal_under_a_normal_map(tmp_path, said):
@@ -279,12 +270,8 @@ def test_geometry_normal_under_a_normal_map(tmp_path, said):
     scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=4.0)
     scenes.black_world()
     scenes.light('SUN', 3.0, rotation=(0.0, 0.6, 0.0))
-    _settings(16, 0)
-    img = _rgb(tmp_path)
-    dd, cc = _blocks(img['DACRT']), _blocks(img['CYCLES'])
-    np.testing.assert_allclose(dd, cc, rtol=0.015, atol=2e-3)
+    dd, cc = _blocks_agree(tmp_path, said, 16, 0, 0.015, 2e-3)
     assert cc[..., 2].mean() > 5 * cc[..., 0].mean(), "the ramp's blue end: N unbent"
-    assert not any("own value" in t for t in said), said
 
 
 def test_emitter_lit_from_its_back_by_normal(tmp_path, said):
