@@ -10,6 +10,7 @@ from ..lights.area import sheared
 from .. import nodeeval, nodegraph
 from ..nodeeval import constant_value, nan_inputs
 from ..nodegraph import input_socket, linked_link, output_node
+from .objectinfo import OBJECT_INFO_OUTPUTS, object_value
 from .shadersockets import mix_factor, value_emission
 
 
@@ -35,17 +36,27 @@ def light_link_receivers(collection):
     return included, frozenset(state.keys() - included)
 
 
-def export_light(ob, matrix, messages, approximated=None):
+def export_light(ob, matrix, messages, approximated=None, info=None):
     """One light object (evaluated) at `matrix` -> scenedata.Light, in Cycles' units.
     approximated: a {what its node tree lacks: {light names}} table the caller reports from,
     one message per text naming every light (linked duplicates of one lamp had said it once
-    each); None: said in messages at once."""
+    each); None: said in messages at once. info: what its node tree's Object Info reads, as a
+    Placement's (objectinfo.object_value: an instance's random id and colour); None: the
+    object's own."""
     light = ob.data
     strength = np.array(light.color, np.float64) * light.energy
     strength *= 2.0 ** getattr(light, 'exposure', 0.0)
     if getattr(light, 'use_temperature', False):
         strength *= np.array(light.temperature_color, np.float64)[:3]
-    shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated)
+    if info is None:
+        info = (ob, 0, False, tuple(ob.color))
+    # Cycles evaluates a light's Object Info for the light object (lights are objects there):
+    # its random, colour, alpha, location and pass index, constant over the lamp
+    location = np.array(matrix, np.float64)[:3, 3]
+
+    def object_info(output):
+        return object_value(info, location, output)
+    shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, object_info)
     strength *= shader
     if not np.isfinite(strength).all():
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
@@ -181,7 +192,7 @@ def _fits_float32(light):
         return False
 
 
-def _light_shader_factor(light, name, messages, approximated=None):
+def _light_shader_factor(light, name, messages, approximated=None, object_info=None):
     """(factor, no_emission): the light's node tree (if used) as a constant RGB factor on its
     colour x power, as Cycles evaluates a light's shader: the emission reaching the output's
     Surface (Emission colour x strength, Add and Mix Shaders of them, a colour or value linked
@@ -189,7 +200,8 @@ def _light_shader_factor(light, name, messages, approximated=None):
     BSDF: no light in Cycles), and no_emission then says why where the tree, not a strength of
     0, is the cause ('' otherwise: the skipped-light message names it). What depends on the
     shading point (textures, a Light Falloff's distance) is read at its own value, with a
-    warning naming the light."""
+    warning naming the light. object_info(output) -> (4,): an Object Info output's value for
+    this light (None: Object Info stands at its own value, as a node not evaluated)."""
     if not getattr(light, 'use_nodes', False) or light.node_tree is None:
         return np.ones(3), ''
     out = output_node(light.node_tree)
@@ -205,7 +217,7 @@ def _light_shader_factor(light, name, messages, approximated=None):
     surface = out.inputs['Surface']
     if not surface.is_linked:
         dark.append("nothing linked into its Light Output's Surface")
-    factor = _light_surface(surface, reasons, 0, dark, light.type)
+    factor = _light_surface(surface, reasons, 0, dark, light.type, object_info)
     no_emission = '; '.join(dict.fromkeys(dark)) if not factor.any() else ''
     if reasons:
         text = '; '.join(dict.fromkeys(reasons))
@@ -216,9 +228,10 @@ def _light_shader_factor(light, name, messages, approximated=None):
     return factor, no_emission
 
 
-def _light_surface(socket, reasons, depth, dark=None, kind=None):
+def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
     """(3,) emission of what feeds a light's shader socket (see _light_shader_factor); dark
-    collects what cuts the tree's emission off (a muted node or link); kind: the light's type."""
+    collects what cuts the tree's emission off (a muted node or link); kind: the light's type;
+    oi: the light's object_info (see _light_shader_factor)."""
     dark = [] if dark is None else dark
     link = linked_link(socket)            # muted nodes are passed through (nodegraph)
     if link is None:
@@ -235,27 +248,27 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None):
     if node.type in ('EMISSION', 'BACKGROUND'):      # Cycles: a Background shader emits there too
         # the strength first: at 0 nothing emits whatever the colour, so a colour the export
         # cannot compute approximates nothing (it had warned for a lamp dimmed to 0)
-        strength = _light_strength(node.inputs['Strength'], reasons, kind, dark)
+        strength = _light_strength(node.inputs['Strength'], reasons, kind, dark, oi)
         if strength == 0.0:
             return np.zeros(3)
-        color = _light_color(node.inputs['Color'], "Emission", reasons, kind)
+        color = _light_color(node.inputs['Color'], "Emission", reasons, kind, oi)
         return np.array(color[:3], np.float64) * strength
     if node.type == 'ADD_SHADER':
-        return _light_surface(node.inputs[0], reasons, depth + 1, dark, kind) + \
-            _light_surface(node.inputs[1], reasons, depth + 1, dark, kind)
+        return _light_surface(node.inputs[0], reasons, depth + 1, dark, kind, oi) + \
+            _light_surface(node.inputs[1], reasons, depth + 1, dark, kind, oi)
     if node.type == 'MIX_SHADER':
         fac = mix_factor(node, reasons, "light Mix Shader", surface=False)
         # a side of weight 0 adds nothing: what it holds approximates nothing either
-        a = _light_surface(node.inputs[1], reasons, depth + 1, dark, kind) if fac != 1.0 else np.zeros(3)
-        b = _light_surface(node.inputs[2], reasons, depth + 1, dark, kind) if fac != 0.0 else np.zeros(3)
+        a = _light_surface(node.inputs[1], reasons, depth + 1, dark, kind, oi) if fac != 1.0 else np.zeros(3)
+        b = _light_surface(node.inputs[2], reasons, depth + 1, dark, kind, oi) if fac != 0.0 else np.zeros(3)
         return (1.0 - fac) * a + fac * b
     if node.type == 'BSDF_PRINCIPLED':   # its emission layer lights; its BSDFs do not
-        return _principled_emission(node, reasons, kind, dark)
+        return _principled_emission(node, reasons, kind, dark, oi)
     reasons.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")
     return np.zeros(3)
 
 
-def _principled_emission(node, reasons, kind=None, dark=None):
+def _principled_emission(node, reasons, kind=None, dark=None, oi=None):
     """A Principled BSDF's emission in a light's shader: Emission Color x Emission Strength,
     under its coat and sheen (principled.emission_dim) and scaled by its alpha, as its weight
     in Cycles' closure."""
@@ -263,30 +276,32 @@ def _principled_emission(node, reasons, kind=None, dark=None):
     strength_socket = input_socket(node, 'Emission Strength')
     if color_socket is None or strength_socket is None:
         return np.zeros(3)
-    strength = _light_strength(strength_socket, reasons, kind, dark)
+    strength = _light_strength(strength_socket, reasons, kind, dark, oi)
     if strength == 0.0:                 # (as an Emission's: the colour then lights nothing)
         return np.zeros(3)
-    color = _light_color(color_socket, "Principled emission", reasons, kind)
+    color = _light_color(color_socket, "Principled emission", reasons, kind, oi)
     alpha_socket = node.inputs.get('Alpha')   # (`in` on an evaluated tree's inputs: False)
     alpha = 1.0 if alpha_socket is None else principled.constant_alpha(alpha_socket, reasons)
     return np.array(color[:3], np.float64) * strength * alpha * principled.emission_dim(node)
 
 
-def _light_strength(socket, reasons, kind=None, dark=None):
+def _light_strength(socket, reasons, kind=None, dark=None, oi=None):
     """An Emission's strength in a light's shader (a Light Falloff's output: see _past_falloff).
     A node not evaluated for a light stands at the own value of the input it is linked into
     and the rest of the chain is computed on it, as a material's evaluation does (it had read
     the Strength socket's own value: Noise x 0 lit at 1, 25.9x Cycles). A strength of 0 from
     that goes into `dark`, said as such (it had been "zero strength", its 300 W panel
-    contradicting it)."""
+    contradicting it). Object Info is computed for the light (oi): exact, nothing said."""
     socket = _past_falloff(socket, reasons, kind)
     why = []
     strength, ok = constant_value(socket, why=why)
     if ok:
         return float(strength)
     notes = []
-    value = float(_LightEvaluator(notes).input(socket, False).value[0])
+    value = float(_LightEvaluator(notes, oi).input(socket, False).value[0])
     strength = 0.0 if value != value else value        # (NaN: 0, as constant_value reads it)
+    if not notes:        # every node computed (Object Info for this light): Cycles' value
+        return strength
     link, carrier = nodegraph.source(socket)
     if link is not None and notes == [nodeeval.stand_in_note(link.from_node, carrier, strength, False)]:
         # the node feeds the Strength itself: its own value is the strength
@@ -302,11 +317,20 @@ def _light_strength(socket, reasons, kind=None, dark=None):
 
 class _LightEvaluator(nodeeval.Evaluator):
     """nodeeval's evaluation of a light's shader input: what it cannot compute for a light (an
-    image, a procedural texture, Light Path, an attribute) stands at the own value of the
-    input it is linked into (noted in reasons), the colour and float nodes after it computed."""
+    image, a procedural texture, Light Path, a mesh attribute) stands at the own value of the
+    input it is linked into (noted in reasons), the colour and float nodes after it computed.
+    Object Info reads the light object's values (oi: see _light_shader_factor), one constant
+    per lamp as Cycles computes it (it had stood at its own value: Random x 10 0.70x Cycles,
+    Color grey)."""
 
-    def __init__(self, reasons):
-        super().__init__(None, reasons, None)
+    def __init__(self, reasons, oi=None):
+        super().__init__(None, reasons, None, attribute=None if oi is None else self._object_info)
+        self._oi = oi
+
+    def _object_info(self, node, out, reasons):
+        if node.type != 'OBJECT_INFO' or out.name not in OBJECT_INFO_OUTPUTS:
+            return None         # (mesh and object attributes: stood in, as before)
+        return _Constant(np.asarray(self._oi(out.name), np.float64))
 
     def _node(self, node, out, depth):
         if node.type in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
@@ -331,15 +355,25 @@ def _past_falloff(socket, reasons, kind=None):
     return falloff.inputs['Strength']
 
 
-def _light_color(socket, what, reasons, kind=None):
+class _Constant:
+    """One value for the whole lamp, as nodeeval reads an attribute's (.pixels of shape (4,))."""
+    __slots__ = ('pixels',)
+
+    def __init__(self, pixels):
+        self.pixels = pixels
+
+
+def _light_color(socket, what, reasons, kind=None, oi=None):
     """The constant colour feeding a light shader's colour socket (a Light Falloff's output as
     grey: see _past_falloff; it had stood at the socket's own value, 0.107 where Cycles
     gives 0.320); nodes the export cannot compute (an image, Light Path) stand at the socket's
-    own value, named."""
+    own value, named. Object Info is computed for the light (oi)."""
     falloff = _past_falloff(socket, reasons, kind)
     if falloff is not socket:
         why = []
         value, ok = constant_value(falloff, why=why)
+        if not ok:
+            value, ok = _computed(falloff, False, oi, value)
         if not ok:
             reasons.append(f"{what} colour from a Light Falloff driven by nodes ({_named(why)}, not evaluated "
                            f"for a light); its own value {float(value):g} used")
@@ -347,9 +381,24 @@ def _light_color(socket, what, reasons, kind=None):
     why = []
     color, ok = nodeeval.constant(socket, True, why=why)
     if not ok:
+        color, ok = _computed(socket, True, oi, color)
+    if not ok:
         reasons.append(f"{what} colour driven by nodes ({_named(why)}, not evaluated for a light); its own "
                        f"value {tuple(round(float(c), 3) for c in color[:3])} used")
     return tuple(float(c) for c in color)
+
+
+def _computed(socket, color, oi, own):
+    """(value, exact): socket computed with Object Info read for the light (oi), exact where
+    nothing else stood in; else (own, False) as before (the caller names the stand-in)."""
+    if oi is None:
+        return own, False
+    notes = []
+    f = _LightEvaluator(notes, oi).input(socket, color)
+    if notes:
+        return own, False
+    v = f.value.reshape(-1)
+    return (float(v[0]) if not color else v), True
 
 
 def _named(why):

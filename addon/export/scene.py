@@ -284,7 +284,10 @@ class Exporter:
             self.ignore(f"ray visibility Glossy {'on' if glossy else 'off'} with Diffuse "
                         f"{'on' if diffuse else 'off'}: glossy layers (rendered as diffuse) take "
                         "this light by its Diffuse visibility", ob.name)
-        light = export_light(ob, inst.matrix_world, self.messages, self.lights_approximated)
+        # what its Object Info reads, as a mesh instance's (_info): an instance's random id and
+        # its instancer's colour (inst.object is read at once, while the iterator holds it)
+        info = (ob, inst.random_id, inst.is_instance, tuple(parent.color))
+        light = export_light(ob, inst.matrix_world, self.messages, self.lights_approximated, info)
         limit = getattr(getattr(ob.data, 'cycles', None), 'max_bounces', None)
         if light is not None and limit is not None:
             light.max_bounces = int(limit)
