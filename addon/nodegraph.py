@@ -17,6 +17,7 @@ Blender node or socket they hold.
 from __future__ import annotations
 
 MAX_HOPS = 256      # reroutes and group boundaries followed before a chain counts as unreadable
+FOLD_DEPTH = 150    # chained Math / Mix nodes folded back from one input (Python's stack)
 
 
 class GraphSocket:
@@ -187,17 +188,19 @@ def links_feeding(socket, descend=lambda node: True, limit=100_000):
 
 def used_outputs(ntree):
     """The outputs (output_key) whose values reach ntree's active output node, following
-    links back as source() does (through reroutes, muted nodes and groups). Cycles removes
-    every other node before it compiles a shader, so an output linked only to something unused
-    (a leftover Math node, a node feeding nothing) counts as unlinked."""
+    links back as source() does (through reroutes, muted nodes and groups), after Cycles'
+    constant folding (_Folder). Cycles removes every other node and link before it compiles a
+    shader, so an output linked only to something unused (a leftover Math node, a node feeding
+    nothing, a Mix factor of a Mix that folds to its A) counts as unlinked."""
     out = output_node(ntree)
+    folder = _Folder()
     used, seen = set(), set()
     todo = [GraphNode(out)] if out is not None else []
     while todo:
         node = todo.pop()
-        for i in range(len(node.inputs)):
-            link = source(node.inputs[i])[0]
-            if link is None:
+        for sock in folder.live_inputs(node):
+            link = folder.input_state(sock)
+            if not isinstance(link, GraphLink):
                 continue
             used.add(output_key(link.from_node, link.from_socket.identifier))
             key = output_key(link.from_node, None)
@@ -205,6 +208,275 @@ def used_outputs(ntree):
                 seen.add(key)
                 todo.append(link.from_node)
     return used
+
+
+class _Const:
+    """An input Cycles sees unlinked after folding: value a float, an (r, g, b) / (x, y, z)
+    tuple, or None where not tracked here (then it is neither 0 nor 1 for the rules)."""
+    __slots__ = ('value',)
+
+    def __init__(self, value):
+        self.value = value
+
+
+def _own_value(socket, crossed=()):
+    """A socket's own value as Cycles holds it (float or 3-tuple), None where a conversion on
+    the way (crossed) or an unusual type makes it untracked."""
+    if crossed:
+        return None
+    v = getattr(unwrap(socket), 'default_value', None)
+    if isinstance(v, (int, float)):
+        return float(v)
+    if v is None or isinstance(v, str):
+        return None
+    try:
+        v = tuple(float(x) for x in v)
+    except (TypeError, ValueError):
+        return None
+    return v[:3] if len(v) >= 3 else None
+
+
+def _is(state, one):
+    """Cycles' ConstantFolder is_zero / is_one: an unlinked input exactly 0 / 1 (all components)."""
+    if not isinstance(state, _Const) or state.value is None:
+        return False
+    v = state.value if isinstance(state.value, tuple) else (state.value,)
+    return all(x == (1.0 if one else 0.0) for x in v)
+
+
+def _saturate(v):
+    if v is None:
+        return None
+    if isinstance(v, tuple):
+        return tuple(min(max(x, 0.0), 1.0) for x in v)
+    return min(max(v, 0.0), 1.0)
+
+
+class _Folder:
+    """Which links survive Cycles' ConstantFolder (intern/cycles/scene/constant_fold.cpp), which
+    Cycles runs node by node from the sources on before it looks at what is linked (whether an
+    Image Texture's Alpha is used, so whether its colour is unassociated, depends on it).
+
+    Mirrored rules, each exact to Cycles for the nodes it covers:
+    - Value and RGB nodes are constants; a Math node or a Mix (Color) / legacy MixRGB node with
+      every input unlinked is a constant (its value tracked for Math add/subtract/multiply/
+      divide and Mix blend, else untracked: it still drops nothing upstream);
+    - Math (fold_math): x + 0, 0 + x, x - 0, x * 1, 1 * x, x / 1, x ^ 1 -> x; x * 0, 0 * x,
+      0 / x -> 0; 1 ^ x, x ^ 0 -> 1;
+    - Mix Color (fold_mix_color) and MixRGB (fold_mix, factor always clamped): an unlinked
+      factor 0 -> A (not Lighten, Dodge, Burn); Mix: A and B the same link or equal constants
+      -> A, factor 1 -> B; Add: 0 + X at factor 1 -> B, X + 0 -> A; Subtract: X - 0 -> A,
+      X - X at factor 1 -> 0; Multiply: 1 * X at factor 1 -> B, X * 1 -> A, 0 * ? -> 0,
+      ? * 0 at factor 1 -> 0; Divide: X / 1 -> A, 0 / ? -> 0. With the result clamped a linked
+      input is kept but every other input is cut, as Cycles does (try_bypass_or_make_constant).
+    Every other node (Mix Float / Vector, Vector Math, Mapping, ...: rules not mirrored here)
+    keeps all its inputs, as if nothing folded (the reading before this existed)."""
+
+    def __init__(self):
+        self._memo = {}       # output_key of a node's output -> _Const | GraphLink it becomes
+        self._live = {}       # output_key(node, None) -> the input identifiers still linked
+        self._depth = 0       # nested folds (Python's stack): past FOLD_DEPTH a node is unfolded
+
+    def input_state(self, sock):
+        """What feeds sock after folding: a _Const, or the GraphLink of the output it reads."""
+        link, carrier = source(sock)
+        if link is None:
+            return _Const(_own_value(carrier.socket, carrier.crossed))
+        r = self._fold(link)
+        if isinstance(r, _Const) and link.crossed:
+            return _Const(None)   # converted on the way (Cycles folds the conversion too)
+        return r
+
+    def live_inputs(self, node):
+        """The inputs of node (GraphNode) that stay linked after folding."""
+        if _fold_kind(node) is None:
+            return [node.inputs[i] for i in range(len(node.inputs))]
+        key = output_key(node, None)
+        if key not in self._live:
+            self._fold_node(node)
+        live = self._live.get(key)
+        if live is None:   # unreadable (a cycle, too deep): all kept
+            return [node.inputs[i] for i in range(len(node.inputs))]
+        return [s for s in (input_by_id(node, i) for i in live) if s is not None]
+
+    def _fold(self, link):
+        node = link.from_node
+        if _fold_kind(node) is None:
+            return link
+        key = output_key(node, link.from_socket.identifier)
+        if key not in self._memo:
+            if self._depth > FOLD_DEPTH:
+                return link
+            self._memo[key] = link        # while folding it (a cycle): unfolded
+            self._depth += 1
+            try:
+                r = self._fold_node(node)
+            finally:
+                self._depth -= 1
+            self._memo[key] = link if r is None else r
+        return self._memo[key]
+
+    def _fold_node(self, node):
+        """_Const, a GraphLink to bypass to, or None: the node stays (its live inputs noted)."""
+        nkey = output_key(node, None)
+        if len(self._memo) > 100_000:
+            return None
+        kind = _fold_kind(node)
+        if kind == 'const':
+            self._live[nkey] = ()
+            return _Const(_own_value(node.outputs[0]))
+        ids = _FOLD_INPUTS[kind](node)
+        st = {i: self.input_state(input_by_id(node, i)) for i in ids}
+        r = _RULES[kind](node, st)
+        if isinstance(r, (_Const, GraphLink)):
+            self._live[nkey] = ()
+            return r
+        if isinstance(r, str):           # bypassed to that input's link
+            self._live[nkey] = (r,)
+            return st[r]
+        self._live[nkey] = tuple(i for i in ids if isinstance(st[i], GraphLink))
+        return None
+
+
+def _fold_kind(node):
+    t = node.type
+    if t in ('VALUE', 'RGB'):
+        return 'const'
+    if t == 'MATH':
+        return 'math'
+    if t == 'MIX' and getattr(node, 'data_type', None) == 'RGBA':
+        return 'mix'
+    if t == 'MIX_RGB':
+        return 'mixrgb'
+    return None
+
+
+_FOLD_INPUTS = {
+    'math': lambda n: tuple(s.identifier for s in unwrap(n).inputs),
+    'mix': lambda n: ('Factor_Float', 'A_Color', 'B_Color'),
+    'mixrgb': lambda n: ('Fac', 'Color1', 'Color2'),
+}
+
+
+def _bypass(node, st, name, clamp):
+    """Cycles' try_bypass_or_make_constant: the node becomes name's constant or link; with a
+    clamp a link is kept, every other input cut (False: folding goes on)."""
+    s = st[name]
+    if isinstance(s, _Const):
+        return _Const(_saturate(s.value) if clamp else s.value)
+    if not clamp:
+        return name
+    for other, o in st.items():
+        if other != name and isinstance(o, GraphLink):
+            st[other] = _Const(_own_value(input_by_id(node, other)))
+    return False
+
+
+def _fold_math(node, st):
+    ids = list(st)
+    if all(isinstance(s, _Const) for s in st.values()):
+        v = [st[i].value for i in ids[:2]]
+        op = node.operation
+        r = None
+        if None not in v and not any(isinstance(x, tuple) for x in v):
+            a, b = v
+            r = {'ADD': a + b, 'SUBTRACT': a - b, 'MULTIPLY': a * b,
+                 'DIVIDE': a / b if b != 0 else 0.0}.get(op)
+        return _Const(_saturate(r) if node.use_clamp else r)
+    if len(ids) < 2:
+        return None
+    v1, v2 = ids[0], ids[1]
+    op, z, one = node.operation, (lambda i: _is(st[i], False)), (lambda i: _is(st[i], True))
+    if op == 'ADD':
+        if z(v1):
+            return _bypass(node, st, v2, False)
+        if z(v2):
+            return _bypass(node, st, v1, False)
+    elif op == 'SUBTRACT':
+        if z(v2):
+            return _bypass(node, st, v1, False)
+    elif op == 'MULTIPLY':
+        if one(v1):
+            return _bypass(node, st, v2, False)
+        if one(v2):
+            return _bypass(node, st, v1, False)
+        if z(v1) or z(v2):
+            return _Const(0.0)
+    elif op == 'DIVIDE':
+        if one(v2):
+            return _bypass(node, st, v1, False)
+        if z(v1):
+            return _Const(0.0)
+    elif op == 'POWER':
+        if one(v1) or z(v2):
+            return _Const(1.0)
+        if one(v2):
+            return _bypass(node, st, v1, False)
+    return None
+
+
+def _fold_mix_common(node, st, fac_id, a_id, b_id, fac_clamped, clamp):
+    blend = node.blend_type
+    fs = st[fac_id]
+    if all(isinstance(s, _Const) for s in st.values()):
+        f, a, b = fs.value, st[a_id].value, st[b_id].value
+        r = None
+        if blend == 'MIX' and None not in (f, a, b) and isinstance(a, tuple) and isinstance(b, tuple):
+            f = _saturate(f) if fac_clamped else f
+            r = tuple(x + (y - x) * f for x, y in zip(a, b))
+        return _Const(_saturate(r) if clamp else r)
+    fac = fs.value if isinstance(fs, _Const) else None
+    if fac is not None and fac_clamped:
+        fac = _saturate(fac)
+    fac_zero, fac_one = fac == 0.0, fac == 1.0
+    if fac_zero and blend not in ('LIGHTEN', 'DODGE', 'BURN'):
+        r = _bypass(node, st, a_id, clamp)
+        if r is not False:
+            return r
+    a, b = st[a_id], st[b_id]
+    z, one = (lambda s: _is(s, False)), (lambda s: _is(s, True))
+    linked = lambda s: isinstance(s, GraphLink)
+    same_link = linked(a) and linked(b) and \
+        output_key(a.from_node, a.from_socket.identifier) == output_key(b.from_node, b.from_socket.identifier)
+    r = None
+    if blend == 'MIX':
+        if same_link:
+            r = _bypass(node, st, a_id, clamp)
+        elif not linked(a) and not linked(b) and a.value is not None and a.value == b.value:
+            r = _bypass(node, st, a_id, clamp)
+        elif fac_one:
+            r = _bypass(node, st, b_id, clamp)
+    elif blend == 'ADD':
+        if z(a) and fac_one:
+            r = _bypass(node, st, b_id, clamp)
+        elif z(b):
+            r = _bypass(node, st, a_id, clamp)
+    elif blend == 'SUBTRACT':
+        if z(b):
+            r = _bypass(node, st, a_id, clamp)
+        elif same_link and fac_one:
+            r = _Const((0.0, 0.0, 0.0))
+    elif blend == 'MULTIPLY':
+        if one(a) and fac_one:
+            r = _bypass(node, st, b_id, clamp)
+        elif one(b):
+            r = _bypass(node, st, a_id, clamp)
+        elif z(a) or (z(b) and fac_one):
+            r = _Const((0.0, 0.0, 0.0))
+    elif blend == 'DIVIDE':
+        if one(b):
+            r = _bypass(node, st, a_id, clamp)
+        elif z(a):
+            r = _Const((0.0, 0.0, 0.0))
+    return r or None
+
+
+_RULES = {
+    'math': _fold_math,
+    'mix': lambda n, st: _fold_mix_common(n, st, 'Factor_Float', 'A_Color', 'B_Color',
+                                          n.clamp_factor, n.clamp_result),
+    'mixrgb': lambda n, st: _fold_mix_common(n, st, 'Fac', 'Color1', 'Color2', True, n.use_clamp),
+}
 
 
 def linked_link(socket):

@@ -1342,7 +1342,8 @@ class MaterialBuilder:
             return None
         # Cycles: with the Alpha output used, the Color output of an image stored with
         # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0); an Alpha
-        # linked only to nodes the shader does not use is not (Cycles removes those first)
+        # linked only to nodes the shader does not use, or through links Cycles' constant
+        # folding drops (Alpha x 0, a Mix Multiply by white), is not (Cycles removes those first)
         alpha_used = output_key(node, node.outputs['Alpha'].identifier) in self._used_outputs \
             if self._used_outputs is not None else node.outputs['Alpha'].is_linked
         unassociate = bool(alpha_used and associates_alpha(img))

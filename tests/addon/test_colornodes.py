@@ -291,18 +291,22 @@ def test_an_image_into_hue_saturation_of_a_constant_colour(scene, which):
 
 
 def _alpha_used(nt, tex):
-    """The image's Alpha through a Math node, for input A of a Mix at factor 1: used by the
-    shader (so Cycles keeps it), without changing its colour."""
-    node = nt.nodes.new('ShaderNodeMath')
-    nt.links.new(tex.outputs['Alpha'], node.inputs[0])
-    return node.outputs[0]
+    """The image's Color through a Mix whose Factor is Alpha > 2 (0 at every texel): the Alpha is
+    used by the shader (Cycles folds no comparison of a linked value), the colour unchanged. (Not
+    the Alpha into A of a Mix at factor 1: Cycles folds that Mix to its B and drops the Alpha.)"""
+    gt = nt.nodes.new('ShaderNodeMath')
+    gt.operation, gt.inputs[1].default_value = 'GREATER_THAN', 2.0
+    nt.links.new(tex.outputs['Alpha'], gt.inputs[0])
+    m = scenes.mix_node(nt, 'MIX', tex.outputs['Color'], (0.0, 0.0, 0.0), 0.0)
+    nt.links.new(gt.outputs[0], m.inputs['Factor'])
+    return m.outputs['Result']
 
 
 def test_float_image_with_alpha_linked_is_unassociated(scene):
     """Cycles divides a float image's colour by its alpha when the Alpha output is linked
     (measured: 0.9 at alpha 0.3 reads 3.0); not when only Color is used."""
     def with_alpha(nt, tex):
-        return scenes.mix_node(nt, 'MIX', _alpha_used(nt, tex), tex.outputs['Color'], 1.0).outputs['Result']
+        return _alpha_used(nt, tex)
     m = _exported_material(_image_material("Alpha", PX, with_alpha))
     assert np.allclose(m.texture[0, 1, :3], PX[0, 1, :3] / 0.3, atol=1e-6)
     assert np.allclose(m.texture[0, 0, :3], PX[0, 0, :3])
@@ -341,7 +345,7 @@ def test_byte_image_alpha_associated_in_its_encoding_as_cycles(scene, alpha_link
     def chain(tex):
         def build(nt, _):
             if alpha_linked:
-                return scenes.mix_node(nt, 'MIX', _alpha_used(nt, tex), tex.outputs['Color'], 1.0).outputs['Result']
+                return _alpha_used(nt, tex)
             return tex.outputs['Color']
         return build
 
