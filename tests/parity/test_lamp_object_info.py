@@ -7,7 +7,6 @@ Suns straight down on a diffuse floor, seen from above, direct light only; each 
 one channel, so each channel's mean is one lamp's. Before, Object Info stood at the own value of
 the input it feeds (reported): Random x 10 was 0.70x Cycles (5 where Cycles has 7.2), Color grey."""
 
-import math
 
 import bpy
 import numpy as np
