@@ -1450,7 +1450,7 @@ class Integrator:
             tris = np.flatnonzero((self.tri.material == m) & self._tri_emissive)
             if not len(tris):
                 continue
-            if not tex.name and self._ATTRIBUTE_CORNERS:
+            if not tex.name:            # attributes alone: measured at every triangle's corners
                 self._attribute_emission_power(tex, interp, ext, xf, tris)
                 continue
             n = min(budget, max(self._POWER_POINTS, self._POWER_POINTS_PER_TRIANGLE * len(tris)))
@@ -1458,19 +1458,25 @@ class Integrator:
             k = np.minimum(np.searchsorted(cdf, rng.random(n) * cdf[-1], side='right'), len(tris) - 1)
             s, r = np.sqrt(rng.random(n)), rng.random(n)       # uniform over each triangle
             u, v = (s * (1.0 - r)).astype(F32), (s * r).astype(F32)
-            value = self._lookup(tex, interp, ext, xf, tris[k], u, v)
-            value = np.abs(np.where(np.isfinite(value), value, F32(0.0))).astype(np.float64)
+            value = self._magnitude(tex, interp, ext, xf, tris[k], u, v)
             mean = value.mean(axis=1)
             if not mean.max() > 0:
                 continue
             count = np.bincount(k, minlength=len(tris))
             own = np.stack([np.bincount(k, weights=value[c], minlength=len(tris)) for c in range(3)])
             own = np.where(count > 0, own / np.maximum(count, 1), mean[:, None])
-            floor = self._POWER_FLOOR
-            self._tri_emission[:, tris] = (floor * mean[:, None] + (1.0 - floor) * own).astype(F32)
+            self._weigh_emitters(tris, mean, own)
 
-    # an emission of attributes alone weighs each triangle by its corners (_attribute_emission_power)
-    _ATTRIBUTE_CORNERS = True
+    def _magnitude(self, tex, interp, ext, xf, prim, u, v):
+        """|emission| (3, k) float64 of texture tex at (prim, u, v), NaN and infinity read 0."""
+        value = self._lookup(tex, interp, ext, xf, prim, u, v)
+        return np.abs(np.where(np.isfinite(value), value, F32(0.0))).astype(np.float64)
+
+    def _weigh_emitters(self, tris, mean, own):
+        """The light-choice weight of emitting triangles tris: 0.1 x their material's mean (3,)
+        + 0.9 x their own measured magnitude (3, len(tris))."""
+        floor = self._POWER_FLOOR
+        self._tri_emission[:, tris] = (floor * mean[:, None] + (1.0 - floor) * own).astype(F32)
     # where each triangle of an attribute-driven emitter is measured: its corners (a hair inside,
     # barycentrics (u, v)) and its centre
     _CORNER_POINTS = np.array([[1e-4, 1e-4], [1.0 - 2e-4, 1e-4], [1e-4, 1.0 - 2e-4], [1.0 / 3.0, 1.0 / 3.0]], F32)
@@ -1486,15 +1492,11 @@ class Integrator:
         prim = np.repeat(tris, k)
         u = np.tile(self._CORNER_POINTS[:, 0], len(tris))
         v = np.tile(self._CORNER_POINTS[:, 1], len(tris))
-        value = self._lookup(tex, interp, ext, xf, prim, u, v)
-        value = np.abs(np.where(np.isfinite(value), value, F32(0.0))).astype(np.float64)
-        own = value.reshape(3, len(tris), k).mean(axis=2)
+        own = self._magnitude(tex, interp, ext, xf, prim, u, v).reshape(3, len(tris), k).mean(axis=2)
         area = self.tri.area[tris].astype(np.float64)
         mean = (own * area).sum(axis=1) / max(area.sum(), 1e-300)
-        if not mean.max() > 0:
-            return
-        floor = self._POWER_FLOOR
-        self._tri_emission[:, tris] = (floor * mean[:, None] + (1.0 - floor) * own).astype(F32)
+        if mean.max() > 0:
+            self._weigh_emitters(tris, mean, own)
 
     def _emission_table(self):
         """(3, M) per triangle: the radiance emission is gathered and light-sampled with (1 on

@@ -87,8 +87,9 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
     compiled (an AOV, whose evaluation reads a camera ray's values instead)."""
     textured = _reaches_procedural(socket, set())
     images = image is not None and _images_reached(socket) >= 2
-    if not textured and not images and not ((coordinates or _coordinate_chain(socket))
-                                            and _reaches_procedural(socket, set(), _COORDINATE_NODES)):
+    # (a coordinate-only chain reaches a coordinate node: _coordinate_chain walks it once)
+    if not textured and not images and not _coordinate_chain(socket) and \
+            not (coordinates and _reaches_procedural(socket, set(), _COORDINATE_NODES)):
         return None
     chain = _Chain([], image, light_path)
     try:
