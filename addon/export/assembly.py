@@ -67,6 +67,12 @@ class _Out:
                            instance_values=self.instance_values or None, attributes=attributes or None, **per_tri)
 
 
+def _own_values(place, names, mat):
+    """A placement's values of the per-object attributes among names (Object Info outputs,
+    Object and Instancer attributes), as ((name, (4,) values), ...): a corner-albedo cache key."""
+    return tuple((n, tuple(place.object_info(n[len(OBJECT_INFO):], mat))) for n in names if n.startswith(OBJECT_INFO))
+
+
 def _unread_rows(nt):
     """(nt, 3, 4) float32: what Cycles' Attribute node reads of an attribute it does not find
     (svm_node_attr): colour and Fac 0, Alpha 1."""
@@ -618,25 +624,14 @@ class Assembly:
             for p in places:
                 if p.slot_map is None or id(p.slot_map) not in slot_maps:
                     continue
-                own = self._owns[k, id(p)] = tuple((n, tuple(p.object_info(n[len(OBJECT_INFO):], mat)))
-                                                   for n in info)
+                own = self._owns[k, id(p)] = _own_values(p, names, mat)
                 if (k, id(a), own) not in cache and own not in pending:
                     pending[own] = p
             if len(pending) < 2:         # (one: _corner_albedo's own evaluation is the same)
                 continue
             nt = len(a.triangles)
             count = nt * 3
-            mesh = {}
-            for n in names:
-                if n.startswith(OBJECT_INFO):
-                    continue
-                v = a.corner_attribute(n)
-                if v is None:
-                    said = a.unread_said(n, "it reads colour 0 and alpha 1")
-                    for p in pending.values():       # (as _corner_albedo says it for each)
-                        self.ignore(said, p.name)
-                    v = _unread_rows(nt)
-                mesh[n] = np.ascontiguousarray(v, np.float32).reshape(-1, 4)
+            mesh = self._mesh_corner_values(a, names, [p.name for p in pending.values()])
             owns = list(pending)
             step = max(1, self._BATCH_ROWS // max(count, 1))
             for s in range(0, len(owns), step):
@@ -661,24 +656,32 @@ class Assembly:
         mat = self.materials.attribute_maps[k][2]
         own = self._owns.get((k, id(place)))       # (_corner_albedos_batch's, for this batch)
         if own is None:
-            own = tuple((n, tuple(place.object_info(n[len(OBJECT_INFO):], mat)))
-                        for n in names if n.startswith(OBJECT_INFO))
+            own = _own_values(place, names, mat)
         cache = self._corner_albedos
         if (k, id(a), own) not in cache:
-            values = {}
-            for n in names:
-                if n.startswith(OBJECT_INFO):
-                    continue
-                v = a.corner_attribute(n)
-                if v is None:
-                    self.ignore(a.unread_said(n, "it reads colour 0 and alpha 1"), place.name)
-                    v = _unread_rows(len(a.triangles))
-                values[n] = v.reshape(-1, 4)
+            values = self._mesh_corner_values(a, names, [place.name])
             count = len(a.triangles) * 3
             values.update((n, np.broadcast_to(np.asarray(v, np.float32), (count, 4))) for n, v in own)
             values = values if isinstance(name, tuple) else values[name]
             cache[k, id(a), own] = self.materials.evaluated_albedo(k, values).reshape(-1, 3, 3)
         return cache[k, id(a), own]
+
+    def _mesh_corner_values(self, a, names, placed):
+        """{name: (3 nt, 4) float32} mesh a's corner values of the attributes among names (not
+        the per-object ones), Cycles' unread rows (0, alpha 1) where it lacks one, said for each
+        placement named in placed."""
+        values = {}
+        for n in names:
+            if n.startswith(OBJECT_INFO):
+                continue
+            v = a.corner_attribute(n)
+            if v is None:
+                said = a.unread_said(n, "it reads colour 0 and alpha 1")
+                for name in placed:
+                    self.ignore(said, name)
+                v = _unread_rows(len(a.triangles))
+            values[n] = np.ascontiguousarray(v, np.float32).reshape(-1, 4)
+        return values
 
     def _attribute_colors(self, a, place, mirrored, out, S):
         """The per-corner albedo factors (w x the attribute's colour + k, Cycles' 0 where the
