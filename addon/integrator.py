@@ -64,7 +64,8 @@ from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DENOISE as DENOISE_PASSES
 from .passes import FIRST_SAMPLE
 from .pathstate import Paths, Sinks, compact
-from .procedural import ATTRIBUTE_NEED, ProceduralTexels
+from . import bump as bumpmap
+from .procedural import ATTRIBUTE_NEED, SIDED, ProceduralTexels
 from .sampling import RandomStream, max3
 from .sceneprep import recentred, validate
 from .scenedata import HOLDOUT, NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
@@ -286,8 +287,12 @@ class Integrator:
         self._tri_albedo = np.ascontiguousarray(np.take(self.mats.base, self.tri.material, axis=1))
         # textures or attribute colours vary the albedo over a triangle: hits need (u, v) for them
         self._albedo_varies = bool(self.mats.textures) or (self.tri.colors is not None and bool(self.mats.colored.any()))
-        # normal maps bend shading normals (they need the tangents the export made)
-        self._bumped = bool(self.mats.normal_maps) and self.tri.tangents is not None
+        # normal maps bend shading normals (they need the tangents the export made), and so do
+        # bump heights (Bump nodes, a Displacement output read as bump) per point
+        self._normal_mapping = bool(self.mats.normal_maps) and self.tri.tangents is not None
+        self._bumped = self._normal_mapping or bool(self.mats.bumps)
+        self._displaced = any(e[1] is not None for e in self.mats.bumps)
+        self._bump_length = bumpmap.scene_step(self.tri.geo[0:3]) if self.mats.bumps else 0.0
         # procedural chains reading a normal (Geometry Normal / True Normal, Texture Coordinate
         # Normal): their hits say which side the ray met (Cycles turns N and Ng to face it)
         self._sided = self.mats.reads_side
@@ -1361,14 +1366,89 @@ class Integrator:
                 albedo[:, sel] *= texel if signed else np.fmax(texel, F32(0.0))
 
     def _bent_normals(self, prim, u, v, ns, ng):
-        """(shading normals with the materials' normal maps applied, bump or None): bump (4, k)
-        keeps the smooth normal (rows 0-2) and the Bump Map Correction flag (row 3) for the bump
-        shadowing of light samples and bounces; (ns, None) when no material has a normal map."""
+        """(shading normals with the materials' normal maps and bump heights applied, bump or
+        None): bump (4, k) keeps the smooth normal (rows 0-2) and the Bump Map Correction flag
+        (row 3) for the bump shadowing of light samples and bounces; (ns, None) when no material
+        bends normals. A Displacement output read as bump sets the shading normal itself first
+        (Cycles' SetNormal: closures then shade with it unshadowed, and a normal map does not
+        start from it); then the normal map, then the BSDF's Bump nodes."""
         if not self._bumped:
             return ns, None
         bump = np.empty((4, len(prim)), F32)
+        bump[3] = 0.0
+        if self._displaced:
+            ns = self._bump_mapped(prim, u, v, ns, ng, bump[3], True)
         bump[:3] = ns
-        return self._normal_mapped(prim, u, v, ns, ng, bump[3]), bump
+        out = self._normal_mapped(prim, u, v, ns, ng, bump[3]) if self._normal_mapping else ns
+        if self.mats.bumps:
+            out = self._bump_mapped(prim, u, v, out, ng, bump[3], False)
+        return out, bump
+
+    def _bump_mapped(self, prim, u, v, N, ng, correction, displacement):
+        """The normals N (3, k) at hits (prim, u, v) bent by their materials' bump heights
+        (bump.bend): the Displacement output's (displacement) or the Bump nodes', in turn. A new
+        array where any is bent; correction (k,): those hits' materials' Bump Map Correction."""
+        entries = self.mats.bumps
+        out = None
+        for (_, displaced, bumps, corrected), sel in zip(
+                entries, _hits_by_material(np.take(self.tri.material, prim), [e[0] for e in entries])):
+            steps = ((displaced,) if displaced is not None else ()) if displacement else bumps
+            if not len(sel) or not steps:
+                continue
+            if out is None:
+                out = np.array(N, F32, copy=True)
+            correction[sel] = float(corrected)
+            step = max(1, self._PROCEDURAL_CHUNK // 8)
+            for a in range(0, len(sel), step):
+                if a and self._check_break():
+                    raise _PassCancelled()
+                part = sel[a:a + step]
+                p = np.take(prim, part)
+                n = np.take(out, part, axis=1)
+                back = self._back(p, np.take(ng, part, axis=1))
+                for b in steps:
+                    n = self._bumped_normal(b, p, np.take(u, part), np.take(v, part), n, back)
+                out[:, part] = n
+        return N if out is None else out
+
+    def _bumped_normal(self, b, prim, u, v, N, back):
+        """N (3, k) bent by one scenedata.Bump b at hits (prim, u, v): its height's derivatives
+        along the triangle's barycentric u and v by central differences over the scene's bump
+        step (every coordinate moved by its own derivative; the normals a chain reads held, as
+        Cycles' bump taps hold N), its strength and distance at the hit."""
+        tex = b.values
+        g = np.take(self.tri.geo, prim, axis=1).astype(np.float64)
+        e1, e2 = g[3:6], g[6:9]
+        u64, v64 = u.astype(np.float64), v.astype(np.float64)
+        du = self._bump_length / np.maximum(np.sqrt((e1 * e1).sum(axis=0)), 1e-30)
+        dv = self._bump_length / np.maximum(np.sqrt((e2 * e2).sum(axis=0)), 1e-30)
+        centre = self._coordinates32(tex.needs, prim, u64, v64, back)
+        values = tex.evaluate(centre)
+        held = {k: c for k, c in centre.items() if k in SIDED}
+
+        def height(uu, vv):
+            return tex.evaluate({**self._coordinates32(tex.needs, prim, uu, vv, back), **held})[0].astype(np.float64)
+        dh_du = (height(u64 + du, v64) - height(u64 - du, v64)) / (2.0 * du)
+        dh_dv = (height(u64, v64 + dv) - height(u64, v64 - dv)) / (2.0 * dv)
+        scale = self._object_scale(prim, e1, e2) ** b.object_scale if b.object_scale else None
+        return bumpmap.bend(N, e1, e2, dh_du, dh_dv, values[2], values[1], scale)
+
+    def _coordinates32(self, needs, prim, u, v, back):
+        """_coordinates at float64 barycentrics (a bump tap's), each (k, 3) float32."""
+        return {k: np.ascontiguousarray(c, F32) for k, c in self._coordinates(needs, prim, u, v, back).items()}
+
+    def _object_scale(self, prim, e1, e2):
+        """(k,) the scale of the hits' objects: the square root of a triangle's world area over
+        its area in Object coordinates (exact for a uniform scale; 1 without them)."""
+        rows = self.tri.coords
+        if rows is None or len(rows) // 3 < 6:
+            return np.ones(len(prim))
+        width = len(rows) // 3
+        r = np.take(rows, prim, axis=1).astype(np.float64)
+        o = np.cross(r[width + 3:width + 6], r[2 * width + 3:2 * width + 6], axis=0)
+        w = np.cross(e1, e2, axis=0)
+        ao, aw = np.sqrt((o * o).sum(axis=0)), np.sqrt((w * w).sum(axis=0))
+        return np.where(ao > 0, np.sqrt(aw / np.where(ao > 0, ao, 1.0)), 1.0)
 
     def _normal_mapped(self, prim, u, v, ns, ng, correction):
         """The shading normals (3, k) at hits (prim, u, v) with their materials' tangent-space
@@ -1378,9 +1458,8 @@ class Integrator:
         the interpolated tangent and n the front face's normal (the geometric one, or the corner
         normals interpolated, unnormalized), turned to the side the ray came from as ns is (ng:
         the geometric normal on that side). A new array; hits of other materials keep ns.
-        correction (k,): filled with each hit's material's Bump Map Correction (0 or 1)."""
+        correction (k,): set to each normal-mapped hit's material's Bump Map Correction (0 or 1)."""
         out = np.array(ns, F32, copy=True)
-        correction[:] = 0.0
         mat = np.take(self.tri.material, prim)
         t, geo, normals = self.tri.tangents, self.tri.geo, self.tri.normals
         maps = self.mats.normal_maps

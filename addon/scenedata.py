@@ -142,6 +142,12 @@ class Material:
     normal_strength: float = 1.0
     normal_uv_map: str = ''       # the UV map whose tangents the Normal Map node reads ('' the active render one)
     bump_correction: bool = True                  # Material > Settings > Bump Map Correction (Cycles)
+    # Bump nodes feeding the BSDF's Normal (scenedata.Bump each), innermost first: applied in
+    # turn after the normal map (or to the shading normal without one)
+    bumps: tuple = ()
+    # the Material Output's Displacement read as bump (Cycles' Bump Only, and the bump part of
+    # Displacement and Bump): a Bump that bends the shading normal itself, before all else
+    displacement_bump: Optional['Bump'] = None
     # a Color Attribute or Attribute node's colour into the albedo: the attribute's name ('' the
     # render colour attribute); base_color then multiplies each point's Geometry.colors
     color_attribute: Optional[str] = None
@@ -197,6 +203,19 @@ class Material:
     # Transparent BSDF the ray kinds in `visibility` cross, which counts against Transparent Max
     # Bounces; the renderer may leave it out where no path can reach that limit
     clear_twin: bool = False
+
+
+@dataclass
+class Bump:
+    """A Bump node (or a Displacement output read as bump) per shading point: `values` is a
+    procedural.ProceduralTexels whose RGB at a point is (height h, strength s, distance d) there
+    (d negative under Invert); the normal N becomes normalize(s x normalize(N - d grad h) +
+    (1 - s) x N), grad h the height's gradient in the plane normal to N (the limit of Cycles'
+    svm_node_set_bump for a height smooth at the pixel scale), s and d the point's.
+    object_scale: the gradient is times the object's scale at the point to this power (0, 1 or
+    2: an object-space Displacement node and bump in object space, Cycles' factors)."""
+    values: object
+    object_scale: int = 0
 
 
 @dataclass

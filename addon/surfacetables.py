@@ -130,6 +130,9 @@ class Materials:
         self.textures = []          # (material index, texture, interpolation, extension, uv transform)
         self.emission_textures = []  # the same, of the materials whose emission is an image's
         self.normal_maps = []       # (index, texture, interpolation, extension, uv transform, strength)
+        # (index, Material.displacement_bump or None, Material.bumps, Bump Map Correction): the
+        # materials whose shading normal Bump nodes or a Displacement output bend per point
+        self.bumps = []
         for i, mat in enumerate(materials):
             b, e = _rgb(mat, 'base_color', mat.base_color), _rgb(mat, 'emission', mat.emission)
             base.append(b)
@@ -146,6 +149,10 @@ class Materials:
                     (i, *texture_entry(mat.name, 'normal map', mat.normal_texture, mat.normal_interpolation,
                                         mat.normal_extension, mat.normal_transform),
                      strength, bool(getattr(mat, 'bump_correction', True))))
+            bumps = tuple(getattr(mat, 'bumps', None) or ())
+            displaced = getattr(mat, 'displacement_bump', None)
+            if bumps or displaced is not None:
+                self.bumps.append((i, displaced, bumps, bool(getattr(mat, 'bump_correction', True))))
             if getattr(mat, 'emission_texture', None) is not None and e.any():
                 self.emission_textures.append(
                     (i, *texture_entry(mat.name, 'emission texture', mat.emission_texture, mat.emission_interpolation,
@@ -201,7 +208,8 @@ class Materials:
         # Normal), which Cycles turns to the side the ray meets: its hits say which side that is
         entries = self.textures + self.emission_textures + self.opacity + \
             [e for found in self.aov_textures.values() for e in found]
-        self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries)
+        self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries) or \
+            any(b.values.needs & SIDED for e in self.bumps for b in (e[1],) + e[2] if b is not None)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
         # picks closures by their mean weight): its albedo and diffuse transmission, or 1 where it
         # only emits (a translucent-only part weighed 0: paths always passed, never scattered)

@@ -47,8 +47,9 @@ those layers' albedos averaged over view directions (principled.py, specular.py)
 sheen, as the Sheen BSDF, its albedo so averaged (sheen.py), and its transmission as the Glass
 BSDF (see-through, unbent; no subsurface); a rough diffuse (Cycles' Oren-Nayar) as its albedo averaged over
 view directions (roughdiffuse.py); a
-BSDF's Normal input other than a tangent-space normal map of an image (bump, other normal
-maps) and the output's Volume and Displacement are ignored (a volume-only material is clear);
+BSDF's Normal input other than a tangent-space normal map of an image and Bump nodes of a
+height followed per point (bump.py; other normal maps), the output's Volume, and its
+Displacement but read as bump, are ignored (a volume-only material is clear);
 texture coordinates other than the UV map (and Mapping nodes of it) are read as the active
 render UV map.
 Each approximated material says why in `Material.approximated`; the export reports them in

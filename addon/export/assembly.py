@@ -879,9 +879,12 @@ class Assembly:
 
 
 def _procedurals(material):
-    """The material's procedural textures (its colour's, its emission's, its opacity's, its AOVs')."""
+    """The material's procedural textures (its colour's, its emission's, its opacity's, its AOVs',
+    its bump heights')."""
+    bumps = tuple(getattr(material, 'bumps', None) or ()) + \
+        tuple(b for b in (getattr(material, 'displacement_bump', None),) if b is not None)
     textures = [material.texture, getattr(material, 'emission_texture', None), getattr(material, 'opacity', None)] + \
-        [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()]
+        [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()] + [b.values for b in bumps]
     return [t for t in textures if isinstance(t, ProceduralTexels)]
 
 

@@ -3,7 +3,7 @@ Diffuse BSDF colour and Principled Base Color (constant, an Image Texture on a U
 Mapping nodes, colour and float nodes evaluated per texel or after the lookup as Cycles runs
 them), emission, a Color Attribute / Attribute / Object Info colour per point, corner or object,
 Add and Mix Shaders, transparency and image cut-outs, holdout, ray-type mixes, a tangent-space
-normal map, AOVs. Everything else is the documented diffuse approximation, each material saying
+normal map, Bump nodes and a Displacement output read as bump (export/bump.py), AOVs. Everything else is the documented diffuse approximation, each material saying
 why in Material.approximated (see the package's docstring). Part of the export layer."""
 
 import bpy
@@ -23,7 +23,8 @@ from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
 from .meshes import attribute_key, attribute_label, color_attribute_key
 from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
-from .normalmaps import bends_normal, tangent_normal_map
+from .normalmaps import bends_normal, normal_map_at
+from .bump import bump_nodes, compile_bump, displacement_bump
 from . import procedurals
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 from .reflectors import (diffuse_roughness, glass_albedos, glossy_map, principled_hair_color, reflector_albedo,
@@ -48,7 +49,7 @@ PRINCIPLED_IGNORED = (('Metallic', "metallic"), ('Transmission Weight', "transmi
                       ('Diffuse Roughness', "diffuse roughness"),
                       ('Anisotropic', "anisotropy (its layers as isotropic)"),
                       ('Thin Film Thickness', "thin film"))
-IGNORED_OUTPUTS = ('Volume', 'Displacement')
+IGNORED_OUTPUTS = ('Volume',)
 # shader nodes that give Cycles no surface closure: volume shaders, and EEVEE's Specular BSDF,
 # which Cycles does not implement; in a surface shader they add nothing (black alone)
 NO_SURFACE_CLOSURE = ('VOLUME_SCATTER', 'VOLUME_ABSORPTION', 'PRINCIPLED_VOLUME', 'VOLUME_COEFFICIENTS',
@@ -156,7 +157,8 @@ class MaterialBuilder:
             self.attribute_maps.append(self._attribute_map)
             self.aov_maps.append(self._aov_varying)
             self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
-                                     or m.emission_texture is not None or m.normal_texture is not None)
+                                     or m.emission_texture is not None or m.normal_texture is not None
+                                     or bool(m.bumps) or m.displacement_bump is not None)
             self.uv_maps.append(m.uv_map)
             self.uv_several.append(self._uv_several)
             self._index[key] = idx
@@ -485,6 +487,8 @@ class MaterialBuilder:
         self._uv_names = []           # the UV map each image this material reads asks for
         self._uv_several = None
         self._normal_maps = []        # (Texture, strength, UV map) of its BSDFs' normal maps
+        self._bumps = []              # (Bump node keys, scenedata.Bump tuple) of its BSDFs' Bump chains
+        displaced = None
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
@@ -536,6 +540,9 @@ class MaterialBuilder:
                 if out is not None and out.inputs.get(socket) is not None and \
                         linked_node(out.inputs[socket]) is not None:
                     reasons.append(f"{socket.lower()} ignored")
+            # (Cycles bumps with the Displacement output only when there is a surface to shade)
+            if out is not None and out.inputs['Surface'].is_linked:
+                displaced = displacement_bump(mat, out, reasons, image=self._texture)
         base, texture, interp, ext, transform = self._albedo(closure)
         self._albedo_attribute = closure.texture.attribute \
             if closure.texture is not None and closure.tex_weight.any() else None
@@ -620,12 +627,18 @@ class MaterialBuilder:
             # map the image is read on: Cycles' node reads its map's tangent attribute)
             n_tex, n_interp, n_ext, n_xf = t.texels(t.pixels), t.interpolation, t.extension, t.transform
             self.normal_mapped = True
+        bumps = ()
+        if self._bumps:
+            bumps = self._bumps[0][1]
+            if len({keys for keys, _ in self._bumps}) > 1:
+                reasons.append("BSDFs with different Bump nodes; the first one's for all")
         uv_names = list(dict.fromkeys(self._uv_names))
         # a procedural texture on Texture Coordinate UV reads the active render map: beside an
         # image on a named map it reads that map too (it had, silently: a gradient across the
         # other map's direction, 0.45 / 0.45 where Cycles gives 0.11 / 0.79)
         # (an image inside such a chain reads its own map, named in uv_names: not the active one)
-        procedurals = [texture, e_tex, opacity] + [t.pixels for t in aov_textures.values()]
+        procedurals = [texture, e_tex, opacity] + [t.pixels for t in aov_textures.values()] + \
+            [b.values for b in bumps + ((displaced,) if displaced is not None else ())]
         if uv_names and any(isinstance(t, ProceduralTexels) and TEXCOORD_UV in t.needs for t in procedurals):
             uv_names = list(dict.fromkeys(uv_names + ['']))
         self._uv_several = None
@@ -644,7 +657,7 @@ class MaterialBuilder:
                            emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,
                            normal_texture=n_tex, normal_interpolation=n_interp or 'Linear',
                            normal_extension=n_ext or 'REPEAT', normal_transform=n_xf, normal_strength=n_strength,
-                           normal_uv_map=n_uv,
+                           normal_uv_map=n_uv, bumps=bumps, displacement_bump=displaced,
                            bump_correction=bool(getattr(getattr(mat, 'cycles', None), 'use_bump_map_correction',
                                                         True)),
                            emission=emission, texture=texture,
@@ -1296,8 +1309,15 @@ class MaterialBuilder:
         return line
 
     def _normal_input(self, node, reasons):
-        """Note a BSDF's tangent-space normal map (tangent_normal_map) for the material."""
-        found = tangent_normal_map(node, reasons)
+        """Note a BSDF's Bump nodes (export/bump.py) and tangent-space normal map
+        (tangent_normal_map, the innermost Bump's Normal) for the material."""
+        nodes, socket = bump_nodes(node.inputs.get('Normal'))
+        if nodes:
+            compiled = [compile_bump(b, reasons, image=self._texture) for b in reversed(nodes)]
+            steps = tuple(b for b in compiled if b is not None)     # (one not followed: said, left flat)
+            if steps:
+                self._bumps.append((tuple(output_key(b, None) for b in nodes), steps))
+        found = normal_map_at(socket, reasons)
         if found is not None:
             image, strength, uv_map, chain = found
             tex = self._texture(image, reasons)

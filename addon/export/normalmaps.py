@@ -1,7 +1,8 @@
 """Which BSDF Normal inputs bend the shading normal: a tangent-space Normal Map of an Image
 Texture, or of colour nodes on one (a DirectX map's green channel flipped), is rendered (the
-material's normal texture); the nodes that leave the normal as it is are looked past; anything
-else is reported as ignored. Part of the export layer."""
+material's normal texture); Bump nodes before it are export/bump.py's; the nodes that leave the
+normal as it is are looked past; anything else is reported as ignored. Part of the export
+layer."""
 
 import numpy as np
 
@@ -49,7 +50,12 @@ def tangent_normal_map(node, reasons):
     map; chain None) or colour nodes on one image's colour (chain: the Normal Map's Color
     socket, which nodeeval.compile_image_chain compiles), or None (an unlinked Normal; anything
     else is reported as ignored)."""
-    socket = node.inputs.get('Normal')
+    return normal_map_at(node.inputs.get('Normal'), reasons)
+
+
+def normal_map_at(socket, reasons):
+    """tangent_normal_map of what feeds a Normal socket (or None): a BSDF's, or the innermost
+    Bump node's (export/bump.py)."""
     link = _normal_link(socket) if socket is not None else None
     if link is None:
         return None

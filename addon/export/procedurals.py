@@ -146,6 +146,30 @@ def compile_emission(color_socket, strength_socket, reasons, image=None):
     return pr.ProceduralTexels(emitted, needs, ', '.join(dict.fromkeys(chain.textures)))
 
 
+def compile_floats(sockets, what, reasons, image=None):
+    """(fn(coords) -> (n, len(sockets)) float64, needs, textures' names) of float sockets, each
+    whatever chain compile follows (procedural textures, images looked up per point through
+    `image`, coordinates, attributes, colour and float nodes; unlinked: its own value), all
+    read at one point: a Bump's Height, Strength and Distance. None where one cannot be
+    followed, said as `what` not rendered (its chain's node named)."""
+    chain = _Chain([], image)
+    try:
+        fns = [_socket(s, False, chain, 0) for s in sockets]
+    except nodeeval.NotCompiled as e:
+        reasons.append(f"{what} not rendered ({e} is not read per point)")
+        return None
+    except (AttributeError, KeyError, TypeError, ValueError) as e:
+        reasons.append(f"{what} not rendered ({type(e).__name__}: {e})")
+        return None
+    reasons.extend(chain.reasons)
+
+    def values(coords):
+        cols = [np.asarray(f(coords), np.float64).reshape(-1) for f in fns]
+        n = max(len(c) for c in cols)
+        return np.stack([np.broadcast_to(c, (n,)) for c in cols], axis=1)
+    return values, frozenset((chain.needs or {'generated'}) | chain.frames), ', '.join(dict.fromkeys(chain.textures))
+
+
 def object_frame(ob):
     """The need that says in whose space a chain reads Texture Coordinate Object: ('object of',
     None, None) the shaded object's own (the node's Object field empty), else ('object of', the

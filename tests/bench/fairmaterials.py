@@ -24,8 +24,10 @@ export renders exactly, following the export's own rules (addon/export/materials
   diffuse colour those nodes on an image):
   unlinked, so Cycles uses that value too; Image Textures and those colour nodes are kept,
   with the coordinates, projection, interpolation and extension the export uses;
-- the output's Volume and Displacement inputs unlinked (muted nodes pass through their
-  internal links in both engines, so they are left as they are).
+- Bump nodes the export renders per point (export/bump.py) kept, others unlinked with the
+  Normal they feed;
+- the output's Volume input unlinked, and its Displacement unless the export reads it as bump
+  (muted nodes pass through their internal links in both engines, so they are left as they are).
 Textures, emission, Add and Mix Shader stay as they are: they are what the comparison tests.
 Objects without a material (no slot, or an empty one) render in Cycles with Blender's default
 surface, a Principled BSDF with a specular layer; the whole-file `make_diffuse()` gives them a
@@ -137,6 +139,13 @@ def _image_alpha(socket):
     """Whether socket is fed straight by an Image Texture's Alpha output (the export renders it)."""
     return export.closure.is_image_alpha(nodegraph.linked_link(socket))
 
+
+def _no_image(node, reasons):
+    """The export's image reader as the bump checks need it: none read (an image in a height
+    is looked up per point, whatever its texels)."""
+    return None
+
+
 class _Editor:
     """Edits one material; a node reached inside a node group is edited in the group's own tree
     (groups are shared: the edit applies to every material using the group, which is what the
@@ -156,6 +165,11 @@ class _Editor:
             sock = out.inputs.get(name)
             if sock is not None and sock.is_linked:
                 self._unlink(sock, f"{name.lower()} removed")
+        sock = out.inputs.get('Displacement')
+        if sock is not None and sock.is_linked:
+            said = []           # (a displacement read as bump is rendered: it stays)
+            if export.bump.displacement_bump(self.mat, out, said, image=_no_image) is None or said:
+                self._unlink(sock, "displacement removed")
         self._shader(out.inputs['Surface'], 0)
         return self.done
 
@@ -288,8 +302,14 @@ class _Editor:
 
     def _normals(self, node):
         sock = node.inputs.get('Normal')
-        if sock is not None and nodegraph.linked_node(sock) is not None \
-                and export.normalmaps.tangent_normal_map(node, []) is None:     # a normal map it renders stays
+        if sock is None or nodegraph.linked_node(sock) is None:
+            return
+        # Bump nodes it renders per point and a normal map it renders under them stay
+        bumps, past = export.bump.bump_nodes(sock)
+        said = []
+        rendered = all(export.bump.compile_bump(b, said, image=_no_image) is not None for b in bumps) and not said \
+            and (export.normalmaps.normal_map_at(past, said) is not None or not export.normalmaps.bends_normal(past))
+        if not rendered:
             self._unlink(sock, f"{node.bl_label} Normal input removed")
 
     def _own_value(self, socket):

@@ -1,0 +1,56 @@
+"""Bump mapping at shading points: the normal a height bends, as Cycles' Bump node
+(kernel/svm/displace.h svm_node_set_bump) gives it for a height smooth at the pixel scale.
+
+Cycles evaluates the height at the point and at two points moved by the ray differentials dPdx,
+dPdy (every texture coordinate moved by its own differential), and bends N by the surface
+gradient (h_x - h_c) (dPdy x N) + (h_y - h_c) (N x dPdx) over det = dPdx . (dPdy x N). For any
+two directions a, b in the triangle's plane that is, in the limit, the vector g normal to N with
+g . a = dh(a) and g . b = dh(b): the height's gradient in the plane normal to N, whatever the
+differentials. The integrator takes a and b as the triangle's edges (dP/du, dP/dv, every
+coordinate moved consistently by its barycentric derivative) and dh by central differences
+over a small step (scene_step), and calls `bend` here."""
+
+import numpy as np
+
+F32 = np.float32
+
+# the step of the height's central differences, as a share of the scene's extent: small enough
+# for the limit (a pattern a pixel wide is some 1e-3 of a scene), large enough that float32
+# coordinates near the scene's extent change by ~1e3 of their rounding
+STEP_SHARE = 1e-4
+
+
+def scene_step(points):
+    """The world length of the height's difference steps for a scene whose points (3, n) span it."""
+    p = np.asarray(points, np.float64)
+    extent = float(np.ptp(p, axis=1).max()) if p.size else 0.0
+    return STEP_SHARE * (extent if extent > 0 else 1.0)
+
+
+def bend(N, e1, e2, dh_du, dh_dv, distance, strength, scale=None):
+    """Normals (3, k) float32 bent by a height: N (3, k) unit, e1 and e2 (3, k) the surface's
+    derivatives dP/du and dP/dv at the points, dh_du and dh_dv (k,) the height's; distance and
+    strength (k,) the Bump's (distance negative under Invert; strength clamped at 0, as Cycles
+    does); scale (k,) or None: a factor on the gradient (an object's scale, Bump.object_scale).
+    N' = normalize(N - distance g), then normalize(strength N' + (1 - strength) N) (Cycles keeps
+    N where N' is zero)."""
+    N, e1, e2 = (np.asarray(x, np.float64) for x in (N, e1, e2))
+    rx, ry = np.cross(e2, N, axis=0), np.cross(N, e1, axis=0)
+    det = (e1 * rx).sum(axis=0)
+    ok = np.abs(det) > 0
+    with np.errstate(divide='ignore', invalid='ignore'):
+        g = (np.asarray(dh_du, np.float64) * rx + np.asarray(dh_dv, np.float64) * ry) / np.where(ok, det, 1.0)
+    g = np.where(ok & np.isfinite(g).all(axis=0), g, 0.0)
+    if scale is not None:
+        g = g * np.asarray(scale, np.float64)
+    out = _unit(N - np.asarray(distance, np.float64) * g, N)
+    s = np.maximum(np.asarray(strength, np.float64), 0.0)
+    out = _unit(s * out + (1.0 - s) * N, N)
+    return out.astype(F32)
+
+
+def _unit(x, fallback):
+    """Columns of x normalized; fallback's where x is zero or not finite."""
+    length = np.sqrt((x * x).sum(axis=0))
+    good = (length > 0) & np.isfinite(length)
+    return np.where(good, x / np.where(good, length, 1.0), fallback)

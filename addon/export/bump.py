@@ -1,0 +1,92 @@
+"""Bump mapping per shading point: the Bump nodes that feed a BSDF's Normal (a height from
+procedural textures, images, coordinates or attributes through colour and float nodes) and a
+material's Displacement output read as bump (Cycles' Bump Only, and the bump part of
+Displacement and Bump), compiled into scenedata.Bump, which the integrator applies at each hit
+(Integrator._bump_mapped). What cannot be followed is reported and left flat. Part of the
+export layer: every node setting is read here."""
+
+import numpy as np
+
+from .. import scenedata as sd
+from ..nodeeval import constant_value
+from ..nodegraph import linked_link
+from ..procedural import ProceduralTexels
+from . import procedurals
+
+
+def bump_nodes(socket):
+    """(the Bump nodes that bend what feeds socket, outermost first; the socket past them: the
+    innermost Bump's Normal input, or socket itself). A Bump of unlinked Height or of constant
+    strength 0 passes its own Normal on, as in Cycles (its gradient is 0, or it is not mixed in)."""
+    nodes = []
+    for _ in range(64):             # (a chain of Bumps, never a cycle: Blender refuses those)
+        link = linked_link(socket) if socket is not None else None
+        if link is None or link.from_node.type != 'BUMP':
+            break
+        node = link.from_node
+        strength, constant = constant_value(node.inputs['Strength'])
+        if not (constant and strength <= 0.0) and linked_link(node.inputs['Height']) is not None:
+            nodes.append(node)
+        socket = node.inputs['Normal']
+    return nodes, socket
+
+
+def compile_bump(node, reasons, image=None):
+    """scenedata.Bump of a Bump node (bump_nodes'), or None where its Height, Strength or
+    Distance chain cannot be followed per point (said). Filter Width is Cycles' tap spacing
+    (a share of the pixel footprint): the limit of a height smooth at the pixel scale does not
+    depend on it."""
+    what = f"Bump node '{node.name}'"
+    found = procedurals.compile_floats([node.inputs['Height'], node.inputs['Strength'], node.inputs['Distance']],
+                                       what, reasons, image)
+    if found is None:
+        return None
+    fn, needs, name = found
+    sign = -1.0 if node.invert else 1.0
+
+    def values(coords):
+        h = fn(coords)
+        # Cycles clamps the strength at 0 (svm_node_set_bump); Invert negates the distance
+        return np.stack([h[:, 0], np.maximum(h[:, 1], 0.0), sign * h[:, 2]], axis=1)
+    return sd.Bump(ProceduralTexels(values, needs, name or what))
+
+
+def displacement_bump(mat, out, reasons, image=None):
+    """scenedata.Bump of a material's Displacement output (out: its Material Output) where
+    Cycles bumps with it (displacement_method BUMP, or the bump part of BOTH): a Displacement
+    node's (Height - Midlevel) x Scale along the normal, which Cycles turns into a height by
+    its dot with N and bumps with at distance 1 and strength 1 (ShaderGraph::
+    bump_from_displacement), setting the shader's normal. None otherwise, said: no link, true
+    displacement alone, or another node (a Vector Displacement)."""
+    socket = out.inputs.get('Displacement') if out is not None else None
+    link = linked_link(socket) if socket is not None else None
+    if link is None:
+        return None
+    method = getattr(mat, 'displacement_method', 'BUMP')
+    if method == 'DISPLACEMENT':
+        reasons.append("displacement ignored (true displacement, Displacement Only, moves no vertices here)")
+        return None
+    node = link.from_node
+    if node.type != 'DISPLACEMENT':
+        reasons.append(f"displacement ignored (from '{node.bl_label}': the Displacement node's only)")
+        return None
+    if method != 'BUMP':
+        reasons.append("displacement: its bump rendered, the true displacement (Displacement and Bump) not")
+    if linked_link(node.inputs['Normal']) is not None:
+        reasons.append("Displacement node's Normal input ignored: displaced along the shading normal")
+    found = procedurals.compile_floats([node.inputs['Height'], node.inputs['Midlevel'], node.inputs['Scale']],
+                                       "displacement (as bump)", reasons, image)
+    if found is None:
+        return None
+    fn, needs, name = found
+    # the displacement vector's length along N: (h - mid) x scale, times the object's scale in
+    # object space (Cycles maps N to object space, scales, and maps the vector back); the
+    # bump of BOTH runs in object space, another factor of the scale on the gradient
+    power = (1 if node.space == 'OBJECT' else 0) + (1 if method == 'BOTH' else 0)
+
+    def values(coords):
+        h = fn(coords)
+        return np.stack([(h[:, 0] - h[:, 1]) * h[:, 2], np.ones(len(h)), np.ones(len(h))], axis=1)
+    if power:
+        needs = needs | {'object'}           # (the object's scale at a hit: Integrator._object_scale)
+    return sd.Bump(ProceduralTexels(values, needs, name or "displacement"), power)
