@@ -31,7 +31,7 @@ def bend(N, e1, e2, dh_du, dh_dv, distance, strength, scale=None):
     """Normals (3, k) float32 bent by a height: N (3, k) unit, e1 and e2 (3, k) the surface's
     derivatives dP/du and dP/dv at the points, dh_du and dh_dv (k,) the height's; distance and
     strength (k,) the Bump's (distance negative under Invert; strength clamped at 0, as Cycles
-    does); scale (k,) or None: a factor on the gradient (an object's scale, Bump.object_scale).
+    does); scale (k,) or None: a factor on the height (Bump.object_height's |M^T N|).
     N' = normalize(N - distance g), then normalize(strength N' + (1 - strength) N) (Cycles keeps
     N where N' is zero)."""
     N, e1, e2 = (np.asarray(x, np.float64) for x in (N, e1, e2))
@@ -43,14 +43,16 @@ def bend(N, e1, e2, dh_du, dh_dv, distance, strength, scale=None):
     g = np.where(ok & np.isfinite(g).all(axis=0), g, 0.0)
     if scale is not None:
         g = g * np.asarray(scale, np.float64)
-    out = _unit(N - np.asarray(distance, np.float64) * g, N)
+    out = unit(N - np.asarray(distance, np.float64) * g, N)
     s = np.maximum(np.asarray(strength, np.float64), 0.0)
-    out = _unit(s * out + (1.0 - s) * N, N)
+    out = unit(s * out + (1.0 - s) * N, N)
     return out.astype(F32)
 
 
-def _unit(x, fallback):
-    """Columns of x normalized; fallback's where x is zero or not finite."""
+def unit(x, fallback=None):
+    """Columns of x (3, k) normalized; fallback's (or 0) where x is zero or not finite."""
+    x = np.asarray(x, np.float64)
+    fallback = np.zeros_like(x) if fallback is None else fallback
     length = np.sqrt((x * x).sum(axis=0))
     good = (length > 0) & np.isfinite(length)
     return np.where(good, x / np.where(good, length, 1.0), fallback)

@@ -1430,25 +1430,26 @@ class Integrator:
             return tex.evaluate({**self._coordinates32(tex.needs, prim, uu, vv, back), **held})[0].astype(np.float64)
         dh_du = (height(u64 + du, v64) - height(u64 - du, v64)) / (2.0 * du)
         dh_dv = (height(u64, v64 + dv) - height(u64, v64 - dv)) / (2.0 * dv)
-        scale = self._object_scale(prim, e1, e2) ** b.object_scale if b.object_scale else None
-        return bumpmap.bend(N, e1, e2, dh_du, dh_dv, values[2], values[1], scale)
+        M = None
+        if (b.object_height or b.object_space) and self.tri.tangent_xf is not None:
+            M = np.take(self.tri.tangent_xf, np.take(self.tri.instance, prim), axis=0).astype(np.float64)
+        if M is None:
+            return bumpmap.bend(N, e1, e2, dh_du, dh_dv, values[2], values[1])
+        N64 = np.asarray(N, np.float64)
+        MtN = np.einsum('kji,jk->ik', M, N64)                    # M^T N: N in object space
+        # (an object-space Displacement's length along N: |M^T N| x (h - mid) x scale)
+        factor = np.sqrt((MtN * MtN).sum(axis=0)) if b.object_height else None
+        if not b.object_space:
+            return bumpmap.bend(N, e1, e2, dh_du, dh_dv, values[2], values[1], factor)
+        Minv = np.linalg.inv(M)
+        bent = bumpmap.bend(bumpmap.unit(MtN), np.einsum('kij,jk->ik', Minv, e1), np.einsum('kij,jk->ik', Minv, e2),
+                            dh_du, dh_dv, values[2], values[1], factor)
+        return bumpmap.unit(np.einsum('kji,jk->ik', Minv, bent.astype(np.float64)), N64).astype(F32)
 
     def _coordinates32(self, needs, prim, u, v, back):
         """_coordinates at float64 barycentrics (a bump tap's), each (k, 3) float32."""
         return {k: np.ascontiguousarray(c, F32) for k, c in self._coordinates(needs, prim, u, v, back).items()}
 
-    def _object_scale(self, prim, e1, e2):
-        """(k,) the scale of the hits' objects: the square root of a triangle's world area over
-        its area in Object coordinates (exact for a uniform scale; 1 without them)."""
-        rows = self.tri.coords
-        if rows is None or len(rows) // 3 < 6:
-            return np.ones(len(prim))
-        width = len(rows) // 3
-        r = np.take(rows, prim, axis=1).astype(np.float64)
-        o = np.cross(r[width + 3:width + 6], r[2 * width + 3:2 * width + 6], axis=0)
-        w = np.cross(e1, e2, axis=0)
-        ao, aw = np.sqrt((o * o).sum(axis=0)), np.sqrt((w * w).sum(axis=0))
-        return np.where(ao > 0, np.sqrt(aw / np.where(ao > 0, ao, 1.0)), 1.0)
 
     def _normal_mapped(self, prim, u, v, ns, ng, correction):
         """The shading normals (3, k) at hits (prim, u, v) with their materials' tangent-space

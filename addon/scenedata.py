@@ -212,10 +212,13 @@ class Bump:
     (d negative under Invert); the normal N becomes normalize(s x normalize(N - d grad h) +
     (1 - s) x N), grad h the height's gradient in the plane normal to N (the limit of Cycles'
     svm_node_set_bump for a height smooth at the pixel scale), s and d the point's.
-    object_scale: the gradient is times the object's scale at the point to this power (0, 1 or
-    2: an object-space Displacement node and bump in object space, Cycles' factors)."""
+    object_height: the height is times |M^T N| (an object-space Displacement node: Cycles maps
+    N to object space, scales it and maps it back; M the placement's linear map,
+    Geometry.tangent_xf); object_space: N is bent in object space (the bump of Displacement and
+    Bump), N_o = normalize(M^T N) by the gradient over M^-1 dP, then normalize(M^-T N_o')."""
     values: object
-    object_scale: int = 0
+    object_height: bool = False
+    object_space: bool = False
 
 
 @dataclass
@@ -247,7 +250,8 @@ class Geometry:
     tangents: Optional[np.ndarray] = None
     # (P,3,3) float32: the object-to-world linear map (3x3 of the matrix) of each placement, by
     # instance id (instance must be given): tangents are then in object space, as Cycles keeps
-    # them; None: tangents are world-space (or there are none)
+    # them, and object-space bumps (Bump.object_height, object_space) read it; None: tangents
+    # are world-space (or there are none), such bumps take M = 1
     tangent_xf: Optional[np.ndarray] = None
     # (M,3,3) float32 per corner: the albedo factor of triangles whose material reads a mesh
     # attribute (Material.color_attribute), interpolated like UVs; 1 elsewhere; None: none does

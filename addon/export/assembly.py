@@ -11,6 +11,7 @@ import numpy as np
 from .. import scenedata as sd
 from ..procedural import ATTRIBUTE_NEED, ProceduralTexels
 from .aovs import GEOMETRY_POSITION
+from .bump import needs_object_maps
 from .errors import ExportCancelled
 from .objectinfo import OBJECT_INFO
 
@@ -36,6 +37,7 @@ class _Out:
         self.uvs = np.empty((m, 3, 2), np.float32) if need_uvs else None
         self.tangents = None              # (m, 3, 4), allocated by the first normal-mapped mesh
         self.linear = []                  # per batch, its placements' 3x3 maps (k, 3, 3)
+        self.object_maps = False          # a material's bump reads them (export/bump.py needs_object_maps)
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
@@ -61,8 +63,10 @@ class _Out:
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
             aovs = {k: _compact_rows(v, self.keep) for k, v in aovs.items()}
             attributes = {k: _compact_rows(v, self.keep) for k, v in attributes.items()}
-        # per placement (instance id), for the object-space tangents of normal maps
-        xf = np.concatenate(self.linear).astype(np.float32) if self.tangents is not None else None
+        # per placement (instance id), for the object-space tangents of normal maps and
+        # object-space bumps
+        xf = np.concatenate(self.linear).astype(np.float32) \
+            if self.tangents is not None or self.object_maps else None
         return sd.Geometry(vertices=self.vertices, tangent_xf=xf, aovs=aovs or None,
                            instance_values=self.instance_values or None, attributes=attributes or None, **per_tri)
 
@@ -172,6 +176,7 @@ class Assembly:
         nv = sum(len(p) * len(a.positions) for a, p in batches)
         m = sum(len(p) * len(a.triangles) for a, p in batches)
         out = _Out(nv, m, need_uvs)
+        out.object_maps = any(needs_object_maps(mat) for mat in self.materials.materials)
         if self._info_needs:
             total = sum(len(p) for _, p in batches)
             out.instance_values = {n: np.zeros((total, 4), np.float32) for n in self._info_needs}

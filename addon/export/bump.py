@@ -79,14 +79,17 @@ def displacement_bump(mat, out, reasons, image=None):
     if found is None:
         return None
     fn, needs, name = found
-    # the displacement vector's length along N: (h - mid) x scale, times the object's scale in
-    # object space (Cycles maps N to object space, scales, and maps the vector back); the
-    # bump of BOTH runs in object space, another factor of the scale on the gradient
-    power = (1 if node.space == 'OBJECT' else 0) + (1 if method == 'BOTH' else 0)
-
     def values(coords):
         h = fn(coords)
         return np.stack([(h[:, 0] - h[:, 1]) * h[:, 2], np.ones(len(h)), np.ones(len(h))], axis=1)
-    if power:
-        needs = needs | {'object'}           # (the object's scale at a hit: Integrator._object_scale)
-    return sd.Bump(ProceduralTexels(values, needs, name or "displacement"), power)
+    # (in object space the displacement's length along N takes the object's scale along N;
+    # Cycles bumps Displacement and Bump's in object space: bump_from_displacement)
+    return sd.Bump(ProceduralTexels(values, needs, name or "displacement"), object_height=node.space == 'OBJECT',
+                   object_space=method == 'BOTH')
+
+
+def needs_object_maps(material):
+    """Whether a scenedata.Material's bump reads its placements' linear maps (Bump.object_height,
+    object_space): the assembly then exports them (Geometry.tangent_xf)."""
+    b = getattr(material, 'displacement_bump', None)
+    return b is not None and (b.object_height or b.object_space)

@@ -20,18 +20,21 @@ from . import scenes
 
 
 def _integrator(height, strength=1.0, distance=1.0, size=2.0, needs=('position',), displacement=False,
-                normals=None, power=0):
+                normals=None, linear=None, object_height=False, object_space=False):
     """An Integrator over a plane z = 0 (2 triangles, +-size) whose material bumps with
-    height(coords) -> (n,), at that strength and distance."""
+    height(coords) -> (n,), at that strength and distance; linear: its placement's 3x3 map."""
     def values(c):
         h = np.asarray(height(c), np.float64)
         return np.stack([h, np.full(len(h), strength), np.full(len(h), distance)], axis=1)
-    b = sd.Bump(ProceduralTexels(values, frozenset(needs), 'height'), power)
+    b = sd.Bump(ProceduralTexels(values, frozenset(needs), 'height'), object_height, object_space)
     v, t = scenes.quad((0.0, 0.0, 0.0), size, size)
     mat = scenes.material('bumpy', bumps=() if displacement else (b,), displacement_bump=b if displacement else None)
     geo = scenes.geometry([(v, t, 1, scenes.ALL_VIS)])
     if normals is not None:
         geo.normals = normals
+    if linear is not None:
+        geo.instance = np.zeros(len(geo.triangles), np.int32)
+        geo.tangent_xf = np.asarray(linear, np.float32)[None]
     scene = sd.SceneData(scenes.ortho_down(), geo, [scenes.material('default'), mat], [],
                          np.zeros(3, np.float32), sd.Settings(samples=1, max_bounces=0))
     return Integrator(scene)
@@ -150,3 +153,20 @@ def test_cycles_surface_gradient_at_small_differentials_tends_to_bend():
     dh2 = (h(P + 1e-6 * e2) - h(P - 1e-6 * e2)) / 2e-6
     ours = bumpmap.bend(N[:, None], e1[:, None], e2[:, None], [dh1], [dh2], [d], [1.0])[:, 0]
     np.testing.assert_allclose(ours, cyc, atol=1e-4)
+
+
+@pytest.mark.parametrize('linear,object_space,factor', [
+    (np.diag([1.0, 1.0, 3.0]), False, 3.0),          # |M^T N| = 3: the displacement 3x as long
+    (np.diag([0.5, 4.0, 1.0]), False, 1.0),          # scaled in the plane: no longer along N
+    (2.0 * np.eye(3), True, 4.0),                    # and bent in object space: the gradient 2x again
+    (np.diag([1.0, 1.0, 3.0]), True, 9.0)])          # the object-space normal back by M^-T: 3x steeper again
+def test_an_object_space_displacement_takes_the_object_scale_along_the_normal(linear, object_space, factor):
+    """A Displacement node in object space (Bump.object_height): the height times |M^T N|; the
+    bump of Displacement and Bump (object_space) bends N in object space. The plane's own
+    geometry is world space here: only the height's factor and the frame change."""
+    a = 0.3
+    integ = _integrator(lambda c: a * c['position'][:, 0], displacement=True, linear=linear,
+                        object_height=True, object_space=object_space)
+    N, _ = _bent(integ, [(0.2, 0.3), (-1.0, 0.5)])
+    want = np.array([-factor * a, 0.0, 1.0]) / np.hypot(factor * a, 1.0)
+    np.testing.assert_allclose(N.T, np.broadcast_to(want, (2, 3)), atol=1e-3)

@@ -67,6 +67,15 @@ def _render(sc, tmp_path, normals=True):
     return img, nrm
 
 
+def _inside(hit, k=2):
+    """hit without its pixels within k of a miss (the plane's edge mixes it with the background)."""
+    keep = hit.copy()
+    for dy in range(-k, k + 1):
+        for dx in range(-k, k + 1):
+            keep &= np.roll(np.roll(hit, dy, axis=0), dx, axis=1)
+    return keep
+
+
 def _blocks(a, k=4):
     h, w = a.shape[0] // k * k, a.shape[1] // k * k
     return a[:h, :w].reshape(h // k, k, w // k, k).mean(axis=(1, 3))
@@ -171,12 +180,44 @@ def test_an_image_height_map_on_uv_matches_cycles(tmp_path):
     _compare(img, nrm, rtol_block=0.04, normal_atol=0.015)
 
 
-def test_a_displacement_output_read_as_bump_matches_cycles(tmp_path):
-    """Material Output > Displacement from a Displacement node (Bump Only, object space on a
-    unit-scale plane): the shader's normal bent by (height - midlevel) x scale."""
-    img, nrm = _render(_plane_scene(lambda: _bumped("Displaced", _wave(), 'Fac', displacement=(0.5, 0.4))), tmp_path)
+@pytest.mark.parametrize('space,scale,rotated', [('OBJECT', 1.0, False), ('OBJECT', (1.0, 1.0, 3.0), True),
+                                                  ('OBJECT', (0.7, 1.5, 2.5), True), ('WORLD', (2.0, 1.0, 1.0), True)])
+def test_a_displacement_output_read_as_bump_matches_cycles(space, scale, rotated, tmp_path):
+    """Material Output > Displacement from a Displacement node (Bump Only): the shader's normal
+    bent by the height (height - midlevel) x scale, in object space times the object's scale
+    along the normal (|M^T N|: a plane scaled 3 along its normal bumps 3x as deep), on planes
+    scaled non-uniformly and rotated; and a Bump node on such a plane (world-space gradient of
+    a height on Generated coordinates). Gentle bands: on steep ones Cycles' own forward
+    differences (a tenth of a pixel apart) bend some 0.02 off the limit."""
+    def make():
+        mat = _bumped("Displaced", _wave(scale=0.35), "Fac", displacement=(0.5, 0.2))
+        next(n for n in mat.node_tree.nodes if n.type == 'DISPLACEMENT').space = space
+        return mat
+    for build in (make, lambda: _bumped("Waves", _wave(scale=0.35), "Fac", distance=0.2)):
+        sc = _plane_scene(build, size=2.0)
+        plane = next(o for o in sc.objects if o.type == 'MESH')
+        plane.scale = (scale,) * 3 if np.isscalar(scale) else scale
+        if rotated:
+            plane.rotation_euler = (0.3, 0.0, 0.5)
+        sc.camera.data.ortho_scale = 3.6
+        img, nrm = _render(sc, tmp_path)
+        hit = _inside(np.abs(nrm['CYCLES']).sum(-1) > 0.5)
+        _compare(img, nrm, rtol_block=0.03, hit=hit)
+        assert img['CYCLES'][hit].max() > 1.5 * img['CYCLES'][hit].min()
+
+
+def test_displacement_and_bump_bumps_in_object_space(tmp_path):
+    """Displacement and Bump: Cycles bumps in object space (bump_from_displacement), on a plane
+    scaled 2 the gradient twice as steep again; its true displacement (which moves the vertices,
+    reported) is left out, so only a unit or uniform scale is compared."""
+    def make():
+        mat = _bumped("Both", _wave(), 'Fac', displacement=(0.5, 0.2))
+        mat.displacement_method = 'BOTH'
+        return mat
+    sc = _plane_scene(make, size=2.0)
+    next(o for o in sc.objects if o.type == 'MESH').scale = (2.0, 2.0, 2.0)
+    img, nrm = _render(sc, tmp_path)
     _compare(img, nrm)
-    assert img['CYCLES'].max() > 1.5 * img['CYCLES'].min()
 
 
 def test_chained_bumps_and_a_normal_map_under_a_bump_match_cycles(tmp_path):
