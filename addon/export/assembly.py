@@ -259,7 +259,8 @@ class Assembly:
             m = mats[k]
             mats.append(dataclasses.replace(
                 m, base_color=np.zeros(3, np.float32), emission=np.zeros(3, np.float32), texture=None,
-                emission_texture=None, normal_texture=None, color_attribute=None, holdout=k in held,
+                emission_texture=None, normal_texture=None, bumps=(), displacement_bump=None,
+                color_attribute=None, holdout=k in held,
                 transparency=None if k in held else np.ones(3, np.float32), translucency=None, refraction=None,
                 opacity=None, opaque_refraction=None, visibility=int(clear[k]), approximated='',
                 clear_twin=k not in held))
