@@ -8,23 +8,33 @@ two directions a, b in the triangle's plane that is, in the limit, the vector g 
 g . a = dh(a) and g . b = dh(b): the height's gradient in the plane normal to N, whatever the
 differentials. The integrator takes a and b as the triangle's edges (dP/du, dP/dv, every
 coordinate moved consistently by its barycentric derivative) and dh by central differences
-over a small step (scene_step), and calls `bend` here."""
+over a small step (step_lengths: a share of the pixel footprint, as Cycles' taps are, within
+bounds set by the scene's extent), and calls `bend` here."""
 
 import numpy as np
 
 F32 = np.float32
 
-# the step of the height's central differences, as a share of the scene's extent: small enough
-# for the limit (a pattern a pixel wide is some 1e-3 of a scene), large enough that float32
-# coordinates near the scene's extent change by ~1e3 of their rounding
-STEP_SHARE = 1e-4
+# the step of the height's central differences: a share of the pixel footprint at the point
+# (Cycles' taps are the footprint x Filter Width apart, 0.1 by default), so a height smooth at
+# the pixel scale is differentiated well inside its features whatever the object's size in the
+# scene; at most STEP_MOST of the scene's extent (a small render's wide pixels), at least
+# STEP_LEAST of it (float32 coordinates must change by more than their rounding)
+FOOTPRINT_SHARE = 0.1
+STEP_MOST, STEP_LEAST = 1e-4, 1e-6
 
 
-def scene_step(points):
-    """The world length of the height's difference steps for a scene whose points (3, n) span it."""
+def scene_extent(points):
+    """The largest side of the box around points (3, n); 1 for a point or none."""
     p = np.asarray(points, np.float64)
     extent = float(np.ptp(p, axis=1).max()) if p.size else 0.0
-    return STEP_SHARE * (extent if extent > 0 else 1.0)
+    return extent if extent > 0 else 1.0
+
+
+def step_lengths(footprint, extent):
+    """(k,) world lengths of the height's difference steps at points whose pixel footprint
+    (k,) is given, in a scene of that extent."""
+    return np.clip(FOOTPRINT_SHARE * np.asarray(footprint, np.float64), STEP_LEAST * extent, STEP_MOST * extent)
 
 
 def bend(N, e1, e2, dh_du, dh_dv, distance, strength, scale=None):

@@ -292,7 +292,7 @@ class Integrator:
         self._normal_mapping = bool(self.mats.normal_maps) and self.tri.tangents is not None
         self._bumped = self._normal_mapping or bool(self.mats.bumps)
         self._displaced = any(e[1] is not None for e in self.mats.bumps)
-        self._bump_length = bumpmap.scene_step(self.tri.geo[0:3]) if self.mats.bumps else 0.0
+        self._bump_extent = bumpmap.scene_extent(self.tri.geo[0:3]) if self.mats.bumps else 1.0
         # procedural chains reading a normal (Geometry Normal / True Normal, Texture Coordinate
         # Normal): their hits say which side the ray met (Cycles turns N and Ng to face it)
         self._sided = self.mats.reads_side
@@ -1413,15 +1413,17 @@ class Integrator:
 
     def _bumped_normal(self, b, prim, u, v, N, back):
         """N (3, k) bent by one scenedata.Bump b at hits (prim, u, v): its height's derivatives
-        along the triangle's barycentric u and v by central differences over the scene's bump
-        step (every coordinate moved by its own derivative; the normals a chain reads held, as
-        Cycles' bump taps hold N), its strength and distance at the hit."""
+        along the triangle's barycentric u and v by central differences over a step of the
+        pixel footprint there (bump.step_lengths; every coordinate moved by its own derivative,
+        the normals a chain reads held, as Cycles' bump taps hold N), its strength and distance
+        at the hit."""
         tex = b.values
         g = np.take(self.tri.geo, prim, axis=1).astype(np.float64)
         e1, e2 = g[3:6], g[6:9]
         u64, v64 = u.astype(np.float64), v.astype(np.float64)
-        du = self._bump_length / np.maximum(np.sqrt((e1 * e1).sum(axis=0)), 1e-30)
-        dv = self._bump_length / np.maximum(np.sqrt((e2 * e2).sum(axis=0)), 1e-30)
+        step = bumpmap.step_lengths(self._footprint(g[0:3] + e1 * u64 + e2 * v64), self._bump_extent)
+        du = step / np.maximum(np.sqrt((e1 * e1).sum(axis=0)), 1e-30)
+        dv = step / np.maximum(np.sqrt((e2 * e2).sum(axis=0)), 1e-30)
         centre = self._coordinates32(tex.needs, prim, u64, v64, back)
         values = tex.evaluate(centre)
         held = {k: c for k, c in centre.items() if k in SIDED}
@@ -1445,6 +1447,17 @@ class Integrator:
         bent = bumpmap.bend(bumpmap.unit(MtN), np.einsum('kij,jk->ik', Minv, e1), np.einsum('kij,jk->ik', Minv, e2),
                             dh_du, dh_dv, values[2], values[1], factor)
         return bumpmap.unit(np.einsum('kji,jk->ik', Minv, bent.astype(np.float64)), N64).astype(F32)
+
+    def _footprint(self, P):
+        """(k,) the width a camera pixel covers at points P (3, k) (seen from the camera: at a
+        bounce too, where Cycles' own differentials are wider still)."""
+        cam = self.camera
+        if cam.kind == 'ORTHO':
+            return np.full(P.shape[1], (cam.right - cam.left) / cam.width)
+        d = np.sqrt(((P - cam.pos[:, None]) ** 2).sum(axis=0))
+        # (a panorama's pixel: its view plane's span over the width, as angles)
+        per_pixel = (cam.right - cam.left) / cam.width * (cam.tan_half_fov if cam.kind == 'PERSP' else 1.0)
+        return d * per_pixel
 
     def _coordinates32(self, needs, prim, u, v, back):
         """_coordinates at float64 barycentrics (a bump tap's), each (k, 3) float32."""

@@ -4,7 +4,7 @@ sin(k x) the normal of that slope at each point; strength mixes towards the unbe
 Invert and a back face; Cycles' surface-gradient formula (svm_node_set_bump) at finite
 differentials tends to the same normal. Before, Bump nodes were ignored (reported): N stayed
 (0, 0, 1). Within 1e-3: the heights read float32 coordinates, as the textures do, which round
-by some 1e-4 of the difference step (bump.STEP_SHARE of the scene) where x is near 2."""
+by some 1e-4 of the difference step (bump.STEP_MOST of the scene here) where x is near 2."""
 from __future__ import annotations
 
 import dacrt
@@ -35,7 +35,7 @@ def _integrator(height, strength=1.0, distance=1.0, size=2.0, needs=('position',
     if linear is not None:
         geo.instance = np.zeros(len(geo.triangles), np.int32)
         geo.tangent_xf = np.asarray(linear, np.float32)[None]
-    scene = sd.SceneData(scenes.ortho_down(), geo, [scenes.material('default'), mat], [],
+    scene = sd.SceneData(scenes.ortho_down(view=4.0), geo, [scenes.material('default'), mat], [],
                          np.zeros(3, np.float32), sd.Settings(samples=1, max_bounces=0))
     return Integrator(scene)
 
@@ -170,3 +170,14 @@ def test_an_object_space_displacement_takes_the_object_scale_along_the_normal(li
     N, _ = _bent(integ, [(0.2, 0.3), (-1.0, 0.5)])
     want = np.array([-factor * a, 0.0, 1.0]) / np.hypot(factor * a, 1.0)
     np.testing.assert_allclose(N.T, np.broadcast_to(want, (2, 3)), atol=1e-3)
+
+
+def test_the_difference_step_follows_the_pixel_footprint_within_the_scene_bounds():
+    """A tenth of the footprint (Cycles' default Filter Width), at most 1e-4 and at least 1e-6 of
+    the scene's extent: a small object near a perspective camera in a large scene is
+    differentiated inside its own features."""
+    np.testing.assert_allclose(bumpmap.step_lengths([1e-3, 10.0, 1e-9], 100.0), [1e-4, 1e-2, 1e-4])
+    integ = _integrator(lambda c: c['position'][:, 0])
+    cam = integ.camera                                   # orthographic, 4 wide over 8 pixels
+    np.testing.assert_allclose(integ._footprint(np.zeros((3, 2))), [0.5, 0.5])
+    assert cam.kind == 'ORTHO'

@@ -300,3 +300,27 @@ def test_a_bump_under_a_white_world_with_bounces_matches_cycles(tmp_path):
     img = {e: exr[f"{layer}.Combined.R"] for e, exr in scenes.render_engines(sc, tmp_path).items()}
     np.testing.assert_allclose(img['DACRT'].mean(), img['CYCLES'].mean(), rtol=0.01)
     np.testing.assert_allclose(_blocks(img['DACRT'], 6), _blocks(img['CYCLES'], 6), rtol=0.04)
+
+
+def test_a_small_bumped_object_in_a_large_scene_matches_cycles(tmp_path):
+    """A 10 cm sphere with a fine Noise height near a perspective camera, over a ground 2 km
+    wide: the difference step follows the pixel footprint at the sphere (a share of the
+    scene's extent would span the sphere's bumps)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat = _bumped("Fine", _noise(scale=40.0, coordinate='Object'), 'Fac', distance=0.004)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 48
+    scenes.camera(location=(0, -0.5, 0), rotation=(np.pi / 2, 0, 0), lens=50.0)
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=0.1)
+    sphere = bpy.context.active_object
+    sphere.data.shade_smooth()
+    sphere.data.materials.append(mat)
+    scenes.plane("Ground", size=2000.0, location=(0, 0, -0.2))
+    sun = scenes.light('SUN', 3.0)
+    sun.rotation_euler = (math.radians(60.0), 0.0, math.radians(40.0))
+    sc.cycles.samples = sc.dacrt.samples = 16
+    img, nrm = _render(sc, tmp_path)
+    on = _inside((np.abs(nrm['CYCLES'] - np.array([0.0, 0.0, 1.0])).sum(-1) > 0.05) &
+                 (np.abs(nrm['CYCLES']).sum(-1) > 0.5), 1)
+    assert on.sum() > 200
+    _compare(img, nrm, hit=on)
