@@ -292,6 +292,9 @@ class Integrator:
         self._normal_mapping = bool(self.mats.normal_maps) and self.tri.tangents is not None
         self._bumped = self._normal_mapping or bool(self.mats.bumps)
         self._displaced = any(e[1] is not None for e in self.mats.bumps)
+        # True while coordinates must read the normal the displacement's bump starts from (its own
+        # height, a Bump node's taps, which hold the centre's)
+        self._undisplaced = False
         self._bump_extent = bumpmap.scene_extent(self.tri.geo[0:3]) if self.mats.bumps else 1.0
         # procedural chains reading a normal (Geometry Normal / True Normal, Texture Coordinate
         # Normal): their hits say which side the ray met (Cycles turns N and Ng to face it)
@@ -1377,7 +1380,11 @@ class Integrator:
         bump = np.empty((4, len(prim)), F32)
         bump[3] = 0.0
         if self._displaced:
-            ns = self._bump_mapped(prim, u, v, ns, ng, bump[3], True)
+            self._undisplaced = True
+            try:
+                ns = self._bump_mapped(prim, u, v, ns, ng, bump[3], True)
+            finally:
+                self._undisplaced = False
         bump[:3] = ns
         out = self._normal_mapped(prim, u, v, ns, ng, bump[3]) if self._normal_mapping else ns
         if self.mats.bumps:
@@ -1430,8 +1437,12 @@ class Integrator:
 
         def height(uu, vv):
             return tex.evaluate({**self._coordinates32(tex.needs, prim, uu, vv, back), **held})[0].astype(np.float64)
-        dh_du = (height(u64 + du, v64) - height(u64 - du, v64)) / (2.0 * du)
-        dh_dv = (height(u64, v64 + dv) - height(u64, v64 - dv)) / (2.0 * dv)
+        was, self._undisplaced = self._undisplaced, True       # (the taps' normals are the centre's)
+        try:
+            dh_du = (height(u64 + du, v64) - height(u64 - du, v64)) / (2.0 * du)
+            dh_dv = (height(u64, v64 + dv) - height(u64, v64 - dv)) / (2.0 * dv)
+        finally:
+            self._undisplaced = was
         M = None
         if (b.object_height or b.object_space) and self.tri.tangent_xf is not None:
             M = np.take(self.tri.tangent_xf, np.take(self.tri.instance, prim), axis=0).astype(np.float64)
@@ -1677,12 +1688,9 @@ class Integrator:
             if 'true_normal' in needs:
                 out['true_normal'] = np.ascontiguousarray(self._sided_unit(g[9:12], back).T, F32)
             if 'normal' in needs:
-                if self.tri.normals is None:
-                    n = g[9:12]
-                else:
-                    nr = np.take(self.tri.normals, prim, axis=1)
-                    n = nr[0:3] + nr[3:6] * u + nr[6:9] * v
-                out['normal'] = np.ascontiguousarray(self._sided_unit(n, back).T, F32)
+                out['normal'] = np.ascontiguousarray(self._shading_normal(prim, u, v, back, g).T, F32)
+        if self._displaced and not self._undisplaced and ('normal' in out or 'object_normal' in out):
+            self._displace_coordinates(out, prim, u, v, back)
         # per-object values (Object Info outputs): the hit triangle's placement's; mesh
         # attributes (procedural.ATTRIBUTE_NEED): their RGBA interpolated from the corners
         for name in needs:
@@ -1698,6 +1706,39 @@ class Integrator:
                     a = np.ascontiguousarray((r[0:4] + r[4:8] * u + r[8:12] * v).T, F32)
                 out[name] = a
         return out
+
+    def _shading_normal(self, prim, u, v, back, g=None):
+        """(3, k) the shading normal at hits (prim, u, v): the corner normals interpolated and
+        normalized, or the face's; negated where back."""
+        if self.tri.normals is None:
+            n = (np.take(self.tri.geo, prim, axis=1) if g is None else g)[9:12]
+        else:
+            nr = np.take(self.tri.normals, prim, axis=1)
+            n = nr[0:3] + nr[3:6] * u + nr[6:9] * v
+        return self._sided_unit(n, back)
+
+    def _displace_coordinates(self, out, prim, u, v, back):
+        """Cycles sets a Displacement output's bump as the shader's N before the surface's nodes
+        run: Geometry Normal and Texture Coordinate Normal (normalize(M^T N), the placement's
+        linear map M) of the hits of displaced materials read it (coordinates out, in place)."""
+        entries = [e for e in self.mats.bumps if e[1] is not None]
+        mat = np.take(self.tri.material, prim)
+        for (_, displaced, _, _), sel in zip(entries, _hits_by_material(mat, [e[0] for e in entries])):
+            if not len(sel):
+                continue
+            p, uu, vv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
+            bk = None if back is None else np.take(back, sel)
+            N = out['normal'][sel].T if 'normal' in out else self._shading_normal(p, uu, vv, bk)
+            self._undisplaced = True
+            try:
+                bent = self._bumped_normal(displaced, p, uu, vv, np.asarray(N, F32), bk)
+            finally:
+                self._undisplaced = False
+            if 'normal' in out:
+                out['normal'][sel] = bent.T
+            if 'object_normal' in out and self.tri.tangent_xf is not None:
+                M = np.take(self.tri.tangent_xf, np.take(self.tri.instance, p), axis=0).astype(np.float64)
+                out['object_normal'][sel] = bumpmap.unit(np.einsum('kji,jk->ik', M, bent.astype(np.float64))).T
 
     @staticmethod
     def _sided_unit(n, back):

@@ -89,7 +89,8 @@ def displacement_bump(mat, out, reasons, image=None):
 
 
 def needs_object_maps(material):
-    """Whether a scenedata.Material's bump reads its placements' linear maps (Bump.object_height,
-    object_space): the assembly then exports them (Geometry.tangent_xf)."""
-    b = getattr(material, 'displacement_bump', None)
-    return b is not None and (b.object_height or b.object_space)
+    """Whether a scenedata.Material's displacement bump reads its placements' linear maps
+    (Bump.object_height, object_space; and Texture Coordinate Normal, the bent N in object
+    space, Integrator._displace_coordinates): the assembly then exports them
+    (Geometry.tangent_xf)."""
+    return getattr(material, 'displacement_bump', None) is not None

@@ -324,3 +324,27 @@ def test_a_small_bumped_object_in_a_large_scene_matches_cycles(tmp_path):
                  (np.abs(nrm['CYCLES']).sum(-1) > 0.5), 1)
     assert on.sum() > 200
     _compare(img, nrm, hit=on)
+
+
+@pytest.mark.parametrize('source', ['Geometry', 'Texture Coordinate'])
+def test_a_colour_from_the_normal_under_a_displacement_bump_matches_cycles(source, tmp_path):
+    """Cycles sets the Displacement output's bump as the shader's N before the surface's nodes
+    run: a colour from Geometry Normal or Texture Coordinate Normal reads the bent normal (on a
+    rotated plane: the object-space one turned back)."""
+    def make():
+        mat = _bumped("Tinted", _wave(), 'Fac', displacement=(0.5, 0.4))
+        nt = mat.node_tree
+        node = nt.nodes.new('ShaderNodeNewGeometry' if source == 'Geometry' else 'ShaderNodeTexCoord')
+        sep = nt.nodes.new('ShaderNodeSeparateXYZ')
+        nt.links.new(node.outputs['Normal'], sep.inputs[0])
+        ma = nt.nodes.new('ShaderNodeMath')
+        ma.operation = 'MULTIPLY_ADD'
+        ma.inputs[1].default_value = ma.inputs[2].default_value = 0.5
+        nt.links.new(sep.outputs['X'], ma.inputs[0])
+        nt.links.new(ma.outputs[0], next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE').inputs['Color'])
+        return mat
+    sc = _plane_scene(make)
+    next(o for o in sc.objects if o.type == 'MESH').rotation_euler = (0.0, 0.0, 0.4)
+    img, nrm = _render(sc, tmp_path)
+    hit = _inside(np.abs(nrm['CYCLES']).sum(-1) > 0.5)
+    _compare(img, nrm, hit=hit)
