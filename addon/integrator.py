@@ -48,6 +48,7 @@ import numpy as np
 
 import dacrt
 
+from . import bump as bumpmap
 from . import cryptomatte
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
@@ -64,7 +65,6 @@ from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DENOISE as DENOISE_PASSES
 from .passes import FIRST_SAMPLE
 from .pathstate import Paths, Sinks, compact
-from . import bump as bumpmap
 from .procedural import ATTRIBUTE_NEED, SIDED, ProceduralTexels
 from .sampling import RandomStream, max3
 from .sceneprep import recentred, validate
@@ -1473,7 +1473,6 @@ class Integrator:
     def _coordinates32(self, needs, prim, u, v, back):
         """_coordinates at float64 barycentrics (a bump tap's), each (k, 3) float32."""
         return {k: np.ascontiguousarray(c, F32) for k, c in self._coordinates(needs, prim, u, v, back).items()}
-
 
     def _normal_mapped(self, prim, u, v, ns, ng, correction):
         """The shading normals (3, k) at hits (prim, u, v) with their materials' tangent-space

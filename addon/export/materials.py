@@ -3,8 +3,9 @@ Diffuse BSDF colour and Principled Base Color (constant, an Image Texture on a U
 Mapping nodes, colour and float nodes evaluated per texel or after the lookup as Cycles runs
 them), emission, a Color Attribute / Attribute / Object Info colour per point, corner or object,
 Add and Mix Shaders, transparency and image cut-outs, holdout, ray-type mixes, a tangent-space
-normal map, Bump nodes and a Displacement output read as bump (export/bump.py), AOVs. Everything else is the documented diffuse approximation, each material saying
-why in Material.approximated (see the package's docstring). Part of the export layer."""
+normal map, Bump nodes and a Displacement output read as bump (export/bump.py), AOVs.
+Everything else is the documented diffuse approximation, each material saying why in
+Material.approximated (see the package's docstring). Part of the export layer."""
 
 import bpy
 import numpy as np
