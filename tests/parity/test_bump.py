@@ -251,7 +251,8 @@ def test_chained_bumps_and_a_normal_map_under_a_bump_match_cycles(tmp_path):
 
 def test_what_is_not_rendered_is_said(said, tmp_path):
     """A height the export cannot follow per point (Texture Coordinate Camera), and true
-    displacement, stay flat and are reported; a rendered bump says nothing."""
+    displacement, stay flat and are reported, as are two BSDFs bumped apart (one bump for the
+    material, as one normal map); a rendered bump says nothing."""
     def make(which):
         def material():
             if which == 'rendered':
@@ -260,12 +261,26 @@ def test_what_is_not_rendered_is_said(said, tmp_path):
                 def noise(nt):
                     return _noise(coordinate='Camera')(nt)
                 return _bumped("Camera", noise, 'Fac', distance=0.4)
+            if which == 'two':            # a Mix of two Diffuse BSDFs bumped apart
+                mat = _bumped("Two", _wave(), 'Fac', distance=0.4)
+                nt = mat.node_tree
+                out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+                first = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+                second = nt.nodes.new('ShaderNodeBsdfDiffuse')
+                bump = nt.nodes.new('ShaderNodeBump')
+                nt.links.new(_noise()(nt).outputs['Fac'], bump.inputs['Height'])
+                nt.links.new(bump.outputs['Normal'], second.inputs['Normal'])
+                mix = nt.nodes.new('ShaderNodeMixShader')
+                nt.links.new(first.outputs[0], mix.inputs[1])
+                nt.links.new(second.outputs[0], mix.inputs[2])
+                nt.links.new(mix.outputs[0], out.inputs['Surface'])
+                return mat
             mat = _bumped("True", _wave(), 'Fac', displacement=(0.5, 0.4))
             mat.displacement_method = 'DISPLACEMENT'
             return mat
         return material
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    for which in ('rendered', 'camera', 'true'):
+    for which in ('rendered', 'camera', 'two', 'true'):
         said.clear()
         sc = _plane_scene(make(which), samples=1)
         sc.render.engine = 'DACRT'
@@ -275,6 +290,8 @@ def test_what_is_not_rendered_is_said(said, tmp_path):
             assert 'Bump' not in text and 'ignored' not in text, text
         elif which == 'camera':
             assert "Bump node 'Bump' not rendered (Texture Coordinate Camera is not read per point)" in text, text
+        elif which == 'two':
+            assert "BSDFs with different Bump nodes; the first one's for all" in text, text
         else:
             assert "displacement ignored (true displacement" in text, text
 
