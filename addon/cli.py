@@ -79,12 +79,13 @@ OTHER_IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".h
 
 def save_render(scene, png, exr):
     """Write the render result as png and exr; returns the files written (a stereo or
-    multiview render: one per view, Blender's view suffix before the extension)."""
+    multiview render: one per view, Blender's view suffix before the extension, whatever
+    the .blend's Output > Views Format)."""
     image = bpy.data.images['Render Result']
     settings = scene.render.image_settings
     media = getattr(settings, 'media_type', None)
     saved = (settings.file_format, settings.color_mode, settings.color_depth)
-    codec = settings.exr_codec
+    codec, views_format = settings.exr_codec, settings.views_format
     written = []
     try:
         exr_format = 'OPEN_EXR_MULTILAYER' if _layers_or_passes(scene) else 'OPEN_EXR'
@@ -97,6 +98,9 @@ def save_render(scene, png, exr):
             settings.color_depth = depth
             if fmt != 'PNG':    # lossless, whatever the .blend's output uses (DWAA: up to 7.6% off)
                 settings.exr_codec = 'ZIP'
+            # one file per view: Stereo 3D would make the EXR an anaglyph (R of one eye, G and
+            # B of the other) or a side-by-side pair, or one multi-view file when multilayer
+            settings.views_format = 'INDIVIDUAL'
             try:
                 image.save_render(filepath=os.path.abspath(path), scene=scene)
                 written.append(path)
@@ -111,7 +115,8 @@ def save_render(scene, png, exr):
         if media is not None:
             settings.media_type = media
         settings.file_format, settings.color_mode, settings.color_depth = saved
-        settings.exr_codec = codec
+        # after the format: a multilayer EXR had set Individual
+        settings.exr_codec, settings.views_format = codec, views_format
     return written
 
 
