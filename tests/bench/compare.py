@@ -3,7 +3,10 @@
 Renders the scene (a .blend, or a built-in benchmark scene name: cornell, outdoor, dragon, environment)
 with DACRT and with Cycles at matched settings (reference blender-cycles.md section 2.7, the
 same as the error-versus-time benchmark; a .blend's materials made what DACRT renders exactly
-unless --materials as-is) and N samples, plus a second Cycles render with another seed. Writes to --out (default bench-out/compare/<scene>/):
+unless --materials as-is) and N samples, plus a second Cycles render with another seed; a stereo
+or multiview file's first enabled view (stereo: left) alone. Writes to --out (default
+bench-out/compare/<scene>/; the work folder is made there too, and kept only when a run fails
+with an error that names its log):
 - side_by_side.png: DACRT | Cycles | difference, display-referred (sRGB, clipped);
 - difference.png: |DACRT - Cycles| averaged over RGB, x16 as Blender's render tests show it;
 - dacrt.exr, cycles.exr: the linear float renders;
@@ -27,7 +30,7 @@ import numpy as np
 
 from . import errorstats, report
 from .progress import Progress
-from .renderjobs import run_jobs
+from .renderjobs import WorkerError, run_jobs
 from .renderspec import BUILTIN, MATERIAL_MODES, scene_spec
 from .scenes import OUT
 
@@ -117,11 +120,12 @@ def run(args) -> int:
     spec = scene_spec(args.scene, args.bounces, args.materials)
     out = args.out or OUT / "compare" / spec.name
     out.mkdir(parents=True, exist_ok=True)
-    OUT.mkdir(parents=True, exist_ok=True)     # (with --out elsewhere, OUT may not exist yet)
-    work = Path(tempfile.mkdtemp(prefix="compare-", dir=OUT))
+    # the work folder (jobs, worker logs, images) inside the output folder: not in the
+    # repository's bench-out when --out is elsewhere
+    work = Path(tempfile.mkdtemp(prefix="compare-work-", dir=out))
     progress = Progress(3)
     other_seed = args.seed + 1
-    done = False
+    keep = False
     try:
         item = lambda engine, seed: dict(spec=spec.as_dict(), samples=args.samples,  # noqa: E731
                                          seed=seed, image=f"{engine}-{seed}.npy")
@@ -130,10 +134,15 @@ def run(args) -> int:
                      work, progress)
         dimg = np.load(work / d["image"])
         cimg, cimg2 = np.load(work / c[0]["image"]), np.load(work / c[1]["image"])
-        done = True
+    except WorkerError as e:            # a failure keeps its folder: the error names its log;
+        keep = not e.expected           # a refused scene's reason is the whole story
+        raise
+    except Exception:
+        keep = True
+        raise
     finally:
         progress.close()
-        if done:                        # a failed run keeps its folder: the error names its log
+        if not keep:
             shutil.rmtree(work, ignore_errors=True)
     if dimg.shape != cimg.shape:
         raise RuntimeError(f"DACRT rendered {dimg.shape[1]}x{dimg.shape[0]} but Cycles "
@@ -167,7 +176,7 @@ def run(args) -> int:
                relmse_ratio=rel / noise if noise > 0 else (1.0 if rel == 0 else float("inf")),
                mean_ratio_rgb=channel_mean_ratio(dimg, cimg),
                mean_ratio_rgb_cycles_seeds=channel_mean_ratio(cimg2, cimg),
-               materials=d.get("materials"),
+               materials=d.get("materials"), view=d.get("view"),
                dacrt_breakdown=d.get("breakdown"), dacrt_memory=d.get("memory"),
                cycles_memory=c[0].get("memory"))
     report.write_json(doc, out / "compare.json")
@@ -190,6 +199,8 @@ def run(args) -> int:
         print("  mean DACRT / Cycles per R,G,B  " + " ".join(f"{x:.4f}" for x in doc["mean_ratio_rgb"])
               + "   (Cycles seed vs seed: " + " ".join(f"{x:.4f}" for x in
                                                        doc["mean_ratio_rgb_cycles_seeds"]) + ")")
+    if d.get("view"):
+        print(f"  multiview file: view '{d['view']}' alone rendered and compared")
     _print_materials(d.get("materials"))
     _print_warnings(d.get("breakdown", {}).get("warnings", ()))
     print(f"wrote {out}/side_by_side.png, difference.png, dacrt.exr, cycles.exr, compare.json")

@@ -18,7 +18,12 @@ from .renderspec import REPO
 
 
 class WorkerError(RuntimeError):
-    pass
+    """expected: the worker refused the scene or the arguments with a reason (a ValueError),
+    said in the message; otherwise a failure, whose log the message names."""
+
+    def __init__(self, message, expected=False):
+        super().__init__(message)
+        self.expected = expected
 
 
 class Unavailable(Exception):
@@ -54,8 +59,10 @@ def run_jobs(engine: str, renders: list[dict], workdir: Path, progress=None, lab
                         continue
                     rec = json.loads(line)
                     if "error" in rec:
+                        if rec.get("expected"):         # the reason alone: no log to keep
+                            raise WorkerError(f"{engine} worker failed: {rec['error']}", expected=True)
                         raise WorkerError(f"{engine} worker failed: {rec['error']} (log: {log_path})"
-                                          + ("" if rec.get("expected") else _tail(log_path)))
+                                          + _tail(log_path))
                     if "unavailable" in rec:
                         raise Unavailable(rec["unavailable"])
                     records.append(rec)

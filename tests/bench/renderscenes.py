@@ -131,6 +131,12 @@ def build(spec: RenderSpec):
         scene = bpy.context.scene
         if scene.camera is None:
             raise ValueError(f"{spec.blend}: the scene has no camera")
+        if not any(layer.use for layer in scene.view_layers):
+            # (Blender would render nothing and the result could not be saved)
+            raise ValueError(f"{spec.blend}: scene '{scene.name}' has no view layer enabled for "
+                             "rendering (View Layer Properties > Use for Rendering)")
+        if scene.render.use_multiview:
+            spec.extra["view"] = _one_view(scene, spec.blend)
         r = scene.render             # as Blender sizes the frame: truncated, then the crop
         spec.resolution = (r.resolution_x * r.resolution_percentage // 100,
                            r.resolution_y * r.resolution_percentage // 100)
@@ -151,6 +157,19 @@ def build(spec: RenderSpec):
     else:
         builder = BUILDERS[spec.name]
     return fair.build(_ParityView(spec, builder))
+
+
+def _one_view(scene, blend) -> str:
+    """A stereo or multiview file: every view but the first enabled one (left for stereo) off,
+    so both engines render that view alone and the result is one image; returns its name."""
+    r = scene.render
+    # Stereo 3D renders the left and right views only, whatever else the list holds
+    views = [v for v in r.views if v.use and (r.views_format != 'STEREO_3D' or v.name in ('left', 'right'))]
+    if not views:
+        raise ValueError(f"{blend}: scene '{scene.name}' renders multiview with no view enabled")
+    for v in r.views:
+        v.use = v == views[0]
+    return views[0].name
 
 
 class _ParityView:

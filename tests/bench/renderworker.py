@@ -33,16 +33,33 @@ from .breakdown import Instrument, PeakMemory
 
 
 def _save_exr(scene, path):
+    """The render result's RGBA through a plain EXR at path (removed after reading); a
+    multiview render (one view left on by renderscenes) is written by Blender under the view's
+    suffix instead, after which save_render raises all the same."""
     s = scene.render.image_settings
     if hasattr(s, 'media_type'):
         s.media_type = 'IMAGE'
     s.file_format, s.color_mode, s.color_depth, s.exr_codec = 'OPEN_EXR', 'RGBA', '32', 'ZIP'
-    if os.path.exists(path):
-        os.remove(path)
-    bpy.data.images['Render Result'].save_render(filepath=str(path), scene=scene)
-    if not os.path.exists(path):
+    s.views_format = 'INDIVIDUAL'       # not a .blend's Stereo 3D anaglyph or side-by-side
+    r = scene.render
+    base, ext = os.path.splitext(str(path))
+    views = [base + v.file_suffix + ext for v in r.views if v.use] if r.use_multiview else []
+    for f in [path, *views]:
+        if os.path.exists(f):
+            os.remove(f)
+    try:
+        bpy.data.images['Render Result'].save_render(filepath=str(path), scene=scene)
+    except RuntimeError:
+        if not any(os.path.exists(v) for v in views):
+            raise
+    written = [f for f in [path, *views] if os.path.exists(f)]
+    if not written:
         raise RuntimeError(f"{scene.render.engine} produced no image (see its report above)")
-    return fair.read_exr(path)
+    try:
+        return fair.read_exr(written[0])
+    finally:
+        for f in written:
+            os.remove(f)
 
 
 def _spec(d: dict) -> renderscenes.RenderSpec:
@@ -102,11 +119,10 @@ def run(job: dict) -> None:
             record["materials"] = dict(mode=spec.materials,
                                        made_diffuse=spec.extra.get("materials_made_diffuse", 0),
                                        approximated=spec.extra.get("approximated", {}))
+            record["view"] = spec.extra.get("view")     # a stereo or multiview file's one view
         if instrument is not None:
             record["breakdown"] = instrument.take(wall)
-        exr = os.path.join(outdir, f"render-{os.getpid()}.exr")
-        image = _save_exr(scene, exr)
-        os.remove(exr)
+        image = _save_exr(scene, os.path.join(outdir, f"render-{os.getpid()}.exr"))
         if not np.isfinite(image).all():
             raise RuntimeError(f"{engine} render of {spec.name} holds NaN/inf pixels")
         if item.get("image"):
