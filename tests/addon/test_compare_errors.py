@@ -2,7 +2,8 @@
 with "DACRT worker failed: RuntimeError: Error: Image 'Render Result' could not be saved" and a
 traceback: a scene with no view layer enabled (now refused with the reason, as the CLI says it)
 and a stereo file (now its left view alone is rendered and compared by both engines). Its work
-folder is inside --out, not the repository's bench-out, and a refused scene leaves none."""
+folder is inside --out, not the repository's bench-out, and a refused scene leaves none.
+`--materials as-is` lists what the DACRT render approximated, not every material of the file."""
 import json
 import subprocess
 import sys
@@ -33,9 +34,9 @@ def _blend(scene, path, **settings):
     return path
 
 
-def _compare(blend, out, samples=8):
+def _compare(blend, out, samples=8, materials="diffuse"):
     return subprocess.run([sys.executable, "-m", "tests.bench", "compare", str(blend), "--samples",
-                           str(samples), "--out", str(out)], cwd=str(conftest.ROOT),
+                           str(samples), "--out", str(out), "--materials", materials], cwd=str(conftest.ROOT),
                           capture_output=True, text=True, timeout=600)
 
 
@@ -104,3 +105,35 @@ def test_the_work_folder_is_under_out_and_kept_only_for_a_failure(tmp_path, monk
     assert seen and seen[0].parent == tmp_path / "out"
     assert seen[0].exists() == kept and (seen[0] / "worker.log").exists() == kept
     assert _work_folders() == before
+
+
+def test_as_is_lists_what_the_dacrt_render_approximated_only(scene, tmp_path):
+    """--materials as-is listed every material and material-less object of the file: a hidden
+    helper without a material as '(default surface)', a Glossy material on no object or on a
+    hidden one, though the render (and its relMSE) had nothing of them. Now what the DACRT render
+    itself approximated: the visible Glossy object, and the default surface once a mesh without
+    a material is rendered."""
+    def objects(sc):
+        scenes.cube("Shiny", size=1.0, location=(2, 0, 0.5), materials=(_glossy("Glossy"),))
+        scenes.cube("HiddenBare", size=1.0, location=(-2, 0, 0.5)).hide_render = True
+        scenes.cube("HiddenShiny", size=1.0, location=(-2, 2, 0.5),
+                    materials=(_glossy("HiddenGlossy"),)).hide_render = True
+        _glossy("Unused").use_fake_user = True
+    blend = _blend(scene, tmp_path / "helpers.blend", objects=objects)
+    listed = lambda out: {line.split("'")[1] for line in out.splitlines()  # noqa: E731
+                          if "DACRT approximates '" in line}
+    got = _compare(blend, tmp_path / "a", samples=4, materials="as-is")
+    assert got.returncode == 0, got.stdout + got.stderr
+    approximated = json.loads((tmp_path / "a" / "compare.json").read_text())["materials"]["approximated"]
+    assert set(approximated) == {"Glossy"} and listed(got.stdout) == {"Glossy"}, got.stdout
+    bpy.data.objects["HiddenBare"].hide_render = False
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    got = _compare(blend, tmp_path / "b", samples=4, materials="as-is")
+    assert got.returncode == 0, got.stdout + got.stderr
+    assert listed(got.stdout) == {"Glossy", "(default surface)"}, got.stdout
+
+
+def _glossy(name):
+    mat, nt, out = scenes._material(name)
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfGlossy').outputs[0], out.inputs['Surface'])
+    return mat

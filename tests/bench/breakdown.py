@@ -76,6 +76,9 @@ class Instrument:
         self.native_calls = 0
         self.threads = 0
         self.messages = []           # the export's (level, text) messages: what the render reports
+        # {material name: reason} of the materials the render's export approximated: those of
+        # the geometry it rendered, not every material or object in the file
+        self.approximated = {}
 
     def __enter__(self):
         real_export = self._export.export_scene
@@ -88,6 +91,7 @@ class Instrument:
             try:
                 scene_data = real_export(*a, **k)
                 me.messages += list(getattr(scene_data, 'messages', ()))
+                me.approximated.update(rendered_approximations(scene_data))
                 return scene_data
             finally:
                 me.export_seconds += time.perf_counter() - t0
@@ -142,8 +146,24 @@ class Instrument:
                 out[key] = stats[key]
         out["native"] = dict(self.native)
         out["warnings"] = list(dict.fromkeys(text for level, text in self.messages if level in ('WARNING', 'ERROR')))
+        out["approximated"] = dict(self.approximated)
         self._clear()
         return out
+
+
+def rendered_approximations(scene_data) -> dict:
+    """{material name: why} of what one export approximated (its 'material(s) approximated'
+    report, per material): the materials its triangles use, and the default surface (material 0)
+    when a triangle has no material."""
+    import numpy as np
+
+    from .fairmaterials import DEFAULT_SURFACE_REASON     # (bpy: inside the worker only)
+    materials = getattr(scene_data, 'materials', None) or []
+    out = {m.name: m.approximated for m in materials[1:] if m.approximated}
+    used = np.asarray(getattr(getattr(scene_data, 'geometry', None), 'material', ()))
+    if used.size and not used.all():
+        out['(default surface)'] = DEFAULT_SURFACE_REASON
+    return out
 
 
 def split_wall(b: dict) -> dict:

@@ -69,7 +69,9 @@ def make_diffuse(materials=None) -> dict[str, list[str]]:
 def remaining_approximations(materials=None) -> dict[str, str]:
     """What the add-on's export would still approximate, per material name (empty after
     make_diffuse, unless two different images are mixed in one material); objects without a
-    material are listed under '(default surface)'."""
+    material are listed under '(default surface)'. Whole file: every material and object of
+    bpy.data, rendered or not (compare reports what its DACRT render approximated instead,
+    breakdown.rendered_approximations)."""
     builder = export.materials.MaterialBuilder()
     out = {}
     if materials is None and _objects_without_material():

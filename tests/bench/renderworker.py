@@ -122,6 +122,9 @@ def run(job: dict) -> None:
             record["view"] = spec.extra.get("view")     # a stereo or multiview file's one view
         if instrument is not None:
             record["breakdown"] = instrument.take(wall)
+            if "materials" in record:   # what the DACRT render itself approximated, not every
+                # material and object of the file (a hidden helper without a material, a fake user)
+                record["materials"]["approximated"] = record["breakdown"]["approximated"]
         image = _save_exr(scene, os.path.join(outdir, f"render-{os.getpid()}.exr"))
         if not np.isfinite(image).all():
             raise RuntimeError(f"{engine} render of {spec.name} holds NaN/inf pixels")
