@@ -13,20 +13,31 @@ from ..passes import PASSES, enabled, result_name
 from ..sampling import mix64_scalar
 from .errors import ExportError
 
-# View-layer passes Cycles renders and DACRT does not: (settings owner, toggle, label); owner ''
-# is the view layer itself, 'cycles' its Cycles settings. The engine registers only the passes
-# it writes, so these would be missing from the result without a word.
-_UNRENDERED_PASSES = tuple(('', f'use_pass_{key}', label) for key, label in (
-    ('vector', 'Vector'), ('glossy_direct', 'Glossy Direct'), ('glossy_indirect', 'Glossy Indirect'),
-    ('glossy_color', 'Glossy Color'), ('transmission_direct', 'Transmission Direct'),
-    ('transmission_indirect', 'Transmission Indirect'), ('transmission_color', 'Transmission Color'),
-    ('subsurface_direct', 'Subsurface Direct'), ('subsurface_indirect', 'Subsurface Indirect'),
-    ('subsurface_color', 'Subsurface Color'),
-    ('ambient_occlusion', 'Ambient Occlusion'), ('shadow', 'Shadow'))) + (
-    ('cycles', 'pass_debug_sample_count', 'Sample Count'),
-    ('cycles', 'use_pass_shadow_catcher', 'Shadow Catcher'),
-    ('cycles', 'use_pass_volume_direct', 'Volume Direct'),
-    ('cycles', 'use_pass_volume_indirect', 'Volume Indirect'))
+# Pass toggles that ask for no pass DACRT lacks: Combined is always written, Cryptomatte Accurate
+# refines the Cryptomatte passes, and the Grease Pencil pass is Blender's, drawn over any engine's
+# render
+_NOT_MISSING = {'use_pass_combined', 'use_pass_cryptomatte_accurate', 'use_pass_grease_pencil'}
+
+
+def unrendered_passes(vl):
+    """(owner, toggle, label) of every pass toggle on view layer vl and its Cycles settings
+    (owner '' the layer, 'cycles' its Cycles settings; label the toggle's UI name, as Cycles
+    names the pass) that asks for a pass DACRT does not write. Read from the RNA, every
+    use_pass_* / pass_* switch minus the ones DACRT writes (passes.PASSES, Cryptomatte), so that
+    a toggle Blender adds is named rather than missing from the result without a word (Volume
+    Scatter / Transmit / Majorant and Render Time had been)."""
+    written = {p[1] for p in PASSES} | {toggle for _, toggle in CRYPTO_KINDS} | _NOT_MISSING
+    out = []
+    for owner in ('', 'cycles'):
+        obj = getattr(vl, owner, None) if owner else vl
+        if obj is None:
+            continue
+        for prop in obj.bl_rna.properties:
+            ident = prop.identifier
+            toggle = f"{owner}.{ident}" if owner else ident
+            if prop.type == 'BOOLEAN' and ident.startswith(('use_pass_', 'pass_')) and toggle not in written:
+                out.append((owner, ident, prop.name))
+    return out
 
 
 # World > Mist Pass falloff as Cycles' exponent (blender/sync.cpp)
@@ -102,7 +113,7 @@ def export_settings(scene, vl, messages, viewport=False):
         passes, missing, aovs, crypto, lightgroups = (), [], (), (), ()
     else:
         passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]))
-        missing = [label for owner, attr, label in _UNRENDERED_PASSES
+        missing = [label for owner, attr, label in unrendered_passes(vl)
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
         aovs = tuple(dict.fromkeys((a.name, a.type) for a in getattr(vl, 'aovs', ()) if a.is_valid))
         missing += [f"AOV '{a.name}' (its name is taken)" for a in getattr(vl, 'aovs', ()) if not a.is_valid]
