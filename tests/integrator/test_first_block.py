@@ -18,15 +18,23 @@ M = 1 << 20
     (1_680_000, 240 * 135, (240 * 135, M)),         # bmw27 at 50%: 1 spp, then 1M paths (was 32 spp first)
     (1_680_000, 480 * 270, (1 << 16, M)),           # a big frame: a run of pixels of the first sample
     (1_680_000, 8 * 6, (1 << 14, M)),               # a tiny frame: at least _MIN_PATHS
-    (100_000, 160 * 120, (160 * 120, 400_000)),     # the dragon
+    (100_000, 160 * 120, (400_000, None)),          # the dragon: a 400K-path block is quick (0.25 s)
+    (200_000, 160 * 120, (160 * 120, 800_000)),
     (1_000, 160 * 120, (1 << 16, None)),            # a small scene: _FIRST_PATHS alone, as before
     (20_000, 320 * 240, (80_000, None)),            # under two previews of 65,536 paths: as before
-    (20_000, 160 * 120, (160 * 120, 80_000)),
 ])
 def test_first_blocks(triangles, pixels, want):
     assert first_blocks(triangles, pixels) == want
     first, then = want
     assert first <= max(pixels, 1 << 14) or then is None      # the preview is at most one sample
+
+
+@pytest.mark.parametrize('samples, want', [(4, None), (16, None), (20, (240 * 135, M))])
+def test_no_preview_where_the_whole_render_is_a_quick_first_block(samples, want):
+    """bmw27 at 240x135: at 4 and 16 spp the render is one block of under _PREVIEW_FROM paths,
+    so a preview would only add a batch (a benchmark point, an animation frame)."""
+    total = 240 * 135 * samples
+    assert first_blocks(1_680_000, 240 * 135, total) == (want or (M, None))
 
 
 def _heavy(width, height, samples):
@@ -39,7 +47,8 @@ def _heavy(width, height, samples):
                         [], np.full(3, 0.3, np.float32), sd.Settings(samples=samples, max_bounces=2))
 
 
-def test_a_heavy_frame_shows_a_preview_sample_first_then_takes_the_amortising_block():
+def test_a_heavy_frame_shows_a_preview_sample_first_then_takes_the_amortising_block(monkeypatch):
+    monkeypatch.setattr(integrator, '_PREVIEW_FROM', 1 << 15)      # (a test-sized heavy frame)
     integ = Integrator(_heavy(32, 24, 64))
     done = [p.samples_done for p in integ.passes()]
     # preview: 16,384 paths = 21 spp of 768 pixels, as equal blocks of the 64: 16; then all
@@ -50,6 +59,7 @@ def test_a_heavy_frame_shows_a_preview_sample_first_then_takes_the_amortising_bl
 def test_a_preview_smaller_than_one_sample_finishes_that_sample_before_the_big_block(monkeypatch):
     monkeypatch.setattr(integrator, '_FIRST_PATHS', 8192)
     monkeypatch.setattr(integrator, '_MIN_PATHS', 4096)
+    monkeypatch.setattr(integrator, '_PREVIEW_FROM', 1 << 15)
     integ = Integrator(_heavy(128, 96, 8))          # 12,288 pixels: the preview is 2/3 of a sample
     done = [p.samples_done for p in integ.passes()]
     assert done == [0, 1, 8], done
