@@ -484,6 +484,48 @@ def linked_link(socket):
     return source(socket)[0]
 
 
+def closure_link(socket, folder=None, depth=0):
+    """The GraphLink a shader input (a Material Output's Surface, a Mix or Add Shader's shader)
+    reads after Cycles' closure folding, None where Cycles compiles no closure into it: whether
+    the material has a surface at all (Cycles' has_surface; without one a volume material is
+    volume-only, SD_HAS_ONLY_VOLUME). Mirrors shader_nodes.cpp's constant_fold of the closure
+    nodes, on inputs folded as _Folder folds them: an Emission or Background of an unlinked black
+    Color or 0 Strength is discarded (so is a value into a shader socket, an Emission of it, that
+    folds to 0); a Mix Shader whose two shaders read the same (nothing too) becomes that, one of
+    unlinked Fac <= 0 / >= 1 its first / second shader; an Add Shader with an empty side becomes
+    the other. Muted nodes, muted links, reroutes and groups pass as source() passes them."""
+    folder = folder if folder is not None else _Folder()
+    link = linked_link(socket)
+    if link is None or depth > FOLD_DEPTH:
+        return link
+    node = link.from_node
+    if link.from_socket.type != 'SHADER':
+        return None if _is(folder.input_state(socket), False) else link
+    t = node.type
+    if t in ('EMISSION', 'BACKGROUND'):
+        if any(_is(folder.input_state(node.inputs[n]), False) for n in ('Color', 'Strength')):
+            return None
+        return link
+    if t not in ('MIX_SHADER', 'ADD_SHADER'):
+        return link
+    first = 1 if t == 'MIX_SHADER' else 0
+    a = closure_link(node.inputs[first], folder, depth + 1)
+    b = closure_link(node.inputs[first + 1], folder, depth + 1)
+    if t == 'ADD_SHADER':
+        return link if a is not None and b is not None else (a if b is None else b)
+    if (a is None and b is None) or (a is not None and b is not None and
+                                      output_key(a.from_node, a.from_socket.identifier) ==
+                                      output_key(b.from_node, b.from_socket.identifier)):
+        return a
+    fac = folder.input_state(node.inputs['Fac'])
+    if isinstance(fac, _Const) and isinstance(fac.value, float):
+        if fac.value <= 0.0:
+            return a
+        if fac.value >= 1.0:
+            return b
+    return link
+
+
 def linked_node(socket):
     """The GraphNode feeding `socket` (see source), or None."""
     link = source(socket)[0]

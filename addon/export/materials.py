@@ -15,7 +15,7 @@ from .. import scenedata as sd
 from ..mapping import texture_transform, uv_map_name
 from ..nodeeval import constant_color, constant_value, nan_inputs
 from .. import nodegraph
-from ..nodegraph import input_socket, linked_link, linked_node, output_key, output_node, used_outputs
+from ..nodegraph import closure_link, input_socket, linked_link, linked_node, output_key, output_node, used_outputs
 from ..procedural import ProceduralTexels
 from ..texture import EncodedTexels, ImageTexels, UdimTiles, stored_texels
 from .aovs import evaluate_varying, shader_aovs, unnamed_attribute
@@ -518,7 +518,10 @@ class MaterialBuilder:
                 if bad:
                     reasons.append(said.format(', '.join(bad)))
             out = output_node(ntree)
-            if out is None or not out.inputs['Surface'].is_linked:
+            # (on the folded graph: a muted Diffuse, a muted link, a bare Reroute or an empty
+            # Mix Shader is no surface in Cycles either; the raw is_linked had made a clear fog
+            # box an opaque black one, 0.245 where Cycles shows the scene, 0.597)
+            if out is None or closure_link(out.inputs['Surface']) is None:
                 # Cycles: no surface shader renders black, but a volume-only material's
                 # surface is no surface (SD_HAS_ONLY_VOLUME): rays cross it without counting a
                 # transparent bounce, shading it or writing its AOVs, whatever its Transparent
