@@ -16,7 +16,7 @@ import numpy as np
 from . import cryptomatte, export
 from .display import Display
 from .allocator import heap_in_use, render_heap, rss_peak, rss_peak_reset
-from .passes import AOV_CHANNELS, AOV_PREFIX, LIGHTGROUP_PREFIX, PASSES, enabled, result_name
+from .passes import AOV_CHANNELS, LIGHTGROUP_PREFIX, PASSES, enabled, result_name, result_passes
 from .texture import stored_texels
 
 # Extra passes: (film name, view-layer toggle, channels, chan_id, type), and Blender's names
@@ -28,18 +28,21 @@ RESULT_PASS_NAME = {p[0]: result_name(p[0], bpy.app.version) for p in PASSES}
 def extra_passes(layer):
     """The passes beyond Combined a view layer's render holds, as the engine registers them:
     (Blender's name, channels, chan_id, type) of each."""
+    # In Cycles' engine.py order (Cryptomatte, AOVs, then light groups): of passes sharing a name
+    # Blender keeps the first one's channels (passes.result_passes), and its AOV check counts
+    # every name registered (an AOV named like another pass is invalid, as under Cycles)
     for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
         if enabled(layer, toggle):
             yield RESULT_PASS_NAME[name], channels, chan_id, kind
-    for group in dict.fromkeys(g.name for g in getattr(layer, 'lightgroups', ())):
-        yield LIGHTGROUP_PREFIX + group, 3, "RGB", 'COLOR'
-    for aov in getattr(layer, 'aovs', ()):      # as Cycles' engine.py registers them
-        if aov.is_valid:
-            yield (aov.name, *AOV_CHANNELS.get(aov.type, AOV_CHANNELS['COLOR']))
     for kind, toggle in cryptomatte.KINDS:
         if getattr(layer, toggle, False):
             for name in cryptomatte.pass_names(kind, getattr(layer, 'pass_cryptomatte_depth', 6)):
                 yield name, 4, "rgba", 'COLOR'   # as Cycles
+    for aov in getattr(layer, 'aovs', ()):      # as Cycles' engine.py registers them
+        if aov.is_valid:
+            yield (aov.name, *AOV_CHANNELS.get(aov.type, AOV_CHANNELS['COLOR']))
+    for group in dict.fromkeys(g.name for g in getattr(layer, 'lightgroups', ())):
+        yield LIGHTGROUP_PREFIX + group, 3, "RGB", 'COLOR'
 
 
 # Stats of the latest render per view layer, for scripts (addon.last_render_stats()); emptied
@@ -421,14 +424,12 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         when final, not at every progressive redraw."""
         passes = result.layers[0].passes
         self._set(passes, 'Combined', film.combined(), scene_data.camera, view)
-        for name in scene_data.settings.passes:
-            if RESULT_PASS_NAME[name] in passes:
-                self._set(passes, RESULT_PASS_NAME[name], film.pass_image(name), scene_data.camera, view)
-        for name in film.lightgroup_passes:
-            if name in passes:
-                self._set(passes, name, film.pass_image(name), scene_data.camera, view)
-        for key in film.aov_passes:
-            name = key[len(AOV_PREFIX):]
+        s = scene_data.settings
+        # one image per result pass: of an AOV and a light group or Denoising Data pass of one
+        # name, the one Cycles writes there (both had been written, the render failing on the
+        # channel count)
+        for name, key, *_ in result_passes(s.passes, getattr(s, 'lightgroups', ()), getattr(s, 'aovs', ()),
+                                          bpy.app.version):
             if name in passes:
                 self._set(passes, name, film.pass_image(key), scene_data.camera, view)
         for name, image in (film.cryptomatte_images() if final else {}).items():
@@ -444,6 +445,13 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         if image.shape[0] == camera.height and image.shape[1] == camera.width and \
                 (y1 - y0, x1 - x0) != (camera.height, camera.width):
             image = image[y0:y1, x0:x1]
+        have, want = (image.shape[2] if image.ndim == 3 else 1), render_pass.channels
+        if have > want and image.ndim == 3:
+            # a pass of that name registered first with fewer channels: its first ones, as Cycles
+            image = image[..., :want]
+        elif have != want:
+            raise export.ExportError(f"pass '{name}' has {want} channel(s) in the render result, DACRT's "
+                                     f"image for it {have}")
         render_pass.rect.foreach_set(np.ascontiguousarray(image, np.float32).reshape(-1))
 
     def _report_messages(self, messages):

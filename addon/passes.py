@@ -50,6 +50,39 @@ LIGHT = ('DiffDir', 'DiffInd', 'Emit', 'Env')
 DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')
 
 
+# Where two passes share a name (an AOV named like a light group's 'Combined_<group>' or a
+# Denoising Data pass, added under an engine that registers neither: AOV.is_valid stays True),
+# Blender keeps the first one registered (Cycles' order: data, light and denoising passes, AOVs,
+# light groups) and Cycles fills it from its film's first pass of that name, its film sorted by
+# components, most first, then by type (scene/pass.cpp compare_pass_order; kernel/types.h PassType order; a light group 3
+# components, a COLOR AOV 4, a VALUE AOV 1), its first channels where the pass has fewer.
+# Measured: a COLOR AOV over a light group or Denoising Data pass, a light group or Denoising
+# Normal / Albedo over a VALUE AOV, a VALUE AOV over Denoising Depth.
+_CYCLES_TYPE_ORDER = ('lightgroup', 'Emit', 'Env', 'DiffDir', 'DiffInd', 'Depth', 'Position', 'Normal', 'UV',
+                      'IndexOB', 'IndexMA', 'AOV COLOR', 'AOV VALUE', 'DiffCol', 'Mist', 'DenoiseNormal',
+                      'DenoiseAlbedo', 'DenoiseDepth')
+_CYCLES_COMPONENTS = dict(CHANNELS, **{'lightgroup': 3, 'AOV COLOR': 4, 'AOV VALUE': 1})
+
+
+def result_passes(passes, lightgroups, aovs, blender_version):
+    """The result passes beyond Combined and Cryptomatte, one per name, in Cycles' registration
+    order: (Blender's name, the film pass written there, the film passes of that name it hides,
+    the pass's channels, the written film pass's), for the film's passes (film names), light group
+    names and Shader AOVs ((name, kind))."""
+    named = {}
+    for name, key, kind in ([(result_name(p, blender_version), p, p) for p in passes]
+                            + [(n, AOV_PREFIX + n, f"AOV {k if k in AOV_CHANNELS else 'COLOR'}") for n, k in aovs]
+                            + [(LIGHTGROUP_PREFIX + g, LIGHTGROUP_PREFIX + g, 'lightgroup') for g in lightgroups]):
+        if all(key != k for k, _ in named.get(name, ())):
+            named.setdefault(name, []).append((key, kind))
+    out = []
+    for name, found in named.items():
+        channels = _CYCLES_COMPONENTS[found[0][1]]
+        found.sort(key=lambda f: (-_CYCLES_COMPONENTS[f[1]], _CYCLES_TYPE_ORDER.index(f[1])))
+        out.append((name, found[0][0], tuple(k for k, _ in found[1:]), channels, _CYCLES_COMPONENTS[found[0][1]]))
+    return out
+
+
 def enabled(view_layer, toggle: str) -> bool:
     """Whether the view layer's toggle (an attribute, or 'owner.attribute' such as
     'cycles.denoising_store_passes') is on; False where the setting does not exist."""

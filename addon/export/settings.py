@@ -9,7 +9,7 @@ import bpy
 
 from .. import scenedata as sd
 from ..cryptomatte import KINDS as CRYPTO_KINDS
-from ..passes import PASSES, enabled, result_name
+from ..passes import AOV_PREFIX, LIGHTGROUP_PREFIX, PASSES, enabled, result_name, result_passes
 from ..sampling import mix64_scalar
 from .errors import ExportError
 
@@ -133,6 +133,8 @@ def export_settings(scene, vl, messages, viewport=False):
     if getattr(cyc, 'use_fast_gi', False) and ao_bounces > 0:
         messages.append(('WARNING', "Cycles' Light Paths > Fast GI Approximation is not applied: DACRT "
                                     "traces full global illumination, so the image differs from Cycles'"))
+    for shared in result_passes(passes, lightgroups, aovs, bpy.app.version):
+        messages += [('WARNING', _shared_pass_text(vl.name, shared, hidden, dict(aovs))) for hidden in shared[2]]
     if missing:
         written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
                                           + ['Cryptomatte', 'light groups', 'shader AOVs']))
@@ -175,3 +177,20 @@ def export_settings(scene, vl, messages, viewport=False):
                        lightgroups=lightgroups,
                        aovs=aovs,
                        adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
+
+
+def _shared_pass_text(layer, shared, hidden, aov_kinds):
+    """What a view layer's result holds where a Shader AOV shares its name with a light group's
+    or another pass (passes.result_passes), which Blender lets through (AOV.is_valid)."""
+    name, key, _, channels, written = shared
+
+    def who(k):
+        if k.startswith(AOV_PREFIX):
+            return f"{aov_kinds.get(k[len(AOV_PREFIX):], 'COLOR')} AOV '{k[len(AOV_PREFIX):]}'"
+        if k.startswith(LIGHTGROUP_PREFIX):
+            return f"light group '{k[len(LIGHTGROUP_PREFIX):]}'"
+        return f"the {result_name(k, bpy.app.version)} pass"
+    first = "" if channels >= written else " (its first channel only)" if channels == 1 else \
+        f" (its first {channels} channels)"
+    return (f"view layer '{layer}': {who(key)} and {who(hidden)} have one name: the result's pass '{name}' "
+            f"holds the values of {who(key)}{first}, as in Cycles, and those of {who(hidden)} are dropped")
