@@ -125,6 +125,7 @@ class Assembly:
         self._corner_aovs = {}     # (material, mesh, AOV input) -> what it writes at each corner
         self._aov_varying = set()  # materials whose AOV inputs read a value per object or corner
         self._slot_sets = {}       # id(slot map) -> (slot map, the materials it shows): see _shown
+        self._shadow_only = set()  # the twins of volume-only tube materials (_volume_only_tubes)
 
     def _shown(self, slot_map):
         """The material indices a slot map shows, once per slot map (placements share them):
@@ -166,11 +167,13 @@ class Assembly:
         self._uv_readers = {name: uv_maps == name for name in set(self.materials.uv_maps) - {''}}
         need_uvs = uv_pass or any(self.materials.uses_texture)
         batches = []
+        strand_keys = {}
         for key, places in self.placements.items():
             if self.check_break():
                 raise ExportCancelled()
             if places:
                 batches.append((self.meshes[key], places))
+                strand_keys[id(self.meshes[key])] = key[0] in ('HAIR', 'CURVES')
         if not batches:
             return sd.Geometry.empty()
         nv = sum(len(p) * len(a.positions) for a, p in batches)
@@ -181,9 +184,12 @@ class Assembly:
             total = sum(len(p) for _, p in batches)
             out.instance_values = {n: np.zeros((total, 4), np.float32) for n in self._info_needs}
         v0 = t0 = 0
+        tubes = []      # the rows of hair and Curves tubes (Cycles' curve primitives)
         for a, places in batches:
             if self.check_break():
                 raise ExportCancelled()
+            if strand_keys.get(id(a)):
+                tubes.append(slice(t0, t0 + len(places) * len(a.triangles)))
             nbad, ndeg = self._instance_batch(a, places, out, v0, t0)
             degenerate += ndeg
             for name, nvb, ntb in nbad:
@@ -204,6 +210,8 @@ class Assembly:
         # those no ray sees (volume-only ones: Cycles' rays cross their faces as no surface)
         # are dropped, as volume objects are
         mvis = np.array([m.visibility for m in self.materials.materials], np.uint8)
+        if tubes and not mvis.all():
+            mvis = self._volume_only_tubes(out, tubes, mvis)
         if len(out.material) and not mvis.all():
             unseen = mvis[np.clip(out.material, 0, len(mvis) - 1)] == 0
             if unseen.any():
@@ -222,6 +230,42 @@ class Assembly:
             geometry = self._clear_twins(geometry, mvis, objects)
         return geometry
 
+    def _volume_only_tubes(self, out, tubes, mvis):
+        """Hair and Curves tubes (rows `tubes`) of a volume-only material (visibility 0): Cycles'
+        camera and bounce rays cross its curves as they cross such a mesh's faces, but its
+        shadow rays stop at them (a curve's shadow transparency is baked from its shader, which
+        has no surface: opaque). Their triangles take a black twin of the material only shadow
+        rays meet (they had been dropped with the meshes': 200 fog strands cast no shadow, 0.628
+        where Cycles gives 0.471). Returns the materials' visibility with the twins'."""
+        mats = self.materials.materials
+        b = self.materials
+        twins = {}
+        for rows in tubes:
+            idx = np.clip(out.material[rows], 0, len(mvis) - 1)
+            fog = mvis[idx] == 0
+            if not fog.any():
+                continue
+            for k in np.unique(idx[fog]).tolist():
+                if k not in twins:
+                    twins[k] = len(mats)
+                    mats.append(dataclasses.replace(
+                        mats[k], base_color=np.zeros(3, np.float32), emission=np.zeros(3, np.float32),
+                        emission_sampling='NONE', texture=None, emission_texture=None, normal_texture=None,
+                        color_attribute=None, holdout=False, transparency=None, translucency=None, refraction=None,
+                        opacity=None, opaque_refraction=None, visibility=sd.VIS_SHADOW, approximated='', aovs={},
+                        aov_textures={}))
+                    b.attribute_maps.append(None)
+                    b.aov_maps.append(None)
+                    b.uses_texture.append(False)
+                    b.uv_maps.append(b.uv_maps[k])
+                    b.uv_several.append(None)
+            lookup = np.arange(len(mats), dtype=np.int32)
+            for k, t in twins.items():
+                lookup[k] = t
+            out.material[rows] = np.where(fog, lookup[idx], out.material[rows])
+        self._shadow_only.update(twins.values())
+        return np.array([m.visibility for m in mats], np.uint8) if twins else mvis
+
     def _clear_twins(self, geometry, mvis, objects):
         """Materials a Light Path mix hides from some ray kinds (Is Camera Ray or Is Shadow Ray
         to a white Transparent BSDF, _ray_type_mix): Cycles runs the shader at those rays' hits
@@ -237,8 +281,10 @@ class Assembly:
         every = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         mats = self.materials.materials
         held = self.materials.camera_holdouts
-        # per material, the ray kinds that see its clear side (0: none, or not a mix)
+        # per material, the ray kinds that see its clear side (0: none, or not a mix); the other
+        # rays cross volume-only tubes as no surface (_volume_only_tubes)
         clear = np.where(mvis != 0, every & ~mvis, 0).astype(np.uint8)
+        clear[sorted(self._shadow_only)] = 0
         twins = {k: len(mats) + i for i, k in enumerate(np.flatnonzero(clear).tolist())}
         if not twins:
             return geometry

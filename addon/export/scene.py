@@ -474,7 +474,9 @@ class Exporter:
         curves and points are one (measured: a translucent point 0.39 / 0.26 / 0.13 of Cycles',
         half-transparent hair 0.88 of it)."""
         mats = self.materials.materials
-        clear = {i for i, m in enumerate(mats) if m.transparency is not None or m.translucency is not None}
+        # (not volume-only ones, visibility 0: no surface to cross)
+        clear = {i for i, m in enumerate(mats)
+                 if (m.transparency is not None or m.translucency is not None) and m.visibility != 0}
         for key, placements in self.placements.items():
             if key[0] not in ('HAIR', 'POINTCLOUD', 'CURVES') or not clear:
                 continue
