@@ -226,9 +226,12 @@ class Exporter:
                     self.drawn_over.append(ob.name)
                 continue
             if ob.type in UNSUPPORTED_TYPES:
-                # (a Geometry Nodes output of the object itself: its other geometry renders)
+                # (a Geometry Nodes output of the object itself: its other geometry renders; placed
+                # by a collection instance its parent is the instancer, but its original is still
+                # the object, of another type: it had been called a volume object)
+                made = own_output or getattr(ob.original, 'type', ob.type) != ob.type
                 self.skip(f"{UNSUPPORTED_TYPES[ob.type]} geometry its Geometry Nodes make is not rendered "
-                          "(the rest of the object is)" if own_output else
+                          "(the rest of the object is)" if made else
                           f"{UNSUPPORTED_TYPES[ob.type]} objects are not rendered", ob.name)
                 continue
             if ob.type not in SYNCED_TYPES or not inst.show_self:
