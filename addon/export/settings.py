@@ -133,6 +133,7 @@ def export_settings(scene, vl, messages, viewport=False):
     if getattr(cyc, 'use_fast_gi', False) and ao_bounces > 0:
         messages.append(('WARNING', "Cycles' Light Paths > Fast GI Approximation is not applied: DACRT "
                                     "traces full global illumination, so the image differs from Cycles'"))
+    passes += _passes_named_by_aovs(passes, aovs, vl.name, messages)
     for shared in result_passes(passes, lightgroups, aovs, bpy.app.version):
         messages += [('WARNING', _shared_pass_text(vl.name, shared, hidden, dict(aovs))) for hidden in shared[2]]
     if missing:
@@ -194,3 +195,31 @@ def _shared_pass_text(layer, shared, hidden, aov_kinds):
         f" (its first {channels} channels)"
     return (f"view layer '{layer}': {who(key)} and {who(hidden)} have one name: the result's pass '{name}' "
             f"holds the values of {who(key)}{first}, as in Cycles, and those of {who(hidden)} are dropped")
+
+
+# Cycles' passes DACRT does not write that Cycles renders under an AOV of their name even with the
+# pass off (sync.cpp get_known_pass_type maps the result's pass names), where they take the pass
+# from the AOV (passes.result_passes' rule): these 3-component ones over a VALUE AOV, Vector (4,
+# before AOVs in type) over either
+_CYCLES_ONLY_OVER_VALUE = ('Glossy Direct', 'Glossy Indirect', 'Glossy Color', 'Transmission Direct',
+                           'Transmission Indirect', 'Transmission Color', 'Volume Direct', 'Volume Indirect',
+                           'Volume Scatter', 'Volume Transmit', 'Ambient Occlusion', 'Vector')
+
+
+def _passes_named_by_aovs(passes, aovs, layer, messages):
+    """The passes that are off but that Cycles renders under an AOV named like them, and writes
+    there in place of the AOV (measured: a VALUE AOV 'Depth' holds the depth, 'Object Index' the
+    index, 'Position' the X coordinate; 'Mist' and any COLOR AOV keep the AOV's values): those
+    DACRT computes, to write them as Cycles does (it had written the AOV's values, silently).
+    Cycles' UV pass there is 0 (no UV map read for it) and its own passes are not computed here:
+    said."""
+    added = []
+    for name, kind in aovs:
+        own = [p[0] for p in PASSES if result_name(p[0], bpy.app.version) == name and p[0] not in passes]
+        if own and own[0] != 'UV':
+            if result_passes(own, (), ((name, kind),), bpy.app.version)[0][1] == own[0]:
+                added.append(own[0])
+        elif (own and kind == 'VALUE') or (name in _CYCLES_ONLY_OVER_VALUE and (kind == 'VALUE' or name == 'Vector')):
+            messages.append(('WARNING', f"view layer '{layer}': Cycles writes its own '{name}' pass into the "
+                                        f"{kind} AOV of that name, even with the pass off; DACRT writes the AOV"))
+    return tuple(added)

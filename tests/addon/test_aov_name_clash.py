@@ -125,3 +125,27 @@ def test_an_aov_added_under_dacrt_is_invalid_as_under_cycles(scene, engine):
     a = layer.aovs.add()
     a.name = 'Combined_sun'
     assert not a.is_valid
+
+
+@pytest.mark.parametrize('name, kind, holds', [
+    ('Depth', 'VALUE', 'pass'), ('Object Index', 'VALUE', 'pass'), ('Position', 'VALUE', 'pass'),
+    ('Mist', 'VALUE', 'aov'), ('Depth', 'COLOR', 'aov'),
+])
+def test_aov_named_like_a_pass_that_is_off(scene, tmp_path, said, name, kind, holds):
+    """Cycles maps the result's pass names to its own passes (sync.cpp get_known_pass_type), so an
+    AOV named like a pass that is off still gets that pass beside it, and the pass of Cycles'
+    order wins (measured, 16 spp: VALUE 'Depth' 4.2e8 (1e10 on the sky), 'Object Index' the index,
+    'Position' the X coordinate 0.0178; VALUE 'Mist' and COLOR 'Depth' the AOV's). DACRT had
+    written the AOV's values every time, silently."""
+    _scene(scene, name, kind, other=False)
+    scene.objects['Block'].pass_index = 3
+    scene.cycles.samples = 16
+    scene.cycles.use_denoising = False
+    out = scenes.render_engines(scene, tmp_path)
+    means = {e: np.array([v.mean() for k, v in sorted(exr.items()) if k.startswith(f"ViewLayer.{name}.")])
+             for e, exr in out.items()}
+    np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.03, atol=1e-3)
+    if holds == 'pass':
+        assert any(f"the {name} pass and {kind} AOV '{name}' have one name" in t for t in said), said
+    else:
+        assert not any("have one name" in t for t in said), said
