@@ -54,8 +54,9 @@ DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')
 # Denoising Data pass, added under an engine that registers neither: AOV.is_valid stays True),
 # Blender keeps the first one registered (Cycles' order: data, light and denoising passes, AOVs,
 # light groups) and Cycles fills it from its film's first pass of that name, its film sorted by
-# components, most first, then by type (scene/pass.cpp compare_pass_order; kernel/types.h PassType order; a light group 3
-# components, a COLOR AOV 4, a VALUE AOV 1), its first channels where the pass has fewer.
+# components, most first, then by type (scene/pass.cpp compare_pass_order; kernel/types.h
+# PassType order; a light group 3 components, a COLOR AOV 4, a VALUE AOV 1), its first channels
+# where the pass has fewer.
 # Measured: a COLOR AOV over a light group or Denoising Data pass, a light group or Denoising
 # Normal / Albedo over a VALUE AOV, a VALUE AOV over Denoising Depth.
 _CYCLES_TYPE_ORDER = ('lightgroup', 'Emit', 'Env', 'DiffDir', 'DiffInd', 'Depth', 'Position', 'Normal', 'UV',
