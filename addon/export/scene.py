@@ -357,9 +357,15 @@ class Exporter:
         self._noted.add(ob.name)
         if getattr(ob, 'is_shadow_catcher', False) and ob.type != 'LIGHT':
             self.ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
-        for mod in getattr(ob, 'modifiers', ()):
+        mods = getattr(ob, 'modifiers', None)
+        if mods:
+            # Cycles dices adaptively only when the stack's last modifier (enabled or not) is an
+            # adaptive Subdivision shown in this render; with any modifier after it (Shade Auto
+            # Smooth's 'Smooth by Angle', even one disabled for the render) it renders the
+            # evaluated Render Levels as DACRT does: the warning there had been false.
             # (the viewport's depsgraph evaluates the modifier as shown in the viewport: its
             # Levels Viewport, capped by Simplify's viewport Max Subdivision)
+            mod = mods[-1]
             viewport = self.view_camera is not None
             shown = mod.show_viewport if viewport else mod.show_render
             if mod.type == 'SUBSURF' and shown and getattr(mod, 'use_adaptive_subdivision', False):
