@@ -71,10 +71,54 @@ def _shader_trees():
 # modifiers Blender applies as deformations only (ModifierTypeType::OnlyDeform): left out of ORCO
 _DEFORM_ONLY = frozenset({'ARMATURE', 'CAST', 'CURVE', 'DISPLACE', 'HOOK', 'LAPLACIANDEFORM', 'LAPLACIANSMOOTH',
                           'LATTICE', 'MESH_DEFORM', 'SHRINKWRAP', 'SIMPLE_DEFORM', 'SMOOTH', 'CORRECTIVE_SMOOTH',
-                          'SURFACE_DEFORM', 'WARP', 'WAVE', 'MESH_CACHE', 'CLOTH', 'SOFT_BODY', 'COLLISION'})
-# modifiers that leave the positions and vertex count alone
+                          'SURFACE_DEFORM', 'WARP', 'WAVE', 'MESH_CACHE', 'CLOTH', 'SOFT_BODY'})
+# modifiers that leave the positions and vertex count alone (Particle System, Collision and
+# Surface are deform-only in Blender but move no vertex: neither deformed nor rebuilt, a
+# shape-keyed emitter of hair had been warned of "(ParticleSystem)")
 _NO_GEOMETRY = frozenset({'DATA_TRANSFER', 'NORMAL_EDIT', 'WEIGHTED_NORMAL', 'UV_PROJECT', 'UV_WARP',
-                          'VERTEX_WEIGHT_EDIT', 'VERTEX_WEIGHT_MIX', 'VERTEX_WEIGHT_PROXIMITY'})
+                          'VERTEX_WEIGHT_EDIT', 'VERTEX_WEIGHT_MIX', 'VERTEX_WEIGHT_PROXIMITY',
+                          'PARTICLE_SYSTEM', 'COLLISION', 'SURFACE'})
+
+
+def _key_positions(block, count):
+    """A shape key block's positions, flat float32 (None if not one per vertex)."""
+    if len(block.data) != count:
+        return None
+    co = np.empty(count * 3, np.float32)
+    block.data.foreach_get('co', co)
+    return co
+
+
+def _shape_keys_move(ob, mesh, key):
+    """Whether the shape keys `key` (a Key as evaluated at this frame) move the vertices of
+    `mesh`, the original mesh of evaluated object `ob`: a Basis alone, or keys all muted, at 0
+    or equal to the key they are relative to, leave the mesh's positions (Blender's ORCO) as
+    they are, so Generated coordinates stay exact (a character's Basis and keys at 0 under a
+    Subdivision had been warned as approximated)."""
+    blocks, count = key.key_blocks, len(mesh.vertices)
+    if len(blocks) == 0:
+        return False
+    base = np.empty(count * 3, np.float32)
+    mesh.attributes['position'].data.foreach_get('vector', base)
+
+    def moves(block, origin):
+        co = _key_positions(block, count)
+        return co is None or not np.array_equal(co, origin)
+    if getattr(ob, 'show_only_shape_key', False):       # Shape Key Lock: the active key alone
+        index = ob.active_shape_key_index
+        return moves(blocks[index] if 0 <= index < len(blocks) else key.reference_key, base)
+    if not key.use_relative:        # absolute keys: blended by Evaluation Time
+        return any(moves(b, base) for b in blocks)
+    reference = key.reference_key
+    if moves(reference, base):
+        return True
+    for b in blocks:
+        if b == reference or b.mute or b.value == 0.0:
+            continue
+        origin = _key_positions(b.relative_key, count)
+        if origin is None or moves(b, origin):
+            return True
+    return False
 
 
 class Exporter:
@@ -508,8 +552,13 @@ class Exporter:
             return None, ()
         # the evaluated object's: its Render switches at this frame (the original's stay at the
         # file's frame in an animation render, a keyed Taper's coordinates slid with it)
-        mods = [m for m in self._evaluated(original).modifiers if m.show_render]
-        deforms = bool(source.shape_keys) or any(m.type in _DEFORM_ONLY for m in mods)
+        evaluated = self._evaluated(original)
+        mods = [m for m in evaluated.modifiers if m.show_render]
+        deforms = any(m.type in _DEFORM_ONLY for m in mods)
+        if not deforms and source.shape_keys is not None:
+            # this frame's key values (the original's stay at the file's frame in an animation render)
+            key = source.shape_keys.evaluated_get(self.depsgraph)
+            deforms = _shape_keys_move(evaluated, source, key)
         if not deforms:
             return None, ()
         rebuilt = tuple(m.name for m in mods if m.type not in _DEFORM_ONLY and m.type not in _NO_GEOMETRY)

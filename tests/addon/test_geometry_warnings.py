@@ -1,7 +1,9 @@
 """What the export says about geometry, said only where the image really differs from Cycles':
 
 - adaptive subdivision, warned only when Cycles dices (its stack's last modifier is the adaptive
-  Subdivision, shown in the render): each stack is checked against Cycles' own silhouette."""
+  Subdivision, shown in the render): each stack is checked against Cycles' own silhouette;
+- Generated coordinates "approximated" only where a mesh is both deformed (shape keys that move
+  a vertex, a deform modifier) and rebuilt (a Particle System rebuilds nothing)."""
 from types import SimpleNamespace
 
 import bpy
@@ -21,6 +23,22 @@ def _diffuse(name, color=(0.8, 0.3, 0.2)):
     mat, nt, out = scenes._material(name)
     d = nt.nodes.new('ShaderNodeBsdfDiffuse')
     d.inputs['Color'].default_value = (*color, 1.0)
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _generated_material(name="Generated"):
+    """A Diffuse coloured by Generated X through a red-to-blue ramp (Cycles' ORCO)."""
+    mat, nt, out = scenes._material(name)
+    tc = nt.nodes.new('ShaderNodeTexCoord')
+    sep = nt.nodes.new('ShaderNodeSeparateXYZ')
+    ramp = nt.nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.elements[0].color = (1, 0, 0, 1)
+    ramp.color_ramp.elements[1].color = (0, 0, 1, 1)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(tc.outputs['Generated'], sep.inputs[0])
+    nt.links.new(sep.outputs[0], ramp.inputs[0])
+    nt.links.new(ramp.outputs[0], d.inputs['Color'])
     nt.links.new(d.outputs[0], out.inputs['Surface'])
     return mat
 
@@ -83,3 +101,73 @@ def test_adaptive_subdivision_is_warned_only_where_cycles_dices(scene, exported,
     data = exported()
     warned = "adaptive subdivision is not rendered" in _text(data)
     assert warned == dices, (stack, _text(data))
+
+
+# --- Generated coordinates: deformed and rebuilt ------------------------------------------------
+
+def _keyed_cube(name="Cube", keys=(), modifier=True):
+    """A cube textured on Generated coordinates with a Basis and `keys` ((value, mute) each, x
+    stretched 1.8x), under a Subdivision if `modifier`."""
+    ob = scenes.cube(name, materials=(_generated_material(),))
+    ob.shape_key_add(name="Basis")
+    for i, (value, mute) in enumerate(keys):
+        k = ob.shape_key_add(name=f"Key{i}")
+        for v in k.data:
+            v.co.x *= 1.8
+        k.value, k.mute = value, mute
+    if modifier:
+        ob.modifiers.new("Subdivision", 'SUBSURF')
+    return ob
+
+
+APPROXIMATED = "Generated coordinates of a mesh both deformed and rebuilt by modifiers"
+
+
+@pytest.mark.parametrize('keys, warned', [
+    ((), False),                    # a Basis alone: the mesh's own positions
+    (((0.0, False),), False),       # a key at 0
+    (((0.6, True),), False),        # a muted key
+    (((0.6, False),), True),        # a key that moves the vertices under a Subdivision: due
+])
+def test_generated_warning_only_where_shape_keys_move_the_mesh(scene, exported, keys, warned):
+    """Blender's ORCO is the mesh before its shape keys: where they move no vertex it is the
+    evaluated (subdivided) mesh itself, exact (a Basis-only cube under a Subdivision: Cycles
+    0.3830, DACRT 0.3830, yet warned)."""
+    scenes.camera((0, -6, 0), (np.pi / 2, 0, 0))
+    _keyed_cube(keys=keys)
+    data = exported()
+    assert (APPROXIMATED in _text(data)) == warned, _text(data)
+    if warned:
+        assert "(Subdivision)" in _text(data)
+
+
+def test_generated_warning_follows_keyed_values_in_an_animation_render(scene, exported):
+    """The key's value at the rendered frame (an animation render leaves the original's at the
+    file's frame): 0 at frame 1 and 0.6 at frame 5, rendered at frame 5, is warned; the other way
+    round not."""
+    scenes.camera((0, -6, 0), (np.pi / 2, 0, 0))
+    ob = _keyed_cube(keys=((0.0, False),))
+    kb = ob.data.shape_keys.key_blocks["Key0"]
+    for frame, value in ((1, 0.0), (5, 0.6), (9, 0.0)):
+        kb.value = value
+        kb.keyframe_insert('value', frame=frame)
+    scene.frame_set(1)
+    scene.frame_start = scene.frame_end = 5
+    assert APPROXIMATED in _text(exported(animation=True))
+    scene.frame_set(5)
+    scene.frame_start = scene.frame_end = 9
+    assert APPROXIMATED not in _text(exported(animation=True))
+
+
+def test_a_particle_system_rebuilds_nothing(scene, exported):
+    """A shape-keyed emitter of hair (Render As None): the Particle System modifier moves no
+    vertex and adds none, so Generated coordinates are the undeformed mesh's, exact (Cycles
+    0.3307, DACRT 0.3306, warned of "(ParticleSystem)"); a Subdivision with it is still said."""
+    scenes.camera((0, -6, 0), (np.pi / 2, 0, 0))
+    ob = _keyed_cube(keys=((1.0, False),), modifier=False)
+    ps = ob.modifiers.new("ParticleSystem", 'PARTICLE_SYSTEM').particle_system
+    ps.settings.type, ps.settings.render_type, ps.settings.count = 'HAIR', 'NONE', 10
+    assert APPROXIMATED not in _text(exported())
+    ob.modifiers.new("Subdivision", 'SUBSURF')
+    text = _text(exported())
+    assert APPROXIMATED in text and "(Subdivision)" in text and "ParticleSystem" not in text, text
