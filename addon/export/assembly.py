@@ -139,6 +139,7 @@ class Assembly:
         """Transform every unique mesh for all its instances at once, straight into the frame's
         arrays (sized up front; dropped triangles are removed in one pass at the end)."""
         bad = {}          # object name -> [non-finite vertices, triangles dropped]
+        skipped = {}      # (non-finite transform, object name) -> placements left out (_instance_batch)
         degenerate = 0
         self._resolve_materials()
         self._several_uv_maps()
@@ -190,8 +191,10 @@ class Assembly:
                 raise ExportCancelled()
             if strand_keys.get(id(a)):
                 tubes.append(slice(t0, t0 + len(places) * len(a.triangles)))
-            nbad, ndeg = self._instance_batch(a, places, out, v0, t0)
+            nbad, ndeg, nskipped = self._instance_batch(a, places, out, v0, t0)
             degenerate += ndeg
+            for name, nonfinite in nskipped:
+                skipped[nonfinite, name] = skipped.get((nonfinite, name), 0) + 1
             for name, nvb, ntb in nbad:
                 acc = bad.setdefault(name, [0, 0])
                 acc[0] += nvb
@@ -202,6 +205,10 @@ class Assembly:
             self.messages.append(('WARNING', f"object '{name}': {nvb} vertices with NaN, infinite or "
                                              f"out-of-range (beyond +-{REACH:.1e}) coordinates; {ntb} "
                                              "triangles using them skipped"))
+        for (nonfinite, name), n in skipped.items():
+            some = f"{n} instance{'s' if n != 1 else ''} of '{name}'"
+            if nonfinite:
+                self.messages.append(('WARNING', f"{some} with a NaN or infinite transform skipped (as in Cycles)"))
         if degenerate:
             self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
         self.counts['triangles_degenerate'] = degenerate
@@ -501,7 +508,8 @@ class Assembly:
 
     def _instance_batch(self, a, places, out, v0, t0):
         """Write the k instances of mesh `a` into out's vertex rows from v0 and triangle rows
-        from t0; returns ([(object name, bad vertices, bad triangles)], degenerate count)."""
+        from t0; returns ([(object name, bad vertices, bad triangles)], degenerate count,
+        [(object name, non-finite transform (else singular)) per placement left out])."""
         k = len(places)
         nv, nt = len(a.positions), len(a.triangles)
         V, T = slice(v0, v0 + k * nv), slice(t0, t0 + k * nt)
@@ -519,6 +527,18 @@ class Assembly:
             np.add(a.triangles[None, :, :], (np.arange(k, dtype=np.int32) * nv)[:, None, None],
                    out=tris.reshape(k, nt, 3))
         bad, keep = [], None
+        # Placements Cycles renders nothing of: a NaN or infinite transform (said as such: it
+        # had been blamed on the mesh's vertices)
+        skipped = []
+        nonfinite = ~np.isfinite(mats).all(axis=(1, 2))
+        det = np.full(k, np.nan)
+        det[~nonfinite] = np.linalg.det(lin[~nonfinite])
+        unplaced = nonfinite
+        if unplaced.any():
+            world.reshape(k, nv, 3)[nonfinite] = 0.0
+            for i in np.flatnonzero(unplaced).tolist():
+                skipped.append((places[i].name, bool(nonfinite[i])))
+            keep = np.repeat(~unplaced, nt)
         # (NaN fails both comparisons; beyond REACH an edge or a hit point on it overflows float32)
         if not (world.max(initial=0.0) <= REACH and world.min(initial=0.0) >= -REACH):
             finite = (np.abs(world) <= REACH).all(axis=1)
@@ -528,13 +548,13 @@ class Assembly:
                 nvb = int((~finite[i * nv:(i + 1) * nv]).sum())
                 if nvb:
                     bad.append((p.name, nvb, nb))
-            keep = tri_ok
+            keep = tri_ok if keep is None else keep & tri_ok
             world[~finite] = 0.0
         # A mirroring transform (negative scale) reverses the winding. The renderer orients the
         # shading normals by the winding normal, so those instances get corners 1 and 2 swapped
         # (their corner normals and UVs below too): the winding normal faces the outside again.
         # (Negating only the flat normals left the two opposed: mirrored objects rendered black.)
-        mirrored = np.flatnonzero(np.linalg.det(lin) < 0)
+        mirrored = np.flatnonzero(det < 0)
         for i in mirrored:
             _rewind(tris[i * nt:(i + 1) * nt])
         # geometric normals in world space (float64, one native pass)
@@ -555,7 +575,7 @@ class Assembly:
                 # transpose gave the ellipsoid's normal: scale (2, 1, 1) 6% bright)
                 xf = lin
             else:                                   # normals transform by the inverse transpose
-                inv = np.linalg.inv(np.where(np.abs(np.linalg.det(lin))[:, None, None] > 0, lin, np.eye(3)))
+                inv = np.linalg.inv(np.where(np.abs(det)[:, None, None] > 0, lin, np.eye(3)))
                 xf = inv.transpose(0, 2, 1)
             n = dacrt.shading.transform_points(a.normal_rows, np.ascontiguousarray(xf), None,
                            np.empty((k, len(a.normal_rows), 3), np.float32))
@@ -646,7 +666,7 @@ class Assembly:
                 self._point_attributes(a, p, i in mirrored, out, S)
         out.instances += k
         out.linear.append(lin)
-        return bad, deg
+        return bad, deg, skipped
 
     # the most rows (corners x placements) one evaluation of _corner_albedos_batch reads
     _BATCH_ROWS = 1 << 20

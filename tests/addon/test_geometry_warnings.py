@@ -3,7 +3,8 @@
 - adaptive subdivision, warned only when Cycles dices (its stack's last modifier is the adaptive
   Subdivision, shown in the render): each stack is checked against Cycles' own silhouette;
 - Generated coordinates "approximated" only where a mesh is both deformed (shape keys that move
-  a vertex, a deform modifier) and rebuilt (a Particle System rebuilds nothing)."""
+  a vertex, a deform modifier) and rebuilt (a Particle System rebuilds nothing);
+- instances with a NaN transform named as such, not as the mesh's vertices."""
 from types import SimpleNamespace
 
 import bpy
@@ -171,3 +172,28 @@ def test_a_particle_system_rebuilds_nothing(scene, exported):
     ob.modifiers.new("Subdivision", 'SUBSURF')
     text = _text(exported())
     assert APPROXIMATED in text and "(Subdivision)" in text and "ParticleSystem" not in text, text
+
+
+# --- NaN instance transforms ---------------------------------------------------------------------
+
+def test_nan_instance_transforms_are_named_as_such(scene, exported):
+    """Geometry Nodes instances of a cube scaled (NaN, 1, 1): both engines render nothing of
+    them; the message had blamed the mesh ("32 vertices with NaN ... coordinates")."""
+    scenes.camera((0, -6, 0), (np.pi / 2, 0, 0))
+    ob = scenes.plane("Scatter")
+    mod = ob.modifiers.new("GN", 'NODES')
+    ng = bpy.data.node_groups.new("Scatter", 'GeometryNodeTree')
+    mod.node_group = ng
+    ng.interface.new_socket('Geometry', in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gi, go = ng.nodes.new('NodeGroupInput'), ng.nodes.new('NodeGroupOutput')
+    iop, cube = ng.nodes.new('GeometryNodeInstanceOnPoints'), ng.nodes.new('GeometryNodeMeshCube')
+    iop.inputs['Scale'].default_value = (float('nan'), 1.0, 1.0)
+    ng.links.new(gi.outputs[0], iop.inputs['Points'])
+    ng.links.new(cube.outputs[0], iop.inputs['Instance'])
+    ng.links.new(iop.outputs[0], go.inputs[0])
+    data = exported()
+    text = _text(data)
+    assert "4 instances of 'Scatter' with a NaN or infinite transform skipped" in text, text
+    assert "vertices with NaN" not in text, text
+    assert len(data.geometry.triangles) == 0
