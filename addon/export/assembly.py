@@ -209,6 +209,10 @@ class Assembly:
             some = f"{n} instance{'s' if n != 1 else ''} of '{name}'"
             if nonfinite:
                 self.messages.append(('WARNING', f"{some} with a NaN or infinite transform skipped (as in Cycles)"))
+            else:
+                self.messages.append(('INFO', f"{some} scaled to 0 along an axis not rendered (as in Cycles, "
+                                              "which renders nothing of an instanced mesh with a singular "
+                                              "transform)"))
         if degenerate:
             self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
         self.counts['triangles_degenerate'] = degenerate
@@ -528,12 +532,17 @@ class Assembly:
                    out=tris.reshape(k, nt, 3))
         bad, keep = [], None
         # Placements Cycles renders nothing of: a NaN or infinite transform (said as such: it
-        # had been blamed on the mesh's vertices)
+        # had been blamed on the mesh's vertices), and, where the mesh is instanced (several
+        # placements: Cycles keeps it in object space and traces each instance through its
+        # inverse transform), an exactly singular one (an axis scaled to 0): Cycles' inverse of it
+        # fails (only a nudged one is left) and its rays never hit it. A single user's
+        # transform is baked into its mesh, by Cycles too, and stays a flat card.
+        # (A flattened linked duplicate had rendered as a disc and its shadow: 0.878x Cycles.)
         skipped = []
         nonfinite = ~np.isfinite(mats).all(axis=(1, 2))
         det = np.full(k, np.nan)
         det[~nonfinite] = np.linalg.det(lin[~nonfinite])
-        unplaced = nonfinite
+        unplaced = nonfinite | (det == 0.0) if k > 1 else nonfinite
         if unplaced.any():
             world.reshape(k, nv, 3)[nonfinite] = 0.0
             for i in np.flatnonzero(unplaced).tolist():
