@@ -1442,20 +1442,32 @@ class Integrator:
                 part = sel[a:a + step]
                 p = np.take(prim, part)
                 n = np.take(out, part, axis=1)
-                back = self._back(p, np.take(ng, part, axis=1))
+                ngp = np.take(ng, part, axis=1)
+                back = self._back(p, ngp)
+                behind = (np.take(self.tri.geo[9:12], p, axis=1) * ngp).sum(axis=0) < 0
                 for b in steps:
-                    n = self._bumped_normal(b, p, np.take(u, part), np.take(v, part), n, back)
+                    n = self._bumped_normal(b, p, np.take(u, part), np.take(v, part), n, back, behind)
                 out[:, part] = n
         return N if out is None else out
 
-    def _bumped_normal(self, b, prim, u, v, N, back):
+    def _bumped_normal(self, b, prim, u, v, N, back, behind=None):
         """N (3, k) bent by one scenedata.Bump b at hits (prim, u, v): its height's derivatives
         along the triangle's barycentric u and v by central differences over a step of the
         pixel footprint there (bump.step_lengths; every coordinate moved by its own derivative,
         the normals a chain reads held, as Cycles' bump taps hold N), its strength and distance
-        at the hit."""
+        at the hit. behind (k,): the hits met from behind (None: N against the face's normal).
+
+        On a back face Cycles negates dPdu and dPdv (shader_setup_from_ray), so the taps of
+        interpolated attributes (UV, Generated, mesh attributes: their du, dv differentials)
+        move opposite to the positions' (Object, Position: P + dPdx): a relief of Generated or
+        UV heights seen from behind is the front's negated (a bump is a dent there), one of
+        Object or Position heights the front's mirrored in N. The attribute taps take the
+        mirrored barycentrics there."""
         tex = b.values
         g = np.take(self.tri.geo, prim, axis=1).astype(np.float64)
+        if behind is None:
+            behind = (g[9:12] * N).sum(axis=0) < 0
+        mirrored = [k for k in tex.needs if _interpolated_need(k)] if behind.any() else []
         e1, e2 = g[3:6], g[6:9]
         u64, v64 = u.astype(np.float64), v.astype(np.float64)
         step = bumpmap.step_lengths(self._footprint(g[0:3] + e1 * u64 + e2 * v64), self._bump_extent)
@@ -1465,12 +1477,17 @@ class Integrator:
         values = tex.evaluate(centre)
         held = {k: c for k, c in centre.items() if k in SIDED}
 
-        def height(uu, vv):
-            return tex.evaluate({**self._coordinates32(tex.needs, prim, uu, vv, back), **held})[0].astype(np.float64)
+        def height(su, sv):
+            coords = self._coordinates32(tex.needs, prim, u64 + su * du, v64 + sv * dv, back)
+            if mirrored:
+                across = self._coordinates32(mirrored, prim, u64 - su * du, v64 - sv * dv, back)
+                for k in mirrored:
+                    coords[k] = np.where(behind[:, None], across[k], coords[k])
+            return tex.evaluate({**coords, **held})[0].astype(np.float64)
         was, self._undisplaced = self._undisplaced, True       # (the taps' normals are the centre's)
         try:
-            dh_du = (height(u64 + du, v64) - height(u64 - du, v64)) / (2.0 * du)
-            dh_dv = (height(u64, v64 + dv) - height(u64, v64 - dv)) / (2.0 * dv)
+            dh_du = (height(1.0, 0.0) - height(-1.0, 0.0)) / (2.0 * du)
+            dh_dv = (height(0.0, 1.0) - height(0.0, -1.0)) / (2.0 * dv)
         finally:
             self._undisplaced = was
         M = None
@@ -2589,6 +2606,13 @@ def _light_set(linking, lamp) -> int:
     """A lamp's light set in linking (lights/linking.py, light or shadow linking): its own by
     unique name (Light.key); the world's is 0, every object's."""
     return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.key)
+
+
+def _interpolated_need(name):
+    """Whether a texture coordinate is a corner attribute interpolated over the triangle in
+    Cycles (UV, Generated, mesh attributes), whose bump taps follow du, dv, rather than one of
+    the hit position (Object, Position)."""
+    return name in ('uv', 'generated') or (isinstance(name, str) and name.startswith(ATTRIBUTE_NEED))
 
 
 def _hits_by_material(mat, materials):
