@@ -1882,7 +1882,8 @@ class Integrator:
             if chain is not None:                   # what the data passes read here, before the pick
                 surface = self._surface(hits, rows, path.D)
                 chain.append(dict(rows=rows, prim=prim, u=np.take(hits['u'], rows), v=np.take(hits['v'], rows),
-                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=surface[0], ns=surface[2],
+                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=surface[0], ng=surface[1],
+                                  ns=surface[2],
                                   glass=self._glass_part(mat, tau, opacity)))
             t_mean = tau.mean(axis=0)
             total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
@@ -2270,12 +2271,23 @@ class Integrator:
         if denoise is not None:
             denoise.prev[:, path.pid] = path.O      # depth from the ray's origin, then each surface
 
-        def surfaces(cols, prim, u, v, thr, alpha, weight, P, ns, depth, tau=None):
+        bent = 'Normal' in want or denoise is not None
+
+        def surfaces(cols, prim, u, v, thr, alpha, weight, P, ng, ns, depth, tau=None):
             albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
             if self._albedo_varies:
                 self._albedo_maps(prim, u, v, albedo, self._back(prim, ns))     # (ns faces the ray)
             if self._any_translucent:
                 albedo += np.take(self.mats.translucency, np.take(self.tri.material, prim), axis=1) * weight
+            if bent:        # Cycles' Normal and denoising normal: the bent one, as _write_passes
+                nb = self._bent_normals(prim, u, v, ns, ng)[0]
+                if tau is not None and nb is not ns:
+                    # ... averaged over the closures by weight (surface_shader_average_normal,
+                    # the denoising features): the transparent closure's is the unbent N
+                    wd, wt = albedo.mean(axis=0), tau.mean(axis=0)
+                    total = wd + wt
+                    nb = np.where(total > 0, (wd * nb + wt * ns) / np.where(total > 0, total, 1.0), nb).astype(F32)
+                ns = nb
             if denoise is not None:
                 denoise.surface(cols, ns, albedo, P, tau)
             diff[:, cols] += thr * albedo
@@ -2290,7 +2302,7 @@ class Integrator:
             first_prim[cols[todo]] = prim[todo]
             first_P[:, cols[todo]] = P[:, todo]
             first = todo & ((alpha.mean(axis=0) >= threshold) | (threshold == 0.0))
-            normal[:, cols[first]] = ns[:, first]
+            normal[:, cols[first]] = _unit(ns[:, first])
             if 'UV' in want:
                 uv[:, cols[first]] = self._uv_pass(prim[first], u[first], v[first])
             done[cols[first]] = True
@@ -2305,7 +2317,7 @@ class Integrator:
             tau, glass = c['tau'], c['glass']
             alpha = np.clip(1.0 - (tau - glass), 0.0, 1.0)
             share = np.take(clear, cols)
-            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'] * share, alpha, c['opacity'], c['P'], c['ns'], depth,
+            surfaces(cols, c['prim'], c['u'], c['v'], c['thr'] * share, alpha, c['opacity'], c['P'], c['ng'], c['ns'], depth,
                      tau - glass)
             t_mean = tau.mean(axis=0)
             clear[cols] = share * np.where(t_mean > 0, (tau - glass).mean(axis=0) / np.where(t_mean > 0, t_mean, 1.0),
@@ -2316,11 +2328,11 @@ class Integrator:
         opaque = ~np.take(self._tri_transparent, prim)
         idx, prim = idx[opaque], prim[opaque]
         if len(idx):
-            P, _, ns, _ = self._surface(hits, idx, path.D)
+            P, ng, ns, _ = self._surface(hits, idx, path.D)
             thr = np.ones((3, len(idx)), F32) if path.thr is None else np.take(path.thr, idx, axis=1)
             thr = thr * np.take(clear, np.take(path.pid, idx))
             surfaces(np.take(path.pid, idx), prim, np.take(hits['u'], idx), np.take(hits['v'], idx), thr,
-                     np.ones((3, len(idx)), F32), np.ones(len(idx), F32), P, ns, len(chain))
+                     np.ones((3, len(idx)), F32), np.ones(len(idx), F32), P, ng, ns, len(chain))
         if 'Normal' in want:
             data['Normal'] = normal
         if 'DiffCol' in want:

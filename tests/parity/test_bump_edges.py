@@ -50,3 +50,59 @@ def test_a_bump_seen_from_behind_matches_cycles(case, tmp_path):
     _compare(img, nrm, normal_atol=0.02 if coordinate else 0.01)
     c = img['CYCLES']
     assert c.max() > 1.5 * c.min(), "the relief must show"
+
+
+def _passes(sc, tmp_path, names):
+    from tests.addon import scenes
+    sc.cycles.use_denoising = False
+    sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.dacrt.max_bounces = 0
+    sc.view_layers[0].use_pass_normal = True
+    sc.view_layers[0].cycles.denoising_store_passes = 'Denoising Normal' in names
+    layer = sc.view_layers[0].name
+    exrs = scenes.render_engines(sc, tmp_path)
+    return {n: {e: np.stack([exr[f"{layer}.{n}.{c}"] for c in 'XYZ'], axis=-1) for e, exr in exrs.items()}
+            for n in names}
+
+
+@pytest.mark.parametrize('case', ['alpha 0.8', 'unrelated clear cube'])
+def test_the_normal_passes_of_a_bump_with_see_through_surfaces_match_cycles(case, tmp_path):
+    """The Normal and Denoising Normal passes of a bumped plane take the bent normal when the scene
+    has see-through surfaces too (their data passes go another way), averaged as Cycles averages
+    the closures' (the transparent closure's is the unbent N): a Principled of Alpha 0.8 and
+    Base Color 0.8 weighs the bent 0.64 and the flat 0.2. Before: flat wherever a transparent
+    surface was in the scene, (0, 0, 1) vs Cycles' (-0.0114, 0, 0.9526) for Alpha 0.8, blocks
+    26% off; (0, 0, 1) vs (-0.0148, 0, 0.9197) over a whole opaque plane beside an alpha-0 cube."""
+    names = ('Normal', 'Denoising Normal')
+
+    def make():
+        if case == 'alpha 0.8':
+            mat = _bumped("P", _wave(), 'Fac', distance=0.4)
+            nt = mat.node_tree
+            p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+            p.inputs['Base Color'].default_value = (0.8, 0.8, 0.8, 1.0)
+            p.inputs['Alpha'].default_value = 0.8
+            p.inputs['Roughness'].default_value = 1.0
+            p.inputs['Specular IOR Level'].default_value = 0.0
+            d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+            bump = next(n for n in nt.nodes if n.type == 'BUMP')
+            nt.links.new(bump.outputs['Normal'], p.inputs['Normal'])
+            nt.links.new(p.outputs[0], next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL').inputs['Surface'])
+            nt.nodes.remove(d)
+            return mat
+        return _bumped("Waves", _wave(), 'Fac', distance=0.4)
+    sc = _plane_scene(make)
+    if case == 'alpha 0.8':
+        sc.render.film_transparent = True
+    else:
+        bpy.ops.mesh.primitive_cube_add(size=0.3, location=(1.6, 1.6, 0.5))
+        clear = bpy.data.materials.new("clear")
+        clear.node_tree.nodes['Principled BSDF'].inputs['Alpha'].default_value = 0.0
+        bpy.context.active_object.data.materials.append(clear)
+    out = _passes(sc, tmp_path, names)
+    for name in names:
+        d, c = out[name]['DACRT'], out[name]['CYCLES']
+        far = np.ones(d.shape[:2], bool)
+        far[:12, -12:] = far[-12:, -12:] = False           # (away from the cube, whichever way up)
+        diff = np.abs(d - c).max(-1)[far].mean()
+        assert diff < 0.01, f"{name}: {diff:.4f} off Cycles' on average"
+        assert np.abs(c[far][:, 0]).mean() > 0.05, "the bend must show"
