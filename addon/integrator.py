@@ -1439,6 +1439,8 @@ class Integrator:
         for (_, displaced, bumps, corrected), sel in zip(
                 entries, _hits_by_material(np.take(self.tri.material, prim), [e[0] for e in entries])):
             steps = ((displaced,) if displaced is not None else ()) if displacement else bumps
+            if len(sel) and self.tri.unbumped is not None:
+                sel = sel[~np.take(self.tri.unbumped, np.take(prim, sel))]     # point clouds: flat
             if not len(sel) or not steps:
                 continue
             if out is None:
@@ -1779,6 +1781,8 @@ class Integrator:
         entries = [e for e in self.mats.bumps if e[1] is not None]
         mat = np.take(self.tri.material, prim)
         for (_, displaced, _, _), sel in zip(entries, _hits_by_material(mat, [e[0] for e in entries])):
+            if len(sel) and self.tri.unbumped is not None:
+                sel = sel[~np.take(self.tri.unbumped, np.take(prim, sel))]     # point clouds: flat
             if not len(sel):
                 continue
             p, uu, vv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
@@ -2714,7 +2718,7 @@ def _valid_reflection_normal(Ng, I, N, correction):
 
 # scenedata.Geometry's per-triangle arrays (aovs, a dict of them, apart)
 _TRIANGLE_FIELDS = ('triangles', 'material', 'normals', 'uvs', 'visibility', 'object_index', 'instance',
-                    'terminator', 'has_uv', 'tangents', 'colors', 'coords')
+                    'terminator', 'has_uv', 'tangents', 'colors', 'coords', 'unbumped')
 
 
 def _line_crossings(vertices, tris, limit=4_000_000):

@@ -62,6 +62,8 @@ def validate(sd: SceneData):
         (g.terminator is None or np.asarray(g.terminator).shape == (m, 2),
          f"geometry.terminator must be None or ({m},2)"),
         (g.has_uv is None or np.asarray(g.has_uv).shape == (m,), f"geometry.has_uv must be None or ({m},)"),
+        (getattr(g, 'unbumped', None) is None or np.asarray(g.unbumped).shape == (m,),
+         f"geometry.unbumped must be None or ({m},)"),
         (getattr(g, 'tangents', None) is None or np.asarray(g.tangents).shape == (m, 3, 4),
          f"geometry.tangents must be None or ({m}, 3, 4)"),
         (getattr(g, 'colors', None) is None or np.asarray(g.colors).shape == (m, 3, 3),

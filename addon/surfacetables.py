@@ -106,6 +106,8 @@ class Triangles:
                            for key, a in (getattr(geometry, 'attributes', None) or {}).items()}
         self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
             np.asarray(geometry.has_uv, bool)
+        unbumped = getattr(geometry, 'unbumped', None)
+        self.unbumped = None if unbumped is None or not np.any(unbumped) else np.asarray(unbumped, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
         # which lifts shadow rays off smooth triangles (none when all are flat), and the
         # shading offset as Cycles' frequency multiplier 1 / (1 - offset / 2); None: none

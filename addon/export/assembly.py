@@ -40,6 +40,7 @@ class _Out:
         self.object_maps = False          # a material's bump reads them (export/bump.py needs_object_maps)
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
+        self.unbumped = None              # (m,) bool, allocated by the first point cloud
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
         self.coords = None                # (m, 3, 6 or 9), allocated by the first procedurally textured mesh
         self.aovs = {}                    # (AOV name, kind) -> (m, 3, C), allocated by the first mesh writing it
@@ -57,7 +58,7 @@ class _Out:
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, instance=self.instance,
                        uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
-                       colors=self.colors, coords=self.coords)
+                       colors=self.colors, coords=self.coords, unbumped=self.unbumped)
         aovs, attributes = dict(self.aovs), dict(self.attributes)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
@@ -339,7 +340,8 @@ class Assembly:
             visibility=np.concatenate([geometry.visibility, twin_vis[rows]]),
             object_index=twice(geometry.object_index), instance=twice(geometry.instance),
             uvs=twice(geometry.uvs), terminator=twice(geometry.terminator), has_uv=twice(geometry.has_uv),
-            tangents=twice(geometry.tangents), colors=twice(geometry.colors), coords=twice(geometry.coords),
+            unbumped=twice(geometry.unbumped), tangents=twice(geometry.tangents), colors=twice(geometry.colors),
+            coords=twice(geometry.coords),
             aovs=None if geometry.aovs is None else {key: twice(a) for key, a in geometry.aovs.items()},
             attributes=None if geometry.attributes is None else
             {key: twice(a) for key, a in geometry.attributes.items()})
@@ -617,6 +619,10 @@ class Assembly:
         # most of the batch): materials (placements sharing a slot map share their rows),
         # visibility, object and instance ids, shadow terminator
         rows = slice(t0, t0 + k * nt)
+        if getattr(a, 'radial_normals', False):     # a point cloud's spheres: no bump (scenedata)
+            if out.unbumped is None:
+                out.unbumped = np.zeros(len(out.triangles), bool)
+            out.unbumped[rows] = True
         material = out.material[rows].reshape(k, nt)
         by_map = {}
         for i, p in enumerate(places):

@@ -186,6 +186,7 @@ class Exporter:
         self._tessellate_strands()
         geometry = Assembly(self).geometry(uv_pass='UV' in settings.passes)
         self._see_through_strands()
+        self._bumped_strands()
         by_ray = []
         world, environment, world_reason = export_world(self.scene, self.layer_eval, camera=False, by_ray=by_ray)
         camera_world = None
@@ -538,6 +539,21 @@ class Exporter:
                     self.ignore("hair, curves and point clouds are tessellated tubes and spheres: light through a "
                                 "see-through or translucent one crosses two surfaces where Cycles' crosses one",
                                 p.name)
+
+    def _bumped_strands(self):
+        """Say which hair and curves have a bumped material: their tubes are bent as meshes,
+        where Cycles bends a curve with its own differentials (measured: a Noise bump on thick
+        curves, 4x4 blocks 17% off, Normal 29%). Point clouds need nothing said: Cycles' points
+        have no surface derivatives, and their spheres are left unbent as its points are."""
+        mats = self.materials.materials
+        bumped = {i for i, m in enumerate(mats) if m.bumps or m.displacement_bump is not None}
+        for key, placements in self.placements.items() if bumped else ():
+            if key[0] not in ('HAIR', 'CURVES'):
+                continue
+            for p in placements:
+                if p.slot_map is not None and bumped.intersection(p.slot_map.tolist()):
+                    self.ignore("Bump on hair and curves approximated: their tubes are bent as meshes, Cycles "
+                                "bends curves with their own differentials (another relief)", p.name)
 
     def _undeformed_source(self, original, mesh):
         """(the mesh Generated coordinates are of, or None for the evaluated one; the modifiers
