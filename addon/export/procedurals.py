@@ -293,6 +293,16 @@ def _node(node, out, chain, depth):
             raise nodeeval.NotCompiled(f"Geometry {out.name}")
         chain.needs.add(kind)
         return (lambda c: c[kind]), True
+    if t == 'BUMP':
+        # the bent normal is not computed as a value (Integrator._bump_mapped bends the shading
+        # normal only): the normal it bends stands in, as Cycles' Bump of strength 0 gives
+        chain.reasons.append("the Bump node's output is not read as a value (for an AOV or a colour): the unbent "
+                             "normal stands in; the bump itself is rendered")
+        normal = nodegraph.input_by_id(node, 'Normal')
+        if nodegraph.source(normal)[0] is not None:
+            return _socket(normal, True, chain, depth + 1), True
+        chain.needs.add('normal')
+        return (lambda c: c['normal']), True
     if t == 'OBJECT_INFO':
         # per object or instance (the assembly's table by placement): Cycles' Object Info
         if out.name not in _OBJECT_INFO_OUTPUTS:

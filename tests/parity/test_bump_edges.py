@@ -231,3 +231,35 @@ def test_a_bump_on_curves_is_said_approximated(said):
             assert "Bump on hair and curves approximated" in text, text
         else:
             assert "Bump" not in text, text
+
+
+def test_a_bump_output_read_as_a_value_is_said_and_stands_at_the_unbent_normal(said, tmp_path):
+    """A Bump's Normal output wired to an AOV (or a colour): the bent normal is not computed as a
+    value, so the normal it bends stands in (not 0, which is no normal), said as such, and the
+    bump itself still renders. Before: 'procedural texture not evaluated per point ('Bump' node
+    is not read there)', as if the bump were not rendered, and the AOV 0 (Cycles' (-0.0148, 0,
+    0.9197) on average)."""
+    from tests.addon import scenes
+
+    def make():
+        mat = _bumped("A", _wave(), 'Fac', distance=0.4)
+        nt = mat.node_tree
+        aov = nt.nodes.new('ShaderNodeOutputAOV')
+        aov.aov_name = 'bn'
+        nt.links.new(next(n for n in nt.nodes if n.type == 'BUMP').outputs['Normal'], aov.inputs['Color'])
+        return mat
+    sc = _plane_scene(make, samples=1)
+    sc.view_layers[0].aovs.add().name = 'bn'
+    sc.view_layers[0].aovs['bn'].type = 'COLOR'
+    sc.render.engine = 'DACRT'
+    said.clear()
+    exr = scenes.read_exr(scenes.render_exr(str(tmp_path / 'd.exr'), sc, multilayer=True))
+    text = ' '.join(said)
+    assert "the Bump node's output is not read as a value (for an AOV or a colour): the unbent normal stands " \
+           "in; the bump itself is rendered" in text, text
+    assert "not evaluated per point" not in text, text
+    layer = sc.view_layers[0].name
+    bn = np.stack([exr[f"{layer}.bn.{c}"] for c in 'RGB'], axis=-1)
+    np.testing.assert_allclose(bn.reshape(-1, 3).mean(0), (0.0, 0.0, 1.0), atol=1e-3)
+    img = np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], axis=-1).mean(-1)
+    assert img.max() > 1.5 * img.min(), "the relief must show"
