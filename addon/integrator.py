@@ -1463,8 +1463,8 @@ class Integrator:
 
     def _bumped_normal(self, b, prim, u, v, N, back, behind=None):
         """N (3, k) bent by one scenedata.Bump b at hits (prim, u, v): its height's derivatives
-        along the triangle's barycentric u and v by central differences over a step of the
-        pixel footprint there (bump.step_lengths; every coordinate moved by its own derivative,
+        along the triangle's barycentric u and v by forward differences over the pixel footprint
+        there times the Filter Width (bump.step_lengths; every coordinate moved by its own derivative,
         the normals a chain reads held, as Cycles' bump taps hold N), its strength and distance
         at the hit. behind (k,): the hits met from behind (None: N against the face's normal).
 
@@ -1481,7 +1481,10 @@ class Integrator:
         mirrored = [k for k in tex.needs if _interpolated_need(k)] if behind.any() else []
         e1, e2 = g[3:6], g[6:9]
         u64, v64 = u.astype(np.float64), v.astype(np.float64)
-        step = bumpmap.step_lengths(self._footprint(g[0:3] + e1 * u64 + e2 * v64), self._bump_extent)
+        share = getattr(b, 'filter_width', bumpmap.FOOTPRINT_SHARE)
+        if not share > 0:                # Cycles' taps at the point itself: no gradient
+            return np.asarray(N, F32)
+        step = bumpmap.step_lengths(self._footprint(g[0:3] + e1 * u64 + e2 * v64), self._bump_extent, share)
         du = step / np.maximum(np.sqrt((e1 * e1).sum(axis=0)), 1e-30)
         dv = step / np.maximum(np.sqrt((e2 * e2).sum(axis=0)), 1e-30)
         centre = self._coordinates32(tex.needs, prim, u64, v64, back)
@@ -1497,8 +1500,10 @@ class Integrator:
             return tex.evaluate({**coords, **held})[0].astype(np.float64)
         was, self._undisplaced = self._undisplaced, True       # (the taps' normals are the centre's)
         try:
-            dh_du = (height(1.0, 0.0) - height(-1.0, 0.0)) / (2.0 * du)
-            dh_dv = (height(0.0, 1.0) - height(0.0, -1.0)) / (2.0 * dv)
+            # forward differences against the centre, as Cycles' two taps (3 evaluations, not 5)
+            h_c = values[0].astype(np.float64)
+            dh_du = (height(1.0, 0.0) - h_c) / du
+            dh_dv = (height(0.0, 1.0) - h_c) / dv
         finally:
             self._undisplaced = was
         M = None

@@ -215,10 +215,14 @@ class Bump:
     object_height: the height is times |M^T N| (an object-space Displacement node: Cycles maps
     N to object space, scales it and maps it back; M the placement's linear map,
     Geometry.tangent_xf); object_space: N is bent in object space (the bump of Displacement and
-    Bump), N_o = normalize(M^T N) by the gradient over M^-1 dP, then normalize(M^-T N_o')."""
+    Bump), N_o = normalize(M^T N) by the gradient over M^-1 dP, then normalize(M^-T N_o').
+    filter_width: the Bump's Filter Width, its taps' share of the pixel footprint (bump.py;
+    Cycles' default 0.1, a Displacement output's); 0 or less: no bend, as Cycles' taps at the
+    point itself give."""
     values: object
     object_height: bool = False
     object_space: bool = False
+    filter_width: float = 0.1
 
 
 @dataclass

@@ -34,9 +34,12 @@ def bump_nodes(socket):
 def compile_bump(node, reasons, image=None):
     """scenedata.Bump of a Bump node (bump_nodes'), or None where its Height, Strength or
     Distance chain cannot be followed per point (said). Filter Width is Cycles' tap spacing
-    (a share of the pixel footprint): the limit of a height smooth at the pixel scale does not
-    depend on it."""
+    (a share of the pixel footprint), read at its own value (said where nodes drive it)."""
     what = f"Bump node '{node.name}'"
+    socket = node.inputs.get('Filter Width')
+    width, constant = constant_value(socket) if socket is not None else (0.1, True)
+    if not constant:
+        reasons.append(f"{what}: Filter Width driven by nodes; its own value used")
     found = procedurals.compile_floats([node.inputs['Height'], node.inputs['Strength'], node.inputs['Distance']],
                                        what, reasons, image)
     if found is None:
@@ -48,7 +51,7 @@ def compile_bump(node, reasons, image=None):
         h = fn(coords)
         # Cycles clamps the strength at 0 (svm_node_set_bump); Invert negates the distance
         return np.stack([h[:, 0], np.maximum(h[:, 1], 0.0), sign * h[:, 2]], axis=1)
-    return sd.Bump(ProceduralTexels(values, needs, name or what))
+    return sd.Bump(ProceduralTexels(values, needs, name or what), filter_width=float(width))
 
 
 def displacement_bump(mat, out, reasons, image=None):

@@ -4,7 +4,7 @@ sin(k x) the normal of that slope at each point; strength mixes towards the unbe
 Invert and a back face; Cycles' surface-gradient formula (svm_node_set_bump) at finite
 differentials tends to the same normal. Before, Bump nodes were ignored (reported): N stayed
 (0, 0, 1). Within 1e-3: the heights read float32 coordinates, as the textures do, which round
-by some 1e-4 of the difference step (bump.STEP_MOST of the scene here) where x is near 2."""
+by some 1e-4 of the difference step where x is near 2."""
 from __future__ import annotations
 
 import dacrt
@@ -20,13 +20,14 @@ from . import scenes
 
 
 def _integrator(height, strength=1.0, distance=1.0, size=2.0, needs=('position',), displacement=False,
-                normals=None, linear=None, object_height=False, object_space=False):
+                normals=None, linear=None, object_height=False, object_space=False, filter_width=0.1):
     """An Integrator over a plane z = 0 (2 triangles, +-size) whose material bumps with
-    height(coords) -> (n,), at that strength and distance; linear: its placement's 3x3 map."""
+    height(coords) -> (n,), at that strength, distance and Filter Width; linear: its
+    placement's 3x3 map."""
     def values(c):
         h = np.asarray(height(c), np.float64)
         return np.stack([h, np.full(len(h), strength), np.full(len(h), distance)], axis=1)
-    b = sd.Bump(ProceduralTexels(values, frozenset(needs), 'height'), object_height, object_space)
+    b = sd.Bump(ProceduralTexels(values, frozenset(needs), 'height'), object_height, object_space, filter_width)
     v, t = scenes.quad((0.0, 0.0, 0.0), size, size)
     mat = scenes.material('bumpy', bumps=() if displacement else (b,), displacement_bump=b if displacement else None)
     geo = scenes.geometry([(v, t, 1, scenes.ALL_VIS)])
@@ -77,7 +78,9 @@ def test_a_linear_height_tilts_the_plane_by_its_slope(a, distance):
 
 def test_a_sine_height_bends_each_point_by_its_own_slope():
     k, amp = 3.0, 0.2
-    integ = _integrator(lambda c: amp * np.sin(k * c['position'][:, 0]), distance=1.0)
+    # (a Filter Width of 0.001: Cycles' forward taps over this 8-pixel render's 0.5-wide pixels
+    # at the default 0.1 see the slope 0.025 further on; the limit is the slope at the point)
+    integ = _integrator(lambda c: amp * np.sin(k * c['position'][:, 0]), distance=1.0, filter_width=1e-3)
     xy = np.random.default_rng(2).uniform(-1.9, 1.9, (200, 2))
     N, _ = _bent(integ, xy)
     slope = amp * k * np.cos(k * xy[:, 0])
@@ -173,10 +176,12 @@ def test_an_object_space_displacement_takes_the_object_scale_along_the_normal(li
 
 
 def test_the_difference_step_follows_the_pixel_footprint_within_the_scene_bounds():
-    """A tenth of the footprint (Cycles' default Filter Width), at most 1e-4 and at least 1e-6 of
-    the scene's extent: a small object near a perspective camera in a large scene is
-    differentiated inside its own features."""
-    np.testing.assert_allclose(bumpmap.step_lengths([1e-3, 10.0, 1e-9], 100.0), [1e-4, 1e-2, 1e-4])
+    """The footprint times the Filter Width (a tenth by default, as Cycles' taps), at least 1e-6
+    of the scene's extent: a small object near a perspective camera in a large scene is
+    differentiated inside its own features, and a wide footprint is not capped (1e-4 of the
+    extent had been: a wider Filter Width softened nothing)."""
+    np.testing.assert_allclose(bumpmap.step_lengths([1e-3, 10.0, 1e-9], 100.0), [1e-4, 1.0, 1e-4])
+    np.testing.assert_allclose(bumpmap.step_lengths([1e-3, 10.0], 100.0, 4.0), [4e-3, 40.0])
     integ = _integrator(lambda c: c['position'][:, 0])
     cam = integ.camera                                   # orthographic, 4 wide over 8 pixels
     np.testing.assert_allclose(integ._footprint(np.zeros((3, 2))), [0.5, 0.5])

@@ -263,3 +263,47 @@ def test_a_bump_output_read_as_a_value_is_said_and_stands_at_the_unbent_normal(s
     np.testing.assert_allclose(bn.reshape(-1, 3).mean(0), (0.0, 0.0, 1.0), atol=1e-3)
     img = np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], axis=-1).mean(-1)
     assert img.max() > 1.5 * img.min(), "the relief must show"
+
+
+@pytest.mark.parametrize('width', [0.1, 1.0, 4.0])
+def test_the_filter_width_softens_a_fine_bump_as_in_cycles(width, tmp_path):
+    """Cycles' taps are the ray differentials times the Bump's Filter Width from the point,
+    forward differences: a Noise finer than the pixel (scale 40, detail 6, distance 0.02) is seen
+    through that footprint, softer as it widens. Before: a step of a tenth of the footprint
+    capped at 1e-4 of the scene, whatever the Filter Width: 0.2373 at each vs Cycles 0.2498 /
+    0.2609 / 0.2613, 4x4 blocks 5.2% / 9.1% / 9.2% off, Normal.z 0.897 vs 0.962 / 0.999 / 1.0."""
+    def noise(nt):
+        n = nt.nodes.new('ShaderNodeTexNoise')
+        n.inputs['Scale'].default_value = 40.0
+        n.inputs['Detail'].default_value = 6.0
+        nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Object'], n.inputs['Vector'])
+        return n
+
+    def make():
+        mat = _bumped("Fine", noise, 'Fac', distance=0.02)
+        next(n for n in mat.node_tree.nodes if n.type == 'BUMP').inputs['Filter Width'].default_value = width
+        return mat
+    sc = _plane_scene(make, samples=32)
+    sc.render.resolution_x = sc.render.resolution_y = 64
+    img, nrm = _render(sc, tmp_path)
+    _compare(img, None, rtol_mean=0.015, rtol_block=0.03)
+    dz, cz = nrm['DACRT'][..., 2].mean(), nrm['CYCLES'][..., 2].mean()
+    assert abs(dz - cz) < 0.005, (dz, cz)
+
+
+def test_a_filter_width_driven_by_nodes_is_said(said):
+    """A Filter Width from a texture is read at its own value, and said so."""
+    from tests.addon import scenes
+
+    def make():
+        mat = _bumped("Driven", _wave(), 'Fac', distance=0.4)
+        nt = mat.node_tree
+        noise = nt.nodes.new('ShaderNodeTexNoise')
+        nt.links.new(noise.outputs['Fac'], next(n for n in nt.nodes if n.type == 'BUMP').inputs['Filter Width'])
+        return mat
+    sc = _plane_scene(make, samples=1)
+    sc.render.engine = 'DACRT'
+    said.clear()
+    scenes.render_rgba(sc)
+    text = ' '.join(said)
+    assert "Bump node 'Bump': Filter Width driven by nodes; its own value used" in text, text
