@@ -183,6 +183,13 @@ def normalize(v: np.ndarray):
     return v * inv, length
 
 
+def unit_columns(v: np.ndarray) -> np.ndarray:
+    """Columns of v (3, k) divided by their length, float32 (0 stays 0): normalize's numbers
+    differ in the last bit (it multiplies by the reciprocal)."""
+    length = np.sqrt((v * v).sum(axis=0))
+    return (v / np.where(length > 0, length, 1)).astype(np.float32)
+
+
 def max3(v: np.ndarray) -> np.ndarray:
     """Largest component per column."""
     return np.maximum(np.maximum(v[0], v[1]), v[2])
@@ -250,3 +257,24 @@ def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:
     out += b * local[1]
     out += n * local[2]
     return out
+
+
+# The path tracer's random dimension pairs (integrator.py and its mixins).
+# Random dimension pairs: 0 = pixel filter; then per vertex k: light pick + roulette, light
+# position, BSDF direction (Cycles keeps the same split: PRNG_FILTER, PRNG_LIGHT, PRNG_SURFACE_BSDF...).
+DIM_FILTER = 0
+DIMS_PER_VERTEX = 3
+# The lens point of depth of field (Cycles' PRNG_LENS_TIME) gets a pair of its own, out of the
+# per-vertex range, so a camera without depth of field draws exactly the numbers it always did.
+DIM_LENS = 1 << 20
+# Passing or stopping at transparent surfaces: pair DIM_TRANSPARENT + 2048 k + j for the j-th
+# transparent surface of segment k (j <= the 1024 limit), also out of the per-vertex range
+# (opaque scenes draw the same numbers as before).
+DIM_TRANSPARENT = 1 << 21
+DIM_PASSED = 1 << 22     # light sampling at passed semi-transparent surfaces (+ k << 11 + 2 layer)
+DIM_LOBE = 1 << 23       # reflection or diffuse transmission at translucent surfaces (+ k)
+DIM_GLASS = 1 << 24      # glass or clear transparency at a pass (+ k << 11 + j, as DIM_TRANSPARENT)
+
+
+def dim(vertex: int, slot: int) -> int:
+    return 1 + vertex * DIMS_PER_VERTEX + slot

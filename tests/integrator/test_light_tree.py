@@ -172,7 +172,7 @@ def test_linked_lights_are_sampled_among_the_lights_a_plate_is_lit_by(monkeypatc
     tree's pick restricted to the sets a point is lit by, the image equals (in expectation)
     the one whose pick ignored the sets, and its noise is far lower (7 of 8 samples had lit
     nothing)."""
-    import addon.integrator as integrator_module
+    import addon.lightsetup as lightsetup_module
     lights = [light('POINT', 100.0, translation(2.0 * i - 7.0, 0.0, 1.5), name=f'L{i}') for i in range(8)]
 
     def render_linked(seed, samples):
@@ -186,8 +186,8 @@ def test_linked_lights_are_sampled_among_the_lights_a_plate_is_lit_by(monkeypatc
         a, b = render_linked(1, 4), render_linked(2, 4)
         return ((a - b) ** 2).mean() / 2, render_linked(3, 256).mean()
     linked_noise, linked_mean = noise_and_mean()
-    real = integrator_module.LightSet
-    monkeypatch.setattr(integrator_module, 'LightSet', lambda *a, light_sets=None, **k: real(*a, **k))
+    real = lightsetup_module.LightSet
+    monkeypatch.setattr(lightsetup_module, 'LightSet', lambda *a, light_sets=None, **k: real(*a, **k))
     blind_noise, blind_mean = noise_and_mean()
     assert linked_noise < 0.4 * blind_noise, (linked_noise, blind_noise)
     assert linked_mean == pytest.approx(blind_mean, rel=0.01)

@@ -76,7 +76,7 @@ def test_valid_reflection_normal_lifts_the_reflection_to_the_threshold():
     """Cycles' ensure_valid_specular_reflection: a bent normal whose mirror reflection of the view
     direction dips below the surface is raised toward Ng until that reflection leaves at
     min(0.9 cos_view, 0.01) above it; a valid one, or any without Bump Map Correction, stays."""
-    from addon.integrator import _valid_reflection_normal
+    from addon.translucency import valid_reflection_normal
     rng = np.random.default_rng(5)
     n = 2000
     Ng = np.tile([[0.0], [0.0], [1.0]], n)
@@ -86,7 +86,7 @@ def test_valid_reflection_normal_lifts_the_reflection_to_the_threshold():
     N = rng.normal(size=(3, n)) * [[1.0], [1.0], [0.3]]
     N[2] = np.abs(N[2]) + 0.01
     N /= np.linalg.norm(N, axis=0)
-    out = _valid_reflection_normal(Ng, I, N, np.ones(n, bool)).astype(np.float64)
+    out = valid_reflection_normal(Ng, I, N, np.ones(n, bool)).astype(np.float64)
     R = lambda m: 2 * (m * I).sum(axis=0) * m - I  # noqa: E731
     t = np.minimum(0.9 * I[2], 0.01)
     valid = R(N)[2] >= t
@@ -95,4 +95,4 @@ def test_valid_reflection_normal_lifts_the_reflection_to_the_threshold():
     np.testing.assert_allclose(R(out)[2][~valid], t[~valid], atol=2e-4)
     np.testing.assert_allclose(np.linalg.norm(out, axis=0), 1.0, atol=1e-5)
     assert np.all(out[2] > 0)
-    np.testing.assert_allclose(_valid_reflection_normal(Ng, I, N, np.zeros(n, bool)), N, atol=1e-6)
+    np.testing.assert_allclose(valid_reflection_normal(Ng, I, N, np.zeros(n, bool)), N, atol=1e-6)

@@ -113,15 +113,15 @@ def test_ray_type_mix_surfaces_count_transparent_bounces(case, limit, tmp_path):
 def test_line_crossings_bound():
     """The most triangles of a placement one line crosses, as the proof that leaves twins out
     counts them: a flat quad 1, a closed box 2 (convex), a bent, non-convex sheet each one."""
-    from addon.integrator import _line_crossings
+    from addon.transparency import line_crossings
     quad = np.array([[0, 0, 5], [1, 0, 5], [1, 1, 5], [0, 1, 5]], np.float32)
-    assert _line_crossings(quad, np.array([[0, 1, 2], [0, 2, 3]])) == 1
+    assert line_crossings(quad, np.array([[0, 1, 2], [0, 2, 3]])) == 1
     box = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], np.float32)
     faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
     tris = np.array([t for a, b, c, d in faces for t in ((a, b, c), (a, c, d))])
-    assert _line_crossings(box, tris) == 2
+    assert line_crossings(box, tris) == 2
     # a zig-zag of three panels: a line can cross all of them
     zig = np.array([[0, 0, 0], [0, 1, 0], [1, 0, 1], [1, 1, 1], [2, 0, 0], [2, 1, 0], [3, 0, 1], [3, 1, 1]],
                    np.float32)
     tris = np.array([(0, 2, 3), (0, 3, 1), (2, 4, 5), (2, 5, 3), (4, 6, 7), (4, 7, 5)])
-    assert _line_crossings(zig, tris) == 6
+    assert line_crossings(zig, tris) == 6

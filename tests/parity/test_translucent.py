@@ -2,7 +2,7 @@
 and a Translucent BSDF, lit from behind by an area light and seen from the front, standing on a
 floor it lights through itself. DACRT takes both lobes in light sampling (the transmission's
 from the far side) and one of them per bounce, as Cycles does with its closures
-(addon/integrator.py _translucent_hits, _choose_lobes). Before, the Translucent BSDF was a
+(addon/translucency.py _translucent_hits, _choose_lobes). Before, the Translucent BSDF was a
 diffuse reflector of its colour: the back-lit leaf rendered dark (a tenth of Cycles' mean on it).
 """
 import math

@@ -1,0 +1,10 @@
+"""Cancellation of a render (Esc, RenderEngine.test_break) as the integrator raises it: during
+set-up (the render reports it and stops) or inside a pass (the pass's samples are dropped)."""
+
+
+class SetupCancelled(Exception):
+    """The render was cancelled (check_break) while the integrator was being set up."""
+
+
+class PassCancelled(Exception):
+    """Cancel (check_break) polled inside a pass: the pass's samples are not added."""

@@ -1,0 +1,321 @@
+"""Transparent surfaces, part of the Integrator (a mixin of it): camera and bounce rays passing
+or stopping at cut-outs, Transparent BSDFs and clear glass at random (weighted so the estimate
+stays unbiased, counted against Transparent and Transmission Max Bounces), light sampled at
+passed semi-transparent surfaces, emission and the world seen along passed segments, and shadow
+rays dimmed by every transparent surface they cross."""
+from __future__ import annotations
+
+import numpy as np
+
+import dacrt
+
+from .pathstate import Paths
+from .sampling import DIM_GLASS, DIM_LOBE, DIM_PASSED, DIM_TRANSPARENT
+
+F32 = np.float32
+
+
+class Transparency:
+    """A mixin of integrator.Integrator (see the module docstring): its methods read and set
+    the Integrator's state."""
+
+    def _through(self, k, camera, path, hits, sinks, chain=None):
+        """Rays that hit a transparent surface pass it or stop there, at random by the
+        transparent and the opaque weights (as Cycles picks a closure by its mean weight; the
+        estimate is the same whichever probability p is used). Passing multiplies the
+        throughput by transparency / p and traces on from just behind the surface, gathering
+        the lamps along the new segment and the world where it then misses; stopping
+        multiplies it by opacity / (1 - p), so all the surface does next (emission, reflection,
+        light sampling) carries its weight. hits, path.thr and path.tb (surfaces passed) change in
+        place; a path that has passed max_transparent transparent surfaces (at least one) stops
+        at the next one (Cycles' PATH_RAY_TERMINATE_ON_NEXT_SURFACE, _vertex)."""
+        kind = 'camera' if camera else 'bounce'
+        thr = path.thr
+        rows = None                             # all rays, then those that passed
+        j = 0
+        while True:
+            prim = hits['prim'] if rows is None else np.take(hits['prim'], rows)
+            at = np.flatnonzero((prim >= 0) & np.take(self._tri_transparent, np.maximum(prim, 0)))
+            if not len(at):
+                return
+            rows, prim = (at if rows is None else rows[at]), prim[at]
+            if thr is None:                     # camera rays: throughput 1 until now
+                thr = path.thr = np.ones((3, len(hits)), F32)
+            if path.tb is None:
+                path.tb = np.zeros(len(hits), np.int32)
+                path.gb = np.zeros(len(hits), np.int32)
+            # Cycles counts transparent surfaces over the whole path: once a pass reaches the
+            # limit, the next surface, this one too, is not passed (nor lit, nor bounced off:
+            # _vertex); what it emits still counts. Glass: against its own limit
+            tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows),
+                                                   None if not self._sided else
+                                                   self._back(prim, -np.take(path.D, rows, axis=1)))
+            glass = np.take(self._mat_glass, mat)
+            if self._opaque_glass:
+                glass = 2.0 * self._glass_part(mat, tau, opacity).mean(axis=0) > tau.mean(axis=0)
+            spent = np.where(glass, np.take(path.gb, rows) >= self._glass_stop,
+                             np.take(path.tb, rows) >= self._transparent_stop)
+            surface = None
+            if chain is not None:                   # what the data passes read here, before the pick
+                surface = self._surface(hits, rows, path.D)
+                chain.append(dict(rows=rows, prim=prim, u=np.take(hits['u'], rows), v=np.take(hits['v'], rows),
+                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=surface[0], ng=surface[1],
+                                  ns=surface[2],
+                                  glass=self._glass_part(mat, tau, opacity)))
+            t_mean = tau.mean(axis=0)
+            total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
+            p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
+            p[spent] = 0.0                      # stops, at its opaque part's weight
+            u = self.rng.uniform2(np.take(path.keys, rows, axis=1), DIM_TRANSPARENT + (k << 11) + j)[0]
+            go = u < p
+            stop = ~go
+            if self.lights and go.any() and k <= self.max_bounces:
+                # As Cycles, the surface's light is sampled at every hit, passed or not, at the
+                # opaque part's weight: here for the paths that pass; those that stop sample it
+                # at their vertex with 1 - p of the 1 / (1 - p) their bounce carries. (Sampled
+                # only where the path stopped, a window of 80% Transparent and 20% Diffuse had
+                # 5-8x Cycles' noise.)
+                self._light_passed(k, j, path, hits, sinks, rows[go], prim[go], opacity[go], surface, go)
+            if stop.any():
+                if path.nee is None:
+                    path.nee = np.ones(len(hits), F32)
+                path.nee[rows[stop]] = 1.0 - p[stop]
+            thr[:, rows[stop]] *= opacity[stop] / (1.0 - p[stop])
+            rows, glass = rows[go], glass[go]
+            if not len(rows):
+                return
+            if (camera and self._glass_film) or self._transmit_split:
+                self._glass_or_clear(camera, path, rows, mat[go], tau[:, go], opacity[go], p[go],
+                                     self.rng.uniform2(np.take(path.keys, rows, axis=1), DIM_GLASS + (k << 11) + j)[0])
+            else:
+                thr[:, rows] *= tau[:, go] / p[go]
+            path.tb[rows[~glass]] += 1
+            path.gb[rows[glass]] += 1
+            # on from just behind the surface (P stepped off it away from the ray's side)
+            if surface is None:
+                P, _, _, P_off = self._surface(hits, rows, path.D)
+            else:
+                P, P_off = surface[0][:, go], surface[3][:, go]
+            D = np.ascontiguousarray(np.take(path.D, rows, axis=1))
+            t0 = np.take(hits['t'], rows)
+            tmax = np.take(path.tmax, rows) - t0
+            sub = self._intersect_past(kind, path.transmit, rows, np.ascontiguousarray(P + P - P_off), D,
+                                       tmax.astype(F32), np.take(hits['prim'], rows))
+            sub['t'] += t0                      # distances from the path vertex, for lamps and MIS
+            seg = Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
+                         np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
+                         None if path.pdf is None else np.take(path.pdf, rows),
+                         None if path.prim is None else np.take(path.prim, rows),
+                         N=None if path.N is None else np.ascontiguousarray(np.take(path.N, rows, axis=1)),
+                         refracted=None if path.refracted is None else np.take(path.refracted, rows),
+                         transmit=None if path.transmit is None else np.take(path.transmit, rows),
+                         dark_pdf=None if path.dark_pdf is None else np.take(path.dark_pdf, rows))
+            self._gather_segment(seg, sub, t0, sinks, k)
+            hits[rows] = sub
+            j += 1
+
+    def _glass_part(self, mat, tau, opacity):
+        """(3, k) the glass part of transparency tau at hits on materials mat of opacity (k,)."""
+        return np.minimum(np.take(self.mats.refraction, mat, axis=1)
+                          + np.take(self.mats.opaque_refraction, mat, axis=1) * opacity, tau)
+
+    def _glass_or_clear(self, camera, path, rows, mat, tau, opacity, p, u):
+        """Paths rows passing surfaces of materials mat with transparency tau (3, k): each passes
+        as glass (its refraction part, with probability mean(glass) / mean(tau)) or as clear
+        transparency (the rest), weighted by the part over its probability (and p, the pass's).
+        Those that pass glass go on as transmission rays (path.transmit) and, camera paths under
+        a transparent film (_glass_film), are refracted from then on (path.refracted)."""
+        glass = self._glass_part(mat, tau, opacity)
+        q = np.where(tau.mean(axis=0) > 0, glass.mean(axis=0) / np.maximum(tau.mean(axis=0), 1e-30), 0.0)
+        go = u < q
+        part = np.where(go, glass / np.where(go, q, 1.0), (tau - glass) / np.where(go, 1.0, 1.0 - q))
+        path.thr[:, rows] *= (part / p).astype(F32)
+        if path.transmit is None:
+            path.transmit = np.zeros(len(path.pid), bool)
+        path.transmit[rows[go]] = True
+        if camera and self._glass_film:
+            if path.refracted is None:
+                path.refracted = np.zeros(len(path.pid), bool)
+            path.refracted[rows[go & np.take(self._film_refracts, mat)]] = True
+
+    def _intersect_past(self, kind, transmit, rows, O, D, tfar, skip):
+        """Closest hits of rays (O, D, tfar; skip: the triangle each leaves) that paths rows trace
+        on past a transparent surface: as `kind`, or as transmission rays where transmit[rows]
+        (they passed glass), which see triangles by their Transmission visibility."""
+        tx = None if transmit is None or 'transmission' not in self._scenes else np.take(transmit, rows)
+        if tx is None or not tx.any():
+            return self._intersect(kind, O, D, tfar, skip)
+        if tx.all():
+            return self._intersect('transmission', O, D, tfar, skip)
+        hits = np.empty(len(rows), dacrt.HIT_DTYPE)
+        for sel, k in ((np.flatnonzero(~tx), kind), (np.flatnonzero(tx), 'transmission')):
+            hits[sel] = self._intersect(k, np.ascontiguousarray(O[:, sel]), np.ascontiguousarray(D[:, sel]),
+                                        np.ascontiguousarray(tfar[sel]), np.take(skip, sel))
+        return hits
+
+    def _light_passed(self, k, j, path, hits, sinks, rows, prim, opacity, surface, go):
+        """Light sampling at the semi-transparent surfaces (layer j) that paths rows pass: the
+        path's throughput so far x the opaque part's weight (opacity x albedo), as vertex k's
+        sampling is (the same sinks and light choice), with random dimensions of their own."""
+        u, v = np.take(hits['u'], rows), np.take(hits['v'], rows)
+        if surface is None:
+            P, ng, ns, P_off = self._surface(hits, rows, path.D)
+        else:
+            P, ng, ns, P_off = (x[:, go] for x in surface)
+        thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
+        if self._albedo_varies:
+            self._albedo_maps(prim, u, v, thr, self._back(prim, ng))
+        ns, bump = self._bent_normals(prim, u, v, ns, ng)
+        keys = np.ascontiguousarray(np.take(path.keys, rows, axis=1))
+        u_pick = None
+        if self.lights.num_entries > 1:
+            u_pick = self.rng.uniform_pick(keys, DIM_PASSED + (k << 11) + 2 * j)[0]
+        tb = None if path.tb is None else np.take(path.tb, rows)
+        self._next_event(k, np.ascontiguousarray(P), np.ascontiguousarray(P_off), prim, np.ascontiguousarray(ng),
+                         np.ascontiguousarray(ns), np.ascontiguousarray(thr, F32), np.take(path.pid, rows), keys,
+                         u_pick, sinks.sampled(k), tb, u, v, sinks.groups, bump,
+                         dims=DIM_PASSED + (k << 11) + 2 * j + 1)
+        if self._any_translucent:             # a translucent surface's transmission, from the far side
+            mat = np.take(self.tri.material, prim)
+            sel = np.flatnonzero(np.take(self.mats.translucent, mat))
+            if len(sel):
+                T = np.take(self.mats.translucency, np.take(mat, sel), axis=1)
+                thr_far = T * np.take(opacity, sel) * np.take(path.thr, np.take(rows, sel), axis=1)
+                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, np.take(path.pid, rows), keys,
+                                     u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, bump=bump)
+
+    def _gather_segment(self, seg, sub, t0, sinks, k):
+        """Lamps beyond distance t0 along a segment past a transparent surface, and the world
+        where it misses: lamp_gather counts lamps from the path vertex (so MIS sees the true
+        distance) up to the new hit; the same lamps up to t0, already gathered, are taken off."""
+        hit = sub['prim'] >= 0
+        self._gather_lamps(seg, hit, sub, sinks, k)
+        # (lamps at infinity count only where a ray missed: nothing to take off for them)
+        camera = k == 0
+        lamps = self._bsdf_lamps if not camera else self._camera_emitters if sinks.split else self._camera_lamps
+        outs = [(lamps, sinks.found(k))]
+        outs += self._group_lamps(camera, sinks)
+        for lamps, out in outs:
+            if not len(lamps):
+                continue
+            for lamps, thr in self._linked(lamps, seg, -seg.thr, camera):
+                for lamps, pdf in self._mis_pdfs(lamps, seg, k, camera):
+                    dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
+                                            np.zeros(len(t0), bool), seg.pid, out, thr=thr,
+                                            pdf_bsdf=pdf, clamp=self._found_clamp(k),
+                                            **self._lamp_mis(camera, seg))
+        if camera and seg.refracted is not None:
+            self._world_through_glass(seg, sub, ~hit & seg.refracted, sinks)
+
+    def _world_through_glass(self, seg, sub, where, sinks):
+        """The world camera rays see through glass under a transparent film (_glass_film), where
+        `where` (bool per ray of seg) they missed after passing it: into Combined (and the world's
+        light group) as through an opaque film; the Environment pass has it already."""
+        if not where.any():
+            return
+        outs = [sinks.L]
+        if sinks.groups and self._world_group >= 0:
+            outs.append(sinks.groups[self._world_group])
+        clamp = self._found_clamp(0)
+        for out in outs:
+            if self._glass_env is not None:
+                self._glass_env.native.gather(0.0, seg.D, where, seg.thr, None, seg.pid, out, clamp)
+            if len(self._glass_world_lamps):
+                dacrt.lamps.lamp_gather(self._lamp_records, self._glass_world_lamps, seg.O, seg.D, sub['t'], where,
+                                        seg.pid, out, thr=seg.thr, pdf_bsdf=None, clamp=clamp)
+
+    def _shadow_through(self, rays, skip, send, occluded, value, tb=None, kind='through'):
+        """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'
+        scene), their light multiplied by each surface's transparency, as Cycles' transparent
+        shadows; more surfaces than the path has left of max_transparent (tb: surfaces its
+        vertex's path passed, per light sample) block them."""
+        # the records as the occlusion query left them (reordered, ids kept; the tfar of rays
+        # that reach their light untouched), renumbered for the rays still open
+        ids = rays['id']
+        keep = ~np.take(occluded, ids)
+        r = rays[keep]
+        if not len(r):
+            return
+        cols = np.take(send, ids[keep])              # the light samples they carry
+        prim = None if skip is None else np.take(skip, ids[keep])
+        r['id'] = np.arange(len(r), dtype=np.uint32)
+        tfar = r['tfar'].copy()
+        hits = self._intersect(kind, None, None, None, prim, rays=r)
+        at = np.flatnonzero(hits['prim'] >= 0)
+        if not len(at):
+            return
+        # from here on only the rays that met a transparent triangle (by id; the tracer
+        # reordered r): their directions, remaining lengths, light samples and attenuation
+        pos = np.empty(len(r), np.int64)
+        pos[r['id']] = np.arange(len(r))
+        D = np.ascontiguousarray(r['dir'][pos[at]].T)
+        tfar, cols = np.take(tfar, at), np.take(cols, at)
+        left = np.full(len(at), self.max_transparent, np.int64) if tb is None else \
+            self.max_transparent - np.take(tb, cols).astype(np.int64)
+        hits = hits[at]
+        atten = np.ones((3, len(at)), F32)
+        rows = np.arange(len(at))
+        at = rows
+        for j in range(self.max_transparent + 1):
+            if j:
+                hits = self._intersect(kind, None, D, None, prim, rays=r)
+                at = np.flatnonzero(hits['prim'] >= 0)
+                if not len(at):
+                    break
+            rows_at = rows[at]
+            tau = self._transparency(hits['prim'][at], hits['u'][at], hits['v'][at],
+                                     None if not self._sided else
+                                     self._back(hits['prim'][at], -np.take(D, at, axis=1)))[0]
+            tau[:, np.take(left, rows_at) <= j] = 0.0      # over the path's limit: blocked
+            atten[:, rows_at] *= tau
+            go = at[tau.max(axis=0) > 0]        # fully opaque there: nothing left to trace
+            if not len(go):
+                break
+            P, _, _, P_off = self._surface(hits, go, D)
+            D = np.ascontiguousarray(np.take(D, go, axis=1))
+            tfar = np.maximum(np.take(tfar, go) - np.take(hits['t'], go), 0.0).astype(F32)
+            prim = np.take(hits['prim'], go)
+            rows = rows[go]
+            r = self._ray_array(np.ascontiguousarray(P + P - P_off), D, tfar)
+        value[:, cols] *= atten
+
+
+# scenedata.Geometry's per-triangle arrays (aovs, a dict of them, apart)
+TRIANGLE_FIELDS = ('triangles', 'material', 'normals', 'uvs', 'visibility', 'object_index', 'instance',
+                    'terminator', 'has_uv', 'tangents', 'colors', 'coords', 'unbumped')
+
+
+def line_crossings(vertices, tris, limit=4_000_000):
+    """The most of these triangles (k, 3) one straight line can cross (not lying in them): 1
+    when they are flat (all their vertices within float rounding of each one's plane), 2 when
+    each has every vertex on one side of its plane (they lie on their convex hull's boundary,
+    which a line crosses twice at most), else their count; the test only up to `limit` vertex x
+    triangle pairs."""
+    k = len(tris)
+    if k <= 1:
+        return k
+    used = np.unique(tris)
+    if k * len(used) > limit:
+        return k
+    V = vertices[used].astype(np.float64)
+    a, b, c = (vertices[tris[:, i]].astype(np.float64) for i in range(3))
+    n = np.cross(b - a, c - a)
+    length = np.linalg.norm(n, axis=1)
+    ok = length > 0
+    if not ok.any():
+        return k
+    n, a = n[ok] / length[ok, None], a[ok]
+    d = V @ n.T - np.einsum('ij,ij->i', a, n)[None, :]      # (vertices, triangles)
+    tol = 1e-5 * max(float(np.abs(V).max()), float(np.ptp(V, axis=0).max()), 1e-30)
+    if (np.abs(d) <= tol).all():
+        return 1
+    if ((d <= tol).all(axis=0) | (d >= -tol).all(axis=0)).all():
+        return min(2, k)
+    return k
+
+
+def seen_through(alpha, path, rows):
+    """Camera paths `rows` that end transparent (at transparent film's background or a
+    holdout) after passing transparent surfaces: alpha 1 - what passed, as Cycles adds the
+    throughput reaching them to the transparency."""
+    alpha[np.take(path.pid, rows)] = 1.0 - np.take(path.thr, rows, axis=1).mean(axis=0)
