@@ -209,7 +209,8 @@ class Assembly:
         for (nonfinite, name), n in skipped.items():
             some = f"{n} instance{'s' if n != 1 else ''} of '{name}'"
             if nonfinite:
-                self.messages.append(('WARNING', f"{some} with a NaN or infinite transform skipped (as in Cycles)"))
+                self.messages.append(('WARNING', f"{some} with a NaN, infinite or out-of-range (beyond +-{REACH:.1e}) "
+                                                 "transform skipped (as in Cycles)"))
             else:
                 self.messages.append(('INFO', f"{some} scaled to 0 along an axis not rendered (as in Cycles, "
                                               "which renders nothing of an instanced mesh with a singular "
@@ -541,7 +542,9 @@ class Assembly:
         # transform is baked into its mesh, by Cycles too, and stays a flat card.
         # (A flattened linked duplicate had rendered as a disc and its shadow: 0.878x Cycles.)
         skipped = []
-        nonfinite = ~np.isfinite(mats).all(axis=(1, 2))
+        # (an infinite scale Blender stores as float32's largest value: beyond REACH too, else
+        # some vertices had stayed in range and drawn triangles 1e38 m across)
+        nonfinite = ~(np.abs(mats) <= REACH).all(axis=(1, 2))
         det = np.full(k, np.nan)
         det[~nonfinite] = np.linalg.det(lin[~nonfinite])
         unplaced = nonfinite | (det == 0.0) if k > 1 else nonfinite

@@ -14,9 +14,11 @@ from ..sampling import mix64_scalar
 from .errors import ExportError
 
 # Pass toggles that ask for no pass DACRT lacks: Combined is always written, Cryptomatte Accurate
-# refines the Cryptomatte passes, and the Grease Pencil pass is Blender's, drawn over any engine's
-# render
-_NOT_MISSING = {'use_pass_combined', 'use_pass_cryptomatte_accurate', 'use_pass_grease_pencil'}
+# refines the Cryptomatte passes, the Grease Pencil pass is Blender's, drawn over any engine's
+# render, and Shadow and Subsurface Direct / Indirect / Color are EEVEE's: Cycles 5.0 writes none
+# of them either (measured: its result holds Combined alone)
+_NOT_MISSING = {'use_pass_combined', 'use_pass_cryptomatte_accurate', 'use_pass_grease_pencil', 'use_pass_shadow',
+                'use_pass_subsurface_direct', 'use_pass_subsurface_indirect', 'use_pass_subsurface_color'}
 
 
 def unrendered_passes(vl):

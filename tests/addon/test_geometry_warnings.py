@@ -194,6 +194,22 @@ def test_nan_instance_transforms_are_named_as_such(scene, exported):
     ng.links.new(iop.outputs[0], go.inputs[0])
     data = exported()
     text = _text(data)
-    assert "4 instances of 'Scatter' with a NaN or infinite transform skipped" in text, text
+    assert "4 instances of 'Scatter' with a NaN, infinite or out-of-range" in text, text
+    assert "vertices with NaN" not in text, text
+    assert len(data.geometry.triangles) == 0
+
+
+def test_an_object_scaled_to_infinity_is_skipped_whole(scene, exported):
+    """Blender stores a scale of inf as float32's largest value (3.4e38): Cycles renders nothing
+    of such an object; the per-vertex range test had dropped only some vertices and drawn the
+    rest as triangles ~1e38 m across that shaded the floor (0.4847 vs Cycles 0.6278), the
+    message blaming the mesh's vertices."""
+    scenes.camera((0, -6, 0), (np.pi / 2, 0, 0))
+    ob = scenes.uv_sphere("Ball", 0.8, 16, 8, (0, 0, 0.8), materials=[scenes.diffuse("Red", (0.8, 0.3, 0.2))])
+    ob.scale = (float('inf'), 1.0, 1.0)
+    assert np.isfinite(ob.matrix_world).all()          # (stored finite: the NaN/inf test alone misses it)
+    data = exported()
+    text = _text(data)
+    assert "1 instance of 'Ball' with a NaN, infinite or out-of-range" in text, text
     assert "vertices with NaN" not in text, text
     assert len(data.geometry.triangles) == 0

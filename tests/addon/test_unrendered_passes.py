@@ -12,8 +12,10 @@ from addon.export import settings
 from . import scenes
 
 # toggles that ask for no pass of their own (Combined is always there; Cryptomatte Accurate
-# refines the Cryptomatte passes; the Grease Pencil pass is Blender's, over any engine's render)
-NOT_A_PASS = {'use_pass_combined', 'use_pass_cryptomatte_accurate', 'use_pass_grease_pencil'}
+# refines the Cryptomatte passes; the Grease Pencil pass is Blender's, over any engine's render;
+# Shadow and Subsurface are EEVEE's, which Cycles 5.0 does not write either)
+NOT_A_PASS = {'use_pass_combined', 'use_pass_cryptomatte_accurate', 'use_pass_grease_pencil', 'use_pass_shadow',
+              'use_pass_subsurface_direct', 'use_pass_subsurface_indirect', 'use_pass_subsurface_color'}
 WRITTEN = {p[1] for p in passes.PASSES} | {toggle for _, toggle in cryptomatte.KINDS}
 
 
@@ -94,6 +96,8 @@ def test_every_pass_cycles_writes_and_dacrt_does_not_is_named(scene, tmp_path, s
     missing = _missing([(None, t) for t in said])
     assert lacking <= set(missing), sorted(lacking - set(missing))
     assert not set(missing) & result['DACRT']        # nothing named that DACRT wrote
+    # nor a pass Cycles does not write either (Shadow, Subsurface Direct / Indirect / Color had been)
+    assert set(missing) <= result['CYCLES'], sorted(set(missing) - result['CYCLES'])
 
 
 @pytest.mark.parametrize("owner", ['', 'cycles'])
