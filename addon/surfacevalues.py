@@ -99,13 +99,9 @@ class SurfaceValues:
         """The normals N (3, k) at hits (prim, u, v) bent by their materials' bump heights
         (bump.bend): the Displacement output's (displacement) or the Bump nodes', in turn. A new
         array where any is bent; correction (k,): those hits' materials' Bump Map Correction."""
-        entries = self.mats.bumps
         out = None
-        for (_, displaced, bumps, corrected), sel in zip(
-                entries, _hits_by_material(np.take(self.tri.material, prim), [e[0] for e in entries])):
+        for (_, displaced, bumps, corrected), sel in self._bump_hits(self.mats.bumps, prim):
             steps = ((displaced,) if displaced is not None else ()) if displacement else bumps
-            if len(sel) and self.tri.unbumped is not None:
-                sel = sel[~np.take(self.tri.unbumped, np.take(prim, sel))]     # point clouds: flat
             if not len(sel) or not steps:
                 continue
             if out is None:
@@ -118,13 +114,20 @@ class SurfaceValues:
                 part = sel[a:a + step]
                 p = np.take(prim, part)
                 n = np.take(out, part, axis=1)
-                ngp = np.take(ng, part, axis=1)
-                back = self._back(p, ngp)
-                behind = (np.take(self.tri.geo[9:12], p, axis=1) * ngp).sum(axis=0) < 0
+                behind = (np.take(self.tri.geo[9:12], p, axis=1) * np.take(ng, part, axis=1)).sum(axis=0) < 0
+                back = behind if self._sided else None          # (as _back gives it)
                 for b in steps:
                     n = self._bumped_normal(b, p, np.take(u, part), np.take(v, part), n, back, behind)
                 out[:, part] = n
         return N if out is None else out
+
+    def _bump_hits(self, entries, prim):
+        """(entry, indices of the hits on prim of its material) for each of entries (mats.bumps'),
+        point-cloud triangles left out: Cycles' points have no surface derivatives, so no bump."""
+        for entry, sel in zip(entries, _hits_by_material(np.take(self.tri.material, prim), [e[0] for e in entries])):
+            if len(sel) and self.tri.unbumped is not None:
+                sel = sel[~np.take(self.tri.unbumped, np.take(prim, sel))]
+            yield entry, sel
 
     def _bumped_normal(self, b, prim, u, v, N, back, behind=None):
         """N (3, k) bent by one scenedata.Bump b at hits (prim, u, v): its height's derivatives
@@ -146,7 +149,7 @@ class SurfaceValues:
         mirrored = [k for k in tex.needs if _interpolated_need(k)] if behind.any() else []
         e1, e2 = g[3:6], g[6:9]
         u64, v64 = u.astype(np.float64), v.astype(np.float64)
-        share = getattr(b, 'filter_width', bumpmap.FOOTPRINT_SHARE)
+        share = b.filter_width
         if not share > 0:                # Cycles' taps at the point itself: no gradient
             return np.asarray(N, F32)
         step = bumpmap.step_lengths(self._footprint(g[0:3] + e1 * u64 + e2 * v64), self._bump_extent, share)
@@ -371,10 +374,7 @@ class SurfaceValues:
         run: Geometry Normal and Texture Coordinate Normal (normalize(M^T N), the placement's
         linear map M) of the hits of displaced materials read it (coordinates out, in place)."""
         entries = [e for e in self.mats.bumps if e[1] is not None]
-        mat = np.take(self.tri.material, prim)
-        for (_, displaced, _, _), sel in zip(entries, _hits_by_material(mat, [e[0] for e in entries])):
-            if len(sel) and self.tri.unbumped is not None:
-                sel = sel[~np.take(self.tri.unbumped, np.take(prim, sel))]     # point clouds: flat
+        for (_, displaced, _, _), sel in self._bump_hits(entries, prim):
             if not len(sel):
                 continue
             p, uu, vv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
