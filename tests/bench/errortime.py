@@ -5,7 +5,9 @@ given) both engines render at matched settings (reference blender-cycles.md sect
 same resolution, bounces, pixel filter, no adaptive sampling, no denoising, no clamping) for a
 sweep of sample counts, several seeds per point. Time = wall seconds of the whole render
 (`bpy.ops.render.render()`: Cycles' sync + BVH build + path tracing, DACRT's export + tracer
-scene creation + integration), after one untimed warm-up render per scene and engine. Error =
+scene creation + integration), each point after one untimed warm-up render of its own scene,
+engine and sample count (renderworker's "point" warm-up: not the first seed of a point alone
+paying the memory its larger working set first touches). Error =
 relMSE against a high-sample Cycles reference (the mean of --ref-seeds renders of
 --ref-samples each, seeds distinct from the test seeds), cached in bench-out/cache/reference/
 by scene source, settings, seeds and bpy version.
@@ -147,7 +149,7 @@ def render_all(specs, args, engines, workdir, progress):
         for spec in specs:
             for spp in args.samples:
                 for seed in range(args.seeds):
-                    renders.append(dict(spec=spec.as_dict(), samples=spp, seed=seed,
+                    renders.append(dict(spec=spec.as_dict(), samples=spp, seed=seed, warmup="point",
                                         image=f"{engine}-{spec.name}-{spp}-{seed}.npy"))
         # sort by spec so each scene is built once per worker (references first within it)
         order = {s.name: i for i, s in enumerate(specs)}
