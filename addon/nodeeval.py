@@ -51,7 +51,7 @@ NODE_TYPES = frozenset(_INPUTS) | {'MIX', 'MAP_RANGE'}
 VIEW_NODE_TYPES = frozenset({'FRESNEL', 'LAYER_WEIGHT'})   # as their average over view directions
 # the note when one of two images is averaged (one image per material)
 TWO_IMAGES = "two image textures mixed; the second as its average colour"
-# Color Attribute, Attribute and Object Info: values per point or per object (export/materials.py)
+# Color Attribute, Attribute and Object Info: values per point or per object (export/attributemaps.py)
 ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 # colour or vector inputs (but floats in Mix FLOAT and Math)
 _COLOR_ROLES = {'color', 'a', 'b', 'vector', 'vfac', 'vvalue', 'vf0', 'vf1', 'vt0', 'vt1', 'vsteps', 'va', 'vb', 'vc'}

@@ -187,7 +187,7 @@ class Material:
     pass_index: int = 0                           # Blender's material pass index (Material Index pass)
     # the ray kinds that meet this material (VIS_* bits; the others pass through its triangles):
     # a Mix Shader of a fully transparent shader by a Light Path ray-type output hides it from
-    # that kind or from the others (export/materials.py)
+    # that kind or from the others (export/shaders.py)
     visibility: int = VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW
     # AOV Output nodes: AOV name -> (colour (3,), value), what the material writes to that
     # AOV's pass (a COLOR AOV takes the colour, a VALUE AOV the value; nodes of one name add up)

@@ -65,7 +65,9 @@ supported) are skipped; negative or non-finite material channels and world becom
 whose clip end lies before its clip start sees nothing but the world, as in Cycles.
 
 The package, one concept a module: scene (the depsgraph walk), settings, camera, lights, world,
-materials (closure, aovs, images, normalmaps, reflectors, shadersockets, objectinfo), geometry
+materials (the builder's mixins shaders, texturedmixes, cutouts, emission, texelbaking,
+attributemaps, imagetextures; closure, aovs, images, normalmaps, reflectors, shadersockets,
+objectinfo), geometry
 (meshes, strands, placement, assembly), errors.
 """
 

@@ -445,13 +445,13 @@ def test_what_loading_an_image_says_reaches_every_material_that_reads_it(scene, 
     another, say) is said in every material reading it. A material that read an image already
     loaded by another had lost those notes, and _build's rebuilds (a colour attribute beside
     an image, the glTF wiring) always did."""
-    from addon.export import materials
-    load = materials.image_pixels
+    from addon.export import imagetextures
+    load = imagetextures.image_pixels
 
     def noting(img, reasons, *args):
         reasons.append(f"loaded '{img.name}'")
         return load(img, reasons, *args)
-    monkeypatch.setattr(materials, 'image_pixels', noting)
+    monkeypatch.setattr(imagetextures, 'image_pixels', noting)
     image = scenes.float_image("Shared", PX)
 
     def material(name):

@@ -1,0 +1,120 @@
+"""Alpha and cut-outs, part of the material export's MaterialBuilder (a mixin of it): a
+Principled BSDF's Alpha and a Mix Shader between a transparent shader and another read as an
+opacity: an Image Texture's Alpha, what nodes compute from one image (per texel), or what
+procedural textures compute (per shading point)."""
+
+import numpy as np
+
+from ..nodegraph import linked_link
+from ..procedural import ProceduralTexels
+from . import procedurals
+from .closure import Closure, Texture, is_image_alpha
+
+# what _image_alpha gives for an Image Texture's Alpha whose image cannot be read
+MISSING_ALPHA = 'missing image alpha'
+
+
+class Cutouts:
+    """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
+    set the builder's state."""
+
+    def _image_alpha(self, socket, reasons, inverted=False):
+        """(Texture, inverted) when socket is linked straight to an Image Texture's Alpha output;
+        MISSING_ALPHA when that image cannot be read (Cycles' opaque magenta: alpha 1)."""
+        link = linked_link(socket)
+        if not is_image_alpha(link):
+            return None
+        tex = self._texture(link.from_node, reasons)
+        return MISSING_ALPHA if tex is None else (tex, inverted)
+
+    def _alpha_mix(self, node, reasons, depth):
+        """A Mix Shader whose factor is an image's alpha, or what nodes compute from one image (a
+        black-and-white opacity map's colour, an alpha through Greater Than or Invert), between a
+        purely transparent shader and another one (the usual cut-out leaf): that shader with
+        the factor as its opacity."""
+        if not is_image_alpha(linked_link(node.inputs['Fac'])) and self._float_per_texel(node.inputs['Fac']) is None:
+            return None
+        if procedurals.reaches_procedural(node.inputs['Fac']) and \
+                procedurals.compile_socket(node.inputs['Fac'], False, [], image=self._texture) is not None:
+            # an image and procedural textures both: the procedural cut-out computes them per
+            # point (_procedural_mix; per texel here the textures had read their own values)
+            return None
+        notes = []              # (said only if this mix is taken: else the shaders are read again)
+        a = self._shader(node.inputs[1], notes, depth + 1)
+        b = self._shader(node.inputs[2], notes, depth + 1)
+        clear_a, clear_b = a.only_transparent(), b.only_transparent()
+        if clear_a == clear_b or a.opacity is not None or b.opacity is not None:
+            return None
+        opaque, clear = (b, a) if clear_a else (a, b)
+        if opaque.transparent.any() or opaque.holdout:
+            return None
+        # Mix = (1 - fac) A + fac B: fac is the opacity when A is the transparent one
+        opacity = self._image_alpha(node.inputs['Fac'], notes, inverted=not clear_a)
+        if opacity is MISSING_ALPHA:       # factor 1: the second shader alone
+            reasons.extend(notes)
+            return b
+        if opacity is None and not is_image_alpha(linked_link(node.inputs['Fac'])):
+            opacity = self._evaluated_alpha(node.inputs['Fac'], notes, inverted=not clear_a)
+        if opacity is None:
+            return None
+        reasons.extend(notes)
+        return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
+                        clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass)
+
+    @staticmethod
+    def _procedural_cutout(closures, fac_fn, needs, name):
+        """The Mix Shader of closures (first, second) whose factor fac_fn computes per point,
+        when one side is purely transparent and the other has no transparency, holdout or
+        opacity of its own: the other side with the factor as its opacity (1 minus it when the
+        transparent side is the second), computed at each shading point as Cycles' Mix Shader
+        weighs its two closures (the factor clamped to [0, 1], NaN 0). None otherwise."""
+        a, b = closures
+        clear_a, clear_b = a.only_transparent(), b.only_transparent()
+        if clear_a == clear_b:
+            return None
+        opaque, clear = (b, a) if clear_a else (a, b)
+        if opaque.transparent.any() or opaque.holdout or opaque.opacity is not None:
+            return None
+
+        def opacity(coords):    # Mix = (1 - fac) first + fac second; reads no Blender data
+            f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+            return f if clear_a else 1.0 - f
+        tex = Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity')
+        return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
+                        clear.transparent, (tex, False), opaque.emission_tex, opaque.translucent, clear.glass)
+
+    def _procedural_alpha(self, socket, reasons):
+        """(Texture, False) of a Principled BSDF's Alpha that procedural textures compute (a
+        Noise through Greater Than, a Gradient through a Color Ramp), per shading point,
+        clamped to [0, 1] as Cycles clamps it (NaN opaque); None when none reaches it or the
+        chain cannot be compiled (said: the Alpha then reads its own value)."""
+        found = procedurals.compile_socket(socket, False, reasons, image=self._texture)
+        if found is None:
+            return None
+        fn, needs, name = found
+
+        def opacity(coords):    # reads no Blender data: it runs during the render's lookups
+            return np.clip(np.nan_to_num(np.asarray(fn(coords), np.float64), nan=1.0), 0.0, 1.0)
+        return Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity'), False
+
+    def _evaluated_alpha(self, socket, reasons, inverted=False):
+        """(Texture, False) whose alpha is what nodes compute from one image (Blender's glTF
+        importer's alpha mask: 1 - (alpha < cutoff) into the Principled Alpha; a black-and-white
+        opacity map's colour into a Mix Shader's factor), evaluated per texel (inverted: 1 minus
+        it); None when nothing of an image reaches the socket. Cycles blends the image, then
+        runs the nodes: a texel-wise cut-out keeps the coverage, with edges one texel soft
+        where Cycles' are sharp (reported unless looked up 'Closest')."""
+        per_texel = self._float_per_texel(socket)
+        if per_texel is None:
+            return None
+        src, a, notes = per_texel
+        reasons.extend(notes)
+        if inverted:
+            a = 1.0 - np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)
+        px = np.zeros(a.shape + (4,), np.float32)
+        px[..., 3] = np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)
+        if src.interpolation != 'Closest':
+            reasons.append(f"alpha from nodes on image '{src.name}' evaluated per texel before the blend "
+                           "(Cycles: after it; cut-out edges one texel soft)")
+        return Texture(('alpha', src.key, id(px)), px, src.interpolation, src.extension, src.transform, None,
+                       src.name), False

@@ -1,0 +1,117 @@
+"""Emission, part of the material export's MaterialBuilder (a mixin of it): an emission's colour
+x strength, constant, from an image (looked up as Cycles stores it, nodes after it run after the
+lookup or baked into its texels), or computed per shading point by procedural textures and
+attributes, with the radiance that weighs it as a light."""
+
+import numpy as np
+
+from .. import nodeeval
+from ..nodegraph import linked_link
+from ..texture import ImageTexels, stored_texels
+from . import procedurals
+from .closure import Texture
+from .images import MISSING_IMAGE
+from .shaders import nonnegative
+
+
+class Emission:
+    """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
+    set the builder's state."""
+
+    def _emission(self, color_socket, strength_socket, label, reasons):
+        """(radiance (3,) float64, image emission or None) of an emission's colour x strength:
+        exact for constants and the nodes the export evaluates. Driven by an image (a screen,
+        a sign, a glTF emissive map): (Texture, weight (3,)), emitting weight x the image,
+        and the radiance its average over the image's texels (what picks it as a light); an
+        image straight into the colour is read as Cycles reads it, colour and float nodes
+        after the image are baked into its texels (as for a diffuse colour). Procedural
+        textures in either: (a ProceduralTexels Texture of colour x strength, 1), the radiance
+        a first guess of its magnitude's mean (the integrator measures it on the emitters); so
+        are attributes (a Color Attribute, a geometry, object or instancer Attribute, Object
+        Info: an LED wall's vertex colours), read per shading point as Cycles reads them."""
+        # procedural textures in either: colour x strength computed at each shading point
+        # (procedural.py), as Cycles' SVM does; they had read the texture's own value
+        emitted = procedurals.compile_emission(color_socket, strength_socket, reasons, image=self._texture)
+        if emitted is not None:
+            return emitted.magnitude(), (Texture.procedural(emitted, 'emission'), np.ones(3))
+        evaluate = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE)
+        color, strength = evaluate.input(color_socket, True), evaluate.input(strength_socket, False)
+        if color.tex is None and strength.tex is None:
+            return np.asarray(color.value, np.float64).reshape(3) * float(strength.value.reshape(-1)[0]), None
+        if color.tex is not None and strength.tex is not None:
+            strength = self._strength_beside(color.tex, strength, label, reasons)
+        link = linked_link(color_socket)
+        # an image with non-finite texels is baked below, where they become 0 (noted): its
+        # average would be NaN, and the emitter lost that colour channel altogether
+        clean = color.tex is None or bool(np.isfinite(color.tex.pixels[..., :3]).all())
+        # nodes after an image Cycles keeps encoded that scale its colour per channel (a tint):
+        # the image itself times that weight, after the lookup (see _evaluated_closure)
+        affine = self._affine_in(color_socket, color.tex) if strength.tex is None and color.tex is not None \
+            and stored_texels(color.tex.pixels) is not None and clean else None
+        if strength.tex is None and link is not None and link.from_node.type == 'TEX_IMAGE' \
+                and link.from_socket.name == 'Color' and clean:
+            tex = color.tex                 # the image itself, looked up as Cycles stores it
+            weight = np.full(3, float(strength.value.reshape(-1)[0]))
+        elif isinstance(affine, tuple) and not affine[1].any():
+            tex = color.tex
+            weight = affine[0] * float(strength.value.reshape(-1)[0])
+        else:                               # nodes (or an image strength) baked per texel
+            src = color.tex if color.tex is not None else strength.tex
+            values = np.asarray(color.value, np.float64) * np.asarray(strength.value, np.float64)
+            px = np.empty(src.pixels.shape[:2] + (4,), np.float32)
+            px[..., :3] = nonnegative(np.broadcast_to(values, px.shape[:2] + (3,)).astype(np.float32),
+                                       f"{label} from nodes" if clean else f"{label} of image '{color.tex.name}'",
+                                       reasons)
+            px[..., 3] = 1.0
+            if color.tex is not None and strength.tex is None and color.tex.attribute is None and clean:
+                # nodes that read the image's colour alone run after its lookup, as Cycles runs
+                # them (see _evaluated_closure); baked into the texels, a Gamma of 2.2 on an
+                # 8-bit screen image emitted 2.3-4.3x Cycles' light
+                after = self._after_lookup(color_socket, color.tex, stored_texels(color.tex.pixels))
+                if after is not None:
+                    s = np.float32(strength.value.reshape(-1)[0])
+                    px = ImageTexels(px, after.followed_by(lambda rgb: rgb * s))
+                elif not self._baked_exactly(color_socket, color.tex, stored_texels(color.tex.pixels)):
+                    # said as _evaluated_closure says it ('Closest' blends nothing: exact)
+                    reasons.append(f"colour nodes after image '{color.tex.name}' applied to its texels before the "
+                                   "blend (Cycles blends, decodes, then applies them)")
+            elif color.tex is None and strength.tex is not None and strength.tex.attribute is None \
+                    and bool(np.isfinite(strength.tex.pixels).all()):
+                # an image (and nodes reading it) into the Strength: looked up as stored, then
+                # the nodes, then times the colour, as Cycles does (baked before the blend, an
+                # 8-bit image straight into Strength emitted 5-6% more than Cycles)
+                after = self._after_lookup(strength_socket, strength.tex, stored_texels(strength.tex.pixels), False)
+                if after is not None:
+                    c = np.asarray(color.value, np.float32).reshape(3)
+                    px = ImageTexels(px, after.followed_by(lambda rgb: rgb * c))
+                elif not self._baked_exactly(strength_socket, strength.tex, stored_texels(strength.tex.pixels),
+                                             False):
+                    # (an Alpha -> Power 4 Strength had been baked silently, +66%)
+                    reasons.append(f"{label} strength nodes after image '{strength.tex.name}' applied to its "
+                                   "texels before the blend (Cycles blends, then applies them)")
+            tex = Texture(('emission', src.key, id(px)), px, src.interpolation, src.extension, src.transform,
+                           src.udim)
+            weight = np.ones(3)
+        mean = np.asarray(tex.pixels[..., :3], np.float64).reshape(-1, 3).mean(axis=0)
+        return mean * weight, (tex, weight)
+
+    @staticmethod
+    def _strength_beside(ctex, strength, label, reasons):
+        """The Strength of an emission whose colour is an image too: per texel where it reads
+        the same image on the same grid (multiplied before the blend, where Cycles blends each
+        and then multiplies: said unless lookups are Closest), else its average (said). Two
+        images of other sizes had failed the render with a broadcast error."""
+        stex = strength.tex
+        same = (stex.key == ctex.key and stex.pixels.shape[:2] == ctex.pixels.shape[:2]
+                and stex.interpolation == ctex.interpolation and stex.extension == ctex.extension
+                and np.array_equal(np.asarray(stex.transform if stex.transform is not None else np.eye(3)),
+                                   np.asarray(ctex.transform if ctex.transform is not None else np.eye(3))))
+        if same:
+            if ctex.interpolation != 'Closest':
+                reasons.append(f"{label} colour and strength from image '{ctex.name}' multiplied per texel "
+                               "before the blend (Cycles blends each, then multiplies)")
+            return strength
+        reasons.append(f"{label} strength from image '{stex.name}' beside a colour from image '{ctex.name}': "
+                       "the strength's average over its texels used")
+        value = np.asarray(strength.value, np.float64)
+        return nodeeval.Field(value.reshape(-1, value.shape[-1]).mean(axis=0))

@@ -1,0 +1,123 @@
+"""Image Texture nodes and a BSDF's normal inputs, part of the material export's MaterialBuilder
+(a mixin of it): an Image Texture node read into a closure.Texture (its image's pixels loaded
+once per export, its mapping, interpolation, extension and UV map), and the Bump nodes and
+tangent-space normal map of a BSDF's Normal (export/bump.py, export/normalmaps.py), the colour
+nodes before a normal map run on its looked-up colours."""
+
+import numpy as np
+
+from .. import nodeeval
+from ..mapping import texture_transform, uv_map_name
+from ..nodegraph import output_key
+from ..texture import UdimTiles, stored_texels
+from .bump import bump_nodes, compile_bump
+from .closure import Texture
+from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
+from .imageuser import user_frame
+from .normalmaps import normal_map_at
+from .texelbaking import channel_line, lookup_chain
+
+# the image extensions the material export implements (another is read as repeat, reported)
+TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR')
+
+
+class ImageTextures:
+    """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
+    set the builder's state."""
+
+    def _texture(self, node, reasons):
+        img = node.image
+        transform = texture_transform(node, reasons)
+        self._uv_names.append(uv_map_name(node))
+        if node.projection != 'FLAT':
+            reasons.append(f"{node.projection.lower()} image projection as flat")
+        # Smart is Cycles' bicubic too (its SVM image lookup: closest, linear, else cubic)
+        interp = {'Closest': 'Closest', 'Cubic': 'Cubic', 'Smart': 'Cubic'}.get(node.interpolation, 'Linear')
+        ext = node.extension if node.extension in TEXTURE_EXTENSIONS else 'REPEAT'
+        if node.extension not in TEXTURE_EXTENSIONS:
+            reasons.append(f"{node.extension.lower()} image extension as repeat")
+        if img is None:
+            reasons.append("Image Texture without an image (magenta, as Cycles)")
+            return None
+        # Cycles: with the Alpha output used, the Color output of an image stored with
+        # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0); an Alpha
+        # linked only to nodes the shader does not use, or through links Cycles' constant
+        # folding drops (Alpha x 0, a Mix Multiply by white), is not (Cycles removes those first)
+        alpha_used = output_key(node, node.outputs['Alpha'].identifier) in self._used_outputs \
+            if self._used_outputs is not None else node.outputs['Alpha'].is_linked
+        unassociate = bool(alpha_used and associates_alpha(img))
+        key = img.as_pointer()
+        frame = user_frame(img, node.image_user, self.frame)   # an image sequence's frames differ
+        cached = self._images.get((key, unassociate, frame))
+        if cached is None:
+            # what loading it says is said again by every material that reads it (and by each
+            # rebuild of one: _build's probes and _product_map start with fresh reasons)
+            notes = []
+            pixels = image_pixels(img, notes, unassociate, node.image_user, self.frame)
+            if pixels is not None and not np.isfinite(pixels).all():
+                # (a float image's NaN or infinity, kept: Cycles blends them in, and surfaces
+                # where the blend reaches them render black, as here)
+                bad = int((~np.isfinite(pixels).all(axis=-1)).sum())
+                notes.append(f"image '{img.name}': {bad} texel(s) NaN or infinite, read as 0 by every lookup "
+                             "that blends them in (black there, as in Cycles)")
+            if pixels is not None and img.source == 'TILED':
+                pixels = udim_tiles(img, pixels, notes, unassociate)
+            cached = self._images[key, unassociate, frame] = (pixels, notes)
+        pixels, notes = cached
+        reasons.extend(notes)
+        if pixels is None:
+            return None
+        udim = pixels if isinstance(pixels, UdimTiles) else None
+        if transform is not None and not np.isfinite(transform).all():
+            # a NaN or infinite Mapping (named in reasons): Cycles' lookup at NaN coordinates
+            # gives NaN in every channel, which its closures drop (a NaN colour is black, a NaN
+            # alpha opaque): the image is read as one black opaque texel
+            reasons.append(f"so image '{img.name}' reads black and opaque there (as in Cycles)")
+            pixels, udim = np.array([[[0.0, 0.0, 0.0, 1.0]]], np.float32), None
+            transform = np.array([[0.0, 0.0, 0.5], [0.0, 0.0, 0.5]])
+        where = None if transform is None else tuple(transform.ravel())
+        if self._image_probe is not None:        # probing how a chain combines it with an attribute
+            t = Texture((key, unassociate, interp, ext, where, frame), self._image_probe, interp, ext, transform,
+                         None, img.name)
+            t.aligned = True
+            return t
+        return Texture((key, unassociate, interp, ext, where, frame), pixels if udim is None else udim.flat,
+                        interp, ext, transform, udim, img.name)
+
+    def _normal_input(self, node, reasons):
+        """Note a BSDF's Bump nodes (export/bump.py) and tangent-space normal map
+        (tangent_normal_map, the innermost Bump's Normal) for the material."""
+        nodes, socket = bump_nodes(node.inputs.get('Normal'))
+        if nodes:
+            compiled = [compile_bump(b, reasons, image=self._texture) for b in reversed(nodes)]
+            steps = tuple(b for b in compiled if b is not None)     # (one not followed: said, left flat)
+            if steps:
+                self._bumps.append((tuple(output_key(b, None) for b in nodes), steps))
+        found = normal_map_at(socket, reasons)
+        if found is not None:
+            image, strength, uv_map, chain = found
+            tex = self._texture(image, reasons)
+            if tex is None:
+                # Cycles reads a missing image as magenta there too, a tangent-space normal
+                # (1, -1, 1) that tilts the surface (it had stayed flat under 'magenta, as Cycles')
+                px = np.array([[[*MISSING_IMAGE, 1.0]]], np.float32)
+                tex = Texture(('missing normal map', image.name), px, 'Closest', 'REPEAT', name=image.name)
+            elif chain is not None:
+                tex = self._normal_chain(tex, chain, reasons)
+            self._normal_maps.append((tex, strength, uv_map))
+
+    def _normal_chain(self, tex, socket, reasons):
+        """The normal map texture tex seen through the colour nodes feeding the Normal Map's
+        Color socket (tangent_normal_map): run on each looked-up colour where Cycles keeps the
+        image encoded (after the blend, in Cycles' order), else on its texels (exact for a
+        per-channel scale and offset, such as a flipped green channel, or 'Closest' lookups;
+        otherwise reported)."""
+        chain = lookup_chain(nodeeval.compile_image_chain(socket, True, tex.key[0]), clamp=False)
+        probe = self._PROBE[:, :3]
+        if stored_texels(tex.pixels) is None and tex.interpolation != 'Closest' and \
+                channel_line(probe.astype(np.float64), chain(probe).astype(np.float64), 1e-5) is None:
+            reasons.append(f"colour nodes after normal map image '{tex.name}' applied to its texels before the "
+                           "blend (Cycles blends, then applies them)")
+        px = tex.baked(chain)
+        return Texture(('normal chain', tex.key, id(px)), px, tex.interpolation, tex.extension, tex.transform,
+                       tex.udim, tex.name)

@@ -1,0 +1,364 @@
+"""Shader closures, part of the material export's MaterialBuilder (a mixin of it): the shader
+graph feeding a Material Output read into a closure.Closure: Diffuse and Principled BSDFs,
+Add and Mix Shaders, Transparent, Ray Portal, Translucent, Glass and Refraction BSDFs, holdout,
+the diffuse stand-ins of other shaders (export/reflectors.py), Light Path ray-type mixes, a
+diffuse colour input (constant, an image, colour nodes on one image), and the largest roughness
+of the glass a surface holds (Film > Transparent Glass)."""
+
+import numpy as np
+
+from .. import nodeeval, principled, roughdiffuse
+from .. import scenedata as sd
+from .. import nodegraph
+from ..nodeeval import constant_color, constant_value
+from ..nodegraph import input_socket, linked_link, linked_node
+from ..texture import ImageTexels, stored_texels
+from . import procedurals
+from .closure import Closure, Texture, is_image_alpha
+from .cutouts import MISSING_ALPHA
+from .images import MISSING_IMAGE
+from .normalmaps import bends_normal
+from .reflectors import (diffuse_roughness, glass_albedos, glossy_map, principled_hair_color, reflector_albedo,
+                         refraction_transmittance, sheen_albedo)
+from .shadersockets import mix_factor, value_emission
+
+# The grey of the diffuse fallbacks (a muted node, a shader without a colour)
+DEFAULT_ALBEDO = (0.8, 0.8, 0.8)
+# What the material export reads otherwise than Cycles renders it (each reported when used):
+# the Principled inputs whose layers it drops
+PRINCIPLED_IGNORED = (('Metallic', "metallic"), ('Transmission Weight', "transmission"),
+                      ('Coat Weight', "coat"), ('Sheen Weight', "sheen"),
+                      ('Subsurface Weight', "subsurface"), ('Specular IOR Level', "specular layer"),
+                      ('Diffuse Roughness', "diffuse roughness"),
+                      ('Anisotropic', "anisotropy (its layers as isotropic)"),
+                      ('Thin Film Thickness', "thin film"))
+# shader nodes that give Cycles no surface closure: volume shaders, and EEVEE's Specular BSDF,
+# which Cycles does not implement; in a surface shader they add nothing (black alone)
+NO_SURFACE_CLOSURE = ('VOLUME_SCATTER', 'VOLUME_ABSORPTION', 'PRINCIPLED_VOLUME', 'VOLUME_COEFFICIENTS',
+                      'EEVEE_SPECULAR')
+
+
+def nonnegative(v, label, reasons):
+    """v (a colour (3,), or texels (h, w, 3)) with negative or non-finite channels set to 0
+    (Cycles would subtract light or produce NaN; a diffuse path tracer's weights must be finite
+    and non-negative), noted in reasons."""
+    bad = ~np.isfinite(v) | (v < 0)
+    if not bad.any():
+        return v
+    if v.ndim == 1:
+        reasons.append(f"negative or non-finite {label} {tuple(float(x) for x in v)} set to 0 per channel")
+    else:
+        reasons.append(f"{int(bad.any(axis=-1).sum())} texel(s) of negative or non-finite {label} set to 0")
+    return np.where(bad, np.float32(0), v).astype(np.float32)
+
+
+class ShaderClosures:
+    """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
+    set the builder's state."""
+
+    def _shader(self, socket, reasons, depth):
+        link = linked_link(socket)        # muted nodes are passed through (nodegraph)
+        if link is None:
+            return Closure()
+        if link.from_socket.type != 'SHADER':
+            # Cycles' Emission of strength 1 of the value; per point where procedurals make it
+            emitted = procedurals.compile_emission(socket, None, reasons, image=self._texture)
+            if emitted is not None:
+                return Closure(emission=emitted.magnitude(),
+                               emission_tex=(Texture.procedural(emitted, 'emission'), np.ones(3)))
+            return Closure(emission=value_emission(link, reasons, self._texture))
+        node = link.from_node
+        if depth > 32:
+            reasons.append("shader graph too deep")
+            return Closure(const=DEFAULT_ALBEDO)
+        t = node.type
+        if t == 'BSDF_DIFFUSE':
+            self._normal_input(node, reasons)
+            c = self._color_closure(node.inputs['Color'], reasons)
+            rough = diffuse_roughness(node, reasons)
+            return c if rough == 0.0 else c.mapped(roughdiffuse.RoughDiffuse(rough))
+        if t == 'BSDF_PRINCIPLED':
+            return self._principled(node, reasons)
+        if t in ('EMISSION', 'BACKGROUND'):     # Cycles: a Background shader on a surface emits
+            emission, etex = self._emission(node.inputs['Color'], node.inputs['Strength'], node.bl_label, reasons)
+            return Closure(emission=emission, emission_tex=etex)
+        if t == 'HOLDOUT':
+            # Cycles: camera rays see through it (alpha 0); other rays meet a black absorber
+            return Closure(holdout=1.0)
+        if t == 'ADD_SHADER':
+            a = self._shader(node.inputs[0], reasons, depth + 1)
+            b = self._shader(node.inputs[1], reasons, depth + 1)
+            return a.plus(b, reasons)
+        if t == 'BSDF_TRANSPARENT':
+            color, ok = constant_color(node.inputs['Color'])
+            if not ok:
+                reasons.append("Transparent BSDF colour driven by nodes; its own value used")
+            return Closure(transparent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
+        if t == 'BSDF_RAY_PORTAL' and linked_link(node.inputs['Position']) is None \
+                and linked_link(node.inputs['Direction']) is None:
+            # Cycles continues the ray where it hit, in its own direction, times the colour: a
+            # Transparent BSDF of that colour whose shadow rays stop there (Cycles' shadow rays
+            # do not pass portals). A plate over a floor under a sun: (0.609, 0.568, 0.549) vs
+            # Cycles (0.608, 0.568, 0.549); it had been a white diffuse, (0.699, 0.615, 0.573)
+            color, ok = constant_color(node.inputs['Color'])
+            if not ok:
+                reasons.append("Ray Portal BSDF colour driven by nodes; its own value used")
+            self._portal = True
+            return Closure(transparent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
+        if t == 'MIX_SHADER':
+            alpha_mix = self._alpha_mix(node, reasons, depth)
+            if alpha_mix is not None:
+                return alpha_mix
+            textured = self._textured_mix(node, reasons, depth)
+            if textured is not None:
+                return textured
+            varying = self._procedural_mix(node, reasons, depth)
+            if varying is not None:
+                return varying
+            fac = mix_factor(node, reasons, "Mix Shader")
+            a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
+            b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
+            return a.plus(b, reasons)
+        if t in ('BSDF_GLOSSY', 'BSDF_METALLIC', 'BSDF_GLASS'):
+            # their diffuse stand-ins shade with the map as a Diffuse BSDF does (the Normal had
+            # been dropped silently: a Glossy of roughness 1 tilted towards a low sun and away
+            # from it 0.296 on both halves, Cycles 0.442 and 0)
+            self._normal_input(node, reasons)
+        if t == 'BSDF_GLOSSY' and linked_link(node.inputs['Color']) is not None:
+            gmap = glossy_map(node, reasons)        # a textured colour: its albedo per texel
+            if gmap is not None:
+                return self._color_closure(node.inputs['Color'], reasons).mapped(gmap)
+        if t == 'BSDF_SHEEN':
+            self._normal_input(node, reasons)
+            e = sheen_albedo(node, reasons)
+            return self._color_closure(node.inputs['Color'], reasons).layered(np.full(3, e), np.zeros(3))
+        reflector = reflector_albedo(node, reasons)
+        if reflector is not None:
+            return Closure(const=reflector)
+        if t == 'BSDF_GLASS':
+            reflect, transmit = glass_albedos(node, reasons)
+            return Closure(const=reflect, transparent=transmit, glass=transmit)
+        if t == 'BSDF_TRANSLUCENT':
+            # diffuse transmission: rendered as Cycles does (the integrator's lobe choice)
+            self._normal_input(node, reasons)
+            color, ok = constant_color(node.inputs['Color'])
+            if not ok:
+                reasons.append("Translucent BSDF colour driven by nodes; its own value used")
+            return Closure(translucent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
+        if t == 'BSDF_REFRACTION':
+            through = refraction_transmittance(node, reasons)
+            if bends_normal(node.inputs.get('Normal')):
+                reasons.append("Refraction BSDF Normal input ignored: its light passes unbent")
+            return Closure(transparent=through, glass=through)
+        if t in NO_SURFACE_CLOSURE:
+            # (a lit diffuse of its colour before: a Volume Scatter surface 0.8 where Cycles is black)
+            reasons.append(f"{node.bl_label} in a surface shader renders nothing, as in Cycles")
+            return Closure()
+        if t == 'BSDF_HAIR_PRINCIPLED' and getattr(node, 'parametrization', 'COLOR') in ('MELANIN', 'ABSORPTION'):
+            # no Color input in these modes: the colour of the absorption Cycles gives it (it
+            # had been the 0.8 grey fallback, silently)
+            self._normal_input(node, reasons)
+            return Closure(const=principled_hair_color(node, reasons))
+        # Documented approximation: a diffuse surface of the node's constant colour, shaded with
+        # the node's normal map as a Diffuse BSDF
+        reasons.append(f"{node.bl_label} as diffuse")
+        self._normal_input(node, reasons)
+        sock = input_socket(node, 'Color', 'Base Color')
+        if sock is not None and sock.type == 'RGBA':
+            color, _ = constant_color(sock)
+            return Closure(const=color)
+        return Closure(const=DEFAULT_ALBEDO)
+
+    def _principled(self, node, reasons):
+        for name, what in PRINCIPLED_IGNORED:
+            s = node.inputs.get(name)
+            if s is not None and name not in principled.HANDLED:
+                v, ok = constant_value(s)
+                if v != 0.0 or not ok:
+                    reasons.append(f"Principled {what} ignored")
+        self._normal_input(node, reasons)
+        coat = node.inputs.get('Coat Weight')
+        coat, coat_ok = constant_value(coat) if coat is not None else (0.0, True)
+        if (coat != 0.0 or not coat_ok) and bends_normal(node.inputs.get('Coat Normal')):
+            # (the coat is part of one diffuse albedo, shaded with the base's normal)
+            reasons.append("Principled Coat Normal ignored: the coat shades with the base's normal")
+        c = self._color_closure(node.inputs['Base Color'], reasons)
+        if c.texture is None or not c.tex_weight.any():
+            # Cycles clamps the base colour at 0 (max(base_color, 0): NaN reads 0) before its
+            # layers; clamped after them, a negative channel took the coat's and the specular
+            # layer's reflection with it
+            bad = ~(c.const >= 0.0)
+            if bad.any():
+                reasons.append(f"Principled Base Color {tuple(round(float(x), 6) for x in c.const)} clamped at 0 "
+                               f"per channel (NaN read as 0), as Cycles clamps it before its layers")
+                c.const = np.where(bad, 0.0, c.const)
+        for step in principled.layer_steps(node, reasons):
+            c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
+        base, base_ok = constant_color(node.inputs['Base Color'])
+        through = principled.transmittance(node, base)
+        if through.any():
+            c.transparent = c.transparent + through
+            c.glass = c.glass + through
+            if not base_ok:
+                reasons.append("Principled transmission tinted by the base colour's own value, not its nodes")
+        es = input_socket(node, 'Emission Strength')
+        ec = input_socket(node, 'Emission Color', 'Emission')
+        if es is not None and ec is not None:
+            dim = principled.emission_dim(node)
+            emission, etex = self._emission(ec, es, "Principled emission", reasons)
+            c.emission = emission * dim
+            c.emission_tex = None if etex is None else (etex[0], etex[1] * dim)
+        # Cycles: alpha < 1 adds a white Transparent BSDF of weight 1 - alpha and scales the rest
+        # (emission included) by alpha
+        alpha = node.inputs.get('Alpha')
+        if alpha is None:
+            return c
+        opacity = self._image_alpha(alpha, reasons)
+        if opacity is MISSING_ALPHA:       # alpha 1: opaque (it had read the socket's own value)
+            return c
+        if opacity is None and procedurals.varies_per_point(alpha):
+            # (an image beside the procedural textures is looked up per point too)
+            opacity = self._procedural_alpha(alpha, reasons)
+        if opacity is None:
+            opacity = self._evaluated_alpha(alpha, reasons)
+        if opacity is not None:
+            # the transmission (all of its transparency) stays the opaque part's glass, passed
+            # at the opacity (overwritten by the cut-out's white, the glass went opaque where
+            # alpha is 1: at IOR 1 black, where Cycles sees all behind it)
+            c.opacity, c.opaque_glass, c.transparent, c.glass = opacity, c.transparent, np.ones(3), np.zeros(3)
+            return c
+        a = principled.constant_alpha(alpha, reasons)
+        if a < 1.0:
+            c = c.scaled(a)
+            c.transparent = c.transparent + (1.0 - a)
+        return c
+
+    def _ray_type_mix(self, socket, reasons, transparent_shadow=True):
+        """(closure, visibility) when the surface is a Mix Shader whose factor is a Light Path
+        node's Is Camera Ray or Is Shadow Ray and one of whose shaders is a white Transparent
+        BSDF: those rays (factor 1: the second shader) or all others (factor 0: the first) see
+        through it, as if the material were invisible to them (the common 'light plane hidden
+        from the camera'), and the rest see the other shader. (None, all) otherwise: the factor
+        is then read at its own value, as any node-driven factor. With the material's Transparent
+        Shadows off, shadow rays stop at it even where they would see the clear side (Cycles
+        takes a surface without SD_HAS_TRANSPARENT_SHADOW for an opaque blocker, whatever the
+        shader gives the shadow ray)."""
+        every = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
+        node = linked_node(socket)
+        if node is None or node.type != 'MIX_SHADER':
+            return None, every
+        link = linked_link(node.inputs['Fac'])
+        kinds = {'Is Camera Ray': sd.VIS_CAMERA, 'Is Shadow Ray': sd.VIS_SHADOW}
+        if link is None or link.from_node.type != 'LIGHT_PATH' or link.from_socket.name not in kinds:
+            return None, every
+        kind = kinds[link.from_socket.name]
+        first = self._shader(node.inputs[1], reasons, 1)
+        second = self._shader(node.inputs[2], reasons, 1)
+
+        def clear(c):
+            return c.only_transparent() and c.opacity is None and np.allclose(c.transparent, 1.0)
+
+        def held(c):
+            return c.holdout >= 1.0 - 1e-6 and not c.transparent.any() and c.opacity is None
+
+        if kind == sd.VIS_CAMERA and held(second) and not (clear(first) or held(first)):
+            # a whole Holdout for camera rays, the first shader for the rest: the others see
+            # this material, camera rays its holdout twin (had been a 50% mix at alpha 1,
+            # where Cycles holds the surface out: alpha 0)
+            self._camera_holdout = True
+            return first, every & ~kind
+        if clear(second) and not clear(first):
+            vis = every & ~kind            # those rays see through it; the rest see the first
+            closure = first
+        elif clear(first) and not clear(second):
+            vis = kind                     # only those rays see the second
+            closure = second
+        else:
+            return None, every
+        if not transparent_shadow:
+            # (a Mix(Diffuse, Transparent, Is Shadow Ray) plate had cast no shadow, Cycles a full one)
+            vis |= sd.VIS_SHADOW
+        return closure, vis
+
+    def _color_closure(self, socket, reasons):
+        """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes
+        and float nodes (nodeeval.py) on constants and one image, baked into a texture."""
+        link = linked_link(socket)
+        found = procedurals.compile_color(socket, reasons, image=self._texture) if link is not None else None
+        if found is not None:       # evaluated at each shading point (procedural.py)
+            return Closure(texture=Texture.procedural(found), tex_weight=(1.0, 1.0, 1.0))
+        if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
+                                 link.from_node.type in nodeeval.VIEW_NODE_TYPES or
+                                 link.from_node.type in nodeeval.ATTRIBUTE_NODE_TYPES or is_image_alpha(link)):
+            return self._evaluated_closure(socket, reasons)
+        if link is not None and link.from_node.type == 'TEX_IMAGE':
+            tex = self._texture(link.from_node, reasons)
+            if tex is None:
+                return Closure(const=MISSING_IMAGE)
+            return Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
+        color, ok = constant_color(socket)
+        if not ok:
+            reasons.append(f"colour from '{link.from_node.bl_label}' node; its own value used "
+                           f"({nodeeval.own_value_note(nodegraph.source(socket)[1], color)})")
+        return Closure(const=color)
+
+    def _evaluated_closure(self, socket, reasons):
+        f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE, attribute=self._attribute).input(socket, True)
+        if f.tex is None:
+            return Closure(const=f.value)
+        src = f.tex
+        stored = stored_texels(src.pixels)
+        after = None
+        if src.attribute is None:
+            # Cycles blends the image as stored (8-bit sRGB: encoded; float: linear), decodes,
+            # then runs the nodes per shading point: baking them into the texels before the
+            # blend brightened edges and minified detail (a tint on 0/255 stripes +61%; a
+            # Gamma 2.2 on 1-texel noise +58% on a float EXR, +170% on an 8-bit PNG, a Color
+            # Ramp of constant interpolation 4.5x). A chain affine in the image's colour per
+            # channel (a Mix tint, Invert, Bright/Contrast, an identity) is kept as weight x
+            # image + constant; any other chain that reads the colour alone is evaluated on
+            # the looked-up colour (EncodedTexels.then), after the blend, as Cycles does.
+            # Chains that read the alpha (a decal mixed over a base by it, a Power on it) run
+            # after the lookup on the blended colour and alpha too.
+            affine = self._affine_in(socket, src)
+            if isinstance(affine, tuple) and stored is not None:
+                return Closure(const=affine[1], texture=src, tex_weight=affine[0])
+            if not isinstance(affine, tuple):
+                after = self._after_lookup(socket, src, stored)
+                if after is None and not self._baked_exactly(socket, src, stored):
+                    # ('Closest' blends nothing: the baked texel read is the nodes on the one
+                    # Cycles reads, decoded, exact)
+                    reasons.append(f"colour nodes after image '{src.name}' applied to its texels before the "
+                                   "blend (Cycles blends, decodes, then applies them)")
+        baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
+        # (an attribute's probe values go negative by design: their clamping says nothing)
+        baked[..., :3] = nonnegative(f.value.astype(np.float32), "colour from colour nodes",
+                                      reasons if src.attribute is None else [])
+        baked[..., 3] = src.pixels[..., 3]
+        key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
+        if after is not None:
+            baked = ImageTexels(baked, after)         # 'Closest' reads the baked texels: the same
+        return Closure(texture=Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim,
+                                         src.name, src.attribute),
+                        tex_weight=(1.0, 1.0, 1.0))
+
+
+def glass_roughness(socket, depth=0):
+    """The largest roughness of the Glass, Refraction and transmitting Principled BSDFs that
+    feed a shader socket (through Mix and Add Shaders and node groups): what Cycles' Film >
+    Transparent Glass compares with its Roughness Threshold (rougher glass stays opaque)."""
+    link = linked_link(socket)
+    if link is None or depth > 64:
+        return 0.0
+    node = link.from_node
+    if node.type in ('MIX_SHADER', 'ADD_SHADER'):
+        return max((glass_roughness(s, depth + 1) for s in node.inputs if s.type == 'SHADER'), default=0.0)
+    if node.type in ('BSDF_GLASS', 'BSDF_REFRACTION', 'BSDF_PRINCIPLED'):
+        if node.type == 'BSDF_PRINCIPLED':
+            weight = input_socket(node, 'Transmission Weight', 'Transmission')
+            if weight is None or (constant_value(weight)[0] <= 0.0 and not weight.is_linked):
+                return 0.0
+        rough = input_socket(node, 'Roughness')
+        v = constant_value(rough)[0] if rough is not None else 0.0
+        return min(max(v, 0.0), 1.0) if np.isfinite(v) else 0.0
+    return 0.0

@@ -1,0 +1,97 @@
+"""Mix Shaders whose factor a texture computes, part of the material export's MaterialBuilder
+(a mixin of it): a factor from nodes on one image between two plain colours (the albedo per
+texel, or after the lookup as Cycles runs the nodes), and a factor procedural textures compute
+between plain or procedural colours (the albedo per shading point) or between a transparent
+shader and another (the procedural cut-out, export/cutouts.py)."""
+
+import numpy as np
+
+from ..procedural import ProceduralTexels
+from ..texture import ImageTexels, stored_texels
+from . import procedurals
+from .closure import Closure, Texture
+
+
+class TexturedMixes:
+    """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
+    set the builder's state."""
+
+    def _textured_mix(self, node, reasons, depth):
+        """A Mix Shader whose factor nodes compute from one image, between two shaders of
+        constant albedo (no emission, transparency or holdout): the albedo per texel, a + (b -
+        a) x factor. Cycles blends the image, runs the nodes, then mixes; so does the lookup
+        here where the factor's nodes read the image's colour alone (else they run per texel
+        before the blend, reported). None otherwise (the factor at its own value)."""
+        fac_socket = node.inputs['Fac']
+        per_texel = self._float_per_texel(fac_socket)
+        if per_texel is None:
+            return None
+        src, fac, notes = per_texel
+        sides = []
+        for socket in (node.inputs[1], node.inputs[2]):
+            c = self._shader(socket, notes, depth + 1)       # (said only if this mix is taken)
+            if c.texture is not None or c.emission.any() or c.emission_tex is not None or c.transparent.any() \
+                    or c.holdout or c.opacity is not None or c.translucent.any():
+                return None
+            sides.append(c)
+        reasons.extend(notes)
+        a, b = sides[0].const, sides[1].const
+        fac = np.clip(np.nan_to_num(fac[..., None].astype(np.float64), nan=0.0), 0.0, 1.0)
+        baked = np.empty(fac.shape[:2] + (4,), np.float32)
+        baked[..., :3] = a + (b - a) * fac
+        baked[..., 3] = 1.0
+        after = self._after_lookup(fac_socket, src, stored_texels(src.pixels), False)
+        if after is not None:
+            lo, span = a.astype(np.float32), (b - a).astype(np.float32)
+            baked = ImageTexels(baked, after.followed_by(lambda g: lo + span * np.clip(g, 0.0, 1.0)))
+        elif src.interpolation != 'Closest':
+            reasons.append(f"Mix Shader factor from nodes on image '{src.name}' evaluated per texel before the "
+                           "blend (Cycles blends, then runs them)")
+        tex = Texture(('mix', src.key, id(baked)), baked, src.interpolation, src.extension, src.transform, None,
+                      src.name)
+        return Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
+
+    def _procedural_mix(self, node, reasons, depth):
+        """A Mix Shader whose factor procedural textures compute (procedurals.py), between two
+        shaders that have an albedo only (a constant, or a procedural texture's): the albedo
+        per shading point, a + (b - a) x factor, the factor clamped to [0, 1] as Cycles' Mix
+        Shader clamps it. Between a purely transparent shader and another (the procedural
+        cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
+        (_procedural_cutout). None otherwise (the factor at its own value)."""
+        fac_notes = []      # (said only if this mix is taken: a Light Path's stand-in)
+        found = procedurals.compile_socket(node.inputs['Fac'], False, fac_notes, image=self._texture)
+        if found is None:
+            return None
+        fac_fn, needs, name = found
+        notes = []
+        closures = [self._shader(socket, notes, depth + 1)     # (said only if this mix is taken)
+                    for socket in (node.inputs[1], node.inputs[2])]
+        cutout = self._procedural_cutout(closures, fac_fn, needs, name)
+        if cutout is not None:
+            reasons.extend(fac_notes + notes)
+            return cutout
+        sides = []
+        for c in closures:
+            procedural = c.texture is not None and isinstance(c.texture.pixels, ProceduralTexels)
+            if (c.texture is not None and not procedural) or c.emission.any() or c.emission_tex is not None \
+                    or c.transparent.any() or c.holdout or c.opacity is not None or c.translucent.any():
+                if name:    # (a coordinate-only factor, no texture: the evaluation's note says it)
+                    reasons.append(f"Mix Shader factor from procedural textures ('{name}') between shaders "
+                                   "that are not both plain colours nor a transparent one and another (an "
+                                   "image, emission, translucency, or transparency on both sides): not "
+                                   "evaluated per point")
+                return None
+            sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
+                          c.texture.pixels if procedural else None))
+            needs |= c.texture.pixels.needs if procedural else frozenset()
+        reasons.extend(fac_notes + notes)
+
+        def albedo(side, coords):
+            const, weight, tex = side
+            return const if tex is None else const + weight * tex.evaluate(coords).T.astype(np.float64)
+
+        def mixed(coords):      # reads no Blender data: it runs during the render's lookups
+            f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+            a = albedo(sides[0], coords)
+            return a + (albedo(sides[1], coords) - a) * f
+        return Closure(texture=Texture.procedural(ProceduralTexels(mixed, needs, name)), tex_weight=(1.0, 1.0, 1.0))
