@@ -1,5 +1,5 @@
 """What the render says about hair particles and Curves (addon/export/strands.py, scene.py,
-materials.py)."""
+materials.py, shaders.py)."""
 import math
 
 from . import scenes

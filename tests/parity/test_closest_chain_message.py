@@ -1,5 +1,5 @@
 """Colour nodes after an image that read its Alpha (a Mix by the image's own Alpha) are baked into
-its texels (addon/export/materials.py) where they cannot run after the lookup. Read 'Closest',
+its texels (addon/export/texelbaking.py) where they cannot run after the lookup. Read 'Closest',
 nothing is blended: the texel looked up is the nodes on the very texel Cycles reads, so the
 render equals Cycles' and nothing is said; it had been reported "applied to its texels before
 the blend (Cycles blends, decodes, then applies them)". Read 'Linear', this chain now runs

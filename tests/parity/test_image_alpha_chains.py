@@ -1,6 +1,6 @@
 """Nodes that read an image's Color and Alpha together, or its Alpha through a non-affine node,
 render as Cycles renders them: Cycles blends the stored texels (colour and alpha), then runs the
-nodes per shading point, and so does the export (materials.py _after_lookup, the blended alpha
+nodes per shading point, and so does the export (texelbaking.py _after_lookup, the blended alpha
 passed to the chain: texture.EncodedTexels reads_alpha). The export had probed the colour (at
 alpha 1) and the alpha (at colour 0.5) apart, so:
 - a decal mixed over the Mix node's default grey 0.5 by its own alpha read as the bare image

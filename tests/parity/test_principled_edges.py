@@ -1,5 +1,5 @@
 """The Principled BSDF's (and the Glass BSDF's) layers at the edges of their inputs, against
-Cycles (addon/principled.py, specular.py, export/reflectors.py, export/materials.py): each case
+Cycles (addon/principled.py, specular.py, export/reflectors.py, export/shaders.py): each case
 a bug where the export had read an input otherwise than Cycles' svm/closure.h does.
 
 The sphere and shell scenes and their means are test_specular's and test_transmission's: a
