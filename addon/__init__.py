@@ -63,12 +63,14 @@ def last_render_stats() -> dict:
 def register():
     native_module()      # refuse to register without a loadable native core
     import bpy
-    from . import properties, engine, ui
+    from . import properties, engine, operators, ui
     properties.register()
     _registered.append(properties)
     bpy.utils.register_class(engine.DACRTRenderEngine)
     engine.register_handlers()
     _registered.append(engine)
+    operators.register()
+    _registered.append(operators)
     ui.register()
     _registered.append(ui)
 

@@ -76,6 +76,8 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
         layout = split_layout(self.layout)
         settings = context.scene.dacrt
         render = context.scene.render
+        if getattr(context.scene, 'cycles', None) is not None:
+            self.layout.operator("dacrt.copy_cycles_settings", icon='COPYDOWN')
         col = layout.column()
         col.prop(settings, "samples")
         col.prop(settings, "preview_samples", text="Viewport")

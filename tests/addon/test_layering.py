@@ -1,6 +1,6 @@
 """The add-on's import layering, read from its source (no Blender needed): only the Blender-facing
-modules (the export package, the engine, its settings, panels, registration and command line)
-import bpy; the integrator and everything it uses never reach bpy or the export; the export
+modules (the export package, the engine, its settings, operators, panels, registration and command
+line) import bpy; the integrator and everything it uses never reach bpy or the export; the export
 and the integrator never import the UI."""
 
 import ast
@@ -8,7 +8,7 @@ from pathlib import Path
 
 ADDON = Path(__file__).resolve().parents[2] / "addon"
 # the modules that may read Blender (module names relative to the add-on package)
-BLENDER_FACING = {"__init__", "engine", "properties", "ui", "cli", "demo"}
+BLENDER_FACING = {"__init__", "engine", "properties", "operators", "ui", "cli", "demo"}
 
 
 def _module_name(path):
