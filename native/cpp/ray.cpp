@@ -34,7 +34,12 @@ __attribute__((noinline, cold)) static std::string describe(const Ray* rays, siz
         if (!finite(r.dir[a])) return at + ".dir is not finite: " + vec(r.dir);
     if (r.dir[0] == 0.0f && r.dir[1] == 0.0f && r.dir[2] == 0.0f) return at + ".dir is the zero vector";
     if (std::isnan(r.tfar)) return at + ".tfar is NaN";
-    if (r.tfar < 0.0f) return at + ".tfar is negative (" + std::to_string(r.tfar) + ")";
+    if (r.tfar < 0.0f) {  // shortest round-trip digits: std::to_string's %f showed -1e-7 as "-0.000000"
+        std::ostringstream s;
+        s.precision(9);
+        s << r.tfar;
+        return at + ".tfar is negative (" + s.str() + ")";
+    }
     if (r.id >= n)
         return at + ".id = " + std::to_string(r.id) + " is out of range: ids must be 0.." + std::to_string(n - 1) +
                " (a permutation of the ray indices)";

@@ -288,3 +288,21 @@ def test_make_rays_names_a_bad_tfar_or_an_overflowing_coordinate():
     r = dacrt.make_rays(o, d, np.full(4, 1e300))  # a tfar beyond float32 is the unbounded ray
     assert np.isposinf(r["tfar"]).all()
     assert dacrt.make_rays(o.astype(np.float32), d, [1, 2, 3, 4])["tfar"].tolist() == [1, 2, 3, 4]
+
+
+def test_make_rays_refuses_complex_input():
+    """numpy would keep the real part with only a ComplexWarning; the next error then blamed a
+    'zero vector' direction for what was (0 + 1j, ...)."""
+    o, d = np.zeros((2, 3)), np.ones((2, 3))
+    raises(r"org.*real", dacrt.make_rays, o + 0j, d)
+    raises(r"dir.*real", dacrt.make_rays, o, d * 1j)
+    raises(r"tfar.*real", dacrt.make_rays, o, d, np.ones(2) + 1j)
+
+
+@pytest.mark.parametrize("tfar", [-1e-7, -1e-30, -1e-45])
+def test_a_small_negative_tfar_is_named_with_its_digits(tfar):
+    """std::to_string's fixed six decimals had shown each of these as 'negative (-0.000000)'."""
+    rays = dacrt.make_rays(np.zeros((1, 3)), [[0, 0, 1]])
+    rays["tfar"] = tfar
+    scene = dacrt.Scene(V, T)
+    raises(r"tfar is negative \(-[1-9]", scene.intersect, rays)

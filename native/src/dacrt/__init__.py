@@ -58,6 +58,8 @@ def thread_limit(limit: int):
 def _float32(a, name: str) -> np.ndarray:
     """a as float32; a finite value that float32 cannot hold is an error, not a silent inf."""
     a = np.asarray(a)
+    if a.dtype.kind == "c":     # numpy would drop the imaginary part, with only a warning
+        raise ValueError(f"{name} must be real numbers; got dtype {a.dtype}")
     if a.dtype == np.float32 or a.dtype.kind not in "fiu":
         return np.asarray(a, dtype=np.float32)
     with np.errstate(over="ignore"):
@@ -78,6 +80,8 @@ def make_rays(org, dir, tfar=np.inf) -> np.ndarray:
     if org.ndim != 2 or org.shape[1] != 3 or dir.shape != org.shape:
         raise ValueError(f"org and dir must both have shape (N, 3); got {org.shape} and {dir.shape}")
     tfar = np.asarray(tfar)
+    if tfar.dtype.kind == "c":
+        raise ValueError(f"tfar must be real numbers; got dtype {tfar.dtype}")
     if tfar.ndim > 1 or (tfar.ndim == 1 and tfar.shape != (len(org),)):
         raise ValueError(f"tfar must be a scalar or have shape ({len(org)},); got {tfar.shape}")
     rays = np.empty(len(org), RAY_DTYPE)
