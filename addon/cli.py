@@ -23,6 +23,7 @@ import bpy
 
 from . import engine, last_render_stats, register
 from .engine import extra_passes
+from .passes import NOISY_IMAGE
 
 
 def parse_args(argv):
@@ -128,7 +129,8 @@ def _layers_or_passes(scene) -> bool:
     layers = [layer for layer in scene.view_layers if layer.use]
     if len(layers) > 1:
         return True
-    return any(next(extra_passes(layer), None) is not None for layer in layers)
+    # (Noisy Image, where Cycles would denoise, is Combined again: no reason for a multilayer file)
+    return any(name != NOISY_IMAGE for layer in layers for name, *_ in extra_passes(layer, scene))
 
 
 def _view_files(scene, path):

@@ -16,7 +16,8 @@ import numpy as np
 from . import cryptomatte, export
 from .display import Display
 from .allocator import heap_in_use, render_heap, rss_peak, rss_peak_reset
-from .passes import AOV_CHANNELS, LIGHTGROUP_PREFIX, PASSES, enabled, result_name, result_passes
+from .passes import (AOV_CHANNELS, DENOISE, LIGHTGROUP_PREFIX, NOISY_IMAGE, PASSES, enabled, result_name,
+                     result_passes, writes_noisy_image)
 from .texture import stored_texels
 
 # Extra passes: (film name, view-layer toggle, channels, chan_id, type), and Blender's names
@@ -24,20 +25,32 @@ from .texture import stored_texels
 EXTRA_PASSES = tuple(p[:5] for p in PASSES)
 RESULT_PASS_NAME = {p[0]: result_name(p[0], bpy.app.version) for p in PASSES}
 
+# said where Cycles would denoise a layer (passes.writes_noisy_image): a scene made for Cycles has
+# Render > Denoise on (the factory setting), and its Image would be denoised
+DENOISE_NOT_APPLIED = ("Cycles' Sampling > Render > Denoise is not applied: DACRT does not denoise, so Image "
+                       "(Combined) and Noisy Image both hold the undenoised render; a compositor Denoise node "
+                       "fed Noisy Image (and the Denoising Data passes) denoises it")
 
-def extra_passes(layer):
+
+def extra_passes(layer, scene=None):
     """The passes beyond Combined a view layer's render holds, as the engine registers them:
-    (Blender's name, channels, chan_id, type) of each."""
-    # In Cycles' engine.py order (Cryptomatte, AOVs, then light groups): of passes sharing a name
-    # Blender keeps the first one's channels (passes.result_passes), and its AOV check counts
-    # every name registered (an AOV named like another pass is invalid, as under Cycles)
+    (Blender's name, channels, chan_id, type) of each. scene: the layer's (default its owner)."""
+    # In Cycles' engine.py order (data and light passes, Cryptomatte, Noisy Image, Denoising Data,
+    # AOVs, then light groups): of passes sharing a name Blender keeps the first one's channels
+    # (passes.result_passes), and its AOV check counts every name registered (an AOV named like
+    # another pass is invalid, as under Cycles)
     for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
-        if enabled(layer, toggle):
+        if name not in DENOISE and enabled(layer, toggle):
             yield RESULT_PASS_NAME[name], channels, chan_id, kind
     for kind, toggle in cryptomatte.KINDS:
         if getattr(layer, toggle, False):
             for name in cryptomatte.pass_names(kind, getattr(layer, 'pass_cryptomatte_depth', 6)):
                 yield name, 4, "rgba", 'COLOR'   # as Cycles
+    if writes_noisy_image(layer.id_data if scene is None else scene, layer):
+        yield NOISY_IMAGE, 4, "RGBA", 'COLOR'    # Combined again (DACRT does not denoise)
+    for name, toggle, channels, chan_id, kind in EXTRA_PASSES:
+        if name in DENOISE and enabled(layer, toggle):
+            yield RESULT_PASS_NAME[name], channels, chan_id, kind
     for aov in getattr(layer, 'aovs', ()):      # as Cycles' engine.py registers them
         if aov.is_valid:
             yield (aov.name, *AOV_CHANNELS.get(aov.type, AOV_CHANNELS['COLOR']))
@@ -148,6 +161,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self._layer_key = None
         self._display = None
         self._viewport_said = set()     # messages the viewport has reported (re-exports repeat them)
+        self._denoise_said = False      # DENOISE_NOT_APPLIED: once per render, not per view layer
 
     def __del__(self):
         # the viewport's worker thread ends with the engine (it holds only a weak reference)
@@ -162,7 +176,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
 
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
-        for args in extra_passes(renderlayer):
+        for args in extra_passes(renderlayer, scene):
             self.register_pass(scene, renderlayer, *args)
 
     def render(self, depsgraph):
@@ -279,6 +293,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
                                          render=self.render)
         export_seconds = time.perf_counter() - t0
         self._report_messages(scene_data.messages)
+        if getattr(scene_data.settings, 'noisy_image', False) and not self._denoise_said:
+            self._denoise_said = True
+            self._report_messages([('WARNING', DENOISE_NOT_APPLIED)])
         if self.cancel_requested():
             self.report({'INFO'}, "DACRT: render cancelled after the scene export")
             return
@@ -423,15 +440,17 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         """The film's passes into the result; Cryptomatte (a sort of every pixel's IDs) only
         when final, not at every progressive redraw."""
         passes = result.layers[0].passes
-        self._set(passes, 'Combined', film.combined(), scene_data.camera, view)
+        combined = film.combined()
+        self._set(passes, 'Combined', combined, scene_data.camera, view)
         s = scene_data.settings
         # one image per result pass: of an AOV and a light group or Denoising Data pass of one
         # name, the one Cycles writes there (both had been written, the render failing on the
-        # channel count)
+        # channel count); Noisy Image is Combined (key 'Combined')
         for name, key, *_ in result_passes(s.passes, getattr(s, 'lightgroups', ()), getattr(s, 'aovs', ()),
-                                          bpy.app.version):
+                                          bpy.app.version, getattr(s, 'noisy_image', False)):
             if name in passes:
-                self._set(passes, name, film.pass_image(key), scene_data.camera, view)
+                image = combined if key == 'Combined' else film.pass_image(key)
+                self._set(passes, name, image, scene_data.camera, view)
         for name, image in (film.cryptomatte_images() if final else {}).items():
             if name in passes:
                 self._set(passes, name, image, scene_data.camera, view)

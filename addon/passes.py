@@ -37,6 +37,20 @@ FIRST_SAMPLE = {'Depth': 1e10, 'Position': 0.0, 'IndexOB': 0.0, 'IndexMA': 0.0}
 
 DENOISE = ('DenoiseNormal', 'DenoiseAlbedo', 'DenoiseDepth')
 
+# Cycles' 'Noisy Image': the image before Render > Denoise, which Cycles registers (without a pass
+# toggle) wherever it denoises: scene.cycles.use_denoising and the layer's cycles.use_denoising
+# (cycles/engine.py list_render_passes; RGBA, after Cryptomatte, before the Denoising Data). DACRT
+# does not denoise: its Combined is the noisy image, and written here too, so that a compositor
+# wired to it (a Denoise node's usual input) gets the render rather than black.
+NOISY_IMAGE = 'Noisy Image'
+
+
+def writes_noisy_image(scene, view_layer) -> bool:
+    """Whether Cycles would denoise view_layer's render of scene (and so register 'Noisy
+    Image'); False where the Cycles settings do not exist."""
+    return bool(getattr(getattr(scene, 'cycles', None), 'use_denoising', False)
+                and getattr(getattr(view_layer, 'cycles', None), 'use_denoising', False))
+
 # a view layer's Light Group <name> is the pass 'Combined_<name>' (RGB), as Cycles names it
 LIGHTGROUP_PREFIX = 'Combined_'
 
@@ -59,19 +73,25 @@ DIVIDED_BY_COLOR = ('DiffDir', 'DiffInd')
 # where the pass has fewer.
 # Measured: a COLOR AOV over a light group or Denoising Data pass, a light group or Denoising
 # Normal / Albedo over a VALUE AOV, a VALUE AOV over Denoising Depth.
-_CYCLES_TYPE_ORDER = ('lightgroup', 'Emit', 'Env', 'DiffDir', 'DiffInd', 'Depth', 'Position', 'Normal', 'UV',
+# (Noisy Image and light groups are both Cycles' PASS_COMBINED, of distinct names)
+_CYCLES_TYPE_ORDER = ('Noisy', 'lightgroup', 'Emit', 'Env', 'DiffDir', 'DiffInd', 'Depth', 'Position', 'Normal', 'UV',
                       'IndexOB', 'IndexMA', 'AOV COLOR', 'AOV VALUE', 'DiffCol', 'Mist', 'DenoiseNormal',
                       'DenoiseAlbedo', 'DenoiseDepth')
-_CYCLES_COMPONENTS = dict(CHANNELS, **{'lightgroup': 3, 'AOV COLOR': 4, 'AOV VALUE': 1})
+_CYCLES_COMPONENTS = dict(CHANNELS, **{'Noisy': 4, 'lightgroup': 3, 'AOV COLOR': 4, 'AOV VALUE': 1})
 
 
-def result_passes(passes, lightgroups, aovs, blender_version):
+def result_passes(passes, lightgroups, aovs, blender_version, noisy_image=False):
     """The result passes beyond Combined and Cryptomatte, one per name, in Cycles' registration
     order: (Blender's name, the film pass written there, the film passes of that name it hides,
     the pass's channels, the written film pass's), for the film's passes (film names), light group
-    names and Shader AOVs ((name, kind))."""
+    names and Shader AOVs ((name, kind)); noisy_image: Cycles' 'Noisy Image' too (film pass
+    'Combined', before the Denoising Data passes)."""
     named = {}
-    for name, key, kind in ([(result_name(p, blender_version), p, p) for p in passes]
+    film = [(result_name(p, blender_version), p, p) for p in passes]
+    if noisy_image:
+        at = next((i for i, p in enumerate(passes) if p in DENOISE), len(film))
+        film.insert(at, (NOISY_IMAGE, 'Combined', 'Noisy'))
+    for name, key, kind in (film
                             + [(n, AOV_PREFIX + n, f"AOV {k if k in AOV_CHANNELS else 'COLOR'}") for n, k in aovs]
                             + [(LIGHTGROUP_PREFIX + g, LIGHTGROUP_PREFIX + g, 'lightgroup') for g in lightgroups]):
         if all(key != k for k, _ in named.get(name, ())):

@@ -335,6 +335,9 @@ class Settings:
     lightgroups: tuple = ()
     # the view layer's Shader AOVs: ((name, 'COLOR' | 'VALUE'), ...), a pass each
     aovs: tuple = ()
+    # Cycles would denoise this layer (passes.writes_noisy_image): its 'Noisy Image' pass is
+    # written, as Combined
+    noisy_image: bool = False
 
 
 @dataclass

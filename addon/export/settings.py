@@ -9,7 +9,8 @@ import bpy
 
 from .. import scenedata as sd
 from ..cryptomatte import KINDS as CRYPTO_KINDS
-from ..passes import AOV_PREFIX, LIGHTGROUP_PREFIX, PASSES, enabled, result_name, result_passes
+from ..passes import (AOV_PREFIX, LIGHTGROUP_PREFIX, NOISY_IMAGE, PASSES, enabled, result_name, result_passes,
+                      writes_noisy_image)
 from ..sampling import mix64_scalar
 from .errors import ExportError
 
@@ -112,8 +113,9 @@ def export_settings(scene, vl, messages, viewport=False):
         raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
     d = stored_settings(d, messages, unread=('samples',) if viewport else ('preview_samples',))
     if viewport:        # the viewport draws Combined alone: no pass, AOV, Cryptomatte or light group
-        passes, missing, aovs, crypto, lightgroups = (), [], (), (), ()
+        passes, missing, aovs, crypto, lightgroups, noisy = (), [], (), (), (), False
     else:
+        noisy = writes_noisy_image(scene, vl)
         passes = tuple(p[0] for p in PASSES if enabled(vl, p[1]))
         missing = [label for owner, attr, label in unrendered_passes(vl)
                    if getattr(getattr(vl, owner) if owner else vl, attr, False)]
@@ -136,7 +138,7 @@ def export_settings(scene, vl, messages, viewport=False):
         messages.append(('WARNING', "Cycles' Light Paths > Fast GI Approximation is not applied: DACRT "
                                     "traces full global illumination, so the image differs from Cycles'"))
     passes += _passes_named_by_aovs(passes, aovs, vl.name, messages)
-    for shared in result_passes(passes, lightgroups, aovs, bpy.app.version):
+    for shared in result_passes(passes, lightgroups, aovs, bpy.app.version, noisy):
         messages += [('WARNING', _shared_pass_text(vl.name, shared, hidden, dict(aovs))) for hidden in shared[2]]
     if missing:
         written = ', '.join(dict.fromkeys([result_name(p[0], bpy.app.version) for p in PASSES]
@@ -178,7 +180,7 @@ def export_settings(scene, vl, messages, viewport=False):
                        pass_alpha_threshold=float(getattr(vl, 'pass_alpha_threshold', 0.5)),
                        cryptomatte=crypto, cryptomatte_levels=int(getattr(vl, 'pass_cryptomatte_depth', 6)),
                        lightgroups=lightgroups,
-                       aovs=aovs,
+                       aovs=aovs, noisy_image=noisy,
                        adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
 
@@ -192,6 +194,8 @@ def _shared_pass_text(layer, shared, hidden, aov_kinds):
             return f"{aov_kinds.get(k[len(AOV_PREFIX):], 'COLOR')} AOV '{k[len(AOV_PREFIX):]}'"
         if k.startswith(LIGHTGROUP_PREFIX):
             return f"light group '{k[len(LIGHTGROUP_PREFIX):]}'"
+        if k == 'Combined':             # (result_passes' key of Noisy Image)
+            return f"the {NOISY_IMAGE} pass"
         return f"the {result_name(k, bpy.app.version)} pass"
     first = "" if channels >= written else " (its first channel only)" if channels == 1 else \
         f" (its first {channels} channels)"
