@@ -6,8 +6,10 @@
 Registers the add-on, opens the .blend (or builds the demo scene), renders every enabled view
 layer with DACRT and writes a PNG (view transform applied) and a linear float EXR next to each
 other; the EXR is a multilayer one holding every layer and pass when more than one layer or any
-pass beyond Combined was rendered (the PNG shows the first layer's Combined). `python3
-build.py render ...` forwards here. Exit status 1 with the reason on failure.
+pass beyond Combined was rendered (the PNG shows the composite, or the first layer's Combined
+without compositing); at Pixel Aspect != 1 that one is written at aspect 1 and its parts'
+PixelAspectRatio set afterwards (Blender 5.0 cannot write it). `python3 build.py render ...`
+forwards here. Exit status 1 with the reason on failure.
 Ctrl-C cancels the render as Esc does in Blender: the samples done so far are written and the
 exit status is 130; a second Ctrl-C stops at once.
 """
@@ -15,6 +17,7 @@ import argparse
 import contextlib
 import os
 import re
+import shutil
 import signal
 import sys
 import tempfile
@@ -83,10 +86,12 @@ def save_render(scene, png, exr):
     multiview render: one per view, Blender's view suffix before the extension, whatever
     the .blend's Output > Views Format)."""
     image = bpy.data.images['Render Result']
-    settings = scene.render.image_settings
+    r = scene.render
+    settings = r.image_settings
     media = getattr(settings, 'media_type', None)
     saved = (settings.file_format, settings.color_mode, settings.color_depth)
     codec, views_format = settings.exr_codec, settings.views_format
+    aspect = (r.pixel_aspect_x, r.pixel_aspect_y)
     written = []
     try:
         exr_format = 'OPEN_EXR_MULTILAYER' if _layers_or_passes(scene) else 'OPEN_EXR'
@@ -102,16 +107,35 @@ def save_render(scene, png, exr):
             # one file per view: Stereo 3D would make the EXR an anaglyph (R of one eye, G and
             # B of the other) or a side-by-side pair, or one multi-view file when multilayer
             settings.views_format = 'INDIVIDUAL'
+            # Blender 5.0's multilayer writer gives the pixel aspect to its first part alone, and
+            # OpenEXR refuses parts that disagree: with Pixel Aspect != 1 and a second part the
+            # save failed (a 0-byte EXR, the render lost; Cycles' results fail alike). The pixels
+            # are rendered: written at aspect 1, the aspect then set on every part
+            flat = fmt == 'OPEN_EXR_MULTILAYER' and aspect != (1.0, 1.0)
+            if flat:
+                r.pixel_aspect_x = r.pixel_aspect_y = 1.0
             try:
                 image.save_render(filepath=os.path.abspath(path), scene=scene)
-                written.append(path)
+                files = [path]
             except RuntimeError:
                 # Blender writes each view of a multiview render to its own file and then
                 # raises all the same: those files are the result
                 views = _view_files(scene, path)
                 if not views or not all(os.path.isfile(v) for v in views):
                     raise
-                written.extend(views)
+                files = views
+            finally:
+                if flat:
+                    r.pixel_aspect_x, r.pixel_aspect_y = aspect
+            if flat:
+                ratio = aspect[0] / aspect[1]
+                for f in files:
+                    why = _set_pixel_aspect(f, ratio)
+                    print(f"DACRT: {f}: written at Pixel Aspect 1 (Blender 5.0 cannot write a multilayer EXR of "
+                          f"several parts at {aspect[0]:g}:{aspect[1]:g}); " +
+                          (f"its PixelAspectRatio is left at 1 ({why}): the pixels are the render's, to be shown "
+                           f"at {ratio:g}" if why else f"its PixelAspectRatio then set to {ratio:g}"))
+            written.extend(files)
     finally:
         if media is not None:
             settings.media_type = media
@@ -119,6 +143,54 @@ def save_render(scene, png, exr):
         # after the format: a multilayer EXR had set Individual
         settings.exr_codec, settings.views_format = codec, views_format
     return written
+
+
+def _set_pixel_aspect(path, ratio):
+    """Rewrite the EXR at path with every part's PixelAspectRatio `ratio` (pixel width over
+    height) and the first part's resolution as Blender writes it for that aspect; pixels,
+    channels and the other attributes as they were. Returns '' when done, else why not (the
+    file left as it was)."""
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        return "OpenImageIO is not installed"
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        return oiio.geterror() or "it could not be read"
+    parts = []
+    try:
+        while inp.seek_subimage(len(parts), 0):
+            spec = oiio.ImageSpec(inp.spec())
+            # (read as float: exact for half and float channels, written back in the spec's format)
+            parts.append((spec, inp.read_image(len(parts), 0, 0, spec.nchannels, 'float')))
+    finally:
+        inp.close()
+    if not parts or any(px is None for _, px in parts):
+        return "it could not be read"
+    for spec, _ in parts:
+        spec.attribute('PixelAspectRatio', float(ratio))
+        if 'XResolution' in [a.name for a in spec.extra_attribs]:
+            # Blender's plain EXR: the wider side's density lowered by the ratio (2:1: 36 x 72)
+            x, y = spec.getattribute('XResolution'), spec.getattribute('YResolution')
+            spec.attribute('XResolution', float(x / max(ratio, 1.0)))
+            spec.attribute('YResolution', float(y * min(ratio, 1.0)))
+    fd, tmp = tempfile.mkstemp(suffix='.exr', dir=os.path.dirname(os.path.abspath(path)))
+    os.close(fd)
+    try:
+        out = oiio.ImageOutput.create(tmp)
+        ok = out is not None and out.open(tmp, [spec for spec, _ in parts])
+        for i, (spec, px) in enumerate(parts if ok else ()):
+            ok = ok and (i == 0 or out.open(tmp, spec, 'AppendSubimage')) and out.write_image(px)
+        why = "" if ok else (out.geterror() if out is not None else oiio.geterror()) or "it could not be written"
+        if out is not None:
+            out.close()
+        if ok:
+            shutil.copymode(path, tmp)
+            os.replace(tmp, path)
+        return why
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
 
 
 def _layers_or_passes(scene) -> bool:
