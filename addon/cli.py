@@ -112,21 +112,34 @@ def save_render(scene, png, exr):
             # save failed (a 0-byte EXR, the render lost; Cycles' results fail alike). The pixels
             # are rendered: written at aspect 1, the aspect then set on every part
             flat = fmt == 'OPEN_EXR_MULTILAYER' and aspect != (1.0, 1.0)
+            views = _view_files(scene, path)
+            files = views or [path]
+            for f in files:
+                # a file of an earlier run must not pass for this save's (a failed write can
+                # also leave it untouched)
+                if os.path.isfile(f) or os.path.islink(f):
+                    os.remove(f)
             if flat:
                 r.pixel_aspect_x = r.pixel_aspect_y = 1.0
+            failure = None
             try:
                 image.save_render(filepath=os.path.abspath(path), scene=scene)
-                files = [path]
-            except RuntimeError:
+            except RuntimeError as e:
                 # Blender writes each view of a multiview render to its own file and then
-                # raises all the same: those files are the result
-                views = _view_files(scene, path)
-                if not views or not all(os.path.isfile(v) for v in views):
-                    raise
-                files = views
+                # raises all the same: those files are the result, if they are images. A failed
+                # write also raises, leaving them empty (0 bytes): 'wrote' had been said of those
+                failure = e
             finally:
                 if flat:
                     r.pixel_aspect_x, r.pixel_aspect_y = aspect
+            bad = [f for f in files if not _is_image(f)]
+            for f in bad:
+                if os.path.isfile(f) and os.path.getsize(f) == 0:
+                    os.remove(f)            # (an empty file is no partial result)
+            if bad or (failure is not None and not views):     # (a single file: Blender's error is final)
+                blender = str(failure).strip().splitlines()[0] if failure is not None and str(failure).strip() else ""
+                raise RuntimeError(f"{' and '.join(bad or files)} not written (missing, empty or unreadable after "
+                                   "the save)" + (f"; Blender: {blender}" if blender else ""))
             if flat:
                 ratio = aspect[0] / aspect[1]
                 for f in files:
@@ -143,6 +156,22 @@ def save_render(scene, png, exr):
         # after the format: a multilayer EXR had set Individual
         settings.exr_codec, settings.views_format = codec, views_format
     return written
+
+
+def _is_image(path) -> bool:
+    """Whether path is a non-empty file that opens as an image (OpenImageIO, where installed)."""
+    if not os.path.isfile(path) or os.path.getsize(path) == 0:
+        return False
+    try:
+        import OpenImageIO as oiio
+    except ImportError:
+        return True
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        oiio.geterror()         # (read, so OpenImageIO does not print it)
+        return False
+    inp.close()
+    return True
 
 
 def _set_pixel_aspect(path, ratio):
