@@ -295,7 +295,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self._report_messages(scene_data.messages)
         if getattr(scene_data.settings, 'noisy_image', False) and not self._denoise_said:
             self._denoise_said = True
-            self._report_messages([('WARNING', DENOISE_NOT_APPLIED)])
+            # INFO, not a warning: Denoise is on in Cycles' factory settings and its toggle is in
+            # Cycles' panel, which DACRT's render properties do not show
+            self._report_messages([('INFO', DENOISE_NOT_APPLIED)])
         if self.cancel_requested():
             self.report({'INFO'}, "DACRT: render cancelled after the scene export")
             return
