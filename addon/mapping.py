@@ -15,10 +15,12 @@ import numpy as np
 from .nodeeval import constant
 from .nodegraph import linked_link, source, unwrap
 
-# Texture Coordinate outputs that are the ray direction D in a world shader; Normal and
-# Reflection are -D (Cycles' shader_setup_from_background: N = I = -D, and Reflection is I
-# where there is no object)
-_DIRECTION_COORDINATES = ('Generated', 'Normal', 'Object', 'Reflection')
+# Outputs that are the ray direction D in a world shader, with their sign: Cycles'
+# shader_setup_from_background sets P = D and N = Ng = I = -D, so Texture Coordinate Normal and
+# Reflection (I where there is no object) and the Geometry node's Normal, True Normal and
+# Incoming are -D, its Position +D (Object without an object: D)
+_DIRECTION_COORDINATES = {'Generated': 1.0, 'Normal': -1.0, 'Object': 1.0, 'Reflection': -1.0}
+_GEOMETRY_DIRECTIONS = {'Position': 1.0, 'Normal': -1.0, 'True Normal': -1.0, 'Incoming': -1.0}
 _MAX_CHAIN = 64
 
 
@@ -237,9 +239,10 @@ def _vector_direction(node, reasons):
 
 
 def _direction_sign(link):
-    """-1 for a Texture Coordinate Normal or Reflection (-D in a world shader), else 1."""
-    return -1.0 if link is not None and _is_direction(link) and link.from_socket.name in ('Normal', 'Reflection') \
-        else 1.0
+    """-1 for an output that is -D in a world shader (_DIRECTION_COORDINATES,
+    _GEOMETRY_DIRECTIONS), else 1."""
+    sign = None if link is None else _direction_of(link)
+    return 1.0 if sign is None else sign
 
 
 def _own_direction_mapping(node, reasons):
@@ -261,10 +264,19 @@ def _own_direction_mapping(node, reasons):
     return M / n[0]
 
 
+def _direction_of(link):
+    """+1 or -1: the output is that sign times the ray direction in a world shader; None when
+    it is no direction there."""
+    node, name = link.from_node, link.from_socket.name
+    if node.type == 'TEX_COORD' and (name != 'Object' or node.object is None):
+        return _DIRECTION_COORDINATES.get(name)
+    if node.type == 'NEW_GEOMETRY':
+        return _GEOMETRY_DIRECTIONS.get(name)
+    return None
+
+
 def _is_direction(link):
-    node = link.from_node
-    return (node.type == 'TEX_COORD' and link.from_socket.name in _DIRECTION_COORDINATES
-            and (link.from_socket.name != 'Object' or node.object is None))
+    return _direction_of(link) is not None
 
 
 def _direction_matrix(node, reasons):
