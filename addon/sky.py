@@ -214,10 +214,23 @@ def multiple_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
     return np.concatenate([xyz, xyz[:, ::-1]], axis=1).astype(np.float32)
 
 
+def _cycles_solid_angle(diameter):
+    """The disc's solid angle as intern/sky's precompute_sun divides its irradiance by it, in
+    float32: 2 pi (1 - cosf(diameter / 2)). Near 1 a float32 cos moves in steps of 5.96e-8, so
+    for a small disc this is far from the disc's own (x1.74 at 0.03 degrees, x0.94 at 0.1,
+    x1.02 at 0.2, x1.001 at the default 0.545), and Cycles' sun is that much dimmer or brighter
+    (its light measured to follow it; a float64 solid angle had rendered a 0.03 degree sun 1.77x
+    Cycles'). The float32 cos is rounded from float64's, as glibc's cosf rounds its double
+    polynomial (half angles from 2^-12, Cycles' least diameter being 0.0005)."""
+    f32 = np.float32
+    half = f32(max(f32(diameter), f32(0.0005))) / f32(2)
+    return float(f32(2.0 * np.pi) * (f32(1) - f32(np.cos(np.float64(half)))))
+
+
 def multiple_scattering_sun(sun_elevation, diameter, altitude, air, aerosol, ozone):
     """(bottom, top) XYZ radiance of the sun disc at its lowest and highest points."""
     alt = np.clip(altitude, 1.0, 99999.0) / 1000.0
-    solid = 2.0 * np.pi * (1.0 - np.cos(diameter / 2))
+    solid = _cycles_solid_angle(diameter)
     elev = np.array([sun_elevation - diameter / 2, sun_elevation + diameter / 2])
     tr = _ms_transmittance(np.cos(np.pi / 2 - elev), np.full(2, alt / _MS_THICK), air, aerosol, ozone)
     return (_MS_SUN * tr / solid) @ _MS_XYZ
@@ -335,7 +348,7 @@ def single_scattering_sun(sun_elevation, diameter, altitude, air, aerosol):
     elev = np.maximum(np.array([sun_elevation - half, sun_elevation + half]), 0.0)
     if not elev[1] > 0:
         return np.zeros((2, 3))
-    solid = 2.0 * np.pi * (1.0 - np.cos(half))
+    solid = _cycles_solid_angle(diameter)
     depth = _ss_optical_depth(np.full(2, _SS_EARTH + alt), np.sin(elev))
     tau = np.outer(depth[:, 0] * air, _SS_RAYLEIGH) + np.outer(depth[:, 1] * aerosol, np.full(21, 1.11 * _SS_MIE))
     return (_SS_IRRADIANCE * np.exp(-tau) / solid) @ _SS_CMF
