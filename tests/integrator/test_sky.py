@@ -18,15 +18,21 @@ def _ms_ray(tr, x, y, sun_elevation, altitude=100.0, air=1.0, aerosol=1.0, ozone
     az, l = 2 * math.pi * u, 2 * v - 1
     el = math.copysign(l * l, l) * math.pi / 2
     d = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    o = np.array([0.0, 0.0, model._MS_EARTH + altitude / 1000.0])
+    f32 = np.float32
+    z = f32(model._MS_EARTH) + f32(altitude) / f32(1000.0)
+    o = np.array([0.0, 0.0, float(z)])
     cz = math.cos(math.pi / 2 - sun_elevation)
     sun = np.array([-math.sqrt(1 - cz * cz), 0.0, cz])
 
     def hit(r):
-        b, c = o @ d, o @ o - r * r
+        # in float32, as Cycles' ray_sphere_intersection (sky_math.h): near the ground
+        # c = |o|^2 - r^2 keeps a few of its digits (12 for 12.74 km^2 at 1 m)
+        l32 = f32(y + 0.5) / f32(model.TABLE_H) * f32(2.0) - f32(1.0)
+        dz = f32(math.sin(float(f32(math.copysign(float(l32 * l32), float(l32))) * f32(math.pi / 2))))
+        b, c = z * dz, z * z - f32(r) * f32(r)
         if (c > 0 and b > 0) or b * b - c < 0:
             return -1.0
-        return -b + math.sqrt(b * b - c) if b * b - c >= b * b else -b - math.sqrt(b * b - c)
+        return float(-b + np.sqrt(b * b - c) if b * b - c >= b * b else -b - np.sqrt(b * b - c))
     ground = hit(model._MS_EARTH)
     t_d = hit(model._MS_ATMOS) if ground < 0 else ground
     mu = -d @ sun
