@@ -37,7 +37,9 @@ def export_camera(scene, messages=None, view=None, camera=None, render=None):
     kind = cam.type if cam else 'PERSP'
     pano = cam.panorama_type if kind == 'PANO' else ''
     if kind not in ('PERSP', 'ORTHO', 'PANO') or (pano and pano not in panorama.SUPPORTED):
-        what = f"a {pano.lower().replace('_', ' ')} panorama" if pano else kind.lower()
+        # (the panorama type by its UI name: "a equiangular ..." had read oddly)
+        label = cam.bl_rna.properties['panorama_type'].enum_items[pano].name if pano else ''
+        what = f"a panorama of type '{label}'" if pano else kind.lower()
         raise ExportError(f"camera '{cam_ob.name}' is {what}; DACRT renders perspective, "
                           "orthographic and panoramic cameras (equirectangular, fisheye equidistant "
                           "and equisolid, mirror ball)")

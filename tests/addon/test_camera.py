@@ -114,9 +114,11 @@ def test_bad_cameras_are_explained(scene):
         export.export_camera(scene)
     cam = scenes.camera()
     cam.data.type = 'PANO'
-    for kind in ('EQUIANGULAR_CUBEMAP_FACE', 'FISHEYE_LENS_POLYNOMIAL', 'CENTRAL_CYLINDRICAL'):
+    for kind, label in (('EQUIANGULAR_CUBEMAP_FACE', 'Equiangular Cubemap Face'),
+                        ('FISHEYE_LENS_POLYNOMIAL', 'Fisheye Lens Polynomial'),
+                        ('CENTRAL_CYLINDRICAL', 'Central Cylindrical')):
         cam.data.panorama_type = kind
-        with pytest.raises(export.ExportError, match=f"is a {kind.lower().replace('_', ' ')} panorama; "
+        with pytest.raises(export.ExportError, match=f"is a panorama of type '{label}'; "
                                                      "DACRT renders perspective, orthographic and panoramic"):
             export.export_camera(scene)
     cam.data.type = 'CUSTOM'
