@@ -184,8 +184,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # set-up of tens of millions of triangles takes seconds: cancel is polled between its steps
         self._check_break = check_break or (lambda: False)
         validate(scene_data)
-        scene_data, self.origin = recentred(scene_data)
-        self.messages: list = []
+        scene_data, self.origin, imprecise = recentred(scene_data)
+        self.messages: list = [('WARNING', imprecise)] if imprecise else []
         s = scene_data.settings
         self.settings = s
         self.max_bounces = int(s.max_bounces)
