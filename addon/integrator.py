@@ -13,7 +13,7 @@ rays and vertex 0 gather), and Cycles' shadow terminator offsets are rendered (n
 
 Also owns, built from the per-frame surface tables (surfacetables.py: triangles, materials and
 textures, self-intersection: every bounce and shadow ray skips the triangle it leaves and starts
-a few ULPs off it, see _OFFSET_ULPS there), the tracer scenes, one per distinct ray-visibility subset
+a few ULPs off it, see OFFSET_ULPS there), the tracer scenes, one per distinct ray-visibility subset
 (camera rays see VIS_CAMERA triangles, bounce rays VIS_DIFFUSE, shadow rays VIS_SHADOW), built
 in the constructor and dropped when rendering ends. Nothing here knows Blender.
 

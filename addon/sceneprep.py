@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from .scenedata import NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, SceneData
-from .surfacetables import _OFFSET_ULPS
+from .surfacetables import OFFSET_ULPS
 
 F32 = np.float32
 
@@ -17,7 +17,7 @@ F32 = np.float32
 # within _GAP x the reach (largest camera distance) of those found so far, grown from the
 # nearest one, so a far cluster beyond such a gap (an object left 1e5 away) is not part of it
 # (vertices: contiguous, a few % of the set-up; triangles would cost as much as the set-up).
-# How imprecise an origin leaves it: the self-intersection step (surfacetables._OFFSET_ULPS
+# How imprecise an origin leaves it: the self-intersection step (surfacetables.OFFSET_ULPS
 # ULPs of a triangle's largest coordinate) over the triangle's size, the median weighted by
 # the solid angle the triangle's box subtends at the camera (what the camera sees up close,
 # and the room around it), on up to _SAMPLE of its triangles. The render's origin stays the
@@ -80,7 +80,7 @@ def _imprecision(boxes, origin):
     largest |coordinate - origin|."""
     lo, hi, side, weight = boxes
     big = _largest(np.maximum(np.abs(lo - origin), np.abs(hi - origin)))
-    ratio = float(_OFFSET_ULPS) * np.spacing(big.astype(F32)).astype(np.float64) / side
+    ratio = float(OFFSET_ULPS) * np.spacing(big.astype(F32)).astype(np.float64) / side
     order = np.argsort(ratio)
     w = np.cumsum(weight[order])
     return float(ratio[order][min(np.searchsorted(w, 0.5 * w[-1]), len(w) - 1)]), float(big.max())

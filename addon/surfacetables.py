@@ -20,12 +20,12 @@ F32 = np.float32
 # by a few ULPs of the coordinates involved, and a point on a huge triangle (a 2 km ground plane)
 # can lie far closer to the origin than the shared edge's vertices, so the ULPs that matter are
 # those of the triangle's largest coordinate, not the point's. The origin therefore moves
-# _OFFSET_ULPS of those ULPs along the geometric normal: the Ray Tracing Gems ch. 6 integer-ULP
+# OFFSET_ULPS of those ULPs along the geometric normal: the Ray Tracing Gems ch. 6 integer-ULP
 # offset, evaluated at the triangle's scale, with 8 instead of RTG's 256 ULPs since the triangle
 # itself is skipped. (Measured over random tilted, subdivided, huge, tiny and distant planes and
 # convex folds: 2 ULPs already never re-hit a neighbour; 8 is the margin.) A 2 km plane so gets
 # a 0.5 mm step where the previous 256 ULPs gave 1.5 cm (which biased MIS toward nearby lights).
-_OFFSET_ULPS = F32(8.0)
+OFFSET_ULPS = F32(8.0)
 _TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
 
 
@@ -49,8 +49,8 @@ class Triangles:
         self.vertices = np.ascontiguousarray(v, F32)
         self.indices = np.ascontiguousarray(t, np.int32)
         # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), the
-        # self-intersection step off the front side (12:15, see _OFFSET_ULPS); one native pass
-        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, _OFFSET_ULPS, _TINY)
+        # self-intersection step off the front side (12:15, see OFFSET_ULPS); one native pass
+        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, OFFSET_ULPS, _TINY)
         poll()
         # (capped at float32's largest: the light tables and kernels hold areas in float32)
         self.area = np.minimum(np.where(bad_t, 0.0, area), np.finfo(F32).max)

@@ -263,7 +263,7 @@ def test_skip_alone_keeps_rays_off_their_own_triangle(monkeypatch):
     is rounded) away from any edge are kept off their own triangle by skip alone, in the bounce
     and shadow scenes, whose numbering a camera-only triangle listed first has shifted."""
     import addon.surfacetables as surfacetables
-    monkeypatch.setattr(surfacetables, '_OFFSET_ULPS', np.float32(0.0))
+    monkeypatch.setattr(surfacetables, 'OFFSET_ULPS', np.float32(0.0))
     v, t = _grid(1.0, 4)
     v = v @ _rotation(9).T
     decoy = (np.array([(0, 0, 9e3), (1, 0, 9e3), (0, 1, 9e3)], float), np.array([(0, 1, 2)]))

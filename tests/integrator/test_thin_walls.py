@@ -1,7 +1,7 @@
 """Thin walls far from the origin: the self-intersection step never carries a path through.
 
 A hit point steps off its triangle by 8 ULPs of the triangle's largest coordinate
-(surfacetables._OFFSET_ULPS): 7.8 mm at 10 km, where a wide scene (a ground plane around the
+(surfacetables.OFFSET_ULPS): 7.8 mm at 10 km, where a wide scene (a ground plane around the
 origin) keeps the renderer from recentring. Where a ray met a wall's back from inside at t ~ 0
 (a path hitting a side wall within a ULP of the wall, its next ray starting on the wall's
 plane), the step toward the side it came from crossed a wall of a few millimetres and its light
