@@ -20,6 +20,7 @@ from .errors import ExportCancelled, ExportError
 from .instanceattrs import InstanceAttributes
 from .lights import export_light, light_link_receivers
 from .materials import MaterialBuilder
+from .normalmaps import below_surface
 from .meshes import mesh_arrays
 from .placement import Placement
 from .aovs import shader_aovs
@@ -222,6 +223,15 @@ class Exporter:
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
         self._summarize(geometry, world, environment, camera_world)
+        # (only where the tree has lamps or emitters to leave out: the world is not culled so)
+        tree_lights = self.lights or any(np.any(m.emission > 0) for m in self.materials.materials)
+        below = below_surface(self.materials.materials) if settings.use_light_tree and tree_lights else []
+        if below:
+            self.messages.append(('WARNING', f"normal map bends normals below the surface on "
+                                             f"{', '.join(repr(n) for n in below)}: lights behind the surface "
+                                             "light it there through the bent normal (unbiased); Cycles' light "
+                                             "tree weighs lights by the unbent normal and never samples those, "
+                                             "so such points stay dark in Cycles (with Light Tree off both agree)"))
         # (an animated Disable in Renders: the frame's value is the evaluated object's; an
         # animation render leaves the original at the file's)
         self.counts['objects_hidden'] = sum(
