@@ -174,37 +174,47 @@ def _cycles_vertex_normals(me, cn, corner_vert, tri_poly):
         return None
     cc = np.flatnonzero(touched[corner_vert])       # every corner of those vertices, ascending
     m = len(cc)
-    face = np.searchsorted(start, cc, side='right') - 1
-    prev = np.where(cc == start[face], start[face] + total[face] - 1, cc - 1)
-    # a corner meets its vertex's two edges (to the next corner, from the previous one); key:
-    # (edge, which end)
     vert = corner_vert[cc]
-    en, ep = corner_edge[cc], corner_edge[prev]
-    kn = 2 * en.astype(np.int64) + (ev[en, 0] != vert)
-    kp = 2 * ep.astype(np.int64) + (ev[ep, 0] != vert)
-    # Cycles' vertices: a vertex's corners joined through edges not split (across non-manifold
-    # ones too), all of them at a vertex left whole
+    # the corner of a Cycles vertex's last face wins (faces' corners are contiguous, in face
+    # order, so the largest corner index)
+    winner = np.arange(m)
     whole = ~cut[vert]
-    key = np.concatenate([kn[~split[en]], kp[~split[ep]], 2 * np.int64(ne) + vert[whole]])
-    owner = np.concatenate([np.flatnonzero(~split[en]), np.flatnonzero(~split[ep]), np.flatnonzero(whole)])
-    order = np.argsort(key, kind='stable')
-    key, owner = key[order], owner[order]
-    same = np.flatnonzero(key[1:] == key[:-1])
-    a, b = owner[same], owner[same + 1]
-    label = np.arange(m)
-    while True:                                     # min-label propagation with pointer jumps
-        new = label.copy()
-        np.minimum.at(new, a, label[b])
-        np.minimum.at(new, b, label[a])
-        new = new[new]
-        if np.array_equal(new, label):
-            break
-        label = new
-    # the corner of a group's last face wins (faces' corners are contiguous, in face order)
-    last = np.zeros(m, np.int64)
-    np.maximum.at(last, label, np.arange(m))
+    if whole.any():                                 # a vertex left whole is one Cycles vertex
+        wi = np.flatnonzero(whole)
+        last_of = np.full(nv, -1, np.int64)
+        np.maximum.at(last_of, vert[wi], wi)
+        winner[wi] = last_of[vert[wi]]
+    ci = np.flatnonzero(~whole)
+    if len(ci):
+        # at a vertex on a split edge, Cycles' vertices are its corners joined through the edges
+        # not split (across non-manifold ones too); a corner meets its vertex's two edges (to
+        # the next corner, from the previous one): key (edge, which end)
+        sc, sv = cc[ci], vert[ci]
+        face = np.searchsorted(start, sc, side='right') - 1
+        prev = np.where(sc == start[face], start[face] + total[face] - 1, sc - 1)
+        en, ep = corner_edge[sc], corner_edge[prev]
+        kn = 2 * en.astype(np.int64) + (ev[en, 0] != sv)
+        kp = 2 * ep.astype(np.int64) + (ev[ep, 0] != sv)
+        key = np.concatenate([kn[~split[en]], kp[~split[ep]]])
+        owner = np.concatenate([np.flatnonzero(~split[en]), np.flatnonzero(~split[ep])])
+        order = np.argsort(key, kind='stable')
+        key, owner = key[order], owner[order]
+        same = np.flatnonzero(key[1:] == key[:-1])
+        a, b = owner[same], owner[same + 1]
+        label = np.arange(len(ci))
+        while True:                                 # min-label propagation with pointer jumps
+            new = label.copy()
+            np.minimum.at(new, a, label[b])
+            np.minimum.at(new, b, label[a])
+            new = new[new]
+            if np.array_equal(new, label):
+                break
+            label = new
+        last = np.zeros(len(ci), np.int64)
+        np.maximum.at(last, label, np.arange(len(ci)))
+        winner[ci] = ci[last[label]]
     cn = cn.copy()
-    cn[cc] = cn[cc[last[label]]]
+    cn[cc] = cn[cc[winner]]
     return cn
 
 
