@@ -20,6 +20,8 @@ def cycles_settings(cycles) -> dict:
     blender-cycles.md's bounce counting), Transparent ones count apart; a filter Cycles lacks
     (none today) keeps DACRT's."""
     values = {ours: getattr(cycles, theirs) for ours, theirs in _SAME if hasattr(cycles, theirs)}
+    if values.get('preview_samples') == 0:      # Cycles' "unlimited": refine as long as DACRT can
+        values['preview_samples'] = 1 << 24
     values['max_bounces'] = min(cycles.max_bounces, cycles.diffuse_bounces)
     values['transmission_max_bounces'] = min(cycles.max_bounces, cycles.transmission_bounces)
     if cycles.pixel_filter_type in ('BOX', 'GAUSSIAN', 'BLACKMAN_HARRIS'):
@@ -49,8 +51,7 @@ class DACRT_OT_copy_cycles_settings(bpy.types.Operator):
                 value = max(prop.hard_min, min(prop.hard_max, float(value)))
             if getattr(settings, name) != value:
                 setattr(settings, name, value)
-                changed.append(f"{prop.name} {value:g}" if isinstance(value, (int, float)) and
-                               not isinstance(value, bool) else f"{prop.name} {value}")
+                changed.append(f"{prop.name} {value:g}" if isinstance(value, float) else f"{prop.name} {value}")
         self.report({'INFO'}, "DACRT settings copied from Cycles: " + (", ".join(changed) if changed
                                                                        else "already the same"))
         return {'FINISHED'}

@@ -35,6 +35,16 @@ def test_every_setting_is_copied_with_cycles_bounce_caps(scene):
     assert d.max_bounces == 1
 
 
+def test_unlimited_viewport_samples_stay_unlimited(scene, capfd):
+    """Cycles' Viewport Samples 0 means no limit; DACRT's minimum, 1, had stopped the viewport
+    after one sample. Large counts are said as integers (it had printed 'Samples 1.23457e+07')."""
+    scene.cycles.preview_samples, scene.cycles.samples = 0, 12345678
+    bpy.ops.dacrt.copy_cycles_settings()
+    assert scene.dacrt.preview_samples == scene.dacrt.bl_rna.properties['preview_samples'].hard_max
+    assert scene.dacrt.samples == 12345678
+    assert "Samples 12345678" in capfd.readouterr().out
+
+
 def test_the_report_names_what_changed(scene, capfd):
     scene.cycles.film_exposure = 1.5
     bpy.ops.dacrt.copy_cycles_settings()
