@@ -162,6 +162,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self._display = None
         self._viewport_said = set()     # messages the viewport has reported (re-exports repeat them)
         self._denoise_said = False      # DENOISE_NOT_APPLIED: once per render, not per view layer
+        self._said = set()              # (level, text) reported: each once per render (_report_messages)
+        self._layers_done = set()       # view layers rendered since those were cleared (_render)
 
     def __del__(self):
         # the viewport's worker thread ends with the engine (it holds only a weak reference)
@@ -285,6 +287,13 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         layer = depsgraph.view_layer.name
         if not self._layer_enabled(layer):
             return
+        # a layer rendered again is a new render (an animation's next frame, or an F12 with
+        # Persistent Data, which keeps this engine): its messages are said again
+        if layer in self._layers_done:
+            self._layers_done.clear()
+            self._said.clear()
+            self._denoise_said = False
+        self._layers_done.add(layer)
         t0 = time.perf_counter()
         self.update_stats("", "DACRT | Exporting scene")
         # a sequencer strip renders its scene through the strip's camera (Cycles reads the same);
@@ -476,7 +485,11 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         render_pass.rect.foreach_set(np.ascontiguousarray(image, np.float32).reshape(-1))
 
     def _report_messages(self, messages):
-        for level, text in dict.fromkeys((lvl, txt) for lvl, txt in messages):
+        # each text once per engine, i.e. per F12 render: the views of a stereo render and the
+        # view layers export and prepare the same scene, and had repeated every message
+        said = self.__dict__.get('_said', set())
+        for level, text in dict.fromkeys((lvl, txt) for lvl, txt in messages if (lvl, txt) not in said):
+            said.add((level, text))
             kind = {level if level in ('INFO', 'WARNING', 'ERROR') else 'INFO'}
             for i, part in enumerate(_report_chunks(text)):
                 self.report(kind, f"DACRT: {part}" if i == 0 else f"DACRT (continued): {part}")

@@ -283,7 +283,7 @@ def test_failed_render_reports_the_reason(scene):
     lit_plane_scene(scene)
     scene.camera.data.type = 'PANO'
     scene.camera.data.panorama_type = 'CENTRAL_CYLINDRICAL'
-    with pytest.raises(RuntimeError, match="central cylindrical panorama; DACRT renders"):
+    with pytest.raises(RuntimeError, match="a panorama of type 'Central Cylindrical'; DACRT renders"):
         bpy.ops.render.render()
 
 
