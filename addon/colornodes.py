@@ -1,6 +1,6 @@
 """Cycles' colour nodes as numpy functions: Mix (every blend mode, colour or float), Invert,
-Gamma, Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp, RGB Curves,
-Separate/Combine Color (RGB, HSV, HSL) and Blackbody.
+Gamma, Brightness/Contrast, Hue/Saturation/Value, RGB to BW, Color Ramp, RGB Curves (and Vector
+Curves, Float Curve), Separate/Combine Color (RGB, HSV, HSL) and Blackbody.
 
 The export (nodeeval.py) evaluates the colour nodes between Image Textures (or constants) and a
 BSDF's colour with these, on a constant (shape (3,)) or on every texel of the image (shape
@@ -230,38 +230,46 @@ def ramp_table(evaluate):
     return np.array([evaluate(i / n) for i in range(n + 1)], np.float64)
 
 
-def curves_table(evaluate, curves):
-    """RGB Curves as Cycles bakes them (blender/util.h curvemapping_color_to_array): the range
-    [lo, hi] of every curve's first and last point x, and RAMP_TABLE_SIZE + 1 entries at
-    lo + i / RAMP_TABLE_SIZE (hi - lo), each channel's curve applied after the combined curve.
-    curves: the mapping's four curves (R, G, B, C), each a list of point x; evaluate(k, x):
-    Blender's CurveMapping.evaluate of curve k. Returns (table (n, 3), lo, hi)."""
+def curves_table(evaluate, curves, combined=True):
+    """A curve mapping as Cycles bakes it (blender/util.h curvemapping_color_to_array,
+    curvemapping_float_to_array): the range [lo, hi] of every curve's first and last point x,
+    and RAMP_TABLE_SIZE + 1 entries at lo + i / RAMP_TABLE_SIZE (hi - lo). combined (RGB
+    Curves): the mapping's four curves (R, G, B, C), each channel's curve applied after the
+    combined one; else one channel per curve (Vector Curves' X, Y, Z; Float Curve's one).
+    curves: each curve's list of point x; evaluate(k, x): Blender's CurveMapping.evaluate of
+    curve k. Returns (table (n, channels), lo, hi)."""
     lo = min(p[0] for p in curves)
     hi = max(p[-1] for p in curves)
     n = RAMP_TABLE_SIZE
-    table = np.empty((n + 1, 3), np.float64)
+    channels = 3 if combined else len(curves)
+    table = np.empty((n + 1, channels), np.float64)
     for i in range(n + 1):
         t = lo + i / n * (hi - lo)
-        ci = evaluate(3, t)
-        table[i] = [evaluate(k, ci) for k in range(3)]
+        if combined:
+            ci = evaluate(3, t)
+            table[i] = [evaluate(k, ci) for k in range(3)]
+        else:
+            table[i] = [evaluate(k, t) for k in range(channels)]
     return table, lo, hi
 
 
 def curves_lookup(table, lo, hi, c, fac, extrapolate):
-    """RGB Curves node (Cycles' svm_node_curves): each channel looked up at its position in
-    [lo, hi] (linearly extrapolated beyond it when the mapping's extension is Extrapolated,
-    else clamped), mixed with the input by fac."""
+    """RGB Curves, Vector Curves and Float Curve (Cycles' svm_node_curves, svm_node_curve):
+    each channel looked up at its position in [lo, hi] (linearly extrapolated beyond it when
+    the mapping's extension is Extrapolated, else clamped), mixed with the input by fac."""
     c = _real(c)
     with np.errstate(divide='ignore', invalid='ignore'):
         rel = (c - lo) / (hi - lo)
-    n = len(table)
-    out = np.empty(np.broadcast_shapes(c.shape, (3,)), c.dtype)
-    for k in range(3):
+    n, channels = table.shape
+    out = np.empty(np.broadcast_shapes(c.shape, (channels,)), c.dtype)
+    rel = np.broadcast_to(rel, out.shape)
+    for k in range(channels):
         f = rel[..., k]
         v = ramp_lookup(table[:, k:k + 1], f, True)[..., 0]
         if extrapolate:
-            below = table[0, k] + (table[0, k] - table[1, k]) * (-f) * (n - 1)
-            above = table[-1, k] + (table[-1, k] - table[-2, k]) * (f - 1.0) * (n - 1)
+            with np.errstate(invalid='ignore', over='ignore'):
+                below = table[0, k] + (table[0, k] - table[1, k]) * (-f) * (n - 1)
+                above = table[-1, k] + (table[-1, k] - table[-2, k]) * (f - 1.0) * (n - 1)
             v = np.where(f < 0.0, below, np.where(f > 1.0, above, v))
         out[..., k] = v
     return _lerp(c, out, fac)
@@ -320,3 +328,4 @@ def blackbody(temperature):
                     ((b[..., 0] * ts[..., 0] + b[..., 1]) * ts[..., 0] + b[..., 2]) * ts[..., 0] + b[..., 3]], -1)
     rgb = np.where((t >= 12000.0)[..., None], _BLACKBODY_ABOVE, np.where((t < 800.0)[..., None], _BLACKBODY_BELOW, rgb))
     return np.maximum(rgb, 0.0)
+

@@ -30,6 +30,8 @@ _INPUTS = {
     'RGBTOBW': {'color': 'Color'},
     'VALTORGB': {'fac': 'Fac'},
     'CURVE_RGB': {'fac': 'Fac', 'color': 'Color'},
+    'CURVE_VEC': {'fac': 'Fac', 'vector': 'Vector'},
+    'CURVE_FLOAT': {'fac': 'Factor', 'value': 'Value'},
     'SEPARATE_COLOR': {'color': 'Color'},
     'COMBINE_COLOR': {'red': 'Red', 'green': 'Green', 'blue': 'Blue'},
     'COMBXYZ': {'x': 'X', 'y': 'Y', 'z': 'Z'},
@@ -285,6 +287,22 @@ def _compute32(node, out, v):
     if t == 'CURVE_RGB':
         table, lo, hi, extrapolate = node.curves if isinstance(node, Frozen) else _curves(node)
         return cn.curves_lookup(table, lo, hi, v['color'], v['fac'], extrapolate)
+    if t in ('CURVE_VEC', 'CURVE_FLOAT'):
+        table, lo, hi, extrapolate = node.curves if isinstance(node, Frozen) else _curves(node)
+        x = v['vector'] if t == 'CURVE_VEC' else v['value']
+        # (Cycles' min and max x and table are float32)
+        r = cn.curves_lookup(table.astype(np.float32), np.float32(lo), np.float32(hi), x, v['fac'], extrapolate)
+        if t == 'CURVE_FLOAT' and x.ndim == 1 and v['fac'].ndim == 1 and hi != lo:
+            # Cycles' constant folding of a Float Curve of constant inputs reads a point beyond
+            # the curve's x range as 0 when Extrapolated and as the end point's y otherwise,
+            # where its kernel extrapolates or takes the table's end (measured in Cycles 5.0 on
+            # a curve over [0.1, 0.9] ending at y 0.15 and 0.35 (the table's ends 0.1723 and
+            # 0.3531 when not Extrapolated): -3 to 0.09 and 0.91 to 5, factor 1 and 0.5)
+            ends = node.curve_ends if isinstance(node, Frozen) else _curve_ends(node)
+            rel = (x - np.float32(lo)) / (np.float32(hi) - np.float32(lo))
+            end = np.float32(0.0) if extrapolate else np.where(rel < 0.0, np.float32(ends[0]), np.float32(ends[1]))
+            r = np.where((rel < 0.0) | (rel > 1.0), x + v['fac'] * (end - x), r)
+        return r
     if t == 'SEPARATE_COLOR':
         k = _SEPARATED[out.identifier]
         return cn.separate_color(node.mode, v['color'])[..., k:k + 1]
@@ -330,10 +348,23 @@ def _ramp(node):
     return table, ramp.interpolation != 'CONSTANT'
 
 
+def _curve_ends(node):
+    """(first, last) point y of a Float Curve's curve."""
+    points = node.mapping.curves[0].points
+    return float(points[0].location[1]), float(points[len(points) - 1].location[1])
+
+
 def _curves(node):
+    """(table, lo, hi, extrapolates) of an RGB Curves, Vector Curves or Float Curve node, as
+    Cycles bakes it (colornodes.curves_table)."""
     m = node.mapping
     curves = [[p.location[0] for p in c.points] for c in m.curves]
-    table, lo, hi = cn.curves_table(lambda k, x: m.evaluate(m.curves[k], x), curves)
+    if node.type == 'CURVE_FLOAT':
+        curves = curves[:1]
+    elif node.type == 'CURVE_VEC':
+        curves = curves[:3]
+    table, lo, hi = cn.curves_table(lambda k, x: m.evaluate(m.curves[k], x), curves,
+                                    combined=node.type == 'CURVE_RGB')
     return table, lo, hi, m.extend == 'EXTRAPOLATED'
 
 
@@ -350,8 +381,10 @@ class Frozen:
         t = getattr(thing, 'type', None)
         if t == 'VALTORGB':
             self.ramp = _ramp(thing)
-        elif t == 'CURVE_RGB':
+        elif t in ('CURVE_RGB', 'CURVE_VEC', 'CURVE_FLOAT'):
             self.curves = _curves(thing)
+            if t == 'CURVE_FLOAT':
+                self.curve_ends = _curve_ends(thing)
 
 
 class NotCompiled(Exception):

@@ -157,18 +157,19 @@ def test_export_bakes_separate_math_combine_per_texel(scene, exported):
 
 
 def test_unsupported_math_inputs_are_reported(scene, exported):
-    """A Float Curve is not evaluated: its own value, reported. (A Map Range of vectors, once
-    the example here, is: test_vector_map_range_and_mix_are_evaluated.)"""
+    """A Vector Transform is not evaluated: its own value, reported. (A Map Range of vectors and
+    a Float Curve, once the examples here, are: test_vector_map_range_and_mix_are_evaluated,
+    tests/parity/test_curve_nodes.py.)"""
     scenes.camera((0, 0, 5), (0, 0, 0))
     mat, nt, out = scenes._material("Curved")
     d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    r = nt.nodes.new('ShaderNodeFloatCurve')
+    r = nt.nodes.new('ShaderNodeVectorTransform')
     nt.links.new(r.outputs[0], d.inputs['Color'])
     nt.links.new(d.outputs[0], out.inputs['Surface'])
     scenes.plane("P", materials=(mat,))
     data = exported()
     got = data.materials[data.geometry.material[0]]
-    assert "colour from 'Float Curve' node; its own value used" in got.approximated
+    assert "colour from 'Vector Transform' node; its own value used" in got.approximated
     assert np.allclose(got.base_color, d.inputs['Color'].default_value[:3])
 
 
