@@ -1,6 +1,6 @@
 """Cycles' float nodes as numpy functions: Math (every operation, with its clamp), Vector Math
-(every operation), Map Range (float: linear, stepped, smoothstep, smootherstep, with its clamp)
-and Clamp (min-max, range).
+(every operation), Map Range (float: linear, stepped, smoothstep, smootherstep, with its clamp),
+Clamp (min-max, range) and Vector Rotate (axis angle, X/Y/Z axis, Euler XYZ; Invert; Center).
 
 The formulas are Cycles' (kernel/svm/math_util.h svm_math, map_range.h, clamp.h, and the safe_*
 helpers of util/math_float.h that give 0 where the operation is undefined), on constants or per
@@ -257,3 +257,63 @@ def clamp_min_max(v, lo, hi):
     """Clamp node of type Min Max: min(max(v, lo), hi)."""
     (v, lo, hi), shape, _ = _real(v, lo, hi)
     return np.minimum(np.maximum(v, lo), hi).reshape(shape)
+
+
+VECTOR_ROTATE_TYPES = frozenset({'AXIS_ANGLE', 'X_AXIS', 'Y_AXIS', 'Z_AXIS', 'EULER_XYZ'})
+_AXES = {'X_AXIS': (1.0, 0.0, 0.0), 'Y_AXIS': (0.0, 1.0, 0.0), 'Z_AXIS': (0.0, 0.0, 1.0)}
+
+
+def euler_matrix(euler):
+    """(..., 3, 3) Euler XYZ rotation matrices (Cycles' euler_to_transform, Rz Ry Rx) of
+    (..., 3) angles."""
+    cx, cy, cz = (np.cos(euler[..., k]) for k in range(3))
+    sx, sy, sz = (np.sin(euler[..., k]) for k in range(3))
+    rows = [[cy * cz, sy * sx * cz - cx * sz, sy * cx * cz + sx * sz],
+            [cy * sz, sy * sx * sz + cx * cz, sy * cx * sz - sx * cz],
+            [-sy, cy * sx, cy * cx]]
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+
+
+def axis_angle_matrix(axis, angle):
+    """(..., 3, 3) rotation by `angle` (...,) about the unit (..., 3) `axis` (Cycles'
+    rotate_around_axis, Rodrigues' formula)."""
+    c, s = np.cos(angle), np.sin(angle)
+    x, y, z = axis[..., 0], axis[..., 1], axis[..., 2]
+    t = 1 - c
+    rows = [[c + t * x * x, t * x * y - z * s, t * x * z + y * s],
+            [t * x * y + z * s, c + t * y * y, t * y * z - x * s],
+            [t * x * z - y * s, t * y * z + x * s, c + t * z * z]]
+    return np.stack([np.stack(np.broadcast_arrays(*r), axis=-1) for r in rows], axis=-2)
+
+
+def vector_rotate_matrix(kind, invert, axis, angle, rotation):
+    """(R (..., 3, 3), keep (...,) bool) of a Vector Rotate node (Cycles'
+    svm_node_vector_rotate): the vector maps to R (v - center) + center, except where `keep`
+    (an axis of length 0: the vector unchanged). axis, rotation (..., 3), angle (..., 1)."""
+    (axis, angle, rotation), _, dtype = _real(axis, angle, rotation)
+    if kind == 'EULER_XYZ':
+        R = euler_matrix(rotation)
+        if invert:
+            R = np.swapaxes(R, -1, -2)
+        return R, np.zeros(R.shape[:-2], bool)
+    angle = angle[..., 0]
+    angle = -angle if invert else angle
+    if kind in _AXES:
+        axis = np.asarray(_AXES[kind], dtype)
+        length = np.ones((), dtype)
+    else:
+        length = np.sqrt(np.sum(axis * axis, axis=-1))
+    keep = length == 0.0
+    with np.errstate(all='ignore'):
+        unit = axis / np.where(keep, 1.0, length).astype(dtype)[..., None]
+    return axis_angle_matrix(unit, angle), np.broadcast_to(keep, np.broadcast_shapes(keep.shape, angle.shape))
+
+
+def vector_rotate(kind, invert, vector, center, axis, angle, rotation):
+    """Vector Rotate node (Cycles' svm_node_vector_rotate) on (..., 3) vectors."""
+    R, keep = vector_rotate_matrix(kind, invert, axis, angle, rotation)
+    (vector, center), _, dtype = _real(vector, center)
+    with np.errstate(all='ignore'):
+        p = vector - center
+        r = np.sum(R * p[..., None, :], axis=-1) + center
+    return np.asarray(np.where(keep[..., None], vector, r), dtype)

@@ -2,6 +2,8 @@
 computes it (kernel/svm/mapping_util.h, svm_mapping), and the two places the export reads them:
 the texture coordinates of an Image Texture (an affine map of the UV map, exact) and the
 direction of an Environment Texture (a rotation, exact for rotations and the signs of a scale).
+Vector Rotate nodes (floatnodes.vector_rotate_matrix: R (v - center) + center) join both chains
+as the affine maps they are.
 
 Cycles, with R the Euler XYZ rotation matrix (Blender's, Rz Ry Rx), s the scale, l the location:
   Point:   R (v * s) + l          Texture: safe_divide(R^T (v - l), s)
@@ -22,6 +24,9 @@ from .nodegraph import linked_link, source, unwrap
 _DIRECTION_COORDINATES = {'Generated': 1.0, 'Normal': -1.0, 'Object': 1.0, 'Reflection': -1.0}
 _GEOMETRY_DIRECTIONS = {'Position': 1.0, 'Normal': -1.0, 'True Normal': -1.0, 'Incoming': -1.0}
 _MAX_CHAIN = 64
+# nodes an Image Texture's coordinates or an Environment Texture's direction pass through as
+# affine maps (Vector Rotate: a rotation about its Center)
+_AFFINE_NODES = ('MAPPING', 'VECTOR_ROTATE')
 
 
 def _rotation(euler):
@@ -104,6 +109,40 @@ def mapping_affine(node, reasons):
     return rot * scale[None, :], np.zeros(3)      # VECTOR
 
 
+def _rotate_inputs(node, reasons):
+    """(axis, angle, rotation, center) of a Vector Rotate node, as constants (what RGB, Value
+    and the evaluated nodes compute for them); an input computed from anything else is
+    reported and its own value used."""
+    out = []
+    for name, color in (('Axis', True), ('Angle', False), ('Rotation', True), ('Center', True)):
+        sock = node.inputs.get(name)
+        if sock is None:
+            out.append(np.zeros(3 if color else 1))
+            continue
+        value, exact = constant(sock, color)
+        if not exact and sock.enabled:
+            reasons.append(f"Vector Rotate {name} driven by nodes; its own value used")
+        out.append(np.asarray(value, np.float64))
+    return out
+
+
+def rotate_affine(node, reasons):
+    """(M, t): a Vector Rotate node as v -> M v + t (Cycles' svm_node_vector_rotate:
+    R (v - center) + center; an axis of length 0 leaves the vector unchanged), computed in
+    float32 as Cycles computes it."""
+    from .floatnodes import VECTOR_ROTATE_TYPES, vector_rotate_matrix
+    axis, angle, rotation, center = _rotate_inputs(node, reasons)
+    if node.rotation_type not in VECTOR_ROTATE_TYPES:
+        reasons.append(f"Vector Rotate of type {node.rotation_type} read as no rotation")
+        return np.eye(3), np.zeros(3)
+    R, keep = vector_rotate_matrix(node.rotation_type, node.invert, np.float32(axis), np.float32(angle),
+                                   np.float32(rotation))
+    if bool(keep):
+        return np.eye(3), np.zeros(3)
+    R = np.asarray(R, np.float64)
+    return R, center - R @ center
+
+
 def node_texture_mapping(node, reasons):
     """(M, t): a texture node's own Texture Mapping (node.texture_mapping: the editor sidebar's
     panel, old files, scripts) as v -> M v + t, which Cycles applies to the node's vector before
@@ -162,9 +201,10 @@ def texture_transform(tex_node, reasons):
         p = M @ np.array(carrier.default_value[:3], np.float64) + t
         return np.array([[0.0, 0.0, p[0]], [0.0, 0.0, p[1]]])
     for _ in range(_MAX_CHAIN):
-        if link is None or link.from_node.type != 'MAPPING':
+        if link is None or link.from_node.type not in _AFFINE_NODES:
             break
-        mi, ti = mapping_affine(link.from_node, reasons)
+        affine = mapping_affine if link.from_node.type == 'MAPPING' else rotate_affine
+        mi, ti = affine(link.from_node, reasons)
         M, t = M @ mi, M @ ti + t
         inner, carrier = source(link.from_node.inputs['Vector'])
         if inner is None:                 # a constant point: every shading point reads one texel
@@ -181,7 +221,7 @@ def texture_transform(tex_node, reasons):
                 reasons.append(f"{link.from_socket.name} texture coordinates read as the UV map")
             elif vec.from_instancer:
                 reasons.append(f"UV coordinates from the instancer ('{vec.name}') read as the object's own")
-        elif vec.type == 'MAPPING':
+        elif vec.type in _AFFINE_NODES:
             reasons.append("Mapping chain too long; read as the UV map")
         else:
             reasons.append(f"texture coordinates from '{vec.bl_label}' read as the UV map")
@@ -195,7 +235,7 @@ def uv_map_name(tex_node):
     '' for the active render UV map (no UV Map node, or one with no name)."""
     link = linked_link(tex_node.inputs['Vector'])
     for _ in range(_MAX_CHAIN):
-        if link is None or link.from_node.type != 'MAPPING':
+        if link is None or link.from_node.type not in _AFFINE_NODES:
             break
         link = linked_link(link.from_node.inputs['Vector'])
     if link is not None and link.from_node.type == 'UVMAP':
@@ -220,22 +260,44 @@ def environment_rotation(node, reasons, vector=True):
 
 
 def _vector_direction(node, reasons):
+    """The direction map of the chain of Mapping and Vector Rotate nodes before an Environment
+    Texture's Vector input, ending at the view direction (or its negative)."""
     link = linked_link(node.inputs['Vector'])
     if link is None:
         return np.eye(3)
-    src = link.from_node
-    if src.type == 'MAPPING':
+    M = np.eye(3)
+    for _ in range(_MAX_CHAIN):
+        src = link.from_node
+        if src.type not in _AFFINE_NODES:
+            break
+        # (every Mapping type and a Vector Rotate are linear in their vector: mapping -D is
+        # -(mapping D); a Vector Rotate's Center, a translation, is reported and left out)
+        M = M @ (_direction_matrix(src, reasons) if src.type == 'MAPPING' else _rotate_direction(src, reasons))
         inner = linked_link(src.inputs['Vector'])
         if inner is None or not _is_direction(inner):
+            if inner is not None and inner.from_node.type in _AFFINE_NODES:
+                link = inner
+                continue
             what = 'nothing' if inner is None else f"'{inner.from_node.bl_label}' {inner.from_socket.name}"
-            reasons.append(f"Mapping node fed by {what}: read as the view direction")
-        # (every Mapping type is linear in its vector: mapping -D is -(mapping D))
-        return _direction_matrix(src, reasons) * _direction_sign(inner)
+            reasons.append(f"{src.bl_label} node fed by {what}: read as the view direction")
+        return M * _direction_sign(inner)
     if not _is_direction(link):
-        reasons.append(f"environment coordinates from '{src.bl_label}' {link.from_socket.name} read as the "
-                       "view direction")
-        return np.eye(3)
-    return np.eye(3) * _direction_sign(link)
+        reasons.append(f"environment coordinates from '{link.from_node.bl_label}' {link.from_socket.name} read as "
+                       "the view direction")
+        return M
+    return M * _direction_sign(link)
+
+
+def _rotate_direction(node, reasons):
+    """The direction part of a Vector Rotate node: its rotation (exact); a Center off the
+    origin moves the looked-up vector, which a direction lookup does not represent: reported
+    and left out."""
+    M, t = rotate_affine(node, reasons)
+    if not np.isfinite(M).all():
+        return np.full((3, 3), np.nan)
+    if np.any(t != 0):
+        reasons.append(f"Vector Rotate '{node.name}' Center ignored (the map is looked up by direction)")
+    return M
 
 
 def _direction_sign(link):

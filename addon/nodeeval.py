@@ -32,6 +32,9 @@ _INPUTS = {
     'CURVE_RGB': {'fac': 'Fac', 'color': 'Color'},
     'CURVE_VEC': {'fac': 'Fac', 'vector': 'Vector'},
     'CURVE_FLOAT': {'fac': 'Factor', 'value': 'Value'},
+    'WAVELENGTH': {'wavelength': 'Wavelength'},
+    'VECTOR_ROTATE': {'vector': 'Vector', 'vcenter': 'Center', 'vaxis': 'Axis', 'angle': 'Angle',
+                      'vrotation': 'Rotation'},
     'SEPARATE_COLOR': {'color': 'Color'},
     'COMBINE_COLOR': {'red': 'Red', 'green': 'Green', 'blue': 'Blue'},
     'COMBXYZ': {'x': 'X', 'y': 'Y', 'z': 'Z'},
@@ -56,7 +59,8 @@ TWO_IMAGES = "two image textures mixed; the second as its average colour"
 # Color Attribute, Attribute and Object Info: values per point or per object (export/attributemaps.py)
 ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 # colour or vector inputs (but floats in Mix FLOAT and Math)
-_COLOR_ROLES = {'color', 'a', 'b', 'vector', 'vfac', 'vvalue', 'vf0', 'vf1', 'vt0', 'vt1', 'vsteps', 'va', 'vb', 'vc'}
+_COLOR_ROLES = {'color', 'a', 'b', 'vector', 'vfac', 'vvalue', 'vf0', 'vf1', 'vt0', 'vt1', 'vsteps', 'va', 'vb', 'vc',
+                'vcenter', 'vaxis', 'vrotation'}
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
 _SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2, 'X': 0, 'Y': 1, 'Z': 2}
 
@@ -80,6 +84,12 @@ def node_inputs(node):
         return None
     if t == 'VECT_MATH' and node.operation not in fn.VECTOR_MATH_OPERATIONS:
         return None
+    if t == 'VECTOR_ROTATE':        # the inputs its type reads (Cycles' svm_node_vector_rotate)
+        if node.rotation_type not in fn.VECTOR_ROTATE_TYPES:
+            return None
+        unread = {'vaxis', 'angle'} if node.rotation_type == 'EULER_XYZ' else \
+            {'vrotation'} | ({'vaxis'} if node.rotation_type != 'AXIS_ANGLE' else set())
+        return {role: ident for role, ident in _INPUTS[t].items() if role not in unread}
     return _INPUTS.get(t)
 
 
@@ -303,6 +313,12 @@ def _compute32(node, out, v):
             end = np.float32(0.0) if extrapolate else np.where(rel < 0.0, np.float32(ends[0]), np.float32(ends[1]))
             r = np.where((rel < 0.0) | (rel > 1.0), x + v['fac'] * (end - x), r)
         return r
+    if t == 'WAVELENGTH':
+        return cn.wavelength(v['wavelength'], node.xyz if isinstance(node, Frozen) else xyz_to_rgb())
+    if t == 'VECTOR_ROTATE':
+        zero = np.zeros(3, np.float32)
+        return fn.vector_rotate(node.rotation_type, node.invert, v['vector'], v['vcenter'], v.get('vaxis', zero),
+                                v.get('angle', zero[:1]), v.get('vrotation', zero))
     if t == 'SEPARATE_COLOR':
         k = _SEPARATED[out.identifier]
         return cn.separate_color(node.mode, v['color'])[..., k:k + 1]
@@ -368,11 +384,20 @@ def _curves(node):
     return table, lo, hi, m.extend == 'EXTRAPOLATED'
 
 
+def xyz_to_rgb():
+    """CIE XYZ (D65) -> scene linear, as Cycles derives it from the colour configuration (the
+    Wavelength node's and the Sky Texture's; Rec.709's without a usable configuration)."""
+    from .export.colorspaces import xyz_to_scene_linear
+    from .sky import XYZ_TO_REC709
+    m = xyz_to_scene_linear()
+    return XYZ_TO_REC709 if m is None else m
+
+
 class Frozen:
     """What _compute reads of a node (or an output socket), copied: computing with it reads no
     Blender data, so it may run after the export (during the render's lookups)."""
     _ATTRS = ('type', 'name', 'identifier', 'clamp_factor', 'data_type', 'blend_type', 'clamp_result', 'use_clamp',
-              'mode', 'operation', 'clamp_type', 'interpolation_type', 'clamp')
+              'mode', 'operation', 'clamp_type', 'interpolation_type', 'clamp', 'rotation_type', 'invert')
 
     def __init__(self, thing):
         for a in self._ATTRS:
@@ -385,6 +410,8 @@ class Frozen:
             self.curves = _curves(thing)
             if t == 'CURVE_FLOAT':
                 self.curve_ends = _curve_ends(thing)
+        elif t == 'WAVELENGTH':
+            self.xyz = xyz_to_rgb()
 
 
 class NotCompiled(Exception):

@@ -57,18 +57,19 @@ def test_what_a_procedural_chain_cannot_read_is_named(scene, exported):
     to its own value, and the message names that thing (it had blamed the Checker alone:
     "colour from 'Checker Texture' node; its own value used")."""
     scenes.camera()
-    for i, (name, build) in enumerate((("VRotate", 'VECT_ROTATE'), ("ObjCoords", 'OBJECT'), ("Camera", 'Camera'))):
+    # (a Vector Rotate, once the first example, is read: tests/parity/test_wavelength_rotate.py)
+    for i, (name, build) in enumerate((("VTransform", 'VECT_TRANSFORM'), ("ObjCoords", 'OBJECT'), ("Camera", 'Camera'))):
         mat = bpy.data.materials.new(name)
         nt = mat.node_tree
         bsdf = next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
         checker = nt.nodes.new('ShaderNodeTexChecker')
         coords = nt.nodes.new('ShaderNodeTexCoord')
         nt.links.new(checker.outputs['Color'], bsdf.inputs['Base Color'])
-        if build == 'VECT_ROTATE':
-            vm = nt.nodes.new('ShaderNodeVectorRotate')
+        if build == 'VECT_TRANSFORM':
+            vm = nt.nodes.new('ShaderNodeVectorTransform')
             nt.links.new(coords.outputs['Object'], vm.inputs[0])
             nt.links.new(vm.outputs['Vector'], checker.inputs['Vector'])
-            expect = "('Vector Rotate' node is not read there)"
+            expect = "('Vector Transform' node is not read there)"
         elif build == 'OBJECT':
             # (Object of another object is read: tests/addon/test_node_messages.py; of two, not)
             coords.object = scenes.camera()
