@@ -331,9 +331,18 @@ def _node(node, out, chain, depth):
     roles = nodeeval.node_inputs(node)
     if roles is None or t in nodeeval.VIEW_NODE_TYPES:
         raise nodeeval.NotCompiled(f"'{node.bl_label}' node")
+    frozen, frozen_out = nodeeval.Frozen(node), nodeeval.Frozen(out)
+    if t == 'CURVE_FLOAT':
+        # a Float Curve of constant inputs: computed as a constant, as Cycles folds it (which
+        # differs from its kernel beyond the curve's range: nodeeval._compute32)
+        consts = {role: nodeeval.constant(nodegraph.input_by_id(node, ident), nodeeval.reads_as_color(node, role))
+                  for role, ident in roles.items()}
+        if all(exact for _, exact in consts.values()):
+            value = np.asarray(nodeeval._compute(frozen, frozen_out, {r: v for r, (v, _) in consts.items()}),
+                               np.float64)[None]
+            return (lambda c: value), False
     parts = {role: _socket(nodegraph.input_by_id(node, ident), nodeeval.reads_as_color(node, role), chain, depth + 1)
              for role, ident in roles.items()}
-    frozen, frozen_out = nodeeval.Frozen(node), nodeeval.Frozen(out)
     return (lambda c: nodeeval._compute(frozen, frozen_out, {role: g(c) for role, g in parts.items()})), \
         nodeeval.gives_vector(node, out)
 

@@ -121,7 +121,25 @@ def vector_color(name, extend, factor, per_point, value=(0.0, 0.0, 0.0)):
     return mat
 
 
+def float_beside_procedural(name):
+    """A Float Curve of constant inputs beyond its range (Extended: its end point's y, 0.15, as
+    Cycles folds it; its table's end is 0.1723) added to a Gradient's Fac x 0.5 per point."""
+    mat, nt, em = _material(name)
+    em.inputs['Color'].default_value = (1, 1, 1, 1)
+    c = _float_curve(nt, 'HORIZONTAL')
+    c.inputs['Value'].default_value = -0.2
+    g = nt.nodes.new('ShaderNodeTexGradient')
+    half = nt.nodes.new('ShaderNodeMath')
+    half.operation = 'MULTIPLY_ADD'
+    half.inputs[1].default_value = 0.5
+    nt.links.new(g.outputs['Fac'], half.inputs[0])
+    nt.links.new(c.outputs['Value'], half.inputs[2])
+    nt.links.new(half.outputs[0], em.inputs['Strength'])
+    return mat
+
+
 CASES = [
+    ('float_const_beside_pp', float_beside_procedural),
     ('float_pp', lambda n: float_strength(n, 'EXTRAPOLATED', 1.0, True)),
     ('float_pp_clamped_fac', lambda n: float_strength(n, 'HORIZONTAL', 0.7, True)),
     ('float_in', lambda n: float_strength(n, 'EXTRAPOLATED', 1.0, False, 0.3)),
