@@ -241,7 +241,13 @@ def _view_files(scene, path):
         return []
     base, ext = os.path.splitext(path)
     names = ('left', 'right') if r.views_format == 'STEREO_3D' else None
-    return [base + v.file_suffix + ext for v in r.views if v.use and (names is None or v.name in names)]
+    views = [v for v in r.views if v.use and (names is None or v.name in names)]
+    files = [base + v.file_suffix + ext for v in views]
+    if len(set(files)) < len(files):    # one view's image would overwrite the other's, 'wrote' said of both
+        same = [v.name for v, f in zip(views, files) if files.count(f) > 1]
+        raise RuntimeError(f"views {', '.join(repr(n) for n in same)} share a file suffix, so their images "
+                           "would be written to one file (Output Properties > Views: give each its own suffix)")
+    return files
 
 
 def render(args):

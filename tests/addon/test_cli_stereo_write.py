@@ -87,3 +87,13 @@ def test_a_failed_single_file_names_it_and_leaves_no_empty_file(scene, tmp_path)
         cli.save_render(scene, str(tmp_path / "shot.png"), str(tmp_path / "shot.exr"))
     assert "shot.exr not written" in str(e.value) and "Blender:" in str(e.value), str(e.value)
     assert sorted(os.listdir(tmp_path)) == ["shot.png"]
+
+
+def test_views_sharing_a_file_suffix_are_an_error(scene, tmp_path):
+    """Two views with one suffix: one image had overwritten the other while the CLI said it wrote
+    both (four names for two files). Now refused, naming the views and the setting."""
+    _stereo(scene)
+    scene.render.views['right'].file_suffix = scene.render.views['left'].file_suffix
+    bpy.ops.render.render()
+    with pytest.raises(RuntimeError, match="views 'left', 'right' share a file suffix"):
+        cli.save_render(scene, str(tmp_path / "shot.png"), str(tmp_path / "shot.exr"))
