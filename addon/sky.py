@@ -166,7 +166,6 @@ def multiple_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
     """(256, 512, 3) XYZ radiance table of the multiple-scattering sky (row 0: straight down),
     as SKY_multiple_scattering_precompute_texture; altitude in metres."""
     tr = _TransmittanceTable(air, aerosol, ozone)
-    alt = np.clip(altitude, 1.0, 99999.0) / 1000.0
     cz = np.cos(np.pi / 2 - sun_elevation)
     sx, sz = -np.sqrt(max(1.0 - cz * cz, 0.0)), cz                 # sun in the x-z plane
     half = TABLE_W // 2
