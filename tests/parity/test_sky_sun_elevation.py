@@ -77,7 +77,9 @@ def test_map_holds_the_disc_light(kind, elevation, size):
     assert np.allclose(lit, exact, rtol=1e-3, atol=1e-6 * exact.max()), (lit / exact, exact)
 
 
-def _scene(kind, elevation):
+def _scene(kind, elevation, size=None):
+    """A ball on a floor under a sky of this kind, its sun disc at elevation (degrees) and size
+    (degrees; None: the default), fair settings (also test_sky_small_sun's)."""
     import bpy
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
@@ -97,6 +99,8 @@ def _scene(kind, elevation):
     sky = wnt.nodes.new('ShaderNodeTexSky')
     sky.sky_type, sky.sun_disc = kind, True
     sky.sun_elevation, sky.sun_rotation = math.radians(elevation), 0.8
+    if size is not None:
+        sky.sun_size = math.radians(size)
     wnt.links.new(sky.outputs[0], bg.inputs['Color'])
     wnt.links.new(bg.outputs[0], wout.inputs['Surface'])
     rendering.fair_scene_settings(sc)
