@@ -24,6 +24,7 @@ from tests.addon import scenes
 
 from . import sunplane
 from .test_curve_nodes import _coordinate, _material, _post, _render
+from .test_world_geometry_coords import W, H, environment_world
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -146,29 +147,8 @@ def test_vector_rotate_in_a_material_matches_cycles(into, said):
     assert not [s for s in said if 'Vector Rotate' in s], said
 
 
-W, H = 64, 32
-
-
-def _env_image():
-    u, v = np.meshgrid((np.arange(64) + 0.5) / 64, (np.arange(32) + 0.5) / 32)
-    px = np.ones((32, 64, 4), np.float32)
-    px[..., 0] = 0.2 + 0.8 * (0.5 + 0.5 * np.sin(2 * np.pi * u))
-    px[..., 1] = 0.1 + 0.9 * v
-    px[..., 2] = 0.2 + 0.8 * (0.5 + 0.5 * np.cos(4 * np.pi * u))
-    return scenes.float_image("Env", px)
-
-
 def _world(spec, with_mapping):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    cam = scenes.camera((0, 0, 0), (math.radians(80), 0, math.radians(30)), kind='PANO')
-    cam.data.panorama_type = 'EQUIRECTANGULAR'
-    world = bpy.data.worlds.new("World")
-    sc.world = world
-    nt = world.node_tree
-    env = nt.nodes.new('ShaderNodeTexEnvironment')
-    env.image = _env_image()
-    nt.links.new(env.outputs['Color'], nt.nodes['Background'].inputs['Color'])
+    nt, env = environment_world()
     coords = nt.nodes.new('ShaderNodeTexCoord')
     r = _rotate(nt, *spec)
     nt.links.new(coords.outputs['Generated'], r.inputs['Vector'])
@@ -179,13 +159,6 @@ def _world(spec, with_mapping):
         nt.links.new(m.outputs[0], env.inputs['Vector'])
     else:
         nt.links.new(r.outputs[0], env.inputs['Vector'])
-    sc.render.resolution_x, sc.render.resolution_y = W, H
-    sc.cycles.device = 'CPU'
-    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
-    sc.cycles.samples = sc.dacrt.samples = 16
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
 
 
 # (the world's rotations about the origin: a Center moves the looked-up vector, which a map

@@ -30,7 +30,10 @@ def _env_image():
     return scenes.float_image("Env", px)
 
 
-def _scene(output, through_mapping):
+def environment_world():
+    """A panoramic camera looking at a world of _env_image, a box-filtered 16-spp direct-light
+    setting for both engines; returns (world node tree, its Environment Texture node) for the
+    caller to link a vector into (also test_wavelength_rotate's)."""
     import bpy
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
@@ -42,6 +45,18 @@ def _scene(output, through_mapping):
     env = nt.nodes.new('ShaderNodeTexEnvironment')
     env.image = _env_image()
     nt.links.new(env.outputs['Color'], nt.nodes['Background'].inputs['Color'])
+    sc.render.resolution_x, sc.render.resolution_y = W, H
+    sc.cycles.device = 'CPU'
+    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
+    sc.cycles.samples = sc.dacrt.samples = 16
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
+    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    return nt, env
+
+
+def _scene(output, through_mapping):
+    nt, env = environment_world()
     geometry = nt.nodes.new('ShaderNodeNewGeometry')
     if through_mapping:
         mapping = nt.nodes.new('ShaderNodeMapping')
@@ -50,13 +65,6 @@ def _scene(output, through_mapping):
         nt.links.new(mapping.outputs['Vector'], env.inputs['Vector'])
     else:
         nt.links.new(geometry.outputs[output], env.inputs['Vector'])
-    sc.render.resolution_x, sc.render.resolution_y = W, H
-    sc.cycles.device = 'CPU'
-    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
-    sc.cycles.samples = sc.dacrt.samples = 16
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
 
 
 @pytest.mark.parametrize('through_mapping', (False, True), ids=('direct', 'mapping'))
