@@ -20,13 +20,10 @@ W = 64          # pixels across a strip (more than the strips' rows: ortho_scale
 
 
 def _material(name):
-    mat = bpy.data.materials.new(name)
-    nt = mat.node_tree
-    for node in list(nt.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            nt.nodes.remove(node)
+    """A material of an Emission alone: (material, node tree, the Emission node)."""
+    mat, nt, out = scenes._material(name)
     em = nt.nodes.new('ShaderNodeEmission')
-    nt.links.new(em.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+    nt.links.new(em.outputs[0], out.inputs['Surface'])
     return mat, nt, em
 
 
