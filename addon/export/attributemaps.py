@@ -71,19 +71,26 @@ class AttributeMaps:
         if self._attribute_pixels is None:
             return None
         self._attributes_read = True
+        # (per-object values are probe values one per entry as a mesh attribute's are: aligned,
+        # so that an image probed beside them is computed entry by entry (_object_product), not
+        # averaged as a second image)
         if node.type == 'OBJECT_INFO':
             if out.name not in OBJECT_INFO_OUTPUTS:
                 return None
             name = OBJECT_INFO + out.name
-            return Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None,
-                            f"Object Info {out.name}", name)
+            t = Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None,
+                        f"Object Info {out.name}", name)
+            t.aligned = True
+            return t
         if node.type == 'ATTRIBUTE':
             if node.attribute_type in ('OBJECT', 'INSTANCER'):
                 # one value per object (per instance): read as Object Info is, per placement
                 kind = OBJECT_ATTRIBUTE if node.attribute_type == 'OBJECT' else INSTANCER_ATTRIBUTE
                 name = f"{OBJECT_INFO}{kind}{node.attribute_name}"
-                return Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None,
-                                f"{node.attribute_type.lower()} attribute '{node.attribute_name}'", name)
+                t = Texture(('attribute', name), self._pixels_of(name), 'Linear', 'REPEAT', None, None,
+                            f"{node.attribute_type.lower()} attribute '{node.attribute_name}'", name)
+                t.aligned = True
+                return t
             name = node.attribute_name
         else:
             # '' the mesh's render colour attribute, as Cycles; a standard name none (marked)
@@ -188,7 +195,13 @@ class AttributeMaps:
             return name, probe_albedo(m)
         name, y = joint(self._ATTRIBUTE_PROBE, self._IMAGE_PROBE)
         if name is None:
-            return None
+            self._attribute_pixels, self._image_probe = self._ATTRIBUTE_PROBE, self._IMAGE_PROBE
+            try:
+                self._build_material(mat)
+            finally:
+                self._attribute_pixels = self._image_probe = None
+            name = self._albedo_attribute
+            return self._object_product(mat, name) if name is not None and name.startswith(OBJECT_INFO) else None
         n = self._ATTRIBUTE_ALPHAS.shape[1]      # (one image colour: only the alpha varies)
         _, ya = joint(self._ATTRIBUTE_ALPHAS, np.repeat(self._IMAGE_PROBE[:, :1], n, axis=1))
         if ya is None or not np.allclose(ya, ya[:1], rtol=1e-6, atol=1e-9):
@@ -211,11 +224,90 @@ class AttributeMaps:
         m.color_attribute = name
         return m
 
+    # per-object values (random, at random alphas; the first all 1) by image values (alphas too)
+    # on a grid, entry by entry: _object_product's check that the albedo is their product
+    _OBJECT_GRID = 16, 32
+
+    def _object_product(self, mat, name):
+        """The material when its albedo is g(an Object Info output's or object attribute's
+        value) x h(an image's texel) per channel (a Mix Multiply of Object Info Color and an
+        Image Texture, any nodes on either side): the image as usual with the per-object value
+        read as a reference v (its albedo h(texel) x g(v)), and self._attribute_map ('object',
+        output, material, (v, image values, their albedo at v)) so that each placement's albedo
+        factor g(value) / g(v) is one evaluation (evaluated_albedo). Exact: the value is one per
+        object, so nothing is interpolated across it. Checked on a grid of probe values of
+        both (each channel's table of rank 1); None when it is not that."""
+        nv, ni = self._OBJECT_GRID
+        rng = np.random.default_rng(31)
+        values = _attribute_probe(rng, alpha=True)[:, :nv]
+        values[0, 0] = 1.0
+        images = (0.1 + 0.9 * rng.random((1, ni, 4))).astype(np.float32)
+        self._attribute_pixels = np.repeat(values, ni, axis=1)
+        self._image_probe = np.tile(images, (1, nv, 1))
+        self._attribute_names = []
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attribute_pixels = self._image_probe = None
+        # (another attribute read beside it would read its values here: not one per object)
+        if self._albedo_attribute != name or m.texture is None or set(self._attribute_names) != {name}:
+            return None
+        f = probe_albedo(m).reshape(nv, ni, 3)
+        if not np.isfinite(f).all():
+            return None
+        scale = np.abs(f).max(axis=(0, 1))
+        live = scale > 1e-12                        # (a channel 0 everywhere: 0 either way)
+        for c in np.flatnonzero(live):
+            s = np.linalg.svd(f[:, :, c], compute_uv=False)
+            if s[1] > 1e-5 * s[0]:
+                return None                         # not a product of the two
+        # the reference value: one where no live channel's g is (near) 0, 1 if it will do
+        size = np.abs(f).max(axis=1) / np.where(live, scale, 1.0)      # (nv, 3)
+        good = np.flatnonzero((size[:, live] > 1e-3).all(axis=1))
+        if not len(good):
+            return None
+        v = values[0, good[0]]
+        # per channel, the image value where the reference's albedo is largest (the divisor)
+        j = np.abs(f[good[0]]).argmax(axis=0)
+        at = f[good[0], j, np.arange(3)]
+        self._attribute_pixels = v.copy()
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attribute_pixels = None
+        if m.texture is None:
+            return None
+        self._attribute_map = ('object', name[len(OBJECT_INFO):], mat,
+                               (v, images[0, j], np.where(live, at, 0.0)))
+        m.color_attribute = name
+        return m
+
+    def _object_factors(self, entry, values):
+        """(n, 3) each placement's albedo factor g(value) / g(v) for an _object_product entry:
+        the chain evaluated on values (n, 4) beside each channel's reference image value."""
+        _, _, mat, (v, images, at) = entry
+        n = len(values)
+        self._attribute_pixels = np.tile(np.ascontiguousarray(values, np.float32), (3, 1))[None]
+        self._image_probe = np.repeat(images.astype(np.float32), n, axis=0)[None]
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attribute_pixels = self._image_probe = None
+        y = probe_albedo(m).reshape(3, n, 3)
+        out = np.ones((n, 3), np.float64)
+        for c in range(3):
+            if at[c] != 0.0:
+                out[:, c] = y[c, :, c] / at[c]
+        return out.astype(np.float32)
+
     def evaluated_albedo(self, index, values):
         """The albedo (n, 3) material `index` (an Object Info or per-corner attribute one) has
         where what its node reads is values (n, 4) each (a dict of them per attribute, for one
         of several attributes): the material evaluated once on all."""
-        mat = self.attribute_maps[index][2]
+        entry = self.attribute_maps[index]
+        if len(entry) > 3:          # an image times the per-object value: the factor alone
+            return self._object_factors(entry, values)
+        mat = entry[2]
         if isinstance(values, dict):
             self._attribute_pixels = {n: np.ascontiguousarray(v, np.float32)[None] for n, v in values.items()}
             values = next(iter(values.values()))

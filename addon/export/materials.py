@@ -147,6 +147,11 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             self._attribute_pixels = None
             self._attribute_map = ('object', name[len(OBJECT_INFO):], mat)
             m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
+            # an image beside it in no product (_object_product): averaged, as the evaluation
+            # did; said as that, not as a second image
+            m.approximated = m.approximated.replace(
+                nodeeval.TWO_IMAGES, f"{marked_label(name)} beside an image, not as a product with it: "
+                "the image read as its average colour")
             return m
         line = channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), probe_albedo(m), 1e-5)
         self._attribute_pixels = self._ATTRIBUTE_ALPHAS
