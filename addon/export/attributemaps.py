@@ -150,6 +150,11 @@ class AttributeMaps:
             return None
         labels = ', '.join(dict.fromkeys(marked_label(n) for n in follows))     # (a Fac and a Color: one)
         if nodeeval.TWO_IMAGES in m.approximated:
+            if all(n.startswith(OBJECT_INFO) for n in follows):
+                # per-object values times an image (Object Info Color x Random x a texture)
+                product = self._object_product(mat, tuple(follows))
+                if product is not None:
+                    return product
             m.approximated = '; '.join(r for r in (m.approximated, f"{labels} read together beside an image: "
                                                    "each read as the first's values") if r)
             return None
@@ -195,13 +200,17 @@ class AttributeMaps:
             return name, probe_albedo(m)
         name, y = joint(self._ATTRIBUTE_PROBE, self._IMAGE_PROBE)
         if name is None:
+            # per-object values beside the image (one, or several each its own): _object_product
             self._attribute_pixels, self._image_probe = self._ATTRIBUTE_PROBE, self._IMAGE_PROBE
+            self._attribute_names = []
             try:
                 self._build_material(mat)
             finally:
                 self._attribute_pixels = self._image_probe = None
-            name = self._albedo_attribute
-            return self._object_product(mat, name) if name is not None and name.startswith(OBJECT_INFO) else None
+            names = tuple(dict.fromkeys(self._attribute_names))
+            if self._albedo_attribute is None or not all(n.startswith(OBJECT_INFO) for n in names):
+                return None
+            return self._object_product(mat, names if len(names) > 1 else names[0])
         n = self._ATTRIBUTE_ALPHAS.shape[1]      # (one image colour: only the alpha varies)
         _, ya = joint(self._ATTRIBUTE_ALPHAS, np.repeat(self._IMAGE_PROBE[:, :1], n, axis=1))
         if ya is None or not np.allclose(ya, ya[:1], rtol=1e-6, atol=1e-9):
@@ -228,29 +237,34 @@ class AttributeMaps:
     # on a grid, entry by entry: _object_product's check that the albedo is their product
     _OBJECT_GRID = 16, 32
 
-    def _object_product(self, mat, name):
-        """The material when its albedo is g(an Object Info output's or object attribute's
-        value) x h(an image's texel) per channel (a Mix Multiply of Object Info Color and an
-        Image Texture, any nodes on either side): the image as usual with the per-object value
-        read as a reference v (its albedo h(texel) x g(v)), and self._attribute_map ('object',
-        output, material, (v, image values, their albedo at v)) so that each placement's albedo
-        factor g(value) / g(v) is one evaluation (evaluated_albedo). Exact: the value is one per
-        object, so nothing is interpolated across it. Checked on a grid of probe values of
-        both (each channel's table of rank 1); None when it is not that."""
+    def _object_product(self, mat, names):
+        """The material when its albedo is g(per-object values) x h(an image's texel) per channel
+        (a Mix Multiply of Object Info Color and an Image Texture, any nodes on either side; g
+        may read several per-object values: Object Info outputs, object or instancer
+        attributes, each its own): the image as usual with the values read as a reference v (its
+        albedo h(texel) x g(v)), and self._attribute_map ('object', output or names, material,
+        (names, v, image values, their albedo at v)) so that each placement's albedo factor
+        g(values) / g(v) is one evaluation (evaluated_albedo). Exact: the values are one per
+        object, so nothing is interpolated across them. Checked on a grid of probe values of
+        both (each channel's table of rank 1); None when it is not that. names: the attribute
+        (marked, OBJECT_INFO + ...) or a tuple of them."""
+        several = isinstance(names, tuple)
+        names = names if several else (names,)
         nv, ni = self._OBJECT_GRID
         rng = np.random.default_rng(31)
-        values = _attribute_probe(rng, alpha=True)[:, :nv]
-        values[0, 0] = 1.0
+        values = {n: _attribute_probe(rng, alpha=True)[:, :nv] for n in names}
+        for v in values.values():
+            v[0, 0] = 1.0
         images = (0.1 + 0.9 * rng.random((1, ni, 4))).astype(np.float32)
-        self._attribute_pixels = np.repeat(values, ni, axis=1)
+        self._attribute_pixels = {n: np.repeat(v, ni, axis=1) for n, v in values.items()}
         self._image_probe = np.tile(images, (1, nv, 1))
         self._attribute_names = []
         try:
             m = self._build_material(mat)
         finally:
             self._attribute_pixels = self._image_probe = None
-        # (another attribute read beside it would read its values here: not one per object)
-        if self._albedo_attribute != name or m.texture is None or set(self._attribute_names) != {name}:
+        # (an attribute read beside them but not probed here (a mesh one) reads 1: not this)
+        if self._albedo_attribute not in names or m.texture is None or not set(self._attribute_names) <= set(names):
             return None
         f = probe_albedo(m).reshape(nv, ni, 3)
         if not np.isfinite(f).all():
@@ -261,33 +275,36 @@ class AttributeMaps:
             s = np.linalg.svd(f[:, :, c], compute_uv=False)
             if s[1] > 1e-5 * s[0]:
                 return None                         # not a product of the two
-        # the reference value: one where no live channel's g is (near) 0, 1 if it will do
+        # the reference values: where no live channel's g is (near) 0, all 1 if they will do
         size = np.abs(f).max(axis=1) / np.where(live, scale, 1.0)      # (nv, 3)
         good = np.flatnonzero((size[:, live] > 1e-3).all(axis=1))
         if not len(good):
             return None
-        v = values[0, good[0]]
+        ref = {n: v[0, good[0]].copy() for n, v in values.items()}
         # per channel, the image value where the reference's albedo is largest (the divisor)
         j = np.abs(f[good[0]]).argmax(axis=0)
         at = f[good[0], j, np.arange(3)]
-        self._attribute_pixels = v.copy()
+        self._attribute_pixels = ref
         try:
             m = self._build_material(mat)
         finally:
             self._attribute_pixels = None
         if m.texture is None:
             return None
-        self._attribute_map = ('object', name[len(OBJECT_INFO):], mat,
-                               (v, images[0, j], np.where(live, at, 0.0)))
-        m.color_attribute = name
+        self._attribute_map = ('object', names if several else names[0][len(OBJECT_INFO):], mat,
+                               (names, ref, images[0, j], np.where(live, at, 0.0)))
+        m.color_attribute = names[0]
         return m
 
     def _object_factors(self, entry, values):
-        """(n, 3) each placement's albedo factor g(value) / g(v) for an _object_product entry:
-        the chain evaluated on values (n, 4) beside each channel's reference image value."""
-        _, _, mat, (v, images, at) = entry
-        n = len(values)
-        self._attribute_pixels = np.tile(np.ascontiguousarray(values, np.float32), (3, 1))[None]
+        """(n, 3) each placement's albedo factor g(values) / g(v) for an _object_product entry:
+        the chain evaluated on values (n, 4) (a dict of them per attribute, for several) beside
+        each channel's reference image value."""
+        _, _, mat, (names, _, images, at) = entry
+        values = values if isinstance(values, dict) else {names[0]: values}
+        n = len(next(iter(values.values())))
+        self._attribute_pixels = {k: np.tile(np.ascontiguousarray(v, np.float32), (3, 1))[None]
+                                  for k, v in values.items()}
         self._image_probe = np.repeat(images.astype(np.float32), n, axis=0)[None]
         try:
             m = self._build_material(mat)

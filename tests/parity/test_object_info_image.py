@@ -161,3 +161,54 @@ def test_image_mixed_by_random_is_said_as_what_it_is(tmp_path, said):
     text = ' '.join(said)
     assert "two image textures" not in text, said
     assert "Object Info Random" in text and "'RandomMix'" in text and "average" in text, said
+
+
+def _several(image_first):
+    """Object Info Color x the image x (Random x Alpha): three per-object values, each its own."""
+    def value(nt):
+        info = nt.nodes.new('ShaderNodeObjectInfo')
+        times = nt.nodes.new('ShaderNodeMath')
+        times.operation = 'MULTIPLY'
+        nt.links.new(info.outputs['Random'], times.inputs[0])
+        nt.links.new(info.outputs['Alpha'], times.inputs[1])
+        return scenes.mix_node(nt, 'MULTIPLY', info.outputs['Color'], times.outputs[0], 1.0).outputs['Result']
+    return value
+
+
+def test_image_times_several_per_object_values_renders_as_cycles(tmp_path, said):
+    """Several per-object values (Color, Random, Alpha) times an image, either order, on two
+    objects and two collection instances each: the product per object and per texel (the image
+    had been averaged, or the values read as the nodes' own, said)."""
+    sc = _scene()
+    for ob in list(sc.objects):
+        if ob.type in ('MESH', 'EMPTY'):
+            bpy.data.objects.remove(ob)
+    cells = [(-1.5, 0.5), (-0.5, 0.5), (0.5, 0.5), (1.5, 0.5), (-1.5, -0.5), (-0.5, -0.5), (0.5, -0.5), (1.5, -0.5)]
+    for row, first in ((0, False), (1, True)):
+        mat = _material(f"Several{row}", _several(first), 10 + row, image_first=first)
+        for i in (0, 1):
+            ob = _plane(f"Own{row}{i}", (*cells[4 * row + i], 0), mat)
+            ob.color = ((0.9, 0.5, 0.2, 0.7), (0.3, 0.7, 0.9, 0.5))[i]
+        kit = bpy.data.collections.new(f"Kit{row}")
+        piece = _plane(f"Piece{row}", (0, 0, 0), mat)
+        piece.color = (0.8, 0.8, 0.4, 0.9)
+        kit.objects.link(piece)
+        sc.collection.objects.unlink(piece)
+        for i in (2, 3):
+            empty = bpy.data.objects.new(f"Kit{row}{i}", None)
+            empty.instance_type, empty.instance_collection = 'COLLECTION', kit
+            empty.location = (*cells[4 * row + i], 0)
+            sc.collection.objects.link(empty)
+    got = {}
+    for engine in ('CYCLES', 'DACRT'):
+        sc.render.engine = engine
+        rgb = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr", sc)))[..., :3]
+        got[engine] = _quarters(rgb)
+    c, d = got['CYCLES'], got['DACRT']
+    assert not any("Object Info" in t or "average colour" in t for t in said), said
+    assert c.min() > 0.005 and (np.ptp(c, axis=1) > 0.005).any(axis=1).all()
+    assert np.ptp(c.mean(1)[[2, 3, 6, 7]], axis=0).max() > 0.01          # the instances differ
+    means = np.abs(d.mean(1) - c.mean(1)) / c.mean(1)
+    quarters = np.abs(d - c) / c
+    assert means.max() < 0.01 and quarters.max() < 0.02, (means.max(1).round(4).tolist(),
+                                                         quarters.max((1, 2)).round(4).tolist())
