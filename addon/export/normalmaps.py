@@ -118,13 +118,26 @@ def below_surface(materials):
             continue
         texels = tex.flat if isinstance(tex, UdimTiles) else tex
         try:
-            c = 2.0 * np.asarray(texels, np.float32)[..., :3].reshape(-1, 3).astype(np.float64) - 1.0
+            rgb = np.asarray(texels)[..., :3].reshape(-1, 3)
         except (TypeError, ValueError, IndexError):      # (not texels: nothing to read)
             continue
-        # the bent normal's height over the surface after Cycles' strength blend,
-        # normalize(N + (normalize(c) - N) x strength) in the tangent frame, N = (0, 0, 1)
-        length = np.linalg.norm(c, axis=1)
-        z = c[:, 2] / np.where(length > 0, length, 1.0)
-        if np.any((length > 0) & (1.0 + (z - 1.0) * float(m.normal_strength) < 0)):
+        strength = float(m.normal_strength)
+        if strength <= 1.0 and (not len(rgb) or float(rgb[:, 2].min()) >= 0.5):
+            continue        # (at strength <= 1 only a texel with blue below 0.5 can point below)
+        if any(_below(rgb[i:i + _CHUNK], strength) for i in range(0, len(rgb), _CHUNK)):
             names.append(m.name)
     return names
+
+
+# texels per step of below_surface: an 8K map in float64 at once had taken gigabytes
+_CHUNK = 1 << 20
+
+
+def _below(rgb, strength):
+    """Whether any texel of rgb (k, 3) decodes to a normal below the surface: the bent normal's
+    height after Cycles' strength blend, normalize(N + (normalize(c) - N) x strength) in the
+    tangent frame, N = (0, 0, 1), c = 2 x colour - 1."""
+    c = 2.0 * rgb.astype(np.float64) - 1.0
+    length = np.sqrt(np.einsum('ij,ij->i', c, c))
+    z = c[:, 2] / np.where(length > 0, length, 1.0)
+    return bool(np.any((length > 0) & (1.0 + (z - 1.0) * strength < 0)))
