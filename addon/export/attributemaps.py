@@ -122,14 +122,20 @@ class AttributeMaps:
         rng = np.random.default_rng(seed)
         return {n: _attribute_probe(rng, alpha=True) for n in names}
 
+    def _built(self, mat, pixels, image=None):
+        """The material built with its attributes reading pixels (an array, or a dict per
+        attribute) and, given, its images reading `image` instead of their texels (how a chain
+        combines the two); both probes are cleared after, whatever the build does."""
+        self._attribute_pixels, self._image_probe = pixels, image
+        try:
+            return self._build_material(mat)
+        finally:
+            self._attribute_pixels = self._image_probe = None
+
     def _albedo_on(self, mat, pixels):
         """The albedo (64, 3) the material has where its attributes read pixels (a dict per
         attribute); None where it then reads none."""
-        self._attribute_pixels = pixels
-        try:
-            m = self._build_material(mat)
-        finally:
-            self._attribute_pixels = None
+        m = self._built(mat, pixels)
         return None if m.texture is None or self._albedo_attribute is None else probe_albedo(m)
 
     def _several_attributes(self, mat, m, names):
@@ -189,11 +195,7 @@ class AttributeMaps:
         self._attribute_map ('mesh', name, w', k') so that Geometry.colors supplies the rest.
         Checked on probe values of both, entry by entry; None when it is not that."""
         def joint(attribute_pixels, image_pixels):
-            self._attribute_pixels, self._image_probe = attribute_pixels, image_pixels
-            try:
-                m = self._build_material(mat)
-            finally:
-                self._attribute_pixels = self._image_probe = None
+            m = self._built(mat, attribute_pixels, image_pixels)
             name = self._albedo_attribute
             if name is None or name.startswith(OBJECT_INFO) or m.texture is None:
                 return None, None
@@ -201,12 +203,8 @@ class AttributeMaps:
         name, y = joint(self._ATTRIBUTE_PROBE, self._IMAGE_PROBE)
         if name is None:
             # per-object values beside the image (one, or several each its own): _object_product
-            self._attribute_pixels, self._image_probe = self._ATTRIBUTE_PROBE, self._IMAGE_PROBE
             self._attribute_names = []
-            try:
-                self._build_material(mat)
-            finally:
-                self._attribute_pixels = self._image_probe = None
+            self._built(mat, self._ATTRIBUTE_PROBE, self._IMAGE_PROBE)
             names = tuple(dict.fromkeys(self._attribute_names))
             if self._albedo_attribute is None or not all(n.startswith(OBJECT_INFO) for n in names):
                 return None
@@ -222,11 +220,7 @@ class AttributeMaps:
         w, k = line
         # the final build reads the attribute as 1: the image's albedo x (w + k); the colours
         # carry (w x attribute + k) / (w + k)
-        self._attribute_pixels = np.ones(4, np.float32)
-        try:
-            m = self._build_material(mat)
-        finally:
-            self._attribute_pixels = None
+        m = self._built(mat, np.ones(4, np.float32))
         if m.texture is None:
             return None
         self._attribute_map = ('mesh', name, w / (w + k), k / (w + k))
@@ -256,13 +250,8 @@ class AttributeMaps:
         for v in values.values():
             v[0, 0] = 1.0
         images = (0.1 + 0.9 * rng.random((1, ni, 4))).astype(np.float32)
-        self._attribute_pixels = {n: np.repeat(v, ni, axis=1) for n, v in values.items()}
-        self._image_probe = np.tile(images, (1, nv, 1))
         self._attribute_names = []
-        try:
-            m = self._build_material(mat)
-        finally:
-            self._attribute_pixels = self._image_probe = None
+        m = self._built(mat, {n: np.repeat(v, ni, axis=1) for n, v in values.items()}, np.tile(images, (1, nv, 1)))
         # (an attribute read beside them but not probed here (a mesh one) reads 1: not this)
         if self._albedo_attribute not in names or m.texture is None or not set(self._attribute_names) <= set(names):
             return None
@@ -284,11 +273,7 @@ class AttributeMaps:
         # per channel, the image value where the reference's albedo is largest (the divisor)
         j = np.abs(f[good[0]]).argmax(axis=0)
         at = f[good[0], j, np.arange(3)]
-        self._attribute_pixels = ref
-        try:
-            m = self._build_material(mat)
-        finally:
-            self._attribute_pixels = None
+        m = self._built(mat, ref)
         if m.texture is None:
             return None
         self._attribute_map = ('object', names if several else names[0][len(OBJECT_INFO):], mat,
@@ -303,13 +288,8 @@ class AttributeMaps:
         _, _, mat, (names, _, images, at) = entry
         values = values if isinstance(values, dict) else {names[0]: values}
         n = len(next(iter(values.values())))
-        self._attribute_pixels = {k: np.tile(np.ascontiguousarray(v, np.float32), (3, 1))[None]
-                                  for k, v in values.items()}
-        self._image_probe = np.repeat(images.astype(np.float32), n, axis=0)[None]
-        try:
-            m = self._build_material(mat)
-        finally:
-            self._attribute_pixels = self._image_probe = None
+        m = self._built(mat, {k: np.tile(np.ascontiguousarray(v, np.float32), (3, 1))[None] for k, v in values.items()},
+                        np.repeat(images.astype(np.float32), n, axis=0)[None])
         y = probe_albedo(m).reshape(3, n, 3)
         out = np.ones((n, 3), np.float64)
         for c in range(3):
@@ -326,14 +306,10 @@ class AttributeMaps:
             return self._object_factors(entry, values)
         mat = entry[2]
         if isinstance(values, dict):
-            self._attribute_pixels = {n: np.ascontiguousarray(v, np.float32)[None] for n, v in values.items()}
+            m = self._built(mat, {n: np.ascontiguousarray(v, np.float32)[None] for n, v in values.items()})
             values = next(iter(values.values()))
         else:
-            self._attribute_pixels = np.ascontiguousarray(values, np.float32)[None]
-        try:
-            m = self._build_material(mat)
-        finally:
-            self._attribute_pixels = None
+            m = self._built(mat, np.ascontiguousarray(values, np.float32)[None])
         if m.texture is None:                  # (the chain no longer reads it: a constant)
             return np.broadcast_to(m.base_color, (len(values), 3)).astype(np.float32)
         return (m.base_color * np.asarray(m.texture, np.float32)[0, :, :3]).astype(np.float32)
