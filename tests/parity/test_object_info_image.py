@@ -120,14 +120,19 @@ def _quarters(img):
                     ).reshape(8, 4, 3)
 
 
-def test_image_times_object_info_renders_per_texel_and_per_object(tmp_path, said):
-    sc = _scene()
+def _both_quarters(sc, tmp_path):
+    """(Cycles', DACRT's) _quarters of the scene rendered by each."""
     got = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine
         rgb = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr", sc)))[..., :3]
         got[engine] = _quarters(rgb)
-    c, d = got['CYCLES'], got['DACRT']
+    return got['CYCLES'], got['DACRT']
+
+
+def test_image_times_object_info_renders_per_texel_and_per_object(tmp_path, said):
+    sc = _scene()
+    c, d = _both_quarters(sc, tmp_path)
     assert not any("two image textures" in t or "average colour" in t for t in said), said
     assert c.min() > 0.02
     assert np.ptp(c.mean(1)[2:4], axis=0).max() > 0.02         # the two instances differ
@@ -199,12 +204,7 @@ def test_image_times_several_per_object_values_renders_as_cycles(tmp_path, said)
             empty.instance_type, empty.instance_collection = 'COLLECTION', kit
             empty.location = (*cells[4 * row + i], 0)
             sc.collection.objects.link(empty)
-    got = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        rgb = scenes.rgba(scenes.read_exr(scenes.render_exr(tmp_path / f"{engine}.exr", sc)))[..., :3]
-        got[engine] = _quarters(rgb)
-    c, d = got['CYCLES'], got['DACRT']
+    c, d = _both_quarters(sc, tmp_path)
     assert not any("Object Info" in t or "average colour" in t for t in said), said
     assert c.min() > 0.005 and (np.ptp(c, axis=1) > 0.005).any(axis=1).all()
     assert np.ptp(c.mean(1)[[2, 3, 6, 7]], axis=0).max() > 0.01          # the instances differ
