@@ -9,6 +9,7 @@ import numpy as np
 from .. import nodegraph
 from ..nodeeval import NotCompiled, compile_image_chain, constant_value
 from ..nodegraph import linked_link
+from ..texture import UdimTiles
 
 
 def _normal_link(socket):
@@ -108,7 +109,6 @@ def below_surface(materials):
     only through the bent normal from behind, stays dark in Cycles (measured: a plane's back
     under a sun in front, 0.000 inside the map's stripes where DACRT, sampling the light as the
     bent normal allows, gives 0.679; with Light Tree off both give 0.679)."""
-    from ..texture import UdimTiles
     names = []
     for m in materials:
         tex = m.normal_texture
