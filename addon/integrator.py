@@ -675,7 +675,11 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             rays = self._ray_array(O, D, tfar)
         skip = self._skip(kind, skip)
         t0 = time.perf_counter()
-        hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip, visible=self._visible[kind])
+        try:
+            hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip, visible=self._visible[kind],
+                                                cancel=self._check_break)
+        except dacrt.Cancelled:
+            raise PassCancelled() from None
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['camera' if kind == 'camera' else 'shadow' if kind.startswith('through') else 'bounce'] += len(rays)
@@ -704,7 +708,11 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             return np.zeros(len(rays), bool)
         skip = self._skip(kind, skip)
         t0 = time.perf_counter()
-        occ = self._scenes[kind].occluded(rays, threads=self.threads, skip=skip, visible=self._visible[kind])
+        try:
+            occ = self._scenes[kind].occluded(rays, threads=self.threads, skip=skip, visible=self._visible[kind],
+                                              cancel=self._check_break)
+        except dacrt.Cancelled:
+            raise PassCancelled() from None
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['shadow'] += len(rays)

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "dispatch.h"
+#include "interrupt.h"
 #include "parallel.h"
 #include "ray_check.h"
 #include "triangles.h"
@@ -70,7 +71,8 @@ public:
     }
 
     py::dict intersect(py::array rays, py::array hits, py::object skip, int threads, const std::string& isa,
-                       int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays, int visible) {
+                       int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays, int visible,
+                       py::object cancel, double poll_seconds) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(hits, n, sizeof(Hit), "hits");
@@ -78,11 +80,14 @@ public:
         TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Closest, h, nullptr,
                      skip_ptr(skip, n), BatchInfo{}, nullptr};
         set_visible(job, visible);
+        const std::unique_ptr<Interrupt> stop = interrupt(cancel, poll_seconds);
+        job.interrupt = stop.get();
         return run(r, n, job, threads, isa, [&](FieldsFn f, BatchInfo& b) { return validate_rays(r, n, h, f, b, threads); });
     }
 
     py::dict occluded(py::array rays, py::array out, py::object skip, int threads, const std::string& isa,
-                      int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays, int visible) {
+                      int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays, int visible,
+                      py::object cancel, double poll_seconds) {
         Ray* r = check_rays(rays);
         const size_t n = size_t(rays.shape(0));
         check_out(out, n, 1, "occluded");
@@ -90,6 +95,8 @@ public:
         TraceJob job{ts_.get(), config(partition, leaf_size, leaf_rays, sah_ratio, chunk_rays), Query::Any, nullptr, o,
                      skip_ptr(skip, n), BatchInfo{}, nullptr};
         set_visible(job, visible);
+        const std::unique_ptr<Interrupt> stop = interrupt(cancel, poll_seconds);
+        job.interrupt = stop.get();
         return run(r, n, job, threads, isa, [&](FieldsFn f, BatchInfo& b) { return validate_rays(r, n, o, f, b, threads); });
     }
 
@@ -105,6 +112,23 @@ private:
             job.mask = mask_.data();
             job.visible = uint8_t(visible);
         }
+    }
+
+    // The caller's cancel callable (None: none), asked with the GIL on the calling thread while
+    // the trace runs without it; Python truthiness, and its exceptions propagate.
+    static std::unique_ptr<Interrupt> interrupt(const py::object& cancel, double poll_seconds) {
+        if (cancel.is_none()) return nullptr;
+        if (!PyCallable_Check(cancel.ptr())) throw py::type_error("cancel must be a callable or None");
+        if (!(poll_seconds >= 0.0)) throw py::value_error("poll_seconds must be >= 0");
+        return std::make_unique<Interrupt>(
+            [&cancel]() {
+                py::gil_scoped_acquire gil;
+                const py::object r = cancel();
+                const int t = PyObject_IsTrue(r.ptr());
+                if (t < 0) throw py::error_already_set();
+                return t != 0;
+            },
+            poll_seconds);
     }
 
     static Config config(int partition, int leaf_size, int leaf_rays, float sah_ratio, size_t chunk_rays) {
@@ -202,6 +226,7 @@ PYBIND11_MODULE(_core, m) {
     register_shading(m);
     register_lamps(m);
     m.doc() = "DACRT native core: divide-and-conquer ray tracing without acceleration structures";
+    py::register_exception<Cancelled>(m, "Cancelled");
     m.def("supported_isas", &supported_isas, "ISAs this CPU can run, weakest first");
     m.def("best_isa", []() { return isa_name(resolve_isa("")); });
     m.def("check_isa", [](const std::string& s) { return isa_name(resolve_isa(s)); },

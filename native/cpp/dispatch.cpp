@@ -13,6 +13,7 @@
 #include <cfloat>
 #include <cmath>
 #include <chrono>
+#include <condition_variable>
 #include <exception>
 #include <mutex>
 #include <stdexcept>
@@ -219,6 +220,9 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         jb.num_ids = n;
 
         std::atomic<size_t> next{0};
+        std::atomic<int> busy{T};  // workers still tracing chunks
+        std::mutex finished_m;      // busy reaching 0 wakes a caller polling an interrupt
+        std::condition_variable finished;
         std::vector<Stats> stats(T);
         std::vector<std::exception_ptr> errors(T);
         auto worker = [&](int w) {
@@ -240,10 +244,30 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
                 errors[w] = std::current_exception();
                 next.store(chunks);
             }
+            if (busy.fetch_sub(1, std::memory_order_acq_rel) == 1 && job.interrupt) {
+                std::lock_guard<std::mutex> g(finished_m);  // the caller may be between check and wait
+                finished.notify_all();
+            }
+            // Only the caller's thread polls an interrupt; when it runs out of chunks first it
+            // keeps polling until the others finish theirs (woken as the last one does), or a
+            // cancel could wait for the longest chunk.
+            if (w == 0 && job.interrupt) {
+                std::unique_lock<std::mutex> lk(finished_m);
+                while (!finished.wait_for(lk, std::chrono::milliseconds(5), [&] { return busy.load() == 0; })) {
+                    lk.unlock();
+                    try {
+                        job.interrupt->stop();
+                    } catch (...) {
+                        if (!errors[0]) errors[0] = std::current_exception();
+                    }
+                    lk.lock();
+                }
+            }
         };
         run_workers(T, worker);
         for (auto& e : errors)
             if (e) std::rethrow_exception(e);
+        if (job.interrupt && job.interrupt->raised()) throw Cancelled();
         for (const Stats& s : stats) res.stats.add(s);
         res.stats.rays = n;
     }

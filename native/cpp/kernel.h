@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 
+#include "interrupt.h"
 #include "ray.h"
 #include "triangles.h"
 
@@ -101,6 +102,8 @@ struct TraceJob {
     // checked against this where it indexes (a rewritten ray gets a wrong answer, never a
     // write out of bounds). Set by trace().
     size_t num_ids = 0;
+    // optional: lets the caller stop the call part-way (interrupt.h); trace() then throws
+    Interrupt* interrupt = nullptr;
 };
 
 // Trace rays[0, n) against all valid triangles; ids: the thread's scratch of ts.valid_ids.size().

@@ -41,6 +41,7 @@ struct Tracer {
     SharedTop* top;
     uint32_t* priv;  // this thread's id scratch
     Stats st;
+    Interrupt* interrupt;  // null: runs to the end
 
     // A node of na active rays and nt triangles is a leaf: all of them tested brute force.
     bool is_leaf(size_t na, size_t nt) const {
@@ -138,7 +139,12 @@ struct Tracer {
         return na;
     }
 
+    // Whether the caller stopped the call: checked on entering a node, never inside one, so a
+    // shared split is always completed and the kept top stays valid for the next call.
+    bool stopped() { return interrupt && interrupt->stop(); }
+
     void node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth) {
+        if (stopped()) return;
         uint64_t w, c1;
         const size_t na = timed_filter(rays, n, nb, depth, nt, w, c1);
         if (na == 0) return;
@@ -169,6 +175,7 @@ struct Tracer {
 
     // A node of the shared top: its split is made once, by whichever thread arrives first.
     void shared_node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h) {
+        if (stopped()) return;
         uint64_t w, c1;
         const size_t na = timed_filter(rays, n, nb, depth, nt, w, c1);
         if (na == 0) return;
@@ -235,7 +242,7 @@ void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& s
     Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), ts.prim.data(), job.hits, job.occluded, job.skip, job.mask, job.visible,
                     job.num_ids, job.cfg, job.batch.origin_abs_max,
                     job.batch.far_origins ? kPrecise : job.batch.odd_dirs ? kOdd : kFast,
-                    job.top, ids, Stats{}};
+                    job.top, ids, Stats{}, job.interrupt};
     NodeBounds root;
     for (int a = 0; a < 3; ++a) {
         root.lo[a] = ts.bounds.lo[a]; root.hi[a] = ts.bounds.hi[a];

@@ -700,6 +700,34 @@ def test_cancel_is_polled_per_bounce_and_drops_the_unfinished_pass():
 
 
 
+def test_cancel_inside_a_trace_drops_the_unfinished_pass(monkeypatch):
+    """Esc while the tracer runs a batch: the trace asks check_break itself (dacrt's `cancel`)
+    and stops part-way, without waiting for the bounce to end; the pass is dropped as at a
+    bounce, the completed one stays."""
+    import inspect
+    monkeypatch.setattr(dacrt, "CANCEL_POLL_SECONDS", 0.0)      # ask at every step of a trace
+    scene = plane_scene([light('POINT', 100.0, translation(z=2.0))], samples=4)
+    state = {'armed': False, 'inside': 0}
+
+    def check_break():                                   # Esc inside the second pass's first trace
+        if not state['armed']:
+            return False
+        inside = any(f.function in ('_intersect', '_occluded_rays') for f in inspect.stack()[1:4])
+        state['inside'] += inside
+        return inside
+    integ = Integrator(scene, paths_per_pass=scene.camera.width * scene.camera.height * 2, check_break=check_break)
+    done = []
+    for p in integ.passes():
+        done.append(p.samples_done)
+        state['armed'] = True
+    assert done == [2] and state['inside'] == 1, (done, state)
+    first = Integrator(scene, paths_per_pass=scene.camera.width * scene.camera.height * 2)
+    steps = first.passes()
+    next(steps)
+    steps.close()
+    assert np.array_equal(integ.film.combined(), first.film.combined())
+
+
 def test_film_exposure_scales_light_not_alpha_or_data():
     """Cycles' Film > Exposure: Combined RGB, the light passes and light groups scale by it;
     alpha and the data passes (Diffuse Color, Depth) do not."""

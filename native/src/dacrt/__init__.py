@@ -17,7 +17,8 @@ import numpy as np
 
 from . import _core
 
-__all__ = ["RAY_DTYPE", "HIT_DTYPE", "Scene", "make_rays", "isa", "supported_isas", "thread_limit", "PARTITIONS"]
+__all__ = ["RAY_DTYPE", "HIT_DTYPE", "Scene", "make_rays", "isa", "supported_isas", "thread_limit", "PARTITIONS",
+           "Cancelled", "CANCEL_POLL_SECONDS"]
 
 RAY_DTYPE = np.dtype([("org", "<f4", (3,)), ("dir", "<f4", (3,)), ("tfar", "<f4"), ("id", "<u4")])
 HIT_DTYPE = np.dtype([("t", "<f4"), ("prim", "<i4"), ("u", "<f4"), ("v", "<f4")])
@@ -25,6 +26,11 @@ assert RAY_DTYPE.itemsize == 32 and HIT_DTYPE.itemsize == 16
 
 PARTITIONS = ("adaptive", "median", "sah")
 ROBUST = _core.ROBUST
+# Raised by Scene.intersect / occluded when their `cancel` callable said stop.
+Cancelled = _core.Cancelled
+# How often a trace asks its `cancel` callable (seconds, on the calling thread): a renderer's
+# Esc is then honoured within a batch, not after it (tests set 0: at every step).
+CANCEL_POLL_SECONDS = 0.05
 
 
 def supported_isas() -> list:
@@ -157,6 +163,13 @@ def _leaf_threshold(name: str, value) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= _INT32_MAX:
         raise ValueError(f"{name} must be an integer in 1..{_INT32_MAX}; got {value!r}")
     return int(value)
+
+
+def _cancel(cancel):
+    """(callable or None, poll interval) for the native trace."""
+    if cancel is not None and not callable(cancel):
+        raise TypeError(f"cancel must be a callable returning true to stop, or None; got {cancel!r}")
+    return cancel, float(CANCEL_POLL_SECONDS)
 
 
 class Scene:
@@ -298,7 +311,7 @@ class Scene:
             raise ValueError("visible was given but this Scene was made without masks")
         return int(visible)
 
-    def intersect(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None) -> np.ndarray:
+    def intersect(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None, cancel=None) -> np.ndarray:
         """Closest hit with t in (0, tfar] for every ray; returns HIT_DTYPE indexed by ray id
         (a miss: prim -1, t = inf, u = v = 0, whatever its tfar).
 
@@ -308,27 +321,31 @@ class Scene:
         (optional, by ray id): a triangle index the ray ignores, e.g. the one it leaves (-1:
         none), as Cycles skips the origin primitive.
         visible (optional): only triangles whose mask has one of these bits (see Scene).
+        cancel (optional): a callable asked on the calling thread about every
+        CANCEL_POLL_SECONDS while the rays are traced (with the GIL; the trace runs without
+        it); when it returns true the trace stops within a recursion step and raises Cancelled
+        (the rays are left reordered, no hits are returned). Its exceptions propagate.
         """
         _check_rays(rays)
         args = self._args(threads)
         skip = self._skip(skip, len(rays))
         vis = self._visible(visible)
         hits = np.empty(len(rays), HIT_DTYPE)
-        self.last_stats = self._core.intersect(rays, hits, skip, *args, vis)
+        self.last_stats = self._core.intersect(rays, hits, skip, *args, vis, *_cancel(cancel))
         return hits
 
-    def occluded(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None) -> np.ndarray:
+    def occluded(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None, cancel=None) -> np.ndarray:
         """True for every ray (by id) that hits anything with t in (0, tfar).
 
         rays is reordered in place; the tfar of occluded rays is overwritten (negative).
-        skip, visible: as for intersect().
+        skip, visible, cancel: as for intersect().
         """
         _check_rays(rays)
         args = self._args(threads)
         skip = self._skip(skip, len(rays))
         vis = self._visible(visible)
         out = np.empty(len(rays), np.uint8)
-        self.last_stats = self._core.occluded(rays, out, skip, *args, vis)
+        self.last_stats = self._core.occluded(rays, out, skip, *args, vis, *_cancel(cancel))
         return out.view(np.bool_)
 
 from . import shading  # noqa: E402  (per-ray helper kernels; needs the names above)
