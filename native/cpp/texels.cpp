@@ -13,9 +13,14 @@ namespace {
 
 inline uint8_t to_byte(float v) {
     // as numpy's rint(v * 255).astype(uint8) for v in [0, 1] (float32 product, ties to even);
-    // NaN and out-of-range values clamp (a byte image has none)
-    const float k = std::nearbyint(v * 255.0f);
-    return uint8_t(k >= 0.0f ? std::min(k, 255.0f) : 0.0f);
+    // NaN and out-of-range values clamp (a byte image has none). Rounded by adding and
+    // subtracting 2^23 (exact ties-to-even for 0 <= x < 2^23 in the default rounding mode):
+    // std::nearbyint is a libm call on the baseline x86-64 build (no SSE4.1 round), which
+    // had made this pass slower than numpy's (a 1K image: 27 ms per megatexel).
+    const float x = v * 255.0f;
+    if (!(x >= 0.0f)) return 0;
+    if (x >= 255.0f) return 255;
+    return uint8_t((x + 0x1p23f) - 0x1p23f);
 }
 
 inline uint8_t associated(uint8_t c, uint8_t a) {

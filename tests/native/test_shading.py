@@ -634,6 +634,21 @@ def test_triangle_indices_out_of_range_are_refused():
     assert ok[0].shape == (3, n)
 
 
+def test_byte_texels_round_as_numpys_rint_everywhere():
+    """The bytes are clip(rint(255 v)) (ties to even) for any float, not only bytes' floats: a
+    dense sweep over [-0.1, 1.1], every half-byte tie and its neighbours, infinities and NaN
+    (clamped to 0). (The rounding is an add-subtract of 2^23, not libm's nearbyint.)"""
+    ties = (np.arange(511) / 2 / 255).astype(F32)
+    v = np.concatenate([np.linspace(-0.1, 1.1, 1_000_003, dtype=F32), ties, np.nextafter(ties, F32(2)),
+                        np.nextafter(ties, F32(-1)), np.array([np.nan, np.inf, -np.inf, -0.0, 0.0, 1.0], F32)])
+    v = np.concatenate([v, np.zeros((-len(v)) % 4, F32)]).reshape(-1, 4)
+    k8 = shading.byte_texels(v, np.arange(256, dtype=F32) / F32(255))[1]
+    x = v * F32(255)
+    expect = np.where(np.isnan(x), 0, np.clip(np.rint(x), 0, 255)).astype(np.uint8)
+    assert (np.rint(x) != np.floor(x + F32(0.5))).any()      # the sweep has ties rounding down
+    np.testing.assert_array_equal(k8, expect)
+
+
 @pytest.mark.parametrize("ch", [1, 2, 3, 4])
 def test_byte_texels_are_numpys_bytes_association_and_exactness(ch):
     """byte_texels against numpy: RGBA with grey and alpha expanded, rint(255 v) as bytes,
