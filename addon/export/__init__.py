@@ -97,6 +97,7 @@ def export_scene(depsgraph, check_break=None, camera=None, view_camera=None, ren
         return exporter.run()
     finally:
         images._check_break[0] = None
+        exporter.release_meshes()       # (edit-mode meshes' to_mesh results: read by now)
         # the exporter's tables refer back to it (a mesh's lazy Generated-coordinates source is
         # one of its methods): dropped here, the frame's export (image texels included) goes
         # with the SceneData it made, not at some later cyclic collection (a 4K texture's

@@ -142,6 +142,7 @@ class Exporter:
         self.world = effective_world(self.scene, self.layer_eval)
         # whether any shader reads Object Info: else no instance's values are gathered
         self._evaluated_of = {}
+        self._to_mesh_objects = []      # evaluated objects whose to_mesh() the export holds (_edit_mesh)
         nodes = [n for t in _shader_trees() for n in t.nodes]
         self._object_info = any(n.type == 'OBJECT_INFO' or (n.type == 'ATTRIBUTE' and n.attribute_type in ('OBJECT', 'INSTANCER'))
                                 for n in nodes)
@@ -615,26 +616,59 @@ class Exporter:
             ev = self._evaluated_of[key] = ob.original.evaluated_get(self.depsgraph)
         return ev
 
+    def release_meshes(self):
+        """Free the meshes Object.to_mesh() made for edit-mode objects (_read_geometry), once
+        the export has read them (assembly reads attributes, tangents and coordinates)."""
+        while self._to_mesh_objects:
+            try:
+                self._to_mesh_objects.pop().to_mesh_clear()
+            except ReferenceError:
+                pass
+
     def _read_geometry(self, ob):
         """Read (once) the evaluated geometry of `ob`; returns its cache key or None."""
-        if ob.type == 'MESH':
-            key = ('MESH', ob.data.as_pointer())
-            if any(slot.link == 'OBJECT' for slot in ob.material_slots):
-                # Cycles gives an object whose materials are linked to it its own geometry
-                # (BKE_object_is_modified), a single user shaded as one: linked duplicates of a
-                # smooth mesh scaled (4, 1, 1) had been shaded as instances, 0.80-1.11x Cycles
-                key += (ob.original.as_pointer(),)
+        me = ob.data if ob.type == 'MESH' else None
+        if me is not None and me.is_editmode:
+            # A mesh in Edit Mode evaluates to a wrapper of the edit mesh, without faces (no
+            # modifier) or attributes (with one): the box had vanished, a Subdivision failed
+            # the render on 'position'. Read as Cycles reads it (blender/util.h object_to_mesh,
+            # Object.to_mesh). Each object evaluates to its own wrapper: linked duplicates
+            # without modifiers or shape keys (Cycles' unmodified objects, keyed by their data)
+            # share one result, keyed by the original mesh.
+            original = ob.original.data
+            if not ob.modifiers and getattr(original, 'shape_keys', None) is None:
+                key = ('MESH', original.as_pointer(), 'EDIT')
+            else:
+                key = ('MESH', me.as_pointer())
+        elif me is not None:
+            key = ('MESH', me.as_pointer())
         else:   # point clouds and Curves: one tessellation per (object, data)
             key = (ob.type, ob.original.as_pointer(), ob.data.as_pointer() if ob.data else 0)
+        if me is not None and any(slot.link == 'OBJECT' for slot in ob.material_slots):
+            # Cycles gives an object whose materials are linked to it its own geometry
+            # (BKE_object_is_modified), a single user shaded as one: linked duplicates of a
+            # smooth mesh scaled (4, 1, 1) had been shaded as instances, 0.80-1.11x Cycles
+            key += (ob.original.as_pointer(),)
         if key in self.meshes:
             return key if self.meshes[key] is not None else None
-        if ob.type == 'MESH':
-            arrays = mesh_arrays(ob.data, want_uvs=True)
+        if me is not None and me.is_editmode:
+            # to_mesh() of the depsgraph's own evaluated object (an instance's is a temporary
+            # copy), held until release_meshes(); a second call would free the first result
+            evaluated = self._evaluated(ob)
+            if evaluated.data != me:    # (another object's Geometry Nodes instance of it)
+                self.skip("a mesh in Edit Mode instanced by another object's Geometry Nodes is not "
+                          "rendered until Edit Mode is left", ob.name)
+                self.meshes[key] = None
+                return None
+            me = evaluated.to_mesh()
+            self._to_mesh_objects.append(evaluated)
+        if me is not None:
+            arrays = mesh_arrays(me, want_uvs=True)
             if arrays is not None:
-                arrays.mesh = ob.data       # the depsgraph's mesh, alive through the export
+                arrays.mesh = me            # the depsgraph's mesh (or to_mesh's), alive through the export
                 # what Generated coordinates are of, looked up only if a procedural texture reads
                 # them (MeshArrays.corner_coordinates); the original object outlives the export
-                arrays.undeformed = functools.partial(self._undeformed_source, ob.original, ob.data)
+                arrays.undeformed = functools.partial(self._undeformed_source, ob.original, me)
         else:           # tessellated once the frame's instances are counted (_tessellate_strands)
             arrays = read_strands(ob, self)
             if arrays is not None:
@@ -646,7 +680,6 @@ class Exporter:
         self.meshes[key] = arrays
         self.placements[key] = []
         return key
-
 
     def _object_id(self, ob, parent):
         """The index of the object's entry (name, pass index, asset, light group); instances of
