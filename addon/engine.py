@@ -210,8 +210,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         main thread, where the export may read bpy. Updates that change nothing rendered
         (a selection) keep the running samples."""
         from .viewport import ViewportSession
+        space = getattr(context, 'space_data', None)
         if self._viewport is not None and not _renders_differently(depsgraph, self._settings_key,
-                                                                   getattr(self, '_layer_key', None)):
+                                                                   getattr(self, '_layer_key', None), space):
             return
         previous = None                 # (its last image stays up until the new one's first)
         if self._viewport is not None:
@@ -225,7 +226,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             r = depsgraph.scene_eval.render
             import dacrt                # (as render(): Threads: Fixed caps the export's passes)
             with dacrt.thread_limit(int(r.threads) if r.threads_mode == 'FIXED' else 0):
-                scene_data = export.export_scene(depsgraph, view_camera=camera)
+                scene_data = export.export_scene(depsgraph, view_camera=camera, view=space)
         except Exception as e:          # in the viewport's status line, and reported once
             self._viewport_report([('ERROR', f"viewport: {e}")])
             self.update_stats("", f"DACRT | Error: {e}")
@@ -238,9 +239,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             if live is not None:
                 live.tag_redraw()
         self._viewport = ViewportSession(scene_data, redraw, previous)
-        self._view_key = _view_key(region, rv3d, getattr(context, 'space_data', None), depsgraph.scene_eval)
+        self._view_key = _view_key(region, rv3d, space, depsgraph.scene_eval)
         self._settings_key = _settings_key(depsgraph.scene_eval)
-        self._layer_key = _layer_key(depsgraph)
+        self._layer_key = _layer_key(depsgraph, space)
         self._viewport.start(camera)
 
     def view_draw(self, context, depsgraph):
@@ -567,18 +568,19 @@ def _view_key(region, rv3d, space=None, scene=None):
     return tuple(key)
 
 
-def _renders_differently(depsgraph, settings_key, layer_key=None) -> bool:
+def _renders_differently(depsgraph, settings_key, layer_key=None, space=None) -> bool:
     """Whether a depsgraph update can change the rendered image: any data-block other than an
     object or the scene, an object's geometry, transform or shading, or the scene's settings
     (settings_key: those of the running export; a selection changes none of them, and comes as
     an update of the scene alone), or what the view layer shows (layer_key, _layer_key's of the
     running export, None: not compared): hiding an object (hide_set) or setting a collection's
-    Holdout or Indirect Only also comes as an update of the scene alone."""
+    Holdout or Indirect Only also comes as an update of the scene alone, as does entering or
+    leaving the 3D view's (space's) Local View or Local Collections."""
     for u in depsgraph.updates:
         if isinstance(u.id, bpy.types.Scene):
             if _settings_key(depsgraph.scene_eval) != settings_key:
                 return True
-            if layer_key is not None and _layer_key(depsgraph) != layer_key:
+            if layer_key is not None and _layer_key(depsgraph, space) != layer_key:
                 return True
         elif not isinstance(u.id, bpy.types.Object):
             return True
@@ -587,10 +589,12 @@ def _renders_differently(depsgraph, settings_key, layer_key=None) -> bool:
     return False
 
 
-def _layer_key(depsgraph):
+def _layer_key(depsgraph, space=None):
     """What the view layer shows besides its objects' data: each layer collection's Exclude,
     Hide, Holdout and Indirect Only, and the objects hidden in the viewport (the eye icon,
-    hide_set: a flag of the view layer's base, not of the object)."""
+    hide_set: a flag of the view layer's base, not of the object); where the 3D view (space)
+    is in Local View or has Local Collections, the objects it shows (the export leaves the
+    others out)."""
     layer = depsgraph.view_layer
     flags = []
 
@@ -604,7 +608,12 @@ def _layer_key(depsgraph):
     filters = tuple(getattr(layer, p, None) for p in ('use_sky', 'use_solid', 'use_strand', 'use_volumes',
                                                       'use_motion_blur'))
     overrides = tuple(getattr(getattr(layer, p, None), 'name', None) for p in ('material_override', 'world_override'))
-    return tuple(flags), hidden, filters, overrides
+    local = None
+    if export.local_view_filter(space):     # (read only then: a call per object)
+        # (the evaluated objects, which the export asks: the originals' Local Collections bits
+        # are synced only when a window draws)
+        local = tuple(sorted(ob.name_full for ob in depsgraph.objects if ob.visible_in_viewport_get(space)))
+    return tuple(flags), hidden, filters, overrides, local
 
 
 def _settings_key(scene):

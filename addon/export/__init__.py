@@ -74,14 +74,14 @@ objectinfo), geometry
 from . import images
 from .camera import camera_view_camera, export_camera, region_border, viewport_camera
 from .errors import ExportCancelled, ExportError
-from .scene import Exporter
+from .scene import Exporter, local_view_filter
 from .world import effective_world, export_world
 
 __all__ = ['ExportCancelled', 'ExportError', 'camera_view_camera', 'effective_world', 'export_camera',
-           'export_scene', 'export_world', 'region_border', 'viewport_camera']
+           'export_scene', 'export_world', 'local_view_filter', 'region_border', 'viewport_camera']
 
 
-def export_scene(depsgraph, check_break=None, camera=None, view_camera=None, render=None):
+def export_scene(depsgraph, check_break=None, camera=None, view_camera=None, render=None, view=None):
     """Build the frame's SceneData from an evaluated depsgraph.
 
     check_break: optional callable returning True when the user cancelled; polled during the
@@ -89,9 +89,11 @@ def export_scene(depsgraph, check_break=None, camera=None, view_camera=None, ren
     the scene's camera (RenderEngine.camera_override: a sequencer strip's camera), or None.
     view_camera: a viewport's camera (scenedata.Camera, export.viewport_camera) to render
     through instead; the scene's camera is then not read. render: the RenderSettings that size
-    the image (RenderEngine.render; see export_camera), or None for the scene's.
+    the image (RenderEngine.render; see export_camera), or None for the scene's. view: the 3D
+    view (SpaceView3D) a viewport renders: the objects it does not show (Local View, Local
+    Collections) are left out, as Cycles' viewport sync leaves them.
     """
-    exporter = Exporter(depsgraph, check_break, camera, view_camera, render)
+    exporter = Exporter(depsgraph, check_break, camera, view_camera, render, view)
     images._check_break[0] = check_break
     try:
         return exporter.run()

@@ -41,6 +41,12 @@ DRAWN_OVER = {'GREASEPENCIL', 'GPENCIL'}
 CHECK_EVERY = 64                          # instances between cancel checks
 
 
+def local_view_filter(view) -> bool:
+    """Whether a 3D view (SpaceView3D, or None) shows only some of the view layer's objects:
+    in Local View, or with Local Collections (its own collection visibility)."""
+    return isinstance(view, bpy.types.SpaceView3D) and (view.local_view is not None or view.use_local_collections)
+
+
 def _add_name(table, reason, name):
     """Note `name` once under `reason` in a reason -> {names} table (the export's messages; a
     dict keeps their order, and its lookup kept 16000 skipped objects from taking 3.7 s)."""
@@ -127,8 +133,10 @@ class Exporter:
     hair, point clouds), then assembles the geometry, reads the world and the settings, and
     collects every message for the render to report."""
 
-    def __init__(self, depsgraph, check_break, camera=None, view_camera=None, render=None):
+    def __init__(self, depsgraph, check_break, camera=None, view_camera=None, render=None, view=None):
         self.depsgraph = depsgraph
+        # the 3D view whose Local View or Local Collections leave objects out (local_view_filter)
+        self.view = view if local_view_filter(view) else None
         self.scene = depsgraph.scene_eval
         self.view_layer = depsgraph.view_layer
         self._held_collections = None   # the view layer's held-out collections (_in_holdout_collection)
@@ -259,6 +267,10 @@ class Exporter:
             if n % CHECK_EVERY == 0 and self.check_break():
                 raise ExportCancelled()
             ob = inst.object
+            # as Cycles' sync_objects: `if (b_v3d && !b_ob.visible_in_viewport_get(b_v3d)) continue`
+            # (an instance takes its instancer's local-view bits); every object had rendered
+            if self.view is not None and not ob.visible_in_viewport_get(self.view):
+                continue
             if not inst.is_instance or ob.name not in self._noted:
                 self._note_ignored_features(ob)
             if ob.type == 'LIGHT':
