@@ -259,8 +259,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             try:
                 session.start(_region_camera(context, depsgraph, said))
             except export.ExportError as e:
-                session.stop()
-                session.error = str(e)
+                session.fail(str(e))    # (the last view's image is not this view's)
             self._viewport_report(said)
         if not session.running and session.messages:
             self._viewport_report(session.messages)

@@ -58,6 +58,7 @@ class ViewportSession:
         self.error = None           # the text of what stopped the render, for the status line
         self.messages = []          # the integrator's messages (what it approximated)
         self.started = 0.0
+        self.empty = False          # the camera has nothing to render (an empty Render Region)
 
     def start(self, camera):
         """(Re)start the samples through `camera` (scenedata.Camera); the previous run stops
@@ -68,8 +69,25 @@ class ViewportSession:
         self.error, self.samples_done, self.started = None, 0, time.perf_counter()
         self.messages = []
         self.samples_total = int(self.scene_data.settings.samples)
+        x0, y0, x1, y1 = camera.border
+        self.empty = x1 <= x0 or y1 <= y0
+        if self.empty:
+            # nothing of the region to render (camera view's Render Region panned or zoomed off
+            # it): an empty region, as Cycles' viewport, not the last view's image
+            self.samples_done = self.samples_total
+            with self._lock:
+                self._image, self._version = blank(camera.width, camera.height), self._version + 1
+            return
         self._thread = threading.Thread(target=self._run, name="DACRT viewport", daemon=True)
         self._thread.start()
+
+    def fail(self, text):
+        """Stop with the error `text`, and drop the image (of another view: drawn over this one,
+        its pixels would be in the wrong place)."""
+        self.stop()
+        self.error = text
+        with self._lock:
+            self._image, self._version = None, self._version + 1
 
     def stop(self):
         """Stop the worker and wait for it (a pass polls the stop between its kernels)."""
@@ -143,6 +161,8 @@ def status_text(session) -> str:
         return "DACRT | Exporting scene"
     if session.error:
         return f"DACRT | Error: {session.error}"
+    if getattr(session, 'empty', False):
+        return "DACRT | Nothing to render: the Render Region is outside the view"
     elapsed = time.perf_counter() - session.started
     done = session.samples_done >= session.samples_total
     return (f"DACRT | Sample {session.samples_done}/{session.samples_total}"

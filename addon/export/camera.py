@@ -304,9 +304,11 @@ def camera_view_camera(scene, cam_ob, frame_matrix, window_matrix, width, height
     r = scene.render
     if r.use_border:
         # the border's frame fractions as fractions of the region
+        # (panned or zoomed off the region, nothing of it: an empty border, rendered as an empty
+        # region as Cycles' clipped border is, not an error)
         border = region_border(((r.border_min_x - u0) / (u1 - u0), (r.border_max_x - u0) / (u1 - u0),
                                 (r.border_min_y - v0) / (v1 - v0), (r.border_max_y - v0) / (v1 - v0)),
-                               width, height)
+                               width, height, empty=True)
     return dataclasses.replace(render, viewplane=tuple(float(v) for v in viewplane), width=int(width),
                                height=int(height), border=border, crop=False)
 
@@ -335,15 +337,18 @@ def _region_in_frame(frame_matrix, window_matrix):
     return tuple(out) if np.isfinite(out).all() and out[1] > out[0] and out[3] > out[2] else None
 
 
-def region_border(fractions, width, height):
+def region_border(fractions, width, height, empty=False):
     """The pixels (x0, y0, x1, y1) of a viewport's Render Region given as fractions (min x, max x,
     min y, max y) of its region, clamped to it, rounded as Cycles' viewport does (the float32
-    product's integer part)."""
+    product's integer part). Less than a pixel: an error, or with `empty` (0, 0, 0, 0), nothing
+    to render."""
     fx0, fx1, fy0, fy1 = (min(max(float(f), 0.0), 1.0) if math.isfinite(f) else 0.0 for f in fractions)
 
     def edge(fraction, size):
         return int(np.float32(fraction) * np.float32(size))
     border = (edge(fx0, width), edge(fy0, height), edge(fx1, width), edge(fy1, height))
     if border[2] <= border[0] or border[3] <= border[1]:
+        if empty:
+            return (0, 0, 0, 0)
         raise ExportError("the viewport's render region is empty (less than one pixel wide or high)")
     return border

@@ -1,0 +1,83 @@
+"""The viewport (Rendered shading), second round: camera view with the scene's Render Region
+panned or zoomed off the region, the integrator's messages, hair at a Viewport Display Amount
+below 100%, Cycles' Viewport Denoise, and settings only the final render reads. Driven without
+a GPU through the stand-ins of test_viewport.py and test_viewport_fixes.py."""
+import numpy as np
+import pytest
+
+import bpy
+
+from . import scenes
+from .test_viewport import _Engine, _finished, _lit_box
+from .test_viewport_fixes import _Context, _cam_context, _space, _zoomed
+
+DRAWN = []
+
+
+@pytest.fixture(autouse=True)
+def _no_gpu(monkeypatch):
+    """view_draw's drawing (Blender's GPU) recorded instead: (image, version, width, height)."""
+    from addon import display
+    DRAWN.clear()
+    monkeypatch.setattr(display.Display, 'draw', lambda self, engine, sc, image, version, w, h:
+                        DRAWN.append((image, version, w, h)))
+
+
+# --- 3. camera view, the Render Region off the region ------------------------------------------
+
+def _camera_view(cam, frame, u, v, w=32, h=24):
+    """The camera view zoomed and offset to show the frame's fractions u across, v up."""
+    return _Context(cam.matrix_world.inverted(), _zoomed(frame, u, v), w, h, _space(), 'CAMERA')
+
+
+def test_camera_view_with_the_render_region_off_the_region_renders_nothing_without_an_error(scene):
+    # the scene's Render Region at 0.1 .. 0.3 of the frame, the view zoomed onto its top-right
+    # quarter: reported as an ERROR ("the viewport's render region is empty"), the status line
+    # an error, the last view's image (30 lit pixels) drawn on over the new view, and a re-export
+    # at that zoom gave no session at all. Cycles renders nothing there (its border clipped)
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 4
+    r = scene.render
+    r.use_border = True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.1, 0.3, 0.1, 0.3
+    dg = bpy.context.evaluated_depsgraph_get()
+    frame = np.array(cam.calc_matrix_camera(dg, x=32, y=24))
+    whole = _camera_view(cam, frame, (0.0, 1.0), (0.0, 1.0))
+    off = _camera_view(cam, frame, (0.5, 1.0), (0.5, 1.0))
+    engine = _Engine()
+    engine.view_update(whole, dg)
+    _finished(engine._viewport)
+    engine.view_draw(whole, dg)
+    assert (DRAWN[-1][0][..., 3] > 0).sum() == 30
+    for _ in range(2):
+        engine.view_draw(off, dg)
+    image, _, w, h = DRAWN[-1]
+    assert image.shape == (24, 32, 4) and (w, h) == (32, 24) and not image.any()
+    assert not engine.reports and "Error" not in engine.status[-1]
+    # a re-export at that zoom: a session with nothing to render
+    fresh = _Engine()
+    fresh.view_update(off, dg)
+    assert fresh._viewport is not None and not fresh.reports
+    fresh.view_draw(off, dg)
+    assert not DRAWN[-1][0].any() and "Error" not in fresh.status[-1]
+    # back over the Render Region: it renders again
+    engine.view_draw(whole, dg)
+    assert (_finished(engine._viewport)[..., 3] > 0).sum() == 30
+    engine._viewport.stop()
+    fresh._viewport.stop()
+
+
+def test_a_view_that_cannot_be_rendered_draws_nothing_of_the_last_view(scene):
+    # a restart that fails (here a region of no width) had kept drawing the last view's image,
+    # stretched over the new one
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 2
+    dg = bpy.context.evaluated_depsgraph_get()
+    engine = _Engine()
+    engine.view_update(_cam_context(cam, space=_space(), perspective='PERSP'), dg)
+    _finished(engine._viewport)
+    engine.view_draw(_cam_context(cam, space=_space(), perspective='PERSP'), dg)
+    drawn = len(DRAWN)
+    engine.view_draw(_cam_context(cam, w=0, space=_space(), perspective='PERSP'), dg)
+    assert len(DRAWN) == drawn and engine._viewport.image()[1] is None
+    assert "Error" in engine.status[-1] and any("less than one pixel" in t for t in engine.reports)
