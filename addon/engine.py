@@ -261,9 +261,11 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             except export.ExportError as e:
                 session.fail(str(e))    # (the last view's image is not this view's)
             self._viewport_report(said)
-        if not session.running and session.messages:
+        # (whether or not the worker still runs: its last redraw comes before it ends, and a
+        # long render's set-up messages had waited for its end)
+        if session.messages:
             self._viewport_report(session.messages)
-        if not session.running and session.error:
+        if session.error:
             # (what stopped the render, the integrator's set-up too: reported once, as an
             # export's error, besides the status line)
             self._viewport_report([('ERROR', f"viewport: {session.error}")])

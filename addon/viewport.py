@@ -66,8 +66,9 @@ class ViewportSession:
         self.stop()
         self.scene_data.camera = camera
         self._stop.clear()
+        # (the messages stay: the same export's, said once per engine; a new view had emptied
+        # them before anything reported them)
         self.error, self.samples_done, self.started = None, 0, time.perf_counter()
-        self.messages = []
         self.samples_total = int(self.scene_data.settings.samples)
         x0, y0, x1, y1 = camera.border
         self.empty = x1 <= x0 or y1 <= y0
@@ -116,6 +117,14 @@ class ViewportSession:
                 if not self._render(dataclasses.replace(self.scene_data, camera=preview, settings=one), preview=True):
                     return
             self._render(self.scene_data, hold=preview is not None)
+        # a redraw once the messages are complete: the last block's came before them, and
+        # Blender draws only when asked (they had waited for a mouse move)
+        self._on_update()
+
+    def _publish(self, messages):
+        """Add the integrator's messages (what it approximated) for view_draw to report."""
+        with self._lock:
+            self.messages = list(dict.fromkeys(self.messages + list(messages)))
 
     def _render(self, scene_data, preview=False, hold=False):
         """Render scene_data's samples, publishing each block's image (hold: only from the end
@@ -130,6 +139,9 @@ class ViewportSession:
             self.error = str(e)
             self._on_update()
             return False
+        # what the set-up said (skipped lights, light linking, ...), reported at the next draw:
+        # a render of many samples had said nothing until it ended
+        self._publish(integ.messages)
         steps = integ.passes()
         try:
             for progress in steps:
@@ -151,7 +163,7 @@ class ViewportSession:
             return False
         finally:
             steps.close()               # frees the tracer scenes now
-            self.messages = list(dict.fromkeys(self.messages + list(integ.messages)))
+            self._publish(integ.messages)   # (and what the passes added: NaN samples dropped, ...)
         return not self._stop.is_set()
 
 
