@@ -50,12 +50,11 @@ def point_attribute(data, name, data_type, width):
     return out.reshape(n, width).astype(np.float64) if width > 1 else out.astype(np.float64)
 
 
-def _per_strand(ps, first, width, read, notes):
-    """(strands, width): read(particle, particle_no) for each rendered strand from the first
-    rendered particle on, children given the first parent (as Cycles' ObtainCacheParticle*
-    calls pass them), polling Esc. bpy has only such per-particle calls: ~4 us a strand."""
+def _per_strand(ps, first, width, read, notes, total):
+    """(strands, width): read(particle, particle_no) for each rendered strand, particles first
+    .. total - 1, children given the first parent (as Cycles' ObtainCacheParticle* calls pass
+    them), polling Esc. bpy has only such per-particle calls: ~4 us a strand."""
     parents = ps.particles
-    total = len(parents) + len(ps.child_particles)
     out = np.empty((total - first, width))
     for i, no in enumerate(range(first, total)):
         if i % 4096 == 0 and notes.check_break():
@@ -64,20 +63,20 @@ def _per_strand(ps, first, width, read, notes):
     return out
 
 
-def _root_uvs(ps, modifier, first, uv_no, notes):
+def _root_uvs(ps, modifier, first, uv_no, notes, total):
     """(strands, 2): each rendered strand's UV at its root on the emitter's UV map uv_no, as
     Cycles reads it (ObtainCacheParticleUV: uv_on_emitter; 0.04 s a UV map for 10K strands,
     whose co_hair points take 0.16 s)."""
     return _per_strand(ps, first, 2, lambda p, no: ps.uv_on_emitter(modifier, p, particle_no=no, uv_no=uv_no),
-                       notes)
+                       notes, total)
 
 
-def _root_colors(ps, modifier, first, vcol_no, notes):
+def _root_colors(ps, modifier, first, vcol_no, notes, total):
     """(strands, 4): each rendered strand's colour at its root on the emitter's vcol_no-th Face
     Corner Byte Color attribute, as Cycles reads it (ObtainCacheParticleVcol: mcol_on_emitter,
     sRGB bytes to linear, alpha 1)."""
     c = _per_strand(ps, first, 3, lambda p, no: ps.mcol_on_emitter(modifier, p, particle_no=no, vcol_no=vcol_no),
-                    notes)
+                    notes, total)
     return np.concatenate([srgb_to_linear(c), np.ones((len(c), 1), np.float32)], axis=1)
 
 
@@ -112,6 +111,11 @@ def hair_arrays(ob, notes):
     for ps in systems:
         s = ps.settings
         parents, children = len(ps.particles), len(ps.child_particles)
+        if viewport:
+            # Cycles' viewport takes the Viewport Display Amount's share of the children
+            # (curves.cpp: (int)((float)totchild * (float)disp / 100.0f)); the viewport's
+            # depsgraph had given about 74% of them at 50%
+            children = int(np.float32(children) * np.float32(s.display_percentage) / np.float32(100.0))
         first = parents if (s.child_type != 'NONE' and children) else 0
         # the path cache's points: 2^render_step + 1 in a render, 2^display_step + 1 in the
         # viewport (whose depsgraph caches the display steps, as Cycles reads them there:
@@ -125,6 +129,13 @@ def hair_arrays(ob, notes):
                 raise ExportCancelled()
             for j in range(points):
                 co[i, j] = ps.co_hair(ob, particle_no=pa, step=j)
+        # the viewport's path cache holds the displayed strands alone (Display Amount below
+        # 100%): co_hair gives the others as one repeated point, tubes of no area which the
+        # tracer dropped and reported as degenerate triangles (5888 of 19844 at 50%); left out
+        shown = np.ones(len(co), bool)
+        if viewport and len(co):
+            shown = (co != co[:, :1]).any(axis=(1, 2))
+            co = co[shown]
         if not len(co):
             continue
         # a Spiral kink's extra steps: the path cache holds fewer than Cycles asks for (parents
@@ -153,9 +164,9 @@ def hair_arrays(ob, notes):
         slots.append(np.full(len(co), min(max(s.material - 1, 0), n_slots - 1)))
         modifier = next(m for m in ob.modifiers if m.type == 'PARTICLE_SYSTEM' and m.particle_system == ps)
         for k, name in enumerate(uv_names):
-            uvs[name].append(_root_uvs(ps, modifier, first, k, notes))
+            uvs[name].append(_root_uvs(ps, modifier, first, k, notes, parents + children)[shown])
         for k, name in enumerate(vcol_names):
-            vcols[name].append(_root_colors(ps, modifier, first, k, notes))
+            vcols[name].append(_root_colors(ps, modifier, first, k, notes, parents + children)[shown])
     if not positions:
         return None
     positions, radii = np.concatenate(positions), np.concatenate(radii)

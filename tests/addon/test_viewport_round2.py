@@ -129,3 +129,55 @@ def test_the_integrators_messages_are_reported_at_the_draws_the_render_asks_for(
         assert sum(ZERO in t for t in engine.reports) == 1          # (once)
     finally:
         engine._viewport.stop()
+
+
+# --- 5. hair at a Viewport Display Amount below 100% -----------------------------------------
+
+def _hair_scene(scene, children, percentage):
+    scene.render.resolution_x, scene.render.resolution_y = 48, 36
+    scenes.plane("Floor", size=8.0, materials=[scenes.diffuse("grey", (0.6, 0.6, 0.6))])
+    em = scenes.plane("Emitter", size=1.0, location=(1.5, 1.0, 0.02),
+                      materials=[scenes.diffuse("hair", (0.9, 0.1, 0.1))])
+    scenes.light('SUN', 3.0, rotation=(0.3, 0.2, 0))
+    scenes.world((0.05, 0.05, 0.08))
+    cam = scenes.camera(location=(0.0, -6.0, 3.0), rotation=(1.1, 0.0, 0.0))
+    scene.dacrt.samples = scene.dacrt.preview_samples = 2
+    s = em.modifiers.new("hair", 'PARTICLE_SYSTEM').particle_system.settings
+    s.type, s.count, s.hair_length, s.radius_scale = 'HAIR', 40, 0.4, 0.06
+    s.display_step, s.render_step = 2, 3
+    s.display_percentage = percentage
+    if children:
+        s.child_type = 'INTERPOLATED'
+        s.child_percent, s.rendered_child_count = 4, 4
+    return cam
+
+
+@pytest.mark.parametrize("children", [False, True])
+def test_hair_at_half_the_display_amount_takes_cycles_strands_and_warns_of_nothing(scene, monkeypatch, children):
+    # the viewport's path cache holds the displayed strands alone, co_hair gives the others as
+    # one repeated point: their tubes of no area were dropped by the tracer and reported
+    # ("5888 degenerate (zero-area) triangles skipped", 20480 with children), and about 74% of
+    # the children were taken where Cycles' viewport takes children x amount / 100
+    from addon.export import scene as scene_export
+    strands = []
+    real = scene_export.tessellate
+
+    def spy(src, *args, **kw):
+        strands.append(len(src.offsets) - 1)
+        return real(src, *args, **kw)
+    monkeypatch.setattr(scene_export, 'tessellate', spy)
+    cam = _hair_scene(scene, children, 50)
+    engine = _Engine()
+    engine.view_update(_cam_context(cam, 48, 36, space=_space(), perspective='PERSP'),
+                       bpy.context.evaluated_depsgraph_get())
+    _finished(engine._viewport)
+    engine.view_draw(_cam_context(cam, 48, 36, space=_space(), perspective='PERSP'),
+                     bpy.context.evaluated_depsgraph_get())
+    engine._viewport.stop()
+    assert not any("degenerate" in t for t in engine.reports), engine.reports
+    ps = bpy.data.objects['Emitter'].evaluated_get(bpy.context.evaluated_depsgraph_get()).particle_systems[0]
+    shown = len(ps.particles)
+    if children:
+        assert strands == [len(ps.child_particles) // 2] and strands[0] == 80
+    else:                       # the displayed parents (half of them: the others are one point)
+        assert 0 < strands[0] < shown and abs(strands[0] - shown / 2) <= 0.25 * shown
