@@ -45,6 +45,9 @@ def unrendered_passes(vl):
 
 # World > Mist Pass falloff as Cycles' exponent (blender/sync.cpp)
 MIST_FALLOFF = {'QUADRATIC': 2.0, 'LINEAR': 1.0, 'INVERSE_QUADRATIC': 0.5}
+# said in the viewport where a scene made for Cycles keeps Cycles' Viewport > Denoise on
+PREVIEW_DENOISE_NOT_APPLIED = ("Cycles' Sampling > Viewport > Denoise is not applied: DACRT does not denoise, "
+                               "so the viewport shows the undenoised image")
 
 
 def layer_samples(scene, vl, samples):
@@ -124,6 +127,9 @@ def export_settings(scene, vl, messages, viewport=False):
         crypto = tuple(kind for kind, toggle in CRYPTO_KINDS if getattr(vl, toggle, False))
         lightgroups = tuple(dict.fromkeys(g.name for g in getattr(vl, 'lightgroups', ())))
     cyc = getattr(scene, 'cycles', None)
+    if viewport and getattr(cyc, 'use_preview_denoising', False):
+        # (the final render says the same of Render > Denoise: engine.DENOISE_NOT_APPLIED)
+        messages.append(('INFO', PREVIEW_DENOISE_NOT_APPLIED))
     culled = [what for what, toggle in (("camera", 'use_camera_cull'), ("distance", 'use_distance_cull'))
               if r.use_simplify and getattr(cyc, toggle, False)]
     if culled:

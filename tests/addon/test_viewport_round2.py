@@ -181,3 +181,24 @@ def test_hair_at_half_the_display_amount_takes_cycles_strands_and_warns_of_nothi
         assert strands == [len(ps.child_particles) // 2] and strands[0] == 80
     else:                       # the displayed parents (half of them: the others are one point)
         assert 0 < strands[0] < shown and abs(strands[0] - shown / 2) <= 0.25 * shown
+
+
+# --- 6. Cycles' Viewport Denoise ---------------------
+
+def test_cycles_viewport_denoise_is_said_in_the_viewport(scene):
+    # a scene made for Cycles may keep Viewport > Denoise on: the viewport showed the noisy
+    # image and said nothing (the final render says its Render > Denoise is not applied)
+    cam = _lit_box(scene)
+    scene.dacrt.preview_samples = 2
+    for on in (False, True):
+        scene.cycles.use_preview_denoising = on
+        scene.update_tag()              # (the evaluated scene's copy of the add-on's property)
+        engine = _Engine()
+        engine.view_update(_cam_context(cam, space=_space(), perspective='PERSP'),
+                           bpy.context.evaluated_depsgraph_get())
+        _finished(engine._viewport)
+        engine._viewport.stop()
+        said = [t for t in engine.reports if "Viewport > Denoise" in t]
+        assert said == (["DACRT: Cycles' Sampling > Viewport > Denoise is not applied: DACRT does not denoise, "
+                         "so the viewport shows the undenoised image"] if on else [])
+
