@@ -618,10 +618,14 @@ def _layer_key(depsgraph, space=None):
 
 
 def _settings_key(scene):
-    """The scene settings a viewport render reads besides its data-blocks: DACRT's own, the
-    film (and Cycles' Transparent Glass, shown in DACRT's panel), the frame and the world."""
+    """The scene settings a viewport render reads besides its data-blocks: DACRT's own but the
+    final render's alone (export.settings.FINAL_ONLY: a change of Render Samples had restarted
+    the viewport, 425 samples thrown away), the film (and Cycles' Transparent Glass, shown in
+    DACRT's panel), the frame and the world."""
+    from .export.settings import FINAL_ONLY
     d = scene.dacrt
-    own = tuple(getattr(d, p.identifier) for p in d.bl_rna.properties if p.identifier not in ('rna_type', 'name'))
+    own = tuple(getattr(d, p.identifier) for p in d.bl_rna.properties
+                if p.identifier not in ('rna_type', 'name') + FINAL_ONLY)
     r = scene.render
     cyc = getattr(scene, 'cycles', None)
     glass = (getattr(cyc, 'film_transparent_glass', None), getattr(cyc, 'film_transparent_roughness', None))

@@ -45,6 +45,11 @@ def unrendered_passes(vl):
 
 # World > Mist Pass falloff as Cycles' exponent (blender/sync.cpp)
 MIST_FALLOFF = {'QUADRATIC': 2.0, 'LINEAR': 1.0, 'INVERSE_QUADRATIC': 0.5}
+# scene.dacrt settings the viewport does not read (the final render's sample count), and those
+# the final render does not (the viewport's): a change of one of the first leaves the viewport
+# as it is (engine._settings_key)
+FINAL_ONLY = ('samples',)
+VIEWPORT_ONLY = ('preview_samples',)
 # said in the viewport where a scene made for Cycles keeps Cycles' Viewport > Denoise on
 PREVIEW_DENOISE_NOT_APPLIED = ("Cycles' Sampling > Viewport > Denoise is not applied: DACRT does not denoise, "
                                "so the viewport shows the undenoised image")
@@ -114,7 +119,7 @@ def export_settings(scene, vl, messages, viewport=False):
     d = getattr(scene, 'dacrt', None)
     if d is None:
         raise ExportError("scene.dacrt is missing: the DACRT add-on is not registered")
-    d = stored_settings(d, messages, unread=('samples',) if viewport else ('preview_samples',))
+    d = stored_settings(d, messages, unread=FINAL_ONLY if viewport else VIEWPORT_ONLY)
     if viewport:        # the viewport draws Combined alone: no pass, AOV, Cryptomatte or light group
         passes, missing, aovs, crypto, lightgroups, noisy = (), [], (), (), (), False
     else:

@@ -183,7 +183,7 @@ def test_hair_at_half_the_display_amount_takes_cycles_strands_and_warns_of_nothi
         assert 0 < strands[0] < shown and abs(strands[0] - shown / 2) <= 0.25 * shown
 
 
-# --- 6. Cycles' Viewport Denoise ---------------------
+# --- 6. Cycles' Viewport Denoise, 7. settings the viewport does not read ---------------------
 
 def test_cycles_viewport_denoise_is_said_in_the_viewport(scene):
     # a scene made for Cycles may keep Viewport > Denoise on: the viewport showed the noisy
@@ -202,3 +202,39 @@ def test_cycles_viewport_denoise_is_said_in_the_viewport(scene):
         assert said == (["DACRT: Cycles' Sampling > Viewport > Denoise is not applied: DACRT does not denoise, "
                          "so the viewport shows the undenoised image"] if on else [])
 
+
+def _scene_update(scene):
+    """The update Blender sends for an edit of an add-on's scene property in the interface (the
+    scene alone: rna_property_update tags the scene; a script's assignment tags nothing), made
+    by re-setting a scene property that tags it so."""
+    scene.render.use_stamp_date = scene.render.use_stamp_date
+
+
+def test_a_setting_only_the_final_render_reads_keeps_the_viewports_samples(scene):
+    # Render > Samples (scene.dacrt.samples) had re-exported the viewport, throwing away its
+    # samples (425 of them, restarted from 0); the viewport's own samples still re-export
+    cam = _lit_box(scene)
+    scene.dacrt.preview_samples = 1 << 20
+    ctx = _cam_context(cam, space=_space(), perspective='PERSP')
+    engine = _Engine()
+    exports = []
+
+    def handler(sc, dg):
+        before = engine._viewport
+        engine.view_update(ctx, dg)
+        exports.append(engine._viewport is not before)
+    dg = bpy.context.evaluated_depsgraph_get()
+    engine.view_update(ctx, dg)
+    bpy.app.handlers.depsgraph_update_post.append(handler)
+    try:
+        scene.dacrt.samples = 128
+        _scene_update(scene)
+        dg.update()
+        assert exports == [False]
+        scene.dacrt.preview_samples = 1 << 19
+        _scene_update(scene)
+        dg.update()
+        assert exports == [False, True]
+    finally:
+        bpy.app.handlers.depsgraph_update_post.remove(handler)
+        engine._viewport.stop()
