@@ -1,0 +1,162 @@
+"""Export speed, round 2: work the export did once per placement, per material or twice, now
+done once. Each test checks the property (how often the heavy step runs, or that it is skipped)
+and that the result is bit for bit what the old way gave; no timing here (the numbers: the
+commits)."""
+import numpy as np
+
+from addon.export import assembly
+from addon.export.objectinfo import OBJECT_INFO
+from tests.parity.test_instancer_attributes import instancer, instancer_material
+
+from . import scenes
+
+
+# -- attribute colours of many placements (Assembly._attribute_colors) -------------------------
+
+def _per_placement_colors(self, a, place, mirrored, out, S):
+    """The per-placement _attribute_colors as it was before the batching (the reference)."""
+    if out.colors is None:
+        out.colors = np.ones((len(out.triangles), 3, 3), np.float32)
+    block = out.colors[S]
+    material = out.material[S]
+    for k in set(place.slot_map):
+        entry = self.materials.attribute_maps[k]
+        if entry is None:
+            continue
+        rows = np.flatnonzero(material == k)
+        if entry[0] == 'object':
+            block[rows] = place.object_albedo[k]
+            continue
+        if entry[0] == 'corners':
+            block[rows] = self._corner_albedo(a, k, entry[1], place)[rows]
+            if mirrored:
+                block[rows] = block[rows][:, [0, 2, 1]]
+            continue
+        _, name, w, c = entry
+        values = a.corner_attribute(name)
+        rgb = np.zeros((len(rows), 3, 3)) if values is None else values[rows, :, :3]
+        if values is None:
+            self.ignore(a.unread_said(name, "its colour reads 0"), place.name)
+        block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)
+        if mirrored:
+            block[rows] = block[rows][:, [0, 2, 1]]
+    bad = ~np.isfinite(block).all(axis=(1, 2))
+    if bad.any():
+        block[bad] = 0.0
+        self.ignore(f"a colour or attribute value NaN or infinite at some corner: the {int(bad.sum())} "
+                    "triangle(s) around it render black, as in Cycles", place.name)
+
+
+def _one_at_a_time(self, a, places, mirrored, out, t0):
+    nt = len(a.triangles)
+    for i, p in enumerate(places):
+        if not self._attributed.isdisjoint(self._shown(p.slot_map)):
+            _per_placement_colors(self, a, p, i in mirrored, out, slice(t0 + i * nt, t0 + (i + 1) * nt))
+
+
+def _random_material(name):
+    """Diffuse colour = Combine Color(Object Info Random, 0.5, 0.3): one albedo per object."""
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    info, comb = nt.nodes.new('ShaderNodeObjectInfo'), nt.nodes.new('ShaderNodeCombineColor')
+    nt.links.new(info.outputs['Random'], comb.inputs[0])
+    comb.inputs[1].default_value, comb.inputs[2].default_value = 0.5, 0.3
+    nt.links.new(comb.outputs[0], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _attribute_material(name, attribute, tint=None, gamma=None):
+    """Diffuse colour = Attribute `attribute` x tint (per point: a scale) or to the power gamma
+    (evaluated at the corners)."""
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    s = scenes.colour_attribute(nt, attribute, by_attribute_node=True)
+    if tint is not None:
+        s = scenes.mix_node(nt, 'MULTIPLY', s, tint, 1.0).outputs['Result']
+    if gamma is not None:
+        g = nt.nodes.new('ShaderNodeGamma')
+        g.inputs['Gamma'].default_value = gamma
+        nt.links.new(s, g.inputs['Color'])
+        s = g.outputs[0]
+    nt.links.new(s, d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _strip(name, materials, location):
+    """Four quads in a row, one material slot each, a corner colour 'col' distinct at each
+    corner (one corner NaN on the second and third quads: the triangles around it render black,
+    said)."""
+    verts, faces = [], []
+    for i in range(4):
+        verts += [(i, 0, 0), (i + 0.9, 0, 0), (i + 0.9, 0.9, 0), (i, 0.9, 0)]
+        faces.append(tuple(range(4 * i, 4 * i + 4)))
+    ob = scenes.mesh(name, verts, faces, location, materials)
+    for i, poly in enumerate(ob.data.polygons):
+        poly.material_index = i
+    col = ob.data.color_attributes.new('col', 'FLOAT_COLOR', 'CORNER')
+    rgba = np.random.default_rng(7).random((len(ob.data.loops), 4)).astype(np.float32)
+    rgba[:, 3] = 1.0
+    rgba[5, 0] = rgba[9, 1] = np.nan       # (on the second and third quads)
+    col.data.foreach_set('color', rgba.ravel())
+    return ob
+
+
+def test_attribute_colours_written_per_batch_bit_for_bit_as_per_placement(scene, exported, monkeypatch):
+    """Linked duplicates of a strip of four quads whose slots read Object Info Random, an
+    attribute times a tint (per point), the attribute to a gamma (at the corners) and an
+    attribute no mesh has (Cycles: 0, said for every duplicate); one duplicate mirrored, one
+    with an object-linked slot (another slot map), and Geometry Nodes instances coloured by an
+    Instancer attribute: the colours are written once per mesh batch, not once per placement,
+    and are bit for bit what the per-placement writing gave, with the same messages."""
+    scenes.camera((3, 0, 14), kind='ORTHO', ortho_scale=12.0)
+    mats = (_random_material("Random"), _attribute_material("Tint", 'col', tint=(0.9, 0.5, 0.2)),
+            _attribute_material("Gamma", 'col', gamma=2.0), _attribute_material("Lost", 'nowhere', tint=(1, 1, 1)))
+    first = _strip("Strip0", mats, (-2, -4, 0))
+    for i in range(1, 7):
+        ob = first.copy()                   # (shares the mesh)
+        ob.name, ob.location = f"Strip{i}", (-2, -4 + 1.1 * i, 0)
+        if i == 2:
+            ob.scale = (-1, 1, 1)
+        if i == 4:
+            ob.material_slots[1].link = 'OBJECT'
+            ob.material_slots[1].material = _attribute_material("Tint2", 'col', tint=(0.2, 0.6, 0.9))
+        scene.collection.objects.link(ob)
+    src = scenes.plane("Src", size=0.4, location=(0, 100, 0), materials=(instancer_material("Icol", 'icol'),))
+
+    def colour_of(ng, index):
+        c = ng.nodes.new('FunctionNodeCombineColor')
+        ng.links.new(scenes.multiply_add(ng, index, 0.1, 0.2), c.inputs[0])
+        c.inputs[1].default_value, c.inputs[2].default_value = 0.4, 0.6
+        return c.outputs[0]
+    instancer("Scatter", [(x, 4.5, 0) for x in (-1.0, 0.0, 1.0, 2.0, 3.0)], src, [('icol', 'FLOAT_COLOR', colour_of)])
+
+    calls = []
+    real = assembly.Assembly._attribute_colors
+
+    def counted(self, a, places, *rest):
+        calls.append(len(places))
+        return real(self, a, places, *rest)
+    monkeypatch.setattr(assembly.Assembly, '_attribute_colors', counted)
+    batched = exported()
+    # one call per mesh batch (the strip's duplicates: the one with its own slot material apart;
+    # the scatter's 5 instances and its source), not one per placement (13)
+    assert sum(calls) == 13 and len(calls) <= 3, calls
+    monkeypatch.setattr(assembly.Assembly, '_attribute_colors', _one_at_a_time)
+    single = exported()
+    ga, gb = batched.geometry, single.geometry
+    assert np.array_equal(ga.material, gb.material) and np.array_equal(ga.triangles, gb.triangles)
+    assert np.array_equal(ga.colors, gb.colors)                 # bit for bit
+    assert batched.messages == single.messages
+    # the scene exercises what it means to: per-object albedos that differ, a mirrored
+    # duplicate, a black NaN triangle on every duplicate, the missing attribute said for all
+    names = [m.name for m in batched.materials]
+    random_rows = np.flatnonzero(ga.material == names.index("Random"))
+    assert len({tuple(np.round(ga.colors[r, 0], 5)) for r in random_rows}) == 7
+    assert (~np.isfinite(ga.colors)).sum() == 0
+    assert (ga.colors == 0).all(axis=(1, 2)).sum() > 7 * 2       # ('nowhere' and the NaNs')
+    text = ' '.join(t for _, t in batched.messages)
+    assert "'nowhere'" in text and "NaN or infinite" in text and "Strip6" in text
+    icol = ga.colors[ga.material == names.index("Icol")]
+    assert len({tuple(np.round(c[0], 5)) for c in icol}) >= 5
