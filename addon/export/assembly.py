@@ -815,9 +815,15 @@ class Assembly:
                 raise ExportCancelled()
             mat_row = material[ids[0]]          # (the same for every placement of the slot map)
             plain, swapped = ids[~flip[ids]], ids[flip[ids]]
-            for m in sorted(self._shown(slot_map) & attributed):
+            ms = sorted(self._shown(slot_map) & attributed)
+            # each material's rows from one stable sort (ascending within each material), not
+            # one scan of the mesh per material (2000 slots of a 2M-triangle mesh: 1.25 s)
+            order = np.argsort(mat_row, kind='stable')
+            ranked = mat_row[order]
+            starts, ends = np.searchsorted(ranked, ms, 'left'), np.searchsorted(ranked, ms, 'right')
+            for m, lo, hi in zip(ms, starts.tolist(), ends.tolist()):
                 entry = maps[m]
-                rows = np.flatnonzero(mat_row == m)
+                rows = order[lo:hi]
                 if entry[0] == 'object':             # one albedo over each whole object
                     albedo = np.stack([places[i].object_albedo[m] for i in ids.tolist()]).astype(np.float32)
                     _put(block, ids, rows, albedo[:, None, None, :])

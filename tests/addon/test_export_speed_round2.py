@@ -160,3 +160,95 @@ def test_attribute_colours_written_per_batch_bit_for_bit_as_per_placement(scene,
     assert "'nowhere'" in text and "NaN or infinite" in text and "Strip6" in text
     icol = ga.colors[ga.material == names.index("Icol")]
     assert len({tuple(np.round(c[0], 5)) for c in icol}) >= 5
+
+
+# -- attribute materials built once (MaterialBuilder._build), many slots on one mesh -----------
+
+def _alpha_mask_material(name):
+    """Diffuse colour = Mix(grey, Attribute 'col' colour, factor its Alpha): reads the alpha."""
+    mat, nt, out = scenes._material(name)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    a = nt.nodes.new('ShaderNodeAttribute')
+    a.attribute_name = 'col'
+    mix = scenes.mix_node(nt, 'MIX', (0.5, 0.5, 0.5), a.outputs['Color'], 1.0)
+    nt.links.new(a.outputs['Alpha'], mix.inputs['Factor'])
+    nt.links.new(mix.outputs['Result'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _grouped_alpha_material(name):
+    """The Attribute node's Alpha used inside a node group (Math Multiply by 0.8) into the colour."""
+    import bpy
+    ng = bpy.data.node_groups.new(name + "Group", 'ShaderNodeTree')
+    ng.interface.new_socket('Value', in_out='OUTPUT', socket_type='NodeSocketFloat')
+    a, go = ng.nodes.new('ShaderNodeAttribute'), ng.nodes.new('NodeGroupOutput')
+    a.attribute_name = 'col'
+    m = ng.nodes.new('ShaderNodeMath')
+    m.operation, m.inputs[1].default_value = 'MULTIPLY', 0.8
+    ng.links.new(a.outputs['Alpha'], m.inputs[0])
+    ng.links.new(m.outputs[0], go.inputs[0])
+    mat, nt, out = scenes._material(name)
+    g = nt.nodes.new('ShaderNodeGroup')
+    g.node_tree = ng
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(g.outputs[0], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _slot_grid(name, materials, n_side=8):
+    """An n_side x n_side grid of quads, quad i on slot i % len(materials), with a corner colour
+    'col' at random colours and alphas."""
+    verts, faces = [], []
+    for j in range(n_side):
+        for i in range(n_side):
+            b = len(verts)
+            verts += [(i, j, 0), (i + 0.9, j, 0), (i + 0.9, j + 0.9, 0), (i, j + 0.9, 0)]
+            faces.append((b, b + 1, b + 2, b + 3))
+    ob = scenes.mesh(name, verts, faces, (-n_side / 2, -n_side / 2, 0), materials)
+    for i, poly in enumerate(ob.data.polygons):
+        poly.material_index = i % len(materials)
+    col = ob.data.color_attributes.new('col', 'FLOAT_COLOR', 'CORNER')
+    col.data.foreach_set('color', np.random.default_rng(3).random(4 * len(ob.data.loops)).astype(np.float32))
+    return ob
+
+
+def test_attribute_material_built_once_unless_an_alpha_is_linked(scene, exported, monkeypatch):
+    """A material whose colour is a tint of an attribute is built once (its chain cannot read the
+    attribute's alpha: no Alpha output linked), where it had been built a second time on
+    alpha probes; one that links an Alpha output (in its tree or in a group) is still built on
+    them and found to read it (evaluated at the corners). Materials, attribute maps, colours and
+    messages are bit for bit those of always building the second time; 40 slots on one mesh,
+    each material's rows found from one sort, the same colours as one scan per material."""
+    from addon.export import materials as materials_module
+    scenes.camera((0, 0, 14), kind='ORTHO', ortho_scale=10.0)
+    tints = [_attribute_material(f"Tint{i}", 'col', tint=(0.1 + 0.02 * i, 0.9 - 0.02 * i, 0.5)) for i in range(38)]
+    mats = tints + [_alpha_mask_material("AlphaMask"), _grouped_alpha_material("GroupAlpha")]
+    _slot_grid("Grid", mats)
+    builds = {}
+    real = materials_module.MaterialBuilder._build_material
+
+    def counted(self, mat):
+        builds[mat.name] = builds.get(mat.name, 0) + 1
+        return real(self, mat)
+    monkeypatch.setattr(materials_module.MaterialBuilder, '_build_material', counted)
+    once = exported()
+    once_builds = dict(builds)
+    assert all(once_builds[f"Tint{i}"] == 1 for i in range(38)), once_builds
+    assert once_builds["AlphaMask"] >= 2 and once_builds["GroupAlpha"] >= 2, once_builds
+    names = [m.name for m in once.materials]
+    monkeypatch.setattr(materials_module, '_alpha_linked', lambda ntree, seen=None: True)
+    monkeypatch.setattr(assembly.Assembly, '_attribute_colors', _one_at_a_time)
+    twice = exported()
+    assert [m.name for m in twice.materials] == names
+    for a, b in zip(once.materials, twice.materials):
+        assert repr(a) == repr(b), a.name
+    g1, g2 = once.geometry, twice.geometry
+    assert np.array_equal(g1.material, g2.material) and np.array_equal(g1.colors, g2.colors)
+    assert once.messages == twice.messages
+    # the grouped alpha is read (its chain evaluated at the corners, said), the tints per point
+    text = ' '.join(t for _, t in once.messages)
+    assert "'GroupAlpha'" in text and "'Tint0'" not in text
+    tint = g1.colors[g1.material == names.index("Tint3")]
+    assert len(tint) and np.ptp(tint.reshape(-1, 3), axis=0).min() > 0.05
