@@ -201,6 +201,55 @@ class ImageTexels(np.ndarray):
         return getattr(ufunc, method)(*(plain(x) for x in inputs), **kwargs)
 
 
+class LazyTexels:
+    """An image's (h, w, 4) float32 texels with colour nodes baked in (`make()` computes them),
+    computed on first read, that carry how Cycles stores the image for lookup (`stored`, as
+    ImageTexels). Where the nodes run after the lookup (EncodedTexels.then), the renderer reads
+    `stored` alone, so the bake (a full pass of the nodes over every texel and a float32 copy
+    of the image: 37 MB and ~0.3 s a 1K image under a Hue/Saturation) is made only if an
+    average or another texel-wise reader asks for it. Reads give plain arrays, as ImageTexels'
+    views do; nbytes counts what was made."""
+
+    def __init__(self, shape, make, stored):
+        self.shape, self.stored = tuple(shape), stored
+        self.ndim, self.dtype = len(self.shape), np.dtype(F32)
+        self._make, self._values = make, None
+
+    @property
+    def made(self) -> bool:
+        return self._values is not None
+
+    def values(self) -> np.ndarray:
+        if self._values is None:
+            self._values = self._make()
+            self._make = None
+        return self._values
+
+    @property
+    def nbytes(self) -> int:
+        return 0 if self._values is None else self._values.nbytes
+
+    @property
+    def size(self) -> int:
+        return int(np.prod(self.shape))
+
+    def __len__(self):
+        return self.shape[0]
+
+    def __array__(self, dtype=None, copy=None):
+        v = self.values()
+        return v if dtype is None else v.astype(dtype, copy=False)
+
+    def __getitem__(self, index):
+        return self.values()[index]
+
+    def __array_ufunc__(self, ufunc, method, *inputs, out=None, **kwargs):
+        plain = lambda x: x.values() if isinstance(x, LazyTexels) else x
+        if out is not None:
+            kwargs['out'] = tuple(plain(o) for o in out)
+        return getattr(ufunc, method)(*(plain(x) for x in inputs), **kwargs)
+
+
 def baked(source, values, fn):
     """Texels `values` (the image texels `source` with a per-point colour map fn, (..., 3) ->
     (..., 3), applied to their RGB: a colour baked in) as an ImageTexels whose lookup, when the

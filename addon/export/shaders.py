@@ -12,7 +12,7 @@ from .. import scenedata as sd
 from .. import nodegraph
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import input_socket, linked_link, linked_node
-from ..texture import ImageTexels, stored_texels
+from ..texture import ImageTexels, LazyTexels, stored_texels
 from . import procedurals
 from .closure import Closure, Texture, is_image_alpha
 from .cutouts import MISSING_ALPHA
@@ -303,6 +303,9 @@ class ShaderClosures:
         return Closure(const=color)
 
     def _evaluated_closure(self, socket, reasons):
+        lazy = self._lookup_closure(socket, reasons)
+        if lazy is not None:
+            return lazy
         f = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE, attribute=self._attribute).input(socket, True)
         if f.tex is None:
             return Closure(const=f.value)
@@ -341,6 +344,78 @@ class ShaderClosures:
         return Closure(texture=Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim,
                                          src.name, src.attribute),
                         tex_weight=(1.0, 1.0, 1.0))
+
+    # the most texels of an image the lazy path samples to see whether its nodes give a
+    # negative or non-finite colour somewhere (then the texels are baked now, counted and said)
+    _SAMPLED = 64
+
+    def _lookup_closure(self, socket, reasons):
+        """The closure of colour nodes on one image (no attribute, no other image) that Cycles runs
+        after its lookup (`_after_lookup`) or that are affine in its colour, found without running
+        the nodes over every texel: the nodes are read once on a one-texel stand-in of the image
+        to find it, then probed as _evaluated_closure probes them. The baked texels (the nodes on
+        each texel, read only by averages and other texel-wise readers: the lookup runs the
+        nodes itself) are made lazily (texture.LazyTexels), the same values. None (reasons as
+        they were): _evaluated_closure's full evaluation decides."""
+        mark = len(reasons)
+        images, other = {}, []
+
+        def stand_in(node, notes):
+            t = self._texture(node, notes)
+            if t is None or t.attribute is not None or t.udim is not None or \
+                    stored_texels(t.pixels) is None or np.ndim(t.pixels) != 3:
+                other.append(t)
+                return t
+            images[t.key] = t
+            return Texture(t.key, np.asarray(t.pixels[:1, :1]).view(np.ndarray), t.interpolation, t.extension,
+                           t.transform, t.udim, t.name, t.attribute)
+
+        def attribute(*args):
+            got = self._attribute(*args)
+            if got is not None:
+                other.append(got)
+            return got
+
+        def undone():
+            del reasons[mark:]
+            return None
+
+        f = nodeeval.Evaluator(stand_in, reasons, MISSING_IMAGE, attribute=attribute).input(socket, True)
+        if other or len(images) != 1 or f.tex is None or f.tex.key not in images:
+            return undone()
+        src = images[f.tex.key]
+        stored = stored_texels(src.pixels)
+        affine = self._affine_in(socket, src)
+        if isinstance(affine, tuple):
+            return Closure(const=affine[1], texture=src, tex_weight=affine[0])
+        after = self._after_lookup(socket, src, stored)
+        if after is None:
+            return undone()
+        pixels = np.asarray(src.pixels).view(np.ndarray)
+        h, w = pixels.shape[:2]
+        sample = pixels[::max(1, -(-h // self._SAMPLED)), ::max(1, -(-w // self._SAMPLED))]
+        g = nodeeval.Evaluator(lambda node, notes: Texture(src.key, sample, src.interpolation, src.extension),
+                               [], MISSING_IMAGE).input(socket, True)
+        v = np.asarray(g.value, np.float32)
+        if g.tex is None or v.shape[:2] != sample.shape[:2] or not (np.isfinite(v) & (v >= 0)).all():
+            return undone()
+        chain, reads_alpha = after.then, after.reads_alpha
+
+        def make():
+            # (what _evaluated_closure bakes: the same nodes on each texel, non-finite and
+            # negative results 0, the image's alpha beside them; in row blocks, as Texture.baked)
+            out = np.empty((h, w, 4), np.float32)
+            step = max(1, (1 << 18) // max(1, w * 4))
+            for i in range(0, h, step):
+                block = pixels[i:i + step]
+                out[i:i + step, :, :3] = chain(block[..., :4] if reads_alpha else block[..., :3])
+                out[i:i + step, :, 3] = block[..., 3]
+            return out
+
+        baked = LazyTexels((h, w, 4), make, after)
+        key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
+        return Closure(texture=Texture(key, baked, src.interpolation, src.extension, src.transform, src.udim,
+                                       src.name, src.attribute), tex_weight=(1.0, 1.0, 1.0))
 
 
 def glass_roughness(socket, depth=0):

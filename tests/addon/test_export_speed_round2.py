@@ -252,3 +252,104 @@ def test_attribute_material_built_once_unless_an_alpha_is_linked(scene, exported
     assert "'GroupAlpha'" in text and "'Tint0'" not in text
     tint = g1.colors[g1.material == names.index("Tint3")]
     assert len(tint) and np.ptp(tint.reshape(-1, 3), axis=0).min() > 0.05
+
+
+# -- colour nodes after an image texture: no bake over every texel at export -------------------
+
+def _byte_image(name, rng, size=(160, 130), alpha=False):
+    import bpy
+    img = bpy.data.images.new(name, size[1], size[0], alpha=alpha, float_buffer=False)
+    px = rng.random((size[0], size[1], 4)).astype(np.float32)
+    if not alpha:
+        px[..., 3] = 1.0
+    img.pixels.foreach_set(px.ravel())
+    img.pack()
+    return img
+
+
+def _chains():
+    """(name, chain(nt, image node) -> socket): colour nodes Cycles runs after the lookup."""
+    def hsv(nt, tex):
+        h = nt.nodes.new('ShaderNodeHueSaturation')
+        h.inputs['Saturation'].default_value = 0.5
+        nt.links.new(tex.outputs['Color'], h.inputs['Color'])
+        return h.outputs['Color']
+
+    def curves(nt, tex):
+        c = nt.nodes.new('ShaderNodeRGBCurve')
+        pt = c.mapping.curves[3].points
+        pt[0].location, pt[1].location = (0.0, 0.1), (1.0, 0.8)
+        pt.new(0.5, 0.7)
+        c.mapping.update()
+        nt.links.new(tex.outputs['Color'], c.inputs['Color'])
+        return c.outputs['Color']
+
+    def gamma(nt, tex):
+        g = nt.nodes.new('ShaderNodeGamma')
+        g.inputs['Gamma'].default_value = 2.0
+        nt.links.new(tex.outputs['Color'], g.inputs['Color'])
+        return g.outputs[0]
+
+    def decal(nt, tex):           # reads the alpha too: a Mix over grey by the image's alpha
+        m = scenes.mix_node(nt, 'MIX', (0.2, 0.3, 0.4), tex.outputs['Color'], 1.0)
+        nt.links.new(tex.outputs['Alpha'], m.inputs['Factor'])
+        g = nt.nodes.new('ShaderNodeGamma')
+        g.inputs['Gamma'].default_value = 1.8
+        nt.links.new(m.outputs['Result'], g.inputs['Color'])
+        return g.outputs[0]
+    return [('Hsv', hsv), ('Curves', curves), ('Gamma', gamma), ('Decal', decal)]
+
+
+def test_colour_nodes_after_an_image_bake_no_texels_at_export(scene, exported, monkeypatch):
+    """An 8-bit image through Hue/Saturation, RGB Curves, Gamma, or a Mix by its own alpha
+    (Linear, Cubic, Closest): the nodes run after the lookup, so the export runs them on no
+    more texels than a sample (they had been run on every texel and the result kept as another
+    float32 copy of the image); the texels baked lazily, where something reads them, are bit
+    for bit the bake of before, and so are the lookups and the messages."""
+    from addon import colornodes
+    from addon.export import shaders
+    from addon.texture import LazyTexels, lookup_texels, texture_lookup
+    scenes.camera((0, 0, 10), kind='ORTHO', ortho_scale=8.0)
+    rng = np.random.default_rng(5)
+    i = 0
+    for name, chain in _chains():
+        for interpolation in ('Linear', 'Cubic', 'Closest'):
+            mat, nt, out = scenes._material(f"{name}{interpolation}")
+            d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+            tex = nt.nodes.new('ShaderNodeTexImage')
+            tex.image = _byte_image(f"{name}{interpolation}", rng, alpha=name == 'Decal')
+            tex.interpolation = interpolation
+            nt.links.new(chain(nt, tex), d.inputs['Color'])
+            nt.links.new(d.outputs[0], out.inputs['Surface'])
+            ob = scenes.plane(f"P{i}", size=0.5, location=(-3 + 0.6 * (i % 10), -1 + 0.6 * (i // 10), 0),
+                              materials=(mat,))
+            ob.data.uv_layers.new(name='UV')
+            i += 1
+    largest = []
+    for fn in ('hue_saturation', 'curves_lookup', 'gamma', 'mix'):
+        real = getattr(colornodes, fn)
+
+        def counted(*args, _real=real, **kw):
+            largest.append(max((np.size(a) for a in args if isinstance(a, np.ndarray)), default=0))
+            return _real(*args, **kw)
+        monkeypatch.setattr(colornodes, fn, counted)
+    lazy = exported()
+    # the nodes ran on probes and a sample of at most 64 x 64 texels, never on the 160 x 130 image
+    assert largest and max(largest) < 160 * 130, max(largest)
+    monkeypatch.setattr(shaders.ShaderClosures, '_lookup_closure', lambda self, socket, reasons: None)
+    eager = exported()
+    assert lazy.messages == eager.messages
+    u, v = rng.random(500).astype(np.float32), rng.random(500).astype(np.float32)
+    checked = 0
+    for a, b in zip(lazy.materials, eager.materials):
+        assert a.name == b.name and a.approximated == b.approximated, a.name
+        if a.texture is None:
+            continue
+        assert isinstance(a.texture, LazyTexels) and not a.texture.made, a.name
+        ta, tb = lookup_texels(a.texture, a.texture_interpolation), lookup_texels(b.texture, b.texture_interpolation)
+        assert np.array_equal(texture_lookup(ta, u, v, a.texture_interpolation, a.texture_extension),
+                              texture_lookup(tb, u, v, b.texture_interpolation, b.texture_extension)), a.name
+        assert np.array_equal(np.asarray(a.texture), np.asarray(b.texture)), a.name      # the bake, made now
+        assert a.texture.made
+        checked += 1
+    assert checked == 12
