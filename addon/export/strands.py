@@ -185,7 +185,7 @@ class StrandSource:
     holds, instances included, so a scatter of hair tufts does not multiply the finest level
     (400 tufts of 30 curves had made 10.75M triangles and 3.4 GB; Cycles 282 MB)."""
     __slots__ = ('kind', 'name', 'positions', 'radii', 'offsets', 'linear', 'attributes', 'render_color',
-                 'curve_slot', 'texspace', 'uv_maps')
+                 'curve_slot', 'texspace', 'uv_maps', 'sampled')
 
     def __init__(self, kind, name, positions, radii, offsets=None, linear=False, attributes=None,
                  render_color=None):
@@ -197,6 +197,9 @@ class StrandSource:
         self.texspace = None        # hair particles: the emitter's texture space (location, size)
         # ({name: (domain, (n, 2) rows)}, the active render map's name or ''): the UV maps
         self.uv_maps = ({}, '')
+        # (steps, hair.rings at them): the curves' samples and rings, made by the triangle count
+        # and read again by tessellate (_sampled); dropped once tessellated
+        self.sampled = None
 
 
 def _attributes(data):
@@ -254,11 +257,20 @@ def strand_kind(src):
     return 'spheres' if src.kind == 'POINTCLOUD' else 'tubes'
 
 
+def _sampled(src, level):
+    """hair.rings of a StrandSource's curves at `level`'s steps (1 for Poly), kept on it for the
+    last steps asked: the count and the tessellation at one level share them."""
+    steps = 1 if src.linear else level[1]
+    if src.sampled is None or src.sampled[0] != steps:
+        src.sampled = (steps, hair.rings(src.positions, src.radii, src.offsets, steps))
+    return src.sampled[1]
+
+
 def triangle_count(src, level):
     """The triangles tessellate() makes of a StrandSource at `level` (at most, for tubes)."""
     if src.kind == 'POINTCLOUD':
         return pointcloud.triangle_count(src.radii, level)
-    return hair.triangle_count(src.offsets, level, src.linear, src.positions)
+    return hair.triangle_count(src.offsets, level, src.linear, src.positions, sampled=_sampled(src, level))
 
 
 def tessellate(src, level, notes, why=''):
@@ -283,7 +295,9 @@ def tessellate(src, level, notes, why=''):
         if unsized:
             notes.ignore(f"{unsized} point(s) of NaN or infinite radius: no tube is rendered around them", src.name)
         v, t, n, kept, tri_curve, (key, u) = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps),
-                                                         curve_of=True, linear=src.linear, vertex_keys=True)
+                                                         curve_of=True, linear=src.linear, vertex_keys=True,
+                                                         sampled=_sampled(src, level))
+        src.sampled = None
         curve = np.searchsorted(src.offsets, key, side='right') - 1
         u32 = u.astype(np.float32)[:, None]
 

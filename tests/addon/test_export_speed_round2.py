@@ -353,3 +353,43 @@ def test_colour_nodes_after_an_image_bake_no_texels_at_export(scene, exported, m
         assert a.texture.made
         checked += 1
     assert checked == 12
+
+
+# -- hair: the samples and rings made once for the triangle count and the tubes ----------------
+
+def test_hair_samples_and_rings_made_once_for_the_count_and_the_tubes(scene, exported, monkeypatch):
+    """A Curves object with sharp turns (rings split there), tessellated under a memory budget
+    (so the export counts its triangles first): hair._samples and hair._joins run once for the
+    count and the tubes together (twice before), and the frame's geometry is bit for bit that
+    of computing them again for the tubes."""
+    from addon import hair
+    from addon.export import budget, strands
+    scenes.camera((0, -4, 1), rotation=(1.4, 0, 0))
+    rng = np.random.default_rng(9)
+    curves = [np.cumsum(rng.normal(0, 0.05, (6, 3)), axis=0) + (rng.random(3) - 0.5) for _ in range(60)]
+    curves[0] = np.array([[0, 0, 0], [0.1, 0, 0], [0.1, 0.1, 0], [0, 0.1, 0.02], [0, 0, 0.04], [0.1, 0, 0.06]])
+    scenes.hair_curves("Hair", curves, radius=0.01)
+    monkeypatch.setattr(budget, 'available_bytes', lambda: 8 * 2**30)
+    calls = {'_samples': 0, '_joins': 0}
+    for fn in calls:
+        real = getattr(hair, fn)
+
+        def counted(*args, _real=real, _fn=fn, **kw):
+            calls[_fn] += 1
+            return _real(*args, **kw)
+        monkeypatch.setattr(hair, fn, counted)
+    counts = []
+    real_count = strands.triangle_count
+    monkeypatch.setattr(strands, 'triangle_count', lambda src, level: counts.append(level) or real_count(src, level))
+    from addon.export import scene as scene_module
+    monkeypatch.setattr(scene_module, 'triangle_count', strands.triangle_count)
+    once = exported()
+    assert counts, "the export did not count the tubes' triangles"
+    assert calls == {'_samples': 1, '_joins': 1}, calls
+    # computed anew for the tubes (what the export did before)
+    monkeypatch.setattr(strands, '_sampled', lambda src, level: None)
+    again = exported()
+    ga, gb = once.geometry, again.geometry
+    assert len(ga.triangles) > 0
+    for name in ('vertices', 'triangles', 'normals', 'material'):
+        assert np.array_equal(getattr(ga, name), getattr(gb, name)), name
