@@ -810,8 +810,8 @@ class Assembly:
         flip[mirrored] = True
         doubt = np.zeros(k, bool)       # placements written a NaN or infinite value somewhere
         maps = self.materials.attribute_maps
-        for slot_map, ids in groups:
-            if self.check_break():
+        for g, (slot_map, ids) in enumerate(groups):
+            if g % 256 == 255 and self.check_break():
                 raise ExportCancelled()
             mat_row = material[ids[0]]          # (the same for every placement of the slot map)
             plain, swapped = ids[~flip[ids]], ids[flip[ids]]
