@@ -74,8 +74,14 @@ class LightSetup:
             self._tri_forced = hittable & (self._tri_shadow_set > 0) & ~sampled
             sampled |= hittable & (self._tri_shadow_set > 0)
         self._tri_sampled = sampled
-        tris = EmissiveTriangles(self.tri.geo, self.tri.area, self._emission_table(), sampled,
-                                 power_emission=self._tri_emission) if self._any_emissive else None
+        table, power = self._emission_table(), self._tri_emission
+        if self._any_emissive and self.mats.light_scale is not None:
+            # light samples and the choice's power see the emission undimmed by a coat or sheen
+            # (Material.light_emission_scale); BSDF and camera hits keep the table's dimmed one
+            scale = np.take(self.mats.light_scale, self.tri.material, axis=1)
+            table, power = table * scale, power * scale
+        tris = EmissiveTriangles(self.tri.geo, self.tri.area, table, sampled,
+                                 power_emission=power) if self._any_emissive else None
         env = EnvironmentLight(sd.environment) if sd.environment is not None else None
         camera_env = env
         if camera_world is not None:

@@ -302,6 +302,26 @@ def emission_dim(node):
     return np.ones(3) if top is None else top[0] @ specular.VIEW
 
 
+def emission_light_dim(node, reasons=None):
+    """(3,) what a light sample sees of the Principled's emission: the coat tint's absorption
+    alone, averaged over view directions. Cycles evaluates an emitter for light samples (and a
+    lamp's shader always) emission-only: no closure is allocated there, so the sheen's and the
+    coat's layering weights (closure_layering_weight, taken only when bsdf_alloc succeeds) do
+    not dim it, while the coat tint, applied outside that test, does (svm/closure.h). A
+    coloured tint, which Cycles applies per direction, is added to `reasons` (a list) if given."""
+    found = _layer_inputs(node, 'Coat Weight', ('Coat Roughness', 'Coat IOR'), 'Coat Tint', "coat", "", [],
+                          most=np.inf)
+    if found is None:
+        return np.ones(3)
+    weight, (_, ior), tint = found
+    ior = 1.0 if np.isnan(ior) else max(float(ior), 1.0)
+    through = (1.0 + weight * (specular.coat_tint_mu(tint, ior) - 1.0)) @ specular.VIEW
+    if reasons is not None and not np.allclose(through, 1.0):
+        reasons.append(f"Principled Coat Tint on the emission averaged over view directions, "
+                       f"{tuple(round(float(x), 3) for x in through)}")
+    return through
+
+
 def _diffuse_roughness(node, reasons):
     """The diffuse base's roughness (Cycles' Oren-Nayar, roughdiffuse.py), 0 for Lambert."""
     sock = node.inputs.get('Diffuse Roughness')

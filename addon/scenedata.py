@@ -117,6 +117,11 @@ class Material:
     # Cycles' Emission Sampling, Auto resolved (addon/emissionsampling.py): 'NONE' leaves the
     # emitter to BSDF rays (light sampling never picks it); 'FRONT' and 'BACK' sample both sides
     emission_sampling: str = 'FRONT_BACK'
+    # (3,) what light samples (and the light choice's weight) see of `emission` and of the
+    # emission texture, per channel: Cycles evaluates an emitter emission-only for light
+    # samples, so a Principled's coat and sheen do not dim it there (their tint does), while
+    # camera and BSDF rays see it dimmed. None: 1
+    light_emission_scale: Optional[np.ndarray] = None
     texture: Optional[np.ndarray] = None          # (h, w, 4) float32 linear RGBA, row 0 at the bottom,
                                                   # or a texture.UdimTiles of such tiles; an image's
                                                   # texture.ImageTexels, or a texture.EncodedTexels,

@@ -164,6 +164,11 @@ class Materials:
         self.colored = np.array([getattr(m, 'color_attribute', None) is not None for m in materials])
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
         self.emissive = self.emission.max(axis=0) > 0
+        # (3, materials) what light samples and the light choice see of that emission
+        # (scenedata.Material.light_emission_scale); None where every one is 1
+        scale = [getattr(m, 'light_emission_scale', None) for m in materials]
+        self.light_scale = None if all(x is None for x in scale) else np.ascontiguousarray(np.asarray(
+            [np.ones(3) if x is None else np.nan_to_num(np.asarray(x, np.float64)[:3]) for x in scale], F32).T)
         # emitters light sampling may pick (Emission Sampling, scenedata.Material)
         self.light_sampled = np.array([getattr(m, 'emission_sampling', 'FRONT_BACK') != 'NONE'
                                        for m in materials], bool)

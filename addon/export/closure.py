@@ -71,7 +71,7 @@ class Closure:
     the glass the opaque part itself lets through (a Principled's transmission under its Alpha)."""
     def __init__(self, const=(0, 0, 0), emission=(0, 0, 0), texture=None, tex_weight=(0, 0, 0), holdout=0.0,
                  transparent=(0, 0, 0), opacity=None, emission_tex=None, translucent=(0, 0, 0),
-                 glass=(0, 0, 0), opaque_glass=(0, 0, 0)):
+                 glass=(0, 0, 0), opaque_glass=(0, 0, 0), light_emission=None):
         self.const = np.array(const, np.float64)
         self.emission = np.array(emission, np.float64)
         self.texture = texture
@@ -86,33 +86,43 @@ class Closure:
         self.translucent = np.array(translucent, np.float64)
         self.glass = np.array(glass, np.float64)
         self.opaque_glass = np.array(opaque_glass, np.float64)
+        # the emission light samples see where it differs from `emission` (what camera and BSDF
+        # rays see): a Principled's under a coat or sheen, which Cycles evaluates emission-only
+        # for light samples, without their layering weights; None: the same
+        self.light_emission = None if light_emission is None else np.array(light_emission, np.float64)
+
+    @property
+    def sampled_emission(self):
+        """(3,) the emission light samples see (and the light choice weighs)."""
+        return self.emission if self.light_emission is None else self.light_emission
 
     def layered(self, dim, add):
         """Under a layer (principled.py): the albedo x dim (3,) + add (3,); emission,
         transparency and holdout are set after the layers."""
         return Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
                         self.transparent, self.opacity, self.emission_tex, self.translucent, self.glass,
-                        self.opaque_glass)
+                        self.opaque_glass, self.light_emission)
 
     def mapped(self, f):
         """Under a nonlinear map of the albedo (principled.BaseMap): exact for a constant
         albedo; a textured one becomes a texture of the mapped texels (weight 1)."""
         if self.texture is None or not self.tex_weight.any():
             return Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
-                            self.opacity, self.emission_tex, self.translucent, self.glass, self.opaque_glass)
+                            self.opacity, self.emission_tex, self.translucent, self.glass, self.opaque_glass,
+                            self.light_emission)
         t = self.texture
         w, k = self.tex_weight.astype(np.float32), self.const.astype(np.float32)
         mapped = Texture(('mapped', t.key, f.key, *self.tex_weight, *self.const),
                           t.baked(lambda rgb: f(rgb * w + k)), t.interpolation, t.extension, t.transform, t.udim,
                           t.name, t.attribute)
         return Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
-                        self.emission_tex, self.translucent, self.glass, self.opaque_glass)
+                        self.emission_tex, self.translucent, self.glass, self.opaque_glass, self.light_emission)
 
     def scaled(self, f):
         etex = None if self.emission_tex is None else (self.emission_tex[0], self.emission_tex[1] * f)
         return Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
                         self.transparent * f, self.opacity, etex, self.translucent * f, self.glass * f,
-                        self.opaque_glass * f)
+                        self.opaque_glass * f, None if self.light_emission is None else self.light_emission * f)
 
     def only_transparent(self):
         return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
@@ -150,6 +160,8 @@ class Closure:
 
     def plus(self, other, reasons):
         etex = self._emission_sum(other, reasons)
+        light = None if self.light_emission is None and other.light_emission is None \
+            else self.sampled_emission + other.sampled_emission
         opacity = self.opacity or other.opacity
         transparent, glass = self.transparent + other.transparent, self.glass + other.glass
         opaque_glass = self.opaque_glass + other.opaque_glass
@@ -173,10 +185,11 @@ class Closure:
                 mean = other.texture.mean()
                 return Closure(self.const + other.const + other.tex_weight * mean,
                                 self.emission + other.emission, tex, w, self.holdout + other.holdout,
-                                transparent, opacity, etex, self.translucent + other.translucent, glass, opaque_glass)
+                                transparent, opacity, etex, self.translucent + other.translucent, glass, opaque_glass,
+                                light)
         return Closure(self.const + other.const, self.emission + other.emission, tex, w,
                         self.holdout + other.holdout, transparent, opacity, etex,
-                        self.translucent + other.translucent, glass, opaque_glass)
+                        self.translucent + other.translucent, glass, opaque_glass, light)
 
 
 def is_image_alpha(link):

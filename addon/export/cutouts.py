@@ -59,7 +59,8 @@ class Cutouts:
             return None
         reasons.extend(notes)
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
-                        clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass)
+                        clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass,
+                        light_emission=opaque.light_emission)
 
     @staticmethod
     def _procedural_cutout(closures, fac_fn, needs, name):
@@ -81,7 +82,8 @@ class Cutouts:
             return f if clear_a else 1.0 - f
         tex = Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity')
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
-                        clear.transparent, (tex, False), opaque.emission_tex, opaque.translucent, clear.glass)
+                        clear.transparent, (tex, False), opaque.emission_tex, opaque.translucent, clear.glass,
+                        light_emission=opaque.light_emission)
 
     def _procedural_alpha(self, socket, reasons):
         """(Texture, False) of a Principled BSDF's Alpha that procedural textures compute (a

@@ -270,8 +270,9 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
 
 def _principled_emission(node, reasons, kind=None, dark=None, oi=None):
     """A Principled BSDF's emission in a light's shader: Emission Color x Emission Strength,
-    under its coat and sheen (principled.emission_dim) and scaled by its alpha, as its weight
-    in Cycles' closure."""
+    under its coat's tint alone (principled.emission_light_dim: a light's shader is evaluated
+    emission-only, so the coat's and sheen's layering weights are never taken, 0.91x and 0.88x
+    Cycles had they been) and scaled by its alpha, as its weight in Cycles' closure."""
     color_socket = input_socket(node, 'Emission Color', 'Emission')
     strength_socket = input_socket(node, 'Emission Strength')
     if color_socket is None or strength_socket is None:
@@ -282,7 +283,7 @@ def _principled_emission(node, reasons, kind=None, dark=None, oi=None):
     color = _light_color(color_socket, "Principled emission", reasons, kind, oi)
     alpha_socket = node.inputs.get('Alpha')   # (`in` on an evaluated tree's inputs: False)
     alpha = 1.0 if alpha_socket is None else principled.constant_alpha(alpha_socket, reasons)
-    return np.array(color[:3], np.float64) * strength * alpha * principled.emission_dim(node)
+    return np.array(color[:3], np.float64) * strength * alpha * principled.emission_light_dim(node, reasons)
 
 
 def _light_strength(socket, reasons, kind=None, dark=None, oi=None):

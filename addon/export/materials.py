@@ -290,6 +290,16 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             emission = np.where(e_keep, emission, 0.0).astype(np.float32)
         else:
             emission = nonnegative(closure.emission.astype(np.float32), "emission", reasons)
+        light_scale = None
+        if closure.light_emission is not None and emission.any():
+            # (a channel camera and BSDF rays see none of keeps 1: no light to scale)
+            own = np.nan_to_num(np.asarray(closure.emission, np.float64))
+            light = np.nan_to_num(np.asarray(closure.light_emission, np.float64))
+            with np.errstate(divide='ignore', invalid='ignore'):
+                ratio = np.where(own > 0, light / own, 1.0)
+            ratio = np.where(np.isfinite(ratio) & (ratio >= 0), ratio, 1.0)
+            if not np.allclose(ratio, 1.0, rtol=0.0, atol=1e-7):
+                light_scale = ratio.astype(np.float32)
         holdout = closure.holdout >= 1.0 - 1e-6
         if 0.0 < closure.holdout and not holdout:
             reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")
@@ -380,7 +390,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                            normal_uv_map=n_uv, bumps=bumps, displacement_bump=displaced,
                            bump_correction=bool(getattr(getattr(mat, 'cycles', None), 'use_bump_map_correction',
                                                         True)),
-                           emission=emission, texture=texture,
+                           emission=emission, texture=texture, light_emission_scale=light_scale,
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, translucency=translucency, refraction=refraction,
