@@ -1,0 +1,46 @@
+"""Messages about lights that said the wrong thing, found by the lights hunt (the images were
+right, or as right as DACRT can make them):
+- a sun's Light Falloff Linear or Constant output warned "approximated", though Cycles passes a
+  sun's Strength through the node unchanged (0.2301 in both engines for all three outputs);
+- a Diffuse, Transparent or Holdout added or mixed beside a lamp's Emission warned
+  "approximated", though Cycles' light shader emits nothing from them either (0.2194 in both);
+- an emitter whose Strength reads 0 only because a node not evaluated here stood at its own
+  value was summed up as "no emissive materials" (Cycles lit the scene with it, 0.1005);
+- an IES Texture on a lamp was only "not evaluated", not said to be ignored as a profile."""
+import numpy as np
+
+from . import scenes
+
+
+def _floor():
+    scenes.plane("Floor", size=8, materials=[scenes.diffuse("Grey", (0.6, 0.6, 0.6))])
+
+
+def _lamp(kind, name, energy, **props):
+    lamp = scenes.light(kind, energy, location=(0, -1, 2.2), name=name, **props)
+    lamp.data.use_nodes = True
+    nt = lamp.data.node_tree
+    return nt, next(n for n in nt.nodes if n.type == 'EMISSION'), next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT')
+
+
+def _about(said, name):
+    return [t for t in said if f"'{name}'" in t or f" {name}" in t]
+
+
+def test_sun_light_falloff_outputs_warn_of_nothing(scene, said):
+    """A sun's Strength from a Light Falloff's Linear or Constant output (Smooth 0 or 1): as its
+    Quadratic in Cycles, so no warning; a point light's Linear output still warns."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    for output, smooth in (('Linear', 0.0), ('Constant', 1.0)):
+        nt, em, _ = _lamp('SUN', f'Sun{output}', 2.0)
+        falloff = nt.nodes.new('ShaderNodeLightFalloff')
+        falloff.inputs['Strength'].default_value = 0.5
+        falloff.inputs['Smooth'].default_value = smooth
+        nt.links.new(falloff.outputs[output], em.inputs['Strength'])
+    nt, em, _ = _lamp('POINT', 'PointLinear', 100.0)
+    falloff = nt.nodes.new('ShaderNodeLightFalloff')
+    nt.links.new(falloff.outputs['Linear'], em.inputs['Strength'])
+    scenes.render_rgba(scene)
+    assert not any("SunLinear" in t or "SunConstant" in t for t in said), said
+    assert any("PointLinear" in t and "Light Falloff Linear" in t for t in said), said
