@@ -264,7 +264,10 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
         return (1.0 - fac) * a + fac * b
     if node.type == 'BSDF_PRINCIPLED':   # its emission layer lights; its BSDFs do not
         return _principled_emission(node, reasons, kind, dark, oi)
-    reasons.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")
+    # exact, not an approximation: Cycles evaluates a light's shader for its emission alone, so
+    # a BSDF, Transparent or Holdout beside an Emission adds nothing there either (it had been
+    # warned "node tree approximated" with the image exact); said only where nothing else emits
+    dark.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")
     return np.zeros(3)
 
 

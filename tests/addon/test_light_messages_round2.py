@@ -44,3 +44,32 @@ def test_sun_light_falloff_outputs_warn_of_nothing(scene, said):
     scenes.render_rgba(scene)
     assert not any("SunLinear" in t or "SunConstant" in t for t in said), said
     assert any("PointLinear" in t and "Light Falloff Linear" in t for t in said), said
+
+
+def test_bsdf_beside_a_lamp_emission_warns_of_nothing(scene, said):
+    """Add(Emission, Diffuse / Transparent / Holdout) and Mix(Emission, Transparent, 0.3) in a
+    point light's tree: their BSDFs emit nothing in Cycles' light shader either: no warning, and
+    the lamps light (not skipped). A tree of a Diffuse BSDF alone is skipped as dark, with that
+    cause, and not warned of as approximated."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    for kind in ('ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTransparent', 'ShaderNodeHoldout'):
+        nt, em, out = _lamp('POINT', f'Add{kind[10:]}', 300.0)
+        add = nt.nodes.new('ShaderNodeAddShader')
+        nt.links.new(em.outputs[0], add.inputs[0])
+        nt.links.new(nt.nodes.new(kind).outputs[0], add.inputs[1])
+        nt.links.new(add.outputs[0], out.inputs['Surface'])
+    nt, em, out = _lamp('POINT', 'MixTransparent', 300.0)
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    mix.inputs['Fac'].default_value = 0.3
+    nt.links.new(em.outputs[0], mix.inputs[1])
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfTransparent').outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    nt, em, out = _lamp('POINT', 'DiffuseOnly', 300.0)
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], out.inputs['Surface'])
+    scenes.render_rgba(scene)
+    assert not any("approximated" in t for t in said), said
+    skipped = next(t for t in said if "node tree emits nothing" in t)
+    assert "DiffuseOnly (Diffuse BSDF emits no light" in skipped, skipped
+    assert not any(n in skipped for n in ('AddBsdfDiffuse', 'AddBsdfTransparent', 'AddHoldout',
+                                          'MixTransparent')), skipped
