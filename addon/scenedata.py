@@ -122,6 +122,9 @@ class Material:
     # samples, so a Principled's coat and sheen do not dim it there (their tint does), while
     # camera and BSDF rays see it dimmed. None: 1
     light_emission_scale: Optional[np.ndarray] = None
+    # non-empty where `emission` is 0 only because nodes the export does not evaluate stood at
+    # their own values (what it said of them): Cycles may light the scene with it
+    dark_stand_in: str = ''
     texture: Optional[np.ndarray] = None          # (h, w, 4) float32 linear RGBA, row 0 at the bottom,
                                                   # or a texture.UdimTiles of such tiles; an image's
                                                   # texture.ImageTexels, or a texture.EncodedTexels,

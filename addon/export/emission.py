@@ -31,13 +31,20 @@ class Emission:
         Info: an LED wall's vertex colours), read per shading point as Cycles reads them."""
         # procedural textures in either: colour x strength computed at each shading point
         # (procedural.py), as Cycles' SVM does; they had read the texture's own value
+        start = len(reasons)
         emitted = procedurals.compile_emission(color_socket, strength_socket, reasons, image=self._texture)
         if emitted is not None:
             return emitted.magnitude(), (Texture.procedural(emitted, 'emission'), np.ones(3))
         evaluate = nodeeval.Evaluator(self._texture, reasons, MISSING_IMAGE)
         color, strength = evaluate.input(color_socket, True), evaluate.input(strength_socket, False)
         if color.tex is None and strength.tex is None:
-            return np.asarray(color.value, np.float64).reshape(3) * float(strength.value.reshape(-1)[0]), None
+            value = np.asarray(color.value, np.float64).reshape(3) * float(strength.value.reshape(-1)[0])
+            said = reasons[start:]
+            if said and not (value > 0).any() and \
+                    (linked_link(color_socket) is not None or linked_link(strength_socket) is not None):
+                # dark only by what stood at its own value: the summary names it (materials.py)
+                self._dark_stand_ins.append(f"{label}: " + '; '.join(dict.fromkeys(said)))
+            return value, None
         if color.tex is not None and strength.tex is not None:
             strength = self._strength_beside(color.tex, strength, label, reasons)
         link = linked_link(color_socket)

@@ -80,6 +80,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         # for the others)
         self.uv_several = [None]
         self._uv_several = None
+        self._dark_stand_ins = []
         # per material: None; ('mesh', attribute name, w (3,), k (3,)): its albedo is w x the
         # mesh attribute's colour + k at each point (a Color Attribute or Attribute node);
         # ('corners', attribute name, material): its nodes evaluated on each corner's value; or
@@ -207,6 +208,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._bumps = []              # (Bump node keys, scenedata.Bump tuple) of its BSDFs' Bump chains
         displaced = None
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
+        self._dark_stand_ins = []     # what each emission that reads 0 only by a stand-in said
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
@@ -290,6 +292,10 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             emission = np.where(e_keep, emission, 0.0).astype(np.float32)
         else:
             emission = nonnegative(closure.emission.astype(np.float32), "emission", reasons)
+        # an emission 0 only because nodes not evaluated here stood at their own values (a
+        # Geometry Incoming into its Strength): Cycles may light it (named in the summary, which
+        # had said "no emissive materials" of a scene its emitter lights)
+        dark_stand_in = '; '.join(dict.fromkeys(self._dark_stand_ins)) if not emission.any() else ''
         light_scale = None
         if closure.light_emission is not None and emission.any():
             # (a channel camera and BSDF rays see none of keeps 1: no light to scale)
@@ -391,6 +397,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                            bump_correction=bool(getattr(getattr(mat, 'cycles', None), 'use_bump_map_correction',
                                                         True)),
                            emission=emission, texture=texture, light_emission_scale=light_scale,
+                           dark_stand_in=dark_stand_in,
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, translucency=translucency, refraction=refraction,

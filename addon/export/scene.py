@@ -773,7 +773,15 @@ class Exporter:
         # a world whose camera rays see a backdrop of their own (Is Camera Ray) draws it
         seen_world = camera_world is not None and bright(*camera_world)
         skipped = f" ({self.lights_skipped} light object(s) give none)" if self.lights_skipped else ""
-        if not self.lights and not lit_world and not has_emission and not seen_world:
+        # emitters dark only by a stand-in (a node not evaluated here at its own value): Cycles
+        # may light the scene with them, so "no emissive materials" had contradicted it
+        stood = {m.name: m.dark_stand_in for m in self.materials.materials if getattr(m, 'dark_stand_in', '')}
+        if not self.lights and not lit_world and not has_emission and not seen_world and stood:
+            self.messages.append(('WARNING', f"the scene has no lights{skipped} and a black world, and its "
+                                             f"emissive material(s) read 0 here (nodes not evaluated stand at "
+                                             f"their own values; Cycles evaluates them): the image will be black: "
+                                             + '; '.join(f"'{n}' ({w})" for n, w in stood.items())))
+        elif not self.lights and not lit_world and not has_emission and not seen_world:
             self.messages.append(('WARNING', f"the scene has no lights{skipped}, no emissive materials and "
                                              "a black world: the image will be black"))
         elif not self.lights:

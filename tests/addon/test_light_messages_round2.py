@@ -73,3 +73,51 @@ def test_bsdf_beside_a_lamp_emission_warns_of_nothing(scene, said):
     assert "DiffuseOnly (Diffuse BSDF emits no light" in skipped, skipped
     assert not any(n in skipped for n in ('AddBsdfDiffuse', 'AddBsdfTransparent', 'AddHoldout',
                                           'MixTransparent')), skipped
+
+
+def _incoming_emitter():
+    """An emissive panel whose Strength is 8 x dot(Geometry Incoming, Normal): per sample in
+    Cycles; here the Incoming stands at its own value, so the strength reads 0."""
+    mat, nt, out = scenes._material("e")
+    em = nt.nodes.new('ShaderNodeEmission')
+    g = nt.nodes.new('ShaderNodeNewGeometry')
+    dot = nt.nodes.new('ShaderNodeVectorMath')
+    dot.operation = 'DOT_PRODUCT'
+    nt.links.new(g.outputs['Incoming'], dot.inputs[0])
+    nt.links.new(g.outputs['Normal'], dot.inputs[1])
+    mul = nt.nodes.new('ShaderNodeMath')
+    mul.operation = 'MULTIPLY'
+    mul.inputs[1].default_value = 8.0
+    nt.links.new(dot.outputs['Value'], mul.inputs[0])
+    nt.links.new(mul.outputs[0], em.inputs['Strength'])
+    nt.links.new(em.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_emitter_dark_by_a_stand_in_is_named(scene, said):
+    """The only emitter's Strength reads 0 because the Geometry node stands at its own value:
+    the summary names the material and the node (Cycles lights the scene with it), not "no
+    emissive materials"."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    panel = scenes.plane("Panel", size=2, location=(0, 0, 2), materials=[_incoming_emitter()])
+    panel.rotation_euler = (np.pi, 0, 0)
+    scenes.render_rgba(scene)
+    assert not any("no emissive materials" in t for t in said), said
+    text = next(t for t in said if "image will be black" in t)
+    assert "emissive material(s) read 0 here" in text and "'e' (Emission: " in text, text
+    assert "'Geometry' node" in text and "Cycles evaluates them" in text, text
+
+
+def test_emitter_of_zero_strength_still_says_no_emissive_materials(scene, said):
+    """An Emission of a plain Strength 0 emits nothing in Cycles too: the summary stays "no
+    emissive materials"."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    mat, nt, out = scenes._material("Off")
+    em = nt.nodes.new('ShaderNodeEmission')
+    em.inputs['Strength'].default_value = 0.0
+    nt.links.new(em.outputs[0], out.inputs['Surface'])
+    scenes.plane("Panel", size=2, location=(0, 0, 2), materials=[mat])
+    scenes.render_rgba(scene)
+    assert any("no emissive materials" in t for t in said), said
