@@ -121,3 +121,17 @@ def test_emitter_of_zero_strength_still_says_no_emissive_materials(scene, said):
     scenes.plane("Panel", size=2, location=(0, 0, 2), materials=[mat])
     scenes.render_rgba(scene)
     assert any("no emissive materials" in t for t in said), said
+
+
+def test_ies_texture_is_named_as_not_applied(scene, said):
+    """An IES Texture into a point light's Strength: the warning names the node and says its
+    photometric profile is not applied (Cycles shapes the light by it)."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    nt, em, _ = _lamp('POINT', 'Spot', 300.0)
+    ies = nt.nodes.new('ShaderNodeTexIES')
+    ies.name = 'Profile'
+    nt.links.new(ies.outputs['Fac'], em.inputs['Strength'])
+    scenes.render_rgba(scene)
+    text = next(t for t in said if "light 'Spot'" in t)
+    assert "IES Texture 'Profile' not applied" in text and "photometric profile" in text, text
