@@ -71,8 +71,19 @@ def _makes_instances(ob):
 
 
 def _shader_trees():
-    """Every material's node tree and every node group (shader groups among them)."""
-    return [m.node_tree for m in bpy.data.materials if m.node_tree is not None] + list(bpy.data.node_groups)
+    """Every material's node tree and the node groups they use (nested ones too). Not every
+    node group: a Geometry Nodes Object Info (the usual way to pick what a scatter instances)
+    has type 'OBJECT_INFO' too, and had switched on the per-instance Object Info reads of 100K
+    instances no shader needed (~0.3-0.8 s of export)."""
+    trees = [m.node_tree for m in bpy.data.materials if m.node_tree is not None]
+    seen = {t.as_pointer() for t in trees}
+    for tree in trees:                  # (grows as nested groups are found)
+        for n in tree.nodes:
+            group = getattr(n, 'node_tree', None) if n.type == 'GROUP' else None
+            if group is not None and group.as_pointer() not in seen:
+                seen.add(group.as_pointer())
+                trees.append(group)
+    return trees
 
 
 # modifiers Blender applies as deformations only (ModifierTypeType::OnlyDeform): left out of ORCO
