@@ -47,6 +47,26 @@ class PassWriting:
         mixed = sum(w * n for w, n in parts) / np.where(total > 0, total, 1.0)
         return np.where(total > 0, mixed, nb).astype(F32)
 
+    def _pass_albedo(self, prim, u, v, back):
+        """(3, k) the colour the Diffuse Color and Denoising Albedo passes take at hits (prim,
+        u, v) (translucency excluded): the albedo, but a rough diffuse's closure colour
+        (Materials.pass_base and pass_textures), as Cycles writes its Oren-Nayar closure's weight
+        there; the film divides Diffuse Direct and Indirect by it, so their split is Cycles' too."""
+        albedo = np.take(self.mats.pass_base, np.take(self.tri.material, prim), axis=1)
+        if not self._albedo_varies and not self.mats.pass_textures:
+            return albedo
+        if not self.mats.has_pass_colors:
+            self._albedo_maps(prim, u, v, albedo, back)
+            return albedo
+        self._texture(prim, u, v, albedo, textures=self.mats.pass_textures, back=back)
+        if self.tri.colors is not None:          # the attribute colours, as _albedo_maps
+            sel = np.flatnonzero(np.take(self.mats.colored, np.take(self.tri.material, prim)))
+            if len(sel):
+                p = np.take(prim, sel)
+                rows = np.take(self.tri.colors, p, axis=1)
+                albedo[:, sel] *= rows[0:3] + rows[3:6] * np.take(u, sel) + rows[6:9] * np.take(v, sel)
+        return albedo
+
     def _write_passes(self, path, hits, hit, data, pix, samp, chain=None, held=None):
         """Data passes from the first visible surface (holdouts and background stay 0); with
         transparent surfaces on the way (chain), as Cycles writes them along it. held (n,) bool
@@ -61,10 +81,8 @@ class PassWriting:
         prim = np.take(hits['prim'], idx)
         hu, hv = np.take(hits['u'], idx), np.take(hits['v'], idx)
         if len(idx):
-            albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1)
             P, ng, ns, _ = self._surface(hits, idx, path.D)
-            if self._albedo_varies:
-                self._albedo_maps(prim, hu, hv, albedo, self._back(prim, ng))
+            albedo = self._pass_albedo(prim, hu, hv, self._back(prim, ng))
             # Cycles: the bent normal (with the translucent closure's raised one)
             mean_n = self._pass_normal(prim, hu, hv, ns, ng, -np.take(path.D, idx, axis=1), albedo)
             ns = unit_columns(mean_n)
@@ -222,9 +240,7 @@ class PassWriting:
         bent = 'Normal' in want or denoise is not None
 
         def surfaces(cols, prim, u, v, thr, alpha, weight, P, ng, ns, I, depth, tau=None):
-            albedo = np.take(self.mats.base, np.take(self.tri.material, prim), axis=1) * weight
-            if self._albedo_varies:
-                self._albedo_maps(prim, u, v, albedo, self._back(prim, ns))     # (ns faces the ray)
+            albedo = self._pass_albedo(prim, u, v, self._back(prim, ns)) * weight     # (ns faces the ray)
             if bent:        # Cycles' Normal and denoising normal: the bent one, as _write_passes,
                 # averaged with the transparent closure's (the unbent N) by their weights
                 ns = self._pass_normal(prim, u, v, ns, ng, I, albedo, tau)

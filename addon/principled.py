@@ -73,6 +73,14 @@ class BaseMap:
                     *(np.asarray(a, np.float64).tobytes() for a in (dim_s, add_s, dim_c, add_c)))
         self._table = None
 
+    def pass_map(self):
+        """The map of the Diffuse Color pass: this one with a Lambertian base (Cycles writes
+        the rough diffuse closure's weight there, not its albedo; export.closure.Closure.mapped)."""
+        if self.diffuse == 0.0:
+            return self
+        return BaseMap(self.m, self.roughness, self.tint, self.multiscatter, self.dim_s, self.add_s, self.dim_c,
+                       self.add_c)
+
     def exact(self, rgb):
         x = np.asarray(rgb, np.float64)[:3]
         metal = specular.metal_albedo_mu(self.roughness, np.clip(x, 0.0, 1.0), self.tint, self.multiscatter)

@@ -72,6 +72,11 @@ class RoughDiffuse:
     def __call__(self, x):
         return albedo(x, self.sigma)
 
+    def pass_map(self):
+        """None: the Diffuse Color pass keeps the colour (Cycles writes the Oren-Nayar closure's
+        weight there and in Denoising Albedo, not this albedo; export.closure.Closure.mapped)."""
+        return None
+
     def line(self):
         """(dim, add): the least-squares line of the map over colours 0..1 (the fair override's
         stand-in for a textured colour)."""

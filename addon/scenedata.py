@@ -134,6 +134,14 @@ class Material:
     texture_extension: str = 'REPEAT'             # 'REPEAT' | 'EXTEND' | 'CLIP'
     texture_transform: Optional[np.ndarray] = None   # (2, 3): the texture is read at
                                                   # (x, y) = T @ (u, v, 1); None: at (u, v)
+    # The colour of the Diffuse Color and Denoising Albedo passes where it is not the albedo
+    # (base_color x texture): a rough diffuse's closure weight (Cycles writes that, and divides
+    # Diffuse Direct and Indirect by it), not the albedo it shades with. pass_color None: the
+    # albedo's; else pass_color x pass_texture (None: 1), pass_texture read as `texture` is,
+    # with its own (interpolation, extension, uv transform) in pass_texture_modes
+    pass_color: Optional[np.ndarray] = None
+    pass_texture: Optional[np.ndarray] = None
+    pass_texture_modes: tuple = ('Linear', 'REPEAT', None)
     # An image's emission (h, w, 4 texels like `texture`, RGB the radiance, or an EncodedTexels-
     # carrying ImageTexels), read on the UV map: the emission at a hit, where `emission` is
     # then its average over the image (what chooses the material's triangles as lights)

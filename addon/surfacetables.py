@@ -160,6 +160,22 @@ class Materials:
                     (i, *texture_entry(mat.name, 'emission texture', mat.emission_texture, mat.emission_interpolation,
                                         mat.emission_extension, mat.emission_transform)))
         self.base = np.ascontiguousarray(np.asarray(base, F32).T)        # (3, materials)
+        # the Diffuse Color / Denoising Albedo colour where it is not the albedo (a rough
+        # diffuse's closure weight, scenedata.Material.pass_color), and its textures: the
+        # albedo's where the material has none of its own (entries as `textures`)
+        self.pass_base = self.base.copy()
+        self.pass_textures, self.has_pass_colors = [], False
+        texture_of = {e[0]: e for e in self.textures}
+        for i, mat in enumerate(materials):
+            if getattr(mat, 'pass_color', None) is None:
+                if i in texture_of:
+                    self.pass_textures.append(texture_of[i])
+                continue
+            self.has_pass_colors = True
+            self.pass_base[:, i] = _rgb(mat, 'pass colour', mat.pass_color)
+            if getattr(mat, 'pass_texture', None) is not None:
+                self.pass_textures.append((i, *texture_entry(mat.name, 'pass texture', mat.pass_texture,
+                                                             *mat.pass_texture_modes)))
         # materials whose albedo is times the triangles' interpolated Geometry.colors
         self.colored = np.array([getattr(m, 'color_attribute', None) is not None for m in materials])
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)
@@ -213,7 +229,7 @@ class Materials:
         self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
         # a procedural chain reads a normal (Geometry Normal or True Normal, Texture Coordinate
         # Normal), which Cycles turns to the side the ray meets: its hits say which side that is
-        entries = self.textures + self.emission_textures + self.opacity + \
+        entries = self.textures + self.pass_textures + self.emission_textures + self.opacity + \
             [e for found in self.aov_textures.values() for e in found]
         self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries) or \
             any(b.values.needs & SIDED for e in self.bumps for b in (e[1],) + e[2] if b is not None)

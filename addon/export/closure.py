@@ -90,22 +90,54 @@ class Closure:
         # rays see): a Principled's under a coat or sheen, which Cycles evaluates emission-only
         # for light samples, without their layering weights; None: the same
         self.light_emission = None if light_emission is None else np.array(light_emission, np.float64)
+        # the colour Cycles writes to Diffuse Color and Denoising Albedo where it differs from the
+        # albedo (a rough diffuse's: its closure weight, not the albedo it shades with), as
+        # (const, texture, tex_weight); None: the albedo's
+        self.passes = None
 
     @property
     def sampled_emission(self):
         """(3,) the emission light samples see (and the light choice weighs)."""
         return self.emission if self.light_emission is None else self.light_emission
 
+    def pass_albedo(self):
+        """(const, texture, tex_weight) of the Diffuse Color pass (see passes)."""
+        return self.passes if self.passes is not None else (self.const, self.texture, self.tex_weight)
+
+    def _with_passes(self, passes):
+        self.passes = passes
+        return self
+
+    @staticmethod
+    def _pass_closure(c):
+        return Closure(const=c[0], texture=c[1], tex_weight=c[2])
+
     def layered(self, dim, add):
         """Under a layer (principled.py): the albedo x dim (3,) + add (3,); emission,
         transparency and holdout are set after the layers."""
-        return Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
-                        self.transparent, self.opacity, self.emission_tex, self.translucent, self.glass,
-                        self.opaque_glass, self.light_emission)
+        out = Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
+                      self.transparent, self.opacity, self.emission_tex, self.translucent, self.glass,
+                      self.opaque_glass, self.light_emission)
+        if self.passes is None:
+            return out
+        k, t, w = self.passes
+        return out._with_passes((k * dim + add, t, w * dim))
 
     def mapped(self, f):
         """Under a nonlinear map of the albedo (principled.BaseMap): exact for a constant
-        albedo; a textured one becomes a texture of the mapped texels (weight 1)."""
+        albedo; a textured one becomes a texture of the mapped texels (weight 1). The pass
+        colour goes through f's pass_map (f.pass_map(): None keeps it as it is: a rough
+        diffuse's closure weight is its colour, Cycles writes that, not the albedo), or f."""
+        out = self._mapped(f)
+        g = f.pass_map() if hasattr(f, 'pass_map') else f
+        if g is None:
+            return out._with_passes(self.pass_albedo())
+        if self.passes is None and g is f:
+            return out
+        p = self._pass_closure(self.pass_albedo())._mapped(g)
+        return out._with_passes((p.const, p.texture, p.tex_weight))
+
+    def _mapped(self, f):
         if self.texture is None or not self.tex_weight.any():
             return Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
                             self.opacity, self.emission_tex, self.translucent, self.glass, self.opaque_glass,
@@ -120,9 +152,13 @@ class Closure:
 
     def scaled(self, f):
         etex = None if self.emission_tex is None else (self.emission_tex[0], self.emission_tex[1] * f)
-        return Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
-                        self.transparent * f, self.opacity, etex, self.translucent * f, self.glass * f,
-                        self.opaque_glass * f, None if self.light_emission is None else self.light_emission * f)
+        out = Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
+                      self.transparent * f, self.opacity, etex, self.translucent * f, self.glass * f,
+                      self.opaque_glass * f, None if self.light_emission is None else self.light_emission * f)
+        if self.passes is None:
+            return out
+        k, t, w = self.passes
+        return out._with_passes((k * f, t, w * f))
 
     def only_transparent(self):
         return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
@@ -159,6 +195,14 @@ class Closure:
         return None
 
     def plus(self, other, reasons):
+        out = self._plus(other, reasons)
+        if self.passes is None and other.passes is None:
+            return out
+        # (a second image's mean, said once by the albedo's sum)
+        p = self._pass_closure(self.pass_albedo())._plus(self._pass_closure(other.pass_albedo()), [])
+        return out._with_passes((p.const, p.texture, p.tex_weight))
+
+    def _plus(self, other, reasons):
         etex = self._emission_sum(other, reasons)
         light = None if self.light_emission is None and other.light_emission is None \
             else self.sampled_emission + other.sampled_emission

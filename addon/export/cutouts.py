@@ -60,7 +60,7 @@ class Cutouts:
         reasons.extend(notes)
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
                         clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass,
-                        light_emission=opaque.light_emission)
+                        light_emission=opaque.light_emission)._with_passes(opaque.passes)
 
     @staticmethod
     def _procedural_cutout(closures, fac_fn, needs, name):
@@ -83,7 +83,7 @@ class Cutouts:
         tex = Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity')
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
                         clear.transparent, (tex, False), opaque.emission_tex, opaque.translucent, clear.glass,
-                        light_emission=opaque.light_emission)
+                        light_emission=opaque.light_emission)._with_passes(opaque.passes)
 
     def _procedural_alpha(self, socket, reasons):
         """(Texture, False) of a Principled BSDF's Alpha that procedural textures compute (a

@@ -162,6 +162,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             self._attribute_pixels = None
             self._attribute_map = ('object', name[len(OBJECT_INFO):], mat)
             m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
+            m.pass_color = m.pass_texture = None     # (a rough diffuse's pass colour: the attribute's albedo)
             # an image beside it in no product (_object_product): averaged, as the evaluation
             # did; said as that, not as a second image
             m.approximated = m.approximated.replace(
@@ -183,6 +184,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             m.texture = None                # the albedo comes per point from Geometry.colors
             m.base_color = np.ones(3, np.float32)
             m.color_attribute = name
+            m.pass_color = m.pass_texture = None
             return m
         # any other chain is evaluated on each mesh's corner values (evaluated_albedo) and the
         # results interpolated: Cycles interpolates first, so this is exact at the corners only,
@@ -193,6 +195,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._attribute_pixels = None
         self._attribute_map = ('corners', name, mat)
         m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
+        m.pass_color = m.pass_texture = None
         if not affine:
             label = marked_label(name)
             m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
@@ -269,6 +272,11 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._albedo_attribute = closure.texture.attribute \
             if closure.texture is not None and closure.tex_weight.any() else None
         base = nonnegative(base, "colour", reasons)
+        pass_color, pass_texture, pass_modes = None, None, ('Linear', 'REPEAT', None)
+        if closure.passes is not None:      # a rough diffuse's Diffuse Color (Closure.passes)
+            k, t, w = closure.passes
+            pc, pass_texture, *pass_modes = self._albedo(Closure(const=k, texture=t, tex_weight=w))
+            pass_color = np.maximum(np.nan_to_num(pc), 0.0).astype(np.float32)
         if closure.emission_tex is not None:
             # an image's emission: its texels keep their sign, as Cycles emits them (an
             # out-of-gamut texel's negative channel); only the weight's negative or non-finite
@@ -373,7 +381,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         # image on a named map it reads that map too (it had, silently: a gradient across the
         # other map's direction, 0.45 / 0.45 where Cycles gives 0.11 / 0.79)
         # (an image inside such a chain reads its own map, named in uv_names: not the active one)
-        procedurals = [texture, e_tex, opacity] + [t.pixels for t in aov_textures.values()] + \
+        procedurals = [texture, pass_texture, e_tex, opacity] + [t.pixels for t in aov_textures.values()] + \
             [b.values for b in bumps + ((displaced,) if displaced is not None else ())]
         if uv_names and any(isinstance(t, ProceduralTexels) and TEXCOORD_UV in t.needs for t in procedurals):
             uv_names = list(dict.fromkeys(uv_names + ['']))
@@ -398,6 +406,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                                                         True)),
                            emission=emission, texture=texture, light_emission_scale=light_scale,
                            dark_stand_in=dark_stand_in,
+                           pass_color=pass_color, pass_texture=pass_texture,
+                           pass_texture_modes=tuple(pass_modes),
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, translucency=translucency, refraction=refraction,

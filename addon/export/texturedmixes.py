@@ -35,21 +35,27 @@ class TexturedMixes:
                 return None
             sides.append(c)
         reasons.extend(notes)
-        a, b = sides[0].const, sides[1].const
         fac = np.clip(np.nan_to_num(fac[..., None].astype(np.float64), nan=0.0), 0.0, 1.0)
-        baked = np.empty(fac.shape[:2] + (4,), np.float32)
-        baked[..., :3] = a + (b - a) * fac
-        baked[..., 3] = 1.0
         after = self._after_lookup(fac_socket, src, stored_texels(src.pixels), False)
-        if after is not None:
-            lo, span = a.astype(np.float32), (b - a).astype(np.float32)
-            baked = ImageTexels(baked, after.followed_by(lambda g: lo + span * np.clip(g, 0.0, 1.0)))
-        elif src.interpolation != 'Closest':
+        if after is None and src.interpolation != 'Closest':
             reasons.append(f"Mix Shader factor from nodes on image '{src.name}' evaluated per texel before the "
                            "blend (Cycles blends, then runs them)")
-        tex = Texture(('mix', src.key, id(baked)), baked, src.interpolation, src.extension, src.transform, None,
-                      src.name)
-        return Closure(texture=tex, tex_weight=(1.0, 1.0, 1.0))
+
+        def texture(a, b):
+            baked = np.empty(fac.shape[:2] + (4,), np.float32)
+            baked[..., :3] = a + (b - a) * fac
+            baked[..., 3] = 1.0
+            if after is not None:
+                lo, span = a.astype(np.float32), (b - a).astype(np.float32)
+                baked = ImageTexels(baked, after.followed_by(lambda g: lo + span * np.clip(g, 0.0, 1.0)))
+            return Texture(('mix', src.key, id(baked)), baked, src.interpolation, src.extension, src.transform,
+                           None, src.name)
+        out = Closure(texture=texture(sides[0].const, sides[1].const), tex_weight=(1.0, 1.0, 1.0))
+        if sides[0].passes is None and sides[1].passes is None:
+            return out
+        # a rough diffuse side: the Diffuse Color pass mixes its colour (Closure.passes)
+        pa, pb = (s.pass_albedo()[0] for s in sides)
+        return out._with_passes((np.zeros(3), texture(pa, pb), np.ones(3)))
 
     def _procedural_mix(self, node, reasons, depth):
         """A Mix Shader whose factor procedural textures compute (procedurals.py), between two
@@ -90,8 +96,19 @@ class TexturedMixes:
             const, weight, tex = side
             return const if tex is None else const + weight * tex.evaluate(coords).T.astype(np.float64)
 
-        def mixed(coords):      # reads no Blender data: it runs during the render's lookups
-            f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
-            a = albedo(sides[0], coords)
-            return a + (albedo(sides[1], coords) - a) * f
-        return Closure(texture=Texture.procedural(ProceduralTexels(mixed, needs, name)), tex_weight=(1.0, 1.0, 1.0))
+        def mixer(sides):
+            def mixed(coords):      # reads no Blender data: it runs during the render's lookups
+                f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+                a = albedo(sides[0], coords)
+                return a + (albedo(sides[1], coords) - a) * f
+            return Texture.procedural(ProceduralTexels(mixed, needs, name))
+        out = Closure(texture=mixer(sides), tex_weight=(1.0, 1.0, 1.0))
+        if all(c.passes is None for c in closures):
+            return out
+        # a rough diffuse side: the Diffuse Color pass mixes its colour (Closure.passes)
+        pass_sides = []
+        for c in closures:
+            k, t, w = c.pass_albedo()
+            pass_sides.append((np.asarray(k, np.float64), np.asarray(w, np.float64),
+                               t.pixels if t is not None else None))
+        return out._with_passes((np.zeros(3), mixer(pass_sides), np.ones(3)))
