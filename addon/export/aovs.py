@@ -10,7 +10,6 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import nodeeval, nodegraph
-from ..nodeeval import constant
 from ..nodegraph import aov_outputs
 from ..procedural import ProceduralTexels
 from . import procedurals
@@ -28,6 +27,9 @@ CAMERA_LIGHT_PATH = {'Is Camera Ray': 1.0, 'Is Shadow Ray': 0.0, 'Is Diffuse Ray
                      'Is Singular Ray': 0.0, 'Is Reflection Ray': 0.0, 'Is Transmission Ray': 0.0,
                      'Is Volume Scatter Ray': 0.0, 'Ray Depth': 0.0, 'Diffuse Depth': 0.0, 'Glossy Depth': 0.0,
                      'Transparent Depth': 0.0, 'Transmission Depth': 0.0}
+# ... and as the world's AOVs read them where camera rays miss: Cycles evaluates the background
+# as emission (PATH_RAY_EMISSION), one bounce further: Ray Depth 1 (svm/light_path.h)
+WORLD_LIGHT_PATH = dict(CAMERA_LIGHT_PATH, **{'Ray Depth': 1.0})
 # what a per-object or per-corner value reads while the export only looks for it
 _MARKER = np.zeros((1, 1, 4), np.float32)
 _GENERIC = "node; its own value used"     # in nodeeval's note for a node it cannot compute
@@ -117,6 +119,28 @@ class _AovEvaluator(nodeeval.Evaluator):
         return f
 
 
+class _WorldAovEvaluator(_AovEvaluator):
+    """The world's AOV inputs, written where camera rays miss (Integrator._world_aov): Light
+    Path outputs are a camera ray's there too, Ray Depth 1 (WORLD_LIGHT_PATH), RGB, Value and the colour
+    and float nodes compute as constants; what varies over the sky (an image, a texture, a
+    direction, a view-dependent node) or per object is not computed: unread, named."""
+
+    _VARIES = nodeeval.ATTRIBUTE_NODE_TYPES | nodeeval.VIEW_NODE_TYPES | {'TEX_IMAGE', 'TEX_ENVIRONMENT',
+                                                                         'NEW_GEOMETRY'}
+
+    def __init__(self, reasons):
+        super().__init__(None, reasons)
+
+    def _node(self, node, out, depth):
+        if node.type == 'LIGHT_PATH' and out.name in WORLD_LIGHT_PATH:
+            self.depth_read |= out.name == 'Transparent Depth'
+            return nodeeval.Field((WORLD_LIGHT_PATH[out.name],))
+        if node.type in self._VARIES:
+            self.unread.append(f"'{node.bl_label}' {out.name}" if len(node.outputs) > 1 else f"'{node.bl_label}'")
+            return None
+        return super()._node(node, out, depth)
+
+
 def _written(v):
     v = np.asarray(v, np.float64).reshape(-1)
     return f"{float(v[0]):.4g}" if len(v) == 1 else f"({', '.join(f'{float(x):.4g}' for x in v[:3])})"
@@ -143,12 +167,23 @@ def shader_aovs(ntree, reasons, texture=None):
         parts = {}
         for kind, color in (('color', True), ('value', False)):
             socket = node.inputs[kind.title()]
-            if texture is None:
-                v, exact = constant(socket, color)
-                if not exact:
-                    reasons.append(f"AOV '{name}' is fed by an image or an unsupported node: its input's own "
-                                   f"value is written")
-                parts[kind] = np.asarray(v, np.float32)
+            if texture is None:         # the world's: constants, Light Path a camera ray's
+                notes = []
+                ev = _WorldAovEvaluator(notes)
+                f = ev.input(socket, color)
+                if ev.unread:
+                    link, _ = nodegraph.source(socket)
+                    direct = link is not None and link.from_node.type not in nodeeval.NODE_TYPES
+                    reasons.append(f"AOV '{name}' {kind}: {', '.join(dict.fromkeys(ev.unread))} not evaluated for "
+                                   "it (the world's AOVs are read as constants); "
+                                   + ("its input's own value " + _written(f.value) + " is written" if direct
+                                      else "the socket it feeds read at its own value"))
+                reasons.extend(n for n in notes if _GENERIC not in n)
+                if ev.depth_read:
+                    reasons.append(f"AOV '{name}' {kind}: Light Path Transparent Depth read as 0 (Cycles counts "
+                                   "the transparent surfaces a camera ray passed)")
+                v = np.asarray(f.value, np.float32)
+                parts[kind] = v.reshape(-1, v.shape[-1]).mean(axis=0)
                 continue
             found = procedurals.compile_socket(socket, color, reasons, coordinates=True, light_path=False) \
                 if (name, kind) not in textures else None
