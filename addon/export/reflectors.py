@@ -128,7 +128,12 @@ def sheen_albedo(node, reasons):
     if not ok:
         reasons.append("Sheen BSDF roughness driven by nodes; its own value used")
     e = sheen.albedo(dist, rough)
-    reasons.append(f"Sheen BSDF as diffuse: its albedo averaged over view directions, {e:.3f} x its colour")
+    said = f"Sheen BSDF as diffuse: its albedo averaged over view directions, {e:.3f} x its colour"
+    if dist == 'ASHIKHMIN':
+        # Cycles' velvet is a glossy closure (Diffuse Color 0 there); no Glossy passes here
+        said += ("; its light in the Diffuse passes, its colour as Diffuse Color and Denoising Albedo "
+                 "(Cycles: the Glossy passes, its colour as Glossy Color and Denoising Albedo)")
+    reasons.append(said)
     return e
 
 

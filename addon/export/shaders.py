@@ -131,7 +131,14 @@ class ShaderClosures:
         if t == 'BSDF_SHEEN':
             self._normal_input(node, reasons)
             e = sheen_albedo(node, reasons)
-            return self._color_closure(node.inputs['Color'], reasons).layered(np.full(3, e), np.zeros(3))
+            c = self._color_closure(node.inputs['Color'], reasons)
+            out = c.layered(np.full(3, e), np.zeros(3))
+            if getattr(node, 'distribution', 'MICROFIBER') == 'ASHIKHMIN':
+                # Cycles' bsdf_albedo of a velvet is its weight, the colour (no view factor, as the
+                # microfiber sheen's): its Glossy Color and, rough, its Denoising Albedo; the
+                # Diffuse passes carry it here, so they take that colour (the light divided by it)
+                out.passes = c.pass_albedo()
+            return out
         reflector = reflector_albedo(node, reasons)
         if reflector is not None:
             return Closure(const=reflector)
