@@ -227,6 +227,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # brings the path's count to the limit: the next surface only emits. Counted in passes,
         # so at a limit of 0 the first surface is still passed.
         self._transparent_stop = max(1, self.max_transparent)
+        # Cycles' Russian roulette at a surface a camera path meets after transparent passes:
+        # from transparent_bounce > min_transparent_bounces + 1 (it stores the setting + 1)
+        self._roulette_after = max(0, int(getattr(s, 'min_transparent_bounces', 0))) + 1
         scene_data, self._twins_skipped = self._without_clear_twins(scene_data)
         self.tri = Triangles(scene_data.geometry, self.messages, self._poll)
         self._poll()
@@ -787,14 +790,19 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             self._through(k, camera, path, hits, sinks, chain)
             prim = hits['prim']
             hit = prim >= 0
-        miss = np.flatnonzero(~hit)
+        if path.dead is not None:                     # ended by the transparent roulette: their
+            hit &= ~path.dead                         # surface is not shaded, nothing writes
+            alpha[np.take(path.pid, np.flatnonzero(path.dead))] = 1.0   # (no transparency reached)
+            miss = np.flatnonzero(~hit & ~path.dead)
+        else:
+            miss = np.flatnonzero(~hit)
         if len(miss) and camera and not self.transparent:
             alpha[np.take(path.pid, miss)] = 1.0
         elif len(miss) and camera and path.thr is not None:
             seen_through(alpha, path, miss)          # transparent film behind transparent surfaces
             if path.refracted is not None:            # ... but behind glass the world is drawn
                 alpha[np.take(path.pid, miss[np.take(path.refracted, miss)])] = 1.0
-        if len(miss) == len(hit):                     # nothing hit (also: no triangles at all)
+        if not hit.any():                             # nothing hit (also: no triangles at all)
             if camera and self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)
             return None

@@ -11,7 +11,8 @@ _SAME = (('samples', 'samples'), ('preview_samples', 'preview_samples'), ('seed'
          ('adaptive_threshold', 'adaptive_threshold'), ('adaptive_min_samples', 'adaptive_min_samples'),
          ('use_light_tree', 'use_light_tree'), ('sample_clamp_direct', 'sample_clamp_direct'),
          ('sample_clamp_indirect', 'sample_clamp_indirect'), ('film_exposure', 'film_exposure'),
-         ('transparent_max_bounces', 'transparent_max_bounces'), ('filter_width', 'filter_width'))
+         ('transparent_max_bounces', 'transparent_max_bounces'), ('filter_width', 'filter_width'),
+         ('min_transparent_bounces', 'min_transparent_bounces'))
 
 
 def cycles_settings(cycles) -> dict:

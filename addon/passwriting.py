@@ -306,7 +306,9 @@ class PassWriting:
         data.update(aovs)
         self._held_aovs(data, path, hits, held, done)
         self._world_aov(data, path, hits, done)
-        missed = np.take(path.pid, np.flatnonzero(~hit))
+        # (paths the roulette ended are not at the background: they keep the last surface reached)
+        gone = ~hit if path.dead is None else ~hit & ~path.dead
+        missed = np.take(path.pid, np.flatnonzero(gone))
         first_prim[missed[~done[missed]]] = -1       # passed every surface below the threshold
         seen = np.flatnonzero(first_prim >= 0)
         self._write_first(pix, samp, seen, first_prim[seen], first_P[:, seen])

@@ -89,3 +89,6 @@ class Paths:
     # paths whose current segment passed glass: Cycles' transmission rays from there (object
     # Transmission visibility, no holdout)
     transmit: np.ndarray | None = None
+    # camera paths ended by Russian roulette at the surface they now hit, after transparent
+    # passes (Transparency._transparent_roulette): neither a hit nor a miss (None: none)
+    dead: np.ndarray | None = None

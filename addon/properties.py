@@ -40,6 +40,13 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
                     "through before it stops, as Cycles' Light Paths > Transparent; they do not "
                     "count as diffuse bounces",
         default=8, min=0, max=1024, soft_max=64)
+    min_transparent_bounces: IntProperty(
+        name="Min Transparent Bounces",
+        description="Transparent surfaces a camera ray passes before Russian roulette may end it "
+                    "at the surfaces behind, as Cycles' scene.cycles.min_transparent_bounces (0: "
+                    "from the surface behind the second one); unbiased, but fewer samples write "
+                    "Normal, UV, AOVs and sample 0's Depth there, as in Cycles",
+        default=0, min=0, max=1024, soft_max=64)
     transmission_max_bounces: IntProperty(
         name="Transmission Max Bounces",
         description="Glass surfaces (Glass, Refraction, Principled transmission: see-through here) "

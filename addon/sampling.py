@@ -274,6 +274,7 @@ DIM_TRANSPARENT = 1 << 21
 DIM_PASSED = 1 << 22     # light sampling at passed semi-transparent surfaces (+ k << 11 + 2 layer)
 DIM_LOBE = 1 << 23       # reflection or diffuse transmission at translucent surfaces (+ k)
 DIM_GLASS = 1 << 24      # glass or clear transparency at a pass (+ k << 11 + j, as DIM_TRANSPARENT)
+DIM_ROULETTE = 1 << 25   # Russian roulette at the hit after the j-th transparent pass (+ k << 11 + j)
 
 
 def dim(vertex: int, slot: int) -> int:

@@ -313,6 +313,9 @@ class Settings:
     max_bounces: int = 4           # K: up to K+1 diffuse reflections (Cycles' semantics)
     transparent_max_bounces: int = 8   # transparent surfaces a ray segment or shadow ray passes
     transmission_max_bounces: int = 12  # glass surfaces a path passes (Cycles' Transmission)
+    # transparent passes a camera path makes before Russian roulette at the surfaces it meets
+    # (Cycles' scene.cycles.min_transparent_bounces, 0 by default)
+    min_transparent_bounces: int = 0
     # Cycles' sample clamps (Light Paths > Clamping; 0: none): the most one sample of direct
     # light (camera-seen emission, light at the first vertex) or of indirect light may add, as
     # the mean of its channels. The add-on's properties default to Cycles' (0, 10); here both

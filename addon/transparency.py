@@ -10,7 +10,8 @@ import numpy as np
 import dacrt
 
 from .pathstate import Paths
-from .sampling import DIM_GLASS, DIM_LOBE, DIM_PASSED, DIM_TRANSPARENT
+from .sampling import DIM_GLASS, DIM_LOBE, DIM_PASSED, DIM_ROULETTE, DIM_TRANSPARENT
+from .scenedata import HOLDOUT
 
 F32 = np.float32
 
@@ -112,7 +113,45 @@ class Transparency:
                          dark_pdf=None if path.dark_pdf is None else np.take(path.dark_pdf, rows))
             self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
+            if camera:
+                rows = self._transparent_roulette(k, j, path, hits, rows)
             j += 1
+
+    def _transparent_roulette(self, k, j, path, hits, rows):
+        """Cycles' Russian roulette at the surfaces camera paths rows now hit after their j-th
+        transparent pass (integrator_intersect_terminate): where the path has passed more than
+        min_transparent_bounces + 1 transparent surfaces, it goes on with probability
+        min(sqrt(max |throughput|), 1), its throughput divided by it, or ends there unshaded:
+        that surface and those behind write no passes (Normal, UV, AOVs, sample 0's Depth:
+        unweighted, so fewer samples write them, as in Cycles; Combined, alpha and the weighted
+        passes stay unbiased). Ended paths are marked in path.dead; returns the rows left.
+        Emissive and holdout surfaces are not rouletted (Cycles still adds such a surface's
+        emission and holdout before ending the path)."""
+        prim = np.take(hits['prim'], rows)
+        sel = np.flatnonzero((np.take(path.tb, rows) > self._roulette_after) & (prim >= 0))
+        if not len(sel):
+            return rows
+        p_sel = prim[sel]
+        keep = ~np.take(self.mats.emissive, np.take(self.tri.material, p_sel))
+        if self._any_holdout:
+            keep &= (np.take(self.tri.visibility, p_sel) & HOLDOUT) == 0
+        sel = sel[keep]
+        if not len(sel):
+            return rows
+        r = rows[sel]
+        q = np.minimum(np.sqrt(np.abs(path.thr[:, r]).max(axis=0)), 1.0).astype(F32)
+        u = self.rng.uniform2(np.take(path.keys, r, axis=1), DIM_ROULETTE + (k << 11) + j)[0]
+        live = u < q
+        path.thr[:, r[live]] /= q[live]
+        if live.all():
+            return rows
+        if path.dead is None:
+            path.dead = np.zeros(len(hits), bool)
+        path.dead[r[~live]] = True
+        self._ended['roulette'] += int((~live).sum())
+        out = np.ones(len(rows), bool)
+        out[sel[~live]] = False
+        return rows[out]
 
     def _glass_part(self, mat, tau, opacity):
         """(3, k) the glass part of transparency tau at hits on materials mat of opacity (k,)."""
