@@ -184,7 +184,8 @@ class Exporter:
         self.world = effective_world(self.scene, self.layer_eval)
         # whether any shader reads Object Info: else no instance's values are gathered
         self._evaluated_of = {}
-        self._to_mesh_objects = []      # evaluated objects whose to_mesh() the export holds (_edit_mesh)
+        self._to_mesh_objects = []      # objects whose to_mesh() the export holds (_read_geometry, _edit_source)
+        self._edit_sources = {}         # original object in Edit Mode -> its undeformed to_mesh()
         nodes = [n for t in _shader_trees() for n in t.nodes]
         self._object_info = any(n.type == 'OBJECT_INFO' or (n.type == 'ATTRIBUTE' and n.attribute_type in ('OBJECT', 'INSTANCER'))
                                 for n in nodes)
@@ -651,30 +652,44 @@ class Exporter:
                     self.ignore("Bump on hair and curves approximated: their tubes are bent as meshes, Cycles "
                                 "bends curves with their own differentials (another relief)", p.name)
 
-    def _undeformed_source(self, original, mesh):
+    def _undeformed_source(self, original, evaluated_mesh, mesh):
         """(the mesh Generated coordinates are of, or None for the evaluated one; the modifiers
         that make that approximate) for the evaluated mesh `mesh` of an instance whose original
-        object is `original`. Blender's ORCO: the modifier stack run on the undeformed mesh
+        object is `original` (evaluated_mesh: the depsgraph's mesh, which `mesh` copies for an
+        object in Edit Mode: to_mesh's copy is never the evaluated object's data, and the
+        deformed positions had been taken as Generated there). Blender's ORCO: the modifier stack run on the undeformed mesh
         with the deform-only modifiers (and shape keys) left out, so the original positions
         only when nothing else changes the mesh, the evaluated ones when nothing deforms it. A
         Geometry Nodes instance's `original` is its instancer, whose mesh is not this one's
         source: only an object that evaluates to this mesh has it."""
-        source = original.data if original is not None else None
-        if not isinstance(source, bpy.types.Mesh) or self._evaluated(original).data != mesh:
+        data = original.data if original is not None else None
+        if not isinstance(data, bpy.types.Mesh) or self._evaluated(original).data != evaluated_mesh:
             return None, ()
+        # in Edit Mode the mesh's own arrays are not its positions (they live in the edit mesh):
+        # the original object's to_mesh() is the undeformed edit mesh
+        source = self._edit_source(original) if data.is_editmode else data
         # the evaluated object's: its Render switches at this frame (the original's stay at the
         # file's frame in an animation render, a keyed Taper's coordinates slid with it)
         evaluated = self._evaluated(original)
         mods = [m for m in evaluated.modifiers if m.show_render]
         deforms = any(m.type in _DEFORM_ONLY for m in mods)
-        if not deforms and source.shape_keys is not None:
+        if not deforms and data.shape_keys is not None:
             # this frame's key values (the original's stay at the file's frame in an animation render)
-            key = source.shape_keys.evaluated_get(self.depsgraph)
-            deforms = _shape_keys_move(evaluated, source, key)
+            key = data.shape_keys.evaluated_get(self.depsgraph)
+            deforms = _shape_keys_move(evaluated, data, key)
         if not deforms:
             return None, ()
         rebuilt = tuple(m.name for m in mods if m.type not in _DEFORM_ONLY and m.type not in _NO_GEOMETRY)
         return (source if source is not mesh else None), rebuilt
+
+    def _edit_source(self, original):
+        """The undeformed mesh of an original object in Edit Mode (its to_mesh(): the edit mesh
+        without modifiers), made once and held until release_meshes()."""
+        got = self._edit_sources.get(original)
+        if got is None:
+            got = self._edit_sources[original] = original.to_mesh()
+            self._to_mesh_objects.append(original)
+        return got
 
     def _info(self, inst, ob, parent, entry=None):
         """What Object Info and object / instancer Attribute nodes read for instance `inst` of
@@ -754,13 +769,14 @@ class Exporter:
                 return None
             me = evaluated.to_mesh()
             self._to_mesh_objects.append(evaluated)
+        evaluated_mesh = ob.data if me is not None else None
         if me is not None:
             arrays = mesh_arrays(me, want_uvs=True)
             if arrays is not None:
                 arrays.mesh = me            # the depsgraph's mesh (or to_mesh's), alive through the export
                 # what Generated coordinates are of, looked up only if a procedural texture reads
                 # them (MeshArrays.corner_coordinates); the original object outlives the export
-                arrays.undeformed = functools.partial(self._undeformed_source, ob.original, me)
+                arrays.undeformed = functools.partial(self._undeformed_source, ob.original, evaluated_mesh, me)
         else:           # tessellated once the frame's instances are counted (_tessellate_strands)
             arrays = read_strands(ob, self)
             if arrays is not None:

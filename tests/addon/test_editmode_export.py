@@ -109,3 +109,35 @@ def test_linked_duplicates_in_edit_mode_share_one_to_mesh_which_the_export_frees
             assert freed == reads - 1
         finally:
             bpy.ops.object.mode_set(mode='OBJECT')
+
+
+def test_generated_coordinates_in_edit_mode_are_of_the_undeformed_mesh(scene):
+    # Generated coordinates are of the mesh before its deform-only modifiers (Blender's ORCO);
+    # in Edit Mode the mesh's own arrays are not its positions, and the deformed ones had been
+    # taken: a twisted checker cube rendered 0.5299 in Edit Mode, 0.5218 in Object Mode and
+    # Cycles' both modes 0.5217 (80x60); now Edit Mode's image is Object Mode's
+    _lit_box(scene)
+    box = bpy.data.objects['Box']
+    mat = bpy.data.materials.new("generated checker")
+    mat.use_nodes = True
+    nt = mat.node_tree
+    checker = nt.nodes.new('ShaderNodeTexChecker')
+    checker.inputs['Scale'].default_value = 4.0
+    nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Generated'], checker.inputs['Vector'])
+    nt.links.new(checker.outputs['Color'], nt.nodes['Principled BSDF'].inputs['Base Color'])
+    box.data.materials[0] = mat
+    box.modifiers.new("twist", 'SIMPLE_DEFORM').deform_method = 'TWIST'
+    bpy.context.view_layer.objects.active = box
+    scene.dacrt.samples = 4
+    final = scenes.render_rgba(scene)
+    bpy.ops.object.mode_set(mode='EDIT')
+    try:
+        edit_final = scenes.render_rgba(scene)
+        edit_again = scenes.render_rgba(scene)          # the held to_mesh results were freed
+    finally:
+        bpy.ops.object.mode_set(mode='OBJECT')
+    np.testing.assert_allclose(edit_final, final, atol=1e-6)
+    np.testing.assert_array_equal(edit_again, edit_final)
+    # (the checker must show on the box: the test would pass on a uniform colour otherwise)
+    untwisted = box.modifiers.remove(box.modifiers['twist']) or scenes.render_rgba(scene)
+    assert np.abs(untwisted - final)[..., :3].max() > 0.05
