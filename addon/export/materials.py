@@ -314,6 +314,14 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             ratio = np.where(np.isfinite(ratio) & (ratio >= 0), ratio, 1.0)
             if not np.allclose(ratio, 1.0, rtol=0.0, atol=1e-7):
                 light_scale = ratio.astype(np.float32)
+                sides = emissionsampling.sampling(mat)
+                if sides in ('FRONT', 'BACK'):
+                    # both sides are light-sampled here: the side Cycles leaves to BSDF rays, which
+                    # see the layers' dimming, lights undimmed (a coat of 1: ~6% brighter there)
+                    reasons.append(f"Emission Sampling {sides.title()} sampled on both sides: under its coat "
+                                   f"or sheen the {'back' if sides == 'FRONT' else 'front'} side lights "
+                                   f"the scene as Cycles' {sides.title()} side does, undimmed by the layers "
+                                   f"(Cycles: dimmed)")
         holdout = closure.holdout >= 1.0 - 1e-6
         if 0.0 < closure.holdout and not holdout:
             reasons.append(f"Holdout mixed in at {closure.holdout:.0%}; ignored (only a whole holdout is rendered)")

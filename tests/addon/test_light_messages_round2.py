@@ -7,6 +7,9 @@ right, or as right as DACRT can make them):
 - an emitter whose Strength reads 0 only because a node not evaluated here stood at its own
   value was summed up as "no emissive materials" (Cycles lit the scene with it, 0.1005);
 - an IES Texture on a lamp was only "not evaluated", not said to be ignored as a profile."""
+import re
+
+import bpy
 import numpy as np
 
 from . import scenes
@@ -135,3 +138,32 @@ def test_ies_texture_is_named_as_not_applied(scene, said):
     scenes.render_rgba(scene)
     text = next(t for t in said if "light 'Spot'" in t)
     assert "IES Texture 'Profile' not applied" in text and "photometric profile" in text, text
+
+
+def test_one_sided_emission_sampling_under_a_coat_is_said(scene, said):
+    """A coated Principled emitter's light samples see its emission undimmed (as Cycles'); DACRT
+    samples Front / Back on both sides, so the side Cycles leaves to BSDF rays lights undimmed
+    too (regression hunt: Back, coat 1, 1.056x Cycles): said for Front and Back, not for Auto
+    or Front and Back, nor without a coat."""
+    scenes.camera((0, 0, 5))
+    _floor()
+    for name, sides, coat in (('CoatBack', 'BACK', 1.0), ('CoatFront', 'FRONT', 1.0), ('CoatBoth', 'FRONT_BACK', 1.0),
+                              ('CoatAuto', 'AUTO', 1.0), ('NoCoatBack', 'BACK', 0.0)):
+        mat = bpy.data.materials.new(name)
+        mat.use_nodes = True
+        p = mat.node_tree.nodes['Principled BSDF']
+        p.inputs['Emission Color'].default_value = (1.0, 0.5, 0.2, 1.0)
+        p.inputs['Emission Strength'].default_value = 5.0
+        p.inputs['Coat Weight'].default_value = coat
+        mat.cycles.emission_sampling = sides
+        scenes.plane(name, size=1.0, location=(0.0, 0.0, 1.0), materials=[mat])
+    scenes.render_rgba(scene)
+    summary = next(t for t in said if "material(s) approximated" in t)
+    reasons = {}                     # "'A' (why); 'B', 'C' (why)": each material's reasons
+    for part in summary.split(": ", 1)[1].split("); "):
+        names, _, why = part.partition(" (")
+        reasons.update((n, why) for n in re.findall(r"'([^']*)'", names))
+    assert set(reasons) == {'CoatBack', 'CoatFront', 'CoatBoth', 'CoatAuto', 'NoCoatBack'}, summary
+    for name, said_it in (('CoatBack', True), ('CoatFront', True), ('CoatBoth', False), ('CoatAuto', False),
+                          ('NoCoatBack', False)):
+        assert ("sampled on both sides" in reasons[name]) == said_it, (name, reasons[name])
