@@ -33,16 +33,23 @@ def _scene(transparent):
     scenes.cube("Block", size=1.0, location=(0.6, 0.3, 0.5), materials=[white])
     panel = scenes.plane(size=0.6, location=(-1.2, 1.98, 2.6), materials=[scenes.emission("Panel", (1.0, 0.8, 0.6), 6.0)])
     panel.rotation_euler = (math.radians(90), 0, 0)
+    light_and_passes(sc, 256)
+    sc.view_layers[0].use_pass_emit = True
+    return sc
+
+
+def light_and_passes(sc, samples):
+    """The box's area lamp and sky, the Diffuse and Environment passes on, both engines at
+    `samples` spp, 3 bounces, no clamp or denoising (test_rough_diffuse_passes shares them)."""
     scenes.light('AREA', 120.0, location=(0.8, -0.5, 3.5), size=1.0)
     scenes.world((0.25, 0.35, 0.6), 1.0)
     vl = sc.view_layers[0]
     vl.use_pass_diffuse_direct = vl.use_pass_diffuse_indirect = vl.use_pass_diffuse_color = True
-    vl.use_pass_emit = vl.use_pass_environment = True
-    sc.cycles.samples = sc.dacrt.samples = 256
+    vl.use_pass_environment = True
+    sc.cycles.samples = sc.dacrt.samples = samples
     sc.cycles.use_denoising = False
     sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.dacrt.max_bounces = 3
     sc.cycles.sample_clamp_indirect = sc.dacrt.sample_clamp_indirect = 0.0
-    return sc
 
 
 def _blocks(a):

@@ -13,6 +13,8 @@ import pytest
 
 from tests.addon import scenes
 
+from .test_light_passes import _blocks, light_and_passes
+
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
@@ -53,22 +55,9 @@ def _scene():
     back.rotation_euler = (math.radians(90), 0, 0)
     wall = scenes.plane(size=4, location=(-2, 0, 2), materials=[_mixed("Wall")])
     wall.rotation_euler = (0, math.radians(90), 0)
-    scenes.light('AREA', 120.0, location=(0.8, -0.5, 3.5), size=1.0)
-    scenes.world((0.25, 0.35, 0.6), 1.0)
-    vl = sc.view_layers[0]
-    vl.use_pass_diffuse_direct = vl.use_pass_diffuse_indirect = vl.use_pass_diffuse_color = True
-    vl.use_pass_environment = True
-    vl.cycles.denoising_store_passes = True
-    sc.cycles.samples = sc.dacrt.samples = 128
-    sc.cycles.use_denoising = False
-    sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.dacrt.max_bounces = 3
-    sc.cycles.sample_clamp_indirect = sc.dacrt.sample_clamp_indirect = 0.0
+    light_and_passes(sc, 128)
+    sc.view_layers[0].cycles.denoising_store_passes = True
     return sc
-
-
-def _blocks(a):
-    """Means over 10 x 10-pixel blocks of an (30, 40, 3) image."""
-    return a.reshape(3, 10, 4, 10, 3).mean(axis=(1, 3))
 
 
 def test_rough_diffuse_passes_match_cycles(tmp_path):
