@@ -219,16 +219,16 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
         dark.append("nothing linked into its Light Output's Surface")
     factor = _light_surface(surface, reasons, 0, dark, light.type, object_info)
     no_emission = '; '.join(dict.fromkeys(dark)) if not factor.any() else ''
-    if factor.any():
-        # an IES profile shapes the lamp's light per direction in Cycles; here it emits evenly
-        # (its node stands at an own value): said by name, not only as "not evaluated" (a
-        # point light 0.02-0.04x Cycles under a narrow profile)
-        ies = [f"'{n.name}'" for n in dict.fromkeys(nodegraph.unwrap(link.from_node)
-                                                     for link in nodegraph.links_feeding(surface))
-               if n.type == 'TEX_IES']
-        if ies:
-            reasons.insert(0, f"IES Texture {', '.join(ies)} not applied: Cycles shapes the light by its IES "
-                              f"photometric profile, DACRT emits it evenly in every direction")
+    # an IES profile shapes the lamp's light per direction in Cycles; here it emits evenly (its
+    # node stands at an own value): said by name, not only as "not evaluated" (a point light
+    # 0.02-0.04x Cycles under a narrow profile), also where that stand-in is 0 (an IES Texture
+    # inside a group: the group output's own 0) and the lamp is skipped as dark
+    ies = [f"'{n.name}'" for n in dict.fromkeys(nodegraph.unwrap(link.from_node)
+                                                 for link in nodegraph.links_feeding(surface))
+           if n.type == 'TEX_IES']
+    if ies:
+        reasons.insert(0, f"IES Texture {', '.join(ies)} not applied: Cycles shapes the light by its IES "
+                          f"photometric profile, DACRT emits it evenly in every direction")
     if reasons:
         text = '; '.join(dict.fromkeys(reasons))
         if approximated is None:

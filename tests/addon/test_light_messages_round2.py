@@ -135,9 +135,22 @@ def test_ies_texture_is_named_as_not_applied(scene, said):
     ies = nt.nodes.new('ShaderNodeTexIES')
     ies.name = 'Profile'
     nt.links.new(ies.outputs['Fac'], em.inputs['Strength'])
+    # inside a node group: the group output's own value (0) stands in and the lamp is skipped
+    # as dark; the IES note had been left out there (regression hunt)
+    nt2, em2, _ = _lamp('POINT', 'Grouped', 300.0)
+    group = bpy.data.node_groups.new('IES group', 'ShaderNodeTree')
+    group.interface.new_socket('Fac', in_out='OUTPUT', socket_type='NodeSocketFloat')
+    inner = group.nodes.new('ShaderNodeTexIES')
+    inner.name = 'Inner profile'
+    group.links.new(inner.outputs['Fac'], group.nodes.new('NodeGroupOutput').inputs[0])
+    node = nt2.nodes.new('ShaderNodeGroup')
+    node.node_tree = group
+    nt2.links.new(node.outputs[0], em2.inputs['Strength'])
     scenes.render_rgba(scene)
     text = next(t for t in said if "light 'Spot'" in t)
     assert "IES Texture 'Profile' not applied" in text and "photometric profile" in text, text
+    text = next(t for t in said if "light 'Grouped'" in t)
+    assert "IES Texture 'Inner profile' not applied" in text, text
 
 
 def test_one_sided_emission_sampling_under_a_coat_is_said(scene, said):
