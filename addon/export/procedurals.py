@@ -86,7 +86,9 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
     at its carrier's own value, noted, as the evaluation reads it (a material); False: not
     compiled (an AOV, whose evaluation reads a camera ray's values instead)."""
     textured = _reaches_procedural(socket, set())
-    images = image is not None and _images_reached(socket) >= 2
+    # (images only matters where no procedural texture does: its walk of the whole chain, the
+    # slowest of these tests, is skipped then; 1000 textured materials spent 0.6 s in it)
+    images = not textured and image is not None and _images_reached(socket) >= 2
     # (a coordinate-only chain reaches a coordinate node: _coordinate_chain walks it once)
     if not textured and not images and not _coordinate_chain(socket) and \
             not (coordinates and _reaches_procedural(socket, set(), _COORDINATE_NODES)):
