@@ -77,3 +77,72 @@ def test_a_chain_of_images_alone_still_counts_them(scene, exported, monkeypatch)
     tex = _texture(exported(), "Images")
     assert calls, "the image count of an image-only chain is still taken"
     assert isinstance(tex, ProceduralTexels)
+
+
+# -- spot lights' cone bounds (lights/point.py SpotLight.bounds) -------------------------------
+
+def _old_spot_bounds(spot):
+    """SpotLight.bounds as it was: the 721 angles round the cone edge and their cos / sin
+    computed for each spot (the reference)."""
+    from addon.lights.base import F32, Bounds
+    from addon.lights.point import PointLight
+    b = PointLight.bounds(spot)
+    half = float(np.arccos(np.clip(float(spot.cos_half), -1.0, 1.0)))
+    if half >= np.pi / 2 - 1e-3:
+        return b
+    m3 = np.linalg.inv(spot.inv_m3.astype(np.float64))
+    axis = m3 @ np.array([0.0, 0.0, -1.0])
+    axis /= np.linalg.norm(axis)
+    phi = np.linspace(0.0, 2.0 * np.pi, 721)
+    edge = m3 @ np.stack([np.sin(half) * np.cos(phi), np.sin(half) * np.sin(phi), -np.full_like(phi, np.cos(half))])
+    edge /= np.linalg.norm(edge, axis=0)
+    widest = float(np.arccos(np.clip(axis @ edge, -1.0, 1.0)).max()) + 1e-3
+    if widest >= np.pi / 2:
+        return b
+    return Bounds(b.lo, b.hi, axis.astype(F32), float(np.cos(widest)), 1.0, b.energy)
+
+
+def _spots(n):
+    from addon.lights import make_lamp
+    from addon.scenedata import Light
+    rng = np.random.default_rng(7)
+    out = []
+    for i in range(n):
+        m = np.eye(4)
+        m[:3, :3] = rng.normal(size=(3, 3)) if i % 2 else np.diag(rng.uniform(0.2, 3.0, 3))   # shear, scale
+        m[:3, 3] = rng.normal(size=3) * 5
+        out.append(make_lamp(Light(kind='SPOT', strength=rng.uniform(0.1, 50.0, 3), matrix=m,
+                                   radius=float(rng.uniform(0.0, 0.5)), spot_size=float(rng.uniform(0.05, 3.1)),
+                                   spot_blend=float(rng.uniform(0.0, 1.0)), name=f'S{i}')))
+    return out
+
+
+def test_spot_bounds_compute_the_cone_edge_circle_once(monkeypatch):
+    """The cos / sin of the 721 angles round a spot's cone edge are computed once, not per
+    spot, and every bound is bit for bit the old one (sheared and scaled spots, cones narrow to
+    nearly 180 degrees)."""
+    spots = _spots(40)
+    want = [_old_spot_bounds(s) for s in spots]
+    circles = []
+    real_linspace, real_cos = np.linspace, np.cos
+
+    def linspace(*a, **k):
+        circles.append('linspace')
+        return real_linspace(*a, **k)
+
+    def cos(x, *a, **k):
+        if np.ndim(x):
+            circles.append('cos')
+        return real_cos(x, *a, **k)
+    monkeypatch.setattr(np, 'linspace', linspace)
+    monkeypatch.setattr(np, 'cos', cos)
+    got = [s.bounds() for s in spots]
+    monkeypatch.undo()
+    assert circles == []
+    narrowed = 0
+    for g, w in zip(got, want):
+        for f in ('lo', 'hi', 'axis'):
+            assert np.array_equal(getattr(g, f), getattr(w, f)), f
+        assert (g.cos_o, g.cos_e, g.energy) == (w.cos_o, w.cos_e, w.energy)
+        narrowed += not np.array_equal(g.axis, np.array([0.0, 0.0, 1.0], np.float32))
+    assert narrowed > 10      # most spots bound by their cone, not all round
