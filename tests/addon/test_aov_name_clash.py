@@ -144,7 +144,10 @@ def test_aov_named_like_a_pass_that_is_off(scene, tmp_path, said, name, kind, ho
     out = scenes.render_engines(scene, tmp_path)
     means = {e: np.array([v.mean() for k, v in sorted(exr.items()) if k.startswith(f"ViewLayer.{name}.")])
              for e, exr in out.items()}
-    np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.03, atol=1e-3)
+    # Cycles' Position pass mean here varies from run to run (0.018, 0.025, 0.037 measured, the
+    # same seed), DACRT's is 0.0177: a tolerance of 0.05 still tells the pass from the AOV's 0.5
+    atol = 0.05 if name == 'Position' else 1e-3
+    np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.03, atol=atol)
     if holds == 'pass':
         assert any(f"the {name} pass and {kind} AOV '{name}' have one name" in t for t in said), said
     else:
