@@ -58,7 +58,7 @@ from . import bump as bumpmap, cryptomatte
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
 from .camera import CameraModel
-from .cancel import PassCancelled, SetupCancelled
+from .cancel import PassCancelled, SetupCancelled, tracer_cancel
 from .cryptomatte import KINDS as CRYPTO_KINDS
 from .emitterhits import EmitterHits
 from .film import LIGHT_PASSES, Film
@@ -678,11 +678,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             rays = self._ray_array(O, D, tfar)
         skip = self._skip(kind, skip)
         t0 = time.perf_counter()
-        try:
+        with tracer_cancel():
             hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip, visible=self._visible[kind],
                                                 cancel=self._check_break)
-        except dacrt.Cancelled:
-            raise PassCancelled() from None
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['camera' if kind == 'camera' else 'shadow' if kind.startswith('through') else 'bounce'] += len(rays)
@@ -711,11 +709,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             return np.zeros(len(rays), bool)
         skip = self._skip(kind, skip)
         t0 = time.perf_counter()
-        try:
+        with tracer_cancel():
             occ = self._scenes[kind].occluded(rays, threads=self.threads, skip=skip, visible=self._visible[kind],
                                               cancel=self._check_break)
-        except dacrt.Cancelled:
-            raise PassCancelled() from None
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['shadow'] += len(rays)
