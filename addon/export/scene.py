@@ -724,8 +724,9 @@ class Exporter:
         return ev
 
     def release_meshes(self):
-        """Free the meshes Object.to_mesh() made for edit-mode objects (_read_geometry), once
-        the export has read them (assembly reads attributes, tangents and coordinates)."""
+        """Free the meshes Object.to_mesh() made for edit-mode objects (_read_geometry's evaluated
+        ones, _edit_source's undeformed ones), once the export has read them (assembly reads
+        attributes, tangents and coordinates)."""
         while self._to_mesh_objects:
             try:
                 self._to_mesh_objects.pop().to_mesh_clear()
