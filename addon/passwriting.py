@@ -55,16 +55,8 @@ class PassWriting:
         albedo = np.take(self.mats.pass_base, np.take(self.tri.material, prim), axis=1)
         if not self._albedo_varies and not self.mats.pass_textures:
             return albedo
-        if not self.mats.has_pass_colors:
-            self._albedo_maps(prim, u, v, albedo, back)
-            return albedo
-        self._texture(prim, u, v, albedo, textures=self.mats.pass_textures, back=back)
-        if self.tri.colors is not None:          # the attribute colours, as _albedo_maps
-            sel = np.flatnonzero(np.take(self.mats.colored, np.take(self.tri.material, prim)))
-            if len(sel):
-                p = np.take(prim, sel)
-                rows = np.take(self.tri.colors, p, axis=1)
-                albedo[:, sel] *= rows[0:3] + rows[3:6] * np.take(u, sel) + rows[6:9] * np.take(v, sel)
+        self._albedo_maps(prim, u, v, albedo, back,
+                          textures=self.mats.pass_textures if self.mats.has_pass_colors else None)
         return albedo
 
     def _write_passes(self, path, hits, hit, data, pix, samp, chain=None, held=None):

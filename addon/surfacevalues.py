@@ -36,11 +36,12 @@ class SurfaceValues:
             return None
         return (np.take(self.tri.geo[9:12], prim, axis=1) * n).sum(axis=0) < 0
 
-    def _albedo_maps(self, prim, u, v, albedo, back=None):
+    def _albedo_maps(self, prim, u, v, albedo, back=None, textures=None):
         """Multiply what varies over a surface into albedo (3, k) (or a throughput that
-        includes it) at hits (prim, u, v), in place: the colour textures, then the attribute
-        colours (Geometry.colors) of the materials that read one."""
-        self._texture(prim, u, v, albedo, back=back)
+        includes it) at hits (prim, u, v), in place: the colour textures (or the entries
+        `textures` lists instead, as _texture), then the attribute colours (Geometry.colors)
+        of the materials that read one."""
+        self._texture(prim, u, v, albedo, textures=textures, back=back)
         if self.tri.colors is not None:
             sel = np.flatnonzero(np.take(self.mats.colored, np.take(self.tri.material, prim)))
             if len(sel):
