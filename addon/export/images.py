@@ -86,21 +86,67 @@ def _tile_path(pattern, number):
 
 
 def _open_straight(path):
-    """(OpenImageIO.ImageBuf, spec) of an image file with its alpha as stored (straight, as
-    Blender keeps byte images and Cycles reads files), or (None, None) if it cannot be read."""
+    """(OpenImageIO.ImageInput, spec) of an image file opened with its alpha as stored (straight,
+    as Blender keeps byte images and Cycles reads files), or (None, None) if it cannot be read."""
     try:
         import OpenImageIO as oiio
     except ImportError:
         return None, None
     straight = oiio.ImageSpec()
     straight.attribute('oiio:UnassociatedAlpha', 1)
-    buf = oiio.ImageBuf(path, 0, 0, straight) if path and os.path.isfile(path) else None
-    spec = buf.spec() if buf is not None and not buf.has_error else None
+    inp = oiio.ImageInput.open(path, straight) if path and os.path.isfile(path) else None
+    spec = inp.spec() if inp is not None else None
     if spec is None or spec.width < 1 or spec.height < 1 or spec.nchannels < 1:
-        if buf is not None:
-            buf.geterror()      # read, so OpenImageIO does not print it
+        if inp is not None:
+            inp.close()
+        oiio.geterror()      # read, so OpenImageIO does not print it
         return None, None
-    return buf, spec
+    return inp, spec
+
+
+# Rows per read: a band of the file is read and flipped into its place (Blender's row 0 is the
+# bottom), so each texel is written once and no whole-image copy is made: an 8K float EXR had
+# three (OpenImageIO's buffer, the flip and the RGBA, 3.4 GB at peak for 0.8 GB of file), and
+# the cancel check runs between bands instead of after seconds of reading.
+_BAND_ROWS = 256
+
+
+def _read_flipped(inp, spec, byte, alpha_one):
+    """The texels of the open file, row 0 at the bottom: (h, w, channels) uint8, its bytes, for a
+    byte file; else (h, w, 4) float32 RGBA (grey replicated, alpha 1 where it has none). Alpha
+    is 1 where `alpha_one`. None if a read fails."""
+    import OpenImageIO as oiio
+    h, w, ch = spec.height, spec.width, spec.nchannels
+    used = ch if byte else min(ch, 4)
+    out = np.empty((h, w, ch if byte else 4), np.uint8 if byte else np.float32)
+    tiled = spec.tile_width > 0
+    rows = _BAND_ROWS if not tiled else max(1, _BAND_ROWS // spec.tile_height) * spec.tile_height
+    fmt = oiio.UINT8 if byte else oiio.FLOAT
+    for y in range(0, h, rows):
+        poll()
+        e = min(h, y + rows)
+        if tiled:
+            band = inp.read_tiles(0, 0, spec.x, spec.x + w, spec.y + y, spec.y + e, spec.z, spec.z + 1, 0, used, fmt)
+        else:
+            band = inp.read_scanlines(0, 0, spec.y + y, spec.y + e, spec.z, 0, used, fmt)
+        if band is None:
+            oiio.geterror()
+            inp.geterror()
+            return None
+        band = np.asarray(band).reshape(e - y, w, used)
+        dst = out[h - e:h - y][::-1]
+        if byte:
+            dst[...] = band
+        elif used >= 3:
+            dst[..., :used] = band
+        else:        # grey (+alpha)
+            dst[..., :3] = band[..., :1]
+            dst[..., 3] = band[..., 1] if used == 2 else 1.0
+        if not byte and used == 3:
+            dst[..., 3] = 1.0
+    if alpha_one and ch in (2, 4):
+        out[..., ch - 1 if byte else 3] = 255 if byte else 1.0     # as Blender's own buffer has it
+    return out
 
 
 def _file_texels(path, img, reasons, unassociate):
@@ -108,7 +154,7 @@ def _file_texels(path, img, reasons, unassociate):
     (a still image's, a UDIM tile's, a sequence's frame), converted as Blender converts it; None
     if it cannot be read."""
     import OpenImageIO as oiio
-    buf, spec = _open_straight(path)
+    inp, spec = _open_straight(path)
     if spec is None:
         return None
     ch = spec.nchannels
@@ -121,11 +167,13 @@ def _file_texels(path, img, reasons, unassociate):
     byte = spec.format.basetype == oiio.UINT8
     # byte files as their bytes (a quarter of the floats' memory, and no conversion): what Cycles
     # reads, and what Blender's byte buffer holds; deeper ones as floats in the image's space
-    raw = np.asarray(buf.get_pixels(oiio.UINT8 if byte else oiio.FLOAT), np.uint8 if byte else np.float32)
-    raw = np.ascontiguousarray(raw.reshape(spec.height, spec.width, -1)[::-1])
-    if img.alpha_mode == 'NONE' and ch in (2, 4):
-        raw[..., ch - 1] = 255 if byte else 1.0      # alpha ignored, as Blender's own buffer has it
-    texels = _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True,
+    try:     # alpha ignored (alpha mode None): 1, as Blender's own buffer has it
+        raw = _read_flipped(inp, spec, byte, alpha_one=img.alpha_mode == 'NONE')
+    finally:
+        inp.close()
+    if raw is None:
+        return None
+    texels = _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True, channels=ch,
                           preassociated=stored_associated and img.alpha_mode != 'NONE')
     stored = stored_texels(texels) if texels is not None else None
     half = spec.format == oiio.HALF and all(f == oiio.HALF for f in (spec.channelformats or [oiio.HALF]))
@@ -213,7 +261,10 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     from_file = not _read_from_blender(img)
     if not img.is_float and ch == 4 and img.alpha_mode == 'PREMUL':
         buf = _premultiplied_bytes(img, buf, from_file, reasons)
-    return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file)
+    # Blender's float RGBA is fresh from foreach_get: used in place
+    in_place = img.is_float and buf.shape[2] == 4
+    return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file,
+                        channels=4 if in_place else None)
 
 
 def _sequence_frame(img, reasons, unassociate, user, scene_frame):
@@ -253,7 +304,8 @@ def _premultiplied_bytes(img, buf, from_file, reasons):
     return np.ascontiguousarray(np.asarray(file.get_pixels(oiio.FLOAT), np.float32).reshape(h, w, 4)[::-1])
 
 
-def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, preassociated=False):
+def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, preassociated=False,
+                 channels=None):
     """(h, w, 4) scene-linear RGBA of an image buffer (h, w, channels) of `img`: a byte buffer
     (Blender's floats k/255, or the bytes themselves as uint8) is in the image's colour space
     with straight alpha; a float one is linear and associated
@@ -263,9 +315,12 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
     file, not Blender's buffer). Spaces other than sRGB and scene linear are converted through
     OpenColorIO (colorspaces) from the values Cycles stores, as its loader converts them.
     `preassociated`: a file's values stored with alpha multiplied in, which Cycles keeps as
-    stored (not associated again, nor divided where it does not associate)."""
+    stored (not associated again, nor divided where it does not associate). `channels`: the
+    image's channel count, given when a float `buf` already is the (h, w, 4) RGBA of such an
+    image, made for this call: it is used in place (an 8K float texture's RGBA is 1 GB)."""
     poll()
-    h, w, ch = buf.shape
+    h, w = buf.shape[:2]
+    ch = buf.shape[2] if channels is None else channels
     # Cycles associates only 4-channel files (a grey+alpha one stays straight), yet divides by
     # alpha at a linked Alpha output all the same
     associate = ch == 4 and associates_alpha(img)
@@ -279,6 +334,8 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
                                                                associate and not preassociated)
         if k8 is None:
             k8 = straight8
+    elif channels is not None:
+        rgba = buf
     else:
         rgba = np.empty((h, w, 4), np.float32)
         rgba[..., :min(ch, 4)] = buf[..., :4]
