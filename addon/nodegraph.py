@@ -9,7 +9,7 @@ a link from a Group node continues at the matching input of the group's active G
 and a link from a Group Input node continues at the matching input of the Group node it was
 entered through. Reroutes are skipped, muted nodes (groups included) are passed through along
 Blender's internal links as Cycles does; a muted or invalid link leaves the input at its own
-value. A node reached inside groups comes wrapped (`GraphNode`), remembering the Group nodes it
+value, a group without a Group Output gives 0 (its outputs' Cycles proxies have nothing linked). A node reached inside groups comes wrapped (`GraphNode`), remembering the Group nodes it
 was reached through, so its inputs can be followed back out; wrappers read through to the
 Blender node or socket they hold.
 """
@@ -102,7 +102,8 @@ def source(socket):
     does (unlinked, muted link, a group without an output for it). carrier: the GraphSocket
     whose own value Cycles uses when link is None, and which the export reads when it cannot
     evaluate the linked node: the socket itself, or the input where the chain last crossed a
-    group boundary (a Group Output's input, or a Group node's input).
+    group boundary (a Group Output's input, or a Group node's input), or for a group with no
+    Group Output a stand-in of 0 for its output (_Zero).
 
     Both carry `crossed`: the types of the sockets the value passes between them and the input
     (group interface sockets, reroutes, a muted node's input and output), nearest the input
@@ -138,7 +139,10 @@ def source(socket):
         if node.type == 'GROUP' and node.node_tree is not None:
             inner = _matching(_group_output(node.node_tree), 'inputs', link.from_socket.identifier)
             if inner is None:
-                return None, carrier
+                # no Group Output feeds it: Cycles' proxy for the output has nothing linked
+                # and no value of its own, so the input reads 0 of the output's type (not
+                # its own value nor the interface default; a texture's Vector the point 0)
+                return None, GraphSocket(_Zero(link.from_socket), groups, crossed)
             sock, groups = inner, groups + (node,)
             carrier = GraphSocket(sock, groups, crossed)
             crossed += (_type(link.from_socket),)
@@ -153,6 +157,44 @@ def source(socket):
             continue
         return GraphLink(link, groups, crossed), carrier
     return None, carrier
+
+
+class _Zero:
+    """What a Group node's output without a Group Output inside carries: 0 of the output's
+    type, named and identified as that output (so it counts as crossing a group boundary)."""
+    __slots__ = ('output',)
+    is_linked, links, hide_value, enabled = False, (), False, True
+
+    def __init__(self, output):
+        self.output = output
+
+    @property
+    def default_value(self):
+        v = getattr(self.output, 'default_value', None)
+        if v is None or isinstance(v, (int, float, bool)):
+            return 0.0
+        return tuple(0.0 for _ in v)
+
+    def __getattr__(self, name):
+        return getattr(self.output, name)
+
+
+def dead_group_outputs(ntree, depth=0):
+    """"'Group' output 'Color'" for each output of a Group node (in ntree or the groups it
+    holds) linked onward while its tree has no Group Output for it (source reads it as 0)."""
+    found = []
+    if ntree is None or depth > MAX_HOPS:
+        return found
+    for link in ntree.links:
+        node = link.from_node
+        if node.type == 'GROUP' and node.node_tree is not None and not link.is_muted and link.is_valid and \
+                not node.mute and \
+                _matching(_group_output(node.node_tree), 'inputs', link.from_socket.identifier) is None:
+            found.append(f"'{node.node_tree.name}' output '{link.from_socket.name}'")
+    for node in ntree.nodes:
+        if node.type == 'GROUP' and node.node_tree is not None and not node.mute:
+            found += dead_group_outputs(node.node_tree, depth + 1)
+    return list(dict.fromkeys(found))
 
 
 def _type(socket):

@@ -20,7 +20,7 @@ import numpy as np
 from .. import emissionsampling, nodeeval, specular
 from .. import scenedata as sd
 from ..nodeeval import nan_inputs
-from ..nodegraph import closure_link, linked_link, linked_node, output_node, used_outputs
+from ..nodegraph import closure_link, dead_group_outputs, linked_link, linked_node, output_node, used_outputs
 from ..procedural import ProceduralTexels
 from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
@@ -238,6 +238,12 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                               (differs, "NaN for {}: the texture computes with it, not as Cycles' does")):
                 if bad:
                     reasons.append(said.format(', '.join(bad)))
+            # (Cycles' proxy for such an output has nothing linked: it reads 0, whatever the
+            # interface's default; the input's own value had been used, silently)
+            dead = dead_group_outputs(ntree)
+            if dead:
+                reasons.append(f"node group output(s) with no Group Output inside read 0, as in Cycles: "
+                               f"{', '.join(dead)}")
             out = output_node(ntree)
             # (on the folded graph: a muted Diffuse, a muted link, a bare Reroute or an empty
             # Mix Shader is no surface in Cycles either; the raw is_linked had made a clear fog

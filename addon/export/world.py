@@ -50,6 +50,9 @@ def export_world(scene, view_layer=None, camera=None, by_ray=None):
     if out is None:
         return none, None, ''
     reasons = []
+    dead = nodegraph.dead_group_outputs(ntree)
+    if dead:        # (source reads them as 0, as Cycles' proxies without a link)
+        reasons.append(f"node group output(s) with no Group Output inside read 0, as in Cycles: {', '.join(dead)}")
     volume = out.inputs.get('Volume')
     if volume is not None and linked_link(volume) is not None:
         reasons.append("world volume ignored")      # a world's fog or haze: no volumes here

@@ -1,0 +1,37 @@
+"""What the export says of bad node set-ups and values it renders as Cycles does (hunt "robust",
+round 3): each is named, with what it renders as."""
+import bpy
+
+from . import scenes
+
+
+def _diffuse(name, color=(0.3, 0.45, 0.7)):
+    mat = scenes.diffuse(name, color)
+    nt = mat.node_tree
+    return mat, nt, next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+
+
+def _small(scene):
+    scenes.world((1, 1, 1))
+    scenes.camera((0, 0, 3), kind='ORTHO', ortho_scale=2.0)
+    scene.dacrt.samples, scene.dacrt.max_bounces = 2, 0
+
+
+def test_group_without_group_output_is_named(scene, said):
+    """A group used in a material with no Group Output inside: its output reads 0, said with
+    the group and output named (it had read the input's own value, silently)."""
+    _small(scene)
+    mat, nt, d = _diffuse("M")
+    ng = bpy.data.node_groups.new("NoOut", 'ShaderNodeTree')
+    ng.interface.new_socket("Tint", in_out='OUTPUT', socket_type='NodeSocketColor')
+    g = nt.nodes.new('ShaderNodeGroup')
+    g.node_tree = ng
+    nt.links.new(g.outputs[0], d.inputs['Color'])
+    scenes.plane("P", materials=(mat,))
+    bpy.ops.render.render()
+    hits = [t for t in said if "'NoOut' output 'Tint'" in t]
+    assert hits and "read 0, as in Cycles" in hits[0], said
+    said.clear()
+    ng.nodes.new('NodeGroupOutput')         # with one: nothing said
+    bpy.ops.render.render()
+    assert not any("NoOut" in t for t in said), said

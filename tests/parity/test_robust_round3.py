@@ -1,0 +1,77 @@
+"""Bad node set-ups and values rendered as Cycles renders them (hunt "robust", round 3). Each
+scene is a plane filling an orthographic view from above under a uniform white world, no
+bounces, so a pixel is the surface's albedo (or emission + albedo); both engines render it and
+the means are compared."""
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+def _scene(res=(16, 12), samples=16):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = res
+    sc.view_settings.view_transform = 'Standard'
+    scenes.world((1, 1, 1))
+    scenes.camera((0, 0, 3), kind='ORTHO', ortho_scale=2.0)
+    sc.dacrt.samples, sc.dacrt.max_bounces = samples, 0
+    c = sc.cycles
+    c.device, c.samples, c.max_bounces, c.use_denoising, c.use_adaptive_sampling = 'CPU', samples, 0, False, False
+    return sc
+
+
+def _diffuse(name, color=(0.3, 0.45, 0.7)):
+    mat = scenes.diffuse(name, color)
+    nt = mat.node_tree
+    return mat, nt, next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+
+
+def _both(sc):
+    out = {}
+    for engine in ('CYCLES', 'DACRT'):
+        sc.render.engine = engine
+        out[engine] = scenes.render_rgba(sc)[2:-2, 2:-2, :3].astype(np.float64)   # (the plane alone)
+    return out
+
+
+def _group_without_output(name, socket_type):
+    ng = bpy.data.node_groups.new(name, 'ShaderNodeTree')
+    s = ng.interface.new_socket("Out", in_out='OUTPUT', socket_type=socket_type)
+    if socket_type != 'NodeSocketShader':
+        s.default_value = (0.9, 0.1, 0.1, 1.0) if socket_type == 'NodeSocketColor' else \
+            (0.5, 0.5, 0.5) if socket_type == 'NodeSocketVector' else 0.7
+    return ng
+
+
+@pytest.mark.parametrize('kind', ['NodeSocketColor', 'NodeSocketFloat', 'NodeSocketVector'])
+def test_group_without_group_output_reads_zero(kind):
+    """A group whose tree has no Group Output: Cycles reads each output as 0 of its type (the
+    interface default and the input's own value unused): a colour or float into the Diffuse
+    Color is black, a vector into a Checker's Vector the point 0 (one colour, not the pattern
+    of its default coordinates). Before, the Diffuse's own colour (0.3, 0.45, 0.7) and the
+    checker's pattern (means 0.45 / 0.45 where Cycles gives 0.1 / 0.8)."""
+    sc = _scene()
+    mat, nt, d = _diffuse("M")
+    g = nt.nodes.new('ShaderNodeGroup')
+    g.node_tree = _group_without_output("NoOut", kind)
+    if kind == 'NodeSocketVector':
+        c = nt.nodes.new('ShaderNodeTexChecker')
+        c.inputs['Scale'].default_value = 3.0
+        c.inputs['Color1'].default_value = (0.8, 0.1, 0.1, 1.0)
+        c.inputs['Color2'].default_value = (0.1, 0.8, 0.1, 1.0)
+        nt.links.new(g.outputs[0], c.inputs['Vector'])
+        nt.links.new(c.outputs['Color'], d.inputs['Color'])
+    else:
+        nt.links.new(g.outputs[0], d.inputs['Color'])
+    scenes.plane("P", materials=(mat,))
+    img = _both(sc)
+    mc, md = (img[e].mean(axis=(0, 1)) for e in ('CYCLES', 'DACRT'))
+    assert np.abs(md - mc).max() < 0.02, (mc, md)
+    if kind == 'NodeSocketVector':
+        assert np.ptp(img['CYCLES'], axis=(0, 1)).max() < 0.05     # one colour: the checker at 0
+    else:
+        assert mc.max() < 0.01
