@@ -853,15 +853,16 @@ class Assembly:
                 if not np.isfinite(got).all():
                     doubt[ids] = True
         # a NaN or infinite attribute value (a script's): Cycles interpolates it into every
-        # point of the triangles around it, whose closures it drops, so they render black (it
-        # had been read as 0 at that corner alone and blended into the rest of the triangle)
+        # point of the triangles around it, per channel, and that channel of the closure's
+        # weight is dropped there: black in it, the other channels shaded (it had been read as
+        # 0 at that corner alone and blended; then the whole triangle blacked out, where
+        # Cycles renders (0.002, 0.817, 0.499) of a NaN red corner)
         # (only the placements written a non-finite value can have one: the others' rows are 1)
         for i in np.flatnonzero(doubt).tolist():
-            bad = ~np.isfinite(block[i]).all(axis=(1, 2))
+            bad = ~np.isfinite(block[i]).all(axis=1)         # (triangles, channel)
             if bad.any():
-                block[i][bad] = 0.0
-                self.ignore(f"a colour or attribute value NaN or infinite at some corner: the {int(bad.sum())} "
-                            "triangle(s) around it render black, as in Cycles", places[i].name)
+                block[i] = np.where(bad[:, None, :], np.float32(0.0), block[i])
+                self.ignore(_nonfinite_said(bad), places[i].name)
 
     @staticmethod
     def _write_rows(block, values, plain, swapped, rows):
@@ -1072,3 +1073,14 @@ def _coordinates_read(material, kinds=frozenset({'generated', 'object', 'object_
     """Whether a procedural texture of the material (its colour's, emission's, opacity's or an AOV's) reads Generated or
     Object coordinates (or those of `kinds`)."""
     return any(t.needs & kinds for t in _procedurals(material))
+
+
+def _nonfinite_said(bad):
+    """What a placement's albedo rows with a NaN or infinite channel render as: bad (triangles,
+    3) the channels zeroed per triangle."""
+    tris = int(bad.any(axis=1).sum())
+    channels = ''.join(c for c, b in zip('RGB', bad.any(axis=0)) if b)
+    where = "black" if bad.all(axis=1)[bad.any(axis=1)].all() else \
+        f"black in their {channels} channel{'s' if len(channels) > 1 else ''} (the others shaded)"
+    return (f"a colour or attribute value NaN or infinite at some corner: the {tris} triangle(s) around it "
+            f"render {where}, as in Cycles")

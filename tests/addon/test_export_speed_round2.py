@@ -40,11 +40,10 @@ def _per_placement_colors(self, a, place, mirrored, out, S):
         block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)
         if mirrored:
             block[rows] = block[rows][:, [0, 2, 1]]
-    bad = ~np.isfinite(block).all(axis=(1, 2))
+    bad = ~np.isfinite(block).all(axis=1)         # per channel, as Cycles drops them
     if bad.any():
-        block[bad] = 0.0
-        self.ignore(f"a colour or attribute value NaN or infinite at some corner: the {int(bad.sum())} "
-                    "triangle(s) around it render black, as in Cycles", place.name)
+        block[:] = np.where(bad[:, None, :], np.float32(0.0), block)
+        self.ignore(assembly._nonfinite_said(bad), place.name)
 
 
 def _one_at_a_time(self, a, places, mirrored, out, t0):

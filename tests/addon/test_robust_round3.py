@@ -35,3 +35,24 @@ def test_group_without_group_output_is_named(scene, said):
     ng.nodes.new('NodeGroupOutput')         # with one: nothing said
     bpy.ops.render.render()
     assert not any("NoOut" in t for t in said), said
+
+
+def test_nan_in_one_channel_of_a_colour_attribute_is_said_per_channel(scene, exported):
+    """NaN in R at one corner: the triangles around it black in R alone (as Cycles), and said
+    so (it had said they render black, every channel)."""
+    import numpy as np
+    _small(scene)
+    mat, nt, d = _diffuse("M")
+    a = nt.nodes.new('ShaderNodeAttribute')
+    a.attribute_name = 'Col'
+    nt.links.new(a.outputs['Color'], d.inputs['Color'])
+    ob = scenes.plane("P", materials=(mat,))
+    col = ob.data.color_attributes.new('Col', 'FLOAT_COLOR', 'CORNER')
+    c = np.tile(np.array([0.8, 0.5, 0.2, 1.0], np.float32), (len(col.data), 1))
+    c[0, 0] = np.nan
+    col.data.foreach_set('color', c.ravel())
+    data = exported()
+    colors = np.asarray(data.geometry.colors)
+    assert np.all(colors[..., 0] == 0.0) and np.allclose(colors[..., 1:], (0.5, 0.2)), colors
+    text = " | ".join(m for _, m in data.messages)
+    assert "render black in their R channel (the others shaded), as in Cycles" in text, text

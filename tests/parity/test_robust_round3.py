@@ -75,3 +75,39 @@ def test_group_without_group_output_reads_zero(kind):
         assert np.ptp(img['CYCLES'], axis=(0, 1)).max() < 0.05     # one colour: the checker at 0
     else:
         assert mc.max() < 0.01
+
+
+def _nan_attribute_plane(name, domain='CORNER', kind='FLOAT_COLOR', nan_channel=0):
+    """A plane (two triangles) whose attribute 'Col' is (0.8, 0.5, 0.2) with NaN in one channel
+    at the first corner / point (a FLOAT attribute: 0.6, NaN there)."""
+    ob = scenes.plane(name)
+    me = ob.data
+    if kind == 'FLOAT':
+        a = me.attributes.new('Col', 'FLOAT', domain)
+        v = np.full(len(a.data), 0.6, np.float32)
+        v[0] = np.nan
+        a.data.foreach_set('value', v)
+    else:
+        a = me.color_attributes.new('Col', kind, domain)
+        c = np.tile(np.array([0.8, 0.5, 0.2, 1.0], np.float32), (len(a.data), 1))
+        c[0, nan_channel] = np.nan
+        a.data.foreach_set('color', c.ravel())
+    return ob
+
+
+def test_nan_in_one_channel_of_a_colour_attribute_blacks_that_channel_only():
+    """NaN in the R channel of one corner of a corner colour attribute into a Diffuse Color:
+    Cycles drops that channel of the closure on the triangles around it, G and B stay shaded.
+    Before, every channel of both triangles was black: (0, 0, 0) where Cycles gives
+    (0, 0.5, 0.2)."""
+    sc = _scene()
+    mat, nt, d = _diffuse("M")
+    a = nt.nodes.new('ShaderNodeAttribute')
+    a.attribute_name = 'Col'
+    nt.links.new(a.outputs['Color'], d.inputs['Color'])
+    ob = _nan_attribute_plane("P")
+    ob.data.materials.append(mat)
+    img = _both(sc)
+    mc, md = (img[e].mean(axis=(0, 1)) for e in ('CYCLES', 'DACRT'))
+    assert mc[0] < 0.01 and mc[1] > 0.4, mc
+    assert np.abs(md - mc).max() < 0.02, (mc, md)
