@@ -101,8 +101,12 @@ class Triangles:
         # per need (procedural.ATTRIBUTE_NEED + key): rows corner 0 (0:4), corner 1 - corner 0
         # (4:8), corner 2 - corner 0 (8:12) of a mesh attribute's RGBA, for the procedural
         # textures reading it per point (scenedata.Geometry.attributes)
-        self.attributes = {key: dacrt.shading.corner_rows(np.nan_to_num(np.ascontiguousarray(a, F32), nan=0.0,
-                                                                        posinf=0.0, neginf=0.0))
+        # (a NaN or infinite corner kept: interpolated, as Cycles does, it makes that channel NaN
+        # over the whole triangle, the nodes after it compute with it, and what reaches a closure
+        # weight non-finite is 0 there (ProceduralTexels.evaluate), per channel, as Cycles drops
+        # it; read as 0 at the corner it had been blended into the rest: a NaN red corner into
+        # an Emission lit 1.03 where Cycles' is black)
+        self.attributes = {key: dacrt.shading.corner_rows(np.ascontiguousarray(a, F32))
                            for key, a in (getattr(geometry, 'attributes', None) or {}).items()}
         self.has_uv = None if geometry.has_uv is None or self.uvs is None else \
             np.asarray(geometry.has_uv, bool)

@@ -11,6 +11,7 @@ import numpy as np
 from .. import scenedata as sd
 from ..procedural import ATTRIBUTE_NEED, ProceduralTexels
 from .aovs import GEOMETRY_POSITION
+from .attributemaps import marked_label
 from .bump import needs_object_maps
 from .errors import ExportCancelled
 from .objectinfo import OBJECT_INFO
@@ -809,6 +810,7 @@ class Assembly:
         flip = np.zeros(k, bool)
         flip[mirrored] = True
         doubt = np.zeros(k, bool)       # placements written a NaN or infinite value somewhere
+        doubted = {}                    # placement -> the attributes that wrote one (names)
         maps = self.materials.attribute_maps
         for g, (slot_map, ids) in enumerate(groups):
             if g % 256 == 255 and self.check_break():
@@ -829,6 +831,7 @@ class Assembly:
                     _put(block, ids, rows, albedo[:, None, None, :])
                     doubt[ids[~np.isfinite(albedo).all(axis=1)]] = True
                     continue
+                names = entry[1] if isinstance(entry[1], tuple) else (entry[1],)
                 if entry[0] == 'corners':            # the chain evaluated at each corner
                     # (one array per distinct per-object value: the placements sharing it at once)
                     by_value = {}
@@ -840,6 +843,8 @@ class Assembly:
                         self._write_rows(block, got[rows], which[~flip[which]], which[flip[which]], rows)
                         if not np.isfinite(got[rows]).all():
                             doubt[which] = True
+                            for i in which.tolist():
+                                doubted.setdefault(i, set()).update(names)
                     continue
                 _, name, w, c = entry
                 values = a.corner_attribute(name)
@@ -852,6 +857,8 @@ class Assembly:
                 self._write_rows(block, got, plain, swapped, rows)
                 if not np.isfinite(got).all():
                     doubt[ids] = True
+                    for i in ids.tolist():
+                        doubted.setdefault(i, set()).add(name)
         # a NaN or infinite attribute value (a script's): Cycles interpolates it into every
         # point of the triangles around it, per channel, and that channel of the closure's
         # weight is dropped there: black in it, the other channels shaded (it had been read as
@@ -862,7 +869,7 @@ class Assembly:
             bad = ~np.isfinite(block[i]).all(axis=1)         # (triangles, channel)
             if bad.any():
                 block[i] = np.where(bad[:, None, :], np.float32(0.0), block[i])
-                self.ignore(_nonfinite_said(bad), places[i].name)
+                self.ignore(_nonfinite_said(bad, doubted.get(i, ())), places[i].name)
 
     @staticmethod
     def _write_rows(block, values, plain, swapped, rows):
@@ -894,6 +901,14 @@ class Assembly:
                     block = _unread_rows(len(rows))
                 else:
                     block = values[rows]
+                    bad = ~np.isfinite(block).all(axis=(1, 2))
+                    if bad.any():
+                        # (kept: interpolated over the triangle and computed through the nodes, it
+                        # blacks the closure channels it reaches there, as in Cycles: surfacetables)
+                        self.ignore(f"{marked_label(name)} NaN or infinite at some corner: the nodes after it "
+                                    f"compute with it over the {int(bad.sum())} triangle(s) around it, and the "
+                                    f"colour or emission channels it makes NaN there render black, as in Cycles",
+                                    place.name)
                 if mirrored:                 # corners 1 and 2 were swapped for these triangles
                     block = block[:, [0, 2, 1]]
                 table[S.start + rows] = block
@@ -1075,12 +1090,13 @@ def _coordinates_read(material, kinds=frozenset({'generated', 'object', 'object_
     return any(t.needs & kinds for t in _procedurals(material))
 
 
-def _nonfinite_said(bad):
+def _nonfinite_said(bad, names=()):
     """What a placement's albedo rows with a NaN or infinite channel render as: bad (triangles,
-    3) the channels zeroed per triangle."""
+    3) the channels zeroed per triangle; names: the attributes read there (marked keys)."""
     tris = int(bad.any(axis=1).sum())
     channels = ''.join(c for c, b in zip('RGB', bad.any(axis=0)) if b)
     where = "black" if bad.all(axis=1)[bad.any(axis=1)].all() else \
         f"black in their {channels} channel{'s' if len(channels) > 1 else ''} (the others shaded)"
+    named = ', '.join(sorted(marked_label(n) for n in names if not n.startswith(OBJECT_INFO)))
     return (f"a colour or attribute value NaN or infinite at some corner: the {tris} triangle(s) around it "
-            f"render {where}, as in Cycles")
+            f"render {where}, as in Cycles{f' (from {named})' if named else ''}")

@@ -348,8 +348,17 @@ class ShaderClosures:
                                    "blend (Cycles blends, decodes, then applies them)")
         baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
         # (an attribute's probe values go negative by design: their clamping says nothing)
-        baked[..., :3] = nonnegative(f.value.astype(np.float32), "colour from colour nodes",
-                                      reasons if src.attribute is None else [])
+        value = f.value.astype(np.float32)
+        if src.attribute is not None:
+            # an attribute's value NaN or infinite at a corner (a script's), computed through the
+            # nodes as Cycles does, stays NaN where it reaches the colour: Cycles interpolates
+            # it over the triangles around that corner and drops that channel of the closure
+            # there, which the export does on the whole triangles (assembly); read as 0 here it
+            # had been blended into them (a NaN float attribute into a Combine Color's R: 0.70
+            # where Cycles' R is 0.42)
+            baked[..., :3] = np.where(np.isfinite(value), np.maximum(value, 0.0), np.float32(np.nan))
+        else:
+            baked[..., :3] = nonnegative(value, "colour from colour nodes", reasons)
         baked[..., 3] = src.pixels[..., 3]
         key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
         if after is not None:

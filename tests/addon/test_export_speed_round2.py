@@ -19,6 +19,7 @@ def _per_placement_colors(self, a, place, mirrored, out, S):
         out.colors = np.ones((len(out.triangles), 3, 3), np.float32)
     block = out.colors[S]
     material = out.material[S]
+    names = set()           # the attributes that wrote a non-finite value
     for k in set(place.slot_map):
         entry = self.materials.attribute_maps[k]
         if entry is None:
@@ -29,6 +30,8 @@ def _per_placement_colors(self, a, place, mirrored, out, S):
             continue
         if entry[0] == 'corners':
             block[rows] = self._corner_albedo(a, k, entry[1], place)[rows]
+            if not np.isfinite(block[rows]).all():
+                names.update(entry[1] if isinstance(entry[1], tuple) else (entry[1],))
             if mirrored:
                 block[rows] = block[rows][:, [0, 2, 1]]
             continue
@@ -38,12 +41,14 @@ def _per_placement_colors(self, a, place, mirrored, out, S):
         if values is None:
             self.ignore(a.unread_said(name, "its colour reads 0"), place.name)
         block[rows] = np.maximum(rgb * w + c, 0.0).astype(np.float32)
+        if not np.isfinite(block[rows]).all():
+            names.add(name)
         if mirrored:
             block[rows] = block[rows][:, [0, 2, 1]]
     bad = ~np.isfinite(block).all(axis=1)         # per channel, as Cycles drops them
     if bad.any():
         block[:] = np.where(bad[:, None, :], np.float32(0.0), block)
-        self.ignore(assembly._nonfinite_said(bad), place.name)
+        self.ignore(assembly._nonfinite_said(bad, names), place.name)
 
 
 def _one_at_a_time(self, a, places, mirrored, out, t0):

@@ -56,3 +56,23 @@ def test_nan_in_one_channel_of_a_colour_attribute_is_said_per_channel(scene, exp
     assert np.all(colors[..., 0] == 0.0) and np.allclose(colors[..., 1:], (0.5, 0.2)), colors
     text = " | ".join(m for _, m in data.messages)
     assert "render black in their R channel (the others shaded), as in Cycles" in text, text
+
+
+def test_nan_attribute_read_by_nodes_is_named(scene, said):
+    """A corner colour attribute NaN at one corner into an Emission's Color (read per point by
+    the nodes): said, naming the attribute (it had been read as 0 at the corner, silently)."""
+    import numpy as np
+    _small(scene)
+    mat = scenes.emission("E", (1, 1, 1), 2.0)
+    nt = mat.node_tree
+    a = nt.nodes.new('ShaderNodeAttribute')
+    a.attribute_name = 'Glow'
+    nt.links.new(a.outputs['Color'], next(n for n in nt.nodes if n.type == 'EMISSION').inputs['Color'])
+    ob = scenes.plane("P", materials=(mat,))
+    col = ob.data.color_attributes.new('Glow', 'FLOAT_COLOR', 'CORNER')
+    c = np.tile(np.array([0.8, 0.5, 0.2, 1.0], np.float32), (len(col.data), 1))
+    c[0, 0] = np.nan
+    col.data.foreach_set('color', c.ravel())
+    bpy.ops.render.render()
+    assert any("'P': attribute 'Glow' NaN or infinite at some corner" in t and "as in Cycles" in t
+               for t in said), said

@@ -111,3 +111,35 @@ def test_nan_in_one_channel_of_a_colour_attribute_blacks_that_channel_only():
     mc, md = (img[e].mean(axis=(0, 1)) for e in ('CYCLES', 'DACRT'))
     assert mc[0] < 0.01 and mc[1] > 0.4, mc
     assert np.abs(md - mc).max() < 0.02, (mc, md)
+
+
+@pytest.mark.parametrize('case', ['emission', 'float_combine'])
+def test_nan_attribute_through_emission_or_nodes_blacks_the_channel_it_reaches(case):
+    """A NaN attribute value reaching a shader other than straight into a Diffuse Color: (a) a
+    corner colour attribute NaN in R at one corner into an Emission's Color, (b) a point Float
+    attribute NaN at one vertex through Combine Color's R into a Diffuse Color. Cycles
+    interpolates the NaN over the triangles around it and the nodes after compute with it: the
+    channel it reaches is black there. Before, it was read as 0 at that corner and blended into
+    the rest (the emission's R lit 1.03 where Cycles' is 0.002; the Combine's R 0.70 vs 0.42)."""
+    sc = _scene()
+    if case == 'emission':
+        mat = scenes.emission("M", (1, 1, 1), 2.0)
+        nt = mat.node_tree
+        a = nt.nodes.new('ShaderNodeAttribute')
+        a.attribute_name = 'Col'
+        nt.links.new(a.outputs['Color'], next(n for n in nt.nodes if n.type == 'EMISSION').inputs['Color'])
+        ob = _nan_attribute_plane("P")
+    else:
+        mat, nt, d = _diffuse("M")
+        a = nt.nodes.new('ShaderNodeAttribute')
+        a.attribute_name = 'Col'
+        cc = nt.nodes.new('ShaderNodeCombineColor')
+        cc.inputs[1].default_value, cc.inputs[2].default_value = 0.6, 0.3
+        nt.links.new(a.outputs['Fac'], cc.inputs[0])
+        nt.links.new(cc.outputs[0], d.inputs['Color'])
+        ob = _nan_attribute_plane("P", 'POINT', 'FLOAT')
+    ob.data.materials.append(mat)
+    img = _both(sc)
+    mc, md = (img[e].mean(axis=(0, 1)) for e in ('CYCLES', 'DACRT'))
+    assert mc[0] < (0.1 if case == 'emission' else 0.5), mc        # R black on the NaN's triangles
+    assert np.abs(md - mc).max() < 0.02, (mc, md)
