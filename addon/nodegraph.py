@@ -9,7 +9,8 @@ a link from a Group node continues at the matching input of the group's active G
 and a link from a Group Input node continues at the matching input of the Group node it was
 entered through. Reroutes are skipped, muted nodes (groups included) are passed through along
 Blender's internal links as Cycles does; a muted or invalid link leaves the input at its own
-value, a group without a Group Output gives 0 (its outputs' Cycles proxies have nothing linked). A node reached inside groups comes wrapped (`GraphNode`), remembering the Group nodes it
+value, a group without a Group Output gives 0 (its outputs' Cycles proxies have nothing linked).
+A tree with a link cycle (link_cycle) Cycles compiles to nothing: the export renders it black. A node reached inside groups comes wrapped (`GraphNode`), remembering the Group nodes it
 was reached through, so its inputs can be followed back out; wrappers read through to the
 Blender node or socket they hold.
 """
@@ -195,6 +196,60 @@ def dead_group_outputs(ntree, depth=0):
         if node.type == 'GROUP' and node.node_tree is not None and not node.mute:
             found += dead_group_outputs(node.node_tree, depth + 1)
     return list(dict.fromkeys(found))
+
+
+def link_cycle(ntree, depth=0):
+    """(tree, "'A' -> 'B'") for a link closing a cycle of links in ntree, or else in a
+    node group it holds (the outermost first); None where there is none. Blender's test
+    (has_available_link_cycle): links between available sockets, muted ones too (Blender marks
+    one link of the cycle invalid, but the tree keeps the cycle). Cycles 5.0 compiles nothing
+    of a material or world whose tree has one: it renders black; on one inside a group it
+    crashes."""
+    if ntree is None or depth > MAX_HOPS:
+        return None
+    succ = {}
+    for link in ntree.links:
+        if getattr(link.from_socket, 'is_unavailable', False) or getattr(link.to_socket, 'is_unavailable', False):
+            continue
+        succ.setdefault(link.from_node.as_pointer(), []).append(link)
+    state = {}                      # node pointer -> 1 on the stack, 2 done
+    for start in list(succ):
+        if start in state:
+            continue
+        state[start] = 1
+        stack = [(start, iter(succ.get(start, ())))]
+        while stack:
+            node, links = stack[-1]
+            link = next(links, None)
+            if link is None:
+                state[node] = 2
+                stack.pop()
+                continue
+            to = link.to_node.as_pointer()
+            if state.get(to) == 1:
+                return ntree, f"'{link.from_node.name}' -> '{link.to_node.name}'"
+            if to not in state:
+                state[to] = 1
+                stack.append((to, iter(succ.get(to, ()))))
+    seen = set()
+    for node in ntree.nodes:
+        tree = getattr(node, 'node_tree', None) if node.type == 'GROUP' else None
+        if tree is not None and tree.as_pointer() not in seen:
+            seen.add(tree.as_pointer())
+            found = link_cycle(tree, depth + 1)
+            if found is not None:
+                return found
+    return None
+
+
+def cycle_said(ntree, found, what):
+    """The message for link_cycle's `found` in ntree (a material's or world's tree), `what`
+    the material or world it renders as ('black')."""
+    tree, link = found
+    if tree.as_pointer() == ntree.as_pointer():
+        return f"node link cycle ({link}): rendered {what}, as in Cycles (it compiles nothing of such a tree)"
+    return (f"node link cycle in node group '{tree.name}' ({link}): rendered {what}, as Cycles renders a tree "
+            f"with a cycle (Cycles itself crashes on one inside a group)")
 
 
 def _type(socket):

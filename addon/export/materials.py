@@ -20,7 +20,8 @@ import numpy as np
 from .. import emissionsampling, nodeeval, specular
 from .. import scenedata as sd
 from ..nodeeval import nan_inputs
-from ..nodegraph import closure_link, dead_group_outputs, linked_link, linked_node, output_node, used_outputs
+from ..nodegraph import (closure_link, cycle_said, dead_group_outputs, link_cycle, linked_link, linked_node,
+                         output_node, used_outputs)
 from ..procedural import ProceduralTexels
 from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
@@ -216,7 +217,14 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
         self._used_outputs = used_outputs(ntree) if ntree is not None else None
-        if ntree is None or (bpy.app.version < (5, 0, 0) and not mat.use_nodes):
+        nodes = ntree is not None and not (bpy.app.version < (5, 0, 0) and not mat.use_nodes)
+        cycle = link_cycle(ntree) if nodes else None
+        if cycle is not None:
+            # Cycles compiles nothing of a tree with a link cycle, wherever it is: no surface,
+            # black (the link Blender marks invalid had been skipped and the rest rendered)
+            reasons.append(cycle_said(ntree, cycle, "black"))
+            closure = Closure()
+        elif not nodes:
             closure = Closure(const=tuple(mat.diffuse_color[:3]))
         else:
             # a script's or driver's NaN: what it becomes depends on the node, each said apart
@@ -366,7 +374,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
         aovs, aov_textures, aov_counts, aov_varying = shader_aovs(ntree, reasons, self._texture) \
-            if ntree is not None else ({}, {}, {}, {})
+            if ntree is not None and cycle is None else ({}, {}, {}, {})
         self._aov_varying = (mat, aov_varying) if aov_varying else None
         e_tex = e_interp = e_ext = e_xf = None
         if closure.emission_tex is not None and emission.any():

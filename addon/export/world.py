@@ -49,6 +49,9 @@ def export_world(scene, view_layer=None, camera=None, by_ray=None):
     out = output_node(ntree)
     if out is None:
         return none, None, ''
+    cycle = nodegraph.link_cycle(ntree)
+    if cycle is not None:       # (Cycles compiles nothing of it: no background, black)
+        return none, None, nodegraph.cycle_said(ntree, cycle, "black")
     reasons = []
     dead = nodegraph.dead_group_outputs(ntree)
     if dead:        # (source reads them as 0, as Cycles' proxies without a link)

@@ -76,3 +76,54 @@ def test_nan_attribute_read_by_nodes_is_named(scene, said):
     bpy.ops.render.render()
     assert any("'P': attribute 'Glow' NaN or infinite at some corner" in t and "as in Cycles" in t
                for t in said), said
+
+
+def _mix_cycle(nt):
+    a, b = nt.nodes.new('ShaderNodeMix'), nt.nodes.new('ShaderNodeMix')
+    a.data_type = b.data_type = 'RGBA'
+    nt.links.new(a.outputs[2], b.inputs[6])
+    nt.links.new(b.outputs[2], a.inputs[6])
+    return b.outputs[2]
+
+
+def test_link_cycle_is_named_in_a_material_a_group_and_the_world(scene, said):
+    """A link cycle: in the material's tree, said as rendered black as in Cycles; in a node group
+    it holds, the group named and that Cycles crashes there; in the world's tree, said for the
+    world. A link between unavailable sockets closes no cycle (Blender's rule): nothing said."""
+    _small(scene)
+    mat, nt, d = _diffuse("Looped")
+    nt.links.new(_mix_cycle(nt), d.inputs['Color'])
+    scenes.plane("P", materials=(mat,))
+    bpy.ops.render.render()
+    assert any("'Looped' (node link cycle (" in t and "rendered black, as in Cycles" in t for t in said), said
+    said.clear()
+    ng = bpy.data.node_groups.new("Loop", 'ShaderNodeTree')
+    ng.interface.new_socket("Color", in_out='OUTPUT', socket_type='NodeSocketColor')
+    ng.links.new(_mix_cycle(ng), ng.nodes.new('NodeGroupOutput').inputs[0])
+    mat2, nt2, d2 = _diffuse("Grouped")
+    g = nt2.nodes.new('ShaderNodeGroup')
+    g.node_tree = ng
+    nt2.links.new(g.outputs[0], d2.inputs['Color'])
+    bpy.data.objects["P"].data.materials[0] = mat2
+    bpy.ops.render.render()
+    assert any("node link cycle in node group 'Loop'" in t and "crashes" in t for t in said), said
+    said.clear()
+    wt = scene.world.node_tree
+    wt.links.new(_mix_cycle(wt), next(n for n in wt.nodes if n.type == 'BACKGROUND').inputs['Color'])
+    bpy.data.objects["P"].data.materials[0] = scenes.diffuse("Plain", (0.5, 0.5, 0.5))
+    bpy.ops.render.render()
+    assert any(t.startswith("world approximated: node link cycle") for t in said), said
+
+
+def test_unavailable_socket_link_is_no_cycle(scene, said):
+    """A link left from an output a Mix no longer shows (switched to Float) is invalid but closes
+    no cycle: both engines ignore it; nothing said of a cycle."""
+    _small(scene)
+    mat, nt, d = _diffuse("M")
+    a = nt.nodes.new('ShaderNodeMix')
+    a.data_type = 'RGBA'
+    nt.links.new(a.outputs[2], d.inputs['Color'])
+    a.data_type = 'FLOAT'
+    scenes.plane("P", materials=(mat,))
+    bpy.ops.render.render()
+    assert not any("cycle" in t for t in said), said

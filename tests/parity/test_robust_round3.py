@@ -143,3 +143,37 @@ def test_nan_attribute_through_emission_or_nodes_blacks_the_channel_it_reaches(c
     mc, md = (img[e].mean(axis=(0, 1)) for e in ('CYCLES', 'DACRT'))
     assert mc[0] < (0.1 if case == 'emission' else 0.5), mc        # R black on the NaN's triangles
     assert np.abs(md - mc).max() < 0.02, (mc, md)
+
+
+def _mix_cycle(nt):
+    """Two Mix (Color) nodes linked into each other (Blender marks one link invalid): the
+    second's Result."""
+    a, b = nt.nodes.new('ShaderNodeMix'), nt.nodes.new('ShaderNodeMix')
+    a.data_type = b.data_type = 'RGBA'
+    nt.links.new(a.outputs[2], b.inputs[6])
+    nt.links.new(b.outputs[2], a.inputs[6])
+    return b.outputs[2]
+
+
+@pytest.mark.parametrize('where', ['feeding', 'aside', 'world'])
+def test_link_cycle_renders_black(where):
+    """A link cycle in a material's tree, feeding the Diffuse Color or on a branch feeding
+    nothing, or in the world's: Cycles compiles nothing of the tree, black. Before, the invalid
+    link was skipped and the rest rendered: the Mix's grey (0.5) or the Diffuse colour, and the
+    white world (1.0) instead of black."""
+    sc = _scene()
+    mat, nt, d = _diffuse("M")
+    if where == 'world':
+        wt = sc.world.node_tree
+        wt.links.new(_mix_cycle(wt), next(n for n in wt.nodes if n.type == 'BACKGROUND').inputs['Color'])
+        bpy.ops.mesh.primitive_plane_add(size=0.5)         # (a small plane: the world around it)
+        bpy.context.object.data.materials.append(mat)
+    else:
+        out = _mix_cycle(nt)
+        if where == 'feeding':
+            nt.links.new(out, d.inputs['Color'])
+        scenes.plane("P", materials=(mat,))
+    img = _both(sc)
+    mc, md = (img[e].mean(axis=(0, 1)) for e in ('CYCLES', 'DACRT'))
+    assert mc.max() < 0.01, mc
+    assert np.abs(md - mc).max() < 0.01, (mc, md)
