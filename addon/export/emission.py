@@ -6,6 +6,7 @@ attributes, with the radiance that weighs it as a light."""
 import numpy as np
 
 from .. import nodeeval
+from ..lights.base import fits_float32
 from ..nodegraph import linked_link
 from ..texture import ImageTexels, stored_texels
 from . import procedurals
@@ -39,6 +40,13 @@ class Emission:
         color, strength = evaluate.input(color_socket, True), evaluate.input(strength_socket, False)
         if color.tex is None and strength.tex is None:
             value = np.asarray(color.value, np.float64).reshape(3) * float(strength.value.reshape(-1)[0])
+            if not fits_float32(value) and np.isfinite(value).all():
+                # finite but beyond what the renderer carries (an 'inf' typed into the Strength
+                # or Color: Blender stores float32's largest): had rendered 3.4e38 pixels,
+                # unnamed; Cycles' film drops the samples it reaches (inf), a lamp of it is
+                # skipped (export/lights.py): read as 0, named
+                reasons.append(huge_said(label, color_socket, strength_socket, value))
+                value = np.zeros(3)
             said = reasons[start:]
             if said and not (value > 0).any() and \
                     (linked_link(color_socket) is not None or linked_link(strength_socket) is not None):
@@ -122,3 +130,15 @@ class Emission:
                        "the strength's average over its texels used")
         value = np.asarray(strength.value, np.float64)
         return nodeeval.Field(value.reshape(-1, value.shape[-1]).mean(axis=0))
+
+
+def huge_said(label, color_socket, strength_socket, value):
+    """The note for an emission colour x strength `value` beyond lights.base.RADIANCE_LIMIT,
+    naming the unlinked sockets that hold such a value."""
+    huge = [f"{sock.name} {max(abs(float(x)) for x in np.atleast_1d(sock.default_value)[:3]):.3g}"
+            for sock in (strength_socket, color_socket)
+            if sock is not None and not sock.is_linked and
+            not fits_float32(np.atleast_1d(np.asarray(sock.default_value, np.float64))[:3])]
+    what = f" ({', '.join(huge)}: 'inf' typed? Blender stores float32's largest)" if huge else ""
+    return (f"{label} colour x strength {max(abs(float(x)) for x in value):.3g}{what} is beyond the float32 "
+            f"range the renderer carries (1e30, as for lamps); read as 0")

@@ -10,9 +10,11 @@ import numpy as np
 
 from .. import nodeeval, nodegraph
 from .. import scenedata as sd
+from ..lights.base import fits_float32
 from ..mapping import environment_rotation
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import linked_link, linked_node, output_node
+from .emission import huge_said
 from .images import MISSING_IMAGE, encoded_environment, image_pixels
 from .materials import channel_line
 from .shadersockets import mix_factor, value_emission
@@ -117,7 +119,16 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
         # nothing emits whatever the colour: a texture there approximates nothing (a world
         # dimmed to 0 had warned that its Noise colour was read at its own value)
         return none, None
-    return _color_light(node.inputs['Color'], np.float32(s * weight), f"world {node.bl_label} Color", reasons, frame)
+    u, env = _color_light(node.inputs['Color'], np.float32(s * weight), f"world {node.bl_label} Color", reasons,
+                          frame)
+    big = u if env is None else np.append(u, env.strength)
+    if np.isfinite(big).all() and not fits_float32(big):
+        # finite but beyond what the renderer carries (an 'inf' typed into the Strength or
+        # Color: Blender stores float32's largest): had rendered every pixel ~1e37, unnamed,
+        # where Cycles' are all non-finite; a lamp of it is skipped (export/lights.py): black
+        reasons.append(huge_said(f"world {node.bl_label}", node.inputs['Color'], node.inputs['Strength'], big))
+        return none, None
+    return u, env
 
 
 def _color_light(socket, strength, what, reasons, frame):

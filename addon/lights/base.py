@@ -30,6 +30,19 @@ from dataclasses import dataclass
 import numpy as np
 
 F32 = np.float32
+
+# The largest radiance the renderer carries: its float32 kernels multiply a radiance by inverse
+# pdfs, MIS and filter weights and sum it over samples, so one near float32's largest (3.4e38,
+# what Blender stores for an 'inf' typed into a field) overflows to inf there; 1e30 leaves 8
+# decades for those products. One rule for lamps, the world and emissive materials.
+RADIANCE_LIMIT = 1e30
+
+
+def fits_float32(radiance) -> bool:
+    """Whether the renderer's float32 arithmetic carries radiance (any shape) finite: every
+    value finite and within RADIANCE_LIMIT (NaN does not)."""
+    with np.errstate(all='ignore'):
+        return bool(np.all(np.abs(np.asarray(radiance, np.float64)) < RADIANCE_LIMIT))
 EMPTY_IDX = np.zeros(0, np.int64)
 
 MAX_BOUNCES_UNLIMITED = 1024   # Blender's default Max Bounces of a light

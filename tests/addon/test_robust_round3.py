@@ -1,6 +1,7 @@
 """What the export says of bad node set-ups and values it renders as Cycles does (hunt "robust",
 round 3): each is named, with what it renders as."""
 import bpy
+import numpy as np
 
 from . import scenes
 
@@ -40,7 +41,6 @@ def test_group_without_group_output_is_named(scene, said):
 def test_nan_in_one_channel_of_a_colour_attribute_is_said_per_channel(scene, exported):
     """NaN in R at one corner: the triangles around it black in R alone (as Cycles), and said
     so (it had said they render black, every channel)."""
-    import numpy as np
     _small(scene)
     mat, nt, d = _diffuse("M")
     a = nt.nodes.new('ShaderNodeAttribute')
@@ -61,7 +61,6 @@ def test_nan_in_one_channel_of_a_colour_attribute_is_said_per_channel(scene, exp
 def test_nan_attribute_read_by_nodes_is_named(scene, said):
     """A corner colour attribute NaN at one corner into an Emission's Color (read per point by
     the nodes): said, naming the attribute (it had been read as 0 at the corner, silently)."""
-    import numpy as np
     _small(scene)
     mat = scenes.emission("E", (1, 1, 1), 2.0)
     nt = mat.node_tree
@@ -127,3 +126,27 @@ def test_unavailable_socket_link_is_no_cycle(scene, said):
     scenes.plane("P", materials=(mat,))
     bpy.ops.render.render()
     assert not any("cycle" in t for t in said), said
+
+
+def test_inf_typed_strength_is_named_and_read_as_0(scene, exported):
+    """'inf' typed into a World Background Strength or an Emission Strength: Blender stores
+    float32's largest (3.4e38), finite, which the renderer's float32 products overflow on (every
+    pixel ~1e37, 3.4e38 on the emitter, unnamed): read as 0 and named with the socket, by the
+    rule that skips a lamp of such a strength (lights.base.fits_float32). 1e20 is kept."""
+    _small(scene)
+    bg = next(n for n in scene.world.node_tree.nodes if n.type == 'BACKGROUND')
+    bg.inputs['Strength'].default_value = float('inf')
+    mat = scenes.emission("Hot", (1, 1, 1), float('inf'))
+    scenes.plane("P", materials=(mat,))
+    data = exported()
+    text = " | ".join(m for _, m in data.messages)
+    assert "world Background colour x strength" in text and "(Strength 3.4e+38" in text, text
+    assert "Emission colour x strength 3.4e+38 (Strength 3.4e+38" in text, text
+    assert not np.asarray(data.world).any()
+    hot = next(m for m in data.materials if m.name == 'Hot')
+    assert not np.asarray(hot.emission).any()
+    bg.inputs['Strength'].default_value = 1e20
+    mat.node_tree.nodes['Emission'].inputs['Strength'].default_value = 1e20
+    data = exported()
+    assert not any("beyond the float32" in m for _, m in data.messages), data.messages
+    assert np.asarray(next(m for m in data.materials if m.name == 'Hot').emission).min() > 1e19
