@@ -138,10 +138,15 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
             return None
         two = light.shape in ('RECTANGLE', 'ELLIPSE')
         sx, sy = float(light.size), float(light.size_y if two else light.size)
-        if not (sx * np.linalg.norm(m[:3, 0]) > 0 and sy * np.linalg.norm(m[:3, 1]) > 0):
-            # zero area (a size or the object's scale is 0): Cycles gets no light from it
-            messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} "
-                                        "at its object's scale): it emits nothing, as in Cycles; skipped"))
+        scale = np.linalg.norm(m[:3, :3], axis=0)
+        ex, ey = sx * scale[0], sy * scale[1]
+        if not (ex > 0 and ey > 0):
+            # zero area (a size or the object's scale is 0): Cycles gets no light from it. The
+            # world size said, and the scale where it is what is 0 (the size alone had been
+            # printed: '1 x 1' of a lamp scaled to 0 along X)
+            shown = ', '.join(f'{v:g}' for v in scale)
+            messages.append(('WARNING', f"area light '{ob.name}' has zero area (size {sx:g} x {sy:g} m, world scale "
+                                        f"({shown}) -> {ex:g} x {ey:g} m): it emits nothing, as in Cycles; skipped"))
             return None
         # a sheared matrix (a light under a rotated child of a non-uniformly scaled parent):
         # Cycles keeps the normalised columns as the lamp's axes and direction (scene/light.cpp)

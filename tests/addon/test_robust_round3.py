@@ -150,3 +150,15 @@ def test_inf_typed_strength_is_named_and_read_as_0(scene, exported):
     data = exported()
     assert not any("beyond the float32" in m for _, m in data.messages), data.messages
     assert np.asarray(next(m for m in data.materials if m.name == 'Hot').emission).min() > 1e19
+
+
+def test_zero_area_light_message_gives_the_world_size(scene, said):
+    """An area light of Size 1 whose object is scaled to 0 along X: skipped as in Cycles, the
+    message giving the scale and the world size it makes (it had said 'size 1 x 1', hiding
+    which side is 0 and why)."""
+    _small(scene)
+    scenes.plane("P", materials=(scenes.diffuse("D", (0.5, 0.5, 0.5)),))
+    ob = scenes.light('AREA', 100.0, location=(0, 0, 2), size=1.0)
+    ob.scale = (0.0, 2.0, 1.0)
+    bpy.ops.render.render()
+    assert any("has zero area (size 1 x 1 m, world scale (0, 2, 1) -> 0 x 2 m)" in t for t in said), said
