@@ -10,9 +10,10 @@ and a link from a Group Input node continues at the matching input of the Group 
 entered through. Reroutes are skipped, muted nodes (groups included) are passed through along
 Blender's internal links as Cycles does; a muted or invalid link leaves the input at its own
 value, a group without a Group Output gives 0 (its outputs' Cycles proxies have nothing linked).
-A tree with a link cycle (link_cycle) Cycles compiles to nothing: the export renders it black. A node reached inside groups comes wrapped (`GraphNode`), remembering the Group nodes it
-was reached through, so its inputs can be followed back out; wrappers read through to the
-Blender node or socket they hold.
+A tree with a link cycle (link_cycle) Cycles compiles to nothing: the export renders it black.
+A node reached inside groups comes wrapped (`GraphNode`), remembering the Group nodes it was
+reached through, so its inputs can be followed back out; wrappers read through to the Blender
+node or socket they hold.
 """
 
 from __future__ import annotations
@@ -233,7 +234,8 @@ def link_cycle(ntree, depth=0):
                 stack.append((to, iter(succ.get(to, ()))))
     seen = set()
     for node in ntree.nodes:
-        tree = getattr(node, 'node_tree', None) if node.type == 'GROUP' else None
+        # (a muted group is passed through along its internal links: Cycles reads none of it)
+        tree = getattr(node, 'node_tree', None) if node.type == 'GROUP' and not node.mute else None
         if tree is not None and tree.as_pointer() not in seen:
             seen.add(tree.as_pointer())
             found = link_cycle(tree, depth + 1)
