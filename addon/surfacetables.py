@@ -82,10 +82,11 @@ class Triangles:
                                 for k, v in values.items()}
         self.instance = np.asarray(geometry.instance, np.int64) if xf is not None or values else None
         # rows: corner 0 colour (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9): the
-        # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors)
+        # albedo factors of attribute-coloured triangles (scenedata.Geometry.colors), kept
+        # signed: clamped at 0 after the interpolation (SurfaceValues._albedo_maps), as Cycles
         colors = getattr(geometry, 'colors', None)
         self.colors = None if colors is None else dacrt.shading.corner_rows(
-            np.nan_to_num(np.maximum(np.asarray(colors, F32), 0.0), posinf=0.0))
+            np.nan_to_num(np.asarray(colors, F32), nan=0.0, posinf=0.0, neginf=0.0))
         # rows: corner 0 generated and object coordinates (0:6), corner 1 - corner 0 (6:12),
         # corner 2 - corner 0 (12:18), for procedural textures (scenedata.Geometry.coords); with
         # the object-space normals C = 9 columns a corner: 0:C, C:2C, 2C:3C

@@ -47,7 +47,10 @@ class SurfaceValues:
             if len(sel):
                 p = np.take(prim, sel)
                 rows = np.take(self.tri.colors, p, axis=1)
-                albedo[:, sel] *= rows[0:3] + rows[3:6] * np.take(u, sel) + rows[6:9] * np.take(v, sel)
+                # interpolated signed, then clamped: Cycles' closure weight is never negative,
+                # but its attribute is interpolated before the clamp
+                albedo[:, sel] *= np.fmax(rows[0:3] + rows[3:6] * np.take(u, sel) + rows[6:9] * np.take(v, sel),
+                                          F32(0.0))
 
     def _texture(self, prim, u, v, albedo, textures=None, signed=False, back=None):
         """Multiply image textures (on the UV map, through each texture's affine map) into

@@ -853,7 +853,10 @@ class Assembly:
                     said = a.unread_said(name, "its colour reads 0")
                     for i in ids.tolist():
                         self.ignore(said, places[i].name)
-                got = np.maximum(rgb * w + c, 0.0).astype(np.float32)      # (no negative albedo)
+                # signed: Cycles interpolates the attribute and clamps the closure weight at
+                # each point (SurfaceValues._albedo_maps clamps after the interpolation), so a
+                # -1 corner darkens its whole triangle; a clamp here had lit it from 0
+                got = (rgb * w + c).astype(np.float32)
                 self._write_rows(block, got, plain, swapped, rows)
                 if not np.isfinite(got).all():
                     doubt[ids] = True

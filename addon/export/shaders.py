@@ -347,18 +347,20 @@ class ShaderClosures:
                     reasons.append(f"colour nodes after image '{src.name}' applied to its texels before the "
                                    "blend (Cycles blends, decodes, then applies them)")
         baked = np.empty(src.pixels.shape[:2] + (4,), np.float32)
-        # (an attribute's probe values go negative by design: their clamping says nothing)
-        value = f.value.astype(np.float32)
-        if src.attribute is not None:
-            # an attribute's value NaN or infinite at a corner (a script's), computed through the
-            # nodes as Cycles does, stays NaN where it reaches the colour: Cycles interpolates
-            # it over the triangles around that corner and drops that channel of the closure
-            # there, which the export does on the whole triangles (assembly); read as 0 here it
-            # had been blended into them (a NaN float attribute into a Combine Color's R: 0.70
-            # where Cycles' R is 0.42)
-            baked[..., :3] = np.where(np.isfinite(value), np.maximum(value, 0.0), np.float32(np.nan))
+        if src.attribute is None:
+            baked[..., :3] = nonnegative(f.value.astype(np.float32), "colour from colour nodes", reasons)
         else:
-            baked[..., :3] = nonnegative(value, "colour from colour nodes", reasons)
+            # an attribute's values (probes, corners, objects: evaluated_albedo) kept signed:
+            # they are interpolated, then clamped at 0 per point (SurfaceValues._albedo_maps), as
+            # Cycles interpolates the attribute before it clamps the closure weight; clamped
+            # per corner here, a -1 corner beside a 1.5 one had lit its triangles 1.67x as bright.
+            # A value NaN or infinite at a corner (a script's), computed through the nodes as
+            # Cycles does, stays NaN where it reaches the colour: Cycles interpolates it over the
+            # triangles around that corner and drops that channel of the closure there, which the
+            # export does on the whole triangles (assembly); read as 0 here it had been blended
+            # into them (a NaN float attribute into a Combine Color's R: 0.70 where Cycles' R is 0.42)
+            v = f.value.astype(np.float32)
+            baked[..., :3] = np.where(np.isfinite(v), v, np.float32(np.nan))
         baked[..., 3] = src.pixels[..., 3]
         key = ('evaluated', src.key, id(baked))       # its own image: never merged with another
         if after is not None:
