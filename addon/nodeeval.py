@@ -162,13 +162,13 @@ class Evaluator:
             own = own_value(carrier, color)
             self.reasons.append(stand_in_note(link.from_node, carrier, own, color))
             return Field(own)
-        return f.through(link.crossed).as_kind(color)
+        return f.through(nodegraph.conversions(link)).as_kind(color)
 
     def output(self, link, color):
         """What the output a GraphLink comes from computes, as a colour or float Field, or None
         where the evaluation cannot compute its node."""
         f = self._node(link.from_node, link.from_socket, 0)
-        return None if f is None else f.through(link.crossed).as_kind(color)
+        return None if f is None else f.through(nodegraph.conversions(link)).as_kind(color)
 
     def _node(self, node, out, depth):
         t = node.type
@@ -442,7 +442,8 @@ def compile_image_chain(socket, color, image_pointer, depth=0):
     if depth >= Evaluator.MAX_DEPTH:
         raise NotCompiled("too deep")
     f, vector = _compile_node(link.from_node, link.from_socket, image_pointer, depth)
-    return lambda px: linked_value(np.asarray(f(px), np.float64), vector, link.crossed, color)
+    crossed = nodegraph.conversions(link)
+    return lambda px: linked_value(np.asarray(f(px), np.float64), vector, crossed, color)
 
 
 def _compile_node(node, out, image_pointer, depth):
@@ -597,23 +598,34 @@ def linked_value(value, vector, crossed, color):
     return _as_kind(*_cross(value, vector, crossed), color)
 
 
-# socket type -> (holds three components, is a vector), for the conversions at crossed sockets
-_SOCKET_KINDS = {'VALUE': (False, False), 'RGBA': (True, False), 'VECTOR': (True, True)}
+# socket type -> what a constant becomes there (Blender's implicit type conversions)
+_SOCKET_KINDS = {'VALUE': 'float', 'INT': 'int', 'BOOLEAN': 'bool', 'RGBA': 'color', 'VECTOR': 'vector'}
 
 
 def _cross(value, vector, crossed):
-    """(value, vector) past sockets of the types `crossed` (nearest the reader first, so taken
-    from the end): each converts a vector or a float as Cycles' proxy of its type does
-    (svm_node_convert: a vector to a float by its average, to a colour as it is; a float to
-    three copies), while a colour passes them all unchanged and is converted only where it is
-    read (measured in Cycles 5.0: red through a group's Float socket or a muted Math node stays
-    red, through a Vector socket into a Math node is its luminance 0.2126, not the average)."""
+    """(value, vector) of a constant past sockets of the types `crossed` (nearest the reader
+    first, so taken from the end; nodegraph.conversions gives none for any other value), each
+    converting it as Blender does while it inlines the tree (bke type_conversions: a vector to
+    a float by its average, a colour by its luminance, to an Int truncated, to a Boolean 1 where
+    above 0 (a vector: any component not 0); a float to three copies)."""
     for kind in reversed(crossed):
-        if value.shape[-1] != 1 and not vector:
-            break
         k = _SOCKET_KINDS.get(kind)
-        if k is not None:
-            value, vector = _as_kind(value, vector, k[0]), k[1]
+        if k is None:
+            continue
+        three = value.shape[-1] != 1
+        if k in ('color', 'vector'):
+            if not three:
+                value = np.repeat(value, 3, axis=-1)
+        elif k == 'bool' and three and vector:
+            value = np.any(value != 0.0, axis=-1, keepdims=True).astype(np.float64)
+        else:
+            if three:
+                value = value.mean(axis=-1, keepdims=True) if vector else cn.gray(value)
+            if k == 'int':
+                value = np.trunc(value)
+            elif k == 'bool':
+                value = (value > 0.0).astype(np.float64)
+        vector = k == 'vector'
     return value, vector
 
 

@@ -109,8 +109,8 @@ def source(socket):
 
     Both carry `crossed`: the types of the sockets the value passes between them and the input
     (group interface sockets, reroutes, a muted node's input and output), nearest the input
-    first. Cycles turns each into a conversion proxy of its type, so a vector through a group's
-    Float socket arrives as its average, not as a colour (nodeeval converts by it)."""
+    first. Blender converts a constant it folds at each of them (a vector through a group's
+    Float socket arrives as its average), any other value not at all (conversions)."""
     if isinstance(socket, GraphSocket):
         sock, groups = socket.socket, socket.groups
     else:
@@ -252,6 +252,53 @@ def cycle_said(ntree, found, what):
         return f"node link cycle ({link}): rendered {what}, as in Cycles (it compiles nothing of such a tree)"
     return (f"node link cycle in node group '{tree.name}' ({link}): rendered {what}, as Cycles renders a tree "
             f"with a cycle (Cycles itself crashes on one inside a group)")
+
+
+# node types Blender 5.0 constant-folds while it inlines a shader tree for Cycles (those with a
+# multi-function: nodes_inline's handle_output_socket__eval) when every input it reads is a
+# constant; measured: a constant colour or vector from each through a group's Float socket
+# arrives grey, from any other node type (RGB, Mapping, Combine Color, Invert, Hue/Saturation,
+# Bright/Contrast, Wavelength, Normal, RGB to BW, Separate Color) unchanged
+BLENDER_FOLDED = frozenset({
+    'VALUE', 'MATH', 'CLAMP', 'MAP_RANGE', 'MIX', 'MIX_RGB', 'COMBXYZ', 'SEPXYZ', 'VECT_MATH',
+    'VECTOR_ROTATE', 'VALTORGB', 'CURVE_RGB', 'CURVE_VEC', 'CURVE_FLOAT', 'GAMMA', 'BLACKBODY',
+    'TEX_CHECKER', 'TEX_BRICK', 'TEX_MAGIC', 'TEX_WAVE', 'TEX_VORONOI', 'TEX_GRADIENT', 'TEX_NOISE',
+    'TEX_GABOR', 'TEX_WHITE_NOISE'})
+
+
+def conversions(link):
+    """The socket types whose conversions a linked value takes on its way (link.crossed), as
+    Blender 5.0 inlines the tree for Cycles: a constant it folds (folded_by_blender) is
+    converted at every socket it crosses (a vector through a group's Float socket is its
+    average, a colour its luminance); any other value passes them unchanged, and only its
+    reader converts it, by the type of the output that made it (nodes_inline's
+    handle_implicit_conversion leaves a linked value as it is; measured: Generated through a
+    group's Float socket, a muted Math node or even an Int socket arrives as the vector)."""
+    if not link.crossed or not folded_by_blender(link):
+        return ()
+    return link.crossed
+
+
+def folded_by_blender(link, depth=0):
+    """Whether the value on a GraphLink is a constant Blender folds before Cycles sees it: its
+    node is of a BLENDER_FOLDED type and every input it reads is a socket's own value (not a
+    texture's unlinked Vector, its implicit coordinates) or a value folded in turn."""
+    node = link.from_node
+    if node.type not in BLENDER_FOLDED or depth > FOLD_DEPTH:
+        return False
+    texture = node.type.startswith('TEX_')
+    for i in range(len(node.inputs)):
+        sock = node.inputs[i]
+        if not getattr(sock.socket, 'enabled', True):
+            continue
+        up, carrier = source(sock)
+        if up is None:
+            if texture and carrier.socket == sock.socket and sock.socket.name == 'Vector':
+                return False
+            continue
+        if not folded_by_blender(up, depth + 1):
+            return False
+    return True
 
 
 def _type(socket):

@@ -242,7 +242,8 @@ def _socket(socket, color, chain, depth):
         const = own[None]
         return lambda c: const
     f, vector = _node(link.from_node, link.from_socket, chain, depth)
-    return lambda c: nodeeval.linked_value(np.asarray(f(c), np.float64), vector, link.crossed, color)
+    crossed = nodegraph.conversions(link)
+    return lambda c: nodeeval.linked_value(np.asarray(f(c), np.float64), vector, crossed, color)
 
 
 def _vector(node, chain, depth):

@@ -94,3 +94,148 @@ def test_negative_attribute_values_clamped_after_interpolation(case, tmp_path):
     assert mc.mean() > 0.05
     assert np.abs(md - mc).max() < 0.01 * mc.max(), (mc, md)
 
+
+def _strip(wires, tmp_path, samples=4):
+    """One emissive 2x2 grid per wire(tree) -> socket (its Emission Color) in a row, seen from
+    above; {engine: (n, 32, 32, 3)} each grid's pixels."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    n = len(wires)
+    sc.render.resolution_x, sc.render.resolution_y = RES * n, RES
+    for i, wire in enumerate(wires):
+        mat, nt, out = scenes._material(f"M{i}")
+        em = nt.nodes.new('ShaderNodeEmission')
+        nt.links.new(em.outputs[0], out.inputs['Surface'])
+        nt.links.new(wire(nt), em.inputs['Color'])
+        bpy.ops.mesh.primitive_grid_add(x_subdivisions=8, y_subdivisions=8, size=2.0, location=(2.0 * i - (n - 1), 0, 0))
+        bpy.context.object.data.materials.append(mat)
+    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0 * n)
+    scenes.black_world()
+    sc.cycles.device = 'CPU'
+    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
+    sc.cycles.samples = sc.dacrt.samples = samples
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
+    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    c, d = _both(sc, tmp_path)
+    split = lambda img: np.stack([img[:, RES * i:RES * (i + 1)] for i in range(n)])
+    return split(c), split(d)
+
+
+def _group(socket_type, name=None):
+    """A node group whose one input of socket_type is wired straight to its one output."""
+    g = bpy.data.node_groups.new(name or socket_type, 'ShaderNodeTree')
+    g.interface.new_socket('In', in_out='INPUT', socket_type=socket_type)
+    g.interface.new_socket('Out', in_out='OUTPUT', socket_type=socket_type)
+    g.links.new(g.nodes.new('NodeGroupInput').outputs[0], g.nodes.new('NodeGroupOutput').inputs[0])
+    return g
+
+
+def _through_group(socket_type, make):
+    def wire(nt):
+        node = nt.nodes.new('ShaderNodeGroup')
+        node.node_tree = _group(socket_type, f"{socket_type}{len(bpy.data.node_groups)}")
+        nt.links.new(make(nt), node.inputs[0])
+        return node.outputs[0]
+    return wire
+
+
+def _through_muted(node_type, make, read_as_float=False):
+    def wire(nt):
+        node = nt.nodes.new(node_type)
+        node.mute = True
+        nt.links.new(make(nt), node.inputs['Color' if node_type == 'ShaderNodeInvert' else 0])
+        if not read_as_float:
+            return node.outputs[0]
+        m = nt.nodes.new('ShaderNodeMath')
+        m.operation = 'ADD'
+        m.inputs[1].default_value = 0.0
+        nt.links.new(node.outputs[0], m.inputs[0])
+        return m.outputs[0]
+    return wire
+
+
+def _generated(nt):
+    return nt.nodes.new('ShaderNodeTexCoord').outputs['Generated']
+
+
+def _mapped(nt):
+    m = nt.nodes.new('ShaderNodeMapping')
+    m.inputs['Scale'].default_value = (1.0, 2.0, 0.5)
+    nt.links.new(_generated(nt), m.inputs['Vector'])
+    return m.outputs[0]
+
+
+def _constant(kind):
+    """A constant colour or vector made by a node Blender folds (Combine XYZ, Mix) or does not
+    (RGB, Combine Color)."""
+    def make(nt):
+        if kind == 'combine':
+            n = nt.nodes.new('ShaderNodeCombineXYZ')
+            for i, x in enumerate((0.9, 0.2, 0.1)):
+                n.inputs[i].default_value = x
+            return n.outputs[0]
+        if kind == 'mix':
+            n = nt.nodes.new('ShaderNodeMix')
+            n.data_type = 'RGBA'
+            n.inputs['Factor'].default_value = 0.0
+            n.inputs[6].default_value = (0.9, 0.2, 0.1, 1.0)
+            return n.outputs[2]
+        if kind == 'rgb':
+            n = nt.nodes.new('ShaderNodeRGB')
+            n.outputs[0].default_value = (0.9, 0.2, 0.1, 1.0)
+            return n.outputs[0]
+        n = nt.nodes.new('ShaderNodeCombineColor')
+        for i, x in enumerate((0.9, 0.2, 0.1)):
+            n.inputs[i].default_value = x
+        return n.outputs[0]
+    return make
+
+
+def _value_node(v):
+    def make(nt):
+        n = nt.nodes.new('ShaderNodeValue')
+        n.outputs[0].default_value = v
+        return n.outputs[0]
+    return make
+
+
+def _math_of(make):
+    """make's output read by a Math Add 0 (as a float)."""
+    def wire(nt):
+        m = nt.nodes.new('ShaderNodeMath')
+        m.operation = 'ADD'
+        m.inputs[1].default_value = 0.0
+        nt.links.new(make(nt), m.inputs[0])
+        return m.outputs[0]
+    return wire
+
+
+def test_values_through_group_sockets_and_muted_nodes(tmp_path):
+    """Blender 5.0 inlines the tree for Cycles: a varying value passes a group's Float, Int or
+    Color socket, or a muted node of another type, unchanged and is converted where it is read
+    by the type of the output that made it (Generated read as a colour: the vector; as a float:
+    its average); only a constant Blender folds (Combine XYZ, Mix, Value) is converted at the
+    socket (average, luminance, truncation), one from a node it does not fold (RGB, Combine Color)
+    passes unchanged. The varying vectors had been averaged at the socket: grey where Cycles
+    shows the coordinates (mean |D-C| 0.08-0.18)."""
+    cases = [
+        _through_group('NodeSocketFloat', _generated),
+        _through_muted('ShaderNodeMath', _generated),
+        _through_group('NodeSocketFloat', _mapped),
+        _through_group('NodeSocketInt', _generated),
+        _math_of(_through_group('NodeSocketColor', _generated)),       # average, not luminance
+        _through_muted('ShaderNodeInvert', _generated, read_as_float=True),
+        _through_group('NodeSocketFloat', _constant('combine')),        # folded: average
+        _through_group('NodeSocketFloat', _constant('mix')),            # folded: luminance
+        _through_group('NodeSocketFloat', _constant('rgb')),            # not folded: the colour
+        _through_group('NodeSocketFloat', _constant('combine_color')),  # not folded: the colour
+        _through_group('NodeSocketInt', _value_node(0.7)),              # folded: truncated to 0
+    ]
+    c, d = _strip(cases, tmp_path)
+    inner = (slice(2, -2), slice(2, -2))
+    diff = np.abs(d - c)[:, inner[0], inner[1]].mean(axis=(1, 2, 3))
+    # the varying ones are coloured (not grey) in Cycles, the truncated constant black
+    assert np.abs(c[0, ..., 0] - c[0, ..., 1]).mean() > 0.05
+    assert c[10, 8:24, 8:24].max() < 1e-3
+    assert diff.max() < 0.01, diff.round(4).tolist()
