@@ -331,9 +331,10 @@ def _compute32(node, out, v):
         k = _SEPARATED[out.identifier]
         return v['vector'][..., k:k + 1]
     if t == 'MATH':
-        return fn.math(node.operation, v['a'], v['b'], v['c'], node.use_clamp)
+        return fn.math(node.operation, v['a'], v['b'], v['c'], node.use_clamp, _blender_folds(node))
     if t == 'VECT_MATH':
-        return fn.vector_math(node.operation, out.identifier, v['va'], v['vb'], v['vc'], v['scale'])
+        return fn.vector_math(node.operation, out.identifier, v['va'], v['vb'], v['vc'], v['scale'],
+                              _blender_folds(node))
     if t == 'BLACKBODY':
         return cn.blackbody(v['temp'])
     if t == 'CLAMP':
@@ -393,6 +394,15 @@ def xyz_to_rgb():
     return XYZ_TO_REC709 if m is None else m
 
 
+def _blender_folds(node):
+    """Whether Blender folds a Power node (a Frozen one's, found when frozen), where its result
+    differs from Cycles' kernel (floatnodes._folded_pow); False for any other operation."""
+    if getattr(node, 'operation', None) != 'POWER':
+        return False
+    folded = getattr(node, 'blender_folded', None)
+    return nodegraph.node_folded_by_blender(node) if folded is None else folded
+
+
 class Frozen:
     """What _compute reads of a node (or an output socket), copied: computing with it reads no
     Blender data, so it may run after the export (during the render's lookups)."""
@@ -412,6 +422,8 @@ class Frozen:
                 self.curve_ends = _curve_ends(thing)
         elif t == 'WAVELENGTH':
             self.xyz = xyz_to_rgb()
+        elif t in ('MATH', 'VECT_MATH'):
+            self.blender_folded = _blender_folds(thing)
 
 
 class NotCompiled(Exception):

@@ -280,10 +280,16 @@ def conversions(link):
 
 
 def folded_by_blender(link, depth=0):
-    """Whether the value on a GraphLink is a constant Blender folds before Cycles sees it: its
-    node is of a BLENDER_FOLDED type and every input it reads is a socket's own value (not a
+    """Whether the value on a GraphLink is a constant Blender folds before Cycles sees it."""
+    return node_folded_by_blender(link.from_node, depth)
+
+
+def node_folded_by_blender(node, depth=0):
+    """Whether Blender folds a node (a GraphNode, or a Blender node reached outside groups): it
+    is of a BLENDER_FOLDED type and every input it reads is a socket's own value (not a
     texture's unlinked Vector, its implicit coordinates) or a value folded in turn."""
-    node = link.from_node
+    if not isinstance(node, GraphNode):
+        node = GraphNode(node)
     if node.type not in BLENDER_FOLDED or depth > FOLD_DEPTH:
         return False
     texture = node.type.startswith('TEX_')
@@ -296,7 +302,7 @@ def folded_by_blender(link, depth=0):
             if texture and carrier.socket == sock.socket and sock.socket.name == 'Vector':
                 return False
             continue
-        if not folded_by_blender(up, depth + 1):
+        if not node_folded_by_blender(up.from_node, depth + 1):
             return False
     return True
 

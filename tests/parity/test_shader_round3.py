@@ -239,3 +239,56 @@ def test_values_through_group_sockets_and_muted_nodes(tmp_path):
     assert np.abs(c[0, ..., 0] - c[0, ..., 1]).mean() > 0.05
     assert c[10, 8:24, 8:24].max() < 1e-3
     assert diff.max() < 0.01, diff.round(4).tolist()
+
+
+def _power_of_zero(exponent, vector=False):
+    """0 ^ exponent(tree) (Math or Vector Math Power), x 0.2 + 0.5."""
+    def wire(nt):
+        e = exponent(nt)
+        if vector:
+            c = nt.nodes.new('ShaderNodeCombineXYZ')
+            for i in range(3):
+                nt.links.new(e, c.inputs[i])
+            p = nt.nodes.new('ShaderNodeVectorMath')
+            p.operation = 'POWER'
+            p.inputs[0].default_value = (0.0, 0.0, 0.0)
+            nt.links.new(c.outputs[0], p.inputs[1])
+            post = nt.nodes.new('ShaderNodeVectorMath')
+            post.operation = 'MULTIPLY_ADD'
+            post.inputs[1].default_value, post.inputs[2].default_value = (0.2,) * 3, (0.5,) * 3
+        else:
+            p = nt.nodes.new('ShaderNodeMath')
+            p.operation = 'POWER'
+            p.inputs[0].default_value = 0.0
+            nt.links.new(e, p.inputs[1])
+            post = nt.nodes.new('ShaderNodeMath')
+            post.operation = 'MULTIPLY_ADD'
+            post.inputs[1].default_value, post.inputs[2].default_value = 0.2, 0.5
+        nt.links.new(p.outputs[0], post.inputs[0])
+        return post.outputs[0]
+    return wire
+
+
+def _x_minus_half(nt):
+    s = nt.nodes.new('ShaderNodeSeparateXYZ')
+    nt.links.new(_generated(nt), s.inputs[0])
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'SUBTRACT'
+    m.inputs[1].default_value = 0.5
+    nt.links.new(s.outputs[0], m.inputs[0])
+    return m.outputs[0]
+
+
+def test_power_of_zero_to_a_negative_exponent(tmp_path):
+    """Math and Vector Math Power of base 0 and a negative exponent varying over the grid
+    (Generated x - 0.5: negative on its left half): Cycles' kernel gives 0 there (the pixels
+    0.5 after x 0.2 + 0.5), where numpy's inf had made the emission non-finite and black (mean
+    0.126 where Cycles has 0.263). A Power of constants, which Blender folds with its own pow
+    before Cycles sees it, is inf there, black in both (said)."""
+    cases = [_power_of_zero(_x_minus_half), _power_of_zero(_x_minus_half, vector=True),
+             _power_of_zero(_value_node(-1.0))]
+    c, d = _strip(cases, tmp_path)
+    assert np.abs(c[0, 8:24, 2:10] - 0.5).max() < 1e-3          # the left half: 0 ^ negative -> 0
+    assert c[2].max() < 1e-3
+    diff = np.abs(d - c)[:, 2:-2, 2:-2].mean(axis=(1, 2, 3))
+    assert diff.max() < 0.01, diff.round(4).tolist()
