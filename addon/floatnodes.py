@@ -174,7 +174,9 @@ _VECTOR_MATH = {
     'SCALE': lambda a, b, c, s: a * s,
     'NORMALIZE': lambda a, b, c, s: _safe_normalize(a),
     'FRACTION': lambda a, b, c, s: a - np.floor(a),
-    'MODULO': lambda a, b, c, s: np.fmod(a, b),    # not Math's safe modulo: NaN where b is 0, as Cycles
+    # Cycles' kernel (safe_modulo per component): 0 where b is 0, as Math's (measured in Cycles
+    # 5.0.1: Generated mod (0, 0.5, 0.5), X + 0.25 is 0.25; NaN had blackened a float read of it)
+    'MODULO': lambda a, b, c, s: _fmod(a, b),
     'MINIMUM': lambda a, b, c, s: np.minimum(a, b),
     'MAXIMUM': lambda a, b, c, s: np.maximum(a, b),
 }
@@ -190,7 +192,8 @@ VECTOR_MATH_OPERATIONS = frozenset(_VECTOR_MATH) | frozenset(_VECTOR_VALUE) | _E
 
 def vector_math(operation, output, a, b, c, scale, folded=False):
     """A Vector Math node's output ('Vector': (..., 3), 'Value': (..., 1)); the output an
-    operation does not write is 0, as in Cycles. folded: as math's."""
+    operation does not write is 0, as in Cycles. folded: Blender folds the node, computing
+    Power and Modulo as Blender does."""
     (a, b, c, scale), _, dtype = _real(a, b, c, scale)
     value = operation in _VECTOR_VALUE
     if (output == 'Value') != value:
@@ -201,6 +204,8 @@ def vector_math(operation, output, a, b, c, scale, folded=False):
             r = _VECTOR_VALUE[operation](a, b)
         elif operation == 'POWER' and folded:
             r = _folded_pow(a, b)
+        elif operation == 'MODULO' and folded:
+            r = np.fmod(a, b)        # Blender's math::mod: NaN where b is 0 (measured: black)
         elif operation in _ENTRY_WISE:
             r = _MATH[operation](a, b, c)
         else:

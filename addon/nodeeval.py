@@ -395,9 +395,10 @@ def xyz_to_rgb():
 
 
 def _blender_folds(node):
-    """Whether Blender folds a Power node (a Frozen one's, found when frozen), where its result
-    differs from Cycles' kernel (floatnodes._folded_pow); False for any other operation."""
-    if getattr(node, 'operation', None) != 'POWER':
+    """Whether Blender folds a Power or Modulo node (a Frozen one's, found when frozen), where
+    its result differs from Cycles' kernel (floatnodes.vector_math); False for any other
+    operation."""
+    if getattr(node, 'operation', None) not in ('POWER', 'MODULO'):
         return False
     folded = getattr(node, 'blender_folded', None)
     return nodegraph.node_folded_by_blender(node) if folded is None else folded

@@ -292,3 +292,38 @@ def test_power_of_zero_to_a_negative_exponent(tmp_path):
     assert c[2].max() < 1e-3
     diff = np.abs(d - c)[:, 2:-2, 2:-2].mean(axis=(1, 2, 3))
     assert diff.max() < 0.01, diff.round(4).tolist()
+
+
+def _modulo(a, read):
+    """Vector Math Modulo of a(tree) by (0, 0.7, 0.7): read 'float' (a Math Add 0, the average)
+    or 'x' (Separate X + 0.25)."""
+    def wire(nt):
+        m = nt.nodes.new('ShaderNodeVectorMath')
+        m.operation = 'MODULO'
+        nt.links.new(a(nt), m.inputs[0])
+        m.inputs[1].default_value = (0.0, 0.7, 0.7)
+        add = nt.nodes.new('ShaderNodeMath')
+        add.operation = 'ADD'
+        if read == 'float':
+            add.inputs[1].default_value = 0.0
+            nt.links.new(m.outputs[0], add.inputs[0])
+        else:
+            s = nt.nodes.new('ShaderNodeSeparateXYZ')
+            nt.links.new(m.outputs[0], s.inputs[0])
+            add.inputs[1].default_value = 0.25
+            nt.links.new(s.outputs[0], add.inputs[0])
+        return add.outputs[0]
+    return wire
+
+
+def test_vector_modulo_by_zero(tmp_path):
+    """Vector Math Modulo by a zero component: Cycles' kernel gives 0 there (safe_modulo), so
+    Generated mod (0, 0.7, 0.7) read as a float is its other components' average and its X
+    + 0.25 is 0.25; DACRT had NaN there, black (Generated mod (0, 0.5, 0.5) on a tilted plane:
+    0.0000 where Cycles' mean is 0.0860, 0 where it is 0.25).
+    A Modulo of constants, which Blender folds (NaN there), is black in both."""
+    cases = [_modulo(_generated, 'float'), _modulo(_generated, 'x'), _modulo(_constant('combine'), 'x')]
+    c, d = _strip(cases, tmp_path)
+    assert np.abs(c[1, 2:-2, 2:-2] - 0.25).max() < 1e-4 and c[2].max() < 1e-3
+    diff = np.abs(d - c)[:, 2:-2, 2:-2].mean(axis=(1, 2, 3))
+    assert diff.max() < 0.01, diff.round(4).tolist()
