@@ -88,15 +88,18 @@ class Cutouts:
     def _procedural_alpha(self, socket, reasons):
         """(Texture, False) of a Principled BSDF's Alpha that procedural textures compute (a
         Noise through Greater Than, a Gradient through a Color Ramp), per shading point,
-        clamped to [0, 1] as Cycles clamps it (NaN opaque); None when none reaches it or the
-        chain cannot be compiled (said: the Alpha then reads its own value)."""
+        clamped to [0, 1] as Cycles clamps it (NaN 0: transparent, as Cycles renders it); None
+        when none reaches it or the chain cannot be compiled (said: the Alpha then reads its own
+        value)."""
         found = procedurals.compile_socket(socket, False, reasons, image=self._texture)
         if found is None:
             return None
         fn, needs, name = found
 
         def opacity(coords):    # reads no Blender data: it runs during the render's lookups
-            return np.clip(np.nan_to_num(np.asarray(fn(coords), np.float64), nan=1.0), 0.0, 1.0)
+            # (a NaN alpha is 0 in Cycles, fully transparent (measured: a Noise of NaN Scale
+            # shows the world behind); it had been opaque here)
+            return np.clip(np.nan_to_num(np.asarray(fn(coords), np.float64), nan=0.0), 0.0, 1.0)
         return Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity'), False
 
     def _evaluated_alpha(self, socket, reasons, inverted=False):
@@ -111,10 +114,14 @@ class Cutouts:
             return None
         src, a, notes = per_texel
         reasons.extend(notes)
+        # an Alpha or a Mix Shader factor that is NaN is 0 in Cycles (its clamp to [0, 1]), before
+        # the factor is turned into an opacity (measured: NaN texels through a Math node show
+        # the world behind a Principled and the first of a Mix Shader's two; it had read 1)
+        a = np.clip(np.nan_to_num(a, nan=0.0), 0.0, 1.0)
         if inverted:
-            a = 1.0 - np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)
+            a = 1.0 - a
         px = np.zeros(a.shape + (4,), np.float32)
-        px[..., 3] = np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)
+        px[..., 3] = a
         if src.interpolation != 'Closest':
             reasons.append(f"alpha from nodes on image '{src.name}' evaluated per texel before the blend "
                            "(Cycles: after it; cut-out edges one texel soft)")

@@ -327,3 +327,64 @@ def test_vector_modulo_by_zero(tmp_path):
     assert np.abs(c[1, 2:-2, 2:-2] - 0.25).max() < 1e-4 and c[2].max() < 1e-3
     diff = np.abs(d - c)[:, 2:-2, 2:-2].mean(axis=(1, 2, 3))
     assert diff.max() < 0.01, diff.round(4).tolist()
+
+
+def _nan_image():
+    """A 4x4 float image whose left half is NaN (0.5 elsewhere)."""
+    px = np.full((4, 4, 4), 0.5, np.float32)
+    px[:, :2, :3] = np.nan
+    px[..., 3] = 1.0
+    return scenes.float_image("NaNs", px)
+
+
+def _nan_alpha_material(i, kind):
+    mat, nt, out = scenes._material(f"N{i}")
+    if kind == 'principled':
+        p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+        noise = nt.nodes.new('ShaderNodeTexNoise')
+        noise.inputs['Scale'].default_value = float('nan')
+        nt.links.new(noise.outputs['Fac'], p.inputs['Alpha'])
+        nt.links.new(p.outputs[0], out.inputs['Surface'])
+        return mat
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    clear, d = nt.nodes.new('ShaderNodeBsdfTransparent'), nt.nodes.new('ShaderNodeBsdfDiffuse')
+    first_clear = kind == 'mix_first_clear'
+    nt.links.new(clear.outputs[0], mix.inputs[1 if first_clear else 2])
+    nt.links.new(d.outputs[0], mix.inputs[2 if first_clear else 1])
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image, tex.interpolation = _nan_image(), 'Closest'
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'MULTIPLY'
+    m.inputs[1].default_value = 1.0
+    nt.links.new(tex.outputs['Color'], m.inputs[0])
+    nt.links.new(m.outputs[0], mix.inputs['Fac'])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_nan_alpha_is_transparent(tmp_path):
+    """A NaN Principled Alpha (a Noise of NaN Scale) and a NaN Mix Shader factor computed per
+    texel (NaN texels through a Math node) are 0 in Cycles: the Principled fully transparent,
+    the Mix its first shader. DACRT had read them as 1: the Principled opaque (0.64 where
+    Cycles shows the grey world, 0.30), the Mix its second shader."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    kinds = ('principled', 'mix_first_clear', 'mix_second_clear')
+    sc.render.resolution_x, sc.render.resolution_y = RES * len(kinds), RES
+    for i, kind in enumerate(kinds):
+        bpy.ops.mesh.primitive_grid_add(x_subdivisions=8, y_subdivisions=8, size=2.0, location=(2.0 * i - 2.0, 0, 0))
+        bpy.context.object.data.materials.append(_nan_alpha_material(i, kind))
+    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=6.0)
+    scenes.light('SUN', 3.0, angle=0.0)
+    scenes.world((0.3, 0.3, 0.3))
+    sc.cycles.device = 'CPU'
+    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
+    sc.cycles.samples = sc.dacrt.samples = 16
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
+    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    c, d = _both(sc, tmp_path)
+    mc = np.array([c[:, RES * i:RES * (i + 1)].mean() for i in range(len(kinds))])
+    md = np.array([d[:, RES * i:RES * (i + 1)].mean() for i in range(len(kinds))])
+    assert abs(mc[0] - 0.3) < 1e-3                 # the world seen through
+    assert np.abs(md - mc).max() < 0.02 * mc.max(), (mc, md)
