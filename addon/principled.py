@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import roughdiffuse, sheen, specular
+from .roughdiffuse import ROUGH_DIFFUSE_LIGHT
 from .nodeeval import constant_color, constant_value
 
 # inputs whose layers the steps render
@@ -340,5 +341,6 @@ def _diffuse_roughness(node, reasons):
     if not ok:
         reasons.append("Principled diffuse roughness driven by nodes; its own value used")
     if v > 0.0:
-        reasons.append("Principled diffuse roughness (Oren-Nayar) as its albedo averaged over view directions")
+        reasons.append("Principled diffuse roughness (Oren-Nayar) as its albedo averaged over view directions"
+                       + ROUGH_DIFFUSE_LIGHT)
     return v

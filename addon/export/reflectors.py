@@ -7,6 +7,7 @@ the Refraction BSDF as a see-through surface. Part of the export layer."""
 import numpy as np
 
 from .. import sheen, specular
+from ..roughdiffuse import ROUGH_DIFFUSE_LIGHT
 from ..nodeeval import constant_color, constant_value
 
 
@@ -19,7 +20,7 @@ def diffuse_roughness(node, reasons):
         reasons.append("Diffuse roughness driven by nodes; its own value used")
     if rough <= 1e-5:
         return 0.0
-    reasons.append("Diffuse roughness (Oren-Nayar) as its albedo averaged over view directions")
+    reasons.append("Diffuse roughness (Oren-Nayar) as its albedo averaged over view directions" + ROUGH_DIFFUSE_LIGHT)
     return rough
 
 
