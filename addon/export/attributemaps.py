@@ -50,9 +50,13 @@ class AttributeMaps:
     # colours at alpha 1, then one colour at alphas 0..1 (a chain reading the alpha is not a
     # scale and offset of the colour)
     # (float colours, vectors and numbers go past 1: values up to 10 too, so a clamp to [0, 1]
-    # after the attribute is not taken for a scale and offset; not below 0, where the export's
-    # own clamp of a negative albedo would do the same)
+    # after the attribute is not taken for a scale and offset)
     _ATTRIBUTE_PROBE = _attribute_probe(np.random.default_rng(11))
+    # and below 0, where a material's own albedo is seen to follow the attribute (_build): the
+    # colours are interpolated signed and clamped after (SurfaceValues._albedo_maps), so a node
+    # that bends below 0 (an Absolute, a Maximum with 0) is not taken for a scale and offset
+    _ATTRIBUTE_SIGNED = np.concatenate([_ATTRIBUTE_PROBE, -_attribute_probe(np.random.default_rng(12))[:, 48:]],
+                                       axis=1)
     _ATTRIBUTE_ALPHAS = TexelBaking._ALPHA_PROBE[None]
 
     def _attribute(self, node, out, reasons):

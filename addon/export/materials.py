@@ -134,7 +134,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         each corner (reported); Object Info on each object's value. An attribute averaged away
         beside an image reads the node's own value (reported by the evaluation)."""
         self._attribute_map = None
-        self._attribute_pixels = self._ATTRIBUTE_PROBE
+        self._attribute_pixels = self._ATTRIBUTE_SIGNED
         self._attributes_read = False
         self._attribute_names = []
         m = self._build_material(mat)
@@ -170,7 +170,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                 nodeeval.TWO_IMAGES, f"{marked_label(name)} beside an image, not as a product with it: "
                 "the image read as its average colour")
             return m
-        line = channel_line(self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64), probe_albedo(m), 1e-5)
+        line = channel_line(self._ATTRIBUTE_SIGNED[0, :, :3].astype(np.float64), probe_albedo(m), 1e-5)
         self._attribute_pixels = self._ATTRIBUTE_ALPHAS
         # built again on alphas alone only where an Alpha output is linked: the only way an
         # attribute's alpha reaches the albedo (nodeeval), so that without one every alpha probe
@@ -191,7 +191,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         # results interpolated: Cycles interpolates first, so this is exact at the corners only,
         # and everywhere when the chain is affine in the colour (a Fac, the channels' average,
         # a luminance, a channel swap: interpolating commutes with it; said otherwise)
-        probe = self._ATTRIBUTE_PROBE[0, :, :3].astype(np.float64)
+        probe = self._ATTRIBUTE_SIGNED[0, :, :3].astype(np.float64)
         affine = not reads_alpha and affine_fit(probe, probe_albedo(m), 1e-5)
         self._attribute_pixels = None
         self._attribute_map = ('corners', name, mat)

@@ -43,10 +43,11 @@ def channel_line(x, y, tolerance):
 
 def affine_fit(x, y, tolerance):
     """Whether y = x W + k (W (3, 3): channels mixed) through every probe value x, y (n, 3) within
-    tolerance x (1 + max |y|), y not negative there (a clamp at 0 would bend it)."""
+    tolerance x (1 + max |y|) (an attribute chain's values are kept signed and clamped after
+    the interpolation, so a negative y is no bend; a clamp inside the chain at 0 is one)."""
     a = np.concatenate([x, np.ones((len(x), 1))], axis=1)
     coef, *_ = np.linalg.lstsq(a, y, rcond=None)
-    return bool(np.abs(a @ coef - y).max() <= tolerance * (1.0 + np.abs(y).max()) and (y >= -1e-6).all())
+    return bool(np.isfinite(y).all() and np.abs(a @ coef - y).max() <= tolerance * (1.0 + np.abs(y).max()))
 
 
 class TexelBaking:

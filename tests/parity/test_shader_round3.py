@@ -95,6 +95,37 @@ def test_negative_attribute_values_clamped_after_interpolation(case, tmp_path):
     assert np.abs(md - mc).max() < 0.01 * mc.max(), (mc, md)
 
 
+
+def _attribute_math(name, operation, b=0.0, c=0.0):
+    """An Attribute's Fac through a Math node."""
+    def wire(nt):
+        a = nt.nodes.new('ShaderNodeAttribute')
+        a.attribute_name = name
+        m = nt.nodes.new('ShaderNodeMath')
+        m.operation = operation
+        m.inputs[1].default_value, m.inputs[2].default_value = b, c
+        nt.links.new(a.outputs['Fac'], m.inputs[0])
+        return m.outputs[0]
+    return wire
+
+
+def test_negative_attribute_values_through_nodes(tmp_path, said):
+    """An attribute of -1 / 1.5 through an affine chain whose result goes below 0 (x -0.5 + 0.6)
+    is interpolated, then clamped, as in Cycles, and nothing said (it had been reported as
+    evaluated at the corners: the export's probes took the negative results for a clamp); one
+    that bends below 0 (an Absolute) is evaluated at the corners and said so, where it had been
+    taken for an identity on probes of 0 and above (silent, 1.9x Cycles)."""
+    sc = _scene(_attribute_math('f', 'MULTIPLY_ADD', -0.5, 0.6), 'diffuse', _alternating('f', [-1.0, 1.5]))
+    c, d = _both(sc, tmp_path)
+    assert c.mean() > 0.05 and abs(d.mean() - c.mean()) < 0.01 * c.mean(), (c.mean(), d.mean())
+    assert not any("approximated" in t for t in said), said
+    del said[:]
+    sc = _scene(_attribute_math('f', 'ABSOLUTE'), 'diffuse', _alternating('f', [-1.0, 1.5]))
+    sc.render.engine = 'DACRT'
+    scenes.render_rgba(sc)
+    assert any("nodes after attribute 'f' applied at the mesh's corners" in t for t in said), said
+
+
 def _strip(wires, tmp_path, samples=4):
     """One emissive 2x2 grid per wire(tree) -> socket (its Emission Color) in a row, seen from
     above; {engine: (n, 32, 32, 3)} each grid's pixels."""
