@@ -213,6 +213,20 @@ class Materials:
                                                         mat.opacity_extension, mat.opacity_transform)))
                 if getattr(mat, 'opaque_refraction', None) is not None:
                     self.opaque_refraction[:, i] = _rgb(mat, 'opaque refraction', mat.opaque_refraction)
+        # the opacity textures as the lookups group them: [((texture, interpolation, extension,
+        # uv transform), [materials])], one entry per texture several materials share, and each
+        # material's entry (-1: none). A transparent step looks each entry up once for all its
+        # materials' hits (SurfaceValues._transparency)
+        self.opacity_group = np.full(len(materials), -1, np.int64)
+        self.opacity_groups = []
+        found = {}
+        for i, tex, interp, ext, xf in self.opacity:
+            key = (id(tex), interp, ext, None if xf is None else xf.tobytes())
+            if key not in found:
+                found[key] = len(self.opacity_groups)
+                self.opacity_groups.append(((tex, interp, ext, xf), []))
+            self.opacity_group[i] = found[key]
+            self.opacity_groups[found[key]][1].append(i)
         self.transparent = self.transparency.max(axis=0) > 0
         # transparent materials shadow rays pass (Transparent Shadows on); the rest block them
         self.shadow_passes = self.transparent & np.array([bool(getattr(m, 'transparent_shadow', True))

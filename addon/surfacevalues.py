@@ -12,7 +12,8 @@ import dacrt
 
 from . import bump as bumpmap
 from .cancel import PassCancelled
-from .procedural import ATTRIBUTE_NEED, SIDED, ProceduralTexels
+from .procedural import ATTRIBUTE_NEED, SIDED, ProceduralTexels, clip_unit
+from .pathstate import compact
 from .sampling import unit_columns
 from .texture import texture_lookup
 
@@ -436,18 +437,41 @@ class SurfaceValues:
     def _transparency(self, prim, u, v, back=None):
         """At hits (prim, u, v) on transparent triangles: the weight rays pass with (3,k) and
         the opacity (k,) the rest of the shader carries (1 but under opacity textures; the
-        opaque part's own glass passes at that opacity, the transparency at 1 - opacity)."""
+        opaque part's own glass passes at that opacity, the transparency at 1 - opacity).
+        Materials that share an opacity texture (one image's alpha) are looked up together:
+        a transparent step pays per texture, not per material (mats.opacity_groups)."""
         mat = np.take(self.tri.material, prim)
         tau = np.take(self.mats.transparency, mat, axis=1)
         opacity = np.ones(len(prim), F32)
-        for (m, tex, interp, ext, xf), sel in zip(self.mats.opacity,
-                                                  _hits_by_material(mat, [e[0] for e in self.mats.opacity])):
-            if len(sel):
-                a = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel),
-                                 None if back is None else np.take(back, sel))[0]
-                a = np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0)    # a NaN texel: opaque
+        groups = self.mats.opacity_groups
+        if not groups:
+            return tau, opacity, mat
+        group = np.take(self.mats.opacity_group, mat)
+        first = int(group[0]) if len(group) else -1
+        if first >= 0 and (group == first).all():      # (a camera ray's layer: often one texture)
+            found = [(groups[first][0], None)]
+        else:
+            found = [(g[0], sel) for g, sel in zip(groups, _hits_by_material(group, range(len(groups)))) if len(sel)]
+        textured = None                                 # the hits under an opacity texture
+        for (tex, interp, ext, xf), sel in found:
+            p, uu, vv, bk = (prim, u, v, back) if sel is None else compact(sel, prim, u, v, back)
+            a = clip_unit(self._lookup(tex, interp, ext, xf, p, uu, vv, bk)[0], 1.0)    # a NaN texel: opaque
+            if a.dtype != F32:                          # (blended as it came, before the cast)
+                at = slice(None) if sel is None else sel
+                glass = np.take(self.mats.opaque_refraction, mat[at], axis=1)
+                tau[:, at] = tau[:, at] * (1.0 - a) + glass * a
+            if sel is None:
+                opacity[:] = a
+                textured = None if a.dtype != F32 else slice(None)
+            else:
                 opacity[sel] = a
-                tau[:, sel] = tau[:, sel] * (1.0 - a) + self.mats.opaque_refraction[:, m:m + 1] * a
+                if a.dtype == F32:
+                    textured = sel if textured is None else np.concatenate([textured, sel])
+        # the rest passes at 1 - opacity, the opaque part's own glass at opacity: one pass for all
+        if textured is not None:
+            a = opacity[textured]
+            glass = np.take(self.mats.opaque_refraction, mat[textured], axis=1)
+            tau[:, textured] = tau[:, textured] * (1.0 - a) + glass * a
         return tau, opacity, mat
 
 

@@ -9,7 +9,7 @@ import numpy as np
 
 import dacrt
 
-from .pathstate import Paths
+from .pathstate import Paths, compact
 from .sampling import DIM_GLASS, DIM_LOBE, DIM_PASSED, DIM_ROULETTE, DIM_TRANSPARENT
 from .scenedata import HOLDOUT
 
@@ -29,17 +29,26 @@ class Transparency:
         multiplies it by opacity / (1 - p), so all the surface does next (emission, reflection,
         light sampling) carries its weight. hits, path.thr and path.tb (surfaces passed) change in
         place; a path that has passed max_transparent transparent surfaces (at least one) stops
-        at the next one (Cycles' PATH_RAY_TERMINATE_ON_NEXT_SURFACE, _vertex)."""
+        at the next one (Cycles' PATH_RAY_TERMINATE_ON_NEXT_SURFACE, _vertex).
+
+        One step per layer of surfaces, whose fixed cost, not the ray count, sets the time of a
+        stack of cut-outs (20 layers had made this loop ~90% of a render): the columns of the
+        rays still passing are kept compacted (h, D, keys, tmax; one native gather a step for
+        them all, not a take per field from the block's arrays), and the surface a ray passes
+        is computed once for its light sample and its next segment."""
         kind = 'camera' if camera else 'bounce'
         thr = path.thr
         rows = None                             # all rays, then those that passed
+        h, D, keys, tmax = hits, path.D, path.keys, path.tmax     # their columns at rows
         j = 0
         while True:
-            prim = hits['prim'] if rows is None else np.take(hits['prim'], rows)
+            prim = np.ascontiguousarray(h['prim'])
             at = np.flatnonzero((prim >= 0) & np.take(self._tri_transparent, np.maximum(prim, 0)))
             if not len(at):
                 return
-            rows, prim = (at if rows is None else rows[at]), prim[at]
+            if rows is None or len(at) < len(rows):
+                rows, prim, h = (at if rows is None else rows[at]), prim[at], h[at]
+                D, keys, tmax = compact(at, D, keys, tmax)
             if thr is None:                     # camera rays: throughput 1 until now
                 thr = path.thr = np.ones((3, len(hits)), F32)
             if path.tb is None:
@@ -48,110 +57,114 @@ class Transparency:
             # Cycles counts transparent surfaces over the whole path: once a pass reaches the
             # limit, the next surface, this one too, is not passed (nor lit, nor bounced off:
             # _vertex); what it emits still counts. Glass: against its own limit
-            tau, opacity, mat = self._transparency(prim, np.take(hits['u'], rows), np.take(hits['v'], rows),
-                                                   None if not self._sided else
-                                                   self._back(prim, -np.take(path.D, rows, axis=1)))
+            u_hit, v_hit = np.ascontiguousarray(h['u']), np.ascontiguousarray(h['v'])
+            tau, opacity, mat = self._transparency(prim, u_hit, v_hit, None if not self._sided else
+                                                   self._back(prim, -D))
             glass = np.take(self._mat_glass, mat)
             if self._opaque_glass:
                 glass = 2.0 * self._glass_part(mat, tau, opacity).mean(axis=0) > tau.mean(axis=0)
-            spent = np.where(glass, np.take(path.gb, rows) >= self._glass_stop,
-                             np.take(path.tb, rows) >= self._transparent_stop)
+            tb, gb = compact(rows, path.tb, path.gb)
+            spent = np.where(glass, gb >= self._glass_stop, tb >= self._transparent_stop)
             surface = None
             if chain is not None:                   # what the data passes read here, before the pick
-                surface = self._surface(hits, rows, path.D)
-                chain.append(dict(rows=rows, prim=prim, u=np.take(hits['u'], rows), v=np.take(hits['v'], rows),
-                                  thr=thr[:, rows], tau=tau, opacity=opacity, P=surface[0], ng=surface[1],
-                                  ns=surface[2],
+                surface = self._surface(h, None, D)
+                chain.append(dict(rows=rows, prim=prim, u=u_hit, v=v_hit, thr=thr[:, rows], tau=tau,
+                                  opacity=opacity, P=surface[0], ng=surface[1], ns=surface[2],
                                   glass=self._glass_part(mat, tau, opacity)))
             t_mean = tau.mean(axis=0)
             total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
             p[spent] = 0.0                      # stops, at its opaque part's weight
-            u = self.rng.uniform2(np.take(path.keys, rows, axis=1), DIM_TRANSPARENT + (k << 11) + j)[0]
+            u = self.rng.uniform2(keys, DIM_TRANSPARENT + (k << 11) + j)[0]
             go = u < p
-            stop = ~go
-            if self.lights and go.any() and k <= self.max_bounces:
+            gone = np.flatnonzero(go)
+            if len(gone) < len(go):
+                stop = np.flatnonzero(~go)
+                if path.nee is None:
+                    path.nee = np.ones(len(hits), F32)
+                p_stop, r_stop = p[stop], rows[stop]
+                path.nee[r_stop] = 1.0 - p_stop
+                thr[:, r_stop] *= opacity[stop] / (1.0 - p_stop)
+            if not len(gone):
+                return
+            # the passing rays' columns, and the surface each leaves: its light sample's point
+            # and its next segment's origin
+            rows, prim, h, glass, mat = rows[gone], prim[gone], h[gone], glass[gone], mat[gone]
+            tau, opacity, p = tau[:, gone], opacity[gone], p[gone]
+            D, keys, tmax, tb = compact(gone, D, keys, tmax, tb)
+            P, ng, ns, P_off = self._surface(h, None, D) if surface is None else (x[:, gone] for x in surface)
+            if self.lights and k <= self.max_bounces:
                 # As Cycles, the surface's light is sampled at every hit, passed or not, at the
                 # opaque part's weight: here for the paths that pass; those that stop sample it
                 # at their vertex with 1 - p of the 1 / (1 - p) their bounce carries. (Sampled
                 # only where the path stopped, a window of 80% Transparent and 20% Diffuse had
                 # 5-8x Cycles' noise.)
-                self._light_passed(k, j, path, hits, sinks, rows[go], prim[go], opacity[go], surface, go)
-            if stop.any():
-                if path.nee is None:
-                    path.nee = np.ones(len(hits), F32)
-                path.nee[rows[stop]] = 1.0 - p[stop]
-            thr[:, rows[stop]] *= opacity[stop] / (1.0 - p[stop])
-            rows, glass = rows[go], glass[go]
-            if not len(rows):
-                return
+                self._light_passed(k, j, path, sinks, rows, prim, u_hit[gone], v_hit[gone], opacity, P, ng, ns, P_off,
+                                   keys, tb)
             if (camera and self._glass_film) or self._transmit_split:
-                self._glass_or_clear(camera, path, rows, mat[go], tau[:, go], opacity[go], p[go],
-                                     self.rng.uniform2(np.take(path.keys, rows, axis=1), DIM_GLASS + (k << 11) + j)[0])
+                self._glass_or_clear(camera, path, rows, mat, tau, opacity, p,
+                                     self.rng.uniform2(keys, DIM_GLASS + (k << 11) + j)[0])
             else:
-                thr[:, rows] *= tau[:, go] / p[go]
+                thr[:, rows] *= tau / p
             path.tb[rows[~glass]] += 1
             path.gb[rows[glass]] += 1
             # on from just behind the surface (P stepped off it away from the ray's side)
-            if surface is None:
-                P, _, _, P_off = self._surface(hits, rows, path.D)
-            else:
-                P, P_off = surface[0][:, go], surface[3][:, go]
-            D = np.ascontiguousarray(np.take(path.D, rows, axis=1))
-            t0 = np.take(hits['t'], rows)
-            tmax = np.take(path.tmax, rows) - t0
+            t0 = h['t']
             sub = self._intersect_past(kind, path.transmit, rows, np.ascontiguousarray(P + P - P_off), D,
-                                       tmax.astype(F32), np.take(hits['prim'], rows))
+                                       (tmax - t0).astype(F32), prim)
             sub['t'] += t0                      # distances from the path vertex, for lamps and MIS
-            seg = Paths(np.take(path.pid, rows), None, np.ascontiguousarray(np.take(path.O, rows, axis=1)), D,
-                         np.take(path.tmax, rows), np.ascontiguousarray(thr[:, rows]),
-                         None if path.pdf is None else np.take(path.pdf, rows),
-                         None if path.prim is None else np.take(path.prim, rows),
-                         N=None if path.N is None else np.ascontiguousarray(np.take(path.N, rows, axis=1)),
-                         refracted=None if path.refracted is None else np.take(path.refracted, rows),
-                         transmit=None if path.transmit is None else np.take(path.transmit, rows),
-                         dark_pdf=None if path.dark_pdf is None else np.take(path.dark_pdf, rows))
+            # the segment's paths: only the columns _gather_segment reads
+            pid, O, thr_seg, pdf, prim_seg, N, refracted, transmit, dark_pdf = compact(
+                rows, path.pid, path.O, thr, path.pdf, path.prim, path.N, path.refracted, path.transmit,
+                path.dark_pdf)
+            seg = Paths(pid, None, O, D, tmax, thr_seg, pdf, prim_seg, N=N, refracted=refracted, transmit=transmit,
+                        dark_pdf=dark_pdf)
             self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
+            h = sub
             if camera:
-                rows = self._transparent_roulette(k, j, path, hits, rows)
+                kept = self._transparent_roulette(k, j, path, sub, rows)
+                if kept is not None:
+                    rows, h = rows[kept], h[kept]
+                    D, keys, tmax = compact(kept, D, keys, tmax)
             j += 1
 
-    def _transparent_roulette(self, k, j, path, hits, rows):
-        """Cycles' Russian roulette at the surfaces camera paths rows now hit after their j-th
-        transparent pass (integrator_intersect_terminate): where the path has passed more than
-        min_transparent_bounces + 1 transparent surfaces, it goes on with probability
-        min(sqrt(max |throughput|), 1), its throughput divided by it, or ends there unshaded:
-        that surface and those behind write no passes (Normal, UV, AOVs, sample 0's Depth:
-        unweighted, so fewer samples write them, as in Cycles; Combined, alpha and the weighted
-        passes stay unbiased). Ended paths are marked in path.dead; returns the rows left.
+    def _transparent_roulette(self, k, j, path, sub, rows):
+        """Cycles' Russian roulette at the surfaces camera paths rows now hit (sub, their hits)
+        after their j-th transparent pass (integrator_intersect_terminate): where the path has
+        passed more than min_transparent_bounces + 1 transparent surfaces, it goes on with
+        probability min(sqrt(max |throughput|), 1), its throughput divided by it, or ends there
+        unshaded: that surface and those behind write no passes (Normal, UV, AOVs, sample 0's
+        Depth: unweighted, so fewer samples write them, as in Cycles; Combined, alpha and the
+        weighted passes stay unbiased). Ended paths are marked in path.dead; returns the
+        positions in rows of those left (None: all of them).
         Emissive and holdout surfaces are not rouletted (Cycles still adds such a surface's
         emission and holdout before ending the path)."""
-        prim = np.take(hits['prim'], rows)
+        prim = sub['prim']
         sel = np.flatnonzero((np.take(path.tb, rows) > self._roulette_after) & (prim >= 0))
         if not len(sel):
-            return rows
+            return None
         p_sel = prim[sel]
         keep = ~np.take(self.mats.emissive, np.take(self.tri.material, p_sel))
         if self._any_holdout:
             keep &= (np.take(self.tri.visibility, p_sel) & HOLDOUT) == 0
         sel = sel[keep]
         if not len(sel):
-            return rows
+            return None
         r = rows[sel]
         q = np.minimum(np.sqrt(np.abs(path.thr[:, r]).max(axis=0)), 1.0).astype(F32)
         u = self.rng.uniform2(np.take(path.keys, r, axis=1), DIM_ROULETTE + (k << 11) + j)[0]
         live = u < q
         path.thr[:, r[live]] /= q[live]
         if live.all():
-            return rows
+            return None
         if path.dead is None:
-            path.dead = np.zeros(len(hits), bool)
+            path.dead = np.zeros(len(path.pid), bool)
         path.dead[r[~live]] = True
         self._ended['roulette'] += int((~live).sum())
         out = np.ones(len(rows), bool)
         out[sel[~live]] = False
-        return rows[out]
+        return np.flatnonzero(out)
 
     def _glass_part(self, mat, tau, opacity):
         """(3, k) the glass part of transparency tau at hits on materials mat of opacity (k,)."""
@@ -192,26 +205,22 @@ class Transparency:
                                         np.ascontiguousarray(tfar[sel]), np.take(skip, sel))
         return hits
 
-    def _light_passed(self, k, j, path, hits, sinks, rows, prim, opacity, surface, go):
-        """Light sampling at the semi-transparent surfaces (layer j) that paths rows pass: the
-        path's throughput so far x the opaque part's weight (opacity x albedo), as vertex k's
-        sampling is (the same sinks and light choice), with random dimensions of their own."""
-        u, v = np.take(hits['u'], rows), np.take(hits['v'], rows)
-        if surface is None:
-            P, ng, ns, P_off = self._surface(hits, rows, path.D)
-        else:
-            P, ng, ns, P_off = (x[:, go] for x in surface)
+    def _light_passed(self, k, j, path, sinks, rows, prim, u, v, opacity, P, ng, ns, P_off, keys, tb):
+        """Light sampling at the semi-transparent surfaces (layer j) that paths rows pass (their
+        hits prim, u, v, the surface's opacity, points and normals (3, k), keys and transparent
+        passes so far tb): the path's throughput so far x the opaque part's weight (opacity x
+        albedo), as vertex k's sampling is (the same sinks and light choice), with random
+        dimensions of their own."""
         thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
         if self._albedo_varies:
             self._albedo_maps(prim, u, v, thr, self._back(prim, ng))
         ns, bump = self._bent_normals(prim, u, v, ns, ng)
-        keys = np.ascontiguousarray(np.take(path.keys, rows, axis=1))
         u_pick = None
         if self.lights.num_entries > 1:
             u_pick = self.rng.uniform_pick(keys, DIM_PASSED + (k << 11) + 2 * j)[0]
-        tb = None if path.tb is None else np.take(path.tb, rows)
+        pid = np.take(path.pid, rows)
         self._next_event(k, np.ascontiguousarray(P), np.ascontiguousarray(P_off), prim, np.ascontiguousarray(ng),
-                         np.ascontiguousarray(ns), np.ascontiguousarray(thr, F32), np.take(path.pid, rows), keys,
+                         np.ascontiguousarray(ns), np.ascontiguousarray(thr, F32), pid, keys,
                          u_pick, sinks.sampled(k), tb, u, v, sinks.groups, bump,
                          dims=DIM_PASSED + (k << 11) + 2 * j + 1)
         if self._any_translucent:             # a translucent surface's transmission, from the far side
@@ -220,7 +229,7 @@ class Transparency:
             if len(sel):
                 T = np.take(self.mats.translucency, np.take(mat, sel), axis=1)
                 thr_far = T * np.take(opacity, sel) * np.take(path.thr, np.take(rows, sel), axis=1)
-                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, np.take(path.pid, rows), keys,
+                self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys,
                                      u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, bump=bump)
 
     def _gather_segment(self, seg, sub, t0, sinks, k):

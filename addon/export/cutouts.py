@@ -6,7 +6,7 @@ procedural textures compute (per shading point)."""
 import numpy as np
 
 from ..nodegraph import linked_link
-from ..procedural import ProceduralTexels
+from ..procedural import ProceduralTexels, clip_unit
 from . import procedurals
 from .closure import Closure, Texture, is_image_alpha
 
@@ -78,7 +78,7 @@ class Cutouts:
             return None
 
         def opacity(coords):    # Mix = (1 - fac) first + fac second; reads no Blender data
-            f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+            f = clip_unit(np.asarray(fac_fn(coords), np.float64), 0.0)
             return f if clear_a else 1.0 - f
         tex = Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity')
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
@@ -99,7 +99,7 @@ class Cutouts:
         def opacity(coords):    # reads no Blender data: it runs during the render's lookups
             # (a NaN alpha is 0 in Cycles, fully transparent (measured: a Noise of NaN Scale
             # shows the world behind); it had been opaque here)
-            return np.clip(np.nan_to_num(np.asarray(fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+            return clip_unit(np.asarray(fn(coords), np.float64), 0.0)
         return Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity'), False
 
     def _evaluated_alpha(self, socket, reasons, inverted=False):

@@ -73,6 +73,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                                       emission=np.zeros(3, np.float32))]
         self._index = {}
         self._images = {}          # (image pointer, unassociated, sequence frame) -> (its pixels, what loading said)
+        self._opacities = {}       # (image Texture key, inverted) -> (its texels, opacity texels, what baking said)
         self._used_outputs = None  # the material being built: nodegraph.used_outputs of its tree (None: none)
         self.uses_texture = [False]
         self.uv_maps = ['']       # per material: the UV map its images read by name, '' active
@@ -360,13 +361,21 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                     reasons.append("emission under a procedural alpha is not dimmed by it for light sampling")
             elif closure.opacity is not None:
                 tex, inverted = closure.opacity
-                a = tex.pixels[..., 3:4]
-                if not np.isfinite(a).all():
-                    reasons.append(f"{int(np.count_nonzero(~np.isfinite(a)))} texel(s) of non-finite alpha "
-                                   f"read as opaque")
-                    a = np.where(np.isfinite(a), a, 1.0)
-                a = np.clip(1.0 - a if inverted else a, 0.0, 1.0).astype(np.float32)
-                opacity = tex.texels(np.ascontiguousarray(np.concatenate([a, a, a, np.ones_like(a)], axis=-1)))
+                # one array per image (and inversion), shared by the materials that cut out by it:
+                # the integrator looks a shared texture up once for all their hits
+                # (SurfaceValues._transparency; 20 leaves' materials on one image had paid 20)
+                pixels, opacity, notes = self._opacities.get((tex.key, inverted), (None, None, []))
+                if pixels is not tex.pixels:        # (not made yet, or a probe's texels under this key)
+                    opacity, notes = None, []
+                    a = tex.pixels[..., 3:4]
+                    if not np.isfinite(a).all():
+                        notes.append(f"{int(np.count_nonzero(~np.isfinite(a)))} texel(s) of non-finite alpha "
+                                     f"read as opaque")
+                        a = np.where(np.isfinite(a), a, 1.0)
+                    a = np.clip(1.0 - a if inverted else a, 0.0, 1.0).astype(np.float32)
+                    opacity = tex.texels(np.ascontiguousarray(np.concatenate([a, a, a, np.ones_like(a)], axis=-1)))
+                    self._opacities[tex.key, inverted] = (tex.pixels, opacity, notes)
+                reasons.extend(notes)
                 o_interp, o_ext, o_transform = tex.interpolation, tex.extension, tex.transform
                 if closure.opaque_glass.any():
                     opaque_refraction = nonnegative(closure.opaque_glass.astype(np.float32), "transmission",
