@@ -201,12 +201,17 @@ class Assembly:
             out.instance_values = {n: np.zeros((total, 4), np.float32) for n in self._info_needs}
         v0 = t0 = 0
         tubes = []      # the rows of hair and Curves tubes (Cycles' curve primitives)
-        for a, places in batches:
+        for a, places in self._grouped(batches, strand_keys):
             if self.check_break():
                 raise ExportCancelled()
-            if strand_keys.get(id(a)):
-                tubes.append(slice(t0, t0 + len(places) * len(a.triangles)))
-            nbad, ndeg, nskipped = self._instance_batch(a, places, out, v0, t0)
+            if a is None:           # single placements of several meshes (_single_batch)
+                nbad, ndeg, nskipped = self._single_batch(places, out, v0, t0)
+                nv_rows, nt_rows = sum(len(b.positions) for b, _ in places), sum(len(b.triangles) for b, _ in places)
+            else:
+                if strand_keys.get(id(a)):
+                    tubes.append(slice(t0, t0 + len(places) * len(a.triangles)))
+                nbad, ndeg, nskipped = self._instance_batch(a, places, out, v0, t0)
+                nv_rows, nt_rows = len(places) * len(a.positions), len(places) * len(a.triangles)
             degenerate += ndeg
             for name, nonfinite in nskipped:
                 skipped[nonfinite, name] = skipped.get((nonfinite, name), 0) + 1
@@ -214,8 +219,8 @@ class Assembly:
                 acc = bad.setdefault(name, [0, 0])
                 acc[0] += nvb
                 acc[1] += ntb
-            v0 += len(places) * len(a.positions)
-            t0 += len(places) * len(a.triangles)
+            v0 += nv_rows
+            t0 += nt_rows
         for name, (nvb, ntb) in bad.items():
             self.messages.append(('WARNING', f"object '{name}': {nvb} vertices with NaN, infinite or "
                                              f"out-of-range (beyond +-{REACH:.1e}) coordinates; {ntb} "
@@ -256,6 +261,123 @@ class Assembly:
             geometry.visibility |= unseen[geometry.material]
             geometry = self._clear_twins(geometry, mvis, objects)
         return geometry
+
+    # the most placements (and triangles) one _single_batch writes: cancel is polled between them
+    SINGLES = 1024
+    SINGLE_ROWS = 1 << 18
+
+    def _grouped(self, batches, strand_keys):
+        """The batches in order, runs of consecutive meshes placed once each (a scene of
+        thousands of separate objects) as (None, [(mesh, placement), ...]) for _single_batch.
+        Meshes of hair, Curves or point clouds go alone through _instance_batch."""
+        run, rows = [], 0
+        for a, places in batches:
+            if len(places) == 1 and not strand_keys.get(id(a)) and not getattr(a, 'radial_normals', False):
+                run.append((a, places[0]))
+                rows += len(a.triangles)
+                if len(run) >= self.SINGLES or rows >= self.SINGLE_ROWS:
+                    yield None, run
+                    run, rows = [], 0
+                continue
+            if run:
+                yield None, run
+                run, rows = [], 0
+            yield a, places
+        if run:
+            yield None, run
+
+    def _single_batch(self, items, out, v0, t0):
+        """Write single placements of several meshes ([(mesh, placement)]) from vertex row v0
+        and triangle row t0, as _instance_batch writes each (bit for bit), with one pass per
+        array over all of them where that writes the same values: their matrices checked, their
+        determinants and inverses, the face normals, materials, visibility and ids. (One
+        _instance_batch per object had cost ~0.1 ms of numpy calls each: 8000 separate objects'
+        export was more than Cycles' whole render.) Returns what _instance_batch returns."""
+        mats = np.stack([p.matrix for _, p in items])              # (G,4,4)
+        if not (np.abs(mats) <= REACH).all():
+            # a non-finite transform: skipped and said per placement, as _instance_batch does
+            return self._each_alone(items, out, v0, t0)
+        g = len(items)
+        lin = mats[:, :3, :3]
+        nvs = np.array([len(a.positions) for a, _ in items])
+        nts = np.array([len(a.triangles) for a, _ in items])
+        vstart, tstart = np.cumsum(nvs) - nvs, np.cumsum(nts) - nts
+        nv, nt = int(nvs.sum()), int(nts.sum())
+        world = out.vertices[v0:v0 + nv]
+        for j, (a, _) in enumerate(items):
+            dacrt.shading.transform_points(a.positions, lin[j:j + 1], mats[j:j + 1, :3, 3],
+                                           world[vstart[j]:vstart[j] + nvs[j]].reshape(1, -1, 3))
+        if not (world.max(initial=0.0) <= REACH and world.min(initial=0.0) >= -REACH):
+            # vertices out of range: dropped and said per object by _instance_batch
+            return self._each_alone(items, out, v0, t0)
+        det = np.linalg.det(lin)        # (each matrix on its own: the same as one at a time)
+        T = slice(t0, t0 + nt)
+        tris = out.triangles[T]         # indices into this group's vertices first (face_normals)
+        for j, (a, _) in enumerate(items):
+            np.add(a.triangles, np.int32(vstart[j]), out=tris[tstart[j]:tstart[j] + nts[j]])
+        mirrored = np.flatnonzero(det < 0)
+        for j in mirrored.tolist():
+            _rewind(tris[tstart[j]:tstart[j] + nts[j]])
+        ng, good = dacrt.shading.face_normals(world, tris)
+        if v0:
+            tris += v0
+        deg = int(np.count_nonzero(~good))
+        if deg:
+            out.drop(T, good)
+        normals = out.normals[T]
+        normals[...] = ng[:, None, :]
+        smooth = [j for j, (a, _) in enumerate(items) if a.normal_rows is not None]
+        if smooth:
+            inv = np.linalg.inv(np.where(np.abs(det)[:, None, None] > 0, lin, np.eye(3)))
+            xf = inv.transpose(0, 2, 1)
+            for j in smooth:
+                S = slice(tstart[j], tstart[j] + nts[j])
+                self._smooth_normals(items[j][0], xf[j:j + 1], [0] if det[j] < 0 else [], normals[S], ng[S])
+        material = out.material[T]
+        for j, (a, p) in enumerate(items):
+            slot_map = p.slot_map
+            material[tstart[j]:tstart[j] + nts[j]] = slot_map[0] if len(slot_map) == 1 or a.slot is None else \
+                np.take(slot_map, a.slot, mode='clip')     # index clamped as Blender does
+        out.visibility[T] = np.repeat(np.asarray([p.visibility for _, p in items], out.visibility.dtype), nts)
+        out.object_index[T] = np.repeat(np.asarray([p.object_index for _, p in items], out.object_index.dtype),
+                                        nts)
+        out.instance[T] = np.repeat(out.instances + np.arange(g, dtype=np.int32), nts)
+        if self._info_needs:
+            self._object_info_values([p for _, p in items], out)
+        for j, (a, p) in enumerate(items):
+            term = (p.terminator[0] if a.normal_rows is not None else 0.0, p.terminator[1])
+            if any(term):
+                if out.terminator is None:
+                    out.terminator = np.zeros((len(out.triangles), 2), np.float32)
+                out.terminator[t0 + tstart[j]:t0 + tstart[j] + nts[j]] = term
+        attributed, coordinated, varying = self._attributed, self._coordinated, self._aov_varying
+        per_point = self._attribute_readers
+        per_placement = out.uvs is not None or self.materials.normal_mapped or coordinated or varying or per_point
+        if attributed or per_placement:
+            for j, (a, p) in enumerate(items):
+                flip = bool(det[j] < 0)
+                S = slice(t0 + tstart[j], t0 + tstart[j] + nts[j])
+                if attributed:
+                    self._corner_albedos_batch(a, [p])
+                    self._attribute_colors(a, [p], np.flatnonzero([flip]), out, S.start)
+                if per_placement:
+                    self._placement_rows(a, p, flip, out, S, coordinated, varying, per_point)
+        out.instances += g
+        out.linear.append(lin)
+        return [], deg, []
+
+    def _each_alone(self, items, out, v0, t0):
+        """items written one _instance_batch each (what non-finite transforms and vertices
+        need: dropped and said per object), their returns joined."""
+        bad, deg, skipped = [], 0, []
+        for a, p in items:
+            nbad, ndeg, nskipped = self._instance_batch(a, [p], out, v0, t0)
+            bad += nbad
+            deg += ndeg
+            skipped += nskipped
+            v0 += len(a.positions)
+            t0 += len(a.triangles)
+        return bad, deg, skipped
 
     def _volume_only_tubes(self, out, tubes, mvis):
         """Hair and Curves tubes (rows `tubes`) of a volume-only material (visibility 0): Cycles'
@@ -482,7 +604,9 @@ class Assembly:
             if not places:
                 continue
             slot = self.meshes[key].slot
-            slots_used = np.zeros(1, np.int32) if slot is None else np.unique(slot)
+            # (a mesh of one slot, most of them, without numpy: two np.unique calls per object
+            # had been a third of this for thousands of separate objects)
+            slots_used = None if slot is None else np.unique(slot)
             # placements sharing their slots list (the instances of one object, 100K of them in
             # a scattered forest: _walk_instances) share one map, read-only from here on
             maps = {}
@@ -493,7 +617,7 @@ class Assembly:
                     continue
                 ptrs = [m.as_pointer() if m is not None else 0 for m in p.slots]
                 n = max(len(p.slots), 1)
-                used = np.unique(np.clip(slots_used, 0, n - 1))
+                used = (0,) if slots_used is None else np.unique(np.clip(slots_used, 0, n - 1)).tolist()
                 p.slot_map = maps[id(p.slots)] = np.zeros(n, np.int32)
                 for i in used:
                     if i < len(p.slots):
@@ -605,33 +729,7 @@ class Assembly:
             else:                                   # normals transform by the inverse transpose
                 inv = np.linalg.inv(np.where(np.abs(det)[:, None, None] > 0, lin, np.eye(3)))
                 xf = inv.transpose(0, 2, 1)
-            n = dacrt.shading.transform_points(a.normal_rows, np.ascontiguousarray(xf), None,
-                           np.empty((k, len(a.normal_rows), 3), np.float32))
-            # |n| per row from the three strided columns: 2x faster than einsum's reduction
-            nlen = n[..., 0] * n[..., 0]
-            nlen += n[..., 1] * n[..., 1]
-            nlen += n[..., 2] * n[..., 2]
-            nlen = np.sqrt(nlen, out=nlen)[..., None]
-            ok = nlen > 1e-12                           # a zero normal falls back to the face's
-            # Cycles bakes a single user's transform into its mesh, normalizing each vertex's
-            # normal, but keeps an instanced mesh (several users: linked duplicates, Geometry
-            # Nodes instances) in object space and transforms the interpolated normal at each
-            # hit: M^-T rows left unnormalized interpolate to that (the renderer normalizes).
-            # Normalized first, a smooth cylinder scaled (4, 1, 1) as linked duplicates was
-            # 0.31-1.06x Cycles across its bands
-            if k == 1:
-                n /= np.where(ok, nlen, np.float32(1))
-            if not ok.all():
-                np.copyto(n, np.float32(0), where=~ok)
-            per = normals.reshape(k, nt, 3, 3)
-            a.per_corner(n, a.normal_index, per)
-            for i in mirrored:
-                _rewind(per[i])
-            if not ok.all():
-                corner_ok = a.per_corner(ok, a.normal_index, np.empty((k, nt, 3, 1), bool))
-                for i in mirrored:
-                    _rewind(corner_ok[i])
-                np.copyto(normals, ng[:, None, :], where=~corner_ok.reshape(k * nt, 3, 1))
+            self._smooth_normals(a, xf, mirrored, normals, ng)
         # per placement, for all k at once (a scatter's 100K instances: a Python step each was
         # most of the batch): materials (placements sharing a slot map share their rows),
         # visibility, object and instance ids, shadow terminator
@@ -675,29 +773,68 @@ class Assembly:
             # waiting 17 s)
             if i % 2048 == 2047 and self.check_break():
                 raise ExportCancelled()
-            S = slice(t0 + i * nt, t0 + (i + 1) * nt)
-            if out.uvs is not None:
-                if a.corner_uvs is None:
-                    out.uvs[S] = 0.0
-                    if out.has_uv is None:
-                        out.has_uv = np.ones(len(out.triangles), bool)
-                    out.has_uv[S] = False
-                else:
-                    a.per_corner(a.corner_uvs, a.corners, out.uvs[S])
-                self._named_uvs(a, p, out.material[S], out.uvs[S])
-                if i in mirrored:
-                    _rewind(out.uvs[S])
-            if self.materials.normal_mapped:
-                self._world_tangents(a, p, i in mirrored, out, S)
-            if coordinated and not coordinated.isdisjoint(self._shown(p.slot_map)):
-                self._texture_coordinates(a, p, coordinated, i in mirrored, out, S)
-            if varying and not varying.isdisjoint(self._shown(p.slot_map)):
-                self._aov_corners(a, p, i in mirrored, out, S)
-            if per_point and not per_point.isdisjoint(self._shown(p.slot_map)):
-                self._point_attributes(a, p, i in mirrored, out, S)
+            self._placement_rows(a, p, i in mirrored, out, slice(t0 + i * nt, t0 + (i + 1) * nt), coordinated,
+                                 varying, per_point)
         out.instances += k
         out.linear.append(lin)
         return bad, deg, skipped
+
+    @staticmethod
+    def _smooth_normals(a, xf, mirrored, normals, ng):
+        """normals (k nt, 3, 3): the corner normals of mesh a's k placements, its normal rows
+        through their maps xf (k, 3, 3) (indices `mirrored` rewound); ng (k nt, 3) the world
+        geometric normals, where a row's normal is zero."""
+        k, nt = len(xf), len(a.triangles)
+        n = dacrt.shading.transform_points(a.normal_rows, np.ascontiguousarray(xf), None,
+                                           np.empty((k, len(a.normal_rows), 3), np.float32))
+        # |n| per row from the three strided columns: 2x faster than einsum's reduction
+        nlen = n[..., 0] * n[..., 0]
+        nlen += n[..., 1] * n[..., 1]
+        nlen += n[..., 2] * n[..., 2]
+        nlen = np.sqrt(nlen, out=nlen)[..., None]
+        ok = nlen > 1e-12                           # a zero normal falls back to the face's
+        # Cycles bakes a single user's transform into its mesh, normalizing each vertex's
+        # normal, but keeps an instanced mesh (several users: linked duplicates, Geometry
+        # Nodes instances) in object space and transforms the interpolated normal at each
+        # hit: M^-T rows left unnormalized interpolate to that (the renderer normalizes).
+        # Normalized first, a smooth cylinder scaled (4, 1, 1) as linked duplicates was
+        # 0.31-1.06x Cycles across its bands
+        if k == 1:
+            n /= np.where(ok, nlen, np.float32(1))
+        if not ok.all():
+            np.copyto(n, np.float32(0), where=~ok)
+        per = normals.reshape(k, nt, 3, 3)
+        a.per_corner(n, a.normal_index, per)
+        for i in mirrored:
+            _rewind(per[i])
+        if not ok.all():
+            corner_ok = a.per_corner(ok, a.normal_index, np.empty((k, nt, 3, 1), bool))
+            for i in mirrored:
+                _rewind(corner_ok[i])
+            np.copyto(normals, ng[:, None, :], where=~corner_ok.reshape(k * nt, 3, 1))
+
+    def _placement_rows(self, a, p, mirrored, out, S, coordinated, varying, per_point):
+        """One placement's per-corner rows S (mesh a placed by p; mirrored: rewound): UVs,
+        tangents, texture coordinates, AOV and point attribute corners."""
+        if out.uvs is not None:
+            if a.corner_uvs is None:
+                out.uvs[S] = 0.0
+                if out.has_uv is None:
+                    out.has_uv = np.ones(len(out.triangles), bool)
+                out.has_uv[S] = False
+            else:
+                a.per_corner(a.corner_uvs, a.corners, out.uvs[S])
+            self._named_uvs(a, p, out.material[S], out.uvs[S])
+            if mirrored:
+                _rewind(out.uvs[S])
+        if self.materials.normal_mapped:
+            self._world_tangents(a, p, mirrored, out, S)
+        if coordinated and not coordinated.isdisjoint(self._shown(p.slot_map)):
+            self._texture_coordinates(a, p, coordinated, mirrored, out, S)
+        if varying and not varying.isdisjoint(self._shown(p.slot_map)):
+            self._aov_corners(a, p, mirrored, out, S)
+        if per_point and not per_point.isdisjoint(self._shown(p.slot_map)):
+            self._point_attributes(a, p, mirrored, out, S)
 
     # the most rows (corners x placements) one evaluation of _corner_albedos_batch reads
     _BATCH_ROWS = 1 << 20
