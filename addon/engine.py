@@ -135,11 +135,12 @@ class _Memory:
     def __init__(self, scene_bytes, heap0, rss0=None):
         self.floor, self.heap0, self.rss0, self.peak = scene_bytes, heap0, rss0, 0.0
 
-    def sample(self):
+    def sample(self, fresh=False):
         """The memory held now; the peak also counts the process's peak resident growth since
         the frame began (the export's temporaries, which samples between passes miss: an 8K
-        image's conversion peaked at 4.4 GB where they saw 1.6)."""
-        now = heap_in_use() if self.heap0 is not None else None
+        image's conversion peaked at 4.4 GB where they saw 1.6). A reading of the heap taken
+        moments ago stands (allocator.HEAP_SPACING) unless fresh (the frame's last sample)."""
+        now = heap_in_use(fresh=fresh) if self.heap0 is not None else None
         used = self.floor if now is None else max(self.floor, now - self.heap0)
         top = rss_peak() if self.rss0 is not None else None
         self.peak = max(self.peak, used / 2 ** 20, 0.0 if top is None else (top - self.rss0) / 2 ** 20)
@@ -435,7 +436,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             if fraction is None:
                 fraction = progress.samples_done / max(progress.samples_total, 1)
             self.update_progress(fraction)
-            used = memory.sample()
+            used = memory.sample(fresh=final)
             self.update_memory_stats(memory_used=used, memory_peak=memory.peak)
             self.update_stats(f"Mem:{used:.1f}M, Peak:{memory.peak:.1f}M", self._status(progress, now - t0))
             if self.cancel_requested():

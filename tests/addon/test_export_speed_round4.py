@@ -170,3 +170,47 @@ def test_separate_objects_share_the_geometry_passes(scene, exported, monkeypatch
     assert len(data.geometry.instance) and data.geometry.instance.max() >= 299
     assert calls['face_normals'] <= 2 and calls['det'] <= 2, calls      # (was 300 each)
 
+def _lit_plane(scene, size=(16, 12)):
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scenes.camera((0, 0, 5))
+    scenes.plane("Ground", size=100, materials=(scenes.diffuse("Ground", (0.2, 0.4, 0.6)),))
+    scenes.light('SUN', 3.0)
+    scene.dacrt.samples = 1
+
+
+class _SlowHeap:
+    """glibc as on a fragmented heap: each mallinfo2 takes `cost` seconds (counted)."""
+
+    def __init__(self, libc, cost):
+        import time
+        from addon.allocator import _MallInfo2
+        self.libc, self.calls = libc, 0
+        real = libc.mallinfo2
+        real.restype = _MallInfo2
+
+        def mallinfo2():
+            self.calls += 1
+            time.sleep(cost)
+            return real()
+        self.mallinfo2 = mallinfo2          # (a function: the reader sets its restype)
+
+    def __getattr__(self, name):
+        return getattr(self.libc, name)
+
+
+@pytest.mark.skipif(not getattr(__import__('addon.allocator').allocator._LIBC, 'mallinfo2', None),
+                    reason="glibc's mallinfo2 only")
+def test_a_costly_heap_reading_is_not_repeated_within_moments(scene, monkeypatch):
+    """Where one reading of the C heap is slow (30-100 ms on a fragmented heap: a frame of
+    4000 objects), a frame reads it at its start and at its last memory sample, not also in
+    the export's memory budget and at every sample between (4 readings: 0.13-0.31 s of that
+    frame); the render's memory still counts the heap's growth (the film's here)."""
+    from addon import allocator
+    slow = _SlowHeap(allocator._LIBC, 0.05)
+    monkeypatch.setattr(allocator, '_LIBC', slow)
+    _lit_plane(scene, size=(640, 480))
+    bpy.ops.render.render()
+    assert slow.calls == 2, slow.calls
+    peak = next(iter(__import__('addon').last_render_stats().values()))['memory_peak_mb']
+    assert peak > 640 * 480 * 4 * 4 / 2 ** 20, peak     # (the film alone)
+    assert allocator._reading is None            # (nothing of the frame's is kept past it)
