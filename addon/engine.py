@@ -288,7 +288,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
     # ------------------------------------------------------------------------------------
     def _render(self, depsgraph):
         layer = depsgraph.view_layer.name
-        if not self._layer_enabled(layer):
+        if not self._layer_enabled(layer, depsgraph.scene):
             return
         # a layer rendered again is a new render (an animation's next frame, or an F12 with
         # Persistent Data, which keeps this engine): its messages are said again
@@ -399,8 +399,13 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         except ValueError as e:
             raise RuntimeError(str(e) if view is None else f"view '{view}': {e}") from None
 
-    def _layer_enabled(self, layer):
+    def _layer_enabled(self, layer, scene=None):
         """Blender may call render for a layer it will not use (Render Single Layer)."""
+        layers = getattr(scene, 'view_layers', None)
+        if layers is not None and len(layers) == 1 and layers[0].name == layer and layers[0].use:
+            # the scene's one view layer, in use: the frame's (the probe, a result begun at the
+            # render's size and dropped, was a fixed cost of every render)
+            return True
         probe = self.begin_result(0, 0, max(self.resolution_x, 1), max(self.resolution_y, 1), layer=layer)
         if probe is None:
             return True

@@ -214,3 +214,26 @@ def test_a_costly_heap_reading_is_not_repeated_within_moments(scene, monkeypatch
     peak = next(iter(__import__('addon').last_render_stats().values()))['memory_peak_mb']
     assert peak > 640 * 480 * 4 * 4 / 2 ** 20, peak     # (the film alone)
     assert allocator._reading is None            # (nothing of the frame's is kept past it)
+
+def test_a_scene_of_one_view_layer_begins_one_result(scene):
+    """A scene of one view layer (in use) renders that layer: no probe result (begun at the
+    render's size and dropped) asks Blender whether it is in the render; with two layers
+    (Render Single Layer) the probe still decides."""
+    import types
+    from addon import engine
+    begun = []
+
+    class Probe:
+        layers = [types.SimpleNamespace(name='ViewLayer')]
+    fake = types.SimpleNamespace(resolution_x=32, resolution_y=24,
+                                 begin_result=lambda *a, **k: begun.append(k.get('layer')) or Probe(),
+                                 end_result=lambda *a, **k: None)
+    assert engine.DACRTRenderEngine._layer_enabled(fake, 'ViewLayer', scene)
+    assert begun == []
+    scene.view_layers[0].use = False                    # (not in use: Blender decides)
+    engine.DACRTRenderEngine._layer_enabled(fake, 'ViewLayer', scene)
+    assert begun == ['ViewLayer']
+    scene.view_layers[0].use = True
+    scene.view_layers.new("Second")
+    assert not engine.DACRTRenderEngine._layer_enabled(fake, 'Second', scene)
+    assert begun == ['ViewLayer', 'Second']
