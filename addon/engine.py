@@ -135,14 +135,15 @@ class _Memory:
     def __init__(self, scene_bytes, heap0, rss0=None):
         self.floor, self.heap0, self.rss0, self.peak = scene_bytes, heap0, rss0, 0.0
 
-    def sample(self, fresh=False):
+    def sample(self, fresh=False, resident=True):
         """The memory held now; the peak also counts the process's peak resident growth since
         the frame began (the export's temporaries, which samples between passes miss: an 8K
-        image's conversion peaked at 4.4 GB where they saw 1.6). A reading of the heap taken
-        moments ago stands (allocator.HEAP_SPACING) unless fresh (the frame's last sample)."""
+        image's conversion peaked at 4.4 GB where they saw 1.6), unless not resident (a /proc
+        read). A reading of the heap taken moments ago stands (allocator.HEAP_SPACING) unless
+        fresh (the frame's last sample)."""
         now = heap_in_use(fresh=fresh) if self.heap0 is not None else None
         used = self.floor if now is None else max(self.floor, now - self.heap0)
-        top = rss_peak() if self.rss0 is not None else None
+        top = rss_peak() if self.rss0 is not None and resident else None
         self.peak = max(self.peak, used / 2 ** 20, 0.0 if top is None else (top - self.rss0) / 2 ** 20)
         return used / 2 ** 20
 
@@ -415,7 +416,9 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
 
     def _integrate(self, integ, result, scene_data, t0, view=None):
         memory = _Memory(_scene_bytes(scene_data), getattr(self, '_heap0', None), getattr(self, '_rss0', None))
-        self.update_memory_stats(memory_used=memory.sample(), memory_peak=memory.peak)
+        # (the resident peak, a high-water mark, is read after each pass: that after the last
+        # holds it all; reading it here too had been one more /proc read per render)
+        self.update_memory_stats(memory_used=memory.sample(resident=False), memory_peak=memory.peak)
         self._memory = memory           # (its peak goes into the view's stats)
         steps = integ.passes()
         try:

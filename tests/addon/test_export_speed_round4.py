@@ -237,3 +237,33 @@ def test_a_scene_of_one_view_layer_begins_one_result(scene):
     scene.view_layers.new("Second")
     assert not engine.DACRTRenderEngine._layer_enabled(fake, 'Second', scene)
     assert begun == ['ViewLayer', 'Second']
+
+
+@pytest.mark.skipif(not __import__('os').path.exists('/proc/self/status'), reason="Linux /proc only")
+def test_a_one_pass_render_reads_its_resident_size_twice(scene, monkeypatch):
+    """The render's memory reads /proc/self/status at the frame's start (the peak's reset) and
+    after each pass (the peak resident size, a high-water mark: the last pass's holds it all),
+    not also before the first pass (3 reads of a 1-pass render's 7 file opens); the figures
+    read are those of the file's lines."""
+    import builtins
+    import os
+    from addon import allocator
+    _lit_plane(scene)
+    bpy.ops.render.render()
+    seen = []
+    real_open, real_os_open = builtins.open, os.open
+    monkeypatch.setattr(builtins, 'open', lambda f, *a, **k: seen.append(str(f)) or real_open(f, *a, **k))
+    monkeypatch.setattr(os, 'open', lambda f, *a, **k: seen.append(str(f)) or real_os_open(f, *a, **k))
+    bpy.ops.render.render()
+    monkeypatch.undo()
+    assert seen.count('/proc/self/status') == 2, seen
+    peak = next(iter(__import__('addon').last_render_stats().values()))['memory_peak_mb']
+    assert peak > 0.0
+    for path in ('/proc/self/status', '/proc/meminfo'):
+        with open(path) as f:
+            lines = {line.split(':')[0]: line.split()[1] for line in f if ':' in line and len(line.split()) > 1}
+        for field in ('VmSize', 'Threads', 'MemTotal', 'SwapTotal', 'Pid', 'Name'):
+            if field in lines:
+                want = int(lines[field]) if lines[field].isdigit() else None
+                assert allocator.proc_kb(field, path) == want, (path, field)
+    assert allocator.proc_kb('NoSuchField') is None and allocator.proc_kb('VmRSS', '/nonexistent') is None
