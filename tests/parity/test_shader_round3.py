@@ -2,7 +2,6 @@
 the test: a grid seen from straight above by an orthographic camera (a 1-pixel box filter), its
 material's colour from the nodes under test, as an emission (the pixels are the nodes' value)
 or as a diffuse colour under a sun straight down (direct light only: almost no noise)."""
-import math
 
 import bpy
 import numpy as np
@@ -13,6 +12,17 @@ from tests.addon import scenes
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 RES = 32
+
+
+def _direct_box(sc, samples):
+    """Both engines at `samples`, direct light only (0 bounces), a 1-pixel Box filter: a
+    pixel is the value the nodes give there, so mismatches are exact, not noise."""
+    sc.cycles.device = 'CPU'
+    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
+    sc.cycles.samples = sc.dacrt.samples = samples
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
+    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
 
 
 def _scene(wire, shader='emission', setup=None):
@@ -38,12 +48,7 @@ def _scene(wire, shader='emission', setup=None):
         setup(ob)
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)
     scenes.black_world()
-    sc.cycles.device = 'CPU'
-    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
-    sc.cycles.samples = sc.dacrt.samples = 4
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    _direct_box(sc, 4)
     return sc
 
 
@@ -142,12 +147,7 @@ def _strip(wires, tmp_path, samples=4):
         bpy.context.object.data.materials.append(mat)
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0 * n)
     scenes.black_world()
-    sc.cycles.device = 'CPU'
-    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
-    sc.cycles.samples = sc.dacrt.samples = samples
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    _direct_box(sc, samples)
     c, d = _both(sc, tmp_path)
     split = lambda img: np.stack([img[:, RES * i:RES * (i + 1)] for i in range(n)])
     return split(c), split(d)
@@ -408,12 +408,7 @@ def test_nan_alpha_is_transparent(tmp_path):
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=6.0)
     scenes.light('SUN', 3.0, angle=0.0)
     scenes.world((0.3, 0.3, 0.3))
-    sc.cycles.device = 'CPU'
-    sc.cycles.use_denoising = sc.cycles.use_adaptive_sampling = False
-    sc.cycles.samples = sc.dacrt.samples = 16
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    _direct_box(sc, 16)
     c, d = _both(sc, tmp_path)
     mc = np.array([c[:, RES * i:RES * (i + 1)].mean() for i in range(len(kinds))])
     md = np.array([d[:, RES * i:RES * (i + 1)].mean() for i in range(len(kinds))])
