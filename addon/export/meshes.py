@@ -219,34 +219,60 @@ def _cycles_vertex_normals(me, cn, corner_vert, tri_poly):
 
 
 def _triangle_tangents(me, uv_name, triangles, corners):
-    """(nt, 3, 4) tangents and signs as corner_tangents gives them, for a mesh Blender's
-    calc_tangents refuses (n-gons): computed on a temporary mesh of the render's own triangles
-    with the same positions, corner normals and UVs. Cycles runs mikktspace on its triangles
-    too, so one n-gon no longer drops the normal map of the whole mesh (a default cylinder's
-    caps: its sides rendered without the map, 0.52 / 0.52 where Cycles gives 0.58 / 0.19).
-    None where even that fails."""
+    """(nt, 3, 4) tangents and signs as corner_tangents gives them, computed as Cycles computes
+    them: mikktspace over the render's own triangles (Cycles' MikkMeshWrapper counts its
+    triangles as the faces), on a temporary mesh of those triangles with the same positions,
+    UVs and normals. Blender's calc_tangents on the mesh itself runs over its faces: a quad
+    that is not planar (any deformed quad mesh: a Wave, an armature, a sculpt) gets other
+    tangents there (8x8 blocks 0.89-1.04x Cycles on a jittered quad grid), and an n-gon none
+    at all (a default cylinder's sides rendered without the map, 0.52 / 0.52 where Cycles
+    gives 0.58 / 0.19). A smooth triangle's corners take the mesh's corner normals, a flat
+    one its own normal (Cycles: Triangle::compute_normal, not the whole face's). None where
+    even that fails."""
     import bpy          # (the export layer: a temporary datablock, removed before returning)
     nt, nv, nl = len(triangles), len(me.vertices), len(me.loops)
     if corners is None:
         corners = np.arange(3 * nt, dtype=np.int32).reshape(nt, 3)
     co = np.empty(nv * 3, np.float32)
-    me.vertices.foreach_get('co', co)
+    me.attributes['position'].data.foreach_get('vector', co)
     uv = np.empty(nl * 2, np.float32)
     me.uv_layers[uv_name].uv.foreach_get('vector', uv)
     cn = np.empty(nl * 3, np.float32)
     me.corner_normals.foreach_get('vector', cn)
+    normals = cn.reshape(nl, 3)[corners]                              # (nt, 3, 3)
+    if me.normals_domain == 'FACE':
+        flat = slice(None)
+    else:
+        sharp = me.attributes.get('sharp_face')
+        flat = None
+        if sharp is not None and sharp.domain == 'FACE' and sharp.data_type == 'BOOLEAN':
+            per_face = np.empty(len(me.polygons), bool)
+            sharp.data.foreach_get('value', per_face)
+            if per_face.any():
+                tri_poly = np.empty(nt, np.int32)
+                me.loop_triangle_polygons.foreach_get('value', tri_poly)
+                flat = np.flatnonzero(per_face[tri_poly])
+    if flat is not None:
+        p = co.reshape(nv, 3)[triangles[flat]]
+        fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        length = np.linalg.norm(fn, axis=1, keepdims=True)
+        fn = np.where(length > 0, fn / np.where(length > 0, length, 1), np.float32([1, 0, 0]))
+        normals[flat] = fn[:, None, :]
     tmp = bpy.data.meshes.new(".dacrt_tangents")
     try:
+        # attribute reads and writes throughout: the RNA item paths (loops' vertex_index, a
+        # list for normals_split_custom_set) took 6.5 s on 500k triangles, these 1.3 s
         tmp.vertices.add(nv)
-        tmp.vertices.foreach_set('co', co)
+        tmp.attributes['position'].data.foreach_set('vector', co)
         tmp.loops.add(3 * nt)
-        tmp.loops.foreach_set('vertex_index', np.ascontiguousarray(triangles, np.int32).ravel())
+        tmp.attributes['.corner_vert'].data.foreach_set('value', np.ascontiguousarray(triangles, np.int32).ravel())
         tmp.polygons.add(nt)
         tmp.polygons.foreach_set('loop_start', np.arange(0, 3 * nt, 3, dtype=np.int32))
-        tmp.update()
         layer = tmp.uv_layers.new(name=uv_name)
         layer.uv.foreach_set('vector', uv.reshape(nl, 2)[corners.ravel()].ravel())
-        tmp.normals_split_custom_set(cn.reshape(nl, 3)[corners.ravel()].tolist())
+        # free custom normals (a float corner attribute): calc_tangents reads them as given
+        tmp.attributes.new('custom_normal', 'FLOAT_VECTOR', 'CORNER').data.foreach_set(
+            'vector', np.ascontiguousarray(normals, np.float32).ravel())
         tmp.calc_tangents(uvmap=uv_name)
         tan = np.empty(3 * nt * 3, np.float32)
         tmp.loops.foreach_get('tangent', tan)
@@ -381,13 +407,17 @@ class MeshArrays:
         """(nt, 3, 4) float32 object-space mikktspace tangent and bitangent sign per triangle
         corner, of UV map uv_map ('' the active render one), as Cycles computes them for a
         normal map (Blender's calc_tangents); None where there are none (no such UV map, a
-        mesh made here or by to_mesh); a mesh with n-gons through _triangle_tangents."""
+        mesh made here or by to_mesh); a mesh with quads or n-gons through _triangle_tangents
+        (mikktspace on the render's triangles, as Cycles: on the faces, a non-planar quad's
+        differ)."""
         if uv_map in self._tangents:
             return self._tangents[uv_map]
         out = None
         me, name = self.mesh, uv_map or self.active_uv
-        if me is not None and name in me.uv_layers:
-            try:
+        if me is not None and name in me.uv_layers and self.corners is not None:
+            out = _triangle_tangents(me, name, self.triangles, self.corners)
+        elif me is not None and name in me.uv_layers:
+            try:        # every face a triangle: Blender's faces are the render's triangles
                 me.calc_tangents(uvmap=name)
                 nl = len(me.loops)
                 tan = np.empty(nl * 3, np.float32)
@@ -397,7 +427,7 @@ class MeshArrays:
                 rows = np.concatenate([tan.reshape(nl, 3), sign[:, None]], axis=1)
                 out = np.empty((len(self.triangles), 3, 4), np.float32)
                 self.per_corner(rows, self.corners, out)
-            except RuntimeError:        # n-gons: mikktspace on the triangles, as Cycles runs it
+            except RuntimeError:
                 out = _triangle_tangents(me, name, self.triangles, self.corners)
         self._tangents[uv_map] = out
         return out
