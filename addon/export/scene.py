@@ -22,6 +22,7 @@ from .lights import export_light, light_link_receivers
 from .materials import MaterialBuilder
 from .normalmaps import below_surface
 from .meshes import mesh_arrays
+from .motion import MotionCheck, motion_blur_message
 from .placement import Placement
 from .aovs import shader_aovs
 from .settings import export_settings
@@ -181,6 +182,13 @@ class Exporter:
         self.camera = camera
         self.render = render                # the RenderSettings sizing the image (export_camera)
         self.view_camera = view_camera      # a viewport's (scenedata.Camera): no scene camera read
+        # what Cycles would blur (motion.py), looked at only where it blurs at all: Render and
+        # the layer's Motion Blur on and a shutter open (Cycles blurs nothing of a layer whose
+        # own switch is off)
+        r = self.scene.render
+        self._blur = MotionCheck() if (r.use_motion_blur and r.motion_blur_shutter > 0
+                                       and getattr(self.view_layer, 'use_motion_blur', True)) else None
+        self._blurred = {}                  # names of rendered objects that may blur (ordered)
         self.world = effective_world(self.scene, self.layer_eval)
         # whether any shader reads Object Info: else no instance's values are gathered
         self._evaluated_of = {}
@@ -382,6 +390,9 @@ class Exporter:
                 continue
             if entry.key is _PENDING:
                 entry.key = self._read_geometry(ob)
+                if (self._blur is not None and entry.key is not None and entry.name not in self._blurred
+                        and self._blur.blurs(ob, instancer)):
+                    self._blurred[entry.name] = None
             if entry.key is None:
                 continue
             if entry.slots is None:
@@ -831,10 +842,11 @@ class Exporter:
             self.messages.append(('INFO', f"Grease Pencil {', '.join(repr(n) for n in self.drawn_over)}: drawn by "
                                           "Blender over the render, unlit and casting no shadows, as for "
                                           "Cycles (not traced)"))
-        if self.scene.render.use_motion_blur and getattr(self.view_layer, 'use_motion_blur', True):
-            # (Cycles blurs nothing of a view layer whose own Motion Blur switch is off)
-            self.messages.append(('WARNING', "motion blur is not rendered: every object is drawn at "
-                                             "its position on the frame"))
+        if self._blur is not None:
+            said = motion_blur_message(list(self._blurred),
+                                       self._blur.camera_moves(self.camera or self.scene.camera))
+            if said:
+                self.messages.append(('WARNING', said))
         space = getattr(getattr(bpy.data, 'colorspace', None), 'working_space', 'Linear Rec.709')
         if space and space != 'Linear Rec.709':
             # Blender 5.0's file working space: Cycles renders in its primaries; the export's

@@ -1098,6 +1098,8 @@ def test_features_rendered_without_are_reported(scene, exported):
     lamp = scenes.light('POINT', 100.0, (0, 0, 3), name="Linked")
     lamp.light_linking.blocker_collection = bpy.data.collections.new("Blockers")
     scene.render.use_motion_blur = True
+    # (said only of what Cycles would blur: something that may move, tests/addon/test_motion_blur_messages.py)
+    scenes.keyed(catcher, 'location', {1: (0, 0, 0), 10: (0, 0, 1)})
     s = exported()
     text = " | ".join(m for _, m in s.messages)
     assert "'Catcher': shadow catcher is not supported" in text
