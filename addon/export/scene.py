@@ -182,11 +182,11 @@ class Exporter:
         self.camera = camera
         self.render = render                # the RenderSettings sizing the image (export_camera)
         self.view_camera = view_camera      # a viewport's (scenedata.Camera): no scene camera read
-        # what Cycles would blur (motion.py), looked at only where it blurs at all: Render and
-        # the layer's Motion Blur on and a shutter open (Cycles blurs nothing of a layer whose
-        # own switch is off)
+        # what Cycles would blur (motion.py), looked at only where it blurs at all: a final
+        # render (its viewport never blurs) with Render and the layer's Motion Blur on and a
+        # shutter open (Cycles blurs nothing of a layer whose own switch is off)
         r = self.scene.render
-        self._blur = MotionCheck() if (r.use_motion_blur and r.motion_blur_shutter > 0
+        self._blur = MotionCheck() if (view_camera is None and r.use_motion_blur and r.motion_blur_shutter > 0
                                        and getattr(self.view_layer, 'use_motion_blur', True)) else None
         self._blurred = {}                  # names of rendered objects that may blur (ordered)
         self.world = effective_world(self.scene, self.layer_eval)

@@ -1,12 +1,14 @@
 """The "motion blur is not rendered" warning: said only where Cycles would blur something, the
 camera or an object whose Object > Motion Blur is on that may move or deform over the shutter
-(export/motion.py). It had been said on every render with Render > Motion Blur on, a static
-shot's or one whose moving object has its blur off included, where DACRT's image is Cycles'
-(max block difference 0.001)."""
+(export/motion.py), and never in the viewport, which Cycles does not blur. It had been said on
+every final render with Render > Motion Blur on, a static shot's or one whose moving object has
+its blur off included, where DACRT's image is Cycles' (max block difference 0.001), and in the
+Rendered viewport."""
 import math
 
 import bpy
 
+from addon import export
 from tests.addon import scenes
 
 
@@ -115,3 +117,17 @@ def test_instances_of_a_moving_instancer_are_warned(scene, said):
     inst.cycles.use_motion_blur = False
     assert _blur_said(said) == []
 
+
+def test_viewport_is_not_warned(scene):
+    """Cycles' viewport renders no motion blur: the Rendered viewport's export says nothing of
+    it, even with a moving object and Render > Motion Blur on."""
+    cube = _scene(scene)
+    scenes.keyed(cube, 'location', {1: (-1, 0, 0), 10: (1, 0, 0)})
+    scene.frame_set(5)
+    dg = bpy.context.evaluated_depsgraph_get()
+    cam = scene.camera
+    view = export.viewport_camera(cam.matrix_world.inverted(), cam.calc_matrix_camera(dg, x=32, y=24), 32, 24)
+    data = export.export_scene(dg, view_camera=view)
+    assert not [m for _, m in data.messages if "motion blur" in m]
+    # the final render's export of the same frame says it
+    assert [m for _, m in export.export_scene(dg).messages if "motion blur" in m]
