@@ -218,17 +218,16 @@ def _cycles_vertex_normals(me, cn, corner_vert, tri_poly):
     return cn
 
 
-def _triangle_tangents(me, uv_name, triangles, corners):
+def _triangle_tangents(me, uv_name, triangles, corners, normals):
     """(nt, 3, 4) tangents and signs as corner_tangents gives them, computed as Cycles computes
     them: mikktspace over the render's own triangles (Cycles' MikkMeshWrapper counts its
-    triangles as the faces), on a temporary mesh of those triangles with the same positions,
-    UVs and normals. Blender's calc_tangents on the mesh itself runs over its faces: a quad
-    that is not planar (any deformed quad mesh: a Wave, an armature, a sculpt) gets other
-    tangents there (8x8 blocks 0.89-1.04x Cycles on a jittered quad grid), and an n-gon none
-    at all (a default cylinder's sides rendered without the map, 0.52 / 0.52 where Cycles
-    gives 0.58 / 0.19). A smooth triangle's corners take the mesh's corner normals, a flat
-    one its own normal (Cycles: Triangle::compute_normal, not the whole face's). None where
-    even that fails."""
+    triangles as the faces), on a temporary mesh of those triangles with the same positions and
+    UVs and the normals (nt, 3, 3) Cycles gives mikktspace (MeshArrays.tangent_normals).
+    Blender's calc_tangents on the mesh itself runs over its faces: a quad that is not planar
+    (any deformed quad mesh: a Wave, an armature, a sculpt) gets other tangents there (8x8
+    blocks 0.89-1.04x Cycles on a jittered quad grid), and an n-gon none at all (a default
+    cylinder's sides rendered without the map, 0.52 / 0.52 where Cycles gives 0.58 / 0.19).
+    None where even that fails."""
     import bpy          # (the export layer: a temporary datablock, removed before returning)
     nt, nv, nl = len(triangles), len(me.vertices), len(me.loops)
     if corners is None:
@@ -237,27 +236,6 @@ def _triangle_tangents(me, uv_name, triangles, corners):
     me.attributes['position'].data.foreach_get('vector', co)
     uv = np.empty(nl * 2, np.float32)
     me.uv_layers[uv_name].uv.foreach_get('vector', uv)
-    cn = np.empty(nl * 3, np.float32)
-    me.corner_normals.foreach_get('vector', cn)
-    normals = cn.reshape(nl, 3)[corners]                              # (nt, 3, 3)
-    if me.normals_domain == 'FACE':
-        flat = slice(None)
-    else:
-        sharp = me.attributes.get('sharp_face')
-        flat = None
-        if sharp is not None and sharp.domain == 'FACE' and sharp.data_type == 'BOOLEAN':
-            per_face = np.empty(len(me.polygons), bool)
-            sharp.data.foreach_get('value', per_face)
-            if per_face.any():
-                tri_poly = np.empty(nt, np.int32)
-                me.loop_triangle_polygons.foreach_get('value', tri_poly)
-                flat = np.flatnonzero(per_face[tri_poly])
-    if flat is not None:
-        p = co.reshape(nv, 3)[triangles[flat]]
-        fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-        length = np.linalg.norm(fn, axis=1, keepdims=True)
-        fn = np.where(length > 0, fn / np.where(length > 0, length, 1), np.float32([1, 0, 0]))
-        normals[flat] = fn[:, None, :]
     tmp = bpy.data.meshes.new(".dacrt_tangents")
     try:
         # attribute reads and writes throughout: the RNA item paths (loops' vertex_index, a
@@ -295,7 +273,7 @@ class MeshArrays:
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
                  'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes', '_coords',
-                 'undeformed', 'rebuilt', 'texspace', 'strand', 'orco', 'radial_normals')
+                 'undeformed', 'rebuilt', 'texspace', 'strand', 'orco', 'radial_normals', 'own_normals')
 
     def __init__(self, me, want_uvs):
         self.texspace = None         # (location, size) where not the mesh's own (from_arrays)
@@ -337,6 +315,7 @@ class MeshArrays:
             self.slot = per_face if self.corners is None else per_face[tri_poly]
         self.domain = me.normals_domain
         sharp = _sharp_faces_alone(me, tri_poly) if self.domain == 'CORNER' else None
+        shared = None
         if self.domain == 'POINT' or sharp is not None:
             vn = np.empty(nv * 3, np.float32)
             me.vertex_normals.foreach_get('vector', vn)
@@ -360,6 +339,9 @@ class MeshArrays:
             self.normal_rows, self.normal_index = (cn if shared is None else shared), self.corners
         else:   # FACE: flat, the triangle's geometric normal (as Cycles), computed in world space
             self.normal_rows = self.normal_index = None
+        # whether Blender's corner normals are the ones shaded with (Cycles'): then an
+        # all-triangle mesh's own calc_tangents gives Cycles' tangents
+        self.own_normals = sharp is None and shared is None
         self.mesh, self._tangents, self._attributes = None, {}, {}   # depsgraph meshes: read on demand
         self._coords = self.undeformed = None
         self.rebuilt = ()
@@ -400,6 +382,7 @@ class MeshArrays:
                        for name, rows in layers.items()}
         a.active_uv, a.corner_uvs = active, a.uv_layers.get(active)
         a.mesh, a._tangents, a._attributes, a._coords, a.undeformed, a.rebuilt = None, {}, {}, None, None, ()
+        a.own_normals = True
         a.normal_rows, a.normal_index = np.ascontiguousarray(vertex_normals, np.float32), a.triangles
         return a
 
@@ -414,10 +397,12 @@ class MeshArrays:
             return self._tangents[uv_map]
         out = None
         me, name = self.mesh, uv_map or self.active_uv
-        if me is not None and name in me.uv_layers and self.corners is not None:
-            out = _triangle_tangents(me, name, self.triangles, self.corners)
-        elif me is not None and name in me.uv_layers:
-            try:        # every face a triangle: Blender's faces are the render's triangles
+        if me is None or name not in me.uv_layers:
+            pass
+        elif self.corners is not None or not self.own_normals:
+            out = _triangle_tangents(me, name, self.triangles, self.corners, self.tangent_normals())
+        else:
+            try:        # every face a triangle, Blender's normals: its faces are the render's triangles
                 me.calc_tangents(uvmap=name)
                 nl = len(me.loops)
                 tan = np.empty(nl * 3, np.float32)
@@ -428,8 +413,27 @@ class MeshArrays:
                 out = np.empty((len(self.triangles), 3, 4), np.float32)
                 self.per_corner(rows, self.corners, out)
             except RuntimeError:
-                out = _triangle_tangents(me, name, self.triangles, self.corners)
+                out = _triangle_tangents(me, name, self.triangles, self.corners, self.tangent_normals())
         self._tangents[uv_map] = out
+        return out
+
+    def tangent_normals(self):
+        """(nt, 3, 3) float32 the normal per triangle corner Cycles' mikktspace reads
+        (MikkMeshWrapper::GetNormal): the normals the triangle is shaded with (normal_rows:
+        vertex normals, or corner normals as Cycles splits them, a flat face's its normal
+        there), a flat triangle's own where those are none (FACE, or a flat face among smooth
+        ones: Triangle::compute_normal, (1, 0, 0) if degenerate), not the whole face's."""
+        nt = len(self.triangles)
+        p = self.positions[self.triangles]
+        fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        length = np.linalg.norm(fn, axis=1, keepdims=True)
+        fn = np.where(length > 0, fn / np.where(length > 0, length, 1), np.float32([1, 0, 0])).astype(np.float32)
+        if self.normal_rows is None:                    # FACE: every triangle flat
+            return np.ascontiguousarray(np.broadcast_to(fn[:, None, :], (nt, 3, 3)))
+        out = np.empty((nt, 3, 3), np.float32)
+        self.per_corner(self.normal_rows, self.normal_index, out)
+        flat = ~out.any(axis=2).any(axis=1)             # the flat triangles' zero rows (_sharp_faces_alone)
+        out[flat] = fn[flat, None, :]
         return out
 
     def texture_space(self):
