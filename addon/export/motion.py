@@ -83,7 +83,8 @@ class MotionCheck:
         return got
 
     def _moves_now(self, ob):
-        if _animated(ob) or getattr(ob, 'rigid_body', None) is not None:
+        body = getattr(ob, 'rigid_body', None)
+        if _animated(ob) or (body is not None and body.type == 'ACTIVE'):    # (a passive one stays)
             return True
         constraints = ob.constraints
         if constraints and any(not c.mute for c in constraints):
@@ -93,7 +94,7 @@ class MotionCheck:
             return False
         if self.moves(p):
             return True
-        if ob.parent_type in ('VERTEX', 'VERTEX_3'):
+        if ob.parent_type in ('VERTEX', 'VERTEX_3', 'LATTICE'):     # placed or deformed by its shape
             return self.deforms(p)
         return p.type == 'CURVE' and _animated(p.data)          # a path animated along a curve
 

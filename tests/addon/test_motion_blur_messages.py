@@ -85,6 +85,17 @@ def test_deformation_by_a_moving_object_is_warned(scene, said):
     assert _blur_said(said) == []
 
 
+def test_active_rigid_body_is_warned_a_passive_one_not(scene, said):
+    """An active rigid body falls with the simulation; a passive one stays where it is put."""
+    cube = _scene(scene)
+    bpy.context.view_layer.objects.active = cube
+    bpy.ops.rigidbody.object_add()
+    cube.rigid_body.type = 'PASSIVE'
+    assert _blur_said(said) == []
+    cube.rigid_body.type = 'ACTIVE'
+    assert "'Cube' may move" in " ".join(_blur_said(said))
+
+
 def test_geometry_nodes_reading_the_time_are_warned(scene, said):
     cube = _scene(scene)
     tree = bpy.data.node_groups.new("Timed", 'GeometryNodeTree')
