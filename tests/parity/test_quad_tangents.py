@@ -98,6 +98,40 @@ def test_flat_quads_among_smooth_ones_bend_normals_as_cycles(sharp_edge_every, t
     np.testing.assert_allclose(n['DACRT'], n['CYCLES'], atol=0.01)
 
 
+def test_planar_quads_under_a_warped_uv_map_bend_normals_as_cycles(tmp_path):
+    """Planar quads whose UV map is not affine over each quad (any unwrap that stretches): the
+    quad's two triangles have other tangents, which mikktspace on the faces averaged: 0.160
+    before, 0.003 after. (Planar quads mapped affinely keep Blender's calc_tangents on the
+    faces: the same tangents, no temporary mesh.)"""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    me = _quad_grid(tmp_path, 0.0, True).data
+    co = np.array([v.co[:] for v in me.vertices])
+    x, y = co[[c.vertex_index for c in me.loops]].T[:2]
+    uv = np.stack([x / 4 + 0.5 + 0.15 * np.sin(2 * y) * x, y / 4 + 0.5 + 0.1 * x * x], -1)
+    me.uv_layers[0].uv.foreach_set('vector', uv.ravel())
+    n = _normals(tmp_path)
+    np.testing.assert_allclose(n['DACRT'], n['CYCLES'], atol=0.01)
+
+
+def test_flat_mapped_quads_are_told_apart():
+    """_flat_mapped_quads: planar quads mapped affinely (a default grid) take calc_tangents on
+    the faces; a lifted corner or a warped UV map does not."""
+    from addon.export import meshes
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=4, y_subdivisions=4, size=2, rotation=(0.3, 0.2, 0.1))
+    me = bpy.context.active_object.data
+
+    def told():
+        return meshes._flat_mapped_quads(me, 'UVMap', np.array([v.co[:] for v in me.vertices], np.float32))
+    assert told()
+    me.vertices[6].co.z += 0.01
+    assert not told()
+    me.vertices[6].co.z -= 0.01
+    assert told()
+    me.uv_layers[0].uv[5].vector.x += 0.01
+    assert not told()
+
+
 def test_wave_deformed_quads_bend_normals_as_cycles(tmp_path):
     """An animated Wave modifier at frame 9 (planar quads on frame 1, bent ones after): 0.009
     before, 0.0009 after."""
