@@ -89,6 +89,11 @@ class MotionCheck:
         constraints = ob.constraints
         if constraints and any(not c.mute for c in constraints):
             return True
+        # an armature posed by its bones' constraints (a bone following an animated target: the
+        # usual rig) moves what is parented to its bones or skinned by it, unkeyed itself
+        pose = getattr(ob, 'pose', None) if ob.type == 'ARMATURE' else None
+        if pose is not None and any(not c.mute for b in pose.bones for c in b.constraints):
+            return True
         p = ob.parent
         if p is None:
             return False

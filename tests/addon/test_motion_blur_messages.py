@@ -85,6 +85,36 @@ def test_deformation_by_a_moving_object_is_warned(scene, said):
     assert _blur_said(said) == []
 
 
+def test_objects_posed_by_bone_constraints_are_warned(scene, said):
+    """An armature with no keys of its own whose bone follows an animated target (a rig's
+    usual Copy Location / IK): what is parented to the bone and what the armature skins move,
+    and Cycles blurs them; an armature posed by nothing moves nothing."""
+    cube = _scene(scene)
+    target = bpy.data.objects.new("Target", None)
+    scene.collection.objects.link(target)
+    scenes.keyed(target, 'location', {1: (-1, 0, 0), 10: (1, 0, 0)})
+    arm = bpy.data.objects.new("Rig", bpy.data.armatures.new("Rig"))
+    scene.collection.objects.link(arm)
+    bpy.context.view_layer.objects.active = arm
+    bpy.ops.object.mode_set(mode='EDIT')
+    bone = arm.data.edit_bones.new("Bone")
+    bone.head, bone.tail = (0, 0, 0), (0, 0, 1)
+    bpy.ops.object.mode_set(mode='OBJECT')
+    skinned = scenes.cube("Skinned")
+    skinned.modifiers.new("Rig", 'ARMATURE').object = arm
+    skinned.vertex_groups.new(name="Bone").add(list(range(len(skinned.data.vertices))), 1.0, 'REPLACE')
+    cube.parent, cube.parent_type, cube.parent_bone = arm, 'BONE', "Bone"
+    assert _blur_said(said) == []                       # the rig holds still: nothing moves
+    follow = arm.pose.bones["Bone"].constraints.new('COPY_LOCATION')
+    follow.target = target
+    scene.frame_set(5)
+    text = _blur_said(said)
+    assert len(text) == 1 and "'Cube'" in text[0] and "'Skinned'" in text[0], text
+    said.clear()
+    follow.mute = True
+    assert _blur_said(said) == []
+
+
 def test_active_rigid_body_is_warned_a_passive_one_not(scene, said):
     """An active rigid body falls with the simulation; a passive one stays where it is put."""
     cube = _scene(scene)
