@@ -119,9 +119,12 @@ def proc_kb(field, path='/proc/self/status'):
             data = os.read(fd, 1 << 16)
         finally:
             os.close(fd)
-        at = 0 if data.startswith(key) else data.find(b'\n' + key) + 1
-        if at == 0 and not data.startswith(key):
-            return None
+        if data.startswith(key):
+            at = 0
+        else:
+            at = data.find(b'\n' + key) + 1
+            if at == 0:
+                return None
         end = data.find(b'\n', at)
         return int(data[at + len(key):end if end >= 0 else len(data)].split()[0])
     except (OSError, ValueError, IndexError):

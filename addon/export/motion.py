@@ -46,6 +46,17 @@ def _flag(ob, name):
     return bool(getattr(getattr(ob, 'cycles', None), name, True))
 
 
+def _once(cache, id_, compute):
+    """compute(id_), worked out once per ID (by pointer) in cache; False while it is being worked
+    out, so a loop (parents, constraints, a group nested in itself) ends there."""
+    key = id_.as_pointer()
+    got = cache.get(key)
+    if got is None:
+        cache[key] = False
+        got = cache[key] = compute(id_)
+    return got
+
+
 class MotionCheck:
     """What may move over the shutter, each object worked out once (originals, by pointer)."""
 
@@ -75,12 +86,7 @@ class MotionCheck:
         return cam is not None and (self.moves(cam.original) or _animated(getattr(cam.original, 'data', None)))
 
     def moves(self, ob):
-        key = ob.as_pointer()
-        got = self._moves.get(key)
-        if got is None:
-            self._moves[key] = False            # (a parent or constraint loop ends here)
-            got = self._moves[key] = self._moves_now(ob)
-        return got
+        return _once(self._moves, ob, self._moves_now)
 
     def _moves_now(self, ob):
         body = getattr(ob, 'rigid_body', None)
@@ -104,12 +110,7 @@ class MotionCheck:
         return p.type == 'CURVE' and _animated(p.data)          # a path animated along a curve
 
     def deforms(self, ob):
-        key = ob.as_pointer()
-        got = self._deforms.get(key)
-        if got is None:
-            self._deforms[key] = False
-            got = self._deforms[key] = self._deforms_now(ob)
-        return got
+        return _once(self._deforms, ob, self._deforms_now)
 
     def _deforms_now(self, ob):
         data = ob.data
@@ -149,12 +150,7 @@ class MotionCheck:
         return False
 
     def _tree_changes(self, tree):
-        key = tree.as_pointer()
-        got = self._trees.get(key)
-        if got is None:
-            self._trees[key] = False            # (a group nested in itself ends here)
-            got = self._trees[key] = _animated(tree) or any(self._node_changes(n) for n in tree.nodes)
-        return got
+        return _once(self._trees, tree, lambda t: _animated(t) or any(self._node_changes(n) for n in t.nodes))
 
     def _node_changes(self, n):
         if n.bl_idname in TIME_NODES:
