@@ -356,7 +356,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             finished = len(per_view) == (len(views) if multiview else 1) and all(
                 v.get('samples_done', 0) >= int(scene_data.settings.samples) for v in per_view)
             self._report_summary(frame_stats(per_view), scene_data, stats_key(depsgraph.scene.name, layer),
-                                 export_seconds, finished)
+                                 export_seconds, finished, scene=depsgraph.scene, layer_name=layer)
 
     def _view_integrator(self, depsgraph, scene_data, view):
         """The integrator of the frame's export (view None) or of one view of a multiview
@@ -505,7 +505,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             for i, part in enumerate(_report_chunks(text)):
                 self.report(kind, f"DACRT: {part}" if i == 0 else f"DACRT (continued): {part}")
 
-    def _report_summary(self, stats, scene_data, layer, export_seconds, finished=False):
+    def _report_summary(self, stats, scene_data, layer, export_seconds, finished=False, scene=None, layer_name=None):
         s = dict(stats, export_seconds=export_seconds)
         LAST_RENDER_STATS[layer] = s
         parts = [f"{len(scene_data.geometry.triangles)} triangles",
@@ -518,10 +518,14 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         parts.append(f"export {export_seconds:.2f} s, set-up {s.get('setup_seconds', 0.0):.2f} s")
         # a cancelled render says so: its sample count alone read like a finished render's
         cancelled = "render cancelled; " if self.cancel_requested() and not finished else ""
-        self.report({'INFO'}, "DACRT: " + cancelled + ", ".join(parts))
+        # each layer's summary names it where several are rendered (two unnamed summaries, the
+        # last "0 triangles", had read as if the whole render were empty)
+        subject = export.layer_subject(scene, layer_name) if scene is not None else "the scene"
+        where = "" if subject == "the scene" else f"{subject}: "
+        self.report({'INFO'}, "DACRT: " + where + cancelled + ", ".join(parts))
         skipped = _skipped_text(s.get('skipped'))
         if skipped:
-            self.report({'INFO'}, f"DACRT: skipped {skipped}")
+            self.report({'INFO'}, f"DACRT: {where}skipped {skipped}")
             # (the samples and time stay in the final status line, as Cycles' keeps them)
             done = f"Sample {s['samples_done']} | " if 'samples_done' in s else ""
             self.update_stats("", f"DACRT | Done | {done}Time {_clock(s.get('total_seconds', 0.0))} | "

@@ -74,11 +74,11 @@ objectinfo), geometry
 from . import images
 from .camera import camera_view_camera, export_camera, region_border, viewport_camera
 from .errors import ExportCancelled, ExportError
-from .scene import Exporter, local_view_filter
+from .scene import Exporter, layer_subject, local_view_filter
 from .world import effective_world, export_world
 
 __all__ = ['ExportCancelled', 'ExportError', 'camera_view_camera', 'effective_world', 'export_camera',
-           'export_scene', 'export_world', 'local_view_filter', 'region_border', 'viewport_camera']
+           'export_scene', 'export_world', 'layer_subject', 'local_view_filter', 'region_border', 'viewport_camera']
 
 
 def export_scene(depsgraph, check_break=None, camera=None, view_camera=None, render=None, view=None):

@@ -37,6 +37,8 @@ GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CUR
 # and only that mesh is rendered (read both, an emissive text gave 1.06-1.17x Cycles' light)
 SYNCED_TYPES = {'MESH', 'POINTCLOUD', 'CURVES'}
 UNSUPPORTED_TYPES = {'VOLUME': "volume"}
+# object types whose own geometry Cycles renders (a shadow catcher flag means something on them)
+CATCHER_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT', 'CURVES', 'POINTCLOUD', 'VOLUME'}
 # drawn by Blender over an external engine's render (Cycles' too), not traced by either
 DRAWN_OVER = {'GREASEPENCIL', 'GPENCIL'}
 CHECK_EVERY = 64                          # instances between cancel checks
@@ -50,6 +52,16 @@ def local_view_filter(view) -> bool:
     """Whether a 3D view (SpaceView3D, or None) shows only some of the view layer's objects:
     in Local View, or with Local Collections (its own collection visibility)."""
     return isinstance(view, bpy.types.SpaceView3D) and (view.local_view is not None or view.use_local_collections)
+
+
+def layer_subject(scene, layer: str) -> str:
+    """What a view layer's messages call what they are about: "the scene", or "view layer
+    'X'" when the scene renders more than one layer (its other layers may render what this one
+    leaves out)."""
+    in_use = sum(1 for l in getattr(scene, 'view_layers', ()) if l.use)
+    if in_use > 1 and not getattr(scene.render, 'use_single_layer', False):
+        return f"view layer '{layer}'"
+    return "the scene"
 
 
 def _add_name(table, reason, name):
@@ -92,6 +104,15 @@ def _makes_instances(ob):
     hair rendered as paths is the emitter's own and linked with it)."""
     return any(m.type == 'PARTICLE_SYSTEM' and m.particle_system.settings.render_type in ('OBJECT', 'COLLECTION')
                for m in ob.modifiers)
+
+
+def _instancer(ob) -> bool:
+    """Whether ob places instances: a collection instance, vertex / face instancing, or
+    particles rendered as objects."""
+    kind = getattr(ob, 'instance_type', 'NONE')
+    if kind == 'COLLECTION':
+        return getattr(ob, 'instance_collection', None) is not None
+    return kind in ('VERTS', 'FACES') or _makes_instances(ob)
 
 
 def _shader_trees():
@@ -168,6 +189,10 @@ class Exporter:
     hair, point clouds), then assembles the geometry, reads the world and the settings, and
     collects every message for the render to report."""
 
+    @property
+    def _layer_filter(self) -> str:
+        return "the view layer's filter" if self.subject == "the scene" else f"the filter of {self.subject}"
+
     def __init__(self, depsgraph, check_break, camera=None, view_camera=None, render=None, view=None):
         self.depsgraph = depsgraph
         # the 3D view whose Local View or Local Collections leave objects out (local_view_filter)
@@ -179,6 +204,9 @@ class Exporter:
         # to the original IDs, whose animated values stay at the file's frame in an animation
         # render (an override world keyed 1 -> 8 rendered 1 on every frame)
         self.layer_eval = getattr(depsgraph, 'view_layer_eval', None) or self.view_layer
+        # what a layer's own messages are about: with several layers rendered, "the scene has
+        # no renderable geometry" had been said of a scene whose other layer renders it
+        self.subject = layer_subject(self.scene, self.view_layer.name)
         self.camera = camera
         self.render = render                # the RenderSettings sizing the image (export_camera)
         self.view_camera = view_camera      # a viewport's (scenedata.Camera): no scene camera read
@@ -219,6 +247,7 @@ class Exporter:
         self.lights_skipped = 0   # light objects that give no light here (portals, skipped ones)
         self.skipped = {}         # reason -> {object names} (ordered)
         self.ignored = {}         # reason -> {object names}: rendered, without a feature Cycles has
+        self._glossy_visibility = {}    # lights whose Glossy and Diffuse visibility differ (_light)
         self.lights_approximated = {}   # what a light's node tree lacks -> {light names}
         self.drawn_over = []      # Grease Pencil objects: Blender draws them over the render
         self._noted = set()       # objects whose ignored features are noted (instances repeat them)
@@ -357,7 +386,7 @@ class Exporter:
             if entry.hair:
                 self._particle_hair(ob, override, inst)
             if entry.type == 'CURVES' and not getattr(self.view_layer, 'use_strand', True):
-                self.skip("hair curves are off in the view layer's filter (Curves)", entry.name)
+                self.skip(f"hair curves are off in {self._layer_filter} (Curves)", entry.name)
                 continue
             if entry.type in DRAWN_OVER:
                 if entry.name not in self.drawn_over:
@@ -377,7 +406,7 @@ class Exporter:
             # the view layer's Surfaces filter hides meshes (those of curves and text too), as
             # Cycles syncs none then (hair follows the Hair filter, point clouds stay)
             if entry.type == 'MESH' and not getattr(self.view_layer, 'use_solid', True):
-                self.skip("surfaces are off in the view layer's filter (Surfaces)", entry.name)
+                self.skip(f"surfaces are off in {self._layer_filter} (Surfaces)", entry.name)
                 continue
             if entry.vis is None:
                 names = (ob.name_full, parent.name_full)
@@ -436,10 +465,14 @@ class Exporter:
             return None
         if glossy != diffuse:
             # glossy layers render as diffuse (approximated, reported per material): they take
-            # the light as diffuse surfaces do
-            self.ignore(f"ray visibility Glossy {'on' if glossy else 'off'} with Diffuse "
-                        f"{'on' if diffuse else 'off'}: glossy layers (rendered as diffuse) take "
-                        "this light by its Diffuse visibility", ob.name)
+            # the light as diffuse surfaces do. Said at the end, only where some material has
+            # such a layer (an all-diffuse scene renders as Cycles: it had been warned anyway),
+            # naming the instancer whose flag it is
+            own = getattr(ob, 'visible_glossy', True) == ob.visible_diffuse
+            name = f"'{ob.name}' (instanced by '{parent.name}')" if own and parent is not ob else f"'{ob.name}'"
+            _add_name(self._glossy_visibility, f"ray visibility Glossy {'on' if glossy else 'off'} with Diffuse "
+                      f"{'on' if diffuse else 'off'}: glossy layers (rendered as diffuse) take this "
+                      "light by its Diffuse visibility", name)
         # what its Object Info reads, as a mesh instance's (_info): an instance's random id and
         # its instancer's colour (inst.object is read at once, while the iterator holds it)
         info = (ob, inst.random_id, inst.is_instance, tuple(parent.color))
@@ -508,7 +541,9 @@ class Exporter:
 
     def _note_ignored_features(self, ob):
         self._noted.add(ob.name)
-        if getattr(ob, 'is_shadow_catcher', False) and ob.type != 'LIGHT':
+        # (Cycles makes catchers of geometry, and of what an instancer's instances are: the
+        # flag on a camera, an empty or a lamp changes nothing, and had been warned of)
+        if getattr(ob, 'is_shadow_catcher', False) and (ob.type in CATCHER_TYPES or _instancer(ob)):
             self.ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
         mods = getattr(ob, 'modifiers', None)
         if mods:
@@ -561,7 +596,7 @@ class Exporter:
         instanced emitter's hair. The object's ray visibility applies (an instance's with its
         instancer's); the view layer's Hair filter off skips it."""
         if not getattr(self.view_layer, 'use_strand', True):
-            self.skip("hair is off in the view layer's filter (Curves)", ob.name)
+            self.skip(f"hair is off in {self._layer_filter} (Curves)", ob.name)
             return
         parent = inst.parent if inst.is_instance and inst.parent is not None else ob
         vis = self._visibility(ob, parent)
@@ -828,6 +863,14 @@ class Exporter:
 
 
     # -- messages ----------------------------------------------------------------------------
+    def _glossy_as_diffuse(self, geometry) -> bool:
+        """Whether a rendered surface has a glossy part DACRT renders as diffuse: a material whose
+        approximation says so (every such reason, Principled layers, Glossy / Glass / Sheen
+        BSDFs, reads "... as diffuse") or Blender's default surface (material 0, a Principled)."""
+        if len(geometry.material) and not geometry.material.all():
+            return True
+        return any(' as diffuse' in m.approximated for m in self.materials.materials)
+
     def _summarize(self, geometry, world, environment, camera_world=None):
         for text, names in self.lights_approximated.items():
             # lights of one node tree (linked duplicates of a lamp) said together, as materials are
@@ -838,6 +881,9 @@ class Exporter:
             self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
         for reason, names in self.ignored.items():
             self.messages.append(('WARNING', f"{', '.join(repr(n) for n in names)}: {reason}"))
+        if self._glossy_visibility and self._glossy_as_diffuse(geometry):
+            for reason, names in self._glossy_visibility.items():     # (names quoted as said)
+                self.messages.append(('WARNING', f"{', '.join(names)}: {reason}"))
         if self.drawn_over:
             self.messages.append(('INFO', f"Grease Pencil {', '.join(repr(n) for n in self.drawn_over)}: drawn by "
                                           "Blender over the render, unlit and casting no shadows, as for "
@@ -873,7 +919,7 @@ class Exporter:
                                              "surfaces and emission; each says what differs): "
                                              + "; ".join(approx)))
         if len(geometry.triangles) == 0:
-            self.messages.append(('WARNING', "the scene has no renderable geometry; only the "
+            self.messages.append(('WARNING', f"{self.subject} has no renderable geometry; only the "
                                              "world background is rendered"))
         has_emission = any(np.any(m.emission > 0) for m in self.materials.materials)
         def bright(uniform, env):
@@ -886,15 +932,15 @@ class Exporter:
         # may light the scene with them, so "no emissive materials" had contradicted it
         stood = {m.name: m.dark_stand_in for m in self.materials.materials if getattr(m, 'dark_stand_in', '')}
         if not self.lights and not lit_world and not has_emission and not seen_world and stood:
-            self.messages.append(('WARNING', f"the scene has no lights{skipped} and a black world, and its "
+            self.messages.append(('WARNING', f"{self.subject} has no lights{skipped} and a black world, and its "
                                              f"emissive material(s) read 0 here (nodes not evaluated stand at "
                                              f"their own values; Cycles evaluates them): the image will be black: "
                                              + '; '.join(f"'{n}' ({w})" for n, w in stood.items())))
         elif not self.lights and not lit_world and not has_emission and not seen_world:
-            self.messages.append(('WARNING', f"the scene has no lights{skipped}, no emissive materials and "
+            self.messages.append(('WARNING', f"{self.subject} has no lights{skipped}, no emissive materials and "
                                              "a black world: the image will be black"))
         elif not self.lights:
-            self.messages.append(('INFO', f"the scene has no light objects{skipped}; lit by the world and "
+            self.messages.append(('INFO', f"{self.subject} has no light objects{skipped}; lit by the world and "
                                           "emissive materials only"))
 
 

@@ -2106,6 +2106,7 @@ def test_light_ray_visibility(scene, exported):
     new light object in Blender 5.0) and Diffuse; an instancer's visibility is inherited; a
     light no ray kind can see (Transmission off too) is skipped with a message."""
     setup(scene)
+    scenes.plane("Floor")       # Blender's default surface: a glossy layer rendered as diffuse
     default = scenes.light('AREA', 10.0, (0, 0, 2), name="Default")
     seen = scenes.light('AREA', 10.0, (0, 0, 3), name="Seen")
     seen.visible_camera = True
@@ -2137,7 +2138,9 @@ def test_light_ray_visibility(scene, exported):
     # Glossy visibility apart from Diffuse: glossy layers (rendered as diffuse) follow Diffuse,
     # said per light (Cycles: a metallic floor under a Glossy-off light 0.0, DACRT 1.02, silent)
     glossy = [t for _, t in data.messages if "ray visibility Glossy" in t]
-    assert len(glossy) == 1 and "'CameraOnly', 'Inst'" in glossy[0] and "Glossy on with Diffuse off" in glossy[0]
+    # (the instancer's flag: named)
+    assert len(glossy) == 1 and "'CameraOnly', 'Inst' (instanced by 'Instancer')" in glossy[0] \
+        and "Glossy on with Diffuse off" in glossy[0], glossy
     seen.visible_glossy = False
     text = " | ".join(t for _, t in exported().messages)
     assert "Glossy off with Diffuse on" in text and "'Seen'" in text

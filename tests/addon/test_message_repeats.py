@@ -21,10 +21,15 @@ def _count(capfd):
 
 
 def test_two_view_layers_say_it_once(scene, capfd):
+    """What is the same for both layers (the plane's default surface) is said once; what each
+    layer finds of its own content is said by each, naming it (test_studio_messages.py)."""
     _unlit(scene)
     scene.view_layers.new("Second")
     bpy.ops.render.render()
-    assert _count(capfd) == 1
+    out = capfd.readouterr().out
+    assert out.count("objects without a material") == 1, out
+    assert out.count("view layer 'ViewLayer' has no light objects") == 1, out
+    assert out.count("view layer 'Second' has no light objects") == 1, out
 
 
 def test_stereo_views_say_it_once(scene, capfd):

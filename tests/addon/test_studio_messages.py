@@ -1,0 +1,139 @@
+"""Messages of studio set-ups (the studio hunt): what a layer says names the layer when the scene
+renders several; a light's Glossy / Diffuse visibility mismatch is said only where a glossy part is
+rendered as diffuse, naming the instancer whose flag it is; the shadow-catcher warning only for
+objects that render something. Each had been said falsely or without its subject: "the scene has
+no renderable geometry" of a layer left empty on purpose beside one that renders 34 triangles, a
+glossy warning in an all-diffuse scene, a catcher warning for the camera and an empty."""
+import math
+
+import bpy
+
+from tests.addon import scenes
+
+
+def _box(scene, material=None):
+    scenes.camera((0, -6, 1), (math.pi / 2, 0, 0))
+    scene.dacrt.samples = 1
+    mat = material or scenes.diffuse("Grey", (0.5, 0.5, 0.5))
+    floor = scenes.plane("Floor", size=6.0, materials=[mat])
+    cube = scenes.cube("Cube", size=1.0, location=(0, 0, 0.5), materials=[mat])
+    lamp = scenes.light('POINT', 500.0, location=(0, -2, 3), name="Lamp")
+    return floor, cube, lamp
+
+
+def _render(said):
+    said.clear()
+    bpy.ops.render.render()
+    return list(said)
+
+
+# -- view layers ---------------------------------------------------------------------------
+def _two_layers(scene):
+    """Layer 'Beauty' renders the geometry; layer 'FX' excludes its collection."""
+    geo = bpy.data.collections.new("Geo")
+    scene.collection.children.link(geo)
+    floor, cube, _ = _box(scene)
+    for ob in (floor, cube):
+        scene.collection.objects.unlink(ob)
+        geo.objects.link(ob)
+    scene.view_layers[0].name = "Beauty"
+    fx = scene.view_layers.new("FX")
+    fx.layer_collection.children["Geo"].exclude = True
+    scene.render.use_single_layer = False
+
+
+def _summaries(capfd):
+    """The per-layer summary lines Blender printed (RenderEngine.report, not _report_messages)."""
+    return [line for line in capfd.readouterr().out.splitlines() if " triangles, " in line]
+
+
+def test_an_empty_layer_beside_a_full_one_is_named(scene, said, capfd):
+    _two_layers(scene)
+    capfd.readouterr()
+    text = _render(said)
+    empty = [t for t in text if "no renderable geometry" in t]
+    assert len(empty) == 1 and "view layer 'FX' has no renderable geometry" in empty[0], text
+    assert not any("the scene has no renderable geometry" in t for t in text), text
+    summaries = _summaries(capfd)
+    assert len(summaries) == 2, summaries
+    assert "DACRT: view layer 'Beauty': " in summaries[0] and ": 0 triangles" not in summaries[0], summaries
+    assert "DACRT: view layer 'FX': 0 triangles" in summaries[1], summaries
+
+
+def test_one_layer_says_the_scene(scene, said, capfd):
+    """A scene rendering one layer (the other not in use) keeps the words it had."""
+    _two_layers(scene)
+    scene.view_layers["Beauty"].use = False
+    capfd.readouterr()
+    text = _render(said)
+    assert any("the scene has no renderable geometry" in t for t in text), text
+    summaries = _summaries(capfd)
+    assert len(summaries) == 1 and "view layer" not in summaries[0], summaries
+
+
+def test_the_surfaces_filter_names_its_layer(scene, said):
+    _two_layers(scene)
+    scene.view_layers["FX"].layer_collection.children["Geo"].exclude = False
+    scene.view_layers["FX"].use_solid = False
+    text = _render(said)
+    assert any("surfaces are off in the filter of view layer 'FX' (Surfaces)" in t for t in text), text
+
+
+# -- light ray visibility ------------------------------------------------------------------
+def _glossy_said(text):
+    return [t for t in text if "glossy layers (rendered as diffuse)" in t]
+
+
+def test_glossy_visibility_off_in_an_all_diffuse_scene_is_not_warned(scene, said):
+    _, _, lamp = _box(scene)
+    lamp.visible_glossy = False
+    assert _glossy_said(_render(said)) == []
+
+
+def test_glossy_visibility_off_beside_a_glossy_layer_is_warned(scene, said):
+    """A Principled's specular layer renders as diffuse: it takes the lamp by its Diffuse
+    visibility, where Cycles' glossy rays would not see it."""
+    _, _, lamp = _box(scene, scenes.principled("Plastic", (0.5, 0.5, 0.5), specular=0.5))
+    lamp.visible_glossy = False
+    text = _glossy_said(_render(said))
+    assert len(text) == 1 and "'Lamp'" in text[0] and "Glossy off with Diffuse on" in text[0], text
+
+
+def test_the_instancer_whose_flag_it_is_is_named(scene, said):
+    _, _, lamp = _box(scene, scenes.principled("Plastic", (0.5, 0.5, 0.5), specular=0.5))
+    rig_set = bpy.data.collections.new("Rig")
+    scene.collection.objects.unlink(lamp)
+    rig_set.objects.link(lamp)
+    rig = bpy.data.objects.new("LightRig", None)
+    rig.instance_type, rig.instance_collection = 'COLLECTION', rig_set
+    scene.collection.objects.link(rig)
+    rig.visible_glossy = False
+    text = _glossy_said(_render(said))
+    assert len(text) == 1 and "'Lamp' (instanced by 'LightRig')" in text[0], text
+
+
+# -- shadow catcher --------------------------------------------------------------------------
+def _catcher_said(text):
+    return [t for t in text if "shadow catcher is not supported" in t]
+
+
+def test_catcher_flag_on_camera_and_empty_is_not_warned(scene, said):
+    _box(scene)
+    empty = bpy.data.objects.new("Locator", None)
+    scene.collection.objects.link(empty)
+    empty.is_shadow_catcher = scene.camera.is_shadow_catcher = True
+    assert _catcher_said(_render(said)) == []
+
+
+def test_catcher_flag_on_a_mesh_and_an_instancer_is_warned(scene, said):
+    floor, cube, _ = _box(scene)
+    floor.is_shadow_catcher = True
+    group = bpy.data.collections.new("Props")
+    scene.collection.objects.unlink(cube)
+    group.objects.link(cube)
+    holder = bpy.data.objects.new("Holder", None)
+    holder.instance_type, holder.instance_collection = 'COLLECTION', group
+    scene.collection.objects.link(holder)
+    holder.is_shadow_catcher = True
+    text = _catcher_said(_render(said))
+    assert len(text) == 1 and "'Floor'" in text[0] and "'Holder'" in text[0], text
