@@ -187,9 +187,12 @@ def object_frame(ob):
 
 
 def _images_reached(socket):
-    """How many different images (by image, or Image Texture nodes without one) feed socket."""
-    return len({link.from_node.image.as_pointer() if link.from_node.image is not None else
-                nodegraph.output_key(link.from_node, None)
+    """How many image lookups feed socket: Image Texture nodes, each in its group context (one
+    node's Color and Alpha are one lookup). Counted by node, not by image: one image read by two
+    nodes (two scales, another interpolation, its Alpha on other coordinates) or through a group
+    used twice is two lookups, which the evaluation (one lookup per material) had read the second
+    of as its average colour."""
+    return len({nodegraph.output_key(link.from_node, None)
                 for link in nodegraph.links_feeding(socket) if link.from_node.type == 'TEX_IMAGE'})
 
 
