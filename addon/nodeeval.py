@@ -138,8 +138,8 @@ class Evaluator:
     """Evaluates what feeds a colour or float input through the nodes above, as one value per
     texel of (at most) one image. texture(node, reasons) -> the export's image of an Image
     Texture node (an object with .pixels (h, w, 4) and .key) or None (then `missing`, a
-    colour). Unsupported nodes give the input's own value; a second, different image its
-    average colour; both noted in reasons. View-dependent nodes (Fresnel, Layer Weight) give
+    colour, with alpha 1). Unsupported nodes give the input's own value; a second, different
+    image its average colour; both noted in reasons. View-dependent nodes (Fresnel, Layer Weight) give
     their average over view directions (fresnel.py), noted in `notes` (default: reasons).
     attribute(node, output, reasons): the values a Color Attribute, Attribute or Object Info
     node's output reads, as an image's
@@ -178,8 +178,8 @@ class Evaluator:
             return Field((out.default_value,))
         if t == 'TEX_IMAGE':
             tex = self.texture(node, self.reasons)
-            if tex is None:
-                return Field(self.missing)
+            if tex is None:     # Cycles' missing image is opaque: only its Color is `missing`
+                return Field((1.0,) if out.name == 'Alpha' else self.missing)
             return Field(tex.pixels[..., 3:4] if out.name == 'Alpha' else tex.pixels[..., :3], tex)
         if t == 'TEX_ENVIRONMENT' and node.image is None:     # Cycles' missing image: magenta, opaque
             return Field((1.0,) if out.name == 'Alpha' else (1.0, 0.0, 1.0))
