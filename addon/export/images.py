@@ -283,9 +283,12 @@ def _premultiplied_bytes(img, buf, from_file, reasons):
     """An 8-bit RGBA image set to Premultiplied alpha: Blender's pixels are its bytes divided by
     alpha (clamped at 1, so colour above alpha is lost), while Cycles reads the file's bytes and
     renders them as it renders a straight image (measured). The file's bytes, read as stored,
-    stand in for Blender's (h, w, 4) buffer; a packed image or an unreadable file keeps
-    Blender's, reported."""
-    path = bpy.path.abspath(img.filepath_raw, library=img.library) if from_file else ''
+    stand in for Blender's (h, w, 4) buffer; a file that cannot be read so keeps Blender's,
+    reported. from_file False (packed, generated, movie): Cycles reads Blender's divided buffer
+    too (image_is_builtin), so it is kept, unsaid (measured equal; it had been warned of)."""
+    if not from_file:
+        return buf
+    path = bpy.path.abspath(img.filepath_raw, library=img.library)
     if img.source == 'TILED' and len(img.tiles):     # the first tile's file (Blender's pixels are its)
         path = _tile_path(path, img.tiles[0].number)
     try:
