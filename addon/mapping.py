@@ -216,6 +216,8 @@ def texture_transform(tex_node, reasons):
         if vec.type == 'UVMAP':      # its map by name: uv_map_name, per material in the export
             if vec.from_instancer:
                 reasons.append(f"UV Map '{vec.name}' from the instancer read as the object's own")
+        elif _attribute_uv_name(link):
+            pass                     # read by name as a UV Map node's (uv_map_name): exact
         elif vec.type == 'TEX_COORD':
             if link.from_socket.name != 'UV':
                 reasons.append(f"{link.from_socket.name} texture coordinates read as the UV map")
@@ -231,8 +233,9 @@ def texture_transform(tex_node, reasons):
 
 
 def uv_map_name(tex_node):
-    """The UV map an Image Texture reads by name: a UV Map node's (through Mapping nodes), or
-    '' for the active render UV map (no UV Map node, or one with no name)."""
+    """The UV map an Image Texture reads by name: a UV Map node's or a named Attribute node's
+    (through Mapping nodes), or '' for the active render UV map (no UV Map node, or one with
+    no name)."""
     link = linked_link(tex_node.inputs['Vector'])
     for _ in range(_MAX_CHAIN):
         if link is None or link.from_node.type not in _AFFINE_NODES:
@@ -240,7 +243,20 @@ def uv_map_name(tex_node):
         link = linked_link(link.from_node.inputs['Vector'])
     if link is not None and link.from_node.type == 'UVMAP':
         return str(link.from_node.uv_map)
-    return ''
+    return _attribute_uv_name(link) if link is not None else ''
+
+
+def _attribute_uv_name(link):
+    """The attribute an Attribute node's Color or Vector output (link) reads, which Cycles looks
+    up by name as a UV Map node of that name does (a UV map, or any attribute: its (x, y)), so
+    the export reads it as one (it had been read as the active map, said even when it named
+    that); '' for another node or output, an unnamed one (0 in Cycles) or an object's,
+    instancer's or view layer's attribute."""
+    node = link.from_node
+    if node.type != 'ATTRIBUTE' or node.attribute_type != 'GEOMETRY' or \
+            link.from_socket.identifier not in ('Color', 'Vector'):
+        return ''
+    return str(node.attribute_name)
 
 
 def coordinates_approximation(tex_node):

@@ -1,0 +1,57 @@
+"""An Attribute node naming a UV map, into an Image Texture's Vector, reads that map as Cycles
+does (its attribute lookup by name, the UV Map node's): on the active map and on a second one
+whose UVs are turned and squeezed. It had been read on the active map (said): blocks 0.95 off
+Cycles' on the second map. A plane lit by a sun of strength pi, direct light only."""
+import math
+
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+
+from . import rendering
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+@pytest.mark.parametrize("name", ["UVMap", "Second"])
+def test_an_attribute_naming_a_uv_map_matches_cycles(tmp_path, name, said):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 32
+    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)
+    scenes.light('SUN', math.pi)
+    scenes.black_world()
+    mat, nt, out = scenes._material("Textured")
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    px = np.random.default_rng(32).random((4, 4, 4)).astype(np.float32)
+    px[..., 3] = 1.0
+    tex.image, tex.interpolation = scenes.float_image("A", px), 'Linear'
+    at = nt.nodes.new('ShaderNodeAttribute')
+    at.attribute_name = name
+    nt.links.new(at.outputs['Vector'], tex.inputs['Vector'])
+    nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+    nt.links.new(d.outputs[0], out.inputs['Surface'])
+    me = scenes.plane("P", size=2.0, materials=(mat,)).data
+    me.uv_layers.new(name="UVMap")
+    second = me.uv_layers.new(name="Second")
+    for corner in second.data:
+        u, v = corner.uv
+        corner.uv = (v * 0.6 + 0.2, 1 - u)
+    rendering.fair_scene_settings(sc)
+    sc.cycles.device, sc.cycles.use_denoising, sc.cycles.use_adaptive_sampling = 'CPU', False, False
+    sc.cycles.samples = sc.dacrt.samples = 16
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
+    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    blocks = {}
+    for engine in ('CYCLES', 'DACRT'):
+        sc.render.engine = engine
+        del said[:]
+        img = scenes.render_rgba(sc)
+        blocks[engine] = img[..., :3].reshape(4, 8, 4, 8, 3).mean(axis=(1, 3))
+    assert not any("read as the UV map" in t for t in said), said
+    diff = np.abs(blocks['DACRT'] - blocks['CYCLES'])
+    assert diff.max() < 0.005, (diff.max(), blocks)
