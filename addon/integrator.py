@@ -54,7 +54,7 @@ import numpy as np
 
 import dacrt
 
-from . import bump as bumpmap, cryptomatte
+from . import bump as bumpmap, cryptomatte, roughdiffuse
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
 from .camera import CameraModel
@@ -854,6 +854,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if tex:
             self._albedo_maps(prim, u, v, thr, self._back(prim, ng))   # the albedo's maps are the reflection's
         ns, bump = self._bent_normals(prim, u, v, ns, ng)
+        # rough diffuse hits: Cycles' Oren-Nayar over the averaged albedo thr holds, per light
+        # sample (next_event) and per bounce (below); None where the scene has none
+        rough = self._rough_rows(prim, u, v, ng, ns, np.take(path.D, idx, axis=1)) if self.mats.any_rough else None
         ns_far = None                                 # the transmission's normal (front-facing)
         if far is not None and bump is not None:
             sel = far[0]
@@ -865,7 +868,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         del hits, path
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr if nee is None else thr * nee, pid, keys, u_pick,
-                             sinks.sampled(k), tb, u, v, sinks.groups, bump)
+                             sinks.sampled(k), tb, u, v, sinks.groups, bump, rough=rough)
             if far is not None:                       # and the transmission's, from the far side
                 sel, thr_far, _ = far
                 if nee is not None:
@@ -891,6 +894,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                                                          shading_offset=offset)
         if kept_thr is not None:
             thr[:, moved] = kept_thr
+        if rough is not None:             # the reflection's Oren-Nayar factor (not a transmission's)
+            f = roughdiffuse.scale(rough, wi, ns)
+            thr *= f if moved is None else np.where(moved, F32(1.0), f)
         if bump is not None:              # Cycles' bsdf_sample: eval x bump_shadowing_term
             g = bump_shadowing(bump[:3], ns, wi, bump[3] != 0)
             thr *= g if moved is None else np.where(moved, F32(1.0), g)
@@ -920,7 +926,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                 FUSED_BOUNCE and self.lights and not self._albedo_varies and not self._bumped
                 and not self._any_translucent and not t.terminator and t.term_cutoff is None
                 and t.term_freq is None and self._link is None and self._shadow_link is None
-                and self._tri_emit_tex is None)
+                and self._tri_emit_tex is None and not self.mats.any_rough)
         return (self._fused_scene and path.tb is None and path.gb is None and path.nee is None
                 and not sinks.groups
                 and not (self.lights.environment is not None and k > self._world_max_bounces))
@@ -968,7 +974,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
     # --- next-event estimation --------------------------------------------------------------------
 
     def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None,
-                    groups=(), bump=None, dims=None, shading_offset=True):
+                    groups=(), bump=None, dims=None, shading_offset=True, rough=None):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
         the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
@@ -993,7 +999,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
             prim=prim, shorten=_END_SHORTEN, skip_work=SKIP_WORK, terminator=term,
             linking=None if self._link is None else (self._entry_set, self._receivers(prim)), entry=entry,
-            point=point, bump=bump)
+            point=point, bump=bump, rough=rough)
         if textured:
             self._textured_samples(value, entry, point, P)
         if dark_world:
@@ -1001,6 +1007,26 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             value[:, off] = 0.0
             contrib[off] = False
         self._shadows(k, pid, value, contrib, rays, send, skip, skipped, L, tb, entry, groups)
+
+    def _rough_rows(self, prim, u, v, ng, ns, D):
+        """(roughdiffuse.ROUGH_ROWS, k) the Oren-Nayar table of hits prim (u, v; ng, ns the
+        normals, D the rays' directions) for next_event and roughdiffuse.scale, b 0 where the
+        material is not a rough diffuse; None where no hit is. The colour is the pass colour (the
+        closure weight Cycles writes) over the material's Mix weights."""
+        mat = np.take(self.tri.material, prim)
+        sigma = np.take(self.mats.rough_sigma, mat)
+        sel = np.flatnonzero(sigma > 0)
+        if not len(sel):
+            return None
+        p = np.take(prim, sel)
+        back = self._back(prim, ng)
+        rho = self._pass_albedo(p, None if u is None else np.take(u, sel), None if v is None else np.take(v, sel),
+                                None if back is None else np.take(back, sel))
+        rho = rho * np.take(self.mats.rough_inv, np.take(mat, sel), axis=1)
+        rows = np.zeros((roughdiffuse.ROUGH_ROWS, len(prim)), F32)
+        rows[:, sel] = roughdiffuse.vertex_rows(np.take(sigma, sel), rho, -np.take(D, sel, axis=1),
+                                                np.take(ns, sel, axis=1))
+        return rows
 
     def _shadows(self, k, pid, value, contrib, rays, send, skip, skipped, L, tb=None, entry=None, groups=()):
         """Next-event estimation's shadow rays (next_event's rays, send, skip) traced as one

@@ -280,7 +280,10 @@ def layer_steps(node, reasons) -> list:
     top = _top_mu(node, reasons)
     diffuse = _diffuse_roughness(node, reasons)
     if metal is None and spec is None and top is None and trans is None:
+        # no layer: the base alone, which the integrator renders as Cycles' BSDF (roughdiffuse.py)
         return [] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse)]
+    if diffuse > 0.0:
+        reasons.append(ROUGH_BASE_AVERAGED)
     n = len(specular.VIEW)
     dim_s = np.ones(n) if spec is None else np.clip(1.0 - spec[1].max(axis=0), 0.0, 1.0)
     add_s = np.zeros((3, n)) if spec is None else spec[0]
@@ -340,7 +343,10 @@ def _diffuse_roughness(node, reasons):
     v = min(max(v, 0.0), 1.0) if np.isfinite(v) else 0.0
     if not ok:
         reasons.append("Principled diffuse roughness driven by nodes; its own value used")
-    if v > 0.0:
-        reasons.append("Principled diffuse roughness (Oren-Nayar) as its albedo averaged over view directions"
-                       + ROUGH_DIFFUSE_LIGHT)
     return v
+
+
+# what a rough diffuse base under layers becomes (said by layer_steps): the layers' dimming of
+# it varies with the view too, which its one averaged (dim, add) step cannot carry per sample
+ROUGH_BASE_AVERAGED = ("Principled diffuse roughness (Oren-Nayar) under the specular, metal, coat, sheen or"
+                       " transmission layers: as its albedo averaged over view directions" + ROUGH_DIFFUSE_LIGHT)

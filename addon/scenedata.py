@@ -142,6 +142,11 @@ class Material:
     pass_color: Optional[np.ndarray] = None
     pass_texture: Optional[np.ndarray] = None
     pass_texture_modes: tuple = ('Linear', 'REPEAT', None)
+    # A rough diffuse (Cycles' Oren-Nayar of roughness rough_sigma; 0: none) whose
+    # view-dependent BSDF the integrator renders (roughdiffuse.py): the albedo is its averaged
+    # albedo, the pass colour (which it needs) its colour times rough_scale (3,), its Mix weights
+    rough_sigma: float = 0.0
+    rough_scale: Optional[np.ndarray] = None
     # An image's emission (h, w, 4 texels like `texture`, RGB the radiance, or an EncodedTexels-
     # carrying ImageTexels), read on the UV map: the emission at a hit, where `emission` is
     # then its average over the image (what chooses the material's triangles as lights)

@@ -222,7 +222,9 @@ class Transparency:
         self._next_event(k, np.ascontiguousarray(P), np.ascontiguousarray(P_off), prim, np.ascontiguousarray(ng),
                          np.ascontiguousarray(ns), np.ascontiguousarray(thr, F32), pid, keys,
                          u_pick, sinks.sampled(k), tb, u, v, sinks.groups, bump,
-                         dims=DIM_PASSED + (k << 11) + 2 * j + 1)
+                         dims=DIM_PASSED + (k << 11) + 2 * j + 1,
+                         rough=self._rough_rows(prim, u, v, ng, ns, np.take(path.D, rows, axis=1))
+                         if self.mats.any_rough else None)
         if self._any_translucent:             # a translucent surface's transmission, from the far side
             mat = np.take(self.tri.material, prim)
             sel = np.flatnonzero(np.take(self.mats.translucent, mat))

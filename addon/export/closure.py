@@ -94,6 +94,11 @@ class Closure:
         # albedo (a rough diffuse's: its closure weight, not the albedo it shades with), as
         # (const, texture, tex_weight); None: the albedo's
         self.passes = None
+        # (sigma, w (3,)) where the whole albedo is one rough diffuse (Oren-Nayar of roughness
+        # sigma) of colour pass_albedo() / w, w its Mix weights: the integrator renders its
+        # view-dependent BSDF (roughdiffuse.py); None: the albedo alone (layers, maps and sums
+        # with another reflection drop it)
+        self.rough = None
 
     @property
     def sampled_emission(self):
@@ -150,7 +155,17 @@ class Closure:
         return Closure((0, 0, 0), self.emission, mapped, (1, 1, 1), self.holdout, self.transparent, self.opacity,
                         self.emission_tex, self.translucent, self.glass, self.opaque_glass, self.light_emission)
 
+    def reflects(self):
+        """Whether this closure has an albedo (a reflection)."""
+        return bool(self.const.any() or self.tex_weight.any())
+
     def scaled(self, f):
+        out = self._scaled(f)
+        if self.rough is not None:
+            out.rough = (self.rough[0], self.rough[1] * np.broadcast_to(np.asarray(f, np.float64), (3,)))
+        return out
+
+    def _scaled(self, f):
         etex = None if self.emission_tex is None else (self.emission_tex[0], self.emission_tex[1] * f)
         out = Closure(self.const * f, self.emission * f, self.texture, self.tex_weight * f, self.holdout * f,
                       self.transparent * f, self.opacity, etex, self.translucent * f, self.glass * f,
@@ -195,6 +210,14 @@ class Closure:
         return None
 
     def plus(self, other, reasons):
+        out = self._summed(other, reasons)
+        # a rough diffuse beside what does not reflect (emission, transparency, ...) stays one
+        mine, theirs = (self, other) if other.rough is None else (other, self)
+        if mine.rough is not None and not theirs.reflects() and theirs.rough is None:
+            out.rough = mine.rough
+        return out
+
+    def _summed(self, other, reasons):
         out = self._plus(other, reasons)
         if self.passes is None and other.passes is None:
             return out

@@ -27,6 +27,7 @@ from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
 from .bump import displacement_bump
 from .closure import Closure
+from .reflectors import ROUGH_DIFFUSE_AVERAGED
 from .cutouts import Cutouts
 from .emission import Emission
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
@@ -47,6 +48,15 @@ DEFAULT_SURFACE_LAYER = specular.layer_albedo(0.5, 1.5, 0.5, (1.0, 1.0, 1.0))
 DEFAULT_SURFACE_ALBEDO = tuple(float(v) for v in 0.8 * (1.0 - DEFAULT_SURFACE_LAYER.max()) + DEFAULT_SURFACE_LAYER)
 # the output sockets the material export ignores (reported when used)
 IGNORED_OUTPUTS = ('Volume',)
+
+
+def _averaged_rough(m):
+    """A rough diffuse whose colour comes per point from an attribute (no pass colour to read
+    it from at hits): its averaged albedo, said."""
+    if m.rough_sigma > 0.0:
+        m.rough_sigma, m.rough_scale = 0.0, None
+        m.approximated = '; '.join(r for r in (m.approximated, ROUGH_DIFFUSE_AVERAGED.replace(
+            "mixed with another reflection or under nodes that map it", "coloured by an attribute")) if r)
 
 
 def _alpha_linked(ntree, seen=None):
@@ -165,6 +175,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             self._attribute_map = ('object', name[len(OBJECT_INFO):], mat)
             m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
             m.pass_color = m.pass_texture = None     # (a rough diffuse's pass colour: the attribute's albedo)
+            _averaged_rough(m)
             # an image beside it in no product (_object_product): averaged, as the evaluation
             # did; said as that, not as a second image
             m.approximated = m.approximated.replace(
@@ -187,6 +198,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             m.base_color = np.ones(3, np.float32)
             m.color_attribute = name
             m.pass_color = m.pass_texture = None
+            _averaged_rough(m)
             return m
         # any other chain is evaluated on each mesh's corner values (evaluated_albedo) and the
         # results interpolated: Cycles interpolates first, so this is exact at the corners only,
@@ -198,6 +210,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._attribute_map = ('corners', name, mat)
         m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
         m.pass_color = m.pass_texture = None
+        _averaged_rough(m)
         if not affine:
             label = marked_label(name)
             m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
@@ -214,6 +227,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         displaced = None
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
         self._dark_stand_ins = []     # what each emission that reads 0 only by a stand-in said
+        self._rough_seen = False      # a rough Diffuse BSDF was read (shaders.py)
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
@@ -283,6 +297,11 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             # (Cycles bumps with the Displacement output only when there is a surface to shade)
             if out is not None and out.inputs['Surface'].is_linked:
                 displaced = displacement_bump(mat, out, reasons, image=self._texture)
+        # a rough diffuse the integrator renders as Cycles' BSDF: the whole albedo is its
+        # (Closure.rough), its colour the pass colour over its Mix weights
+        rough = closure.rough if closure.passes is not None else None
+        if rough is None and self._rough_seen:
+            reasons.append(ROUGH_DIFFUSE_AVERAGED)
         base, texture, interp, ext, transform = self._albedo(closure)
         self._albedo_attribute = closure.texture.attribute \
             if closure.texture is not None and closure.tex_weight.any() else None
@@ -439,6 +458,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                            dark_stand_in=dark_stand_in,
                            pass_color=pass_color, pass_texture=pass_texture,
                            pass_texture_modes=tuple(pass_modes),
+                           rough_sigma=0.0 if rough is None else float(rough[0]),
+                           rough_scale=None if rough is None else np.asarray(rough[1], np.float32),
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
                            transparency=transparency, translucency=translucency, refraction=refraction,

@@ -1,5 +1,6 @@
-"""BSDF nodes a diffuse renderer keeps as an albedo: a rough Diffuse BSDF (Oren-Nayar, as its
-albedo averaged over view directions, roughdiffuse.py) and the Glossy and Metallic BSDFs (their
+"""BSDF nodes a diffuse renderer keeps as an albedo: a rough Diffuse BSDF (Oren-Nayar: its
+albedo averaged over view directions, roughdiffuse.py, which the integrator turns into the
+view-dependent BSDF) and the Glossy and Metallic BSDFs (their
 albedo averaged over view directions, specular.py), the Sheen BSDF (its albedo averaged over
 view directions, sheen.py), the Glass BSDF as a see-through surface with its reflection, and
 the Refraction BSDF as a see-through surface. Part of the export layer."""
@@ -20,8 +21,13 @@ def diffuse_roughness(node, reasons):
         reasons.append("Diffuse roughness driven by nodes; its own value used")
     if rough <= 1e-5:
         return 0.0
-    reasons.append("Diffuse roughness (Oren-Nayar) as its albedo averaged over view directions" + ROUGH_DIFFUSE_LIGHT)
     return rough
+
+
+# what a rough Diffuse BSDF the integrator cannot render as Cycles' BSDF becomes (said by the
+# material export, materials.py)
+ROUGH_DIFFUSE_AVERAGED = ("Diffuse roughness (Oren-Nayar) mixed with another reflection or under nodes that map it:"
+                          " as its albedo averaged over view directions" + ROUGH_DIFFUSE_LIGHT)
 
 
 class GlossyMap:

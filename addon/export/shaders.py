@@ -76,7 +76,15 @@ class ShaderClosures:
             self._normal_input(node, reasons)
             c = self._color_closure(node.inputs['Color'], reasons)
             rough = diffuse_roughness(node, reasons)
-            return c if rough == 0.0 else c.mapped(roughdiffuse.RoughDiffuse(rough))
+            if rough == 0.0:
+                return c
+            # the averaged albedo, what the albedo and passes hold; the BSDF's view dependence
+            # is the integrator's where the material's albedo is this closure alone (rough)
+            self._rough_seen = True
+            out = c.mapped(roughdiffuse.RoughDiffuse(rough))
+            if c.passes is None:
+                out.rough = (rough, np.ones(3))
+            return out
         if t == 'BSDF_PRINCIPLED':
             return self._principled(node, reasons)
         if t in ('EMISSION', 'BACKGROUND'):     # Cycles: a Background shader on a surface emits
@@ -199,8 +207,12 @@ class ShaderClosures:
                 reasons.append(f"Principled Base Color {tuple(round(float(x), 6) for x in c.const)} clamped at 0 "
                                f"per channel (NaN read as 0), as Cycles clamps it before its layers")
                 c.const = np.where(bad, 0.0, c.const)
-        for step in principled.layer_steps(node, reasons):
+        steps = principled.layer_steps(node, reasons)
+        plain = c.passes is None
+        for step in steps:
             c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
+        if plain and len(steps) == 1 and isinstance(steps[0], roughdiffuse.RoughDiffuse):
+            c.rough = (steps[0].sigma, np.ones(3))     # a rough base under no layer: Cycles' BSDF
         base, base_ok = constant_color(node.inputs['Base Color'])
         through = principled.transmittance(node, base)
         if through.any():

@@ -15,6 +15,7 @@
 
 #include "bindargs.h"
 #include "bounce.h"
+#include "orennayar.h"
 #include "shading.h"
 #include "environment.h"
 #include "lamps.h"
@@ -325,8 +326,8 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
                      py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator,
                      py::object linking, py::object entry, py::object point, py::object bump, py::object tree,
-                     py::object tri_prim) {
-    F32Array keep[3], ng_keep, thr_keep, bump_keep;
+                     py::object tri_prim, py::object rough) {
+    F32Array keep[3], ng_keep, thr_keep, bump_keep, rough_keep;
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
@@ -344,6 +345,7 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     pts.ng = optional_f32(ng, 3, n, "ng", ng_keep);
     pts.thr = optional_f32(thr, 3, n, "thr", thr_keep);
     pts.bump = optional_f32(bump, 4, n, "bump", bump_keep);
+    pts.rough = optional_f32(rough, kRoughRows, n, "rough", rough_keep);
     pts.keys = keys.data();
     pts.ka = ka;
     pts.kb = kb;
@@ -685,7 +687,8 @@ void register_lamps(py::module_& m) {
           py::arg("pick"), py::arg("prim"), py::arg("shorten"), py::arg("skip_work"), py::arg("value"),
           py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"),
           py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none(),
-          py::arg("bump") = py::none(), py::arg("tree") = py::none(), py::arg("tri_prim") = py::none());
+          py::arg("bump") = py::none(), py::arg("tree") = py::none(), py::arg("tri_prim") = py::none(),
+          py::arg("rough") = py::none());
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)",
         py::module_local())

@@ -2,6 +2,7 @@
 // float32 arithmetic are those of the separate kernels it fuses (uniform2_rows, the light
 // choice, sample_lamp / triangle_light, nee_scale, shadow_record), so it gives the same bits.
 #include "nextevent.h"
+#include "orennayar.h"
 
 #include <algorithm>
 #include <atomic>
@@ -104,6 +105,7 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                 for (int a = 0; a < 3; ++a) value[a] *= g;
                 ok = ok && g > 0.0f;
             }
+            if (p.rough) rough_diffuse_scale(p.rough, n, i, ns, wi, value);
             if (L.light_set && p.receivers && !((p.receivers[i] >> L.light_set[entry]) & 1u)) {
                 ok = false;  // light linking: the light does not reach this point's object
                 value[0] = value[1] = value[2] = 0.0f;

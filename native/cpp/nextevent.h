@@ -106,6 +106,9 @@ struct VertexPoints {
     // normal maps: (4, n) the smooth normal before the map (rows 0-2; ns where there is none)
     // and the material's Bump Map Correction (row 3, 0 or 1): samples take bump_shadowing
     const float* bump = nullptr;
+    // rough diffuse points (null: none): kRoughRows rows of n (orennayar.h); each sample takes
+    // Cycles' Oren-Nayar factor over the view-averaged albedo
+    const float* rough = nullptr;
 };
 
 // The entry point i picks and its selection probability p_sel: entry 0 without a pick, else

@@ -235,7 +235,7 @@ class LightChoice:
 
 def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: int, pick=None, prim=None,
                shorten: float = 1.0, skip_work: bool = True, terminator=None, linking=None, entry=None,
-               point=None, bump=None):
+               point=None, bump=None, rough=None):
     """Next-event estimation at n shading points in one pass: pick a light per point (entry 0
     when pick is None, else the entry the uniform pick (n,) float64 falls in), sample it with
     the uniforms of keys (2, n) and dimension words (ka, kb) (the same numbers as uniform2),
@@ -268,6 +268,10 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
     Correction (row 3, 0 or 1): each sample is multiplied by Cycles' bump shadowing term
     (bump_shadowing: 0 below the smooth surface, the GGX softening with correction).
 
+    rough (11, n): rough diffuse points (Cycles' Oren-Nayar; orennayar.h, rows from
+    addon/roughdiffuse.vertex_rows; b (row 4) 0 where a point is Lambertian): each sample's
+    value is multiplied by that BSDF's value over the view-averaged albedo the throughput holds.
+
     Returns value (3, n) (each sample's contribution), contrib (n,) bool (it adds to the image
     unless its shadow ray is occluded), rays (m,) RAY_DTYPE (ids 0..m-1, in point order), send
     (m,) int64 (the point of each ray), skip (m,) int32 (prim[send], the triangle each ray
@@ -297,7 +301,8 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         value, contrib, rays, send, skip, _terminator(terminator),
         None if linking is None else (np.ascontiguousarray(linking[0], np.uint8),
                                       np.ascontiguousarray(linking[1], np.uint64)), entry, point,
-        None if bump is None else _rows(bump, 4, "bump"), lights.tree, lights.tri_prim)
+        None if bump is None else _rows(bump, 4, "bump"), lights.tree, lights.tri_prim,
+        None if rough is None else _rows(rough, 11, "rough"))
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
 
 

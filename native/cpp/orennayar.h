@@ -1,0 +1,44 @@
+// Cycles' rough diffuse (closure/bsdf_oren_nayar.h: Fujii's improved Oren-Nayar with OpenPBR's
+// energy-preserving multiple scattering, "EON") as a factor on a Lambertian sample. Cycles
+// samples it cosine-weighted, so pdfs and MIS weights are Lambert's and only the value changes;
+// the material's albedo is already its view-averaged albedo D (addon/roughdiffuse.py), so a
+// sample takes F / D, F = f_EON / f_Lambert. What depends on the point alone (the view and the
+// colour) comes per point from Python (roughdiffuse.vertex_rows); here only the light's part.
+#pragma once
+
+#include <cfloat>
+#include <cmath>
+#include <cstddef>
+
+namespace dacrt {
+
+// Rows of a rough point table (stride n): wo (0-2, toward the viewer), a (3), b (4; 0: Lambert,
+// no factor), k = pi Ems (1 - E(nv)) per channel (5-7), 1 / D per channel (8-10).
+constexpr int kRoughRows = 11;
+
+// Cycles' bsdf_oren_nayar_G(cos theta).
+inline float oren_nayar_G(float c) {
+    if (c < 1e-6f) return (1.5707963267948966f - 2.0f / 3.0f) - c;  // (Cycles' Taylor branch)
+    const float s = std::sqrt(std::fmax(1.0f - c * c, 0.0f));
+    const float th = std::acos(std::fmin(std::fmax(c, -1.0f), 1.0f));
+    return s * (th - 2.0f / 3.0f - s * c) + 2.0f / 3.0f * (s / c) * (1.0f - s * s * s);
+}
+
+// value (3) times F / D of point i of the table for light direction wi at shading normal ns.
+inline void rough_diffuse_scale(const float* rough, size_t n, size_t i, const float ns[3], const float wi[3],
+                                float value[3]) {
+    const float b = rough[4 * n + i];
+    if (!(b > 0.0f)) return;
+    const float a = rough[3 * n + i];
+    const float wo[3] = {rough[i], rough[n + i], rough[2 * n + i]};
+    const float nl = std::fmax(ns[0] * wi[0] + ns[1] * wi[1] + ns[2] * wi[2], 0.0f);
+    const float nv = std::fmax(ns[0] * wo[0] + ns[1] * wo[1] + ns[2] * wo[2], 0.0f);
+    float t = wi[0] * wo[0] + wi[1] * wo[1] + wi[2] * wo[2] - nl * nv;
+    if (t > 0.0f) t /= std::fmax(nl, nv) + FLT_MIN;
+    const float pi = 3.14159265358979f;
+    const float single = pi * (a + b * t), El = a * pi + b * oren_nayar_G(nl);
+    for (int c = 0; c < 3; ++c)
+        value[c] *= (single + rough[(5 + c) * n + i] * (1.0f - El)) * rough[(8 + c) * n + i];
+}
+
+}  // namespace dacrt
