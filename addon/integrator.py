@@ -2,7 +2,8 @@
 
 Owns the render loop: per pass it builds every camera ray of a block of (pixel, sample) paths,
 then traces each bounce as ONE batch (`dacrt.Scene.intersect`) and all shadow rays of that bounce
-as one batch (`dacrt.Scene.occluded`). Shading is Lambertian (albedo = base colour x texture),
+as one batch (`dacrt.Scene.occluded`). Shading is Lambertian (albedo = base colour x texture;
+a rough diffuse takes Cycles' Oren-Nayar as a factor on its samples, roughdiffuse.py),
 with next-event estimation and multiple importance sampling (power heuristic) against every
 emitter a BSDF ray can meet (emissive triangles, lamps with MIS, an environment map; the
 uniform world is left to BSDF rays alone, as in Cycles, see lights/background.py), Russian roulette
@@ -54,7 +55,7 @@ import numpy as np
 
 import dacrt
 
-from . import bump as bumpmap, cryptomatte, roughdiffuse
+from . import bump as bumpmap, cryptomatte
 from .adaptive import AdaptiveSampling
 from .allocator import render_heap
 from .camera import CameraModel
@@ -895,8 +896,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if kept_thr is not None:
             thr[:, moved] = kept_thr
         if rough is not None:             # the reflection's Oren-Nayar factor (not a transmission's)
-            f = roughdiffuse.scale(rough, wi, ns)
-            thr *= f if moved is None else np.where(moved, F32(1.0), f)
+            if moved is not None:
+                rough[4, moved] = 0.0
+            dacrt.shading.rough_scale(rough, wi, ns, thr)
         if bump is not None:              # Cycles' bsdf_sample: eval x bump_shadowing_term
             g = bump_shadowing(bump[:3], ns, wi, bump[3] != 0)
             thr *= g if moved is None else np.where(moved, F32(1.0), g)
@@ -1009,24 +1011,25 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._shadows(k, pid, value, contrib, rays, send, skip, skipped, L, tb, entry, groups)
 
     def _rough_rows(self, prim, u, v, ng, ns, D):
-        """(roughdiffuse.ROUGH_ROWS, k) the Oren-Nayar table of hits prim (u, v; ng, ns the
-        normals, D the rays' directions) for next_event and roughdiffuse.scale, b 0 where the
-        material is not a rough diffuse; None where no hit is. The colour is the pass colour (the
-        closure weight Cycles writes) over the material's Mix weights."""
+        """The rough diffuse table (dacrt.shading.rough_rows) of hits prim (u, v; ng, ns the
+        normals, D the rays' directions) for next_event and rough_scale, zero where the
+        material is not a rough diffuse; None where no hit is. The colour is the pass colour
+        (the closure weight Cycles writes) over the material's Mix weights."""
         mat = np.take(self.tri.material, prim)
-        sigma = np.take(self.mats.rough_sigma, mat)
-        sel = np.flatnonzero(sigma > 0)
-        if not len(sel):
+        rough = np.take(self.mats.rough, mat)
+        if not rough.any():
             return None
-        p = np.take(prim, sel)
         back = self._back(prim, ng)
-        rho = self._pass_albedo(p, None if u is None else np.take(u, sel), None if v is None else np.take(v, sel),
-                                None if back is None else np.take(back, sel))
-        rho = rho * np.take(self.mats.rough_inv, np.take(mat, sel), axis=1)
-        rows = np.zeros((roughdiffuse.ROUGH_ROWS, len(prim)), F32)
-        rows[:, sel] = roughdiffuse.vertex_rows(np.take(sigma, sel), rho, -np.take(D, sel, axis=1),
-                                                np.take(ns, sel, axis=1))
-        return rows
+        if rough.all():
+            rho = self._pass_albedo(prim, u, v, back)
+        else:                                         # the others' colours are not needed
+            sel = np.flatnonzero(rough)
+            rho = np.zeros((3, len(prim)), F32)
+            rho[:, sel] = self._pass_albedo(np.take(prim, sel), None if u is None else np.take(u, sel),
+                                            None if v is None else np.take(v, sel),
+                                            None if back is None else np.take(back, sel))
+        rho *= np.take(self.mats.rough_inv, mat, axis=1)
+        return dacrt.shading.rough_rows(self.mats.rough_params, mat, rho, D, ns)
 
     def _shadows(self, k, pid, value, contrib, rays, send, skip, skipped, L, tb=None, entry=None, groups=()):
         """Next-event estimation's shadow rays (next_event's rays, send, skip) traced as one

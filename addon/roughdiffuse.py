@@ -15,8 +15,8 @@ That albedo is what the material's albedo holds (so the Diffuse passes, emission
 rays and everything that reads the albedo stay as they were); the integrator then renders the
 real BSDF: Cycles samples it cosine-weighted, so pdfs and MIS weights are Lambert's and each
 light sample and each bounce only takes the factor F / D per channel, F = f / (rho / pi) the
-BSDF over Lambert's and D the averaged albedo over rho (vertex_rows, scale; the light sample's
-in the native next_event, orennayar.h). A material gets it where its whole albedo is one rough
+BSDF over Lambert's and D the averaged albedo over rho (params here, per material; the rest
+native: dacrt.shading.rough_rows, rough_scale and next_event's rough, orennayar.h). A material gets it where its whole albedo is one rough
 diffuse of one colour (any Mix Shader weight, beside emission, transparency, holdout or
 translucency: export.closure.Closure.rough); under the Principled's layers (their dimming
 varies with the view too) or mixed with another reflection it keeps the averaged albedo, said.
@@ -105,45 +105,11 @@ class RoughDiffuse:
         return np.full(3, k), np.full(3, c)
 
 
-# Rows of the rough point table next_event and scale read (native/cpp/orennayar.h)
-ROUGH_ROWS = 11
-
-
-def _ms(r, eavg):
-    """pi Ems of Cycles' multiple-scattering term for the saturated colour r."""
-    return r * r * eavg / (1.0 - eavg) / (1.0 - r * (1.0 - eavg))
-
-
-def vertex_rows(sigma, rho, wo, n):
-    """(ROUGH_ROWS, k) float32: what the factor needs of k points of roughness sigma (k,) (0:
-    Lambert, no factor), colour rho (3, k) (Cycles' closure colour, before its Mix weights),
-    toward the viewer wo (3, k), shading normal n (3, k): wo, a, b, k = pi Ems (1 - E(nv)) per
-    channel, 1 / D per channel (D = albedo / rho, what the throughput holds)."""
-    sigma = np.asarray(sigma, np.float64)
-    out = np.zeros((ROUGH_ROWS, len(sigma)), np.float32)
-    out[0:3] = wo
-    nv = np.maximum((np.asarray(n, np.float64) * wo).sum(axis=0), 0.0)
-    for s in np.unique(sigma[sigma > 0]):
-        sel = np.flatnonzero(sigma == s)
-        ebar, eavg, a, b = _terms(float(min(s, 1.0)))
-        ms = _ms(np.clip(np.nan_to_num(np.asarray(rho, np.float64)[:, sel]), 0.0, 1.0), eavg)
-        ev = a * np.pi + b * _g(nv[sel])
-        out[3, sel], out[4, sel] = a, b
-        out[5:8, sel] = ms * (1.0 - ev)
-        out[8:11, sel] = 1.0 / (ebar + ms * (1.0 - ebar) ** 2)
-    return out
-
-
-def scale(rows, wi, n):
-    """(3, k) float32: F / D of each point of vertex_rows' table for a direction wi (3, k) at
-    shading normal n (3, k) (1 where b is 0), as the native light samples take it: a bounce's
-    throughput after its cosine-weighted direction."""
-    rows = np.asarray(rows, np.float32)
-    a, b, wo = rows[3], rows[4], rows[0:3]
-    nl = np.maximum((n * wi).sum(axis=0), 0.0)
-    nv = np.maximum((n * wo).sum(axis=0), 0.0)
-    t = (wi * wo).sum(axis=0) - nl * nv
-    t = np.where(t > 0, t / (np.maximum(nl, nv) + np.finfo(np.float32).tiny), t)
-    el = a * np.float32(np.pi) + b * _g(nl).astype(np.float32)
-    f = (np.float32(np.pi) * (a + b * t) + rows[5:8] * (1.0 - el)) * rows[8:11]
-    return np.where(b > 0, f, np.float32(1.0)).astype(np.float32)
+def params(sigma: float) -> np.ndarray:
+    """(4,) float32 (a, b, Ebar, Eavg) of roughness sigma, what the native rough diffuse table
+    takes per material (dacrt.shading.rough_rows); zeros at sigma 0 (Lambert: no factor)."""
+    sigma = min(max(float(sigma), 0.0), 1.0) if np.isfinite(sigma) else 0.0
+    if sigma <= 0.0:
+        return np.zeros(4, np.float32)
+    ebar, eavg, a, b = _terms(sigma)
+    return np.array([a, b, ebar, eavg], np.float32)

@@ -8,6 +8,7 @@ import numpy as np
 
 import dacrt
 
+from . import roughdiffuse
 from .procedural import SIDED, ProceduralTexels
 from .texture import EncodedTexels, UdimTiles, lookup_texels
 
@@ -181,16 +182,18 @@ class Materials:
             if getattr(mat, 'pass_texture', None) is not None:
                 self.pass_textures.append((i, *texture_entry(mat.name, 'pass texture', mat.pass_texture,
                                                              *mat.pass_texture_modes)))
-        # rough diffuses (scenedata.Material.rough_sigma): roughness per material (0: none) and
-        # 1 / their Mix weights (3, materials): the colour is the pass colour times it
-        self.rough_sigma = np.array([float(getattr(m, 'rough_sigma', 0.0) or 0.0) for m in materials], F32)
-        self.rough_sigma = np.where(np.isfinite(self.rough_sigma), np.clip(self.rough_sigma, 0.0, 1.0), F32(0.0))
+        # rough diffuses (scenedata.Material.rough_sigma): per material (4, materials) the
+        # Oren-Nayar terms (roughdiffuse.params; b, row 1, 0: none) and 1 / their Mix weights
+        # (3, materials): the colour is the pass colour times it
+        self.rough_params = np.zeros((4, len(materials)), F32)
         self.rough_inv = np.zeros((3, len(materials)), F32)
         for i, m in enumerate(materials):
-            if self.rough_sigma[i] > 0:
+            self.rough_params[:, i] = roughdiffuse.params(float(getattr(m, 'rough_sigma', 0.0) or 0.0))
+            if self.rough_params[1, i] > 0:
                 w = np.ones(3) if m.rough_scale is None else np.asarray(m.rough_scale, np.float64)[:3]
                 self.rough_inv[:, i] = np.where(w > 0, 1.0 / np.where(w > 0, w, 1.0), 0.0)
-        self.any_rough = bool((self.rough_sigma > 0).any())
+        self.rough = self.rough_params[1] > 0
+        self.any_rough = bool(self.rough.any())
         # materials whose albedo is times the triangles' interpolated Geometry.colors
         self.colored = np.array([getattr(m, 'color_attribute', None) is not None for m in materials])
         self.emission = np.ascontiguousarray(np.asarray(emit, F32).T)

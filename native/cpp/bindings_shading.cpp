@@ -12,6 +12,7 @@
 
 #include "bindargs.h"
 #include "noise.h"
+#include "orennayar.h"
 #include "shading.h"
 #include "texels.h"
 #include "voronoi.h"
@@ -182,6 +183,31 @@ py::tuple sample_triangles_py(F32Array geo, F32Array area, I64Array which, F32Ar
     }
     if (bad) throw py::value_error(std::to_string(bad) + " entries of which are not triangles 0.." + std::to_string(M ? M - 1 : 0));
     return py::make_tuple(wi, dist, pdf, target);
+}
+
+F32Array rough_rows_py(F32Array params, py::array_t<int32_t, py::array::c_style> mat, F32Array rho, F32Array D,
+                       F32Array ns) {
+    const size_t M = rows_of(params, 4, "params"), n = rows_of(ns, 3, "ns");
+    if (rows_of(rho, 3, "rho") != n || rows_of(D, 3, "D") != n)
+        throw py::value_error("rho and D must have shape (3, n) like ns");
+    need_len(mat, n, "mat");
+    const int32_t* m = mat.data();
+    for (size_t i = 0; i < n; ++i)
+        if (m[i] < 0 || size_t(m[i]) >= M) throw py::value_error("mat out of range of params");
+    F32Array out({py::ssize_t(kRoughRows), py::ssize_t(n)});
+    {
+        py::gil_scoped_release nogil;
+        rough_rows(params.data(), M, m, rho.data(), D.data(), ns.data(), n, out.mutable_data());
+    }
+    return out;
+}
+
+void rough_scale_py(F32Array rows, F32Array wi, F32Array ns, F32Array thr) {
+    const size_t n = rows_of(rows, kRoughRows, "rows");
+    if (rows_of(wi, 3, "wi") != n || rows_of(ns, 3, "ns") != n || rows_of(thr, 3, "thr") != n)
+        throw py::value_error("wi, ns and thr must have shape (3, n) like rows");
+    py::gil_scoped_release nogil;
+    rough_scale(rows.data(), wi.data(), ns.data(), n, thr.mutable_data());
 }
 
 py::array_t<bool> nee_weight_py(F32Array ns, py::object ng, F32Array wi, F32Array pdf, F32Array p_sel, py::object thr,
@@ -673,6 +699,8 @@ void register_shading(py::module_& m) {
           py::arg("ng"), py::arg("origins"), py::arg("rays"), py::arg("shading_offset") = py::none());
     m.def("sample_triangles", &sample_triangles_py, py::arg("geo"), py::arg("area"), py::arg("which"), py::arg("P"),
           py::arg("u1"), py::arg("u2"));
+    m.def("rough_rows", &rough_rows_py, py::arg("params"), py::arg("mat"), py::arg("rho"), py::arg("D"), py::arg("ns"));
+    m.def("rough_scale", &rough_scale_py, py::arg("rows"), py::arg("wi"), py::arg("ns"), py::arg("thr"));
     m.def("nee_weight", &nee_weight_py, py::arg("ns"), py::arg("ng"), py::arg("wi"), py::arg("pdf"), py::arg("p_sel"),
           py::arg("thr"), py::arg("value"));
     m.def("shadow_rays", &shadow_rays_py, py::arg("O"), py::arg("wi"), py::arg("dist"), py::arg("target"), py::arg("idx"),

@@ -3,7 +3,7 @@
 // samples it cosine-weighted, so pdfs and MIS weights are Lambert's and only the value changes;
 // the material's albedo is already its view-averaged albedo D (addon/roughdiffuse.py), so a
 // sample takes F / D, F = f_EON / f_Lambert. What depends on the point alone (the view and the
-// colour) comes per point from Python (roughdiffuse.vertex_rows); here only the light's part.
+// colour) is a table per point (rough_rows); per direction only the light's part is left.
 #pragma once
 
 #include <cfloat>
@@ -40,5 +40,16 @@ inline void rough_diffuse_scale(const float* rough, size_t n, size_t i, const fl
     for (int c = 0; c < 3; ++c)
         value[c] *= (single + rough[(5 + c) * n + i] * (1.0f - El)) * rough[(8 + c) * n + i];
 }
+
+// The table (kRoughRows x n) of n points: material m = mat[i] has params (4 rows of M: a, b,
+// Ebar the cos-weighted average of E, Eavg Cycles' fit of it; b 0: not rough, a zero column),
+// rho (3 x n) its colour (saturated here, as Cycles' multiple-scattering term takes it), D
+// (3 x n) the rays' directions (wo = -D), ns (3 x n) the shading normals.
+void rough_rows(const float* params, size_t M, const int32_t* mat, const float* rho, const float* D, const float* ns,
+                size_t n, float* out);
+
+// thr (3 x n) times F / D of each point of the table for directions wi (3 x n) at ns, in place
+// (a bounce's throughput after its cosine-weighted direction).
+void rough_scale(const float* rows, const float* wi, const float* ns, size_t n, float* thr);
 
 }  // namespace dacrt

@@ -5,6 +5,7 @@ orennayar.h), not its albedo averaged over view directions: the factor the integ
 bsdf_oren_nayar.h; a plane under a sun rendered at tilted views against it; and energy: under
 a uniform white world a sphere (every view cosine, cos-weighted, as an orthographic camera
 sees them) still gives the averaged albedo."""
+import dacrt
 import numpy as np
 import pytest
 
@@ -38,6 +39,19 @@ def cycles_eon(rho, sigma, n, wi, wo):
     return intensity * np.pi
 
 
+def factor(sigma, rho, wo, n, wi):
+    """(3, k) float64: the factor the integrator applies (dacrt.shading.rough_rows and
+    rough_scale, as a bounce takes it; next_event's light samples share rough_diffuse_scale)
+    at k points of roughness sigma (k,), colour rho (3, k), view wo, normal n, light wi."""
+    k = len(sigma)
+    P = np.stack([roughdiffuse.params(s) for s in sigma], 1)
+    f32 = lambda x: np.ascontiguousarray(x, np.float32)          # noqa: E731
+    rows = dacrt.shading.rough_rows(P, np.arange(k, dtype=np.int32), f32(rho), f32(-wo), f32(n))
+    thr = np.ones((3, k), np.float32)
+    dacrt.shading.rough_scale(rows, f32(wi), f32(n), thr)
+    return thr.astype(np.float64)
+
+
 def _unit(x):
     return x / np.linalg.norm(x, axis=0)
 
@@ -48,7 +62,7 @@ def _hemisphere(rng, k, n):
 
 
 def test_factor_against_cycles_formula():
-    """scale x the averaged albedo's D (albedo / rho) is Cycles' f / f_Lambert, for random
+    """The factor x the averaged albedo's D (albedo / rho) is Cycles' f / f_Lambert, for random
     normals, view and light directions (grazing included), roughness and colours."""
     rng = np.random.default_rng(3)
     k = 4000
@@ -58,16 +72,14 @@ def test_factor_against_cycles_formula():
     sigma = rng.choice([0.05, 0.5, 1.0], size=k)
     rho = rng.uniform(0, 1, size=(3, k))
     rho[:, :20] = 0.0
-    rows = roughdiffuse.vertex_rows(sigma, rho, wo.astype(np.float32), n.astype(np.float32))
-    got = roughdiffuse.scale(rows, wi.astype(np.float32), n.astype(np.float32)).astype(np.float64)
+    got = factor(sigma, rho, wo, n, wi)
     d = np.stack([roughdiffuse.albedo(rho[:, j], sigma[j]) / np.where(rho[:, j] > 0, rho[:, j], 1)
                   for j in range(k)], 1)
     d[:, :20] = np.array([roughdiffuse._terms(s)[0] for s in sigma[:20]])
     want = cycles_eon(rho, sigma, n, wi, wo)
     assert np.abs(got * d - want).max() < 2e-4 * want.max(), np.abs(got * d - want).max()
     # and Lambert's points take none
-    rows[4] = 0.0
-    assert (roughdiffuse.scale(rows, wi.astype(np.float32), n.astype(np.float32)) == 1.0).all()
+    assert (factor(np.zeros(k), rho, wo, n, wi) == 1.0).all()
 
 
 @pytest.mark.parametrize('sigma', [0.3, 1.0])
@@ -85,8 +97,7 @@ def test_factor_keeps_the_averaged_albedo(sigma):
             wi = np.stack([np.sqrt(1 - M * M) * np.cos(P), np.sqrt(1 - M * M) * np.sin(P), M]).reshape(3, -1)
             k = wi.shape[1]
             n = np.tile([[0.0], [0.0], [1.0]], (1, k))
-            rows = roughdiffuse.vertex_rows(np.full(k, sigma), np.full((3, k), rho), np.tile(wo[:, None], (1, k)), n)
-            f = roughdiffuse.scale(rows, wi, n)[0].astype(np.float64).reshape(M.shape)
+            f = factor(np.full(k, sigma), np.full((3, k), rho), np.tile(wo[:, None], (1, k)), n, wi)[0].reshape(M.shape)
             # cosine-weighted over wi: pdf cos / pi, so the mean of f over (mu^2, phi)
             inner = (f * (2 * mu * wm)[:, None]).sum() / len(phi)
             total += 2 * mo * wmo * inner

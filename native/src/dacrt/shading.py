@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "shadow_rays",
+__all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
            "LightChoice", "next_event", "accumulate_masked", "noise_texture",
            "voronoi_texture"]
 
@@ -161,6 +161,24 @@ def sample_triangles(geo, area, which, P, u1, u2):
     P = _rows(P, 3, "P")
     return _core.sample_triangles(geo, np.ascontiguousarray(area, _F32), np.ascontiguousarray(which, np.int64), P,
                                   np.ascontiguousarray(u1, _F32), np.ascontiguousarray(u2, _F32))
+
+
+def rough_rows(params, mat, rho, D, ns):
+    """The rough diffuse table (11, n) float32 of n points (Cycles' Oren-Nayar, orennayar.h) for
+    next_event's `rough` and rough_scale: material mat[i] (n,) has params[:, mat[i]] (4, M: a,
+    b, Ebar the cos-weighted average of E, Eavg Cycles' fit of it; b 0: not rough), rho (3, n)
+    its colour, D (3, n) the rays' directions, ns (3, n) the shading normals."""
+    return _core.rough_rows(_rows(params, 4, "params"), np.ascontiguousarray(mat, np.int32), _rows(rho, 3, "rho"),
+                            _rows(D, 3, "D"), _rows(ns, 3, "ns"))
+
+
+def rough_scale(rows, wi, ns, thr):
+    """thr (3, n) float32, in place: times the rough diffuse factor (Cycles' Oren-Nayar over the
+    view-averaged albedo) of each point of rough_rows' table for directions wi (3, n) at ns
+    (1 where the point is not rough)."""
+    if thr.dtype != _F32 or not thr.flags.c_contiguous or thr.ndim != 2:
+        raise ValueError("thr must be a C-contiguous (3, n) float32 array (scaled in place)")
+    _core.rough_scale(_rows(rows, 11, "rows"), _rows(wi, 3, "wi"), _rows(ns, 3, "ns"), thr)
 
 
 def nee_weight(ns, ng, wi, pdf, p_sel, thr, value):
