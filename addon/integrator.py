@@ -341,6 +341,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._rays = {'camera': 0, 'bounce': 0, 'shadow': 0}
         self._skipped_shadow = 0        # light samples that could not contribute: no ray traced
         self._fused_scene = None        # whether diffuse vertices may take one native pass (_fused)
+        self._rough_fused = None        # _fused_rough's arrays, made once
         self._samples_skipped = 0       # (pixel, sample) paths adaptive sampling did not take
         # bounce rays not traced, by reason: the surface is black, Russian roulette, the last
         # BSDF ray could only find emission and nothing emits, the direction is below the surface
@@ -928,7 +929,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                 FUSED_BOUNCE and self.lights and not self._albedo_varies and not self._bumped
                 and not self._any_translucent and not t.terminator and t.term_cutoff is None
                 and t.term_freq is None and self._link is None and self._shadow_link is None
-                and self._tri_emit_tex is None and not self.mats.any_rough)
+                and self._tri_emit_tex is None)
         return (self._fused_scene and path.tb is None and path.gb is None and path.nee is None
                 and not sinks.groups
                 and not (self.lights.environment is not None and k > self._world_max_bounces))
@@ -942,7 +943,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         black, rr, (thr, (_, _, ns, P_off), prim, pid, keys, _), nee, bsdf = dacrt.shading.shade_bounce(
             self._light_choice_at(k), hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_scatter,
             path.thr, u_rr, t.geo, t.normals, path.D, path.pid, path.keys, u_pick, self.rng.dim_words(dim(k, 1)),
-            _END_SHORTEN, SKIP_WORK, None if last else self.rng.dim_words(dim(k, 2)))
+            _END_SHORTEN, SKIP_WORK, None if last else self.rng.dim_words(dim(k, 2)), rough=self._fused_rough())
         self._ended['black'] += black
         self._ended['roulette'] += rr
         if len(pid) == 0:
@@ -1009,6 +1010,17 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             value[:, off] = 0.0
             contrib[off] = False
         self._shadows(k, pid, value, contrib, rays, send, skip, skipped, L, tb, entry, groups)
+
+    def _fused_rough(self):
+        """shade_bounce's rough diffuses (triangle materials, Oren-Nayar terms and colours per
+        material: the pass colour over the Mix weights, constant where vertices are fused), or
+        None without any."""
+        if not self.mats.any_rough:
+            return None
+        if self._rough_fused is None:
+            self._rough_fused = (np.ascontiguousarray(self.tri.material, np.int32), self.mats.rough_params,
+                                 np.ascontiguousarray(self.mats.pass_base * self.mats.rough_inv, F32))
+        return self._rough_fused
 
     def _rough_rows(self, prim, u, v, ng, ns, D):
         """The rough diffuse table (dacrt.shading.rough_rows) of hits prim (u, v; ng, ns the

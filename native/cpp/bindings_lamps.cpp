@@ -452,7 +452,7 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
                           F32Array geo, py::object normals, F32Array D, I64Array pid,
                           py::array_t<uint32_t, py::array::c_style> keys, py::object pick, uint32_t nee_ka,
                           uint32_t nee_kb, float shorten, bool skip_work, bool scatter, uint32_t ka, uint32_t kb,
-                          py::object ray_dtype) {
+                          py::object ray_dtype, py::object rough) {
     F32Array keep[3];
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
@@ -490,6 +490,26 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     in.pick = pick_uniforms(pick, n, lights.entries, pick_keep);
     in.nee_ka = nee_ka, in.nee_kb = nee_kb, in.shorten = shorten, in.skip_work = skip_work;
     in.scatter = scatter, in.ka = ka, in.kb = kb;
+    I32Array rough_mat_keep;
+    F32Array rough_params_keep, rough_rho_keep;
+    if (!rough.is_none()) {  // (triangle materials (M,), params (4, m), colours (3, m))
+        const auto t = rough.cast<py::tuple>();
+        if (t.size() != 3) throw py::value_error("rough must be (materials, params, colours)");
+        rough_mat_keep = t[0].cast<I32Array>();
+        rough_params_keep = t[1].cast<F32Array>();
+        rough_rho_keep = t[2].cast<F32Array>();
+        need_shape(rough_mat_keep, 0, in.M, "rough materials");
+        if (rough_params_keep.ndim() != 2 || rough_params_keep.shape(0) != 4)
+            throw py::value_error("rough params must have shape (4, m)");
+        in.rough_M = size_t(rough_params_keep.shape(1));
+        need_shape(rough_rho_keep, 3, in.rough_M, "rough colours");
+        const int32_t* m = rough_mat_keep.data();
+        for (size_t i = 0; i < in.M; ++i)
+            if (m[i] < 0 || size_t(m[i]) >= in.rough_M) throw py::value_error("rough materials out of range");
+        in.rough_mat = m;
+        in.rough_params = rough_params_keep.data();
+        in.rough_rho = rough_rho_keep.data();
+    }
     const py::dtype rd = py::dtype::from_args(ray_dtype);
     if (size_t(rd.itemsize()) != sizeof(Ray)) throw py::value_error("ray_dtype must describe the tracer's ray records");
     I64Array idx{py::ssize_t(n)};
@@ -707,7 +727,8 @@ void register_lamps(py::module_& m) {
           py::arg("tree"), py::arg("tri_prim"), py::arg("hits"), py::arg("hit"), py::arg("live"), py::arg("albedo"),
           py::arg("thr"), py::arg("u_rr"), py::arg("geo"), py::arg("normals"), py::arg("D"), py::arg("pid"),
           py::arg("keys"), py::arg("pick"), py::arg("nee_ka"), py::arg("nee_kb"), py::arg("shorten"),
-          py::arg("skip_work"), py::arg("scatter"), py::arg("ka"), py::arg("kb"), py::arg("ray_dtype"));
+          py::arg("skip_work"), py::arg("scatter"), py::arg("ka"), py::arg("kb"), py::arg("ray_dtype"),
+          py::arg("rough") = py::none());
     m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"),
           py::arg("clamp") = std::numeric_limits<float>::infinity());
 }

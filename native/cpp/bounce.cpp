@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "orennayar.h"
 #include "parallel.h"
 #include "shading.h"
 
@@ -32,6 +33,9 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
     pts.n = k;
     pts.shorten = in.shorten;
     pts.skip_work = in.skip_work;
+    std::unique_ptr<float[]> rough;  // the survivors' rough diffuse table (kRoughRows x k)
+    if (in.rough_mat) rough.reset(new float[size_t(kRoughRows) * (k ? k : 1)]);
+    pts.rough = rough.get();
     const bool areas = draws_area_lanes(lights);
     std::unique_ptr<Pending[]> pending(new Pending[k ? k : 1]);
     std::vector<size_t> count(blocks), bad(blocks);
@@ -46,10 +50,26 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
             out.keys[k + j] = in.keys[n + i];
             if (out.pick) out.pick[j] = in.pick[i];
         }
+        if (in.rough_mat)
+            for (size_t j = b; j < e; ++j) {
+                const size_t i = size_t(idx[j]), m = size_t(in.rough_mat[out.prim[j]]), M = in.rough_M;
+                const float rho[3] = {in.rough_rho[m], in.rough_rho[M + m], in.rough_rho[2 * M + m]},
+                            d[3] = {in.D[i], in.D[n + i], in.D[2 * n + i]}, N[3] = {ns[j], ns[k + j], ns[2 * k + j]};
+                rough_row(in.rough_params, M, m, rho, d, N, rough.get(), k, j);
+            }
         count[q] = event_range(lights, areas, pts, out.nee, pending.get(), b, e, &bad[q]);
-        if (in.scatter)
+        if (in.scatter) {
             scatter_range(out.keys, k, in.ka, in.kb, ns, in.normals ? ng : nullptr, out.wi, out.pdf, out.ok, P_off,
                           out.rays, nullptr, b, e);
+            if (in.rough_mat)  // the bounce's throughput: the factor for its direction
+                for (size_t j = b; j < e; ++j) {
+                    const float N[3] = {ns[j], ns[k + j], ns[2 * k + j]},
+                                w[3] = {out.wi[j], out.wi[k + j], out.wi[2 * k + j]};
+                    float t[3] = {out.thr[j], out.thr[k + j], out.thr[2 * k + j]};
+                    rough_diffuse_scale(rough.get(), k, j, N, w, t);
+                    for (int c = 0; c < 3; ++c) out.thr[size_t(c) * k + j] = t[c];
+                }
+        }
     };
     // blocks to whichever worker is free: one descheduled worker (a busy machine) does not
     // hold the pass back by its share

@@ -38,6 +38,13 @@ struct BounceIn {
     bool skip_work;
     bool scatter;
     uint32_t ka, kb;
+    // rough diffuses (null: none; orennayar.h): each triangle's material (M), the materials'
+    // Oren-Nayar terms (4 rows of rough_M, rough_rows' params) and colours (3 rows of rough_M):
+    // light samples and the bounce take the factor
+    const int32_t* rough_mat = nullptr;
+    const float* rough_params = nullptr;
+    const float* rough_rho = nullptr;
+    size_t rough_M = 0;
 };
 
 // The survivors' columns (k each, idx from survivors()): thr (3 rows), surf (P, ng, P_off and,

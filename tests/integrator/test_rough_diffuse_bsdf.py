@@ -154,3 +154,33 @@ def test_white_world_gives_the_averaged_albedo():
     rgba = render(scene).film.combined().reshape(-1, 4).astype(np.float64)
     mean = rgba[:, :3].sum(0) / rgba[:, 3].sum()
     assert mean == pytest.approx(roughdiffuse.albedo(rho, sigma), rel=0.01)
+
+
+@pytest.mark.parametrize('area_light', [True, False])
+def test_fused_vertices_take_the_factor(monkeypatch, area_light):
+    """A Cornell box whose walls are rough (two of them Lambertian, mixed scenes take the
+    factor only where it is rough): the fused native pass (shade_bounce) gives the general
+    steps' bits, and the factor changes the image (against the walls' averaged albedo)."""
+    import addon.integrator as integrator_module
+    from .scenes import cornell_box
+
+    def box(rough):
+        s = cornell_box(40, 30, 16, 4, area_light=area_light)
+        for i in (1, 3):
+            m = s.materials[i]
+            rho = m.base_color.astype(np.float64)
+            m.base_color = roughdiffuse.albedo(rho, 0.8).astype(np.float32)
+            if rough:
+                m.rough_sigma, m.pass_color = 0.8, rho.astype(np.float32)
+        return s
+    calls = []
+    fused_pass = dacrt.shading.shade_bounce
+    monkeypatch.setattr(dacrt.shading, 'shade_bounce', lambda *a, **k: calls.append(k.get('rough')) or
+                        fused_pass(*a, **k))
+    fused = render(box(True)).film.combined()
+    assert calls and all(c is not None for c in calls)
+    averaged = render(box(False)).film.combined()
+    monkeypatch.setattr(integrator_module, 'FUSED_BOUNCE', False)
+    general = render(box(True)).film.combined()
+    assert np.array_equal(fused, general)
+    assert not np.array_equal(fused, averaged)

@@ -325,13 +325,15 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
 
 
 def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, normals, D, pid, keys, pick,
-                 nee_words, shorten: float = 1.0, skip_work: bool = True, scatter_words=None):
+                 nee_words, shorten: float = 1.0, skip_work: bool = True, scatter_words=None, rough=None):
     """A diffuse path vertex in one native pass, block by block: continue_paths(hits, hit, live,
     albedo, thr, u_rr, surface=(geo, normals, D), take=(pid, keys, pick)), then next_event at
     the survivors (lights, their P, P_off, ns, ng (None where normals is None), thr, keys,
     pick and prim, dimension words nee_words = (ka, kb), shorten, skip_work; no terminator,
     linking or bump) and, with scatter_words = (ka, kb), cosine_scatter(keys, ka, kb, ns, ng,
-    origins=P_off) of the survivors: the same bits as those three calls.
+    origins=P_off) of the survivors: the same bits as those three calls. rough = (materials
+    (M,) of the triangles, params (4, m), colours (3, m)) or None: rough diffuses, as
+    rough_rows' table of the survivors in next_event's rough and rough_scale after the scatter.
 
     Returns (black, roulette, (thr, (P, ng, ns, P_off), prim, pid, keys, pick), (value, contrib,
     rays, send, skip, skipped) as next_event's, (wi, pdf, ok, rays) as cosine_scatter's or None
@@ -348,7 +350,9 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
         _rows(geo, 15, "geo"), None if normals is None else _rows(normals, 9, "normals"), _rows(D, 3, "D"),
         np.ascontiguousarray(pid, np.int64), _rows(keys, 2, "keys", np.uint32),
         None if pick is None else np.ascontiguousarray(pick, np.float64), int(nee_words[0]), int(nee_words[1]),
-        float(shorten), bool(skip_work), scatter_words is not None, int(ka), int(kb), RAY_DTYPE)
+        float(shorten), bool(skip_work), scatter_words is not None, int(ka), int(kb), RAY_DTYPE,
+        None if rough is None else (np.ascontiguousarray(rough[0], np.int32), _rows(rough[1], 4, "rough params"),
+                                    _rows(rough[2], 3, "rough colours")))
     thr_out, surf, prim, pid_out, keys_out, pick_out = paths
     ng = surf[3:6]
     points = (surf[0:3], ng, ng if normals is None else surf[9:12], surf[6:9])
