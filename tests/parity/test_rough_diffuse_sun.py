@@ -52,8 +52,8 @@ def _material(kind, roughness, colour):
 
 def build(view, light, roughness, colour, kind='plain', samples=4):
     """The plane (UV-mapped, 40 x 40) seen from `view` degrees above it (from -Y), lit by
-    light: ('sun', elevation, +1 behind the viewer / -1 facing it), ('point', z) or
-    ('world',)."""
+    light: ('sun', elevation, +1 behind the viewer / -1 facing it), ('point', z), ('area', z)
+    or ('world',)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     e = math.radians(view)
@@ -66,6 +66,9 @@ def build(view, light, roughness, colour, kind='plain', samples=4):
         scenes.black_world()
     elif light[0] == 'point':
         scenes.light('POINT', 300.0, location=(0, 0.5, light[1]), shadow_soft_size=0.0)
+        scenes.black_world()
+    elif light[0] == 'area':
+        scenes.light('AREA', 300.0, location=(0, 1.0, light[1]), rotation=(-0.5, 0, 0), size=1.0)
         scenes.black_world()
     else:
         scenes.world((1.0, 1.0, 1.0), 1.0)
@@ -112,8 +115,10 @@ def test_rough_diffuse_textured_and_mixed_under_a_sun(kind, tmp_path):
     assert np.abs(r - 1.0).max() < 0.02, r
 
 
-def test_rough_diffuse_under_a_point_lamp(tmp_path):
-    r, _ = ratio(tmp_path, 35, ('point', 1.5), 1.0, (0.8, 0.5, 0.3), samples=16)
+@pytest.mark.parametrize('lamp', ['point', 'area'])
+def test_rough_diffuse_under_a_lamp(lamp, tmp_path):
+    """A point lamp, and an area lamp (its samples drawn by lanes)."""
+    r, _ = ratio(tmp_path, 35, (lamp, 1.5), 1.0, (0.8, 0.5, 0.3), samples=64 if lamp == 'area' else 16)
     assert np.abs(r - 1.0).max() < 0.02, r
 
 
