@@ -1,5 +1,6 @@
-"""Cycles' rough diffuse reflection (Diffuse BSDF Roughness, Principled Diffuse Roughness) as
-the Lambertian albedo a diffuse renderer keeps: its albedo averaged over view directions.
+"""Cycles' rough diffuse reflection (Diffuse BSDF Roughness, Principled Diffuse Roughness): its
+albedo averaged over view directions, which the material's albedo holds, and the terms the
+integrator's per-sample factor over it needs (params).
 
 Cycles (closure/bsdf_oren_nayar.h) renders roughness sigma as Fujii's improved Oren-Nayar with
 OpenPBR's energy-preserving multiple-scattering term: for a colour rho, at view cosine mu_o
@@ -16,10 +17,12 @@ rays and everything that reads the albedo stay as they were); the integrator the
 real BSDF: Cycles samples it cosine-weighted, so pdfs and MIS weights are Lambert's and each
 light sample and each bounce only takes the factor F / D per channel, F = f / (rho / pi) the
 BSDF over Lambert's and D the averaged albedo over rho (params here, per material; the rest
-native: dacrt.shading.rough_rows, rough_scale and next_event's rough, orennayar.h). A material gets it where its whole albedo is one rough
-diffuse of one colour (any Mix Shader weight, beside emission, transparency, holdout or
-translucency: export.closure.Closure.rough); under the Principled's layers (their dimming
-varies with the view too) or mixed with another reflection it keeps the averaged albedo, said.
+native: dacrt.shading.rough_rows, rough_scale, next_event's and shade_bounce's rough,
+orennayar.h). A material gets it where its whole albedo is one rough diffuse of one colour
+(any Mix Shader weight, beside emission, transparency, holdout or translucency:
+export.closure.Closure.rough; a Principled base under no layer); under the Principled's
+layers (their dimming varies with the view too), mixed with another reflection or coloured by
+an attribute it keeps the averaged albedo, said.
 Pure numpy, no Blender.
 """
 from __future__ import annotations
@@ -29,7 +32,8 @@ from functools import lru_cache
 import numpy as np
 
 
-# what the albedo averaged over view directions gives a rough diffuse (measured on a plane against
+# what the albedo averaged over view directions gives a rough diffuse where it is kept (mixed with
+# another reflection, a colour attribute, a Principled base under layers; measured on a plane against
 # Cycles 5.0: uniform white world 0.97-1.02x by view angle, exact on average; a zero-angle sun
 # at roughness 1: 0.33-0.97x with the sun behind the viewer, 1.1-7.7x facing it, 20-80 degrees
 # up; README, rough diffuse)

@@ -46,7 +46,8 @@ Principled BSDF keeps its diffuse base, with its metal, dielectric specular laye
 those layers' albedos averaged over view directions (principled.py, specular.py) and its
 sheen, as the Sheen BSDF, its albedo so averaged (sheen.py), and its transmission as the Glass
 BSDF (see-through, unbent; no subsurface); a rough diffuse (Cycles' Oren-Nayar) as its albedo averaged over
-view directions (roughdiffuse.py); a
+view directions (roughdiffuse.py), which the integrator turns into the view-dependent BSDF
+where the material's albedo is that one rough diffuse (closure.Closure.rough); a
 BSDF's Normal input other than a tangent-space normal map of an image and Bump nodes of a
 height followed per point (bump.py; other normal maps), the output's Volume, and its
 Displacement but read as bump, are ignored (a volume-only material is clear);
