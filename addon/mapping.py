@@ -232,6 +232,25 @@ def texture_transform(tex_node, reasons):
     return np.array([[M[0, 0], M[0, 1], t[0]], [M[1, 0], M[1, 1], t[1]]])
 
 
+def reads_off_uv(tex_node):
+    """Whether an Image Texture reads coordinates the UV path (texture_transform: an affine
+    map of a UV map) cannot: a projection other than Flat (Cycles' Box, Sphere, Tube), or a
+    Vector that, past Mapping and Vector Rotate nodes, comes from anything but a UV map (Texture
+    Coordinate Generated, Object, Normal, a Vector Math, a Combine XYZ, an attribute)."""
+    if tex_node.projection != 'FLAT':
+        return True
+    link = linked_link(tex_node.inputs['Vector'])
+    for _ in range(_MAX_CHAIN):
+        if link is None or link.from_node.type not in _AFFINE_NODES:
+            break
+        link = linked_link(link.from_node.inputs['Vector'])
+    if link is None:
+        return False
+    vec = link.from_node
+    return not (vec.type == 'UVMAP' or vec.type in _AFFINE_NODES or
+                (vec.type == 'TEX_COORD' and link.from_socket.name == 'UV'))
+
+
 def uv_map_name(tex_node):
     """The UV map an Image Texture reads by name: a UV Map node's or a named Attribute node's
     (through Mapping nodes), or '' for the active render UV map (no UV Map node, or one with

@@ -22,7 +22,7 @@ class Cutouts:
         """(Texture, inverted) when socket is linked straight to an Image Texture's Alpha output;
         MISSING_ALPHA when that image cannot be read (Cycles' opaque magenta: alpha 1)."""
         link = linked_link(socket)
-        if not is_image_alpha(link):
+        if not is_image_alpha(link) or self._per_point_image(socket):
             return None
         tex = self._texture(link.from_node, reasons)
         return MISSING_ALPHA if tex is None else (tex, inverted)
@@ -38,6 +38,8 @@ class Cutouts:
                 procedurals.compile_socket(node.inputs['Fac'], False, [], image=self._texture) is not None:
             # an image and procedural textures both: the procedural cut-out computes them per
             # point (_procedural_mix; per texel here the textures had read their own values)
+            return None
+        if self._per_point_image(node.inputs['Fac']):
             return None
         notes = []              # (said only if this mix is taken: else the shaders are read again)
         a = self._shader(node.inputs[1], notes, depth + 1)
@@ -61,6 +63,14 @@ class Cutouts:
         return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
                         clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass,
                         light_emission=opaque.light_emission)._with_passes(opaque.passes)
+
+    def _per_point_image(self, socket):
+        """Whether an image feeding socket reads coordinates its UV lookup cannot (Generated,
+        Object, Box projection: procedurals.images_off_uv) and compile looks the chain up per
+        point: the per-point paths (_procedural_mix, _procedural_alpha) take it then, where per
+        texel it had been read on the UV map."""
+        return procedurals.images_off_uv(socket) and \
+            procedurals.compile_socket(socket, False, [], image=self._texture) is not None
 
     @staticmethod
     def _procedural_cutout(closures, fac_fn, needs, name):

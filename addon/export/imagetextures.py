@@ -25,12 +25,21 @@ class ImageTextures:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
 
-    def _texture(self, node, reasons):
+    def _texture(self, node, reasons, per_point=None):
+        """The closure.Texture of an Image Texture node (None: no image or unreadable). per_point
+        (procedurals._image, which computes the node's coordinates and projection itself): no
+        transform, nothing said about its coordinates, and its UV map counted only when
+        per_point is 'uv' (it reads one)."""
         img = node.image
-        transform = texture_transform(node, reasons)
-        self._uv_names.append(uv_map_name(node))
-        if node.projection != 'FLAT':
-            reasons.append(f"{node.projection.lower()} image projection as flat")
+        if per_point is None:
+            transform = texture_transform(node, reasons)
+            self._uv_names.append(uv_map_name(node))
+            if node.projection != 'FLAT':
+                reasons.append(f"{node.projection.lower()} image projection as flat")
+        else:
+            transform = None
+            if per_point == 'uv':
+                self._uv_names.append(uv_map_name(node))
         # Smart is Cycles' bicubic too (its SVM image lookup: closest, linear, else cubic)
         interp = {'Closest': 'Closest', 'Cubic': 'Cubic', 'Smart': 'Cubic'}.get(node.interpolation, 'Linear')
         ext = node.extension if node.extension in TEXTURE_EXTENSIONS else 'REPEAT'

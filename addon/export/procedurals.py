@@ -9,8 +9,9 @@ as in Cycles, but White Noise's, its own value); texture inputs (Scale, Detail, 
 themselves vary over the surface. Anything else (an image, an attribute, another texture or
 coordinate kind) leaves the chain to nodeeval's evaluation, which reads the procedural node's
 own value and says so. A chain of coordinates and those nodes without any texture is compiled
-too. Part of the export layer: every node setting is read here, so the compiled function reads
-no Blender data.
+too, and so is one holding an Image Texture that reads other coordinates than a UV map or
+projects Box, Sphere or Tube (images_off_uv: looked up per point, _image). Part of the export
+layer: every node setting is read here, so the compiled function reads no Blender data.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import numpy as np
 
 from .. import nodeeval, nodegraph
 from .. import procedural as pr
-from ..mapping import mapping_affine, node_texture_mapping
+from ..mapping import mapping_affine, node_texture_mapping, reads_off_uv
 from ..texture import alpha_lookup, lookup_texels, texture_lookup
 from .meshes import attribute_key, color_attribute_key
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO
@@ -88,7 +89,7 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
     textured = _reaches_procedural(socket, set())
     # (images only matters where no procedural texture does: its walk of the whole chain, the
     # slowest of these tests, is skipped then; 1000 textured materials spent 0.6 s in it)
-    images = not textured and image is not None and _images_reached(socket) >= 2
+    images = not textured and image is not None and (_images_reached(socket) >= 2 or images_off_uv(socket))
     # (a coordinate-only chain reaches a coordinate node: _coordinate_chain walks it once)
     if not textured and not images and not _coordinate_chain(socket) and \
             not (coordinates and _reaches_procedural(socket, set(), _COORDINATE_NODES)):
@@ -196,6 +197,14 @@ def _images_reached(socket):
                 for link in nodegraph.links_feeding(socket) if link.from_node.type == 'TEX_IMAGE'})
 
 
+def images_off_uv(socket):
+    """Whether an Image Texture feeding socket reads coordinates its UV lookup cannot
+    (mapping.reads_off_uv: Generated, Object, Normal, vector nodes, a Box, Sphere or Tube
+    projection): compile then looks it up per point at the coordinates its chain computes."""
+    return any(link.from_node.type == 'TEX_IMAGE' and reads_off_uv(link.from_node)
+               for link in nodegraph.links_feeding(socket))
+
+
 def reaches_procedural(socket):
     """Whether a procedural texture feeds socket (through any nodes)."""
     return _reaches_procedural(socket, set())
@@ -212,7 +221,7 @@ def _coordinate_chain(socket):
 def varies_per_point(socket):
     """Whether compile follows socket's chain per point: a procedural texture or a
     coordinate-only chain feeds it."""
-    return _reaches_procedural(socket, set()) or _coordinate_chain(socket)
+    return _reaches_procedural(socket, set()) or _coordinate_chain(socket) or images_off_uv(socket)
 
 
 def _reaches_procedural(socket, seen, types=PROCEDURAL_TYPES):
@@ -328,7 +337,7 @@ def _node(node, out, chain, depth):
     if t in PROCEDURAL_TYPES:
         return _texture(node, out, chain, depth)
     if t == 'TEX_IMAGE' and chain.image is not None:
-        return _image(node, out, chain)
+        return _image(node, out, chain, depth)
     if t == 'LIGHT_FALLOFF':
         strength = nodeeval.falloff_strength(node, out, chain.reasons)
         if strength is None:
@@ -516,11 +525,19 @@ def _white_noise(node, out, chain, depth):
     return white_noise, False
 
 
-def _image(node, out, chain):
-    """(fn, False) of an Image Texture's Color or Alpha, looked up at each point's UV (through
-    the Mapping the export reads into the texture's transform) as the material's one image is
-    (texture.texture_lookup: Cycles' interpolation, extension and stored encoding)."""
-    tex = chain.image(node, chain.reasons)
+def _image(node, out, chain, depth):
+    """(fn, False) of an Image Texture's Color or Alpha, looked up per point as Cycles'
+    svm_node_tex_image does (texture.texture_lookup: its interpolation, extension and stored
+    encoding): at each point's UV through the Mapping the export reads into the texture's
+    transform, or, where the node reads other coordinates (mapping.reads_off_uv), at what its
+    Vector chain computes there (_image_vector), projected Flat, Sphere or Tube
+    (_projected_uv), or Box (_box_lookup: three lookups weighed by the object-space normal)."""
+    off_uv = reads_off_uv(node)
+    if off_uv:
+        vector, reads_uv = _image_vector(node, chain, depth)
+        tex = chain.image(node, chain.reasons, per_point='uv' if reads_uv else True)
+    else:
+        tex = chain.image(node, chain.reasons)
     alpha = out.name == 'Alpha'
     chain.textures.append(f"image '{node.image.name}'" if node.image is not None else "Image Texture")
     if tex is None:                         # no image or unreadable: Cycles' opaque magenta
@@ -530,6 +547,26 @@ def _image(node, out, chain):
         raise nodeeval.NotCompiled(f"the Alpha of UDIM image '{tex.name}'")
     texels = lookup_texels(tex.texels(tex.pixels), tex.interpolation)
     interp, ext = tex.interpolation, tex.extension
+
+    def read(u, v):
+        if alpha:
+            return alpha_lookup(texels, u, v, interp, ext)[:, None]
+        return texture_lookup(texels, u, v, interp, ext).T
+    if off_uv and node.projection == 'BOX':
+        if tex.udim is not None:
+            raise nodeeval.NotCompiled(f"Box projection of UDIM image '{tex.name}'")
+        chain.needs.add('object_normal')
+        blend = np.float32(node.projection_blend)
+        width = 1 if alpha else 3
+        return (lambda c: _box_lookup(np.asarray(vector(c), np.float32), c['object_normal'], blend, read,
+                                      width)), False
+    if off_uv:
+        projection = node.projection
+
+        def projected(c):
+            u, v = _projected_uv(np.asarray(vector(c), np.float32), projection)
+            return read(u, v)
+        return projected, False
     M = None if tex.transform is None else np.asarray(tex.transform, np.float32)
     chain.needs.add('uv')
 
@@ -537,10 +574,113 @@ def _image(node, out, chain):
         u, v = c['uv'][:, 0], c['uv'][:, 1]
         if M is not None:
             u, v = M[0, 0] * u + M[0, 1] * v + M[0, 2], M[1, 0] * u + M[1, 1] * v + M[1, 2]
-        if alpha:
-            return alpha_lookup(texels, u, v, interp, ext)[:, None]
-        return texture_lookup(texels, u, v, interp, ext).T
+        return read(u, v)
     return look, False
+
+
+def _image_vector(node, chain, depth):
+    """(fn(coords) -> (n, 3) float32, whether it reads the UV map itself) of an Image Texture's
+    Vector: its chain, or the UV map where nothing is linked (Cycles' default for an image),
+    then the node's own Texture Mapping."""
+    own = nodegraph.input_by_id(node, 'Vector')
+    link, carrier = nodegraph.source(own)
+    reads_uv = link is None and (nodegraph.unwrap(carrier).as_pointer() == nodegraph.unwrap(own).as_pointer()
+                                 or getattr(nodegraph.unwrap(carrier), 'hide_value', False))
+    if reads_uv:
+        chain.needs.add('uv')
+        f = lambda c: c['uv']  # noqa: E731
+    else:
+        f = _socket(own, True, chain, depth + 1)
+    found = node_texture_mapping(node, chain.reasons)
+    if found is None:
+        return (lambda c: np.asarray(f(c), np.float32)), reads_uv
+    M, t = found
+    return (lambda c: (np.asarray(f(c), np.float64) @ M.T + t).astype(np.float32)), reads_uv
+
+
+_HALF, _TWO = np.float32(0.5), np.float32(2.0)
+
+
+def _projected_uv(co, projection):
+    """(u, v) float32 of an image's vector co (n, 3) under its Flat, Sphere or Tube projection
+    (Cycles' svm_node_tex_image: texco_remap_square, then map_to_sphere / map_to_tube)."""
+    if projection == 'FLAT':
+        return co[:, 0], co[:, 1]
+    p = (co - _HALF) * _TWO
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    with np.errstate(invalid='ignore', divide='ignore'):
+        if projection == 'SPHERE':
+            ll = x * x + y * y + z * z
+            u = np.where((x == 0) & (y == 0), np.float32(0.0),
+                         _HALF - np.arctan2(x, y) * np.float32(0.5 / np.pi)).astype(np.float32)
+            v = (np.float32(1.0) - np.arccos(np.clip(z / np.sqrt(ll), -1.0, 1.0)) * np.float32(1.0 / np.pi))
+            keep = ll > 0
+        else:                                   # TUBE
+            ln = np.sqrt(x * x + y * y)
+            safe = np.where(ln > 0, ln, np.float32(1.0))
+            u = (np.float32(1.0) - np.arctan2(x / safe, y / safe) / np.float32(np.pi)) * _HALF
+            v = (z + np.float32(1.0)) * _HALF
+            keep = ln > 0
+    zero = np.float32(0.0)
+    return np.where(keep, u, zero).astype(np.float32), np.where(keep, v, zero).astype(np.float32)
+
+
+def _box_weights(n, blend):
+    """(n, 3) float32 weights of the three axis projections at object-space normals n (n, 3),
+    as Cycles' svm_node_tex_image_box: one axis alone near it, two or three blended in between
+    by the node's Blend (0: the largest axis alone)."""
+    f32 = np.float32
+    a = np.abs(np.asarray(n, f32))
+    with np.errstate(invalid='ignore', divide='ignore'):
+        a = a / (a[:, 0] + a[:, 1] + a[:, 2])[:, None]
+    x, y, z = a[:, 0], a[:, 1], a[:, 2]
+    limit = f32(0.5) * (f32(1.0) + blend)
+    w = np.zeros(a.shape, f32)
+    todo = np.ones(len(a), bool)
+
+    def take(sel, wx, wy, wz):
+        nonlocal todo
+        sel = sel & todo
+        for k, value in enumerate((wx, wy, wz)):
+            w[sel, k] = value[sel] if np.ndim(value) else value
+        todo = todo & ~sel
+    with np.errstate(invalid='ignore', divide='ignore'):
+        take((x > limit * (x + y)) & (x > limit * (x + z)), 1.0, 0.0, 0.0)
+        take((y > limit * (x + y)) & (y > limit * (y + z)), 0.0, 1.0, 0.0)
+        take((z > limit * (x + z)) & (z > limit * (y + z)), 0.0, 0.0, 1.0)
+        if blend > 0:
+            lo = f32(0.5) * (f32(1.0) - blend)
+            one = f32(1.0) - limit
+            wx = np.clip((x / (x + y) - lo) / blend, 0.0, 1.0).astype(f32)
+            take(z < one * (y + x), wx, f32(1.0) - wx, 0.0)
+            wy = np.clip((y / (y + z) - lo) / blend, 0.0, 1.0).astype(f32)
+            take(x < one * (y + z), 0.0, wy, f32(1.0) - wy)
+            wx = np.clip((x / (x + z) - lo) / blend, 0.0, 1.0).astype(f32)
+            take(y < one * (x + z), wx, 0.0, f32(1.0) - wx)
+            d = f32(2.0) * limit - f32(1.0)
+            take(todo, *(((f32(2.0) - limit) * q + (limit - f32(1.0))) / d for q in (x, y, z)))
+        else:
+            take(todo, 1.0, 0.0, 0.0)      # (Cycles' "desperate mode": one side)
+    return w
+
+
+def _box_lookup(co, normal, blend, read, width):
+    """An image's colour or alpha (n, c) under Box projection: the lookups on the three axis
+    planes (each flipped by the normal's sign so no side reads mirrored, as Cycles maps them),
+    weighed by _box_weights; a lookup whose weight is 0 is skipped, as in Cycles."""
+    n = np.asarray(normal, np.float32)
+    co = np.broadcast_to(co, (len(n), 3))
+    w = _box_weights(n, blend)
+    one = np.float32(1.0)
+    x, y, z = co[:, 0], co[:, 1], co[:, 2]
+    planes = ((np.where(n[:, 0] < 0, one - y, y), z), (np.where(n[:, 1] > 0, one - x, x), z),
+              (np.where(n[:, 2] > 0, one - y, y), x))
+    out = np.zeros((len(co), width), np.float32)
+    for k, (u, v) in enumerate(planes):
+        sel = np.flatnonzero(w[:, k] > 0)
+        if len(sel):
+            out[sel] += w[sel, k, None] * np.asarray(read(u[sel], v[sel]), np.float32)
+    return out
 
 
 def _voronoi(node, out, vec, chain, depth):

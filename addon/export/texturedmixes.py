@@ -23,6 +23,8 @@ class TexturedMixes:
         here where the factor's nodes read the image's colour alone (else they run per texel
         before the blend, reported). None otherwise (the factor at its own value)."""
         fac_socket = node.inputs['Fac']
+        if self._per_point_image(fac_socket):       # (_procedural_mix looks it up per point)
+            return None
         per_texel = self._float_per_texel(fac_socket)
         if per_texel is None:
             return None

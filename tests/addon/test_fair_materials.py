@@ -91,7 +91,8 @@ def _non_diffuse_materials():
     tex = nt.nodes.new('ShaderNodeTexImage')
     tex.image, tex.interpolation, tex.extension, tex.projection = img, 'Cubic', 'MIRROR', 'BOX'
     coords = nt.nodes.new('ShaderNodeTexCoord')
-    nt.links.new(coords.outputs['Generated'], tex.inputs['Vector'])
+    # (Camera: Generated and a Box projection are looked up per point, exact, since tex-coords)
+    nt.links.new(coords.outputs['Camera'], tex.inputs['Vector'])
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     nt.links.new(tex.outputs['Alpha'], p.inputs['Base Color'])
     nt.links.new(p.outputs[0], out.inputs['Surface'])
@@ -157,7 +158,7 @@ def test_override_keeps_what_the_export_reads_and_leaves_nothing_approximated(sc
     reasons = fairmaterials.remaining_approximations()
     assert set(reasons) == {m.name for m in mats}
     assert "Bump node 'Bump' not rendered" in reasons["Shiny"] and "Normal input" in reasons["Driven"]
-    assert "Generated texture coordinates" in reasons["Textured"]
+    assert "Camera texture coordinates" in reasons["Textured"]
     assert "volume ignored" in reasons["Volumetric"] and "displacement ignored" in reasons["Volumetric"]
     assert "'Layer Weight Fresnel' (view-dependent) as its average" in reasons["Coated"]
     assert "'Fresnel' (view-dependent) as its average" in reasons["Coated"]
