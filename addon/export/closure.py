@@ -10,6 +10,7 @@ import numpy as np
 
 from .. import nodeeval
 from ..procedural import ProceduralTexels
+from ..texture import lookup_texels, texture_lookup
 from ..texture import baked as after_lookup
 
 
@@ -244,9 +245,11 @@ class Closure:
         if other.texture is not None:
             if tex is None or tex.key == other.texture.key:
                 tex, w = other.texture, w + other.tex_weight
-            elif isinstance(tex.pixels, ProceduralTexels) and isinstance(other.texture.pixels, ProceduralTexels):
-                # two procedural textures: their weighted sum, per shading point
-                tex, w = _procedural_sum(tex, w, other.texture, other.tex_weight), np.ones(3)
+            elif None not in (pair := (per_point(tex), per_point(other.texture))):
+                # two procedural textures or images (a Mix or Add Shader of two Diffuse BSDFs on
+                # different images): their weighted sum, per shading point, each looked up as it
+                # is alone (the second image had been read as its mean, blocks 0.18-0.45 off)
+                tex, w = _procedural_sum(pair[0], w, pair[1], other.tex_weight), np.ones(3)
             else:   # two different images: keep the first, the other contributes its mean
                 reasons.append(nodeeval.TWO_IMAGES)
                 mean = other.texture.mean()
@@ -262,6 +265,26 @@ class Closure:
 def is_image_alpha(link):
     """Whether a link (or None) comes straight from an Image Texture's Alpha output."""
     return link is not None and link.from_node.type == 'TEX_IMAGE' and link.from_socket.name == 'Alpha'
+
+
+def per_point(t):
+    """A Texture as a procedural one (computed per shading point): itself, or an image on the UV
+    map looked up there as the renderer looks a material's image up (through its transform,
+    Cycles' interpolation, extension and stored encoding); None for attribute probes."""
+    if isinstance(t.pixels, ProceduralTexels):
+        return t
+    if t.attribute is not None or t.aligned:
+        return None
+    texels = lookup_texels(t.texels(t.pixels), t.interpolation)
+    interp, ext = t.interpolation, t.extension
+    M = None if t.transform is None else np.asarray(t.transform, np.float32)
+
+    def look(c):
+        u, v = c['uv'][:, 0], c['uv'][:, 1]
+        if M is not None:
+            u, v = M[0, 0] * u + M[0, 1] * v + M[0, 2], M[1, 0] * u + M[1, 1] * v + M[1, 2]
+        return texture_lookup(texels, u, v, interp, ext).T
+    return Texture.procedural(ProceduralTexels(look, {'uv'}, f"image '{t.name}'"))
 
 
 def _procedural_sum(a, wa, b, wb):

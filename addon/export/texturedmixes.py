@@ -6,10 +6,11 @@ shader and another (the procedural cut-out, export/cutouts.py)."""
 
 import numpy as np
 
+from ..nodegraph import links_feeding
 from ..procedural import ProceduralTexels
 from ..texture import ImageTexels, stored_texels
 from . import procedurals
-from .closure import Closure, Texture
+from .closure import Closure, Texture, per_point
 
 
 class TexturedMixes:
@@ -60,27 +61,42 @@ class TexturedMixes:
         return out._with_passes((np.zeros(3), texture(pa, pb), np.ones(3)))
 
     def _procedural_mix(self, node, reasons, depth):
-        """A Mix Shader whose factor procedural textures compute (procedurals.py), between two
-        shaders that have an albedo only (a constant, or a procedural texture's): the albedo
+        """A Mix Shader whose factor procedural textures (or an image, beside textured sides)
+        compute (procedurals.py), between two shaders that have an albedo only (a constant, a
+        procedural texture's or an image's, looked up per point: closure.per_point): the albedo
         per shading point, a + (b - a) x factor, the factor clamped to [0, 1] as Cycles' Mix
         Shader clamps it. Between a purely transparent shader and another (the procedural
         cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
         (_procedural_cutout). None otherwise (the factor at its own value)."""
         fac_notes = []      # (said only if this mix is taken: a Light Path's stand-in)
         found = procedurals.compile_socket(node.inputs['Fac'], False, fac_notes, image=self._texture)
+        closures = None
+        if found is None and any(link.from_node.type == 'TEX_IMAGE' for link in links_feeding(node.inputs['Fac'])):
+            # a factor from one image between shaders with images of their own (a mask's colour
+            # mixing two textured Diffuse BSDFs): it had stood at its own value; every image is
+            # looked up per point then (sides of constant colours: _textured_mix, per texel)
+            notes = []
+            closures = [self._shader(socket, notes, depth + 1) for socket in (node.inputs[1], node.inputs[2])]
+            if any(c.texture is not None for c in closures):
+                found = procedurals.compile_floats([node.inputs['Fac']], "Mix Shader factor", fac_notes,
+                                                   image=self._texture)
         if found is None:
             return None
         fac_fn, needs, name = found
-        notes = []
-        closures = [self._shader(socket, notes, depth + 1)     # (said only if this mix is taken)
-                    for socket in (node.inputs[1], node.inputs[2])]
+        if closures is None:
+            notes = []
+            closures = [self._shader(socket, notes, depth + 1)     # (said only if this mix is taken)
+                        for socket in (node.inputs[1], node.inputs[2])]
         cutout = self._procedural_cutout(closures, fac_fn, needs, name)
         if cutout is not None:
             reasons.extend(fac_notes + notes)
             return cutout
         sides = []
         for c in closures:
-            procedural = c.texture is not None and isinstance(c.texture.pixels, ProceduralTexels)
+            # (an image on the UV map is looked up per point as well: two Diffuse BSDFs on
+            # different images mixed by a Checker had read the factor at its own value)
+            lookup = per_point(c.texture) if c.texture is not None else None
+            procedural = lookup is not None
             if (c.texture is not None and not procedural) or c.emission.any() or c.emission_tex is not None \
                     or c.transparent.any() or c.holdout or c.opacity is not None or c.translucent.any():
                 if name:    # (a coordinate-only factor, no texture: the evaluation's note says it)
@@ -90,8 +106,8 @@ class TexturedMixes:
                                    "evaluated per point")
                 return None
             sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
-                          c.texture.pixels if procedural else None))
-            needs |= c.texture.pixels.needs if procedural else frozenset()
+                          lookup.pixels if procedural else None))
+            needs |= lookup.pixels.needs if procedural else frozenset()
         reasons.extend(fac_notes + notes)
 
         def albedo(side, coords):
@@ -111,6 +127,9 @@ class TexturedMixes:
         pass_sides = []
         for c in closures:
             k, t, w = c.pass_albedo()
+            lookup = per_point(t) if t is not None else None
+            if t is not None and lookup is None:
+                return out
             pass_sides.append((np.asarray(k, np.float64), np.asarray(w, np.float64),
-                               t.pixels if t is not None else None))
+                               lookup.pixels if lookup is not None else None))
         return out._with_passes((np.zeros(3), mixer(pass_sides), np.ones(3)))
