@@ -149,6 +149,26 @@ def test_principled_base_color_and_alpha_on_generated(tmp_path, said):
     _agree(tmp_path, said, samples=64, atol=0.015)   # (stochastic cut-outs: 0.011 at 64 spp)
 
 
+def test_cutout_from_alpha_on_generated_box(tmp_path, said):
+    """A Mix Shader of a Transparent and a Diffuse BSDF by the image's Alpha (Generated, Box
+    with Blend 0.4) on the sphere over a lit white floor: the cut-out per point (its shadow too)."""
+    nt, sh, tex, _ = _scene('sphere')
+    tex.projection, tex.projection_blend = 'BOX', 0.4
+    _coordinates(nt, tex, 'Generated')
+    out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+    clear = nt.nodes.new('ShaderNodeBsdfTransparent')
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    nt.links.new(tex.outputs['Alpha'], mix.inputs['Fac'])
+    nt.links.new(clear.outputs[0], mix.inputs[1])
+    nt.links.new(sh.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    white, wnt, wout = scenes._material("White")
+    d = wnt.nodes.new('ShaderNodeBsdfDiffuse')
+    wnt.links.new(d.outputs[0], wout.inputs['Surface'])
+    scenes.plane("Floor", size=8.0, location=(0.0, 0.0, -1.2), materials=(white,))
+    _agree(tmp_path, said, samples=128, atol=0.015)  # (stochastic cut-out: 0.004 at 256 spp)
+
+
 def test_camera_coordinates_keep_the_uv_fallback(tmp_path, said):
     """Texture Coordinate Camera is not computed per point: the image stays on the UV map, said
     as before (only the render's messages are checked)."""
