@@ -262,12 +262,12 @@ def test_a_chain_that_cannot_be_read_falls_back_and_says_why(scene, exported, mo
 
 def test_a_mix_factor_that_is_not_computed_names_its_source(scene, exported):
     """A Mix Shader factor the export cannot compute is reported with the node it comes from and
-    the value used instead; a procedural factor between an image and a colour says why it is
-    not evaluated per point."""
+    the value used instead; a procedural factor between an emission and a colour says why it
+    is not evaluated per point (between an image and a colour it is, since tex-coords)."""
     scenes.camera()
     trick, nt, mix, _, _ = scenes.mix_shader_material("Trick", 'ShaderNodeBsdfPrincipled', 'ShaderNodeEmission', 0.3)
     nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Diffuse Ray'], mix.inputs['Fac'])
-    imaged, nt, mix, _, b = scenes.mix_shader_material("Imaged", 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfDiffuse')
+    imaged, nt, mix, _, b = scenes.mix_shader_material("Imaged", 'ShaderNodeBsdfDiffuse', 'ShaderNodeEmission')
     tex = nt.nodes.new('ShaderNodeTexImage')
     tex.image = scenes.float_image("Imaged image", np.ones((2, 2, 4), np.float32))
     nt.links.new(tex.outputs['Color'], b.inputs['Color'])
