@@ -15,8 +15,11 @@ from . import rendering
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-@pytest.mark.parametrize("name", ["UVMap", "Second"])
-def test_an_attribute_naming_a_uv_map_matches_cycles(tmp_path, name, said):
+@pytest.mark.parametrize("name,output", [("UVMap", 'Vector'), ("Second", 'Vector'), ("Second", 'Color'),
+                                         ("Second", 'Fac'), ("", 'Vector'), ("Missing", 'Vector')])
+def test_an_attribute_naming_a_uv_map_matches_cycles(tmp_path, name, output, said):
+    """Also its Fac output and an attribute no mesh has (unnamed, or a name of none): what
+    the per-point coordinate chain computes there, as Cycles."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
@@ -31,7 +34,7 @@ def test_an_attribute_naming_a_uv_map_matches_cycles(tmp_path, name, said):
     tex.image, tex.interpolation = scenes.float_image("A", px), 'Linear'
     at = nt.nodes.new('ShaderNodeAttribute')
     at.attribute_name = name
-    nt.links.new(at.outputs['Vector'], tex.inputs['Vector'])
+    nt.links.new(at.outputs[output], tex.inputs['Vector'])
     nt.links.new(tex.outputs['Color'], d.inputs['Color'])
     nt.links.new(d.outputs[0], out.inputs['Surface'])
     me = scenes.plane("P", size=2.0, materials=(mat,)).data
