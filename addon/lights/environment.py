@@ -117,7 +117,7 @@ class EnvironmentLight:
     def _uv(self, D):
         m = self.to_map @ np.asarray(D, np.float64)
         m /= np.linalg.norm(m, axis=0)
-        u = 0.5 - np.arctan2(m[1], m[0]) / (2.0 * np.pi)
+        u = 0.5 - np.arctan2(m[1] + 0.0, m[0] + 0.0) / (2.0 * np.pi)    # -0 as +0, as the native eval
         v = 1.0 - np.arccos(np.clip(m[2], -1.0, 1.0)) / np.pi
         return u, v, np.hypot(m[0], m[1])
 

@@ -268,7 +268,11 @@ void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], 
         return;
     }
     const float z = std::min(1.0f, std::max(-1.0f, m[2] / len));
-    const float u = 0.5f - std::atan2(m[1], m[0]) * INV_2PI;
+    // At the pole (m.x, m.y both zero) atan2 reads only their signs: Cycles' directions there
+    // have +0 (its camera sums products, one of them +0), ours can carry -0 (an orthographic
+    // camera's -forward, to_map's products), which read the u = 0 seam column instead of
+    // u = 0.5. Adding +0 turns -0 into +0 and leaves every other value as it is.
+    const float u = 0.5f - std::atan2(m[1] + 0.0f, m[0] + 0.0f) * INV_2PI;
     const float v = 1.0f - std::acos(z) * INV_PI;
     lookup(env, u, v, Le);
     const float s = std::sqrt(m[0] * m[0] + m[1] * m[1]) / len;
