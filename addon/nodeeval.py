@@ -107,24 +107,62 @@ def gives_vector(node, out):
     return node.type == 'COMBXYZ' or getattr(out, 'type', None) == 'VECTOR'
 
 
+class TexelChannels:
+    """Channels `sl` of an image's texels (h, w, 4), read only when a Field's value is: an
+    image straight into a closure's input is looked up as stored, and its per-texel float64
+    copy (1.6 GB for an 8K image's colour) was made and never read."""
+    __slots__ = ('pixels', 'sl')
+
+    def __init__(self, pixels, sl):
+        self.pixels, self.sl = pixels, sl
+
+    @property
+    def width(self) -> int:
+        return len(range(4)[self.sl])
+
+    def values(self):
+        return self.pixels[..., self.sl]
+
+
 class Field:
     """A colour or vector (..., 3) or float (..., 1) value: constant (shape (3,) or (1,)) or one
     per texel of the image `tex` (shape (h, w, 3) or (h, w, 1)). vector: the value is a vector
     (a Combine XYZ output), which Cycles turns into a float by its average, not its luminance."""
-    __slots__ = ('value', 'tex', 'vector')
+    __slots__ = ('_value', '_texels', 'tex', 'vector')
 
     def __init__(self, value, tex=None, vector=False):
-        self.value, self.tex, self.vector = np.asarray(value, np.float64), tex, vector
+        self.tex, self.vector = tex, vector
+        if isinstance(value, TexelChannels):   # an image's own texels: float64 only if read
+            self._value, self._texels = None, value
+        else:
+            self._value, self._texels = np.asarray(value, np.float64), None
+
+    @property
+    def value(self):
+        if self._value is None:
+            self._value, self._texels = np.asarray(self._texels.values(), np.float64), None
+        return self._value
+
+    @value.setter
+    def value(self, v):
+        self._value, self._texels = v, None
+
+    @property
+    def width(self) -> int:
+        """The value's last dimension (3 or 1), without making it."""
+        return self._texels.width if self._value is None else self._value.shape[-1]
 
     def through(self, crossed):
         """This value as it arrives past the sockets `crossed` (nodegraph.source)."""
+        if not any(_SOCKET_KINDS.get(kind) for kind in crossed):     # (nothing converts it)
+            return Field(self.value if self._texels is None else self._texels, self.tex, self.vector)
         value, vector = _cross(self.value, self.vector, crossed)
         return Field(value, self.tex, vector)
 
     def as_kind(self, color):
         """This value as a colour or vector (color True: colours and vectors pass unchanged) or
         a float, as Cycles converts sockets (svm_node_convert)."""
-        n = self.value.shape[-1]
+        n = self.width
         if color and n == 1:
             return Field(np.repeat(self.value, 3, axis=-1), self.tex)
         if not color and n != 1:
@@ -180,7 +218,7 @@ class Evaluator:
             tex = self.texture(node, self.reasons)
             if tex is None:     # Cycles' missing image is opaque: only its Color is `missing`
                 return Field((1.0,) if out.name == 'Alpha' else self.missing)
-            return Field(tex.pixels[..., 3:4] if out.name == 'Alpha' else tex.pixels[..., :3], tex)
+            return Field(TexelChannels(tex.pixels, slice(3, 4) if out.name == 'Alpha' else slice(3)), tex)
         if t == 'TEX_ENVIRONMENT' and node.image is None:     # Cycles' missing image: magenta, opaque
             return Field((1.0,) if out.name == 'Alpha' else (1.0, 0.0, 1.0))
         if t in VIEW_NODE_TYPES:

@@ -250,6 +250,51 @@ class LazyTexels:
         return getattr(ufunc, method)(*(plain(x) for x in inputs), **kwargs)
 
 
+class ByteTexels(LazyTexels):
+    """An 8-bit image's (h, w, 4) float32 scene-linear texels kept as its bytes k8 (h, w, 4)
+    uint8: colour table[k], alpha alpha_table[k] (256 float32 each, the very values the float
+    path computes per texel), made on first read (LazyTexels). The renderer reads `stored` (the
+    bytes as Cycles stores them), so an image that only nodes' lookups read never holds its
+    floats: an 8K texture 0.25 GB instead of 1.25 GB, as Cycles keeps 4 bytes a texel. Its
+    mean and finiteness come from the bytes."""
+
+    def __init__(self, k8, table, alpha_table, stored):
+        self.k8, self.table, self.alpha_table = k8, np.asarray(table, F32), np.asarray(alpha_table, F32)
+        super().__init__(k8.shape, self._floats, stored)
+
+    def _floats(self) -> np.ndarray:
+        import dacrt
+        rgba = np.empty(self.k8.shape, F32)
+        np.take(self.alpha_table, self.k8[..., 3], out=rgba[..., 3])
+        dacrt.shading.byte_lookup(self.k8, self.table, rgba)
+        return rgba
+
+    def mean_rgb(self) -> np.ndarray:
+        """(3,) float64: the mean colour, by a count of each byte value (each count x value is
+        exact in float64; equal to the texels' float64 mean within its rounding)."""
+        h, w = self.k8.shape[:2]
+        counts = np.zeros((3, 256), np.int64)
+        for y in range(0, h, 64):           # by bands: bincount copies to int64
+            band = self.k8[y:y + 64].reshape(-1, 4)
+            for c in range(3):
+                counts[c] += np.bincount(band[:, c], minlength=256)
+        return counts @ self.table.astype(np.float64) / (h * w)
+
+
+def mean_rgb(pixels) -> np.ndarray:
+    """(3,) float64 mean colour of texels (h, w, >= 3): an 8-bit image's from its bytes."""
+    if isinstance(pixels, ByteTexels) and not pixels.made:
+        return pixels.mean_rgb()
+    return np.asarray(pixels[..., :3], np.float64).reshape(-1, 3).mean(axis=0)
+
+
+def all_finite(pixels, channels=slice(None)) -> bool:
+    """Whether every texel value (of `channels`) is finite: an 8-bit image's always are."""
+    if isinstance(pixels, ByteTexels):
+        return True
+    return bool(np.isfinite(pixels[..., channels]).all())
+
+
 def baked(source, values, fn):
     """Texels `values` (the image texels `source` with a per-point colour map fn, (..., 3) ->
     (..., 3), applied to their RGB: a colour baked in) as an ImageTexels whose lookup, when the

@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import nodeeval
 from ..procedural import ProceduralTexels
-from ..texture import lookup_texels, texture_lookup
+from ..texture import LazyTexels, lookup_texels, mean_rgb, stored_texels, texture_lookup
 from ..texture import baked as after_lookup
 
 
@@ -43,7 +43,7 @@ class Texture:
         """The mean colour (3,) of these texels (a procedural texture's over the unit cube)."""
         if isinstance(self.pixels, ProceduralTexels):
             return self.pixels.mean()
-        return np.asarray(self.pixels[..., :3], np.float64).reshape(-1, 3).mean(0)
+        return mean_rgb(self.pixels)
 
     def baked(self, fn):
         """These texels with the colour map fn ((..., 3) -> (..., 3)) applied to their RGB; an
@@ -51,6 +51,14 @@ class Texture:
         (texture.baked)."""
         if isinstance(self.pixels, ProceduralTexels):
             return self.pixels.followed_by(fn)
+        stored = stored_texels(self.pixels)
+        if stored is not None and self.udim is None:
+            # looked up as stored, fn after: the baked texels only for what reads texels (an
+            # 8K image's strength bake had been 1 GB of floats, and its source's 1 GB more)
+            return LazyTexels(np.shape(self.pixels), lambda: self._bake(fn), stored.followed_by(fn))
+        return after_lookup(self.pixels, self._bake(fn), fn)
+
+    def _bake(self, fn):
         src = np.asarray(self.pixels).view(np.ndarray)
         px = np.empty_like(src)
         # by blocks of rows, so fn's temporaries stay in cache (whole-image temporaries made an
@@ -59,7 +67,7 @@ class Texture:
         for i in range(0, len(src), step):
             px[i:i + step, ..., 3:] = src[i:i + step, ..., 3:]
             px[i:i + step, ..., :3] = fn(src[i:i + step, ..., :3])
-        return after_lookup(self.pixels, px, fn)
+        return px
 
 
 class Closure:

@@ -8,7 +8,7 @@ import numpy as np
 from .. import nodeeval
 from ..lights.base import fits_float32
 from ..nodegraph import linked_link
-from ..texture import ImageTexels, stored_texels
+from ..texture import ImageTexels, all_finite, mean_rgb, stored_texels
 from . import procedurals
 from .closure import Texture
 from .images import MISSING_IMAGE
@@ -58,7 +58,7 @@ class Emission:
         link = linked_link(color_socket)
         # an image with non-finite texels is baked below, where they become 0 (noted): its
         # average would be NaN, and the emitter lost that colour channel altogether
-        clean = color.tex is None or bool(np.isfinite(color.tex.pixels[..., :3]).all())
+        clean = color.tex is None or all_finite(color.tex.pixels, slice(3))
         # nodes after an image Cycles keeps encoded that scale its colour per channel (a tint):
         # the image itself times that weight, after the lookup (see _evaluated_closure)
         affine = self._affine_in(color_socket, color.tex) if strength.tex is None and color.tex is not None \
@@ -91,7 +91,7 @@ class Emission:
                     reasons.append(f"colour nodes after image '{color.tex.name}' applied to its texels before the "
                                    "blend (Cycles blends, decodes, then applies them)")
             elif color.tex is None and strength.tex is not None and strength.tex.attribute is None \
-                    and bool(np.isfinite(strength.tex.pixels).all()):
+                    and all_finite(strength.tex.pixels):
                 # an image (and nodes reading it) into the Strength: looked up as stored, then
                 # the nodes, then times the colour, as Cycles does (baked before the blend, an
                 # 8-bit image straight into Strength emitted 5-6% more than Cycles)
@@ -107,7 +107,7 @@ class Emission:
             tex = Texture(('emission', src.key, id(px)), px, src.interpolation, src.extension, src.transform,
                            src.udim)
             weight = np.ones(3)
-        mean = np.asarray(tex.pixels[..., :3], np.float64).reshape(-1, 3).mean(axis=0)
+        mean = mean_rgb(tex.pixels)
         return mean * weight, (tex, weight)
 
     @staticmethod

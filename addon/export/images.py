@@ -11,7 +11,7 @@ import bpy
 import dacrt
 import numpy as np
 
-from ..texture import EncodedTexels, ImageTexels, UdimTiles, half_as_cycles_reads, linear_to_srgb, stored_texels
+from ..texture import ByteTexels, EncodedTexels, ImageTexels, UdimTiles, half_as_cycles_reads, linear_to_srgb, stored_texels
 from .colorspaces import CONVERT, DATA, LINEAR, SRGB, space_kind, to_scene_linear
 from .errors import ExportCancelled
 from .imageuser import sequence_path, user_frame
@@ -149,7 +149,7 @@ def _read_flipped(inp, spec, byte, alpha_one):
     return out
 
 
-def _file_texels(path, img, reasons, unassociate):
+def _file_texels(path, img, reasons, unassociate, lazy=False):
     """The texels (ImageTexels) of the image file at `path` read as Cycles reads `img`'s file
     (a still image's, a UDIM tile's, a sequence's frame), converted as Blender converts it; None
     if it cannot be read."""
@@ -174,7 +174,7 @@ def _file_texels(path, img, reasons, unassociate):
     if raw is None:
         return None
     texels = _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True, channels=ch,
-                          preassociated=stored_associated and img.alpha_mode != 'NONE')
+                          preassociated=stored_associated and img.alpha_mode != 'NONE', lazy=lazy)
     stored = stored_texels(texels) if texels is not None else None
     half = spec.format == oiio.HALF and all(f == oiio.HALF for f in (spec.channelformats or [oiio.HALF]))
     if half and stored is not None and stored.texels.dtype == np.float32:
@@ -232,7 +232,8 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
         if img.source == 'TILED' and len(img.tiles):
             path = _tile_path(path, img.tiles[0].number)
         poll()
-        texels = _file_texels(path, img, reasons, unassociate) if '<' not in path else None
+        texels = _file_texels(path, img, reasons, unassociate, lazy=img.source != 'TILED') \
+            if '<' not in path else None
         if texels is not None:
             return texels
         gone = _unreadable_file(img, path)
@@ -264,7 +265,7 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     # Blender's float RGBA is fresh from foreach_get: used in place
     in_place = img.is_float and buf.shape[2] == 4
     return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file,
-                        channels=4 if in_place else None)
+                        channels=4 if in_place else None, lazy=img.source != 'TILED')
 
 
 def _sequence_frame(img, reasons, unassociate, user, scene_frame):
@@ -272,7 +273,7 @@ def _sequence_frame(img, reasons, unassociate, user, scene_frame):
     file, imageuser.user_frame / sequence_path), or None (magenta, as Cycles) if unreadable."""
     frame = user_frame(img, user, scene_frame)
     path = sequence_path(img, frame)
-    texels = _file_texels(path, img, reasons, unassociate)
+    texels = _file_texels(path, img, reasons, unassociate, lazy=True)
     if texels is None:
         reasons.append(f"image sequence '{img.name}': frame {frame} could not be read from '{path}' "
                        "(magenta, as Cycles)")
@@ -308,7 +309,7 @@ def _premultiplied_bytes(img, buf, from_file, reasons):
 
 
 def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, preassociated=False,
-                 channels=None):
+                 channels=None, lazy=False):
     """(h, w, 4) scene-linear RGBA of an image buffer (h, w, channels) of `img`: a byte buffer
     (Blender's floats k/255, or the bytes themselves as uint8) is in the image's colour space
     with straight alpha; a float one is linear and associated
@@ -320,23 +321,36 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
     `preassociated`: a file's values stored with alpha multiplied in, which Cycles keeps as
     stored (not associated again, nor divided where it does not associate). `channels`: the
     image's channel count, given when a float `buf` already is the (h, w, 4) RGBA of such an
-    image, made for this call: it is used in place (an 8K float texture's RGBA is 1 GB)."""
+    image, made for this call: it is used in place (an 8K float texture's RGBA is 1 GB). `lazy`:
+    a byte image whose linear texels are a table of its bytes is kept as its bytes
+    (texture.ByteTexels, the floats made only if read), not a UDIM tile."""
     poll()
     h, w = buf.shape[:2]
     ch = buf.shape[2] if channels is None else channels
     # Cycles associates only 4-channel files (a grey+alpha one stays straight), yet divides by
     # alpha at a linked Alpha output all the same
     associate = ch == 4 and associates_alpha(img)
-    k8 = straight8 = None
+    k8 = straight8 = kind = None
     exact = False
     if byte:
+        kind = space_kind(img, reasons)
+        tables = _byte_tables(kind, associate, unassociate, ch) if lazy else None
         # the bytes, once (Blender's byte pixels are k x (1/255) in float32; exact: all are),
         # and associated as Cycles associates them, integer c a / 255: one native pass (numpy's
-        # pass per operation took an 8K texture ~12 s)
+        # pass per operation took an 8K texture ~12 s); no floats where they are a table of the
+        # bytes (Blender's float buffer: if it is its bytes' floats, colour and alpha)
         rgba, straight8, k8, exact = dacrt.shading.byte_texels(buf[..., :4], _byte_table('blender', False),
-                                                               associate and not preassociated)
+                                                               associate and not preassociated,
+                                                               floats=tables is None)
         if k8 is None:
             k8 = straight8
+        if tables is not None and (buf.dtype == np.uint8 or (exact and _alpha_exact(buf, straight8))):
+            stored = _stored_texels(None, img, unassociate, True, encoded, from_file,
+                                    associate and not preassociated, kind, k8)
+            poll()
+            return ByteTexels(k8, *tables, stored)
+        if rgba is None:     # Blender's floats are not its bytes': the float path
+            rgba = dacrt.shading.byte_texels(buf[..., :4], _byte_table('blender', False), False)[0]
     elif channels is not None:
         rgba = buf
     else:
@@ -348,7 +362,8 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
             rgba[..., 1] = rgba[..., 2] = buf[..., 0]
             rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
     poll()
-    kind = space_kind(img, reasons) if byte or encoded else None
+    if not byte:     # (a byte image's was read above)
+        kind = space_kind(img, reasons) if encoded else None
     if kind == CONVERT:
         # Cycles converts what it stores to scene linear (a byte image it must convert is
         # loaded as half floats and associated in float, not in bytes: the truncating byte
@@ -405,6 +420,30 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
         rgba = _unassociated(rgba)
     poll()
     return ImageTexels(rgba, stored)
+
+
+def _byte_tables(kind, associate, unassociate, ch):
+    """(colour table, alpha table) by which _linear_rgba's scene-linear texels of a byte image
+    are its bytes (the branches below that look up a table), or None where they are computed
+    otherwise (converted through OpenColorIO, divided by alpha)."""
+    if kind == CONVERT or (unassociate and (associate or ch == 2)):
+        return None
+    decode = kind == SRGB
+    table = _byte_table('divided', decode) if associate else _byte_table('blender', decode)
+    return table, _byte_table('blender', False)
+
+
+def _alpha_exact(buf, k8):
+    """Whether Blender's float buffer buf (h, w, c) has as alpha its bytes' floats (the colour
+    is checked by byte_texels), by bands of rows (no whole-image temporaries)."""
+    if buf.shape[2] not in (2, 4):
+        return True
+    table = _byte_table('blender', False)
+    a = buf.shape[2] - 1
+    for y in range(0, buf.shape[0], _BAND_ROWS):
+        if not np.array_equal(buf[y:y + _BAND_ROWS, :, a], table[k8[y:y + _BAND_ROWS, :, 3]]):
+            return False
+    return True
 
 
 def _keeps_srgb(img):

@@ -9,7 +9,7 @@ import numpy as np
 from .. import nodeeval
 from ..mapping import texture_transform, uv_map_name
 from ..nodegraph import output_key
-from ..texture import UdimTiles, stored_texels
+from ..texture import UdimTiles, all_finite, stored_texels
 from .bump import bump_nodes, compile_bump
 from .closure import Texture
 from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
@@ -63,7 +63,7 @@ class ImageTextures:
             # rebuild of one: _build's probes and _product_map start with fresh reasons)
             notes = []
             pixels = image_pixels(img, notes, unassociate, node.image_user, self.frame)
-            if pixels is not None and not np.isfinite(pixels).all():
+            if pixels is not None and not all_finite(pixels):     # (an 8-bit image's bytes: finite)
                 # (a float image's NaN or infinity, kept: Cycles blends them in, and surfaces
                 # where the blend reaches them render black, as here)
                 bad = int((~np.isfinite(pixels).all(axis=-1)).sum())

@@ -61,7 +61,7 @@ bool byte_texels(const float* buf, size_t n, int ch, const float* byte_floats, f
             expand(buf + i * size_t(ch), ch, 1.0f, v);
             uint8_t k[4];
             for (int c = 0; c < 4; ++c) {
-                rgba[4 * i + size_t(c)] = v[c];
+                if (rgba) rgba[4 * i + size_t(c)] = v[c];
                 k[c] = to_byte(v[c]);
             }
             for (int c = 0; c < 3; ++c) same &= v[c] == byte_floats[k[c]];
@@ -78,7 +78,8 @@ void byte_texels(const uint8_t* buf, size_t n, int ch, const float* byte_floats,
         for (size_t i = b; i < e; ++i) {
             uint8_t k[4];
             expand(buf + i * size_t(ch), ch, uint8_t(255), k);
-            for (int c = 0; c < 4; ++c) rgba[4 * i + size_t(c)] = byte_floats[k[c]];
+            if (rgba)
+                for (int c = 0; c < 4; ++c) rgba[4 * i + size_t(c)] = byte_floats[k[c]];
             store_bytes(k, i, k8, k8_assoc);
         }
     }, size_t(1) << 16);

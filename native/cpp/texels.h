@@ -12,7 +12,8 @@ namespace dacrt {
 // buf: n texels of ch (1-4) float channels; rgba: n x 4 floats, the texels as RGBA (one
 // channel: grey; two: grey and alpha; no alpha: 1); k8: n x 4 bytes rint(255 rgba), clamped
 // to [0, 255]; k8_assoc (or null): k8 with the colour associated with alpha as Cycles does in
-// bytes, c a / 255. Returns whether every colour value is exactly byte_floats[k] (Blender's
+// bytes, c a / 255; rgba may be null (the bytes alone: an 8-bit image kept as bytes, its floats
+// made by table only if read, saves 16 bytes a texel). Returns whether every colour value is exactly byte_floats[k] (Blender's
 // own float for byte k), i.e. whether a lookup by byte reproduces rgba.
 bool byte_texels(const float* buf, size_t n, int ch, const float* byte_floats, float* rgba, uint8_t* k8,
                  uint8_t* k8_assoc);

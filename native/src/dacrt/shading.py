@@ -580,15 +580,15 @@ def voronoi_texture(points, scale, detail, roughness, lacunarity, smoothness, ex
                                  VORONOI_FEATURES[feature], VORONOI_TEXTURE_METRICS[metric], bool(normalize))
 
 
-def byte_texels(buf, byte_floats, associate: bool = False):
+def byte_texels(buf, byte_floats, associate: bool = False, floats: bool = True):
     """An 8-bit image's texels from Blender's float buffer buf (..., c), c in 1..4 (its values
     k/255), or from its bytes (uint8 buf): (rgba (..., 4) float32 with grey and alpha expanded
-    (from bytes: byte_floats[k]), bytes (..., 4) uint8 rint(255 rgba), those associated as
-    Cycles does in bytes (c a / 255) or None, exact: whether every colour value is
-    byte_floats[its byte], Blender's own float for it). One threaded pass."""
+    (from bytes: byte_floats[k]; None unless `floats`), bytes (..., 4) uint8 rint(255 rgba),
+    those associated as Cycles does in bytes (c a / 255) or None, exact: whether every colour
+    value is byte_floats[its byte], Blender's own float for it). One threaded pass."""
     table = np.ascontiguousarray(byte_floats, _F32)
     buf = np.ascontiguousarray(buf, np.uint8 if np.asarray(buf).dtype == np.uint8 else _F32)
-    return _core.byte_texels(buf, table, bool(associate))
+    return _core.byte_texels(buf, table, bool(associate), bool(floats))
 
 
 def byte_lookup(k8, table, rgba) -> None:

@@ -1,0 +1,126 @@
+"""8-bit images kept as their bytes end to end (texture.ByteTexels): Cycles keeps 4 bytes a
+texel, and the export had held each 8-bit image as (h, w, 4) float32 scene-linear texels as
+well (an 8K PNG: 1 GB, plus a float64 copy of its colour in the node evaluation (1.6 GB), a
+finiteness mask and a float64 mean: 4.8 GB of RSS growth and 21-46 s for an 8K PNG into an
+Emission, 0.5 GB and 1.8 s now). The renderer reads the bytes as Cycles stores them; the
+scene-linear floats (colour nodes, averages) are a 256-entry table of the bytes, made only if
+something reads them, and equal, bit for bit, to what the float path computes (images.py
+_linear_rgba without `lazy`). Float images, UDIM tiles, converted colour spaces and a linked
+Alpha's division keep the float path."""
+import bpy
+import dacrt
+import numpy as np
+import pytest
+
+from addon import export
+from addon.export import images
+from addon.texture import ByteTexels, LazyTexels, mean_rgb, stored_texels
+
+from . import scenes
+
+
+def _pixels(h, w, ch, seed=0):
+    """(h, w, ch) uint8 with every byte value in each channel, and alpha 0 and 255 among them."""
+    rng = np.random.default_rng(seed)
+    px = rng.integers(0, 256, (h, w, ch), dtype=np.uint8)
+    k = min(256, h * w)
+    px.reshape(-1, ch)[:k] = np.arange(k, dtype=np.uint8)[:, None]
+    return px
+
+
+def _material(img, link='diffuse', alpha_linked=False, strength=1.0):
+    mat, nt, out = scenes._material("M " + img.name)
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    if link == 'emission':
+        node = nt.nodes.new('ShaderNodeEmission')
+        node.inputs['Strength'].default_value = strength
+    else:
+        node = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    nt.links.new(tex.outputs['Color'], node.inputs['Color'])
+    if alpha_linked:
+        nt.links.new(tex.outputs['Alpha'], node.inputs['Roughness' if link == 'diffuse' else 'Strength'])
+    nt.links.new(node.outputs[0], out.inputs['Surface'])
+    builder = export.materials.MaterialBuilder()
+    return builder.materials[builder.index(mat)]
+
+
+def _float_path(img, unassociate=False):
+    """The texels as the float path makes them (lazy off), from the image's file bytes."""
+    path = bpy.path.abspath(img.filepath_raw)
+    inp, spec = images._open_straight(path)
+    raw = images._read_flipped(inp, spec, True, alpha_one=img.alpha_mode == 'NONE')
+    inp.close()
+    return np.asarray(images._linear_rgba(raw, img, [], unassociate, byte=True, encoded=True,
+                                          channels=spec.nchannels))
+
+
+@pytest.mark.parametrize('link', ['diffuse', 'emission'])
+def test_8bit_png_into_a_closure_holds_no_floats(tmp_path, link):
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "c.png", _pixels(40, 24, 3), 'uint8'))
+    m = _material(img, link, strength=2.0)
+    tex = m.texture if link == 'diffuse' else m.emission_texture
+    source = tex if link == 'diffuse' else None
+    # the renderer's texels: the bytes as Cycles stores them
+    stored = stored_texels(tex)
+    assert stored is not None and stored.texels.dtype == np.uint8, type(tex)
+    # no float texels were made: the image's own (diffuse) or the strength baked in (emission)
+    assert isinstance(tex, LazyTexels) and not tex.made, type(tex)
+    if source is not None:
+        assert isinstance(source, ByteTexels)
+        np.testing.assert_array_equal(np.asarray(source), _float_path(img))
+    assert not m.approximated
+
+
+@pytest.mark.parametrize('ch', [1, 2, 3, 4])
+@pytest.mark.parametrize('space', ['sRGB', 'Non-Color', 'Linear Rec.709'])
+def test_texels_made_from_bytes_equal_the_float_path(tmp_path, ch, space):
+    img = bpy.data.images.load(scenes.write_image(tmp_path / f"b{ch}.png", _pixels(33, 17, ch, ch), 'uint8'))
+    img.colorspace_settings.name = space
+    notes = []
+    px = images.image_pixels(img, notes)
+    assert isinstance(px, ByteTexels) and not px.made
+    want = _float_path(img)
+    np.testing.assert_allclose(mean_rgb(px), want[..., :3].astype(np.float64).reshape(-1, 3).mean(0),
+                               rtol=1e-14, atol=0)
+    assert not px.made                  # the mean came from the bytes
+    np.testing.assert_array_equal(np.asarray(px), want)
+    assert px.dtype == np.float32 and px.shape == want.shape
+
+
+@pytest.mark.parametrize('ch', [3, 4])
+def test_packed_image_from_blenders_floats(tmp_path, ch):
+    """A packed 8-bit image comes from Blender's float buffer (its bytes' floats): bytes too."""
+    img = bpy.data.images.load(scenes.write_image(tmp_path / f"p{ch}.png", _pixels(21, 30, ch, 7), 'uint8'))
+    img.pack()
+    buf = np.empty(img.size[0] * img.size[1] * img.channels, np.float32)
+    img.pixels.foreach_get(buf)
+    want = np.asarray(images._linear_rgba(buf.reshape(img.size[1], img.size[0], img.channels), img, [], False,
+                                          byte=True, encoded=False, from_file=False))
+    px = images.image_pixels(img, [])
+    assert isinstance(px, ByteTexels) and not px.made
+    np.testing.assert_array_equal(np.asarray(px), want)
+
+
+def test_linked_alpha_and_float_images_keep_the_float_path(tmp_path):
+    """An associated image whose Alpha output is linked is divided per texel: floats, as before;
+    so is a float image."""
+    img = bpy.data.images.load(scenes.write_image(tmp_path / "a.png", _pixels(20, 14, 4, 3), 'uint8'))
+    px = images.image_pixels(img, [], unassociate=True)
+    assert not isinstance(px, LazyTexels)
+    np.testing.assert_array_equal(np.asarray(px), _float_path(img, unassociate=True))
+    f = scenes.float_image("F", np.random.default_rng(1).uniform(0, 2, (6, 5, 4)).astype(np.float32))
+    assert not isinstance(images.image_pixels(f, []), LazyTexels)
+
+
+def test_native_bytes_without_floats():
+    buf = _pixels(20, 13, 4, 5)
+    table = np.arange(256, dtype=np.float32) * np.float32(1 / 255)
+    rgba, straight, assoc, exact = dacrt.shading.byte_texels(buf, table, True)
+    none, straight2, assoc2, exact2 = dacrt.shading.byte_texels(buf, table, True, floats=False)
+    assert none is None and exact2
+    np.testing.assert_array_equal(straight, straight2)
+    np.testing.assert_array_equal(assoc, assoc2)
+    floats = (buf.astype(np.float32) / 255).astype(np.float32)
+    _, s3, a3, e3 = dacrt.shading.byte_texels(floats, table, True, floats=False)
+    np.testing.assert_array_equal(s3, straight)
