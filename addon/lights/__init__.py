@@ -31,6 +31,7 @@ import numpy as np
 from .area import AreaLight
 from .background import BackgroundLight
 from .environment import EnvironmentLight
+from .lamplanes import lamp_group_stats
 from .base import F32, RECORD_WIDTH, Lamp, LightSample
 from .point import PointLight, SpotLight
 from .sun import SunLight
@@ -170,12 +171,16 @@ class LightSet:
         if groups < 2 or n == 0:
             return
         u1, u2 = rng.random((2, n), np.float32)
-        narrow, gives = [], []
-        for kind, entries, within in self._groups:
+        narrow, gives = np.zeros(groups), np.zeros(groups)
+        # each lamp a group of its own (no tree): all sampled at once (lamplanes), the same bits
+        alone = [g for g, (kind, _, _) in enumerate(self._groups) if kind == 'lamps']
+        if alone:
+            narrow[alone], gives[alone] = lamp_group_stats(
+                [self.lamps[int(self._groups[g][1][0])] for g in alone], P, u1, u2, N)
+        for g, (kind, entries, within) in enumerate(self._groups):
             if kind == 'lamps':
-                s = self.lamps[int(entries[0])].sample(P, u1, u2)
-                wi, value, pdf, pick = s.wi, s.value, s.pdf, np.ones(n)
-            elif kind == 'environment':      # (the renderer's samples: the readable definition
+                continue
+            if kind == 'environment':      # (the renderer's samples: the readable definition
                 wi, value, pdf = self.environment.native_sample(u1, u2)   # builds tables of its own)
                 pick = np.ones(n)
             else:                       # the tree's or the power-weighted pick at each point
@@ -187,14 +192,14 @@ class LightSet:
                                                         len(within) - 1)
                     pick = within[which - self.num_lamps]
                 wi, value, pdf = self._entry_samples(P, which, u1, u2)
-            narrow.append(self._narrowness(pdf))
+            narrow[g] = self._narrowness(pdf)
             lum = np.nan_to_num(np.asarray(value, np.float64).mean(axis=0), nan=0.0, posinf=0.0)
             cos = 1.0 if N is None else np.maximum((np.asarray(N, np.float64) * wi).sum(axis=0), 0.0)
             with np.errstate(divide='ignore', invalid='ignore'):
-                gives.append(float(np.nan_to_num(np.where(pick > 0, lum * cos / pick, 0.0)).mean()))
-        w = np.asarray(narrow, np.float64) * np.asarray(gives)
+                gives[g] = float(np.nan_to_num(np.where(pick > 0, lum * cos / pick, 0.0)).mean())
+        w = narrow * gives
         if not (np.isfinite(w).all() and w.sum() > 0):
-            w = np.asarray(narrow, np.float64)
+            w = narrow
         if not w.sum() > 0:
             return
         self._set_groups((1.0 - uniform_mix) * w / w.sum() + uniform_mix / groups)

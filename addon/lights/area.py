@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..sampling import concentric_disk, dot, normalize
-from .base import F32, KIND_AREA, Bounds, Lamp, LightSample, luminance, make_record, outer
+from .base import F32, KIND_AREA, Bounds, Lamp, LightSample, col, luminance, make_record, outer, vdot
 
 SHAPES = ('SQUARE', 'RECTANGLE', 'DISK', 'ELLIPSE')
 SHAPE_RECT, SHAPE_ELLIPSE, SHAPE_PARALLELOGRAM = range(3)   # record shape codes (lamps.h AreaShape)
@@ -115,9 +115,9 @@ class AreaLight(Lamp):
         emitting side), so beyond the square around it. Returns (lo_x, hi_x, lo_y, hi_y, w_x,
         w_y, frac, full): the clamped box, its widths (0 if empty), its share of the bounding
         rectangle's area and whether it is the whole rectangle. lamps.h area_spread_box."""
-        rel = X - self.center[:, None]
-        h = dot(rel, self.normal)
-        fx, fy = dot(rel, self.inv_x), dot(rel, self.inv_y)
+        rel = X - col(self.center)
+        h = vdot(rel, self.normal)
+        fx, fy = vdot(rel, self.inv_x), vdot(rel, self.inv_y)
         r = h * self.tan_half_spread
         rx, ry = r * self._len_inv_x, r * self._len_inv_y
         half, zero = F32(0.5), F32(0.0)
@@ -157,9 +157,9 @@ class AreaLight(Lamp):
         (3, n): its corners relative to X's foot along the unit axes (world lengths), X's height
         h, the constants of the warp, the solid angle S and whether to sample it by solid angle
         there. lamps.h sph_rect, the same float32 operations."""
-        rel = X - self.center[:, None]
-        fx, fy = dot(rel, self.inv_x), dot(rel, self.inv_y)
-        h = dot(rel, self.normal)
+        rel = X - col(self.center)
+        fx, fy = vdot(rel, self.inv_x), vdot(rel, self.inv_y)
+        h = vdot(rel, self.normal)
         x0, x1 = (lo_x - fx) * self._len_x, (hi_x - fx) * self._len_x
         y0, y1 = (lo_y - fy) * self._len_y, (hi_y - fy) * self._len_y
         h2 = h * h
@@ -220,9 +220,9 @@ class AreaLight(Lamp):
             y = _clamp(yv, y0, y1)
         # along the unit axes, below X by h
         sx, sy = x / self._len_x, y / self._len_y
-        w = self.axis_x[:, None] * sx
-        w += self.axis_y[:, None] * sy
-        w -= self.normal[:, None] * h
+        w = col(self.axis_x) * sx
+        w += col(self.axis_y) * sy
+        w -= col(self.normal) * h
         return normalize(w)
 
     def _by_solid_angle(self, P, u1, u2, ls, box):
@@ -234,7 +234,7 @@ class AreaLight(Lamp):
         wi, dist = self._sample_solid_angle(r, u1, u2)
         use = r['use']
         S = np.where(use, r['S'], F32(1.0))
-        value = outer(self.emit, self._spread(S.copy(), -dot(wi, self.normal), wi))
+        value = outer(self.emit, self._spread(S.copy(), -vdot(wi, self.normal), wi))
         with np.errstate(divide='ignore'):
             pdf = F32(1.0) / S
         return LightSample(np.where(use, wi, ls.wi), np.where(use, dist, ls.dist),
@@ -278,11 +278,11 @@ class AreaLight(Lamp):
             y *= 0.5
         else:
             x, y = u1 - F32(0.5), u2 - F32(0.5)
-        q = self.axis_x[:, None] * x
-        q += self.axis_y[:, None] * y
-        q += (self.center[:, None] - P)
+        q = col(self.axis_x) * x
+        q += col(self.axis_y) * y
+        q += (col(self.center) - P)
         wi, dist = normalize(q)
-        cos_l = -dot(wi, self.normal)
+        cos_l = -vdot(wi, self.normal)
         ok = (cos_l > 0) & (dist > 0)
         with np.errstate(divide='ignore', invalid='ignore'):
             pdf = np.where(ok, dist * dist / (F32(self.area) * cos_l), F32(0.0))
@@ -301,11 +301,11 @@ class AreaLight(Lamp):
             on_lamp = full | (x * x + y * y <= F32(0.25))
             x = np.where(full, dx * F32(0.5), x)
             y = np.where(full, dy * F32(0.5), y)
-        q = self.axis_x[:, None] * x
-        q += self.axis_y[:, None] * y
-        q += (self.center[:, None] - P)
+        q = col(self.axis_x) * x
+        q += col(self.axis_y) * y
+        q += (col(self.center) - P)
         wi, dist = normalize(q)
-        cos_l = -dot(wi, self.normal)
+        cos_l = -vdot(wi, self.normal)
         ok = (cos_l > 0) & (dist > 0) & (frac > 0) & on_lamp
         with np.errstate(divide='ignore', invalid='ignore'):
             pdf = np.where(ok, dist * dist / (self._box_area(full) * frac * cos_l), F32(0.0))

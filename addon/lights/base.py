@@ -98,8 +98,30 @@ def luminance(rgb) -> float:
 
 
 def outer(color: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """(3,) colour times (n,) scalars -> (3,n)."""
-    return color[:, None] * scale
+    """(3,) colour times (n,) scalars -> (3,n); lanes' colours (3, n) (lamplanes) per column."""
+    return col(color) * scale
+
+
+def col(v: np.ndarray) -> np.ndarray:
+    """A lamp's (3,) vector as a column (3, 1) against (3, n) points; lanes of lamps
+    (lamplanes.py) hold one per sample already, (3, n)."""
+    return v[:, None] if v.ndim == 1 else v
+
+
+def vdot(a: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Per-column dot of (3, n) vectors a with a lamp's (3,) vector v, or lanes' (3, n): the
+    same float operations either way (sampling.dot's for a constant vector)."""
+    v = v.astype(a.dtype, copy=False)
+    return v[0] * a[0] + v[1] * a[1] + v[2] * a[2]
+
+
+def matvec(m: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """A lamp's (3, 3) matrix times (3, n) vectors; lanes' (k, 3, 3), one matrix per lamp,
+    each times its own n / k columns (one product per lamp: the same bits as the lamp's own)."""
+    if m.ndim == 2:
+        return m @ v
+    n = v.shape[1] // len(m)
+    return np.concatenate([m[i] @ v[:, i * n:(i + 1) * n] for i in range(len(m))], axis=1)
 
 
 class Lamp(ABC):

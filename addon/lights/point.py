@@ -25,7 +25,7 @@ import numpy as np
 from ..sampling import (concentric_disk, dot, normalize, one_minus_cos_from_sin2, orthonormal_basis,
                         to_world, uniform_cone)
 from .base import (F32, KIND_POINT, KIND_SPOT, POINT_DELTA, POINT_DISK, POINT_SPHERE, Bounds, Lamp, LightSample,
-                   luminance, make_record, outer)
+                   col, luminance, make_record, matvec, outer)
 
 
 class PointLight(Lamp):
@@ -69,7 +69,7 @@ class PointLight(Lamp):
 
     def sample(self, P, u1, u2):
         n = P.shape[1]
-        axis, d = normalize(self.center[:, None] - P)
+        axis, d = normalize(col(self.center) - P)
         if self.delta:
             with np.errstate(divide='ignore'):
                 scale = np.where(d > 0, F32(1.0) / (d * d), F32(0.0))
@@ -93,7 +93,7 @@ class PointLight(Lamp):
             t1, t2 = orthonormal_basis(axis)
             q = t1 * (r * x)
             q += t2 * (r * y)
-            q += self.center[:, None]
+            q += col(self.center)
             wi, dist = normalize(q - P)
             cos_l = dot(wi, axis)                          # disk normal (-axis) against -wi
             good = apart & (cos_l > 0)
@@ -202,7 +202,7 @@ class SpotLight(PointLight):
 
     def attenuation(self, from_light):
         """Cone factor for unit light->point directions (3,n)."""
-        local = self.inv_m3 @ from_light
+        local = matvec(self.inv_m3, from_light)
         length = np.sqrt(dot(local, local))
         with np.errstate(divide='ignore', invalid='ignore'):
             z = np.where(length > 0, -local[2] / length, F32(-1.0))

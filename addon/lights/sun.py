@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..sampling import dot, to_world, uniform_cone
-from .base import F32, KIND_SUN, Lamp, LightSample, make_record, outer
+from .base import F32, KIND_SUN, Lamp, LightSample, col, make_record, outer
 
 
 class SunLight(Lamp):
@@ -47,7 +47,7 @@ class SunLight(Lamp):
         ones = np.ones(n, F32)
         if self.delta:
             wi = np.empty((3, n), F32)
-            wi[:] = self.to_sun[:, None]
+            wi[:] = col(self.to_sun)
             return LightSample(wi, dist, outer(self.emit, ones), np.full(n, np.inf, F32))
         local, _ = uniform_cone(u1, u2, self.omc)
         wi = to_world(local, self.to_sun)
