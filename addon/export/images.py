@@ -111,14 +111,16 @@ def _open_straight(path):
 _BAND_ROWS = 256
 
 
-def _read_flipped(inp, spec, byte, alpha_one):
+def _read_flipped(inp, spec, byte, alpha_one, expand=False):
     """The texels of the open file, row 0 at the bottom: (h, w, channels) uint8, its bytes, for a
-    byte file; else (h, w, 4) float32 RGBA (grey replicated, alpha 1 where it has none). Alpha
-    is 1 where `alpha_one`. None if a read fails."""
+    byte file (`expand`, at most 4 channels: (h, w, 4) RGBA bytes as byte_texels expands them,
+    made as read: no second whole-image array); else (h, w, 4) float32 RGBA (grey replicated,
+    alpha 1 where it has none). Alpha is 1 where `alpha_one`. None if a read fails."""
     import OpenImageIO as oiio
     h, w, ch = spec.height, spec.width, spec.nchannels
+    expand = expand and byte and ch <= 4
     used = ch if byte else min(ch, 4)
-    out = np.empty((h, w, ch if byte else 4), np.uint8 if byte else np.float32)
+    out = np.empty((h, w, 4 if expand or not byte else ch), np.uint8 if byte else np.float32)
     tiled = spec.tile_width > 0
     rows = _BAND_ROWS if not tiled else max(1, _BAND_ROWS // spec.tile_height) * spec.tile_height
     fmt = oiio.UINT8 if byte else oiio.FLOAT
@@ -135,7 +137,10 @@ def _read_flipped(inp, spec, byte, alpha_one):
             return None
         band = np.asarray(band).reshape(e - y, w, used)
         dst = out[h - e:h - y][::-1]
-        if byte:
+        if expand:
+            dst[..., :3] = band[..., :3] if used >= 3 else band[..., :1]
+            dst[..., 3] = band[..., used - 1] if used in (2, 4) else 255
+        elif byte:
             dst[...] = band
         elif used >= 3:
             dst[..., :used] = band
@@ -145,7 +150,7 @@ def _read_flipped(inp, spec, byte, alpha_one):
         if not byte and used == 3:
             dst[..., 3] = 1.0
     if alpha_one and ch in (2, 4):
-        out[..., ch - 1 if byte else 3] = 255 if byte else 1.0     # as Blender's own buffer has it
+        out[..., ch - 1 if byte and not expand else 3] = 255 if byte else 1.0   # as Blender's own buffer has it
     return out
 
 
@@ -168,7 +173,7 @@ def _file_texels(path, img, reasons, unassociate, lazy=False):
     # byte files as their bytes (a quarter of the floats' memory, and no conversion): what Cycles
     # reads, and what Blender's byte buffer holds; deeper ones as floats in the image's space
     try:     # alpha ignored (alpha mode None): 1, as Blender's own buffer has it
-        raw = _read_flipped(inp, spec, byte, alpha_one=img.alpha_mode == 'NONE')
+        raw = _read_flipped(inp, spec, byte, alpha_one=img.alpha_mode == 'NONE', expand=lazy)
     finally:
         inp.close()
     if raw is None:
@@ -339,9 +344,14 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
         # and associated as Cycles associates them, integer c a / 255: one native pass (numpy's
         # pass per operation took an 8K texture ~12 s); no floats where they are a table of the
         # bytes (Blender's float buffer: if it is its bytes' floats, colour and alpha)
-        rgba, straight8, k8, exact = dacrt.shading.byte_texels(buf[..., :4], _byte_table('blender', False),
-                                                               associate and not preassociated,
-                                                               floats=tables is None)
+        if tables is not None and buf.dtype == np.uint8 and buf.shape[2] == 4 and \
+                not (associate and not preassociated):
+            # straight bytes already RGBA (a file read expanded): they are the texels, no copy
+            rgba, straight8, k8, exact = None, buf, None, True
+        else:
+            rgba, straight8, k8, exact = dacrt.shading.byte_texels(buf[..., :4], _byte_table('blender', False),
+                                                                   associate and not preassociated,
+                                                                   floats=tables is None)
         if k8 is None:
             k8 = straight8
         if tables is not None and (buf.dtype == np.uint8 or (exact and _alpha_exact(buf, straight8))):

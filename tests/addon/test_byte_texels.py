@@ -124,3 +124,20 @@ def test_native_bytes_without_floats():
     floats = (buf.astype(np.float32) / 255).astype(np.float32)
     _, s3, a3, e3 = dacrt.shading.byte_texels(floats, table, True, floats=False)
     np.testing.assert_array_equal(s3, straight)
+
+
+@pytest.mark.parametrize('alpha_one', [False, True])
+@pytest.mark.parametrize('ch', [1, 2, 3, 4])
+def test_file_read_expanded_is_the_expanded_bytes(tmp_path, ch, alpha_one):
+    """A byte file read straight into RGBA bytes (no second whole-image array): what
+    byte_texels expands its bytes to (grey replicated, alpha 255 where it has none)."""
+    path = scenes.write_image(tmp_path / f"e{ch}.png", _pixels(300, 9, ch, 11), 'uint8')
+    reads = []
+    for expand in (False, True):
+        inp, spec = images._open_straight(path)
+        reads.append(images._read_flipped(inp, spec, True, alpha_one, expand=expand))
+        inp.close()
+    raw, expanded = reads
+    assert expanded.shape == raw.shape[:2] + (4,) and expanded.dtype == np.uint8
+    table = np.arange(256, dtype=np.float32) * np.float32(1 / 255)
+    np.testing.assert_array_equal(expanded, dacrt.shading.byte_texels(raw, table, False, floats=False)[1])
