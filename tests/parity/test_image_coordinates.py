@@ -232,3 +232,18 @@ def test_two_diffuse_bsdfs_on_different_images(tmp_path, said, combine):
     d, c = img['DACRT'], img['CYCLES']
     np.testing.assert_allclose(_blocks(d), _blocks(c), atol=0.012)
     assert not any("average colour" in t or "own value" in t for t in said), said
+
+
+@pytest.mark.parametrize('colorspace', ['sRGB', 'Non-Color'])
+def test_8bit_file_on_generated_box(tmp_path, said, colorspace):
+    """An 8-bit PNG (held as its bytes, texture.ByteTexels) on Generated, Box with Blend 0.3,
+    into a Diffuse colour: the per-point lookup decodes its bytes as the UV path does."""
+    nt, sh, tex, _ = _scene('cube')
+    px = (np.random.RandomState(5).rand(5, 6, 4) * 255).astype(np.uint8)
+    px[..., 3] = 255
+    tex.image = bpy.data.images.load(scenes.write_image(tmp_path / "t.png", px))
+    tex.image.colorspace_settings.name = colorspace
+    tex.projection, tex.projection_blend = 'BOX', 0.3
+    _coordinates(nt, tex, 'Generated')
+    nt.links.new(tex.outputs['Color'], sh.inputs['Color'])
+    _agree(tmp_path, said)
