@@ -259,20 +259,30 @@ def _socket(socket, color, chain, depth):
 
 
 def _vector(node, chain, depth):
-    """fn(coords) -> (n, 3) float32 of a texture's Vector input: its link, or Generated, then
-    the node's own Texture Mapping (mapping.node_texture_mapping)."""
+    """fn(coords) -> (n, 3) float32 of a procedural texture's Vector input: its link, or
+    Generated, then the node's own Texture Mapping."""
+    return _texture_vector(node, chain, depth, 'generated')[0]
+
+
+def _texture_vector(node, chain, depth, default):
+    """(fn(coords) -> (n, 3) float32, whether it reads `default`) of a texture node's Vector:
+    its chain, or the coordinate an unlinked Vector reads (`default`: 'generated' for
+    procedural textures, 'uv' for an image, which a group socket with a hidden value also
+    leaves to it), then the node's own Texture Mapping (mapping.node_texture_mapping)."""
     own = nodegraph.input_by_id(node, 'Vector')
     link, carrier = nodegraph.source(own)
-    if link is None and nodegraph.unwrap(carrier).as_pointer() == nodegraph.unwrap(own).as_pointer():
-        chain.needs.add('generated')
-        f = lambda c: c['generated']  # noqa: E731
+    implicit = link is None and (nodegraph.unwrap(carrier).as_pointer() == nodegraph.unwrap(own).as_pointer()
+                                 or (default == 'uv' and getattr(nodegraph.unwrap(carrier), 'hide_value', False)))
+    if implicit:
+        chain.needs.add(default)
+        f = lambda c: c[default]  # noqa: E731
     else:
         f = _socket(own, True, chain, depth + 1)
     found = node_texture_mapping(node, chain.reasons)
     if found is None:
-        return lambda c: np.asarray(f(c), np.float32)
+        return (lambda c: np.asarray(f(c), np.float32)), implicit
     M, t = found
-    return lambda c: (np.asarray(f(c), np.float64) @ M.T + t).astype(np.float32)
+    return (lambda c: (np.asarray(f(c), np.float64) @ M.T + t).astype(np.float32)), implicit
 
 
 def _float(node, ident, chain, depth):
@@ -530,11 +540,11 @@ def _image(node, out, chain, depth):
     svm_node_tex_image does (texture.texture_lookup: its interpolation, extension and stored
     encoding): at each point's UV through the Mapping the export reads into the texture's
     transform, or, where the node reads other coordinates (mapping.reads_off_uv), at what its
-    Vector chain computes there (_image_vector), projected Flat, Sphere or Tube
+    Vector chain computes there (_texture_vector), projected Flat, Sphere or Tube
     (_projected_uv), or Box (_box_lookup: three lookups weighed by the object-space normal)."""
     off_uv = reads_off_uv(node)
     if off_uv:
-        vector, reads_uv = _image_vector(node, chain, depth)
+        vector, reads_uv = _texture_vector(node, chain, depth, 'uv')
         tex = chain.image(node, chain.reasons, per_point='uv' if reads_uv else True)
     else:
         tex = chain.image(node, chain.reasons)
@@ -576,26 +586,6 @@ def _image(node, out, chain, depth):
             u, v = M[0, 0] * u + M[0, 1] * v + M[0, 2], M[1, 0] * u + M[1, 1] * v + M[1, 2]
         return read(u, v)
     return look, False
-
-
-def _image_vector(node, chain, depth):
-    """(fn(coords) -> (n, 3) float32, whether it reads the UV map itself) of an Image Texture's
-    Vector: its chain, or the UV map where nothing is linked (Cycles' default for an image),
-    then the node's own Texture Mapping."""
-    own = nodegraph.input_by_id(node, 'Vector')
-    link, carrier = nodegraph.source(own)
-    reads_uv = link is None and (nodegraph.unwrap(carrier).as_pointer() == nodegraph.unwrap(own).as_pointer()
-                                 or getattr(nodegraph.unwrap(carrier), 'hide_value', False))
-    if reads_uv:
-        chain.needs.add('uv')
-        f = lambda c: c['uv']  # noqa: E731
-    else:
-        f = _socket(own, True, chain, depth + 1)
-    found = node_texture_mapping(node, chain.reasons)
-    if found is None:
-        return (lambda c: np.asarray(f(c), np.float32)), reads_uv
-    M, t = found
-    return (lambda c: (np.asarray(f(c), np.float64) @ M.T + t).astype(np.float32)), reads_uv
 
 
 _HALF, _TWO = np.float32(0.5), np.float32(2.0)

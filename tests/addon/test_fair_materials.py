@@ -91,7 +91,7 @@ def _non_diffuse_materials():
     tex = nt.nodes.new('ShaderNodeTexImage')
     tex.image, tex.interpolation, tex.extension, tex.projection = img, 'Cubic', 'MIRROR', 'BOX'
     coords = nt.nodes.new('ShaderNodeTexCoord')
-    # (Camera: Generated and a Box projection are looked up per point, exact, since tex-coords)
+    # (Camera: an image on Generated with a Box projection is looked up per point, exact)
     nt.links.new(coords.outputs['Camera'], tex.inputs['Vector'])
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     nt.links.new(tex.outputs['Alpha'], p.inputs['Base Color'])

@@ -21,6 +21,17 @@ def _box(scene, material=None):
     return floor, cube, lamp
 
 
+def _instanced(scene, ob, collection, instancer):
+    """ob moved into a new collection, placed by a new empty `instancer` (returned)."""
+    group = bpy.data.collections.new(collection)
+    scene.collection.objects.unlink(ob)
+    group.objects.link(ob)
+    holder = bpy.data.objects.new(instancer, None)
+    holder.instance_type, holder.instance_collection = 'COLLECTION', group
+    scene.collection.objects.link(holder)
+    return holder
+
+
 def _render(said):
     said.clear()
     bpy.ops.render.render()
@@ -101,13 +112,7 @@ def test_glossy_visibility_off_beside_a_glossy_layer_is_warned(scene, said):
 
 def test_the_instancer_whose_flag_it_is_is_named(scene, said):
     _, _, lamp = _box(scene, scenes.principled("Plastic", (0.5, 0.5, 0.5), specular=0.5))
-    rig_set = bpy.data.collections.new("Rig")
-    scene.collection.objects.unlink(lamp)
-    rig_set.objects.link(lamp)
-    rig = bpy.data.objects.new("LightRig", None)
-    rig.instance_type, rig.instance_collection = 'COLLECTION', rig_set
-    scene.collection.objects.link(rig)
-    rig.visible_glossy = False
+    _instanced(scene, lamp, "Rig", "LightRig").visible_glossy = False
     text = _glossy_said(_render(said))
     assert len(text) == 1 and "'Lamp' (instanced by 'LightRig')" in text[0], text
 
@@ -128,12 +133,6 @@ def test_catcher_flag_on_camera_and_empty_is_not_warned(scene, said):
 def test_catcher_flag_on_a_mesh_and_an_instancer_is_warned(scene, said):
     floor, cube, _ = _box(scene)
     floor.is_shadow_catcher = True
-    group = bpy.data.collections.new("Props")
-    scene.collection.objects.unlink(cube)
-    group.objects.link(cube)
-    holder = bpy.data.objects.new("Holder", None)
-    holder.instance_type, holder.instance_collection = 'COLLECTION', group
-    scene.collection.objects.link(holder)
-    holder.is_shadow_catcher = True
+    _instanced(scene, cube, "Props", "Holder").is_shadow_catcher = True
     text = _catcher_said(_render(said))
     assert len(text) == 1 and "'Floor'" in text[0] and "'Holder'" in text[0], text
