@@ -231,3 +231,32 @@ def principled_hair_color(node, reasons):
     reasons.append(f"Principled Hair BSDF as diffuse of the colour its {what} absorbs as in Cycles' Direct "
                    f"Coloring: ({', '.join(f'{v:.3g}' for v in color)})")
     return color
+
+
+# closures Cycles evaluates for glossy rays and light samples (its glossy class); the Sheen BSDF,
+# the Toon BSDF's Diffuse component and the Principled's sheen are diffuse-class there
+GLOSSY_NODE_TYPES = frozenset({'BSDF_GLOSSY', 'BSDF_ANISOTROPIC', 'BSDF_METALLIC', 'BSDF_GLASS', 'BSDF_HAIR',
+                               'BSDF_HAIR_PRINCIPLED'})
+# Principled inputs whose nonzero value makes a glossy layer (specular, metal, coat, glass)
+_PRINCIPLED_GLOSSY = ('Specular IOR Level', 'Metallic', 'Coat Weight', 'Transmission Weight')
+
+
+def has_glossy_closure(ntree, seen=None) -> bool:
+    """Whether a node tree (its groups too) holds a closure Cycles treats as glossy, which DACRT
+    renders as diffuse: a light's Glossy ray visibility then differs from its Diffuse one there
+    (export/scene.py). A Principled counts unless each of its glossy layers is an unlinked 0."""
+    seen = set() if seen is None else seen
+    if ntree is None or ntree.as_pointer() in seen:
+        return False
+    seen.add(ntree.as_pointer())
+    for node in ntree.nodes:
+        t = node.type
+        if t in GLOSSY_NODE_TYPES or (t == 'BSDF_TOON' and getattr(node, 'component', 'DIFFUSE') == 'GLOSSY'):
+            return True
+        if t == 'BSDF_PRINCIPLED':
+            layers = [node.inputs.get(n) for n in _PRINCIPLED_GLOSSY]
+            if any(s is not None and (s.is_linked or s.default_value != 0.0) for s in layers):
+                return True
+        if t == 'GROUP' and has_glossy_closure(node.node_tree, seen):
+            return True
+    return False

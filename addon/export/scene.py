@@ -39,6 +39,7 @@ SYNCED_TYPES = {'MESH', 'POINTCLOUD', 'CURVES'}
 UNSUPPORTED_TYPES = {'VOLUME': "volume"}
 # object types whose own geometry Cycles renders (a shadow catcher flag means something on them)
 CATCHER_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT', 'CURVES', 'POINTCLOUD', 'VOLUME'}
+CATCHER_IGNORED = "shadow catcher is not supported; rendered as an ordinary object"
 # drawn by Blender over an external engine's render (Cycles' too), not traced by either
 DRAWN_OVER = {'GREASEPENCIL', 'GPENCIL'}
 CHECK_EVERY = 64                          # instances between cancel checks
@@ -58,8 +59,10 @@ def layer_subject(scene, layer: str) -> str:
     """What a view layer's messages call what they are about: "the scene", or "view layer
     'X'" when the scene renders more than one layer (its other layers may render what this one
     leaves out)."""
+    # (Render Single Layer is not read: a script's or the command line's render renders every
+    # layer in use whatever it says, and naming the layer is true either way)
     in_use = sum(1 for l in getattr(scene, 'view_layers', ()) if l.use)
-    if in_use > 1 and not getattr(scene.render, 'use_single_layer', False):
+    if in_use > 1:
         return f"view layer '{layer}'"
     return "the scene"
 
@@ -248,6 +251,7 @@ class Exporter:
         self.skipped = {}         # reason -> {object names} (ordered)
         self.ignored = {}         # reason -> {object names}: rendered, without a feature Cycles has
         self._glossy_visibility = {}    # lights whose Glossy and Diffuse visibility differ (_light)
+        self._catchers = {}       # names of geometry objects flagged Shadow Catcher (_note_ignored_features)
         self.lights_approximated = {}   # what a light's node tree lacks -> {light names}
         self.drawn_over = []      # Grease Pencil objects: Blender draws them over the render
         self._noted = set()       # objects whose ignored features are noted (instances repeat them)
@@ -543,8 +547,11 @@ class Exporter:
         self._noted.add(ob.name)
         # (Cycles makes catchers of geometry, and of what an instancer's instances are: the
         # flag on a camera, an empty or a lamp changes nothing, and had been warned of)
-        if getattr(ob, 'is_shadow_catcher', False) and (ob.type in CATCHER_TYPES or _instancer(ob)):
-            self.ignore("shadow catcher is not supported; rendered as an ordinary object", ob.name)
+        if getattr(ob, 'is_shadow_catcher', False):
+            if _instancer(ob):
+                self.ignore(CATCHER_IGNORED, ob.name)
+            elif ob.type in CATCHER_TYPES:
+                self._catchers[ob.name] = None      # said if it renders something (_summarize)
         mods = getattr(ob, 'modifiers', None)
         if mods:
             # Cycles dices adaptively only when the stack's last modifier (enabled or not) is an
@@ -864,12 +871,13 @@ class Exporter:
 
     # -- messages ----------------------------------------------------------------------------
     def _glossy_as_diffuse(self, geometry) -> bool:
-        """Whether a rendered surface has a glossy part DACRT renders as diffuse: a material whose
-        approximation says so (every such reason, Principled layers, Glossy / Glass / Sheen
-        BSDFs, reads "... as diffuse") or Blender's default surface (material 0, a Principled)."""
+        """Whether a rendered surface has a closure Cycles treats as glossy, which DACRT renders
+        as diffuse (Material.glossy), or Blender's default surface (material 0, a Principled
+        with its specular layer). Sheen and a Toon's Diffuse component are diffuse in Cycles."""
         if len(geometry.material) and not geometry.material.all():
             return True
-        return any(' as diffuse' in m.approximated for m in self.materials.materials)
+        used = np.unique(geometry.material)
+        return any(self.materials.materials[k].glossy for k in used if 0 < k < len(self.materials.materials))
 
     def _summarize(self, geometry, world, environment, camera_world=None):
         for text, names in self.lights_approximated.items():
@@ -879,6 +887,12 @@ class Exporter:
                                              f"approximated: {text}"))
         for reason, names in self.skipped.items():
             self.messages.append(('WARNING', f"skipped {', '.join(repr(n) for n in names)}: {reason}"))
+        if self._catchers:
+            # a catcher that renders nothing (a curve with no splines or no bevel) is not said
+            drawn = {p.name for key, ps in self.placements.items() if self.meshes.get(key) is not None for p in ps}
+            for name in self._catchers:
+                if name in drawn:
+                    _add_name(self.ignored, CATCHER_IGNORED, name)
         for reason, names in self.ignored.items():
             self.messages.append(('WARNING', f"{', '.join(repr(n) for n in names)}: {reason}"))
         if self._glossy_visibility and self._glossy_as_diffuse(geometry):

@@ -82,6 +82,16 @@ def test_one_layer_says_the_scene(scene, said, capfd):
     assert len(summaries) == 1 and "view layer" not in summaries[0], summaries
 
 
+def test_render_single_layer_still_names_the_layer(scene, said, capfd):
+    """A script's render renders every layer in use whatever Render Single Layer says."""
+    _two_layers(scene)
+    scene.render.use_single_layer = True
+    capfd.readouterr()
+    text = _render(said)
+    assert any("view layer 'FX' has no renderable geometry" in t for t in text), text
+    assert not any("the scene has no renderable geometry" in t for t in text), text
+
+
 def test_the_surfaces_filter_names_its_layer(scene, said):
     _two_layers(scene)
     scene.view_layers["FX"].layer_collection.children["Geo"].exclude = False
@@ -110,6 +120,36 @@ def test_glossy_visibility_off_beside_a_glossy_layer_is_warned(scene, said):
     assert len(text) == 1 and "'Lamp'" in text[0] and "Glossy off with Diffuse on" in text[0], text
 
 
+def _shader(name, kind, **props):
+    mat, nt, out = scenes._material(name)
+    node = nt.nodes.new(kind)
+    for k, v in props.items():
+        setattr(node, k, v)
+    nt.links.new(node.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_diffuse_class_closures_are_not_glossy(scene, said):
+    """A Sheen BSDF and a Toon BSDF's Diffuse component are diffuse closures in Cycles: its
+    image is the same with the lamp's Glossy visibility on or off (measured 0.6151 / 0.0226)."""
+    _, cube, lamp = _box(scene, _shader("Toon", 'ShaderNodeBsdfToon'))
+    cube.data.materials[0] = _shader("Sheen", 'ShaderNodeBsdfSheen')
+    lamp.visible_glossy = False
+    assert _glossy_said(_render(said)) == []
+
+
+def test_a_toon_glossy_component_is_glossy(scene, said):
+    _, _, lamp = _box(scene, _shader("ToonGlossy", 'ShaderNodeBsdfToon', component='GLOSSY'))
+    lamp.visible_glossy = False
+    assert len(_glossy_said(_render(said))) == 1
+
+
+def test_a_principled_without_glossy_layers_is_not_glossy(scene, said):
+    _, _, lamp = _box(scene, scenes.principled("Matte", (0.5, 0.5, 0.5), specular=0.0))
+    lamp.visible_glossy = False
+    assert _glossy_said(_render(said)) == []
+
+
 def test_the_instancer_whose_flag_it_is_is_named(scene, said):
     _, _, lamp = _box(scene, scenes.principled("Plastic", (0.5, 0.5, 0.5), specular=0.5))
     _instanced(scene, lamp, "Rig", "LightRig").visible_glossy = False
@@ -127,6 +167,19 @@ def test_catcher_flag_on_camera_and_empty_is_not_warned(scene, said):
     empty = bpy.data.objects.new("Locator", None)
     scene.collection.objects.link(empty)
     empty.is_shadow_catcher = scene.camera.is_shadow_catcher = True
+    assert _catcher_said(_render(said)) == []
+
+
+def test_catcher_flag_on_an_empty_curve_is_not_warned(scene, said):
+    """A curve with no splines and a path with no bevel render nothing in either engine."""
+    _box(scene)
+    for name, points in (("Empty", 0), ("Path", 3)):
+        cu = bpy.data.curves.new(name, 'CURVE')
+        if points:
+            cu.splines.new('POLY').points.add(points - 1)
+        ob = bpy.data.objects.new(name, cu)
+        scene.collection.objects.link(ob)
+        ob.is_shadow_catcher = True
     assert _catcher_said(_render(said)) == []
 
 
