@@ -18,6 +18,8 @@
 #include "orennayar.h"
 #include "shading.h"
 #include "environment.h"
+#include "envlanes.h"
+#include "equirect.h"
 #include "lamps.h"
 #include "nextevent.h"
 
@@ -677,6 +679,37 @@ void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py
     });
 }
 
+// The equirectangular mapping's kernels alone (envlanes.h, equirect.h), for their tests.
+py::tuple equirect_uv_py(F32Array to_map, F32Array D) {
+    if (to_map.size() != 9) throw py::value_error("to_map must hold 9 floats, got " + shape_str(to_map));
+    if (D.ndim() != 2 || D.shape(0) != 3) throw py::value_error("D must have shape (3, n), got " + shape_str(D));
+    const size_t n = size_t(D.shape(1));
+    F32Array u{py::ssize_t(n)}, v{py::ssize_t(n)}, s{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        equirect_uv_lanes(to_map.data(), D.data(), D.data() + n, D.data() + 2 * n, n, u.mutable_data(),
+                          v.mutable_data(), s.mutable_data());
+    }
+    return py::make_tuple(u, v, s);
+}
+
+py::tuple equirect_direction_py(F32Array u, F32Array v) {
+    if (u.ndim() != 1) throw py::value_error("u must be one-dimensional, got " + shape_str(u));
+    const size_t n = size_t(u.shape(0));
+    need_shape(v, 0, n, "v");
+    F32Array m({py::ssize_t(3), py::ssize_t(n)}), s{py::ssize_t(n)};
+    float* out = m.mutable_data();
+    {
+        py::gil_scoped_release nogil;
+        for (size_t i = 0; i < n; ++i) {
+            float d[3];
+            equirect::from_uv(u.data()[i], v.data()[i], d, s.mutable_data()[i]);
+            for (int a = 0; a < 3; ++a) out[size_t(a) * n + i] = d[a];
+        }
+    }
+    return py::make_tuple(m, s);
+}
+
 }  // namespace
 
 void register_lamps(py::module_& m) {
@@ -709,6 +742,8 @@ void register_lamps(py::module_& m) {
           py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none(),
           py::arg("bump") = py::none(), py::arg("tree") = py::none(), py::arg("tri_prim") = py::none(),
           py::arg("rough") = py::none());
+    m.def("equirect_uv", &equirect_uv_py, py::arg("to_map"), py::arg("D"));
+    m.def("equirect_direction", &equirect_direction_py, py::arg("u"), py::arg("v"));
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(
         m, "EnvironmentMap", "An equirectangular environment light: radiance, pdf and samples (environment.h)",
         py::module_local())

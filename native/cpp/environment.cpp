@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "envlanes.h"
+#include "equirect.h"
 #include "parallel.h"
 #include "shading.h"
 
@@ -13,9 +15,6 @@ namespace dacrt {
 namespace {
 
 constexpr double PI_D = 3.14159265358979323846;
-constexpr float PI = float(PI_D);
-constexpr float INV_2PI = float(1.0 / (2.0 * PI_D));
-constexpr float INV_PI = float(1.0 / PI_D);
 constexpr float INV_2PI2 = float(1.0 / (2.0 * PI_D * PI_D));
 
 // i modulo size (REPEAT). Lookups and samples only ever step one period out ([-size, 2 size)),
@@ -140,27 +139,48 @@ inline double sin_integral(double v0, double v1) {
     return (std::cos(PI_D * (1.0 - v1)) - std::cos(PI_D * (1.0 - v0))) / PI_D;
 }
 
+// Radiance at (u, v) and the solid-angle pdf of sampling it, sin_theta < 0: no direction.
+inline void eval_uv(const EnvironmentMap& env, float u, float v, float sin_theta, float Le[3], float& pdf) {
+    if (!(sin_theta >= 0.0f)) {
+        Le[0] = Le[1] = Le[2] = 0.0f;
+        pdf = 0.0f;
+        return;
+    }
+    lookup(env, u, v, Le);
+    pdf = env.total > 0 && sin_theta > 0 ? uv_pdf(env, u, v) * INV_2PI2 / sin_theta : 0.0f;
+}
+
+// The missed rays of [b, e) in chunks: their (u, v) lane by lane (envlanes.h), then the lookups.
 void gather_range(const EnvironmentMap* env, float prob, const float* D, const uint8_t* miss, const float* thr,
                   const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N, float clamp, size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-        if (!miss[i]) continue;
-        const float d[3] = {D[i], D[n + i], D[2 * n + i]};
-        float Le[3], pdf;
-        environment_eval(*env, d, Le, pdf);
-        float w = 1.0f;
-        if (prob > 0) {  // power heuristic of this BSDF ray against sampling the map
-            float r = prob * pdf / pdf_bsdf[i];
-            r *= r;
-            w = 1.0f / (1.0f + r);
+    constexpr size_t K = 64;
+    size_t idx[K];
+    float dx[K], dy[K], dz[K], us[K], vs[K], ss[K];
+    size_t i = b;
+    while (i < e) {
+        size_t m = 0;
+        for (; i < e && m < K; ++i)
+            if (miss[i]) idx[m] = i, dx[m] = D[i], dy[m] = D[n + i], dz[m] = D[2 * n + i], ++m;
+        equirect_uv_lanes(env->to_map, dx, dy, dz, m, us, vs, ss);
+        for (size_t q = 0; q < m; ++q) {
+            const size_t r = idx[q];
+            float Le[3], pdf;
+            eval_uv(*env, us[q], vs[q], ss[q], Le, pdf);
+            float w = 1.0f;
+            if (prob > 0) {  // power heuristic of this BSDF ray against sampling the map
+                float x = prob * pdf / pdf_bsdf[r];
+                x *= x;
+                w = 1.0f / (1.0f + x);
+            }
+            float* out = L + index_at(pid, r, N);
+            float v[3];
+            for (int a = 0; a < 3; ++a) {
+                v[a] = Le[a] * w;
+                if (thr) v[a] *= thr[size_t(a) * n + r];
+            }
+            clamp_light(v, clamp);
+            for (int a = 0; a < 3; ++a) out[size_t(a) * N] += v[a];
         }
-        float* out = L + index_at(pid, i, N);
-        float v[3];
-        for (int a = 0; a < 3; ++a) {
-            v[a] = Le[a] * w;
-            if (thr) v[a] *= thr[size_t(a) * n + i];
-        }
-        clamp_light(v, clamp);
-        for (int a = 0; a < 3; ++a) out[size_t(a) * N] += v[a];
     }
 }
 
@@ -258,25 +278,9 @@ std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t wi
 }
 
 void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], float& pdf) {
-    const float* M = env.to_map;
-    float m[3];
-    for (int r = 0; r < 3; ++r) m[r] = M[3 * r] * d[0] + M[3 * r + 1] * d[1] + M[3 * r + 2] * d[2];
-    const float len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-    if (!(len > 0)) {
-        Le[0] = Le[1] = Le[2] = 0.0f;
-        pdf = 0.0f;
-        return;
-    }
-    const float z = std::min(1.0f, std::max(-1.0f, m[2] / len));
-    // At the pole (m.x, m.y both zero) atan2 reads only their signs: Cycles' directions there
-    // have +0 (its camera sums products, one of them +0), ours can carry -0 (an orthographic
-    // camera's -forward, to_map's products), which read the u = 0 seam column instead of
-    // u = 0.5. Adding +0 turns -0 into +0 and leaves every other value as it is.
-    const float u = 0.5f - std::atan2(m[1] + 0.0f, m[0] + 0.0f) * INV_2PI;
-    const float v = 1.0f - std::acos(z) * INV_PI;
-    lookup(env, u, v, Le);
-    const float s = std::sqrt(m[0] * m[0] + m[1] * m[1]) / len;
-    pdf = env.total > 0 && s > 0 ? uv_pdf(env, u, v) * INV_2PI2 / s : 0.0f;
+    float u, v, s;
+    equirect_uv_lanes(env.to_map, d, d + 1, d + 2, 1, &u, &v, &s);
+    eval_uv(env, u, v, s, Le, pdf);
 }
 
 void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[3], float value[3], float& pdf) {
@@ -312,9 +316,8 @@ void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[
         u -= std::floor(u);  // REPEAT: the last column's and row's cells wrap
         v -= std::floor(v);
     }
-    const float theta = PI * (1.0f - v), phi = PI * (1.0f - 2.0f * u);
-    const float s = std::sin(theta);
-    const float m[3] = {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
+    float m[3], s;
+    equirect::from_uv(u, v, m, s);
     const float* M = env.to_map;  // orthogonal: the inverse is the transpose
     for (int a = 0; a < 3; ++a) wi[a] = M[a] * m[0] + M[3 + a] * m[1] + M[6 + a] * m[2];
     pdf = s > 0 ? uv_pdf(env, u, v) * INV_2PI2 / s : 0.0f;
