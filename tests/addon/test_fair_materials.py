@@ -7,7 +7,7 @@ import math
 import bpy
 import numpy as np
 
-from addon import export, nodeeval, sheen, specular
+from addon import nodeeval, sheen, specular
 from tests.bench import fairmaterials
 
 from . import scenes
