@@ -338,15 +338,29 @@ def links_feeding(socket, descend=lambda node: True, limit=100_000):
             todo.extend(node.inputs[i] for i in range(len(node.inputs)))
 
 
+class Used(set):
+    """used_outputs' set of output keys, which also holds each used output's Identical key."""
+
+    def __init__(self, keys=(), same=None):
+        super().__init__(keys)
+        self.same = same if same is not None else Identical()
+
+    def reads(self, node, identifier):
+        """Whether node's output is used: its own, or that of a node Cycles merges it with."""
+        return output_key(node, identifier) in self or self.same.output(node, identifier) in self
+
+
 def used_outputs(ntree):
     """The outputs (output_key) whose values reach ntree's active output node, following
     links back as source() does (through reroutes, muted nodes and groups), after Cycles'
     constant folding (_Folder). Cycles removes every other node and link before it compiles a
     shader, so an output linked only to something unused (a leftover Math node, a node feeding
-    nothing, a Mix factor of a Mix that folds to its A) counts as unlinked."""
+    nothing, a Mix factor of a Mix that folds to its A) counts as unlinked. Each used output's
+    Identical key is in the set too (Used.reads): Cycles merges identical nodes first, so an
+    output of one is used where that of a node identical to it is."""
     out = output_node(ntree)
     folder = _Folder()
-    used, seen = set(), set()
+    used, seen = Used(), set()
     todo = [GraphNode(out)] if out is not None else []
     while todo:
         node = todo.pop()
@@ -355,11 +369,131 @@ def used_outputs(ntree):
             if not isinstance(link, GraphLink):
                 continue
             used.add(output_key(link.from_node, link.from_socket.identifier))
+            used.add(used.same.output(link.from_node, link.from_socket.identifier))
             key = output_key(link.from_node, None)
             if key not in seen:
                 seen.add(key)
                 todo.append(link.from_node)
     return used
+
+
+# node settings Cycles does not read (a texture's Color Mapping), left out of Identical's keys
+_IGNORED_SETTINGS = frozenset({'rna_type', 'color_mapping'})
+_SCALARS = ('BOOLEAN', 'INT', 'FLOAT', 'STRING', 'ENUM')
+
+
+class Identical:
+    """Keys that name nodes as Cycles' ShaderGraph::deduplicate_nodes (shader_graph.cpp) merges
+    them, after flattening groups and before it compiles: two nodes of one type whose settings
+    are equal and each of whose inputs reads the same output (of nodes merged in turn, bottom
+    up) or, unlinked, the same value become one node. Whatever Cycles decides for the merged
+    node holds for both: two Image Texture nodes of one image, one's Color used and the other's
+    Alpha, are one node whose Alpha is used, its Color unassociated for both readers. Nodes
+    reached through groups (GraphNode) are compared in their group context, so a group used
+    twice on the same inputs merges too. Where a setting is not compared here (a Color Ramp's
+    stops, a curve) the node keeps its own key: merged with none, as before this existed."""
+
+    def __init__(self):
+        self._ids = {}           # a node's description -> its key (a small int)
+        self._memo = {}          # output_key(node, None) -> its key
+        self._settings = {}      # bl_idname -> the identifiers of its own settings
+        self._depth = 0
+
+    def output(self, node, identifier):
+        """The key of node's output (GraphNode or Blender node) `identifier`."""
+        return 'identical', self.node(node), identifier
+
+    def node(self, node):
+        own = output_key(node, None)
+        key = self._memo.get(own)
+        if key is None:
+            self._memo[own] = own          # while it is described (a cycle): itself
+            key = own
+            if self._depth <= FOLD_DEPTH and len(self._memo) < 100_000:
+                self._depth += 1
+                try:
+                    described = self._describe(node)
+                except (AttributeError, TypeError, ValueError, KeyError, RuntimeError):
+                    described = None      # (a node of another Blender version: merged with none)
+                finally:
+                    self._depth -= 1
+                if described is not None:
+                    key = self._ids.setdefault(described, len(self._ids))
+            self._memo[own] = key
+        return key
+
+    def _describe(self, node):
+        n = unwrap(node)
+        settings = self._values(n, self._own_settings(n), 0)
+        if settings is None:
+            return None
+        if n.type in ('VALUE', 'RGB'):          # their value is their output's
+            settings += (_plain(getattr(n.outputs[0], 'default_value', None)),)
+        if not isinstance(node, GraphNode):
+            node = GraphNode(n)
+        inputs = []
+        for i in range(len(n.inputs)):
+            sock = node.inputs[i]
+            if not getattr(sock.socket, 'enabled', True):
+                continue
+            link, carrier = source(sock)
+            if link is not None:
+                inputs.append((self.node(link.from_node), link.from_socket.identifier, link.crossed))
+            else:
+                # unlinked: its own value, or a value carried in from a group's socket (where an
+                # unlinked texture Vector reads a point, not its UV map: kept apart)
+                own = unwrap(carrier).as_pointer() == sock.socket.as_pointer()
+                inputs.append((own, _plain(getattr(unwrap(carrier), 'default_value', None)),
+                               bool(getattr(unwrap(carrier), 'hide_value', False)), carrier.crossed))
+        return n.bl_idname, settings, tuple(inputs)
+
+    def _own_settings(self, n):
+        found = self._settings.get(n.bl_idname)
+        if found is None:
+            base, inherited = n.bl_rna.base, set()
+            while base is not None:
+                inherited.update(p.identifier for p in base.properties)
+                base = base.base
+            found = self._settings[n.bl_idname] = tuple(
+                p for p in n.bl_rna.properties if p.identifier not in inherited and p.identifier not in _IGNORED_SETTINGS)
+        return found
+
+    def _values(self, owner, props, depth):
+        """The values of owner's properties props, a tuple; None where one is not compared."""
+        values = []
+        for p in props:
+            if p.identifier in _IGNORED_SETTINGS:
+                continue
+            v = getattr(owner, p.identifier, None)
+            if p.type in _SCALARS:
+                values.append(_plain(v))
+            elif p.type == 'POINTER':
+                if v is None:
+                    values.append(None)
+                elif getattr(v, 'id_data', None) is not None and v.id_data.as_pointer() == v.as_pointer():
+                    values.append(('id', v.as_pointer()))        # a data-block: the same one
+                elif depth == 0:                                  # a node's struct (an Image User)
+                    inner = self._values(v, v.bl_rna.properties, 1)
+                    if inner is None:
+                        return None
+                    values.append(inner)
+                else:
+                    return None
+            else:
+                return None
+        return tuple(values)
+
+
+def _plain(v):
+    """A setting's or socket's value as a hashable one."""
+    if v is None or isinstance(v, (bool, int, float, str)):
+        return v
+    if isinstance(v, (set, frozenset)):
+        return tuple(sorted(v))
+    try:
+        return tuple(_plain(x) for x in v)
+    except TypeError:
+        return object()                  # (not compared: equal to nothing)
 
 
 class _Const:

@@ -51,8 +51,10 @@ class ImageTextures:
         # Cycles: with the Alpha output used, the Color output of an image stored with
         # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0); an Alpha
         # linked only to nodes the shader does not use, or through links Cycles' constant
-        # folding drops (Alpha x 0, a Mix Multiply by white), is not (Cycles removes those first)
-        alpha_used = output_key(node, node.outputs['Alpha'].identifier) in self._used_outputs \
+        # folding drops (Alpha x 0, a Mix Multiply by white), is not (Cycles removes those first);
+        # one whose Alpha is unused is when an identical node's is (Cycles merges the two: a leaf
+        # PNG's second node for its Alpha had left the first's colour associated, 0.86x)
+        alpha_used = self._used_outputs.reads(node, node.outputs['Alpha'].identifier) \
             if self._used_outputs is not None else node.outputs['Alpha'].is_linked
         unassociate = bool(alpha_used and associates_alpha(img))
         key = img.as_pointer()

@@ -191,9 +191,11 @@ def _images_reached(socket):
     """How many image lookups feed socket: Image Texture nodes, each in its group context (one
     node's Color and Alpha are one lookup). Counted by node, not by image: one image read by two
     nodes (two scales, another interpolation, its Alpha on other coordinates) or through a group
-    used twice is two lookups, which the evaluation (one lookup per material) had read the second
-    of as its average colour."""
-    return len({nodegraph.output_key(link.from_node, None)
+    used twice on other inputs is two lookups, which the evaluation (one lookup per material) had
+    read the second of as its average colour. Identical nodes (nodegraph.Identical) are one: Cycles
+    merges them, and the evaluation reads them as one image exactly."""
+    same = nodegraph.Identical()
+    return len({same.node(link.from_node)
                 for link in nodegraph.links_feeding(socket) if link.from_node.type == 'TEX_IMAGE'})
 
 
