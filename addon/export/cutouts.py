@@ -14,6 +14,20 @@ from .closure import Closure, Texture, is_image_alpha
 MISSING_ALPHA = 'missing image alpha'
 
 
+def _with_opacity(opaque, clear, opacity):
+    """The cut-out of opaque (no transparency of its own) by opacity, clear's transparency
+    where it is not. Opacity only weighs the whole closure per point: albedo and pass colour
+    stay opaque's, so a rough diffuse stays one (Closure.rough: its colour is the pass colour
+    over its Mix weights, F / D depends on that colour and sigma, not on the weight). Dropping
+    it had made a textured cut-out of a rough Diffuse its view-averaged albedo, 2-2.3x Cycles
+    under a low sun facing the view."""
+    out = Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
+                  clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass,
+                  light_emission=opaque.light_emission)._with_passes(opaque.passes)
+    out.rough = opaque.rough
+    return out
+
+
 class Cutouts:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
@@ -60,9 +74,7 @@ class Cutouts:
         if opacity is None:
             return None
         reasons.extend(notes)
-        return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
-                        clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass,
-                        light_emission=opaque.light_emission)._with_passes(opaque.passes)
+        return _with_opacity(opaque, clear, opacity)
 
     def _per_point_image(self, socket):
         """Whether an image feeding socket reads coordinates its UV lookup cannot (Generated,
@@ -91,9 +103,7 @@ class Cutouts:
             f = clip_unit(np.asarray(fac_fn(coords), np.float64), 0.0)
             return f if clear_a else 1.0 - f
         tex = Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity')
-        return Closure(opaque.const, opaque.emission, opaque.texture, opaque.tex_weight, 0.0,
-                        clear.transparent, (tex, False), opaque.emission_tex, opaque.translucent, clear.glass,
-                        light_emission=opaque.light_emission)._with_passes(opaque.passes)
+        return _with_opacity(opaque, clear, (tex, False))
 
     def _procedural_alpha(self, socket, reasons):
         """(Texture, False) of a Principled BSDF's Alpha that procedural textures compute (a

@@ -27,7 +27,7 @@ from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
 from .bump import displacement_bump
 from .closure import Closure
-from .reflectors import ROUGH_DIFFUSE_AVERAGED, has_glossy_closure
+from .reflectors import ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, has_glossy_closure
 from .cutouts import Cutouts
 from .emission import Emission
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
@@ -56,7 +56,7 @@ def _averaged_rough(m):
     if m.rough_sigma > 0.0:
         m.rough_sigma, m.rough_scale = 0.0, None
         m.approximated = '; '.join(r for r in (m.approximated, ROUGH_DIFFUSE_AVERAGED.replace(
-            "mixed with another reflection or under nodes that map it", "coloured by an attribute")) if r)
+            ROUGH_DIFFUSE_WHY, "coloured by an attribute")) if r)
 
 
 def _alpha_linked(ntree, seen=None):

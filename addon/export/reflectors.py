@@ -25,8 +25,12 @@ def diffuse_roughness(node, reasons):
 
 
 # what a rough Diffuse BSDF the integrator cannot render as Cycles' BSDF becomes (said by the
-# material export, materials.py)
-ROUGH_DIFFUSE_AVERAGED = ("Diffuse roughness (Oren-Nayar) mixed with another reflection or under nodes that map it:"
+# material export, materials.py). Only a sum or mix with another reflection (of another colour or
+# roughness: export.closure.plus, texturedmixes) drops it from a Diffuse BSDF; cut-outs, emission,
+# holdout, translucency and Mix weights (constant or textured) keep it (a textured cut-out had
+# been said as "mixed with another reflection or under nodes that map it", neither true)
+ROUGH_DIFFUSE_WHY = "mixed with another reflection of another colour or roughness (Mix or Add Shader)"
+ROUGH_DIFFUSE_AVERAGED = (f"Diffuse roughness (Oren-Nayar) {ROUGH_DIFFUSE_WHY}:"
                           " as its albedo averaged over view directions" + ROUGH_DIFFUSE_LIGHT)
 
 
