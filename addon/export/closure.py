@@ -224,6 +224,10 @@ class Closure:
         mine, theirs = (self, other) if other.rough is None else (other, self)
         if mine.rough is not None and not theirs.reflects() and theirs.rough is None:
             out.rough = mine.rough
+        elif same_rough(self, other):
+            # two shares of one rough diffuse (one Diffuse BSDF in both inputs of a Mix Shader):
+            # still one colour, its weights summed (had been averaged, 1.9-2.3x Cycles)
+            out.rough = (self.rough[0], self.rough[1] + other.rough[1])
         return out
 
     def _summed(self, other, reasons):
@@ -268,6 +272,21 @@ class Closure:
         return Closure(self.const + other.const, self.emission + other.emission, tex, w,
                         self.holdout + other.holdout, transparent, opacity, etex,
                         self.translucent + other.translucent, glass, opaque_glass, light)
+
+
+def same_rough(a, b):
+    """Whether closures a and b are both a rough diffuse (Closure.rough) of one roughness and
+    one colour (pass colour over Mix weights: the same texture, proportional weights), so that
+    their sum or any mix of them is that rough diffuse again."""
+    if a.rough is None or b.rough is None or a.rough[0] != b.rough[0]:
+        return False
+    (ka, ta, twa), (kb, tb, twb) = a.pass_albedo(), b.pass_albedo()
+    wa, wb = np.asarray(a.rough[1], np.float64), np.asarray(b.rough[1], np.float64)
+    textured_a, textured_b = ta is not None and np.any(twa), tb is not None and np.any(twb)
+    if textured_a != textured_b or (textured_a and ta.key != tb.key):
+        return False
+    return bool(np.allclose(ka * wb, kb * wa, rtol=1e-6, atol=0.0) and
+                np.allclose(np.asarray(twa) * wb, np.asarray(twb) * wa, rtol=1e-6, atol=0.0))
 
 
 def is_image_alpha(link):

@@ -10,7 +10,15 @@ from ..nodegraph import links_feeding
 from ..procedural import ProceduralTexels
 from ..texture import ImageTexels, stored_texels
 from . import procedurals
-from .closure import Closure, Texture, per_point
+from .closure import Closure, Texture, per_point, same_rough
+
+
+def _alike(a, b):
+    """Whether two closures that have an albedo alone are one rough diffuse of the same colour
+    and weight: a Mix Shader of them is that closure at any factor (per texel or per point it
+    had become a texture of the albedo and lost the rough diffuse's view dependence)."""
+    return same_rough(a, b) and np.allclose(a.rough[1], b.rough[1]) and np.allclose(a.const, b.const) and \
+        np.allclose(a.tex_weight, b.tex_weight)
 
 
 class TexturedMixes:
@@ -38,6 +46,8 @@ class TexturedMixes:
                 return None
             sides.append(c)
         reasons.extend(notes)
+        if _alike(*sides):      # (one rough diffuse in both inputs: itself, whatever the factor)
+            return sides[0]
         fac = np.clip(np.nan_to_num(fac[..., None].astype(np.float64), nan=0.0), 0.0, 1.0)
         after = self._after_lookup(fac_socket, src, stored_texels(src.pixels), False)
         if after is None and src.interpolation != 'Closest':
@@ -108,6 +118,9 @@ class TexturedMixes:
             sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
                           lookup.pixels if procedural else None))
             needs |= lookup.pixels.needs if procedural else frozenset()
+        if _alike(*closures):           # (the factor, unused, says nothing)
+            reasons.extend(notes)
+            return closures[0]
         reasons.extend(fac_notes + notes)
 
         def albedo(side, coords):
