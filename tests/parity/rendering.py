@@ -46,6 +46,19 @@ def fair_scene_settings(scene, terminator=False):
             ob.cycles.shadow_terminator_geometry_offset = 0.0     # the older home of the setting
 
 
+def matched(scene, samples, bounces=0, box=True):
+    """fair_scene_settings, then both engines at `samples` and `bounces` on the CPU, without
+    denoising or adaptive sampling, with a 1-pixel Box filter unless not `box` (small tests
+    comparing block means)."""
+    fair_scene_settings(scene)
+    scene.cycles.device, scene.cycles.use_denoising, scene.cycles.use_adaptive_sampling = 'CPU', False, False
+    scene.cycles.samples = scene.dacrt.samples = samples
+    scene.cycles.max_bounces = scene.dacrt.max_bounces = bounces
+    if box:
+        scene.cycles.pixel_filter_type, scene.dacrt.filter_type = 'BOX', 'BOX'
+        scene.cycles.filter_width = scene.dacrt.filter_width = 1.0
+
+
 def set_cycles(scene, spec, seed):
     scene.render.engine = 'CYCLES'
     c = scene.cycles

@@ -43,12 +43,7 @@ def test_an_attribute_naming_a_uv_map_matches_cycles(tmp_path, name, output, sai
     for corner in second.data:
         u, v = corner.uv
         corner.uv = (v * 0.6 + 0.2, 1 - u)
-    rendering.fair_scene_settings(sc)
-    sc.cycles.device, sc.cycles.use_denoising, sc.cycles.use_adaptive_sampling = 'CPU', False, False
-    sc.cycles.samples = sc.dacrt.samples = 16
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    rendering.matched(sc, 16)
     blocks = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine

@@ -85,12 +85,7 @@ def test_a_missing_images_alpha_is_one_as_in_cycles(tmp_path, source, use, said)
     a = sc.view_layers[0].aovs.add()
     a.name, a.type = 'mask', 'VALUE'
     scenes.plane("P", size=2, materials=(mat,)).data.uv_layers.new(name='UVMap')
-    rendering.fair_scene_settings(sc)
-    sc.cycles.device, sc.cycles.use_denoising, sc.cycles.use_adaptive_sampling = 'CPU', False, False
-    sc.cycles.samples = sc.dacrt.samples = 4
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'
-    sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
+    rendering.matched(sc, 4)
     got = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine
