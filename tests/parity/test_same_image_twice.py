@@ -10,7 +10,7 @@ import pytest
 
 from tests.addon import scenes
 
-from . import rendering
+from .test_two_images import albedo_plane_blocks
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -83,25 +83,7 @@ def group_twice(nt, img):
 
 @pytest.mark.parametrize("chain", [two_scales, decal, clip_cubic, group_twice], ids=lambda f: f.__name__)
 def test_one_image_looked_up_twice_matches_cycles(tmp_path, chain, said):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x = sc.render.resolution_y = 32
-    scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)
-    scenes.world((1, 1, 1))
-    mat = bpy.data.materials.new("M")
-    nt = mat.node_tree
-    bsdf = nt.nodes['Principled BSDF']
-    bsdf.inputs['Specular IOR Level'].default_value = 0
-    nt.links.new(chain(nt, _image(tmp_path)), bsdf.inputs['Base Color'])
-    scenes.plane("P", size=2, materials=(mat,)).data.uv_layers.new(name='UVMap')
-    rendering.fair_scene_settings(sc)
-    blocks = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        sc.cycles.samples, sc.cycles.use_denoising, sc.cycles.device, sc.cycles.max_bounces = 64, False, 'CPU', 0
-        sc.dacrt.samples, sc.dacrt.max_bounces = 64, 0
-        img = scenes.render_rgba(sc)
-        blocks[engine] = img[..., :3].reshape(4, 8, 4, 8, 3).mean(axis=(1, 3))
+    blocks = albedo_plane_blocks(lambda nt: chain(nt, _image(tmp_path)))
     assert not any("two image textures" in t for t in said), said
     diff = np.abs(blocks['DACRT'] - blocks['CYCLES'])
     # 64 samples of a world-lit albedo: a block's mean is within ~0.002 of Cycles' (Closest

@@ -50,8 +50,11 @@ def mapped_linear(nt, ta, tb):
     return multiply(nt, ta, tb)
 
 
-@pytest.mark.parametrize("chain", [multiply, alpha_mask, noise_mask, mapped_linear], ids=lambda f: f.__name__)
-def test_two_textures_in_one_colour_match_cycles(tmp_path, chain):
+def albedo_plane_blocks(colour):
+    """The scene of this file and test_same_image_twice.py: a UV-mapped plane whose Principled
+    (no specular layer) takes its Base Color from colour(node tree), under a white world without
+    bounces (radiance = albedo), seen square by an orthographic camera at 32 x 32, 64 spp.
+    Returns {engine: 4 x 4 block means (4, 4, 3)}."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
@@ -61,11 +64,7 @@ def test_two_textures_in_one_colour_match_cycles(tmp_path, chain):
     nt = mat.node_tree
     bsdf = nt.nodes['Principled BSDF']
     bsdf.inputs['Specular IOR Level'].default_value = 0
-    ia, ib = _images(tmp_path)
-    ta, tb = nt.nodes.new('ShaderNodeTexImage'), nt.nodes.new('ShaderNodeTexImage')
-    ta.image, tb.image = ia, ib
-    ta.interpolation = tb.interpolation = 'Closest'
-    nt.links.new(chain(nt, ta, tb), bsdf.inputs['Base Color'])
+    nt.links.new(colour(nt), bsdf.inputs['Base Color'])
     scenes.plane("P", size=2, materials=(mat,)).data.uv_layers.new(name='UVMap')
     rendering.fair_scene_settings(sc)
     blocks = {}
@@ -75,6 +74,18 @@ def test_two_textures_in_one_colour_match_cycles(tmp_path, chain):
         sc.dacrt.samples, sc.dacrt.max_bounces = 64, 0
         img = scenes.render_rgba(sc)
         blocks[engine] = img[..., :3].reshape(4, 8, 4, 8, 3).mean(axis=(1, 3))
+    return blocks
+
+
+@pytest.mark.parametrize("chain", [multiply, alpha_mask, noise_mask, mapped_linear], ids=lambda f: f.__name__)
+def test_two_textures_in_one_colour_match_cycles(tmp_path, chain):
+    def colour(nt):
+        ia, ib = _images(tmp_path)
+        ta, tb = nt.nodes.new('ShaderNodeTexImage'), nt.nodes.new('ShaderNodeTexImage')
+        ta.image, tb.image = ia, ib
+        ta.interpolation = tb.interpolation = 'Closest'
+        return chain(nt, ta, tb)
+    blocks = albedo_plane_blocks(colour)
     diff = np.abs(blocks['DACRT'] - blocks['CYCLES'])
     # 64 samples of a world-lit albedo: a block's mean is within ~0.002 of Cycles'
     assert diff.max() < 0.005, (diff.max(), blocks)
