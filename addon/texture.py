@@ -325,6 +325,16 @@ def lookup_texels(texture, interpolation):
     return texture if stored is None else stored
 
 
+def mapped_uv(uv, transform):
+    """(u, v) of UV coordinates uv (n, 2) through a texture's transform (2, 3) float32, where
+    a material's Mapping puts the texture ((x, y) = T @ (u, v, 1)); uv's own columns for None."""
+    u, v = uv[:, 0], uv[:, 1]
+    if transform is None:
+        return u, v
+    M = transform
+    return M[0, 0] * u + M[0, 1] * v + M[0, 2], M[1, 0] * u + M[1, 1] * v + M[1, 2]
+
+
 def texture_lookup(tex, u: np.ndarray, v: np.ndarray, interpolation: str, extension: str) -> np.ndarray:
     """RGB (3,n) of an (h,w,4) texture (row 0 at the bottom), a UdimTiles or an EncodedTexels at
     (u, v): 'Closest', bilinear 'Linear' or bicubic (B-spline) 'Cubic', with texel centres at

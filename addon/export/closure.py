@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import nodeeval
 from ..procedural import ProceduralTexels
-from ..texture import LazyTexels, lookup_texels, mean_rgb, stored_texels, texture_lookup
+from ..texture import LazyTexels, lookup_texels, mapped_uv, mean_rgb, stored_texels, texture_lookup
 from ..texture import baked as after_lookup
 
 
@@ -307,10 +307,7 @@ def per_point(t):
     M = None if t.transform is None else np.asarray(t.transform, np.float32)
 
     def look(c):
-        u, v = c['uv'][:, 0], c['uv'][:, 1]
-        if M is not None:
-            u, v = M[0, 0] * u + M[0, 1] * v + M[0, 2], M[1, 0] * u + M[1, 1] * v + M[1, 2]
-        return texture_lookup(texels, u, v, interp, ext).T
+        return texture_lookup(texels, *mapped_uv(c['uv'], M), interp, ext).T
     return Texture.procedural(ProceduralTexels(look, {'uv'}, f"image '{t.name}'"))
 
 

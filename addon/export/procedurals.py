@@ -21,7 +21,7 @@ import numpy as np
 from .. import nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping, reads_off_uv
-from ..texture import alpha_lookup, lookup_texels, texture_lookup
+from ..texture import alpha_lookup, lookup_texels, mapped_uv, texture_lookup
 from .meshes import attribute_key, color_attribute_key
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO
 
@@ -583,10 +583,7 @@ def _image(node, out, chain, depth):
     chain.needs.add('uv')
 
     def look(c):
-        u, v = c['uv'][:, 0], c['uv'][:, 1]
-        if M is not None:
-            u, v = M[0, 0] * u + M[0, 1] * v + M[0, 2], M[1, 0] * u + M[1, 1] * v + M[1, 2]
-        return read(u, v)
+        return read(*mapped_uv(c['uv'], M))
     return look, False
 
 
