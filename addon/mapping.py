@@ -27,6 +27,12 @@ _MAX_CHAIN = 64
 # nodes an Image Texture's coordinates or an Environment Texture's direction pass through as
 # affine maps (Vector Rotate: a rotation about its Center)
 _AFFINE_NODES = ('MAPPING', 'VECTOR_ROTATE')
+# Vector Math operations that are affine in one operand when the others are constants (an
+# asset's "Tiling" as UV x 2.5 or UV + offset): the operand inputs they read, by index
+# (Vector, Vector_001, Vector_002, Scale); Divide only by a constant divisor, Scale only of a
+# varying vector
+_AFFINE_VECTOR_MATH = {'ADD': (0, 1), 'SUBTRACT': (0, 1), 'MULTIPLY': (0, 1), 'DIVIDE': (0, 1),
+                       'MULTIPLY_ADD': (0, 1, 2), 'SCALE': (0, 3), 'CROSS_PRODUCT': (0, 1)}
 
 
 def _rotation(euler):
@@ -143,6 +149,73 @@ def rotate_affine(node, reasons):
     return R, center - R @ center
 
 
+def _cross_matrix(c):
+    """[c]x: the matrix of v -> c x v."""
+    return np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0]])
+
+
+def vector_math_affine(node, output):
+    """(M, t, socket): a Vector Math node's Vector output as v -> M v + t of the one operand
+    input (socket) that is no constant, the others computed as constants (Cycles'
+    svm_vector_math: Divide is safe_divide, 0 where the divisor is 0); None where it is no such
+    map (another operation or output, no operand or two that vary, a varying divisor or Scale)."""
+    if node.type != 'VECT_MATH' or output.identifier != 'Vector' or node.operation not in _AFFINE_VECTOR_MATH:
+        return None
+    used = _AFFINE_VECTOR_MATH[node.operation]
+    values, varying = {}, []
+    for i in used:
+        sock = node.inputs[i]
+        value, exact = constant(sock, i != 3)
+        if exact:
+            values[i] = np.asarray(value, np.float64).reshape(-1)
+        else:
+            varying.append(i)
+    if len(varying) != 1:
+        return None
+    v, op, I = varying[0], node.operation, np.eye(3)
+    other = values.get(1 if v == 0 else 0)
+    if op == 'ADD':
+        return I, other, node.inputs[v]
+    if op == 'SUBTRACT':
+        return (I, -other, node.inputs[v]) if v == 0 else (-I, values[0], node.inputs[v])
+    if op == 'MULTIPLY':
+        return np.diag(other), np.zeros(3), node.inputs[v]
+    if op == 'DIVIDE':
+        return (np.diag(_safe_inverse(other)), np.zeros(3), node.inputs[v]) if v == 0 else None
+    if op == 'MULTIPLY_ADD':        # a * b + c
+        if v == 2:
+            return I, values[0] * values[1], node.inputs[v]
+        return np.diag(other), values[2], node.inputs[v]
+    if op == 'SCALE':
+        return (float(values[3][0]) * I, np.zeros(3), node.inputs[v]) if v == 0 else None
+    # CROSS_PRODUCT: v x c = -(c x v)
+    return (-_cross_matrix(other) if v == 0 else _cross_matrix(other)), np.zeros(3), node.inputs[v]
+
+
+def _affine_step(link, reasons):
+    """(M, t, socket) of the node link comes from, if it maps the vector fed to socket
+    affinely (Mapping, Vector Rotate, an affine Vector Math of constants), else None."""
+    node = link.from_node
+    if node.type == 'MAPPING':
+        return (*mapping_affine(node, reasons), node.inputs['Vector'])
+    if node.type == 'VECTOR_ROTATE':
+        return (*rotate_affine(node, reasons), node.inputs['Vector'])
+    return vector_math_affine(node, link.from_socket)
+
+
+def _past_affine(link):
+    """The link feeding the chain of affine nodes (_affine_step) that link comes from, or the
+    link itself where it comes from no such node (None: the chain starts at a constant)."""
+    for _ in range(_MAX_CHAIN):
+        if link is None:
+            return None
+        step = _affine_step(link, [])
+        if step is None:
+            return link
+        link = linked_link(step[2])
+    return link
+
+
 def node_texture_mapping(node, reasons):
     """(M, t): a texture node's own Texture Mapping (node.texture_mapping: the editor sidebar's
     panel, old files, scripts) as v -> M v + t, which Cycles applies to the node's vector before
@@ -186,9 +259,10 @@ def node_texture_mapping(node, reasons):
 
 def texture_transform(tex_node, reasons):
     """How an Image Texture's Vector input maps the active render UV map (u, v, 0): a (2, 3)
-    float64 T with (x, y) = T @ (u, v, 1), or None for the UV map itself. Chains of Mapping
-    nodes compose exactly; a Mapping with nothing linked maps its own (constant) vector. Other
-    sources are read as the UV map, with the reason in reasons."""
+    float64 T with (x, y) = T @ (u, v, 1), or None for the UV map itself. Chains of Mapping,
+    Vector Rotate and affine Vector Math nodes (vector_math_affine: UV x tiling, + offset)
+    compose exactly; a Mapping with nothing linked maps its own (constant) vector. Other
+    sources are read as the UV map, with the reason (naming the image) in reasons."""
     # from the vector reached so far to the image's: the node's own Texture Mapping first
     M, t = node_texture_mapping(tex_node, reasons) or (np.eye(3), np.zeros(3))
     own = tex_node.inputs['Vector']
@@ -201,12 +275,12 @@ def texture_transform(tex_node, reasons):
         p = M @ np.array(carrier.default_value[:3], np.float64) + t
         return np.array([[0.0, 0.0, p[0]], [0.0, 0.0, p[1]]])
     for _ in range(_MAX_CHAIN):
-        if link is None or link.from_node.type not in _AFFINE_NODES:
+        step = None if link is None else _affine_step(link, reasons)
+        if step is None:
             break
-        affine = mapping_affine if link.from_node.type == 'MAPPING' else rotate_affine
-        mi, ti = affine(link.from_node, reasons)
+        mi, ti, vector = step
         M, t = M @ mi, M @ ti + t
-        inner, carrier = source(link.from_node.inputs['Vector'])
+        inner, carrier = source(vector)
         if inner is None:                 # a constant point: every shading point reads one texel
             p = M @ np.array(carrier.default_value[:3], np.float64) + t
             return np.array([[0.0, 0.0, p[0]], [0.0, 0.0, p[1]]])
@@ -223,10 +297,14 @@ def texture_transform(tex_node, reasons):
                 reasons.append(f"{link.from_socket.name} texture coordinates read as the UV map")
             elif vec.from_instancer:
                 reasons.append(f"UV coordinates from the instancer ('{vec.name}') read as the object's own")
-        elif vec.type in _AFFINE_NODES:
-            reasons.append("Mapping chain too long; read as the UV map")
+        elif vec.type in _AFFINE_NODES or _affine_step(link, []) is not None:
+            reasons.append(f"image '{_image_name(tex_node)}': Mapping chain too long; read as the UV map")
         else:
-            reasons.append(f"texture coordinates from '{vec.bl_label}' read as the UV map")
+            # (named: the material's other images may well be read exactly)
+            what = f"'{vec.bl_label}'" + (f" ('{vec.name}')" if vec.name != vec.bl_label else '')
+            if vec.type == 'VECT_MATH':
+                what = f"'{vec.bl_label}' {vec.operation.replace('_', ' ').title()} ('{vec.name}')"
+            reasons.append(f"image '{_image_name(tex_node)}': texture coordinates from {what} read as the UV map")
     if np.array_equal(M, np.eye(3)) and not t.any():
         return None
     return np.array([[M[0, 0], M[0, 1], t[0]], [M[1, 0], M[1, 1], t[1]]])
@@ -251,15 +329,15 @@ def reads_off_uv(tex_node):
                 (vec.type == 'TEX_COORD' and link.from_socket.name == 'UV'))
 
 
+def _image_name(tex_node):
+    return tex_node.image.name if getattr(tex_node, 'image', None) is not None else tex_node.name
+
+
 def uv_map_name(tex_node):
     """The UV map an Image Texture reads by name: a UV Map node's or a named Attribute node's
-    (through Mapping nodes), or '' for the active render UV map (no UV Map node, or one with
-    no name)."""
-    link = linked_link(tex_node.inputs['Vector'])
-    for _ in range(_MAX_CHAIN):
-        if link is None or link.from_node.type not in _AFFINE_NODES:
-            break
-        link = linked_link(link.from_node.inputs['Vector'])
+    (through Mapping, Vector Rotate and affine Vector Math nodes), or '' for the active render
+    UV map (no UV Map node, or one with no name)."""
+    link = _past_affine(linked_link(tex_node.inputs['Vector']))
     if link is not None and link.from_node.type == 'UVMAP':
         return str(link.from_node.uv_map)
     return _attribute_uv_name(link) if link is not None else ''
