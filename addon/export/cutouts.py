@@ -8,7 +8,9 @@ import numpy as np
 from ..nodegraph import linked_link
 from ..procedural import ProceduralTexels, clip_unit
 from . import procedurals
+from ..texture import stored_texels
 from .closure import Closure, Texture, is_image_alpha
+from .texelbaking import affine_fit
 
 # what _image_alpha gives for an Image Texture's Alpha whose image cannot be read
 MISSING_ALPHA = 'missing image alpha'
@@ -128,12 +130,13 @@ class Cutouts:
         opacity map's colour into a Mix Shader's factor), evaluated per texel (inverted: 1 minus
         it); None when nothing of an image reaches the socket. Cycles blends the image, then
         runs the nodes: a texel-wise cut-out keeps the coverage, with edges one texel soft
-        where Cycles' are sharp (reported unless looked up 'Closest')."""
+        where Cycles' are sharp (reported unless looked up 'Closest' or _alpha_commutes)."""
         per_texel = self._float_per_texel(socket)
         if per_texel is None:
             return None
         src, a, notes = per_texel
         reasons.extend(notes)
+        exact = src.interpolation == 'Closest' or self._alpha_commutes(socket, src, a)
         # an Alpha or a Mix Shader factor that is NaN is 0 in Cycles (its clamp to [0, 1]), before
         # the factor is turned into an opacity (measured: NaN texels through a Math node show
         # the world behind a Principled and the first of a Mix Shader's two; it had read 1)
@@ -142,8 +145,27 @@ class Cutouts:
             a = 1.0 - a
         px = np.zeros(a.shape + (4,), np.float32)
         px[..., 3] = a
-        if src.interpolation != 'Closest':
+        if not exact:
             reasons.append(f"alpha from nodes on image '{src.name}' evaluated per texel before the blend "
                            "(Cycles: after it; cut-out edges one texel soft)")
         return Texture(('alpha', src.key, id(px)), px, src.interpolation, src.extension, src.transform, None,
                        src.name), False
+
+    def _alpha_commutes(self, socket, src, values):
+        """Whether the nodes feeding a float socket, run on image src's texels (values) and then
+        blended, give what Cycles' blend-then-nodes gives: the chain is affine in what it reads
+        (a grey opacity map's colour as its luminance, Alpha x 0.7), probed as the colour path
+        probes it (_joint), the colour read only of an image blended as its linear texels (an
+        8-bit sRGB one is blended encoded, then decoded), and no texel's value outside [0, 1]
+        (Cycles clamps after the blend). A plain opacity map into Alpha had been said to have
+        edges one texel soft, matching Cycles within noise."""
+        # (a white texel's luminance is 1.0000001 in float32: a clamp of that changes nothing)
+        if not np.isfinite(values).all() or values.min() < -1e-6 or values.max() > 1.0 + 1e-6:
+            return False
+        y = self._joint(socket, src, False)
+        if y is None:
+            return False
+        reads_colour = np.ptp(y, axis=0).max() > 0.0
+        if reads_colour and stored_texels(src.pixels) is not None:
+            return False
+        return affine_fit(self._JOINT_PROBE.astype(np.float64), y.reshape(-1, 3).astype(np.float64), 1e-5)
