@@ -1152,9 +1152,7 @@ class Assembly:
         for name, ks in sorted(by_map.items()):
             tan = a.corner_tangents(name)
             if tan is None:
-                self.ignore("normal map not applied: no tangents (the mesh has no such UV map, or is "
-                            "a curve, text or metaball; Cycles derives them from generated coordinates)",
-                            place.name)
+                self.ignore(_no_tangents(a, name), place.name)
                 continue
             if out.tangents is None:
                 out.tangents = np.zeros((len(out.triangles), 3, 4), np.float32)
@@ -1240,3 +1238,25 @@ def _nonfinite_said(bad, names=()):
     named = ', '.join(sorted(marked_label(n) for n in names if not n.startswith(OBJECT_INFO)))
     return (f"a colour or attribute value NaN or infinite at some corner: the {tris} triangle(s) around it "
             f"render {where}, as in Cycles{f' (from {named})' if named else ''}")
+
+
+def _no_tangents(a, name):
+    """Why a mesh has no tangents for a normal map on UV map name ('' the default one), as the
+    message says it. Without a UV map active for render (a Geometry Nodes mesh's stored 'UVMap'
+    is never flagged; a curve, text or metaball, a mesh without UV maps) Cycles 5.0 takes the
+    mikktspace tangents of the positions mapped to a sphere (scene/mesh.cpp MikkMeshWrapper
+    without ATTR_STD_UV), which are not computed here. The message had blamed a missing UV map
+    on a mesh that has one (a Geometry Nodes grid: 1.81x Cycles' brightness, unreported cause)."""
+    me = a.mesh
+    maps = [layer.name for layer in me.uv_layers] if me is not None else []
+    if name:        # (Cycles has no tangents there either: the normal stays unbent in both)
+        return f"normal map on UV map '{name}', which the mesh does not have: not applied (nor by Cycles)"
+    if me is None:
+        return "normal map not applied on tessellated hair or points (Cycles does not bend their normals either)"
+    if maps:
+        return (f"normal map not applied: no UV map is active for render (UV map '{maps[0]}' exists but is not "
+                f"flagged, as on Geometry Nodes output); Cycles then bends the normal by tangents of the "
+                f"positions mapped to a sphere, not computed here (name '{maps[0]}' in the Normal Map node, and "
+                f"any image's UV Map node, for its own tangents in both)")
+    return ("normal map not applied: the mesh has no UV map (or is a curve, text or metaball); Cycles then bends "
+            "the normal by tangents of the positions mapped to a sphere, not computed here")
