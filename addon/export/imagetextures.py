@@ -97,14 +97,22 @@ class ImageTextures:
 
     def _normal_input(self, node, reasons):
         """Note a BSDF's Bump nodes (export/bump.py) and tangent-space normal map
-        (tangent_normal_map, the innermost Bump's Normal) for the material."""
+        (tangent_normal_map, the innermost Bump's Normal) for the material, and one entry per
+        BSDF in _normals (an unbent one too): (BSDF name, its Mix weight, index in _normal_maps
+        or None, index in _bumps or None, its outermost Bump's name), so the material can tell BSDFs that bend apart and
+        take one BSDF's normal map and bump together (materials._normal_choice)."""
+        bump_at = map_at = None
         nodes, socket = bump_nodes(node.inputs.get('Normal'))
         if nodes:
             compiled = [compile_bump(b, reasons, image=self._texture) for b in reversed(nodes)]
             steps = tuple(b for b in compiled if b is not None)     # (one not followed: said, left flat)
             if steps:
+                bump_at = len(self._bumps)
                 self._bumps.append((tuple(output_key(b, None) for b in nodes), steps))
         found = normal_map_at(socket, reasons)
+        if found is not None:
+            map_at = len(self._normal_maps)
+        self._normals.append((node.name, self._normal_weight, map_at, bump_at, nodes[0].name if nodes else ''))
         if found is not None:
             image, strength, uv_map, chain = found
             tex = self._texture(image, reasons)

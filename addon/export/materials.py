@@ -112,6 +112,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._image_probe = None        # what images read instead of their texels (_product_map)
         self._uv_names = []
         self._normal_maps = []
+        self._normals, self._normal_weight = [], 1.0     # (see _normal_input)
         self.normal_mapped = False  # some material has a normal map: meshes need tangents
 
     def index(self, mat):
@@ -224,6 +225,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._uv_several = None
         self._normal_maps = []        # (Texture, strength, UV map) of its BSDFs' normal maps
         self._bumps = []              # (Bump node keys, scenedata.Bump tuple) of its BSDFs' Bump chains
+        self._normals = []            # per BSDF read: (name, Mix weight, normal map index, bump index)
+        self._normal_weight = 1.0
         displaced = None
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
         self._dark_stand_ins = []     # what each emission that reads 0 only by a stand-in said
@@ -413,19 +416,14 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         n_tex = n_interp = n_ext = n_xf = None
         n_uv = ''
         n_strength = 1.0
-        if self._normal_maps:
-            t, n_strength, n_uv = self._normal_maps[0]
-            if len({(m[0].key, m[1]) for m in self._normal_maps}) > 1:
-                reasons.append("BSDFs with different normal maps; the first one's for all")
+        map_at, bump_at = self._normal_choice(reasons)
+        if map_at is not None:
+            t, n_strength, n_uv = self._normal_maps[map_at]
             # (tangents from the Normal Map node's UV map, '' the active render one, whichever
             # map the image is read on: Cycles' node reads its map's tangent attribute)
             n_tex, n_interp, n_ext, n_xf = t.texels(t.pixels), t.interpolation, t.extension, t.transform
             self.normal_mapped = True
-        bumps = ()
-        if self._bumps:
-            bumps = self._bumps[0][1]
-            if len({keys for keys, _ in self._bumps}) > 1:
-                reasons.append("BSDFs with different Bump nodes; the first one's for all")
+        bumps = () if bump_at is None else self._bumps[bump_at][1]
         uv_names = list(dict.fromkeys(self._uv_names))
         # a procedural texture on Texture Coordinate UV reads the active render map: beside an
         # image on a named map it reads that map too (it had, silently: a gradient across the
@@ -476,6 +474,42 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                            visibility=visibility,
                            aov_textures={key: (t.texels(t.pixels), t.interpolation, t.extension, t.transform)
                                          for key, t in aov_textures.items()})
+
+    def _normal_choice(self, reasons):
+        """(index in _normal_maps or None, index in _bumps or None): the normal map and bump of
+        one BSDF, the one of most Mix weight among those the material reads (the first on a
+        tie), for all its BSDFs. The material shades with one normal where Cycles gives each
+        BSDF its own: BSDFs that differ (an unbent one beside a normal-mapped one, the usual
+        dirt or wet layer over a base) are said, naming the BSDF whose normal is used. Each
+        BSDF's had been ignored unless mapped: a layer without a map bent by the other's
+        (0.91x Cycles, silently), and a normal map from one BSDF and a bump from another
+        chained for all (0.74x)."""
+        entries = [e for e in self._normals if e[1] > 0.0]      # (Cycles drops a weight of 0)
+        if not entries:
+            return None, None
+
+        def key(entry):
+            m, b = entry[2], entry[3]
+            return (None if m is None else (self._normal_maps[m][0].key,) + tuple(self._normal_maps[m][1:]),
+                    None if b is None else self._bumps[b][0])
+        weights, first = {}, {}
+        for e in entries:
+            weights[key(e)] = weights.get(key(e), 0.0) + e[1]
+            first.setdefault(key(e), e)
+        best = max(weights, key=weights.get)            # (dicts keep order: the first on a tie)
+        if len(weights) > 1:
+            def said(k):
+                e = first[k]
+                parts = ([f"Bump '{e[4]}'"] if e[3] is not None else []) + \
+                    ([f"normal map '{self._normal_maps[e[2]][0].name}'"] if e[2] is not None else [])
+                return f"'{e[0]}' " + (' over '.join(parts) if parts else 'unbent')
+            what = "normal maps" if all(b is None for _, b in weights) else \
+                "Bump nodes" if all(n is None for n, _ in weights) else "normals"
+            which = "the first one's" if best == next(iter(weights)) else "the most weighed one's"
+            others = ', '.join(said(k) for k in weights if k != best)
+            reasons.append(f"BSDFs with different {what}; {which} for all: {said(best)}, also for {others} "
+                           "(Cycles shades each BSDF with its own)")
+        return first[best][2], first[best][3]
 
     @staticmethod
     def _albedo(c):

@@ -124,8 +124,13 @@ class ShaderClosures:
             if varying is not None:
                 return varying
             fac = mix_factor(node, reasons, "Mix Shader")
+            # (each side's BSDFs weighed for the material's choice of normal: _normal_input)
+            weight = self._normal_weight
+            self._normal_weight = weight * (1.0 - fac)
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
+            self._normal_weight = weight * fac
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
+            self._normal_weight = weight
             return a.plus(b, reasons)
         if t in ('BSDF_GLOSSY', 'BSDF_METALLIC', 'BSDF_GLASS'):
             # their diffuse stand-ins shade with the map as a Diffuse BSDF does (the Normal had
