@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "envcell.h"
 #include "envlanes.h"
 #include "equirect.h"
 #include "parallel.h"
@@ -97,13 +98,6 @@ inline float uv_pdf(const EnvironmentMap& env, float u, float v) {
                                                          c.fx, c.fy);
 }
 
-// x in [0, 1) with density proportional to (1 - x) a + x b (pbrt-v4's SampleLinear).
-inline float sample_linear(float u, float a, float b) {
-    if (u == 0 && a == 0) return 0.0f;
-    const float x = u * (a + b) / (a + std::sqrt((1.0f - u) * a * a + u * b * b));
-    return std::min(std::max(x, 0.0f), 0x1.fffffep-1f);
-}
-
 // The guide of one CDF c[0..count]: g[b] = std::upper_bound's position of b / G, b = 0..G.
 // For u in [b/G, (b+1)/G) (exact: G is a power of two) the position of u lies in [g[b], g[b+1]]
 // (monotone), so searching c[g[b], g[b+1]) finds the same one: one or two cache lines of a row
@@ -148,6 +142,72 @@ inline void eval_uv(const EnvironmentMap& env, float u, float v, float sin_theta
     }
     lookup(env, u, v, Le);
     pdf = env.total > 0 && sin_theta > 0 ? uv_pdf(env, u, v) * INV_2PI2 / sin_theta : 0.0f;
+}
+
+// What a map with nothing to sample gives: no direction's value, pdf 0.
+inline void no_sample(float wi[3], float value[3], float& pdf) {
+    wi[0] = wi[1] = 0.0f, wi[2] = 1.0f;
+    value[0] = value[1] = value[2] = 0.0f;
+    pdf = 0.0f;
+}
+
+// The cell that uniforms u1 (row), u2 (column) pick (env.total > 0), by the guided searches:
+// row i, column j and the CDF entries around u1 (r0, r1) and u2 (c0, c1).
+struct Picked {
+    size_t i, j;
+    double r0, r1;
+    float c0, c1;
+};
+
+inline Picked pick_cell(const EnvironmentMap& env, float u1, float u2) {
+    const uint32_t w = env.width, h = env.height;
+    Picked p;
+    p.i = find_guided(env.row_cdf.data(), h, env.row_guide.data(), env.row_buckets, double(u1));
+    p.r0 = env.row_cdf[p.i], p.r1 = env.row_cdf[p.i + 1];
+    const float* c = env.col_cdf.data() + p.i * (size_t(w) + 1);
+    p.j = find_guided(c, w, env.col_guide.data() + p.i * (size_t(env.guide_buckets) + 1), env.guide_buckets, u2);
+    p.c0 = c[p.j], p.c1 = c[p.j + 1];
+    return p;
+}
+
+// 'Linear': the luminances of the picked cell's corners (i, j), (i, j+1), (i+1, j), (i+1, j+1).
+inline void corners(const EnvironmentMap& env, const Picked& p, float& a, float& b, float& c, float& d) {
+    const size_t w = env.width, i = p.i, j = p.j;
+    const size_t i1 = i + 1 == env.height ? 0 : i + 1, j1 = j + 1 == w ? 0 : j + 1;
+    const float* L = env.lum.data();
+    a = L[i * w + j], b = L[i * w + j1], c = L[i1 * w + j], d = L[i1 * w + j1];
+}
+
+// 'Closest': fu, fv < 1, but the division can round u up onto the next texel's edge, whose
+// texel (black, say) the lookup and the pdf would then read: stay inside the sampled one.
+inline void keep_inside(const EnvironmentMap& env, const Picked& p, float& u, float& v) {
+    while (u * float(env.width) >= float(p.j + 1)) u = std::nextafter(u, 0.0f);
+    while (v * float(env.height) >= float(p.i + 1)) v = std::nextafter(v, 0.0f);
+}
+
+// The (u, v) that uniforms u1, u2 sample (env.total > 0): a place in the picked texel
+// ('Closest') or in the picked cell's bilinear blend ('Linear'), envcell.h.
+inline void sample_uv(const EnvironmentMap& env, float u1, float u2, float& u, float& v) {
+    const Picked p = pick_cell(env, u1, u2);
+    const float fv = envcell::row_fraction(u1, p.r0, p.r1), fu = envcell::column_fraction(u2, p.c0, p.c1);
+    const float fw = float(env.width), fh = float(env.height);
+    if (env.closest) {
+        envcell::closest_place(fu, fv, float(p.j), float(p.i), fw, fh, u, v);
+        keep_inside(env, p, u, v);
+    } else {
+        float a, b, c, d;
+        corners(env, p, a, b, c, d);
+        envcell::linear_place(fu, fv, a, b, c, d, float(p.j), float(p.i), fw, fh, u, v);
+    }
+}
+
+// A sample at (u, v) (direction's sin(theta) s): its solid-angle pdf and radiance / pdf.
+inline void weigh_sample(const EnvironmentMap& env, float u, float v, float s, float value[3], float& pdf) {
+    pdf = s > 0 ? uv_pdf(env, u, v) * INV_2PI2 / s : 0.0f;
+    float Le[3];
+    lookup(env, u, v, Le);
+    const float inv = pdf > 0 ? 1.0f / pdf : 0.0f;
+    for (int a = 0; a < 3; ++a) value[a] = Le[a] * inv;
 }
 
 // The missed rays of [b, e) in chunks: their (u, v) lane by lane (envlanes.h), then the lookups.
@@ -285,46 +345,51 @@ void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], 
 
 void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[3], float value[3], float& pdf) {
     if (!(env.total > 0)) {
-        wi[0] = wi[1] = 0.0f, wi[2] = 1.0f;
-        value[0] = value[1] = value[2] = 0.0f;
-        pdf = 0.0f;
+        no_sample(wi, value, pdf);
         return;
     }
-    const uint32_t w = env.width, h = env.height;
-    const size_t i = find_guided(env.row_cdf.data(), h, env.row_guide.data(), env.row_buckets, double(u1));
-    const double r0 = env.row_cdf[i], r1 = env.row_cdf[i + 1];
-    const float fv = std::min(std::max(float((double(u1) - r0) / (r1 - r0)), 0.0f), 0x1.fffffep-1f);
-    const float* c = env.col_cdf.data() + i * (size_t(w) + 1);
-    const size_t j = find_guided(c, w, env.col_guide.data() + i * (size_t(env.guide_buckets) + 1), env.guide_buckets, u2);
-    const float fu = std::min(std::max((u2 - c[j]) / (c[j + 1] - c[j]), 0.0f), 0x1.fffffep-1f);
-    float u, v;
-    if (env.closest) {
-        u = (float(j) + fu) / float(w);
-        v = (float(i) + fv) / float(h);
-        // fu, fv < 1, but the division can round u up onto the next texel's edge, whose texel
-        // (black, say) the lookup and the pdf would then read: stay inside the sampled one
-        while (u * float(w) >= float(j + 1)) u = std::nextafter(u, 0.0f);
-        while (v * float(h) >= float(i + 1)) v = std::nextafter(v, 0.0f);
-    } else {  // the cell's bilinear blend: y from its marginal, then x given y (both linear)
-        const float* L = env.lum.data();
-        const size_t i1 = i + 1 == h ? 0 : i + 1, j1 = j + 1 == w ? 0 : j + 1;
-        const float a = L[i * w + j], b = L[i * w + j1], cc = L[i1 * w + j], d = L[i1 * w + j1];
-        const float y = sample_linear(fv, a + b, cc + d);
-        const float x = sample_linear(fu, a + (cc - a) * y, b + (d - b) * y);
-        u = (float(j) + 0.5f + x) / float(w);
-        v = (float(i) + 0.5f + y) / float(h);
-        u -= std::floor(u);  // REPEAT: the last column's and row's cells wrap
-        v -= std::floor(v);
-    }
-    float m[3], s;
+    float u, v, m[3], s;
+    sample_uv(env, u1, u2, u, v);
     equirect::from_uv(u, v, m, s);
     const float* M = env.to_map;  // orthogonal: the inverse is the transpose
     for (int a = 0; a < 3; ++a) wi[a] = M[a] * m[0] + M[3 + a] * m[1] + M[6 + a] * m[2];
-    pdf = s > 0 ? uv_pdf(env, u, v) * INV_2PI2 / s : 0.0f;
-    float Le[3];
-    lookup(env, u, v, Le);
-    const float inv = pdf > 0 ? 1.0f / pdf : 0.0f;
-    for (int a = 0; a < 3; ++a) value[a] = Le[a] * inv;
+    weigh_sample(env, u, v, s, value, pdf);
+}
+
+void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const float* u2, size_t m, float* wi,
+                              float* value, float* pdf, size_t stride) {
+    if (!(env.total > 0)) {
+        for (size_t k = 0; k < m; ++k) {
+            float w[3], val[3];
+            no_sample(w, val, pdf[k]);
+            for (int a = 0; a < 3; ++a) wi[a * stride + k] = w[a], value[a * stride + k] = val[a];
+        }
+        return;
+    }
+    constexpr size_t K = kEnvLanes;
+    EnvPicks in;
+    Picked picked[K];
+    float us[K], vs[K], ss[K];
+    const bool closest = env.closest;
+    for (size_t k0 = 0; k0 < m; k0 += K) {
+        const size_t c = std::min(K, m - k0);
+        for (size_t k = 0; k < c; ++k) {  // the searches and the corners' loads, point by point
+            const Picked& p = picked[k] = pick_cell(env, u1[k0 + k], u2[k0 + k]);
+            in.u1[k] = u1[k0 + k], in.u2[k] = u2[k0 + k];
+            in.r0[k] = p.r0, in.r1[k] = p.r1, in.c0[k] = p.c0, in.c1[k] = p.c1;
+            in.fj[k] = float(p.j), in.fi[k] = float(p.i);
+            if (!closest) corners(env, p, in.a[k], in.b[k], in.c[k], in.d[k]);
+        }
+        env_place_lanes(closest, float(env.width), float(env.height), in, c, us, vs);
+        if (closest)
+            for (size_t k = 0; k < c; ++k) keep_inside(env, picked[k], us[k], vs[k]);
+        equirect_dir_lanes(env.to_map, us, vs, c, wi + k0, wi + stride + k0, wi + 2 * stride + k0, ss);
+        for (size_t k = 0; k < c; ++k) {
+            float val[3];
+            weigh_sample(env, us[k], vs[k], ss[k], val, pdf[k0 + k]);
+            for (int a = 0; a < 3; ++a) value[a * stride + k0 + k] = val[a];
+        }
+    }
 }
 
 void environment_gather(const EnvironmentMap& env, float prob, const float* D, const uint8_t* miss,

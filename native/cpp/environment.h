@@ -68,6 +68,12 @@ void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], 
 // pdf in value and its solid-angle pdf (0 and value 0 at a pole, where the map has no area).
 void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[3], float value[3], float& pdf);
 
+// environment_sample for points k < m at once (the same bits): wi and value in 3 rows of
+// stride `stride`, pdf[k]. The searches and the lookups run per point; from_uv and the turn to
+// the world run as a lane loop (envlanes.h), which one point at a time could not vectorise.
+void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const float* u2, size_t m, float* wi,
+                              float* value, float* pdf, size_t stride);
+
 // What rays that missed everything see of the map: L[:, pid[i]] (stride N) += thr x Le x w
 // where miss[i], thr null = 1, w = 1 when prob is 0 (camera rays), else the power heuristic
 // 1 / (1 + (prob pdf_env / pdf_bsdf)^2). pid distinct (threads split by ray).

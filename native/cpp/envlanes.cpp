@@ -1,5 +1,6 @@
-// equirect_uv_lanes (envlanes.h), compiled per instruction set as named copies (as noise.cpp)
-// so that DACRT_ISA can pick a narrower one and tests compare them on one machine. Compiled
+// equirect_uv_lanes, equirect_dir_lanes and env_place_lanes (envlanes.h), compiled per
+// instruction set as named copies (as noise.cpp) so that DACRT_ISA can pick a narrower one and
+// tests compare them on one machine. Compiled
 // with -fno-trapping-math (CMakeLists.txt) so equirect.h's selects vectorise; -ffp-contract=off:
 // every copy gives the scalar bits.
 #include "envlanes.h"
@@ -9,6 +10,7 @@
 #include <cstdlib>
 
 #include "dispatch.h"
+#include "envcell.h"
 #include "equirect.h"
 
 namespace dacrt {
@@ -16,6 +18,8 @@ namespace dacrt {
 namespace {
 
 using UvFn = void (*)(const float*, const float*, const float*, const float*, size_t, float*, float*, float*);
+using DirFn = void (*)(const float*, const float*, const float*, size_t, float*, float*, float*, float*);
+using PlaceFn = void (*)(bool, float, float, const EnvPicks&, size_t, float*, float*);
 
 #define DACRT_EQUIRECT_ISA(NAME, TARGET)                                                                     \
     TARGET void NAME##_uv(const float* __restrict M, const float* __restrict dx, const float* __restrict dy,  \
@@ -30,6 +34,32 @@ using UvFn = void (*)(const float*, const float*, const float*, const float*, si
             const float len2 = mx * mx + my * my + mz * mz;                                                   \
             sin_theta[j] = len2 > 0.0f ? s : -1.0f; /* (NaN: -1, no direction) */                            \
         }                                                                                                     \
+    }                                                                                                         \
+    TARGET void NAME##_dir(const float* __restrict M, const float* __restrict u, const float* __restrict v,    \
+                           size_t m, float* __restrict wx, float* __restrict wy, float* __restrict wz,        \
+                           float* __restrict sin_theta) {                                                     \
+        for (size_t j = 0; j < m; ++j) {                                                                      \
+            float d[3];                                                                                       \
+            equirect::from_uv(u[j], v[j], d, sin_theta[j]);                                                   \
+            wx[j] = M[0] * d[0] + M[3] * d[1] + M[6] * d[2]; /* orthogonal: the inverse is the transpose */    \
+            wy[j] = M[1] * d[0] + M[4] * d[1] + M[7] * d[2];                                                  \
+            wz[j] = M[2] * d[0] + M[5] * d[1] + M[8] * d[2];                                                  \
+        }                                                                                                     \
+    }                                                                                                         \
+    TARGET void NAME##_place(bool closest, float fw, float fh, const EnvPicks& p, size_t m,                \
+                             float* __restrict u, float* __restrict v) {                                      \
+        float fu[kEnvLanes], fv[kEnvLanes];                                                                   \
+        for (size_t k = 0; k < m; ++k) {                                                                      \
+            fv[k] = envcell::row_fraction(p.u1[k], p.r0[k], p.r1[k]);                                         \
+            fu[k] = envcell::column_fraction(p.u2[k], p.c0[k], p.c1[k]);                                      \
+        }                                                                                                     \
+        if (closest) {                                                                                        \
+            for (size_t k = 0; k < m; ++k) envcell::closest_place(fu[k], fv[k], p.fj[k], p.fi[k], fw, fh, u[k], v[k]); \
+        } else {                                                                                              \
+            for (size_t k = 0; k < m; ++k)                                                                    \
+                envcell::linear_place(fu[k], fv[k], p.a[k], p.b[k], p.c[k], p.d[k], p.fj[k], p.fi[k], fw, fh, u[k], \
+                                      v[k]);                                                                  \
+        }                                                                                                     \
     }
 
 DACRT_EQUIRECT_ISA(portable, )
@@ -37,13 +67,28 @@ DACRT_EQUIRECT_ISA(avx2, __attribute__((target("avx2,fma,bmi,bmi2"))))
 DACRT_EQUIRECT_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl,avx512dq,avx512bw,avx512cd"))))
 
 // The widest the CPU runs, or a narrower one DACRT_ISA names (a wider one it lacks: the widest).
-UvFn pick_uv() {
+Isa pick_isa() {
     const Isa best = resolve_isa("");
     const char* env = std::getenv("DACRT_ISA");
     Isa isa = best;
     if (env && strcasecmp(env, "portable") == 0) isa = Isa::Portable;
     if (env && strcasecmp(env, "avx2") == 0 && best != Isa::Portable) isa = Isa::Avx2;
+    return isa;
+}
+
+UvFn pick_uv() {
+    const Isa isa = pick_isa();
     return isa == Isa::Avx512 ? avx512_uv : (isa == Isa::Avx2 ? avx2_uv : portable_uv);
+}
+
+DirFn pick_dir() {
+    const Isa isa = pick_isa();
+    return isa == Isa::Avx512 ? avx512_dir : (isa == Isa::Avx2 ? avx2_dir : portable_dir);
+}
+
+PlaceFn pick_place() {
+    const Isa isa = pick_isa();
+    return isa == Isa::Avx512 ? avx512_place : (isa == Isa::Avx2 ? avx2_place : portable_place);
 }
 
 }  // namespace
@@ -52,6 +97,17 @@ void equirect_uv_lanes(const float to_map[9], const float* dx, const float* dy, 
                        float* v, float* sin_theta) {
     static const UvFn fn = pick_uv();
     fn(to_map, dx, dy, dz, m, u, v, sin_theta);
+}
+
+void equirect_dir_lanes(const float to_map[9], const float* u, const float* v, size_t m, float* wx, float* wy,
+                        float* wz, float* sin_theta) {
+    static const DirFn fn = pick_dir();
+    fn(to_map, u, v, m, wx, wy, wz, sin_theta);
+}
+
+void env_place_lanes(bool closest, float fw, float fh, const EnvPicks& in, size_t m, float* u, float* v) {
+    static const PlaceFn fn = pick_place();
+    fn(closest, fw, fh, in, m, u, v);
 }
 
 }  // namespace dacrt

@@ -1,5 +1,6 @@
-// The equirectangular mapping of many directions at once (equirect.h's to_uv per lane),
-// compiled per instruction set in envlanes.cpp: environment_gather's rays that missed.
+// The equirectangular mapping of many directions at once (equirect.h's to_uv and from_uv per
+// lane), compiled per instruction set in envlanes.cpp: environment_gather's rays that missed and
+// environment_sample_lanes' samples.
 #pragma once
 
 #include <cstddef>
@@ -10,5 +11,24 @@ namespace dacrt {
 // and sin(theta), or sin_theta -1 where the direction has no length (zero or not finite).
 void equirect_uv_lanes(const float to_map[9], const float* dx, const float* dy, const float* dz, size_t m,
                        float* u, float* v, float* sin_theta);
+
+// What environment_sample_lanes' searches picked for up to kEnvLanes points k: the uniforms u1,
+// u2, the picked row's CDF entries r0, r1 and column's c0, c1, the cell's column fj and row fi
+// and, for 'Linear', its corners' luminances a (i, j), b (i, j+1), c (i+1, j), d (i+1, j+1).
+constexpr size_t kEnvLanes = 128;
+struct EnvPicks {
+    double r0[kEnvLanes], r1[kEnvLanes];
+    float u1[kEnvLanes], u2[kEnvLanes], c0[kEnvLanes], c1[kEnvLanes], fj[kEnvLanes], fi[kEnvLanes];
+    float a[kEnvLanes], b[kEnvLanes], c[kEnvLanes], d[kEnvLanes];
+};
+
+// For k < m: the (u, v) environment_sample places in its picked cell of the fw x fh map
+// (envcell.h: the uniforms' fractions, then 'Closest' or 'Linear').
+void env_place_lanes(bool closest, float fw, float fh, const EnvPicks& in, size_t m, float* u, float* v);
+
+// For j < m: the world direction of (u, v)[j] (from_uv, turned back by to_map's transpose) into
+// wx, wy, wz and its sin(theta), in environment_sample's operations (the same bits).
+void equirect_dir_lanes(const float to_map[9], const float* u, const float* v, size_t m, float* wx, float* wy,
+                        float* wz, float* sin_theta);
 
 }  // namespace dacrt

@@ -12,6 +12,10 @@
 
 #include <cmath>
 
+// For the functions both a lane loop (envlanes.cpp) and scalar code use: the module's LTO
+// otherwise merges them into one out-of-line copy that the lane loop calls per lane.
+#define DACRT_ENV_INLINE __attribute__((always_inline)) inline
+
 namespace dacrt::equirect {
 
 // atan(t) on [-tan(pi/8), tan(pi/8)] (Cephes atanf's minimax polynomial, ~1 ulp).
@@ -36,17 +40,17 @@ inline float atan2f_poly(float y, float x) {
 
 // sin(pi r), cos(pi r) for r in [-1/4, 1/4]: Taylor in r to degree 9 / 10 (truncation below
 // 2e-9 relative there).
-inline float sinpi_small(float r) {
+DACRT_ENV_INLINE float sinpi_small(float r) {
     const float z = r * r;
     return ((((8.21458866e-2f * z - 5.99264529e-1f) * z + 2.55016404f) * z - 5.16771278f) * z + 3.14159274f) * r;
 }
-inline float cospi_small(float r) {
+DACRT_ENV_INLINE float cospi_small(float r) {
     const float z = r * r;
     return ((((-2.58068914e-2f * z + 2.35330630e-1f) * z - 1.33526277f) * z + 4.05871213f) * z - 4.93480220f) * z + 1.0f;
 }
 
 // sin(pi t) and cos(pi t) for t in [0, 2]: t = k / 2 + r exactly (|r| <= 1/4), then the quadrant.
-inline void sincospi(float t, float& s, float& c) {
+DACRT_ENV_INLINE void sincospi(float t, float& s, float& c) {
     const int ki = int(2.0f * t + 0.5f);  // (t >= 0: a truncation, which every ISA vectorises)
     const float k = float(ki);
     const float r = t - 0.5f * k;
@@ -74,7 +78,7 @@ inline void to_uv(float mx, float my, float mz, float& u, float& v, float& sin_t
 }
 
 // The unit map-frame direction of (u, v) in [0, 1) and its sin(theta).
-inline void from_uv(float u, float v, float m[3], float& sin_theta) {
+DACRT_ENV_INLINE void from_uv(float u, float v, float m[3], float& sin_theta) {
     float st, ct, sp, cp;
     sincospi(v, st, ct);
     sincospi(2.0f * u, sp, cp);

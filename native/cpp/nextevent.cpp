@@ -22,9 +22,10 @@ namespace dacrt {
 namespace {
 
 // AREAS: some lamp is drawn lane by lane (area_lanes_apply): its points are drawn first per chunk
-// (draw_chunk). Without, the loop is that of one point at a time only: the chunk's arrays and
-// its pass picking the entries first had cost scenes without area lamps ~11%.
-template <bool AREAS>
+// (draw_chunk). ENV: an environment map, whose points' samples are drawn first per chunk too
+// (environment_sample_lanes). Without either, the loop is that of one point at a time only: the
+// chunk's arrays and its pass picking the entries first had cost scenes without area lamps ~11%.
+template <bool AREAS, bool ENV>
 size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* contrib, int32_t* entry_out,
                    float* point_out, Pending* pending, size_t b, size_t e, size_t* skipped) {
     const size_t n = p.n, T = L.num_tris;
@@ -35,12 +36,22 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
         uint32_t entries[kWordChunk];
         float sels[kWordChunk];
     };
+    struct EnvChunk {  // the samples of the chunk's points that picked the map, in point order
+        float u1[kWordChunk], u2[kWordChunk], wi[3 * kWordChunk], value[3 * kWordChunk], pdf[kWordChunk];
+    };
     struct None {};
-    std::conditional_t<AREAS, Chunk, None> c;
+    std::conditional_t<AREAS || ENV, Chunk, None> c;
+    std::conditional_t<ENV, EnvChunk, None> ec;
+    const size_t env_entry = L.num_lamps + T;
     for_words(p.keys, n, p.ka, p.kb, b, e, [&](size_t i0, size_t cnt, const uint32_t* wa, const uint32_t* wb) {
-        if constexpr (AREAS) {
-            pick_entries(L, p, i0, cnt, c.entries, c.sels);
-            draw_chunk(L, p, i0, cnt, c.entries, c.sels, wa, wb, c.drawn, c.is_drawn);
+        if constexpr (AREAS || ENV) pick_entries(L, p, i0, cnt, c.entries, c.sels);
+        if constexpr (AREAS) draw_chunk(L, p, i0, cnt, c.entries, c.sels, wa, wb, c.drawn, c.is_drawn);
+        [[maybe_unused]] size_t q = 0;  // ENV: the next of the chunk's map samples
+        if constexpr (ENV) {
+            size_t m_env = 0;
+            for (size_t j = 0; j < cnt; ++j)
+                if (c.entries[j] == env_entry) ec.u1[m_env] = unit24(wa[j]), ec.u2[m_env] = unit24(wb[j]), ++m_env;
+            environment_sample_lanes(*L.env, ec.u1, ec.u2, m_env, ec.wi, ec.value, ec.pdf, kWordChunk);
         }
         for (size_t j = 0; j < cnt; ++j) {
             const size_t i = i0 + j;
@@ -49,10 +60,10 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
             float p_sel;
             size_t entry;
             bool lanes = false;
-            if constexpr (AREAS) {
+            if constexpr (AREAS || ENV) {
                 p_sel = c.sels[j];
                 entry = c.entries[j];
-                lanes = c.is_drawn[j];
+                if constexpr (AREAS) lanes = c.is_drawn[j];
             } else {
                 entry = pick_entry(L, p, i, p_sel);
             }
@@ -71,8 +82,14 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                 for (int a = 0; a < 3; ++a) wi[a] = s.wi[a], value[a] = s.value[a];
                 dist = s.dist;
                 pdf = s.pdf;
-            } else if (entry == L.num_lamps + T) {  // the environment map (entries has it last)
-                environment_sample(*L.env, u1, u2, wi, value, pdf);
+            } else if (entry == env_entry) {  // the environment map (entries has it last)
+                if constexpr (ENV) {
+                    for (int a = 0; a < 3; ++a)
+                        wi[a] = ec.wi[a * kWordChunk + q], value[a] = ec.value[a * kWordChunk + q];
+                    pdf = ec.pdf[q++];
+                } else {
+                    environment_sample(*L.env, u1, u2, wi, value, pdf);
+                }
                 dist = lampmath::INF;
             } else {
                 const size_t w = entry - L.num_lamps;
@@ -180,7 +197,9 @@ bool draws_area_lanes(const LightChoice& lights) {
 
 size_t event_range(const LightChoice& lights, bool areas, const VertexPoints& pts, const NextEventOut& out,
                    Pending* pending, size_t b, size_t e, size_t* skipped) {
-    const auto block = areas ? event_block<true> : event_block<false>;
+    const bool env = lights.env != nullptr;
+    const auto block = areas ? (env ? event_block<true, true> : event_block<true, false>)
+                             : (env ? event_block<false, true> : event_block<false, false>);
     return block(lights, pts, out.value, out.contrib, out.entry, out.point, pending, b, e, skipped);
 }
 
