@@ -13,6 +13,13 @@
 
 namespace dacrt::envcell {
 
+constexpr float INV_2PI2 = float(1.0 / (2.0 * 3.14159265358979323846 * 3.14159265358979323846));
+
+// The bilinear blend of corners a (0, 0), b (1, 0), c (0, 1), d (1, 1) at (fx, fy).
+DACRT_ENV_INLINE float bilerp(float a, float b, float c, float d, float fx, float fy) {
+    return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
+}
+
 // Where a uniform falls within its picked CDF interval [lo, hi), in [0, 1): the row's (a double
 // CDF) and the column's.
 DACRT_ENV_INLINE float row_fraction(float u1, double lo, double hi) {

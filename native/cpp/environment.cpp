@@ -16,7 +16,8 @@ namespace dacrt {
 namespace {
 
 constexpr double PI_D = 3.14159265358979323846;
-constexpr float INV_2PI2 = float(1.0 / (2.0 * PI_D * PI_D));
+using envcell::bilerp;
+using envcell::INV_2PI2;
 
 // i modulo size (REPEAT). Lookups and samples only ever step one period out ([-size, 2 size)),
 // so that range is wrapped by a compare instead of an integer division (up to ten per sample:
@@ -46,10 +47,6 @@ inline Cell cell_of(const EnvironmentMap& env, float u, float v) {
     c.i = wrap(int64_t(y0), h), c.i1 = wrap(int64_t(y0) + 1, h);
     c.fx = x - x0, c.fy = y - y0;
     return c;
-}
-
-inline float bilerp(float a, float b, float c, float d, float fx, float fy) {
-    return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
 }
 
 // Cycles' color_srgb_to_linear (negative -> 0).
@@ -210,22 +207,61 @@ inline void weigh_sample(const EnvironmentMap& env, float u, float v, float s, f
     for (int a = 0; a < 3; ++a) value[a] = Le[a] * inv;
 }
 
+// 'Linear' without sRGB: what the lookup and the pdf at (u, v) read, into lane k of t (s < 0: no
+// direction, zeros, so the blends give 0 as eval_uv).
+inline void fill_texels(const EnvironmentMap& env, float u, float v, float s, EnvTexels& t, size_t k) {
+    t.s[k] = s;
+    if (!(s >= 0.0f)) {
+        t.fx[k] = t.fy[k] = t.cell[k] = 0.0f;
+        for (int c = 0; c < 4; ++c) {
+            t.lum[c][k] = 0.0f;
+            for (int a = 0; a < 3; ++a) t.rgb[c][a][k] = 0.0f;
+        }
+        return;
+    }
+    const size_t w = env.width;
+    const Cell c = cell_of(env, u, v);
+    t.fx[k] = c.fx, t.fy[k] = c.fy;
+    const size_t at[4] = {size_t(c.i) * w + c.j, size_t(c.i) * w + c.j1, size_t(c.i1) * w + c.j,
+                          size_t(c.i1) * w + c.j1};
+    t.cell[k] = env.cell_pdf[at[0]];
+    for (int q = 0; q < 4; ++q) {
+        t.lum[q][k] = env.lum[at[q]];
+        for (int a = 0; a < 3; ++a) t.rgb[q][a][k] = env.rgb[at[q] * 3 + a];
+    }
+}
+
+// The blends run as lane loops (env_blend_lanes) for 'Linear' maps without sRGB decoding.
+inline bool blends_in_lanes(const EnvironmentMap& env) { return !env.closest && !env.srgb; }
+
 // The missed rays of [b, e) in chunks: their (u, v) lane by lane (envlanes.h), then the lookups.
 void gather_range(const EnvironmentMap* env, float prob, const float* D, const uint8_t* miss, const float* thr,
                   const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N, float clamp, size_t b, size_t e) {
     constexpr size_t K = 64;
     size_t idx[K];
     float dx[K], dy[K], dz[K], us[K], vs[K], ss[K];
+    const bool lanes = blends_in_lanes(*env);
+    EnvTexels tex;
+    float Les[3 * kEnvLanes], pdfs[kEnvLanes];
     size_t i = b;
     while (i < e) {
         size_t m = 0;
         for (; i < e && m < K; ++i)
             if (miss[i]) idx[m] = i, dx[m] = D[i], dy[m] = D[n + i], dz[m] = D[2 * n + i], ++m;
         equirect_uv_lanes(env->to_map, dx, dy, dz, m, us, vs, ss);
+        if (lanes) {
+            for (size_t q = 0; q < m; ++q) fill_texels(*env, us[q], vs[q], ss[q], tex, q);
+            env_blend_lanes(tex, m, env->total > 0, false, Les, kEnvLanes, pdfs);
+        }
         for (size_t q = 0; q < m; ++q) {
             const size_t r = idx[q];
             float Le[3], pdf;
-            eval_uv(*env, us[q], vs[q], ss[q], Le, pdf);
+            if (lanes) {
+                for (int a = 0; a < 3; ++a) Le[a] = Les[a * kEnvLanes + q];
+                pdf = pdfs[q];
+            } else {
+                eval_uv(*env, us[q], vs[q], ss[q], Le, pdf);
+            }
             float w = 1.0f;
             if (prob > 0) {  // power heuristic of this BSDF ray against sampling the map
                 float x = prob * pdf / pdf_bsdf[r];
@@ -368,6 +404,7 @@ void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const 
     }
     constexpr size_t K = kEnvLanes;
     EnvPicks in;
+    EnvTexels tex;
     Picked picked[K];
     float us[K], vs[K], ss[K];
     const bool closest = env.closest;
@@ -384,6 +421,11 @@ void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const 
         if (closest)
             for (size_t k = 0; k < c; ++k) keep_inside(env, picked[k], us[k], vs[k]);
         equirect_dir_lanes(env.to_map, us, vs, c, wi + k0, wi + stride + k0, wi + 2 * stride + k0, ss);
+        if (blends_in_lanes(env)) {
+            for (size_t k = 0; k < c; ++k) fill_texels(env, us[k], vs[k], ss[k], tex, k);
+            env_blend_lanes(tex, c, true, true, value + k0, stride, pdf + k0);
+            continue;
+        }
         for (size_t k = 0; k < c; ++k) {
             float val[3];
             weigh_sample(env, us[k], vs[k], ss[k], val, pdf[k0 + k]);

@@ -20,6 +20,7 @@ namespace {
 using UvFn = void (*)(const float*, const float*, const float*, const float*, size_t, float*, float*, float*);
 using DirFn = void (*)(const float*, const float*, const float*, size_t, float*, float*, float*, float*);
 using PlaceFn = void (*)(bool, float, float, const EnvPicks&, size_t, float*, float*);
+using BlendFn = void (*)(const EnvTexels&, size_t, bool, bool, float*, size_t, float*);
 
 #define DACRT_EQUIRECT_ISA(NAME, TARGET)                                                                     \
     TARGET void NAME##_uv(const float* __restrict M, const float* __restrict dx, const float* __restrict dy,  \
@@ -54,12 +55,28 @@ using PlaceFn = void (*)(bool, float, float, const EnvPicks&, size_t, float*, fl
             fu[k] = envcell::column_fraction(p.u2[k], p.c0[k], p.c1[k]);                                      \
         }                                                                                                     \
         if (closest) {                                                                                        \
-            for (size_t k = 0; k < m; ++k) envcell::closest_place(fu[k], fv[k], p.fj[k], p.fi[k], fw, fh, u[k], v[k]); \
+            for (size_t k = 0; k < m; ++k)                                                                    \
+                envcell::closest_place(fu[k], fv[k], p.fj[k], p.fi[k], fw, fh, u[k], v[k]);                  \
         } else {                                                                                              \
             for (size_t k = 0; k < m; ++k)                                                                    \
                 envcell::linear_place(fu[k], fv[k], p.a[k], p.b[k], p.c[k], p.d[k], p.fj[k], p.fi[k], fw, fh, u[k], \
                                       v[k]);                                                                  \
         }                                                                                                     \
+    }                                                                                                         \
+    TARGET void NAME##_blend(const EnvTexels& t, size_t m, bool has_pdf, bool divide, float* __restrict out,    \
+                             size_t stride, float* __restrict pdf) {                                          \
+        for (size_t k = 0; k < m; ++k) {                                                                      \
+            const float fx = t.fx[k], fy = t.fy[k];                                                           \
+            const float bl = envcell::bilerp(t.lum[0][k], t.lum[1][k], t.lum[2][k], t.lum[3][k], fx, fy);      \
+            pdf[k] = has_pdf && t.s[k] > 0 ? t.cell[k] * bl * envcell::INV_2PI2 / t.s[k] : 0.0f;              \
+        }                                                                                                     \
+        for (int a = 0; a < 3; ++a)                                                                           \
+            for (size_t k = 0; k < m; ++k) {                                                                  \
+                const float le = envcell::bilerp(t.rgb[0][a][k], t.rgb[1][a][k], t.rgb[2][a][k], t.rgb[3][a][k],\
+                                                 t.fx[k], t.fy[k]);                                           \
+                const float inv = pdf[k] > 0 ? 1.0f / pdf[k] : 0.0f;                                          \
+                out[a * stride + k] = divide ? le * inv : le;                                                 \
+            }                                                                                                 \
     }
 
 DACRT_EQUIRECT_ISA(portable, )
@@ -86,6 +103,11 @@ DirFn pick_dir() {
     return isa == Isa::Avx512 ? avx512_dir : (isa == Isa::Avx2 ? avx2_dir : portable_dir);
 }
 
+BlendFn pick_blend() {
+    const Isa isa = pick_isa();
+    return isa == Isa::Avx512 ? avx512_blend : (isa == Isa::Avx2 ? avx2_blend : portable_blend);
+}
+
 PlaceFn pick_place() {
     const Isa isa = pick_isa();
     return isa == Isa::Avx512 ? avx512_place : (isa == Isa::Avx2 ? avx2_place : portable_place);
@@ -108,6 +130,11 @@ void equirect_dir_lanes(const float to_map[9], const float* u, const float* v, s
 void env_place_lanes(bool closest, float fw, float fh, const EnvPicks& in, size_t m, float* u, float* v) {
     static const PlaceFn fn = pick_place();
     fn(closest, fw, fh, in, m, u, v);
+}
+
+void env_blend_lanes(const EnvTexels& t, size_t m, bool has_pdf, bool divide, float* out, size_t stride, float* pdf) {
+    static const BlendFn fn = pick_blend();
+    fn(t, m, has_pdf, divide, out, stride, pdf);
 }
 
 }  // namespace dacrt
