@@ -69,8 +69,9 @@ void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], 
 void environment_sample(const EnvironmentMap& env, float u1, float u2, float wi[3], float value[3], float& pdf);
 
 // environment_sample for points k < m at once (the same bits): wi and value in 3 rows of
-// stride `stride`, pdf[k]. The searches and the lookups run per point; from_uv and the turn to
-// the world run as a lane loop (envlanes.h), which one point at a time could not vectorise.
+// stride `stride`, pdf[k]. The searches and the texel loads run per point; the place in the
+// cell, from_uv with the turn to the world and ('Linear' without sRGB) the pdf's and lookup's
+// blends run as lane loops (envlanes.h), which one point at a time could not vectorise.
 void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const float* u2, size_t m, float* wi,
                               float* value, float* pdf, size_t stride);
 
