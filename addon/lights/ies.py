@@ -90,8 +90,8 @@ def _parse(text: bytes):
     factor = p.double()                         # candela multiplier
     v_num, h_num = p.long(), p.long()
     kind = p.long()                             # photometric type: 1 C, 2 B, 3 A
-    if kind not in (1, 2):
-        raise IESError(f"photometric type {kind} (Cycles reads types B (2) and C (1))")
+    if kind not in (1, 2, 3):
+        raise IESError(f"photometric type {kind} (LM-63 has types C (1), B (2) and A (3))")
     p.long()                                    # units
     p.double(), p.double(), p.double()          # width, length, height
     factor *= p.double()                        # ballast factor
@@ -108,81 +108,92 @@ def _parse(text: bytes):
     return kind, h, v, inten
 
 
+def _close(a, b):
+    """Cycles' angle_close: within 1e-4 degrees (float32)."""
+    return abs(F32(F32(a) - F32(b))) < F32(1e-4)
+
+
+def _mirror_about_90(angles):
+    """0..90 mirrored to 0..180 (90 - a reversed, then 90 + a); the indices the values come from."""
+    n = len(angles)
+    out = [F32(F32(90.0) - angles[i]) for i in range(n - 1, 0, -1)] + [F32(F32(90.0) + a) for a in angles]
+    return out, list(range(n - 1, 0, -1)) + list(range(n))
+
+
 def _process_b(h, v, inten):
-    # type B: swap the axes (Cycles' process_type_b)
+    # type B: the axes swapped (its polar axis is horizontal; the user rotates the light)
     inten = [[inten[j][i] for j in range(len(h))] for i in range(len(v))]
     h, v = v, h
-    if h[-1] != 90.0:
-        raise IESError("type B horizontal angles do not end at 90 degrees")
-    if h[0] == 0.0:
-        hn = len(h)
-        new_h = [F32(90.0 - h[i]) for i in range(hn - 1, 0, -1)] + [F32(90.0 + h[i]) for i in range(hn)]
-        inten = [inten[i] for i in range(hn - 1, 0, -1)] + [inten[i] for i in range(hn)]
-        h = new_h
-    elif h[0] == -90.0:
+    if _close(h[0], 0.0):               # 0..90 mirrored to -90..90, shifted to 0..180
+        h, idx = _mirror_about_90(h)
+        inten = [inten[i] for i in idx]
+    else:                               # -90..90 shifted
         h = [F32(a + F32(90.0)) for a in h]
-    h.append(F32(360.0))
-    inten.append(inten[0])
-    if v[-1] != 90.0:
-        raise IESError("type B vertical angles do not end at 90 degrees")
-    if v[0] == 0.0:
-        vn = len(v)
-        v_new = [F32(90.0 - v[i]) for i in range(vn - 1, 0, -1)] + [F32(90.0 + v[i]) for i in range(vn)]
-        inten = [[row[j] for j in range(vn - 2, -1, -1)] + list(row) for row in inten]
-        v = v_new
-    elif v[0] == -90.0:
+    if _close(v[0], 0.0):
+        v, idx = _mirror_about_90(v)
+        inten = [[row[j] for j in idx] for row in inten]
+    else:
         v = [F32(a + F32(90.0)) for a in v]
     return h, v, inten
 
 
+def _process_a(h, v, inten):
+    v = [F32(a + F32(90.0)) for a in v]
+    # -90..90 maps to 270..90 of type C; from 0, mirrored: the negative side to 180..270
+    new_h = [F32(F32(180.0) - h[i]) for i in range(len(h) - 1, -1, -1)]
+    rows = [inten[i] for i in range(len(h) - 1, -1, -1)]
+    if _close(h[0], 0.0):
+        new_h += [F32(F32(180.0) + h[i]) for i in range(1, len(h))]
+        rows += [inten[i] for i in range(1, len(h))]
+    return new_h, v, rows
+
+
 def _process_c(h, v, inten):
-    if h[0] == 90.0:        # stored from 90 to 270 degrees
+    if _close(h[0], 90.0):              # stored from 90 to 270
         h = [F32(a - F32(90.0)) for a in h]
-    if h[0] != 0.0:
-        raise IESError(f"type C horizontal angles start at {float(h[0]):g} degrees, not 0 or 90")
     if len(h) == 1:
-        h.append(F32(360.0))
-        inten.append(inten[0])
-    if h[-1] == 90.0:       # one quadrant: mirrored to two, then (below) to four
+        h = [F32(0.0), F32(360.0)]
+        inten = [inten[0], inten[0]]
+    if _close(h[-1], 90.0):             # one quadrant: mirrored to two, then (below) to four
         for i in range(len(h) - 2, -1, -1):
-            h.append(F32(180.0 - h[i]))
+            h.append(F32(F32(180.0) - h[i]))
             inten.append(inten[i])
-    if h[-1] == 180.0:      # one half: mirrored to the full circle
+    if _close(h[-1], 180.0):            # one half: mirrored to the full circle
         for i in range(len(h) - 2, -1, -1):
-            h.append(F32(360.0 - h[i]))
+            h.append(F32(F32(360.0) - h[i]))
             inten.append(inten[i])
-    if h[-1] != 360.0:      # a missing 360 entry where the spacing says it is one step away
+    if _close(h[0], 0.0) and not _close(h[-1], 360.0):
+        # a missing 360 entry where the spacing says it is one step away
         last_step, first_step = F32(h[-1] - h[-2]), F32(h[1] - h[0])
-        diff = F32(F32(360.0) - h[-1])
-        if last_step == diff or first_step == diff:
+        gap = F32(F32(360.0) - h[-1])
+        if _close(last_step, gap) or _close(first_step, gap):
             h.append(F32(360.0))
             inten.append(inten[0])
-        else:
-            raise IESError(f"type C horizontal angles end at {float(h[-1]):g} degrees, not 90, 180 or 360")
-    if v[0] == 90.0:
-        if v[-1] != 180.0:
-            raise IESError("type C vertical angles from 90 degrees do not end at 180")
-    elif v[0] != 0.0:
-        raise IESError(f"type C vertical angles start at {float(v[0]):g} degrees, not 0 or 90")
     return h, v, inten
 
 
 def parse_ies(text) -> IESProfile:
     """The profile Cycles builds from an LM-63 text (str or bytes); IESError where Cycles'
-    IESFile::load fails (the light then shines 100 x Strength evenly there: INVALID_VALUE)."""
+    IESFile::load fails (the light then shines 100 x Strength evenly there: INVALID_VALUE).
+    Cycles 5.0 is forgiving past the parse: angle ranges are taken as they come (lookups
+    outside them read 0)."""
     if isinstance(text, str):
         text = text.encode('utf-8', 'surrogateescape')
     kind, h, v, inten = _parse(bytes(text))
     if not h or not v:
         raise IESError("no angles")
-    if kind == 2:
-        h, v, inten = _process_b(h, v, inten)
-    else:
-        h, v, inten = _process_c(h, v, inten)
+    h, v, inten = {1: _process_c, 2: _process_b, 3: _process_a}[kind](h, v, inten)
     deg = F32(np.pi) / F32(180.0)           # (M_PI_F / 180.f, in float32 as Cycles)
     h_rad = np.asarray(h, F32) * deg
     v_rad = np.asarray(v, F32) * deg
     table = np.asarray(inten, F32).reshape(len(h), len(v))
+    # (what Cycles' linear scans would read of unordered angles or non-finite values is not
+    # modelled: such a file is refused, said, and rendered as one Cycles cannot load)
+    for name, a in (('horizontal', h_rad), ('vertical', v_rad)):
+        if not (np.isfinite(a).all() and (np.diff(a) > 0).all()):
+            raise IESError(f"its {name} angles are not finite and ascending after Cycles' processing")
+    if not np.isfinite(table).all():
+        raise IESError("non-finite intensities")
     return IESProfile(h_rad, v_rad, np.ascontiguousarray(table))
 
 
@@ -193,8 +204,10 @@ def _cubic(a, b, c, d, x):
 
 def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
     """Cycles' kernel_ies_interp (kernel/util/ies.h) in float64 over arrays of angles (radians):
-    bicubic over the table, the vertical neighbour past a pole read on the same column where the
-    table reaches that pole (else 0), columns wrapped past 360 degrees, 0 outside, clipped at 0."""
+    bicubic over the table; past a table's end the neighbour is read across the pole (v from 0)
+    or round the circle (h from 0 to 2 pi) where the table wraps there, else the nearer inner
+    point stands in (vertically the next one, horizontally the current one, as Cycles); 0
+    outside the table, clipped at 0."""
     h_tab = profile.h_angles.astype(np.float64)
     v_tab = profile.v_angles.astype(np.float64)
     table = profile.intensity.astype(np.float64)
@@ -206,25 +219,30 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
     if not valid.any():
         return out
     h, v = h[valid], v[valid]
-    wrap_h = h_tab[0] < 1e-7 and h_tab[-1] > 2.0 * np.pi - 1e-7
-    wrap_vlow, wrap_vhigh = v_tab[0] < 1e-7, v_tab[-1] > np.pi - 1e-7
+    # the wrap tests in float32, as Cycles makes them: M_2PI_F - 1e-7f and M_PI_F - 1e-7f round
+    # back to 2 pi and pi, so a table ending at 360 (180) degrees does not wrap there, and the
+    # inner point stands in (measured: wrapped, an asymmetric profile's seam at -Y was 0.77x
+    # Cycles)
+    eps = F32(1e-7)
+    wrap_h = bool(profile.h_angles[0] < eps and profile.h_angles[-1] > F32(F32(2.0 * np.pi) - eps))
+    wrap_vlow = bool(profile.v_angles[0] < eps)
+    wrap_vhigh = bool(profile.v_angles[-1] > F32(F32(np.pi) - eps))
     # the first index whose next angle is >= the angle (Cycles' linear scan)
     hi = np.searchsorted(h_tab[1:], h, side='left')
     vi = np.searchsorted(v_tab[1:], v, side='left')
     h_frac = (h - h_tab[hi]) / (h_tab[hi + 1] - h_tab[hi])
     v_frac = (v - v_tab[vi]) / (v_tab[vi + 1] - v_tab[vi])
 
-    def vertical(col, ok):
-        col = np.clip(col, 0, hn - 1)
+    def vertical(col):
         get = lambda j: table[col, np.clip(j, 0, vn - 1)]     # noqa: E731
-        a = np.where(vi > 0, get(vi - 1), get(np.ones_like(vi)) if wrap_vlow else 0.0)
-        d = np.where(vi + 2 < vn, get(vi + 2), get(np.full_like(vi, vn - 2)) if wrap_vhigh else 0.0)
-        return np.where(ok, _cubic(a, get(vi), get(vi + 1), d, v_frac), 0.0)
+        b, c = get(vi), get(vi + 1)
+        a = np.where(vi > 0, get(vi - 1), get(np.ones_like(vi)) if wrap_vlow else b)
+        d = np.where(vi + 2 < vn, get(vi + 2), get(np.full_like(vi, vn - 2)) if wrap_vhigh else c)
+        return _cubic(a, b, c, d, v_frac)
 
-    true = np.ones(h.shape, bool)
-    a = vertical(np.where(hi > 0, hi - 1, hn - 2), (hi > 0) | wrap_h)
-    b, c = vertical(hi, true), vertical(hi + 1, true)
-    d = vertical(np.where(hi + 2 < hn, hi + 2, 1), (hi + 2 < hn) | wrap_h)
+    b, c = vertical(hi), vertical(hi + 1)
+    a = np.where(hi > 0, vertical(np.maximum(hi - 1, 0)), vertical(np.full_like(hi, hn - 2)) if wrap_h else b)
+    d = np.where(hi + 2 < hn, vertical(np.minimum(hi + 2, hn - 1)), vertical(np.ones_like(hi)) if wrap_h else b)
     out[valid] = np.maximum(_cubic(a, b, c, d, h_frac), 0.0)
     return out
 

@@ -1,6 +1,6 @@
 """LM-63 (IES) parsing as Cycles 5.0 does it (addon/lights/ies.py vs util/ies.cpp): tables worked
-out by hand from Cycles' process_type_b / process_type_c for each horizontal symmetry, the
-candela scaling, and the files Cycles refuses. No Blender needed."""
+out by hand from Cycles' process_type_a / _b / _c for each horizontal symmetry, the candela
+scaling, the ranges Cycles takes as they come, and the files it cannot load. No Blender needed."""
 import numpy as np
 import pytest
 
@@ -75,12 +75,28 @@ def test_type_c_upper_hemisphere_kept():
 
 
 def test_type_b_mirrored_both_ways():
-    # file v (0, 45, 90) becomes the horizontal axis mirrored about 90 (0..180), file h (0, 90)
-    # the vertical one mirrored about 90 (0..180); rows a (h = 0) and b (h = 90) per file v
+    # file v (0, 45, 90) becomes the horizontal axis mirrored about 90 (0..180, no 360 entry),
+    # file h (0, 90) the vertical one mirrored about 90 (0..180); rows a (h = 0) and b (h = 90)
     a, b = [10, 20, 30], [1, 2, 3]
     p = parse_ies(lm63([0, 45, 90], [0, 90], [a, b], kind=2))
-    r = [[a[i], a[i], b[i]] for i in range(3)]
-    check(p, [0, 45, 90, 135, 180, 360], [0, 90, 180], [r[2], r[1], r[0], r[1], r[2], r[2]])
+    r = [[b[i], a[i], b[i]] for i in range(3)]
+    check(p, [0, 45, 90, 135, 180], [0, 90, 180], [r[2], r[1], r[0], r[1], r[2]])
+    # -90..90 on both: shifted by 90
+    p = parse_ies(lm63([-90, 0, 90], [-90, 0, 90], [[1, 2, 3], [4, 5, 6], [7, 8, 9]], kind=2))
+    check(p, [0, 90, 180], [0, 90, 180], [[1, 4, 7], [2, 5, 8], [3, 6, 9]])
+
+
+def test_type_a():
+    # vertical -90..90 shifted to 0..180; horizontal 0..90 to 90..180 reversed, mirrored to 270
+    p = parse_ies(lm63([-90, 0, 90], [0, 45, 90], [R0[:3], R1[:3], R2[:3]], kind=3))
+    check(p, [90, 135, 180, 225, 270], [0, 90, 180], [R2[:3], R1[:3], R0[:3], R1[:3], R2[:3]])
+
+
+def test_ranges_taken_as_they_come():
+    # Cycles 5.0 no longer refuses odd ranges: a quadrant from 45 is mirrored about 90 only,
+    # vertical angles from 10 stay (lookups outside read 0)
+    p = parse_ies(lm63([10, 30, 90], [45, 90], [[1, 2, 3], [4, 5, 6]]))
+    check(p, [45, 90, 135], [10, 30, 90], [[1, 2, 3], [4, 5, 6], [1, 2, 3]])
 
 
 def test_scaling_tilt_include_and_commas():
@@ -92,15 +108,13 @@ def test_scaling_tilt_include_and_commas():
 @pytest.mark.parametrize("text, what", [
     ("", "empty"),
     (lm63(V, [0], [R0]).replace("TILT=NONE", "TILT NONE"), "TILT"),
-    (lm63(V, [0], [R0], kind=3), "type 3"),
+    (lm63(V, [0], [R0], kind=4), "type 4"),
     (lm63(V, [0], [R0])[:-12], "fewer numbers"),
-    (lm63(V, [45, 90], [R0, R1]), "start at 45"),
-    (lm63(V, [0, 50, 120], [R0, R1, R2]), "end at 120"),
-    (lm63([10, 30, 90], [0], [[1, 2, 3]]), "vertical angles start at 10"),
-    (lm63([90, 120], [0], [[1, 2]]), "do not end at 180"),
-    (lm63(V, [0, 45], [R0, R1], kind=2), "type B vertical"),
-    (lm63([0, 45], [0, 90], [[1, 2], [3, 4]], kind=2), "type B horizontal"),
+    (lm63(V, [0, 90, 45], [R0, R1, R2]), "horizontal angles are not finite and ascending"),
+    (lm63([0, 60, 30], [0], [[1, 2, 3]]), "vertical angles are not"),
 ])
 def test_malformed(text, what):
+    """What Cycles cannot load (it then lights 100 x Strength evenly), and unordered angles,
+    whose reading by Cycles' linear scans is not modelled."""
     with pytest.raises(IESError, match=what):
         parse_ies(text)
