@@ -20,7 +20,9 @@ order of the C++ struct LampRecord; fields a lamp does not use stay 0:
   pos 5..7 (centre, or the sun's unit direction), radius 8, cos_half 9 (spot, sun),
   inv_smooth 10 (spot; 0 = hard edge), omc 11 (sun: 1 - cos(angle/2)), pdf 12 (sun cone,
   background), area 13, axis_x 14..16, axis_y 17..19, inv_x 20..22, inv_y 23..25, normal 26..28,
-  tan_half_spread 29, spread_norm 30 (0 = no spread), inv_m3 31..39 (spot, row-major).
+  tan_half_spread 29, spread_norm 30 (0 = no spread), inv_m3 31..39 (spot, row-major),
+  ies 40 (point/spot: IES profile id, dacrt.lamps.ies_register; 0 = none), ies_m3 41..49 (its
+  world -> object transform of directions, row-major; lights/ies.py).
 """
 from __future__ import annotations
 
@@ -47,12 +49,12 @@ EMPTY_IDX = np.zeros(0, np.int64)
 
 MAX_BOUNCES_UNLIMITED = 1024   # Blender's default Max Bounces of a light
 
-RECORD_WIDTH = 40
+RECORD_WIDTH = 50
 RECORD_FIELDS = {
     'kind': (0, 1), 'shape': (1, 1), 'emit': (2, 3), 'pos': (5, 3), 'radius': (8, 1), 'cos_half': (9, 1),
     'inv_smooth': (10, 1), 'omc': (11, 1), 'pdf': (12, 1), 'area': (13, 1), 'axis_x': (14, 3), 'axis_y': (17, 3),
     'inv_x': (20, 3), 'inv_y': (23, 3), 'normal': (26, 3), 'tan_half_spread': (29, 1), 'spread_norm': (30, 1),
-    'inv_m3': (31, 9),
+    'inv_m3': (31, 9), 'ies': (40, 1), 'ies_m3': (41, 9),
 }
 KIND_POINT, KIND_SPOT, KIND_SUN, KIND_AREA, KIND_BACKGROUND = range(5)
 POINT_DELTA, POINT_SPHERE, POINT_DISK = range(3)

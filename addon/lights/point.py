@@ -26,6 +26,7 @@ from ..sampling import (concentric_disk, dot, normalize, one_minus_cos_from_sin2
                         to_world, uniform_cone)
 from .base import (F32, KIND_POINT, KIND_SPOT, POINT_DELTA, POINT_DISK, POINT_SPHERE, Bounds, Lamp, LightSample,
                    col, luminance, make_record, matvec, outer)
+from .ies import ies_direction, ies_mean, native_id
 
 
 class PointLight(Lamp):
@@ -45,18 +46,27 @@ class PointLight(Lamp):
             fac = 1.0 / (4.0 * np.pi ** 2 * self.radius ** 2) if self.normalize else 1.0 / np.pi
         # intensity (delta) or radiance (finite): strength * eval_fac
         self.emit = (self.color * fac).astype(F32)
+        # an IES profile (lights/ies.py) times the emission per direction in the light's object
+        # space: Cycles' default Vector, Geometry Incoming taken world -> object as a normal (M^T)
+        self.ies = getattr(light, 'ies', None)
+        self.ies_m3 = m[:3, :3].T.astype(F32) if self.ies is not None else None
 
     def bounds(self) -> Bounds:
         # every direction (SpotLight narrows it to its cone); on-axis intensity strength / 4 pi
         # either way
         r = F32(self.radius)
         energy = luminance(self.emit) * (1.0 if self.delta else np.pi * self.radius ** 2)
+        if self.ies is not None:        # the profile's mean over the sphere (the pick stays unbiased)
+            energy *= ies_mean(self.ies)
         return Bounds(self.center - r, self.center + r, np.array([0.0, 0.0, 1.0], F32), -1.0, 0.0, energy)
 
     def record(self):
         shape = POINT_DELTA if self.delta else POINT_SPHERE if self.sphere else POINT_DISK
+        extra = {}
+        if self.ies is not None:
+            extra = dict(ies=native_id(self.ies), ies_m3=self.ies_m3)
         return make_record(self.record_kind, shape, emit=self.emit, pos=self.center, radius=self.radius,
-                           **self._cone_fields())
+                           **self._cone_fields(), **extra)
 
     def _cone_fields(self) -> dict:
         return {}
@@ -65,7 +75,14 @@ class PointLight(Lamp):
         """Per-sample scalars times the light's angular factor for unit directions (3,n) from the
         shading point toward the light sample (1 for points); inside (n,) bool or None: points
         within a sphere light, which a spot's cone does not shape (Cycles' light/spot.h)."""
-        return scale
+        return self._profile(scale, to_light)
+
+    def _profile(self, scale, to_light):
+        """scale times the IES profile along -to_light (unchanged without one)."""
+        if self.ies is None:
+            return scale
+        local = matvec(self.ies_m3, -np.asarray(to_light, F32))
+        return scale * ies_direction(self.ies, local).astype(F32)
 
     def sample(self, P, u1, u2):
         n = P.shape[1]
@@ -198,7 +215,7 @@ class SpotLight(PointLight):
     def _attenuate(self, scale, to_light, inside=None):
         cone = self.attenuation(-to_light)
         scale *= cone if inside is None else np.where(inside, F32(1.0), cone)
-        return scale
+        return self._profile(scale, to_light)
 
     def attenuation(self, from_light):
         """Cone factor for unit light->point directions (3,n)."""

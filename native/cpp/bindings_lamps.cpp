@@ -20,6 +20,7 @@
 #include "environment.h"
 #include "envlanes.h"
 #include "equirect.h"
+#include "ies.h"
 #include "lamps.h"
 #include "nextevent.h"
 
@@ -249,6 +250,8 @@ py::dict lamp_record_layout() {
     DACRT_FIELD(tan_half_spread, 1);
     DACRT_FIELD(spread_norm, 1);
     DACRT_FIELD(inv_m3, 9);
+    DACRT_FIELD(ies, 1);
+    DACRT_FIELD(ies_m3, 9);
 #undef DACRT_FIELD
     return d;
 }
@@ -727,9 +730,37 @@ py::tuple equirect_direction_py(F32Array u, F32Array v) {
     return py::make_tuple(m, s);
 }
 
+// Registers an IES table (addon/lights/ies.py's IESProfile): its id for lamp records.
+int ies_register_py(F32Array h, F32Array v, F32Array intensity) {
+    if (h.ndim() != 1 || v.ndim() != 1) throw py::value_error("h and v must be one-dimensional");
+    need_shape(intensity, h.shape(0), size_t(v.shape(0)), "intensity");
+    std::vector<float> hv(h.data(), h.data() + h.size()), vv(v.data(), v.data() + v.size()),
+        iv(intensity.data(), intensity.data() + intensity.size());
+    return ies_register(std::move(hv), std::move(vv), std::move(iv));  // invalid_argument: ValueError
+}
+
+// kernel_ies_interp of profile id at each (h, v) angle pair (tests).
+F32Array ies_lookup_py(int id, F32Array h, F32Array v) {
+    const IesTable* t = ies_table(id);
+    if (!t) throw py::value_error("IES profile " + std::to_string(id) + " is not registered");
+    if (h.ndim() != 1) throw py::value_error("h must be one-dimensional, got " + shape_str(h));
+    const size_t n = size_t(h.shape(0));
+    need_shape(v, 0, n, "v");
+    F32Array out{py::ssize_t(n)};
+    float* o = out.mutable_data();
+    const float *hp = h.data(), *vp = v.data();
+    py::gil_scoped_release nogil;
+    for (size_t i = 0; i < n; ++i) o[i] = ies_interp(*t, hp[i], vp[i]);
+    return out;
+}
+
 }  // namespace
 
 void register_lamps(py::module_& m) {
+    m.def("ies_register", &ies_register_py, py::arg("h"), py::arg("v"), py::arg("intensity"),
+          "register an IES profile table (radians, (H, V) values): its id >= 1 for lamp records");
+    m.def("ies_lookup", &ies_lookup_py, py::arg("id"), py::arg("h"), py::arg("v"),
+          "Cycles' kernel_ies_interp of a registered profile at angle pairs");
     m.attr("LAMP_RECORD_WIDTH") = LAMP_RECORD_WIDTH;
     m.def("lamp_record_layout", &lamp_record_layout, "field name -> (offset, width) in float32 of a lamp record");
     m.def("lamp_sample", &lamp_sample_py, py::arg("records"), py::arg("entry"), py::arg("P"), py::arg("u1"),

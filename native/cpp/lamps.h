@@ -19,6 +19,7 @@
 #include <limits>
 #include <string>
 
+#include "ies.h"
 #include "lighttree.h"
 #if defined(__SSE2__) || defined(_M_X64)
 #include <emmintrin.h>
@@ -52,8 +53,10 @@ struct LampRecord {
     float tan_half_spread;  // 29 area spread: tan(spread/2)
     float spread_norm;      // 30 spread profile normalisation; 0 = no spread (spread = pi)
     float inv_m3[9];        // 31 spot: inverse of the object's 3x3 transform, row-major
+    float ies;              // 40 point/spot: IES profile id (ies.h), 0 = none
+    float ies_m3[9];        // 41 its world -> object transform of directions (as a normal), row-major
 };
-constexpr size_t LAMP_RECORD_WIDTH = 40;
+constexpr size_t LAMP_RECORD_WIDTH = 50;
 static_assert(sizeof(LampRecord) == LAMP_RECORD_WIDTH * sizeof(float), "LampRecord must be packed floats");
 
 // Empty if the record can be used, else what is wrong (kind/shape codes, non-finite fields).
@@ -486,6 +489,10 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
             const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
             scale *= spot_attenuation(L, from_light);
         }
+        if (L.ies != 0) {  // per lamp: predicted; the profile along the sample's direction
+            const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
+            scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
+        }
         break;
     }
     case LAMP_SUN:
@@ -652,6 +659,10 @@ __attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const f
         if (kind == LAMP_SPOT && cone) {
             const float from_light[3] = {-D[0], -D[1], -D[2]};
             scale = spot_attenuation(L, from_light);
+        }
+        if (L.ies != 0) {  // as sample_lamp weighs its samples: MIS sees one emission
+            const float from_light[3] = {-D[0], -D[1], -D[2]};
+            scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
         }
     } else if (kind == LAMP_AREA) {
         // per lamp, predicted; with spread out of line, which keeps lamps without spread as fast

@@ -493,7 +493,7 @@ def test_bad_arguments():
     u = np.full(n, 0.5, F32)
     e = np.zeros(n, np.int32)
     sample = dacrt.lamps.lamp_sample
-    with pytest.raises(ValueError, match=r'records must have shape \(R, 40\)'):
+    with pytest.raises(ValueError, match=r'records must have shape \(R, 50\)'):
         sample(rec[:, :39], e, P, u, u)
     with pytest.raises(ValueError, match=r'P must have shape \(3, n\)'):
         sample(rec, e, P[:2], u, u)

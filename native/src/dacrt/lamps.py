@@ -19,7 +19,7 @@ import numpy as np
 from . import _core
 from .shading import _check_added_to
 
-__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather", "EnvironmentMap", "LightTree", "light_tree",
+__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather", "ies_register", "ies_lookup", "EnvironmentMap", "LightTree", "light_tree",
            "environment_map"]
 
 RECORD_WIDTH = int(_core.LAMP_RECORD_WIDTH)
@@ -159,3 +159,14 @@ def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool 
     return _core.EnvironmentMap(np.ascontiguousarray(rgb, _F32), np.ascontiguousarray(m, _F32),
                                 interpolation == "Closest", bool(srgb),
                                 None if scale is None else np.ascontiguousarray(scale, _F32).reshape(3))
+
+
+def ies_register(h, v, intensity) -> int:
+    """Registers an IES profile table (h (H,), v (V,) radians ascending, intensity (H, V)):
+    its id >= 1 for a point/spot lamp record's `ies` field (identical tables share one id)."""
+    return int(_core.ies_register(_f32(h), _f32(v), _f32(intensity)))
+
+
+def ies_lookup(id: int, h, v) -> np.ndarray:
+    """Cycles' kernel_ies_interp of registered profile id at angle pairs (h[i], v[i])."""
+    return _core.ies_lookup(int(id), _f32(h), _f32(v))

@@ -1,0 +1,128 @@
+// IES profile lookup and registry (ies.h).
+#include "ies.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+
+namespace dacrt {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr float k2Pi = 6.28318530717958647692f;
+
+// Cycles' util/math cubic_interp and inverse_lerp, their operation order
+inline float cubic_interp(float a, float b, float c, float d, float x) {
+    return 0.5f * (((d + 3.0f * (b - c) - a) * x + (2.0f * a - 5.0f * b + 4.0f * c - d)) * x + (c - a)) * x + b;
+}
+inline float inverse_lerp(float a, float b, float x) { return (x - a) / (b - a); }
+
+// interpolate_ies_vertical: along v in column h; past an end that does not wrap the nearer
+// inner point stands in
+inline float vertical(const IesTable& t, bool wrap_vlow, bool wrap_vhigh, size_t v, float v_frac, size_t h) {
+    const size_t vn = t.v.size();
+    const float* col = t.I.data() + h * vn;
+    const float b = col[v], c = col[v + 1];
+    const float a = v > 0 ? col[v - 1] : (wrap_vlow ? col[1] : b);
+    const float d = v + 2 < vn ? col[v + 2] : (wrap_vhigh ? col[vn - 2] : c);
+    return cubic_interp(a, b, c, d, v_frac);
+}
+
+// Registered tables live as long as the process (a few kB each, identical ones shared): lamp
+// records hold bare ids, and a render may still read one while the next scene registers.
+constexpr int kMaxTables = 4096;
+std::atomic<const IesTable*> g_tables[kMaxTables];
+std::atomic<int> g_count{0};
+std::mutex g_register;
+
+}  // namespace
+
+float ies_interp(const IesTable& t, float h_angle, float v_angle) {
+    const size_t hn = t.h.size(), vn = t.v.size();
+    const float v_low = t.v[0], v_high = t.v[vn - 1], h_low = t.h[0], h_high = t.h[hn - 1];
+    // (NaN angles: no index found below, 0 as outside)
+    if (!(v_angle >= v_low && v_angle < v_high)) return 0.0f;
+    if (!(h_angle >= h_low && h_angle < h_high)) return 0.0f;
+    // Cycles' float32 tests: k2Pi - 1e-7f and kPi - 1e-7f round back to 2 pi and pi, so a
+    // table ending at 360 (180) degrees does not wrap there (the inner point stands in)
+    const bool wrap_h = h_low < 1e-7f && h_high > k2Pi - 1e-7f;
+    const bool wrap_vlow = v_low < 1e-7f;
+    const bool wrap_vhigh = v_high > kPi - 1e-7f;
+    size_t hi = 0, vi = 0;
+    while (t.h[hi + 1] < h_angle) ++hi;
+    while (t.v[vi + 1] < v_angle) ++vi;
+    const float h_frac = inverse_lerp(t.h[hi], t.h[hi + 1], h_angle);
+    const float v_frac = inverse_lerp(t.v[vi], t.v[vi + 1], v_angle);
+    const float b = vertical(t, wrap_vlow, wrap_vhigh, vi, v_frac, hi);
+    const float c = vertical(t, wrap_vlow, wrap_vhigh, vi, v_frac, hi + 1);
+    float a = b, d = b;  // (Cycles: the current column stands in at both ends)
+    if (hi > 0)
+        a = vertical(t, wrap_vlow, wrap_vhigh, vi, v_frac, hi - 1);
+    else if (wrap_h)  // the last column (360 degrees) is the first: the one before it
+        a = vertical(t, wrap_vlow, wrap_vhigh, vi, v_frac, hn - 2);
+    if (hi + 2 < hn)
+        d = vertical(t, wrap_vlow, wrap_vhigh, vi, v_frac, hi + 2);
+    else if (wrap_h)
+        d = vertical(t, wrap_vlow, wrap_vhigh, vi, v_frac, 1);
+    return std::max(cubic_interp(a, b, c, d, h_frac), 0.0f);
+}
+
+float ies_direction(const IesTable& t, const float d[3]) {
+    const float len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if (!(len > 0)) return 0.0f;
+    const float inv = 1.0f / len;
+    const float x = d[0] * inv, y = d[1] * inv, z = d[2] * inv;
+    const float mz = -z;
+    const float v_angle = mz >= 1.0f ? 0.0f : (mz <= -1.0f ? kPi : std::acos(mz));  // safe_acosf
+    const float h_angle = std::atan2(x, y) + kPi;
+    return ies_interp(t, h_angle, v_angle);
+}
+
+const IesTable* ies_table(int id) {
+    if (id < 1 || id > g_count.load(std::memory_order_acquire)) return nullptr;
+    return g_tables[id - 1].load(std::memory_order_acquire);
+}
+
+int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> I) {
+    if (h.empty() || v.empty() || I.size() != h.size() * v.size())
+        throw std::invalid_argument("an IES table needs >= 1 horizontal and vertical angle and H x V values");
+    for (size_t k = 0; k < h.size(); ++k)
+        if (!std::isfinite(h[k]) || (k && !(h[k] > h[k - 1])))
+            throw std::invalid_argument("IES horizontal angles must be finite and ascending");
+    for (size_t k = 0; k < v.size(); ++k)
+        if (!std::isfinite(v[k]) || (k && !(v[k] > v[k - 1])))
+            throw std::invalid_argument("IES vertical angles must be finite and ascending");
+    for (float x : I)
+        if (!std::isfinite(x)) throw std::invalid_argument("IES intensities must be finite");
+    const std::lock_guard<std::mutex> lock(g_register);
+    const int n = g_count.load(std::memory_order_relaxed);
+    for (int k = 0; k < n; ++k) {
+        const IesTable* t = g_tables[k].load(std::memory_order_relaxed);
+        if (t->h == h && t->v == v && t->I == I) return k + 1;
+    }
+    if (n >= kMaxTables) throw std::invalid_argument("too many distinct IES profiles");
+    g_tables[n].store(new IesTable{std::move(h), std::move(v), std::move(I)}, std::memory_order_release);
+    g_count.store(n + 1, std::memory_order_release);
+    return n + 1;
+}
+
+std::string ies_id_error(float id) {
+    if (id == 0) return {};
+    if (float(int(id)) != id || !ies_table(int(id)))
+        return "ies " + std::to_string(id) + " is not a registered IES profile id (0 = none)";
+    return {};
+}
+
+float ies_lamp_factor(float id, const float m3[9], const float from_light[3]) {
+    const IesTable* t = ies_table(int(id));
+    if (!t) return 0.0f;
+    float local[3];
+    for (int r = 0; r < 3; ++r)
+        local[r] = m3[3 * r] * from_light[0] + m3[3 * r + 1] * from_light[1] + m3[3 * r + 2] * from_light[2];
+    return ies_direction(*t, local);
+}
+
+}  // namespace dacrt
