@@ -56,7 +56,8 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
 
     def object_info(output):
         return object_value(info, location, output)
-    shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, object_info)
+    profile = []
+    shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, object_info, profile)
     strength *= shader
     if not np.isfinite(strength).all():
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
@@ -106,6 +107,8 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
               # rays past glass (Cycles' transmission rays) see it by this one
               visible_transmission=bool(getattr(ob, 'visible_transmission', True)),
               no_emission=no_emission)
+    if profile:
+        kw.update(ies=profile[0])
     if light.type in ('POINT', 'SPOT'):
         kw.update(radius=float(light.shadow_soft_size),
                   soft_falloff=bool(getattr(light, 'use_soft_falloff', True)))
@@ -200,7 +203,7 @@ def _fits_float32(light):
         return False
 
 
-def _light_shader_factor(light, name, messages, approximated=None, object_info=None):
+def _light_shader_factor(light, name, messages, approximated=None, object_info=None, profile=None):
     """(factor, no_emission): the light's node tree (if used) as a constant RGB factor on its
     colour x power, as Cycles evaluates a light's shader: the emission reaching the output's
     Surface (Emission colour x strength, Add and Mix Shaders of them, a colour or value linked
@@ -209,7 +212,11 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
     0, is the cause ('' otherwise: the skipped-light message names it). What depends on the
     shading point (textures, a Light Falloff's distance) is read at its own value, with a
     warning naming the light. object_info(output) -> (4,): an Object Info output's value for
-    this light (None: Object Info stands at its own value, as a node not evaluated)."""
+    this light (None: Object Info stands at its own value, as a node not evaluated). An IES
+    Texture feeding the emission linearly (its Fac into a Strength or Color, through products)
+    is applied as Cycles does: the factor is the tree's with the node at its Strength, and the
+    parsed profile (lights/ies.py) is appended to `profile` (a list) for a point or spot light
+    to multiply its emission by per direction (_ies_profile says what it cannot apply)."""
     if not getattr(light, 'use_nodes', False) or light.node_tree is None:
         return np.ones(3), ''
     out = output_node(light.node_tree)
@@ -225,18 +232,18 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
     surface = out.inputs['Surface']
     if not surface.is_linked:
         dark.append("nothing linked into its Light Output's Surface")
-    factor = _light_surface(surface, reasons, 0, dark, light.type, object_info)
-    no_emission = '; '.join(dict.fromkeys(dark)) if not factor.any() else ''
-    # an IES profile shapes the lamp's light per direction in Cycles; here it emits evenly (its
-    # node stands at an own value): said by name, not only as "not evaluated" (a point light
-    # 0.02-0.04x Cycles under a narrow profile), also where that stand-in is 0 (an IES Texture
-    # inside a group: the group output's own 0) and the lamp is skipped as dark
-    ies = [f"'{n.name}'" for n in dict.fromkeys(nodegraph.unwrap(link.from_node)
-                                                 for link in nodegraph.links_feeding(surface))
+    ies = [n for n in dict.fromkeys(nodegraph.unwrap(link.from_node) for link in nodegraph.links_feeding(surface))
            if n.type == 'TEX_IES']
+    applied = None
     if ies:
-        reasons.insert(0, f"IES Texture {', '.join(ies)} not applied: Cycles shapes the light by its IES "
-                          f"photometric profile, DACRT emits it evenly in every direction")
+        applied = _ies_profile(light, name, ies, surface, object_info, messages, reasons)
+    if applied is not None:
+        factor, found, reasons, dark = applied
+        if found is not None and profile is not None:
+            profile.append(found)
+    else:
+        factor = _light_surface(surface, reasons, 0, dark, light.type, object_info)
+    no_emission = '; '.join(dict.fromkeys(dark)) if not factor.any() else ''
     if reasons:
         text = '; '.join(dict.fromkeys(reasons))
         if approximated is None:
@@ -244,6 +251,90 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
         else:
             approximated.setdefault(text, {})[name] = None
     return factor, no_emission
+
+
+# (the IES Texture's value while _ies_profile probes the tree: its Strength x this; None: the
+# node stands at the input's own value, as a node not evaluated)
+_ies_probe = [None, False]     # (the value's scale, whether the evaluation met the node)
+
+
+def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
+    """(factor, profile or None, reasons, dark) of a light whose emission an IES Texture feeds,
+    as Cycles renders it: the tree evaluated with the node's Fac at its Strength x s for s = 0,
+    1, 2 must scale as s (the profile multiplies the emission: its Fac into an Emission
+    Strength or Color through products); the factor is then the s = 1 one and the profile
+    goes with it. A text Cycles cannot load gives 100 x Strength in every direction there
+    (kernel_ies_interp of an invalid slot), rendered so and said, naming the light and the
+    file. None where it cannot be applied (said in reasons, the node then standing at its
+    own value as before): a point or spot light only, one such node, its Vector unlinked (the
+    default: the direction from the light in its object space)."""
+    shown = ', '.join(f"'{n.name}'" for n in nodes)
+    why = None
+    if light.type not in ('POINT', 'SPOT'):
+        why = f"IES profiles are applied to point and spot lights; this is a {light.type.lower()} light"
+    elif len(nodes) > 1:
+        why = "more than one IES Texture feeds its emission"
+    elif nodes[0].inputs['Vector'].is_linked:
+        why = ("its Vector input is linked (only the default, the direction from the light in its object "
+               "space, is applied)")
+    text, where = None, ''
+    if why is None:
+        text, where, why = _ies_text(nodes[0])
+    if why is not None:
+        reasons.insert(0, f"IES Texture {shown} not applied: {why}; DACRT emits the light evenly in every "
+                          f"direction (Cycles shapes it by the profile)")
+        return None
+    from ..lights.ies import IESError, INVALID_VALUE, parse_ies
+    try:
+        found, scale, error = parse_ies(text), 1.0, None
+    except IESError as e:
+        found, scale, error = None, INVALID_VALUE, e
+    runs = []
+    for s in (1.0, 0.0, 2.0):
+        r, d = list(reasons), []
+        _ies_probe[:] = [s * scale, False]
+        try:
+            runs.append((_light_surface(surface, r, 0, d, light.type, oi), r, d, _ies_probe[1]))
+        finally:
+            _ies_probe[:] = [None, False]
+    (f1, r1, d1, used), (f0, _, _, _), (f2, _, _, _) = runs
+    if not used:    # (the node inside a node group: the group's output stands at its own value)
+        reasons.insert(0, f"IES Texture {shown} not applied: it is not evaluated where it stands (inside a "
+                          "node group); DACRT emits the light evenly in every direction (Cycles shapes it by "
+                          "the profile)")
+        return None
+    if not (np.allclose(f0, 0.0, atol=0.0) and np.allclose(f2, 2.0 * f1, rtol=1e-9, atol=0.0)):
+        reasons.insert(0, f"IES Texture {shown} not applied: its Fac does not scale the light's emission (it "
+                          "feeds something other than an Emission Strength or Color, or does so through a sum "
+                          "or non-linear node); DACRT emits the light evenly in every direction")
+        return None
+    if error is not None:
+        messages.append(('WARNING', f"light '{name}': IES profile {where} of IES Texture {shown} cannot be read "
+                                    f"({error}): rendered as Cycles does, {INVALID_VALUE:g} x its Strength in every "
+                                    "direction"))
+    return f1, found, r1, d1
+
+
+def _ies_text(node):
+    """(text, where, why not): the IES Texture's LM-63 text as bytes, from its Text datablock
+    (Internal) or its file (External, relative to the .blend: bpy.path.abspath); where names
+    it for messages; why not: None, or why there is no text to read."""
+    if getattr(node, 'mode', 'INTERNAL') == 'INTERNAL':
+        text = getattr(node, 'ies', None)
+        if text is None:
+            return b'', "(no Text datablock)", None
+        return text.as_string().encode('utf-8', 'surrogateescape'), f"text '{text.name}'", None
+    path = getattr(node, 'filepath', '')
+    try:
+        import bpy
+        full = bpy.path.abspath(path)
+    except ImportError:
+        full = path
+    try:
+        with open(full, 'rb') as f:
+            return f.read(), f"file '{path}'", None
+    except OSError as e:
+        return b'', f"file '{path}' ({e.strerror or e})", None
 
 
 def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
@@ -357,6 +448,10 @@ class _LightEvaluator(nodeeval.Evaluator):
     def _node(self, node, out, depth):
         if node.type in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
             return None
+        if node.type == 'TEX_IES' and _ies_probe[0] is not None:   # (_ies_profile's probe)
+            _ies_probe[1] = True
+            strength = self.input(node.inputs['Strength'], False, depth + 1)
+            return nodeeval.Field((float(np.ravel(strength.value)[0]) * _ies_probe[0],))
         return super()._node(node, out, depth)
 
 
