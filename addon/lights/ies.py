@@ -259,13 +259,18 @@ def ies_direction(profile: IESProfile, d) -> np.ndarray:
 
 
 def ies_mean(profile: IESProfile) -> float:
-    """The profile's mean over the sphere of directions (the light tree's power estimate)."""
+    """The profile's mean over the sphere of directions (the light tree's power estimate; kept
+    on the profile: lamps sharing one compute it once)."""
+    cached = getattr(profile, '_mean', None)
+    if cached is not None:
+        return cached
     v = (np.arange(64) + 0.5) * (np.pi / 64)
     h = (np.arange(128) + 0.5) * (2.0 * np.pi / 128)
     vv, hh = np.meshgrid(v, h, indexing='ij')
     val = ies_interp(profile, hh.ravel(), vv.ravel()).reshape(vv.shape)
     w = np.sin(vv)
-    return float((val * w).sum() / w.sum())
+    profile._mean = float((val * w).sum() / w.sum())
+    return profile._mean
 
 
 def native_id(profile: IESProfile) -> int:

@@ -21,7 +21,9 @@ def _branches(lamp):
     """What must agree for lamps to share one call: their class and every flag their sampling
     branches on (bools and parameters that may be None)."""
     # (a class sets its attributes in one order: no sort needed)
-    return type(lamp), tuple((k, v) for k, v in vars(lamp).items() if v is None or type(v) in (bool, np.bool_))
+    flags = tuple((k, v) for k, v in vars(lamp).items() if v is None or type(v) in (bool, np.bool_))
+    profile = getattr(lamp, 'ies', None)    # (an IES profile is not stacked: one per call)
+    return type(lamp), flags, None if profile is None else id(profile)
 
 
 def _stacked(lamps, n):

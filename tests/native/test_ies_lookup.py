@@ -168,3 +168,19 @@ def test_record_checks_the_id():
     with pytest.raises(ValueError, match='IES'):
         dacrt.lamps.lamp_sample(recs, np.zeros(1, np.int32), np.zeros((3, 1), F32), np.zeros(1, F32),
                                 np.zeros(1, F32))
+
+
+def test_light_choice_stats_keep_each_lamps_profile():
+    """LightSet.reweight samples lamps stacked (lights/lamplanes.py): lamps of different
+    profiles are not stacked under one (the second had been read through the first's)."""
+    from addon.lights.lamplanes import lamp_group_stats
+    lamps = [lamp('POINT', registered(name)[0]) for name in ('batwing', 'asymmetric', 'downlight')]
+    lamps.append(lamp('POINT', None))
+    n = 2000
+    P = shading_points(n, 9)
+    rng = np.random.default_rng(2)
+    u1, u2 = rng.random(n, dtype=F32), rng.random(n, dtype=F32)
+    together = lamp_group_stats(lamps, P, u1, u2)
+    alone = np.array([lamp_group_stats([l], P, u1, u2) for l in lamps])[:, :, 0].T
+    np.testing.assert_allclose(together, alone, rtol=1e-6)
+    assert len(set(np.round(together[1], 6))) == 4
