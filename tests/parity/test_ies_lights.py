@@ -130,3 +130,12 @@ def test_malformed_profile_is_named(tmp_path, said):
     assert text and "100 x its Strength" in text[0], said
     c, d = images['CYCLES'].mean(), images['DACRT'].mean()
     assert abs(d / c - 1) < 0.03, (c, d)
+
+
+def test_non_uniformly_scaled_lamp(tmp_path, said):
+    """Under a non-uniform object scale Cycles takes the direction to the light's object space
+    as a normal (M^T, not M^-1: the two differ there): a rotated point light scaled (1, 2.5, 0.4)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    lamp = _lamp('POINT', 'asymmetric', 'internal', tmp_path, (0.4, 0.2, 0.7))
+    lamp.scale = (1.0, 2.5, 0.4)
+    _agree(_render(tmp_path, said), said)
