@@ -215,8 +215,8 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
     this light (None: Object Info stands at its own value, as a node not evaluated). An IES
     Texture feeding the emission linearly (its Fac into a Strength or Color, through products)
     is applied as Cycles does: the factor is the tree's with the node at its Strength, and the
-    parsed profile (lights/ies.py) is appended to `profile` (a list) for a point or spot light
-    to multiply its emission by per direction (_ies_profile says what it cannot apply)."""
+    parsed profile (lights/ies.py) is appended to `profile` (a list) for a point, spot or area
+    light to multiply its emission by per direction (_ies_profile says what it cannot apply)."""
     if not getattr(light, 'use_nodes', False) or light.node_tree is None:
         return np.ones(3), ''
     out = output_node(light.node_tree)
@@ -266,12 +266,12 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
     goes with it. A text Cycles cannot load gives 100 x Strength in every direction there
     (kernel_ies_interp of an invalid slot), rendered so and said, naming the light and the
     file. None where it cannot be applied (said in reasons, the node then standing at its
-    own value as before): a point or spot light only, one such node, its Vector unlinked (the
+    own value as before): a point, spot or area light, one such node, its Vector unlinked (the
     default: the direction from the light in its object space)."""
     shown = ', '.join(f"'{n.name}'" for n in nodes)
     why = None
-    if light.type not in ('POINT', 'SPOT'):
-        why = f"IES profiles are applied to point and spot lights; this is a {light.type.lower()} light"
+    if light.type not in ('POINT', 'SPOT', 'AREA'):
+        why = f"IES profiles are applied to point, spot and area lights; this is a {light.type.lower()} light"
     elif len(nodes) > 1:
         why = "more than one IES Texture feeds its emission"
     elif nodes[0].inputs['Vector'].is_linked:

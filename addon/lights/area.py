@@ -33,7 +33,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..sampling import concentric_disk, dot, normalize
-from .base import F32, KIND_AREA, Bounds, Lamp, LightSample, col, luminance, make_record, outer, vdot
+from .base import F32, KIND_AREA, Bounds, Lamp, LightSample, col, luminance, make_record, matvec, outer, vdot
+from .ies import ies_direction, ies_mean, native_id
 
 SHAPES = ('SQUARE', 'RECTANGLE', 'DISK', 'ELLIPSE')
 SHAPE_RECT, SHAPE_ELLIPSE, SHAPE_PARALLELOGRAM = range(3)   # record shape codes (lamps.h AreaShape)
@@ -94,6 +95,10 @@ class AreaLight(Lamp):
         fac = 1.0 / (np.pi * self.area) if self.normalize else 1.0 / np.pi
         self.emit = (self.color * fac).astype(F32)
         self._init_spread(float(light.spread))
+        # an IES profile (lights/ies.py) per direction from the lamp's point, in its object space
+        # (as a normal: M^T), as for point lights
+        self.ies = getattr(light, 'ies', None)
+        self.ies_m3 = m[:3, :3].T.astype(F32) if self.ies is not None else None
 
     def _init_spread(self, spread):
         if not (0.0 < spread <= np.pi + 1e-6):
@@ -150,6 +155,9 @@ class AreaLight(Lamp):
                 tan_t = np.where(cos_l > 0, sin_t / cos_l, F32(np.inf))
             f = np.maximum(self.tan_half_spread - tan_t, 0.0) * self.spread_norm
             scale *= np.where(cos_l > 0, f, F32(0.0))
+        if self.ies is not None:        # the profile along -w (lamps.h: after the spread)
+            local = matvec(self.ies_m3, -np.asarray(w, F32))
+            scale = scale * ies_direction(self.ies, local).astype(F32)
         return scale
 
     def _sph_rect(self, X, lo_x, hi_x, lo_y, hi_y):
@@ -251,14 +259,18 @@ class AreaLight(Lamp):
         if self.tan_half_spread is not None:
             theta_e = float(np.arctan(np.float64(self.tan_half_spread))) + 1e-3
             cos_e = float(np.cos(theta_e)) if theta_e < np.pi / 2 else 0.0
-        return Bounds(self.center - half, self.center + half, self.normal, 1.0, cos_e,
-                      luminance(self.emit) * self.area)
+        energy = luminance(self.emit) * self.area
+        if self.ies is not None:        # the profile's mean over the sphere (the pick stays unbiased)
+            energy *= ies_mean(self.ies)
+        return Bounds(self.center - half, self.center + half, self.normal, 1.0, cos_e, energy)
 
     def record(self):
         # shape 0: rectangle (square), 1: ellipse (disk), 2: parallelogram; spread_norm 0: no spread
         spread = {} if self.tan_half_spread is None else dict(tan_half_spread=self.tan_half_spread,
                                                                spread_norm=self.spread_norm)
         shape = SHAPE_ELLIPSE if self.ellipse else SHAPE_PARALLELOGRAM if self.sheared else SHAPE_RECT
+        if self.ies is not None:
+            spread.update(ies=native_id(self.ies), ies_m3=self.ies_m3)
         return make_record(KIND_AREA, shape, emit=self.emit, pos=self.center, area=self.area,
                            axis_x=self.axis_x, axis_y=self.axis_y, inv_x=self.inv_x, inv_y=self.inv_y,
                            normal=self.normal, **spread)

@@ -23,7 +23,10 @@ struct LampLanes {
 };
 
 // Whether sample_area_lanes draws lamp L's samples: an area lamp without spread.
-inline bool area_lanes_apply(const LampRecord& L) { return int(L.kind) == LAMP_AREA && L.spread_norm == 0; }
+// (an IES profile's area lamp goes through sample_lamp and hit_area, one sample at a time)
+inline bool area_lanes_apply(const LampRecord& L) {
+    return int(L.kind) == LAMP_AREA && L.spread_norm == 0 && L.ies == 0;
+}
 
 namespace lanes {
 // lamps.h's helpers as plain selects, the same results (NaN included) where vectorised

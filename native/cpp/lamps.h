@@ -53,7 +53,7 @@ struct LampRecord {
     float tan_half_spread;  // 29 area spread: tan(spread/2)
     float spread_norm;      // 30 spread profile normalisation; 0 = no spread (spread = pi)
     float inv_m3[9];        // 31 spot: inverse of the object's 3x3 transform, row-major
-    float ies;              // 40 point/spot: IES profile id (ies.h), 0 = none
+    float ies;              // 40 point/spot/area: IES profile id (ies.h), 0 = none
     float ies_m3[9];        // 41 its world -> object transform of directions (as a normal), row-major
 };
 constexpr size_t LAMP_RECORD_WIDTH = 50;
@@ -489,10 +489,6 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
             const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
             scale *= spot_attenuation(L, from_light);
         }
-        if (L.ies != 0) {  // per lamp: predicted; the profile along the sample's direction
-            const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
-            scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
-        }
         break;
     }
     case LAMP_SUN:
@@ -575,6 +571,10 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
         per_pdf = true;
         break;
     }
+    if (L.ies != 0) {  // per lamp: predicted; the profile along the sample's direction (point, spot, area)
+        const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
+        scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
+    }
     for (int a = 0; a < 3; ++a) s.value[a] = (per_pdf ? L.emit[a] / L.pdf : L.emit[a]) * scale;
     return s;
 }
@@ -605,6 +605,10 @@ inline bool hit_area(const LampRecord& L, const float O[3], const float D[3], fl
         scale = area_spread(L, cos_l, D);
     }
     pdf = t * t / (area * cos_l);
+    if (L.ies != 0) {  // per lamp: predicted (area_lanes_apply leaves such lamps to this path)
+        const float from_light[3] = {-D[0], -D[1], -D[2]};
+        scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
+    }
     for (int a = 0; a < 3; ++a) Le[a] = L.emit[a] * scale;
     const bool hit = (denom < 0) & (t > 0) & (t < tmax) & inside & drawn;
     if (hit & (int(L.shape) == AREA_RECT)) {  // sample_lamp's pdf at O: its sph_rect decides

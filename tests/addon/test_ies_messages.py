@@ -1,5 +1,5 @@
 """What of an IES Texture in a light's node tree is not applied is said by name (the lamp then
-emits evenly at the node's own value, as before): a sun or area light, its Vector linked, its Fac
+emits evenly at the node's own value, as before): a sun, its Vector linked, its Fac
 through a sum (not a factor on the emission), two IES Textures on one lamp. A Fac through
 products (Math Multiply, into the Color) is applied and nothing is said. A profile that is
 applied reaches the lamp (scenedata.Light.ies)."""
@@ -44,7 +44,7 @@ def test_applied_through_products_says_nothing(scene):
 
 def test_unsupported_uses_are_named(scene):
     cases = {}
-    for kind, name in (('SUN', 'Sun'), ('AREA', 'Area')):
+    for kind, name in (('SUN', 'Sun'),):
         lamp, nt, em, ies = _lamp(kind, name)
         nt.links.new(ies.outputs['Fac'], em.inputs['Strength'])
         cases[name] = (lamp, "this is a " + kind.lower() + " light")

@@ -2,7 +2,7 @@
 of Cycles' kernel_ies_interp (addon/lights/ies.py ies_interp) on profiles of every shape the
 parser makes (full circle, mirrored quadrant, an uplight's 90-180 range, type B), at random
 angles, on the table's own angles, at the poles and across 0/360 degrees; then the factor in
-point and spot light samples (lamp_sample) and in what BSDF rays collect from a lamp
+point, spot and area light samples (lamp_sample) and in what BSDF rays collect from a lamp
 (lamp_gather), both the profile along the light's object-space direction, so MIS sees one
 emission."""
 import dacrt
@@ -106,7 +106,10 @@ def shading_points(n, seed=3):
 
 @pytest.mark.parametrize('name', ['batwing', 'asymmetric', 'downlight'])
 @pytest.mark.parametrize('kind, kw', [('POINT', {}), ('POINT', dict(radius=0.2)),
-                                      ('POINT', dict(radius=0.2, soft_falloff=False)), ('SPOT', dict(radius=0.1))])
+                                      ('POINT', dict(radius=0.2, soft_falloff=False)), ('SPOT', dict(radius=0.1)),
+                                      ('AREA', dict(shape='RECTANGLE', size_x=0.6, size_y=0.3)),
+                                      ('AREA', dict(shape='DISK', size_x=0.5)),
+                                      ('AREA', dict(shape='SQUARE', size_x=0.5, spread=1.2))])
 def test_light_samples_carry_the_profile(name, kind, kw):
     p, _ = registered(name)
     with_p, without = lamp(kind, p, **kw), lamp(kind, None, **kw)
@@ -136,7 +139,8 @@ def test_light_samples_carry_the_profile(name, kind, kw):
 
 
 @pytest.mark.parametrize('kind, kw', [('POINT', dict(radius=0.3)), ('POINT', dict(radius=0.3, soft_falloff=False)),
-                                      ('SPOT', dict(radius=0.2))])
+                                      ('SPOT', dict(radius=0.2)), ('AREA', dict(shape='RECTANGLE', size_x=0.8, size_y=0.5)),
+                                      ('AREA', dict(shape='DISK', size_x=0.8, spread=1.5))])
 def test_bsdf_rays_see_the_profile(kind, kw):
     p, _ = registered('asymmetric')
     with_p, without = lamp(kind, p, **kw), lamp(kind, None, **kw)

@@ -1,4 +1,4 @@
-"""IES Textures in point and spot lights' node trees agree with Cycles: a narrow downlight, a
+"""IES Textures in point, spot and area lights' node trees agree with Cycles: a narrow downlight, a
 batwing (one quadrant given, mirrored) and an asymmetric profile (full circle), the Fac into the
 Emission Strength, from a Text datablock (Internal) and from a file relative to the .blend
 (External), on lamps upright and rotated, lighting a floor and a wall: per-block means of
@@ -104,6 +104,8 @@ CASES = [
     ('SPOT', 'batwing', 'internal', (0.0, 0.0, 0.0), dict(spot_size=np.radians(150.0), spot_blend=0.3)),
     ('SPOT', 'asymmetric', 'external', (0.3, -0.2, 2.2), dict(spot_size=np.radians(160.0), spot_blend=0.1,
                                                               shadow_soft_size=0.15)),
+    ('AREA', 'batwing', 'internal', (0.0, 0.0, 0.0), dict(shape='RECTANGLE', size=0.6, size_y=0.3)),
+    ('AREA', 'asymmetric', 'external', (0.4, 0.2, 0.9), dict(shape='DISK', size=0.5)),
 ]
 
 
