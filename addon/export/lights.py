@@ -277,14 +277,12 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
     elif nodes[0].inputs['Vector'].is_linked:
         why = ("its Vector input is linked (only the default, the direction from the light in its object "
                "space, is applied)")
-    text, where = None, ''
-    if why is None:
-        text, where, why = _ies_text(nodes[0])
     if why is not None:
         reasons.insert(0, f"IES Texture {shown} not applied: {why}; DACRT emits the light evenly in every "
                           f"direction (Cycles shapes it by the profile)")
         return None
     from ..lights.ies import IESError, INVALID_VALUE, parse_ies
+    text, where = _ies_text(nodes[0])
     try:
         found, scale, error = parse_ies(text), 1.0, None
     except IESError as e:
@@ -316,14 +314,14 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
 
 
 def _ies_text(node):
-    """(text, where, why not): the IES Texture's LM-63 text as bytes, from its Text datablock
-    (Internal) or its file (External, relative to the .blend: bpy.path.abspath); where names
-    it for messages; why not: None, or why there is no text to read."""
+    """(text, where): the IES Texture's LM-63 text as bytes (empty where there is none to read:
+    Cycles cannot load it either), from its Text datablock (Internal) or its file (External,
+    relative to the .blend: bpy.path.abspath); where names it for messages."""
     if getattr(node, 'mode', 'INTERNAL') == 'INTERNAL':
         text = getattr(node, 'ies', None)
         if text is None:
-            return b'', "(no Text datablock)", None
-        return text.as_string().encode('utf-8', 'surrogateescape'), f"text '{text.name}'", None
+            return b'', "(no Text datablock)"
+        return text.as_string().encode('utf-8', 'surrogateescape'), f"text '{text.name}'"
     path = getattr(node, 'filepath', '')
     try:
         import bpy
@@ -332,9 +330,9 @@ def _ies_text(node):
         full = path
     try:
         with open(full, 'rb') as f:
-            return f.read(), f"file '{path}'", None
+            return f.read(), f"file '{path}'"
     except OSError as e:
-        return b'', f"file '{path}' ({e.strerror or e})", None
+        return b'', f"file '{path}' ({e.strerror or e})"
 
 
 def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
