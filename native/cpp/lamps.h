@@ -605,12 +605,12 @@ inline bool hit_area(const LampRecord& L, const float O[3], const float D[3], fl
         scale = area_spread(L, cos_l, D);
     }
     pdf = t * t / (area * cos_l);
-    if (L.ies != 0) {  // per lamp: predicted (area_lanes_apply leaves such lamps to this path)
-        const float from_light[3] = {-D[0], -D[1], -D[2]};
+    const bool hit = (denom < 0) & (t > 0) & (t < tmax) & inside & drawn;
+    if ((L.ies != 0) & hit) {  // (area_lanes_apply leaves such lamps to this path) only where met:
+        const float from_light[3] = {-D[0], -D[1], -D[2]};  // a lookup costs more than a mispredict
         scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
     }
     for (int a = 0; a < 3; ++a) Le[a] = L.emit[a] * scale;
-    const bool hit = (denom < 0) & (t > 0) & (t < tmax) & inside & drawn;
     if (hit & (int(L.shape) == AREA_RECT)) {  // sample_lamp's pdf at O: its sph_rect decides
         // (a branch: most rays miss, and sph_rect's four atan2 would cost every candidate)
         AreaBox box{-0.5f, 0.5f, -0.5f, 0.5f, 1.0f, 1.0f, 1.0f, true};
