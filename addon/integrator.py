@@ -791,15 +791,14 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if path.dead is not None:                     # ended by the transparent roulette: their
             hit &= ~path.dead                         # surface is not shaded, nothing writes
             alpha[np.take(path.pid, np.flatnonzero(path.dead))] = 1.0   # (no transparency reached)
-            miss = np.flatnonzero(~hit & ~path.dead)
-        else:
-            miss = np.flatnonzero(~hit)
-        if len(miss) and camera and not self.transparent:
-            alpha[np.take(path.pid, miss)] = 1.0
-        elif len(miss) and camera and path.thr is not None:
-            seen_through(alpha, path, miss)          # transparent film behind transparent surfaces
-            if path.refracted is not None:            # ... but behind glass the world is drawn
-                alpha[np.take(path.pid, miss[np.take(path.refracted, miss)])] = 1.0
+        if camera:        # camera rays that miss write alpha (BSDF rays' misses are not looked for)
+            miss = np.flatnonzero(~hit if path.dead is None else ~hit & ~path.dead)
+            if len(miss) and not self.transparent:
+                alpha[np.take(path.pid, miss)] = 1.0
+            elif len(miss) and path.thr is not None:
+                seen_through(alpha, path, miss)      # transparent film behind transparent surfaces
+                if path.refracted is not None:        # ... but behind glass the world is drawn
+                    alpha[np.take(path.pid, miss[np.take(path.refracted, miss)])] = 1.0
         if not hit.any():                             # nothing hit (also: no triangles at all)
             if camera and self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain)

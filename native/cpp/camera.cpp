@@ -3,6 +3,7 @@
 // instead of a dozen numpy passes.
 #include <cmath>
 
+#include "cameralanes.h"
 #include "parallel.h"
 #include "pathvertex.h"
 #include "shading.h"
@@ -48,6 +49,14 @@ void aperture_point(const CameraFrame& c, float u, float v, float& x, float& y) 
 void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
                  float* tmax, Ray* rays, const float* lu, const float* lv) {
     const bool lens = c.aperture > 0.0f && lu && lv;
+    if (!c.ortho && !lens) {  // the common camera: its lane loop, then the records
+        parallel_for(n, [&](size_t b, size_t e) {
+            pinhole_lanes(c, rx, ry, b, e, n, O, D, tmax);
+            if (rays)
+                for (size_t i = b; i < e; ++i) ray_record(O, D, n, i, tmax[i], rays[i]);
+        }, size_t(1) << 15);
+        return;
+    }
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             float sx = c.sx0 + rx[i] * c.sx_scale, sy = c.sy0 + ry[i] * c.sy_scale;
