@@ -37,7 +37,6 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
     if (in.rough_mat) rough.reset(new float[size_t(kRoughRows) * (k ? k : 1)]);
     pts.rough = rough.get();
     const bool areas = draws_area_lanes(lights);
-    std::unique_ptr<Pending[]> pending(new Pending[k ? k : 1]);
     std::vector<size_t> count(blocks), bad(blocks);
     auto block = [&](size_t q) {
         const size_t b = q * kEventBlock, e = std::min(k, b + kEventBlock);
@@ -57,7 +56,7 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
                             d[3] = {in.D[i], in.D[n + i], in.D[2 * n + i]}, N[3] = {ns[j], ns[k + j], ns[2 * k + j]};
                 rough_row(in.rough_params, M, m, rho, d, N, rough.get(), k, j);
             }
-        count[q] = event_range(lights, areas, pts, out.nee, pending.get(), b, e, &bad[q]);
+        count[q] = event_range(lights, areas, pts, out.nee, b, e, &bad[q]);
         if (in.scatter) {
             scatter_range(out.keys, k, in.ka, in.kb, ns, in.normals ? ng : nullptr, out.wi, out.pdf, out.ok, P_off,
                           out.rays, nullptr, b, e);
@@ -82,7 +81,7 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
             for (size_t q; (q = next.fetch_add(1, std::memory_order_relaxed)) < blocks;) block(q);
         });
     }
-    return place_shadow_rays(pending.get(), out.nee, blocks, count, bad, skipped);
+    return place_shadow_rays(out.nee, blocks, count, bad, skipped);
 }
 
 }  // namespace dacrt

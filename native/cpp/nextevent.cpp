@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstring>
 #include <memory>
 #include <type_traits>
 #include <vector>
@@ -26,8 +27,11 @@ namespace {
 // (environment_sample_lanes). Without either, the loop is that of one point at a time only: the
 // chunk's arrays and its pass picking the entries first had cost scenes without area lamps ~11%.
 template <bool AREAS, bool ENV>
-size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* contrib, int32_t* entry_out,
-                   float* point_out, Pending* pending, size_t b, size_t e, size_t* skipped) {
+size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_t b, size_t e, size_t* skipped) {
+    float* value_out = out.value;
+    uint8_t* contrib = out.contrib;
+    int32_t* entry_out = out.entry;
+    float* point_out = out.point;
     const size_t n = p.n, T = L.num_tris;
     size_t m = b, bad = 0;
     struct Chunk {
@@ -150,11 +154,10 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                 ++bad;
             } else if (L.shadow[entry]) {
                 float O[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
-                Pending& q = pending[m];
                 const bool geometry = !lamp && entry < L.num_lamps + T;  // a triangle: aim at its point
                 const float* aim = geometry ? target : nullptr;
                 float shorten = p.shorten, lamp_point[3];
-                q.skip = p.prim ? p.prim[i] : -1;
+                int32_t skip = p.prim ? p.prim[i] : -1;
                 const float ngw = ng[0] * wi[0] + ng[1] * wi[1] + ng[2] * wi[2];
                 // Cycles' shadow_ray_offset: the geometric normal on the side of L (by ns)
                 const float sign = NL < 0 ? -1.0f : 1.0f;
@@ -165,7 +168,7 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                     terminator_lift(p.term->geo, p.term->normals, p.term->M, tri, p.term->u[i], p.term->v[i], Ng, lift);
                     for (int a = 0; a < 3; ++a) O[a] += lift[a] * amount;
                     // below the geometric normal the lifted ray is meant to meet its own triangle
-                    if (NgL <= 0.0f) q.skip = -1;
+                    if (NgL <= 0.0f) skip = -1;
                     if (!aim && dist < lampmath::INF) {  // still to the sampled point of the lamp
                         for (int a = 0; a < 3; ++a) lamp_point[a] = P[a] + wi[a] * dist;
                         aim = lamp_point;
@@ -177,8 +180,12 @@ size_t event_block(LightChoice L, VertexPoints p, float* value_out, uint8_t* con
                     for (int a = 0; a < 3; ++a) O[a] = P[a] + (P[a] - O[a]);
                 }
                 // a zero-length ray (the point lies on the light) is not traced and adds nothing
-                adds = shadow_record(O, wi, dist, aim, shorten, q.ray);
-                if (adds) q.path = int64_t(i), ++m;
+                adds = shadow_record(O, wi, dist, aim, shorten, out.rays[m]);
+                if (adds) {
+                    out.send[m] = int64_t(i);
+                    if (out.skip) out.skip[m] = skip;
+                    ++m;
+                }
             }
             contrib[i] = adds;
         }
@@ -195,50 +202,43 @@ bool draws_area_lanes(const LightChoice& lights) {
     return areas;
 }
 
-size_t event_range(const LightChoice& lights, bool areas, const VertexPoints& pts, const NextEventOut& out,
-                   Pending* pending, size_t b, size_t e, size_t* skipped) {
+size_t event_range(const LightChoice& lights, bool areas, const VertexPoints& pts, const NextEventOut& out, size_t b,
+                   size_t e, size_t* skipped) {
     const bool env = lights.env != nullptr;
     const auto block = areas ? (env ? event_block<true, true> : event_block<true, false>)
                              : (env ? event_block<false, true> : event_block<false, false>);
-    return block(lights, pts, out.value, out.contrib, out.entry, out.point, pending, b, e, skipped);
+    return block(lights, pts, out, b, e, skipped);
 }
 
-size_t place_shadow_rays(const Pending* pending, const NextEventOut& out, size_t blocks, const std::vector<size_t>& count,
+size_t place_shadow_rays(const NextEventOut& out, size_t blocks, const std::vector<size_t>& count,
                          const std::vector<size_t>& bad, size_t* skipped) {
-    std::vector<size_t> offset(blocks);
     size_t m = 0, skip_count = 0;
-    for (size_t k = 0; k < blocks; ++k) {
-        offset[k] = m;
-        m += count[k];
+    for (size_t k = 0; k < blocks; ++k) {  // each block's rays left to follow the last's, in order
+        const size_t src = k * kEventBlock, c = count[k];
+        if (src != m && c) {  // (m < src: a block's rays only move toward the front)
+            std::memmove(out.rays + m, out.rays + src, c * sizeof(Ray));
+            std::memmove(out.send + m, out.send + src, c * sizeof(int64_t));
+            if (out.skip) std::memmove(out.skip + m, out.skip + src, c * sizeof(int32_t));
+        }
+        m += c;
         skip_count += bad[k];
     }
-    parallel_for(blocks, [&](size_t b0, size_t b1) {
-        for (size_t k = b0; k < b1; ++k) {
-            const Pending* src = pending + k * kEventBlock;
-            for (size_t j = 0; j < count[k]; ++j) {
-                const size_t d = offset[k] + j;
-                out.rays[d] = src[j].ray;
-                out.rays[d].id = uint32_t(d);
-                out.send[d] = src[j].path;
-                if (out.skip) out.skip[d] = src[j].skip;
-            }
-        }
-    }, 16);
+    parallel_for(m, [&](size_t b, size_t e) {
+        for (size_t d = b; d < e; ++d) out.rays[d].id = uint32_t(d);
+    }, size_t(1) << 16);
     *skipped = skip_count;
     return m;
 }
 
 size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped) {
     const size_t n = pts.n, blocks = (n + kEventBlock - 1) / kEventBlock;
-    std::unique_ptr<Pending[]> pending(new Pending[n ? n : 1]);
     std::vector<size_t> count(blocks), bad(blocks);
     const bool areas = draws_area_lanes(lights);  // area lamps' samples are drawn kLampLanes points at a time
     parallel_for(blocks, [&](size_t b0, size_t b1) {
         for (size_t k = b0; k < b1; ++k)
-            count[k] = event_range(lights, areas, pts, out, pending.get(), k * kEventBlock,
-                                   std::min(n, (k + 1) * kEventBlock), &bad[k]);
+            count[k] = event_range(lights, areas, pts, out, k * kEventBlock, std::min(n, (k + 1) * kEventBlock), &bad[k]);
     }, 1);
-    return place_shadow_rays(pending.get(), out, blocks, count, bad, skipped);
+    return place_shadow_rays(out, blocks, count, bad, skipped);
 }
 
 bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n,
