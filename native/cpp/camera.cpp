@@ -54,7 +54,7 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
             pinhole_lanes(c, rx, ry, b, e, n, O, D, tmax);
             if (rays)
                 for (size_t i = b; i < e; ++i) ray_record(O, D, n, i, tmax[i], rays[i]);
-        }, size_t(1) << 15);
+        }, size_t(1) << 16);
         return;
     }
     parallel_for(n, [&](size_t b, size_t e) {
