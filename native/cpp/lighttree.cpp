@@ -2,6 +2,7 @@
 // merged as Cycles' light tree does, and the importance that splits a point's choice between
 // two children.
 #include "lighttree.h"
+#include "treelanes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -113,122 +114,14 @@ double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
     return nd.energy * f / std::max(dd, kMinDist2);
 }
 
-// Four floats side by side (GCC/Clang vector extensions: SSE on x86-64, NEON on arm64, no
-// per-ISA build needed); comparisons give lane masks, `mask ? a : b` selects per lane.
-typedef float F4 __attribute__((vector_size(16)));
-typedef int32_t M4 __attribute__((vector_size(16)));
-
-// Eight lanes as two of four, each operation written out for both halves: a stop's eight lanes
-// weigh in one pass, so that the two halves' chains of roots and divisions overlap (weighed
-// as two passes of four, the second waited on the first; target_probs was 11% of a many-light
-// render). A 32-byte vector extension type is no substitute without AVX: GCC turns its
-// comparisons and selects into scalar code, 3x slower.
-struct F8 {
-    F4 lo, hi;
-};
-struct M8 {
-    M4 lo, hi;
-};
-inline F8 operator+(F8 a, F8 b) { return {a.lo + b.lo, a.hi + b.hi}; }
-inline F8 operator-(F8 a, F8 b) { return {a.lo - b.lo, a.hi - b.hi}; }
-inline F8 operator*(F8 a, F8 b) { return {a.lo * b.lo, a.hi * b.hi}; }
-inline F8 operator/(F8 a, F8 b) { return {a.lo / b.lo, a.hi / b.hi}; }
-inline F8 operator-(F8 a) { return {-a.lo, -a.hi}; }
-inline F8 operator-(F8 a, float b) { return {a.lo - b, a.hi - b}; }
-inline F8 operator*(F8 a, float b) { return {a.lo * b, a.hi * b}; }
-inline F8 operator*(float a, F8 b) { return {a * b.lo, a * b.hi}; }
-inline M8 operator<(F8 a, F8 b) { return {a.lo < b.lo, a.hi < b.hi}; }
-inline M8 operator>(F8 a, F8 b) { return {a.lo > b.lo, a.hi > b.hi}; }
-inline M8 operator<=(F8 a, F8 b) { return {a.lo <= b.lo, a.hi <= b.hi}; }
-inline M8 operator>=(F8 a, F8 b) { return {a.lo >= b.lo, a.hi >= b.hi}; }
-inline M8 operator>=(F8 a, float b) { return {a.lo >= b, a.hi >= b}; }
-inline M8 operator<=(F8 a, float b) { return {a.lo <= b, a.hi <= b}; }
-inline M8 operator&(M8 a, M8 b) { return {a.lo & b.lo, a.hi & b.hi}; }
-inline M8 operator|(M8 a, M8 b) { return {a.lo | b.lo, a.hi | b.hi}; }
-inline M8 operator!(M8 a) { return {!a.lo, !a.hi}; }
-inline M8 operator~(M8 a) { return {~a.lo, ~a.hi}; }
-inline F8 sel(M8 m, F8 a, F8 b) { return {m.lo ? a.lo : b.lo, m.hi ? a.hi : b.hi}; }
-inline F8 splat8(float x) { return {F4{x, x, x, x}, F4{x, x, x, x}}; }
-
-inline F8 load8(const float* p) {
-    F8 v;
-    std::memcpy(&v.lo, p, sizeof v.lo);
-    std::memcpy(&v.hi, p + 4, sizeof v.hi);
-    return v;
-}
-inline F4 sqrt4(F4 x) {  // of x >= 0 lanes (a lane loop the compiler turns into one sqrtps)
-    F4 r;
-    for (int k = 0; k < 4; ++k) r[k] = std::sqrt(x[k]);
-    return r;
-}
-inline F8 sqrt8(F8 x) { return {sqrt4(x.lo), sqrt4(x.hi)}; }
-inline F8 max8(F8 a, F8 b) { return sel(a > b, a, b); }
-inline F8 min8(F8 a, F8 b) { return sel(a < b, a, b); }
-inline F8 clamp1(F8 x) {  // (NaN stays NaN)
-    x = sel(x < splat8(-1.0f), splat8(-1.0f), x);
-    return sel(x > splat8(1.0f), splat8(1.0f), x);
-}
-inline bool all4(M4 m) { return m[0] & m[1] & m[2] & m[3]; }
-
-// The eight lanes of stop q weighed at P (and N), as weigh() does, in float and side by side:
-// this is most of a many-light render's light sampling. Float is enough for a sampling
-// estimate once distances are in range: the culling tests keep a margin of float's rounding,
-// so no lane weighs 0 that weigh() would not, and a lane not culled weighs more than 0.
-// Returns, per four lanes (bit 0: lanes 0-3, bit 1: lanes 4-7), whether some lane's squared
-// distance lies outside [1e-30, 1e30] or is NaN: those four take weigh() in float64 (their imp
-// is left to the caller).
-template <bool kNormal>
-int weigh8_float(const LightTree::Stop& q, const float P[3], const float* N, double imp[8]) {
-    const F8 zero = splat8(0.0f), one = splat8(1.0f);
-    const F8 margin = splat8(1e-5f);  // ~100 float ULPs of a cosine
-    const F8 v0 = load8(q.center[0]) - P[0], v1 = load8(q.center[1]) - P[1], v2 = load8(q.center[2]) - P[2];
-    const F8 dd = v0 * v0 + v1 * v1 + v2 * v2, r = load8(q.radius), r2 = r * r;
-    const M8 inside = !(dd > r2);
-    const F8 denom = sel(inside, max8(dd, r2 * 0.25f), dd);
-    const M8 ok = (denom >= 1e-30f) & (dd <= 1e30f) & (r2 <= 1e30f);
-    const int bad = (all4(ok.lo) ? 0 : 1) | (all4(ok.hi) ? 0 : 2);
-    if (bad == 3) return bad;
-    // Every sine and cosine from dd and one product each (cos_u = sqrt(dd - r^2) / d, sin_i =
-    // sqrt(dd - (N.v)^2) / d, ...) rather than from one another: the roots and the two
-    // divisions then run side by side instead of one after another.
-    const F8 av = -(load8(q.axis[0]) * v0 + load8(q.axis[1]) * v1 + load8(q.axis[2]) * v2);
-    const F8 nv = kNormal ? N[0] * v0 + N[1] * v1 + N[2] * v2 : zero;
-    const F8 inv_d = one / sqrt8(dd), inv_denom = one / denom;
-    const F8 root_u = sqrt8(max8(dd - r2, zero)), root_i = sqrt8(max8(dd - nv * nv, zero)),
-             root_t = sqrt8(max8(dd - av * av, zero));
-    const F8 sin_u = min8(r * inv_d, one), cos_u = min8(root_u * inv_d, one);
-    M8 culled = {}, out_culled = {};  // out_culled: outside the bounds only
-    F8 f = one;
-    if (kNormal) {
-        const F8 spread = std::fabs(N[0]) * load8(q.half[0]) + std::fabs(N[1]) * load8(q.half[1]) +
-                          std::fabs(N[2]) * load8(q.half[2]);
-        const F8 reach = nv + spread, nv_abs = sel(nv < zero, -nv, nv);
-        culled = !(reach > -(margin * (nv_abs + spread)));
-        const F8 ci = clamp1(nv * inv_d), sin_i = min8(root_i * inv_d, one);
-        const F8 c = ci * cos_u + sin_i * sin_u;
-        const M8 below = ci < cos_u;
-        out_culled = below & !(c > -margin);
-        f = sel(below, max8(c, margin), one);
-    }
-    const F8 co = load8(q.cos_o), so = load8(q.sin_o);
-    const F8 cos_p = co * cos_u - so * sin_u, sin_p = so * cos_u + co * sin_u;
-    const F8 ct = clamp1(av * inv_d), sin_t = min8(root_t * inv_d, one);
-    const F8 cos_r = ct * cos_p + sin_t * sin_p;
-    const M8 beyond = (co > -one) & (sin_p >= zero) & (ct < cos_p);
-    out_culled = out_culled | (beyond & (cos_r <= load8(q.cos_e) - margin));
-    f = sel(beyond, f * max8(cos_r, margin), f);
-    culled = culled | (~inside & out_culled);
-    {  // behind every light of a node that emits within a hemisphere, inside its sphere too
-        const F8 sl = load8(q.slab);
-        const float pm = std::max({std::fabs(P[0]), std::fabs(P[1]), std::fabs(P[2])});
-        const F8 d = dd * inv_d;  // (NaN at dd = 0: not culled, as the centre is in the box)
-        const F8 tol = kBackMargin * (2.0f * (d + splat8(pm)) + sl);
-        culled = culled | ((sl >= zero) & (av + sl <= -tol));
-    }
-    const F8 g = sel(culled, zero, sel(inside, one, f) * inv_denom);
-    for (int k = 0; k < 4; ++k) imp[k] = q.energy[k] * double(g.lo[k]);
-    for (int k = 0; k < 4; ++k) imp[4 + k] = q.energy[4 + k] * double(g.hi[k]);
-    return bad;
+// The eight lanes of stop q weighed at the point: side by side in float (treelanes.h), the four
+// of them a distance out of float's range takes in float64.
+void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const TreePoint& at, double imp[8]) {
+    static const StopWeighFn weigh_lanes = stop_weigh_fn();
+    const int bad = weigh_lanes(q, at, imp);
+    for (int o = 0; o < 8; o += 4)
+        if (bad & (1 << (o / 4)))
+            for (int k = o; k < o + 4; ++k) imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], at.P, at.N);
 }
 
 // The probabilities at P of a walk at stop q going on to each of its targets (see
@@ -241,13 +134,10 @@ int weigh8_float(const LightTree::Stop& q, const float P[3], const float* N, dou
 // them: then the point is lit by no light below, and any way gives it nothing). Each
 // probability is its own quotient, not 1 - the others: a faint light's 1e-19 would round to 0
 // that way, and a delta light must never become impossible. At least one target gets > 0.
-void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const float P[3],
-                  const float* N, uint64_t receivers, double p[4]) {
+void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const TreePoint& at,
+                  uint64_t receivers, double p[4]) {
     double imp[8];
-    const int bad = N ? weigh8_float<true>(q, P, N, imp) : weigh8_float<false>(q, P, N, imp);
-    for (int o = 0; o < 8; o += 4)
-        if (bad & (1 << (o / 4)))
-            for (int k = o; k < o + 4; ++k) imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], P, N);
+    lane_weighs(nodes, q, at, imp);
     if (lane_sets)
         for (int k = 0; k < 8; ++k) imp[k] = (lane_sets[k] & receivers) ? imp[k] : 0.0;
     bool eligible[4], any = false;
@@ -602,11 +492,10 @@ void LightTree::build_stops() {
     }
 }
 
-inline void LightTree::probs_at(size_t at, const float P[3], const float* N, uint64_t receivers,
-                                double p[4]) const {
+inline void LightTree::probs_at(size_t at, const TreePoint& point, uint64_t receivers, double p[4]) const {
     const size_t qi = size_t(stop_of_[at]);
     const uint64_t* lane_sets = stop_sets_.empty() || receivers == kAllSets ? nullptr : stop_sets_.data() + 12 * qi;
-    target_probs(nodes_.data(), stops_[qi], lane_sets, P, N, receivers, p);
+    target_probs(nodes_.data(), stops_[qi], lane_sets, point, receivers, p);
 }
 
 int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers) const {
@@ -615,9 +504,10 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     size_t at = 0;
     double lo = 0.0, w = 1.0;
     if (!(u >= 0.0)) u = 0.0;  // (NaN too)
+    const TreePoint point = tree_point(P, N);
     while (nodes_[at].child >= 0) {
         double p[4];
-        probs_at(at, P, N, receivers, p);
+        probs_at(at, point, receivers, p);
         // the first target (of those possible) whose share of [lo, lo + w) holds u; the last
         // possible one where rounding leaves u past them all. Without branches (selects): which
         // target a point takes is random, and a mispredicted pick stalled every stop.
@@ -652,14 +542,26 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     return member_key_[size_t(slot)];
 }
 
+void LightTree::stop_weighs(const float P[3], const float* N, double* lanes, double* exact) const {
+    const TreePoint point = tree_point(P, N);
+    for (size_t s = 0; s < stops_.size(); ++s) {
+        lane_weighs(nodes_.data(), stops_[s], point, lanes + 8 * s);
+        for (int k = 0; k < 8; ++k) {
+            const int32_t at = stops_[s].node[k];
+            exact[8 * s + size_t(k)] = at < 0 ? 0.0 : weigh(nodes_[size_t(at)], P, N);
+        }
+    }
+}
+
 double LightTree::pdf(const float P[3], const float* N, int64_t key, uint64_t receivers) const {
     if (!member(key)) return 0.0;
     size_t at = size_t(leaf_of_key_[size_t(key)]);
     double p = member_share_[size_t(slot_of_key_[size_t(key)])];
+    const TreePoint point = tree_point(P, N);
     while (at != 0) {  // up the walk's stops to the root
         const size_t from = size_t(hop_from_[at]);
         double lp[4];
-        probs_at(from, P, N, receivers, lp);
+        probs_at(from, point, receivers, lp);
         p *= lp[hop_lane_[at]];
         at = from;
     }

@@ -27,7 +27,8 @@
 //
 // Two levels per step and eight weighs side by side in float (falling back to float64 where
 // distances leave float's range) made picking a light about twice as fast as one level per
-// step in float64, the same look-ahead.
+// step in float64, the same look-ahead; the eight are one AVX vector where the CPU has it
+// (treelanes.cpp).
 #pragma once
 
 #include <cstddef>
@@ -36,6 +37,8 @@
 #include <vector>
 
 namespace dacrt {
+
+struct TreePoint;  // treelanes.h
 
 struct LightTreeNode {
     float center[3], radius;  // bounding sphere of the lights' bounds
@@ -95,6 +98,11 @@ public:
     int32_t sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers = kAllSets) const;
     // The probability that sample() at P, N (and receivers) picks key (0 when key is not a member).
     double pdf(const float P[3], const float* N, int64_t key, uint64_t receivers = kAllSets) const;
+    // For tests: every stop's eight lanes (stops() x 8, stop by stop) weighed at P (and N) as a
+    // walk weighs them (the float lanes, float64 where they leave float's range) into lanes,
+    // and by the float64 weigh() into exact (0 for an empty lane).
+    size_t stops() const { return stops_.size(); }
+    void stop_weighs(const float P[3], const float* N, double* lanes, double* exact) const;
     // The same with N column i of normals (3 rows, stride n; null: none).
     double pdf(const float P[3], const float* normals, size_t n, size_t i, int64_t key,
                uint64_t receivers = kAllSets) const;
@@ -103,7 +111,7 @@ public:
     // on to one of its four targets, its children's children (a leaf child stands for itself:
     // targets 1 and 3 then -1), by their importance at the point, each the sum of its two lanes'
     // weighs (lookahead: its children, or itself when a leaf). The lanes' bounds side by side in
-    // float, so that all eight are weighed at once (lighttree.cpp); an empty lane has energy 0.
+    // float, so that all eight are weighed at once (treelanes.cpp); an empty lane has energy 0.
     struct Stop {
         float center[3][8], half[3][8], radius[8];
         float axis[3][8], cos_o[8], sin_o[8], cos_e[8], slab[8];
@@ -114,7 +122,7 @@ public:
 
 private:
     void build_stops();
-    void probs_at(size_t at, const float P[3], const float* N, uint64_t receivers, double p[4]) const;
+    void probs_at(size_t at, const TreePoint& point, uint64_t receivers, double p[4]) const;
 
     std::vector<LightTreeNode> nodes_;
     std::vector<Stop> stops_;

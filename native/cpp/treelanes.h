@@ -1,0 +1,31 @@
+// A light-tree stop's eight lanes weighed at one point (lighttree.h, LightTree::Stop), in
+// float, side by side: most of a many-light render's light sampling. Compiled once per
+// instruction set (treelanes.cpp) with every lane's operations in the same order, so that each
+// gives the same bits.
+#pragma once
+
+#include "lighttree.h"
+
+namespace dacrt {
+
+// The point a walk down the tree weighs its stops at, with what every stop would otherwise
+// work out again from it: |N| (the box's spread toward the tangent plane) and max |P_k| (the
+// back-face test's margin).
+struct TreePoint {
+    float P[3];
+    const float* N;  // unit receiving normal, or null: none
+    float abs_n[3];  // |N_k| (with N)
+    float pm;        // max_k |P_k|
+};
+TreePoint tree_point(const float P[3], const float* N);
+
+// imp[k]: lane k's importance at the point (energy x incidence and emission cosines / squared
+// distance, lighttree.cpp weigh(), 0 where culled). Returns, per four lanes (bit 0: lanes 0-3,
+// bit 1: lanes 4-7), whether some lane's squared distance lies outside [1e-30, 1e30] or is NaN:
+// those four must be weighed in float64 (their imp is left to the caller).
+using StopWeighFn = int (*)(const LightTree::Stop& q, const TreePoint& at, double imp[8]);
+
+// The widest kernel the CPU runs, or a narrower one DACRT_ISA names (portable, avx2).
+StopWeighFn stop_weigh_fn();
+
+}  // namespace dacrt
