@@ -357,11 +357,71 @@ def alpha_lookup(tex, u: np.ndarray, v: np.ndarray, interpolation: str, extensio
 
 
 def _blend(tex, u, v, interpolation, extension, channels):
-    """The first `channels` channels (channels, n) float32 of texels tex (h, w, c) at (u, v)."""
+    """The first `channels` channels (channels, n) float32 of texels tex (h, w, c) at (u, v):
+    natively where that gives _blend_texels' very bits (_native_texels), else in numpy."""
+    arr = _native_texels(tex, channels)
+    if arr is not None and getattr(u, 'dtype', None) == F32 and getattr(v, 'dtype', None) == F32 \
+            and u.ndim == 1 and v.shape == u.shape and interpolation in _INTERPOLATIONS and extension in _EXTENSIONS:
+        return _images().texel_blend(arr, u, v, (0, channels), interpolation, extension)
     # (a NaN or infinite UV, a script's, casts to an arbitrary texel index, wrapped into the
     # image as any other: numpy's RuntimeWarning about the cast had reached the console)
     with np.errstate(invalid='ignore', over='ignore'):
         return _blend_texels(tex, u, v, interpolation, extension, channels)
+
+
+_INTERPOLATIONS, _EXTENSIONS = ('Closest', 'Linear', 'Cubic'), ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR')
+
+
+def _images():
+    import dacrt
+    return dacrt.images
+
+
+def _native_texels(tex, channels):
+    """tex as dacrt.images reads it in place (float32 or uint8 (h, w, c >= channels)), or None
+    where only numpy gives _blend_texels' values (float64 texels, a LazyTexels' floats)."""
+    if isinstance(tex, np.ndarray) and tex.dtype in (F32, np.uint8) and tex.ndim == 3 and tex.shape[2] >= channels:
+        return tex.view(np.ndarray)
+    return None
+
+
+def box_texels(texels, alpha, interpolation, extension):
+    """How dacrt.images.box_lookup reads an image's Color (or Alpha) under Box projection, as
+    texture_lookup (alpha_lookup) reads it on each plane: (texels, channels, scale, finish),
+    finish None where the lookup is the blend times scale (combined natively), else the
+    decoding (an EncodedTexels' finish: sRGB, unassociated alpha, nodes after the image) to
+    apply to each plane's blend before the weighing. None: numpy's lookups (UDIM tiles,
+    float64 texels, an alpha of texels without one)."""
+    if interpolation not in _INTERPOLATIONS or extension not in _EXTENSIONS:
+        return None
+    if isinstance(texels, EncodedTexels):
+        arr = _native_texels(texels.texels, 4 if alpha else 3)
+        if arr is None:
+            return None
+        if alpha:
+            return arr, (3, 4), texels.scale, None
+        if not (texels.srgb or texels.unassociate or texels.then is not None):
+            return arr, (0, 3), texels.scale, None
+        channels = min(4 if texels.unassociate or texels.reads_alpha else 3, arr.shape[2])
+        return arr, (0, channels), F32(1.0), texels.finish
+    arr = _native_texels(texels, 4 if alpha else 3)
+    return None if arr is None else (arr, (3, 4) if alpha else (0, 3), F32(1.0), None)
+
+
+def box_lookup(spec, co, normal, blend, interpolation, extension):
+    """An image's colour (n, 3) or alpha (n, 1) under Box projection at points co (n, 3) with
+    object-space normals normal, read as box_texels says (spec): export/procedurals._box_lookup's
+    values, the planes and weights natively."""
+    arr, channels, scale, finish = spec
+    w, out = _images().box_lookup(arr, co, normal, blend, channels, interpolation, extension, scale, finish is None)
+    if finish is None:
+        return out
+    total = np.zeros((len(w), 3), F32)
+    for k in range(3):
+        sel = np.flatnonzero(w[:, k] > 0)
+        if len(sel):
+            total[sel] += w[sel, k, None] * np.asarray(finish(out[k][:, sel]), F32).T
+    return total
 
 
 def _blend_texels(tex, u, v, interpolation, extension, channels):

@@ -21,7 +21,7 @@ import numpy as np
 from .. import nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping, reads_off_uv
-from ..texture import alpha_lookup, lookup_texels, mapped_uv, texture_lookup
+from ..texture import alpha_lookup, box_lookup, box_texels, lookup_texels, mapped_uv, texture_lookup
 from .meshes import attribute_key, color_attribute_key
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO
 
@@ -570,6 +570,10 @@ def _image(node, out, chain, depth):
         chain.needs.add('object_normal')
         blend = np.float32(node.projection_blend)
         width = 1 if alpha else 3
+        spec = box_texels(texels, alpha, interp, ext)
+        if spec is not None:                # natively: the same values, ~10x faster
+            return (lambda c: box_lookup(spec, np.asarray(vector(c), np.float32), c['object_normal'], blend,
+                                         interp, ext)), False
         return (lambda c: _box_lookup(np.asarray(vector(c), np.float32), c['object_normal'], blend, read,
                                       width)), False
     if off_uv:

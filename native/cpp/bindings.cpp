@@ -221,10 +221,12 @@ private:
 
 void register_shading(py::module_& m);  // bindings_shading.cpp
 void register_lamps(py::module_& m);    // bindings_lamps.cpp
+void register_images(py::module_& m);   // bindings_images.cpp
 
 PYBIND11_MODULE(_core, m) {
     register_shading(m);
     register_lamps(m);
+    register_images(m);
     m.doc() = "DACRT native core: divide-and-conquer ray tracing without acceleration structures";
     py::register_exception<Cancelled>(m, "Cancelled");
     m.def("supported_isas", &supported_isas, "ISAs this CPU can run, weakest first");

@@ -350,3 +350,4 @@ class Scene:
 
 from . import shading  # noqa: E402  (per-ray helper kernels; needs the names above)
 from . import lamps  # noqa: E402  (analytic lamp kernels)
+from . import images  # noqa: E402  (per-point image lookups)
