@@ -387,11 +387,11 @@ def _native_texels(tex, channels):
 
 def box_texels(texels, alpha, interpolation, extension):
     """How dacrt.images.box_lookup reads an image's Color (or Alpha) under Box projection, as
-    texture_lookup (alpha_lookup) reads it on each plane: (texels, channels, scale, finish),
-    finish None where the lookup is the blend times scale (combined natively), else the
-    decoding (an EncodedTexels' finish: sRGB, unassociated alpha, nodes after the image) to
-    apply to each plane's blend before the weighing. None: numpy's lookups (UDIM tiles,
-    float64 texels, an alpha of texels without one)."""
+    texture_lookup (alpha_lookup) reads it on each plane: (texels, channels, scale, srgb,
+    finish), finish None where the lookup is the blend times scale, then (srgb) decoded from
+    sRGB, all native, else the decoding (an EncodedTexels' finish: unassociated alpha, nodes
+    after the image) to apply to each plane's blend in numpy before the weighing. None: numpy's
+    lookups (UDIM tiles, float64 texels, an alpha of texels without one)."""
     if interpolation not in _INTERPOLATIONS or extension not in _EXTENSIONS:
         return None
     if isinstance(texels, EncodedTexels):
@@ -399,21 +399,23 @@ def box_texels(texels, alpha, interpolation, extension):
         if arr is None:
             return None
         if alpha:
-            return arr, (3, 4), texels.scale, None
-        if not (texels.srgb or texels.unassociate or texels.then is not None):
-            return arr, (0, 3), texels.scale, None
+            return arr, (3, 4), texels.scale, False, None
+        if not (texels.unassociate or texels.then is not None):
+            return arr, (0, 3), texels.scale, texels.srgb, None
         channels = min(4 if texels.unassociate or texels.reads_alpha else 3, arr.shape[2])
-        return arr, (0, channels), F32(1.0), texels.finish
+        return arr, (0, channels), F32(1.0), False, texels.finish
     arr = _native_texels(texels, 4 if alpha else 3)
-    return None if arr is None else (arr, (3, 4) if alpha else (0, 3), F32(1.0), None)
+    return None if arr is None else (arr, (3, 4) if alpha else (0, 3), F32(1.0), False, None)
 
 
 def box_lookup(spec, co, normal, blend, interpolation, extension):
     """An image's colour (n, 3) or alpha (n, 1) under Box projection at points co (n, 3) with
     object-space normals normal, read as box_texels says (spec): export/procedurals._box_lookup's
-    values, the planes and weights natively."""
-    arr, channels, scale, finish = spec
-    w, out = _images().box_lookup(arr, co, normal, blend, channels, interpolation, extension, scale, finish is None)
+    values (an sRGB image's within an ulp: libm's powf, not numpy's), the planes and weights
+    natively."""
+    arr, channels, scale, srgb, finish = spec
+    w, out = _images().box_lookup(arr, co, normal, blend, channels, interpolation, extension, scale, srgb,
+                                  finish is None)
     if finish is None:
         return out
     total = np.zeros((len(w), 3), F32)

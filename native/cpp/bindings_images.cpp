@@ -55,7 +55,7 @@ F32Array texel_blend_py(py::array texels, F32Array u, F32Array v, int c0, int c1
 }
 
 py::tuple box_lookup_py(py::array texels, F32Array co, F32Array normal, float blend, int c0, int c1, int interp,
-                        int ext, float scale, bool combine) {
+                        int ext, float scale, bool srgb, bool combine) {
     const TexelImage t = texel_image(texels, c0, c1, interp, ext);
     const size_t n = points_of(normal, 3, "normal");
     if (points_of(co, 3, "co") != n) throw py::value_error("co and normal must have the same length");
@@ -66,7 +66,7 @@ py::tuple box_lookup_py(py::array texels, F32Array co, F32Array normal, float bl
     float* o = out.mutable_data();
     {
         py::gil_scoped_release nogil;
-        box_lookup(t, co.data(), normal.data(), n, blend, scale, combine, w, o);
+        box_lookup(t, co.data(), normal.data(), n, blend, scale, srgb, combine, w, o);
     }
     return py::make_tuple(weights, out);
 }
@@ -77,5 +77,5 @@ void register_images(py::module_& m) {
     m.def("texel_blend", &texel_blend_py, py::arg("texels"), py::arg("u"), py::arg("v"), py::arg("c0"), py::arg("c1"),
           py::arg("interp"), py::arg("ext"));
     m.def("box_lookup", &box_lookup_py, py::arg("texels"), py::arg("co"), py::arg("normal"), py::arg("blend"),
-          py::arg("c0"), py::arg("c1"), py::arg("interp"), py::arg("ext"), py::arg("scale"), py::arg("combine"));
+          py::arg("c0"), py::arg("c1"), py::arg("interp"), py::arg("ext"), py::arg("scale"), py::arg("srgb"), py::arg("combine"));
 }

@@ -33,15 +33,17 @@ def texel_blend(texels, u, v, channels, interpolation: str, extension: str) -> n
 
 
 def box_lookup(texels, co, normal, blend, channels, interpolation: str, extension: str, scale=1.0,
-               combine: bool = True):
+               srgb: bool = False, combine: bool = True):
     """Box projection (Cycles' svm_node_tex_image_box) at points co (n, 3) or (1, 3) with
     object-space normals normal (n, 3): (weights (n, 3), out). The three axis planes' lookups
     (texel_blend; each plane's u flipped by the normal's sign) where their weight is > 0,
-    weighed by Blend. combine: out (n, c1 - c0) the weighed sum of the lookups x scale; else
-    out (3, c1 - c0, n) each plane's lookup as blended (0 where its weight is not > 0), for
-    decoding before the weighing."""
+    weighed by Blend. combine: out (n, c1 - c0) the weighed sum of the lookups x scale, with
+    srgb channels 0-2 decoded from sRGB to linear (Cycles' color_srgb_to_linear, libm's powf)
+    before the weighing; else out (3, c1 - c0, n) each plane's lookup as blended (0 where its
+    weight is not > 0), for decoding before the weighing."""
     c0, c1 = channels
     normal = np.ascontiguousarray(normal, _F32)
     co = np.ascontiguousarray(np.broadcast_to(np.asarray(co, _F32), normal.shape))
     return _core.box_lookup(_texels(texels), co, normal, _F32(blend), int(c0), int(c1),
-                            INTERPOLATIONS[interpolation], EXTENSIONS[extension], _F32(scale), bool(combine))
+                            INTERPOLATIONS[interpolation], EXTENSIONS[extension], _F32(scale), bool(srgb),
+                            bool(combine))
