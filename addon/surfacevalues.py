@@ -331,9 +331,11 @@ class SurfaceValues:
             if rows is None or width < 3 * k + 3:
                 out[name] = np.zeros((len(prim), 3), F32)
                 continue
-            r = np.take(rows, prim, axis=1)
+            # (the three rows of each coefficient taken alone: a take of all the rows had
+            # gathered every coordinate's 27 for each one asked for)
             a, b = 3 * k, 3 * k + 3
-            c = r[a:b] + r[width + a:width + b] * u + r[2 * width + a:2 * width + b] * v
+            c0, cu, cv = (np.take(rows[o + a:o + b], prim, axis=1) for o in (0, width, 2 * width))
+            c = c0 + cu * u + cv * v
             if name == 'object_normal':
                 c = self._sided_unit(c, back)
             out[name] = np.ascontiguousarray(c.T, F32)
