@@ -34,7 +34,7 @@ import numpy as np
 
 from ..sampling import concentric_disk, dot, normalize
 from .base import F32, KIND_AREA, Bounds, Lamp, LightSample, col, luminance, make_record, matvec, outer, vdot
-from .ies import ies_direction, ies_mean, native_id
+from .ies import ies_direction, ies_mean
 
 SHAPES = ('SQUARE', 'RECTANGLE', 'DISK', 'ELLIPSE')
 SHAPE_RECT, SHAPE_ELLIPSE, SHAPE_PARALLELOGRAM = range(3)   # record shape codes (lamps.h AreaShape)
@@ -270,7 +270,7 @@ class AreaLight(Lamp):
                                                                spread_norm=self.spread_norm)
         shape = SHAPE_ELLIPSE if self.ellipse else SHAPE_PARALLELOGRAM if self.sheared else SHAPE_RECT
         if self.ies is not None:
-            spread.update(ies=native_id(self.ies), ies_m3=self.ies_m3)
+            spread.update(ies=self._ies_id(), ies_m3=self.ies_m3)
         return make_record(KIND_AREA, shape, emit=self.emit, pos=self.center, area=self.area,
                            axis_x=self.axis_x, axis_y=self.axis_y, inv_x=self.inv_x, inv_y=self.inv_y,
                            normal=self.normal, **spread)

@@ -21,8 +21,9 @@ order of the C++ struct LampRecord; fields a lamp does not use stay 0:
   inv_smooth 10 (spot; 0 = hard edge), omc 11 (sun: 1 - cos(angle/2)), pdf 12 (sun cone,
   background), area 13, axis_x 14..16, axis_y 17..19, inv_x 20..22, inv_y 23..25, normal 26..28,
   tan_half_spread 29, spread_norm 30 (0 = no spread), inv_m3 31..39 (spot, row-major),
-  ies 40 (point/spot: IES profile id, dacrt.lamps.ies_register; 0 = none), ies_m3 41..49 (its
-  world -> object transform of directions, row-major; lights/ies.py).
+  ies 40 (point/spot/area: IES profile id, dacrt.lamps.ies_register(...).id, live while the lamp
+  that made the record is: Lamp._ies_id; 0 = none), ies_m3 41..49 (its world -> object
+  transform of directions, row-major; lights/ies.py).
 """
 from __future__ import annotations
 
@@ -185,6 +186,16 @@ class Lamp(ABC):
     @abstractmethod
     def record(self) -> np.ndarray:
         """The lamp's parameters as a native lamp record (RECORD_WIDTH float32, module doc)."""
+
+    def _ies_id(self) -> int:
+        """The native id of the lamp's IES profile (self.ies) for its record. The lamp holds the
+        handle: the table lives as long as the lamp, and with it the records of its frame (the
+        integrator keeps both; a record outliving its lamp is refused, never read freed)."""
+        handle = getattr(self, '_ies_handle', None)
+        if handle is None:
+            from .ies import native_profile
+            handle = self._ies_handle = native_profile(self.ies)
+        return handle.id
 
     def bounds(self) -> Bounds | None:
         """The light's place in the light tree; None for lights at infinity (sun, world),

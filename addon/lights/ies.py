@@ -273,8 +273,10 @@ def ies_mean(profile: IESProfile) -> float:
     return profile._mean
 
 
-def native_id(profile: IESProfile) -> int:
-    """The profile's id in the native registry (dacrt.lamps.ies_register; identical tables
-    share one), for lamp records."""
+def native_profile(profile: IESProfile):
+    """A handle (dacrt.lamps.IesProfile) on the profile's table in the native registry; its .id
+    is what lamp records name. The table lives while a handle does (identical tables share one
+    slot): the lamp that names it in its record keeps the handle, so a frame's tables go with its
+    lamps and a viewport editing the text or an animation cycling profiles leaves none behind."""
     import dacrt
-    return int(dacrt.lamps.ies_register(profile.h_angles, profile.v_angles, profile.intensity))
+    return dacrt.lamps.ies_register(profile.h_angles, profile.v_angles, profile.intensity)

@@ -26,7 +26,7 @@ from ..sampling import (concentric_disk, dot, normalize, one_minus_cos_from_sin2
                         to_world, uniform_cone)
 from .base import (F32, KIND_POINT, KIND_SPOT, POINT_DELTA, POINT_DISK, POINT_SPHERE, Bounds, Lamp, LightSample,
                    col, luminance, make_record, matvec, outer)
-from .ies import ies_direction, ies_mean, native_id
+from .ies import ies_direction, ies_mean
 
 
 class PointLight(Lamp):
@@ -64,7 +64,7 @@ class PointLight(Lamp):
         shape = POINT_DELTA if self.delta else POINT_SPHERE if self.sphere else POINT_DISK
         extra = {}
         if self.ies is not None:
-            extra = dict(ies=native_id(self.ies), ies_m3=self.ies_m3)
+            extra = dict(ies=self._ies_id(), ies_m3=self.ies_m3)
         return make_record(self.record_kind, shape, emit=self.emit, pos=self.center, radius=self.radius,
                            **self._cone_fields(), **extra)
 

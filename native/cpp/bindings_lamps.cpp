@@ -740,19 +740,32 @@ py::tuple equirect_direction_py(F32Array u, F32Array v) {
     return py::make_tuple(m, s);
 }
 
-// Registers an IES table (addon/lights/ies.py's IESProfile): its id for lamp records.
-int ies_register_py(F32Array h, F32Array v, F32Array intensity) {
+// One reference to a registered IES table (dacrt.lamps.IesProfile): the table lives while a
+// handle does, so whatever uses a lamp record naming .id keeps the handle (the add-on's lamps).
+struct IesHandle {
+    int id;
+    explicit IesHandle(int i) : id(i) {}
+    IesHandle(const IesHandle&) = delete;
+    IesHandle& operator=(const IesHandle&) = delete;
+    ~IesHandle() { ies_release(id); }
+};
+
+// Registers an IES table (addon/lights/ies.py's IESProfile): a handle whose id lamp records name.
+std::unique_ptr<IesHandle> ies_register_py(F32Array h, F32Array v, F32Array intensity) {
     if (h.ndim() != 1 || v.ndim() != 1) throw py::value_error("h and v must be one-dimensional");
     need_shape(intensity, h.shape(0), size_t(v.shape(0)), "intensity");
     std::vector<float> hv(h.data(), h.data() + h.size()), vv(v.data(), v.data() + v.size()),
         iv(intensity.data(), intensity.data() + intensity.size());
-    return ies_register(std::move(hv), std::move(vv), std::move(iv));  // invalid_argument: ValueError
+    // invalid_argument: ValueError
+    return std::make_unique<IesHandle>(ies_register(std::move(hv), std::move(vv), std::move(iv)));
 }
 
-// kernel_ies_interp of profile id at each (h, v) angle pair (tests).
-F32Array ies_lookup_py(int id, F32Array h, F32Array v) {
+// kernel_ies_interp of a profile (handle, or a live id) at each (h, v) angle pair (tests). The
+// handle argument stays referenced through the call, so the table outlives the GIL-free loop.
+F32Array ies_lookup_py(py::object profile, F32Array h, F32Array v) {
+    const int id = py::isinstance<IesHandle>(profile) ? profile.cast<const IesHandle&>().id : profile.cast<int>();
     const IesTable* t = ies_table(id);
-    if (!t) throw py::value_error("IES profile " + std::to_string(id) + " is not registered");
+    if (!t) throw py::value_error("IES profile " + std::to_string(id) + " is not live (never registered, or released)");
     if (h.ndim() != 1) throw py::value_error("h must be one-dimensional, got " + shape_str(h));
     const size_t n = size_t(h.shape(0));
     need_shape(v, 0, n, "v");
@@ -767,10 +780,20 @@ F32Array ies_lookup_py(int id, F32Array h, F32Array v) {
 }  // namespace
 
 void register_lamps(py::module_& m) {
+    // module_local: see LightTree below
+    py::class_<IesHandle>(m, "IesProfile",
+                          "A reference to a registered IES table; the table is freed when the last one goes",
+                          py::module_local())
+        .def_property_readonly("id", [](const IesHandle& p) { return p.id; })
+        .def("__int__", [](const IesHandle& p) { return p.id; })
+        .def("__index__", [](const IesHandle& p) { return p.id; })
+        .def("__repr__", [](const IesHandle& p) { return "<IesProfile id " + std::to_string(p.id) + ">"; });
     m.def("ies_register", &ies_register_py, py::arg("h"), py::arg("v"), py::arg("intensity"),
-          "register an IES profile table (radians, (H, V) values): its id >= 1 for lamp records");
-    m.def("ies_lookup", &ies_lookup_py, py::arg("id"), py::arg("h"), py::arg("v"),
-          "Cycles' kernel_ies_interp of a registered profile at angle pairs");
+          "register an IES profile table (radians, (H, V) values): an IesProfile handle, .id >= 1 for lamp records");
+    m.def("ies_lookup", &ies_lookup_py, py::arg("profile"), py::arg("h"), py::arg("v"),
+          "Cycles' kernel_ies_interp of a live profile (IesProfile or its id) at angle pairs");
+    m.def("ies_live", &ies_live, "distinct IES tables alive now");
+    m.attr("IES_MAX_TABLES") = kIesMaxTables;
     m.attr("LAMP_RECORD_WIDTH") = LAMP_RECORD_WIDTH;
     m.def("lamp_record_layout", &lamp_record_layout, "field name -> (offset, width) in float32 of a lamp record");
     m.def("lamp_sample", &lamp_sample_py, py::arg("records"), py::arg("entry"), py::arg("P"), py::arg("u1"),

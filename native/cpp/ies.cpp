@@ -31,11 +31,18 @@ inline float vertical(const IesTable& t, bool wrap_vlow, bool wrap_vhigh, size_t
     return cubic_interp(a, b, c, d, v_frac);
 }
 
-// Registered tables live as long as the process (a few kB each, identical ones shared): lamp
-// records hold bare ids, and a render may still read one while the next scene registers.
-constexpr int kMaxTables = 4096;
-std::atomic<const IesTable*> g_tables[kMaxTables];
-std::atomic<int> g_count{0};
+// A slot per distinct live table, its references counted under the mutex. An id is
+// generation * kIesMaxTables + slot + 1, the generation bumped when the slot is freed: a record
+// naming a released profile finds no table (rather than the slot's next one) until the slot has
+// been reused kGenerations times. Ids stay below 2^24, exact in a record's float32.
+constexpr int kGenerations = (1 << 24) / kIesMaxTables;
+struct Slot {
+    std::atomic<const IesTable*> table{nullptr};
+    std::atomic<int> id{0};  // 0: free
+    int refs = 0, generation = 0;
+};
+Slot g_slots[kIesMaxTables];
+std::atomic<int> g_live{0};
 std::mutex g_register;
 
 }  // namespace
@@ -82,8 +89,10 @@ float ies_direction(const IesTable& t, const float d[3]) {
 }
 
 const IesTable* ies_table(int id) {
-    if (id < 1 || id > g_count.load(std::memory_order_acquire)) return nullptr;
-    return g_tables[id - 1].load(std::memory_order_acquire);
+    if (id < 1 || id > kIesMaxTables * kGenerations) return nullptr;
+    const Slot& s = g_slots[(id - 1) % kIesMaxTables];
+    if (s.id.load(std::memory_order_acquire) != id) return nullptr;
+    return s.table.load(std::memory_order_acquire);
 }
 
 int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> I) {
@@ -98,21 +107,50 @@ int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> 
     for (float x : I)
         if (!std::isfinite(x)) throw std::invalid_argument("IES intensities must be finite");
     const std::lock_guard<std::mutex> lock(g_register);
-    const int n = g_count.load(std::memory_order_relaxed);
-    for (int k = 0; k < n; ++k) {
-        const IesTable* t = g_tables[k].load(std::memory_order_relaxed);
-        if (t->h == h && t->v == v && t->I == I) return k + 1;
+    Slot* free_slot = nullptr;
+    for (Slot& s : g_slots) {
+        if (s.refs == 0) {
+            if (!free_slot) free_slot = &s;
+            continue;
+        }
+        const IesTable* t = s.table.load(std::memory_order_relaxed);
+        if (t->h == h && t->v == v && t->I == I) {
+            ++s.refs;
+            return s.id.load(std::memory_order_relaxed);
+        }
     }
-    if (n >= kMaxTables) throw std::invalid_argument("too many distinct IES profiles");
-    g_tables[n].store(new IesTable{std::move(h), std::move(v), std::move(I)}, std::memory_order_release);
-    g_count.store(n + 1, std::memory_order_release);
-    return n + 1;
+    if (!free_slot)
+        throw std::invalid_argument("too many distinct IES profiles alive at once (" + std::to_string(kIesMaxTables) +
+                                    ")");
+    Slot& s = *free_slot;
+    const int id = s.generation * kIesMaxTables + int(&s - g_slots) + 1;
+    s.refs = 1;
+    s.table.store(new IesTable{std::move(h), std::move(v), std::move(I)}, std::memory_order_release);
+    s.id.store(id, std::memory_order_release);
+    g_live.fetch_add(1, std::memory_order_relaxed);
+    return id;
 }
+
+void ies_release(int id) {
+    if (id < 1 || id > kIesMaxTables * kGenerations) return;
+    const std::lock_guard<std::mutex> lock(g_register);
+    Slot& s = g_slots[(id - 1) % kIesMaxTables];
+    if (s.refs == 0 || s.id.load(std::memory_order_relaxed) != id || --s.refs > 0) return;
+    // no handle holds it, so no render reads it: unpublish, then delete
+    s.id.store(0, std::memory_order_release);
+    delete s.table.exchange(nullptr, std::memory_order_acq_rel);
+    s.generation = (s.generation + 1) % kGenerations;
+    g_live.fetch_sub(1, std::memory_order_relaxed);
+}
+
+int ies_live() { return g_live.load(std::memory_order_relaxed); }
 
 std::string ies_id_error(float id) {
     if (id == 0) return {};
-    if (float(int(id)) != id || !ies_table(int(id)))
-        return "ies " + std::to_string(id) + " is not a registered IES profile id (0 = none)";
+    const bool whole = std::fabs(id) < 2e9f && float(int(id)) == id;  // (int of NaN or 1e30: undefined)
+    if (!whole || !ies_table(int(id)))
+        return "ies " + (whole ? std::to_string(int(id)) : std::to_string(id)) +
+               " is not a live IES profile id (never registered, or its last IesProfile handle was released; 0 = none)";
     return {};
 }
 

@@ -3,7 +3,8 @@
 // angle (0..2 pi), built by addon/lights/ies.py (Cycles' util/ies.cpp), looked up with Cycles'
 // kernel_ies_interp (kernel/util/ies.h: bicubic, wrapping round the poles and past 360 degrees,
 // 0 outside the table) in its float32 operations. A lamp record names its profile by an id
-// (LampRecord::ies, 0 = none) in a process-wide registry the export fills.
+// (LampRecord::ies, 0 = none) in a registry whose tables live as long as a handle holds them
+// (ies_register / ies_release: the Python IesProfile a render's lamps keep).
 #pragma once
 
 #include <cstddef>
@@ -25,15 +26,25 @@ float ies_interp(const IesTable& t, float h_angle, float v_angle);
 // point; not normalised): v = acos(-z), h = atan2(x, y) + pi of d / |d|; 0 for d = 0.
 float ies_direction(const IesTable& t, const float d[3]);
 
-// The registered profile with this id, or null. Lock-free: render threads read while another
-// thread may register.
+// The live profile with this id, or null (never registered, or released). Lock-free: render
+// threads read while another thread registers or releases other profiles; a table is deleted
+// only when its last reference goes, which its readers hold.
 const IesTable* ies_table(int id);
 
 // Registers a profile (checked: sizes, ascending finite angles, finite values; else
-// std::invalid_argument) and returns its id >= 1; an identical table gets the id it had.
+// std::invalid_argument) and returns its id >= 1 holding one reference; an identical live table
+// gets its id and one more reference. At most kIesMaxTables distinct tables live at once.
 int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> I);
 
-// Empty if id is 0 or registered, else what is wrong (lamp_record_error).
+// Drops one reference of id; the last deletes the table and frees its slot. An id not live: no-op.
+void ies_release(int id);
+
+// Distinct tables alive now.
+int ies_live();
+
+constexpr int kIesMaxTables = 4096;
+
+// Empty if id is 0 or live, else what is wrong (lamp_record_error).
 std::string ies_id_error(float id);
 
 // The factor of lamp profile id (registered, != 0) for a world direction from the light,

@@ -71,7 +71,7 @@ def test_lookup_matches_cycles_port(name):
 
 def test_register_shares_identical_and_checks():
     p, a = registered('batwing')
-    assert registered('batwing')[1] == a and registered('downlight')[1] != a
+    assert registered('batwing')[1].id == a.id and registered('downlight')[1].id != a.id
     with pytest.raises(ValueError):
         dacrt.lamps.ies_register(p.h_angles[::-1], p.v_angles, p.intensity)
     with pytest.raises(ValueError):

@@ -19,7 +19,7 @@ import numpy as np
 from . import _core
 from .shading import _check_added_to
 
-__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather", "ies_register", "ies_lookup", "EnvironmentMap", "LightTree", "light_tree",
+__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather", "ies_register", "ies_lookup", "ies_live", "IesProfile", "IES_MAX_TABLES", "EnvironmentMap", "LightTree", "light_tree",
            "environment_map"]
 
 RECORD_WIDTH = int(_core.LAMP_RECORD_WIDTH)
@@ -161,12 +161,26 @@ def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool 
                                 None if scale is None else np.ascontiguousarray(scale, _F32).reshape(3))
 
 
-def ies_register(h, v, intensity) -> int:
-    """Registers an IES profile table (h (H,), v (V,) radians ascending, intensity (H, V)):
-    its id >= 1 for a point/spot lamp record's `ies` field (identical tables share one id)."""
-    return int(_core.ies_register(_f32(h), _f32(v), _f32(intensity)))
+IesProfile = _core.IesProfile
+IES_MAX_TABLES = int(_core.IES_MAX_TABLES)
 
 
-def ies_lookup(id: int, h, v) -> np.ndarray:
-    """Cycles' kernel_ies_interp of registered profile id at angle pairs (h[i], v[i])."""
-    return _core.ies_lookup(int(id), _f32(h), _f32(v))
+def ies_register(h, v, intensity) -> "IesProfile":
+    """Registers an IES profile table (h (H,), v (V,) radians ascending, intensity (H, V)): a
+    handle (IesProfile) whose .id (also int(handle)) a point/spot/area lamp record's `ies` field
+    names. The table lives while a handle does: identical tables share one slot, counted; the
+    last handle's release frees it, and a record naming a freed id is refused. Keep the handle as
+    long as its records are used. At most IES_MAX_TABLES distinct tables live at once."""
+    return _core.ies_register(_f32(h), _f32(v), _f32(intensity))
+
+
+def ies_lookup(profile, h, v) -> np.ndarray:
+    """Cycles' kernel_ies_interp of a live profile (an IesProfile, or its id) at angle pairs (h[i], v[i])."""
+    if not isinstance(profile, IesProfile):
+        profile = int(profile)
+    return _core.ies_lookup(profile, _f32(h), _f32(v))
+
+
+def ies_live() -> int:
+    """How many distinct IES tables are alive (held by a handle) now."""
+    return int(_core.ies_live())
