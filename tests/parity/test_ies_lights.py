@@ -9,28 +9,9 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
+from tests.iesfiles import PROFILES
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
-
-
-def lm63(v, h, rows):
-    return "\n".join(["IESNA:LM-63-2002", "[TEST] dacrt", "TILT=NONE", f"1 1000 1 {len(v)} {len(h)} 1 2 0 0 0",
-                      "1 1 50", " ".join(map(str, v)), " ".join(map(str, h))] +
-                     [" ".join(map(str, r)) for r in rows]) + "\n"
-
-
-V = [0, 10, 20, 30, 45, 60, 75, 90]
-PROFILES = {
-    'downlight': lm63(V, [0], [[1000, 950, 700, 300, 50, 5, 0, 0]]),
-    'batwing': lm63(V, [0, 45, 90], [[200, 260, 380, 520, 600, 400, 120, 10],
-                                     [210, 250, 330, 420, 450, 280, 90, 5],
-                                     [220, 240, 280, 300, 280, 150, 40, 0]]),
-    'asymmetric': lm63([0, 30, 60, 90, 120, 150, 180], [0, 60, 120, 180, 240, 300, 360],
-                       [[500, 400, 300, 100, 50, 20, 10], [300, 350, 420, 200, 80, 30, 10],
-                        [100, 150, 250, 300, 120, 40, 10], [80, 90, 100, 120, 60, 20, 10],
-                        [150, 120, 90, 60, 30, 15, 10], [400, 380, 200, 80, 40, 20, 10],
-                        [500, 400, 300, 100, 50, 20, 10]]),
-}
 
 
 def _lamp(kind, profile, source, tmp_path, rotation=(0.0, 0.0, 0.0), **props):
