@@ -199,6 +199,7 @@ private:
         d["filter_skips"] = res.stats.filter_skips;
         d["tri_tests"] = res.stats.tri_tests;
         d["partition_steps"] = res.stats.partition_steps;
+        d["steals"] = res.stats.steals;
         d["median_steps"] = res.stats.median_steps;
         d["sah_steps"] = res.stats.sah_steps;
         d["leaves"] = res.stats.leaves;

@@ -1,11 +1,14 @@
 // Run-time ISA dispatch and threading (see dispatch.h).
 //
 // Multithreading: independent ray chunks traced in parallel as in the paper (one per thread,
-// handed out dynamically when chunk_rays asks for more), plus shared top levels (kernel.h
-// SharedTop) so the threads do not repeat the large partitioning steps. Allocations
-// of a call: the shared triangle id array, one id scratch per thread (4 bytes per triangle
-// each) and the shared nodes (two per published split); nothing per ray.
+// handed out dynamically when chunk_rays asks for more), cut at the median origin
+// (chunkorder.h), plus shared top levels (kernel.h SharedTop) so the threads do not repeat the
+// large partitioning steps, and work stealing (kernel.h StealBoard) so that chunks of unequal
+// cost finish together. Allocations of a call: the shared triangle id array, one id scratch
+// per thread (4 bytes per triangle each) and the shared nodes (two per published split);
+// per ray only the copies a stolen node takes (its rays, ids and hits).
 #include "dispatch.h"
+#include "chunkorder.h"
 #include "parallel.h"
 
 #include <algorithm>
@@ -123,6 +126,50 @@ static std::vector<Span> origin_groups(const TriangleSet& ts, Ray* rays, size_t 
     return spans;
 }
 
+// The stolen tasks' hits into the caller's (closest t, then lowest triangle: the leaf's rule,
+// so the result does not depend on who traced what), then the tfar of the caller's records
+// from the merged hits, as the owner's leaves would have set it (a hit's distance, or
+// kOccludedTfar): the records of a stolen node have moved within their chunk since.
+static void merge_stolen(StealBoard& board, const TraceJob& job, size_t n, int T) {
+    std::vector<std::pair<Ray*, size_t>> chunks;
+    for (const auto& t : board.all) chunks.emplace_back(t->fix, t->fix_n);
+    std::sort(chunks.begin(), chunks.end());
+    chunks.erase(std::unique(chunks.begin(), chunks.end()), chunks.end());
+    // a ray may be in several tasks (a stolen node's task stolen from again): each thread
+    // merges the ids of its own range, then fixes the records of its own range
+    run_workers(T, [&](int w) {
+        const size_t lo = n * size_t(w) / size_t(T), hi = n * size_t(w + 1) / size_t(T);
+        for (const auto& t : board.all) {
+            const size_t m = t->map.size();
+            for (size_t k = 0; k < m; ++k) {
+                const uint32_t g = t->map[k];
+                if (g < lo || g >= hi) continue;
+                if (job.query == Query::Any) {
+                    if (t->occluded[k]) job.occluded[g] = 1;
+                    continue;
+                }
+                const Hit& l = t->hits[k];
+                Hit& h = job.hits[g];
+                if (l.prim >= 0 && (h.prim < 0 || l.t < h.t || (l.t == h.t && l.prim < h.prim))) h = l;
+            }
+        }
+    });
+    run_workers(T, [&](int w) {
+        for (const auto& c : chunks) {
+            const size_t b = c.second * size_t(w) / size_t(T), e = c.second * size_t(w + 1) / size_t(T);
+            for (size_t i = b; i < e; ++i) {
+                Ray& r = c.first[i];
+                if (r.id >= n) continue;
+                if (job.query == Query::Any) {
+                    if (job.occluded[r.id] == 1) r.tfar = kOccludedTfar;
+                } else if (job.hits[r.id].prim >= 0) {
+                    r.tfar = job.hits[r.id].t;
+                }
+            }
+        }
+    });
+}
+
 TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, int threads, Isa isa,
                   TopCache* cache) {
     TraceJob job = job_in;
@@ -202,6 +249,8 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         std::vector<size_t> first_chunk{0};
         for (const Span& g : groups) first_chunk.push_back(first_chunk.back() + chunks_of(g.e - g.b));
         const size_t chunks = first_chunk.back();
+        for (size_t g = 0; g < groups.size(); ++g)  // chunks of nearby origins (chunkorder.h)
+            order_by_origin(rays + groups[g].b, groups[g].e - groups[g].b, first_chunk[g + 1] - first_chunk[g]);
         if (size_t(T) > chunks) T = int(chunks);
         res.threads = T;
 
@@ -219,15 +268,20 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         jb.top = &top;
         jb.num_ids = n;
 
+        // Work stealing: a thread out of chunks takes a far child that another has yet to visit
+        // (StealBoard, kernel.h), so chunks of unequal cost still finish together.
+        StealBoard board;
+        board.working = T;
+        if (T > 1) jb.steal = &board;
+        TaskFn task_fn = isa == Isa::Avx512 ? avx512::trace_task : (isa == Isa::Avx2 ? avx2::trace_task : portable::trace_task);
+
         std::atomic<size_t> next{0};
-        std::atomic<int> busy{T};  // workers still tracing chunks
-        std::mutex finished_m;      // busy reaching 0 wakes a caller polling an interrupt
-        std::condition_variable finished;
         std::vector<Stats> stats(T);
         std::vector<std::exception_ptr> errors(T);
         auto worker = [&](int w) {
+            std::vector<uint32_t> ids;
             try {
-                std::vector<uint32_t> ids(nt);
+                ids.resize(nt);
                 for (;;) {
                     const size_t c = next.fetch_add(1);
                     if (c >= chunks) break;
@@ -244,16 +298,34 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
                 errors[w] = std::current_exception();
                 next.store(chunks);
             }
-            if (busy.fetch_sub(1, std::memory_order_acq_rel) == 1 && job.interrupt) {
-                std::lock_guard<std::mutex> g(finished_m);  // the caller may be between check and wait
-                finished.notify_all();
-            }
-            // Only the caller's thread polls an interrupt; when it runs out of chunks first it
-            // keeps polling until the others finish theirs (woken as the last one does), or a
-            // cancel could wait for the longest chunk.
-            if (w == 0 && job.interrupt) {
-                std::unique_lock<std::mutex> lk(finished_m);
-                while (!finished.wait_for(lk, std::chrono::milliseconds(5), [&] { return busy.load() == 0; })) {
+            // Then tasks, until no thread traces anything. Only the caller's thread polls an
+            // interrupt; while it waits it keeps polling (every 5 ms), or a cancel could wait
+            // for the longest chunk.
+            std::unique_lock<std::mutex> lk(board.m);
+            if (--board.working == 0) board.cv.notify_all();
+            for (;;) {
+                if (!board.queue.empty()) {
+                    StolenTask* t = board.queue.front();
+                    board.queue.pop_front();
+                    --board.offered;
+                    board.update();
+                    ++board.working;
+                    lk.unlock();
+                    try {
+                        if (ids.size() < nt) ids.resize(nt);
+                        task_fn(jb, *t, ids.data(), stats[w]);
+                    } catch (...) {
+                        if (!errors[w]) errors[w] = std::current_exception();
+                    }
+                    lk.lock();
+                    if (--board.working == 0) board.cv.notify_all();
+                    continue;
+                }
+                if (board.working == 0) break;
+                ++board.waiting;
+                board.update();
+                if (w == 0 && job.interrupt) {
+                    board.cv.wait_for(lk, std::chrono::milliseconds(5));
                     lk.unlock();
                     try {
                         job.interrupt->stop();
@@ -261,13 +333,18 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
                         if (!errors[0]) errors[0] = std::current_exception();
                     }
                     lk.lock();
+                } else {
+                    board.cv.wait(lk);
                 }
+                --board.waiting;
+                board.update();
             }
         };
         run_workers(T, worker);
         for (auto& e : errors)
             if (e) std::rethrow_exception(e);
         if (job.interrupt && job.interrupt->raised()) throw Cancelled();
+        if (!board.all.empty()) merge_stolen(board, job, n, T);
         for (const Stats& s : stats) res.stats.add(s);
         res.stats.rays = n;
     }

@@ -2,10 +2,13 @@
 // trace) compiled in its own translation unit with its own instruction set and namespace.
 #pragma once
 #include <atomic>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include "interrupt.h"
 #include "ray.h"
@@ -68,6 +71,66 @@ struct SharedTop {
     float ray_scale = 1.0f;       // total rays / chunk rays: the adaptive choice at shared nodes
 };
 
+// Work stealing (dispatch.cpp): a thread out of chunks takes the farther child of a node that
+// another thread has still to visit, with a copy of that node's rays renumbered 0..n-1 and
+// hits of its own, merged into the caller's afterwards (closest t, then lowest triangle, the
+// leaf's own rule, so hits stay a function of ray and triangles alone).
+struct StolenTask {
+    std::vector<Ray> rays;
+    std::vector<uint32_t> own_ids;  // a private subtree's triangle ids (the owner reuses its scratch)
+    uint32_t* ids = nullptr;        // own_ids, or the shared top's ids of a shared child
+    size_t nt = 0;
+    NodeBounds nb{};
+    uint64_t depth = 0;
+    uint32_t h = 0;                 // the shared child's pool index (with shared)
+    bool shared = false;
+    std::vector<uint32_t> map;      // local id -> the caller's id (~0u: an id out of range)
+    std::vector<int32_t> skip;      // by local id (empty: no skip array)
+    std::vector<Hit> hits;          // by local id
+    std::vector<uint8_t> occluded;  // by local id
+    float origin_abs_max = 0.0f;
+    int filter_kind = 0;
+    Ray* fix = nullptr;             // the caller's records that hold these rays (their chunk's), whose
+    size_t fix_n = 0;               // tfar is set from the merged hits
+};
+
+struct StealBoard {
+    // Nodes handed over: from kMinRays rays (fewer are not worth a copy) to kMaxRays. Taking
+    // the largest pending node instead (all of a chunk's rays near the top) copied up to 16 MB
+    // a steal, and on a loaded machine, where a thread descheduled for a while makes the other
+    // steal, the halves went back and forth: dragon diffuse rays +10% CPU time, no faster.
+    static constexpr size_t kMinRays = 4096, kMaxRays = 65536;
+    std::mutex m;
+    std::condition_variable cv;
+    std::atomic<int> want{0};  // waiting - offered: read by busy threads at every node entry
+    int waiting = 0;           // idle threads waiting for a task (under m, as all below)
+    int offered = 0;           // tasks being copied or queued
+    int working = 0;           // threads tracing a chunk or a task
+    std::deque<StolenTask*> queue;
+    std::vector<std::unique_ptr<StolenTask>> all;  // merged when the call ends
+
+    void update() { want.store(waiting - offered, std::memory_order_relaxed); }
+    // Whether a busy thread should copy a task for a waiting one (then it must publish or withdraw).
+    bool reserve() {
+        std::lock_guard<std::mutex> g(m);
+        if (waiting - offered <= 0) return false;
+        ++offered;
+        update();
+        return true;
+    }
+    void withdraw() {
+        std::lock_guard<std::mutex> g(m);
+        --offered;
+        update();
+    }
+    void publish(std::unique_ptr<StolenTask> t) {
+        std::lock_guard<std::mutex> g(m);
+        queue.push_back(t.get());
+        all.push_back(std::move(t));
+        cv.notify_all();
+    }
+};
+
 // What the field check (validate.h) learns about a batch besides its validity.
 struct BatchInfo {
     float origin_abs_max = 0.0f;  // largest |origin coordinate| (box padding)
@@ -104,22 +167,28 @@ struct TraceJob {
     size_t num_ids = 0;
     // optional: lets the caller stop the call part-way (interrupt.h); trace() then throws
     Interrupt* interrupt = nullptr;
+    StealBoard* steal = nullptr;  // null: no work stealing
 };
 
 // Trace rays[0, n) against all valid triangles; ids: the thread's scratch of ts.valid_ids.size().
 using ChunkFn = void (*)(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
+// Trace a stolen task's rays (with its own hits) on the thread's id scratch.
+using TaskFn = void (*)(const TraceJob&, StolenTask&, uint32_t*, Stats&);
 // Whether every ray's fields are valid (validate.h); also what the trace needs to know of them.
 using FieldsFn = bool (*)(const Ray*, size_t, BatchInfo&);
 namespace portable {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
+void trace_task(const TraceJob&, StolenTask&, uint32_t*, Stats&);
 bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 namespace avx2 {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
+void trace_task(const TraceJob&, StolenTask&, uint32_t*, Stats&);
 bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 namespace avx512 {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
+void trace_task(const TraceJob&, StolenTask&, uint32_t*, Stats&);
 bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 

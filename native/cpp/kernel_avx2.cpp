@@ -23,6 +23,10 @@ void trace_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats&
     trace_chunk_w<8>(job, rays, n, ids, st);
 }
 
+void trace_task(const TraceJob& job, StolenTask& t, uint32_t* ids, Stats& st) {
+    trace_task_w<8>(job, t, ids, st);
+}
+
 bool fields_valid(const Ray* rays, size_t n, BatchInfo& info) {
     return fields_valid_w<8>(rays, n, info);
 }

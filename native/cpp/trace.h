@@ -42,6 +42,98 @@ struct Tracer {
     uint32_t* priv;  // this thread's id scratch
     Stats st;
     Interrupt* interrupt;  // null: runs to the end
+    StealBoard* steal = nullptr;    // null: no work stealing
+    const uint32_t* map = nullptr;  // a stolen task's local id -> the caller's id (null: ids are the caller's)
+    Ray* chunk = nullptr;           // the caller's records that hold this tracer's rays (its chunk's)
+    size_t chunk_n = 0;
+
+    // A farther child still to be visited, which an idle thread may take (StealBoard).
+    struct Pending {
+        Ray* rays;
+        size_t na;
+        uint32_t* ids;
+        size_t nt;
+        NodeBounds nb;
+        uint64_t depth;
+        uint32_t h;
+        bool shared, given;
+    };
+    std::vector<Pending> pending;
+
+    // Records the farther child before the nearer one is visited; returns its slot (or ~0).
+    size_t defer(Ray* rays, size_t na, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h,
+                 bool shared) {
+        if (!steal) return ~size_t(0);
+        pending.push_back(Pending{rays, na, ids, nt, nb, depth, h, shared, false});
+        return pending.size() - 1;
+    }
+    // Whether the deferred child is still this thread's to visit.
+    bool resume(size_t slot) {
+        if (slot == ~size_t(0)) return true;
+        const bool given = pending[slot].given;
+        pending.pop_back();
+        return !given;
+    }
+
+    // Hands the shallowest deferred child of a node of kMinRays..kMaxRays rays to an idle thread.
+    void offer() {
+        Pending* f = nullptr;
+        for (Pending& p : pending)
+            if (!p.given && p.na >= StealBoard::kMinRays && p.na <= StealBoard::kMaxRays &&
+                p.nt > size_t(cfg.leaf_size)) {
+                f = &p;
+                break;
+            }
+        if (!f || !steal->reserve()) return;
+        std::unique_ptr<StolenTask> t;
+        {
+            try {
+                t.reset(new StolenTask());
+                const size_t m = f->na;
+                t->rays.assign(f->rays, f->rays + m);
+                t->map.resize(m);
+                if (skip) t->skip.resize(m);
+                for (size_t k = 0; k < m; ++k) {
+                    const uint32_t id = t->rays[k].id;
+                    const bool in = id < num_ids;  // see TraceJob::num_ids
+                    t->map[k] = !in ? ~0u : map ? map[id] : id;
+                    if (skip) t->skip[k] = in ? skip[id] : -1;
+                    t->rays[k].id = uint32_t(k);
+                }
+                if (Q == Query::Any) t->occluded.assign(m, 0);
+                else t->hits.assign(m, Hit{INFINITY, -1, 0.0f, 0.0f});
+                if (f->shared) {
+                    t->ids = f->ids;
+                } else {  // this thread's scratch is reused once it leaves the node
+                    t->own_ids.assign(f->ids, f->ids + f->nt);
+                    t->ids = t->own_ids.data();
+                }
+                t->nt = f->nt;
+                t->nb = f->nb;
+                t->depth = f->depth;
+                t->h = f->h;
+                t->shared = f->shared;
+                t->origin_abs_max = origin_abs_max;
+                t->filter_kind = filter_kind;
+                t->fix = chunk;
+                t->fix_n = chunk_n;
+            } catch (...) {  // out of memory: keep the work
+                t.reset();
+            }
+        }
+        if (!t) {
+            steal->withdraw();
+            return;
+        }
+        f->given = true;
+        ++st.steals;
+        steal->publish(std::move(t));
+    }
+
+    // At every node entry: an idle thread waits for work.
+    void maybe_offer() {
+        if (steal && steal->want.load(std::memory_order_relaxed) > 0) offer();
+    }
 
     // A node of na active rays and nt triangles is a leaf: all of them tested brute force.
     bool is_leaf(size_t na, size_t nt) const {
@@ -145,6 +237,7 @@ struct Tracer {
 
     void node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth) {
         if (stopped()) return;
+        maybe_offer();
         uint64_t w, c1;
         const size_t na = timed_filter(rays, n, nb, depth, nt, w, c1);
         if (na == 0) return;
@@ -165,17 +258,20 @@ struct Tracer {
         const size_t k = split(ids, nt, nb, float(na), depth, L, R, axis);
         st.partition_ticks += w * (clock(w) - c1);
         if (majority_positive(rays, na, axis)) {
+            const size_t slot = defer(rays, na, ids + k, nt - k, R, depth + 1, 0, false);
             node(rays, na, ids, k, L, depth + 1);
-            node(rays, na, ids + k, nt - k, R, depth + 1);
+            if (resume(slot)) node(rays, na, ids + k, nt - k, R, depth + 1);
         } else {
+            const size_t slot = defer(rays, na, ids, k, L, depth + 1, 0, false);
             node(rays, na, ids + k, nt - k, R, depth + 1);
-            node(rays, na, ids, k, L, depth + 1);
+            if (resume(slot)) node(rays, na, ids, k, L, depth + 1);
         }
     }
 
     // A node of the shared top: its split is made once, by whichever thread arrives first.
     void shared_node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h) {
         if (stopped()) return;
+        maybe_offer();
         uint64_t w, c1;
         const size_t na = timed_filter(rays, n, nb, depth, nt, w, c1);
         if (na == 0) return;
@@ -217,11 +313,13 @@ struct Tracer {
         const uint32_t nearer = lower_first ? c : (c ? c + 1 : 0);
         if (nearer && top->pool->at(nearer).state.load(std::memory_order_relaxed) == 1) lower_first = !lower_first;
         if (lower_first) {
+            const size_t slot = defer(rays, na, ids + k, nt - k, sn.R, depth + 1, c ? c + 1 : 0, true);
             child(rays, na, ids, k, sn.L, depth + 1, c);
-            child(rays, na, ids + k, nt - k, sn.R, depth + 1, c ? c + 1 : 0);
+            if (resume(slot)) child(rays, na, ids + k, nt - k, sn.R, depth + 1, c ? c + 1 : 0);
         } else {
+            const size_t slot = defer(rays, na, ids, k, sn.L, depth + 1, c, true);
             child(rays, na, ids + k, nt - k, sn.R, depth + 1, c ? c + 1 : 0);
-            child(rays, na, ids, k, sn.L, depth + 1, c);
+            if (resume(slot)) child(rays, na, ids, k, sn.L, depth + 1, c);
         }
     }
 
@@ -242,7 +340,7 @@ void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& s
     Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), ts.prim.data(), job.hits, job.occluded, job.skip, job.mask, job.visible,
                     job.num_ids, job.cfg, job.batch.origin_abs_max,
                     job.batch.far_origins ? kPrecise : job.batch.odd_dirs ? kOdd : kFast,
-                    job.top, ids, Stats{}, job.interrupt};
+                    job.top, ids, Stats{}, job.interrupt, job.steal, nullptr, rays, n};
     NodeBounds root;
     for (int a = 0; a < 3; ++a) {
         root.lo[a] = ts.bounds.lo[a]; root.hi[a] = ts.bounds.hi[a];
@@ -252,8 +350,27 @@ void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& s
     st.add(tr.st);
 }
 
+// A stolen child (StolenTask): its copied rays against its subtree, hits of its own.
+template <int W, Query Q>
+void run_task(const TraceJob& job, StolenTask& t, uint32_t* ids, Stats& st) {
+    const TriangleSet& ts = *job.ts;
+    Tracer<W, Q> tr{ts.boxes.data(), ts.tris.data(), ts.prim.data(), t.hits.data(), t.occluded.data(),
+                    t.skip.empty() ? nullptr : t.skip.data(), job.mask, job.visible, t.rays.size(), job.cfg,
+                    t.origin_abs_max, t.filter_kind, job.top, ids, Stats{}, job.interrupt, job.steal, t.map.data(),
+                    t.fix, t.fix_n};
+    if (t.shared) tr.child(t.rays.data(), t.rays.size(), t.ids, t.nt, t.nb, t.depth, t.h);
+    else tr.node(t.rays.data(), t.rays.size(), t.ids, t.nt, t.nb, t.depth);
+    st.add(tr.st);
+}
+
 template <int W>
 void trace_chunk_w(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
     if (job.query == Query::Any) run_chunk<W, Query::Any>(job, rays, n, ids, st);
     else run_chunk<W, Query::Closest>(job, rays, n, ids, st);
+}
+
+template <int W>
+void trace_task_w(const TraceJob& job, StolenTask& t, uint32_t* ids, Stats& st) {
+    if (job.query == Query::Any) run_task<W, Query::Any>(job, t, ids, st);
+    else run_task<W, Query::Closest>(job, t, ids, st);
 }

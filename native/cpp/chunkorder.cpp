@@ -1,0 +1,94 @@
+// Chunks of nearby origins (see chunkorder.h).
+//
+// Chunks cut from the batch by index each met nearly every leaf of the scene with a fraction of
+// the rays: on San Francisco's 1M diffuse rays two chunks visited 53K leaves against one
+// chunk's 31K, and 2 threads spent 8% more CPU time than 1. Cut at the median origin instead,
+// each chunk meets mostly the leaves near its own origins. Hits do not change: they are a
+// function of each ray and the triangles, and the tracer permutes the records anyway.
+#include "chunkorder.h"
+
+#include <algorithm>
+#include <cstring>
+#include <vector>
+
+namespace dacrt {
+
+namespace {
+
+constexpr size_t kSamples = 1024;  // origins sampled for a cut's axis and plane
+constexpr size_t kRun = 64;        // records classified per mask word
+
+void swap_records(Ray* a, Ray* b) {
+    Ray t;
+    std::memcpy(&t, a, sizeof(Ray));
+    std::memcpy(a, b, sizeof(Ray));
+    std::memcpy(b, &t, sizeof(Ray));
+}
+
+// Bit k set: rays[k] (k < m) lies below the plane.
+uint64_t below_mask(const Ray* rays, size_t m, int axis, float plane) {
+    uint64_t bits = 0;
+    for (size_t k = 0; k < m; ++k) bits |= uint64_t(rays[k].org[axis] < plane) << k;
+    return bits;
+}
+
+// Moves the rays below the plane to the front; returns their count. Hoare-style on runs of 64
+// records from both ends, the classification branch-free, as the filter does (filter.h): a
+// record-at-a-time std::partition spent a mispredicted branch on about every other ray.
+size_t split_rays(Ray* rays, size_t n, int axis, float plane) {
+    size_t i = 0, j = n, li = 0, rj = 0;
+    uint64_t ml = 0, mr = 0;  // above-plane rays of the left run, below-plane of the right run
+    for (;;) {
+        while (ml == 0 && j - i >= kRun) {
+            ml = ~below_mask(rays + i, kRun, axis, plane);
+            li = i;
+            i += kRun;
+        }
+        while (mr == 0 && j - i >= kRun) {
+            j -= kRun;
+            mr = below_mask(rays + j, kRun, axis, plane);
+            rj = j;
+        }
+        if (ml == 0 || mr == 0) break;
+        do {
+            swap_records(rays + li + __builtin_ctzll(ml), rays + rj + __builtin_ctzll(mr));
+            ml &= ml - 1;
+            mr &= mr - 1;
+        } while (ml && mr);
+    }
+    const size_t b = ml ? li : i, e = mr ? rj + kRun : j;
+    Ray* mid = std::partition(rays + b, rays + e, [&](const Ray& r) { return r.org[axis] < plane; });
+    return size_t(mid - rays);
+}
+
+void order(Ray* rays, size_t n, size_t parts) {
+    if (parts < 2 || n < 2 * kSamples) return;
+    const size_t s = std::min(n, kSamples);
+    std::vector<float> v[3];
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+        v[a].resize(s);
+        for (size_t k = 0; k < s; ++k) v[a][k] = rays[k * n / s].org[a];
+        const auto mm = std::minmax_element(v[a].begin(), v[a].end());
+        lo[a] = *mm.first;
+        hi[a] = *mm.second;
+    }
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+        if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+    if (!(hi[axis] > lo[axis])) return;  // one origin (camera rays): nothing to gain
+    const size_t left_parts = parts / 2;
+    const size_t q = s * left_parts / parts;
+    std::nth_element(v[axis].begin(), v[axis].begin() + q, v[axis].end());
+    const float plane = v[axis][q];
+    const size_t k = split_rays(rays, n, axis, plane);
+    if (k == 0 || k == n) return;
+    order(rays, k, left_parts);
+    order(rays + k, n - k, parts - left_parts);
+}
+
+}  // namespace
+
+void order_by_origin(Ray* rays, size_t n, size_t parts) { order(rays, n, parts); }
+
+}  // namespace dacrt
