@@ -653,7 +653,9 @@ py::tuple environment_eval_py(const EnvironmentMap& env, F32Array D) {
     return py::make_tuple(Le, pdf);
 }
 
-py::tuple environment_sample_py(const EnvironmentMap& env, F32Array u1, F32Array u2) {
+// environment_sample point by point, or environment_sample_lanes over the whole arrays (the lane
+// path event_block takes): tests compare the two bit for bit.
+py::tuple environment_sample_py(const EnvironmentMap& env, F32Array u1, F32Array u2, bool lanes) {
     if (u1.ndim() != 1) throw py::value_error("u1 must be one-dimensional, got " + shape_str(u1));
     const size_t n = size_t(u1.shape(0));
     need_shape(u2, 0, n, "u2");
@@ -664,28 +666,15 @@ py::tuple environment_sample_py(const EnvironmentMap& env, F32Array u1, F32Array
     const float *a1 = u1.data(), *a2 = u2.data();
     {
         py::gil_scoped_release nogil;
-        for (size_t i = 0; i < n; ++i) {
-            float wv[3], vv[3];
-            environment_sample(env, a1[i], a2[i], wv, vv, p[i]);
-            for (int a = 0; a < 3; ++a) w[size_t(a) * n + i] = wv[a], v[size_t(a) * n + i] = vv[a];
+        if (lanes) {
+            environment_sample_lanes(env, a1, a2, n, w, v, p, n);
+        } else {
+            for (size_t i = 0; i < n; ++i) {
+                float wv[3], vv[3];
+                environment_sample(env, a1[i], a2[i], wv, vv, p[i]);
+                for (int a = 0; a < 3; ++a) w[size_t(a) * n + i] = wv[a], v[size_t(a) * n + i] = vv[a];
+            }
         }
-    }
-    return py::make_tuple(wi, value, pdf);
-}
-
-// environment_sample_lanes over the whole arrays (the lane path event_block takes).
-py::tuple environment_sample_lanes_py(const EnvironmentMap& env, F32Array u1, F32Array u2) {
-    if (u1.ndim() != 1) throw py::value_error("u1 must be one-dimensional, got " + shape_str(u1));
-    const size_t n = size_t(u1.shape(0));
-    need_shape(u2, 0, n, "u2");
-    F32Array wi({py::ssize_t(3), py::ssize_t(n)}), value({py::ssize_t(3), py::ssize_t(n)}), pdf{py::ssize_t(n)};
-    float* w = wi.mutable_data();
-    float* v = value.mutable_data();
-    float* p = pdf.mutable_data();
-    const float *a1 = u1.data(), *a2 = u2.data();
-    {
-        py::gil_scoped_release nogil;
-        environment_sample_lanes(env, a1, a2, n, w, v, p, n);
     }
     return py::make_tuple(wi, value, pdf);
 }
@@ -835,8 +824,12 @@ void register_lamps(py::module_& m) {
         .def_property_readonly("height", [](const EnvironmentMap& e) { return e.height; })
         .def_property_readonly("total", [](const EnvironmentMap& e) { return e.total; })
         .def("eval", &environment_eval_py, py::arg("D"))
-        .def("sample", &environment_sample_py, py::arg("u1"), py::arg("u2"))
-        .def("sample_lanes", &environment_sample_lanes_py, py::arg("u1"), py::arg("u2"))
+        .def("sample", [](const EnvironmentMap& env, F32Array u1, F32Array u2) {
+            return environment_sample_py(env, u1, u2, false);
+        }, py::arg("u1"), py::arg("u2"))
+        .def("sample_lanes", [](const EnvironmentMap& env, F32Array u1, F32Array u2) {
+            return environment_sample_py(env, u1, u2, true);
+        }, py::arg("u1"), py::arg("u2"))
         .def("gather", &environment_gather_py, py::arg("prob"), py::arg("D"), py::arg("miss"), py::arg("thr"),
              py::arg("pdf_bsdf"), py::arg("pid"), py::arg("L"),
              py::arg("clamp") = std::numeric_limits<float>::infinity());
