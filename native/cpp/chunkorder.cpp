@@ -61,8 +61,8 @@ size_t split_rays(Ray* rays, size_t n, int axis, float plane) {
     return size_t(mid - rays);
 }
 
-void order(Ray* rays, size_t n, size_t parts) {
-    if (parts < 2 || n < 2 * kSamples) return;
+bool order(Ray* rays, size_t n, size_t parts) {
+    if (parts < 2 || n < 2 * kSamples) return false;
     const size_t s = std::min(n, kSamples);
     std::vector<float> v[3];
     float lo[3], hi[3];
@@ -76,19 +76,20 @@ void order(Ray* rays, size_t n, size_t parts) {
     int axis = 0;
     for (int a = 1; a < 3; ++a)
         if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
-    if (!(hi[axis] > lo[axis])) return;  // one origin (camera rays): nothing to gain
+    if (!(hi[axis] > lo[axis])) return false;  // one origin (camera rays): nothing to gain
     const size_t left_parts = parts / 2;
     const size_t q = s * left_parts / parts;
     std::nth_element(v[axis].begin(), v[axis].begin() + q, v[axis].end());
     const float plane = v[axis][q];
     const size_t k = split_rays(rays, n, axis, plane);
-    if (k == 0 || k == n) return;
+    if (k == 0 || k == n) return false;
     order(rays, k, left_parts);
     order(rays + k, n - k, parts - left_parts);
+    return true;
 }
 
 }  // namespace
 
-void order_by_origin(Ray* rays, size_t n, size_t parts) { order(rays, n, parts); }
+bool order_by_origin(Ray* rays, size_t n, size_t parts) { return order(rays, n, parts); }
 
 }  // namespace dacrt

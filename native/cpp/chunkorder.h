@@ -10,6 +10,7 @@ namespace dacrt {
 // Reorders rays[0, n) into `parts` groups of nearly equal size, each the rays whose origins
 // fall in one cell of a recursive median bisection of the origins (widest axis each time,
 // judged on sampled rays). Leaves the rays as they are when the sampled origins coincide.
-void order_by_origin(Ray* rays, size_t n, size_t parts);
+// True if it cut the rays at least once.
+bool order_by_origin(Ray* rays, size_t n, size_t parts);
 
 }  // namespace dacrt
