@@ -228,6 +228,9 @@ class Material:
     # a closure Cycles treats as glossy (rendered as diffuse here): lights with Glossy and
     # Diffuse ray visibility apart are said where some material has one (reflectors.has_glossy_closure)
     glossy: bool = False
+    # which of Cycles' Caustics toggles and Filter Glossy change what Cycles renders of it
+    # (reflectors.glossy_kinds: 'reflect', 'transmit', 'sharp'); said by export/scene.py
+    glossy_kinds: frozenset = frozenset()
 
 
 @dataclass

@@ -27,7 +27,7 @@ from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
 from .bump import displacement_bump
 from .closure import Closure
-from .reflectors import ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, has_glossy_closure
+from .reflectors import ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds, has_glossy_closure
 from .cutouts import Cutouts
 from .emission import Emission
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
@@ -446,6 +446,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                 self._uv_several = (named[0], said)
         return sd.Material(name=name, base_color=base, uv_map=uv_names[0] if uv_names else '',
                            glossy=nodes and cycle is None and has_glossy_closure(ntree),
+                           glossy_kinds=glossy_kinds(ntree) if nodes and cycle is None else frozenset(),
                            emission_texture=e_tex, emission_interpolation=e_interp or 'Linear',
                            emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,
                            normal_texture=n_tex, normal_interpolation=n_interp or 'Linear',

@@ -245,6 +245,58 @@ GLOSSY_NODE_TYPES = frozenset({'BSDF_GLOSSY', 'BSDF_ANISOTROPIC', 'BSDF_METALLIC
 _PRINCIPLED_GLOSSY = ('Specular IOR Level', 'Metallic', 'Coat Weight', 'Transmission Weight')
 
 
+# roughness below which Cycles' Filter Glossy can blur a glossy closure: after a blurry bounce it
+# raises alpha = roughness^2 to 0.5 sqrt(1 - min_ray_pdf / blur_glossy) (surface_shader.h,
+# bsdf_blur), at most 0.5
+FILTER_GLOSSY_ROUGHNESS = 0.5 ** 0.5
+# closures Cycles drops after a diffuse bounce with Refractive Caustics off (glossy transmission)
+_TRANSMIT_NODE_TYPES = frozenset({'BSDF_GLASS', 'BSDF_REFRACTION'})
+_REFLECT_NODE_TYPES = frozenset({'BSDF_GLOSSY', 'BSDF_ANISOTROPIC', 'BSDF_METALLIC', 'BSDF_GLASS'})
+
+
+def glossy_kinds(ntree, seen=None) -> frozenset:
+    """What of Cycles' caustics and Filter Glossy settings a node tree (its groups too) is
+    subject to: 'reflect' (a glossy reflection: Glossy, Anisotropic, Metallic, Glass, the
+    Principled's specular, metal, coat or glass layers; dropped after a diffuse bounce with
+    Reflective Caustics off), 'transmit' (Glass, Refraction, Principled Transmission: dropped
+    there with Refractive Caustics off) and 'sharp' (one of them whose roughness is node-driven
+    or below FILTER_GLOSSY_ROUGHNESS, which Filter Glossy blurs)."""
+    seen = set() if seen is None else seen
+    if ntree is None or ntree.as_pointer() in seen:
+        return frozenset()
+    seen.add(ntree.as_pointer())
+    kinds = set()
+
+    def on(name):
+        s = node.inputs.get(name)
+        return s is not None and (s.is_linked or s.default_value != 0.0)
+
+    def sharp(name):
+        s = node.inputs.get(name)
+        return s is not None and (s.is_linked or s.default_value < FILTER_GLOSSY_ROUGHNESS)
+
+    for node in ntree.nodes:
+        t = node.type
+        if t in _REFLECT_NODE_TYPES or t in _TRANSMIT_NODE_TYPES:
+            kinds.update(k for k, types in (('reflect', _REFLECT_NODE_TYPES), ('transmit', _TRANSMIT_NODE_TYPES))
+                         if t in types)
+            if sharp('Roughness'):
+                kinds.add('sharp')
+        elif t == 'BSDF_PRINCIPLED':
+            layers = [n for n in ('Specular IOR Level', 'Metallic', 'Transmission Weight') if on(n)]
+            if layers:
+                kinds.add('reflect')
+                kinds.update(('sharp',) if sharp('Roughness') else ())
+            if on('Transmission Weight'):
+                kinds.add('transmit')
+            if on('Coat Weight'):
+                kinds.add('reflect')
+                kinds.update(('sharp',) if sharp('Coat Roughness') else ())
+        elif t == 'GROUP':
+            kinds.update(glossy_kinds(node.node_tree, seen))
+    return frozenset(kinds)
+
+
 def has_glossy_closure(ntree, seen=None) -> bool:
     """Whether a node tree (its groups too) holds a closure Cycles treats as glossy, which DACRT
     renders as diffuse: a light's Glossy ray visibility then differs from its Diffuse one there

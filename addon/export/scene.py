@@ -25,7 +25,7 @@ from .meshes import mesh_arrays
 from .motion import MotionCheck, motion_blur_message
 from .placement import Placement
 from .aovs import shader_aovs
-from .settings import export_settings
+from .settings import cycles_glossy_messages, export_settings
 from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, strand_kind, tessellate,
                       triangle_count)
 from .world import effective_world, export_world, world_visibility
@@ -879,6 +879,17 @@ class Exporter:
         used = np.unique(geometry.material)
         return any(self.materials.materials[k].glossy for k in used if 0 < k < len(self.materials.materials))
 
+    def _glossy_kinds(self, geometry):
+        """For settings.cycles_glossy_messages: the union of the rendered materials' glossy_kinds
+        (material 0, Blender's default Principled of roughness 0.5, a sharp glossy reflection)."""
+        mats = self.materials.materials
+        used = np.unique(geometry.material)
+        kinds = set(('reflect', 'sharp') if len(used) and used[0] == 0 else ())
+        for k in used.tolist():
+            if 0 < k < len(mats):
+                kinds.update(mats[k].glossy_kinds)
+        return frozenset(kinds)
+
     def _summarize(self, geometry, world, environment, camera_world=None):
         for text, names in self.lights_approximated.items():
             # lights of one node tree (linked duplicates of a lamp) said together, as materials are
@@ -927,6 +938,9 @@ class Exporter:
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "
                              "BSDF: specular layer as diffuse)")
             count += 1
+        self.messages += cycles_glossy_messages(self.scene, self._glossy_kinds(geometry),
+                                                max_bounces=int(getattr(getattr(self.scene, 'dacrt', None),
+                                                                        'max_bounces', 0)))
         if approx:
             # (not "as diffuse": a reason may be about an emission's colour, which stays emission)
             self.messages.append(('WARNING', f"{count} material(s) approximated (DACRT renders diffuse "
