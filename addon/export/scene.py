@@ -880,15 +880,21 @@ class Exporter:
         return any(self.materials.materials[k].glossy for k in used if 0 < k < len(self.materials.materials))
 
     def _glossy_kinds(self, geometry):
-        """For settings.cycles_glossy_messages: the union of the rendered materials' glossy_kinds
-        (material 0, Blender's default Principled of roughness 0.5, a sharp glossy reflection)."""
+        """(kinds, shadow_clear_glass) for settings.cycles_glossy_messages: the union of the
+        rendered materials' glossy_kinds (material 0, Blender's default Principled of roughness
+        0.5, a sharp glossy reflection), and whether triangles of a material with transmission
+        are seen by bounce rays but not by shadow rays (those rays cross their clear twin)."""
         mats = self.materials.materials
         used = np.unique(geometry.material)
         kinds = set(('reflect', 'sharp') if len(used) and used[0] == 0 else ())
+        glass = np.zeros(len(mats), bool)
         for k in used.tolist():
             if 0 < k < len(mats):
                 kinds.update(mats[k].glossy_kinds)
-        return frozenset(kinds)
+                glass[k] = 'transmit' in mats[k].glossy_kinds and not mats[k].clear_twin
+        vis = geometry.visibility[glass[geometry.material]] if len(geometry.material) else geometry.visibility
+        clear = bool(np.any(((vis & sd.VIS_DIFFUSE) != 0) & ((vis & sd.VIS_SHADOW) == 0)))
+        return frozenset(kinds), clear
 
     def _summarize(self, geometry, world, environment, camera_world=None):
         for text, names in self.lights_approximated.items():
@@ -938,7 +944,7 @@ class Exporter:
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "
                              "BSDF: specular layer as diffuse)")
             count += 1
-        self.messages += cycles_glossy_messages(self.scene, self._glossy_kinds(geometry),
+        self.messages += cycles_glossy_messages(self.scene, *self._glossy_kinds(geometry),
                                                 max_bounces=int(getattr(getattr(self.scene, 'dacrt', None),
                                                                         'max_bounces', 0)))
         if approx:
