@@ -210,8 +210,10 @@ def cycles_glossy_messages(scene, kinds, shadow_clear_glass, max_bounces):
     blur = float(getattr(cyc, 'blur_glossy', 0.0))
     if 'sharp' in kinds and blur > 0.0:
         # measured: a closed room of default Principled walls (base 0.8), a point light, 8
-        # bounces (tests/parity/test_principled_room.py); its blurred layers lose light
-        out.append(('WARNING', f"Cycles' Light Paths > Caustics > Filter Glossy ({blur:g}) is not applied: past a "
+        # bounces (tests/parity/test_principled_room.py); its blurred layers lose light. INFO:
+        # Cycles' default (1) meets Blender's default material, so a warning would come with
+        # nearly every render, and it matters where light bounces between glossy surfaces
+        out.append(('INFO', f"Cycles' Light Paths > Caustics > Filter Glossy ({blur:g}) is not applied: past a "
                                "diffuse bounce Cycles blurs glossy layers of roughness below 0.71 (the Principled's "
                                "specular, metal, coat and glass; Glossy, Metallic and Glass BSDFs) and they then "
                                "reflect less, so light bounced between such surfaces is darker in Cycles (a closed "
