@@ -306,7 +306,11 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
                           "feeds something other than an Emission Strength or Color, or does so through a sum "
                           "or non-linear node); DACRT emits the light evenly in every direction")
         return None
-    if error is not None:
+    if error is not None and error.cycles_reads:    # (a profile Cycles loads: DACRT's limit, not the file's)
+        messages.append(('WARNING', f"light '{name}': DACRT cannot read IES profile {where} of IES Texture {shown} "
+                                    f"({error}); Cycles does: this light differs from Cycles, emitted evenly at "
+                                    f"{INVALID_VALUE:g} x its Strength"))
+    elif error is not None:
         messages.append(('WARNING', f"light '{name}': IES profile {where} of IES Texture {shown} cannot be read "
                                     f"({error}): rendered as Cycles does, {INVALID_VALUE:g} x its Strength in every "
                                     "direction"))

@@ -26,7 +26,12 @@ _LONG = re.compile(rb'\s*([+-]?\d+)')
 
 
 class IESError(ValueError):
-    """The text is not an LM-63 profile Cycles loads (what is wrong said)."""
+    """The text is not an LM-63 profile Cycles loads (what is wrong said); cycles_reads: a
+    profile Cycles does load that DACRT cannot (its light then differs from Cycles')."""
+
+    def __init__(self, what, cycles_reads=False):
+        super().__init__(what)
+        self.cycles_reads = cycles_reads
 
 
 @dataclass
@@ -174,7 +179,8 @@ def _process_c(h, v, inten):
 
 def parse_ies(text) -> IESProfile:
     """The profile Cycles builds from an LM-63 text (str or bytes); IESError where Cycles'
-    IESFile::load fails (the light then shines 100 x Strength evenly there: INVALID_VALUE).
+    IESFile::load fails (the light then shines 100 x Strength evenly there: INVALID_VALUE), or
+    (cycles_reads) where Cycles loads a profile DACRT does not read: non-finite angles.
     Cycles 5.0 is forgiving past the parse: angle ranges are taken as they come (lookups
     outside them read 0)."""
     if isinstance(text, str):
@@ -187,13 +193,12 @@ def parse_ies(text) -> IESProfile:
     h_rad = np.asarray(h, F32) * deg
     v_rad = np.asarray(v, F32) * deg
     table = np.asarray(inten, F32).reshape(len(h), len(v))
-    # (what Cycles' linear scans would read of unordered angles or non-finite values is not
-    # modelled: such a file is refused, said, and rendered as one Cycles cannot load)
+    # Repeated or unordered angles and non-finite intensities go to the lookup as Cycles keeps
+    # them (its linear scans read them: ies_interp). Non-finite angles are refused: where a
+    # table edge is NaN Cycles' bounds test passes and its scan can read past a one-angle axis.
     for name, a in (('horizontal', h_rad), ('vertical', v_rad)):
-        if not (np.isfinite(a).all() and (np.diff(a) > 0).all()):
-            raise IESError(f"its {name} angles are not finite and ascending after Cycles' processing")
-    if not np.isfinite(table).all():
-        raise IESError("non-finite intensities")
+        if not np.isfinite(a).all():
+            raise IESError(f"its {name} angles are not all finite", cycles_reads=True)
     return IESProfile(h_rad, v_rad, np.ascontiguousarray(table))
 
 
@@ -207,13 +212,16 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
     bicubic over the table; past a table's end the neighbour is read across the pole (v from 0)
     or round the circle (h from 0 to 2 pi) where the table wraps there, else the nearer inner
     point stands in (vertically the next one, horizontally the current one, as Cycles); 0
-    outside the table, clipped at 0."""
+    outside the table (its first and last angles), clipped at 0. The interval is the first whose
+    end is >= the angle, as Cycles' linear scan finds it in any order of angles (a repeated
+    angle's zero-width interval is never the first such but at a repeated first angle: 0/0).
+    NaN gives 0 (Cycles' max(x, 0) is x > 0 ? x : 0) and so does inf (Cycles' film makes a
+    non-finite contribution 0: film_clamp_light's ensure_finite)."""
     h_tab = profile.h_angles.astype(np.float64)
     v_tab = profile.v_angles.astype(np.float64)
     table = profile.intensity.astype(np.float64)
     h = np.asarray(h_angle, np.float64).ravel()
     v = np.asarray(v_angle, np.float64).ravel()
-    hn, vn = len(h_tab), len(v_tab)
     valid = (v >= v_tab[0]) & (v < v_tab[-1]) & (h >= h_tab[0]) & (h < h_tab[-1])
     out = np.zeros(h.shape, np.float64)
     if not valid.any():
@@ -227,11 +235,25 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
     wrap_h = bool(profile.h_angles[0] < eps and profile.h_angles[-1] > F32(F32(2.0 * np.pi) - eps))
     wrap_vlow = bool(profile.v_angles[0] < eps)
     wrap_vhigh = bool(profile.v_angles[-1] > F32(F32(np.pi) - eps))
-    # the first index whose next angle is >= the angle (Cycles' linear scan)
-    hi = np.searchsorted(h_tab[1:], h, side='left')
-    vi = np.searchsorted(v_tab[1:], v, side='left')
-    h_frac = (h - h_tab[hi]) / (h_tab[hi + 1] - h_tab[hi])
-    v_frac = (v - v_tab[vi]) / (v_tab[vi + 1] - v_tab[vi])
+    # the first index whose next angle is >= the angle (Cycles' linear scan; one exists: the
+    # last angle is above every valid one)
+    hi, vi = _scan(h_tab, h), _scan(v_tab, v)
+    with np.errstate(invalid='ignore', divide='ignore'):
+        out[valid] = _interp_at(table, hi, vi, (h - h_tab[hi]) / (h_tab[hi + 1] - h_tab[hi]),
+                                (v - v_tab[vi]) / (v_tab[vi + 1] - v_tab[vi]), wrap_h, wrap_vlow, wrap_vhigh)
+    return out
+
+
+def _scan(tab, x):
+    """Cycles' `for (i = 0; tab[i + 1] < x; i++)` for each x (in chunks: a table row per x)."""
+    step = max(1, (1 << 22) // len(tab))
+    return np.concatenate([np.argmax(tab[None, 1:] >= x[k:k + step, None], axis=1)
+                           for k in range(0, len(x), step)])
+
+
+def _interp_at(table, hi, vi, h_frac, v_frac, wrap_h, wrap_vlow, wrap_vhigh):
+    """kernel_ies_interp's bicubic at the scanned intervals (hi, vi) and their fractions."""
+    hn, vn = table.shape
 
     def vertical(col):
         get = lambda j: table[col, np.clip(j, 0, vn - 1)]     # noqa: E731
@@ -243,8 +265,8 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
     b, c = vertical(hi), vertical(hi + 1)
     a = np.where(hi > 0, vertical(np.maximum(hi - 1, 0)), vertical(np.full_like(hi, hn - 2)) if wrap_h else b)
     d = np.where(hi + 2 < hn, vertical(np.minimum(hi + 2, hn - 1)), vertical(np.ones_like(hi)) if wrap_h else b)
-    out[valid] = np.maximum(_cubic(a, b, c, d, h_frac), 0.0)
-    return out
+    x = _cubic(a, b, c, d, h_frac)
+    return np.where((x > 0.0) & (x < np.inf), x, 0.0)
 
 
 def ies_direction(profile: IESProfile, d) -> np.ndarray:

@@ -58,6 +58,9 @@ float ies_interp(const IesTable& t, float h_angle, float v_angle) {
     const bool wrap_h = h_low < 1e-7f && h_high > k2Pi - 1e-7f;
     const bool wrap_vlow = v_low < 1e-7f;
     const bool wrap_vhigh = v_high > kPi - 1e-7f;
+    // Cycles' linear scans, in any order of angles: the first interval whose end is >= the
+    // angle; one past the first has its start < the angle, so only a repeated first angle can
+    // give a zero-width interval (0/0: NaN, then 0 below)
     size_t hi = 0, vi = 0;
     while (t.h[hi + 1] < h_angle) ++hi;
     while (t.v[vi + 1] < v_angle) ++vi;
@@ -74,7 +77,10 @@ float ies_interp(const IesTable& t, float h_angle, float v_angle) {
         d = vertical(t, wrap_vlow, wrap_vhigh, vi, v_frac, hi + 2);
     else if (wrap_h)
         d = vertical(t, wrap_vlow, wrap_vhigh, vi, v_frac, 1);
-    return std::max(cubic_interp(a, b, c, d, h_frac), 0.0f);
+    // Cycles' max(x, 0.0f) is x > 0 ? x : 0, so NaN (a NaN intensity, a 0/0 fraction) gives
+    // 0; inf passes it but Cycles' film makes a non-finite contribution 0 (film_clamp_light)
+    const float r = cubic_interp(a, b, c, d, h_frac);
+    return r > 0.0f && r < INFINITY ? r : 0.0f;
 }
 
 float ies_direction(const IesTable& t, const float d[3]) {
@@ -98,14 +104,12 @@ const IesTable* ies_table(int id) {
 int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> I) {
     if (h.empty() || v.empty() || I.size() != h.size() * v.size())
         throw std::invalid_argument("an IES table needs >= 1 horizontal and vertical angle and H x V values");
-    for (size_t k = 0; k < h.size(); ++k)
-        if (!std::isfinite(h[k]) || (k && !(h[k] > h[k - 1])))
-            throw std::invalid_argument("IES horizontal angles must be finite and ascending");
-    for (size_t k = 0; k < v.size(); ++k)
-        if (!std::isfinite(v[k]) || (k && !(v[k] > v[k - 1])))
-            throw std::invalid_argument("IES vertical angles must be finite and ascending");
-    for (float x : I)
-        if (!std::isfinite(x)) throw std::invalid_argument("IES intensities must be finite");
+    // Angles in any order and any intensities, as Cycles keeps them; finite angles bound the
+    // scans in ies_interp (the last angle stops them), which a NaN would not.
+    for (float a : h)
+        if (!std::isfinite(a)) throw std::invalid_argument("IES horizontal angles must be finite");
+    for (float a : v)
+        if (!std::isfinite(a)) throw std::invalid_argument("IES vertical angles must be finite");
     const std::lock_guard<std::mutex> lock(g_register);
     Slot* free_slot = nullptr;
     for (Slot& s : g_slots) {

@@ -14,12 +14,12 @@
 namespace dacrt {
 
 struct IesTable {
-    std::vector<float> h, v;  // angles in radians, ascending
+    std::vector<float> h, v;  // angles in radians, finite, in the file's order (Cycles reads any)
     std::vector<float> I;     // I[ih * v.size() + iv]
 };
 
 // kernel_ies_interp: the profile's value at (h_angle, v_angle); 0 outside the table (a single
-// angle on an axis: everywhere).
+// angle on an axis: everywhere) and where Cycles' value is NaN or inf.
 float ies_interp(const IesTable& t, float h_angle, float v_angle);
 
 // svm_node_ies on a direction d in the light's object space (from the light toward the lit
@@ -31,7 +31,7 @@ float ies_direction(const IesTable& t, const float d[3]);
 // only when its last reference goes, which its readers hold.
 const IesTable* ies_table(int id);
 
-// Registers a profile (checked: sizes, ascending finite angles, finite values; else
+// Registers a profile (checked: sizes, finite angles; else
 // std::invalid_argument) and returns its id >= 1 holding one reference; an identical live table
 // gets its id and one more reference. At most kIesMaxTables distinct tables live at once.
 int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> I);

@@ -110,11 +110,9 @@ def test_scaling_tilt_include_and_commas():
     (lm63(V, [0], [R0]).replace("TILT=NONE", "TILT NONE"), "TILT"),
     (lm63(V, [0], [R0], kind=4), "type 4"),
     (lm63(V, [0], [R0])[:-12], "fewer numbers"),
-    (lm63(V, [0, 90, 45], [R0, R1, R2]), "horizontal angles are not finite and ascending"),
-    (lm63([0, 60, 30], [0], [[1, 2, 3]]), "vertical angles are not"),
 ])
 def test_malformed(text, what):
-    """What Cycles cannot load (it then lights 100 x Strength evenly), and unordered angles,
-    whose reading by Cycles' linear scans is not modelled."""
+    """What Cycles cannot load (it then lights 100 x Strength evenly). (Unordered angles are read
+    as Cycles' scans read them: tests/addon/test_ies_irregular_parse.py.)"""
     with pytest.raises(IESError, match=what):
         parse_ies(text)
