@@ -284,6 +284,8 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
     from ..lights.ies import IESError, INVALID_VALUE, parse_ies
     text, where = _ies_text(nodes[0])
     try:
+        if isinstance(text, IESError):   # (no text to read: its failure is the cause, not a parse's)
+            raise text
         found, scale, error = parse_ies(text), 1.0, None
     except IESError as e:
         found, scale, error = None, INVALID_VALUE, e
@@ -318,13 +320,15 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
 
 
 def _ies_text(node):
-    """(text, where): the IES Texture's LM-63 text as bytes (empty where there is none to read:
-    Cycles cannot load it either), from its Text datablock (Internal) or its file (External,
-    relative to the .blend: bpy.path.abspath); where names it for messages."""
+    """(text, where): the IES Texture's LM-63 text as bytes, from its Text datablock (Internal)
+    or its file (External, relative to the .blend: bpy.path.abspath); where names it for
+    messages. Where there is none to read (Cycles cannot load it either) the text is an IESError
+    saying why: no Text datablock, or the file's OS error."""
+    from ..lights.ies import IESError
     if getattr(node, 'mode', 'INTERNAL') == 'INTERNAL':
         text = getattr(node, 'ies', None)
         if text is None:
-            return b'', "(no Text datablock)"
+            return IESError("the node names no Text datablock"), "text"
         return text.as_string().encode('utf-8', 'surrogateescape'), f"text '{text.name}'"
     path = getattr(node, 'filepath', '')
     try:
@@ -336,7 +340,7 @@ def _ies_text(node):
         with open(full, 'rb') as f:
             return f.read(), f"file '{path}'"
     except OSError as e:
-        return b'', f"file '{path}' ({e.strerror or e})"
+        return IESError(f"the file cannot be opened: {e.strerror or e}"), f"file '{path}'"
 
 
 def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
