@@ -245,7 +245,10 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
 
 
 def _scan(tab, x):
-    """Cycles' `for (i = 0; tab[i + 1] < x; i++)` for each x (in chunks: a table row per x)."""
+    """Cycles' `for (i = 0; tab[i + 1] < x; i++)` for each x: a bisection where the angles do not
+    decrease (the first >= x, repeats included), else in chunks, a table row per x."""
+    if (np.diff(tab) >= 0).all():
+        return np.searchsorted(tab[1:], x, side='left')
     step = max(1, (1 << 22) // len(tab))
     return np.concatenate([np.argmax(tab[None, 1:] >= x[k:k + step, None], axis=1)
                            for k in range(0, len(x), step)])
