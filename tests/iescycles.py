@@ -51,11 +51,13 @@ def cycles_ies_interp(h_tab, v_tab, table, h_angle, v_angle):
     return x if np.isfinite(x) else F32(0.0)
 
 
-# the hunter's four profiles Cycles 5.0 reads and DACRT had refused (said "rendered as Cycles does",
-# lit 100 x Strength evenly: 26.3x, 5.75x, 5.23x and 73x Cycles' mean)
+# profiles Cycles 5.0 reads and DACRT had refused (said "rendered as Cycles does", lit 100 x
+# Strength evenly: the hunter's four 26.3x, 5.75x, 5.23x and 73x Cycles' mean)
 IRREGULAR = {
     'dup_vertical': lm63([0, 10, 10, 30, 45, 60, 75, 90], [0], [[1000, 950, 700, 300, 50, 5, 0, 0]]),
     'dup_horizontal': lm63(V, [0, 45, 45, 90], [[200] * 8, [300] * 8, [400] * 8, [500] * 8]),
     'unsorted_vertical': lm63([0, 45, 30, 90], [0], [[1000, 500, 700, 0]]),
     'nan_candela': lm63(V, [0], [[1000, float('nan'), 700, 300, 50, 5, 0, 0]]),
+    # (and a NaN vertical angle: Cycles' scan stops at it, its fraction NaN: dark from 45 degrees)
+    'nan_vertical_angle': lm63([0, 10, 20, 30, 45, float('nan'), 75, 90], [0], [[1000, 950, 700, 300, 50, 5, 0, 0]]),
 }

@@ -180,7 +180,8 @@ def _process_c(h, v, inten):
 def parse_ies(text) -> IESProfile:
     """The profile Cycles builds from an LM-63 text (str or bytes); IESError where Cycles'
     IESFile::load fails (the light then shines 100 x Strength evenly there: INVALID_VALUE), or
-    (cycles_reads) where Cycles loads a profile DACRT does not read: non-finite angles.
+    (cycles_reads) where Cycles loads a profile DACRT does not read: an axis of one angle, not
+    finite.
     Cycles 5.0 is forgiving past the parse: angle ranges are taken as they come (lookups
     outside them read 0)."""
     if isinstance(text, str):
@@ -193,12 +194,13 @@ def parse_ies(text) -> IESProfile:
     h_rad = np.asarray(h, F32) * deg
     v_rad = np.asarray(v, F32) * deg
     table = np.asarray(inten, F32).reshape(len(h), len(v))
-    # Repeated or unordered angles and non-finite intensities go to the lookup as Cycles keeps
-    # them (its linear scans read them: ies_interp). Non-finite angles are refused: where a
-    # table edge is NaN Cycles' bounds test passes and its scan can read past a one-angle axis.
+    # Repeated, unordered or non-finite angles and non-finite intensities go to the lookup as
+    # Cycles keeps them (its bounds tests and linear scans read them: ies_interp), but for an
+    # axis of one angle that is not finite: Cycles' bounds test lets every angle through there
+    # and its scan reads past the axis (what it reads there is not modelled).
     for name, a in (('horizontal', h_rad), ('vertical', v_rad)):
-        if not np.isfinite(a).all():
-            raise IESError(f"its {name} angles are not all finite", cycles_reads=True)
+        if len(a) == 1 and not np.isfinite(a[0]):
+            raise IESError(f"its only {name} angle is not finite", cycles_reads=True)
     return IESProfile(h_rad, v_rad, np.ascontiguousarray(table))
 
 
@@ -212,9 +214,10 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
     bicubic over the table; past a table's end the neighbour is read across the pole (v from 0)
     or round the circle (h from 0 to 2 pi) where the table wraps there, else the nearer inner
     point stands in (vertically the next one, horizontally the current one, as Cycles); 0
-    outside the table (its first and last angles), clipped at 0. The interval is the first whose
-    end is >= the angle, as Cycles' linear scan finds it in any order of angles (a repeated
-    angle's zero-width interval is never the first such but at a repeated first angle: 0/0).
+    outside the table (below its first angle or from its last, in Cycles' tests: a NaN end lets
+    angles through), clipped at 0. The interval is the first whose end is not < the angle, as
+    Cycles' linear scan finds it in any order of angles (a repeated angle's zero-width interval
+    is never the first such but at a repeated first angle: 0/0; a NaN end: a NaN fraction).
     NaN gives 0 (Cycles' max(x, 0) is x > 0 ? x : 0) and so does inf (Cycles' film makes a
     non-finite contribution 0: film_clamp_light's ensure_finite)."""
     h_tab = profile.h_angles.astype(np.float64)
@@ -222,7 +225,7 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
     table = profile.intensity.astype(np.float64)
     h = np.asarray(h_angle, np.float64).ravel()
     v = np.asarray(v_angle, np.float64).ravel()
-    valid = (v >= v_tab[0]) & (v < v_tab[-1]) & (h >= h_tab[0]) & (h < h_tab[-1])
+    valid = ~((v < v_tab[0]) | (v >= v_tab[-1]) | (h < h_tab[0]) | (h >= h_tab[-1]) | np.isnan(h) | np.isnan(v))
     out = np.zeros(h.shape, np.float64)
     if not valid.any():
         return out
@@ -235,8 +238,8 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
     wrap_h = bool(profile.h_angles[0] < eps and profile.h_angles[-1] > F32(F32(2.0 * np.pi) - eps))
     wrap_vlow = bool(profile.v_angles[0] < eps)
     wrap_vhigh = bool(profile.v_angles[-1] > F32(F32(np.pi) - eps))
-    # the first index whose next angle is >= the angle (Cycles' linear scan; one exists: the
-    # last angle is above every valid one)
+    # the first index whose next angle is not < the angle (Cycles' linear scan; one exists: the
+    # last angle is, for every valid angle)
     hi, vi = _scan(h_tab, h), _scan(v_tab, v)
     with np.errstate(invalid='ignore', divide='ignore'):
         out[valid] = _interp_at(table, hi, vi, (h - h_tab[hi]) / (h_tab[hi + 1] - h_tab[hi]),
@@ -247,10 +250,10 @@ def ies_interp(profile: IESProfile, h_angle, v_angle) -> np.ndarray:
 def _scan(tab, x):
     """Cycles' `for (i = 0; tab[i + 1] < x; i++)` for each x: a bisection where the angles do not
     decrease (the first >= x, repeats included), else in chunks, a table row per x."""
-    if (np.diff(tab) >= 0).all():
+    if (np.diff(tab) >= 0).all():       # (False with a NaN)
         return np.searchsorted(tab[1:], x, side='left')
     step = max(1, (1 << 22) // len(tab))
-    return np.concatenate([np.argmax(tab[None, 1:] >= x[k:k + step, None], axis=1)
+    return np.concatenate([np.argmax(~(tab[None, 1:] < x[k:k + step, None]), axis=1)
                            for k in range(0, len(x), step)])
 
 

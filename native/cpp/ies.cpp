@@ -50,17 +50,21 @@ std::mutex g_register;
 float ies_interp(const IesTable& t, float h_angle, float v_angle) {
     const size_t hn = t.h.size(), vn = t.v.size();
     const float v_low = t.v[0], v_high = t.v[vn - 1], h_low = t.h[0], h_high = t.h[hn - 1];
-    // (NaN angles: no index found below, 0 as outside)
-    if (!(v_angle >= v_low && v_angle < v_high)) return 0.0f;
-    if (!(h_angle >= h_low && h_angle < h_high)) return 0.0f;
+    // (a NaN lookup angle: Cycles' fraction is NaN, so 0; and no scan to run off a one-angle axis)
+    if (std::isnan(v_angle) || std::isnan(h_angle)) return 0.0f;
+    // Cycles' bounds tests in its form: a NaN or infinite table end lets angles through
+    if (v_angle < v_low || v_angle >= v_high) return 0.0f;
+    if (h_angle < h_low || h_angle >= h_high) return 0.0f;
     // Cycles' float32 tests: k2Pi - 1e-7f and kPi - 1e-7f round back to 2 pi and pi, so a
     // table ending at 360 (180) degrees does not wrap there (the inner point stands in)
     const bool wrap_h = h_low < 1e-7f && h_high > k2Pi - 1e-7f;
     const bool wrap_vlow = v_low < 1e-7f;
     const bool wrap_vhigh = v_high > kPi - 1e-7f;
-    // Cycles' linear scans, in any order of angles: the first interval whose end is >= the
-    // angle; one past the first has its start < the angle, so only a repeated first angle can
-    // give a zero-width interval (0/0: NaN, then 0 below)
+    // Cycles' linear scans, in any order of angles: the first interval whose end is not < the
+    // angle (>= it, or NaN); the last angle ends them (the bounds test), so an axis of one angle
+    // gets here only where that angle is not finite, which ies_register refuses. A finite
+    // interval past the first starts below the angle: only a repeated first angle gives a
+    // zero-width one (0/0: NaN), and a NaN end a NaN fraction, both 0 below.
     size_t hi = 0, vi = 0;
     while (t.h[hi + 1] < h_angle) ++hi;
     while (t.v[vi + 1] < v_angle) ++vi;
@@ -104,12 +108,13 @@ const IesTable* ies_table(int id) {
 int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> I) {
     if (h.empty() || v.empty() || I.size() != h.size() * v.size())
         throw std::invalid_argument("an IES table needs >= 1 horizontal and vertical angle and H x V values");
-    // Angles in any order and any intensities, as Cycles keeps them; finite angles bound the
-    // scans in ies_interp (the last angle stops them), which a NaN would not.
-    for (float a : h)
-        if (!std::isfinite(a)) throw std::invalid_argument("IES horizontal angles must be finite");
-    for (float a : v)
-        if (!std::isfinite(a)) throw std::invalid_argument("IES vertical angles must be finite");
+    // Any angles in any order and any intensities, as Cycles keeps them, but for an axis of one
+    // angle that is not finite: Cycles' bounds test then lets angles through and its scan reads
+    // past the axis.
+    if (h.size() == 1 && !std::isfinite(h[0]))
+        throw std::invalid_argument("an IES horizontal axis of one angle must have it finite");
+    if (v.size() == 1 && !std::isfinite(v[0]))
+        throw std::invalid_argument("an IES vertical axis of one angle must have it finite");
     const std::lock_guard<std::mutex> lock(g_register);
     Slot* free_slot = nullptr;
     for (Slot& s : g_slots) {

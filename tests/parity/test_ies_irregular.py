@@ -1,8 +1,8 @@
 """IES profiles Cycles 5.0 loads although an angle repeats (vertical 10 twice, horizontal 45
-twice), the vertical angles are out of order, or a candela is NaN, agree with Cycles: a point
-lamp lighting a floor and a wall, per-block means of both engines' images. Before, DACRT refused
-them and lit the lamp evenly at 100 x the node's Strength, said as "rendered as Cycles does":
-means 26.3x, 5.75x, 5.23x and 73x Cycles'."""
+twice), the vertical angles are out of order, a candela is NaN or a vertical angle is NaN, agree
+with Cycles: a point lamp lighting a floor and a wall, per-block means of both engines' images.
+Before, DACRT refused them and lit the lamp evenly at 100 x the node's Strength, said as
+"rendered as Cycles does": the first four 26.3x, 5.75x, 5.23x and 73x Cycles' mean."""
 import bpy
 import pytest
 

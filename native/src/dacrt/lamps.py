@@ -166,8 +166,9 @@ IES_MAX_TABLES = int(_core.IES_MAX_TABLES)
 
 
 def ies_register(h, v, intensity) -> "IesProfile":
-    """Registers an IES profile table (h (H,), v (V,) radians, finite, in any order as Cycles
-    reads them; intensity (H, V), any values: where Cycles' lookup gives NaN or inf, 0): a
+    """Registers an IES profile table (h (H,), v (V,) radians in any order as Cycles reads them,
+    finite where an axis has one; intensity (H, V), any values: where Cycles' lookup gives NaN or
+    inf, 0): a
     handle (IesProfile) whose .id (also int(handle)) a point/spot/area lamp record's `ies` field
     names. The table lives while a handle does: identical tables share one slot, counted; the
     last handle's release frees it, and a record naming a freed id is refused. Keep the handle as
