@@ -180,8 +180,7 @@ def _process_c(h, v, inten):
 def parse_ies(text) -> IESProfile:
     """The profile Cycles builds from an LM-63 text (str or bytes); IESError where Cycles'
     IESFile::load fails (the light then shines 100 x Strength evenly there: INVALID_VALUE), or
-    (cycles_reads) where Cycles loads a profile DACRT does not read: an axis of one angle, not
-    finite.
+    (cycles_reads) where Cycles loads a profile DACRT does not read: an axis of one NaN angle.
     Cycles 5.0 is forgiving past the parse: angle ranges are taken as they come (lookups
     outside them read 0)."""
     if isinstance(text, str):
@@ -196,11 +195,12 @@ def parse_ies(text) -> IESProfile:
     table = np.asarray(inten, F32).reshape(len(h), len(v))
     # Repeated, unordered or non-finite angles and non-finite intensities go to the lookup as
     # Cycles keeps them (its bounds tests and linear scans read them: ies_interp), but for an
-    # axis of one angle that is not finite: Cycles' bounds test lets every angle through there
-    # and its scan reads past the axis (what it reads there is not modelled).
+    # axis of one NaN angle: Cycles' bounds test lets every angle through there and its scan
+    # reads past the axis (what it reads there is not modelled; one infinite angle fails every
+    # angle: 0).
     for name, a in (('horizontal', h_rad), ('vertical', v_rad)):
-        if len(a) == 1 and not np.isfinite(a[0]):
-            raise IESError(f"its only {name} angle is not finite", cycles_reads=True)
+        if len(a) == 1 and np.isnan(a[0]):
+            raise IESError(f"its only {name} angle is NaN", cycles_reads=True)
     return IESProfile(h_rad, v_rad, np.ascontiguousarray(table))
 
 

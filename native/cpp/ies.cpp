@@ -62,7 +62,7 @@ float ies_interp(const IesTable& t, float h_angle, float v_angle) {
     const bool wrap_vhigh = v_high > kPi - 1e-7f;
     // Cycles' linear scans, in any order of angles: the first interval whose end is not < the
     // angle (>= it, or NaN); the last angle ends them (the bounds test), so an axis of one angle
-    // gets here only where that angle is not finite, which ies_register refuses. A finite
+    // gets here only where that angle is NaN, which ies_register refuses. A finite
     // interval past the first starts below the angle: only a repeated first angle gives a
     // zero-width one (0/0: NaN), and a NaN end a NaN fraction, both 0 below.
     size_t hi = 0, vi = 0;
@@ -109,12 +109,12 @@ int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> 
     if (h.empty() || v.empty() || I.size() != h.size() * v.size())
         throw std::invalid_argument("an IES table needs >= 1 horizontal and vertical angle and H x V values");
     // Any angles in any order and any intensities, as Cycles keeps them, but for an axis of one
-    // angle that is not finite: Cycles' bounds test then lets angles through and its scan reads
-    // past the axis.
-    if (h.size() == 1 && !std::isfinite(h[0]))
-        throw std::invalid_argument("an IES horizontal axis of one angle must have it finite");
-    if (v.size() == 1 && !std::isfinite(v[0]))
-        throw std::invalid_argument("an IES vertical axis of one angle must have it finite");
+    // NaN angle: Cycles' bounds test then lets angles through and its scan reads past the axis
+    // (one infinite angle fails every angle there: 0).
+    if (h.size() == 1 && std::isnan(h[0]))
+        throw std::invalid_argument("an IES horizontal axis of one angle must not have it NaN");
+    if (v.size() == 1 && std::isnan(v[0]))
+        throw std::invalid_argument("an IES vertical axis of one angle must not have it NaN");
     const std::lock_guard<std::mutex> lock(g_register);
     Slot* free_slot = nullptr;
     for (Slot& s : g_slots) {

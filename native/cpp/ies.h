@@ -31,7 +31,7 @@ float ies_direction(const IesTable& t, const float d[3]);
 // only when its last reference goes, which its readers hold.
 const IesTable* ies_table(int id);
 
-// Registers a profile (checked: sizes, an axis of one angle finite; else
+// Registers a profile (checked: sizes, no axis of one NaN angle; else
 // std::invalid_argument) and returns its id >= 1 holding one reference; an identical live table
 // gets its id and one more reference. At most kIesMaxTables distinct tables live at once.
 int ies_register(std::vector<float> h, std::vector<float> v, std::vector<float> I);

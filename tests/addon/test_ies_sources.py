@@ -2,7 +2,7 @@
 (addon/export/lights.py): a missing file, a directory or no Text datablock is said by that
 failure (before: "... (No such file or directory) ... cannot be read (the text is empty)", the
 parse of nothing); a text Cycles cannot load either is "rendered as Cycles does"; a profile
-Cycles reads but DACRT cannot (an axis of one non-finite angle) is said as differing from Cycles (before:
+Cycles reads but DACRT cannot (an axis of one NaN angle) is said as differing from Cycles (before:
 "rendered as Cycles does", for DACRT's own refusals too). Profiles with repeated, unordered or
 NaN angles or a NaN candela are applied, nothing said (before: refused, 100 x Strength evenly)."""
 import bpy
@@ -56,7 +56,7 @@ def test_dacrt_limit_said_as_differing(scene):
     out, said = _lamp('internal', lm63([float('nan')], [0], [[1]]))
     assert len(said) == 1 and out.ies is None, said
     assert ("DACRT cannot read IES profile text 'profile.ies' of IES Texture 'IES Texture' (its only vertical "
-            "angle is not finite); Cycles does: this light differs from Cycles") in said[0], said
+            "angle is NaN); Cycles does: this light differs from Cycles") in said[0], said
     assert "rendered as Cycles does" not in said[0]
 
 

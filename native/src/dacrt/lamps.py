@@ -167,7 +167,7 @@ IES_MAX_TABLES = int(_core.IES_MAX_TABLES)
 
 def ies_register(h, v, intensity) -> "IesProfile":
     """Registers an IES profile table (h (H,), v (V,) radians in any order as Cycles reads them,
-    finite where an axis has one; intensity (H, V), any values: where Cycles' lookup gives NaN or
+    not NaN where an axis has one; intensity (H, V), any values: where Cycles' lookup gives NaN or
     inf, 0): a
     handle (IesProfile) whose .id (also int(handle)) a point/spot/area lamp record's `ies` field
     names. The table lives while a handle does: identical tables share one slot, counted; the
