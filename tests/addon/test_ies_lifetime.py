@@ -6,7 +6,6 @@ import gc
 
 import bpy
 import dacrt
-import numpy as np
 
 from . import scenes
 

@@ -13,6 +13,8 @@ from types import SimpleNamespace
 
 import bpy
 import numpy as np
+from mathutils import Vector
+
 
 def build(spec):
     """Reset to a factory-empty scene, build spec's scene and apply the shared settings."""
@@ -57,6 +59,30 @@ def matched(scene, samples, bounces=0, box=True):
     if box:
         scene.cycles.pixel_filter_type, scene.dacrt.filter_type = 'BOX', 'BOX'
         scene.cycles.filter_width = scene.dacrt.filter_width = 1.0
+
+
+def interior(scene, bounces=8):
+    """An interior test's view and settings: a 16 mm camera in a room's corner at (0.3, 0.3, 1.5)
+    looking at (3.5, 4, 1); matched at 64 spp (Cycles 128) and `bounces` of every kind, Tabulated
+    Sobol, seed 0, light threshold 0."""
+    cd = bpy.data.cameras.new('interior')
+    cd.lens = 16
+    c = bpy.data.objects.new('interior', cd)
+    scene.collection.objects.link(c)
+    c.location = (0.3, 0.3, 1.5)
+    c.rotation_euler = (Vector((3.5, 4.0, 1.0)) - c.location).to_track_quat('-Z', 'Y').to_euler()
+    scene.camera = c
+    matched(scene, 64, bounces=bounces)
+    cy = scene.cycles
+    cy.samples, cy.diffuse_bounces, cy.glossy_bounces = 128, bounces, bounces
+    cy.light_sampling_threshold = 0.0
+    cy.sampling_pattern, cy.seed, scene.dacrt.seed = 'TABULATED_SOBOL', 0, 0
+
+
+def mean_of(scene, engine, path):
+    """The whole-image mean of `engine`'s Combined RGB (a linear EXR written to path)."""
+    scene.render.engine = engine
+    return float(render_combined(scene, str(path))[..., :3].mean())
 
 
 def set_cycles(scene, spec, seed):

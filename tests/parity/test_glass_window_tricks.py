@@ -10,7 +10,6 @@ import math
 
 import bpy
 import pytest
-from mathutils import Vector
 
 from tests.parity import rendering
 
@@ -86,24 +85,9 @@ def _room(pane):
     so = bpy.data.objects.new('sun', sun)
     s.collection.objects.link(so)
     so.rotation_euler = [math.radians(a) for a in (60, 0, 90)]
-    cd = bpy.data.cameras.new('cam')
-    cd.lens = 16
-    c = bpy.data.objects.new('cam', cd)
-    s.collection.objects.link(c)
-    c.location = (0.3, 0.3, 1.5)
-    c.rotation_euler = (Vector((3.5, 4.0, 1.0)) - c.location).to_track_quat('-Z', 'Y').to_euler()
-    s.camera = c
-    rendering.matched(s, 64, bounces=8)
-    cy = s.cycles
-    cy.samples, cy.diffuse_bounces, cy.glossy_bounces, cy.transmission_bounces = 128, 8, 8, 12
-    cy.light_sampling_threshold = 0.0
-    cy.sampling_pattern, cy.seed, s.dacrt.seed = 'TABULATED_SOBOL', 0, 0
+    rendering.interior(s)
+    s.cycles.transmission_bounces = 12
     return s
-
-
-def _mean(s, engine, path):
-    s.render.engine = engine
-    return float(rendering.render_combined(s, str(path))[..., :3].mean())
 
 
 # pane: (DACRT / Cycles with Refractive Caustics on, off, tolerance); None: not checked
@@ -118,7 +102,7 @@ def test_glass_window_tricks(pane, tmp_path, said):
     for refractive, quoted in ((True, on), (False, off)):
         s.cycles.caustics_reflective = s.cycles.caustics_refractive = refractive
         said.clear()
-        dacrt = _mean(s, 'DACRT', tmp_path / f'dacrt{refractive}.exr')
+        dacrt = rendering.mean_of(s, 'DACRT', tmp_path / f'dacrt{refractive}.exr')
         twice, dropped = [t for t in said if TWICE in t], [t for t in said if REFRACTIVE in t]
         if refractive:
             assert (len(twice) == 1) == (pane != 'plain') and not dropped, said
@@ -126,6 +110,6 @@ def test_glass_window_tricks(pane, tmp_path, said):
             assert len(dropped) == 1 and not twice, said
         if quoted is None:
             continue
-        ratio = dacrt / _mean(s, 'CYCLES', tmp_path / f'cycles{refractive}.exr')
+        ratio = dacrt / rendering.mean_of(s, 'CYCLES', tmp_path / f'cycles{refractive}.exr')
         assert abs(ratio - quoted) < tol, (pane, refractive, ratio)
         assert f"{quoted:.2f}x" in (twice or dropped)[0] or f"{quoted:g}x" in (twice or dropped)[0]

@@ -15,7 +15,6 @@ Filter Glossy is now said (settings.cycles_glossy_messages) with the ratios meas
 this test keeps true."""
 import bpy
 import pytest
-from mathutils import Vector
 
 from tests.parity import rendering
 
@@ -45,25 +44,10 @@ def _room(roughness):
     lo = bpy.data.objects.new('p', lamp)
     s.collection.objects.link(lo)
     lo.location = (2, 2.5, 2.5)
-    cd = bpy.data.cameras.new('c')
-    cd.lens = 16
-    c = bpy.data.objects.new('c', cd)
-    s.collection.objects.link(c)
-    c.location = (0.3, 0.3, 1.5)
-    c.rotation_euler = (Vector((3.5, 4.0, 1.0)) - c.location).to_track_quat('-Z', 'Y').to_euler()
-    s.camera = c
-    rendering.matched(s, 64, bounces=8)
+    rendering.interior(s)
     cy = s.cycles
-    cy.samples, cy.diffuse_bounces, cy.glossy_bounces = 128, 8, 8
     cy.sample_clamp_direct = cy.sample_clamp_indirect = s.dacrt.sample_clamp_direct = s.dacrt.sample_clamp_indirect = 0.0
-    cy.light_sampling_threshold = 0.0
-    cy.sampling_pattern, cy.seed, s.dacrt.seed = 'TABULATED_SOBOL', 0, 0
     return s
-
-
-def _mean(s, engine, path):
-    s.render.engine = engine
-    return float(rendering.render_combined(s, str(path))[..., :3].mean())
 
 
 # roughness: (Filter Glossy 0 tolerance on |DACRT / Cycles - 1|, the ratio the message quotes at
@@ -75,12 +59,12 @@ CASES = {0.1: (0.06, 1.17), 0.5: (0.03, 1.07), 1.0: (0.02, None)}
 def test_principled_room(roughness, tmp_path, said):
     tol, quoted = CASES[roughness]
     s = _room(roughness)
-    dacrt = _mean(s, 'DACRT', tmp_path / 'dacrt.exr')
+    dacrt = rendering.mean_of(s, 'DACRT', tmp_path / 'dacrt.exr')
     told = [t for t in said if FILTER in t]
     s.cycles.blur_glossy = 0.0
-    plain = dacrt / _mean(s, 'CYCLES', tmp_path / 'cycles0.exr')
+    plain = dacrt / rendering.mean_of(s, 'CYCLES', tmp_path / 'cycles0.exr')
     s.cycles.blur_glossy = 1.0
-    blurred = dacrt / _mean(s, 'CYCLES', tmp_path / 'cycles1.exr')
+    blurred = dacrt / rendering.mean_of(s, 'CYCLES', tmp_path / 'cycles1.exr')
     assert abs(plain - 1.0) < tol, (roughness, plain, blurred)
     if quoted is None:
         assert abs(blurred - 1.0) < tol and not told, (roughness, blurred, told)
