@@ -95,49 +95,4 @@ void LampBVH::build(std::vector<int32_t>& items, size_t b, size_t e, const std::
     build(items, mid, e, box, centre, size_t(node.first) + 1);
 }
 
-void LampBVH::visit(const float O[3], const float D[3], float tmax, std::vector<int32_t>& out) const {
-    if (nodes_.empty()) return;
-    // A point hit_lamp computes at parameter t may be off by ~ulps of |O| and of t (|D| = 1)
-    // on every axis: the box grows by c (M + t), M = |O|max. On axis a that is
-    //   (D_a + c) t >= lo_a - O_a - c M   and   (D_a - c) t <= hi_a - O_a + c M,
-    // a slab test whose bounds are lower or upper by the signs of D_a +- c (at |D_a| < c the
-    // widening outruns the ray: both are lower bounds).
-    const float c = kSlack;
-    const float M = std::max({std::fabs(O[0]), std::fabs(O[1]), std::fabs(O[2])});
-    float inv_p[3], inv_m[3], off_lo[3], off_hi[3];
-    bool lower_p[3], upper_m[3];
-    for (int a = 0; a < 3; ++a) {
-        const float ap = D[a] + c, am = D[a] - c;
-        inv_p[a] = 1.0f / ap;  // a zero gives +-inf: the bound is then +-inf or (0 x inf) NaN, ignored
-        inv_m[a] = 1.0f / am;
-        lower_p[a] = !std::signbit(ap);
-        upper_m[a] = !std::signbit(am);
-        off_lo[a] = -O[a] - c * M;
-        off_hi[a] = -O[a] + c * M;
-    }
-    const float t_end = tmax + c * (M + tmax);
-    int32_t stack[64];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-        const Node& node = nodes_[size_t(stack[--top])];
-        float tn = 0.0f, tf = t_end;
-        for (int a = 0; a < 3; ++a) {
-            const float x = (node.lo[a] + off_lo[a]) * inv_p[a], y = (node.hi[a] + off_hi[a]) * inv_m[a];
-            // NaN bounds compare false and are ignored: the test stays conservative
-            if (lower_p[a]) tn = x > tn ? x : tn;
-            else tf = x < tf ? x : tf;
-            if (upper_m[a]) tf = y < tf ? y : tf;
-            else tn = y > tn ? y : tn;
-        }
-        if (!(tn <= tf)) continue;
-        if (node.count == 0) {
-            stack[top++] = node.first;
-            stack[top++] = node.first + 1;
-        } else {
-            for (int32_t i = 0; i < node.count; ++i) out.push_back(order_[size_t(node.first + i)]);
-        }
-    }
-}
-
 }  // namespace dacrt

@@ -84,8 +84,25 @@ void gather_range(Gather g, size_t b, size_t e) {
 
 // Ray by ray, over the lamps the BVH finds near it and those at infinity, in list order: the
 // same additions in the same order as gather_range, without the lamps a ray passes far from
-// (a delta lamp is never seen: the linear loop adds 0 for it).
+// (a delta lamp is never seen: the linear loop adds 0 for it). Up to 64 listed lamps the
+// candidates are bits of a word, read in order, instead of a list to sort per ray.
 void gather_range_bvh(Gather g, const LampBVH& bvh, const std::vector<int32_t>& at_infinity, size_t b, size_t e) {
+    auto add = [&](int32_t k, size_t i) {
+        const LampRecord& lamp = g.rec[g.lamps[k]];
+        gather_one(g, lamp, int(lamp.kind), tree_key(g, size_t(k)), size_t(k), i);
+    };
+    if (g.nl <= 64) {
+        uint64_t infinity = 0;
+        for (int32_t k : at_infinity) infinity |= uint64_t(1) << k;
+        for (size_t i = b; i < e; ++i) {
+            const float o[3] = {g.O[i], g.O[g.n + i], g.O[2 * g.n + i]};
+            const float d[3] = {g.D[i], g.D[g.n + i], g.D[2 * g.n + i]};
+            uint64_t cand = g.miss[i] ? infinity : 0;
+            bvh.visit(o, d, g.t_surf[i], [&](int32_t k) { cand |= uint64_t(1) << k; });
+            for (; cand; cand &= cand - 1) add(int32_t(__builtin_ctzll(cand)), i);
+        }
+        return;
+    }
     std::vector<int32_t> cand;
     for (size_t i = b; i < e; ++i) {
         cand.clear();
@@ -94,10 +111,7 @@ void gather_range_bvh(Gather g, const LampBVH& bvh, const std::vector<int32_t>& 
         bvh.visit(o, d, g.t_surf[i], cand);
         if (g.miss[i]) cand.insert(cand.end(), at_infinity.begin(), at_infinity.end());
         std::sort(cand.begin(), cand.end());
-        for (int32_t k : cand) {
-            const LampRecord& lamp = g.rec[g.lamps[k]];
-            gather_one(g, lamp, int(lamp.kind), tree_key(g, size_t(k)), size_t(k), i);
-        }
+        for (int32_t k : cand) add(k, i);
     }
 }
 

@@ -1,0 +1,69 @@
+"""lamp_gather through its lamp BVH (lamps.cpp gather_range_bvh, lampbvh.h visit) against the
+brute-force loop: every listed lamp gathered on its own, in list order (each call the plain
+lamp-by-lamp loop over the rays). The sums must be bit for bit equal: the BVH only narrows the
+candidates, so a ray must get the same lamps, added in the same order, with the same emission
+and MIS weights. Lists of 2..64 lamps take the per-ray candidate bit word, longer ones a
+sorted list; both are covered, at the word's ends (lamp 0, lamp 63) too."""
+import dacrt
+import numpy as np
+import pytest
+
+from addon.lights import lamp_records
+
+from tests.integrator.test_native_lamps import many_lamps, rays_at_lamps
+
+F32 = np.float32
+
+
+def brute_force(rec, listed, O, D, t_surf, miss, pid, L0, **kw):
+    L = L0.copy()
+    for j in listed:
+        dacrt.lamps.lamp_gather(rec, [int(j)], O, D, t_surf, miss, pid, L, **kw)
+    return L
+
+
+@pytest.mark.parametrize('count', [2, 7, 40, 64, 65, 150])
+@pytest.mark.parametrize('bsdf', [False, True])
+def test_bvh_gather_equals_brute_force(count, bsdf):
+    rng = np.random.default_rng(count * 2 + bsdf)
+    lamps = many_lamps(rng, 80, spread=rng.choice([2.0, 20.0]))   # (the background last)
+    rec = lamp_records(lamps)
+    listed = rng.integers(0, len(lamps), count).astype(np.int32)   # repeats included
+    finite = [j for j, lamp in enumerate(lamps) if hasattr(lamp, 'center') and not lamp.delta]
+    listed[rng.integers(0, count)] = len(lamps) - 1                 # the background somewhere
+    listed[0] = rng.choice(finite)                                  # and a lamp rays can meet
+    n, N = 6000, 9000
+    O, D, t_surf, miss = rays_at_lamps(rng, [lamps[j] for j in listed if j in finite], n)
+    pid = rng.permutation(N)[:n]
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=rng.uniform(0.05, 1.0, len(lamps)).astype(F32), clamp=50.0)
+    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    L = L0.copy()
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, L, **kw)
+    ref = brute_force(rec, listed, O, D, t_surf, miss, pid, L0, **kw)
+    seen = (ref != L0).any(axis=0)[pid]
+    assert seen.sum() > n // 20, 'too few rays see a lamp to test it'
+    np.testing.assert_array_equal(L.view(np.uint32), ref.view(np.uint32))
+
+
+def test_first_and_last_bit_of_the_candidate_word():
+    """64 listed lamps where the first and last positions are lamps every ray meets (big spheres
+    around the origins) and the rest delta lamps: both must be added, in order."""
+    rng = np.random.default_rng(5)
+    lamps = many_lamps(rng, 300)
+    finite = [j for j, lamp in enumerate(lamps) if hasattr(lamp, 'center') and not lamp.delta]
+    delta = [j for j, lamp in enumerate(lamps) if getattr(lamp, 'delta', False)]
+    listed = np.array([finite[0]] + delta[:62] + [finite[1]], np.int32)
+    assert len(listed) == 64
+    n = 4000
+    O, D, t_surf, miss = rays_at_lamps(rng, [lamps[j] for j in (finite[0], finite[1])], n)
+    rec = lamp_records(lamps)
+    pid = np.arange(n)
+    L0 = np.zeros((3, n), F32)
+    L = L0.copy()
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, L)
+    ref = brute_force(rec, listed, O, D, t_surf, miss, pid, L0)
+    assert (ref > 0).any(axis=0).sum() > 100
+    np.testing.assert_array_equal(L.view(np.uint32), ref.view(np.uint32))
