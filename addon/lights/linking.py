@@ -4,7 +4,9 @@ Blender's receiver collection of an emitter (a light or an emissive object) name
 include or exclude (export.lights.light_link_receivers); with any included, only they are lit (less
 the excluded), else every object but the excluded. Emitters with the same receivers share a
 light set; set 0 is every object's (emitters without a receiver collection; where every emitter
-has one, set 0 is a linked set's too, so 64 fit, as in Cycles). Each object gets a
+has one, set 0 is a linked set's too, so 64 fit, as in Cycles). Blender also numbers the
+objects' distinct combinations of linking collections, 63 of them; past that it unlinks objects
+in memory order, which is said and not followed (combinations). Each object gets a
 64-bit mask of the sets it receives, so a shading point is lit by an emitter when bit
 set(emitter) of its object's mask is set, as Cycles' light_link_object_match tests it. Light
 linking decides lighting only: camera rays see every emitter, and shadows are not linked.
@@ -14,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 MAX_SETS = 64          # bits of a receiver mask; Cycles links up to 64 collections (ids 0-63)
+MAX_COMBINATIONS = 63  # Blender's light sets of objects: distinct collection combinations (ids 1-63)
 
 
 def receives(name, receivers) -> bool:
@@ -46,6 +49,14 @@ class LightLinking:
             messages.append(('WARNING', f"{MAX_SETS} different {kind} sets and emitters that are not "
                                         f"linked (or the world): only {MAX_SETS - 1} sets fit with those (Cycles "
                                         f"has {MAX_SETS}); {names(set(squeezed))} light every object"))
+        combos = combinations(specs[:MAX_SETS])      # (past 64 collections Blender links no objects)
+        if combos > MAX_COMBINATIONS:
+            # Blender numbers them in the order of a Map keyed by object pointer, so which objects
+            # lose their links changes between runs: Cycles' image is not repeatable, ours keeps them
+            messages.append(('WARNING', f"objects in {combos} different combinations of {kind} "
+                                        f"collections, past Blender's {MAX_COMBINATIONS}: it leaves the objects of "
+                                        f"{combos - MAX_COMBINATIONS} unlinked, picked by memory order, so Cycles' "
+                                        f"image can change between runs; all linked here"))
         first = MAX_SETS - room             # 0: bit 0 is a linked set's, no set lights every object
         self._set_of = {spec: s + first for s, spec in enumerate(specs[:room])}
         # the set whose emitters light every object (None: there is none)
@@ -77,6 +88,18 @@ class LightLinking:
     def sets(self, names) -> np.ndarray:
         """(k,) uint8: the light set of each emitter name."""
         return np.array([self.emitter_set(n) for n in names], np.uint8).reshape(-1)
+
+
+def combinations(specs) -> int:
+    """How many light sets Blender numbers for objects linked by the emitter sets specs (its
+    LinkingData::end_build): one per distinct pair (sets including the object, sets excluding
+    it), over every object a receiver (or blocker) collection holds, in the scene or not."""
+    member = {}
+    for s, (included, excluded) in enumerate(specs):
+        for state, names in enumerate((included, excluded)):
+            for name in names:
+                member.setdefault(name, (set(), set()))[state].add(s)
+    return len({(frozenset(i), frozenset(e)) for i, e in member.values()})
 
 
 def reached(receivers: np.ndarray, light_set: np.ndarray) -> np.ndarray:
