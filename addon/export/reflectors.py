@@ -7,7 +7,7 @@ the Refraction BSDF as a see-through surface. Part of the export layer."""
 
 import numpy as np
 
-from .. import sheen, specular
+from .. import nodegraph, sheen, specular
 from ..roughdiffuse import ROUGH_DIFFUSE_LIGHT
 from ..nodeeval import constant_color, constant_value
 
@@ -254,28 +254,57 @@ _TRANSMIT_NODE_TYPES = frozenset({'BSDF_GLASS', 'BSDF_REFRACTION'})
 _REFLECT_NODE_TYPES = frozenset({'BSDF_GLOSSY', 'BSDF_ANISOTROPIC', 'BSDF_METALLIC', 'BSDF_GLASS'})
 
 
-def glossy_kinds(ntree, seen=None) -> frozenset:
-    """What of Cycles' caustics and Filter Glossy settings a node tree (its groups too) is
-    subject to: 'reflect' (a glossy reflection: Glossy, Anisotropic, Metallic, Glass, the
-    Principled's specular, metal, coat or glass layers; dropped after a diffuse bounce with
-    Reflective Caustics off), 'transmit' (Glass, Refraction, Principled Transmission: dropped
-    there with Refractive Caustics off) and 'sharp' (one of them whose roughness is node-driven
-    or below FILTER_GLOSSY_ROUGHNESS, which Filter Glossy blurs)."""
-    seen = set() if seen is None else seen
-    if ntree is None or ntree.as_pointer() in seen:
-        return frozenset()
-    seen.add(ntree.as_pointer())
+def rendered_closures(ntree) -> list:
+    """The shader nodes (GraphNodes, so their inputs can be followed out of groups) whose
+    closures Cycles compiles into the surface of the output it renders (nodegraph.output_node,
+    the one the material export renders): walked back from its Surface through what
+    nodegraph.closure_link keeps (reroutes, muted nodes and links, groups entered through their
+    active Group Output, a Mix Shader of constant Fac <= 0 or >= 1 down to one shader, an empty
+    Emission dropped), into both shaders of the Mix and Add Shaders left. Nodes outside that walk
+    (a new material's Principled left unlinked beside the Diffuse the user linked, an EEVEE-only
+    output's shader, an unused node inside a group) render nothing in Cycles."""
+    out = nodegraph.output_node(ntree) if ntree is not None else None
+    if out is None or out.inputs.get('Surface') is None:
+        return []
+    folder = nodegraph._Folder()       # shared: each Mix Shader's Fac folded once
+    found, seen, todo = [], set(), [(out.inputs['Surface'], 0)]
+    while todo:
+        sock, depth = todo.pop()
+        link = nodegraph.closure_link(sock, folder)
+        if link is None or depth > nodegraph.FOLD_DEPTH or link.from_socket.type != 'SHADER':
+            continue
+        node = link.from_node
+        key = nodegraph.output_key(node, link.from_socket.identifier)
+        if key in seen:
+            continue
+        seen.add(key)
+        if node.type == 'MIX_SHADER':
+            todo += [(node.inputs[1], depth + 1), (node.inputs[2], depth + 1)]
+        elif node.type == 'ADD_SHADER':
+            todo += [(node.inputs[0], depth + 1), (node.inputs[1], depth + 1)]
+        else:
+            found.append(node)
+    return found
+
+
+def glossy_kinds(ntree) -> frozenset:
+    """What of Cycles' caustics and Filter Glossy settings the surface Cycles renders of a node
+    tree (rendered_closures: not every node in it) is subject to: 'reflect' (a glossy
+    reflection: Glossy, Anisotropic, Metallic, Glass, the Principled's specular, metal, coat or
+    glass layers; dropped after a diffuse bounce with Reflective Caustics off), 'transmit' (Glass,
+    Refraction, Principled Transmission: dropped there with Refractive Caustics off) and 'sharp'
+    (one of them whose roughness is node-driven or below FILTER_GLOSSY_ROUGHNESS, which Filter
+    Glossy blurs)."""
     kinds = set()
+    for node in rendered_closures(ntree):
+        def on(name):
+            s = node.inputs.get(name)
+            return s is not None and (s.is_linked or s.default_value != 0.0)
 
-    def on(name):
-        s = node.inputs.get(name)
-        return s is not None and (s.is_linked or s.default_value != 0.0)
+        def sharp(name):
+            s = node.inputs.get(name)
+            return s is not None and (s.is_linked or s.default_value < FILTER_GLOSSY_ROUGHNESS)
 
-    def sharp(name):
-        s = node.inputs.get(name)
-        return s is not None and (s.is_linked or s.default_value < FILTER_GLOSSY_ROUGHNESS)
-
-    for node in ntree.nodes:
         t = node.type
         if t in _REFLECT_NODE_TYPES or t in _TRANSMIT_NODE_TYPES:
             kinds.update(k for k, types in (('reflect', _REFLECT_NODE_TYPES), ('transmit', _TRANSMIT_NODE_TYPES))
@@ -292,8 +321,6 @@ def glossy_kinds(ntree, seen=None) -> frozenset:
             if on('Coat Weight'):
                 kinds.add('reflect')
                 kinds.update(('sharp',) if sharp('Coat Roughness') else ())
-        elif t == 'GROUP':
-            kinds.update(glossy_kinds(node.node_tree, seen))
     return frozenset(kinds)
 
 

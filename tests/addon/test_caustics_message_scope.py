@@ -1,0 +1,170 @@
+"""The Caustics / Filter Glossy messages (settings.cycles_glossy_messages) count only what Cycles
+renders of a material (reflectors.glossy_kinds over reflectors.rendered_closures):
+
+- the shaders that reach the active Cycles Material Output, as Cycles compiles it (reroutes,
+  muted nodes passed through, groups through their active Group Output, a Mix Shader of Fac 0 or
+  1 down to one shader), not every node in the tree: a new material's Principled left unlinked
+  beside the Diffuse the user linked had brought the Filter Glossy INFO at Cycles' defaults and a
+  false Reflective WARNING with the toggle off, though Cycles renders it bit-identically with the
+  toggles on or off (and DACRT's image matched it).
+
+DACRT's messages at 1 sample, 32x24; where Cycles renders, 32 samples (its images compared
+with the setting on and off at the same seed)."""
+import math
+
+import bpy
+import numpy as np
+import pytest
+
+from tests.parity import rendering
+
+from . import scenes
+
+FILTER = "Filter Glossy"
+REFLECTIVE = "Caustics > Reflective is off"
+REFRACTIVE = "Caustics > Refractive is off"
+ALL = (FILTER, REFLECTIVE, REFRACTIVE)
+
+
+def _new_material(name):
+    """A material as Blender makes a new one: a Principled BSDF linked to the output."""
+    m = bpy.data.materials.new(name)
+    nt = m.node_tree
+    return m, nt, next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL'), \
+        next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
+
+
+def _group(glossy_linked):
+    """A node group holding a Diffuse and a Glossy BSDF; its output the Glossy (through a reroute)
+    where glossy_linked, else the Diffuse (the Glossy left unlinked inside)."""
+    grp = bpy.data.node_groups.new('G', 'ShaderNodeTree')
+    grp.interface.new_socket('Shader', in_out='OUTPUT', socket_type='NodeSocketShader')
+    go = grp.nodes.new('NodeGroupOutput')
+    d, g = grp.nodes.new('ShaderNodeBsdfDiffuse'), grp.nodes.new('ShaderNodeBsdfGlossy')
+    if glossy_linked:
+        r = grp.nodes.new('NodeReroute')
+        grp.links.new(g.outputs[0], r.inputs[0])
+        grp.links.new(r.outputs[0], go.inputs[0])
+    else:
+        grp.links.new(d.outputs[0], go.inputs[0])
+    return grp
+
+
+def _material(case):
+    """(material, whether a sharp glossy reflection renders in Cycles) for each case."""
+    m, nt, out, p = _new_material(case)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    surface = out.inputs['Surface']
+    if case == 'unlinked_principled':               # the Principled left beside a linked Diffuse
+        nt.links.new(d.outputs[0], surface)
+        return m, False
+    if case == 'linked_principled':
+        return m, True
+    nt.nodes.remove(p)
+    if case == 'unlinked_glass':
+        nt.nodes.new('ShaderNodeBsdfGlass')
+        nt.links.new(d.outputs[0], surface)
+        return m, False
+    if case in ('mix_fac_0', 'mix_fac_1', 'mix_fac_value_0'):
+        g, mx = nt.nodes.new('ShaderNodeBsdfGlossy'), nt.nodes.new('ShaderNodeMixShader')
+        mx.inputs['Fac'].default_value = 1.0 if case == 'mix_fac_1' else 0.0
+        if case == 'mix_fac_value_0':              # a Fac that folds to 0 (Cycles' constant folding)
+            mx.inputs['Fac'].default_value = 0.5
+            v, mul = nt.nodes.new('ShaderNodeValue'), nt.nodes.new('ShaderNodeMath')
+            v.outputs[0].default_value, mul.operation = 0.7, 'MULTIPLY'
+            mul.inputs[1].default_value = 0.0
+            nt.links.new(v.outputs[0], mul.inputs[0])
+            nt.links.new(mul.outputs[0], mx.inputs['Fac'])
+        nt.links.new(d.outputs[0], mx.inputs[1])
+        nt.links.new(g.outputs[0], mx.inputs[2])
+        nt.links.new(mx.outputs[0], surface)
+        return m, case == 'mix_fac_1'
+    if case in ('eevee_output_glossy', 'cycles_output_glossy'):
+        o2 = nt.nodes.new('ShaderNodeOutputMaterial')
+        g = nt.nodes.new('ShaderNodeBsdfGlossy')
+        glossy_out, diffuse_out = (o2, out) if case == 'eevee_output_glossy' else (out, o2)
+        glossy_out.target, diffuse_out.target = ('EEVEE', 'CYCLES') if case == 'eevee_output_glossy' \
+            else ('CYCLES', 'EEVEE')
+        nt.links.new(g.outputs[0], glossy_out.inputs['Surface'])
+        nt.links.new(d.outputs[0], diffuse_out.inputs['Surface'])
+        return m, case == 'cycles_output_glossy'
+    if case == 'muted_glossy':                      # no pass-through: no closure (black in both)
+        g = nt.nodes.new('ShaderNodeBsdfGlossy')
+        g.mute = True
+        nt.links.new(g.outputs[0], surface)
+        return m, False
+    if case in ('muted_mix_diffuse_first', 'muted_mix_glossy_first'):
+        # a muted Mix Shader passes its first shader through, whatever its Fac
+        g, mx = nt.nodes.new('ShaderNodeBsdfGlossy'), nt.nodes.new('ShaderNodeMixShader')
+        mx.mute = True
+        first, second = (d, g) if case == 'muted_mix_diffuse_first' else (g, d)
+        nt.links.new(first.outputs[0], mx.inputs[1])
+        nt.links.new(second.outputs[0], mx.inputs[2])
+        nt.links.new(mx.outputs[0], surface)
+        return m, case == 'muted_mix_glossy_first'
+    if case in ('group_unused_glossy', 'group_glossy'):
+        gn = nt.nodes.new('ShaderNodeGroup')
+        gn.node_tree = _group(case == 'group_glossy')
+        nt.links.new(gn.outputs[0], surface)
+        return m, case == 'group_glossy'
+    if case == 'muted_link_glossy':                 # a muted link: no surface, black in both
+        g = nt.nodes.new('ShaderNodeBsdfGlossy')
+        nt.links.new(g.outputs[0], surface).is_muted = True
+        return m, False
+    raise ValueError(case)
+
+
+def _scene(sc, m, bounces=2):
+    scenes.world((0.5, 0.5, 0.5), 1.0)
+    scenes.camera(location=(0, -5, 3), rotation=(math.radians(60), 0, 0))
+    scenes.light('POINT', 200, location=(1, -1, 3))
+    scenes.plane(size=8, materials=[m])
+    scenes.uv_sphere(location=(0, 0, 1), materials=[m])
+    rendering.matched(sc, 1, bounces=bounces)
+    sc.cycles.samples = 32
+    sc.cycles.blur_glossy = 1.0                     # Cycles' default
+    sc.cycles.caustics_reflective = sc.cycles.caustics_refractive = False
+
+
+def _said(sc, said, *keys):
+    said.clear()
+    sc.render.engine = 'DACRT'
+    bpy.ops.render.render()
+    return {k: [t for t in said if k in t] for k in keys}
+
+
+@pytest.mark.parametrize('case', ['unlinked_principled', 'linked_principled', 'unlinked_glass', 'mix_fac_0',
+                                  'mix_fac_value_0', 'mix_fac_1', 'eevee_output_glossy', 'cycles_output_glossy',
+                                  'muted_glossy', 'muted_mix_diffuse_first', 'muted_mix_glossy_first',
+                                  'group_unused_glossy', 'group_glossy', 'muted_link_glossy'])
+def test_only_shaders_cycles_renders_count(scene, said, case):
+    m, glossy = _material(case)
+    _scene(scene, m)
+    got = _said(scene, said, *ALL)
+    if glossy:          # a sharp glossy reflection reaches the Cycles output: both said, once
+        assert len(got[FILTER]) == 1 and len(got[REFLECTIVE]) == 1 and not got[REFRACTIVE], got
+    else:
+        assert not any(got.values()), got
+
+
+@pytest.mark.parametrize('case', ['unlinked_principled', 'linked_principled'])
+def test_said_where_cycles_image_changes(scene, said, tmp_path, case):
+    """Cycles' image with the Caustics settings at Cycles' defaults and with Filter Glossy 0 and
+    both toggles off: bit-identical where the Principled is unlinked (and DACRT, which matches it,
+    says nothing), different where it renders (and DACRT says so)."""
+    m, glossy = _material(case)
+    _scene(scene, m)
+    cy = scene.cycles
+    scene.render.engine = 'CYCLES'
+    cy.blur_glossy, cy.caustics_reflective, cy.caustics_refractive = 1.0, True, True
+    on = rendering.render_combined(scene, str(tmp_path / 'on.exr'))
+    cy.blur_glossy, cy.caustics_reflective, cy.caustics_refractive = 0.0, False, False
+    off = rendering.render_combined(scene, str(tmp_path / 'off.exr'))
+    assert np.array_equal(on, off) != glossy
+    cy.blur_glossy = 1.0
+    got = _said(scene, said, *ALL)
+    assert bool(got[FILTER]) == glossy and bool(got[REFLECTIVE]) == glossy and not got[REFRACTIVE], got
+    if not glossy:
+        scene.dacrt.samples = 16
+        d = rendering.mean_of(scene, 'DACRT', tmp_path / 'd.exr')
+        assert abs(d / float(on[..., :3].mean()) - 1.0) < 0.03
