@@ -290,11 +290,11 @@ def rendered_closures(ntree) -> list:
 def glossy_kinds(ntree) -> frozenset:
     """What of Cycles' caustics and Filter Glossy settings the surface Cycles renders of a node
     tree (rendered_closures: not every node in it) is subject to: 'reflect' (a glossy
-    reflection: Glossy, Anisotropic, Metallic, Glass, the Principled's specular, metal, coat or
-    glass layers; dropped after a diffuse bounce with Reflective Caustics off), 'transmit' (Glass,
-    Refraction, Principled Transmission: dropped there with Refractive Caustics off) and 'sharp'
-    (one of them whose roughness is node-driven or below FILTER_GLOSSY_ROUGHNESS, which Filter
-    Glossy blurs)."""
+    reflection: Glossy, Anisotropic, Metallic, Glass, a Toon's Glossy component, the Principled's
+    specular, metal, coat or glass layers; dropped after a diffuse bounce with Reflective
+    Caustics off), 'transmit' (Glass, Refraction, Principled Transmission: dropped there with
+    Refractive Caustics off) and 'sharp' (one of them whose roughness is node-driven or below
+    FILTER_GLOSSY_ROUGHNESS, which Filter Glossy blurs)."""
     kinds = set()
     for node in rendered_closures(ntree):
         def on(name):
@@ -311,6 +311,10 @@ def glossy_kinds(ntree) -> frozenset:
                          if t in types)
             if sharp('Roughness'):
                 kinds.add('sharp')
+        elif t == 'BSDF_TOON' and getattr(node, 'component', 'DIFFUSE') == 'GLOSSY':
+            # Cycles drops it past a diffuse bounce with Reflective Caustics off (svm closure.h
+            # CLOSURE_BSDF_GLOSSY_TOON_ID); Filter Glossy's bsdf_blur leaves it alone (no microfacet)
+            kinds.add('reflect')
         elif t == 'BSDF_PRINCIPLED':
             layers = [n for n in ('Specular IOR Level', 'Metallic', 'Transmission Weight') if on(n)]
             if layers:

@@ -222,7 +222,8 @@ def cycles_glossy_messages(scene, kinds, shadow_clear_glass, max_bounces):
     if 'reflect' in kinds and not getattr(cyc, 'caustics_reflective', True):
         out.append(('WARNING', "Cycles' Light Paths > Caustics > Reflective is off and not applied: Cycles drops "
                                "glossy reflections (the Principled's specular, metal and coat layers; Glossy, "
-                               "Metallic and Glass BSDFs) past a diffuse bounce; DACRT keeps their diffuse stand-ins "
+                               "Metallic and Glass BSDFs; a Toon BSDF's Glossy component) past a diffuse "
+                               "bounce; DACRT keeps their diffuse stand-ins "
                                "on every path"))
     refractive = getattr(cyc, 'caustics_refractive', True)
     if 'transmit' in kinds and not refractive:
