@@ -254,6 +254,10 @@ _TRANSMIT_NODE_TYPES = frozenset({'BSDF_GLASS', 'BSDF_REFRACTION'})
 _REFLECT_NODE_TYPES = frozenset({'BSDF_GLOSSY', 'BSDF_ANISOTROPIC', 'BSDF_METALLIC', 'BSDF_GLASS'})
 
 
+# Cycles' CLOSURE_WEIGHT_CUTOFF: a Principled layer of weight at or below it makes no closure
+_WEIGHT_CUTOFF = 1e-5
+
+
 def rendered_closures(ntree) -> list:
     """The shader nodes (GraphNodes, so their inputs can be followed out of groups) whose
     closures Cycles compiles into the surface of the output it renders (nodegraph.output_node,
@@ -293,38 +297,66 @@ def glossy_kinds(ntree) -> frozenset:
     reflection: Glossy, Anisotropic, Metallic, Glass, a Toon's Glossy component, the Principled's
     specular, metal, coat or glass layers; dropped after a diffuse bounce with Reflective
     Caustics off), 'transmit' (Glass, Refraction, Principled Transmission: dropped there with
-    Refractive Caustics off) and 'sharp' (one of them whose roughness is node-driven or below
-    FILTER_GLOSSY_ROUGHNESS, which Filter Glossy blurs)."""
+    Refractive Caustics off) and 'sharp' (one of the microfacet ones with an alpha (roughness
+    squared) below 0.5 in some direction, which Filter Glossy blurs: roughness below
+    FILTER_GLOSSY_ROUGHNESS when isotropic). Inputs are read as the material export reads
+    them (nodeeval.constant_value: Value, RGB and Math chains and the like folded to their
+    constant, clamped as Cycles' svm clamps them); one that varies over the surface (a texture,
+    Fresnel) counts as possibly on and sharp."""
     kinds = set()
     for node in rendered_closures(ntree):
-        def on(name):
+        def value(name, default=0.0):
             s = node.inputs.get(name)
-            return s is not None and (s.is_linked or s.default_value != 0.0)
+            if s is None:
+                return default, True
+            return constant_value(s)
 
-        def sharp(name):
-            s = node.inputs.get(name)
-            return s is not None and (s.is_linked or s.default_value < FILTER_GLOSSY_ROUGHNESS)
+        def weight(name, default=0.0):
+            """A layer's weight as Cycles reads it (saturated, or at least 0), 1 where it varies."""
+            v, ok = value(name, default)
+            return min(max(v, 0.0), 1.0 if name in ('Metallic', 'Transmission Weight', 'Alpha') else np.inf) \
+                if ok else 1.0
+
+        def sharp(name, aniso=0.0):
+            """Whether Filter Glossy can blur the lobe: its smallest alpha below 0.5 (aniso: how much
+            anisotropy shrinks it, 0..1), or a roughness that varies."""
+            r, ok = value(name, 1.0)
+            r = min(max(r, 0.0), 1.0)
+            return not ok or r * r * (1.0 - aniso) < FILTER_GLOSSY_ROUGHNESS ** 2
 
         t = node.type
         if t in _REFLECT_NODE_TYPES or t in _TRANSMIT_NODE_TYPES:
             kinds.update(k for k, types in (('reflect', _REFLECT_NODE_TYPES), ('transmit', _TRANSMIT_NODE_TYPES))
                          if t in types)
-            if sharp('Roughness'):
+            a, a_ok = value('Anisotropy')
+            # (Cycles: alpha r^2 (1 - |a|) along one axis, a clamped to 0.99)
+            if sharp('Roughness', min(abs(a), 0.99) if a_ok else 0.99):
                 kinds.add('sharp')
         elif t == 'BSDF_TOON' and getattr(node, 'component', 'DIFFUSE') == 'GLOSSY':
             # Cycles drops it past a diffuse bounce with Reflective Caustics off (svm closure.h
             # CLOSURE_BSDF_GLOSSY_TOON_ID); Filter Glossy's bsdf_blur leaves it alone (no microfacet)
             kinds.add('reflect')
         elif t == 'BSDF_PRINCIPLED':
-            layers = [n for n in ('Specular IOR Level', 'Metallic', 'Transmission Weight') if on(n)]
-            if layers:
-                kinds.add('reflect')
-                kinds.update(('sharp',) if sharp('Roughness') else ())
-            if on('Transmission Weight'):
-                kinds.add('transmit')
-            if on('Coat Weight'):
+            # Cycles' svm_node_closure_bsdf: alpha scales every layer; coat on top, then metal
+            # (leaving 1 - metallic), transmission (leaving 1 - transmission), then the specular
+            # layer unless its IOR comes out 1 (Specular IOR Level 0 or IOR 1) without thin film
+            w = weight('Alpha', 1.0)
+            a, a_ok = value('Anisotropic')
+            aniso = 1.0 - (1.0 - 0.9 * min(max(a, 0.0), 1.0)) ** 0.5 if a_ok else 1.0 - 0.1 ** 0.5
+            if w * weight('Coat Weight') > _WEIGHT_CUTOFF:
                 kinds.add('reflect')
                 kinds.update(('sharp',) if sharp('Coat Roughness') else ())
+            metal, trans = weight('Metallic'), weight('Transmission Weight')
+            level, l_ok = value('Specular IOR Level', 0.5)
+            ior, i_ok = value('IOR', 1.5)
+            film, f_ok = value('Thin Film Thickness')
+            specular = (level > 0.0 or not l_ok) and (ior != 1.0 or not i_ok or film > 0.1 or not f_ok)
+            layers = [w * metal, w * (1.0 - metal) * trans, w * (1.0 - metal) * (1.0 - trans) * specular]
+            if any(x > _WEIGHT_CUTOFF for x in layers):
+                kinds.add('reflect')
+                kinds.update(('sharp',) if sharp('Roughness', aniso) else ())
+            if layers[1] > _WEIGHT_CUTOFF:
+                kinds.add('transmit')
     return frozenset(kinds)
 
 

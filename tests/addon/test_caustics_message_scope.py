@@ -1,5 +1,6 @@
 """The Caustics / Filter Glossy messages (settings.cycles_glossy_messages) count only what Cycles
-renders of a material (reflectors.glossy_kinds over reflectors.rendered_closures):
+renders of a material (reflectors.glossy_kinds over reflectors.rendered_closures), read as the
+export reads its inputs:
 
 - the shaders that reach the active Cycles Material Output, as Cycles compiles it (reroutes,
   muted nodes passed through, groups through their active Group Output, a Mix Shader of Fac 0 or
@@ -8,7 +9,11 @@ renders of a material (reflectors.glossy_kinds over reflectors.rendered_closures
   false Reflective WARNING with the toggle off, though Cycles renders it bit-identically with the
   toggles on or off (and DACRT's image matched it);
 - a Toon BSDF's Glossy component, which Cycles drops past a diffuse bounce with Reflective
-  Caustics off (4.8% darker there) and which had been left unsaid.
+  Caustics off (4.8% darker there) and which had been left unsaid;
+- a roughness or layer weight fed by a constant (a Value node, a Math chain) at its value: a
+  Principled of roughness 0.95 from a Value node, which Filter Glossy leaves alone (Cycles
+  bit-identical at 1 and 0), had got the Filter Glossy INFO, a Metallic from a Value of 0 the
+  Reflective WARNING. A roughness that varies (a texture) still counts as possibly sharp.
 
 DACRT's messages at 1 sample, 32x24; where Cycles renders, 32 samples (its images compared
 with the setting on and off at the same seed)."""
@@ -214,3 +219,86 @@ def test_toon_glossy_said_under_reflective_caustics_off(scene, said, tmp_path):
 def test_toon_diffuse_not_said(scene, said):
     _toon_scene(scene, 'DIFFUSE')
     assert not any(_said(scene, said, *ALL).values())
+
+
+def _principled(sc, **linked):
+    """A Principled (specular from its Specular IOR Level) whose inputs named in `linked` come
+    from Value nodes of those values (or, for 'texture', a Noise Texture into that input)."""
+    m, nt, out, p = _new_material('p')
+    for name, v in linked.items():
+        name = name.replace('_', ' ')
+        if v == 'texture':
+            nt.links.new(nt.nodes.new('ShaderNodeTexNoise').outputs['Fac'], p.inputs[name])
+        elif isinstance(v, tuple):                  # Value * factor (a Math chain that folds)
+            val, mul = nt.nodes.new('ShaderNodeValue'), nt.nodes.new('ShaderNodeMath')
+            val.outputs[0].default_value, mul.operation = v[0], 'MULTIPLY'
+            mul.inputs[1].default_value = v[1]
+            nt.links.new(val.outputs[0], mul.inputs[0])
+            nt.links.new(mul.outputs[0], p.inputs[name])
+        else:
+            val = nt.nodes.new('ShaderNodeValue')
+            val.outputs[0].default_value = v
+            nt.links.new(val.outputs[0], p.inputs[name])
+    _scene(sc, m)
+    return p
+
+
+@pytest.mark.parametrize('inputs, expect', [
+    ({'Roughness': 0.95}, {REFLECTIVE}),                 # rough: never blurred
+    ({'Roughness': 0.3}, {FILTER, REFLECTIVE}),
+    ({'Roughness': (0.4, 2.0)}, {REFLECTIVE}),            # Value x 2 = 0.8
+    ({'Roughness': 'texture'}, {FILTER, REFLECTIVE}),     # varies: possibly sharp
+    ({'Specular_IOR_Level': 0.0, 'Metallic': 0.0}, set()),
+    ({'Specular_IOR_Level': 0.0, 'Metallic': 1.0}, {FILTER, REFLECTIVE}),
+    ({'Specular_IOR_Level': 0.0, 'Metallic': (1.0, 0.0)}, set()),   # Value x 0
+    ({'Specular_IOR_Level': 0.0, 'Coat_Weight': 0.0}, set()),
+    ({'Specular_IOR_Level': 0.0, 'Coat_Weight': 0.5}, {FILTER, REFLECTIVE}),
+    ({'Specular_IOR_Level': 0.0, 'Transmission_Weight': 0.0}, set()),
+    ({'Specular_IOR_Level': 0.0, 'Transmission_Weight': 1.0}, {FILTER, REFLECTIVE, REFRACTIVE}),
+    ({'Specular_IOR_Level': 0.0, 'Metallic': 'texture'}, {FILTER, REFLECTIVE}),
+    ({'Alpha': 0.0}, set()),                              # fully transparent: no closure
+    ({'IOR': 1.0}, set()),                                # specular of IOR 1: none (Cycles' eta 1)
+])
+def test_constant_inputs_read_at_their_value(scene, said, inputs, expect):
+    _principled(scene, **inputs)
+    got = _said(scene, said, *ALL)
+    assert {k for k, v in got.items() if v} == expect, got
+
+
+def test_filter_glossy_from_value_roughness_against_cycles(scene, said, tmp_path):
+    """Roughness from a Value of 0.95: Cycles' image is the same at Filter Glossy 1 and 0 (its
+    bsdf_blur acts below 0.71), and nothing is said; from 0.3 it changes, and the INFO is said."""
+    for rough, blurred in ((0.95, False), (0.3, True)):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        sc = bpy.context.scene
+        sc.render.resolution_x, sc.render.resolution_y = 32, 24
+        _principled(sc, Roughness=rough)
+        sc.cycles.caustics_reflective = sc.cycles.caustics_refractive = True
+        imgs = []
+        sc.render.engine = 'CYCLES'
+        for blur in (1.0, 0.0):
+            sc.cycles.blur_glossy = blur
+            imgs.append(rendering.render_combined(sc, str(tmp_path / f'c{rough}_{blur}.exr')))
+        assert np.array_equal(*imgs) != blurred, rough
+        sc.cycles.blur_glossy = 1.0
+        assert bool(_said(sc, said, FILTER)[FILTER]) == blurred, rough
+
+
+@pytest.mark.parametrize('rough, sharp', [(0.9, False), (0.2, True)])
+def test_roughness_read_out_of_a_group(scene, said, rough, sharp):
+    """A Glossy BSDF inside a group, its Roughness from the Group Input: the Group node's own
+    value is what Cycles reads."""
+    grp = bpy.data.node_groups.new('G', 'ShaderNodeTree')
+    grp.interface.new_socket('Roughness', in_out='INPUT', socket_type='NodeSocketFloat')
+    grp.interface.new_socket('Shader', in_out='OUTPUT', socket_type='NodeSocketShader')
+    gi, go, g = grp.nodes.new('NodeGroupInput'), grp.nodes.new('NodeGroupOutput'), grp.nodes.new('ShaderNodeBsdfGlossy')
+    grp.links.new(gi.outputs[0], g.inputs['Roughness'])
+    grp.links.new(g.outputs[0], go.inputs[0])
+    m, nt, out = scenes._material('grouped')
+    gn = nt.nodes.new('ShaderNodeGroup')
+    gn.node_tree = grp
+    gn.inputs[0].default_value = rough
+    nt.links.new(gn.outputs[0], out.inputs['Surface'])
+    _scene(scene, m)
+    got = _said(scene, said, *ALL)
+    assert bool(got[FILTER]) == sharp and len(got[REFLECTIVE]) == 1 and not got[REFRACTIVE], got
