@@ -11,6 +11,7 @@ import dacrt
 
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .lights.base import RECORD_FIELDS
+from .lights.coincident import coincident_copies
 from .lights.linking import LightLinking
 from .procedural import ProceduralTexels
 from .scenedata import NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, SceneData
@@ -61,6 +62,9 @@ class LightSetup:
         # Only triangles BSDF rays can hit are sampled as lights, so both MIS strategies see the
         # same emitters; of those, the materials' Emission Sampling (None: BSDF rays alone)
         hittable = self._tri_emissive & ((vis & VIS_DIFFUSE) != 0)
+        self._tri_alias = None
+        if self._any_emissive:
+            hittable = self._without_coincident_copies(sd, hittable, vis)
         sampled = hittable & self.mats.light_sampled[self.tri.material]
         if self._shadow_link is not None:
             # shadow-linked emitters are light-sampled whatever their Emission Sampling says: a
@@ -174,6 +178,28 @@ class LightSetup:
         self._bsdf_linked = np.zeros(0, np.int32)
         self._selection_table()
 
+    def _without_coincident_copies(self, sd: SceneData, hittable, vis):
+        """hittable without the emitters a BSDF ray never returns: those exactly covered by a
+        lower-index triangle it stops at (lights/coincident.py), so light sampling sees the one
+        surface hits see (a twin's samples had added its emission again: 2.1x Cycles, 1.42x the
+        single quad); said, naming the objects."""
+        blockers = ((vis & VIS_DIFFUSE) != 0) & (self.tri.area > 0) & ~self._tri_transparent
+        copies, winners, grouped = coincident_copies(self.tri.vertices, self.tri.indices, hittable, blockers)
+        if grouped is None:
+            return hittable
+        # copies listed in another corner order may still be hit where t rounds lower: such a
+        # hit is MIS-weighted as one on its winner, the same surface (_selection_table)
+        self._tri_alias = (copies, winners)
+        names = sd.per_object(sd.object_names, lambda i: f"object {i}")
+        ob = np.asarray(sd.geometry.object_index, np.int64)[grouped]
+        shown = ', '.join(repr(names[i]) for i in np.unique(ob))
+        self.messages.append(('INFO', f"{int(grouped.sum())} emissive triangles of {shown} coincide with other "
+                                      "triangles: rendered as one surface (Cycles renders coincident faces "
+                                      "darker)"))
+        hittable = hittable.copy()
+        hittable[copies] = False
+        return hittable
+
     def _selection_table(self):
         """The light choice next-event estimation draws from (dacrt.shading.LightChoice): per
         entry (lamps, then emissive triangles) its selection probability, whether it is sampled
@@ -206,6 +232,11 @@ class LightSetup:
             if ntri:
                 j = np.arange(ntri)
                 self._tri_key[tris.index] = np.where(member[nl + j], nl + j, -1)
+        if self._tri_alias is not None:
+            copies, winners = self._tri_alias
+            lights.tri_prob[copies] = lights.tri_prob[winners]
+            if self._tri_key is not None:
+                self._tri_key[copies] = self._tri_key[winners]
         every = self._record_lamps
         if self._groups:                    # light groups: each lamp record's and entry's group
             self._record_group = np.array([self._world_group if isinstance(l, BackgroundLight)

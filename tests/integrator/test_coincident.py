@@ -34,8 +34,8 @@ def _with_copies(scene: sd.SceneData, tris: np.ndarray, rotate: bool) -> sd.Scen
     return replace(scene, geometry=geo)
 
 
-# the floor (triangles 0, 1) and the back wall (4, 5): reflectors only. (A duplicated emitter
-# is two lights in one place, as in Cycles, where light sampling finds both.)
+# the floor (triangles 0, 1) and the back wall (4, 5): reflectors only (duplicated emitters:
+# test_coincident_emitters.py)
 _DUPLICATED = np.array([0, 1, 4, 5])
 
 

@@ -1,0 +1,75 @@
+"""Coincident emitters: an emissive triangle modelled twice (a duplicated import, a Mirror
+modifier applied twice, a second object sharing the mesh in place) is one surface to the tracer:
+of exactly coincident triangles a ray's hit returns the lowest triangle index (native leaf.h's
+tie rule), and a ray leaving either copy never meets the other. Light sampling must see the
+same one surface, or next-event estimation adds each copy's emission where BSDF hits (and MIS)
+count one: an emissive quad and its twin had lit a floor 1.42x the single quad.
+
+Found vectorised and only among the triangles whose corners all share an x with an emitter's
+corner: an order-independent hash of their three float32 vertices (as the tracer reads them),
+then an exact check of those sharing a hash."""
+from __future__ import annotations
+
+import numpy as np
+
+_K = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], np.uint64)
+
+
+def _corner_hash(xyz) -> np.ndarray:
+    """(..., ) uint64: a hash of float32 points (..., 3) (-0 read as +0: the same point)."""
+    bits = (xyz + np.float32(0.0)).view(np.uint32).astype(np.uint64)
+    h = (bits * _K).sum(axis=-1, dtype=np.uint64)    # (wraps modulo 2^64)
+    h ^= h >> np.uint64(31)
+    h *= np.uint64(0xBF58476D1CE4E5B9)
+    h ^= h >> np.uint64(29)
+    return h
+
+
+def coincident_copies(vertices, indices, emitters, blockers):
+    """(copies, winners, grouped): the emitters (bool (M,)) that a triangle of blockers (bool
+    (M,): those the rays in question hit and stop at) with a lower index covers exactly (same
+    three float32 vertices, in any order or winding), as indices, ascending; the lowest such
+    blocker of each (what hits return); and the mask (M,) of the emitters that coincide with
+    any other emitter or blocker. None, None, None where no emitter coincides with anything."""
+    cand = np.flatnonzero(emitters)
+    if not len(cand):
+        return None, None, None
+    v = np.asarray(vertices, np.float32)
+    indices = np.asarray(indices)
+    # prefilter (a 1M-triangle scene in a few ms): the triangles whose corners all have an x an
+    # emitter's corner has (float compare: -0 == +0)
+    x = v[:, 0]
+    ex = np.unique(x[indices[cand]])
+    near = ex[np.minimum(np.searchsorted(ex, x), len(ex) - 1)] == x
+    S = np.flatnonzero(near[indices[:, 0]])
+    S = S[(emitters[S] | blockers[S]) & near[indices[S, 1]] & near[indices[S, 2]]]    # ascending
+    if len(S) < 2:
+        return None, None, None
+    # an order-independent key per triangle (the sum of its corners' hashes); only triangles
+    # sharing a key with another are checked exactly
+    xyz = v[indices[S]]                      # (S, 3 corners, 3)
+    h = _corner_hash(xyz)
+    keys = h.sum(axis=1, dtype=np.uint64)
+    uk, ki, kc = np.unique(keys, return_inverse=True, return_counts=True)
+    shared = kc[ki.ravel()] > 1
+    shared &= np.bincount(ki.ravel(), weights=emitters[S], minlength=len(uk))[ki.ravel()] > 0
+    if not shared.any():
+        return None, None, None
+    S, xyz, h = S[shared], xyz[shared], h[shared]
+    # exact: the three corners sorted (by hash), compared bit for bit
+    order = np.argsort(h, axis=1, kind='stable')
+    xyz = np.take_along_axis(xyz, order[:, :, None], axis=1) + np.float32(0.0)
+    rows = np.ascontiguousarray(xyz.reshape(len(S), 9)).view(np.dtype((np.void, 36))).ravel()
+    _, inverse, count = np.unique(rows, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    # the lowest blocker of each group: what a ray's hit returns there
+    lowest = np.full(len(count), np.iinfo(np.int64).max, np.int64)
+    b = blockers[S]
+    np.minimum.at(lowest, inverse[b], S[b])
+    grouped = np.zeros(len(emitters), bool)
+    grouped[S] = count[inverse] > 1
+    grouped &= emitters
+    if not grouped.any():
+        return None, None, None
+    copy = emitters[S] & (lowest[inverse] < S)
+    return S[copy], lowest[inverse][copy], grouped
