@@ -379,7 +379,9 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                 if closure.opaque_glass.any():
                     opaque_refraction = nonnegative(closure.opaque_glass.astype(np.float32), "transmission",
                                                      reasons)
-                if emission.any():
+                if emission.any() and not closure.per_point_sum:
+                    # (a cut-out's sum with other shaders carries its opacity in its emission:
+                    # closure.cutout_sum)
                     reasons.append("emission under a procedural alpha is not dimmed by it for light sampling")
             elif closure.opacity is not None:
                 tex, inverted = closure.opacity
