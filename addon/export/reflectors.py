@@ -241,8 +241,6 @@ def principled_hair_color(node, reasons):
 # the Toon BSDF's Diffuse component and the Principled's sheen are diffuse-class there
 GLOSSY_NODE_TYPES = frozenset({'BSDF_GLOSSY', 'BSDF_ANISOTROPIC', 'BSDF_METALLIC', 'BSDF_GLASS', 'BSDF_HAIR',
                                'BSDF_HAIR_PRINCIPLED'})
-# Principled inputs whose nonzero value makes a glossy layer (specular, metal, coat, glass)
-_PRINCIPLED_GLOSSY = ('Specular IOR Level', 'Metallic', 'Coat Weight', 'Transmission Weight')
 
 
 # roughness below which Cycles' Filter Glossy can blur a glossy closure: after a blurry bounce it
@@ -305,77 +303,80 @@ def glossy_kinds(ntree) -> frozenset:
     Fresnel) counts as possibly on and sharp."""
     kinds = set()
     for node in rendered_closures(ntree):
-        def value(name, default=0.0):
-            s = node.inputs.get(name)
-            if s is None:
-                return default, True
-            return constant_value(s)
-
-        def weight(name, default=0.0):
-            """A layer's weight as Cycles reads it (saturated, or at least 0), 1 where it varies."""
-            v, ok = value(name, default)
-            return min(max(v, 0.0), 1.0 if name in ('Metallic', 'Transmission Weight', 'Alpha') else np.inf) \
-                if ok else 1.0
-
-        def sharp(name, aniso=0.0):
-            """Whether Filter Glossy can blur the lobe: its smallest alpha below 0.5 (aniso: how much
-            anisotropy shrinks it, 0..1), or a roughness that varies."""
-            r, ok = value(name, 1.0)
-            r = min(max(r, 0.0), 1.0)
-            return not ok or r * r * (1.0 - aniso) < FILTER_GLOSSY_ROUGHNESS ** 2
-
-        t = node.type
-        if t in _REFLECT_NODE_TYPES or t in _TRANSMIT_NODE_TYPES:
-            kinds.update(k for k, types in (('reflect', _REFLECT_NODE_TYPES), ('transmit', _TRANSMIT_NODE_TYPES))
-                         if t in types)
-            a, a_ok = value('Anisotropy')
-            # (Cycles: alpha r^2 (1 - |a|) along one axis, a clamped to 0.99)
-            if sharp('Roughness', min(abs(a), 0.99) if a_ok else 0.99):
-                kinds.add('sharp')
-        elif t == 'BSDF_TOON' and getattr(node, 'component', 'DIFFUSE') == 'GLOSSY':
-            # Cycles drops it past a diffuse bounce with Reflective Caustics off (svm closure.h
-            # CLOSURE_BSDF_GLOSSY_TOON_ID); Filter Glossy's bsdf_blur leaves it alone (no microfacet)
-            kinds.add('reflect')
-        elif t == 'BSDF_PRINCIPLED':
-            # Cycles' svm_node_closure_bsdf: alpha scales every layer; coat on top, then metal
-            # (leaving 1 - metallic), transmission (leaving 1 - transmission), then the specular
-            # layer unless its IOR comes out 1 (Specular IOR Level 0 or IOR 1) without thin film
-            w = weight('Alpha', 1.0)
-            a, a_ok = value('Anisotropic')
-            aniso = 1.0 - (1.0 - 0.9 * min(max(a, 0.0), 1.0)) ** 0.5 if a_ok else 1.0 - 0.1 ** 0.5
-            if w * weight('Coat Weight') > _WEIGHT_CUTOFF:
-                kinds.add('reflect')
-                kinds.update(('sharp',) if sharp('Coat Roughness') else ())
-            metal, trans = weight('Metallic'), weight('Transmission Weight')
-            level, l_ok = value('Specular IOR Level', 0.5)
-            ior, i_ok = value('IOR', 1.5)
-            film, f_ok = value('Thin Film Thickness')
-            specular = (level > 0.0 or not l_ok) and (ior != 1.0 or not i_ok or film > 0.1 or not f_ok)
-            layers = [w * metal, w * (1.0 - metal) * trans, w * (1.0 - metal) * (1.0 - trans) * specular]
-            if any(x > _WEIGHT_CUTOFF for x in layers):
-                kinds.add('reflect')
-                kinds.update(('sharp',) if sharp('Roughness', aniso) else ())
-            if layers[1] > _WEIGHT_CUTOFF:
-                kinds.add('transmit')
+        kinds |= _node_kinds(node)
     return frozenset(kinds)
 
 
-def has_glossy_closure(ntree, seen=None) -> bool:
-    """Whether a node tree (its groups too) holds a closure Cycles treats as glossy, which DACRT
-    renders as diffuse: a light's Glossy ray visibility then differs from its Diffuse one there
-    (export/scene.py). A Principled counts unless each of its glossy layers is an unlinked 0."""
-    seen = set() if seen is None else seen
-    if ntree is None or ntree.as_pointer() in seen:
-        return False
-    seen.add(ntree.as_pointer())
-    for node in ntree.nodes:
+def _node_kinds(node) -> set:
+    """glossy_kinds of one rendered shader node."""
+    kinds = set()
+
+    def value(name, default=0.0):
+        s = node.inputs.get(name)
+        if s is None:
+            return default, True
+        return constant_value(s)
+
+    def weight(name, default=0.0):
+        """A layer's weight as Cycles reads it (saturated, or at least 0), 1 where it varies."""
+        v, ok = value(name, default)
+        return min(max(v, 0.0), 1.0 if name in ('Metallic', 'Transmission Weight', 'Alpha') else np.inf) \
+            if ok else 1.0
+
+    def sharp(name, aniso=0.0):
+        """Whether Filter Glossy can blur the lobe: its smallest alpha below 0.5 (aniso: how much
+        anisotropy shrinks it, 0..1), or a roughness that varies."""
+        r, ok = value(name, 1.0)
+        r = min(max(r, 0.0), 1.0)
+        return not ok or r * r * (1.0 - aniso) < FILTER_GLOSSY_ROUGHNESS ** 2
+
+    t = node.type
+    if t in _REFLECT_NODE_TYPES or t in _TRANSMIT_NODE_TYPES:
+        kinds.update(k for k, types in (('reflect', _REFLECT_NODE_TYPES), ('transmit', _TRANSMIT_NODE_TYPES))
+                     if t in types)
+        a, a_ok = value('Anisotropy')
+        # (Cycles: alpha r^2 (1 - |a|) along one axis, a clamped to 0.99)
+        if sharp('Roughness', min(abs(a), 0.99) if a_ok else 0.99):
+            kinds.add('sharp')
+    elif t == 'BSDF_TOON' and getattr(node, 'component', 'DIFFUSE') == 'GLOSSY':
+        # Cycles drops it past a diffuse bounce with Reflective Caustics off (svm closure.h
+        # CLOSURE_BSDF_GLOSSY_TOON_ID); Filter Glossy's bsdf_blur leaves it alone (no microfacet)
+        kinds.add('reflect')
+    elif t == 'BSDF_PRINCIPLED':
+        # Cycles' svm_node_closure_bsdf: alpha scales every layer; coat on top, then metal
+        # (leaving 1 - metallic), transmission (leaving 1 - transmission), then the specular
+        # layer unless its IOR comes out 1 (Specular IOR Level 0 or IOR 1) without thin film
+        w = weight('Alpha', 1.0)
+        a, a_ok = value('Anisotropic')
+        aniso = 1.0 - (1.0 - 0.9 * min(max(a, 0.0), 1.0)) ** 0.5 if a_ok else 1.0 - 0.1 ** 0.5
+        if w * weight('Coat Weight') > _WEIGHT_CUTOFF:
+            kinds.add('reflect')
+            kinds.update(('sharp',) if sharp('Coat Roughness') else ())
+        metal, trans = weight('Metallic'), weight('Transmission Weight')
+        level, l_ok = value('Specular IOR Level', 0.5)
+        ior, i_ok = value('IOR', 1.5)
+        film, f_ok = value('Thin Film Thickness')
+        specular = (level > 0.0 or not l_ok) and (ior != 1.0 or not i_ok or film > 0.1 or not f_ok)
+        layers = [w * metal, w * (1.0 - metal) * trans, w * (1.0 - metal) * (1.0 - trans) * specular]
+        if any(x > _WEIGHT_CUTOFF for x in layers):
+            kinds.add('reflect')
+            kinds.update(('sharp',) if sharp('Roughness', aniso) else ())
+        if layers[1] > _WEIGHT_CUTOFF:
+            kinds.add('transmit')
+    return kinds
+
+
+def has_glossy_closure(ntree) -> bool:
+    """Whether the surface Cycles renders of a node tree (rendered_closures: not every node in
+    it; an unlinked Glossy beside the linked Diffuse, a Mix of Fac 0's second shader render
+    nothing, and Cycles' image is then the same whatever a light's Glossy visibility) holds a
+    closure Cycles treats as glossy, which DACRT renders as diffuse: a light's Glossy ray
+    visibility then differs from its Diffuse one there (export/scene.py). A Principled counts
+    where one of its glossy layers renders (glossy_kinds: weights read at their folded value)."""
+    for node in rendered_closures(ntree):
         t = node.type
         if t in GLOSSY_NODE_TYPES or (t == 'BSDF_TOON' and getattr(node, 'component', 'DIFFUSE') == 'GLOSSY'):
             return True
-        if t == 'BSDF_PRINCIPLED':
-            layers = [node.inputs.get(n) for n in _PRINCIPLED_GLOSSY]
-            if any(s is not None and (s.is_linked or s.default_value != 0.0) for s in layers):
-                return True
-        if t == 'GROUP' and has_glossy_closure(node.node_tree, seen):
+        if t == 'BSDF_PRINCIPLED' and _node_kinds(node) & {'reflect', 'transmit'}:
             return True
     return False
