@@ -227,6 +227,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._bumps = []              # (Bump node keys, scenedata.Bump tuple) of its BSDFs' Bump chains
         self._normals = []            # per BSDF read: (name, Mix weight, normal map index, bump index)
         self._normal_weight = 1.0
+        self._closure_folder = None   # Cycles' constant folding of this material (shaders.py)
         displaced = None
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
         self._dark_stand_ins = []     # what each emission that reads 0 only by a stand-in said

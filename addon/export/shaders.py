@@ -11,7 +11,7 @@ from .. import nodeeval, principled, roughdiffuse
 from .. import scenedata as sd
 from .. import nodegraph
 from ..nodeeval import constant_color, constant_value
-from ..nodegraph import input_socket, linked_link, linked_node
+from ..nodegraph import input_socket, linked_link
 from ..texture import ImageTexels, LazyTexels, stored_texels
 from . import procedurals
 from .closure import Closure, Texture, is_image_alpha
@@ -56,8 +56,20 @@ class ShaderClosures:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
 
+    def _closure_link(self, socket):
+        """The link a shader input reads after Cycles' closure folding (nodegraph.closure_link):
+        a Mix Shader of constant Fac <= 0 / >= 1 is its one shader, an empty Emission nothing.
+        Each material's Fac chains folded once (a _Folder per material)."""
+        folder = getattr(self, '_closure_folder', None)
+        if folder is None:
+            folder = self._closure_folder = nodegraph._Folder()
+        return nodegraph.closure_link(socket, folder)
+
     def _shader(self, socket, reasons, depth):
-        link = linked_link(socket)        # muted nodes are passed through (nodegraph)
+        # muted nodes are passed through (nodegraph); folded as Cycles folds the closures, so
+        # only what renders is read and said (a Mix of Fac 0 had said "Glossy BSDF as diffuse"
+        # for the Glossy Cycles drops, scaled to nothing here)
+        link = self._closure_link(socket)
         if link is None:
             return Closure()
         if link.from_socket.type != 'SHADER':
@@ -190,6 +202,12 @@ class ShaderClosures:
         return Closure(const=DEFAULT_ALBEDO)
 
     def _principled(self, node, reasons):
+        alpha = node.inputs.get('Alpha')
+        a, ok = constant_value(alpha) if alpha is not None else (1.0, True)
+        if ok and np.isfinite(a) and a <= 0.0:
+            # Cycles scales every layer and the emission by alpha and allocates no closure of
+            # weight 0: only the white Transparent BSDF renders, so no layer is read or said
+            return Closure(transparent=np.ones(3))
         for name, what in PRINCIPLED_IGNORED:
             s = node.inputs.get(name)
             if s is not None and name not in principled.HANDLED:
@@ -274,7 +292,8 @@ class ShaderClosures:
         takes a surface without SD_HAS_TRANSPARENT_SHADOW for an opaque blocker, whatever the
         shader gives the shadow ray)."""
         every = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
-        node = linked_node(socket)
+        link = self._closure_link(socket)      # (past Mixes of Fac 0 or 1, as _shader)
+        node = link.from_node if link is not None else None
         if node is None or node.type != 'MIX_SHADER':
             return None, every
         link = linked_link(node.inputs['Fac'])

@@ -6,8 +6,12 @@ constant Fac <= 0 / >= 1 down to one shader), not every node in the tree:
 - the light's Glossy ray visibility message (reflectors.has_glossy_closure, which had looked at
   every node): Cycles renders a Diffuse beside an unlinked Glossy bit-identically with the
   light's Glossy visibility on or off, and DACRT (which matches it) need not say anything;
+- the "material(s) approximated" reasons (the material export's shader walk, which had
+  evaluated both shaders of a Mix of Fac 0 and said "Glossy BSDF as diffuse" for the one Cycles
+  drops; a Principled whose Alpha folds to 0 had its every layer said, though Cycles renders
+  only its transparency), and a Principled layer whose weight folds to 0 (a Value, a Math chain).
 
-DACRT's messages at 1 sample, 32x24; where Cycles renders, 16 samples, compared at one seed."""
+DACRT's messages at 1 sample, 32x24; where Cycles renders, 16 samples (DACRT 1), compared at one seed."""
 import math
 
 import bpy
@@ -126,6 +130,16 @@ def test_glossy_visibility_said_only_where_glossy_renders(scene, said, case):
     assert len(got) == (1 if glossy else 0), got
 
 
+@pytest.mark.parametrize('case', CASES)
+def test_glossy_as_diffuse_said_only_where_glossy_renders(scene, said, case):
+    m, glossy = _material(case)
+    _scene(scene, m)
+    got = _said(scene, said, APPROX)[APPROX]
+    assert len(got) == (1 if glossy else 0), got
+    if glossy:
+        assert GLOSSY_AS_DIFFUSE in got[0], got
+
+
 @pytest.mark.parametrize('case', ['unlinked', 'mix_fac_0', 'linked'])
 def test_cycles_image_and_glossy_visibility(scene, said, tmp_path, case):
     """Cycles with the light's Glossy visibility on and off: bit-identical where the Glossy does
@@ -137,3 +151,79 @@ def test_cycles_image_and_glossy_visibility(scene, said, tmp_path, case):
     lamp.visible_glossy = True
     on = rendering.render_combined(scene, str(tmp_path / 'on.exr'))
     assert np.array_equal(on, off) != glossy
+
+
+@pytest.mark.parametrize('case', ['mix_fac_0', 'mix_fac_value_0', 'mix_fac_1_glossy_first'])
+def test_dropped_glossy_renders_as_the_diffuse_alone(scene, said, tmp_path, case):
+    """A Mix of Fac folding to 0 or 1 renders, in Cycles and in DACRT, as the one shader it keeps
+    (bit-identical to the Diffuse linked straight to the output), so nothing of the Glossy is
+    said."""
+    m, _ = _material(case)
+    _scene(scene, m)
+    nt = m.node_tree
+    images = {}
+    for how in ('mix', 'diffuse'):
+        if how == 'diffuse':
+            out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+            nt.links.new(next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE').outputs[0], out.inputs['Surface'])
+        for engine in ('CYCLES', 'DACRT'):
+            scene.render.engine = engine
+            said.clear()
+            images[how, engine] = rendering.render_combined(scene, str(tmp_path / f'{how}{engine}.exr'))
+            assert not any(APPROX in t or GLOSSY_VIS in t for t in said), said
+    for engine in ('CYCLES', 'DACRT'):
+        assert np.array_equal(images['mix', engine], images['diffuse', engine]), engine
+    c, d = images['mix', 'CYCLES'][..., :3].mean(), images['mix', 'DACRT'][..., :3].mean()
+    assert d == pytest.approx(c, rel=0.03)
+
+
+def _principled(inp, value=0.0):
+    """A Principled (coat, sheen, metal, subsurface, transmission all 0.5) whose input `inp`
+    reads a Math chain that folds to `value` (a Value node x 0 where value is 0)."""
+    m = bpy.data.materials.new(inp)
+    nt = m.node_tree
+    p = next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
+    for name in ('Coat Weight', 'Sheen Weight', 'Metallic', 'Subsurface Weight', 'Transmission Weight'):
+        p.inputs[name].default_value = 0.5
+    nt.links.new(_folded(nt, 0.7, value), p.inputs[inp])
+    return m, p
+
+
+LAYER_WORDS = {'Coat Weight': "coat", 'Sheen Weight': "sheen", 'Metallic': "metal",
+               'Subsurface Weight': "subsurface", 'Transmission Weight': "transmission"}
+
+
+@pytest.mark.parametrize('inp', list(LAYER_WORDS))
+def test_principled_layer_of_folded_weight_0_unsaid(scene, said, inp):
+    """A Principled layer whose weight folds to 0 renders nothing in Cycles (no closure of weight
+    0) and is not said; the others (0.5) are."""
+    m, _ = _principled(inp)
+    _scene(scene, m)
+    got = _said(scene, said, APPROX)[APPROX]
+    assert len(got) == 1, got
+    words = {w for k, w in LAYER_WORDS.items() if f"Principled {w}" in got[0]}
+    assert words == set(LAYER_WORDS.values()) - {LAYER_WORDS[inp]}, got
+
+
+def test_principled_of_alpha_0_renders_only_its_transparency(scene, said, tmp_path):
+    """A Principled whose Alpha folds to 0: Cycles scales every layer by it and allocates none,
+    so only its white Transparent BSDF renders (bit-identical to a Transparent BSDF alone); its
+    coat, sheen, metal, ... had been said as approximated."""
+    m, p = _principled('Alpha')
+    floor = bpy.data.materials.new('Floor')
+    floor.node_tree.nodes.remove(next(n for n in floor.node_tree.nodes if n.type == 'BSDF_PRINCIPLED'))
+    floor.node_tree.links.new(floor.node_tree.nodes.new('ShaderNodeBsdfDiffuse').outputs[0],
+                              next(n for n in floor.node_tree.nodes if n.type == 'OUTPUT_MATERIAL').inputs[0])
+    _scene(scene, floor)
+    scenes.uv_sphere(name='Ball', location=(0.5, 0, 1.2), radius=0.8, materials=[m])
+    got = _said(scene, said, APPROX, GLOSSY_VIS)
+    assert not any(got.values()), got
+    scene.render.engine = 'CYCLES'
+    principled = rendering.render_combined(scene, str(tmp_path / 'p.exr'))
+    nt = m.node_tree
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfTransparent').outputs[0],
+                 next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL').inputs['Surface'])
+    assert np.array_equal(principled, rendering.render_combined(scene, str(tmp_path / 't.exr')))
+    scene.render.engine = 'DACRT'
+    dacrt = rendering.render_combined(scene, str(tmp_path / 'd.exr'))
+    assert dacrt[..., :3].mean() == pytest.approx(principled[..., :3].mean(), rel=0.03)
