@@ -596,13 +596,13 @@ def constant_value(socket, notes=None, why=None):
     return (0.0 if v != v else v), exact
 
 
-def nan_inputs(ntree, types=None):
+def nan_inputs(ntree, types=None, keep=None):
     """'input' of 'node' for each unlinked float input of ntree's nodes whose value is NaN
     (a script's or driver's), which constant_value reads as 0; types: only nodes of those
-    types (a set of node.type), or None for all."""
+    types (a set of node.type), or None for all; keep: only nodes it returns true for."""
     found = []
     for node in getattr(ntree, 'nodes', ()):
-        if types is not None and node.type not in types:
+        if (types is not None and node.type not in types) or (keep is not None and not keep(node)):
             continue
         for sock in node.inputs:
             v = getattr(sock, 'default_value', None)

@@ -252,15 +252,22 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             # reads 0; a procedural texture computes with it as Cycles' kernels do)
             computed = {n.type for n in ntree.nodes if nodeeval.node_inputs(n) is not None}
             shader = {n.type for n in ntree.nodes} - computed - PROCEDURAL_TYPES
-            textures = nan_inputs(ntree, PROCEDURAL_TYPES)
+            # only nodes Cycles compiles (the active output and what reaches it after constant
+            # folding): a NaN in a node left unlinked, or on an EEVEE-only output, is read by nothing
+            active, used = output_node(ntree), self._used_outputs
+
+            def rendered(n):
+                return n == active or any(used.reads(n, o.identifier) for o in n.outputs)
+
+            textures = nan_inputs(ntree, PROCEDURAL_TYPES, rendered)
             # (the textures take a NaN as Cycles' kernels do: clamped where Cycles clamps it, a
             # Noise's NaN Scale black; but a Noise's NaN Lacunarity or Distortion and a Voronoi's
             # NaN Scale (cells hashed from NaN) do not give Cycles' result)
-            differs = [b for b in nan_inputs(ntree, {'TEX_NOISE'})
+            differs = [b for b in nan_inputs(ntree, {'TEX_NOISE'}, rendered)
                        if b.startswith("'Lacunarity' of ") or b.startswith("'Distortion' of ")]
-            differs += [b for b in nan_inputs(ntree, {'TEX_VORONOI'}) if b.startswith("'Scale' of ")]
-            for bad, said in ((nan_inputs(ntree, shader), "NaN read as 0 (as Cycles clamps it) for {}"),
-                              (nan_inputs(ntree, computed) + [b for b in textures if b not in differs],
+            differs += [b for b in nan_inputs(ntree, {'TEX_VORONOI'}, rendered) if b.startswith("'Scale' of ")]
+            for bad, said in ((nan_inputs(ntree, shader, rendered), "NaN read as 0 (as Cycles clamps it) for {}"),
+                              (nan_inputs(ntree, computed, rendered) + [b for b in textures if b not in differs],
                                "NaN computed through the node as Cycles computes it for {}"),
                               (differs, "NaN for {}: the texture computes with it, not as Cycles' does")):
                 if bad:

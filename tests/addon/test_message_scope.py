@@ -9,7 +9,8 @@ constant Fac <= 0 / >= 1 down to one shader), not every node in the tree:
 - the "material(s) approximated" reasons (the material export's shader walk, which had
   evaluated both shaders of a Mix of Fac 0 and said "Glossy BSDF as diffuse" for the one Cycles
   drops; a Principled whose Alpha folds to 0 had its every layer said, though Cycles renders
-  only its transparency), and a Principled layer whose weight folds to 0 (a Value, a Math chain).
+  only its transparency), and a Principled layer whose weight folds to 0 (a Value, a Math chain);
+  a NaN input (a script's) on a node Cycles does not compile (unlinked, on an EEVEE-only output).
 
 DACRT's messages at 1 sample, 32x24; where Cycles renders, 16 samples (DACRT 1), compared at one seed."""
 import math
@@ -227,3 +228,21 @@ def test_principled_of_alpha_0_renders_only_its_transparency(scene, said, tmp_pa
     scene.render.engine = 'DACRT'
     dacrt = rendering.render_combined(scene, str(tmp_path / 'd.exr'))
     assert dacrt[..., :3].mean() == pytest.approx(principled[..., :3].mean(), rel=0.03)
+
+
+@pytest.mark.parametrize('case', ['unlinked', 'linked', 'eevee_output', 'cycles_output'])
+def test_nan_input_said_only_where_its_node_renders(scene, said, tmp_path, case):
+    """A NaN Roughness (a script's) on the Glossy is said only where Cycles compiles the node:
+    not when it is left unlinked or on an EEVEE-only output (nothing reads it: Cycles'
+    image bit-identical with the Roughness NaN or 0.3)."""
+    m, glossy = _material(case)
+    rough = next(n for n in m.node_tree.nodes if n.type == 'BSDF_GLOSSY').inputs['Roughness']
+    rough.default_value = float('nan')
+    _scene(scene, m)
+    got = [t for t in _said(scene, said, APPROX)[APPROX] if "NaN" in t]
+    assert len(got) == (1 if glossy else 0), got
+    if case == 'unlinked':
+        scene.render.engine = 'CYCLES'
+        nan = rendering.render_combined(scene, str(tmp_path / 'nan.exr'))
+        rough.default_value = 0.3
+        assert np.array_equal(nan, rendering.render_combined(scene, str(tmp_path / 'r.exr')))
