@@ -132,10 +132,11 @@ class ShaderClosures:
             textured = self._textured_mix(node, reasons, depth)
             if textured is not None:
                 return textured
-            varying = self._procedural_mix(node, reasons, depth)
+            said = []       # (why the per-point mix was not taken: said once, with the value used)
+            varying = self._procedural_mix(node, reasons, depth, said)
             if varying is not None:
                 return varying
-            fac = mix_factor(node, reasons, "Mix Shader")
+            fac = mix_factor(node, reasons, "Mix Shader", said=said)
             # (each side's BSDFs weighed for the material's choice of normal: _normal_input)
             weight = self._normal_weight
             self._normal_weight = weight * (1.0 - fac)

@@ -30,15 +30,19 @@ def value_emission(link, reasons, texture=_no_image):
     return np.asarray(f.value, np.float64).reshape(3)
 
 
-def mix_factor(node, reasons, label, surface=True):
+def mix_factor(node, reasons, label, surface=True, said=None):
     """A Mix Shader's factor, clamped to [0, 1] as Cycles does: computed through the nodes the
     export evaluates, on a surface a Fresnel or Layer Weight (a clear coat's blend) as its
     average over view directions (fresnel.py; not in the world, which has no surface to view);
-    otherwise at its own value."""
+    otherwise at its own value. said: what the per-point mix already found about the factor
+    ("from image 'x.png' not evaluated per point (why)"), said instead of what the evaluation
+    did not compute, so the message names the factor's source and its reason once."""
     notes, why = [], []
     fac, ok = constant_value(node.inputs['Fac'], notes if surface else None, why)
     reasons.extend(f"{label} factor from {n}" for n in notes)
-    if not ok:
+    if not ok and said:
+        reasons.append(f"{label} factor {said[0]}; its own value {fac:.3g} weighs both shaders")
+    elif not ok:
         what = ", ".join(dict.fromkeys(why)) or "nodes"
         reasons.append(f"{label} factor not computed ({what}); its own value {fac:.3g} used")
     return min(max(fac, 0.0), 1.0) if fac == fac else 0.0     # (NaN: Cycles' saturate gives 0)

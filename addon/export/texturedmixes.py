@@ -1,8 +1,9 @@
 """Mix Shaders whose factor a texture computes, part of the material export's MaterialBuilder
 (a mixin of it): a factor from nodes on one image between two plain colours (the albedo per
 texel, or after the lookup as Cycles runs the nodes), and a factor procedural textures compute
-between plain or procedural colours (the albedo per shading point) or between a transparent
-shader and another (the procedural cut-out, export/cutouts.py)."""
+between plain or procedural colours and emissions (the albedo and the emission per shading
+point: an emission mask) or between a transparent shader and another (the procedural cut-out,
+export/cutouts.py)."""
 
 import numpy as np
 
@@ -19,6 +20,26 @@ def _alike(a, b):
     had become a texture of the albedo and lost the rough diffuse's view dependence)."""
     return same_rough(a, b) and np.allclose(a.rough[1], b.rough[1]) and np.allclose(a.const, b.const) and \
         np.allclose(a.tex_weight, b.tex_weight)
+
+
+def _emits(c):
+    """Whether closure c has an emission (constant or per point)."""
+    return bool(c.emission.any()) or c.emission_tex is not None
+
+
+def _constant_part(c):
+    """What of closure c a per-point Mix Shader factor cannot weigh, the surface holding one
+    value of it per material (a Translucent BSDF's colour, a Transparent's, ...), or ''."""
+    if c.translucent.any():
+        return "translucency is one colour per material here"
+    if c.transparent.any() or c.opacity is not None:
+        return ("a transparent part is one colour per material here (per point only as a cut-out: one "
+                "side purely transparent, the other opaque)")
+    if c.holdout:
+        return "a Holdout's weight is one per material here"
+    if c.light_emission is not None:
+        return "an emission under a coat or sheen is one value per material here"
+    return ''
 
 
 class TexturedMixes:
@@ -70,24 +91,26 @@ class TexturedMixes:
         pa, pb = (s.pass_albedo()[0] for s in sides)
         return out._with_passes((np.zeros(3), texture(pa, pb), np.ones(3)))
 
-    def _procedural_mix(self, node, reasons, depth):
-        """A Mix Shader whose factor procedural textures (or an image, beside textured sides)
-        compute (procedurals.py), between two shaders that have an albedo only (a constant, a
-        procedural texture's or an image's, looked up per point: closure.per_point): the albedo
-        per shading point, a + (b - a) x factor, the factor clamped to [0, 1] as Cycles' Mix
+    def _procedural_mix(self, node, reasons, depth, said=None):
+        """A Mix Shader whose factor procedural textures (or an image, beside textured or
+        emitting sides) compute (procedurals.py), between two shaders that have an albedo and an
+        emission only (each a constant, a procedural texture's or an image's, looked up per
+        point: closure.per_point): the albedo per shading point, a + (b - a) x factor, and the
+        emission likewise, E1 + (E2 - E1) x factor, the factor clamped to [0, 1] as Cycles' Mix
         Shader clamps it. Between a purely transparent shader and another (the procedural
         cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
-        (_procedural_cutout). None otherwise (the factor at its own value)."""
+        (_procedural_cutout). None otherwise (the factor at its own value; why, in `said`)."""
         fac_notes = []      # (said only if this mix is taken: a Light Path's stand-in)
         found = procedurals.compile_socket(node.inputs['Fac'], False, fac_notes, image=self._texture)
         closures = None
         if found is None and any(link.from_node.type == 'TEX_IMAGE' for link in links_feeding(node.inputs['Fac'])):
             # a factor from one image between shaders with images of their own (a mask's colour
-            # mixing two textured Diffuse BSDFs): it had stood at its own value; every image is
-            # looked up per point then (sides of constant colours: _textured_mix, per texel)
+            # mixing two textured Diffuse BSDFs) or an emission (a glow mask: _textured_mix
+            # bakes albedos alone): it had stood at its own value; every image is looked up per
+            # point then (sides of constant colours alone: _textured_mix, per texel)
             notes = []
             closures = [self._shader(socket, notes, depth + 1) for socket in (node.inputs[1], node.inputs[2])]
-            if any(c.texture is not None for c in closures):
+            if any(c.texture is not None or _emits(c) or _constant_part(c) for c in closures):
                 found = procedurals.compile_floats([node.inputs['Fac']], "Mix Shader factor", fac_notes,
                                                    image=self._texture)
         if found is None:
@@ -101,24 +124,27 @@ class TexturedMixes:
         if cutout is not None:
             reasons.extend(fac_notes + notes)
             return cutout
-        sides = []
+        sides, emits = [], []
         for c in closures:
             # (an image on the UV map is looked up per point as well: two Diffuse BSDFs on
             # different images mixed by a Checker had read the factor at its own value)
             lookup = per_point(c.texture) if c.texture is not None else None
-            procedural = lookup is not None
-            if (c.texture is not None and not procedural) or c.emission.any() or c.emission_tex is not None \
-                    or c.transparent.any() or c.holdout or c.opacity is not None or c.translucent.any():
-                if name:    # (a coordinate-only factor, no texture: the evaluation's note says it)
-                    reasons.append(f"Mix Shader factor from procedural textures ('{name}') between shaders "
-                                   "that are not both plain colours nor a transparent one and another (an "
-                                   "image, emission, translucency, or transparency on both sides): not "
-                                   "evaluated per point")
+            elookup = per_point(c.emission_tex[0]) if c.emission_tex is not None else None
+            why = _constant_part(c) or \
+                (c.texture is not None and lookup is None and "a mesh attribute's colour is not looked up in it") or \
+                (c.emission_tex is not None and elookup is None and "a mesh attribute's emission is not looked up in it")
+            if why:
+                if name and said is not None:   # (a coordinate-only factor: the evaluation's note says it)
+                    said.append(f"from procedural textures ('{name}') not evaluated per point ({why})")
                 return None
             sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
-                          lookup.pixels if procedural else None))
-            needs |= lookup.pixels.needs if procedural else frozenset()
-        if _alike(*closures):           # (the factor, unused, says nothing)
+                          lookup.pixels if lookup is not None else None))
+            needs |= lookup.pixels.needs if lookup is not None else frozenset()
+            # an emission: its constant, or its image's or procedural one's weight x per point
+            emits.append((c.emission.astype(np.float64), None, None) if elookup is None else
+                         (np.zeros(3), np.asarray(c.emission_tex[1], np.float64), elookup.pixels))
+            needs |= elookup.pixels.needs if elookup is not None else frozenset()
+        if _alike(*closures) and not any(_emits(c) for c in closures):     # (the factor, unused, says nothing)
             reasons.extend(notes)
             return closures[0]
         reasons.extend(fac_notes + notes)
@@ -127,13 +153,24 @@ class TexturedMixes:
             const, weight, tex = side
             return const if tex is None else const + weight * tex.evaluate(coords).T.astype(np.float64)
 
-        def mixer(sides):
+        def factor(coords):
+            return np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+
+        def mixer(sides, kind='procedural'):
             def mixed(coords):      # reads no Blender data: it runs during the render's lookups
-                f = np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+                f = factor(coords)
                 a = albedo(sides[0], coords)
                 return a + (albedo(sides[1], coords) - a) * f
-            return Texture.procedural(ProceduralTexels(mixed, needs, name))
-        out = Closure(texture=mixer(sides), tex_weight=(1.0, 1.0, 1.0))
+            return Texture.procedural(ProceduralTexels(mixed, needs, name), kind)
+        emission, etex = np.zeros(3), None
+        if any(_emits(c) for c in closures):
+            # an emission mask (a glow on a sign, lava cracks): Cycles weighs each side's
+            # emission by the factor at the point; it had stood at the node's own value (1.3x)
+            emitted = mixer(emits, 'emission')
+            emission, etex = emitted.pixels.magnitude(), (emitted, np.ones(3))
+        if etex is not None and not any(c.reflects() for c in closures):
+            return Closure(emission=emission, emission_tex=etex)     # (Mix of two Emissions: no albedo)
+        out = Closure(texture=mixer(sides), tex_weight=(1.0, 1.0, 1.0), emission=emission, emission_tex=etex)
         if all(c.passes is None for c in closures):
             return out
         # a rough diffuse side: the Diffuse Color pass mixes its colour (Closure.passes)

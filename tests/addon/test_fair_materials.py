@@ -79,7 +79,9 @@ def _non_diffuse_materials():
     nt.links.new(math_node.outputs[0], e.inputs['Strength'])
     mix = nt.nodes.new('ShaderNodeMixShader')
     mix.inputs['Fac'].default_value = 0.3
-    nt.links.new(noise.outputs['Fac'], mix.inputs['Fac'])
+    # (a 4D noise: a 3D one is evaluated per point between a Diffuse and an Emission, the
+    # emission mask of export/texturedmixes.py, which the override would not keep)
+    nt.links.new(noise4d.outputs['Fac'], mix.inputs['Fac'])
     nt.links.new(d.outputs[0], mix.inputs[1])
     nt.links.new(e.outputs[0], mix.inputs[2])
     nt.links.new(mix.outputs[0], out.inputs['Surface'])
