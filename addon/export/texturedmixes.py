@@ -5,6 +5,8 @@ between plain or procedural colours and emissions (the albedo and the emission p
 point: an emission mask) or between a transparent shader and another (the procedural cut-out,
 export/cutouts.py)."""
 
+import re
+
 import numpy as np
 
 from ..nodegraph import links_feeding
@@ -33,13 +35,27 @@ def _constant_part(c):
     if c.translucent.any():
         return "translucency is one colour per material here"
     if c.transparent.any() or c.opacity is not None:
-        return ("a transparent part is one colour per material here (per point only as a cut-out: one "
-                "side purely transparent, the other opaque)")
+        return ("a transparent part is one colour per material here, per point only in a cut-out: one "
+                "side purely transparent, the other opaque")
     if c.holdout:
         return "a Holdout's weight is one per material here"
     if c.light_emission is not None:
         return "an emission under a coat or sheen is one value per material here"
     return ''
+
+
+def factor_source(name):
+    """How a message names what computes a factor, from procedurals' joined texture names
+    ("Checker Texture, image 'tex.png'"): an image as an image, a procedural texture as one
+    (an image had been called "procedural textures ('image 'tex.png'')")."""
+    parts = [p for p in re.split(r", (?=image '|[A-Z])", name) if p]
+    images = [p for p in parts if p.startswith("image '") or p == 'Image Texture']
+    procs = [f"'{p}'" for p in parts if p not in images]
+    if not procs:
+        return images[0] if len(images) == 1 else "images " + ", ".join(p[len("image "):] for p in images)
+    if not images:
+        return ("procedural texture " if len(procs) == 1 else "procedural textures ") + ", ".join(procs)
+    return "textures (" + ", ".join(procs + images) + ")"
 
 
 class TexturedMixes:
@@ -135,7 +151,7 @@ class TexturedMixes:
                 (c.emission_tex is not None and elookup is None and "a mesh attribute's emission is not looked up in it")
             if why:
                 if name and said is not None:   # (a coordinate-only factor: the evaluation's note says it)
-                    said.append(f"from procedural textures ('{name}') not evaluated per point ({why})")
+                    said.append(f"from {factor_source(name)} not evaluated per point ({why})")
                 return None
             sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
                           lookup.pixels if lookup is not None else None))

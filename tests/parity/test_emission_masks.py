@@ -130,12 +130,18 @@ def _said_for(tmp_path, said, first, second, kind):
     return next(t for t in said if "'M'" in t)
 
 
-def test_a_factor_not_weighed_per_point_says_what_stands_at_a_constant(tmp_path, said):
-    """Where the surface holds one value per material (a Translucent BSDF's colour), the factor
-    stands at its own value for both shaders: said once, with why. It had said "between
-    shaders that are not both plain colours ...: not evaluated per point" and then the factor
-    again ("not computed (value from 'Checker Texture' node)"), not what stood at a constant."""
-    text = _said_for(tmp_path, said, 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTranslucent', 'checker')
-    assert "not evaluated per point (translucency is one colour per material here); its own value 0.5 " \
-           "weighs both shaders" in text, text
-    assert text.count("Mix Shader factor") == 1, text
+@pytest.mark.parametrize('first, second, kind, what', [
+    ('ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTranslucent', 'checker', "translucency is one colour per material"),
+    ('ShaderNodeBsdfTransparent', 'ShaderNodeBsdfTransparent', 'image_uv', "a transparent part is one colour"),
+    ('ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTranslucent', 'image_generated', "translucency is one colour")])
+def test_a_factor_not_weighed_per_point_says_what_stands_at_a_constant(first, second, kind, what, tmp_path, said):
+    """Where the surface holds one value per material (a Translucent BSDF's colour, a
+    Transparent's beside another transparent side), the factor stands at its own value for
+    both shaders: said once, naming the factor's source (an image as an image) and why. It had
+    said "procedural textures ('image 'mask.png'')" and then the factor again ("not
+    computed (an image)"), without saying what was read at a constant."""
+    text = _said_for(tmp_path, said, first, second, kind)
+    source = "procedural texture 'Checker Texture'" if kind == 'checker' else "image 'mask.png'"
+    assert f"Mix Shader factor from {source} not evaluated per point ({what}" in text, text
+    assert "its own value 0.5 weighs both shaders" in text, text
+    assert text.count("Mix Shader factor") == 1 and "procedural textures" not in text, text
