@@ -89,6 +89,12 @@ void gather_area_lanes(const Gather& g, const LampRecord& lamp, int32_t key, siz
             pdf[q] = t * t / (lamp.area * -denom);
             hit[q] = int(denom < 0) & int(t > 0) & int(t < tmax[q]) & (ellipse ? in_ellipse : in_rect);
         }
+        // Most groups meet the lamp nowhere (a ceiling lamp fills a small part of a vertex's
+        // hemisphere): they add nothing and are done. Branching per group is predictable where
+        // branching per ray was not; adding their zeros had cost more than finding the hits.
+        int any = 0;
+        for (size_t q = 0; q < K; ++q) any |= hit[q];
+        if (!any) continue;
         if (rect)
             for (size_t q = 0; q < K; ++q) {  // sample_lamp's pdf at the ray's origin: its sph_rect decides
                 if (!hit[q]) continue;
