@@ -31,7 +31,7 @@ struct Gather {
 };
 
 // Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
-// caller). The add is selected, not branched on: whether a ray sees a lamp follows no pattern.
+// caller); nothing where it does not see the lamp.
 __attribute__((always_inline)) inline void gather_one(const Gather& g, const LampRecord& lamp, int kind, int32_t key,
                                                       size_t k, size_t i) {
     const size_t n = g.n;
@@ -40,10 +40,14 @@ __attribute__((always_inline)) inline void gather_one(const Gather& g, const Lam
     float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
     const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
                                                                   : hit_lamp(lamp, o, d, g.t_surf[i], Le, pdf_l);
+    // most rays see none of the lamps they are tested against (a sun's disk, a small lamp the
+    // BVH lists as near): they add nothing and are done, without the weight, the clamp and the
+    // film's three read-modify-writes (many lights: 16.6 -> 14.9 ms of lamp_gather per render)
+    if (!seen) return;
     float w = 1.0f;
     if (g.lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
         float p_sel = g.lamp_prob[g.lamps[k]];
-        if (key >= 0 && seen)  // as picked from o with the vertex's normal
+        if (key >= 0)  // as picked from o with the vertex's normal
             p_sel = float(double(p_sel) * g.tree->pdf(o, g.normal, n, i, key,
                                                       g.receivers ? g.receivers[i] : LightTree::kAllSets));
         float r = p_sel * pdf_l / g.pdf_bsdf[i];
@@ -59,7 +63,7 @@ __attribute__((always_inline)) inline void gather_one(const Gather& g, const Lam
         if (g.lamp_prob) v[a] *= w;
     }
     clamp_light(v, g.clamp);  // each lamp a ray meets is its own contribution, as in Cycles
-    for (int a = 0; a < 3; ++a) out[size_t(a) * g.N] += seen ? v[a] : 0.0f;
+    for (int a = 0; a < 3; ++a) out[size_t(a) * g.N] += v[a];
 }
 
 // gather_one for an area lamp without spread (area_lanes_apply) at list position k, tree key

@@ -80,3 +80,56 @@ def test_groups_that_meet_nothing_add_nothing(shape, bsdf):
         dacrt.lamps.lamp_gather(rec, [0], O[:, i:i + 1], D[:, i:i + 1], t_surf[i:i + 1], miss[i:i + 1],
                                 pid[i:i + 1], by_ray, **sub)
     np.testing.assert_array_equal(L.view(np.uint32), by_ray.view(np.uint32))
+
+
+def _small_lamps():
+    """A sun and lamps a ray passes near far more often than it meets them (the lamp BVH lists
+    them as near): small spheres and disks, a spot."""
+    return [make_lamp(light('POINT', (30.0, 30.0, 30.0), translation(x, y, 2.0), radius=0.2, soft_falloff=soft))
+            for x, y, soft in ((-0.5, 0.0, False), (0.5, 0.3, True), (0.0, -0.5, False))] + [
+        make_lamp(light('SPOT', (50.0, 20.0, 5.0), translation(0.2, 0.2, 2.5), radius=0.08,
+                        spot_size=np.radians(120.0), spot_blend=0.3)),
+        make_lamp(light('SUN', (3.0, 3.0, 3.0), translation(0.0, 0.0, 5.0), angle=np.radians(15.0)))]
+
+
+@pytest.mark.parametrize('lamps', [[0], [4], [0, 1, 2, 3, 4]])     # one lamp, the sun; several: the BVH
+@pytest.mark.parametrize('bsdf', [False, True])
+def test_rays_that_see_no_lamp_add_nothing(lamps, bsdf):
+    """gather_one returns for a ray that does not see the lamp (the ray-by-ray path of points,
+    spots and suns, and of the lamp BVH): its film column keeps its bits whatever the ray's
+    throughput and pdf, and the rays that see a lamp add what they add when gathered alone."""
+    rng = np.random.default_rng(11 + bsdf + len(lamps))
+    rec = lamp_records(_small_lamps())
+    n = 4000
+    O = np.stack([rng.uniform(-1, 1, n), rng.uniform(-1, 1, n), rng.uniform(0.0, 1.0, n)]).astype(F32)
+    D = np.stack([rng.normal(0, 0.4, n), rng.normal(0, 0.4, n), np.ones(n)])
+    D = (D / np.linalg.norm(D, axis=0)).astype(F32)
+    t_surf = np.where(rng.random(n) < 0.2, rng.uniform(0.5, 3.0, n), np.inf).astype(F32)
+    miss = ~np.isfinite(t_surf)
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=np.full(len(rec), 0.2, F32), clamp=40.0)
+    pid = rng.permutation(n)
+    L0 = rng.uniform(0.0, 3.0, (3, n)).astype(F32)
+    L = L0.copy()
+    dacrt.lamps.lamp_gather(rec, lamps, O, D, t_surf, miss, pid, L, **kw)
+    seen = (L != L0).any(axis=0)
+    assert 20 < seen.sum() < n // 3, f'{seen.sum()} of {n} rays see a lamp: the test wants few'
+    if bsdf:   # now the same rays with non-finite throughputs and pdfs where they see nothing
+        away = np.flatnonzero(~seen[pid])
+        thr, pdf = kw['thr'].copy(), kw['pdf_bsdf'].copy()
+        thr[:, away[::2]] = np.nan
+        pdf[away[1::2]] = 0.0
+        L2 = L0.copy()
+        with np.errstate(invalid='ignore', divide='ignore'):
+            dacrt.lamps.lamp_gather(rec, lamps, O, D, t_surf, miss, pid, L2, **dict(kw, thr=thr, pdf_bsdf=pdf))
+        np.testing.assert_array_equal(L2.view(np.uint32), L.view(np.uint32))
+    np.testing.assert_array_equal(L[:, ~seen].view(np.uint32), L0[:, ~seen].view(np.uint32))
+    by_ray = L0.copy()
+    for i in np.flatnonzero(seen[pid]):
+        sub = {k: (v[..., i:i + 1] if k in ('thr', 'pdf_bsdf') else v) for k, v in kw.items()}
+        dacrt.lamps.lamp_gather(rec, lamps, O[:, i:i + 1], D[:, i:i + 1], t_surf[i:i + 1], miss[i:i + 1],
+                                pid[i:i + 1], by_ray, **sub)
+    np.testing.assert_array_equal(L.view(np.uint32), by_ray.view(np.uint32))
+
