@@ -45,11 +45,26 @@ def nonnegative(v, label, reasons):
     bad = ~np.isfinite(v) | (v < 0)
     if not bad.any():
         return v
+    # (an emission's negative channel is Cycles' too: it emits it, darkening what it adds to)
+    emitted = " (Cycles emits the negative value)" if 'emission' in label and (v < 0).any() else ""
     if v.ndim == 1:
-        reasons.append(f"negative or non-finite {label} {tuple(float(x) for x in v)} set to 0 per channel")
+        reasons.append(f"negative or non-finite {label} {tuple(float(x) for x in v)} set to 0 per channel"
+                       f"{emitted}")
     else:
-        reasons.append(f"{int(bad.any(axis=-1).sum())} texel(s) of negative or non-finite {label} set to 0")
+        reasons.append(f"{int(bad.any(axis=-1).sum())} texel(s) of negative or non-finite {label} set to 0"
+                       f"{emitted}")
     return np.where(bad, np.float32(0), v).astype(np.float32)
+
+
+def _clamped_weight(c):
+    """c with the negative channels of its constant colour at 0, as Cycles clamps each BSDF's
+    closure weight before the closures are summed: a Diffuse of red -0.3 is black in red, and
+    mixed 0.5 with a Diffuse of red 0.8 gives 0.4 (summed first, then clamped, it had been 0.25
+    unsaid). Not a difference from Cycles, so not said; a NaN channel is left for nonnegative
+    to report. A textured colour is clamped per point later."""
+    if c.texture is None or not c.tex_weight.any():
+        c.const = np.where(c.const < 0.0, 0.0, c.const)
+    return c
 
 
 class ShaderClosures:
@@ -86,7 +101,7 @@ class ShaderClosures:
         t = node.type
         if t == 'BSDF_DIFFUSE':
             self._normal_input(node, reasons)
-            c = self._color_closure(node.inputs['Color'], reasons)
+            c = _clamped_weight(self._color_closure(node.inputs['Color'], reasons))
             rough = diffuse_roughness(node, reasons)
             if rough == 0.0:
                 return c
@@ -199,7 +214,7 @@ class ShaderClosures:
         sock = input_socket(node, 'Color', 'Base Color')
         if sock is not None and sock.type == 'RGBA':
             color, _ = constant_color(sock)
-            return Closure(const=color)
+            return _clamped_weight(Closure(const=color))
         return Closure(const=DEFAULT_ALBEDO)
 
     def _principled(self, node, reasons):
@@ -225,12 +240,9 @@ class ShaderClosures:
         if c.texture is None or not c.tex_weight.any():
             # Cycles clamps the base colour at 0 (max(base_color, 0): NaN reads 0) before its
             # layers; clamped after them, a negative channel took the coat's and the specular
-            # layer's reflection with it
-            bad = ~(c.const >= 0.0)
-            if bad.any():
-                reasons.append(f"Principled Base Color {tuple(round(float(x), 6) for x in c.const)} clamped at 0 "
-                               f"per channel (NaN read as 0), as Cycles clamps it before its layers")
-                c.const = np.where(bad, 0.0, c.const)
+            # layer's reflection with it. Not said: the image is Cycles' (it had been reported
+            # as an approximation)
+            c.const = np.where(~(c.const >= 0.0), 0.0, c.const)
         steps = principled.layer_steps(node, reasons)
         plain = c.passes is None
         for step in steps:
