@@ -7,6 +7,7 @@ layer."""
 import numpy as np
 
 from .. import nodegraph
+from .. import scenedata as sd
 from ..nodeeval import NotCompiled, compile_image_chain, constant_value
 from ..nodegraph import linked_link
 from ..texture import UdimTiles
@@ -141,3 +142,183 @@ def _below(rgb, strength):
     length = np.sqrt(np.einsum('ij,ij->i', c, c))
     z = c[:, 2] / np.where(length > 0, length, 1.0)
     return bool(np.any((length > 0) & (1.0 + (z - 1.0) * strength < 0)))
+
+
+# (placements with such a material past which the side test is not made: said, as before)
+_MAX_PLACEMENTS = 2000
+# (plane x ray-origin tests, or frame triangles, past which it is not made either)
+_MAX_TESTS = 20_000_000
+_MAX_TRIANGLES = 20_000_000
+
+
+def lit_from_behind(names, geometry, materials, lights, camera):
+    """Those of names (below_surface's) on whose surfaces a lamp or emitter can lie on the far
+    side of the surface from a ray that meets it: only there does Cycles' light tree, weighing
+    a light by the unbent normal turned to the ray's side, never sample it while the bent normal
+    lets it light the point here. Per placement of each such material:
+
+    * a closed mesh (every edge shared by two triangles) that shadow rays cannot pass: a ray
+      from outside meets its outside, and a light behind the surface there is on the inside of
+      the surface's plane, so the path to it crosses the mesh again, unless the light is inside
+      the mesh (a lamp or emitter within its bounds: said) or the camera is (said);
+    * any other surface, per triangle plane: said if a ray can meet it from one side (the
+      camera or any object's bounds lie on that side) while some part of a lamp (its radius or
+      area corners, a sun's cone) or emitter (its bounds) lies on the other.
+
+    It leaves out the few points of a smooth mesh whose interpolated normal, not the
+    triangle's, puts a light behind (the terminator of a 32-segment sphere: a repro of a
+    normal-mapped sphere and floor under an area lamp matched Cycles to 1e-4 yet was warned
+    of). Conservative: too many placements or tests, or no camera, say them all."""
+    if not names:
+        return []
+    wanted = np.array([k for k, m in enumerate(materials) if m.name in set(names)], np.int64)
+    tris = np.asarray(geometry.triangles)
+    mat = np.asarray(geometry.material)
+    verts = np.asarray(geometry.vertices, np.float64)
+    if camera is None or not len(tris) or not len(wanted) or len(tris) > _MAX_TRIANGLES:
+        return list(names)
+    place = np.asarray(geometry.instance if geometry.instance is not None else geometry.object_index)
+    ids, inverse = np.unique(place, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    if len(np.unique(inverse[np.isin(mat, wanted)])) > _MAX_PLACEMENTS:
+        return list(names)
+    lo_all, hi_all = verts.min(axis=0), verts.max(axis=0)
+    eps = 1e-5 * float(max(np.max(hi_all - lo_all), 1e-3))
+    lo, hi = _bounds(verts, tris, inverse, len(ids))
+    # the points lights lie in: lamps' extents, emitters' bounds; suns' directions and half-angles
+    points, suns = [], []
+    for light in lights:
+        m = np.asarray(light.matrix, np.float64)
+        if light.kind == 'SUN':
+            w = m[:3, 2] / max(np.linalg.norm(m[:3, 2]), 1e-30)
+            suns.append((w, 0.5 * float(light.angle)))
+        elif light.kind == 'AREA':
+            sx, sy = 0.5 * float(light.size_x), 0.5 * float(light.size_y)
+            points.extend(m[:3, :3] @ np.array([x, y, 0.0]) + m[:3, 3] for x in (-sx, sx) for y in (-sy, sy))
+        else:
+            r = float(light.radius)
+            points.extend(m[:3, 3] + np.array([x, y, z]) for x in (-r, r) for y in (-r, r) for z in (-r, r))
+    emissive = np.array([bool(np.any(np.asarray(m.emission) > 0)) or m.emission_texture is not None
+                         for m in materials])
+    glowing = emissive[mat]
+    if glowing.any():
+        e_lo, e_hi = _bounds(verts, tris[glowing], inverse[glowing], len(ids))
+        g = np.isfinite(e_lo[:, 0])
+        points.extend(_box_corners(e_lo[g], e_hi[g]))
+    points = np.array(points, np.float64).reshape(-1, 3)
+    # where rays start: the camera (its lens, near clip and, orthographic, its film) and any
+    # object's bounds
+    cam = _camera_points(camera)
+    origins = np.concatenate([cam, _box_corners(lo, hi)])
+    # surfaces shadow rays pass (see-through, translucent, hidden from them): not closed to light
+    leaky_mat = np.array([any(t is not None and np.any(np.asarray(t) > 0)
+                              for t in (m.transparency, m.translucency, m.refraction, m.opaque_refraction))
+                          or m.opacity is not None for m in materials])
+    leaky = leaky_mat[mat] | ((np.asarray(geometry.visibility) & sd.VIS_SHADOW) == 0)
+    order = np.argsort(inverse, kind='stable')
+    starts = np.searchsorted(inverse[order], np.arange(len(ids) + 1))
+    found = set()
+    for p in np.unique(inverse[np.isin(mat, wanted)]):
+        own = order[starts[p]:starts[p + 1]]
+        todo = set(int(k) for k in np.unique(mat[own])) & set(wanted.tolist()) - found
+        if not todo:
+            continue
+        if not leaky[own].any() and _closed(verts[tris[own]], eps):
+            def inside(q):
+                return bool(np.any(np.all((q >= lo[p] - eps) & (q <= hi[p] + eps), axis=1)))
+            if inside(points) or inside(cam):
+                found |= todo
+            continue
+        for k in todo:
+            if _seen_with_light_behind(verts[tris[own[mat[own] == k]]], origins, points, suns, eps):
+                found.add(k)
+    found = {materials[k].name for k in found}
+    return [n for n in names if n in found]
+
+
+def _bounds(verts, tris, inverse, count):
+    """(lo, hi) (count, 3): the bounds of each placement's triangles (inverse: the placement of
+    each triangle; inf / -inf where it has none), from its vertices (a placement's own: the
+    export does not share them), without a (M, 3, 3) copy of the corners."""
+    lo, hi = np.full((count, 3), np.inf), np.full((count, 3), -np.inf)
+    owner = np.full(len(verts), -1, np.int64)
+    owner[tris] = inverse[:, None]
+    used = np.flatnonzero(owner >= 0)
+    if not len(used):
+        return lo, hi
+    keys = owner[used]
+    order = np.argsort(keys, kind='stable')
+    keys, at = keys[order], verts[used[order]]
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
+    lo[keys[starts]] = np.minimum.reduceat(at, starts, axis=0)
+    hi[keys[starts]] = np.maximum.reduceat(at, starts, axis=0)
+    return lo, hi
+
+
+def _box_corners(lo, hi):
+    """(8 n, 3): the corners of n boxes (n, 3) lo..hi."""
+    lo, hi = np.atleast_2d(lo), np.atleast_2d(hi)
+    return np.stack([np.where(np.array(bits, bool), hi, lo)
+                     for bits in np.ndindex(2, 2, 2)], axis=1).reshape(-1, 3)
+
+
+def _camera_points(camera):
+    m = np.asarray(camera.matrix, np.float64)
+    l, r, b, t = (float(v) for v in camera.viewplane)
+    clip = float(camera.clip_start)
+    if camera.kind == 'ORTHO':
+        local = [np.array([x, y, -z]) for x in (l, r) for y in (b, t) for z in (0.0, clip)]
+        return np.array([m[:3, :3] @ q + m[:3, 3] for q in local]) + _cube(float(camera.aperture))
+    reach = float(camera.aperture) + clip * (1.0 if camera.kind == 'PANO' else np.sqrt(
+        1.0 + (camera.tan_half_fov * max(abs(l), abs(r))) ** 2 + (camera.tan_half_fov * max(abs(b), abs(t))) ** 2))
+    return m[:3, 3] + _cube(reach)
+
+
+def _cube(r):
+    """(8, 3): the corners of a cube of half-size r about 0 ((1, 3) zero for r 0)."""
+    if r <= 0:
+        return np.zeros((1, 3))
+    return np.array([[x, y, z] for x in (-r, r) for y in (-r, r) for z in (-r, r)], np.float64)
+
+
+def _closed(corners, eps):
+    """Whether triangles (n, 3, 3) close a volume: every edge, corners welded by position
+    (the export splits them at seams), shared by exactly two of them."""
+    q = np.round(corners.reshape(-1, 3) / eps).astype(np.int64)
+    _, vid = np.unique(q, axis=0, return_inverse=True)
+    vid = vid.reshape(-1, 3)
+    edges = np.sort(np.concatenate([vid[:, [0, 1]], vid[:, [1, 2]], vid[:, [2, 0]]]), axis=1)
+    edges = edges[edges[:, 0] != edges[:, 1]]
+    if not len(edges):
+        return False
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(np.all(counts == 2))
+
+
+def _seen_with_light_behind(corners, origins, points, suns, eps):
+    """Whether some triangle (n, 3, 3) can be met from one side of its plane while part of a
+    light lies on the other (points: (j, 3) light positions; suns: (direction to the sun,
+    half-angle))."""
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(n, axis=1)
+    keep = length > 0
+    n = n[keep] / length[keep, None]
+    d = np.einsum('ij,ij->i', n, corners[keep, 0])
+    # (one test per distinct plane: a subdivided floor is one)
+    planes = np.unique(np.round(np.column_stack([n, d / eps]), 6), axis=0)
+    n, d = planes[:, :3], planes[:, 3] * eps
+    if len(n) * (len(origins) + len(points)) > _MAX_TESTS:
+        return True
+    side = origins @ n.T - d                                 # (k, planes)
+    front, back = (side > eps).any(axis=0), (side < -eps).any(axis=0)
+    lit_front = np.zeros(len(n), bool)
+    lit_back = np.zeros(len(n), bool)
+    if len(points):
+        s = points @ n.T - d
+        lit_front |= (s > eps).any(axis=0)
+        lit_back |= (s < -eps).any(axis=0)
+    for w, half in suns:
+        c = n @ w
+        lit_front |= c > -np.sin(half)
+        lit_back |= c < np.sin(half)
+    return bool(np.any((front & lit_back) | (back & lit_front)))

@@ -20,7 +20,7 @@ from .errors import ExportCancelled, ExportError
 from .instanceattrs import InstanceAttributes
 from .lights import export_light, light_link_receivers
 from .materials import MaterialBuilder
-from .normalmaps import below_surface
+from .normalmaps import below_surface, lit_from_behind
 from .meshes import mesh_arrays
 from .motion import MotionCheck, motion_blur_message
 from .placement import Placement
@@ -311,6 +311,9 @@ class Exporter:
         # (only where the tree has lamps or emitters to leave out: the world is not culled so)
         tree_lights = self.lights or any(np.any(m.emission > 0) for m in self.materials.materials)
         below = below_surface(self.materials.materials) if settings.use_light_tree and tree_lights else []
+        # (only where a lamp or emitter can lie behind such a surface from where rays meet it: a
+        # normal-mapped sphere and floor under one lamp above had been warned of, matching Cycles)
+        below = lit_from_behind(below, geometry, self.materials.materials, self.lights, camera)
         if below:
             self.messages.append(('WARNING', f"normal map bends normals below the surface on "
                                              f"{', '.join(repr(n) for n in below)}: lights behind the surface "
