@@ -6,9 +6,10 @@ dPdy times the node's Filter Width (every texture coordinate moved by its own di
 bends N by the surface gradient (h_x - h_c) (dPdy x N) + (h_y - h_c) (N x dPdx) over det = dPdx .
 (dPdy x N). For any two directions a, b in the triangle's plane that is the vector g normal to N
 with g . a = dh(a) and g . b = dh(b), whatever the differentials. The integrator takes a and b as
-the triangle's edges (dP/du, dP/dv, every coordinate moved consistently by its barycentric
-derivative) and dh by forward differences, as Cycles' taps are, over the pixel footprint times
-the Filter Width (step_lengths), and calls `bend` here."""
+Cycles' own tap directions (tap_frame: at a surface its differentials are make_orthonormals(Ng)
+times a width; every coordinate moved consistently by the barycentric move that makes the tap)
+and dh by forward differences, as Cycles' taps are, over the pixel footprint times the Filter
+Width (step_lengths), and calls `bend` here."""
 
 import numpy as np
 
@@ -35,6 +36,27 @@ def step_lengths(footprint, extent, share=FOOTPRINT_SHARE):
     """(k,) world lengths of the height's difference steps at points whose pixel footprint
     (k,) is given, in a scene of that extent, for a Filter Width share."""
     return np.maximum(share * np.asarray(footprint, np.float64), STEP_LEAST * extent)
+
+
+def tap_frame(ng):
+    """(T, B) (3, k) float64: the directions of Cycles' two bump taps at points whose geometric
+    normal, turned to the ray's side, is ng (3, k). Cycles keeps no full ray differential at a
+    surface, only a width, so svm_node_set_bump and the texture coordinates' bump taps take
+    differential_from_compact(Ng, dP): make_orthonormals(Ng), T = normalize((1, 1, 1) x Ng)
+    ((-1, 1, 1) x Ng where Ng's components are equal) and B = Ng x T, times the width. A height
+    smooth at the step gives the same gradient in any frame, but a step finer than the taps (a
+    Brick's mortar, a clamped Wave) is crossed by one tap or the other, and the bent normal then
+    lies across the other tap's direction: with the taps along the triangle's edges, as before,
+    a Brick bump on a sphere under a sun rendered 3.4% bright (8px blocks up to 6.6%); in this
+    frame 0.999 of Cycles (blocks within 1.2%). (Duff et al.'s basis, which later Cycles sources
+    use, gave 0.984: not Blender 5.0's.)"""
+    n = np.asarray(ng, np.float64)
+    n = n / np.maximum(np.sqrt((n * n).sum(axis=0)), 1e-30)
+    x, y, z = n
+    same = (x == y) & (x == z)
+    t = np.where(same, np.array([z - y, x + z, -y - x]), np.array([z - y, x - z, y - x]))
+    t = t / np.maximum(np.sqrt((t * t).sum(axis=0)), 1e-30)
+    return t, np.cross(n, t, axis=0)
 
 
 def bend(N, e1, e2, dh_du, dh_dv, distance, strength, scale=None):

@@ -136,8 +136,8 @@ class SurfaceValues:
 
     def _bumped_normal(self, b, prim, u, v, N, back, behind=None):
         """N (3, k) bent by one scenedata.Bump b at hits (prim, u, v): its height's derivatives
-        along the triangle's barycentric u and v by forward differences over the pixel footprint
-        there times the Filter Width (bump.step_lengths; every coordinate moved by its own derivative,
+        along Cycles' two tap directions (bump.tap_frame) by forward differences over the pixel
+        footprint there times the Filter Width (bump.step_lengths; every coordinate moved by its own derivative,
         the normals a chain reads held, as Cycles' bump taps hold N), its strength and distance
         at the hit. behind (k,): the hits met from behind (None: N against the face's normal).
 
@@ -158,16 +158,25 @@ class SurfaceValues:
         if not share > 0:                # Cycles' taps at the point itself: no gradient
             return np.asarray(N, F32)
         step = bumpmap.step_lengths(self._footprint(g[0:3] + e1 * u64 + e2 * v64), self._bump_extent, share)
-        du = step / np.maximum(np.sqrt((e1 * e1).sum(axis=0)), 1e-30)
-        dv = step / np.maximum(np.sqrt((e2 * e2).sum(axis=0)), 1e-30)
+        # the taps along Cycles' frame of the geometric normal on the ray's side (bump.tap_frame),
+        # each as the barycentric move that makes it: e1 du + e2 dv = step x T (or B)
+        T, B = bumpmap.tap_frame(np.where(behind, -g[9:12], g[9:12]))
+        g11, g12, g22 = (e1 * e1).sum(axis=0), (e1 * e2).sum(axis=0), (e2 * e2).sum(axis=0)
+        gram = g11 * g22 - g12 * g12
+        ok = gram > 0
+        gram = np.where(ok, gram, 1.0)
+
+        def barycentric(t):
+            a, c = (e1 * t).sum(axis=0) * step, (e2 * t).sum(axis=0) * step
+            return np.where(ok, (g22 * a - g12 * c) / gram, 0.0), np.where(ok, (g11 * c - g12 * a) / gram, 0.0)
         centre = self._coordinates32(tex.needs, prim, u64, v64, back)
         values = tex.evaluate(centre)
         held = {k: c for k, c in centre.items() if k in SIDED}
 
-        def height(su, sv):
-            coords = self._coordinates32(tex.needs, prim, u64 + su * du, v64 + sv * dv, back)
+        def height(du, dv):
+            coords = self._coordinates32(tex.needs, prim, u64 + du, v64 + dv, back)
             if mirrored:
-                across = self._coordinates32(mirrored, prim, u64 - su * du, v64 - sv * dv, back)
+                across = self._coordinates32(mirrored, prim, u64 - du, v64 - dv, back)
                 for k in mirrored:
                     coords[k] = np.where(behind[:, None], across[k], coords[k])
             return tex.evaluate({**coords, **held})[0].astype(np.float64)
@@ -175,10 +184,11 @@ class SurfaceValues:
         try:
             # forward differences against the centre, as Cycles' two taps (3 evaluations, not 5)
             h_c = values[0].astype(np.float64)
-            dh_du = (height(1.0, 0.0) - h_c) / du
-            dh_dv = (height(0.0, 1.0) - h_c) / dv
+            dh_du = (height(*barycentric(T)) - h_c) / step
+            dh_dv = (height(*barycentric(B)) - h_c) / step
         finally:
             self._undisplaced = was
+        e1, e2 = T, B                    # (the directions the derivatives are along)
         M = None
         if (b.object_height or b.object_space) and self.tri.tangent_xf is not None:
             M = np.take(self.tri.tangent_xf, np.take(self.tri.instance, prim), axis=0).astype(np.float64)
