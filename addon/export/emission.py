@@ -6,6 +6,7 @@ attributes, with the radiance that weighs it as a light."""
 import numpy as np
 
 from .. import nodeeval
+from .. import procedural as pr
 from ..lights.base import fits_float32
 from ..nodegraph import linked_link
 from ..texture import ImageTexels, all_finite, mean_rgb, stored_texels
@@ -47,6 +48,14 @@ class Emission:
                 # skipped (export/lights.py): read as 0, named
                 reasons.append(huge_said(label, color_socket, strength_socket, value))
                 value = np.zeros(3)
+            if np.isfinite(value).all() and (value < 0).any():
+                # Cycles emits a negative channel as it is (it subtracts from what it adds to);
+                # clamped at 0 it had been said as an approximation. Kept signed by the per-point
+                # emission (a constant one), which emits what it computes; its magnitude weighs
+                # the light choice
+                signed = value.copy()
+                texels = pr.ProceduralTexels(lambda coords: signed[None, :], {'generated'}, 'a negative constant')
+                return np.abs(value), (Texture.procedural(texels, 'emission'), np.ones(3))
             said = reasons[start:]
             if said and not (value > 0).any() and \
                     (linked_link(color_socket) is not None or linked_link(strength_socket) is not None):

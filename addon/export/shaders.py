@@ -46,7 +46,7 @@ def nonnegative(v, label, reasons):
     if not bad.any():
         return v
     # (an emission's negative channel is Cycles' too: it emits it, darkening what it adds to)
-    emitted = " (Cycles emits the negative value)" if 'emission' in label and (v < 0).any() else ""
+    emitted = " (Cycles emits the negative value)" if 'emission' in label.lower() and (v < 0).any() else ""
     if v.ndim == 1:
         reasons.append(f"negative or non-finite {label} {tuple(float(x) for x in v)} set to 0 per channel"
                        f"{emitted}")

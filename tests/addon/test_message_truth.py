@@ -5,8 +5,8 @@ Negative constant colours: Cycles clamps each BSDF's weight at 0 per channel bef
 closures are summed, so a Diffuse of red -0.3 is black in red, exactly as DACRT renders it; it
 had been reported as "set to 0 per channel", an approximation. Summed first and clamped after
 (the export before), the same Diffuse mixed 0.5 with one of red 0.8 rendered red 0.245 where
-Cycles gives 0.393, unsaid. A negative emission Cycles emits (red -0.30 where DACRT clamps it):
-still clamped and said, now naming what Cycles does."""
+Cycles gives 0.393, unsaid. A negative constant emission Cycles emits (red -0.30): it had been
+clamped to 0 and said; now emitted signed, per point, as procedural emission is."""
 import bpy
 import numpy as np
 import pytest
@@ -55,25 +55,15 @@ def test_a_negative_constant_bsdf_colour_is_clamped_unsaid(kind, exported):
     assert not m.approximated, m.approximated
 
 
-def test_a_negative_constant_emission_says_cycles_emits_it(exported):
-    scenes.plane("P", materials=[_negative_material('emission')])
-    scenes.camera()
-    m = next(m for m in exported().materials if m.name == 'emission')
-    np.testing.assert_allclose(m.emission, [0.0, 0.5, 0.8], atol=1e-6)
-    assert "set to 0 per channel" in m.approximated and "Cycles emits the negative value" in m.approximated
-
-
-def test_a_negative_diffuse_in_a_mix_is_clamped_before_the_sum(tmp_path):
-    """A sphere under a white world, 0 bounces, orthographic: its disk's mean is the albedo.
-    Before: DACRT red 0.245 (-0.15 + 0.4), Cycles 0.393 (0 + 0.4)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    mat = _negative_material('mix')
+def _sphere_disk(mat, tmp_path, world=1.0):
+    """(DACRT, Cycles) mean colour over a sphere's disk (orthographic, transparent film: sum(RGB)
+    / sum(alpha)) under a uniform world, 0 bounces."""
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
     sc.render.film_transparent = True
     scenes.camera(location=(0, -5, 0), rotation=(np.pi / 2, 0, 0), kind='ORTHO', ortho_scale=2.1)
     scenes.uv_sphere(radius=1.0, segments=64, rings=32, smooth=True, materials=[mat])
-    scenes.world((1.0, 1.0, 1.0), 1.0)
+    scenes.world((world,) * 3, 1.0)
     sc.cycles.samples = sc.dacrt.samples = 32
     sc.cycles.use_denoising = False
     sc.cycles.device = 'CPU'
@@ -84,6 +74,25 @@ def test_a_negative_diffuse_in_a_mix_is_clamped_before_the_sum(tmp_path):
     for engine, exr in scenes.render_engines(sc, tmp_path).items():
         a = exr[f"{layer}.Combined.A"].sum()
         disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
+    return disk['DACRT'], disk['CYCLES']
+
+
+def test_a_negative_constant_emission_is_emitted_as_cycles_does(tmp_path, said):
+    """Cycles emits the negative red; it had been clamped to 0 and said. Before: DACRT
+    (0, 0.5, 0.8), Cycles (-0.3, 0.5, 0.8)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    d, c = _sphere_disk(_negative_material('emission'), tmp_path, world=0.0)
+    np.testing.assert_allclose(c, [-0.3, 0.5, 0.8], atol=0.01)
+    np.testing.assert_allclose(d, c, atol=0.005)
+    assert not any("negative" in text for text in said), said
+
+
+def test_a_negative_diffuse_in_a_mix_is_clamped_before_the_sum(tmp_path):
+    """A sphere under a white world, 0 bounces, orthographic: its disk's mean is the albedo.
+    Before: DACRT red 0.245 (-0.15 + 0.4), Cycles 0.393 (0 + 0.4)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    d, c = _sphere_disk(_negative_material('mix'), tmp_path)
+    disk = {'DACRT': d, 'CYCLES': c}
     np.testing.assert_allclose(disk['DACRT'], disk['CYCLES'], rtol=0.02)
     assert disk['CYCLES'][0] > 0.35, disk
 
