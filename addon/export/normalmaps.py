@@ -223,7 +223,7 @@ def lit_from_behind(names, geometry, materials, lights, camera):
         todo = set(int(k) for k in np.unique(mat[own])) & set(wanted.tolist()) - found
         if not todo:
             continue
-        if not leaky[own].any() and _closed(verts[tris[own]], eps):
+        if not leaky[own].any() and _closed(tris[own]):
             def inside(q):
                 return bool(np.any(np.all((q >= lo[p] - eps) & (q <= hi[p] + eps), axis=1)))
             if inside(points) or inside(cam):
@@ -281,18 +281,33 @@ def _cube(r):
     return np.array([[x, y, z] for x in (-r, r) for y in (-r, r) for z in (-r, r)], np.float64)
 
 
-def _closed(corners, eps):
-    """Whether triangles (n, 3, 3) close a volume: every edge, corners welded by position
-    (the export splits them at seams), shared by exactly two of them."""
-    q = np.round(corners.reshape(-1, 3) / eps).astype(np.int64)
-    _, vid = np.unique(q, axis=0, return_inverse=True)
-    vid = vid.reshape(-1, 3)
-    edges = np.sort(np.concatenate([vid[:, [0, 1]], vid[:, [1, 2]], vid[:, [2, 0]]]), axis=1)
-    edges = edges[edges[:, 0] != edges[:, 1]]
-    if not len(edges):
+def _closed(tris):
+    """Whether triangles (n, 3) close a volume: every edge shared by exactly two of them. By
+    vertex index: the export keeps a mesh's vertices shared (UV seams and flat shading split
+    corners, not vertices); a mesh whose faces are really apart (an Edge Split) counts as open,
+    which only says the warning where it might not be needed."""
+    return _edges_paired(tris.astype(np.int64))
+
+
+def _edges_paired(vid):
+    lo = np.minimum(vid, np.roll(vid, -1, axis=1)).ravel()
+    hi = np.maximum(vid, np.roll(vid, -1, axis=1)).ravel()
+    keep = lo != hi
+    if not keep.any():
         return False
-    _, counts = np.unique(edges, axis=0, return_counts=True)
+    _, counts = np.unique(lo[keep] * (int(vid.max()) + 1) + hi[keep], return_counts=True)
     return bool(np.all(counts == 2))
+
+
+def _hashed(rows):
+    """(n,) int64 keys of integer rows (n, c), equal rows equal keys (np.unique of rows is ~15x
+    slower than of keys: 13 s for 3M rows here); distinct rows collide with odds ~n^2 / 2^64."""
+    key = np.zeros(len(rows), np.uint64)
+    with np.errstate(over='ignore'):
+        for j in range(rows.shape[1]):
+            key = key * np.uint64(0x9E3779B97F4A7C15) + rows[:, j].astype(np.uint64)
+            key ^= key >> np.uint64(29)
+    return key.view(np.int64)
 
 
 def _seen_with_light_behind(corners, origins, points, suns, eps):
@@ -305,8 +320,9 @@ def _seen_with_light_behind(corners, origins, points, suns, eps):
     n = n[keep] / length[keep, None]
     d = np.einsum('ij,ij->i', n, corners[keep, 0])
     # (one test per distinct plane: a subdivided floor is one)
-    planes = np.unique(np.round(np.column_stack([n, d / eps]), 6), axis=0)
-    n, d = planes[:, :3], planes[:, 3] * eps
+    _, first = np.unique(_hashed(np.round(np.column_stack([n * 1e6, d / eps])).astype(np.int64)),
+                         return_index=True)
+    n, d = n[first], d[first]
     if len(n) * (len(origins) + len(points)) > _MAX_TESTS:
         return True
     side = origins @ n.T - d                                 # (k, planes)
