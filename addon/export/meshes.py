@@ -357,6 +357,15 @@ class MeshArrays:
             self.slot = per_face if self.corners is None else per_face[tri_poly]
         self.domain = me.normals_domain
         sharp = _sharp_faces_alone(me, tri_poly) if self.domain == 'CORNER' else None
+        if self.domain == 'POINT' and getattr(me, 'has_custom_normals', False) and nt:
+            # Free custom normals on the Point domain (Set Mesh Normal, Free, Point) beside
+            # faces marked flat: Blender answers POINT, but Cycles shades a flat face with its
+            # own normal whatever the vertex normals (its per-triangle smooth flag is
+            # !sharp_face), so those triangles read the zero row as below (they had taken the
+            # custom normals: an ico sphere 1.035x Cycles' image mean, a block 1.29x)
+            flat = _flags(me, 'sharp_face', 'FACE', len(me.polygons))
+            if flat.any():
+                sharp = flat[tri_poly]
         shared = None
         if self.domain == 'POINT' or sharp is not None:
             vn = np.empty(nv * 3, np.float32)
