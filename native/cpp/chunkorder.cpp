@@ -16,47 +16,23 @@ namespace dacrt {
 namespace {
 
 constexpr size_t kSamples = 1024;  // origins sampled for a cut's axis and plane
-constexpr size_t kRun = 64;        // records classified per mask word
 
-void swap_records(Ray* a, Ray* b) {
-    Ray t;
-    std::memcpy(&t, a, sizeof(Ray));
-    std::memcpy(a, b, sizeof(Ray));
-    std::memcpy(b, &t, sizeof(Ray));
-}
+#include "runpartition.h"
 
-// Bit k set: rays[k] (k < m) lies below the plane.
-uint64_t below_mask(const Ray* rays, size_t m, int axis, float plane) {
+// Bit k set: rays[k] (k < kRunRays) lies below the plane.
+uint64_t below_mask(const Ray* rays, int axis, float plane) {
     uint64_t bits = 0;
-    for (size_t k = 0; k < m; ++k) bits |= uint64_t(rays[k].org[axis] < plane) << k;
+    for (size_t k = 0; k < kRunRays; ++k) bits |= uint64_t(rays[k].org[axis] < plane) << k;
     return bits;
 }
 
-// Moves the rays below the plane to the front; returns their count. Hoare-style on runs of 64
-// records from both ends, the classification branch-free, as the filter does (filter.h): a
-// record-at-a-time std::partition spent a mispredicted branch on about every other ray.
+// Moves the rays below the plane to the front; returns their count. The filter's partition
+// (runpartition.h), the classification branch-free: a record-at-a-time std::partition spent a
+// mispredicted branch on about every other ray.
 size_t split_rays(Ray* rays, size_t n, int axis, float plane) {
-    size_t i = 0, j = n, li = 0, rj = 0;
-    uint64_t ml = 0, mr = 0;  // above-plane rays of the left run, below-plane of the right run
-    for (;;) {
-        while (ml == 0 && j - i >= kRun) {
-            ml = ~below_mask(rays + i, kRun, axis, plane);
-            li = i;
-            i += kRun;
-        }
-        while (mr == 0 && j - i >= kRun) {
-            j -= kRun;
-            mr = below_mask(rays + j, kRun, axis, plane);
-            rj = j;
-        }
-        if (ml == 0 || mr == 0) break;
-        do {
-            swap_records(rays + li + __builtin_ctzll(ml), rays + rj + __builtin_ctzll(mr));
-            ml &= ml - 1;
-            mr &= mr - 1;
-        } while (ml && mr);
-    }
-    const size_t b = ml ? li : i, e = mr ? rj + kRun : j;
+    size_t b, e;
+    partition_runs(rays, n, [&](const Ray* p) __attribute__((always_inline)) { return below_mask(p, axis, plane); },
+                   b, e);
     Ray* mid = std::partition(rays + b, rays + e, [&](const Ray& r) { return r.org[axis] < plane; });
     return size_t(mid - rays);
 }

@@ -3,6 +3,7 @@
 // move, never an index array: later passes then read memory linearly. W rays per box test,
 // AoS -> SoA by loads and shuffles. Included inside an ISA namespace.
 #pragma once
+#include "runpartition.h"
 
 // Robust slab test. No reciprocal is stored: 1/d is computed in registers, with the hardware's
 // approximate reciprocal on AVX (a division would dominate the filter); the interval is then
@@ -50,15 +51,6 @@ __attribute__((always_inline)) inline vbool<W> box_test(const vfloat<W> r[8], co
     return cmple(tmin * splat<W>(1.0f - kWiden), tmax * splat<W>(1.0f + kWiden));
 }
 
-// Exchanges two records; a == b is allowed (each copy goes through a temporary).
-inline void swap_records(Ray* a, Ray* b) {
-    Ray ta, tb;
-    std::memcpy(&ta, a, sizeof(Ray));
-    std::memcpy(&tb, b, sizeof(Ray));
-    std::memcpy(a, &tb, sizeof(Ray));
-    std::memcpy(b, &ta, sizeof(Ray));
-}
-
 template <int W, int Kind>
 __attribute__((always_inline)) inline uint32_t block_active(const Ray* rays, const float lo[3], const float hi[3]) {
     vfloat<W> r[8];
@@ -67,7 +59,6 @@ __attribute__((always_inline)) inline uint32_t block_active(const Ray* rays, con
 }
 
 // The box test of the 64 rays from `rays` on, one bit per ray.
-constexpr size_t kRunRays = 64;
 template <int W, int Kind>
 __attribute__((always_inline)) inline uint64_t run_active(const Ray* rays, const float lo[3], const float hi[3]) {
     static_assert(kRunRays % W == 0, "W-ray blocks must tile a run");
@@ -99,37 +90,18 @@ size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
     return w;
 }
 
-// Returns the number of active rays, now rays[0, result). Hoare-style on runs of 64 rays from
-// both ends: an inactive ray in a left run swaps with an active ray in a right run, so only
-// misplaced records move (about p(1-p)n swaps for an active fraction p, against pn for a
-// one-sided sweep). Runs of 64 rays rather than blocks of W: each run pair's swap loop ends on
-// a mispredicted branch, as does each test for an empty mask, and with W = 16 those cost about
-// a tenth of the whole trace (San Francisco diffuse rays, 1 thread: runs of 64 +10%, of 32
-// +8%; of 128, with two mask words, -28%).
+// Returns the number of active rays, now rays[0, result): partition_runs (runpartition.h) by
+// the box test, the unsettled middle by filter_small. Runs of 64 rays rather than blocks of W:
+// each run pair's swap loop ends on a mispredicted branch, as does each test for an empty
+// mask, and with W = 16 those cost about a tenth of the whole trace (San Francisco diffuse
+// rays, 1 thread: runs of 64 +10%, of 32 +8%; of 128, with two mask words, -28%).
 template <int W, int Kind>
 size_t filter_rays(Ray* rays, size_t n, const float lo[3], const float hi[3], Stats& st) {
     st.box_tests += n;
-    size_t i = 0, j = n;    // [0, i) settled active (but a pending left run), [j, n) inactive
-    size_t li = 0, rj = 0;  // pending runs
-    uint64_t ml = 0, mr = 0;  // inactive rays of the left run, active rays of the right run
-    for (;;) {
-        while (ml == 0 && j - i >= kRunRays) {
-            ml = ~run_active<W, Kind>(rays + i, lo, hi);
-            li = i;
-            i += kRunRays;
-        }
-        while (mr == 0 && j - i >= kRunRays) {
-            j -= kRunRays;
-            mr = run_active<W, Kind>(rays + j, lo, hi);
-            rj = j;
-        }
-        if (ml == 0 || mr == 0) break;
-        do {
-            swap_records(rays + li + __builtin_ctzll(ml), rays + rj + __builtin_ctzll(mr));
-            ml &= ml - 1;
-            mr &= mr - 1;
-        } while (ml && mr);
-    }
-    const size_t b = ml ? li : i, e = mr ? rj + kRunRays : j;
+    size_t b, e;
+    // always_inline: without it GCC called the box test once per run (no longer one loop with
+    // the box in registers)
+    partition_runs(rays, n, [&](const Ray* p) __attribute__((always_inline)) { return run_active<W, Kind>(p, lo, hi); },
+                   b, e);
     return b + filter_small<W, Kind>(rays + b, e - b, lo, hi);
 }
