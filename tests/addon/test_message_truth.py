@@ -11,6 +11,8 @@ import bpy
 import numpy as np
 import pytest
 
+from tests.parity.test_specular import _disk_means
+
 from . import scenes
 
 
@@ -69,12 +71,7 @@ def _sphere_disk(mat, tmp_path, world=1.0):
     sc.cycles.device = 'CPU'
     sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.cycles.glossy_bounces = 0
     sc.dacrt.max_bounces = 0
-    layer = sc.view_layers[0].name
-    disk = {}
-    for engine, exr in scenes.render_engines(sc, tmp_path).items():
-        a = exr[f"{layer}.Combined.A"].sum()
-        disk[engine] = np.array([exr[f"{layer}.Combined.{c}"].sum() / a for c in 'RGB'])
-    return disk['DACRT'], disk['CYCLES']
+    return _disk_means(sc, tmp_path)
 
 
 def test_a_negative_constant_emission_is_emitted_as_cycles_does(tmp_path, said):

@@ -10,8 +10,6 @@ The scene: a floor lit by a 1 m quad facing down 1 m above it, an orthographic c
 the quad's plane looking at the floor beside it, 0 bounces."""
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 

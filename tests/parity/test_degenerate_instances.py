@@ -22,16 +22,8 @@ from . import rendering
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _diffuse(name, color):
-    mat, nt, out = scenes._material(name)
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    d.inputs['Color'].default_value = (*color, 1.0)
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
-    return mat
-
-
 def _sphere(name, location=(0, 0, 0), color=(0.8, 0.3, 0.2), scene=None):
-    return scenes.uv_sphere(name, 0.8, 16, 8, location, materials=(_diffuse(name, color),), scene=scene)
+    return scenes.uv_sphere(name, 0.8, 16, 8, location, materials=(scenes.diffuse(name, color),), scene=scene)
 
 
 def _linked(ob, name, location, scale, rotation=(0.0, 0.0, 0.3)):
@@ -57,7 +49,7 @@ def _scene():
     scenes.camera((0, -7.5, 4.0), (math.radians(62), 0, 0), lens=35)
     scenes.light('SUN', 3.0, rotation=(0.6, 0.2, 0.4), angle=0.1)
     scenes.world((1.0, 1.0, 1.0), 0.3)
-    scenes.plane("Floor", 20.0, materials=(_diffuse("Floor", (0.5, 0.5, 0.5)),))
+    scenes.plane("Floor", 20.0, materials=(scenes.diffuse("Floor", (0.5, 0.5, 0.5)),))
     round_ = _sphere("Round", (-1.4, 0.0, 0.8))
     _linked(round_, "Flat", (1.4, 0.0, 0.8), (1.0, 0.0, 1.0))
     source = bpy.data.collections.new("Source")         # (not in the scene: instanced only)

@@ -20,14 +20,6 @@ from . import rendering
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _diffuse(name, color):
-    mat, nt, out = scenes._material(name)
-    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    d.inputs['Color'].default_value = (*color, 1.0)
-    nt.links.new(d.outputs[0], out.inputs['Surface'])
-    return mat
-
-
 def _custom_normal_ico(name, location, smooth_upper_half):
     """An ico sphere from Geometry Nodes (flat faces), the faces above z = 0 made smooth when
     smooth_upper_half, then Set Mesh Normal (Free, Point) to (0, 0, 1) everywhere."""
@@ -56,7 +48,7 @@ def _custom_normal_ico(name, location, smooth_upper_half):
     up.vector = (0.0, 0.0, 1.0)
     L.new(up.outputs[0], next(s for s in sn.inputs if s.name in ('Custom Normal', 'Normal')))
     sm = N.new('GeometryNodeSetMaterial')
-    sm.inputs['Material'].default_value = _diffuse(name, (0.2, 0.7, 0.6))
+    sm.inputs['Material'].default_value = scenes.diffuse(name, (0.2, 0.7, 0.6))
     L.new(sn.outputs[0], sm.inputs['Geometry'])
     L.new(sm.outputs[0], go.inputs[0])
     ob = scenes.link(bpy.data.objects.new(name, bpy.data.meshes.new(name)))
@@ -72,7 +64,7 @@ def _scene():
     scenes.camera((0.0, -4.0, 1.6), (math.radians(72), 0, 0), lens=30)
     scenes.light('SUN', 2.0, rotation=(0.5, 0.4, 0.3), angle=0.1)
     scenes.world((0.05, 0.05, 0.05), 1.0)
-    scenes.plane("Floor", 12.0, (0, 0, -1), materials=(_diffuse("Floor", (0.7, 0.7, 0.7)),))
+    scenes.plane("Floor", 12.0, (0, 0, -1), materials=(scenes.diffuse("Floor", (0.7, 0.7, 0.7)),))
     _custom_normal_ico("Flat", (-1.0, 0.0, 0.0), False)
     _custom_normal_ico("Half", (1.0, 0.0, 0.0), True)
     rendering.fair_scene_settings(sc)
