@@ -19,7 +19,9 @@ from addon.lights.coincident import coincident_copies
 
 from .scenes import ALL_VIS, geometry, light, material, ortho_down, quad, render, translation
 
-MESSAGE = "coincide with other triangles: rendered as one surface (Cycles renders coincident faces darker)"
+MESSAGE = "coincide with other triangles: rendered as one surface (Cycles renders "
+DARKER = "Cycles renders coincident faces darker"
+BRIGHTER = "Cycles renders these faces brighter"    # a reflecting copy on an emitting one
 FLOOR, LAMP, DIFFUSE = 1, 2, 3
 
 
@@ -82,9 +84,12 @@ def test_a_diffuse_twin_decides_by_its_index():
         lit, said = _image([(*_lamp(), LAMP, ALL_VIS), (*_lamp(rotate, flip), DIFFUSE, ALL_VIS)])
         _same_surface(lit, single, 'close')
         assert len(said) == 1 and said[0].startswith("2 emissive triangles of 'object 1' "), said
+        assert DARKER in said[0], said      # (the emitter is the lower copy; the rule reads no further)
         unlit, said = _image([(*_lamp(rotate, flip), DIFFUSE, ALL_VIS), (*_lamp(), LAMP, ALL_VIS)])
         np.testing.assert_array_equal(unlit, dark)
         assert len(said) == 1 and said[0].startswith("2 emissive triangles of 'object 2' "), said
+        # (Cycles' bounce ray leaving the diffuse copy meets the emitter and gathers its light)
+        assert BRIGHTER in said[0], said
 
 
 def test_a_copy_bsdf_rays_pass_does_not_hide_the_emitter():
