@@ -1,4 +1,4 @@
-"""Geometry found by the randomized geometry hunt (fuzzgeo), against Cycles.
+"""Custom normals beside faces marked flat, against Cycles.
 
 Free custom normals on the Point domain (Geometry Nodes Set Mesh Normal, Free, Point) on faces
 marked flat: Blender's `normals_domain` answers POINT, yet Cycles shades each flat face with its

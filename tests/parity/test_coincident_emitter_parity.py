@@ -1,7 +1,7 @@
 """Coincident emitters that also reflect: the message says the direction Cycles renders them in.
 
 A cube whose material adds a Diffuse and an Emission, its mesh mirrored twice on one axis so
-every face exists twice (found by the pass fuzzer, /tmp/s63/h_fuzzpass seed 105). DACRT renders
+every face exists twice (found by a fuzzer of render settings and passes). DACRT renders
 the copies as one surface; Cycles' bounce ray leaving one copy meets the other at t ~ 0 and
 gathers its emission again, so Cycles renders them brighter (64x48, K = 1, Cycles 512 spp:
 Combined 0.3515 against 0.2158, Diffuse Direct 0.1537 against 0.0128), where the render had
