@@ -242,7 +242,13 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
         if found is not None and profile is not None:
             profile.append(found)
     else:
+        _ray_kind_used[0] = False
         factor = _light_surface(surface, reasons, 0, dark, light.type, object_info)
+        if _ray_kind_used[0] and (light.type == 'AREA' or getattr(light, 'shadow_soft_size', 0.0) > 0.0):
+            messages.append(('INFO', f"light '{name}': its Mix Shader by Light Path Is Camera Ray / Is Shadow Ray "
+                                     "lights the scene with its first shader, as in Cycles (0 there); where the "
+                                     "camera sees the light's own surface DACRT shows that shader too (Cycles: the "
+                                     "camera ray's)"))
     no_emission = '; '.join(dict.fromkeys(dark)) if not factor.any() else ''
     if reasons:
         text = '; '.join(dict.fromkeys(reasons))
@@ -372,7 +378,9 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
         return _light_surface(node.inputs[0], reasons, depth + 1, dark, kind, oi) + \
             _light_surface(node.inputs[1], reasons, depth + 1, dark, kind, oi)
     if node.type == 'MIX_SHADER':
-        fac = mix_factor(node, reasons, "light Mix Shader", surface=False)
+        fac = _ray_kind_factor(node)
+        if fac is None:
+            fac = mix_factor(node, reasons, "light Mix Shader", surface=False)
         # a side of weight 0 adds nothing: what it holds approximates nothing either
         a = _light_surface(node.inputs[1], reasons, depth + 1, dark, kind, oi) if fac != 1.0 else np.zeros(3)
         b = _light_surface(node.inputs[2], reasons, depth + 1, dark, kind, oi) if fac != 0.0 else np.zeros(3)
@@ -384,6 +392,24 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
     # warned "node tree approximated" with the image exact); said only where nothing else emits
     dark.append(f"{node.bl_label} emits no light (Cycles: a light's shader lights only by its emission)")
     return np.zeros(3)
+
+
+# Light Path outputs whose value Cycles' light evaluation fixes: it evaluates a light's shader
+# for the light it casts (light_sample_shader_eval) with path flag PATH_RAY_EMISSION alone, so
+# Is Camera Ray and Is Shadow Ray are 0 there (a lamp mixed by Is Camera Ray lights with the
+# Mix's first shader: it had stood at the factor's own value 0.5, 1.50x Cycles on a block)
+_LIGHTING_RAY_FLAGS = ('Is Camera Ray', 'Is Shadow Ray')
+_ray_kind_used = [False]     # (set where one decided a Mix: _light_shader_factor says so)
+
+
+def _ray_kind_factor(node):
+    """0.0 where a light Mix Shader's factor is a Light Path's Is Camera Ray or Is Shadow Ray
+    (what Cycles' evaluation for the light the lamp casts reads), else None."""
+    link = linked_link(node.inputs['Fac'])
+    if link is None or link.from_node.type != 'LIGHT_PATH' or link.from_socket.name not in _LIGHTING_RAY_FLAGS:
+        return None
+    _ray_kind_used[0] = True
+    return 0.0
 
 
 def _principled_emission(node, reasons, kind=None, dark=None, oi=None):
