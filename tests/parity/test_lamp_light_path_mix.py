@@ -2,8 +2,8 @@
 Cycles: Cycles evaluates a light's shader for the light it casts with path flag PATH_RAY_EMISSION
 alone (light_sample_shader_eval), so both flags read 0 there and the lamp lights with the Mix's
 first shader. DACRT had read the factor at its own value 0.5, reported ("light Mix Shader factor
-not computed (value from 'Light Path' node)"): an area lamp's scene 1.50x Cycles on a block
-(hunt fuzzlight63). Where the lamp has a surface the camera may see, DACRT shows that first
+not computed (value from 'Light Path' node)"): an area lamp's scene 1.50x Cycles on a block.
+Where the lamp has a surface the camera may see, DACRT shows that first
 shader there too, said as an INFO."""
 import math
 
