@@ -61,6 +61,18 @@ def matched(scene, samples, bounces=0, box=True):
         scene.cycles.filter_width = scene.dacrt.filter_width = 1.0
 
 
+def room_file():
+    """A fresh file for an interior test: 64 x 48 at 100%, the Standard view transform (no look)
+    and a world of its own; (scene, world)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    s = bpy.context.scene
+    s.render.resolution_x, s.render.resolution_y, s.render.resolution_percentage = 64, 48, 100
+    s.view_settings.view_transform, s.view_settings.look = 'Standard', 'None'
+    w = bpy.data.worlds.new('w')
+    s.world = w
+    return s, w
+
+
 def interior(scene, bounces=8):
     """An interior test's view and settings: a 16 mm camera in a room's corner at (0.3, 0.3, 1.5)
     looking at (3.5, 4, 1); matched at 64 spp (Cycles 128) and `bounces` of every kind, Tabulated

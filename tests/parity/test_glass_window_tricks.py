@@ -59,12 +59,7 @@ def _room(pane):
     """The room 4 x 5 x 2.8 m of 10 cm diffuse walls, a 1.6 x 1.3 m window in the east wall
     with the pane in it ('trick', 'noshadow' or 'plain'), a 5 W/m2 sun at 30 degrees through it,
     a (0.4, 0.6, 1) world, a 16 mm camera inside."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    s = bpy.context.scene
-    s.render.resolution_x, s.render.resolution_y, s.render.resolution_percentage = 64, 48, 100
-    s.view_settings.view_transform, s.view_settings.look = 'Standard', 'None'
-    w = bpy.data.worlds.new('w')
-    s.world = w
+    s, w = rendering.room_file()
     bg = w.node_tree.nodes['Background']
     bg.inputs['Color'].default_value, bg.inputs['Strength'].default_value = (0.4, 0.6, 1.0, 1), 1.0
     wall, floor = _diffuse('wall', (0.8, 0.8, 0.8))[0], _diffuse('floor', (0.5, 0.4, 0.3))[0]

@@ -24,12 +24,7 @@ FILTER = "Filter Glossy"
 
 
 def _room(roughness):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    s = bpy.context.scene
-    s.render.resolution_x, s.render.resolution_y, s.render.resolution_percentage = 64, 48, 100
-    s.view_settings.view_transform, s.view_settings.look = 'Standard', 'None'
-    w = bpy.data.worlds.new('w')
-    s.world = w
+    s, w = rendering.room_file()
     w.node_tree.nodes['Background'].inputs['Strength'].default_value = 0.0
     m = bpy.data.materials.new('walls')
     b = next(n for n in m.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
