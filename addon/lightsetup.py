@@ -191,9 +191,7 @@ class LightSetup:
         # copies listed in another corner order may still be hit where t rounds lower: such a
         # hit is MIS-weighted as one on its winner, the same surface (_selection_table)
         self._tri_alias = (copies, winners)
-        names = sd.per_object(sd.object_names, lambda i: f"object {i}")
-        ob = np.asarray(sd.geometry.object_index, np.int64)[grouped]
-        shown = ', '.join(repr(names[i]) for i in np.unique(ob))
+        shown = _object_names(sd, grouped)
         # Cycles' bounce ray leaves one copy and meets the other at t ~ 0: copies that only emit
         # come out darker there (their shadow rays stop at each other), but where a copy that
         # reflects lies on an emitting one, each bounce gathers that emission again (an Add of
@@ -224,9 +222,7 @@ class LightSetup:
         through = sampled & ((vis & VIS_SHADOW) == 0)
         if not through.any():
             return
-        names = sd.per_object(sd.object_names, lambda i: f"object {i}")
-        ob = np.unique(np.asarray(sd.geometry.object_index, np.int64)[through])
-        self.messages.append(('WARNING', f"emitter(s) {', '.join(repr(names[i]) for i in ob)} have Ray Visibility > "
+        self.messages.append(('WARNING', f"emitter(s) {_object_names(sd, through)} have Ray Visibility > "
                                          "Shadow off: their light samples pass through their own faces, which stop "
                                          "bounce rays, so where those faces hide them the image depends on how a "
                                          "light is chosen; DACRT renders them as Cycles does with its Light Tree "
@@ -480,3 +476,9 @@ def _light_set(linking, lamp) -> int:
     """A lamp's light set in linking (lights/linking.py, light or shadow linking): its own by
     unique name (Light.key); the world's is 0, every object's."""
     return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.key)
+
+
+def _object_names(sd: SceneData, tris) -> str:
+    """The quoted names of the objects owning the triangles of mask tris, for a message."""
+    names = sd.per_object(sd.object_names, lambda i: f"object {i}")
+    return ', '.join(repr(names[i]) for i in np.unique(np.asarray(sd.geometry.object_index, np.int64)[tris]))
