@@ -6,6 +6,8 @@ as the graph reads it (texels shared between materials, a UV transform, a UDIM l
 Mix Shaders combine closures; principled.py's layers scale or map them. Part of the export
 layer."""
 
+import threading
+
 import numpy as np
 
 from .. import nodeeval
@@ -451,23 +453,28 @@ def cutout_sum(a, b, reasons):
     total = sum(p[1] for p in parts)              # what passes at most, in units of base
     needs = frozenset().union(*(p[2][1] | p[3][1] | p[4][1] | p[5][1] for p in parts))
 
-    def opacity_sum(coords):
-        passing = sum(share * ((1.0 - o(coords)) if cut else 1.0) for cut, share, (o, _), *_ in parts)
-        return 1.0 - np.broadcast_to(passing, (_count(coords),)) / (_SPAN * total)
+    @_once_per_lookup
+    def opacities(coords):
+        """(each side's opacity, the sum's (n,)) at coords, evaluated once per lookup: the
+        sum's colours read both (each side's had been evaluated twice per colour)."""
+        sides = [o(coords) for _, _, (o, _), *_ in parts]
+        passing = sum(share * ((1.0 - o) if cut else 1.0) for (cut, share, *_), o in zip(parts, sides))
+        return sides, 1.0 - np.broadcast_to(passing, (_count(coords),)) / (_SPAN * total)
 
     def opaque(k):
         """coords -> (n, 3): part k (3 albedo, 4 pass colour, 5 emission) of the sides' opaque
         parts, each x its opacity, over the sum's opacity."""
         def fn(coords):
-            n = _count(coords)
-            out = np.zeros((n, 3))
-            for p in parts:
-                out += np.asarray(p[2][0](coords), np.float64).reshape(-1, 1) * p[k][0](coords)
-            return out / opacity_sum(coords)[:, None]
+            sides, summed = opacities(coords)
+            out = np.zeros((_count(coords), 3))
+            for p, o in zip(parts, sides):
+                out += np.asarray(o, np.float64).reshape(-1, 1) * p[k][0](coords)
+            return out / summed[:, None]
         return fn
 
     def texture(fn, kind):
-        return Texture.procedural(ProceduralTexels(fn, needs, names.replace("'", '')), kind)
+        # (a lookup's memo of opacities spans the whole lookup, nested sums' included)
+        return Texture.procedural(ProceduralTexels(_once_per_lookup(fn), needs, names.replace("'", '')), kind)
     reflects = any(c.reflects() for c in sides)
     emits = any(c.emission.any() for c in sides)
     pass_differs = any(c.passes is not None for c in sides)
@@ -475,13 +482,39 @@ def cutout_sum(a, b, reasons):
     out = Closure(texture=texture(opaque(3), 'cutout sum') if reflects else None,
                   tex_weight=np.ones(3) if reflects else np.zeros(3),
                   transparent=_SPAN * total * base,
-                  opacity=(texture(lambda coords: opacity_sum(coords)[:, None], 'procedural opacity'), False),
+                  opacity=(texture(lambda coords: opacities(coords)[1][:, None], 'procedural opacity'), False),
                   emission=emission_tex.pixels.magnitude() if emits else np.zeros(3),
                   emission_tex=(emission_tex, np.ones(3)) if emits else None)
     if pass_differs:
         out._with_passes((np.zeros(3), texture(opaque(4), 'cutout sum pass'), np.ones(3)))
     out.per_point_sum = True
     return out
+
+
+# the values cut-out sums computed during the outermost lookup running in this thread (see
+# _once_per_lookup); None between lookups
+_lookup = threading.local()
+
+
+def _once_per_lookup(fn):
+    """fn (coords -> values) computed once per coords during one lookup of a texture: a
+    cut-out sum inside another is read for its opacity and for its colour at the same points,
+    each reading its sides' opacities (a lookup of a sum of sums had evaluated its 3 cut-outs 14
+    times per point). The memo lives for the outermost such call only: the coords it is keyed
+    by are held, unchanged, until that returns."""
+    def once(coords):
+        memo = getattr(_lookup, 'memo', None)
+        if memo is None:
+            _lookup.memo = {}
+            try:
+                return once(coords)
+            finally:
+                _lookup.memo = None
+        key = (id(once), id(coords))
+        if key not in memo:
+            memo[key] = (coords, fn(coords))
+        return memo[key][1]
+    return once
 
 
 def _count(coords):
