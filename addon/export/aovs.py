@@ -188,7 +188,8 @@ def shader_aovs(ntree, reasons, texture=None):
             found = procedurals.compile_socket(socket, color, reasons, coordinates=True, light_path=False) \
                 if (name, kind) not in textures else None
             if found is not None:           # procedural textures: computed per shading point
-                textures[name, kind] = Texture.procedural(ProceduralTexels(*found), 'aov')
+                fn, needs, sources = found
+                textures[name, kind] = Texture.procedural(ProceduralTexels(fn, needs, str(sources)), 'aov')
                 parts[kind] = np.zeros(3 if color else 1, np.float32)
                 continue
             notes = []

@@ -44,14 +44,14 @@ def compile_bump(node, reasons, image=None):
                                        what, reasons, image)
     if found is None:
         return None
-    fn, needs, name = found
+    fn, needs, sources = found
     sign = -1.0 if node.invert else 1.0
 
     def values(coords):
         h = fn(coords)
         # Cycles clamps the strength at 0 (svm_node_set_bump); Invert negates the distance
         return np.stack([h[:, 0], np.maximum(h[:, 1], 0.0), sign * h[:, 2]], axis=1)
-    return sd.Bump(ProceduralTexels(values, needs, name or what), filter_width=float(width))
+    return sd.Bump(ProceduralTexels(values, needs, str(sources) or what), filter_width=float(width))
 
 
 def displacement_bump(mat, out, reasons, image=None):
@@ -81,14 +81,14 @@ def displacement_bump(mat, out, reasons, image=None):
                                        "displacement (as bump)", reasons, image)
     if found is None:
         return None
-    fn, needs, name = found
+    fn, needs, sources = found
     def values(coords):
         h = fn(coords)
         return np.stack([(h[:, 0] - h[:, 1]) * h[:, 2], np.ones(len(h)), np.ones(len(h))], axis=1)
     # (in object space the displacement's length along N takes the object's scale along N;
     # Cycles bumps Displacement and Bump's in object space: bump_from_displacement)
-    return sd.Bump(ProceduralTexels(values, needs, name or "displacement"), object_height=node.space == 'OBJECT',
-                   object_space=method == 'BOTH')
+    return sd.Bump(ProceduralTexels(values, needs, str(sources) or "displacement"),
+                   object_height=node.space == 'OBJECT', object_space=method == 'BOTH')
 
 
 def needs_object_maps(material):

@@ -87,12 +87,13 @@ class Cutouts:
             procedurals.compile_socket(socket, False, [], image=self._texture) is not None
 
     @staticmethod
-    def _procedural_cutout(closures, fac_fn, needs, name):
-        """The Mix Shader of closures (first, second) whose factor fac_fn computes per point,
-        when one side is purely transparent and the other has no transparency, holdout or
-        opacity of its own: the other side with the factor as its opacity (1 minus it when the
-        transparent side is the second), computed at each shading point as Cycles' Mix Shader
-        weighs its two closures (the factor clamped to [0, 1], NaN 0). None otherwise."""
+    def _procedural_cutout(closures, fac_fn, needs, sources):
+        """The Mix Shader of closures (first, second) whose factor fac_fn computes per point
+        (from sources, procedurals.Sources), when one side is purely transparent and the other
+        has no transparency, holdout or opacity of its own: the other side with the factor as
+        its opacity (1 minus it when the transparent side is the second), computed at each
+        shading point as Cycles' Mix Shader weighs its two closures (the factor clamped to [0,
+        1], NaN 0). None otherwise."""
         a, b = closures
         clear_a, clear_b = a.only_transparent(), b.only_transparent()
         if clear_a == clear_b:
@@ -104,7 +105,7 @@ class Cutouts:
         def opacity(coords):    # Mix = (1 - fac) first + fac second; reads no Blender data
             f = clip_unit(np.asarray(fac_fn(coords), np.float64), 0.0)
             return f if clear_a else 1.0 - f
-        tex = Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity')
+        tex = Texture.procedural(ProceduralTexels(opacity, needs, str(sources)), 'procedural opacity')
         return _with_opacity(opaque, clear, (tex, False))
 
     def _procedural_alpha(self, socket, reasons):
@@ -116,13 +117,13 @@ class Cutouts:
         found = procedurals.compile_socket(socket, False, reasons, image=self._texture)
         if found is None:
             return None
-        fn, needs, name = found
+        fn, needs, sources = found
 
         def opacity(coords):    # reads no Blender data: it runs during the render's lookups
             # (a NaN alpha is 0 in Cycles, fully transparent (measured: a Noise of NaN Scale
             # shows the world behind); it had been opaque here)
             return clip_unit(np.asarray(fn(coords), np.float64), 0.0)
-        return Texture.procedural(ProceduralTexels(opacity, needs, name), 'procedural opacity'), False
+        return Texture.procedural(ProceduralTexels(opacity, needs, str(sources)), 'procedural opacity'), False
 
     def _evaluated_alpha(self, socket, reasons, inverted=False):
         """(Texture, False) whose alpha is what nodes compute from one image (Blender's glTF

@@ -53,8 +53,30 @@ _OBJECT_INFO_OUTPUTS = {'Location': slice(0, 3), 'Color': slice(0, 3), 'Alpha': 
 ATTRIBUTE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 
 
+class Sources(tuple):
+    """The textures a compiled chain reads, each once, in the order met: (kind, name) pairs, kind
+    'procedural' (name: the node's label, 'Checker Texture') or 'image' (the image's name; None:
+    an Image Texture without one). str(): the names as texels and messages show them ("Checker
+    Texture, image 'tex.png'"); messages that word them by kind read the pairs (an image's name
+    may hold ', ' and capitals: the joined string cannot be split back)."""
+
+    def __new__(cls, pairs=()):
+        return super().__new__(cls, dict.fromkeys(pairs))
+
+    def __str__(self):
+        return ', '.join(source_name(kind, name) for kind, name in self)
+
+
+def source_name(kind, name):
+    """How texels and messages name one of Sources' (kind, name)."""
+    if kind != 'image':
+        return name
+    return f"image '{name}'" if name is not None else "Image Texture"
+
+
 class _Chain:
-    """One compile: the coordinates the chain reads, the textures it met, the notes it makes;
+    """One compile: the coordinates the chain reads, the textures it met (Sources' pairs), the
+    notes it makes;
     image(node, reasons): the export's Texture of an Image Texture node (or None: magenta),
     None where image nodes are not compiled."""
 
@@ -72,13 +94,13 @@ def compile_color(socket, reasons, image=None):
     found = compile_socket(socket, True, reasons, image=image)
     if found is None:
         return None
-    fn, needs, name = found
-    return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), needs, name)
+    fn, needs, sources = found
+    return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), needs, str(sources))
 
 
 def compile_socket(socket, color, reasons, coordinates=False, image=None, light_path=True):
-    """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures'
-    names) for what feeds a colour (color) or float socket, or None as compile_color.
+    """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures it
+    reads (Sources)) for what feeds a colour (color) or float socket, or None as compile_color.
     coordinates: also a chain that reads Texture Coordinate Generated, Object or UV through an
     image and no procedural texture (an AOV's input); one with no image is compiled for every
     use (_coordinate_chain). A coordinate chain that cannot be compiled is left to the
@@ -110,7 +132,7 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
             reasons.append(f"procedural texture chain not evaluated per point ({type(e).__name__}: {e})")
         return None
     reasons.extend(chain.reasons)
-    return fn, frozenset((chain.needs or {'generated'}) | chain.frames), ', '.join(dict.fromkeys(chain.textures))
+    return fn, frozenset((chain.needs or {'generated'}) | chain.frames), Sources(chain.textures)
 
 
 def compile_emission(color_socket, strength_socket, reasons, image=None):
@@ -146,12 +168,12 @@ def compile_emission(color_socket, strength_socket, reasons, image=None):
     def emitted(coords):
         return np.asarray(color(coords), np.float64) * np.asarray(strength(coords), np.float64)
     needs = frozenset((chain.needs or {'generated'}) | chain.frames)
-    return pr.ProceduralTexels(emitted, needs, ', '.join(dict.fromkeys(chain.textures)))
+    return pr.ProceduralTexels(emitted, needs, str(Sources(chain.textures)))
 
 
 def compile_floats(sockets, what, reasons, image=None):
-    """(fn(coords) -> (n, len(sockets)) float64, needs, textures' names) of float sockets, each
-    whatever chain compile follows (procedural textures, images looked up per point through
+    """(fn(coords) -> (n, len(sockets)) float64, needs, the textures read (Sources)) of float
+    sockets, each whatever chain compile follows (procedural textures, images looked up per point through
     `image`, coordinates, attributes, colour and float nodes; unlinked: its own value), all
     read at one point: a Bump's Height, Strength and Distance. None where one cannot be
     followed, said as `what` not rendered (its chain's node named)."""
@@ -170,7 +192,7 @@ def compile_floats(sockets, what, reasons, image=None):
         cols = [np.asarray(f(coords), np.float64).reshape(-1) for f in fns]
         n = max(len(c) for c in cols)
         return np.stack([np.broadcast_to(c, (n,)) for c in cols], axis=1)
-    return values, frozenset((chain.needs or {'generated'}) | chain.frames), ', '.join(dict.fromkeys(chain.textures))
+    return values, frozenset((chain.needs or {'generated'}) | chain.frames), Sources(chain.textures)
 
 
 def object_frame(ob):
@@ -423,7 +445,7 @@ def _texture(node, out, chain, depth):
         return _white_noise(node, out, chain, depth)
     # (a 1D Voronoi reads W alone, its Vector hidden)
     vec = None if t == 'TEX_VORONOI' and node.voronoi_dimensions == '1D' else _vector(node, chain, depth)
-    chain.textures.append(node.bl_label)
+    chain.textures.append(('procedural', node.bl_label))
     fac = out.identifier == 'Fac'
     if t == 'TEX_NOISE':
         dims = _NOISE_DIMENSIONS.get(node.noise_dimensions)
@@ -523,7 +545,7 @@ def _white_noise(node, out, chain, depth):
     its own (hidden) value, (0, 0, 0), as Cycles does (its socket is not one that Cycles feeds
     Generated coordinates to: measured, the same colour everywhere)."""
     dims = int(node.noise_dimensions[0])
-    chain.textures.append(node.bl_label)
+    chain.textures.append(('procedural', node.bl_label))
     vec = _socket(nodegraph.input_by_id(node, 'Vector'), True, chain, depth + 1) if dims > 1 else None
     w = _float(node, 'W', chain, depth) if dims in (1, 4) else None
     value = out.identifier == 'Value'
@@ -551,7 +573,7 @@ def _image(node, out, chain, depth):
     else:
         tex = chain.image(node, chain.reasons)
     alpha = out.name == 'Alpha'
-    chain.textures.append(f"image '{node.image.name}'" if node.image is not None else "Image Texture")
+    chain.textures.append(('image', node.image.name if node.image is not None else None))
     if tex is None:                         # no image or unreadable: Cycles' opaque magenta
         const = np.array([[1.0]] if alpha else [[1.0, 0.0, 1.0]])
         return (lambda c: const), False

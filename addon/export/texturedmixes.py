@@ -5,8 +5,6 @@ between plain or procedural colours and emissions (the albedo and the emission p
 point: an emission mask) or between a transparent shader and another (the procedural cut-out,
 export/cutouts.py)."""
 
-import re
-
 import numpy as np
 
 from ..nodegraph import links_feeding
@@ -44,18 +42,20 @@ def _constant_part(c):
     return ''
 
 
-def factor_source(name):
-    """How a message names what computes a factor, from procedurals' joined texture names
-    ("Checker Texture, image 'tex.png'"): an image as an image, a procedural texture as one
-    (an image had been called "procedural textures ('image 'tex.png'')")."""
-    parts = [p for p in re.split(r", (?=image '|[A-Z])", name) if p]
-    images = [p for p in parts if p.startswith("image '") or p == 'Image Texture']
-    procs = [f"'{p}'" for p in parts if p not in images]
+def factor_source(sources):
+    """How a message names what computes a factor (procedurals.Sources): an image as an image, a
+    procedural texture as one ("image 'tex.png'", "procedural texture 'Checker Texture'",
+    "textures ('Checker Texture', image 'tex.png')"; an image had been called "procedural
+    textures ('image 'tex.png'')", and one named 'a, B' split into two)."""
+    images = [name for kind, name in sources if kind == 'image']
+    procs = [f"'{name}'" for kind, name in sources if kind != 'image']
     if not procs:
-        return images[0] if len(images) == 1 else "images " + ", ".join(p[len("image "):] for p in images)
+        if len(images) == 1:
+            return procedurals.source_name('image', images[0])
+        return "images " + ", ".join("Image Texture" if n is None else f"'{n}'" for n in images)
     if not images:
         return ("procedural texture " if len(procs) == 1 else "procedural textures ") + ", ".join(procs)
-    return "textures (" + ", ".join(procs + images) + ")"
+    return "textures (" + ", ".join(procs + [procedurals.source_name('image', n) for n in images]) + ")"
 
 
 class TexturedMixes:
@@ -131,12 +131,12 @@ class TexturedMixes:
                                                    image=self._texture)
         if found is None:
             return None
-        fac_fn, needs, name = found
+        fac_fn, needs, sources = found
         if closures is None:
             notes = []
             closures = [self._shader(socket, notes, depth + 1)     # (said only if this mix is taken)
                         for socket in (node.inputs[1], node.inputs[2])]
-        cutout = self._procedural_cutout(closures, fac_fn, needs, name)
+        cutout = self._procedural_cutout(closures, fac_fn, needs, sources)
         if cutout is not None:
             reasons.extend(fac_notes + notes)
             return cutout
@@ -150,8 +150,8 @@ class TexturedMixes:
                 (c.texture is not None and lookup is None and "a mesh attribute's colour is not looked up in it") or \
                 (c.emission_tex is not None and elookup is None and "a mesh attribute's emission is not looked up in it")
             if why:
-                if name and said is not None:   # (a coordinate-only factor: the evaluation's note says it)
-                    said.append(f"from {factor_source(name)} not evaluated per point ({why})")
+                if sources and said is not None:   # (a coordinate-only factor: the evaluation's note says it)
+                    said.append(f"from {factor_source(sources)} not evaluated per point ({why})")
                 return None
             sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
                           lookup.pixels if lookup is not None else None))
@@ -177,7 +177,7 @@ class TexturedMixes:
                 f = factor(coords)
                 a = albedo(sides[0], coords)
                 return a + (albedo(sides[1], coords) - a) * f
-            return Texture.procedural(ProceduralTexels(mixed, needs, name), kind)
+            return Texture.procedural(ProceduralTexels(mixed, needs, str(sources)), kind)
         emission, etex = np.zeros(3), None
         if any(_emits(c) for c in closures):
             # an emission mask (a glow on a sign, lava cracks): Cycles weighs each side's
