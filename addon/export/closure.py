@@ -122,6 +122,13 @@ class Closure:
         """(const, texture, tex_weight) of the Diffuse Color pass (see passes)."""
         return self.passes if self.passes is not None else (self.const, self.texture, self.tex_weight)
 
+    def emitted(self):
+        """(const, texture, weight) of the emission (as pass_albedo's, for colour_at): an image's
+        or a procedural one's weight x it (`emission`, its average, left out), else the constant."""
+        if self.emission_tex is not None:
+            return np.zeros(3), self.emission_tex[0], self.emission_tex[1]
+        return self.emission, None, np.zeros(3)
+
     def _with_passes(self, passes):
         self.passes = passes
         return self
@@ -386,9 +393,10 @@ def _opacity_at(opacity):
     return at, src.needs
 
 
-def _colour_at(const, texture, weight):
-    """(coords -> (n, 3) float64, needs) of const + weight x texture per point; None where the
-    texture cannot be looked up per point."""
+def colour_at(const, texture, weight):
+    """(coords -> (n, 3) float64 (or (3,): a constant), needs) of const + weight x texture per
+    point (an albedo, a pass colour, an emission: pass_albedo(), emitted()); None where the
+    texture cannot be looked up per point (an attribute's probes) and weighs something."""
     const, weight = np.asarray(const, np.float64), np.asarray(weight, np.float64)
     if texture is None or not weight.any():
         return (lambda coords: const), frozenset()
@@ -431,12 +439,9 @@ def cutout_sum(a, b, reasons):
     if not why:
         for c in sides:
             o = _opacity_at(c.opacity) if c.opacity is not None else ((lambda coords: 1.0), frozenset())
-            albedo = _colour_at(c.const, c.texture, c.tex_weight)
-            passes = _colour_at(*c.pass_albedo())
-            if c.emission_tex is not None:
-                emission = _colour_at(np.zeros(3), c.emission_tex[0], c.emission_tex[1])
-            else:
-                emission = _colour_at(c.emission, None, np.zeros(3))
+            albedo = colour_at(c.const, c.texture, c.tex_weight)
+            passes = colour_at(*c.pass_albedo())
+            emission = colour_at(*c.emitted())
             if None in (o, albedo, passes, emission):
                 why.append("an attribute's colour")
                 break

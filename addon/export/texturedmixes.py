@@ -11,7 +11,7 @@ from ..nodegraph import links_feeding
 from ..procedural import ProceduralTexels
 from ..texture import ImageTexels, stored_texels
 from . import procedurals
-from .closure import Closure, Texture, per_point, same_rough
+from .closure import Closure, Texture, colour_at, same_rough
 
 
 def _alike(a, b):
@@ -144,30 +144,22 @@ class TexturedMixes:
         for c in closures:
             # (an image on the UV map is looked up per point as well: two Diffuse BSDFs on
             # different images mixed by a Checker had read the factor at its own value)
-            lookup = per_point(c.texture) if c.texture is not None else None
-            elookup = per_point(c.emission_tex[0]) if c.emission_tex is not None else None
-            why = _constant_part(c) or \
-                (c.texture is not None and lookup is None and "a mesh attribute's colour is not looked up in it") or \
-                (c.emission_tex is not None and elookup is None and "a mesh attribute's emission is not looked up in it")
+            albedo = colour_at(c.const, c.texture, c.tex_weight)
+            # an emission: its constant, or its image's or procedural one's weight x per point
+            emission_at = colour_at(*c.emitted())
+            why = _constant_part(c) or (albedo is None and "a mesh attribute's colour is not looked up in it") or \
+                (emission_at is None and "a mesh attribute's emission is not looked up in it")
             if why:
                 if sources and said is not None:   # (a coordinate-only factor: the evaluation's note says it)
                     said.append(f"from {factor_source(sources)} not evaluated per point ({why})")
                 return None
-            sides.append((c.const.astype(np.float64), c.tex_weight.astype(np.float64),
-                          lookup.pixels if lookup is not None else None))
-            needs |= lookup.pixels.needs if lookup is not None else frozenset()
-            # an emission: its constant, or its image's or procedural one's weight x per point
-            emits.append((c.emission.astype(np.float64), None, None) if elookup is None else
-                         (np.zeros(3), np.asarray(c.emission_tex[1], np.float64), elookup.pixels))
-            needs |= elookup.pixels.needs if elookup is not None else frozenset()
+            sides.append(albedo[0])
+            emits.append(emission_at[0])
+            needs |= albedo[1] | emission_at[1]
         if _alike(*closures) and not any(_emits(c) for c in closures):     # (the factor, unused, says nothing)
             reasons.extend(notes)
             return closures[0]
         reasons.extend(fac_notes + notes)
-
-        def albedo(side, coords):
-            const, weight, tex = side
-            return const if tex is None else const + weight * tex.evaluate(coords).T.astype(np.float64)
 
         def factor(coords):
             return np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
@@ -175,8 +167,8 @@ class TexturedMixes:
         def mixer(sides, kind='procedural'):
             def mixed(coords):      # reads no Blender data: it runs during the render's lookups
                 f = factor(coords)
-                a = albedo(sides[0], coords)
-                return a + (albedo(sides[1], coords) - a) * f
+                a = sides[0](coords)
+                return a + (sides[1](coords) - a) * f
             return Texture.procedural(ProceduralTexels(mixed, needs, str(sources)), kind)
         emission, etex = np.zeros(3), None
         if any(_emits(c) for c in closures):
@@ -190,12 +182,7 @@ class TexturedMixes:
         if all(c.passes is None for c in closures):
             return out
         # a rough diffuse side: the Diffuse Color pass mixes its colour (Closure.passes)
-        pass_sides = []
-        for c in closures:
-            k, t, w = c.pass_albedo()
-            lookup = per_point(t) if t is not None else None
-            if t is not None and lookup is None:
-                return out
-            pass_sides.append((np.asarray(k, np.float64), np.asarray(w, np.float64),
-                               lookup.pixels if lookup is not None else None))
-        return out._with_passes((np.zeros(3), mixer(pass_sides), np.ones(3)))
+        pass_sides = [colour_at(*c.pass_albedo()) for c in closures]
+        if None in pass_sides:
+            return out
+        return out._with_passes((np.zeros(3), mixer([p[0] for p in pass_sides]), np.ones(3)))
