@@ -369,13 +369,13 @@ class Used(set):
 def used_outputs(ntree):
     """The outputs (output_key) whose values reach ntree's active output node, following
     links back as source() does (through reroutes, muted nodes and groups), after Cycles'
-    constant folding (_Folder). Cycles removes every other node and link before it compiles a
+    constant folding (Folder). Cycles removes every other node and link before it compiles a
     shader, so an output linked only to something unused (a leftover Math node, a node feeding
     nothing, a Mix factor of a Mix that folds to its A) counts as unlinked. Used.reads also
     answers for a node identical to a used one: Cycles merges identical nodes first, so an
     output of one is used where that of a node identical to it is."""
     out = output_node(ntree)
-    folder = _Folder()
+    folder = Folder()
     used, seen = Used(), set()
     todo = [GraphNode(out)] if out is not None else []
     while todo:
@@ -553,10 +553,12 @@ def _saturate(v):
     return min(max(v, 0.0), 1.0)
 
 
-class _Folder:
+class Folder:
     """Which links survive Cycles' ConstantFolder (intern/cycles/scene/constant_fold.cpp), which
     Cycles runs node by node from the sources on before it looks at what is linked (whether an
-    Image Texture's Alpha is used, so whether its colour is unassociated, depends on it).
+    Image Texture's Alpha is used, so whether its colour is unassociated, depends on it). One
+    per material: it remembers what each output folds to, so the walks of one material that
+    share it (closure_link's, reflectors.rendered_closures') fold each chain once.
 
     Mirrored rules, each exact to Cycles for the nodes it covers:
     - Value and RGB nodes are constants; a Math node or a Mix (Color) / legacy MixRGB node with
@@ -790,12 +792,12 @@ def closure_link(socket, folder=None, depth=0):
     reads after Cycles' closure folding, None where Cycles compiles no closure into it: whether
     the material has a surface at all (Cycles' has_surface; without one a volume material is
     volume-only, SD_HAS_ONLY_VOLUME). Mirrors shader_nodes.cpp's constant_fold of the closure
-    nodes, on inputs folded as _Folder folds them: an Emission or Background of an unlinked black
+    nodes, on inputs folded as Folder folds them: an Emission or Background of an unlinked black
     Color or 0 Strength is discarded (so is a value into a shader socket, an Emission of it, that
     folds to 0); a Mix Shader whose two shaders read the same (nothing too) becomes that, one of
     unlinked Fac <= 0 / >= 1 its first / second shader; an Add Shader with an empty side becomes
     the other. Muted nodes, muted links, reroutes and groups pass as source() passes them."""
-    folder = folder if folder is not None else _Folder()
+    folder = folder if folder is not None else Folder()
     link = linked_link(socket)
     if link is None or depth > FOLD_DEPTH:
         return link

@@ -27,7 +27,8 @@ from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
 from .bump import displacement_bump
 from .closure import Closure
-from .reflectors import ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds, has_glossy_closure
+from .reflectors import (ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds, has_glossy_closure,
+                         rendered_closures)
 from .cutouts import Cutouts
 from .emission import Emission
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
@@ -454,9 +455,11 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                 # one map by name beside the active render one: the same map on a mesh whose
                 # active render map it is; said where a mesh's is another (assembly)
                 self._uv_several = (named[0], said)
+        # (one walk of the shaders Cycles renders for both, on this material's folding)
+        rendered = rendered_closures(ntree, self._folder()) if nodes and cycle is None else []
         return sd.Material(name=name, base_color=base, uv_map=uv_names[0] if uv_names else '',
-                           glossy=nodes and cycle is None and has_glossy_closure(ntree),
-                           glossy_kinds=glossy_kinds(ntree) if nodes and cycle is None else frozenset(),
+                           glossy=nodes and cycle is None and has_glossy_closure(rendered),
+                           glossy_kinds=glossy_kinds(rendered),
                            emission_texture=e_tex, emission_interpolation=e_interp or 'Linear',
                            emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,
                            normal_texture=n_tex, normal_interpolation=n_interp or 'Linear',

@@ -256,7 +256,7 @@ _REFLECT_NODE_TYPES = frozenset({'BSDF_GLOSSY', 'BSDF_ANISOTROPIC', 'BSDF_METALL
 _WEIGHT_CUTOFF = 1e-5
 
 
-def rendered_closures(ntree) -> list:
+def rendered_closures(ntree, folder=None) -> list:
     """The shader nodes (GraphNodes, so their inputs can be followed out of groups) whose
     closures Cycles compiles into the surface of the output it renders (nodegraph.output_node,
     the one the material export renders): walked back from its Surface through what
@@ -264,11 +264,13 @@ def rendered_closures(ntree) -> list:
     active Group Output, a Mix Shader of constant Fac <= 0 or >= 1 down to one shader, an empty
     Emission dropped), into both shaders of the Mix and Add Shaders left. Nodes outside that walk
     (a new material's Principled left unlinked beside the Diffuse the user linked, an EEVEE-only
-    output's shader, an unused node inside a group) render nothing in Cycles."""
+    output's shader, an unused node inside a group) render nothing in Cycles. folder: the
+    material's nodegraph.Folder (the material export's: its Fac chains folded once for both);
+    None: a new one."""
     out = nodegraph.output_node(ntree) if ntree is not None else None
     if out is None or out.inputs.get('Surface') is None:
         return []
-    folder = nodegraph._Folder()       # shared: each Mix Shader's Fac folded once
+    folder = folder if folder is not None else nodegraph.Folder()  # (each Mix Shader's Fac folded once)
     found, seen, todo = [], set(), [(out.inputs['Surface'], 0)]
     while todo:
         sock, depth = todo.pop()
@@ -289,20 +291,20 @@ def rendered_closures(ntree) -> list:
     return found
 
 
-def glossy_kinds(ntree) -> frozenset:
+def glossy_kinds(rendered) -> frozenset:
     """What of Cycles' caustics and Filter Glossy settings the surface Cycles renders of a node
-    tree (rendered_closures: not every node in it) is subject to: 'reflect' (a glossy
-    reflection: Glossy, Anisotropic, Metallic, Glass, a Toon's Glossy component, the Principled's
-    specular, metal, coat or glass layers; dropped after a diffuse bounce with Reflective
-    Caustics off), 'transmit' (Glass, Refraction, Principled Transmission: dropped there with
-    Refractive Caustics off) and 'sharp' (one of the microfacet ones with an alpha (roughness
-    squared) below 0.5 in some direction, which Filter Glossy blurs: roughness below
+    tree (rendered: its rendered_closures, not every node in it) is subject to: 'reflect' (a
+    glossy reflection: Glossy, Anisotropic, Metallic, Glass, a Toon's Glossy component, the
+    Principled's specular, metal, coat or glass layers; dropped after a diffuse bounce with
+    Reflective Caustics off), 'transmit' (Glass, Refraction, Principled Transmission: dropped
+    there with Refractive Caustics off) and 'sharp' (one of the microfacet ones with an alpha
+    (roughness squared) below 0.5 in some direction, which Filter Glossy blurs: roughness below
     FILTER_GLOSSY_ROUGHNESS when isotropic). Inputs are read as the material export reads
     them (nodeeval.constant_value: Value, RGB and Math chains and the like folded to their
     constant, clamped as Cycles' svm clamps them); one that varies over the surface (a texture,
     Fresnel) counts as possibly on and sharp."""
     kinds = set()
-    for node in rendered_closures(ntree):
+    for node in rendered:
         kinds |= _node_kinds(node)
     return frozenset(kinds)
 
@@ -366,14 +368,15 @@ def _node_kinds(node) -> set:
     return kinds
 
 
-def has_glossy_closure(ntree) -> bool:
-    """Whether the surface Cycles renders of a node tree (rendered_closures: not every node in
-    it; an unlinked Glossy beside the linked Diffuse, a Mix of Fac 0's second shader render
-    nothing, and Cycles' image is then the same whatever a light's Glossy visibility) holds a
-    closure Cycles treats as glossy, which DACRT renders as diffuse: a light's Glossy ray
-    visibility then differs from its Diffuse one there (export/scene.py). A Principled counts
-    where one of its glossy layers renders (glossy_kinds: weights read at their folded value)."""
-    for node in rendered_closures(ntree):
+def has_glossy_closure(rendered) -> bool:
+    """Whether the surface Cycles renders of a node tree (rendered: its rendered_closures, not
+    every node in it; an unlinked Glossy beside the linked Diffuse, a Mix of Fac 0's second
+    shader render nothing, and Cycles' image is then the same whatever a light's Glossy
+    visibility) holds a closure Cycles treats as glossy, which DACRT renders as diffuse: a
+    light's Glossy ray visibility then differs from its Diffuse one there (export/scene.py). A
+    Principled counts where one of its glossy layers renders (glossy_kinds: weights read at
+    their folded value)."""
+    for node in rendered:
         t = node.type
         if t in GLOSSY_NODE_TYPES or (t == 'BSDF_TOON' and getattr(node, 'component', 'DIFFUSE') == 'GLOSSY'):
             return True

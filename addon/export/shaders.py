@@ -71,14 +71,17 @@ class ShaderClosures:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
 
+    def _folder(self):
+        """This material's nodegraph.Folder: its Fac chains folded once for all that walks its
+        closures (the shaders read here, reflectors.rendered_closures)."""
+        if getattr(self, '_closure_folder', None) is None:
+            self._closure_folder = nodegraph.Folder()
+        return self._closure_folder
+
     def _closure_link(self, socket):
         """The link a shader input reads after Cycles' closure folding (nodegraph.closure_link):
-        a Mix Shader of constant Fac <= 0 / >= 1 is its one shader, an empty Emission nothing.
-        Each material's Fac chains folded once (a _Folder per material)."""
-        folder = getattr(self, '_closure_folder', None)
-        if folder is None:
-            folder = self._closure_folder = nodegraph._Folder()
-        return nodegraph.closure_link(socket, folder)
+        a Mix Shader of constant Fac <= 0 / >= 1 is its one shader, an empty Emission nothing."""
+        return nodegraph.closure_link(socket, self._folder())
 
     def _shader(self, socket, reasons, depth):
         # muted nodes are passed through (nodegraph); folded as Cycles folds the closures, so
