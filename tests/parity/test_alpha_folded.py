@@ -1,7 +1,7 @@
 """An Image Texture's Alpha linked only through nodes Cycles' ConstantFolder removes does not
 count as used: Cycles folds (Alpha x 0 -> 0, a Mix at factor 0 -> its A, a Mix Multiply by white
 -> its A, ...) before it looks at what is linked, so it reads the colour of an associated-alpha
-image as stored, not divided by alpha (nodegraph.used_outputs, _Folder). The export had counted
+image as stored, not divided by alpha (nodegraph.used_outputs, Folder). The export had counted
 any link reaching the output, so it divided: a half EXR's colour under alpha 0 by 2^-15 (3388x
 Cycles' mean), an 8-bit straight PNG decal's 3.4x. Controls: a Mix Multiply by 0.999 does not
 fold, and Alpha x 1 folds to the Alpha itself: both still divide, in both engines. Also a
