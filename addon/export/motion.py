@@ -18,6 +18,12 @@ TIME_MODIFIERS = frozenset({'WAVE', 'OCEAN', 'BUILD', 'EXPLODE', 'CLOTH', 'SOFT_
 TIME_NODES = frozenset({'GeometryNodeInputSceneTime', 'GeometryNodeSimulationInput',
                         'GeometryNodeSimulationOutput', 'GeometryNodeBake'})
 SAID = 5                                  # names the message lists before "and N more"
+# what Cycles blurs of a camera's data (BlenderSync::sync_camera_motion): a perspective camera's
+# field of view, from its lens and the sensor that fits the frame (a light looked through: its spot
+# size); focus distance, f-stop, clip range, shift and orthographic scale are read at the frame
+FOV_SETTINGS = {'CAMERA': frozenset({'lens', 'angle', 'angle_x', 'angle_y', 'sensor_width', 'sensor_height',
+                                     'sensor_fit'}),
+                'LIGHT': frozenset({'spot_size'})}
 
 
 _OBJECT_SETTINGS = {}
@@ -38,6 +44,29 @@ def _animated(id_):
     """BKE_animdata_id_is_animated: an action, drivers or NLA tracks on the ID."""
     ad = getattr(id_, 'animation_data', None)
     return ad is not None and (ad.action is not None or len(ad.drivers) > 0 or len(ad.nla_tracks) > 0)
+
+
+def _animated_paths(id_):
+    """The data paths an ID's animation may change: the F-curves of its action (its slot's) and of
+    its NLA strips' actions, and its drivers'."""
+    ad = getattr(id_, 'animation_data', None)
+    if ad is None:
+        return set()
+    paths = {d.data_path for d in ad.drivers}
+    actions = [(ad.action, getattr(ad, 'action_slot', None))] if ad.action is not None else []
+    actions += [(strip.action, getattr(strip, 'action_slot', None))
+                for track in ad.nla_tracks for strip in track.strips if strip.action is not None]
+    for action, slot in actions:
+        legacy = getattr(action, 'fcurves', None)          # (Blender before 5.0)
+        if legacy is not None:
+            paths.update(fc.data_path for fc in legacy)
+            continue
+        for layer in action.layers:
+            for strip in layer.strips:
+                for bag in getattr(strip, 'channelbags', ()):
+                    if slot is None or bag.slot == slot:
+                        paths.update(fc.data_path for fc in bag.fcurves)
+    return paths
 
 
 def _flag(ob, name):
@@ -82,8 +111,21 @@ class MotionCheck:
                           and (instancer is None or _flag(instancer, 'use_deform_motion')))
 
     def camera_moves(self, cam):
-        """The camera's placement or its lens (Cycles blurs a zoom too) may change."""
-        return cam is not None and (self.moves(cam.original) or _animated(getattr(cam.original, 'data', None)))
+        """Whether Cycles would blur the camera (BlenderSync::sync_camera_motion): its placement may
+        change and its Object > Motion Blur is on (else Cycles gives it no motion steps), or it is
+        a perspective camera (or a light looked through) whose field of view may change, a zoom,
+        which Cycles blurs whatever that setting. A change of focus distance, f-stop, clip range,
+        shift or orthographic scale is not blurred: it had been warned as a moving camera (a rack
+        focus with Motion Blur on, whose image is Cycles')."""
+        if cam is None:
+            return False
+        cam = cam.original
+        if _flag(cam, 'use_motion_blur') and self.moves(cam):
+            return True
+        data = getattr(cam, 'data', None)
+        if data is None or not _animated(data) or (cam.type == 'CAMERA' and data.type != 'PERSP'):
+            return False
+        return bool(_animated_paths(data) & FOV_SETTINGS.get(cam.type, frozenset()))
 
     def moves(self, ob):
         return _once(self._moves, ob, self._moves_now)
