@@ -71,7 +71,7 @@ from .passwriting import PassWriting, aov_tables
 from .pathstate import Paths, Sinks, compact
 from .sampling import DIM_FILTER, DIM_LENS, DIM_LOBE, RandomStream, dim, max3
 from .scenedata import HOLDOUT, NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
-from .sceneprep import recentred, validate
+from .sceneprep import huge_surfaces, recentred, validate
 from .surfacetables import Materials, Triangles
 from .surfacevalues import SurfaceValues
 from .translucency import Translucency, valid_reflection_normal
@@ -233,6 +233,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._roulette_after = max(0, int(getattr(s, 'min_transparent_bounces', 0))) + 1
         scene_data, self._twins_skipped = self._without_clear_twins(scene_data)
         self.tri = Triangles(scene_data.geometry, self.messages, self._poll)
+        # surfaces whose step is a sizeable share of the objects on them (a huge ground plane)
+        self.messages += [('WARNING', text) for text in huge_surfaces(scene_data, self.origin, self.tri.geo)]
         self._poll()
         # per AOV the images that write to it: (rows they fill, [(material, texture, ...)])
         self._aov_images = {AOV_PREFIX + name: (3 if kind == 'COLOR' else 1,

@@ -159,6 +159,135 @@ def recentred(sd: SceneData):
     return replace(sd, geometry=geometry, camera=camera, lights=lights), origin, warning
 
 
+# Far-reaching surfaces (huge_surfaces): a triangle's self-intersection step is OFFSET_ULPS ULPs
+# of its largest coordinate, so a single-quad ground plane 1e6 across steps 0.5 m off itself
+# everywhere, also under the 1 m objects standing on it near the origin, whose contact shadows
+# and the light under them are then lost (a 1 m box on planes of half-size 1e4 / 1e5 / 1e6,
+# 64x48, Cycles 512 spp against DACRT 2 x 256: its shadow's 8x8 block x1.003 / 1.033 / 1.128
+# Cycles'). Said where the step exceeds _HUGE_STEP of the size of the objects within
+# _NEAR_STEPS steps of the surface (1e5: 6%, said; 1e4: 0.8%, within noise, not said).
+_HUGE_STEP = 1e-2
+_NEAR_STEPS = 4.0
+_HUGE_CANDIDATES = 8      # the largest triangles of each far-reaching object that are checked
+_HUGE_OBJECTS = 3         # objects named in full
+_HUGE_SEARCH = 16         # objects checked, those of the largest steps
+_HUGE_SEEN = 1e-4          # objects on the surface smaller than this x their camera distance are not weighed
+
+
+def _steps(mag):
+    """The self-intersection step of triangles whose largest |coordinate| is mag (float64)."""
+    return float(OFFSET_ULPS) * np.spacing(np.maximum(np.asarray(mag, F32), F32(2.0 ** -100))).astype(np.float64)
+
+
+def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None) -> list:
+    """Warnings (texts) naming the surfaces whose self-intersection step (OFFSET_ULPS ULPs of
+    a triangle's largest coordinate) is a sizeable share of the objects resting on or near them:
+    a huge single-quad ground plane. The step cannot shrink there without its neighbour across
+    the quad's diagonal being re-hit (README, Robustness); subdividing the surface makes the
+    faces under the objects small and their steps with them. geo: the frame's triangle table
+    (surfacetables.Triangles.geo, (15, M) float32), whose rows 12:15 hold each triangle's step
+    along its normal: read from there (contiguous rows) instead of from the vertices. Where
+    nothing is said this costs those rows' min / max and a sampled triangle box pass."""
+    g = sd.geometry
+    v = np.asarray(g.vertices)
+    tri = np.asarray(g.triangles)
+    if v.ndim != 2 or not len(v) or not len(tri):
+        return []
+    if geo is not None:
+        # the largest step: at most sqrt(3) x its largest component (the table's rows)
+        rows = np.asarray(geo)[12:15]
+        largest_step = np.sqrt(3.0) * max(max(abs(float(r.min())), abs(float(r.max()))) for r in rows)
+    else:
+        # from the largest |coordinate|: per column min / max (no copies); non-finite rows
+        # (dropped by the triangle tables) only looked past where there are any
+        big = max(max(abs(float(v[:, a].min())), abs(float(v[:, a].max()))) for a in range(3))
+        if not np.isfinite(big):
+            fin = v[np.isfinite(v).all(axis=1)]
+            big = float(np.abs(fin).max()) if len(fin) else 0.0
+        largest_step = _steps(big)
+    # sampled triangle sizes (an even spread of up to _SAMPLE)
+    idx = np.arange(len(tri))
+    idx = idx[::-(-len(idx) // _SAMPLE)] if len(idx) > _SAMPLE else idx
+    t = tri[idx]
+    c0, c1, c2 = (np.asarray(v[t[:, k]], np.float64) for k in range(3))
+    lo, hi = np.minimum(np.minimum(c0, c1), c2), np.maximum(np.maximum(c0, c1), c2)
+    side = _largest(hi - lo)
+    ok = np.isfinite(side) & (side > 0) & np.isfinite(lo).all(axis=1) & np.isfinite(hi).all(axis=1)
+    if not ok.any():
+        return []
+    idx, lo, hi, side = idx[ok], lo[ok], hi[ok], side[ok]
+    # nothing can step off by _HUGE_STEP of anything: the common case ends here
+    if not largest_step > _HUGE_STEP * float(side.min()):
+        return []
+    # every triangle's step (the table's, or from its vertices' largest |coordinate|)
+    av = np.abs(np.asarray(v, np.float64))
+    av = np.where(np.isfinite(av), av, 0.0)
+    av = np.maximum(np.maximum(av[:, 0], av[:, 1]), av[:, 2])
+    if geo is not None:
+        rows = np.asarray(geo)[12:15].astype(np.float64)
+        tstep = np.sqrt(rows[0] * rows[0] + rows[1] * rows[1] + rows[2] * rows[2])
+    else:
+        tstep = _steps(np.maximum(np.maximum(av[tri[:, 0]], av[tri[:, 1]]), av[tri[:, 2]]))
+    candidates = np.flatnonzero(tstep > _HUGE_STEP * float(side.min()))
+    objects = np.asarray(g.object_index) if getattr(g, 'object_index', None) is not None else np.zeros(len(tri), np.int64)
+    names = list(getattr(sd, 'object_names', None) or [])
+    sample_obj = objects[idx]
+    eye = np.asarray(sd.camera.matrix, np.float64)[:3, 3]
+    found = {}
+    # the objects with the largest steps first, _HUGE_SEARCH of them (bounds the cost where
+    # many objects reach far: a city block 1e4 out)
+    ranked_c = candidates[np.argsort(-tstep[candidates], kind='stable')]
+    first_obj, first_at = np.unique(objects[ranked_c], return_index=True)
+    for obj in first_obj[np.argsort(first_at)][:_HUGE_SEARCH]:
+        mine = candidates[objects[candidates] == obj]
+        cv = [np.asarray(v[tri[mine, k]], np.float64) for k in range(3)]
+        clo, chi = np.minimum(np.minimum(cv[0], cv[1]), cv[2]), np.maximum(np.maximum(cv[0], cv[1]), cv[2])
+        cside = _largest(chi - clo)
+        good = np.isfinite(cside)
+        mine, clo, chi, cside = mine[good], clo[good], chi[good], cside[good]
+        order = np.argsort(-cside)[:_HUGE_CANDIDATES]
+        for j in order:
+            step = float(tstep[mine[j]])
+            gap = np.maximum(np.maximum(lo - chi[j], clo[j] - hi), 0.0)
+            dist = np.sqrt(np.einsum('ij,ij->i', gap, gap))
+            near = (dist <= _NEAR_STEPS * step) & (side * 16.0 < cside[j])
+            if not near.any():
+                continue
+            # the objects there, each by the box of its small triangles near the surface
+            nobj, inverse = np.unique(sample_obj[near], return_inverse=True)
+            olo = np.full((len(nobj), 3), np.inf)
+            ohi = np.full((len(nobj), 3), -np.inf)
+            np.minimum.at(olo, inverse, lo[near])
+            np.maximum.at(ohi, inverse, hi[near])
+            sizes = _largest(ohi - olo)
+            # only objects the camera can make out (a 1 cm part 1e4 away cannot show its
+            # contact shadow): at least _HUGE_SEEN of their distance across
+            gap_eye = np.maximum(np.maximum(olo - eye, 0.0), eye - ohi)
+            seen = sizes >= _HUGE_SEEN * np.sqrt(np.einsum('ij,ij->i', gap_eye, gap_eye))
+            if not seen.any():
+                continue
+            size = float(np.median(sizes[seen]))
+            if size > 0 and step > _HUGE_STEP * size:
+                share = step / size
+                if obj not in found or share > found[obj][0]:
+                    found[obj] = (share, step, size, float(av[tri[mine[j]]].max()))
+    if not found:
+        return []
+    where = "the render's origin" if recentred_origin is not None and np.any(recentred_origin) else "the world origin"
+    out = []
+    ranked = sorted(found.items(), key=lambda kv: -kv[1][0])
+    for obj, (share, step, size, mag) in ranked[:_HUGE_OBJECTS]:
+        name = names[int(obj)] if 0 <= int(obj) < len(names) else f"#{int(obj)}"
+        out.append(f"object '{name}' has faces reaching {mag:.3g} from {where}: bounce and shadow rays "
+                   f"leave them {step:.2g} off the surface (8 float32 ULPs of that coordinate), "
+                   f"{share:.0%} of the {size:.3g}-unit objects on or near it, so their contact "
+                   f"shadows and the light under them are lost; subdivide it so the faces under "
+                   f"the objects are small (Subdivide, or a Grid), or make it smaller")
+    if len(ranked) > _HUGE_OBJECTS:
+        out[-1] += f" ({len(ranked) - _HUGE_OBJECTS} more such objects)"
+    return out
+
+
 def validate(sd: SceneData):
     g = sd.geometry
     m = len(np.asarray(g.triangles))
