@@ -55,6 +55,12 @@ def _largest(a):
     return np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2])
 
 
+def _magnitude(p):
+    """Per row of points p (k,3): its largest finite |coordinate| (0 where none is)."""
+    a = np.abs(np.asarray(p, np.float64))
+    return _largest(np.where(np.isfinite(a), a, 0.0))
+
+
 def _near_boxes(v, tri, near, eye):
     """Boxes (lo, hi (k,3) float64), sizes (k,) and solid-angle weights (k,) of up to _SAMPLE
     triangles with a vertex in near (an even spread), or None."""
@@ -216,22 +222,39 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None) -> list:
     if not ok.any():
         return []
     idx, lo, hi, side = idx[ok], lo[ok], hi[ok], side[ok]
-    # nothing can step off by _HUGE_STEP of anything: the common case ends here
-    if not largest_step > _HUGE_STEP * float(side.min()):
-        return []
-    # every triangle's step (the table's, or from its vertices' largest |coordinate|)
-    av = np.abs(np.asarray(v, np.float64))
-    av = np.where(np.isfinite(av), av, 0.0)
-    av = np.maximum(np.maximum(av[:, 0], av[:, 1]), av[:, 2])
-    if geo is not None:
-        rows = np.asarray(geo)[12:15].astype(np.float64)
-        tstep = np.sqrt(rows[0] * rows[0] + rows[1] * rows[1] + rows[2] * rows[2])
-    else:
-        tstep = _steps(np.maximum(np.maximum(av[tri[:, 0]], av[tri[:, 1]]), av[tri[:, 2]]))
-    candidates = np.flatnonzero(tstep > _HUGE_STEP * float(side.min()))
+    # nothing can step off by _HUGE_STEP of any object (its sampled faces' box: a scanned
+    # mesh of tiny faces is one object several units across): the common case ends here
     objects = np.asarray(g.object_index) if getattr(g, 'object_index', None) is not None else np.zeros(len(tri), np.int64)
-    names = list(getattr(sd, 'object_names', None) or [])
     sample_obj = objects[idx]
+    kinds, which = np.unique(sample_obj, return_inverse=True)
+    obj_lo = np.full((len(kinds), 3), np.inf)
+    obj_hi = np.full((len(kinds), 3), -np.inf)
+    np.minimum.at(obj_lo, which, lo)
+    np.maximum.at(obj_hi, which, hi)
+    smallest_object = max(float(_largest(obj_hi - obj_lo).min()), float(side.min()))
+    if not largest_step > _HUGE_STEP * smallest_object:
+        return []
+    # Only faces much wider than the smallest sampled ones can swallow objects (`near` below
+    # wants 16x): those are the candidates, found from the table's edge rows without a gather
+    # of vertices (a scanned mesh of tiny faces 100 units out passed the test above and had cost
+    # ~0.5 s a million triangles); 8x leaves room for the float32 edges' rounding.
+    small = float(side.min())
+    if geo is not None:
+        edges = np.asarray(geo)[3:9]
+        extent = np.zeros(len(tri), F32)
+        for a in range(3):
+            e1, e2 = edges[a], edges[3 + a]
+            np.maximum(extent, np.maximum(np.maximum(e1, e2), 0) - np.minimum(np.minimum(e1, e2), 0), out=extent)
+        wide = np.flatnonzero(extent > 8.0 * small)
+        rows = np.asarray(geo)[12:15][:, wide].astype(np.float64)
+        wide_step = np.sqrt(rows[0] * rows[0] + rows[1] * rows[1] + rows[2] * rows[2])
+    else:
+        wide = np.arange(len(tri))
+        wide_step = _steps(_largest(np.stack([_magnitude(v[tri[:, k]]) for k in range(3)], axis=1)))
+    tstep = np.zeros(len(tri))                 # each candidate's step (the others' are not read)
+    tstep[wide] = wide_step
+    candidates = wide[wide_step > _HUGE_STEP * smallest_object]
+    names = list(getattr(sd, 'object_names', None) or [])
     eye = np.asarray(sd.camera.matrix, np.float64)[:3, 3]
     found = {}
     # the objects with the largest steps first, _HUGE_SEARCH of them (bounds the cost where
@@ -270,7 +293,7 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None) -> list:
             if size > 0 and step > _HUGE_STEP * size:
                 share = step / size
                 if obj not in found or share > found[obj][0]:
-                    found[obj] = (share, step, size, float(av[tri[mine[j]]].max()))
+                    found[obj] = (share, step, size, float(_magnitude(v[tri[mine[j]]]).max()))
     if not found:
         return []
     where = "the render's origin" if recentred_origin is not None and np.any(recentred_origin) else "the world origin"
