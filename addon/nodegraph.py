@@ -521,20 +521,38 @@ class _Const:
 
 
 def _own_value(socket, crossed=()):
-    """A socket's own value as Cycles holds it (float or 3-tuple), None where a conversion on
-    the way (crossed) or an unusual type makes it untracked."""
-    if crossed:
-        return None
+    """A socket's own value as Cycles holds it (float or 3-tuple), converted at the sockets it
+    crossed on the way (source's carrier.crossed); None where an unusual type makes it
+    untracked."""
     v = getattr(unwrap(socket), 'default_value', None)
     if isinstance(v, (int, float)):
-        return float(v)
-    if v is None or isinstance(v, str):
+        v = float(v)
+    elif v is None or isinstance(v, str):
         return None
-    try:
-        v = tuple(float(x) for x in v)
-    except (TypeError, ValueError):
-        return None
-    return v[:3] if len(v) >= 3 else None
+    else:
+        try:
+            v = tuple(float(x) for x in v)
+        except (TypeError, ValueError):
+            return None
+        if len(v) < 3:
+            return None
+        v = v[:3]
+    return _crossed_value(v, _type(unwrap(socket)) == 'VECTOR', crossed)
+
+
+def _crossed_value(value, vector, crossed):
+    """A constant (float or 3-tuple; vector: a vector's) as it arrives past the sockets of the
+    types `crossed` (nearest the reader first), converted at each as Blender converts a constant
+    while it inlines the tree for Cycles (nodeeval's conversions; a float through Float
+    reroutes and group sockets stays that float, as Cycles' flattened graph holds it)."""
+    if value is None or not crossed:
+        return value
+    from . import nodeeval          # (nodeeval imports this module)
+    import numpy as np
+    arr = np.asarray(value if isinstance(value, tuple) else (value,), np.float64)
+    arr, _ = nodeeval._cross(arr, vector, crossed)
+    out = tuple(float(x) for x in arr.reshape(-1))
+    return out[0] if len(out) == 1 else out[:3]
 
 
 def _is(state, one):
@@ -587,7 +605,11 @@ class Folder:
             return _Const(_own_value(carrier.socket, carrier.crossed))
         r = self._fold(link)
         if isinstance(r, _Const) and link.crossed:
-            return _Const(None)   # converted on the way (Cycles folds the conversion too)
+            # Cycles folds a flattened graph: reroutes, group sockets and muted nodes are gone,
+            # a constant Blender folds converted at each socket it crossed (none where their
+            # types are the value's), any other one as its node made it (conversions)
+            vector = _type(link.from_socket) == 'VECTOR'
+            return _Const(_crossed_value(r.value, vector, conversions(link)))
         return r
 
     def live_inputs(self, node):
