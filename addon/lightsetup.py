@@ -238,6 +238,8 @@ class LightSetup:
         if not (self._any_emissive and getattr(self.settings, 'use_light_tree', True)):
             return
         through = sampled & ((vis & VIS_SHADOW) == 0)
+        if through.any():
+            through &= ~self._coplanar_placements(sd, through, vis)
         if not through.any():
             return
         self.messages.append(('WARNING', f"emitter(s) {_object_names(sd, through)} have Ray Visibility > "
@@ -245,6 +247,37 @@ class LightSetup:
                                          "bounce rays, so where those faces hide them the image depends on how a "
                                          "light is chosen; DACRT renders them as Cycles does with its Light Tree "
                                          "off (Cycles' light tree picks each emissive triangle apart)"))
+
+    def _coplanar_placements(self, sd: SceneData, through, vis):
+        """Mask of the triangles of `through` whose placement (object or instance) stops bounce
+        rays only in the plane of its emitting faces (a light card): no face of it can stand
+        between a receiver and an emitting one, so nothing of it is reached by light samples
+        alone and the light-selection pdf cannot change the image (a card with Shadow off
+        matched Cycles, 1.000x, blocks within noise). Any face off that plane (a sphere's far
+        side behind its near one, a Solidified shell's inner faces) keeps it said."""
+        place = np.asarray(sd.geometry.instance if sd.geometry.instance is not None
+                           else sd.geometry.object_index, np.int64)
+        geo, area = self.tri.geo, self.tri.area
+        # each placement's largest emitting triangle of `through` gives its plane
+        idx = np.flatnonzero(through)
+        order = idx[np.lexsort((-area[idx], place[idx]))]
+        places, first = np.unique(place[order], return_index=True)
+        rep = order[first]
+        n = geo[9:12, rep].T.astype(np.float64)
+        d = np.einsum('ij,ij->i', n, geo[0:3, rep].T.astype(np.float64))
+        # (float32 corners of a rotated card stray ~1e-7 of their coordinates off its plane)
+        eps = 1e-5 * (np.abs(d) + np.sqrt(area[rep]) + 1e-6)
+        which = np.full(int(place.max()) + 1, -1, np.int64)
+        which[places] = np.arange(len(places))
+        stops = np.flatnonzero(((vis & VIS_DIFFUSE) != 0) & (which[place] >= 0))
+        k = which[place[stops]]
+        v0 = geo[0:3, stops].T.astype(np.float64)
+        off = np.zeros(len(places))
+        for corner in (v0, v0 + geo[3:6, stops].T, v0 + geo[6:9, stops].T):
+            np.maximum.at(off, k, np.abs(np.einsum('ij,ij->i', corner, n[k]) - d[k]))
+        flat = np.zeros(len(which), bool)
+        flat[places] = off <= eps
+        return through & flat[place]
 
     def _selection_table(self):
         """The light choice next-event estimation draws from (dacrt.shading.LightChoice): per
