@@ -163,7 +163,8 @@ def lit_from_behind(names, geometry, materials, lights, camera):
     * a closed mesh (every edge shared by two triangles) that shadow rays cannot pass: a ray
       from outside meets its outside, and a light behind the surface there is on the inside of
       the surface's plane, so the path to it crosses the mesh again, unless the light is inside
-      the mesh (a lamp or emitter within its bounds: said) or the camera is (said);
+      the mesh (a lamp or emitter within its bounds) or the camera is: then the side test
+      below, with the mesh's own vertices for its bounds' corners (an interior);
     * any other surface, per triangle plane: said if a ray can meet it from one side (the
       camera or any object's bounds lie on that side) while some part of a lamp (its radius or
       area corners, a sun's cone) or emitter (its bounds) lies on the other.
@@ -226,14 +227,22 @@ def lit_from_behind(names, geometry, materials, lights, camera):
         todo = set(int(k) for k in np.unique(mat[own])) & set(wanted.tolist()) - found
         if not todo:
             continue
+        near = origins
         if not leaky[own].any() and _closed(tris[own]):
             def inside(q):
                 return bool(np.any(np.all((q >= lo[p] - eps) & (q <= hi[p] + eps), axis=1)))
-            if inside(points) or inside(cam):
-                found |= todo
-            continue
+            if not (inside(points) or inside(cam)):
+                continue
+            # a light or the camera within its bounds (an interior): the side test per plane,
+            # with rays starting on its own faces (its vertices bound them) rather than at the
+            # corners of its bounds, which lie outside a room not aligned to the axes; a convex
+            # room holding the lamp and camera has every origin and light on the inner side of
+            # every wall and matches Cycles (1.000x), an L-shaped one or a lamp in an alcove
+            # has a wall plane between them and is said
+            others = np.delete(np.arange(len(ids)), p)
+            near = np.concatenate([cam, verts[np.unique(tris[own])], _box_corners(lo[others], hi[others])])
         for k in todo:
-            if _seen_with_light_behind(verts[tris[own[mat[own] == k]]], origins, points, suns, eps):
+            if _seen_with_light_behind(verts[tris[own[mat[own] == k]]], near, points, suns, eps):
                 found.add(k)
     found = {materials[k].name for k in found}
     return [n for n in names if n in found]
