@@ -242,13 +242,10 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
         if found is not None and profile is not None:
             profile.append(found)
     else:
-        _ray_kind_used[0] = False
+        # (a Mix by Is Camera Ray shows its first shader where the camera sees the lamp too, in
+        # Cycles as here: shade_light evaluates the lamp's shader with PATH_RAY_EMISSION alone
+        # on camera hits as well, so there is nothing to say; it had been said to differ)
         factor = _light_surface(surface, reasons, 0, dark, light.type, object_info)
-        if _ray_kind_used[0] and (light.type == 'AREA' or getattr(light, 'shadow_soft_size', 0.0) > 0.0):
-            messages.append(('INFO', f"light '{name}': its Mix Shader by Light Path Is Camera Ray / Is Shadow Ray "
-                                     "lights the scene with its first shader, as in Cycles (0 there); where the "
-                                     "camera sees the light's own surface DACRT shows that shader too (Cycles: the "
-                                     "camera ray's)"))
     no_emission = '; '.join(dict.fromkeys(dark)) if not factor.any() else ''
     if reasons:
         text = '; '.join(dict.fromkeys(reasons))
@@ -399,7 +396,6 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
 # Is Camera Ray and Is Shadow Ray are 0 there (a lamp mixed by Is Camera Ray lights with the
 # Mix's first shader: it had stood at the factor's own value 0.5, 1.50x Cycles on a block)
 _LIGHTING_RAY_FLAGS = ('Is Camera Ray', 'Is Shadow Ray')
-_ray_kind_used = [False]     # (set where one decided a Mix: _light_shader_factor says so)
 
 
 def _ray_kind_factor(node):
@@ -408,7 +404,6 @@ def _ray_kind_factor(node):
     link = linked_link(node.inputs['Fac'])
     if link is None or link.from_node.type != 'LIGHT_PATH' or link.from_socket.name not in _LIGHTING_RAY_FLAGS:
         return None
-    _ray_kind_used[0] = True
     return 0.0
 
 
