@@ -193,15 +193,28 @@ struct Tracer {
         return na;
     }
 
+    // Scratch of partition_ids_stable, kept by the thread across calls (4 bytes a triangle of
+    // the largest scene split); null when it cannot grow (the split is then made in place).
+    static uint32_t* split_scratch(size_t nt) {
+        thread_local std::vector<uint32_t> v;
+        try {
+            if (v.size() < nt) v.resize(nt);
+        } catch (...) {  // out of memory while holding a shared node's lock: never throw there
+            return nullptr;
+        }
+        return v.data();
+    }
+
     size_t split(uint32_t* ids, size_t nt, const NodeBounds& nb, float rays, uint64_t depth,
-                 NodeBounds& L, NodeBounds& R, int& axis) {
+                 NodeBounds& L, NodeBounds& R, int& axis, bool shared = false) {
         ++st.partition_steps;
         size_t k = 0;
         const bool sah = cfg.partition == Partition::Sah ||
                          (cfg.partition == Partition::Adaptive && rays > cfg.sah_ratio * float(nt));
+        uint32_t* tmp = shared ? split_scratch(nt) : nullptr;
         if (depth < 64) {
-            if (sah) { ++st.sah_steps; k = split_sah(ids, nt, boxes, nb, L, R, axis); }
-            else { ++st.median_steps; k = split_median(ids, nt, boxes, nb, L, R, axis); }
+            if (sah) { ++st.sah_steps; k = split_sah(ids, nt, boxes, nb, L, R, axis, tmp); }
+            else { ++st.median_steps; k = split_median(ids, nt, boxes, nb, L, R, axis, tmp); }
         }
         if (k == 0 || k == nt) k = split_object_median(ids, nt, boxes, nb, L, R, axis);
         return k;
@@ -296,7 +309,7 @@ struct Tracer {
                     node_split(rays, na, priv, nt, nb, depth, c2, w);
                     return;
                 }
-                sn.k = uint32_t(split(ids, nt, nb, float(na) * top->ray_scale, depth, sn.L, sn.R, sn.axis));
+                sn.k = uint32_t(split(ids, nt, nb, float(na) * top->ray_scale, depth, sn.L, sn.R, sn.axis, true));
                 sn.child = top->pool->alloc2();
                 sn.state.store(2, std::memory_order_release);
                 break;
