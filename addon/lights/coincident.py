@@ -5,9 +5,10 @@ tie rule), and a ray leaving either copy never meets the other. Light sampling m
 same one surface, or next-event estimation adds each copy's emission where BSDF hits (and MIS)
 count one: an emissive quad and its twin had lit a floor 1.42x the single quad.
 
-Found vectorised and only among the triangles whose corners all share an x with an emitter's
-corner: an order-independent hash of their three float32 vertices (as the tracer reads them),
-then an exact check of those sharing a hash."""
+Found vectorised: an order-independent hash of each triangle's three float32 vertices (as the
+tracer reads them), among the triangles whose corners all share an x with an emitter's corner
+(where emitters are few; otherwise each vertex hashed once), then an exact check of those
+sharing a hash, sorted only where bucket counts of the hashes leave any."""
 from __future__ import annotations
 
 import numpy as np
@@ -25,6 +26,19 @@ def _corner_hash(xyz) -> np.ndarray:
     return h
 
 
+def _may_repeat(keys) -> np.ndarray:
+    """The positions of the keys (uint64 (n,)) that may occur more than once, ascending: a
+    superset of those that do, by two rounds of bucket counts on other bits of the keys (no
+    sort; of n distinct keys ~6% are left)."""
+    nb = 1 << max(10, min(22, (2 * len(keys)).bit_length()))      # buckets: 2-4 per key
+    b = ((keys >> np.uint64(40)) & np.uint64(nb - 1)).astype(np.intp)
+    keep = np.flatnonzero(np.bincount(b, minlength=nb)[b] > 1)
+    if len(keep):
+        b = (keys[keep] & np.uint64(nb - 1)).astype(np.intp)
+        keep = keep[np.bincount(b, minlength=nb)[b] > 1]
+    return keep
+
+
 def coincident_copies(vertices, indices, emitters, blockers):
     """(copies, winners, grouped): the emitters (bool (M,)) that a triangle of blockers (bool
     (M,): those the rays in question hit and stop at) with a lower index covers exactly (same
@@ -36,26 +50,40 @@ def coincident_copies(vertices, indices, emitters, blockers):
         return None, None, None
     v = np.asarray(vertices, np.float32)
     indices = np.asarray(indices)
-    # prefilter (a 1M-triangle scene in a few ms): the triangles whose corners all have an x an
-    # emitter's corner has (float compare: -0 == +0)
-    x = v[:, 0]
-    ex = np.unique(x[indices[cand]])
-    near = ex[np.minimum(np.searchsorted(ex, x), len(ex) - 1)] == x
-    S = np.flatnonzero(near[indices[:, 0]])
-    S = S[(emitters[S] | blockers[S]) & near[indices[S, 1]] & near[indices[S, 2]]]    # ascending
-    if len(S) < 2:
-        return None, None, None
+    pool = emitters | blockers
+    if 8 * len(cand) < len(indices):
+        # few emitters; prefilter (a 1M-triangle scene in a few ms): the triangles whose corners
+        # all have an x an emitter's corner has (float compare: -0 == +0), then their corners
+        # hashed
+        x = v[:, 0]
+        ex = np.unique(x[indices[cand]])
+        near = ex[np.minimum(np.searchsorted(ex, x), len(ex) - 1)] == x
+        S = np.flatnonzero(near[indices[:, 0]])
+        S = S[pool[S] & near[indices[S, 1]] & near[indices[S, 2]]]                     # ascending
+        if len(S) < 2:
+            return None, None, None
+        h = _corner_hash(v[indices[S]])
+    else:
+        # mostly emitters (an emissive terrain, an LED wall): the x prefilter would keep nearly
+        # everything, so each vertex is hashed once and a corner reads its vertex's hash (hashing
+        # 3M corners and sorting the x had cost 3.4 s on a 1M-triangle emissive grid)
+        S = np.flatnonzero(pool)
+        h = np.take(_corner_hash(v), indices if len(S) == len(indices) else indices[S])
     # an order-independent key per triangle (the sum of its corners' hashes); only triangles
-    # sharing a key with another are checked exactly
-    xyz = v[indices[S]]                      # (S, 3 corners, 3)
-    h = _corner_hash(xyz)
+    # sharing a key with another are checked exactly: first those whose key may repeat (no sort:
+    # without coincident triangles few are left), then by the keys themselves
     keys = h.sum(axis=1, dtype=np.uint64)
+    keep = _may_repeat(keys)
+    if not len(keep):
+        return None, None, None
+    S, keys, h = S[keep], keys[keep], h[keep]
     uk, ki, kc = np.unique(keys, return_inverse=True, return_counts=True)
     shared = kc[ki.ravel()] > 1
     shared &= np.bincount(ki.ravel(), weights=emitters[S], minlength=len(uk))[ki.ravel()] > 0
     if not shared.any():
         return None, None, None
-    S, xyz, h = S[shared], xyz[shared], h[shared]
+    S, h = S[shared], h[shared]
+    xyz = v[indices[S]]                      # (S, 3 corners, 3)
     # exact: the three corners sorted (by hash), compared bit for bit
     order = np.argsort(h, axis=1, kind='stable')
     xyz = np.take_along_axis(xyz, order[:, :, None], axis=1) + np.float32(0.0)
