@@ -11,7 +11,7 @@ import dacrt
 
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .lights.base import RECORD_FIELDS
-from .lights.coincident import coincident_copies
+from .lights.coincident import coincident_copies, near_copies
 from .lights.linking import LightLinking
 from .procedural import ProceduralTexels
 from .scenedata import NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
@@ -65,6 +65,7 @@ class LightSetup:
         self._tri_alias = None
         if self._any_emissive:
             hittable = self._without_coincident_copies(sd, hittable, vis)
+            self._say_near_copies(sd, hittable)
         sampled = hittable & self.mats.light_sampled[self.tri.material]
         if self._shadow_link is not None:
             # shadow-linked emitters are light-sampled whatever their Emission Sampling says: a
@@ -225,6 +226,24 @@ class LightSetup:
         hittable = hittable.copy()
         hittable[copies] = False
         return hittable
+
+    def _say_near_copies(self, sd: SceneData, hittable):
+        """Said where emitters repeat each other only up to rounding (lights/coincident.py
+        near_copies: a twin under another transform, or moved by ~1e-6): not bit for bit, so
+        both stay light-sampled and next-event estimation adds each copy's emission where BSDF
+        hits count one surface (a quad's twin 1e-6 below it: 1.41x Cycles, which renders it as
+        the quad alone; a twin turned 90 degrees, which near_copies does not find as its
+        triangles split along the other diagonal: 1.82x)."""
+        # (only light-sampled ones: copies left to BSDF rays alone are not added twice)
+        sampled = hittable & self.mats.light_sampled[self.tri.material]
+        near, tol = near_copies(self.tri.vertices, self.tri.indices, sampled)
+        if near is None:
+            return
+        self.messages.append(('WARNING', f"{int(near.sum())} emissive triangles of {_object_names(sd, near)} "
+                                         f"repeat other emissive triangles up to rounding (corners within "
+                                         f"{tol:.1g}, not bit for bit): each copy is light-sampled, so their "
+                                         "light comes out up to twice as bright as in Cycles, which renders "
+                                         "them as one surface or darker; delete the duplicate or move it apart"))
 
     def _say_shadowless_emitters(self, sd: SceneData, sampled, vis):
         """Light-sampled emitters with Ray Visibility > Shadow off: their light samples pass

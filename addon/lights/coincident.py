@@ -101,3 +101,56 @@ def coincident_copies(vertices, indices, emitters, blockers):
         return None, None, None
     copy = emitters[S] & (lowest[inverse] < S)
     return S[copy], lowest[inverse][copy], grouped
+
+
+_NEAR_MAX = 50_000         # emitter triangles looked at for near copies (a sort of their centroids)
+_NEAR_ULPS = 16            # how near: float32 ulps of the emitters' largest coordinate
+# a fixed direction the centroids are sorted along (not along an axis a grid lines up with)
+_NEAR_DIR = np.array([0.5366, 0.6397, 0.5503]) / np.linalg.norm([0.5366, 0.6397, 0.5503])
+# the six corner orders a copy may list its corners in (rolled, or wound the other way)
+_ORDERS = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]])
+
+
+def near_copies(vertices, indices, emitters):
+    """(mask, tol): the emitters (bool (M,)) another emitter repeats up to rounding, every corner
+    within tol (_NEAR_ULPS float32 ulps of the emitters' largest coordinate, in any corner order
+    or winding) but not bit for bit (a copy under another transform, or moved by ~1e-6: both are
+    light-sampled, and coincident_copies, exact, leaves them); (None, tol) where there are none,
+    or too many emitters to look (_NEAR_MAX). Only triangles split alike are found: a quad
+    copied under a 90 degree turn splits along its other diagonal, and those are not. Cheap: the
+    centroids sorted along one direction, each compared with the next few within tol."""
+    E = np.flatnonzero(emitters)
+    if not 2 <= len(E) <= _NEAR_MAX:
+        return None, 0.0
+    c32 = np.asarray(vertices, np.float32)[np.asarray(indices)[E]] + np.float32(0.0)   # (E, 3, 3)
+    tol = float(_NEAR_ULPS * np.spacing(np.float32(max(float(np.abs(c32).max()), 1e-30))))
+    cent = c32.mean(axis=1, dtype=np.float64)
+    # triangles smaller than a few tol are rounding themselves: any two of them would match
+    big = np.flatnonzero(np.abs(c32 - cent[:, None].astype(np.float32)).max(axis=(1, 2)) > 4 * tol)
+    if len(big) < 2:
+        return None, tol
+    p = cent[big] @ _NEAR_DIR
+    srt = np.argsort(p)
+    order, p = big[srt], p[srt]
+    found = np.zeros(len(E), bool)
+    for k in range(1, 33):              # the next 32 along the direction at most
+        close = np.flatnonzero(p[k:] - p[:-k] <= 2 * tol)      # (a centroid moves <= tol * sqrt(3))
+        if not len(close):
+            break
+        a, b = order[close], order[close + k]
+        near = np.abs(cent[a] - cent[b]).max(axis=1) <= tol     # centroids first: few are left
+        a, b = a[near], b[near]
+        if not len(a):
+            continue
+        ca, cb = c32[a].astype(np.float64), c32[b].astype(np.float64)
+        err = np.min([np.abs(ca - cb[:, o]).max(axis=(1, 2)) for o in _ORDERS], axis=0)
+        exact = np.zeros(len(a), bool)
+        for o in _ORDERS:
+            exact |= (c32[a] == c32[b][:, o]).all(axis=(1, 2))
+        hit = (err <= tol) & ~exact
+        found[a[hit]] = found[b[hit]] = True
+    if not found.any():
+        return None, tol
+    mask = np.zeros(len(emitters), bool)
+    mask[E[found]] = True
+    return mask, tol
