@@ -8,7 +8,8 @@ Face domain when the mesh has no sharp_face attribute. Free custom normals on th
 their angle-weighted mean around each vertex. DACRT had shaded every Face-domain triangle flat:
 the half-smooth ico sphere's 8 px blocks 0.78x Cycles, silently.
 
-Each scene holds four spheres in one render, over a floor in a sun, 64x48, 1 bounce."""
+Meshes without custom normals whose every edge is marked sharp (domain Face) follow the same
+rule. Each scene holds up to four spheres in one render, over a floor in a sun, 64x48, 1 bounce."""
 import math
 from types import SimpleNamespace
 
@@ -104,7 +105,7 @@ def _face_domain(sc):
     _gn_ico('HalfField', (-0.8, 0.6, 0.0), 'FACE', 'half', 'field', after=('SUBSURF',))
     _face_normals_mesh('AllSmooth', (0.8, 0.6, 0.0), lambda c: False)   # sharp_face all False
     _gn_ico('AllSmoothGone', (2.4, 0.6, 0.0), 'FACE', 'all', 'field', after=('TRIANGULATE',))
-    return {'HalfUp': 'FACE', 'HalfField': 'FACE', 'AllSmooth': 'FACE', 'AllSmoothGone': 'FACE'}
+    return dict.fromkeys(('HalfUp', 'HalfField', 'AllSmooth', 'AllSmoothGone'), ('FACE', True))
 
 
 def _other_domains(sc):
@@ -112,7 +113,27 @@ def _other_domains(sc):
     _gn_ico('CornerHalf', (-0.8, 0.6, 0.0), 'CORNER', 'half', 'field')
     _face_normals_mesh('FaceQuarter', (0.8, 0.6, 0.0), lambda c: c[0] > 0.2)
     _gn_ico('FaceFlat', (2.4, 0.6, 0.0), 'FACE', 'none', 'field')
-    return {'PointHalf': 'POINT', 'CornerHalf': 'CORNER', 'FaceQuarter': 'FACE', 'FaceFlat': 'FACE'}
+    return {'PointHalf': ('POINT', True), 'CornerHalf': ('CORNER', True), 'FaceQuarter': ('FACE', True),
+            'FaceFlat': ('FACE', True)}
+
+
+def _sharp_edges(sc):
+    """No custom normals: every edge marked sharp (Blender's domain: FACE) and the upper half's
+    faces smooth: Cycles still shades those smooth, with the vertex normals."""
+    import bmesh        # importable once bpy is
+    for name, x, smooth in (('EdgesHalf', -1.25, lambda c: c.z > 0), ('EdgesQuarter', 1.25, lambda c: c.x > 0.2)):
+        me = bpy.data.meshes.new(name)
+        bm = bmesh.new()
+        bmesh.ops.create_icosphere(bm, subdivisions=1, radius=1.1)
+        bm.to_mesh(me)
+        bm.free()
+        for f in me.polygons:
+            f.use_smooth = smooth(f.center)
+        for e in me.edges:
+            e.use_edge_sharp = True
+        me.materials.append(scenes.diffuse(name, (0.7, 0.4, 0.2)))
+        scenes.link(bpy.data.objects.new(name, me)).location = (x, 0.6, 0.0)
+    return {'EdgesHalf': ('FACE', False), 'EdgesQuarter': ('FACE', False)}
 
 
 def _scene(build):
@@ -133,13 +154,13 @@ def _blocks(img, n=8):
     return img[:h - h % n, :w - w % n].reshape(h // n, n, w // n, n, -1).mean(axis=(1, 3, 4))
 
 
-@pytest.mark.parametrize('build', [_face_domain, _other_domains], ids=['face', 'other'])
+@pytest.mark.parametrize('build', [_face_domain, _other_domains, _sharp_edges], ids=['face', 'other', 'sharp_edges'])
 def test_normals_of_every_domain_shade_as_in_cycles(tmp_path, build):
     sc, domains = _scene(build)
     dg = bpy.context.evaluated_depsgraph_get()
-    for name, domain in domains.items():
+    for name, (domain, custom) in domains.items():
         me = bpy.data.objects[name].evaluated_get(dg).data
-        assert me.has_custom_normals and me.normals_domain == domain, (name, me.normals_domain)
+        assert me.has_custom_normals == custom and me.normals_domain == domain, (name, me.normals_domain)
     spec = SimpleNamespace(cycles_samples=128, dacrt_samples=128, bounces=1, clamp=(0.0, 0.0),
                            filter_type='BOX', filter_width=1.0)
     img = {}
@@ -151,5 +172,5 @@ def test_normals_of_every_domain_shade_as_in_cycles(tmp_path, build):
     ratio = (bd + 1e-3) / (bc + 1e-3)
     print('mean C %.4f D %.4f ratio %.4f; 8 px blocks %.3f-%.3f, max diff %.4f'
           % (c.mean(), d.mean(), d.mean() / c.mean(), ratio.min(), ratio.max(), np.abs(bd - bc).max()))
-    assert np.abs(bd - bc).max() < 0.012, np.array2string(ratio, precision=3)
-    assert abs(d.mean() / c.mean() - 1) < 0.005, (c.mean(), d.mean())
+    assert np.abs(bd - bc).max() < 0.006, np.array2string(ratio, precision=3)
+    assert abs(d.mean() / c.mean() - 1) < 0.003, (c.mean(), d.mean())
