@@ -60,6 +60,13 @@ class CameraModel:
         self.rot = rot / norms
         self.pos = m[:3, 3].copy()
         self.forward = -self.rot[:, 2]
+        # A camera under a rotated, non-uniformly scaled parent keeps a sheared matrix (Cycles
+        # only normalises its columns, transform_clear_scale); world -> camera is then its
+        # inverse, not its transpose. Orthonormal ones keep the transpose (the same, bit-exact).
+        self.sheared = not np.allclose(self.rot.T @ self.rot, np.eye(3), rtol=0.0, atol=1e-6)
+        if self.sheared and abs(np.linalg.det(self.rot)) < 1e-9:
+            raise ValueError("camera.matrix has a degenerate rotation")
+        self.inv = np.linalg.inv(self.rot) if self.sheared else self.rot.T
         # world -> Cycles' camera space (blender_camera_matrix: x right, y up, z into the view;
         # a panorama's frame turned so that it looks along the object's +X (a mirror ball: -Y),
         # as an environment texture is centred), for the Denoising Normal pass
@@ -68,7 +75,7 @@ class CameraModel:
             frame = (np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
                      if cam.panorama_type == 'MIRRORBALL' else
                      np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]))
-        self.to_camera = (self.rot @ frame).T
+        self.to_camera = frame.T @ self.inv     # Cycles' transform_direction(worldtocamera, N)
         self.aperture = float(cam.aperture)
         self.focal_distance = float(cam.focal_distance)
         self.aperture_blades = int(cam.aperture_blades)
@@ -84,6 +91,7 @@ class CameraModel:
             if not np.isfinite(self.aperture_rotation):
                 raise ValueError(f"camera.aperture_rotation {cam.aperture_rotation!r} must be finite")
         self._rot32 = self.rot.astype(np.float32)
+        self._inv32 = self.inv.astype(np.float32)
         self._pos32 = self.pos.astype(np.float32)
         self._frame = self._frame_floats()
         self._init_region(cam)
@@ -192,22 +200,26 @@ class CameraModel:
         the camera for a panoramic one (as Cycles' camera_z_depth gives it there)."""
         if self.pano is not None:
             return self.distance(points)
-        f = -self._rot32[:, 2]
+        # transform_point(worldtocamera, P).z: the inverse's row (a sheared camera's differs
+        # from its view axis)
+        return self._along(points, -self._inv32[2])
+
+    def _along(self, points, f):
         return f[0] * (points[0] - self._pos32[0]) + f[1] * (points[1] - self._pos32[1]) + \
             f[2] * (points[2] - self._pos32[2])
 
     def distance(self, points: np.ndarray) -> np.ndarray:
         """Cycles' camera_distance of world points (3,n), what the Mist pass measures: from the
         camera's position, or along its view axis for an orthographic camera."""
-        if self.kind == 'ORTHO':
-            return np.abs(self.z_depth(points))
+        if self.kind == 'ORTHO':    # along the view axis (the matrix's column), even when sheared
+            return np.abs(self._along(points, -self._rot32[:, 2]))
         return np.sqrt(sum((points[a] - self._pos32[a]) ** 2 for a in range(3))).astype(np.float32)
 
     def project(self, points: np.ndarray):
         """World points (n,3) -> full-frame raster (rx, ry) float64 and z-depth; inverse of rays()."""
         if self.pano is not None:
             raise NotImplementedError("project() covers perspective and orthographic cameras")
-        p = (np.asarray(points, np.float64) - self.pos) @ self.rot     # camera space (x right, y up, -z forward)
+        p = (np.asarray(points, np.float64) - self.pos) @ self.inv.T   # camera space (x right, y up, -z forward)
         depth = -p[:, 2]
         if self.kind == 'ORTHO':
             sx, sy = p[:, 0], p[:, 1]
