@@ -5,6 +5,8 @@ Cycles normalises its columns (transform_clear_scale) but they are no longer ort
   (camera_z_depth, transform_direction(worldtocamera, N)); DACRT used the transpose, which is the
   inverse only for an orthonormal matrix. Depth over a floor: Cycles 11.560, DACRT 12.637 (max
   difference 2.99); camera-space normal Cycles (-0.34, -1.92, 1.72), DACRT (-0.38, -0.50, -0.06).
+- Panoramic clip: Cycles normalises the world direction and clips along it; DACRT did not, so
+  the clip landed at clip_start * |d| (equirectangular floor coverage 0.88x, fisheye 0.85x).
 """
 import math
 
@@ -79,3 +81,14 @@ def test_depth_and_denoising_normal_of_a_sheared_camera(kind, tmp_path):
     assert np.abs(cn[hit].mean(0) - dn[hit].mean(0)).max() < 0.03, (cn[hit].mean(0), dn[hit].mean(0))
     assert np.median(np.abs(cn - dn)[hit]) < 1e-3
 
+
+@pytest.mark.parametrize('pano', ['EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'MIRRORBALL'])
+@pytest.mark.parametrize('clip', [(6.0, 1000.0), (0.1, 7.0)], ids=['start', 'end'])
+def test_panoramic_clip_of_a_sheared_camera(pano, clip, tmp_path):
+    sc = _scene(samples=32, emission=True, clip=clip, pano=pano)
+    out = _channels(sc, tmp_path, 'Combined', 'RA')
+    c, d = out['CYCLES'], out['DACRT']
+    cov_c, cov_d = c[..., 1].mean(), d[..., 1].mean()
+    assert 0.01 < cov_c < 0.9, "the clip must cut the floor"
+    assert abs(cov_d / cov_c - 1) < 0.03, (cov_c, cov_d)
+    assert abs(d[..., 0].mean() / c[..., 0].mean() - 1) < 0.03, (c[..., 0].mean(), d[..., 0].mean())
