@@ -141,11 +141,13 @@ class CameraModel:
         has depth of field (Cycles' thin lens: the ray leaves its lens point towards the pinhole
         ray's point on the plane of focus); None gives pinhole rays. One native pass
         (dacrt.shading.camera_rays) on the frame below; with records=True also the tracer's
-        RAY_DTYPE records of the rays."""
+        RAY_DTYPE records of the rays. A sheared matrix (self.sheared) maps them as Cycles does:
+        each world direction normalised after it, a perspective camera's clip start and range
+        (camera-space depths over d_cam.z) laid along the ray rather than on the sheared planes."""
         if self.pano is not None:
             return self._panorama_rays(rx, ry, records)
         return dacrt.shading.camera_rays(self.kind == 'ORTHO', self._frame, rx, ry, records,
-                                         lens if self.has_lens else None)
+                                         lens if self.has_lens else None, sheared=self.sheared)
 
     def _viewplane(self, rx, ry):
         rx, ry = np.asarray(rx, np.float64), np.asarray(ry, np.float64)

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "bindargs.h"
+#include "camera.h"
 #include "noise.h"
 #include "orennayar.h"
 #include "shading.h"
@@ -404,7 +405,7 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
 }
 
 py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, py::object rays, py::object lu_obj,
-                         py::object lv_obj) {
+                         py::object lv_obj, bool sheared) {
     if (frame.ndim() != 1 || frame.shape(0) != 27)
         throw py::value_error("frame must hold 27 floats (rotation 9, position 3, ortho base 3, raster map 4, "
                               "tan_half_fov, clip_start, clip_range, aperture, focal_distance, blades, "
@@ -438,8 +439,9 @@ py::tuple camera_rays_py(bool ortho, F32Array frame, F32Array rx, F32Array ry, p
     Ray* rec = rays.is_none() ? nullptr : out_records<Ray>(rays.cast<py::array>(), n, "rays");
     {
         py::gil_scoped_release nogil;
-        camera_rays(c, rx.data(), ry.data(), n, O.mutable_data(), D.mutable_data(), tmax.mutable_data(), rec,
-                    lu_obj.is_none() ? nullptr : lu.data(), lv_obj.is_none() ? nullptr : lv.data());
+        (sheared ? sheared_camera_rays : camera_rays)(c, rx.data(), ry.data(), n, O.mutable_data(), D.mutable_data(),
+                                                      tmax.mutable_data(), rec, lu_obj.is_none() ? nullptr : lu.data(),
+                                                      lv_obj.is_none() ? nullptr : lv.data());
     }
     return py::make_tuple(O, D, tmax);
 }
@@ -718,7 +720,7 @@ void register_shading(py::module_& m) {
           py::arg("clamp") = std::numeric_limits<float>::infinity(), py::arg("tree") = py::none(),
           py::arg("tri_key") = py::none(), py::arg("normal") = py::none(), py::arg("receivers") = py::none());
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
-          py::arg("rays"), py::arg("lu") = py::none(), py::arg("lv") = py::none());
+          py::arg("rays"), py::arg("lu") = py::none(), py::arg("lv") = py::none(), py::arg("sheared") = false);
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
     m.def("sample_sums", &sample_sums_py, py::arg("values"), py::arg("weights"));
     m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"));

@@ -3,6 +3,7 @@
 // instead of a dozen numpy passes.
 #include <cmath>
 
+#include "camera.h"
 #include "cameralanes.h"
 #include "parallel.h"
 #include "pathvertex.h"
@@ -44,19 +45,16 @@ void aperture_point(const CameraFrame& c, float u, float v, float& x, float& y) 
     x *= c.inv_ratio;
 }
 
-}  // namespace
+// Scales the world direction w to unit length and writes it as ray i's direction (a sheared
+// camera's: Cycles' normalize(transform_direction(cameratoworld, D))).
+inline void unit_direction(const float w[3], float* D, size_t n, size_t i, float d[3]) {
+    const float inv = 1.0f / std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    for (int a = 0; a < 3; ++a) D[size_t(a) * n + i] = d[a] = w[a] * inv;
+}
 
-void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
-                 float* tmax, Ray* rays, const float* lu, const float* lv) {
-    const bool lens = c.aperture > 0.0f && lu && lv;
-    if (!c.ortho && !lens) {  // the common camera: its lane loop, then the records
-        parallel_for(n, [&](size_t b, size_t e) {
-            pinhole_lanes(c, rx, ry, b, e, n, O, D, tmax);
-            if (rays)
-                for (size_t i = b; i < e; ++i) ray_record(O, D, n, i, tmax[i], rays[i]);
-        }, size_t(1) << 16);
-        return;
-    }
+// The one-ray-at-a-time mapping: orthographic, depth of field, and every sheared camera.
+void scalar_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
+                 float* tmax, Ray* rays, const float* lu, const float* lv, bool lens, bool sheared) {
     parallel_for(n, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             float sx = c.sx0 + rx[i] * c.sx_scale, sy = c.sy0 + ry[i] * c.sy_scale;
@@ -83,11 +81,16 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
                 const float len = std::sqrt(lx * lx + ly * ly + c.focal_distance * c.focal_distance);
                 const float inv = 1.0f / len, start = c.clip_start * len / c.focal_distance;
                 const float dc[3] = {-lx * inv, -ly * inv, -c.focal_distance * inv};
+                float w[3], unit[3];
                 for (int a = 0; a < 3; ++a) {
                     const float d = c.rot[a][0] * dc[0] + c.rot[a][1] * dc[1] + c.rot[a][2] * dc[2];
+                    w[a] = d;
                     D[size_t(a) * n + i] = d;
                     O[size_t(a) * n + i] = c.rot[a][0] * (sx + lx) + c.rot[a][1] * (sy + ly) + c.pos[a] + d * start;
                 }
+                // sheared: the origin is the camera-space point mapped by the matrix, as above; only
+                // the direction is scaled to unit length, and clip_range is measured along it
+                if (sheared) unit_direction(w, D, n, i, unit);
                 if (rays) ray_record(O, D, n, i, tmax[i], rays[i]);
                 continue;
             }
@@ -98,7 +101,24 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
             // (Cycles clips along the lens ray by the pinhole ray's factor too)
             const float start = c.clip_start / inv_len;
             tmax[i] = c.clip_range / inv_len;
-            if (!lens) {
+            if (sheared) {
+                // Cycles' camera_sample_perspective: the world direction normalised after the
+                // matrix, the clip distances (camera-space depth / d_cam.z) laid along it, from the
+                // pinhole or the lens point mapped by the matrix; not the sheared image of the plane
+                float w[3], d[3], lens_w[3] = {0.0f, 0.0f, 0.0f};
+                if (!lens) {
+                    for (int a = 0; a < 3; ++a) w[a] = c.rot[a][0] * sx + c.rot[a][1] * sy - c.rot[a][2];
+                } else {
+                    const float fx = sx * c.focal_distance - lx, fy = sy * c.focal_distance - ly,
+                                fz = -c.focal_distance;
+                    for (int a = 0; a < 3; ++a) {
+                        w[a] = c.rot[a][0] * fx + c.rot[a][1] * fy + c.rot[a][2] * fz;
+                        lens_w[a] = c.rot[a][0] * lx + c.rot[a][1] * ly;
+                    }
+                }
+                unit_direction(w, D, n, i, d);
+                for (int a = 0; a < 3; ++a) O[size_t(a) * n + i] = lens_w[a] + c.pos[a] + d[a] * start;
+            } else if (!lens) {
                 for (int a = 0; a < 3; ++a) {
                     const float d = (c.rot[a][0] * sx + c.rot[a][1] * sy - c.rot[a][2]) * inv_len;
                     D[size_t(a) * n + i] = d;
@@ -117,6 +137,27 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
             if (rays) ray_record(O, D, n, i, tmax[i], rays[i]);
         }
     }, size_t(1) << 16);
+}
+
+}  // namespace
+
+void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
+                 float* tmax, Ray* rays, const float* lu, const float* lv) {
+    const bool lens = c.aperture > 0.0f && lu && lv;
+    if (!c.ortho && !lens) {  // the common camera: its lane loop, then the records
+        parallel_for(n, [&](size_t b, size_t e) {
+            pinhole_lanes(c, rx, ry, b, e, n, O, D, tmax);
+            if (rays)
+                for (size_t i = b; i < e; ++i) ray_record(O, D, n, i, tmax[i], rays[i]);
+        }, size_t(1) << 16);
+        return;
+    }
+    scalar_rays(c, rx, ry, n, O, D, tmax, rays, lu, lv, lens, false);
+}
+
+void sheared_camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t n, float* O, float* D,
+                         float* tmax, Ray* rays, const float* lu, const float* lv) {
+    scalar_rays(c, rx, ry, n, O, D, tmax, rays, lu, lv, c.aperture > 0.0f && lu && lv, true);
 }
 
 }  // namespace dacrt

@@ -7,6 +7,12 @@ Cycles normalises its columns (transform_clear_scale) but they are no longer ort
   difference 2.99); camera-space normal Cycles (-0.34, -1.92, 1.72), DACRT (-0.38, -0.50, -0.06).
 - Panoramic clip: Cycles normalises the world direction and clips along it; DACRT did not, so
   the clip landed at clip_start * |d| (equirectangular floor coverage 0.88x, fisheye 0.85x).
+- Perspective clip: Cycles' camera_sample_perspective lays clip start and range (camera-space
+  depths over d_cam.z) along the normalised world ray; DACRT's native rays started on the sheared
+  image of the clip-start plane (floor coverage at clip start 11: 0.78x Cycles', at clip end 10:
+  1.29x), with or without depth of field. Orthographic rays already matched (their origins are
+  the matrix's image of camera-space points in both), but with depth of field their directions
+  were not unit length.
 """
 import math
 
@@ -92,3 +98,74 @@ def test_panoramic_clip_of_a_sheared_camera(pano, clip, tmp_path):
     assert 0.01 < cov_c < 0.9, "the clip must cut the floor"
     assert abs(cov_d / cov_c - 1) < 0.03, (cov_c, cov_d)
     assert abs(d[..., 0].mean() / c[..., 0].mean() - 1) < 0.03, (c[..., 0].mean(), d[..., 0].mean())
+
+
+@pytest.mark.parametrize('kind,fstop', [('PERSP', None), ('PERSP', 0.2), ('ORTHO', None), ('ORTHO', 0.2)],
+                         ids=['persp', 'persp-dof', 'ortho', 'ortho-dof'])
+@pytest.mark.parametrize('clip', [(11.0, 1000.0), (0.1, 10.0)], ids=['start', 'end'])
+def test_clip_of_a_sheared_camera(kind, fstop, clip, tmp_path):
+    sc = _scene(kind, samples=32, emission=True, clip=clip)
+    if fstop:
+        dof = sc.camera.data.dof
+        dof.use_dof, dof.aperture_fstop, dof.focus_distance = True, fstop, 9.0
+    out = _channels(sc, tmp_path, 'Combined', 'RA')
+    c, d = out['CYCLES'], out['DACRT']
+    cov_c, cov_d = c[..., 1].mean(), d[..., 1].mean()
+    assert 0.05 < cov_c < 0.9, ("the clip must cut the floor", cov_c)
+    assert abs(cov_d / cov_c - 1) < 0.03, (cov_c, cov_d)
+    assert abs(d[..., 0].mean() / c[..., 0].mean() - 1) < 0.03, (c[..., 0].mean(), d[..., 0].mean())
+
+
+@pytest.mark.parametrize('kind,aperture', [('PERSP', 0.0), ('PERSP', 0.3), ('ORTHO', 0.0), ('ORTHO', 0.3)])
+def test_sheared_camera_rays_follow_cycles_formulas(kind, aperture):
+    """CameraModel.rays of a sheared matrix against Cycles' camera_sample_perspective /
+    _orthographic in float64: unit world directions normalize(R d), a perspective ray starting
+    clip_start * |d_cam| / |d_cam.z| along it (from the pinhole or the lens point R (lx, ly, 0))
+    and clip_range * |d_cam| / |d_cam.z| long; orthographic: origin R (camera-space point),
+    clip_range long."""
+    from addon.camera import CameraModel
+    from addon.scenedata import Camera
+    rng = np.random.default_rng(3)
+    rot = np.array([[0.9, 0.3, -0.2], [0.1, 0.8, 0.5], [-0.3, 0.4, 0.9]])
+    m = np.eye(4)
+    m[:3, :3], m[:3, 3] = rot * [1.0, 2.0, 0.5], (1.0, -2.0, 3.0)    # columns scaled: normalised away
+    cam = Camera(kind=kind, matrix=m, width=16, height=12, viewplane=(-1.0, 1.0, -0.75, 0.75),
+                 tan_half_fov=0.4, clip_start=2.5, clip_end=9.0, aperture=aperture, focal_distance=6.0)
+    model = CameraModel(cam)
+    assert model.sheared
+    n = 64
+    rx, ry = rng.uniform(0, 16, n).astype(np.float32), rng.uniform(0, 12, n).astype(np.float32)
+    lens = rng.uniform(0, 1, (2, n)).astype(np.float32) if aperture else None
+    O, D, tmax = model.rays(rx, ry, lens=lens)
+    R = rot / np.linalg.norm(rot, axis=0)
+    sx, sy = model._viewplane(rx, ry)
+    np.testing.assert_allclose(np.linalg.norm(D, axis=0), 1.0, atol=2e-6)
+    if kind == 'PERSP':
+        dc = np.stack([sx * 0.4, sy * 0.4, -np.ones(n)])
+        z_inv = np.linalg.norm(dc, axis=0)          # |d_cam| / |d_cam.z|, d_cam.z = -1
+        np.testing.assert_allclose(tmax, 6.5 * z_inv, rtol=1e-6)
+        if not aperture:
+            w = R @ dc
+            Dw = w / np.linalg.norm(w, axis=0)
+            np.testing.assert_allclose(D, Dw, atol=2e-6)
+            np.testing.assert_allclose(O, m[:3, 3, None] + 2.5 * z_inv * Dw, atol=2e-5)
+        else:
+            # the ray meets the pinhole ray's point on the plane of focus (camera depth 6)
+            P = O - 2.5 * z_inv * D                  # the lens point, on the camera plane
+            lp = np.linalg.solve(R, P - m[:3, 3, None])
+            np.testing.assert_allclose(lp[2], 0.0, atol=2e-5)
+            focus = m[:3, 3, None] + R @ (dc * 6.0)
+            t = np.linalg.norm(focus - P, axis=0)
+            np.testing.assert_allclose(P + t * D, focus, atol=1e-4)
+    else:
+        np.testing.assert_allclose(tmax, 6.5, rtol=1e-6)
+        cp = np.linalg.solve(R, O - m[:3, 3, None])   # origins: camera-space points on z = -clip_start
+        if not aperture:
+            np.testing.assert_allclose(cp, np.stack([sx, sy, np.full(n, -2.5)]), atol=2e-5)
+            np.testing.assert_allclose(D, -R[:, 2:3] * np.ones(n), atol=2e-6)
+        else:
+            np.testing.assert_allclose(cp[2], -2.5, atol=2e-5)
+            # towards the pinhole's point (sx, sy) at depth focal_distance
+            focus = m[:3, 3, None] + R @ np.stack([sx, sy, np.full(n, -6.0)])
+            t = np.linalg.norm(focus - O, axis=0)
+            np.testing.assert_allclose(O + t * D, focus, atol=1e-4)

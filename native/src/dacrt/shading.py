@@ -409,7 +409,7 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
                                  None if receivers is None else np.ascontiguousarray(receivers, np.uint64))
 
 
-def camera_rays(ortho: bool, frame, rx, ry, records: bool = False, lens=None):
+def camera_rays(ortho: bool, frame, rx, ry, records: bool = False, lens=None, sheared: bool = False):
     """Rays through raster positions rx, ry (n,) of a camera frame (27 float32: camera-to-world
     rotation row-major (9), position (3), orthographic origin base (3), raster -> viewplane
     map sx0, sx_scale, sy0, sy_scale (4), tan(fov / 2), clip start, clip range, then depth of
@@ -417,12 +417,15 @@ def camera_rays(ortho: bool, frame, rx, ry, records: bool = False, lens=None):
     1 / aperture ratio): origins and unit directions (3, n) on the clip-start plane, tmax (n,)
     to the clip-end plane, and with records=True their RAY_DTYPE records (ids 0..n-1) from the
     same pass. lens: (u, v) uniforms (n,) picking each ray's lens point when the aperture is
-    open (Cycles' thin lens); without them every ray is a pinhole ray."""
+    open (Cycles' thin lens); without them every ray is a pinhole ray. sheared: the rotation's
+    columns are not orthogonal (a camera under a rotated, non-uniformly scaled parent); then
+    each world direction is normalised after it and the clip distances are laid along it, as
+    Cycles does, instead of starting on the sheared image of the clip-start plane."""
     rx = np.ascontiguousarray(rx, _F32)
     rays = np.empty(len(rx), RAY_DTYPE) if records else None
     lu, lv = (None, None) if lens is None else (np.ascontiguousarray(lens[0], _F32), np.ascontiguousarray(lens[1], _F32))
     O, D, tmax = _core.camera_rays(bool(ortho), np.ascontiguousarray(frame, _F32), rx,
-                                   np.ascontiguousarray(ry, _F32), rays, lu, lv)
+                                   np.ascontiguousarray(ry, _F32), rays, lu, lv, bool(sheared))
     return (O, D, tmax, rays) if records else (O, D, tmax)
 
 
