@@ -63,10 +63,11 @@ class CameraModel:
         # A camera under a rotated, non-uniformly scaled parent keeps a sheared matrix (Cycles
         # only normalises its columns, transform_clear_scale); world -> camera is then its
         # inverse, not its transpose. Orthonormal ones keep the transpose (the same, bit-exact).
+        # (a parent flattened to zero on one axis leaves coplanar columns: no inverse, so the
+        # pseudo-inverse keeps the passes finite; Cycles renders such a camera too)
         self.sheared = not np.allclose(self.rot.T @ self.rot, np.eye(3), rtol=0.0, atol=1e-6)
-        if self.sheared and abs(np.linalg.det(self.rot)) < 1e-9:
-            raise ValueError("camera.matrix has a degenerate rotation")
-        self.inv = np.linalg.inv(self.rot) if self.sheared else self.rot.T
+        self.inv = (self.rot.T if not self.sheared else np.linalg.inv(self.rot)
+                    if abs(np.linalg.det(self.rot)) > 1e-9 else np.linalg.pinv(self.rot))
         # world -> Cycles' camera space (blender_camera_matrix: x right, y up, z into the view;
         # a panorama's frame turned so that it looks along the object's +X (a mirror ball: -Y),
         # as an environment texture is centred), for the Denoising Normal pass

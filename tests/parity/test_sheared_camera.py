@@ -169,3 +169,21 @@ def test_sheared_camera_rays_follow_cycles_formulas(kind, aperture):
             focus = m[:3, 3, None] + R @ np.stack([sx, sy, np.full(n, -6.0)])
             t = np.linalg.norm(focus - O, axis=0)
             np.testing.assert_allclose(O + t * D, focus, atol=1e-4)
+
+
+def test_camera_under_a_flattened_parent_renders(tmp_path):
+    """A parent scaled to 0 on one axis leaves the camera's columns coplanar: no inverse. It
+    renders (Cycles does too; its Depth there is arbitrary), its Combined as Cycles'."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 16, 12
+    cam = scenes.camera(location=(0, -6, 4), rotation=(math.radians(50), 0, 0.2))
+    rig = scenes.link(bpy.data.objects.new('Rig', None), sc)
+    rig.scale = (1.0, 0.0, 1.0)       # every column loses its y: exactly coplanar
+    cam.parent = rig
+    scenes.plane(size=20, materials=[scenes.emission("Glow", (1.0, 1.0, 1.0), 1.0)])
+    sc.view_layers[0].use_pass_z = True
+    sc.cycles.device = 'CPU'
+    sc.cycles.samples = sc.dacrt.samples = 4
+    out = _channels(sc, tmp_path, 'Combined', 'R')
+    assert abs(out['DACRT'].mean() - out['CYCLES'].mean()) < 0.01
