@@ -564,17 +564,12 @@ size_t param_len(const F32Array& a, size_t n, const char* name) {
     return size_t(a.shape(0));
 }
 
-// Procedural texture points: (n, 2) or (n, 3); returns the dimension.
-int points_dims(const F32Array& points) {
-    if (points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3))
-        throw py::value_error("points must have shape (n, 2) or (n, 3), got " + shape_str(points));
-    return int(points.shape(1));
-}
-
 py::tuple noise_texture_py(F32Array points, F32Array scale, F32Array detail, F32Array roughness,
                            F32Array lacunarity, F32Array distortion, bool normalize, bool color, int type,
                            F32Array offset, F32Array gain) {
-    const int dims = points_dims(points);
+    if (points.ndim() != 2 || points.shape(1) < 1 || points.shape(1) > 4)
+        throw py::value_error("points must have shape (n, 1..4), got " + shape_str(points));
+    const int dims = int(points.shape(1));
     if (type < NOISE_FBM || type > NOISE_HETERO_TERRAIN)
         throw py::value_error("type must be 0..4 (fBM, multifractal, hybrid, ridged, hetero terrain), got " +
                               std::to_string(type));

@@ -1,5 +1,5 @@
-// Bob Jenkins' lookup3 hash as Cycles' util/hash.h computes it: the final mix of three words and
-// a float's bits as a word. Shared by the noise and Voronoi kernels, whose cells Cycles hashes
+// Bob Jenkins' lookup3 hash as Cycles' util/hash.h computes it: the mix and final mix of three
+// words and a float's bits as a word. Shared by the noise and Voronoi kernels, whose cells Cycles hashes
 // with it (the texture's values depend on it bit for bit).
 #pragma once
 
@@ -10,6 +10,16 @@ namespace dacrt {
 namespace lookup3 {
 
 inline uint32_t rot(uint32_t x, int k) { return (x << k) | (x >> (32 - k)); }
+
+// The mix between blocks of three words (Cycles' hash_uint4 mixes its first three).
+inline void mix(uint32_t& a, uint32_t& b, uint32_t& c) {
+    a -= c; a ^= rot(c, 4);  c += b;
+    b -= a; b ^= rot(a, 6);  a += c;
+    c -= b; c ^= rot(b, 8);  b += a;
+    a -= c; a ^= rot(c, 16); c += b;
+    b -= a; b ^= rot(a, 19); a += c;
+    c -= b; c ^= rot(b, 4);  b += a;
+}
 
 inline uint32_t final_mix(uint32_t a, uint32_t b, uint32_t c) {
     c ^= b; c -= rot(b, 14);

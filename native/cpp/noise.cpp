@@ -34,7 +34,13 @@ using lookup3::final_mix;
 // 16: one AVX-512 vector, two AVX2 ones, four SSE2 ones per step.
 constexpr int kLanes = 16;
 using Lanes = float[kLanes];
-using Points = float[3][kLanes];   // a coordinate's lanes per axis (2D: the first two)
+using Points = float[4][kLanes];   // a coordinate's lanes per axis (1D to 3D: the first ones)
+
+DACRT_LANES uint32_t hash_uint(uint32_t kx) {
+    uint32_t a = 0xdeadbeefu + (1u << 2) + 13u, b = a, c = a;
+    a += kx;
+    return final_mix(a, b, c);
+}
 
 DACRT_LANES uint32_t hash_uint2(uint32_t kx, uint32_t ky) {
     uint32_t a = 0xdeadbeefu + (2u << 2) + 13u, b = a, c = a;
@@ -51,9 +57,22 @@ DACRT_LANES uint32_t hash_uint3(uint32_t kx, uint32_t ky, uint32_t kz) {
     return final_mix(a, b, c);
 }
 
-// Cycles' random_float3_offset / random_float2_offset component k of a seed.
-inline float random_offset(float seed, int k) {
-    const uint32_t h32 = hash_uint2(lookup3::float_bits(seed), lookup3::float_bits(float(k)));
+// Cycles' hash_uint4: three words mixed, the fourth added to a, the final mix.
+DACRT_LANES uint32_t hash_uint4(uint32_t kx, uint32_t ky, uint32_t kz, uint32_t kw) {
+    uint32_t a = 0xdeadbeefu + (4u << 2) + 13u, b = a, c = a;
+    a += kx;
+    b += ky;
+    c += kz;
+    lookup3::mix(a, b, c);
+    a += kw;
+    return final_mix(a, b, c);
+}
+
+// Cycles' random_float{2,3,4}_offset component k of a seed (hash of the seed and k); in 1D
+// random_float_offset, the hash of the seed alone.
+inline float random_offset(float seed, int k, int dims) {
+    const uint32_t h32 = dims == 1 ? hash_uint(lookup3::float_bits(seed))
+                                   : hash_uint2(lookup3::float_bits(seed), lookup3::float_bits(float(k)));
     const float h = float(h32) / float(0xFFFFFFFFu);
     return 100.0f + h * 100.0f;
 }
@@ -84,6 +103,22 @@ DACRT_LANES float grad3(uint32_t h, float x, float y, float z) {
     const float vt = select(mask(h == 12) | mask(h == 14), x, z);
     const float v = select(mask(h < 4), y, vt);
     return negate_if(u, h & 1u, 31) + negate_if(v, h & 2u, 30);
+}
+
+// Cycles' grad4: three of the four offsets, each negated by its bit of the hash.
+DACRT_LANES float grad4(uint32_t h, float x, float y, float z, float w) {
+    h &= 31u;
+    const float u = select(mask(h < 24), x, y);
+    const float v = select(mask(h < 16), y, z);
+    const float s = select(mask(h < 8), z, w);
+    return negate_if(u, h & 1u, 31) + negate_if(v, h & 2u, 30) + negate_if(s, h & 4u, 29);
+}
+
+// Cycles' grad1: a slope 1..8 from the hash's low bits, negated by its bit 3.
+DACRT_LANES float grad1(uint32_t h, float x) {
+    h &= 15u;
+    const float g = float(int32_t(1u + (h & 7u)));
+    return negate_if(g, h & 8u, 28) * x;
 }
 
 DACRT_LANES float grad2(uint32_t h, float x, float y) {
@@ -126,6 +161,41 @@ DACRT_LANES float perlin_3d(float x, float y, float z) {
            w * (y1 * (g4 * x1 + g5 * u) + v * (g6 * x1 + g7 * u));
 }
 
+// Cycles' mix (a + t (b - a)): quad_mix's last step and perlin_1d's.
+DACRT_LANES float mix(float a, float b, float t) { return a + t * (b - a); }
+
+DACRT_LANES float perlin_1d(float x) {
+    uint32_t X;
+    const float fx = floorfrac(x, X);
+    const float u = fade(fx);
+    return mix(grad1(hash_uint(X), fx), grad1(hash_uint(X + 1), fx - 1.0f), u);
+}
+
+// Cycles' scalar perlin_4d: two tri_mix of 8 gradients (w and w + 1), mixed along w.
+DACRT_LANES float perlin_4d(float x, float y, float z, float w) {
+    uint32_t X, Y, Z, W;
+    const float fx = floorfrac(x, X), fy = floorfrac(y, Y), fz = floorfrac(z, Z), fw = floorfrac(w, W);
+    const float u = fade(fx), v = fade(fy), t = fade(fz), s = fade(fw);
+    const float gx = fx - 1.0f, gy = fy - 1.0f, gz = fz - 1.0f, gw = fw - 1.0f;
+    float tri[2];
+    for (int k = 0; k < 2; ++k) {
+        const uint32_t Wk = W + uint32_t(k);
+        const float wk = k ? gw : fw;
+        const float g0 = grad4(hash_uint4(X, Y, Z, Wk), fx, fy, fz, wk);
+        const float g1 = grad4(hash_uint4(X + 1, Y, Z, Wk), gx, fy, fz, wk);
+        const float g2 = grad4(hash_uint4(X, Y + 1, Z, Wk), fx, gy, fz, wk);
+        const float g3 = grad4(hash_uint4(X + 1, Y + 1, Z, Wk), gx, gy, fz, wk);
+        const float g4 = grad4(hash_uint4(X, Y, Z + 1, Wk), fx, fy, gz, wk);
+        const float g5 = grad4(hash_uint4(X + 1, Y, Z + 1, Wk), gx, fy, gz, wk);
+        const float g6 = grad4(hash_uint4(X, Y + 1, Z + 1, Wk), fx, gy, gz, wk);
+        const float g7 = grad4(hash_uint4(X + 1, Y + 1, Z + 1, Wk), gx, gy, gz, wk);
+        const float x1 = 1.0f - u, y1 = 1.0f - v, z1 = 1.0f - t;
+        tri[k] = z1 * (y1 * (g0 * x1 + g1 * u) + v * (g2 * x1 + g3 * u)) +
+                 t * (y1 * (g4 * x1 + g5 * u) + v * (g6 * x1 + g7 * u));
+    }
+    return mix(tri[0], tri[1], s);
+}
+
 DACRT_LANES float perlin_2d(float x, float y) {
     uint32_t X, Y;
     const float fx = floorfrac(x, X), fy = floorfrac(y, Y);
@@ -151,7 +221,7 @@ DACRT_LANES float wrap(float x) {
     return std::copysign(float(r), x);
 }
 
-// Cycles' snoise_2d / snoise_3d of every lane: the noise repeats every 100000 on each axis
+// Cycles' snoise_1d to snoise_4d of every lane: the noise repeats every 100000 on each axis
 // (fmod, against float32's spacing far out; past 1e6 the point also moves half a cell), scaled,
 // 0 where not finite. Only lanes beyond wrap's range (1e14, inf, NaN) call std::fmod, after the
 // vector pass: at Detail 15 the last octaves' coordinates are past 100000 in every lane.
@@ -172,10 +242,19 @@ DACRT_LANES void snoise_lanes(const Points& p, Lanes& out) {
                 if (!(std::fabs(x) < 1e14f))
                     q[a][k] = std::fmod(x, 100000.0f) + 0.5f * float(std::fabs(x) >= 1000000.0f);
             }
+    constexpr float kScale = D == 1 ? 0.2500f : D == 2 ? 0.6616f : D == 3 ? 0.9820f : 0.8344f;
     for (int k = 0; k < kLanes; ++k) {
-        float r = D == 3 ? perlin_3d(q[0][k], q[1][k], q[2][k]) : perlin_2d(q[0][k], q[1][k]);
+        float r;
+        if constexpr (D == 1)
+            r = perlin_1d(q[0][k]);
+        else if constexpr (D == 2)
+            r = perlin_2d(q[0][k], q[1][k]);
+        else if constexpr (D == 3)
+            r = perlin_3d(q[0][k], q[1][k], q[2][k]);
+        else
+            r = perlin_4d(q[0][k], q[1][k], q[2][k], q[3][k]);
         r = select(mask(std::fabs(r) <= 3.40282347e38f), r, 0.0f);  // (!isfinite: 0)
-        out[k] = (D == 3 ? 0.9820f : 0.6616f) * r;
+        out[k] = kScale * r;
     }
 }
 
@@ -347,7 +426,7 @@ DACRT_LANES void ridged_multi_fractal(Points& p, const Params& w, Lanes& out, S 
     }
 }
 
-// Cycles' noise_select: the texture's type at points p, offset by off (3) first.
+// Cycles' noise_select: the texture's type at points p, offset by off (D) first.
 template <int D, class S>
 DACRT_LANES void noise_select(const Points& p, const float* off, int type, bool normalize, const Params& w,
                               Lanes& out, S snoise) {
@@ -365,7 +444,7 @@ DACRT_LANES void noise_select(const Points& p, const float* off, int type, bool 
 
 inline float at(const float* a, size_t count, size_t i) { return a[count == 1 ? 0 : i]; }
 
-using Offsets = float[5][3];  // seeds 0..dims-1: distortion; dims, dims + 1: the colour's channels
+using Offsets = float[6][4];  // seeds 0..dims-1: distortion; dims, dims + 1: the colour's channels
 
 // Points [b, e) of noise_texture, kLanes at a time (a short last block repeats its last point).
 template <int D, class S>
@@ -422,18 +501,28 @@ using RangeFn = void (*)(const float*, size_t, size_t, int, const NoiseParams&, 
 // One copy of the kernel per instruction set: snoise (the hot loop) its own function, called
 // from the fractal loops of the same instruction set.
 #define DACRT_NOISE_ISA(NAME, TARGET)                                                                      \
+    TARGET __attribute__((noinline)) void NAME##_snoise1(const Points& p, Lanes& out) {                  \
+        snoise_lanes<1>(p, out);                                                                         \
+    }                                                                                                    \
     TARGET __attribute__((noinline)) void NAME##_snoise2(const Points& p, Lanes& out) {                  \
         snoise_lanes<2>(p, out);                                                                         \
     }                                                                                                    \
     TARGET __attribute__((noinline)) void NAME##_snoise3(const Points& p, Lanes& out) {                  \
         snoise_lanes<3>(p, out);                                                                         \
     }                                                                                                    \
+    TARGET __attribute__((noinline)) void NAME##_snoise4(const Points& p, Lanes& out) {                  \
+        snoise_lanes<4>(p, out);                                                                         \
+    }                                                                                                    \
     TARGET void NAME##_range(const float* p, size_t b, size_t e, int dims, const NoiseParams& k,         \
                              const Offsets& offsets, float* fac, float* color) {                         \
-        if (dims == 3)                                                                                   \
+        if (dims == 1)                                                                                   \
+            noise_range<1>(p, b, e, k, offsets, fac, color, NAME##_snoise1);                             \
+        else if (dims == 2)                                                                              \
+            noise_range<2>(p, b, e, k, offsets, fac, color, NAME##_snoise2);                             \
+        else if (dims == 3)                                                                              \
             noise_range<3>(p, b, e, k, offsets, fac, color, NAME##_snoise3);                             \
         else                                                                                             \
-            noise_range<2>(p, b, e, k, offsets, fac, color, NAME##_snoise2);                             \
+            noise_range<4>(p, b, e, k, offsets, fac, color, NAME##_snoise4);                             \
     }
 
 DACRT_NOISE_ISA(portable, )
@@ -455,8 +544,8 @@ RangeFn pick_range() {
 void noise_texture(const float* p, size_t n, int dims, const NoiseParams& k, float* fac, float* color) {
     static const RangeFn range = pick_range();
     Offsets offsets;
-    for (int seed = 0; seed < 5; ++seed)
-        for (int a = 0; a < 3; ++a) offsets[seed][a] = random_offset(float(seed), a);
+    for (int seed = 0; seed < 6; ++seed)
+        for (int a = 0; a < 4; ++a) offsets[seed][a] = random_offset(float(seed), a, dims);
     parallel_for(n, [&](size_t b, size_t e) { range(p, b, e, dims, k, offsets, fac, color); }, size_t(1) << 12);
 }
 

@@ -10,7 +10,8 @@
 namespace dacrt {
 
 // The Noise Texture (its five types: fBM and the multifractals, Offset and Gain where they read
-// them) at n points p (n, dims) row-major, dims 2 or 3, each point's Vector.
+// them) at n points p (n, dims) row-major, dims 1 to 4: W alone (1D), the Vector's x, y (2D),
+// x, y, z (3D), or x, y, z and W (4D), as Cycles' svm_node_tex_noise reads them.
 // Per-point parameters are arrays of length n, or of length 1 for one value for all (the
 // *_n arguments give each length). fac (n,) gets the Fac output; color (n, 3) row-major, when
 // not null, the Color output. Threaded.

@@ -23,6 +23,36 @@ def _final(a, b, c):
     return c
 
 
+def _mix(a, b, c):
+    a -= c; a ^= _rot(c, 4); c += b     # noqa: E702 (lookup3's mix, as Jenkins')
+    b -= a; b ^= _rot(a, 6); a += c     # noqa: E702
+    c -= b; c ^= _rot(b, 8); b += a     # noqa: E702
+    a -= c; a ^= _rot(c, 16); c += b    # noqa: E702
+    b -= a; b ^= _rot(a, 19); a += c    # noqa: E702
+    c -= b; c ^= _rot(b, 4); b += a     # noqa: E702
+    return a, b, c
+
+
+def hash_uint(kx):
+    with np.errstate(over='ignore'):
+        a = np.full(np.shape(kx), 0xdeadbeef + (1 << 2) + 13, U32)
+        b, c = a.copy(), a.copy()
+        a += kx.astype(U32)
+        return _final(a, b, c)
+
+
+def hash_uint4(kx, ky, kz, kw):
+    with np.errstate(over='ignore'):
+        a = np.full(np.shape(kx), 0xdeadbeef + (4 << 2) + 13, U32)
+        b, c = a.copy(), a.copy()
+        a += kx.astype(U32)
+        b += ky.astype(U32)
+        c += kz.astype(U32)
+        a, b, c = _mix(a, b, c)
+        a += kw.astype(U32)
+        return _final(a, b, c)
+
+
 def hash_uint2(kx, ky):
     with np.errstate(over='ignore'):
         a = np.full(np.shape(kx), 0xdeadbeef + (2 << 2) + 13, U32)
@@ -50,7 +80,11 @@ def _hash_float2_to_float(x, y):
 
 
 def random_offset(seed: float, dims: int) -> np.ndarray:
-    """Cycles' random_float3_offset / random_float2_offset: 100 + hash x 100 per axis."""
+    """Cycles' random_float4_offset / random_float3_offset / random_float2_offset: 100 + hash x
+    100 per axis; in 1D random_float_offset, the hash of the seed alone."""
+    if dims == 1:
+        h = hash_uint(np.array([seed], F32).view(U32))[0]
+        return np.array([F32(100.0) + F32(h) / F32(0xFFFFFFFF) * F32(100.0)], F32)
     return np.array([F32(100.0) + _hash_float2_to_float(seed, float(k)) * F32(100.0) for k in range(dims)], F32)
 
 
@@ -70,6 +104,25 @@ def _grad3(h, x, y, z):
     vt = np.where((h == 12) | (h == 14), x, z)
     v = np.where(h < 4, y, vt)
     return _negate_if(u, h & U32(1)) + _negate_if(v, h & U32(2))
+
+
+def _grad4(h, x, y, z, w):
+    h = h & U32(31)
+    u = np.where(h < 24, x, y)
+    v = np.where(h < 16, y, z)
+    s = np.where(h < 8, z, w)
+    return _negate_if(u, h & U32(1)) + _negate_if(v, h & U32(2)) + _negate_if(s, h & U32(4))
+
+
+def _grad1(h, x):
+    h = h & U32(15)
+    g = (U32(1) + (h & U32(7))).astype(F32)
+    return _negate_if(g, h & U32(8)) * x
+
+
+def _mixf(a, b, t):
+    """Cycles' mix(a, b, t): a + t (b - a)."""
+    return a + t * (b - a)
 
 
 def _grad2(h, x, y):
@@ -107,18 +160,41 @@ def perlin_2d(p):
     return (F32(1.0) - v) * (g[0] * x1 + g[1] * u) + v * (g[2] * x1 + g[3] * u)
 
 
-_NOISE_SCALE = {2: F32(0.6616), 3: F32(0.9820)}
+def perlin_1d(p):
+    """Cycles' perlin_1d of points p (n, 1) float32."""
+    fx, X = _floorfrac(p[:, 0])
+    u = _fade(fx)
+    return _mixf(_grad1(hash_uint(X), fx), _grad1(hash_uint(X + 1), fx - F32(1.0)), u)
+
+
+def perlin_4d(p):
+    """Cycles' perlin_4d (its scalar quad_mix: two tri_mix, mixed along w) of points p (n, 4)."""
+    (fx, X), (fy, Y), (fz, Z), (fw, W) = (_floorfrac(p[:, k]) for k in range(4))
+    u, v, t, s = _fade(fx), _fade(fy), _fade(fz), _fade(fw)
+    one = F32(1.0)
+    x1, y1, z1 = one - u, one - v, one - t
+    tri = []
+    for m in (0, 1):
+        g = [_grad4(hash_uint4(X + i, Y + j, Z + k, W + m), fx - F32(i), fy - F32(j), fz - F32(k), fw - F32(m))
+             for k in (0, 1) for j in (0, 1) for i in (0, 1)]
+        tri.append(z1 * (y1 * (g[0] * x1 + g[1] * u) + v * (g[2] * x1 + g[3] * u)) +
+                   t * (y1 * (g[4] * x1 + g[5] * u) + v * (g[6] * x1 + g[7] * u)))
+    return _mixf(tri[0], tri[1], s)
+
+
+_NOISE_SCALE = {1: F32(0.2500), 2: F32(0.6616), 3: F32(0.9820), 4: F32(0.8344)}
+_PERLIN = {1: perlin_1d, 2: perlin_2d, 3: perlin_3d, 4: perlin_4d}
 
 
 def snoise(p):
-    """Cycles' signed noise snoise_2d / snoise_3d (p (n, 2) or (n, 3)): scaled Perlin noise, 0
-    where it is not finite."""
+    """Cycles' signed noise snoise_1d to snoise_4d (p (n, 1..4)): scaled Perlin noise, 0 where it
+    is not finite."""
     d = p.shape[1]
     # Cycles repeats the noise every 100000 on each axis (fmod), and past 1e6 moves the point
     # half a cell
     with np.errstate(invalid='ignore'):
         p = (np.fmod(p, F32(100000.0)) + F32(0.5) * (np.abs(p) >= F32(1000000.0))).astype(F32)
-    r = perlin_3d(p) if d == 3 else perlin_2d(p)
+    r = _PERLIN[d](p)
     r = np.where(np.isfinite(r), r, F32(0.0))
     return _NOISE_SCALE[d] * r
 
@@ -250,10 +326,14 @@ def noise_select(p, kind, detail, roughness, lacunarity, offset, gain, normalize
 
 
 def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color, kind='FBM',
-                  offset=0.0, gain=1.0):
-    """The Noise Texture node (FBM type) at points co (n, 3): (Fac (n,), Color (n, 3) or None).
-    dims 2 reads co's x and y. Parameters are (n,) arrays or scalars."""
+                  offset=0.0, gain=1.0, w=None):
+    """The Noise Texture node at points co (n, 3) and W w (n,): (Fac (n,), Color (n, 3) or None).
+    dims 1 reads w alone, 2 co's x and y, 3 co, 4 co and w. Parameters are (n,) arrays or
+    scalars."""
     n = len(co)
+    if dims in (1, 4):
+        w = np.broadcast_to(np.asarray(w, F32).reshape(-1, 1), (n, 1))
+        co = w if dims == 1 else np.concatenate([co[:, :3], w], axis=1)
     p = (co[:, :dims] * np.asarray(scale, F32).reshape(-1, 1)).astype(F32)
     detail = np.clip(np.asarray(detail, F32), F32(0.0), F32(15.0))
     roughness = np.maximum(np.asarray(roughness, F32), F32(0.0))

@@ -78,7 +78,7 @@ def test_non_finite_points_and_detail_stay_finite():
 
 def test_bad_shapes_are_refused():
     with pytest.raises(ValueError, match="points must have shape"):
-        dacrt.shading.noise_texture(np.zeros((4, 4), np.float32), 1.0, 2.0, 0.5, 2.0, 0.0, True, False)
+        dacrt.shading.noise_texture(np.zeros((4, 5), np.float32), 1.0, 2.0, 0.5, 2.0, 0.0, True, False)
     with pytest.raises(ValueError, match="kind must be one of"):
         dacrt.shading.noise_texture(np.zeros((4, 3), np.float32), 1.0, 2.0, 0.5, 2.0, 0.0, True, False, 'PERLIN')
     with pytest.raises(ValueError, match="scale must have shape"):

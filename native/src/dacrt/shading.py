@@ -544,7 +544,8 @@ def _per_point(v):
 
 def noise_texture(points, scale, detail, roughness, lacunarity, distortion, normalize: bool, color: bool,
                   kind: str = 'FBM', offset=0.0, gain=1.0):
-    """Cycles' Noise Texture at points (n, 2) or (n, 3): (fac (n,), colour (n, 3) or None).
+    """Cycles' Noise Texture at unscaled points (n, d): d 1 (W), 2 (x, y), 3 (x, y, z) or
+    4 (x, y, z, W): (fac (n,), colour (n, 3) or None).
     Parameters: one value, or one per point (n,). Perlin noise on Bob Jenkins' lookup3 hash,
     octaves summed as Cycles' noise_fbm (the fractional octave mixed in; normalize: fBM only)
     or its multifractals (kind, a NOISE_TYPES name, reading offset and gain where Cycles does),
