@@ -76,13 +76,22 @@ def clip_unit(x, nan):
 
 
 def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color, kind='FBM',
-                  offset=0.0, gain=1.0):
-    """The Noise Texture node at points co (n, 3): (Fac (n,), Color (n, 3) or None). dims 2
-    reads co's x and y; kind: its type (fBM or a multifractal, which read offset and gain).
-    Parameters are (n,) arrays or scalars. Cycles' Perlin noise and its fractal sums in the
-    native kernel (dacrt.shading.noise_texture: one threaded pass, ~16x numpy's per-operation
-    passes), which tests/integrator/noise_reference.py checks bit for bit."""
-    co = np.ascontiguousarray(np.asarray(co, F32)[:, :dims])
+                  offset=0.0, gain=1.0, w=None, n=None):
+    """The Noise Texture node at points co (n, 3) (or None in 1D) and W w (n,) (1D and 4D; else
+    None): (Fac (n,), Color (n, 3) or None). dims 1 reads w alone, 2 co's x and y, 3 co, 4 co
+    and w, as Cycles' svm_node_tex_noise; kind: its type (fBM or a multifractal, which read
+    offset and gain). Parameters are (n,) arrays or scalars; n: the point count where co and w
+    are both constant. Cycles' Perlin noise and its fractal sums in the native kernel
+    (dacrt.shading.noise_texture: one threaded pass, ~16x numpy's per-operation passes), which
+    tests/integrator/noise_reference.py checks bit for bit."""
+    if dims in (2, 3):
+        co = np.ascontiguousarray(np.asarray(co, F32)[:, :dims])
+    else:
+        if n is None:
+            n = len(co) if co is not None else np.size(w)
+        cols = [] if dims == 1 else [np.broadcast_to(np.asarray(co, F32)[:, :3], (n, 3))]
+        cols.append(np.broadcast_to(np.asarray(w, F32).reshape(-1, 1), (n, 1)))
+        co = np.ascontiguousarray(np.concatenate(cols, axis=1), F32)
     return dacrt.shading.noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, want_color,
                                        kind, offset, gain)
 

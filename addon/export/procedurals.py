@@ -34,7 +34,8 @@ _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv', 'Norma
 _GEOMETRY = {'Position': 'position', 'Normal': 'normal', 'True Normal': 'true_normal'}
 # nodes a coordinate-only chain starts from
 _COORDINATE_NODES = ('TEX_COORD', 'NEW_GEOMETRY')
-_NOISE_DIMENSIONS = {'2D': 2, '3D': 3}
+_NOISE_DIMENSIONS = {'1D': 1, '2D': 2, '3D': 3, '4D': 4}
+_GABOR_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_DIMENSIONS = {'1D': 1, '2D': 2, '3D': 3, '4D': 4}
 _VORONOI_FEATURES = ('F1', 'F2', 'SMOOTH_F1', 'DISTANCE_TO_EDGE', 'N_SPHERE_RADIUS')
 _VORONOI_METRICS = ('EUCLIDEAN', 'MANHATTAN', 'CHEBYCHEV', 'MINKOWSKI')
@@ -443,8 +444,10 @@ def _texture(node, out, chain, depth):
     t = node.type
     if t == 'TEX_WHITE_NOISE':
         return _white_noise(node, out, chain, depth)
-    # (a 1D Voronoi reads W alone, its Vector hidden)
-    vec = None if t == 'TEX_VORONOI' and node.voronoi_dimensions == '1D' else _vector(node, chain, depth)
+    # (a 1D Voronoi or Noise reads W alone, its Vector hidden)
+    alone = (t == 'TEX_VORONOI' and node.voronoi_dimensions == '1D') or \
+        (t == 'TEX_NOISE' and node.noise_dimensions == '1D')
+    vec = None if alone else _vector(node, chain, depth)
     chain.textures.append(('procedural', node.bl_label))
     fac = out.identifier == 'Fac'
     if t == 'TEX_NOISE':
@@ -454,12 +457,17 @@ def _texture(node, out, chain, depth):
             raise nodeeval.NotCompiled(f"{node.noise_dimensions} noise")
         params = [_float(node, k, chain, depth) for k in ('Scale', 'Detail', 'Roughness', 'Lacunarity',
                                                           'Distortion', 'Offset', 'Gain')]
+        # W (1D and 4D; animated noise keys it), per point like the other float inputs
+        w = _float(node, 'W', chain, depth) if dims in (1, 4) else None
         normalize = bool(node.normalize)
 
         def noise(c):
-            scale, detail, rough, lac, dist, offset, gain = (p(c) for p in params)
-            value, color = pr.noise_texture(vec(c), scale, detail, rough, lac, dist, normalize, dims, not fac, kind,
-                                            offset, gain)
+            scale, detail, rough, lac, dist, offset, gain = values = [p(c) for p in params]
+            co = None if vec is None else vec(c)
+            ww = None if w is None else w(c)
+            n = max([np.size(v) for v in values] + [len(x) for x in (co, ww) if x is not None])
+            value, color = pr.noise_texture(co, scale, detail, rough, lac, dist, normalize, dims, not fac, kind,
+                                            offset, gain, ww, n)
             lost = ~np.isfinite(scale)
             if lost.any():
                 # a NaN Scale (a script's): Cycles' noise of NaN points is NaN, which its
@@ -507,7 +515,7 @@ def _texture(node, out, chain, depth):
             return ((color[:, 0] + color[:, 1] + color[:, 2]) / np.float32(3.0))[:, None] if fac else color
         return magic, False
     if t == 'TEX_GABOR':
-        dims = _NOISE_DIMENSIONS.get(node.gabor_type)
+        dims = _GABOR_DIMENSIONS.get(node.gabor_type)
         if dims is None:
             raise nodeeval.NotCompiled(f"{node.gabor_type} Gabor")
         params = [_float(node, k, chain, depth) for k in ('Scale', 'Frequency', 'Anisotropy')]

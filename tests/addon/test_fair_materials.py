@@ -70,18 +70,19 @@ def _non_diffuse_materials():
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
     noise = nt.nodes.new('ShaderNodeTexNoise')
     nt.links.new(noise.outputs['Color'], nmap.inputs['Color'])     # (a flat default map is exact)
-    noise4d = nt.nodes.new('ShaderNodeTexNoise')     # (4D: the export evaluates 2D and 3D per point)
-    noise4d.noise_dimensions = '4D'
-    nt.links.new(noise4d.outputs['Color'], d.inputs['Color'])
+    noise_window = nt.nodes.new('ShaderNodeTexNoise')     # (of Window coordinates: not evaluated per point)
+    window = nt.nodes.new('ShaderNodeTexCoord')
+    nt.links.new(window.outputs['Window'], noise_window.inputs['Vector'])
+    nt.links.new(noise_window.outputs['Color'], d.inputs['Color'])
     e = nt.nodes.new('ShaderNodeEmission')
     e.inputs['Strength'].default_value = 2.0
     math_node = nt.nodes.new('ShaderNodeMath')
     nt.links.new(math_node.outputs[0], e.inputs['Strength'])
     mix = nt.nodes.new('ShaderNodeMixShader')
     mix.inputs['Fac'].default_value = 0.3
-    # (a 4D noise: a 3D one is evaluated per point between a Diffuse and an Emission, the
+    # (a Window noise: an Object one is evaluated per point between a Diffuse and an Emission, the
     # emission mask of export/texturedmixes.py, which the override would not keep)
-    nt.links.new(noise4d.outputs['Fac'], mix.inputs['Fac'])
+    nt.links.new(noise_window.outputs['Fac'], mix.inputs['Fac'])
     nt.links.new(d.outputs[0], mix.inputs[1])
     nt.links.new(e.outputs[0], mix.inputs[2])
     nt.links.new(mix.outputs[0], out.inputs['Surface'])

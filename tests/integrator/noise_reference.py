@@ -1,7 +1,8 @@
 """A float32 numpy reference of Cycles' Noise Texture (kernel/svm/noise.h, fractal_noise.h,
 noise_texture), written from Cycles' formulas operation by operation, for the native kernel
-dacrt.shading.noise_texture to match bit for bit (tests/integrator/test_noise.py). Cycles itself
-is the reference of both in tests/parity/test_procedural.py."""
+dacrt.shading.noise_texture to match bit for bit (tests/integrator/test_noise.py; 1D and 4D:
+tests/native/test_noise_1d_4d.py). Cycles itself is the reference of both in
+tests/parity/test_procedural.py and tests/parity/test_noise_1d_4d.py."""
 import numpy as np
 
 F32 = np.float32
