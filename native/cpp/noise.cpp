@@ -171,29 +171,30 @@ DACRT_LANES float perlin_1d(float x) {
     return mix(grad1(hash_uint(X), fx), grad1(hash_uint(X + 1), fx - 1.0f), u);
 }
 
-// Cycles' scalar perlin_4d: two tri_mix of 8 gradients (w and w + 1), mixed along w.
+// Cycles' tri_mix of perlin_4d's 8 gradients at one w lattice step (Wk, offset wk).
+DACRT_LANES float perlin_4d_cube(uint32_t X, uint32_t Y, uint32_t Z, uint32_t Wk, float fx, float fy, float fz,
+                                 float wk, float u, float v, float t) {
+    const float gx = fx - 1.0f, gy = fy - 1.0f, gz = fz - 1.0f;
+    const float g0 = grad4(hash_uint4(X, Y, Z, Wk), fx, fy, fz, wk);
+    const float g1 = grad4(hash_uint4(X + 1, Y, Z, Wk), gx, fy, fz, wk);
+    const float g2 = grad4(hash_uint4(X, Y + 1, Z, Wk), fx, gy, fz, wk);
+    const float g3 = grad4(hash_uint4(X + 1, Y + 1, Z, Wk), gx, gy, fz, wk);
+    const float g4 = grad4(hash_uint4(X, Y, Z + 1, Wk), fx, fy, gz, wk);
+    const float g5 = grad4(hash_uint4(X + 1, Y, Z + 1, Wk), gx, fy, gz, wk);
+    const float g6 = grad4(hash_uint4(X, Y + 1, Z + 1, Wk), fx, gy, gz, wk);
+    const float g7 = grad4(hash_uint4(X + 1, Y + 1, Z + 1, Wk), gx, gy, gz, wk);
+    const float x1 = 1.0f - u, y1 = 1.0f - v, z1 = 1.0f - t;
+    return z1 * (y1 * (g0 * x1 + g1 * u) + v * (g2 * x1 + g3 * u)) +
+           t * (y1 * (g4 * x1 + g5 * u) + v * (g6 * x1 + g7 * u));
+}
+
+// Cycles' scalar perlin_4d: quad_mix, the cubes at w and w + 1 mixed along w.
 DACRT_LANES float perlin_4d(float x, float y, float z, float w) {
     uint32_t X, Y, Z, W;
     const float fx = floorfrac(x, X), fy = floorfrac(y, Y), fz = floorfrac(z, Z), fw = floorfrac(w, W);
     const float u = fade(fx), v = fade(fy), t = fade(fz), s = fade(fw);
-    const float gx = fx - 1.0f, gy = fy - 1.0f, gz = fz - 1.0f, gw = fw - 1.0f;
-    float tri[2];
-    for (int k = 0; k < 2; ++k) {
-        const uint32_t Wk = W + uint32_t(k);
-        const float wk = k ? gw : fw;
-        const float g0 = grad4(hash_uint4(X, Y, Z, Wk), fx, fy, fz, wk);
-        const float g1 = grad4(hash_uint4(X + 1, Y, Z, Wk), gx, fy, fz, wk);
-        const float g2 = grad4(hash_uint4(X, Y + 1, Z, Wk), fx, gy, fz, wk);
-        const float g3 = grad4(hash_uint4(X + 1, Y + 1, Z, Wk), gx, gy, fz, wk);
-        const float g4 = grad4(hash_uint4(X, Y, Z + 1, Wk), fx, fy, gz, wk);
-        const float g5 = grad4(hash_uint4(X + 1, Y, Z + 1, Wk), gx, fy, gz, wk);
-        const float g6 = grad4(hash_uint4(X, Y + 1, Z + 1, Wk), fx, gy, gz, wk);
-        const float g7 = grad4(hash_uint4(X + 1, Y + 1, Z + 1, Wk), gx, gy, gz, wk);
-        const float x1 = 1.0f - u, y1 = 1.0f - v, z1 = 1.0f - t;
-        tri[k] = z1 * (y1 * (g0 * x1 + g1 * u) + v * (g2 * x1 + g3 * u)) +
-                 t * (y1 * (g4 * x1 + g5 * u) + v * (g6 * x1 + g7 * u));
-    }
-    return mix(tri[0], tri[1], s);
+    return mix(perlin_4d_cube(X, Y, Z, W, fx, fy, fz, fw, u, v, t),
+               perlin_4d_cube(X, Y, Z, W + 1, fx, fy, fz, fw - 1.0f, u, v, t), s);
 }
 
 DACRT_LANES float perlin_2d(float x, float y) {
