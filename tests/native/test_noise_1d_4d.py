@@ -81,6 +81,20 @@ def test_lattice_points_read_zero_noise(dims):
     assert (f == F32(0.5)).all()
 
 
+@pytest.mark.parametrize('dims', [1, 4])
+def test_one_octave_is_the_double_precision_noise_within_float32_rounding(dims):
+    """One octave, unnormalised, scale 1: Fac is snoise itself; the float64 evaluation of the
+    same formulas (noise_reference.snoise(dtype=float64)) is within 1e-5 (float32's roundings,
+    no lost precision in Cycles' order of operations)."""
+    rng = np.random.default_rng(dims + 20)
+    p = ((rng.random((20000, 4)) - 0.5) * 200).astype(F32)
+    pts = p[:, 3:] if dims == 1 else p
+    f, _ = dacrt.shading.noise_texture(np.ascontiguousarray(pts), 1.0, 0.0, 0.5, 2.0, 0.0, False, False)
+    exact = ref.snoise(pts.astype(np.float64), np.float64)
+    assert exact.dtype == np.float64 and np.ptp(exact) > 0.5
+    assert np.abs(f - exact).max() < 1e-5, float(np.abs(f - exact).max())
+
+
 def test_4d_differs_from_3d_and_1d_ignores_the_vector():
     """4D reads W (not a 3D noise with W ignored); 1D reads W alone."""
     rng = np.random.default_rng(4)
