@@ -114,6 +114,59 @@ def hair_curves(name, curves, radius=None, material=None, scene=None):
     return link(bpy.data.objects.new(name, hc), scene)
 
 
+def custom_normal_ico(name, location, domain='POINT', smooth='none', field='up', after=(), radius=0.7):
+    """A Geometry Nodes ico sphere of radius (flat faces, a diffuse material), its faces above z = 0 made smooth when smooth is
+    'half' (all when 'all'), then Set Mesh Normal (Free, domain): (0, 0, 1) when field is 'up',
+    else the direction from (-0.8, 0, 0) to the element's position (a field that varies); then
+    the modifiers named in after."""
+    ng = bpy.data.node_groups.new(name, 'GeometryNodeTree')
+    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    N, L = ng.nodes, ng.links
+    go = N.new('NodeGroupOutput')
+    ico = N.new('GeometryNodeMeshIcoSphere')
+    ico.inputs['Radius'].default_value, ico.inputs['Subdivisions'].default_value = radius, 2
+    geo = ico.outputs['Mesh']
+    if smooth != 'none':
+        ss = N.new('GeometryNodeSetShadeSmooth')
+        L.new(geo, ss.inputs['Geometry'])
+        if smooth == 'half':
+            pos, sep = N.new('GeometryNodeInputPosition'), N.new('ShaderNodeSeparateXYZ')
+            cmp = N.new('FunctionNodeCompare')
+            cmp.data_type, cmp.operation = 'FLOAT', 'GREATER_THAN'
+            L.new(pos.outputs[0], sep.inputs[0])
+            L.new(sep.outputs['Z'], cmp.inputs[0])
+            cmp.inputs[1].default_value = 0.0
+            L.new(cmp.outputs[0], ss.inputs['Selection'])
+        geo = ss.outputs[0]
+    sn = N.new('GeometryNodeSetMeshNormal')
+    sn.mode, sn.domain = 'FREE', domain
+    L.new(geo, sn.inputs[0])
+    target = next(s for s in sn.inputs if s.name in ('Custom Normal', 'Normal'))
+    if field == 'up':
+        up = N.new('FunctionNodeInputVector')
+        up.vector = (0.0, 0.0, 1.0)
+        L.new(up.outputs[0], target)
+    else:
+        pos, add, norm = N.new('GeometryNodeInputPosition'), N.new('ShaderNodeVectorMath'), N.new('ShaderNodeVectorMath')
+        add.operation, norm.operation = 'ADD', 'NORMALIZE'
+        add.inputs[1].default_value = (0.8, 0.0, 0.0)
+        L.new(pos.outputs[0], add.inputs[0])
+        L.new(add.outputs[0], norm.inputs[0])
+        L.new(norm.outputs[0], target)
+    sm = N.new('GeometryNodeSetMaterial')
+    sm.inputs['Material'].default_value = diffuse(name, (0.2, 0.7, 0.6))
+    L.new(sn.outputs[0], sm.inputs['Geometry'])
+    L.new(sm.outputs[0], go.inputs[0])
+    ob = link(bpy.data.objects.new(name, bpy.data.meshes.new(name)))
+    ob.modifiers.new('nodes', 'NODES').node_group = ng
+    for kind in after:
+        m = ob.modifiers.new(kind.lower(), kind)
+        if kind == 'SUBSURF':
+            m.levels = m.render_levels = 1
+    ob.location = location
+    return ob
+
+
 def _material(name):
     mat = bpy.data.materials.new(name)
     nt = mat.node_tree

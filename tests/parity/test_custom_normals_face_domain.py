@@ -24,59 +24,6 @@ from . import rendering
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _gn_ico(name, location, domain, smooth, field, after=()):
-    """A Geometry Nodes ico sphere (flat faces), its faces above z = 0 made smooth when smooth is
-    'half' (all when 'all'), then Set Mesh Normal (Free, domain): (0, 0, 1) when field is 'up',
-    else the direction from (-0.8, 0, 0) to the element's position (a field that varies); then
-    the modifiers named in after."""
-    ng = bpy.data.node_groups.new(name, 'GeometryNodeTree')
-    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
-    N, L = ng.nodes, ng.links
-    go = N.new('NodeGroupOutput')
-    ico = N.new('GeometryNodeMeshIcoSphere')
-    ico.inputs['Radius'].default_value, ico.inputs['Subdivisions'].default_value = 0.7, 2
-    geo = ico.outputs['Mesh']
-    if smooth != 'none':
-        ss = N.new('GeometryNodeSetShadeSmooth')
-        L.new(geo, ss.inputs['Geometry'])
-        if smooth == 'half':
-            pos, sep = N.new('GeometryNodeInputPosition'), N.new('ShaderNodeSeparateXYZ')
-            cmp = N.new('FunctionNodeCompare')
-            cmp.data_type, cmp.operation = 'FLOAT', 'GREATER_THAN'
-            L.new(pos.outputs[0], sep.inputs[0])
-            L.new(sep.outputs['Z'], cmp.inputs[0])
-            cmp.inputs[1].default_value = 0.0
-            L.new(cmp.outputs[0], ss.inputs['Selection'])
-        geo = ss.outputs[0]
-    sn = N.new('GeometryNodeSetMeshNormal')
-    sn.mode, sn.domain = 'FREE', domain
-    L.new(geo, sn.inputs[0])
-    target = next(s for s in sn.inputs if s.name in ('Custom Normal', 'Normal'))
-    if field == 'up':
-        up = N.new('FunctionNodeInputVector')
-        up.vector = (0.0, 0.0, 1.0)
-        L.new(up.outputs[0], target)
-    else:
-        pos, add, norm = N.new('GeometryNodeInputPosition'), N.new('ShaderNodeVectorMath'), N.new('ShaderNodeVectorMath')
-        add.operation, norm.operation = 'ADD', 'NORMALIZE'
-        add.inputs[1].default_value = (0.8, 0.0, 0.0)
-        L.new(pos.outputs[0], add.inputs[0])
-        L.new(add.outputs[0], norm.inputs[0])
-        L.new(norm.outputs[0], target)
-    sm = N.new('GeometryNodeSetMaterial')
-    sm.inputs['Material'].default_value = scenes.diffuse(name, (0.2, 0.7, 0.6))
-    L.new(sn.outputs[0], sm.inputs['Geometry'])
-    L.new(sm.outputs[0], go.inputs[0])
-    ob = scenes.link(bpy.data.objects.new(name, bpy.data.meshes.new(name)))
-    ob.modifiers.new('nodes', 'NODES').node_group = ng
-    for kind in after:
-        m = ob.modifiers.new(kind.lower(), kind)
-        if kind == 'SUBSURF':
-            m.levels = m.render_levels = 1
-    ob.location = location
-    return ob
-
-
 def _face_normals_mesh(name, location, sharp):
     """A bmesh ico sphere with free custom normals on its faces (each tilted toward +x), and a
     sharp_face attribute set to `sharp` (a function of the face's centre), kept even where it
@@ -101,18 +48,18 @@ def _face_normals_mesh(name, location, sharp):
 
 
 def _face_domain(sc):
-    _gn_ico('HalfUp', (-2.4, 0.6, 0.0), 'FACE', 'half', 'up')           # the report's sphere
-    _gn_ico('HalfField', (-0.8, 0.6, 0.0), 'FACE', 'half', 'field', after=('SUBSURF',))
+    scenes.custom_normal_ico('HalfUp', (-2.4, 0.6, 0.0), 'FACE', 'half', 'up')           # the report's sphere
+    scenes.custom_normal_ico('HalfField', (-0.8, 0.6, 0.0), 'FACE', 'half', 'field', after=('SUBSURF',))
     _face_normals_mesh('AllSmooth', (0.8, 0.6, 0.0), lambda c: False)   # sharp_face all False
-    _gn_ico('AllSmoothGone', (2.4, 0.6, 0.0), 'FACE', 'all', 'field', after=('TRIANGULATE',))
+    scenes.custom_normal_ico('AllSmoothGone', (2.4, 0.6, 0.0), 'FACE', 'all', 'field', after=('TRIANGULATE',))
     return dict.fromkeys(('HalfUp', 'HalfField', 'AllSmooth', 'AllSmoothGone'), ('FACE', True))
 
 
 def _other_domains(sc):
-    _gn_ico('PointHalf', (-2.4, 0.6, 0.0), 'POINT', 'half', 'field', after=('MIRROR',))
-    _gn_ico('CornerHalf', (-0.8, 0.6, 0.0), 'CORNER', 'half', 'field')
+    scenes.custom_normal_ico('PointHalf', (-2.4, 0.6, 0.0), 'POINT', 'half', 'field', after=('MIRROR',))
+    scenes.custom_normal_ico('CornerHalf', (-0.8, 0.6, 0.0), 'CORNER', 'half', 'field')
     _face_normals_mesh('FaceQuarter', (0.8, 0.6, 0.0), lambda c: c[0] > 0.2)
-    _gn_ico('FaceFlat', (2.4, 0.6, 0.0), 'FACE', 'none', 'field')
+    scenes.custom_normal_ico('FaceFlat', (2.4, 0.6, 0.0), 'FACE', 'none', 'field')
     return {'PointHalf': ('POINT', True), 'CornerHalf': ('CORNER', True), 'FaceQuarter': ('FACE', True),
             'FaceFlat': ('FACE', True)}
 

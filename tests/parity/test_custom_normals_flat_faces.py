@@ -20,43 +20,6 @@ from . import rendering
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _custom_normal_ico(name, location, smooth_upper_half):
-    """An ico sphere from Geometry Nodes (flat faces), the faces above z = 0 made smooth when
-    smooth_upper_half, then Set Mesh Normal (Free, Point) to (0, 0, 1) everywhere."""
-    ng = bpy.data.node_groups.new(name, 'GeometryNodeTree')
-    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
-    N, L = ng.nodes, ng.links
-    go = N.new('NodeGroupOutput')
-    ico = N.new('GeometryNodeMeshIcoSphere')
-    ico.inputs['Radius'].default_value, ico.inputs['Subdivisions'].default_value = 0.8, 2
-    geo = ico.outputs['Mesh']
-    if smooth_upper_half:
-        ss = N.new('GeometryNodeSetShadeSmooth')
-        pos, sep = N.new('GeometryNodeInputPosition'), N.new('ShaderNodeSeparateXYZ')
-        cmp = N.new('FunctionNodeCompare')
-        cmp.data_type, cmp.operation = 'FLOAT', 'GREATER_THAN'
-        L.new(pos.outputs[0], sep.inputs[0])
-        L.new(sep.outputs['Z'], cmp.inputs[0])
-        cmp.inputs[1].default_value = 0.0
-        L.new(geo, ss.inputs['Geometry'])
-        L.new(cmp.outputs[0], ss.inputs['Selection'])
-        geo = ss.outputs[0]
-    sn = N.new('GeometryNodeSetMeshNormal')
-    sn.mode, sn.domain = 'FREE', 'POINT'
-    L.new(geo, sn.inputs[0])
-    up = N.new('FunctionNodeInputVector')
-    up.vector = (0.0, 0.0, 1.0)
-    L.new(up.outputs[0], next(s for s in sn.inputs if s.name in ('Custom Normal', 'Normal')))
-    sm = N.new('GeometryNodeSetMaterial')
-    sm.inputs['Material'].default_value = scenes.diffuse(name, (0.2, 0.7, 0.6))
-    L.new(sn.outputs[0], sm.inputs['Geometry'])
-    L.new(sm.outputs[0], go.inputs[0])
-    ob = scenes.link(bpy.data.objects.new(name, bpy.data.meshes.new(name)))
-    ob.modifiers.new('nodes', 'NODES').node_group = ng
-    ob.location = location
-    return ob
-
-
 def _scene():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
@@ -65,8 +28,8 @@ def _scene():
     scenes.light('SUN', 2.0, rotation=(0.5, 0.4, 0.3), angle=0.1)
     scenes.world((0.05, 0.05, 0.05), 1.0)
     scenes.plane("Floor", 12.0, (0, 0, -1), materials=(scenes.diffuse("Floor", (0.7, 0.7, 0.7)),))
-    _custom_normal_ico("Flat", (-1.0, 0.0, 0.0), False)
-    _custom_normal_ico("Half", (1.0, 0.0, 0.0), True)
+    scenes.custom_normal_ico("Flat", (-1.0, 0.0, 0.0), radius=0.8)
+    scenes.custom_normal_ico("Half", (1.0, 0.0, 0.0), smooth='half', radius=0.8)
     rendering.fair_scene_settings(sc)
     return sc
 
