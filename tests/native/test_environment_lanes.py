@@ -4,14 +4,13 @@ loop, per instruction set). Property: within a few float ulps of Cycles' formula
 float64 (u = 0.5 - atan2(y, x) / 2pi, v = 1 - acos(z / |m|) / pi; theta = pi (1 - v),
 phi = pi (1 - 2u)), libm's quadrants and signed zeros (the u = 0 / 1 seam), no direction for a
 zero or NaN vector, and the same bits from every instruction set the CPU runs (DACRT_ISA)."""
-import os
-import subprocess
-import sys
-import tempfile
 
 import numpy as np
+
 import pytest
 from dacrt import _core
+
+from tests.native.isaruns import outputs_per_isa
 
 F32 = np.float32
 EYE = np.eye(3, dtype=F32).ravel()
@@ -127,19 +126,10 @@ np.save(sys.argv[3], np.stack(_core.equirect_uv(M, d)))
 
 
 def test_every_isa_gives_the_same_bits():
-    import dacrt
     rng = np.random.default_rng(3)
     D = _directions(rng, 4099)                      # a short last block of every vector width
     M = _rotation(rng).ravel()
-    out = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        np.save(os.path.join(tmp, 'd.npy'), D)
-        np.save(os.path.join(tmp, 'm.npy'), M)
-        for isa in dacrt.supported_isas():
-            path = os.path.join(tmp, f'{isa}.npy')
-            subprocess.run([sys.executable, '-c', _ISA_RUN, os.path.join(tmp, 'd.npy'), os.path.join(tmp, 'm.npy'),
-                            path], check=True, env={**os.environ, 'DACRT_ISA': isa})
-            out[isa] = np.load(path)
+    out = outputs_per_isa(_ISA_RUN, D, M)
     first = out.pop('portable')
     for isa, got in out.items():
         np.testing.assert_array_equal(got.view(np.uint32), first.view(np.uint32), err_msg=isa)

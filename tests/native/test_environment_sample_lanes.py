@@ -5,16 +5,14 @@ map kind ('Linear' and 'Closest', sRGB, black rows, one-row and one-column maps,
 mirrored worlds, an all-black map), at the uniforms' edges, for any count (short last lane
 groups), on every instruction set the CPU runs (DACRT_ISA); and next_event, which takes the
 lane path for the points that pick the map, gives what sampling them one at a time gives."""
-import os
-import subprocess
-import sys
-import tempfile
 
 import numpy as np
+
 import pytest
 from dacrt import lamps, shading
 
 from ..integrator.test_next_event import SHORTEN, _lights, _points
+from .isaruns import outputs_per_isa
 
 F32 = np.float32
 
@@ -91,20 +89,10 @@ np.save(sys.argv[4], np.concatenate([np.atleast_2d(a) for a in out]))
 
 
 def test_every_isa_gives_the_same_bits():
-    import dacrt
     rng = np.random.default_rng(23)
     rgb = (rng.random((16, 32, 3)) ** 3 * 4).astype(F32)
     u = np.stack(_uniforms(rng, 4099))                     # a short last group of every vector width
-    out = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        names = [os.path.join(tmp, f) for f in ("rgb.npy", "m.npy", "u.npy")]
-        for path, a in zip(names, (rgb, _rotation(rng), u)):
-            np.save(path, a)
-        for isa in dacrt.supported_isas():
-            path = os.path.join(tmp, f"{isa}.npy")
-            subprocess.run([sys.executable, "-c", _ISA_RUN, *names, path], check=True,
-                           env={**os.environ, "DACRT_ISA": isa})
-            out[isa] = np.load(path)
+    out = outputs_per_isa(_ISA_RUN, rgb, _rotation(rng), u)
     first = out.pop("portable")
     for isa, got in out.items():
         np.testing.assert_array_equal(got.view(np.uint32), first.view(np.uint32), err_msg=isa)

@@ -4,15 +4,13 @@ side by side in float, one copy per instruction set. Properties: every copy give
 float's precision and cull exactly what it culls, and the walk's probabilities stay a
 distribution whose samples report their own pdf, also at the edges: one light, 100K lights,
 every light behind the point, lights too faint to weigh in float."""
-import os
-import subprocess
-import sys
-import tempfile
 
-import dacrt
 import numpy as np
+
 import pytest
 from dacrt import lamps
+
+from tests.native.isaruns import outputs_per_isa
 
 F32 = np.float32
 EVERY = -1.0      # cos_o of a light that emits in every direction
@@ -66,15 +64,7 @@ def walks():
 
 
 def test_every_instruction_set_gives_the_same_bits():
-    out = {}
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    with tempfile.TemporaryDirectory() as tmp:
-        for isa in dacrt.supported_isas():
-            path = os.path.join(tmp, isa + '.npy')
-            subprocess.run([sys.executable, '-c', _ISA_RUN, path], check=True, cwd=root,
-                           env={**os.environ, 'DACRT_ISA': isa,
-                                'PYTHONPATH': os.pathsep.join([root] + sys.path)})
-            out[isa] = np.load(path)
+    out = outputs_per_isa(_ISA_RUN)
     first = out['portable']
     assert first.size > 0 and np.isfinite(first).all()
     for isa, v in out.items():

@@ -6,16 +6,14 @@ seeds. Property: every lane gives the bits of the float32 reference written from
 formulas (tests/integrator/noise_reference.py), for every type, on any input (far, huge,
 non-finite points, extreme parameters, per-point parameters), and every instruction set the same
 bits. Cycles itself checks both in tests/parity/test_noise_1d_4d.py."""
-import os
-import subprocess
-import sys
-import tempfile
 
 import dacrt
 import numpy as np
+
 import pytest
 
 from tests.integrator import noise_reference as ref
+from tests.native.isaruns import outputs_per_isa
 from tests.native.test_noise_lanes import _params, _points, _same
 
 F32 = np.float32
@@ -132,14 +130,7 @@ def test_every_instruction_set_gives_the_same_bits():
         v[rng.random(n) < 0.02] = np.nan
     # columns: x y z w scale detail rough lac dist | offset gain
     a = np.concatenate([p, w, np.stack([scale, detail, rough, lac, dist, offset, gain], 1)], 1).astype(F32)
-    with tempfile.TemporaryDirectory() as tmp:
-        np.save(os.path.join(tmp, 'in.npy'), a)
-        out = {}
-        for isa in dacrt.supported_isas():
-            path = os.path.join(tmp, f'{isa}.npy')
-            subprocess.run([sys.executable, '-c', _ISA_RUN, os.path.join(tmp, 'in.npy'), path], check=True,
-                           env={**os.environ, 'DACRT_ISA': isa})
-            out[isa] = np.load(path)
+    out = outputs_per_isa(_ISA_RUN, a)
     first = out['portable']
     assert np.isfinite(first).mean() > 0.5
     for isa, v in out.items():

@@ -7,16 +7,14 @@ operation from Cycles (tests/integrator/noise_reference.py) on random points far
 every type, 2D and 3D, Detail 0 to 15 whole and fractional, extreme Roughness and Lacunarity,
 distortion, normalisation off, per-point parameters and point counts that leave a short last
 block; and the same bits from every instruction set the CPU runs (DACRT_ISA picks one)."""
-import os
-import subprocess
-import sys
-import tempfile
 
 import dacrt
 import numpy as np
+
 import pytest
 
 from tests.integrator import noise_reference as ref
+from tests.native.isaruns import outputs_per_isa
 
 F32 = np.float32
 KINDS = ['FBM', 'MULTIFRACTAL', 'HYBRID_MULTIFRACTAL', 'RIDGED_MULTIFRACTAL', 'HETERO_TERRAIN']
@@ -125,14 +123,7 @@ def test_every_instruction_set_gives_the_same_bits():
     lac[rng.random(n) < 0.02] = np.inf
     # columns: x y z scale detail rough lac dist | offset gain (read by the script by position)
     a = np.concatenate([p, np.stack([scale, detail, rough, lac, dist, offset, gain], 1)], 1).astype(F32)
-    with tempfile.TemporaryDirectory() as tmp:
-        np.save(os.path.join(tmp, 'in.npy'), a)
-        out = {}
-        for isa in dacrt.supported_isas():
-            path = os.path.join(tmp, f'{isa}.npy')
-            subprocess.run([sys.executable, '-c', _ISA_RUN, os.path.join(tmp, 'in.npy'), path], check=True,
-                           env={**os.environ, 'DACRT_ISA': isa})
-            out[isa] = np.load(path)
+    out = outputs_per_isa(_ISA_RUN, a)
     first = out['portable']
     assert np.isfinite(first).mean() > 0.5
     for isa, v in out.items():

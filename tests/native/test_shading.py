@@ -4,15 +4,16 @@ weights, shadow rays and accumulation; and their argument checks (emissive trian
 test_triangle_light.py)."""
 
 import os
-import subprocess
-import sys
 import tempfile
 import warnings
 
 import dacrt
 import numpy as np
+
 import pytest
 from dacrt import shading
+
+from tests.native.isaruns import outputs_per_isa
 
 F32 = np.float32
 
@@ -189,14 +190,7 @@ def test_sample_words_are_the_same_on_every_instruction_set():
     rng = np.random.default_rng(8)
     keys = np.stack([rng.integers(0, 2 ** 32, 1037, dtype=np.uint64).astype(np.uint32),
                      rng.integers(0, 2 ** 32, 1037, dtype=np.uint64).astype(np.uint32)])
-    with tempfile.TemporaryDirectory() as tmp:
-        np.save(os.path.join(tmp, "keys.npy"), keys)
-        out = {}
-        for isa in dacrt.supported_isas():
-            path = os.path.join(tmp, f"{isa}.npy")
-            subprocess.run([sys.executable, "-c", code, os.path.join(tmp, "keys.npy"), path], check=True,
-                           env={**os.environ, "DACRT_ISA": isa})
-            out[isa] = np.load(path)
+    out = outputs_per_isa(code, keys)
     first = out[dacrt.supported_isas()[0]]
     for isa, words in out.items():
         assert words.tobytes() == first.tobytes(), isa
