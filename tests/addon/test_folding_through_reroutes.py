@@ -17,6 +17,7 @@ import pytest
 from tests.parity import rendering
 
 from . import scenes
+from .test_message_scope import mix_and_diffuse_images
 
 GLOSSY_VIS = "ray visibility Glossy"
 FILTER_GLOSSY = "Filter Glossy"
@@ -162,15 +163,7 @@ def test_cycles_renders_the_rerouted_mix_as_the_diffuse_alone(scene, said, tmp_p
     through reroutes is bit-identical to the Diffuse linked to the output, and DACRT's matches."""
     m = _material('reroute', 0.0)
     _scene(scene, m)
-    nt = m.node_tree
-    images = {}
-    for how in ('mix', 'diffuse'):
-        if how == 'diffuse':
-            out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
-            nt.links.new(next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE').outputs[0], out.inputs['Surface'])
-        for engine in ('CYCLES', 'DACRT'):
-            scene.render.engine = engine
-            images[how, engine] = rendering.render_combined(scene, str(tmp_path / f'{how}{engine}.exr'))
+    images = mix_and_diffuse_images(scene, m, tmp_path, said)
     assert np.array_equal(images['mix', 'CYCLES'], images['diffuse', 'CYCLES'])
     assert np.array_equal(images['mix', 'DACRT'], images['diffuse', 'DACRT'])
     c, d = images['mix', 'CYCLES'][..., :3].mean(), images['mix', 'DACRT'][..., :3].mean()

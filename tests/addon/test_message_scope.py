@@ -154,13 +154,9 @@ def test_cycles_image_and_glossy_visibility(scene, said, tmp_path, case):
     assert np.array_equal(on, off) != glossy
 
 
-@pytest.mark.parametrize('case', ['mix_fac_0', 'mix_fac_value_0', 'mix_fac_1_glossy_first'])
-def test_dropped_glossy_renders_as_the_diffuse_alone(scene, said, tmp_path, case):
-    """A Mix of Fac folding to 0 or 1 renders, in Cycles and in DACRT, as the one shader it keeps
-    (bit-identical to the Diffuse linked straight to the output), so nothing of the Glossy is
-    said."""
-    m, _ = _material(case)
-    _scene(scene, m)
+def mix_and_diffuse_images(scene, m, tmp_path, said):
+    """{(how, engine): image}: material m's Mix rendered by Cycles and DACRT ('mix'), then its
+    Diffuse linked straight to the output ('diffuse'); nothing of the Glossy said in any."""
     nt = m.node_tree
     images = {}
     for how in ('mix', 'diffuse'):
@@ -172,6 +168,17 @@ def test_dropped_glossy_renders_as_the_diffuse_alone(scene, said, tmp_path, case
             said.clear()
             images[how, engine] = rendering.render_combined(scene, str(tmp_path / f'{how}{engine}.exr'))
             assert not any(APPROX in t or GLOSSY_VIS in t for t in said), said
+    return images
+
+
+@pytest.mark.parametrize('case', ['mix_fac_0', 'mix_fac_value_0', 'mix_fac_1_glossy_first'])
+def test_dropped_glossy_renders_as_the_diffuse_alone(scene, said, tmp_path, case):
+    """A Mix of Fac folding to 0 or 1 renders, in Cycles and in DACRT, as the one shader it keeps
+    (bit-identical to the Diffuse linked straight to the output), so nothing of the Glossy is
+    said."""
+    m, _ = _material(case)
+    _scene(scene, m)
+    images = mix_and_diffuse_images(scene, m, tmp_path, said)
     for engine in ('CYCLES', 'DACRT'):
         assert np.array_equal(images['mix', engine], images['diffuse', engine]), engine
     c, d = images['mix', 'CYCLES'][..., :3].mean(), images['mix', 'DACRT'][..., :3].mean()

@@ -8,26 +8,12 @@ per wall plane decides, with rays starting at the camera, on the room's own face
 objects' bounds: an L-shaped room with the lamp in one arm and the camera in the other, a lamp
 inside a room seen from outside, are still said (the plane test is conservative: a non-convex
 room is said wherever some wall's plane separates a face of it from a light, hidden or not)."""
-import math
-
 import bpy
-import numpy as np
 import pytest
 from mathutils import Vector
 
 from . import scenes
-
-BELOW = "normal map bends normals below the surface"
-
-
-def _bumpy(name):
-    """A Diffuse whose tangent-space Normal Map points into the surface on half of its texels."""
-    px = np.ones((4, 4, 4), np.float32)
-    px[..., :2] = 0.5
-    px[:, :2, 2] = 0.2
-    img = scenes.float_image(name + "_img", px)
-    img.colorspace_settings.name = 'Non-Color'
-    return scenes.normal_map_material(name, img, interpolation='Closest')
+from .test_message_truth import BELOW, _bumpy
 
 
 def _box_room(rotation=(0, 0, 0), flipped=False):
@@ -71,7 +57,7 @@ def test_convex_room_with_lamp_and_camera_inside_not_said(case, exported):
     if case == 'box with furniture':
         scenes.cube('Table', size=1.0, location=(0.5, 0.5, 0.5), materials=[_bumpy('Wood')])
     if case == 'area lamp':
-        lamp = scenes.light('AREA', 300.0, location=(0.5, 0.0, 5.0), size=1.0)
+        scenes.light('AREA', 300.0, location=(0.5, 0.0, 5.0), size=1.0)
     else:
         scenes.light('POINT', 500.0, location=(1.0, 0.5, 4.5), shadow_soft_size=0.2)
     _camera((-1.8, -1.8, 1.6), (1.5, 1.5, 2.0))
