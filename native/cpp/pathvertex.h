@@ -22,15 +22,63 @@ namespace dacrt {
 // back past where the ray came from. A step larger than a wall's thickness had carried points
 // through it where a ray met the wall's back from inside at t ~ 0 (a corner of a 2 mm wall 10
 // km from the origin: 8 ULPs are 7.8 mm there), and their light samples then saw the far room.
+// P itself keeps at least that step's length from each edge (inside_edges): a point reconstructed
+// on an edge rounds up to an ULP past it, and where a wall meets the triangle there (a room's
+// concave corner) that is outside the wall, which the step along the normal runs parallel to.
 struct SurfacePoint {
     float P[3], ng[3], ns[3], P_off[3];
 };
 
+// Barycentrics (u, v) of triangle p (geo: 15 rows of M) moved, where needed, to at least
+// `margin` from each edge: a weight w_k whose edge lies nearer is raised to margin / (its
+// altitude), the largest weight paying for it. Points farther in keep their (u, v) bit for bit.
+// The margins are capped at 1/4 of a weight (a triangle narrower than 4 margins: toward its
+// middle) and the move at 2 margins (a sharp corner: as far as that goes), so the point never
+// travels farther than that: a thin wall standing on the triangle stays on its side.
+inline void inside_edges(const float* geo, size_t M, size_t p, float margin, float& u, float& v) {
+    auto g = [&](int row) { return geo[size_t(row) * M + p]; };
+    float e[3][3];  // edges opposite corners 0, 1, 2: v2 - v1, v2 - v0, v1 - v0
+    for (int a = 0; a < 3; ++a) {
+        e[0][a] = g(6 + a) - g(3 + a);
+        e[1][a] = g(6 + a);
+        e[2][a] = g(3 + a);
+    }
+    // twice the area, along the table's unit normal (e1 x e2 . n)
+    const float c0 = e[2][1] * e[1][2] - e[2][2] * e[1][1], c1 = e[2][2] * e[1][0] - e[2][0] * e[1][2],
+                c2 = e[2][0] * e[1][1] - e[2][1] * e[1][0];
+    const float area2 = c0 * g(9) + c1 * g(10) + c2 * g(11);
+    if (!(area2 > 0) || !(margin > 0) || !(area2 < kFloatMax)) return;  // degenerate, no step, NaN
+    float w[3] = {1.0f - u - v, u, v}, len[3], need[3];
+    for (int k = 0; k < 3; ++k) {
+        len[k] = std::sqrt(e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2]);
+        need[k] = std::min(margin * len[k] / area2, 0.25f);  // distance w_k area2 / len_k >= margin
+    }
+    if (w[0] >= need[0] && w[1] >= need[1] && w[2] >= need[2]) return;  // the common case
+    const int big = (w[0] >= w[1] && w[0] >= w[2]) ? 0 : (w[1] >= w[2] ? 1 : 2);  // >= 1/3 > need
+    float raise[3] = {0.0f, 0.0f, 0.0f}, travel = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        if (k == big) continue;
+        raise[k] = std::max(need[k] - w[k], 0.0f);
+        travel += raise[k] * len[3 - k - big];  // along the edge from corner big to corner k
+    }
+    const float cut = travel > 2.0f * margin ? 2.0f * margin / travel : 1.0f;
+    for (int k = 0; k < 3; ++k) {
+        if (k == big) continue;
+        w[k] += raise[k] * cut;
+        w[big] -= raise[k] * cut;
+    }
+    u = w[1];
+    v = w[2];
+}
+
 inline void surface_point(const float* geo, size_t M, const float* normals, const Hit& h, const float d[3],
                           SurfacePoint& s) {
     const size_t p = prim_at(h, M);
-    const float u = h.u, v = h.v;
     auto g = [&](int row) { return geo[size_t(row) * M + p]; };
+    const float len2 = g(12) * g(12) + g(13) * g(13) + g(14) * g(14);
+    const float step_len = std::sqrt(len2);
+    float u = h.u, v = h.v;
+    inside_edges(geo, M, p, step_len, u, v);
     for (int a = 0; a < 3; ++a) {
         float x = g(3 + a) * u;
         x += g(6 + a) * v;
@@ -41,8 +89,7 @@ inline void surface_point(const float* geo, size_t M, const float* normals, cons
     const float flip = dn > 0 ? -1.0f : 1.0f;
     float step = flip;  // the step's scale: its sign, cut where the origin was nearer the plane
     const float half_back = 0.5f * h.t * std::fabs(dn);
-    const float len2 = g(12) * g(12) + g(13) * g(13) + g(14) * g(14);
-    if (half_back * half_back < len2) step *= half_back / std::sqrt(len2);  // (t NaN: the full step)
+    if (half_back * half_back < len2) step *= half_back / step_len;  // (t NaN: the full step)
     for (int a = 0; a < 3; ++a) {
         s.ng[a] = g(9 + a) * flip;
         s.P_off[a] = s.P[a] + g(12 + a) * step;
