@@ -48,12 +48,19 @@ inline void inside_edges(const float* geo, size_t M, size_t p, float margin, flo
                 c2 = e[2][0] * e[1][1] - e[2][1] * e[1][0];
     const float area2 = c0 * g(9) + c1 * g(10) + c2 * g(11);
     if (!(area2 > 0) || !(margin > 0) || !(area2 < kFloatMax)) return;  // degenerate, no step, NaN
-    float w[3] = {1.0f - u - v, u, v}, len[3], need[3];
+    float w[3] = {1.0f - u - v, u, v}, len2[3], len[3], need[3];
+    // the common case, without roots or divisions: distance w_k area2 / len_k >= margin
+    bool inside = true;
     for (int k = 0; k < 3; ++k) {
-        len[k] = std::sqrt(e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2]);
-        need[k] = std::min(margin * len[k] / area2, 0.25f);  // distance w_k area2 / len_k >= margin
+        len2[k] = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
+        const float wa = w[k] * area2;
+        inside = inside && wa >= 0 && wa * wa >= margin * margin * len2[k];
     }
-    if (w[0] >= need[0] && w[1] >= need[1] && w[2] >= need[2]) return;  // the common case
+    if (inside) return;
+    for (int k = 0; k < 3; ++k) {
+        len[k] = std::sqrt(len2[k]);
+        need[k] = std::min(margin * len[k] / area2, 0.25f);
+    }
     const int big = (w[0] >= w[1] && w[0] >= w[2]) ? 0 : (w[1] >= w[2] ? 1 : 2);  // >= 1/3 > need
     float raise[3] = {0.0f, 0.0f, 0.0f}, travel = 0.0f;
     for (int k = 0; k < 3; ++k) {
