@@ -564,28 +564,39 @@ class MeshArrays:
             if me is None and self.strand is not None:
                 out = self.corner_attribute(base[len(COLOR_STANDARD_OF):])
         elif me is None and self.strand is not None:
-            attributes, render_color, per_vertex = self.strand[:3]
-            found = attributes.get(name if name else render_color)
-            if found is None and fac:           # (strands hold a FAC_OF entry of 2D vectors only)
-                found = attributes.get(name[len(FAC_OF):])
-            if found is not None:
-                rows = per_vertex(*found)
-                out = None if rows is None else self.per_corner(rows, self.triangles,
-                                                                np.empty((len(self.triangles), 3, 4), np.float32))
+            out = self._strand_corners(name, fac)
         elif me is not None:
             attr = _named_attribute(me, name[len(FAC_OF):] if fac else name)
             out = None if attr is None else self._attribute_corners(me, attr, fac)
         self._attributes[name] = out
         return out
 
+    def _strand_corners(self, name, fac):
+        """corner_attribute of a tessellated point cloud's or hair's attribute `name` (its
+        strand attributes, per_vertex), None where it has none."""
+        attributes, render_color, per_vertex = self.strand[:3]
+        found = attributes.get(name if name else render_color)
+        if found is None and fac:           # (strands hold a FAC_OF entry of 2D vectors only)
+            found = attributes.get(name[len(FAC_OF):])
+        if found is None:
+            return None
+        rows = per_vertex(*found)
+        return None if rows is None else self.per_corner(rows, self.triangles,
+                                                         np.empty((len(self.triangles), 3, 4), np.float32))
+
     def _standard_corners(self, std, fac):
         """corner_attribute of Cycles' standard attribute `std` (STANDARD_OF): Generated
         coordinates (g, 1), the active render UV map (u, v, 0, 1) (its Fac u: a 2D vector's);
-        None for the others on a mesh (a tessellated point cloud or hair reads its own attribute
-        of that name, as before)."""
+        None for the others on a mesh (a tessellated point cloud or hair reads Cycles' own
+        'curve_intercept', 'curve_length', 'curve_random' and 'point_random', made by
+        strands.StandardAttributes, and its attribute of the name for the others, as before; a
+        Color Attribute node naming them reads its attribute of the name, never Cycles' own)."""
         if std not in STANDARD_READ:
             if self.mesh is None and self.strand is not None:
-                return self.corner_attribute((FAC_OF if fac else '') + std)
+                # Cycles' own of curves and points (strands.StandardAttributes: numbers, so
+                # their Fac is the same), else the strand's attribute of the name
+                made = self._strand_corners(STANDARD_OF + std, False)
+                return made if made is not None else self.corner_attribute((FAC_OF if fac else '') + std)
             return None
         nt = len(self.triangles)
         out = np.ones((nt, 3, 4), np.float32)
@@ -778,7 +789,8 @@ STANDARD_READ = frozenset({'generated', 'uv'})
 STANDARD_UNREAD = frozenset({'N', 'tangent', 'tangent_sign', 'pointiness', 'random_per_island',
                              'generated_transform', 'undisplaced_tangent', 'undisplaced_tangent_sign'})
 # those of volumes, curves and points, and ones Cycles leaves empty on a mesh rendered without
-# displacement or motion: 0 on a mesh, its own attribute of that name unread ('color' too)
+# displacement or motion: 0 on a mesh, its own attribute of that name unread ('color' too); on
+# strands the curves' and points' ones are Cycles' (strands.StandardAttributes)
 STANDARD_EMPTY = frozenset({'color', 'density', 'flame', 'heat', 'temperature', 'velocity', 'velocity_x',
                             'velocity_y', 'velocity_z', 'curve_intercept', 'curve_length', 'curve_random',
                             'point_random', 'particle', 'shadow_transparency', 'undeformed', 'undisplaced',

@@ -8,11 +8,93 @@ import numpy as np
 from .. import hair, pointcloud
 from ..texture import srgb_to_linear
 from .errors import ExportCancelled
-from .meshes import FAC_OF, MeshArrays, attribute_rows, fac_rows
+from .meshes import FAC_OF, STANDARD_OF, MeshArrays, attribute_rows, fac_rows
 
 # why an attribute hair particles' materials name reads 0 (as in Cycles)
 HAIR_UNREAD = ("no Face Corner Byte Color attribute {name!r} on the emitter (hair particles read only those, at "
                "each strand's root)")
+
+
+def hash_uint2_to_float(kx):
+    """Cycles' hash_uint2_to_float(kx, 0) of each of the uint32s kx (Bob Jenkins' lookup3 final
+    mix of the two words, over 2^32 - 1): the 'curve_random' and 'point_random' it gives every
+    curve and point (their index)."""
+    with np.errstate(over='ignore'):
+        kx = np.asarray(kx).astype(np.uint32)
+        a = np.full(kx.shape, 0xdeadbeef + (2 << 2) + 13, np.uint32)
+        b, c = a.copy(), a.copy()
+        a = a + kx
+
+        v = {'a': a, 'b': b, 'c': c}
+        # final(a, b, c): x ^= y; x -= rot(y, k), as objectinfo._hash_uint2 (one word at a time)
+        for x, y, k in (('c', 'b', 14), ('a', 'c', 11), ('b', 'a', 25), ('c', 'b', 16), ('a', 'c', 4),
+                        ('b', 'a', 14), ('c', 'b', 24)):
+            w = v[y]
+            v[x] = (v[x] ^ w) - ((w << np.uint32(k)) | (w >> np.uint32(32 - k)))
+        c = v['c']
+    return (c.astype(np.float64) / 0xFFFFFFFF).astype(np.float32)
+
+
+def _rows(values):
+    """(n, 4) float32 rows (v, v, v, 1) of numbers, as an Attribute node reads a float."""
+    rows = np.ones((len(values), 4), np.float32)
+    rows[:, :3] = np.asarray(values, np.float32)[:, None]
+    return rows
+
+
+class StandardAttributes(dict):
+    """A strand source's attributes (name: (domain, rows)) with Cycles' standard attributes of
+    curves and points made when a material reads one (an Attribute node naming 'curve_intercept',
+    'curve_length', 'curve_random' or 'point_random': meshes.STANDARD_EMPTY, asked for under
+    STANDARD_OF + the name by MeshArrays._standard_corners; a Color Attribute node naming one
+    reads none of them, as in Cycles), as Cycles computes them in place of any attribute of the name
+    (blender/curves.cpp, pointcloud.cpp): a key's length along its curve's key chords over the
+    curve's, the curve's length, hash_uint2_to_float(curve or point index, 0). They had read 0,
+    said to be as in Cycles, where Cycles gives the root-to-tip gradient."""
+
+    def __init__(self, own, positions, offsets=None):
+        super().__init__(own)
+        self._positions, self._offsets = positions, offsets
+        self._made = set()          # the standard names made (or found not to apply) so far
+
+    def _standard(self, name):
+        p, off = self._positions, self._offsets
+        if off is None:
+            return ('POINT', _rows(hash_uint2_to_float(np.arange(len(p))))) if name == 'point_random' else None
+        if name == 'curve_random':
+            return 'CURVE', _rows(hash_uint2_to_float(np.arange(len(off) - 1)))
+        if name not in ('curve_intercept', 'curve_length'):
+            return None
+        off = np.asarray(off, np.int64)
+        counts = np.diff(off)
+        d = np.zeros(len(p))
+        d[1:] = np.linalg.norm(np.diff(np.asarray(p, np.float64), axis=0), axis=1)
+        d[off[:-1][counts > 0]] = 0.0                   # no chord into a curve's first key
+        along = np.cumsum(d)
+        if len(p):
+            along -= np.repeat(along[np.minimum(off[:-1], len(p) - 1)], counts)
+        total = np.zeros(len(counts))
+        total[counts > 0] = along[off[1:][counts > 0] - 1]
+        if name == 'curve_length':
+            return 'CURVE', _rows(total)
+        per_key = np.repeat(total, counts)
+        return 'POINT', _rows(np.divide(along, per_key, out=np.zeros_like(along), where=per_key > 0))
+
+    def get(self, name, default=None):
+        std = name[len(STANDARD_OF):] if isinstance(name, str) and name.startswith(STANDARD_OF) else None
+        if std in STANDARD_STRAND and name not in self._made:
+            found = self._standard(std)
+            self._made.add(name)
+            if found is not None:
+                self[name] = found
+        return super().get(name, default)
+
+    def __bool__(self):          # (a source with no attributes of its own still has these)
+        return True
+
+
+# Cycles' standard attributes of curves and points StandardAttributes makes
+STANDARD_STRAND = frozenset({'curve_intercept', 'curve_length', 'curve_random', 'point_random'})
 
 
 def hair_systems(ob):
@@ -170,7 +252,8 @@ def hair_arrays(ob, notes):
     if not positions:
         return None
     positions, radii = np.concatenate(positions), np.concatenate(radii)
-    attributes = {name: ('CURVE', np.concatenate(rows).astype(np.float32)) for name, rows in vcols.items()}
+    attributes = StandardAttributes({name: ('CURVE', np.concatenate(rows).astype(np.float32))
+                                     for name, rows in vcols.items()}, positions, np.array(offsets))
     src = StrandSource('HAIR', ob.name, positions, radii, np.array(offsets), attributes=attributes)
     src.curve_slot = np.concatenate(slots)
     src.texspace = (np.array(me.texspace_location, np.float64), np.array(me.texspace_size, np.float64))
@@ -235,14 +318,15 @@ def read_strands(ob, notes):
     attributes, render_color = _attributes(data)
     if ob.type == 'POINTCLOUD':
         radii = np.full(len(positions), pointcloud.DEFAULT_RADIUS) if radii is None else radii
-        return StrandSource('POINTCLOUD', ob.name, positions, radii, attributes=attributes,
-                            render_color=render_color)
+        return StrandSource('POINTCLOUD', ob.name, positions, radii,
+                            attributes=StandardAttributes(attributes, positions), render_color=render_color)
     radii = np.full(len(positions), hair.DEFAULT_RADIUS) if radii is None else radii
     offsets = np.empty(len(data.curves) + 1, np.int32)
     data.curve_offset_data.foreach_get('value', offsets)
     types = data.attributes.get('curve_type')        # absent: all Catmull-Rom
     linear = types is not None and _all_poly(types, len(data.curves))
-    src = StrandSource('CURVES', ob.name, positions, radii, offsets, linear, attributes, render_color)
+    src = StrandSource('CURVES', ob.name, positions, radii, offsets, linear,
+                       StandardAttributes(attributes, positions, offsets), render_color)
     # Cycles' UV of curves is their 'surface_uv_coordinate' on curves (ATTR_STD_UV); a UV Map
     # node reads any 2D vector attribute by its name
     surface = 'surface_uv_coordinate'
