@@ -49,13 +49,46 @@ class GraphNode:
         return _Inputs(self.node.inputs, self.groups)
 
 
+# Curves Info and Point Info outputs Cycles reads as standard attributes of curves and points
+# (HairInfoNode / PointInfoNode::compile: ATTR_STD_CURVE_INTERCEPT, ...; 0 on other geometry)
+INFO_ATTRIBUTES = {('HAIR_INFO', 'Intercept'): 'curve_intercept', ('HAIR_INFO', 'Length'): 'curve_length',
+                   ('HAIR_INFO', 'Random'): 'curve_random', ('POINT_INFO', 'Random'): 'point_random'}
+
+
+class StandardAttributeNode(GraphNode):
+    """A Curves Info or Point Info node reached through one of its INFO_ATTRIBUTES outputs,
+    seen as the Attribute node (type Geometry) naming that standard attribute, which Cycles
+    compiles it to: read on strands as Cycles computes it (export/strands.py
+    StandardAttributes), 0 on a mesh."""
+    __slots__ = ('standard',)
+
+    def __init__(self, node, groups, standard):
+        super().__init__(node, groups)
+        self.standard = standard
+
+    @property
+    def type(self):
+        return 'ATTRIBUTE'
+
+    @property
+    def attribute_type(self):
+        return 'GEOMETRY'
+
+    @property
+    def attribute_name(self):
+        return self.standard
+
+
 class GraphLink:
     """The link that produces a socket's value: from_node (a GraphNode), from_socket and
     to_socket (Blender sockets), the Blender link itself, and crossed (see source)."""
     __slots__ = ('link', 'from_node', 'crossed')
 
     def __init__(self, link, groups, crossed=()):
-        self.link, self.from_node, self.crossed = link, GraphNode(link.from_node, groups), crossed
+        node = link.from_node
+        standard = INFO_ATTRIBUTES.get((node.type, link.from_socket.name))
+        self.link, self.crossed = link, crossed
+        self.from_node = GraphNode(node, groups) if standard is None else StandardAttributeNode(node, groups, standard)
 
     @property
     def from_socket(self):

@@ -1,0 +1,69 @@
+"""The Curves Info node's Intercept, Length and Random and the Point Info node's Random, read
+as Cycles compiles them: its standard attributes 'curve_intercept', 'curve_length',
+'curve_random' and 'point_random' (nodegraph.StandardAttributeNode; computed on strands by
+export/strands.py StandardAttributes, 0 on a mesh), against Cycles.
+
+They had not been evaluated: the linked input's own value stood in (a Color Ramp's Factor 0.5)
+for every strand and point, said only as "value from 'Curves Info' node; its own value used":
+an Intercept gradient had rendered 0.432 at the roots and 0.430 at the tips where Cycles
+renders 0.128 and 0.731, a Point Info Random ramp one colour (std 0.054 where Cycles' is 0.257),
+and a Curves Info ramp on a mesh its middle colour where Cycles reads 0.
+"""
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+from tests.parity.test_curve_standard_attributes import _curves, _particles, _points, _scene
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+def _ramped(node_type, output, scale=1.0):
+    """An emission material coloured by a Color Ramp (dark blue to white) of node_type's
+    output times scale."""
+    mat = bpy.data.materials.new(f"{node_type}{output}")
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out, em = nt.nodes.new('ShaderNodeOutputMaterial'), nt.nodes.new('ShaderNodeEmission')
+    info, ramp = nt.nodes.new(node_type), nt.nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.elements[0].color = (0.05, 0.1, 0.4, 1.0)
+    mul = nt.nodes.new('ShaderNodeMath')
+    mul.operation = 'MULTIPLY'
+    mul.inputs[1].default_value = scale
+    nt.links.new(info.outputs[output], mul.inputs[0])
+    nt.links.new(mul.outputs[0], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], em.inputs['Color'])
+    nt.links.new(em.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _sphere(material):
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.5, location=(0, 0, 0.6))
+    bpy.context.active_object.data.materials.append(material)
+
+
+CASES = {
+    'curves_intercept': (_curves, 'ShaderNodeHairInfo', 'Intercept', 1.0),
+    'curves_length': (_curves, 'ShaderNodeHairInfo', 'Length', 0.8),
+    'curves_random': (_curves, 'ShaderNodeHairInfo', 'Random', 1.0),
+    'particles_intercept': (_particles, 'ShaderNodeHairInfo', 'Intercept', 1.0),
+    'points_random': (_points, 'ShaderNodePointInfo', 'Random', 1.0),
+    'mesh_curves_random': (_sphere, 'ShaderNodeHairInfo', 'Random', 1.0),      # 0 on a mesh
+}
+
+
+@pytest.mark.parametrize('case', list(CASES))
+def test_info_node_output_reads_as_in_cycles(case, tmp_path, said):
+    build, node_type, output, scale = CASES[case]
+    sc = _scene()
+    build(_ramped(node_type, output, scale))
+    layer = sc.view_layers[0].name
+    imgs = {e: np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGBA'], -1).astype(np.float64)
+            for e, exr in scenes.render_engines(sc, tmp_path).items()}
+    d, c = imgs['DACRT'], imgs['CYCLES']
+    assert c[..., :3].mean() > 0.02
+    for part in np.array_split(np.arange(d.shape[0]), 3):        # bottom to top: root to tip
+        np.testing.assert_allclose(d[part, :, :3].mean(axis=(0, 1)), c[part, :, :3].mean(axis=(0, 1)),
+                                   rtol=0.03, atol=0.003, err_msg=f"{case}, rows {part[0]}-{part[-1]}")
+    assert not [m for m in said if "its own value used" in m], said
