@@ -10,7 +10,7 @@ import numpy as np
 from .. import nodeeval
 from .aovs import evaluate_varying, unnamed_attribute
 from .closure import Texture
-from .meshes import attribute_key, attribute_label, color_attribute_key
+from .meshes import attribute_key, attribute_label, color_attribute_key, per_primitive
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO, OBJECT_INFO_OUTPUTS
 from .texelbaking import TexelBaking, affine_fit, channel_line
 
@@ -183,7 +183,7 @@ class AttributeMaps:
         for row in (0, 1):                  # the per-object ones fixed, at two values
             fixed = {n: p if n in mesh else np.repeat(p[:, row:row + 1], p.shape[1], axis=1) for n, p in probes.items()}
             affine = affine and affine_fit(x, self._albedo_on(mat, fixed), 1e-5)
-        if not affine:
+        if not affine and not all(per_primitive(n) for n in mesh):
             said = f"nodes after {labels} applied at the mesh's corners, then interpolated (Cycles interpolates first)"
             m.approximated = '; '.join(r for r in (m.approximated, said) if r)
         return m

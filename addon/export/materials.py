@@ -32,6 +32,7 @@ from .reflectors import (ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds
 from .cutouts import Cutouts
 from .emission import Emission
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
+from .meshes import per_primitive
 from .objectinfo import OBJECT_INFO
 from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
 from .shaders import DEFAULT_ALBEDO, PRINCIPLED_IGNORED, ShaderClosures, glass_roughness, nonnegative
@@ -213,7 +214,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
         m.pass_color = m.pass_texture = None
         _averaged_rough(m)
-        if not affine:
+        if not affine and not per_primitive(name):
             label = marked_label(name)
             m.approximated = '; '.join(r for r in (m.approximated, f"nodes after {label} applied at the mesh's "
                                                    "corners, then interpolated (Cycles interpolates first)") if r)

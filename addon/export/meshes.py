@@ -798,6 +798,15 @@ STANDARD_EMPTY = frozenset({'color', 'density', 'flame', 'heat', 'temperature', 
 # ('P', 'radius' and 'vertex_color' are standard names too, but Cycles reads a mesh's attribute
 # of those names: read as any other)
 STANDARD_NAMES = STANDARD_READ | STANDARD_UNREAD | STANDARD_EMPTY
+# one value at every corner of a curve's or point's triangles (0 on a mesh): nodes applied at
+# the corners before interpolating give Cycles' own values
+STANDARD_PER_PRIMITIVE = frozenset({'curve_length', 'curve_random', 'point_random'})
+
+
+def per_primitive(name):
+    """Whether the attribute read under name (attribute_key) is one of STANDARD_PER_PRIMITIVE."""
+    inner = name.removeprefix(FAC_OF)
+    return inner.startswith(STANDARD_OF) and inner[len(STANDARD_OF):] in STANDARD_PER_PRIMITIVE
 
 
 def attribute_key(name, fac=False):

@@ -67,3 +67,24 @@ def test_info_node_output_reads_as_in_cycles(case, tmp_path, said):
         np.testing.assert_allclose(d[part, :, :3].mean(axis=(0, 1)), c[part, :, :3].mean(axis=(0, 1)),
                                    rtol=0.03, atol=0.003, err_msg=f"{case}, rows {part[0]}-{part[-1]}")
     assert not [m for m in said if "its own value used" in m], said
+
+
+@pytest.mark.parametrize('case', ['curves_intercept', 'curves_length', 'curves_random', 'points_random'])
+def test_ramp_of_a_per_strand_value_is_not_said_interpolated(case, said):
+    """A Color Ramp of a value that is one per curve or point (Length, Random) into a Base Color
+    is exact applied at the corners (all of a strand's corners hold the same value): not said,
+    where the Intercept, which varies along the strand, is."""
+    build, node_type, output, _ = CASES[case]
+    sc = _scene()
+    mat = bpy.data.materials.new(case)
+    nt = mat.node_tree
+    info, ramp = nt.nodes.new(node_type), nt.nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.elements.new(0.5).color = (0.9, 0.1, 0.1, 1.0)        # not affine in the value
+    nt.links.new(info.outputs[output], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], nt.nodes['Principled BSDF'].inputs['Base Color'])
+    build(mat)
+    sc.render.engine = 'DACRT'
+    sc.dacrt.samples = 1
+    bpy.ops.render.render()
+    interpolated = [m for m in said if "applied at the mesh's corners" in m]
+    assert bool(interpolated) == (output == 'Intercept'), said
