@@ -243,16 +243,22 @@ size_t next_event(const LightChoice& lights, const VertexPoints& pts, const Next
 
 bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n,
                        float clamp) {
+    // Split from kAccumulateSplit columns: a render's shadow batches are 10^4..2x10^5 paths, and
+    // from 2^17 per thread (as it was) this add ran on the calling thread alone while the other
+    // cores idled (Cornell 256 spp: 0.070 s CPU, all on one thread). pid are distinct: no two
+    // threads add into one column, and each column's sum is the same on any thread count.
+    constexpr size_t kAccumulateSplit = size_t(1) << 14;
     std::atomic<bool> in_range{true};
-    parallel_for(n, [&](size_t b, size_t e) {
+    parallel_for(n, [&in_range, pid, N](size_t b, size_t e) {
         bool ok = true;
         for (size_t i = b; i < e; ++i) ok &= pid[i] >= 0 && uint64_t(pid[i]) < N;
         if (!ok) in_range.store(false, std::memory_order_relaxed);
-    }, size_t(1) << 17);
+    }, kAccumulateSplit);
     if (!in_range.load()) return false;  // checked first: a refused call leaves L as it was
     // Branch-free: adding 0 where the mask is clear costs less than mispredicting it (~half
-    // the samples of a vertex are occluded or skipped, in no pattern).
-    parallel_for(n, [&](size_t b, size_t e) {
+    // the samples of a vertex are occluded or skipped, in no pattern). Captured by value: the
+    // workers read no pointer from the calling thread's stack in the loop.
+    parallel_for(n, [L, N, pid, values, mask, n, clamp](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const bool on = mask[i];
             const size_t j = index_at(pid, i, N);  // checked above, but the caller's array
@@ -260,7 +266,7 @@ bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* valu
             clamp_light(v, clamp);
             for (int a = 0; a < 3; ++a) L[size_t(a) * N + j] += on ? v[a] : 0.0f;
         }
-    }, size_t(1) << 17);
+    }, kAccumulateSplit);
     return true;
 }
 
