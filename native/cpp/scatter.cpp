@@ -11,6 +11,11 @@
 
 namespace dacrt {
 
+// Split from 2^14 paths: a render's later bounces hold 10^4..10^5 paths, which from 2^16 per
+// thread (as it was) ran on the calling thread alone (Cornell 256 spp: uniform_pick 0.013 s CPU,
+// 80% of it on one thread).
+constexpr size_t kUniformSplit = size_t(1) << 14;
+
 void uniform2_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, float* u1, float* u2) {
     parallel_for(n, [&](size_t begin, size_t end) {
         for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* a, const uint32_t* b) {
@@ -19,7 +24,7 @@ void uniform2_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, flo
                 u2[i0 + j] = unit24(b[j]);
             }
         });
-    }, size_t(1) << 16);
+    }, kUniformSplit);
 }
 
 void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, double* pick, float* u) {
@@ -30,7 +35,7 @@ void uniform_pick_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb,
                 u[i0 + j] = unit24(b[j]);
             }
         });
-    }, size_t(1) << 16);
+    }, kUniformSplit);
 }
 
 void scatter_range(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, const float* ns, const float* ng,

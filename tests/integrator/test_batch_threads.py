@@ -1,7 +1,8 @@
 """Per-vertex kernels at a render's batch sizes run on every thread, with one thread's results:
 dacrt.shading.accumulate_masked (the light samples' add into the paths' radiance) had split
 only from 2^17 columns per thread, so at every Cornell-box batch (10^4..2x10^5 paths) it ran
-on the calling thread alone (0.07 s of CPU on one core while the other idled). Which threads ran is read from /proc (CPU ticks), not timed."""
+on the calling thread alone (0.07 s of CPU on one core while the other idled); uniform_pick
+from 2^16. Which threads ran is read from /proc (CPU ticks), not timed."""
 
 import threading
 
@@ -60,3 +61,23 @@ def test_sums_match_one_thread_and_numpy(n):
     np.testing.assert_array_equal(L, one)
     np.testing.assert_allclose(L, want, rtol=1e-6)
 
+
+def test_a_render_sized_light_pick_is_drawn_on_every_thread():
+    """uniform_pick (the light choice's and Russian roulette's numbers, once per bounce): the
+    same split from 2^14 paths; below 2^16 per thread it had run on the calling thread alone."""
+    if dacrt._core.hardware_threads() < 2 or _thread_cpu_seconds() is None:
+        pytest.skip("needs two cores and Linux /proc to see which threads ran")
+    keys = np.random.default_rng(5).integers(0, 2**32, (2, N_PATHS), dtype=np.uint32)
+    with dacrt.thread_limit(1):
+        one = shading.uniform_pick(keys, 7, 9)
+    me = str(threading.get_native_id())
+    before = _thread_cpu_seconds()
+    mine = 0.0
+    while mine < 0.3:
+        for _ in range(200):
+            got = shading.uniform_pick(keys, 7, 9)
+        after = _thread_cpu_seconds()
+        mine = after[me] - before[me]
+    others = sum(after[t] - before.get(t, 0.0) for t in after if t != me)
+    assert others > 0.3 * mine, f"the calling thread {mine:.2f} s, the others {others:.2f} s"
+    assert all(np.array_equal(a, b) for a, b in zip(one, got))
