@@ -222,6 +222,8 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None) -> list:
     if not ok.any():
         return []
     idx, lo, hi, side = idx[ok], lo[ok], hi[ok], side[ok]
+    if not largest_step > _HUGE_STEP * float(side.min()):
+        return []                   # not even of the smallest face: no object's boxes needed
     # nothing can step off by _HUGE_STEP of any object (its sampled faces' box: a scanned
     # mesh of tiny faces is one object several units across): the common case ends here
     objects = np.asarray(g.object_index) if getattr(g, 'object_index', None) is not None else np.zeros(len(tri), np.int64)
