@@ -236,6 +236,12 @@ def _rot(x, k):
     return (x << np.uint32(k)) | (x >> np.uint32(32 - k))
 
 
+def hash_uint2_to_float(kx, ky):
+    """Cycles' hash_uint2_to_float of uint32 arrays kx, ky: hash_uint2 / (2^32 - 1), float32."""
+    c = _jenkins(np.asarray(kx).astype(np.uint32), np.asarray(ky).astype(np.uint32))
+    return (c.astype(np.float64) / 0xFFFFFFFF).astype(np.float32)
+
+
 def _jenkins(*keys):
     """Cycles' hash_uint .. hash_uint4 (Bob Jenkins' lookup3 on 1-4 uint32 keys): (n,) uint32."""
     with np.errstate(over='ignore'):

@@ -6,6 +6,7 @@ Part of the export layer."""
 import numpy as np
 
 from .. import hair, pointcloud
+from ..procedural import hash_uint2_to_float
 from ..texture import srgb_to_linear
 from .errors import ExportCancelled
 from .meshes import FAC_OF, STANDARD_OF, MeshArrays, attribute_rows, fac_rows
@@ -13,26 +14,6 @@ from .meshes import FAC_OF, STANDARD_OF, MeshArrays, attribute_rows, fac_rows
 # why an attribute hair particles' materials name reads 0 (as in Cycles)
 HAIR_UNREAD = ("no Face Corner Byte Color attribute {name!r} on the emitter (hair particles read only those, at "
                "each strand's root)")
-
-
-def hash_uint2_to_float(kx):
-    """Cycles' hash_uint2_to_float(kx, 0) of each of the uint32s kx (Bob Jenkins' lookup3 final
-    mix of the two words, over 2^32 - 1): the 'curve_random' and 'point_random' it gives every
-    curve and point (their index)."""
-    with np.errstate(over='ignore'):
-        kx = np.asarray(kx).astype(np.uint32)
-        a = np.full(kx.shape, 0xdeadbeef + (2 << 2) + 13, np.uint32)
-        b, c = a.copy(), a.copy()
-        a = a + kx
-
-        v = {'a': a, 'b': b, 'c': c}
-        # final(a, b, c): x ^= y; x -= rot(y, k), as objectinfo._hash_uint2 (one word at a time)
-        for x, y, k in (('c', 'b', 14), ('a', 'c', 11), ('b', 'a', 25), ('c', 'b', 16), ('a', 'c', 4),
-                        ('b', 'a', 14), ('c', 'b', 24)):
-            w = v[y]
-            v[x] = (v[x] ^ w) - ((w << np.uint32(k)) | (w >> np.uint32(32 - k)))
-        c = v['c']
-    return (c.astype(np.float64) / 0xFFFFFFFF).astype(np.float32)
 
 
 def _rows(values):
@@ -60,9 +41,9 @@ class StandardAttributes(dict):
     def _standard(self, name):
         p, off = self._positions, self._offsets
         if off is None:
-            return ('POINT', _rows(hash_uint2_to_float(np.arange(len(p))))) if name == 'point_random' else None
+            return ('POINT', _rows(hash_uint2_to_float(np.arange(len(p)), 0))) if name == 'point_random' else None
         if name == 'curve_random':
-            return 'CURVE', _rows(hash_uint2_to_float(np.arange(len(off) - 1)))
+            return 'CURVE', _rows(hash_uint2_to_float(np.arange(len(off) - 1), 0))
         if name not in ('curve_intercept', 'curve_length'):
             return None
         off = np.asarray(off, np.int64)
