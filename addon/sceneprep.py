@@ -185,6 +185,19 @@ def _steps(mag):
     return float(OFFSET_ULPS) * np.spacing(np.maximum(np.asarray(mag, F32), F32(2.0 ** -100))).astype(np.float64)
 
 
+def _plane_gap(a, b, c, lo, hi):
+    """Distances (k,) from boxes lo, hi (k,3) to the plane of triangle a, b, c (float64; 0
+    where a box crosses it or the triangle has no plane)."""
+    n = np.cross(b - a, c - a)
+    length = float(np.linalg.norm(n))
+    if not (length > 0 and np.isfinite(length)):
+        return np.zeros(len(lo))
+    n = n / length
+    d = float(n @ a)
+    near, far = np.where(n > 0, lo, hi) @ n, np.where(n > 0, hi, lo) @ n    # the box's extent along n
+    return np.maximum(np.maximum(near - d, d - far), 0.0)
+
+
 def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None) -> list:
     """Warnings (texts) naming the surfaces whose self-intersection step (OFFSET_ULPS ULPs of
     a triangle's largest coordinate) is a sizeable share of the objects resting on or near them:
@@ -274,7 +287,11 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None) -> list:
         for j in order:
             step = float(tstep[mine[j]])
             gap = np.maximum(np.maximum(lo - chi[j], clo[j] - hi), 0.0)
-            dist = np.sqrt(np.einsum('ij,ij->i', gap, gap))
+            # a lower bound of each box's distance to the triangle: the larger of its gap to
+            # the triangle's box and to its plane (a tilted huge face's box holds objects far
+            # off the face itself)
+            dist = np.maximum(np.sqrt(np.einsum('ij,ij->i', gap, gap)),
+                              _plane_gap(cv[0][j], cv[1][j], cv[2][j], lo, hi))
             near = (dist <= _NEAR_STEPS * step) & (side * 16.0 < cside[j])
             if not near.any():
                 continue

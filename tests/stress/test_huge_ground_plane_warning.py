@@ -88,3 +88,31 @@ def test_ordinary_scenes_say_nothing():
     for data in (cornell_box(width=8, height=6, samples=1), scene(3.0)):
         moved, origin, _ = recentred(data)
         assert huge_surfaces(moved, origin) == []
+
+
+def _tilted(distance, half_size=1e6):
+    """The box under a huge quad tilted 45 degrees about x whose plane passes `distance` from the
+    origin: the quad's halves' boxes hold the box at any distance."""
+    s = 1.0 / np.sqrt(2.0)
+    c = np.array([0.0, distance * np.sqrt(2.0), 0.0])
+    h = half_size
+    plane = c + np.array([(-h, -h * s, -h * s), (h, -h * s, -h * s), (h, h * s, h * s), (-h, h * s, h * s)])
+    box = _box((-0.5, -0.5, 0), (0.5, 0.5, 1))
+    parts = [(plane, np.array([(0, 1, 2), (0, 2, 3)]), 1, ALL_VIS), (box[0], box[1], 1, ALL_VIS)]
+    cam = np.eye(4)
+    cam[:3, 3] = (3.0, -3.0, 2.0)
+    data = sd.SceneData(sd.Camera('PERSP', cam, (-1.0, 1.0, -1.0, 1.0), 0.8, 0.01, 1e7, 8, 8),
+                        geometry(parts), [material('default'), material('grey', (0.5,) * 3)], [],
+                        np.full(3, 0.5, np.float32), sd.Settings(samples=1, max_bounces=1))
+    data.object_names[:] = ['slope', 'box']
+    return data
+
+
+@pytest.mark.parametrize("distance,said", [(0.0, True), (1e3, False), (1e5, False)])
+def test_a_tilted_huge_quad_is_said_only_of_objects_near_its_plane(distance, said):
+    """A tilted quad's box spans 1e6 on every axis: objects 1e3 off its plane (1 000 steps) lie
+    inside it but lose no contact shadow, and are not said; the box the plane cuts is."""
+    found = _said(render(_tilted(distance)))
+    assert len(found) == int(said), found
+    if said:
+        assert "object 'slope'" in found[0], found
