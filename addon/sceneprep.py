@@ -239,7 +239,12 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None) -> list:
         return []                   # not even of the smallest face: no object's boxes needed
     # nothing can step off by _HUGE_STEP of any object (its sampled faces' box: a scanned
     # mesh of tiny faces is one object several units across): the common case ends here
-    objects = np.asarray(g.object_index) if getattr(g, 'object_index', None) is not None else np.zeros(len(tri), np.int64)
+    index = np.asarray(g.object_index) if getattr(g, 'object_index', None) is not None else np.zeros(len(tri), np.int64)
+    # each placement apart (an instance of an object; else the object): instances of one rock
+    # scattered over a ground plane share an object index, and their joint box had been weighed
+    # as one object as wide as the scatter, leaving the lost contact shadows unsaid
+    instance = getattr(g, 'instance', None)
+    objects = np.asarray(instance) if instance is not None else index
     sample_obj = objects[idx]
     kinds, which = np.unique(sample_obj, return_inverse=True)
     obj_lo = np.full((len(kinds), 3), np.inf)
@@ -311,8 +316,9 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None) -> list:
             size = float(np.median(sizes[seen]))
             if size > 0 and step > _HUGE_STEP * size:
                 share = step / size
-                if obj not in found or share > found[obj][0]:
-                    found[obj] = (share, step, size, float(_magnitude(v[tri[mine[j]]]).max()))
+                named = int(index[mine[j]])    # by its object: a huge tile's instances said once
+                if named not in found or share > found[named][0]:
+                    found[named] = (share, step, size, float(_magnitude(v[tri[mine[j]]]).max()))
     if not found:
         return []
     where = "the render's origin" if recentred_origin is not None and np.any(recentred_origin) else "the world origin"

@@ -9,6 +9,8 @@ the object and the step, where the step exceeds 1% of the objects on or near the
 (sceneprep.huge_surfaces); planes up to 1e4 (within noise), far-away large objects (a mountain
 1e5 out), objects too small to make out from the camera and ordinary scenes say nothing."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -116,3 +118,53 @@ def test_a_tilted_huge_quad_is_said_only_of_objects_near_its_plane(distance, sai
     assert len(found) == int(said), found
     if said:
         assert "object 'slope'" in found[0], found
+
+
+def _scattered(instanced, half_size=1e6):
+    """Three 1 m boxes 30 apart on the plane: three objects, or (instanced) three instances of
+    one object, which share its object index and differ by placement (Geometry.instance)."""
+    plane = np.array([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], np.float64) * (half_size, half_size, 0)
+    parts = [(plane, np.array([(0, 1, 2), (0, 2, 3)]), 1, ALL_VIS)]
+    for x in (-30.0, 0.0, 30.0):
+        b = _box((x - 0.5, -0.5, 0), (x + 0.5, 0.5, 1))
+        parts.append((b[0], b[1], 1, ALL_VIS))
+    g = geometry(parts)
+    names = ['ground', 'box1', 'box2', 'box3']
+    if instanced:
+        place = np.asarray(g.object_index)
+        g = replace(g, object_index=np.minimum(place, 1).astype(np.int32), instance=place.astype(np.int32))
+        names = ['ground', 'rock']
+    cam = np.eye(4)
+    cam[:3, 3] = (3.0, -3.0, 2.0)
+    data = sd.SceneData(sd.Camera('PERSP', cam, (-1.0, 1.0, -1.0, 1.0), 0.8, 0.01, 1e7, 8, 8),
+                        g, [material('default'), material('grey', (0.5,) * 3)], [],
+                        np.full(3, 0.5, np.float32), sd.Settings(samples=1, max_bounces=1))
+    data.object_names[:] = names
+    return data
+
+
+@pytest.mark.parametrize("instanced", [False, True], ids=['objects', 'instances'])
+def test_instances_scattered_on_a_huge_plane_are_weighed_each(instanced):
+    """Instances of one rock scattered over the plane are each 1 m across, as three separate
+    objects are: said alike (their joint box, 61 m wide, had hidden the 0.5 m step)."""
+    found = _said(render(_scattered(instanced)))
+    assert len(found) == 1 and "object 'ground'" in found[0] and "50% of the 1-unit objects" in found[0], found
+
+
+def test_instances_of_a_huge_surface_are_said_once():
+    """Two instances of one huge tile side by side: one message naming the tile's object."""
+    tile = np.array([(0, -1, 0), (1, -1, 0), (1, 1, 0), (0, 1, 0)], np.float64) * (1e6, 1e6, 0)
+    box = _box((-0.5, -0.5, 0), (0.5, 0.5, 1))
+    parts = [(tile, np.array([(0, 1, 2), (0, 2, 3)]), 1, ALL_VIS),
+             (tile * (-1, 1, 1), np.array([(0, 2, 1), (0, 3, 2)]), 1, ALL_VIS), (box[0], box[1], 1, ALL_VIS)]
+    g = geometry(parts)
+    place = np.asarray(g.object_index)
+    g = replace(g, object_index=np.where(place < 2, 0, 1).astype(np.int32), instance=place.astype(np.int32))
+    cam = np.eye(4)
+    cam[:3, 3] = (3.0, -3.0, 2.0)
+    data = sd.SceneData(sd.Camera('PERSP', cam, (-1.0, 1.0, -1.0, 1.0), 0.8, 0.01, 1e7, 8, 8),
+                        g, [material('default'), material('grey', (0.5,) * 3)], [],
+                        np.full(3, 0.5, np.float32), sd.Settings(samples=1, max_bounces=1))
+    data.object_names[:] = ['tile', 'box']
+    found = _said(render(data))
+    assert len(found) == 1 and "object 'tile'" in found[0] and "more such" not in found[0], found
