@@ -237,9 +237,11 @@ def _rot(x, k):
 
 
 def hash_uint2_to_float(kx, ky):
-    """Cycles' hash_uint2_to_float of uint32 arrays kx, ky: hash_uint2 / (2^32 - 1), float32."""
+    """Cycles' hash_uint2_to_float of uint32 arrays kx, ky: (float)hash_uint2 / (float)0xFFFFFFFFu,
+    float32: the hash rounded to float32, over 2^32 (what the divisor rounds to), so exactly (the
+    exact hash over 2^32 - 1, rounded after, is one step off on ~0.8% of keys)."""
     c = _jenkins(np.asarray(kx).astype(np.uint32), np.asarray(ky).astype(np.uint32))
-    return (c.astype(np.float64) / 0xFFFFFFFF).astype(np.float32)
+    return c.astype(np.float32) * F32(2.0 ** -32)
 
 
 def _jenkins(*keys):
