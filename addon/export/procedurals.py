@@ -34,6 +34,9 @@ _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv', 'Norma
 _GEOMETRY = {'Position': 'position', 'Normal': 'normal', 'True Normal': 'true_normal'}
 # nodes a coordinate-only chain starts from
 _COORDINATE_NODES = ('TEX_COORD', 'NEW_GEOMETRY')
+# nodes an attribute chain starts from (compile_socket's attributes; Curves Info and Point Info
+# outputs are seen as Attribute nodes: nodegraph.StandardAttributeNode)
+_ATTRIBUTE_NODES = ('ATTRIBUTE', 'VERTEX_COLOR')
 _NOISE_DIMENSIONS = {'1D': 1, '2D': 2, '3D': 3, '4D': 4}
 _GABOR_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_DIMENSIONS = {'1D': 1, '2D': 2, '3D': 3, '4D': 4}
@@ -99,7 +102,7 @@ def compile_color(socket, reasons, image=None):
     return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), needs, str(sources))
 
 
-def compile_socket(socket, color, reasons, coordinates=False, image=None, light_path=True):
+def compile_socket(socket, color, reasons, coordinates=False, image=None, light_path=True, attributes=False):
     """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures it
     reads (Sources)) for what feeds a colour (color) or float socket, or None as compile_color.
     coordinates: also a chain that reads Texture Coordinate Generated, Object or UV through an
@@ -108,14 +111,19 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
     evaluation silently, which says what it does not read. A chain reading Object coordinates
     says in whose space among its needs (object_frame). light_path: a Light Path output stands
     at its carrier's own value, noted, as the evaluation reads it (a material); False: not
-    compiled (an AOV, whose evaluation reads a camera ray's values instead)."""
+    compiled (an AOV, whose evaluation reads a camera ray's values instead). attributes: also a
+    chain that reads a mesh's or strand's attributes (Attribute, Color Attribute, Curves Info,
+    Point Info) and no image, interpolated per point before its nodes as in Cycles (a Mix
+    Shader's factor: the attribute maps weigh BSDF colours alone, and the factor had stood at
+    its own value)."""
     textured = _reaches_procedural(socket, set())
     # (images only matters where no procedural texture does: its walk of the whole chain, the
     # slowest of these tests, is skipped then; 1000 textured materials spent 0.6 s in it)
     images = not textured and image is not None and (_images_reached(socket) >= 2 or images_off_uv(socket))
     # (a coordinate-only chain reaches a coordinate node: _coordinate_chain walks it once)
     if not textured and not images and not _coordinate_chain(socket) and \
-            not (coordinates and _reaches_procedural(socket, set(), _COORDINATE_NODES)):
+            not (coordinates and _reaches_procedural(socket, set(), _COORDINATE_NODES)) and \
+            not (attributes and _images_reached(socket) == 0 and _reaches_procedural(socket, set(), _ATTRIBUTE_NODES)):
         return None
     chain = _Chain([], image, light_path)
     try:

@@ -108,8 +108,8 @@ class TexturedMixes:
         return out._with_passes((np.zeros(3), texture(pa, pb), np.ones(3)))
 
     def _procedural_mix(self, node, reasons, depth, said=None):
-        """A Mix Shader whose factor procedural textures (or an image, beside textured or
-        emitting sides) compute (procedurals.py), between two shaders that have an albedo and an
+        """A Mix Shader whose factor procedural textures, a mesh's or strand's attributes (or an
+        image, beside textured or emitting sides) compute (procedurals.py), between two shaders that have an albedo and an
         emission only (each a constant, a procedural texture's or an image's, looked up per
         point: closure.per_point): the albedo per shading point, a + (b - a) x factor, and the
         emission likewise, E1 + (E2 - E1) x factor, the factor clamped to [0, 1] as Cycles' Mix
@@ -117,7 +117,7 @@ class TexturedMixes:
         cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
         (_procedural_cutout). None otherwise (the factor at its own value; why, in `said`)."""
         fac_notes = []      # (said only if this mix is taken: a Light Path's stand-in)
-        found = procedurals.compile_socket(node.inputs['Fac'], False, fac_notes, image=self._texture)
+        found = procedurals.compile_socket(node.inputs['Fac'], False, fac_notes, image=self._texture, attributes=True)
         closures = None
         if found is None and any(link.from_node.type == 'TEX_IMAGE' for link in links_feeding(node.inputs['Fac'])):
             # a factor from one image between shaders with images of their own (a mask's colour
