@@ -35,8 +35,9 @@ _GEOMETRY = {'Position': 'position', 'Normal': 'normal', 'True Normal': 'true_no
 # nodes a coordinate-only chain starts from
 _COORDINATE_NODES = ('TEX_COORD', 'NEW_GEOMETRY')
 # nodes an attribute chain starts from (compile_socket's attributes; Curves Info and Point Info
-# outputs are seen as Attribute nodes: nodegraph.StandardAttributeNode)
-_ATTRIBUTE_NODES = ('ATTRIBUTE', 'VERTEX_COLOR')
+# outputs are seen as Attribute nodes: nodegraph.StandardAttributeNode; Object Info read per
+# object or instance: instance_values)
+_ATTRIBUTE_NODES = ('ATTRIBUTE', 'VERTEX_COLOR', 'OBJECT_INFO')
 _NOISE_DIMENSIONS = {'1D': 1, '2D': 2, '3D': 3, '4D': 4}
 _GABOR_DIMENSIONS = {'2D': 2, '3D': 3}
 _VORONOI_DIMENSIONS = {'1D': 1, '2D': 2, '3D': 3, '4D': 4}
@@ -113,7 +114,7 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
     at its carrier's own value, noted, as the evaluation reads it (a material); False: not
     compiled (an AOV, whose evaluation reads a camera ray's values instead). attributes: also a
     chain that reads a mesh's or strand's attributes (Attribute, Color Attribute, Curves Info,
-    Point Info) and no image, interpolated per point before its nodes as in Cycles (a Mix
+    Point Info) or Object Info and no image, interpolated per point before its nodes as in Cycles (a Mix
     Shader's factor: the attribute maps weigh BSDF colours alone, and the factor had stood at
     its own value)."""
     textured = _reaches_procedural(socket, set())

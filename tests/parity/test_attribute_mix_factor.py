@@ -149,3 +149,42 @@ def test_strand_info_mix_factor_as_in_cycles(case, tmp_path, said):
                                        err_msg=f"{case}, rows {part[0]}-{part[-1]}, channel {ch}")
     assert abs(c[..., 0].mean() - c[..., 2].mean()) > 0.005, "the mix must vary"
     assert not [m for m in said if 'factor not computed' in m], said
+
+
+def test_object_info_random_mix_factor_per_object_and_instance(tmp_path, said):
+    """Object Info Random as the factor: each object and each collection instance mixes by its
+    own value, as in Cycles (it had stood at 0.5 for all: (0.49, 0, 0.49) where Cycles' tiles
+    range from (0.02, 0, 0.98) to (0.86, 0, 0.14))."""
+    import bmesh        # importable once bpy is
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    mat, nt, out = scenes._material("ByObject")
+    mix = _mix(nt, out, *_emissions(nt))
+    nt.links.new(nt.nodes.new('ShaderNodeObjectInfo').outputs['Random'], mix.inputs['Fac'])
+    me = bpy.data.meshes.new("Tile")
+    bm = bmesh.new()
+    bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=0.8)
+    bm.to_mesh(me)
+    bm.free()
+    me.materials.append(mat)
+    coll = bpy.data.collections.new("Tiles")
+    coll.objects.link(bpy.data.objects.new("Tile", me))
+    for i, x in enumerate((-3, -1, 1, 3)):
+        scenes.link(bpy.data.objects.new(f"T{i}", me)).location = (x, 1.2, 0)
+        e = scenes.link(bpy.data.objects.new(f"I{i}", None))
+        e.instance_type, e.instance_collection, e.location = 'COLLECTION', coll, (x, -1.2, 0)
+    scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=8.0)
+    scenes.black_world()
+    sc.render.resolution_x, sc.render.resolution_y = 64, 32
+    sc.cycles.samples = sc.dacrt.samples = 4
+    sc.cycles.use_denoising = False
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
+    img = _images(sc, tmp_path)
+    c, d = img['CYCLES'], img['DACRT']
+    # each tile's middle (4x4 pixels): one object's or instance's factor
+    mids = [(r, k) for r in (8, 24) for k in (8, 24, 40, 56)]
+    tc = np.array([c[r - 2:r + 2, k - 2:k + 2, :3].mean(axis=(0, 1)) for r, k in mids])
+    td = np.array([d[r - 2:r + 2, k - 2:k + 2, :3].mean(axis=(0, 1)) for r, k in mids])
+    assert np.ptp(tc[:, 0]) > 0.3, tc
+    np.testing.assert_allclose(td, tc, atol=0.01)
+    assert not [m for m in said if 'factor not computed' in m], said
