@@ -108,10 +108,10 @@ class TexturedMixes:
         return out._with_passes((np.zeros(3), texture(pa, pb), np.ones(3)))
 
     def _procedural_mix(self, node, reasons, depth, said=None):
-        """A Mix Shader whose factor procedural textures, a mesh's or strand's attributes (or an
-        image, beside textured or emitting sides) compute (procedurals.py), between two shaders that have an albedo and an
-        emission only (each a constant, a procedural texture's or an image's, looked up per
-        point: closure.per_point): the albedo per shading point, a + (b - a) x factor, and the
+        """A Mix Shader whose factor procedural textures, a mesh's or strand's attributes or
+        Object Info (or an image, beside textured or emitting sides) compute (procedurals.py),
+        between two shaders that have an albedo and an emission only (each a constant, a
+        procedural texture's or an image's, looked up per point: closure.colour_at): the albedo per shading point, a + (b - a) x factor, and the
         emission likewise, E1 + (E2 - E1) x factor, the factor clamped to [0, 1] as Cycles' Mix
         Shader clamps it. Between a purely transparent shader and another (the procedural
         cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
