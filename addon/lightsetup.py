@@ -12,6 +12,7 @@ import dacrt
 from .lights import BackgroundLight, EmissiveTriangles, EnvironmentLight, LightSet, lamp_records, make_lamp
 from .lights.base import RECORD_FIELDS
 from .lights.coincident import coincident_copies, near_copies
+from .lights.overlap import coplanar_overlaps
 from .lights.linking import LightLinking
 from .procedural import ProceduralTexels
 from .scenedata import NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
@@ -232,11 +233,22 @@ class LightSetup:
         near_copies: a twin under another transform, or moved by ~1e-6): not bit for bit, so
         both stay light-sampled and next-event estimation adds each copy's emission where BSDF
         hits count one surface (a quad's twin 1e-6 below it: 1.41x Cycles, which renders it as
-        the quad alone; a twin turned 90 degrees, which near_copies does not find as its
-        triangles split along the other diagonal: 1.82x)."""
+        the quad alone). Then those that overlap other emitters in their plane without repeating
+        them (lights/overlap.py: a twin turned 90 degrees splits along the other diagonal, 1.82x
+        Cycles, and had been said nothing)."""
         # (only light-sampled ones: copies left to BSDF rays alone are not added twice)
         sampled = hittable & self.mats.light_sampled[self.tri.material]
         near, tol = near_copies(self.tri.vertices, self.tri.indices, sampled)
+        over, over_tol = coplanar_overlaps(self.tri.vertices, self.tri.indices, sampled)
+        if over is not None and near is not None:
+            over &= ~near
+        if over is not None and over.any():
+            self.messages.append(('WARNING', f"{int(over.sum())} emissive triangles of {_object_names(sd, over)} "
+                                             f"overlap other emissive triangles in their plane (within "
+                                             f"{over_tol:.1g}) without repeating them corner for corner: each is "
+                                             "light-sampled, so where they overlap their light comes out up to "
+                                             "twice as bright as in Cycles, which renders them as one surface or "
+                                             "darker; delete the duplicate or move it apart"))
         if near is None:
             return
         self.messages.append(('WARNING', f"{int(near.sum())} emissive triangles of {_object_names(sd, near)} "
