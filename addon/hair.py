@@ -210,14 +210,15 @@ def _frames(p, counts, sector=0.0, t=None):
 
 
 def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool = False, linear: bool = False,
-          vertex_keys: bool = False, sampled=None):
+          vertex_keys: bool = False, sampled=None, exact: bool = False):
     """Tube meshes of the curves (offsets: c + 1 first-point indices, the last = point count),
     Catmull-Rom, or with `linear` straight between the points (POLY curves, as Cycles draws them):
     (vertices float32 (v, 3), triangles int32 (t, 3) wound outward, vertex normals float32
     (v, 3), curves rendered), and with curve_of the curve (index into offsets) each triangle
     belongs to (t,) int64. Curves of fewer than 2 points are not rendered; a sample of radius 0
     or less closes the tube there (Cycles gives it no width), so a curve's triangle count
-    depends on its radii."""
+    depends on its radii. exact: the vertices in float64 (a ring far from the origin keeps
+    a radius below float32's spacing there)."""
     positions = np.asarray(positions, np.float64).reshape(-1, 3)
     offsets = np.asarray(offsets, np.int64)
     sides, steps = level_for(len(positions)) if level is None else level
@@ -268,7 +269,7 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
         keep = keep.copy()
         keep[joint] &= area > 1e-6 * (r[ring[joint]] * scale)[:, None, None] ** 2
     triangles = quads[keep].reshape(-1, 3)
-    out = (vertices.astype(np.float32), triangles.astype(np.int32), radial.reshape(-1, 3).astype(np.float32),
+    out = (vertices if exact else vertices.astype(np.float32), triangles.astype(np.int32), radial.reshape(-1, 3).astype(np.float32),
            len(counts))
     if curve_of:
         curves = np.flatnonzero(np.diff(offsets) >= 2)            # the curves _samples kept, in order

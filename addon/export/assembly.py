@@ -309,7 +309,7 @@ class Assembly:
         nv, nt = int(nvs.sum()), int(nts.sum())
         world = out.vertices[v0:v0 + nv]
         for j, (a, _) in enumerate(items):
-            dacrt.shading.transform_points(a.positions, lin[j:j + 1], mats[j:j + 1, :3, 3],
+            dacrt.shading.transform_points(*_placed(a, lin[j:j + 1], mats[j:j + 1, :3, 3]),
                                            world[vstart[j]:vstart[j] + nvs[j]].reshape(1, -1, 3))
         if not (world.max(initial=0.0) <= REACH and world.min(initial=0.0) >= -REACH):
             # vertices out of range: dropped and said per object by _instance_batch
@@ -668,7 +668,7 @@ class Assembly:
         # renderer centres it (integrator.recentred) and rounds to float32
         world = out.vertices[V]
         # (one threaded native pass, bit for bit the float64 numpy multiply-adds it replaced)
-        dacrt.shading.transform_points(a.positions, lin, mats[:, :3, 3], world.reshape(k, nv, 3))
+        dacrt.shading.transform_points(*_placed(a, lin, mats[:, :3, 3]), world.reshape(k, nv, 3))
         tris = out.triangles[T]             # local indices first (face_normals reads them)
         if k == 1:
             tris[...] = a.triangles
@@ -1264,3 +1264,13 @@ def _no_tangents(a, name):
                 f"any image's UV Map node, for its own tangents in both)")
     return ("normal map not applied: the mesh has no UV map (or is a curve, text or metaball); Cycles then bends "
             "the normal by tangents of the positions mapped to a sphere, not computed here")
+
+
+def _placed(a, lin, offset):
+    """(points, linear maps, offsets) transform_points places mesh a's positions by: its
+    anchored float32 offsets and each offset moved by its map of the anchor, in float64, where
+    the mesh has them (meshes._anchored: tessellations away from their object's origin)."""
+    if a.anchored is None:
+        return a.positions, lin, offset
+    anchor, local = a.anchored
+    return local, lin, offset + np.einsum('kij,j->ki', lin, anchor)

@@ -305,6 +305,24 @@ def _flat_mapped_quads(me, uv_name, positions, tolerance=1e-5):
     return bool((dot(miss, miss) <= tolerance * tolerance * span).all())
 
 
+def _anchored(positions):
+    """(anchor float64 (3,), positions - anchor float32 (v, 3)) of float64 positions lying away
+    from their origin (further than their half-extent), else None. A tessellation's positions
+    are computed in float64 (hair.tubes: a strand's centre plus its ring's offset), so a hair
+    tube 1e-4 across modelled 1000 from its object's origin, where float32's spacing is 6e-5,
+    rounded to a few grid points (Curves 1.095x Cycles' coverage, 1.017x at the origin);
+    placed through its anchor (in float64), its tube keeps its shape until the renderer
+    centres the scene (sceneprep.recentred) and rounds it to float32 there."""
+    p = np.asarray(positions)
+    if p.dtype != np.float64 or not len(p) or not np.isfinite(p).all():
+        return None
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    anchor = 0.5 * (lo + hi)
+    if np.abs(anchor).max() <= 0.5 * (hi - lo).max():
+        return None
+    return anchor, np.ascontiguousarray(p - anchor, np.float32)
+
+
 class MeshArrays:
     """One evaluated mesh in its local space, read once per unique mesh.
 
@@ -315,13 +333,15 @@ class MeshArrays:
     reshapes without a gather. Per-corner UVs stay per corner until a texture needs them."""
     __slots__ = ('positions', 'triangles', 'corners', 'slot', 'normal_rows', 'normal_index',
                  'corner_uvs', 'uv_layers', 'active_uv', 'domain', 'mesh', '_tangents', '_attributes', '_coords',
-                 'undeformed', 'rebuilt', 'texspace', 'strand', 'orco', 'radial_normals', 'own_normals')
+                 'undeformed', 'rebuilt', 'texspace', 'strand', 'orco', 'radial_normals', 'own_normals',
+                 'anchored')
 
     def __init__(self, me, want_uvs):
         self.texspace = None         # (location, size) where not the mesh's own (from_arrays)
         self.strand = None           # a tessellation's attributes (from_arrays)
         self.radial_normals = False  # spheres' normals: placed like positions (from_arrays)
         self.orco = None             # the positions Generated coordinates are of, where set (from_arrays)
+        self.anchored = None         # a tessellation's exact positions, where set (from_arrays)
         nv = len(me.vertices)
         self.positions = np.empty(nv * 3, np.float32)
         me.attributes['position'].data.foreach_get('vector', self.positions)
@@ -429,7 +449,8 @@ class MeshArrays:
         4th item of strand says why a name not among them reads 0 ('{name}' formatted).
         radial_normals: the normals are directions from a centre (spheres), placed by the
         instance's matrix itself, not its inverse transpose (as Cycles shades a point:
-        normalize(P - centre) in world space)."""
+        normalize(P - centre) in world space). Positions given in float64 keep their precision
+        where the mesh lies away from its object's origin (_anchored)."""
         a = cls.__new__(cls)
         a.radial_normals = radial_normals
         a.texspace = (np.full(3, 0.5), np.full(3, 0.5)) if generated_is_object else None
@@ -438,6 +459,7 @@ class MeshArrays:
             a.orco, a.texspace = np.asarray(generated_of[0], np.float32), generated_of[1]
         a.strand = strand
         a.positions = np.ascontiguousarray(positions, np.float32)
+        a.anchored = _anchored(positions)
         a.triangles = np.ascontiguousarray(triangles, np.int32)
         a.corners, a.slot, a.domain = None, None, 'POINT'
         # per corner, as a mesh's: triangle i's corners are 3i, 3i + 1, 3i + 2

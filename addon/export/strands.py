@@ -361,7 +361,7 @@ def tessellate(src, level, notes, why=''):
             notes.ignore(f"{unsized} point(s) of NaN or infinite radius: no tube is rendered around them", src.name)
         v, t, n, kept, tri_curve, (key, u) = hair.tubes(src.positions, src.radii, src.offsets, (sides, steps),
                                                          curve_of=True, linear=src.linear, vertex_keys=True,
-                                                         sampled=_sampled(src, level))
+                                                         sampled=_sampled(src, level), exact=True)
         src.sampled = None
         curve = np.searchsorted(src.offsets, key, side='right') - 1
         u32 = u.astype(np.float32)[:, None]
