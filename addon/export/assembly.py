@@ -608,6 +608,9 @@ class Assembly:
             if not places:
                 continue
             slot = self.meshes[key].slot
+            # a point cloud's spheres (their normals radial) take their materials' point variant
+            # (MaterialBuilder.index)
+            points = bool(getattr(self.meshes[key], 'radial_normals', False))
             # (a mesh of one slot, most of them, without numpy: two np.unique calls per object
             # had been a third of this for thousands of separate objects)
             slots_used = None if slot is None else np.unique(slot)
@@ -627,7 +630,7 @@ class Assembly:
                     if i < len(p.slots):
                         if p.slots[i] is not None and p.slots[i].as_pointer() not in built and self.check_break():
                             raise ExportCancelled()   # a material's images can take seconds
-                        p.slot_map[i] = self.materials.index(p.slots[i])
+                        p.slot_map[i] = self.materials.index(p.slots[i], on_points=points)
                         if p.slots[i] is not None:
                             built.add(p.slots[i].as_pointer())
                 seen.update(ptr for ptr in ptrs if ptr)

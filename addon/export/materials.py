@@ -75,6 +75,19 @@ def _alpha_linked(ntree, seen=None):
                if n.type == 'GROUP' and getattr(n, 'node_tree', None) is not None)
 
 
+def _huang_hair(ntree, depth=0):
+    """Whether a node tree (its groups' included) holds a Principled Hair BSDF of the Huang
+    model, the one Cycles renders black on points (MaterialBuilder.index)."""
+    if ntree is None or depth > 32:
+        return False
+    for node in ntree.nodes:
+        if node.type == 'BSDF_HAIR_PRINCIPLED' and getattr(node, 'model', '') == 'HUANG' and not node.mute:
+            return True
+        if node.type == 'GROUP' and _huang_hair(node.node_tree, depth + 1):
+            return True
+    return False
+
+
 class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBaking, AttributeMaps, ImageTextures):
     """Evaluates Blender materials into scenedata.Material, one per material."""
 
@@ -116,17 +129,27 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._normal_maps = []
         self._normals, self._normal_weight = [], 1.0     # (see _normal_input)
         self.normal_mapped = False  # some material has a normal map: meshes need tangents
+        self._on_points = False     # the material being built shades point-cloud spheres (index)
 
-    def index(self, mat):
-        """Global index of an (evaluated) material; None -> default material 0."""
+    def index(self, mat, on_points=False):
+        """Global index of an (evaluated) material; None -> default material 0. on_points: as
+        it shades a point cloud's spheres, where a Principled Hair BSDF of the Huang model
+        renders black in Cycles (its closure's frame is the curve tangent dPdu, which a point
+        has none of: 0 under a sun and a white world alike); a material holding one gets a
+        variant of its own there."""
         if mat is None:
             return 0
-        key = mat.as_pointer()
+        on_points = on_points and _huang_hair(mat.node_tree)
+        key = (mat.as_pointer(), 'points') if on_points else mat.as_pointer()
         idx = self._index.get(key)
         if idx is None:
             idx = len(self.materials)
             self._camera_holdout = False
-            self.materials.append(self._build(mat))
+            self._on_points = on_points
+            try:
+                self.materials.append(self._build(mat))
+            finally:
+                self._on_points = False
             if self._camera_holdout:
                 self.camera_holdouts.add(idx)
             m = self.materials[-1]

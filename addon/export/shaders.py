@@ -205,6 +205,13 @@ class ShaderClosures:
             # (a lit diffuse of its colour before: a Volume Scatter surface 0.8 where Cycles is black)
             reasons.append(f"{node.bl_label} in a surface shader renders nothing, as in Cycles")
             return Closure()
+        if t == 'BSDF_HAIR_PRINCIPLED' and self._on_points and getattr(node, 'model', '') == 'HUANG':
+            # Cycles' Huang closure takes its frame from the curve tangent dPdu, which a point has
+            # none of: it reflects nothing there (a lit diffuse of its colour had rendered, 0.36
+            # under a sun and 0.80 under a white world where Cycles gives 0)
+            reasons.append("Principled Hair BSDF (Huang model) on a point cloud renders black, as in Cycles "
+                           "(its closure needs a curve's tangent)")
+            return Closure()
         if t == 'BSDF_HAIR_PRINCIPLED' and getattr(node, 'parametrization', 'COLOR') in ('MELANIN', 'ABSORPTION'):
             # no Color input in these modes: the colour of the absorption Cycles gives it (it
             # had been the 0.8 grey fallback, silently)
