@@ -117,7 +117,8 @@ def near_copies(vertices, indices, emitters):
     or winding) but not bit for bit (a copy under another transform, or moved by ~1e-6: both are
     light-sampled, and coincident_copies, exact, leaves them); (None, tol) where there are none,
     or too many emitters to look (_NEAR_MAX). Only triangles split alike are found: a quad
-    copied under a 90 degree turn splits along its other diagonal, and those are not. Cheap: the
+    copied under a 90 degree turn splits along its other diagonal, and those are not
+    (lights/overlap.py finds them). Cheap: the
     centroids sorted along one direction, each compared with the next few within tol."""
     E = np.flatnonzero(emitters)
     if not 2 <= len(E) <= _NEAR_MAX:

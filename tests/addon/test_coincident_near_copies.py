@@ -4,8 +4,8 @@ exact coincident_copies leaves both light-sampled and next-event estimation adds
 emission: the quad and its twin 1e-6 below rendered 1.41x Cycles (64x48, 0 bounces, Cycles 512
 spp 0.2280, DACRT 256 spp 0.3224; Cycles renders the quad alone), silently. near_copies finds
 triangles repeated within a few float32 ulps, and the render says so (a WARNING naming the
-objects). A quad turned 90 degrees splits along its other diagonal and is not found (1.82x):
-README "Coincident faces"."""
+objects). A quad turned 90 degrees splits along its other diagonal and is not found here (1.82x;
+lights/overlap.py finds it: test_coplanar_overlapping_emitters.py)"""
 import math
 
 import bpy
