@@ -174,6 +174,11 @@ class Progress:
     fraction: float            # share of all (pixel, sample) paths done, 0..1
 
 
+# passes past tube insides a ray may take (_past_tube_insides): a ray entering an open end meets
+# one wall, leaves through it; a few more only where tubes cross
+_TUBE_PASSES = 4
+
+
 class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWriting, EmitterHits):
     """Renders a SceneData progressively; see the module docstring and `passes()`.
 
@@ -678,8 +683,52 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         return prim if local is None else np.take(local, prim)
 
     def _intersect(self, kind, O, D, tfar, skip=None, rays=None):
+        given = O is not None and D is not None and tfar is not None
         if rays is None:
             rays = self._ray_array(O, D, tfar)
+        if self.tri.one_sided is None:
+            return self._intersect_rays(kind, rays, skip)
+        if given:
+            start = (O, D, tfar)
+        else:       # the records by ray id, before the trace reorders them and sets their tfar
+            r = np.empty(len(rays), rays.dtype)
+            r[rays['id']] = rays
+            start = (r['org'].T, r['dir'].T, r['tfar'])
+        return self._past_tube_insides(kind, start, self._intersect_rays(kind, rays, skip))
+
+    def _past_tube_insides(self, kind, start, hits):
+        """hits with those on the inside of a one-sided triangle (a hair tube's wall seen
+        through its open end: Cycles' curves have no inside, so its rays meet nothing there;
+        DACRT's strands pointing at the camera had shown their insides, a strand 9.5 degrees
+        off the view axis 1.28x Cycles' coverage) traced on past it, from the original rays
+        (start: origins and directions (3, n), lengths (n,) or one for all): a few passes, each
+        skipping the wall it met."""
+        one, ng = self.tri.one_sided, self.tri.geo[9:12]
+        org, dirs, tfar = start
+        tfar = np.broadcast_to(np.asarray(tfar, F32), (len(hits),))
+        for _ in range(_TUBE_PASSES):
+            prim = hits['prim']
+            idx = np.flatnonzero(np.take(one, np.maximum(prim, 0)) & (prim >= 0))
+            if not len(idx):
+                break
+            p = prim[idx]
+            d = np.take(dirs, idx, axis=1)
+            inside = np.einsum('ik,ik->k', d, np.take(ng, p, axis=1)) > 0.0
+            idx, p, d = idx[inside], p[inside], d[:, inside]
+            if not len(idx):
+                break
+            t = hits['t'][idx].astype(np.float64)
+            # from the wall's outer side (its self-intersection step), so the walls sharing the
+            # edge or corner it met are not met again there
+            O = (np.take(org, idx, axis=1) + t * d + np.take(self.tri.geo[12:15], p, axis=1)).astype(F32)
+            rays = self._ray_array(O, np.ascontiguousarray(d, F32), np.maximum(tfar[idx] - t, 0.0).astype(F32))
+            on = self._intersect_rays(kind, rays, p)
+            met = on['prim'] >= 0
+            on['t'][met] = (on['t'][met] + t[met]).astype(F32)
+            hits[idx] = on
+        return hits
+
+    def _intersect_rays(self, kind, rays, skip):
         skip = self._skip(kind, skip)
         t0 = time.perf_counter()
         with tracer_cancel():

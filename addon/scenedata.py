@@ -279,6 +279,9 @@ class Geometry:
     # (M,) bool: triangles bump heights leave unbent, a point cloud's spheres (Cycles' points
     # have no surface derivatives, so svm_node_set_bump's gradient is 0 on them); None: none
     unbumped: Optional[np.ndarray] = None
+    # (M,) bool: triangles rays meet from their front alone, hair and Curves tubes (Cycles'
+    # curves have no inside: a ray entering a tube's open end meets nothing there); None: none
+    one_sided: Optional[np.ndarray] = None
     # (M,3,4) float32 per corner: the unit tangent (mikktspace, of the UV map the triangle's
     # material reads; in object space when tangent_xf is given, else in world space) and the
     # bitangent sign, for normal maps; 0 where none; None: no material has a normal map

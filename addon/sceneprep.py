@@ -352,6 +352,8 @@ def validate(sd: SceneData):
         (g.has_uv is None or np.asarray(g.has_uv).shape == (m,), f"geometry.has_uv must be None or ({m},)"),
         (getattr(g, 'unbumped', None) is None or np.asarray(g.unbumped).shape == (m,),
          f"geometry.unbumped must be None or ({m},)"),
+        (getattr(g, 'one_sided', None) is None or np.asarray(g.one_sided).shape == (m,),
+         f"geometry.one_sided must be None or ({m},)"),
         (getattr(g, 'tangents', None) is None or np.asarray(g.tangents).shape == (m, 3, 4),
          f"geometry.tangents must be None or ({m}, 3, 4)"),
         (getattr(g, 'colors', None) is None or np.asarray(g.colors).shape == (m, 3, 3),

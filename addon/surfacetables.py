@@ -114,6 +114,8 @@ class Triangles:
             np.asarray(geometry.has_uv, bool)
         unbumped = getattr(geometry, 'unbumped', None)
         self.unbumped = None if unbumped is None or not np.any(unbumped) else np.asarray(unbumped, bool)
+        one_sided = getattr(geometry, 'one_sided', None)
+        self.one_sided = None if one_sided is None or not np.any(one_sided) else np.asarray(one_sided, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
         # which lifts shadow rays off smooth triangles (none when all are flat), and the
         # shading offset as Cycles' frequency multiplier 1 / (1 - offset / 2); None: none

@@ -332,7 +332,7 @@ class Transparency:
 
 # scenedata.Geometry's per-triangle arrays (aovs, a dict of them, apart)
 TRIANGLE_FIELDS = ('triangles', 'material', 'normals', 'uvs', 'visibility', 'object_index', 'instance',
-                    'terminator', 'has_uv', 'tangents', 'colors', 'coords', 'unbumped')
+                    'terminator', 'has_uv', 'tangents', 'colors', 'coords', 'unbumped', 'one_sided')
 
 
 def line_crossings(vertices, tris, limit=4_000_000):

@@ -42,6 +42,7 @@ class _Out:
         self.terminator = None            # (m, 2), allocated by the first object that has one
         self.has_uv = None                # (m,) bool, allocated by the first mesh without a UV map
         self.unbumped = None              # (m,) bool, allocated by the first point cloud
+        self.one_sided = None             # (m,) bool, allocated by the first hair or Curves tubes
         self.colors = None                # (m, 3, 3), allocated by the first attribute-coloured mesh
         self.coords = None                # (m, 3, 6 or 9), allocated by the first procedurally textured mesh
         self.aovs = {}                    # (AOV name, kind) -> (m, 3, C), allocated by the first mesh writing it
@@ -59,7 +60,7 @@ class _Out:
         per_tri = dict(triangles=self.triangles, normals=self.normals, material=self.material,
                        visibility=self.visibility, object_index=self.object_index, instance=self.instance,
                        uvs=self.uvs, terminator=self.terminator, has_uv=self.has_uv, tangents=self.tangents,
-                       colors=self.colors, coords=self.coords, unbumped=self.unbumped)
+                       colors=self.colors, coords=self.coords, unbumped=self.unbumped, one_sided=self.one_sided)
         aovs, attributes = dict(self.aovs), dict(self.attributes)
         if self.keep is not None and not self.keep.all():
             per_tri = {k: (_compact_rows(v, self.keep) if v is not None else None) for k, v in per_tri.items()}
@@ -210,6 +211,9 @@ class Assembly:
             else:
                 if strand_keys.get(id(a)):
                     tubes.append(slice(t0, t0 + len(places) * len(a.triangles)))
+                    if out.one_sided is None:
+                        out.one_sided = np.zeros(len(out.triangles), bool)
+                    out.one_sided[tubes[-1]] = True
                 nbad, ndeg, nskipped = self._instance_batch(a, places, out, v0, t0)
                 nv_rows, nt_rows = len(places) * len(a.positions), len(places) * len(a.triangles)
             degenerate += ndeg
@@ -481,7 +485,8 @@ class Assembly:
             visibility=np.concatenate([geometry.visibility, twin_vis[rows]]),
             object_index=twice(geometry.object_index), instance=twice(geometry.instance),
             uvs=twice(geometry.uvs), terminator=twice(geometry.terminator), has_uv=twice(geometry.has_uv),
-            unbumped=twice(geometry.unbumped), tangents=twice(geometry.tangents), colors=twice(geometry.colors),
+            unbumped=twice(geometry.unbumped), one_sided=twice(geometry.one_sided),
+            tangents=twice(geometry.tangents), colors=twice(geometry.colors),
             coords=twice(geometry.coords),
             aovs=None if geometry.aovs is None else {key: twice(a) for key, a in geometry.aovs.items()},
             attributes=None if geometry.attributes is None else
