@@ -942,7 +942,9 @@ class Exporter:
             if m.approximated:
                 by_reason.setdefault(m.approximated, []).append(f"'{m.name}'")
         approx = [f"{', '.join(names)} ({reason})" for reason, names in by_reason.items()]
-        count = sum(len(names) for names in by_reason.values())
+        # (a material counted once where its point-cloud variant says another reason:
+        # MaterialBuilder.index)
+        count = len({n for names in by_reason.values() for n in names})
         if len(geometry.material) and not geometry.material.all():     # material 0 is in use
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "
                              "BSDF: specular layer as diffuse)")

@@ -73,3 +73,14 @@ def test_chiang_hair_on_points_is_not_made_black(tmp_path):
     c_points, _ = _halves(sc, 'CYCLES', tmp_path)
     d_points, _ = _halves(sc, 'DACRT', tmp_path)
     assert c_points.min() > 0.1 and d_points.min() > 0.1, (c_points, d_points)
+
+
+def test_the_point_variant_is_said_as_one_material(said):
+    sc = _scene('HUANG', 'sun')
+    sc.render.engine = 'DACRT'
+    said.clear()
+    bpy.ops.render.render()
+    got = [t for t in said if "material(s) approximated" in t]
+    assert len(got) == 1 and got[0].startswith("1 material(s) approximated"), got
+    assert "'hair-HUANG' (Principled Hair BSDF (Huang model) on a point cloud renders black" in got[0], got
+    assert "'hair-HUANG' (Principled Hair BSDF as diffuse)" in got[0], got
