@@ -4,6 +4,8 @@ location, pass indices, and custom properties or RNA paths. Part of the export l
 
 import numpy as np
 
+from ..procedural import hash_uint2_to_float
+
 # Object Info outputs read per object, as a material's colour attribute named OBJECT_INFO + output
 OBJECT_INFO = 'Object Info:'
 OBJECT_INFO_OUTPUTS = ('Random', 'Color', 'Alpha', 'Location', 'Object Index', 'Material Index')
@@ -88,29 +90,15 @@ def _rgba_attribute(owner, name):
 
 
 def object_random(name, random_id, is_instance):
-    """Cycles' Object Info Random of an object: an instance's random_id / (2^32 - 1); an object
-    of its own, hash_uint2(hash_string(its name), 0) / (2^32 - 1) (blender/object.cpp; checked
-    against Cycles renders)."""
+    """Cycles' Object Info Random of an object: its random id (an instance's random_id; an
+    object of its own, hash_uint2(hash_string(its name), 0), blender/object.cpp) as Cycles turns
+    it into a number, in float32: the id rounded to float32 times 1 / (float)0xFFFFFFFF = 2^-32
+    (scene/object.cpp). The exact id / (2^32 - 1), rounded after, is one float32 step off on
+    ~0.5% of names."""
     full = 0xFFFFFFFF
     if is_instance:
-        return (random_id & full) / full
+        return float(np.float32(random_id & full) * np.float32(2.0 ** -32))
     h = 0
     for b in name.encode('utf-8'):        # Cycles' hash_string reads (signed) chars into a uint
         h = (h * 37 + (b if b < 128 else (b - 256) & full)) & full
-    return _hash_uint2(h, 0) / full
-
-
-def _hash_uint2(kx, ky):
-    """Cycles' hash_uint2 (Bob Jenkins' lookup3 final mix of two words)."""
-    full = 0xFFFFFFFF
-
-    def rot(x, k):
-        return ((x << k) | (x >> (32 - k))) & full
-    a = b = c = (0xdeadbeef + (2 << 2) + 13) & full
-    a, b = (a + kx) & full, (b + ky) & full
-    for x, y, k in (('c', 'b', 14), ('a', 'c', 11), ('b', 'a', 25), ('c', 'b', 16), ('a', 'c', 4),
-                    ('b', 'a', 14), ('c', 'b', 24)):
-        v = {'a': a, 'b': b, 'c': c}
-        r = ((v[x] ^ v[y]) - rot(v[y], k)) & full
-        a, b, c = (r if x == 'a' else a), (r if x == 'b' else b), (r if x == 'c' else c)
-    return c
+    return float(hash_uint2_to_float(np.uint32(h), np.uint32(0)))
