@@ -21,6 +21,9 @@ MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magen
 # The running export's cancel check (export_scene sets it): a big image's conversion takes
 # seconds (an 8K PNG ~11 s here), where polling between objects alone answered Esc 14-18 s late
 _check_break = [None]
+# the running export's Cycles Simplify > Texture Limit in pixels (0: off; export_scene sets it):
+# Cycles renders a bigger image halved until it fits, which DACRT does not
+_texture_limit = [0]
 
 
 def poll():
@@ -214,6 +217,33 @@ def _srgb_to_linear(c):
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
+def texture_limit(scene, viewport):
+    """Cycles' Simplify > Texture Limit (the viewport's or the final render's) of the
+    evaluated scene in pixels, 0 when off."""
+    cyc = getattr(scene, 'cycles', None)
+    if not scene.render.use_simplify or cyc is None:
+        return 0
+    limit = getattr(cyc, 'texture_limit' if viewport else 'texture_limit_render', 'OFF')
+    return int(limit) if str(limit).isdigit() else 0
+
+
+def _over_texture_limit(img, reasons):
+    """Say that an image bigger than the running export's Texture Limit renders at full size:
+    Cycles halves it (a box-filtered 2^k downscale, scene/image.cpp) until it fits."""
+    limit = _texture_limit[0]
+    try:
+        w, h = (int(v) for v in img.size)
+    except (TypeError, ValueError):
+        return
+    if limit <= 0 or max(w, h) <= limit:
+        return
+    k = 1
+    while max(w, h) / k > limit:
+        k *= 2
+    reasons.append(f"image '{img.name}' ({w}x{h}) is rendered at full size; Cycles' Simplify > Texture Limit "
+                   f"({limit}) renders it {max(w // k, 1)}x{max(h // k, 1)}, its detail averaged away")
+
+
 def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels.
     The colour is associated with alpha as Cycles stores the image (associates_alpha), or with
@@ -222,6 +252,7 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     (_stored_texels), which blends those and decodes after. `user`: the node's image user,
     which picks an image sequence's frame at the scene frame `frame` (the rendered scene's;
     imageuser.user_frame)."""
+    _over_texture_limit(img, reasons)
     if img.source == 'SEQUENCE':     # bpy holds no frame's pixels in background renders
         return _sequence_frame(img, reasons, unassociate, user, frame)
     if not _read_from_blender(img):
