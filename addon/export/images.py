@@ -227,24 +227,81 @@ def texture_limit(scene, viewport):
     return int(limit) if str(limit).isdigit() else 0
 
 
-def _over_texture_limit(img, reasons):
-    """Say that an image bigger than the running export's Texture Limit renders at full size:
-    Cycles halves it (a box-filtered 2^k downscale, scene/image.cpp) until it fits."""
+def _limit_factor(img):
+    """How many times Cycles' Texture Limit (the running export's) halves the image's size
+    (k = 2^n: 1 when off or the image fits), and its size (w, h)."""
     limit = _texture_limit[0]
+    if limit <= 0:
+        return 1, (0, 0)         # (img.size would load Blender's buffer of a file image)
     try:
         w, h = (int(v) for v in img.size)
     except (TypeError, ValueError):
-        return
-    if limit <= 0 or max(w, h) <= limit:
-        return
+        return 1, (0, 0)
     k = 1
-    while max(w, h) / k > limit:
+    while max(w, h) > limit * k:       # Cycles: max_size * scale > limit, scale /= 2
         k *= 2
+    return k, (w, h)
+
+
+def _stores_float32(img):
+    """Whether Cycles keeps the image's texels as 32-bit floats: Blender's float buffer (a
+    packed or generated float image) or a file of 32-bit float channels (not halves)."""
+    if not img.is_float:
+        return False
+    if _read_from_blender(img):
+        return True
+    import OpenImageIO as oiio
+    inp, spec = _open_straight(bpy.path.abspath(img.filepath_raw, library=img.library))
+    if inp is None:
+        return False
+    inp.close()
+    return all(f == oiio.FLOAT for f in (spec.channelformats or [spec.format]))
+
+
+def downscaled(texels, k):
+    """Cycles' Texture Limit downscale (util_image_resize_pixels at scale 1 / k) of (h, w, c)
+    float32 texels, row 0 at the bottom as Cycles stores them: (max(h // k, 1), max(w // k, 1), c),
+    each the float32 mean of its k x k block's texels inside the image, summed row by row in
+    float32 and times 1 / count, as Cycles' box filter."""
+    h, w, c = texels.shape
+    oh, ow = max(h // k, 1), max(w // k, 1)
+    acc = np.zeros((oh, ow, c), np.float32)
+    count = np.zeros((oh, ow, 1), np.float32)
+    for dy in range(k):
+        for dx in range(k):
+            rows, cols = np.arange(oh) * k + dy, np.arange(ow) * k + dx
+            inside = (rows < h)[:, None] & (cols < w)[None, :]
+            block = texels[np.minimum(rows, h - 1)][:, np.minimum(cols, w - 1)]
+            acc += np.where(inside[..., None], block, np.float32(0.0))
+            count += inside[..., None]
+    return acc * (np.float32(1.0) / count)
+
+
+def _texture_limited(texels, img, reasons):
+    """The image's texels as Cycles' Simplify > Texture Limit has them: downscaled where Cycles
+    keeps them as the scene-linear float32 texels DACRT reads (a float image), else as they are,
+    said (Cycles downscales its bytes or halves, which DACRT does not)."""
+    k, (w, h) = _limit_factor(img)
+    if k == 1 or texels is None:
+        return texels
+    # (a UDIM image's other tiles and a sequence's frame files are read elsewhere: said)
+    exact = (img.source in ('FILE', 'GENERATED') and type(texels) is ImageTexels and texels.stored is None
+             and texels.dtype == np.float32 and texels.ndim == 3 and np.isfinite(texels).all()
+             and _stores_float32(img))
+    if exact:
+        return ImageTexels(downscaled(np.asarray(texels.view(np.ndarray)), k))
     reasons.append(f"image '{img.name}' ({w}x{h}) is rendered at full size; Cycles' Simplify > Texture Limit "
-                   f"({limit}) renders it {max(w // k, 1)}x{max(h // k, 1)}, its detail averaged away")
+                   f"({_texture_limit[0]}) renders it {max(w // k, 1)}x{max(h // k, 1)}, its detail averaged away")
+    return texels
 
 
 def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
+    """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels
+    (_image_pixels), at the size Cycles' Simplify > Texture Limit renders it (_texture_limited)."""
+    return _texture_limited(_image_pixels(img, reasons, unassociate, user, frame), img, reasons)
+
+
+def _image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels.
     The colour is associated with alpha as Cycles stores the image (associates_alpha), or with
     `unassociate` divided by it again as Cycles' lookup does for a linked Alpha output. A
@@ -252,7 +309,6 @@ def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     (_stored_texels), which blends those and decodes after. `user`: the node's image user,
     which picks an image sequence's frame at the scene frame `frame` (the rendered scene's;
     imageuser.user_frame)."""
-    _over_texture_limit(img, reasons)
     if img.source == 'SEQUENCE':     # bpy holds no frame's pixels in background renders
         return _sequence_frame(img, reasons, unassociate, user, frame)
     if not _read_from_blender(img):

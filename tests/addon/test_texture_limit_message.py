@@ -1,9 +1,10 @@
 """Cycles' Simplify > Texture Limit renders an image bigger than the limit halved until it fits
 (a 512x512 texel-noise image at limit 128 renders in 4x4-texel blocks of one value each, its
-per-pixel spread 0.046 against 0.184 at full size; measured), which DACRT does not do: it had
-rendered the full-size image and said nothing. The render now names each such image, its size
-and Cycles' (an image texture and a world's environment), and says nothing when Simplify is
-off or the image fits."""
+per-pixel spread 0.046 against 0.184 at full size; measured). DACRT downscales float images so
+(tests/parity/test_texture_limit.py); an 8-bit one, which Cycles averages as bytes, it renders at
+full size, and had said nothing. The render now names each such image, its size and Cycles' (an
+image texture and a world's environment), and says nothing when Simplify is off or the image
+fits, or for a float image it downscales as Cycles."""
 import bpy
 import numpy as np
 import pytest
@@ -11,16 +12,25 @@ import pytest
 from . import scenes
 
 
-def _scene(scene, size, env=False):
+def _image(name, size, byte):
+    """A packed (size / 2) x size grey image, 8-bit or float."""
+    if not byte:
+        return scenes.float_image(name, np.full((size, size // 2, 4), 0.5, np.float32))
+    img = bpy.data.images.new(name, size // 2, size)
+    img.pixels.foreach_set(np.full(size * (size // 2) * 4, 0.5, np.float32))
+    img.pack()
+    return img
+
+
+def _scene(scene, size, env=False, byte=True):
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)
-    px = np.full((size, size // 2, 4), 0.5, np.float32)
     if env:
-        scenes.environment_world(scenes.float_image("Sky", px))
+        scenes.environment_world(_image("Sky", size, byte))
         scenes.plane("Floor", size=2.0)
     else:
         mat, nt, out = scenes._material("Textured")
         d, tex = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeTexImage')
-        tex.image = scenes.float_image("Noise", px)
+        tex.image = _image("Noise", size, byte)
         nt.links.new(tex.outputs['Color'], d.inputs['Color'])
         nt.links.new(d.outputs[0], out.inputs['Surface'])
         scenes.plane("Floor", size=2.0, materials=(mat,)).data.uv_layers.new(name="UVMap")
@@ -29,14 +39,17 @@ def _scene(scene, size, env=False):
     scene.dacrt.samples = 1
 
 
-@pytest.mark.parametrize('simplify, limit, size, env, said_size', [
-    (True, '128', 512, False, "(256x512) is rendered at full size; Cycles' Simplify > Texture Limit (128) renders it 64x128"),
-    (True, '256', 300, True, "(150x300) is rendered at full size; Cycles' Simplify > Texture Limit (256) renders it 75x150"),
-    (True, '512', 512, False, None),       # fits: Cycles renders it as it is
-    (False, '128', 512, False, None),      # Simplify off: the limit is not applied
+@pytest.mark.parametrize('simplify, limit, size, env, byte, said_size', [
+    (True, '128', 512, False, True, "(256x512) is rendered at full size; Cycles' Simplify > Texture Limit (128) "
+                                    "renders it 64x128"),
+    (True, '256', 300, True, True, "(150x300) is rendered at full size; Cycles' Simplify > Texture Limit (256) "
+                                   "renders it 75x150"),
+    (True, '128', 512, False, False, None),    # float: downscaled as Cycles
+    (True, '512', 512, False, True, None),     # fits: Cycles renders it as it is
+    (False, '128', 512, False, True, None),    # Simplify off: the limit is not applied
 ])
-def test_texture_limit_is_said_where_cycles_applies_it(scene, said, simplify, limit, size, env, said_size):
-    _scene(scene, size, env)
+def test_texture_limit_is_said_where_cycles_applies_it(scene, said, simplify, limit, size, env, byte, said_size):
+    _scene(scene, size, env, byte)
     scene.render.use_simplify = simplify
     scene.cycles.texture_limit_render = limit
     scenes.render_rgba(scene)
