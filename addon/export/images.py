@@ -277,19 +277,38 @@ def downscaled(texels, k):
     return acc * (np.float32(1.0) / count)
 
 
+def _downscaled_bytes(k8, k):
+    """Cycles' Texture Limit downscale of (h, w, c) uint8 texels as it stores them: each byte
+    read as b / 255 in float32, the block means (downscaled), cast back rounding to nearest and
+    clamped (util_image_cast_from_float)."""
+    mean = downscaled(k8.astype(np.float32) / np.float32(255.0), k)
+    # (a mean on a half-byte boundary can round the other way than Cycles' build does: a 4x4
+    # block's, where that is 1 in 16, ~0.7% of the texels one byte off; 2x2 blocks matched)
+    out = (np.float32(255.0) * mean + np.float32(0.5)).astype(np.int32)
+    out = np.where(mean > np.float32(1.0) - np.float32(0.5) / np.float32(255.0), 255, out)
+    return np.where(mean < 0, 0, out).astype(np.uint8)
+
+
 def _texture_limited(texels, img, reasons):
-    """The image's texels as Cycles' Simplify > Texture Limit has them: downscaled where Cycles
-    keeps them as the scene-linear float32 texels DACRT reads (a float image), else as they are,
-    said (Cycles downscales its bytes or halves, which DACRT does not)."""
+    """The image's texels as Cycles' Simplify > Texture Limit has them: downscaled where DACRT's
+    texels are what Cycles stores (a float image's 32-bit floats; an 8-bit image's bytes, kept
+    as such), else as they are, said (Cycles averages its halves or converted floats, which
+    DACRT does not hold)."""
     k, (w, h) = _limit_factor(img)
     if k == 1 or texels is None:
         return texels
     # (a UDIM image's other tiles and a sequence's frame files are read elsewhere: said)
-    exact = (img.source in ('FILE', 'GENERATED') and type(texels) is ImageTexels and texels.stored is None
-             and texels.dtype == np.float32 and texels.ndim == 3 and np.isfinite(texels).all()
-             and _stores_float32(img))
-    if exact:
+    single = img.source in ('FILE', 'GENERATED')
+    if single and type(texels) is ImageTexels and texels.stored is None and texels.dtype == np.float32 \
+            and texels.ndim == 3 and np.isfinite(texels).all() and _stores_float32(img):
         return ImageTexels(downscaled(np.asarray(texels.view(np.ndarray)), k))
+    stored = texels.stored if isinstance(texels, ByteTexels) else None
+    if single and isinstance(texels, ByteTexels) and texels.k8.ndim == 3 and (stored is None or (
+            stored.texels is texels.k8 and stored.then is None)):
+        k8 = _downscaled_bytes(texels.k8, k)
+        if stored is not None:
+            stored = EncodedTexels(k8, stored.srgb, stored.unassociate, stored.scale)
+        return ByteTexels(k8, texels.table, texels.alpha_table, stored)
     reasons.append(f"image '{img.name}' ({w}x{h}) is rendered at full size; Cycles' Simplify > Texture Limit "
                    f"({_texture_limit[0]}) renders it {max(w // k, 1)}x{max(h // k, 1)}, its detail averaged away")
     return texels
