@@ -15,6 +15,7 @@ from .attributemaps import marked_label
 from .bump import needs_object_maps
 from .errors import ExportCancelled
 from .objectinfo import OBJECT_INFO
+from .usedindices import used_indices
 
 # The largest world coordinate a vertex may have: half float32's range, so that the edges and
 # the hit points of its triangles stay finite in float32 (a triangle at 2e38 failed the render
@@ -618,7 +619,7 @@ class Assembly:
             points = bool(getattr(self.meshes[key], 'radial_normals', False))
             # (a mesh of one slot, most of them, without numpy: two np.unique calls per object
             # had been a third of this for thousands of separate objects)
-            slots_used = None if slot is None else np.unique(slot)
+            slots_used = None if slot is None else used_indices(slot, 0)
             # placements sharing their slots list (the instances of one object, 100K of them in
             # a scattered forest: _walk_instances) share one map, read-only from here on
             maps = {}

@@ -28,6 +28,7 @@ from .aovs import shader_aovs
 from .settings import cycles_glossy_messages, export_settings
 from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, strand_kind, tessellate,
                       triangle_count)
+from .usedindices import used_indices
 from .world import effective_world, export_world, world_visibility
 
 # object types that render as geometry (curves, surfaces, text, metaballs through their mesh)
@@ -879,7 +880,7 @@ class Exporter:
         with its specular layer). Sheen and a Toon's Diffuse component are diffuse in Cycles."""
         if len(geometry.material) and not geometry.material.all():
             return True
-        used = np.unique(geometry.material)
+        used = used_indices(geometry.material, len(self.materials.materials))
         return any(self.materials.materials[k].glossy for k in used if 0 < k < len(self.materials.materials))
 
     def _glossy_kinds(self, geometry):
@@ -888,13 +889,15 @@ class Exporter:
         0.5, a sharp glossy reflection), and whether triangles of a material with transmission
         are seen by bounce rays but not by shadow rays (those rays cross their clear twin)."""
         mats = self.materials.materials
-        used = np.unique(geometry.material)
+        used = used_indices(geometry.material, len(self.materials.materials))
         kinds = set(('reflect', 'sharp') if len(used) and used[0] == 0 else ())
         glass = np.zeros(len(mats), bool)
         for k in used.tolist():
             if 0 < k < len(mats):
                 kinds.update(mats[k].glossy_kinds)
                 glass[k] = 'transmit' in mats[k].glossy_kinds and not mats[k].clear_twin
+        if not glass.any():     # (no transmitting material: no triangle to look at)
+            return frozenset(kinds), False
         vis = geometry.visibility[glass[geometry.material]] if len(geometry.material) else geometry.visibility
         clear = bool(np.any(((vis & sd.VIS_DIFFUSE) != 0) & ((vis & sd.VIS_SHADOW) == 0)))
         return frozenset(kinds), clear
