@@ -92,6 +92,25 @@ def _imprecision(boxes, origin):
     return float(ratio[order][min(np.searchsorted(w, 0.5 * w[-1]), len(w) - 1)]), float(big.max())
 
 
+def _median_above(boxes, origin, limit) -> bool:
+    """Whether _imprecision(boxes, origin)'s weighted median exceeds limit, without its sort
+    where the weights settle it: the median lies above limit exactly when the boxes at or below
+    it hold less than half the weight in the sorted cumulative sum. Summed in another order the
+    two sums differ by rounding only (~n ULPs of the total, n <= _SAMPLE), so a difference from
+    half beyond 1e-9 of the total decides; closer ones (and no weight) take the sort."""
+    lo, hi, side, weight = boxes
+    big = _largest(np.maximum(np.abs(lo - origin), np.abs(hi - origin)))
+    ratio = float(OFFSET_ULPS) * np.spacing(big.astype(F32)).astype(np.float64) / side
+    total = float(weight.sum())
+    below = float(weight[ratio <= limit].sum())
+    margin = 1e-9 * total
+    if total > 0 and below >= 0.5 * total + margin:
+        return False
+    if total > 0 and below <= 0.5 * total - margin:
+        return True
+    return _imprecision(boxes, origin)[0] > limit
+
+
 def recentred(sd: SceneData):
     """The scene translated for float32 shading, that offset (float64), and a warning (or None)
     when precision cannot be had.
@@ -127,21 +146,20 @@ def recentred(sd: SceneData):
     eye = np.asarray(sd.camera.matrix, np.float64)[:3, 3]
     near = _camera_cluster(np.asarray(v, np.float64), eye) if np.isfinite(eye).all() and len(tri) else None
     boxes = None if near is None else _near_boxes(v, tri, near, eye)
-    if boxes is not None:
+    # Weighed only when the origin is not good enough already: most scenes, which the weights
+    # settle without the weighted median's sort (_median_above)
+    if boxes is not None and _median_above(boxes, origin, _WARN_STEP / _GAIN):
         kept = _imprecision(boxes, origin)
         # the cluster's centre, or the camera where it does much better (a camera amid a large
-        # cluster); the centre first, as it stays put while the camera moves through a scene.
-        # Weighed only when the origin is not good enough already: most scenes (a third of
-        # this check's ~5 ms on a 100K-triangle frame, which a 4-spp render spends ~0.07 s on)
-        if kept[0] > _WARN_STEP / _GAIN:
-            clo, chi = (lo, hi) if near.all() else (v[near].min(axis=0).astype(np.float64),
-                                                     v[near].max(axis=0).astype(np.float64))
-            centre = 0.5 * (clo + chi)
-            at_centre, at_eye = _imprecision(boxes, centre)[0], _imprecision(boxes, eye)[0]
-            candidate, score = (eye, at_eye) if _GAIN * at_eye < at_centre else (centre, at_centre)
-            if kept[0] > _GAIN * score:
-                origin = candidate
-                kept = _imprecision(boxes, origin)
+        # cluster); the centre first, as it stays put while the camera moves through a scene
+        clo, chi = (lo, hi) if near.all() else (v[near].min(axis=0).astype(np.float64),
+                                                 v[near].max(axis=0).astype(np.float64))
+        centre = 0.5 * (clo + chi)
+        at_centre, at_eye = _imprecision(boxes, centre)[0], _imprecision(boxes, eye)[0]
+        candidate, score = (eye, at_eye) if _GAIN * at_eye < at_centre else (centre, at_centre)
+        if kept[0] > _GAIN * score:
+            origin = candidate
+            kept = _imprecision(boxes, origin)
         if kept[0] > _WARN_STEP:
             world = float(np.maximum(np.abs(boxes[0]), np.abs(boxes[1])).max())
             where = f"{kept[1]:.3g}" if not origin.any() else \

@@ -1,0 +1,87 @@
+"""The set-up's fixed cost on every render (sceneprep.recentred): a scene whose origin already
+keeps float32 precise is told so without sorting the sampled triangles for the weighted median
+of their step / size (_imprecision's argsort, a fifth of the check on the 100K-triangle dragon);
+the decision is the sort's, exactly (_median_above against _imprecision)."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from addon import sceneprep
+from addon.sceneprep import _imprecision, _median_above, recentred
+
+from .scenes import ALL_VIS, cornell_box, geometry, icosphere
+from ..stress.test_far_scenes import room
+
+
+@pytest.fixture
+def argsorts(monkeypatch):
+    """The lengths of the arrays np.argsort sorts during the test."""
+    sizes = []
+    real = np.argsort
+
+    def recording(a, *args, **kw):
+        sizes.append(int(np.size(a)))
+        return real(a, *args, **kw)
+    monkeypatch.setattr(np, 'argsort', recording)
+    return sizes
+
+
+def _sphere_scene(offset):
+    """A fine icosphere (5120 triangles) around offset, seen by the Cornell box's camera."""
+    v, t = icosphere(1.0, subdiv=4, center=offset)
+    return replace(cornell_box(), geometry=geometry([(v, t, 1, ALL_VIS)]))
+
+
+@pytest.mark.parametrize('make', [cornell_box, room, lambda: _sphere_scene((0.0, 0.0, 0.0))],
+                         ids=['cornell', 'room', 'sphere'])
+def test_a_precise_scene_is_not_sorted(make, argsorts):
+    scene = make()
+    out, origin, warning = recentred(scene)
+    assert out is scene and not origin.any() and warning is None
+    assert argsorts == [], argsorts
+
+
+def test_a_far_scene_still_weighs_its_origins(argsorts):
+    """Where the origin is not good enough (the room 1e5 away with an outlier across the
+    origin), the medians are sorted and the camera's surroundings chosen, as before."""
+    out, origin, warning = recentred(room(1e5, outlier=True))
+    assert argsorts and origin.any() and warning is None
+
+
+def _boxes(rng, n, spread):
+    lo = rng.normal(0.0, spread, (n, 3)) + rng.choice([0.0, 1e3, 1e5], n)[:, None]
+    side = np.exp(rng.normal(-3.0, 2.0, n))
+    hi = lo + side[:, None] * rng.uniform(0.2, 1.0, (n, 3))
+    side = sceneprep._largest(hi - lo)
+    weight = rng.uniform(0.0, 1.0, n) ** 4
+    return lo, hi, side, weight
+
+
+@pytest.mark.parametrize('seed', range(6))
+def test_median_above_is_the_sorted_median_compared(seed):
+    rng = np.random.default_rng(seed)
+    n = [1, 2, 7, 300, 5000, 16384][seed]
+    boxes = _boxes(rng, n, 10.0)
+    origin = np.zeros(3) if seed % 2 else rng.normal(0.0, 1e3, 3)
+    median = _imprecision(boxes, origin)[0]
+    lo, hi, side, weight = boxes
+    big = sceneprep._largest(np.maximum(np.abs(lo - origin), np.abs(hi - origin)))
+    ratios = float(sceneprep.OFFSET_ULPS) * np.spacing(big.astype(np.float32)).astype(np.float64) / side
+    # every ratio as the limit (ties at the median itself), its neighbours and far ones
+    limits = np.concatenate([ratios, np.nextafter(ratios, 0), np.nextafter(ratios, np.inf), [0.0, 1e300]])
+    for limit in limits[:3000]:
+        assert _median_above(boxes, origin, limit) == (median > limit), (limit, median)
+
+
+def test_median_above_at_an_exact_half_and_without_weight():
+    """Two boxes of equal weight: the cumulative sum meets half at the first, the median is
+    its ratio; all weights zero (underflowed): the smallest ratio, as the sort gives."""
+    lo = np.array([[0.0, 0, 0], [0.0, 0, 0]])
+    for weight in (np.array([1.0, 1.0]), np.array([0.0, 0.0]), np.array([1.0, 3.0]), np.array([3.0, 1.0])):
+        hi = np.array([[1.0, 1, 1], [1e-3, 1e-3, 1e-3]])
+        boxes = (lo, hi, sceneprep._largest(hi - lo), weight)
+        median = _imprecision(boxes, np.zeros(3))[0]
+        for limit in (0.0, median, np.nextafter(median, 0), np.nextafter(median, 1), 1.0):
+            assert _median_above(boxes, np.zeros(3), limit) == (median > limit), (weight, limit)
