@@ -191,7 +191,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._check_break = check_break or (lambda: False)
         validate(scene_data)
         given = scene_data
-        scene_data, self.origin, imprecise = recentred(scene_data)
+        sampled = {}     # (what huge_surfaces reuses of recentred's sample of the triangles)
+        scene_data, self.origin, imprecise = recentred(scene_data, sampled)
         self.messages: list = [('WARNING', imprecise)] if imprecise else []
         rounded = rounded_strands(given, self.origin)
         if rounded is not None:
@@ -248,7 +249,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         scene_data, self._twins_skipped = self._without_clear_twins(scene_data)
         self.tri = Triangles(scene_data.geometry, self.messages, self._poll)
         # surfaces whose step is a sizeable share of the objects on them (a huge ground plane)
-        self.messages += [('WARNING', text) for text in huge_surfaces(scene_data, self.origin, self.tri.geo)]
+        self.messages += [('WARNING', text)
+                          for text in huge_surfaces(scene_data, self.origin, self.tri.geo, sampled)]
         self._poll()
         # per AOV the images that write to it: (rows they fill, [(material, texture, ...)])
         self._aov_images = {AOV_PREFIX + name: (3 if kind == 'COLOR' else 1,
@@ -398,6 +400,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         (line_crossings); otherwise each triangle counts. SKIP_WORK off: always kept."""
         geometry = scene_data.geometry
         twin = np.array([bool(getattr(m, 'clear_twin', False)) for m in scene_data.materials], bool)
+        if not twin.any():      # (no twin material: no per-triangle pass)
+            return scene_data, 0
         mat = np.asarray(geometry.material, np.int64)
         vis = np.asarray(geometry.visibility, np.uint8)
         is_twin = twin[mat] if len(twin) else np.zeros(len(mat), bool)

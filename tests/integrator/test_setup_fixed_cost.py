@@ -85,3 +85,59 @@ def test_median_above_at_an_exact_half_and_without_weight():
         median = _imprecision(boxes, np.zeros(3))[0]
         for limit in (0.0, median, np.nextafter(median, 0), np.nextafter(median, 1), 1.0):
             assert _median_above(boxes, np.zeros(3), limit) == (median > limit), (weight, limit)
+
+
+def _huge_scenes():
+    """Scenes the huge-surface check says something about and scenes it does not: planes of
+    half-size 10 .. 1e6 under a box (at the origin, 1e5 away), a far mountain, a box seen from
+    afar, the Cornell box, a fine sphere, and a vertex at infinity in a plane's corner."""
+    from ..stress.test_huge_ground_plane_warning import scene
+    out = [scene(h) for h in (10.0, 1e3, 1e4, 1e5, 1e6)]
+    out += [scene(1e6, offset=1e5), scene(10.0, mountain_at=1e5), scene(1e6, eye=(0.0, -1e5, 2e4)),
+            cornell_box(width=8, height=6, samples=1), _sphere_scene((0.0, 0.0, 0.0))]
+    broken = scene(1e5)
+    v = np.array(broken.geometry.vertices)
+    v[0] = np.inf
+    out.append(replace(broken, geometry=replace(broken.geometry, vertices=v)))
+    return out
+
+
+@pytest.mark.parametrize('k', range(11))
+def test_huge_surfaces_says_the_same_from_recentred_sample(k):
+    """huge_surfaces with what recentred found of its sample: the same warnings as on its own."""
+    from addon.surfacetables import Triangles
+    data = _huge_scenes()[k]
+    found = {}
+    moved, origin, _ = recentred(data, found)
+    geo = Triangles(moved.geometry, []).geo
+    alone = sceneprep.huge_surfaces(moved, origin, geo)
+    assert sceneprep.huge_surfaces(moved, origin, geo, found) == alone
+    if k == 3:
+        assert len(alone) == 1     # (the 1e5 plane under the box is said)
+    if origin.any():
+        assert found == {}         # (moved vertices: nothing of the sample reused)
+
+
+def test_an_ordinary_render_samples_the_triangles_once(monkeypatch):
+    """The Integrator's set-up of a scene around the origin: huge_surfaces takes recentred's
+    smallest face instead of gathering and sizing the same sample again."""
+    from addon import integrator
+    sized, inside = [], []
+    real_largest, real_huge = sceneprep._largest, integrator.huge_surfaces
+
+    def counting(a):
+        if inside:
+            sized.append(len(a))
+        return real_largest(a)
+
+    def huge(*args, **kw):
+        inside.append(True)
+        try:
+            return real_huge(*args, **kw)
+        finally:
+            inside.pop()
+    monkeypatch.setattr(sceneprep, '_largest', counting)
+    monkeypatch.setattr(integrator, 'huge_surfaces', huge)
+    integ = integrator.Integrator(_sphere_scene((0.0, 0.0, 0.0)))
+    assert not [m for m in integ.messages if 'off the surface' in m[1]]
+    assert sized == [], sized
