@@ -262,7 +262,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if holdout.any():    # a Holdout material acts as object holdout does for camera rays
             seen = (self.tri.visibility & VIS_CAMERA) != 0
             self.tri.visibility |= np.where(seen & holdout[self.tri.material], HOLDOUT, 0).astype(np.uint8)
-        self._tri_emissive = self.mats.emissive[self.tri.material] & (self.tri.area > 0)
+        self._tri_emissive = self._per_triangle(self.mats.emissive) & (self.tri.area > 0)
         # glass passes count against their own limit, as Cycles' transmission bounces (12, where
         # Transparent's 8 had cut a path at its fourth pane: a wall behind three boxes of glass
         # 0.34 where Cycles gives 0.80); a pass through glass is no transparent pass
@@ -271,7 +271,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # contribution's absolute channel sum, 3 x the setting; 0 is none
         self._clamps = tuple(_clamp_limit(name, getattr(s, name, 0.0))
                              for name in ('sample_clamp_direct', 'sample_clamp_indirect'))
-        self._tri_transparent = self.mats.transparent[self.tri.material] & (self.tri.visibility != 0)
+        self._tri_transparent = self._per_triangle(self.mats.transparent) & (self.tri.visibility != 0)
         # materials whose passes count as glass: mostly refraction (Glass, Refraction, Principled
         # transmission), the rest as transparent
         self._mat_glass = 2.0 * self.mats.refraction.mean(axis=0) > self.mats.transparency.mean(axis=0)
@@ -291,14 +291,13 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             [self.transparent and (not getattr(s, 'film_transparent_glass', False)
                                    or float(getattr(m, 'glass_roughness', 0.0)) > threshold)
              for m in scene_data.materials], bool)
-        self._glass_film = bool((refracts & self._film_refracts)
-                                [self.tri.material][self._tri_transparent].any())
+        self._glass_film = bool((self._per_triangle(refracts & self._film_refracts) & self._tri_transparent).any())
         # Rays past glass are Cycles' transmission rays: they see objects by their Transmission
         # visibility and no holdout. Passes pick glass or clear transparency (as under a
         # transparent film) only where that changes what they see: glass in the scene and some
         # object seen differently by transmission rays than by camera or diffuse rays, or held out
         vis = self.tri.visibility
-        glass = refracts[self.tri.material] & self._tri_transparent
+        glass = self._per_triangle(refracts) & self._tri_transparent
         self._tri_transmit = ((vis & NO_TRANSMISSION) == 0) & ((vis & ~np.uint8(NO_TRANSMISSION)) != 0)
         self._any_glass = bool(glass.any())
         self._transmit_split = self._any_glass and bool(
@@ -322,7 +321,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._sided = self.mats.reads_side
         # diffuse transmission (Translucent BSDF): continue_paths multiplies in 1 on such
         # triangles, _translucent_hits and _choose_lobes then weigh the lobes
-        tri_translucent = self.mats.translucent[self.tri.material]
+        tri_translucent = self._per_triangle(self.mats.translucent)
         self._any_translucent = bool(tri_translucent.any())
         self._tri_live = (max3(self._tri_albedo) > 0) | tri_translucent
         self._tri_scatter = self._tri_albedo
@@ -381,6 +380,12 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._weight_lights()
         self._build_seconds = time.perf_counter() - t_build
         self._setup_seconds = time.perf_counter() - t_start
+
+    def _per_triangle(self, flags):
+        """A per-material bool array at each triangle; without any flag set (most scenes: no
+        emissive, transparent or translucent material) no gather over the triangles."""
+        flags = np.asarray(flags)
+        return flags[self.tri.material] if flags.any() else np.zeros(len(self.tri.material), bool)
 
     def _without_clear_twins(self, scene_data):
         """(scene_data, triangles left out): without the clear twins of ray-type-mix materials

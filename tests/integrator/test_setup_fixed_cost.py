@@ -11,7 +11,7 @@ import pytest
 from addon import sceneprep
 from addon.sceneprep import _imprecision, _median_above, recentred
 
-from .scenes import ALL_VIS, cornell_box, geometry, icosphere
+from .scenes import ALL_VIS, cornell_box, geometry, icosphere, material
 from ..stress.test_far_scenes import room
 
 
@@ -141,3 +141,26 @@ def test_an_ordinary_render_samples_the_triangles_once(monkeypatch):
     integ = integrator.Integrator(_sphere_scene((0.0, 0.0, 0.0)))
     assert not [m for m in integ.messages if 'off the surface' in m[1]]
     assert sized == [], sized
+
+
+def test_flags_no_material_has_are_not_gathered_per_triangle(monkeypatch):
+    """The set-up's per-triangle flags (emissive, transparent, refracting, translucent) where
+    no material has the flag: no gather over the triangles, the same all-False arrays."""
+    from addon import integrator
+    gathered = []
+    real = integrator.Integrator._per_triangle
+
+    def per_triangle(self, flags):
+        out = real(self, flags)
+        gathered.append(bool(np.asarray(flags).any()))
+        return out
+    monkeypatch.setattr(integrator.Integrator, '_per_triangle', per_triangle)
+    plain = replace(_sphere_scene((0.0, 0.0, 0.0)), materials=[material('default'), material('grey', (0.5,) * 3)])
+    integ = integrator.Integrator(plain)
+    assert gathered and not any(gathered), gathered
+    assert not integ._tri_emissive.any() and not integ._tri_transparent.any()
+    assert integ._tri_emissive.dtype == bool and len(integ._tri_emissive) == len(integ.tri)
+    # and where one has it, its triangles (the Cornell box's ceiling light)
+    box = integrator.Integrator(cornell_box())
+    want = box.mats.emissive[box.tri.material] & (box.tri.area > 0)
+    assert want.any() and np.array_equal(box._tri_emissive, want)
