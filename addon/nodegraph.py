@@ -49,10 +49,18 @@ class GraphNode:
         return _Inputs(self.node.inputs, self.groups)
 
 
+# the Curves Info and Point Info outputs Cycles' kernel computes itself, not from an attribute
+# (svm_node_hair_info, svm_node_point_info), read as standard attributes under these names,
+# which no Blender attribute can have (a NUL in them): export/meshes.py STANDARD_INFO
+CURVE_IS_STRAND, CURVE_THICKNESS, POINT_RADIUS = ('\x00Curves Info Is Strand', '\x00Curves Info Thickness',
+                                                  '\x00Point Info Radius')
 # Curves Info and Point Info outputs Cycles reads as standard attributes of curves and points
-# (HairInfoNode / PointInfoNode::compile: ATTR_STD_CURVE_INTERCEPT, ...; 0 on other geometry)
+# (HairInfoNode / PointInfoNode::compile: ATTR_STD_CURVE_INTERCEPT, ...; 0 on other geometry),
+# and those above
 INFO_ATTRIBUTES = {('HAIR_INFO', 'Intercept'): 'curve_intercept', ('HAIR_INFO', 'Length'): 'curve_length',
-                   ('HAIR_INFO', 'Random'): 'curve_random', ('POINT_INFO', 'Random'): 'point_random'}
+                   ('HAIR_INFO', 'Random'): 'curve_random', ('POINT_INFO', 'Random'): 'point_random',
+                   ('HAIR_INFO', 'Is Strand'): CURVE_IS_STRAND, ('HAIR_INFO', 'Thickness'): CURVE_THICKNESS,
+                   ('POINT_INFO', 'Radius'): POINT_RADIUS}
 
 
 class StandardAttributeNode(GraphNode):

@@ -7,6 +7,8 @@ import functools
 
 import numpy as np
 
+from ..nodegraph import CURVE_IS_STRAND, CURVE_THICKNESS, POINT_RADIUS
+
 
 # Triangles from which a mesh of quads is tessellated in numpy (_quad_corner_tris, ~15 ns a
 # triangle plus ~100 us of calls) rather than read from loop_triangles (~90 ns a triangle):
@@ -609,10 +611,16 @@ class MeshArrays:
     def _standard_corners(self, std, fac):
         """corner_attribute of Cycles' standard attribute `std` (STANDARD_OF): Generated
         coordinates (g, 1), the active render UV map (u, v, 0, 1) (its Fac u: a 2D vector's);
-        None for the others on a mesh (a tessellated point cloud or hair reads Cycles' own
+        the Curves and Point Info outputs of STANDARD_INFO 0 on a mesh, as Cycles' kernel
+        gives them there; None for the others on a mesh (a tessellated point cloud or hair
+        reads those and Cycles' own
         'curve_intercept', 'curve_length', 'curve_random' and 'point_random', made by
         strands.StandardAttributes, and its attribute of the name for the others, as before; a
         Color Attribute node naming them reads its attribute of the name, never Cycles' own)."""
+        if std in STANDARD_INFO and not (self.mesh is None and self.strand is not None):
+            out = np.zeros((len(self.triangles), 3, 4), np.float32)     # 0 on a mesh, as in Cycles
+            out[..., 3] = 1.0
+            return out
         if std not in STANDARD_READ:
             if self.mesh is None and self.strand is not None:
                 # Cycles' own of curves and points (strands.StandardAttributes: numbers, so
@@ -817,12 +825,16 @@ STANDARD_EMPTY = frozenset({'color', 'density', 'flame', 'heat', 'temperature', 
                             'velocity_y', 'velocity_z', 'curve_intercept', 'curve_length', 'curve_random',
                             'point_random', 'particle', 'shadow_transparency', 'undeformed', 'undisplaced',
                             'undisplaced_N', 'ptex_face_id', 'ptex_uv'})
+# the Curves Info and Point Info outputs Cycles' kernel computes (nodegraph's names: Is Strand 1
+# on curves, Thickness twice the radius interpolated along the segment, a point's Radius; 0 on
+# any other geometry)
+STANDARD_INFO = frozenset({CURVE_IS_STRAND, CURVE_THICKNESS, POINT_RADIUS})
 # ('P', 'radius' and 'vertex_color' are standard names too, but Cycles reads a mesh's attribute
 # of those names: read as any other)
-STANDARD_NAMES = STANDARD_READ | STANDARD_UNREAD | STANDARD_EMPTY
+STANDARD_NAMES = STANDARD_READ | STANDARD_UNREAD | STANDARD_EMPTY | STANDARD_INFO
 # one value at every corner of a curve's or point's triangles (0 on a mesh): nodes applied at
 # the corners before interpolating give Cycles' own values
-STANDARD_PER_PRIMITIVE = frozenset({'curve_length', 'curve_random', 'point_random'})
+STANDARD_PER_PRIMITIVE = frozenset({'curve_length', 'curve_random', 'point_random', CURVE_IS_STRAND, POINT_RADIUS})
 
 
 def per_primitive(name):
@@ -853,7 +865,8 @@ def attribute_label(key):
     """The attribute a key of attribute_key or color_attribute_key names, as a message says it."""
     name = key.removeprefix(FAC_OF).removeprefix(COLOR_STANDARD_OF)
     if name.startswith(STANDARD_OF):
-        return f"Cycles' standard attribute '{name[len(STANDARD_OF):]}'"
+        std = name[len(STANDARD_OF):]
+        return f"the {std[1:]} output" if std in STANDARD_INFO else f"Cycles' standard attribute '{std}'"
     return f"attribute '{name}'" if name else "the render colour attribute"
 
 

@@ -6,10 +6,11 @@ Part of the export layer."""
 import numpy as np
 
 from .. import hair, pointcloud
+from ..nodegraph import CURVE_IS_STRAND, CURVE_THICKNESS
 from ..procedural import hash_uint2_to_float
 from ..texture import srgb_to_linear
 from .errors import ExportCancelled
-from .meshes import FAC_OF, STANDARD_OF, MeshArrays, attribute_rows, fac_rows
+from .meshes import FAC_OF, STANDARD_INFO, STANDARD_OF, MeshArrays, attribute_rows, fac_rows
 
 # why an attribute hair particles' materials name reads 0 (as in Cycles)
 HAIR_UNREAD = ("no Face Corner Byte Color attribute {name!r} on the emitter (hair particles read only those, at "
@@ -31,15 +32,36 @@ class StandardAttributes(dict):
     reads none of them, as in Cycles), as Cycles computes them in place of any attribute of the name
     (blender/curves.cpp, pointcloud.cpp): a key's length along its curve's key chords over the
     curve's, the curve's length, hash_uint2_to_float(curve or point index, 0). They had read 0,
-    said to be as in Cycles, where Cycles gives the root-to-tip gradient."""
+    said to be as in Cycles, where Cycles gives the root-to-tip gradient. And the Curves Info
+    and Point Info outputs Cycles' kernel computes (meshes.STANDARD_INFO), from the keys'
+    radii: Is Strand 1 on curves, Thickness 2 r interpolated between a segment's keys
+    (curve_thickness), a point's Radius r (point_radius); 0 on the other kind. Cycles gives
+    the radius in world space as |M (r, r, r) / sqrt(3)| (M: the object's linear part;
+    measured: a (0.5, 1, 1) scale 0.868x the unscaled value): `matrix` is the reading object's
+    (an instance of it at another scale reads that object's). They had stood at the input's
+    own value: Thickness 17x Cycles, Is Strand 1 on a mesh."""
 
-    def __init__(self, own, positions, offsets=None):
+    def __init__(self, own, positions, offsets=None, radii=None, matrix=None):
         super().__init__(own)
-        self._positions, self._offsets = positions, offsets
+        self._positions, self._offsets, self._radii = positions, offsets, radii
+        linear = np.eye(3) if matrix is None else np.asarray(matrix, np.float64)[:3, :3]
+        self._radius_scale = float(np.linalg.norm(linear.sum(axis=1))) / np.sqrt(3.0)
         self._made = set()          # the standard names made (or found not to apply) so far
+
+    def _info(self, name):
+        """(domain, rows) of a STANDARD_INFO output on these points or curves."""
+        n, curves = len(self._positions), self._offsets is not None
+        r = np.zeros(n) if self._radii is None else np.asarray(self._radii, np.float64) * self._radius_scale
+        if name == CURVE_IS_STRAND:
+            return ('CURVE', _rows(np.ones(len(self._offsets) - 1))) if curves else ('POINT', _rows(np.zeros(n)))
+        if name == CURVE_THICKNESS:
+            return 'POINT', _rows(2.0 * r if curves else np.zeros(n))
+        return 'POINT', _rows(np.zeros(n) if curves else r)
 
     def _standard(self, name):
         p, off = self._positions, self._offsets
+        if name in STANDARD_INFO:
+            return self._info(name)
         if off is None:
             return ('POINT', _rows(hash_uint2_to_float(np.arange(len(p)), 0))) if name == 'point_random' else None
         if name == 'curve_random':
@@ -75,7 +97,7 @@ class StandardAttributes(dict):
 
 
 # Cycles' standard attributes of curves and points StandardAttributes makes
-STANDARD_STRAND = frozenset({'curve_intercept', 'curve_length', 'curve_random', 'point_random'})
+STANDARD_STRAND = frozenset({'curve_intercept', 'curve_length', 'curve_random', 'point_random'}) | STANDARD_INFO
 
 
 def hair_systems(ob):
@@ -234,7 +256,8 @@ def hair_arrays(ob, notes):
         return None
     positions, radii = np.concatenate(positions), np.concatenate(radii)
     attributes = StandardAttributes({name: ('CURVE', np.concatenate(rows).astype(np.float32))
-                                     for name, rows in vcols.items()}, positions, np.array(offsets))
+                                     for name, rows in vcols.items()}, positions, np.array(offsets), radii,
+                                    to_world)
     src = StrandSource('HAIR', ob.name, positions, radii, np.array(offsets), attributes=attributes)
     src.curve_slot = np.concatenate(slots)
     src.texspace = (np.array(me.texspace_location, np.float64), np.array(me.texspace_size, np.float64))
@@ -300,14 +323,15 @@ def read_strands(ob, notes):
     if ob.type == 'POINTCLOUD':
         radii = np.full(len(positions), pointcloud.DEFAULT_RADIUS) if radii is None else radii
         return StrandSource('POINTCLOUD', ob.name, positions, radii,
-                            attributes=StandardAttributes(attributes, positions), render_color=render_color)
+                            attributes=StandardAttributes(attributes, positions, radii=radii, matrix=ob.matrix_world),
+                            render_color=render_color)
     radii = np.full(len(positions), hair.DEFAULT_RADIUS) if radii is None else radii
     offsets = np.empty(len(data.curves) + 1, np.int32)
     data.curve_offset_data.foreach_get('value', offsets)
     types = data.attributes.get('curve_type')        # absent: all Catmull-Rom
     linear = types is not None and _all_poly(types, len(data.curves))
     src = StrandSource('CURVES', ob.name, positions, radii, offsets, linear,
-                       StandardAttributes(attributes, positions, offsets), render_color)
+                       StandardAttributes(attributes, positions, offsets, radii, ob.matrix_world), render_color)
     # Cycles' UV of curves is their 'surface_uv_coordinate' on curves (ATTR_STD_UV); a UV Map
     # node reads any 2D vector attribute by its name
     surface = 'surface_uv_coordinate'

@@ -1,7 +1,12 @@
 """The Curves Info node's Intercept, Length and Random and the Point Info node's Random, read
 as Cycles compiles them: its standard attributes 'curve_intercept', 'curve_length',
 'curve_random' and 'point_random' (nodegraph.StandardAttributeNode; computed on strands by
-export/strands.py StandardAttributes, 0 on a mesh), against Cycles.
+export/strands.py StandardAttributes, 0 on a mesh), against Cycles. And the outputs Cycles'
+kernel computes, read the same way (meshes.STANDARD_INFO): Curves Info Is Strand and
+Thickness, Point Info Radius, in world units on a scaled object.
+
+Those had stood at the input's own value too: Thickness 0.407 where Cycles renders 0.0243,
+Radius 0.191 where Cycles renders 0.0152, Is Strand 1 on a mesh (0.26 where Cycles is black).
 
 They had not been evaluated: the linked input's own value stood in (a Color Ramp's Factor 0.5)
 for every strand and point, said only as "value from 'Curves Info' node; its own value used":
@@ -43,6 +48,16 @@ def _sphere(material):
     bpy.context.active_object.data.materials.append(material)
 
 
+def _scaled(build, scale):
+    """build, then every object but the camera scaled by `scale` (world radii differ)."""
+    def scaled(material):
+        build(material)
+        for ob in bpy.context.scene.objects:
+            if ob.type != 'CAMERA':
+                ob.scale = scale
+    return scaled
+
+
 CASES = {
     'curves_intercept': (_curves, 'ShaderNodeHairInfo', 'Intercept', 1.0),
     'curves_length': (_curves, 'ShaderNodeHairInfo', 'Length', 0.8),
@@ -50,6 +65,15 @@ CASES = {
     'particles_intercept': (_particles, 'ShaderNodeHairInfo', 'Intercept', 1.0),
     'points_random': (_points, 'ShaderNodePointInfo', 'Random', 1.0),
     'mesh_curves_random': (_sphere, 'ShaderNodeHairInfo', 'Random', 1.0),      # 0 on a mesh
+    'curves_is_strand': (_curves, 'ShaderNodeHairInfo', 'Is Strand', 0.7),
+    'mesh_is_strand': (_sphere, 'ShaderNodeHairInfo', 'Is Strand', 1.0),         # 0 on a mesh
+    'points_is_strand': (_points, 'ShaderNodeHairInfo', 'Is Strand', 1.0),       # 0 on points
+    'curves_thickness': (_curves, 'ShaderNodeHairInfo', 'Thickness', 12.0),
+    'curves_thickness_scaled': (_scaled(_curves, (0.5, 1, 1.2)), 'ShaderNodeHairInfo', 'Thickness', 12.0),
+    'particles_thickness': (_particles, 'ShaderNodeHairInfo', 'Thickness', 10.0),     # tapered
+    'points_radius': (_points, 'ShaderNodePointInfo', 'Radius', 8.0),
+    'points_radius_scaled': (_scaled(_points, (0.6, 1, 1)), 'ShaderNodePointInfo', 'Radius', 8.0),
+    'curves_point_radius': (_curves, 'ShaderNodePointInfo', 'Radius', 8.0),     # 0 on curves
 }
 
 
