@@ -269,12 +269,14 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
     goes with it. A text Cycles cannot load gives 100 x Strength in every direction there
     (kernel_ies_interp of an invalid slot), rendered so and said, naming the light and the
     file. None where it cannot be applied (said in reasons, the node then standing at its
-    own value as before): a point, spot or area light, one such node, its Vector unlinked (the
-    default: the direction from the light in its object space)."""
+    own value as before): a point, spot, area or sun light, one such node, its Vector unlinked
+    (the default: the direction from the light in its object space). A sun's profile goes per
+    direction over its cone as the others' (it had been left out, the light 1/70 of Cycles'
+    under a downlight profile); a delta sun's is one factor, its limit (ies.ies_sun_mean)."""
     shown = ', '.join(f"'{n.name}'" for n in nodes)
     why = None
-    if light.type not in ('POINT', 'SPOT', 'AREA'):
-        why = f"IES profiles are applied to point, spot and area lights; this is a {light.type.lower()} light"
+    if light.type not in ('POINT', 'SPOT', 'AREA', 'SUN'):
+        why = f"IES profiles are applied to point, spot, area and sun lights; this is a {light.type.lower()} light"
     elif len(nodes) > 1:
         why = "more than one IES Texture feeds its emission"
     elif nodes[0].inputs['Vector'].is_linked:
@@ -284,7 +286,7 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
         reasons.insert(0, f"IES Texture {shown} not applied: {why}; DACRT emits the light evenly in every "
                           f"direction (Cycles shapes it by the profile)")
         return None
-    from ..lights.ies import IESError, INVALID_VALUE, parse_ies
+    from ..lights.ies import IESError, INVALID_VALUE, ies_interp, ies_sun_mean, parse_ies
     text, where = _ies_text(nodes[0])
     try:
         if isinstance(text, IESError):   # (no text to read: its failure is the cause, not a parse's)
@@ -319,6 +321,16 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
         messages.append(('WARNING', f"light '{name}': IES profile {where} of IES Texture {shown} cannot be read "
                                     f"({error}): rendered as Cycles does, {INVALID_VALUE:g} x its Strength in every "
                                     "direction"))
+    if light.type == 'SUN' and found is not None and not float(getattr(light, 'angle', 0.0)) > 0.0:
+        # a delta sun: one direction, the pole, where Cycles' horizontal angle is its transform's
+        # rounding (measured: an upright sun read the nadir value, a rotated one the 360-degree
+        # end, 0); the mean round the pole, said where the profile varies there
+        ring = ies_interp(found, np.linspace(0.0, 2.0 * np.pi, 64, endpoint=False), np.zeros(64))
+        if ring.max() - ring.min() > 1e-6 * ring.max():
+            r1.append(f"IES Texture {shown} on a sun of Angle 0: its profile varies round the pole the light travels "
+                      f"along ({ring.min():.3g}..{ring.max():.3g}); Cycles reads one value there, as its transform "
+                      f"rounds, DACRT the mean {ring.mean():.3g}")
+        return f1 * ies_sun_mean(found, 0.0), None, r1, d1
     return f1, found, r1, d1
 
 

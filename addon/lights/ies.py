@@ -301,6 +301,22 @@ def ies_mean(profile: IESProfile) -> float:
     return profile._mean
 
 
+def ies_sun_mean(profile: IESProfile, angle: float) -> float:
+    """The mean of the profile over a sun's cone of directions (about -Z in its object space,
+    half-angle angle / 2), uniform in solid angle as the sun samples them: what a sun's IES
+    Texture scales its light by on average (measured with a 0.53 degree sun: an asymmetric
+    profile 18.0x, its ring mean at v = 0, where the one direction (0, 0, -1) gives 5.65x).
+    Angle 0: the limit, the ring's mean at v = 0, for a delta sun (Cycles' one direction there
+    is float rounding's)."""
+    omc = 1.0 - np.cos(0.5 * max(float(angle), 0.0))
+    if not omc > 0.0:
+        omc = 0.0
+    cos_v = 1.0 - (np.arange(16) + 0.5) / 16 * omc           # uniform in solid angle over the cone
+    h = (np.arange(512) + 0.5) * (2.0 * np.pi / 512)
+    vv, hh = np.meshgrid(np.arccos(np.clip(cos_v, -1.0, 1.0)), h, indexing='ij')
+    return float(ies_interp(profile, hh.ravel(), vv.ravel()).mean())
+
+
 def native_profile(profile: IESProfile):
     """A handle (dacrt.lamps.IesProfile) on the profile's table in the native registry; its .id
     is what lamp records name. The table lives while a handle does (identical tables share one

@@ -32,7 +32,8 @@ std::string lamp_record_error(const LampRecord& r) {
         return "a sun with an angle needs omc > 0 and pdf > 0";
     if (kind == LAMP_BACKGROUND && !(r.pdf > 0)) return "the background needs pdf > 0";
     if (kind == LAMP_AREA && !(r.area > 0)) return "an area lamp needs area > 0";
-    if (r.ies != 0 && (kind == LAMP_SUN || kind == LAMP_BACKGROUND)) return "an IES profile applies to point, spot and area lamps";
+    if (r.ies != 0 && ((kind == LAMP_SUN && shape != SUN_CONE) || kind == LAMP_BACKGROUND))
+        return "an IES profile applies to point, spot, area and sun (with an angle) lamps";
     if (std::string e = ies_id_error(r.ies); !e.empty()) return e;
     return {};
 }

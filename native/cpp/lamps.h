@@ -53,7 +53,7 @@ struct LampRecord {
     float tan_half_spread;  // 29 area spread: tan(spread/2)
     float spread_norm;      // 30 spread profile normalisation; 0 = no spread (spread = pi)
     float inv_m3[9];        // 31 spot: inverse of the object's 3x3 transform, row-major
-    float ies;              // 40 point/spot/area: IES profile id (ies.h), 0 = none
+    float ies;              // 40 point/spot/area/sun cone: IES profile id (ies.h), 0 = none
     float ies_m3[9];        // 41 its world -> object transform of directions (as a normal), row-major
 };
 constexpr size_t LAMP_RECORD_WIDTH = 50;
@@ -571,7 +571,7 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
         per_pdf = true;
         break;
     }
-    if (L.ies != 0) {  // per lamp: predicted; the profile along the sample's direction (point, spot, area)
+    if (L.ies != 0) {  // per lamp: predicted; the profile along the sample's direction (point, spot, area, sun)
         const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
         scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
     }
@@ -687,7 +687,12 @@ inline bool miss_lamp(const LampRecord& L, const float D[3], float Le[3], float&
     } else if (kind != LAMP_BACKGROUND) {
         return false;
     }
-    for (int a = 0; a < 3; ++a) Le[a] = L.emit[a];
+    float scale = 1.0f;
+    if (L.ies != 0) {  // a sun's profile along the direction it travels (as sample_lamp weighs it)
+        const float from_light[3] = {-D[0], -D[1], -D[2]};
+        scale = ies_lamp_factor(L.ies, L.ies_m3, from_light);
+    }
+    for (int a = 0; a < 3; ++a) Le[a] = L.emit[a] * scale;
     pdf = L.pdf;
     return true;
 }

@@ -1,8 +1,9 @@
 """What of an IES Texture in a light's node tree is not applied is said by name (the lamp then
-emits evenly at the node's own value, as before): a sun, its Vector linked, its Fac
+emits evenly at the node's own value, as before): its Vector linked, its Fac
 through a sum (not a factor on the emission), two IES Textures on one lamp. A Fac through
 products (Math Multiply, into the Color) is applied and nothing is said. A profile that is
-applied reaches the lamp (scenedata.Light.ies)."""
+applied reaches the lamp (scenedata.Light.ies); a sun's too (it had been said not applied),
+a delta sun's as one factor."""
 import bpy
 
 from addon.export import lights as export_lights
@@ -44,10 +45,6 @@ def test_applied_through_products_says_nothing(scene):
 
 def test_unsupported_uses_are_named(scene):
     cases = {}
-    for kind, name in (('SUN', 'Sun'),):
-        lamp, nt, em, ies = _lamp(kind, name)
-        nt.links.new(ies.outputs['Fac'], em.inputs['Strength'])
-        cases[name] = (lamp, "this is a " + kind.lower() + " light")
     lamp, nt, em, ies = _lamp('POINT', 'Vector')
     nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Object'], ies.inputs['Vector'])
     nt.links.new(ies.outputs['Fac'], em.inputs['Strength'])
@@ -70,3 +67,36 @@ def test_unsupported_uses_are_named(scene):
         assert out is not None and getattr(out, 'ies', None) is None, name
         text = [t for t in said if f"IES Texture '{name} profile'" in t and "not applied" in t]
         assert text and why in text[0] and f"light '{name}'" in text[0], (name, said)
+
+
+def test_a_suns_profile_is_applied(scene):
+    """A sun with an angle carries the profile (per direction over its cone); a delta sun the
+    profile's mean round v = 0 as a factor (0.0707 x 1000 here), nothing said for either."""
+    lamp, nt, em, ies = _lamp('SUN', 'Sun')
+    nt.links.new(ies.outputs['Fac'], em.inputs['Strength'])
+    lamp.data.angle = 0.3
+    out, said = _export(lamp)
+    assert out is not None and out.ies is not None and not said, said
+    strength = float(out.strength[0])
+    lamp.data.angle = 0.0
+    out, said = _export(lamp)
+    assert out is not None and out.ies is None and not said, said
+    assert abs(float(out.strength[0]) / strength - 1000 * 0.0706650768394) < 1e-2
+
+
+def test_a_delta_suns_profile_varying_round_its_pole_is_said(scene):
+    """A sun of Angle 0 travels along the profile's pole, where Cycles reads one horizontal angle
+    as its transform rounds: with a profile that varies round the pole DACRT's mean there is said
+    (with one that does not, as above, nothing is)."""
+    from tests.iesfiles import PROFILES
+    lamp, nt, em, ies = _lamp('SUN', 'Delta')
+    ies.ies.from_string(PROFILES['asymmetric'])
+    nt.links.new(ies.outputs['Fac'], em.inputs['Strength'])
+    lamp.data.angle = 0.0
+    out, said = _export(lamp)
+    assert out is not None and out.ies is None
+    text = [t for t in said if "light 'Delta'" in t and "IES Texture 'Delta profile' on a sun of Angle 0" in t]
+    assert text and "varies round the pole" in text[0], said
+    lamp.data.angle = 0.2
+    out, said = _export(lamp)
+    assert out.ies is not None and not said, said

@@ -83,7 +83,8 @@ def shading_points(n, seed=3):
                                       ('POINT', dict(radius=0.2, soft_falloff=False)), ('SPOT', dict(radius=0.1)),
                                       ('AREA', dict(shape='RECTANGLE', size_x=0.6, size_y=0.3)),
                                       ('AREA', dict(shape='DISK', size_x=0.5)),
-                                      ('AREA', dict(shape='SQUARE', size_x=0.5, spread=1.2))])
+                                      ('AREA', dict(shape='SQUARE', size_x=0.5, spread=1.2)),
+                                      ('SUN', dict(angle=1.0))])
 def test_light_samples_carry_the_profile(name, kind, kw):
     p, _ = registered(name)
     with_p, without = lamp(kind, p, **kw), lamp(kind, None, **kw)
@@ -137,6 +138,34 @@ def test_bsdf_rays_see_the_profile(kind, kw):
     f = ies_direction(p, local)
     np.testing.assert_allclose(L[0], L[1] * f, rtol=2e-4, atol=1e-6 * float(L[1].max()))
     idx, Le, _ = with_p.intersect(O, D, t_surf)
+    np.testing.assert_allclose(Le, L[0][:, idx], rtol=2e-3, atol=1e-5 * float(L[1].max()))
+
+
+@pytest.mark.parametrize('name', ['asymmetric', 'downlight'])
+def test_rays_leaving_the_scene_see_a_suns_profile(name):
+    """A sun with an angle: what rays that leave the scene inside its cone collect carries the
+    profile along their direction from the sun, in its object space, as its light samples do
+    (Cycles' IES Texture on a sun: the shader runs per direction; it had not been applied)."""
+    p, _ = registered(name)
+    with_p, without = lamp('SUN', p, angle=1.0), lamp('SUN', None, angle=1.0)
+    n = 6000
+    rng = np.random.default_rng(12)
+    O = shading_points(n, 6)
+    D = MATRIX[:3, 2, None] + rng.normal(size=(3, n)) * 0.4      # about the direction to the sun
+    D = (D / np.linalg.norm(D, axis=0)).astype(F32)
+    t_surf = np.full(n, np.inf, F32)
+    miss = np.ones(n, bool)
+    pid = np.arange(n, dtype=np.int64)
+    recs = lamp_records([with_p, without])
+    L = np.zeros((2, 3, n), F32)
+    for k in (0, 1):
+        dacrt.lamps.lamp_gather(recs, [k], O, D, t_surf, miss, pid, L[k])
+    seen = L[1].any(axis=0)
+    assert n // 10 < seen.sum() < n
+    f = ies_direction(p, MATRIX[:3, :3].T @ (-D.astype(np.float64)))
+    np.testing.assert_allclose(L[0], L[1] * f, rtol=2e-4, atol=1e-6 * float(L[1].max()))
+    assert (f[seen] < 0.5 * f[seen].max()).any()
+    idx, Le, _ = with_p.eval_miss(D)
     np.testing.assert_allclose(Le, L[0][:, idx], rtol=2e-3, atol=1e-5 * float(L[1].max()))
 
 
