@@ -273,9 +273,15 @@ class AreaLight(Lamp):
             spread.update(ies=self._ies_id(), ies_m3=self.ies_m3)
         return make_record(KIND_AREA, shape, emit=self.emit, pos=self.center, area=self.area,
                            axis_x=self.axis_x, axis_y=self.axis_y, inv_x=self.inv_x, inv_y=self.inv_y,
-                           normal=self.normal, **spread)
+                           normal=self.normal, **spread, **self.falloff_fields())
 
     def sample(self, P, u1, u2):
+        ls = self._sample(P, u1, u2)
+        if np.any(self.falloff_power) or np.any(self.falloff_smooth):      # (a Light Falloff at each sample's distance)
+            ls.value = (ls.value * self.falloff(np.ones_like(ls.dist), ls.dist)).astype(F32)
+        return ls
+
+    def _sample(self, P, u1, u2):
         if self.tan_half_spread is not None:
             ls = self._sample_spread(P, u1, u2)
             return self._by_solid_angle(P, u1, u2, ls, self._spread_box(P)) if self.solid_angle else ls
@@ -356,7 +362,8 @@ class AreaLight(Lamp):
             r = self._sph_rect(Oi, *box[:4])
             with np.errstate(divide='ignore'):
                 pdf = np.where(r['use'], F32(1.0) / r['S'], pdf)
-        return idx, outer(self.emit, self._spread(np.ones(len(idx), F32), cos_l, np.take(D, idx, axis=1))), pdf
+        scale = self.falloff(self._spread(np.ones(len(idx), F32), cos_l, np.take(D, idx, axis=1)), tc)
+        return idx, outer(self.emit, scale), pdf
 
 
 def _corner_turn(na, aa, nb, ab):

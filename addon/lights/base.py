@@ -21,9 +21,10 @@ order of the C++ struct LampRecord; fields a lamp does not use stay 0:
   inv_smooth 10 (spot; 0 = hard edge), omc 11 (sun: 1 - cos(angle/2)), pdf 12 (sun cone,
   background), area 13, axis_x 14..16, axis_y 17..19, inv_x 20..22, inv_y 23..25, normal 26..28,
   tan_half_spread 29, spread_norm 30 (0 = no spread), inv_m3 31..39 (spot, row-major),
-  ies 40 (point/spot/area: IES profile id, dacrt.lamps.ies_register(...).id, live while the lamp
-  that made the record is: Lamp._ies_id; 0 = none), ies_m3 41..49 (its world -> object
-  transform of directions, row-major; lights/ies.py).
+  ies 40 (point/spot/area/sun cone: IES profile id, dacrt.lamps.ies_register(...).id, live while
+  the lamp that made the record is: Lamp._ies_id; 0 = none), ies_m3 41..49 (its world -> object
+  transform of directions, row-major; lights/ies.py), falloff_power 50 and falloff_smooth 51
+  (point/spot/area: a Light Falloff feeding the emission, Lamp.falloff).
 """
 from __future__ import annotations
 
@@ -50,12 +51,12 @@ EMPTY_IDX = np.zeros(0, np.int64)
 
 MAX_BOUNCES_UNLIMITED = 1024   # Blender's default Max Bounces of a light
 
-RECORD_WIDTH = 50
+RECORD_WIDTH = 52
 RECORD_FIELDS = {
     'kind': (0, 1), 'shape': (1, 1), 'emit': (2, 3), 'pos': (5, 3), 'radius': (8, 1), 'cos_half': (9, 1),
     'inv_smooth': (10, 1), 'omc': (11, 1), 'pdf': (12, 1), 'area': (13, 1), 'axis_x': (14, 3), 'axis_y': (17, 3),
     'inv_x': (20, 3), 'inv_y': (23, 3), 'normal': (26, 3), 'tan_half_spread': (29, 1), 'spread_norm': (30, 1),
-    'inv_m3': (31, 9), 'ies': (40, 1), 'ies_m3': (41, 9),
+    'inv_m3': (31, 9), 'ies': (40, 1), 'ies_m3': (41, 9), 'falloff_power': (50, 1), 'falloff_smooth': (51, 1),
 }
 KIND_POINT, KIND_SPOT, KIND_SUN, KIND_AREA, KIND_BACKGROUND = range(5)
 POINT_DELTA, POINT_SPHERE, POINT_DISK = range(3)
@@ -149,6 +150,10 @@ class Lamp(ABC):
             self.max_bounces = int(getattr(light, 'max_bounces', MAX_BOUNCES_UNLIMITED))
             self.lightgroup = str(getattr(light, 'lightgroup', ''))
             self.no_emission = str(getattr(light, 'no_emission', ''))
+            # a Light Falloff feeding the emission (Cycles' svm_node_light_falloff at the ray's
+            # length to the lamp's point): its output (0 Quadratic, 1 Linear, 2 Constant) and Smooth
+            power, smooth = getattr(light, 'falloff', (0, 0.0))
+            self.falloff_power, self.falloff_smooth = F32(power), F32(smooth)
         else:
             self.name = self.key = 'World'
             self.color = np.asarray(color, np.float64)
@@ -157,6 +162,29 @@ class Lamp(ABC):
             self.normalize = True
             self.max_bounces = MAX_BOUNCES_UNLIMITED
             self.lightgroup = ''            # the integrator gives the world's
+            self.falloff_power = self.falloff_smooth = F32(0.0)
+
+    def falloff_fields(self) -> dict:
+        """The record's falloff fields (none where the lamp has no Light Falloff)."""
+        if not (self.falloff_power or self.falloff_smooth):
+            return {}
+        return dict(falloff_power=self.falloff_power, falloff_smooth=self.falloff_smooth)
+
+    def falloff(self, scale, t):
+        """scale (n,) times the Light Falloff's factor at ray lengths t (n,) (lamps.h
+        falloff_factor, its float32 operations): Linear x t, Constant x t^2, then Smooth s x
+        t^2 / (s + t^2) where t^2 is finite; unchanged without one. Lanes of lamps
+        (lamplanes.py) hold the fields per sample."""
+        k, s = self.falloff_power, self.falloff_smooth
+        if not (np.any(k) or np.any(s)):
+            return scale
+        t = np.asarray(t, F32)
+        f = np.where(k >= 1, t, F32(1.0))
+        f = np.where(k >= 2, f * t, f)
+        t2 = t * t
+        with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
+            f = np.where((s > 0) & np.isfinite(t2), f * (t2 / (s + t2)), f)
+        return (np.asarray(scale, F32) * f).astype(F32)
 
     @property
     def seen_by_camera(self) -> bool:

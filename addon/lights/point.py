@@ -66,7 +66,7 @@ class PointLight(Lamp):
         if self.ies is not None:
             extra = dict(ies=self._ies_id(), ies_m3=self.ies_m3)
         return make_record(self.record_kind, shape, emit=self.emit, pos=self.center, radius=self.radius,
-                           **self._cone_fields(), **extra)
+                           **self._cone_fields(), **extra, **self.falloff_fields())
 
     def _cone_fields(self) -> dict:
         return {}
@@ -90,7 +90,8 @@ class PointLight(Lamp):
         if self.delta:
             with np.errstate(divide='ignore'):
                 scale = np.where(d > 0, F32(1.0) / (d * d), F32(0.0))
-            return LightSample(axis, d, outer(self.emit, self._attenuate(scale, axis)), np.full(n, np.inf, F32))
+            return LightSample(axis, d, outer(self.emit, self.falloff(self._attenuate(scale, axis), d)),
+                               np.full(n, np.inf, F32))
         r = F32(self.radius)
         outside = d > r
         apart = d > 0                                      # P at the centre: no direction
@@ -118,7 +119,7 @@ class PointLight(Lamp):
                 pdf = np.where(good, dist * dist / (F32(np.pi) * r * r * cos_l), F32(0.0))
                 scale = np.where(good, F32(1.0) / pdf, F32(0.0))
         inside = ~outside if self.sphere else None
-        return LightSample(wi, dist, outer(self.emit, self._attenuate(scale, wi, inside)), pdf)
+        return LightSample(wi, dist, outer(self.emit, self.falloff(self._attenuate(scale, wi, inside), dist)), pdf)
 
     def intersect(self, O, D, tmax):
         if self.delta:
@@ -137,6 +138,7 @@ class PointLight(Lamp):
             idx = np.flatnonzero(apart & (h2 >= 0) & (t > 0) & (t < tmax))
             omc = np.where(outside[idx], one_minus_cos_from_sin2(np.minimum(r * r / d2[idx], F32(1.0))), F32(2.0))
             pdf = F32(1.0 / (2.0 * np.pi)) / omc
+            t_i = t[idx]
         else:
             # disk through the centre, facing the ray origin: plane at distance |oc| along oc
             dist_c = np.sqrt(d2)
@@ -148,7 +150,7 @@ class PointLight(Lamp):
             t_i = t[idx]
             pdf = t_i * t_i / (F32(np.pi) * r * r * cos_l[idx])
         scale = self._attenuate(np.ones(len(idx), F32), D[:, idx], ~outside[idx] if self.sphere else None)
-        return idx, outer(self.emit, scale), pdf.astype(F32)
+        return idx, outer(self.emit, self.falloff(scale, t_i)), pdf.astype(F32)
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:

@@ -23,9 +23,10 @@ struct LampLanes {
 };
 
 // Whether sample_area_lanes draws lamp L's samples: an area lamp without spread.
-// (an IES profile's area lamp goes through sample_lamp and hit_area, one sample at a time)
+// (an IES profile's or a Light Falloff's area lamp goes through sample_lamp and hit_area, one
+// sample at a time)
 inline bool area_lanes_apply(const LampRecord& L) {
-    return int(L.kind) == LAMP_AREA && L.spread_norm == 0 && L.ies == 0;
+    return int(L.kind) == LAMP_AREA && L.spread_norm == 0 && L.ies == 0 && !has_falloff(L);
 }
 
 namespace lanes {

@@ -262,6 +262,8 @@ py::dict lamp_record_layout() {
     DACRT_FIELD(inv_m3, 9);
     DACRT_FIELD(ies, 1);
     DACRT_FIELD(ies_m3, 9);
+    DACRT_FIELD(falloff_power, 1);
+    DACRT_FIELD(falloff_smooth, 1);
 #undef DACRT_FIELD
     return d;
 }

@@ -35,6 +35,10 @@ std::string lamp_record_error(const LampRecord& r) {
     if (r.ies != 0 && ((kind == LAMP_SUN && shape != SUN_CONE) || kind == LAMP_BACKGROUND))
         return "an IES profile applies to point, spot, area and sun (with an angle) lamps";
     if (std::string e = ies_id_error(r.ies); !e.empty()) return e;
+    if ((r.falloff_power != 0 || r.falloff_smooth != 0) && (kind == LAMP_SUN || kind == LAMP_BACKGROUND))
+        return "a Light Falloff applies to point, spot and area lamps (a sun's ray length is infinite)";
+    if (!(r.falloff_power == 0 || r.falloff_power == 1 || r.falloff_power == 2) || !(r.falloff_smooth >= 0))
+        return "falloff_power must be 0, 1 or 2 and falloff_smooth >= 0";
     return {};
 }
 

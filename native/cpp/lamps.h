@@ -55,8 +55,10 @@ struct LampRecord {
     float inv_m3[9];        // 31 spot: inverse of the object's 3x3 transform, row-major
     float ies;              // 40 point/spot/area/sun cone: IES profile id (ies.h), 0 = none
     float ies_m3[9];        // 41 its world -> object transform of directions (as a normal), row-major
+    float falloff_power;    // 50 point/spot/area: a Light Falloff's output, 0 Quadratic, 1 Linear, 2 Constant
+    float falloff_smooth;   // 51 its Smooth (0: none)
 };
-constexpr size_t LAMP_RECORD_WIDTH = 50;
+constexpr size_t LAMP_RECORD_WIDTH = 52;
 static_assert(sizeof(LampRecord) == LAMP_RECORD_WIDTH * sizeof(float), "LampRecord must be packed floats");
 
 // Empty if the record can be used, else what is wrong (kind/shape codes, non-finite fields).
@@ -431,6 +433,20 @@ struct LampSample {
     float wi[3], dist, value[3], pdf;
 };
 
+// Cycles' Light Falloff node feeding the lamp's emission (svm_node_light_falloff) at the ray
+// length t to the lamp's point (the sample's distance, or where a ray meets the lamp): the
+// Linear output x t, Constant x t^2, then Smooth s > 0 x t^2 / (s + t^2); 1 for Quadratic
+// without Smooth (the lamp's own falloff is the inverse square already).
+inline float falloff_factor(const LampRecord& L, float t) {
+    float f = L.falloff_power >= 1.0f ? t : 1.0f;
+    if (L.falloff_power >= 2.0f) f *= t;
+    const float t2 = t * t;
+    if ((L.falloff_smooth > 0.0f) & std::isfinite(t2)) f *= t2 / (L.falloff_smooth + t2);  // (as Cycles)
+    return f;
+}
+
+inline bool has_falloff(const LampRecord& L) { return (L.falloff_power != 0.0f) | (L.falloff_smooth != 0.0f); }
+
 // One light sample of lamp L toward the shading point P (Lamp.sample in the Python definitions).
 inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, float u2) {
     using namespace lampmath;
@@ -575,6 +591,7 @@ inline LampSample sample_lamp(const LampRecord& L, const float P[3], float u1, f
         const float from_light[3] = {-s.wi[0], -s.wi[1], -s.wi[2]};
         scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
     }
+    if (has_falloff(L)) scale *= falloff_factor(L, s.dist);  // per lamp: predicted (finite lamps only)
     for (int a = 0; a < 3; ++a) s.value[a] = (per_pdf ? L.emit[a] / L.pdf : L.emit[a]) * scale;
     return s;
 }
@@ -610,6 +627,7 @@ inline bool hit_area(const LampRecord& L, const float O[3], const float D[3], fl
         const float from_light[3] = {-D[0], -D[1], -D[2]};  // a lookup costs more than a mispredict
         scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
     }
+    if (has_falloff(L) & hit) scale *= falloff_factor(L, t);  // (also left to this path)
     for (int a = 0; a < 3; ++a) Le[a] = L.emit[a] * scale;
     if (hit & (int(L.shape) == AREA_RECT)) {  // sample_lamp's pdf at O: its sph_rect decides
         // (a branch: most rays miss, and sph_rect's four atan2 would cost every candidate)
@@ -641,6 +659,7 @@ __attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const f
         const float oc[3] = {L.pos[0] - O[0], L.pos[1] - O[1], L.pos[2] - O[2]};
         const float b = dot3(oc, D), d2 = dot3(oc, oc);
         if (!(d2 > 0)) return false;  // origin at the centre
+        float t_hit;
         bool cone = true;             // a sphere spot shapes only what lies outside it
         if (shape == POINT_SPHERE) {
             // from outside the near intersection; from inside the far one (seen all round)
@@ -651,6 +670,7 @@ __attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const f
             const float h = std::sqrt(std::max(0.0f, h2));
             const float t = outside ? b - h : b + h;
             if (!(h2 >= 0 && t > 0 && t < tmax)) return false;
+            t_hit = t;
             pdf = outside ? INV_2PI / one_minus_cos_from_sin2(std::min(1.0f, r * r / d2)) : INV_2PI / 2.0f;
         } else {                              // disk through the centre, facing the ray origin
             const float dist_c = std::sqrt(d2);
@@ -659,6 +679,7 @@ __attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const f
             const float rel[3] = {D[0] * t - oc[0], D[1] * t - oc[1], D[2] * t - oc[2]};
             if (!(cos_l > 0 && t < tmax && dot3(rel, rel) <= r * r)) return false;
             pdf = t * t / (PI * r * r * cos_l);
+            t_hit = t;
         }
         if (kind == LAMP_SPOT && cone) {
             const float from_light[3] = {-D[0], -D[1], -D[2]};
@@ -668,6 +689,7 @@ __attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const f
             const float from_light[3] = {-D[0], -D[1], -D[2]};
             scale *= ies_lamp_factor(L.ies, L.ies_m3, from_light);
         }
+        if (has_falloff(L)) scale *= falloff_factor(L, t_hit);
     } else if (kind == LAMP_AREA) {
         // per lamp, predicted; with spread out of line, which keeps lamps without spread as fast
         return L.spread_norm != 0 ? hit_area_spread(L, O, D, tmax, Le, pdf) : hit_area<false>(L, O, D, tmax, Le, pdf);

@@ -1,6 +1,7 @@
 """A light node tree the export approximates is said once for all the lights showing it (12
 linked duplicates of one lamp with a Light Falloff had made 12 warnings differing only in the
-name), as approximated materials are named together; different trees stay apart."""
+name), as approximated materials are named together; different trees stay apart. (A lamp
+applies one Light Falloff now: these feed two Emissions added, which it does not.)"""
 import bpy
 
 from . import scenes
@@ -12,7 +13,13 @@ def _falloff_lamp(name, output):
     data.use_nodes = True
     nt = data.node_tree
     em = next(n for n in nt.nodes if n.type == 'EMISSION')
-    nt.links.new(nt.nodes.new('ShaderNodeLightFalloff').outputs[output], em.inputs['Strength'])
+    falloff, second, add = (nt.nodes.new(t) for t in ('ShaderNodeLightFalloff', 'ShaderNodeEmission',
+                                                      'ShaderNodeAddShader'))
+    nt.links.new(falloff.outputs[output], em.inputs['Strength'])
+    nt.links.new(falloff.outputs[output], second.inputs['Strength'])
+    nt.links.new(em.outputs[0], add.inputs[0])
+    nt.links.new(second.outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT').inputs['Surface'])
     return data
 
 

@@ -32,7 +32,9 @@ def _about(said, name):
 
 def test_sun_light_falloff_outputs_warn_of_nothing(scene, said):
     """A sun's Strength from a Light Falloff's Linear or Constant output (Smooth 0 or 1): as its
-    Quadratic in Cycles, so no warning; a point light's Linear output still warns."""
+    Quadratic in Cycles, so no warning; a point light's Linear output neither (the lamp applies
+    it per ray: tests/parity/test_light_falloff_lamps.py), but a point light's Linear output
+    feeding both of two Emissions added (the lamp applies one falloff) still warns."""
     scenes.camera((0, 0, 5))
     _floor()
     for output, smooth in (('Linear', 0.0), ('Constant', 1.0)):
@@ -44,6 +46,12 @@ def test_sun_light_falloff_outputs_warn_of_nothing(scene, said):
     nt, em, _ = _lamp('POINT', 'PointLinear', 100.0)
     falloff = nt.nodes.new('ShaderNodeLightFalloff')
     nt.links.new(falloff.outputs['Linear'], em.inputs['Strength'])
+    second = nt.nodes.new('ShaderNodeEmission')
+    add = nt.nodes.new('ShaderNodeAddShader')
+    nt.links.new(falloff.outputs['Linear'], second.inputs['Strength'])
+    nt.links.new(em.outputs[0], add.inputs[0])
+    nt.links.new(second.outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], next(n for n in nt.nodes if n.type == 'OUTPUT_LIGHT').inputs['Surface'])
     scenes.render_rgba(scene)
     assert not any("SunLinear" in t or "SunConstant" in t for t in said), said
     assert any("PointLinear" in t and "Light Falloff Linear" in t for t in said), said

@@ -62,6 +62,16 @@ VARIANTS = {
                                           spread=np.radians(2.0)),
     'area_rectangle_unnormalized': light('AREA', RGB, TILT, shape='RECTANGLE', size_x=2.0, size_y=0.5,
                                          normalize=False),
+    # a Light Falloff feeding the emission (Linear, Constant; Smooth) at each ray's length
+    'point_delta_linear': light('POINT', RGB, translation(*CENTRE), falloff=(1, 0.0)),
+    'point_sphere_constant_smooth': light('POINT', RGB, translation(*CENTRE), radius=0.5, soft_falloff=False,
+                                          falloff=(2, 0.7)),
+    'point_disk_smooth': light('POINT', RGB, translation(*CENTRE), radius=0.3, falloff=(0, 2.0)),
+    'spot_smooth_disk_linear': light('SPOT', RGB, TILT, radius=0.4, spot_size=np.radians(90.0), spot_blend=0.7,
+                                     falloff=(1, 0.5)),
+    'area_square_constant': light('AREA', RGB, TILT, shape='SQUARE', size_x=1.5, falloff=(2, 0.0)),
+    'area_ellipse_spread_linear_smooth': light('AREA', RGB, SQUASH, shape='ELLIPSE', size_x=0.8, size_y=1.4,
+                                               spread=np.radians(120.0), falloff=(1, 1.5)),
 }
 
 
@@ -493,7 +503,7 @@ def test_bad_arguments():
     u = np.full(n, 0.5, F32)
     e = np.zeros(n, np.int32)
     sample = dacrt.lamps.lamp_sample
-    with pytest.raises(ValueError, match=r'records must have shape \(R, 50\)'):
+    with pytest.raises(ValueError, match=r'records must have shape \(R, 52\)'):
         sample(rec[:, :39], e, P, u, u)
     with pytest.raises(ValueError, match=r'P must have shape \(3, n\)'):
         sample(rec, e, P[:2], u, u)
