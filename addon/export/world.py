@@ -1,8 +1,9 @@
 """The world the view layer renders with: the Background (or Emission) colour x strength, an
 Environment Texture's equirectangular image (through a Mapping node's rotation, with colour
 nodes after it applied to its texels), a Sky Texture's sky (export/sky.py, colour nodes after
-it likewise), Add and Mix Shaders of these, the camera/light split of a Light Path's Is Camera
-Ray, and the world's ray visibility. Other world shaders use the world colour, reported. Part
+it likewise), procedural textures of the view direction baked into a map (a Gradient), Add and
+Mix Shaders of these, the camera/light split of a Light Path's Is Camera Ray, and the world's ray
+visibility. Other world shaders use the world colour, reported. Part
 of the export layer."""
 
 import bpy
@@ -160,6 +161,10 @@ def _color_light(socket, strength, what, reasons, frame):
             found = _sky_through(socket, skies[0], strength, reasons)
             if found is not None:
                 return found
+        if not envs and not skies:
+            found = _procedural_world(socket, strength, what, reasons)
+            if found is not None:
+                return found
         source = linked_node(socket)
         name = f"'{source.bl_label}'" if source is not None else "nodes"
         if source is not None and source.type == 'TEX_SKY':
@@ -170,6 +175,56 @@ def _color_light(socket, strength, what, reasons, frame):
         reasons.append(f"{what} from {name}, {why}; the socket's own colour "
                        f"{tuple(round(float(x), 3) for x in c[:3])} used")
     return np.array(c, np.float32) * strength, None
+
+
+# what a world's texture coordinates read in Cycles' background shader: the view direction
+# (Generated, Object, and the Geometry Position, P = D there)
+_WORLD_COORDINATES = frozenset({'generated', 'object', 'position'})
+PROCEDURAL_WIDTH = 1024     # the baked map of a procedural world (a Gradient: smooth)
+
+
+def _procedural_world(socket, strength, what, reasons):
+    """(uniform radiance, Environment) of procedural textures (a Gradient, a Noise) and the
+    colour nodes after them feeding a world colour, with the Vector unlinked (the Generated
+    direction) or read from Texture Coordinate Generated or Object or Geometry Position, all
+    of them the view direction in Cycles' background shader (Object of an object: the
+    direction as a point in its space), through Mapping nodes: the chain
+    compiled (procedurals.compile_socket) and evaluated at the texel centres of an
+    equirectangular map, which the environment light blends and samples. None where the chain
+    reads anything else. A Gradient world had stood at the socket's own colour (0.05 where
+    Cycles' mean is 0.20)."""
+    from . import procedurals
+    notes = []
+    found = procedurals.compile_socket(socket, True, notes)
+    if found is None:
+        return None
+    fn, needs, sources = found
+    frames = {n for n in needs if isinstance(n, tuple) and n[0] == procedurals.OBJECT_OF}
+    if not (needs - frames) <= _WORLD_COORDINATES or len(frames) > 1:
+        return None
+    height = PROCEDURAL_WIDTH // 2
+    # texel centres as skyanalytic.equirect lays them out (row 0 at the -Z pole)
+    theta = (1.0 - (np.arange(height) + 0.5) / height) * np.pi
+    phi = (0.5 - (np.arange(PROCEDURAL_WIDTH) + 0.5) / PROCEDURAL_WIDTH) * 2 * np.pi
+    st = np.sin(theta)[:, None]
+    dirs = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)[:, None]), axis=-1)
+    d = np.ascontiguousarray(dirs.reshape(-1, 3), np.float32)
+    coords = {kind: d for kind in (needs - frames) | {'generated'}}
+    for _, _, inverse in frames:    # Texture Coordinate Object of an object: D as a point in its space
+        if inverse is not None:
+            m = np.array(inverse, np.float64).reshape(4, 4)
+            coords['object'] = (d @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
+    img = np.asarray(fn(coords), np.float64)
+    img = np.broadcast_to(img, (len(d), 3)).reshape(height, PROCEDURAL_WIDTH, 3)
+    img = np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0)
+    if (img < 0).any():         # (no negative light: the environment adds light only)
+        reasons.append(f"{what} from {sources} below 0 in places: read as 0 there")
+        img = np.maximum(img, 0.0)
+    reasons.extend(notes)
+    reasons.append(f"{what} from {sources} baked into a {PROCEDURAL_WIDTH} x {height} map, blended between "
+                   "its texels (Cycles evaluates it per ray)")
+    env = sd.Environment(img.astype(np.float32), np.full(3, strength, np.float32))
+    return np.zeros(3, np.float32), env
 
 
 def _sky_through(socket, sky, strength, reasons):
