@@ -470,7 +470,7 @@ def _light_strength(socket, reasons, kind=None, dark=None, oi=None):
     if ok:
         return float(strength)
     notes = []
-    value = float(_LightEvaluator(notes, oi).input(socket, False).value[0])
+    value = float(_LightEvaluator(notes, oi, kind).input(socket, False).value[0])
     strength = 0.0 if value != value else value        # (NaN: 0, as constant_value reads it)
     if not notes:        # every node computed (Object Info for this light): Cycles' value
         return strength
@@ -495,9 +495,9 @@ class _LightEvaluator(nodeeval.Evaluator):
     per lamp as Cycles computes it (it had stood at its own value: Random x 10 0.70x Cycles,
     Color grey)."""
 
-    def __init__(self, reasons, oi=None):
+    def __init__(self, reasons, oi=None, kind=None):
         super().__init__(None, reasons, None, attribute=None if oi is None else self._object_info)
-        self._oi = oi
+        self._oi, self._kind = oi, kind
 
     def _object_info(self, node, out, reasons):
         if node.type != 'OBJECT_INFO' or out.name not in OBJECT_INFO_OUTPUTS:
@@ -507,6 +507,9 @@ class _LightEvaluator(nodeeval.Evaluator):
     def _node(self, node, out, depth):
         if node.type in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
             return None
+        if node.type in _GENERATED_TEXTURES and self._kind in _NO_GENERATED and \
+                not nodegraph.input_by_id(node, 'Vector').is_linked:
+            return _at_generated_zero(node, out, depth)
         if node.type == 'TEX_IES' and _ies_probe[0] is not None:   # (_ies_profile's probe)
             _ies_probe[1] = True
             strength = self.input(node.inputs['Strength'], False, depth + 1)
@@ -533,6 +536,31 @@ def _one_emission(surface):
     """Whether one emitting node (an Emission, a Principled BSDF) feeds the light's Surface."""
     kinds = ('EMISSION', 'BSDF_PRINCIPLED')
     return sum(nodegraph.unwrap(link.from_node).type in kinds for link in nodegraph.links_feeding(surface)) == 1
+
+
+# procedural textures whose unlinked Vector reads the Generated coordinates, which a light has
+# none of in Cycles (its attribute lookup finds none: 0): one value over the lamp (measured: a
+# Gradient on a point lamp black, a Checker's colour 2 on a spot; they had stood at the input's
+# own value, 0.137 where Cycles renders 0, 4.6x)
+# (an area light's vary over it in Cycles: a Checker of Scale 3 averages its two colours there)
+_NO_GENERATED = ('POINT', 'SPOT', 'SUN')
+_GENERATED_TEXTURES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK',
+                                 'TEX_MAGIC', 'TEX_GABOR'})
+
+
+def _at_generated_zero(node, out, depth):
+    """A procedural texture's output (nodeeval.Field) at Generated (0, 0, 0), its other inputs
+    compiled as a material's (procedurals); None where they read anything else."""
+    from . import procedurals
+    chain = procedurals._Chain([], None)
+    try:
+        fn, vector = procedurals._node(node, out, chain, depth)
+    except (nodeeval.NotCompiled, AttributeError, KeyError, TypeError, ValueError):
+        return None
+    if chain.needs - {'generated'} or chain.frames or chain.reasons:
+        return None
+    value = np.asarray(fn({'generated': np.zeros((1, 3), np.float32)}), np.float64).reshape(-1)
+    return nodeeval.Field(value[:3] if len(value) >= 3 else value[:1], vector=vector)
 
 
 def _past_falloff(socket, reasons, kind=None):
@@ -576,7 +604,7 @@ def _light_color(socket, what, reasons, kind=None, oi=None):
         why = []
         value, ok = constant_value(falloff, why=why)
         if not ok:
-            value, ok = _computed(falloff, False, oi, value)
+            value, ok = _computed(falloff, False, oi, value, kind)
         if not ok:
             reasons.append(f"{what} colour from a Light Falloff driven by nodes ({_named(why)}, not evaluated "
                            f"for a light); its own value {float(value):g} used")
@@ -584,20 +612,20 @@ def _light_color(socket, what, reasons, kind=None, oi=None):
     why = []
     color, ok = nodeeval.constant(socket, True, why=why)
     if not ok:
-        color, ok = _computed(socket, True, oi, color)
+        color, ok = _computed(socket, True, oi, color, kind)
     if not ok:
         reasons.append(f"{what} colour driven by nodes ({_named(why)}, not evaluated for a light); its own "
                        f"value {tuple(round(float(c), 3) for c in color[:3])} used")
     return tuple(float(c) for c in color)
 
 
-def _computed(socket, color, oi, own):
+def _computed(socket, color, oi, own, kind=None):
     """(value, exact): socket computed with Object Info read for the light (oi), exact where
     nothing else stood in; else (own, False) as before (the caller names the stand-in)."""
     if oi is None:
         return own, False
     notes = []
-    f = _LightEvaluator(notes, oi).input(socket, color)
+    f = _LightEvaluator(notes, oi, kind).input(socket, color)
     if notes:
         return own, False
     v = f.value.reshape(-1)
