@@ -92,7 +92,8 @@ class Light:
     max_bounces: int = 1024        # Cycles' Light > Max Bounces: light sampling skips it deeper
     lightgroup: str = ''           # the light's Light Group (its light also goes to that pass)
     no_emission: str = ''          # why its node tree emits nothing (no Cycles output, a muted node); '': it emits
-    ies: Optional[object] = None   # POINT/SPOT/AREA/SUN (angle > 0): an IES profile (lights/ies.IESProfile) times the emission per direction
+    # POINT/SPOT/AREA/SUN (angle > 0): an IES profile (lights/ies.IESProfile) times the emission per direction
+    ies: Optional[object] = None
     # POINT/SPOT/AREA: a Light Falloff feeding the emission, (output: 0 Quadratic, 1 Linear,
     # 2 Constant; Smooth), applied at each ray's length to the lamp's point (lights/base.py)
     falloff: tuple = (0, 0.0)
