@@ -908,7 +908,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
         # (their barycentrics too where textures need them)
         tex = self._albedo_varies
-        uv = tex or self._bumped or (self.tri.term_cutoff is not None and bool(self.lights))   # the lift needs u, v
+        uv = tex or self._bumped or (self.tri.term_cutoff is not None and bool(self.lights)) or \
+            bool(self.mats.translucency_textures)   # the lift needs u, v; so do those textures
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_scatter, path.thr,
             u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),
@@ -921,6 +922,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # translucent hits (continue_paths left their throughput before any albedo): thr takes
         # the reflection's albedo R, far (sel, thr_far) the transmission's T
         far = self._translucent_hits(prim, thr) if self._any_translucent else None
+        if far is not None and self.mats.translucency_textures:
+            self._translucency_maps(far[0], prim, u, v, far[1], ng)
         if tex:
             self._albedo_maps(prim, u, v, thr, self._back(prim, ng))   # the albedo's maps are the reflection's
         ns, bump = self._bent_normals(prim, u, v, ns, ng)

@@ -79,7 +79,7 @@ class PassWriting:
             mean_n = self._pass_normal(prim, hu, hv, ns, ng, -np.take(path.D, idx, axis=1), albedo)
             ns = unit_columns(mean_n)
             if self._any_translucent:                 # Cycles' diffuse closures include it
-                albedo += np.take(self.mats.translucency, np.take(self.tri.material, prim), axis=1)
+                albedo += self._translucency_at(prim, hu, hv, self._back(prim, ng))
         else:
             P = ns = mean_n = albedo = np.zeros((3, 0), F32)
         if 'UV' in want:
@@ -237,7 +237,7 @@ class PassWriting:
                 # averaged with the transparent closure's (the unbent N) by their weights
                 ns = self._pass_normal(prim, u, v, ns, ng, I, albedo, tau)
             if self._any_translucent:
-                albedo += np.take(self.mats.translucency, np.take(self.tri.material, prim), axis=1) * weight
+                albedo += self._translucency_at(prim, u, v, self._back(prim, ns)) * weight
             if denoise is not None:
                 denoise.surface(cols, ns, albedo, P, tau)
             diff[:, cols] += thr * albedo

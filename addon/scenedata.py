@@ -192,6 +192,10 @@ class Material:
     # Diffuse transmission (Translucent BSDF): the colour x mix weights (3,) of a Lambertian lobe
     # on the far side of the surface, beside the reflection of base_color; None: none
     translucency: Optional[np.ndarray] = None
+    # with a `translucency_texture` (procedural.ProceduralTexels, computed per shading point) the
+    # transmission at a point is translucency x it; translucency, its stand-in, then picks the
+    # lobe and weighs the passes
+    translucency_texture: Optional['ProceduralTexels'] = None
     # the part of `transparency` that stands in for glass (Glass and Refraction BSDFs, the
     # Principled's transmission): light through it is refracted light to Cycles, so a camera
     # ray that passes it sees the world behind even with a transparent film; None: none

@@ -252,6 +252,12 @@ class Materials:
             if getattr(mat, 'translucency', None) is not None:
                 self.translucency[:, i] = _rgb(mat, 'translucency', mat.translucency)
         self.translucent = self.translucency.max(axis=0) > 0
+        # the materials whose transmission varies per point (scenedata.Material.translucency_texture):
+        # (index, texture, interpolation, extension, uv transform), as `textures`
+        self.translucency_textures = [
+            (i, *texture_entry(mat.name, 'translucency texture', mat.translucency_texture, 'Linear', 'REPEAT', None))
+            for i, mat in enumerate(materials)
+            if getattr(mat, 'translucency_texture', None) is not None and self.translucent[i]]
         # images that write AOVs: (AOV name, 'color' | 'value') -> [(material index, texture,
         # interpolation, extension, uv transform)]
         self.aov_textures = {}
@@ -264,6 +270,7 @@ class Materials:
         # a procedural chain reads a normal (Geometry Normal or True Normal, Texture Coordinate
         # Normal), which Cycles turns to the side the ray meets: its hits say which side that is
         entries = self.textures + self.pass_textures + self.emission_textures + self.opacity + \
+            self.translucency_textures + \
             [e for found in self.aov_textures.values() for e in found]
         self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries) or \
             any(b.values.needs & SIDED for e in self.bumps for b in (e[1],) + e[2] if b is not None)

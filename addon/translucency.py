@@ -35,6 +35,21 @@ class Translucency:
         rt, tt = max3(R), max3(T)
         return sel, before * T, tt / (rt + tt)           # tt > 0 on translucent materials
 
+    def _translucency_maps(self, sel, prim, u, v, thr_far, ng):
+        """Multiply the transmission that varies per point (mats.translucency_textures: over
+        the material's own) into thr_far (3, len(sel)) in place, at the hits sel of (prim, u, v),
+        ng (3, k) their normals facing the rays."""
+        take = lambda a: np.take(a, sel, axis=-1)  # noqa: E731
+        self._texture(take(prim), take(u), take(v), thr_far, textures=self.mats.translucency_textures,
+                      back=self._back(take(prim), take(ng)))
+
+    def _translucency_at(self, prim, u, v, back=None):
+        """(3, k) the diffuse transmission's colour at hits (prim, u, v), per point where it varies."""
+        T = np.take(self.mats.translucency, np.take(self.tri.material, prim), axis=1)
+        if self.mats.translucency_textures:
+            self._texture(prim, u, v, T, textures=self.mats.translucency_textures, back=back)
+        return T
+
     def _next_event_far(self, k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys, u_pick, sinks, tb, u, v, dims,
                         ns_far=None, bump=None):
         """Light sampling of the transmission lobe at the vertices sel (columns of the other

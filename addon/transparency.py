@@ -231,6 +231,8 @@ class Transparency:
             if len(sel):
                 T = np.take(self.mats.translucency, np.take(mat, sel), axis=1)
                 thr_far = T * np.take(opacity, sel) * np.take(path.thr, np.take(rows, sel), axis=1)
+                if self.mats.translucency_textures:
+                    self._translucency_maps(sel, prim, u, v, thr_far, ng)
                 self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys,
                                      u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, bump=bump)
 

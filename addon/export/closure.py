@@ -76,7 +76,8 @@ class Closure:
     """Linear combination of what a diffuse renderer keeps:
     albedo = const + tex_weight * texture, emission constant, the weight of transparent
     closures (`transparent`, rgb; `glass` the part of it that stands in for refraction) and the
-    diffuse transmission (`translucent`, rgb: Translucent BSDFs' colour x their weights).
+    diffuse transmission (`translucent`, rgb: Translucent BSDFs' colour x their weights; with
+    `translucent_tex` it varies per point and `translucent` is only its estimate).
     `opacity` (an image's alpha, (Texture, inverted)) makes the shader opacity x (everything
     else) + (1 - opacity) x transparent at each hit; everything else includes `opaque_glass`,
     the glass the opaque part itself lets through (a Principled's transmission under its Alpha)."""
@@ -95,6 +96,10 @@ class Closure:
         # one's (colour x strength per point; `emission` a guess of its magnitude's mean)
         self.emission_tex = emission_tex
         self.translucent = np.array(translucent, np.float64)
+        # a diffuse transmission per shading point (a Mix Shader of a Translucent BSDF by a
+        # texture's factor), (Texture, weight (3,)): weight x it; `translucent` is then a guess at
+        # its mean (what picks the lobe and lights the passes); None: `translucent` everywhere
+        self.translucent_tex = None
         self.glass = np.array(glass, np.float64)
         self.opaque_glass = np.array(opaque_glass, np.float64)
         # the emission light samples see where it differs from `emission` (what camera and BSDF
@@ -143,6 +148,7 @@ class Closure:
         out = Closure(self.const * dim + add, self.emission, self.texture, self.tex_weight * dim, self.holdout,
                       self.transparent, self.opacity, self.emission_tex, self.translucent, self.glass,
                       self.opaque_glass, self.light_emission)
+        out.translucent_tex = self.translucent_tex
         if self.passes is None:
             return out
         k, t, w = self.passes
@@ -163,6 +169,11 @@ class Closure:
         return out._with_passes((p.const, p.texture, p.tex_weight))
 
     def _mapped(self, f):
+        out = self._mapped_albedo(f)
+        out.translucent_tex = self.translucent_tex
+        return out
+
+    def _mapped_albedo(self, f):
         if self.texture is None or not self.tex_weight.any():
             return Closure(f.exact(self.const), self.emission, None, (0, 0, 0), self.holdout, self.transparent,
                             self.opacity, self.emission_tex, self.translucent, self.glass, self.opaque_glass,
@@ -191,6 +202,8 @@ class Closure:
                       self.transparent * f, self.opacity, etex, self.translucent * f, self.glass * f,
                       self.opaque_glass * f, None if self.light_emission is None else self.light_emission * f)
         out.per_point_sum = self.per_point_sum
+        if self.translucent_tex is not None:
+            out.translucent_tex = (self.translucent_tex[0], self.translucent_tex[1] * f)
         if self.passes is None:
             return out
         k, t, w = self.passes
@@ -254,7 +267,23 @@ class Closure:
         p = self._pass_closure(self.pass_albedo())._plus(self._pass_closure(other.pass_albedo()), [])
         return out._with_passes((p.const, p.texture, p.tex_weight))
 
+    def translucent_at(self):
+        """(coords -> (n, 3) float64 (or (3,)), needs) of the diffuse transmission per point."""
+        if self.translucent_tex is None:
+            return colour_at(self.translucent, None, np.zeros(3))
+        return colour_at(np.zeros(3), *self.translucent_tex)
+
     def _plus(self, other, reasons):
+        out = self._plus_all_but_translucent(other, reasons)
+        if self.translucent_tex is not None or other.translucent_tex is not None:
+            # (a per-point transmission beside another: summed per point)
+            a, b = self.translucent_at(), other.translucent_at()
+            out.translucent_tex = (Texture.procedural(ProceduralTexels(
+                lambda coords: np.broadcast_to(a[0](coords) + b[0](coords), (_count(coords), 3)), a[1] | b[1],
+                'translucency'), 'translucency'), np.ones(3))
+        return out
+
+    def _plus_all_but_translucent(self, other, reasons):
         etex = self._emission_sum(other, reasons)
         light = None if self.light_emission is None and other.light_emission is None \
             else self.sampled_emission + other.sampled_emission

@@ -27,6 +27,7 @@ def _with_opacity(opaque, clear, opacity):
                   clear.transparent, opacity, opaque.emission_tex, opaque.translucent, clear.glass,
                   light_emission=opaque.light_emission)._with_passes(opaque.passes)
     out.rough = opaque.rough
+    out.translucent_tex = opaque.translucent_tex
     return out
 
 

@@ -398,6 +398,13 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         transparency = opacity = refraction = opaque_refraction = None
         translucency = nonnegative(closure.translucent.astype(np.float32), "translucency", reasons) \
             if closure.translucent.any() and not holdout else None
+        t_tex = None
+        if translucency is not None and closure.translucent_tex is not None:
+            # per point: the transmission over the material's stand-in for it (scenedata.Material)
+            t, w = closure.translucent_tex
+            scale = np.where(translucency > 0, np.asarray(w, np.float64) / np.where(translucency > 0, translucency,
+                                                                                   1.0), 0.0)
+            t_tex = t.pixels.followed_by(lambda rgb: np.maximum(rgb, 0.0) * scale)
         o_interp, o_ext, o_transform = 'Linear', 'REPEAT', None
         if closure.transparent.any() and not holdout:
             transparency = nonnegative(closure.transparent.astype(np.float32), "transparency", reasons)
@@ -464,7 +471,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         # image on a named map it reads that map too (it had, silently: a gradient across the
         # other map's direction, 0.45 / 0.45 where Cycles gives 0.11 / 0.79)
         # (an image inside such a chain reads its own map, named in uv_names: not the active one)
-        procedurals = [texture, pass_texture, e_tex, opacity] + [t.pixels for t in aov_textures.values()] + \
+        procedurals = [texture, pass_texture, e_tex, opacity, t_tex] + [t.pixels for t in aov_textures.values()] + \
             [b.values for b in bumps + ((displaced,) if displaced is not None else ())]
         if uv_names and any(isinstance(t, ProceduralTexels) and TEXCOORD_UV in t.needs for t in procedurals):
             uv_names = list(dict.fromkeys(uv_names + ['']))
@@ -499,7 +506,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                            rough_scale=None if rough is None else np.asarray(rough[1], np.float32),
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
                            texture_interpolation=interp, texture_extension=ext, texture_transform=transform,
-                           transparency=transparency, translucency=translucency, refraction=refraction,
+                           transparency=transparency, translucency=translucency, translucency_texture=t_tex,
+                           refraction=refraction,
                            opaque_refraction=opaque_refraction,
                            glass_roughness=glass_rough if refraction is not None or opaque_refraction is not None
                            else 0.0,

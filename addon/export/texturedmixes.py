@@ -27,10 +27,11 @@ def _emits(c):
     return bool(c.emission.any()) or c.emission_tex is not None
 
 
-def _constant_part(c):
+def _constant_part(c, translucency=False):
     """What of closure c a per-point Mix Shader factor cannot weigh, the surface holding one
-    value of it per material (a Translucent BSDF's colour, a Transparent's, ...), or ''."""
-    if c.translucent.any():
+    value of it per material (a Transparent's colour, ...), or ''. A Translucent BSDF's colour
+    is weighed per point by _procedural_mix (translucency True) but not per texel."""
+    if c.translucent.any() and not translucency:
         return "translucency is one colour per material here"
     if c.transparent.any() or c.opacity is not None:
         return ("a transparent part is one colour per material here, per point only in a cut-out: one "
@@ -40,6 +41,15 @@ def _constant_part(c):
     if c.light_emission is not None:
         return "an emission under a coat or sheen is one value per material here"
     return ''
+
+
+def _translucency_guess(texture, closures):
+    """(3,) a per-point transmission's stand-in where one value per material is read (the
+    lobe choice, the passes' weights): its mean over the unit cube, at least a thousandth of
+    the larger side's colour in each channel either side transmits (a channel of 0 there
+    would read as none at all)."""
+    top = np.maximum(*(c.translucent for c in closures))
+    return np.where(top > 0, np.maximum(texture.pixels.mean(), 1e-3 * top), 0.0)
 
 
 def factor_source(sources):
@@ -126,7 +136,7 @@ class TexturedMixes:
             # point then (sides of constant colours alone: _textured_mix, per texel)
             notes = []
             closures = [self._shader(socket, notes, depth + 1) for socket in (node.inputs[1], node.inputs[2])]
-            if any(c.texture is not None or _emits(c) or _constant_part(c) for c in closures):
+            if any(c.texture is not None or _emits(c) or _constant_part(c) or c.translucent.any() for c in closures):
                 found = procedurals.compile_floats([node.inputs['Fac']], "Mix Shader factor", fac_notes,
                                                    image=self._texture)
         if found is None:
@@ -140,23 +150,29 @@ class TexturedMixes:
         if cutout is not None:
             reasons.extend(fac_notes + notes)
             return cutout
-        sides, emits = [], []
+        sides, emits, transmits = [], [], []
         for c in closures:
             # (an image on the UV map is looked up per point as well: two Diffuse BSDFs on
             # different images mixed by a Checker had read the factor at its own value)
             albedo = colour_at(c.const, c.texture, c.tex_weight)
             # an emission: its constant, or its image's or procedural one's weight x per point
             emission_at = colour_at(*c.emitted())
-            why = _constant_part(c) or (albedo is None and "a mesh attribute's colour is not looked up in it") or \
-                (emission_at is None and "a mesh attribute's emission is not looked up in it")
+            translucent_at = c.translucent_at()
+            why = _constant_part(c, translucency=True) or \
+                (albedo is None and "a mesh attribute's colour is not looked up in it") or \
+                (emission_at is None and "a mesh attribute's emission is not looked up in it") or \
+                (translucent_at is None and "a mesh attribute's translucency is not looked up in it")
             if why:
                 if sources and said is not None:   # (a coordinate-only factor: the evaluation's note says it)
                     said.append(f"from {factor_source(sources)} not evaluated per point ({why})")
                 return None
             sides.append(albedo[0])
             emits.append(emission_at[0])
-            needs |= albedo[1] | emission_at[1]
-        if _alike(*closures) and not any(_emits(c) for c in closures):     # (the factor, unused, says nothing)
+            transmits.append(translucent_at[0])
+            needs |= albedo[1] | emission_at[1] | translucent_at[1]
+        translucent = any(c.translucent.any() for c in closures)
+        if _alike(*closures) and not any(_emits(c) for c in closures) and not translucent:
+            # (the factor, unused, says nothing)
             reasons.extend(notes)
             return closures[0]
         reasons.extend(fac_notes + notes)
@@ -176,9 +192,19 @@ class TexturedMixes:
             # emission by the factor at the point; it had stood at the node's own value (1.3x)
             emitted = mixer(emits, 'emission')
             emission, etex = emitted.pixels.magnitude(), (emitted, np.ones(3))
-        if etex is not None and not any(c.reflects() for c in closures):
+        if etex is not None and not any(c.reflects() for c in closures) and not translucent:
             return Closure(emission=emission, emission_tex=etex)     # (Mix of two Emissions: no albedo)
-        out = Closure(texture=mixer(sides), tex_weight=(1.0, 1.0, 1.0), emission=emission, emission_tex=etex)
+        reflects = any(c.reflects() for c in closures)
+        out = Closure(texture=mixer(sides) if reflects else None, tex_weight=(1.0, 1.0, 1.0) if reflects else (0, 0, 0),
+                      emission=emission, emission_tex=etex)
+        if translucent:
+            # a leaf whose Translucent BSDF a mask weighs (Mix of Diffuse and Translucent by a
+            # Checker or an image): the transmission per point, T1 + (T2 - T1) x factor, as the
+            # albedo; it had been one colour per material at the factor's own value (the
+            # pattern gone from the light through the leaf)
+            transmitted = mixer(transmits, 'translucency')
+            out.translucent = _translucency_guess(transmitted, closures)
+            out.translucent_tex = (transmitted, np.ones(3))
         if all(c.passes is None for c in closures):
             return out
         # a rough diffuse side: the Diffuse Color pass mixes its colour (Closure.passes)

@@ -31,7 +31,7 @@ def test_factor_source_words_each_source_by_its_kind(pairs, shown):
 
 
 def test_an_image_name_with_a_comma_is_said_whole(scene, said):
-    """Mix(Diffuse, Translucent) by Checker x an image named 'a, B': the translucency is one
+    """Mix(Transparent, Transparent) by Checker x an image named 'a, B': the transparency is one
     colour per material, so the factor stands at its own value, said naming both sources."""
     mat, nt, out = scenes._material("M")
     mix, mul = nt.nodes.new('ShaderNodeMixShader'), nt.nodes.new('ShaderNodeMath')
@@ -41,8 +41,10 @@ def test_an_image_name_with_a_comma_is_said_whole(scene, said):
     nt.links.new(nt.nodes.new('ShaderNodeTexChecker').outputs['Fac'], mul.inputs[0])
     nt.links.new(img.outputs['Color'], mul.inputs[1])
     nt.links.new(mul.outputs[0], mix.inputs['Fac'])
-    nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], mix.inputs[1])
-    nt.links.new(nt.nodes.new('ShaderNodeBsdfTranslucent').outputs[0], mix.inputs[2])
+    clear = [nt.nodes.new('ShaderNodeBsdfTransparent') for _ in range(2)]
+    clear[1].inputs['Color'].default_value = (0.2, 0.2, 0.9, 1)
+    nt.links.new(clear[0].outputs[0], mix.inputs[1])
+    nt.links.new(clear[1].outputs[0], mix.inputs[2])
     nt.links.new(mix.outputs[0], out.inputs['Surface'])
     scenes.plane("P", materials=(mat,)).data.uv_layers.new(name="UVMap")
     scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=2.0)

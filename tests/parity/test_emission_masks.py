@@ -131,15 +131,16 @@ def _said_for(tmp_path, said, first, second, kind):
 
 
 @pytest.mark.parametrize('first, second, kind, what', [
-    ('ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTranslucent', 'checker', "translucency is one colour per material"),
+    ('ShaderNodeBsdfTransparent', 'ShaderNodeBsdfTransparent', 'checker', "a transparent part is one colour"),
     ('ShaderNodeBsdfTransparent', 'ShaderNodeBsdfTransparent', 'image_uv', "a transparent part is one colour"),
-    ('ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTranslucent', 'image_generated', "translucency is one colour")])
+    ('ShaderNodeBsdfTransparent', 'ShaderNodeBsdfTransparent', 'image_generated', "a transparent part is one colour")])
 def test_a_factor_not_weighed_per_point_says_what_stands_at_a_constant(first, second, kind, what, tmp_path, said):
-    """Where the surface holds one value per material (a Translucent BSDF's colour, a
-    Transparent's beside another transparent side), the factor stands at its own value for
-    both shaders: said once, naming the factor's source (an image as an image) and why. It had
-    said "procedural textures ('image 'mask.png'')" and then the factor again ("not
-    computed (an image)"), without saying what was read at a constant."""
+    """Where the surface holds one value per material (a Transparent's colour beside another
+    transparent side; a Translucent BSDF's is weighed per point: test_translucent_masks.py),
+    the factor stands at its own value for both shaders: said once, naming the factor's source
+    (an image as an image) and why. It had said "procedural textures ('image 'mask.png'')" and
+    then the factor again ("not computed (an image)"), without saying what was read at a
+    constant."""
     text = _said_for(tmp_path, said, first, second, kind)
     source = "procedural texture 'Checker Texture'" if kind == 'checker' else "image 'mask.png'"
     assert f"Mix Shader factor from {source} not evaluated per point ({what}" in text, text
