@@ -420,8 +420,9 @@ class Assembly:
                     mats.append(dataclasses.replace(
                         mats[k], base_color=np.zeros(3, np.float32), emission=np.zeros(3, np.float32),
                         emission_sampling='NONE', texture=None, emission_texture=None, normal_texture=None,
-                        color_attribute=None, holdout=False, transparency=None, translucency=None, refraction=None,
-                        opacity=None, opaque_refraction=None, visibility=sd.VIS_SHADOW, approximated='', aovs={},
+                        color_attribute=None, holdout=False, transparency=None, translucency=None,
+                        translucency_texture=None, refraction=None, opacity=None, opaque_refraction=None,
+                        visibility=sd.VIS_SHADOW, approximated='', aovs={},
                         aov_textures={}))
                     b.attribute_maps.append(None)
                     b.aov_maps.append(None)
@@ -476,7 +477,8 @@ class Assembly:
                 m, base_color=np.zeros(3, np.float32), emission=np.zeros(3, np.float32), texture=None,
                 emission_texture=None, normal_texture=None, bumps=(), displacement_bump=None,
                 color_attribute=None, holdout=k in held,
-                transparency=None if k in held else np.ones(3, np.float32), translucency=None, refraction=None,
+                transparency=None if k in held else np.ones(3, np.float32), translucency=None,
+                translucency_texture=None, refraction=None,
                 opacity=None, opaque_refraction=None, visibility=int(clear[k]), approximated='',
                 clear_twin=k not in held))
             b.attribute_maps.append(None)
@@ -1208,11 +1210,12 @@ class Assembly:
 
 
 def _procedurals(material):
-    """The material's procedural textures (its colour's, its emission's, its opacity's, its AOVs',
-    its bump heights')."""
+    """The material's procedural textures (its colour's, its emission's, its opacity's, its
+    transmission's, its AOVs', its bump heights')."""
     bumps = tuple(getattr(material, 'bumps', None) or ()) + \
         tuple(b for b in (getattr(material, 'displacement_bump', None),) if b is not None)
-    textures = [material.texture, getattr(material, 'emission_texture', None), getattr(material, 'opacity', None)] + \
+    textures = [material.texture, getattr(material, 'emission_texture', None), getattr(material, 'opacity', None),
+                getattr(material, 'translucency_texture', None)] + \
         [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()] + [b.values for b in bumps]
     return [t for t in textures if isinstance(t, ProceduralTexels)]
 

@@ -273,6 +273,23 @@ class Closure:
             return colour_at(self.translucent, None, np.zeros(3))
         return colour_at(np.zeros(3), *self.translucent_tex)
 
+    def transmitting(self):
+        """A Translucent BSDF of this closure's albedo as its colour (a texture's per point):
+        the closure of its diffuse transmission; None where the colour cannot be looked up per
+        point (an attribute's probes)."""
+        if self.texture is None or not self.tex_weight.any():
+            return Closure(translucent=np.clip(np.nan_to_num(self.const), 0.0, None))
+        at = colour_at(self.const, self.texture, self.tex_weight)
+        if at is None:
+            return None
+        fn, needs = at
+        tex = Texture.procedural(ProceduralTexels(fn, needs, self.texture.name), 'translucency')
+        # (its stand-in: the mean, a thousandth of the weights at least where they are not 0)
+        top = np.abs(self.const) + np.abs(self.tex_weight)
+        out = Closure(translucent=np.where(top > 0, np.maximum(tex.pixels.mean(), 1e-3 * top), 0.0))
+        out.translucent_tex = (tex, np.ones(3))
+        return out
+
     def _plus(self, other, reasons):
         out = self._plus_all_but_translucent(other, reasons)
         if self.translucent_tex is not None or other.translucent_tex is not None:

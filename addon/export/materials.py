@@ -157,7 +157,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             self.aov_maps.append(self._aov_varying)
             self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
                                      or m.emission_texture is not None or m.normal_texture is not None
-                                     or bool(m.bumps) or m.displacement_bump is not None)
+                                     or bool(m.bumps) or m.displacement_bump is not None
+                                     or m.translucency_texture is not None)
             self.uv_maps.append(m.uv_map)
             self.uv_several.append(self._uv_several)
             self._index[key] = idx

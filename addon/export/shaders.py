@@ -192,6 +192,14 @@ class ShaderClosures:
         if t == 'BSDF_TRANSLUCENT':
             # diffuse transmission: rendered as Cycles does (the integrator's lobe choice)
             self._normal_input(node, reasons)
+            if linked_link(node.inputs['Color']) is not None:
+                # a colour nodes compute (a leaf's image, a procedural pattern): per point, as a
+                # Diffuse BSDF's (it had stood at the socket's own value, said)
+                notes = []
+                transmitted = self._color_closure(node.inputs['Color'], notes).transmitting()
+                if transmitted is not None:
+                    reasons.extend(notes)
+                    return transmitted
             color, ok = constant_color(node.inputs['Color'])
             if not ok:
                 reasons.append("Translucent BSDF colour driven by nodes; its own value used")
