@@ -465,7 +465,7 @@ def cutout_sum(a, b, reasons):
     and shades A x (albedo, emission) at each point, T constant: the sum is that exactly with
     T = _SPAN x (sum of the sides' t), 1 - A = (what passes here) / T, and the albedo, emission
     and pass colour the sides' opaque parts x their opacities / A per point. None (said) where
-    that cannot be exact: transparencies of different colours, glass, translucency, holdout, a
+    that cannot be exact: transparencies of different colours, glass, holdout, a
     coat's light emission, or textures that cannot be looked up per point."""
     sides = (a, b)
     why = []
@@ -473,8 +473,6 @@ def cutout_sum(a, b, reasons):
         why.append("a holdout")
     if any(c.glass.any() or c.opaque_glass.any() for c in sides):
         why.append("transmission")
-    if any(c.translucent.any() for c in sides):
-        why.append("translucency")
     if any(c.light_emission is not None for c in sides):
         why.append("an emission under a coat or sheen")
     ts = [np.asarray(c.transparent, np.float64) for c in sides]
@@ -488,13 +486,14 @@ def cutout_sum(a, b, reasons):
             albedo = colour_at(c.const, c.texture, c.tex_weight)
             passes = colour_at(*c.pass_albedo())
             emission = colour_at(*c.emitted())
-            if None in (o, albedo, passes, emission):
+            transmission = c.translucent_at()
+            if None in (o, albedo, passes, emission, transmission):
                 why.append("an attribute's colour")
                 break
             # the share of base this side passes where its opacity is 0 (1 - o: a cut-out) or
             # always (no opacity)
             share = float(c.transparent.max() / base.max())
-            parts.append((c.opacity is not None, share, o, albedo, passes, emission))
+            parts.append((c.opacity is not None, share, o, albedo, passes, emission, transmission))
     names = ', '.join(dict.fromkeys(f"'{_opacity_name(c)}'" for c in sides if c.opacity is not None))
     if why:
         reasons.append(f"cut-out or Alpha from {names} added or mixed with other shaders, with "
@@ -502,7 +501,7 @@ def cutout_sum(a, b, reasons):
                        f"dropped; not weighed by the opacity per point)")
         return None
     total = sum(p[1] for p in parts)              # what passes at most, in units of base
-    needs = frozenset().union(*(p[2][1] | p[3][1] | p[4][1] | p[5][1] for p in parts))
+    needs = frozenset().union(*(p[2][1] | p[3][1] | p[4][1] | p[5][1] | p[6][1] for p in parts))
 
     @_once_per_lookup
     def opacities(coords):
@@ -513,7 +512,8 @@ def cutout_sum(a, b, reasons):
         return sides, 1.0 - np.broadcast_to(passing, (_count(coords),)) / (_SPAN * total)
 
     def opaque(k):
-        """coords -> (n, 3): part k (3 albedo, 4 pass colour, 5 emission) of the sides' opaque
+        """coords -> (n, 3): part k (3 albedo, 4 pass colour, 5 emission, 6 diffuse
+        transmission) of the sides' opaque
         parts, each x its opacity, over the sum's opacity."""
         def fn(coords):
             sides, summed = opacities(coords)
@@ -538,6 +538,14 @@ def cutout_sum(a, b, reasons):
                   emission_tex=(emission_tex, np.ones(3)) if emits else None)
     if pass_differs:
         out._with_passes((np.zeros(3), texture(opaque(4), 'cutout sum pass'), np.ones(3)))
+    if any(c.translucent.any() for c in sides):
+        # a Translucent BSDF in the sum (a leaf's cut-out beside its transmission): per point as
+        # the albedo, its sides' opaque parts x their opacities over the sum's (it had made the
+        # sum opaque, said)
+        transmitted = texture(opaque(6), 'cutout sum translucency')
+        top = np.maximum(*(c.translucent for c in sides))
+        out.translucent = np.where(top > 0, np.maximum(transmitted.pixels.mean(), 1e-3 * top), 0.0)
+        out.translucent_tex = (transmitted, np.ones(3))
     out.per_point_sum = True
     return out
 

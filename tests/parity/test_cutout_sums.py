@@ -67,6 +67,9 @@ def _other(nt, kind):
     if kind == 'emission':
         node = nt.nodes.new('ShaderNodeEmission')
         node.inputs['Color'].default_value = (0.5, 0.1, 0.0, 1.0)
+    elif kind == 'translucent':
+        node = nt.nodes.new('ShaderNodeBsdfTranslucent')
+        node.inputs['Color'].default_value = (0.3, 0.8, 0.4, 1.0)
     elif kind == 'diffuse':
         node = nt.nodes.new('ShaderNodeBsdfDiffuse')
         node.inputs['Color'].default_value = (0.1, 0.2, 0.9, 1.0)
@@ -120,6 +123,9 @@ CASES = [
     ('mix', 'cutout', 'image', 'diffuse'),
     ('mix', 'alpha', 'image', 'principled'),        # the leaf card: image Alpha mixed 0.5 with an opaque Principled
     ('add', 'alpha', 'image', 'emission'),
+    ('add', 'cutout', 'checker', 'translucent'),    # a Translucent BSDF beside the cut-out: per point too
+    ('mix', 'cutout', 'image', 'translucent'),
+    ('add', 'alpha', 'checker', 'translucent'),
 ]
 
 
@@ -170,28 +176,32 @@ def test_cutout_sum_emission_lights_the_floor(tmp_path, said):
     assert not any("combined with other shaders" in t for t in said), said
 
 
-def test_cutout_sum_with_translucency_said_and_opaque(tmp_path, said):
-    """Add(cut-out by a Checker, Translucent): the renderer's translucency is one colour per
-    material, the sum's would vary per point, so it is rendered opaque (the cut-out's
-    transparency dropped with its opacity: no cell shows the floor) and said so, naming the
-    Checker, not an image (it had said 'image alpha combined with other shaders; alpha ignored'
-    and rendered transparent and opaque at once)."""
-    def translucent_sum():
+def test_cutout_sum_with_translucency_lit_from_below(tmp_path, said):
+    """Add(a Translucent BSDF cut out by a Checker: Mix(Transparent, Translucent), a blue
+    Diffuse) lit from below only (the sun under the sheet, no floor, a black world): the camera
+    sees the transmission through the cut-out's opaque cells alone, each cell within 2% of
+    Cycles'. The renderer's translucency had been one colour per material, so the sum was
+    rendered opaque (the cut-out's transparency dropped, said): every cell alike, green 0.479
+    also on the clear cells, where Cycles' are black."""
+    def leaf():
         mat, nt, out = scenes._material("Sum")
-        add, tl = nt.nodes.new('ShaderNodeAddShader'), nt.nodes.new('ShaderNodeBsdfTranslucent')
-        tl.inputs['Color'].default_value = (0.2, 0.2, 0.2, 1.0)
-        nt.links.new(_cutout(nt, 'checker').outputs[0], add.inputs[0])
-        nt.links.new(tl.outputs[0], add.inputs[1])
+        add, tr, tl, mix = (nt.nodes.new(t) for t in ('ShaderNodeAddShader', 'ShaderNodeBsdfTransparent',
+                                                      'ShaderNodeBsdfTranslucent', 'ShaderNodeMixShader'))
+        tl.inputs['Color'].default_value = (0.3, 0.8, 0.4, 1.0)
+        nt.links.new(_factor(nt, 'checker'), mix.inputs['Fac'])
+        nt.links.new(tr.outputs[0], mix.inputs[1])
+        nt.links.new(tl.outputs[0], mix.inputs[2])
+        nt.links.new(mix.outputs[0], add.inputs[0])
+        nt.links.new(_other(nt, 'diffuse').outputs[0], add.inputs[1])
         nt.links.new(add.outputs[0], out.inputs['Surface'])
         return mat
-    sc = _scene(translucent_sum)
-    _settings(32, 1)
-    layer = sc.view_layers[0].name
-    exr = scenes.render_engines(sc, tmp_path, engines=('DACRT',))['DACRT']
-    cells = _cells(np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], axis=-1))
-    # every cell the orange Diffuse (plus the translucency), none showing the green floor
-    assert np.ptp(cells, axis=(0, 1)).max() < 0.05 and cells[..., 0].min() > 0.6, cells.round(3).tolist()
-    text = ' '.join(said)
-    assert "cut-out or Alpha from 'Checker Texture'" in text and "translucency" in text and \
-        "rendered opaque" in text, said
-    assert "image" not in text, said
+    _scene(leaf)
+    sun = next(ob for ob in bpy.data.objects if ob.type == 'LIGHT')
+    sun.rotation_euler = (np.radians(160), 0.0, 0.0)        # shining up at the sheet's back
+    bpy.data.objects.remove(bpy.data.objects["Floor"])
+    scenes.black_world()
+    img = _render(tmp_path, 256)
+    d, c = _cells(img['DACRT'][..., :3]), _cells(img['CYCLES'][..., :3])
+    np.testing.assert_allclose(d, c, rtol=0.02, atol=3e-3)
+    assert np.ptp(c[..., 1]) > 0.05, "the cut-out should show"
+    assert not any("rendered opaque" in t for t in said), said
