@@ -33,10 +33,9 @@ class PassWriting:
         nb, bump = self._bent_normals(prim, u, v, ns, ng)
         if bump is None:
             return nb
-        mat = np.take(self.tri.material, prim)
         parts = [(diffuse.mean(axis=0), nb)]
         if self._any_translucent:
-            wt = np.take(self.mats.translucency, mat, axis=1).mean(axis=0)
+            wt = self._translucency_at(prim, u, v, self._back(prim, ng)).mean(axis=0)
             if (wt > 0).any():
                 parts.append((wt, valid_reflection_normal(ng, I, nb, bump[3] != 0)))
         if tau is not None:
