@@ -457,7 +457,7 @@ def _opacity_name(c):
     return c.opacity[0].name or 'texture'
 
 
-def cutout_sum(a, b, reasons):
+def cutout_sum(a, b, reasons, factor=None):
     """The sum of closures a and b, one or both with an opacity (a cut-out or a Principled Alpha),
     per shading point as Cycles sums their closures: each opacity weighs only its own side. A
     side of opacity o passes t (1 - o) and reflects / emits o x its opaque part; one without
@@ -466,7 +466,9 @@ def cutout_sum(a, b, reasons):
     T = _SPAN x (sum of the sides' t), 1 - A = (what passes here) / T, and the albedo, emission
     and pass colour the sides' opaque parts x their opacities / A per point. None (said) where
     that cannot be exact: transparencies of different colours, glass, holdout, a
-    coat's light emission, or textures that cannot be looked up per point."""
+    coat's light emission, or textures that cannot be looked up per point. With `factor`
+    ((coords -> (n,) in [0, 1], its needs)) the Mix Shader of a and b by it per point
+    instead of their sum: a weighs 1 - factor, b factor, transparency and all."""
     sides = (a, b)
     why = []
     if any(c.holdout for c in sides):
@@ -501,14 +503,23 @@ def cutout_sum(a, b, reasons):
                        f"dropped; not weighed by the opacity per point)")
         return None
     total = sum(p[1] for p in parts)              # what passes at most, in units of base
-    needs = frozenset().union(*(p[2][1] | p[3][1] | p[4][1] | p[5][1] | p[6][1] for p in parts))
+    needs = frozenset().union(*(p[2][1] | p[3][1] | p[4][1] | p[5][1] | p[6][1] for p in parts),
+                              factor[1] if factor is not None else frozenset())
 
     @_once_per_lookup
     def opacities(coords):
         """(each side's opacity, the sum's (n,)) at coords, evaluated once per lookup: the
         sum's colours read both (each side's had been evaluated twice per colour)."""
         sides = [o(coords) for _, _, (o, _), *_ in parts]
-        passing = sum(share * ((1.0 - o) if cut else 1.0) for (cut, share, *_), o in zip(parts, sides))
+        if factor is not None:      # (a Mix Shader's per point: each side whole times its weight)
+            f = np.asarray(factor[0](coords), np.float64)
+            f = f.reshape(len(f), -1)[:, 0] if f.ndim else f       # (a factor is (n, 1) or (n,))
+            weights = (1.0 - f, f)
+        else:
+            weights = (1.0, 1.0)
+        passing = sum(w * share * ((1.0 - o) if cut else 1.0)
+                      for (cut, share, *_), o, w in zip(parts, sides, weights))
+        sides = [w * np.asarray(o, np.float64) for o, w in zip(sides, weights)]
         return sides, 1.0 - np.broadcast_to(passing, (_count(coords),)) / (_SPAN * total)
 
     def opaque(k):

@@ -11,7 +11,7 @@ from ..nodegraph import links_feeding
 from ..procedural import ProceduralTexels
 from ..texture import ImageTexels, stored_texels
 from . import procedurals
-from .closure import Closure, Texture, colour_at, same_rough
+from .closure import Closure, Texture, colour_at, cutout_sum, same_rough
 
 
 def _alike(a, b):
@@ -150,6 +150,18 @@ class TexturedMixes:
         if cutout is not None:
             reasons.extend(fac_notes + notes)
             return cutout
+
+        def factor(coords):
+            return np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+        if any(c.transparent.any() or c.opacity is not None for c in closures):
+            # a see-through side that is not a pure cut-out (a Transparent beside a Diffuse,
+            # a Principled Alpha): each side whole, times its weight per point, as a cut-out
+            # sum computes it (it had been one transparency per material at the factor's own
+            # value, said); None where that cannot be exact (said below)
+            mixed = cutout_sum(*closures, [], factor=(factor, needs))
+            if mixed is not None:
+                reasons.extend(fac_notes + notes)
+                return mixed
         sides, emits, transmits = [], [], []
         for c in closures:
             # (an image on the UV map is looked up per point as well: two Diffuse BSDFs on
@@ -176,9 +188,6 @@ class TexturedMixes:
             reasons.extend(notes)
             return closures[0]
         reasons.extend(fac_notes + notes)
-
-        def factor(coords):
-            return np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
 
         def mixer(sides, kind='procedural'):
             def mixed(coords):      # reads no Blender data: it runs during the render's lookups
