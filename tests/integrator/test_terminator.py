@@ -218,7 +218,10 @@ def test_shading_offset_scales_light_samples_by_shift_cos_in():
     factor = np.where(f > 1, _shift(c, f), 1.0)
     vb, vg = base[0][:, send].astype(np.float64), got[0][:, send].astype(np.float64)
     ok = vb.max(axis=0) > 0
-    # (float32 acos near c = 1 loses digits: Cycles itself uses a fast approximation)
+    # (float32 acos near c = 1 loses digits: Cycles itself uses a fast approximation; and
+    # where the stretched angle lands next to 90 deg its cosine is all cancellation, so a
+    # float32 ulp of the direction moves it by percents: those few are not compared)
+    ok &= np.abs(np.arccos(np.clip(c, -1, 1)) * f - np.pi / 2) > 1e-3
     assert np.allclose(vg[:, ok], vb[:, ok] * factor[ok], rtol=2e-3, atol=1e-30)
     assert (factor[ok] < 0.9).mean() > 0.3
     # a stretched angle past 90 deg: that sample can no longer contribute
