@@ -35,6 +35,16 @@ def _table(v, scale=1.0):
     return np.ascontiguousarray(geo), area.astype(F32)
 
 
+def _normal_share(g):
+    """The share of the table's step that the step along the normal takes (pathvertex.h
+    normal_share): sum_a |n_a| ulp(mag_a) / ulp(max_a mag_a), at most 1; mag_a = |v0_a| +
+    max(|e1_a|, |e2_a|) in float32 (g: the table's columns, float64)."""
+    g = g.astype(F32)
+    mag = np.maximum(np.abs(g[0:3]) + np.maximum(np.abs(g[3:6]), np.abs(g[6:9])), F32(2.0 ** -100))
+    ulp = np.spacing(mag).astype(np.float64)
+    return np.minimum(1.0, (np.abs(g[9:12]).astype(np.float64) * ulp).sum(axis=0) / ulp.max(axis=0))
+
+
 def _unit(rng, n):
     d = rng.normal(size=(3, n))
     return (d / np.linalg.norm(d, axis=0)).astype(F32)
@@ -98,10 +108,11 @@ def test_surface_matches_float64(smooth, select):
     np.testing.assert_array_equal(ng, (g[9:12] * flip).astype(F32))
     # the step off the surface, at most half the way back to the plane's distance of the origin
     dn = np.abs(np.einsum("ij,ij->j", g[9:12], D[:, sel]))
-    step = np.linalg.norm(g[12:15], axis=0)
+    share = _normal_share(g)
+    step = np.linalg.norm(g[12:15], axis=0) * share
     scale = np.minimum(1.0, 0.5 * hits["t"][sel] * dn / step)
     assert (scale < 1).mean() > 0.05
-    np.testing.assert_allclose(P_off - P, g[12:15] * flip * scale, atol=1e-6)
+    np.testing.assert_allclose(P_off - P, g[12:15] * flip * share * scale, atol=1e-6)
     back = np.abs(np.einsum("ij,ij->j", ng.astype(float), P_off.astype(float) - P))
     assert (back <= 0.5 * hits["t"][sel] * dn * (1 + 1e-5) + 1e-6 * np.abs(g).max()).all()
     if smooth:
