@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from .scenedata import NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, SceneData
-from .surfacetables import OFFSET_ULPS
+from .surfacetables import OFFSET_ULPS, normal_share
 
 F32 = np.float32
 
@@ -234,13 +234,18 @@ def rounded_strands(sd: SceneData, origin):
     return bad if bad.any() else None
 
 
-# Far-reaching surfaces (huge_surfaces): a triangle's self-intersection step is OFFSET_ULPS ULPs
-# of its largest coordinate, so a single-quad ground plane 1e6 across steps 0.5 m off itself
-# everywhere, also under the 1 m objects standing on it near the origin, whose contact shadows
-# and the light under them are then lost (a 1 m box on planes of half-size 1e4 / 1e5 / 1e6,
-# 64x48, Cycles 512 spp against DACRT 2 x 256: its shadow's 8x8 block x1.003 / 1.033 / 1.128
-# Cycles'). Said where the step exceeds _HUGE_STEP of the size of the objects within
-# _NEAR_STEPS steps of the surface (1e5: 6%, said; 1e4: 0.8%, within noise, not said).
+# Far-reaching surfaces (huge_surfaces): float32 places a point on a triangle only to ULPs of
+# its coordinates. What the render still gets wrong near objects resting on a huge face
+# (measured: a 1 m box on one quad of half-size H, against the same plane split small under the
+# box, which renders right): hit points placed to ~1 ULP of H along the surface (its float32
+# barycentrics: median 1, largest ~4.5 ULPs; Cycles' are the same), points within the step
+# (8 ULPs of H) of a face's edge moved up to 2 steps along the surface (the margin that keeps a
+# neighbour's float test from taking them), and on a tilted face the step along the normal (P's
+# error there, ULPs of H). An axis-aligned plane steps only ULPs of its own height off itself
+# (pathvertex.h normal_share): the 0.5 m step under everything on a plane of half-size 1e6,
+# which lost the contact shadows (the box's 8x8 shadow block 1.128x Cycles'), is gone. Said
+# where one of those exceeds _HUGE_STEP of the size of the objects within _NEAR_STEPS steps of
+# the surface (H = 1e4: 0.8%, not said).
 _HUGE_STEP = 1e-2
 _NEAR_STEPS = 4.0
 _HUGE_CANDIDATES = 8      # the largest triangles of each far-reaching object that are checked
@@ -389,26 +394,60 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None, found=None) ->
             if not seen.any():
                 continue
             size = float(np.median(sizes[seen]))
-            if size > 0 and step > _HUGE_STEP * size:
-                share = step / size
+            if not (size > 0 and step > _HUGE_STEP * size):
+                continue
+            corners = [c[j] for c in cv]
+            said = _what_is_off(corners, step, olo[seen], ohi[seen], _HUGE_STEP * size)
+            if said:
+                share = max(err for err, _ in said) / size
                 named = int(index[mine[j]])    # by its object: a huge tile's instances said once
                 if named not in found or share > found[named][0]:
-                    found[named] = (share, step, size, float(_magnitude(v[tri[mine[j]]]).max()))
+                    found[named] = (share, [text for _, text in said], size, float(_magnitude(np.array(corners)).max()))
     if not found:
         return []
     where = "the render's origin" if recentred_origin is not None and np.any(recentred_origin) else "the world origin"
     out = []
     ranked = sorted(found.items(), key=lambda kv: -kv[1][0])
-    for obj, (share, step, size, mag) in ranked[:_HUGE_OBJECTS]:
+    for obj, (share, texts, size, mag) in ranked[:_HUGE_OBJECTS]:
         name = names[int(obj)] if 0 <= int(obj) < len(names) else f"#{int(obj)}"
-        out.append(f"object '{name}' has faces reaching {mag:.3g} from {where}: bounce and shadow rays "
-                   f"leave them {step:.2g} off the surface (8 float32 ULPs of that coordinate), "
-                   f"{share:.0%} of the {size:.3g}-unit objects on or near it, so their contact "
-                   f"shadows and the light under them are lost; subdivide it so the faces under "
+        out.append(f"object '{name}' has faces reaching {mag:.3g} from {where}: {'; '.join(texts)} "
+                   f"(up to {share:.0%} of the {size:.3g}-unit objects on or near it), so shading "
+                   f"and contact shadows there are off by that much; subdivide it so the faces under "
                    f"the objects are small (Subdivide, or a Grid), or make it smaller")
     if len(ranked) > _HUGE_OBJECTS:
         out[-1] += f" ({len(ranked) - _HUGE_OBJECTS} more such objects)"
     return out
+
+
+def _what_is_off(corners, step, olo, ohi, limit):
+    """(error, text) of what float32 still gets wrong by more than `limit` on the triangle of
+    corners (3 float64 points) whose table step is `step`, near the objects of boxes olo / ohi
+    (k, 3): the hit points' placement (an ULP of its largest coordinate), the move of points
+    within the step of an edge (where an object lies that near one), the step along the normal."""
+    c = [np.asarray(x, np.float64) for x in corners]
+    mag = float(max(np.abs(x).max() for x in c))
+    ulp = float(np.spacing(np.float32(mag)))
+    said = []
+    if ulp > limit:
+        said.append((ulp, f"hit points on them are placed only to ~{ulp:.2g} (a float32 ULP of that coordinate)"))
+    if step > limit:
+        centre, half = 0.5 * (olo + ohi), 0.5 * np.sqrt(((ohi - olo) ** 2).sum(axis=1))
+        for a, b in ((c[0], c[1]), (c[1], c[2]), (c[2], c[0])):
+            e = b - a
+            s = np.clip(((centre - a) @ e) / max(float(e @ e), 1e-300), 0.0, 1.0)
+            gap = np.sqrt((((a + s[:, None] * e) - centre) ** 2).sum(axis=1)) - half
+            if (gap <= _NEAR_STEPS * step).any():
+                said.append((step, f"shading points within {step:.2g} of their edges move up to "
+                                   f"{2 * step:.2g} along them"))
+                break
+        f32 = np.float32
+        n = np.cross(c[1] - c[0], c[2] - c[0])
+        n /= max(float(np.linalg.norm(n)), 1e-300)
+        normal = step * float(normal_share(c[0][None].astype(f32), (c[1] - c[0])[None].astype(f32),
+                                           (c[2] - c[0])[None].astype(f32), n[None])[0])
+        if normal > limit:
+            said.append((normal, f"bounce and shadow rays leave them {normal:.2g} off the surface"))
+    return said
 
 
 def validate(sd: SceneData):

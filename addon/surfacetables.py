@@ -26,8 +26,22 @@ F32 = np.float32
 # itself is skipped. (Measured over random tilted, subdivided, huge, tiny and distant planes and
 # convex folds: 2 ULPs already never re-hit a neighbour; 8 is the margin.) A 2 km plane so gets
 # a 0.5 mm step where the previous 256 ULPs gave 1.5 cm (which biased MIS toward nearby lights).
+# The step along the normal is only the share of that P's error along the normal needs (native
+# pathvertex.h normal_share: on a plane z = c, ULPs of c however far the plane reaches); the
+# full step stays the hit point's margin from the edges, where a neighbour's float test errs.
 OFFSET_ULPS = F32(8.0)
 _TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
+
+
+def normal_share(v0, e1, e2, n):
+    """The share of a triangle's step taken along its normal, as the native hit-point
+    reconstruction computes it (pathvertex.h normal_share): sum_a |n_a| ulp(mag_a) over
+    ulp(max_a mag_a), at most 1, mag_a = |v0_a| + max(|e1_a|, |e2_a|) in float32. Rows (k, 3)
+    of the table's v0, edges and unit normal; returns (k,) float64."""
+    v0, e1, e2 = (np.asarray(x, F32) for x in (v0, e1, e2))
+    mag = np.maximum(np.abs(v0) + np.maximum(np.abs(e1), np.abs(e2)), _TINY)
+    ulp = np.spacing(mag).astype(np.float64)
+    return np.minimum(1.0, (np.abs(np.asarray(n, np.float64)) * ulp).sum(axis=1) / ulp.max(axis=1))
 
 
 class Triangles:
