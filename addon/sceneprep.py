@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from .scenedata import NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, SceneData
-from .surfacetables import OFFSET_ULPS, normal_share
+from .surfacetables import OFFSET_ULPS
 
 F32 = np.float32
 
@@ -242,7 +242,7 @@ def rounded_strands(sd: SceneData, origin):
 # (8 ULPs of H) of a face's edge moved up to 2 steps along the surface (the margin that keeps a
 # neighbour's float test from taking them), and on a tilted face the step along the normal (P's
 # error there, ULPs of H). An axis-aligned plane steps only ULPs of its own height off itself
-# (pathvertex.h normal_share): the 0.5 m step under everything on a plane of half-size 1e6,
+# (native shading.h triangle_table): the 0.5 m step under everything on a plane of half-size 1e6,
 # which lost the contact shadows (the box's 8x8 shadow block 1.128x Cycles'), is gone. Said
 # where one of those exceeds _HUGE_STEP of the size of the objects within _NEAR_STEPS steps of
 # the surface (H = 1e4: 0.8%, not said).
@@ -289,9 +289,12 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None, found=None) ->
     if v.ndim != 2 or not len(v) or not len(tri):
         return []
     if geo is not None:
-        # the largest step: at most sqrt(3) x its largest component (the table's rows)
-        rows = np.asarray(geo)[12:15]
-        largest_step = np.sqrt(3.0) * max(max(abs(float(r.min())), abs(float(r.max()))) for r in rows)
+        # the largest coordinate: at most |v0| + the larger edge, per axis (contiguous rows)
+        rows = np.asarray(geo)
+        big = sum(max(abs(float(rows[a].min())), abs(float(rows[a].max())))
+                  + max(abs(float(rows[b].min())), abs(float(rows[b].max())), abs(float(rows[b + 3].min())),
+                        abs(float(rows[b + 3].max()))) for a, b in ((0, 3), (1, 4), (2, 5)))
+        largest_step = _steps(big) if np.isfinite(big) else np.inf
     else:
         # from the largest |coordinate|: per column min / max (no copies); non-finite rows
         # (dropped by the triangle tables) only looked past where there are any
@@ -346,8 +349,7 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None, found=None) ->
             e1, e2 = edges[a], edges[3 + a]
             np.maximum(extent, np.maximum(np.maximum(e1, e2), 0) - np.minimum(np.minimum(e1, e2), 0), out=extent)
         wide = np.flatnonzero(extent > 8.0 * small)
-        rows = np.asarray(geo)[12:15][:, wide].astype(np.float64)
-        wide_step = np.sqrt(rows[0] * rows[0] + rows[1] * rows[1] + rows[2] * rows[2])
+        wide_step = _steps(_largest(np.stack([_magnitude(v[tri[wide, k]]) for k in range(3)], axis=1)))
     else:
         wide = np.arange(len(tri))
         wide_step = _steps(_largest(np.stack([_magnitude(v[tri[:, k]]) for k in range(3)], axis=1)))
@@ -397,7 +399,8 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None, found=None) ->
             if not (size > 0 and step > _HUGE_STEP * size):
                 continue
             corners = [c[j] for c in cv]
-            said = _what_is_off(corners, step, olo[seen], ohi[seen], _HUGE_STEP * size)
+            said = _what_is_off(corners, step, _normal_step(geo, mine[j], v, tri), olo[seen], ohi[seen],
+                                _HUGE_STEP * size)
             if said:
                 share = max(err for err, _ in said) / size
                 named = int(index[mine[j]])    # by its object: a huge tile's instances said once
@@ -419,11 +422,23 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None, found=None) ->
     return out
 
 
-def _what_is_off(corners, step, olo, ohi, limit):
+def _normal_step(geo, i, v, tri):
+    """Triangle i's step along its normal: the frame's table row (geo: rows 12:15), else its
+    own table's (which cannot know of a coincident twin)."""
+    if geo is None:
+        import dacrt
+        geo = dacrt.shading.triangle_table(np.asarray(v[tri[i]], F32), np.array([[0, 1, 2]], np.int32),
+                                           OFFSET_ULPS)[0]
+        i = 0
+    return float(np.linalg.norm(np.asarray(geo)[12:15, i].astype(np.float64)))
+
+
+def _what_is_off(corners, step, normal, olo, ohi, limit):
     """(error, text) of what float32 still gets wrong by more than `limit` on the triangle of
-    corners (3 float64 points) whose table step is `step`, near the objects of boxes olo / ohi
-    (k, 3): the hit points' placement (an ULP of its largest coordinate), the move of points
-    within the step of an edge (where an object lies that near one), the step along the normal."""
+    corners (3 float64 points) whose whole step is `step` and step along the normal `normal`,
+    near the objects of boxes olo / ohi (k, 3): the hit points' placement (an ULP of its largest
+    coordinate), the move of points within the step of an edge (where an object lies that near
+    one), the step along the normal."""
     c = [np.asarray(x, np.float64) for x in corners]
     mag = float(max(np.abs(x).max() for x in c))
     ulp = float(np.spacing(np.float32(mag)))
@@ -440,11 +455,6 @@ def _what_is_off(corners, step, olo, ohi, limit):
                 said.append((step, f"shading points within {step:.2g} of their edges move up to "
                                    f"{2 * step:.2g} along them"))
                 break
-        f32 = np.float32
-        n = np.cross(c[1] - c[0], c[2] - c[0])
-        n /= max(float(np.linalg.norm(n)), 1e-300)
-        normal = step * float(normal_share(c[0][None].astype(f32), (c[1] - c[0])[None].astype(f32),
-                                           (c[2] - c[0])[None].astype(f32), n[None])[0])
         if normal > limit:
             said.append((normal, f"bounce and shadow rays leave them {normal:.2g} off the surface"))
     return said

@@ -26,22 +26,31 @@ F32 = np.float32
 # itself is skipped. (Measured over random tilted, subdivided, huge, tiny and distant planes and
 # convex folds: 2 ULPs already never re-hit a neighbour; 8 is the margin.) A 2 km plane so gets
 # a 0.5 mm step where the previous 256 ULPs gave 1.5 cm (which biased MIS toward nearby lights).
-# The step along the normal is only the share of that P's error along the normal needs (native
-# pathvertex.h normal_share: on a plane z = c, ULPs of c however far the plane reaches); the
-# full step stays the hit point's margin from the edges, where a neighbour's float test errs.
+# Along the normal the step is only the share of it that P's error there needs (native
+# shading.h triangle_table: on a plane z = c, ULPs of c however far the plane reaches), except on
+# triangles with a coincident twin (`coincident`), whose float test errs by ULPs of their
+# coordinates along the ray: a huge ground plane's 0.5 m step under everything on it had lost
+# their contact shadows. The hit point's margin from its edges stays the whole step.
 OFFSET_ULPS = F32(8.0)
 _TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
+_MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], np.uint64)
 
 
-def normal_share(v0, e1, e2, n):
-    """The share of a triangle's step taken along its normal, as the native hit-point
-    reconstruction computes it (pathvertex.h normal_share): sum_a |n_a| ulp(mag_a) over
-    ulp(max_a mag_a), at most 1, mag_a = |v0_a| + max(|e1_a|, |e2_a|) in float32. Rows (k, 3)
-    of the table's v0, edges and unit normal; returns (k,) float64."""
-    v0, e1, e2 = (np.asarray(x, F32) for x in (v0, e1, e2))
-    mag = np.maximum(np.abs(v0) + np.maximum(np.abs(e1), np.abs(e2)), _TINY)
-    ulp = np.spacing(mag).astype(np.float64)
-    return np.minimum(1.0, (np.abs(np.asarray(n, np.float64)) * ulp).sum(axis=1) / ulp.max(axis=1))
+def coincident(v, t):
+    """(M,) bool: triangles t (M, 3) of float32 vertices v whose three corner positions another
+    triangle repeats, in any order (a surface modelled twice). By an order-free hash of the
+    corners' bits; a collision only gives a triangle the whole step it had before."""
+    if not len(t):
+        return np.zeros(0, bool)
+    bits = (np.asarray(v, F32) + F32(0.0)).view(np.uint32).astype(np.uint64)   # (+0: -0 as 0)
+    corner = (bits * _MIX).sum(axis=1)           # per vertex (wrapping), then per triangle
+    key = corner[np.asarray(t)].sum(axis=1)
+    order = np.argsort(key, kind='stable')
+    same = key[order[1:]] == key[order[:-1]]
+    out = np.zeros(len(t), bool)
+    out[order[1:][same]] = True
+    out[order[:-1][same]] = True
+    return out
 
 
 class Triangles:
@@ -65,7 +74,8 @@ class Triangles:
         self.indices = np.ascontiguousarray(t, np.int32)
         # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), the
         # self-intersection step off the front side (12:15, see OFFSET_ULPS); one native pass
-        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, OFFSET_ULPS, _TINY)
+        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, OFFSET_ULPS, _TINY,
+                                                      full=coincident(self.vertices, self.indices))
         poll()
         # (capped at float32's largest: the light tables and kernels hold areas in float32)
         self.area = np.minimum(np.where(bad_t, 0.0, area), np.finfo(F32).max)

@@ -544,14 +544,21 @@ F32Array corner_rows_py(F32Array per_corner) {
 }
 
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
-                            float tiny) {
+                            float tiny, py::object full) {
     const auto [V, M] = mesh_sizes(vertices, triangles);
     const int32_t* t = triangles.data();
+    py::array_t<uint8_t, py::array::c_style | py::array::forcecast> flags;
+    if (!full.is_none()) {
+        flags = full.cast<py::array_t<uint8_t, py::array::c_style | py::array::forcecast>>();
+        if (flags.ndim() != 1 || size_t(flags.shape(0)) != M)
+            throw py::value_error("full must hold one entry per triangle");
+    }
+    const uint8_t* f = full.is_none() ? nullptr : flags.data();
     F32Array geo({py::ssize_t(15), py::ssize_t(M)});
     py::array_t<double> area{py::ssize_t(M)};
     {
         py::gil_scoped_release nogil;
-        triangle_table(vertices.data(), V, t, M, offset_ulps, tiny, geo.mutable_data(), area.mutable_data());
+        triangle_table(vertices.data(), V, t, M, offset_ulps, tiny, f, geo.mutable_data(), area.mutable_data());
     }
     return py::make_tuple(geo, area);
 }
@@ -690,7 +697,7 @@ void byte_lookup_py(py::array_t<uint8_t, py::array::c_style> k8, F32Array table,
 void register_shading(py::module_& m) {
     m.def("pack_rays", &pack_rays_py, py::arg("O"), py::arg("D"), py::arg("tfar"), py::arg("out"));
     m.def("triangle_table", &triangle_table_py, py::arg("vertices"), py::arg("triangles"), py::arg("offset_ulps"),
-          py::arg("tiny"));
+          py::arg("tiny"), py::arg("full") = py::none());
     m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"));
     m.def("uniform2", &uniform2_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("uniform_pick", &uniform_pick_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));

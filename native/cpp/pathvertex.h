@@ -17,13 +17,13 @@ namespace dacrt {
 
 // Hit point P, geometric and shading normals facing the incoming direction d, and P stepped
 // off the surface toward d's side (geo: 15 rows of M; normals: 9 rows of M or null = flat).
-// The step is the table's (8 ULPs of the triangle's largest coordinate, surfacetables.py) times
-// normal_share (P's error along the normal: on a plane z = c, ULPs of c), cut to half the
+// The step (the table's: P's error along the normal, of at most 8 ULPs of the triangle's largest
+// coordinate; on a plane z = c ULPs of c, shading.h triangle_table) is cut to half the
 // distance the ray's origin lay off the triangle's plane (h.t |ng . d|): the point never moves
 // back past where the ray came from. A step larger than a wall's thickness had carried points
 // through it where a ray met the wall's back from inside at t ~ 0 (a corner of a 2 mm wall 10
 // km from the origin: 8 ULPs are 7.8 mm there), and their light samples then saw the far room.
-// P itself keeps at least the table step's length from each edge (inside_edges): a point reconstructed
+// P itself keeps at least edge_margin from each edge (inside_edges): a point reconstructed
 // on an edge rounds up to an ULP past it, and where a wall meets the triangle there (a room's
 // concave corner) that is outside the wall, which the step along the normal runs parallel to.
 struct SurfacePoint {
@@ -79,36 +79,29 @@ inline void inside_edges(const float* geo, size_t M, size_t p, float margin, flo
     v = w[2];
 }
 
-// The share of the table's step (8 ULPs of the triangle's largest coordinate) that P's error
-// along the normal needs: P = v0 + u e1 + v e2 errs by ULPs of each axis's own coordinates, and
-// only the normal's part of that moves it off the plane, so the step is sum_a |n_a| ulp(mag_a)
-// over ulp(max_a mag_a) of it (mag_a >= every vertex's |coordinate a|), at most all of it. A
-// ground plane z = c a million units across so steps ULPs of c, where the whole step had lifted
-// every point 0.5 m (the contact shadows of the objects on it lost). The edge margin keeps the
-// whole step: it is what keeps a neighbour's float test from taking the point (whose error is
-// ULPs of that neighbour's coordinates, in every axis).
-inline float normal_share(const float* geo, size_t M, size_t p) {
+// The hit point's margin from its triangle's edges (inside_edges): 8 ULPs of the triangle's
+// largest coordinate (from the table's v0 and edges), the whole self-intersection step (the
+// table's step along the normal is only the share P's error there needs, shading.h
+// triangle_table). Within it a neighbour's float test, erring by ULPs of that neighbour's
+// coordinates in every axis, could take the point.
+inline float edge_margin(const float* geo, size_t M, size_t p) {
     auto g = [&](int row) { return geo[size_t(row) * M + p]; };
-    float mag[3], top = 0x1p-100f;
+    float top = 0x1p-100f;
     for (int a = 0; a < 3; ++a) {
-        mag[a] = std::max(std::fabs(g(a)) + std::max(std::fabs(g(3 + a)), std::fabs(g(6 + a))), 0x1p-100f);
-        top = std::max(top, mag[a]);
+        const float v0 = g(a);
+        top = std::max(top, std::max(std::fabs(v0), std::max(std::fabs(v0 + g(3 + a)), std::fabs(v0 + g(6 + a)))));
     }
-    float sum = 0.0f;
-    for (int a = 0; a < 3; ++a) sum += std::fabs(g(9 + a)) * ulp_of(mag[a]);
-    const float share = sum / ulp_of(top);
-    return share < 1.0f ? share : 1.0f;  // (NaN: 1)
+    return 8.0f * ulp_of(top);
 }
 
 inline void surface_point(const float* geo, size_t M, const float* normals, const Hit& h, const float d[3],
                           SurfacePoint& s) {
     const size_t p = prim_at(h, M);
     auto g = [&](int row) { return geo[size_t(row) * M + p]; };
-    const float margin = std::sqrt(g(12) * g(12) + g(13) * g(13) + g(14) * g(14));
+    const float len2 = g(12) * g(12) + g(13) * g(13) + g(14) * g(14);
+    const float step_len = std::sqrt(len2);
     float u = h.u, v = h.v;
-    inside_edges(geo, M, p, margin, u, v);
-    const float share = normal_share(geo, M, p);
-    const float step_len = margin * share, len2 = step_len * step_len;
+    inside_edges(geo, M, p, edge_margin(geo, M, p), u, v);
     for (int a = 0; a < 3; ++a) {
         float x = g(3 + a) * u;
         x += g(6 + a) * v;
@@ -117,7 +110,7 @@ inline void surface_point(const float* geo, size_t M, const float* normals, cons
     }
     const float dn = g(9) * d[0] + g(10) * d[1] + g(11) * d[2];
     const float flip = dn > 0 ? -1.0f : 1.0f;
-    float step = flip * share;  // the step's scale: its sign and share, cut where the origin was nearer the plane
+    float step = flip;  // the step's scale: its sign, cut where the origin was nearer the plane
     const float half_back = 0.5f * h.t * std::fabs(dn);
     if (half_back * half_back < len2) step *= half_back / step_len;  // (t NaN: the full step)
     for (int a = 0; a < 3; ++a) {

@@ -79,11 +79,16 @@ void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray*
 
 // The per-triangle table surface() reads, for M triangles of float32 vertices: rows v0,
 // v1 - v0, v2 - v0 (differences in double, rounded once), the unit geometric normal (double
-// cross product; 0 for zero area) and the front-side self-intersection step: offset_ulps ULPs of
-// the triangle's largest |coordinate| (at least `tiny`) along that normal. geo: 15 rows of M;
-// area: M doubles. Triangles must index existing vertices (callers check).
+// cross product; 0 for zero area) and the front-side self-intersection step along that normal:
+// of offset_ulps ULPs of the triangle's largest |coordinate| (at least `tiny`) the share P's
+// error along the normal needs, sum_a |n_a| ulp(largest |coordinate a|) / ulp(largest), at most
+// 1 (a plane z = c a million units across: ULPs of c), or all of it where full[i] (null: none)
+// is set: a triangle with a coincident twin, whose float test at a ray's origin errs by ULPs of
+// its coordinates along the ray. The hit point's margin from the edges is always the whole
+// (pathvertex.h edge_margin). geo: 15 rows of M; area: M doubles. Triangles must index
+// existing vertices (callers check).
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
-                    float* geo, double* area);
+                    const uint8_t* full, float* geo, double* area);
 
 // Unit geometric normals (M rows of 3, by the winding (v1 - v0) x (v2 - v0)) of triangles of
 // float64 vertices (V rows of 3), in double, rounded once; good[i] = 0 (normal 0) for a

@@ -12,23 +12,33 @@
 namespace dacrt {
 
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
-                    float* geo, double* area) {
+                    const uint8_t* full, float* geo, double* area) {
     parallel_for(M, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const float* c[3];
             for (int k = 0; k < 3; ++k) c[k] = vertex_of(vertices, V, triangles, 3 * i + size_t(k));
             double e1[3], e2[3];
-            float mag = tiny;
+            float mag = tiny, axis[3];
             for (int a = 0; a < 3; ++a) {
                 e1[a] = double(c[1][a]) - double(c[0][a]);
                 e2[a] = double(c[2][a]) - double(c[0][a]);
-                for (int k = 0; k < 3; ++k) mag = std::max(mag, std::fabs(c[k][a]));
+                axis[a] = tiny;
+                for (int k = 0; k < 3; ++k) axis[a] = std::max(axis[a], std::fabs(c[k][a]));
+                mag = std::max(mag, axis[a]);
             }
             const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                                  e1[0] * e2[1] - e1[1] * e2[0]};
             const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             area[i] = 0.5 * len;
-            const float step = ulp_of(mag) * offset_ulps;
+            // along the normal only P's error there (see shading.h): sum_a |n_a| ulp(axis_a)
+            // of the ULPs of the largest coordinate, all of it for a triangle with a twin
+            float share = 1.0f;
+            if (!(full && full[i]) && len > 0) {
+                double sum = 0.0;
+                for (int a = 0; a < 3; ++a) sum += std::fabs(n[a] / len) * ulp_of(axis[a]);
+                share = float(std::min(1.0, sum / ulp_of(mag)));
+            }
+            const float step = ulp_of(mag) * offset_ulps * share;
             for (int a = 0; a < 3; ++a) {
                 const float ng = len > 0 ? float(n[a] / len) : 0.0f;
                 geo[size_t(a) * M + i] = c[0][a];

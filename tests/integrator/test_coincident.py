@@ -47,11 +47,14 @@ def _pair(area_light: bool, rotate: bool):
     return render(base).film.combined(), render(copied).film.combined()
 
 
-def test_exact_copies_render_bit_identically():
+def test_exact_copies_render_as_one_surface():
+    # the same paths to float rounding: the copies step their whole 8 ULPs off the surface
+    # (surfacetables.coincident), the single surface only its error along the normal (ULPs of
+    # the floor's z = 0), so their rays start some 1e-6 apart (they had been bit-identical)
     for area_light in (False, True):      # an emissive quad, or an area lamp + a world (shadow rays)
         single, doubled = _pair(area_light, rotate=False)
         assert single.mean() > 0.01
-        np.testing.assert_array_equal(doubled, single)
+        np.testing.assert_allclose(doubled, single, rtol=1e-5, atol=1e-6 * float(np.abs(single).max()))
 
 
 def test_copies_in_another_corner_order_render_the_same_surface():
@@ -61,3 +64,24 @@ def test_copies_in_another_corner_order_render_the_same_surface():
     assert single.mean() > 0.01
     np.testing.assert_allclose(doubled.mean(axis=(0, 1)), single.mean(axis=(0, 1)), rtol=1e-3)
     assert np.mean(np.abs(doubled - single) > 1e-3 * np.abs(single).max()) < 0.01
+
+
+def test_twins_are_found_in_any_corner_order_and_keep_the_whole_step():
+    """surfacetables.coincident marks both copies (also listed in another corner order, or with
+    -0 for 0), nothing else; the table then gives them the whole step along the normal, which a
+    ray leaving one copy needs to clear the other (the float test errs by ULPs of the copy's
+    coordinates along the ray), while the other triangles of the plane z = 0 step ULPs of 0."""
+    from addon.surfacetables import OFFSET_ULPS, Triangles, coincident
+    v = np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, -0.0), (2, 0, 0), (0, 0, 0)], np.float32)
+    t = np.array([(0, 1, 2), (0, 2, 3), (1, 4, 2), (2, 0, 1), (5, 1, 2), (1, 2, 4)], np.int32)
+    np.testing.assert_array_equal(coincident(v, t), [True, False, True, True, True, True])
+    scene = cornell_box(width=4, height=3, samples=1)
+    geometry = replace(scene.geometry, vertices=v.astype(np.float64), triangles=t,
+                       material=np.ones(6, np.int32), normals=np.zeros((6, 3, 3), np.float32) + (0, 0, 1),
+                       visibility=np.full(6, scene.geometry.visibility[0]), object_index=np.zeros(6, np.int32),
+                       uvs=None)
+    steps = np.linalg.norm(Triangles(geometry, []).geo[12:15].astype(np.float64), axis=0)
+    top = np.array([1.0, 1.0, 2.0, 1.0, 1.0, 2.0], np.float32)     # each one's largest coordinate
+    whole = float(OFFSET_ULPS) * np.spacing(top).astype(np.float64)
+    np.testing.assert_allclose(steps[[0, 2, 3, 4, 5]], whole[[0, 2, 3, 4, 5]], rtol=1e-6)
+    assert 0 < steps[1] < 1e-30

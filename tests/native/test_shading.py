@@ -35,14 +35,12 @@ def _table(v, scale=1.0):
     return np.ascontiguousarray(geo), area.astype(F32)
 
 
-def _normal_share(g):
-    """The share of the table's step that the step along the normal takes (pathvertex.h
-    normal_share): sum_a |n_a| ulp(mag_a) / ulp(max_a mag_a), at most 1; mag_a = |v0_a| +
-    max(|e1_a|, |e2_a|) in float32 (g: the table's columns, float64)."""
+def _edge_margin(g):
+    """The hit point's margin from its triangle's edges (pathvertex.h edge_margin): 8 ULPs of
+    the largest |coordinate| of v0, v0 + e1, v0 + e2 in float32 (g: the table's columns)."""
     g = g.astype(F32)
-    mag = np.maximum(np.abs(g[0:3]) + np.maximum(np.abs(g[3:6]), np.abs(g[6:9])), F32(2.0 ** -100))
-    ulp = np.spacing(mag).astype(np.float64)
-    return np.minimum(1.0, (np.abs(g[9:12]).astype(np.float64) * ulp).sum(axis=0) / ulp.max(axis=0))
+    top = np.maximum(np.abs(g[0:3]), np.maximum(np.abs(g[0:3] + g[3:6]), np.abs(g[0:3] + g[6:9]))).max(axis=0)
+    return 8.0 * np.spacing(np.maximum(top, F32(2.0 ** -100))).astype(np.float64)
 
 
 def _unit(rng, n):
@@ -85,6 +83,8 @@ def test_surface_matches_float64(smooth, select):
     hits["prim"] = rng.integers(0, m, n)
     su = np.sqrt(rng.random(n))
     hits["u"], hits["v"] = rng.random(n) * su, 1 - su
+    edge = rng.random(n) < 0.1                           # a tenth within the margin of an edge
+    hits["v"] = np.where(edge, rng.random(n) * 1e-6, hits["v"])
     # distances from far off to next to the plane (a tenth of the rays: within the step)
     hits["t"] = np.where(rng.random(n) < 0.1, rng.random(n) * 1e-6, rng.random(n) * 10)
     D = _unit(rng, n)
@@ -94,8 +94,8 @@ def test_surface_matches_float64(smooth, select):
     p, u, v = hits["prim"][sel], hits["u"][sel].astype(float), hits["v"][sel].astype(float)
     g = geo.astype(float)[:, p]
     exact = g[0:3] + g[3:6] * u + g[6:9] * v
-    # points nearer an edge than the step move inside by at most 2 steps (pathvertex.h inside_edges)
-    step = np.linalg.norm(g[12:15], axis=0)
+    # points nearer an edge than the margin move inside by at most 2 margins (pathvertex.h inside_edges)
+    step = _edge_margin(g)
     area2 = np.linalg.norm(np.cross(g[3:6].T, g[6:9].T), axis=1)
     edges = (g[6:9] - g[3:6], g[6:9], g[3:6])
     near = np.zeros(len(p), bool)
@@ -108,11 +108,10 @@ def test_surface_matches_float64(smooth, select):
     np.testing.assert_array_equal(ng, (g[9:12] * flip).astype(F32))
     # the step off the surface, at most half the way back to the plane's distance of the origin
     dn = np.abs(np.einsum("ij,ij->j", g[9:12], D[:, sel]))
-    share = _normal_share(g)
-    step = np.linalg.norm(g[12:15], axis=0) * share
+    step = np.linalg.norm(g[12:15], axis=0)
     scale = np.minimum(1.0, 0.5 * hits["t"][sel] * dn / step)
     assert (scale < 1).mean() > 0.05
-    np.testing.assert_allclose(P_off - P, g[12:15] * flip * share * scale, atol=1e-6)
+    np.testing.assert_allclose(P_off - P, g[12:15] * flip * scale, atol=1e-6)
     back = np.abs(np.einsum("ij,ij->j", ng.astype(float), P_off.astype(float) - P))
     assert (back <= 0.5 * hits["t"][sel] * dn * (1 + 1e-5) + 1e-6 * np.abs(g).max()).all()
     if smooth:
@@ -410,7 +409,15 @@ def test_triangle_table_matches_float64():
     np.testing.assert_allclose(geo[9:12][:, good], (n[good] / length[good, None]).T, atol=1e-7)
     mag = np.abs(v[t]).max(axis=(1, 2))
     ulp = 2.0 ** (np.floor(np.log2(mag)) - 23)
-    np.testing.assert_allclose(np.linalg.norm(geo[12:15], axis=0)[good], 8 * ulp[good], rtol=1e-6)
+    # along the normal the share P's error there needs: sum_a |n_a| ulp(largest |coordinate a|)
+    axis_ulp = 2.0 ** (np.floor(np.log2(np.abs(v[t]).max(axis=1))) - 23)        # (M, 3)
+    unit = np.abs(n) / np.where(length > 0, length, 1.0)[:, None]
+    share = np.minimum(1.0, (unit * axis_ulp).sum(axis=1) / ulp)
+    assert (share[good] < 0.9).mean() > 0.2
+    np.testing.assert_allclose(np.linalg.norm(geo[12:15], axis=0)[good], (8 * ulp * share)[good], rtol=1e-6)
+    # a triangle marked `full` (one with a coincident twin) keeps all 8 ULPs
+    whole, _ = shading.triangle_table(v, t, 8.0, full=np.ones(len(t), bool))
+    np.testing.assert_allclose(np.linalg.norm(whole[12:15], axis=0)[good], 8 * ulp[good], rtol=1e-6)
     with pytest.raises(ValueError, match="refers to vertex 500"):
         shading.triangle_table(v, np.array([[0, 1, 500]]), 8.0)
 

@@ -4,8 +4,8 @@ Rays from inside a closed box aimed at points of its 12 edges hit one of the two
 there with barycentrics on the edge; P = v0 + e1 u + e2 v then rounded up to an ULP past the
 other wall's plane (2.3% of these hits), and the step off the surface along the hit wall's
 normal, parallel to that other wall, left it there: the path vertex lay outside the room.
-shading.surface now keeps P at least the step's length (8 ULPs of the triangle's largest
-coordinate) from every edge of its triangle; points farther in are unchanged bit for bit.
+shading.surface now keeps P at least 8 ULPs of the triangle's largest coordinate (the whole
+self-intersection step, pathvertex.h edge_margin) from every edge of its triangle; points farther in are unchanged bit for bit.
 """
 from __future__ import annotations
 
@@ -52,10 +52,12 @@ def test_edge_hits_stay_inside_the_room(scale, offset):
     for name, X in (("P", P), ("P_off", P_off)):
         out = ((X.T < lo) | (X.T > hi)).any(axis=1)
         assert not out.any(), f"{out.sum()} of {len(out)} {name} outside the room"
-    # ... and no farther from the ray's own hit than the promised 2 steps (+ rounding)
+    # ... and no farther from the ray's own hit than the promised 2 margins (+ rounding): the
+    # margin is 8 ULPs of the triangle's largest coordinate (pathvertex.h edge_margin)
     g = geo.astype(np.float64)[:, hits["prim"]]
     exact = g[0:3] + g[3:6] * hits["u"] + g[6:9] * hits["v"]
-    step = np.linalg.norm(g[12:15], axis=0)
+    t = _room(scale, offset)[1][hits["prim"]]
+    step = 8.0 * np.spacing(np.abs(v[t]).max(axis=(1, 2))).astype(np.float64)
     assert (np.linalg.norm(P - exact, axis=0) <= 2.0 * step * (1 + 1e-3) + 4 * np.spacing(np.abs(g[0:3]).max(0).astype(F32))).all()
 
 
