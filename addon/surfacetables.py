@@ -28,28 +28,24 @@ F32 = np.float32
 # a 0.5 mm step where the previous 256 ULPs gave 1.5 cm (which biased MIS toward nearby lights).
 # Along the normal the step is only the share of it that P's error there needs (native
 # shading.h triangle_table: on a plane z = c, ULPs of c however far the plane reaches), except on
-# triangles with a coincident twin (`coincident`), whose float test errs by ULPs of their
+# triangles with a coincident twin (`twins`), whose float test errs by ULPs of their
 # coordinates along the ray: a huge ground plane's 0.5 m step under everything on it had lost
 # their contact shadows. The hit point's margin from its edges stays the whole step.
 OFFSET_ULPS = F32(8.0)
 _TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
-_MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], np.uint64)
-
-
-def coincident(v, t):
-    """(M,) bool: triangles t (M, 3) of float32 vertices v whose three corner positions another
-    triangle repeats, in any order (a surface modelled twice). By an order-free hash of the
-    corners' bits; a collision only gives a triangle the whole step it had before."""
-    if not len(t):
-        return np.zeros(0, bool)
-    bits = (np.asarray(v, F32) + F32(0.0)).view(np.uint32).astype(np.uint64)   # (+0: -0 as 0)
-    corner = (bits * _MIX).sum(axis=1)           # per vertex (wrapping), then per triangle
-    key = corner[np.asarray(t)].sum(axis=1)
-    order = np.argsort(key, kind='stable')
-    same = key[order[1:]] == key[order[:-1]]
-    out = np.zeros(len(t), bool)
-    out[order[1:][same]] = True
-    out[order[:-1][same]] = True
+def twins(keys):
+    """(M,) bool: the triangles whose key (triangle_table's order-free hash of the corners'
+    bits, 0 where the step kept all 8 ULPs) another triangle repeats: a surface modelled twice,
+    in any corner order. A hash collision only gives a triangle the whole step it had before."""
+    cand = np.flatnonzero(keys)
+    out = np.zeros(len(keys), bool)
+    if len(cand) < 2:
+        return out
+    k = keys[cand]
+    order = np.argsort(k)
+    same = k[order[1:]] == k[order[:-1]]
+    out[cand[order[1:][same]]] = True
+    out[cand[order[:-1][same]]] = True
     return out
 
 
@@ -74,8 +70,13 @@ class Triangles:
         self.indices = np.ascontiguousarray(t, np.int32)
         # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), the
         # self-intersection step off the front side (12:15, see OFFSET_ULPS); one native pass
-        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, OFFSET_ULPS, _TINY,
-                                                      full=coincident(self.vertices, self.indices))
+        keys = np.empty(m, np.uint64)
+        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, OFFSET_ULPS, _TINY, keys=keys)
+        twin = twins(keys)
+        if twin.any():      # (rare) their whole step: a ray leaving one must clear the other
+            whole, _ = dacrt.shading.triangle_table(self.vertices, self.indices[twin], OFFSET_ULPS, _TINY,
+                                                    full=np.ones(int(twin.sum()), np.uint8))
+            self.geo[12:15, twin] = whole[12:15]
         poll()
         # (capped at float32's largest: the light tables and kernels hold areas in float32)
         self.area = np.minimum(np.where(bad_t, 0.0, area), np.finfo(F32).max)

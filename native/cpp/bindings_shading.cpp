@@ -544,7 +544,7 @@ F32Array corner_rows_py(F32Array per_corner) {
 }
 
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
-                            float tiny, py::object full) {
+                            float tiny, py::object full, py::object keys) {
     const auto [V, M] = mesh_sizes(vertices, triangles);
     const int32_t* t = triangles.data();
     py::array_t<uint8_t, py::array::c_style | py::array::forcecast> flags;
@@ -554,11 +554,19 @@ py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c
             throw py::value_error("full must hold one entry per triangle");
     }
     const uint8_t* f = full.is_none() ? nullptr : flags.data();
+    uint64_t* k = nullptr;
+    py::array_t<uint64_t, py::array::c_style> key_out;
+    if (!keys.is_none()) {
+        key_out = keys.cast<py::array_t<uint64_t, py::array::c_style>>();
+        if (key_out.ndim() != 1 || size_t(key_out.shape(0)) != M || !key_out.writeable())
+            throw py::value_error("keys must be a writeable uint64 array with one entry per triangle");
+        k = key_out.mutable_data();
+    }
     F32Array geo({py::ssize_t(15), py::ssize_t(M)});
     py::array_t<double> area{py::ssize_t(M)};
     {
         py::gil_scoped_release nogil;
-        triangle_table(vertices.data(), V, t, M, offset_ulps, tiny, f, geo.mutable_data(), area.mutable_data());
+        triangle_table(vertices.data(), V, t, M, offset_ulps, tiny, f, geo.mutable_data(), area.mutable_data(), k);
     }
     return py::make_tuple(geo, area);
 }
@@ -697,7 +705,7 @@ void byte_lookup_py(py::array_t<uint8_t, py::array::c_style> k8, F32Array table,
 void register_shading(py::module_& m) {
     m.def("pack_rays", &pack_rays_py, py::arg("O"), py::arg("D"), py::arg("tfar"), py::arg("out"));
     m.def("triangle_table", &triangle_table_py, py::arg("vertices"), py::arg("triangles"), py::arg("offset_ulps"),
-          py::arg("tiny"), py::arg("full") = py::none());
+          py::arg("tiny"), py::arg("full") = py::none(), py::arg("keys") = py::none());
     m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"));
     m.def("uniform2", &uniform2_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("uniform_pick", &uniform_pick_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));

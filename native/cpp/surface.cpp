@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 
 #include "parallel.h"
 #include "pathvertex.h"
@@ -11,8 +12,12 @@
 
 namespace dacrt {
 
+namespace {
+constexpr uint64_t kCornerMix[3] = {0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full, 0x165667B19E3779F9ull};
+}  // namespace
+
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
-                    const uint8_t* full, float* geo, double* area) {
+                    const uint8_t* full, float* geo, double* area, uint64_t* keys) {
     parallel_for(M, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const float* c[3];
@@ -39,6 +44,24 @@ void triangle_table(const float* vertices, size_t V, const int32_t* triangles, s
                 share = float(std::min(1.0, sum / ulp_of(mag)));
             }
             const float step = ulp_of(mag) * offset_ulps * share;
+            if (keys) {
+                // an order-free hash of the corners' bits (+0: -0 as 0) where the step shrank
+                uint64_t key = 0;
+                if (share < 1.0f) {
+                    for (int k = 0; k < 3; ++k) {
+                        uint64_t h = 0;
+                        for (int a = 0; a < 3; ++a) {
+                            const float x = c[k][a] + 0.0f;
+                            uint32_t b;
+                            std::memcpy(&b, &x, 4);
+                            h += uint64_t(b) * kCornerMix[a];
+                        }
+                        key += h;
+                    }
+                    key |= 1;  // never 0 (0: the whole step)
+                }
+                keys[i] = key;
+            }
             for (int a = 0; a < 3; ++a) {
                 const float ng = len > 0 ? float(n[a] / len) : 0.0f;
                 geo[size_t(a) * M + i] = c[0][a];

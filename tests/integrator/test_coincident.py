@@ -67,14 +67,17 @@ def test_copies_in_another_corner_order_render_the_same_surface():
 
 
 def test_twins_are_found_in_any_corner_order_and_keep_the_whole_step():
-    """surfacetables.coincident marks both copies (also listed in another corner order, or with
+    """surfacetables.twins marks both copies (also listed in another corner order, or with
     -0 for 0), nothing else; the table then gives them the whole step along the normal, which a
     ray leaving one copy needs to clear the other (the float test errs by ULPs of the copy's
     coordinates along the ray), while the other triangles of the plane z = 0 step ULPs of 0."""
-    from addon.surfacetables import OFFSET_ULPS, Triangles, coincident
+    import dacrt
+    from addon.surfacetables import OFFSET_ULPS, Triangles, twins
     v = np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, -0.0), (2, 0, 0), (0, 0, 0)], np.float32)
     t = np.array([(0, 1, 2), (0, 2, 3), (1, 4, 2), (2, 0, 1), (5, 1, 2), (1, 2, 4)], np.int32)
-    np.testing.assert_array_equal(coincident(v, t), [True, False, True, True, True, True])
+    keys = np.empty(len(t), np.uint64)
+    dacrt.shading.triangle_table(v, t, OFFSET_ULPS, keys=keys)
+    np.testing.assert_array_equal(twins(keys), [True, False, True, True, True, True])
     scene = cornell_box(width=4, height=3, samples=1)
     geometry = replace(scene.geometry, vertices=v.astype(np.float64), triangles=t,
                        material=np.ones(6, np.int32), normals=np.zeros((6, 3, 3), np.float32) + (0, 0, 1),

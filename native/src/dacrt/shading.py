@@ -78,19 +78,21 @@ def _triangles32(triangles, num_vertices: int) -> np.ndarray:
     return np.ascontiguousarray(t, np.int32)
 
 
-def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100, full=None):
+def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100, full=None, keys=None):
     """The (15, M) float32 table surface() and sample_triangles() read, and the areas (M,)
     float64, of triangles (M, 3) of vertices (V, 3): rows v0, v1 - v0, v2 - v0 (differences
     in double, rounded once), the unit geometric normal (0 for zero area) and the front-side
     self-intersection step along the normal: of offset_ulps ULPs of the triangle's largest
     |coordinate| (at least tiny) the share the hit point's error along the normal needs,
     sum_a |n_a| ulp(largest |coordinate a|) / ulp(largest) (a plane z = c: ULPs of c), or all of
-    it for the triangles where full (M,) is true (those with a coincident twin)."""
+    it for the triangles where full (M,) is true (those with a coincident twin). keys (M,)
+    uint64, optional, is written: for the triangles whose step shrank an odd order-free hash of
+    their corners' bits, else 0 (twins have equal keys)."""
     v = np.ascontiguousarray(vertices, _F32)
     t = _triangles32(triangles, len(v))
     if full is not None:
         full = np.ascontiguousarray(full, np.uint8)
-    return _core.triangle_table(v, t, float(offset_ulps), float(tiny), full)
+    return _core.triangle_table(v, t, float(offset_ulps), float(tiny), full, keys)
 
 
 def surface(geo, normals, hits, idx, D):
