@@ -42,6 +42,9 @@ def twins(keys):
     if len(cand) < 2:
         return out
     k = keys[cand]
+    ordered = np.sort(k)                 # the common case, no repeats: a sort, no argsort
+    if not (ordered[1:] == ordered[:-1]).any():
+        return out
     order = np.argsort(k)
     same = k[order[1:]] == k[order[:-1]]
     out[cand[order[1:][same]]] = True
