@@ -543,6 +543,17 @@ F32Array corner_rows_py(F32Array per_corner) {
     return rows;
 }
 
+py::array_t<bool> repeated_keys_py(py::array_t<uint64_t, py::array::c_style | py::array::forcecast> keys) {
+    if (keys.ndim() != 1) throw py::value_error("keys must be one-dimensional");
+    const size_t n = size_t(keys.shape(0));
+    py::array_t<bool> out{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        repeated_keys(keys.data(), n, reinterpret_cast<uint8_t*>(out.mutable_data()));
+    }
+    return out;
+}
+
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny, py::object full, py::object keys) {
     const auto [V, M] = mesh_sizes(vertices, triangles);
@@ -704,6 +715,7 @@ void byte_lookup_py(py::array_t<uint8_t, py::array::c_style> k8, F32Array table,
 
 void register_shading(py::module_& m) {
     m.def("pack_rays", &pack_rays_py, py::arg("O"), py::arg("D"), py::arg("tfar"), py::arg("out"));
+    m.def("repeated_keys", &repeated_keys_py, py::arg("keys"));
     m.def("triangle_table", &triangle_table_py, py::arg("vertices"), py::arg("triangles"), py::arg("offset_ulps"),
           py::arg("tiny"), py::arg("full") = py::none(), py::arg("keys") = py::none());
     m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"));

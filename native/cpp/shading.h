@@ -91,6 +91,11 @@ void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray*
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     const uint8_t* full, float* geo, double* area, uint64_t* keys = nullptr);
 
+// out[i] = 1 where keys[i] != 0 and another entry holds the same key, else 0 (n entries): the
+// triangles whose triangle_table key repeats (a surface modelled twice). One pass over an
+// open-addressing table of 2-4n slots: a sort of a million keys had cost ~60 ms a frame.
+void repeated_keys(const uint64_t* keys, size_t n, uint8_t* out);
+
 // Unit geometric normals (M rows of 3, by the winding (v1 - v0) x (v2 - v0)) of triangles of
 // float64 vertices (V rows of 3), in double, rounded once; good[i] = 0 (normal 0) for a
 // zero-area or non-finite triangle. Triangles must index existing vertices (callers check).

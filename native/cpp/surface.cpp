@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include "parallel.h"
 #include "pathvertex.h"
@@ -15,6 +16,28 @@ namespace dacrt {
 namespace {
 constexpr uint64_t kCornerMix[3] = {0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full, 0x165667B19E3779F9ull};
 }  // namespace
+
+void repeated_keys(const uint64_t* keys, size_t n, uint8_t* out) {
+    size_t cap = 16;
+    while (cap < 2 * n) cap <<= 1;
+    const size_t mask = cap - 1;
+    std::vector<uint64_t> slot(cap, 0);      // 0: empty (keys of 0 are never stored)
+    std::vector<size_t> first(cap);          // the entry that filled the slot
+    for (size_t i = 0; i < n; ++i) {
+        out[i] = 0;
+        const uint64_t k = keys[i];
+        if (k == 0) continue;
+        size_t h = size_t((k * 0x9E3779B97F4A7C15ull) >> 17) & mask;   // (the key's own bits are a hash)
+        while (slot[h] != 0 && slot[h] != k) h = (h + 1) & mask;
+        if (slot[h] == 0) {
+            slot[h] = k;
+            first[h] = i;
+        } else {
+            out[i] = 1;
+            out[first[h]] = 1;
+        }
+    }
+}
 
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     const uint8_t* full, float* geo, double* area, uint64_t* keys) {

@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["triangle_table", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
+__all__ = ["triangle_table", "repeated_keys", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
            "LightChoice", "next_event", "accumulate_masked", "noise_texture",
            "voronoi_texture"]
 
@@ -76,6 +76,12 @@ def _triangles32(triangles, num_vertices: int) -> np.ndarray:
         raise ValueError(f"triangles[{row}] refers to vertex {int(t[row][bad[row]][0])} "
                          f"but there are {num_vertices} vertices")
     return np.ascontiguousarray(t, np.int32)
+
+
+def repeated_keys(keys):
+    """(n,) bool: the entries of keys (n,) uint64 that are not 0 and that another entry repeats
+    (triangle_table's keys: the triangles with a coincident twin). One hash-table pass."""
+    return _core.repeated_keys(np.ascontiguousarray(keys, np.uint64))
 
 
 def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100, full=None, keys=None):
