@@ -53,13 +53,10 @@ def _blocks(img, size=8):
     return img[:h * size, :w * size].reshape(h, size, w, size, 3).mean((1, 3))
 
 
-@pytest.mark.parametrize('kind', ['checker', 'noise', 'image'])
-def test_translucency_weighed_by_a_mask_per_point(kind, tmp_path, said):
-    """The blocks the transmission lights (Cycles' green above 0.3) within 4% of Cycles' and
-    the image's mean within 1.5% (measured 0.97-1.03 and 0.5%); the Diffuse Color pass, which
-    counts the transmission, within 1% block by block (measured exact). The mask shows: those
-    blocks differ 2x in Cycles."""
-    sc = _masked_leaf(kind, tmp_path)
+def _lit_blocks_agree(sc, tmp_path, what):
+    """Both engines' Combined and Diffuse Color images ({engine: {pass: (h, w, 3)}}, the pass
+    name) after checking the back-lit blocks (Cycles' green above 0.3: at least 6, differing
+    2x so `what` shows through the leaf) agree within 4%."""
     layer = sc.view_layers[0].name
     col = result_name('DiffCol', bpy.app.version)
     out = {}
@@ -68,8 +65,19 @@ def test_translucency_weighed_by_a_mask_per_point(kind, tmp_path, said):
     c, d = (_blocks(out[e]['Combined']) for e in ('CYCLES', 'DACRT'))
     lit = c[..., 1] > 0.3
     assert lit.sum() >= 6, c[..., 1]
-    assert c[lit][:, 1].max() > 2.0 * c[lit][:, 1].min(), "the mask should show through the leaf"
+    assert c[lit][:, 1].max() > 2.0 * c[lit][:, 1].min(), f"the {what} should show through the leaf"
     np.testing.assert_allclose(d[lit], c[lit], rtol=0.04)
+    return out, col
+
+
+@pytest.mark.parametrize('kind', ['checker', 'noise', 'image'])
+def test_translucency_weighed_by_a_mask_per_point(kind, tmp_path, said):
+    """The blocks the transmission lights (Cycles' green above 0.3) within 4% of Cycles' and
+    the image's mean within 1.5% (measured 0.97-1.03 and 0.5%); the Diffuse Color pass, which
+    counts the transmission, within 1% block by block (measured exact). The mask shows: those
+    blocks differ 2x in Cycles."""
+    sc = _masked_leaf(kind, tmp_path)
+    out, col = _lit_blocks_agree(sc, tmp_path, 'mask')
     np.testing.assert_allclose(out['DACRT']['Combined'].mean((0, 1)), out['CYCLES']['Combined'].mean((0, 1)),
                                rtol=0.015)
     np.testing.assert_allclose(_blocks(out['DACRT'][col]), _blocks(out['CYCLES'][col]), rtol=0.01, atol=1e-4)
@@ -94,16 +102,7 @@ def test_translucent_colour_from_a_texture_per_point(kind, tmp_path, said):
     nt.links.new(mask, t.inputs['Color'])
     _settings(64, 4)
     sc.view_layers[0].use_pass_diffuse_color = True
-    layer = sc.view_layers[0].name
-    col = result_name('DiffCol', bpy.app.version)
-    out = {}
-    for engine, exr in scenes.render_engines(sc, tmp_path).items():
-        out[engine] = {p: np.stack([exr[f"{layer}.{p}.{c}"] for c in 'RGB'], -1) for p in ('Combined', col)}
-    c, d = (_blocks(out[e]['Combined']) for e in ('CYCLES', 'DACRT'))
-    lit = c[..., 1] > 0.3
-    assert lit.sum() >= 6, c[..., 1]
-    assert c[lit][:, 1].max() > 2.0 * c[lit][:, 1].min(), "the texture should show through the leaf"
-    np.testing.assert_allclose(d[lit], c[lit], rtol=0.04)
+    out, col = _lit_blocks_agree(sc, tmp_path, 'texture')
     np.testing.assert_allclose(_blocks(out['DACRT'][col]), _blocks(out['CYCLES'][col]), rtol=0.01, atol=1e-4)
     assert not any("Translucent BSDF colour" in t for t in said), said
 
