@@ -197,17 +197,39 @@ def recentred(sd: SceneData, found=None):
 # triangle's shortest edge has lost its shape in float32 (a ring of radius 5e-5 where the spacing
 # is 6.1e-5 had become rings of radius 0 to 8.6e-5: 3000 strands 1.095x Cycles' coverage)
 _STRAND_ROUNDING = 0.2
+# ... said where such triangles can move more than this share of their placement's tube area: a
+# tapering strand always ends thinner than float32 near its tip (fur of Shape 0.9 at the origin,
+# radii down to 1e-8: 96000 of its 624000 triangles rounded), where the area the rounding can
+# move is a negligible share of the tubes' and the image is Cycles'
+_STRAND_SHARE = 0.01
 _STRAND_CHUNK = 1 << 18
 _STRAND_SAMPLE = 4096
+
+
+def _strand_rounding(v, tri, r, origin):
+    """For tube triangles r: which round out of shape (a corner moved by more than
+    _STRAND_ROUNDING of the shortest edge once centred on origin and rounded to float32), the
+    area each of those can gain or lose so (0 for the others: its own area, plus its perimeter
+    times the corners' move and the disc of that move), and each one's area."""
+    c = v[tri[r]] - origin                                              # (k, 3, 3)
+    err = np.abs(c.astype(F32).astype(np.float64) - c).max(axis=(1, 2))
+    e = [c[:, (i + 1) % 3] - c[:, i] for i in range(3)]
+    lengths = np.stack([np.linalg.norm(x, axis=1) for x in e], axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(e[0], e[1]), axis=1)
+    bad = err > _STRAND_ROUNDING * lengths.min(axis=1)
+    move = np.sqrt(3.0) * err                                           # (a corner's distance moved)
+    return bad, np.where(bad, area + lengths.sum(axis=1) * move + np.pi * move * move, 0.0), area
 
 
 def rounded_strands(sd: SceneData, origin):
     """Mask (M,) of the hair and Curves tube triangles (Geometry.one_sided) whose float32
     coordinates once centred on `origin` (recentred's) move a corner by more than
-    _STRAND_ROUNDING of the triangle's shortest edge, or None where none do or the vertices
-    are float32 already (nothing to compare). Strands thinner than a few float32 steps at their
-    place lose their shape there however they are tessellated: Cycles keeps a curve's radius
-    apart from its keys. Chunked: (k, 3, 3) float64 corners per chunk."""
+    _STRAND_ROUNDING of the triangle's shortest edge, in the placements (Geometry.instance, else
+    the objects) where those triangles can move more than _STRAND_SHARE of the tubes' area; or
+    None where there are none or the vertices are float32 already (nothing to compare). Strands
+    thinner than a few float32 steps at their place lose their shape there however they are
+    tessellated: Cycles keeps a curve's radius apart from its keys. Chunked: (k, 3, 3) float64
+    corners per chunk."""
     g = sd.geometry
     one = getattr(g, 'one_sided', None)
     v = np.asarray(g.vertices)
@@ -218,20 +240,35 @@ def rounded_strands(sd: SceneData, origin):
         return None
     tri = np.asarray(g.triangles)
     origin = np.asarray(origin, np.float64)
+    owner = getattr(g, 'instance', None)
+    owner = np.asarray(g.object_index if owner is None else owner)
 
-    def distorted(r):
-        c = v[tri[r]] - origin                                          # (k, 3, 3)
-        err = np.abs(c.astype(F32).astype(np.float64) - c).max(axis=(1, 2))
-        edge = np.min([np.linalg.norm(c[:, (i + 1) % 3] - c[:, i], axis=1) for i in range(3)], axis=0)
-        return err > _STRAND_ROUNDING * edge
-    # a spread sample first (most renders: none of it, ~1 ms); the whole count only past it
-    if len(rows) > _STRAND_SAMPLE and not distorted(rows[::len(rows) // _STRAND_SAMPLE]).any():
-        return None
-    bad = np.zeros(len(tri), bool)
+    def over(picked, change, area):
+        """Per triangle of rows[picked]: whether its placement's picked triangles can move
+        more than _STRAND_SHARE of their area."""
+        ids = owner[rows[picked]]
+        lo, hi = int(ids.min()), int(ids.max())
+        # (placement ids index arrays: counted, not sorted, where their range is short)
+        who = ids - lo if hi - lo <= 4 * len(ids) else np.unique(ids, return_inverse=True)[1]
+        return (np.bincount(who, change) > _STRAND_SHARE * np.bincount(who, area))[who]
+    # a spread sample first (most renders: no placement near the share, ~1 ms); all past it
+    if len(rows) > _STRAND_SAMPLE:
+        picked = np.arange(0, len(rows), len(rows) // _STRAND_SAMPLE)
+        bad, change, area = _strand_rounding(v, tri, rows[picked], origin)
+        # (a placement at a quarter of the share in the sample is looked at in full)
+        if not (bad.any() and over(picked, 4.0 * change, area).any()):
+            return None
+    bad = np.zeros(len(rows), bool)
+    change, area = np.zeros(len(rows)), np.zeros(len(rows))
     for c0 in range(0, len(rows), _STRAND_CHUNK):
-        r = rows[c0:c0 + _STRAND_CHUNK]
-        bad[r] = distorted(r)
-    return bad if bad.any() else None
+        part = slice(c0, c0 + _STRAND_CHUNK)
+        bad[part], change[part], area[part] = _strand_rounding(v, tri, rows[part], origin)
+    bad &= over(slice(None), change, area)
+    if not bad.any():
+        return None
+    out = np.zeros(len(tri), bool)
+    out[rows[bad]] = True
+    return out
 
 
 # Far-reaching surfaces (huge_surfaces): float32 places a point on a triangle only to ULPs of
