@@ -241,7 +241,7 @@ class LightSetup:
         Cycles, and had been said nothing)."""
         # (only light-sampled ones: copies left to BSDF rays alone are not added twice)
         sampled = hittable & self.mats.light_sampled[self.tri.material]
-        near, tol = near_copies(self.tri.vertices, self.tri.indices, sampled)
+        near, tol = near_copies(self.tri.vertices, self.tri.indices, sampled, _tube_owner(sd.geometry))
         over, over_tol = coplanar_overlaps(self.tri.vertices, self.tri.indices, sampled)
         if over is not None and near is not None:
             over &= ~near
@@ -563,19 +563,26 @@ def _light_set(linking, lamp) -> int:
     return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.key)
 
 
+def _tube_owner(geometry):
+    """(M,) int64: each hair or Curves tube triangle's placement (Geometry.instance, else its
+    object), -1 on other triangles; None without tubes."""
+    one = getattr(geometry, 'one_sided', None)
+    if one is None:
+        return None
+    owner = geometry.instance if geometry.instance is not None else geometry.object_index
+    return np.where(np.asarray(one, bool), np.asarray(owner, np.int64), -1)
+
+
 def _user_copies(geometry, copies, winners, grouped):
     """coincident_copies' (copies, winners, grouped) without the pairs of one placement's own
     hair or Curves tube triangles (Geometry.one_sided): a strand tapering to its tip has rings
     thinner than float32 there, whose triangles round onto each other (fur of Shape 0.9: 2556
     of them, 1e-11 in area), a copy of DACRT's tessellation that Cycles' curves do not have
     (its image 1.02x Cycles'), not one the user modelled: not said."""
-    one = getattr(geometry, 'one_sided', None)
-    if one is None or not len(copies):
+    owner = _tube_owner(geometry)
+    if owner is None or not len(copies):
         return copies, winners, grouped
-    one = np.asarray(one, bool)
-    owner = geometry.instance if geometry.instance is not None else geometry.object_index
-    owner = np.asarray(owner)
-    own = one[copies] & one[winners] & (owner[copies] == owner[winners])
+    own = (owner[copies] == owner[winners]) & (owner[copies] >= 0)
     if not own.any():
         return copies, winners, grouped
     made = np.zeros(len(grouped), bool)
