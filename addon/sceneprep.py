@@ -243,27 +243,33 @@ def rounded_strands(sd: SceneData, origin):
     owner = getattr(g, 'instance', None)
     owner = np.asarray(g.object_index if owner is None else owner)
 
-    def over(picked, change, area):
-        """Per triangle of rows[picked]: whether its placement's picked triangles can move
-        more than _STRAND_SHARE of their area."""
-        ids = owner[rows[picked]]
+    def places(ids):
+        """The placement ids as counts' positions (counted, not sorted, where their range is
+        short: they index arrays) and how many."""
         lo, hi = int(ids.min()), int(ids.max())
-        # (placement ids index arrays: counted, not sorted, where their range is short)
-        who = ids - lo if hi - lo <= 4 * len(ids) else np.unique(ids, return_inverse=True)[1]
-        return (np.bincount(who, change) > _STRAND_SHARE * np.bincount(who, area))[who]
+        if hi - lo <= 4 * len(ids):
+            return (ids - lo).astype(np.intp), hi - lo + 1
+        _, who = np.unique(ids, return_inverse=True)
+        return who, int(who.max()) + 1
     # a spread sample first (most renders: no placement near the share, ~1 ms); all past it
     if len(rows) > _STRAND_SAMPLE:
-        picked = np.arange(0, len(rows), len(rows) // _STRAND_SAMPLE)
-        bad, change, area = _strand_rounding(v, tri, rows[picked], origin)
-        # (a placement at a quarter of the share in the sample is looked at in full)
-        if not (bad.any() and over(picked, 4.0 * change, area).any()):
+        picked = rows[::len(rows) // _STRAND_SAMPLE]
+        bad, change, area = _strand_rounding(v, tri, picked, origin)
+        if not bad.any():
             return None
+        who, k = places(owner[picked])
+        # (a placement at a quarter of the share in the sample is looked at in full)
+        if not (np.bincount(who, change, k) > 0.25 * _STRAND_SHARE * np.bincount(who, area, k)).any():
+            return None
+    who, k = places(owner[rows])
+    moved, total = np.zeros(k), np.zeros(k)
     bad = np.zeros(len(rows), bool)
-    change, area = np.zeros(len(rows)), np.zeros(len(rows))
     for c0 in range(0, len(rows), _STRAND_CHUNK):
         part = slice(c0, c0 + _STRAND_CHUNK)
-        bad[part], change[part], area[part] = _strand_rounding(v, tri, rows[part], origin)
-    bad &= over(slice(None), change, area)
+        bad[part], change, area = _strand_rounding(v, tri, rows[part], origin)
+        moved += np.bincount(who[part], change, k)
+        total += np.bincount(who[part], area, k)
+    bad &= (moved > _STRAND_SHARE * total)[who]
     if not bad.any():
         return None
     out = np.zeros(len(tri), bool)
