@@ -241,7 +241,7 @@ class LightSetup:
         Cycles, and had been said nothing)."""
         # (only light-sampled ones: copies left to BSDF rays alone are not added twice)
         sampled = hittable & self.mats.light_sampled[self.tri.material]
-        near, tol = near_copies(self.tri.vertices, self.tri.indices, sampled, _tube_owner(sd.geometry))
+        near, tol = near_copies(self.tri.vertices, self.tri.indices, sampled, _tubes(sd.geometry))
         over, over_tol = coplanar_overlaps(self.tri.vertices, self.tri.indices, sampled)
         if over is not None and near is not None:
             over &= ~near
@@ -563,14 +563,14 @@ def _light_set(linking, lamp) -> int:
     return 0 if isinstance(lamp, BackgroundLight) else linking.emitter_set(lamp.key)
 
 
-def _tube_owner(geometry):
-    """(M,) int64: each hair or Curves tube triangle's placement (Geometry.instance, else its
-    object), -1 on other triangles; None without tubes."""
+def _tubes(geometry):
+    """(one_sided bool (M,), placement (M,)): the hair and Curves tube triangles and each
+    triangle's placement (Geometry.instance, else its object); None without tubes."""
     one = getattr(geometry, 'one_sided', None)
     if one is None:
         return None
     owner = geometry.instance if geometry.instance is not None else geometry.object_index
-    return np.where(np.asarray(one, bool), np.asarray(owner, np.int64), -1)
+    return np.asarray(one, bool), np.asarray(owner)
 
 
 def _user_copies(geometry, copies, winners, grouped):
@@ -579,10 +579,11 @@ def _user_copies(geometry, copies, winners, grouped):
     thinner than float32 there, whose triangles round onto each other (fur of Shape 0.9: 2556
     of them, 1e-11 in area), a copy of DACRT's tessellation that Cycles' curves do not have
     (its image 1.02x Cycles'), not one the user modelled: not said."""
-    owner = _tube_owner(geometry)
-    if owner is None or not len(copies):
+    tubes = _tubes(geometry)
+    if tubes is None or not len(copies):
         return copies, winners, grouped
-    own = (owner[copies] == owner[winners]) & (owner[copies] >= 0)
+    one, place = tubes
+    own = one[copies] & one[winners] & (place[copies] == place[winners])
     if not own.any():
         return copies, winners, grouped
     made = np.zeros(len(grouped), bool)

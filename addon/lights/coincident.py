@@ -111,14 +111,15 @@ _NEAR_DIR = np.array([0.5366, 0.6397, 0.5503]) / np.linalg.norm([0.5366, 0.6397,
 _ORDERS = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]])
 
 
-def near_copies(vertices, indices, emitters, own=None):
+def near_copies(vertices, indices, emitters, tubes=None):
     """(mask, tol): the emitters (bool (M,)) another emitter repeats up to rounding, every corner
     within tol (_NEAR_ULPS float32 ulps of the emitters' largest coordinate, in any corner order
     or winding) but not bit for bit (a copy under another transform, or moved by ~1e-6: both are
     light-sampled, and coincident_copies, exact, leaves them); (None, tol) where there are none,
-    or too many emitters to look (_NEAR_MAX). own (int (M,), optional): pairs of one value >= 0
-    there are not copies (a placement's own hair tube triangles that rounding brought together
-    at a tapering tip, ~1e-11 in area: not a copy the user made). Only triangles split alike are found: a quad
+    or too many emitters to look (_NEAR_MAX). tubes (optional): (one_sided bool (M,), placement
+    int (M,)): a pair of tube triangles of one placement is no copy (a tapering strand's tip
+    triangles, rounded together, ~1e-11 in area: not a copy the user made). Only triangles
+    split alike are found: a quad
     copied under a 90 degree turn splits along its other diagonal, and those are not
     (lights/overlap.py finds them). Cheap: the
     centroids sorted along one direction, each compared with the next few within tol."""
@@ -151,8 +152,9 @@ def near_copies(vertices, indices, emitters, own=None):
         for o in _ORDERS:
             exact |= (c32[a] == c32[b][:, o]).all(axis=(1, 2))
         hit = (err <= tol) & ~exact
-        if own is not None:
-            hit &= ~((own[E[a]] == own[E[b]]) & (own[E[a]] >= 0))
+        if tubes is not None:
+            one, place = tubes
+            hit &= ~(one[E[a]] & one[E[b]] & (place[E[a]] == place[E[b]]))
         found[a[hit]] = found[b[hit]] = True
     if not found.any():
         return None, tol
