@@ -114,14 +114,15 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
             reasons.append("two environment textures in the world; the second ignored")
         return ua + ub, ea if ea is not None else eb
     s, s_ok = constant_value(node.inputs['Strength'])
-    if not s_ok:
+    found = None if s_ok else _procedural_strength(node, weight, reasons)
+    if not s_ok and found is None:
         reasons.append(f"world {node.bl_label} Strength driven by nodes; its own value used")
-    if s * weight == 0.0:
+    if found is None and s * weight == 0.0:
         # nothing emits whatever the colour: a texture there approximates nothing (a world
         # dimmed to 0 had warned that its Noise colour was read at its own value)
         return none, None
-    u, env = _color_light(node.inputs['Color'], np.float32(s * weight), f"world {node.bl_label} Color", reasons,
-                          frame)
+    u, env = found or _color_light(node.inputs['Color'], np.float32(s * weight), f"world {node.bl_label} Color",
+                                   reasons, frame)
     big = u if env is None else np.append(u, env.strength)
     if np.isfinite(big).all() and not fits_float32(big):
         # finite but beyond what the renderer carries (an 'inf' typed into the Strength or
@@ -193,12 +194,40 @@ def _procedural_world(socket, strength, what, reasons):
     equirectangular map, which the environment light blends and samples. None where the chain
     reads anything else. A Gradient world had stood at the socket's own colour (0.05 where
     Cycles' mean is 0.20)."""
+    return _baked([(socket, True)], np.full(3, strength, np.float32), what, reasons)
+
+
+def _procedural_strength(node, weight, reasons):
+    """(uniform radiance, Environment) of a Background or Emission whose Strength is computed
+    from procedural textures of the view direction (a Spherical Gradient's sun spot, a Noise),
+    its Color a constant or such textures too: the product baked as _procedural_world bakes a
+    colour; None where either reads anything else (images, a Sky) or nothing of the kind. It
+    had stood at the Strength socket's own value, said (a world dimmed to 0 outside a Gradient's
+    spot rendered its colour where Cycles is black; a Noise strength 2.07x Cycles')."""
+    color = node.inputs['Color']
+    c, c_ok = constant_color(color)
+    if not c_ok and (_environments_feeding(color) or _environments_feeding(color, 'TEX_SKY')):
+        return None
+    sockets = [(node.inputs['Strength'], False)] + ([] if c_ok else [(color, True)])
+    tint = np.asarray(c[:3], np.float32) * np.float32(weight) if c_ok else np.full(3, weight, np.float32)
+    return _baked(sockets, tint, f"world {node.bl_label} Strength", reasons)
+
+
+def _baked(sockets, strength, what, reasons):
+    """(zero uniform radiance, Environment of the product of the sockets' values, times strength
+    (3,)) with each socket (socket, is colour) compiled by procedurals.compile_socket and
+    evaluated at the texel centres of an equirectangular map of the view directions; None
+    where one cannot be compiled or reads anything but the view direction (as texture
+    coordinates: _WORLD_COORDINATES, one object's frame)."""
     from . import procedurals
     notes = []
-    found = procedurals.compile_socket(socket, True, notes)
-    if found is None:
-        return None
-    fn, needs, sources = found
+    chains = []
+    for socket, color in sockets:
+        found = procedurals.compile_socket(socket, color, notes)
+        if found is None:
+            return None
+        chains.append(found)
+    needs = set().union(*(n for _, n, _ in chains))
     frames = {n for n in needs if isinstance(n, tuple) and n[0] == procedurals.OBJECT_OF}
     if not (needs - frames) <= _WORLD_COORDINATES or len(frames) > 1:
         return None
@@ -214,16 +243,19 @@ def _procedural_world(socket, strength, what, reasons):
         if inverse is not None:
             m = np.array(inverse, np.float64).reshape(4, 4)
             coords['object'] = (d @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
-    img = np.asarray(fn(coords), np.float64)
-    img = np.broadcast_to(img, (len(d), 3)).reshape(height, PROCEDURAL_WIDTH, 3)
+    img = np.ones((len(d), 3), np.float64)
+    for fn, _, _ in chains:
+        img = img * np.asarray(fn(coords), np.float64)      # ((n, 1) floats broadcast over RGB)
+    img = img.reshape(height, PROCEDURAL_WIDTH, 3)
     img = np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0)
+    sources = ', '.join(dict.fromkeys(str(src) for _, _, src in chains))
     if (img < 0).any():         # (no negative light: the environment adds light only)
         reasons.append(f"{what} from {sources} below 0 in places: read as 0 there")
         img = np.maximum(img, 0.0)
     reasons.extend(notes)
     reasons.append(f"{what} from {sources} baked into a {PROCEDURAL_WIDTH} x {height} map, blended between "
                    "its texels (Cycles evaluates it per ray)")
-    env = sd.Environment(img.astype(np.float32), np.full(3, strength, np.float32))
+    env = sd.Environment(img.astype(np.float32), np.asarray(strength, np.float32))
     return np.zeros(3, np.float32), env
 
 
