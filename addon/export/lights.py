@@ -57,8 +57,12 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
     def object_info(output):
         return object_value(info, location, output)
     profile, falloff = [], []
-    shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, object_info, profile,
-                                               falloff)
+    _generated_at[0] = _sun_generated(light, matrix) if light.type == 'SUN' else None
+    try:
+        shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, object_info, profile,
+                                                   falloff)
+    finally:
+        _generated_at[0] = None
     strength *= shader
     if not np.isfinite(strength).all():
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
@@ -509,7 +513,8 @@ class _LightEvaluator(nodeeval.Evaluator):
             return None
         if node.type in _GENERATED_TEXTURES and self._kind in _NO_GENERATED and \
                 not nodegraph.input_by_id(node, 'Vector').is_linked:
-            return _at_generated_zero(node, out, depth)
+            return _at_generated_zero(node, out, depth, _generated_at[0] if self._kind == 'SUN' else None,
+                                      self.notes)
         if node.type == 'TEX_IES' and _ies_probe[0] is not None:   # (_ies_profile's probe)
             _ies_probe[1] = True
             strength = self.input(node.inputs['Strength'], False, depth + 1)
@@ -538,8 +543,8 @@ def _one_emission(surface):
     return sum(nodegraph.unwrap(link.from_node).type in kinds for link in nodegraph.links_feeding(surface)) == 1
 
 
-# procedural textures whose unlinked Vector reads the Generated coordinates, which a light has
-# none of in Cycles (its attribute lookup finds none: 0): one value over the lamp (measured: a
+# procedural textures whose unlinked Vector reads the Generated coordinates, which a point or
+# spot light has none of in Cycles (0 at its centre; a sun's: _sun_generated): one value over the lamp (measured: a
 # Gradient on a point lamp black, a Checker's colour 2 on a spot; they had stood at the input's
 # own value, 0.137 where Cycles renders 0, 4.6x)
 # (an area light's vary over it in Cycles: a Checker of Scale 3 averages its two colours there)
@@ -548,9 +553,11 @@ _GENERATED_TEXTURES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TE
                                  'TEX_MAGIC', 'TEX_GABOR'})
 
 
-def _at_generated_zero(node, out, depth):
-    """A procedural texture's output (nodeeval.Field) at Generated (0, 0, 0), its other inputs
-    compiled as a material's (procedurals); None where they read anything else."""
+def _at_generated_zero(node, out, depth, points=None, notes=None):
+    """A procedural texture's output (nodeeval.Field) at Generated (0, 0, 0), or the mean of
+    it at points (n, 3) (a sun's: _sun_generated), its other inputs compiled as a material's
+    (procedurals); None where they read anything else. Where the points' values differ (a sun
+    of some angle) their mean is noted in notes: Cycles computes the chain per direction."""
     from . import procedurals
     chain = procedurals._Chain([], None)
     try:
@@ -559,8 +566,56 @@ def _at_generated_zero(node, out, depth):
         return None
     if chain.needs - {'generated'} or chain.frames or chain.reasons:
         return None
-    value = np.asarray(fn({'generated': np.zeros((1, 3), np.float32)}), np.float64).reshape(-1)
+    at = np.zeros((1, 3), np.float32) if points is None else np.asarray(points, np.float32)
+    values = np.asarray(fn({'generated': at}), np.float64).reshape(len(at), -1)
+    value = values.mean(axis=0)
+    if len(at) > 1 and notes is not None and np.ptp(values, axis=0).max() > 1e-3 * (np.abs(value).max() + 1e-3):
+        notes.append(f"{node.bl_label} averaged over the sun's angle (Cycles computes the nodes after it per "
+                     "direction)")
     return nodeeval.Field(value[:3] if len(value) >= 3 else value[:1], vector=vector)
+
+
+# a sun's Generated coordinates while its tree is evaluated (export_light): _sun_generated
+_generated_at = [None]
+
+
+def _sun_generated(light, matrix, rings=4, around=16):
+    """Where a sun's Generated coordinates lie in Cycles: its sampled direction of travel d (unit,
+    world; within the cone of its angle) read as a point in the sun's object space, M^-1 (d, 1)
+    (Cycles' attribute fallback transforms the shading point, which a distant light's sample
+    sets to d; measured to 4 digits on rotated, moved suns). They had been taken as 0: a
+    Gradient on a sun at (-2, 0, 3) lit nothing where Cycles lights at full strength.
+    (n, 3): the centre direction, and for an angle > 0 rings of the cone in equal solid angle,
+    or None where the matrix is not invertible (Generated 0 then)."""
+    m = np.array(matrix, np.float64)
+    if not np.isfinite(m[:3, :3]).all():
+        return None
+    axis = m[:3, :3] @ np.array([0.0, 0.0, -1.0])
+    n = np.linalg.norm(axis)
+    if not n > 0:
+        return None
+    axis /= n
+    half = 0.5 * float(getattr(light, 'angle', 0.0))
+    dirs = [axis]
+    if half > 0.0:
+        u = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
+        u /= np.linalg.norm(u)
+        v = np.cross(axis, u)
+        one_minus = 1.0 - np.cos(min(half, np.pi / 2))
+        for i in range(rings):              # (uniform in solid angle: cos theta uniform, as Cycles samples)
+            cos_t = 1.0 - one_minus * (i + 0.5) / rings
+            sin_t = np.sqrt(max(1.0 - cos_t * cos_t, 0.0))
+            for k in range(around):
+                a = 2 * np.pi * (k + 0.5 * (i % 2)) / around
+                dirs.append(cos_t * axis + sin_t * (np.cos(a) * u + np.sin(a) * v))
+        dirs = dirs[1:]
+    m[:3, 3] = np.nan_to_num(m[:3, 3], nan=0.0, posinf=0.0, neginf=0.0)
+    try:
+        inverse = np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        return None
+    pts = np.asarray(dirs) @ inverse[:3, :3].T + inverse[:3, 3]
+    return pts if np.isfinite(pts).all() else None
 
 
 def _past_falloff(socket, reasons, kind=None):
