@@ -62,3 +62,27 @@ def test_sun_texture_at_its_generated_point_agrees_with_cycles(case, tmp_path, s
         assert not mine, said
     else:                           # the nodes after the texture see its mean over the cone: said
         assert [t for t in mine if "Noise Texture averaged over the sun's angle" in t], said
+
+
+def test_sun_colour_texture_of_an_angle_is_averaged_over_its_cone(tmp_path, said):
+    """A colour (not a Strength) from a texture that varies over a wide sun's cone: the mean of
+    the texture over the cone's directions, said (not the Color socket's own value)."""
+    sc = _scene('ShaderNodeTexNoise', 'Color', 'Color', (0.0, 0.0, 0.0), (0.6, 0.2, 0.0), 0.3, {'Scale': 3.0})
+    layer = sc.view_layers[0].name
+    means = {e: np.array([exr[f"{layer}.Combined.{c}"].mean() for c in 'RGB'], np.float64)
+             for e, exr in scenes.render_engines(sc, tmp_path).items()}
+    np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.03)
+    assert [t for t in said if "light 'Sun'" in t and "Noise Texture averaged over the sun's angle" in t], said
+    assert not [t for t in said if "own value" in t], said
+
+
+def test_point_lamp_texture_that_varies_over_its_radius_is_said(tmp_path, said):
+    """A point lamp of radius 0.8 with a Linear Gradient: Cycles reads it at the point sampled on
+    the lamp's disc (0.0084 where the centre's value, 0, is black): computed at the centre, said."""
+    sc = _scene('ShaderNodeTexGradient', 'Fac', 'Strength', (0.0, 0.0, 2.0), (0.0, 0.0, 0.0), 0.0, {})
+    lamp = sc.objects['Sun']
+    lamp.data.type = 'POINT'
+    lamp.data.shadow_soft_size = 0.8
+    sc.render.engine = 'DACRT'
+    scenes.render_exr(tmp_path / "d.exr", sc)
+    assert [t for t in said if "light 'Sun'" in t and "Gradient Texture computed at the lamp's centre" in t], said
