@@ -104,6 +104,10 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
             fac = 1.0 if camera else 0.0      # (the background trick: what the camera sees, and the light)
             by_ray.append(node.name)
         else:
+            if t == 'MIX_SHADER' and not constant_value(node.inputs['Fac'])[1]:
+                found = _procedural_mix(node, weight, reasons)
+                if found is not None:
+                    return found
             fac = mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
@@ -213,7 +217,32 @@ def _procedural_strength(node, weight, reasons):
     return _baked(sockets, tint, f"world {node.bl_label} Strength", reasons)
 
 
-def _baked(sockets, strength, what, reasons):
+def _procedural_mix(node, weight, reasons):
+    """(uniform radiance, Environment) of a world Mix Shader whose factor is computed from
+    procedural textures of the view direction, between two Backgrounds or Emissions (or
+    nothing) of constant or such procedural Color and Strength: (1 - f) A + f B with f clamped
+    to [0, 1] as Cycles does, baked as _procedural_world; None where any part reads anything
+    else. Its factor had stood at its own value, said (a Gradient's mix of two colours 0.55-5.5x
+    Cycles by quarters)."""
+    sides = []
+    for i in (1, 2):
+        link = linked_link(node.inputs[i])
+        if link is None:
+            sides.append(None)
+            continue
+        if link.from_node.type not in ('BACKGROUND', 'EMISSION'):
+            return None
+        color, strength = link.from_node.inputs['Color'], link.from_node.inputs['Strength']
+        for socket in (color, strength):
+            if _environments_feeding(socket) or _environments_feeding(socket, 'TEX_SKY'):
+                return None
+        sides.append([(color, True), (strength, False)])
+    ones = np.full(3, weight, np.float32)
+    found = _baked([(node.inputs['Fac'], False)], ones, "world Mix Shader factor", reasons, sides=sides)
+    return found
+
+
+def _baked(sockets, strength, what, reasons, sides=None):
     """(zero uniform radiance, Environment of the product of the sockets' values, times strength
     (3,)) with each socket (socket, is colour) compiled by procedurals.compile_socket and
     evaluated at the texel centres of an equirectangular map of the view directions; None
@@ -227,7 +256,14 @@ def _baked(sockets, strength, what, reasons):
         if found is None:
             return None
         chains.append(found)
-    needs = set().union(*(n for _, n, _ in chains))
+    side_values, side_chains = [], []
+    for side in sides or ():
+        value, found = _side_value(side, notes)
+        if value is None:
+            return None
+        side_values.append(value)
+        side_chains.extend(found)
+    needs = set().union(*(n for _, n, _ in chains + side_chains))
     frames = {n for n in needs if isinstance(n, tuple) and n[0] == procedurals.OBJECT_OF}
     if not (needs - frames) <= _WORLD_COORDINATES or len(frames) > 1:
         return None
@@ -246,9 +282,14 @@ def _baked(sockets, strength, what, reasons):
     img = np.ones((len(d), 3), np.float64)
     for fn, _, _ in chains:
         img = img * np.asarray(fn(coords), np.float64)      # ((n, 1) floats broadcast over RGB)
+    if sides is not None:           # a Mix Shader: img is its factor, then (1 - f) A + f B
+        f = np.clip(np.nan_to_num(img, nan=0.0), 0.0, 1.0)
+        img = np.zeros_like(img)
+        for w, side in zip((1.0 - f, f), side_values):
+            img = img + w * side(coords)
     img = img.reshape(height, PROCEDURAL_WIDTH, 3)
     img = np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0)
-    sources = ', '.join(dict.fromkeys(str(src) for _, _, src in chains))
+    sources = ', '.join(dict.fromkeys(str(src) for _, _, src in chains + side_chains))
     if (img < 0).any():         # (no negative light: the environment adds light only)
         reasons.append(f"{what} from {sources} below 0 in places: read as 0 there")
         img = np.maximum(img, 0.0)
@@ -257,6 +298,32 @@ def _baked(sockets, strength, what, reasons):
                    "its texels (Cycles evaluates it per ray)")
     env = sd.Environment(img.astype(np.float32), np.asarray(strength, np.float32))
     return np.zeros(3, np.float32), env
+
+
+def _side_value(side, notes):
+    """(fn(coords) -> (n, 3) radiance of one side of a baked Mix Shader, its compiled chains),
+    (None, []) where a socket of it cannot be compiled; a side of None (nothing linked) is 0."""
+    from . import procedurals
+    if side is None:
+        return (lambda coords: 0.0), []
+    parts, chains = [], []
+    for socket, color in side:
+        c, ok = (constant_color(socket) if color else constant_value(socket))
+        if ok:
+            parts.append(np.asarray(c[:3] if color else [c], np.float64))
+            continue
+        found = procedurals.compile_socket(socket, color, notes)
+        if found is None:
+            return None, []
+        chains.append(found)
+        parts.append(found[0])
+
+    def value(coords):
+        out = np.ones(3, np.float64)
+        for part in parts:
+            out = out * (np.asarray(part(coords), np.float64) if callable(part) else part)
+        return out
+    return value, chains
 
 
 def _sky_through(socket, sky, strength, reasons):
