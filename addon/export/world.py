@@ -237,9 +237,8 @@ def _procedural_mix(node, weight, reasons):
             if _environments_feeding(socket) or _environments_feeding(socket, 'TEX_SKY'):
                 return None
         sides.append([(color, True), (strength, False)])
-    ones = np.full(3, weight, np.float32)
-    found = _baked([(node.inputs['Fac'], False)], ones, "world Mix Shader factor", reasons, sides=sides)
-    return found
+    return _baked([(node.inputs['Fac'], False)], np.full(3, weight, np.float32), "world Mix Shader factor",
+                  reasons, sides=sides)
 
 
 def _baked(sockets, strength, what, reasons, sides=None):
@@ -247,7 +246,9 @@ def _baked(sockets, strength, what, reasons, sides=None):
     (3,)) with each socket (socket, is colour) compiled by procedurals.compile_socket and
     evaluated at the texel centres of an equirectangular map of the view directions; None
     where one cannot be compiled or reads anything but the view direction (as texture
-    coordinates: _WORLD_COORDINATES, one object's frame)."""
+    coordinates: _WORLD_COORDINATES, one object's frame). sides: a Mix Shader's two shaders
+    (_side_value's [(Color, True), (Strength, False)] or None), the product then being its
+    factor f and the map (1 - f) A + f B."""
     from . import procedurals
     notes = []
     chains = []
