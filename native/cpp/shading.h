@@ -92,8 +92,9 @@ void triangle_table(const float* vertices, size_t V, const int32_t* triangles, s
                     const uint8_t* full, float* geo, double* area, uint64_t* keys = nullptr);
 
 // out[i] = 1 where keys[i] != 0 and another entry holds the same key, else 0 (n entries): the
-// triangles whose triangle_table key repeats (a surface modelled twice). One pass over an
-// open-addressing table of 2-4n slots: a sort of a million keys had cost ~60 ms a frame.
+// triangles whose triangle_table key repeats (a surface modelled twice). Keys partitioned by
+// hash into buckets of ~4K, each searched in an open-addressing table that fits in cache (see
+// surface.cpp); a sort of a million keys had cost ~60 ms a frame. n < 2^32.
 void repeated_keys(const uint64_t* keys, size_t n, uint8_t* out);
 
 // Unit geometric normals (M rows of 3, by the winding (v1 - v0) x (v2 - v0)) of triangles of

@@ -17,26 +17,59 @@ namespace {
 constexpr uint64_t kCornerMix[3] = {0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full, 0x165667B19E3779F9ull};
 }  // namespace
 
+// Radix-partitioned: the keys (with their entries) go to buckets by their top hash bits,
+// ~4K keys a bucket, and each bucket finds its repeats in an open-addressing table of its own
+// that stays in cache. One table over all keys had missed the cache on every probe once it
+// outgrew it: 65 ns a key at 1.25M keys (2M triangles, 67 ms a frame), 5 ns at 100K.
 void repeated_keys(const uint64_t* keys, size_t n, uint8_t* out) {
-    size_t cap = 16;
-    while (cap < 2 * n) cap <<= 1;
-    const size_t mask = cap - 1;
-    std::vector<uint64_t> slot(cap, 0);      // 0: empty (keys of 0 are never stored)
-    std::vector<size_t> first(cap);          // the entry that filled the slot
-    for (size_t i = 0; i < n; ++i) {
-        out[i] = 0;
-        const uint64_t k = keys[i];
-        if (k == 0) continue;
-        size_t h = size_t((k * 0x9E3779B97F4A7C15ull) >> 17) & mask;   // (the key's own bits are a hash)
-        while (slot[h] != 0 && slot[h] != k) h = (h + 1) & mask;
-        if (slot[h] == 0) {
-            slot[h] = k;
-            first[h] = i;
-        } else {
-            out[i] = 1;
-            out[first[h]] = 1;
+    std::memset(out, 0, n);
+    auto mixed = [](uint64_t k) { return k * 0x9E3779B97F4A7C15ull; };  // (the key's own bits are a hash)
+    size_t live = 0;
+    for (size_t i = 0; i < n; ++i) live += keys[i] != 0;
+    int bits = 0;
+    while (bits < 16 && (live >> bits) > 4096) ++bits;
+    const size_t buckets = size_t(1) << bits;
+    std::vector<size_t> start(buckets + 1, 0);
+    auto bucket_of = [&](uint64_t k) { return bits ? size_t(mixed(k) >> (64 - bits)) : size_t(0); };
+    for (size_t i = 0; i < n; ++i)
+        if (keys[i]) ++start[bucket_of(keys[i]) + 1];
+    for (size_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
+    std::vector<uint64_t> key(live);
+    std::vector<uint32_t> entry(live);
+    {
+        std::vector<size_t> fill(start.begin(), start.end() - 1);
+        for (size_t i = 0; i < n; ++i) {
+            const uint64_t k = keys[i];
+            if (!k) continue;
+            const size_t at = fill[bucket_of(k)]++;
+            key[at] = k;
+            entry[at] = uint32_t(i);
         }
     }
+    parallel_for(buckets, [&](size_t b0, size_t b1) {
+        std::vector<uint64_t> slot;
+        std::vector<uint32_t> first;
+        for (size_t b = b0; b < b1; ++b) {
+            const size_t lo = start[b], m = start[b + 1] - lo;
+            size_t cap = 16;
+            while (cap < 2 * m) cap <<= 1;
+            const size_t mask = cap - 1;
+            slot.assign(cap, 0);  // 0: empty (keys of 0 are never stored)
+            first.resize(cap);    // the entry that filled the slot
+            for (size_t j = lo; j < lo + m; ++j) {
+                const uint64_t k = key[j];
+                size_t h = size_t(mixed(k) >> 17) & mask;
+                while (slot[h] != 0 && slot[h] != k) h = (h + 1) & mask;
+                if (slot[h] == 0) {
+                    slot[h] = k;
+                    first[h] = entry[j];
+                } else {
+                    out[entry[j]] = 1;
+                    out[first[h]] = 1;
+                }
+            }
+        }
+    }, 8);
 }
 
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
