@@ -42,25 +42,17 @@ def test_keys_that_collide_in_the_table_stay_apart():
     assert got[0] and got[-1] and got.sum() == 2
 
 
-def test_many_keys_cost_a_small_part_of_a_sort():
-    """A frame of millions of triangles: the keys are partitioned into buckets whose tables stay
-    in cache. One table over all the keys missed the cache on every probe once it outgrew it
-    (65 ns a key at 1.25M keys, 2M triangles: 67 ms CPU a frame; partitioned 14 ms). Against
-    numpy's sort of these 2M keys (1.2M live): 0.20-0.23x before, 0.08x partitioned. CPU time,
-    medians of alternating runs."""
-    import time
+def test_millions_of_keys_over_many_buckets_match_a_sort():
+    """A frame of millions of triangles: the keys are partitioned by hash into buckets of ~4K
+    whose tables stay in cache, searched on the call's threads (one table over all keys had
+    missed the cache on every probe: 67 ms CPU at 2M triangles, partitioned ~14 ms; speed is
+    the benchmark's business, not this test's). The answer is the sort's, planted repeats and
+    all, across bucket boundaries."""
     rng = np.random.default_rng(3)
     n = 2_000_000
     keys = rng.integers(1, 2**63, n, dtype=np.uint64) | np.uint64(1)
     keys[rng.random(n) < 0.4] = 0                 # (1.2M live, as 2M triangles near the origin)
-    keys[-1000:] = keys[:1000]                             # planted repeats
-    ours, sort = [], []
-    for _ in range(5):
-        t0 = time.process_time()
-        got = shading.repeated_keys(keys)
-        ours.append(time.process_time() - t0)
-        t0 = time.process_time()
-        np.sort(keys)
-        sort.append(time.process_time() - t0)
-    assert np.array_equal(got[:1000], keys[:1000] != 0) and got.sum() == 2 * np.count_nonzero(keys[:1000])
-    assert np.median(ours) < 0.13 * np.median(sort), (np.median(ours), np.median(sort))
+    keys[-1000:] = keys[:1000]                    # planted repeats, far apart in the array
+    got = shading.repeated_keys(keys)
+    assert np.array_equal(got, _reference(keys))
+    assert got.sum() >= 2 * np.count_nonzero(keys[:1000])
