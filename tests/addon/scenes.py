@@ -335,6 +335,25 @@ def world_tree(scene=None):
     return w, nt, nt.nodes.new('ShaderNodeOutputWorld')
 
 
+def panorama_world(name, samples=16):
+    """A fresh factory scene seen by a 64x32 equirectangular camera at the origin, its new world
+    `name` (returned, with its node tree's default Background) and a grey diffuse ball 3 units
+    along +Y that the world lights, both engines at `samples` spp and 1 bounce, Cycles without
+    denoising: the procedural-world parity tests' common set-up. Returns (scene, world)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 64, 32
+    cam = camera(location=(0, 0, 0), rotation=(math.pi / 2, 0, 0))
+    cam.data.type, cam.data.panorama_type = 'PANO', 'EQUIRECTANGULAR'
+    sc.cycles.samples = sc.dacrt.samples = samples
+    sc.cycles.use_denoising = False
+    sc.cycles.max_bounces = sc.dacrt.max_bounces = 1
+    world = bpy.data.worlds.new(name)
+    sc.world = world
+    uv_sphere("Ball", radius=0.5, location=(0, 3, 0), materials=[diffuse("Grey", (0.8, 0.8, 0.8))])
+    return sc, world
+
+
 def black_world(scene=None):
     return world((0, 0, 0), 0.0, scene)
 

@@ -7,9 +7,7 @@ diffuse sphere lit by that world.
 It had stood at the Background Color socket's own colour, said: a Linear gradient world 0.05
 where Cycles' mean is 0.203.
 """
-import math
 
-import bpy
 import numpy as np
 import pytest
 
@@ -19,16 +17,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(texture, output, coordinate, rotation):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 64, 32
-    cam = scenes.camera(location=(0, 0, 0), rotation=(math.pi / 2, 0, 0))
-    cam.data.type, cam.data.panorama_type = 'PANO', 'EQUIRECTANGULAR'
-    sc.cycles.samples = sc.dacrt.samples = 16
-    sc.cycles.use_denoising = False
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 1
-    world = bpy.data.worlds.new("Gradient")
-    sc.world = world
+    sc, world = scenes.panorama_world("Gradient", samples=16)
     nt = world.node_tree
     tex = nt.nodes.new(texture[0])
     for k, v in texture[1].items():
@@ -40,7 +29,6 @@ def _scene(texture, output, coordinate, rotation):
         nt.links.new(coords.outputs[coordinate], mapping.inputs['Vector'])
         nt.links.new(mapping.outputs[0], tex.inputs['Vector'])
     nt.links.new(tex.outputs[output], nt.nodes['Background'].inputs['Color'])
-    scenes.uv_sphere("Ball", radius=0.5, location=(0, 3, 0), materials=[scenes.diffuse("Grey", (0.8, 0.8, 0.8))])
     return sc
 
 

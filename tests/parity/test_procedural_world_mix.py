@@ -8,9 +8,7 @@ The factor had stood at its own value, said ("world Mix Shader factor not comput
 value 0.5 used"): a Gradient's mix of an orange and a blue Background 0.55x-5.5x Cycles by
 quarters.
 """
-import math
 
-import bpy
 import numpy as np
 import pytest
 
@@ -20,16 +18,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(factor, second):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 64, 32
-    cam = scenes.camera(location=(0, 0, 0), rotation=(math.pi / 2, 0, 0))
-    cam.data.type, cam.data.panorama_type = 'PANO', 'EQUIRECTANGULAR'
-    sc.cycles.samples = sc.dacrt.samples = 32
-    sc.cycles.use_denoising = False
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 1
-    world = bpy.data.worlds.new("Mixed")
-    sc.world = world
+    sc, world = scenes.panorama_world("Mixed", samples=32)
     nt = world.node_tree
     bg = nt.nodes['Background']
     bg.inputs['Color'].default_value = (1.0, 0.3, 0.1, 1.0)
@@ -46,7 +35,6 @@ def _scene(factor, second):
     nt.links.new(bg.outputs[0], mix.inputs[1])
     nt.links.new(other.outputs[0], mix.inputs[2])
     nt.links.new(mix.outputs[0], nt.nodes['World Output'].inputs['Surface'])
-    scenes.uv_sphere("Ball", radius=0.5, location=(0, 3, 0), materials=[scenes.diffuse("Grey", (0.8, 0.8, 0.8))])
     return sc
 
 

@@ -9,9 +9,7 @@ nodes; its own value used"): a world dimmed to 0 outside a Gradient's spot rende
 (0.9, 0.6, 0.3) in the top rows where Cycles' are black, a Noise strength 2.07x Cycles' there,
 a Noise times a Gradient 2.03x.
 """
-import math
 
-import bpy
 import numpy as np
 import pytest
 
@@ -21,16 +19,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(strength, color):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 64, 32
-    cam = scenes.camera(location=(0, 0, 0), rotation=(math.pi / 2, 0, 0))
-    cam.data.type, cam.data.panorama_type = 'PANO', 'EQUIRECTANGULAR'
-    sc.cycles.samples = sc.dacrt.samples = 32
-    sc.cycles.use_denoising = False
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 1
-    world = bpy.data.worlds.new("Lit")
-    sc.world = world
+    sc, world = scenes.panorama_world("Lit", samples=32)
     nt = world.node_tree
     bg = nt.nodes['Background']
     bg.inputs['Color'].default_value = (0.9, 0.6, 0.3, 1.0)
@@ -53,7 +42,6 @@ def _scene(strength, color):
     if color == 'gradient':
         grad = nt.nodes.new('ShaderNodeTexGradient')
         nt.links.new(grad.outputs['Color'], bg.inputs['Color'])
-    scenes.uv_sphere("Ball", radius=0.5, location=(0, 3, 0), materials=[scenes.diffuse("Grey", (0.8, 0.8, 0.8))])
     return sc
 
 
