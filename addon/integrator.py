@@ -65,13 +65,13 @@ from .emitterhits import EmitterHits
 from .film import LIGHT_PASSES, Film
 from .filter import PixelFilter
 from .lights.linking import reached
-from .lightsetup import LightSetup, _object_names
+from .lightsetup import LightSetup
 from .passes import AOV_PREFIX
 from .passwriting import PassWriting, aov_tables
 from .pathstate import Paths, Sinks, compact
 from .sampling import DIM_FILTER, DIM_LENS, DIM_LOBE, RandomStream, dim, max3
 from .scenedata import HOLDOUT, NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
-from .sceneprep import _STRAND_ROUNDING, huge_surfaces, recentred, rounded_strands, validate
+from .sceneprep import huge_surfaces, recentred, thin_strands, validate
 from .surfacetables import Materials, Triangles
 from .surfacevalues import SurfaceValues
 from .translucency import Translucency, valid_reflection_normal
@@ -194,14 +194,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         sampled = {}     # (what huge_surfaces reuses of recentred's sample of the triangles)
         scene_data, self.origin, imprecise = recentred(scene_data, sampled)
         self.messages: list = [('WARNING', imprecise)] if imprecise else []
-        rounded = rounded_strands(given, self.origin)
-        if rounded is not None:
-            self.messages.append(('WARNING', f"hair or curves of {_object_names(given, rounded)}: "
-                                             f"{int(rounded.sum())} of their tube triangles are thinner than "
-                                             "float32 can hold where they are (their corners round by more than "
-                                             f"{_STRAND_ROUNDING:g} of an edge), so those strands render out of "
-                                             "shape, wider or narrower than Cycles' curves; move them nearer "
-                                             "the world origin (or render them apart from far-off objects)"))
+        thin = thin_strands(given, self.origin)
+        if thin is not None:
+            self.messages.append(('WARNING', thin))
         s = scene_data.settings
         self.settings = s
         self.max_bounces = int(s.max_bounces)

@@ -198,7 +198,7 @@ class LightSetup:
         copies, winners, grouped = _user_copies(sd.geometry, copies, winners, grouped)
         if not grouped.any():
             return hittable
-        shown = _object_names(sd, grouped)
+        shown = sd.named_objects(grouped)
         # Cycles' bounce ray leaves one copy and meets the other at t ~ 0: copies that only emit
         # come out darker there (their shadow rays stop at each other), but where a copy that
         # reflects lies on an emitting one, each bounce gathers that emission again (an Add of
@@ -222,8 +222,8 @@ class LightSetup:
             which = more if more.any() else differ
             lost, won = (np.zeros(len(self.tri), bool) for _ in range(2))
             lost[copies[which]], won[winners[which]] = True, True
-            what = (f"DACRT renders what the copy its rays hit emits ({_object_names(sd, won)}), not the "
-                    f"{'brighter' if more.any() else 'dimmer'} emission of {_object_names(sd, lost)}, which "
+            what = (f"DACRT renders what the copy its rays hit emits ({sd.named_objects(won)}), not the "
+                    f"{'brighter' if more.any() else 'dimmer'} emission of {sd.named_objects(lost)}, which "
                     "Cycles shows too")
             how = (f"Cycles renders these faces brighter: the copies emit differently; {what}" if more.any() else
                    f"{how}; the copies emit differently: {what}")
@@ -246,7 +246,7 @@ class LightSetup:
         if over is not None and near is not None:
             over &= ~near
         if over is not None and over.any():
-            self.messages.append(('WARNING', f"{int(over.sum())} emissive triangles of {_object_names(sd, over)} "
+            self.messages.append(('WARNING', f"{int(over.sum())} emissive triangles of {sd.named_objects(over)} "
                                              f"overlap other emissive triangles in their plane (within "
                                              f"{over_tol:.1g}) without repeating them corner for corner: each is "
                                              "light-sampled, so where they overlap their light comes out up to "
@@ -254,7 +254,7 @@ class LightSetup:
                                              "darker; delete the duplicate or move it apart"))
         if near is None:
             return
-        self.messages.append(('WARNING', f"{int(near.sum())} emissive triangles of {_object_names(sd, near)} "
+        self.messages.append(('WARNING', f"{int(near.sum())} emissive triangles of {sd.named_objects(near)} "
                                          f"repeat other emissive triangles up to rounding (corners within "
                                          f"{tol:.1g}, not bit for bit): each copy is light-sampled, so their "
                                          "light comes out up to twice as bright as in Cycles, which renders "
@@ -276,7 +276,7 @@ class LightSetup:
             through &= ~self._coplanar_placements(sd, through, vis)
         if not through.any():
             return
-        self.messages.append(('WARNING', f"emitter(s) {_object_names(sd, through)} have Ray Visibility > "
+        self.messages.append(('WARNING', f"emitter(s) {sd.named_objects(through)} have Ray Visibility > "
                                          "Shadow off: their light samples pass through their own faces, which stop "
                                          "bounce rays, so where those faces hide them the image depends on how a "
                                          "light is chosen; DACRT renders them as Cycles does with its Light Tree "
@@ -593,7 +593,3 @@ def _user_copies(geometry, copies, winners, grouped):
     return copies[~own], winners[~own], grouped & ~(made & ~kept)
 
 
-def _object_names(sd: SceneData, tris) -> str:
-    """The quoted names of the objects owning the triangles of mask tris, for a message."""
-    names = sd.per_object(sd.object_names, lambda i: f"object {i}")
-    return ', '.join(repr(names[i]) for i in np.unique(np.asarray(sd.geometry.object_index, np.int64)[tris]))

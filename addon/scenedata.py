@@ -436,3 +436,8 @@ class SceneData:
         index = np.asarray(self.geometry.object_index)
         need = int(index.max()) + 1 if len(index) else 0
         return values + [fill(i) for i in range(len(values), need)]
+
+    def named_objects(self, tris) -> str:
+        """The quoted names of the objects owning the triangles of mask tris, for a message."""
+        names = self.per_object(self.object_names, lambda i: f"object {i}")
+        return ', '.join(repr(names[i]) for i in np.unique(np.asarray(self.geometry.object_index, np.int64)[tris]))

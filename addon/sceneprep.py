@@ -277,6 +277,18 @@ def rounded_strands(sd: SceneData, origin):
     return out
 
 
+def thin_strands(sd: SceneData, origin):
+    """The warning (text) naming the hair and Curves objects whose tubes render out of shape
+    where they are (rounded_strands), or None."""
+    rounded = rounded_strands(sd, origin)
+    if rounded is None:
+        return None
+    return (f"hair or curves of {sd.named_objects(rounded)}: {int(rounded.sum())} of their tube triangles are "
+            f"thinner than float32 can hold where they are (their corners round by more than "
+            f"{_STRAND_ROUNDING:g} of an edge), so those strands render out of shape, wider or narrower than "
+            "Cycles' curves; move them nearer the world origin (or render them apart from far-off objects)")
+
+
 # Far-reaching surfaces (huge_surfaces): float32 places a point on a triangle only to ULPs of
 # its coordinates. What the render still gets wrong near objects resting on a huge face
 # (measured: a 1 m box on one quad of half-size H, against the same plane split small under the
