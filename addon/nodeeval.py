@@ -13,6 +13,9 @@ or Compare, a Stepped Map Range, lands on Cycles' side); values are kept in floa
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
+
 import numpy as np
 
 from . import colornodes as cn
@@ -172,6 +175,34 @@ class Field:
         return self
 
 
+# Light Path outputs as the ray a material is built for reads them (light_path): output name ->
+# value; None (the default) or an output not named: the node is not computed (its stand-in)
+_LIGHT_PATH = contextvars.ContextVar('dacrt_light_path', default=None)
+
+
+@contextlib.contextmanager
+def light_path(values):
+    """Within it, a Light Path node's outputs named in `values` (output name -> float) compute
+    as those values, in every evaluation (Evaluator, constant) and compile (export/procedurals)
+    of the export: a material built once per ray kind (export/rayvariants.py)."""
+    token = _LIGHT_PATH.set(values)
+    try:
+        yield
+    finally:
+        _LIGHT_PATH.reset(token)
+
+
+def light_path_active():
+    """Whether Light Path outputs compute as a ray kind's (within light_path)."""
+    return _LIGHT_PATH.get() is not None
+
+
+def light_path_value(out):
+    """The value a Light Path output stands for in the current light_path, or None."""
+    values = _LIGHT_PATH.get()
+    return None if values is None else values.get(out.name)
+
+
 class Evaluator:
     """Evaluates what feeds a colour or float input through the nodes above, as one value per
     texel of (at most) one image. texture(node, reasons) -> the export's image of an Image
@@ -223,6 +254,8 @@ class Evaluator:
             return Field((1.0,) if out.name == 'Alpha' else (1.0, 0.0, 1.0))
         if t in VIEW_NODE_TYPES:
             return self._view_average(node, out, depth)
+        if t == 'LIGHT_PATH' and light_path_value(out) is not None:
+            return Field((light_path_value(out),))
         if t == 'LIGHT_FALLOFF':
             strength = falloff_strength(node, out, self.reasons)
             return None if strength is None else self.input(strength, False, depth + 1)

@@ -269,6 +269,7 @@ class Assembly:
             unseen = np.where((mvis & sd.VIS_DIFFUSE) == 0, sd.NO_TRANSMISSION, 0).astype(np.uint8)
             geometry.visibility |= unseen[geometry.material]
             geometry = self._clear_twins(geometry, mvis, objects)
+            geometry = self._variant_twins(geometry, objects)
         return geometry
 
     # the most placements (and triangles) one _single_batch writes: cancel is polled between them
@@ -455,6 +456,8 @@ class Assembly:
         # rays cross volume-only tubes as no surface (_volume_only_tubes)
         clear = np.where(mvis != 0, every & ~mvis, 0).astype(np.uint8)
         clear[sorted(self._shadow_only)] = 0
+        # (a material built per ray kind has its own copies: _variant_twins)
+        clear[[i for k, vs in self.materials.ray_variants.items() for i in [k, *vs]]] = 0
         twins = {k: len(mats) + i for i, k in enumerate(np.flatnonzero(clear).tolist())}
         if not twins:
             return geometry
@@ -489,22 +492,36 @@ class Assembly:
         lookup = np.arange(len(mats), dtype=np.int32)
         for k, t in twins.items():
             lookup[k] = t
+        return _copied(geometry, rows, lookup[geometry.material[rows]], twin_vis[rows])
 
-        def twice(a):
-            return None if a is None else np.concatenate([a, a[rows]])
+    def _variant_twins(self, geometry, objects):
+        """The triangles of a material built per ray kind (MaterialBuilder.ray_variants,
+        rayvariants.py) get one copy per variant, seen by the variant's kinds as far as the
+        object itself is (camera rays: with its holdout); the original keeps the kinds of the
+        material's own build, bounce rays among them, so rays past glass (Cycles' transmission
+        rays, whose Is Camera Ray and Is Shadow Ray are 0) see that one."""
+        variants = self.materials.ray_variants
+        if not variants:
+            return geometry
+        mats = self.materials.materials
+        rows, material, vis = [], [], []
+        for k, others in variants.items():
+            at = np.flatnonzero(geometry.material == k)
+            if not len(at):
+                continue
+            obj = objects[at]
+            for v in others:
+                bits = np.uint8(mats[v].visibility)
+                sees = obj & bits
+                twin = sees | np.where(bits & sd.VIS_CAMERA, obj & np.uint8(sd.HOLDOUT), 0) | np.uint8(sd.NO_TRANSMISSION)
+                keep = (sees & np.uint8(sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)) != 0
+                rows.append(at[keep])
+                material.append(np.full(int(keep.sum()), v, np.int32))
+                vis.append(twin[keep].astype(np.uint8))
+        if not rows or not sum(len(r) for r in rows):
+            return geometry
+        return _copied(geometry, np.concatenate(rows), np.concatenate(material), np.concatenate(vis))
 
-        return dataclasses.replace(
-            geometry, triangles=twice(geometry.triangles), normals=twice(geometry.normals),
-            material=np.concatenate([geometry.material, lookup[geometry.material[rows]]]),
-            visibility=np.concatenate([geometry.visibility, twin_vis[rows]]),
-            object_index=twice(geometry.object_index), instance=twice(geometry.instance),
-            uvs=twice(geometry.uvs), terminator=twice(geometry.terminator), has_uv=twice(geometry.has_uv),
-            unbumped=twice(geometry.unbumped), one_sided=twice(geometry.one_sided),
-            tangents=twice(geometry.tangents), colors=twice(geometry.colors),
-            coords=twice(geometry.coords),
-            aovs=None if geometry.aovs is None else {key: twice(a) for key, a in geometry.aovs.items()},
-            attributes=None if geometry.attributes is None else
-            {key: twice(a) for key, a in geometry.attributes.items()})
 
     def _users(self, wanted):
         """{material index: the placements showing it} for the materials in `wanted`, in one
@@ -1297,3 +1314,23 @@ def _placed(a, lin, offset):
         return a.positions, lin, offset
     anchor, local = a.anchored
     return local, lin, offset + np.einsum('kij,j->ki', lin, anchor)
+
+
+def _copied(geometry, rows, material, visibility):
+    """geometry with copies of its triangles `rows` appended, of the given material and
+    visibility (per copy): the twins a ray kind sees instead of the original."""
+    def twice(a):
+        return None if a is None else np.concatenate([a, a[rows]])
+
+    return dataclasses.replace(
+        geometry, triangles=twice(geometry.triangles), normals=twice(geometry.normals),
+        material=np.concatenate([geometry.material, np.asarray(material, geometry.material.dtype)]),
+        visibility=np.concatenate([geometry.visibility, np.asarray(visibility, geometry.visibility.dtype)]),
+        object_index=twice(geometry.object_index), instance=twice(geometry.instance),
+        uvs=twice(geometry.uvs), terminator=twice(geometry.terminator), has_uv=twice(geometry.has_uv),
+        unbumped=twice(geometry.unbumped), one_sided=twice(geometry.one_sided),
+        tangents=twice(geometry.tangents), colors=twice(geometry.colors),
+        coords=twice(geometry.coords),
+        aovs=None if geometry.aovs is None else {key: twice(a) for key, a in geometry.aovs.items()},
+        attributes=None if geometry.attributes is None else
+        {key: twice(a) for key, a in geometry.attributes.items()})

@@ -14,6 +14,8 @@ cut-outs (cutouts.py), emission (emission.py), node chains after an image probed
 texel or run after the lookup (texelbaking.py), attributes read per point, corner or object
 (attributemaps.py), and Image Texture nodes with a BSDF's normal inputs (imagetextures.py)."""
 
+import dataclasses
+
 import bpy
 import numpy as np
 
@@ -34,6 +36,7 @@ from .emission import Emission
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
 from .meshes import per_primitive
 from .objectinfo import OBJECT_INFO
+from . import rayvariants
 from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
 from .shaders import DEFAULT_ALBEDO, PRINCIPLED_IGNORED, ShaderClosures, glass_roughness, nonnegative
 from .texelbaking import TexelBaking, channel_line
@@ -121,6 +124,10 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         # a holdout twin only camera rays see (assembly._clear_twins)
         self.camera_holdouts = set()
         self._camera_holdout = False
+        # material index -> the indices of its variants for other ray kinds (rayvariants.py),
+        # each seen by the kinds in its visibility; the material itself by the rest
+        self.ray_variants = {}
+        self.max_bounces = 0        # (the export sets it: whether deeper bounces are rendered)
         self._aov_varying = None
         self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
         self._attribute_names = []      # the attributes a build read (_pixels_of)
@@ -147,22 +154,56 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             self._camera_holdout = False
             self._on_points = on_points
             try:
-                self.materials.append(self._build(mat))
+                built = [(self._build(mat), self._extra())]
+                if self._camera_holdout:
+                    self.camera_holdouts.add(idx)
+                elif built[0][0].visibility == sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW:
+                    built = self._per_ray_kind(mat, built)
             finally:
                 self._on_points = False
-            if self._camera_holdout:
-                self.camera_holdouts.add(idx)
-            m = self.materials[-1]
-            self.attribute_maps.append(self._attribute_map)
-            self.aov_maps.append(self._aov_varying)
-            self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
-                                     or m.emission_texture is not None or m.normal_texture is not None
-                                     or bool(m.bumps) or m.displacement_bump is not None
-                                     or m.translucency_texture is not None)
-            self.uv_maps.append(m.uv_map)
-            self.uv_several.append(self._uv_several)
+            for m, extra in built:
+                self._register(m, extra)
+            if len(built) > 1:
+                self.ray_variants[idx] = list(range(idx + 1, idx + len(built)))
             self._index[key] = idx
         return idx
+
+    def _extra(self):
+        """What a build leaves beside its material (attribute map, varying AOVs, UV maps)."""
+        return self._attribute_map, self._aov_varying, self._uv_several
+
+    def _register(self, m, extra):
+        self.materials.append(m)
+        self.attribute_maps.append(extra[0])
+        self.aov_maps.append(extra[1])
+        self.uses_texture.append(m.texture is not None or m.opacity is not None or bool(m.aov_textures)
+                                 or m.emission_texture is not None or m.normal_texture is not None
+                                 or bool(m.bumps) or m.displacement_bump is not None
+                                 or m.translucency_texture is not None)
+        self.uv_maps.append(m.uv_map)
+        self.uv_several.append(extra[2])
+
+    def _per_ray_kind(self, mat, built):
+        """built, or the material's builds per ray kind where its shaders read a Light Path
+        ray-type output and differ between kinds (rayvariants.py): the first for bounce rays,
+        carrying what remains approximated, the others (no notes) for their kinds."""
+        reads = rayvariants.reads_ray_outputs(mat.node_tree) if mat.node_tree is not None else set()
+        if not reads:
+            return built
+
+        def build(values):
+            with nodeeval.light_path(values):
+                return self._build(mat), self._extra()
+
+        variants, notes = rayvariants.ray_variants(build, reads, self.max_bounces)
+        if len(variants) == 1:
+            m, extra = variants[0]
+            m.approximated = '; '.join(r for r in (m.approximated, *notes) if r)
+            return [(dataclasses.replace(m, visibility=sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW), extra)]
+        said = [r for m, _ in variants for r in m.approximated.split('; ') if r] + notes
+        first, extra = variants[0]
+        out = [(dataclasses.replace(first, approximated='; '.join(dict.fromkeys(said))), extra)]
+        return out + [(dataclasses.replace(m, approximated=''), e) for m, e in variants[1:]]
 
     def _build(self, mat):
         """The material, and self._attribute_map: how its albedo follows a mesh attribute (a

@@ -280,6 +280,12 @@ def _socket(socket, color, chain, depth):
         return lambda c: const
     if depth >= nodeeval.Evaluator.MAX_DEPTH:
         raise nodeeval.NotCompiled(f"a chain deeper than {nodeeval.Evaluator.MAX_DEPTH} nodes")
+    if link.from_node.type == 'LIGHT_PATH' and chain.light_path and \
+            nodeeval.light_path_value(link.from_socket) is not None:
+        # the value of the ray kind the material is built for (nodeeval.light_path)
+        v = np.array([nodeeval.light_path_value(link.from_socket)], np.float64)
+        const = nodeeval.linked_value(v, False, nodegraph.conversions(link), color)[None]
+        return lambda c: const
     if link.from_node.type == 'LIGHT_PATH' and chain.light_path:
         # its carrier's own value, as the evaluation reads it, and the rest of the chain per
         # point (it had given up on the whole chain: a Checker mixed by Is Camera Ray was flat)

@@ -236,6 +236,9 @@ class Exporter:
         self.check_break = check_break or (lambda: False)
         self.messages = []
         self.materials = MaterialBuilder(self.scene.frame_current)
+        # (a material read per ray kind says a depth it reads the same on every bounce only if
+        # bounces past the first are rendered)
+        self.materials.max_bounces = int(getattr(getattr(self.scene, 'dacrt', None), 'max_bounces', 0))
         self.object_names = []
         self.object_keys = []         # name_full of each: light linking's names
         self.object_pass_index = []

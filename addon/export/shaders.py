@@ -155,6 +155,10 @@ class ShaderClosures:
             if varying is not None:
                 return varying
             fac = mix_factor(node, reasons, "Mix Shader", said=said)
+            if fac in (0.0, 1.0) and nodeeval.light_path_active():
+                # built for one ray kind (rayvariants.py): the side it picks alone, as Cycles
+                # allocates no closure of weight 0 (nor says what the other side lacks)
+                return self._shader(node.inputs[2 if fac else 1], reasons, depth + 1)
             # (each side's BSDFs weighed for the material's choice of normal: _normal_input)
             weight = self._normal_weight
             self._normal_weight = weight * (1.0 - fac)
