@@ -128,6 +128,9 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         # each seen by the kinds in its visibility; the material itself by the rest
         self.ray_variants = {}
         self.max_bounces = 0        # (the export sets it: whether deeper bounces are rendered)
+        # material index -> what it approximates where the scene has translucent or glass
+        # surfaces (rayvariants.ray_variants; the export says it then: add_bent_ray_notes)
+        self.bent_ray_notes = {}
         self._aov_varying = None
         self._attribute_pixels = None   # what Color Attribute / Attribute nodes read in a build
         self._attribute_names = []      # the attributes a build read (_pixels_of)
@@ -168,6 +171,18 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             self._index[key] = idx
         return idx
 
+    def add_bent_ray_notes(self, used):
+        """Add to the materials of bent_ray_notes their note where a material in `used` (the
+        indices the geometry shows) is translucent or passes light as glass: what those rays
+        read of a Light Path differs from a diffuse reflection's there."""
+        mats = self.materials
+        if not self.bent_ray_notes or not any(
+                mats[k].translucency is not None or mats[k].refraction is not None
+                or mats[k].opaque_refraction is not None for k in used if 0 <= k < len(mats)):
+            return
+        for k, note in self.bent_ray_notes.items():
+            mats[k].approximated = '; '.join(r for r in (mats[k].approximated, note) if r)
+
     def _extra(self):
         """What a build leaves beside its material (attribute map, varying AOVs, UV maps)."""
         return self._attribute_map, self._aov_varying, self._uv_several
@@ -195,7 +210,9 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             with nodeeval.light_path(values):
                 return self._build(mat), self._extra()
 
-        variants, notes = rayvariants.ray_variants(build, reads, self.max_bounces)
+        variants, notes, bent = rayvariants.ray_variants(build, reads, self.max_bounces)
+        if bent:
+            self.bent_ray_notes[len(self.materials)] = bent
         if len(variants) == 1:
             m, extra = variants[0]
             m.approximated = '; '.join(r for r in (m.approximated, *notes) if r)

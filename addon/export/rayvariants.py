@@ -18,6 +18,7 @@ import dataclasses
 import numpy as np
 
 from .. import scenedata as sd
+from ..procedural import ProceduralTexels
 from .aovs import CAMERA_LIGHT_PATH
 
 # the Light Path outputs that depend on the ray (Ray Length and Is Backfacing do not: they stay
@@ -33,6 +34,11 @@ BOUNCE = dict(_NONE, **{'Is Diffuse Ray': 1.0, 'Is Reflection Ray': 1.0, 'Ray De
 SHADOW = dict(_NONE, **{'Is Shadow Ray': 1.0, 'Ray Depth': 1.0})
 # an emitter's light sample (PATH_RAY_EMISSION alone), one bounce further than the vertex
 EMITTED = dict(_NONE, **{'Ray Depth': 1.0})
+# a ray off a Translucent BSDF (diffuse transmission), and one past glass (Cycles' singular
+# transmission): bounce rays here both
+_TRANSLUCENT = dict(BOUNCE, **{'Is Reflection Ray': 0.0, 'Is Transmission Ray': 1.0})
+_GLASS = dict(_NONE, **{'Is Glossy Ray': 1.0, 'Is Singular Ray': 1.0, 'Is Transmission Ray': 1.0, 'Ray Depth': 1.0,
+                        'Transmission Depth': 1.0})
 # the outputs past the first bounce, and the Transparent Depth past one transparent surface
 _DEEPER = {'Ray Depth': 2.0, 'Diffuse Depth': 2.0}
 # fields a shadow ray reads of a material (whether and how much light passes)
@@ -55,16 +61,35 @@ def reads_ray_outputs(ntree, depth=0):
     return found
 
 
-def _equal(a, b):
+# points a procedural texture of two builds is compared at (its coordinates, whatever they are)
+_PROBE = np.random.default_rng(11).uniform(-2.0, 2.0, (256, 3)).astype(np.float32)
+
+
+def _equal(a, b, depth=0):
+    """Whether two values of two builds are alike: arrays by value, procedural textures by
+    their colour at probe points, other objects by their attributes."""
     if a is b:
         return True
+    if depth > 4 or type(a) is not type(b):
+        return False
+    if isinstance(a, ProceduralTexels):
+        return a.needs == b.needs and np.array_equal(a.evaluate({k: _PROBE for k in a.needs}),
+                                                     b.evaluate({k: _PROBE for k in b.needs}), equal_nan=True)
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
         return a is not None and b is not None and np.shape(a) == np.shape(b) and \
             np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)
-    if isinstance(a, (tuple, list)) and isinstance(b, (tuple, list)):
-        return len(a) == len(b) and all(_equal(x, y) for x, y in zip(a, b))
-    if isinstance(a, dict) and isinstance(b, dict):
-        return a.keys() == b.keys() and all(_equal(a[k], b[k]) for k in a)
+    if isinstance(a, (tuple, list)):
+        return len(a) == len(b) and all(_equal(x, y, depth + 1) for x, y in zip(a, b))
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_equal(a[k], b[k], depth + 1) for k in a)
+    if isinstance(a, (int, float, str, bool)):
+        return a == b or (a != a and b != b)
+    if callable(a):
+        return False
+    if hasattr(a, '__dict__'):
+        return _equal(vars(a), vars(b), depth + 1)
+    if hasattr(a, '__slots__'):
+        return all(_equal(getattr(a, n, None), getattr(b, n, None), depth + 1) for n in a.__slots__)
     try:
         return bool(a == b)
     except (TypeError, ValueError):
@@ -81,18 +106,23 @@ def same(a, b, fields=None):
 
 def ray_variants(build, reads, max_bounces):
     """[(material, extra), ...] with their visibility set, the first the one bounce rays see
-    (the material's index), and the notes for what remains approximated. build(values) builds
+    (the material's index), the notes for what remains approximated, and the note that holds
+    where the scene has translucent or glass surfaces ('' none: said by the export, which
+    knows them all). build(values) builds
     the material with Light Path outputs as `values` (nodeeval.light_path) -> (material,
     extra); reads: the outputs the tree reads (reads_ray_outputs)."""
     bounce, camera, shadow = build(BOUNCE), build(CAMERA), build(SHADOW)
     notes = []
-    emitted = build(EMITTED)
+    # (a light sample's outputs differ from a bounce ray's in these alone: Cycles' light sample
+    # at a vertex reads the vertex's diffuse depth, a bounce ray off it one more)
+    emitted = build(EMITTED) if reads & {'Is Diffuse Ray', 'Is Reflection Ray', 'Diffuse Depth'} else bounce
     if not same(emitted[0], bounce[0], ('emission', 'emission_texture', 'light_emission_scale')):
         # one emission per material lights the scene and shows to bounce rays here; Cycles
         # weighs the two by MIS, each seeing its own
-        notes.append(f"Light Path {_names(reads, ('Is Diffuse Ray', 'Is Reflection Ray'))}: emitters light the "
-                     "scene by light samples with the emission bounce rays see (Cycles' light samples read "
-                     "it as 0)")
+        shown = _names(reads, ('Is Diffuse Ray', 'Is Reflection Ray', 'Diffuse Depth'))
+        notes.append(f"Light Path {shown}: emitters light the scene by light samples with the emission bounce "
+                     "rays see (Cycles' light samples read these as at the vertex they light: Is Diffuse Ray and "
+                     "Is Reflection Ray 0, Diffuse Depth one less)")
     if max_bounces >= 1 and reads & set(_DEEPER):
         deeper = build(dict(BOUNCE, **_DEEPER))
         if not same(deeper[0], bounce[0]):
@@ -103,13 +133,19 @@ def ray_variants(build, reads, max_bounces):
         if not same(past[0], camera[0]):
             notes.append("Light Path Transparent Depth read as 0 on every surface (Cycles counts the transparent "
                          "surfaces a ray has passed)")
-    glossy = reads & {'Is Glossy Ray', 'Is Singular Ray', 'Is Transmission Ray', 'Glossy Depth',
-                      'Transmission Depth'}
+    kinds = reads & {'Is Diffuse Ray', 'Is Reflection Ray', 'Is Transmission Ray'}
+    bent = ''
+    if kinds and not all(same(build(v)[0], bounce[0]) for v in (_TRANSLUCENT, _GLASS)):
+        # (every bounce ray here is one off a diffuse reflection: rays off a Translucent BSDF
+        # and past glass trace the same scene; said where the scene has such a surface)
+        bent = (f"Light Path {' / '.join(sorted(kinds))} read as after a diffuse reflection on every bounce "
+                "ray (Cycles: not so on rays leaving a Translucent BSDF or passing glass)")
+    glossy = reads & {'Is Glossy Ray', 'Is Singular Ray', 'Glossy Depth', 'Transmission Depth'}
     if glossy:
         # (exact on diffuse paths; Cycles sets them on rays off glossy or glass surfaces, which
         # DACRT renders as diffuse or passes straight through)
-        notes.append(f"Light Path {', '.join(sorted(glossy))} read as on a diffuse path (Cycles: set on rays "
-                     "off glossy, glass or translucent surfaces)")
+        notes.append(f"Light Path {' / '.join(sorted(glossy))} read as on a diffuse path (Cycles: set on rays "
+                     "off glossy or glass surfaces)")
     groups = [[bounce, sd.VIS_DIFFUSE]]
     if same(camera[0], bounce[0]):
         groups[0][1] |= sd.VIS_CAMERA
@@ -124,7 +160,7 @@ def ray_variants(build, reads, max_bounces):
     out = []
     for (m, extra), vis in groups:
         out.append((dataclasses.replace(m, visibility=int(vis)), extra))
-    return out, notes
+    return out, notes, bent
 
 
 def _names(reads, among):

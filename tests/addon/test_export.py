@@ -524,7 +524,7 @@ def test_light_path_ray_type_mix_hides_the_material(scene, exported):
     one side: the triangles lose the ray kinds that see through it and keep the other shader,
     and a clear twin of them those kinds alone see stands for the Transparent side (a pass that
     counts against Transparent Max Bounces, as Cycles counts it); a non-white transparent side
-    or another factor source keeps the own-value mix."""
+    is built per ray kind instead (rayvariants.py: a copy of the triangles for the camera's)."""
     setup(scene)
     # (the originals' visibility, the clear twins' (None: no twin))
     cases = {"NoCam": ('Is Camera Ray', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent', (1, 1, 1),
@@ -535,7 +535,7 @@ def test_light_path_ray_type_mix_hides_the_material(scene, exported):
              "NoShadow": ('Is Shadow Ray', 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTransparent', (1, 1, 1),
                           sd.VIS_CAMERA | sd.VIS_DIFFUSE, sd.VIS_SHADOW | sd.NO_TRANSMISSION),
              "Tinted": ('Is Camera Ray', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent', (0.5, 1, 1),
-                        sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW, None)}
+                        sd.VIS_DIFFUSE | sd.VIS_SHADOW, None)}
     for i, (name, (output, first, second, clear, *_)) in enumerate(cases.items()):
         mat, nt, mix, a, b = scenes.mix_shader_material(name, first, second)
         nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs[output], mix.inputs['Fac'])
@@ -545,9 +545,14 @@ def test_light_path_ray_type_mix_hides_the_material(scene, exported):
         scenes.plane(name, location=(3 * i, 0, 0), materials=(mat,))
     data = exported()
     twin = np.array([m.clear_twin for m in data.materials])[data.geometry.material]
+    # (the camera's build of a material built per ray kind: the second of its name)
+    variant = np.zeros(len(data.materials), bool)
+    names = [m.name for m in data.materials]
+    variant[[k for k, n in enumerate(names) if n in names[:k] and not data.materials[k].clear_twin]] = True
+    variant = variant[data.geometry.material]
     for name, (*_, want, want_twin) in cases.items():
         rows = of_object(data, name)
-        vis = np.unique(data.geometry.visibility[rows & ~twin])
+        vis = np.unique(data.geometry.visibility[rows & ~twin & ~variant])
         assert vis.tolist() == [want], name
         assert np.unique(data.geometry.visibility[rows & twin]).tolist() == ([] if want_twin is None else [want_twin])
         assert np.count_nonzero(rows & twin) == (0 if want_twin is None else np.count_nonzero(rows & ~twin))
@@ -556,7 +561,16 @@ def test_light_path_ray_type_mix_hides_the_material(scene, exported):
     for m in data.materials:
         if m.clear_twin:        # a white Transparent BSDF: no light, no albedo
             assert np.allclose(m.transparency, 1.0) and not m.emission.any() and not m.base_color.any()
-    assert np.allclose(by_name["Tinted"].emission, 0.5)      # the own-value mix (factor 0.5)
+    # the tinted one: its emission for bounce rays, its tinted transparency for the camera's on
+    # a copy of each triangle (it had been the own-value mix, factor 0.5, for all)
+    tinted = [k for k, m in enumerate(data.materials) if m.name == "Tinted"]
+    assert [data.materials[k].visibility for k in tinted] == [sd.VIS_DIFFUSE | sd.VIS_SHADOW, sd.VIS_CAMERA]
+    bounce, camera = (data.materials[k] for k in tinted)
+    assert np.allclose(bounce.emission, 1.0) and bounce.transparency is None
+    assert not camera.emission.any() and np.allclose(camera.transparency, (0.5, 1, 1))
+    rows = of_object(data, "Tinted")
+    assert np.unique(data.geometry.visibility[rows & variant]).tolist() == [sd.VIS_CAMERA | sd.NO_TRANSMISSION]
+    assert np.count_nonzero(rows & variant) == np.count_nonzero(rows & ~variant)
 
 
 def test_material_slot_per_triangle(scene, exported):
