@@ -124,8 +124,10 @@ def ray_variants(build, reads, max_bounces):
                      "rays see (Cycles' light samples read these as at the vertex they light: Is Diffuse Ray and "
                      "Is Reflection Ray 0, Diffuse Depth one less)")
     if max_bounces >= 1 and reads & set(_DEEPER):
+        # (bounce rays past the first, and shadow rays and light samples from their vertices)
         deeper = build(dict(BOUNCE, **_DEEPER))
-        if not same(deeper[0], bounce[0]):
+        deeper_shadow = build(dict(SHADOW, **{'Ray Depth': 2.0, 'Diffuse Depth': 1.0}))
+        if not same(deeper[0], bounce[0]) or not same(deeper_shadow[0], shadow[0], _SHADOW_FIELDS):
             notes.append(f"Light Path {_names(reads, tuple(_DEEPER))} read as 1 on every bounce (Cycles: the "
                          "bounce's depth)")
     if 'Transparent Depth' in reads:

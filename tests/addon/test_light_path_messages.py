@@ -1,0 +1,76 @@
+"""What a material built per Light Path ray kind (export/rayvariants.py) says: only what stays
+approximated, and only where it holds in the scene. A depth clamp past the first bounce (the
+bounces here read Ray Depth 1), a Transparent Depth, Is Reflection Ray beside a Translucent
+BSDF (rays off it read as off a reflection), Is Glossy Ray; and nothing where the build per
+kind is exact (a camera-only clamp, Is Reflection Ray without a translucent or glass surface,
+a deep clamp with no bounce past the first rendered)."""
+import pytest
+
+from tests.addon import scenes
+
+RAY_DEPTH = "Light Path Ray Depth read as 1 on every bounce"
+TRANSPARENT_DEPTH = "Light Path Transparent Depth read as 0 on every surface"
+BENT = "Light Path Is Reflection Ray read as after a diffuse reflection on every bounce ray"
+GLOSSY = "Light Path Is Glossy Ray read as on a diffuse path"
+
+
+def _clamped_emission(name, output, below):
+    """An emission of strength 6 x (output < below) over a diffuse."""
+    mat, nt, out = scenes._material(name)
+    e, d, add = (nt.nodes.new(k) for k in ('ShaderNodeEmission', 'ShaderNodeBsdfDiffuse', 'ShaderNodeAddShader'))
+    less, scale = nt.nodes.new('ShaderNodeMath'), nt.nodes.new('ShaderNodeMath')
+    less.operation, scale.operation = 'LESS_THAN', 'MULTIPLY'
+    less.inputs[1].default_value, scale.inputs[1].default_value = below, 6.0
+    nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs[output], less.inputs[0])
+    nt.links.new(less.outputs[0], scale.inputs[0])
+    nt.links.new(scale.outputs[0], e.inputs['Strength'])
+    nt.links.new(d.outputs[0], add.inputs[0])
+    nt.links.new(e.outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def _mixed_by(name, output):
+    mat, nt, mix, a, b = scenes.mix_shader_material(name, 'ShaderNodeBsdfDiffuse', 'ShaderNodeEmission')
+    nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs[output], mix.inputs['Fac'])
+    return mat
+
+
+def _said(data, name):
+    return [t for _, t in data.messages if f"'{name}'" in t]
+
+
+@pytest.mark.parametrize('below, bounces, said', [(2.0, 2, True), (2.0, 0, False), (1.0, 2, False)])
+def test_ray_depth_clamp_says_the_depth_only_past_the_first_bounce(scene, exported, below, bounces, said):
+    scenes.camera()
+    scene.dacrt.max_bounces = bounces
+    scenes.plane("Panel", materials=(_clamped_emission("Panel", 'Ray Depth', below),))
+    text = ' '.join(_said(exported(), "Panel"))
+    assert (RAY_DEPTH in text) == said, text
+    assert "'Light Path' node" not in text, text
+
+
+def test_transparent_depth_is_said(scene, exported):
+    scenes.camera()
+    scenes.plane("Panel", materials=(_clamped_emission("Panel", 'Transparent Depth', 1.0),))
+    text = ' '.join(_said(exported(), "Panel"))
+    assert TRANSPARENT_DEPTH in text, text
+
+
+@pytest.mark.parametrize('translucent', [False, True])
+def test_reflection_ray_said_beside_a_translucent_surface_only(scene, exported, translucent):
+    scenes.camera()
+    scenes.plane("Panel", materials=(_mixed_by("Panel", 'Is Reflection Ray'),))
+    if translucent:
+        mat, nt, out = scenes._material("Leaf")
+        nt.links.new(nt.nodes.new('ShaderNodeBsdfTranslucent').outputs[0], out.inputs['Surface'])
+        scenes.plane("Leaf", location=(3, 0, 0), materials=(mat,))
+    text = ' '.join(_said(exported(), "Panel"))
+    assert (BENT in text) == translucent, text
+
+
+def test_glossy_ray_is_said(scene, exported):
+    scenes.camera()
+    scenes.plane("Panel", materials=(_mixed_by("Panel", 'Is Glossy Ray'),))
+    text = ' '.join(_said(exported(), "Panel"))
+    assert GLOSSY in text, text
