@@ -273,6 +273,10 @@ class LightSetup:
             return
         through = sampled & ((vis & VIS_SHADOW) == 0)
         if through.any():
+            # (an emitter built per ray kind: shadow rays meet its copy, export/rayvariants.py)
+            apart = np.array([m.ray_kinds_apart for m in sd.materials], bool)
+            through &= ~apart[self.tri.material]
+        if through.any():
             through &= ~self._coplanar_placements(sd, through, vis)
         if not through.any():
             return

@@ -233,6 +233,9 @@ class Material:
     # Transparent BSDF the ray kinds in `visibility` cross, which counts against Transparent Max
     # Bounces; the renderer may leave it out where no path can reach that limit
     clear_twin: bool = False
+    # built per ray kind (export/rayvariants.py): its triangles have a copy per variant, each
+    # seen by its kinds, so a kind one copy lacks (Shadow) is another's, not the object's setting
+    ray_kinds_apart: bool = False
     # a closure Cycles treats as glossy (rendered as diffuse here): lights with Glossy and
     # Diffuse ray visibility apart are said where some material has one (reflectors.has_glossy_closure)
     glossy: bool = False

@@ -219,8 +219,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             return [(dataclasses.replace(m, visibility=sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW), extra)]
         said = [r for m, _ in variants for r in m.approximated.split('; ') if r] + notes
         first, extra = variants[0]
-        out = [(dataclasses.replace(first, approximated='; '.join(dict.fromkeys(said))), extra)]
-        return out + [(dataclasses.replace(m, approximated=''), e) for m, e in variants[1:]]
+        out = [(dataclasses.replace(first, approximated='; '.join(dict.fromkeys(said)), ray_kinds_apart=True), extra)]
+        return out + [(dataclasses.replace(m, approximated='', ray_kinds_apart=True), e) for m, e in variants[1:]]
 
     def _build(self, mat):
         """The material, and self._attribute_map: how its albedo follows a mesh attribute (a

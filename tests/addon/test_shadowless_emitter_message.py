@@ -60,3 +60,22 @@ def test_front_sampled_faces_said(scene, said):
     # per-face Front sampling (the fuzzer's seed 845: 1.24x Cycles) is light-sampled too
     _scene(scene, sampling='FRONT')
     assert len(_said(scene, said)) == 1
+
+
+def test_emitter_tinting_its_own_shadow_rays_is_not_shadowless(scene, said):
+    """An emitter whose shader gives shadow rays a tinted Transparent BSDF (Mix by Light Path
+    Is Shadow Ray) is built per ray kind (export/rayvariants.py): its emitting faces are seen by
+    bounce rays and a copy of them by shadow rays, so its light samples are stopped or dimmed by
+    its faces as in Cycles; its Shadow visibility is on, and nothing is said of it."""
+    _scene(scene, shadow=True)
+    m = bpy.data.materials['lamp']
+    nt = m.node_tree
+    out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+    e = next(n for n in nt.nodes if n.type == 'EMISSION')
+    mix, t = nt.nodes.new('ShaderNodeMixShader'), nt.nodes.new('ShaderNodeBsdfTransparent')
+    t.inputs['Color'].default_value = (0.5, 0.5, 0.5, 1.0)
+    nt.links.new(e.outputs[0], mix.inputs[1])
+    nt.links.new(t.outputs[0], mix.inputs[2])
+    nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Shadow Ray'], mix.inputs['Fac'])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    assert not any(SAID in t for t in _said(scene, said)), said
