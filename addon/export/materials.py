@@ -157,11 +157,11 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             self._camera_holdout = False
             self._on_points = on_points
             try:
-                built = [(self._build(mat), self._extra())]
+                built = self._per_ray_kind(mat)
+                if built is None:       # (no ray-type read, or a mix with a clear side)
+                    built = [(self._build(mat), self._extra())]
                 if self._camera_holdout:
                     self.camera_holdouts.add(idx)
-                elif built[0][0].visibility == sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW:
-                    built = self._per_ray_kind(mat, built)
             finally:
                 self._on_points = False
             for m, extra in built:
@@ -198,18 +198,29 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self.uv_maps.append(m.uv_map)
         self.uv_several.append(extra[2])
 
-    def _per_ray_kind(self, mat, built):
-        """built, or the material's builds per ray kind where its shaders read a Light Path
-        ray-type output and differ between kinds (rayvariants.py): the first for bounce rays,
-        carrying what remains approximated, the others (no notes) for their kinds."""
+    def _per_ray_kind(self, mat):
+        """The material's builds per ray kind where its shaders read a Light Path ray-type
+        output (rayvariants.py): the first for bounce rays, carrying what remains approximated,
+        the others (no notes) for their kinds; one where the kinds' builds agree. None where it
+        reads none, or where its surface is a mix by Is Camera Ray or Is Shadow Ray with a clear
+        side or a holdout (shaders._ray_type_mix: its clear or holdout twin, built as before)."""
         reads = rayvariants.reads_ray_outputs(mat.node_tree) if mat.node_tree is not None else set()
         if not reads:
-            return built
+            return None
+        builds = {}
 
         def build(values):
-            with nodeeval.light_path(values):
-                return self._build(mat), self._extra()
+            # (kinds that read the same values of the outputs the tree reads share one build)
+            key = tuple(values[k] for k in sorted(reads))
+            if key not in builds:
+                with nodeeval.light_path(values):
+                    builds[key] = self._build(mat), self._extra()
+            return builds[key]
 
+        first = build(rayvariants.BOUNCE)[0]
+        if self._camera_holdout or first.visibility != sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW:
+            self._camera_holdout = False
+            return None
         variants, notes, bent = rayvariants.ray_variants(build, reads, self.max_bounces)
         if bent:
             self.bent_ray_notes[len(self.materials)] = bent
