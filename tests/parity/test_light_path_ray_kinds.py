@@ -74,6 +74,29 @@ def _tinted_shadow():
     return mat
 
 
+def _emitter_tinting_its_shadow_rays():
+    # an emitter (factor 0) that shadow rays pass at half strength, its own light samples too
+    mat, nt, mix, e, t = scenes.mix_shader_material("Panel", 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent')
+    e.inputs['Color'].default_value = (1.0, 0.9, 0.7, 1.0)
+    e.inputs['Strength'].default_value = 6.0
+    t.inputs['Color'].default_value = (0.5, 0.5, 0.5, 1.0)
+    nt.links.new(_light_path(nt, 'Is Shadow Ray'), mix.inputs['Fac'])
+    return mat
+
+
+def _held_out_through_math():
+    # Mix(Diffuse, Holdout) by Is Camera Ray x 1: held out for the camera (alpha 0), a diffuse
+    # that shadows and reflects for the rest (through a Math node: not the plain mix
+    # shaders._ray_type_mix knows, built per ray kind)
+    mat, nt, mix, d, h = scenes.mix_shader_material("Panel", 'ShaderNodeBsdfDiffuse', 'ShaderNodeHoldout')
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'MULTIPLY'
+    m.inputs[1].default_value = 1.0
+    nt.links.new(_light_path(nt, 'Is Camera Ray'), m.inputs[0])
+    nt.links.new(m.outputs[0], mix.inputs['Fac'])
+    return mat
+
+
 CASES = {   # material, a sun (else the panel and a dim world light the floor), a pane of glass
     'emitter_diffuse_to_camera': (_emitter_diffuse_to_camera, False, False),
     # (camera rays past the pane are Cycles' transmission rays, Is Camera Ray 0: they see the
@@ -82,6 +105,8 @@ CASES = {   # material, a sun (else the panel and a dim world light the floor), 
     'black_to_camera_white_to_bounces': (_black_to_camera, True, False),
     'depth_clamped_emission': (_depth_clamped_emission, False, False),
     'tinted_shadow_pass': (_tinted_shadow, True, False),
+    'emitter_tinting_its_shadow_rays': (_emitter_tinting_its_shadow_rays, True, False),
+    'held_out_through_math': (_held_out_through_math, True, False),
 }
 
 
@@ -122,17 +147,18 @@ def _scene(case):
     sc.cycles.filter_width = sc.dacrt.filter_width = 1.5
     sc.cycles.sample_clamp_direct = sc.cycles.sample_clamp_indirect = 0.0
     sc.dacrt.sample_clamp_direct = sc.dacrt.sample_clamp_indirect = 0.0
+    sc.render.film_transparent = True       # (alpha compared too: a holdout's 0)
     return sc
 
 
 def _seeded(sc, tmp_path):
-    """{engine: (seeds, H, W, 3) Combined}."""
+    """{engine: (seeds, H, W, 4) Combined}."""
     layer = sc.view_layers[0].name
     out = {'CYCLES': [], 'DACRT': []}
     for seed in SEEDS:
         sc.cycles.seed = sc.dacrt.seed = seed
         for engine, exr in scenes.render_engines(sc, tmp_path / str(seed)).items():
-            out[engine].append(np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], axis=-1))
+            out[engine].append(np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGBA'], axis=-1))
     return {e: np.stack(v) for e, v in out.items()}
 
 
