@@ -888,7 +888,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if path.tb is not None:                       # past Transparent Max Bounces: emission only
             hit &= path.tb < self._transparent_stop
         if path.gb is not None:                       # past Transmission Max Bounces: the same
-            hit &= path.gb < self._glass_stop
+            # (a path that crossed no glass made no transmission bounce: a limit of 0 leaves it;
+            # it had ended every path of a batch some ray of which met a transparent surface)
+            hit &= path.gb < max(self._glass_stop, 1)
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)),
         # in one native pass; thr becomes albedo x thr / q, the throughput after this
