@@ -74,3 +74,29 @@ def test_glossy_ray_is_said(scene, exported):
     scenes.plane("Panel", materials=(_mixed_by("Panel", 'Is Glossy Ray'),))
     text = ' '.join(_said(exported(), "Panel"))
     assert GLOSSY in text, text
+
+
+@pytest.mark.parametrize('camera_sees_the_attribute', [True, False])
+def test_object_info_colour_with_a_ray_kind_mix_is_built_once_and_said(scene, exported, camera_sees_the_attribute):
+    """A colour per object (Object Info Random through a Color Ramp) in a material mixed by Is
+    Camera Ray: the per-object colour is evaluated on the material's own triangles, out of any
+    ray kind, so the material is not built per ray kind: its Light Path reads its own value,
+    said (built per kind, a camera-only Object Info colour had shown the bounce build's on its
+    copies, unsaid: 1.13-1.49x Cycles)."""
+    scenes.camera()
+    mat, nt, mix, d, e = scenes.mix_shader_material("Panel", 'ShaderNodeBsdfDiffuse', 'ShaderNodeEmission')
+    oi, ramp = nt.nodes.new('ShaderNodeObjectInfo'), nt.nodes.new('ShaderNodeValToRGB')
+    nt.links.new(oi.outputs['Random'], ramp.inputs['Fac'])
+    nt.links.new(ramp.outputs['Color'], d.inputs['Color'])
+    lp = nt.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray']
+    if camera_sees_the_attribute:
+        inv = nt.nodes.new('ShaderNodeMath')
+        inv.operation, inv.inputs[0].default_value = 'SUBTRACT', 1.0
+        nt.links.new(lp, inv.inputs[1])
+        lp = inv.outputs[0]
+    nt.links.new(lp, mix.inputs['Fac'])
+    scenes.plane("Panel", materials=(mat,))
+    data = exported()
+    assert [m.name for m in data.materials].count("Panel") == 1
+    text = ' '.join(_said(data, "Panel"))
+    assert "(value from 'Light Path' node); its own value 0.5 used" in text, text
