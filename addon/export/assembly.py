@@ -498,8 +498,8 @@ class Assembly:
         """The triangles of a material built per ray kind (MaterialBuilder.ray_variants,
         rayvariants.py) get one copy per variant, seen by the variant's kinds as far as the
         object itself is (camera rays: with its holdout); the original keeps the kinds of the
-        material's own build, bounce rays among them, so rays past glass (Cycles' transmission
-        rays, whose Is Camera Ray and Is Shadow Ray are 0) see that one."""
+        material's own build. Rays past glass (Cycles' transmission rays, whose Is Camera Ray
+        and Is Shadow Ray are 0) see the one bounce rays see."""
         variants = self.materials.ray_variants
         if not variants:
             return geometry
@@ -510,11 +510,16 @@ class Assembly:
             if not len(at):
                 continue
             obj = objects[at]
+            # (rays past glass see the copy bounce rays see, where the object lets them: as
+            # _clear_twins)
+            obj_transmit = ((obj & sd.NO_TRANSMISSION) == 0) & ((obj & ~np.uint8(sd.NO_TRANSMISSION)) != 0)
             for v in others:
                 bits = np.uint8(mats[v].visibility)
                 sees = obj & bits
-                twin = sees | np.where(bits & sd.VIS_CAMERA, obj & np.uint8(sd.HOLDOUT), 0) | np.uint8(sd.NO_TRANSMISSION)
-                keep = (sees & np.uint8(sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)) != 0
+                transmit = obj_transmit & bool(bits & sd.VIS_DIFFUSE)
+                twin = (sees | np.where(bits & sd.VIS_CAMERA, obj & np.uint8(sd.HOLDOUT), 0)
+                        | np.where(transmit, np.where(sees == 0, sd.VIS_TRANSMISSION, 0), sd.NO_TRANSMISSION))
+                keep = ((sees & np.uint8(sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)) != 0) | transmit
                 rows.append(at[keep])
                 material.append(np.full(int(keep.sum()), v, np.int32))
                 vis.append(twin[keep].astype(np.uint8))
@@ -1159,7 +1164,7 @@ class Assembly:
         the first by name, said. Worked out once per material (the placements repeat it)."""
         key = id(material)
         if key not in self._frames:
-            frames = sorted({n for t in _procedurals(material) for n in t.needs if isinstance(n, tuple)},
+            frames = sorted({n for t in procedural_textures(material) for n in t.needs if isinstance(n, tuple)},
                             key=lambda f: (f[1] is not None, f[1] or ''))
             said = None
             if len(frames) > 1:
@@ -1226,7 +1231,7 @@ class Assembly:
             uvs[rows] = layer[index]
 
 
-def _procedurals(material):
+def procedural_textures(material):
     """The material's procedural textures (its colour's, its emission's, its opacity's, its
     transmission's, its AOVs', its bump heights')."""
     bumps = tuple(getattr(material, 'bumps', None) or ()) + \
@@ -1239,13 +1244,13 @@ def _procedurals(material):
 
 def _object_info_read(material):
     """The Object Info needs ('Object Info:Random', ...) of the material's procedural textures."""
-    return {n for t in _procedurals(material) for n in t.needs if isinstance(n, str) and n.startswith(OBJECT_INFO)}
+    return {n for t in procedural_textures(material) for n in t.needs if isinstance(n, str) and n.startswith(OBJECT_INFO)}
 
 
 def _attributes_read(material):
     """The mesh attribute needs (procedural.ATTRIBUTE_NEED + key) of the material's procedural
     textures, sorted."""
-    return sorted({n for t in _procedurals(material) for n in t.needs
+    return sorted({n for t in procedural_textures(material) for n in t.needs
                    if isinstance(n, str) and n.startswith(ATTRIBUTE_NEED)})
 
 
@@ -1269,7 +1274,7 @@ def _object_normals(a):
 def _coordinates_read(material, kinds=frozenset({'generated', 'object', 'object_normal'})):
     """Whether a procedural texture of the material (its colour's, emission's, opacity's or an AOV's) reads Generated or
     Object coordinates (or those of `kinds`)."""
-    return any(t.needs & kinds for t in _procedurals(material))
+    return any(t.needs & kinds for t in procedural_textures(material))
 
 
 def _nonfinite_said(bad, names=()):

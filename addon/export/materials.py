@@ -222,8 +222,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             self._camera_holdout = False
             return None
         variants, notes, bent = rayvariants.ray_variants(build, reads, self.max_bounces)
-        maps = [extra[0] for _, extra in variants if extra[0] is not None]
-        if (len(variants) > 1 and maps) or any(m[0] != 'mesh' for m in maps):
+        maps = [extra[0] for _, extra in variants or () if extra[0] is not None]
+        if variants is None or (len(variants) > 1 and maps) or any(m[0] != 'mesh' for m in maps):
             # a colour per object or corner is evaluated later on the material's triangles, out
             # of any ray kind, and a variant's copies take the first's: built once, as before,
             # its Light Path read at the own value (said). (A camera-only Object Info colour had

@@ -20,6 +20,7 @@ import numpy as np
 from .. import scenedata as sd
 from ..procedural import ProceduralTexels
 from .aovs import CAMERA_LIGHT_PATH
+from .assembly import procedural_textures
 
 # the Light Path outputs that depend on the ray (Ray Length and Is Backfacing do not: they stay
 # what the evaluation makes of them)
@@ -104,9 +105,23 @@ def same(a, b, fields=None):
     return all(_equal(getattr(a, n), getattr(b, n)) for n in names)
 
 
+def _triangle_needs(m):
+    """What a material reads per triangle beside its UVs, which the assembly fills in for the
+    triangles of the material they show (a variant's copies take the original's): the
+    coordinates, attributes and Object Info its procedural textures read, a normal map's
+    tangents, a UV map read by name."""
+    needs = {n for t in procedural_textures(m) for n in t.needs}
+    if m.normal_texture is not None:
+        needs.add(('tangents', m.normal_uv_map))
+    if m.uv_map:
+        needs.add(('uv map', m.uv_map))
+    return needs
+
+
 def ray_variants(build, reads, max_bounces):
-    """[(material, extra), ...] with their visibility set, the first the one bounce rays see
-    (the material's index), the notes for what remains approximated, and the note that holds
+    """[(material, extra), ...] with their visibility set, the first the one on the original
+    triangles (the material's index; bounce rays' unless another needs more per triangle, see
+    _triangle_needs; None where no build needs all that the others need), the notes for what remains approximated, and the note that holds
     where the scene has translucent or glass surfaces ('' none: said by the export, which
     knows them all). build(values) builds
     the material with Light Path outputs as `values` (nodeeval.light_path) -> (material,
@@ -159,6 +174,13 @@ def ray_variants(build, reads, max_bounces):
             break
     else:
         groups.append([shadow, sd.VIS_SHADOW])
+    # the original triangles show the build that needs the most of them (bounce rays' first);
+    # none needing all the others need: None (the caller builds it once, as before)
+    needs = [_triangle_needs(m) for (m, _), _ in groups]
+    first = next((i for i, n in enumerate(needs) if all(o <= n for o in needs)), None)
+    if first is None:
+        return None, notes, bent
+    groups.insert(0, groups.pop(first))
     out = []
     for (m, extra), vis in groups:
         out.append((dataclasses.replace(m, visibility=int(vis)), extra))
