@@ -45,7 +45,8 @@ class EmitterHits:
                 thr = np.ones((3, len(hit)), F32) if thr is None else thr.copy()
                 thr[:, at] *= self._emission_at(prim[at], hits['u'][at], hits['v'][at],
                                                 None if not self._sided else
-                                                self._back(prim[at], -np.take(path.D, at, axis=1)))
+                                                self._back(prim[at], -np.take(path.D, at, axis=1),
+                                                           -np.take(path.D, at, axis=1)))
         for mask, out in outs:
             dacrt.shading.gather_emission(hits, mask, self._emission_table(), self._tri_emissive,
                                           None if camera else self.lights.tri_prob, self._area32, self.tri.geo,

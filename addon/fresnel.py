@@ -1,5 +1,7 @@
-"""View-dependent factors (the Fresnel and Layer Weight nodes) as the constants a diffuse
-renderer can use: each output's average over the directions a surface is seen from.
+"""View-dependent factors (the Fresnel and Layer Weight nodes): per shading point from the
+incoming direction and the normal, as Cycles' svm_node_fresnel and svm_node_layer_weight
+(`fresnel_node`, `layer_weight`: what the integrator evaluates where a chain compiles), and
+each output's average over the directions a surface is seen from (where it does not).
 
 Cycles evaluates these per shading point from the angle between the view and the normal
 (svm/fresnel.h, fresnel_dielectric_cos), typically to blend a clear coat over a paint with
@@ -58,6 +60,31 @@ def _per_value(fn, x):
         return fn(values)[inverse].reshape(x.shape)
     grid = np.linspace(values[0], values[-1], _MAX_DISTINCT)
     return np.interp(x, grid, fn(grid))
+
+
+def fresnel_node(cosi, ior, backfacing):
+    """The Fresnel node's Fac (n,) float32 at points whose incoming direction and normal have
+    dot product cosi (n,), IOR ior, met from behind where backfacing (n,) (Cycles inverts the
+    IOR there: the ray leaves the medium)."""
+    eta = np.maximum(np.asarray(ior, np.float32), np.float32(1e-5))
+    eta = np.where(backfacing, np.float32(1.0) / eta, eta)
+    return fresnel_dielectric_cos(np.asarray(cosi, np.float32), eta).astype(np.float32)
+
+
+def layer_weight(cosi, blend, output, backfacing):
+    """The Layer Weight node's 'Fresnel' or 'Facing' output (n,) float32 at points whose
+    incoming direction and normal have dot product cosi (n,): Fresnel of eta = 1 / max(1 -
+    blend, 1e-5) (its inverse where backfacing), Facing 1 - |cosi|^p (p as layer_weight_average;
+    blend 0.5 exactly: p = 1, as Cycles skips the power)."""
+    cosi, blend = np.asarray(cosi, np.float32), np.asarray(blend, np.float32)
+    if output == 'Fresnel':
+        eta = np.maximum(np.float32(1.0) - blend, np.float32(1e-5))
+        eta = np.where(backfacing, eta, np.float32(1.0) / eta)
+        return fresnel_dielectric_cos(cosi, eta).astype(np.float32)
+    b = np.clip(blend, np.float32(0.0), np.float32(1.0 - 1e-5))
+    p = np.where(blend == np.float32(0.5), np.float32(1.0),
+                 np.where(b < 0.5, np.float32(2.0) * b, np.float32(0.5) / (np.float32(1.0) - b)))
+    return (np.float32(1.0) - np.power(np.abs(cosi), p)).astype(np.float32)
 
 
 def fresnel_node_average(ior):

@@ -314,6 +314,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # procedural chains reading a normal (Geometry Normal / True Normal, Texture Coordinate
         # Normal): their hits say which side the ray met (Cycles turns N and Ng to face it)
         self._sided = self.mats.reads_side
+        self._viewed = self.mats.reads_view
         # diffuse transmission (Translucent BSDF): continue_paths multiplies in 1 on such
         # triangles, _translucent_hits and _choose_lobes then weigh the lobes
         tri_translucent = self._per_triangle(self.mats.translucent)
@@ -920,9 +921,10 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # the reflection's albedo R, far (sel, thr_far) the transmission's T
         far = self._translucent_hits(prim, thr) if self._any_translucent else None
         if far is not None and self.mats.translucency_textures:
-            self._translucency_maps(far[0], prim, u, v, far[1], ng)
+            self._translucency_maps(far[0], prim, u, v, far[1], ng, -np.take(path.D, idx, axis=1))
         if tex:
-            self._albedo_maps(prim, u, v, thr, self._back(prim, ng))   # the albedo's maps are the reflection's
+            # (the albedo's maps are the reflection's)
+            self._albedo_maps(prim, u, v, thr, self._back(prim, ng, -np.take(path.D, idx, axis=1)))
         ns, bump = self._bent_normals(prim, u, v, ns, ng)
         # rough diffuse hits: Cycles' Oren-Nayar over the averaged albedo thr holds, per light
         # sample (next_event) and per bounce (below); None where the scene has none
@@ -1099,7 +1101,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         rough = np.take(self.mats.rough, mat)
         if not rough.any():
             return None
-        back = self._back(prim, ng)
+        back = self._back(prim, ng, -D)
         if rough.all():
             rho = self._pass_albedo(prim, u, v, back)
         else:                                         # the others' colours are not needed

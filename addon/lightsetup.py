@@ -14,9 +14,10 @@ from .lights.base import RECORD_FIELDS
 from .lights.coincident import coincident_copies, near_copies
 from .lights.overlap import coplanar_overlaps
 from .lights.linking import LightLinking
-from .procedural import ProceduralTexels
+from .procedural import VIEW, ProceduralTexels
 from .scenedata import NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 from .translucency import far_side
+from .viewside import Facing
 
 F32 = np.float32
 
@@ -528,8 +529,13 @@ class LightSetup:
             self._weigh_emitters(tris, mean, own)
 
     def _magnitude(self, tex, interp, ext, xf, prim, u, v):
-        """|emission| (3, k) float64 of texture tex at (prim, u, v), NaN and infinity read 0."""
-        value = self._lookup(tex, interp, ext, xf, prim, u, v)
+        """|emission| (3, k) float64 of texture tex at (prim, u, v), NaN and infinity read 0.
+        An emission that varies with the view (Fresnel, Layer Weight) is read from directions
+        drawn about the front face's normal by cos, as its power weighs them."""
+        back = None
+        if isinstance(tex, ProceduralTexels) and tex.needs & VIEW:
+            back = Facing.of(np.zeros(len(prim), bool), _cosine_directions(self.tri.geo[9:12, prim], len(prim)))
+        value = self._lookup(tex, interp, ext, xf, prim, u, v, back)
         return np.abs(np.where(np.isfinite(value), value, F32(0.0))).astype(np.float64)
 
     def _weigh_emitters(self, tris, mean, own):
@@ -597,3 +603,15 @@ def _user_copies(geometry, copies, winners, grouped):
     return copies[~own], winners[~own], grouped & ~(made & ~kept)
 
 
+def _cosine_directions(normals, k):
+    """(3, k) unit directions drawn by cos about the normals (3, k) (a fixed sequence: the
+    light choice is the same every frame)."""
+    rng = np.random.default_rng(0xC05)
+    r, phi = np.sqrt(rng.random(k)), 2.0 * np.pi * rng.random(k)
+    n = normals.astype(np.float64)
+    n = n / np.maximum(np.sqrt((n * n).sum(axis=0)), 1e-30)
+    a = np.where(np.abs(n[0]) > 0.9, 0.0, 1.0)            # a helper axis not along n
+    t = np.cross(n, np.stack([a, 1.0 - a, np.zeros(k)]), axis=0)
+    t = t / np.maximum(np.sqrt((t * t).sum(axis=0)), 1e-30)
+    b = np.cross(n, t, axis=0)
+    return r * np.cos(phi) * t + r * np.sin(phi) * b + np.sqrt(np.maximum(1.0 - r * r, 0.0)) * n

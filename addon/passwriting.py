@@ -35,7 +35,7 @@ class PassWriting:
             return nb
         parts = [(diffuse.mean(axis=0), nb)]
         if self._any_translucent:
-            wt = self._translucency_at(prim, u, v, self._back(prim, ng)).mean(axis=0)
+            wt = self._translucency_at(prim, u, v, self._back(prim, ng, I)).mean(axis=0)
             if (wt > 0).any():
                 parts.append((wt, valid_reflection_normal(ng, I, nb, bump[3] != 0)))
         if tau is not None:
@@ -73,12 +73,12 @@ class PassWriting:
         hu, hv = np.take(hits['u'], idx), np.take(hits['v'], idx)
         if len(idx):
             P, ng, ns, _ = self._surface(hits, idx, path.D)
-            albedo = self._pass_albedo(prim, hu, hv, self._back(prim, ng))
+            albedo = self._pass_albedo(prim, hu, hv, self._back(prim, ng, -np.take(path.D, idx, axis=1)))
             # Cycles: the bent normal (with the translucent closure's raised one)
             mean_n = self._pass_normal(prim, hu, hv, ns, ng, -np.take(path.D, idx, axis=1), albedo)
             ns = unit_columns(mean_n)
             if self._any_translucent:                 # Cycles' diffuse closures include it
-                albedo += self._translucency_at(prim, hu, hv, self._back(prim, ng))
+                albedo += self._translucency_at(prim, hu, hv, self._back(prim, ng, -np.take(path.D, idx, axis=1)))
         else:
             P = ns = mean_n = albedo = np.zeros((3, 0), F32)
         if 'UV' in want:
@@ -231,12 +231,12 @@ class PassWriting:
         bent = 'Normal' in want or denoise is not None
 
         def surfaces(cols, prim, u, v, thr, alpha, weight, P, ng, ns, I, depth, tau=None):
-            albedo = self._pass_albedo(prim, u, v, self._back(prim, ns)) * weight     # (ns faces the ray)
+            albedo = self._pass_albedo(prim, u, v, self._back(prim, ns, I)) * weight     # (ns faces the ray)
             if bent:        # Cycles' Normal and denoising normal: the bent one, as _write_passes,
                 # averaged with the transparent closure's (the unbent N) by their weights
                 ns = self._pass_normal(prim, u, v, ns, ng, I, albedo, tau)
             if self._any_translucent:
-                albedo += self._translucency_at(prim, u, v, self._back(prim, ns)) * weight
+                albedo += self._translucency_at(prim, u, v, self._back(prim, ns, I)) * weight
             if denoise is not None:
                 denoise.surface(cols, ns, albedo, P, tau)
             diff[:, cols] += thr * albedo

@@ -22,8 +22,13 @@ import numpy as np
 F32 = np.float32
 
 COORDINATES = ('generated', 'object', 'uv', 'position', 'normal', 'true_normal', 'object_normal')
-# the coordinates that depend on the side a ray meets a surface from (Cycles turns N and Ng to it)
-SIDED = frozenset({'normal', 'true_normal', 'object_normal'})
+# what the Fresnel and Layer Weight nodes read beside the normal: the incoming direction
+# (n, 3) (Cycles' sd->wi, unit, toward where the ray came from) and whether the hit met the
+# surface from behind (n, 1) (SD_BACKFACING: their IOR is inverted there)
+VIEW = frozenset({'incoming', 'backfacing'})
+# the coordinates that depend on the side a ray meets a surface from (Cycles turns N and Ng to
+# it) or on the ray itself
+SIDED = frozenset({'normal', 'true_normal', 'object_normal'}) | VIEW
 # a need naming a mesh attribute a chain reads per point (export/procedurals._attribute): this
 # prefix and the attribute's key (export/meshes.attribute_key); the integrator gives its RGBA
 # (n, 4) interpolated from the corners (scenedata.Geometry.attributes)
@@ -54,16 +59,30 @@ class ProceduralTexels:
 
     def mean(self) -> np.ndarray:
         """The colour's mean over coordinates in the unit cube (the stand-in where a second
-        texture in one material is averaged away)."""
-        p = np.random.default_rng(7).random((4096, 3)).astype(F32)
-        return self.evaluate({k: p for k in self.needs}).mean(axis=1).astype(np.float64)
+        texture in one material is averaged away); over view directions by cos where it reads
+        the view (_probe)."""
+        return self.evaluate(self._probe()).mean(axis=1).astype(np.float64)
 
     def magnitude(self) -> np.ndarray:
         """The mean of the colour's magnitude (3,) per channel over coordinates in the unit
         cube: a first guess at what an emission of it gives (it weighs the light choice until
         the integrator measures it on the emitter itself, _procedural_emission_power)."""
-        p = np.random.default_rng(7).random((4096, 3)).astype(F32)
-        return np.abs(self.evaluate({k: p for k in self.needs})).mean(axis=1).astype(np.float64)
+        return np.abs(self.evaluate(self._probe())).mean(axis=1).astype(np.float64)
+
+    def _probe(self):
+        """Coordinates of 4096 points in the unit cube; a chain reading the view (VIEW) sees a
+        front face of normal +z from directions drawn by cos (the share of a surface's
+        projected area seen at each angle, as fresnel.py's averages)."""
+        rng = np.random.default_rng(7)
+        p = rng.random((4096, 3)).astype(F32)
+        coords = {k: p for k in self.needs}
+        if self.needs & VIEW:
+            r, phi = np.sqrt(rng.random(4096)), 2.0 * np.pi * rng.random(4096)
+            incoming = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1.0 - r * r)], axis=1)
+            up = np.broadcast_to(np.array([0.0, 0.0, 1.0], F32), (4096, 3))
+            coords.update({k: up for k in SIDED - VIEW if k in self.needs})
+            coords.update({'incoming': incoming.astype(F32), 'backfacing': np.zeros((4096, 1), F32)})
+        return coords
 
 
 def clip_unit(x, nan):

@@ -9,7 +9,7 @@ import numpy as np
 import dacrt
 
 from . import roughdiffuse
-from .procedural import SIDED, ProceduralTexels
+from .procedural import SIDED, VIEW, ProceduralTexels
 from .texture import EncodedTexels, UdimTiles, lookup_texels
 
 F32 = np.float32
@@ -291,6 +291,8 @@ class Materials:
             [e for found in self.aov_textures.values() for e in found]
         self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries) or \
             any(b.values.needs & SIDED for e in self.bumps for b in (e[1],) + e[2] if b is not None)
+        # a chain reads the view (Fresnel, Layer Weight): hits carry their rays' directions
+        self.reads_view = any(isinstance(e[1], ProceduralTexels) and e[1].needs & VIEW for e in entries)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
         # picks closures by their mean weight): its albedo and diffuse transmission, or 1 where it
         # only emits (a translucent-only part weighed 0: paths always passed, never scattered)

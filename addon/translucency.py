@@ -35,13 +35,13 @@ class Translucency:
         rt, tt = max3(R), max3(T)
         return sel, before * T, tt / (rt + tt)           # tt > 0 on translucent materials
 
-    def _translucency_maps(self, sel, prim, u, v, thr_far, ng):
+    def _translucency_maps(self, sel, prim, u, v, thr_far, ng, incoming):
         """Multiply the transmission that varies per point (mats.translucency_textures: over
         the material's own) into thr_far (3, len(sel)) in place, at the hits sel of (prim, u, v),
-        ng (3, k) their normals facing the rays."""
+        ng (3, k) their normals facing the rays, incoming (3, k) the rays' directions negated."""
         take = lambda a: np.take(a, sel, axis=-1)  # noqa: E731
         self._texture(take(prim), take(u), take(v), thr_far, textures=self.mats.translucency_textures,
-                      back=self._back(take(prim), take(ng)))
+                      back=self._back(take(prim), take(ng), take(incoming)))
 
     def _translucency_at(self, prim, u, v, back=None):
         """(3, k) the diffuse transmission's colour at hits (prim, u, v), per point where it varies."""

@@ -59,7 +59,7 @@ class Transparency:
             # _vertex); what it emits still counts. Glass: against its own limit
             u_hit, v_hit = np.ascontiguousarray(h['u']), np.ascontiguousarray(h['v'])
             tau, opacity, mat = self._transparency(prim, u_hit, v_hit, None if not self._sided else
-                                                   self._back(prim, -D))
+                                                   self._back(prim, -D, -D))
             glass = np.take(self._mat_glass, mat)
             if self._opaque_glass:
                 glass = 2.0 * self._glass_part(mat, tau, opacity).mean(axis=0) > tau.mean(axis=0)
@@ -213,7 +213,7 @@ class Transparency:
         dimensions of their own."""
         thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
         if self._albedo_varies:
-            self._albedo_maps(prim, u, v, thr, self._back(prim, ng))
+            self._albedo_maps(prim, u, v, thr, self._back(prim, ng, -np.take(path.D, rows, axis=1)))
         ns, bump = self._bent_normals(prim, u, v, ns, ng)
         u_pick = None
         if self.lights.num_entries > 1:
@@ -232,7 +232,7 @@ class Transparency:
                 T = np.take(self.mats.translucency, np.take(mat, sel), axis=1)
                 thr_far = T * np.take(opacity, sel) * np.take(path.thr, np.take(rows, sel), axis=1)
                 if self.mats.translucency_textures:
-                    self._translucency_maps(sel, prim, u, v, thr_far, ng)
+                    self._translucency_maps(sel, prim, u, v, thr_far, ng, -np.take(path.D, rows, axis=1))
                 self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys,
                                      u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, bump=bump)
 
@@ -317,7 +317,8 @@ class Transparency:
             rows_at = rows[at]
             tau = self._transparency(hits['prim'][at], hits['u'][at], hits['v'][at],
                                      None if not self._sided else
-                                     self._back(hits['prim'][at], -np.take(D, at, axis=1)))[0]
+                                     self._back(hits['prim'][at], -np.take(D, at, axis=1),
+                                                -np.take(D, at, axis=1)))[0]
             tau[:, np.take(left, rows_at) <= j] = 0.0      # over the path's limit: blocked
             atten[:, rows_at] *= tau
             go = at[tau.max(axis=0) > 0]        # fully opaque there: nothing left to trace

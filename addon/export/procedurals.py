@@ -4,7 +4,8 @@ White Noise, Magic, Gabor): compiled into a function of the shading point's text
 a diffuse colour, a Mix Shader's factor, an AOV, an emission's colour x strength.
 The chain may hold the colour and float nodes nodeeval computes, RGB and Value nodes, Mapping
 nodes, Texture Coordinate's Generated, Object, UV and Normal outputs and the Geometry node's
-Position, Normal and True Normal (world space) (an unlinked Vector: Generated,
+Position, Normal and True Normal (world space), the Fresnel and Layer Weight nodes (the
+hit's incoming direction against its normal: procedural.VIEW) (an unlinked Vector: Generated,
 as in Cycles, but White Noise's, its own value); texture inputs (Scale, Detail, ...) may
 themselves vary over the surface. Anything else (an image, an attribute, another texture or
 coordinate kind) leaves the chain to nodeeval's evaluation, which reads the procedural node's
@@ -18,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import nodeeval, nodegraph
+from .. import fresnel, nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping, reads_off_uv
 from ..texture import alpha_lookup, box_lookup, box_texels, lookup_texels, mapped_uv, texture_lookup
@@ -85,9 +86,9 @@ class _Chain:
     image(node, reasons): the export's Texture of an Image Texture node (or None: magenta),
     None where image nodes are not compiled."""
 
-    def __init__(self, reasons, image=None, light_path=True):
+    def __init__(self, reasons, image=None, light_path=True, view=False):
         self.needs, self.textures, self.reasons, self.image, self.frames = set(), [], reasons, image, set()
-        self.light_path = light_path
+        self.light_path, self.view = light_path, view
 
 
 def compile_color(socket, reasons, image=None):
@@ -96,14 +97,15 @@ def compile_color(socket, reasons, image=None):
     image (the export's image reader, see _Chain): Image Texture nodes are looked up per point
     too, so a chain of procedurals and images, or of two or more images (which nodeeval's
     evaluation, one image per material, reads the second of as its average), is exact."""
-    found = compile_socket(socket, True, reasons, image=image)
+    found = compile_socket(socket, True, reasons, image=image, view=True)
     if found is None:
         return None
     fn, needs, sources = found
     return pr.ProceduralTexels(lambda coords: np.maximum(fn(coords), 0.0), needs, str(sources))
 
 
-def compile_socket(socket, color, reasons, coordinates=False, image=None, light_path=True, attributes=False):
+def compile_socket(socket, color, reasons, coordinates=False, image=None, light_path=True, attributes=False,
+                   view=False):
     """(fn(coords) -> (n, 3) colour or (n, 1) float, the coordinates it needs, the textures it
     reads (Sources)) for what feeds a colour (color) or float socket, or None as compile_color.
     coordinates: also a chain that reads Texture Coordinate Generated, Object or UV through an
@@ -116,7 +118,9 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
     chain that reads a mesh's or strand's attributes (Attribute, Color Attribute, Curves Info,
     Point Info) or Object Info and no image, interpolated per point before its nodes as in Cycles (a Mix
     Shader's factor: the attribute maps weigh BSDF colours alone, and the factor had stood at
-    its own value)."""
+    its own value). view: also a chain that reads the Fresnel or Layer Weight node (the view
+    direction and the normal at each hit: a Mix Shader's factor, a colour, an emission, which
+    the integrator evaluates with the hit's ray), else left to the evaluation's average."""
     textured = _reaches_procedural(socket, set())
     # (images only matters where no procedural texture does: its walk of the whole chain, the
     # slowest of these tests, is skipped then; 1000 textured materials spent 0.6 s in it)
@@ -124,9 +128,10 @@ def compile_socket(socket, color, reasons, coordinates=False, image=None, light_
     # (a coordinate-only chain reaches a coordinate node: _coordinate_chain walks it once)
     if not textured and not images and not _coordinate_chain(socket) and \
             not (coordinates and _reaches_procedural(socket, set(), _COORDINATE_NODES)) and \
-            not (attributes and _images_reached(socket) == 0 and _reaches_procedural(socket, set(), _ATTRIBUTE_NODES)):
+            not (attributes and _images_reached(socket) == 0 and
+                 _reaches_procedural(socket, set(), _ATTRIBUTE_NODES)) and not (view and reads_view(socket)):
         return None
-    chain = _Chain([], image, light_path)
+    chain = _Chain([], image, light_path, view)
     try:
         fn = _socket(socket, color, chain, 0)
     except nodeeval.NotCompiled as e:
@@ -159,10 +164,11 @@ def compile_emission(color_socket, strength_socket, reasons, image=None):
     strength_socket None: strength 1 (a colour or value linked into a shader input, which
     Cycles makes an Emission of strength 1)."""
     def emits_per_point(socket):
-        return socket is not None and (varies_per_point(socket) or _reaches_procedural(socket, set(), ATTRIBUTE_TYPES))
+        return socket is not None and (varies_per_point(socket) or
+                                       _reaches_procedural(socket, set(), ATTRIBUTE_TYPES | nodeeval.VIEW_NODE_TYPES))
     if not (emits_per_point(color_socket) or emits_per_point(strength_socket)):
         return None
-    chain = _Chain([], image)
+    chain = _Chain([], image, view=True)
     one = np.ones((1, 1))
     try:
         color = _socket(color_socket, True, chain, 0)
@@ -242,6 +248,11 @@ def images_off_uv(socket):
 def reaches_procedural(socket):
     """Whether a procedural texture feeds socket (through any nodes)."""
     return _reaches_procedural(socket, set())
+
+
+def reads_view(socket):
+    """Whether a Fresnel or Layer Weight node feeds socket (through any nodes)."""
+    return _reaches_procedural(socket, set(), nodeeval.VIEW_NODE_TYPES)
 
 
 def _coordinate_chain(socket):
@@ -393,6 +404,8 @@ def _node(node, out, chain, depth):
         if strength is None:
             raise nodeeval.NotCompiled(f"Light Falloff {out.name}")
         return _socket(strength, False, chain, depth + 1), False
+    if t in nodeeval.VIEW_NODE_TYPES and chain.view:
+        return _view_factor(node, out, chain, depth), False
     roles = nodeeval.node_inputs(node)
     if roles is None or t in nodeeval.VIEW_NODE_TYPES:
         raise nodeeval.NotCompiled(f"'{node.bl_label}' node")
@@ -410,6 +423,32 @@ def _node(node, out, chain, depth):
              for role, ident in roles.items()}
     return (lambda c: nodeeval._compute(frozen, frozen_out, {role: g(c) for role, g in parts.items()})), \
         nodeeval.gives_vector(node, out)
+
+
+def _view_factor(node, out, chain, depth):
+    """fn(coords) -> (n, 1) of a Fresnel or Layer Weight output at each hit, as Cycles'
+    svm_node_fresnel and svm_node_layer_weight: from the incoming direction and the normal (the
+    Normal input's chain, else the shading normal turned to the ray's side; either unnormalized
+    as Cycles reads it), the IOR or Blend per point, and the hit's side."""
+    chain.needs.update(('incoming', 'backfacing'))
+    normal = nodegraph.input_by_id(node, 'Normal')
+    if nodegraph.source(normal)[0] is not None:
+        n_fn = _socket(normal, True, chain, depth + 1)
+    else:
+        chain.needs.add('normal')
+        n_fn = lambda c: c['normal']  # noqa: E731
+    fresnel_node = node.type == 'FRESNEL'
+    param = _float(node, 'IOR' if fresnel_node else 'Blend', chain, depth)
+    output = out.identifier
+
+    def value(c):
+        n = np.asarray(n_fn(c), np.float32)
+        cosi = (np.asarray(c['incoming'], np.float32) * n).sum(axis=1, dtype=np.float32)
+        backfacing = np.asarray(c['backfacing'], np.float32)[:, 0] > 0.5
+        f = fresnel.fresnel_node(cosi, param(c), backfacing) if fresnel_node else \
+            fresnel.layer_weight(cosi, param(c), output, backfacing)
+        return np.asarray(f, np.float64).reshape(-1, 1)
+    return value
 
 
 def _rgba(values):

@@ -127,7 +127,8 @@ class TexturedMixes:
         cut-out): that shader with the factor (or 1 minus it) as its opacity per shading point
         (_procedural_cutout). None otherwise (the factor at its own value; why, in `said`)."""
         fac_notes = []      # (said only if this mix is taken: a Light Path's stand-in)
-        found = procedurals.compile_socket(node.inputs['Fac'], False, fac_notes, image=self._texture, attributes=True)
+        found = procedurals.compile_socket(node.inputs['Fac'], False, fac_notes, image=self._texture, attributes=True,
+                                           view=True)
         closures = None
         if found is None and any(link.from_node.type == 'TEX_IMAGE' for link in links_feeding(node.inputs['Fac'])):
             # a factor from one image between shaders with images of their own (a mask's colour

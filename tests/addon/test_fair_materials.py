@@ -110,26 +110,6 @@ def _non_diffuse_materials():
     nt.links.new(nt.nodes.new('ShaderNodeDisplacement').outputs[0], out.inputs['Displacement'])
     mats.append(mat)
 
-    mat, nt, out = _tree("Coated")                      # view-dependent factors: their averages
-    mix = nt.nodes.new('ShaderNodeMixShader')
-    lw = nt.nodes.new('ShaderNodeLayerWeight')
-    lw.inputs['Blend'].default_value = 0.4
-    nt.links.new(lw.outputs['Fresnel'], mix.inputs['Fac'])
-    paint = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    tint = nt.nodes.new('ShaderNodeMix')
-    tint.data_type = 'RGBA'
-    tint.inputs['A'].default_value = (0.8, 0.1, 0.1, 1)
-    tint.inputs['B'].default_value = (0.1, 0.1, 0.8, 1)
-    fres = nt.nodes.new('ShaderNodeFresnel')
-    nt.links.new(fres.outputs['Fac'], tint.inputs['Factor'])
-    nt.links.new(tint.outputs['Result'], paint.inputs['Color'])
-    coat = nt.nodes.new('ShaderNodeBsdfDiffuse')
-    coat.inputs['Color'].default_value = (0.9, 0.9, 0.9, 1)
-    nt.links.new(paint.outputs[0], mix.inputs[1])
-    nt.links.new(coat.outputs[0], mix.inputs[2])
-    nt.links.new(mix.outputs[0], out.inputs['Surface'])
-    mats.append(mat)
-
     mat, nt, out = _tree("Plastic")                     # a specular layer over a constant base
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     p.inputs['Base Color'].default_value = (0.1, 0.2, 0.3, 1)
@@ -163,8 +143,6 @@ def test_override_keeps_what_the_export_reads_and_leaves_nothing_approximated(sc
     assert "Bump node 'Bump' not rendered" in reasons["Shiny"] and "Normal input" in reasons["Driven"]
     assert "Camera texture coordinates" in reasons["Textured"]
     assert "volume ignored" in reasons["Volumetric"] and "displacement ignored" in reasons["Volumetric"]
-    assert "'Layer Weight Fresnel' (view-dependent) as its average" in reasons["Coated"]
-    assert "'Fresnel' (view-dependent) as its average" in reasons["Coated"]
 
     changes = fairmaterials.make_diffuse()
     assert set(changes) == {m.name for m in mats}
@@ -269,3 +247,42 @@ def test_override_keeps_procedural_colour_chains(scene):
     assert fairmaterials.make_diffuse() == {}
     assert d.inputs['Color'].is_linked and ramp.inputs['Fac'].is_linked
     assert fairmaterials.remaining_approximations() == {}
+
+
+def _coated():
+    """A Mix Shader by Layer Weight Fresnel over a paint whose colour a Fresnel tints."""
+    mat, nt, out = _tree("Coated")
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    lw = nt.nodes.new('ShaderNodeLayerWeight')
+    lw.inputs['Blend'].default_value = 0.4
+    nt.links.new(lw.outputs['Fresnel'], mix.inputs['Fac'])
+    paint = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    tint = nt.nodes.new('ShaderNodeMix')
+    tint.data_type = 'RGBA'
+    tint.inputs['A'].default_value = (0.8, 0.1, 0.1, 1)
+    tint.inputs['B'].default_value = (0.1, 0.1, 0.8, 1)
+    fres = nt.nodes.new('ShaderNodeFresnel')
+    nt.links.new(fres.outputs['Fac'], tint.inputs['Factor'])
+    nt.links.new(tint.outputs['Result'], paint.inputs['Color'])
+    coat = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    coat.inputs['Color'].default_value = (0.9, 0.9, 0.9, 1)
+    nt.links.new(paint.outputs[0], mix.inputs[1])
+    nt.links.new(coat.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    return mat
+
+
+
+def test_view_dependent_chains_the_export_computes_per_point_stay(scene, exported):
+    """Fresnel and Layer Weight in a Mix Shader's factor and a diffuse colour are rendered per
+    point as Cycles does (export/procedurals.py): the override leaves them, and the export reads
+    the same before and after (they had been set to their averages, which the export rendered)."""
+    scenes.camera((0, -10, 0), (math.pi / 2, 0, 0))
+    mat = _coated()
+    scenes.plane(mat.name, materials=(mat,))
+    before = _table(exported())["Coated"]
+    assert not before.approximated, before.approximated
+    assert fairmaterials.make_diffuse() == {}
+    after = _table(exported())["Coated"]
+    assert not after.approximated and np.array_equal(before.base_color, after.base_color)
+    assert {link.from_node.type for link in mat.node_tree.links} >= {'LAYER_WEIGHT', 'FRESNEL'}

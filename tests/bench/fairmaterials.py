@@ -17,8 +17,9 @@ export renders exactly, following the export's own rules (addon/export/materials
 - Diffuse BSDF: roughness 0, normal unlinked;
 - any other shader node (Glossy, Glass, ...): replaced by a Diffuse BSDF of the colour the
   export reads from it (its constant 'Color' / 'Base Color', 0.8 grey without one);
-- a Fresnel or Layer Weight node (in a factor or colour chain): the socket it feeds set to the
-  average over view directions the export renders it as;
+- a Fresnel or Layer Weight node the export does not render per point (a Mix Shader's
+  factor, a diffuse colour or an emission it compiles, export/procedurals.py, stay): the
+  socket it feeds set to the average over view directions the export renders it as;
 - a linked colour or factor the export reads as the socket's own value (not an Image Texture,
   a procedural chain it evaluates per point (export/procedurals.py), a constant chain of RGB or Value nodes through the nodes the export evaluates, or for a
   diffuse colour those nodes on an image):
@@ -128,6 +129,14 @@ def _fill_empty_slots() -> list[str]:
                 slot.material = mat
     return [ob.name for ob in objects]
 
+
+
+def _view_factor(socket):
+    """Whether a Fresnel or Layer Weight node feeds a Mix Shader's factor socket through a chain
+    the export computes per point (export.procedurals.compile_socket with view: Cycles' own
+    per-point values, exact)."""
+    return export.procedurals.reads_view(socket) and \
+        export.procedurals.compile_socket(socket, False, [], image=_no_image, attributes=True, view=True) is not None
 
 
 def _one_side_transparent(mix):
@@ -255,7 +264,7 @@ class _Editor:
             self._normals(node)
         elif t == 'MIX_SHADER':
             keep = (_image_alpha(node.inputs['Fac']) and _one_side_transparent(node)) or \
-                (depth == 0 and _ray_type_mix(node))
+                (depth == 0 and _ray_type_mix(node)) or _view_factor(node.inputs['Fac'])
             if not keep:
                 self._own_value(node.inputs['Fac'])
             self._shader(node.inputs[1], depth + 1)
