@@ -46,7 +46,7 @@ class EmitterHits:
                 thr[:, at] *= self._emission_at(prim[at], hits['u'][at], hits['v'][at],
                                                 None if not self._sided else
                                                 self._back(prim[at], -np.take(path.D, at, axis=1),
-                                                           -np.take(path.D, at, axis=1)))
+                                                           -np.take(path.D, at, axis=1), hits['t'][at]))
         for mask, out in outs:
             dacrt.shading.gather_emission(hits, mask, self._emission_table(), self._tri_emissive,
                                           None if camera else self.lights.tri_prob, self._area32, self.tri.geo,

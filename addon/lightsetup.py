@@ -531,10 +531,14 @@ class LightSetup:
     def _magnitude(self, tex, interp, ext, xf, prim, u, v):
         """|emission| (3, k) float64 of texture tex at (prim, u, v), NaN and infinity read 0.
         An emission that varies with the view (Fresnel, Layer Weight) is read from directions
-        drawn about the front face's normal by cos, as its power weighs them."""
+        drawn about the front face's normal by cos, as its power weighs them; one that varies
+        with the distance it is seen from (Light Falloff) from the camera's."""
         back = None
         if isinstance(tex, ProceduralTexels) and tex.needs & VIEW:
-            back = Facing.of(np.zeros(len(prim), bool), _cosine_directions(self.tri.geo[9:12, prim], len(prim)))
+            g = self.tri.geo[:, prim].astype(np.float64)
+            seen = self.camera.pos[:, None] - (g[0:3] + g[3:6] * u + g[6:9] * v)     # (both recentred)
+            back = Facing.of(np.zeros(len(prim), bool), _cosine_directions(g[9:12], len(prim)),
+                             np.sqrt((seen * seen).sum(axis=0)))
         value = self._lookup(tex, interp, ext, xf, prim, u, v, back)
         return np.abs(np.where(np.isfinite(value), value, F32(0.0))).astype(np.float64)
 

@@ -571,7 +571,8 @@ def falloff_strength(node, out, reasons):
     leaves Quadratic at its Strength (it was 0.14x Cycles on an emitting mesh, read at the
     Emission Strength's own value); Smooth > 0 then scales it by d^2 / (smooth + d^2) at the
     ray's length d (not for a sun's, FLT_MAX), not known here: read as 0, noted. Linear and
-    Constant scale by d and d^2: None (not evaluated)."""
+    Constant scale by d and d^2: None (not evaluated). (An emission's chain computes all of
+    them at each ray's length: export/procedurals._falloff.)"""
     if out.identifier != 'Quadratic':
         return None
     smooth, ok = constant_value(nodegraph.input_by_id(node, 'Smooth'))

@@ -22,10 +22,11 @@ import numpy as np
 F32 = np.float32
 
 COORDINATES = ('generated', 'object', 'uv', 'position', 'normal', 'true_normal', 'object_normal')
-# what the Fresnel and Layer Weight nodes read beside the normal: the incoming direction
-# (n, 3) (Cycles' sd->wi, unit, toward where the ray came from) and whether the hit met the
-# surface from behind (n, 1) (SD_BACKFACING: their IOR is inverted there)
-VIEW = frozenset({'incoming', 'backfacing'})
+# what the hit's ray gives a chain: the incoming direction (n, 3) (Cycles' sd->wi, unit, toward
+# where the ray came from) and whether it met the surface from behind (n, 1) (SD_BACKFACING),
+# which the Fresnel and Layer Weight nodes read beside the normal; the ray's length to the hit
+# (n, 1) (sd->ray_length: a light sample's distance), which an emission's Light Falloff reads
+VIEW = frozenset({'incoming', 'backfacing', 'ray_length'})
 # the coordinates that depend on the side a ray meets a surface from (Cycles turns N and Ng to
 # it) or on the ray itself
 SIDED = frozenset({'normal', 'true_normal', 'object_normal'}) | VIEW
@@ -72,7 +73,7 @@ class ProceduralTexels:
     def _probe(self):
         """Coordinates of 4096 points in the unit cube; a chain reading the view (VIEW) sees a
         front face of normal +z from directions drawn by cos (the share of a surface's
-        projected area seen at each angle, as fresnel.py's averages)."""
+        projected area seen at each angle, as fresnel.py's averages), from 1 away."""
         rng = np.random.default_rng(7)
         p = rng.random((4096, 3)).astype(F32)
         coords = {k: p for k in self.needs}
@@ -81,7 +82,8 @@ class ProceduralTexels:
             incoming = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1.0 - r * r)], axis=1)
             up = np.broadcast_to(np.array([0.0, 0.0, 1.0], F32), (4096, 3))
             coords.update({k: up for k in SIDED - VIEW if k in self.needs})
-            coords.update({'incoming': incoming.astype(F32), 'backfacing': np.zeros((4096, 1), F32)})
+            coords.update({'incoming': incoming.astype(F32), 'backfacing': np.zeros((4096, 1), F32),
+                           'ray_length': np.ones((4096, 1), F32)})
         return coords
 
 

@@ -12,10 +12,10 @@ import dacrt
 
 from . import bump as bumpmap
 from .cancel import PassCancelled
-from .procedural import ATTRIBUTE_NEED, SIDED, ProceduralTexels, clip_unit
+from .procedural import ATTRIBUTE_NEED, SIDED, VIEW, ProceduralTexels, clip_unit
 from .pathstate import compact
 from .sampling import unit_columns
-from .viewside import Facing, incoming_of
+from .viewside import Facing, incoming_of, length_of
 from .texture import texture_lookup
 
 F32 = np.float32
@@ -30,15 +30,16 @@ class SurfaceValues:
         offset off the surface toward the ray's side (all (3,k)), of the rays sel (None: all)."""
         return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D)
 
-    def _back(self, prim, n, incoming):
+    def _back(self, prim, n, incoming, length=None):
         """(k,) bool: the hits on prim met from behind (n (3, k): the normals turned to face the
         rays, or the rays' directions negated), where a chain reads a normal; else None (no
-        material reads the side). incoming (3, k): the rays' directions negated, which it
-        carries (viewside.Facing) where a chain reads the view (Fresnel, Layer Weight)."""
+        material reads the side). incoming (3, k): the rays' directions negated, and length
+        (k,): their lengths to the hits (an emitter's callers give them), which it carries
+        (viewside.Facing) where a chain reads them (Fresnel, Layer Weight, Light Falloff)."""
         if not self._sided:
             return None
         back = (np.take(self.tri.geo[9:12], prim, axis=1) * n).sum(axis=0) < 0
-        return Facing.of(back, incoming) if self._viewed else back
+        return Facing.of(back, incoming, length) if self._viewed else back
 
     def _albedo_maps(self, prim, u, v, albedo, back=None, textures=None):
         """Multiply what varies over a surface into albedo (3, k) (or a throughput that
@@ -310,9 +311,12 @@ class SurfaceValues:
         with np.errstate(divide='ignore', invalid='ignore'):
             bu = np.where(den > 0, (d11 * d20 - d01 * d21) / den, 0.0)
             bv = np.where(den > 0, (d00 * d21 - d01 * d20) / den, 0.0)
-        seen = origin[:, idx].astype(np.float64) - point[:, idx] if origin is not None else None
-        back = None if origin is None or not self._sided else \
-            self._back(prim, seen, seen / np.maximum(np.sqrt((seen * seen).sum(axis=0)), 1e-30))
+        back = None
+        if origin is not None and self._sided:
+            # (the sample's distance: Cycles' ray_length of a light sample, ls->t)
+            seen = origin[:, idx].astype(np.float64) - point[:, idx]
+            d = np.sqrt((seen * seen).sum(axis=0))
+            back = self._back(prim, seen, seen / np.maximum(d, 1e-30), d)
         value[:, idx] *= self._emission_at(prim, bu.astype(F32), bv.astype(F32), back)
 
     def _uv(self, prim, u, v):
@@ -362,7 +366,7 @@ class SurfaceValues:
                 out['true_normal'] = np.ascontiguousarray(self._sided_unit(g[9:12], back).T, F32)
             if 'normal' in needs:
                 out['normal'] = np.ascontiguousarray(self._shading_normal(prim, u, v, back, g).T, F32)
-        if 'incoming' in needs or 'backfacing' in needs:
+        if not VIEW.isdisjoint(needs):
             self._view_coordinates(out, needs, len(prim), back)
         if self._displaced and not self._undisplaced and ('normal' in out or 'object_normal' in out):
             self._displace_coordinates(out, prim, u, v, back)
@@ -384,17 +388,21 @@ class SurfaceValues:
 
     @staticmethod
     def _view_coordinates(out, needs, k, back):
-        """The Fresnel and Layer Weight nodes' 'incoming' (k, 3) and 'backfacing' (k, 1) (into
-        out), from the side array back (viewside.Facing) the hits' caller made: every caller
-        of a chain that reads them gives their rays' directions (Integrator._back)."""
-        incoming = incoming_of(back)
-        if incoming is None or incoming.shape[-1] != k:
-            raise ValueError("a chain reads the view direction (Fresnel, Layer Weight) where the hits' rays "
+        """What the hits' rays give (procedural.VIEW, into out): the Fresnel and Layer Weight
+        nodes' 'incoming' (k, 3) and 'backfacing' (k, 1), an emission's Light Falloff's
+        'ray_length' (k, 1), from the side array back (viewside.Facing) the hits' caller made:
+        every caller of a chain that reads them gives their rays (Integrator._back), and the
+        emitters' callers their lengths."""
+        incoming, length = incoming_of(back), length_of(back)
+        if incoming is None or incoming.shape[-1] != k or ('ray_length' in needs and length is None):
+            raise ValueError("a chain reads the hits' rays (Fresnel, Layer Weight, Light Falloff) where they "
                              "were not given")
         if 'incoming' in needs:
             out['incoming'] = np.ascontiguousarray(incoming.T, F32)
         if 'backfacing' in needs:
             out['backfacing'] = np.asarray(back, F32).reshape(-1, 1)
+        if 'ray_length' in needs:
+            out['ray_length'] = np.asarray(length, F32).reshape(-1, 1)
 
     def _shading_normal(self, prim, u, v, back, g=None):
         """(3, k) the shading normal at hits (prim, u, v): the corner normals interpolated and

@@ -86,9 +86,9 @@ class _Chain:
     image(node, reasons): the export's Texture of an Image Texture node (or None: magenta),
     None where image nodes are not compiled."""
 
-    def __init__(self, reasons, image=None, light_path=True, view=False):
+    def __init__(self, reasons, image=None, light_path=True, view=False, ray=False):
         self.needs, self.textures, self.reasons, self.image, self.frames = set(), [], reasons, image, set()
-        self.light_path, self.view = light_path, view
+        self.light_path, self.view, self.ray = light_path, view, ray
 
 
 def compile_color(socket, reasons, image=None):
@@ -164,11 +164,11 @@ def compile_emission(color_socket, strength_socket, reasons, image=None):
     strength_socket None: strength 1 (a colour or value linked into a shader input, which
     Cycles makes an Emission of strength 1)."""
     def emits_per_point(socket):
-        return socket is not None and (varies_per_point(socket) or
+        return socket is not None and (varies_per_point(socket) or falls_off_per_ray(socket) or
                                        _reaches_procedural(socket, set(), ATTRIBUTE_TYPES | nodeeval.VIEW_NODE_TYPES))
     if not (emits_per_point(color_socket) or emits_per_point(strength_socket)):
         return None
-    chain = _Chain([], image, view=True)
+    chain = _Chain([], image, view=True, ray=True)
     one = np.ones((1, 1))
     try:
         color = _socket(color_socket, True, chain, 0)
@@ -248,6 +248,18 @@ def images_off_uv(socket):
 def reaches_procedural(socket):
     """Whether a procedural texture feeds socket (through any nodes)."""
     return _reaches_procedural(socket, set())
+
+
+def falls_off_per_ray(socket):
+    """Whether a Light Falloff node feeds socket whose output scales with the ray's length
+    (Linear, Constant, or Smooth not a constant 0; Quadratic of Smooth 0 is its Strength)."""
+    for link in nodegraph.links_feeding(socket):
+        node = link.from_node
+        if node.type == 'LIGHT_FALLOFF':
+            smooth, exact = nodeeval.constant_value(nodegraph.input_by_id(node, 'Smooth'))
+            if link.from_socket.identifier != 'Quadratic' or not exact or smooth > 0.0:
+                return True
+    return False
 
 
 def reads_view(socket):
@@ -399,6 +411,8 @@ def _node(node, out, chain, depth):
         return _texture(node, out, chain, depth)
     if t == 'TEX_IMAGE' and chain.image is not None:
         return _image(node, out, chain, depth)
+    if t == 'LIGHT_FALLOFF' and chain.ray:
+        return _falloff(node, out, chain, depth), False
     if t == 'LIGHT_FALLOFF':
         strength = nodeeval.falloff_strength(node, out, chain.reasons)
         if strength is None:
@@ -423,6 +437,29 @@ def _node(node, out, chain, depth):
              for role, ident in roles.items()}
     return (lambda c: nodeeval._compute(frozen, frozen_out, {role: g(c) for role, g in parts.items()})), \
         nodeeval.gives_vector(node, out)
+
+
+def _falloff(node, out, chain, depth):
+    """fn(coords) -> (n, 1) of a Light Falloff output in an emission, as Cycles'
+    svm_node_light_falloff at the hit's ray length d (a light sample's distance): the Strength,
+    times d (Linear) or d^2 (Constant), times d^2 / (smooth + d^2) where Smooth > 0 (unless d^2
+    overflows), in float32."""
+    chain.needs.add('ray_length')
+    strength = _float(node, 'Strength', chain, depth)
+    smooth = _float(node, 'Smooth', chain, depth)
+    power = {'Quadratic': 0, 'Linear': 1, 'Constant': 2}[out.identifier]
+
+    def value(c):
+        d = np.asarray(c['ray_length'], np.float32)[:, 0]
+        s = np.asarray(strength(c), np.float32) * d ** np.float32(power) if power else \
+            np.asarray(strength(c), np.float32)
+        k = np.asarray(smooth(c), np.float32)
+        with np.errstate(over='ignore', invalid='ignore'):
+            squared = d * d
+            scaled = s * (squared / (k + squared))
+        s = np.where((k > 0.0) & np.isfinite(squared), scaled, s)
+        return np.asarray(s, np.float64).reshape(-1, 1)
+    return value
 
 
 def _view_factor(node, out, chain, depth):

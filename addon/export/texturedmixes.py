@@ -164,6 +164,9 @@ class TexturedMixes:
                 reasons.extend(fac_notes + notes)
                 return mixed
         sides, emits, transmits = [], [], []
+        # each mix's coordinates: the factor's and its sides' (an emission's ray length, which
+        # its callers alone give, is not asked of the albedo's)
+        side_needs = {kind: set(needs) for kind in ('procedural', 'emission', 'translucency')}
         for c in closures:
             # (an image on the UV map is looked up per point as well: two Diffuse BSDFs on
             # different images mixed by a Checker had read the factor at its own value)
@@ -182,7 +185,9 @@ class TexturedMixes:
             sides.append(albedo[0])
             emits.append(emission_at[0])
             transmits.append(translucent_at[0])
-            needs |= albedo[1] | emission_at[1] | translucent_at[1]
+            side_needs['procedural'] |= albedo[1]
+            side_needs['emission'] |= emission_at[1]
+            side_needs['translucency'] |= translucent_at[1]
         translucent = any(c.translucent.any() for c in closures)
         if _alike(*closures) and not any(_emits(c) for c in closures) and not translucent:
             # (the factor, unused, says nothing)
@@ -190,12 +195,12 @@ class TexturedMixes:
             return closures[0]
         reasons.extend(fac_notes + notes)
 
-        def mixer(sides, kind='procedural'):
+        def mixer(sides, kind='procedural', extra=frozenset()):
             def mixed(coords):      # reads no Blender data: it runs during the render's lookups
                 f = factor(coords)
                 a = sides[0](coords)
                 return a + (sides[1](coords) - a) * f
-            return Texture.procedural(ProceduralTexels(mixed, needs, str(sources)), kind)
+            return Texture.procedural(ProceduralTexels(mixed, side_needs[kind] | extra, str(sources)), kind)
         emission, etex = np.zeros(3), None
         if any(_emits(c) for c in closures):
             # an emission mask (a glow on a sign, lava cracks): Cycles weighs each side's
@@ -221,4 +226,5 @@ class TexturedMixes:
         pass_sides = [colour_at(*c.pass_albedo()) for c in closures]
         if None in pass_sides:
             return out
-        return out._with_passes((np.zeros(3), mixer([p[0] for p in pass_sides]), np.ones(3)))
+        return out._with_passes((np.zeros(3), mixer([p[0] for p in pass_sides], extra=frozenset().union(
+            *(p[1] for p in pass_sides))), np.ones(3)))

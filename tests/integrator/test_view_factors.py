@@ -9,7 +9,7 @@ import pytest
 
 from addon import fresnel
 from addon.pathstate import compact
-from addon.viewside import Facing, incoming_of
+from addon.viewside import Facing, incoming_of, length_of
 
 
 # float32, as Cycles computes: just past the critical angle of total internal reflection the
@@ -30,7 +30,7 @@ def _snell(mu, n):
 def _facing(k=7):
     back = np.arange(k) % 3 == 0
     incoming = np.arange(3 * k, dtype=np.float32).reshape(3, k)
-    return Facing.of(back, incoming), back, incoming
+    return Facing.of(back, incoming, 10.0 + np.arange(k)), back, incoming
 
 
 def test_the_incoming_directions_follow_take_slices_and_masks():
@@ -40,6 +40,8 @@ def test_the_incoming_directions_follow_take_slices_and_masks():
         assert isinstance(got, Facing)
         np.testing.assert_array_equal(np.asarray(got), back[cols])
         np.testing.assert_array_equal(incoming_of(got), incoming[:, cols])
+        np.testing.assert_array_equal(length_of(got), (10.0 + np.arange(7))[cols])
+    assert length_of(np.take(Facing.of(back, incoming), sel)) is None       # (no lengths given: none)
     # taken twice (a material's hits, then a chunk of them)
     np.testing.assert_array_equal(incoming_of(np.take(f, sel)[1:]), incoming[:, sel[1:]])
 
@@ -47,7 +49,7 @@ def test_the_incoming_directions_follow_take_slices_and_masks():
 def test_other_arrays_made_from_it_carry_no_view():
     f, back, _ = _facing()
     for other in (~f, f & True, f[:, None], np.where(f, 1, 0)):
-        assert incoming_of(other) is None
+        assert incoming_of(other) is None and length_of(other) is None
     assert bool(f[0]) is True and np.where(f, -1.0, 1.0).tolist() == np.where(back, -1.0, 1.0).tolist()
     assert incoming_of(np.asarray(back)) is None and incoming_of(None) is None
 
