@@ -889,9 +889,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if path.tb is not None:                       # past Transparent Max Bounces: emission only
             hit &= path.tb < self._transparent_stop
         if path.gb is not None:                       # past Transmission Max Bounces: the same
-            # (a path that crossed no glass made no transmission bounce: a limit of 0 leaves it;
-            # it had ended every path of a batch some ray of which met a transparent surface)
-            hit &= path.gb < max(self._glass_stop, 1)
+            hit &= path.gb <= self._glass_stop
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)),
         # in one native pass; thr becomes albedo x thr / q, the throughput after this
@@ -953,6 +951,12 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         moved = None
         if far is not None:                           # one lobe for the bounce
             ns, ng, P_off, moved = self._choose_lobes(k, far, keys, thr, P, ns, ng, P_off, ns_far)
+        if moved is not None:
+            # Cycles counts a diffuse transmission as a transmission bounce (path_state_next:
+            # LABEL_TRANSMIT), against Transmission Max Bounces as glass passes are: had gone on
+            # (a Translucent and Diffuse sphere at 0 transmission bounces 1.21x Cycles in green)
+            gb = np.zeros(len(moved), np.int32) if gb is None else gb
+            gb[moved] += 1
         # cosine-weighted BSDF sample around the shading normal; reject directions below the
         # geometric surface (a diffuse BSDF only reflects; a transmitting one is turned around)
         ka, kb = self.rng.dim_words(dim(k, 2))

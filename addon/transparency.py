@@ -53,6 +53,7 @@ class Transparency:
                 thr = path.thr = np.ones((3, len(hits)), F32)
             if path.tb is None:
                 path.tb = np.zeros(len(hits), np.int32)
+            if path.gb is None:             # (a translucent bounce may have made it)
                 path.gb = np.zeros(len(hits), np.int32)
             # Cycles counts transparent surfaces over the whole path: once a pass reaches the
             # limit, the next surface, this one too, is not passed (nor lit, nor bounced off:
