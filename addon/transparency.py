@@ -65,7 +65,9 @@ class Transparency:
             if self._opaque_glass:
                 glass = 2.0 * self._glass_part(mat, tau, opacity).mean(axis=0) > tau.mean(axis=0)
             tb, gb = compact(rows, path.tb, path.gb)
-            spent = np.where(glass, gb >= self._glass_stop, tb >= self._transparent_stop)
+            # (glass: Cycles refracts at a surface after n transmissions while n <= the limit, two
+            # clear panes before an emitter seen through at limit 1: they had been black there)
+            spent = np.where(glass, gb > self._glass_stop, tb >= self._transparent_stop)
             surface = None
             if chain is not None:                   # what the data passes read here, before the pick
                 surface = self._surface(h, None, D)
