@@ -49,9 +49,10 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
         default=0, min=0, max=1024, soft_max=64)
     transmission_max_bounces: IntProperty(
         name="Transmission Max Bounces",
-        description="Glass surfaces (Glass, Refraction, Principled transmission: see-through here) "
-                    "a path passes through before it stops, as Cycles' Light Paths > Transmission "
-                    "(with its Total, both 12 by default); they do not count as transparent passes",
+        description="Transmission bounces N, as Cycles' Light Paths > Transmission counts them (with "
+                    "its Total, both 12 by default): paths pass up to N+1 glass surfaces (Glass, "
+                    "Refraction, Principled transmission: see-through here) and Translucent BSDF "
+                    "bounces; they do not count as transparent passes",
         default=12, min=0, max=1024, soft_max=64)
     # Cycles' Light Paths > Clamping, with its defaults (direct off, indirect 10)
     sample_clamp_direct: FloatProperty(
