@@ -16,6 +16,7 @@ import numpy as np
 from . import cryptomatte, export
 from .display import Display
 from .allocator import heap_in_use, render_heap, rss_peak, rss_peak_reset
+from .blasthreads import blas_on_caller
 from .passes import (AOV_CHANNELS, DENOISE, LIGHTGROUP_PREFIX, NOISY_IMAGE, PASSES, enabled, result_name,
                      result_passes, writes_noisy_image)
 from .texture import stored_texels
@@ -190,7 +191,8 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             # Render > Performance > Threads: Fixed caps every native pass of the frame (export,
             # set-up, shading kernels), not the tracer alone
             limit = int(r.threads) if r.threads_mode == 'FIXED' else 0
-            with render_heap(), dacrt.thread_limit(limit):   # (heap: passes reuse freed arrays)
+            # (heap: passes reuse freed arrays; numpy's tiny matrix calls wake no BLAS threads)
+            with render_heap(), blas_on_caller(), dacrt.thread_limit(limit):
                 self._heap0, self._rss0 = heap_in_use(), rss_peak_reset()
                 self._render(depsgraph)
         except export.ExportCancelled:
@@ -227,7 +229,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             camera = _region_camera(context, depsgraph, said)
             r = depsgraph.scene_eval.render
             import dacrt                # (as render(): Threads: Fixed caps the export's passes)
-            with dacrt.thread_limit(int(r.threads) if r.threads_mode == 'FIXED' else 0):
+            with dacrt.thread_limit(int(r.threads) if r.threads_mode == 'FIXED' else 0), blas_on_caller():
                 scene_data = export.export_scene(depsgraph, view_camera=camera, view=space)
         except Exception as e:          # in the viewport's status line, and reported once
             self._viewport_report([('ERROR', f"viewport: {e}")])

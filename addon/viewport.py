@@ -13,6 +13,7 @@ import time
 import dacrt
 import numpy as np
 
+from .blasthreads import blas_on_caller
 from .integrator import Integrator, SetupCancelled
 
 
@@ -110,7 +111,8 @@ class ViewportSession:
     def _run(self):
         # Threads: Fixed caps this thread's native passes (shading kernels, set-up), as it
         # caps a frame's; the limit is per calling thread, so an F12 render beside it keeps its own
-        with dacrt.thread_limit(self.scene_data.settings.threads):
+        # (and numpy's tiny matrix calls wake no BLAS threads, as in a frame's render)
+        with dacrt.thread_limit(self.scene_data.settings.threads), blas_on_caller():
             preview = preview_camera(self.scene_data.camera)
             if preview is not None:
                 one = dataclasses.replace(self.scene_data.settings, samples=1)
