@@ -64,3 +64,14 @@ def test_a_preview_smaller_than_one_sample_finishes_that_sample_before_the_big_b
     done = [p.samples_done for p in integ.passes()]
     assert done == [0, 1, 8], done
     assert np.all(integ.film.sample_counts() == 8)
+
+
+def test_a_render_of_at_most_two_first_blocks_is_one_block():
+    """The Cornell box (34 triangles) at 160x120 and 4 spp, 76,800 paths: one block, where the
+    equal split of blocks of at most _FIRST_PATHS had made it two of 2 spp, each paying a
+    block's fixed costs (its bounces' kernel calls and traces: ~4 ms CPU of a 4-spp outdoor
+    render). Longer renders start as before."""
+    one = Integrator(scenes.cornell_box(width=160, height=120, samples=4, max_bounces=2))
+    assert [p.samples_done for p in one.passes()] == [4]
+    longer = Integrator(scenes.cornell_box(width=160, height=120, samples=8, max_bounces=2))
+    assert next(longer.passes()).samples_done == 3      # 65,536 paths of 19,200 pixels, equal blocks
