@@ -57,7 +57,7 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
     def object_info(output):
         return object_value(info, location, output)
     profile, falloff = [], []
-    _generated_at[0] = _sun_generated(light, matrix) if light.type == 'SUN' else _disc_generated(light, matrix)
+    _generated_at[0] = _generated_of(light, matrix)
     try:
         shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, object_info, profile,
                                                    falloff)
@@ -515,7 +515,8 @@ class _LightEvaluator(nodeeval.Evaluator):
             return None
         if node.type in _GENERATED_TEXTURES and self._kind in _NO_GENERATED and \
                 not nodegraph.input_by_id(node, 'Vector').is_linked:
-            return _at_generated_zero(node, out, depth, _generated_at[0], _generated_notes, self._kind == 'SUN')
+            points = None if _generated_at[0] is None else _generated_at[0]()
+            return _at_generated_zero(node, out, depth, points, _generated_notes, self._kind == 'SUN')
         if node.type == 'TEX_IES' and _ies_probe[0] is not None:   # (_ies_profile's probe)
             _ies_probe[1] = True
             strength = self.input(node.inputs['Strength'], False, depth + 1)
@@ -588,11 +589,25 @@ def _at_generated_zero(node, out, depth, points=None, notes=None, sun=True):
     return nodeeval.Field(value[:3] if len(value) >= 3 else value[:1], vector=vector)
 
 
-# a lamp's Generated coordinates while its tree is evaluated (export_light): _sun_generated,
-# _disc_generated; and what _at_generated_zero says of them, for the light's message (apart
+# a lamp's Generated coordinates while its tree is evaluated (export_light: _generated_of, a
+# callable giving _sun_generated's or _disc_generated's points); and what _at_generated_zero says of them, for the light's message (apart
 # from an evaluation's notes, which would have a colour stand at its own value)
 _generated_at = [None]
 _generated_notes = []
+
+
+def _generated_of(light, matrix):
+    """A callable giving the lamp's Generated points (_sun_generated, _disc_generated), worked out
+    when a texture first asks: most lamps' trees read none, and every lamp had worked them out
+    (a sun's 64 cone directions in Python loops ~1 ms, a point lamp's a 3x3 inverse, on every
+    render)."""
+    done = []
+
+    def points():
+        if not done:
+            done.append(_sun_generated(light, matrix) if light.type == 'SUN' else _disc_generated(light, matrix))
+        return done[0]
+    return points
 
 
 def _disc_generated(light, matrix):
