@@ -355,7 +355,8 @@ def huge_surfaces(sd: SceneData, recentred_origin=None, geo=None, found=None) ->
     along its normal: read from there (contiguous rows) instead of from the vertices. Where
     nothing is said this costs those rows' min / max and a sampled triangle box pass, or not
     even that where recentred (found) sampled the same triangles of this geometry: its smallest
-    face size then settles the first test (the dragon's 4-spp set-up: ~1 ms a render)."""
+    face size then settles the first test (the dragon's 4-spp set-up: ~1 ms a render), and its
+    sampled boxes are the objects' past it."""
     g = sd.geometry
     v = np.asarray(g.vertices)
     tri = np.asarray(g.triangles)

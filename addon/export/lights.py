@@ -590,8 +590,9 @@ def _at_generated_zero(node, out, depth, points=None, notes=None, sun=True):
 
 
 # a lamp's Generated coordinates while its tree is evaluated (export_light: _generated_of, a
-# callable giving _sun_generated's or _disc_generated's points); and what _at_generated_zero says of them, for the light's message (apart
-# from an evaluation's notes, which would have a colour stand at its own value)
+# callable giving _sun_generated's or _disc_generated's points); and what _at_generated_zero
+# says of them, for the light's message (apart from an evaluation's notes, which would have a
+# colour stand at its own value)
 _generated_at = [None]
 _generated_notes = []
 
