@@ -15,6 +15,8 @@ its setting from before returns when the last one ends.
 OpenBLAS is found among the libraries the process has loaded (/proc/self/maps) by its
 num-threads functions under the names numpy's builds give them (plain, the 64-bit interface's
 '64_', scipy-openblas's 'scipy_' prefix); none found (another BLAS, no /proc): nothing to do.
+(threadpoolctl does this for every BLAS, but the extension would have to bundle it as a second
+wheel beside the native one for this one OpenBLAS call pair.)
 """
 from __future__ import annotations
 
