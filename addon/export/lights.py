@@ -57,12 +57,9 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
     def object_info(output):
         return object_value(info, location, output)
     profile, falloff = [], []
-    _generated_at[0] = _generated_of(light, matrix)
-    try:
-        shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, object_info, profile,
-                                                   falloff)
-    finally:
-        _generated_at[0] = None
+    lamp = _LampTree(light.type, object_info,
+                     _sun_generated(light, matrix) if light.type == 'SUN' else _disc_generated(light, matrix))
+    shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, lamp, profile, falloff)
     strength *= shader
     if not np.isfinite(strength).all():
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite strength; skipped"))
@@ -210,7 +207,34 @@ def _fits_float32(light):
         return False
 
 
-def _light_shader_factor(light, name, messages, approximated=None, object_info=None, profile=None, falloff=None):
+class _LampTree:
+    """One evaluation of a light's node tree, handed down it (export_light makes one per light;
+    nothing outlives it): module globals had carried this between calls, where one lamp's
+    leftovers could reach the next and no two exports could run at once. kind: the light's
+    type; object_info(output) -> (4,): an Object Info output's value for the light (None: the
+    node stands at its own value, as one not evaluated); generated: where its Generated
+    coordinates lie (_sun_generated, _disc_generated), and generated_notes what
+    _at_generated_zero says of them for the light's message (apart from an evaluation's notes,
+    which would have a colour stand at its own value); falloffs: the Light Falloffs
+    _past_falloff meets, a list where the lamp can apply one (FALLOFF_LIGHTS, one emission),
+    None where they are read as Quadratic, said; ies_scale: while _ies_profile probes the tree,
+    the IES Texture's value is its Strength x this (None: the node stands at the input's own
+    value), and ies_met says whether the evaluation met the node."""
+    __slots__ = ('kind', 'object_info', 'generated', 'generated_notes', 'falloffs', 'ies_scale', 'ies_met')
+
+    def __init__(self, kind, object_info=None, generated=None):
+        self.kind, self.object_info, self.generated = kind, object_info, generated
+        self.generated_notes = []
+        self.falloffs = None
+        self.ies_scale, self.ies_met = None, False
+
+    def forget_falloffs(self):
+        """Start collecting the Light Falloffs of one evaluation of the tree afresh."""
+        if self.falloffs is not None:
+            self.falloffs.clear()
+
+
+def _light_shader_factor(light, name, messages, approximated, lamp, profile=None, falloff=None):
     """(factor, no_emission): the light's node tree (if used) as a constant RGB factor on its
     colour x power, as Cycles evaluates a light's shader: the emission reaching the output's
     Surface (Emission colour x strength, Add and Mix Shaders of them, a colour or value linked
@@ -218,12 +242,12 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
     BSDF: no light in Cycles), and no_emission then says why where the tree, not a strength of
     0, is the cause ('' otherwise: the skipped-light message names it). What depends on the
     shading point (textures, a Light Falloff's distance) is read at its own value, with a
-    warning naming the light. object_info(output) -> (4,): an Object Info output's value for
-    this light (None: Object Info stands at its own value, as a node not evaluated). An IES
-    Texture feeding the emission linearly (its Fac into a Strength or Color, through products)
-    is applied as Cycles does: the factor is the tree's with the node at its Strength, and the
-    parsed profile (lights/ies.py) is appended to `profile` (a list) for a point, spot or area
-    light to multiply its emission by per direction (_ies_profile says what it cannot apply).
+    warning naming the light. lamp: the evaluation's _LampTree (the light's kind, its Object
+    Info, what the nodes hand back). An IES Texture feeding the emission linearly (its Fac into
+    a Strength or Color, through products) is applied as Cycles does: the factor is the tree's
+    with the node at its Strength, and the parsed profile (lights/ies.py) is appended to
+    `profile` (a list) for a point, spot or area light to multiply its emission by per
+    direction (_ies_profile says what it cannot apply).
     A Light Falloff feeding the one emission of a point, spot or area light (its Strength or
     Color, once) is appended to `falloff` as (output, smooth) for the lamp to apply at each
     ray's length (_past_falloff; it had been read as Quadratic without Smooth, said: Linear
@@ -246,26 +270,21 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
     ies = [n for n in dict.fromkeys(nodegraph.unwrap(link.from_node) for link in nodegraph.links_feeding(surface))
            if n.type == 'TEX_IES']
     applied = None
-    _falloffs[:] = [[]] if light.type in FALLOFF_LIGHTS and falloff is not None and \
-        _one_emission(surface) else [None]
-    try:
-        if ies:
-            applied = _ies_profile(light, name, ies, surface, object_info, messages, reasons)
-        if applied is not None:
-            factor, found, reasons, dark = applied
-            if found is not None and profile is not None:
-                profile.append(found)
-        else:
-            # (a Mix by Is Camera Ray shows its first shader where the camera sees the lamp too, in
-            # Cycles as here: shade_light evaluates the lamp's shader with PATH_RAY_EMISSION alone
-            # on camera hits as well, so there is nothing to say; it had been said to differ)
-            _forget_falloffs()
-            factor = _light_surface(surface, reasons, 0, dark, light.type, object_info)
-        met = _falloffs[0]          # (those of the last evaluation of the tree)
-        reasons.extend(_generated_notes)
-    finally:
-        _falloffs[:] = [None]
-        _generated_notes.clear()
+    lamp.falloffs = [] if light.type in FALLOFF_LIGHTS and falloff is not None and _one_emission(surface) else None
+    if ies:
+        applied = _ies_profile(light, name, ies, surface, lamp, messages, reasons)
+    if applied is not None:
+        factor, found, reasons, dark = applied
+        if found is not None and profile is not None:
+            profile.append(found)
+    else:
+        # (a Mix by Is Camera Ray shows its first shader where the camera sees the lamp too, in
+        # Cycles as here: shade_light evaluates the lamp's shader with PATH_RAY_EMISSION alone
+        # on camera hits as well, so there is nothing to say; it had been said to differ)
+        lamp.forget_falloffs()
+        factor = _light_surface(surface, reasons, 0, dark, lamp)
+    met = lamp.falloffs          # (those of the last evaluation of the tree)
+    reasons.extend(lamp.generated_notes)
     if met and len(met) == 1:
         falloff.append(met[0])
     elif met:       # (two of them multiply in Cycles, the lamp takes one: read as before, said)
@@ -281,12 +300,7 @@ def _light_shader_factor(light, name, messages, approximated=None, object_info=N
     return factor, no_emission
 
 
-# (the IES Texture's value while _ies_profile probes the tree: its Strength x this; None: the
-# node stands at the input's own value, as a node not evaluated)
-_ies_probe = [None, False]     # (the value's scale, whether the evaluation met the node)
-
-
-def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
+def _ies_profile(light, name, nodes, surface, lamp, messages, reasons):
     """(factor, profile or None, reasons, dark) of a light whose emission an IES Texture feeds,
     as Cycles renders it: the tree evaluated with the node's Fac at its Strength x s for s = 0,
     1, 2 must scale as s (the profile multiplies the emission: its Fac into an Emission
@@ -322,12 +336,10 @@ def _ies_profile(light, name, nodes, surface, oi, messages, reasons):
     runs = []
     for s in (1.0, 0.0, 2.0):
         r, d = list(reasons), []
-        _ies_probe[:] = [s * scale, False]
-        _forget_falloffs()
-        try:
-            runs.append((_light_surface(surface, r, 0, d, light.type, oi), r, d, _ies_probe[1]))
-        finally:
-            _ies_probe[:] = [None, False]
+        lamp.ies_scale, lamp.ies_met = s * scale, False
+        lamp.forget_falloffs()
+        runs.append((_light_surface(surface, r, 0, d, lamp), r, d, lamp.ies_met))
+    lamp.ies_scale = None       # (where it is not applied, the tree is evaluated again without the probe)
     (f1, r1, d1, used), (f0, _, _, _), (f2, _, _, _) = runs
     if not used:    # (the node inside a node group: the group's output stands at its own value)
         reasons.insert(0, f"IES Texture {shown} not applied: it is not evaluated where it stands (inside a "
@@ -384,10 +396,10 @@ def _ies_text(node):
         return IESError(f"the file cannot be opened: {e.strerror or e}"), f"file '{path}'"
 
 
-def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
+def _light_surface(socket, reasons, depth, dark, lamp):
     """(3,) emission of what feeds a light's shader socket (see _light_shader_factor); dark
-    collects what cuts the tree's emission off (a muted node or link); kind: the light's type;
-    oi: the light's object_info (see _light_shader_factor)."""
+    collects what cuts the tree's emission off (a muted node or link); lamp: the evaluation's
+    _LampTree."""
     dark = [] if dark is None else dark
     link = linked_link(socket)            # muted nodes are passed through (nodegraph)
     if link is None:
@@ -404,24 +416,24 @@ def _light_surface(socket, reasons, depth, dark=None, kind=None, oi=None):
     if node.type in ('EMISSION', 'BACKGROUND'):      # Cycles: a Background shader emits there too
         # the strength first: at 0 nothing emits whatever the colour, so a colour the export
         # cannot compute approximates nothing (it had warned for a lamp dimmed to 0)
-        strength = _light_strength(node.inputs['Strength'], reasons, kind, dark, oi)
+        strength = _light_strength(node.inputs['Strength'], reasons, lamp, dark)
         if strength == 0.0:
             return np.zeros(3)
-        color = _light_color(node.inputs['Color'], "Emission", reasons, kind, oi)
+        color = _light_color(node.inputs['Color'], "Emission", reasons, lamp)
         return np.array(color[:3], np.float64) * strength
     if node.type == 'ADD_SHADER':
-        return _light_surface(node.inputs[0], reasons, depth + 1, dark, kind, oi) + \
-            _light_surface(node.inputs[1], reasons, depth + 1, dark, kind, oi)
+        return _light_surface(node.inputs[0], reasons, depth + 1, dark, lamp) + \
+            _light_surface(node.inputs[1], reasons, depth + 1, dark, lamp)
     if node.type == 'MIX_SHADER':
         fac = _ray_kind_factor(node)
         if fac is None:
             fac = mix_factor(node, reasons, "light Mix Shader", surface=False)
         # a side of weight 0 adds nothing: what it holds approximates nothing either
-        a = _light_surface(node.inputs[1], reasons, depth + 1, dark, kind, oi) if fac != 1.0 else np.zeros(3)
-        b = _light_surface(node.inputs[2], reasons, depth + 1, dark, kind, oi) if fac != 0.0 else np.zeros(3)
+        a = _light_surface(node.inputs[1], reasons, depth + 1, dark, lamp) if fac != 1.0 else np.zeros(3)
+        b = _light_surface(node.inputs[2], reasons, depth + 1, dark, lamp) if fac != 0.0 else np.zeros(3)
         return (1.0 - fac) * a + fac * b
     if node.type == 'BSDF_PRINCIPLED':   # its emission layer lights; its BSDFs do not
-        return _principled_emission(node, reasons, kind, dark, oi)
+        return _principled_emission(node, reasons, lamp, dark)
     # exact, not an approximation: Cycles evaluates a light's shader for its emission alone, so
     # a BSDF, Transparent or Holdout beside an Emission adds nothing there either (it had been
     # warned "node tree approximated" with the image exact); said only where nothing else emits
@@ -445,7 +457,7 @@ def _ray_kind_factor(node):
     return 0.0
 
 
-def _principled_emission(node, reasons, kind=None, dark=None, oi=None):
+def _principled_emission(node, reasons, lamp, dark=None):
     """A Principled BSDF's emission in a light's shader: Emission Color x Emission Strength,
     under its coat's tint alone (principled.emission_light_dim: a light's shader is evaluated
     emission-only, so the coat's and sheen's layering weights are never taken, 0.91x and 0.88x
@@ -454,29 +466,29 @@ def _principled_emission(node, reasons, kind=None, dark=None, oi=None):
     strength_socket = input_socket(node, 'Emission Strength')
     if color_socket is None or strength_socket is None:
         return np.zeros(3)
-    strength = _light_strength(strength_socket, reasons, kind, dark, oi)
+    strength = _light_strength(strength_socket, reasons, lamp, dark)
     if strength == 0.0:                 # (as an Emission's: the colour then lights nothing)
         return np.zeros(3)
-    color = _light_color(color_socket, "Principled emission", reasons, kind, oi)
+    color = _light_color(color_socket, "Principled emission", reasons, lamp)
     alpha_socket = node.inputs.get('Alpha')   # (`in` on an evaluated tree's inputs: False)
     alpha = 1.0 if alpha_socket is None else principled.constant_alpha(alpha_socket, reasons)
     return np.array(color[:3], np.float64) * strength * alpha * principled.emission_light_dim(node, reasons)
 
 
-def _light_strength(socket, reasons, kind=None, dark=None, oi=None):
+def _light_strength(socket, reasons, lamp, dark=None):
     """An Emission's strength in a light's shader (a Light Falloff's output: see _past_falloff).
     A node not evaluated for a light stands at the own value of the input it is linked into
     and the rest of the chain is computed on it, as a material's evaluation does (it had read
     the Strength socket's own value: Noise x 0 lit at 1, 25.9x Cycles). A strength of 0 from
     that goes into `dark`, said as such (it had been "zero strength", its 300 W panel
-    contradicting it). Object Info is computed for the light (oi): exact, nothing said."""
-    socket = _past_falloff(socket, reasons, kind)
+    contradicting it). Object Info is computed for the light (lamp): exact, nothing said."""
+    socket = _past_falloff(socket, reasons, lamp)
     why = []
     strength, ok = constant_value(socket, why=why)
     if ok:
         return float(strength)
     notes = []
-    value = float(_LightEvaluator(notes, oi, kind).input(socket, False).value[0])
+    value = float(_LightEvaluator(notes, lamp).input(socket, False).value[0])
     strength = 0.0 if value != value else value        # (NaN: 0, as constant_value reads it)
     if not notes:        # every node computed (Object Info for this light): Cycles' value
         return strength
@@ -497,30 +509,30 @@ class _LightEvaluator(nodeeval.Evaluator):
     """nodeeval's evaluation of a light's shader input: what it cannot compute for a light (an
     image, a procedural texture, Light Path, a mesh attribute) stands at the own value of the
     input it is linked into (noted in reasons), the colour and float nodes after it computed.
-    Object Info reads the light object's values (oi: see _light_shader_factor), one constant
+    Object Info reads the light object's values (lamp.object_info: _LampTree), one constant
     per lamp as Cycles computes it (it had stood at its own value: Random x 10 0.70x Cycles,
     Color grey)."""
 
-    def __init__(self, reasons, oi=None, kind=None):
-        super().__init__(None, reasons, None, attribute=None if oi is None else self._object_info)
-        self._oi, self._kind = oi, kind
+    def __init__(self, reasons, lamp):
+        super().__init__(None, reasons, None, attribute=None if lamp.object_info is None else self._object_info)
+        self._lamp = lamp
 
     def _object_info(self, node, out, reasons):
         if node.type != 'OBJECT_INFO' or out.name not in OBJECT_INFO_OUTPUTS:
             return None         # (mesh and object attributes: stood in, as before)
-        return _Constant(np.asarray(self._oi(out.name), np.float64))
+        return _Constant(np.asarray(self._lamp.object_info(out.name), np.float64))
 
     def _node(self, node, out, depth):
         if node.type in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
             return None
-        if node.type in _GENERATED_TEXTURES and self._kind in _NO_GENERATED and \
+        lamp = self._lamp
+        if node.type in _GENERATED_TEXTURES and lamp.kind in _NO_GENERATED and \
                 not nodegraph.input_by_id(node, 'Vector').is_linked:
-            points = None if _generated_at[0] is None else _generated_at[0]()
-            return _at_generated_zero(node, out, depth, points, _generated_notes, self._kind == 'SUN')
-        if node.type == 'TEX_IES' and _ies_probe[0] is not None:   # (_ies_profile's probe)
-            _ies_probe[1] = True
+            return _at_generated_zero(node, out, depth, lamp.generated, lamp.generated_notes, lamp.kind == 'SUN')
+        if node.type == 'TEX_IES' and lamp.ies_scale is not None:   # (_ies_profile's probe)
+            lamp.ies_met = True
             strength = self.input(node.inputs['Strength'], False, depth + 1)
-            return nodeeval.Field((float(np.ravel(strength.value)[0]) * _ies_probe[0],))
+            return nodeeval.Field((float(np.ravel(strength.value)[0]) * lamp.ies_scale,))
         return super()._node(node, out, depth)
 
 
@@ -528,15 +540,6 @@ class _LightEvaluator(nodeeval.Evaluator):
 # infinite, where Cycles passes the Strength through
 FALLOFF_LIGHTS = ('POINT', 'SPOT', 'AREA')
 _FALLOFF_OUTPUTS = ('Quadratic', 'Linear', 'Constant')
-# the Light Falloffs _past_falloff meets while a lamp's tree is evaluated: [list] where the lamp
-# can apply one (FALLOFF_LIGHTS, one emission), [None] where they are read as Quadratic, said
-_falloffs = [None]
-
-
-def _forget_falloffs():
-    """Start collecting the Light Falloffs of one evaluation of a lamp's tree afresh."""
-    if _falloffs[0] is not None:
-        _falloffs[0].clear()
 
 
 def _one_emission(surface):
@@ -587,28 +590,6 @@ def _at_generated_zero(node, out, depth, points=None, notes=None, sun=True):
         notes.append(f"{node.bl_label} averaged over the sun's angle (Cycles computes the nodes after it per "
                      "direction)")
     return nodeeval.Field(value[:3] if len(value) >= 3 else value[:1], vector=vector)
-
-
-# a lamp's Generated coordinates while its tree is evaluated (export_light: _generated_of, a
-# callable giving _sun_generated's or _disc_generated's points); and what _at_generated_zero
-# says of them, for the light's message (apart from an evaluation's notes, which would have a
-# colour stand at its own value)
-_generated_at = [None]
-_generated_notes = []
-
-
-def _generated_of(light, matrix):
-    """A callable giving the lamp's Generated points (_sun_generated, _disc_generated), worked out
-    when a texture first asks: most lamps' trees read none, and every lamp had worked them out
-    (a sun's 64 cone directions in Python loops ~1 ms, a point lamp's a 3x3 inverse, on every
-    render)."""
-    done = []
-
-    def points():
-        if not done:
-            done.append(_sun_generated(light, matrix) if light.type == 'SUN' else _disc_generated(light, matrix))
-        return done[0]
-    return points
 
 
 def _disc_generated(light, matrix):
@@ -672,11 +653,11 @@ def _sun_generated(light, matrix, rings=4, around=16):
     return pts if np.isfinite(pts).all() else None
 
 
-def _past_falloff(socket, reasons, kind=None):
+def _past_falloff(socket, reasons, lamp):
     """The socket a light shader's input reads: a Light Falloff's Quadratic output is its own
     Strength input (the light's inverse square is the lamp's already, as Cycles computes it);
     its Linear and Constant outputs and Smooth depend on the distance to the shaded point and
-    are applied by a point, spot or area lamp of one emission (collected in _falloffs, the
+    are applied by a point, spot or area lamp of one emission (collected in lamp.falloffs, the
     lamp's falloff), else read as Quadratic, reported. For a sun none of it is an approximation: Cycles
     (svm_node_light_falloff) passes the Strength through unchanged, whatever the output and
     Smooth, where the ray length is FLT_MAX, as a sun's is (measured: Quadratic, Linear and
@@ -687,9 +668,9 @@ def _past_falloff(socket, reasons, kind=None):
     falloff = link.from_node
     smooth, exact = constant_value(falloff.inputs['Smooth'])
     power = _FALLOFF_OUTPUTS.index(link.from_socket.name) if link.from_socket.name in _FALLOFF_OUTPUTS else 0
-    if kind != 'SUN' and (power or smooth > 0.0):
-        if _falloffs[0] is not None and exact and smooth == smooth:     # the lamp applies it
-            _falloffs[0].append((power, max(float(smooth), 0.0)))
+    if lamp.kind != 'SUN' and (power or smooth > 0.0):
+        if lamp.falloffs is not None and exact and smooth == smooth:     # the lamp applies it
+            lamp.falloffs.append((power, max(float(smooth), 0.0)))
         else:
             reasons.append(f"Light Falloff {link.from_socket.name} (smooth {smooth:g}) as Quadratic without smoothing")
     return falloff.inputs['Strength']
@@ -703,17 +684,17 @@ class _Constant:
         self.pixels = pixels
 
 
-def _light_color(socket, what, reasons, kind=None, oi=None):
+def _light_color(socket, what, reasons, lamp):
     """The constant colour feeding a light shader's colour socket (a Light Falloff's output as
     grey: see _past_falloff; it had stood at the socket's own value, 0.107 where Cycles
     gives 0.320); nodes the export cannot compute (an image, Light Path) stand at the socket's
-    own value, named. Object Info is computed for the light (oi)."""
-    falloff = _past_falloff(socket, reasons, kind)
+    own value, named. Object Info is computed for the light (lamp)."""
+    falloff = _past_falloff(socket, reasons, lamp)
     if falloff is not socket:
         why = []
         value, ok = constant_value(falloff, why=why)
         if not ok:
-            value, ok = _computed(falloff, False, oi, value, kind)
+            value, ok = _computed(falloff, False, lamp, value)
         if not ok:
             reasons.append(f"{what} colour from a Light Falloff driven by nodes ({_named(why)}, not evaluated "
                            f"for a light); its own value {float(value):g} used")
@@ -721,20 +702,20 @@ def _light_color(socket, what, reasons, kind=None, oi=None):
     why = []
     color, ok = nodeeval.constant(socket, True, why=why)
     if not ok:
-        color, ok = _computed(socket, True, oi, color, kind)
+        color, ok = _computed(socket, True, lamp, color)
     if not ok:
         reasons.append(f"{what} colour driven by nodes ({_named(why)}, not evaluated for a light); its own "
                        f"value {tuple(round(float(c), 3) for c in color[:3])} used")
     return tuple(float(c) for c in color)
 
 
-def _computed(socket, color, oi, own, kind=None):
-    """(value, exact): socket computed with Object Info read for the light (oi), exact where
+def _computed(socket, color, lamp, own):
+    """(value, exact): socket computed with Object Info read for the light (lamp), exact where
     nothing else stood in; else (own, False) as before (the caller names the stand-in)."""
-    if oi is None:
+    if lamp.object_info is None:
         return own, False
     notes = []
-    f = _LightEvaluator(notes, oi, kind).input(socket, color)
+    f = _LightEvaluator(notes, lamp).input(socket, color)
     if notes:
         return own, False
     v = f.value.reshape(-1)
