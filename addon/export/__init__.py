@@ -72,7 +72,6 @@ objectinfo), geometry
 (meshes, strands, placement, assembly), errors.
 """
 
-from . import images
 from .camera import camera_view_camera, export_camera, region_border, viewport_camera
 from .errors import ExportCancelled, ExportError
 from .scene import Exporter, layer_subject, local_view_filter
@@ -95,13 +94,9 @@ def export_scene(depsgraph, check_break=None, camera=None, view_camera=None, ren
     Collections) are left out, as Cycles' viewport sync leaves them.
     """
     exporter = Exporter(depsgraph, check_break, camera, view_camera, render, view)
-    images._check_break[0] = check_break
-    images._texture_limit[0] = images.texture_limit(depsgraph.scene_eval, view_camera is not None)
     try:
         return exporter.run()
     finally:
-        images._check_break[0] = None
-        images._texture_limit[0] = 0
         exporter.release_meshes()       # (edit-mode meshes' to_mesh results: read by now)
         # the exporter's tables refer back to it (a mesh's lazy Generated-coordinates source is
         # one of its methods): dropped here, the frame's export (image texels included) goes

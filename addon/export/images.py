@@ -6,6 +6,7 @@ lookups, the texels as Cycles stores them (texture.EncodedTexels). Missing or un
 are magenta, as in Cycles. Part of the export layer."""
 
 import os
+from typing import Callable, NamedTuple, Optional
 
 import bpy
 import dacrt
@@ -18,19 +19,24 @@ from .imageuser import sequence_path, user_frame
 
 MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
 
-# The running export's cancel check (export_scene sets it): a big image's conversion takes
-# seconds (an 8K PNG ~11 s here), where polling between objects alone answered Esc 14-18 s late
-_check_break = [None]
-# the running export's Cycles Simplify > Texture Limit in pixels (0: off; export_scene sets it):
-# Cycles renders a bigger image halved until it fits, which DACRT does not
-_texture_limit = [0]
+class ImageReading(NamedTuple):
+    """How one export reads images (the Exporter makes one and hands it to the materials and the
+    world; module globals had carried it, set and reset around each export, where one export's
+    could reach another's reads). check_break: the export's cancel check, polled between bands
+    of a big image (its conversion takes seconds: an 8K PNG ~11 s here, where polling between
+    objects alone answered Esc 14-18 s late); texture_limit: Cycles' Simplify > Texture Limit in
+    pixels (0: off; texture_limit()): Cycles renders a bigger image halved until it fits. The
+    default reads every image whole, uncancelled."""
+    check_break: Optional[Callable[[], bool]] = None
+    texture_limit: int = 0
+
+    def poll(self):
+        """Raise ExportCancelled if the user cancelled the export."""
+        if self.check_break is not None and self.check_break():
+            raise ExportCancelled()
 
 
-def poll():
-    """Raise ExportCancelled if the user cancelled the running export."""
-    check = _check_break[0]
-    if check is not None and check():
-        raise ExportCancelled()
+WHOLE = ImageReading()     # (immutable: outside an export, and the default)
 
 
 def associates_alpha(img):
@@ -49,7 +55,7 @@ def _unassociated(rgba):
     return out
 
 
-def udim_tiles(img, first, reasons, unassociate):
+def udim_tiles(img, first, reasons, unassociate, reading=WHOLE):
     """A UDIM image's tiles: the first (the one bpy's pixels give) as read, the others from
     their files through OpenImageIO (bpy gives no other tile's pixels), converted as Blender
     converts the first one. A tile that cannot be read renders magenta, as in Cycles."""
@@ -67,7 +73,8 @@ def udim_tiles(img, first, reasons, unassociate):
     unread = []
     for number in rest:
         path = _tile_path(pattern, number)
-        texels = _file_texels(path, img, reasons, unassociate) if '<' not in path and path != pattern else None
+        texels = _file_texels(path, img, reasons, unassociate, reading=reading) \
+            if '<' not in path and path != pattern else None
         if texels is None:
             unread.append(number)
         else:
@@ -114,7 +121,7 @@ def _open_straight(path):
 _BAND_ROWS = 256
 
 
-def _read_flipped(inp, spec, byte, alpha_one, expand=False):
+def _read_flipped(inp, spec, byte, alpha_one, expand=False, reading=WHOLE):
     """The texels of the open file, row 0 at the bottom: (h, w, channels) uint8, its bytes, for a
     byte file (`expand`, at most 4 channels: (h, w, 4) RGBA bytes as byte_texels expands them,
     made as read: no second whole-image array); else (h, w, 4) float32 RGBA (grey replicated,
@@ -128,7 +135,7 @@ def _read_flipped(inp, spec, byte, alpha_one, expand=False):
     rows = _BAND_ROWS if not tiled else max(1, _BAND_ROWS // spec.tile_height) * spec.tile_height
     fmt = oiio.UINT8 if byte else oiio.FLOAT
     for y in range(0, h, rows):
-        poll()
+        reading.poll()
         e = min(h, y + rows)
         if tiled:
             band = inp.read_tiles(0, 0, spec.x, spec.x + w, spec.y + y, spec.y + e, spec.z, spec.z + 1, 0, used, fmt)
@@ -157,7 +164,7 @@ def _read_flipped(inp, spec, byte, alpha_one, expand=False):
     return out
 
 
-def _file_texels(path, img, reasons, unassociate, lazy=False):
+def _file_texels(path, img, reasons, unassociate, lazy=False, reading=WHOLE):
     """The texels (ImageTexels) of the image file at `path` read as Cycles reads `img`'s file
     (a still image's, a UDIM tile's, a sequence's frame), converted as Blender converts it; None
     if it cannot be read."""
@@ -176,13 +183,13 @@ def _file_texels(path, img, reasons, unassociate, lazy=False):
     # byte files as their bytes (a quarter of the floats' memory, and no conversion): what Cycles
     # reads, and what Blender's byte buffer holds; deeper ones as floats in the image's space
     try:     # alpha ignored (alpha mode None): 1, as Blender's own buffer has it
-        raw = _read_flipped(inp, spec, byte, alpha_one=img.alpha_mode == 'NONE', expand=lazy)
+        raw = _read_flipped(inp, spec, byte, alpha_one=img.alpha_mode == 'NONE', expand=lazy, reading=reading)
     finally:
         inp.close()
     if raw is None:
         return None
     texels = _linear_rgba(raw, img, reasons, unassociate, byte=byte, encoded=True, channels=ch,
-                          preassociated=stored_associated and img.alpha_mode != 'NONE', lazy=lazy)
+                          preassociated=stored_associated and img.alpha_mode != 'NONE', lazy=lazy, reading=reading)
     stored = stored_texels(texels) if texels is not None else None
     half = spec.format == oiio.HALF and all(f == oiio.HALF for f in (spec.channelformats or [oiio.HALF]))
     if half and stored is not None and stored.texels.dtype == np.float32:
@@ -227,10 +234,9 @@ def texture_limit(scene, viewport):
     return int(limit) if str(limit).isdigit() else 0
 
 
-def _limit_factor(img):
-    """How many times Cycles' Texture Limit (the running export's) halves the image's size
+def _limit_factor(img, limit):
+    """How many times Cycles' Texture Limit `limit` (pixels, 0: off) halves the image's size
     (k = 2^n: 1 when off or the image fits), and its size (w, h)."""
-    limit = _texture_limit[0]
     if limit <= 0:
         return 1, (0, 0)         # (img.size would load Blender's buffer of a file image)
     try:
@@ -289,12 +295,12 @@ def _downscaled_bytes(k8, k):
     return np.where(mean < 0, 0, out).astype(np.uint8)
 
 
-def _texture_limited(texels, img, reasons):
+def _texture_limited(texels, img, reasons, limit):
     """The image's texels as Cycles' Simplify > Texture Limit has them: downscaled where DACRT's
     texels are what Cycles stores (a float image's 32-bit floats; an 8-bit image's bytes, kept
     as such), else as they are, said (Cycles averages its halves or converted floats, which
-    DACRT does not hold)."""
-    k, (w, h) = _limit_factor(img)
+    DACRT does not hold). limit: the Texture Limit in pixels (0: off)."""
+    k, (w, h) = _limit_factor(img, limit)
     if k == 1 or texels is None:
         return texels
     # (a UDIM image's other tiles and a sequence's frame files are read elsewhere: said)
@@ -310,17 +316,19 @@ def _texture_limited(texels, img, reasons):
             stored = EncodedTexels(k8, stored.srgb, stored.unassociate, stored.scale)
         return ByteTexels(k8, texels.table, texels.alpha_table, stored)
     reasons.append(f"image '{img.name}' ({w}x{h}) is rendered at full size; Cycles' Simplify > Texture Limit "
-                   f"({_texture_limit[0]}) renders it {max(w // k, 1)}x{max(h // k, 1)}, its detail averaged away")
+                   f"({limit}) renders it {max(w // k, 1)}x{max(h // k, 1)}, its detail averaged away")
     return texels
 
 
-def image_pixels(img, reasons, unassociate=False, user=None, frame=None):
+def image_pixels(img, reasons, unassociate=False, user=None, frame=None, reading=WHOLE):
     """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels
-    (_image_pixels), at the size Cycles' Simplify > Texture Limit renders it (_texture_limited)."""
-    return _texture_limited(_image_pixels(img, reasons, unassociate, user, frame), img, reasons)
+    (_image_pixels), at the size Cycles' Simplify > Texture Limit renders it (_texture_limited).
+    reading: the export's ImageReading (its cancel check and Texture Limit)."""
+    return _texture_limited(_image_pixels(img, reasons, unassociate, user, frame, reading), img, reasons,
+                            reading.texture_limit)
 
 
-def _image_pixels(img, reasons, unassociate=False, user=None, frame=None):
+def _image_pixels(img, reasons, unassociate=False, user=None, frame=None, reading=WHOLE):
     """(h, w, 4) float32 scene-linear RGBA, row 0 at the bottom; None if it has no pixels.
     The colour is associated with alpha as Cycles stores the image (associates_alpha), or with
     `unassociate` divided by it again as Cycles' lookup does for a linked Alpha output. A
@@ -329,7 +337,7 @@ def _image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     which picks an image sequence's frame at the scene frame `frame` (the rendered scene's;
     imageuser.user_frame)."""
     if img.source == 'SEQUENCE':     # bpy holds no frame's pixels in background renders
-        return _sequence_frame(img, reasons, unassociate, user, frame)
+        return _sequence_frame(img, reasons, unassociate, user, frame, reading)
     if not _read_from_blender(img):
         # Cycles reads an image that has a file from that file at every render, not from
         # Blender's buffer: a file rewritten since Blender loaded it renders as it is now (it
@@ -342,8 +350,8 @@ def _image_pixels(img, reasons, unassociate=False, user=None, frame=None):
         path = bpy.path.abspath(img.filepath_raw, library=img.library)
         if img.source == 'TILED' and len(img.tiles):
             path = _tile_path(path, img.tiles[0].number)
-        poll()
-        texels = _file_texels(path, img, reasons, unassociate, lazy=img.source != 'TILED') \
+        reading.poll()
+        texels = _file_texels(path, img, reasons, unassociate, lazy=img.source != 'TILED', reading=reading) \
             if '<' not in path else None
         if texels is not None:
             return texels
@@ -359,10 +367,10 @@ def _image_pixels(img, reasons, unassociate=False, user=None, frame=None):
         n = w * h * ch
         if n == 0:
             raise ValueError
-        poll()
+        reading.poll()
         buf = np.empty(n, np.float32)
         img.pixels.foreach_get(buf)
-        poll()
+        reading.poll()
     except (RuntimeError, ValueError, ReferenceError):
         reasons.append(f"image '{img.name}' could not be loaded (magenta, as Cycles)")
         return None
@@ -376,15 +384,15 @@ def _image_pixels(img, reasons, unassociate=False, user=None, frame=None):
     # Blender's float RGBA is fresh from foreach_get: used in place
     in_place = img.is_float and buf.shape[2] == 4
     return _linear_rgba(buf, img, reasons, unassociate, byte=not img.is_float, encoded=False, from_file=from_file,
-                        channels=4 if in_place else None, lazy=img.source != 'TILED')
+                        channels=4 if in_place else None, lazy=img.source != 'TILED', reading=reading)
 
 
-def _sequence_frame(img, reasons, unassociate, user, scene_frame):
+def _sequence_frame(img, reasons, unassociate, user, scene_frame, reading=WHOLE):
     """The texels of an image sequence's file at the frame its user shows (Cycles reads that
     file, imageuser.user_frame / sequence_path), or None (magenta, as Cycles) if unreadable."""
     frame = user_frame(img, user, scene_frame)
     path = sequence_path(img, frame)
-    texels = _file_texels(path, img, reasons, unassociate, lazy=True)
+    texels = _file_texels(path, img, reasons, unassociate, lazy=True, reading=reading)
     if texels is None:
         reasons.append(f"image sequence '{img.name}': frame {frame} could not be read from '{path}' "
                        "(magenta, as Cycles)")
@@ -420,7 +428,7 @@ def _premultiplied_bytes(img, buf, from_file, reasons):
 
 
 def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, preassociated=False,
-                 channels=None, lazy=False):
+                 channels=None, lazy=False, reading=WHOLE):
     """(h, w, 4) scene-linear RGBA of an image buffer (h, w, channels) of `img`: a byte buffer
     (Blender's floats k/255, or the bytes themselves as uint8) is in the image's colour space
     with straight alpha; a float one is linear and associated
@@ -434,8 +442,9 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
     image's channel count, given when a float `buf` already is the (h, w, 4) RGBA of such an
     image, made for this call: it is used in place (an 8K float texture's RGBA is 1 GB). `lazy`:
     a byte image whose linear texels are a table of its bytes is kept as its bytes
-    (texture.ByteTexels, the floats made only if read), not a UDIM tile."""
-    poll()
+    (texture.ByteTexels, the floats made only if read), not a UDIM tile. reading: the export's
+    ImageReading (its cancel check)."""
+    reading.poll()
     h, w = buf.shape[:2]
     ch = buf.shape[2] if channels is None else channels
     # Cycles associates only 4-channel files (a grey+alpha one stays straight), yet divides by
@@ -463,7 +472,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
         if tables is not None and (buf.dtype == np.uint8 or (exact and _alpha_exact(buf, straight8))):
             stored = _stored_texels(None, img, unassociate, True, encoded, from_file,
                                     associate and not preassociated, kind, k8)
-            poll()
+            reading.poll()
             return ByteTexels(k8, *tables, stored)
         if rgba is None:     # Blender's floats are not its bytes': the float path
             rgba = dacrt.shading.byte_texels(buf[..., :4], _byte_table('blender', False), False)[0]
@@ -477,7 +486,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
         if ch < 3:     # grey (+alpha) images
             rgba[..., 1] = rgba[..., 2] = buf[..., 0]
             rgba[..., 3] = buf[..., 1] if ch == 2 else 1.0
-    poll()
+    reading.poll()
     if not byte:     # (a byte image's was read above)
         kind = space_kind(img, reasons) if encoded else None
     if kind == CONVERT:
@@ -497,7 +506,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
         return ImageTexels(_unassociated(rgba) if unassociate else rgba, stored)
     stored = _stored_texels(rgba, img, unassociate, byte, encoded, from_file, associate and not preassociated,
                             kind, k8)
-    poll()
+    reading.poll()
     if byte:   # byte buffers are in the image's colour space; float ones are linear
         decode = kind == SRGB
         if unassociate and (associate or ch == 2):
@@ -534,7 +543,7 @@ def _linear_rgba(buf, img, reasons, unassociate, byte, encoded, from_file=True, 
                 rgba = _unassociated(rgba)
     elif unassociate:      # float buffers are linear and associated
         rgba = _unassociated(rgba)
-    poll()
+    reading.poll()
     return ImageTexels(rgba, stored)
 
 

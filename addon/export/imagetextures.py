@@ -64,7 +64,7 @@ class ImageTextures:
             # what loading it says is said again by every material that reads it (and by each
             # rebuild of one: _build's probes and _product_map start with fresh reasons)
             notes = []
-            pixels = image_pixels(img, notes, unassociate, node.image_user, self.frame)
+            pixels = image_pixels(img, notes, unassociate, node.image_user, self.frame, self.image_reading)
             if pixels is not None and not all_finite(pixels):     # (an 8-bit image's bytes: finite)
                 # (a float image's NaN or infinity, kept: Cycles blends them in, and surfaces
                 # where the blend reaches them render black, as here)
@@ -72,7 +72,7 @@ class ImageTextures:
                 notes.append(f"image '{img.name}': {bad} texel(s) NaN or infinite, read as 0 by every lookup "
                              "that blends them in (black there, as in Cycles)")
             if pixels is not None and img.source == 'TILED':
-                pixels = udim_tiles(img, pixels, notes, unassociate)
+                pixels = udim_tiles(img, pixels, notes, unassociate, self.image_reading)
             cached = self._images[key, unassociate, frame] = (pixels, notes)
         pixels, notes = cached
         reasons.extend(notes)

@@ -17,6 +17,7 @@ from . import budget
 from .assembly import Assembly
 from .camera import export_camera
 from .errors import ExportCancelled, ExportError
+from .images import ImageReading, texture_limit
 from .instanceattrs import InstanceAttributes
 from .lights import export_light, light_link_receivers
 from .materials import MaterialBuilder
@@ -234,8 +235,10 @@ class Exporter:
         self._instance_attributes = InstanceAttributes(self._evaluated) \
             if any(n.type == 'ATTRIBUTE' and n.attribute_type == 'INSTANCER' for n in nodes) else None
         self.check_break = check_break or (lambda: False)
+        # how its images are read (the cancel check between bands of a big one, Cycles' Texture Limit)
+        self.image_reading = ImageReading(check_break, texture_limit(self.scene, view_camera is not None))
         self.messages = []
-        self.materials = MaterialBuilder(self.scene.frame_current)
+        self.materials = MaterialBuilder(self.scene.frame_current, self.image_reading)
         # (a material read per ray kind says a depth it reads the same on every bounce only if
         # bounces past the first are rendered)
         self.materials.max_bounces = int(getattr(getattr(self.scene, 'dacrt', None), 'max_bounces', 0))
@@ -278,10 +281,11 @@ class Exporter:
         self._see_through_strands()
         self._bumped_strands()
         by_ray = []
-        world, environment, world_reason = export_world(self.scene, self.layer_eval, camera=False, by_ray=by_ray)
+        world, environment, world_reason = export_world(self.scene, self.layer_eval, camera=False, by_ray=by_ray,
+                                                          reading=self.image_reading)
         camera_world = None
         if by_ray:      # a Light Path's Is Camera Ray picks what the camera sees of the world
-            cw, cenv, creason = export_world(self.scene, self.layer_eval, camera=True)
+            cw, cenv, creason = export_world(self.scene, self.layer_eval, camera=True, reading=self.image_reading)
             world_reason = '; '.join(dict.fromkeys(r for r in (world_reason, creason) if r))
             cw = np.where(np.isfinite(cw), cw, 0.0).astype(np.float32)
             if not (cw >= 0).all():

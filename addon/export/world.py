@@ -16,7 +16,7 @@ from ..mapping import environment_rotation
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import linked_link, linked_node, output_node
 from .emission import huge_said
-from .images import MISSING_IMAGE, encoded_environment, image_pixels
+from .images import MISSING_IMAGE, WHOLE, encoded_environment, image_pixels
 from .materials import channel_line
 from .shadersockets import mix_factor, value_emission
 from .sky import sky_environment
@@ -34,13 +34,14 @@ def effective_world(scene, view_layer):
     return override if override is not None else scene.world
 
 
-def export_world(scene, view_layer=None, camera=None, by_ray=None):
+def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE):
     """(uniform background radiance (3,), scenedata.Environment or None, reason string if the
     world had to be approximated) of the world the view layer renders with (effective_world).
     An Environment Texture feeding the Background's Color is exported as an image (its Mapping
     node's rotation included); other inputs use their own value. camera True / False: the world
     as camera rays / all other rays see it, a Mix Shader whose factor is a Light Path's Is
-    Camera Ray giving 1 / 0 (each such mix appends to the list by_ray); None: its own value."""
+    Camera Ray giving 1 / 0 (each such mix appends to the list by_ray); None: its own value.
+    reading: the export's images.ImageReading (its cancel check and Texture Limit)."""
     world = effective_world(scene, view_layer)
     none = np.zeros(3, np.float32)
     if world is None:
@@ -63,7 +64,7 @@ def export_world(scene, view_layer=None, camera=None, by_ray=None):
     if volume is not None and linked_link(volume) is not None:
         reasons.append("world volume ignored")      # a world's fog or haze: no volumes here
     uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, camera,
-                                  by_ray if by_ray is not None else [], scene.frame_current)
+                                  by_ray if by_ray is not None else [], scene.frame_current, reading)
     return uniform.astype(np.float32), env, '; '.join(dict.fromkeys(reasons))
 
 
@@ -73,7 +74,7 @@ def _is_camera_ray(socket):
     return link is not None and link.from_node.type == 'LIGHT_PATH' and link.from_socket.name == 'Is Camera Ray'
 
 
-def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=(), frame=None):
+def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=(), frame=None, reading=WHOLE):
     """(uniform radiance, Environment or None) of what feeds a world shader socket at
     `weight`: Background and Emission (the same for the world in Cycles), Add Shader and Mix
     Shader (constant factor) of them, a colour or value (an emission of it, as Cycles converts
@@ -87,7 +88,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
         if _environments_feeding(socket):
             # a map's colour straight into the world's surface: Cycles' emission of it, which
             # for the world is a Background of that colour, strength 1
-            return _color_light(socket, np.float32(weight), "world surface", reasons, frame)
+            return _color_light(socket, np.float32(weight), "world surface", reasons, frame, reading)
         return value_emission(link, reasons).astype(np.float32) * np.float32(weight), None
     node = link.from_node
     t = node.type
@@ -112,7 +113,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
         (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1, camera, by_ray,
-                                             frame)
+                                             frame, reading)
                               for i, w in enumerate(weights))
         if ea is not None and eb is not None:
             reasons.append("two environment textures in the world; the second ignored")
@@ -126,7 +127,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
         # dimmed to 0 had warned that its Noise colour was read at its own value)
         return none, None
     u, env = found or _color_light(node.inputs['Color'], np.float32(s * weight), f"world {node.bl_label} Color",
-                                   reasons, frame)
+                                   reasons, frame, reading)
     big = u if env is None else np.append(u, env.strength)
     if np.isfinite(big).all() and not fits_float32(big):
         # finite but beyond what the renderer carries (an 'inf' typed into the Strength or
@@ -137,13 +138,13 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
     return u, env
 
 
-def _color_light(socket, strength, what, reasons, frame):
+def _color_light(socket, strength, what, reasons, frame, reading=WHOLE):
     """(uniform radiance, Environment or None) of a world colour socket at `strength`: an
     Environment Texture's map or a Sky Texture's, with the colour nodes between them applied
     to its texels (a tint, a Hue/Saturation, a ramp), or a constant colour."""
     tex = linked_node(socket)
     if tex is not None and tex.type == 'TEX_ENVIRONMENT':
-        return _environment(tex, strength, reasons, frame=frame)
+        return _environment(tex, strength, reasons, frame=frame, reading=reading)
     if tex is not None and tex.type == 'TEX_SKY':
         found = sky_environment(tex, strength, reasons)
         if found is not None:
@@ -160,7 +161,7 @@ def _color_light(socket, strength, what, reasons, frame):
             except nodeeval.NotCompiled:
                 chain = None
             if chain is not None:
-                return _environment(envs[0], strength, reasons, chain, frame)
+                return _environment(envs[0], strength, reasons, chain, frame, reading)
         skies = _environments_feeding(socket, 'TEX_SKY')
         if len(skies) == 1 and not envs:
             found = _sky_through(socket, skies[0], strength, reasons)
@@ -379,14 +380,14 @@ def _per_channel_affine(chain):
     return bool(np.isfinite(y).all()) and channel_line(_PROBE[:, :3], y, 1e-5) is not None
 
 
-def _environment(node, strength, reasons, chain=None, frame=None):
+def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE):
     """(uniform radiance, scenedata.Environment or None) of an Environment Texture node; chain:
     the colour nodes after it (nodeeval.compile_image_chain), applied to its texels."""
     if not (np.isfinite(strength) and strength >= 0):
         reasons.append(f"Background Strength {float(strength):g} is negative or not finite; rendered black")
         return np.zeros(3, np.float32), None
     img = node.image
-    pixels = None if img is None else image_pixels(img, reasons, user=node.image_user, frame=frame)
+    pixels = None if img is None else image_pixels(img, reasons, user=node.image_user, frame=frame, reading=reading)
     if pixels is None:
         if img is None:
             reasons.append("Environment Texture without an image (magenta, as Cycles)")
