@@ -1,9 +1,12 @@
 """The add-on's import layering, read from its source (no Blender needed): only the Blender-facing
 modules (the export package, the engine, its settings, operators, panels, registration and command
 line) import bpy; the integrator and everything it uses never reach bpy or the export; the export
-and the integrator never import the UI."""
+and the integrator never import the UI. And the rules a syntax tree shows: every module has a
+docstring, only the command line prints, and no function keeps state in module globals between
+calls (memo caches of pure functions and the session's own state aside)."""
 
 import ast
+import functools
 from pathlib import Path
 
 ADDON = Path(__file__).resolve().parents[2] / "addon"
@@ -52,6 +55,7 @@ def _path_of(module):
     return None
 
 
+@functools.lru_cache(maxsize=None)     # (read once for all the tests: read-only)
 def _graph():
     graph = {}
     for path in ADDON.rglob("*.py"):
@@ -101,3 +105,133 @@ def test_export_and_integrator_never_import_the_ui():
     for start in ("export", "integrator"):
         assert "ui" not in _reach(graph, start), start
         assert "engine" not in _reach(graph, start), start
+
+
+# The rules below read every add-on module's syntax tree.
+@functools.lru_cache(maxsize=None)
+def _trees():
+    return {_module_name(path): ast.parse(path.read_text(), str(path)) for path in ADDON.rglob("*.py")}
+
+
+def test_every_module_has_a_docstring():
+    trees = _trees()
+    assert len(trees) > 50
+    assert sorted(m for m, tree in trees.items() if not ast.get_docstring(tree)) == []
+
+
+def _prints(tree):
+    return [n.lineno for n in ast.walk(tree)
+            if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == 'print']
+
+
+def test_only_the_command_line_prints():
+    """What a render has to say goes through RenderEngine.report (scenedata messages); the
+    command line alone writes to its terminal."""
+    trees = _trees()
+    assert _prints(trees["cli"])            # (the reader finds the calls it forbids elsewhere)
+    assert {m: _prints(t) for m, t in trees.items() if m != "cli" and _prints(t)} == {}
+
+
+# Module-level containers a function may write: memo caches of pure functions, keyed by all
+# they depend on, so whichever export fills them holds what any other would.
+CACHES = {
+    ("export.images", "_BYTE_TABLES"),          # byte -> float tables of constants
+    ("export.motion", "_OBJECT_SETTINGS"),      # a modifier type's Object settings (its RNA)
+    ("nodeeval", "_RAMP_TABLES"),               # a Color Ramp's table, keyed by its whole content
+}
+# what outlives one render by design: the C heap's policy is the process's (allocator), and the
+# engine, registration and command line keep the session's (the last render's stats, a cancel)
+PROCESS_STATE = BLENDER_FACING | {"allocator"}
+_MUTATORS = {'append', 'extend', 'clear', 'insert', 'pop', 'popitem', 'remove', 'update', 'setdefault', 'add',
+             'discard', 'sort', 'reverse'}
+
+
+def _container_globals(tree):
+    """Names a module binds at its top level to a list, dict or set."""
+    names = set()
+    for node in tree.body:
+        if isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None:
+            value = node.value
+            if isinstance(value, (ast.List, ast.Dict, ast.Set, ast.ListComp, ast.DictComp, ast.SetComp)) or (
+                    isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
+                    and value.func.id in ('list', 'dict', 'set')):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                names.update(t.id for t in targets if isinstance(t, ast.Name))
+    return names
+
+
+def _module_aliases(module, tree):
+    """Local names bound to other add-on modules (`from . import images`)."""
+    package = module.split(".") if (ADDON / Path(*module.split(".")) / "__init__.py").is_file() and module != "__init__" \
+        else module.split(".")[:-1]
+    aliases = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.level > 0:
+            base = package[:len(package) - (node.level - 1)] if node.level > 1 else package
+            target = base + (node.module.split(".") if node.module else [])
+            for a in node.names:
+                candidate = ".".join(target + [a.name])
+                if _path_of(candidate) is not None:
+                    aliases[a.asname or a.name] = candidate
+    return aliases
+
+
+def _root(node):
+    while isinstance(node, (ast.Subscript, ast.Attribute)):
+        node = node.value
+    return node.id if isinstance(node, ast.Name) else None
+
+
+def _first_attribute(node):
+    """The attribute read of the name an assignment target starts from (`images._limit[0]`)."""
+    while isinstance(node.value, (ast.Subscript, ast.Attribute)):
+        node = node.value
+    return node.attr if isinstance(node, ast.Attribute) else None
+
+
+def _state_writes(module, tree):
+    """(name, line) of each write by a function to module-level state: `global`, an item of or
+    a mutating call on a top-level container, or an attribute of another add-on module."""
+    containers, aliases = _container_globals(tree), _module_aliases(module, tree)
+    found = set()
+    for fn in ast.walk(tree):
+        if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            continue
+        own = {a.arg for a in fn.args.args + fn.args.kwonlyargs + fn.args.posonlyargs}
+        for node in ast.walk(fn):
+            if isinstance(node, ast.Global):
+                found.update((name, node.lineno) for name in node.names)
+            targets = node.targets if isinstance(node, (ast.Assign, ast.Delete)) else \
+                [node.target] if isinstance(node, (ast.AugAssign, ast.AnnAssign)) else []
+            for t in targets:
+                root = _root(t)
+                if isinstance(t, ast.Subscript) and root in containers - own:
+                    found.add((root, node.lineno))
+                elif isinstance(t, (ast.Attribute, ast.Subscript)) and root in aliases and _first_attribute(t):
+                    found.add((f"{aliases[root]}.{_first_attribute(t)}", node.lineno))
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in _MUTATORS \
+                    and isinstance(node.func.value, ast.Name) and node.func.value.id in containers - own:
+                found.add((node.func.value.id, node.lineno))
+    return found
+
+
+def test_no_module_state_carried_between_calls():
+    """The export, the integrator and all they use hand what one call needs to the next in
+    objects they pass (export.lights._LampTree, export.images.ImageReading), not in module
+    globals: those carry one export's leftovers into the next, and break under threads and
+    re-entry (a lamp's Light Falloffs, the running export's Texture Limit had been so)."""
+    trees = _trees()
+    writes = {m: _state_writes(m, t) for m, t in trees.items()}
+    # the reader sees the writes it allows (a cache, the engine's session state)
+    assert any(name == "_RAMP_TABLES" for name, _ in writes["nodeeval"])
+    assert any(name == "_CANCEL_ASKED" for name, _ in writes["engine"])
+    offenders = {m: sorted(w for w in found if (m, w[0]) not in CACHES)
+                 for m, found in writes.items() if m not in PROCESS_STATE}
+    assert {m: w for m, w in offenders.items() if w} == {}
+
+
+def test_the_state_reader_sees_writes_through_another_module():
+    tree = ast.parse("from . import images\n_seen = []\n\n"
+                     "def run(check):\n    images._check_break[0] = check\n    _seen.append(check)\n"
+                     "    global _last\n")
+    assert _state_writes("export.fake", tree) == {("export.images._check_break", 5), ("_seen", 6), ("_last", 7)}
