@@ -177,7 +177,7 @@ class CameraModel:
             local = np.where(seen, local, [[0.0], [0.0], [-1.0]])
         d = self.rot @ local
         if self.sheared:    # Cycles: normalize(transform_direction(cameratoworld, D)), then clip along it
-            d = panorama._unit(d)
+            d = panorama.unit(d)
         D = np.ascontiguousarray(d, np.float32)
         O = np.ascontiguousarray(self.pos[:, None] + self.clip_start * d, np.float32)
         tmax = np.full(D.shape[1], self.clip_end - self.clip_start, np.float32)

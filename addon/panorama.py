@@ -47,7 +47,7 @@ def directions(cam, u, v) -> np.ndarray:
         # the view ray I = (0, -1, 0) reflected about the ball's normal (x, y, z): 2 (n.I) n - I
         k = -2.0 * y
         d = np.stack([k * x, k * y + 1.0, k * z])
-        return _unit(np.stack([d[0], d[2], d[1]]))  # Cycles' mirror-ball frame: looks along -y
+        return unit(np.stack([d[0], d[2], d[1]]))  # Cycles' mirror-ball frame: looks along -y
     else:                                           # the fisheyes
         if kind == 'FISHEYE_EQUIDISTANT':
             x, y = (u - 0.5) * 2.0, (v - 0.5) * 2.0
@@ -66,8 +66,9 @@ def directions(cam, u, v) -> np.ndarray:
         phi = np.where(y < 0.0, -phi, phi)
         d = np.stack([np.cos(theta), -np.cos(phi) * np.sin(theta), np.sin(phi) * np.sin(theta)])
     # Cycles' panorama frame (x forward, y left, z up) in Blender's camera frame
-    return _unit(np.stack([-d[1], d[2], -d[0]]))
+    return unit(np.stack([-d[1], d[2], -d[0]]))
 
 
-def _unit(d: np.ndarray) -> np.ndarray:
+def unit(d: np.ndarray) -> np.ndarray:
+    """The columns of d (3, n) scaled to length 1."""
     return d / np.linalg.norm(d, axis=0)

@@ -192,7 +192,7 @@ class LightSet:
                                                         len(within) - 1)
                     pick = within[which - self.num_lamps]
                 wi, value, pdf = self._entry_samples(P, which, u1, u2)
-            narrow[g] = self._narrowness(pdf)
+            narrow[g] = self.narrowness(pdf)
             lum = np.nan_to_num(np.asarray(value, np.float64).mean(axis=0), nan=0.0, posinf=0.0)
             cos = 1.0 if N is None else np.maximum((np.asarray(N, np.float64) * wi).sum(axis=0), 0.0)
             with np.errstate(divide='ignore', invalid='ignore'):
@@ -220,7 +220,7 @@ class LightSet:
         return wi, value, pdf
 
     @staticmethod
-    def _narrowness(pdf) -> float:
+    def narrowness(pdf) -> float:
         """Mean over the samples that reach a point of 1 - 1 / (2 pi pdf), clipped to [0, 1]."""
         pdf = np.asarray(pdf, np.float64)
         valid = pdf > 0

@@ -83,5 +83,5 @@ def lamp_group_stats(lamps, P, u1, u2, N=None):
                 full = np.clip(1.0 - 1.0 / (2.0 * np.pi * pdf[valid]), 0.0, 1.0).mean(axis=1)
             narrow[np.asarray(idx)[valid]] = full
             for r in np.flatnonzero(~valid):     # (points a lamp cannot reach: its own mean)
-                narrow[idx[r]] = LightSet._narrowness(pdf[r])
+                narrow[idx[r]] = LightSet.narrowness(pdf[r])
     return narrow, gives

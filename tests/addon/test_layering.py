@@ -235,3 +235,53 @@ def test_the_state_reader_sees_writes_through_another_module():
                      "def run(check):\n    images._check_break[0] = check\n    _seen.append(check)\n"
                      "    global _last\n")
     assert _state_writes("export.fake", tree) == {("export.images._check_break", 5), ("_seen", 6), ("_last", 7)}
+
+
+def _private_uses(module, tree):
+    """What a module reads of another add-on module's private names: `from .m import _x`,
+    `m._x` and `C._x` (C a class another module defines)."""
+    aliases = _module_aliases(module, tree)
+    package = module.split(".") if (ADDON / Path(*module.split(".")) / "__init__.py").is_file() and module != "__init__" \
+        else module.split(".")[:-1]
+    imported = {}       # local name -> 'module.name' of a name (not a module) imported from an add-on module
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.level > 0:
+            base = package[:len(package) - (node.level - 1)] if node.level > 1 else package
+            source = ".".join(base + (node.module.split(".") if node.module else []))
+            for a in node.names:
+                if (a.asname or a.name) in aliases:
+                    continue
+                imported[a.asname or a.name] = f"{source}.{a.name}"
+                if a.name.startswith('_') and not a.name.startswith('__'):
+                    found.add(f"{source}.{a.name}")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and \
+                node.attr.startswith('_') and not node.attr.startswith('__'):
+            if node.value.id in aliases:
+                found.add(f"{aliases[node.value.id]}.{node.attr}")
+            elif node.value.id in imported:
+                found.add(f"{imported[node.value.id]}.{node.attr}")
+    return found
+
+
+# private names still read across modules, to be made public where they are defined (left while
+# other work changed those modules): this list only shrinks
+PRIVATE_READS_LEFT = {       # (reader, whose name)
+    ("sheen", "specular._MU"),
+    ("export.lights", "export.procedurals._Chain"),
+    ("export.lights", "export.procedurals._node"),
+    ("export.procedurals", "nodeeval._compute"),
+    ("nodegraph", "nodeeval._cross"),
+    ("export.attributemaps", "export.texelbaking.TexelBaking._ALPHA_PROBE"),
+}
+
+
+def test_no_private_names_read_across_modules():
+    """A module's _names are its own: another module reading one depends on what its author
+    may change freely (the integrator had built a message from lightsetup's _object_names)."""
+    trees = _trees()
+    found = {(m, use) for m, tree in trees.items() for use in _private_uses(m, tree)}
+    # the reader finds reads of both kinds (an imported name, a module's attribute)
+    assert ("sheen", "specular._MU") in found and ("nodegraph", "nodeeval._cross") in found
+    assert sorted(found - PRIVATE_READS_LEFT) == []

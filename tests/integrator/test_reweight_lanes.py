@@ -67,7 +67,7 @@ def _per_lamp(ls, P, rng, N, uniform_mix=0.2):
     for kind, entries, within in ls._groups:
         assert kind == 'lamps'
         s = ls.lamps[int(entries[0])].sample(P, u1, u2)
-        narrow.append(ls._narrowness(s.pdf))
+        narrow.append(ls.narrowness(s.pdf))
         lum = np.nan_to_num(np.asarray(s.value, np.float64).mean(axis=0), nan=0.0, posinf=0.0)
         cos = 1.0 if N is None else np.maximum((np.asarray(N, np.float64) * s.wi).sum(axis=0), 0.0)
         pick = np.ones(n)
