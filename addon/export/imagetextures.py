@@ -12,7 +12,7 @@ from ..nodegraph import output_key
 from ..texture import UdimTiles, all_finite, stored_texels
 from .bump import bump_nodes, compile_bump
 from .closure import Texture
-from .images import MISSING_IMAGE, associates_alpha, image_pixels, udim_tiles
+from .images import MISSING_IMAGE, WHOLE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
 from .normalmaps import normal_map_at
 from .texelbaking import channel_line, lookup_chain
@@ -24,6 +24,9 @@ TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR')
 class ImageTextures:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
+    # how the export reads images (images.ImageReading: its cancel check, Cycles' Texture
+    # Limit); the Exporter sets its own
+    image_reading = WHOLE
 
     def _texture(self, node, reasons, per_point=None):
         """The closure.Texture of an Image Texture node (None: no image or unreadable). per_point

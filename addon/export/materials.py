@@ -33,7 +33,6 @@ from .reflectors import (ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds
                          rendered_closures)
 from .cutouts import Cutouts
 from .emission import Emission
-from .images import WHOLE
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
 from .meshes import per_primitive
 from .objectinfo import OBJECT_INFO
@@ -95,9 +94,8 @@ def _huang_hair(ntree, depth=0):
 class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBaking, AttributeMaps, ImageTextures):
     """Evaluates Blender materials into scenedata.Material, one per material."""
 
-    def __init__(self, frame=None, image_reading=WHOLE):
+    def __init__(self, frame=None):
         self.frame = frame         # the rendered scene's frame (image sequences; None: the context's)
-        self.image_reading = image_reading   # the export's (images.ImageReading: cancel check, Texture Limit)
         self.materials = [sd.Material(name='(default)',
                                       base_color=np.array(DEFAULT_SURFACE_ALBEDO, np.float32),
                                       emission=np.zeros(3, np.float32))]

@@ -235,10 +235,8 @@ class Exporter:
         self._instance_attributes = InstanceAttributes(self._evaluated) \
             if any(n.type == 'ATTRIBUTE' and n.attribute_type == 'INSTANCER' for n in nodes) else None
         self.check_break = check_break or (lambda: False)
-        # how its images are read (the cancel check between bands of a big one, Cycles' Texture Limit)
-        self.image_reading = ImageReading(check_break, texture_limit(self.scene, view_camera is not None))
         self.messages = []
-        self.materials = MaterialBuilder(self.scene.frame_current, self.image_reading)
+        self.materials = MaterialBuilder(self.scene.frame_current)
         # (a material read per ray kind says a depth it reads the same on every bounce only if
         # bounces past the first are rendered)
         self.materials.max_bounces = int(getattr(getattr(self.scene, 'dacrt', None), 'max_bounces', 0))
@@ -250,6 +248,10 @@ class Exporter:
         self.shadow_links = {}        # emitter name -> (included, excluded) blocker names
         self.object_assets = []
         self.object_lightgroups = []
+        # how its images are read, by the materials and the world (the cancel check between
+        # bands of a big one, Cycles' Texture Limit)
+        self.image_reading = self.materials.image_reading = ImageReading(
+            check_break, texture_limit(self.scene, view_camera is not None))
         self._object_index = {}
         self.meshes = {}          # key -> MeshArrays
         self.placements = {}      # key -> [Placement]
