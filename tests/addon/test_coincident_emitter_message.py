@@ -5,35 +5,12 @@ once that the emissive triangles coincide (Cycles renders coincident faces darke
 scene at 64x48, 0 bounces, Cycles 0.1346 against the plane alone 0.2002; DACRT had 0.2838).
 A twin that is a Diffuse copy (an object-linked material) leaves one surface too: the
 emitter's or the diffuse one's, by which the tracer's hits return."""
-import math
-
-import bpy
 import numpy as np
 
-from tests.parity import rendering
-
 from . import scenes
+from .emittertwins import lamp_scene, twin
 
 SAID = "coincide with other triangles: rendered as one surface (Cycles renders coincident faces darker)"
-
-
-def _scene(sc):
-    scenes.camera(location=(0, -5, 3), rotation=(math.radians(60), 0, 0))
-    scenes.plane('Floor', size=8, materials=[scenes.diffuse('floor', (0.8, 0.8, 0.8))])
-    lamp = scenes.plane('Lamp', size=1, location=(0, 0, 1), materials=[scenes.emission('e', (1, 1, 1), 5.0)])
-    lamp.rotation_euler = (math.pi, 0, 0)
-    scenes.black_world()
-    rendering.matched(sc, 16, bounces=0)
-    return lamp
-
-
-def _twin(lamp, material=None):
-    twin = scenes.link(bpy.data.objects.new('Twin', lamp.data))
-    twin.location, twin.rotation_euler = lamp.location, lamp.rotation_euler
-    if material is not None:
-        twin.material_slots[0].link = 'OBJECT'
-        twin.material_slots[0].material = material
-    return twin
 
 
 def _render(said):
@@ -43,19 +20,19 @@ def _render(said):
 
 
 def test_twin_renders_as_the_plane_alone_said_once(scene, said):
-    lamp = _scene(scene)
+    lamp = lamp_scene(scene, 1.0, 16)
     single, got = _render(said)
     assert single.mean() > 0.05 and not got
-    _twin(lamp)
+    twin(lamp)
     doubled, got = _render(said)
     np.testing.assert_array_equal(doubled, single)       # (the twin: the higher index)
     assert len(got) == 1 and got[0] == f"4 emissive triangles of 'Lamp', 'Twin' {SAID}", got
 
 
 def test_diffuse_twin_leaves_one_surface(scene, said):
-    lamp = _scene(scene)
+    lamp = lamp_scene(scene, 1.0, 16)
     single, _ = _render(said)
-    _twin(lamp, scenes.diffuse('twin', (0.8, 0.8, 0.8)))
+    twin(lamp, material=scenes.diffuse('twin', (0.8, 0.8, 0.8)))
     doubled, got = _render(said)
     # which copy the hits return is the export's order (here the emitter's): its image alone
     np.testing.assert_array_equal(doubled, single)

@@ -6,15 +6,13 @@ spp 0.2280, DACRT 256 spp 0.3224; Cycles renders the quad alone), silently. near
 triangles repeated within a few float32 ulps, and the render says so (a WARNING naming the
 objects). A quad turned 90 degrees splits along its other diagonal and is not found here (1.82x;
 lights/overlap.py finds it: test_coplanar_overlapping_emitters.py)"""
-import math
-
 import bpy
 import numpy as np
 
 from addon.lights import coincident
-from tests.parity import rendering
 
 from . import scenes
+from .emittertwins import lamp_scene, twin
 
 SAID = "repeat other emissive triangles up to rounding"
 
@@ -60,15 +58,9 @@ def test_a_near_copy_among_many_emitters_is_found_and_a_grid_alone_is_not():
 
 
 def _scene(sc, dz):
-    scenes.camera(location=(0, -5, 3), rotation=(math.radians(60), 0, 0))
-    scenes.plane('Floor', size=8, materials=[scenes.diffuse('floor', (0.8, 0.8, 0.8))])
-    lamp = scenes.plane('Lamp', size=1, location=(0, 0, 1.5), materials=[scenes.emission('e', (1, 1, 1), 5.0)])
-    lamp.rotation_euler = (math.pi, 0, 0)
+    lamp = lamp_scene(sc, 1.5, 4)
     if dz is not None:
-        twin = scenes.link(bpy.data.objects.new('Twin', lamp.data))
-        twin.location, twin.rotation_euler = (0, 0, 1.5 + dz), lamp.rotation_euler
-    scenes.black_world()
-    rendering.matched(sc, 4, bounces=0)
+        twin(lamp, (0.0, 0.0, dz))
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
 
 

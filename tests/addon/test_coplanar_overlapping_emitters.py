@@ -11,9 +11,9 @@ import bpy
 import numpy as np
 
 from addon.lights.overlap import coplanar_overlaps
-from tests.parity import rendering
 
 from . import scenes
+from .emittertwins import lamp_scene, twin
 
 SAID = "overlap other emissive triangles in their plane"
 
@@ -59,17 +59,11 @@ def test_a_wavy_emissive_grid_has_no_overlaps():
     assert _found(fold, [[0, 1, 2], [0, 2, 3], [3, 2, 5], [3, 5, 4]]) is None
 
 
-def _scene(sc, twin=None):
-    scenes.camera(location=(0, -5, 3), rotation=(math.radians(60), 0, 0))
-    scenes.plane('Floor', size=8, materials=[scenes.diffuse('floor', (0.8, 0.8, 0.8))])
-    lamp = scenes.plane('Lamp', size=1, location=(0, 0, 1.5), materials=[scenes.emission('e', (1, 1, 1), 5.0)])
-    lamp.rotation_euler = (math.pi, 0, 0)
-    if twin is not None:
-        (dx, dz), turn = twin
-        other = scenes.link(bpy.data.objects.new('Twin', lamp.data))
-        other.location, other.rotation_euler = (dx, 0, 1.5 + dz), (math.pi, 0, turn)
-    scenes.black_world()
-    rendering.matched(sc, 4, bounces=0)
+def _scene(sc, placed=None):
+    lamp = lamp_scene(sc, 1.5, 4)
+    if placed is not None:
+        (dx, dz), turn = placed
+        twin(lamp, (dx, 0.0, dz), turn)
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
 
 
@@ -87,10 +81,10 @@ def test_a_twin_turned_90_degrees_is_said(scene, said):
 
 
 def test_lamps_apart_alone_or_near_copies_are_not_said_as_overlapping(scene, said):
-    for twin in (None, ((1.0, 0.0), 0.0), ((0.0, 1e-3), math.pi / 2), ((0.0, -1e-6), 0.0)):
+    for placed in (None, ((1.0, 0.0), 0.0), ((0.0, 1e-3), math.pi / 2), ((0.0, -1e-6), 0.0)):
         bpy.ops.wm.read_factory_settings(use_empty=True)
         bpy.context.scene.render.engine = 'DACRT'
-        _scene(bpy.context.scene, twin)
-        assert _said(said) == [], (twin, said)
+        _scene(bpy.context.scene, placed)
+        assert _said(said) == [], (placed, said)
     # (the near copy 1e-6 below is said once, by its own message)
     assert sum("repeat other emissive triangles up to rounding" in t for t in said) == 1, said
