@@ -9,11 +9,12 @@ import dacrt
 import numpy as np
 import pytest
 
-from addon.lights import lamp_records, make_lamp
-from addon.lights.ies import ies_direction, ies_interp, parse_ies
+from addon.lights import make_lamp
+from addon.lights.ies import ies_interp, parse_ies
 from addon import scenedata as sd
 from tests.iescycles import IRREGULAR, cycles_ies_interp
 from tests.iesfiles import lm63
+from tests.iesrays import profile_factor, sampled
 
 F32 = np.float32
 CASES = dict(IRREGULAR, inf_horizontal=lm63([0, 30, 90], [0, 90, float('inf')], [[1000, 800, 0], [500, 400, 0],
@@ -74,10 +75,8 @@ def test_nan_profile_lamp_samples_finite(kind):
     rng = np.random.default_rng(5)
     P = np.stack([rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), np.zeros(n)]).astype(F32)
     u1, u2 = rng.random(n, dtype=F32), rng.random(n, dtype=F32)
-    recs = lamp_records(lamps)
-    (wi, _, value, _), (_, _, value0, _) = (dacrt.lamps.lamp_sample(recs, np.full(n, e, np.int32), P, u1, u2)
-                                            for e in (0, 1))
+    (wi, value, _), (_, value0, _) = sampled(lamps, P, u1, u2)
     assert np.isfinite(value).all()
-    f = ies_direction(p, -wi.astype(np.float64))
+    f = profile_factor(p, m, wi)
     np.testing.assert_allclose(value, value0 * f, rtol=2e-4, atol=1e-6 * float(np.abs(value0).max()))
     assert (f == 0).any() and (f > 0).any()

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from addon.lights import lamp_records, make_lamp
-from addon.lights.ies import ies_direction, ies_interp, parse_ies
+from addon.lights.ies import ies_interp, parse_ies
 from addon import scenedata as sd
 from tests.iesfiles import PROFILES
+from tests.iesrays import gathered, profile_factor, sampled
 
 F32 = np.float32
 
@@ -92,17 +93,11 @@ def test_light_samples_carry_the_profile(name, kind, kw):
     P = shading_points(n)
     rng = np.random.default_rng(7)
     u1, u2 = rng.random(n, dtype=F32), rng.random(n, dtype=F32)
-    recs = lamp_records([with_p, without])
-    out = []
-    for entry in (0, 1):
-        wi, dist, value, pdf = dacrt.lamps.lamp_sample(recs, np.full(n, entry, np.int32), P, u1, u2)
-        out.append((wi, value, pdf))
-    (wi, value, pdf), (wi0, value0, pdf0) = out
+    (wi, value, pdf), (wi0, value0, pdf0) = sampled([with_p, without], P, u1, u2)
     np.testing.assert_array_equal(wi, wi0)
     np.testing.assert_array_equal(pdf, pdf0)
     # the profile at the direction from the light, in its object space (M^T: as a normal)
-    local = MATRIX[:3, :3].T @ (-wi.astype(np.float64))
-    f = ies_direction(p, local)
+    f = profile_factor(p, MATRIX, wi)
     np.testing.assert_allclose(value, value0 * f, rtol=2e-4, atol=1e-6 * float(np.abs(value).max()))
     assert (f > 0).any() and (f < f.max() * 0.5).any()
     # the readable definition (lights/point.py) agrees
@@ -125,19 +120,12 @@ def test_bsdf_rays_see_the_profile(kind, kw):
     target = MATRIX[:3, 3, None] + rng.normal(size=(3, n)) * 0.15
     D = target - O
     D = (D / np.linalg.norm(D, axis=0)).astype(F32)
-    t_surf = np.full(n, np.inf, F32)
-    miss = np.zeros(n, bool)
-    pid = np.arange(n, dtype=np.int64)
-    recs = lamp_records([with_p, without])
-    L = np.zeros((2, 3, n), F32)
-    for k in (0, 1):
-        dacrt.lamps.lamp_gather(recs, [k], O, D, t_surf, miss, pid, L[k])
+    L = gathered([with_p, without], O, D, np.zeros(n, bool))
     seen = L[1].any(axis=0)
     assert seen.sum() > n // 10
-    local = MATRIX[:3, :3].T @ (-D.astype(np.float64))
-    f = ies_direction(p, local)
+    f = profile_factor(p, MATRIX, D)
     np.testing.assert_allclose(L[0], L[1] * f, rtol=2e-4, atol=1e-6 * float(L[1].max()))
-    idx, Le, _ = with_p.intersect(O, D, t_surf)
+    idx, Le, _ = with_p.intersect(O, D, np.full(n, np.inf, F32))
     np.testing.assert_allclose(Le, L[0][:, idx], rtol=2e-3, atol=1e-5 * float(L[1].max()))
 
 
@@ -153,16 +141,10 @@ def test_rays_leaving_the_scene_see_a_suns_profile(name):
     O = shading_points(n, 6)
     D = MATRIX[:3, 2, None] + rng.normal(size=(3, n)) * 0.4      # about the direction to the sun
     D = (D / np.linalg.norm(D, axis=0)).astype(F32)
-    t_surf = np.full(n, np.inf, F32)
-    miss = np.ones(n, bool)
-    pid = np.arange(n, dtype=np.int64)
-    recs = lamp_records([with_p, without])
-    L = np.zeros((2, 3, n), F32)
-    for k in (0, 1):
-        dacrt.lamps.lamp_gather(recs, [k], O, D, t_surf, miss, pid, L[k])
+    L = gathered([with_p, without], O, D, np.ones(n, bool))
     seen = L[1].any(axis=0)
     assert n // 10 < seen.sum() < n
-    f = ies_direction(p, MATRIX[:3, :3].T @ (-D.astype(np.float64)))
+    f = profile_factor(p, MATRIX, D)
     np.testing.assert_allclose(L[0], L[1] * f, rtol=2e-4, atol=1e-6 * float(L[1].max()))
     assert (f[seen] < 0.5 * f[seen].max()).any()
     idx, Le, _ = with_p.eval_miss(D)
