@@ -10,7 +10,7 @@ exact for constants, for Closest interpolation and for transforms that are affin
 linearly interpolated image is applied to the texels before filtering, where Cycles filters
 first (the two differ only within a texel). The formulas are Cycles' (kernel/svm/color_util.h,
 hsv.h, gamma.h, invert.h, ramp.h, sepcomb_color.h, math_util.h), in float32 as Cycles' SVM computes
-when given float32 (the export's evaluation, nodeeval._compute: a value on a step's edge, a
+when given float32 (the export's evaluation, nodeeval.compute_node: a value on a step's edge, a
 Constant Color Ramp's stop or a hue's sector, lands on Cycles' side), else in float64. No
 Blender import here.
 """

@@ -5,7 +5,7 @@ Clamp (min-max, range) and Vector Rotate (axis angle, X/Y/Z axis, Euler XYZ; Inv
 The formulas are Cycles' (kernel/svm/math_util.h svm_math, map_range.h, clamp.h, and the safe_*
 helpers of util/math_float.h that give 0 where the operation is undefined), on constants or per
 texel (arrays broadcast), in float32 as Cycles' SVM computes when given float32 (the export's
-node evaluation, nodeeval._compute: a value exactly on a step's edge, a Floor, Compare, Snap or
+node evaluation, nodeeval.compute_node: a value exactly on a step's edge, a Floor, Compare, Snap or
 Stepped Map Range, lands on Cycles' side), else in float64. No Blender import: the export's
 node evaluation (nodeeval.py) calls these with the node's operation and input values.
 """
@@ -24,7 +24,7 @@ def _safe_divide(a, b):
 
 def _real(*xs):
     """The arrays, at least 1-d (numpy 1.x computes a 0-d float32 with a Python float in
-    float64), in float32 if they all are (the export's evaluation, nodeeval._compute) else in
+    float64), in float32 if they all are (the export's evaluation, nodeeval.compute_node) else in
     float64; the shape the result takes; the dtype."""
     xs = [np.asarray(x) for x in xs]
     dtype = np.float32 if all(x.dtype == np.float32 for x in xs) else np.float64

@@ -159,7 +159,7 @@ class Field:
         """This value as it arrives past the sockets `crossed` (nodegraph.source)."""
         if not any(_SOCKET_KINDS.get(kind) for kind in crossed):     # (nothing converts it)
             return Field(self.value if self._texels is None else self._texels, self.tex, self.vector)
-        value, vector = _cross(self.value, self.vector, crossed)
+        value, vector = converted_across(self.value, self.vector, crossed)
         return Field(value, self.tex, vector)
 
     def as_kind(self, color):
@@ -282,7 +282,7 @@ class Evaluator:
             sock = nodegraph.input_by_id(node, ident)
             x[role] = self.input(sock, reads_as_color(node, role), depth + 1)
         tex = self._join(x.values())
-        return Field(_compute(node, out, {role: f.value for role, f in x.items()}), tex, gives_vector(node, out))
+        return Field(compute_node(node, out, {role: f.value for role, f in x.items()}), tex, gives_vector(node, out))
 
     def _view_average(self, node, out, depth):
         """A Fresnel or Layer Weight output as its average over view directions (its Normal
@@ -327,7 +327,7 @@ class Evaluator:
         return tex
 
 
-def _compute(node, out, v):
+def compute_node(node, out, v):
     """The value of node's output `out` from its inputs' values v (by role), in float32 as
     Cycles' SVM computes (inputs rounded to float32 first, as a socket stores them): a value
     on a step's edge (Math Floor, Compare, a Stepped Map Range) lands on Cycles' side."""
@@ -476,7 +476,7 @@ def _blender_folds(node):
 
 
 class Frozen:
-    """What _compute reads of a node (or an output socket), copied: computing with it reads no
+    """What compute_node reads of a node (or an output socket), copied: computing with it reads no
     Blender data, so it may run after the export (during the render's lookups)."""
     _ATTRS = ('type', 'name', 'identifier', 'clamp_factor', 'data_type', 'blend_type', 'clamp_result', 'use_clamp',
               'mode', 'operation', 'clamp_type', 'interpolation_type', 'clamp', 'rotation_type', 'invert')
@@ -562,7 +562,7 @@ def _compile_node(node, out, image_pointer, depth):
                                        image_pointer, depth + 1)
              for role, ident in roles.items()}
     frozen, frozen_out = Frozen(node), Frozen(out)
-    return (lambda px: _compute(frozen, frozen_out, {role: g(px) for role, g in parts.items()})), \
+    return (lambda px: compute_node(frozen, frozen_out, {role: g(px) for role, g in parts.items()})), \
         gives_vector(node, out)
 
 
@@ -680,14 +680,14 @@ def own_value_note(carrier, value):
 def linked_value(value, vector, crossed, color):
     """A value (..., 3) or (..., 1) (vector: a vector's) past the sockets `crossed`, as a
     colour or a float input reads it."""
-    return _as_kind(*_cross(value, vector, crossed), color)
+    return _as_kind(*converted_across(value, vector, crossed), color)
 
 
 # socket type -> what a constant becomes there (Blender's implicit type conversions)
 _SOCKET_KINDS = {'VALUE': 'float', 'INT': 'int', 'BOOLEAN': 'bool', 'RGBA': 'color', 'VECTOR': 'vector'}
 
 
-def _cross(value, vector, crossed):
+def converted_across(value, vector, crossed):
     """(value, vector) of a constant past sockets of the types `crossed` (nearest the reader
     first, so taken from the end; nodegraph.conversions gives none for any other value), each
     converting it as Blender does while it inlines the tree (bke type_conversions: a vector to

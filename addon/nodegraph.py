@@ -591,7 +591,7 @@ def _crossed_value(value, vector, crossed):
     from . import nodeeval          # (nodeeval imports this module)
     import numpy as np
     arr = np.asarray(value if isinstance(value, tuple) else (value,), np.float64)
-    arr, _ = nodeeval._cross(arr, vector, crossed)
+    arr, _ = nodeeval.converted_across(arr, vector, crossed)
     out = tuple(float(x) for x in arr.reshape(-1))
     return out[0] if len(out) == 1 else out[:3]
 

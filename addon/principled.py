@@ -58,7 +58,7 @@ class BaseMap:
     + add_c, per channel: the metal of weight m (A: specular.metal_albedo_mu at this roughness
     and tint) mixed with the dielectric specular layer over the diffuse base (dim_s, add_s; 1
     and 0 without one; D: the rough diffuse's albedo, roughdiffuse.py, the colour itself at
-    roughness 0), under the coat and sheen (dim_c, add_c; 1 and 0 without them), each (.., len(_MU)).
+    roughness 0), under the coat and sheen (dim_c, add_c; 1 and 0 without them), each (.., len(MU)).
     Exact for a constant base (exact); a texture's texels go through a table of the function
     (__call__, 129 F0 steps per channel: within 1e-4 of exact)."""
 
@@ -117,7 +117,7 @@ def _multiscatter(node):
 
 
 def _specular_mu(node, reasons):
-    """(albedo, estimate): the dielectric specular layer's albedo per view cosine (3, len(_MU))
+    """(albedo, estimate): the dielectric specular layer's albedo per view cosine (3, len(MU))
     and what Cycles takes it to be when it dims the layers below (specular.layer_estimate_mu:
     with GGX a lobe of albedo 1, below IOR 1 its table read at 1 / IOR), or None."""
     level_socket = node.inputs.get('Specular IOR Level')
@@ -182,7 +182,7 @@ def _layer_inputs(node, weight_name, names, tint_name, what, unused, reasons, mo
 
 
 def _transmission(node, reasons):
-    """(weight, reflection (3, len(_MU)), transmittance (3, len(_MU))) per view cosine of the
+    """(weight, reflection (3, len(MU)), transmittance (3, len(MU))) per view cosine of the
     Principled's glass (Transmission Weight > 0; Cycles' GGX glass of the Roughness and IOR under
     the metal, over the specular layer and base, which it dims by 1 - weight), or None. As the
     Glass BSDF (export.reflectors.glass_albedos): its reflection (tinted by Specular Tint) a
@@ -218,7 +218,7 @@ def transmittance(node, base) -> np.ndarray:
 
 
 def _coat_mu(node, reasons):
-    """(dim, add) of the coat per view cosine, each (3, len(_MU)), or None. As Cycles: Coat
+    """(dim, add) of the coat per view cosine, each (3, len(MU)), or None. As Cycles: Coat
     Weight w clipped at 0 only (the coat's albedo x w, what lies below dimmed by 1 - w x its
     estimate, clipped to 0..1, and tinted by 1 + w (tint - 1)), Coat IOR fmaxf(IOR, 1) (NaN and
     IORs below 1 read 1: no reflection; read raw, IOR 0.8 had made a mirror-bright coat)."""
@@ -238,7 +238,7 @@ def _coat_mu(node, reasons):
 
 
 def _sheen_mu(node, reasons):
-    """(dim (len(_MU),), add (3, len(_MU))) of the sheen layer per view cosine, or None: Cycles'
+    """(dim (len(MU),), add (3, len(MU))) of the sheen layer per view cosine, or None: Cycles'
     microfiber sheen of weight x tint, dimming the layers below by 1 - max over channels of its
     albedo (closure_layering_weight)."""
     found = _layer_inputs(node, 'Sheen Weight', ('Sheen Roughness',), 'Sheen Tint', "sheen",
@@ -254,7 +254,7 @@ def _sheen_mu(node, reasons):
 
 
 def _top_mu(node, reasons):
-    """(dim, add) per view cosine, each (3, len(_MU)), of the layers over the specular layer and
+    """(dim, add) per view cosine, each (3, len(MU)), of the layers over the specular layer and
     the metal: the coat under the sheen; None without either."""
     coat, top = _coat_mu(node, reasons), _sheen_mu(node, reasons)
     if top is None:

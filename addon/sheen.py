@@ -1,5 +1,5 @@
 """Cycles' sheen (the Sheen BSDF node and the Principled BSDF's sheen layer) as a diffuse
-renderer keeps it: its albedo per view cosine (specular._MU) and averaged over view directions.
+renderer keeps it: its albedo per view cosine (specular.MU) and averaged over view directions.
 
 A sheen lobe reflects little: a few percent of its colour at normal view, more towards grazing.
 The Velvet of bmw27's floor (roughness 0.4, mixed with a Glossy) reflects 0.132 of its colour
@@ -27,15 +27,15 @@ from functools import lru_cache
 
 import numpy as np
 
-from .specular import _MU, VIEW
+from .specular import MU, VIEW
 
 DISTRIBUTIONS = ('MICROFIBER', 'ASHIKHMIN')
 
 
 def microfiber_albedo_mu(roughness: float) -> np.ndarray:
-    """Directional albedo of the microfiber sheen per view cosine _MU (len(_MU),)."""
+    """Directional albedo of the microfiber sheen per view cosine MU (len(MU),)."""
     y = min(max(float(roughness), 1e-3), 1.0) if np.isfinite(roughness) else 0.5
-    x = _MU
+    x = MU
     s = y * (0.0206607 + 1.58491 * y) / (0.0379424 + y * (1.32227 + y))
     m = y * (-0.193854 + y * (-1.14885 + y * (1.7932 - 0.95943 * y * y))) / (0.046391 + y)
     o = y * (0.000654023 + (-0.0207818 + 0.119681 * y) * y) / (1.26264 + y * (-1.92021 + y))
@@ -52,7 +52,7 @@ _LIGHT_PHI = (np.arange(128) + 0.5) / 128 * np.pi
 @lru_cache(maxsize=64)
 def _velvet_albedo_mu(sigma: float) -> np.ndarray:
     inv_s2 = 1.0 / (sigma * sigma)
-    vo = _MU[:, None, None]                     # view (sin_o, 0, mu_o)
+    vo = MU[:, None, None]                     # view (sin_o, 0, mu_o)
     li = _LIGHT_MU[None, :, None]               # light (sin_i cos phi, sin_i sin phi, mu_i)
     so, si = np.sqrt(1.0 - vo * vo), np.sqrt(1.0 - li * li)
     cp = np.cos(_LIGHT_PHI)[None, None, :]
@@ -72,7 +72,7 @@ def _velvet_albedo_mu(sigma: float) -> np.ndarray:
 
 
 def velvet_albedo_mu(roughness: float) -> np.ndarray:
-    """Directional albedo of the Ashikhmin velvet per view cosine _MU (len(_MU),)."""
+    """Directional albedo of the Ashikhmin velvet per view cosine MU (len(MU),)."""
     r = min(max(float(roughness), 0.0), 1.0) if np.isfinite(roughness) else 0.5
     return _velvet_albedo_mu(max(r, 0.01))
 

@@ -32,15 +32,15 @@ def _gauss(n):
 
 # view cosines (weight 2 mu), the half vector's GGX-distributed polar variable xi and azimuth:
 # ~1.3 ms per (roughness, IOR), within 0.2% of a grid 4x as fine each way (Fresnel albedo)
-_MU, _W_MU = _gauss(32)
+MU, _W_MU = _gauss(32)
 _XI, _W_XI = _gauss(48)
 _PHI = (np.arange(32) + 0.5) / 32 * 2.0 * np.pi
 # the glass's refraction at roughness 1 needs a finer grid (its albedo within 0.05% of one 2x
 # as fine each way; 0.25% dark on this one)
 _XI_G, _W_XI_G = _gauss(192)
 _PHI_G = (np.arange(128) + 0.5) / 128 * 2.0 * np.pi
-# a per-view-cosine quantity (..., len(_MU)) @ VIEW: its average over view directions weighted by cos
-VIEW = 2.0 * _MU * _W_MU
+# a per-view-cosine quantity (..., len(MU)) @ VIEW: its average over view directions weighted by cos
+VIEW = 2.0 * MU * _W_MU
 
 
 def f0_from_ior(eta):
@@ -48,11 +48,11 @@ def f0_from_ior(eta):
 
 
 def _half_vectors(alpha: float, beckmann: bool = False, xi=None, phi=None):
-    """The microfacet half vectors of the (_MU, xi, phi) quadrature (default _XI, _PHI): (mu_o,
-    cos theta_h, wo.h, the reflected direction's z), each broadcasting to (len(_MU), len(xi),
+    """The microfacet half vectors of the (MU, xi, phi) quadrature (default _XI, _PHI): (mu_o,
+    cos theta_h, wo.h, the reflected direction's z), each broadcasting to (len(MU), len(xi),
     len(phi)); h is taken with density D(h) cos(theta_h) (GGX: tan^2 theta_h = alpha^2 xi /
     (1 - xi); Beckmann: -alpha^2 log(1 - xi)), wo = (sin, 0, mu_o)."""
-    mo = _MU[:, None, None]
+    mo = MU[:, None, None]
     so = np.sqrt(1.0 - mo * mo)
     xi = (_XI if xi is None else xi)[None, :, None]
     t2 = -alpha * alpha * np.log1p(-xi) if beckmann else alpha * alpha * xi / (1.0 - xi)
@@ -64,8 +64,8 @@ def _half_vectors(alpha: float, beckmann: bool = False, xi=None, phi=None):
 
 @lru_cache(maxsize=256)
 def _ggx_dielectric(alpha: float, eta: float) -> tuple:
-    """Per view cosine _MU, the GGX reflection albedo without Fresnel (F = 1) and with the
-    dielectric Fresnel of eta: (E, EF), each (len(_MU),). The half vector h is taken with
+    """Per view cosine MU, the GGX reflection albedo without Fresnel (F = 1) and with the
+    dielectric Fresnel of eta: (E, EF), each (len(MU),). The half vector h is taken with
     density D(h) cos(theta_h) (tan^2 theta_h = alpha^2 xi / (1 - xi)); per h the reflected
     direction contributes F G2 (wo.h) / (mu_o cos theta_h)."""
     mo, ch, oh, wiz = _half_vectors(alpha)
@@ -128,13 +128,13 @@ def _fss(eta, f0, ft):
 
 
 def layer_albedo_mu(roughness: float, ior: float, level: float, tint, multiscatter: bool = True) -> np.ndarray:
-    """Per channel and view cosine (3, len(_MU)), the specular layer's albedo (see the top);
+    """Per channel and view cosine (3, len(MU)), the specular layer's albedo (see the top);
     zeros without a layer (Specular IOR Level 0, IOR 1, or a black tint). With multiscatter
     (the Principled's Multiscatter GGX; a coat always), Cycles' energy compensation, with the
     generalised Schlick's average Fresnel (bsdf_microfacet_setup_fresnel_generalized_schlick)."""
     setup = _layer_setup(roughness, ior, level, tint)
     if setup is None:
-        return np.zeros((3, len(_MU)))
+        return np.zeros((3, len(MU)))
     r, f0, eta, ft = setup
     e1, ef = _ggx_dielectric(r * r, eta)
     # s = (F - f0) / (1 - f0) integrates to (EF - f0 E1) / (1 - f0), per view cosine
@@ -145,7 +145,7 @@ def layer_albedo_mu(roughness: float, ior: float, level: float, tint, multiscatt
 
 @lru_cache(maxsize=256)
 def _schlick_s(alpha: float, eta: float) -> np.ndarray:
-    """Per view cosine _MU, Cycles' ggx_gen_schlick_ior_s table (cycles_precompute.cpp) for
+    """Per view cosine MU, Cycles' ggx_gen_schlick_ior_s table (cycles_precompute.cpp) for
     eta > 1: where the Fresnel of eta lies between F0 and 1, s = (F - F0) / (1 - F0), averaged
     over GGX's visible normals (pdf G1(wo) D (wo.h) / mu_o; a reflection below the horizon
     counts 0). Integrated as _ggx_dielectric, normalised by the quadrature's visible-normal
@@ -158,7 +158,7 @@ def _schlick_s(alpha: float, eta: float) -> np.ndarray:
 
 
 def layer_estimate_mu(roughness: float, ior: float, level: float, tint, multiscatter: bool = True) -> np.ndarray:
-    """Per channel and view cosine (3, len(_MU)), what Cycles takes the specular layer's
+    """Per channel and view cosine (3, len(MU)), what Cycles takes the specular layer's
     albedo to be when it dims the layers below (bsdf_microfacet_estimate_albedo): f0 t +
     (1 - f0 t) s with s from its table (_schlick_s) read at z = sqrt(|eta - 1| / (eta + 1)),
     i.e. at eta or 1 / eta, a table that assumes a lobe of albedo 1; with multiscatter times
@@ -168,7 +168,7 @@ def layer_estimate_mu(roughness: float, ior: float, level: float, tint, multisca
     reflection (0.545 at IOR 0.7) dims far more than the table's 0.08."""
     setup = _layer_setup(roughness, ior, level, tint)
     if setup is None:
-        return np.zeros((3, len(_MU)))
+        return np.zeros((3, len(MU)))
     r, f0, eta, ft = setup
     e1, _ = _ggx_dielectric(r * r, eta)
     est = ft + (1.0 - ft) * _schlick_s(r * r, max(eta, 1.0 / eta))[None, :]
@@ -177,9 +177,9 @@ def layer_estimate_mu(roughness: float, ior: float, level: float, tint, multisca
 
 @lru_cache(maxsize=256)
 def _glass_lobes(alpha: float, eta: float, beckmann: bool = False) -> tuple:
-    """Per view cosine _MU, a rough dielectric's (Cycles' glass, GGX or Beckmann) single
+    """Per view cosine MU, a rough dielectric's (Cycles' glass, GGX or Beckmann) single
     scattering albedos in parts linear in the Fresnel's s = (F(eta) - F0) / (1 - F0) (1 under
-    total internal reflection): (R1, RS, T1, TS), each (len(_MU),), the reflection with weight
+    total internal reflection): (R1, RS, T1, TS), each (len(MU),), the reflection with weight
     1 and s, the refraction with weight 1 and s. Per half vector h (density D(h) cos theta_h,
     as _ggx_moments) both lobes contribute G2 (wo.h) / (mu_o cos theta_h) (Cycles' BTDF carries
     eta^2, so its refraction integrates as its reflection), the refraction where eta lets light
@@ -208,7 +208,7 @@ def _glass_lobes(alpha: float, eta: float, beckmann: bool = False) -> tuple:
 
 def glass_albedo_mu(roughness: float, ior: float, tint=(1.0, 1.0, 1.0), multiscatter: bool = True,
                     beckmann: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """(reflected, transmitted), each per channel and view cosine (3, len(_MU)), of Cycles'
+    """(reflected, transmitted), each per channel and view cosine (3, len(MU)), of Cycles'
     rough glass seen from outside (eta = IOR, as Cycles fmaxf(IOR, 1e-5)): its generalised
     Schlick Fresnel F = f0 t + (1 - f0 t) s (f0 = F0(IOR) x the tint t, the Principled's
     Specular Tint; white for the Glass BSDF) reflects F and lets 1 - F through, per channel.
@@ -236,12 +236,12 @@ def layer_albedo(roughness: float, ior: float, level: float, tint, multiscatter:
 
 
 def coat_tint_mu(tint, coat_ior: float) -> np.ndarray:
-    """Per channel and view cosine (3, len(_MU)), Cycles' Coat Tint absorption of the layers
+    """Per channel and view cosine (3, len(MU)), Cycles' Coat Tint absorption of the layers
     below the coat, tint^(1 / cos_t) with cos_t the refracted view cosine in the coat (tint is
     the transmittance at normal incidence)."""
     tint = np.clip(np.asarray(tint, np.float64)[:3], 0.0, None)
     eta = max(float(coat_ior), 1.0)
-    cos_t = np.sqrt(1.0 - (1.0 - _MU * _MU) / (eta * eta))
+    cos_t = np.sqrt(1.0 - (1.0 - MU * MU) / (eta * eta))
     return tint[:, None] ** (1.0 / cos_t)[None, :]
 
 
@@ -252,8 +252,8 @@ def coat_tint_average(tint, coat_ior: float) -> np.ndarray:
 
 @lru_cache(maxsize=256)
 def _ggx_moments(alpha: float, beckmann: bool = False) -> tuple:
-    """Per view cosine _MU, the microfacet reflection albedo without Fresnel E and its moments
-    with the Schlick weights s^5 and cos s^6 (s = 1 - wo.h): (E, S5, S6), each (len(_MU),).
+    """Per view cosine MU, the microfacet reflection albedo without Fresnel E and its moments
+    with the Schlick weights s^5 and cos s^6 (s = 1 - wo.h): (E, S5, S6), each (len(MU),).
     GGX, or with beckmann the Beckmann distribution and Cycles' rational approximation of its
     Smith Lambda (bsdf_microfacet.h)."""
     mo, ch, oh, wiz = _half_vectors(alpha, beckmann)
@@ -290,7 +290,7 @@ def metal_albedo(roughness: float, f0, tint, multiscatter: bool = True, beckmann
 
 
 def metal_albedo_mu(roughness: float, f0, tint, multiscatter: bool = True, beckmann: bool = False) -> np.ndarray:
-    """Per channel and view cosine (3, len(_MU)), the albedo of Cycles' Principled metal (and
+    """Per channel and view cosine (3, len(MU)), the albedo of Cycles' Principled metal (and
     of the Metallic BSDF in F82 mode): GGX reflection with the F82-tint
     Fresnel (F0 = base colour, tint = Specular Tint / Edge Tint; bsdf_util.h fresnel_f82tint_B
     / fresnel_f82) and, with multiscatter (Multiscatter GGX), the energy compensation of

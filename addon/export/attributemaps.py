@@ -57,7 +57,7 @@ class AttributeMaps:
     # that bends below 0 (an Absolute, a Maximum with 0) is not taken for a scale and offset
     _ATTRIBUTE_SIGNED = np.concatenate([_ATTRIBUTE_PROBE, -_attribute_probe(np.random.default_rng(12))[:, 48:]],
                                        axis=1)
-    _ATTRIBUTE_ALPHAS = TexelBaking._ALPHA_PROBE[None]
+    _ATTRIBUTE_ALPHAS = TexelBaking.ALPHA_PROBE[None]
 
     def _attribute(self, node, out, reasons):
         """The values a Color Attribute, (geometry) Attribute or Object Info node reads in this

@@ -430,12 +430,12 @@ def _node(node, out, chain, depth):
         consts = {role: nodeeval.constant(nodegraph.input_by_id(node, ident), nodeeval.reads_as_color(node, role))
                   for role, ident in roles.items()}
         if all(exact for _, exact in consts.values()):
-            value = np.asarray(nodeeval._compute(frozen, frozen_out, {r: v for r, (v, _) in consts.items()}),
+            value = np.asarray(nodeeval.compute_node(frozen, frozen_out, {r: v for r, (v, _) in consts.items()}),
                                np.float64)[None]
             return (lambda c: value), False
     parts = {role: _socket(nodegraph.input_by_id(node, ident), nodeeval.reads_as_color(node, role), chain, depth + 1)
              for role, ident in roles.items()}
-    return (lambda c: nodeeval._compute(frozen, frozen_out, {role: g(c) for role, g in parts.items()})), \
+    return (lambda c: nodeeval.compute_node(frozen, frozen_out, {role: g(c) for role, g in parts.items()})), \
         nodeeval.gives_vector(node, out)
 
 

@@ -63,13 +63,13 @@ class TexelBaking:
     _PROBE[:, 3] = 1.0
     _PROBE[:5, :3] = [[0, 0, 0], [1, 1, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
     _PROBE[48:, :3] = 1.0 + 9.0 * _PROBE[48:, :3]
-    _ALPHA_PROBE = np.concatenate([np.full((16, 3), 0.5), np.linspace(0, 1, 16)[:, None]], axis=1).astype(np.float32)
-    # every _PROBE colour at each _ALPHA_PROBE alpha, (64 x 16, 4) colour-major: how a chain
+    ALPHA_PROBE = np.concatenate([np.full((16, 3), 0.5), np.linspace(0, 1, 16)[:, None]], axis=1).astype(np.float32)
+    # every _PROBE colour at each ALPHA_PROBE alpha, (64 x 16, 4) colour-major: how a chain
     # reads colour and alpha together. Apart, a Mix of grey 0.5 and the colour by the alpha
     # read as the colour alone (at colour 0.5 the alpha changes nothing; at alpha 1 it is the
     # colour): the alpha had been dropped, a decal over the Mix's default grey 2.7x dark
-    _JOINT_PROBE = np.concatenate([np.repeat(_PROBE[:, :3], len(_ALPHA_PROBE), axis=0),
-                                   np.tile(_ALPHA_PROBE[:, 3:], (len(_PROBE), 1))], axis=1)
+    _JOINT_PROBE = np.concatenate([np.repeat(_PROBE[:, :3], len(ALPHA_PROBE), axis=0),
+                                   np.tile(ALPHA_PROBE[:, 3:], (len(_PROBE), 1))], axis=1)
 
     def _float_per_texel(self, socket):
         """(image Texture, values (h, w) float32, notes) of a float socket that nodes compute
@@ -115,7 +115,7 @@ class TexelBaking:
         """What feeds `socket` on _JOINT_PROBE, (colours, alphas, 3): axis 1 varies the alpha
         alone, axis 0 the colour alone; None as _probe."""
         y = self._probe(socket, src, self._JOINT_PROBE, color)
-        return None if y is None else y.reshape(len(self._PROBE), len(self._ALPHA_PROBE), 3)
+        return None if y is None else y.reshape(len(self._PROBE), len(self.ALPHA_PROBE), 3)
 
     def _baked_exactly(self, socket, src, stored, color=True):
         """Whether the chain feeding `socket` baked into image src's texels and then blended
@@ -160,7 +160,7 @@ class TexelBaking:
                 return 'alpha'                              # (nothing of the image matters)
             # alpha only: baked per texel it must be affine, or the blend is not Cycles'
             # (alpha -> Power 4 had been baked silently, +76%)
-            x = np.repeat(self._ALPHA_PROBE[:, 3:].astype(np.float64), 3, axis=1)
+            x = np.repeat(self.ALPHA_PROBE[:, 3:].astype(np.float64), 3, axis=1)
             line = channel_line(x, y[0], 1e-6)
             if line is None or (line[1] < -1e-9).any() or (line[1] + line[0] < -1e-9).any():
                 return None
