@@ -74,6 +74,7 @@ objectinfo), geometry
 
 from .camera import camera_view_camera, export_camera, region_border, viewport_camera
 from .errors import ExportCancelled, ExportError
+from .images import WHOLE
 from .scene import Exporter, layer_subject, local_view_filter
 from .world import effective_world, export_world
 
@@ -98,6 +99,10 @@ def export_scene(depsgraph, check_break=None, camera=None, view_camera=None, ren
         return exporter.run()
     finally:
         exporter.release_meshes()       # (edit-mode meshes' to_mesh results: read by now)
+        # the SceneData keeps the material builder (its per-point image lookups): it must not
+        # keep the export's cancel check, the engine's method (the engine had outlived its
+        # render, deleted after Blender freed it), and what it reads later is read whole
+        exporter.materials.image_reading = WHOLE
         # the exporter's tables refer back to it (a mesh's lazy Generated-coordinates source is
         # one of its methods): dropped here, the frame's export (image texels included) goes
         # with the SceneData it made, not at some later cyclic collection (a 4K texture's
