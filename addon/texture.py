@@ -408,9 +408,68 @@ def box_texels(texels, alpha, interpolation, extension):
     return None if arr is None else (arr, (3, 4) if alpha else (0, 3), F32(1.0), False, None)
 
 
+def box_weights(n, blend):
+    """(n, 3) float32 weights of the three axis projections at object-space normals n (n, 3),
+    as Cycles' svm_node_tex_image_box: one axis alone near it, two or three blended in between
+    by the node's Blend (0: the largest axis alone)."""
+    f32 = np.float32
+    a = np.abs(np.asarray(n, f32))
+    with np.errstate(invalid='ignore', divide='ignore'):
+        a = a / (a[:, 0] + a[:, 1] + a[:, 2])[:, None]
+    x, y, z = a[:, 0], a[:, 1], a[:, 2]
+    limit = f32(0.5) * (f32(1.0) + blend)
+    w = np.zeros(a.shape, f32)
+    todo = np.ones(len(a), bool)
+
+    def take(sel, wx, wy, wz):
+        nonlocal todo
+        sel = sel & todo
+        for k, value in enumerate((wx, wy, wz)):
+            w[sel, k] = value[sel] if np.ndim(value) else value
+        todo = todo & ~sel
+    with np.errstate(invalid='ignore', divide='ignore'):
+        take((x > limit * (x + y)) & (x > limit * (x + z)), 1.0, 0.0, 0.0)
+        take((y > limit * (x + y)) & (y > limit * (y + z)), 0.0, 1.0, 0.0)
+        take((z > limit * (x + z)) & (z > limit * (y + z)), 0.0, 0.0, 1.0)
+        if blend > 0:
+            lo = f32(0.5) * (f32(1.0) - blend)
+            one = f32(1.0) - limit
+            wx = np.clip((x / (x + y) - lo) / blend, 0.0, 1.0).astype(f32)
+            take(z < one * (y + x), wx, f32(1.0) - wx, 0.0)
+            wy = np.clip((y / (y + z) - lo) / blend, 0.0, 1.0).astype(f32)
+            take(x < one * (y + z), 0.0, wy, f32(1.0) - wy)
+            wx = np.clip((x / (x + z) - lo) / blend, 0.0, 1.0).astype(f32)
+            take(y < one * (x + z), wx, 0.0, f32(1.0) - wx)
+            d = f32(2.0) * limit - f32(1.0)
+            take(todo, *(((f32(2.0) - limit) * q + (limit - f32(1.0))) / d for q in (x, y, z)))
+        else:
+            take(todo, 1.0, 0.0, 0.0)      # (Cycles' "desperate mode": one side)
+    return w
+
+
+def box_projected(co, normal, blend, read, width):
+    """An image's colour or alpha (n, c) under Box projection, read(u, v) -> (n, c) its lookup:
+    the lookups on the three axis planes (each flipped by the normal's sign so no side reads
+    mirrored, as Cycles maps them), weighed by box_weights; a lookup whose weight is 0 is
+    skipped, as in Cycles (box_lookup: the same natively)."""
+    n = np.asarray(normal, np.float32)
+    co = np.broadcast_to(co, (len(n), 3))
+    w = box_weights(n, blend)
+    one = np.float32(1.0)
+    x, y, z = co[:, 0], co[:, 1], co[:, 2]
+    planes = ((np.where(n[:, 0] < 0, one - y, y), z), (np.where(n[:, 1] > 0, one - x, x), z),
+              (np.where(n[:, 2] > 0, one - y, y), x))
+    out = np.zeros((len(co), width), np.float32)
+    for k, (u, v) in enumerate(planes):
+        sel = np.flatnonzero(w[:, k] > 0)
+        if len(sel):
+            out[sel] += w[sel, k, None] * np.asarray(read(u[sel], v[sel]), np.float32)
+    return out
+
+
 def box_lookup(spec, co, normal, blend, interpolation, extension):
     """An image's colour (n, 3) or alpha (n, 1) under Box projection at points co (n, 3) with
-    object-space normals normal, read as box_texels says (spec): export/procedurals._box_lookup's
+    object-space normals normal, read as box_texels says (spec): box_projected's
     values (an sRGB image's within an ulp: libm's powf, not numpy's), the planes and weights
     natively."""
     arr, channels, scale, srgb, finish = spec

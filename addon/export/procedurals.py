@@ -22,7 +22,7 @@ import numpy as np
 from .. import fresnel, nodeeval, nodegraph
 from .. import procedural as pr
 from ..mapping import mapping_affine, node_texture_mapping, reads_off_uv
-from ..texture import alpha_lookup, box_lookup, box_texels, lookup_texels, mapped_uv, texture_lookup
+from ..texture import alpha_lookup, box_lookup, box_projected, box_texels, lookup_texels, mapped_uv, texture_lookup
 from .meshes import attribute_key, color_attribute_key
 from .objectinfo import INSTANCER_ATTRIBUTE, OBJECT_ATTRIBUTE, OBJECT_INFO
 
@@ -664,7 +664,7 @@ def _image(node, out, chain, depth):
     encoding): at each point's UV through the Mapping the export reads into the texture's
     transform, or, where the node reads other coordinates (mapping.reads_off_uv), at what its
     Vector chain computes there (_texture_vector), projected Flat, Sphere or Tube
-    (_projected_uv), or Box (_box_lookup: three lookups weighed by the object-space normal)."""
+    (_projected_uv), or Box (texture.box_projected: three lookups weighed by the object-space normal)."""
     off_uv = reads_off_uv(node)
     if off_uv:
         vector, reads_uv = _texture_vector(node, chain, depth, 'uv')
@@ -695,8 +695,8 @@ def _image(node, out, chain, depth):
         if spec is not None:                # natively: the same values, ~10x faster
             return (lambda c: box_lookup(spec, np.asarray(vector(c), np.float32), c['object_normal'], blend,
                                          interp, ext)), False
-        return (lambda c: _box_lookup(np.asarray(vector(c), np.float32), c['object_normal'], blend, read,
-                                      width)), False
+        return (lambda c: box_projected(np.asarray(vector(c), np.float32), c['object_normal'], blend, read,
+                                        width)), False
     if off_uv:
         projection = node.projection
 
@@ -737,64 +737,6 @@ def _projected_uv(co, projection):
             keep = ln > 0
     zero = np.float32(0.0)
     return np.where(keep, u, zero).astype(np.float32), np.where(keep, v, zero).astype(np.float32)
-
-
-def _box_weights(n, blend):
-    """(n, 3) float32 weights of the three axis projections at object-space normals n (n, 3),
-    as Cycles' svm_node_tex_image_box: one axis alone near it, two or three blended in between
-    by the node's Blend (0: the largest axis alone)."""
-    f32 = np.float32
-    a = np.abs(np.asarray(n, f32))
-    with np.errstate(invalid='ignore', divide='ignore'):
-        a = a / (a[:, 0] + a[:, 1] + a[:, 2])[:, None]
-    x, y, z = a[:, 0], a[:, 1], a[:, 2]
-    limit = f32(0.5) * (f32(1.0) + blend)
-    w = np.zeros(a.shape, f32)
-    todo = np.ones(len(a), bool)
-
-    def take(sel, wx, wy, wz):
-        nonlocal todo
-        sel = sel & todo
-        for k, value in enumerate((wx, wy, wz)):
-            w[sel, k] = value[sel] if np.ndim(value) else value
-        todo = todo & ~sel
-    with np.errstate(invalid='ignore', divide='ignore'):
-        take((x > limit * (x + y)) & (x > limit * (x + z)), 1.0, 0.0, 0.0)
-        take((y > limit * (x + y)) & (y > limit * (y + z)), 0.0, 1.0, 0.0)
-        take((z > limit * (x + z)) & (z > limit * (y + z)), 0.0, 0.0, 1.0)
-        if blend > 0:
-            lo = f32(0.5) * (f32(1.0) - blend)
-            one = f32(1.0) - limit
-            wx = np.clip((x / (x + y) - lo) / blend, 0.0, 1.0).astype(f32)
-            take(z < one * (y + x), wx, f32(1.0) - wx, 0.0)
-            wy = np.clip((y / (y + z) - lo) / blend, 0.0, 1.0).astype(f32)
-            take(x < one * (y + z), 0.0, wy, f32(1.0) - wy)
-            wx = np.clip((x / (x + z) - lo) / blend, 0.0, 1.0).astype(f32)
-            take(y < one * (x + z), wx, 0.0, f32(1.0) - wx)
-            d = f32(2.0) * limit - f32(1.0)
-            take(todo, *(((f32(2.0) - limit) * q + (limit - f32(1.0))) / d for q in (x, y, z)))
-        else:
-            take(todo, 1.0, 0.0, 0.0)      # (Cycles' "desperate mode": one side)
-    return w
-
-
-def _box_lookup(co, normal, blend, read, width):
-    """An image's colour or alpha (n, c) under Box projection: the lookups on the three axis
-    planes (each flipped by the normal's sign so no side reads mirrored, as Cycles maps them),
-    weighed by _box_weights; a lookup whose weight is 0 is skipped, as in Cycles."""
-    n = np.asarray(normal, np.float32)
-    co = np.broadcast_to(co, (len(n), 3))
-    w = _box_weights(n, blend)
-    one = np.float32(1.0)
-    x, y, z = co[:, 0], co[:, 1], co[:, 2]
-    planes = ((np.where(n[:, 0] < 0, one - y, y), z), (np.where(n[:, 1] > 0, one - x, x), z),
-              (np.where(n[:, 2] > 0, one - y, y), x))
-    out = np.zeros((len(co), width), np.float32)
-    for k, (u, v) in enumerate(planes):
-        sel = np.flatnonzero(w[:, k] > 0)
-        if len(sel):
-            out[sel] += w[sel, k, None] * np.asarray(read(u[sel], v[sel]), np.float32)
-    return out
 
 
 def _voronoi(node, out, vec, chain, depth):

@@ -286,3 +286,38 @@ def test_the_private_name_reader_sees_each_kind_of_read():
     tree = ast.parse("from . import nodeeval\nfrom .specular import _MU, VIEW\nfrom .lights import LightSet\n"
                      "x = nodeeval._cross(_MU) + LightSet._narrowness(VIEW) + nodeeval.__name__\n")
     assert _private_uses("sheen", tree) == {"nodeeval._cross", "specular._MU", "lights.LightSet._narrowness"}
+
+
+TESTS = ADDON.parent / "tests"
+
+
+def _blender_imports(path):
+    """What a test module imports of Blender or the export layer (bpy, addon.export, tests.addon,
+    tests.parity: those set Blender up)."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+            [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else []
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module == "addon":
+            names += [f"addon.{a.name}" for a in node.names]
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module == "tests":
+            names += [f"tests.{a.name}" for a in node.names]
+        found.update(n for n in names if n == "bpy" or n.startswith(("bpy.", "addon.export", "tests.addon",
+                                                                      "tests.parity")))
+    return found
+
+
+def test_native_and_integrator_tests_run_without_blender():
+    """Tests by layer: the native module's and the integrator's tests need no Blender (they run
+    where bpy is not installed); what reads Blender is tested under tests/addon and tests/parity."""
+    found = {str(p.relative_to(TESTS)): _blender_imports(p)
+             for layer in ("native", "integrator") for p in sorted((TESTS / layer).rglob("*.py"))}
+    assert len(found) > 40
+    assert {p: f for p, f in found.items() if f} == {}
+
+
+def test_the_test_reader_sees_blender_imports(tmp_path):
+    path = tmp_path / "t.py"
+    path.write_text("import bpy\nfrom addon.export import images\nfrom addon import export, texture\n"
+                    "from tests.parity import rendering\nfrom tests import iesfiles\nimport numpy\n")
+    assert _blender_imports(path) == {"bpy", "addon.export", "tests.parity"}

@@ -4,7 +4,7 @@ float64 numpy reference written from Cycles' formulas (texel centres at (i + 0.5
 bilinear and uniform cubic B-spline taps, Repeat / Extend / Clip / Mirror, the Box weights of
 svm_node_tex_image_box) for every interpolation, extension, Blend 0 / 0.5 / 1, float and byte
 texels, points on the cube's edges and corners and at the poles; and it gives the very bits of
-the add-on's numpy lookups it replaces (texture._blend_texels, procedurals._box_lookup), NaN,
+the add-on's numpy lookups it replaces (texture._blend_texels, texture.box_projected), NaN,
 infinite and huge coordinates and NaN or zero normals included, but for the sRGB decode of a
 Box plane (libm's powf where numpy's float32 power is SVML's: within 4 ulps once weighed). Byte texels are
 read in place (no float copy)."""
@@ -15,7 +15,6 @@ import pytest
 
 import dacrt
 from addon import texture
-from addon.export import procedurals
 
 F32 = np.float32
 INTERPS = ['Closest', 'Linear', 'Cubic']
@@ -207,7 +206,7 @@ def _numpy_box(tex, co, normal, blend, interp, ext, alpha=False):
             return texture.alpha_lookup(tex, u, v, interp, ext)[:, None]
         return texture.texture_lookup(tex, u, v, interp, ext).T
     with np.errstate(invalid='ignore', over='ignore'):
-        return procedurals._box_lookup(co, normal, F32(blend), read, 1 if alpha else 3)
+        return texture.box_projected(co, normal, F32(blend), read, 1 if alpha else 3)
 
 
 def _numpy_only(monkeypatch):
