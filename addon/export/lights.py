@@ -332,7 +332,9 @@ def _ies_profile(light, name, nodes, surface, lamp, messages, reasons):
             raise text
         found, scale, error = parse_ies(text), 1.0, None
     except IESError as e:
-        found, scale, error = None, INVALID_VALUE, e
+        # (kept without its traceback: its frames, up to the engine's render, would stay in a
+        # cycle with this one's locals until a later collection, the engine past its life)
+        found, scale, error = None, INVALID_VALUE, e.with_traceback(None)
     runs = []
     for s in (1.0, 0.0, 2.0):
         r, d = list(reasons), []
