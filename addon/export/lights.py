@@ -58,7 +58,7 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
         return object_value(info, location, output)
     profile, falloff = [], []
     lamp = _LampTree(light.type, object_info,
-                     _sun_generated(light, matrix) if light.type == 'SUN' else _disc_generated(light, matrix))
+                     lambda: _sun_generated(light, matrix) if light.type == 'SUN' else _disc_generated(light, matrix))
     shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, lamp, profile, falloff)
     strength *= shader
     if not np.isfinite(strength).all():
@@ -212,21 +212,31 @@ class _LampTree:
     nothing outlives it): module globals had carried this between calls, where one lamp's
     leftovers could reach the next and no two exports could run at once. kind: the light's
     type; object_info(output) -> (4,): an Object Info output's value for the light (None: the
-    node stands at its own value, as one not evaluated); generated: where its Generated
-    coordinates lie (_sun_generated, _disc_generated), and generated_notes what
+    node stands at its own value, as one not evaluated); generated(): where its Generated
+    coordinates lie (_sun_generated, _disc_generated), worked out when a texture first reads
+    them (where_generated() makes them; most lamps' trees read none), and generated_notes what
     _at_generated_zero says of them for the light's message (apart from an evaluation's notes,
     which would have a colour stand at its own value); falloffs: the Light Falloffs
     _past_falloff meets, a list where the lamp can apply one (FALLOFF_LIGHTS, one emission),
     None where they are read as Quadratic, said; ies_scale: while _ies_profile probes the tree,
     the IES Texture's value is its Strength x this (None: the node stands at the input's own
     value), and ies_met says whether the evaluation met the node."""
-    __slots__ = ('kind', 'object_info', 'generated', 'generated_notes', 'falloffs', 'ies_scale', 'ies_met')
+    __slots__ = ('kind', 'object_info', '_where_generated', '_generated', 'generated_notes', 'falloffs', 'ies_scale',
+                 'ies_met')
 
-    def __init__(self, kind, object_info=None, generated=None):
-        self.kind, self.object_info, self.generated = kind, object_info, generated
+    def __init__(self, kind, object_info=None, where_generated=None):
+        self.kind, self.object_info = kind, object_info
+        self._where_generated, self._generated = where_generated, None
         self.generated_notes = []
         self.falloffs = None
         self.ies_scale, self.ies_met = None, False
+
+    def generated(self):
+        """The lamp's Generated points (n, 3), or None, worked out once when first asked (a
+        sun's cone of directions in Python loops, ~1 ms; a point lamp's 3x3 inverse)."""
+        if self._where_generated is not None:
+            self._generated, self._where_generated = self._where_generated(), None
+        return self._generated
 
     def forget_falloffs(self):
         """Start collecting the Light Falloffs of one evaluation of the tree afresh."""
@@ -530,7 +540,7 @@ class _LightEvaluator(nodeeval.Evaluator):
         lamp = self._lamp
         if node.type in _GENERATED_TEXTURES and lamp.kind in _NO_GENERATED and \
                 not nodegraph.input_by_id(node, 'Vector').is_linked:
-            return _at_generated_zero(node, out, depth, lamp.generated, lamp.generated_notes, lamp.kind == 'SUN')
+            return _at_generated_zero(node, out, depth, lamp.generated(), lamp.generated_notes, lamp.kind == 'SUN')
         if node.type == 'TEX_IES' and lamp.ies_scale is not None:   # (_ies_profile's probe)
             lamp.ies_met = True
             strength = self.input(node.inputs['Strength'], False, depth + 1)
