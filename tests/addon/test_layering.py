@@ -139,9 +139,10 @@ CACHES = {
     ("export.motion", "_OBJECT_SETTINGS"),      # a modifier type's Object settings (its RNA)
     ("nodeeval", "_RAMP_TABLES"),               # a Color Ramp's table, keyed by its whole content
 }
-# what outlives one render by design: the C heap's policy is the process's (allocator), and the
-# engine, registration and command line keep the session's (the last render's stats, a cancel)
-PROCESS_STATE = BLENDER_FACING | {"allocator"}
+# what outlives one render by design: the C heap's and OpenBLAS's thread policies are the
+# process's (allocator, blasthreads: counted nestings under a lock), and the engine,
+# registration and command line keep the session's (the last render's stats, a cancel)
+PROCESS_STATE = BLENDER_FACING | {"allocator", "blasthreads"}
 _MUTATORS = {'append', 'extend', 'clear', 'insert', 'pop', 'popitem', 'remove', 'update', 'setdefault', 'add',
              'discard', 'sort', 'reverse'}
 
