@@ -579,9 +579,8 @@ def _at_generated_zero(node, out, depth, points=None, notes=None, sun=True):
     sun False: points are where a point or spot lamp's disc reaches (_disc_generated); the
     value stays the centre's, noted where theirs differ from it."""
     from . import procedurals
-    chain = procedurals._Chain([], None)
     try:
-        fn, vector = procedurals._node(node, out, chain, depth)
+        fn, vector, chain = procedurals.compile_node(node, out, depth)
     except (nodeeval.NotCompiled, AttributeError, KeyError, TypeError, ValueError):
         return None
     if chain.needs - {'generated'} or chain.frames or chain.reasons:

@@ -211,6 +211,16 @@ def compile_floats(sockets, what, reasons, image=None):
     return values, frozenset((chain.needs or {'generated'}) | chain.frames), Sources(chain.textures)
 
 
+def compile_node(node, out, depth=0):
+    """(fn(coords), vector, chain) of one node's output `out` compiled as in a material's chain,
+    for a reader outside a material (a lamp's texture at its Generated points:
+    export/lights._at_generated_zero): chain.needs, frames and reasons say what it reads. Raises
+    what _node raises (nodeeval.NotCompiled; a node of another Blender version's errors)."""
+    chain = _Chain([], None)
+    fn, vector = _node(node, out, chain, depth)
+    return fn, vector, chain
+
+
 def object_frame(ob):
     """The need that says in whose space a chain reads Texture Coordinate Object: ('object of',
     None, None) the shaded object's own (the node's Object field empty), else ('object of', the
