@@ -949,7 +949,7 @@ class Exporter:
                                              "from Cycles'; constant and float colours are as Cycles has them"))
         # materials of one reason named together (500 default Principled materials had made 56
         # report lines of the same words)
-        self.materials.add_bent_ray_notes(np.unique(geometry.material).tolist())
+        self.materials.add_bent_ray_notes(used_indices(geometry.material, len(self.materials.materials)).tolist())
         by_reason = {}
         for m in self.materials.materials:
             if m.approximated:
