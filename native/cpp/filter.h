@@ -91,14 +91,16 @@ size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
     return w;
 }
 
-// Sweeps of at least this many rays (4 MB of records, beyond L2) go one way, forward, as
+// Sweeps of at least this many rays (1 MB of records, an L2 here) go one way, forward, as
 // filter_small: reading the records from both ends cost the two-ended sweep (which moves only
-// the p(1-p)n misplaced records, against pn) twice its in-cache time per ray there. Measured
-// on San Francisco diffuse rays, a box keeping 59%, 2 threads each sweeping its own records,
-// ns a ray: two-ended 1.1 up to 64K rays, 1.55 at 128K, 2.1-2.4 at 256K, 2.6 at 512K (cache
-// flushed); forward 1.3 at every size, 1.6 at 512K flushed. Only the order of the rays
-// changes, never which are kept.
-constexpr size_t kForwardSweepRays = size_t(1) << 17;
+// the p(1-p)n misplaced records, against pn) up to twice its in-cache time per ray out of
+// cache. Standalone, San Francisco diffuse rays, a box keeping 59%, 2 threads each sweeping
+// its own records, ns a ray: two-ended 1.1 up to 64K rays, 1.55 at 128K, 2.1-2.4 at 256K,
+// 2.6 at 512K (cache flushed); forward 1.3 at every size, 1.6 at 512K flushed. In the tracer,
+// where a node's records have left L2 sooner, from 2^15 rays beat from 2^17 (CPU 0.95-0.985x)
+// and from 2^13 was no better (0.97-1.04x). Only the order of the rays changes, never which
+// are kept.
+constexpr size_t kForwardSweepRays = size_t(1) << 15;
 
 // Returns the number of active rays, now rays[0, result): partition_runs (runpartition.h) by
 // the box test, the unsettled middle by filter_small. Runs of 64 rays rather than blocks of W:

@@ -1,4 +1,4 @@
-"""Filter sweeps of at least 2^17 rays (kForwardSweepRays, native/cpp/filter.h) partition the
+"""Filter sweeps of at least 2^15 rays (kForwardSweepRays, native/cpp/filter.h) partition the
 records in one forward pass, smaller ones from both ends: only the order of the records may
 change, never a hit. A batch traced as one chunk whose root filter sweeps all its rays (half of
 them start outside the scene box and point away, so the sampled filter skip, 20 of 32, never
@@ -13,9 +13,9 @@ from . import harness, scenes
 from .rays import make_rays
 
 ISAS = dacrt.supported_isas()
-FORWARD_RAYS = 1 << 17
-N_RAYS = FORWARD_RAYS + 30_000
-SMALL = 40_000  # a batch below FORWARD_RAYS: every sweep two-ended
+FORWARD_RAYS = 1 << 15
+N_RAYS = 2 * FORWARD_RAYS + 20_000  # forward sweeps at the top, two-ended ones below
+SMALL = 20_000  # a batch below FORWARD_RAYS: every sweep two-ended
 
 
 @pytest.fixture(scope="module")
