@@ -72,7 +72,9 @@ void draw_area_lanes(const LampRecord& lamp, bool no_mis, const float* p_sel, co
 }  // namespace
 
 void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, uint32_t* entry, float* p_sel) {
-    for (size_t j = 0; j < cnt; ++j) entry[j] = uint32_t(pick_entry(L, p, i0 + j, p_sel[j]));
+    size_t j = 0;
+    for (; j + 1 < cnt; j += 2) pick_entry_pair(L, p, i0 + j, entry + j, p_sel + j);
+    if (j < cnt) entry[j] = uint32_t(pick_entry(L, p, i0 + j, p_sel[j]));
 }
 
 void draw_chunk(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, const uint32_t* entry,

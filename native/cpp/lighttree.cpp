@@ -498,37 +498,31 @@ inline void LightTree::probs_at(size_t at, const TreePoint& point, uint64_t rece
     target_probs(nodes_.data(), stops_[qi], lane_sets, point, receivers, p);
 }
 
-int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers) const {
-    // u stays as drawn; the node's share of [0, 1) narrows to [lo, lo + w) on the way down
-    // (no rescaling of u: one division per stop, in the probabilities)
-    size_t at = 0;
-    double lo = 0.0, w = 1.0;
-    if (!(u >= 0.0)) u = 0.0;  // (NaN too)
-    const TreePoint point = tree_point(P, N);
-    while (nodes_[at].child >= 0) {
-        double p[4];
-        probs_at(at, point, receivers, p);
-        // the first target (of those possible) whose share of [lo, lo + w) holds u; the last
-        // possible one where rounding leaves u past them all. Without branches (selects): which
-        // target a point takes is random, and a mispredicted pick stalled every stop.
-        double run = lo, pick_lo = lo, last_lo = lo;
-        int pick = -1, last = 0;
-        for (int j = 0; j < 4; ++j) {
-            const bool possible = p[j] > 0.0;
-            const double next = run + w * p[j];  // (+ 0 where impossible: run unchanged)
-            last = possible ? j : last;
-            last_lo = possible ? run : last_lo;
-            const bool here = possible & (pick < 0) & (u < next);
-            pick_lo = here ? run : pick_lo;
-            pick = here ? j : pick;
-            run = next;
-        }
-        if (pick < 0) pick = last, pick_lo = last_lo;
-        lo = pick_lo;
-        w *= p[pick];
-        at = size_t(stops_[size_t(stop_of_[at])].target[pick]);
+// One stop of a walk: from the probabilities p of stop `at`'s targets, the target whose share of
+// [lo, lo + w) holds u (the last possible one where rounding leaves u past them all); lo and w
+// narrow to it. Without branches (selects): which target a point takes is random, and a
+// mispredicted pick stalled every stop.
+inline size_t LightTree::step(size_t at, const double p[4], double u, double& lo, double& w) const {
+    double run = lo, pick_lo = lo, last_lo = lo;
+    int pick = -1, last = 0;
+    for (int j = 0; j < 4; ++j) {
+        const bool possible = p[j] > 0.0;
+        const double next = run + w * p[j];  // (+ 0 where impossible: run unchanged)
+        last = possible ? j : last;
+        last_lo = possible ? run : last_lo;
+        const bool here = possible & (pick < 0) & (u < next);
+        pick_lo = here ? run : pick_lo;
+        pick = here ? j : pick;
+        run = next;
     }
-    // the leaf's group: a member by energy, with what is left of u
+    if (pick < 0) pick = last, pick_lo = last_lo;
+    lo = pick_lo;
+    w *= p[pick];
+    return size_t(stops_[size_t(stop_of_[at])].target[pick]);
+}
+
+// The walk's end at leaf `at`: a member of its group by energy, with what is left of u.
+inline int32_t LightTree::leaf_pick(size_t at, double u, double lo, double w, double& prob) const {
     const size_t g = size_t(-1 - nodes_[at].child);
     const int32_t b = item_start_[g], e = item_start_[g + 1];
     int32_t slot = b;
@@ -540,6 +534,49 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     }
     prob = w;
     return member_key_[size_t(slot)];
+}
+
+int32_t LightTree::sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers) const {
+    // u stays as drawn; the node's share of [0, 1) narrows to [lo, lo + w) on the way down
+    // (no rescaling of u: one division per stop, in the probabilities)
+    size_t at = 0;
+    double lo = 0.0, w = 1.0;
+    if (!(u >= 0.0)) u = 0.0;  // (NaN too)
+    const TreePoint point = tree_point(P, N);
+    while (nodes_[at].child >= 0) {
+        double p[4];
+        probs_at(at, point, receivers, p);
+        at = step(at, p, u, lo, w);
+    }
+    return leaf_pick(at, u, lo, w, prob);
+}
+
+void LightTree::sample_pair(const float* const P[2], const float* const N[2], const double u_in[2],
+                            const uint64_t receivers[2], int32_t key[2], double prob[2]) const {
+    // sample() for two points, their walks' stops taken in turn: each stop is a chain (the
+    // lanes' roots and divisions, the probabilities' division, the pick, the next stop's load)
+    // that one walk waits on, and the other walk's stop fills that wait. Each walk's own
+    // operations are sample()'s, so the same bits.
+    size_t at[2] = {0, 0};
+    double lo[2] = {0.0, 0.0}, w[2] = {1.0, 1.0}, u[2];
+    TreePoint point[2];
+    bool go[2];
+    for (int s = 0; s < 2; ++s) {
+        u[s] = u_in[s] >= 0.0 ? u_in[s] : 0.0;  // (NaN too)
+        point[s] = tree_point(P[s], N[s]);
+        go[s] = nodes_[0].child >= 0;
+    }
+    while (go[0] | go[1]) {
+        double p[2][4];
+        for (int s = 0; s < 2; ++s)
+            if (go[s]) probs_at(at[s], point[s], receivers[s], p[s]);
+        for (int s = 0; s < 2; ++s)
+            if (go[s]) {
+                at[s] = step(at[s], p[s], u[s], lo[s], w[s]);
+                go[s] = nodes_[at[s]].child >= 0;
+            }
+    }
+    for (int s = 0; s < 2; ++s) key[s] = leaf_pick(at[s], u[s], lo[s], w[s], prob[s]);
 }
 
 void LightTree::stop_weighs(const float P[3], const float* N, double* lanes, double* exact) const {

@@ -96,6 +96,10 @@ public:
     // u in [0, 1), and its probability, among the lights of the sets in `receivers` (when the
     // point is lit by none of the tree's, a light of any set, which lights it nothing).
     int32_t sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers = kAllSets) const;
+    // sample() at two points s = 0, 1 (P[s], N[s], u[s], receivers[s]: key[s], prob[s]), the
+    // same bits, the two walks side by side.
+    void sample_pair(const float* const P[2], const float* const N[2], const double u[2], const uint64_t receivers[2],
+                     int32_t key[2], double prob[2]) const;
     // The probability that sample() at P, N (and receivers) picks key (0 when key is not a member).
     double pdf(const float P[3], const float* N, int64_t key, uint64_t receivers = kAllSets) const;
     // For tests: every stop's eight lanes (stops() x 8, stop by stop) weighed at P (and N) as a
@@ -123,6 +127,8 @@ public:
 private:
     void build_stops();
     void probs_at(size_t at, const TreePoint& point, uint64_t receivers, double p[4]) const;
+    size_t step(size_t at, const double p[4], double u, double& lo, double& w) const;
+    int32_t leaf_pick(size_t at, double u, double lo, double w, double& prob) const;
 
     std::vector<LightTreeNode> nodes_;
     std::vector<Stop> stops_;
