@@ -72,9 +72,8 @@ void draw_area_lanes(const LampRecord& lamp, bool no_mis, const float* p_sel, co
 }  // namespace
 
 void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, uint32_t* entry, float* p_sel) {
-    size_t j = 0;
-    for (; j + 1 < cnt; j += 2) pick_entry_pair(L, p, i0 + j, entry + j, p_sel + j);
-    if (j < cnt) entry[j] = uint32_t(pick_entry(L, p, i0 + j, p_sel[j]));
+    for (size_t j = 0; j < cnt; j += LightTree::kGroup)
+        pick_entry_group(L, p, i0 + j, std::min(LightTree::kGroup, cnt - j), entry + j, p_sel + j);
 }
 
 void draw_chunk(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, const uint32_t* entry,

@@ -551,32 +551,35 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     return leaf_pick(at, u, lo, w, prob);
 }
 
-void LightTree::sample_pair(const float* const P[2], const float* const N[2], const double u_in[2],
-                            const uint64_t receivers[2], int32_t key[2], double prob[2]) const {
-    // sample() for two points, their walks' stops taken in turn: each stop is a chain (the
-    // lanes' roots and divisions, the probabilities' division, the pick, the next stop's load)
-    // that one walk waits on, and the other walk's stop fills that wait. Each walk's own
+void LightTree::sample_group(size_t count, const float* const P[], const float* const N[], const double u_in[],
+                             const uint64_t receivers[], int32_t key[], double prob[]) const {
+    // sample() for up to kGroup points, their walks' stops taken in turn: each stop is a chain
+    // (the lanes' roots and divisions, the probabilities' division, the pick, the next stop's
+    // load) that one walk waits on, and the other walks' stops fill that wait. Each walk's own
     // operations are sample()'s, so the same bits.
-    size_t at[2] = {0, 0};
-    double lo[2] = {0.0, 0.0}, w[2] = {1.0, 1.0}, u[2];
-    TreePoint point[2];
-    bool go[2];
-    for (int s = 0; s < 2; ++s) {
+    size_t at[kGroup] = {};
+    double lo[kGroup] = {}, w[kGroup], u[kGroup] = {};
+    TreePoint point[kGroup];
+    bool go[kGroup] = {};
+    for (size_t s = 0; s < count; ++s) {
+        w[s] = 1.0;
         u[s] = u_in[s] >= 0.0 ? u_in[s] : 0.0;  // (NaN too)
         point[s] = tree_point(P[s], N[s]);
         go[s] = nodes_[0].child >= 0;
     }
-    while (go[0] | go[1]) {
-        double p[2][4];
-        for (int s = 0; s < 2; ++s)
+    for (bool any = count > 0 && nodes_[0].child >= 0; any;) {
+        double p[kGroup][4];
+        for (size_t s = 0; s < count; ++s)
             if (go[s]) probs_at(at[s], point[s], receivers[s], p[s]);
-        for (int s = 0; s < 2; ++s)
+        any = false;
+        for (size_t s = 0; s < count; ++s)
             if (go[s]) {
                 at[s] = step(at[s], p[s], u[s], lo[s], w[s]);
                 go[s] = nodes_[at[s]].child >= 0;
+                any |= go[s];
             }
     }
-    for (int s = 0; s < 2; ++s) key[s] = leaf_pick(at[s], u[s], lo[s], w[s], prob[s]);
+    for (size_t s = 0; s < count; ++s) key[s] = leaf_pick(at[s], u[s], lo[s], w[s], prob[s]);
 }
 
 void LightTree::stop_weighs(const float P[3], const float* N, double* lanes, double* exact) const {

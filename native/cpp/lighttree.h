@@ -96,10 +96,11 @@ public:
     // u in [0, 1), and its probability, among the lights of the sets in `receivers` (when the
     // point is lit by none of the tree's, a light of any set, which lights it nothing).
     int32_t sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers = kAllSets) const;
-    // sample() at two points s = 0, 1 (P[s], N[s], u[s], receivers[s]: key[s], prob[s]), the
-    // same bits, the two walks side by side.
-    void sample_pair(const float* const P[2], const float* const N[2], const double u[2], const uint64_t receivers[2],
-                     int32_t key[2], double prob[2]) const;
+    // sample() at count <= kGroup points s (P[s], N[s], u[s], receivers[s]: key[s], prob[s]),
+    // the same bits, their walks side by side.
+    static constexpr size_t kGroup = 4;
+    void sample_group(size_t count, const float* const P[], const float* const N[], const double u[],
+                      const uint64_t receivers[], int32_t key[], double prob[]) const;
     // The probability that sample() at P, N (and receivers) picks key (0 when key is not a member).
     double pdf(const float P[3], const float* N, int64_t key, uint64_t receivers = kAllSets) const;
     // For tests: every stop's eight lanes (stops() x 8, stop by stop) weighed at P (and N) as a

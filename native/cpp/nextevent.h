@@ -122,45 +122,46 @@ inline size_t pick_entry(const LightChoice& L, const VertexPoints& p, size_t i, 
     return choose_light(L, Q, N, p.pick[i], p_sel, L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets);
 }
 
-// pick_entry at points i and i + 1: where both land on the light tree, its two walks side by
-// side (LightTree::sample_pair, a many-light render's light choice waits on each walk's chain of
-// stops), otherwise one after the other; the same bits either way.
-inline void pick_entry_pair(const LightChoice& L, const VertexPoints& p, size_t i, uint32_t entry[2], float p_sel[2]) {
+// pick_entry at points i .. i + count - 1 (count <= LightTree::kGroup): those whose pick lands
+// on the light tree walk it side by side (LightTree::sample_group: a many-light render's light
+// choice waits on each walk's chain of stops), the others pick as pick_entry; the same bits.
+inline void pick_entry_group(const LightChoice& L, const VertexPoints& p, size_t i, size_t count, uint32_t entry[],
+                             float p_sel[]) {
     if (!p.pick || !L.tree) {
-        for (size_t s = 0; s < 2; ++s) entry[s] = uint32_t(pick_entry(L, p, i + s, p_sel[s]));
+        for (size_t s = 0; s < count; ++s) entry[s] = uint32_t(pick_entry(L, p, i + s, p_sel[s]));
         return;
     }
+    constexpr size_t G = LightTree::kGroup;
     const size_t n = p.n;
-    size_t e[2];
-    float Q[2][3], N[2][3];
-    uint64_t receivers[2];
-    bool both = true;
-    for (size_t s = 0; s < 2; ++s) {
+    float Q[G][3], N[G][3];
+    const float* Ps[G];
+    const float* Ns[G];
+    double u[G];
+    uint64_t receivers[G];
+    size_t walk[G], m = 0;  // the points that go on to the tree
+    for (size_t s = 0; s < count; ++s) {
         const size_t k = i + s;
-        for (size_t a = 0; a < 3; ++a) Q[s][a] = p.P_off[a * n + k], N[s][a] = p.ns[a * n + k];
-        receivers[s] = L.light_set && p.receivers ? p.receivers[k] : LightTree::kAllSets;
-        e[s] = size_t(std::upper_bound(L.cdf, L.cdf + L.entries, p.pick[k]) - L.cdf);  // (choose_light's)
-        e[s] = e[s] < L.entries ? e[s] : L.entries - 1;
-        both = both && L.tree->member(int64_t(e[s]));
+        float* q = Q[m];
+        float* nn = N[m];
+        for (size_t a = 0; a < 3; ++a) q[a] = p.P_off[a * n + k], nn[a] = p.ns[a * n + k];
+        const uint64_t r = L.light_set && p.receivers ? p.receivers[k] : LightTree::kAllSets;
+        size_t e = size_t(std::upper_bound(L.cdf, L.cdf + L.entries, p.pick[k]) - L.cdf);  // (choose_light's)
+        e = e < L.entries ? e : L.entries - 1;
+        if (!L.tree->member(int64_t(e))) {
+            entry[s] = uint32_t(e);
+            p_sel[s] = L.prob[e];
+            continue;
+        }
+        const double lo = e ? L.cdf[e - 1] : 0.0, mass = L.cdf[e] - lo;
+        u[m] = mass > 0 ? (p.pick[k] - lo) / mass : 0.0;
+        Ps[m] = q, Ns[m] = nn, receivers[m] = r, walk[m++] = s;
     }
-    if (!both) {
-        for (size_t s = 0; s < 2; ++s)
-            entry[s] = uint32_t(choose_light(L, Q[s], N[s], p.pick[i + s], p_sel[s], receivers[s]));
-        return;
-    }
-    double u[2];
-    for (size_t s = 0; s < 2; ++s) {
-        const double lo = e[s] ? L.cdf[e[s] - 1] : 0.0, mass = L.cdf[e[s]] - lo;
-        u[s] = mass > 0 ? (p.pick[i + s] - lo) / mass : 0.0;
-    }
-    const float* const Ps[2] = {Q[0], Q[1]};
-    const float* const Ns[2] = {N[0], N[1]};
-    int32_t key[2];
-    double pt[2];
-    L.tree->sample_pair(Ps, Ns, u, receivers, key, pt);
-    for (size_t s = 0; s < 2; ++s) {
-        entry[s] = uint32_t(key[s]);
-        p_sel[s] = float(double(L.prob[size_t(key[s])]) * pt[s]);
+    int32_t key[G];
+    double pt[G];
+    L.tree->sample_group(m, Ps, Ns, u, receivers, key, pt);
+    for (size_t w = 0; w < m; ++w) {
+        entry[walk[w]] = uint32_t(key[w]);
+        p_sel[walk[w]] = float(double(L.prob[size_t(key[w])]) * pt[w]);
     }
 }
 

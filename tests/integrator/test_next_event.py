@@ -389,12 +389,13 @@ def test_bump_shadowing_closed_form_and_native_agree():
 
 
 @pytest.mark.parametrize('linked', [False, True])
-def test_light_tree_picks_beside_an_area_lamp_are_tree_sample_s(linked):
-    """With an area lamp the light choice runs per chunk, two points' tree walks side by side
-    (LightTree::sample_pair): every point's entry and selection probability (in its sample's
-    value) are bit for bit the composed choice, one walk per point by tree.sample, for walks of
-    different depths (an unbalanced tree of 23 lamps), picks beside the tree, NaN picks, an odd
-    chunk tail and, with light linking, receiver masks that exclude some of the tree's lamps."""
+def test_light_tree_walks_side_by_side_pick_as_tree_sample(linked):
+    """With an area lamp the light choice runs per chunk, up to four points' tree walks side by
+    side (LightTree::sample_group): every point's entry and selection probability (in its
+    sample's value) are bit for bit the composed choice, one walk per point by tree.sample, for
+    walks of different depths (an unbalanced tree of 23 lamps), groups with picks beside the tree,
+    NaN picks, a chunk tail of one point and, with light linking, receiver masks that exclude some
+    of the tree's lamps."""
     rng = np.random.default_rng(23)
     K = 23
     pos = np.concatenate([rng.normal(size=(3, 16)) * 0.3, rng.normal(size=(3, K - 16)) * 4.0], axis=1) \
