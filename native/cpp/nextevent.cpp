@@ -23,7 +23,7 @@ namespace dacrt {
 namespace {
 
 // AREAS: some lamp is drawn lane by lane (area_lanes_apply): its points are drawn first per chunk
-// (draw_chunk). ENV: an environment map, whose points' samples are drawn first per chunk too
+// (draw_chunk); also with a light tree, whose walks pick_entries takes side by side. ENV: an environment map, whose points' samples are drawn first per chunk too
 // (environment_sample_lanes). Without either, the loop is that of one point at a time only: the
 // chunk's arrays and its pass picking the entries first had cost scenes without area lamps ~11%.
 template <bool AREAS, bool ENV>
@@ -205,7 +205,9 @@ bool draws_area_lanes(const LightChoice& lights) {
 size_t event_range(const LightChoice& lights, bool areas, const VertexPoints& pts, const NextEventOut& out, size_t b,
                    size_t e, size_t* skipped) {
     const bool env = lights.env != nullptr;
-    const auto block = areas ? (env ? event_block<true, true> : event_block<true, false>)
+    // with a light tree, the chunk's picks first (pick_entries): its walks go side by side
+    const bool chunks = areas || (lights.tree && pts.pick);
+    const auto block = chunks ? (env ? event_block<true, true> : event_block<true, false>)
                              : (env ? event_block<false, true> : event_block<false, false>);
     return block(lights, pts, out, b, e, skipped);
 }

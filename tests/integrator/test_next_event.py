@@ -388,43 +388,45 @@ def test_bump_shadowing_closed_form_and_native_agree():
     np.testing.assert_allclose(bumped[0][lit], plain[0][lit] * g[lit], rtol=2e-6, atol=0)
 
 
+@pytest.mark.parametrize('area', [True, False])
 @pytest.mark.parametrize('linked', [False, True])
-def test_light_tree_walks_side_by_side_pick_as_tree_sample(linked):
-    """With an area lamp the light choice runs per chunk, up to four points' tree walks side by
+def test_light_tree_walks_side_by_side_pick_as_tree_sample(linked, area):
+    """With a light tree the light choice runs per chunk, up to four points' tree walks side by
     side (LightTree::sample_group): every point's entry and selection probability (in its
     sample's value) are bit for bit the composed choice, one walk per point by tree.sample, for
-    walks of different depths (an unbalanced tree of 23 lamps), groups with picks beside the tree,
-    NaN picks, a chunk tail of one point and, with light linking, receiver masks that exclude some
-    of the tree's lamps."""
+    walks of different depths (an unbalanced tree of 23 lamps), groups with picks beside the tree
+    (an area lamp's), NaN picks, a chunk tail of one point and, with light linking, receiver
+    masks that exclude some of the tree's lamps."""
     rng = np.random.default_rng(23)
-    K = 23
+    K, A = 23, int(area)
     pos = np.concatenate([rng.normal(size=(3, 16)) * 0.3, rng.normal(size=(3, K - 16)) * 4.0], axis=1) \
         + np.asarray(CENTRE)[:, None]
-    recs = lamp_records([make('area_square')] + [
+    recs = lamp_records([make('area_square')] * A + [
         make_lamp(light('POINT', rng.uniform(5, 50), translation(*pos[:, k]))) for k in range(K)])
     energy = rng.uniform(1.0, 100.0, K)
     sets = rng.integers(0, 3, K).astype(np.uint8) if linked else None
     p = np.float64(pos.astype(F32))
     tree = dacrt.lamps.light_tree(p, p, np.tile([[0.0], [0.0], [1.0]], K), np.full(K, -1.0), np.zeros(K), energy,
-                                  np.arange(1, K + 1), set=sets)
-    cdf = np.concatenate([[0.25], np.full(K, 1.0)])
-    prob = np.concatenate([[0.25], np.full(K, 0.75)]).astype(F32)
-    lc = shading.LightChoice(recs, cdf, prob, np.zeros(K + 1, bool), np.ones(K + 1, bool), tree=tree)
+                                  np.arange(A, K + A), set=sets)
+    lo = 0.25 * A                                        # the tree's slot: [lo, 1)
+    cdf = np.concatenate([[lo] * A, np.full(K, 1.0)])
+    prob = np.concatenate([[lo] * A, np.full(K, 1.0 - lo)]).astype(F32)
+    lc = shading.LightChoice(recs, cdf, prob, np.zeros(K + A, bool), np.ones(K + A, bool), tree=tree)
     n = 30_001
     P, P_off, ns, ng, th, keys = _points(rng, n, flat=False, thr=True)
     pick = rng.random(n)
     pick[rng.integers(0, n, 40)] = np.nan
     receivers = rng.integers(1, 8, n).astype(np.uint64) if linked else None
-    linking = (np.concatenate([[0], sets]).astype(np.uint8), receivers | np.uint64(1)) if linked else None
+    linking = (np.concatenate([[0] * A, sets]).astype(np.uint8), receivers | np.uint64(1)) if linked else None
     entry = np.zeros(n, np.int32)
     got = shading.next_event(lc, P, P_off, ns, ng, th, keys, 0x1234567, 0x89ABCDE, pick=pick, shorten=SHORTEN,
                              skip_work=False, linking=linking, entry=entry)
     # the composed choice: the entry the pick falls in; a pick in the tree's slot, rescaled to
     # it, goes on to tree.sample at P_off with ns
-    want = np.minimum(np.searchsorted(cdf, pick, side='right'), K).astype(np.int32)
+    want = np.minimum(np.searchsorted(cdf, pick, side='right'), K + A - 1).astype(np.int32)
     p_sel = prob[want].copy()
-    member = want >= 1
-    u = (pick[member] - 0.25) / 0.75
+    member = want >= A
+    u = (pick[member] - lo) / (1.0 - lo)
     key, pt = tree.sample(P_off[:, member], u, N=ns[:, member],
                           **({'receivers': linking[1][member]} if linked else {}))
     want[member] = key
@@ -439,5 +441,5 @@ def test_light_tree_walks_side_by_side_pick_as_tree_sample(linked):
     if linked:
         ok &= ((linking[1] >> linking[0][want].astype(np.uint64)) & np.uint64(1)) == 1
     value[:, ~ok] = 0.0
-    lamp = want >= 1       # (the area lamp's lanes round their own way: checked by the tests above)
+    lamp = want >= A       # (the area lamp's lanes round their own way: checked by the tests above)
     assert np.array_equal(got[0][:, lamp].view(np.uint32), value[:, lamp].view(np.uint32))
