@@ -35,9 +35,10 @@ OFFSET_ULPS = F32(8.0)
 _TINY = F32(2.0 ** -100)     # floor keeping the ULP's input a normal float (an all-zero triangle is never hit)
 def twins(keys):
     """(M,) bool: the triangles whose key (triangle_table's order-free hash of the corners'
-    bits, 0 where the step kept all 8 ULPs) another triangle repeats: a surface modelled twice,
-    in any corner order. A hash collision only gives a triangle the whole step it had before.
-    (Native, one hash-table pass: sorting the keys had cost ~4.6 ms of a 100K-triangle frame.)"""
+    bits) another triangle repeats: a surface modelled twice, in any corner order, or (rarely)
+    a hash collision, which only gives a triangle the whole step; coincidentfaces.py checks
+    them exactly. (Native, one hash-table pass: sorting the keys had cost ~4.6 ms of a
+    100K-triangle frame.)"""
     return dacrt.shading.repeated_keys(keys)
 
 
@@ -65,6 +66,8 @@ class Triangles:
         keys = np.empty(m, np.uint64)
         self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, OFFSET_ULPS, _TINY, keys=keys)
         twin = twins(keys)
+        # the candidates for coincident faces (coincidentfaces.py), exact copies among them
+        self.twins = twin
         if twin.any():      # (rare) their whole step: a ray leaving one must clear the other
             whole, _ = dacrt.shading.triangle_table(self.vertices, self.indices[twin], OFFSET_ULPS, _TINY,
                                                     full=np.ones(int(twin.sum()), np.uint8))

@@ -85,9 +85,9 @@ void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray*
 // 1 (a plane z = c a million units across: ULPs of c), or all of it where full[i] (null: none)
 // is set: a triangle with a coincident twin, whose float test at a ray's origin errs by ULPs of
 // its coordinates along the ray. The hit point's margin from the edges is always the whole
-// (pathvertex.h edge_margin). geo: 15 rows of M; area: M doubles; keys (M, or null): for the
-// triangles whose step shrank an odd order-free hash of their corners' bits, else 0 (where the
-// caller looks for twins). Triangles must index existing vertices (callers check).
+// (pathvertex.h edge_margin). geo: 15 rows of M; area: M doubles; keys (M, or null): an odd
+// order-free hash of each triangle's corners' bits (-0 as 0): exact copies have equal keys.
+// Triangles must index existing vertices (callers check).
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     const uint8_t* full, float* geo, double* area, uint64_t* keys = nullptr);
 

@@ -101,22 +101,25 @@ void triangle_table(const float* vertices, size_t V, const int32_t* triangles, s
             }
             const float step = ulp_of(mag) * offset_ulps * share;
             if (keys) {
-                // an order-free hash of the corners' bits (+0: -0 as 0) where the step shrank
+                // an order-free hash of the corners' bits (+0: -0 as 0), every triangle: twins to
+                // step off (where the step shrank) and exact copies to say (surfacetables.py).
+                // Each corner's hash mixed before the sum: a sum of the raw bits times constants
+                // is linear in them, so corners whose bits sum alike (a regular grid) collide
                 uint64_t key = 0;
-                if (share < 1.0f) {
-                    for (int k = 0; k < 3; ++k) {
-                        uint64_t h = 0;
-                        for (int a = 0; a < 3; ++a) {
-                            const float x = c[k][a] + 0.0f;
-                            uint32_t b;
-                            std::memcpy(&b, &x, 4);
-                            h += uint64_t(b) * kCornerMix[a];
-                        }
-                        key += h;
+                for (int k = 0; k < 3; ++k) {
+                    uint64_t h = 0;
+                    for (int a = 0; a < 3; ++a) {
+                        const float x = c[k][a] + 0.0f;
+                        uint32_t b;
+                        std::memcpy(&b, &x, 4);
+                        h += uint64_t(b) * kCornerMix[a];
                     }
-                    key |= 1;  // never 0 (0: the whole step)
+                    h ^= h >> 31;
+                    h *= 0xBF58476D1CE4E5B9ull;
+                    h ^= h >> 29;
+                    key += h;
                 }
-                keys[i] = key;
+                keys[i] = key | 1;  // never 0 (0: no key, repeated_keys skips it)
             }
             for (int a = 0; a < 3; ++a) {
                 const float ng = len > 0 ? float(n[a] / len) : 0.0f;

@@ -92,8 +92,8 @@ def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 **
     |coordinate| (at least tiny) the share the hit point's error along the normal needs,
     sum_a |n_a| ulp(largest |coordinate a|) / ulp(largest) (a plane z = c: ULPs of c), or all of
     it for the triangles where full (M,) is true (those with a coincident twin). keys (M,)
-    uint64, optional, is written: for the triangles whose step shrank an odd order-free hash of
-    their corners' bits, else 0 (twins have equal keys)."""
+    uint64, optional, is written: an odd order-free hash of each triangle's corners' bits (-0
+    as 0; exact copies, in any corner order, have equal keys)."""
     v = np.ascontiguousarray(vertices, _F32)
     t = _triangles32(triangles, len(v))
     if full is not None:

@@ -1,0 +1,110 @@
+"""Coincident faces: triangles modelled twice, exactly (the same three float32 corners in any
+order or winding: a Mirror modifier on a mesh already symmetric, a second Mirror, duplicated
+faces or objects). DACRT renders them as one surface (a ray leaving one copy steps off both,
+surfacetables.twins); Cycles' rays leaving one copy meet the other at zero distance, so it
+renders them darker (a mirrored cube, grey world, 1 bounce: DACRT 1.094x Cycles' image mean;
+README "Coincident faces"). Said, naming the objects. Emissive copies have their own message
+(lightsetup, lights/coincident.py), so sets holding an emitter are left to it.
+
+Cheap: only the triangles whose order-free corner hash repeats (Triangles.twins, from the
+table pass every frame makes) are compared, bit for bit; without coincident faces none are.
+Never claimed where no ray could tell the copies apart: the export's own twins (a ray-type mix's
+clear or holdout side, seen by other ray kinds than the original: scenedata.Material.clear_twin),
+zero-area triangles, and a hair or Curves tube's own triangles rounded onto each other at a
+thin tip (lightsetup._user_copies)."""
+from __future__ import annotations
+
+import numpy as np
+
+from .scenedata import VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW
+
+_K = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], np.uint64)
+
+
+def exact_groups(vertices, indices, candidates):
+    """(rows, group): the triangles of mask candidates that repeat another of them exactly (the
+    same three float32 corners, -0 as 0, in any order or winding), ascending, and each one's set
+    (0..G-1); empty arrays where none does."""
+    S = np.flatnonzero(candidates)
+    if len(S) < 2:
+        return S[:0], S[:0]
+    xyz = np.asarray(vertices, np.float32)[np.asarray(indices)[S]] + np.float32(0.0)    # (S, 3, 3)
+    # the corners in an order of their own (by their bits' hash), then compared bit for bit:
+    # a hash tie between two different corners of one triangle can only miss a copy
+    h = (xyz.view(np.uint32).astype(np.uint64) * _K).sum(axis=-1, dtype=np.uint64)
+    order = np.argsort(h, axis=1, kind='stable')
+    xyz = np.take_along_axis(xyz, order[:, :, None], axis=1)
+    rows = np.ascontiguousarray(xyz.reshape(len(S), 9)).view(np.dtype((np.void, 36))).ravel()
+    _, inverse, count = np.unique(rows, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    copied = count[inverse] > 1
+    S, inverse = S[copied], inverse[copied]
+    _, group = np.unique(inverse, return_inverse=True)
+    return S, group.ravel()
+
+
+def said_copies(rows, group, area, visibility, emissive, tubes=None):
+    """Mask (M,) of the triangles of exact_groups' (rows, group) a message can truly say render
+    differently from Cycles: of positive area, in a set without an emitter (said by lightsetup)
+    where two copies a ray kind sees alike tell apart: two seen by bounce rays (one's bounce
+    ray meets the other), or two seen by shadow rays and one by camera rays (its shadow rays
+    meet the other). The export's own twins (a ray-type mix's clear or holdout side) are seen
+    by other ray kinds than their original, so never. A tube's own triangles of one placement
+    count as one copy. tubes: (one_sided (M,), placement (M,)) or None."""
+    said = np.zeros(len(area), bool)
+    if not len(rows):
+        return said
+    G = int(group.max()) + 1
+    vis = np.asarray(visibility)[rows]
+    live = np.asarray(area)[rows] > 0
+    lit = np.bincount(group, weights=np.asarray(emissive)[rows], minlength=G) > 0
+    # distinct copies: a tube triangle counts as its placement, any other as itself
+    ident = rows.astype(np.int64)
+    if tubes is not None:
+        one, place = tubes
+        ident = np.where(np.asarray(one, bool)[rows], -1 - np.asarray(place, np.int64)[rows], ident)
+    seen = {kind: _distinct(group[m], ident[m], G)
+            for kind in (VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW) for m in [live & ((vis & kind) != 0)]}
+    ok = ((seen[VIS_DIFFUSE] >= 2) | ((seen[VIS_SHADOW] >= 2) & (seen[VIS_CAMERA] >= 1))) & ~lit
+    said[rows[live & ((vis & (VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW)) != 0) & ok[group]]] = True
+    return said
+
+
+def _distinct(group, ident, G):
+    """Per set (G,), how many distinct identities its listed members have."""
+    if not len(group):
+        return np.zeros(G, np.int64)
+    pairs = np.unique(np.stack([group.astype(np.int64), ident]), axis=1)
+    return np.bincount(pairs[0], minlength=G)
+
+
+def coincident_faces(sd, tri, mats) -> list:
+    """The message (a list of 0 or 1 (level, text)) naming the objects whose non-emissive
+    faces coincide exactly with other faces (sd: the SceneData tri was made of, naming the
+    objects; tri: surfacetables.Triangles; mats: surfacetables.Materials)."""
+    if not tri.twins.any():
+        return []
+    rows, group = exact_groups(tri.vertices, tri.indices, tri.twins)
+    g = sd.geometry
+    tubes = None if g.one_sided is None else \
+        (g.one_sided, g.instance if g.instance is not None else g.object_index)
+    said = said_copies(rows, group, tri.area, tri.visibility, mats.emissive[tri.material], tubes)
+    if not said.any():
+        return []
+    mat = np.asarray(tri.material)
+    how = "so it renders them darker (black with enough bounces)"
+    if mats.transparent[mat[said]].any():
+        how = "so it renders opaque copies darker (black with enough bounces) and crosses clear ones twice"
+    text = (f"{int(said.sum())} triangles of {sd.named_objects(said)} coincide exactly with other triangles "
+            "(the same three corners: duplicated faces, or a Mirror modifier on a mesh already symmetric): "
+            "DACRT renders each set as one surface; Cycles' rays leaving one copy meet the other at zero "
+            f"distance, {how}")
+    # copies of different materials: the hit returns the copy listed first (exact ties)
+    kept = said[rows]
+    lo = np.full(int(group.max()) + 1, np.iinfo(np.int64).max)
+    hi = np.full(len(lo), -1)
+    np.minimum.at(lo, group[kept], mat[rows[kept]])
+    np.maximum.at(hi, group[kept], mat[rows[kept]])
+    if (hi > lo).any():
+        text += "; where the copies' materials differ, DACRT shows mostly the first-listed copy's"
+    return [('INFO', text)]
