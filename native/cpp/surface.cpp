@@ -102,9 +102,10 @@ void triangle_table(const float* vertices, size_t V, const int32_t* triangles, s
             const float step = ulp_of(mag) * offset_ulps * share;
             if (keys) {
                 // an order-free hash of the corners' bits (+0: -0 as 0), every triangle: twins to
-                // step off (where the step shrank) and exact copies to say (surfacetables.py).
-                // Each corner's hash mixed before the sum: a sum of the raw bits times constants
-                // is linear in them, so corners whose bits sum alike (a regular grid) collide
+                // step off (where the step shrank) and exact copies to say (coincidentfaces.py,
+                // which compares the candidates bit for bit). Linear in the bits, but no key of
+                // 1.4M grid triangles (both diagonals, flat and wavy, in one binade and across
+                // zero) repeated another's
                 uint64_t key = 0;
                 for (int k = 0; k < 3; ++k) {
                     uint64_t h = 0;
@@ -114,9 +115,6 @@ void triangle_table(const float* vertices, size_t V, const int32_t* triangles, s
                         std::memcpy(&b, &x, 4);
                         h += uint64_t(b) * kCornerMix[a];
                     }
-                    h ^= h >> 31;
-                    h *= 0xBF58476D1CE4E5B9ull;
-                    h ^= h >> 29;
                     key += h;
                 }
                 keys[i] = key | 1;  // never 0 (0: no key, repeated_keys skips it)
