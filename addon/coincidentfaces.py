@@ -23,24 +23,56 @@ _K = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], np.u
 
 def exact_groups(vertices, indices, candidates):
     """(rows, group): the triangles of mask candidates that repeat another of them exactly (the
-    same three float32 corners, -0 as 0, in any order or winding), ascending, and each one's set
-    (0..G-1); empty arrays where none does."""
+    same three float32 corners, -0 as 0, in any order or winding), in no set order, and each
+    one's set (0..G-1); empty arrays where none does. Sorted by an order-free key of the
+    corners, each triangle then compared bit for bit with the first of its key (the few whose
+    key another surface shares are sorted apart by their bits): a 1M-triangle grid copied whole
+    (2M candidates) in ~0.6 s, where sorting the bits of all as rows had taken 2.2 s."""
     S = np.flatnonzero(candidates)
     if len(S) < 2:
         return S[:0], S[:0]
-    xyz = np.asarray(vertices, np.float32)[np.asarray(indices)[S]] + np.float32(0.0)    # (S, 3, 3)
-    # the corners in an order of their own (by their bits' hash), then compared bit for bit:
-    # a hash tie between two different corners of one triangle can only miss a copy
-    h = (xyz.view(np.uint32).astype(np.uint64) * _K).sum(axis=-1, dtype=np.uint64)
-    order = np.argsort(h, axis=1, kind='stable')
-    xyz = np.take_along_axis(xyz, order[:, :, None], axis=1)
-    rows = np.ascontiguousarray(xyz.reshape(len(S), 9)).view(np.dtype((np.void, 36))).ravel()
-    _, inverse, count = np.unique(rows, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
-    copied = count[inverse] > 1
-    S, inverse = S[copied], inverse[copied]
-    _, group = np.unique(inverse, return_inverse=True)
-    return S, group.ravel()
+    v = np.asarray(vertices, np.float32) + np.float32(0.0)
+    corners = np.asarray(indices)[S]                                        # (S, 3)
+    if 3 * len(S) > len(v):         # (a vertex's hash, hashed once)
+        h = _hash(v)[corners]
+    else:
+        h = _hash(v[corners])
+    # the corners in an order of their own (by hash, ties by position; a tie between two
+    # different corners of one triangle can only miss a copy), 9 words a row
+    h0, h1, h2 = h[:, 0], h[:, 1], h[:, 2]
+    rank = np.stack([(h0 > h1).astype(np.int8) + (h0 > h2), (h1 >= h0).astype(np.int8) + (h1 > h2),
+                     (h2 >= h0).astype(np.int8) + (h2 >= h1)], axis=1)
+    sorted_corners = np.empty_like(corners)
+    np.put_along_axis(sorted_corners, rank.astype(np.intp), corners, axis=1)
+    key = h.sum(axis=1, dtype=np.uint64)
+    by = np.argsort(key)
+    key, S, sorted_corners = key[by], S[by], sorted_corners[by]
+    start = np.r_[True, key[1:] != key[:-1]]
+    run = np.cumsum(start) - 1
+    first = np.flatnonzero(start)
+    # each corner's bits as x, y in one word and z (gathers of plain words: a gather of 3-word
+    # rows had cost twice the rest)
+    b = v.view(np.uint32)
+    xy, z = np.ascontiguousarray(b[:, :2]).view(np.uint64).ravel(), b[:, 2]
+    ref = sorted_corners[first[run]]
+    same = ((xy[sorted_corners] == xy[ref]) & (z[sorted_corners] == z[ref])).all(axis=1)
+    group = run
+    if not same.all():        # keys shared by different surfaces: those runs by their bits
+        mixed = np.isin(run, run[~same])
+        bits = b[sorted_corners[mixed]].reshape(-1, 9)
+        rows = np.ascontiguousarray(bits).view(np.dtype((np.void, 36))).ravel()
+        _, sub = np.unique(rows, return_inverse=True)
+        group = group.copy()
+        group[mixed] = len(first) + sub.ravel()
+    count = np.bincount(group)
+    copied = count[group] > 1
+    label = np.cumsum(count > 1) - 1
+    return S[copied], label[group[copied]]
+
+
+def _hash(xyz) -> np.ndarray:
+    """(...,) uint64: a hash of float32 points (..., 3) by their bits (equal points, equal hash)."""
+    return (xyz.view(np.uint32).astype(np.uint64) * _K).sum(axis=-1, dtype=np.uint64)
 
 
 def said_copies(rows, group, area, visibility, emissive, tubes=None):
@@ -71,11 +103,14 @@ def said_copies(rows, group, area, visibility, emissive, tubes=None):
 
 
 def _distinct(group, ident, G):
-    """Per set (G,), how many distinct identities its listed members have."""
-    if not len(group):
-        return np.zeros(G, np.int64)
-    pairs = np.unique(np.stack([group.astype(np.int64), ident]), axis=1)
-    return np.bincount(pairs[0], minlength=G)
+    """Per set (G,), how many distinct identities its listed members have (an identity below 0:
+    a tube placement's, which its triangles share; any other is one triangle's own)."""
+    n = np.bincount(group[ident >= 0], minlength=G)
+    shared = ident < 0
+    if shared.any():
+        pairs = np.unique(group[shared].astype(np.int64) * (int(-ident.min()) + 1) - ident[shared])
+        n += np.bincount(pairs // (int(-ident.min()) + 1), minlength=G)
+    return n
 
 
 def coincident_faces(sd, tri, mats) -> list:
@@ -101,10 +136,9 @@ def coincident_faces(sd, tri, mats) -> list:
             f"distance, {how}")
     # copies of different materials: the hit returns the copy listed first (exact ties)
     kept = said[rows]
-    lo = np.full(int(group.max()) + 1, np.iinfo(np.int64).max)
-    hi = np.full(len(lo), -1)
-    np.minimum.at(lo, group[kept], mat[rows[kept]])
-    np.maximum.at(hi, group[kept], mat[rows[kept]])
-    if (hi > lo).any():
+    g, m = group[kept], mat[rows[kept]]
+    one = np.zeros(int(group.max()) + 1, m.dtype)
+    one[g] = m                          # (some member's material per set)
+    if (m != one[g]).any():
         text += "; where the copies' materials differ, DACRT shows mostly the first-listed copy's"
     return [('INFO', text)]
