@@ -80,3 +80,33 @@ def test_an_emitters_copy_keeps_its_own_message_alone(scene, said):
     twin.location, twin.rotation_euler = lamp.location, lamp.rotation_euler
     assert not _said(said)
     assert len([t for t in said if EMITTERS in t and "coincide" in t]) == 1, said
+
+
+def _ray_type_mixes():
+    """A plate hidden from shadow rays (Mix(Diffuse, Transparent, Is Shadow Ray)) and one held
+    out for the camera (Mix(Diffuse, Holdout, Is Camera Ray)), beside a Transparent pane that
+    keeps the clear twins in the render: the export gives each plate a twin on its faces that
+    other ray kinds see (export/assembly.py _clear_twins), no copy of the user's."""
+    _scene()
+    scenes.light('SUN', 3.0, rotation=(0.3, 0.2, 0))
+    for name, second, output, x in (('Plate', 'ShaderNodeBsdfTransparent', 'Is Shadow Ray', 1.0),
+                                    ('Held', 'ShaderNodeHoldout', 'Is Camera Ray', -1.0)):
+        mat, nt, mix, _, _ = scenes.mix_shader_material(name, 'ShaderNodeBsdfDiffuse', second)
+        nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs[output], mix.inputs['Fac'])
+        scenes.plane(name, size=1.0, location=(x, 1.0, 1.2), materials=[mat])
+    pane, nt, out = scenes._material('pane')
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfTransparent').outputs[0], out.inputs['Surface'])
+    scenes.plane('Pane', size=1.0, location=(0, -1.5, 1.0), materials=[pane])
+
+
+def test_the_exports_own_ray_kind_twins_coincide(scene, exported):
+    from addon.coincidentfaces import exact_groups
+    _ray_type_mixes()
+    g = exported().geometry
+    rows, _ = exact_groups(g.vertices, g.triangles, np.ones(len(g.triangles), bool))
+    assert len(rows) == 8, len(rows)           # both plates and their twins: what the next test renders
+
+
+def test_the_exports_own_ray_kind_twins_are_not_said(scene, said):
+    _ray_type_mixes()
+    assert not _said(said), said
