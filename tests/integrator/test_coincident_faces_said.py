@@ -91,6 +91,21 @@ def test_copies_no_ray_kind_sees_alike_are_not_said():
     assert len(got) == 1, got
 
 
+def test_wholly_clear_copies_are_not_said_half_clear_ones_are():
+    # a white Transparent BSDF twice renders as once in Cycles too (1.0 both, under a white
+    # world); a half-clear one twice darker there (0.526 against 0.55)
+    v, t = _box()
+    for clear, says in ((1.0, False), (0.5, True)):
+        mats = [material('default'), material('floor'),
+                material('glassy', (0.1, 0.1, 0.1), transparency=np.full(3, clear, np.float32))]
+        q, qt = quad((0.0, 0.0, 0.0), 4.0, 4.0)
+        scene = sd.SceneData(ortho_down(height=3.0, width=8, px=6, view=3.0),
+                             geometry([(q, qt, FLOOR, ALL_VIS), (v, t, 2, ALL_VIS), (v, t, 2, ALL_VIS)]),
+                             mats, [], np.full(3, 0.5, np.float32), sd.Settings(samples=1, max_bounces=1))
+        got = [m for _, m in render(scene).messages if SAID in m]
+        assert len(got) == says, (clear, got)
+
+
 def test_groups_are_exact_in_any_corner_order_and_twins_find_them_everywhere():
     # far from the origin as near it, and where a triangle's step keeps all its ULPs (the
     # keys had been written only where the step shrank: 50 of 350 copies found on a fuzz scene)
