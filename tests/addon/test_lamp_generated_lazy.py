@@ -4,7 +4,6 @@ reads them: every lamp had worked them out on every render (a sun's 64 direction
 loops, ~1 ms; a point lamp's 3x3 inverse), where most lamps have no such texture. A tree that
 reads them gets the same points as before (tests/parity/test_sun_generated_textures.py and
 test_lamp_generated_textures.py compare them with Cycles)."""
-import bpy
 
 from addon.export import lights
 

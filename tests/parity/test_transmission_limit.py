@@ -5,7 +5,6 @@ alone). DACRT's glass is a stand-in (unbent, its shadows let through: said), so 
 differ; where the limit falls must not. DACRT had needed one bounce more: the floor behind
 the pane was black at 1 too (image 0.042 where Cycles gives 0.307; 0.404 at 12)."""
 import bpy
-import numpy as np
 import pytest
 
 from tests.addon import scenes
