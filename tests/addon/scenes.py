@@ -417,6 +417,17 @@ def render_rgba(scene=None):
         return rgba(read_exr(render_exr(Path(d) / "render.exr", scene)))
 
 
+def seeded_rgb(scene, engine, seeds):
+    """(seeds, H, W, 3): the scene rendered by engine ('CYCLES' or 'DACRT') once per seed 0..seeds-1
+    (both engines' seed set alike), for a per-pixel test against another engine's renders."""
+    scene.render.engine = engine
+    out = []
+    for seed in range(seeds):
+        scene.cycles.seed = scene.dacrt.seed = seed
+        out.append(render_rgba(scene)[..., :3])
+    return np.stack(out)
+
+
 def write_image(path, px, fmt='uint8'):
     """px (h, w, c) written to an image file through OpenImageIO, row 0 at the BOTTOM (as
     Blender's pixels), alpha straight as given; returns the path as str."""

@@ -118,9 +118,9 @@ def test_huge_surfaces_says_the_same_from_recentred_sample(k):
         assert found == {}         # (moved vertices: nothing of the sample reused)
 
 
-def test_an_ordinary_render_samples_the_triangles_once(monkeypatch):
-    """The Integrator's set-up of a scene around the origin: huge_surfaces takes recentred's
-    smallest face instead of gathering and sizing the same sample again."""
+def _sized_in_huge_surfaces(monkeypatch):
+    """The lengths of the samples sceneprep._largest sizes while huge_surfaces runs (filled as
+    the Integrator is set up)."""
     from addon import integrator
     sized, inside = [], []
     real_largest, real_huge = sceneprep._largest, integrator.huge_surfaces
@@ -138,6 +138,14 @@ def test_an_ordinary_render_samples_the_triangles_once(monkeypatch):
             inside.pop()
     monkeypatch.setattr(sceneprep, '_largest', counting)
     monkeypatch.setattr(integrator, 'huge_surfaces', huge)
+    return sized
+
+
+def test_an_ordinary_render_samples_the_triangles_once(monkeypatch):
+    """The Integrator's set-up of a scene around the origin: huge_surfaces takes recentred's
+    smallest face instead of gathering and sizing the same sample again."""
+    from addon import integrator
+    sized = _sized_in_huge_surfaces(monkeypatch)
     integ = integrator.Integrator(_sphere_scene((0.0, 0.0, 0.0)))
     assert not [m for m in integ.messages if 'off the surface' in m[1]]
     assert sized == [], sized
@@ -182,22 +190,7 @@ def test_objects_on_a_far_reaching_face_are_sized_from_recentred_sample(monkeypa
     sampled faces, not a second gather and sizing of the same sample (~1 ms of the dragon's
     4-spp set-up), and says nothing here."""
     from addon import integrator
-    sized, inside = [], []
-    real_largest, real_huge = sceneprep._largest, integrator.huge_surfaces
-
-    def counting(a):
-        if inside:
-            sized.append(len(a))
-        return real_largest(a)
-
-    def huge(*args, **kw):
-        inside.append(True)
-        try:
-            return real_huge(*args, **kw)
-        finally:
-            inside.pop()
-    monkeypatch.setattr(sceneprep, '_largest', counting)
-    monkeypatch.setattr(integrator, 'huge_surfaces', huge)
+    sized = _sized_in_huge_surfaces(monkeypatch)
     integ = integrator.Integrator(_pebble_on_a_field())
     assert not [m for m in integ.messages if 'off the surface' in m[1]]
     assert sized == [2], sized      # (the two objects' boxes only: the test got past the faces)

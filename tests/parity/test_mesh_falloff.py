@@ -95,14 +95,6 @@ def _per_ray_scene(output, smooth, strength, textured, mixed):
     return sc
 
 
-def _seeds(sc, engine, seeds=4):
-    sc.render.engine = engine
-    out = []
-    for seed in range(seeds):
-        sc.cycles.seed = sc.dacrt.seed = seed
-        out.append(scenes.render_rgba(sc)[..., :3])
-    return np.stack(out)
-
 
 @pytest.mark.parametrize('output,smooth,strength,textured,mixed', [
     ('Linear', 0.0, 2.0, False, False), ('Constant', 0.0, 0.5, True, False), ('Quadratic', 1.0, 8.0, False, False),
@@ -111,7 +103,7 @@ def test_falloff_at_each_rays_length_matches_cycles(output, smooth, strength, te
     """Per pixel (Welch tests per pixel and 4x4 block, 4 seeds a side) and per channel (1%): the
     panel seen by the camera, the floor it lights by light samples and BSDF hits."""
     sc = _per_ray_scene(output, smooth, strength, textured, mixed)
-    cycles, dacrt = _seeds(sc, 'CYCLES'), _seeds(sc, 'DACRT')
+    cycles, dacrt = scenes.seeded_rgb(sc, 'CYCLES', 4), scenes.seeded_rgb(sc, 'DACRT', 4)
     assert cycles[:, :18].mean() > 0.025         # (the floor, rows from the bottom: 0.012 by the world)
     result = stats.compare(cycles, dacrt)
     assert result.passed, result.summary()

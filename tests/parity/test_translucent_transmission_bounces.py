@@ -46,19 +46,11 @@ def _scene(bounces, veil=False):
     return sc
 
 
-def _seeds(sc, engine, seeds=4):
-    sc.render.engine = engine
-    out = []
-    for seed in range(seeds):
-        sc.cycles.seed = sc.dacrt.seed = seed
-        out.append(scenes.render_rgba(sc)[..., :3])
-    return np.stack(out)
-
 
 @pytest.mark.parametrize('bounces,veil', [(0, False), (1, False), (2, False), (0, True)])
 def test_translucent_bounces_end_at_the_transmission_limit(bounces, veil):
     sc = _scene(bounces, veil)
-    cycles, dacrt = _seeds(sc, 'CYCLES'), _seeds(sc, 'DACRT')
+    cycles, dacrt = scenes.seeded_rgb(sc, 'CYCLES', 4), scenes.seeded_rgb(sc, 'DACRT', 4)
     assert cycles.mean() > 0.05
     result = stats.compare(cycles, dacrt)
     assert result.passed, result.summary()
@@ -87,6 +79,6 @@ def _panes(bounces):
 @pytest.mark.parametrize('bounces', [0, 1, 2])
 def test_glass_panes_are_passed_while_the_transmissions_are_within_the_limit(bounces):
     sc = _panes(bounces)
-    means = {engine: _seeds(sc, engine, seeds=1).mean(axis=(0, 1, 2)) for engine in ('CYCLES', 'DACRT')}
+    means = {engine: scenes.seeded_rgb(sc, engine, 1).mean(axis=(0, 1, 2)) for engine in ('CYCLES', 'DACRT')}
     assert (means['CYCLES'][0] > 1.9) == (bounces > 0) and (means['CYCLES'][0] < 1e-3) == (bounces == 0)
     np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.01, atol=1e-4)

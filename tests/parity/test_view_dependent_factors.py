@@ -18,7 +18,6 @@ import math
 
 import bpy
 import bmesh
-import numpy as np
 import pytest
 
 from tests.addon import scenes
@@ -113,14 +112,6 @@ def _scene(kind, value, use='diffuses', light='area', smooth=True, bowl=False, n
     return sc
 
 
-def _seeds(sc, engine):
-    sc.render.engine = engine
-    out = []
-    for seed in range(SEEDS):
-        sc.cycles.seed = sc.dacrt.seed = seed
-        out.append(scenes.render_rgba(sc)[..., :3])
-    return np.stack(out)
-
 
 CASES = {
     'facing 0.3, area light': dict(kind='facing', value=0.3),
@@ -143,8 +134,8 @@ CASES = {
 @pytest.mark.parametrize('case', list(CASES))
 def test_view_dependent_factors_match_cycles_per_pixel(case, said):
     sc = _scene(**CASES[case])
-    cycles = _seeds(sc, 'CYCLES')
-    dacrt = _seeds(sc, 'DACRT')
+    cycles = scenes.seeded_rgb(sc, 'CYCLES', SEEDS)
+    dacrt = scenes.seeded_rgb(sc, 'DACRT', SEEDS)
     assert cycles.mean() > 0.02
     result = stats.compare(cycles, dacrt)
     assert result.passed, result.summary()
