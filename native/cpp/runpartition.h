@@ -26,18 +26,35 @@ __attribute__((always_inline)) inline void partition_runs(Ray* rays, size_t n, R
     size_t i = 0, j = n;    // [0, i) settled marked (but a pending left run), [j, n) unmarked
     size_t li = 0, rj = 0;  // pending runs
     uint64_t ml = 0, mr = 0;  // unmarked records of the left run, marked records of the right run
+    // The masks of the next unclaimed run on each side, taken before a swap loop (at pl, pr;
+    // SIZE_MAX: none), so the box tests overlap the swaps' dependency chain instead of waiting
+    // for the loop's mispredicted exit. A mask is used only while its run is still the next
+    // one on its side and unclaimed (j - i >= kRunRays): the swaps touch claimed runs only,
+    // and a claim by the other side overlapping it leaves j - i < kRunRays.
+    size_t pl = SIZE_MAX, pr = SIZE_MAX;
+    uint64_t mpl = 0, mpr = 0;
     for (;;) {
         while (ml == 0 && j - i >= kRunRays) {
-            ml = ~run(rays + i);
+            ml = ~(pl == i ? mpl : run(rays + i));
             li = i;
             i += kRunRays;
         }
         while (mr == 0 && j - i >= kRunRays) {
             j -= kRunRays;
-            mr = run(rays + j);
+            mr = pr == j ? mpr : run(rays + j);
             rj = j;
         }
         if (ml == 0 || mr == 0) break;
+        if (j - i >= kRunRays) {
+            if (pl != i) {
+                mpl = run(rays + i);
+                pl = i;
+            }
+            if (pr != j - kRunRays) {
+                mpr = run(rays + j - kRunRays);
+                pr = j - kRunRays;
+            }
+        }
         do {
             swap_records(rays + li + __builtin_ctzll(ml), rays + rj + __builtin_ctzll(mr));
             ml &= ml - 1;
