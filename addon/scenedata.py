@@ -111,6 +111,9 @@ class Environment:
     # lookup blends it and decodes the blend, the importance map comes from its decoded texels;
     # None: `pixels` are blended. `pixels` are the decoded texels either way
     encoded: Optional[np.ndarray] = None
+    # a Single Scattering Sky Texture's map: its ground (below the horizon) fades as Cycles'
+    # kernel publishes it, where Cycles 5.0.1 renders it darker (export/sky.py says so)
+    sky_ground_fade: bool = False
 
 
 @dataclass

@@ -26,7 +26,8 @@ from .meshes import mesh_arrays
 from .motion import MotionCheck, motion_blur_message
 from .placement import Placement
 from .aovs import shader_aovs
-from .settings import cycles_glossy_messages, export_settings
+from .sky import ground_seen_said
+from .settings import clamp_direct_said, cycles_glossy_messages, export_settings
 from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, strand_kind, tessellate,
                       triangle_count)
 from .usedindices import used_indices
@@ -318,6 +319,19 @@ class Exporter:
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
         self._summarize(geometry, world, environment, camera_world)
+        seen_env = camera_world[1] if camera_world is not None else environment
+        said = ground_seen_said(seen_env, camera, settings,
+                                bool(world_visibility(self.world) & sd.VIS_CAMERA))
+        if said:
+            self.messages.append(('WARNING', said))
+        used = set(used_indices(geometry.material, len(self.materials.materials)).tolist())
+        said = clamp_direct_said(settings, [lt for lt in self.lights if np.any(lt.strength > 0)],
+                                 [m.name for i, m in enumerate(self.materials.materials)
+                                  if i in used and np.any(m.emission > 0) and m.emission_sampling != 'NONE'],
+                                 np.any(world > 0) or (environment is not None and np.any(environment.strength > 0)
+                                                       and np.any(environment.pixels > 0)))
+        if said:
+            self.messages.append(('WARNING', said))
         # (only where the tree has lamps or emitters to leave out: the world is not culled so)
         tree_lights = self.lights or any(np.any(m.emission > 0) for m in self.materials.materials)
         below = below_surface(self.materials.materials) if settings.use_light_tree and tree_lights else []

@@ -196,6 +196,23 @@ def export_settings(scene, vl, messages, viewport=False):
                        adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
 
+def clamp_direct_said(settings, lamps, emitters, world_lit):
+    """The report's text when Clamp Direct is on and more than one light source can be
+    sampled (lamps, emissive materials, a lit world), else None: each engine clamps its own
+    light samples, and DACRT picks among sources with other probabilities than Cycles, so the
+    clamped samples and the clamped image differ (one lamp alone clamps alike)."""
+    if not settings.sample_clamp_direct > 0:
+        return None
+    sources = [f"{len(lamps)} light(s)"] if lamps else []
+    sources += [f"{len(emitters)} emissive material(s)"] if emitters else []
+    sources += ["the world"] if world_lit else []
+    if len(lamps) + len(emitters) + bool(world_lit) < 2:
+        return None
+    return (f"Clamp Direct {settings.sample_clamp_direct:g} with several light sources ({', '.join(sources)}): "
+            "DACRT picks which to sample with other probabilities than Cycles, so it clamps other light "
+            "samples and clamped pixels differ from Cycles' (unclamped both agree)")
+
+
 def cycles_glossy_messages(scene, kinds, shadow_clear_glass, max_bounces):
     """The warnings for Cycles' Light Paths > Caustics settings (Filter Glossy, Reflective and
     Refractive Caustics), which DACRT does not apply, where they change what Cycles renders of
