@@ -84,9 +84,10 @@ def ground_seen_said(env, camera, settings, camera_sees_world):
     band = (z < 0.0) & (z > -0.4) & (True if seen is None else seen)
     if not band.any():
         return None
-    return ("world: the Single Scattering Sky Texture's ground (below its horizon), which the camera sees, "
-            "fades as Cycles' sky kernel publishes it; Cycles 5.0.1 renders it 2-25% darker there "
-            "(the further below the horizon, the darker)")
+    # (objects may hide that ground: said as where the camera sees it, not that it does)
+    return ("world: where the camera sees the Single Scattering Sky Texture's ground (below its horizon), "
+            "DACRT fades it as Cycles' sky kernel publishes it; Cycles 5.0.1 renders it 2-25% darker "
+            "there (the further below the horizon, the darker)")
 
 
 @lru_cache(maxsize=4)
