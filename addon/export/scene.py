@@ -325,11 +325,9 @@ class Exporter:
         if said:
             self.messages.append(('WARNING', said))
         used = set(used_indices(geometry.material, len(self.materials.materials)).tolist())
-        said = clamp_direct_said(settings, [lt for lt in self.lights if np.any(lt.strength > 0)],
-                                 [m.name for i, m in enumerate(self.materials.materials)
-                                  if i in used and np.any(m.emission > 0) and m.emission_sampling != 'NONE'],
-                                 np.any(world > 0) or (environment is not None and np.any(environment.strength > 0)
-                                                       and np.any(environment.pixels > 0)))
+        said = clamp_direct_said(settings, [m.name for i, m in enumerate(self.materials.materials)
+                                            if i in used and np.any(m.emission > 0) and m.emission_sampling != 'NONE'],
+                                 sum(1 for lt in self.lights if np.any(lt.strength > 0)))
         if said:
             self.messages.append(('WARNING', said))
         # (only where the tree has lamps or emitters to leave out: the world is not culled so)

@@ -196,21 +196,24 @@ def export_settings(scene, vl, messages, viewport=False):
                        adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
 
-def clamp_direct_said(settings, lamps, emitters, world_lit):
-    """The report's text when Clamp Direct is on and more than one light source can be
-    sampled (lamps, emissive materials, a lit world), else None: each engine clamps its own
-    light samples, and DACRT picks among sources with other probabilities than Cycles, so the
-    clamped samples and the clamped image differ (one lamp alone clamps alike)."""
-    if not settings.sample_clamp_direct > 0:
+def clamp_direct_said(settings, emitters, lamps):
+    """The report's text when Clamp Direct can clamp other light samples than Cycles', else
+    None. emitters: names of the light-sampled emissive materials in use; lamps: how many lamps
+    give light. Each engine clamps its own light samples. With the Light Tree DACRT picks an
+    emitter's triangles with other probabilities than Cycles' tree (the object, then its
+    triangles by power): an emissive cube over a floor at Clamp Direct 1, 0 bounces, 0.95x
+    Cycles' mean (rows to 0.80x), 1.000x unclamped. Without it one emitter is picked as Cycles
+    picks it (1.000x), but its share against a lamp differs (0.99x, rows to 0.977x). Lamps and
+    the world alone clamp alike (two or three lamps, a lamp and a grey world: 1.000x, 0.996x)."""
+    if not settings.sample_clamp_direct > 0 or not emitters:
         return None
-    sources = [f"{len(lamps)} light(s)"] if lamps else []
-    sources += [f"{len(emitters)} emissive material(s)"] if emitters else []
-    sources += ["the world"] if world_lit else []
-    if len(lamps) + len(emitters) + bool(world_lit) < 2:
+    if not settings.use_light_tree and not lamps and len(emitters) < 2:
         return None
-    return (f"Clamp Direct {settings.sample_clamp_direct:g} with several light sources ({', '.join(sources)}): "
-            "DACRT picks which to sample with other probabilities than Cycles, so it clamps other light "
-            "samples and clamped pixels differ from Cycles' (unclamped both agree)")
+    named = ', '.join(repr(n) for n in emitters[:3]) + (f" and {len(emitters) - 3} more" if len(emitters) > 3 else "")
+    how = ("picks their triangles" if settings.use_light_tree else "shares light samples among the light sources")
+    return (f"Clamp Direct {settings.sample_clamp_direct:g} with light-sampled emissive material(s) {named}: "
+            f"DACRT {how} with other probabilities than Cycles, so it clamps other light samples and "
+            "the light they cast differs from Cycles' where clamped (unclamped both agree)")
 
 
 def cycles_glossy_messages(scene, kinds, shadow_clear_glass, max_bounces):
