@@ -74,7 +74,10 @@ def ground_seen_said(env, camera, settings, camera_sees_world):
     if not (np.any(env.strength > 0) and np.any(env.pixels > 0)):
         return None
     from ..camera import CameraModel      # (the numpy camera model: the rays Cycles casts)
-    cam = CameraModel(camera)
+    try:
+        cam = CameraModel(camera)
+    except ValueError:      # (a camera the render refuses says so itself; nothing to add here)
+        return None
     x0, y0, x1, y1 = cam.region
     rx, ry = np.meshgrid(np.linspace(x0, x1, 65), np.linspace(y0, y1, 65))
     rx, ry = rx.ravel(), ry.ravel()

@@ -67,3 +67,13 @@ def test_not_said_where_it_cannot_show(scene, said, case):
     if case == 'camera_hidden':
         w.cycles_visibility.camera = False
     assert not _said(said)
+
+
+@pytest.mark.parametrize('pitch, seen', [(95.0, True), (125.0, False)])
+def test_said_in_the_viewport_by_its_view(scene, pitch, seen):
+    # the viewport's camera (export.viewport_camera) decides it as the render camera does
+    from addon import export
+    from .test_viewport import _view_of
+    _sky(scene, pitch=pitch)
+    data = export.export_scene(bpy.context.evaluated_depsgraph_get(), view_camera=_view_of(scene.camera))
+    assert any(SAID in text for _, text in data.messages) == seen, data.messages
