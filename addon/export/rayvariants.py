@@ -18,7 +18,7 @@ import dataclasses
 import numpy as np
 
 from .. import scenedata as sd
-from ..procedural import ProceduralTexels
+from ..procedural import VIEW, ProceduralTexels
 from .aovs import CAMERA_LIGHT_PATH
 from .assembly import procedural_textures
 
@@ -109,8 +109,9 @@ def _triangle_needs(m):
     """What a material reads per triangle beside its UVs, which the assembly fills in for the
     triangles of the material they show (a variant's copies take the original's): the
     coordinates, attributes and Object Info its procedural textures read, a normal map's
-    tangents, a UV map read by name."""
-    needs = {n for t in procedural_textures(m) for n in t.needs}
+    tangents, a UV map read by name. What a chain reads of the hit's ray (procedural.VIEW: a
+    Layer Weight's view, a Light Falloff's ray length) is no triangle's: every hit carries it."""
+    needs = {n for t in procedural_textures(m) for n in t.needs if n not in VIEW}
     if m.normal_texture is not None:
         needs.add(('tangents', m.normal_uv_map))
     if m.uv_map:

@@ -97,6 +97,28 @@ def _held_out_through_math():
     return mat
 
 
+def _view_and_ray_length():
+    # camera rays see an emission shaped by the view (Layer Weight Facing), bounce rays and light
+    # samples one by the ray's length (Light Falloff Linear): per-hit values both, no triangle's.
+    # Taken for per-triangle data, neither build "needed all the other's", so the material was
+    # built once with the factor at its own value 0.5, said: 4.3x Cycles in red here
+    mat, nt, mix, lit, seen = scenes.mix_shader_material("Panel", 'ShaderNodeEmission', 'ShaderNodeEmission')
+    falloff = nt.nodes.new('ShaderNodeLightFalloff')
+    falloff.inputs['Strength'].default_value = 3.0
+    nt.links.new(falloff.outputs['Linear'], lit.inputs['Strength'])
+    lit.inputs['Color'].default_value = (1.0, 0.8, 0.5, 1.0)
+    weight = nt.nodes.new('ShaderNodeLayerWeight')
+    weight.inputs['Blend'].default_value = 0.3
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'MULTIPLY'
+    m.inputs[1].default_value = 8.0
+    nt.links.new(weight.outputs['Facing'], m.inputs[0])
+    nt.links.new(m.outputs[0], seen.inputs['Strength'])
+    seen.inputs['Color'].default_value = (0.3, 0.6, 1.0, 1.0)
+    nt.links.new(_light_path(nt, 'Is Camera Ray'), mix.inputs['Fac'])
+    return mat
+
+
 CASES = {   # material, a sun (else the panel and a dim world light the floor), a pane of glass
     'emitter_diffuse_to_camera': (_emitter_diffuse_to_camera, False, False),
     # (camera rays past the pane are Cycles' transmission rays, Is Camera Ray 0: they see the
@@ -107,6 +129,7 @@ CASES = {   # material, a sun (else the panel and a dim world light the floor), 
     'tinted_shadow_pass': (_tinted_shadow, True, False),
     'emitter_tinting_its_shadow_rays': (_emitter_tinting_its_shadow_rays, True, False),
     'held_out_through_math': (_held_out_through_math, True, False),
+    'view_and_ray_length': (_view_and_ray_length, False, False),
 }
 
 
