@@ -128,9 +128,13 @@ def coincident_faces(sd, tri, mats) -> list:
     tubes = None if g.one_sided is None else \
         (g.one_sided, g.instance if g.instance is not None else g.object_index)
     said = said_copies(rows, group, tri.area, tri.visibility, mats.emissive[tri.material], tubes)
+    # (a material built per ray kind has a copy of each triangle per variant, in the same set:
+    # counted once, as the user's triangle, and as the material it is a build of)
+    family = np.array([m.variant_of if m.variant_of >= 0 else i for i, m in enumerate(sd.materials)], np.int64)
+    mat = family[np.asarray(tri.material)]
+    said &= mat == np.asarray(tri.material)
     if not said.any():
         return []
-    mat = np.asarray(tri.material)
     # (half-clear copies too: Mix(Diffuse 0.1, Transparent, 0.5) twice under a white world, K = 1:
     # Cycles 0.526, DACRT 0.55 as the single plane)
     text = (f"{int(said.sum())} triangles of {sd.named_objects(said)} coincide exactly with other triangles "

@@ -239,6 +239,9 @@ class Material:
     # built per ray kind (export/rayvariants.py): its triangles have a copy per variant, each
     # seen by its kinds, so a kind one copy lacks (Shadow) is another's, not the object's setting
     ray_kinds_apart: bool = False
+    # one of those copies' builds: the index of the material whose triangles it copies (-1: none;
+    # coincident faces are counted without them, coincidentfaces.py)
+    variant_of: int = -1
     # a closure Cycles treats as glossy (rendered as diffuse here): lights with Glossy and
     # Diffuse ray visibility apart are said where some material has one (reflectors.has_glossy_closure)
     glossy: bool = False

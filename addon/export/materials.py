@@ -164,8 +164,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                     self.camera_holdouts.add(idx)
             finally:
                 self._on_points = False
-            for m, extra in built:
-                self._register(m, extra)
+            for i, (m, extra) in enumerate(built):
+                self._register(m if i == 0 else dataclasses.replace(m, variant_of=idx), extra)
             if len(built) > 1:
                 self.ray_variants[idx] = list(range(idx + 1, idx + len(built)))
             self._index[key] = idx

@@ -110,3 +110,24 @@ def test_the_exports_own_ray_kind_twins_coincide(scene, exported):
 def test_the_exports_own_ray_kind_twins_are_not_said(scene, said):
     _ray_type_mixes()
     assert not _said(said), said
+
+
+def test_copies_of_a_material_built_per_ray_kind_are_counted_once(scene, said):
+    # a mirrored cube whose material reads Is Camera Ray between two diffuse colours: the export
+    # builds it per ray kind and gives each triangle a copy per variant (rayvariants.py), in the
+    # same coincident set as the user's copy. Said as the same mesh with a plain material is
+    # (the variants had doubled the count and added "where the copies' materials differ",
+    # false: the user's copies share one material)
+    cube = _scene()
+    m = cube.modifiers.new('mirror', 'MIRROR')
+    m.use_axis = [True, False, False]
+    plain = _said(said)
+    assert len(plain) == 1, said
+    mat, nt, mix, _, red = scenes.mix_shader_material('kinds', 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfDiffuse')
+    red.inputs['Color'].default_value = (0.9, 0.1, 0.1, 1.0)
+    nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray'], mix.inputs['Fac'])
+    cube.data.materials[0] = mat
+    got = _said(said)
+    assert got == plain, (got, plain)
+    assert got[0].startswith(f"{_brute_force_copies()} triangles of 'Cube' {SAID}"), got
+    assert "materials differ" not in got[0], got
