@@ -2,9 +2,10 @@
 the searches and lookups per point, from_uv and the turn to the world as a lane loop per
 instruction set) against one point at a time (environment_sample): the same bits for every
 map kind ('Linear' and 'Closest', sRGB, black rows, one-row and one-column maps, rotated and
-mirrored worlds, an all-black map), at the uniforms' edges, for any count (short last lane
-groups), on every instruction set the CPU runs (DACRT_ISA); and next_event, which takes the
-lane path for the points that pick the map, gives what sampling them one at a time gives."""
+mirrored worlds, an all-black map, guide buckets that hold long flat runs or nothing), at the
+uniforms' edges, for any count (short last lane groups), on every instruction set the CPU runs
+(DACRT_ISA); and next_event, which takes the lane path for the points that pick the map, gives
+what sampling them one at a time gives."""
 
 import numpy as np
 
@@ -44,13 +45,25 @@ def _maps(rng):
         out.append((f"srgb-{interp}", lamps.environment_map(enc, _rotation(rng), interp, srgb=True,
                                                             scale=[1.5, 2.0, 0.5])))
         out.append((f"black-{interp}", lamps.environment_map(np.zeros((8, 16, 3), F32), _rotation(rng), interp)))
+        # Guide buckets that hold thousands of entries (a flat CDF run: black columns) and empty
+        # ones (the bright ends' steep rise), rows and columns alike, in maps over 2^20 column-CDF
+        # entries (where a lane-group search would pay, README "envcdf"). Each row's column CDF is
+        # 3/7 over its black run: u2 = 3/7 (_uniforms) ties with it inside a bucket, and every
+        # search must land after the run as std::upper_bound does.
+        wide = np.zeros((400, 3000, 3), F32)
+        wide[:, :3] = wide[:, -4:] = 1.0
+        out.append((f"wide-runs-{interp}", lamps.environment_map(wide, _rotation(rng), interp)))
+        tall = np.zeros((2000, 600, 3), F32)
+        tall[:7] = tall[-7:] = 2.0
+        tall[1000] = 5.0
+        out.append((f"tall-runs-{interp}", lamps.environment_map(tall, _rotation(rng), interp)))
     return out
 
 
 def _uniforms(rng, n):
     u1 = rng.random(n).astype(F32)
     u2 = rng.random(n).astype(F32)
-    edges = np.array([0, 2 ** -24, 0.25, 0.5, 1 - 2 ** -24, 1 - 2 ** -23], F32)
+    edges = np.array([0, 2 ** -24, 0.25, 3 / 7, 0.5, 1 - 2 ** -24, 1 - 2 ** -23], F32)
     k = min(n, 300)
     u1[:k] = rng.choice(edges, k)
     u2[k // 2:k + k // 2] = rng.choice(edges, len(u2[k // 2:k + k // 2]))
