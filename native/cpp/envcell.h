@@ -6,7 +6,6 @@
 // one out-of-line copy, called per lane (envlanes.cpp's samples 1.4x slower than one at a time).
 #pragma once
 
-#include <algorithm>
 #include <cmath>
 
 #include "equirect.h"
@@ -20,19 +19,29 @@ DACRT_ENV_INLINE float bilerp(float a, float b, float c, float d, float fx, floa
     return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
 }
 
+// std::min(std::max(x, 0), the float below 1), spelled out: std::min<float> and std::max<float>
+// are inline functions other files use too, and the module's LTO kept one out-of-line copy that
+// the place lanes (envlanes.cpp) then called per lane, which left those loops scalar. The same
+// selects as std::max ((x < 0) ? 0 : x) and std::min ((c < y) ? c : y), so the same bits, NaN
+// included.
+DACRT_ENV_INLINE float clamp_below_one(float x) {
+    const float y = x < 0.0f ? 0.0f : x;
+    return 0x1.fffffep-1f < y ? 0x1.fffffep-1f : y;
+}
+
 // Where a uniform falls within its picked CDF interval [lo, hi), in [0, 1): the row's (a double
 // CDF) and the column's.
 DACRT_ENV_INLINE float row_fraction(float u1, double lo, double hi) {
-    return std::min(std::max(float((double(u1) - lo) / (hi - lo)), 0.0f), 0x1.fffffep-1f);
+    return clamp_below_one(float((double(u1) - lo) / (hi - lo)));
 }
 DACRT_ENV_INLINE float column_fraction(float u2, float lo, float hi) {
-    return std::min(std::max((u2 - lo) / (hi - lo), 0.0f), 0x1.fffffep-1f);
+    return clamp_below_one((u2 - lo) / (hi - lo));
 }
 
 // x in [0, 1) with density proportional to (1 - x) a + x b (pbrt-v4's SampleLinear).
 DACRT_ENV_INLINE float sample_linear(float u, float a, float b) {
     const float x = u * (a + b) / (a + std::sqrt((1.0f - u) * a * a + u * b * b));
-    return u == 0 && a == 0 ? 0.0f : std::min(std::max(x, 0.0f), 0x1.fffffep-1f);
+    return u == 0 && a == 0 ? 0.0f : clamp_below_one(x);
 }
 
 // 'Linear': (u, v) in the cell between texel centres (row fi, column fj of a fw x fh map) whose
