@@ -245,9 +245,13 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
     float Les[3 * kEnvLanes], pdfs[kEnvLanes];
     size_t i = b;
     while (i < e) {
+        // the next K missed rays, branch-free: which rays missed follows no pattern (a branch
+        // per ray was the gather's most mispredicted); a ray that hit is written and overwritten
         size_t m = 0;
-        for (; i < e && m < K; ++i)
-            if (miss[i]) idx[m] = i, dx[m] = D[i], dy[m] = D[n + i], dz[m] = D[2 * n + i], ++m;
+        for (; i < e && m < K; ++i) {
+            idx[m] = i, dx[m] = D[i], dy[m] = D[n + i], dz[m] = D[2 * n + i];
+            m += miss[i] != 0;
+        }
         equirect_uv_lanes(env->to_map, dx, dy, dz, m, us, vs, ss);
         if (lanes) {
             for (size_t q = 0; q < m; ++q) fill_texels(*env, us[q], vs[q], ss[q], tex, q);
