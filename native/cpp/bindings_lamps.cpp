@@ -825,6 +825,8 @@ void register_lamps(py::module_& m) {
         .def_property_readonly("width", [](const EnvironmentMap& e) { return e.width; })
         .def_property_readonly("height", [](const EnvironmentMap& e) { return e.height; })
         .def_property_readonly("total", [](const EnvironmentMap& e) { return e.total; })
+        .def_property_readonly("row_buckets", [](const EnvironmentMap& e) { return e.row_buckets; })
+        .def_property_readonly("guide_buckets", [](const EnvironmentMap& e) { return e.guide_buckets; })
         .def("eval", &environment_eval_py, py::arg("D"))
         .def("sample", [](const EnvironmentMap& env, F32Array u1, F32Array u2) {
             return environment_sample_py(env, u1, u2, false);
