@@ -265,6 +265,10 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # Transparent's 8 had cut a path at its fourth pane: a wall behind three boxes of glass
         # 0.34 where Cycles gives 0.80); a pass through glass is no transparent pass
         self._glass_stop = max(0, int(getattr(s, 'transmission_max_bounces', 12)))
+        # Cycles' Total counts every bounce, a glass pass too (a floor behind a pane at Total 4
+        # renders as without it at 3): a path stops at k + glass passes > it, or at k > max_bounces
+        self._total_stop = max(0, int(getattr(s, 'total_max_bounces', 12)))
+        self.max_bounces = min(self.max_bounces, self._total_stop)
         # Cycles' sample clamps as the kernel applies them (scene/integrator.cpp): a limit on a
         # contribution's absolute channel sum, 3 x the setting; 0 is none
         self._clamps = tuple(_clamp_limit(name, getattr(s, name, 0.0))
@@ -897,6 +901,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             hit &= path.tb < self._transparent_stop
         if path.gb is not None:                       # past Transmission Max Bounces: the same
             hit &= path.gb <= self._glass_stop
+        if path.xb is not None:                       # past Total Max Bounces: the same
+            hit &= k + path.xb <= self._total_stop
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)),
         # in one native pass; thr becomes albedo x thr / q, the throughput after this
@@ -941,6 +947,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                                               np.take(ns, sel, axis=1), np.take(bump[3], sel) != 0)
         tb = None if path.tb is None else np.take(path.tb, idx)
         gb = None if path.gb is None else np.take(path.gb, idx)
+        xb = None if path.xb is None else np.take(path.xb, idx)
         nee = None if path.nee is None else np.take(path.nee, idx)
         del hits, path
         if self.lights:
@@ -991,10 +998,11 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             nee = None if nee is None else np.take(nee, kept)
             tb = None if tb is None else np.take(tb, kept)
             gb = None if gb is None else np.take(gb, kept)
+            xb = None if xb is None else np.take(xb, kept)
             rays = None                                # repacked with the survivors' ids
         if len(pid) == 0:
             return None
-        return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb, gb=gb,
+        return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb, gb=gb, xb=xb,
                       N=ns if self.lights.tree is not None else None,
                       dark_pdf=None if nee is None else (pdf * nee).astype(F32))
 

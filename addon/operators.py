@@ -25,6 +25,7 @@ def cycles_settings(cycles) -> dict:
         values['preview_samples'] = 1 << 24
     values['max_bounces'] = min(cycles.max_bounces, cycles.diffuse_bounces)
     values['transmission_max_bounces'] = min(cycles.max_bounces, cycles.transmission_bounces)
+    values['total_max_bounces'] = cycles.max_bounces    # glass passes count against it too
     if cycles.pixel_filter_type in ('BOX', 'GAUSSIAN', 'BLACKMAN_HARRIS'):
         values['filter_type'] = cycles.pixel_filter_type
     return values

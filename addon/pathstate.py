@@ -76,6 +76,9 @@ class Paths:
     rays: np.ndarray | None = None   # their RAY_DTYPE records when already packed
     tb: np.ndarray | None = None     # transparent surfaces passed so far (None: none yet)
     gb: np.ndarray | None = None     # glass surfaces passed so far, with tb (their own limit)
+    # glass passes so far: the bounces Cycles' Total counts besides the vertex index k (its
+    # diffuse and translucent bounces); set with gb
+    xb: np.ndarray | None = None
     # light sampling's share of the throughput at the next vertex (None: all of it): 1 - p of
     # a path that stopped at a semi-transparent surface (_through), whose bounce carries 1 / (1 - p)
     nee: np.ndarray | None = None

@@ -34,6 +34,13 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
         description="Diffuse bounces K, as Cycles counts them: paths have up to K+1 diffuse "
                     "reflections; 0 is direct light only",
         default=4, min=0, max=1024, soft_max=32)
+    total_max_bounces: IntProperty(
+        name="Total Max Bounces",
+        description="Bounces of every kind a path makes, as Cycles' Light Paths > Total counts "
+                    "them (12 by default): diffuse reflections, Translucent BSDF bounces and glass "
+                    "passes (see-through here) all count; a path stops at this or at its own "
+                    "kind's limit",
+        default=12, min=0, max=1024, soft_max=32)
     transparent_max_bounces: IntProperty(
         name="Transparent Max Bounces",
         description="Transparent surfaces (Transparent BSDF, Principled Alpha) a ray passes "

@@ -345,6 +345,7 @@ class Settings:
     max_bounces: int = 4           # K: up to K+1 diffuse reflections (Cycles' semantics)
     transparent_max_bounces: int = 8   # transparent surfaces a ray segment or shadow ray passes
     transmission_max_bounces: int = 12  # glass surfaces a path passes (Cycles' Transmission)
+    total_max_bounces: int = 12    # diffuse, translucent and glass bounces together (Cycles' Total)
     # transparent passes a camera path makes before Russian roulette at the surfaces it meets
     # (Cycles' scene.cycles.min_transparent_bounces, 0 by default)
     min_transparent_bounces: int = 0

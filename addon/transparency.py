@@ -55,6 +55,8 @@ class Transparency:
                 path.tb = np.zeros(len(hits), np.int32)
             if path.gb is None:             # (a translucent bounce may have made it)
                 path.gb = np.zeros(len(hits), np.int32)
+            if path.xb is None:
+                path.xb = np.zeros(len(hits), np.int32)
             # Cycles counts transparent surfaces over the whole path: once a pass reaches the
             # limit, the next surface, this one too, is not passed (nor lit, nor bounced off:
             # _vertex); what it emits still counts. Glass: against its own limit
@@ -64,10 +66,13 @@ class Transparency:
             glass = np.take(self._mat_glass, mat)
             if self._opaque_glass:
                 glass = 2.0 * self._glass_part(mat, tau, opacity).mean(axis=0) > tau.mean(axis=0)
-            tb, gb = compact(rows, path.tb, path.gb)
+            tb, gb, xb = compact(rows, path.tb, path.gb, path.xb)
             # (glass: Cycles refracts at a surface after n transmissions while n <= the limit, two
             # clear panes before an emitter seen through at limit 1: they had been black there)
-            spent = np.where(glass, gb > self._glass_stop, tb >= self._transparent_stop)
+            # Past Total Max Bounces (k + glass passes over it) glass is not passed either, as
+            # Cycles keeps only transparent closures there; clear surfaces still are
+            spent_total = k + xb > self._total_stop
+            spent = np.where(glass, (gb > self._glass_stop) | spent_total, tb >= self._transparent_stop)
             surface = None
             if chain is not None:                   # what the data passes read here, before the pick
                 surface = self._surface(h, None, D)
@@ -97,12 +102,14 @@ class Transparency:
             D, keys, tmax, tb = compact(gone, D, keys, tmax, tb)
             P, ng, ns, P_off = self._surface(h, None, D) if surface is None else (x[:, gone] for x in surface)
             if self.lights and k <= self.max_bounces:
+                # (none past Total Max Bounces: Cycles keeps no opaque closure there)
+                lit = opacity if not spent_total.any() else np.where(spent_total[gone], F32(0.0), opacity)
                 # As Cycles, the surface's light is sampled at every hit, passed or not, at the
                 # opaque part's weight: here for the paths that pass; those that stop sample it
                 # at their vertex with 1 - p of the 1 / (1 - p) their bounce carries. (Sampled
                 # only where the path stopped, a window of 80% Transparent and 20% Diffuse had
                 # 5-8x Cycles' noise.)
-                self._light_passed(k, j, path, sinks, rows, prim, u_hit[gone], v_hit[gone], opacity, P, ng, ns, P_off,
+                self._light_passed(k, j, path, sinks, rows, prim, u_hit[gone], v_hit[gone], lit, P, ng, ns, P_off,
                                    keys, tb)
             if (camera and self._glass_film) or self._transmit_split:
                 self._glass_or_clear(camera, path, rows, mat, tau, opacity, p,
@@ -111,6 +118,7 @@ class Transparency:
                 thr[:, rows] *= tau / p
             path.tb[rows[~glass]] += 1
             path.gb[rows[glass]] += 1
+            path.xb[rows[glass]] += 1
             # on from just behind the surface (P stepped off it away from the ray's side)
             t0 = h['t']
             sub = self._intersect_past(kind, path.transmit, rows, np.ascontiguousarray(P + P - P_off), D,

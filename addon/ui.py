@@ -82,6 +82,7 @@ class RENDER_PT_dacrt(DACRTPanel, Panel):
         col.prop(settings, "samples")
         col.prop(settings, "preview_samples", text="Viewport")
         col.prop(settings, "max_bounces")
+        col.prop(settings, "total_max_bounces", text="Total")
         col.prop(settings, "transparent_max_bounces", text="Transparent")
         col.prop(settings, "transmission_max_bounces", text="Transmission")
         row = col.row(align=True)

@@ -174,6 +174,7 @@ def export_settings(scene, vl, messages, viewport=False):
     return sd.Settings(samples=samples, max_bounces=d.max_bounces,
                        transparent_max_bounces=d.transparent_max_bounces,
                        transmission_max_bounces=d.transmission_max_bounces,
+                       total_max_bounces=int(getattr(d, 'total_max_bounces', 12)),
                        min_transparent_bounces=int(getattr(d, 'min_transparent_bounces', 0)),
                        sample_clamp_direct=d.sample_clamp_direct,
                        sample_clamp_indirect=d.sample_clamp_indirect, filter_type=d.filter_type,

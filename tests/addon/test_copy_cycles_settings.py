@@ -29,6 +29,7 @@ def test_every_setting_is_copied_with_cycles_bounce_caps(scene):
     assert (d.sample_clamp_direct, d.sample_clamp_indirect, d.film_exposure) == (3.0, 0.0, 2.0)
     # Cycles' Total (3) caps Diffuse (7) and Transmission (2); Transparent counts apart
     assert (d.max_bounces, d.transmission_max_bounces, d.transparent_max_bounces) == (3, 2, 21)
+    assert d.total_max_bounces == 3     # and glass passes count against it (test_total_bounces.py)
     assert (d.filter_type, d.filter_width) == ('GAUSSIAN', 2.5)
     scene.cycles.diffuse_bounces = 1
     bpy.ops.dacrt.copy_cycles_settings()
