@@ -234,6 +234,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._data_passes = tuple(p for p in self.film.passes if p not in LIGHT_PASSES) + kinds \
             + tuple(self._aovs)
         self.mats = Materials(scene_data.materials)
+        self._bounce_limits(s)
         self.max_transparent = max(0, int(getattr(s, 'transparent_max_bounces', 8)))
         # Cycles sets PATH_RAY_TERMINATE_ON_NEXT_SURFACE when a pass through a transparent surface
         # brings the path's count to the limit: the next surface only emits. Counted in passes,
@@ -261,14 +262,6 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             seen = (self.tri.visibility & VIS_CAMERA) != 0
             self.tri.visibility |= np.where(seen & holdout[self.tri.material], HOLDOUT, 0).astype(np.uint8)
         self._tri_emissive = self._per_triangle(self.mats.emissive) & (self.tri.area > 0)
-        # glass passes count against their own limit, as Cycles' transmission bounces (12, where
-        # Transparent's 8 had cut a path at its fourth pane: a wall behind three boxes of glass
-        # 0.34 where Cycles gives 0.80); a pass through glass is no transparent pass
-        self._glass_stop = max(0, int(getattr(s, 'transmission_max_bounces', 12)))
-        # Cycles' Total counts every bounce, a glass pass too (a floor behind a pane at Total 4
-        # renders as without it at 3): a path stops at k + glass passes > it, or at k > max_bounces
-        self._total_stop = max(0, int(getattr(s, 'total_max_bounces', 12)))
-        self.max_bounces = min(self.max_bounces, self._total_stop)
         # Cycles' sample clamps as the kernel applies them (scene/integrator.cpp): a limit on a
         # contribution's absolute channel sum, 3 x the setting; 0 is none
         self._clamps = tuple(_clamp_limit(name, getattr(s, name, 0.0))
@@ -449,6 +442,32 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if geometry.aovs is not None:
             per_tri['aovs'] = {key: a[keep] for key, a in geometry.aovs.items()}
         return replace(scene_data, geometry=replace(geometry, **per_tri)), int(np.count_nonzero(is_twin))
+
+    def _bounce_limits(self, s):
+        """Cycles' bounce budgets per path (kernel/integrator/path_state.h path_state_next): Total
+        counts every bounce, a glass pass too (a floor behind a pane at Total 4 renders as without
+        it at 3), Diffuse the diffuse reflections alone: a Translucent BSDF's bounce is a
+        transmission one (rays off it read Diffuse Depth 0), so with translucent surfaces the
+        vertex index k (diffuse and translucent bounces) may pass Max Bounces. A vertex is shaded
+        while k - translucent bounces <= Max Bounces (self._diffuse_stop), k + glass passes <=
+        Total and transmissions <= Transmission; self.max_bounces is the deepest k that can be."""
+        # glass passes count against their own limit, as Cycles' transmission bounces (12, where
+        # Transparent's 8 had cut a path at its fourth pane: a wall behind three boxes of glass
+        # 0.34 where Cycles gives 0.80); a pass through glass is no transparent pass
+        self._glass_stop = max(0, int(getattr(s, 'transmission_max_bounces', 12)))
+        self._total_stop = max(0, int(getattr(s, 'total_max_bounces', 12)))
+        self._diffuse_stop = min(self.max_bounces, self._total_stop)
+        self.max_bounces = self._diffuse_stop
+        self._translucent_apart = bool(self.mats.translucent.any()) and self._diffuse_stop < self._total_stop
+        if self._translucent_apart:
+            self.max_bounces = min(self._total_stop, self._diffuse_stop + self._glass_stop)
+
+    def _diffuse_bounces(self, k, path):
+        """The diffuse reflections path has made before vertex k: k less its translucent bounces
+        (its transmissions gb less its glass passes xb)."""
+        if path.gb is None:
+            return np.full(len(path.pid), k, np.int64)
+        return k - (path.gb - (0 if path.xb is None else path.xb))
 
     def _build_scenes(self):
         """The tracer scenes the ray kinds need. Kinds that see nearly the same triangles share
@@ -903,6 +922,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             hit &= path.gb <= self._glass_stop
         if path.xb is not None:                       # past Total Max Bounces: the same
             hit &= k + path.xb <= self._total_stop
+        if self._translucent_apart:                   # past Max Bounces' diffuse reflections
+            hit &= self._diffuse_bounces(k, path) <= self._diffuse_stop
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)),
         # in one native pass; thr becomes albedo x thr / q, the throughput after this

@@ -73,6 +73,9 @@ class Transparency:
             # Cycles keeps only transparent closures there; clear surfaces still are
             spent_total = k + xb > self._total_stop
             spent = np.where(glass, (gb > self._glass_stop) | spent_total, tb >= self._transparent_stop)
+            # (paths past their diffuse reflections, where translucent bounces let k pass Max
+            # Bounces, pass as at k = Max Bounces + 1: unlit)
+            unlit = spent_total | (k - (gb - xb) > self._diffuse_stop) if self._translucent_apart else spent_total
             surface = None
             if chain is not None:                   # what the data passes read here, before the pick
                 surface = self._surface(h, None, D)
@@ -103,7 +106,7 @@ class Transparency:
             P, ng, ns, P_off = self._surface(h, None, D) if surface is None else (x[:, gone] for x in surface)
             if self.lights and k <= self.max_bounces:
                 # (none past Total Max Bounces: Cycles keeps no opaque closure there)
-                lit = opacity if not spent_total.any() else np.where(spent_total[gone], F32(0.0), opacity)
+                lit = opacity if not unlit.any() else np.where(unlit[gone], F32(0.0), opacity)
                 # As Cycles, the surface's light is sampled at every hit, passed or not, at the
                 # opaque part's weight: here for the paths that pass; those that stop sample it
                 # at their vertex with 1 - p of the 1 / (1 - p) their bounce carries. (Sampled
