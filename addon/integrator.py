@@ -1012,8 +1012,17 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if bump is not None:              # Cycles' bsdf_sample: eval x bump_shadowing_term
             g = bump_shadowing(bump[:3], ns, wi, bump[3] != 0)
             thr *= g if moved is None else np.where(moved, F32(1.0), g)
+        below = int(len(ok) - np.count_nonzero(ok))
+        if self._translucent_apart and not self.lights.seen_by_bsdf and SKIP_WORK:
+            # (a reflection past the last diffuse one could only find emission, which no BSDF ray
+            # sees: ended here, as at k = Max Bounces without translucent surfaces)
+            d = k + 1 - (0 if gb is None else gb - (0 if xb is None else xb))
+            spent = (d > self._diffuse_stop) if gb is not None else np.full(len(ok), d > self._diffuse_stop)
+            if spent.any():
+                self._ended['last_bounce'] += int(np.count_nonzero(spent & ok))
+                ok = ok & ~spent
         if not ok.all():
-            self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
+            self._ended['below_surface'] += below
             kept = np.flatnonzero(ok)
             P_off, wi, thr, pid, keys, pdf, prim, ns = compact(kept, P_off, wi, thr, pid, keys, pdf, prim, ns)
             nee = None if nee is None else np.take(nee, kept)
