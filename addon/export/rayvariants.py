@@ -36,8 +36,11 @@ SHADOW = dict(_NONE, **{'Is Shadow Ray': 1.0, 'Ray Depth': 1.0})
 # an emitter's light sample (PATH_RAY_EMISSION alone), one bounce further than the vertex
 EMITTED = dict(_NONE, **{'Ray Depth': 1.0})
 # a ray off a Translucent BSDF (diffuse transmission), and one past glass (Cycles' singular
-# transmission): bounce rays here both
-_TRANSLUCENT = dict(BOUNCE, **{'Is Reflection Ray': 0.0, 'Is Transmission Ray': 1.0})
+# transmission): bounce rays here both. (Measured in Cycles 5.0, a ray off a Translucent BSDF:
+# Is Diffuse Ray and Is Transmission Ray 1, Is Reflection Ray 0, Ray Depth and Transmission
+# Depth 1, Diffuse Depth 0: path_state_next counts it as a transmission bounce alone)
+_TRANSLUCENT = dict(BOUNCE, **{'Is Reflection Ray': 0.0, 'Is Transmission Ray': 1.0, 'Diffuse Depth': 0.0,
+                               'Transmission Depth': 1.0})
 _GLASS = dict(_NONE, **{'Is Glossy Ray': 1.0, 'Is Singular Ray': 1.0, 'Is Transmission Ray': 1.0, 'Ray Depth': 1.0,
                         'Transmission Depth': 1.0})
 # the outputs past the first bounce, and the Transparent Depth past one transparent surface
@@ -139,31 +142,42 @@ def ray_variants(build, reads, max_bounces):
         notes.append(f"Light Path {shown}: emitters light the scene by light samples with the emission bounce "
                      "rays see (Cycles' light samples read these as at the vertex they light: Is Diffuse Ray and "
                      "Is Reflection Ray 0, Diffuse Depth one less)")
-    if max_bounces >= 1 and reads & set(_DEEPER):
-        # (bounce rays past the first, and shadow rays and light samples from their vertices)
+    deep = ''
+    if reads & set(_DEEPER):
+        # (bounce rays past the first, and shadow rays and light samples from their vertices;
+        # at Max Bounces 0 only paths through glass or off a Translucent BSDF go deeper, so it is
+        # then said with the bent note, where the scene has such a surface)
         deeper = build(dict(BOUNCE, **_DEEPER))
         deeper_shadow = build(dict(SHADOW, **{'Ray Depth': 2.0, 'Diffuse Depth': 1.0}))
         if not same(deeper[0], bounce[0]) or not same(deeper_shadow[0], shadow[0], _SHADOW_FIELDS):
-            notes.append(f"Light Path {_names(reads, tuple(_DEEPER))} read as 1 on every bounce (Cycles: the "
-                         "bounce's depth)")
+            deep = f"Light Path {_names(reads, tuple(_DEEPER))} read as 1 on every bounce (Cycles: the bounce's depth)"
+            if max_bounces >= 1:
+                notes.append(deep)
+                deep = ''
     if 'Transparent Depth' in reads:
         past = build(dict(CAMERA, **{'Transparent Depth': 1.0}))
         if not same(past[0], camera[0]):
             notes.append("Light Path Transparent Depth read as 0 on every surface (Cycles counts the transparent "
                          "surfaces a ray has passed)")
-    kinds = reads & {'Is Diffuse Ray', 'Is Reflection Ray', 'Is Transmission Ray'}
+    glossy = reads & {'Is Glossy Ray', 'Is Singular Ray', 'Glossy Depth', 'Transmission Depth'}
+    # the outputs a ray off a Translucent BSDF or past glass reads otherwise than one off a
+    # diffuse reflection (those of `glossy` are said apart, always)
+    kinds = {n for n in reads - glossy if any(v[n] != BOUNCE[n] for v in (_TRANSLUCENT, _GLASS))}
     bent = ''
     if kinds and not all(same(build(v)[0], bounce[0]) for v in (_TRANSLUCENT, _GLASS)):
         # (every bounce ray here is one off a diffuse reflection: rays off a Translucent BSDF
         # and past glass trace the same scene; said where the scene has such a surface)
         bent = (f"Light Path {' / '.join(sorted(kinds))} read as after a diffuse reflection on every bounce "
                 "ray (Cycles: not so on rays leaving a Translucent BSDF or passing glass)")
-    glossy = reads & {'Is Glossy Ray', 'Is Singular Ray', 'Glossy Depth', 'Transmission Depth'}
+    bent = '; '.join(r for r in (bent, deep) if r)
     if glossy:
         # (exact on diffuse paths; Cycles sets them on rays off glossy or glass surfaces, which
-        # DACRT renders as diffuse or passes straight through)
+        # DACRT renders as diffuse or passes straight through, and Transmission Depth on rays
+        # off a Translucent BSDF)
+        off = "glossy or glass surfaces" + (", Transmission Depth off a Translucent BSDF too"
+                                            if 'Transmission Depth' in glossy else "")
         notes.append(f"Light Path {' / '.join(sorted(glossy))} read as on a diffuse path (Cycles: set on rays "
-                     "off glossy or glass surfaces)")
+                     f"off {off})")
     groups = [[bounce, sd.VIS_DIFFUSE]]
     if same(camera[0], bounce[0]):
         groups[0][1] |= sd.VIS_CAMERA

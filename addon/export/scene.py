@@ -239,8 +239,9 @@ class Exporter:
         self.messages = []
         self.materials = MaterialBuilder(self.scene.frame_current)
         # (a material read per ray kind says a depth it reads the same on every bounce only if
-        # bounces past the first are rendered)
-        self.materials.max_bounces = int(getattr(getattr(self.scene, 'dacrt', None), 'max_bounces', 0))
+        # bounces past the first are rendered: Max Bounces, capped by Total)
+        d = getattr(self.scene, 'dacrt', None)
+        self.materials.max_bounces = min(int(getattr(d, 'max_bounces', 0)), int(getattr(d, 'total_max_bounces', 12)))
         self.object_names = []
         self.object_keys = []         # name_full of each: light linking's names
         self.object_pass_index = []

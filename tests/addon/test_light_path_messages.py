@@ -100,3 +100,48 @@ def test_object_info_colour_with_a_ray_kind_mix_is_built_once_and_said(scene, ex
     assert [m.name for m in data.materials].count("Panel") == 1
     text = ' '.join(_said(data, "Panel"))
     assert "(value from 'Light Path' node); its own value 0.5 used" in text, text
+
+
+def _leaf(x=3.0):
+    mat, nt, out = scenes._material("Leaf")
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfTranslucent').outputs[0], out.inputs['Surface'])
+    scenes.plane("Leaf", location=(x, 0, 0), materials=(mat,))
+
+
+@pytest.mark.parametrize('translucent', [False, True])
+def test_diffuse_depth_said_beside_a_translucent_surface_only(scene, exported, translucent):
+    """A ray off a Translucent BSDF reads Diffuse Depth 0 in Cycles 5.0 (a transmission bounce;
+    measured behind a white translucent plate), where DACRT's bounce rays read 1: said where the
+    scene has one, at Max Bounces 0 too (no deeper bounce then for the depth note to say it).
+    It had not been said: Diffuse Depth was left out of the outputs checked for such rays."""
+    scenes.camera()
+    scene.dacrt.max_bounces = 0
+    scenes.plane("Panel", materials=(_mixed_by("Panel", 'Diffuse Depth'),))
+    if translucent:
+        _leaf()
+    text = ' '.join(_said(exported(), "Panel"))
+    said = "Light Path Diffuse Depth read as after a diffuse reflection on every bounce ray"
+    assert (said in text) == translucent, text
+
+
+@pytest.mark.parametrize('glass', [False, True])
+def test_ray_depth_past_the_first_bounce_said_at_max_bounces_zero_where_glass_goes_deeper(scene, exported, glass):
+    """At Max Bounces 0 a diffuse path ends at its first bounce, but one through glass goes on
+    (Cycles counts the pass: the floor behind a pane casts its shadow ray at Ray Depth 2): the
+    depth note is said there, where the scene has glass, and not without."""
+    scenes.camera()
+    scene.dacrt.max_bounces = 0
+    scenes.plane("Panel", materials=(_clamped_emission("Panel", 'Ray Depth', 2.0),))
+    if glass:
+        mat, nt, out = scenes._material("Glass")
+        nt.links.new(nt.nodes.new('ShaderNodeBsdfGlass').outputs[0], out.inputs['Surface'])
+        scenes.plane("Pane", location=(3, 0, 0), materials=(mat,))
+    text = ' '.join(_said(exported(), "Panel"))
+    assert (RAY_DEPTH in text) == glass, text
+
+
+def test_transmission_depth_note_names_translucent_surfaces(scene, exported):
+    scenes.camera()
+    scenes.plane("Panel", materials=(_mixed_by("Panel", 'Transmission Depth'),))
+    text = ' '.join(_said(exported(), "Panel"))
+    assert "Transmission Depth off a Translucent BSDF too" in text, text

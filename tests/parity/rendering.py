@@ -56,6 +56,8 @@ def matched(scene, samples, bounces=0, box=True):
     scene.cycles.device, scene.cycles.use_denoising, scene.cycles.use_adaptive_sampling = 'CPU', False, False
     scene.cycles.samples = scene.dacrt.samples = samples
     scene.cycles.max_bounces = scene.dacrt.max_bounces = bounces
+    # (Cycles' max_bounces is its Total: glass passes and translucent bounces count against it too)
+    scene.dacrt.total_max_bounces = bounces
     if box:
         scene.cycles.pixel_filter_type, scene.dacrt.filter_type = 'BOX', 'BOX'
         scene.cycles.filter_width = scene.dacrt.filter_width = 1.0
