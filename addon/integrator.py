@@ -973,13 +973,13 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         del hits, path
         if self.lights:
             self._next_event(k, P, P_off, prim, ng, ns, thr if nee is None else thr * nee, pid, keys, u_pick,
-                             sinks.sampled(k), tb, u, v, sinks.groups, bump, rough=rough)
+                             sinks.sampled(k), tb, u, v, sinks.groups, bump, rough=rough, xb=xb)
             if far is not None:                       # and the transmission's, from the far side
                 sel, thr_far, _ = far
                 if nee is not None:
                     thr_far = thr_far * np.take(nee, sel)
                 self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys, u_pick, sinks,
-                                     tb, u, v, DIM_LOBE + 2 * k + 1, ns_far, bump)
+                                     tb, u, v, DIM_LOBE + 2 * k + 1, ns_far, bump, xb=xb)
         if k == K and not self.lights.seen_by_bsdf and SKIP_WORK:
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
@@ -1096,7 +1096,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
     # --- next-event estimation --------------------------------------------------------------------
 
     def _next_event(self, k, P, P_off, prim, ng, ns, thr, pid, keys, u_pick, L, tb=None, u=None, v=None,
-                    groups=(), bump=None, dims=None, shading_offset=True, rough=None):
+                    groups=(), bump=None, dims=None, shading_offset=True, rough=None, xb=None):
         """Sample one light per vertex, weight by MIS against the BSDF, trace shadow rays as one
         batch. thr: path throughput including this vertex's albedo. Light geometry is taken at
         the surface point P; shadow rays leave from P_off and skip the triangle prim they leave.
@@ -1105,7 +1105,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         front of them, a little short (the tracer can skip only one triangle: the one left).
         Light samples need only be in front of the shading normal, as in Cycles. With Cycles'
         shadow terminator (u, v: the points' barycentrics), shadow rays near it leave from the
-        smooth surface and samples are dimmed by the shading offset."""
+        smooth surface and samples are dimmed by the shading offset. xb: the paths' glass passes
+        (None: none), which Cycles' lamp and world Max Bounces count as bounces."""
         ka, kb = self.rng.dim_words(dim(k, 1) if dims is None else dims)
         t = self.tri
         term = (t.geo, t.normals if t.term_cutoff is not None else None, t.term_cutoff,
@@ -1114,8 +1115,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # past the world's Max Bounces its samples are still chosen but light nothing, as Cycles
         # rejects them (light_select_reached_max_bounces) while BSDF rays keep their MIS weight
         dark_world = self.lights.environment is not None and k > self._world_max_bounces
+        deeper = xb if xb is not None and self._depth_limited() and np.any(xb) else None
         entry = np.empty(len(pid), np.int32) if groups or self._shadow_link is not None or textured or dark_world \
-            else None
+            or deeper is not None else None
         point = np.empty((3, len(pid)), F32) if textured else None
         value, contrib, rays, send, skip, skipped = dacrt.shading.next_event(
             self._light_choice_at(k), P, P_off, ns, None if ns is ng else ng, thr, keys, ka, kb, pick=u_pick,
@@ -1128,7 +1130,28 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             off = np.flatnonzero(entry == self.lights.num_entries - 1)     # (the map is the last entry)
             value[:, off] = 0.0
             contrib[off] = False
+        if deeper is not None:
+            self._dark_past(k + np.asarray(deeper, np.int64), entry, value, contrib)
         self._shadows(k, pid, value, contrib, rays, send, skip, skipped, L, tb, entry, groups)
+
+    def _depth_limited(self):
+        """Whether a lamp's or the world's Max Bounces may fall within the paths' depths."""
+        return bool((self._max_bounces < self._total_stop + 1).any()) or (
+            self.lights.environment is not None and self._world_max_bounces <= self._total_stop)
+
+    def _dark_past(self, depth, entry, value, contrib):
+        """Light samples (picked entry, value, contrib per row) of lamps, or the world, past their
+        Max Bounces at the rows' bounce counts `depth` made dark, as _light_choice_at makes them
+        at the vertex index: Cycles counts a glass pass as a bounce there too (a lamp of Max
+        Bounces 0 lights no floor seen through a pane: 0 where DACRT gave the floor lit, 1.00)."""
+        nl = len(self._max_bounces)
+        over = np.zeros(len(depth), bool)
+        lamp = np.flatnonzero((entry >= 0) & (entry < nl))
+        over[lamp] = self._max_bounces[entry[lamp]] < depth[lamp]
+        if self.lights.environment is not None:
+            over |= (entry == self.lights.num_entries - 1) & (depth > self._world_max_bounces)
+        value[:, over] = 0.0
+        contrib[over] = False
 
     def _fused_rough(self):
         """shade_bounce's rough diffuses (triangle materials, Oren-Nayar terms and colours per

@@ -51,7 +51,7 @@ class Translucency:
         return T
 
     def _next_event_far(self, k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys, u_pick, sinks, tb, u, v, dims,
-                        ns_far=None, bump=None):
+                        ns_far=None, bump=None, xb=None):
         """Light sampling of the transmission lobe at the vertices sel (columns of the other
         arrays) of translucent surfaces, from their far side (far_side), with throughput
         thr_far (3, len(sel)) and random dimensions dims of its own; ns_far (3, len(sel)): the
@@ -70,7 +70,7 @@ class Translucency:
             far_bump[:3] *= F32(-1.0)
         self._next_event(k, fP, fP_off, take(prim), fng, fns, np.ascontiguousarray(thr_far, F32), take(pid),
                          np.ascontiguousarray(take(keys)), take(u_pick), sinks.sampled(k), take(tb), take(u),
-                         take(v), sinks.groups, far_bump, dims=dims, shading_offset=False)
+                         take(v), sinks.groups, far_bump, dims=dims, shading_offset=False, xb=take(xb))
 
     def _choose_lobes(self, k, far, keys, thr, P, ns, ng, P_off, ns_far=None):
         """The bounce's lobe at translucent hits (far: _translucent_hits'): the transmission with

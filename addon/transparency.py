@@ -233,12 +233,13 @@ class Transparency:
         if self.lights.num_entries > 1:
             u_pick = self.rng.uniform_pick(keys, DIM_PASSED + (k << 11) + 2 * j)[0]
         pid = np.take(path.pid, rows)
+        xb = None if path.xb is None else np.take(path.xb, rows)
         self._next_event(k, np.ascontiguousarray(P), np.ascontiguousarray(P_off), prim, np.ascontiguousarray(ng),
                          np.ascontiguousarray(ns), np.ascontiguousarray(thr, F32), pid, keys,
                          u_pick, sinks.sampled(k), tb, u, v, sinks.groups, bump,
                          dims=DIM_PASSED + (k << 11) + 2 * j + 1,
                          rough=self._rough_rows(prim, u, v, ng, ns, np.take(path.D, rows, axis=1))
-                         if self.mats.any_rough else None)
+                         if self.mats.any_rough else None, xb=xb)
         if self._any_translucent:             # a translucent surface's transmission, from the far side
             mat = np.take(self.tri.material, prim)
             sel = np.flatnonzero(np.take(self.mats.translucent, mat))
@@ -248,7 +249,7 @@ class Transparency:
                 if self.mats.translucency_textures:
                     self._translucency_maps(sel, prim, u, v, thr_far, ng, -np.take(path.D, rows, axis=1))
                 self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys,
-                                     u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, bump=bump)
+                                     u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, bump=bump, xb=xb)
 
     def _gather_segment(self, seg, sub, t0, sinks, k):
         """Lamps beyond distance t0 along a segment past a transparent surface, and the world

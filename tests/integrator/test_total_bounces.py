@@ -10,7 +10,7 @@ import pytest
 
 from addon import scenedata as sd
 
-from .scenes import ALL_VIS, geometry, material, ortho_down, quad, render
+from .scenes import ALL_VIS, geometry, light, material, ortho_down, quad, render
 from .test_transparency import WORLD, sheet_scene
 
 ONES = np.ones(3, np.float32)
@@ -66,3 +66,16 @@ def test_a_pass_through_glass_counts_against_total_bounces(total, max_bounces, v
     # without the pane the same budget shades one vertex more, unless Diffuse stops it first
     bare = _floor_under_ceiling(False, max_bounces=max_bounces, total_max_bounces=total)
     assert bare == pytest.approx(_reflected(min(total, max_bounces) + 1), rel=0.02)
+
+
+@pytest.mark.parametrize('lamp_limit,lit', [(0, False), (1, True)])
+def test_a_lamps_max_bounces_counts_glass_passes(lamp_limit, lit):
+    """Cycles' Light > Max Bounces compares the path's bounce count, a glass pass included: a
+    sun of Max Bounces 0 lights no floor seen through a pane (Cycles 0, with the floor lit
+    without the pane), one of 1 lights it as without the pane. DACRT had compared the vertex
+    index alone, the floor lit at 0 (1.00 where Cycles gives 0). The floor under a straight-down
+    sun of 3 is exactly 0.8 x 3 / pi per sample; the pane is seen by camera rays alone."""
+    sun = light('SUN', 3.0, np.eye(4), max_bounces=lamp_limit)
+    img = render(sheet_scene(GLASS, floor=True, lights=[sun], world=np.zeros(3), sheet_vis=sd.VIS_CAMERA,
+                             sheets=(0.3,), samples=4)).film.combined()[..., :3]
+    np.testing.assert_allclose(img, 0.8 * 3.0 / np.pi if lit else 0.0, rtol=1e-5, atol=0.0)

@@ -54,3 +54,24 @@ def test_glass_passes_count_against_total_bounces_as_in_cycles(tmp_path, total):
         sc.render.engine = engine
         means[engine] = float(rendering.render_combined(sc, tmp_path / f"{engine}.exr")[..., :3].mean())
     assert means['DACRT'] == pytest.approx(means['CYCLES'], rel=0.025), means
+
+
+@pytest.mark.parametrize('lamp_limit', [0, 1])
+def test_a_lamps_max_bounces_counts_the_glass_pass_as_in_cycles(tmp_path, lamp_limit):
+    """The box lit by a point lamp instead, Total 4: Cycles counts the pass against the lamp's
+    Max Bounces too, so at 0 the floor behind the pane is black (0.0) and at 1 it has its direct
+    light alone (0.997, as the bare floor at 0). DACRT had lit it as without the pane: 0.997 and
+    1.894."""
+    sc = _box_with_pane()
+    bpy.data.objects.remove(bpy.data.objects['Panel'])
+    lamp = scenes.light('POINT', 200.0, location=(0.5, 0.5, 1.8))
+    lamp.data.shadow_soft_size = 0.0
+    lamp.data.cycles.max_bounces = lamp_limit
+    c = sc.cycles
+    c.max_bounces, c.diffuse_bounces, c.glossy_bounces, c.transmission_bounces = 4, 4, 4, 12
+    bpy.ops.dacrt.copy_cycles_settings()
+    means = {}
+    for engine in ('CYCLES', 'DACRT'):
+        sc.render.engine = engine
+        means[engine] = float(rendering.render_combined(sc, tmp_path / f"{engine}.exr")[..., :3].mean())
+    assert means['DACRT'] == pytest.approx(means['CYCLES'], rel=0.025, abs=1e-4), means
