@@ -127,7 +127,13 @@ def coincident_faces(sd, tri, mats) -> list:
     g = sd.geometry
     tubes = None if g.one_sided is None else \
         (g.one_sided, g.instance if g.instance is not None else g.object_index)
-    said = said_copies(rows, group, tri.area, tri.visibility, mats.emissive[tri.material], tubes)
+    # (a copy built for the deeper bounce rays (depth_class 2) is never met by the rays that meet
+    # its first-bounce twin: one surface to bounce rays)
+    vis = tri.visibility
+    depth = np.array([getattr(m, 'depth_class', 0) for m in sd.materials], np.int8)
+    if (depth == 2).any():
+        vis = np.where(depth[np.asarray(tri.material)] == 2, vis & np.uint8(~VIS_DIFFUSE & 0xFF), vis).astype(vis.dtype)
+    said = said_copies(rows, group, tri.area, vis, mats.emissive[tri.material], tubes)
     # (a material built per ray kind has a copy of each triangle per variant, in the same set:
     # counted once, as the user's triangle, and as the material it is a build of)
     family = np.array([m.variant_of if m.variant_of >= 0 else i for i, m in enumerate(sd.materials)], np.int64)

@@ -245,6 +245,10 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._roulette_after = max(0, int(getattr(s, 'min_transparent_bounces', 0))) + 1
         scene_data, self._twins_skipped = self._without_clear_twins(scene_data)
         self.tri = Triangles(scene_data.geometry, self.messages, self._poll)
+        # materials built per depth (export/rayvariants.py): bounce rays arriving past the first
+        # vertex trace their own scene ('bounce_deep'), with the copies of class 2 in place of 1
+        depth = np.array([getattr(m, 'depth_class', 0) for m in scene_data.materials], np.int8)
+        self._tri_depth = depth[self.tri.material] if (depth == 2).any() else None
         # surfaces whose step is a sizeable share of the objects on them (a huge ground plane)
         self.messages += [('WARNING', text)
                           for text in huge_surfaces(scene_data, self.origin, self.tri.geo, sampled)]
@@ -491,10 +495,19 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             wanted['shadow'] = VIS_SHADOW
         self._scenes, self._maps, self._local, self._visible = {}, {}, {}, {}
         masks = {kind: (vis & bit) != 0 for kind, bit in wanted.items()}
+        if self._tri_depth is not None and 'bounce' in masks:
+            # (per-depth copies: kinds told apart by class, which no visibility bit holds, so each
+            # kind gets a scene of its own)
+            diffuse = masks['bounce']
+            masks['bounce'] = diffuse & (self._tri_depth != 2)
+            masks['bounce_deep'] = diffuse & (self._tri_depth != 1)
+            wanted['bounce_deep'] = VIS_DIFFUSE
+            if 'transmission' in masks:
+                masks['transmission'] &= self._tri_depth != 2
         keys = {kind: m.tobytes() for kind, m in masks.items()}
         needed = np.logical_or.reduce(list(masks.values()))
         counts = [int(np.count_nonzero(m)) for m in masks.values()]
-        shared = (len(set(keys.values())) > 1 and
+        shared = (self._tri_depth is None and len(set(keys.values())) > 1 and
                   min(counts) >= _SHARED_SCENE_FRACTION * np.count_nonzero(needed))
         built = {}
         for kind, bit in wanted.items():
@@ -871,7 +884,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         emission, Russian roulette, light sampling, BSDF sampling. Returns the paths that go on."""
         K = self.max_bounces
         camera = k == 0
-        hits = self._intersect('camera' if camera else 'bounce', path.O, path.D, path.tmax, path.prim, path.rays)
+        hits = self._intersect('camera' if camera else self._bounce_kind(k), path.O, path.D, path.tmax, path.prim,
+                               path.rays)
         prim = hits['prim']
         hit = prim >= 0
         self._gather_lamps(path, hit, hits, sinks, k)
@@ -1133,6 +1147,11 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if deeper is not None:
             self._dark_past(k + np.asarray(deeper, np.int64), entry, value, contrib)
         self._shadows(k, pid, value, contrib, rays, send, skip, skipped, L, tb, entry, groups)
+
+    def _bounce_kind(self, k):
+        """The tracer scene of the bounce rays arriving at vertex k: past the first, the one with
+        the deeper builds' copies where the scene has any."""
+        return 'bounce_deep' if k >= 2 and 'bounce_deep' in self._scenes else 'bounce'
 
     def _depth_limited(self):
         """Whether a lamp's or the world's Max Bounces may fall within the paths' depths."""

@@ -242,6 +242,9 @@ class Material:
     # one of those copies' builds: the index of the material whose triangles it copies (-1: none;
     # coincident faces are counted without them, coincidentfaces.py)
     variant_of: int = -1
+    # which bounce rays see it (a build per depth, export/rayvariants.py): 0 all, 1 those that
+    # arrive at the first bounce vertex (Ray Depth 1), 2 those that arrive deeper
+    depth_class: int = 0
     # a closure Cycles treats as glossy (rendered as diffuse here): lights with Glossy and
     # Diffuse ray visibility apart are said where some material has one (reflectors.has_glossy_closure)
     glossy: bool = False

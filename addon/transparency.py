@@ -36,7 +36,7 @@ class Transparency:
         rays still passing are kept compacted (h, D, keys, tmax; one native gather a step for
         them all, not a take per field from the block's arrays), and the surface a ray passes
         is computed once for its light sample and its next segment."""
-        kind = 'camera' if camera else 'bounce'
+        kind = 'camera' if camera else self._bounce_kind(k)
         thr = path.thr
         rows = None                             # all rays, then those that passed
         h, D, keys, tmax = hits, path.D, path.keys, path.tmax     # their columns at rows

@@ -516,7 +516,8 @@ class Assembly:
             for v in others:
                 bits = np.uint8(mats[v].visibility)
                 sees = obj & bits
-                transmit = obj_transmit & bool(bits & sd.VIS_DIFFUSE)
+                # (not the copy deeper bounce rays see: rays past glass see the first bounce's)
+                transmit = obj_transmit & bool(bits & sd.VIS_DIFFUSE) & (mats[v].depth_class != 2)
                 twin = (sees | np.where(bits & sd.VIS_CAMERA, obj & np.uint8(sd.HOLDOUT), 0)
                         | np.where(transmit, np.where(sees == 0, sd.VIS_TRANSMISSION, 0), sd.NO_TRANSMISSION))
                 keep = ((sees & np.uint8(sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW)) != 0) | transmit

@@ -45,6 +45,8 @@ _GLASS = dict(_NONE, **{'Is Glossy Ray': 1.0, 'Is Singular Ray': 1.0, 'Is Transm
                         'Transmission Depth': 1.0})
 # the outputs past the first bounce, and the Transparent Depth past one transparent surface
 _DEEPER = {'Ray Depth': 2.0, 'Diffuse Depth': 2.0}
+# the deepest bounce builds are compared to (beyond, a depth is taken as this one's)
+_DEPTHS = 32
 # fields a shadow ray reads of a material (whether and how much light passes)
 _SHADOW_FIELDS = ('transparency', 'opacity', 'refraction', 'opaque_refraction', 'transparent_shadow', 'holdout')
 _IGNORED_FIELDS = ('approximated', 'visibility', 'name', 'dark_stand_in')
@@ -143,17 +145,32 @@ def ray_variants(build, reads, max_bounces):
                      "rays see (Cycles' light samples read these as at the vertex they light: Is Diffuse Ray and "
                      "Is Reflection Ray 0, Diffuse Depth one less)")
     deep = ''
+    split = None        # the build bounce rays arriving past the first vertex see, on copies
     if reads & set(_DEEPER):
         # (bounce rays past the first, and shadow rays and light samples from their vertices;
         # at Max Bounces 0 only paths through glass or off a Translucent BSDF go deeper, so it is
         # then said with the bent note, where the scene has such a surface)
-        deeper = build(dict(BOUNCE, **_DEEPER))
-        deeper_shadow = build(dict(SHADOW, **{'Ray Depth': 2.0, 'Diffuse Depth': 1.0}))
-        if not same(deeper[0], bounce[0]) or not same(deeper_shadow[0], shadow[0], _SHADOW_FIELDS):
-            deep = f"Light Path {_names(reads, tuple(_DEEPER))} read as 1 on every bounce (Cycles: the bounce's depth)"
-            if max_bounces >= 1:
-                notes.append(deep)
-                deep = ''
+        # (every depth a bounce ray arrives at a shaded vertex with, 2 .. max_bounces, and the
+        # shadow rays' from vertices 1 .. max_bounces: a threshold at 2.5 differs from depth 3
+        # on, and had gone unsaid when depth 2 alone was compared)
+        last = max(2, min(max_bounces, _DEPTHS))
+        deepers = [build(dict(BOUNCE, **{'Ray Depth': float(d), 'Diffuse Depth': float(d)})) for d in range(2, last + 1)]
+        deeper = deepers[0]
+        shadows_alike = all(same(build(dict(SHADOW, **{'Ray Depth': float(d + 1), 'Diffuse Depth': float(d)}))[0],
+                                 shadow[0], _SHADOW_FIELDS) for d in range(1, last))
+        uniform = all(same(b[0], deeper[0]) for b in deepers[1:])
+        if not same(deeper[0], bounce[0]) or not uniform or not shadows_alike:
+            if max_bounces >= 1 and shadows_alike and uniform and not _emits(deeper, bounce):
+                # a depth threshold at the first bounce (Ray Depth > 1): the bounce rays past
+                # it trace a copy of their own (Integrator: the 'bounce_deep' scene)
+                split = deeper
+                deep = (f"Light Path {_names(reads, tuple(_DEEPER))} on rays past glass or off a Translucent BSDF read "
+                        "by their diffuse bounces, or as 1 past glass (Cycles counts those bounces too)")
+            else:
+                deep = f"Light Path {_names(reads, tuple(_DEEPER))} read as 1 on every bounce (Cycles: the bounce's depth)"
+                if max_bounces >= 1:
+                    notes.append(deep)
+                    deep = ''
     if 'Transparent Depth' in reads:
         past = build(dict(CAMERA, **{'Transparent Depth': 1.0}))
         if not same(past[0], camera[0]):
@@ -178,28 +195,36 @@ def ray_variants(build, reads, max_bounces):
                                             if 'Transmission Depth' in glossy else "")
         notes.append(f"Light Path {' / '.join(sorted(glossy))} read as on a diffuse path (Cycles: set on rays "
                      f"off {off})")
-    groups = [[bounce, sd.VIS_DIFFUSE]]
+    groups = [[bounce, sd.VIS_DIFFUSE, 1 if split else 0]]
     if same(camera[0], bounce[0]):
         groups[0][1] |= sd.VIS_CAMERA
     else:
-        groups.append([camera, sd.VIS_CAMERA])
+        groups.append([camera, sd.VIS_CAMERA, 0])
     for g in groups:
         if same(shadow[0], g[0][0], _SHADOW_FIELDS):
             g[1] |= sd.VIS_SHADOW
             break
     else:
-        groups.append([shadow, sd.VIS_SHADOW])
+        groups.append([shadow, sd.VIS_SHADOW, 0])
+    if split:
+        groups.append([split, sd.VIS_DIFFUSE, 2])
     # the original triangles show the build that needs the most of them (bounce rays' first);
     # none needing all the others need: None (the caller builds it once, as before)
-    needs = [_triangle_needs(m) for (m, _), _ in groups]
+    needs = [_triangle_needs(m) for (m, _), _, _ in groups]
     first = next((i for i, n in enumerate(needs) if all(o <= n for o in needs)), None)
     if first is None:
         return None, notes, bent
     groups.insert(0, groups.pop(first))
     out = []
-    for (m, extra), vis in groups:
-        out.append((dataclasses.replace(m, visibility=int(vis)), extra))
+    for (m, extra), vis, depth in groups:
+        out.append((dataclasses.replace(m, visibility=int(vis), depth_class=depth), extra))
     return out, notes, bent
+
+
+def _emits(*builds):
+    """Whether a build emits (a per-depth copy's emission would be light-sampled beside the
+    original's: such a material keeps one build, its depth said)."""
+    return any(m.emission is not None and np.any(m.emission) or m.emission_texture is not None for m, _ in builds)
 
 
 def _names(reads, among):
