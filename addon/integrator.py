@@ -884,8 +884,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         emission, Russian roulette, light sampling, BSDF sampling. Returns the paths that go on."""
         K = self.max_bounces
         camera = k == 0
-        hits = self._intersect('camera' if camera else self._bounce_kind(k), path.O, path.D, path.tmax, path.prim,
-                               path.rays)
+        hits = self._intersect('camera', path.O, path.D, path.tmax, path.prim, path.rays) if camera \
+            else self._intersect_bounce(k, path)
         prim = hits['prim']
         hit = prim >= 0
         self._gather_lamps(path, hit, hits, sinks, k)
@@ -1152,6 +1152,27 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         """The tracer scene of the bounce rays arriving at vertex k: past the first, the one with
         the deeper builds' copies where the scene has any."""
         return 'bounce_deep' if k >= 2 and 'bounce_deep' in self._scenes else 'bounce'
+
+    def _deeper_rows(self, k, xb):
+        """Of bounce rays arriving at vertex 1 with glass passes xb, those Cycles counts past the
+        first bounce (a pass is a bounce: a floor seen through a pane reads Ray Depth 2 on the
+        walls its bounce rays meet); None where none is or the scene has no deeper copies."""
+        if k != 1 or xb is None or 'bounce_deep' not in self._scenes:
+            return None
+        deep = xb > 0
+        return deep if deep.any() else None
+
+    def _intersect_bounce(self, k, path):
+        """Closest hits of the bounce rays arriving at vertex k, each in its depth's scene."""
+        deep = self._deeper_rows(k, path.xb)
+        if deep is None or deep.all():
+            kind = 'bounce_deep' if deep is not None else self._bounce_kind(k)
+            return self._intersect(kind, path.O, path.D, path.tmax, path.prim, path.rays)
+        hits = np.empty(len(deep), dacrt.HIT_DTYPE)
+        for sel, kind in ((np.flatnonzero(~deep), 'bounce'), (np.flatnonzero(deep), 'bounce_deep')):
+            hits[sel] = self._intersect(kind, np.ascontiguousarray(path.O[:, sel]), np.ascontiguousarray(path.D[:, sel]),
+                                        np.ascontiguousarray(path.tmax[sel]), np.take(path.prim, sel))
+        return hits
 
     def _depth_limited(self):
         """Whether a lamp's or the world's Max Bounces may fall within the paths' depths."""

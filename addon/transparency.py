@@ -125,7 +125,8 @@ class Transparency:
             # on from just behind the surface (P stepped off it away from the ray's side)
             t0 = h['t']
             sub = self._intersect_past(kind, path.transmit, rows, np.ascontiguousarray(P + P - P_off), D,
-                                       (tmax - t0).astype(F32), prim)
+                                       (tmax - t0).astype(F32), prim,
+                                       None if camera else self._deeper_rows(k, np.take(path.xb, rows)))
             sub['t'] += t0                      # distances from the path vertex, for lamps and MIS
             # the segment's paths: only the columns _gather_segment reads
             pid, O, thr_seg, pdf, prim_seg, N, refracted, transmit, dark_pdf = compact(
@@ -204,11 +205,21 @@ class Transparency:
                 path.refracted = np.zeros(len(path.pid), bool)
             path.refracted[rows[go & np.take(self._film_refracts, mat)]] = True
 
-    def _intersect_past(self, kind, transmit, rows, O, D, tfar, skip):
+    def _intersect_past(self, kind, transmit, rows, O, D, tfar, skip, deep=None):
         """Closest hits of rays (O, D, tfar; skip: the triangle each leaves) that paths rows trace
         on past a transparent surface: as `kind`, or as transmission rays where transmit[rows]
-        (they passed glass), which see triangles by their Transmission visibility."""
+        (they passed glass), which see triangles by their Transmission visibility; bounce rays
+        where deep (Integrator._deeper_rows) in the deeper builds' scene."""
         tx = None if transmit is None or 'transmission' not in self._scenes else np.take(transmit, rows)
+        if deep is not None:
+            tx = np.zeros(len(rows), bool) if tx is None else tx
+            hits = np.empty(len(rows), dacrt.HIT_DTYPE)
+            for sel, k in ((np.flatnonzero(~tx & ~deep), kind), (np.flatnonzero(~tx & deep), 'bounce_deep'),
+                           (np.flatnonzero(tx), 'transmission')):
+                if len(sel):
+                    hits[sel] = self._intersect(k, np.ascontiguousarray(O[:, sel]), np.ascontiguousarray(D[:, sel]),
+                                                np.ascontiguousarray(tfar[sel]), np.take(skip, sel))
+            return hits
         if tx is None or not tx.any():
             return self._intersect(kind, O, D, tfar, skip)
         if tx.all():

@@ -164,8 +164,11 @@ def ray_variants(build, reads, max_bounces):
                 # a depth threshold at the first bounce (Ray Depth > 1): the bounce rays past
                 # it trace a copy of their own (Integrator: the 'bounce_deep' scene)
                 split = deeper
-                deep = (f"Light Path {_names(reads, tuple(_DEEPER))} on rays past glass or off a Translucent BSDF read "
-                        "by their diffuse bounces, or as 1 past glass (Cycles counts those bounces too)")
+                # (bounce rays count glass passes, Integrator._deeper_rows; rays past glass
+                # trace the first bounce's, and Diffuse Depth counts translucent bounces)
+                deep = (f"Light Path {_names(reads, tuple(_DEEPER))} read as at the first bounce on rays past glass "
+                        "(Cycles: their bounces count)" + ("; Diffuse Depth counts a Translucent BSDF's bounces "
+                                                           "(Cycles: not)" if 'Diffuse Depth' in reads else ""))
             else:
                 deep = f"Light Path {_names(reads, tuple(_DEEPER))} read as 1 on every bounce (Cycles: the bounce's depth)"
                 if max_bounces >= 1:

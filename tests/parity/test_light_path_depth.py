@@ -66,3 +66,19 @@ def test_a_deeper_threshold_is_said(tmp_path, said):
     sc.render.engine = 'DACRT'
     rendering.render_combined(sc, tmp_path / "DACRT.exr")
     assert any(_SAID in t and "'Walls'" in t for t in said), said
+
+
+def test_a_pane_before_the_floor_counts_as_a_bounce(tmp_path, said):
+    """The floor seen through a camera-only pane of IOR-1 glass: Cycles counts the pass, so the
+    floor's bounce rays read Ray Depth 2 and see the walls green (mean (0.353, 0.464, 0.353));
+    DACRT had shown them red, by the vertex index alone (0.406, 0.388)."""
+    sc = _box('Ray Depth', 1.5)
+    mat, nt, out = scenes._material("Glass")
+    glass = nt.nodes.new('ShaderNodeBsdfGlass')
+    glass.inputs['IOR'].default_value, glass.inputs['Roughness'].default_value = 1.0, 0.0
+    nt.links.new(glass.outputs[0], out.inputs['Surface'])
+    pane = scenes.plane("Pane", size=1.0, location=(0, 0, 1.0), materials=[mat])
+    for ray in ('diffuse', 'glossy', 'transmission', 'shadow'):
+        setattr(pane, f'visible_{ray}', False)
+    means = _means(sc, tmp_path)
+    np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.01)
