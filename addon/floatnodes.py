@@ -140,7 +140,7 @@ def _dot(a, b):
     return np.sum(a * b, axis=-1, keepdims=True)
 
 
-def _safe_normalize(a):
+def safe_normalize(a):
     """Cycles' safe_normalize: a / |a|, or a itself (0) where |a| is 0."""
     n = np.sqrt(_dot(a, a))
     return np.where(n != 0.0, a / np.where(n != 0.0, n, 1.0), a)
@@ -152,12 +152,12 @@ def _project(a, b):
 
 
 def _reflect(a, b):
-    n = _safe_normalize(b)
+    n = safe_normalize(b)
     return a - 2.0 * _dot(n, a) * n
 
 
 def _refract(a, b, eta):
-    n = _safe_normalize(b)
+    n = safe_normalize(b)
     d = _dot(n, a)
     k = 1.0 - eta * eta * (1.0 - d * d)
     return np.where(k < 0.0, 0.0, eta * a - (eta * d + np.sqrt(np.maximum(k, 0.0))) * n)
@@ -172,7 +172,7 @@ _VECTOR_MATH = {
     'REFRACT': lambda a, b, c, s: _refract(a, b, s),
     'FACEFORWARD': lambda a, b, c, s: np.where(_dot(c, b) < 0.0, a, -a),
     'SCALE': lambda a, b, c, s: a * s,
-    'NORMALIZE': lambda a, b, c, s: _safe_normalize(a),
+    'NORMALIZE': lambda a, b, c, s: safe_normalize(a),
     'FRACTION': lambda a, b, c, s: a - np.floor(a),
     # Cycles' kernel (safe_modulo per component): 0 where b is 0, as Math's (measured in Cycles
     # 5.0.1: Generated mod (0, 0.5, 0.5), X + 0.25 is 0.25; NaN had blackened a float read of it)
@@ -327,6 +327,27 @@ def vector_rotate_matrix(kind, invert, axis, angle, rotation):
     with np.errstate(all='ignore'):
         unit = axis / np.where(keep, 1.0, length).astype(dtype)[..., None]
     return axis_angle_matrix(unit, angle), np.broadcast_to(keep, np.broadcast_shapes(keep.shape, angle.shape))
+
+
+MAPPING_TYPES = frozenset({'POINT', 'TEXTURE', 'VECTOR', 'NORMAL'})
+
+
+def mapping(kind, vector, location, rotation, scale):
+    """Mapping node (Cycles' svm_mapping) on (..., 3) vectors: Point R (v s) + l, Texture
+    R^T (v - l) / s, Vector R (v s), Normal normalize(R (v / s)), R the Euler XYZ rotation, a
+    division by a zero component 0 (safe_divide) and a zero vector left zero (safe_normalize)."""
+    (vector, location, rotation, scale), _, dtype = _real(vector, location, rotation, scale)
+    R = euler_matrix(rotation).astype(dtype)
+    with np.errstate(all='ignore'):
+        if kind == 'TEXTURE':
+            r = _safe_divide(np.sum(np.swapaxes(R, -1, -2) * (vector - location)[..., None, :], axis=-1), scale)
+        elif kind == 'NORMAL':
+            r = safe_normalize(np.sum(R * _safe_divide(vector, scale)[..., None, :], axis=-1))
+        else:
+            r = np.sum(R * (vector * scale)[..., None, :], axis=-1)
+            if kind == 'POINT':
+                r = r + location
+    return np.asarray(r, dtype)
 
 
 def vector_rotate(kind, invert, vector, center, axis, angle, rotation):

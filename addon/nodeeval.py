@@ -38,6 +38,7 @@ _INPUTS = {
     'WAVELENGTH': {'wavelength': 'Wavelength'},
     'VECTOR_ROTATE': {'vector': 'Vector', 'vcenter': 'Center', 'vaxis': 'Axis', 'angle': 'Angle',
                       'vrotation': 'Rotation'},
+    'MAPPING': {'vector': 'Vector', 'vloc': 'Location', 'vrot': 'Rotation', 'vscale': 'Scale'},
     'SEPARATE_COLOR': {'color': 'Color'},
     'COMBINE_COLOR': {'red': 'Red', 'green': 'Green', 'blue': 'Blue'},
     'COMBXYZ': {'x': 'X', 'y': 'Y', 'z': 'Z'},
@@ -63,7 +64,7 @@ TWO_IMAGES = "two image textures mixed; the second as its average colour"
 ATTRIBUTE_NODE_TYPES = frozenset({'VERTEX_COLOR', 'ATTRIBUTE', 'OBJECT_INFO'})
 # colour or vector inputs (but floats in Mix FLOAT and Math)
 _COLOR_ROLES = {'color', 'a', 'b', 'vector', 'vfac', 'vvalue', 'vf0', 'vf1', 'vt0', 'vt1', 'vsteps', 'va', 'vb', 'vc',
-                'vcenter', 'vaxis', 'vrotation'}
+                'vcenter', 'vaxis', 'vrotation', 'vloc', 'vrot', 'vscale'}
 _FLOAT_NODES = {'MATH', 'CLAMP', 'MAP_RANGE'}
 _SEPARATED = {'Red': 0, 'Green': 1, 'Blue': 2, 'X': 0, 'Y': 1, 'Z': 2}
 
@@ -87,6 +88,11 @@ def node_inputs(node):
         return None
     if t == 'VECT_MATH' and node.operation not in fn.VECTOR_MATH_OPERATIONS:
         return None
+    if t == 'MAPPING':              # (the Vector and Normal types have no Location input)
+        if node.vector_type not in fn.MAPPING_TYPES:
+            return None
+        return {role: ident for role, ident in _INPUTS[t].items()
+                if role != 'vloc' or node.vector_type in ('POINT', 'TEXTURE')}
     if t == 'VECTOR_ROTATE':        # the inputs its type reads (Cycles' svm_node_vector_rotate)
         if node.rotation_type not in fn.VECTOR_ROTATE_TYPES:
             return None
@@ -390,6 +396,11 @@ def _compute32(node, out, v):
         zero = np.zeros(3, np.float32)
         return fn.vector_rotate(node.rotation_type, node.invert, v['vector'], v['vcenter'], v.get('vaxis', zero),
                                 v.get('angle', zero[:1]), v.get('vrotation', zero))
+    if t == 'MAPPING':
+        if node.zero if isinstance(node, Frozen) else _mapping_folds_to_zero(node):
+            return np.zeros(np.broadcast_shapes(*(x.shape for x in v.values())), np.float32)
+        return fn.mapping(node.vector_type, v['vector'], v.get('vloc', np.zeros(3, np.float32)), v['vrot'],
+                          v['vscale'])
     if t == 'SEPARATE_COLOR':
         k = _SEPARATED[out.identifier]
         return cn.separate_color(node.mode, v['color'])[..., k:k + 1]
@@ -479,7 +490,8 @@ class Frozen:
     """What compute_node reads of a node (or an output socket), copied: computing with it reads no
     Blender data, so it may run after the export (during the render's lookups)."""
     _ATTRS = ('type', 'name', 'identifier', 'clamp_factor', 'data_type', 'blend_type', 'clamp_result', 'use_clamp',
-              'mode', 'operation', 'clamp_type', 'interpolation_type', 'clamp', 'rotation_type', 'invert')
+              'mode', 'operation', 'clamp_type', 'interpolation_type', 'clamp', 'rotation_type', 'invert',
+              'vector_type')
 
     def __init__(self, thing):
         for a in self._ATTRS:
@@ -496,6 +508,15 @@ class Frozen:
             self.xyz = xyz_to_rgb()
         elif t in ('MATH', 'VECT_MATH'):
             self.blender_folded = _blender_folds(thing)
+        elif t == 'MAPPING':
+            self.zero = _mapping_folds_to_zero(thing)
+
+
+def _mapping_folds_to_zero(node):
+    """Whether Cycles folds a Mapping node to the zero vector (mapping.folds_to_zero: a zero
+    Scale with another input varying)."""
+    from .mapping import folds_to_zero      # (mapping reads constants through this module)
+    return folds_to_zero(node)
 
 
 class NotCompiled(Exception):

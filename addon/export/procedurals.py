@@ -21,6 +21,7 @@ import numpy as np
 
 from .. import fresnel, nodeeval, nodegraph
 from .. import procedural as pr
+from ..floatnodes import safe_normalize
 from ..mapping import mapping_affine, node_texture_mapping, reads_off_uv
 from ..texture import alpha_lookup, box_lookup, box_projected, box_texels, lookup_texels, mapped_uv, texture_lookup
 from .meshes import attribute_key, color_attribute_key
@@ -411,11 +412,16 @@ def _node(node, out, chain, depth):
     if t in ('VERTEX_COLOR', 'ATTRIBUTE'):
         return _attribute(node, out, chain)
     if t == 'MAPPING':
-        if node.vector_type == 'NORMAL':
-            raise nodeeval.NotCompiled("a Normal-type Mapping")
-        M, off = mapping_affine(node, chain.reasons)
+        normal = node.vector_type == 'NORMAL'
+        # (the Normal type: R (v / s) normalised per point, as Cycles' svm_mapping; mapping_affine
+        # gives R / s and says it leaves out the normalisation, which is done here)
+        reasons = []
+        M, off = mapping_affine(node, reasons)
+        chain.reasons.extend(r for r in reasons if not (normal and 'normalisation' in r))
         v = _socket(nodegraph.input_by_id(node, 'Vector'), True, chain, depth + 1)
         M32, off32 = M.T.astype(np.float32), off.astype(np.float32)
+        if normal:
+            return (lambda c: safe_normalize(np.asarray(v(c), np.float32) @ M32)), True
         return (lambda c: np.asarray(v(c), np.float32) @ M32 + off32), True
     if t in PROCEDURAL_TYPES:
         return _texture(node, out, chain, depth)
