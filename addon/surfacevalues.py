@@ -357,6 +357,8 @@ class SurfaceValues:
             if name == 'object_normal':
                 c = self._sided_unit(c, back)
             out[name] = np.ascontiguousarray(c.T, F32)
+        if 'edge_distance' in needs:
+            out['edge_distance'] = self._edge_distance(prim, u, v)
         if 'position' in needs or 'normal' in needs or 'true_normal' in needs:
             g = np.take(self.tri.geo, prim, axis=1)
             if 'position' in needs:
@@ -385,6 +387,24 @@ class SurfaceValues:
                     a = np.ascontiguousarray((r[0:4] + r[4:8] * u + r[8:12] * v).T, F32)
                 out[name] = a
         return out
+
+    def _edge_distance(self, prim, u, v):
+        """(k, 1) float32 the squared distance from hits (prim, u, v) to the nearest line through an
+        edge of their triangle (world space), which the Wireframe node compares with (Size / 2)^2:
+        Cycles' svm_wireframe, |edge x (P - corner)|^2 against |edge|^2 (Size / 2)^2 for each edge
+        (a zero-length edge is no line: infinitely far)."""
+        g = np.take(self.tri.geo, prim, axis=1).astype(np.float64)
+        e1, e2 = g[3:6], g[6:9]
+        p = e1 * u + e2 * v                      # the hit, from the triangle's first corner
+        corners = (np.zeros_like(e1), e1, e2)
+        best = np.full(len(prim), np.inf)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            for i in range(3):
+                edge = corners[i] - corners[i - 1]
+                crs = np.cross(edge, p - corners[i], axis=0)
+                d2 = (crs * crs).sum(axis=0) / (edge * edge).sum(axis=0)
+                best = np.fmin(best, np.where(np.isfinite(d2), d2, np.inf))
+        return best.astype(F32).reshape(-1, 1)
 
     @staticmethod
     def _view_coordinates(out, needs, k, back):

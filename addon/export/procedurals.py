@@ -35,7 +35,7 @@ _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv', 'Norma
 # Pointiness, Parametric, Tangent, Random Per Island) are left to the evaluation
 _GEOMETRY = {'Position': 'position', 'Normal': 'normal', 'True Normal': 'true_normal'}
 # nodes a coordinate-only chain starts from
-_COORDINATE_NODES = ('TEX_COORD', 'NEW_GEOMETRY')
+_COORDINATE_NODES = ('TEX_COORD', 'NEW_GEOMETRY', 'WIREFRAME')
 # nodes an attribute chain starts from (compile_socket's attributes; Curves Info and Point Info
 # outputs are seen as Attribute nodes: nodegraph.StandardAttributeNode; Object Info read per
 # object or instance: instance_values)
@@ -392,6 +392,17 @@ def _node(node, out, chain, depth):
             raise nodeeval.NotCompiled(f"Geometry {out.name}")
         chain.needs.add(kind)
         return (lambda c: c[kind]), True
+    if t == 'WIREFRAME':
+        if node.use_pixel_size:
+            raise nodeeval.NotCompiled("Wireframe of Pixel Size")
+        # 1 within Size / 2 of a triangle's edge (Cycles' svm_wireframe, world space)
+        chain.needs.add('edge_distance')
+        size = _float(node, 'Size', chain, depth)
+
+        def wire(c):
+            half = np.float32(0.5) * np.asarray(size(c), np.float32)
+            return (np.asarray(c['edge_distance'], np.float32)[:, 0] < half * half).astype(np.float64).reshape(-1, 1)
+        return wire, False
     if t == 'BUMP':
         # the bent normal is not computed as a value (Integrator._bump_mapped bends the shading
         # normal only): the normal it bends stands in, as Cycles' Bump of strength 0 gives
