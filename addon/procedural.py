@@ -257,6 +257,12 @@ def _rot(x, k):
     return (x << np.uint32(k)) | (x >> np.uint32(32 - k))
 
 
+def hash_uint_to_float(kx):
+    """Cycles' hash_uint_to_float of a uint32 array: (float)hash_uint / (float)0xFFFFFFFFu, as
+    hash_uint2_to_float computes it (float32)."""
+    return _jenkins(np.asarray(kx).astype(np.uint32)).astype(np.float32) * F32(2.0 ** -32)
+
+
 def hash_uint2_to_float(kx, ky):
     """Cycles' hash_uint2_to_float of uint32 arrays kx, ky: (float)hash_uint2 / (float)0xFFFFFFFFu,
     float32: the hash rounded to float32, over 2^32 (what the divisor rounds to), so exactly (the

@@ -8,6 +8,7 @@ import functools
 import numpy as np
 
 from ..nodegraph import CURVE_IS_STRAND, CURVE_THICKNESS, POINT_RADIUS
+from .islands import random_per_island
 
 
 # Triangles from which a mesh of quads is tessellated in numpy (_quad_corner_tris, ~15 ns a
@@ -610,7 +611,8 @@ class MeshArrays:
 
     def _standard_corners(self, std, fac):
         """corner_attribute of Cycles' standard attribute `std` (STANDARD_OF): Generated
-        coordinates (g, 1), the active render UV map (u, v, 0, 1) (its Fac u: a 2D vector's);
+        coordinates (g, 1), the active render UV map (u, v, 0, 1) (its Fac u: a 2D vector's),
+        a mesh's Random Per Island (r, r, r, 1) at each triangle's corners (islands.py);
         the Curves and Point Info outputs of STANDARD_INFO 0 on a mesh, as Cycles' kernel
         gives them there; None for the others on a mesh (a tessellated point cloud or hair
         reads those and Cycles' own
@@ -621,7 +623,7 @@ class MeshArrays:
             out = np.zeros((len(self.triangles), 3, 4), np.float32)     # 0 on a mesh, as in Cycles
             out[..., 3] = 1.0
             return out
-        if std not in STANDARD_READ:
+        if std not in STANDARD_READ or (std == 'random_per_island' and self.mesh is None):
             if self.mesh is None and self.strand is not None:
                 # Cycles' own of curves and points (strands.StandardAttributes: numbers, so
                 # their Fac is the same), else the strand's attribute of the name
@@ -632,6 +634,11 @@ class MeshArrays:
         out = np.ones((nt, 3, 4), np.float32)
         if std == 'generated':
             out[..., :3] = self.corner_coordinates()[..., :3]
+            return out
+        if std == 'random_per_island':          # one number per triangle, as Cycles' face attribute
+            edges = np.empty(2 * len(self.mesh.edges), np.int32)
+            self.mesh.edges.foreach_get('vertices', edges)
+            out[..., :3] = random_per_island(len(self.positions), edges, self.triangles)[:, None, None]
             return out
         if self.corner_uvs is None:              # no UV map: Cycles reads 0 too
             return None
@@ -813,10 +820,11 @@ FAC_OF = '\x00Fac\x00'
 # attribute of the name; it is read under this prefix and the name (attribute_key). Measured in
 # Cycles 5.0 on a plane, with and without a mesh attribute of the name:
 STANDARD_OF = '\x00Standard\x00'
-# read here: Generated coordinates (as the Texture Coordinate node's) and the active render UV map
-STANDARD_READ = frozenset({'generated', 'uv'})
+# read here: Generated coordinates (as the Texture Coordinate node's), the active render UV map
+# and, on a mesh, Random Per Island (islands.py)
+STANDARD_READ = frozenset({'generated', 'uv', 'random_per_island'})
 # computed by Cycles for a mesh (its normals, tangents, pointiness, ...), not here: said so
-STANDARD_UNREAD = frozenset({'N', 'tangent', 'tangent_sign', 'pointiness', 'random_per_island',
+STANDARD_UNREAD = frozenset({'N', 'tangent', 'tangent_sign', 'pointiness',
                              'generated_transform', 'undisplaced_tangent', 'undisplaced_tangent_sign'})
 # those of volumes, curves and points, and ones Cycles leaves empty on a mesh rendered without
 # displacement or motion: 0 on a mesh, its own attribute of that name unread ('color' too); on

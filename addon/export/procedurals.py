@@ -386,6 +386,11 @@ def _node(node, out, chain, depth):
         if kind == 'uv':
             chain.needs.add(TEXCOORD_UV)
         return (lambda c: c[kind]), True
+    if t == 'NEW_GEOMETRY' and out.name == 'Random Per Island':
+        # Cycles' standard attribute of the mesh (a face attribute: one number per triangle)
+        need = pr.ATTRIBUTE_NEED + attribute_key('random_per_island')
+        chain.needs.add(need)
+        return (lambda c: np.asarray(c[need], np.float64)[:, :1]), False
     if t == 'NEW_GEOMETRY':
         kind = _GEOMETRY.get(out.name)
         if kind is None:
