@@ -373,6 +373,15 @@ def _node(node, out, chain, depth):
     if t == 'VALUE':
         const = np.array((out.default_value,), np.float64)[None]
         return (lambda c: const), False
+    if t == 'TEX_COORD' and out.name == 'Reflection' and chain.view and not node.from_instancer:
+        # Cycles' svm_node_tex_coord: the incoming direction mirrored about the shading normal,
+        # 2 (N . wi) N - wi, in world space (N turned to the ray's side, as Cycles' N)
+        chain.needs.update(('normal', 'incoming'))
+
+        def reflection(c):
+            n, wi = np.asarray(c['normal'], np.float32), np.asarray(c['incoming'], np.float32)
+            return np.float32(2.0) * (n * wi).sum(axis=1, keepdims=True, dtype=np.float32) * n - wi
+        return reflection, True
     if t == 'TEX_COORD':
         kind = _COORDINATES.get(out.name)
         if kind is None or node.from_instancer:
