@@ -22,6 +22,9 @@ import numpy as np
 F32 = np.float32
 
 COORDINATES = ('generated', 'object', 'uv', 'position', 'normal', 'true_normal', 'object_normal')
+# Texture Coordinate Camera: the hit in the render camera's space, as Cycles' worldtocamera
+# (CameraModel.to_camera about its position), which the integrator knows and the export does not
+CAMERA_COORDINATES = 'camera'
 # what the hit's ray gives a chain: the incoming direction (n, 3) (Cycles' sd->wi, unit, toward
 # where the ray came from) and whether it met the surface from behind (n, 1) (SD_BACKFACING),
 # which the Fresnel and Layer Weight nodes read beside the normal; the ray's length to the hit

@@ -382,6 +382,10 @@ def _node(node, out, chain, depth):
             n, wi = np.asarray(c['normal'], np.float32), np.asarray(c['incoming'], np.float32)
             return np.float32(2.0) * (n * wi).sum(axis=1, keepdims=True, dtype=np.float32) * n - wi
         return reflection, True
+    if t == 'TEX_COORD' and out.name == 'Camera' and not node.from_instancer:
+        # the hit in Cycles' camera space (worldtocamera: x right, y up, z into the view)
+        chain.needs.add(pr.CAMERA_COORDINATES)
+        return (lambda c: c[pr.CAMERA_COORDINATES]), True
     if t == 'TEX_COORD':
         kind = _COORDINATES.get(out.name)
         if kind is None or node.from_instancer:

@@ -41,7 +41,7 @@ def _non_diffuse_materials():
     tl = nt.nodes.new('ShaderNodeBsdfTranslucent')
     tl.inputs['Color'].default_value = (0.5, 0.7, 0.2, 1)
     bump = nt.nodes.new('ShaderNodeBump')
-    nt.links.new(_camera_noise(nt).outputs['Fac'], bump.inputs['Height'])     # (not rendered per point)
+    nt.links.new(_window_noise(nt).outputs['Fac'], bump.inputs['Height'])     # (not rendered per point)
     nt.links.new(bump.outputs['Normal'], tl.inputs['Normal'])
     nt.links.new(tl.outputs[0], out.inputs['Surface'])
     mats.append(mat)
@@ -54,7 +54,7 @@ def _non_diffuse_materials():
     p.inputs['Sheen Weight'].default_value = 0.6
     p.inputs['Alpha'].default_value = 0.5
     bump = nt.nodes.new('ShaderNodeBump')
-    nt.links.new(_camera_noise(nt).outputs['Fac'], bump.inputs['Height'])
+    nt.links.new(_window_noise(nt).outputs['Fac'], bump.inputs['Height'])
     nt.links.new(bump.outputs['Normal'], p.inputs['Normal'])
     value = nt.nodes.new('ShaderNodeValue')             # exact: kept by both
     value.outputs[0].default_value = 0.0
@@ -94,8 +94,8 @@ def _non_diffuse_materials():
     tex = nt.nodes.new('ShaderNodeTexImage')
     tex.image, tex.interpolation, tex.extension, tex.projection = img, 'Cubic', 'MIRROR', 'BOX'
     coords = nt.nodes.new('ShaderNodeTexCoord')
-    # (Camera: an image on Generated with a Box projection is looked up per point, exact)
-    nt.links.new(coords.outputs['Camera'], tex.inputs['Vector'])
+    # (Window: an image on Generated, or Camera, with a Box projection is looked up per point, exact)
+    nt.links.new(coords.outputs['Window'], tex.inputs['Vector'])
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     nt.links.new(tex.outputs['Alpha'], p.inputs['Base Color'])
     nt.links.new(p.outputs[0], out.inputs['Surface'])
@@ -120,10 +120,10 @@ def _non_diffuse_materials():
     return mats
 
 
-def _camera_noise(nt):
-    """A Noise Texture on Texture Coordinate Camera, which no chain reads per point."""
+def _window_noise(nt):
+    """A Noise Texture on Texture Coordinate Window, which no chain reads per point."""
     noise = nt.nodes.new('ShaderNodeTexNoise')
-    nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Camera'], noise.inputs['Vector'])
+    nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Window'], noise.inputs['Vector'])
     return noise
 
 
@@ -141,7 +141,7 @@ def test_override_keeps_what_the_export_reads_and_leaves_nothing_approximated(sc
     reasons = fairmaterials.remaining_approximations()
     assert set(reasons) == {m.name for m in mats}
     assert "Bump node 'Bump' not rendered" in reasons["Shiny"] and "Normal input" in reasons["Driven"]
-    assert "Camera texture coordinates" in reasons["Textured"]
+    assert "Window texture coordinates" in reasons["Textured"]
     assert "volume ignored" in reasons["Volumetric"] and "displacement ignored" in reasons["Volumetric"]
 
     changes = fairmaterials.make_diffuse()

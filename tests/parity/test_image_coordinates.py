@@ -169,16 +169,17 @@ def test_cutout_from_alpha_on_generated_box(tmp_path, said):
     _agree(tmp_path, said, samples=128, atol=0.015)  # (stochastic cut-out: 0.004 at 256 spp)
 
 
-def test_camera_coordinates_keep_the_uv_fallback(tmp_path, said):
-    """Texture Coordinate Camera is not computed per point: the image stays on the UV map, said
-    as before (only the render's messages are checked)."""
+def test_window_coordinates_keep_the_uv_fallback(tmp_path, said):
+    """Texture Coordinate Window is not computed per point: the image stays on the UV map, said
+    as before (only the render's messages are checked; Camera is computed per point:
+    tests/parity/test_camera_coordinates.py)."""
     nt, sh, tex, _ = _scene('cube')
-    _coordinates(nt, tex, 'Camera')
+    _coordinates(nt, tex, 'Window')
     nt.links.new(tex.outputs['Color'], sh.inputs['Color'])
     _settings(1, 0)
     bpy.context.scene.render.engine = 'DACRT'
-    scenes.render_exr(str(tmp_path / "camera.exr"))
-    assert any("Camera texture coordinates read as the UV map" in t for t in said), said
+    scenes.render_exr(str(tmp_path / "window.exr"))
+    assert any("Window texture coordinates read as the UV map" in t for t in said), said
 
 
 def _two_image_diffuse_plane():
