@@ -379,12 +379,14 @@ def _compute32(node, out, v):
         x = v['vector'] if t == 'CURVE_VEC' else v['value']
         # (Cycles' min and max x and table are float32)
         r = cn.curves_lookup(table.astype(np.float32), np.float32(lo), np.float32(hi), x, v['fac'], extrapolate)
-        if t == 'CURVE_FLOAT' and x.ndim == 1 and v['fac'].ndim == 1 and hi != lo:
-            # Cycles' constant folding of a Float Curve of constant inputs reads a point beyond
+        if t == 'CURVE_FLOAT' and x.ndim == 1 and v['fac'].ndim == 1 and hi != lo and _curve_folded(node):
+            # the folding of a Float Curve of constant inputs Blender folds reads a point beyond
             # the curve's x range as 0 when Extrapolated and as the end point's y otherwise,
-            # where its kernel extrapolates or takes the table's end (measured in Cycles 5.0 on
+            # where Cycles' kernel extrapolates or takes the table's end (measured in Cycles 5.0 on
             # a curve over [0.1, 0.9] ending at y 0.15 and 0.35 (the table's ends 0.1723 and
-            # 0.3531 when not Extrapolated): -3 to 0.09 and 0.91 to 5, factor 1 and 0.5)
+            # 0.3531 when not Extrapolated): -3 to 0.09 and 0.91 to 5, factor 1 and 0.5); constants
+            # Blender leaves (an RGB node's on the way) reach the kernel (measured: -0.7 through
+            # an RGB node and a Math node extrapolated to -17.76, where the fold gives 0)
             ends = node.curve_ends if isinstance(node, Frozen) else _curve_ends(node)
             rel = (x - np.float32(lo)) / (np.float32(hi) - np.float32(lo))
             end = np.float32(0.0) if extrapolate else np.where(rel < 0.0, np.float32(ends[0]), np.float32(ends[1]))
@@ -476,6 +478,12 @@ def xyz_to_rgb():
     return XYZ_TO_REC709 if m is None else m
 
 
+def _curve_folded(node):
+    """Whether Blender folds a Float Curve node (a Frozen one's, found when frozen)."""
+    folded = getattr(node, 'blender_folded', None)
+    return nodegraph.node_folded_by_blender(node) if folded is None else folded
+
+
 def _blender_folds(node):
     """Whether Blender folds a Power or Modulo node (a Frozen one's, found when frozen), where
     its result differs from Cycles' kernel (floatnodes.vector_math); False for any other
@@ -504,6 +512,7 @@ class Frozen:
             self.curves = _curves(thing)
             if t == 'CURVE_FLOAT':
                 self.curve_ends = _curve_ends(thing)
+                self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t == 'WAVELENGTH':
             self.xyz = xyz_to_rgb()
         elif t in ('MATH', 'VECT_MATH'):

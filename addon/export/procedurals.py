@@ -470,8 +470,9 @@ def _node(node, out, chain, depth):
         raise nodeeval.NotCompiled(f"'{node.bl_label}' node")
     frozen, frozen_out = nodeeval.Frozen(node), nodeeval.Frozen(out)
     if t == 'CURVE_FLOAT':
-        # a Float Curve of constant inputs: computed as a constant, as Cycles folds it (which
-        # differs from its kernel beyond the curve's range: nodeeval._compute32)
+        # a Float Curve of constant inputs: computed as a constant, folded as Blender folds it
+        # where it does (which differs from Cycles' kernel beyond the curve's range:
+        # nodeeval._compute32)
         consts = {role: nodeeval.constant(nodegraph.input_by_id(node, ident), nodeeval.reads_as_color(node, role))
                   for role, ident in roles.items()}
         if all(exact for _, exact in consts.values()):

@@ -191,3 +191,43 @@ def test_curve_nodes_match_cycles(said):
         assert np.abs(d - c).max() < tol, (name, np.abs(d - c).max(), d.mean(axis=0), c.mean(axis=0))
         assert abs(d.mean() - c.mean()) < (5e-3 if per_point else 1e-4), (name, d.mean(axis=0), c.mean(axis=0))
     assert not [s for s in said if 'Curve' in s], said
+
+
+def float_from_rgb(name, extend, factor, value, through_rgb=True):
+    """float_strength at `value`, the Float Curve's Value linked from a Math node (x 1) of an
+    RGB node's grey (through_rgb: Blender does not fold an RGB node, so Cycles' kernel runs the
+    curve, extrapolating) or of its own value (Blender folds the chain: the 0 beyond the range)."""
+    mat = float_strength(name, extend, factor, False, value)
+    nt = mat.node_tree
+    c = next(n for n in nt.nodes if n.type == 'CURVE_FLOAT')
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'MULTIPLY'
+    m.inputs[0].default_value, m.inputs[1].default_value = value / 0.5, 0.5
+    if through_rgb:
+        rgb = nt.nodes.new('ShaderNodeRGB')
+        rgb.outputs[0].default_value = (0.5, 0.5, 0.5, 1.0)
+        nt.links.new(rgb.outputs[0], m.inputs[1])
+    nt.links.new(m.outputs[0], c.inputs['Value'])
+    return mat
+
+
+UNFOLDED = [
+    ('rgb_below', lambda n: float_from_rgb(n, 'EXTRAPOLATED', 1.0, -0.7)),
+    ('rgb_above_fac', lambda n: float_from_rgb(n, 'EXTRAPOLATED', 0.6, 1.6)),
+    ('rgb_below_clamped', lambda n: float_from_rgb(n, 'HORIZONTAL', 1.0, -0.7)),
+    ('math_below', lambda n: float_from_rgb(n, 'EXTRAPOLATED', 1.0, -0.7, through_rgb=False)),
+    ('math_above_fac', lambda n: float_from_rgb(n, 'EXTRAPOLATED', 0.6, 1.6, through_rgb=False)),
+]
+
+
+def test_float_curve_of_constants_blender_does_not_fold_matches_cycles(said):
+    """A Float Curve of constants that Blender does not fold (an RGB node's grey on the way)
+    runs in Cycles' kernel, extrapolated beyond its range; the same chain without the RGB node
+    is folded, beyond its range 0 (Extrapolated). The fold's rule had been applied to every
+    chain of constants (below the range a Strength of 0.7 where Cycles gives -1.076; a fuzzed
+    Mix Shader factor through such a curve 44% off in blue)."""
+    got = _render(UNFOLDED)
+    for i, (name, _) in enumerate(UNFOLDED):
+        d, c = got['DACRT'][i], got['CYCLES'][i]
+        assert np.abs(d - c).max() < 2e-4, (name, d.mean(axis=0), c.mean(axis=0))
+    assert not [s for s in said if 'Curve' in s], said
