@@ -9,6 +9,7 @@ import numpy as np
 
 from ..nodegraph import CURVE_IS_STRAND, CURVE_THICKNESS, POINT_RADIUS
 from .islands import random_per_island
+from .pointiness import pointiness
 
 
 # Triangles from which a mesh of quads is tessellated in numpy (_quad_corner_tris, ~15 ns a
@@ -612,7 +613,8 @@ class MeshArrays:
     def _standard_corners(self, std, fac):
         """corner_attribute of Cycles' standard attribute `std` (STANDARD_OF): Generated
         coordinates (g, 1), the active render UV map (u, v, 0, 1) (its Fac u: a 2D vector's),
-        a mesh's Random Per Island (r, r, r, 1) at each triangle's corners (islands.py);
+        a mesh's Random Per Island (r, r, r, 1) at each triangle's corners (islands.py) and
+        Pointiness at each vertex (pointiness.py);
         the Curves and Point Info outputs of STANDARD_INFO 0 on a mesh, as Cycles' kernel
         gives them there; None for the others on a mesh (a tessellated point cloud or hair
         reads those and Cycles' own
@@ -623,7 +625,7 @@ class MeshArrays:
             out = np.zeros((len(self.triangles), 3, 4), np.float32)     # 0 on a mesh, as in Cycles
             out[..., 3] = 1.0
             return out
-        if std not in STANDARD_READ or (std == 'random_per_island' and self.mesh is None):
+        if std not in STANDARD_READ or (std in ('random_per_island', 'pointiness') and self.mesh is None):
             if self.mesh is None and self.strand is not None:
                 # Cycles' own of curves and points (strands.StandardAttributes: numbers, so
                 # their Fac is the same), else the strand's attribute of the name
@@ -639,6 +641,13 @@ class MeshArrays:
             edges = np.empty(2 * len(self.mesh.edges), np.int32)
             self.mesh.edges.foreach_get('vertices', edges)
             out[..., :3] = random_per_island(len(self.positions), edges, self.triangles)[:, None, None]
+            return out
+        if std == 'pointiness':                 # a point attribute, as Cycles'
+            edges = np.empty(2 * len(self.mesh.edges), np.int32)
+            self.mesh.edges.foreach_get('vertices', edges)
+            normals = np.empty(3 * len(self.positions), np.float32)
+            self.mesh.vertex_normals.foreach_get('vector', normals)
+            out[..., :3] = pointiness(self.positions, normals, edges)[self.triangles][..., None]
             return out
         if self.corner_uvs is None:              # no UV map: Cycles reads 0 too
             return None
@@ -821,10 +830,10 @@ FAC_OF = '\x00Fac\x00'
 # Cycles 5.0 on a plane, with and without a mesh attribute of the name:
 STANDARD_OF = '\x00Standard\x00'
 # read here: Generated coordinates (as the Texture Coordinate node's), the active render UV map
-# and, on a mesh, Random Per Island (islands.py)
-STANDARD_READ = frozenset({'generated', 'uv', 'random_per_island'})
-# computed by Cycles for a mesh (its normals, tangents, pointiness, ...), not here: said so
-STANDARD_UNREAD = frozenset({'N', 'tangent', 'tangent_sign', 'pointiness',
+# and, on a mesh, Random Per Island (islands.py) and Pointiness (pointiness.py)
+STANDARD_READ = frozenset({'generated', 'uv', 'random_per_island', 'pointiness'})
+# computed by Cycles for a mesh (its normals, tangents, ...), not here: said so
+STANDARD_UNREAD = frozenset({'N', 'tangent', 'tangent_sign',
                              'generated_transform', 'undisplaced_tangent', 'undisplaced_tangent_sign'})
 # those of volumes, curves and points, and ones Cycles leaves empty on a mesh rendered without
 # displacement or motion: 0 on a mesh, its own attribute of that name unread ('color' too); on

@@ -399,9 +399,9 @@ def _node(node, out, chain, depth):
         if kind == 'uv':
             chain.needs.add(TEXCOORD_UV)
         return (lambda c: c[kind]), True
-    if t == 'NEW_GEOMETRY' and out.name == 'Random Per Island':
-        # Cycles' standard attribute of the mesh (a face attribute: one number per triangle)
-        need = pr.ATTRIBUTE_NEED + attribute_key('random_per_island')
+    if t == 'NEW_GEOMETRY' and out.name in ('Random Per Island', 'Pointiness'):
+        # Cycles' standard attributes of the mesh (a face one: a number per triangle; a point one)
+        need = pr.ATTRIBUTE_NEED + attribute_key(out.name.lower().replace(' ', '_'))
         chain.needs.add(need)
         return (lambda c: np.asarray(c[need], np.float64)[:, :1]), False
     if t == 'NEW_GEOMETRY':

@@ -9,7 +9,7 @@ against Cycles: tests/parity/test_texcoord_edges.py):
     Coordinate UV beside an image on another map, and for a named map beside the unnamed one on
     a mesh whose active render map is another;
   - an Attribute node naming a standard attribute of Cycles' that the export does not compute
-    ('N', 'pointiness', 'tangent') says it is not read here (it had said
+    ('N', 'tangent') says it is not read here (it had said
     "no attribute 'N' on the mesh: its colour reads 0, as in Cycles", where Cycles reads it);
     one Cycles reads 0 for on a mesh ('density') says so, as in Cycles, as does a Color
     Attribute node naming a standard name (Cycles reads none, not even the colour attribute);
@@ -128,9 +128,9 @@ def _attribute_material(name, attribute, output='Color'):
 def test_standard_attributes_not_read_here_are_said_so(scene, exported):
     scenes.camera((0, 0, 5))
     scenes.light('SUN', 3.0)
-    names = ('N', 'pointiness', 'tangent')
-    # ('random_per_island' is read: export/islands.py, tests/parity/test_random_per_island.py)
-    for i, name in enumerate(names + ('random_per_island',)):
+    names = ('N', 'tangent')
+    # ('random_per_island' and 'pointiness' are read: export/islands.py, export/pointiness.py)
+    for i, name in enumerate(names + ('random_per_island', 'pointiness')):
         scenes.plane(f"P{i}", location=(3 * i, 0, 0), materials=(_attribute_material(f"M{i}", name),))
     scenes.plane("Fac", location=(0, 3, 0), materials=(_attribute_material("F", 'N', 'Fac'),))
     scenes.plane("Density", location=(3, 3, 0), materials=(_attribute_material("D", 'density'),))
@@ -146,7 +146,7 @@ def test_standard_attributes_not_read_here_are_said_so(scene, exported):
         "attribute" in text and "its colour reads 0, as in Cycles" in text, text
     for name in names:
         assert f"Cycles' standard attribute '{name}' is not read here; its colour reads 0" in text, text
-    assert "'random_per_island' is not read here" not in text, text
+    assert "'random_per_island' is not read here" not in text and "'pointiness' is not read here" not in text, text
     assert "Cycles' standard attribute 'N' is not read here; it reads colour 0 and alpha 1" in text, text
     assert "'density' is the name of a Cycles standard attribute" in text and "reads 0, as in Cycles" in text, text
     assert "no attribute 'N'" not in text and "standard attribute 'N' is not read here; its colour reads 0, as in " \
