@@ -18,6 +18,7 @@
 #include "orennayar.h"
 #include "shading.h"
 #include "environment.h"
+#include "envbuild.h"
 #include "envlanes.h"
 #include "equirect.h"
 #include "ies.h"
@@ -611,8 +612,8 @@ void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_
 
 std::shared_ptr<EnvironmentMap> make_environment(F32Array rgb, F32Array to_map, bool closest, bool srgb,
                                                  py::object scale) {
-    if (rgb.ndim() != 3 || rgb.shape(2) != 3)
-        throw py::value_error("rgb must have shape (h, w, 3), got " + shape_str(rgb));
+    if (rgb.ndim() != 3 || rgb.shape(2) < 3)
+        throw py::value_error("rgb must have shape (h, w, 3 or more), got " + shape_str(rgb));
     if (to_map.ndim() != 2 || to_map.shape(0) != 3 || to_map.shape(1) != 3)
         throw py::value_error("to_map must have shape (3, 3), got " + shape_str(to_map));
     if (rgb.shape(0) > py::ssize_t(UINT32_MAX) || rgb.shape(1) > py::ssize_t(UINT32_MAX))
@@ -629,11 +630,25 @@ std::shared_ptr<EnvironmentMap> make_environment(F32Array rgb, F32Array to_map, 
     std::string err;
     {
         py::gil_scoped_release nogil;
-        err = build_environment(*env, rgb.data(), uint32_t(rgb.shape(1)), uint32_t(rgb.shape(0)), to_map.data(), closest,
-                                srgb, sc);
+        err = build_environment_texels(*env, rgb.data(), size_t(rgb.shape(2)), uint32_t(rgb.shape(1)),
+                                       uint32_t(rgb.shape(0)), to_map.data(), closest, srgb, sc);
     }
     if (!err.empty()) throw py::value_error("environment map: " + err);
     return env;
+}
+
+// (non-finite texel count, a finite value negative, a value positive) of texels (..., c >= 3):
+// envbuild.h texel_stats.
+py::tuple texel_stats_py(F32Array texels) {
+    if (texels.ndim() < 1 || texels.shape(texels.ndim() - 1) < 3)
+        throw py::value_error("texels must have 3 or more channels in their last axis, got " + shape_str(texels));
+    const size_t c = size_t(texels.shape(texels.ndim() - 1)), n = size_t(texels.size()) / c;
+    TexelStats f;
+    {
+        py::gil_scoped_release nogil;
+        f = texel_stats(texels.data(), n, c);
+    }
+    return py::make_tuple(f.non_finite, f.negative, f.positive);
 }
 
 py::tuple environment_eval_py(const EnvironmentMap& env, F32Array D) {
@@ -815,6 +830,7 @@ void register_lamps(py::module_& m) {
           py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none(),
           py::arg("bump") = py::none(), py::arg("tree") = py::none(), py::arg("tri_prim") = py::none(),
           py::arg("rough") = py::none());
+    m.def("texel_stats", &texel_stats_py, py::arg("texels"));
     m.def("equirect_uv", &equirect_uv_py, py::arg("to_map"), py::arg("D"));
     m.def("equirect_direction", &equirect_direction_py, py::arg("u"), py::arg("v"));
     py::class_<EnvironmentMap, std::shared_ptr<EnvironmentMap>>(

@@ -19,7 +19,7 @@ import numpy as np
 from . import _core
 from .shading import _check_added_to
 
-__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather", "ies_register", "ies_lookup", "ies_live", "IesProfile", "IES_MAX_TABLES", "EnvironmentMap", "LightTree", "light_tree",
+__all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather", "ies_register", "ies_lookup", "ies_live", "IesProfile", "IES_MAX_TABLES", "EnvironmentMap", "texel_stats", "LightTree", "light_tree",
            "environment_map"]
 
 RECORD_WIDTH = int(_core.LAMP_RECORD_WIDTH)
@@ -141,11 +141,13 @@ def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None, set=None) ->
 
 
 def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool = False, scale=None) -> EnvironmentMap:
-    """An environment light from rgb (h, w, 3) float32 linear radiance (row 0 at the bottom, the
-    -Z pole; strength included), the orthogonal to_map (3, 3) taking world directions to the
-    map's frame (None: identity) and 'Linear' (bilinear) or 'Closest' lookup. With srgb, rgb is
-    sRGB-encoded (as Cycles keeps an 8-bit image): lookups blend it, decode the blend and
-    multiply by scale ((3,), the strength; None: 1), and the map is sampled by its decoded texels.
+    """An environment light from rgb (h, w, 3 or more channels, the first three RGB: an image's
+    RGBA is taken as it is, its alpha unread) float32 linear radiance (row 0 at the bottom, the
+    -Z pole) times scale ((3,), the strength; None: 1), the orthogonal to_map (3, 3) taking
+    world directions to the map's frame (None: identity) and 'Linear' (bilinear) or 'Closest'
+    lookup. With srgb, rgb is sRGB-encoded (as Cycles keeps an 8-bit image): lookups blend it,
+    decode the blend and multiply by scale, and the map is sampled by its decoded texels. The
+    tables are built on all threads, the same bits on any number of them.
 
     The object offers eval(D (3, n)) -> (radiance (3, n), solid-angle pdf (n,)),
     sample(u1, u2 (n,)) -> (wi (3, n), radiance / pdf (3, n), pdf (n,)) and
@@ -159,6 +161,13 @@ def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool 
     return _core.EnvironmentMap(np.ascontiguousarray(rgb, _F32), np.ascontiguousarray(m, _F32),
                                 interpolation == "Closest", bool(srgb),
                                 None if scale is None else np.ascontiguousarray(scale, _F32).reshape(3))
+
+
+def texel_stats(texels):
+    """(how many texels hold a non-finite RGB value, whether a finite RGB value is negative,
+    whether any RGB value is above 0) of float32 texels (..., channels >= 3, RGB first): one
+    threaded pass, no temporaries."""
+    return _core.texel_stats(np.ascontiguousarray(texels, _F32))
 
 
 IesProfile = _core.IesProfile

@@ -1,0 +1,234 @@
+// The environment map's tables from an image's texels, threaded by rows (see envbuild.h).
+#include "envbuild.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <mutex>
+#include <vector>
+
+#include "parallel.h"
+
+namespace dacrt {
+
+namespace {
+
+constexpr double PI_D = 3.14159265358979323846;
+
+// Cycles' color_srgb_to_linear (negative -> 0): environment.cpp's decode, the same expression so
+// the same bits as the lookups'.
+inline float srgb_to_linear(float c) {
+    return c < 0.04045f ? std::max(c * (1.0f / 12.92f), 0.0f) : std::pow((c + 0.055f) * (1.0f / 1.055f), 2.4f);
+}
+
+// An 8-bit image's encoded texels are k x float(1/255) (export/images.py: its bytes as float32
+// times 1/255): their decodes from a table of the 256, each taken only where the texel has
+// exactly that value, so the bits are srgb_to_linear's. Three pow per texel had been most of
+// an sRGB 4K map's build (0.24 s CPU).
+struct ByteDecode {
+    float value[256], linear[256];
+    ByteDecode() {
+        for (int k = 0; k < 256; ++k) value[k] = float(k) * float(1.0 / 255.0), linear[k] = srgb_to_linear(value[k]);
+    }
+    float operator()(float c) const {
+        const float x = c * 255.0f + 0.5f;
+        if (x >= 0.0f && x < 256.0f) {
+            const int k = int(x);
+            uint32_t a, b;  // bitwise: -0 decodes to -0
+            std::memcpy(&a, &value[k], 4), std::memcpy(&b, &c, 4);
+            if (a == b) return linear[k];
+        }
+        return srgb_to_linear(c);
+    }
+};
+
+// Integral of sin(theta) dv over v in [v0, v1] within [0, 1], theta = pi (1 - v).
+inline double sin_integral(double v0, double v1) {
+    return (std::cos(PI_D * (1.0 - v1)) - std::cos(PI_D * (1.0 - v0))) / PI_D;
+}
+
+// The guide of one CDF c[0..count] (environment.cpp's find_guided reads it): g[b] =
+// std::upper_bound's position of b / G, b = 0..G, found in one walk along the CDF (it is
+// sorted, and so are the b / G): a binary search per bucket had been a third of the build.
+template <class T>
+void build_guide(const T* c, size_t count, uint32_t G, uint32_t* g) {
+    size_t k = 0;
+    for (uint32_t b = 0; b <= G; ++b) {
+        const T x = T(b) / T(G);
+        while (k <= count && !(x < c[k])) ++k;
+        g[b] = uint32_t(k);
+    }
+}
+
+// G for a CDF of count entries: about 8 entries a bucket, at most 1024 buckets.
+uint32_t guide_size(size_t count) {
+    uint32_t G = 1;
+    while (G < 1024 && size_t(G) * 8 < count) G *= 2;
+    return G;
+}
+
+// Rows per thread: at least ~64K texels each (smaller maps build on the calling thread).
+size_t min_rows(uint32_t width) { return std::max<size_t>(1, (size_t(1) << 16) / width); }
+
+}  // namespace
+
+TexelStats texel_stats(const float* texels, size_t n, size_t channels) {
+    std::atomic<size_t> non_finite{0};
+    std::atomic<bool> negative{false}, positive{false};
+    parallel_for(n, [&](size_t b, size_t e) {
+        size_t bad = 0;
+        bool neg = false, pos = false;
+        for (size_t k = b; k < e; ++k) {
+            const float* t = texels + k * channels;
+            bool finite = true;
+            for (int a = 0; a < 3; ++a) {
+                finite &= std::isfinite(t[a]);
+                neg |= t[a] < 0.0f && t[a] > -std::numeric_limits<float>::infinity();
+                pos |= t[a] > 0.0f;
+            }
+            bad += !finite;
+        }
+        non_finite += bad;
+        if (neg) negative = true;
+        if (pos) positive = true;
+    }, size_t(1) << 16);
+    return {non_finite.load(), negative.load(), positive.load()};
+}
+
+std::string build_environment_texels(EnvironmentMap& env, const float* texels, size_t channels, uint32_t width,
+                                     uint32_t height, const float to_map[9], bool closest, bool srgb,
+                                     const float* scale) {
+    if (width == 0 || height == 0) return "the map has no pixels";
+    if (channels < 3) return "texels need 3 channels or more";
+    if (size_t(width) * height > (size_t(1) << 28)) return "the map has more than 2^28 pixels";
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+            double dot = 0;
+            for (int a = 0; a < 3; ++a) dot += double(to_map[3 * r + a]) * to_map[3 * c + a];
+            if (!(std::fabs(dot - (r == c ? 1.0 : 0.0)) < 1e-4)) return "to_map is not an orthogonal 3x3 matrix";
+        }
+    for (int a = 0; scale && a < 3; ++a)
+        if (!(scale[a] >= 0 && scale[a] < std::numeric_limits<float>::infinity()))
+            return "scale " + std::to_string(scale[a]) + " is negative or not finite";
+    env.width = width;
+    env.height = height;
+    env.closest = closest;
+    env.srgb = srgb;
+    for (int a = 0; a < 3; ++a) env.scale[a] = srgb && scale ? scale[a] : 1.0f;
+    std::copy(to_map, to_map + 9, env.to_map);
+    const size_t cells = size_t(width) * height;
+    env.rgb.resize(cells * 3);
+    env.lum.resize(cells);
+    // The radiance texels (a linear map's RGB x scale, an sRGB map's encoded RGB) and each
+    // one's luminance (an sRGB map's: of the decoded texel x scale, as the lookup decodes).
+    std::mutex first_lock;
+    size_t first_bad = cells;
+    const ByteDecode byte_decode;
+    const bool folds = !srgb && scale;
+    parallel_for(height, [&](size_t b, size_t e) {
+        size_t bad = cells;
+        for (size_t k = b * width; k < e * width; ++k) {
+            float t[3];
+            for (int a = 0; a < 3; ++a) t[a] = folds ? texels[k * channels + a] * scale[a] : texels[k * channels + a];
+            for (int a = 0; a < 3; ++a) {
+                env.rgb[3 * k + a] = t[a];
+                if (!(t[a] >= 0 && t[a] < std::numeric_limits<float>::infinity()) && bad == cells) bad = k;
+            }
+            if (srgb)
+                for (int a = 0; a < 3; ++a) t[a] = byte_decode(t[a]) * env.scale[a];
+            env.lum[k] = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
+        }
+        if (bad < cells) {
+            std::lock_guard<std::mutex> hold(first_lock);
+            first_bad = std::min(first_bad, bad);
+        }
+    }, min_rows(width));
+    if (first_bad < cells) {
+        const float* t = env.rgb.data() + 3 * first_bad;
+        const int a = !(t[0] >= 0 && t[0] < std::numeric_limits<float>::infinity()) ? 0
+                      : !(t[1] >= 0 && t[1] < std::numeric_limits<float>::infinity()) ? 1 : 2;
+        return "pixel value " + std::to_string(t[a]) + " at " + std::to_string(first_bad) +
+               " is negative or not finite";
+    }
+    // Cell weights: their luminance integral, the mean of the corners ('Linear': the cell
+    // between texel centres, whose bilinear blend is sampled exactly within it) or the texel
+    // ('Closest'), times the mean of sin(theta) over the cell's rows (the last 'Linear' row
+    // wraps over the pole: half at the top, half at the bottom).
+    std::vector<double> row_sin(height);
+    for (uint32_t i = 0; i < height; ++i) {
+        if (closest)
+            row_sin[i] = sin_integral(double(i) / height, double(i + 1) / height) * height;
+        else if (i + 1 < height)
+            row_sin[i] = sin_integral((i + 0.5) / height, (i + 1.5) / height) * height;
+        else
+            row_sin[i] = (sin_integral((i + 0.5) / height, 1.0) + sin_integral(0.0, 0.5 / height)) * height;
+    }
+    const float* L = env.lum.data();
+    // The means of row i's cells, in double: their corners' ('Linear': with the next row and
+    // column, wrapped) or the texel ('Closest')
+    auto cell_means = [&](uint32_t i, double* m) {
+        const float* r = L + size_t(i) * width;
+        if (closest) {
+            for (uint32_t j = 0; j < width; ++j) m[j] = double(r[j]);
+            return;
+        }
+        const float* r1 = L + size_t(i + 1 == height ? 0 : i + 1) * width;
+        for (uint32_t j = 0; j < width; ++j) {
+            const uint32_t j1 = j + 1 == width ? 0 : j + 1;
+            m[j] = (double(r[j]) + r[j1] + r1[j] + r1[j1]) / 4.0;
+        }
+    };
+    env.row_cdf.assign(size_t(height) + 1, 0.0);
+    env.col_cdf.resize(size_t(height) * (width + 1));
+    env.cell_pdf.resize(cells);
+    env.guide_buckets = guide_size(width);
+    env.col_guide.resize(size_t(height) * (env.guide_buckets + 1));
+    std::vector<double> row_total(height);
+    parallel_for(height, [&](size_t b, size_t e) {
+        std::vector<double> row(width);
+        for (size_t i = b; i < e; ++i) {
+            cell_means(uint32_t(i), row.data());
+            double acc = 0;
+            for (uint32_t j = 0; j < width; ++j) acc += row[j] *= row_sin[i];
+            float* c = env.col_cdf.data() + i * (width + 1);
+            c[0] = 0.0f;
+            double run = 0;
+            for (uint32_t j = 0; j < width; ++j) {
+                run += row[j];
+                c[j + 1] = acc > 0 ? float(run / acc) : float(j + 1) / float(width);
+            }
+            c[width] = 1.0f;
+            build_guide(c, width, env.guide_buckets, env.col_guide.data() + i * (env.guide_buckets + 1));
+            row_total[i] = acc;
+        }
+    }, min_rows(width));
+    double total = 0;  // in row order: the same sum whatever the threads
+    for (uint32_t i = 0; i < height; ++i) env.row_cdf[i + 1] = total += row_total[i];
+    env.total = total;
+    if (!(total > 0)) {
+        std::fill(env.cell_pdf.begin(), env.cell_pdf.end(), 0.0f);
+        return {};
+    }
+    for (uint32_t i = 0; i <= height; ++i) env.row_cdf[i] /= total;
+    env.row_cdf[height] = 1.0;
+    env.row_buckets = guide_size(height);
+    env.row_guide.assign(size_t(env.row_buckets) + 1, 0u);
+    build_guide(env.row_cdf.data(), height, env.row_buckets, env.row_guide.data());
+    // pdf over (u, v) = P(cell) w h x (the blend / its mean over the cell)
+    const double pdf_scale = double(width) * height / total;
+    parallel_for(height, [&](size_t b, size_t e) {
+        std::vector<double> means(width);
+        for (size_t i = b; i < e; ++i) {
+            cell_means(uint32_t(i), means.data());
+            for (uint32_t j = 0; j < width; ++j) {
+                const double m = means[j];
+                env.cell_pdf[i * width + j] = m > 0 ? float(m * row_sin[i] * pdf_scale / (closest ? 1.0 : m)) : 0.0f;
+            }
+        }
+    }, min_rows(width));
+    return {};
+}
+
+}  // namespace dacrt

@@ -1,0 +1,116 @@
+"""The environment map's build (native/cpp/envbuild.cpp): its tables have the same bits on one
+thread as on all of them; an image's RGBA texels with the strength as `scale` build the map of
+the RGB x strength product the export had made in numpy; an 8-bit sRGB map's importance is its
+decoded texels' mean (the byte table's decodes are the lookup's); texel_stats counts what the
+export reports."""
+
+import dacrt
+import numpy as np
+import pytest
+from dacrt import lamps
+
+F32 = np.float32
+
+
+def _rotation(rng):
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    return q.astype(F32)
+
+
+def _outputs(env, rng):
+    """Everything the renderer reads of a map: eval at random directions, both samplers' draws."""
+    n = 4000
+    D = rng.normal(size=(3, n)).astype(F32)
+    D /= np.linalg.norm(D, axis=0)
+    u1, u2 = rng.random(n, dtype=F32), rng.random(n, dtype=F32)
+    return [np.array([env.total])] + list(env.eval(D)) + list(env.sample(u1, u2)) + list(env.sample_lanes(u1, u2))
+
+
+def _maps(rng):
+    """(name, rgb, srgb, scale): maps of many shapes, wide dark runs, 8-bit and arbitrary sRGB values."""
+    out = []
+    for h, w in ((1, 1), (1, 9), (7, 1), (33, 65), (512, 1024)):
+        px = (rng.random((h, w, 4), F32) ** 4 * 10).astype(F32)
+        px[..., :3][rng.random((h, w)) < 0.3] = 0
+        st = np.array([1.5, 0.7, 2.25], F32)
+        out.append((f"linear-{h}x{w}", px, False, st))
+        out.append((f"bytes-{h}x{w}", rng.integers(0, 256, (h, w, 3)).astype(F32) * F32(1 / 255), True, st))
+        out.append((f"srgb-floats-{h}x{w}", rng.random((h, w, 3), F32), True, st))
+        out.append((f"black-{h}x{w}", np.zeros((h, w, 3), F32), False, None))
+    return out
+
+
+@pytest.mark.parametrize("interp", ["Linear", "Closest"])
+def test_tables_have_the_same_bits_on_any_thread_count(interp):
+    rng = np.random.default_rng(3)
+    M = _rotation(rng)
+    for name, rgb, srgb, scale in _maps(rng):
+        with dacrt.thread_limit(1):
+            one = lamps.environment_map(rgb, M, interp, srgb=srgb, scale=scale)
+        every = lamps.environment_map(rgb, M, interp, srgb=srgb, scale=scale)
+        seed = int(rng.integers(1 << 30))
+        for a, b in zip(_outputs(one, np.random.default_rng(seed)), _outputs(every, np.random.default_rng(seed))):
+            assert a.tobytes() == b.tobytes(), (name, interp)
+
+
+@pytest.mark.parametrize("interp", ["Linear", "Closest"])
+def test_rgba_texels_with_a_scale_are_the_map_of_their_rgb_times_it(interp):
+    """What the export hands over (an image's RGBA, the Background's strength) builds, bit for
+    bit, the map of the float32 product RGB x strength (alpha unread)."""
+    rng = np.random.default_rng(4)
+    M = _rotation(rng)
+    rgba = (rng.random((48, 96, 4), F32) ** 3 * 20).astype(F32)
+    rgba[..., 3] = rng.choice([0.0, np.nan, -1.0, 1e30], size=(48, 96))    # alpha: never read
+    st = np.array([3.0, 0.25, 1.7], F32)
+    folded = lamps.environment_map(rgba, M, interp, scale=st)
+    product = lamps.environment_map(np.ascontiguousarray(rgba[..., :3]) * st, M, interp)
+    seed = int(rng.integers(1 << 30))
+    for a, b in zip(_outputs(folded, np.random.default_rng(seed)), _outputs(product, np.random.default_rng(seed))):
+        assert a.tobytes() == b.tobytes()
+
+
+def test_an_srgb_maps_importance_is_its_decoded_texels_mean():
+    """'Closest': the pdf of a texel over another in its row is the ratio of their looked-up
+    (decoded) RGB means, for 8-bit values (decoded by the byte table) and others alike."""
+    rng = np.random.default_rng(5)
+    h, w = 16, 32
+    for enc in (rng.integers(1, 256, (h, w, 3)).astype(F32) * F32(1 / 255), rng.random((h, w, 3), F32) + F32(0.01)):
+        st = np.array([2.0, 1.0, 0.5], F32)
+        env = lamps.environment_map(enc, None, "Closest", srgb=True, scale=st)
+        i = np.repeat(np.arange(1, h - 1), w)
+        j = np.tile(np.arange(w), h - 2)
+        u, v = (j + 0.5) / w, (i + 0.5) / h
+        theta, phi = np.pi * (1.0 - v), np.pi * (1.0 - 2.0 * u)
+        D = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)]).astype(F32)
+        L, pdf = env.eval(D)
+        lum = L.astype(np.float64).mean(axis=0).reshape(h - 2, w)
+        ratio = pdf.astype(np.float64).reshape(h - 2, w) / lum
+        # (the pdf carries sin(theta) of the direction: a row's texels share it)
+        np.testing.assert_allclose(ratio / ratio[:, :1], 1.0, rtol=2e-6)
+
+
+def test_a_texel_beyond_float_after_the_scale_is_refused():
+    px = np.ones((4, 8, 4), F32)
+    px[2, 5, 1] = 1e30
+    with pytest.raises(ValueError, match=r"pixel value inf at 21 is negative or not finite"):
+        lamps.environment_map(px, scale=np.array([1.0, 1e10, 1.0], F32))
+    with pytest.raises(ValueError, match=r"scale nan is negative or not finite"):
+        lamps.environment_map(px, scale=np.array([1.0, np.nan, 1.0], F32))
+
+
+def test_texel_stats_count_the_rgb_faults_and_light():
+    px = np.zeros((5, 7, 4), F32)
+    assert lamps.texel_stats(px) == (0, False, False)
+    px[..., 3] = np.nan          # alpha: not counted
+    px[0, 0, 3] = -1.0
+    px[1, 1, 3] = 5.0
+    assert lamps.texel_stats(px) == (0, False, False)
+    px[2, 3, 0] = px[2, 3, 2] = np.nan          # one texel, two values
+    px[4, 6, 1] = -np.inf                      # not finite: black, not 'negative'
+    assert lamps.texel_stats(px) == (2, False, False)
+    px[3, 3, 2] = -0.5
+    px[0, 1, 1] = 1e-30
+    assert lamps.texel_stats(px) == (2, True, True)
+    big = np.zeros((300, 600, 3), F32)          # (threaded)
+    big[299, 599, 2] = np.inf
+    assert lamps.texel_stats(big) == (1, False, True)
