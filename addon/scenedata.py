@@ -102,13 +102,16 @@ class Light:
 @dataclass
 class Environment:
     """An Environment Texture lighting the world (equirectangular; lights/environment.py)."""
-    pixels: np.ndarray             # (h, w, 3+) float32 linear RGB, row 0 at the bottom (the -Z pole)
+    pixels: np.ndarray             # (h, w, 3+) float32 linear RGB, row 0 at the bottom (the -Z pole):
+                                   # an image's RGBA as read (alpha unread; an 8-bit image's
+                                   # texture.ByteTexels, made into floats only if read)
     strength: np.ndarray           # (3,) multiplies the pixels (the Background's strength)
     to_map: np.ndarray = field(default_factory=lambda: np.eye(3))  # (3,3) orthogonal: world direction
                                                                    # -> the map's frame (Mapping node)
     interpolation: str = 'Linear'  # 'Linear' | 'Closest'
     # (h, w, 3) float32: the image's RGB in its sRGB encoding, as Cycles keeps an sRGB image: the
     # lookup blends it and decodes the blend, the importance map comes from its decoded texels;
+    # or (h, w, 3+) uint8: an 8-bit image's bytes, k the value k / 255 (alpha unread);
     # None: `pixels` are blended. `pixels` are the decoded texels either way
     encoded: Optional[np.ndarray] = None
     # a Single Scattering Sky Texture's map: its ground (below the horizon) fades as Cycles'

@@ -582,9 +582,10 @@ def validate(sd: SceneData):
         raise ValueError(f"world_visibility must be bits of VIS_CAMERA | VIS_DIFFUSE | NO_TRANSMISSION, got {wv!r}")
     env = sd.environment
     if env is not None:
-        px, st = np.asarray(env.pixels), np.asarray(env.strength, np.float64)
-        if px.ndim != 3 or px.shape[2] < 3 or px.shape[0] < 1 or px.shape[1] < 1:
-            raise ValueError(f"environment.pixels must be (h, w, 3 or 4) with h, w >= 1, got {px.shape}")
+        # (its shape alone: an 8-bit image's texels are made into floats only if read)
+        shape, st = np.shape(env.pixels), np.asarray(env.strength, np.float64)
+        if len(shape) != 3 or shape[2] < 3 or shape[0] < 1 or shape[1] < 1:
+            raise ValueError(f"environment.pixels must be (h, w, 3 or 4) with h, w >= 1, got {shape}")
         if st.shape != (3,) or not np.isfinite(st).all() or (st < 0).any():
             raise ValueError(f"environment.strength must be 3 finite non-negative numbers, got {env.strength!r}")
         m = np.asarray(env.to_map, np.float64)
@@ -592,8 +593,9 @@ def validate(sd: SceneData):
             raise ValueError(f"environment.to_map must be an orthogonal 3x3 matrix, got {env.to_map!r}")
         if env.interpolation not in ('Linear', 'Closest'):
             raise ValueError(f"environment.interpolation must be 'Linear' or 'Closest', got {env.interpolation!r}")
-        if env.encoded is not None and np.shape(env.encoded) != px.shape[:2] + (3,):
-            raise ValueError(f"environment.encoded must be (h, w, 3) as its pixels {px.shape[:2]}, "
+        enc = np.shape(env.encoded)
+        if env.encoded is not None and (len(enc) != 3 or enc[:2] != tuple(shape[:2]) or enc[2] < 3):
+            raise ValueError(f"environment.encoded must be (h, w, 3 or 4) as its pixels {tuple(shape[:2])}, "
                              f"got {np.shape(env.encoded)}")
     s = sd.settings
     if int(s.samples) < 1:

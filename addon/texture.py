@@ -280,12 +280,32 @@ class ByteTexels(LazyTexels):
                 counts[c] += np.bincount(band[:, c], minlength=256)
         return counts @ self.table.astype(np.float64) / (h * w)
 
+    def any_positive_rgb(self) -> bool:
+        """Whether a texel's RGB is above 0, from the bytes: the tables rise with the byte, so
+        where every byte from the first lit one is lit, the largest byte decides."""
+        lit = self.table > 0
+        if not lit.any():
+            return False
+        first = int(np.argmax(lit))
+        if lit[first:].all():
+            return bool(self.k8[..., :3].max() >= first)
+        return bool(lit[self.k8[..., :3]].any())
+
 
 def mean_rgb(pixels) -> np.ndarray:
     """(3,) float64 mean colour of texels (h, w, >= 3): an 8-bit image's from its bytes."""
     if isinstance(pixels, ByteTexels) and not pixels.made:
         return pixels.mean_rgb()
     return np.asarray(pixels[..., :3], np.float64).reshape(-1, 3).mean(axis=0)
+
+
+def any_positive_rgb(pixels) -> bool:
+    """Whether any texel (h, w, >= 3) has an RGB value above 0: an 8-bit image's from its bytes
+    (not made into floats), others in one native pass (no whole-image temporaries)."""
+    if isinstance(pixels, ByteTexels) and not pixels.made:
+        return pixels.any_positive_rgb()
+    import dacrt
+    return bool(dacrt.lamps.texel_stats(pixels)[2])
 
 
 def all_finite(pixels, channels=slice(None)) -> bool:

@@ -665,10 +665,16 @@ def _stored_texels(rgba, img, unassociate, byte, encoded, from_file, associates,
 
 def encoded_environment(pixels, interpolation):
     """An Environment Texture image's RGB as Cycles' 'Linear' lookup blends it, sRGB-encoded
-    (h, w, 3) float32, when Cycles keeps it so and the values are finite and non-negative;
-    None: the scene-linear pixels are blended ('Closest' reads one texel: the same either way)."""
+    (h, w, 3) float32, or an 8-bit image's bytes as stored (h, w, 4) uint8, byte k the value
+    k / 255 (the native map reads them so: no float copy of the image), when Cycles keeps it so
+    and the values are finite and non-negative; None: the scene-linear pixels are blended
+    ('Closest' reads one texel: the same either way)."""
     stored = stored_texels(pixels)
     if interpolation == 'Closest' or stored is None or not stored.srgb or isinstance(stored.texels, UdimTiles):
         return None
-    rgb = stored.texels[..., :3].astype(np.float32) * stored.scale
-    return rgb if np.isfinite(rgb).all() and (rgb >= 0).all() else None
+    texels = stored.texels
+    if texels.dtype == np.uint8 and stored.scale == np.float32(1.0 / 255.0):
+        return texels
+    rgb = np.multiply(texels[..., :3], stored.scale, dtype=np.float32)
+    non_finite, negative, _ = dacrt.lamps.texel_stats(rgb)
+    return rgb if not (non_finite or negative) else None

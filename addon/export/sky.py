@@ -11,6 +11,7 @@ from .. import scenedata as sd
 from .. import sky as model
 from .. import skyanalytic
 from ..mapping import environment_rotation
+from ..texture import any_positive_rgb
 from .colorspaces import xyz_to_scene_linear
 
 EVALUATED = ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING', 'PREETHAM', 'HOSEK_WILKIE')
@@ -71,7 +72,7 @@ def ground_seen_said(env, camera, settings, camera_sees_world):
     a panorama's grid samples it)."""
     if env is None or not env.sky_ground_fade or not camera_sees_world or settings.film_transparent:
         return None
-    if not (np.any(env.strength > 0) and np.any(env.pixels > 0)):
+    if not (np.any(env.strength > 0) and any_positive_rgb(env.pixels)):
         return None
     from ..camera import CameraModel      # (the numpy camera model: the rays Cycles casts)
     try:

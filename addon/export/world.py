@@ -7,6 +7,7 @@ visibility. Other world shaders use the world colour, reported. Part
 of the export layer."""
 
 import bpy
+import dacrt
 import numpy as np
 
 from .. import nodeeval, nodegraph
@@ -15,6 +16,7 @@ from ..lights.base import fits_float32
 from ..mapping import environment_rotation
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import linked_link, linked_node, output_node
+from ..texture import ByteTexels, mean_rgb
 from .emission import huge_said
 from .images import MISSING_IMAGE, WHOLE, encoded_environment, image_pixels
 from .materials import channel_line
@@ -392,18 +394,25 @@ def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE)
         if img is None:
             reasons.append("Environment Texture without an image (magenta, as Cycles)")
         return np.array(MISSING_IMAGE, np.float32) * strength, None
-    rgb = pixels[..., :3]
-    bad = ~np.isfinite(rgb)
-    if bad.any():
-        reasons.append(f"image '{img.name}': {int(bad.any(axis=2).sum())} pixel(s) not finite, rendered black")
-        rgb = np.where(bad, 0.0, rgb)
-    if (rgb < 0).any():
-        reasons.append(f"image '{img.name}': negative values rendered as 0")
-        rgb = np.maximum(rgb, 0.0)
+    # the map reads the image's RGBA texels in place (the strength is folded in as the native map
+    # copies them): an RGB copy, a strength product and numpy's whole-image checks had been
+    # ~0.3 s CPU of every frame with a 4K HDRI. An 8-bit image's texels (a table of its bytes)
+    # are finite and non-negative, and are not made into floats where its bytes are looked up
+    texels = pixels
+    non_finite, negative, _ = (0, False, True) if isinstance(pixels, ByteTexels) else dacrt.lamps.texel_stats(pixels)
+    if non_finite or negative:
+        texels = np.asarray(pixels[..., :3])
+        if non_finite:
+            reasons.append(f"image '{img.name}': {non_finite} pixel(s) not finite, rendered black")
+            texels = np.where(np.isfinite(texels), texels, 0.0)
+        if negative:
+            reasons.append(f"image '{img.name}': negative values rendered as 0")
+            texels = np.maximum(texels, 0.0)
     if chain is not None:
+        rgb = np.asarray(texels[..., :3])
         px = np.concatenate([rgb, pixels[..., 3:4]], axis=-1).reshape(-1, 4)
         y = np.asarray(chain(px), np.float64).reshape(rgb.shape)
-        rgb = np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0).astype(np.float32)
+        texels = np.maximum(np.nan_to_num(y, nan=0.0, posinf=0.0, neginf=0.0), 0.0).astype(np.float32)
         # exact when the map is blended as it is held (float) and the chain scales and offsets
         # each channel; else the blend of the results is not the result of the blend (a Gamma
         # 2.2 on 0/1 columns: 0.50 where Cycles blends, then raises, 0.32)
@@ -414,7 +423,7 @@ def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE)
     if node.projection != 'EQUIRECTANGULAR':
         reasons.append(f"{node.projection.lower().replace('_', ' ')} projection: the image's mean colour used "
                        "as a uniform world")
-        return rgb.reshape(-1, 3).mean(0).astype(np.float32) * strength, None
+        return mean_rgb(texels).astype(np.float32) * strength, None
     interp = 'Closest' if node.interpolation == 'Closest' else 'Linear'
     if node.interpolation in LINEAR_INTERPOLATIONS:
         reasons.append(f"{node.interpolation.lower()} environment interpolation as linear")
@@ -424,7 +433,7 @@ def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE)
         # direction, and its background is black
         reasons.append(f"so environment image '{img.name}' is looked up at no direction: black, as in Cycles")
         return np.zeros(3, np.float32), None
-    env = sd.Environment(np.ascontiguousarray(rgb, np.float32), np.full(3, strength, np.float32),
+    env = sd.Environment(texels, np.full(3, strength, np.float32),
                          to_map, interp,
                          encoded=None if pixels is None else encoded_environment(pixels, interp))
     return np.zeros(3, np.float32), env

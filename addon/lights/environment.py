@@ -44,13 +44,22 @@ class EnvironmentLight:
         self._env = env
         self.to_map = np.asarray(env.to_map, np.float64)
         self.interpolation = env.interpolation
-        self.encoded = None if env.encoded is None else np.ascontiguousarray(env.encoded, F32)
+        # (an 8-bit image's bytes stay bytes, k / 255: texture.EncodedTexels' scale)
+        enc = None if env.encoded is None else np.asarray(env.encoded)
+        self.encoded = None if enc is None else np.ascontiguousarray(enc, np.uint8 if enc.dtype == np.uint8 else F32)
         self._native = None
 
     def _radiance_image(self):
         """(h, w, 3) the texels' radiance (an encoded map's decoded as the native map decodes them)."""
-        px = np.asarray(self._env.pixels, F32)[..., :3] if self.encoded is None else srgb_to_linear(self.encoded)
+        px = np.asarray(self._env.pixels, F32)[..., :3] if self.encoded is None else \
+            srgb_to_linear(self._encoded_texels().texels[..., :3] * self._encoded_texels().scale)
         return np.ascontiguousarray(px * np.asarray(self._env.strength, F32))
+
+    def _encoded_texels(self):
+        """The encoded map as texture.EncodedTexels (bytes: scale 1 / 255)."""
+        if self.encoded.dtype == np.uint8:
+            return EncodedTexels(self.encoded, srgb=True, scale=1.0 / 255.0)
+        return EncodedTexels(self.encoded, srgb=True)
 
     @property
     def native(self):
@@ -58,7 +67,10 @@ class EnvironmentLight:
         once; the numpy tables below are built only when the definition itself is asked."""
         if self._native is None:
             if self.encoded is None:
-                self._native = dacrt.lamps.environment_map(self._radiance_image(), self.to_map, self.interpolation)
+                # the texels as the export holds them (an image's RGBA), the strength folded in
+                # natively: the same bits as _radiance_image's product, without its copies
+                self._native = dacrt.lamps.environment_map(self._env.pixels, self.to_map, self.interpolation,
+                                                           scale=np.asarray(self._env.strength, F32))
             else:
                 self._native = dacrt.lamps.environment_map(self.encoded, self.to_map, self.interpolation, srgb=True,
                                                            scale=np.asarray(self._env.strength, F32))
@@ -146,7 +158,7 @@ class EnvironmentLight:
 
     def radiance(self, u, v):
         if self.encoded is not None:
-            rgb = texture_lookup(EncodedTexels(self.encoded, srgb=True), u.astype(F32), v.astype(F32),
+            rgb = texture_lookup(self._encoded_texels(), u.astype(F32), v.astype(F32),
                                  self.interpolation, 'REPEAT')
             return rgb * np.asarray(self._env.strength, F32)[:, None]
         return texture_lookup(self.rgb, u.astype(F32), v.astype(F32), self.interpolation, 'REPEAT')

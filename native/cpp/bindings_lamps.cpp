@@ -610,8 +610,12 @@ void accumulate_masked_py(py::array L, I64Array pid, F32Array values, py::array_
 
 // --- the environment map (environment.h) ---
 
-std::shared_ptr<EnvironmentMap> make_environment(F32Array rgb, F32Array to_map, bool closest, bool srgb,
+// rgb: float32, or uint8 (an 8-bit image's bytes: texel value k / 255, envbuild.h).
+std::shared_ptr<EnvironmentMap> make_environment(py::array rgb, F32Array to_map, bool closest, bool srgb,
                                                  py::object scale) {
+    const bool bytes = py::isinstance<py::array_t<uint8_t>>(rgb);
+    rgb = bytes ? py::array(py::array_t<uint8_t, py::array::c_style>::ensure(rgb)) : py::array(F32Array::ensure(rgb));
+    if (!rgb) throw py::value_error("rgb must be float32 or uint8 texels");
     if (rgb.ndim() != 3 || rgb.shape(2) < 3)
         throw py::value_error("rgb must have shape (h, w, 3 or more), got " + shape_str(rgb));
     if (to_map.ndim() != 2 || to_map.shape(0) != 3 || to_map.shape(1) != 3)
@@ -630,8 +634,14 @@ std::shared_ptr<EnvironmentMap> make_environment(F32Array rgb, F32Array to_map, 
     std::string err;
     {
         py::gil_scoped_release nogil;
-        err = build_environment_texels(*env, rgb.data(), size_t(rgb.shape(2)), uint32_t(rgb.shape(1)),
-                                       uint32_t(rgb.shape(0)), to_map.data(), closest, srgb, sc);
+        if (bytes)
+            err = build_environment_bytes(*env, static_cast<const uint8_t*>(rgb.data()), size_t(rgb.shape(2)),
+                                          uint32_t(rgb.shape(1)), uint32_t(rgb.shape(0)), to_map.data(), closest,
+                                          srgb, sc);
+        else
+            err = build_environment_texels(*env, static_cast<const float*>(rgb.data()), size_t(rgb.shape(2)),
+                                           uint32_t(rgb.shape(1)), uint32_t(rgb.shape(0)), to_map.data(), closest,
+                                           srgb, sc);
     }
     if (!err.empty()) throw py::value_error("environment map: " + err);
     return env;

@@ -97,9 +97,15 @@ TexelStats texel_stats(const float* texels, size_t n, size_t channels) {
     return {non_finite.load(), negative.load(), positive.load()};
 }
 
-std::string build_environment_texels(EnvironmentMap& env, const float* texels, size_t channels, uint32_t width,
-                                     uint32_t height, const float to_map[9], bool closest, bool srgb,
-                                     const float* scale) {
+namespace {
+
+// A texel's value: a float as it is, a byte k as export/images.py makes it (float32 k x 1/255).
+inline float texel_value(float x) { return x; }
+inline float texel_value(uint8_t k) { return float(k) * float(1.0 / 255.0); }
+
+template <class T>
+std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, uint32_t width, uint32_t height,
+                         const float to_map[9], bool closest, bool srgb, const float* scale) {
     if (width == 0 || height == 0) return "the map has no pixels";
     if (channels < 3) return "texels need 3 channels or more";
     if (size_t(width) * height > (size_t(1) << 28)) return "the map has more than 2^28 pixels";
@@ -131,7 +137,10 @@ std::string build_environment_texels(EnvironmentMap& env, const float* texels, s
         size_t bad = cells;
         for (size_t k = b * width; k < e * width; ++k) {
             float t[3];
-            for (int a = 0; a < 3; ++a) t[a] = folds ? texels[k * channels + a] * scale[a] : texels[k * channels + a];
+            for (int a = 0; a < 3; ++a) {
+                t[a] = texel_value(texels[k * channels + a]);
+                if (folds) t[a] *= scale[a];
+            }
             for (int a = 0; a < 3; ++a) {
                 env.rgb[3 * k + a] = t[a];
                 if (!(t[a] >= 0 && t[a] < std::numeric_limits<float>::infinity()) && bad == cells) bad = k;
@@ -229,6 +238,20 @@ std::string build_environment_texels(EnvironmentMap& env, const float* texels, s
         }
     }, min_rows(width));
     return {};
+}
+
+}  // namespace
+
+std::string build_environment_texels(EnvironmentMap& env, const float* texels, size_t channels, uint32_t width,
+                                     uint32_t height, const float to_map[9], bool closest, bool srgb,
+                                     const float* scale) {
+    return build_tables(env, texels, channels, width, height, to_map, closest, srgb, scale);
+}
+
+std::string build_environment_bytes(EnvironmentMap& env, const uint8_t* texels, size_t channels, uint32_t width,
+                                    uint32_t height, const float to_map[9], bool closest, bool srgb,
+                                    const float* scale) {
+    return build_tables(env, texels, channels, width, height, to_map, closest, srgb, scale);
 }
 
 }  // namespace dacrt

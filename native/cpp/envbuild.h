@@ -25,6 +25,13 @@ std::string build_environment_texels(EnvironmentMap& env, const float* texels, s
                                      uint32_t height, const float to_map[9], bool closest, bool srgb = false,
                                      const float* scale = nullptr);
 
+// The same from an 8-bit image's bytes (its sRGB encoding, as Cycles keeps it): byte k is the
+// texel value float32 k x 1/255, the very floats export/images.py made of them (no float copy
+// of the image, 4x the bytes, is made first).
+std::string build_environment_bytes(EnvironmentMap& env, const uint8_t* texels, size_t channels, uint32_t width,
+                                    uint32_t height, const float to_map[9], bool closest, bool srgb = false,
+                                    const float* scale = nullptr);
+
 // What a world's map needs to know of texels n x channels (channels >= 3, RGB first): how many
 // texels hold a non-finite RGB value (rendered black), whether a finite RGB value is negative
 // (rendered 0), whether any is above 0 (the world lights anything). One threaded pass, no

@@ -207,8 +207,40 @@ def test_environment_keeps_an_8bit_map_encoded(tmp_path, exported):
         env = exported().environment
         assert (env.encoded is not None) == kept
         if kept:
-            assert np.allclose(env.encoded, np.repeat(BYTES[..., :3], 2, axis=0) / 255.0, atol=1e-7)
-        assert np.allclose(env.pixels, srgb_to_linear(np.repeat(BYTES[..., :3], 2, axis=0) / 255.0), atol=1e-6)
+            # (its bytes as stored: the native map reads byte k as k / 255)
+            assert env.encoded.dtype == np.uint8
+            assert np.array_equal(env.encoded[..., :3], np.repeat(BYTES[..., :3], 2, axis=0))
+        assert np.allclose(env.pixels[..., :3], srgb_to_linear(np.repeat(BYTES[..., :3], 2, axis=0) / 255.0), atol=1e-6)
+
+
+def test_an_8bit_environment_map_is_built_from_its_bytes_alone(tmp_path, exported):
+    """An 8-bit sRGB world map ('Linear') goes from its file to the native map as its bytes: its
+    floats (4x the memory, made and checked by whole-image passes at every frame) are never made."""
+    from addon.lights.environment import EnvironmentLight
+    from addon.texture import ByteTexels
+    path = _write(tmp_path / "env.png", np.repeat(BYTES[..., :3], 2, axis=0), 'uint8')
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.context.scene.render.engine = 'DACRT'
+    scenes.camera((0, 0, 5), (0, 0, 0))
+    scenes.environment_world(bpy.data.images.load(path), 2.0)
+    data = exported()
+    env = data.environment
+    assert isinstance(env.pixels, ByteTexels) and not env.pixels.made
+    assert any("lit by the world" in t for _, t in data.messages)       # (lit: told by its bytes)
+    assert EnvironmentLight(env).native.total > 0 and not env.pixels.made
+
+
+def test_an_environment_images_alpha_does_not_light_the_world(exported):
+    """The map holds the image's RGBA as read: a black image of alpha 1 is a black world."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.context.scene.render.engine = 'DACRT'
+    scenes.camera((0, 0, 5), (0, 0, 0))
+    px = np.zeros((4, 8, 4), np.float32)
+    px[..., 3] = 1.0
+    scenes.environment_world(scenes.float_image("Black", px), 1.0)
+    data = exported()
+    assert data.environment is not None and data.environment.pixels.shape[2] == 4
+    assert any("a black world: the image will be black" in t for _, t in data.messages)
 
 
 def test_premultiplied_8bit_file_is_read_as_cycles_reads_it(tmp_path):

@@ -1,8 +1,8 @@
 """The environment map's build (native/cpp/envbuild.cpp): its tables have the same bits on one
 thread as on all of them; an image's RGBA texels with the strength as `scale` build the map of
-the RGB x strength product the export had made in numpy; an 8-bit sRGB map's importance is its
-decoded texels' mean (the byte table's decodes are the lookup's); texel_stats counts what the
-export reports."""
+the RGB x strength product the export had made in numpy, and an 8-bit image's bytes the map of
+their floats; an sRGB map's importance is its decoded texels' mean (the byte table's decodes
+are the lookup's); texel_stats counts what the export reports."""
 
 import dacrt
 import numpy as np
@@ -66,6 +66,24 @@ def test_rgba_texels_with_a_scale_are_the_map_of_their_rgb_times_it(interp):
     product = lamps.environment_map(np.ascontiguousarray(rgba[..., :3]) * st, M, interp)
     seed = int(rng.integers(1 << 30))
     for a, b in zip(_outputs(folded, np.random.default_rng(seed)), _outputs(product, np.random.default_rng(seed))):
+        assert a.tobytes() == b.tobytes()
+
+
+@pytest.mark.parametrize("interp", ["Linear", "Closest"])
+@pytest.mark.parametrize("srgb", [True, False])
+def test_bytes_build_the_map_of_their_floats(interp, srgb):
+    """An 8-bit image's bytes (h, w, 4) build, bit for bit, the map of the floats the export
+    made of them (float32 k x 1/255, RGB): no float copy of the image is needed."""
+    rng = np.random.default_rng(6)
+    M = _rotation(rng)
+    k8 = rng.integers(0, 256, (40, 72, 4)).astype(np.uint8)
+    st = np.array([2.0, 0.3, 1.1], F32)
+    floats = np.ascontiguousarray(k8[..., :3]).astype(F32) * F32(1 / 255)
+    from_bytes = lamps.environment_map(k8, M, interp, srgb=srgb, scale=st)
+    from_floats = lamps.environment_map(floats, M, interp, srgb=srgb, scale=st)
+    seed = int(rng.integers(1 << 30))
+    for a, b in zip(_outputs(from_bytes, np.random.default_rng(seed)),
+                    _outputs(from_floats, np.random.default_rng(seed))):
         assert a.tobytes() == b.tobytes()
 
 

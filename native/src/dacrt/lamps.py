@@ -143,7 +143,8 @@ def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None, set=None) ->
 def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool = False, scale=None) -> EnvironmentMap:
     """An environment light from rgb (h, w, 3 or more channels, the first three RGB: an image's
     RGBA is taken as it is, its alpha unread) float32 linear radiance (row 0 at the bottom, the
-    -Z pole) times scale ((3,), the strength; None: 1), the orthogonal to_map (3, 3) taking
+    -Z pole) times scale ((3,), the strength; None: 1), or uint8 bytes k read as float32
+    k x 1/255 (an 8-bit image's, as the export's floats of them), the orthogonal to_map (3, 3) taking
     world directions to the map's frame (None: identity) and 'Linear' (bilinear) or 'Closest'
     lookup. With srgb, rgb is sRGB-encoded (as Cycles keeps an 8-bit image): lookups blend it,
     decode the blend and multiply by scale, and the map is sampled by its decoded texels. The
@@ -158,7 +159,8 @@ def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool 
     if interpolation not in ("Linear", "Closest"):
         raise ValueError(f"interpolation must be 'Linear' or 'Closest', got {interpolation!r}")
     m = np.eye(3) if to_map is None else to_map
-    return _core.EnvironmentMap(np.ascontiguousarray(rgb, _F32), np.ascontiguousarray(m, _F32),
+    rgb = np.ascontiguousarray(rgb, np.uint8 if getattr(rgb, 'dtype', None) == np.uint8 else _F32)
+    return _core.EnvironmentMap(rgb, np.ascontiguousarray(m, _F32),
                                 interpolation == "Closest", bool(srgb),
                                 None if scale is None else np.ascontiguousarray(scale, _F32).reshape(3))
 
