@@ -49,23 +49,30 @@ inline double sin_integral(double v0, double v1) {
     return (std::cos(PI_D * (1.0 - v1)) - std::cos(PI_D * (1.0 - v0))) / PI_D;
 }
 
-// The guide of one CDF c[0..count] (environment.cpp's find_guided reads it): g[b] =
-// std::upper_bound's position of b / G, b = 0..G, found in one walk along the CDF (it is
-// sorted, and so are the b / G): a binary search per bucket had been a third of the build.
+// The guide of one CDF c[0..count] (environment.cpp's find_guided reads it): g[b] = std::upper_bound's position of b / G, b = 0..G.
+// For u in [b/G, (b+1)/G) (exact: G is a power of two) the position of u lies in [g[b], g[b+1]]
+// (monotone), so searching c[g[b], g[b+1]) finds the same one: one or two cache lines of a row
+// instead of ~11 dependent loads through a big map's rows (cutpoint method, Chen and Asau 1974),
+// and, for the rows' CDF, one or two mispredicted branches instead of ~log2(height) / 2 (the
+// search over the rows was a quarter of a small map's sampling). Built in one walk along the
+// sorted CDF, not a search per bucket: the same positions in count + G steps, not G log2(count).
 template <class T>
 void build_guide(const T* c, size_t count, uint32_t G, uint32_t* g) {
     size_t k = 0;
     for (uint32_t b = 0; b <= G; ++b) {
-        const T x = T(b) / T(G);
-        while (k <= count && !(x < c[k])) ++k;
+        const T u = T(b) / T(G);
+        while (k <= count && !(u < c[k])) ++k;  // std::upper_bound's test: the first c[k] > u
         g[b] = uint32_t(k);
     }
 }
 
-// G for a CDF of count entries: about 8 entries a bucket, at most 1024 buckets.
+// G for a CDF of count entries: a bucket per entry (at most 1024 buckets), so a sample's search
+// meets ~1 entry, not ~8, and its branches rarely mispredict (1M samples of the benchmark's
+// 96 x 48 sky 62 -> 46 ms, a 4K x 2K sky ~325 -> ~280 ms, one thread; the same samples). The
+// table costs 4 bytes a bucket: up to ~8 bytes a texel on maps up to 1024 wide, 1 on a 4K map.
 uint32_t guide_size(size_t count) {
     uint32_t G = 1;
-    while (G < 1024 && size_t(G) * 8 < count) G *= 2;
+    while (G < 1024 && size_t(G) < count) G *= 2;
     return G;
 }
 

@@ -13,7 +13,7 @@
 
 namespace dacrt {
 
-// build_environment's tables, the same bits whatever the thread count (each row's luminance,
+// The environment map's tables, the same bits whatever the thread count (each row's luminance,
 // CDF, guide and cell pdfs come from that row and, 'Linear', the next; the rows' totals are
 // summed in row order), from texels height x width x channels (channels >= 3: the first three
 // are RGB). Linear maps: each texel's RGB times scale (null: 1; float products, as numpy's

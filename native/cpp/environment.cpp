@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "envcell.h"
 #include "envlanes.h"
@@ -15,7 +14,6 @@ namespace dacrt {
 
 namespace {
 
-constexpr double PI_D = 3.14159265358979323846;
 using envcell::bilerp;
 using envcell::INV_2PI2;
 
@@ -95,33 +93,6 @@ inline float uv_pdf(const EnvironmentMap& env, float u, float v) {
                                                          c.fx, c.fy);
 }
 
-// The guide of one CDF c[0..count]: g[b] = std::upper_bound's position of b / G, b = 0..G.
-// For u in [b/G, (b+1)/G) (exact: G is a power of two) the position of u lies in [g[b], g[b+1]]
-// (monotone), so searching c[g[b], g[b+1]) finds the same one: one or two cache lines of a row
-// instead of ~11 dependent loads through a big map's rows (cutpoint method, Chen and Asau 1974),
-// and, for the rows' CDF, one or two mispredicted branches instead of ~log2(height) / 2 (the
-// search over the rows was a quarter of a small map's sampling). Built in one walk along the
-// sorted CDF, not a search per bucket: the same positions in count + G steps, not G log2(count).
-template <class T>
-void build_guide(const T* c, size_t count, uint32_t G, uint32_t* g) {
-    size_t k = 0;
-    for (uint32_t b = 0; b <= G; ++b) {
-        const T u = T(b) / T(G);
-        while (k <= count && !(u < c[k])) ++k;  // std::upper_bound's test: the first c[k] > u
-        g[b] = uint32_t(k);
-    }
-}
-
-// G for a CDF of count entries: a bucket per entry (at most 1024 buckets), so a sample's search
-// meets ~1 entry, not ~8, and its branches rarely mispredict (1M samples of the benchmark's
-// 96 x 48 sky 62 -> 46 ms, a 4K x 2K sky ~325 -> ~280 ms, one thread; the same samples). The
-// table costs 4 bytes a bucket: up to ~8 bytes a texel on maps up to 1024 wide, 1 on a 4K map.
-uint32_t guide_size(size_t count) {
-    uint32_t G = 1;
-    while (G < 1024 && size_t(G) < count) G *= 2;
-    return G;
-}
-
 // The index k with c[k] <= u < c[k + 1] among c[0..count], at most count - 1, for a guided CDF.
 // std::upper_bound within the bucket, not a branch-free search: its speculation runs ahead
 // through a big map's CDF rows, where the dependent loads of a branch-free one made a 2K x 1K
@@ -131,11 +102,6 @@ inline size_t find_guided(const T* c, size_t count, const uint32_t* g, uint32_t 
     const uint32_t b = std::min(uint32_t(u * T(G)), G - 1);
     const size_t k = size_t(std::upper_bound(c + g[b], c + g[b + 1], u) - c);
     return k == 0 ? 0 : std::min(k - 1, count - 1);
-}
-
-// Integral of sin(theta) dv over v in [v0, v1] within [0, 1], theta = pi (1 - v).
-inline double sin_integral(double v0, double v1) {
-    return (std::cos(PI_D * (1.0 - v1)) - std::cos(PI_D * (1.0 - v0))) / PI_D;
 }
 
 // Radiance at (u, v) and the solid-angle pdf of sampling it, sin_theta < 0: no direction.
@@ -293,97 +259,6 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
 }
 
 }  // namespace
-
-std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t width, uint32_t height,
-                              const float to_map[9], bool closest, bool srgb, const float* scale) {
-    if (width == 0 || height == 0) return "the map has no pixels";
-    if (size_t(width) * height > (size_t(1) << 28)) return "the map has more than 2^28 pixels";
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-            double dot = 0;
-            for (int a = 0; a < 3; ++a) dot += double(to_map[3 * r + a]) * to_map[3 * c + a];
-            if (!(std::fabs(dot - (r == c ? 1.0 : 0.0)) < 1e-4)) return "to_map is not an orthogonal 3x3 matrix";
-        }
-    const size_t count = size_t(width) * height * 3;
-    for (size_t k = 0; k < count; ++k)
-        if (!(rgb[k] >= 0 && rgb[k] < std::numeric_limits<float>::infinity()))
-            return "pixel value " + std::to_string(rgb[k]) + " at " + std::to_string(k / 3) +
-                   " is negative or not finite";
-    for (int a = 0; scale && a < 3; ++a)
-        if (!(scale[a] >= 0 && scale[a] < std::numeric_limits<float>::infinity()))
-            return "scale " + std::to_string(scale[a]) + " is negative or not finite";
-    env.width = width;
-    env.height = height;
-    env.closest = closest;
-    env.srgb = srgb;
-    for (int a = 0; a < 3; ++a) env.scale[a] = scale ? scale[a] : 1.0f;
-    std::copy(to_map, to_map + 9, env.to_map);
-    env.rgb.assign(rgb, rgb + count);
-    const size_t cells = size_t(width) * height;
-    env.lum.resize(cells);
-    for (size_t k = 0; k < cells; ++k) {
-        float t[3] = {rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]};
-        if (srgb) decode(env, t);  // the radiance of the texel itself
-        env.lum[k] = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
-    }
-    // Cell weights: their luminance integral, the mean of the corners ('Linear': the cell
-    // between texel centres, whose bilinear blend is sampled exactly within it) or the texel
-    // ('Closest'), times the mean of sin(theta) over the cell's rows (the last 'Linear' row
-    // wraps over the pole: half at the top, half at the bottom).
-    std::vector<double> row_sin(height);
-    for (uint32_t i = 0; i < height; ++i) {
-        if (closest)
-            row_sin[i] = sin_integral(double(i) / height, double(i + 1) / height) * height;
-        else if (i + 1 < height)
-            row_sin[i] = sin_integral((i + 0.5) / height, (i + 1.5) / height) * height;
-        else
-            row_sin[i] = (sin_integral((i + 0.5) / height, 1.0) + sin_integral(0.0, 0.5 / height)) * height;
-    }
-    const float* L = env.lum.data();
-    auto cell_mean = [&](uint32_t i, uint32_t j) {  // recomputed, not stored: two doubles per cell
-        if (closest) return double(L[size_t(i) * width + j]);
-        const uint32_t i1 = (i + 1) % height, j1 = (j + 1) % width;
-        return (double(L[size_t(i) * width + j]) + L[size_t(i) * width + j1] + L[size_t(i1) * width + j] +
-                L[size_t(i1) * width + j1]) / 4.0;
-    };
-    env.row_cdf.assign(size_t(height) + 1, 0.0);
-    env.col_cdf.assign(size_t(height) * (width + 1), 0.0f);
-    env.cell_pdf.assign(cells, 0.0f);
-    env.guide_buckets = guide_size(width);
-    env.col_guide.assign(size_t(height) * (env.guide_buckets + 1), 0u);
-    std::vector<double> row(width);
-    double total = 0;
-    for (uint32_t i = 0; i < height; ++i) {
-        double acc = 0;
-        for (uint32_t j = 0; j < width; ++j) acc += row[j] = cell_mean(i, j) * row_sin[i];
-        float* c = env.col_cdf.data() + size_t(i) * (width + 1);
-        double run = 0;
-        for (uint32_t j = 0; j < width; ++j) {
-            run += row[j];
-            c[j + 1] = acc > 0 ? float(run / acc) : float(j + 1) / float(width);
-        }
-        c[width] = 1.0f;
-        build_guide(c, width, env.guide_buckets, env.col_guide.data() + size_t(i) * (env.guide_buckets + 1));
-        total += acc;
-        env.row_cdf[i + 1] = total;
-    }
-    env.total = total;
-    if (total > 0) {
-        for (uint32_t i = 0; i <= height; ++i) env.row_cdf[i] /= total;
-        env.row_cdf[height] = 1.0;
-        env.row_buckets = guide_size(height);
-        env.row_guide.assign(size_t(env.row_buckets) + 1, 0u);
-        build_guide(env.row_cdf.data(), height, env.row_buckets, env.row_guide.data());
-        // pdf over (u, v) = P(cell) w h x (the blend / its mean over the cell)
-        const double scale = double(width) * height / total;
-        for (uint32_t i = 0; i < height; ++i)
-            for (uint32_t j = 0; j < width; ++j) {
-                const double m = cell_mean(i, j);
-                env.cell_pdf[size_t(i) * width + j] = m > 0 ? float(m * row_sin[i] * scale / (closest ? 1.0 : m)) : 0.0f;
-            }
-    }
-    return {};
-}
 
 void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], float& pdf) {
     float u, v, s;

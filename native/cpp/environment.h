@@ -55,12 +55,6 @@ struct EnvironmentMap {
     double total = 0;                   // sum of the weights: 0 = nothing to sample
 };
 
-// Builds the tables; empty string on success, else what is wrong with the input (sizes,
-// non-finite or negative pixels or scale, a to_map that is not orthogonal). srgb: rgb is
-// sRGB-encoded, its lookups decoded and multiplied by scale (null: 1).
-std::string build_environment(EnvironmentMap& env, const float* rgb, uint32_t width, uint32_t height,
-                              const float to_map[9], bool closest, bool srgb = false, const float* scale = nullptr);
-
 // Radiance toward world direction d (unit) and the solid-angle pdf of sampling it.
 void environment_eval(const EnvironmentMap& env, const float d[3], float Le[3], float& pdf);
 
