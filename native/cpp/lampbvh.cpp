@@ -30,7 +30,21 @@ bool lamp_box(const LampRecord& L, float lo[3], float hi[3]) {
     return true;
 }
 
+// The rounding of the lamp's own coordinates in hit_lamp (|pos| and its extent).
+float box_pad(const float lo[3], const float hi[3]) {
+    float mag = 0.0f;
+    for (int a = 0; a < 3; ++a) mag = std::max({mag, std::fabs(lo[a]), std::fabs(hi[a]), hi[a] - lo[a]});
+    return LampBVH::kSlack * mag;
+}
+
 }  // namespace
+
+bool LampBVH::padded_box(const LampRecord& L, float lo[3], float hi[3]) {
+    if (!lamp_box(L, lo, hi)) return false;
+    const float pad = box_pad(lo, hi);
+    for (int a = 0; a < 3; ++a) lo[a] -= pad, hi[a] += pad;
+    return true;
+}
 
 LampBVH::LampBVH(const LampRecord* rec, const int32_t* lamps, size_t nl) {
     std::vector<float> box, centre;
@@ -38,10 +52,7 @@ LampBVH::LampBVH(const LampRecord* rec, const int32_t* lamps, size_t nl) {
     for (size_t k = 0; k < nl; ++k) {
         float lo[3], hi[3];
         if (!lamp_box(rec[lamps[k]], lo, hi)) continue;
-        // the rounding of the lamp's own coordinates in hit_lamp (|pos| and its extent)
-        float mag = 0.0f;
-        for (int a = 0; a < 3; ++a) mag = std::max({mag, std::fabs(lo[a]), std::fabs(hi[a]), hi[a] - lo[a]});
-        const float pad = kSlack * mag;
+        const float pad = box_pad(lo, hi);
         for (int a = 0; a < 3; ++a) box.push_back(lo[a] - pad);
         for (int a = 0; a < 3; ++a) box.push_back(hi[a] + pad);
         for (int a = 0; a < 3; ++a) centre.push_back(0.5f * (lo[a] + hi[a]));

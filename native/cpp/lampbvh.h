@@ -41,6 +41,10 @@ public:
     static constexpr float kSlack = 1.0f / 8192.0f;  // ~1000 float32 ulps of the magnitudes
     static constexpr int kLeafSize = 2;
 
+    // Lamp L's box, padded for the rounding of its own coordinates in hit_lamp; false for lamps
+    // no ray meets (delta point and spot lamps) and lamps at infinity (sun, background).
+    static bool padded_box(const LampRecord& L, float lo[3], float hi[3]);
+
 private:
     struct Node {
         float lo[3], hi[3];

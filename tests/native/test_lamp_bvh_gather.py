@@ -1,9 +1,9 @@
-"""lamp_gather through its lamp BVH (lamps.cpp gather_range_bvh, lampbvh.h visit) against the
+"""lamp_gather through its lamp boxes or BVH (lamps.cpp gather_range_boxes, gather_range_bvh) against the
 brute-force loop: every listed lamp gathered on its own, in list order (each call the plain
-lamp-by-lamp loop over the rays). The sums must be bit for bit equal: the BVH only narrows the
-candidates, so a ray must get the same lamps, added in the same order, with the same emission
-and MIS weights. Lists of 2..64 lamps take the per-ray candidate bit word, longer ones a
-sorted list; both are covered, at the word's ends (lamp 0, lamp 63) too."""
+lamp-by-lamp loop over the rays). The sums must be bit for bit equal: boxes and BVH only narrow
+the candidates, so a ray must get the same lamps, added in the same order, with the same emission
+and MIS weights. Lists of 2..64 lamps take the flat box test (lampboxes.h, a bit per lamp),
+longer ones the BVH and a sorted list; both are covered, at the word's ends (lamp 0, lamp 63) too."""
 import dacrt
 import numpy as np
 import pytest
