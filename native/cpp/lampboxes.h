@@ -30,6 +30,8 @@ public:
     // where the ray may meet listed lamp k's box at 0 < t < tmax (LampBVH::visit's test).
     void meets(const float* O, const float* D, const float* tmax, size_t n, size_t i0, size_t count,
                uint64_t out[kRays]) const;
+    // No listed lamp has a box (only lamps at infinity and delta lamps): no ray meets one.
+    bool empty() const { return which_.empty(); }
 
 private:
     std::vector<float> box_;      // per boxed lamp: padded lo[3], hi[3]

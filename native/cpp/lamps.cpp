@@ -98,8 +98,8 @@ void gather_range_boxes(Gather g, const LampBoxes& boxes, uint64_t infinity, siz
     constexpr size_t K = LampBoxes::kRays;
     for (size_t i0 = b; i0 < e; i0 += K) {
         const size_t count = std::min(K, e - i0);
-        uint64_t cand[K];
-        boxes.meets(g.O, g.D, g.t_surf, g.n, i0, count, cand);
+        uint64_t cand[K] = {};
+        if (!boxes.empty()) boxes.meets(g.O, g.D, g.t_surf, g.n, i0, count, cand);
         for (size_t q = 0; q < count; ++q) {
             const size_t i = i0 + q;
             for (uint64_t c = cand[q] | (g.miss[i] ? infinity : 0); c; c &= c - 1) {
