@@ -500,23 +500,23 @@ inline void LightTree::probs_at(size_t at, const TreePoint& point, uint64_t rece
 
 // One stop of a walk: from the probabilities p of stop `at`'s targets, the target whose share of
 // [lo, lo + w) holds u (the last possible one where rounding leaves u past them all); lo and w
-// narrow to it. Without branches (selects): which target a point takes is random, and a
-// mispredicted pick stalled every stop.
+// narrow to it. Without branches: which target a point takes is random, and a mispredicted
+// pick stalled every stop. The shares' bounds are kept in a row and the pick found from bit
+// masks, then read by index: GCC compiles a select between two doubles to a branch (the
+// earlier selects of run and pick_lo did), but picks between ints to cmov.
 inline size_t LightTree::step(size_t at, const double p[4], double u, double& lo, double& w) const {
-    double run = lo, pick_lo = lo, last_lo = lo;
-    int pick = -1, last = 0;
+    double run[5];  // run[j]: where target j's share starts (+ 0 where impossible: unchanged)
+    run[0] = lo;
+    for (int j = 0; j < 4; ++j) run[j + 1] = run[j] + w * p[j];
+    unsigned possible = 0, below = 0;
     for (int j = 0; j < 4; ++j) {
-        const bool possible = p[j] > 0.0;
-        const double next = run + w * p[j];  // (+ 0 where impossible: run unchanged)
-        last = possible ? j : last;
-        last_lo = possible ? run : last_lo;
-        const bool here = possible & (pick < 0) & (u < next);
-        pick_lo = here ? run : pick_lo;
-        pick = here ? j : pick;
-        run = next;
+        possible |= unsigned(p[j] > 0.0) << j;
+        below |= unsigned(u < run[j + 1]) << j;
     }
-    if (pick < 0) pick = last, pick_lo = last_lo;
-    lo = pick_lo;
+    const int last = possible ? 31 - __builtin_clz(possible) : 0;  // (none possible: target 0)
+    const int first = __builtin_ctz((possible & below) | 16u);      // 4: u past them all
+    const int pick = first < 4 ? first : last;
+    lo = run[pick];
     w *= p[pick];
     return size_t(stops_[size_t(stop_of_[at])].target[pick]);
 }
