@@ -330,7 +330,8 @@ class Exporter:
         said = clamp_direct_said(settings, [m.name for i, m in enumerate(self.materials.materials)
                                             if i in used and np.any(m.emission > 0) and m.emission_sampling != 'NONE'],
                                  sum(1 for lt in self.lights if np.any(lt.strength > 0)),
-                                 None if environment is None or self.world is None else self.world.name)
+                                 None if environment is None or self.world is None else self.world.name,
+                                 sum(1 for lt in self.lights if np.any(lt.strength > 0) and lt.kind == 'SUN'))
         if said:
             self.messages.append(('WARNING', said))
         # (only where the tree has lamps or emitters to leave out: the world is not culled so)

@@ -197,36 +197,42 @@ def export_settings(scene, vl, messages, viewport=False):
                        adaptive_threshold=d.adaptive_threshold, adaptive_min_samples=d.adaptive_min_samples)
 
 
-def clamp_direct_said(settings, emitters, lamps, world=None):
+def clamp_direct_said(settings, emitters, lamps, world=None, suns=0):
     """The report's text when Clamp Direct can clamp other light samples than Cycles', else
     None. emitters: names of the light-sampled emissive materials in use; lamps: how many lamps
-    give light; world: the world's name where its light is sampled from a map (an image, sky
-    or procedural world), else None. Each engine clamps its own light samples. With the Light
-    Tree DACRT picks an emitter's triangles with other probabilities than Cycles' tree (the
-    object, then its triangles by power): an emissive cube over a floor at Clamp Direct 1, 0
-    bounces, 0.95x Cycles' mean (rows to 0.80x), 1.000x unclamped. Without it one emitter is
-    picked as Cycles picks it (1.000x), but its share against a lamp differs (0.99x, rows to
-    0.977x). A mapped world beside a lamp is shared with other probabilities too (a point lamp
-    and an image world with a hot spot, Clamp Direct 1: 0.94x Cycles' mean without the tree,
-    1.005x with it, 4x4 blocks 0.94-1.03x; fuzz seed 7437, a spot and an image world at Clamp
-    Direct 1.89: 0.975x, a ball 0.89x). Lamps and the world alone clamp alike (two or three
+    give light, suns of them Sun lamps; world: the world's name where its light is sampled from
+    a map (an image, sky or procedural world), else None. Each engine clamps its own light
+    samples. With the Light Tree DACRT picks an emitter's triangles with other probabilities
+    than Cycles' tree (the object, then its triangles by power): an emissive cube over a floor
+    at Clamp Direct 1, 0 bounces, 0.95x Cycles' mean (rows to 0.80x), 1.000x unclamped.
+    DACRT also splits its light samples between groups (the tree, each sun, the mapped world;
+    without the tree each lamp and the emitters) by what each gives, not as Cycles does, so
+    two groups are clamped otherwise: a lamp and an emitter without the tree 0.99x (rows to
+    0.977x); a point lamp and an image world with a hot spot at Clamp Direct 1, 0 bounces,
+    0.94x without the tree, 1.005x with it (4x4 blocks 0.94-1.03x); fuzz seeds 7437 (a spot
+    and an image world, Clamp Direct 1.89: a ball 0.89x), 7428 (a spot and a sun without the
+    tree, 1.82: a patch 0.51-0.64x) and 7452 (a spot, a sun and an area light with the tree,
+    4.31: 1.08-1.10x the mean). Lamps in one tree and the world alone clamp alike (two or three
     lamps, a lamp and a grey world, which neither engine light-samples: 1.000x, 0.996x)."""
     if not settings.sample_clamp_direct > 0:
         return None
-    shared = world is not None and (lamps or emitters)
-    if not emitters and not shared:
+    tree = settings.use_light_tree
+    if tree:
+        groups = suns + bool(lamps - suns or emitters) + (world is not None)
+    else:
+        groups = lamps + bool(emitters) + (world is not None)
+    if groups < 2 and not (emitters and (tree or len(emitters) > 1)):
         return None
-    if emitters and not shared and not settings.use_light_tree and not lamps and len(emitters) < 2:
-        return None
+    sources = []
     if emitters:
         named = ', '.join(repr(n) for n in emitters[:3]) + (f" and {len(emitters) - 3} more" if len(emitters) > 3 else "")
-        what = f"light-sampled emissive material(s) {named}" + (f" and the world '{world}'" if shared else "")
-        how = ("picks their triangles" if settings.use_light_tree and not shared else
-               "shares light samples among the light sources")
-    else:
-        what = f"the world '{world}' light-sampled beside lamps"
-        how = "shares light samples between the world and the lamps"
-    return (f"Clamp Direct {settings.sample_clamp_direct:g} with {what}: "
+        sources.append(f"light-sampled emissive material(s) {named}")
+    elif lamps:
+        sources.append(f"{lamps} lamps" if lamps > 1 else "a lamp")
+    if world is not None:
+        sources.append(f"the world '{world}' (light-sampled)")
+    how = ("picks their triangles" if tree and groups < 2 else "shares light samples among the light sources")
+    return (f"Clamp Direct {settings.sample_clamp_direct:g} with {' and '.join(sources)}: "
             f"DACRT {how} with other probabilities than Cycles, so it clamps other light samples and "
             "the light they cast differs from Cycles' where clamped (unclamped both agree)")
 

@@ -14,7 +14,9 @@ with other probabilities too (fuzz seeds 7437, 7428, 7540: a spot or point lamp 
 world, Clamp Direct 1.55-1.89, 0.975-0.984x Cycles' mean, a ball 0.89x, a patch 0.63-0.77x,
 1.000x unclamped; a point lamp and an image world with a hot spot at Clamp Direct 1, 0
 bounces, 48x36, 64 spp x 8: 0.94x without the Light Tree, 1.005x with it and 4x4 blocks
-0.94-1.03x). That was silent; it is said naming the world, not for the world alone (0.993x).
+0.94-1.03x). So are lamps in separate groups of DACRT's split: each lamp without the Light
+Tree, each sun with it. That was silent; it is said, not for the world alone (0.993x) nor
+for lamps of one tree.
 """
 import math
 
@@ -68,11 +70,22 @@ def test_said_naming_a_mapped_world_beside_lamps(scene, said, case):
     _scene(scene, world='image', emitter=case == 'lamp_and_emitter', tree=not case.startswith('tree_off'))
     got = _said(said)
     assert len(got) == 1, got
-    if case == 'lamp_and_emitter':
-        assert got[0].startswith(f"{SAID} 'glow' and the world 'Sky': DACRT shares light samples"), got
-    else:
-        assert got[0].startswith("Clamp Direct 1 with the world 'Sky' light-sampled beside lamps: DACRT shares "
-                                 "light samples between the world and the lamps"), got
+    first = f"{SAID} 'glow'" if case == 'lamp_and_emitter' else "Clamp Direct 1 with a lamp"
+    assert got[0].startswith(f"{first} and the world 'Sky' (light-sampled): DACRT shares light samples among "
+                             "the light sources"), got
+
+
+@pytest.mark.parametrize('case', ['tree_off_two_lamps', 'lamp_and_sun'])
+def test_said_for_lamps_in_separate_groups(scene, said, case):
+    """Without the tree each lamp is a group of DACRT's split; with it each sun is (fuzz 7428:
+    a spot and a sun without the tree, a patch 0.51-0.64x Cycles; 7452: a spot, a sun and an
+    area light with it, 1.08-1.10x the mean)."""
+    _scene(scene, lamps=2 if case.startswith('tree_off') else 1, tree=not case.startswith('tree_off'))
+    if case == 'lamp_and_sun':
+        scenes.light('SUN', 2.0, name="Sun")
+    got = _said(said)
+    assert len(got) == 1 and got[0].startswith("Clamp Direct 1 with 2 lamps: DACRT shares light samples among "
+                                               "the light sources"), got
 
 
 @pytest.mark.parametrize('case', ['image_world_alone', 'image_world_clamp_off'])
