@@ -67,15 +67,10 @@ def test_camera_coordinates_match_cycles(kind, camera):
     scenes.uv_sphere('S', radius=1.0, location=(-1.2, 0, 0.2), materials=(mat,))
     plane = scenes.plane('P', size=2.0, location=(1.4, 0, 0.2), materials=(mat,))
     plane.rotation_euler = (1.1, 0.3, 0.2)
-    rendering.fair_scene_settings(sc)
+    rendering.matched(sc, 64)
     got = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine
-        sc.cycles.samples, sc.cycles.use_denoising, sc.cycles.device = 64, False, 'CPU'
-        sc.dacrt.samples = 64
-        sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-        sc.cycles.pixel_filter_type = sc.dacrt.filter_type = 'BOX'
-        sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
         got[engine] = scenes.render_rgba(sc)[..., :3]
     c, d = got['CYCLES'], got['DACRT']
     if kind == 'emission':

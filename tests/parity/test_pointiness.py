@@ -48,16 +48,11 @@ def test_pointiness_matches_cycles():
     for ob in bpy.data.objects:
         if ob.type == 'MESH':
             ob.data.materials.append(mat)
-    rendering.fair_scene_settings(sc)
+    rendering.matched(sc, 64)
     sc.render.film_transparent = True            # (alpha finds the silhouettes)
     got = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine
-        sc.cycles.samples, sc.cycles.use_denoising, sc.cycles.device = 64, False, 'CPU'
-        sc.dacrt.samples = 64
-        sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-        sc.cycles.pixel_filter_type = sc.dacrt.filter_type = 'BOX'
-        sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
         got[engine] = scenes.render_rgba(sc)
     c, d = got['CYCLES'], got['DACRT']
     inside = c[..., 3] > 0.999

@@ -34,6 +34,7 @@ def _settings(samples, bounces, box=True):
     sc.cycles.use_denoising = False
     sc.cycles.use_adaptive_sampling = False
     sc.cycles.max_bounces = sc.cycles.diffuse_bounces = sc.dacrt.max_bounces = bounces
+    sc.dacrt.total_max_bounces = bounces     # (Cycles' Total: translucent bounces count against it)
     sc.cycles.glossy_bounces = 0
     if box:
         sc.cycles.pixel_filter_type, sc.dacrt.filter_type = 'BOX', 'BOX'

@@ -70,15 +70,10 @@ def test_random_per_island_matches_cycles():
     scenes.world((1.0, 1.0, 1.0), 1.0)
     _islands_mesh('emitting', ROWS, _material('emission'))
     _islands_mesh('diffuse', -ROWS, _material('diffuse'))
-    rendering.fair_scene_settings(sc)
+    rendering.matched(sc, 64)
     got = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine
-        sc.cycles.samples, sc.cycles.use_denoising, sc.cycles.device = 64, False, 'CPU'
-        sc.dacrt.samples = 64
-        sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-        sc.cycles.pixel_filter_type = sc.dacrt.filter_type = 'BOX'
-        sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
         img = scenes.render_rgba(sc)[..., :3]
         # each island's inner 8x8 pixels (16 pixels a unit; islands 1.7 wide, 2 apart)
         got[engine] = np.array([[img[8 * r + 4:8 * r + 12, 16 * c + 4:16 * c + 12].mean(axis=(0, 1))

@@ -74,15 +74,10 @@ def test_wireframe_matches_cycles():
                                         location=(-N + 1 + 2 * i, 0, 0), rotation=(0.3, -0.2, 0.4 + i))
         ob = bpy.context.active_object
         ob.data.materials.append(_material(kind))
-    rendering.fair_scene_settings(sc)
+    rendering.matched(sc, 128)
     got = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine
-        sc.cycles.samples, sc.cycles.use_denoising, sc.cycles.device = 128, False, 'CPU'
-        sc.dacrt.samples = 128
-        sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-        sc.cycles.pixel_filter_type = sc.dacrt.filter_type = 'BOX'
-        sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
         img = scenes.render_rgba(sc)[..., :3]
         got[engine] = img.reshape(8, 4, 8 * N, 4, 3).mean(axis=(1, 3))
     diff = np.abs(got['DACRT'] - got['CYCLES'])
