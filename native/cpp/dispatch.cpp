@@ -278,21 +278,29 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         // the chunks were cut at origins: chunks of one origin's rays (a pinhole camera's) cut
         // by index cost alike, and stealing between them cost camera rays 4% more CPU time and
         // 6.5% more wall time.
-        StealBoard board;
-        board.working = T;
+        StealBoard board;  // working: threads that have joined and not yet finished (see worker)
         if (T > 1 && spatial) jb.steal = &board;
         TaskFn task_fn = isa == Isa::Avx512 ? avx512::trace_task : (isa == Isa::Avx2 ? avx2::trace_task : portable::trace_task);
 
         std::atomic<size_t> next{0};
         std::vector<Stats> stats(T);
         std::vector<std::exception_ptr> errors(T);
+        // A thread counts as working from the moment it joins, not from the call's start: one
+        // that a loaded machine has not scheduled yet holds nobody back. The others trace
+        // every chunk and finish; run_workers then runs its index on whichever thread is free
+        // (parallel.cpp), where it finds no chunk left. A thread that joins late takes the
+        // chunks still left and is stolen from as any other.
         auto worker = [&](int w) {
-            std::vector<uint32_t> ids;
+            std::vector<uint32_t> ids;  // sized on the first chunk: a late index may find none
+            {
+                std::lock_guard<std::mutex> g(board.m);
+                ++board.working;
+            }
             try {
-                ids.resize(nt);
                 for (;;) {
                     const size_t c = next.fetch_add(1);
                     if (c >= chunks) break;
+                    if (ids.size() < nt) ids.resize(nt);
                     size_t g = 0;
                     while (c >= first_chunk[g + 1]) ++g;
                     const size_t m = groups[g].e - groups[g].b, k = c - first_chunk[g], cs = first_chunk[g + 1] - first_chunk[g];

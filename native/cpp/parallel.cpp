@@ -12,6 +12,8 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
+#include <cstdlib>
 #include <exception>
 #include <mutex>
 #include <new>
@@ -68,35 +70,67 @@ void spin_while(F&& waiting) {
 
 thread_local bool t_in_job = false;  // nested calls must not wait for the pool they run on
 
+// A test's stand-in for a worker that a loaded machine has not scheduled yet: each wake-up
+// sleeps this long (DACRT_TEST_WORKER_DELAY_US, microseconds) before the worker claims work.
+long worker_delay_us() {
+    static const long us = [] {
+        const char* e = std::getenv("DACRT_TEST_WORKER_DELAY_US");
+        return e ? std::max(0L, std::strtol(e, nullptr, 10)) : 0L;
+    }();
+    return us;
+}
+
+// Job indices are claimed, not assigned: a woken worker and, once job(0) returns, the caller
+// take the call's indices 1..workers-1 from one counter, so a worker that has not run yet
+// (a loaded machine: woken, not scheduled) never holds the call back: its index is run by
+// whoever is free first, and the caller then waits only for indices that someone started. The
+// counter shares a word with the call's generation, so a worker that woke for an earlier call
+// cannot claim an index of a later one with the earlier call's job.
 class Pool {
   public:
     // Runs job on workers 1..workers-1 of the pool and on the caller as 0.
     void run(int workers, const std::function<void(int)>& job) {
+        uint32_t gen;
         {
             std::lock_guard<std::mutex> g(m_);
             while (int(threads_.size()) < workers - 1) {
                 // a new worker has not seen this call's generation yet, whenever it starts
-                const int w = int(threads_.size()) + 1;
                 const unsigned seen = generation_.load();
-                threads_.emplace_back([this, w, seen] { loop(w, seen); });
+                threads_.emplace_back([this, seen] { loop(seen); });
                 threads_.back().detach();
             }
             job_ = &job;
             active_ = workers;
-            pending_.store(workers - 1);
+            done_count_.store(0);
             errors_.assign(size_t(workers), nullptr);
-            generation_.fetch_add(1, std::memory_order_release);
+            gen = generation_.load() + 1;
+            claim_.store(uint64_t(gen) << 32 | 1u);
+            generation_.store(gen, std::memory_order_release);
         }
         wake_.notify_all();
         call(0, job);
+        for (int w; (w = claim(gen, workers)) >= 0;) {  // indices no worker has started yet
+            call(w, job);
+            done_count_.fetch_add(1);
+        }
         std::unique_lock<std::mutex> lk(m_);
-        done_.wait(lk, [this] { return pending_.load() == 0; });
+        done_.wait(lk, [&] { return done_count_.load() == workers - 1; });
         job_ = nullptr;
         for (auto& e : errors_)
             if (e) std::rethrow_exception(e);
     }
 
   private:
+    // The next unclaimed index of call gen (of `workers`), or -1 when none is left or the call
+    // is no longer gen.
+    int claim(uint32_t gen, int workers) {
+        uint64_t c = claim_.load();
+        for (;;) {
+            if (uint32_t(c >> 32) != gen || int(uint32_t(c)) >= workers) return -1;
+            if (claim_.compare_exchange_weak(c, c + 1)) return int(uint32_t(c));
+        }
+    }
+
     void call(int w, const std::function<void(int)>& job) {
         t_in_job = true;
         try {
@@ -107,19 +141,22 @@ class Pool {
         t_in_job = false;
     }
 
-    void loop(int w, unsigned seen) {
+    void loop(unsigned seen) {
         for (;;) {
             spin_while([&] { return generation_.load(std::memory_order_acquire) == seen; });
             std::unique_lock<std::mutex> lk(m_);
             wake_.wait(lk, [&] { return generation_.load() != seen; });
             seen = generation_.load();
-            if (w >= active_) continue;  // this call needs fewer workers
-            const std::function<void(int)>* job = job_;
+            const std::function<void(int)>* job = job_;  // null between calls (claims then fail)
+            const int workers = active_;
             lk.unlock();
-            call(w, *job);
-            if (pending_.fetch_sub(1) == 1) {
-                std::lock_guard<std::mutex> g(m_);  // the caller may be between check and wait
-                done_.notify_one();
+            if (worker_delay_us() > 0) std::this_thread::sleep_for(std::chrono::microseconds(worker_delay_us()));
+            for (int w; (w = claim(seen, workers)) >= 0;) {
+                call(w, *job);
+                if (done_count_.fetch_add(1) + 1 == workers - 1) {
+                    std::lock_guard<std::mutex> g(m_);  // the caller may be between check and wait
+                    done_.notify_one();
+                }
             }
         }
     }
@@ -129,8 +166,9 @@ class Pool {
     std::vector<std::thread> threads_;
     const std::function<void(int)>* job_ = nullptr;
     int active_ = 0;
-    std::atomic<int> pending_{0};
-    std::atomic<unsigned> generation_{0};
+    std::atomic<int> done_count_{0};         // indices 1.. finished, by workers or the caller
+    std::atomic<uint32_t> generation_{0};
+    std::atomic<uint64_t> claim_{0};         // generation << 32 | next index to claim
     std::vector<std::exception_ptr> errors_;
 };
 
