@@ -1,5 +1,5 @@
-// The in-place partition of ray records that the filter (filter.h) and the chunk cuts
-// (chunkorder.cpp) share: Hoare-style on runs of 64 records from both ends, each run classified
+// The filter's in-place partition of ray records (filter.h; the chunk cuts, chunkorder.cpp, use
+// its run size and record swap for their forward sweep): Hoare-style on runs of 64 records from both ends, each run classified
 // at once into a mask word (one bit per record, set: the record goes to the front), so only
 // misplaced records move (about p(1-p)n swaps for a front share p, against pn for a one-sided
 // sweep) and the branches are per run, not per record. Included inside a namespace of its
