@@ -71,3 +71,43 @@ def test_late_worker_holds_no_call_back_and_hits_stay_exact():
     # each call (an intersect and an occluded) in well under one worker's delay: none waited
     slow = [round(t, 2) for t in out["times"] if t > DELAY_S / 2]
     assert not slow, f"2-thread calls waited for the late worker: {slow} s of {out['times']} (its delay {DELAY_S} s)"
+
+
+STRESS = textwrap.dedent("""
+    import json
+    import numpy as np
+    import dacrt
+    from tests.native import scenes
+
+    rng = np.random.default_rng(6)
+    v, t = scenes.random_soup(rng, 5000, spread=1.0, size=0.08)
+    def rays(n, seed):
+        r = np.random.default_rng(seed)
+        org = r.uniform(-1.2, 1.2, (n, 3)).astype(np.float32)
+        return dacrt.make_rays(org, r.normal(size=(n, 3)).astype(np.float32))
+    sizes = [1100, 2500, 9000]
+    src = {n: rays(n, n) for n in sizes}
+    ref = {n: dacrt.Scene(v, t).intersect(src[n].copy(), threads=1) for n in sizes}
+    s = dacrt.Scene(v, t, keep_top=True)
+    bad = []
+    for i in range(150):  # calls back to back: a worker woken for one call wakes in a later one
+        n = sizes[i % len(sizes)]
+        h = s.intersect(src[n].copy(), threads=2)
+        if not np.array_equal(h.view(np.uint32), ref[n].view(np.uint32)):
+            bad.append(i)
+    print(json.dumps(bad))
+""")
+
+
+def test_workers_woken_across_calls_claim_only_their_own_call():
+    # worker delays around a call's length: workers that woke for one call meet later ones, and
+    # a claim with an earlier call's job would trace the wrong rays (or freed memory)
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    for delay_us in (0, 200, 1500):
+        env = dict(os.environ, DACRT_TEST_WORKER_DELAY_US=str(delay_us))
+        env["PYTHONPATH"] = os.pathsep.join([root] + [p for p in sys.path if p])
+        proc = subprocess.run([sys.executable, "-c", STRESS], env=env, cwd=root, capture_output=True, text=True,
+                              timeout=120)
+        assert proc.returncode == 0, f"delay {delay_us} us: {proc.stderr[-3000:]}"
+        bad = json.loads(proc.stdout.strip().splitlines()[-1])
+        assert not bad, f"delay {delay_us} us: calls {bad[:10]} differ from one thread's hits"
