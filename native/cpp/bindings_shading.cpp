@@ -12,6 +12,7 @@
 
 #include "bindargs.h"
 #include "camera.h"
+#include "islands.h"
 #include "noise.h"
 #include "orennayar.h"
 #include "shading.h"
@@ -525,6 +526,23 @@ py::tuple face_normals_py(py::array_t<double, py::array::c_style> vertices,
     return py::make_tuple(normals, good);
 }
 
+py::array_t<int64_t> island_roots_py(size_t V, py::array_t<int32_t, py::array::c_style | py::array::forcecast> edges) {
+    if (edges.ndim() != 2 || edges.shape(1) != 2)
+        throw py::value_error("edges must have shape (m, 2), got " + shape_str(edges));
+    const size_t m = size_t(edges.shape(0));
+    const int32_t* e = edges.data();
+    for (size_t k = 0; k < 2 * m; ++k)
+        if (e[k] < 0 || size_t(e[k]) >= V)
+            throw py::value_error("edge " + std::to_string(k / 2) + " has vertex " + std::to_string(e[k]) +
+                                  ", outside 0.." + std::to_string(V) + "-1");
+    py::array_t<int64_t> roots{py::ssize_t(V)};
+    {
+        py::gil_scoped_release nogil;
+        island_roots(V, e, m, roots.mutable_data());
+    }
+    return roots;
+}
+
 bool normals_flat_py(F32Array normals, F32Array geo, float tol) {
     const size_t M = rows_of(geo, 15, "geo");
     if (normals.ndim() != 3 || size_t(normals.shape(0)) != M || normals.shape(1) != 3 || normals.shape(2) != 3)
@@ -749,6 +767,7 @@ void register_shading(py::module_& m) {
     m.def("transform_points", &transform_points_py, py::arg("points"), py::arg("linear"), py::arg("offset"),
           py::arg("out"));
     m.def("corner_rows", &corner_rows_py, py::arg("per_corner"));
+    m.def("island_roots", &island_roots_py, py::arg("vertex_count"), py::arg("edges"));
     m.def("normals_flat", &normals_flat_py, py::arg("normals"), py::arg("geo"), py::arg("tol"));
     m.def("noise_texture", &noise_texture_py, py::arg("points"), py::arg("scale"), py::arg("detail"),
           py::arg("roughness"), py::arg("lacunarity"), py::arg("distortion"), py::arg("normalize"), py::arg("color"),

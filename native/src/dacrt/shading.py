@@ -493,6 +493,17 @@ def corner_rows(per_corner):
     return _core.corner_rows(np.ascontiguousarray(per_corner, _F32))
 
 
+def island_roots(vertex_count: int, edges) -> np.ndarray:
+    """(vertex_count,) int64: each vertex's root in Cycles' disjoint set (util/disjoint_set.h)
+    after joining edges ((m, 2) vertex indices) in their order, union by rank with path
+    compression, as attr_create_random_per_island numbers a mesh's islands. ValueError for an
+    index outside 0..vertex_count-1."""
+    e = np.asarray(edges).reshape(-1, 2)
+    if e.size and (e.min() < 0 or e.max() >= vertex_count):
+        raise ValueError(f"edges index vertices outside 0..{int(vertex_count) - 1}")
+    return _core.island_roots(int(vertex_count), np.ascontiguousarray(e, np.int32))
+
+
 def normals_flat(normals, geo, tol: float) -> bool:
     """Whether every corner normal of normals (M, 3, 3) is within tol of its triangle's geometric
     normal (geo rows 9:12, geo as triangle_table makes it)."""
