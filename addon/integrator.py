@@ -76,7 +76,7 @@ from .sceneprep import huge_surfaces, recentred, thin_strands, validate
 from .surfacetables import Materials, Triangles
 from .surfacevalues import SurfaceValues
 from .translucency import Translucency, valid_reflection_normal
-from .transparency import TRIANGLE_FIELDS, Transparency, line_crossings, seen_through
+from .transparency import ROULETTE_FROM, TRIANGLE_FIELDS, Transparency, line_crossings, seen_through
 
 F32 = np.float32
 
@@ -939,16 +939,20 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if self._translucent_apart:                   # past Max Bounces' diffuse reflections
             hit &= self._diffuse_bounces(k, path) <= self._diffuse_stop
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
-        # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1)),
+        # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1); glass
+        # passes count as bounces, so paths past glass may be ended before vertex 2 too),
         # in one native pass; thr becomes albedo x thr / q, the throughput after this
         # reflection (textures multiply in below)
         need_pick = self.lights.num_entries > 1
         u_pick = u_rr = None
-        if need_pick or k >= 2:
+        early = k < ROULETTE_FROM and path.xb is not None and path.thr is not None
+        if need_pick or k >= ROULETTE_FROM or early:
             u_pick, u_rr = self.rng.uniform_pick(path.keys, dim(k, 0))
+        if early:                                     # Cycles counts glass passes as bounces
+            hit = self._glass_roulette(k, path, hit, u_rr)
         if self._fused(path, sinks, k):
             return self._diffuse_vertex(k, path, hits, hit, sinks, u_pick if need_pick else None,
-                                        u_rr if k >= 2 else None)
+                                        u_rr if k >= ROULETTE_FROM else None)
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
         # (their barycentrics too where textures need them)
         tex = self._albedo_varies
@@ -956,7 +960,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             bool(self.mats.translucency_textures)   # the lift needs u, v; so do those textures
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_scatter, path.thr,
-            u_rr if k >= 2 else None, surface=(self.tri.geo, self.tri.normals, path.D),
+            u_rr if k >= ROULETTE_FROM else None, surface=(self.tri.geo, self.tri.normals, path.D),
             take=(path.pid, path.keys, u_pick if need_pick else None,
                   hits['u'] if uv else None, hits['v'] if uv else None))
         self._ended['black'] += n_black
