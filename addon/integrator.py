@@ -76,7 +76,7 @@ from .sceneprep import huge_surfaces, recentred, thin_strands, validate
 from .surfacetables import Materials, Triangles
 from .surfacevalues import SurfaceValues
 from .translucency import Translucency, valid_reflection_normal
-from .transparency import ROULETTE_FROM, TRIANGLE_FIELDS, Transparency, line_crossings, seen_through
+from .transparency import ROULETTE_FROM, TRIANGLE_FIELDS, Transparency, light_classes, line_crossings, seen_through
 
 F32 = np.float32
 
@@ -1150,7 +1150,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             contrib[off] = False
         if deeper is not None:
             self._dark_past(k + np.asarray(deeper, np.int64), entry, value, contrib)
-        self._shadows(k, pid, value, contrib, rays, send, skip, skipped, L, tb, entry, groups)
+        self._shadows(k, pid, value, contrib, rays, send, skip, skipped, L, tb, entry, groups, xb)
 
     def _bounce_kind(self, k):
         """The tracer scene of the bounce rays arriving at vertex k: past the first, the one with
@@ -1229,10 +1229,12 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         rho *= np.take(self.mats.rough_inv, mat, axis=1)
         return dacrt.shading.rough_rows(self.mats.rough_params, mat, rho, D, ns)
 
-    def _shadows(self, k, pid, value, contrib, rays, send, skip, skipped, L, tb=None, entry=None, groups=()):
+    def _shadows(self, k, pid, value, contrib, rays, send, skip, skipped, L, tb=None, entry=None, groups=(),
+                 xb=None):
         """Next-event estimation's shadow rays (next_event's rays, send, skip) traced as one
         batch (per shadow-linked set), and the samples they do not block (value, contrib) added
-        to L at the paths pid (and each light group's share, by the entry each picked)."""
+        to L at the paths pid (and each light group's share, by the entry each picked), clamped
+        by the class of each path's bounce count k + xb (xb: its glass passes, None: none)."""
         self._skipped_shadow += skipped
         if len(send) and self._shadow_link is not None:
             # shadow linking: each set's rays against its own blockers (set 0: every object)
@@ -1256,12 +1258,16 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             contrib[send[occ]] = False
             if 'through' in self._scenes:
                 self._shadow_through(rays, skip, send, occ, value, tb)
-        # light sampled at vertex 0 is direct light (Cycles: the shadow path's bounce 0)
-        dacrt.shading.accumulate_masked(L, pid, value, contrib, self._clamps[k > 0])
+        # light sampled at vertex 0 is direct light (Cycles: the shadow path's bounce 0), unless
+        # the path passed glass: Cycles counts a pass as a bounce, so behind it light is indirect
+        classes = light_classes(k, xb, contrib, self._clamps)
+        for mask, clamp in classes:
+            dacrt.shading.accumulate_masked(L, pid, value, mask, clamp)
         if groups:                          # and each light group's own share
             grp = np.take(self._entry_group, entry)
             for g, G in enumerate(groups):
-                dacrt.shading.accumulate_masked(G, pid, value, contrib & (grp == g), self._clamps[k > 0])
+                for mask, clamp in classes:
+                    dacrt.shading.accumulate_masked(G, pid, value, mask & (grp == g), clamp)
 
 
 def bump_shadowing(Ns, N, I, correction):

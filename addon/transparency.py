@@ -20,6 +20,16 @@ F32 = np.float32
 ROULETTE_FROM = 2
 
 
+def light_classes(k, xb, contrib, clamps):
+    """[(mask, clamp)]: the light samples taken at vertex k (contrib: those that count) split by
+    Cycles' clamp classes (clamps: direct, indirect), which go by the path's bounce count: the
+    vertex index plus its glass passes xb (None: none), direct at 0 alone."""
+    if k > 0 or xb is None or clamps[0] == clamps[1]:
+        return [(contrib, clamps[k > 0])]
+    past = xb > 0
+    return [(contrib & ~past, clamps[0]), (contrib & past, clamps[1])]
+
+
 class Transparency:
     """A mixin of integrator.Integrator (see the module docstring): its methods read and set
     the Integrator's state."""
