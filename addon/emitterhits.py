@@ -5,6 +5,8 @@ Clamping, split by light linking and light groups, and what the last bounce's ra
 collect."""
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 import dacrt
@@ -18,10 +20,11 @@ class EmitterHits:
     """A mixin of integrator.Integrator (see the module docstring): its methods read and set
     the Integrator's state."""
 
-    def _gather_emission(self, camera, hit, hits, path, L, clamp=np.inf, groups=()):
-        """Emission of the triangles hit by rays `hit` (two-sided), MIS-weighted for BSDF rays
-        (one native pass); each contribution clamped to clamp (Cycles' sample clamp); with
-        light groups, each group's triangles again into its own array."""
+    def _gather_emission(self, camera, hit, hits, path, L, k, groups=()):
+        """Emission of the triangles hit by rays `hit` (two-sided) arriving at vertex k,
+        MIS-weighted for BSDF rays (one native pass); each contribution clamped as Cycles'
+        sample clamp (_found_classes); with light groups, each group's triangles again into its
+        own array."""
         if self._link is not None and not camera and path.prim is not None:
             # light linking: emitters do not light the objects their set leaves out
             prim = np.maximum(hits['prim'], 0)
@@ -48,17 +51,34 @@ class EmitterHits:
                                                 self._back(prim[at], -np.take(path.D, at, axis=1),
                                                            -np.take(path.D, at, axis=1), hits['t'][at]))
         for mask, out in outs:
-            dacrt.shading.gather_emission(hits, mask, self._emission_table(), self._tri_emissive,
-                                          None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
-                                          path.O, path.D, thr, path.pdf, path.pid, out, clamp=clamp,
-                                          **({} if camera or self._tri_key is None
-                                             else dict(tree=self.lights.tree, tri_key=self._tri_key, N=path.N,
-                                                       receivers=self._linked_receivers(path))))
+            for thr_c, clamp in self._found_classes(k, path, thr):
+                dacrt.shading.gather_emission(hits, mask, self._emission_table(), self._tri_emissive,
+                                              None if camera else self.lights.tri_prob, self._area32, self.tri.geo,
+                                              path.O, path.D, thr_c, path.pdf, path.pid, out, clamp=clamp,
+                                              **({} if camera or self._tri_key is None
+                                                 else dict(tree=self.lights.tree, tri_key=self._tri_key, N=path.N,
+                                                           receivers=self._linked_receivers(path))))
 
     def _found_clamp(self, k):
-        """The clamp of light that rays arriving at vertex k find: direct up to the BSDF rays
-        of vertex 0 (Cycles clamps it by bounce - 1 <= 0), indirect after."""
+        """The clamp of light that rays arriving at vertex k past no glass find: direct up to
+        the BSDF rays of vertex 0 (Cycles clamps it by bounce - 1 <= 0), indirect after."""
         return self._clamps[k > 1]
+
+    def _found_classes(self, k, path, thr=None):
+        """[(throughput, clamp)]: the rays of path arriving at vertex k, of throughput thr
+        (default path.thr; None: 1), by the clamp of the light they find. Cycles' bounce count
+        there counts glass passes (path.xb) too, so a ray past glass may find indirect light
+        before vertex 2 (a lamp seen by the BSDF rays of a floor behind a pane was 3.2x Cycles
+        at Clamp Direct 0 / Indirect 1). Mixed rays are gathered twice, each time with the
+        other class's throughput 0."""
+        thr = path.thr if thr is None else thr
+        if path.xb is None or k > 1 or self._clamps[0] == self._clamps[1]:
+            return [(thr, self._found_clamp(k))]
+        deep = k + path.xb > 1
+        if not deep.any() or deep.all():
+            return [(thr, self._clamps[bool(deep.any())])]
+        one = np.ones((3, len(deep)), F32) if thr is None else thr
+        return [(np.where(deep, F32(0), one), self._clamps[0]), (np.where(deep, one, F32(0)), self._clamps[1])]
 
     def _group_lamps(self, camera, sinks, combined=None):
         """[(lamp records, light group's array)]: per light group, the records of its lamps
@@ -77,7 +97,7 @@ class EmitterHits:
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather); with light
         passes, camera rays' emitters and world go to their two passes; with light groups,
         each group's lamps (and the world) again into its own array."""
-        camera, clamp = k == 0, self._found_clamp(k)
+        camera, classes = k == 0, self._found_classes(k, path)
         L, L_env = sinks.found(k), sinks.world(k)
         if not camera:
             env, groups = self.lights.environment, ((self._bsdf_lamps, L),)
@@ -98,20 +118,20 @@ class EmitterHits:
         miss = ~hit
         # camera rays past glass see the map by the world's Transmission visibility (_env_apart)
         past = path.transmit if camera and self._env_apart and path.transmit is not None else None
-        for e, out in envs:
+        for (e, out), (thr, clamp) in itertools.product(envs, classes):
             e.native.gather(0.0 if camera else self.lights.env_prob, path.D, miss if past is None else miss & ~past,
-                            path.thr, None if camera else path.pdf, path.pid, out, clamp)
+                            thr, None if camera else path.pdf, path.pid, out, clamp)
         if past is not None and self._transmit_env is not None and past.any():
             outs = [L_env] + ([sinks.groups[self._world_group]] if sinks.groups and self._world_group >= 0 else [])
-            for out in outs:
-                self._transmit_env.native.gather(0.0, path.D, miss & past, path.thr, None, path.pid, out, clamp)
+            for out, (thr, clamp) in itertools.product(outs, classes):
+                self._transmit_env.native.gather(0.0, path.D, miss & past, thr, None, path.pid, out, clamp)
         if not groups:
             return
         # a lamp counts in front of the surface hit, or of the ray's end where it missed (the
         # tracer leaves a miss at t = inf: only camera rays end sooner, at the clip end)
         t_surf = np.where(hit, hits['t'], path.tmax) if camera else hits['t']
-        for lamps, out in groups:
-            for lamps, thr in self._linked(lamps, path, path.thr, camera):
+        for (lamps, out), (thr_c, clamp) in itertools.product(groups, classes):
+            for lamps, thr in self._linked(lamps, path, thr_c, camera):
                 for lamps, pdf in self._mis_pdfs(lamps, path, k, camera):
                     dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
                                             miss, path.pid, out, thr=thr, pdf_bsdf=pdf,
@@ -148,7 +168,7 @@ class EmitterHits:
         if not len(lamps):
             return
         sets = self._record_shadow_set[lamps]
-        clamp, L = self._found_clamp(k), sinks.found(k)
+        classes, L = self._found_classes(k, path), sinks.found(k)
         for s in np.unique(sets):
             kind = f'shadow{s}'
             if kind in self._scenes:
@@ -157,8 +177,9 @@ class EmitterHits:
             else:                           # no blockers: nothing stops the rays
                 t, miss = np.full(len(path.pid), np.inf, F32), np.ones(len(path.pid), bool)
             mine = lamps[sets == s]
-            for recs, out in [(mine, L)] + self._group_lamps(False, sinks, mine):
-                for recs, thr in self._linked(recs, path, path.thr, False):
+            for (recs, out), (thr_c, clamp) in itertools.product([(mine, L)] + self._group_lamps(False, sinks, mine),
+                                                                 classes):
+                for recs, thr in self._linked(recs, path, thr_c, False):
                     dacrt.lamps.lamp_gather(self._lamp_records, recs, path.O, path.D, t, miss, path.pid, out,
                                             thr=thr, pdf_bsdf=path.pdf if path.dark_pdf is None else path.dark_pdf,
                                             clamp=clamp, **self._lamp_mis(False, path))

@@ -927,7 +927,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             if self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain, held)
         if self._any_emissive:
-            self._gather_emission(camera, hit, hits, path, sinks.found(k), self._found_clamp(k), sinks.groups)
+            self._gather_emission(camera, hit, hits, path, sinks.found(k), k, sinks.groups)
         if k == K + 1:
             return None
         if path.tb is not None:                       # past Transparent Max Bounces: emission only

@@ -143,11 +143,11 @@ class Transparency:
                                        None if camera else self._deeper_rows(k, np.take(path.xb, rows)))
             sub['t'] += t0                      # distances from the path vertex, for lamps and MIS
             # the segment's paths: only the columns _gather_segment reads
-            pid, O, thr_seg, pdf, prim_seg, N, refracted, transmit, dark_pdf = compact(
+            pid, O, thr_seg, pdf, prim_seg, N, refracted, transmit, dark_pdf, xb_seg = compact(
                 rows, path.pid, path.O, thr, path.pdf, path.prim, path.N, path.refracted, path.transmit,
-                path.dark_pdf)
+                path.dark_pdf, path.xb)
             seg = Paths(pid, None, O, D, tmax, thr_seg, pdf, prim_seg, N=N, refracted=refracted, transmit=transmit,
-                        dark_pdf=dark_pdf)
+                        dark_pdf=dark_pdf, xb=xb_seg)
             self._gather_segment(seg, sub, t0, sinks, k)
             hits[rows] = sub
             h = sub
@@ -306,15 +306,16 @@ class Transparency:
         lamps = self._bsdf_lamps if not camera else self._camera_emitters if sinks.split else self._camera_lamps
         outs = [(lamps, sinks.found(k))]
         outs += self._group_lamps(camera, sinks)
+        # (taken off in the clamp classes they were just gathered in)
         for lamps, out in outs:
             if not len(lamps):
                 continue
-            for lamps, thr in self._linked(lamps, seg, -seg.thr, camera):
-                for lamps, pdf in self._mis_pdfs(lamps, seg, k, camera):
-                    dacrt.lamps.lamp_gather(self._lamp_records, lamps, seg.O, seg.D, t0.astype(F32),
-                                            np.zeros(len(t0), bool), seg.pid, out, thr=thr,
-                                            pdf_bsdf=pdf, clamp=self._found_clamp(k),
-                                            **self._lamp_mis(camera, seg))
+            for thr_c, clamp in self._found_classes(k, seg, -seg.thr):
+                for lamps_l, thr in self._linked(lamps, seg, thr_c, camera):
+                    for lamps_p, pdf in self._mis_pdfs(lamps_l, seg, k, camera):
+                        dacrt.lamps.lamp_gather(self._lamp_records, lamps_p, seg.O, seg.D, t0.astype(F32),
+                                                np.zeros(len(t0), bool), seg.pid, out, thr=thr,
+                                                pdf_bsdf=pdf, clamp=clamp, **self._lamp_mis(camera, seg))
         if camera and seg.refracted is not None:
             self._world_through_glass(seg, sub, ~hit & seg.refracted, sinks)
 
@@ -327,13 +328,13 @@ class Transparency:
         outs = [sinks.L]
         if sinks.groups and self._world_group >= 0:
             outs.append(sinks.groups[self._world_group])
-        clamp = self._found_clamp(0)
         for out in outs:
-            if self._glass_env is not None:
-                self._glass_env.native.gather(0.0, seg.D, where, seg.thr, None, seg.pid, out, clamp)
-            if len(self._glass_world_lamps):
-                dacrt.lamps.lamp_gather(self._lamp_records, self._glass_world_lamps, seg.O, seg.D, sub['t'], where,
-                                        seg.pid, out, thr=seg.thr, pdf_bsdf=None, clamp=clamp)
+            for thr, clamp in self._found_classes(0, seg):     # (past two panes: indirect)
+                if self._glass_env is not None:
+                    self._glass_env.native.gather(0.0, seg.D, where, thr, None, seg.pid, out, clamp)
+                if len(self._glass_world_lamps):
+                    dacrt.lamps.lamp_gather(self._lamp_records, self._glass_world_lamps, seg.O, seg.D, sub['t'],
+                                            where, seg.pid, out, thr=thr, pdf_bsdf=None, clamp=clamp)
 
     def _shadow_through(self, rays, skip, send, occluded, value, tb=None, kind='through'):
         """Shadow rays not stopped by opaque triangles pass the transparent ones (the 'through'

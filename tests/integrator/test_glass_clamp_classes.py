@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from .scenes import ALL_VIS, geometry, light, material, quad, render
+from .test_total_bounces import _floor_under_ceiling, _reflected
 from .test_transparency import sheet_scene
 
 LIT = 0.8 * 3.0 / np.pi            # the floor under a sun of 3, per channel (RGB sum 2.29)
@@ -42,3 +43,19 @@ def test_a_path_past_glass_and_one_without_are_clamped_apart():
     behind = np.isclose(img, 0.5, rtol=1e-5).all(axis=-1)
     assert np.all(behind | np.isclose(img, LIT, rtol=1e-5).all(axis=-1))
     np.testing.assert_array_equal(behind.sum(axis=1), img.shape[1] // 2)    # the right half
+
+
+@pytest.mark.parametrize('direct,indirect', [(0.0, 1e-4), (1e-4, 0.0)])
+def test_light_found_by_rays_from_behind_a_pane_is_clamped_as_indirect(direct, indirect):
+    """The 0.8 floor behind a camera-only pane under an emissive ceiling (E 1), Total 1: the
+    floor is Cycles' bounce 1, so both its light samples and the emission its BSDF rays find
+    (bounce 2, clamped by bounce - 1) are indirect. With Clamp Indirect 1e-4 each sample has at
+    most two contributions of RGB sum 3e-4; with it off (Direct 1e-4) the floor is unclamped,
+    0.8 x E. DACRT had clamped the found emission as direct light (the floor 0.8 x E's share
+    unclamped, or clamped to nothing)."""
+    img = _floor_under_ceiling(True, max_bounces=4, total_max_bounces=1,
+                               sample_clamp_direct=direct, sample_clamp_indirect=indirect)
+    if indirect:
+        assert 0.0 < img <= 2e-4 + 1e-7
+    else:
+        assert img == pytest.approx(_reflected(1), rel=0.02)
