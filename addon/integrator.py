@@ -308,7 +308,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._albedo_varies = bool(self.mats.textures) or (self.tri.colors is not None and bool(self.mats.colored.any()))
         # normal maps bend shading normals (they need the tangents the export made), and so do
         # bump heights (Bump nodes, a Displacement output read as bump) per point
-        self._normal_mapping = bool(self.mats.normal_maps) and self.tri.tangents is not None
+        # (object- and world-space maps need no tangents)
+        self._normal_mapping = bool(self.mats.normal_maps) and (
+            self.tri.tangents is not None or any(e[7] != 'TANGENT' for e in self.mats.normal_maps))
         self._bumped = self._normal_mapping or bool(self.mats.bumps)
         self._displaced = any(e[1] is not None for e in self.mats.bumps)
         # True while coordinates must read the normal the displacement's bump starts from (its own

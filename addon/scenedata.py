@@ -173,6 +173,10 @@ class Material:
     normal_transform: Optional[np.ndarray] = None
     normal_strength: float = 1.0
     normal_uv_map: str = ''       # the UV map whose tangents the Normal Map node reads ('' the active render one)
+    # the Normal Map node's space: TANGENT (the UV map's tangents), or the colour a direction in
+    # OBJECT or WORLD space (BLENDER_OBJECT, BLENDER_WORLD: its y and z negated); a procedural
+    # normal_texture (procedural.ProceduralTexels) is the colour per point
+    normal_space: str = 'TANGENT'
     bump_correction: bool = True                  # Material > Settings > Bump Map Correction (Cycles)
     # Bump nodes feeding the BSDF's Normal (scenedata.Bump each), innermost first: applied in
     # turn after the normal map (or to the shading normal without one)

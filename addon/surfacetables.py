@@ -159,7 +159,7 @@ class Materials:
         base, emit = [], []
         self.textures = []          # (material index, texture, interpolation, extension, uv transform)
         self.emission_textures = []  # the same, of the materials whose emission is an image's
-        self.normal_maps = []       # (index, texture, interpolation, extension, uv transform, strength)
+        self.normal_maps = []       # (index, texture, interpolation, extension, uv transform, strength, correction, space)
         # (index, Material.displacement_bump or None, Material.bumps, Bump Map Correction): the
         # materials whose shading normal Bump nodes or a Displacement output bend per point
         self.bumps = []
@@ -178,7 +178,7 @@ class Materials:
                 self.normal_maps.append(
                     (i, *texture_entry(mat.name, 'normal map', mat.normal_texture, mat.normal_interpolation,
                                         mat.normal_extension, mat.normal_transform),
-                     strength, bool(getattr(mat, 'bump_correction', True))))
+                     strength, bool(getattr(mat, 'bump_correction', True)), str(getattr(mat, 'normal_space', 'TANGENT'))))
             bumps = tuple(getattr(mat, 'bumps', None) or ())
             displaced = getattr(mat, 'displacement_bump', None)
             if bumps or displaced is not None:

@@ -237,13 +237,19 @@ class SurfaceValues:
         mat = np.take(self.tri.material, prim)
         t, geo, normals = self.tri.tangents, self.tri.geo, self.tri.normals
         maps = self.mats.normal_maps
-        for (m, tex, interp, ext, xf, strength, corrected), sel in zip(maps,
-                                                                       _hits_by_material(mat, [e[0] for e in maps])):
+        for (m, tex, interp, ext, xf, strength, corrected, space), sel in zip(
+                maps, _hits_by_material(mat, [e[0] for e in maps])):
             if not len(sel):
                 continue
             correction[sel] = float(corrected)
             p, uu, vv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
             c = F32(2.0) * (self._lookup(tex, interp, ext, xf, p, uu, vv) - F32(0.5))
+            if space != 'TANGENT':
+                out[:, sel] = self._direction_mapped(c, space, strength, p, np.take(out, sel, axis=1),
+                                                     np.take(ng, sel, axis=1))
+                continue
+            if t is None:                          # (no mesh had the map's tangents)
+                continue
             c[0] *= F32(strength)
             c[1] *= F32(strength)
             c[2] = F32(1.0) + (c[2] - F32(1.0)) * F32(min(strength, 1.0))
@@ -277,6 +283,31 @@ class SurfaceValues:
             N = np.where(back, -N, N) / np.where(good, length, 1)
             out[:, sel] = np.where(good, N, out[:, sel])
         return out
+
+    def _direction_mapped(self, c, space, strength, prim, ns, ng):
+        """Shading normals (3, k) of an object- or world-space normal map at hits on prim, as
+        Cycles' svm_node_normal_map gives them: c (3, k) = 2 x colour - 1 (y and z negated in
+        Blender's own spaces) is the direction, in object space turned to world space by the
+        normal matrix M^-T (object_normal_transform), normalized, negated on a back face, then
+        normalize(ns + (N - ns) x strength) mixed with the shading normal ns (3, k) (already on
+        the ray's side; ng the geometric normal there); ns where the result is zero."""
+        c = np.asarray(c, np.float64)
+        if space.startswith('BLENDER_'):
+            c = c * np.array([1.0, -1.0, -1.0])[:, None]
+        if space.endswith('OBJECT') and self.tri.tangent_xf is not None:
+            M = np.take(self.tri.tangent_xf, np.take(self.tri.instance, prim), axis=0).astype(np.float64)
+            a, b, cc = (np.moveaxis(M[:, :, j], 0, 1) for j in range(3))
+            bc, ca, ab = np.cross(b, cc, axis=0), np.cross(cc, a, axis=0), np.cross(a, b, axis=0)
+            flip = np.where((a * bc).sum(axis=0) < 0, -1.0, 1.0)
+            c = (c[0] * bc + c[1] * ca + c[2] * ab) * flip          # M^-T c up to a positive scale
+        N = bumpmap.unit(c)
+        back = (ng * np.take(self.tri.geo[9:12], prim, axis=1)).sum(axis=0) < 0
+        N = np.where(back, -N, N)
+        n0 = np.asarray(ns, np.float64)
+        if strength != 1.0:
+            N = bumpmap.unit(n0 + (N - n0) * max(float(strength), 0.0))
+        zero = ~(np.abs(N).sum(axis=0) > 0)
+        return np.where(zero, n0, N).astype(F32)
 
     def _emission_at(self, prim, u, v, back=None):
         """Radiance (3, k) of image-emission triangles prim at barycentrics (u, v) (back: the

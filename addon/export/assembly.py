@@ -1187,7 +1187,8 @@ class Assembly:
         normal map then leaves the normal as it is (Cycles' fallback without the tangent
         attribute)."""
         mats = self.materials.materials
-        wants = {k for k in set(place.slot_map) if mats[k].normal_texture is not None}
+        wants = {k for k in set(place.slot_map) if mats[k].normal_texture is not None
+                 and getattr(mats[k], 'normal_space', 'TANGENT') == 'TANGENT'}
         if not wants:
             return
         # the tangents of the Normal Map node's own UV map ('' the active render one), not of
@@ -1234,11 +1235,11 @@ class Assembly:
 
 def procedural_textures(material):
     """The material's procedural textures (its colour's, its emission's, its opacity's, its
-    transmission's, its AOVs', its bump heights')."""
+    transmission's, its normal map's, its AOVs', its bump heights')."""
     bumps = tuple(getattr(material, 'bumps', None) or ()) + \
         tuple(b for b in (getattr(material, 'displacement_bump', None),) if b is not None)
     textures = [material.texture, getattr(material, 'emission_texture', None), getattr(material, 'opacity', None),
-                getattr(material, 'translucency_texture', None)] + \
+                getattr(material, 'translucency_texture', None), getattr(material, 'normal_texture', None)] + \
         [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()] + [b.values for b in bumps]
     return [t for t in textures if isinstance(t, ProceduralTexels)]
 

@@ -94,6 +94,8 @@ def displacement_bump(mat, out, reasons, image=None):
 def needs_object_maps(material):
     """Whether a scenedata.Material's displacement bump reads its placements' linear maps
     (Bump.object_height, object_space; and Texture Coordinate Normal, the bent N in object
-    space, Integrator._displace_coordinates): the assembly then exports them
-    (Geometry.tangent_xf)."""
-    return getattr(material, 'displacement_bump', None) is not None
+    space, Integrator._displace_coordinates), or its object-space normal map (turned to world
+    space by the normal matrix): the assembly then exports them (Geometry.tangent_xf)."""
+    return getattr(material, 'displacement_bump', None) is not None or (
+        getattr(material, 'normal_texture', None) is not None and
+        getattr(material, 'normal_space', 'TANGENT') in ('OBJECT', 'BLENDER_OBJECT'))

@@ -1,14 +1,17 @@
-"""Which BSDF Normal inputs bend the shading normal: a tangent-space Normal Map of an Image
-Texture, or of colour nodes on one (a DirectX map's green channel flipped), is rendered (the
-material's normal texture); Bump nodes before it are export/bump.py's; the nodes that leave the
-normal as it is are looked past; anything else is reported as ignored. Part of the export
+"""Which BSDF Normal inputs bend the shading normal: a Normal Map node, in tangent, object or
+world space (Blender's own two too), of an Image Texture, of colour nodes on one (a DirectX
+map's green channel flipped), or of any colour chain compiled per point (procedural textures,
+coordinates, attributes, a constant), is rendered (the material's normal texture); Bump nodes
+before it are export/bump.py's; the nodes that leave the normal as it is are looked past;
+anything else is reported as ignored. Part of the export
 layer."""
 
 import numpy as np
 
 from .. import nodegraph
 from .. import scenedata as sd
-from ..nodeeval import NotCompiled, compile_image_chain, constant_value
+from ..nodeeval import NotCompiled, compile_image_chain, constant, constant_value
+from ..procedural import ProceduralTexels
 from ..nodegraph import linked_link
 from ..texture import UdimTiles
 
@@ -47,36 +50,75 @@ def bends_normal(socket):
 
 
 def tangent_normal_map(node, reasons):
-    """(image node, strength, UV map name, chain) of a BSDF's Normal input fed by a
-    tangent-space Normal Map node whose Color is an Image Texture's (the common baked normal
-    map; chain None) or colour nodes on one image's colour (chain: the Normal Map's Color
-    socket, which nodeeval.compile_image_chain compiles), or None (an unlinked Normal; anything
-    else is reported as ignored)."""
+    """normal_map_at of a BSDF's Normal input."""
     return normal_map_at(node.inputs.get('Normal'), reasons)
 
 
-def normal_map_at(socket, reasons):
-    """tangent_normal_map of what feeds a Normal socket (or None): a BSDF's, or the innermost
-    Bump node's (export/bump.py)."""
+# Normal Map node spaces whose colour is a direction in object or world space (svm_node_normal_map:
+# Blender's own two with y and z negated)
+NON_TANGENT_SPACES = ('OBJECT', 'WORLD', 'BLENDER_OBJECT', 'BLENDER_WORLD')
+
+
+def normal_map_at(socket, reasons, image=None):
+    """What feeds a Normal socket (or None: unbent, or not followed, said): a BSDF's, or the
+    innermost Bump node's (export/bump.py). A Normal Map node: (image node or None, strength,
+    UV map name, chain, space, colour) where the image node is an Image Texture whose Color
+    feeds it (chain None) or that colour nodes on one image's colour run on (chain: the Color
+    socket, which nodeeval.compile_image_chain compiles); otherwise image None and colour a
+    procedural.ProceduralTexels of the Color socket per point (procedural textures,
+    coordinates, attributes, several images, or a constant), run through its nodes as Cycles
+    runs them. space: the node's (TANGENT or NON_TANGENT_SPACES)."""
     link = _normal_link(socket) if socket is not None else None
     if link is None:
         return None
     nmap = link.from_node
-    image = linked_link(nmap.inputs['Color']) if nmap.type == 'NORMAL_MAP' else None
+    if nmap.type != 'NORMAL_MAP':
+        reasons.append(f"Normal input ('{nmap.bl_label}') ignored: Normal Map and Bump nodes only")
+        return None
+    space = str(nmap.space)
+    image = linked_link(nmap.inputs['Color'])
     direct = image is not None and image.from_node.type == 'TEX_IMAGE' and image.from_socket.name == 'Color'
     through = None if direct or image is None else _one_image_through_nodes(nmap.inputs['Color'])
-    if nmap.type != 'NORMAL_MAP' or nmap.space != 'TANGENT' or not (direct or through is not None):
-        what = f"{nmap.space.lower().replace('_', ' ')} space normal map" if nmap.type == 'NORMAL_MAP' else \
-            f"'{nmap.bl_label}'"
-        reasons.append(f"Normal input ({what}) ignored: tangent-space normal maps of an image, or of colour "
-                       "nodes on one image's colour, only")
-        return None
     strength, ok = constant_value(nmap.inputs['Strength'])
     if not ok:
         reasons.append("Normal Map strength driven by nodes; its own value used")
+    strength = max(float(strength), 0.0)
     if direct:
-        return image.from_node, max(float(strength), 0.0), str(nmap.uv_map), None
-    return through, max(float(strength), 0.0), str(nmap.uv_map), nmap.inputs['Color']
+        return image.from_node, strength, str(nmap.uv_map), None, space, None
+    if through is not None:
+        return through, strength, str(nmap.uv_map), nmap.inputs['Color'], space, None
+    colour = _per_point_colour(nmap, reasons, image)
+    if colour is None:
+        return None
+    return None, strength, str(nmap.uv_map), None, space, colour
+
+
+def _per_point_colour(nmap, reasons, image):
+    """A ProceduralTexels of a Normal Map node's Color per point, unclamped (a colour below 0
+    or above 1 is a longer or reversed direction there as in Cycles), or None (said): what
+    procedurals.compile_socket follows (images looked up per point through `image`, the
+    export's reader), else the chain's constant value. A chain reading the view (Layer Weight,
+    Fresnel) is not followed: the normal is bent before any ray direction is at hand here."""
+    from . import procedurals            # (procedurals imports the export's node helpers)
+    socket = nmap.inputs['Color']
+    found = procedurals.compile_socket(socket, True, reasons, coordinates=True, image=image, attributes=True)
+    if found is not None:
+        fn, needs, sources = found
+        return ProceduralTexels(lambda coords: np.asarray(fn(coords), np.float64), needs,
+                                str(sources) or f"Normal Map '{nmap.name}' colour")
+    why = []
+    value, exact = constant(socket, True, None, why)
+    if not exact:
+        reasons.append(f"Normal Map '{nmap.name}' ignored: its Color chain is not evaluated per point"
+                       + (f" ({'; '.join(why)})" if why else ""))
+        return None
+    rgb = np.asarray(value, np.float64)[:3]
+    return ProceduralTexels(lambda coords: np.broadcast_to(rgb, (_count(coords), 3)), frozenset({'generated'}),
+                            f"Normal Map '{nmap.name}' colour")
+
+
+def _count(coords):
+    return len(next(iter(coords.values()))) if coords else 0
 
 
 def _one_image_through_nodes(socket):
@@ -101,7 +143,7 @@ def _one_image_through_nodes(socket):
 
 
 def below_surface(materials):
-    """The names of the materials whose normal map bends the normal below the surface somewhere
+    """The names of the materials whose tangent-space normal map of an image bends the normal below the surface somewhere
     (a texel whose tangent-space normal, 2 x colour - 1 as Cycles' svm_node_normal_map decodes
     it, points below the surface after its strength is applied: an OBJ's map_Bump height image
     wired as a normal map) and that have no
@@ -113,7 +155,10 @@ def below_surface(materials):
     names = []
     for m in materials:
         tex = m.normal_texture
-        if tex is None or m.normal_strength <= 0 or any(
+        # (an object- or world-space map's texel is a direction, below the surface or not by
+        # where it lies: not tested here; a per-point colour has no texels)
+        if tex is None or getattr(m, 'normal_space', 'TANGENT') != 'TANGENT' or \
+                isinstance(tex, ProceduralTexels) or m.normal_strength <= 0 or any(
                 t is not None and np.any(np.asarray(t) > 0)
                 for t in (m.translucency, m.refraction, m.opaque_refraction)):
             continue

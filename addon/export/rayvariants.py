@@ -117,7 +117,7 @@ def _triangle_needs(m):
     tangents, a UV map read by name. What a chain reads of the hit's ray (procedural.VIEW: a
     Layer Weight's view, a Light Falloff's ray length) is no triangle's: every hit carries it."""
     needs = {n for t in procedural_textures(m) for n in t.needs if n not in VIEW}
-    if m.normal_texture is not None:
+    if m.normal_texture is not None and getattr(m, 'normal_space', 'TANGENT') == 'TANGENT':
         needs.add(('tangents', m.normal_uv_map))
     if m.uv_map:
         needs.add(('uv map', m.uv_map))

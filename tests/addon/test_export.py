@@ -2711,7 +2711,9 @@ def test_normal_setups_that_leave_the_normal_are_not_approximations(scene, expor
     for name in exact:
         assert table[name].approximated == '', (name, table[name].approximated)
     assert len(table["Bumpy"].bumps) == 1 and table["Bumpy"].approximated == ''    # (tests/parity/test_bump.py)
-    assert "Normal input (object space normal map) ignored" in table["ObjectMap"].approximated
+    # (rendered: tests/parity/test_normal_map_spaces.py)
+    assert table["ObjectMap"].approximated == '' and table["ObjectMap"].normal_space == 'OBJECT'
+    assert table["ObjectMap"].normal_texture is not None
 
 
 def test_colour_nodes_after_an_8bit_image(scene, exported, tmp_path):
