@@ -30,7 +30,7 @@ class PassWriting:
         maybe_ensure_valid_specular_reflection under Bump Map Correction: a deep bump's
         Normal.z 0.714 -> 0.777 straight on), the transparent closure's the unbent ns (weight
         tau (3, k) or None). ns and ng face the ray, I (3, k) toward where it came from."""
-        nb, bump = self._bent_normals(prim, u, v, ns, ng)
+        nb, bump = self._bent_normals(prim, u, v, ns, ng, self._back(prim, ng, I))
         if bump is None:
             return nb
         parts = [(diffuse.mean(axis=0), nb)]

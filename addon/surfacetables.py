@@ -178,7 +178,8 @@ class Materials:
                 self.normal_maps.append(
                     (i, *texture_entry(mat.name, 'normal map', mat.normal_texture, mat.normal_interpolation,
                                         mat.normal_extension, mat.normal_transform),
-                     strength, bool(getattr(mat, 'bump_correction', True)), str(getattr(mat, 'normal_space', 'TANGENT'))))
+                     strength, bool(getattr(mat, 'bump_correction', True)),
+                     str(getattr(mat, 'normal_space', 'TANGENT'))))
             bumps = tuple(getattr(mat, 'bumps', None) or ())
             displaced = getattr(mat, 'displacement_bump', None)
             if bumps or displaced is not None:
@@ -290,7 +291,7 @@ class Materials:
         # a procedural chain reads a normal (Geometry Normal or True Normal, Texture Coordinate
         # Normal), which Cycles turns to the side the ray meets: its hits say which side that is
         entries = self.textures + self.pass_textures + self.emission_textures + self.opacity + \
-            self.translucency_textures + \
+            self.translucency_textures + self.normal_maps + \
             [e for found in self.aov_textures.values() for e in found]
         self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries) or \
             any(b.values.needs & SIDED for e in self.bumps for b in (e[1],) + e[2] if b is not None)

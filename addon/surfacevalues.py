@@ -81,13 +81,14 @@ class SurfaceValues:
                 texel = np.where(np.isfinite(texel), texel, F32(0.0))
                 albedo[:, sel] *= texel if signed else np.fmax(texel, F32(0.0))
 
-    def _bent_normals(self, prim, u, v, ns, ng):
+    def _bent_normals(self, prim, u, v, ns, ng, back=None):
         """(shading normals with the materials' normal maps and bump heights applied, bump or
         None): bump (4, k) keeps the smooth normal (rows 0-2) and the Bump Map Correction flag
         (row 3) for the bump shadowing of light samples and bounces; (ns, None) when no material
         bends normals. A Displacement output read as bump sets the shading normal itself first
         (Cycles' SetNormal: closures then shade with it unshadowed, and a normal map does not
-        start from it); then the normal map, then the BSDF's Bump nodes."""
+        start from it); then the normal map, then the BSDF's Bump nodes. back: the hits' side
+        array (_back), for a normal map's colour chain that reads a normal or the view."""
         if not self._bumped:
             return ns, None
         bump = np.empty((4, len(prim)), F32)
@@ -99,7 +100,7 @@ class SurfaceValues:
             finally:
                 self._undisplaced = False
         bump[:3] = ns
-        out = self._normal_mapped(prim, u, v, ns, ng, bump[3]) if self._normal_mapping else ns
+        out = self._normal_mapped(prim, u, v, ns, ng, bump[3], back) if self._normal_mapping else ns
         if self.mats.bumps:
             out = self._bump_mapped(prim, u, v, out, ng, bump[3], False)
         return out, bump
@@ -224,7 +225,7 @@ class SurfaceValues:
         """_coordinates at float64 barycentrics (a bump tap's), each (k, 3) float32."""
         return {k: np.ascontiguousarray(c, F32) for k, c in self._coordinates(needs, prim, u, v, back).items()}
 
-    def _normal_mapped(self, prim, u, v, ns, ng, correction):
+    def _normal_mapped(self, prim, u, v, ns, ng, correction, side=None):
         """The shading normals (3, k) at hits (prim, u, v) with their materials' tangent-space
         normal maps applied as Cycles' svm_node_normal_map: c = 2 x texel - 1, its x, y times
         the strength and z mixed from 1, N = normalize(M^-T (c.x T + c.y sign (n x T) + c.z n)),
@@ -232,7 +233,9 @@ class SurfaceValues:
         the interpolated tangent and n the front face's normal (the geometric one, or the corner
         normals interpolated, unnormalized), turned to the side the ray came from as ns is (ng:
         the geometric normal on that side). A new array; hits of other materials keep ns.
-        correction (k,): set to each normal-mapped hit's material's Bump Map Correction (0 or 1)."""
+        correction (k,): set to each normal-mapped hit's material's Bump Map Correction (0 or 1).
+        side: the hits' side array (_back; None: the front), which a per-point colour chain
+        reading a normal or the view (Fresnel, Layer Weight) takes."""
         out = np.array(ns, F32, copy=True)
         mat = np.take(self.tri.material, prim)
         t, geo, normals = self.tri.tangents, self.tri.geo, self.tri.normals
@@ -243,7 +246,8 @@ class SurfaceValues:
                 continue
             correction[sel] = float(corrected)
             p, uu, vv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
-            c = F32(2.0) * (self._lookup(tex, interp, ext, xf, p, uu, vv) - F32(0.5))
+            c = F32(2.0) * (self._lookup(tex, interp, ext, xf, p, uu, vv,
+                                         None if side is None else np.take(side, sel)) - F32(0.5))
             if space != 'TANGENT':
                 out[:, sel] = self._direction_mapped(c, space, strength, p, np.take(out, sel, axis=1),
                                                      np.take(ng, sel, axis=1))

@@ -97,11 +97,12 @@ def _per_point_colour(nmap, reasons, image):
     """A ProceduralTexels of a Normal Map node's Color per point, unclamped (a colour below 0
     or above 1 is a longer or reversed direction there as in Cycles), or None (said): what
     procedurals.compile_socket follows (images looked up per point through `image`, the
-    export's reader), else the chain's constant value. A chain reading the view (Layer Weight,
-    Fresnel) is not followed: the normal is bent before any ray direction is at hand here."""
+    export's reader; the view, Fresnel and Layer Weight, at each hit's ray, with the unbent
+    normal as in Cycles), else the chain's constant value."""
     from . import procedurals            # (procedurals imports the export's node helpers)
     socket = nmap.inputs['Color']
-    found = procedurals.compile_socket(socket, True, reasons, coordinates=True, image=image, attributes=True)
+    found = procedurals.compile_socket(socket, True, reasons, coordinates=True, image=image, attributes=True,
+                                       view=True)
     if found is not None:
         fn, needs, sources = found
         return ProceduralTexels(lambda coords: np.asarray(fn(coords), np.float64), needs,
@@ -143,7 +144,8 @@ def _one_image_through_nodes(socket):
 
 
 def below_surface(materials):
-    """The names of the materials whose tangent-space normal map of an image bends the normal below the surface somewhere
+    """The names of the materials whose tangent-space normal map of an image bends the normal
+    below the surface somewhere
     (a texel whose tangent-space normal, 2 x colour - 1 as Cycles' svm_node_normal_map decodes
     it, points below the surface after its strength is applied: an OBJ's map_Bump height image
     wired as a normal map) and that have no

@@ -42,11 +42,27 @@ def _constant(nt):
     return None
 
 
+def _fresnel_mix(nt):
+    """Two colours mixed by a Fresnel: the view at each hit (its unbent normal) picks the direction."""
+    mix = nt.nodes.new('ShaderNodeMix')
+    mix.data_type = 'RGBA'
+    mix.inputs['A'].default_value = (0.5, 0.5, 1.0, 1.0)
+    mix.inputs['B'].default_value = (0.95, 0.25, 0.6, 1.0)
+    nt.links.new(nt.nodes.new('ShaderNodeFresnel').outputs['Fac'], mix.inputs['Factor'])
+    return mix.outputs['Result']
+
+
+def _geometry_normal(nt):
+    """The shading normal as a colour (turned to the side the ray meets, as Cycles turns it)."""
+    return nt.nodes.new('ShaderNodeNewGeometry').outputs['Normal']
+
+
 CASES = [
     ('TANGENT', _noise, 1.0), ('TANGENT', _object_colour, 0.5),
     ('OBJECT', _object_colour, 1.0), ('OBJECT', _noise, 0.5), ('OBJECT', _constant, 1.0),
     ('WORLD', _object_colour, 1.0), ('WORLD', _constant, 0.5),
     ('BLENDER_OBJECT', _object_colour, 1.0), ('BLENDER_WORLD', _noise, 1.0),
+    ('TANGENT', _fresnel_mix, 1.0), ('WORLD', _fresnel_mix, 0.8), ('WORLD', _geometry_normal, 0.7),
 ]
 
 
