@@ -177,6 +177,8 @@ class Material:
     # OBJECT or WORLD space (BLENDER_OBJECT, BLENDER_WORLD: its y and z negated); a procedural
     # normal_texture (procedural.ProceduralTexels) is the colour per point
     normal_space: str = 'TANGENT'
+    # a Strength driven by nodes: a procedural.ProceduralTexels of it per point (R), else None
+    normal_strength_map: Optional[object] = None
     bump_correction: bool = True                  # Material > Settings > Bump Map Correction (Cycles)
     # Bump nodes feeding the BSDF's Normal (scenedata.Bump each), innermost first: applied in
     # turn after the normal map (or to the shading normal without one)

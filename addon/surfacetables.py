@@ -159,7 +159,8 @@ class Materials:
         base, emit = [], []
         self.textures = []          # (material index, texture, interpolation, extension, uv transform)
         self.emission_textures = []  # the same, of the materials whose emission is an image's
-        self.normal_maps = []       # (index, texture, interpolation, extension, uv transform, strength, correction, space)
+        # (index, texture, interpolation, extension, uv transform, strength, correction, space, strength per point)
+        self.normal_maps = []
         # (index, Material.displacement_bump or None, Material.bumps, Bump Map Correction): the
         # materials whose shading normal Bump nodes or a Displacement output bend per point
         self.bumps = []
@@ -179,7 +180,7 @@ class Materials:
                     (i, *texture_entry(mat.name, 'normal map', mat.normal_texture, mat.normal_interpolation,
                                         mat.normal_extension, mat.normal_transform),
                      strength, bool(getattr(mat, 'bump_correction', True)),
-                     str(getattr(mat, 'normal_space', 'TANGENT'))))
+                     str(getattr(mat, 'normal_space', 'TANGENT')), getattr(mat, 'normal_strength_map', None)))
             bumps = tuple(getattr(mat, 'bumps', None) or ())
             displaced = getattr(mat, 'displacement_bump', None)
             if bumps or displaced is not None:
@@ -291,7 +292,7 @@ class Materials:
         # a procedural chain reads a normal (Geometry Normal or True Normal, Texture Coordinate
         # Normal), which Cycles turns to the side the ray meets: its hits say which side that is
         entries = self.textures + self.pass_textures + self.emission_textures + self.opacity + \
-            self.translucency_textures + self.normal_maps + \
+            self.translucency_textures + self.normal_maps + [(e[0], e[8]) for e in self.normal_maps] + \
             [e for found in self.aov_textures.values() for e in found]
         self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries) or \
             any(b.values.needs & SIDED for e in self.bumps for b in (e[1],) + e[2] if b is not None)

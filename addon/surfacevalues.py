@@ -240,14 +240,16 @@ class SurfaceValues:
         mat = np.take(self.tri.material, prim)
         t, geo, normals = self.tri.tangents, self.tri.geo, self.tri.normals
         maps = self.mats.normal_maps
-        for (m, tex, interp, ext, xf, strength, corrected, space), sel in zip(
+        for (m, tex, interp, ext, xf, strength, corrected, space, strength_map), sel in zip(
                 maps, _hits_by_material(mat, [e[0] for e in maps])):
             if not len(sel):
                 continue
             correction[sel] = float(corrected)
             p, uu, vv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
-            c = F32(2.0) * (self._lookup(tex, interp, ext, xf, p, uu, vv,
-                                         None if side is None else np.take(side, sel)) - F32(0.5))
+            at = None if side is None else np.take(side, sel)
+            c = F32(2.0) * (self._lookup(tex, interp, ext, xf, p, uu, vv, at) - F32(0.5))
+            if strength_map is not None:        # (a Strength driven by nodes: per point, >= 0)
+                strength = self._procedural(strength_map, p, uu, vv, at)[0]
             if space != 'TANGENT':
                 out[:, sel] = self._direction_mapped(c, space, strength, p, np.take(out, sel, axis=1),
                                                      np.take(ng, sel, axis=1))
@@ -256,7 +258,7 @@ class SurfaceValues:
                 continue
             c[0] *= F32(strength)
             c[1] *= F32(strength)
-            c[2] = F32(1.0) + (c[2] - F32(1.0)) * F32(min(strength, 1.0))
+            c[2] = F32(1.0) + (c[2] - F32(1.0)) * np.minimum(strength, F32(1.0)).astype(F32)
             tr = np.take(t, p, axis=1)
             T = tr[0:4] + tr[4:8] * uu + tr[8:12] * vv          # tangent (0:3) and sign (3)
             M = None if self.tri.tangent_xf is None else \
@@ -294,7 +296,8 @@ class SurfaceValues:
         Blender's own spaces) is the direction, in object space turned to world space by the
         normal matrix M^-T (object_normal_transform), normalized, negated on a back face, then
         normalize(ns + (N - ns) x strength) mixed with the shading normal ns (3, k) (already on
-        the ray's side; ng the geometric normal there); ns where the result is zero."""
+        the ray's side; ng the geometric normal there); ns where the result is zero. strength: a
+        number or (k,) per hit."""
         c = np.asarray(c, np.float64)
         if space.startswith('BLENDER_'):
             c = c * np.array([1.0, -1.0, -1.0])[:, None]
@@ -308,8 +311,9 @@ class SurfaceValues:
         back = (ng * np.take(self.tri.geo[9:12], prim, axis=1)).sum(axis=0) < 0
         N = np.where(back, -N, N)
         n0 = np.asarray(ns, np.float64)
-        if strength != 1.0:
-            N = bumpmap.unit(n0 + (N - n0) * max(float(strength), 0.0))
+        s = np.maximum(np.asarray(strength, np.float64), 0.0)       # (a number, or (k,) per point)
+        if np.any(s != 1.0):
+            N = bumpmap.unit(n0 + (N - n0) * s)
         zero = ~(np.abs(N).sum(axis=0) > 0)
         return np.where(zero, n0, N).astype(F32)
 

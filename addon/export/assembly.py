@@ -1239,7 +1239,8 @@ def procedural_textures(material):
     bumps = tuple(getattr(material, 'bumps', None) or ()) + \
         tuple(b for b in (getattr(material, 'displacement_bump', None),) if b is not None)
     textures = [material.texture, getattr(material, 'emission_texture', None), getattr(material, 'opacity', None),
-                getattr(material, 'translucency_texture', None), getattr(material, 'normal_texture', None)] + \
+                getattr(material, 'translucency_texture', None), getattr(material, 'normal_texture', None),
+                getattr(material, 'normal_strength_map', None)] + \
         [t for t, *_ in (getattr(material, 'aov_textures', None) or {}).values()] + [b.values for b in bumps]
     return [t for t in textures if isinstance(t, ProceduralTexels)]
 

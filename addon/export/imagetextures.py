@@ -112,12 +112,12 @@ class ImageTextures:
             if steps:
                 bump_at = len(self._bumps)
                 self._bumps.append((tuple(output_key(b, None) for b in nodes), steps))
-        found = normal_map_at(socket, reasons, image=self._texture)
+        found = normal_map_at(socket, reasons, image_reader=self._texture)
         if found is not None:
             map_at = len(self._normal_maps)
         self._normals.append((node.name, self._normal_weight, map_at, bump_at, nodes[0].name if nodes else ''))
         if found is not None:
-            image, strength, uv_map, chain, space, colour = found
+            image, strength, uv_map, chain, space, colour, strength_map = found
             tex = Texture.procedural(colour, 'normal map') if image is None else self._texture(image, reasons)
             if tex is None:
                 # Cycles reads a missing image as magenta there too, a tangent-space normal
@@ -126,7 +126,7 @@ class ImageTextures:
                 tex = Texture(('missing normal map', image.name), px, 'Closest', 'REPEAT', name=image.name)
             elif chain is not None:
                 tex = self._normal_chain(tex, chain, reasons)
-            self._normal_maps.append((tex, strength, uv_map, space))
+            self._normal_maps.append((tex, strength, uv_map, space, strength_map))
 
     def _normal_chain(self, tex, socket, reasons):
         """The normal map texture tex seen through the colour nodes feeding the Normal Map's

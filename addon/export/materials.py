@@ -326,7 +326,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         glass_rough = 0.0
         self._uv_names = []           # the UV map each image this material reads asks for
         self._uv_several = None
-        self._normal_maps = []        # (Texture, strength, UV map, space) of its BSDFs' normal maps
+        self._normal_maps = []        # (Texture, strength, UV map, space, strength per point) of its BSDFs' normal maps
         self._bumps = []              # (Bump node keys, scenedata.Bump tuple) of its BSDFs' Bump chains
         self._normals = []            # per BSDF read: (name, Mix weight, normal map index, bump index)
         self._normal_weight = 1.0
@@ -536,10 +536,11 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         n_tex = n_interp = n_ext = n_xf = None
         n_uv = ''
         n_space = 'TANGENT'
+        n_strength_map = None
         n_strength = 1.0
         map_at, bump_at = self._normal_choice(reasons)
         if map_at is not None:
-            t, n_strength, n_uv, n_space = self._normal_maps[map_at]
+            t, n_strength, n_uv, n_space, n_strength_map = self._normal_maps[map_at]
             # (tangents from the Normal Map node's UV map, '' the active render one, whichever
             # map the image is read on: Cycles' node reads its map's tangent attribute)
             n_tex, n_interp, n_ext, n_xf = t.texels(t.pixels), t.interpolation, t.extension, t.transform
@@ -551,7 +552,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         # other map's direction, 0.45 / 0.45 where Cycles gives 0.11 / 0.79)
         # (an image inside such a chain reads its own map, named in uv_names: not the active one)
         procedurals = [texture, pass_texture, e_tex, opacity, t_tex] + [t.pixels for t in aov_textures.values()] + \
-            [b.values for b in bumps + ((displaced,) if displaced is not None else ())] + [n_tex]
+            [b.values for b in bumps + ((displaced,) if displaced is not None else ())] + [n_tex, n_strength_map]
         if uv_names and any(isinstance(t, ProceduralTexels) and TEXCOORD_UV in t.needs for t in procedurals):
             uv_names = list(dict.fromkeys(uv_names + ['']))
         self._uv_several = None
@@ -574,7 +575,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                            emission_extension=e_ext or 'REPEAT', emission_transform=e_xf,
                            normal_texture=n_tex, normal_interpolation=n_interp or 'Linear',
                            normal_extension=n_ext or 'REPEAT', normal_transform=n_xf, normal_strength=n_strength,
-                           normal_uv_map=n_uv, normal_space=n_space, bumps=bumps, displacement_bump=displaced,
+                           normal_uv_map=n_uv, normal_space=n_space,
+                           normal_strength_map=n_strength_map, bumps=bumps, displacement_bump=displaced,
                            bump_correction=bool(getattr(getattr(mat, 'cycles', None), 'use_bump_map_correction',
                                                         True)),
                            emission=emission, texture=texture, light_emission_scale=light_scale,

@@ -59,15 +59,17 @@ def tangent_normal_map(node, reasons):
 NON_TANGENT_SPACES = ('OBJECT', 'WORLD', 'BLENDER_OBJECT', 'BLENDER_WORLD')
 
 
-def normal_map_at(socket, reasons, image=None):
+def normal_map_at(socket, reasons, image_reader=None):
     """What feeds a Normal socket (or None: unbent, or not followed, said): a BSDF's, or the
     innermost Bump node's (export/bump.py). A Normal Map node: (image node or None, strength,
-    UV map name, chain, space, colour) where the image node is an Image Texture whose Color
+    UV map name, chain, space, colour, strength per point) where the image node is an Image Texture whose Color
     feeds it (chain None) or that colour nodes on one image's colour run on (chain: the Color
     socket, which nodeeval.compile_image_chain compiles); otherwise image None and colour a
     procedural.ProceduralTexels of the Color socket per point (procedural textures,
     coordinates, attributes, several images, or a constant), run through its nodes as Cycles
-    runs them. space: the node's (TANGENT or NON_TANGENT_SPACES)."""
+    runs them. space: the node's (TANGENT or NON_TANGENT_SPACES). strength per point: a
+    ProceduralTexels of a Strength driven by nodes (None: the constant strength). image_reader:
+    the export's image reader, for images read per point in these chains."""
     link = _normal_link(socket) if socket is not None else None
     if link is None:
         return None
@@ -80,17 +82,34 @@ def normal_map_at(socket, reasons, image=None):
     direct = image is not None and image.from_node.type == 'TEX_IMAGE' and image.from_socket.name == 'Color'
     through = None if direct or image is None else _one_image_through_nodes(nmap.inputs['Color'])
     strength, ok = constant_value(nmap.inputs['Strength'])
-    if not ok:
+    per_point = None if ok else _per_point_strength(nmap, reasons, image_reader)
+    if not ok and per_point is None:
         reasons.append("Normal Map strength driven by nodes; its own value used")
     strength = max(float(strength), 0.0)
     if direct:
-        return image.from_node, strength, str(nmap.uv_map), None, space, None
+        return image.from_node, strength, str(nmap.uv_map), None, space, None, per_point
     if through is not None:
-        return through, strength, str(nmap.uv_map), nmap.inputs['Color'], space, None
-    colour = _per_point_colour(nmap, reasons, image)
+        return through, strength, str(nmap.uv_map), nmap.inputs['Color'], space, None, per_point
+    colour = _per_point_colour(nmap, reasons, image_reader)
     if colour is None:
         return None
-    return None, strength, str(nmap.uv_map), None, space, colour
+    return None, strength, str(nmap.uv_map), None, space, colour, per_point
+
+
+def _per_point_strength(nmap, reasons, image):
+    """A ProceduralTexels of a Normal Map node's Strength per point (R = G = B), clamped at 0 as
+    Cycles clamps it, or None where procedurals.compile_socket does not follow its chain."""
+    from . import procedurals
+    found = procedurals.compile_socket(nmap.inputs['Strength'], False, reasons, coordinates=True, image=image,
+                                       attributes=True, view=True)
+    if found is None:
+        return None
+    fn, needs, sources = found
+
+    def strength(coords):
+        s = np.maximum(np.asarray(fn(coords), np.float64).reshape(-1, 1), 0.0)
+        return np.repeat(s, 3, axis=1)
+    return ProceduralTexels(strength, needs, str(sources) or f"Normal Map '{nmap.name}' strength")
 
 
 def _per_point_colour(nmap, reasons, image):

@@ -66,9 +66,33 @@ CASES = [
 ]
 
 
+def _driven_strength(nt, socket):
+    """Strength = 0.9 x Object x + 0.7 per point: from below 0 (clamped) to about 1.8."""
+    tc, sep = nt.nodes.new('ShaderNodeTexCoord'), nt.nodes.new('ShaderNodeSeparateXYZ')
+    ma = nt.nodes.new('ShaderNodeMath')
+    ma.operation = 'MULTIPLY_ADD'
+    ma.inputs[1].default_value, ma.inputs[2].default_value = 0.9, 0.7
+    nt.links.new(tc.outputs['Object'], sep.inputs['Vector'])
+    nt.links.new(sep.outputs['X'], ma.inputs[0])
+    nt.links.new(ma.outputs[0], socket)
+
+
+DRIVEN = [('TANGENT', _noise), ('WORLD', _object_colour), ('OBJECT', _constant)]
+
+
+@pytest.mark.parametrize('space,colour', DRIVEN, ids=[f"{s.lower()}-{c.__name__[1:]}" for s, c in DRIVEN])
+def test_normal_map_strength_driven_by_nodes_matches_cycles(tmp_path, space, colour):
+    """A Strength from a node chain, per point (it had been read at its own value, said)."""
+    _render_and_compare(tmp_path, space, colour, _driven_strength)
+
+
 @pytest.mark.parametrize('space,colour,strength', CASES,
                          ids=[f"{s.lower()}-{c.__name__[1:]}-{k}" for s, c, k in CASES])
 def test_normal_map_space_and_colour_chain_matches_cycles(tmp_path, space, colour, strength):
+    _render_and_compare(tmp_path, space, colour, strength)
+
+
+def _render_and_compare(tmp_path, space, colour, strength):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 24
@@ -78,7 +102,10 @@ def test_normal_map_space_and_colour_chain_matches_cycles(tmp_path, space, colou
     d.inputs['Color'].default_value = (0.8, 0.8, 0.8, 1.0)
     nmap = nt.nodes.new('ShaderNodeNormalMap')
     nmap.space = space
-    nmap.inputs['Strength'].default_value = strength
+    if callable(strength):
+        strength(nt, nmap.inputs['Strength'])
+    else:
+        nmap.inputs['Strength'].default_value = strength
     nmap.inputs['Color'].default_value = (0.75, 0.35, 0.7, 1.0)
     fed = colour(nt)
     if fed is not None:
@@ -112,7 +139,7 @@ def test_normal_map_space_and_colour_chain_matches_cycles(tmp_path, space, colou
     assert float(np.median(diff)) < 0.01 and float(np.percentile(diff, 95)) < 0.05, \
         (float(np.median(diff)), float(np.percentile(diff, 95)), float(diff.max()))
     dm, cm = img['DACRT'][inside].mean(axis=0), img['CYCLES'][inside].mean(axis=0)
-    print(space, colour.__name__, strength, 'normals median/p95/max', float(np.median(diff)),
+    print(space, colour.__name__, getattr(strength, '__name__', strength), 'normals median/p95/max', float(np.median(diff)),
           float(np.percentile(diff, 95)), float(diff.max()), 'means', dm, cm)
     np.testing.assert_allclose(dm, cm, rtol=0.02, atol=2e-3)
 
