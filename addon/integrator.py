@@ -977,7 +977,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if tex:
             # (the albedo's maps are the reflection's)
             self._albedo_maps(prim, u, v, thr, self._back(prim, ng, -np.take(path.D, idx, axis=1)))
-        ns, bump = self._bent_normals(prim, u, v, ns, ng, self._back(prim, ng, -np.take(path.D, idx, axis=1)))
+        # (the side only where a normal map's chain reads it: _back's rays cost a take per vertex)
+        side = self._back(prim, ng, -np.take(path.D, idx, axis=1)) if self._sided and self._bumped else None
+        ns, bump = self._bent_normals(prim, u, v, ns, ng, side)
         # rough diffuse hits: Cycles' Oren-Nayar over the averaged albedo thr holds, per light
         # sample (next_event) and per bounce (below); None where the scene has none
         rough = self._rough_rows(prim, u, v, ng, ns, np.take(path.D, idx, axis=1)) if self.mats.any_rough else None

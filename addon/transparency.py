@@ -272,7 +272,8 @@ class Transparency:
         thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
         if self._albedo_varies:
             self._albedo_maps(prim, u, v, thr, self._back(prim, ng, -np.take(path.D, rows, axis=1)))
-        ns, bump = self._bent_normals(prim, u, v, ns, ng, self._back(prim, ng, -np.take(path.D, rows, axis=1)))
+        side = self._back(prim, ng, -np.take(path.D, rows, axis=1)) if self._sided and self._bumped else None
+        ns, bump = self._bent_normals(prim, u, v, ns, ng, side)
         u_pick = None
         if self.lights.num_entries > 1:
             u_pick = self.rng.uniform_pick(keys, DIM_PASSED + (k << 11) + 2 * j)[0]
