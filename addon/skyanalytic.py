@@ -114,10 +114,10 @@ def radiance(sky, dirs, xyz_to_rgb):
     return np.maximum(_xyY_to_xyz(x, y, Y) @ m, 0.0)
 
 
-def equirect(sky, width, xyz_to_rgb):
-    """(width / 2, width, 3) float32 equirectangular image of the sky at texel centres (row 0 at
-    the bottom, as the environment light maps it): smooth, so 1024 texels around suffice."""
-    height = width // 2
+def equirect(sky, width, xyz_to_rgb, height=None):
+    """(height, width, 3) float32 equirectangular image of the sky at texel centres (row 0 at
+    the bottom, as the environment light maps it; height width / 2 unless given)."""
+    height = width // 2 if height is None else int(height)
     theta = (1.0 - (np.arange(height) + 0.5) / height) * np.pi
     phi = (0.5 - (np.arange(width) + 0.5) / width) * 2 * np.pi
     st = np.sin(theta)[:, None]
