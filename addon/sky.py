@@ -502,16 +502,16 @@ def _equirect_dirs(u, v):
     return np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)), axis=-1)
 
 
-def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16, chain=None):
-    """(width / 2, width, 3) float32 equirectangular radiance image of the sky (row 0 at the
-    bottom, the environment light's layout). The sky is read at texel centres: a texel's
+def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16, chain=None, height=None):
+    """(height, width, 3) float32 equirectangular radiance image of the sky (row 0 at the
+    bottom, the environment light's layout; height width / 2 unless given). The sky is read at texel centres: a texel's
     column fixes its azimuth and its row its elevation, so the table is blended per row, then
     per column. Texels the sun disc touches hold its integral over them / their solid angle
     (_add_sun; sun_samples^2 points per texel for a large disc), so the image carries the
     disc's whole light (2048 texels around: ~3 across the default sun).
     chain: colour nodes after the sky, fn((n, 3) RGB) -> (n, 3), applied to each texel and to
     each of the disc's points before their mean."""
-    height = width // 2
+    height = width // 2 if height is None else int(height)
     m = np.asarray(xyz_to_rgb, np.float64).T
     table = sky.table().astype(np.float64)
     v = (np.arange(height) + 0.5) / height

@@ -18,6 +18,12 @@ EVALUATED = ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING', 'PREETHAM', 'HOSEK_WILK
 # 2048 x 1024 texels (0.18 degrees): the default sun (0.545 degrees) spans ~3 of them, and a
 # texel's row is finer than the sky's fastest change at the horizon a render resolves
 WIDTH = 2048
+# Multiple Scattering's rows: the ground's edge (the horizon's dip, 0.32 degrees below at the
+# default Altitude of 100 m) is a step Cycles' table resolves in rows of ~0.08 degrees; rows of
+# 0.18 degrees blended across it (render rows 0.91x and 1.16x Cycles' there, the ground below
+# 1-1.5% bright). Rows of 0.088 degrees: within 2%, a 1-degree band 0.6%. 2048 x 2048, 48 MB;
+# single scattering's ground reads the horizon's row, without that step
+MULTIPLE_HEIGHT = 2048
 ANALYTIC_WIDTH = 1024          # Preetham and Hosek-Wilkie: smooth, no disc
 # Hosek-Wilkie's rows: its sqrt(cos theta) term turns sharply at the horizon (where Cycles also
 # clamps theta to pi/2 - 0.001), which a row of 0.35 degrees blended across: up to 4.7% bright
@@ -102,7 +108,7 @@ def ground_seen_said(env, camera, settings, camera_sees_world):
 @lru_cache(maxsize=4)
 def _image(sky, xyz_to_rgb):
     """The sky's equirectangular image (read-only), kept for the next render of the same sky
-    (frames of an animation, the viewport's redraws): ~0.3 s to make, 25 MB."""
+    (frames of an animation, the viewport's redraws): ~0.3-0.8 s to make, 25-48 MB."""
     img = _make_image(sky, xyz_to_rgb)
     img.setflags(write=False)
     return img
@@ -114,7 +120,8 @@ def _make_image(sky, xyz_to_rgb, chain=None):
         if chain is not None:
             img = chain(img.reshape(-1, 3)).reshape(img.shape).astype(np.float32)
         return img
-    return model.equirect(sky, WIDTH, np.array(xyz_to_rgb), chain=chain)
+    return model.equirect(sky, WIDTH, np.array(xyz_to_rgb), chain=chain,
+                          height=MULTIPLE_HEIGHT if sky.multiple else None)
 
 
 def _rgb_chain(chain):
