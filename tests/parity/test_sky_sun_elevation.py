@@ -51,13 +51,14 @@ def _disc_integral(model, sky, m, k=600, ring=720):
 @pytest.mark.parametrize('kind', KINDS)
 def test_map_holds_the_disc_light(kind, elevation, size):
     from addon import sky as model
-    from addon.export.sky import WIDTH
+    from addon.export.sky import MULTIPLE_HEIGHT, WIDTH
     m = np.asarray(model.XYZ_TO_REC709, np.float64).T
     values = dict(sun_size=math.radians(size), altitude=100.0)
     on, off = (model.Sky.from_node_values(kind == 'MULTIPLE_SCATTERING', math.radians(elevation), 0.8,
                                           sun_disc=disc, **values) for disc in (True, False))
-    height = WIDTH // 2
-    diff = model.equirect(on, WIDTH).astype(np.float64) - model.equirect(off, WIDTH).astype(np.float64)
+    height = MULTIPLE_HEIGHT if kind == 'MULTIPLE_SCATTERING' else WIDTH // 2     # the map as exported
+    diff = (model.equirect(on, WIDTH, height=height).astype(np.float64)
+            - model.equirect(off, WIDTH, height=height).astype(np.float64))
     # what the environment light reconstructs: bilinear with REPEAT in u and v, so over the
     # azimuth each row's texels sum (x 2 pi / width), blended between row centres in theta;
     # integrated x sin(theta) from the zenith to 30 degrees past the sun (not the far pole,
