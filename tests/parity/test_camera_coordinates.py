@@ -12,7 +12,7 @@ import pytest
 
 from tests.addon import scenes
 
-from . import rendering
+from .test_reflection_coordinates import sphere_and_plane_rgb
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -62,17 +62,7 @@ def test_camera_coordinates_match_cycles(kind, camera):
         sc.render.resolution_x, sc.render.resolution_y = 128, 64
     else:
         cam.data.shift_x, cam.data.shift_y = 0.05, -0.08
-    scenes.world((1.0, 1.0, 1.0), 1.0)
-    mat = _material(kind)
-    scenes.uv_sphere('S', radius=1.0, location=(-1.2, 0, 0.2), materials=(mat,))
-    plane = scenes.plane('P', size=2.0, location=(1.4, 0, 0.2), materials=(mat,))
-    plane.rotation_euler = (1.1, 0.3, 0.2)
-    rendering.matched(sc, 64)
-    got = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        got[engine] = scenes.render_rgba(sc)[..., :3]
-    c, d = got['CYCLES'], got['DACRT']
+    c, d = sphere_and_plane_rgb(sc, _material(kind))
     if kind == 'emission':
         inside = ~np.all(np.abs(c - 1.0) < 1e-4, axis=-1)      # the white world elsewhere
         for ax in (0, 1):
