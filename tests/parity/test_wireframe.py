@@ -5,7 +5,6 @@ Shader's factor between two Emissions, into an Emission's Strength with its Size
 and into a Diffuse BSDF's Color (through a Color Ramp) under a white world (no bounces). 4x4-pixel
 blocks within 0.02 of Cycles' (lines cover pixels partly: each block a mean of 2048 samples; measured
 0.004-0.007). The node had stood at the reading input's own value, said: blocks 0.28-0.85 off."""
-import math
 
 import bpy
 import numpy as np
