@@ -22,11 +22,7 @@ LOC, ROT, SCALE, VECTOR = (0.3, -0.6, 0.2), (0.4, -0.9, 1.3), (1.5, -0.7, 2.5), 
 
 
 def _square(kind, source, i, n):
-    mat = bpy.data.materials.new(f"{kind}-{source}")
-    nt = mat.node_tree
-    for node in list(nt.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            nt.nodes.remove(node)
+    mat, nt, _ = scenes._material(f"{kind}-{source}")     # (its output node: 'Material Output')
     em = nt.nodes.new('ShaderNodeEmission')
     nt.links.new(em.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
     m = nt.nodes.new('ShaderNodeMapping')

@@ -17,11 +17,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _material():
-    mat = bpy.data.materials.new('pointy')
-    nt = mat.node_tree
-    for node in list(nt.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            nt.nodes.remove(node)
+    mat, nt, _ = scenes._material('pointy')     # (its output node: 'Material Output')
     geo = nt.nodes.new('ShaderNodeNewGeometry')
     post = nt.nodes.new('ShaderNodeMath')
     post.operation = 'MULTIPLY_ADD'

@@ -42,11 +42,7 @@ def _islands_mesh(name, y0, material):
 
 
 def _material(kind):
-    mat = bpy.data.materials.new(kind)
-    nt = mat.node_tree
-    for node in list(nt.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            nt.nodes.remove(node)
+    mat, nt, _ = scenes._material(kind)     # (its output node: 'Material Output')
     geo = nt.nodes.new('ShaderNodeNewGeometry')
     if kind == 'emission':
         sh = nt.nodes.new('ShaderNodeEmission')

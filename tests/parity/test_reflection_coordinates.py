@@ -19,11 +19,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _material(kind):
-    mat = bpy.data.materials.new(kind)
-    nt = mat.node_tree
-    for node in list(nt.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            nt.nodes.remove(node)
+    mat, nt, _ = scenes._material(kind)     # (its output node: 'Material Output')
     tc = nt.nodes.new('ShaderNodeTexCoord')
     if kind == 'image':          # a reflection map: an image on Reflection, Sphere projection
         img = nt.nodes.new('ShaderNodeTexImage')

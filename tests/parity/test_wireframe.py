@@ -21,11 +21,7 @@ N = len(KINDS)
 
 
 def _material(kind):
-    mat = bpy.data.materials.new(kind)
-    nt = mat.node_tree
-    for node in list(nt.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            nt.nodes.remove(node)
+    mat, nt, _ = scenes._material(kind)     # (its output node: 'Material Output')
     out = nt.nodes['Material Output'].inputs['Surface']
     wire = nt.nodes.new('ShaderNodeWireframe')
     wire.use_pixel_size = False
