@@ -69,7 +69,7 @@ from .lights.linking import reached
 from .lightsetup import LightSetup
 from .passes import AOV_PREFIX
 from .passwriting import PassWriting, aov_tables
-from .pathstate import Paths, Sinks, compact
+from .pathstate import Paths, Sinks, compact, diffuse_reflections
 from .sampling import DIM_FILTER, DIM_LENS, DIM_LOBE, RandomStream, dim, max3
 from .scenedata import HOLDOUT, NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 from .sceneprep import huge_surfaces, recentred, thin_strands, validate
@@ -467,13 +467,6 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._translucent_apart = bool(self.mats.translucent.any()) and self._diffuse_stop < self._total_stop
         if self._translucent_apart:
             self.max_bounces = min(self._total_stop, self._diffuse_stop + self._glass_stop)
-
-    def _diffuse_bounces(self, k, path):
-        """The diffuse reflections path has made before vertex k: k less its translucent bounces
-        (its transmissions gb less its glass passes xb)."""
-        if path.gb is None:
-            return np.full(len(path.pid), k, np.int64)
-        return k - (path.gb - (0 if path.xb is None else path.xb))
 
     def _build_scenes(self):
         """The tracer scenes the ray kinds need. Kinds that see nearly the same triangles share
@@ -939,7 +932,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if path.xb is not None:                       # past Total Max Bounces: the same
             hit &= k + path.xb <= self._total_stop
         if self._translucent_apart:                   # past Max Bounces' diffuse reflections
-            hit &= self._diffuse_bounces(k, path) <= self._diffuse_stop
+            hit &= diffuse_reflections(k, path.gb, path.xb) <= self._diffuse_stop
         # Which paths go on: hits on non-black surfaces that survive Russian roulette (Cycles:
         # from bounce > min_bounce (+1 stored), survival min(sqrt(max |throughput|), 1); glass
         # passes count as bounces, so paths past glass may be ended before vertex 2 too),
@@ -1038,8 +1031,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if self._translucent_apart and not self.lights.seen_by_bsdf and SKIP_WORK:
             # (a reflection past the last diffuse one could only find emission, which no BSDF ray
             # sees: ended here, as at k = Max Bounces without translucent surfaces)
-            d = k + 1 - (0 if gb is None else gb - (0 if xb is None else xb))
-            spent = (d > self._diffuse_stop) if gb is not None else np.full(len(ok), d > self._diffuse_stop)
+            spent = np.broadcast_to(diffuse_reflections(k + 1, gb, xb) > self._diffuse_stop, ok.shape)
             if spent.any():
                 self._ended['last_bounce'] += int(np.count_nonzero(spent & ok))
                 ok = ok & ~spent

@@ -54,6 +54,14 @@ class Sinks:
         data.update((name, self.arrays[name]) for name in self.passes)
 
 
+def diffuse_reflections(k, gb, xb):
+    """The diffuse reflections a path has made before vertex k: k less its translucent bounces,
+    which are its transmissions gb less its glass passes xb (gb None: none kept, so k)."""
+    if gb is None:
+        return k
+    return k - (gb - (0 if xb is None else xb))
+
+
 def compact(idx, *arrays):
     """The columns idx of per-path arrays ((n,) or (rows, n); None stays None) in one native
     pass; idx None keeps them all."""

@@ -9,7 +9,7 @@ import numpy as np
 
 import dacrt
 
-from .pathstate import Paths, compact
+from .pathstate import Paths, compact, diffuse_reflections
 from .sampling import DIM_GLASS, DIM_LOBE, DIM_PASSED, DIM_ROULETTE, DIM_TRANSPARENT
 from .scenedata import HOLDOUT
 
@@ -89,7 +89,7 @@ class Transparency:
             spent = np.where(glass, (gb > self._glass_stop) | spent_total, tb >= self._transparent_stop)
             # (paths past their diffuse reflections, where translucent bounces let k pass Max
             # Bounces, pass as at k = Max Bounces + 1: unlit)
-            unlit = spent_total | (k - (gb - xb) > self._diffuse_stop) if self._translucent_apart else spent_total
+            unlit = spent_total | (diffuse_reflections(k, gb, xb) > self._diffuse_stop) if self._translucent_apart else spent_total
             surface = None
             if chain is not None:                   # what the data passes read here, before the pick
                 surface = self._surface(h, None, D)
