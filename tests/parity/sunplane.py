@@ -34,6 +34,18 @@ def build(pixels, wire, resolution, samples):
     sc.cycles.filter_width = sc.dacrt.filter_width = 1.0
 
 
+def alpha_cutout():
+    """Make the built plane's Diffuse a cut-out: the image's Alpha the factor of a Transparent /
+    Diffuse Mix Shader into the output."""
+    nt = bpy.data.materials['Textured'].node_tree
+    out, d, tex = (next(n for n in nt.nodes if n.type == t) for t in ('OUTPUT_MATERIAL', 'BSDF_DIFFUSE', 'TEX_IMAGE'))
+    m, clear = nt.nodes.new('ShaderNodeMixShader'), nt.nodes.new('ShaderNodeBsdfTransparent')
+    nt.links.new(tex.outputs['Alpha'], m.inputs['Fac'])
+    nt.links.new(clear.outputs[0], m.inputs[1])
+    nt.links.new(d.outputs[0], m.inputs[2])
+    nt.links.new(m.outputs[0], out.inputs['Surface'])
+
+
 def render_rgb(engine, tmp_path):
     """The scene rendered by engine ('DACRT' or 'CYCLES'): linear RGB (H, W, 3), row 0 at the
     bottom."""

@@ -109,16 +109,7 @@ def test_cutout_of_a_non_color_exr(tmp_path, said):
         tex.image.colorspace_settings.name = 'Non-Color'
         nt.links.new(tex.outputs['Color'], diffuse.inputs['Color'])
 
-    def mix():
-        nt = bpy.data.materials['Textured'].node_tree
-        out, d, tex = (next(n for n in nt.nodes if n.type == t) for t in ('OUTPUT_MATERIAL', 'BSDF_DIFFUSE', 'TEX_IMAGE'))
-        m, clear = nt.nodes.new('ShaderNodeMixShader'), nt.nodes.new('ShaderNodeBsdfTransparent')
-        nt.links.new(tex.outputs['Alpha'], m.inputs['Fac'])
-        nt.links.new(clear.outputs[0], m.inputs[1])
-        nt.links.new(d.outputs[0], m.inputs[2])
-        nt.links.new(m.outputs[0], out.inputs['Surface'])
-
-    _check(tmp_path, wire, 'Non-Color', stored[..., :3] * stored[..., 3:4], (2, 2), 'cut.exr', said, mix)
+    _check(tmp_path, wire, 'Non-Color', stored[..., :3] * stored[..., 3:4], (2, 2), 'cut.exr', said, sunplane.alpha_cutout)
 
 
 @pytest.mark.parametrize('ext, fmt, space, alpha_mode', [('exr', 'float', 'Non-Color', 'STRAIGHT'),

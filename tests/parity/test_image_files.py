@@ -69,16 +69,7 @@ def test_grey_alpha_png(tmp_path, cutout):
         tex.image = bpy.data.images.load(path)
         nt.links.new(tex.outputs['Color'], diffuse.inputs['Color'])
 
-    def mix():
-        nt = bpy.data.materials['Textured'].node_tree
-        out, d, tex = (next(n for n in nt.nodes if n.type == t) for t in ('OUTPUT_MATERIAL', 'BSDF_DIFFUSE', 'TEX_IMAGE'))
-        m, clear = nt.nodes.new('ShaderNodeMixShader'), nt.nodes.new('ShaderNodeBsdfTransparent')
-        nt.links.new(tex.outputs['Alpha'], m.inputs['Fac'])
-        nt.links.new(clear.outputs[0], m.inputs[1])
-        nt.links.new(d.outputs[0], m.inputs[2])
-        nt.links.new(m.outputs[0], out.inputs['Surface'])
-
-    means = _render_both(tmp_path, wire, mix if cutout else None)
+    means = _render_both(tmp_path, wire, sunplane.alpha_cutout if cutout else None)
     _agree(means, 'cutout' if cutout else 'colour')
     g, a = GREY[..., 0] / 255.0, GREY[..., 1] / 255.0
     decode = lambda c: np.where(c < 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
