@@ -12,8 +12,8 @@ import numpy as np
 
 from .. import hair, pointcloud
 from .. import scenedata as sd
+from ..lights import envkeep
 from ..nodeeval import nan_inputs
-from ..texture import any_positive_rgb
 from . import budget
 from .assembly import Assembly
 from .camera import export_camera
@@ -991,7 +991,7 @@ class Exporter:
                                              "world background is rendered"))
         has_emission = any(np.any(m.emission > 0) for m in self.materials.materials)
         def bright(uniform, env):
-            return np.any(uniform > 0) or (env is not None and np.any(env.strength > 0) and any_positive_rgb(env.pixels))
+            return np.any(uniform > 0) or (env is not None and np.any(env.strength > 0) and envkeep.any_positive(env))
         lit_world = bright(world, environment)
         # a world whose camera rays see a backdrop of their own (Is Camera Ray) draws it
         seen_world = camera_world is not None and bright(*camera_world)

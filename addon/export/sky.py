@@ -10,8 +10,8 @@ import numpy as np
 from .. import scenedata as sd
 from .. import sky as model
 from .. import skyanalytic
+from ..lights import envkeep
 from ..mapping import environment_rotation
-from ..texture import any_positive_rgb
 from .colorspaces import xyz_to_scene_linear
 
 EVALUATED = ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING', 'PREETHAM', 'HOSEK_WILKIE')
@@ -71,7 +71,8 @@ def sky_environment(node, strength, reasons, chain=None):
     rotation = environment_rotation(node, mapped, vector=vector is not None and vector.enabled)
     reasons.extend(f"Sky Texture '{node.name}': {r}" for r in mapped)
     env = sd.Environment(img, np.full(3, strength, np.float32), rotation, 'Linear',
-                         sky_ground_fade=isinstance(sky, model.Sky) and not sky.multiple)
+                         sky_ground_fade=isinstance(sky, model.Sky) and not sky.multiple,
+                         texels_key=None if chain is not None else ('sky', sky, m))
     return np.zeros(3, np.float32), env
 
 
@@ -83,7 +84,7 @@ def ground_seen_said(env, camera, settings, camera_sees_world):
     a panorama's grid samples it)."""
     if env is None or not env.sky_ground_fade or not camera_sees_world or settings.film_transparent:
         return None
-    if not (np.any(env.strength > 0) and any_positive_rgb(env.pixels)):
+    if not (np.any(env.strength > 0) and envkeep.any_positive(env)):
         return None
     from ..camera import CameraModel      # (the numpy camera model: the rays Cycles casts)
     try:

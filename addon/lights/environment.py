@@ -30,6 +30,7 @@ import dacrt
 import numpy as np
 
 from ..texture import EncodedTexels, srgb_to_linear, texture_lookup
+from . import envkeep
 from .base import F32, LightSample
 
 _TWO_PI2 = 2.0 * np.pi * np.pi
@@ -69,8 +70,8 @@ class EnvironmentLight:
             if self.encoded is None:
                 # the texels as the export holds them (an image's RGBA), the strength folded in
                 # natively: the same bits as _radiance_image's product, without its copies
-                self._native = dacrt.lamps.environment_map(self._env.pixels, self.to_map, self.interpolation,
-                                                           scale=np.asarray(self._env.strength, F32))
+                self._native = envkeep.native_map(self._env, self.to_map, self.interpolation,
+                                                  np.asarray(self._env.strength, F32))
             else:
                 self._native = dacrt.lamps.environment_map(self.encoded, self.to_map, self.interpolation, srgb=True,
                                                            scale=np.asarray(self._env.strength, F32))
