@@ -199,3 +199,24 @@ def test_preetham_zenith_is_its_zenith_luminance():
     rgb_to_xyz = np.linalg.inv(model.XYZ_TO_REC709)
     Y = (rgb_to_xyz @ skyanalytic.radiance(sky, np.array([0.0, 0.0, 1.0]), model.XYZ_TO_REC709))[1]
     assert Y == pytest.approx(zenith_Y, rel=1e-9)
+
+
+@pytest.mark.parametrize('kind', ('hosek', 'preetham'))
+@pytest.mark.parametrize('sun', ((0.3, 0.5, 0.8), (0.8, -0.3, 0.25), (0.0, 0.0, 1.0), (1.0, 0.0, -0.1)))
+def test_closed_form_map_is_its_texel_centres_radiance(kind, sun):
+    """skyanalytic.equirect (its per-row terms taken once per row) is, bit for bit, radiance()
+    of each texel centre's direction, as the map had been made: the full maps' sizes (1024 x
+    2048 Hosek-Wilkie, 1024 x 512 Preetham) and an odd one."""
+    from addon import skyanalytic
+    sky = skyanalytic.Analytic.hosek_wilkie(sun, 4.2, 0.3) if kind == 'hosek' else \
+        skyanalytic.Analytic.preetham(sun, 4.2)
+    m = np.array(model.XYZ_TO_REC709)
+    for width, height in ((1024, 2048 if kind == 'hosek' else 512), (97, 31)):
+        theta = (1.0 - (np.arange(height) + 0.5) / height) * np.pi
+        phi = (0.5 - (np.arange(width) + 0.5) / width) * 2 * np.pi
+        st = np.sin(theta)[:, None]
+        dirs = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)[:, None]), axis=-1)
+        expected = skyanalytic.radiance(sky, dirs, m).astype(np.float32)
+        got = skyanalytic.equirect(sky, width, m, height)
+        assert got.dtype == np.float32 and got.shape == (height, width, 3)
+        assert np.array_equal(got, expected), np.abs(got - expected).max()
