@@ -4,12 +4,12 @@ for the next frame instead of built again.
 A Sky Texture's radiance map is made once per parameter set (export/sky.py keeps it, read-only,
 and names it by those parameters: scenedata.Environment.texels_key); the map's tables (its copy
 of the texels, the luminance, the CDFs and their guides, the cell pdfs) and the check that any
-texel is bright were still made from it every frame: ~35 ms of CPU of a 160 x 120 1 spp frame's
-~62 ms under a Hosek-Wilkie sky (1024 x 2048), ~60 of ~86 ms under a Multiple Scattering one
-(2048 x 2048). The native map is immutable once built, so a frame whose world has the same
+texel is bright were still made from it every frame: ~31 ms of CPU (a 1024 x 2048 Hosek-Wilkie
+map) and ~61 ms (a 2048 x 2048 Multiple Scattering one) of a 160 x 120 1 spp frame's 53-55 and
+85-92 ms. The native map is immutable once built, so a frame whose world has the same
 texels, rotation, strength and lookup reuses it: the same object, the same samples and film.
 
-Only the latest map is kept (an MS sky's is ~100 MB beside its 48 MB image), replaced by the
+Only the latest map is kept (an MS sky's is ~105 MB beside its 48 MB image), replaced by the
 next keyed one; a world without a key (an Environment Texture's image, read from Blender each
 frame) builds its own and leaves the kept one alone.
 """
