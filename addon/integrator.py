@@ -61,6 +61,7 @@ from .allocator import render_heap
 from .camera import CameraModel
 from .cancel import PassCancelled, SetupCancelled, tracer_cancel
 from .coincidentfaces import coincident_faces
+from .overlappingfaces import overlapping_faces
 from .cryptomatte import KINDS as CRYPTO_KINDS
 from .emitterhits import EmitterHits
 from .film import LIGHT_PASSES, Film
@@ -254,6 +255,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                           for text in huge_surfaces(scene_data, self.origin, self.tri.geo, sampled)]
         # non-emissive faces modelled twice: one surface here, darker in Cycles
         self.messages += coincident_faces(scene_data, self.tri, self.mats)
+        # and faces overlapping others in part in one plane: they z-fight, in each tracer its way
+        self.messages += overlapping_faces(scene_data, self.tri, self.mats)
         self._poll()
         # per AOV the images that write to it: (rows they fill, [(material, texture, ...)])
         self._aov_images = {AOV_PREFIX + name: (3 if kind == 'COLOR' else 1,

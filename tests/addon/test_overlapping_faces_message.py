@@ -1,0 +1,120 @@
+"""Faces overlapping in part in one plane through Blender (addon/overlappingfaces.py;
+tests/integrator/test_overlapping_faces_found.py for the rule): a single Mirror modifier without
+merging on a cube off its mirror plane lays mirrored faces over part of the originals, which
+z-fight (the fuzzer's seeds 7465/7472: a region 2.6x Cycles, pixels to 6x, unsaid). The render
+says so once, naming the objects, with the overlapping triangles counted as a float64 brute
+force over the evaluated meshes counts them; ordinary meshes are not said: a cube, a subdivided
+plane, planes sharing an edge, parallel planes apart, a closed sphere, a box resting on a floor."""
+import math
+
+import bpy
+import numpy as np
+
+from . import scenes
+
+SAID = "overlap other triangles in part in the same plane"
+
+
+def _scene(floor=True):
+    scenes.camera(location=(0, -7, 4), rotation=(math.radians(60), 0, 0))
+    if floor:               # the cube rests on it: faces in contact, facing each other
+        scenes.plane('Floor', size=10, materials=[scenes.diffuse('floor', (0.8, 0.8, 0.8))])
+    scenes.world((0.5, 0.5, 0.5))
+    return scenes.cube('Cube', size=1.0, location=(0, 0, 0.5), materials=[scenes.diffuse('grey', (0.5, 0.5, 0.5))])
+
+
+def _said(said):
+    said.clear()
+    scenes.render_rgba()
+    return [t for t in said if SAID in t]
+
+
+def _brute_force_overlapping():
+    """How many triangles of the evaluated scene overlap another facing the same way in one
+    plane by a positive area (float64: corners within 1e-6 of the plane, the common area of
+    the pair by sampling a 64x64 lattice inside the first triangle)."""
+    dg = bpy.context.evaluated_depsgraph_get()
+    tris = []
+    for ob in bpy.context.scene.objects:
+        if ob.type != 'MESH':
+            continue
+        ev = ob.evaluated_get(dg)
+        me = ev.to_mesh()
+        me.calc_loop_triangles()
+        mw = np.array(ev.matrix_world, np.float64)
+        v = np.array([tuple(p.co) for p in me.vertices], np.float64) @ mw[:3, :3].T + mw[:3, 3]
+        tris += [v[list(t.vertices)] for t in me.loop_triangles]
+        ev.to_mesh_clear()
+    c = np.array(tris)
+    n = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    a, b = np.meshgrid(np.arange(64) + 0.5, np.arange(64) + 0.5)
+    keep = a.ravel() + b.ravel() < 64
+    bary = np.c_[a.ravel(), b.ravel()][keep] / 64                       # inside points
+    hit = np.zeros(len(c), bool)
+    for i in range(len(c)):
+        pts = c[i, 0] + bary[:, :1] * (c[i, 1] - c[i, 0]) + bary[:, 1:] * (c[i, 2] - c[i, 0])
+        for j in range(len(c)):
+            if i == j or n[i] @ n[j] < 1 - 1e-9 or np.abs((c[j] - c[i, 0]) @ n[i]).max() > 1e-6:
+                continue
+            if {tuple(p) for p in c[i].round(6)} == {tuple(p) for p in c[j].round(6)}:
+                continue        # an exact copy: coincidentfaces.py's
+            # inside j: on the inner side of its three edges (in its own winding)
+            inside = np.ones(len(pts), bool)
+            for k in range(3):
+                e = c[j, (k + 1) % 3] - c[j, k]
+                inside &= np.cross(e, pts - c[j, k]) @ n[j] > 1e-9
+            hit[i] |= inside.any()
+    return int(hit.sum())
+
+
+def _mirror(ob):
+    m = ob.modifiers.new('mirror', 'MIRROR')
+    m.use_axis = [True, False, False]
+    m.use_mirror_merge = False
+    return m
+
+
+def test_a_single_mirror_off_the_mirror_plane_is_said(scene, said):
+    cube = _scene()
+    assert not _said(said)                    # the cube resting on the floor: not said
+    _mirror(cube)
+    cube.data.transform(__import__('mathutils').Matrix.Translation((0.3, 0, 0)))   # off the plane
+    n = _brute_force_overlapping()
+    assert n > 0
+    got = _said(said)
+    assert len(got) == 1 and got[0].startswith(f"{n} triangles of 'Cube' {SAID}"), (n, got)
+    assert "z-fight" in got[0], got
+
+
+def test_a_mirror_on_a_symmetric_cube_is_said_beside_its_exact_copies(scene, said):
+    # mirrored on x, the cube's x faces repeat exactly (said as coincident) and its other faces
+    # lie on themselves split along the other diagonal: overlapping in part
+    cube = _scene(floor=False)
+    _mirror(cube)
+    n = _brute_force_overlapping()
+    got = _said(said)
+    assert n > 0 and len(got) == 1 and got[0].startswith(f"{n} triangles of 'Cube' {SAID}"), (n, got)
+
+
+def test_two_planes_overlapping_half_are_said_naming_both(scene, said):
+    _scene(floor=False)
+    scenes.plane('A', size=2.0, location=(0, 0, 2.0), materials=[scenes.diffuse('a', (0.8, 0.2, 0.2))])
+    scenes.plane('B', size=2.0, location=(1.0, 0, 2.0), materials=[scenes.diffuse('b', (0.2, 0.8, 0.2))])
+    got = _said(said)
+    assert len(got) == 1 and got[0].startswith(f"4 triangles of 'A', 'B' {SAID}"), got
+
+
+def test_ordinary_meshes_are_not_said(scene, said):
+    _scene()
+    grid = scenes.plane('Grid', size=2.0, location=(3, 0, 1.0))
+    grid.modifiers.new('sub', 'SUBSURF').levels = 3
+    grid.modifiers['sub'].subdivision_type = 'SIMPLE'
+    scenes.plane('Left', size=1.0, location=(-3, 0, 1.0))             # sharing an edge
+    scenes.plane('Right', size=1.0, location=(-2, 0, 1.0))
+    scenes.plane('Low', size=1.0, location=(0, 2, 1.0))               # parallel, apart
+    scenes.plane('High', size=1.0, location=(0, 2, 1.001))
+    scenes.uv_sphere('Ball', radius=0.5, location=(-1.5, -1.5, 0.5), smooth=False)
+    top = scenes.cube('Stacked', size=1.0, location=(0, 0, 1.5))      # on the cube: in contact
+    assert top and _brute_force_overlapping() == 0
+    assert not _said(said), said

@@ -1,0 +1,152 @@
+"""Faces overlapping in part in one plane (addon/overlappingfaces.py): found where two triangles
+facing one way cover a common area of one plane, never where they do not. Checked against a
+float64 brute force over every pair that clips one triangle by the other (Sutherland-Hodgman)
+and measures the common area: no triangle is found that the brute force does not give an overlap,
+and every pair with a clear overlap (a tenth of the smaller triangle) is found."""
+import numpy as np
+import pytest
+
+import dacrt
+from addon.overlappingfaces import overlapping
+from addon.surfacetables import _TINY, OFFSET_ULPS
+
+
+def _found(v, t, candidates=None):
+    v, t = np.ascontiguousarray(v, np.float32), np.ascontiguousarray(t, np.int32)
+    geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64))
+    return overlapping(v, t, geo, np.ones(len(t), bool) if candidates is None else candidates)
+
+
+def _quad(x0, x1, y0, y1, z=0.0, other_diagonal=False, flip=False):
+    v = np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], np.float64)
+    t = np.array([[0, 1, 3], [1, 2, 3]] if other_diagonal else [[0, 1, 2], [0, 2, 3]])
+    return v, t[:, ::-1] if flip else t
+
+
+def _join(*meshes):
+    vs, ts, off = [], [], 0
+    for v, t in meshes:
+        vs.append(v), ts.append(t + off)
+        off += len(v)
+    return np.concatenate(vs), np.concatenate(ts)
+
+
+def _clip_area(a, b):
+    """The area common to 2-D triangles a and b (float64, any winding)."""
+    def ccw(p):
+        return p if (p[1, 0] - p[0, 0]) * (p[2, 1] - p[0, 1]) - (p[1, 1] - p[0, 1]) * (p[2, 0] - p[0, 0]) > 0 else p[::-1]
+    poly, clip = list(ccw(a)), ccw(b)
+    for k in range(3):
+        p, q = clip[k], clip[(k + 1) % 3]
+        side = lambda x: (q[0] - p[0]) * (x[1] - p[1]) - (q[1] - p[1]) * (x[0] - p[0])
+        out = []
+        for m in range(len(poly)):
+            s, e = poly[m - 1], poly[m]
+            if side(e) >= 0:
+                if side(s) < 0:
+                    out.append(s + (e - s) * side(s) / (side(s) - side(e)))
+                out.append(e)
+            elif side(s) >= 0:
+                out.append(s + (e - s) * side(s) / (side(s) - side(e)))
+        poly = out
+        if not poly:
+            return 0.0
+    x, y = np.array(poly).T
+    return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _brute(v, t, flat_tol=1e-9):
+    """(M, M) common area of every pair lying in one plane and facing one way, float64."""
+    c = np.asarray(v, np.float32).astype(np.float64)[t]
+    n = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    area = np.zeros((len(t), len(t)))
+    for i in range(len(t)):
+        for j in range(i + 1, len(t)):
+            if n[i] @ n[j] < 1 - 1e-9 or np.abs((c[j] - c[i, 0]) @ n[i]).max() > flat_tol:
+                continue
+            u = c[i, 1] - c[i, 0]
+            u /= np.linalg.norm(u)
+            w = np.cross(n[i], u)
+            to2 = lambda x: np.stack([(x - c[i, 0]) @ u, (x - c[i, 0]) @ w], axis=1)
+            area[i, j] = area[j, i] = _clip_area(to2(c[i]), to2(c[j]))
+    return area, 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
+
+
+CASES = {
+    'two quads overlapping half': (_join(_quad(0, 1, 0, 1), _quad(0.5, 1.5, 0, 1)), True),
+    'a quad split along the other diagonal on itself': (_join(_quad(0, 1, 0, 1), _quad(0, 1, 0, 1, other_diagonal=True)), True),
+    'a quad wound the other way on half of another': (_join(_quad(0, 1, 0, 1), _quad(0.5, 1.5, 0, 1, flip=True)), False),
+    'quads sharing an edge': (_join(_quad(0, 1, 0, 1), _quad(1, 2, 0, 1)), False),
+    'quads sharing an edge as separate meshes, split alike': (_join(_quad(0, 1, 0, 1), _quad(1, 2, 0, 1), _quad(0, 1, 1, 2)), False),
+    'parallel quads 1e-3 apart': (_join(_quad(0, 1, 0, 1), _quad(0, 1, 0, 1, z=1e-3)), False),
+    'a small quad inside a large one (a group of 4)': (_join(_quad(0, 4, 0, 4), _quad(1, 2, 1, 2)), True),
+}
+
+
+@pytest.mark.parametrize('name', list(CASES))
+def test_quads(name):
+    (v, t), expect = CASES[name]
+    got = _found(v, t)
+    area, _ = _brute(v, t)
+    assert got.any() == expect, (name, got)
+    assert not (got & ~(area > 0).any(axis=1)).any(), got
+
+
+def test_subdivided_plane_and_closed_mesh_are_not_found():
+    n = 40
+    x, y = np.meshgrid(np.linspace(-1, 1, n + 1), np.linspace(-1, 1, n + 1))
+    i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    grid = np.r_[np.c_[i, i + 1, i + n + 2], np.c_[i, i + n + 2, i + n + 1]]
+    assert not _found(np.c_[x.ravel(), y.ravel(), np.zeros(x.size)], grid).any()
+    # a subdivided cube (6 split faces, a closed manifold), each face a plane group of 3200
+    faces = []
+    for axis in range(3):
+        for s in (-1.0, 1.0):
+            p = np.zeros((x.size, 3))
+            p[:, axis] = s
+            p[:, (axis + 1) % 3], p[:, (axis + 2) % 3] = x.ravel(), y.ravel()
+            faces.append((p, grid if s > 0 else grid[:, ::-1]))
+    v, t = _join(*faces)
+    assert not _found(v, t).any()
+
+
+def test_random_coplanar_triangles_against_brute_force():
+    rng = np.random.default_rng(7)
+    for trial in range(30):
+        k = int(rng.integers(2, 14))          # up to _SMALL: every pair tested
+        # a random plane, triangles in it (a few off it by 1e-3, a few flipped)
+        n = rng.normal(size=3)
+        n /= np.linalg.norm(n)
+        u = np.cross(n, [0.3, 0.5, 0.7])
+        u /= np.linalg.norm(u)
+        w = np.cross(n, u)
+        p2 = rng.uniform(-1, 1, size=(k, 1, 2)) + rng.uniform(-0.6, 0.6, size=(k, 3, 2))
+        c = p2[..., :1] * u + p2[..., 1:] * w + 0.37 * n
+        c[rng.random(k) < 0.15] += 1e-3 * n
+        flip = rng.random(k) < 0.2
+        c[flip] = c[flip][:, ::-1]
+        v, t = c.reshape(-1, 3), np.arange(3 * k).reshape(k, 3)
+        got = _found(v, t)
+        area, tri_area = _brute(v, t, flat_tol=1e-5)
+        clear = (area > 0.1 * np.minimum(tri_area[:, None], tri_area[None, :])).any(axis=1)
+        assert not (got & ~(area > 0).any(axis=1)).any(), (trial, got, area)
+        assert not (clear & ~got).any(), (trial, got, area)
+
+
+def test_a_million_triangles_cost_little():
+    import time
+    n = 708
+    x, y = np.meshgrid(np.linspace(0, 10, n + 1), np.linspace(0, 10, n + 1))
+    i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    t = np.r_[np.c_[i, i + 1, i + n + 2], np.c_[i, i + n + 2, i + n + 1]]
+    v = np.c_[x.ravel(), y.ravel(), np.sin(3 * x.ravel()) * np.cos(2 * y.ravel())]
+    v, t = np.ascontiguousarray(v, np.float32), np.ascontiguousarray(t, np.int32)
+    geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64))
+    cand = np.ones(len(t), bool)
+    times = []
+    for _ in range(3):
+        a = time.process_time()
+        assert not overlapping(v, t, geo, cand).any()
+        times.append(time.process_time() - a)
+    assert min(times) < 0.5, times           # (~40 ms unloaded; a loose bound for a shared machine)
