@@ -8,13 +8,14 @@ depends on each tracer's order, so no image can agree with Cycles. Said, naming 
 
 Cheap, and never claimed where it is not so: triangles are keyed by their quantised plane (unit
 normal up to sign, offset in bins of _ULPS float32 ulps of the largest coordinate) and counted
-in 2^20 buckets of the key. A pair alone in its bucket (a quad's two triangles) is tested
+in buckets of the key (4 a triangle). A pair alone in its bucket (a quad's two triangles) is tested
 directly; groups of up to _SMALL all pair by pair; larger groups (up to _MAX_GROUP) only where
 their triangles' areas, projected into the plane, add up to more than the area of a rectangle
 bounding them there, which must cover some point twice (the smallest of the rectangles along the
 edges of one triangle; a Mirror's faces mostly fill theirs). Every pair is tested exactly in the
-first one's plane: the other's corners within the tolerance of it, and separating axes (the
-six edge normals), each overlap deeper than the tolerance. So faces overlapping within a plane
+first one's plane: the other's corners within _PAIR_ULPS float32 ulps of the pair's own largest
+coordinate of it (surfaces further apart are met in one order by both tracers), and separating
+axes (the six edge normals), each overlap deeper than that. So faces overlapping within a plane
 holding more than _MAX_GROUP triangles (a face laid on a finely split floor) or whose other faces
 spread far around them are not found, nor a sliver thinner than the tolerance, nor a triangle
 whose key falls in the bin next to its twin's: misses, never a false message. Faces facing
@@ -26,7 +27,8 @@ import numpy as np
 
 import dacrt
 
-_ULPS = 64              # the plane offset's bin and the overlap depth: float32 ulps of the largest coordinate
+_ULPS = 64              # the plane offset's bin: float32 ulps of the scene's largest coordinate
+_PAIR_ULPS = 16         # one plane, and the overlap depth: float32 ulps of the pair's largest coordinate
 _NORMAL_BINS = 4096     # per unit of each normal component (~2.4e-4 rad)
 _SMALL = 16             # groups tested pair by pair without the area bound
 _MAX_GROUP = 512        # larger plane groups are left (their buckets' counts)
@@ -47,7 +49,7 @@ def overlapping(vertices, indices, geo, candidates):
         return out
     v = np.asarray(vertices, np.float32)
     tol = float(_ULPS * np.spacing(np.float32(max(float(np.abs(v).max(initial=0.0)), 1e-30))))
-    n = np.asarray(geo[9:12], np.float32)
+    n = wound = np.asarray(geo[9:12], np.float32)
     n = n * np.where(_SIGN @ n < 0, np.float32(-1), np.float32(1))
     d = geo[0] * n[0] + geo[1] * n[1] + geo[2] * n[2]
     # the key, exact: each normal component in 14 bits, the offset in 22 (|d| / tol is below
@@ -57,29 +59,34 @@ def overlapping(vertices, indices, geo, candidates):
     key |= (n[1] * np.float32(_NORMAL_BINS) + half).astype(np.int64) << 36
     key |= (n[2] * np.float32(_NORMAL_BINS) + half).astype(np.int64) << 22
     key |= (d * np.float32(1.0 / tol) + np.float32(2 ** 21 + 0.5)).astype(np.int64) & (2 ** 22 - 1)
-    key = key.view(np.uint64)[S]
-    rep = dacrt.shading.repeated_keys(key)          # (native hash table: most keys are unique)
-    S, key = S[rep], key[rep]
-    bucket = ((key * _K[0]) >> np.uint64(44)).astype(np.intp)
-    count = np.bincount(bucket, minlength=1 << 20)[bucket]
+    key = key.view(np.uint64)
     t = np.asarray(indices)
+    # a quad's two triangles, listed one after the other (as Blender triangulates), count as one
+    # key: a quad alone in its plane (most of a low-poly mesh) is then unique; its mate rejoins
+    # its group below
+    p = np.flatnonzero(candidates[:-1] & candidates[1:] & (key[:-1] == key[1:]))
+    p = p[_quads(t, wound, p, p + 1)]
+    p = p[~np.isin(p - 1, p)]               # (a fan's chain: every other pair)
+    mate = np.full(M, -1, np.intp)
+    mate[p] = p + 1
+    listed = candidates.copy()
+    listed[p + 1] = False
+    S = np.flatnonzero(listed)
+    S = S[dacrt.shading.repeated_keys(key[S])]       # (native hash table: most keys are unique)
+    S = np.r_[S, mate[S][mate[S] >= 0]]
+    key = key[S]
+    bits = int(np.clip(np.ceil(np.log2(4 * len(S) + 1)), 10, 20))   # few distinct keys share a bucket
+    bucket = ((key * _K[0]) >> np.uint64(64 - bits)).astype(np.intp)
+    count = np.bincount(bucket, minlength=1 << bits)[bucket]
     c = _Corners(v, t)
     pi, pj = [], []
     # pairs alone in their bucket: the partner is the bucket's sum of members less itself
     two = np.flatnonzero(count == 2)
     if len(two):
-        total = np.bincount(bucket[two], weights=two.astype(np.float64), minlength=1 << 20)
+        total = np.bincount(bucket[two], weights=two.astype(np.float64), minlength=1 << bits)
         other = (total[bucket[two]] - two).astype(np.intp)
         first = (two < other) & (key[two] == key[other])
-        i, j = S[two[first]], S[other[first]]
-        # a quad's two triangles: an edge shared by index, wound alike: no overlap
-        ti, tj = t[i], t[j]
-        shared = (ti[:, :, None] == tj[:, None, :]).sum(axis=(1, 2)) >= 2
-        ci, cj = c[i], c[j]
-        alike = np.einsum('ij,ij->i', np.cross(ci[:, 1] - ci[:, 0], ci[:, 2] - ci[:, 0]),
-                          np.cross(cj[:, 1] - cj[:, 0], cj[:, 2] - cj[:, 0])) > 0
-        keep = ~(shared & alike)
-        pi.append(i[keep]), pj.append(j[keep])
+        pi.append(S[two[first]]), pj.append(S[other[first]])
     few = np.flatnonzero((count > 2) & (count <= _MAX_GROUP))
     if len(few):
         by = few[np.argsort(key[few], kind='stable')]
@@ -95,9 +102,24 @@ def overlapping(vertices, indices, geo, candidates):
             pi.append(rows[(g[:, None] + a).ravel()]), pj.append(rows[(g[:, None] + b).ravel()])
     if pi:
         i, j = np.concatenate(pi), np.concatenate(pj)
-        hit = _pairs_overlap(c[i], c[j], tol)
+        keep = ~_quads(t, wound, i, j)
+        i, j = i[keep], j[keep]
+        hit = _pairs_overlap(c[i], c[j])
         out[i[hit]] = out[j[hit]] = True
     return out
+
+
+def _quads(t, wound, i, j):
+    """Mask of the pairs of triangles i, j sharing an edge by index, run one way by one and the
+    other way by the other, both facing one way (wound: the unit normals (3, M)): on either side
+    of the edge in their plane, so never overlapping (a quad's two triangles, a fan's neighbours)."""
+    a, b = [t[i, k] for k in range(3)], [t[j, k] for k in range(3)]
+    quad = np.zeros(len(i), bool)
+    for k in range(3):
+        for m in range(3):
+            quad |= (a[k] == b[(m + 1) % 3]) & (a[(k + 1) % 3] == b[m])
+    quad[quad] &= (wound[:, i[quad]] * wound[:, j[quad]]).sum(axis=0) > 0
+    return quad
 
 
 class _Corners:
@@ -135,14 +157,18 @@ def _bound_exceeded(c, rows, g, s, tol):
     return total > box * (1.0 + 1e-6) + tol * tol
 
 
-def _pairs_overlap(a, b, tol):
+def _pairs_overlap(a, b):
     """Mask (P,) of the pairs of triangles a, b (P, 3, 3) lying in one plane, facing one way (b's
-    corners within tol of a's plane, the winding normals alike) whose interiors overlap deeper than tol along each of
-    the six edge normals (separating axes: exact for two convex shapes)."""
+    corners within _PAIR_ULPS float32 ulps of the pair's largest coordinate of a's plane, the
+    winding normals alike) whose interiors overlap deeper than that along each of the six edge
+    normals (separating axes: exact for two convex shapes). Surfaces further apart are met in one
+    order by both tracers (a ray's float test errs by a few ulps of the coordinates)."""
+    big = np.maximum(np.abs(a).max(axis=(1, 2)), np.abs(b).max(axis=(1, 2)))
+    tol = _PAIR_ULPS * np.spacing(np.maximum(big, 1e-30).astype(np.float32)).astype(np.float64)
     o, u, w, n = _frame(a)
     nb = np.cross(b[:, 1] - b[:, 0], b[:, 2] - b[:, 0])
     nb /= np.maximum(np.linalg.norm(nb, axis=1, keepdims=True), 1e-300)
-    flat = (np.abs(np.einsum('pkd,pd->pk', b - o[:, None], n)) <= tol).all(axis=1)
+    flat = (np.abs(np.einsum('pkd,pd->pk', b - o[:, None], n)) <= tol[:, None]).all(axis=1)
     flat &= np.einsum('pd,pd->p', n, nb) >= _PARALLEL
     p = [np.stack([np.einsum('pkd,pd->pk', x - o[:, None], u), np.einsum('pkd,pd->pk', x - o[:, None], w)], axis=2)
          for x in (a, b)]
@@ -154,7 +180,7 @@ def _pairs_overlap(a, b, tol):
     axes = np.concatenate(axes, axis=1)                                  # (P, 6, 2)
     pa, pb = (np.einsum('pad,pkd->pak', axes, q) for q in p)             # (P, 6, 3)
     depth = np.minimum(pa.max(axis=2), pb.max(axis=2)) - np.maximum(pa.min(axis=2), pb.min(axis=2))
-    return flat & (depth > tol).all(axis=1)
+    return flat & (depth > tol[:, None]).all(axis=1)
 
 
 def overlapping_faces(sd, tri, mats) -> list:
@@ -185,7 +211,7 @@ def overlapping_faces(sd, tri, mats) -> list:
     if not said.any():
         return []
     return [('INFO', f"{int(said.sum())} triangles of {sd.named_objects(said)} overlap other triangles in "
-                     "part in the same plane (a Mirror modifier without merging on a mesh not symmetric "
-                     "about its mirror plane, or faces laid over others): such faces z-fight, which one a "
-                     "ray meets depends on each renderer's order, so DACRT's image there differs from "
-                     "Cycles'")]
+                     "part in the same plane, facing the same way (a Mirror modifier without merging on a "
+                     "mesh not symmetric about its mirror plane, or faces laid over others): such faces "
+                     "z-fight, which one a ray meets depends on each renderer's order, so where they are "
+                     "seen DACRT's image can differ from Cycles'; delete the overlap or move the faces apart")]

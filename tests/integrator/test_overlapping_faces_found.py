@@ -80,6 +80,8 @@ CASES = {
     'quads sharing an edge': (_join(_quad(0, 1, 0, 1), _quad(1, 2, 0, 1)), False),
     'quads sharing an edge as separate meshes, split alike': (_join(_quad(0, 1, 0, 1), _quad(1, 2, 0, 1), _quad(0, 1, 1, 2)), False),
     'parallel quads 1e-3 apart': (_join(_quad(0, 1, 0, 1), _quad(0, 1, 0, 1, z=1e-3)), False),
+    'a fan folded onto itself (an edge shared, run one way by both)':
+        ((np.array([[0, 0, 0], [1, 0, 0], [0.2, 1, 0], [0.8, 0.6, 0]], np.float64), np.array([[0, 1, 2], [0, 1, 3]])), True),
     'a small quad inside a large one (a group of 4)': (_join(_quad(0, 4, 0, 4), _quad(1, 2, 1, 2)), True),
 }
 
