@@ -7,9 +7,10 @@ diagonal. They z-fight: which one a ray meets, and whether a ray leaving one mee
 depends on each tracer's order, so no image can agree with Cycles. Said, naming the objects.
 
 Cheap, and never claimed where it is not so: triangles are keyed by their quantised plane (unit
-normal up to sign, offset in bins of _ULPS float32 ulps of the largest coordinate) and counted
-in buckets of the key (4 a triangle). A pair alone in its bucket (a quad's two triangles) is tested
-directly; groups of up to _SMALL all pair by pair; larger groups (up to _MAX_GROUP) only where
+normal up to sign, offset in bins of _ULPS float32 ulps of the largest coordinate; a quad's two
+triangles listed one after the other as one key), only repeated keys kept (native
+repeated_keys) and counted in buckets of the key (4 a triangle). A pair alone in its bucket
+is tested directly; groups of up to _SMALL all pair by pair; larger groups (up to _MAX_GROUP) only where
 their triangles' areas, projected into the plane, add up to more than the area of a rectangle
 bounding them there, which must cover some point twice (the smallest of the rectangles along the
 edges of one triangle; a Mirror's faces mostly fill theirs). Every pair is tested exactly in the
