@@ -3,8 +3,9 @@
 A grey diffuse cube moved off its mirror plane and mirrored once without merging (the fuzzer's
 seeds 7465/7472): the mirrored half lays its faces over part of the original's, in the same
 planes, facing the same way. They z-fight, and the engines resolve it each their own way: the
-overlap renders unlike Cycles (32x24, 128 spp, K = 1: mean |DACRT - Cycles| 3.9% of Cycles' mean, image means 0.4566 against 0.4396; the cube without the Mirror 0.02%), so the render says so
-(addon/overlappingfaces.py), and not for the same cube without the Mirror, where the images
+overlap renders unlike Cycles (32x24, 128 spp, K = 1: mean |DACRT - Cycles| 3.9% of Cycles'
+mean, image means 0.4566 against 0.4396; the cube without the Mirror 0.02%), so the render says
+so (addon/overlappingfaces.py), and not for the same cube without the Mirror, where the images
 agree."""
 import bpy
 import numpy as np
