@@ -8,10 +8,10 @@ depends on each tracer's order, so no image can agree with Cycles. Said, naming 
 
 Cheap, and never claimed where it is not so: triangles are keyed by their quantised plane (unit
 normal up to sign, offset in bins of _ULPS float32 ulps of the largest coordinate; a quad's two
-triangles listed one after the other as one key), only repeated keys kept (native
-repeated_keys) and counted in buckets of the key (4 a triangle). A pair alone in its bucket
-is tested directly; groups of up to _SMALL all pair by pair; larger groups (up to _MAX_GROUP) only where
-their triangles' areas, projected into the plane, add up to more than the area of a rectangle
+triangles listed one after the other as one key) and grouped natively where keys repeat
+(dacrt.shading.coplanar_groups: threaded passes and a hash, a few ms per 1M triangles). Groups
+of up to _SMALL are tested pair by pair; larger groups (up to _MAX_GROUP) only where their
+triangles' areas, projected into the plane, add up to more than the area of a rectangle
 bounding them there, which must cover some point twice (the smallest of the rectangles along the
 edges of one triangle; a Mirror's faces mostly fill theirs). Every pair is tested exactly in the
 first one's plane: the other's corners within _PAIR_ULPS float32 ulps of the pair's own largest
@@ -30,14 +30,9 @@ import dacrt
 
 _ULPS = 64              # the plane offset's bin: float32 ulps of the scene's largest coordinate
 _PAIR_ULPS = 16         # one plane, and the overlap depth: float32 ulps of the pair's largest coordinate
-_NORMAL_BINS = 4096     # per unit of each normal component (~2.4e-4 rad)
 _SMALL = 16             # groups tested pair by pair without the area bound
-_MAX_GROUP = 512        # larger plane groups are left (their buckets' counts)
+_MAX_GROUP = 512        # larger plane groups are left
 _PARALLEL = 1.0 - 1e-6  # cos between the normals of a pair in one plane facing one way
-# the sign that makes n and -n one key (odd in n; a normal nearly perpendicular to it may split
-# a plane's triangles into two groups: a miss, never a false message)
-_SIGN = np.array([0.5773502, 0.6172134, 0.5345225], np.float32)
-_K = np.array([0x9E3779B97F4A7C15], np.uint64)
 
 
 def overlapping(vertices, indices, geo, candidates):
@@ -45,68 +40,32 @@ def overlapping(vertices, indices, geo, candidates):
     the same plane (geo: triangle_table's rows, v0 at 0:3 and the unit normal at 9:12)."""
     M = len(candidates)
     out = np.zeros(M, bool)
-    S = np.flatnonzero(candidates)
-    if len(S) < 2:
+    if np.count_nonzero(candidates) < 2:
         return out
     v = np.asarray(vertices, np.float32)
-    tol = float(_ULPS * np.spacing(np.float32(max(float(np.abs(v).max(initial=0.0)), 1e-30))))
-    n = wound = np.asarray(geo[9:12], np.float32)
-    n = n * np.where(_SIGN @ n < 0, np.float32(-1), np.float32(1))
-    d = geo[0] * n[0] + geo[1] * n[1] + geo[2] * n[2]
-    # the key, exact: each normal component in 14 bits, the offset in 22 (|d| / tol is below
-    # sqrt(3) 2^24 / _ULPS: the tolerance is _ULPS ulps of the largest coordinate)
-    half = np.float32(_NORMAL_BINS + 0.5)
-    key = (n[0] * np.float32(_NORMAL_BINS) + half).astype(np.int64) << 50
-    key |= (n[1] * np.float32(_NORMAL_BINS) + half).astype(np.int64) << 36
-    key |= (n[2] * np.float32(_NORMAL_BINS) + half).astype(np.int64) << 22
-    key |= (d * np.float32(1.0 / tol) + np.float32(2 ** 21 + 0.5)).astype(np.int64) & (2 ** 22 - 1)
-    key = key.view(np.uint64)
+    big = max(float(v.max(initial=0.0)), -float(v.min(initial=0.0)), 1e-30)    # (no |v| temporary)
+    tol = float(_ULPS * np.spacing(np.float32(big)))
     t = np.asarray(indices)
-    # a quad's two triangles, listed one after the other (as Blender triangulates), count as one
-    # key: a quad alone in its plane (most of a low-poly mesh) is then unique; its mate rejoins
-    # its group below
-    p = np.flatnonzero(candidates[:-1] & candidates[1:] & (key[:-1] == key[1:]))
-    p = p[_quads(t, wound, p, p + 1)]
-    p = p[~np.isin(p - 1, p)]               # (a fan's chain: every other pair)
-    mate = np.full(M, -1, np.intp)
-    mate[p] = p + 1
-    listed = candidates.copy()
-    listed[p + 1] = False
-    S = np.flatnonzero(listed)
-    S = S[dacrt.shading.repeated_keys(key[S])]       # (native hash table: most keys are unique)
-    S = np.r_[S, mate[S][mate[S] >= 0]]
-    key = key[S]
-    bits = int(np.clip(np.ceil(np.log2(4 * len(S) + 1)), 10, 20))   # few distinct keys share a bucket
-    bucket = ((key * _K[0]) >> np.uint64(64 - bits)).astype(np.intp)
-    count = np.bincount(bucket, minlength=1 << bits)[bucket]
+    # natively, in one threaded pass: the plane keys, a quad's two triangles as one, the groups
+    # of repeated keys (most meshes have none, or one plane too large to test)
+    rows, start = dacrt.shading.coplanar_groups(geo, t, candidates, np.float32(1.0 / tol), _MAX_GROUP)
+    if not len(rows):
+        return out
+    size = np.diff(start)
+    start = start[:-1]
     c = _Corners(v, t)
     pi, pj = [], []
-    # pairs alone in their bucket: the partner is the bucket's sum of members less itself
-    two = np.flatnonzero(count == 2)
-    if len(two):
-        total = np.bincount(bucket[two], weights=two.astype(np.float64), minlength=1 << bits)
-        other = (total[bucket[two]] - two).astype(np.intp)
-        first = (two < other) & (key[two] == key[other])
-        pi.append(S[two[first]]), pj.append(S[other[first]])
-    few = np.flatnonzero((count > 2) & (count <= _MAX_GROUP))
-    if len(few):
-        by = few[np.argsort(key[few], kind='stable')]
-        k = key[by]
-        start = np.flatnonzero(np.r_[True, k[1:] != k[:-1]])
-        size = np.diff(np.r_[start, len(by)])
-        rows = S[by]
-        for s in np.unique(size[size > 1]):
-            g = start[size == s]
-            if s > _SMALL:
-                g = g[_bound_exceeded(c, rows, g, s, tol)]
-            a, b = np.triu_indices(s, 1)
-            pi.append(rows[(g[:, None] + a).ravel()]), pj.append(rows[(g[:, None] + b).ravel()])
-    if pi:
-        i, j = np.concatenate(pi), np.concatenate(pj)
-        keep = ~_quads(t, wound, i, j)
-        i, j = i[keep], j[keep]
-        hit = _pairs_overlap(c[i], c[j])
-        out[i[hit]] = out[j[hit]] = True
+    for s in np.unique(size):
+        g = start[size == s]
+        if s > _SMALL:
+            g = g[_bound_exceeded(c, rows, g, s, tol)]
+        a, b = np.triu_indices(s, 1)
+        pi.append(rows[(g[:, None] + a).ravel()]), pj.append(rows[(g[:, None] + b).ravel()])
+    i, j = np.concatenate(pi), np.concatenate(pj)
+    keep = ~_quads(t, np.asarray(geo[9:12]), i, j)
+    i, j = i[keep], j[keep]
+    hit = _pairs_overlap(c[i], c[j])
+    out[i[hit]] = out[j[hit]] = True
     return out
 
 

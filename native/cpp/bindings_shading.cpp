@@ -12,6 +12,7 @@
 
 #include "bindargs.h"
 #include "camera.h"
+#include "coplanar.h"
 #include "islands.h"
 #include "noise.h"
 #include "orennayar.h"
@@ -572,6 +573,33 @@ py::array_t<bool> repeated_keys_py(py::array_t<uint64_t, py::array::c_style | py
     return out;
 }
 
+py::tuple coplanar_groups_py(F32Array geo, py::array_t<int32_t, py::array::c_style> triangles,
+                             py::array_t<uint8_t, py::array::c_style | py::array::forcecast> candidates,
+                             float inv_step, size_t max_group, py::object keys) {
+    const size_t M = rows_of(geo, 15, "geo");
+    if (triangles.ndim() != 2 || size_t(triangles.shape(0)) != M || triangles.shape(1) != 3)
+        throw py::value_error("triangles must have shape (M, 3), one row per column of geo");
+    need_len(candidates, M, "candidates");
+    if (M >= (size_t(1) << 31)) throw py::value_error("at most 2^31 - 1 triangles");
+    uint64_t* k = nullptr;
+    py::array_t<uint64_t, py::array::c_style> key_out;
+    if (!keys.is_none()) {
+        key_out = keys.cast<py::array_t<uint64_t, py::array::c_style>>();
+        if (key_out.ndim() != 1 || size_t(key_out.shape(0)) != M || !key_out.writeable())
+            throw py::value_error("keys must be a writeable uint64 array with one entry per triangle");
+        k = key_out.mutable_data();
+    }
+    std::vector<int64_t> rows, start;
+    {
+        py::gil_scoped_release nogil;
+        coplanar_groups(geo.data(), M, triangles.data(), candidates.data(), inv_step, max_group, rows, start, k);
+    }
+    I64Array r{py::ssize_t(rows.size())}, s{py::ssize_t(start.size())};
+    std::copy(rows.begin(), rows.end(), r.mutable_data());
+    std::copy(start.begin(), start.end(), s.mutable_data());
+    return py::make_tuple(r, s);
+}
+
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny, py::object full, py::object keys) {
     const auto [V, M] = mesh_sizes(vertices, triangles);
@@ -734,6 +762,8 @@ void byte_lookup_py(py::array_t<uint8_t, py::array::c_style> k8, F32Array table,
 void register_shading(py::module_& m) {
     m.def("pack_rays", &pack_rays_py, py::arg("O"), py::arg("D"), py::arg("tfar"), py::arg("out"));
     m.def("repeated_keys", &repeated_keys_py, py::arg("keys"));
+    m.def("coplanar_groups", &coplanar_groups_py, py::arg("geo"), py::arg("triangles"), py::arg("candidates"),
+          py::arg("inv_step"), py::arg("max_group"), py::arg("keys") = py::none());
     m.def("triangle_table", &triangle_table_py, py::arg("vertices"), py::arg("triangles"), py::arg("offset_ulps"),
           py::arg("tiny"), py::arg("full") = py::none(), py::arg("keys") = py::none());
     m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"));

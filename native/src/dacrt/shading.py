@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["triangle_table", "repeated_keys", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
+__all__ = ["triangle_table", "repeated_keys", "coplanar_groups", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
            "LightChoice", "next_event", "accumulate_masked", "noise_texture",
            "voronoi_texture"]
 
@@ -82,6 +82,21 @@ def repeated_keys(keys):
     """(n,) bool: the entries of keys (n,) uint64 that are not 0 and that another entry repeats
     (triangle_table's keys: the triangles with a coincident twin). One hash-table pass."""
     return _core.repeated_keys(np.ascontiguousarray(keys, np.uint64))
+
+
+def coplanar_groups(geo, triangles, candidates, inv_step: float, max_group: int, keys=None):
+    """The triangles whose quantised planes repeat among candidates (M,) bool, grouped: (rows,
+    start) int64, group g being rows[start[g]:start[g + 1]], rows ascending within a group. geo:
+    triangle_table's (15, M) rows (v0 and the unit normal read); triangles (M, 3) int32. The key
+    (coplanar.h): the normal up to sign in steps of 1/4096 a component and the offset n . v0 in
+    steps of 1 / inv_step (keep |n . v0| * inv_step below 2^21). A quad's two triangles listed
+    one after the other count as one key (alone in its plane, a quad is no group); groups of more
+    than max_group triangles are left out. keys (M,) uint64, optional, is written: each
+    candidate's key, 0 elsewhere. One threaded pass over the triangles and a hash of the keys."""
+    geo = _rows(geo, 15, "geo")
+    t = np.ascontiguousarray(triangles, np.int32)    # (indices only compared, never followed)
+    return _core.coplanar_groups(geo, t, np.ascontiguousarray(candidates, np.uint8), float(inv_step),
+                                 int(max_group), keys)
 
 
 def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100, full=None, keys=None):
