@@ -136,19 +136,27 @@ def test_random_coplanar_triangles_against_brute_force():
         assert not (clear & ~got).any(), (trial, got, area)
 
 
-def test_a_million_triangles_cost_little():
+@pytest.mark.parametrize('wavy', [True, False])
+def test_a_million_triangles_cost_less_than_their_table(wavy):
+    """The check beside the triangle table it reads, timed in the same loop (so a loaded machine
+    slows both): a wavy grid (no plane repeats) and a flat one (one plane of 1M triangles, left
+    out as too big). Measured ~0.6-0.9x the table; the numpy keys had cost 1.4x on the wavy
+    grid and 4x on the flat one."""
+    import statistics
     import time
     n = 708
     x, y = np.meshgrid(np.linspace(0, 10, n + 1), np.linspace(0, 10, n + 1))
     i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
-    t = np.r_[np.c_[i, i + 1, i + n + 2], np.c_[i, i + n + 2, i + n + 1]]
-    v = np.c_[x.ravel(), y.ravel(), np.sin(3 * x.ravel()) * np.cos(2 * y.ravel())]
-    v, t = np.ascontiguousarray(v, np.float32), np.ascontiguousarray(t, np.int32)
-    geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64))
+    t = np.c_[i, i + 1, i + n + 2, i, i + n + 2, i + n + 1].reshape(-1, 3)     # a quad's triangles adjacent
+    z = np.sin(3 * x.ravel()) * np.cos(2 * y.ravel()) if wavy else np.zeros(x.size)
+    v = np.ascontiguousarray(np.c_[x.ravel(), y.ravel(), z], np.float32)
+    t = np.ascontiguousarray(t, np.int32)
     cand = np.ones(len(t), bool)
-    times = []
-    for _ in range(3):
+    table, check = [], []
+    for _ in range(5):
         a = time.process_time()
+        geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64))
+        b = time.process_time()
         assert not overlapping(v, t, geo, cand).any()
-        times.append(time.process_time() - a)
-    assert min(times) < 0.5, times           # (~40 ms unloaded; a loose bound for a shared machine)
+        table.append(b - a), check.append(time.process_time() - b)
+    assert statistics.median(check) < 1.5 * statistics.median(table), (check, table)
