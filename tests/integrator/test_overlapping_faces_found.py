@@ -137,13 +137,10 @@ def test_random_coplanar_triangles_against_brute_force():
 
 
 @pytest.mark.parametrize('wavy', [True, False])
-def test_a_million_triangles_cost_less_than_their_table(wavy):
-    """The check beside the triangle table it reads, timed in the same loop (so a loaded machine
-    slows both): a wavy grid (no plane repeats) and a flat one (one plane of 1M triangles, left
-    out as too big). Measured ~0.6-0.9x the table; the numpy keys had cost 1.4x on the wavy
-    grid and 4x on the flat one."""
-    import statistics
-    import time
+def test_a_million_triangle_grid_has_no_overlap(wavy):
+    """A wavy grid (no plane repeats) and a flat one (one plane of 1M triangles, left out as too
+    big), each quad's triangles adjacent: nothing said. (The check's cost per 1M triangles is
+    measured beside the table's, not asserted here: README, coincident faces.)"""
     n = 708
     x, y = np.meshgrid(np.linspace(0, 10, n + 1), np.linspace(0, 10, n + 1))
     i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
@@ -151,12 +148,5 @@ def test_a_million_triangles_cost_less_than_their_table(wavy):
     z = np.sin(3 * x.ravel()) * np.cos(2 * y.ravel()) if wavy else np.zeros(x.size)
     v = np.ascontiguousarray(np.c_[x.ravel(), y.ravel(), z], np.float32)
     t = np.ascontiguousarray(t, np.int32)
-    cand = np.ones(len(t), bool)
-    table, check = [], []
-    for _ in range(5):
-        a = time.process_time()
-        geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64))
-        b = time.process_time()
-        assert not overlapping(v, t, geo, cand).any()
-        table.append(b - a), check.append(time.process_time() - b)
-    assert statistics.median(check) < 1.5 * statistics.median(table), (check, table)
+    geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64))
+    assert not overlapping(v, t, geo, np.ones(len(t), bool)).any()
