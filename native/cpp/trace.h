@@ -23,8 +23,8 @@ inline bool majority_positive(const Ray* rays, size_t na, int axis) {
 // Largest shared node that a few-ray visit (<= leaf_rays) leaves unsplit: bigger ones are split
 // for the kept top. A leaf met by 1-3 rays costs a SIMD step per triangle, each triangle's
 // records fetched from scattered memory, while a split is made once per frame and serves every
-// later batch: with 256 a 4-spp dragon frame's batches of 700-10K rays ran 67-181 triangle
-// tests a ray, with 32 28-59, and the frame's trace CPU time fell 0.84-0.93x (README, "Where the
+// later batch: with 256 a 4-spp dragon frame's batches of 700-10K rays ran 39-181 triangle
+// tests a ray, with 32 20-59, and the frame's trace CPU time fell 0.84-0.93x (README, "Where the
 // time goes"; 16-64 within noise of each other on one thread, 32 best on two).
 constexpr size_t kPrivateFewRaysTris = 32;
 
