@@ -26,16 +26,34 @@ void draw_area_lanes(const LampRecord& lamp, bool no_mis, const float* p_sel, co
     const size_t n = p.n;
     for (size_t k0 = 0; k0 < m; k0 += K) {
         float P[3][K], ns[3][K], thr[3][K], u1[K], u2[K], sel[K];
-        for (size_t k = 0; k < K; ++k) {
-            const size_t j = js[std::min(k0 + k, m - 1)], i = i0 + j;
-            for (int a = 0; a < 3; ++a) {
-                P[a][k] = p.P[size_t(a) * n + i];
-                ns[a][k] = p.ns[size_t(a) * n + i];
-                thr[a][k] = p.thr ? p.thr[size_t(a) * n + i] : 1.0f;
+        const size_t j0 = js[k0];
+        if (k0 + K <= m && js[k0 + K - 1] == j0 + (K - 1)) {
+            // K consecutive points (the usual group: most points pick the one area lamp of a
+            // room): the columns' runs loaded as vectors instead of a gather lane by lane
+            const size_t i = i0 + j0;
+            for (int a = 0; a < 3; ++a)
+                for (size_t k = 0; k < K; ++k) {
+                    P[a][k] = p.P[size_t(a) * n + i + k];
+                    ns[a][k] = p.ns[size_t(a) * n + i + k];
+                    thr[a][k] = p.thr ? p.thr[size_t(a) * n + i + k] : 1.0f;
+                }
+            for (size_t k = 0; k < K; ++k) {
+                u1[k] = unit24(wa[j0 + k]);
+                u2[k] = unit24(wb[j0 + k]);
+                sel[k] = p_sel[j0 + k];
             }
-            u1[k] = unit24(wa[j]);
-            u2[k] = unit24(wb[j]);
-            sel[k] = p_sel[j];
+        } else {
+            for (size_t k = 0; k < K; ++k) {
+                const size_t j = js[std::min(k0 + k, m - 1)], i = i0 + j;
+                for (int a = 0; a < 3; ++a) {
+                    P[a][k] = p.P[size_t(a) * n + i];
+                    ns[a][k] = p.ns[size_t(a) * n + i];
+                    thr[a][k] = p.thr ? p.thr[size_t(a) * n + i] : 1.0f;
+                }
+                u1[k] = unit24(wa[j]);
+                u2[k] = unit24(wb[j]);
+                sel[k] = p_sel[j];
+            }
         }
         LampLanes s;
         sample_area_lanes(lamp, P[0], P[1], P[2], u1, u2, s);

@@ -2,9 +2,7 @@
 #include "bounce.h"
 
 #include <algorithm>
-#include <atomic>
 #include <memory>
-#include <vector>
 
 #include "orennayar.h"
 #include "parallel.h"
@@ -37,8 +35,7 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
     if (in.rough_mat) rough.reset(new float[size_t(kRoughRows) * (k ? k : 1)]);
     pts.rough = rough.get();
     const bool areas = draws_area_lanes(lights);
-    std::vector<size_t> count(blocks), bad(blocks);
-    auto block = [&](size_t q) {
+    auto block = [&](size_t q, size_t* bad) {
         const size_t b = q * kEventBlock, e = std::min(k, b + kEventBlock);
         survivor_range(in.hits, n, in.albedo, in.M, in.thr, in.u_rr != nullptr, idx, k, out.thr, in.geo, in.normals,
                        in.D, surf, out.prim, b, e);
@@ -56,7 +53,7 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
                             d[3] = {in.D[i], in.D[n + i], in.D[2 * n + i]}, N[3] = {ns[j], ns[k + j], ns[2 * k + j]};
                 rough_row(in.rough_params, M, m, rho, d, N, rough.get(), k, j);
             }
-        count[q] = event_range(lights, areas, pts, out.nee, b, e, &bad[q]);
+        const size_t count = event_range(lights, areas, pts, out.nee, b, e, bad);
         if (in.scatter) {
             scatter_range(out.keys, k, in.ka, in.kb, ns, in.normals ? ng : nullptr, out.wi, out.pdf, out.ok, P_off,
                           out.rays, nullptr, b, e);
@@ -69,19 +66,9 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
                     for (int c = 0; c < 3; ++c) out.thr[size_t(c) * k + j] = t[c];
                 }
         }
+        return count;
     };
-    // blocks to whichever worker is free: one descheduled worker (a busy machine) does not
-    // hold the pass back by its share
-    const int workers = int(std::min<size_t>(size_t(default_threads()), blocks));
-    if (workers <= 1) {
-        for (size_t q = 0; q < blocks; ++q) block(q);
-    } else {
-        std::atomic<size_t> next{0};
-        run_workers(workers, [&](int) {
-            for (size_t q; (q = next.fetch_add(1, std::memory_order_relaxed)) < blocks;) block(q);
-        });
-    }
-    return place_shadow_rays(out.nee, blocks, count, bad, skipped);
+    return event_blocks(out.nee, blocks, block, skipped);  // (the blocks to whichever worker is free)
 }
 
 }  // namespace dacrt

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <type_traits>
 #include <vector>
@@ -77,13 +78,18 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
             bool own = false;  // the point's own emissive triangle: it adds nothing
             if (lanes) {  // drawn and weighted already
                 if constexpr (AREAS) {
-                    for (int a = 0; a < 3; ++a) wi[a] = c.drawn[j].wi[a], value[a] = c.drawn[j].value[a];
+                    // whole-array copies: three 4-byte stores of wi could not forward to the
+                    // 8-byte load the direction's dot products below compile to (a stall per
+                    // point, ~15% of this loop's samples in perf annotate)
+                    std::memcpy(wi, c.drawn[j].wi, sizeof wi);
+                    std::memcpy(value, c.drawn[j].value, sizeof value);
                     dist = c.drawn[j].dist;
                 }
                 pdf = 0.0f;  // (weighted with it)
             } else if (lamp) {
                 const LampSample s = sample_lamp(L.lamps[entry], P, u1, u2);
-                for (int a = 0; a < 3; ++a) wi[a] = s.wi[a], value[a] = s.value[a];
+                std::memcpy(wi, s.wi, sizeof wi);
+                std::memcpy(value, s.value, sizeof value);
                 dist = s.dist;
                 pdf = s.pdf;
             } else if (entry == env_entry) {  // the environment map (entries has it last)
@@ -181,6 +187,7 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                 }
                 // a zero-length ray (the point lies on the light) is not traced and adds nothing
                 adds = shadow_record(O, wi, dist, aim, shorten, out.rays[m]);
+                out.rays[m].id = uint32_t(m);  // its place if its block's rays stay (place_shadow_rays)
                 if (adds) {
                     out.send[m] = int64_t(i);
                     if (out.skip) out.skip[m] = skip;
@@ -212,35 +219,105 @@ size_t event_range(const LightChoice& lights, bool areas, const VertexPoints& pt
     return block(lights, pts, out, b, e, skipped);
 }
 
-size_t place_shadow_rays(const NextEventOut& out, size_t blocks, const std::vector<size_t>& count,
-                         const std::vector<size_t>& bad, size_t* skipped) {
-    size_t m = 0, skip_count = 0;
-    for (size_t k = 0; k < blocks; ++k) {  // each block's rays left to follow the last's, in order
-        const size_t src = k * kEventBlock, c = count[k];
-        if (src != m && c) {  // (m < src: a block's rays only move toward the front)
-            std::memmove(out.rays + m, out.rays + src, c * sizeof(Ray));
-            std::memmove(out.send + m, out.send + src, c * sizeof(int64_t));
-            if (out.skip) std::memmove(out.skip + m, out.skip + src, c * sizeof(int32_t));
-        }
-        m += c;
-        skip_count += bad[k];
+namespace {
+
+// Block k's c shadow rays (at k * kEventBlock) moved to follow the blocks before, from m on,
+// with send and skip; each ray's id is its index: event_block wrote those of rays left in place,
+// a moved ray's is set as it moves (no pass over all the rays after).
+void move_block(const NextEventOut& out, size_t k, size_t c, size_t m) {
+    const size_t src = k * kEventBlock;
+    if (src == m || !c) return;  // (m < src: a block's rays only move toward the front)
+    for (size_t d = 0; d < c; ++d) {
+        Ray r = out.rays[src + d];
+        r.id = uint32_t(m + d);
+        out.rays[m + d] = r;
     }
-    parallel_for(m, [&](size_t b, size_t e) {
-        for (size_t d = b; d < e; ++d) out.rays[d].id = uint32_t(d);
-    }, size_t(1) << 16);
-    *skipped = skip_count;
-    return m;
+    std::memmove(out.send + m, out.send + src, c * sizeof(int64_t));
+    if (out.skip) std::memmove(out.skip + m, out.skip + src, c * sizeof(int32_t));
+}
+
+// The blocks' rays placed as the blocks are done: whichever worker finds the first unplaced
+// block done moves it and every done block after it (a block's destination ends before the
+// next block's rays begin, so moving it never touches a block still being shaded). The moves
+// then run while the other worker shades, instead of on the calling thread after the pass.
+class Placement {
+  public:
+    Placement(const NextEventOut& out, size_t blocks)
+        : out_(out), blocks_(blocks), count_(blocks), bad_(blocks), ready_(new std::atomic<uint8_t>[blocks]) {
+        for (size_t k = 0; k < blocks; ++k) ready_[k].store(0, std::memory_order_relaxed);
+    }
+
+    void done(size_t k, size_t count, size_t bad) {
+        count_[k] = count;
+        bad_[k] = bad;
+        ready_[k].store(1, std::memory_order_seq_cst);
+        // (seq_cst both sides: a worker whose exchange finds the other placing, and the other
+        // after its release, cannot both miss a block that became ready between)
+        while (front_.load(std::memory_order_seq_cst) < blocks_ &&
+               ready_[front_.load(std::memory_order_seq_cst)].load(std::memory_order_seq_cst)) {
+            if (busy_.exchange(1, std::memory_order_seq_cst)) return;  // the other worker places
+            advance();
+            busy_.store(0, std::memory_order_seq_cst);
+        }
+    }
+
+    // After every block is done: what no worker placed, then the number of rays.
+    size_t finish(size_t* skipped) {
+        advance();
+        *skipped = skipped_;
+        return m_;
+    }
+
+  private:
+    void advance() {  // holding busy_ (or alone)
+        size_t f = front_.load(std::memory_order_relaxed);
+        for (; f < blocks_ && ready_[f].load(std::memory_order_acquire); ++f) {
+            move_block(out_, f, count_[f], m_);
+            m_ += count_[f];
+            skipped_ += bad_[f];
+        }
+        front_.store(f, std::memory_order_seq_cst);
+    }
+
+    const NextEventOut& out_;
+    const size_t blocks_;
+    std::vector<size_t> count_, bad_;
+    std::unique_ptr<std::atomic<uint8_t>[]> ready_;
+    std::atomic<size_t> front_{0};
+    std::atomic<int> busy_{0};
+    size_t m_ = 0, skipped_ = 0;  // (changed only while placing)
+};
+
+}  // namespace
+
+size_t event_blocks(const NextEventOut& out, size_t blocks, const std::function<size_t(size_t, size_t*)>& block,
+                    size_t* skipped) {
+    Placement place(out, blocks);
+    auto run = [&](size_t q) {
+        size_t bad = 0;
+        const size_t c = block(q, &bad);
+        place.done(q, c, bad);
+    };
+    // blocks to whichever worker is free, in order: one descheduled worker (a busy machine)
+    // does not hold the pass back by its share, and the placed front follows the shading
+    const int workers = int(std::min<size_t>(size_t(default_threads()), blocks));
+    if (workers <= 1) {
+        for (size_t q = 0; q < blocks; ++q) run(q);
+    } else {
+        std::atomic<size_t> next{0};
+        run_workers(workers, [&](int) {
+            for (size_t q; (q = next.fetch_add(1, std::memory_order_relaxed)) < blocks;) run(q);
+        });
+    }
+    return place.finish(skipped);
 }
 
 size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped) {
     const size_t n = pts.n, blocks = (n + kEventBlock - 1) / kEventBlock;
-    std::vector<size_t> count(blocks), bad(blocks);
     const bool areas = draws_area_lanes(lights);  // area lamps' samples are drawn kLampLanes points at a time
-    parallel_for(blocks, [&](size_t b0, size_t b1) {
-        for (size_t k = b0; k < b1; ++k)
-            count[k] = event_range(lights, areas, pts, out, k * kEventBlock, std::min(n, (k + 1) * kEventBlock), &bad[k]);
-    }, 1);
-    return place_shadow_rays(out, blocks, count, bad, skipped);
+    return event_blocks(out, blocks, [&](size_t k, size_t* bad) {
+        return event_range(lights, areas, pts, out, k * kEventBlock, std::min(n, (k + 1) * kEventBlock), bad);
+    }, skipped);
 }
 
 bool accumulate_masked(float* L, size_t N, const int64_t* pid, const float* values, const uint8_t* mask, size_t n,

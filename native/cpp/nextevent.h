@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "environment.h"
@@ -185,20 +186,22 @@ struct NextEventOut {
 size_t next_event(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out, size_t* skipped);
 
 // next_event in pieces, for a pass that shades its points block by block (bounce.h): points
-// [b, e) of a block of at most kEventBlock (b a multiple of it) write their shadow rays (ids
-// left unset), send and skip to out from position b on, and return their count (*skipped: the
-// samples that could not contribute); then place_shadow_rays moves every block's (count, bad:
-// per block) to follow the one before, as next_event leaves them, numbers them and returns
-// their number. Written in place, a block's rays had gone through a buffer of their own first:
-// one more write and read of 48 bytes per ray (1-2% of a Cornell render's CPU).
+// [b, e) of a block of at most kEventBlock (b a multiple of it) write their shadow rays (each
+// numbered by its position), send and skip to out from position b on, and return their count
+// (*skipped: the samples that could not contribute). event_blocks runs block(q, &bad) for the
+// blocks q < blocks on whichever worker is free (block returns event_range's count and bad) and
+// moves each block's rays to follow the one before as the blocks are done, renumbering the
+// moved ones, as next_event leaves them; it returns their number (*skipped: the bads' sum).
+// Written in place, a block's rays had gone through a buffer of their own first: one more
+// write and read of 48 bytes per ray (1-2% of a Cornell render's CPU).
 // areas: draws_area_lanes(lights).
 constexpr size_t kEventBlock = 4096;  // points per block: blocks compact their shadow rays on their own
 
 bool draws_area_lanes(const LightChoice& lights);
 size_t event_range(const LightChoice& lights, bool areas, const VertexPoints& pts, const NextEventOut& out, size_t b,
                    size_t e, size_t* skipped);
-size_t place_shadow_rays(const NextEventOut& out, size_t blocks, const std::vector<size_t>& count,
-                         const std::vector<size_t>& bad, size_t* skipped);
+size_t event_blocks(const NextEventOut& out, size_t blocks, const std::function<size_t(size_t, size_t*)>& block,
+                    size_t* skipped);
 
 // L[:, pid[i]] (stride N) += values[:, i] (stride n) where mask[i], each clamped to clamp
 // (clamp_light); pid distinct. False (L untouched) when some pid is outside 0..N-1.
