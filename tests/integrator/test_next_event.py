@@ -329,6 +329,30 @@ def test_accumulate_masked_adds_selected_columns():
         assert np.array_equal(L, before), 'a refused call changed L'
 
 
+@pytest.mark.parametrize('where', [0, 1, 8, 4097, -2, -1])
+@pytest.mark.parametrize('column', ['N', -1, 'huge'])
+def test_accumulate_masked_refuses_any_id_out_of_range_wherever_it_sits(where, column):
+    """The id check (one vectorised pass on the calling thread, nextevent.cpp ids_in_range)
+    finds a bad id at the start, inside and at the tail of its vectors, on every batch size of
+    a render (here 2^15 + 3 ids: split over the threads for the adds), and leaves L as it was."""
+    rng = np.random.default_rng(12)
+    N, n = 70000, 2 ** 15 + 3
+    L = rng.random((3, N)).astype(F32)
+    pid = rng.permutation(N)[:n].astype(np.int64)
+    values = rng.random((3, n)).astype(F32)
+    mask = rng.random(n) < 0.5
+    before = L.copy()
+    pid[where] = {'N': N, -1: -1, 'huge': 2 ** 62}[column]
+    with pytest.raises(ValueError, match='outside'):
+        shading.accumulate_masked(L, pid, values, mask)
+    assert np.array_equal(L, before), 'a refused call changed L'
+    pid[where] = np.setdiff1d(np.arange(N), pid)[0]            # a column no other id holds: accepted
+    want = L.copy()
+    want[:, pid[mask]] += values[:, mask]
+    shading.accumulate_masked(L, pid, values, mask)
+    assert np.array_equal(L, want)
+
+
 def test_accumulate_masked_threads_blocks_and_refuses_copies():
     """Enough columns for the threaded path; L may be the rows of a larger block (the integrator
     adds into rgba[:3]); an L that would have to be converted is refused, not silently copied."""
