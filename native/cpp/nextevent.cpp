@@ -187,7 +187,7 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                 }
                 // a zero-length ray (the point lies on the light) is not traced and adds nothing
                 adds = shadow_record(O, wi, dist, aim, shorten, out.rays[m]);
-                out.rays[m].id = uint32_t(m);  // its place if its block's rays stay (place_shadow_rays)
+                out.rays[m].id = uint32_t(m);  // its place if its block's rays stay (event_blocks)
                 if (adds) {
                     out.send[m] = int64_t(i);
                     if (out.skip) out.skip[m] = skip;
