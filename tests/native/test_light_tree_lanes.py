@@ -59,7 +59,9 @@ def walks():
         u = rng.random(n)
         for normals in (N, None):
             key, prob = tree.sample(P, u, normals)
-            out += [key.astype(np.float64), prob, tree.pdf(P, rng.integers(0, m, n), normals)]
+            gkey, gprob = tree.sample(P, u, normals, grouped=True)
+            out += [key.astype(np.float64), prob, tree.pdf(P, rng.integers(0, m, n), normals),
+                    gkey.astype(np.float64), gprob]
     return np.concatenate(out)
 
 
@@ -69,6 +71,35 @@ def test_every_instruction_set_gives_the_same_bits():
     assert first.size > 0 and np.isfinite(first).all()
     for isa, v in out.items():
         assert v.tobytes() == first.tobytes(), isa
+
+
+@pytest.mark.parametrize("linked", [False, True])
+def test_walks_side_by_side_pick_as_one_walk(linked):
+    """Light sampling walks up to four points' trees side by side, their stops' lanes weighed in
+    one interleaved pass (LightTree::sample_group): each point gets bit for bit the key and
+    probability of its own walk (sample), in trees of 1 to 3000 lights whose walks end at
+    different depths, at scales whose distances leave float's range (a four redone in float64
+    for some walks of a group and not others), with and without normals, with NaN and negative
+    uniforms, a last group of 1-3 points and, with light linking, receiver masks."""
+    rng = np.random.default_rng(29)
+    for m, scale in ((1, 1.0), (14, 1.0), (300, 1.0), (3000, 1.0), (200, 1e17), (200, 1e-17), (60, 1e15)):
+        lo, hi, axis, cos_o, cos_e, energy = lights(rng, m, scale=scale)
+        sets = rng.integers(0, 4, m).astype(np.uint8) if linked else None
+        tree = lamps.light_tree(lo, hi, axis, cos_o, cos_e, energy, np.arange(m), set=sets)
+        for n in (4001, 4002, 4003, 4004):
+            P = (rng.uniform(-7, 7, (3, n)) * scale).astype(F32)
+            if scale == 1e15:      # some points of a group near (in range), some far (redone)
+                P[:, rng.random(n) < 0.5] *= F32(1e-15)
+            u = rng.random(n)
+            u[rng.integers(0, n, 20)] = np.nan
+            u[rng.integers(0, n, 20)] = -0.5
+            recv = {'receivers': rng.integers(1, 16, n).astype(np.uint64)} if linked else {}
+            for N in (unit(rng, n), None):
+                key, prob = tree.sample(P, u, N, **recv)
+                gkey, gprob = tree.sample(P, u, N, grouped=True, **recv)
+                assert np.array_equal(gkey, key)
+                assert gprob.view(np.uint64).tolist() == prob.view(np.uint64).tolist()
+                assert m == 1 or len(np.unique(key)) > 1
 
 
 @pytest.mark.parametrize("with_normal", [True, False])
