@@ -116,21 +116,16 @@ double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
 
 // The eight lanes of stop q weighed at the point: side by side in float (treelanes.h), the four
 // of them a distance out of float's range takes in float64.
-// The lanes of the fours in bad (bit h: lanes 4h .. 4h + 3) weighed again in float64.
-inline void redo_wide(const LightTreeNode* nodes, const LightTree::Stop& q, const TreePoint& at, int bad, double imp[8]) {
+void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const TreePoint& at, double imp[8]) {
+    static const StopWeighFn weigh_lanes = stop_weigh_fn();
+    const int bad = weigh_lanes(q, at, imp);
     for (int o = 0; o < 8; o += 4)
         if (bad & (1 << (o / 4)))
             for (int k = o; k < o + 4; ++k) imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], at.P, at.N);
 }
 
-void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const TreePoint& at, double imp[8]) {
-    static const StopWeighFn weigh_lanes = stop_weigh_fn();
-    redo_wide(nodes, q, at, weigh_lanes(q, at, imp), imp);
-}
-
 // The probabilities at P of a walk at stop q going on to each of its targets (see
-// LightTree::Stop), from its lanes' importances imp there (lane_weighs): by importance, a leaf
-// target's own weigh() or an inner one's children's
+// LightTree::Stop): by importance, a leaf target's own weigh() or an inner one's children's
 // summed (whose tighter bounds see more than their parent's: a group of spots all aimed away
 // from P, or lights all behind its surface, is 0 even where their merged cone and sphere are
 // not); by energy where all importances are 0 (or their sum is not finite). With light linking
@@ -139,8 +134,10 @@ void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const Tre
 // them: then the point is lit by no light below, and any way gives it nothing). Each
 // probability is its own quotient, not 1 - the others: a faint light's 1e-19 would round to 0
 // that way, and a delta light must never become impossible. At least one target gets > 0.
-void probs_of(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, uint64_t receivers,
-              double imp[8], double p[4]) {
+void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const TreePoint& at,
+                  uint64_t receivers, double p[4]) {
+    double imp[8];
+    lane_weighs(nodes, q, at, imp);
     if (lane_sets)
         for (int k = 0; k < 8; ++k) imp[k] = (lane_sets[k] & receivers) ? imp[k] : 0.0;
     bool eligible[4], any = false;
@@ -164,15 +161,6 @@ void probs_of(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64
     for (int j = 0; j < 4; ++j) e += eligible[j] ? nodes[q.target[j]].energy : 0.0;
     const double inv = 1.0 / e;
     for (int j = 0; j < 4; ++j) p[j] = eligible[j] ? nodes[q.target[j]].energy * inv : 0.0;
-}
-
-
-// probs_of with the lanes weighed here.
-void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const TreePoint& at,
-                  uint64_t receivers, double p[4]) {
-    double imp[8];
-    lane_weighs(nodes, q, at, imp);
-    probs_of(nodes, q, lane_sets, receivers, imp, p);
 }
 
 // Conty and Kulla's orientation measure of a cone: the solid angle of its axis spread plus the
@@ -504,13 +492,10 @@ void LightTree::build_stops() {
     }
 }
 
-inline const uint64_t* LightTree::lane_sets(size_t qi, uint64_t receivers) const {
-    return stop_sets_.empty() || receivers == kAllSets ? nullptr : stop_sets_.data() + 12 * qi;
-}
-
 inline void LightTree::probs_at(size_t at, const TreePoint& point, uint64_t receivers, double p[4]) const {
     const size_t qi = size_t(stop_of_[at]);
-    target_probs(nodes_.data(), stops_[qi], lane_sets(qi, receivers), point, receivers, p);
+    const uint64_t* lane_sets = stop_sets_.empty() || receivers == kAllSets ? nullptr : stop_sets_.data() + 12 * qi;
+    target_probs(nodes_.data(), stops_[qi], lane_sets, point, receivers, p);
 }
 
 // One stop of a walk: from the probabilities p of stop `at`'s targets, the target whose share of
@@ -582,22 +567,10 @@ void LightTree::sample_group(size_t count, const float* const P[], const float* 
         point[s] = tree_point(P[s], N[s]);
         go[s] = nodes_[0].child >= 0;
     }
-    static const StopGroupWeighFn weigh_group = stop_group_weigh_fn();
     for (bool any = count > 0 && nodes_[0].child >= 0; any;) {
-        // the walks still going weighed in one call, their lanes' operations interleaved
-        const Stop* qs[kGroup];
-        const TreePoint* ats[kGroup];
-        size_t who[kGroup], m = 0;
+        double p[kGroup][4];
         for (size_t s = 0; s < count; ++s)
-            if (go[s]) qs[m] = &stops_[size_t(stop_of_[at[s]])], ats[m] = &point[s], who[m++] = s;
-        double imp[kGroup][8], p[kGroup][4];
-        int bad[kGroup];
-        weigh_group(m, qs, ats, imp, bad);
-        for (size_t j = 0; j < m; ++j) {
-            const size_t s = who[j];
-            redo_wide(nodes_.data(), *qs[j], point[s], bad[j], imp[j]);
-            probs_of(nodes_.data(), *qs[j], lane_sets(size_t(stop_of_[at[s]]), receivers[s]), receivers[s], imp[j], p[s]);
-        }
+            if (go[s]) probs_at(at[s], point[s], receivers[s], p[s]);
         any = false;
         for (size_t s = 0; s < count; ++s)
             if (go[s]) {

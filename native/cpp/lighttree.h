@@ -127,7 +127,6 @@ public:
 
 private:
     void build_stops();
-    const uint64_t* lane_sets(size_t qi, uint64_t receivers) const;  // stop qi's (null: unlinked)
     void probs_at(size_t at, const TreePoint& point, uint64_t receivers, double p[4]) const;
     size_t step(size_t at, const double p[4], double u, double& lo, double& w) const;
     int32_t leaf_pick(size_t at, double u, double lo, double w, double& prob) const;

@@ -25,13 +25,7 @@ TreePoint tree_point(const float P[3], const float* N);
 // those four must be weighed in float64 (their imp is left to the caller).
 using StopWeighFn = int (*)(const LightTree::Stop& q, const TreePoint& at, double imp[8]);
 
-// StopWeighFn for count <= LightTree::kGroup walks s, each at its own stop q[s] and point
-// at[s] (into imp[s], bad[s]), their operations interleaved: the same bits as one call each.
-using StopGroupWeighFn = void (*)(size_t count, const LightTree::Stop* const q[], const TreePoint* const at[],
-                                  double (*imp)[8], int bad[]);
-
 // The widest kernel the CPU runs, or a narrower one DACRT_ISA names (portable, avx2).
 StopWeighFn stop_weigh_fn();
-StopGroupWeighFn stop_group_weigh_fn();
 
 }  // namespace dacrt
