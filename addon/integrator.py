@@ -302,6 +302,11 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         glass = self._per_triangle(refracts) & self._tri_transparent
         self._tri_transmit = ((vis & NO_TRANSMISSION) == 0) & ((vis & ~np.uint8(NO_TRANSMISSION)) != 0)
         self._any_glass = bool(glass.any())
+        # a point-cloud sphere rays can get inside (not seen by camera or bounce rays, or see-through):
+        # its shadow rays from inside pass it (_occluded_past_insides); otherwise no ray starts there
+        unb = self.tri.unbumped
+        self._sphere_insides = unb is not None and bool(
+            (((vis[unb] & (VIS_CAMERA | VIS_DIFFUSE)) != (VIS_CAMERA | VIS_DIFFUSE)) | self._tri_transparent[unb]).any())
         self._transmit_split = self._any_glass and bool(
             ((vis & HOLDOUT) != 0).any() or (self._tri_transmit != ((vis & VIS_CAMERA) != 0)).any()
             or (self._tri_transmit != ((vis & VIS_DIFFUSE) != 0)).any())
@@ -751,14 +756,15 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             start = (r['org'].T, r['dir'].T, r['tfar'])
         return self._past_tube_insides(kind, start, self._intersect_rays(kind, rays, skip))
 
-    def _past_tube_insides(self, kind, start, hits):
+    def _past_tube_insides(self, kind, start, hits, one=None):
         """hits with those on the inside of a one-sided triangle (a hair tube's wall seen
         through its open end: Cycles' curves have no inside, so its rays meet nothing there;
         DACRT's strands pointing at the camera had shown their insides, a strand 9.5 degrees
         off the view axis 1.28x Cycles' coverage) traced on past it, from the original rays
         (start: origins and directions (3, n), lengths (n,) or one for all): a few passes, each
-        skipping the wall it met."""
-        one, ng = self.tri.one_sided, self.tri.geo[9:12]
+        skipping the wall it met; one: the walls passed, tri.one_sided unless given)."""
+        one = self.tri.one_sided if one is None else one
+        ng = self.tri.geo[9:12]
         org, dirs, tfar = start
         tfar = np.broadcast_to(np.asarray(tfar, F32), (len(hits),))
         for _ in range(_TUBE_PASSES):
@@ -815,7 +821,10 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         scene may not exist: it has no blockers, nothing is occluded)."""
         if kind not in self._scenes:
             return np.zeros(len(rays), bool)
-        skip = self._skip(kind, skip)
+        given, skip = skip, self._skip(kind, skip)
+        if self._sphere_insides:                # by ray id, before the trace reorders them and sets tfar
+            start = np.empty_like(rays)
+            start[rays['id']] = rays
         t0 = time.perf_counter()
         with tracer_cancel():
             occ = self._scenes[kind].occluded(rays, threads=self.threads, skip=skip, visible=self._visible[kind],
@@ -823,6 +832,25 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['shadow'] += len(rays)
+        if self._sphere_insides and occ.any():
+            occ = self._occluded_past_insides(start, given, kind, occ)
+        return occ
+
+    def _occluded_past_insides(self, rays, skip, kind, occ):
+        """occ (by ray id; rays: the records by id) with the rays blocked only by point-cloud
+        spheres met from inside cleared: the occluded rays traced again to their hits, past such
+        walls (_past_tube_insides). Cycles' point intersection culls back faces, so a floor
+        inside a point sphere is lit by the sun through it (it had been black in DACRT); its
+        curves block shadow rays leaving from inside them (hair roots on a floor, measured:
+        tests/parity/test_hair_fog_shadow.py), so hair tubes are not passed here."""
+        idx = np.flatnonzero(occ)
+        r = rays[idx]
+        r['id'] = np.arange(len(idx), dtype=np.uint32)
+        sk = None if skip is None else np.ascontiguousarray(np.asarray(skip)[idx])
+        hits = self._past_tube_insides(kind, (r['org'].T, r['dir'].T, r['tfar'].copy()),
+                                       self._intersect_rays(kind, r.copy(), sk), self.tri.unbumped)
+        occ = occ.copy()
+        occ[idx] = hits['prim'] >= 0
         return occ
 
     # --- one block of paths ---------------------------------------------------------------------

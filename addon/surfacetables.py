@@ -134,7 +134,12 @@ class Triangles:
             np.asarray(geometry.has_uv, bool)
         unbumped = getattr(geometry, 'unbumped', None)
         self.unbumped = None if unbumped is None or not np.any(unbumped) else np.asarray(unbumped, bool)
+        # triangles rays pass from inside (integrator._past_tube_insides): hair and Curves tubes,
+        # and a point cloud's spheres (the unbumped triangles), as Cycles' point intersection culls
+        # back faces (a floor a sphere sinks into had been enclosed: black)
         one_sided = getattr(geometry, 'one_sided', None)
+        if self.unbumped is not None:
+            one_sided = self.unbumped if one_sided is None else np.asarray(one_sided, bool) | self.unbumped
         self.one_sided = None if one_sided is None or not np.any(one_sided) else np.asarray(one_sided, bool)
         # Cycles' shadow terminator (dacrt.shading.next_event): the geometry offset's cutoff,
         # which lifts shadow rays off smooth triangles (none when all are flat), and the

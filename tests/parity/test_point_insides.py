@@ -1,0 +1,40 @@
+"""Cycles' point-cloud spheres have no inside: its point intersection culls back faces, so a
+ray leaving a point inside a sphere (a floor the sphere sinks into, seen past a sphere hidden
+from the camera) passes it. DACRT tessellates the spheres into closed meshes (addon/pointcloud.py)
+and had enclosed that floor: black under a sun and a grey world (0.0 where Cycles renders
+1.13). Rays now pass their triangles from inside as they pass the hair tubes' (surfacetables:
+camera and bounce rays in integrator._past_tube_insides, shadow rays blocked only by such
+insides in integrator._occluded_past_insides)."""
+import bpy
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+
+from . import rendering
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+@pytest.mark.parametrize('sun', [True, False], ids=['sun_and_world', 'world_only'])
+def test_a_floor_inside_a_hidden_point_sphere_is_lit_as_in_cycles(sun, tmp_path):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 24
+    scenes.camera(location=(0, 0, 6), kind='ORTHO', ortho_scale=2.0)
+    scenes.plane("Floor", size=8, materials=[scenes.diffuse("F", (0.8, 0.8, 0.8))])
+    # one sphere of radius 0.7 centred on the floor: the middle third of the frame lies inside it
+    dot = scenes.point_cloud("Dot", [(0, 0, 0)], radius=0.7, material=scenes.diffuse("D", (0.8, 0.2, 0.2)))
+    dot.visible_camera = False
+    scenes.world((1, 1, 1), 0.5)
+    if sun:
+        scenes.light('SUN', 3.0, rotation=(0.3, 0.0, 0.0))
+    rendering.matched(sc, 64, 1)
+    inside = {}
+    for engine in ('CYCLES', 'DACRT'):
+        sc.render.engine = engine
+        img = rendering.render_combined(sc, str(tmp_path / f'{engine}.exr'))
+        inside[engine] = float(img[8:16, 8:16, :3].mean())
+    c, d = inside['CYCLES'], inside['DACRT']
+    assert c > 0.3, inside
+    assert abs(d / c - 1.0) < 0.03, inside
