@@ -833,7 +833,12 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['shadow'] += len(rays)
         if self._sphere_insides and occ.any():
-            occ = self._occluded_past_insides(start, given, kind, occ)
+            passed = self._occluded_past_insides(start, given, kind, occ)
+            # the rays now open get back the length the query had marked off (-1): the
+            # transparent-shadow pass (_shadow_through) traces them on from these records
+            opened = np.take(occ & ~passed, rays['id'])
+            rays['tfar'][opened] = start['tfar'][rays['id'][opened]]
+            occ = passed
         return occ
 
     def _occluded_past_insides(self, rays, skip, kind, occ):

@@ -16,8 +16,12 @@ from . import rendering
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-@pytest.mark.parametrize('sun', [True, False], ids=['sun_and_world', 'world_only'])
-def test_a_floor_inside_a_hidden_point_sphere_is_lit_as_in_cycles(sun, tmp_path):
+@pytest.mark.parametrize('sun, card', [(True, False), (False, False), (True, True)],
+                         ids=['sun_and_world', 'world_only', 'sun_and_a_cutout_card'])
+def test_a_floor_inside_a_hidden_point_sphere_is_lit_as_in_cycles(sun, card, tmp_path):
+    """card: a half-transparent card beside the sphere, so shadow rays also take the
+    transparent-shadow pass (the rays let through had kept the occlusion query's length of -1
+    there: the render failed)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 24
@@ -26,6 +30,9 @@ def test_a_floor_inside_a_hidden_point_sphere_is_lit_as_in_cycles(sun, tmp_path)
     # one sphere of radius 0.7 centred on the floor: the middle third of the frame lies inside it
     dot = scenes.point_cloud("Dot", [(0, 0, 0)], radius=0.7, material=scenes.diffuse("D", (0.8, 0.2, 0.2)))
     dot.visible_camera = False
+    if card:
+        mat = scenes.mix_shader_material("Cut", 'ShaderNodeBsdfDiffuse', 'ShaderNodeBsdfTransparent')[0]
+        scenes.plane("Card", size=0.5, location=(0.9, 0.9, 0.5), materials=[mat])
     scenes.world((1, 1, 1), 0.5)
     if sun:
         scenes.light('SUN', 3.0, rotation=(0.3, 0.0, 0.0))
