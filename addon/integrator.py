@@ -991,7 +991,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             bool(self.mats.translucency_textures)   # the lift needs u, v; so do those textures
         idx, thr, n_black, n_rr, (P, ng, ns, P_off), prim, (pid, keys, u_pick, u, v) = dacrt.shading.continue_paths(
             hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_scatter, path.thr,
-            u_rr if k >= ROULETTE_FROM else None, surface=(self.tri.geo, self.tri.normals, path.D),
+            u_rr if k >= ROULETTE_FROM else None, surface=(self.tri.geo, self.tri.normals, path.D, self.tri.records),
             take=(path.pid, path.keys, u_pick if need_pick else None,
                   hits['u'] if uv else None, hits['v'] if uv else None))
         self._ended['black'] += n_black
@@ -1112,7 +1112,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         black, rr, (thr, (_, _, ns, P_off), prim, pid, keys, _), nee, bsdf = dacrt.shading.shade_bounce(
             self._light_choice_at(k), hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_scatter,
             path.thr, u_rr, t.geo, t.normals, path.D, path.pid, path.keys, u_pick, self.rng.dim_words(dim(k, 1)),
-            _END_SHORTEN, SKIP_WORK, None if last else self.rng.dim_words(dim(k, 2)), rough=self._fused_rough())
+            _END_SHORTEN, SKIP_WORK, None if last else self.rng.dim_words(dim(k, 2)), rough=self._fused_rough(),
+            records=t.records)
         self._ended['black'] += black
         self._ended['roulette'] += rr
         if len(pid) == 0:

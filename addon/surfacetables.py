@@ -83,6 +83,10 @@ class Triangles:
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
         poll()
         self.normals = None if flat else dacrt.shading.corner_rows(normals)
+        # what a hit point reads of its triangle (geo's rows, the corner normals and their
+        # per-triangle arithmetic) as one 128-byte record per triangle: two cache lines per hit
+        # instead of 24 rows' lines (native hitrecords.h); built after the twins' steps above
+        self.records = dacrt.shading.hit_records(self.geo, self.normals)
         poll()
         self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
         # rows: corner 0 tangent and sign (0:4), corner 1 - corner 0 (4:8), corner 2 - corner 0

@@ -28,7 +28,7 @@ class SurfaceValues:
     def _surface(self, hits, sel, D):
         """Hit points P, geometric and shading normals facing the incoming rays, and the points
         offset off the surface toward the ray's side (all (3,k)), of the rays sel (None: all)."""
-        return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D)
+        return dacrt.shading.surface(self.tri.geo, self.tri.normals, hits, sel, D, self.tri.records)
 
     def _back(self, prim, n, incoming, length=None):
         """(k,) bool: the hits on prim met from behind (n (3, k): the normals turned to face the

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 
+#include "hitrecords.h"
 #include "lighttree.h"
 
 namespace dacrt::bindargs {
@@ -68,6 +69,23 @@ inline const LightTree* tree_keys(const py::object& tree, const py::object& keys
             throw py::value_error(std::string(name) + "[" + std::to_string(k) + "] = " + std::to_string(keep.data()[k]) +
                                   " is neither -1 nor a key of the light tree");
     return lt;
+}
+
+// The hit-point records (hitrecords.h, hit_records_py) of a table of M triangles, or null for
+// None; they must say whether they hold corner normals as the call does (smooth): records of
+// another table shape would be read as the wrong triangles' data.
+inline const float* hit_records_arg(const py::object& rec, size_t M, bool smooth,
+                                    py::array_t<float, py::array::c_style>& keep) {
+    if (rec.is_none()) return nullptr;
+    keep = rec.cast<py::array_t<float, py::array::c_style>>();
+    if (keep.ndim() != 2 || size_t(keep.shape(0)) != M || size_t(keep.shape(1)) != kHitRecord)
+        throw py::value_error("records must have shape (" + std::to_string(M) + ", " + std::to_string(kHitRecord) +
+                              "), got " + shape_str(keep));
+    const float want = smooth ? 1.0f : 0.0f;
+    if (M && (keep.data()[kRecordSmooth] != want || keep.data()[(M - 1) * kHitRecord + kRecordSmooth] != want))
+        throw py::value_error(std::string("records were built ") + (smooth ? "without" : "with") +
+                              " corner normals, the call has " + (smooth ? "them" : "none"));
+    return keep.data();
 }
 
 }  // namespace dacrt::bindargs

@@ -494,7 +494,7 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
                           F32Array geo, py::object normals, F32Array D, I64Array pid,
                           py::array_t<uint32_t, py::array::c_style> keys, py::object pick, uint32_t nee_ka,
                           uint32_t nee_kb, float shorten, bool skip_work, bool scatter, uint32_t ka, uint32_t kb,
-                          py::object ray_dtype, py::object rough) {
+                          py::object ray_dtype, py::object rough, py::object records_of_geo) {
     F32Array keep[3];
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
@@ -522,6 +522,8 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     need_shape(geo, 15, in.M, "geo");
     in.geo = geo.data();
     in.normals = optional_f32(normals, 9, in.M, "normals", nrm_keep);
+    F32Array rec_keep;
+    in.records = hit_records_arg(records_of_geo, in.M, in.normals != nullptr, rec_keep);
     need_shape(D, 3, n, "D");
     in.D = D.data();
     need_shape(pid, 0, n, "pid");
@@ -893,7 +895,7 @@ void register_lamps(py::module_& m) {
           py::arg("thr"), py::arg("u_rr"), py::arg("geo"), py::arg("normals"), py::arg("D"), py::arg("pid"),
           py::arg("keys"), py::arg("pick"), py::arg("nee_ka"), py::arg("nee_kb"), py::arg("shorten"),
           py::arg("skip_work"), py::arg("scatter"), py::arg("ka"), py::arg("kb"), py::arg("ray_dtype"),
-          py::arg("rough") = py::none());
+          py::arg("rough") = py::none(), py::arg("geo_records") = py::none());
     m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"),
           py::arg("clamp") = std::numeric_limits<float>::infinity());
 }

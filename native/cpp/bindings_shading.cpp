@@ -4,8 +4,11 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,6 +16,7 @@
 #include "bindargs.h"
 #include "camera.h"
 #include "coplanar.h"
+#include "hitrecords.h"
 #include "islands.h"
 #include "noise.h"
 #include "orennayar.h"
@@ -89,10 +93,12 @@ void pack_rays_py(F32Array O, F32Array D, F32Array tfar, py::array out) {
     pack_rays(O.data(), D.data(), tfar.data(), n, r);
 }
 
-F32Array surface_py(F32Array geo, py::object normals, py::array hits, py::object idx, F32Array D) {
+F32Array surface_py(F32Array geo, py::object normals, py::array hits, py::object idx, F32Array D,
+                    py::object geo_records) {
     size_t M = rows_of(geo, 15, "geo");
-    F32Array nrm_keep;
+    F32Array nrm_keep, rec_keep;
     const float* nrm = optional_rows(normals, 9, M, "normals", nrm_keep);
+    const float* rec = hit_records_arg(geo_records, M, nrm != nullptr, rec_keep);
     size_t n = rows_of(D, 3, "D");
     const Hit* h = records<Hit>(hits, n, "hits");
     I64Array idx_keep;
@@ -102,7 +108,7 @@ F32Array surface_py(F32Array geo, py::object normals, py::array hits, py::object
     size_t bad;
     {
         py::gil_scoped_release nogil;
-        bad = surface(geo.data(), M, nrm, h, ix, k, D.data(), n, out.mutable_data());
+        bad = surface(geo.data(), M, nrm, h, ix, k, D.data(), n, out.mutable_data(), rec);
     }
     if (bad) throw py::value_error(std::to_string(bad) + " selected hit(s) have no triangle (prim < 0 or >= " +
                                    std::to_string(M) + ")");
@@ -303,7 +309,8 @@ std::vector<Columns> columns_of(const py::list& arrays, size_t k, py::list& out,
 
 py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style> hit,
                             py::array_t<bool, py::array::c_style> live, F32Array albedo, py::object thr,
-                            py::object u_rr, py::object geo, py::object normals, py::object D, py::list take) {
+                            py::object u_rr, py::object geo, py::object normals, py::object D, py::list take,
+                            py::object geo_records) {
     const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const Hit* h = records<Hit>(hits, n, "hits");
     need_len(hit, n, "hit");
@@ -323,6 +330,8 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
     const float* nrm = g ? optional_rows(normals, 9, M, "normals", nrm_keep) : nullptr;
     const float* d = g ? optional_rows(D, 3, n, "D", D_keep) : nullptr;
     if (g && !d) throw py::value_error("geo needs D, the rays' directions");
+    F32Array rec_keep;
+    const float* rec = g ? hit_records_arg(geo_records, M, nrm != nullptr, rec_keep) : nullptr;
     I64Array idx{py::ssize_t(n)};
     size_t k, black, rr;
     {
@@ -351,7 +360,7 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
     {
         py::gil_scoped_release nogil;
         survivor_throughput(h, n, albedo.data(), M, t, r != nullptr, idx.data(), k, thr_out.mutable_data(), g, nrm, d,
-                            surf_out, prim_out);
+                            surf_out, prim_out, rec);
         if (!cols.empty()) take_columns(cols.data(), cols.size(), idx.data(), k);
     }
     return py::make_tuple(idx, thr_out, black, rr, surf, prim, taken);
@@ -600,6 +609,24 @@ py::tuple coplanar_groups_py(F32Array geo, py::array_t<int32_t, py::array::c_sty
     return py::make_tuple(r, s);
 }
 
+// The hit-point records of a table (hitrecords.h): (M, 32) float32, each record on its own
+// two cache lines (the array's memory 128-byte aligned, which numpy's own is not).
+F32Array hit_records_py(F32Array geo, py::object normals) {
+    const size_t M = rows_of(geo, 15, "geo");
+    F32Array nrm_keep;
+    const float* nrm = optional_rows(normals, 9, M, "normals", nrm_keep);
+    const size_t bytes = std::max<size_t>(M * kHitRecord * sizeof(float), 128);
+    float* mem = static_cast<float*>(std::aligned_alloc(128, bytes));
+    if (!mem) throw std::bad_alloc();
+    py::capsule owner(mem, [](void* p) { std::free(p); });
+    F32Array out({py::ssize_t(M), py::ssize_t(kHitRecord)}, mem, owner);
+    {
+        py::gil_scoped_release nogil;
+        hit_records(geo.data(), M, nrm, mem);
+    }
+    return out;
+}
+
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
                             float tiny, py::object full, py::object keys) {
     const auto [V, M] = mesh_sizes(vertices, triangles);
@@ -766,7 +793,9 @@ void register_shading(py::module_& m) {
           py::arg("inv_step"), py::arg("max_group"), py::arg("keys") = py::none());
     m.def("triangle_table", &triangle_table_py, py::arg("vertices"), py::arg("triangles"), py::arg("offset_ulps"),
           py::arg("tiny"), py::arg("full") = py::none(), py::arg("keys") = py::none());
-    m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"));
+    m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"),
+          py::arg("records") = py::none());
+    m.def("hit_records", &hit_records_py, py::arg("geo"), py::arg("normals"));
     m.def("uniform2", &uniform2_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("uniform_pick", &uniform_pick_py, py::arg("keys"), py::arg("ka"), py::arg("kb"));
     m.def("cosine_scatter", &cosine_scatter_py, py::arg("keys"), py::arg("ka"), py::arg("kb"), py::arg("ns"),
@@ -783,7 +812,7 @@ void register_shading(py::module_& m) {
           py::arg("k1"), py::arg("ka"), py::arg("kb"), py::arg("table"));
     m.def("continue_paths", &continue_paths_py, py::arg("hits"), py::arg("hit"), py::arg("live"), py::arg("albedo"),
           py::arg("thr"), py::arg("u_rr"), py::arg("geo") = py::none(), py::arg("normals") = py::none(),
-          py::arg("D") = py::none(), py::arg("take") = py::list());
+          py::arg("D") = py::none(), py::arg("take") = py::list(), py::arg("records") = py::none());
     m.def("gather_emission", &gather_emission_py, py::arg("hits"), py::arg("hit"), py::arg("emission"),
           py::arg("emissive"), py::arg("tri_prob"), py::arg("area"), py::arg("geo"), py::arg("O"), py::arg("D"),
           py::arg("thr"), py::arg("pdf"), py::arg("pid"), py::arg("L"),

@@ -38,7 +38,7 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
     auto block = [&](size_t q, size_t* bad) {
         const size_t b = q * kEventBlock, e = std::min(k, b + kEventBlock);
         survivor_range(in.hits, n, in.albedo, in.M, in.thr, in.u_rr != nullptr, idx, k, out.thr, in.geo, in.normals,
-                       in.D, surf, out.prim, b, e);
+                       in.D, surf, out.prim, b, e, in.records);
         for (size_t j = b; j < e; ++j) {  // the path columns the survivors keep
             const size_t i = size_t(idx[j]);
             out.pid[j] = in.pid[i];

@@ -28,6 +28,7 @@ struct BounceIn {
     const float* geo;
     const float* normals;
     const float* D;
+    const float* records;  // geo's hit-point records (hitrecords.h) or null: the rows
     const float* thr;
     const float* u_rr;
     const int64_t* pid;

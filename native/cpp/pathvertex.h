@@ -30,14 +30,33 @@ struct SurfacePoint {
     float P[3], ng[3], ns[3], P_off[3];
 };
 
-// Barycentrics (u, v) of triangle p (geo: 15 rows of M) moved, where needed, to at least
-// `margin` from each edge: a weight w_k whose edge lies nearer is raised to margin / (its
-// altitude), the largest weight paying for it. Points farther in keep their (u, v) bit for bit.
-// The margins are capped at 1/4 of a weight (a triangle narrower than 4 margins: toward its
-// middle) and the move at 2 margins (a sharp corner: as far as that goes), so the point never
-// travels farther than that: a thin wall standing on the triangle stays on its side.
-inline void inside_edges(const float* geo, size_t M, size_t p, float margin, float& u, float& v) {
-    auto g = [&](int row) { return geo[size_t(row) * M + p]; };
+// The hit point's margin from its triangle's edges (inside_edges): 8 ULPs of the triangle's
+// largest coordinate (from the table's v0 and edges), the whole self-intersection step (the
+// table's step along the normal is only the share P's error there needs, shading.h
+// triangle_table). Within it a neighbour's float test, erring by ULPs of that neighbour's
+// coordinates in every axis, could take the point.
+template <class G>
+inline float edge_margin(const G& g) {
+    float top = 0x1p-100f;
+    for (int a = 0; a < 3; ++a) {
+        const float v0 = g(a);
+        top = std::max(top, std::max(std::fabs(v0), std::max(std::fabs(v0 + g(3 + a)), std::fabs(v0 + g(6 + a)))));
+    }
+    return 8.0f * ulp_of(top);
+}
+
+// What inside_edges and the step need of a triangle besides its rows: its edge margin
+// (edge_margin), twice its area along its unit normal, its edges' squared lengths (opposite
+// corners 0, 1, 2) and the step's squared length and length. Computed from the rows alone, so a
+// per-triangle record holding it (hitrecords.h) gives the same bits as computing it per hit.
+struct TriangleShape {
+    float margin, area2, len2[3], step2, step_len;
+};
+
+template <class G>
+inline TriangleShape shape_of(const G& g) {
+    TriangleShape sh;
+    sh.margin = edge_margin(g);
     float e[3][3];  // edges opposite corners 0, 1, 2: v2 - v1, v2 - v0, v1 - v0
     for (int a = 0; a < 3; ++a) {
         e[0][a] = g(6 + a) - g(3 + a);
@@ -47,13 +66,27 @@ inline void inside_edges(const float* geo, size_t M, size_t p, float margin, flo
     // twice the area, along the table's unit normal (e1 x e2 . n)
     const float c0 = e[2][1] * e[1][2] - e[2][2] * e[1][1], c1 = e[2][2] * e[1][0] - e[2][0] * e[1][2],
                 c2 = e[2][0] * e[1][1] - e[2][1] * e[1][0];
-    const float area2 = c0 * g(9) + c1 * g(10) + c2 * g(11);
+    sh.area2 = c0 * g(9) + c1 * g(10) + c2 * g(11);
+    for (int k = 0; k < 3; ++k) sh.len2[k] = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
+    sh.step2 = g(12) * g(12) + g(13) * g(13) + g(14) * g(14);
+    sh.step_len = std::sqrt(sh.step2);
+    return sh;
+}
+
+// Barycentrics (u, v) of a triangle of shape sh moved, where needed, to at least
+// `margin` from each edge: a weight w_k whose edge lies nearer is raised to margin / (its
+// altitude), the largest weight paying for it. Points farther in keep their (u, v) bit for bit.
+// The margins are capped at 1/4 of a weight (a triangle narrower than 4 margins: toward its
+// middle) and the move at 2 margins (a sharp corner: as far as that goes), so the point never
+// travels farther than that: a thin wall standing on the triangle stays on its side.
+inline void inside_edges(const TriangleShape& sh, float& u, float& v) {
+    const float margin = sh.margin, area2 = sh.area2;
+    const float* len2 = sh.len2;
     if (!(area2 > 0) || !(margin > 0) || !(area2 < kFloatMax)) return;  // degenerate, no step, NaN
-    float w[3] = {1.0f - u - v, u, v}, len2[3], len[3], need[3];
+    float w[3] = {1.0f - u - v, u, v}, len[3], need[3];
     // the common case, without roots or divisions: distance w_k area2 / len_k >= margin
     bool inside = true;
     for (int k = 0; k < 3; ++k) {
-        len2[k] = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
         const float wa = w[k] * area2;
         inside = inside && wa >= 0 && wa * wa >= margin * margin * len2[k];
     }
@@ -79,29 +112,14 @@ inline void inside_edges(const float* geo, size_t M, size_t p, float margin, flo
     v = w[2];
 }
 
-// The hit point's margin from its triangle's edges (inside_edges): 8 ULPs of the triangle's
-// largest coordinate (from the table's v0 and edges), the whole self-intersection step (the
-// table's step along the normal is only the share P's error there needs, shading.h
-// triangle_table). Within it a neighbour's float test, erring by ULPs of that neighbour's
-// coordinates in every axis, could take the point.
-inline float edge_margin(const float* geo, size_t M, size_t p) {
-    auto g = [&](int row) { return geo[size_t(row) * M + p]; };
-    float top = 0x1p-100f;
-    for (int a = 0; a < 3; ++a) {
-        const float v0 = g(a);
-        top = std::max(top, std::max(std::fabs(v0), std::max(std::fabs(v0 + g(3 + a)), std::fabs(v0 + g(6 + a)))));
-    }
-    return 8.0f * ulp_of(top);
-}
-
-inline void surface_point(const float* geo, size_t M, const float* normals, const Hit& h, const float d[3],
-                          SurfacePoint& s) {
-    const size_t p = prim_at(h, M);
-    auto g = [&](int row) { return geo[size_t(row) * M + p]; };
-    const float len2 = g(12) * g(12) + g(13) * g(13) + g(14) * g(14);
-    const float step_len = std::sqrt(len2);
+// surface_point on a triangle's rows g(0..14) (the table's), its corner-normal rows nr(0..8)
+// (read only when smooth) and its shape (shape_of g).
+template <class G, class N>
+inline void surface_point_of(const G& g, const N& nr, bool smooth, const TriangleShape& sh, const Hit& h,
+                             const float d[3], SurfacePoint& s) {
+    const float len2 = sh.step2, step_len = sh.step_len;
     float u = h.u, v = h.v;
-    inside_edges(geo, M, p, edge_margin(geo, M, p), u, v);
+    inside_edges(sh, u, v);
     for (int a = 0; a < 3; ++a) {
         float x = g(3 + a) * u;
         x += g(6 + a) * v;
@@ -118,12 +136,12 @@ inline void surface_point(const float* geo, size_t M, const float* normals, cons
         s.P_off[a] = s.P[a] + g(12 + a) * step;
         s.ns[a] = s.ng[a];
     }
-    if (normals) {
+    if (smooth) {
         float n[3];
         for (int a = 0; a < 3; ++a) {
-            float x = normals[size_t(3 + a) * M + p] * u;
-            x += normals[size_t(6 + a) * M + p] * v;
-            x += normals[size_t(a) * M + p];
+            float x = nr(3 + a) * u;
+            x += nr(6 + a) * v;
+            x += nr(a);
             n[a] = x;
         }
         const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -133,6 +151,14 @@ inline void surface_point(const float* geo, size_t M, const float* normals, cons
             for (int a = 0; a < 3; ++a) s.ns[a] = n[a] * inv;
         }
     }
+}
+
+inline void surface_point(const float* geo, size_t M, const float* normals, const Hit& h, const float d[3],
+                          SurfacePoint& s) {
+    const size_t p = prim_at(h, M);
+    auto g = [&](int row) { return geo[size_t(row) * M + p]; };
+    auto nr = [&](int row) { return normals[size_t(row) * M + p]; };
+    surface_point_of(g, nr, normals != nullptr, shape_of(g), h, d, s);
 }
 
 // value (radiance / pdf of a light sample) times thr (null = 1) x cos/pi x the power-heuristic

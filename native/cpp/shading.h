@@ -123,9 +123,9 @@ bool normals_flat(const float* normals, const float* geo, size_t M, float tol);
 // or null for flat shading. out: rows P, ng, P_off, then ns when normals are given (stride k);
 // ng, ns face the incoming ray and P_off is P stepped off the surface toward the ray's side.
 // Returns the number of selected rays whose prim is not a triangle of geo (out stays unwritten
-// for them; callers raise).
+// for them; callers raise). records: as survivor_throughput's (null: the rows).
 size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits, const int64_t* idx,
-               size_t k, const float* D, size_t n, float* out);
+               size_t k, const float* D, size_t n, float* out, const float* records = nullptr);
 
 // Two uniforms per path for keys (rows k0, k1; stride n) and dimension words ka, kb.
 void uniform2_rows(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, float* u1, float* u2);
@@ -218,14 +218,17 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
 // same pass, their surface points as surface() gives them (directions D: 3 rows, stride n;
 // normals null = flat) to surf_out: rows P, ng, P_off (and ns with normals) of stride k, and
 // their triangles to prim_out: one pass over the survivors instead of three calls and passes.
+// records (null: read geo and normals' rows): the table's hit-point records (hitrecords.h,
+// built from this geo and normals), the same bits from two cache lines a hit.
 void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                          const int64_t* idx, size_t k, float* thr_out, const float* geo = nullptr,
                          const float* normals = nullptr, const float* D = nullptr, float* surf_out = nullptr,
-                         int32_t* prim_out = nullptr);
+                         int32_t* prim_out = nullptr, const float* records = nullptr);
 // survivor_throughput's survivors [b, e) on the calling thread.
 void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                     const int64_t* idx, size_t k, float* thr_out, const float* geo, const float* normals,
-                    const float* D, float* surf_out, int32_t* prim_out, size_t b, size_t e);
+                    const float* D, float* surf_out, int32_t* prim_out, size_t b, size_t e,
+                    const float* records = nullptr);
 
 // Emission that rays (origins O, unit directions D: 3 rows, stride n) meet on emissive triangles
 // (two-sided), added to L (3 rows, stride N) at column pid[i] (distinct per ray). Rays with

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <vector>
 
+#include "hitrecords.h"
 #include "parallel.h"
 #include "pathvertex.h"
 #include "shading.h"
@@ -132,7 +133,7 @@ void triangle_table(const float* vertices, size_t V, const int32_t* triangles, s
 }
 
 size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits, const int64_t* idx,
-               size_t k, const float* D, size_t n, float* out) {
+               size_t k, const float* D, size_t n, float* out, const float* records) {
     std::atomic<size_t> bad{0};
     parallel_for(k, [&](size_t b, size_t e) {
         size_t local_bad = 0;
@@ -146,7 +147,10 @@ size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits
             }
             const float d[3] = {D[i], D[n + i], D[2 * n + i]};
             SurfacePoint sp;
-            surface_point(geo, M, normals, h, d, sp);
+            if (records)
+                surface_point_record(records + kHitRecord * size_t(p), normals != nullptr, h, d, sp);
+            else
+                surface_point(geo, M, normals, h, d, sp);
             for (int a = 0; a < 3; ++a) {
                 out[size_t(a) * k + j] = sp.P[a];
                 out[size_t(3 + a) * k + j] = sp.ng[a];

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "hitrecords.h"
 #include "parallel.h"
 #include "pathvertex.h"
 #include "shading.h"
@@ -53,7 +54,7 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
 
 void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                     const int64_t* idx, size_t k, float* thr_out, const float* geo, const float* normals,
-                    const float* D, float* surf_out, int32_t* prim_out, size_t b, size_t e) {
+                    const float* D, float* surf_out, int32_t* prim_out, size_t b, size_t e, const float* records) {
     for (size_t j = b; j < e; ++j) {
         const size_t i = size_t(idx[j]);
         const Hit& h = hits[i];
@@ -68,7 +69,10 @@ void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, co
         if (!geo) continue;
         const float d[3] = {D[i], D[n + i], D[2 * n + i]};
         SurfacePoint sp;
-        surface_point(geo, M, normals, h, d, sp);  // survivors have 0 <= prim < M
+        if (records)  // two cache lines and no shape arithmetic per hit, the same bits
+            surface_point_record(records + kHitRecord * p, normals != nullptr, h, d, sp);
+        else
+            surface_point(geo, M, normals, h, d, sp);  // survivors have 0 <= prim < M
         for (int a = 0; a < 3; ++a) {
             surf_out[size_t(a) * k + j] = sp.P[a];
             surf_out[size_t(3 + a) * k + j] = sp.ng[a];
@@ -81,9 +85,10 @@ void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, co
 
 void survivor_throughput(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                          const int64_t* idx, size_t k, float* thr_out, const float* geo, const float* normals,
-                         const float* D, float* surf_out, int32_t* prim_out) {
+                         const float* D, float* surf_out, int32_t* prim_out, const float* records) {
     parallel_for(k, [&](size_t b, size_t e) {
-        survivor_range(hits, n, albedo, M, thr, roulette, idx, k, thr_out, geo, normals, D, surf_out, prim_out, b, e);
+        survivor_range(hits, n, albedo, M, thr, roulette, idx, k, thr_out, geo, normals, D, surf_out, prim_out, b, e,
+                       records);
     });
 }
 

@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["triangle_table", "repeated_keys", "coplanar_groups", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
+__all__ = ["triangle_table", "hit_records", "repeated_keys", "coplanar_groups", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
            "LightChoice", "next_event", "accumulate_masked", "noise_texture",
            "voronoi_texture"]
 
@@ -116,12 +116,26 @@ def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 **
     return _core.triangle_table(v, t, float(offset_ulps), float(tiny), full, keys)
 
 
-def surface(geo, normals, hits, idx, D):
+def hit_records(geo, normals):
+    """(M, 32) float32: per-triangle hit-point records of the table geo (15, M) and its corner
+    normals (9, M) or None (native hitrecords.h): what a hit point reads of its triangle on two
+    cache lines, with the per-triangle arithmetic done once. Kernels given them (records= of
+    surface, continue_paths' surface tuple, shade_bounce's geo_records) give the same bits as
+    from the rows; build them again after changing geo or normals."""
+    return _core.hit_records(_rows(geo, 15, "geo"), None if normals is None else _rows(normals, 9, "normals"))
+
+
+def _records(records):
+    return None if records is None else np.ascontiguousarray(records, _F32)
+
+
+def surface(geo, normals, hits, idx, D, records=None):
     """Hit points of the rays idx (all when None) from their hits (HIT_DTYPE, n) and
     directions D (3, n).
 
     geo (15, M): rows v0, v1 - v0, v2 - v0, unit geometric normal, front-side offset step;
-    normals (9, M) (corner-0 normal, corner 1 - 0, corner 2 - 0) or None for flat shading.
+    normals (9, M) (corner-0 normal, corner 1 - 0, corner 2 - 0) or None for flat shading;
+    records: hit_records(geo, normals) or None (the rows: the same bits, slower).
     Returns P, ng, ns, P_off (3, k): geometric and shading normals facing the incoming ray
     (ns is ng when normals is None) and P stepped off the surface toward the ray's side."""
     geo = _rows(geo, 15, "geo")
@@ -133,7 +147,7 @@ def surface(geo, normals, hits, idx, D):
     hits = np.ascontiguousarray(hits)
     if idx is not None:
         idx = np.ascontiguousarray(idx, np.int64)
-    out = _core.surface(geo, normals, hits, idx, _rows(D, 3, "D"))
+    out = _core.surface(geo, normals, hits, idx, _rows(D, 3, "D"), _records(records))
     P, ng, P_off = out[0:3], out[3:6], out[6:9]
     ns = ng if normals is None else out[9:12]
     return P, ng, ns, P_off
@@ -353,7 +367,8 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
 
 
 def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, normals, D, pid, keys, pick,
-                 nee_words, shorten: float = 1.0, skip_work: bool = True, scatter_words=None, rough=None):
+                 nee_words, shorten: float = 1.0, skip_work: bool = True, scatter_words=None, rough=None,
+                 records=None):
     """A diffuse path vertex in one native pass, block by block: continue_paths(hits, hit, live,
     albedo, thr, u_rr, surface=(geo, normals, D), take=(pid, keys, pick)), then next_event at
     the survivors (lights, their P, P_off, ns, ng (None where normals is None), thr, keys,
@@ -362,6 +377,7 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
     origins=P_off) of the survivors: the same bits as those three calls. rough = (materials
     (M,) of the triangles, params (4, m), colours (3, m)) or None: rough diffuses, as
     rough_rows' table of the survivors in next_event's rough and rough_scale after the scatter.
+    records: hit_records(geo, normals) or None (as surface()).
 
     Returns (black, roulette, (thr, (P, ng, ns, P_off), prim, pid, keys, pick), (value, contrib,
     rays, send, skip, skipped) as next_event's, (wi, pdf, ok, rays) as cosine_scatter's or None
@@ -380,7 +396,7 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
         None if pick is None else np.ascontiguousarray(pick, np.float64), int(nee_words[0]), int(nee_words[1]),
         float(shorten), bool(skip_work), scatter_words is not None, int(ka), int(kb), RAY_DTYPE,
         None if rough is None else (np.ascontiguousarray(rough[0], np.int32), _rows(rough[1], 4, "rough params"),
-                                    _rows(rough[2], 3, "rough colours")))
+                                    _rows(rough[2], 3, "rough colours")), _records(records))
     thr_out, surf, prim, pid_out, keys_out, pick_out = paths
     ng = surf[3:6]
     points = (surf[0:3], ng, ng if normals is None else surf[9:12], surf[6:9])
@@ -545,24 +561,26 @@ def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None, surface=None, t
     their throughput albedo[prim] x thr / q (3, k), paths ended on black surfaces, paths ended
     by roulette).
 
-    surface = (geo, normals, D) and take (per-path arrays, (n,) or (rows, n), None kept None)
-    ask for more of the survivors in the same native pass: the return then ends with
-    (P, ng, ns, P_off) as surface(geo, normals, hits, idx, D) gives them (None without
+    surface = (geo, normals, D) or (geo, normals, D, records) and take (per-path arrays, (n,) or
+    (rows, n), None kept None) ask for more of the survivors in the same native pass: the return
+    then ends with (P, ng, ns, P_off) as surface(geo, normals, hits, idx, D, records) gives them (None without
     surface), their triangles prim (k,) int32 (None without surface) and the columns idx of
     each array of take, as take_columns(idx, *take)."""
     hits = np.asarray(hits)
     if hits.dtype != HIT_DTYPE:
         raise ValueError(f"hits must be a HIT_DTYPE array, got {hits.dtype}")
-    geo = normals = D = None
+    geo = normals = D = records = None
     if surface is not None:
-        geo, normals, D = surface
+        geo, normals, D, *rest = surface
+        records = rest[0] if rest else None
         geo, D = _rows(geo, 15, "geo"), _rows(D, 3, "D")
         if normals is not None:
             normals = _rows(normals, 9, "normals")
     idx, thr_out, black, rr, surf, prim, taken = _core.continue_paths(
         np.ascontiguousarray(hits), np.ascontiguousarray(hit, np.bool_), np.ascontiguousarray(live, np.bool_),
         _rows(albedo, 3, "albedo"), None if thr is None else _rows(thr, 3, "thr"),
-        None if u_rr is None else np.ascontiguousarray(u_rr, _F32), geo, normals, D, _present(take))
+        None if u_rr is None else np.ascontiguousarray(u_rr, _F32), geo, normals, D, _present(take),
+        _records(records))
     if surface is None and not take:
         return idx, thr_out, black, rr
     points = None
