@@ -42,6 +42,9 @@ def twins(keys):
     return dacrt.shading.repeated_keys(keys)
 
 
+RECORDS_UP_TO = 1 << 20     # triangles: hit-point records up to 128 MB (see Triangles)
+
+
 class Triangles:
     """Per-triangle arrays the shading code gathers from, one float32 row per quantity."""
 
@@ -85,8 +88,11 @@ class Triangles:
         self.normals = None if flat else dacrt.shading.corner_rows(normals)
         # what a hit point reads of its triangle (geo's rows, the corner normals and their
         # per-triangle arithmetic) as one 128-byte record per triangle: two cache lines per hit
-        # instead of 24 rows' lines (native hitrecords.h); built after the twins' steps above
-        self.records = dacrt.shading.hit_records(self.geo, self.normals)
+        # instead of 24 rows' lines (native hitrecords.h), the same bits; built after the twins'
+        # steps above. Not for frames above RECORDS_UP_TO triangles: there 128 bytes a triangle
+        # would be half again the frame's peak memory (export/budget.py MESH_BYTES), for kernels
+        # that are a small share of such a frame's time beside its tracing
+        self.records = dacrt.shading.hit_records(self.geo, self.normals) if m <= RECORDS_UP_TO else None
         poll()
         self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
         # rows: corner 0 tangent and sign (0:4), corner 1 - corner 0 (4:8), corner 2 - corner 0

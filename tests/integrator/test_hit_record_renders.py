@@ -57,3 +57,20 @@ def test_renders_from_records_are_renders_from_rows(monkeypatch, fused, smooth):
     assert np.array_equal(with_records.film.combined(), rows.film.combined())
     assert with_records.stats['rays'] == rows.stats['rays']
     assert with_records.film.combined()[..., :3].mean() > 0
+
+
+def test_frames_above_the_record_limit_render_from_the_rows(monkeypatch):
+    """Above surfacetables.RECORDS_UP_TO triangles no records are built (their 128 bytes a
+    triangle would be half again a large frame's peak memory): the rows give the same image."""
+    import addon.surfacetables as surfacetables
+    scene = cornell_box(40, 30, 16, 4, area_light=True)
+    built = []
+    real = dacrt.shading.hit_records
+    monkeypatch.setattr(dacrt.shading, 'hit_records', lambda *a: built.append(1) or real(*a))
+    with_records = render(scene)
+    assert built
+    built.clear()
+    monkeypatch.setattr(surfacetables, 'RECORDS_UP_TO', len(scene.geometry.triangles) - 1)
+    rows = render(scene)
+    assert not built
+    assert np.array_equal(with_records.film.combined(), rows.film.combined())
