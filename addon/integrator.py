@@ -383,6 +383,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._passes = 0
         x0, y0, x1, y1 = self.camera.region
         self._frame_paths = max(0, x1 - x0) * max(0, y1 - y0) * self.samples
+        self.tri.build_records(self._frame_paths)
         t_build = time.perf_counter()
         self._poll()
         self._build_scenes()

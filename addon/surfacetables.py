@@ -42,7 +42,14 @@ def twins(keys):
     return dacrt.shading.repeated_keys(keys)
 
 
-RECORDS_UP_TO = 1 << 20     # triangles: hit-point records up to 128 MB (see Triangles)
+# Hit-point records (Triangles.build_records) for frames of at most RECORDS_UP_TO triangles (up
+# to 128 MB) with at least RECORD_PATHS_PER_TRIANGLE paths per triangle. They cost 128 bytes and
+# ~75 ns of CPU a triangle to build (100K and 1M triangles, page faults included) and save ~15-50
+# ns a hit: a dragon frame at 4 spp (0.77 paths a triangle) lost ~4 ms with them (7.5 built, 3.5
+# saved), at 16 spp it gains. Above the size limit 128 bytes a triangle would be half again the
+# frame's peak memory (export/budget.py MESH_BYTES: a 4M-triangle frame 1045 -> 1533 MB).
+RECORDS_UP_TO = 1 << 20
+RECORD_PATHS_PER_TRIANGLE = 2
 
 
 class Triangles:
@@ -86,13 +93,7 @@ class Triangles:
         # rows: corner 0 normal (0:3), corner 1 - corner 0 (3:6), corner 2 - corner 0 (6:9)
         poll()
         self.normals = None if flat else dacrt.shading.corner_rows(normals)
-        # what a hit point reads of its triangle (geo's rows, the corner normals and their
-        # per-triangle arithmetic) as one 128-byte record per triangle: two cache lines per hit
-        # instead of 24 rows' lines (native hitrecords.h), the same bits; built after the twins'
-        # steps above. Not for frames above RECORDS_UP_TO triangles: there 128 bytes a triangle
-        # would be half again the frame's peak memory (export/budget.py MESH_BYTES), for kernels
-        # that are a small share of such a frame's time beside its tracing
-        self.records = dacrt.shading.hit_records(self.geo, self.normals) if m <= RECORDS_UP_TO else None
+        self.records = None     # (build_records)
         poll()
         self.uvs = None if geometry.uvs is None else dacrt.shading.corner_rows(geometry.uvs)
         # rows: corner 0 tangent and sign (0:4), corner 1 - corner 0 (4:8), corner 2 - corner 0
@@ -162,6 +163,16 @@ class Triangles:
             if (t[:, 1] > 0).any():
                 self.term_freq = (F32(1.0) / (F32(1.0) - F32(0.5) * t[:, 1])).astype(F32)
         self.terminator = self.term_cutoff is not None or self.term_freq is not None
+
+    def build_records(self, frame_paths):
+        """What a hit point reads of its triangle (geo's rows, the corner normals and the
+        arithmetic on them that depends on the triangle alone) as one 128-byte record per
+        triangle, two cache lines a hit instead of 24 rows' lines (native hitrecords.h): the
+        same bits, faster, for a frame of frame_paths paths where they pay (see RECORDS_UP_TO);
+        else records stays None and the kernels read the rows."""
+        m = len(self)
+        if m <= RECORDS_UP_TO and frame_paths >= RECORD_PATHS_PER_TRIANGLE * m:
+            self.records = dacrt.shading.hit_records(self.geo, self.normals)
 
     def __len__(self):
         return len(self.indices)

@@ -59,18 +59,27 @@ def test_renders_from_records_are_renders_from_rows(monkeypatch, fused, smooth):
     assert with_records.film.combined()[..., :3].mean() > 0
 
 
-def test_frames_above_the_record_limit_render_from_the_rows(monkeypatch):
-    """Above surfacetables.RECORDS_UP_TO triangles no records are built (their 128 bytes a
-    triangle would be half again a large frame's peak memory): the rows give the same image."""
+@pytest.mark.parametrize('limit', ['RECORDS_UP_TO', 'RECORD_PATHS_PER_TRIANGLE'])
+def test_frames_where_records_do_not_pay_render_from_the_rows(monkeypatch, limit):
+    """Above surfacetables.RECORDS_UP_TO triangles (their 128 bytes a triangle would be half
+    again a large frame's peak memory) or below RECORD_PATHS_PER_TRIANGLE paths per triangle
+    (building them costs more than they save) no records are built: the rows give the same
+    image. Cornell at 40 x 30 x 16 has ~560 paths per triangle."""
     import addon.surfacetables as surfacetables
     scene = cornell_box(40, 30, 16, 4, area_light=True)
+    m = len(scene.geometry.triangles)
     built = []
     real = dacrt.shading.hit_records
     monkeypatch.setattr(dacrt.shading, 'hit_records', lambda *a: built.append(1) or real(*a))
+    monkeypatch.setattr(surfacetables, 'RECORDS_UP_TO', m)
+    monkeypatch.setattr(surfacetables, 'RECORD_PATHS_PER_TRIANGLE', 40 * 30 * 16 // m)
     with_records = render(scene)
     assert built
     built.clear()
-    monkeypatch.setattr(surfacetables, 'RECORDS_UP_TO', len(scene.geometry.triangles) - 1)
+    if limit == 'RECORDS_UP_TO':
+        monkeypatch.setattr(surfacetables, limit, m - 1)
+    else:
+        monkeypatch.setattr(surfacetables, limit, 40 * 30 * 16 // m + 1)
     rows = render(scene)
     assert not built
     assert np.array_equal(with_records.film.combined(), rows.film.combined())
