@@ -44,7 +44,7 @@ def twins(keys):
 
 # Hit-point records (Triangles.build_records) for frames of at most RECORDS_UP_TO triangles (up
 # to 128 MB) with at least RECORD_PATHS_PER_TRIANGLE paths per triangle. They cost 128 bytes and
-# ~75 ns of CPU a triangle to build (100K and 1M triangles, page faults included) and save ~15-50
+# 22-120 ns of CPU a triangle to build (100K and 1M triangles, a loaded machine) and save ~15-50
 # ns a hit: a dragon frame at 4 spp (0.77 paths a triangle) lost ~4 ms with them (7.5 built, 3.5
 # saved), at 16 spp it gains. Above the size limit 128 bytes a triangle would be half again the
 # frame's peak memory (export/budget.py MESH_BYTES: a 4M-triangle frame 1045 -> 1533 MB).
