@@ -14,7 +14,7 @@ from .lights.base import RECORD_FIELDS
 from .lights.coincident import coincident_copies, near_copies
 from .lights.overlap import coplanar_overlaps
 from .lights.point import SpotLight
-from .lights.sphereinside import triangles_within
+from .lights.sphereinside import TriangleReach
 from .lights.linking import LightLinking
 from .procedural import VIEW, ProceduralTexels
 from .scenedata import NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
@@ -322,9 +322,12 @@ class LightSetup:
         lights them all round, as a point light of that radius (where Cycles agrees); with MIS
         off or Soft Falloff on both agree. Said, naming the spots, only where some triangle
         comes within the radius."""
-        names = [l.name for l in self.lights.lamps
-                 if isinstance(l, SpotLight) and l.sphere and l.seen_by_bsdf and l.radius > 0
-                 and triangles_within(l.center, l.radius, self.tri.geo)]
+        spots = [l for l in self.lights.lamps
+                 if isinstance(l, SpotLight) and l.sphere and l.seen_by_bsdf and l.radius > 0]
+        if not spots:
+            return
+        reach = TriangleReach(self.tri.geo)
+        names = [l.name for l in spots if reach.within(l.center, l.radius)]
         if names:
             self.messages.append(('WARNING', f"spot light(s) {', '.join(repr(n) for n in dict.fromkeys(names))} with "
                                              "Soft Falloff off have surfaces within their radius: Cycles lights "

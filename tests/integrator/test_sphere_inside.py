@@ -39,3 +39,17 @@ def test_any_of_many_and_degenerate_input():
     assert triangles_within((0.0, 0.0, 0.01), 0.02, _geo([flat]))
     assert not triangles_within((0.0, 0.0, 0.0), 0.0, _geo([near]))
     assert not triangles_within((0.0, 0.0, 0.0), 1.0, np.zeros((12, 0), np.float32))
+
+
+def test_many_queries_on_shared_triangles_match_one_by_one():
+    """TriangleReach (sorted by x, wide triangles apart) answers as the brute check of each
+    triangle alone, for lights all over a field of small triangles and one wide floor."""
+    from addon.lights.sphereinside import TriangleReach
+    rng = np.random.default_rng(11)
+    small = [p + rng.normal(size=(3, 3)) * 0.1 for p in rng.uniform(-5, 5, size=(400, 3))]
+    floor = np.array([[-50.0, -50.0, -3.0], [50.0, -50.0, -3.0], [0.0, 60.0, -3.0]])
+    tris = small + [floor]
+    reach = TriangleReach(_geo(tris))
+    for _ in range(200):
+        c, r = rng.uniform(-6, 6, size=3), rng.uniform(0.01, 1.0)
+        assert reach.within(c, r) == any(triangles_within(c, r, _geo([t])) for t in tris)
