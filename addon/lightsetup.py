@@ -303,7 +303,8 @@ class LightSetup:
         lights = self.lights
         if lights.num_entries < 2:
             return
-        names = [l.name for l in lights.lamps if not l.cast_shadow and l.seen_by_bsdf]
+        # (instances of one lamp share its name: said once)
+        names = list(dict.fromkeys(l.name for l in lights.lamps if not l.cast_shadow and l.seen_by_bsdf))
         if names:
             self.messages.append(('WARNING', f"light(s) {', '.join(repr(n) for n in names)} have Cast Shadow off "
                                              "and Multiple Importance on: light samples light past occluders, "

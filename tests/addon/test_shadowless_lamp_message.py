@@ -64,3 +64,20 @@ def test_not_said_where_the_image_cannot_change(scene, said, case):
     _scene(scene, shadow=case == 'shadow_on', mis=case != 'mis_off', other=None if case == 'alone' else 'point',
            radius=0.0 if case == 'radius_0' else None)
     assert not _said(scene, said)
+
+
+def test_instances_of_one_lamp_named_once(scene, said):
+    """Two collection instances of the shadowless lamp (the fuzzer's seed 523 had said
+    "'L0', 'L0'")."""
+    _scene(scene)
+    lamp = bpy.data.objects['Fill']
+    coll = bpy.data.collections.new('Lamps')
+    scene.collection.objects.unlink(lamp)
+    coll.objects.link(lamp)
+    for k in range(2):
+        e = bpy.data.objects.new(f'Inst{k}', None)
+        e.instance_type, e.instance_collection = 'COLLECTION', coll
+        e.location = (k - 0.5, 0.0, 0.0)
+        scene.collection.objects.link(e)
+    got = _said(scene, said)
+    assert len(got) == 1 and got[0].startswith("light(s) 'Fill' have Cast Shadow off"), got
