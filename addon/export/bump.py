@@ -31,6 +31,29 @@ def bump_nodes(socket):
     return nodes, socket
 
 
+def _white_noise_feeds(socket, seen=None, depth=0) -> bool:
+    """Whether a White Noise Texture computes part of socket's value (through any nodes)."""
+    seen = set() if seen is None else seen
+    link = linked_link(socket) if socket is not None and depth < 64 else None
+    if link is None:
+        return False
+    node = link.from_node
+    if node.type == 'TEX_WHITE_NOISE':
+        return True
+    key = (node.id_data.name, node.name)      # (a node read twice is searched once)
+    if key in seen:
+        return False
+    seen.add(key)
+    return any(_white_noise_feeds(i, seen, depth + 1) for i in node.inputs)
+
+
+# A White Noise height takes a new value at every point: Cycles' bump of it is a difference of
+# two unrelated values over its taps' spacing (a pixel footprint), not the height's gradient
+WHITE_NOISE_BUMP = ("height from a White Noise Texture (a new value at every point): its bump is the "
+                    "difference of unrelated values over a pixel footprint, which DACRT does not take as "
+                    "Cycles does, so the bent normals and the brightness differ from Cycles'")
+
+
 def compile_bump(node, reasons, image=None):
     """scenedata.Bump of a Bump node (bump_nodes'), or None where its Height, Strength or
     Distance chain cannot be followed per point (said). Filter Width is Cycles' tap spacing
@@ -45,6 +68,8 @@ def compile_bump(node, reasons, image=None):
     if found is None:
         return None
     fn, needs, sources = found
+    if _white_noise_feeds(node.inputs['Height']):
+        reasons.append(f"{what}: {WHITE_NOISE_BUMP}")
     sign = -1.0 if node.invert else 1.0
 
     def values(coords):
@@ -82,6 +107,8 @@ def displacement_bump(mat, out, reasons, image=None):
     if found is None:
         return None
     fn, needs, sources = found
+    if _white_noise_feeds(node.inputs['Height']):
+        reasons.append(f"displacement (as bump): {WHITE_NOISE_BUMP}")
     def values(coords):
         h = fn(coords)
         return np.stack([(h[:, 0] - h[:, 1]) * h[:, 2], np.ones(len(h)), np.ones(len(h))], axis=1)

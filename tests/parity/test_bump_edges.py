@@ -307,3 +307,36 @@ def test_a_filter_width_driven_by_nodes_is_said(said):
     scenes.render_rgba(sc)
     text = ' '.join(said)
     assert "Bump node 'Bump': Filter Width driven by nodes; its own value used" in text, text
+
+
+@pytest.mark.parametrize('displacement', [False, True])
+def test_a_white_noise_height_is_said(said, displacement):
+    """A White Noise height (through a Math node) has no gradient: Cycles' bump of it is the
+    difference of unrelated values over its pixel-footprint taps. Fuzz seed 7793 (an Add of two
+    Diffuse BSDFs bumped by White Noise, equirectangular camera) rendered 0.77x Cycles with no
+    message; a Noise height is not said."""
+    from tests.addon import scenes
+
+    def white(nt):
+        w = nt.nodes.new('ShaderNodeTexWhiteNoise')
+        m = nt.nodes.new('ShaderNodeMath')
+        m.operation = 'MULTIPLY'
+        m.inputs[1].default_value = 0.5
+        nt.links.new(w.outputs['Value'], m.inputs[0])
+        return m
+
+    def noise(nt):
+        return nt.nodes.new('ShaderNodeTexNoise')
+
+    texts = {}
+    for name, make_height, out in (("White", white, 'Value'), ("Smooth", noise, 'Fac')):
+        def make():
+            return _bumped(name, make_height, out, distance=0.2,
+                           displacement=(0.5, 0.2) if displacement else None)
+        sc = _plane_scene(make, samples=1)
+        sc.render.engine = 'DACRT'
+        said.clear()
+        scenes.render_rgba(sc)
+        texts[name] = ' '.join(said)
+    assert "height from a White Noise Texture" in texts["White"], texts["White"]
+    assert "White Noise" not in texts["Smooth"], texts["Smooth"]
