@@ -138,6 +138,8 @@ CACHES = {
     ("export.images", "_BYTE_TABLES"),          # byte -> float tables of constants
     ("export.motion", "_OBJECT_SETTINGS"),      # a modifier type's Object settings (its RNA)
     ("nodeeval", "_RAMP_TABLES"),               # a Color Ramp's table, keyed by its whole content
+    ("lights.envkeep", "_kept"),                # a sky's immutable native map, keyed by texels, mapping, strength
+    ("lights.envkeep", "_bright"),              # whether a sky's texels have light, keyed by the texels
 }
 # what outlives one render by design: the C heap's and OpenBLAS's thread policies are the
 # process's (allocator, blasthreads: counted nestings under a lock), and the engine,
