@@ -55,6 +55,15 @@ const float* optional_rows(const py::object& o, py::ssize_t rows, size_t n, cons
     return keep.data();
 }
 
+// An optional writeable (n,) uint64 output of one key per triangle (None: not wanted).
+uint64_t* optional_keys(const py::object& keys, size_t n, py::array_t<uint64_t, py::array::c_style>& keep) {
+    if (keys.is_none()) return nullptr;
+    keep = keys.cast<py::array_t<uint64_t, py::array::c_style>>();
+    if (keep.ndim() != 1 || size_t(keep.shape(0)) != n || !keep.writeable())
+        throw py::value_error("keys must be a writeable uint64 array with one entry per triangle");
+    return keep.mutable_data();
+}
+
 // A contiguous (n,) array of Record-sized records (rays or hits) to read.
 template <class Record>
 const Record* records(const py::array& a, size_t n, const char* what) {
@@ -588,14 +597,8 @@ py::tuple coplanar_groups_py(F32Array geo, py::array_t<int32_t, py::array::c_sty
         throw py::value_error("triangles must have shape (M, 3), one row per column of geo");
     need_len(candidates, M, "candidates");
     if (M >= (size_t(1) << 31)) throw py::value_error("at most 2^31 - 1 triangles");
-    uint64_t* k = nullptr;
     py::array_t<uint64_t, py::array::c_style> key_out;
-    if (!keys.is_none()) {
-        key_out = keys.cast<py::array_t<uint64_t, py::array::c_style>>();
-        if (key_out.ndim() != 1 || size_t(key_out.shape(0)) != M || !key_out.writeable())
-            throw py::value_error("keys must be a writeable uint64 array with one entry per triangle");
-        k = key_out.mutable_data();
-    }
+    uint64_t* k = optional_keys(keys, M, key_out);
     std::vector<int64_t> rows, start;
     {
         py::gil_scoped_release nogil;
@@ -636,14 +639,8 @@ py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c
             throw py::value_error("full must hold one entry per triangle");
     }
     const uint8_t* f = full.is_none() ? nullptr : flags.data();
-    uint64_t* k = nullptr;
     py::array_t<uint64_t, py::array::c_style> key_out;
-    if (!keys.is_none()) {
-        key_out = keys.cast<py::array_t<uint64_t, py::array::c_style>>();
-        if (key_out.ndim() != 1 || size_t(key_out.shape(0)) != M || !key_out.writeable())
-            throw py::value_error("keys must be a writeable uint64 array with one entry per triangle");
-        k = key_out.mutable_data();
-    }
+    uint64_t* k = optional_keys(keys, M, key_out);
     F32Array geo({py::ssize_t(15), py::ssize_t(M)});
     py::array_t<double> area{py::ssize_t(M)};
     {

@@ -6,7 +6,6 @@ and had enclosed that floor: black under a sun and a grey world (0.0 where Cycle
 camera and bounce rays in integrator._past_tube_insides, shadow rays blocked only by such
 insides in integrator._occluded_past_insides)."""
 import bpy
-import numpy as np
 import pytest
 
 from tests.addon import scenes
