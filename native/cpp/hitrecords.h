@@ -40,6 +40,16 @@ inline void surface_point_record(const float* r, bool smooth, const Hit& h, cons
                      smooth, sh, h, d, s);
 }
 
+// surface_point of hit h (0 <= prim < M) from its record where records are given (the same
+// bits, faster), else from the table's rows.
+inline void surface_point_at(const float* geo, size_t M, const float* normals, const float* records, const Hit& h,
+                             const float d[3], SurfacePoint& s) {
+    if (records)
+        surface_point_record(records + kHitRecord * prim_at(h, M), normals != nullptr, h, d, s);
+    else
+        surface_point(geo, M, normals, h, d, s);
+}
+
 // The records of all M triangles (out: M x kHitRecord floats), threaded.
 void hit_records(const float* geo, size_t M, const float* normals, float* out);
 

@@ -147,10 +147,7 @@ size_t surface(const float* geo, size_t M, const float* normals, const Hit* hits
             }
             const float d[3] = {D[i], D[n + i], D[2 * n + i]};
             SurfacePoint sp;
-            if (records)
-                surface_point_record(records + kHitRecord * size_t(p), normals != nullptr, h, d, sp);
-            else
-                surface_point(geo, M, normals, h, d, sp);
+            surface_point_at(geo, M, normals, records, h, d, sp);
             for (int a = 0; a < 3; ++a) {
                 out[size_t(a) * k + j] = sp.P[a];
                 out[size_t(3 + a) * k + j] = sp.ng[a];

@@ -69,10 +69,7 @@ void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, co
         if (!geo) continue;
         const float d[3] = {D[i], D[n + i], D[2 * n + i]};
         SurfacePoint sp;
-        if (records)  // two cache lines and no shape arithmetic per hit, the same bits
-            surface_point_record(records + kHitRecord * p, normals != nullptr, h, d, sp);
-        else
-            surface_point(geo, M, normals, h, d, sp);  // survivors have 0 <= prim < M
+        surface_point_at(geo, M, normals, records, h, d, sp);  // survivors have 0 <= prim < M
         for (int a = 0; a < 3; ++a) {
             surf_out[size_t(a) * k + j] = sp.P[a];
             surf_out[size_t(3 + a) * k + j] = sp.ng[a];
