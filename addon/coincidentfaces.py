@@ -114,6 +114,19 @@ def _distinct(group, ident, G):
     return n
 
 
+def wholly_clear(mats):
+    """(materials,) bool: the materials whose faces every ray passes (transparency 1 in every
+    channel, no opacity map)."""
+    return (mats.transparency.min(axis=0) >= 1.0) & ~np.isin(np.arange(len(mats.transparent)),
+                                                             [e[0] for e in mats.opacity])
+
+
+def material_family(sd):
+    """(materials,) int64: the user's material each of sd's materials is a build of (a material
+    built per ray kind or depth has variants), itself where it is the user's."""
+    return np.array([m.variant_of if m.variant_of >= 0 else i for i, m in enumerate(sd.materials)], np.int64)
+
+
 def coincident_faces(sd, tri, mats) -> list:
     """The message (a list of 0 or 1 (level, text)) naming the objects whose non-emissive
     faces coincide exactly with other faces (sd: the SceneData tri was made of, naming the
@@ -121,8 +134,7 @@ def coincident_faces(sd, tri, mats) -> list:
     if not tri.twins.any():
         return []
     # wholly clear copies (a white Transparent BSDF) render alike in both: a ray passes them all
-    clear = (mats.transparency.min(axis=0) >= 1.0) & ~np.isin(np.arange(len(mats.transparent)),
-                                                              [e[0] for e in mats.opacity])
+    clear = wholly_clear(mats)
     rows, group = exact_groups(tri.vertices, tri.indices, tri.twins & ~clear[tri.material])
     g = sd.geometry
     tubes = None if g.one_sided is None else \
@@ -136,7 +148,7 @@ def coincident_faces(sd, tri, mats) -> list:
     said = said_copies(rows, group, tri.area, vis, mats.emissive[tri.material], tubes)
     # (a material built per ray kind has a copy of each triangle per variant, in the same set:
     # counted once, as the user's triangle, and as the material it is a build of)
-    family = np.array([m.variant_of if m.variant_of >= 0 else i for i, m in enumerate(sd.materials)], np.int64)
+    family = material_family(sd)
     mat = family[np.asarray(tri.material)]
     said &= mat == np.asarray(tri.material)
     if not said.any():

@@ -148,13 +148,12 @@ def overlapping_faces(sd, tri, mats) -> list:
     overlap other faces in part in one plane (sd: SceneData; tri: surfacetables.Triangles;
     mats: surfacetables.Materials). Exact copies count once (coincidentfaces.py says them);
     emitters are lights/overlap.py's; wholly clear faces render alike (a ray passes them all)."""
-    from .coincidentfaces import exact_groups
+    from .coincidentfaces import exact_groups, material_family, wholly_clear
     from .scenedata import VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW
     m = np.asarray(tri.material)
-    clear = (mats.transparency.min(axis=0) >= 1.0) & ~np.isin(np.arange(len(mats.transparent)),
-                                                              [e[0] for e in mats.opacity])
+    clear = wholly_clear(mats)
     # (a material built per ray kind or depth copies each triangle: counted as the user's)
-    family = np.array([x.variant_of if x.variant_of >= 0 else i for i, x in enumerate(sd.materials)], np.int64)
+    family = material_family(sd)
     cand = (np.asarray(tri.area) > 0) & ((np.asarray(tri.visibility) & (VIS_CAMERA | VIS_DIFFUSE | VIS_SHADOW)) != 0)
     # (per material first, then one gather over the triangles)
     cand &= (~clear & ~np.asarray(mats.emissive, bool) & (family == np.arange(len(family))))[m]
