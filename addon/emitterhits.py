@@ -12,6 +12,7 @@ import numpy as np
 import dacrt
 
 from .lights.linking import reached
+from .pathstate import clamp_classes
 
 F32 = np.float32
 
@@ -59,11 +60,6 @@ class EmitterHits:
                                                  else dict(tree=self.lights.tree, tri_key=self._tri_key, N=path.N,
                                                            receivers=self._linked_receivers(path))))
 
-    def _found_clamp(self, k):
-        """The clamp of light that rays arriving at vertex k past no glass find: direct up to
-        the BSDF rays of vertex 0 (Cycles clamps it by bounce - 1 <= 0), indirect after."""
-        return self._clamps[k > 1]
-
     def _found_classes(self, k, path, thr=None):
         """[(throughput, clamp)]: the rays of path arriving at vertex k, of throughput thr
         (default path.thr; None: 1), by the clamp of the light they find. Cycles' bounce count
@@ -72,13 +68,11 @@ class EmitterHits:
         at Clamp Direct 0 / Indirect 1). Mixed rays are gathered twice, each time with the
         other class's throughput 0."""
         thr = path.thr if thr is None else thr
-        if path.xb is None or k > 1 or self._clamps[0] == self._clamps[1]:
-            return [(thr, self._found_clamp(k))]
-        deep = k + path.xb > 1
-        if not deep.any() or deep.all():
-            return [(thr, self._clamps[bool(deep.any())])]
-        one = np.ones((3, len(deep)), F32) if thr is None else thr
-        return [(np.where(deep, F32(0), one), self._clamps[0]), (np.where(deep, one, F32(0)), self._clamps[1])]
+        classes = clamp_classes(k - 1, path.xb, self._clamps)   # bounce k - 1: the vertex it left
+        if len(classes) == 1:
+            return [(thr, classes[0][1])]
+        one = np.ones((3, len(path.xb)), F32) if thr is None else thr
+        return [(np.where(m, one, F32(0)), c) for m, c in classes]
 
     def _group_lamps(self, camera, sinks, combined=None):
         """[(lamp records, light group's array)]: per light group, the records of its lamps

@@ -62,6 +62,18 @@ def diffuse_reflections(k, gb, xb):
     return k - (gb - (0 if xb is None else xb))
 
 
+def clamp_classes(bounce, xb, clamps):
+    """[(mask, clamp)]: rays split by Cycles' clamp classes (clamps: direct, indirect), which go
+    by a path's bounce count: here bounce (the same for all) plus each ray's glass passes xb
+    (None: none). A count of 0 alone is direct. mask None stands for every ray; a class no ray
+    is in is left out."""
+    if bounce > 0 or xb is None or clamps[0] == clamps[1]:
+        return [(None, clamps[bounce > 0])]
+    deep = bounce + xb > 0
+    if not deep.any() or deep.all():
+        return [(None, clamps[bool(deep.any())])]
+    return [(~deep, clamps[0]), (deep, clamps[1])]
+
 def compact(idx, *arrays):
     """The columns idx of per-path arrays ((n,) or (rows, n); None stays None) in one native
     pass; idx None keeps them all."""

@@ -9,7 +9,7 @@ import numpy as np
 
 import dacrt
 
-from .pathstate import Paths, compact, diffuse_reflections
+from .pathstate import Paths, clamp_classes, compact, diffuse_reflections
 from .sampling import DIM_GLASS, DIM_LOBE, DIM_PASSED, DIM_ROULETTE, DIM_TRANSPARENT
 from .scenedata import HOLDOUT
 
@@ -22,12 +22,8 @@ ROULETTE_FROM = 2
 
 def light_classes(k, xb, contrib, clamps):
     """[(mask, clamp)]: the light samples taken at vertex k (contrib: those that count) split by
-    Cycles' clamp classes (clamps: direct, indirect), which go by the path's bounce count: the
-    vertex index plus its glass passes xb (None: none), direct at 0 alone."""
-    if k > 0 or xb is None or clamps[0] == clamps[1]:
-        return [(contrib, clamps[k > 0])]
-    past = xb > 0
-    return [(contrib & ~past, clamps[0]), (contrib & past, clamps[1])]
+    Cycles' clamp classes: the path's bounce count there is k plus its glass passes xb."""
+    return [(contrib if m is None else contrib & m, c) for m, c in clamp_classes(k, xb, clamps)]
 
 
 class Transparency:
