@@ -213,3 +213,134 @@ def test_group_boxes_are_the_boxes_of_each_groups_rows(seed):
     want_hi = np.array([hi[groups == k].max(axis=0) for k in kinds])
     np.testing.assert_array_equal(got_lo, want_lo)
     np.testing.assert_array_equal(got_hi, want_hi)
+
+
+# --- recentred's camera cluster and sample, against the code they replaced (kept here as the
+# reference): blockwise distances without a whole (k, 3) difference, reductions with where=
+# instead of copies, the sampled rows by np.take, no copies of an all-kept sample
+
+def _reference_cluster(v, eye):
+    d = v - eye
+    d = np.sqrt(np.einsum('ij,ij->i', d, d))
+    d[~np.isfinite(d)] = np.inf
+    if not np.isfinite(d).any():
+        return None
+    positive = d[d > 0]
+    reach = float(positive.min()) if len(positive) else 0.0
+    for _ in range(64):
+        near = d <= sceneprep._GAP * reach
+        grown = float(d[near].max())
+        if grown <= reach:
+            break
+        reach = grown
+    return near
+
+
+def _reference_boxes(v, tri, near, eye, found=None):
+    idx = np.arange(len(tri)) if near.all() else \
+        np.flatnonzero(near[tri[:, 0]] | near[tri[:, 1]] | near[tri[:, 2]])
+    idx = idx[::-(-len(idx) // sceneprep._SAMPLE)] if len(idx) > sceneprep._SAMPLE else idx
+    t = tri[idx]
+    c0, c1, c2 = (np.asarray(v[t[:, k]], np.float64) for k in range(3))
+    lo, hi = np.minimum(np.minimum(c0, c1), c2), np.maximum(np.maximum(c0, c1), c2)
+    side = sceneprep._largest(hi - lo)
+    gap = np.maximum(np.maximum(lo - eye, 0.0), eye - hi)
+    dist = np.sqrt(np.einsum('ij,ij->i', gap, gap))
+    keep = np.isfinite(side) & np.isfinite(dist) & (side > 0)
+    if found is not None and near.all():
+        faces = side[np.isfinite(side) & (side > 0)]
+        found['smallest_face'] = float(faces.min()) if len(faces) else None
+        found['sample'] = (idx, lo, hi, side)
+    if not keep.any():
+        return None
+    side, dist = side[keep], dist[keep]
+    return lo[keep], hi[keep], side, (side / np.maximum(dist, side)) ** 2
+
+
+def _clouds():
+    """(vertices float64 (k, 3), eye): random clouds of up to ~3 distance blocks, clusters with
+    gaps, magnitudes 1e-30 .. 1e30, NaN and infinite coordinates, a camera on a vertex, on the
+    only finite one, and no finite vertex at all."""
+    rng = np.random.default_rng(7)
+    out = []
+    for n, scale in ((1, 1.0), (5, 1e-30), (1000, 1.0), (70000, 1e3), (150000, 1e30), (200003, 1.0)):
+        v = rng.normal(0.0, scale, (n, 3)) * np.exp(rng.normal(0.0, 3.0, (n, 1)))
+        v[rng.random(n) < 0.05] += rng.normal(0.0, 1e5 * scale, 3)      # a far cluster
+        out.append((v, rng.normal(0.0, scale, 3)))
+    v = rng.normal(0.0, 1.0, (5000, 3))
+    v[rng.integers(0, 5000, 50), rng.integers(0, 3, 50)] = np.nan
+    v[rng.integers(0, 5000, 50), rng.integers(0, 3, 50)] = np.inf
+    out.append((v, v[17].copy() if np.isfinite(v[17]).all() else np.zeros(3)))     # on a vertex
+    out.append((np.array([[1.0, 2, 3], [np.inf, 0, 0], [0, np.nan, 0]]), np.array([1.0, 2, 3])))
+    out.append((np.array([[np.inf, 0, 0], [0, np.nan, 0]]), np.zeros(3)))
+    out.append((np.zeros((4, 3)), np.zeros(3)))
+    return out
+
+
+@pytest.mark.parametrize('case', range(10))
+def test_camera_cluster_and_its_distances_are_the_reference_bits(case):
+    v, eye = _clouds()[case]
+    with np.errstate(all='ignore'):
+        d = v - eye
+        want = np.sqrt(np.einsum('ij,ij->i', d, d))
+        assert np.array_equal(sceneprep._distances(v, eye).view(np.uint64), want.view(np.uint64))
+        got, ref = sceneprep._camera_cluster(v, eye), _reference_cluster(v, eye)
+    assert (got is None) == (ref is None)
+    if ref is not None:
+        assert np.array_equal(got, ref)
+
+
+@pytest.mark.parametrize('case', range(8))
+def test_near_boxes_are_the_reference_boxes(case):
+    """The sample's boxes, sizes, weights and what huge_surfaces reuses: every bit the
+    reference's, for all-near and part-near clusters, float32 and float64 vertices, samples
+    below and above _SAMPLE, degenerate and non-finite triangles."""
+    rng = np.random.default_rng(case)
+    n = [3, 100, 20000, 70001][case % 4]
+    v = rng.normal(0.0, 10.0, (n, 3))
+    if case % 2:
+        v = v.astype(np.float32)
+    v[:3] = v[0]                                    # a degenerate triangle's corners
+    if case >= 4:
+        v[rng.integers(0, n, 5)] = np.inf
+    tri = rng.integers(0, n, (2 * n, 3)).astype(np.int32)
+    eye = rng.normal(0.0, 5.0, 3)
+    with np.errstate(all='ignore'):
+        for near in (np.ones(n, bool), rng.random(n) < 0.3):
+            f_got, f_ref = {}, {}
+            got = sceneprep._near_boxes(v, tri, near, eye, f_got)
+            ref = _reference_boxes(v, tri, near, eye, f_ref)
+            assert (got is None) == (ref is None)
+            for a, b in zip(got or (), ref or ()):
+                a, b = np.ascontiguousarray(a), np.ascontiguousarray(b)
+                assert a.dtype == b.dtype and np.array_equal(a.view(np.uint8), b.view(np.uint8))
+            assert f_got.keys() == f_ref.keys()
+            if f_ref:
+                assert f_got['smallest_face'] == f_ref['smallest_face']
+                for a, b in zip(f_got['sample'], f_ref['sample']):
+                    a, b = np.ascontiguousarray(a), np.ascontiguousarray(b)
+                    assert a.dtype == b.dtype and np.array_equal(a.view(np.uint8), b.view(np.uint8))
+
+
+class _Watched:
+    """A triangle table that records being read (np.asarray calls __array__)."""
+
+    def __init__(self, geo):
+        self.geo, self.reads = geo, 0
+
+    def __array__(self, dtype=None, copy=None):
+        self.reads += 1
+        return self.geo
+
+
+def test_an_ordinary_scene_bounds_its_steps_from_recentred_box():
+    """A scene around the origin whose vertices are all finite: huge_surfaces bounds its steps
+    by recentred's box of the vertices instead of reducing the table's nine rows (0.3 ms of the
+    dragon's set-up, ~4 ms at 1M triangles); the warnings are the same (above)."""
+    from addon.surfacetables import Triangles
+    for data in (cornell_box(), _sphere_scene((0.0, 0.0, 0.0)), _pebble_on_a_field()):
+        found = {}
+        moved, origin, _ = recentred(data, found)
+        geo = _Watched(Triangles(moved.geometry, []).geo)
+        assert sceneprep.huge_surfaces(moved, origin, geo, found) == []
+        assert geo.reads == 0, geo.reads
