@@ -849,7 +849,7 @@ class Assembly:
         # Normalized first, a smooth cylinder scaled (4, 1, 1) as linked duplicates was
         # 0.31-1.06x Cycles across its bands
         if k == 1:
-            n /= np.where(ok, nlen, np.float32(1))
+            _divide_rows(n, np.where(ok, nlen, np.float32(1))[..., 0])
         if not ok.all():
             np.copyto(n, np.float32(0), where=~ok)
         per = normals.reshape(k, nt, 3, 3)
@@ -1312,6 +1312,14 @@ def _no_tangents(a, name):
                 f"any image's UV Map node, for its own tangents in both)")
     return ("normal map not applied: the mesh has no UV map (or is a curve, text or metaball); Cycles then bends "
             "the normal by tangents of the positions mapped to a sphere, not computed here")
+
+
+def _divide_rows(rows, by):
+    """rows (..., 3) /= by (...) in place, one column at a time: numpy's broadcast of by over a
+    last axis of 3 runs its inner loop three elements at a time (a smooth mesh's 1M normals
+    4.9 -> 2.6 ms); the same divisions, so the same bits."""
+    for c in range(rows.shape[-1]):
+        np.divide(rows[..., c], by, out=rows[..., c])
 
 
 def _placed(a, lin, offset):
