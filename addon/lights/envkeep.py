@@ -10,10 +10,20 @@ map) and ~61 ms (a 2048 x 2048 Multiple Scattering one) of a 160 x 120 1 spp fra
 texels, rotation, strength and lookup reuses it: the same object, the same samples and film.
 
 Only the latest map is kept (an MS sky's is ~105 MB beside its 48 MB image), replaced by the
-next keyed one; a world without a key (an Environment Texture's image, read from Blender each
-frame) builds its own and leaves the kept one alone.
+next keyed one.
+
+An Environment Texture's image has no such name: its texels are read again every frame (from
+its file, as Cycles reads it at each render, or from Blender's buffer), and what they are
+follows the file, edits, reloads, the frame of a sequence and every colour setting. So the map
+built from them is kept with those texels themselves, and a frame whose texels hold the very
+same bits (and the same rotation, strength and lookup) reuses it: an exact comparison, a
+chunked pass over both arrays (~15 ms for a 4K float image), where the map's build took ~120
+ms of CPU. Kept for texels of up to _SAME_BYTES (a 4K x 2K float RGBA image): beyond that the
+two arrays held between frames would be a gigabyte, so bigger maps are built every frame.
 """
 from __future__ import annotations
+
+import weakref
 
 import dacrt
 import numpy as np
@@ -21,6 +31,12 @@ import numpy as np
 from ..texture import any_positive_rgb
 
 _kept: dict = {}          # {key: native map}: at most one entry
+# the latest map of unkeyed texels: {'texels': the array it was built from, 'rest': _rest(...),
+# 'native': the map}, or empty
+_same: dict = {}
+_SAME_BYTES = 4096 * 2048 * 4 * 4
+_CHUNK = 1 << 20            # elements compared at a time (no temporaries the size of the image)
+_asked: dict = {}           # {'env': weakref to the Environment last compared, 'same': the answer}
 _bright: dict = {}        # {texels_key: any RGB above 0}: a bool per sky kept (few)
 _BRIGHT_KEPT = 8
 
@@ -30,24 +46,82 @@ def _key(env, to_map, interpolation, strength):
             np.asarray(strength, np.float32).tobytes())
 
 
+def _rest(to_map, interpolation, strength):
+    """What a map is made from besides its texels, as bytes."""
+    return (np.asarray(to_map, np.float64).tobytes(), interpolation, np.asarray(strength, np.float32).tobytes())
+
+
+def same_bits(a, b) -> bool:
+    """Whether arrays a and b have the same shape, dtype and bytes (C-contiguous ones; others
+    are not compared: False), a chunk at a time."""
+    if a.shape != b.shape or a.dtype != b.dtype or not (a.flags.c_contiguous and b.flags.c_contiguous):
+        return False
+    word = next(w for w in (np.uint64, np.uint32, np.uint16, np.uint8) if a.nbytes % np.dtype(w).itemsize == 0)
+    x, y = a.reshape(-1).view(word), b.reshape(-1).view(word)
+    return all(np.array_equal(x[i:i + _CHUNK], y[i:i + _CHUNK]) for i in range(0, len(x), _CHUNK))
+
+
 def native_map(env, to_map, interpolation, strength):
     """dacrt.lamps.environment_map of env's texels (float32, linear) with the strength folded
-    in: the kept one when env.texels_key and the rest match the latest keyed build."""
+    in: the kept one when env.texels_key and the rest match the latest keyed build, or, without
+    a key, when the texels hold the same bits as those of the latest unkeyed build (and the
+    rest matches)."""
     if env.texels_key is None:
-        return dacrt.lamps.environment_map(env.pixels, to_map, interpolation, scale=strength)
+        return _unkeyed_map(env, to_map, interpolation, strength)
     key = _key(env, to_map, interpolation, strength)
     native = _kept.get(key)
     if native is None:
         _kept.clear()          # (before the build: the old map's memory is free for the new one)
+        _same.clear()
+        _asked.clear()
         native = _kept[key] = dacrt.lamps.environment_map(env.pixels, to_map, interpolation, scale=strength)
+    return native
+
+
+def _matches_kept(env) -> bool:
+    """Whether env (unkeyed) holds the bits of the kept map's texels: compared once per env
+    (the export's bright check and the map's build ask for the same one). Texels in the kept
+    array's own memory are not compared with it: written in place since, they would equal
+    themselves (each frame's export reads its images into new arrays)."""
+    if not _same:
+        return False
+    if _asked.get('env') is not None and _asked['env']() is env:
+        return _asked['same']
+    texels = env.pixels
+    same = isinstance(texels, np.ndarray) and not np.may_share_memory(_same['texels'], texels) \
+        and same_bits(_same['texels'], texels)
+    if same:
+        _same['texels'] = texels        # (the same bits: the older frame's array can go)
+    _asked.clear()
+    _asked.update(env=weakref.ref(env), same=same)
+    return same
+
+
+def _unkeyed_map(env, to_map, interpolation, strength):
+    texels = env.pixels
+    if not isinstance(texels, np.ndarray) or texels.nbytes > _SAME_BYTES:
+        return dacrt.lamps.environment_map(texels, to_map, interpolation, scale=strength)
+    rest = _rest(to_map, interpolation, strength)
+    if _matches_kept(env) and _same['rest'] == rest:
+        return _same['native']
+    _same.clear()              # (before the build, as above)
+    _kept.clear()
+    native = dacrt.lamps.environment_map(texels, to_map, interpolation, scale=strength)
+    _same.update(texels=texels, rest=rest, native=native)
+    _asked.clear()             # (an earlier answer was about the texels kept before)
+    _asked.update(env=weakref.ref(env), same=True)
     return native
 
 
 def any_positive(env) -> bool:
     """Whether any of env's texels has an RGB value above 0 (texture.any_positive_rgb), found
-    once per keyed texels."""
+    once per keyed texels, and once per kept unkeyed ones."""
     if env.texels_key is None:
-        return any_positive_rgb(env.pixels)
+        if not _matches_kept(env):
+            return any_positive_rgb(env.pixels)
+        if 'bright' not in _same:
+            _same['bright'] = any_positive_rgb(_same['texels'])
+        return _same['bright']
     found = _bright.get(env.texels_key)
     if found is None:
         if len(_bright) >= _BRIGHT_KEPT:
@@ -59,4 +133,6 @@ def any_positive(env) -> bool:
 def forget():
     """Drop what is kept (tests; a session that wants the memory back)."""
     _kept.clear()
+    _same.clear()
+    _asked.clear()
     _bright.clear()

@@ -1,0 +1,179 @@
+"""Frames of an unchanged Environment Texture world reuse its native environment map
+(lights/envkeep.py): the image's texels are read every frame (from the file, as Cycles reads
+it), and where they hold the same bits as the frame before (and the rotation, strength and
+lookup are the same) the map and the bright-texel check are not made again (a 4K float HDRI's
+~120 + ~30 ms of CPU a frame). A frame after any change of what the map is made from (a pixel
+painted, the file rewritten and reloaded, the Background's strength, the Mapping rotation, the
+interpolation) renders exactly as it does with nothing kept."""
+import math
+
+import dacrt
+import numpy as np
+import pytest
+
+from addon import scenedata as sd
+from addon.lights import envkeep
+
+from . import scenes
+
+
+@pytest.fixture(autouse=True)
+def nothing_kept():
+    envkeep.forget()
+    yield
+    envkeep.forget()
+
+
+def _texels(seed=3, h=32, w=64):
+    rng = np.random.default_rng(seed)
+    px = np.ones((h, w, 4), np.float32)
+    px[..., :3] = (rng.random((h, w, 3)) ** 3 * 4).astype(np.float32)
+    return px
+
+
+def _write_exr(path, px):
+    import OpenImageIO as oiio
+    out = oiio.ImageOutput.create(str(path))
+    out.open(str(path), oiio.ImageSpec(px.shape[1], px.shape[0], 4, 'float'))
+    out.write_image(np.ascontiguousarray(px[::-1]))
+    out.close()
+
+
+def _hdri_world(scene, image):
+    """A diffuse ball under an Environment Texture of image through a Mapping node; 1 spp, 2
+    bounces."""
+    scenes.camera(location=(0, -5, 0), rotation=(math.radians(90), 0, 0))
+    scenes.uv_sphere(materials=[scenes.diffuse('grey', (0.5, 0.5, 0.5))])
+    w = scenes.environment_world(image, strength=1.0, rotation=(0.0, 0.0, 0.3))
+    scene.dacrt.samples, scene.dacrt.max_bounces = 1, 2
+    nt = w.node_tree
+    return (next(n for n in nt.nodes if n.type == 'TEX_ENVIRONMENT'),
+            next(n for n in nt.nodes if n.type == 'BACKGROUND'),
+            next(n for n in nt.nodes if n.type == 'MAPPING'))
+
+
+def _counting(monkeypatch, module, name):
+    calls = []
+    real = getattr(module, name)
+
+    def counted(*a, **k):
+        calls.append(name)
+        return real(*a, **k)
+    monkeypatch.setattr(module, name, counted)
+    return calls
+
+
+@pytest.mark.parametrize('source', ['file', 'packed', 'buffer'])
+def test_frames_of_one_hdri_build_its_map_once(scene, tmp_path, monkeypatch, source):
+    if source == 'file':
+        _write_exr(tmp_path / 'sky.exr', _texels())
+        image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
+    elif source == 'packed':
+        image = scenes.float_image('sky', _texels())
+    else:
+        image = _buffer_image(_texels())
+    _hdri_world(scene, image)
+    builds = _counting(monkeypatch, dacrt.lamps, 'environment_map')
+    films = []
+    for frame in (1, 2, 3):
+        scene.frame_set(frame)
+        films.append(scenes.render_rgba(scene))
+    assert len(builds) == 1, builds
+    assert np.array_equal(films[0], films[1]) and np.array_equal(films[0], films[2])
+
+
+def _buffer_image(px):
+    """A float image of pixels (h, w, 4) held only in Blender's buffer (generated, not packed)."""
+    img = scenes.bpy.data.images.new('painted', px.shape[1], px.shape[0], float_buffer=True, alpha=True)
+    img.pixels.foreach_set(np.ascontiguousarray(px, np.float32).ravel())
+    img.update()
+    return img
+
+
+def _paint(env, bg, mapping):
+    img = env.image
+    px = np.empty(len(img.pixels), np.float32)
+    img.pixels.foreach_get(px)
+    px[4 * (16 * 64 + 40):4 * (16 * 64 + 40) + 3] = 30.0      # one texel, bright
+    img.pixels.foreach_set(px)
+    img.update()
+
+
+def _rewrite(env, bg, mapping):
+    _write_exr(scenes.bpy.path.abspath(env.image.filepath), _texels(seed=4))
+    env.image.reload()
+
+
+CHANGES = {
+    'painted': _paint,
+    'rewritten': _rewrite,
+    'strength': lambda env, bg, mapping: setattr(bg.inputs['Strength'], 'default_value', 2.5),
+    'rotation': lambda env, bg, mapping: setattr(mapping.inputs['Rotation'], 'default_value', (0.0, 0.0, 1.3)),
+    'interpolation': lambda env, bg, mapping: setattr(env, 'interpolation', 'Closest'),
+}
+
+
+@pytest.mark.parametrize('change', CHANGES)
+def test_a_changed_hdri_renders_as_with_nothing_kept(scene, tmp_path, change):
+    if change == 'rewritten':
+        _write_exr(tmp_path / 'sky.exr', _texels())
+        image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
+    elif change == 'painted':
+        image = _buffer_image(_texels())     # (no file: Blender's buffer is what renders, edits too)
+    else:
+        image = scenes.float_image('sky', _texels())
+    nodes = _hdri_world(scene, image)
+    before = scenes.render_rgba(scene)
+    CHANGES[change](*nodes)
+    after = scenes.render_rgba(scene)
+    envkeep.forget()
+    fresh = scenes.render_rgba(scene)
+    assert not np.array_equal(before, fresh)          # (the change shows in the image)
+    assert np.array_equal(after, fresh), np.abs(after - fresh).max()
+
+
+def _env(px, strength=1.0):
+    return sd.Environment(px, np.full(3, strength, np.float32), np.eye(3), 'Linear')
+
+
+def test_texels_written_in_place_are_not_taken_for_the_kept_ones(monkeypatch):
+    """The same array handed again after being written in place equals itself: it is not
+    compared, the map is built again (and a copy of the same bits is the kept map)."""
+    builds = _counting(monkeypatch, dacrt.lamps, 'environment_map')
+    px = _texels()
+    first = envkeep.native_map(_env(px), np.eye(3), 'Linear', np.ones(3, np.float32))
+    px[3, 5, :3] = 50.0
+    again = envkeep.native_map(_env(px), np.eye(3), 'Linear', np.ones(3, np.float32))
+    assert len(builds) == 2 and again is not first
+    same = envkeep.native_map(_env(px.copy()), np.eye(3), 'Linear', np.ones(3, np.float32))
+    assert len(builds) == 2 and same is again
+    assert envkeep.any_positive(_env(px.copy()))
+
+
+def test_maps_above_the_limit_are_built_every_frame(monkeypatch):
+    monkeypatch.setattr(envkeep, '_SAME_BYTES', 1000)
+    builds = _counting(monkeypatch, dacrt.lamps, 'environment_map')
+    px = _texels()
+    for _ in range(2):
+        envkeep.native_map(_env(px.copy()), np.eye(3), 'Linear', np.ones(3, np.float32))
+    assert len(builds) == 2 and not envkeep._same
+
+
+def test_same_bits_is_every_byte_compared(monkeypatch):
+    monkeypatch.setattr(envkeep, '_CHUNK', 7)      # (chunk edges inside the arrays)
+    rng = np.random.default_rng(0)
+    for shape, dtype in (((5, 9, 4), np.float32), ((3, 3, 3), np.float32), ((13,), np.uint8), ((2, 5), np.float64)):
+        a = rng.normal(size=shape).astype(dtype) if dtype != np.uint8 else rng.integers(0, 255, shape, np.uint8)
+        assert envkeep.same_bits(a, a.copy())
+        for i in range(a.size):                     # any one element changed
+            b = a.copy()
+            flat = b.reshape(-1)
+            flat[i] = flat[i] + 1 if dtype == np.uint8 else np.nextafter(flat[i], dtype(np.inf))
+            assert not envkeep.same_bits(a, b), (shape, i)
+    a = np.zeros((4, 4), np.float32)
+    assert not envkeep.same_bits(a, -a)                                  # (-0 is other bits)
+    nan = np.full(4, np.nan, np.float32)
+    assert envkeep.same_bits(nan, nan.copy())                            # (NaN: the same bits)
+    assert not envkeep.same_bits(a, a.astype(np.float64))
+    assert not envkeep.same_bits(a, a.reshape(2, 8))
+    assert not envkeep.same_bits(a[:, ::2], a[:, ::2].copy())            # (not contiguous: not compared)
