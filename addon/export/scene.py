@@ -320,13 +320,16 @@ class Exporter:
             world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
+        # the material indices the triangles use, once for the checks and messages below (each
+        # had counted them again: four passes over the triangles' materials a frame)
+        self._used = used_indices(geometry.material, len(self.materials.materials))
         self._summarize(geometry, world, environment, camera_world)
         seen_env = camera_world[1] if camera_world is not None else environment
         said = ground_seen_said(seen_env, camera, settings,
                                 bool(world_visibility(self.world) & sd.VIS_CAMERA))
         if said:
             self.messages.append(('WARNING', said))
-        used = set(used_indices(geometry.material, len(self.materials.materials)).tolist())
+        used = set(self._used.tolist())
         said = clamp_direct_said(settings, [m.name for i, m in enumerate(self.materials.materials)
                                             if i in used and np.any(m.emission > 0) and m.emission_sampling != 'NONE'],
                                  sum(1 for lt in self.lights if np.any(lt.strength > 0)),
@@ -899,13 +902,13 @@ class Exporter:
 
 
     # -- messages ----------------------------------------------------------------------------
-    def _glossy_as_diffuse(self, geometry) -> bool:
+    def _glossy_as_diffuse(self) -> bool:
         """Whether a rendered surface has a closure Cycles treats as glossy, which DACRT renders
         as diffuse (Material.glossy), or Blender's default surface (material 0, a Principled
         with its specular layer). Sheen and a Toon's Diffuse component are diffuse in Cycles."""
-        if len(geometry.material) and not geometry.material.all():
+        used = self._used
+        if (used == 0).any():
             return True
-        used = used_indices(geometry.material, len(self.materials.materials))
         return any(self.materials.materials[k].glossy for k in used if 0 < k < len(self.materials.materials))
 
     def _glossy_kinds(self, geometry):
@@ -914,7 +917,7 @@ class Exporter:
         0.5, a sharp glossy reflection), and whether triangles of a material with transmission
         are seen by bounce rays but not by shadow rays (those rays cross their clear twin)."""
         mats = self.materials.materials
-        used = used_indices(geometry.material, len(self.materials.materials))
+        used = self._used
         kinds = set(('reflect', 'sharp') if len(used) and used[0] == 0 else ())
         glass = np.zeros(len(mats), bool)
         for k in used.tolist():
@@ -943,7 +946,7 @@ class Exporter:
                     _add_name(self.ignored, CATCHER_IGNORED, name)
         for reason, names in self.ignored.items():
             self.messages.append(('WARNING', f"{', '.join(repr(n) for n in names)}: {reason}"))
-        if self._glossy_visibility and self._glossy_as_diffuse(geometry):
+        if self._glossy_visibility and self._glossy_as_diffuse():
             for reason, names in self._glossy_visibility.items():     # (names quoted as said)
                 self.messages.append(('WARNING', f"{', '.join(names)}: {reason}"))
         if self.drawn_over:
@@ -965,7 +968,7 @@ class Exporter:
                                              "from Cycles'; constant and float colours are as Cycles has them"))
         # materials of one reason named together (500 default Principled materials had made 56
         # report lines of the same words)
-        self.materials.add_bent_ray_notes(used_indices(geometry.material, len(self.materials.materials)).tolist())
+        self.materials.add_bent_ray_notes(self._used.tolist())
         by_reason = {}
         for m in self.materials.materials:
             if m.approximated:
@@ -974,7 +977,7 @@ class Exporter:
         # (a material counted once where its point-cloud variant says another reason:
         # MaterialBuilder.index)
         count = len({n for names in by_reason.values() for n in names})
-        if len(geometry.material) and not geometry.material.all():     # material 0 is in use
+        if (self._used == 0).any():     # material 0 is in use
             approx.insert(0, "objects without a material (Blender's default surface, a Principled "
                              "BSDF: specular layer as diffuse)")
             count += 1

@@ -117,3 +117,24 @@ def test_normal_rows_divided_per_column_are_the_broadcast_divisions(k):
         got = n.copy()
         _divide_rows(got, by[..., 0])
     assert np.array_equal(got.view(np.uint32), want.view(np.uint32))
+
+
+def test_the_triangles_materials_are_counted_once(exported, monkeypatch):
+    """The material indices the triangles use are found once per export for all the checks and
+    messages that read them (the glossy and default-surface messages, bent-ray notes, the
+    direct clamp's emitters): each had counted them again, four passes over the triangles."""
+    from addon.export import scene as export_scene
+    counted = []
+    real = export_scene.used_indices
+
+    def counting(a, bound):
+        counted.append(len(a))
+        return real(a, bound)
+    monkeypatch.setattr(export_scene, 'used_indices', counting)
+    scenes.uv_sphere("S", segments=64, rings=32, materials=[scenes.diffuse('grey', (0.5, 0.5, 0.5))])
+    scenes.uv_sphere("Bare", segments=16, rings=8, location=(3, 0, 0))    # (material 0: said)
+    scenes.camera()
+    data = exported()
+    m = len(data.geometry.triangles)
+    assert counted.count(m) == 1, counted
+    assert any("objects without a material" in text for _, text in data.messages)
