@@ -23,6 +23,7 @@ two arrays held between frames would be a gigabyte, so bigger maps are built eve
 """
 from __future__ import annotations
 
+import threading
 import weakref
 
 import dacrt
@@ -39,6 +40,9 @@ _CHUNK = 1 << 20            # elements compared at a time (no temporaries the si
 _asked: dict = {}           # {'env': weakref to the Environment last compared, 'same': the answer}
 _bright: dict = {}        # {texels_key: any RGB above 0}: a bool per sky kept (few)
 _BRIGHT_KEPT = 8
+# (a viewport's export and a final render's may run at once: a comparison and the map it answers
+# for are read under one lock, so one thread's build cannot replace the map another was told it may reuse)
+_lock = threading.Lock()
 
 
 def _key(env, to_map, interpolation, strength):
@@ -66,16 +70,17 @@ def native_map(env, to_map, interpolation, strength):
     in: the kept one when env.texels_key and the rest match the latest keyed build, or, without
     a key, when the texels hold the same bits as those of the latest unkeyed build (and the
     rest matches)."""
-    if env.texels_key is None:
-        return _unkeyed_map(env, to_map, interpolation, strength)
-    key = _key(env, to_map, interpolation, strength)
-    native = _kept.get(key)
-    if native is None:
-        _kept.clear()          # (before the build: the old map's memory is free for the new one)
-        _same.clear()
-        _asked.clear()
-        native = _kept[key] = dacrt.lamps.environment_map(env.pixels, to_map, interpolation, scale=strength)
-    return native
+    with _lock:
+        if env.texels_key is None:
+            return _unkeyed_map(env, to_map, interpolation, strength)
+        key = _key(env, to_map, interpolation, strength)
+        native = _kept.get(key)
+        if native is None:
+            _kept.clear()          # (before the build: the old map's memory is free for the new one)
+            _same.clear()
+            _asked.clear()
+            native = _kept[key] = dacrt.lamps.environment_map(env.pixels, to_map, interpolation, scale=strength)
+        return native
 
 
 def _matches_kept(env) -> bool:
@@ -116,23 +121,25 @@ def _unkeyed_map(env, to_map, interpolation, strength):
 def any_positive(env) -> bool:
     """Whether any of env's texels has an RGB value above 0 (texture.any_positive_rgb), found
     once per keyed texels, and once per kept unkeyed ones."""
-    if env.texels_key is None:
-        if not _matches_kept(env):
-            return any_positive_rgb(env.pixels)
-        if 'bright' not in _same:
-            _same['bright'] = any_positive_rgb(_same['texels'])
-        return _same['bright']
-    found = _bright.get(env.texels_key)
-    if found is None:
-        if len(_bright) >= _BRIGHT_KEPT:
-            _bright.clear()
-        found = _bright[env.texels_key] = any_positive_rgb(env.pixels)
-    return found
+    with _lock:
+        if env.texels_key is None:
+            if not _matches_kept(env):
+                return any_positive_rgb(env.pixels)
+            if 'bright' not in _same:
+                _same['bright'] = any_positive_rgb(_same['texels'])
+            return _same['bright']
+        found = _bright.get(env.texels_key)
+        if found is None:
+            if len(_bright) >= _BRIGHT_KEPT:
+                _bright.clear()
+            found = _bright[env.texels_key] = any_positive_rgb(env.pixels)
+        return found
 
 
 def forget():
     """Drop what is kept (tests; a session that wants the memory back)."""
-    _kept.clear()
-    _same.clear()
-    _asked.clear()
-    _bright.clear()
+    with _lock:
+        _kept.clear()
+        _same.clear()
+        _asked.clear()
+        _bright.clear()

@@ -177,3 +177,28 @@ def test_same_bits_is_every_byte_compared(monkeypatch):
     assert not envkeep.same_bits(a, a.astype(np.float64))
     assert not envkeep.same_bits(a, a.reshape(2, 8))
     assert not envkeep.same_bits(a[:, ::2], a[:, ::2].copy())            # (not contiguous: not compared)
+
+
+def test_a_build_on_another_thread_cannot_replace_the_map_a_comparison_answered_for(monkeypatch):
+    """A viewport's export and a final render's may ask at once: while one thread compares its
+    texels with the kept ones, another thread's build of other texels waits, so the first gets
+    the map of its own texels (without the lock it got the other's)."""
+    import threading
+    ones = np.ones(3, np.float32)
+    a, b = _texels(seed=5), _texels(seed=6)
+    kept_a = envkeep.native_map(_env(a), np.eye(3), 'Linear', ones)
+    real = envkeep.same_bits
+    other = {}
+
+    def compare_while_another_builds(x, y):
+        if not other:
+            t = other['thread'] = threading.Thread(
+                target=lambda: other.setdefault('map', envkeep.native_map(_env(b), np.eye(3), 'Linear', ones)))
+            t.start()
+            t.join(0.5)          # (blocked by the lock: the build waits for this answer)
+        return real(x, y)
+    monkeypatch.setattr(envkeep, 'same_bits', compare_while_another_builds)
+    got = envkeep.native_map(_env(a.copy()), np.eye(3), 'Linear', ones)
+    other['thread'].join()
+    assert got is kept_a
+    assert other['map'] is not kept_a
