@@ -140,6 +140,8 @@ CACHES = {
     ("nodeeval", "_RAMP_TABLES"),               # a Color Ramp's table, keyed by its whole content
     ("lights.envkeep", "_kept"),                # a sky's immutable native map, keyed by texels, mapping, strength
     ("lights.envkeep", "_bright"),              # whether a sky's texels have light, keyed by the texels
+    ("lights.envkeep", "_same"),                # an HDRI's native map, reused only for texels of the same bits
+    ("lights.envkeep", "_asked"),               # that comparison's answer, for the Environment (a weakref) it was made for
 }
 # what outlives one render by design: the C heap's and OpenBLAS's thread policies are the
 # process's (allocator, blasthreads: counted nestings under a lock), and the engine,
