@@ -152,31 +152,30 @@ class EmitterHits:
             return [(lamps, path.pdf)]
         return [(recs, pdf) for recs, pdf in ((lamps[~past], path.pdf), (lamps[past], path.dark_pdf)) if len(recs)]
 
-    def _gather_past_limit(self, path, sinks, k):
-        """Shadow-linked lamps past their Max Bounces at the vertex the BSDF rays of segment k
-        leave (vertex k - 1): light sampling skips them there (_light_choice_at), and, as in
-        Cycles (which traces a dedicated shadow ray toward the lamps a BSDF ray meets, its
-        forward hit MIS-weighted), these rays gather them with their MIS weight, stopped only
-        by each lamp's blockers (its set's opaque ones: a transparent blocker lets it through)."""
-        lamps = self._bsdf_linked[self._max_bounces[self._bsdf_linked] < k - 1]
-        if not len(lamps):
-            return
+    def _gather_shadow_linked(self, path, sinks, k):
+        """Shadow-linked lamps BSDF rays of segment k meet, as Cycles finds them (its dedicated
+        light search along the ray ends at the first opaque object in no blocker collection,
+        and the dedicated shadow ray is stopped by the lamp's blockers): the rays retraced
+        against those objects per set ('shadow<set>u', transparent ones let through), the lamps
+        they reach gathered with their MIS weight (past a lamp's Max Bounces, where light
+        sampling skips it, with the pdf that holds all their light: _mis_pdfs)."""
+        lamps = self._bsdf_linked
         sets = self._record_shadow_set[lamps]
         classes, L = self._found_classes(k, path), sinks.found(k)
         for s in np.unique(sets):
-            kind = f'shadow{s}'
+            kind = f'shadow{s}u'
             if kind in self._scenes:
                 hits = self._intersect(kind, path.O, path.D, path.tmax, path.prim)
                 t, miss = hits['t'], hits['prim'] < 0
-            else:                           # no blockers: nothing stops the rays
+            else:                           # nothing opaque blocks them: nothing stops the rays
                 t, miss = np.full(len(path.pid), np.inf, F32), np.ones(len(path.pid), bool)
             mine = lamps[sets == s]
             for (recs, out), (thr_c, clamp) in itertools.product([(mine, L)] + self._group_lamps(False, sinks, mine),
                                                                  classes):
                 for recs, thr in self._linked(recs, path, thr_c, False):
-                    dacrt.lamps.lamp_gather(self._lamp_records, recs, path.O, path.D, t, miss, path.pid, out,
-                                            thr=thr, pdf_bsdf=path.pdf if path.dark_pdf is None else path.dark_pdf,
-                                            clamp=clamp, **self._lamp_mis(False, path))
+                    for recs, pdf in self._mis_pdfs(recs, path, k, False):
+                        dacrt.lamps.lamp_gather(self._lamp_records, recs, path.O, path.D, t, miss, path.pid, out,
+                                                thr=thr, pdf_bsdf=pdf, clamp=clamp, **self._lamp_mis(False, path))
 
     def _lamp_mis(self, camera, path):
         """lamp_gather's MIS arguments: none for camera rays; for BSDF rays each lamp record's

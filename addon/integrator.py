@@ -531,6 +531,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if self.lights and self._shadow_link is not None:
             # shadow linking: per set of blockers, its opaque and transparent shadow casters
             kinds = np.unique(self._entry_shadow_kind) if hasattr(self, '_entry_shadow_kind') else []
+            # (and the scenes BSDF rays find shadow-linked lamps in: _gather_shadow_linked)
+            if len(self._bsdf_linked):
+                kinds = np.union1d(kinds, 2 * np.unique(self._record_shadow_set[self._bsdf_linked]) + 1)
             for sk in kinds[kinds > 1] if len(kinds) else ():
                 s, forced = int(sk) // 2, bool(sk % 2)
                 blocks = reached(self._tri_blocks, s)
@@ -922,7 +925,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         hit = prim >= 0
         self._gather_lamps(path, hit, hits, sinks, k)
         if not camera and len(self._bsdf_linked):
-            self._gather_past_limit(path, sinks, k)
+            self._gather_shadow_linked(path, sinks, k)
         chain = None                                  # camera rays' transparent surfaces, for the passes
         if self._any_transparent and hit.any():
             chain = [] if camera and self._data_passes else None

@@ -418,20 +418,21 @@ class LightSetup:
             self._entry_shadow_kind = 2 * self._entry_shadow_set + self._entry_table(
                 np.zeros(len(record_sets), np.int64), self._tri_forced, 0)
             # A BSDF ray toward a shadow-linked emitter would be stopped by every object, its
-            # blockers or not, so its MIS share is missing where a non-blocker stands between
-            # (Cycles traces a dedicated shadow ray for it): such emitters are lit by light
-            # samples alone, at weight 1, and BSDF rays do not gather them (a 6 m area light
-            # over a floor had been 0.68x Cycles under a plate its blockers leave out)
-            linked = self._entry_shadow_set > 0
-            self._light_choice.no_mis[linked] = True
+            # blockers or not; Cycles traces a dedicated shadow ray toward the emitters it
+            # passes, its search ending at the first opaque object in no blocker collection,
+            # the ray stopped by the emitter's blockers. Shadow-linked lamps are gathered so
+            # (_gather_shadow_linked: BSDF rays retraced against those objects), MIS-weighted
+            # against their light samples as in Cycles, whose image then lacks their BSDF share
+            # behind objects in no blocker collection (lit at weight 1 by light samples alone,
+            # the shadows of such objects had been up to 1.05x Cycles beside two 1.8 m soft
+            # point lamps). Linked emissive triangles are still lit by light samples alone, at
+            # weight 1 (a 6 m area light over a floor had been 0.68x Cycles under a plate its
+            # blockers leave out when BSDF rays gathered it in the full scene)
+            lamp = np.zeros(len(self._entry_shadow_set), bool)
+            lamp[:nl] = True
+            self._light_choice.no_mis[(self._entry_shadow_set > 0) & ~lamp] = True
             self._bsdf_lamps = self._bsdf_every[record_sets[self._bsdf_every] == 0]
-            # ... but past its Max Bounces light sampling skips it, where Cycles keeps the BSDF
-            # rays' MIS share of it: those rays gather it against its blockers alone
-            # (_gather_past_limit; it had been lost there: a ceiling lit by bounced light alone
-            # went black, the Cornell box 0.963x Cycles at Max Bounces 0)
-            linked = self._bsdf_every[(record_sets[self._bsdf_every] > 0) & (self._bsdf_every < nl)]
-            self._bsdf_linked = linked[np.array([lights.lamps[j].max_bounces for j in linked], np.int64)
-                                       < self.max_bounces] if len(linked) else linked
+            self._bsdf_linked = self._bsdf_every[(record_sets[self._bsdf_every] > 0) & (self._bsdf_every < nl)]
             self._record_shadow_set = record_sets
         if self._link is not None:          # light linking: each entry's and lamp record's light set
             self._record_set = np.array([_light_set(self._link, l) for l in every], np.uint8).reshape(-1)

@@ -10,7 +10,8 @@ import pytest
 
 from tests.addon import scenes
 from tests.parity import rendering
-from tests.parity.test_linking_edges import _close, glow_over_plate
+from tests.parity.test_light_linking import _direct_light
+from tests.parity.test_linking_edges import _close, _render, glow_over_plate
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -54,3 +55,35 @@ def test_lamp_max_bounces_past_a_semi_transparent_surface(lamp_max, bounces, tmp
     means = rendering.engine_means(sc, tmp_path, 'veil', samples=128, bounces=bounces)
     ratio = means['DACRT'] / means['CYCLES']
     assert np.all(np.abs(ratio - 1) < 0.01), ratio
+
+
+# --- a shadow-linked lamp behind an object in no blocker collection ------------------------------
+
+@pytest.mark.parametrize('kind, props', [('AREA', dict(size=3.0)),
+                                         ('POINT', dict(shadow_soft_size=1.0, use_soft_falloff=True))])
+def test_lamp_behind_an_unlisted_object(kind, props, tmp_path):
+    """A large lamp 1.2 m over a floor, its blocker collection holding only the floor; a plate
+    0.6 m up is in no blocker collection. Light samples pass the plate (not the lamp's blocker),
+    but Cycles' BSDF rays find the lamp by a dedicated search that ends at the plate, so under
+    it Cycles has the light samples' MIS share only. DACRT had lit shadow-linked lamps by light
+    samples alone at weight 1, the whole light: brighter there (a fuzz scene with two 1.8 m soft
+    point lamps: 1.03-1.05x Cycles by an object in no blocker collection)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = 20
+    scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=4.0)
+    scenes.plane("Floor", size=4, materials=[scenes.diffuse("Floor", (0.8, 0.8, 0.8))])
+    scenes.plane("Plate", size=1.0, location=(0, 0, 0.6),
+                 materials=[scenes.diffuse("Plate", (0.8, 0.8, 0.8))]).visible_camera = False
+    lamp = scenes.light(kind, 300.0, (0, 0, 1.2), **props)
+    coll = bpy.data.collections.new("Blockers")
+    coll.objects.link(bpy.data.objects["Floor"])
+    lamp.light_linking.blocker_collection = coll
+    rendering.fair_scene_settings(sc)
+    _direct_light(sc, 512)
+    under = {e: _render(sc, e, tmp_path)[8:12, 8:12].mean() for e in ('CYCLES', 'DACRT')}
+    sc.render.engine = 'CYCLES'
+    bpy.data.objects["Plate"].hide_render = True      # the plate gone: every BSDF ray finds it
+    clear = _render(sc, 'CYCLES', tmp_path, 'clear')[8:12, 8:12].mean()
+    assert under['CYCLES'] < 0.97 * clear, (under, clear)   # Cycles loses the BSDF share there
+    assert _close(under['DACRT'], under['CYCLES']), (under, clear)
