@@ -130,11 +130,43 @@ def test_single_scattering_table_is_the_per_ray_march():
 
 @pytest.mark.parametrize('multiple', (True, False))
 def test_equirect_is_the_sky_at_texel_centres(multiple):
+    """Rows away from the horizon hold the sky at their texels' centres; those within
+    the two rows that meet at the horizon their mean over the row's span
+    (test_equirect_keeps_the_horizons_light)."""
     sky = model.Sky.from_node_values(multiple, E15, 0.7, sun_disc=False)
     img = model.equirect(sky, 256)
     h, w = img.shape[:2]
-    dirs = model._equirect_dirs(((np.arange(w) + 0.5) / w)[None, :], ((np.arange(h) + 0.5) / h)[:, None])
-    np.testing.assert_allclose(img, model.radiance(sky, dirs), rtol=1e-5, atol=1e-6)
+    u = ((np.arange(w) + 0.5) / w)[None, :]
+    v = (np.arange(h) + 0.5) / h
+    centre = np.abs((v - 0.5) * np.pi) >= np.pi / h
+    dirs = model._equirect_dirs(u, v[centre][:, None])
+    np.testing.assert_allclose(img[centre], model.radiance(sky, dirs), rtol=1e-5, atol=1e-6)
+    for r in np.flatnonzero(~centre):                   # 2000 elevations across the row, sin theta weighted
+        sub = (r + (np.arange(2000) + 0.5) / 2000) / h
+        rad = model.radiance(sky, model._equirect_dirs(u, sub[:, None]))
+        weight = np.sin((1.0 - sub) * np.pi)[:, None, None]
+        np.testing.assert_allclose(img[r], (rad * weight).sum(axis=0) / weight.sum(), rtol=2e-4, atol=1e-6)
+
+
+def test_equirect_keeps_the_horizons_light():
+    """Dense air, a low sun, Altitude 0: the sky stays bright down to the horizon's dip
+    (~0.03 degrees below) over a ground 30x darker, a step far finer than the map's rows of
+    0.088 degrees that Cycles' warped table resolves (0.0014 degrees at the horizon). The map,
+    blended between rows as the environment light blends it, must hold the light of the band
+    +-1 degree about the horizon: read at texel centres it had lost 2% of it (a render's row
+    holding the horizon 0.955-0.968x Cycles, the row under it 0.70x)."""
+    sky = model.Sky.from_node_values(True, 0.11, 1.0, sun_disc=False, altitude=0.0,
+                                      air=4.17, aerosol=1.47, ozone=4.97)
+    h, w = 2048, 16
+    img = model.equirect(sky, w, height=h).astype(np.float64)
+    centres = (np.arange(h) + 0.5) / h * np.pi - np.pi / 2         # row elevations
+    el = np.linspace(-np.radians(1.0), np.radians(1.0), 200001)
+    for col in (0, 5, 11):
+        phi = (0.5 - (col + 0.5) / w) * 2 * np.pi                  # the texel column's azimuth
+        dirs = np.stack([np.cos(el) * np.cos(phi), np.cos(el) * np.sin(phi), np.sin(el)], -1)
+        exact = model.radiance(sky, dirs).sum(axis=0)
+        blended = np.stack([np.interp(el, centres, img[:, col, k]) for k in range(3)], -1).sum(axis=0)
+        np.testing.assert_allclose(blended, exact, rtol=3e-3)
 
 
 @pytest.mark.parametrize('multiple', (True, False))

@@ -63,3 +63,28 @@ def _rows_within(tol, tmp_path):
     ratio = d / c                                       # (rows, 3): each row's mean per channel
     worst = np.abs(ratio - 1).max(axis=1)
     assert worst.max() < tol, (int(worst.argmax()), ratio.round(4).tolist())
+
+
+def test_multiple_scattering_horizon_inside_a_row(tmp_path):
+    """Dense air (4.17, dust 1.47, ozone 4.97), a sun 6.3 degrees up, Altitude 0: the sky stays
+    bright down to the horizon's dip, ~0.03 degrees under it, over a ground 30x darker. Seen
+    through a 50 mm lens (rows of 1 degree) with the horizon across the middle of a row, that
+    row holds the band's light: read at the map's texel centres (rows of 0.088 degrees) it had
+    been 0.955-0.968x Cycles (a fuzz scene's horizon row 0.974x); each texel by the horizon now
+    holds its row's mean (sky.equirect)."""
+    import bpy
+    _level_view('MULTIPLE_SCATTERING', elevation=math.degrees(0.11))
+    sky = bpy.context.scene.world.node_tree.nodes['Sky Texture']
+    sky.altitude, sky.air_density, sky.aerosol_density, sky.ozone_density = 0.0, 4.17, 1.47, 4.97
+    cam = bpy.context.scene.camera
+    cam.data.lens = 50.0
+    cam.rotation_euler = (math.radians(90.0 + 0.495), 0, math.radians(20))   # horizon mid-row
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 40, 30
+    sc.cycles.samples = sc.dacrt.samples = 64
+    c, d = (sunplane.render_rgb(e, tmp_path).astype(np.float64).mean(axis=1) for e in ('CYCLES', 'DACRT'))
+    ratio = d / c
+    row = int(np.argmax(np.abs(np.diff(c[:, 0]))))     # the horizon's row: under the largest step
+    assert c[row, 0] < 0.6 * c[row + 1, 0], c[:, 0]     # (it holds the step: dimmer than the sky)
+    assert np.abs(ratio[row] - 1).max() < 0.01, (row, ratio.round(4).tolist())
+    assert np.abs(ratio - 1).max() < 0.02, ratio.round(4).tolist()   # (the dark ground's noise)
