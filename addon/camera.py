@@ -220,6 +220,44 @@ class CameraModel:
             return np.abs(self._along(points, -self._rot32[:, 2]))
         return np.sqrt(sum((points[a] - self._pos32[a]) ** 2 for a in range(3))).astype(np.float32)
 
+    def footprint(self, points: np.ndarray) -> np.ndarray:
+        """(k,) float64 Cycles' ray-differential width at world points (3, k) seen from the
+        camera, what its bump taps are spaced by: the compact differential, the mean length
+        of the rays' change over one pixel in x and in y, of the position (orthographic:
+        dP) and of the direction times the distance (perspective and panoramic: dD, found as
+        Cycles' camera_sample_* finds it, the direction one pixel over minus this one's).
+        (It had been the view plane's span over the width for every camera: for a panorama a
+        unit square's, 2 pi too narrow across an equirectangular frame's equator; for a
+        perspective camera the centre's, not the narrower one off its axis.)"""
+        P = np.asarray(points, np.float64)
+        du, dv = (self.right - self.left) / self.width, (self.top - self.bottom) / self.height
+        if self.kind == 'ORTHO':                    # dP: the view plane's pixel; dD 0
+            return np.full(P.shape[1], 0.5 * (du + dv))
+        rel = P - self.pos[:, None]
+        dist = np.sqrt((rel * rel).sum(axis=0))
+        local = self.inv @ rel                      # camera frame (x right, y up, -z forward)
+        if self.pano is None:
+            with np.errstate(divide='ignore', invalid='ignore'):
+                plane = local[:2] / np.where(local[2] < 0, -local[2], np.nan)   # on z = -1
+            step = lambda a, b: panorama.unit(np.stack([a, b, -np.ones_like(a)]))
+            sx, sy = plane
+            t = self.tan_half_fov
+            d0, dx, dy = step(sx, sy), step(sx + du * t, sy), step(sx, sy + dv * t)
+        else:
+            u, v = panorama.viewplane_of(self.pano, panorama.unit(local))
+            d0 = panorama.directions(self.pano, u, v)
+            dx, dy = self._pano_direction(u + du, v), self._pano_direction(u, v + dv)
+        spread = 0.5 * (np.sqrt(((dx - d0) ** 2).sum(axis=0)) + np.sqrt(((dy - d0) ** 2).sum(axis=0)))
+        return np.where(np.isfinite(spread), spread, 0.0) * dist
+
+    def _pano_direction(self, u, v):
+        """panorama.directions, zero where the point has no ray (past a fisheye's circle or the
+        mirror ball), as Cycles' projection returns it there: a pixel by the rim then differs
+        from its neighbour by a whole unit direction."""
+        d = panorama.directions(self.pano, u, v)
+        seen = panorama.sees(self.pano, u, v)
+        return d if seen is None else np.where(seen, d, 0.0)
+
     def project(self, points: np.ndarray):
         """World points (n,3) -> full-frame raster (rx, ry) float64 and z-depth; inverse of rays()."""
         if self.pano is not None:

@@ -69,6 +69,35 @@ def directions(cam, u, v) -> np.ndarray:
     return unit(np.stack([-d[1], d[2], -d[0]]))
 
 
+def viewplane_of(cam, d):
+    """(u, v) (n,) the viewplane points whose rays have the unit directions d (3, n) in
+    Blender's camera frame: directions() inverted (a fisheye's points past its circle and the
+    mirror ball's rim where no ray leaves are returned too)."""
+    kind = cam.panorama_type
+    d = np.asarray(d, np.float64)
+    if kind == 'MIRRORBALL':
+        m = np.stack([d[0], d[2], d[1]])           # the mirror-ball frame
+        n = m + np.array([[0.0], [-1.0], [0.0]])     # d + I = 2 (n.I) n: the ball's normal
+        n = n / np.maximum(np.linalg.norm(n, axis=0), 1e-300)
+        return (n[0] + 1.0) * 0.5, (n[2] + 1.0) * 0.5
+    p = np.stack([-d[2], -d[0], d[1]])              # Cycles' panorama frame (x forward, z up)
+    if kind == 'EQUIRECTANGULAR':
+        (lon0, lon1), (lat0, lat1) = cam.longitude, cam.latitude
+        theta = np.arccos(np.clip(p[2], -1.0, 1.0))
+        phi = np.arctan2(p[1], p[0])
+        return (phi + lon0) / (lon0 - lon1), (theta + lat0 - 0.5 * np.pi) / (lat0 - lat1)
+    theta = np.arccos(np.clip(p[0], -1.0, 1.0))
+    phi = np.arctan2(p[2], -p[1])
+    if kind == 'FISHEYE_EQUIDISTANT':
+        r = theta / (cam.fisheye_fov * 0.5)
+        return r * np.cos(phi) * 0.5 + 0.5, r * np.sin(phi) * 0.5 + 0.5
+    if kind == 'FISHEYE_EQUISOLID':
+        w, h = cam.sensor_mm
+        r = 2.0 * cam.fisheye_lens * np.sin(theta * 0.5)
+        return r * np.cos(phi) / w + 0.5, r * np.sin(phi) / h + 0.5
+    raise ValueError(f"panorama type {kind!r} is not one of {', '.join(SUPPORTED)}")
+
+
 def unit(d: np.ndarray) -> np.ndarray:
     """The columns of d (3, n) scaled to length 1."""
     return d / np.linalg.norm(d, axis=0)

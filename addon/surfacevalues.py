@@ -211,15 +211,10 @@ class SurfaceValues:
         return bumpmap.unit(np.einsum('kji,jk->ik', Minv, bent.astype(np.float64)), N64).astype(F32)
 
     def _footprint(self, P):
-        """(k,) the width a camera pixel covers at points P (3, k) (seen from the camera: at a
-        bounce too, where Cycles' own differentials are wider still)."""
-        cam = self.camera
-        if cam.kind == 'ORTHO':
-            return np.full(P.shape[1], (cam.right - cam.left) / cam.width)
-        d = np.sqrt(((P - cam.pos[:, None]) ** 2).sum(axis=0))
-        # (a panorama's pixel: its view plane's span over the width, as angles)
-        per_pixel = (cam.right - cam.left) / cam.width * (cam.tan_half_fov if cam.kind == 'PERSP' else 1.0)
-        return d * per_pixel
+        """(k,) the width a camera pixel covers at points P (3, k), Cycles' compact ray
+        differential seen from the camera (camera.footprint; at a bounce too, where Cycles'
+        own differentials are wider still)."""
+        return self.camera.footprint(P)
 
     def _coordinates32(self, needs, prim, u, v, back):
         """_coordinates at float64 barycentrics (a bump tap's), each (k, 3) float32."""
