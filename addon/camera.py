@@ -253,7 +253,8 @@ class CameraModel:
     def _pano_direction(self, u, v):
         """panorama.directions, zero where the point has no ray (past a fisheye's circle or the
         mirror ball), as Cycles' projection returns it there: a pixel by the rim then differs
-        from its neighbour by a whole unit direction."""
+        from its neighbour by a whole unit direction. (Cycles' own differential of such pixels
+        ends up NaN, and it renders their bumped surfaces dark; not reproduced.)"""
         d = panorama.directions(self.pano, u, v)
         seen = panorama.sees(self.pano, u, v)
         return d if seen is None else np.where(seen, d, 0.0)
