@@ -7,10 +7,10 @@ diagonal. They z-fight: which one a ray meets, and whether a ray leaving one mee
 depends on each tracer's order, so no image can agree with Cycles. Said, naming the objects.
 
 Cheap, and never claimed where it is not so: triangles are keyed by their quantised plane (unit
-normal up to sign, offset in bins of _ULPS float32 ulps of the largest coordinate; a quad's two
-triangles listed one after the other as one key) and grouped natively where keys repeat
-(dacrt.shading.coplanar_groups: threaded passes over the table's rows, 0.6-0.9x the table's own
-cost). Groups of up to _SMALL are tested pair by pair; larger groups (up to _MAX_GROUP) only
+normal up to sign, offset in bins of _ULPS float32 ulps of the largest coordinate, plane_step;
+written by the table's own pass, dacrt.shading.triangle_table's plane_keys) and grouped natively
+where keys repeat, a quad's two triangles listed one after the other as one key
+(dacrt.shading.coplanar_groups: threaded passes over the keys). Groups of up to _SMALL are tested pair by pair; larger groups (up to _MAX_GROUP) only
 where their triangles' areas, projected into the plane, add up to more than the area of a
 rectangle bounding them there, which must cover some point twice (the smallest of the rectangles
 along the edges of one triangle; a Mirror's faces mostly fill theirs). Every pair is tested exactly in the
@@ -35,20 +35,27 @@ _MAX_GROUP = 512        # larger plane groups are left
 _PARALLEL = 1.0 - 1e-6  # cos between the normals of a pair in one plane facing one way
 
 
-def overlapping(vertices, indices, geo, candidates):
+def plane_step(vertices) -> float:
+    """The plane keys' offset bin: _ULPS float32 ulps of the largest |coordinate| of vertices
+    (triangle_table's plane_inv_step is its float32 inverse)."""
+    v = np.asarray(vertices, np.float32)
+    big = max(float(v.max(initial=0.0)), -float(v.min(initial=0.0)), 1e-30)    # (no |v| temporary)
+    return float(_ULPS * np.spacing(np.float32(big)))
+
+
+def overlapping(vertices, indices, geo, keys, step, candidates):
     """Mask (M,) of the triangles of mask candidates that overlap another candidate in part in
-    the same plane (geo: triangle_table's rows, v0 at 0:3 and the unit normal at 9:12)."""
+    the same plane (geo: triangle_table's rows, v0 at 0:3 and the unit normal at 9:12; keys its
+    plane_keys, written with plane_inv_step float32(1 / step), step = plane_step(vertices))."""
     M = len(candidates)
     out = np.zeros(M, bool)
     if np.count_nonzero(candidates) < 2:
         return out
     v = np.asarray(vertices, np.float32)
-    big = max(float(v.max(initial=0.0)), -float(v.min(initial=0.0)), 1e-30)    # (no |v| temporary)
-    tol = float(_ULPS * np.spacing(np.float32(big)))
     t = np.asarray(indices)
-    # natively, in one threaded pass: the plane keys, a quad's two triangles as one, the groups
-    # of repeated keys (most meshes have none, or one plane too large to test)
-    rows, start = dacrt.shading.coplanar_groups(geo, t, candidates, np.float32(1.0 / tol), _MAX_GROUP)
+    # natively, in one threaded pass: a quad's two triangles as one, the groups of repeated keys
+    # (most meshes have none, or one plane too large to test)
+    rows, start = dacrt.shading.coplanar_groups(keys, geo, t, candidates, _MAX_GROUP)
     if not len(rows):
         return out
     size = np.diff(start)
@@ -58,7 +65,7 @@ def overlapping(vertices, indices, geo, candidates):
     for s in np.unique(size):
         g = start[size == s]
         if s > _SMALL:
-            g = g[_bound_exceeded(c, rows, g, s, tol)]
+            g = g[_bound_exceeded(c, rows, g, s, step)]
         a, b = np.triu_indices(s, 1)
         pi.append(rows[(g[:, None] + a).ravel()]), pj.append(rows[(g[:, None] + b).ravel()])
     i, j = np.concatenate(pi), np.concatenate(pj)
@@ -167,7 +174,8 @@ def overlapping_faces(sd, tri, mats) -> list:
             drop = np.ones(len(rows), bool)
             drop[order[firsts]] = False
             cand[rows[drop]] = False
-    said = overlapping(tri.vertices, tri.indices, tri.geo, cand)
+    said = overlapping(tri.vertices, tri.indices, tri.geo, tri.plane_keys, tri.plane_step, cand)
+    tri.plane_keys = None       # (8 bytes a triangle, read only here)
     if not said.any():
         return []
     return [('INFO', f"{int(said.sum())} triangles of {sd.named_objects(said)} overlap other triangles in "

@@ -9,6 +9,7 @@ import numpy as np
 import dacrt
 
 from . import roughdiffuse
+from .overlappingfaces import plane_step
 from .procedural import SIDED, VIEW, ProceduralTexels
 from .texture import EncodedTexels, UdimTiles, lookup_texels
 
@@ -74,7 +75,13 @@ class Triangles:
         # rows: v0 (0:3), v1 - v0 (3:6), v2 - v0 (6:9), unit geometric normal (9:12), the
         # self-intersection step off the front side (12:15, see OFFSET_ULPS); one native pass
         keys = np.empty(m, np.uint64)
-        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, OFFSET_ULPS, _TINY, keys=keys)
+        # and each triangle's plane key, for the partial-overlap check (overlappingfaces.py, which
+        # reads and drops them), in the same pass
+        self.plane_step = plane_step(self.vertices)
+        self.plane_keys = np.empty(m, np.uint64)
+        self.geo, area = dacrt.shading.triangle_table(self.vertices, self.indices, OFFSET_ULPS, _TINY, keys=keys,
+                                                      plane_keys=self.plane_keys,
+                                                      plane_inv_step=F32(1.0 / self.plane_step))
         twin = twins(keys)
         # the candidates for coincident faces (coincidentfaces.py), exact copies among them
         self.twins = twin

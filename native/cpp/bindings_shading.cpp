@@ -56,11 +56,12 @@ const float* optional_rows(const py::object& o, py::ssize_t rows, size_t n, cons
 }
 
 // An optional writeable (n,) uint64 output of one key per triangle (None: not wanted).
-uint64_t* optional_keys(const py::object& keys, size_t n, py::array_t<uint64_t, py::array::c_style>& keep) {
+uint64_t* optional_keys(const py::object& keys, size_t n, py::array_t<uint64_t, py::array::c_style>& keep,
+                        const char* name) {
     if (keys.is_none()) return nullptr;
     keep = keys.cast<py::array_t<uint64_t, py::array::c_style>>();
     if (keep.ndim() != 1 || size_t(keep.shape(0)) != n || !keep.writeable())
-        throw py::value_error("keys must be a writeable uint64 array with one entry per triangle");
+        throw py::value_error(std::string(name) + " must be a writeable uint64 array with one entry per triangle");
     return keep.mutable_data();
 }
 
@@ -589,20 +590,20 @@ py::array_t<bool> repeated_keys_py(py::array_t<uint64_t, py::array::c_style | py
     return out;
 }
 
-py::tuple coplanar_groups_py(F32Array geo, py::array_t<int32_t, py::array::c_style> triangles,
+py::tuple coplanar_groups_py(py::array_t<uint64_t, py::array::c_style> keys, F32Array geo,
+                             py::array_t<int32_t, py::array::c_style> triangles,
                              py::array_t<uint8_t, py::array::c_style | py::array::forcecast> candidates,
-                             float inv_step, size_t max_group, py::object keys) {
+                             size_t max_group) {
     const size_t M = rows_of(geo, 15, "geo");
     if (triangles.ndim() != 2 || size_t(triangles.shape(0)) != M || triangles.shape(1) != 3)
         throw py::value_error("triangles must have shape (M, 3), one row per column of geo");
+    need_len(keys, M, "keys");
     need_len(candidates, M, "candidates");
     if (M >= (size_t(1) << 31)) throw py::value_error("at most 2^31 - 1 triangles");
-    py::array_t<uint64_t, py::array::c_style> key_out;
-    uint64_t* k = optional_keys(keys, M, key_out);
     std::vector<int64_t> rows, start;
     {
         py::gil_scoped_release nogil;
-        coplanar_groups(geo.data(), M, triangles.data(), candidates.data(), inv_step, max_group, rows, start, k);
+        coplanar_groups(keys.data(), geo.data(), M, triangles.data(), candidates.data(), max_group, rows, start);
     }
     I64Array r{py::ssize_t(rows.size())}, s{py::ssize_t(start.size())};
     std::copy(rows.begin(), rows.end(), r.mutable_data());
@@ -629,7 +630,7 @@ F32Array hit_records_py(F32Array geo, py::object normals) {
 }
 
 py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c_style> triangles, float offset_ulps,
-                            float tiny, py::object full, py::object keys) {
+                            float tiny, py::object full, py::object keys, py::object plane_keys, float plane_inv_step) {
     const auto [V, M] = mesh_sizes(vertices, triangles);
     const int32_t* t = triangles.data();
     py::array_t<uint8_t, py::array::c_style | py::array::forcecast> flags;
@@ -640,12 +641,15 @@ py::tuple triangle_table_py(F32Array vertices, py::array_t<int32_t, py::array::c
     }
     const uint8_t* f = full.is_none() ? nullptr : flags.data();
     py::array_t<uint64_t, py::array::c_style> key_out;
-    uint64_t* k = optional_keys(keys, M, key_out);
+    uint64_t* k = optional_keys(keys, M, key_out, "keys");
+    py::array_t<uint64_t, py::array::c_style> plane_out;
+    uint64_t* pk = optional_keys(plane_keys, M, plane_out, "plane_keys");
     F32Array geo({py::ssize_t(15), py::ssize_t(M)});
     py::array_t<double> area{py::ssize_t(M)};
     {
         py::gil_scoped_release nogil;
-        triangle_table(vertices.data(), V, t, M, offset_ulps, tiny, f, geo.mutable_data(), area.mutable_data(), k);
+        triangle_table(vertices.data(), V, t, M, offset_ulps, tiny, f, geo.mutable_data(), area.mutable_data(), k, pk,
+                       plane_inv_step);
     }
     return py::make_tuple(geo, area);
 }
@@ -784,10 +788,11 @@ void byte_lookup_py(py::array_t<uint8_t, py::array::c_style> k8, F32Array table,
 void register_shading(py::module_& m) {
     m.def("pack_rays", &pack_rays_py, py::arg("O"), py::arg("D"), py::arg("tfar"), py::arg("out"));
     m.def("repeated_keys", &repeated_keys_py, py::arg("keys"));
-    m.def("coplanar_groups", &coplanar_groups_py, py::arg("geo"), py::arg("triangles"), py::arg("candidates"),
-          py::arg("inv_step"), py::arg("max_group"), py::arg("keys") = py::none());
+    m.def("coplanar_groups", &coplanar_groups_py, py::arg("keys"), py::arg("geo"), py::arg("triangles"),
+          py::arg("candidates"), py::arg("max_group"));
     m.def("triangle_table", &triangle_table_py, py::arg("vertices"), py::arg("triangles"), py::arg("offset_ulps"),
-          py::arg("tiny"), py::arg("full") = py::none(), py::arg("keys") = py::none());
+          py::arg("tiny"), py::arg("full") = py::none(), py::arg("keys") = py::none(),
+          py::arg("plane_keys") = py::none(), py::arg("plane_inv_step") = 0.0f);
     m.def("surface", &surface_py, py::arg("geo"), py::arg("normals"), py::arg("hits"), py::arg("idx"), py::arg("D"),
           py::arg("records") = py::none());
     m.def("hit_records", &hit_records_py, py::arg("geo"), py::arg("normals"));

@@ -1,8 +1,10 @@
-// Triangles in one plane (see coplanar.h): keys, quads merged, repeats found, in threaded
-// passes over the triangles that write only a 4-byte tag each. Most meshes repeat no plane (a
-// curved surface) or one huge plane (a flat grid, left out), so bitmaps of hash slots seen once
-// and twice (in cache) leave few triangles to key exactly, and the result is small. A sort of
-// the keys or a hash partition of all of them had cost 20-60 ms per 1M triangles.
+// Triangles in one plane (see coplanar.h): quads merged, repeated keys found, in threaded passes
+// over the triangles that write only a 4-byte tag each. Most meshes repeat no plane (a curved
+// surface) or one huge plane (a flat grid, left out), so bitmaps of hash slots seen once and
+// twice (in cache) leave few triangles to look up exactly, and the result is small. A sort of
+// the keys or a hash partition of all of them had cost 20-60 ms per 1M triangles; the keys
+// come from triangle_table's pass (computed here from the table's rows, a second read of 24
+// bytes a triangle, they had cost ~8 ms more per 1M).
 #include "coplanar.h"
 
 #include <algorithm>
@@ -87,15 +89,14 @@ struct LocalGroups {
 
 }  // namespace
 
-// 1: each thread keys its triangles (the next one's key kept for the quad test), tags the
+// 1: each thread reads its triangles' keys (the next one's kept for the quad test), tags the
 // listed ones with their hash slot and marks the slot in its bitmaps of slots seen once and
 // seen twice; 2: the bitmaps merged (a slot seen twice by all threads together); 3: each thread
-// keys again only its triangles in a slot seen twice (the repeats, and ~1/16 of the rest that
-// share a slot) into a table of its own; 4: the threads' groups summed, those repeated and small
+// puts only its triangles in a slot seen twice (the repeats, and ~1/16 of the rest that share a
+// slot) into a table of its own; 4: the threads' groups summed, those repeated and small
 // enough kept. Nothing of size M but the tags is written.
-void coplanar_groups(const float* geo, size_t M, const int32_t* tri, const uint8_t* candidates, float inv_step,
-                     size_t max_group, std::vector<int64_t>& rows, std::vector<int64_t>& start,
-                     uint64_t* keys_out) {
+void coplanar_groups(const uint64_t* keys, const float* geo, size_t M, const int32_t* tri, const uint8_t* candidates,
+                     size_t max_group, std::vector<int64_t>& rows, std::vector<int64_t>& start) {
     rows.clear();
     start.assign(1, 0);
     if (M < 2) return;
@@ -122,7 +123,7 @@ void coplanar_groups(const float* geo, size_t M, const int32_t* tri, const uint8
         bm.assign(2 * words, 0);
         bm2.assign(2 * words, 0);
         if (b >= e) return;
-        auto plain_key = [&](size_t i) { return candidates[i] ? coplanar_key(geo, M, i, inv_step) : uint64_t(0); };
+        auto plain_key = [&](size_t i) { return candidates[i] ? keys[i] : uint64_t(0); };
         auto pair = [&](size_t i, uint64_t k, uint64_t next) {
             return k != 0 && k == next && quad_pair(geo, M, tri, i);
         };
@@ -142,10 +143,8 @@ void coplanar_groups(const float* geo, size_t M, const int32_t* tri, const uint8
             // keys i0 + 1 .. i0 + n (the last one the next block's first), 0 past M - 1
             const size_t m = std::min(n, M - 1 - i0);
             for (size_t j = 1; j <= m; ++j)
-                kb[j] = coplanar_key(geo, M, i0 + j, inv_step) & (uint64_t(0) - uint64_t(candidates[i0 + j] != 0));
+                kb[j] = keys[i0 + j] & (uint64_t(0) - uint64_t(candidates[i0 + j] != 0));
             for (size_t j = m + 1; j <= n; ++j) kb[j] = 0;
-            if (keys_out)
-                for (size_t j = 0; j < n; ++j) keys_out[i0 + j] = kb[j];
             for (size_t j = 0; j < n; ++j) {
                 hb[j] = tag_of(kb[j]);
                 sb[j] = second(hb[j]);
@@ -189,7 +188,7 @@ void coplanar_groups(const float* geo, size_t M, const int32_t* tri, const uint8
             twice2[j] = t2;
         }
     }, size_t(1) << 14);
-    // 3: the triangles in slots seen twice keyed again (their words prefetched ahead)
+    // 3: the triangles in slots seen twice looked up (their words prefetched ahead)
     std::vector<LocalGroups> local(static_cast<size_t>(threads));
     run_workers(threads, [&](int w) {
         const size_t b = std::min(M, size_t(w) * step), e = std::min(M, b + step);
@@ -205,7 +204,7 @@ void coplanar_groups(const float* geo, size_t M, const int32_t* tri, const uint8
             if (!(t & kListed)) continue;
             const uint32_t s = (t & kHash) >> 7, s2 = second(t & kHash);
             if (!(twice[s >> 6] >> (s & 63) & 1) || !(twice2[s2 >> 6] >> (s2 & 63) & 1)) continue;
-            g.add(coplanar_key(geo, M, i, inv_step), uint32_t(i), t & kMate, max_group);
+            g.add(keys[i], uint32_t(i), t & kMate, max_group);
         }
     });
     // 4: the groups summed over threads (few: the repeats and the slots they share)

@@ -86,10 +86,14 @@ void pack_rays(const float* O, const float* D, const float* tfar, size_t n, Ray*
 // is set: a triangle with a coincident twin, whose float test at a ray's origin errs by ULPs of
 // its coordinates along the ray. The hit point's margin from the edges is always the whole
 // (pathvertex.h edge_margin). geo: 15 rows of M; area: M doubles; keys (M, or null): an odd
-// order-free hash of each triangle's corners' bits (-0 as 0): exact copies have equal keys.
-// Triangles must index existing vertices (callers check).
+// order-free hash of each triangle's corners' bits (-0 as 0): exact copies have equal keys;
+// plane_keys (M, or null): each triangle's coplanar_key (coplanar.h) of its v0 and normal rows
+// with plane_inv_step, written here where they are at hand (coplanar_groups' input: keyed in a
+// pass of its own, it had read the six rows again). Triangles must index existing vertices
+// (callers check).
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
-                    const uint8_t* full, float* geo, double* area, uint64_t* keys = nullptr);
+                    const uint8_t* full, float* geo, double* area, uint64_t* keys = nullptr,
+                    uint64_t* plane_keys = nullptr, float plane_inv_step = 0.0f);
 
 // out[i] = 1 where keys[i] != 0 and another entry holds the same key, else 0 (n entries): the
 // triangles whose triangle_table key repeats (a surface modelled twice). Keys partitioned by

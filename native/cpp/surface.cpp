@@ -6,6 +6,7 @@
 #include <cstring>
 #include <vector>
 
+#include "coplanar.h"
 #include "hitrecords.h"
 #include "parallel.h"
 #include "pathvertex.h"
@@ -74,7 +75,8 @@ void repeated_keys(const uint64_t* keys, size_t n, uint8_t* out) {
 }
 
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
-                    const uint8_t* full, float* geo, double* area, uint64_t* keys) {
+                    const uint8_t* full, float* geo, double* area, uint64_t* keys, uint64_t* plane_keys,
+                    float plane_inv_step) {
     parallel_for(M, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
             const float* c[3];
@@ -120,14 +122,17 @@ void triangle_table(const float* vertices, size_t V, const int32_t* triangles, s
                 }
                 keys[i] = key | 1;  // never 0 (0: no key, repeated_keys skips it)
             }
+            float ng[3];
             for (int a = 0; a < 3; ++a) {
-                const float ng = len > 0 ? float(n[a] / len) : 0.0f;
+                ng[a] = len > 0 ? float(n[a] / len) : 0.0f;
                 geo[size_t(a) * M + i] = c[0][a];
                 geo[size_t(3 + a) * M + i] = float(e1[a]);
                 geo[size_t(6 + a) * M + i] = float(e2[a]);
-                geo[size_t(9 + a) * M + i] = ng;
-                geo[size_t(12 + a) * M + i] = ng * step;
+                geo[size_t(9 + a) * M + i] = ng[a];
+                geo[size_t(12 + a) * M + i] = ng[a] * step;
             }
+            // (from the very floats just written to rows 0-2 and 9-11)
+            if (plane_keys) plane_keys[i] = coplanar_key(c[0], ng[0], ng[1], ng[2], plane_inv_step);
         }
     });
 }

@@ -7,14 +7,17 @@ import numpy as np
 import pytest
 
 import dacrt
-from addon.overlappingfaces import overlapping
+from addon.overlappingfaces import overlapping, plane_step
 from addon.surfacetables import _TINY, OFFSET_ULPS
 
 
 def _found(v, t, candidates=None):
+    """overlapping() of the table and plane keys as surfacetables.Triangles makes them."""
     v, t = np.ascontiguousarray(v, np.float32), np.ascontiguousarray(t, np.int32)
-    geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64))
-    return overlapping(v, t, geo, np.ones(len(t), bool) if candidates is None else candidates)
+    step, keys = plane_step(v), np.empty(len(t), np.uint64)
+    geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64),
+                                          plane_keys=keys, plane_inv_step=np.float32(1.0 / step))
+    return overlapping(v, t, geo, keys, step, np.ones(len(t), bool) if candidates is None else candidates)
 
 
 def _quad(x0, x1, y0, y1, z=0.0, other_diagonal=False, flip=False):
@@ -146,7 +149,4 @@ def test_a_million_triangle_grid_has_no_overlap(wavy):
     i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
     t = np.c_[i, i + 1, i + n + 2, i, i + n + 2, i + n + 1].reshape(-1, 3)     # a quad's triangles adjacent
     z = np.sin(3 * x.ravel()) * np.cos(2 * y.ravel()) if wavy else np.zeros(x.size)
-    v = np.ascontiguousarray(np.c_[x.ravel(), y.ravel(), z], np.float32)
-    t = np.ascontiguousarray(t, np.int32)
-    geo, _ = dacrt.shading.triangle_table(v, t, OFFSET_ULPS, _TINY, keys=np.empty(len(t), np.uint64))
-    assert not overlapping(v, t, geo, np.ones(len(t), bool)).any()
+    assert not _found(np.c_[x.ravel(), y.ravel(), z], t).any()

@@ -84,22 +84,23 @@ def repeated_keys(keys):
     return _core.repeated_keys(np.ascontiguousarray(keys, np.uint64))
 
 
-def coplanar_groups(geo, triangles, candidates, inv_step: float, max_group: int, keys=None):
-    """The triangles whose quantised planes repeat among candidates (M,) bool, grouped: (rows,
-    start) int64, group g being rows[start[g]:start[g + 1]], rows ascending within a group. geo:
-    triangle_table's (15, M) rows (v0 and the unit normal read); triangles (M, 3) int32. The key
-    (coplanar.h): the normal up to sign in steps of 1/4096 a component and the offset n . v0 in
-    steps of 1 / inv_step (keep |n . v0| * inv_step below 2^21). A quad's two triangles listed
-    one after the other count as one key (alone in its plane, a quad is no group); groups of more
-    than max_group triangles are left out. keys (M,) uint64, optional, is written: each
-    candidate's key, 0 elsewhere. One threaded pass over the triangles and a hash of the keys."""
+def coplanar_groups(keys, geo, triangles, candidates, max_group: int):
+    """The triangles whose plane keys repeat among candidates (M,) bool, grouped: (rows, start)
+    int64, group g being rows[start[g]:start[g + 1]], rows ascending within a group. keys (M,)
+    uint64: triangle_table's plane_keys (coplanar.h: the normal up to sign in steps of 1/4096 a
+    component and the offset n . v0 in steps of 1 / plane_inv_step); geo: that table's (15, M)
+    rows (the normals read for the quad test); triangles (M, 3) int32. A quad's two triangles
+    listed one after the other count as one key (alone in its plane, a quad is no group); groups
+    of more than max_group triangles are left out. One threaded pass over the keys and a hash of
+    the few that may repeat."""
     geo = _rows(geo, 15, "geo")
     t = np.ascontiguousarray(triangles, np.int32)    # (indices only compared, never followed)
-    return _core.coplanar_groups(geo, t, np.ascontiguousarray(candidates, np.uint8), float(inv_step),
-                                 int(max_group), keys)
+    return _core.coplanar_groups(np.ascontiguousarray(keys, np.uint64), geo, t,
+                                 np.ascontiguousarray(candidates, np.uint8), int(max_group))
 
 
-def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100, full=None, keys=None):
+def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100, full=None, keys=None,
+                   plane_keys=None, plane_inv_step: float = 0.0):
     """The (15, M) float32 table surface() and sample_triangles() read, and the areas (M,)
     float64, of triangles (M, 3) of vertices (V, 3): rows v0, v1 - v0, v2 - v0 (differences
     in double, rounded once), the unit geometric normal (0 for zero area) and the front-side
@@ -108,12 +109,14 @@ def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 **
     sum_a |n_a| ulp(largest |coordinate a|) / ulp(largest) (a plane z = c: ULPs of c), or all of
     it for the triangles where full (M,) is true (those with a coincident twin). keys (M,)
     uint64, optional, is written: an odd order-free hash of each triangle's corners' bits (-0
-    as 0; exact copies, in any corner order, have equal keys)."""
+    as 0; exact copies, in any corner order, have equal keys). plane_keys (M,) uint64, optional,
+    is written: each triangle's plane key (coplanar_groups' input) of the v0 and normal it writes,
+    the offset in steps of 1 / plane_inv_step (keep |n . v0| * plane_inv_step below 2^21)."""
     v = np.ascontiguousarray(vertices, _F32)
     t = _triangles32(triangles, len(v))
     if full is not None:
         full = np.ascontiguousarray(full, np.uint8)
-    return _core.triangle_table(v, t, float(offset_ulps), float(tiny), full, keys)
+    return _core.triangle_table(v, t, float(offset_ulps), float(tiny), full, keys, plane_keys, float(plane_inv_step))
 
 
 def hit_records(geo, normals):
