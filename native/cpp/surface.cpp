@@ -77,62 +77,70 @@ void repeated_keys(const uint64_t* keys, size_t n, uint8_t* out) {
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     const uint8_t* full, float* geo, double* area, uint64_t* keys, uint64_t* plane_keys,
                     float plane_inv_step) {
+    // in blocks: each block's plane keys from its rows just written (in cache), in one loop that
+    // vectorises (keyed one by one in the loop above they had cost ~10 ns a triangle)
+    constexpr size_t kBlock = 256;
     parallel_for(M, [&](size_t b, size_t e) {
-        for (size_t i = b; i < e; ++i) {
-            const float* c[3];
-            for (int k = 0; k < 3; ++k) c[k] = vertex_of(vertices, V, triangles, 3 * i + size_t(k));
-            double e1[3], e2[3];
-            float mag = tiny, axis[3];
-            for (int a = 0; a < 3; ++a) {
-                e1[a] = double(c[1][a]) - double(c[0][a]);
-                e2[a] = double(c[2][a]) - double(c[0][a]);
-                axis[a] = tiny;
-                for (int k = 0; k < 3; ++k) axis[a] = std::max(axis[a], std::fabs(c[k][a]));
-                mag = std::max(mag, axis[a]);
-            }
-            const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                 e1[0] * e2[1] - e1[1] * e2[0]};
-            const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-            area[i] = 0.5 * len;
-            // along the normal only P's error there (see shading.h): sum_a |n_a| ulp(axis_a)
-            // of the ULPs of the largest coordinate, all of it for a triangle with a twin
-            float share = 1.0f;
-            if (!(full && full[i]) && len > 0) {
-                double sum = 0.0;
-                for (int a = 0; a < 3; ++a) sum += std::fabs(n[a] / len) * ulp_of(axis[a]);
-                share = float(std::min(1.0, sum / ulp_of(mag)));
-            }
-            const float step = ulp_of(mag) * offset_ulps * share;
-            if (keys) {
-                // an order-free hash of the corners' bits (+0: -0 as 0), every triangle: twins to
-                // step off (where the step shrank) and exact copies to say (coincidentfaces.py,
-                // which compares the candidates bit for bit). Linear in the bits, but no key of
-                // 1.4M grid triangles (both diagonals, flat and wavy, in one binade and across
-                // zero) repeated another's
-                uint64_t key = 0;
-                for (int k = 0; k < 3; ++k) {
-                    uint64_t h = 0;
-                    for (int a = 0; a < 3; ++a) {
-                        const float x = c[k][a] + 0.0f;
-                        uint32_t b;
-                        std::memcpy(&b, &x, 4);
-                        h += uint64_t(b) * kCornerMix[a];
-                    }
-                    key += h;
+        for (size_t b0 = b; b0 < e; b0 += kBlock) {
+            const size_t e0 = std::min(e, b0 + kBlock);
+            for (size_t i = b0; i < e0; ++i) {
+                const float* c[3];
+                for (int k = 0; k < 3; ++k) c[k] = vertex_of(vertices, V, triangles, 3 * i + size_t(k));
+                double e1[3], e2[3];
+                float mag = tiny, axis[3];
+                for (int a = 0; a < 3; ++a) {
+                    e1[a] = double(c[1][a]) - double(c[0][a]);
+                    e2[a] = double(c[2][a]) - double(c[0][a]);
+                    axis[a] = tiny;
+                    for (int k = 0; k < 3; ++k) axis[a] = std::max(axis[a], std::fabs(c[k][a]));
+                    mag = std::max(mag, axis[a]);
                 }
-                keys[i] = key | 1;  // never 0 (0: no key, repeated_keys skips it)
+                const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                     e1[0] * e2[1] - e1[1] * e2[0]};
+                const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                area[i] = 0.5 * len;
+                // along the normal only P's error there (see shading.h): sum_a |n_a| ulp(axis_a)
+                // of the ULPs of the largest coordinate, all of it for a triangle with a twin
+                float share = 1.0f;
+                if (!(full && full[i]) && len > 0) {
+                    double sum = 0.0;
+                    for (int a = 0; a < 3; ++a) sum += std::fabs(n[a] / len) * ulp_of(axis[a]);
+                    share = float(std::min(1.0, sum / ulp_of(mag)));
+                }
+                const float step = ulp_of(mag) * offset_ulps * share;
+                if (keys) {
+                    // an order-free hash of the corners' bits (+0: -0 as 0), every triangle: twins to
+                    // step off (where the step shrank) and exact copies to say (coincidentfaces.py,
+                    // which compares the candidates bit for bit). Linear in the bits, but no key of
+                    // 1.4M grid triangles (both diagonals, flat and wavy, in one binade and across
+                    // zero) repeated another's
+                    uint64_t key = 0;
+                    for (int k = 0; k < 3; ++k) {
+                        uint64_t h = 0;
+                        for (int a = 0; a < 3; ++a) {
+                            const float x = c[k][a] + 0.0f;
+                            uint32_t b;
+                            std::memcpy(&b, &x, 4);
+                            h += uint64_t(b) * kCornerMix[a];
+                        }
+                        key += h;
+                    }
+                    keys[i] = key | 1;  // never 0 (0: no key, repeated_keys skips it)
+                }
+                for (int a = 0; a < 3; ++a) {
+                    const float ng = len > 0 ? float(n[a] / len) : 0.0f;
+                    geo[size_t(a) * M + i] = c[0][a];
+                    geo[size_t(3 + a) * M + i] = float(e1[a]);
+                    geo[size_t(6 + a) * M + i] = float(e2[a]);
+                    geo[size_t(9 + a) * M + i] = ng;
+                    geo[size_t(12 + a) * M + i] = ng * step;
+                }
             }
-            float ng[3];
-            for (int a = 0; a < 3; ++a) {
-                ng[a] = len > 0 ? float(n[a] / len) : 0.0f;
-                geo[size_t(a) * M + i] = c[0][a];
-                geo[size_t(3 + a) * M + i] = float(e1[a]);
-                geo[size_t(6 + a) * M + i] = float(e2[a]);
-                geo[size_t(9 + a) * M + i] = ng[a];
-                geo[size_t(12 + a) * M + i] = ng[a] * step;
-            }
-            // (from the very floats just written to rows 0-2 and 9-11)
-            if (plane_keys) plane_keys[i] = coplanar_key(c[0], ng[0], ng[1], ng[2], plane_inv_step);
+            if (plane_keys)
+                for (size_t i = b0; i < e0; ++i) {
+                    const float v0[3] = {geo[i], geo[M + i], geo[2 * M + i]};
+                    plane_keys[i] = coplanar_key(v0, geo[9 * M + i], geo[10 * M + i], geo[11 * M + i], plane_inv_step);
+                }
         }
     });
 }
