@@ -150,3 +150,15 @@ def test_a_million_triangle_grid_has_no_overlap(wavy):
     t = np.c_[i, i + 1, i + n + 2, i, i + n + 2, i + n + 1].reshape(-1, 3)     # a quad's triangles adjacent
     z = np.sin(3 * x.ravel()) * np.cos(2 * y.ravel()) if wavy else np.zeros(x.size)
     assert not _found(np.c_[x.ravel(), y.ravel(), z], t).any()
+
+
+@pytest.mark.parametrize('ulps', [14, 20])
+def test_a_pair_off_its_plane_within_the_tolerance_is_found(ulps):
+    """Quads overlapping half in z = 0.25 and z = 0.25 + ulps ulps of the largest coordinate (1):
+    within the pair's tolerance (16 ulps) they are one plane and found, though their bounding
+    boxes do not meet (the box test before the exact one keeps a margin); past it they are not."""
+    dz = ulps * float(np.spacing(np.float32(1.0)))
+    v, t = _join(_quad(0, 1, 0, 0.5, z=0.25), _quad(0.5, 1.0, 0, 0.5, z=0.25 + dz))
+    assert np.float32(0.25 + dz) - np.float32(0.25) == dz
+    found = _found(v, t)
+    assert found.all() if ulps < 16 else not found.any()
