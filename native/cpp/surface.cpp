@@ -77,67 +77,89 @@ void repeated_keys(const uint64_t* keys, size_t n, uint8_t* out) {
 void triangle_table(const float* vertices, size_t V, const int32_t* triangles, size_t M, float offset_ulps, float tiny,
                     const uint8_t* full, float* geo, double* area, uint64_t* keys, uint64_t* plane_keys,
                     float plane_inv_step) {
-    // in blocks: each block's plane keys from its rows just written (in cache), in one loop that
-    // vectorises (keyed one by one in the loop above they had cost ~10 ns a triangle)
+    // In blocks of kBlock triangles, two loops each: the corners gathered, differenced, hashed
+    // and the cross product kept; then, with no gathers, the square roots, divisions and steps
+    // (a loop whose iterations overlap, and vectorise: in one loop per triangle the chain of
+    // sqrt and three divisions had stalled each triangle), and the plane keys from the rows
+    // just written (in cache). The same operations in the same order: the same bits.
     constexpr size_t kBlock = 256;
     parallel_for(M, [&](size_t b, size_t e) {
+        double nb[3][kBlock];
+        float axb[3][kBlock], magb[kBlock];
+        uint8_t fb[kBlock];
         for (size_t b0 = b; b0 < e; b0 += kBlock) {
-            const size_t e0 = std::min(e, b0 + kBlock);
-            for (size_t i = b0; i < e0; ++i) {
+            const size_t n = std::min(e, b0 + kBlock) - b0;
+            for (size_t j = 0; j < n; ++j) {
+                const size_t i = b0 + j;
                 const float* c[3];
                 for (int k = 0; k < 3; ++k) c[k] = vertex_of(vertices, V, triangles, 3 * i + size_t(k));
                 double e1[3], e2[3];
-                float mag = tiny, axis[3];
+                float mag = tiny;
                 for (int a = 0; a < 3; ++a) {
                     e1[a] = double(c[1][a]) - double(c[0][a]);
                     e2[a] = double(c[2][a]) - double(c[0][a]);
-                    axis[a] = tiny;
-                    for (int k = 0; k < 3; ++k) axis[a] = std::max(axis[a], std::fabs(c[k][a]));
-                    mag = std::max(mag, axis[a]);
+                    float axis = tiny;
+                    for (int k = 0; k < 3; ++k) axis = std::max(axis, std::fabs(c[k][a]));
+                    mag = std::max(mag, axis);
+                    axb[a][j] = axis;
+                    geo[size_t(a) * M + i] = c[0][a];
+                    geo[size_t(3 + a) * M + i] = float(e1[a]);
+                    geo[size_t(6 + a) * M + i] = float(e2[a]);
                 }
-                const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                     e1[0] * e2[1] - e1[1] * e2[0]};
-                const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-                area[i] = 0.5 * len;
-                // along the normal only P's error there (see shading.h): sum_a |n_a| ulp(axis_a)
-                // of the ULPs of the largest coordinate, all of it for a triangle with a twin
-                float share = 1.0f;
-                if (!(full && full[i]) && len > 0) {
-                    double sum = 0.0;
-                    for (int a = 0; a < 3; ++a) sum += std::fabs(n[a] / len) * ulp_of(axis[a]);
-                    share = float(std::min(1.0, sum / ulp_of(mag)));
-                }
-                const float step = ulp_of(mag) * offset_ulps * share;
+                nb[0][j] = e1[1] * e2[2] - e1[2] * e2[1];
+                nb[1][j] = e1[2] * e2[0] - e1[0] * e2[2];
+                nb[2][j] = e1[0] * e2[1] - e1[1] * e2[0];
+                magb[j] = mag;
+                fb[j] = full ? full[i] : 0;
                 if (keys) {
-                    // an order-free hash of the corners' bits (+0: -0 as 0), every triangle: twins to
-                    // step off (where the step shrank) and exact copies to say (coincidentfaces.py,
-                    // which compares the candidates bit for bit). Linear in the bits, but no key of
-                    // 1.4M grid triangles (both diagonals, flat and wavy, in one binade and across
-                    // zero) repeated another's
+                    // an order-free hash of the corners' bits (+0: -0 as 0), every triangle: twins
+                    // to step off (where the step shrank) and exact copies to say
+                    // (coincidentfaces.py, which compares the candidates bit for bit). Linear in
+                    // the bits, but no key of 1.4M grid triangles (both diagonals, flat and wavy,
+                    // in one binade and across zero) repeated another's
                     uint64_t key = 0;
                     for (int k = 0; k < 3; ++k) {
                         uint64_t h = 0;
                         for (int a = 0; a < 3; ++a) {
                             const float x = c[k][a] + 0.0f;
-                            uint32_t b;
-                            std::memcpy(&b, &x, 4);
-                            h += uint64_t(b) * kCornerMix[a];
+                            uint32_t bits;
+                            std::memcpy(&bits, &x, 4);
+                            h += uint64_t(bits) * kCornerMix[a];
                         }
                         key += h;
                     }
                     keys[i] = key | 1;  // never 0 (0: no key, repeated_keys skips it)
                 }
-                for (int a = 0; a < 3; ++a) {
-                    const float ng = len > 0 ? float(n[a] / len) : 0.0f;
-                    geo[size_t(a) * M + i] = c[0][a];
-                    geo[size_t(3 + a) * M + i] = float(e1[a]);
-                    geo[size_t(6 + a) * M + i] = float(e2[a]);
-                    geo[size_t(9 + a) * M + i] = ng;
-                    geo[size_t(12 + a) * M + i] = ng * step;
-                }
+            }
+            for (size_t j = 0; j < n; ++j) {
+                const size_t i = b0 + j;
+                const double n0 = nb[0][j], n1 = nb[1][j], n2 = nb[2][j];
+                const double len = std::sqrt(n0 * n0 + n1 * n1 + n2 * n2);
+                area[i] = 0.5 * len;
+                // (divided by 1 where the area is 0: the same values where they are used, and no
+                // division by 0 computed, so the loop has no branch)
+                const bool ok = len > 0;
+                const double by = ok ? len : 1.0;
+                const double u0 = n0 / by, u1 = n1 / by, u2 = n2 / by;
+                // along the normal only P's error there (see shading.h): sum_a |n_a| ulp(axis_a)
+                // of the ULPs of the largest coordinate, all of it for a triangle with a twin
+                double sum = 0.0;
+                sum += std::fabs(u0) * ulp_of(axb[0][j]);
+                sum += std::fabs(u1) * ulp_of(axb[1][j]);
+                sum += std::fabs(u2) * ulp_of(axb[2][j]);
+                const float ulp = ulp_of(magb[j]);
+                const float share = !fb[j] && ok ? float(std::min(1.0, sum / ulp)) : 1.0f;
+                const float step = ulp * offset_ulps * share;
+                const float g0 = ok ? float(u0) : 0.0f, g1 = ok ? float(u1) : 0.0f, g2 = ok ? float(u2) : 0.0f;
+                geo[9 * M + i] = g0;
+                geo[10 * M + i] = g1;
+                geo[11 * M + i] = g2;
+                geo[12 * M + i] = g0 * step;
+                geo[13 * M + i] = g1 * step;
+                geo[14 * M + i] = g2 * step;
             }
             if (plane_keys)
-                for (size_t i = b0; i < e0; ++i) {
+                for (size_t i = b0; i < b0 + n; ++i) {
                     const float v0[3] = {geo[i], geo[M + i], geo[2 * M + i]};
                     plane_keys[i] = coplanar_key(v0, geo[9 * M + i], geo[10 * M + i], geo[11 * M + i], plane_inv_step);
                 }
