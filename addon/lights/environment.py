@@ -26,7 +26,6 @@ from __future__ import annotations
 
 from functools import cached_property
 
-import dacrt
 import numpy as np
 
 from ..texture import EncodedTexels, srgb_to_linear, texture_lookup
@@ -73,8 +72,8 @@ class EnvironmentLight:
                 self._native = envkeep.native_map(self._env, self.to_map, self.interpolation,
                                                   np.asarray(self._env.strength, F32))
             else:
-                self._native = dacrt.lamps.environment_map(self.encoded, self.to_map, self.interpolation, srgb=True,
-                                                           scale=np.asarray(self._env.strength, F32))
+                self._native = envkeep.encoded_map(self.encoded, self.to_map, self.interpolation,
+                                                   np.asarray(self._env.strength, F32))
         return self._native
 
     @property

@@ -88,7 +88,7 @@ def _matches_kept(env) -> bool:
     (the export's bright check and the map's build ask for the same one). Texels in the kept
     array's own memory are not compared with it: written in place since, they would equal
     themselves (each frame's export reads its images into new arrays)."""
-    if not _same:
+    if not _same or _same['srgb']:
         return False
     if _asked.get('env') is not None and _asked['env']() is env:
         return _asked['same']
@@ -112,10 +112,30 @@ def _unkeyed_map(env, to_map, interpolation, strength):
     _same.clear()              # (before the build, as above)
     _kept.clear()
     native = dacrt.lamps.environment_map(texels, to_map, interpolation, scale=strength)
-    _same.update(texels=texels, rest=rest, native=native)
+    _same.update(texels=texels, rest=rest, native=native, srgb=False)
     _asked.clear()             # (an earlier answer was about the texels kept before)
     _asked.update(env=weakref.ref(env), same=True)
     return native
+
+
+def encoded_map(encoded, to_map, interpolation, strength):
+    """dacrt.lamps.environment_map of an sRGB-encoded image's texels (Environment.encoded: an
+    8-bit image's bytes, or float32 encoded RGB), kept as the unkeyed linear ones are: reused
+    for encoded texels of the same bits with the same rest."""
+    with _lock:
+        if not isinstance(encoded, np.ndarray) or encoded.nbytes > _SAME_BYTES:
+            return dacrt.lamps.environment_map(encoded, to_map, interpolation, srgb=True, scale=strength)
+        rest = _rest(to_map, interpolation, strength)
+        if _same and _same['srgb'] and _same['rest'] == rest and not np.may_share_memory(_same['texels'], encoded) \
+                and same_bits(_same['texels'], encoded):
+            _same['texels'] = encoded       # (the same bits: the older frame's array can go)
+            return _same['native']
+        _same.clear()
+        _kept.clear()
+        _asked.clear()
+        native = dacrt.lamps.environment_map(encoded, to_map, interpolation, srgb=True, scale=strength)
+        _same.update(texels=encoded, rest=rest, native=native, srgb=True)
+        return native
 
 
 def any_positive(env) -> bool:

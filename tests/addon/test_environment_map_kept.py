@@ -4,7 +4,8 @@ it), and where they hold the same bits as the frame before (and the rotation, st
 lookup are the same) the map and the bright-texel check are not made again (a 4K float HDRI's
 ~120 + ~30 ms of CPU a frame). A frame after any change of what the map is made from (a pixel
 painted, the file rewritten and reloaded, the Background's strength, the Mapping rotation, the
-interpolation) renders exactly as it does with nothing kept."""
+interpolation) renders exactly as it does with nothing kept; an 8-bit image's map (made from
+its bytes, sRGB-encoded) the same way."""
 import math
 
 import dacrt
@@ -63,11 +64,22 @@ def _counting(monkeypatch, module, name):
     return calls
 
 
-@pytest.mark.parametrize('source', ['file', 'packed', 'buffer'])
+def _write_png(path, px):
+    import OpenImageIO as oiio
+    out = oiio.ImageOutput.create(str(path))
+    out.open(str(path), oiio.ImageSpec(px.shape[1], px.shape[0], 4, 'uint8'))
+    out.write_image(np.ascontiguousarray((np.clip(px[::-1], 0, 1) * 255).round().astype(np.uint8)))
+    out.close()
+
+
+@pytest.mark.parametrize('source', ['file', 'packed', 'buffer', '8-bit file'])
 def test_frames_of_one_hdri_build_its_map_once(scene, tmp_path, monkeypatch, source):
     if source == 'file':
         _write_exr(tmp_path / 'sky.exr', _texels())
         image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
+    elif source == '8-bit file':      # (its bytes are the map's encoded texels: lights/environment.py)
+        _write_png(tmp_path / 'sky.png', _texels())
+        image = scenes.bpy.data.images.load(str(tmp_path / 'sky.png'))
     elif source == 'packed':
         image = scenes.float_image('sky', _texels())
     else:
@@ -100,13 +112,15 @@ def _paint(env, bg, mapping):
 
 
 def _rewrite(env, bg, mapping):
-    _write_exr(scenes.bpy.path.abspath(env.image.filepath), _texels(seed=4))
+    path = scenes.bpy.path.abspath(env.image.filepath)
+    (_write_png if path.endswith('.png') else _write_exr)(path, _texels(seed=4))
     env.image.reload()
 
 
 CHANGES = {
     'painted': _paint,
     'rewritten': _rewrite,
+    'rewritten 8-bit': _rewrite,
     'strength': lambda env, bg, mapping: setattr(bg.inputs['Strength'], 'default_value', 2.5),
     'rotation': lambda env, bg, mapping: setattr(mapping.inputs['Rotation'], 'default_value', (0.0, 0.0, 1.3)),
     'interpolation': lambda env, bg, mapping: setattr(env, 'interpolation', 'Closest'),
@@ -118,6 +132,9 @@ def test_a_changed_hdri_renders_as_with_nothing_kept(scene, tmp_path, change):
     if change == 'rewritten':
         _write_exr(tmp_path / 'sky.exr', _texels())
         image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
+    elif change == 'rewritten 8-bit':
+        _write_png(tmp_path / 'sky.png', _texels())
+        image = scenes.bpy.data.images.load(str(tmp_path / 'sky.png'))
     elif change == 'painted':
         image = _buffer_image(_texels())     # (no file: Blender's buffer is what renders, edits too)
     else:
