@@ -16,6 +16,7 @@
 
 #include "bindargs.h"
 #include "bounce.h"
+#include "choiceruns.h"
 #include "orennayar.h"
 #include "shading.h"
 #include "environment.h"
@@ -330,13 +331,18 @@ LightChoice light_choice(const F32Array& records, const py::array_t<double, py::
     return c;
 }
 
-// A light tree over the choice's entries, or none.
-void attach_tree(LightChoice& c, const py::object& tree) {
+// A light tree over the choice's entries, or none; with one, the cdf's runs (into runs): its
+// members other than the first have no mass of their own, so the runs are few.
+void attach_tree(LightChoice& c, const py::object& tree, ChoiceRuns& runs) {
     if (tree.is_none()) return;
     c.tree = tree.cast<const LightTree*>();
     if (c.tree->key_bound() > c.entries)
         throw py::value_error("the light tree's keys must be entries of the light choice (0.." +
                               std::to_string(c.entries - 1) + ")");
+    choice_runs(c.cdf, c.entries, runs);
+    c.run_cdf = runs.cdf.data();
+    c.run_entry = runs.entry.data();
+    c.runs = runs.cdf.size();
 }
 
 // The emissive triangles' primitive ids (None: not given).
@@ -373,7 +379,8 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
-    attach_tree(lights, tree);
+    ChoiceRuns runs;
+    attach_tree(lights, tree, runs);
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     VertexPoints pts{};
     pts.n = size_t(P.shape(1));
@@ -499,7 +506,8 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
-    attach_tree(lights, tree);
+    ChoiceRuns runs;
+    attach_tree(lights, tree, runs);
     I32Array tri_prim_keep;
     lights.tri_prim = tri_prims(tri_prim, lights.num_tris, tri_prim_keep);
     BounceIn in{};

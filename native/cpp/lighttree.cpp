@@ -542,7 +542,8 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     size_t at = 0;
     double lo = 0.0, w = 1.0;
     if (!(u >= 0.0)) u = 0.0;  // (NaN too)
-    const TreePoint point = tree_point(P, N);
+    TreePoint point;
+    tree_point(point, P, N);
     while (nodes_[at].child >= 0) {
         double p[4];
         probs_at(at, point, receivers, p);
@@ -564,7 +565,7 @@ void LightTree::sample_group(size_t count, const float* const P[], const float* 
     for (size_t s = 0; s < count; ++s) {
         w[s] = 1.0;
         u[s] = u_in[s] >= 0.0 ? u_in[s] : 0.0;  // (NaN too)
-        point[s] = tree_point(P[s], N[s]);
+        tree_point(point[s], P[s], N[s]);
         go[s] = nodes_[0].child >= 0;
     }
     for (bool any = count > 0 && nodes_[0].child >= 0; any;) {
@@ -583,7 +584,8 @@ void LightTree::sample_group(size_t count, const float* const P[], const float* 
 }
 
 void LightTree::stop_weighs(const float P[3], const float* N, double* lanes, double* exact) const {
-    const TreePoint point = tree_point(P, N);
+    TreePoint point;
+    tree_point(point, P, N);
     for (size_t s = 0; s < stops_.size(); ++s) {
         lane_weighs(nodes_.data(), stops_[s], point, lanes + 8 * s);
         for (int k = 0; k < 8; ++k) {
@@ -597,7 +599,8 @@ double LightTree::pdf(const float P[3], const float* N, int64_t key, uint64_t re
     if (!member(key)) return 0.0;
     size_t at = size_t(leaf_of_key_[size_t(key)]);
     double p = member_share_[size_t(slot_of_key_[size_t(key)])];
-    const TreePoint point = tree_point(P, N);
+    TreePoint point;
+    tree_point(point, P, N);
     while (at != 0) {  // up the walk's stops to the root
         const size_t from = size_t(hop_from_[at]);
         double lp[4];

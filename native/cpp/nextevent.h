@@ -47,15 +47,30 @@ struct LightChoice {
     // numbering: a point never lights itself from its own triangle (a plane emits nothing
     // into itself; from within rounding of it, solid-angle sampling saw half the sphere)
     const int32_t* tri_prim = nullptr;
+    // (runs 0: none) cdf by runs of equal values (choiceruns.h): each run's value and first
+    // entry, searched instead of the whole cdf, the same entries
+    const double* run_cdf = nullptr;
+    const uint32_t* run_entry = nullptr;
+    size_t runs = 0;
 };
+
+// The entry whose share of the cdf holds u: std::upper_bound's over cdf (the last entry where u
+// lies past them all, or is NaN), by the runs where L has them.
+inline size_t cdf_entry(const LightChoice& L, double u) {
+    if (L.runs) {
+        const size_t r = size_t(std::upper_bound(L.run_cdf, L.run_cdf + L.runs, u) - L.run_cdf);
+        return r < L.runs ? size_t(L.run_entry[r]) : L.entries - 1;
+    }
+    const size_t e = size_t(std::upper_bound(L.cdf, L.cdf + L.entries, u) - L.cdf);
+    return e < L.entries ? e : L.entries - 1;
+}
 
 // The light entry a point at P (the shadow ray's origin, as a BSDF ray's MIS sees it) with
 // shading normal N (and, with light linking, the receiver mask of its object) picks with the
 // uniform u, and its selection probability.
 inline size_t choose_light(const LightChoice& L, const float P[3], const float N[3], double u, float& p_sel,
                            uint64_t receivers = LightTree::kAllSets) {
-    size_t e = size_t(std::upper_bound(L.cdf, L.cdf + L.entries, u) - L.cdf);
-    e = e < L.entries ? e : L.entries - 1;
+    size_t e = cdf_entry(L, u);
     p_sel = L.prob[e];
     if (L.tree && L.tree->member(int64_t(e))) {
         const double lo = e ? L.cdf[e - 1] : 0.0, mass = L.cdf[e] - lo;
@@ -146,8 +161,7 @@ inline void pick_entry_group(const LightChoice& L, const VertexPoints& p, size_t
         float* nn = N[m];
         for (size_t a = 0; a < 3; ++a) q[a] = p.P_off[a * n + k], nn[a] = p.ns[a * n + k];
         const uint64_t r = L.light_set && p.receivers ? p.receivers[k] : LightTree::kAllSets;
-        size_t e = size_t(std::upper_bound(L.cdf, L.cdf + L.entries, p.pick[k]) - L.cdf);  // (choose_light's)
-        e = e < L.entries ? e : L.entries - 1;
+        const size_t e = cdf_entry(L, p.pick[k]);  // (choose_light's)
         if (!L.tree->member(int64_t(e))) {
             entry[s] = uint32_t(e);
             p_sel[s] = L.prob[e];

@@ -186,12 +186,10 @@ DACRT_TREE_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl
 
 }  // namespace
 
-TreePoint tree_point(const float P[3], const float* N) {
-    TreePoint t{{P[0], P[1], P[2]}, N, {0.0f, 0.0f, 0.0f}, 0.0f};
-    if (N)
-        for (int k = 0; k < 3; ++k) t.abs_n[k] = std::fabs(N[k]);
+void tree_point(TreePoint& t, const float P[3], const float* N) {
+    for (int k = 0; k < 3; ++k) t.P[k] = P[k], t.abs_n[k] = N ? std::fabs(N[k]) : 0.0f;
+    t.N = N;
     t.pm = std::max({std::fabs(P[0]), std::fabs(P[1]), std::fabs(P[2])});
-    return t;
 }
 
 StopWeighFn stop_weigh_fn() {

@@ -17,7 +17,10 @@ struct TreePoint {
     float abs_n[3];  // |N_k| (with N)
     float pm;        // max_k |P_k|
 };
-TreePoint tree_point(const float P[3], const float* N);
+// Fills t in place, field by field: a TreePoint built aside and copied into a walk group's
+// array was reloaded as 16-byte words over the 4- and 8-byte stores that had just built it,
+// which the CPU cannot forward (~1.5% of a many-light render's samples in sample_group).
+void tree_point(TreePoint& t, const float P[3], const float* N);
 
 // imp[k]: lane k's importance at the point (energy x incidence and emission cosines / squared
 // distance, lighttree.cpp weigh(), 0 where culled). Returns, per four lanes (bit 0: lanes 0-3,
