@@ -134,8 +134,10 @@ void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const Tre
 // them: then the point is lit by no light below, and any way gives it nothing). Each
 // probability is its own quotient, not 1 - the others: a faint light's 1e-19 would round to 0
 // that way, and a delta light must never become impossible. At least one target gets > 0.
-void probs_of(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, uint64_t receivers,
-              double imp[8], double p[4]) {
+void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const TreePoint& at,
+                  uint64_t receivers, double p[4]) {
+    double imp[8];
+    lane_weighs(nodes, q, at, imp);
     if (lane_sets)
         for (int k = 0; k < 8; ++k) imp[k] = (lane_sets[k] & receivers) ? imp[k] : 0.0;
     bool eligible[4], any = false;
@@ -159,23 +161,6 @@ void probs_of(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64
     for (int j = 0; j < 4; ++j) e += eligible[j] ? nodes[q.target[j]].energy : 0.0;
     const double inv = 1.0 / e;
     for (int j = 0; j < 4; ++j) p[j] = eligible[j] ? nodes[q.target[j]].energy * inv : 0.0;
-}
-
-// probs_of with stop q's lanes weighed at the point.
-void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const TreePoint& at,
-                  uint64_t receivers, double p[4]) {
-    double imp[8];
-    lane_weighs(nodes, q, at, imp);
-    probs_of(nodes, q, lane_sets, receivers, imp, p);
-}
-
-// Stop q's eight lane weighs at the point from its half h's pass (h_imp: h's four lanes, all
-// in float's range), as lane_weighs gives them: its live lanes' float weighs, and 0 in its empty
-// lanes (lane_weighs': energy 0 x a finite number).
-void unpack_half(const LightTree::Half& h, const double h_imp[4], double imp[8]) {
-    for (int k = 0; k < 8; ++k) imp[k] = 0.0;
-    for (int i = 0; i < 4; ++i)
-        if (h.lane[i] >= 0) imp[h.lane[i]] = h_imp[i];
 }
 
 // Conty and Kulla's orientation measure of a cone: the solid angle of its axis spread plus the
@@ -458,7 +443,6 @@ void LightTree::build_stops() {
     hop_from_.assign(nodes_.size(), -1);
     hop_lane_.assign(nodes_.size(), 0);
     stops_.clear();
-    halves_.clear();
     stop_sets_.clear();
     std::vector<size_t> todo{0};
     while (!todo.empty()) {
@@ -501,29 +485,6 @@ void LightTree::build_stops() {
             q.energy[k] = q.node[k] < 0 ? 0.0 : nd.energy;
         }
         stops_.push_back(q);
-        Half h{};
-        for (int k = 0; k < 8; ++k)
-            if (q.node[k] >= 0) {
-                if (h.live < 4) h.lane[h.live] = k;
-                ++h.live;
-            }
-        for (int i = 0; i < 4; ++i) {
-            // padding repeats the first live lane (lane 0) with no energy; its weigh is not used
-            const int k = i < h.live ? h.lane[i] : 0;
-            if (i >= h.live) h.lane[i] = -1;
-            for (int a = 0; a < 3; ++a) {
-                h.center[a][i] = q.center[a][k];
-                h.half[a][i] = q.half[a][k];
-                h.axis[a][i] = q.axis[a][k];
-            }
-            h.radius[i] = q.radius[k];
-            h.cos_o[i] = q.cos_o[k];
-            h.sin_o[i] = q.sin_o[k];
-            h.cos_e[i] = q.cos_e[k];
-            h.slab[i] = q.slab[k];
-            h.energy[i] = i < h.live ? q.energy[k] : 0.0;
-        }
-        halves_.push_back(h);
         if (!sets_.empty()) {  // light linking: the lanes' sets, then the targets'
             for (int k = 0; k < 8; ++k) stop_sets_.push_back(q.node[k] < 0 ? 0 : sets_[size_t(q.node[k])]);
             for (int j = 0; j < 4; ++j) stop_sets_.push_back(q.target[j] < 0 ? 0 : sets_[size_t(q.target[j])]);
@@ -535,27 +496,6 @@ inline void LightTree::probs_at(size_t at, const TreePoint& point, uint64_t rece
     const size_t qi = size_t(stop_of_[at]);
     const uint64_t* lane_sets = stop_sets_.empty() || receivers == kAllSets ? nullptr : stop_sets_.data() + 12 * qi;
     target_probs(nodes_.data(), stops_[qi], lane_sets, point, receivers, p);
-}
-
-// probs_at for two walks at stops whose live lanes fit four each (Half), weighed in one pass.
-inline void LightTree::pair_probs_at(const size_t at[2], const TreePoint* const point[2], const uint64_t receivers[2],
-                                     double* const p[2]) const {
-    static const HalfPairWeighFn weigh_pair = half_pair_weigh_fn();
-    const size_t qi[2] = {size_t(stop_of_[at[0]]), size_t(stop_of_[at[1]])};
-    double imp8[8];
-    const int bad = weigh_pair(halves_[qi[0]], *point[0], halves_[qi[1]], *point[1], imp8);
-    for (int w = 0; w < 2; ++w) {
-        const Stop& q = stops_[qi[w]];
-        double imp[8];
-        // a lane out of float's range (rare): the stop weighed whole, its fours as lane_weighs'
-        if (bad & (1 << w))
-            lane_weighs(nodes_.data(), q, *point[w], imp);
-        else
-            unpack_half(halves_[qi[w]], imp8 + 4 * w, imp);
-        const uint64_t* lane_sets =
-            stop_sets_.empty() || receivers[w] == kAllSets ? nullptr : stop_sets_.data() + 12 * qi[w];
-        probs_of(nodes_.data(), q, lane_sets, receivers[w], imp, p[w]);
-    }
 }
 
 // One stop of a walk: from the probabilities p of stop `at`'s targets, the target whose share of
@@ -630,27 +570,8 @@ void LightTree::sample_group(size_t count, const float* const P[], const float* 
     }
     for (bool any = count > 0 && nodes_[0].child >= 0; any;) {
         double p[kGroup][4];
-        // walks at stops of at most four live lanes go two to a pass (pair_probs_at); the
-        // others, and one left over, weigh their stop's eight lanes alone
-        size_t held = kGroup;  // a walk waiting for a partner
-        for (size_t s = 0; s < count; ++s) {
-            if (!go[s]) continue;
-            if (halves_[size_t(stop_of_[at[s]])].live > 4) {
-                probs_at(at[s], point[s], receivers[s], p[s]);
-            } else if (held == kGroup) {
-                held = s;
-            } else if ((point[held].N != nullptr) != (point[s].N != nullptr)) {
-                probs_at(at[s], point[s], receivers[s], p[s]);
-            } else {
-                const size_t ats[2] = {at[held], at[s]};
-                const TreePoint* const pts[2] = {&point[held], &point[s]};
-                const uint64_t recs[2] = {receivers[held], receivers[s]};
-                double* const ps[2] = {p[held], p[s]};
-                pair_probs_at(ats, pts, recs, ps);
-                held = kGroup;
-            }
-        }
-        if (held != kGroup) probs_at(at[held], point[held], receivers[held], p[held]);
+        for (size_t s = 0; s < count; ++s)
+            if (go[s]) probs_at(at[s], point[s], receivers[s], p[s]);
         any = false;
         for (size_t s = 0; s < count; ++s)
             if (go[s]) {

@@ -124,27 +124,15 @@ public:
         int32_t node[8];    // the node each lane is (-1: empty), for the float64 path
         int32_t target[4];  // target j weighs as lanes 2j, 2j + 1
     };
-    // A stop's live lanes (node >= 0) packed into four, for two walks' stops weighed as one
-    // vector of eight (treelanes.h, HalfPairWeighFn); live > 4: the stop is weighed whole.
-    struct Half {
-        float center[3][4], half[3][4], radius[4];
-        float axis[3][4], cos_o[4], sin_o[4], cos_e[4], slab[4];
-        double energy[4];
-        int32_t lane[4];  // the stop's lane each is (-1: padding, lane 0's bounds, energy 0)
-        int32_t live;
-    };
 
 private:
     void build_stops();
     void probs_at(size_t at, const TreePoint& point, uint64_t receivers, double p[4]) const;
-    void pair_probs_at(const size_t at[2], const TreePoint* const point[2], const uint64_t receivers[2],
-                       double* const p[2]) const;
     size_t step(size_t at, const double p[4], double u, double& lo, double& w) const;
     int32_t leaf_pick(size_t at, double u, double lo, double w, double& prob) const;
 
     std::vector<LightTreeNode> nodes_;
     std::vector<Stop> stops_;
-    std::vector<Half> halves_;          // per stop: its live lanes packed (Half)
     std::vector<int32_t> stop_of_;      // node -> its stop (-1: no walk stops there, or a leaf)
     std::vector<uint64_t> stop_sets_;   // light linking: per stop its 8 lanes' sets, its 4 targets' (empty: unlinked)
     std::vector<int32_t> hop_from_;     // node -> the stop it is a target of (-1: the root, or none)

@@ -94,33 +94,6 @@ LANES W8 root(const W8& x) {
     for (int k = 0; k < 8; ++k) r[k] = std::sqrt(x[k]);
     return r;
 }
-// Four floats at a then four at b as one vector of eight; a four times then b four times.
-template <class V>
-LANES V join(const float* a, const float* b);
-template <>
-LANES F8 join<F8>(const float* a, const float* b) {
-    F8 v;
-    std::memcpy(&v.lo, a, sizeof v.lo);
-    std::memcpy(&v.hi, b, sizeof v.hi);
-    return v;
-}
-template <>
-LANES W8 join<W8>(const float* a, const float* b) {
-    F4 lo, hi;
-    std::memcpy(&lo, a, sizeof lo);
-    std::memcpy(&hi, b, sizeof hi);
-    return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7);
-}
-template <class V>
-LANES V join_splat(float a, float b);
-template <>
-LANES F8 join_splat<F8>(float a, float b) {
-    return {F4{a, a, a, a}, F4{b, b, b, b}};
-}
-template <>
-LANES W8 join_splat<W8>(float a, float b) {
-    return W8{a, a, a, a, b, b, b, b};
-}
 LANES float lane(F8 v, int k) { return k < 4 ? v.lo[k] : v.hi[k - 4]; }
 LANES float lane(const W8& v, int k) { return v[k]; }
 // Bit h: some lane of four h is clear.
@@ -128,62 +101,6 @@ LANES int not_all(M8 m) {
     return (m.lo[0] & m.lo[1] & m.lo[2] & m.lo[3] ? 0 : 1) | (m.hi[0] & m.hi[1] & m.hi[2] & m.hi[3] ? 0 : 2);
 }
 LANES int not_all(const WM8& m) { return (m[0] & m[1] & m[2] & m[3] ? 0 : 1) | (m[4] & m[5] & m[6] & m[7] ? 0 : 2); }
-
-// What a pass of eight lanes reads: a stop's eight lanes (StopLanes) or two stops' live lanes,
-// four each (HalfLanes); and the point they are weighed at (OnePoint: a float each, as one
-// stop's lanes share it) or the two points, four lanes each (TwoPoints).
-template <class V>
-struct StopLanes {
-    const LightTree::Stop& q;
-    LANES V center(int a) const { return load<V>(q.center[a]); }
-    LANES V half(int a) const { return load<V>(q.half[a]); }
-    LANES V axis(int a) const { return load<V>(q.axis[a]); }
-    LANES V radius() const { return load<V>(q.radius); }
-    LANES V cos_o() const { return load<V>(q.cos_o); }
-    LANES V sin_o() const { return load<V>(q.sin_o); }
-    LANES V cos_e() const { return load<V>(q.cos_e); }
-    LANES V slab() const { return load<V>(q.slab); }
-    LANES double energy(int k) const { return q.energy[k]; }
-};
-template <class V>
-struct HalfLanes {
-    const LightTree::Half& a;
-    const LightTree::Half& b;
-    LANES V center(int k) const { return join<V>(a.center[k], b.center[k]); }
-    LANES V half(int k) const { return join<V>(a.half[k], b.half[k]); }
-    LANES V axis(int k) const { return join<V>(a.axis[k], b.axis[k]); }
-    LANES V radius() const { return join<V>(a.radius, b.radius); }
-    LANES V cos_o() const { return join<V>(a.cos_o, b.cos_o); }
-    LANES V sin_o() const { return join<V>(a.sin_o, b.sin_o); }
-    LANES V cos_e() const { return join<V>(a.cos_e, b.cos_e); }
-    LANES V slab() const { return join<V>(a.slab, b.slab); }
-    LANES double energy(int k) const { return k < 4 ? a.energy[k] : b.energy[k - 4]; }
-};
-// A point's value in every lane: a float splat, a vector as it is.
-template <class V>
-LANES V lanes_of(float x) {
-    return splat<V>(x);
-}
-template <class V>
-LANES V lanes_of(const V& x) {
-    return x;
-}
-struct OnePoint {
-    const TreePoint& at;
-    LANES float P(int k) const { return at.P[k]; }
-    LANES float N(int k) const { return at.N[k]; }
-    LANES float abs_n(int k) const { return at.abs_n[k]; }
-    LANES float pm() const { return at.pm; }
-};
-template <class V>
-struct TwoPoints {
-    const TreePoint& a;
-    const TreePoint& b;
-    LANES V P(int k) const { return join_splat<V>(a.P[k], b.P[k]); }
-    LANES V N(int k) const { return join_splat<V>(a.N[k], b.N[k]); }
-    LANES V abs_n(int k) const { return join_splat<V>(a.abs_n[k], b.abs_n[k]); }
-    LANES V pm() const { return join_splat<V>(a.pm, b.pm); }
-};
 
 template <class V>
 LANES V max_(const V& a, const V& b) {
@@ -199,17 +116,18 @@ LANES V clamp1(const V& x) {  // (NaN stays NaN)
     return sel(y > splat<V>(1.0f), splat<V>(1.0f), y);
 }
 
-// Eight lanes (ld: StopLanes or HalfLanes) weighed at their point(s) (pt: OnePoint or
-// TwoPoints), as lighttree.cpp's weigh() does, in float: enough for a sampling estimate once
-// distances are in range: the culling tests keep a margin of float's rounding, so no lane
-// weighs 0 that weigh() would not, and a lane not culled weighs more than 0. V: eight floats,
-// M: their lane masks. Returns StopWeighFn's bits of the fours out of range.
-template <class V, class M, bool kNormal, class Lanes, class Point>
-LANES int weigh_lanes(const Lanes& ld, const Point& pt, double imp[8]) {
+// The eight lanes of stop q weighed at the point, as lighttree.cpp's weigh() does, in float:
+// enough for a sampling estimate once distances are in range: the culling tests keep a margin
+// of float's rounding, so no lane weighs 0 that weigh() would not, and a lane not culled weighs
+// more than 0. V: eight floats, M: their lane masks.
+template <class V, class M, bool kNormal>
+LANES int weigh_lanes(const LightTree::Stop& q, const TreePoint& at, double imp[8]) {
+    const float* P = at.P;
+    const float* N = at.N;
     const V zero = splat<V>(0.0f), one = splat<V>(1.0f);
     const V margin = splat<V>(1e-5f);  // ~100 float ULPs of a cosine
-    const V v0 = ld.center(0) - pt.P(0), v1 = ld.center(1) - pt.P(1), v2 = ld.center(2) - pt.P(2);
-    const V dd = v0 * v0 + v1 * v1 + v2 * v2, r = ld.radius(), r2 = r * r;
+    const V v0 = load<V>(q.center[0]) - P[0], v1 = load<V>(q.center[1]) - P[1], v2 = load<V>(q.center[2]) - P[2];
+    const V dd = v0 * v0 + v1 * v1 + v2 * v2, r = load<V>(q.radius), r2 = r * r;
     const M inside = !(dd > r2);
     const V denom = sel(inside, max_(dd, r2 * 0.25f), dd);
     const M ok = (denom >= 1e-30f) & (dd <= 1e30f) & (r2 <= 1e30f);
@@ -218,8 +136,8 @@ LANES int weigh_lanes(const Lanes& ld, const Point& pt, double imp[8]) {
     // Every sine and cosine from dd and one product each (cos_u = sqrt(dd - r^2) / d, sin_i =
     // sqrt(dd - (N.v)^2) / d, ...) rather than from one another: the roots and the two
     // divisions then run side by side instead of one after another.
-    const V av = -(ld.axis(0) * v0 + ld.axis(1) * v1 + ld.axis(2) * v2);
-    const V nv = kNormal ? pt.N(0) * v0 + pt.N(1) * v1 + pt.N(2) * v2 : zero;
+    const V av = -(load<V>(q.axis[0]) * v0 + load<V>(q.axis[1]) * v1 + load<V>(q.axis[2]) * v2);
+    const V nv = kNormal ? N[0] * v0 + N[1] * v1 + N[2] * v2 : zero;
     const V inv_d = one / root(dd), inv_denom = one / denom;
     const V root_u = root(max_(dd - r2, zero)), root_i = root(max_(dd - nv * nv, zero)),
             root_t = root(max_(dd - av * av, zero));
@@ -227,7 +145,8 @@ LANES int weigh_lanes(const Lanes& ld, const Point& pt, double imp[8]) {
     M culled = {}, out_culled = {};  // out_culled: outside the bounds only
     V f = one;
     if (kNormal) {
-        const V spread = pt.abs_n(0) * ld.half(0) + pt.abs_n(1) * ld.half(1) + pt.abs_n(2) * ld.half(2);
+        const V spread = at.abs_n[0] * load<V>(q.half[0]) + at.abs_n[1] * load<V>(q.half[1]) +
+                         at.abs_n[2] * load<V>(q.half[2]);
         const V reach = nv + spread, nv_abs = sel(nv < zero, -nv, nv);
         culled = !(reach > -(margin * (nv_abs + spread)));
         const V ci = clamp1(nv * inv_d), sin_i = min_(root_i * inv_d, one);
@@ -236,36 +155,28 @@ LANES int weigh_lanes(const Lanes& ld, const Point& pt, double imp[8]) {
         out_culled = below & !(c > -margin);
         f = sel(below, max_(c, margin), one);
     }
-    const V co = ld.cos_o(), so = ld.sin_o();
+    const V co = load<V>(q.cos_o), so = load<V>(q.sin_o);
     const V cos_p = co * cos_u - so * sin_u, sin_p = so * cos_u + co * sin_u;
     const V ct = clamp1(av * inv_d), sin_t = min_(root_t * inv_d, one);
     const V cos_r = ct * cos_p + sin_t * sin_p;
     const M beyond = (co > -one) & (sin_p >= zero) & (ct < cos_p);
-    out_culled = out_culled | (beyond & (cos_r <= ld.cos_e() - margin));
+    out_culled = out_culled | (beyond & (cos_r <= load<V>(q.cos_e) - margin));
     f = sel(beyond, f * max_(cos_r, margin), f);
     culled = culled | (~inside & out_culled);
     {  // behind every light of a node that emits within a hemisphere, inside its sphere too
-        const V sl = ld.slab();
+        const V sl = load<V>(q.slab);
         const V d = dd * inv_d;  // (NaN at dd = 0: not culled, as the centre is in the box)
-        const V tol = kBackMargin * (2.0f * (d + lanes_of<V>(pt.pm())) + sl);
+        const V tol = kBackMargin * (2.0f * (d + splat<V>(at.pm)) + sl);
         culled = culled | ((sl >= zero) & (av + sl <= -tol));
     }
     const V g = sel(culled, zero, sel(inside, one, f) * inv_denom);
-    for (int k = 0; k < 8; ++k) imp[k] = ld.energy(k) * double(lane(g, k));
+    for (int k = 0; k < 8; ++k) imp[k] = q.energy[k] * double(lane(g, k));
     return bad;
 }
 
-#define DACRT_TREE_ISA(NAME, TARGET, V, M)                                                               \
-    TARGET int NAME##_weigh(const LightTree::Stop& q, const TreePoint& at, double imp[8]) {              \
-        const StopLanes<V> ld{q};                                                                        \
-        const OnePoint pt{at};                                                                           \
-        return at.N ? weigh_lanes<V, M, true>(ld, pt, imp) : weigh_lanes<V, M, false>(ld, pt, imp);      \
-    }                                                                                                    \
-    TARGET int NAME##_pair(const LightTree::Half& a, const TreePoint& pa, const LightTree::Half& b,       \
-                           const TreePoint& pb, double imp[8]) {                                         \
-        const HalfLanes<V> ld{a, b};                                                                     \
-        const TwoPoints<V> pt{pa, pb};                                                                   \
-        return pa.N ? weigh_lanes<V, M, true>(ld, pt, imp) : weigh_lanes<V, M, false>(ld, pt, imp);      \
+#define DACRT_TREE_ISA(NAME, TARGET, V, M)                                                       \
+    TARGET int NAME##_weigh(const LightTree::Stop& q, const TreePoint& at, double imp[8]) {      \
+        return at.N ? weigh_lanes<V, M, true>(q, at, imp) : weigh_lanes<V, M, false>(q, at, imp); \
     }
 
 DACRT_TREE_ISA(portable, , F8, M8)
@@ -281,27 +192,13 @@ void tree_point(TreePoint& t, const float P[3], const float* N) {
     t.pm = std::max({std::fabs(P[0]), std::fabs(P[1]), std::fabs(P[2])});
 }
 
-namespace {
-
-Isa tree_isa() {
+StopWeighFn stop_weigh_fn() {
     const Isa best = resolve_isa("");
     const char* env = std::getenv("DACRT_ISA");
     Isa isa = best;
     if (env && strcasecmp(env, "portable") == 0) isa = Isa::Portable;
     if (env && strcasecmp(env, "avx2") == 0 && best != Isa::Portable) isa = Isa::Avx2;
-    return isa;
-}
-
-}  // namespace
-
-StopWeighFn stop_weigh_fn() {
-    const Isa isa = tree_isa();
     return isa == Isa::Avx512 ? avx512_weigh : (isa == Isa::Avx2 ? avx2_weigh : portable_weigh);
-}
-
-HalfPairWeighFn half_pair_weigh_fn() {
-    const Isa isa = tree_isa();
-    return isa == Isa::Avx512 ? avx512_pair : (isa == Isa::Avx2 ? avx2_pair : portable_pair);
 }
 
 }  // namespace dacrt

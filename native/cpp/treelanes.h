@@ -28,18 +28,7 @@ void tree_point(TreePoint& t, const float P[3], const float* N);
 // those four must be weighed in float64 (their imp is left to the caller).
 using StopWeighFn = int (*)(const LightTree::Stop& q, const TreePoint& at, double imp[8]);
 
-// Two stops' live lanes (LightTree::Half: at most four each) weighed in one pass of eight, each
-// half at its own point: lanes 0-3 are a's at pa, 4-7 b's at pb (pa.N and pb.N both set or both
-// null). Past the root most stops fill half their lanes or less, and each pass costs the same
-// roots and divisions whatever its lanes hold. Each lane's operations are StopWeighFn's, so the
-// same bits. imp[k] as StopWeighFn's; returns bit 0 where some lane of a's is out of float's
-// range, bit 1 where one of b's is (that walk's stop is then weighed whole: its own fours decide
-// which lanes go to float64).
-using HalfPairWeighFn = int (*)(const LightTree::Half& a, const TreePoint& pa, const LightTree::Half& b,
-                                const TreePoint& pb, double imp[8]);
-
 // The widest kernel the CPU runs, or a narrower one DACRT_ISA names (portable, avx2).
 StopWeighFn stop_weigh_fn();
-HalfPairWeighFn half_pair_weigh_fn();
 
 }  // namespace dacrt
