@@ -19,7 +19,8 @@ struct TreePoint {
 };
 // Fills t in place, field by field: a TreePoint built aside and copied into a walk group's
 // array was reloaded as 16-byte words over the 4- and 8-byte stores that had just built it,
-// which the CPU cannot forward (~1.5% of a many-light render's samples in sample_group).
+// which the CPU cannot forward (those copies held ~19% of sample_group's perf samples; the
+// walk's chain still waits as long, now in the lanes: README, manylights2).
 void tree_point(TreePoint& t, const float P[3], const float* N);
 
 // imp[k]: lane k's importance at the point (energy x incidence and emission cosines / squared
