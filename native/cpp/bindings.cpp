@@ -209,6 +209,7 @@ private:
         d["isa"] = isa_name(isa);
         d["leaf_size"] = res.leaf_size;
         d["seconds"] = res.seconds;
+        d["order_seconds"] = res.order_seconds;
         d["validate_seconds"] = validate_s;
         // Thread-seconds (summed over threads) in each phase of the recursion.
         d["filter_seconds"] = double(res.stats.filter_ticks) * seconds_per_tick;

@@ -174,7 +174,31 @@ static void merge_stolen(StealBoard& board, const TraceJob& job, size_t n, int T
     });
 }
 
-TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, int threads, Isa isa,
+// Stores the triangles in the kept top's id order, so that a node's triangles fill a contiguous
+// range of slots and a leaf's records share cache lines instead of being fetched one miss each
+// (in the caller's order a late batch's leaves spent most of their time on those loads). Done
+// after the frame's first call and again whenever the top's splits have doubled since (a later
+// split only permutes a node's range, which stays contiguous). Measured on a recorded 4-spp
+// dragon frame (100K triangles, 9 calls): trace CPU 88-89 -> 55-75 ms, the late calls 1.5-2x
+// faster; the order costs ~35 ns a triangle (README, "Where the time goes"). Returns its
+// seconds (0: not done).
+static double store_in_top_order(TriangleSet& ts, TopCache& cache) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::unique_lock<std::shared_mutex> alone(cache.lock);
+    if (!cache.ready || !cache.pool) return 0.0;
+    const uint32_t nodes = cache.pool->used();
+    if (nodes <= 2 || nodes < 2 * cache.ordered_nodes) return 0.0;  // 2: the root alone, no split
+    try {
+        ts.reorder(cache.ids.data());
+    } catch (...) {  // out of memory: nothing was changed, and the order only saves time
+        return 0.0;
+    }
+    for (size_t i = 0; i < cache.ids.size(); ++i) cache.ids[i] = uint32_t(i);
+    cache.ordered_nodes = nodes;
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+TraceResult trace(TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, int threads, Isa isa,
                   TopCache* cache) {
     TraceJob job = job_in;
     if (job.cfg.leaf_size == 0) job.cfg.leaf_size = kDefaultLeafSize;
@@ -219,6 +243,7 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
                     cache->partition = c.partition;
                     cache->leaf_size = c.leaf_size;
                     cache->sah_ratio = c.sah_ratio;
+                    cache->ordered_nodes = 0;
                     cache->ready = true;
                 }
             }  // then take it shared (another call may have reset it to its settings: again)
@@ -363,6 +388,10 @@ TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& jo
         if (!board.all.empty()) merge_stolen(board, job, n, T);
         for (const Stats& s : stats) res.stats.add(s);
         res.stats.rays = n;
+        if (use_kept) {
+            kept.unlock();
+            res.order_seconds = store_in_top_order(ts, *cache);
+        }
     }
     res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return res;

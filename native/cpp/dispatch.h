@@ -22,6 +22,7 @@ struct TraceResult {
     int threads = 1;
     int leaf_size = 0;  // the leaf size the call used (a Config's 0 resolved per ISA)
     double seconds = 0.0;
+    double order_seconds = 0.0;  // of seconds: storing the triangles in the kept top's order
 };
 
 // The shared top levels of a scene's partition (kernel.h SharedTop: the split triangle ids and
@@ -40,12 +41,13 @@ struct TopCache {
     float sah_ratio = 0.0f;
     std::vector<uint32_t> ids;
     std::unique_ptr<NodePool> pool;
+    uint32_t ordered_nodes = 0;  // the pool's size when the triangles were last stored in ids' order
 };
 
 // Validates nothing (see ray.h validate_rays); traces rays[0, n) with `threads` threads
 // (0 = all cores). Independent ray chunks per thread, as in the paper, with dynamic hand-out.
 // cache: the scene's kept top levels (null: built for this call only).
-TraceResult trace(const TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job, int threads, Isa isa,
+TraceResult trace(TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job, int threads, Isa isa,
                   TopCache* cache = nullptr);
 
 }  // namespace dacrt

@@ -45,6 +45,10 @@ class NodePool {
     static constexpr uint32_t kBlock = 4096, kMaxBlocks = 4096;  // at most 16M nodes
     NodePool() { blocks_[0].reset(new SharedNode[kBlock]); used_ = 2; }  // 1: the root (0: none)
     SharedNode& at(uint32_t i) { return blocks_[i / kBlock][i % kBlock]; }
+    uint32_t used() {
+        std::lock_guard<std::mutex> g(m_);
+        return used_;
+    }
     // Index of two fresh consecutive nodes, or 0 when the pool is full.
     uint32_t alloc2() {
         std::lock_guard<std::mutex> g(m_);

@@ -82,6 +82,10 @@ struct TriangleSet {
     // vertices: V x 3 floats (finite, checked by the caller); indices: M x 3, each < V.
     TriangleSet(const float* vertices, size_t num_vertices, const uint32_t* indices, size_t num_tris,
                 bool spatial_order);
+
+    // Moves valid slot order[i] to slot i (order: a permutation of valid_ids), the degenerate
+    // slots after them: valid_ids becomes 0, 1, ... in place.
+    void reorder(const uint32_t* order);
 };
 
 // Box centre, in a form that cannot overflow for coordinates near the float limits.
