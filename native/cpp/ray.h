@@ -71,8 +71,8 @@ struct Stats {
     uint64_t max_depth = 0;
     uint64_t steals = 0;  // subtrees handed to an idle thread (work stealing, dispatch.cpp)
     // Per-phase time in phase_clock() ticks, summed over threads: read at node
-    // granularity (3 clock reads per node), never per ray; nodes of few rays are sampled
-    // (Tracer::timing in trace.h), so for them these are estimates.
+    // granularity (3 clock reads per node), never per ray; subtrees of few rays are timed as a
+    // whole and split between the phases by sampled nodes (Tracer::timing in trace.h).
     uint64_t filter_ticks = 0;
     uint64_t partition_ticks = 0;
     uint64_t leaf_ticks = 0;

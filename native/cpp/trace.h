@@ -226,17 +226,54 @@ struct Tracer {
 
     // Phase timers: a node of at least kTimedRays rays reads the clock 3 times (~27 ns, lost in
     // its work). At a node of a few rays those reads were a third of its cost (the small late
-    // batches of a frame: a 1K-ray dragon batch 1.57 -> 1.10 us a ray without them), so such
-    // nodes are timed one in kTimedEvery, their ticks scaled by it: an unbiased estimate.
+    // batches of a frame: a 1K-ray dragon batch 1.57 -> 1.10 us a ray without them), so a
+    // subtree entered with fewer rays is timed as a whole (2 reads) and only its split between
+    // the phases is sampled, on one node in kTimedEvery (the first included). Scaling each
+    // sampled node's ticks by kTimedEvery instead made one preempted node count 16 times (a
+    // 15 ms call reported 458 ms of leaf time) and a call of under 16 small nodes none at all.
     static constexpr size_t kTimedRays = 256;
     static constexpr uint32_t kTimedEvery = 16;
+    enum Phase { kFilter, kPartition, kLeaf };
     uint32_t small_nodes = 0;
-    // The weight of this node's ticks: 1, kTimedEvery, or 0 (not timed).
+    bool in_small = false;         // inside a subtree entered with < kTimedRays rays
+    uint64_t small_ticks = 0;      // those subtrees' ticks, measured
+    uint64_t sampled[3] = {};      // their sampled nodes' ticks by phase
+    // The node's timing: 1 (timed), 2 (sampled in a small subtree) or 0 (not timed).
     uint64_t timing(size_t n) {
         if (n >= kTimedRays) return 1;
-        return (++small_nodes & (kTimedEvery - 1)) == 0 ? kTimedEvery : 0;
+        return (small_nodes++ & (kTimedEvery - 1)) == 0 ? 2 : 0;
     }
     static uint64_t clock(uint64_t w) { return w ? phase_clock() : 0; }
+    void count(Phase p, uint64_t w, uint64_t ticks) {
+        if (w == 1) (p == kFilter ? st.filter_ticks : p == kPartition ? st.partition_ticks : st.leaf_ticks) += ticks;
+        else if (w == 2) sampled[p] += ticks;
+    }
+    // Times the subtree of a node of n rays as a whole if it is the first of < kTimedRays.
+    struct SmallScope {
+        Tracer& t;
+        const bool root;
+        uint64_t c0 = 0;
+        SmallScope(Tracer& tr, size_t n) : t(tr), root(!tr.in_small && n < kTimedRays) {
+            if (root) { t.in_small = true; c0 = phase_clock(); }
+        }
+        ~SmallScope() {
+            if (root) { t.small_ticks += phase_clock() - c0; t.in_small = false; }
+        }
+    };
+    // The small subtrees' ticks into the phases, in the sampled nodes' proportions.
+    void settle_timing() {
+        const double s = double(sampled[0]) + double(sampled[1]) + double(sampled[2]);
+        if (small_ticks == 0) return;
+        if (!(s > 0.0)) {  // no sampled node took a tick: the clock did not move
+            st.leaf_ticks += small_ticks;
+            return;
+        }
+        const uint64_t f = std::min(small_ticks, uint64_t(double(small_ticks) * (double(sampled[0]) / s)));
+        const uint64_t p = std::min(small_ticks - f, uint64_t(double(small_ticks) * (double(sampled[1]) / s)));
+        st.filter_ticks += f;
+        st.partition_ticks += p;
+        st.leaf_ticks += small_ticks - f - p;
+    }
 
     // filter() timed: sets the node's timing weight w and the clock after filtering c1.
     size_t timed_filter(Ray* rays, size_t n, const NodeBounds& nb, uint64_t depth, size_t nt, uint64_t& w, uint64_t& c1) {
@@ -244,7 +281,7 @@ struct Tracer {
         const uint64_t c0 = clock(w);
         const size_t na = filter(rays, n, nb, depth, nt);
         c1 = clock(w);
-        st.filter_ticks += w * (c1 - c0);
+        count(kFilter, w, c1 - c0);
         return na;
     }
 
@@ -254,6 +291,7 @@ struct Tracer {
 
     void node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth) {
         if (stopped()) return;
+        const SmallScope scope(*this, n);
         maybe_offer();
         uint64_t w, c1;
         const size_t na = timed_filter(rays, n, nb, depth, nt, w, c1);
@@ -267,13 +305,13 @@ struct Tracer {
                     uint64_t c1, uint64_t w) {
         if (is_leaf(na, nt)) {
             intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, num_ids, mask, visible, st);
-            st.leaf_ticks += w * (clock(w) - c1);
+            count(kLeaf, w, clock(w) - c1);
             return;
         }
         NodeBounds L, R;
         int axis = 0;
         const size_t k = split(ids, nt, nb, float(na), depth, L, R, axis);
-        st.partition_ticks += w * (clock(w) - c1);
+        count(kPartition, w, clock(w) - c1);
         if (majority_positive(rays, na, axis)) {
             const size_t slot = defer(rays, na, ids + k, nt - k, R, depth + 1, 0, false);
             node(rays, na, ids, k, L, depth + 1);
@@ -288,13 +326,14 @@ struct Tracer {
     // A node of the shared top: its split is made once, by whichever thread arrives first.
     void shared_node(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h) {
         if (stopped()) return;
+        const SmallScope scope(*this, n);
         maybe_offer();
         uint64_t w, c1;
         const size_t na = timed_filter(rays, n, nb, depth, nt, w, c1);
         if (na == 0) return;
         if (nt <= size_t(cfg.leaf_size)) {  // never split, so its ids never move
             intersect_leaf<W, Q>(rays, na, ids, nt, boxes, tris, prims, hits, occluded, skip, num_ids, mask, visible, st);
-            st.leaf_ticks += w * (clock(w) - c1);
+            count(kLeaf, w, clock(w) - c1);
             return;
         }
         SharedNode& sn = top->pool->at(h);
@@ -309,7 +348,7 @@ struct Tracer {
                     std::memcpy(priv, ids, nt * sizeof(uint32_t));
                     sn.state.store(0, std::memory_order_release);
                     const uint64_t c2 = clock(w);
-                    st.partition_ticks += w * (c2 - c1);
+                    count(kPartition, w, c2 - c1);
                     node_split(rays, na, priv, nt, nb, depth, c2, w);
                     return;
                 }
@@ -320,7 +359,7 @@ struct Tracer {
             }
             std::this_thread::yield();  // another thread splits it (or copies its ids)
         }
-        st.partition_ticks += w * (clock(w) - c1);  // includes waiting for another thread's split
+        count(kPartition, w, clock(w) - c1);  // includes waiting for another thread's split
         const size_t k = sn.k;
         const uint32_t c = sn.child;
         bool lower_first = majority_positive(rays, na, sn.axis);
@@ -364,6 +403,7 @@ void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& s
         root.clo[a] = ts.centroid_bounds.lo[a]; root.chi[a] = ts.centroid_bounds.hi[a];
     }
     tr.child(rays, n, job.top->ids, ts.valid_ids.size(), root, 0, 1);
+    tr.settle_timing();
     st.add(tr.st);
 }
 
@@ -377,6 +417,7 @@ void run_task(const TraceJob& job, StolenTask& t, uint32_t* ids, Stats& st) {
                     t.fix, t.fix_n};
     if (t.shared) tr.child(t.rays.data(), t.rays.size(), t.ids, t.nt, t.nb, t.depth, t.h);
     else tr.node(t.rays.data(), t.rays.size(), t.ids, t.nt, t.nb, t.depth);
+    tr.settle_timing();
     st.add(tr.st);
 }
 
