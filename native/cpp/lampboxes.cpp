@@ -29,12 +29,13 @@ inline int sign_clear(float x) {  // !std::signbit(x), as an int lane
     return int(~b >> 31);
 }
 
-}  // namespace
-
+// The test itself, a free function of internal linkage: target_clones on the member function
+// made GCC's LTO link warn that LampBoxes::meets violates the ODR (its clones and ifunc against
+// the header's plain declaration).
 __attribute__((target_clones("avx2", "default")))
-void LampBoxes::meets(const float* O, const float* D, const float* tmax, size_t n, size_t i0, size_t count,
-                      uint64_t out[kRays]) const {
-    constexpr size_t K = kRays;
+void meets_lanes(const float* box, const int32_t* which, size_t nb, const float* O, const float* D,
+                 const float* tmax, size_t n, size_t i0, size_t count, uint64_t out[LampBoxes::kRays]) {
+    constexpr size_t K = LampBoxes::kRays;
     constexpr float inf = std::numeric_limits<float>::infinity();
     const float c = LampBVH::kSlack;
     // LampBVH::Slab per lane; lanes past count get a harmless ray (their bits are dropped)
@@ -70,9 +71,8 @@ void LampBoxes::meets(const float* O, const float* D, const float* tmax, size_t 
         t_end[q] = tm[q] + c * (M + tm[q]);
     }
     uint64_t bits[K] = {};
-    const size_t nb = which_.size();
     for (size_t j = 0; j < nb; ++j) {
-        const float* bx = box_.data() + 6 * j;
+        const float* bx = box + 6 * j;
         int hit[K];
         for (size_t q = 0; q < K; ++q) {  // LampBVH::Slab::meets
             float tn = 0.0f, tf = t_end[q];
@@ -91,10 +91,17 @@ void LampBoxes::meets(const float* O, const float* D, const float* tmax, size_t 
         int any = 0;
         for (size_t q = 0; q < K; ++q) any |= hit[q];
         if (!any) continue;
-        const uint64_t bit = uint64_t(1) << which_[j];
+        const uint64_t bit = uint64_t(1) << which[j];
         for (size_t q = 0; q < K; ++q) bits[q] |= hit[q] ? bit : 0;
     }
     for (size_t q = 0; q < K; ++q) out[q] = q < count ? bits[q] : 0;
+}
+
+}  // namespace
+
+void LampBoxes::meets(const float* O, const float* D, const float* tmax, size_t n, size_t i0, size_t count,
+                      uint64_t out[kRays]) const {
+    meets_lanes(box_.data(), which_.data(), which_.size(), O, D, tmax, n, i0, count, out);
 }
 
 }  // namespace dacrt
