@@ -9,6 +9,7 @@
 #include "parallel.h"
 #include "pathvertex.h"
 #include "shading.h"
+#include "survivorlanes.h"
 
 namespace dacrt {
 
@@ -55,6 +56,9 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
 void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                     const int64_t* idx, size_t k, float* thr_out, const float* geo, const float* normals,
                     const float* D, float* surf_out, int32_t* prim_out, size_t b, size_t e, const float* records) {
+    if (geo && records)  // whole groups of survivors in lanes (the same bits), the rest one at a time
+        b = survivor_lanes(hits, n, albedo, M, thr, roulette, idx, k, thr_out, records, normals != nullptr, D,
+                           surf_out, prim_out, b, e);
     for (size_t j = b; j < e; ++j) {
         const size_t i = size_t(idx[j]);
         const Hit& h = hits[i];
