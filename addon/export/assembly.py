@@ -239,7 +239,8 @@ class Assembly:
                 nbad, ndeg, nskipped = self._instance_batch(a, places, out, v0, t0)
                 nv_rows, nt_rows = len(places) * len(a.positions), len(places) * len(a.triangles)
                 if getattr(a, 'radial_normals', False):
-                    stretched_points.update(_stretched(places))
+                    for name, ratio in _stretched(places).items():
+                        stretched_points[name] = max(ratio, stretched_points.get(name, 0.0))
             degenerate += ndeg
             for name, nonfinite in nskipped:
                 skipped[nonfinite, name] = skipped.get((nonfinite, name), 0) + 1
