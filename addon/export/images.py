@@ -16,6 +16,7 @@ from ..texture import ByteTexels, EncodedTexels, ImageTexels, UdimTiles, half_as
 from .colorspaces import CONVERT, DATA, LINEAR, SRGB, space_kind, to_scene_linear
 from .errors import ExportCancelled
 from .imageuser import sequence_path, user_frame
+from .readkeep import file_key, keep, kept
 
 MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
 
@@ -167,7 +168,20 @@ def _read_flipped(inp, spec, byte, alpha_one, expand=False, reading=WHOLE):
 def _file_texels(path, img, reasons, unassociate, lazy=False, reading=WHOLE):
     """The texels (ImageTexels) of the image file at `path` read as Cycles reads `img`'s file
     (a still image's, a UDIM tile's, a sequence's frame), converted as Blender converts it; None
-    if it cannot be read."""
+    if it cannot be read. Float texels of a file and settings read before are those kept
+    (readkeep), read-only."""
+    key = file_key(path, img, unassociate, lazy)      # (before the read: readkeep)
+    texels = kept(key, reasons)
+    if texels is not None:
+        return texels
+    first = len(reasons)
+    texels = _read_file_texels(path, img, reasons, unassociate, lazy, reading)
+    keep(key, texels, reasons[first:])
+    return texels
+
+
+def _read_file_texels(path, img, reasons, unassociate, lazy, reading):
+    """_file_texels, read from the file."""
     import OpenImageIO as oiio
     inp, spec = _open_straight(path)
     if spec is None:

@@ -87,19 +87,31 @@ def _matches_kept(env) -> bool:
     """Whether env (unkeyed) holds the bits of the kept map's texels: compared once per env
     (the export's bright check and the map's build ask for the same one). Texels in the kept
     array's own memory are not compared with it: written in place since, they would equal
-    themselves (each frame's export reads its images into new arrays)."""
+    themselves (each frame's export reads its images into new arrays, but for a file's texels
+    kept read-only by export.readkeep: the same array, unchanged)."""
     if not _same or _same['srgb']:
         return False
     if _asked.get('env') is not None and _asked['env']() is env:
         return _asked['same']
     texels = env.pixels
-    same = isinstance(texels, np.ndarray) and not np.may_share_memory(_same['texels'], texels) \
-        and same_bits(_same['texels'], texels)
+    # (the kept array itself, read-only with all it views, cannot have been written: a file's
+    # texels export.readkeep gives again)
+    same = isinstance(texels, np.ndarray) and ((texels is _same['texels'] and _read_only(texels)) or (
+        not np.may_share_memory(_same['texels'], texels) and same_bits(_same['texels'], texels)))
     if same:
         _same['texels'] = texels        # (the same bits: the older frame's array can go)
     _asked.clear()
     _asked.update(env=weakref.ref(env), same=same)
     return same
+
+
+def _read_only(a) -> bool:
+    """Whether a and every array it views are read-only."""
+    while isinstance(a, np.ndarray):
+        if a.flags.writeable:
+            return False
+        a = a.base
+    return True
 
 
 def _unkeyed_map(env, to_map, interpolation, strength):

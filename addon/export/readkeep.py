@@ -1,0 +1,93 @@
+"""Float texels read from an image file, kept for the next frame while the file and every
+setting its conversion reads stay the same.
+
+Cycles reads an image's file at every render, and so does the export (images._file_texels):
+a 4K float EXR HDRI took ~0.63 s of a ~0.72 s 160 x 120 frame to read and convert. What the
+conversion makes depends only on the file's bytes and on the image's settings it reads, so a
+frame whose key matches gets the texels the last read made: the file by its resolved path and
+os.stat identity and version (device, inode, size, mtime_ns, ctime_ns; taken before the read,
+so a file rewritten during it is read again next time), and the image's name (in the
+conversion's messages), alpha mode, colour space and its Non-Color flag, the lookup's
+unassociation and the lazy byte form. The Texture Limit is not in it: it is applied to the
+texels after (images._texture_limited); a sequence's frame and a UDIM tile pick the path. The
+messages the read gave are given again with the texels.
+
+Kept texels are read-only (numpy's writeable flag, on them and on the arrays they view): a
+consumer that wrote into them would change the next frame's image, and raises instead. Only
+ImageTexels (float32 arrays) are kept: an 8-bit image's lazy ByteTexels are not. At most
+_KEEP_BYTES of texels are kept in all (two 4K x 2K float RGBA images), the least recently
+used dropped first; a bigger image is not kept.
+"""
+from __future__ import annotations
+
+import os
+import threading
+
+import numpy as np
+
+from ..texture import ImageTexels
+
+_kept: dict = {}          # {key: (texels, messages, bytes)}, oldest use first
+_KEEP_BYTES = 2 * 4096 * 2048 * 4 * 4
+_lock = threading.Lock()     # (a viewport's export and a final render's may run at once)
+
+
+def file_key(path, img, unassociate, lazy):
+    """The key of the file at `path` read as `img`'s texels, or None if it cannot be stat'ed."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    cs = img.colorspace_settings
+    return (os.path.realpath(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns,
+            img.name, img.alpha_mode, cs.name, bool(cs.is_data), bool(unassociate), bool(lazy))
+
+
+def kept(key, reasons):
+    """The texels kept under key (their read's messages appended to reasons), or None."""
+    if key is None:
+        return None
+    with _lock:
+        entry = _kept.pop(key, None)
+        if entry is None:
+            return None
+        _kept[key] = entry         # (now the most recently used)
+    reasons.extend(entry[1])
+    return entry[0]
+
+
+def _arrays(texels):
+    """The arrays a kept ImageTexels holds: its own and its stored (lookup) texels."""
+    stored = texels.stored
+    return [texels] + ([stored.texels] if stored is not None and isinstance(stored.texels, np.ndarray) else [])
+
+
+def _freeze(a):
+    """a and the arrays it views made read-only."""
+    while isinstance(a, np.ndarray):
+        a.flags.writeable = False
+        a = a.base
+
+
+def keep(key, texels, messages):
+    """Keep texels (what the read under key made, with its messages) if they are float
+    ImageTexels within the byte limit; they are read-only from here on."""
+    if key is None or type(texels) is not ImageTexels:
+        return
+    arrays = _arrays(texels)
+    size = sum(a.nbytes for a in arrays)
+    if size > _KEEP_BYTES:
+        return
+    for a in arrays:
+        _freeze(a)
+    with _lock:
+        _kept.pop(key, None)
+        while _kept and sum(e[2] for e in _kept.values()) + size > _KEEP_BYTES:
+            del _kept[next(iter(_kept))]
+        _kept[key] = (texels, tuple(messages), size)
+
+
+def forget():
+    """Drop what is kept (tests; a session that wants the memory back)."""
+    with _lock:
+        _kept.clear()
