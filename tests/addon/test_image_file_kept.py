@@ -196,3 +196,31 @@ def test_the_kept_bytes_are_bounded(tmp_path, monkeypatch):
     images.image_pixels(imgs[0], [])
     images.image_pixels(imgs[0], [])
     assert len(reads) == 6 and not readkeep._kept
+
+
+@pytest.mark.parametrize('space, alpha_linked', [('Linear Rec.709', False), ('sRGB', True)])
+def test_a_material_texture_of_a_kept_file_renders_as_with_nothing_kept(scene, tmp_path, monkeypatch, space,
+                                                                        alpha_linked):
+    """The kept, read-only texels (and their stored lookup copy: sRGB, unassociated) go through
+    the material's image texture as a fresh read's do."""
+    _write_exr(tmp_path / 'tex.exr', _texels())
+    img = scenes.bpy.data.images.load(str(tmp_path / 'tex.exr'))
+    img.colorspace_settings.name = space
+    mat, nt, out = scenes._material('textured')
+    tex = nt.nodes.new('ShaderNodeTexImage')
+    tex.image = img
+    em = nt.nodes.new('ShaderNodeEmission')
+    nt.links.new(tex.outputs['Color'], em.inputs['Color'])
+    if alpha_linked:
+        nt.links.new(tex.outputs['Alpha'], em.inputs['Strength'])
+    nt.links.new(em.outputs[0], out.inputs['Surface'])
+    scenes.camera(location=(0, 0, 3))
+    scenes.plane(materials=[mat])
+    scenes.black_world()
+    scene.dacrt.samples = 1
+    reads = _counting(monkeypatch, images, '_read_flipped')
+    first, second = scenes.render_rgba(scene), scenes.render_rgba(scene)
+    assert len(reads) == 1
+    readkeep.forget()
+    fresh = scenes.render_rgba(scene)
+    assert np.array_equal(first, fresh) and np.array_equal(second, fresh) and fresh[..., :3].max() > 0.1
