@@ -3,7 +3,8 @@
 Cycles (film/data_passes.h) adds Diffuse Color and Mist at every surface of the camera's
 transparent chain, weighted by the throughput, and takes Normal from the first surface at least
 that opaque (none where the chain stopped at a thinner one); Depth comes from sample 0 alone,
-so only its mean is compared."""
+so only its mean is compared. An emissive sheet is passed with the same probability: Cycles
+picks among its closures by weight, emission not among them."""
 import math
 
 import bpy
@@ -15,14 +16,17 @@ from tests.addon import scenes
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _scene(alpha):
+def _scene(alpha, emission=0.0):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, -6, 3), rotation=(math.radians(60), 0, 0), kind='PERSP')
     scenes.plane(size=30, materials=[scenes.diffuse("Floor", (0.8, 0.5, 0.3))])
     sheet = scenes.principled("Sheet", (0.2, 0.4, 0.9))
-    sheet.node_tree.nodes['Principled BSDF'].inputs['Alpha'].default_value = alpha
+    bsdf = sheet.node_tree.nodes['Principled BSDF']
+    bsdf.inputs['Alpha'].default_value = alpha
+    bsdf.inputs['Emission Color'].default_value = (1.0, 0.9, 0.7, 1.0)
+    bsdf.inputs['Emission Strength'].default_value = emission
     scenes.plane(size=4, location=(0, 0, 1.0), materials=[sheet])
     scenes.world((0.3, 0.4, 0.6), 1.0)
     m = sc.world.mist_settings
@@ -36,9 +40,9 @@ def _scene(alpha):
     return sc
 
 
-@pytest.mark.parametrize('alpha', [0.6, 0.3])
-def test_data_passes_through_alpha_match_cycles(alpha, tmp_path):
-    sc = _scene(alpha)
+@pytest.mark.parametrize('alpha, emission', [(0.6, 0.0), (0.3, 0.0), (0.3, 2.0)])
+def test_data_passes_through_alpha_match_cycles(alpha, emission, tmp_path):
+    sc = _scene(alpha, emission)
     out = scenes.render_engines(sc, tmp_path)
     name = sc.view_layers[0].name
     c, d = out['CYCLES'], out['DACRT']
