@@ -962,7 +962,10 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             if self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain, held)
         if self._any_emissive:
-            self._gather_emission(camera, hit, hits, path, sinks.found(k), k, sinks.groups)
+            emit = hit
+            if self._any_transparent:       # (their emission counted before the pass-or-stop pick)
+                emit = hit & ~np.take(self._tri_transparent, np.maximum(prim, 0))
+            self._gather_emission(camera, emit, hits, path, sinks.found(k), k, sinks.groups)
         if k == K + 1:
             return None
         if path.tb is not None:                       # past Transparent Max Bounces: emission only

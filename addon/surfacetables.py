@@ -332,13 +332,13 @@ class Materials:
         # a chain reads the view (Fresnel, Layer Weight): hits carry their rays' directions
         self.reads_view = any(isinstance(e[1], ProceduralTexels) and e[1].needs & VIEW for e in entries)
         # how much the opaque part weighs when a hit picks between passing and stopping (Cycles
-        # picks closures by their mean weight, emission not among them): its albedo and diffuse
-        # transmission, or 1 where it only emits, whose emission counts on stopping paths alone
-        # (a translucent-only part weighed 0: paths always passed, never scattered). An emissive
-        # part that also scatters had weighed at least 1 too, so behind an emissive sheet of
-        # Alpha 0.225 the Normal pass (written by the paths that pass) was 0.56x Cycles'
-        scatter = (self.base + self.translucency).mean(axis=0)
-        self.opaque_weight = np.where(self.emissive & (scatter <= 0.0), 1.0, scatter).astype(F32)
+        # picks closures by their mean weight, emission not among them: a surface's emission
+        # counts at every hit, before the pick, Transparency._emission_before_pick): its albedo
+        # and diffuse transmission (a translucent-only part weighed 0: paths always passed, never
+        # scattered). Emissive parts had weighed at least 1, their emission counted on stopping
+        # paths alone, so behind an emissive sheet of Alpha 0.225 the Normal pass (written by the
+        # paths that pass) was 0.56x Cycles'
+        self.opaque_weight = (self.base + self.translucency).mean(axis=0).astype(F32)
 
 
 def _rgb(mat, label, value, nonnegative=True):

@@ -92,6 +92,8 @@ class Transparency:
                 chain.append(dict(rows=rows, prim=prim, u=u_hit, v=v_hit, thr=thr[:, rows], tau=tau,
                                   opacity=opacity, P=surface[0], ng=surface[1], ns=surface[2],
                                   glass=self._glass_part(mat, tau, opacity)))
+            if self._any_emissive:
+                self._emission_before_pick(camera, k, path, hits, rows, prim, opacity, sinks)
             t_mean = tau.mean(axis=0)
             total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
@@ -291,6 +293,26 @@ class Transparency:
                     self._translucency_maps(sel, prim, u, v, thr_far, ng, -np.take(path.D, rows, axis=1))
                 self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys,
                                      u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, bump=bump, xb=xb)
+
+    def _emission_before_pick(self, camera, k, path, hits, rows, prim, opacity, sinks):
+        """The emission of the transparent surfaces the rays `rows` of path meet now (hits
+        [rows], prim), at the throughput they arrive with times the opacity there, as Cycles
+        counts a surface's emission before it picks a closure: whether the ray then passes or
+        stops does not change it, so the pick can weigh the scattering closures alone (_vertex
+        leaves these surfaces' emission out where paths stopped). Holdout surfaces seen by
+        camera rays are left to _vertex, which holds them out."""
+        mask = np.zeros(len(hits), bool)
+        mask[rows] = True
+        if camera and self._any_holdout:
+            mask[rows] = (np.take(self.tri.visibility, prim) & HOLDOUT) == 0
+        saved = path.thr
+        if (opacity != 1.0).any():
+            path.thr = saved.copy()
+            path.thr[:, rows] *= opacity
+        try:
+            self._gather_emission(camera, mask, hits, path, sinks.found(k), k, sinks.groups)
+        finally:
+            path.thr = saved
 
     def _gather_segment(self, seg, sub, t0, sinks, k):
         """Lamps beyond distance t0 along a segment past a transparent surface, and the world
