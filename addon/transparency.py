@@ -95,14 +95,7 @@ class Transparency:
             if self._any_emissive:
                 self._emission_before_pick(camera, k, path, hits, rows, prim, opacity, sinks)
             t_mean = tau.mean(axis=0)
-            weight = np.take(self.mats.opaque_weight, mat)
-            if self._albedo_varies:     # Cycles weighs the closure by its colour at the point: a
-                # Color Attribute or texture Base Color under Alpha 0.225 had stopped paths 9x
-                # as often (its constant base weighed), shifting the data passes behind it
-                back = None if not self._sided else self._back(prim, -D, -D)
-                here = self._pass_albedo(prim, u_hit, v_hit, back).mean(axis=0)
-                weight = weight + here - np.take(self.mats.pass_base, mat, axis=1).mean(axis=0)
-            total = t_mean + np.maximum(weight, 0.0) * opacity
+            total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
             p[spent] = 0.0                      # stops, at its opaque part's weight
             u = self.rng.uniform2(keys, DIM_TRANSPARENT + (k << 11) + j)[0]
