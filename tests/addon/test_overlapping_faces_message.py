@@ -118,3 +118,69 @@ def test_ordinary_meshes_are_not_said(scene, said):
     top = scenes.cube('Stacked', size=1.0, location=(0, 0, 1.5))      # on the cube: in contact
     assert top and _brute_force_overlapping() == 0
     assert not _said(said), said
+
+
+def _fold_count():
+    """The triangles of the evaluated scene folded back over an edge they share with another of
+    their mesh: two corners common by index, facing opposite ways, in one plane (float64, 1e-6),
+    the third corners on one side of the edge."""
+    dg = bpy.context.evaluated_depsgraph_get()
+    n = 0
+    for ob in bpy.context.scene.objects:
+        if ob.type != 'MESH':
+            continue
+        me = ob.evaluated_get(dg).to_mesh()
+        me.calc_loop_triangles()
+        v = np.array([tuple(p.co) for p in me.vertices], np.float64)
+        tris = [list(t.vertices) for t in me.loop_triangles]
+        folded = set()
+        for i, a in enumerate(tris):
+            for j, b in enumerate(tris[i + 1:], i + 1):
+                edge = set(a) & set(b)
+                if len(edge) != 2:
+                    continue
+                p, q = (v[k] for k in edge)
+                ra, rb = (v[next(k for k in x if k not in edge)] for x in (a, b))
+                na = np.cross(v[a[1]] - v[a[0]], v[a[2]] - v[a[0]])
+                nb = np.cross(v[b[1]] - v[b[0]], v[b[2]] - v[b[0]])
+                sa, sb = np.cross(q - p, ra - p), np.cross(q - p, rb - p)
+                if na @ nb < 0 and abs((rb - p) @ na) < 1e-6 * np.linalg.norm(na) and sa @ sb > 0:
+                    folded |= {i, j}
+        n += len(folded)
+        ob.evaluated_get(dg).to_mesh_clear()
+    return n
+
+
+def test_a_concave_quad_triangulated_along_its_outer_diagonal_is_said(scene, said):
+    # (fuzz seed 202: Triangulate, Fixed Alternate here, folds the quad over the diagonal; pixels 1.35-2.35x Cycles)
+    _scene(floor=False)
+    ob = scenes.mesh('Dart', [(0, 0, 2), (1.5, 0, 2), (0.4, 0.4, 2), (0, 1.5, 2)], [(0, 1, 2, 3)],
+                     materials=[scenes.diffuse('d', (0.6, 0.6, 0.6))])
+    tri = ob.modifiers.new('tri', 'TRIANGULATE')
+    tri.quad_method = 'FIXED_ALTERNATE'       # the split along the corners 1-3: the outer diagonal
+    assert _fold_count() == 2
+    got = _said(said)
+    assert len(got) == 1 and got[0].startswith(f"2 triangles of 'Dart' {SAID}"), got
+    assert "folded back over an edge" in got[0], got
+    ob.modifiers.remove(tri)                  # Blender's own split of the concave quad: no fold
+    assert _fold_count() == 0 and not _said(said), said
+
+
+def test_a_flat_profile_screwed_about_its_normal_is_said_beyond_512_triangles(scene, said):
+    # (fuzz seed 2051: a 3x3 grid, Screw 3.12 rad in 16 steps about z: 1440 triangles in one plane
+    # overlapping everywhere, pixels 2.5-3.2x Cycles, unsaid while planes above 512 were left)
+    _scene(floor=False)
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=4, y_subdivisions=4, size=2.0, location=(0, 0, 2))
+    grid = bpy.context.active_object
+    grid.name = 'Swept'
+    screw = grid.modifiers.new('screw', 'SCREW')
+    screw.angle, screw.steps, screw.render_steps, screw.screw_offset = 3.12, 16, 16, 0.0
+    screw.axis = 'Z'
+    got = _said(said)
+    dg = bpy.context.evaluated_depsgraph_get()
+    me = grid.evaluated_get(dg).to_mesh()
+    me.calc_loop_triangles()
+    count = len(me.loop_triangles)
+    grid.evaluated_get(dg).to_mesh_clear()
+    assert count > 512
+    assert len(got) == 1 and "'Swept'" in got[0] and SAID in got[0], (count, got)

@@ -162,3 +162,67 @@ def test_a_pair_off_its_plane_within_the_tolerance_is_found(ulps):
     assert np.float32(0.25 + dz) - np.float32(0.25) == dz
     found = _found(v, t)
     assert found.all() if ulps < 16 else not found.any()
+
+
+def _concave_quad(outer_diagonal):
+    """A quad concave at its third corner, split along the diagonal inside it or outside it (the
+    second triangle then folds back over the first, facing the other way: Triangulate, Fixed)."""
+    v = np.array([[0, 0, 0.5], [1, 0, 0.5], [0.3, 0.3, 0.5], [0, 1, 0.5]], np.float64)
+    return v, np.array([[0, 1, 3], [1, 2, 3]] if outer_diagonal else [[0, 1, 2], [0, 2, 3]])
+
+
+def test_a_concave_quad_folded_over_its_outer_diagonal_is_found():
+    v, t = _concave_quad(outer_diagonal=True)
+    c = v[t]
+    n = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+    assert n[0] @ n[1] < 0 and _clip_area(c[0, :, :2], c[1, :, :2]) > 0.1     # opposite ways, overlapping
+    assert _found(v, t).all()
+    assert not _found(*_concave_quad(outer_diagonal=False)).any()
+
+
+def test_opposite_facing_pairs_not_folded_are_not_found():
+    """Facing opposite ways and sharing corners, yet no fold: a quad with one triangle wound the
+    other way (on either side of the shared edge), and a triangle with its copy wound back (all
+    three corners shared: an exact copy, coincidentfaces.py's)."""
+    v, t = _quad(0, 1, 0, 1)
+    assert not _found(v, np.array([t[0], t[1][::-1]])).any()
+    assert not _found(v, np.array([[0, 1, 2], [2, 1, 0]])).any()
+
+
+def test_planes_holding_more_than_max_group_triangles_are_checked():
+    """A 3x3 grid turned about its normal in 40 steps (a Screw of a flat profile): 720 triangles in
+    one plane, above the pair-by-pair limit (512), each overlapping its neighbouring steps: all
+    found (they had been left unchecked). A 30x30 grid (1800) with a small quad laid on it: only
+    the triangles the brute force finds under the quad; the grid alone: nothing."""
+    from addon import overlappingfaces
+    n = 3
+    x, y = np.meshgrid(np.linspace(-1, 1, n + 1), np.linspace(-1, 1, n + 1))
+    i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    grid = np.r_[np.c_[i, i + 1, i + n + 2], np.c_[i, i + n + 2, i + n + 1]]
+    p = np.c_[x.ravel(), y.ravel()]
+    steps = []
+    for k in range(40):
+        a = np.pi * k / 40
+        r = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+        steps.append((np.c_[p @ r.T, np.full(len(p), 0.2)], grid))
+    v, t = _join(*steps)
+    assert len(t) > overlappingfaces._MAX_GROUP
+    assert _found(v, t).all()
+
+    n = 30
+    x, y = np.meshgrid(np.linspace(-1, 1, n + 1), np.linspace(-1, 1, n + 1))
+    i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    grid = np.r_[np.c_[i, i + 1, i + n + 2], np.c_[i, i + n + 2, i + n + 1]]
+    floor = (np.c_[x.ravel(), y.ravel(), np.zeros(x.size)], grid)
+    assert overlappingfaces._MAX_GROUP < len(grid) < overlappingfaces._BIG
+    assert not _found(*floor).any()
+    v, t = _join(floor, _quad(0.31, 0.52, -0.47, -0.29))
+    got = _found(v, t)
+    c = np.asarray(v, np.float32).astype(np.float64)[t]
+    rug = np.arange(len(grid), len(t))
+    truth = np.zeros(len(t), bool)
+    for j in range(len(grid)):
+        for r in rug:
+            if _clip_area(c[j, :, :2], c[r, :, :2]) > 1e-9:
+                truth[j] = truth[r] = True
+    assert 4 < truth.sum() and (got == truth).all(), (np.nonzero(got)[0], np.nonzero(truth)[0])
