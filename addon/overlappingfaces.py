@@ -38,6 +38,8 @@ _SMALL = 16             # groups tested pair by pair without the area bound
 _MAX_GROUP = 512        # larger plane groups: only their pairs whose bounding boxes meet
 _BIG = 4096             # larger plane groups are left (a finely split floor)
 _CHUNK = 1 << 16        # pairs tested at once
+_NEAREST = 4            # a big group's first pairs: each triangle's nearest by box centre
+_BUDGET = 1 << 17       # a big group's further pairs tested at most
 _PARALLEL = 1.0 - 1e-6  # cos between the normals of a pair in one plane facing one way
 
 
@@ -74,34 +76,59 @@ def overlapping(vertices, indices, geo, keys, step, candidates):
             g = g[_bound_exceeded(c, rows, g, s, step)]
         if s > _MAX_GROUP:
             for g0 in g:
-                a, b = _boxes_meet(c[rows[g0:g0 + s]])
-                pi.append(rows[g0 + a]), pj.append(rows[g0 + b])
+                _big_group(c, t, geo, rows[g0:g0 + s], out)
             continue
         a, b = np.triu_indices(s, 1)
         pi.append(rows[(g[:, None] + a).ravel()]), pj.append(rows[(g[:, None] + b).ravel()])
     if not pi:
         return out
     i, j = np.concatenate(pi), np.concatenate(pj)
+    _test(c, t, geo, i, j, out)
+    return out
+
+
+def _test(c, t, geo, i, j, out):
+    """Marks in out the triangles of the pairs i, j overlapping in part (quads' pairs left)."""
     keep = ~_quads(t, np.asarray(geo[9:12]), i, j)
     i, j = i[keep], j[keep]
     for k in range(0, len(i), _CHUNK):         # (a big group's pairs: bounded memory)
         a, b = i[k:k + _CHUNK], j[k:k + _CHUNK]
         hit = _pairs_overlap(c[a], c[b], _folds(t, a, b))
         out[a[hit]] = out[b[hit]] = True
-    return out
 
 
-def _boxes_meet(tri):
-    """The pairs (a, b), a < b, of triangles tri (s, 3, 3) whose bounding boxes come within twice
-    the largest pair tolerance of the group on every axis (_pairs_overlap's own box test, looser):
-    a big group's candidates, without its s^2 / 2 pairs' corners."""
+def _big_group(c, t, geo, rows, out):
+    """Marks in out the triangles rows of a group above _MAX_GROUP overlapping another of it: of
+    the pairs whose bounding boxes come within twice the group's largest pair tolerance on every
+    axis (_pairs_overlap's own box test, looser), first each triangle's _NEAREST with the closest
+    box centres (a Screw's steps: each overlaps the next, all found there), then those with a
+    triangle not found yet, at most _BUDGET pairs (a floor with a rug on it: a few neighbours each).
+    Past the budget, triangles are left unsaid: the count said is then a lower bound, still true."""
+    tri = c[rows]
     lo, hi = tri.min(axis=1), tri.max(axis=1)
     big = max(float(np.abs(tri).max()), 1e-30)
     margin = 2 * _PAIR_ULPS * float(np.spacing(np.float32(big)))
     near = np.ones((len(tri), len(tri)), bool)
     for d in range(3):
         near &= (lo[None, :, d] <= hi[:, None, d] + margin) & (lo[:, None, d] <= hi[None, :, d] + margin)
-    return np.nonzero(np.triu(near, 1))
+    np.fill_diagonal(near, False)
+    mid = (0.5 * (lo + hi)).astype(np.float32)
+    dist = np.zeros(near.shape, np.float32)
+    for d in range(3):
+        dist += np.square(mid[:, None, d] - mid[None, :, d])
+    dist[~near] = np.inf
+    k = min(_NEAREST, len(tri) - 1)
+    b = np.argpartition(dist, k - 1, axis=1)[:, :k]
+    a = np.repeat(np.arange(len(tri)), k)
+    b = b.ravel()
+    first = near[a, b]
+    pair = np.unique(np.sort(np.c_[a[first], b[first]], axis=1), axis=0)
+    _test(c, t, geo, rows[pair[:, 0]], rows[pair[:, 1]], out)
+    near[pair[:, 0], pair[:, 1]] = False
+    a, b = np.nonzero(np.triu(near, 1))
+    rest = ~(out[rows[a]] & out[rows[b]])
+    a, b = a[rest][:_BUDGET], b[rest][:_BUDGET]
+    _test(c, t, geo, rows[a], rows[b], out)
 
 
 def _folds(t, i, j):
