@@ -184,3 +184,42 @@ def test_a_flat_profile_screwed_about_its_normal_is_said_beyond_512_triangles(sc
     grid.evaluated_get(dg).to_mesh_clear()
     assert count > 512
     assert len(got) == 1 and "'Swept'" in got[0] and SAID in got[0], (count, got)
+
+
+def test_ordinary_planes_of_more_than_512_triangles_are_not_said(scene, said):
+    # planes now checked up to 4096 triangles: a finely split grid, one under Solidify and one
+    # under Mirror with merging, a circle filled as a fan and as an n-gon (Blender's own split),
+    # and a Screw of an edge about z closing a disc: nothing overlaps
+    _scene()
+    # (each in a plane of its own: one plane holding them all would be left as above 4096)
+    for k, (x, y) in enumerate([(-3, 0), (0, 2), (3, 0)]):
+        cuts = 21 if k == 2 else 41             # (the mirrored grid's plane: 1600 triangles, below 4096)
+        bpy.ops.mesh.primitive_grid_add(x_subdivisions=cuts, y_subdivisions=cuts, size=2.0, location=(x, y, 1.5 + 0.5 * k))
+        g = bpy.context.active_object
+        if k == 1:
+            g.modifiers.new('solid', 'SOLIDIFY').thickness = 0.1
+        elif k == 2:
+            g.data.transform(__import__('mathutils').Matrix.Translation((1.0, 0, 0)))  # the half
+            m = g.modifiers.new('mirror', 'MIRROR')
+            m.use_axis, m.use_mirror_merge = [True, False, False], True
+    for fill, x, z in (('TRIFAN', -3, 0.5), ('NGON', 3, 0.8)):
+        bpy.ops.mesh.primitive_circle_add(vertices=1500, radius=1.0, fill_type=fill, location=(x, 3, z))
+    edge = bpy.data.meshes.new('edge')
+    edge.from_pydata([(0.4, 0, 0), (0.7, 0, 0), (1.0, 0, 0)], [(0, 1), (1, 2)], [])
+    ring = bpy.data.objects.new('Ring', edge)
+    ring.location = (0, -3, 1.1)
+    scenes.link(ring)
+    screw = ring.modifiers.new('screw', 'SCREW')
+    screw.angle, screw.steps, screw.render_steps, screw.screw_offset, screw.axis = 2 * math.pi, 600, 600, 0.0, 'Z'
+    screw.use_merge_vertices = True
+    dg = bpy.context.evaluated_depsgraph_get()
+    sizes = []
+    for ob in bpy.context.scene.objects:
+        if ob.type == 'MESH':
+            me = ob.evaluated_get(dg).to_mesh()
+            me.calc_loop_triangles()
+            sizes.append(len(me.loop_triangles))
+            ob.evaluated_get(dg).to_mesh_clear()
+    assert sum(s > 512 for s in sizes) >= 6, sizes
+    assert not _said(said), said
+    assert not [t for t in said if 'coincid' in t or 'overlap' in t], said
