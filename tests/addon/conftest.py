@@ -63,3 +63,19 @@ def exported(monkeypatch):
 def said(monkeypatch):
     """The texts the engine reports (RenderEngine.report) during the test's renders."""
     return recorded_reports(monkeypatch)
+
+
+@pytest.fixture
+def calls_to(monkeypatch):
+    """calls_to(module, name): a list that gets `name` appended at each call of module.name
+    (the call itself goes through), to count builds and reads."""
+    def watch(module, name):
+        calls = []
+        real = getattr(module, name)
+
+        def counted(*a, **k):
+            calls.append(name)
+            return real(*a, **k)
+        monkeypatch.setattr(module, name, counted)
+        return calls
+    return watch

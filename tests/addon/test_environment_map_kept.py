@@ -53,16 +53,6 @@ def _hdri_world(scene, image):
             next(n for n in nt.nodes if n.type == 'MAPPING'))
 
 
-def _counting(monkeypatch, module, name):
-    calls = []
-    real = getattr(module, name)
-
-    def counted(*a, **k):
-        calls.append(name)
-        return real(*a, **k)
-    monkeypatch.setattr(module, name, counted)
-    return calls
-
 
 def _write_png(path, px):
     import OpenImageIO as oiio
@@ -73,7 +63,7 @@ def _write_png(path, px):
 
 
 @pytest.mark.parametrize('source', ['file', 'packed', 'buffer', '8-bit file'])
-def test_frames_of_one_hdri_build_its_map_once(scene, tmp_path, monkeypatch, source):
+def test_frames_of_one_hdri_build_its_map_once(scene, tmp_path, monkeypatch, source, calls_to):
     if source == 'file':
         _write_exr(tmp_path / 'sky.exr', _texels())
         image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
@@ -85,7 +75,7 @@ def test_frames_of_one_hdri_build_its_map_once(scene, tmp_path, monkeypatch, sou
     else:
         image = _buffer_image(_texels())
     _hdri_world(scene, image)
-    builds = _counting(monkeypatch, dacrt.lamps, 'environment_map')
+    builds = calls_to(dacrt.lamps, 'environment_map')
     films = []
     for frame in (1, 2, 3):
         scene.frame_set(frame)
@@ -153,10 +143,10 @@ def _env(px, strength=1.0):
     return sd.Environment(px, np.full(3, strength, np.float32), np.eye(3), 'Linear')
 
 
-def test_texels_written_in_place_are_not_taken_for_the_kept_ones(monkeypatch):
+def test_texels_written_in_place_are_not_taken_for_the_kept_ones(monkeypatch, calls_to):
     """The same array handed again after being written in place equals itself: it is not
     compared, the map is built again (and a copy of the same bits is the kept map)."""
-    builds = _counting(monkeypatch, dacrt.lamps, 'environment_map')
+    builds = calls_to(dacrt.lamps, 'environment_map')
     px = _texels()
     first = envkeep.native_map(_env(px), np.eye(3), 'Linear', np.ones(3, np.float32))
     px[3, 5, :3] = 50.0
@@ -167,9 +157,9 @@ def test_texels_written_in_place_are_not_taken_for_the_kept_ones(monkeypatch):
     assert envkeep.any_positive(_env(px.copy()))
 
 
-def test_maps_above_the_limit_are_built_every_frame(monkeypatch):
+def test_maps_above_the_limit_are_built_every_frame(monkeypatch, calls_to):
     monkeypatch.setattr(envkeep, '_SAME_BYTES', 1000)
-    builds = _counting(monkeypatch, dacrt.lamps, 'environment_map')
+    builds = calls_to(dacrt.lamps, 'environment_map')
     px = _texels()
     for _ in range(2):
         envkeep.native_map(_env(px.copy()), np.eye(3), 'Linear', np.ones(3, np.float32))

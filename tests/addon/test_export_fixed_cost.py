@@ -89,7 +89,7 @@ def test_smooth_meshes_corners_are_written_once(exported, monkeypatch):
     monkeypatch.setattr(assembly.dacrt.shading, 'face_normals', face_normals)
     _ReadRows.reads = []
     smooth = scenes.uv_sphere("Smooth", segments=48, rings=24)
-    flat = scenes.cube("Flat", location=(3, 0, 0))
+    scenes.cube("Flat", location=(3, 0, 0))
     scenes.camera()
     data = exported()
     n_smooth = len(smooth.data.polygons) * 2 - 2 * 48       # (quads and the two fans)

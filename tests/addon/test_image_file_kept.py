@@ -43,26 +43,16 @@ def _write_exr(path, px):
     out.close()
 
 
-def _counting(monkeypatch, module, name):
-    calls = []
-    real = getattr(module, name)
 
-    def counted(*a, **k):
-        calls.append(name)
-        return real(*a, **k)
-    monkeypatch.setattr(module, name, counted)
-    return calls
-
-
-def test_frames_of_an_unchanged_hdri_file_read_it_once(scene, tmp_path, monkeypatch):
+def test_frames_of_an_unchanged_hdri_file_read_it_once(scene, tmp_path, monkeypatch, calls_to):
     _write_exr(tmp_path / 'sky.exr', _texels())
     image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
     scenes.camera(location=(0, -5, 0), rotation=(math.radians(90), 0, 0))
     scenes.uv_sphere(materials=[scenes.diffuse('grey', (0.5, 0.5, 0.5))])
     scenes.environment_world(image, strength=1.0, rotation=(0.0, 0.0, 0.3))
     scene.dacrt.samples, scene.dacrt.max_bounces = 1, 2
-    reads = _counting(monkeypatch, images, '_read_flipped')
-    builds = _counting(monkeypatch, dacrt.lamps, 'environment_map')
+    reads = calls_to(images, '_read_flipped')
+    builds = calls_to(dacrt.lamps, 'environment_map')
     films = []
     for frame in (1, 2, 3):
         scene.frame_set(frame)
@@ -119,13 +109,13 @@ CHANGES = {
 
 
 @pytest.mark.parametrize('change', CHANGES)
-def test_a_change_of_what_the_read_depends_on_reads_again_as_with_nothing_kept(tmp_path, monkeypatch, change):
+def test_a_change_of_what_the_read_depends_on_reads_again_as_with_nothing_kept(tmp_path, monkeypatch, change, calls_to):
     path = tmp_path / 'tex.exr'
     _write_exr(path, _texels())
     img = scenes.bpy.data.images.load(str(path))
     if change == 'non-color':        # (from sRGB: a linear EXR's texels are the same as data)
         img.colorspace_settings.name = 'sRGB'
-    reads = _counting(monkeypatch, images, '_read_flipped')
+    reads = calls_to(images, '_read_flipped')
     before = images.image_pixels(img, [])
     assert _same(images.image_pixels(img, []), before) and len(reads) == 1      # (kept)
     unassociate = change == 'unassociate'
@@ -151,13 +141,13 @@ def test_the_texture_limit_applies_to_kept_texels_as_to_read_ones(tmp_path):
     assert kept.shape == (8, 16, 4) and np.array_equal(kept, fresh) and not np.array_equal(whole[:8, :16], fresh)
 
 
-def test_each_frame_of_a_sequence_is_its_own_file(tmp_path, monkeypatch):
+def test_each_frame_of_a_sequence_is_its_own_file(tmp_path, monkeypatch, calls_to):
     for frame, seed in ((1, 7), (2, 8)):
         _write_exr(tmp_path / f'sky_{frame:03d}.exr', _texels(seed))
     img = scenes.bpy.data.images.load(str(tmp_path / 'sky_001.exr'))
     img.source = 'SEQUENCE'
     user = type('User', (), dict(frame_duration=2, frame_start=1, use_cyclic=False, frame_offset=0))()
-    reads = _counting(monkeypatch, images, '_read_flipped')
+    reads = calls_to(images, '_read_flipped')
     one, two, one_again = (images.image_pixels(img, [], user=user, frame=f) for f in (1, 2, 1))
     assert len(reads) == 2 and not _same(one, two) and one_again is one
     readkeep.forget()
@@ -175,14 +165,14 @@ def test_kept_texels_are_read_only(tmp_path):
             a[0, 0, 0] = 1.0
 
 
-def test_the_kept_bytes_are_bounded(tmp_path, monkeypatch):
+def test_the_kept_bytes_are_bounded(tmp_path, monkeypatch, calls_to):
     one = _texels().nbytes
     monkeypatch.setattr(readkeep, '_KEEP_BYTES', 2 * one)
     imgs = []
     for name in 'abc':
         _write_exr(tmp_path / f'{name}.exr', _texels())
         imgs.append(scenes.bpy.data.images.load(str(tmp_path / f'{name}.exr')))
-    reads = _counting(monkeypatch, images, '_read_flipped')
+    reads = calls_to(images, '_read_flipped')
     for img in imgs:
         images.image_pixels(img, [])
     assert len(readkeep._kept) == 2 and sum(e[2] for e in readkeep._kept.values()) <= 2 * one
@@ -199,8 +189,8 @@ def test_the_kept_bytes_are_bounded(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize('space, alpha_linked', [('Linear Rec.709', False), ('sRGB', True)])
-def test_a_material_texture_of_a_kept_file_renders_as_with_nothing_kept(scene, tmp_path, monkeypatch, space,
-                                                                        alpha_linked):
+def test_a_material_texture_of_a_kept_file_renders_as_with_nothing_kept(scene, tmp_path, space, alpha_linked,
+                                                                        calls_to):
     """The kept, read-only texels (and their stored lookup copy: sRGB, unassociated) go through
     the material's image texture as a fresh read's do."""
     _write_exr(tmp_path / 'tex.exr', _texels())
@@ -218,7 +208,7 @@ def test_a_material_texture_of_a_kept_file_renders_as_with_nothing_kept(scene, t
     scenes.plane(materials=[mat])
     scenes.black_world()
     scene.dacrt.samples = 1
-    reads = _counting(monkeypatch, images, '_read_flipped')
+    reads = calls_to(images, '_read_flipped')
     first, second = scenes.render_rgba(scene), scenes.render_rgba(scene)
     assert len(reads) == 1
     readkeep.forget()

@@ -39,21 +39,11 @@ def _sky_world(scene):
     return sky, bg, mapping
 
 
-def _counting(monkeypatch, module, name):
-    calls = []
-    real = getattr(module, name)
 
-    def counted(*a, **k):
-        calls.append(name)
-        return real(*a, **k)
-    monkeypatch.setattr(module, name, counted)
-    return calls
-
-
-def test_frames_of_one_sky_build_its_map_once(scene, monkeypatch):
+def test_frames_of_one_sky_build_its_map_once(scene, monkeypatch, calls_to):
     _sky_world(scene)
-    builds = _counting(monkeypatch, dacrt.lamps, 'environment_map')
-    scans = _counting(monkeypatch, dacrt.lamps, 'texel_stats')
+    builds = calls_to(dacrt.lamps, 'environment_map')
+    scans = calls_to(dacrt.lamps, 'texel_stats')
     films = [scenes.render_rgba(scene) for _ in range(3)]
     assert len(builds) == 1, builds
     assert len(scans) <= 1, scans

@@ -8,7 +8,6 @@ reported 458 ms of leaf time) and a call of fewer than 16 small nodes report no 
 """
 
 import dacrt
-import numpy as np
 
 from . import harness, scenes
 from .rays import make_rays
