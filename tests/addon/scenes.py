@@ -428,6 +428,22 @@ def seeded_rgb(scene, engine, seeds):
     return np.stack(out)
 
 
+def world_triangles():
+    """(k, 3, 3) float64 world-space corners of every mesh triangle of the evaluated scene."""
+    dg = bpy.context.evaluated_depsgraph_get()
+    tris = []
+    for ob in bpy.context.scene.objects:
+        if ob.type != 'MESH':
+            continue
+        ev = ob.evaluated_get(dg)
+        me = ev.to_mesh()
+        me.calc_loop_triangles()
+        mw = np.array(ev.matrix_world, np.float64)
+        v = np.array([tuple(p.co) for p in me.vertices], np.float64) @ mw[:3, :3].T + mw[:3, 3]
+        tris += [v[list(t.vertices)] for t in me.loop_triangles]
+        ev.to_mesh_clear()
+    return np.array(tris, np.float64).reshape(-1, 3, 3)
+
 def write_image(path, px, fmt='uint8'):
     """px (h, w, c) written to an image file through OpenImageIO, row 0 at the BOTTOM (as
     Blender's pixels), alpha straight as given; returns the path as str."""

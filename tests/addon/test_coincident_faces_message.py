@@ -34,19 +34,8 @@ def _said(said):
 def _brute_force_copies():
     """How many triangles of the evaluated scene repeat another exactly (world space, float32
     corners as a sorted tuple)."""
-    dg = bpy.context.evaluated_depsgraph_get()
-    keys = []
-    for ob in bpy.context.scene.objects:
-        if ob.type != 'MESH':
-            continue
-        ev = ob.evaluated_get(dg)
-        me = ev.to_mesh()
-        me.calc_loop_triangles()
-        mw = np.array(ev.matrix_world, np.float64)
-        v = np.array([tuple(p.co) for p in me.vertices], np.float64)
-        v = (v @ mw[:3, :3].T + mw[:3, 3]).astype(np.float32) + np.float32(0.0)
-        keys += [tuple(sorted(map(tuple, v[list(t.vertices)].tolist()))) for t in me.loop_triangles]
-        ev.to_mesh_clear()
+    c = scenes.world_triangles().astype(np.float32) + np.float32(0.0)
+    keys = [tuple(sorted(map(tuple, t.tolist()))) for t in c]
     return sum(c for c in Counter(keys).values() if c > 1)
 
 

@@ -33,19 +33,7 @@ def _brute_force_overlapping():
     """How many triangles of the evaluated scene overlap another facing the same way in one
     plane by a positive area (float64: corners within 1e-6 of the plane, the common area of
     the pair by sampling a 64x64 lattice inside the first triangle)."""
-    dg = bpy.context.evaluated_depsgraph_get()
-    tris = []
-    for ob in bpy.context.scene.objects:
-        if ob.type != 'MESH':
-            continue
-        ev = ob.evaluated_get(dg)
-        me = ev.to_mesh()
-        me.calc_loop_triangles()
-        mw = np.array(ev.matrix_world, np.float64)
-        v = np.array([tuple(p.co) for p in me.vertices], np.float64) @ mw[:3, :3].T + mw[:3, 3]
-        tris += [v[list(t.vertices)] for t in me.loop_triangles]
-        ev.to_mesh_clear()
-    c = np.array(tris)
+    c = scenes.world_triangles()
     n = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     a, b = np.meshgrid(np.arange(64) + 0.5, np.arange(64) + 0.5)

@@ -8,11 +8,12 @@ them darker (32x24, 128 spp, K = 1: Cycles 0.324, DACRT 0.425, the cube mirrored
 The render says so (addon/coincidentfaces.py), and not for the cube mirrored once."""
 import bpy
 import pytest
-from mathutils import Matrix, Vector
+from mathutils import Matrix
 
 from tests.addon import scenes
 
 from . import rendering
+from . import scenes as P
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -30,12 +31,7 @@ def _scene(mirrors):
         m = ob.modifiers.new('mir', 'MIRROR')
         m.use_axis = [False, False, True]
     ob.data.materials.append(scenes.diffuse('grey', (0.6, 0.6, 0.6)))
-    cd = bpy.data.cameras.new('cam')
-    cd.type, cd.ortho_scale = 'ORTHO', 7.0
-    cam = scenes.link(bpy.data.objects.new('cam', cd))
-    cam.location = (-4.5, -3.0, 2.0)
-    cam.rotation_euler = (Vector((0, 0, 0)) - cam.location).to_track_quat('-Z', 'Y').to_euler()
-    sc.camera = cam
+    P.aim(scenes.camera((-4.5, -3.0, 2.0), kind='ORTHO', ortho_scale=7.0), (0, 0, 0))
     scenes.world((0.5, 0.5, 0.5))
     rendering.matched(sc, 128, bounces=1)
     return sc
