@@ -265,6 +265,20 @@ def test_a_bump_output_read_as_a_value_is_said_and_stands_at_the_unbent_normal(s
     assert img.max() > 1.5 * img.min(), "the relief must show"
 
 
+def _fine_bump(width):
+    """A Noise finer than the pixel (scale 40, detail 6, Object coordinates) bumping by 0.02
+    with the given Filter Width."""
+    def noise(nt):
+        n = nt.nodes.new('ShaderNodeTexNoise')
+        n.inputs['Scale'].default_value = 40.0
+        n.inputs['Detail'].default_value = 6.0
+        nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Object'], n.inputs['Vector'])
+        return n
+    mat = _bumped("Fine", noise, 'Fac', distance=0.02)
+    next(n for n in mat.node_tree.nodes if n.type == 'BUMP').inputs['Filter Width'].default_value = width
+    return mat
+
+
 @pytest.mark.parametrize('width', [0.1, 1.0, 4.0])
 def test_the_filter_width_softens_a_fine_bump_as_in_cycles(width, tmp_path):
     """Cycles' taps are the ray differentials times the Bump's Filter Width from the point,
@@ -272,18 +286,7 @@ def test_the_filter_width_softens_a_fine_bump_as_in_cycles(width, tmp_path):
     through that footprint, softer as it widens. Before: a step of a tenth of the footprint
     capped at 1e-4 of the scene, whatever the Filter Width: 0.2373 at each vs Cycles 0.2498 /
     0.2609 / 0.2613, 4x4 blocks 5.2% / 9.1% / 9.2% off, Normal.z 0.897 vs 0.962 / 0.999 / 1.0."""
-    def noise(nt):
-        n = nt.nodes.new('ShaderNodeTexNoise')
-        n.inputs['Scale'].default_value = 40.0
-        n.inputs['Detail'].default_value = 6.0
-        nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Object'], n.inputs['Vector'])
-        return n
-
-    def make():
-        mat = _bumped("Fine", noise, 'Fac', distance=0.02)
-        next(n for n in mat.node_tree.nodes if n.type == 'BUMP').inputs['Filter Width'].default_value = width
-        return mat
-    sc = _plane_scene(make, samples=32)
+    sc = _plane_scene(lambda: _fine_bump(width), samples=32)
     sc.render.resolution_x = sc.render.resolution_y = 64
     img, nrm = _render(sc, tmp_path)
     _compare(img, None, rtol_mean=0.015, rtol_block=0.03)
@@ -350,18 +353,7 @@ def test_a_fine_bump_seen_through_each_cameras_differentials(camera, tmp_path):
     pixel spans 2 pi / width radians across the equator and a perspective one narrows off the
     axis. DACRT had taken the view plane's span over the width for all: for a panorama the unit
     square's, 2 pi too narrow (0.987x Cycles at the fuzz's Noise of scale 200)."""
-    def noise(nt):
-        n = nt.nodes.new('ShaderNodeTexNoise')
-        n.inputs['Scale'].default_value = 40.0
-        n.inputs['Detail'].default_value = 6.0
-        nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Object'], n.inputs['Vector'])
-        return n
-
-    def make():
-        mat = _bumped("Fine", noise, 'Fac', distance=0.02)
-        next(n for n in mat.node_tree.nodes if n.type == 'BUMP').inputs['Filter Width'].default_value = 1.0
-        return mat
-    sc = _plane_scene(make, samples=32, size=40.0)
+    sc = _plane_scene(lambda: _fine_bump(1.0), samples=32, size=40.0)
     sc.render.resolution_x, sc.render.resolution_y = 64, 32
     cam = sc.camera
     cam.location = (0, 0, 1.5)
