@@ -457,6 +457,17 @@ def write_image(path, px, fmt='uint8'):
     return str(path)
 
 
+def write_exr(path, px):
+    """px (h, w, 4) float32 written as a float OpenEXR, row 0 at the BOTTOM (as Blender's
+    pixels), the values as given."""
+    import OpenImageIO as oiio
+    out = oiio.ImageOutput.create(str(path))
+    out.open(str(path), oiio.ImageSpec(px.shape[1], px.shape[0], 4, 'float'))
+    out.write_image(np.ascontiguousarray(px[::-1]))
+    out.close()
+    return str(path)
+
+
 def normal_map_material(name, image, strength=1.0, interpolation='Linear'):
     """A Diffuse BSDF (0.8) whose Normal is a tangent-space Normal Map node of the image."""
     mat, nt, out = _material(name)

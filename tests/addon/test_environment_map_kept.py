@@ -32,14 +32,6 @@ def _texels(seed=3, h=32, w=64):
     return px
 
 
-def _write_exr(path, px):
-    import OpenImageIO as oiio
-    out = oiio.ImageOutput.create(str(path))
-    out.open(str(path), oiio.ImageSpec(px.shape[1], px.shape[0], 4, 'float'))
-    out.write_image(np.ascontiguousarray(px[::-1]))
-    out.close()
-
-
 def _hdri_world(scene, image):
     """A diffuse ball under an Environment Texture of image through a Mapping node; 1 spp, 2
     bounces."""
@@ -65,7 +57,7 @@ def _write_png(path, px):
 @pytest.mark.parametrize('source', ['file', 'packed', 'buffer', '8-bit file'])
 def test_frames_of_one_hdri_build_its_map_once(scene, tmp_path, monkeypatch, source, calls_to):
     if source == 'file':
-        _write_exr(tmp_path / 'sky.exr', _texels())
+        scenes.write_exr(tmp_path / 'sky.exr', _texels())
         image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
     elif source == '8-bit file':      # (its bytes are the map's encoded texels: lights/environment.py)
         _write_png(tmp_path / 'sky.png', _texels())
@@ -103,7 +95,7 @@ def _paint(env, bg, mapping):
 
 def _rewrite(env, bg, mapping):
     path = scenes.bpy.path.abspath(env.image.filepath)
-    (_write_png if path.endswith('.png') else _write_exr)(path, _texels(seed=4))
+    (_write_png if path.endswith('.png') else scenes.write_exr)(path, _texels(seed=4))
     env.image.reload()
 
 
@@ -120,7 +112,7 @@ CHANGES = {
 @pytest.mark.parametrize('change', CHANGES)
 def test_a_changed_hdri_renders_as_with_nothing_kept(scene, tmp_path, change):
     if change == 'rewritten':
-        _write_exr(tmp_path / 'sky.exr', _texels())
+        scenes.write_exr(tmp_path / 'sky.exr', _texels())
         image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
     elif change == 'rewritten 8-bit':
         _write_png(tmp_path / 'sky.png', _texels())

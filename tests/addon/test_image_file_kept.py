@@ -35,17 +35,8 @@ def _texels(seed=3, h=32, w=64):
     return px
 
 
-def _write_exr(path, px):
-    import OpenImageIO as oiio
-    out = oiio.ImageOutput.create(str(path))
-    out.open(str(path), oiio.ImageSpec(px.shape[1], px.shape[0], 4, 'float'))
-    out.write_image(np.ascontiguousarray(px[::-1]))
-    out.close()
-
-
-
 def test_frames_of_an_unchanged_hdri_file_read_it_once(scene, tmp_path, monkeypatch, calls_to):
-    _write_exr(tmp_path / 'sky.exr', _texels())
+    scenes.write_exr(tmp_path / 'sky.exr', _texels())
     image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
     scenes.camera(location=(0, -5, 0), rotation=(math.radians(90), 0, 0))
     scenes.uv_sphere(materials=[scenes.diffuse('grey', (0.5, 0.5, 0.5))])
@@ -77,11 +68,11 @@ def _same(a, b):
 
 
 def _rewrite(img, path, tmp_path):
-    _write_exr(path, _texels(seed=4))
+    scenes.write_exr(path, _texels(seed=4))
 
 
 def _replace(img, path, tmp_path):      # (a new inode: written beside and renamed over it)
-    _write_exr(tmp_path / 'new.exr', _texels(seed=5))
+    scenes.write_exr(tmp_path / 'new.exr', _texels(seed=5))
     os.replace(tmp_path / 'new.exr', path)
 
 
@@ -91,7 +82,7 @@ def _touch(img, path, tmp_path):        # (the same bytes, a later mtime: read a
 
 
 def _other_file(img, path, tmp_path):
-    _write_exr(tmp_path / 'other.exr', _texels(seed=6))
+    scenes.write_exr(tmp_path / 'other.exr', _texels(seed=6))
     img.filepath = str(tmp_path / 'other.exr')
 
 
@@ -111,7 +102,7 @@ CHANGES = {
 @pytest.mark.parametrize('change', CHANGES)
 def test_a_change_of_what_the_read_depends_on_reads_again_as_with_nothing_kept(tmp_path, monkeypatch, change, calls_to):
     path = tmp_path / 'tex.exr'
-    _write_exr(path, _texels())
+    scenes.write_exr(path, _texels())
     img = scenes.bpy.data.images.load(str(path))
     if change == 'non-color':        # (from sRGB: a linear EXR's texels are the same as data)
         img.colorspace_settings.name = 'sRGB'
@@ -131,7 +122,7 @@ def test_a_change_of_what_the_read_depends_on_reads_again_as_with_nothing_kept(t
 
 
 def test_the_texture_limit_applies_to_kept_texels_as_to_read_ones(tmp_path):
-    _write_exr(tmp_path / 'tex.exr', _texels())
+    scenes.write_exr(tmp_path / 'tex.exr', _texels())
     img = scenes.bpy.data.images.load(str(tmp_path / 'tex.exr'))
     whole = images.image_pixels(img, [])
     limited = images.ImageReading(texture_limit=16)
@@ -143,7 +134,7 @@ def test_the_texture_limit_applies_to_kept_texels_as_to_read_ones(tmp_path):
 
 def test_each_frame_of_a_sequence_is_its_own_file(tmp_path, monkeypatch, calls_to):
     for frame, seed in ((1, 7), (2, 8)):
-        _write_exr(tmp_path / f'sky_{frame:03d}.exr', _texels(seed))
+        scenes.write_exr(tmp_path / f'sky_{frame:03d}.exr', _texels(seed))
     img = scenes.bpy.data.images.load(str(tmp_path / 'sky_001.exr'))
     img.source = 'SEQUENCE'
     user = type('User', (), dict(frame_duration=2, frame_start=1, use_cyclic=False, frame_offset=0))()
@@ -155,7 +146,7 @@ def test_each_frame_of_a_sequence_is_its_own_file(tmp_path, monkeypatch, calls_t
 
 
 def test_kept_texels_are_read_only(tmp_path):
-    _write_exr(tmp_path / 'tex.exr', _texels())
+    scenes.write_exr(tmp_path / 'tex.exr', _texels())
     img = scenes.bpy.data.images.load(str(tmp_path / 'tex.exr'))
     img.colorspace_settings.name = 'sRGB'        # (a stored sRGB copy beside the linear texels)
     texels = images.image_pixels(img, [])
@@ -170,7 +161,7 @@ def test_the_kept_bytes_are_bounded(tmp_path, monkeypatch, calls_to):
     monkeypatch.setattr(readkeep, '_KEEP_BYTES', 2 * one)
     imgs = []
     for name in 'abc':
-        _write_exr(tmp_path / f'{name}.exr', _texels())
+        scenes.write_exr(tmp_path / f'{name}.exr', _texels())
         imgs.append(scenes.bpy.data.images.load(str(tmp_path / f'{name}.exr')))
     reads = calls_to(images, '_read_flipped')
     for img in imgs:
@@ -193,7 +184,7 @@ def test_a_material_texture_of_a_kept_file_renders_as_with_nothing_kept(scene, t
                                                                         calls_to):
     """The kept, read-only texels (and their stored lookup copy: sRGB, unassociated) go through
     the material's image texture as a fresh read's do."""
-    _write_exr(tmp_path / 'tex.exr', _texels())
+    scenes.write_exr(tmp_path / 'tex.exr', _texels())
     img = scenes.bpy.data.images.load(str(tmp_path / 'tex.exr'))
     img.colorspace_settings.name = space
     mat, nt, out = scenes._material('textured')
