@@ -7,11 +7,11 @@ visibility. Other world shaders use the world colour, reported. Part
 of the export layer."""
 
 import bpy
-import dacrt
 import numpy as np
 
 from .. import nodeeval, nodegraph
 from .. import scenedata as sd
+from ..lights import envkeep
 from ..lights.base import fits_float32
 from ..mapping import environment_rotation
 from ..nodeeval import constant_color, constant_value
@@ -399,7 +399,7 @@ def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE)
     # ~0.3 s CPU of every frame with a 4K HDRI. An 8-bit image's texels (a table of its bytes)
     # are finite and non-negative, and are not made into floats where its bytes are looked up
     texels = pixels
-    non_finite, negative, _ = (0, False, True) if isinstance(pixels, ByteTexels) else dacrt.lamps.texel_stats(pixels)
+    non_finite, negative, _ = (0, False, True) if isinstance(pixels, ByteTexels) else envkeep.texel_stats(pixels)
     if non_finite or negative:
         texels = np.asarray(pixels[..., :3])
         if non_finite:

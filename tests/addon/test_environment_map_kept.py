@@ -2,7 +2,8 @@
 (lights/envkeep.py): the image's texels are read every frame (from the file, as Cycles reads
 it), and where they hold the same bits as the frame before (and the rotation, strength and
 lookup are the same) the map and the bright-texel check are not made again (a 4K float HDRI's
-~120 + ~30 ms of CPU a frame). A frame after any change of what the map is made from (a pixel
+~120 + ~30 ms of CPU a frame), and a file's kept, read-only texels are scanned once (the
+world's texel check, ~28 ms). A frame after any change of what the map is made from (a pixel
 painted, the file rewritten and reloaded, the Background's strength, the Mapping rotation, the
 interpolation) renders exactly as it does with nothing kept; an 8-bit image's map (made from
 its bytes, sRGB-encoded) the same way."""
@@ -201,3 +202,47 @@ def test_a_build_on_another_thread_cannot_replace_the_map_a_comparison_answered_
     other['thread'].join()
     assert got is kept_a
     assert other['map'] is not kept_a
+
+
+def test_frames_of_an_unchanged_hdri_file_scan_its_texels_once(scene, tmp_path, calls_to):
+    """The world's check of the texels (non-finite, negative, bright) and the bright check scan
+    a file's kept, read-only texels once in three frames (a 4K float HDRI: ~28 ms of CPU a scan;
+    five scans before: two a frame, one on the third)."""
+    from addon.export import readkeep
+    readkeep.forget()
+    _write_exr(tmp_path / 'sky.exr', _texels())
+    image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
+    _hdri_world(scene, image)
+    scans = calls_to(dacrt.lamps, 'texel_stats')
+    films = []
+    for frame in (1, 2, 3):
+        scene.frame_set(frame)
+        films.append(scenes.render_rgba(scene))
+    readkeep.forget()
+    assert len(scans) == 1, scans
+    assert np.array_equal(films[0], films[1]) and np.array_equal(films[0], films[2])
+
+
+def test_texel_stats_are_kept_only_for_the_same_read_only_array(calls_to):
+    """A writable array (written in place since, perhaps), a read-only view of a writable one and
+    a copy with the same bits are scanned again; the same read-only array is not."""
+    scans = calls_to(dacrt.lamps, 'texel_stats')
+    px = _texels()
+    assert envkeep.texel_stats(px) == (0, False, True)
+    px[3, 5, 0], px[4, 6, 1] = np.nan, -2.0
+    assert envkeep.texel_stats(px) == (1, True, True) and len(scans) == 2
+    view = px[:]
+    view.flags.writeable = False                    # (its base still writable)
+    assert envkeep.texel_stats(view) == (1, True, True) and len(scans) == 3
+    px[3, 5, 0] = 1.0
+    assert envkeep.texel_stats(view) == (0, True, True) and len(scans) == 4
+    frozen = px.copy()
+    frozen.flags.writeable = False
+    assert envkeep.texel_stats(frozen) == (0, True, True) and len(scans) == 5
+    assert envkeep.texel_stats(frozen) == (0, True, True) and len(scans) == 5
+    assert envkeep.any_positive(_env(frozen)) and len(scans) == 5
+    assert envkeep.texel_stats(frozen.copy()) == (0, True, True) and len(scans) == 6
+    dark = np.zeros_like(frozen)
+    dark.flags.writeable = False
+    assert envkeep.texel_stats(dark) == (0, False, False) and not envkeep.any_positive(_env(dark))
+    assert len(scans) == 7
