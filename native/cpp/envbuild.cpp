@@ -81,25 +81,45 @@ size_t min_rows(uint32_t width) { return std::max<size_t>(1, (size_t(1) << 16) /
 
 }  // namespace
 
+namespace {
+
+// texel_stats over texels [b, e) (C channels, or `channels` where C is 0), on the floats' bits so
+// that it vectorises: a value is not finite where its exponent is all ones, finite and negative
+// where its sign is set and its magnitude in (0, inf), above 0 where its sign is clear and its
+// magnitude in (0, inf] (std::isfinite, t < 0 && t > -inf and t > 0 had compiled to a branch
+// per value: a 4K RGBA map's scan ~2.7x slower on one thread).
+template <size_t C>
+TexelStats stats_range(const float* texels, size_t channels, size_t b, size_t e) {
+    const size_t ch = C ? C : channels;
+    uint64_t bad = 0;
+    uint32_t neg = 0, pos = 0;
+    for (size_t k = b; k < e; ++k) {
+        uint32_t f = 0, n = 0, p = 0;
+        for (size_t a = 0; a < 3; ++a) {
+            uint32_t x;
+            std::memcpy(&x, texels + k * ch + a, 4);
+            const uint32_t m = x & 0x7fffffffu, s = x >> 31;
+            f |= uint32_t(m >= 0x7f800000u);
+            n |= s & uint32_t(m - 1u < 0x7f7fffffu);           // m in [1, 0x7f7fffff]
+            p |= (s ^ 1u) & uint32_t(m - 1u < 0x7f800000u);    // m in [1, 0x7f800000]
+        }
+        bad += f, neg |= n, pos |= p;
+    }
+    return {size_t(bad), neg != 0, pos != 0};
+}
+
+}  // namespace
+
 TexelStats texel_stats(const float* texels, size_t n, size_t channels) {
     std::atomic<size_t> non_finite{0};
     std::atomic<bool> negative{false}, positive{false};
     parallel_for(n, [&](size_t b, size_t e) {
-        size_t bad = 0;
-        bool neg = false, pos = false;
-        for (size_t k = b; k < e; ++k) {
-            const float* t = texels + k * channels;
-            bool finite = true;
-            for (int a = 0; a < 3; ++a) {
-                finite &= std::isfinite(t[a]);
-                neg |= t[a] < 0.0f && t[a] > -std::numeric_limits<float>::infinity();
-                pos |= t[a] > 0.0f;
-            }
-            bad += !finite;
-        }
-        non_finite += bad;
-        if (neg) negative = true;
-        if (pos) positive = true;
+        const TexelStats s = channels == 4   ? stats_range<4>(texels, channels, b, e)
+                             : channels == 3 ? stats_range<3>(texels, channels, b, e)
+                                             : stats_range<0>(texels, channels, b, e);
+        non_finite += s.non_finite;
+        if (s.negative) negative = true;
+        if (s.positive) positive = true;
     }, size_t(1) << 16);
     return {non_finite.load(), negative.load(), positive.load()};
 }

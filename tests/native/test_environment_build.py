@@ -132,3 +132,40 @@ def test_texel_stats_count_the_rgb_faults_and_light():
     big = np.zeros((300, 600, 3), F32)          # (threaded)
     big[299, 599, 2] = np.inf
     assert lamps.texel_stats(big) == (1, False, True)
+
+
+def _stats_reference(px):
+    """texel_stats in numpy: texels with a non-finite RGB value, a finite negative one, one > 0."""
+    rgb = px.reshape(-1, px.shape[-1])[:, :3]
+    with np.errstate(invalid='ignore'):
+        return (int((~np.isfinite(rgb)).any(axis=1).sum()), bool((np.isfinite(rgb) & (rgb < 0)).any()),
+                bool((rgb > 0).any()))
+
+
+@pytest.mark.parametrize('channels', [3, 4, 5])
+def test_texel_stats_read_every_value_class_as_the_float_tests(channels):
+    """texel_stats reads the floats' bits (a branch-free pass): each class of value (NaNs of
+    either sign and payload, infinities, zeros of either sign, subnormals, the largest finite
+    values) counts as isfinite, < 0 and > 0 read it, alone in an image at every place (the
+    threaded split's ends too) and mixed."""
+    special = np.array([np.nan, -np.nan, np.inf, -np.inf, 0.0, -0.0, 1e-45, -1e-45, 1.1754942e-38, -1.1754942e-38,
+                        3.4028235e38, -3.4028235e38, 1.0, -1.0], F32)
+    bits = special.view(np.uint32)
+    special = np.concatenate([special, (bits | np.uint32(0x7fc00123)).view(F32), np.array([0x7f800001, 0xff800001],
+                                                                                           np.uint32).view(F32)])
+    for h, w in ((3, 5), (300, 600)):          # (the second threaded)
+        for v in special:
+            for at in (0, 1, h * w // 2, (1 << 16) - 1, 1 << 16, h * w - 1):
+                if at >= h * w:
+                    continue
+                px = np.zeros((h, w, channels), F32)
+                px.reshape(-1, channels)[at, (at % 3)] = v
+                px.reshape(-1, channels)[at // 2, channels - 1] = -np.nan if channels > 3 else 0.0   # (not RGB)
+                alone = _stats_reference(np.array([[v, 0, 0]], F32))      # (the rest is 0)
+                assert lamps.texel_stats(px) == alone, (h, w, float(v), v.view(np.uint32), at)
+    rng = np.random.default_rng(7)
+    for n in (1, 17, 70000, 200003):
+        px = rng.choice(special, size=(n, channels)).astype(F32)
+        assert lamps.texel_stats(px) == _stats_reference(px), n
+        px = np.abs(rng.normal(size=(n, channels))).astype(F32)
+        assert lamps.texel_stats(px) == _stats_reference(px) == (0, False, True)
