@@ -11,7 +11,10 @@
 #include "chunkorder.h"
 #include "parallel.h"
 
+#include <strings.h>
+
 #include <algorithm>
+#include <cstdlib>
 #include <atomic>
 #include <cfloat>
 #include <cmath>
@@ -65,6 +68,15 @@ Isa resolve_isa(const std::string& req) {
         return Isa::Avx512;
     }
     throw std::runtime_error("unknown ISA '" + req + "' (expected portable, avx2 or avx512)");
+}
+
+Isa lane_isa() {
+    const Isa best = resolve_isa("");
+    const char* env = std::getenv("DACRT_ISA");
+    Isa isa = best;
+    if (env && strcasecmp(env, "portable") == 0) isa = Isa::Portable;
+    if (env && strcasecmp(env, "avx2") == 0 && best != Isa::Portable) isa = Isa::Avx2;
+    return isa;
 }
 
 FieldsFn fields_fn(Isa isa) {

@@ -17,6 +17,18 @@ std::string isa_name(Isa isa);
 Isa resolve_isa(const std::string& requested);
 FieldsFn fields_fn(Isa isa);  // the ISA's SIMD check of ray fields
 
+// The instruction set of the lane kernels compiled as named copies per instruction set (noise.cpp,
+// envlanes.cpp): the widest the CPU runs, or a narrower one DACRT_ISA names (a wider one it lacks,
+// or any other name: the widest), so that tests compare the copies on one machine.
+Isa lane_isa();
+
+// Of a lane kernel's portable, AVX2 and AVX-512 copies, the one lane_isa() names.
+template <class Fn>
+Fn lane_copy(Fn portable, Fn avx2, Fn avx512) {
+    const Isa isa = lane_isa();
+    return isa == Isa::Avx512 ? avx512 : (isa == Isa::Avx2 ? avx2 : portable);
+}
+
 struct TraceResult {
     Stats stats;
     int threads = 1;

@@ -1,13 +1,10 @@
 // equirect_uv_lanes, equirect_dir_lanes and env_place_lanes (envlanes.h), compiled per
-// instruction set as named copies (as noise.cpp) so that DACRT_ISA can pick a narrower one and
-// tests compare them on one machine. Compiled
+// instruction set as named copies (as noise.cpp) so that DACRT_ISA can pick a narrower one
+// (dispatch.h lane_copy) and tests compare them on one machine. Compiled
 // with -fno-trapping-math (CMakeLists.txt) so equirect.h's selects vectorise; -ffp-contract=off:
 // every copy gives the scalar bits.
 #include "envlanes.h"
 
-#include <strings.h>
-
-#include <cstdlib>
 
 #include "dispatch.h"
 #include "envcell.h"
@@ -83,57 +80,27 @@ DACRT_EQUIRECT_ISA(portable, )
 DACRT_EQUIRECT_ISA(avx2, __attribute__((target("avx2,fma,bmi,bmi2"))))
 DACRT_EQUIRECT_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl,avx512dq,avx512bw,avx512cd"))))
 
-// The widest the CPU runs, or a narrower one DACRT_ISA names (a wider one it lacks: the widest).
-Isa pick_isa() {
-    const Isa best = resolve_isa("");
-    const char* env = std::getenv("DACRT_ISA");
-    Isa isa = best;
-    if (env && strcasecmp(env, "portable") == 0) isa = Isa::Portable;
-    if (env && strcasecmp(env, "avx2") == 0 && best != Isa::Portable) isa = Isa::Avx2;
-    return isa;
-}
-
-UvFn pick_uv() {
-    const Isa isa = pick_isa();
-    return isa == Isa::Avx512 ? avx512_uv : (isa == Isa::Avx2 ? avx2_uv : portable_uv);
-}
-
-DirFn pick_dir() {
-    const Isa isa = pick_isa();
-    return isa == Isa::Avx512 ? avx512_dir : (isa == Isa::Avx2 ? avx2_dir : portable_dir);
-}
-
-BlendFn pick_blend() {
-    const Isa isa = pick_isa();
-    return isa == Isa::Avx512 ? avx512_blend : (isa == Isa::Avx2 ? avx2_blend : portable_blend);
-}
-
-PlaceFn pick_place() {
-    const Isa isa = pick_isa();
-    return isa == Isa::Avx512 ? avx512_place : (isa == Isa::Avx2 ? avx2_place : portable_place);
-}
-
 }  // namespace
 
 void equirect_uv_lanes(const float to_map[9], const float* dx, const float* dy, const float* dz, size_t m, float* u,
                        float* v, float* sin_theta) {
-    static const UvFn fn = pick_uv();
+    static const UvFn fn = lane_copy<UvFn>(portable_uv, avx2_uv, avx512_uv);
     fn(to_map, dx, dy, dz, m, u, v, sin_theta);
 }
 
 void equirect_dir_lanes(const float to_map[9], const float* u, const float* v, size_t m, float* wx, float* wy,
                         float* wz, float* sin_theta) {
-    static const DirFn fn = pick_dir();
+    static const DirFn fn = lane_copy<DirFn>(portable_dir, avx2_dir, avx512_dir);
     fn(to_map, u, v, m, wx, wy, wz, sin_theta);
 }
 
 void env_place_lanes(bool closest, float fw, float fh, const EnvPicks& in, size_t m, float* u, float* v) {
-    static const PlaceFn fn = pick_place();
+    static const PlaceFn fn = lane_copy<PlaceFn>(portable_place, avx2_place, avx512_place);
     fn(closest, fw, fh, in, m, u, v);
 }
 
 void env_blend_lanes(const EnvTexels& t, size_t m, bool has_pdf, bool divide, float* out, size_t stride, float* pdf) {
-    static const BlendFn fn = pick_blend();
+    static const BlendFn fn = lane_copy<BlendFn>(portable_blend, avx2_blend, avx512_blend);
     fn(t, m, has_pdf, divide, out, stride, pdf);
 }
 

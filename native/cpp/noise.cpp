@@ -4,18 +4,15 @@
 // was 78-86% of a render at Detail 15. Here each step is a loop over lanes without branches
 // (gradients and floors as bit selects, fmod in double below 1e14), compiled once per
 // instruction set like target_clones, but as named copies (portable, avx2, avx512) so that
-// DACRT_ISA can pick a narrower one, as for the tracer, and the tests compare them on one
-// machine. Per lane the operations and their order are the one-point kernel's, so every
-// instruction set gives its bits (-ffp-contract=off: no fused multiply-add;
+// DACRT_ISA can pick a narrower one (dispatch.h lane_copy), as for the tracer, and the tests
+// compare them on one machine. Per lane the operations and their order are the one-point
+// kernel's, so every instruction set gives its bits (-ffp-contract=off: no fused multiply-add;
 // tests/native/test_noise_lanes.py, tests/integrator/test_noise.py).
 #include "noise.h"
-
-#include <strings.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <cstring>
 
 #include "dispatch.h"
@@ -530,20 +527,10 @@ DACRT_NOISE_ISA(portable, )
 DACRT_NOISE_ISA(avx2, __attribute__((target("avx2,fma,bmi,bmi2"))))
 DACRT_NOISE_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl,avx512dq,avx512bw,avx512cd"))))
 
-// The widest the CPU runs, or a narrower one DACRT_ISA names (a wider one it lacks: the widest).
-RangeFn pick_range() {
-    const Isa best = resolve_isa("");
-    const char* env = std::getenv("DACRT_ISA");
-    Isa isa = best;
-    if (env && strcasecmp(env, "portable") == 0) isa = Isa::Portable;
-    if (env && strcasecmp(env, "avx2") == 0 && best != Isa::Portable) isa = Isa::Avx2;
-    return isa == Isa::Avx512 ? avx512_range : (isa == Isa::Avx2 ? avx2_range : portable_range);
-}
-
 }  // namespace
 
 void noise_texture(const float* p, size_t n, int dims, const NoiseParams& k, float* fac, float* color) {
-    static const RangeFn range = pick_range();
+    static const RangeFn range = lane_copy<RangeFn>(portable_range, avx2_range, avx512_range);
     Offsets offsets;
     for (int seed = 0; seed < 6; ++seed)
         for (int a = 0; a < 4; ++a) offsets[seed][a] = random_offset(float(seed), a, dims);
