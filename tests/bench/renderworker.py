@@ -11,14 +11,13 @@ With "warmup": "point" the warm-up renders at the item's own sample count instea
 first timed render of every sample count of the scene: a render whose working set is larger
 than any before it first pays the memory's first touch (on a VM that backs guest memory lazily,
 about 2 ms per MB: a 4-spp dragon render 0.06 -> 0.12 s after a 1-spp warm-up), a one-off cost
-of the process that, like kernel loading, is not the render's.
-
-Timed: `bpy.ops.render.render()` alone, the whole render as a user sees it (Cycles: scene sync,
-BVH build, path tracing; DACRT: export, tracer scene creation, integration). Saving the image
-as EXR and reading it back are not timed. Each finished render appends one JSON line to the
-results file (the parent follows it for its progress bar; {"unavailable": reason} when the
-engine asked for, DACRT with adaptive sampling, does not exist in this add-on); the image is stored as .npy
-(H, W, 4) float32, row 0 at the bottom. Any failure is written as {"error": ...} and exits 1.
+of the process that, like kernel loading, is not the render's. OpenImageIO, which reads the
+saved images back, is imported before the first render, and a warm-up's image is saved and read
+back like a timed one's (then dropped): the first image read had imported it between two timed
+renders, its allocations took the free blocks a render had left in the held heap, and the next
+render faulted ~25 MB in again (the dragon at 4 spp as a worker's first scene: ~6,300 page
+faults in its second timed render, every time, against ~100 when an earlier scene had saved
+first; imported only in the warm-up's save, the faults moved to the first timed render).
 """
 
 from __future__ import annotations
@@ -31,6 +30,8 @@ import traceback
 
 import bpy
 import numpy as np
+# (imported before any render, not by the first image read: see the module doc)
+import OpenImageIO  # noqa: F401
 
 from ..parity import rendering as fair
 from . import renderscenes
@@ -73,6 +74,14 @@ def _spec(d: dict) -> renderscenes.RenderSpec:
     return renderscenes.RenderSpec(**d)
 
 
+def _warm_up(scene, spec, engine, samples, outdir):
+    """An untimed render at `samples`, its image saved and read back as a timed render's is
+    (and dropped): the one-off costs of both steps are paid here (see the module doc)."""
+    renderscenes.configure(scene, spec, engine, samples, 999)
+    bpy.ops.render.render()
+    _save_exr(scene, os.path.join(outdir, f"warmup-{os.getpid()}.exr"))
+
+
 def run(job: dict) -> None:
     engine = job["engine"]
     outdir = job["outdir"]
@@ -98,12 +107,10 @@ def run(job: dict) -> None:
             build_s = time.perf_counter() - t0
             built_key, warmed = key, set()
             if warmup is True:
-                renderscenes.configure(scene, spec, engine, 1, 999)
-                bpy.ops.render.render()
+                _warm_up(scene, spec, engine, 1, outdir)
         if warmup == "point" and int(item["samples"]) not in warmed:
             warmed.add(int(item["samples"]))
-            renderscenes.configure(scene, spec, engine, int(item["samples"]), 999)
-            bpy.ops.render.render()
+            _warm_up(scene, spec, engine, int(item["samples"]), outdir)
         renderscenes.configure(scene, spec, engine, int(item["samples"]), int(item["seed"]))
         frame_s = None
         if item.get("frame") is not None:
