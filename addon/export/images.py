@@ -16,7 +16,7 @@ from ..texture import ByteTexels, EncodedTexels, ImageTexels, UdimTiles, half_as
 from .colorspaces import CONVERT, DATA, LINEAR, SRGB, space_kind, to_scene_linear
 from .errors import ExportCancelled
 from .imageuser import sequence_path, user_frame
-from .readkeep import file_key, keep, kept
+from .readkeep import file_key, keep, keep_bytes, kept, kept_bytes
 
 MISSING_IMAGE = (1.0, 0.0, 1.0)           # Cycles renders a missing image magenta
 
@@ -175,13 +175,14 @@ def _file_texels(path, img, reasons, unassociate, lazy=False, reading=WHOLE):
     if texels is not None:
         return texels
     first = len(reasons)
-    texels = _read_file_texels(path, img, reasons, unassociate, lazy, reading)
+    texels = _read_file_texels(path, img, reasons, unassociate, lazy, reading, key)
     keep(key, texels, reasons[first:])
     return texels
 
 
-def _read_file_texels(path, img, reasons, unassociate, lazy, reading):
-    """_file_texels, read from the file."""
+def _read_file_texels(path, img, reasons, unassociate, lazy, reading, key=None):
+    """_file_texels, read from the file (an 8-bit file's decoded bytes: those kept under key
+    (readkeep.kept_bytes), when read before, copied)."""
     import OpenImageIO as oiio
     inp, spec = _open_straight(path)
     if spec is None:
@@ -196,8 +197,14 @@ def _read_file_texels(path, img, reasons, unassociate, lazy, reading):
     byte = spec.format.basetype == oiio.UINT8
     # byte files as their bytes (a quarter of the floats' memory, and no conversion): what Cycles
     # reads, and what Blender's byte buffer holds; deeper ones as floats in the image's space
+    raw = kept_bytes(key) if byte else None
     try:     # alpha ignored (alpha mode None): 1, as Blender's own buffer has it
-        raw = _read_flipped(inp, spec, byte, alpha_one=img.alpha_mode == 'NONE', expand=lazy, reading=reading)
+        if raw is None:
+            raw = _read_flipped(inp, spec, byte, alpha_one=img.alpha_mode == 'NONE', expand=lazy, reading=reading)
+            if byte and raw is not None:
+                keep_bytes(key, raw.copy())      # (this frame converts raw itself)
+        else:
+            raw = raw.copy()       # (the conversion may write into its bytes; the kept ones stay read-only)
     finally:
         inp.close()
     if raw is None:

@@ -1,4 +1,4 @@
-"""Float texels read from an image file, kept for the next frame while the file and every
+"""Texels read from an image file (float ones, or an 8-bit file's decoded bytes), kept for the next frame while the file and every
 setting its conversion reads stay the same.
 
 Cycles reads an image's file at every render, and so does the export (images._file_texels):
@@ -14,9 +14,11 @@ messages the read gave are given again with the texels.
 
 Kept texels are read-only (numpy's writeable flag, on them and on the arrays they view): a
 consumer that wrote into them would change the next frame's image, and raises instead. Only
-ImageTexels (float32 arrays) are kept: an 8-bit image's lazy ByteTexels are not. At most
-_KEEP_BYTES of texels are kept in all (two 4K x 2K float RGBA images), the least recently
-used dropped first; a bigger image is not kept.
+ImageTexels (float32 arrays) are kept as texels: an 8-bit image's lazy ByteTexels are not
+(the floats they make on first read would stay with them), but its decoded bytes are
+(keep_bytes: a 4K x 2K PNG took ~280 ms of CPU to decode every frame), and each frame converts a
+copy of them. At most _KEEP_BYTES are kept in all (two 4K x 2K float RGBA images), the least
+recently used dropped first; a bigger image is not kept.
 """
 from __future__ import annotations
 
@@ -85,6 +87,31 @@ def keep(key, texels, messages):
         while _kept and sum(e[2] for e in _kept.values()) + size > _KEEP_BYTES:
             del _kept[next(iter(_kept))]
         _kept[key] = (texels, tuple(messages), size)
+
+
+def kept_bytes(key):
+    """The decoded bytes of an 8-bit file kept under key (keep_bytes: read-only), or None."""
+    if key is None:
+        return None
+    with _lock:
+        entry = _kept.pop(('bytes',) + key, None)
+        if entry is None:
+            return None
+        _kept[('bytes',) + key] = entry
+    return entry[0]
+
+
+def keep_bytes(key, raw):
+    """Keep an 8-bit file's decoded bytes (uint8, as images._read_flipped made them under key)
+    within the byte limit; read-only from here on (a copy of it is what a frame converts)."""
+    if key is None or not isinstance(raw, np.ndarray) or raw.dtype != np.uint8 or raw.nbytes > _KEEP_BYTES:
+        return
+    _freeze(raw)
+    with _lock:
+        _kept.pop(('bytes',) + key, None)
+        while _kept and sum(e[2] for e in _kept.values()) + raw.nbytes > _KEEP_BYTES:
+            del _kept[next(iter(_kept))]
+        _kept[('bytes',) + key] = (raw, (), raw.nbytes)
 
 
 def forget():
