@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 F32 = np.float32
+_RGB_BYTES = np.frombuffer(bytes([255, 255, 255, 0]), np.uint32)[0]     # a texel word's RGB bytes
 
 
 def srgb_to_linear(c) -> np.ndarray:
@@ -287,9 +288,16 @@ class ByteTexels(LazyTexels):
         if not lit.any():
             return False
         first = int(np.argmax(lit))
+        k8 = self.k8
+        if first == 1 and lit[1:].all() and k8.ndim == 3 and k8.shape[-1] == 4 and k8.flags.c_contiguous:
+            # every non-zero byte lit (a colour table's usual form): any RGB byte non-zero, a band of
+            # 32-bit texel words at a time (the strided max over [..., :3] took ~37 ms of a 4K
+            # world's frame; these ~4 ms at most, and stop at the first lit band)
+            words = k8.view(np.uint32).reshape(k8.shape[:2])
+            return any((words[y:y + 64] & _RGB_BYTES).any() for y in range(0, len(words), 64))
         if lit[first:].all():
-            return bool(self.k8[..., :3].max() >= first)
-        return bool(lit[self.k8[..., :3]].any())
+            return bool(k8[..., :3].max() >= first)
+        return bool(lit[k8[..., :3]].any())
 
 
 def mean_rgb(pixels) -> np.ndarray:

@@ -141,3 +141,38 @@ def test_file_read_expanded_is_the_expanded_bytes(tmp_path, ch, alpha_one):
     assert expanded.shape == raw.shape[:2] + (4,) and expanded.dtype == np.uint8
     table = np.arange(256, dtype=np.float32) * np.float32(1 / 255)
     np.testing.assert_array_equal(expanded, dacrt.shading.byte_texels(raw, table, False, floats=False)[1])
+
+
+def _bright_reference(k8, table):
+    """ByteTexels.any_positive_rgb as it was (every texel's RGB bytes looked up in the table)."""
+    return bool((np.asarray(table, np.float32)[k8[..., :3]] > 0).any())
+
+
+def test_the_bright_check_of_bytes_is_the_lookup_of_every_rgb_byte():
+    """ByteTexels.any_positive_rgb (the world light's bright check, read from the bytes) against
+    the table lookup of every RGB byte: random images, one lit byte at the first or last texel
+    in each channel, only alpha set, and tables whose first lit byte is 0, 1, or later, or with
+    gaps; bands of 64 rows end inside the image or exactly at it."""
+    from addon.texture import ByteTexels
+    rng = np.random.default_rng(11)
+    ramp = np.arange(256, dtype=np.float32) / 255
+    tables = [ramp, ramp + 0.1, np.where(ramp > 0.5, ramp, 0), np.where(np.arange(256) % 7 == 3, ramp, 0),
+              np.zeros(256, np.float32)]
+    images = []
+    for h, w in ((1, 1), (3, 5), (64, 3), (130, 7)):
+        images.append((rng.random((h, w, 4)) * 256).astype(np.uint8))
+        dark = np.zeros((h, w, 4), np.uint8)
+        images.append(dark)
+        alpha_only = dark.copy()
+        alpha_only[..., 3] = 255
+        images.append(alpha_only)
+        for y, x in ((0, 0), (h - 1, w - 1)):
+            for c in range(3):
+                for v in (1, 4, 200):
+                    one = alpha_only.copy()
+                    one[y, x, c] = v
+                    images.append(one)
+    for table in tables:
+        for k8 in images:
+            got = ByteTexels(k8, table, np.ones(256, np.float32), None).any_positive_rgb()
+            assert got == _bright_reference(k8, table), (k8.shape, table[:3])
