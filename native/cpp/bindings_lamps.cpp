@@ -331,18 +331,49 @@ LightChoice light_choice(const F32Array& records, const py::array_t<double, py::
     return c;
 }
 
-// A light tree over the choice's entries, or none; with one, the cdf's runs (into runs): its
-// members other than the first have no mass of their own, so the runs are few.
-void attach_tree(LightChoice& c, const py::object& tree, ChoiceRuns& runs) {
+// A light tree over the choice's entries, or none; with one, the cdf's runs (choiceruns.h): its
+// members other than the first have no mass of their own, so the runs are few. given: the
+// runs as choice_runs_py made them (run_cdf, run_entry), checked against the cdf in O(runs),
+// or None: built here (into runs), which reads every entry.
+void attach_tree(LightChoice& c, const py::object& tree, const py::object& given, ChoiceRuns& runs,
+                 py::array_t<double, py::array::c_style>& keep_cdf, py::array_t<uint32_t, py::array::c_style>& keep_entry) {
     if (tree.is_none()) return;
     c.tree = tree.cast<const LightTree*>();
     if (c.tree->key_bound() > c.entries)
         throw py::value_error("the light tree's keys must be entries of the light choice (0.." +
                               std::to_string(c.entries - 1) + ")");
-    choice_runs(c.cdf, c.entries, runs);
-    c.run_cdf = runs.cdf.data();
-    c.run_entry = runs.entry.data();
-    c.runs = runs.cdf.size();
+    if (given.is_none()) {
+        choice_runs(c.cdf, c.entries, runs);
+        c.run_cdf = runs.cdf.data();
+        c.run_entry = runs.entry.data();
+        c.runs = runs.cdf.size();
+        return;
+    }
+    const py::tuple t = given.cast<py::tuple>();
+    if (t.size() != 2) throw py::value_error("runs is (run_cdf, run_entry), as choice_runs gives them");
+    keep_cdf = t[0].cast<py::array_t<double, py::array::c_style>>();
+    keep_entry = t[1].cast<py::array_t<uint32_t, py::array::c_style>>();
+    if (keep_cdf.ndim() != 1) throw py::value_error("run_cdf must be one-dimensional, got " + shape_str(keep_cdf));
+    const size_t r = size_t(keep_cdf.shape(0));
+    need_shape(keep_entry, 0, r, "run_entry");
+    const std::string err = choice_runs_error(c.cdf, c.entries, keep_cdf.data(), keep_entry.data(), r);
+    if (!err.empty()) throw py::value_error("runs are not the cdf's (choice_runs(cdf) makes them): " + err);
+    c.run_cdf = keep_cdf.data();
+    c.run_entry = keep_entry.data();
+    c.runs = r;
+}
+
+// choice_runs of cdf (float64, (n,)): (run_cdf (r,) float64, run_entry (r,) uint32), empty where
+// the cdf is not non-decreasing or holds a NaN.
+py::tuple choice_runs_py(py::array_t<double, py::array::c_style> cdf) {
+    if (cdf.ndim() != 1) throw py::value_error("cdf must be one-dimensional, got " + shape_str(cdf));
+    ChoiceRuns runs;
+    choice_runs(cdf.data(), size_t(cdf.shape(0)), runs);
+    py::array_t<double> run_cdf(py::ssize_t(runs.cdf.size()));
+    py::array_t<uint32_t> run_entry(py::ssize_t(runs.entry.size()));
+    std::copy(runs.cdf.begin(), runs.cdf.end(), run_cdf.mutable_data());
+    std::copy(runs.entry.begin(), runs.entry.end(), run_entry.mutable_data());
+    return py::make_tuple(run_cdf, run_entry);
 }
 
 // The emissive triangles' primitive ids (None: not given).
@@ -374,13 +405,15 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
                      py::array value, py::array_t<bool, py::array::c_style> contrib, py::array rays,
                      py::array_t<int64_t, py::array::c_style> send, py::object skip, py::object terminator,
                      py::object linking, py::object entry, py::object point, py::object bump, py::object tree,
-                     py::object tri_prim, py::object rough) {
+                     py::object tri_prim, py::object rough, py::object runs_given) {
     F32Array keep[3], ng_keep, thr_keep, bump_keep, rough_keep;
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
     ChoiceRuns runs;
-    attach_tree(lights, tree, runs);
+    py::array_t<double, py::array::c_style> run_cdf_keep;
+    py::array_t<uint32_t, py::array::c_style> run_entry_keep;
+    attach_tree(lights, tree, runs_given, runs, run_cdf_keep, run_entry_keep);
     if (P.ndim() != 2 || P.shape(0) != 3) throw py::value_error("P must have shape (3, n), got " + shape_str(P));
     VertexPoints pts{};
     pts.n = size_t(P.shape(1));
@@ -501,13 +534,15 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
                           F32Array geo, py::object normals, F32Array D, I64Array pid,
                           py::array_t<uint32_t, py::array::c_style> keys, py::object pick, uint32_t nee_ka,
                           uint32_t nee_kb, float shorten, bool skip_work, bool scatter, uint32_t ka, uint32_t kb,
-                          py::object ray_dtype, py::object rough, py::object records_of_geo) {
+                          py::object ray_dtype, py::object rough, py::object records_of_geo, py::object runs_given) {
     F32Array keep[3];
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
         light_choice(records, cdf, prob, no_mis, shadow, tri_geo, tri_area, tri_emission, env, env_keep, keep);
     ChoiceRuns runs;
-    attach_tree(lights, tree, runs);
+    py::array_t<double, py::array::c_style> run_cdf_keep;
+    py::array_t<uint32_t, py::array::c_style> run_entry_keep;
+    attach_tree(lights, tree, runs_given, runs, run_cdf_keep, run_entry_keep);
     I32Array tri_prim_keep;
     lights.tri_prim = tri_prims(tri_prim, lights.num_tris, tri_prim_keep);
     BounceIn in{};
@@ -873,7 +908,8 @@ void register_lamps(py::module_& m) {
           py::arg("contrib"), py::arg("rays"), py::arg("send"), py::arg("skip"), py::arg("terminator"),
           py::arg("linking") = py::none(), py::arg("entry") = py::none(), py::arg("point") = py::none(),
           py::arg("bump") = py::none(), py::arg("tree") = py::none(), py::arg("tri_prim") = py::none(),
-          py::arg("rough") = py::none());
+          py::arg("rough") = py::none(), py::arg("runs") = py::none());
+    m.def("choice_runs", &choice_runs_py, py::arg("cdf"));
     m.def("texel_stats", &texel_stats_py, py::arg("texels"));
     m.def("equirect_uv", &equirect_uv_py, py::arg("to_map"), py::arg("D"));
     m.def("equirect_direction", &equirect_direction_py, py::arg("u"), py::arg("v"));
@@ -903,7 +939,7 @@ void register_lamps(py::module_& m) {
           py::arg("thr"), py::arg("u_rr"), py::arg("geo"), py::arg("normals"), py::arg("D"), py::arg("pid"),
           py::arg("keys"), py::arg("pick"), py::arg("nee_ka"), py::arg("nee_kb"), py::arg("shorten"),
           py::arg("skip_work"), py::arg("scatter"), py::arg("ka"), py::arg("kb"), py::arg("ray_dtype"),
-          py::arg("rough") = py::none(), py::arg("geo_records") = py::none());
+          py::arg("rough") = py::none(), py::arg("geo_records") = py::none(), py::arg("runs") = py::none());
     m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"),
           py::arg("clamp") = std::numeric_limits<float>::infinity());
 }
