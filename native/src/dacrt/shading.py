@@ -275,7 +275,7 @@ class LightChoice:
     def __init__(self, records, cdf, prob, no_mis, shadow, tri_geo=None, tri_area=None, tri_emission=None,
                  environment=None, tree=None, tri_prim=None):
         self.records = np.ascontiguousarray(np.asarray(records, _F32).reshape(-1, _core.LAMP_RECORD_WIDTH))
-        self.cdf = np.ascontiguousarray(cdf, np.float64)
+        self.cdf = cdf
         self.prob = np.ascontiguousarray(prob, _F32)
         self.no_mis = np.ascontiguousarray(no_mis, np.bool_)
         self.shadow = np.ascontiguousarray(shadow, np.bool_)
@@ -289,6 +289,28 @@ class LightChoice:
         if tree is not None and not isinstance(tree, _core.LightTree):
             raise ValueError(f"tree must be a dacrt.lamps.LightTree or None, got {type(tree).__name__}")
         self.tree = tree
+
+    @property
+    def cdf(self) -> np.ndarray:
+        """The choice's cdf, a read-only float64 copy: its runs (choiceruns.h) are built once
+        from it, so it is replaced (lights.cdf = ...), not changed in place."""
+        return self._cdf
+
+    @cdf.setter
+    def cdf(self, cdf):
+        self._cdf = np.array(cdf, np.float64, order="C")
+        self._cdf.flags.writeable = False
+        self._runs = None
+
+    @property
+    def runs(self):
+        """(run_cdf, run_entry): the cdf by runs of equal values (_core.choice_runs), which the
+        kernels search with a tree instead of every entry; built on first use, once per cdf
+        (building them reads every entry: a million emissive triangles in a tree had been a
+        scan of ~1M doubles in every kernel call)."""
+        if self._runs is None:
+            self._runs = _core.choice_runs(self._cdf)
+        return self._runs
 
     @property
     def entries(self) -> int:
@@ -365,7 +387,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
         None if linking is None else (np.ascontiguousarray(linking[0], np.uint8),
                                       np.ascontiguousarray(linking[1], np.uint64)), entry, point,
         None if bump is None else _rows(bump, 4, "bump"), lights.tree, lights.tri_prim,
-        None if rough is None else _rows(rough, 11, "rough"))
+        None if rough is None else _rows(rough, 11, "rough"), None if lights.tree is None else lights.runs)
     return value, contrib, rays[:m], send[:m], None if skip is None else skip[:m], skipped
 
 
@@ -399,7 +421,8 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
         None if pick is None else np.ascontiguousarray(pick, np.float64), int(nee_words[0]), int(nee_words[1]),
         float(shorten), bool(skip_work), scatter_words is not None, int(ka), int(kb), RAY_DTYPE,
         None if rough is None else (np.ascontiguousarray(rough[0], np.int32), _rows(rough[1], 4, "rough params"),
-                                    _rows(rough[2], 3, "rough colours")), _records(records))
+                                    _rows(rough[2], 3, "rough colours")), _records(records),
+        None if lights.tree is None else lights.runs)
     thr_out, surf, prim, pid_out, keys_out, pick_out = paths
     ng = surf[3:6]
     points = (surf[0:3], ng, ng if normals is None else surf[9:12], surf[6:9])
