@@ -210,7 +210,7 @@ def test_frames_of_an_unchanged_hdri_file_scan_its_texels_once(scene, tmp_path, 
     five scans before: two a frame, one on the third)."""
     from addon.export import readkeep
     readkeep.forget()
-    _write_exr(tmp_path / 'sky.exr', _texels())
+    scenes.write_exr(tmp_path / 'sky.exr', _texels())
     image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
     _hdri_world(scene, image)
     scans = calls_to(dacrt.lamps, 'texel_stats')
