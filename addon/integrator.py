@@ -71,6 +71,7 @@ from .lightsetup import LightSetup
 from .passes import AOV_PREFIX
 from .passwriting import PassWriting, aov_tables
 from .pathstate import Paths, Sinks, compact, diffuse_reflections
+from .pointinsides import inside_starts
 from .sampling import DIM_FILTER, DIM_LENS, DIM_LOBE, RandomStream, dim, max3
 from .scenedata import HOLDOUT, NO_TRANSMISSION, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 from .sceneprep import huge_surfaces, recentred, thin_strands, validate
@@ -305,8 +306,13 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # a point-cloud sphere rays can get inside (not seen by camera or bounce rays, or see-through):
         # its shadow rays from inside pass it (_occluded_past_insides); otherwise no ray starts there
         unb = self.tri.unbumped
-        self._sphere_insides = unb is not None and bool(
-            (((vis[unb] & (VIS_CAMERA | VIS_DIFFUSE)) != (VIS_CAMERA | VIS_DIFFUSE)) | self._tri_transparent[unb]).any())
+        enterable = None if unb is None else unb & (
+            ((vis & (VIS_CAMERA | VIS_DIFFUSE)) != (VIS_CAMERA | VIS_DIFFUSE)) | self._tri_transparent)
+        self._sphere_insides = enterable is not None and bool(enterable.any())
+        # the triangles such rays can leave from inside a sphere (the others' blocked shadow rays
+        # need no second trace: 5000 hidden points over a floor had cost +30-45% render CPU)
+        self._inside_starts = inside_starts(self.tri.vertices, self.tri.indices, enterable) \
+            if self._sphere_insides else None
         self._transmit_split = self._any_glass and bool(
             ((vis & HOLDOUT) != 0).any() or (self._tri_transmit != ((vis & VIS_CAMERA) != 0)).any()
             or (self._tri_transmit != ((vis & VIS_DIFFUSE) != 0)).any())
@@ -852,7 +858,14 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         inside a point sphere is lit by the sun through it (it had been black in DACRT); its
         curves block shadow rays leaving from inside them (hair roots on a floor, measured:
         tests/parity/test_hair_fog_shadow.py), so hair tubes are not passed here."""
-        idx = np.flatnonzero(occ)
+        from_inside = occ.copy()
+        if skip is not None:        # rays leaving no triangle (no valid index) may start anywhere
+            prim = np.asarray(skip).astype(np.int64)
+            known = (prim >= 0) & (prim < len(self._inside_starts))
+            from_inside &= ~known | np.take(self._inside_starts, np.where(known, prim, 0))
+        idx = np.flatnonzero(from_inside)
+        if not len(idx):
+            return occ
         r = rays[idx]
         r['id'] = np.arange(len(idx), dtype=np.uint32)
         sk = None if skip is None else np.ascontiguousarray(np.asarray(skip)[idx])
