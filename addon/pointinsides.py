@@ -67,7 +67,7 @@ def _max3(rows):
 
 def inside_starts(vertices, indices, spheres):
     """(m,) bool: the triangles a point inside one of the spheres' closed meshes can lie on
-    (spheres: (m,) bool, the sphere triangles rays can get inside)."""
+    (spheres: (m,) bool, the sphere triangles)."""
     flag = np.asarray(spheres, bool).copy()
     if not flag.any():
         return flag
