@@ -891,16 +891,18 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
 
     def _render_block(self, film_pix, frame_pix, s0, ns):
         n = len(film_pix) * ns
-        pix = np.repeat(film_pix, ns)
-        samp = np.tile(np.arange(s0, s0 + ns, dtype=np.int64), len(film_pix))
-        frame = np.repeat(frame_pix, ns)
+        # each path's film pixel and sample number, which only the data passes read
+        pix = samp = None
+        if self._data_passes:
+            pix = np.repeat(film_pix, ns)
+            samp = np.tile(np.arange(s0, s0 + ns, dtype=np.int64), len(film_pix))
         # path keys and camera-ray positions importance-sampling the pixel filter, in one native
-        # pass (the same numbers as rng.path_keys, rng.uniform2 and filter.offsets)
+        # pass over the block's pixels and samples (the same numbers as rng.path_keys,
+        # rng.uniform2 and filter.offsets)
         k0, k1 = self.rng.seed_words
         ka, kb = self.rng.dim_words(DIM_FILTER)
-        keys, rx, ry = dacrt.shading.pixel_samples(frame, samp, self.camera.width, k0, k1, ka, kb,
+        keys, rx, ry = dacrt.shading.block_samples(frame_pix, s0, ns, self.camera.width, k0, k1, ka, kb,
                                                    self.filter.table)
-        del frame
         lens = self.rng.uniform2(keys, DIM_LENS) if self.camera.has_lens else None
         O, D, tmax, rays = self.camera.rays(rx, ry, records=True, lens=lens)
         seen = self.camera.sees(rx, ry)

@@ -288,6 +288,29 @@ py::tuple pixel_samples_py(I64Array pixel, I64Array sample, int64_t width, uint6
     return py::make_tuple(keys, rx, ry);
 }
 
+py::tuple block_samples_py(I64Array pixels, int64_t s0, int64_t ns, int64_t width, uint64_t k0, uint64_t k1,
+                           uint32_t ka, uint32_t kb, F32Array table) {
+    if (pixels.ndim() != 1) throw py::value_error("pixels must be one-dimensional");
+    const size_t npix = size_t(pixels.shape(0));
+    if (width < 1) throw py::value_error("width must be >= 1");
+    if (ns < 1) throw py::value_error("ns must be >= 1");
+    if (s0 < 0 || s0 + ns > (int64_t(1) << 32)) throw py::value_error("samples s0 .. s0 + ns - 1 must be in [0, 2**32)");
+    if (table.ndim() != 1 || table.shape(0) < 2) throw py::value_error("table must have at least 2 entries");
+    const int64_t* px = pixels.data();
+    for (size_t i = 0; i < npix; ++i)
+        if (px[i] < 0 || px[i] >= (int64_t(1) << 32))
+            throw py::value_error("pixels must be in [0, 2**32); entry " + std::to_string(i) + " is not");
+    const size_t n = npix * size_t(ns);
+    U32Array keys({py::ssize_t(2), py::ssize_t(n)});
+    F32Array rx{py::ssize_t(n)}, ry{py::ssize_t(n)};
+    {
+        py::gil_scoped_release nogil;
+        block_samples(px, npix, s0, size_t(ns), width, k0, k1, ka, kb, table.data(), size_t(table.shape(0)),
+                      keys.mutable_data(), rx.mutable_data(), ry.mutable_data());
+    }
+    return py::make_tuple(keys, rx, ry);
+}
+
 // The Columns of `arrays` (each C-contiguous (n,) or (rows, n), the same n) taken at k
 // indices, with their fresh outputs appended to out; n: their column count (0 when none).
 std::vector<Columns> columns_of(const py::list& arrays, size_t k, py::list& out, size_t& n) {
@@ -816,6 +839,8 @@ void register_shading(py::module_& m) {
           py::arg("shorten"), py::arg("out"));
     m.def("pixel_samples", &pixel_samples_py, py::arg("pixel"), py::arg("sample"), py::arg("width"), py::arg("k0"),
           py::arg("k1"), py::arg("ka"), py::arg("kb"), py::arg("table"));
+    m.def("block_samples", &block_samples_py, py::arg("pixels"), py::arg("s0"), py::arg("ns"), py::arg("width"),
+          py::arg("k0"), py::arg("k1"), py::arg("ka"), py::arg("kb"), py::arg("table"));
     m.def("continue_paths", &continue_paths_py, py::arg("hits"), py::arg("hit"), py::arg("live"), py::arg("albedo"),
           py::arg("thr"), py::arg("u_rr"), py::arg("geo") = py::none(), py::arg("normals") = py::none(),
           py::arg("D") = py::none(), py::arg("take") = py::list(), py::arg("records") = py::none());

@@ -2,6 +2,7 @@
 // twin of RandomStream.path_keys + uniform2 + PixelFilter.offsets in the add-on (bit-identical,
 // tested).
 #include <algorithm>
+#include <cstdint>
 
 #include "parallel.h"
 #include "random.h"
@@ -20,27 +21,61 @@ inline float filter_offset(float u, const float* table, size_t size) {
     return table[i] + x * slope;
 }
 
+// The keys and positions of paths [begin, end); at(i, p, s) sets path i's pixel p and sample s.
+// The seed is computed once per run of a pixel's samples (blocks are pixel-major).
+template <class At>
+void samples_range(At&& at, size_t n, int64_t width, uint64_t k0, uint64_t k1, uint32_t ka, uint32_t kb,
+                   const float* table, size_t table_size, uint32_t* keys, float* rx, float* ry, size_t begin,
+                   size_t end) {
+    int64_t last = -1;
+    uint32_t seed = 0;
+    for (size_t i = begin; i < end; ++i) {
+        int64_t p, s;
+        at(i, p, s);
+        if (p != last) seed = pixel_seed(uint64_t(p), k0, k1);
+        last = p;
+        keys[i] = seed;
+        keys[n + i] = uint32_t(s);
+    }
+    for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* wa, const uint32_t* wb) {
+        for (size_t j = 0; j < m; ++j) {
+            int64_t p, s;
+            at(i0 + j, p, s);
+            const int64_t x = p % width, y = p / width;
+            // Cycles (integrate_camera_sample): sample 0 looks up the table at 0.5, the
+            // pixel centre, so the passes written from it (depth, IDs) are not jittered
+            const bool centre = s == 0;
+            rx[i0 + j] = filter_offset(centre ? 0.5f : unit24(wa[j]), table, table_size) + float(x);
+            ry[i0 + j] = filter_offset(centre ? 0.5f : unit24(wb[j]), table, table_size) + float(y);
+        }
+    });
+}
+
 }  // namespace
 
 void pixel_samples(const int64_t* pixel, const int64_t* sample, size_t n, int64_t width, uint64_t k0, uint64_t k1,
                    uint32_t ka, uint32_t kb, const float* table, size_t table_size, uint32_t* keys, float* rx,
                    float* ry) {
     parallel_for(n, [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) {
-            // blocks are pixel-major: a pixel's seed is computed once for its run of samples
-            keys[i] = i > begin && pixel[i] == pixel[i - 1] ? keys[i - 1] : pixel_seed(uint64_t(pixel[i]), k0, k1);
-            keys[n + i] = uint32_t(sample[i]);
-        }
-        for_words(keys, n, ka, kb, begin, end, [&](size_t i0, size_t m, const uint32_t* wa, const uint32_t* wb) {
-            for (size_t j = 0; j < m; ++j) {
-                const int64_t p = pixel[i0 + j], x = p % width, y = p / width;
-                // Cycles (integrate_camera_sample): sample 0 looks up the table at 0.5, the
-                // pixel centre, so the passes written from it (depth, IDs) are not jittered
-                const bool centre = sample[i0 + j] == 0;
-                rx[i0 + j] = filter_offset(centre ? 0.5f : unit24(wa[j]), table, table_size) + float(x);
-                ry[i0 + j] = filter_offset(centre ? 0.5f : unit24(wb[j]), table, table_size) + float(y);
-            }
-        });
+        samples_range([&](size_t i, int64_t& p, int64_t& s) { p = pixel[i], s = sample[i]; }, n, width, k0, k1, ka,
+                      kb, table, table_size, keys, rx, ry, begin, end);
+    }, size_t(1) << 16);
+}
+
+void block_samples(const int64_t* pixels, size_t npix, int64_t s0, size_t ns, int64_t width, uint64_t k0,
+                   uint64_t k1, uint32_t ka, uint32_t kb, const float* table, size_t table_size, uint32_t* keys,
+                   float* rx, float* ry) {
+    const size_t n = npix * ns;
+    parallel_for(n, [&](size_t begin, size_t end) {
+        // path i is pixel i / ns's sample s0 + i % ns: one division per call to at() that does
+        // not follow the path before it (the words' chunks), counters otherwise
+        size_t next = SIZE_MAX, q = 0, r = 0;
+        samples_range([&](size_t i, int64_t& p, int64_t& s) {
+            if (i != next) q = i / ns, r = i % ns;
+            p = pixels[q], s = s0 + int64_t(r);
+            next = i + 1;
+            if (++r == ns) r = 0, ++q;
+        }, n, width, k0, k1, ka, kb, table, table_size, keys, rx, ry, begin, end);
     }, size_t(1) << 16);
 }
 

@@ -206,6 +206,12 @@ void pixel_samples(const int64_t* pixel, const int64_t* sample, size_t n, int64_
                    uint32_t ka, uint32_t kb, const float* table, size_t table_size, uint32_t* keys, float* rx,
                    float* ry);
 
+// pixel_samples of a pixel-major block: every one of the npix pixels for the samples s0 ..
+// s0 + ns - 1 (path i: pixel pixels[i / ns], sample s0 + i % ns), without the pairs' arrays.
+void block_samples(const int64_t* pixels, size_t npix, int64_t s0, size_t ns, int64_t width, uint64_t k0,
+                   uint64_t k1, uint32_t ka, uint32_t kb, const float* table, size_t table_size, uint32_t* keys,
+                   float* rx, float* ry);
+
 }  // namespace dacrt
 
 namespace dacrt {

@@ -106,3 +106,40 @@ def test_native_pixel_samples_equal_keys_uniforms_and_filter_lookup(kind, width)
     assert np.array_equal(rx, ex) and np.array_equal(ry, ey)
     with pytest.raises(ValueError, match="2\\*\\*32"):
         dacrt.shading.pixel_samples(np.array([-1]), np.array([0]), w, 1, 2, 3, 4, filt.table)
+
+
+@pytest.mark.parametrize('s0, ns', [(0, 1), (0, 3), (5, 7), (0, 64), (4000, 96)])
+def test_block_samples_equal_pixel_samples_of_the_pairs(s0, ns):
+    """The render loop's camera samples of a pixel-major block (every pixel for samples s0 ..
+    s0 + ns - 1) are pixel_samples' of the (pixel, sample) pairs bit for bit, also where a
+    thread's range or a chunk of sample words begins inside a pixel's run of samples."""
+    import dacrt
+    from addon.filter import PixelFilter
+    rs, filt = RandomStream(7), PixelFilter('BLACKMAN_HARRIS', 1.5)
+    w = 333
+    rng = np.random.default_rng(ns)
+    # enough paths for several threads' ranges (2**16 each) at the larger ns; pixels out of order
+    pixels = rng.choice(w * 401, size=max(3, (1 << 17) // ns + 11), replace=False).astype(np.int64)
+    pixels[:2] = [0, w * 401 - 1]
+    keys, rx, ry = dacrt.shading.block_samples(pixels, s0, ns, w, *rs.seed_words, *rs.dim_words(0), filt.table)
+    pixel = np.repeat(pixels, ns)
+    sample = np.tile(np.arange(s0, s0 + ns, dtype=np.int64), len(pixels))
+    ref = dacrt.shading.pixel_samples(pixel, sample, w, *rs.seed_words, *rs.dim_words(0), filt.table)
+    assert keys.shape == (2, len(pixel)) and rx.shape == ry.shape == (len(pixel),)
+    assert np.array_equal(keys, ref[0]) and np.array_equal(keys, rs.path_keys(pixel, sample))
+    assert rx.view(np.uint32).tobytes() == ref[1].view(np.uint32).tobytes()
+    assert ry.view(np.uint32).tobytes() == ref[2].view(np.uint32).tobytes()
+
+
+def test_block_samples_refuse_pixels_and_samples_beyond_32_bits():
+    import dacrt
+    from addon.filter import PixelFilter
+    table = PixelFilter('BOX', 1.0).table
+    with pytest.raises(ValueError, match="2\\*\\*32"):
+        dacrt.shading.block_samples(np.array([-1]), 0, 1, 8, 1, 2, 3, 4, table)
+    with pytest.raises(ValueError, match="2\\*\\*32"):
+        dacrt.shading.block_samples(np.array([3]), 2**32 - 2, 4, 8, 1, 2, 3, 4, table)
+    with pytest.raises(ValueError, match="ns"):
+        dacrt.shading.block_samples(np.array([3]), 0, 0, 8, 1, 2, 3, 4, table)
+    keys, rx, ry = dacrt.shading.block_samples(np.zeros(0, np.int64), 0, 4, 8, 1, 2, 3, 4, table)
+    assert keys.shape == (2, 0) and len(rx) == len(ry) == 0

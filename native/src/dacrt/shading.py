@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["triangle_table", "hit_records", "repeated_keys", "coplanar_groups", "corner_rows", "pixel_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
+__all__ = ["triangle_table", "hit_records", "repeated_keys", "coplanar_groups", "corner_rows", "pixel_samples", "block_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
            "LightChoice", "next_event", "accumulate_masked", "noise_texture",
            "voronoi_texture"]
 
@@ -575,6 +575,15 @@ def pixel_samples(pixel, sample, width: int, k0: int, k1: int, ka: int, kb: int,
     dimension words ka, kb; sample 0 with 0.5 instead (the pixel centre, as Cycles)."""
     return _core.pixel_samples(np.ascontiguousarray(pixel, np.int64), np.ascontiguousarray(sample, np.int64),
                                int(width), int(k0), int(k1), int(ka), int(kb), np.ascontiguousarray(table, _F32))
+
+
+def block_samples(pixels, s0: int, ns: int, width: int, k0: int, k1: int, ka: int, kb: int, table):
+    """pixel_samples of a pixel-major block, every pixel of pixels (P,) for the samples s0 ..
+    s0 + ns - 1 (path i: pixel pixels[i // ns], sample s0 + i % ns), the same numbers as
+    pixel_samples(np.repeat(pixels, ns), np.tile(np.arange(s0, s0 + ns), P), ...) without
+    those two arrays (and their checks, per pixel here instead of per path)."""
+    return _core.block_samples(np.ascontiguousarray(pixels, np.int64), int(s0), int(ns), int(width), int(k0), int(k1),
+                               int(ka), int(kb), np.ascontiguousarray(table, _F32))
 
 
 def continue_paths(hits, hit, live, albedo, thr=None, u_rr=None, surface=None, take=()):
