@@ -348,6 +348,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._tri_any = np.ones(len(self.tri), bool)   # every triangle shades (SKIP_WORK off)
         self._area32 = self.tri.area.astype(F32)
         self._any_holdout = bool(np.any(self.tri.visibility & HOLDOUT))
+        # an opaque film without holdouts: every camera path's alpha is 1 (hit, missed or ended),
+        # set for the block at once instead of from the camera rays' hits and misses
+        self._all_opaque = not self.transparent and not self._any_holdout
         self._any_emissive = bool(self._tri_emissive.any())
         # radiance per triangle (3, M), gathered once: BSDF and camera rays read it per hit
         self._tri_emission = np.ascontiguousarray(np.take(self.mats.emission, self.tri.material, axis=1)) \
@@ -909,6 +912,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         del rx, ry, lens
         rgba = np.zeros((4, n), F32)                  # radiance and alpha of every path
         L, alpha = rgba[:3], rgba[3]
+        if self._all_opaque:
+            alpha[:] = 1.0
         sinks = Sinks(L, self._light_passes, self._groups)
         data = {}
         path = Paths(np.arange(n), keys, O, D, tmax, None, None, None, rays)
@@ -952,7 +957,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         if path.dead is not None:                     # ended by the transparent roulette: their
             hit &= ~path.dead                         # surface is not shaded, nothing writes
             alpha[np.take(path.pid, np.flatnonzero(path.dead))] = 1.0   # (no transparency reached)
-        if camera:        # camera rays that miss write alpha (BSDF rays' misses are not looked for)
+        if camera and not self._all_opaque:   # camera rays that miss write alpha (BSDF rays'
             miss = np.flatnonzero(~hit if path.dead is None else ~hit & ~path.dead)
             if len(miss) and not self.transparent:
                 alpha[np.take(path.pid, miss)] = 1.0
@@ -975,7 +980,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                 hit &= ~held
                 if path.thr is not None and held.any():
                     seen_through(alpha, path, np.flatnonzero(held))
-            alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
+            if not self._all_opaque:
+                alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
             if self._data_passes:
                 self._write_passes(path, hits, hit, data, pix, samp, chain, held)
         if self._any_emissive:
