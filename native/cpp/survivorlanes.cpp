@@ -57,7 +57,7 @@ using LanesFn = size_t (*)(const Hit*, size_t, const float*, size_t, const float
         float q = 1.0f;
         if (roulette) {
             const float m = thr ? vmax(vmax(thr[i], thr[n + i]), thr[2 * n + i]) : 1.0f;
-            q = vmin(std::sqrt(m), 1.0f);
+            q = vmin(__builtin_sqrtf(m), 1.0f);   // (not std::sqrt: LTO kept it out of line, one lane at a time)
         }
         inv_q[l] = q > 0 ? 1.0f / q : 1.0f;
     }
@@ -134,7 +134,7 @@ using LanesFn = size_t (*)(const Hit*, size_t, const float*, size_t, const float
                 nv[a][l] = x;
             }
         for (size_t l = 0; l < K; ++l) {
-            const float len = std::sqrt(nv[0][l] * nv[0][l] + nv[1][l] * nv[1][l] + nv[2][l] * nv[2][l]);
+            const float len = __builtin_sqrtf(nv[0][l] * nv[0][l] + nv[1][l] * nv[1][l] + nv[2][l] * nv[2][l]);
             // a zero interpolated normal (opposite corner normals) falls back to ng; len > 0 and
             // len <= kFloatMax is len > 0 && isfinite(len)
             const bool good = (len > 0) & (len <= kFloatMax);
