@@ -73,7 +73,8 @@ class PassWriting:
         hu, hv = np.take(hits['u'], idx), np.take(hits['v'], idx)
         if len(idx):
             P, ng, ns, _ = self._surface(hits, idx, path.D)
-            albedo = self._pass_albedo(prim, hu, hv, self._back(prim, ng, -np.take(path.D, idx, axis=1)))
+            side = self._back(prim, ng, -np.take(path.D, idx, axis=1))
+            albedo = self._pass_albedo(prim, hu, hv, side)
             # Cycles: the bent normal (with the translucent closure's raised one)
             mean_n = self._pass_normal(prim, hu, hv, ns, ng, -np.take(path.D, idx, axis=1), albedo)
             ns = unit_columns(mean_n)
@@ -81,6 +82,7 @@ class PassWriting:
                 albedo += self._translucency_at(prim, hu, hv, self._back(prim, ng, -np.take(path.D, idx, axis=1)))
         else:
             P = ns = mean_n = albedo = np.zeros((3, 0), F32)
+            side = None
         if 'UV' in want:
             data['UV'] = np.zeros((3, n), F32)
             data['UV'][:, cols] = self._uv_pass(prim, hu, hv)
@@ -109,7 +111,7 @@ class PassWriting:
         self._write_coverage(pix, samp, cols, prim, np.ones(len(cols), F32))
         for key, table in self._aovs.items():
             data[key] = np.zeros((table.shape[0], n), F32)
-            data[key][:, cols] = self._aov_values(key, table, prim, hu, hv)
+            data[key][:, cols] = self._aov_values(key, table, prim, hu, hv, side)
         self._held_aovs(data, path, hits, held)
         self._world_aov(data, path, hits)
 
@@ -124,8 +126,10 @@ class PassWriting:
             keep = ~done[cols]
             idx, cols = idx[keep], cols[keep]
         prim, u, v = np.take(hits['prim'], idx), np.take(hits['u'], idx), np.take(hits['v'], idx)
+        incoming = -np.take(path.D, idx, axis=1)
+        side = self._back(prim, incoming, incoming)
         for key, table in self._aovs.items():
-            data[key][:, cols] += self._aov_values(key, table, prim, u, v)
+            data[key][:, cols] += self._aov_values(key, table, prim, u, v, side)
 
     def _world_aov(self, data, path, hits, done=None):
         """The world's AOVs added where the block's camera rays missed everything (and their
@@ -138,10 +142,11 @@ class PassWriting:
         for key, value in self._world_aovs.items():
             data[key][:, cols] += value[:, None]
 
-    def _aov_values(self, key, table, prim, u, v):
+    def _aov_values(self, key, table, prim, u, v, back=None):
         """(channels, k): what the materials of the surfaces (prim, u, v) write to AOV key: the
         constants of its table (aov_tables) plus what images write there and what inputs
-        varying per object or corner write (Geometry.aovs, interpolated)."""
+        varying per object or corner write (Geometry.aovs, interpolated). back: the hits' side
+        and camera rays (SurfaceValues._back), which chains reading the view need."""
         mat = np.take(self.tri.material, prim)
         out = np.take(table, mat, axis=1)
         corners = self._aov_corners.get(key)
@@ -153,7 +158,8 @@ class PassWriting:
         for m, tex, interp, ext, xf in images:
             sel = np.flatnonzero(mat == m)
             if len(sel):
-                rgb = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel))
+                rgb = self._lookup(tex, interp, ext, xf, np.take(prim, sel), np.take(u, sel), np.take(v, sel),
+                                   None if back is None else back[sel])
                 out[:rows, sel] += rgb[:rows]
         return out
 
@@ -246,8 +252,10 @@ class PassWriting:
             self._write_coverage(pix, samp, cols, prim, thr.mean(axis=0) * alpha.mean(axis=0), depth)
             todo = ~done[cols]
             # Shader AOVs: every surface's shader writes until the pass is done (svm/aov.h)
+            side = self._back(prim, I, I) if self._aovs else None
             for key, table in self._aovs.items():
-                aovs[key][:, cols[todo]] += self._aov_values(key, table, prim[todo], u[todo], v[todo])
+                aovs[key][:, cols[todo]] += self._aov_values(key, table, prim[todo], u[todo], v[todo],
+                                                             None if side is None else side[todo])
             first_prim[cols[todo]] = prim[todo]
             first_P[:, cols[todo]] = P[:, todo]
             first = todo & ((alpha.mean(axis=0) >= threshold) | (threshold == 0.0))

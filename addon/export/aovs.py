@@ -185,7 +185,10 @@ def shader_aovs(ntree, reasons, texture=None):
                 v = np.asarray(f.value, np.float32)
                 parts[kind] = v.reshape(-1, v.shape[-1]).mean(axis=0)
                 continue
-            found = procedurals.compile_socket(socket, color, reasons, coordinates=True, light_path=False) \
+            # (view: Reflection, Incoming, Fresnel and Layer Weight read the camera ray's direction,
+            # the only rays AOVs are written by)
+            found = procedurals.compile_socket(socket, color, reasons, coordinates=True, light_path=False,
+                                               view=True) \
                 if (name, kind) not in textures else None
             if found is not None:           # procedural textures: computed per shading point
                 fn, needs, sources = found
