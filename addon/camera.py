@@ -259,6 +259,28 @@ class CameraModel:
         seen = panorama.sees(self.pano, u, v)
         return d if seen is None else np.where(seen, d, 0.0)
 
+    def window(self, rel: np.ndarray) -> np.ndarray:
+        """(3, k) Cycles' Texture Coordinate Window of points rel (3, k) given from the camera's
+        position (camera_world_to_ndc): the point projected to the view plane, 0..1 across the
+        full frame, z 0; a point in the camera's plane (no projection) 0; a panorama's, the
+        direction's place on its projection (viewplane_of)."""
+        p = self.inv @ np.asarray(rel, np.float64)          # x right, y up, -z forward
+        out = np.zeros_like(p)
+        if self.pano is not None:
+            u, v = panorama.viewplane_of(self.pano, p / np.maximum(np.linalg.norm(p, axis=0), 1e-300))
+            out[0], out[1] = u, v
+            return out
+        if self.kind == 'ORTHO':
+            sx, sy = p[0], p[1]
+        else:
+            w = -p[2] * self.tan_half_fov
+            ok = w != 0.0
+            safe = np.where(ok, w, 1.0)
+            sx, sy = np.where(ok, p[0] / safe, np.nan), np.where(ok, p[1] / safe, np.nan)
+        out[0] = (sx - self.left) / (self.right - self.left)
+        out[1] = (sy - self.bottom) / (self.top - self.bottom)
+        return np.nan_to_num(out, nan=0.0)
+
     def project(self, points: np.ndarray):
         """World points (n,3) -> full-frame raster (rx, ry) float64 and z-depth; inverse of rays()."""
         if self.pano is not None:

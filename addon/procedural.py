@@ -25,6 +25,9 @@ COORDINATES = ('generated', 'object', 'uv', 'position', 'normal', 'true_normal',
 # Texture Coordinate Camera: the hit in the render camera's space, as Cycles' worldtocamera
 # (CameraModel.to_camera about its position), which the integrator knows and the export does not
 CAMERA_COORDINATES = 'camera'
+# Texture Coordinate Window: the hit projected to the render camera's frame, 0..1 across it (z
+# 0), as Cycles' camera_world_to_ndc (CameraModel.window)
+WINDOW_COORDINATES = 'window'
 # what the hit's ray gives a chain: the incoming direction (n, 3) (Cycles' sd->wi, unit, toward
 # where the ray came from) and whether it met the surface from behind (n, 1) (SD_BACKFACING),
 # which the Fresnel and Layer Weight nodes read beside the normal; the ray's length to the hit

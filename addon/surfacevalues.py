@@ -12,7 +12,8 @@ import dacrt
 
 from . import bump as bumpmap
 from .cancel import PassCancelled
-from .procedural import ATTRIBUTE_NEED, CAMERA_COORDINATES, SIDED, VIEW, ProceduralTexels, clip_unit
+from .procedural import (ATTRIBUTE_NEED, CAMERA_COORDINATES, SIDED, VIEW, WINDOW_COORDINATES, ProceduralTexels,
+                         clip_unit)
 from .pathstate import compact
 from .sampling import unit_columns
 from .viewside import Facing, incoming_of, length_of
@@ -395,6 +396,10 @@ class SurfaceValues:
             g = np.take(self.tri.geo, prim, axis=1).astype(np.float64)
             p = g[0:3] + g[3:6] * u + g[6:9] * v - self.camera.pos[:, None]     # (both recentred)
             out[CAMERA_COORDINATES] = np.ascontiguousarray((self.camera.to_camera @ p).T, F32)
+        if WINDOW_COORDINATES in needs:
+            g = np.take(self.tri.geo, prim, axis=1).astype(np.float64)
+            p = g[0:3] + g[3:6] * u + g[6:9] * v - self.camera.pos[:, None]
+            out[WINDOW_COORDINATES] = np.ascontiguousarray(self.camera.window(p).T, F32)
         if 'edge_distance' in needs:
             out['edge_distance'] = self._edge_distance(prim, u, v)
         if 'position' in needs or 'normal' in needs or 'true_normal' in needs:

@@ -382,6 +382,9 @@ def _node(node, out, chain, depth):
             n, wi = np.asarray(c['normal'], np.float32), np.asarray(c['incoming'], np.float32)
             return np.float32(2.0) * (n * wi).sum(axis=1, keepdims=True, dtype=np.float32) * n - wi
         return reflection, True
+    if t == 'TEX_COORD' and out.name == 'Window' and not node.from_instancer:
+        chain.needs.add(pr.WINDOW_COORDINATES)
+        return (lambda c: c[pr.WINDOW_COORDINATES]), True
     if t == 'TEX_COORD' and out.name == 'Camera' and not node.from_instancer:
         # the hit in Cycles' camera space (worldtocamera: x right, y up, z into the view)
         chain.needs.add(pr.CAMERA_COORDINATES)

@@ -68,9 +68,9 @@ def _non_diffuse_materials():
     d.inputs['Roughness'].default_value = 0.5
     nmap = nt.nodes.new('ShaderNodeNormalMap')
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
-    noise_window = nt.nodes.new('ShaderNodeTexNoise')     # (of Window coordinates: not evaluated per point)
-    window = nt.nodes.new('ShaderNodeTexCoord')
-    nt.links.new(window.outputs['Window'], noise_window.inputs['Vector'])
+    noise_window = nt.nodes.new('ShaderNodeTexNoise')     # (of Geometry Parametric: not evaluated per point)
+    window = nt.nodes.new('ShaderNodeNewGeometry')
+    nt.links.new(window.outputs['Parametric'], noise_window.inputs['Vector'])
     # (a flat default map is exact, and so is one of a Noise the chain follows per point)
     nt.links.new(noise_window.outputs['Color'], nmap.inputs['Color'])
     nt.links.new(noise_window.outputs['Color'], d.inputs['Color'])
@@ -80,7 +80,7 @@ def _non_diffuse_materials():
     nt.links.new(math_node.outputs[0], e.inputs['Strength'])
     mix = nt.nodes.new('ShaderNodeMixShader')
     mix.inputs['Fac'].default_value = 0.3
-    # (a Window noise: an Object one is evaluated per point between a Diffuse and an Emission, the
+    # (a Parametric noise: an Object one is evaluated per point between a Diffuse and an Emission, the
     # emission mask of export/texturedmixes.py, which the override would not keep)
     nt.links.new(noise_window.outputs['Fac'], mix.inputs['Fac'])
     nt.links.new(d.outputs[0], mix.inputs[1])
@@ -93,9 +93,9 @@ def _non_diffuse_materials():
     img.pixels[:] = [0.5, 0.25, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.2, 0.4, 0.6, 0.5]
     tex = nt.nodes.new('ShaderNodeTexImage')
     tex.image, tex.interpolation, tex.extension, tex.projection = img, 'Cubic', 'MIRROR', 'BOX'
-    coords = nt.nodes.new('ShaderNodeTexCoord')
-    # (Window: an image on Generated, or Camera, with a Box projection is looked up per point, exact)
-    nt.links.new(coords.outputs['Window'], tex.inputs['Vector'])
+    coords = nt.nodes.new('ShaderNodeNewGeometry')
+    # (Parametric: an image on Generated, Camera or Window, with a Box projection is looked up per point, exact)
+    nt.links.new(coords.outputs['Parametric'], tex.inputs['Vector'])
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     nt.links.new(tex.outputs['Alpha'], p.inputs['Base Color'])
     nt.links.new(p.outputs[0], out.inputs['Surface'])
@@ -121,9 +121,9 @@ def _non_diffuse_materials():
 
 
 def _window_noise(nt):
-    """A Noise Texture on Texture Coordinate Window, which no chain reads per point."""
+    """A Noise Texture on Geometry Parametric, which no chain reads per point."""
     noise = nt.nodes.new('ShaderNodeTexNoise')
-    nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Window'], noise.inputs['Vector'])
+    nt.links.new(nt.nodes.new('ShaderNodeNewGeometry').outputs['Parametric'], noise.inputs['Vector'])
     return noise
 
 
@@ -141,7 +141,7 @@ def test_override_keeps_what_the_export_reads_and_leaves_nothing_approximated(sc
     reasons = fairmaterials.remaining_approximations()
     assert set(reasons) == {m.name for m in mats}
     assert "Bump node 'Bump' not rendered" in reasons["Shiny"] and "Normal Map 'Normal Map' ignored" in reasons["Driven"]
-    assert "Window texture coordinates" in reasons["Textured"]
+    assert "read as the UV map" in reasons["Textured"]
     assert "volume ignored" in reasons["Volumetric"] and "displacement ignored" in reasons["Volumetric"]
 
     changes = fairmaterials.make_diffuse()

@@ -250,7 +250,7 @@ def test_chained_bumps_and_a_normal_map_under_a_bump_match_cycles(tmp_path):
 
 
 def test_what_is_not_rendered_is_said(said, tmp_path):
-    """A height the export cannot follow per point (Texture Coordinate Window), and true
+    """A height the export cannot follow per point (Geometry Parametric), and true
     displacement, stay flat and are reported, as are two BSDFs bumped apart (one bump for the
     material, as one normal map); a rendered bump says nothing."""
     def make(which):
@@ -259,7 +259,9 @@ def test_what_is_not_rendered_is_said(said, tmp_path):
                 return _bumped("Waves", _wave(), 'Fac', distance=0.4)
             if which == 'camera':
                 def noise(nt):
-                    return _noise(coordinate='Window')(nt)
+                    n = _noise()(nt)
+                    nt.links.new(nt.nodes.new('ShaderNodeNewGeometry').outputs['Parametric'], n.inputs['Vector'])
+                    return n
                 return _bumped("Camera", noise, 'Fac', distance=0.4)
             if which == 'two':            # a Mix of two Diffuse BSDFs bumped apart
                 mat = _bumped("Two", _wave(), 'Fac', distance=0.4)
@@ -289,7 +291,7 @@ def test_what_is_not_rendered_is_said(said, tmp_path):
         if which == 'rendered':
             assert 'Bump' not in text and 'ignored' not in text, text
         elif which == 'camera':
-            assert "Bump node 'Bump' not rendered (Texture Coordinate Window is not read per point)" in text, text
+            assert "Bump node 'Bump' not rendered (Geometry Parametric is not read per point)" in text, text
         elif which == 'two':
             assert "BSDFs with different Bump nodes; the first one's for all" in text, text
         else:

@@ -169,17 +169,15 @@ def test_cutout_from_alpha_on_generated_box(tmp_path, said):
     _agree(tmp_path, said, samples=128, atol=0.015)  # (stochastic cut-out: 0.004 at 256 spp)
 
 
-def test_window_coordinates_keep_the_uv_fallback(tmp_path, said):
-    """Texture Coordinate Window is not computed per point: the image stays on the UV map, said
-    as before (only the render's messages are checked; Camera is computed per point:
-    tests/parity/test_camera_coordinates.py)."""
+def test_window_coordinates_match_cycles(tmp_path, said):
+    """An image on Texture Coordinate Window (the hit projected to the camera's frame) into a
+    Diffuse BSDF is looked up per point, as Camera is: block means within 0.012 of Cycles'. It
+    had stayed on the UV map, said ("Window texture coordinates read as the UV map")."""
     nt, sh, tex, _ = _scene('cube')
     _coordinates(nt, tex, 'Window')
     nt.links.new(tex.outputs['Color'], sh.inputs['Color'])
-    _settings(1, 0)
-    bpy.context.scene.render.engine = 'DACRT'
-    scenes.render_exr(str(tmp_path / "window.exr"))
-    assert any("Window texture coordinates read as the UV map" in t for t in said), said
+    _agree(tmp_path, said)
+    assert not any("Window" in t for t in said), said
 
 
 def _two_image_diffuse_plane():
