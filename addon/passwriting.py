@@ -307,6 +307,8 @@ class PassWriting:
         self._world_aov(data, path, hits, done)
         # (paths the roulette ended are not at the background: they keep the last surface reached)
         gone = ~hit if path.dead is None else ~hit & ~path.dead
+        if held is not None:        # (a holdout writes none: they keep the last surface passed)
+            gone &= ~held
         missed = np.take(path.pid, np.flatnonzero(gone))
         first_prim[missed[~done[missed]]] = -1       # passed every surface below the threshold
         seen = np.flatnonzero(first_prim >= 0)
