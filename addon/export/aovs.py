@@ -27,6 +27,8 @@ CAMERA_LIGHT_PATH = {'Is Camera Ray': 1.0, 'Is Shadow Ray': 0.0, 'Is Diffuse Ray
                      'Is Singular Ray': 0.0, 'Is Reflection Ray': 0.0, 'Is Transmission Ray': 0.0,
                      'Is Volume Scatter Ray': 0.0, 'Ray Depth': 0.0, 'Diffuse Depth': 0.0, 'Glossy Depth': 0.0,
                      'Transparent Depth': 0.0, 'Transmission Depth': 0.0}
+# ... as a procedural chain compiled for an AOV reads them (Transparent Depth varies: not compiled)
+_CAMERA_RAY = {k: v for k, v in CAMERA_LIGHT_PATH.items() if k != 'Transparent Depth'}
 # ... and as the world's AOVs read them where camera rays miss: Cycles evaluates the background
 # as emission (PATH_RAY_EMISSION), one bounce further: Ray Depth 1 (svm/light_path.h)
 WORLD_LIGHT_PATH = dict(CAMERA_LIGHT_PATH, **{'Ray Depth': 1.0})
@@ -186,10 +188,12 @@ def shader_aovs(ntree, reasons, texture=None):
                 parts[kind] = v.reshape(-1, v.shape[-1]).mean(axis=0)
                 continue
             # (view: Reflection, Incoming, Fresnel and Layer Weight read the camera ray's direction,
-            # the only rays AOVs are written by)
-            found = procedurals.compile_socket(socket, color, reasons, coordinates=True, light_path=False,
-                                               view=True) \
-                if (name, kind) not in textures else None
+            # the only rays AOVs are written by, and Light Path outputs its kind and depths; but
+            # Transparent Depth, which counts the surfaces passed: its carrier's own value, said)
+            found = None
+            if (name, kind) not in textures:
+                with nodeeval.light_path(_CAMERA_RAY):
+                    found = procedurals.compile_socket(socket, color, reasons, coordinates=True, view=True)
             if found is not None:           # procedural textures: computed per shading point
                 fn, needs, sources = found
                 textures[name, kind] = Texture.procedural(ProceduralTexels(fn, needs, str(sources)), 'aov')

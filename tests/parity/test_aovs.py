@@ -143,3 +143,37 @@ def test_procedural_aovs_match_cycles(tmp_path):
     assert np.ptp(c['cells']) > 0.3 and np.ptp(c['grain'][..., 0]) > 0.3     # the patterns show
     for key in ('grain', 'cells'):
         _pixels_agree(key, d[key], c[key])
+
+
+def test_procedural_aov_reading_light_path_matches_cycles(tmp_path):
+    """An AOV's procedural chain that also reads Light Path is computed per point, the Light Path
+    outputs as the camera rays that write AOVs read them: a Checker's colour mixed with black by
+    Is Camera Ray (1) and a Noise's Fac plus 2 x Is Diffuse Ray (0), on the Cornell box's back
+    wall. The chains had been read at the textures' own values, said (fuzz 9010: 0.08x)."""
+    sc = rendering.small_cornell()
+    vl = sc.view_layers[0]
+    for name, kind in (("checks", 'COLOR'), ("grain", 'VALUE')):
+        aov = vl.aovs.add()
+        aov.name, aov.type = name, kind
+    mat = scenes.diffuse("Wall", (0.7, 0.7, 0.7))
+    nt = mat.node_tree
+    lp = nt.nodes.new('ShaderNodeLightPath')
+    checker = nt.nodes.new('ShaderNodeTexChecker')
+    checker.inputs['Scale'].default_value = 4.0
+    mix = scenes.mix_node(nt, 'MIX', (0.0, 0.0, 0.0), checker.outputs['Color'])
+    nt.links.new(lp.outputs['Is Camera Ray'], mix.inputs['Factor'])
+    nt.links.new(mix.outputs['Result'], _aov(mat, "checks").inputs['Color'])
+    noise = nt.nodes.new('ShaderNodeTexNoise')
+    noise.inputs['Scale'].default_value = 3.0
+    madd = nt.nodes.new('ShaderNodeMath')
+    madd.operation = 'MULTIPLY_ADD'
+    nt.links.new(lp.outputs['Is Diffuse Ray'], madd.inputs[0])
+    madd.inputs[1].default_value = 2.0
+    nt.links.new(noise.outputs['Fac'], madd.inputs[2])
+    nt.links.new(madd.outputs[0], _aov(mat, "grain").inputs['Value'])
+    wall = scenes.plane("Wall", size=1.6, location=(0.0, 0.97, 1.0), materials=[mat])
+    wall.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    c, d = _aov_passes(sc, tmp_path, {'checks': "RGB", 'grain': "X"})
+    assert np.ptp(c['checks'][..., 0]) > 0.3 and np.ptp(c['grain']) > 0.2     # the patterns show
+    for key in ('checks', 'grain'):
+        _pixels_agree(key, d[key], c[key])
