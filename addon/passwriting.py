@@ -17,6 +17,10 @@ from .translucency import valid_reflection_normal
 F32 = np.float32
 
 
+# Cycles' CLOSURE_WEIGHT_CUTOFF: a closure lighter than this is not allocated
+_WEIGHT_CUTOFF = 1e-5
+
+
 class PassWriting:
     """A mixin of integrator.Integrator (see the module docstring): its methods read and set
     the Integrator's state."""
@@ -41,6 +45,19 @@ class PassWriting:
         if tau is not None:
             parts.append((tau.mean(axis=0), ns))
         if len(parts) == 1:
+            # no closure where the colour is 0 (Cycles allocates none under CLOSURE_WEIGHT_CUTOFF):
+            # its average normal is then sd->N, unbent (a normal map under a Base Color that
+            # reaches 0 had kept its bent normal, Normal pass 0.45 off Cycles'). The full albedo
+            # says whether another layer (a specular one) still carries the bent normal there
+            none = parts[0][0] < _WEIGHT_CUTOFF
+            if none.any():
+                at = np.flatnonzero(none)
+                p_at = np.take(prim, at)
+                full = np.take(self.mats.base, np.take(self.tri.material, p_at), axis=1)
+                self._albedo_maps(p_at, np.take(u, at), np.take(v, at), full,
+                                  None if not self._sided else self._back(p_at, ng[:, at], I[:, at]))
+                none[at] = full.mean(axis=0) < _WEIGHT_CUTOFF
+                return np.where(none, ns, nb).astype(F32)
             return nb
         total = sum(w for w, _ in parts)
         mixed = sum(w * n for w, n in parts) / np.where(total > 0, total, 1.0)
