@@ -373,6 +373,9 @@ class SurfaceValues:
         turned to the ray's side where back (k,) says it met the back (Cycles' shader setup
         negates N and Ng there); None: the front."""
         out = {}
+        if 'parametric' in needs:       # Cycles' Geometry Parametric: (1 - u - v, u, 0)
+            uu, vv = np.asarray(u, np.float64), np.asarray(v, np.float64)
+            out['parametric'] = np.stack([1.0 - uu - vv, uu, np.zeros_like(uu)], axis=1)
         if 'uv' in needs:
             tu, tv = self._uv(prim, u, v)
             out['uv'] = np.stack([tu, tv, np.zeros_like(tu)], axis=1)

@@ -32,7 +32,7 @@ PROCEDURAL_TYPES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_V
 _COORDINATES = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv', 'Normal': 'object_normal'}
 # the Geometry node's outputs read per point (world space, Cycles' P, N and Ng; the normals
 # turned to the ray's side as Cycles' shader setup turns them); Incoming where the chain has the
-# hit's ray (view); its others (Backfacing, Parametric, Tangent) are left to the evaluation
+# hit's ray (view), Parametric always; its others (Backfacing, Tangent) are left to the evaluation
 _GEOMETRY = {'Position': 'position', 'Normal': 'normal', 'True Normal': 'true_normal'}
 # nodes a coordinate-only chain starts from
 _COORDINATE_NODES = ('TEX_COORD', 'NEW_GEOMETRY', 'WIREFRAME')
@@ -407,6 +407,9 @@ def _node(node, out, chain, depth):
         need = pr.ATTRIBUTE_NEED + attribute_key(out.name.lower().replace(' ', '_'))
         chain.needs.add(need)
         return (lambda c: np.asarray(c[need], np.float64)[:, :1]), False
+    if t == 'NEW_GEOMETRY' and out.name == 'Parametric':
+        chain.needs.add('parametric')
+        return (lambda c: c['parametric']), True
     if t == 'NEW_GEOMETRY' and out.name == 'Incoming' and chain.view:
         # Cycles' sd->wi: toward where the ray came from, world space (the Fresnel nodes' view)
         chain.needs.add('incoming')

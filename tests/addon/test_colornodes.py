@@ -391,15 +391,15 @@ def test_udim_tile_without_a_file_reported_and_magenta(scene):
 
 def test_fair_editor_keeps_colour_nodes(scene):
     """The benchmark's fair-material editor keeps what the export evaluates (the image, the Mix
-    and Hue/Saturation nodes) and unlinks only the Noise Texture of Geometry Parametric (not
+    and Hue/Saturation nodes) and unlinks only the Noise Texture of Geometry Tangent (not
     evaluated), where the export reads the Mix input's own value."""
     from tests.bench import fairmaterials
     state = {}
 
     def chain(nt, tex):
         noise = nt.nodes.new('ShaderNodeTexNoise')
-        geometry = nt.nodes.new('ShaderNodeNewGeometry')          # (Parametric: not read per point)
-        nt.links.new(geometry.outputs['Parametric'], noise.inputs['Vector'])
+        geometry = nt.nodes.new('ShaderNodeNewGeometry')          # (Tangent: not read per point)
+        nt.links.new(geometry.outputs['Tangent'], noise.inputs['Vector'])
         m = scenes.mix_node(nt, 'MULTIPLY', tex.outputs['Color'], noise.outputs['Color'], 0.5)
         hs = nt.nodes.new('ShaderNodeHueSaturation')
         nt.links.new(m.outputs['Result'], hs.inputs['Color'])

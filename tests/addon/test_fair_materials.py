@@ -68,9 +68,9 @@ def _non_diffuse_materials():
     d.inputs['Roughness'].default_value = 0.5
     nmap = nt.nodes.new('ShaderNodeNormalMap')
     nt.links.new(nmap.outputs['Normal'], d.inputs['Normal'])
-    noise_window = nt.nodes.new('ShaderNodeTexNoise')     # (of Geometry Parametric: not evaluated per point)
+    noise_window = nt.nodes.new('ShaderNodeTexNoise')     # (of Geometry Tangent: not evaluated per point)
     window = nt.nodes.new('ShaderNodeNewGeometry')
-    nt.links.new(window.outputs['Parametric'], noise_window.inputs['Vector'])
+    nt.links.new(window.outputs['Tangent'], noise_window.inputs['Vector'])
     # (a flat default map is exact, and so is one of a Noise the chain follows per point)
     nt.links.new(noise_window.outputs['Color'], nmap.inputs['Color'])
     nt.links.new(noise_window.outputs['Color'], d.inputs['Color'])
@@ -80,7 +80,7 @@ def _non_diffuse_materials():
     nt.links.new(math_node.outputs[0], e.inputs['Strength'])
     mix = nt.nodes.new('ShaderNodeMixShader')
     mix.inputs['Fac'].default_value = 0.3
-    # (a Parametric noise: an Object one is evaluated per point between a Diffuse and an Emission, the
+    # (a Tangent noise: an Object one is evaluated per point between a Diffuse and an Emission, the
     # emission mask of export/texturedmixes.py, which the override would not keep)
     nt.links.new(noise_window.outputs['Fac'], mix.inputs['Fac'])
     nt.links.new(d.outputs[0], mix.inputs[1])
@@ -94,8 +94,8 @@ def _non_diffuse_materials():
     tex = nt.nodes.new('ShaderNodeTexImage')
     tex.image, tex.interpolation, tex.extension, tex.projection = img, 'Cubic', 'MIRROR', 'BOX'
     coords = nt.nodes.new('ShaderNodeNewGeometry')
-    # (Parametric: an image on Generated, Camera or Window, with a Box projection is looked up per point, exact)
-    nt.links.new(coords.outputs['Parametric'], tex.inputs['Vector'])
+    # (Tangent: an image on Generated, Camera or Window, with a Box projection is looked up per point, exact)
+    nt.links.new(coords.outputs['Tangent'], tex.inputs['Vector'])
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     nt.links.new(tex.outputs['Alpha'], p.inputs['Base Color'])
     nt.links.new(p.outputs[0], out.inputs['Surface'])
@@ -121,9 +121,9 @@ def _non_diffuse_materials():
 
 
 def _window_noise(nt):
-    """A Noise Texture on Geometry Parametric, which no chain reads per point."""
+    """A Noise Texture on Geometry Tangent, which no chain reads per point."""
     noise = nt.nodes.new('ShaderNodeTexNoise')
-    nt.links.new(nt.nodes.new('ShaderNodeNewGeometry').outputs['Parametric'], noise.inputs['Vector'])
+    nt.links.new(nt.nodes.new('ShaderNodeNewGeometry').outputs['Tangent'], noise.inputs['Vector'])
     return noise
 
 

@@ -87,15 +87,15 @@ def test_bsdf_beside_a_lamp_emission_warns_of_nothing(scene, said):
 
 
 def _incoming_emitter():
-    """An emissive panel whose Strength is 8 x length(Geometry Parametric): per sample in
-    Cycles; here the Parametric stands at its own value, so the strength reads 0. (Incoming,
+    """An emissive panel whose Strength is 8 x length(Geometry Tangent): per sample in
+    Cycles; here the Tangent stands at its own value, so the strength reads 0. (Incoming,
     which this read before, is now computed per point.)"""
     mat, nt, out = scenes._material("e")
     em = nt.nodes.new('ShaderNodeEmission')
     g = nt.nodes.new('ShaderNodeNewGeometry')
     dot = nt.nodes.new('ShaderNodeVectorMath')
     dot.operation = 'LENGTH'
-    nt.links.new(g.outputs['Parametric'], dot.inputs[0])
+    nt.links.new(g.outputs['Tangent'], dot.inputs[0])
     mul = nt.nodes.new('ShaderNodeMath')
     mul.operation = 'MULTIPLY'
     mul.inputs[1].default_value = 8.0

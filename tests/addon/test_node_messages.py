@@ -63,10 +63,10 @@ def test_fractal_voronoi_is_read_and_what_is_not_is_named(scene, said):
     _render(scene, 'DACRT')
     assert not any("Voronoi" in t for t in said), said
     tc = nt.nodes.new('ShaderNodeNewGeometry')      # a coordinate kind not read: named alone
-    nt.links.new(tc.outputs['Parametric'], v.inputs['Vector'])
+    nt.links.new(tc.outputs['Tangent'], v.inputs['Vector'])
     _render(scene, 'DACRT')
     text = " | ".join(said)
-    assert "(Geometry Parametric is not read there)" in text and "4D" not in text
+    assert "(Geometry Tangent is not read there)" in text and "4D" not in text
     said.clear()
     nt.links.remove(v.inputs['Vector'].links[0])
     v.inputs['Detail'].default_value = 0.0      # one octave, 3D Euclidean: evaluated per point, silent

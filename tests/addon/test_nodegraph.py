@@ -273,7 +273,7 @@ def test_source_carrier_and_unwrap(scene):
 def test_fair_editor_edits_inside_groups(scene, exported):
     """The benchmark's fair-material editor follows groups as the export does: it zeroes a
     grouped Principled's metallic in the group's tree and unlinks a Noise Texture of Geometry
-    Parametric (which the export reads as its own value) at the Group node's input, so nothing
+    Tangent (which the export reads as its own value) at the Group node's input, so nothing
     is left approximated."""
     setup(scene)
     g, gi, go = _group("Metal", inputs=(('Tint', 'NodeSocketColor'),))
@@ -284,8 +284,8 @@ def test_fair_editor_edits_inside_groups(scene, exported):
     g.links.new(p.outputs[0], go.inputs['Shader'])
     mat, node = _material_using(g, "Metal", tint=(0.4, 0.5, 0.6))
     noise = mat.node_tree.nodes.new('ShaderNodeTexNoise')
-    geometry = mat.node_tree.nodes.new('ShaderNodeNewGeometry')      # (Parametric: not read per point)
-    mat.node_tree.links.new(geometry.outputs['Parametric'], noise.inputs['Vector'])
+    geometry = mat.node_tree.nodes.new('ShaderNodeNewGeometry')      # (Tangent: not read per point)
+    mat.node_tree.links.new(geometry.outputs['Tangent'], noise.inputs['Vector'])
     mat.node_tree.links.new(noise.outputs['Color'], node.inputs['Tint'])
     assert fairmaterials.remaining_approximations([mat])
     changes = fairmaterials.make_diffuse([mat])

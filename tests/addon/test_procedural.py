@@ -75,8 +75,8 @@ def test_what_a_procedural_chain_cannot_read_is_named(scene, exported):
             nt.links.new(nt.nodes.new('ShaderNodeTexCoord').outputs['Object'], checker.inputs['Color1'])
             expect = "(Texture Coordinate Object of two objects (the shaded one counts) is not read there)"
         else:
-            nt.links.new(nt.nodes.new('ShaderNodeNewGeometry').outputs['Parametric'], checker.inputs['Vector'])
-            expect = "(Geometry Parametric is not read there)"
+            nt.links.new(nt.nodes.new('ShaderNodeNewGeometry').outputs['Tangent'], checker.inputs['Vector'])
+            expect = "(Geometry Tangent is not read there)"
         scenes.cube(name, location=(3 * i, 0, 0), materials=(mat,))
         m = _material(exported(), name)
         assert not isinstance(m.texture, ProceduralTexels)

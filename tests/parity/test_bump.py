@@ -250,7 +250,7 @@ def test_chained_bumps_and_a_normal_map_under_a_bump_match_cycles(tmp_path):
 
 
 def test_what_is_not_rendered_is_said(said, tmp_path):
-    """A height the export cannot follow per point (Geometry Parametric), and true
+    """A height the export cannot follow per point (Geometry Tangent), and true
     displacement, stay flat and are reported, as are two BSDFs bumped apart (one bump for the
     material, as one normal map); a rendered bump says nothing."""
     def make(which):
@@ -260,7 +260,7 @@ def test_what_is_not_rendered_is_said(said, tmp_path):
             if which == 'camera':
                 def noise(nt):
                     n = _noise()(nt)
-                    nt.links.new(nt.nodes.new('ShaderNodeNewGeometry').outputs['Parametric'], n.inputs['Vector'])
+                    nt.links.new(nt.nodes.new('ShaderNodeNewGeometry').outputs['Tangent'], n.inputs['Vector'])
                     return n
                 return _bumped("Camera", noise, 'Fac', distance=0.4)
             if which == 'two':            # a Mix of two Diffuse BSDFs bumped apart
@@ -291,7 +291,7 @@ def test_what_is_not_rendered_is_said(said, tmp_path):
         if which == 'rendered':
             assert 'Bump' not in text and 'ignored' not in text, text
         elif which == 'camera':
-            assert "Bump node 'Bump' not rendered (Geometry Parametric is not read per point)" in text, text
+            assert "Bump node 'Bump' not rendered (Geometry Tangent is not read per point)" in text, text
         elif which == 'two':
             assert "BSDFs with different Bump nodes; the first one's for all" in text, text
         else:

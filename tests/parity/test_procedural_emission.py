@@ -262,14 +262,14 @@ def test_principled_and_mixed_procedural_emission(tmp_path, shader, said):
 
 
 def test_chain_the_export_cannot_follow_is_still_reported(tmp_path, said):
-    """A noise on Geometry Parametric into an Emission's colour is not evaluated per point:
+    """A noise on Geometry Tangent into an Emission's colour is not evaluated per point:
     the render says so, naming what it does not read, and reads the socket's own value."""
     def material():
         mat, nt, out = scenes._material("NormalNoise")
         em = nt.nodes.new('ShaderNodeEmission')
         tc = nt.nodes.new('ShaderNodeNewGeometry')
         nz = nt.nodes.new('ShaderNodeTexNoise')
-        nt.links.new(tc.outputs['Parametric'], nz.inputs['Vector'])
+        nt.links.new(tc.outputs['Tangent'], nz.inputs['Vector'])
         nt.links.new(nz.outputs['Color'], em.inputs['Color'])
         nt.links.new(em.outputs[0], out.inputs['Surface'])
         return mat
@@ -278,7 +278,7 @@ def test_chain_the_export_cannot_follow_is_still_reported(tmp_path, said):
     sc = bpy.context.scene
     sc.render.engine = 'DACRT'
     scenes.render_rgba(sc)
-    assert any("procedural emission not evaluated per point (Geometry Parametric" in t for t in said), said
+    assert any("procedural emission not evaluated per point (Geometry Tangent" in t for t in said), said
 
 
 def _stripe_material():
