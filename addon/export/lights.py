@@ -57,8 +57,7 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
     def object_info(output):
         return object_value(info, location, output)
     profile, falloff = [], []
-    lamp = _LampTree(light.type, object_info,
-                     lambda: _sun_generated(light, matrix) if light.type == 'SUN' else _disc_generated(light, matrix))
+    lamp = _LampTree(light.type, object_info, lambda: _lamp_coordinates(light, matrix))
     shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, lamp, profile, falloff)
     strength *= shader
     if not np.isfinite(strength).all():
@@ -212,31 +211,31 @@ class _LampTree:
     nothing outlives it): module globals had carried this between calls, where one lamp's
     leftovers could reach the next and no two exports could run at once. kind: the light's
     type; object_info(output) -> (4,): an Object Info output's value for the light (None: the
-    node stands at its own value, as one not evaluated); generated(): where its Generated
-    coordinates lie (_sun_generated, _disc_generated), worked out when a texture first reads
-    them (where_generated() makes them; most lamps' trees read none), and generated_notes what
-    _at_generated_zero says of them for the light's message (apart from an evaluation's notes,
+    node stands at its own value, as one not evaluated); coordinates(): the texture coordinates
+    Cycles' shader reads at the lamp (_lamp_coordinates), worked out when a texture first reads
+    them (where_coordinates() makes them; most lamps' trees read none), and generated_notes what
+    _at_lamp_coordinates says of them for the light's message (apart from an evaluation's notes,
     which would have a colour stand at its own value); falloffs: the Light Falloffs
     _past_falloff meets, a list where the lamp can apply one (FALLOFF_LIGHTS, one emission),
     None where they are read as Quadratic, said; ies_scale: while _ies_profile probes the tree,
     the IES Texture's value is its Strength x this (None: the node stands at the input's own
     value), and ies_met says whether the evaluation met the node."""
-    __slots__ = ('kind', 'object_info', '_where_generated', '_generated', 'generated_notes', 'falloffs', 'ies_scale',
+    __slots__ = ('kind', 'object_info', '_where', '_coordinates', 'generated_notes', 'falloffs', 'ies_scale',
                  'ies_met')
 
-    def __init__(self, kind, object_info=None, where_generated=None):
+    def __init__(self, kind, object_info=None, where_coordinates=None):
         self.kind, self.object_info = kind, object_info
-        self._where_generated, self._generated = where_generated, None
+        self._where, self._coordinates = where_coordinates, ({}, False)
         self.generated_notes = []
         self.falloffs = None
         self.ies_scale, self.ies_met = None, False
 
-    def generated(self):
-        """The lamp's Generated points (n, 3), or None, worked out once when first asked (a
+    def coordinates(self):
+        """({need: (n, 3)}, centre) of _lamp_coordinates, worked out once when first asked (a
         sun's cone of directions in Python loops, ~1 ms; a point lamp's 3x3 inverse)."""
-        if self._where_generated is not None:
-            self._generated, self._where_generated = self._where_generated(), None
-        return self._generated
+        if self._where is not None:
+            self._coordinates, self._where = self._where(), None
+        return self._coordinates
 
     def forget_falloffs(self):
         """Start collecting the Light Falloffs of one evaluation of the tree afresh."""
@@ -538,9 +537,14 @@ class _LightEvaluator(nodeeval.Evaluator):
         if node.type in ('TEX_IMAGE', 'TEX_ENVIRONMENT'):
             return None
         lamp = self._lamp
-        if node.type in _GENERATED_TEXTURES and lamp.kind in _NO_GENERATED and \
-                not nodegraph.input_by_id(node, 'Vector').is_linked:
-            return _at_generated_zero(node, out, depth, lamp.generated(), lamp.generated_notes, lamp.kind == 'SUN')
+        if node.type in _GENERATED_TEXTURES:
+            found = _at_lamp_coordinates(node, out, depth, lamp)
+            if found is not None:
+                return found
+        if node.type == 'TEX_COORD':
+            found = _lamp_coordinate(node, out, lamp)
+            if found is not None:
+                return found
         if node.type == 'TEX_IES' and lamp.ies_scale is not None:   # (_ies_profile's probe)
             lamp.ies_met = True
             strength = self.input(node.inputs['Strength'], False, depth + 1)
@@ -560,46 +564,115 @@ def _one_emission(surface):
     return sum(nodegraph.unwrap(link.from_node).type in kinds for link in nodegraph.links_feeding(surface)) == 1
 
 
-# procedural textures whose unlinked Vector reads the Generated coordinates, which a point or
-# spot light has none of in Cycles (0 at its centre; a sun's: _sun_generated): one value over the lamp (measured: a
+# procedural textures whose Vector reads coordinates Cycles' shader has at a lamp
+# (_lamp_coordinates): one value over the lamp where they are constant there (measured: a
 # Gradient on a point lamp black, a Checker's colour 2 on a spot; they had stood at the input's
 # own value, 0.137 where Cycles renders 0, 4.6x)
-# (an area light's vary over it in Cycles: a Checker of Scale 3 averages its two colours there)
-_NO_GENERATED = ('POINT', 'SPOT', 'SUN')
 _GENERATED_TEXTURES = frozenset({'TEX_NOISE', 'TEX_CHECKER', 'TEX_GRADIENT', 'TEX_VORONOI', 'TEX_WAVE', 'TEX_BRICK',
                                  'TEX_MAGIC', 'TEX_GABOR'})
+# Texture Coordinate's outputs as procedurals' needs name them
+_COORDINATE_NEEDS = {'Generated': 'generated', 'Object': 'object', 'UV': 'uv', 'Normal': 'object_normal'}
+# the Object coordinates of the lamp's own space (Texture Coordinate with no Object set:
+# procedurals.object_frame(None))
+_OWN_FRAME = frozenset({('object of', None, None)})
 
 
-def _at_generated_zero(node, out, depth, points=None, notes=None, sun=True):
-    """A procedural texture's output (nodeeval.Field) at Generated (0, 0, 0), or the mean of
-    it at points (n, 3) (a sun's: _sun_generated), its other inputs compiled as a material's
-    (procedurals); None where they read anything else. Where the points' values differ (a sun
-    of some angle) their mean is noted in notes (a list for the light's message): Cycles
-    computes the chain per direction.
-    sun False: points are where a point or spot lamp's disc reaches (_disc_generated); the
-    value stays the centre's, noted where theirs differ from it."""
+def _lamp_coordinates(light, matrix):
+    """({need: (n, 3) float32}, centre): the texture coordinates Cycles' shader reads at the lamp
+    (the needs of procedurals.compile_node), one row per sample of the lamp, where they are one
+    value over it or a few (measured against Cycles with Strength = a coordinate's component):
+    - Generated (no such attribute: Cycles falls back to the shading point in object space) and
+      Object: a sun's sampled direction of travel as a point (_sun_generated); a point or spot
+      lamp's centre, then points on its radius (_disc_generated; centre True: the value kept is
+      row 0's). An area light's vary over its surface: none.
+    - Normal (the light's normal in object space): a sun's direction of travel, an area light's
+      -Z, read back as Cycles' object_inverse_normal_transform does, normalize(M^T N): (0, 0, -1)
+      for both unsheared; a point or spot lamp's is the direction to the shaded point: none.
+    - UV: (0.5, 0.5, 0) for a sun; a point, spot or area lamp's vary over it: none.
+    They had stood at the input's own value, said: a Checker on a sun's Normal lit at 1 where
+    Cycles lit nothing (1.28x), a Noise on a point lamp's Object 1.96x."""
+    from .procedurals import TEXCOORD_UV
+    m = np.array(matrix, np.float64)
+    kind = light.type
+    if kind == 'AREA':
+        normal = _object_normal(m, -m[:3, 2])
+        return ({} if normal is None else {'object_normal': normal}), False
+    if kind != 'SUN':
+        disc = _disc_generated(light, matrix)
+        at = np.zeros((1, 3)) if disc is None else np.vstack([np.zeros((1, 3)), disc])
+        return {'generated': at.astype(np.float32), 'object': at.astype(np.float32)}, True
+    pts = _sun_generated(light, matrix)
+    at = np.zeros((1, 3)) if pts is None else pts
+    coords = {'generated': at, 'object': at,
+              'uv': np.tile([0.5, 0.5, 0.0], (len(at), 1)), TEXCOORD_UV: np.tile([0.5, 0.5, 0.0], (len(at), 1))}
+    dirs = None if pts is None else _sun_directions(light, matrix)
+    normals = None if dirs is None else _object_normal(m, dirs)
+    if normals is not None and len(normals) == len(at):
+        coords['object_normal'] = normals
+    return {k: np.asarray(v, np.float32) for k, v in coords.items()}, False
+
+
+def _object_normal(m, normals):
+    """World normals (n, 3) or (3,) -> (n, 3) in the object space of matrix m, as Cycles'
+    object_inverse_normal_transform: normalize(M^T N); None where not finite."""
+    n = np.atleast_2d(np.asarray(normals, np.float64))
+    n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    o = n @ m[:3, :3]
+    with np.errstate(all='ignore'):
+        o = o / np.linalg.norm(o, axis=1, keepdims=True)
+    return o if np.isfinite(o).all() else None
+
+
+def _lamp_coordinate(node, out, lamp):
+    """A Texture Coordinate output read as a value (Separate XYZ, Math after it) at the lamp
+    (_lamp_coordinates), as a Field: a sun's mean over its cone, a point or spot lamp's
+    centre, noted as _at_lamp_coordinates notes; None where the lamp has no such value (it
+    stands in, said)."""
+    need = _COORDINATE_NEEDS.get(out.name)
+    if need is None or node.from_instancer or (need == 'object' and node.object is not None):
+        return None
+    coords, centre = lamp.coordinates()
+    at = coords.get(need)
+    if at is None:
+        return None
+    return nodeeval.Field(_one_value(node, np.asarray(at, np.float64), centre, lamp), vector=True)
+
+
+def _one_value(node, values, centre, lamp):
+    """(k,): the value kept of a node's values (n, k) at the lamp's rows, row 0 (a point or
+    spot lamp's centre) or their mean (a sun's cone), noted in lamp.generated_notes where they
+    differ (Cycles computes per sample)."""
+    value = values[0] if centre else values.mean(axis=0)
+    if len(values) > 1 and np.ptp(values, axis=0).max() > 1e-3 * (np.abs(value).max() + 1e-3):
+        lamp.generated_notes.append(
+            f"{node.bl_label} computed at the lamp's centre (Cycles reads it at the point sampled on the lamp's "
+            "radius, where it differs)" if centre else
+            f"{node.bl_label} averaged over the sun's angle (Cycles computes the nodes after it per direction)")
+    return value
+
+
+def _at_lamp_coordinates(node, out, depth, lamp):
+    """A procedural texture's output (nodeeval.Field) at the lamp's coordinates
+    (lamp.coordinates(): _lamp_coordinates), its Vector's chain and other inputs compiled as a
+    material's (procedurals); None where they read anything the lamp has not as such (Object of
+    another object, a point lamp's Normal). Rows of a sun's cone are averaged, noted in
+    lamp.generated_notes where they differ (Cycles computes the chain per direction); a point or
+    spot lamp's keeps its centre's, noted where the points on its radius differ from it."""
     from . import procedurals
+    coords, centre = lamp.coordinates()
+    if not coords:
+        return None
     try:
         fn, vector, chain = procedurals.compile_node(node, out, depth)
     except (nodeeval.NotCompiled, AttributeError, KeyError, TypeError, ValueError):
         return None
-    if chain.needs - {'generated'} or chain.frames or chain.reasons:
+    if chain.needs - set(coords) or chain.frames - _OWN_FRAME or chain.reasons:
         return None
-    if points is not None and not sun:
-        centre = np.zeros((1, 3), np.float32)
-        values = np.asarray(fn({'generated': np.vstack([centre, np.asarray(points, np.float32)])}),
-                            np.float64).reshape(len(points) + 1, -1)
-        value = values[0]
-        if notes is not None and np.ptp(values, axis=0).max() > 1e-3 * (np.abs(value).max() + 1e-3):
-            notes.append(f"{node.bl_label} computed at the lamp's centre (Cycles reads it at the point sampled "
-                         "on the lamp's radius, where it differs)")
-        return nodeeval.Field(value[:3] if len(value) >= 3 else value[:1], vector=vector)
-    at = np.zeros((1, 3), np.float32) if points is None else np.asarray(points, np.float32)
-    values = np.asarray(fn({'generated': at}), np.float64).reshape(len(at), -1)
-    value = values.mean(axis=0)
-    if len(at) > 1 and notes is not None and np.ptp(values, axis=0).max() > 1e-3 * (np.abs(value).max() + 1e-3):
-        notes.append(f"{node.bl_label} averaged over the sun's angle (Cycles computes the nodes after it per "
-                     "direction)")
+    n = len(next(iter(coords.values())))
+    values = np.asarray(fn({k: coords[k] for k in chain.needs}), np.float64)
+    values = values.reshape(len(values), -1)
+    values = np.broadcast_to(values, (n, values.shape[1]))
+    value = _one_value(node, values, centre, lamp)
     return nodeeval.Field(value[:3] if len(value) >= 3 else value[:1], vector=vector)
 
 
@@ -625,14 +698,30 @@ def _disc_generated(light, matrix):
     return pts if np.isfinite(pts).all() else None
 
 
-def _sun_generated(light, matrix, rings=4, around=16):
+def _sun_generated(light, matrix):
     """Where a sun's Generated coordinates lie in Cycles: its sampled direction of travel d (unit,
-    world; within the cone of its angle) read as a point in the sun's object space, M^-1 (d, 1)
-    (Cycles' attribute fallback transforms the shading point, which a distant light's sample
-    sets to d; measured to 4 digits on rotated, moved suns). They had been taken as 0: a
-    Gradient on a sun at (-2, 0, 3) lit nothing where Cycles lights at full strength.
-    (n, 3): the centre direction, and for an angle > 0 rings of the cone in equal solid angle,
-    or None where the matrix is not invertible (Generated 0 then)."""
+    world; within the cone of its angle: _sun_directions) read as a point in the sun's object
+    space, M^-1 (d, 1) (Cycles' attribute fallback transforms the shading point, which a distant
+    light's sample sets to d; measured to 4 digits on rotated, moved suns). They had been taken
+    as 0: a Gradient on a sun at (-2, 0, 3) lit nothing where Cycles lights at full strength.
+    (n, 3), or None where the matrix is not invertible (Generated 0 then)."""
+    dirs = _sun_directions(light, matrix)
+    if dirs is None:
+        return None
+    m = np.array(matrix, np.float64)
+    m[:3, 3] = np.nan_to_num(m[:3, 3], nan=0.0, posinf=0.0, neginf=0.0)
+    try:
+        inverse = np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        return None
+    pts = dirs @ inverse[:3, :3].T + inverse[:3, 3]
+    return pts if np.isfinite(pts).all() else None
+
+
+def _sun_directions(light, matrix, rings=4, around=16):
+    """A sun's directions of travel (n, 3), unit, world: the centre one for an angle of 0, else
+    rings of the cone in equal solid angle (cos theta uniform, as Cycles samples); None where
+    the matrix is not finite or has no -Z axis."""
     m = np.array(matrix, np.float64)
     if not np.isfinite(m[:3, :3]).all():
         return None
@@ -642,26 +731,20 @@ def _sun_generated(light, matrix, rings=4, around=16):
         return None
     axis /= n
     half = 0.5 * float(getattr(light, 'angle', 0.0))
-    dirs = [axis]
-    if half > 0.0:
-        u = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
-        u /= np.linalg.norm(u)
-        v = np.cross(axis, u)
-        one_minus = 1.0 - np.cos(min(half, np.pi / 2))
-        for i in range(rings):              # (uniform in solid angle: cos theta uniform, as Cycles samples)
-            cos_t = 1.0 - one_minus * (i + 0.5) / rings
-            sin_t = np.sqrt(max(1.0 - cos_t * cos_t, 0.0))
-            for k in range(around):
-                a = 2 * np.pi * (k + 0.5 * (i % 2)) / around
-                dirs.append(cos_t * axis + sin_t * (np.cos(a) * u + np.sin(a) * v))
-        dirs = dirs[1:]
-    m[:3, 3] = np.nan_to_num(m[:3, 3], nan=0.0, posinf=0.0, neginf=0.0)
-    try:
-        inverse = np.linalg.inv(m)
-    except np.linalg.LinAlgError:
-        return None
-    pts = np.asarray(dirs) @ inverse[:3, :3].T + inverse[:3, 3]
-    return pts if np.isfinite(pts).all() else None
+    if not half > 0.0:
+        return axis[None]
+    u = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(axis, u)
+    one_minus = 1.0 - np.cos(min(half, np.pi / 2))
+    dirs = []
+    for i in range(rings):
+        cos_t = 1.0 - one_minus * (i + 0.5) / rings
+        sin_t = np.sqrt(max(1.0 - cos_t * cos_t, 0.0))
+        for k in range(around):
+            a = 2 * np.pi * (k + 0.5 * (i % 2)) / around
+            dirs.append(cos_t * axis + sin_t * (np.cos(a) * u + np.sin(a) * v))
+    return np.asarray(dirs)
 
 
 def _past_falloff(socket, reasons, lamp):
