@@ -6,7 +6,12 @@ a sun and an area light, UV (0.5, 0.5, 0) for a sun. Against Cycles.
 
 They had stood at the input's own value, said: a Checker on a sun's Normal into its Strength lit
 at 1 where Cycles lit nothing (fuzz 1024, 1.28x), a Noise on a point lamp's Object 1.96x (fuzz
-1078). A point lamp's Normal and UV vary with the direction to the shaded point: still said.
+1078).
+
+A point lamp's Normal and UV and a spot lamp's Normal vary with the direction d from the lamp
+to the shaded point (Cycles' light normal is that direction, for a lamp of a radius too): a
+texture on them that scales the emission is applied as an IES-like profile over d
+(_texture_profile). An area light's UV and Object and a spot lamp's UV vary otherwise: said.
 """
 import bpy
 import numpy as np
@@ -75,13 +80,56 @@ def test_lamp_texture_on_a_constant_coordinate_agrees_with_cycles(case, tmp_path
     assert not [t for t in said if "not evaluated for a light" in t], said
 
 
-@pytest.mark.parametrize('coordinate', ['Normal', 'UV'])
-def test_point_lamp_texture_on_a_varying_coordinate_is_still_said(coordinate, said):
-    """A point lamp's Normal and UV vary with the direction to the shaded point in Cycles (a
-    Normal's Z from -0.99 to -0.07 over this floor): not one value, so the input's own value
-    stands, said."""
-    sc = _scene('POINT', 'ShaderNodeTexChecker', coordinate, 'Color', 'Color', {'Scale': 3.0})
+STILL_SAID = {
+    # an area light's UV varies over its surface, a spot lamp's is a mapping not matched, and a
+    # coloured texture into a point lamp's Color is no one profile
+    'area_uv': ('AREA', 'ShaderNodeTexChecker', 'UV', 'Color', 'Color', {'Scale': 3.0}),
+    'spot_uv': ('SPOT', 'ShaderNodeTexChecker', 'UV', 'Color', 'Color', {'Scale': 3.0}),
+    'point_coloured_normal': ('POINT', 'ShaderNodeTexChecker', 'Normal', 'Color', 'Color',
+                              {'Color2': (0.3, 0.6, 0.9, 1.0)}),
+}
+
+
+@pytest.mark.parametrize('case', list(STILL_SAID))
+def test_lamp_texture_on_a_varying_coordinate_is_still_said(case, said):
+    """Not one value, nor a direction profile: the input's own value stands, said."""
+    sc = _scene(*STILL_SAID[case])
     sc.render.engine = 'DACRT'
     sc.dacrt.samples = 1
     bpy.ops.render.render()
     assert [t for t in said if "light 'Lamp'" in t and "'Checker Texture' node, not evaluated for a light" in t], said
+
+DIRECTIONAL = {
+    # a point lamp's Normal and UV, a spot lamp's Normal: the direction from the lamp, applied
+    # as an IES-like profile (export/lights.py _texture_profile)
+    'point_checker_normal': ('POINT', 'ShaderNodeTexChecker', 'Normal', 'Fac', 'Strength', {'Scale': 2.0}),
+    'point_noise_uv': ('POINT', 'ShaderNodeTexNoise', 'UV', 'Fac', 'Strength', {'Scale': 4.0}),
+    'point_gradient_normal_colour': ('POINT', 'ShaderNodeTexGradient', 'Normal', 'Color', 'Color', {}),
+    'spot_noise_normal': ('SPOT', 'ShaderNodeTexNoise', 'Normal', 'Fac', 'Strength', {'Scale': 3.0}),
+}
+
+
+@pytest.mark.parametrize('case', list(DIRECTIONAL))
+@pytest.mark.parametrize('radius', [0.0, 0.5])
+def test_lamp_texture_on_the_direction_from_the_lamp_agrees_with_cycles(case, radius, tmp_path, said):
+    """Per 4x4 block of the floor, as the texture varies over it (the Checker on a point lamp's
+    Normal had lit the whole floor at 1, 2x Cycles' mean)."""
+    sc = _scene(*DIRECTIONAL[case])
+    sc.objects['Lamp'].data.shadow_soft_size = radius
+    if sc.objects['Lamp'].data.type == 'SPOT':
+        sc.objects['Lamp'].data.spot_size = 2.5
+    sc.cycles.samples = sc.dacrt.samples = 64
+    layer = sc.view_layers[0].name
+    blocks = {}
+    for e, exr in scenes.render_engines(sc, tmp_path).items():
+        g = np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], -1)
+        blocks[e] = g.reshape(8, 4, 8, 4, 3).mean(axis=(1, 3))
+    d, c = blocks['DACRT'], blocks['CYCLES']
+    lit = c.mean(-1) > 0.1 * c.mean(-1).max()
+    assert lit.sum() > 10, case
+    ratio = d[lit].sum(0) / c[lit].sum(0)
+    np.testing.assert_allclose(ratio, 1.0, atol=0.03, err_msg=case)
+    # blocks within 10% (64 spp of a 4x4 block of a lamp of a radius: ~2% noise; the Checker's
+    # edges are blurred over the profile's 1-degree grid)
+    assert np.percentile(np.abs(d[lit] / np.maximum(c[lit], 1e-9) - 1.0), 90) < 0.10, (case, d[lit] / c[lit])
+    assert not [t for t in said if "not evaluated for a light" in t], said
