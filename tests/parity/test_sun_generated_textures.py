@@ -76,13 +76,21 @@ def test_sun_colour_texture_of_an_angle_is_averaged_over_its_cone(tmp_path, said
     assert not [t for t in said if "own value" in t], said
 
 
-def test_point_lamp_texture_that_varies_over_its_radius_is_said(tmp_path, said):
-    """A point lamp of radius 0.8 with a Linear Gradient: Cycles reads it at the point sampled on
-    the lamp's disc (0.0084 where the centre's value, 0, is black): computed at the centre, said."""
+def test_point_lamp_texture_that_varies_over_its_radius_is_said_where_not_scaling(tmp_path, said):
+    """A point lamp of radius 0.8 with a Linear Gradient through a Power (not scaling the
+    emission, so no direction profile: tests/parity/test_lamp_texture_coordinates.py): Cycles
+    reads it at the point sampled on the lamp's disc (0.0084 where the centre's value, 0, is
+    black): computed at the centre, said."""
     sc = _scene('ShaderNodeTexGradient', 'Fac', 'Strength', (0.0, 0.0, 2.0), (0.0, 0.0, 0.0), 0.0, {})
     lamp = sc.objects['Sun']
     lamp.data.type = 'POINT'
     lamp.data.shadow_soft_size = 0.8
+    nt = lamp.data.node_tree
+    power = nt.nodes.new('ShaderNodeMath')
+    power.operation = 'POWER'
+    power.inputs[1].default_value = 2.0
+    nt.links.new(nt.nodes['Gradient Texture'].outputs['Fac'], power.inputs[0])
+    nt.links.new(power.outputs[0], next(n for n in nt.nodes if n.type == 'EMISSION').inputs['Strength'])
     sc.render.engine = 'DACRT'
     scenes.render_exr(tmp_path / "d.exr", sc)
     assert [t for t in said if "light 'Sun'" in t and "Gradient Texture computed at the lamp's centre" in t], said
