@@ -58,7 +58,7 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
         return object_value(info, location, output)
     profile, falloff = [], []
     lamp = _LampTree(light.type, object_info, lambda: _lamp_coordinates(light, matrix))
-    lamp.disc = (float(getattr(light, 'shadow_soft_size', 0.0)), matrix)
+    lamp.disc = (float(getattr(light, 'shadow_soft_size', 0.0)), matrix, bool(getattr(light, 'use_soft_falloff', True)))
     shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, lamp, profile, falloff)
     strength *= shader
     if not np.isfinite(strength).all():
@@ -753,9 +753,10 @@ _DISC_PROFILE_V = np.linspace(0.0, np.pi, 37)
 
 
 def _disc_points(lamp):
-    """(radius, matrix (3, 3), its inverse) of a point or spot lamp of a radius > 0 and an
-    invertible matrix, else None."""
-    r, matrix = lamp.disc
+    """(spiral (k, 2), matrix (3, 3), its inverse, lift) of a point or spot lamp of a radius > 0
+    and an invertible matrix, else None; lift: the sphere's height over the disc at the spiral's
+    points (k,), where Soft Falloff is off, else None."""
+    r, matrix, soft = lamp.disc
     m = np.array(matrix, np.float64)[:3, :3]
     if not (r > 0.0 and np.isfinite(r) and np.isfinite(m).all()):
         return None
@@ -765,19 +766,26 @@ def _disc_points(lamp):
         return None
     k = np.arange(_DISC_SAMPLES)
     rho, phi = r * np.sqrt((k + 0.5) / len(k)), k * np.pi * (3.0 - np.sqrt(5.0))
-    return (np.stack([rho * np.cos(phi), rho * np.sin(phi)], -1), m, inverse)
+    lift = None if soft else np.sqrt(np.maximum(r * r - rho * rho, 0.0))
+    return (np.stack([rho * np.cos(phi), rho * np.sin(phi)], -1), m, inverse, lift)
 
 
-def _on_discs(d, spiral, m, inverse):
+def _on_discs(d, spiral, m, inverse, lift):
     """(n * k, 3): per object-space direction d (n, 3) from the lamp, the spiral's points on
     the world disc facing along it (its world direction normalize(M^-T d), as the IES lookup's
-    direction is M^T of the world one), in object space."""
+    direction is M^T of the world one), in object space. With lift (Soft Falloff off), lifted
+    onto the sphere's hemisphere facing that way: Cycles samples the sphere's visible cap there,
+    uniformly in the solid angle it spans, so by projected area from far away (measured: a
+    Spherical Gradient of radius 0.6 gives 1 - r, 0.400, where Soft Falloff on gives the
+    disc's 0.60)."""
     w = d @ inverse                     # (M^-T d, row-wise)
     w /= np.linalg.norm(w, axis=1, keepdims=True)
     a = np.cross(w, np.where(np.abs(w[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
     a /= np.linalg.norm(a, axis=1, keepdims=True)
     b = np.cross(w, a)
     world = spiral[None, :, :1] * a[:, None] + spiral[None, :, 1:] * b[:, None]
+    if lift is not None:
+        world = world + lift[None, :, None] * w[:, None]
     return world.reshape(-1, 3) @ inverse.T
 
 

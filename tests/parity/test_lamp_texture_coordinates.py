@@ -146,19 +146,27 @@ ON_THE_DISC = {
     'point_linear_gradient': ('POINT', 'ShaderNodeTexGradient', 'Object', 'Fac', 'Strength', {}, 0.8, 0.15),
     'spot_checker': ('SPOT', 'ShaderNodeTexChecker', 'Generated', 'Fac', 'Strength', {'Scale': 3.0}, 0.35, 0.10),
     'point_noise': ('POINT', 'ShaderNodeTexNoise', 'Object', 'Fac', 'Strength', {'Scale': 3.0}, 0.5, 0.10),
+    # Soft Falloff off: the point sampled on the sphere's visible cap (a Spherical Gradient 1 - r)
+    'point_spherical_gradient_hard': ('POINT', 'ShaderNodeTexGradient', 'Generated', 'Fac', 'Strength',
+                                      {'gradient_type': 'SPHERICAL', 'use_soft_falloff': False}, 0.6, 0.10),
+    'spot_noise_hard': ('SPOT', 'ShaderNodeTexNoise', 'Generated', 'Fac', 'Strength',
+                        {'Scale': 2.0, 'use_soft_falloff': False}, 0.2, 0.10),     # (fuzz 1158: 0.87x)
 }
 
 
 @pytest.mark.parametrize('case', list(ON_THE_DISC))
 def test_lamp_texture_over_its_radius_agrees_with_cycles(case, tmp_path, said):
     """They had been computed at the lamp's centre, said: a Spherical Gradient 1.66x Cycles
-    (1 at the centre, the disc's mean 0.60), a Checker on a spot of radius 0.35 dark (0 there)."""
+    (1 at the centre, the disc's mean 0.60), 2.5x with Soft Falloff off (the sphere's 0.40), a
+    Checker on a spot of radius 0.35 dark (0 there)."""
     kind, texture, coordinate, output, into, props, radius, block_tol = ON_THE_DISC[case]
-    sc = _scene(kind, texture, coordinate, output, into, {k: v for k, v in props.items() if k != 'gradient_type'})
+    sc = _scene(kind, texture, coordinate, output, into,
+                {k: v for k, v in props.items() if k not in ('gradient_type', 'use_soft_falloff')})
     lamp = sc.objects['Lamp'].data
     tex = lamp.node_tree.nodes[-1]
     if 'gradient_type' in props:
         tex.gradient_type = props['gradient_type']
+    lamp.use_soft_falloff = props.get('use_soft_falloff', True)
     lamp.shadow_soft_size = radius
     if kind == 'SPOT':
         lamp.spot_size = 2.5
