@@ -675,7 +675,9 @@ def _one_value(node, values, centre, lamp):
 # (a spot lamp's is another mapping, not matched)
 # Generated and Object: the point sampled on a disc of the lamp's radius facing the shaded
 # point (measured: a Spherical Gradient on a point lamp of radius 0.6, Cycles 0.6024, the
-# facing disc's mean 0.5999, the sphere's 0.40, the ball's 0.55, the centre's 1)
+# facing disc's mean 0.5999, the sphere's 0.40, the ball's 0.55, the centre's 1); with Soft
+# Falloff off the point sampled on the sphere's cap facing it, and Normal and UV then read the
+# sphere's normal there (measured: Normal's mean over a pixel 0.66 d)
 _DIRECTIONAL = {'POINT': frozenset({'object_normal', 'uv', 'Texture Coordinate UV', 'generated', 'object'}),
                 'SPOT': frozenset({'object_normal', 'generated', 'object'})}
 _ON_DISC = frozenset({'generated', 'object'})
@@ -701,20 +703,30 @@ def _texture_profile(surface, lamp, reasons):
     from .procedurals import TEXCOORD_UV
     (key, (fn, width, vector, _, needs)), = lamp.directional.items()
     grid_h, grid_v = _PROFILE_H, _PROFILE_V
-    disc = _disc_points(lamp) if needs & _ON_DISC else None
+    disc = _disc_points(lamp)
+    # (Soft Falloff off: the normal is the sphere's at the point sampled on its cap)
+    on_cap = disc is not None and disc[3] is not None
+    if not (needs & _ON_DISC or on_cap):
+        disc = None
     if disc is not None:                # (the disc's mean per direction: a coarser grid)
         grid_h, grid_v = _DISC_PROFILE_H, _DISC_PROFILE_V
     hh, vv = np.meshgrid(grid_h, grid_v, indexing='ij')
     # the direction ies.ies_direction reads as (h, v): v = acos(-z), h = atan2(x, y) + pi
     d = np.stack([np.sin(vv) * np.sin(hh - np.pi), np.sin(vv) * np.cos(hh - np.pi), -np.cos(vv)], -1).reshape(-1, 3)
-    uv = np.stack([np.mod(np.arctan2(d[:, 1], d[:, 0]) / (2.0 * np.pi) + 0.25, 1.0),
-                   np.arcsin(np.clip(d[:, 2], -1.0, 1.0)) / np.pi + 0.5, np.zeros(len(d))], -1)
     k = 1 if disc is None else len(disc[0])
-    coords = {'object_normal': np.repeat(d, k, axis=0).astype(np.float32),
-              'uv': np.repeat(uv, k, axis=0).astype(np.float32)}
-    coords[TEXCOORD_UV] = coords['uv']
-    coords['generated'] = coords['object'] = (np.zeros((len(d), 3), np.float32) if disc is None
-                                              else _on_discs(d, *disc).astype(np.float32))
+    normal = np.repeat(d, k, axis=0)
+    at = np.zeros((len(d), 3))
+    if disc is not None:
+        world = _on_discs(d, *disc)
+        at = world @ disc[2].T
+        if on_cap:                      # (Cycles' object_inverse_normal_transform: M^T n)
+            normal = world @ disc[1]
+            normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    uv = np.stack([np.mod(np.arctan2(normal[:, 1], normal[:, 0]) / (2.0 * np.pi) + 0.25, 1.0),
+                   np.arcsin(np.clip(normal[:, 2], -1.0, 1.0)) / np.pi + 0.5, np.zeros(len(normal))], -1)
+    coords = {'object_normal': normal.astype(np.float32), 'uv': uv.astype(np.float32),
+              'generated': at.astype(np.float32)}
+    coords[TEXCOORD_UV], coords['object'] = coords['uv'], coords['generated']
     values = np.broadcast_to(np.asarray(fn(coords), np.float64).reshape(-1, width)[:, :width], (len(d) * k, width))
     values = values.reshape(len(d), k, width).mean(axis=1)
     if not np.isfinite(values).all():
@@ -773,7 +785,7 @@ def _disc_points(lamp):
 def _on_discs(d, spiral, m, inverse, lift):
     """(n * k, 3): per object-space direction d (n, 3) from the lamp, the spiral's points on
     the world disc facing along it (its world direction normalize(M^-T d), as the IES lookup's
-    direction is M^T of the world one), in object space. With lift (Soft Falloff off), lifted
+    direction is M^T of the world one), from the lamp's centre, in world space. With lift (Soft Falloff off), lifted
     onto the sphere's hemisphere facing that way: Cycles samples the sphere's visible cap there,
     uniformly in the solid angle it spans, so by projected area from far away (measured: a
     Spherical Gradient of radius 0.6 gives 1 - r, 0.400, where Soft Falloff on gives the
@@ -786,7 +798,7 @@ def _on_discs(d, spiral, m, inverse, lift):
     world = spiral[None, :, :1] * a[:, None] + spiral[None, :, 1:] * b[:, None]
     if lift is not None:
         world = world + lift[None, :, None] * w[:, None]
-    return world.reshape(-1, 3) @ inverse.T
+    return world.reshape(-1, 3)
 
 
 def _at_lamp_coordinates(node, out, depth, lamp):

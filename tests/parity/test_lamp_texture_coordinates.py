@@ -151,6 +151,11 @@ ON_THE_DISC = {
                                       {'gradient_type': 'SPHERICAL', 'use_soft_falloff': False}, 0.6, 0.10),
     'spot_noise_hard': ('SPOT', 'ShaderNodeTexNoise', 'Generated', 'Fac', 'Strength',
                         {'Scale': 2.0, 'use_soft_falloff': False}, 0.2, 0.10),     # (fuzz 1158: 0.87x)
+    # Soft Falloff off: Normal and UV are the sphere's normal at the point sampled on its cap
+    'point_checker_normal_hard': ('POINT', 'ShaderNodeTexChecker', 'Normal', 'Fac', 'Strength',
+                                  {'Scale': 2.0, 'use_soft_falloff': False}, 0.5, 0.10),
+    'point_noise_uv_hard': ('POINT', 'ShaderNodeTexNoise', 'UV', 'Fac', 'Strength',
+                            {'Scale': 4.0, 'use_soft_falloff': False}, 0.5, 0.10),
 }
 
 
