@@ -85,6 +85,8 @@ STILL_SAID = {
     # coloured texture into a point lamp's Color is no one profile
     'area_uv': ('AREA', 'ShaderNodeTexChecker', 'UV', 'Color', 'Color', {'Scale': 3.0}),
     'spot_uv': ('SPOT', 'ShaderNodeTexChecker', 'UV', 'Color', 'Color', {'Scale': 3.0}),
+    # (a sun of an angle of 1 rad: its UV's pixel mean (0.493, 0.520), a Gradient 1.5% off)
+    'wide_sun_uv': ('SUN', 'ShaderNodeTexChecker', 'UV', 'Color', 'Color', {'Scale': 3.0}),
     'point_coloured_normal': ('POINT', 'ShaderNodeTexChecker', 'Normal', 'Color', 'Color',
                               {'Color2': (0.3, 0.6, 0.9, 1.0)}),
 }
@@ -94,6 +96,8 @@ STILL_SAID = {
 def test_lamp_texture_on_a_varying_coordinate_is_still_said(case, said):
     """Not one value, nor a direction profile: the input's own value stands, said."""
     sc = _scene(*STILL_SAID[case])
+    if case == 'wide_sun_uv':
+        sc.objects['Lamp'].data.angle = 1.0
     sc.render.engine = 'DACRT'
     sc.dacrt.samples = 1
     bpy.ops.render.render()
