@@ -605,6 +605,9 @@ def _lamp_coordinates(light, matrix):
     - Normal (the light's normal in object space): a sun's direction of travel, an area light's
       -Z, read back as Cycles' object_inverse_normal_transform does, normalize(M^T N): (0, 0, -1)
       for both unsheared; a point or spot lamp's is the direction to the shaded point: none.
+    - An area light's Generated, Object and UV vary over its surface (measured: Object the point
+      sampled on it, UV that + 0.5 for a square of size 1): points over it (_area_points), the
+      texture's mean over them standing in, said (Cycles varies the emission over the surface).
     - UV: (0.5, 0.5, 0) for a sun up to an angle of 0.1 rad (_SUN_UV_ANGLE; a wider one's varies
       per sample in a way not found), and a point, spot or area lamp's over it: none here.
     They had stood at the input's own value, said: a Checker on a sun's Normal lit at 1 where
@@ -614,7 +617,11 @@ def _lamp_coordinates(light, matrix):
     kind = light.type
     if kind == 'AREA':
         normal = _object_normal(m, -m[:3, 2])
-        return ({} if normal is None else {'object_normal': normal}), False
+        at, uv = _area_points(light)
+        coords = {'generated': at, 'object': at, 'uv': uv, TEXCOORD_UV: uv}
+        if normal is not None:
+            coords['object_normal'] = np.repeat(normal, len(at), axis=0)
+        return {k: np.asarray(v, np.float32) for k, v in coords.items()}, False
     if kind != 'SUN':
         disc = _disc_generated(light, matrix)
         at = np.zeros((1, 3)) if disc is None else np.vstack([np.zeros((1, 3)), disc])
@@ -635,6 +642,22 @@ def _lamp_coordinates(light, matrix):
 # (measured: (0.499, 0.502) at 0.1 rad, (0.498, 0.506) at 0.3, (0.493, 0.520) at 1, where a
 # Gradient on it was 1.5% darker than at (0.5, 0.5), fuzz 1217): (0.5, 0.5) up to 0.1 rad
 _SUN_UV_ANGLE = 0.1
+
+
+def _area_points(light, n=16):
+    """((k, 3) object-space points, (k, 3) UV) at the centres of an n x n grid over an area
+    light's square or rectangle (those within the disk or ellipse for those shapes): the point
+    (x, y, 0) and UV (x / size_x + 1/2, y / size_y + 1/2, 0)."""
+    shape = getattr(light, 'shape', 'SQUARE')
+    sx = float(light.size)
+    sy = float(getattr(light, 'size_y', sx)) if shape in ('RECTANGLE', 'ELLIPSE') else sx
+    g = (np.arange(n) + 0.5) / n - 0.5
+    gx, gy = (a.ravel() for a in np.meshgrid(g, g, indexing='ij'))
+    if shape in ('DISK', 'ELLIPSE'):
+        inside = gx * gx + gy * gy <= 0.25
+        gx, gy = gx[inside], gy[inside]
+    zero = np.zeros_like(gx)
+    return np.stack([gx * sx, gy * sy, zero], -1), np.stack([gx + 0.5, gy + 0.5, zero], -1)
 
 
 def _object_normal(m, normals):
@@ -672,6 +695,8 @@ def _one_value(node, values, centre, lamp):
         lamp.generated_notes.append(
             f"{node.bl_label} computed at the lamp's centre (Cycles reads it at the point sampled on the lamp's "
             "radius, where it differs)" if centre else
+            f"{node.bl_label} averaged over the area light's surface (Cycles varies its emission over it)"
+            if lamp.kind == 'AREA' else
             f"{node.bl_label} averaged over the sun's angle (Cycles computes the nodes after it per direction)")
     return value
 
@@ -793,11 +818,11 @@ def _disc_points(lamp):
 def _on_discs(d, spiral, m, inverse, lift):
     """(n * k, 3): per object-space direction d (n, 3) from the lamp, the spiral's points on
     the world disc facing along it (its world direction normalize(M^-T d), as the IES lookup's
-    direction is M^T of the world one), from the lamp's centre, in world space. With lift (Soft Falloff off), lifted
-    onto the sphere's hemisphere facing that way: Cycles samples the sphere's visible cap there,
-    uniformly in the solid angle it spans, so by projected area from far away (measured: a
-    Spherical Gradient of radius 0.6 gives 1 - r, 0.400, where Soft Falloff on gives the
-    disc's 0.60)."""
+    direction is M^T of the world one), from the lamp's centre, in world space. With lift (Soft
+    Falloff off), lifted onto the sphere's hemisphere facing that way: Cycles samples the
+    sphere's visible cap there, uniformly in the solid angle it spans, so by projected area
+    from far away (measured: a Spherical Gradient of radius 0.6 gives 1 - r, 0.400, where Soft
+    Falloff on gives the disc's 0.60)."""
     w = d @ inverse                     # (M^-T d, row-wise)
     w /= np.linalg.norm(w, axis=1, keepdims=True)
     a = np.cross(w, np.where(np.abs(w[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))

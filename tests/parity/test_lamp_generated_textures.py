@@ -1,7 +1,7 @@
 """A procedural texture with its Vector unlinked in a point, spot or sun light's node tree reads
 the Generated coordinates, which a light has none of in Cycles (0 there): one value over the
-lamp, computed at (0, 0, 0) (export/lights.py _at_generated_zero), against Cycles. An area
-light's vary over its surface in Cycles: still the input's own value there, said.
+lamp, computed at (0, 0, 0) (export/lights.py _at_lamp_coordinates), against Cycles. An area
+light's vary over its surface in Cycles: the texture's mean over it there, said.
 
 They had stood at the input's own value, said: a Gradient on a point lamp lit the floor 0.137
 where Cycles renders it black, a Checker on a spot 4.6x Cycles.
@@ -59,11 +59,13 @@ def test_lamp_texture_at_generated_zero_agrees_with_cycles(case, tmp_path, said)
     assert not [t for t in said if "not evaluated for a light" in t], said
 
 
-def test_area_lamp_texture_is_still_said(tmp_path, said):
+def test_area_lamp_texture_is_averaged_and_said(tmp_path, said):
     """An area light's Generated coordinates vary over it in Cycles (a Checker of Scale 3 there
-    averages its colours: 0.5x a white lamp): not one value, so its own value stands, said."""
+    averages its colours: 0.5x a white lamp): not one value, so the texture's mean over the
+    surface stands in, said (tests/parity/test_lamp_texture_coordinates.py compares it)."""
     sc = _scene('AREA', 'ShaderNodeTexChecker', 'Color', 'Color', {'Scale': 3.0})
     sc.render.engine = 'DACRT'
     sc.dacrt.samples = 1
     bpy.ops.render.render()
-    assert [t for t in said if "light 'Lamp'" in t and "'Checker Texture' node, not evaluated for a light" in t], said
+    assert [t for t in said if "light 'Lamp'" in t and "Checker Texture averaged over the area light's surface" in t], \
+        said
