@@ -734,7 +734,7 @@ def _texture_profile(surface, lamp, reasons):
     1160)."""
     from ..lights.ies import IESProfile
     from .procedurals import TEXCOORD_UV
-    (key, (fn, width, vector, _, needs)), = lamp.directional.items()
+    (key, (fn, width, _, _, needs)), = lamp.directional.items()
     grid_h, grid_v = _PROFILE_H, _PROFILE_V
     disc = _disc_points(lamp)
     # (Soft Falloff off: the normal is the sphere's at the point sampled on its cap)
