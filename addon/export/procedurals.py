@@ -215,7 +215,7 @@ def compile_floats(sockets, what, reasons, image=None):
 def compile_node(node, out, depth=0):
     """(fn(coords), vector, chain) of one node's output `out` compiled as in a material's chain,
     for a reader outside a material (a lamp's texture at its Generated points:
-    export/lights._at_generated_zero): chain.needs, frames and reasons say what it reads. Raises
+    export/lampcoordinates.at_lamp_coordinates): chain.needs, frames and reasons say what it reads. Raises
     what _node raises (nodeeval.NotCompiled; a node of another Blender version's errors)."""
     chain = _Chain([], None)
     fn, vector = _node(node, out, chain, depth)

@@ -1,11 +1,11 @@
-"""A lamp's Generated coordinates (export/lights.py: a sun's cone of directions in its object
+"""A lamp's Generated coordinates (export/lampcoordinates.py: a sun's cone of directions in its object
 space, a point or spot lamp's disc) are worked out only for a tree whose procedural texture
 reads them: every lamp had worked them out on every render (a sun's 64 directions in Python
 loops, ~1 ms; a point lamp's 3x3 inverse), where most lamps have no such texture. A tree that
 reads them gets the same points as before (tests/parity/test_sun_generated_textures.py and
 test_lamp_generated_textures.py compare them with Cycles)."""
 
-from addon.export import lights
+from addon.export import lampcoordinates
 
 from . import scenes
 
@@ -13,12 +13,12 @@ from . import scenes
 def _counting(monkeypatch):
     calls = []
     for name in ('_sun_generated', '_disc_generated'):
-        real = getattr(lights, name)
+        real = getattr(lampcoordinates, name)
 
         def counted(*a, _real=real, _name=name, **k):
             calls.append(_name)
             return _real(*a, **k)
-        monkeypatch.setattr(lights, name, counted)
+        monkeypatch.setattr(lampcoordinates, name, counted)
     return calls
 
 
