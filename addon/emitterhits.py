@@ -21,20 +21,24 @@ class EmitterHits:
     """A mixin of integrator.Integrator (see the module docstring): its methods read and set
     the Integrator's state."""
 
-    def _gather_emission(self, camera, hit, hits, path, L, k, groups=()):
+    def _gather_emission(self, camera, hit, hits, path, L, k, groups=(), shadow_set=0):
         """Emission of the triangles hit by rays `hit` (two-sided) arriving at vertex k,
         MIS-weighted for BSDF rays (one native pass); each contribution clamped as Cycles'
         sample clamp (_found_classes); with light groups, each group's triangles again into its
-        own array."""
+        own array. shadow_set: with shadow linking, the set of blockers whose emitters are
+        gathered (0: those of none; the others by _gather_shadow_linked's retraced rays)."""
         if self._link is not None and not camera and path.prim is not None:
             # light linking: emitters do not light the objects their set leaves out
             prim = np.maximum(hits['prim'], 0)
             hit = hit & reached(self._receivers(path.prim), np.take(self._tri_set, prim))
         if self._shadow_link is not None and not camera:
-            # shadow-linked emitters light by their light samples alone (_selection_table), which
-            # pick them whatever their Emission Sampling (_build_lights)
+            # shadow-linked emitters: gathered by rays retraced against their set's blockers
+            # (_gather_shadow_linked), or lit by their light samples alone where Cycles leaves
+            # them to BSDF rays (forced: _build_lights)
             prim = np.maximum(hits['prim'], 0)
-            hit = hit & (np.take(self._tri_shadow_set, prim) == 0)
+            hit = hit & (np.take(self._tri_shadow_set, prim) == shadow_set)
+            if shadow_set:
+                hit &= np.take(self._tri_sampled & ~self._tri_forced, prim)
         outs = [(hit, L)]
         if groups:
             grp = np.take(self._tri_group, np.maximum(hits['prim'], 0))
@@ -158,8 +162,18 @@ class EmitterHits:
         and the dedicated shadow ray is stopped by the lamp's blockers): the rays retraced
         against those objects per set ('shadow<set>u', transparent ones let through), the lamps
         they reach gathered with their MIS weight (past a lamp's Max Bounces, where light
-        sampling skips it, with the pdf that holds all their light: _mis_pdfs)."""
+        sampling skips it, with the pdf that holds all their light: _mis_pdfs). Light-sampled
+        linked emissive triangles likewise, per set, against its blockers, the unlisted opaque
+        objects and the set's emitters ('shadow<set>e'), MIS-weighted by _gather_emission."""
+        for s in self._linked_tri_sets:
+            kind = f'shadow{int(s)}e'
+            if kind in self._scenes:
+                hits = self._intersect(kind, path.O, path.D, path.tmax, path.prim)
+                self._gather_emission(False, hits['prim'] >= 0, hits, path, sinks.found(k), k, sinks.groups,
+                                      shadow_set=int(s))
         lamps = self._bsdf_linked
+        if not len(lamps):
+            return
         sets = self._record_shadow_set[lamps]
         classes, L = self._found_classes(k, path), sinks.found(k)
         for s in np.unique(sets):

@@ -545,6 +545,17 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             # (and the scenes BSDF rays find shadow-linked lamps in: _gather_shadow_linked)
             if len(self._bsdf_linked):
                 kinds = np.union1d(kinds, 2 * np.unique(self._record_shadow_set[self._bsdf_linked]) + 1)
+            # (and, per set of light-sampled linked emitters, those scenes with its emitters in:
+            # 'shadow<set>e', where _gather_shadow_linked's retraced rays meet them)
+            for s in self._linked_tri_sets:
+                kind = f'shadow{int(s)}e'
+                mask = (((reached(self._tri_blocks, int(s)) | self._tri_unlisted) & ((vis & VIS_SHADOW) != 0))
+                        | ((self._tri_shadow_set == s) & self._tri_sampled & ((vis & VIS_DIFFUSE) != 0)))
+                if mask.any():
+                    self._scenes[kind], self._maps[kind], self._local[kind] = built[kind] = \
+                        self._tracer_scene(mask, None)
+                    self._visible[kind] = None
+                    needed = needed | mask
             for sk in kinds[kinds > 1] if len(kinds) else ():
                 s, forced = int(sk) // 2, bool(sk % 2)
                 blocks = reached(self._tri_blocks, s)
@@ -946,7 +957,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         prim = hits['prim']
         hit = prim >= 0
         self._gather_lamps(path, hit, hits, sinks, k)
-        if not camera and len(self._bsdf_linked):
+        if not camera and (len(self._bsdf_linked) or len(self._linked_tri_sets)):
             self._gather_shadow_linked(path, sinks, k)
         chain = None                                  # camera rays' transparent surfaces, for the passes
         if self._any_transparent and hit.any():

@@ -184,6 +184,7 @@ class LightSetup:
         self._bsdf_lamps = self._bsdf_every = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf],
                                                        np.int32)
         self._bsdf_linked = np.zeros(0, np.int32)
+        self._linked_tri_sets = np.zeros(0, np.int64)
         self._selection_table()
 
     def _without_coincident_copies(self, sd: SceneData, hittable, vis):
@@ -425,12 +426,18 @@ class LightSetup:
             # against their light samples as in Cycles, whose image then lacks their BSDF share
             # behind objects in no blocker collection (lit at weight 1 by light samples alone,
             # the shadows of such objects had been up to 1.05x Cycles beside two 1.8 m soft
-            # point lamps). Linked emissive triangles are still lit by light samples alone, at
-            # weight 1 (a 6 m area light over a floor had been 0.68x Cycles under a plate its
-            # blockers leave out when BSDF rays gathered it in the full scene)
+            # point lamps). Light-sampled linked emissive triangles are gathered so too, per set
+            # (a 6 m area light over a floor had been 0.68x Cycles under a plate its blockers
+            # leave out when BSDF rays gathered it in the full scene; lit by light samples alone
+            # at weight 1, 1.03x there); those Cycles leaves to BSDF rays (forced: light-sampled
+            # here against the objects its search stops at) keep weight 1, as its BSDF rays'
             lamp = np.zeros(len(self._entry_shadow_set), bool)
             lamp[:nl] = True
-            self._light_choice.no_mis[(self._entry_shadow_set > 0) & ~lamp] = True
+            self._light_choice.no_mis[(self._entry_shadow_kind % 2 == 1) & ~lamp] = True
+            forced = getattr(self, '_tri_forced', None)
+            if forced is not None and self._tri_sampled is not None:
+                linked = self._tri_sampled & (self._tri_shadow_set > 0) & ~forced
+                self._linked_tri_sets = np.unique(self._tri_shadow_set[linked])
             self._bsdf_lamps = self._bsdf_every[record_sets[self._bsdf_every] == 0]
             self._bsdf_linked = self._bsdf_every[(record_sets[self._bsdf_every] > 0) & (self._bsdf_every < nl)]
             self._record_shadow_set = record_sets
