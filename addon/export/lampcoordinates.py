@@ -41,8 +41,9 @@ def lamp_coordinates(light, matrix):
     - An area light's Generated, Object and UV vary over its surface (measured: Object the point
       sampled on it, UV that + 0.5 for a square of size 1): points over it (_area_points), the
       texture's mean over them standing in, said (Cycles varies the emission over the surface).
-    - UV: (0.5, 0.5, 0) for a sun up to an angle of 0.1 rad (_SUN_UV_ANGLE; a wider one's varies
-      per sample in a way not found), and a point, spot or area lamp's over it: none here.
+    - UV: (0.5, 0.5, 0) for a sun, exact up to an angle of 0.1 rad (_SUN_UV_ANGLE; a wider one's
+      varies per sample in a way not found: read so, said), and a point, spot or area lamp's
+      over it: none here.
     They had stood at the input's own value, said: a Checker on a sun's Normal lit at 1 where
     Cycles lit nothing (1.28x), a Noise on a point lamp's Object 1.96x."""
     from .procedurals import TEXCOORD_UV
@@ -62,8 +63,9 @@ def lamp_coordinates(light, matrix):
     pts = _sun_generated(light, matrix)
     at = np.zeros((1, 3)) if pts is None else pts
     coords = {'generated': at, 'object': at}
-    if not float(getattr(light, 'angle', 0.0)) > _SUN_UV_ANGLE:
-        coords['uv'] = coords[TEXCOORD_UV] = np.tile([0.5, 0.5, 0.0], (len(at), 1))
+    coords['uv'] = coords[TEXCOORD_UV] = np.tile([0.5, 0.5, 0.0], (len(at), 1))
+    if float(getattr(light, 'angle', 0.0)) > _SUN_UV_ANGLE:
+        coords[_WIDE_SUN_UV] = coords['uv']       # (read so, said: _note_wide_sun_uv)
     dirs = None if pts is None else _sun_directions(light, matrix)
     normals = None if dirs is None else _object_normal(m, dirs)
     if normals is not None and len(normals) == len(at):
@@ -75,6 +77,15 @@ def lamp_coordinates(light, matrix):
 # (measured: (0.499, 0.502) at 0.1 rad, (0.498, 0.506) at 0.3, (0.493, 0.520) at 1, where a
 # Gradient on it was 1.5% darker than at (0.5, 0.5), fuzz 1217): (0.5, 0.5) up to 0.1 rad
 _SUN_UV_ANGLE = 0.1
+# the key in a sun's coordinates that says its UV is read at (0.5, 0.5) beyond that angle
+_WIDE_SUN_UV = 'uv of a wide sun'
+
+
+def _note_wide_sun_uv(node, needs, coords, lamp):
+    """Say that node's chain reads a wide sun's UV at (0.5, 0.5) (lamp.generated_notes)."""
+    if _WIDE_SUN_UV in coords and needs & {'uv', 'Texture Coordinate UV'}:
+        lamp.generated_notes.append(f"{node.bl_label} reads the sun's UV as (0.5, 0.5) (Cycles' varies per "
+                                    f"sample for a sun wider than {_SUN_UV_ANGLE:g} rad)")
 
 
 def _area_points(light, n=16):
@@ -116,6 +127,7 @@ def coordinate_value(node, out, lamp):
     at = coords.get(need)
     if at is None:
         return None
+    _note_wide_sun_uv(node, {need}, coords, lamp)
     return nodeeval.Field(_one_value(node, np.asarray(at, np.float64), centre, lamp), vector=True)
 
 
@@ -292,6 +304,7 @@ def at_lamp_coordinates(node, out, depth, lamp):
             lamp.directional[(node.as_pointer(), out.name)] = (fn, width, vector, '', frozenset(chain.needs))
         return None
     n = len(next(iter(coords.values())))
+    _note_wide_sun_uv(node, chain.needs, coords, lamp)
     values = np.asarray(fn({k: coords[k] for k in chain.needs}), np.float64)
     values = values.reshape(len(values), -1)
     values = np.broadcast_to(values, (n, values.shape[1]))
