@@ -255,17 +255,25 @@ _DISC_PROFILE_H = np.linspace(0.0, 2.0 * np.pi, 73)
 _DISC_PROFILE_V = np.linspace(0.0, np.pi, 37)
 
 
+def _disc_frame(r, matrix):
+    """(M, M^-1), the 3x3 of a point or spot lamp's matrix and its inverse, for a radius r > 0
+    (finite) and a finite, invertible matrix; else (None, None)."""
+    m = np.array(matrix, np.float64)[:3, :3]
+    if not (r > 0.0 and np.isfinite(r) and np.isfinite(m).all()):
+        return None, None
+    try:
+        return m, np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        return None, None
+
+
 def _disc_points(lamp):
     """(spiral (k, 2), matrix (3, 3), its inverse, lift) of a point or spot lamp of a radius > 0
     and an invertible matrix, else None; lift: the sphere's height over the disc at the spiral's
     points (k,), where Soft Falloff is off, else None."""
     r, matrix, soft = lamp.disc
-    m = np.array(matrix, np.float64)[:3, :3]
-    if not (r > 0.0 and np.isfinite(r) and np.isfinite(m).all()):
-        return None
-    try:
-        inverse = np.linalg.inv(m)
-    except np.linalg.LinAlgError:
+    m, inverse = _disc_frame(r, matrix)
+    if m is None:
         return None
     k = np.arange(_DISC_SAMPLES)
     rho, phi = r * np.sqrt((k + 0.5) / len(k)), k * np.pi * (3.0 - np.sqrt(5.0))
@@ -339,12 +347,8 @@ def _disc_generated(light, matrix):
     points round the sphere of radius r there, or None for a radius of 0 or a matrix that is
     not invertible."""
     r = float(getattr(light, 'shadow_soft_size', 0.0))
-    m = np.array(matrix, np.float64)[:3, :3]
-    if not (r > 0.0 and np.isfinite(r) and np.isfinite(m).all()):
-        return None
-    try:
-        inverse = np.linalg.inv(m)
-    except np.linalg.LinAlgError:
+    _, inverse = _disc_frame(r, matrix)
+    if inverse is None:
         return None
     k = np.arange(26)           # (a Fibonacci sphere)
     z = 1.0 - (2.0 * k + 1.0) / len(k)

@@ -15,7 +15,9 @@ from tests.addon import scenes
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _scene(kind, texture, output, into, props):
+def lamp_over_floor(kind):
+    """(scene, the lamp's node tree): a grey floor seen from above (orthographic, 32 x 32, 32
+    spp, no bounces) under a lamp of kind named 'Lamp' with its nodes on."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
@@ -27,7 +29,11 @@ def _scene(kind, texture, output, into, props):
     lamp = scenes.light(kind, 3.0 if kind == 'SUN' else 100.0, location=(0.5, 0.0, 1.5), rotation=(0.3, 0.1, 0.0),
                         name="Lamp")
     lamp.data.use_nodes = True
-    nt = lamp.data.node_tree
+    return sc, lamp.data.node_tree
+
+
+def _scene(kind, texture, output, into, props):
+    sc, nt = lamp_over_floor(kind)
     tex = nt.nodes.new(texture)
     for k, v in props.items():
         if k in tex.inputs:

@@ -18,23 +18,13 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
+from tests.parity.test_lamp_generated_textures import lamp_over_floor
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(kind, texture, coordinate, output, into, props):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x = sc.render.resolution_y = 32
-    scenes.camera(location=(0, 0, 6), kind='ORTHO', ortho_scale=8.0)
-    sc.cycles.samples = sc.dacrt.samples = 32
-    sc.cycles.use_denoising = False
-    sc.cycles.max_bounces = sc.dacrt.max_bounces = 0
-    scenes.plane("Floor", size=8.0, materials=[scenes.diffuse("Grey", (0.8, 0.8, 0.8))])
-    lamp = scenes.light(kind, 3.0 if kind == 'SUN' else 100.0, location=(0.5, 0.0, 1.5), rotation=(0.3, 0.1, 0.0),
-                        name="Lamp")
-    lamp.data.use_nodes = True
-    nt = lamp.data.node_tree
+    sc, nt = lamp_over_floor(kind)
     coords = nt.nodes.new('ShaderNodeTexCoord')
     emission = next(n for n in nt.nodes if n.type == 'EMISSION')
     if texture is None:         # the coordinate read as a value: Strength = 2 + 0.5 component
@@ -52,6 +42,19 @@ def _scene(kind, texture, coordinate, output, into, props):
     nt.links.new(coords.outputs[coordinate], tex.inputs['Vector'])
     nt.links.new(tex.outputs[output], emission.inputs[into])
     return sc
+
+
+def _lit_blocks(sc, tmp_path):
+    """(DACRT, Cycles, lit): both engines' 4x4-pixel block means (8, 8, 3) at 64 spp, and the
+    blocks Cycles lights above a tenth of its brightest."""
+    sc.cycles.samples = sc.dacrt.samples = 64
+    layer = sc.view_layers[0].name
+    blocks = {}
+    for e, exr in scenes.render_engines(sc, tmp_path).items():
+        g = np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], -1)
+        blocks[e] = g.reshape(8, 4, 8, 4, 3).mean(axis=(1, 3))
+    d, c = blocks['DACRT'], blocks['CYCLES']
+    return d, c, c.mean(-1) > 0.1 * c.mean(-1).max()
 
 
 CASES = {
@@ -117,14 +120,7 @@ def test_lamp_texture_on_the_direction_from_the_lamp_agrees_with_cycles(case, ra
     sc.objects['Lamp'].data.shadow_soft_size = radius
     if sc.objects['Lamp'].data.type == 'SPOT':
         sc.objects['Lamp'].data.spot_size = 2.5
-    sc.cycles.samples = sc.dacrt.samples = 64
-    layer = sc.view_layers[0].name
-    blocks = {}
-    for e, exr in scenes.render_engines(sc, tmp_path).items():
-        g = np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], -1)
-        blocks[e] = g.reshape(8, 4, 8, 4, 3).mean(axis=(1, 3))
-    d, c = blocks['DACRT'], blocks['CYCLES']
-    lit = c.mean(-1) > 0.1 * c.mean(-1).max()
+    d, c, lit = _lit_blocks(sc, tmp_path)
     assert lit.sum() > 10, case
     ratio = d[lit].sum(0) / c[lit].sum(0)
     np.testing.assert_allclose(ratio, 1.0, atol=0.03, err_msg=case)
@@ -175,14 +171,7 @@ def test_lamp_texture_over_its_radius_agrees_with_cycles(case, tmp_path, said):
     if kind == 'SPOT':
         lamp.spot_size = 2.5
     sc.objects['Lamp'].location.z = 2.5
-    sc.cycles.samples = sc.dacrt.samples = 64
-    layer = sc.view_layers[0].name
-    blocks = {}
-    for e, exr in scenes.render_engines(sc, tmp_path).items():
-        g = np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], -1)
-        blocks[e] = g.reshape(8, 4, 8, 4, 3).mean(axis=(1, 3))
-    d, c = blocks['DACRT'], blocks['CYCLES']
-    lit = c.mean(-1) > 0.1 * c.mean(-1).max()
+    d, c, lit = _lit_blocks(sc, tmp_path)
     assert lit.sum() > 10, case
     np.testing.assert_allclose(d[lit].sum(0) / c[lit].sum(0), 1.0, atol=0.03, err_msg=case)
     assert np.percentile(np.abs(d[lit] / np.maximum(c[lit], 1e-9) - 1.0), 90) < block_tol, (case, d[lit] / c[lit])
