@@ -197,6 +197,16 @@ def diffuse(name, color, roughness=0.0):
     return mat
 
 
+def as_colour(nt, socket):
+    """The output socket of a Vector Math node in nt giving socket x 0.5 + 0.5 (a unit vector
+    as a colour in 0..1)."""
+    post = nt.nodes.new('ShaderNodeVectorMath')
+    post.operation = 'MULTIPLY_ADD'
+    post.inputs[1].default_value, post.inputs[2].default_value = (0.5, 0.5, 0.5), (0.5, 0.5, 0.5)
+    nt.links.new(socket, post.inputs[0])
+    return post.outputs['Vector']
+
+
 def emission(name, color, strength):
     mat, nt, out = _material(name)
     node = nt.nodes.new('ShaderNodeEmission')

@@ -19,12 +19,8 @@ def _material(kind):
     mat, nt, _ = scenes._material(kind)
     geo = nt.nodes.new('ShaderNodeNewGeometry')
     if kind == 'emission':
-        post = nt.nodes.new('ShaderNodeVectorMath')
-        post.operation = 'MULTIPLY_ADD'
-        post.inputs[1].default_value, post.inputs[2].default_value = (0.5, 0.5, 0.5), (0.5, 0.5, 0.5)
-        nt.links.new(geo.outputs['Incoming'], post.inputs[0])
         sh = nt.nodes.new('ShaderNodeEmission')
-        nt.links.new(post.outputs['Vector'], sh.inputs['Color'])
+        nt.links.new(scenes.as_colour(nt, geo.outputs['Incoming']), sh.inputs['Color'])
     else:
         dot = nt.nodes.new('ShaderNodeVectorMath')
         dot.operation = 'DOT_PRODUCT'

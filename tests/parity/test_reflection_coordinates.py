@@ -31,12 +31,8 @@ def _material(kind):
         sh = nt.nodes.new('ShaderNodeEmission')
         nt.links.new(img.outputs['Color'], sh.inputs['Color'])
     elif kind == 'emission':
-        post = nt.nodes.new('ShaderNodeVectorMath')
-        post.operation = 'MULTIPLY_ADD'
-        post.inputs[1].default_value, post.inputs[2].default_value = (0.5, 0.5, 0.5), (0.5, 0.5, 0.5)
-        nt.links.new(tc.outputs['Reflection'], post.inputs[0])
         sh = nt.nodes.new('ShaderNodeEmission')
-        nt.links.new(post.outputs['Vector'], sh.inputs['Color'])
+        nt.links.new(scenes.as_colour(nt, tc.outputs['Reflection']), sh.inputs['Color'])
     else:
         sep = nt.nodes.new('ShaderNodeSeparateXYZ')
         ramp = nt.nodes.new('ShaderNodeValToRGB')

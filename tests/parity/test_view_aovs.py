@@ -25,13 +25,9 @@ def _view_aovs(mat):
     Incoming.z) in mat's tree."""
     nt = mat.node_tree
     tc = nt.nodes.new('ShaderNodeTexCoord')
-    post = nt.nodes.new('ShaderNodeVectorMath')
-    post.operation = 'MULTIPLY_ADD'
-    post.inputs[1].default_value, post.inputs[2].default_value = (0.5, 0.5, 0.5), (0.5, 0.5, 0.5)
-    nt.links.new(tc.outputs['Reflection'], post.inputs[0])
     refl = nt.nodes.new('ShaderNodeOutputAOV')
     refl.aov_name = 'refl'
-    nt.links.new(post.outputs['Vector'], refl.inputs['Color'])
+    nt.links.new(scenes.as_colour(nt, tc.outputs['Reflection']), refl.inputs['Color'])
     lw = nt.nodes.new('ShaderNodeLayerWeight')
     lw.inputs['Blend'].default_value = 0.4
     geo = nt.nodes.new('ShaderNodeNewGeometry')
