@@ -10,10 +10,7 @@
 // -fno-trapping-math (CMakeLists.txt) so the selects after a division vectorise.
 #include "survivorlanes.h"
 
-#include <strings.h>
-
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 
 #include "dispatch.h"
@@ -161,22 +158,12 @@ DACRT_SURVIVOR_ISA(portable, )
 DACRT_SURVIVOR_ISA(avx2, __attribute__((target("avx2,fma,bmi,bmi2"))))
 DACRT_SURVIVOR_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl,avx512dq,avx512bw,avx512cd"))))
 
-// The widest the CPU runs, or a narrower one DACRT_ISA names (a wider one it lacks: the widest).
-LanesFn pick_lanes() {
-    const Isa best = resolve_isa("");
-    const char* env = std::getenv("DACRT_ISA");
-    Isa isa = best;
-    if (env && strcasecmp(env, "portable") == 0) isa = Isa::Portable;
-    if (env && strcasecmp(env, "avx2") == 0 && best != Isa::Portable) isa = Isa::Avx2;
-    return isa == Isa::Avx512 ? avx512_lanes : (isa == Isa::Avx2 ? avx2_lanes : portable_lanes);
-}
-
 }  // namespace
 
 size_t survivor_lanes(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,
                       const int64_t* idx, size_t k, float* thr_out, const float* records, bool smooth,
                       const float* D, float* surf_out, int32_t* prim_out, size_t b, size_t e) {
-    static const LanesFn fn = pick_lanes();
+    static const LanesFn fn = lane_copy<LanesFn>(portable_lanes, avx2_lanes, avx512_lanes);   // (dispatch.h)
     return fn(hits, n, albedo, M, thr, roulette, idx, k, thr_out, records, smooth, D, surf_out, prim_out, b, e);
 }
 
