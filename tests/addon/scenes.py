@@ -427,6 +427,15 @@ def render_rgba(scene=None):
         return rgba(read_exr(render_exr(Path(d) / "render.exr", scene)))
 
 
+def frame_films(scene, frames=(1, 2, 3)):
+    """render_rgba of scene at each of frames, in order."""
+    films = []
+    for frame in frames:
+        scene.frame_set(frame)
+        films.append(render_rgba(scene))
+    return films
+
+
 def seeded_rgb(scene, engine, seeds):
     """(seeds, H, W, 3): the scene rendered by engine ('CYCLES' or 'DACRT') once per seed 0..seeds-1
     (both engines' seed set alike), for a per-pixel test against another engine's renders."""

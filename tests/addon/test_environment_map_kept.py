@@ -17,6 +17,7 @@ from addon import scenedata as sd
 from addon.lights import envkeep
 
 from . import scenes
+from .test_sky_map_kept import renders_as_with_nothing_kept
 
 
 @pytest.fixture(autouse=True)
@@ -69,10 +70,7 @@ def test_frames_of_one_hdri_build_its_map_once(scene, tmp_path, monkeypatch, sou
         image = _buffer_image(_texels())
     _hdri_world(scene, image)
     builds = calls_to(dacrt.lamps, 'environment_map')
-    films = []
-    for frame in (1, 2, 3):
-        scene.frame_set(frame)
-        films.append(scenes.render_rgba(scene))
+    films = scenes.frame_films(scene)
     assert len(builds) == 1, builds
     assert np.array_equal(films[0], films[1]) and np.array_equal(films[0], films[2])
 
@@ -122,14 +120,7 @@ def test_a_changed_hdri_renders_as_with_nothing_kept(scene, tmp_path, change):
         image = _buffer_image(_texels())     # (no file: Blender's buffer is what renders, edits too)
     else:
         image = scenes.float_image('sky', _texels())
-    nodes = _hdri_world(scene, image)
-    before = scenes.render_rgba(scene)
-    CHANGES[change](*nodes)
-    after = scenes.render_rgba(scene)
-    envkeep.forget()
-    fresh = scenes.render_rgba(scene)
-    assert not np.array_equal(before, fresh)          # (the change shows in the image)
-    assert np.array_equal(after, fresh), np.abs(after - fresh).max()
+    renders_as_with_nothing_kept(scene, CHANGES[change], _hdri_world(scene, image))
 
 
 def _env(px, strength=1.0):
@@ -214,10 +205,7 @@ def test_frames_of_an_unchanged_hdri_file_scan_its_texels_once(scene, tmp_path, 
     image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
     _hdri_world(scene, image)
     scans = calls_to(dacrt.lamps, 'texel_stats')
-    films = []
-    for frame in (1, 2, 3):
-        scene.frame_set(frame)
-        films.append(scenes.render_rgba(scene))
+    films = scenes.frame_films(scene)
     readkeep.forget()
     assert len(scans) == 1, scans
     assert np.array_equal(films[0], films[1]) and np.array_equal(films[0], films[2])

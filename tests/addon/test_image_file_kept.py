@@ -16,6 +16,7 @@ from addon.export import images, readkeep
 from addon.lights import envkeep
 
 from . import scenes
+from .test_environment_map_kept import _hdri_world
 
 
 @pytest.fixture(autouse=True)
@@ -37,17 +38,10 @@ def _texels(seed=3, h=32, w=64):
 
 def test_frames_of_an_unchanged_hdri_file_read_it_once(scene, tmp_path, monkeypatch, calls_to):
     scenes.write_exr(tmp_path / 'sky.exr', _texels())
-    image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
-    scenes.camera(location=(0, -5, 0), rotation=(math.radians(90), 0, 0))
-    scenes.uv_sphere(materials=[scenes.diffuse('grey', (0.5, 0.5, 0.5))])
-    scenes.environment_world(image, strength=1.0, rotation=(0.0, 0.0, 0.3))
-    scene.dacrt.samples, scene.dacrt.max_bounces = 1, 2
+    _hdri_world(scene, scenes.bpy.data.images.load(str(tmp_path / 'sky.exr')))
     reads = calls_to(images, '_read_flipped')
     builds = calls_to(dacrt.lamps, 'environment_map')
-    films = []
-    for frame in (1, 2, 3):
-        scene.frame_set(frame)
-        films.append(scenes.render_rgba(scene))
+    films = scenes.frame_films(scene)
     assert len(reads) == 1, reads
     assert len(builds) == 1, builds          # (envkeep reuses the map of the kept, read-only texels)
     readkeep.forget()
@@ -59,16 +53,8 @@ def test_frames_of_an_unchanged_hdri_file_read_it_once(scene, tmp_path, monkeypa
 def _hdri_frames(scene, tmp_path, px, frames=(1, 2, 3)):
     """Films of frames of a sphere under an HDRI world read from an EXR of px."""
     scenes.write_exr(tmp_path / 'sky.exr', px)
-    image = scenes.bpy.data.images.load(str(tmp_path / 'sky.exr'))
-    scenes.camera(location=(0, -5, 0), rotation=(math.radians(90), 0, 0))
-    scenes.uv_sphere(materials=[scenes.diffuse('grey', (0.5, 0.5, 0.5))])
-    scenes.environment_world(image, strength=1.0, rotation=(0.0, 0.0, 0.3))
-    scene.dacrt.samples, scene.dacrt.max_bounces = 1, 2
-    films = []
-    for frame in frames:
-        scene.frame_set(frame)
-        films.append(scenes.render_rgba(scene))
-    return films
+    _hdri_world(scene, scenes.bpy.data.images.load(str(tmp_path / 'sky.exr')))
+    return scenes.frame_films(scene, frames)
 
 
 def test_what_the_check_finds_in_kept_texels_is_said_every_frame(scene, tmp_path, said):
@@ -103,10 +89,7 @@ def test_frames_of_an_unchanged_8bit_file_decode_it_once(scene, tmp_path, calls_
     scenes.environment_world(image, strength=1.0, rotation=(0.0, 0.0, 0.3))
     scene.dacrt.samples, scene.dacrt.max_bounces = 1, 2
     reads = calls_to(images, '_read_flipped')
-    films = []
-    for frame in (1, 2, 3):
-        scene.frame_set(frame)
-        films.append(scenes.render_rgba(scene))
+    films = scenes.frame_films(scene)
     assert len(reads) == 1, reads
     readkeep.forget()
     envkeep.forget()
