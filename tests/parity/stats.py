@@ -178,6 +178,15 @@ def welch(a, b):
     return Welch(mean_a, mean_b, np.sqrt(var), dof, t_two_sided_p(t, dof))
 
 
+def interior(mask):
+    """(H, W) bool: the pixels whose 3x3 neighbourhood lies all in mask (the rows and columns
+    wrap, as np.roll's), e.g. an object's pixels away from its silhouette."""
+    inside = mask
+    for ax in (0, 1):
+        inside = inside & np.roll(inside, 1, ax) & np.roll(inside, -1, ax)
+    return inside
+
+
 def block_means(images, block):
     """(M, H, W, C) -> (M, H // block, W // block, C) means of block x block pixel tiles
     (a partial last row or column of tiles is dropped)."""

@@ -4,13 +4,13 @@ a perspective camera under a white world: the vector x 0.5 + 0.5 into an Emissio
 (interior pixels within 0.01 of Cycles'), and its dot product with Geometry Normal (a facing
 ratio) through a Color Ramp into a Diffuse BSDF's Color (4x4 blocks within 0.03). Incoming had
 stood at its socket's own value (0), said: the emission read a flat 0.5 grey."""
-import bpy
 import numpy as np
 import pytest
 
 from tests.addon import scenes
 
-from .test_reflection_coordinates import sphere_and_plane_rgb
+from .stats import block_means
+from .test_reflection_coordinates import coordinates_view, object_interior, sphere_and_plane_rgb
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -38,21 +38,15 @@ def _material(kind):
 
 @pytest.mark.parametrize('kind', ['emission', 'diffuse'])
 def test_incoming_matches_cycles(kind):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 64, 32
-    scenes.camera((0.5, -6.0, 2.0), rotation=(1.25, 0.0, 0.08), lens=35)
+    sc, _ = coordinates_view()
     c, d = sphere_and_plane_rgb(sc, _material(kind))
-    world = np.all(np.abs(c - 1.0) < 1e-4, axis=-1)
     if kind == 'emission':
-        inside = ~world
-        for ax in (0, 1):
-            inside = inside & np.roll(inside, 1, ax) & np.roll(inside, -1, ax)
+        inside = object_interior(c)
         assert inside.sum() > 200
         diff = np.abs(d - c)[inside]
         assert diff.max() < 0.01, (diff.max(), diff.mean(axis=0))
         assert np.ptp(c[inside], axis=0).max() > 0.3        # the test sees the vector vary
     else:
-        cb, db = (x.reshape(8, 4, 16, 4, 3).mean(axis=(1, 3)) for x in (c, d))
+        cb, db = (block_means(x[None], 4)[0] for x in (c, d))
         assert np.abs(db - cb).max() < 0.03, np.abs(db - cb).max()
         assert np.ptp(cb[..., 0]) > 0.3

@@ -11,15 +11,13 @@ import pytest
 from tests.addon import scenes
 
 from . import rendering
+from .test_reflection_coordinates import coordinates_view, engines_rgb, object_interior
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def test_parametric_matches_cycles():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 64, 32
-    scenes.camera((0.5, -6.0, 2.0), rotation=(1.25, 0.0, 0.08), lens=35)
+    sc, _ = coordinates_view()
     mat, nt, _ = scenes._material('Parametric')
     geo = nt.nodes.new('ShaderNodeNewGeometry')
     em = nt.nodes.new('ShaderNodeEmission')
@@ -31,14 +29,8 @@ def test_parametric_matches_cycles():
     bpy.ops.mesh.primitive_cube_add(location=(-1.2, 0, 0.2), rotation=(0.5, 0.3, 0.7))
     bpy.context.object.data.materials.append(mat)
     rendering.matched(sc, 64)
-    got = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        got[engine] = scenes.render_rgba(sc)[..., :3]
-    c, d = got['CYCLES'], got['DACRT']
-    inside = ~np.all(np.abs(c - 1.0) < 1e-4, axis=-1)
-    for ax in (0, 1):
-        inside = inside & np.roll(inside, 1, ax) & np.roll(inside, -1, ax)
+    c, d = engines_rgb(sc)
+    inside = object_interior(c)
     assert inside.sum() > 300
     diff = np.abs(d - c)[inside]
     assert diff.mean() < 0.004 and np.mean(diff.max(axis=-1) > 0.05) < 0.02, (diff.mean(), np.mean(diff.max(-1) > 0.05))

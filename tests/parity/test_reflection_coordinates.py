@@ -14,6 +14,7 @@ import pytest
 from tests.addon import scenes
 
 from . import rendering
+from .stats import block_means, interior
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -47,14 +48,17 @@ def _material(kind):
     return mat
 
 
-def sphere_and_plane_rgb(sc, mat):
-    """Cycles' and DACRT's RGB of a sphere and a tilted plane of mat under a white world (64
-    spp, direct light only, 1-pixel Box filter): the coordinate tests' scene."""
-    scenes.world((1.0, 1.0, 1.0), 1.0)
-    scenes.uv_sphere('S', radius=1.0, location=(-1.2, 0, 0.2), materials=(mat,))
-    plane = scenes.plane('P', size=2.0, location=(1.4, 0, 0.2), materials=(mat,))
-    plane.rotation_euler = (1.1, 0.3, 0.2)
-    rendering.matched(sc, 64)
+def coordinates_view(**camera):
+    """(scene, camera) of the coordinate tests: an empty 64 x 32 scene seen from (0.5, -6, 2)
+    by a 35 mm lens (camera: scenes.camera's other keywords)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 64, 32
+    return sc, scenes.camera((0.5, -6.0, 2.0), rotation=(1.25, 0.0, 0.08), lens=35, **camera)
+
+
+def engines_rgb(sc):
+    """Cycles' and DACRT's RGB of sc."""
     got = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine
@@ -62,20 +66,29 @@ def sphere_and_plane_rgb(sc, mat):
     return got['CYCLES'], got['DACRT']
 
 
+def sphere_and_plane_rgb(sc, mat, samples=64):
+    """Cycles' and DACRT's RGB of a sphere and a tilted plane of mat under a white world
+    (samples, direct light only, 1-pixel Box filter): the coordinate tests' scene."""
+    scenes.world((1.0, 1.0, 1.0), 1.0)
+    scenes.uv_sphere('S', radius=1.0, location=(-1.2, 0, 0.2), materials=(mat,))
+    plane = scenes.plane('P', size=2.0, location=(1.4, 0, 0.2), materials=(mat,))
+    plane.rotation_euler = (1.1, 0.3, 0.2)
+    rendering.matched(sc, samples)
+    return engines_rgb(sc)
+
+
+def object_interior(c):
+    """The pixels of RGB c (H, W, 3) whose 3x3 neighbourhood all shows an object, not the white
+    world."""
+    return interior(~np.all(np.abs(c - 1.0) < 1e-4, axis=-1))
+
+
 @pytest.mark.parametrize('kind', ['emission', 'image', 'diffuse'])
 def test_reflection_coordinates_match_cycles(kind):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 64, 32
-    scenes.camera((0.5, -6.0, 2.0), rotation=(1.25, 0.0, 0.08), lens=35)
+    sc, _ = coordinates_view()
     c, d = sphere_and_plane_rgb(sc, _material(kind))
-    # pixels whose 3x3 neighbourhood all shows an object (no silhouette), found on the emission
-    # render of the same view: a white world is (1, 1, 1) there
-    world = np.all(np.abs(c - 1.0) < 1e-4, axis=-1)
     if kind != 'diffuse':
-        inside = ~world
-        for ax in (0, 1):
-            inside = inside & np.roll(inside, 1, ax) & np.roll(inside, -1, ax)
+        inside = object_interior(c)         # (no silhouette pixels)
         assert inside.sum() > 200
         diff = np.abs(d - c)[inside]
         # (an image's texels change within a pixel where the reflection turns fast: a pixel's
@@ -84,6 +97,6 @@ def test_reflection_coordinates_match_cycles(kind):
         assert diff.mean() < 0.004, diff.mean(axis=0)
         assert np.ptp(c[inside], axis=0).max() > 0.3        # the test sees the vector vary
     else:
-        cb, db = (x.reshape(8, 4, 16, 4, 3).mean(axis=(1, 3)) for x in (c, d))
+        cb, db = (block_means(x[None], 4)[0] for x in (c, d))
         assert np.abs(db - cb).max() < 0.03, np.abs(db - cb).max()
         assert np.ptp(cb[..., 0]) > 0.3

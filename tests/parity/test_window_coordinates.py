@@ -5,13 +5,13 @@ whose Emission's Color is the Window vector, and a Checker texture on it, under 
 (the vector) and 4x4 blocks within 0.03 (the checker, whose squares split pixels at their
 edges). Window had been read as the socket's own value, said: pixels up to 1.0 off (the
 checker's blocks 0.8)."""
-import bpy
 import numpy as np
 import pytest
 
 from tests.addon import scenes
 
-from . import rendering
+from .stats import block_means
+from .test_reflection_coordinates import coordinates_view, object_interior, sphere_and_plane_rgb
 
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
@@ -33,10 +33,7 @@ def _material(kind):
 
 
 def _render(camera, kind):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 64, 32
-    cam = scenes.camera((0.5, -6.0, 2.0), rotation=(1.25, 0.0, 0.08), lens=35)
+    sc, cam = coordinates_view()
     if camera == 'ortho':
         cam.data.type, cam.data.ortho_scale = 'ORTHO', 7.0
     elif camera == 'shifted':
@@ -45,25 +42,13 @@ def _render(camera, kind):
         cam.location = (0.1, -1.8, 0.3)
         cam.data.type = 'PANO'
         cam.data.panorama_type = 'EQUIRECTANGULAR'
-    scenes.world((1.0, 1.0, 1.0), 1.0)
-    mat = _material(kind)
-    scenes.uv_sphere('S', radius=1.0, location=(-1.2, 0, 0.2), materials=(mat,))
-    plane = scenes.plane('P', size=2.0, location=(1.4, 0, 0.2), materials=(mat,))
-    plane.rotation_euler = (1.1, 0.3, 0.2)
-    rendering.matched(sc, 16)
-    got = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        got[engine] = scenes.render_rgba(sc)[..., :3]
-    return got['CYCLES'], got['DACRT']
+    return sphere_and_plane_rgb(sc, _material(kind), samples=16)
 
 
 @pytest.mark.parametrize('camera', ['persp', 'shifted', 'ortho', 'pano'])
 def test_window_vector_matches_cycles(camera):
     c, d = _render(camera, 'vector')
-    inside = ~np.all(np.abs(c - 1.0) < 1e-4, axis=-1)
-    for ax in (0, 1):
-        inside = inside & np.roll(inside, 1, ax) & np.roll(inside, -1, ax)
+    inside = object_interior(c)
     assert inside.sum() > 40
     diff = np.abs(d - c)[inside]
     assert diff.max() < 0.01, (diff.max(), diff.mean(axis=0))
@@ -73,5 +58,5 @@ def test_window_vector_matches_cycles(camera):
 @pytest.mark.parametrize('camera', ['persp', 'ortho'])
 def test_window_checker_matches_cycles(camera):
     c, d = _render(camera, 'checker')
-    cb, db = (x.reshape(8, 4, 16, 4, 3).mean(axis=(1, 3)) for x in (c, d))
+    cb, db = (block_means(x[None], 4)[0] for x in (c, d))
     assert np.abs(db - cb).max() < 0.03, np.abs(db - cb).max()
