@@ -6,11 +6,8 @@
 // -ffp-contract=off: every copy gives the same bits.
 #include "treelanes.h"
 
-#include <strings.h>
-
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 
 #include "dispatch.h"
@@ -192,13 +189,6 @@ void tree_point(TreePoint& t, const float P[3], const float* N) {
     t.pm = std::max({std::fabs(P[0]), std::fabs(P[1]), std::fabs(P[2])});
 }
 
-StopWeighFn stop_weigh_fn() {
-    const Isa best = resolve_isa("");
-    const char* env = std::getenv("DACRT_ISA");
-    Isa isa = best;
-    if (env && strcasecmp(env, "portable") == 0) isa = Isa::Portable;
-    if (env && strcasecmp(env, "avx2") == 0 && best != Isa::Portable) isa = Isa::Avx2;
-    return isa == Isa::Avx512 ? avx512_weigh : (isa == Isa::Avx2 ? avx2_weigh : portable_weigh);
-}
+StopWeighFn stop_weigh_fn() { return lane_copy<StopWeighFn>(portable_weigh, avx2_weigh, avx512_weigh); }
 
 }  // namespace dacrt
