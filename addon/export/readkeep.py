@@ -47,13 +47,9 @@ def file_key(path, img, unassociate, lazy):
 
 def kept(key, reasons):
     """The texels kept under key (their read's messages appended to reasons), or None."""
-    if key is None:
+    entry = _touch(key)
+    if entry is None:
         return None
-    with _lock:
-        entry = _kept.pop(key, None)
-        if entry is None:
-            return None
-        _kept[key] = entry         # (now the most recently used)
     reasons.extend(entry[1])
     return entry[0]
 
@@ -82,23 +78,13 @@ def keep(key, texels, messages):
         return
     for a in arrays:
         _freeze(a)
-    with _lock:
-        _kept.pop(key, None)
-        while _kept and sum(e[2] for e in _kept.values()) + size > _KEEP_BYTES:
-            del _kept[next(iter(_kept))]
-        _kept[key] = (texels, tuple(messages), size)
+    _store(key, (texels, tuple(messages), size))
 
 
 def kept_bytes(key):
     """The decoded bytes of an 8-bit file kept under key (keep_bytes: read-only), or None."""
-    if key is None:
-        return None
-    with _lock:
-        entry = _kept.pop(('bytes',) + key, None)
-        if entry is None:
-            return None
-        _kept[('bytes',) + key] = entry
-    return entry[0]
+    entry = None if key is None else _touch(('bytes',) + key)
+    return None if entry is None else entry[0]
 
 
 def keep_bytes(key, raw):
@@ -107,11 +93,28 @@ def keep_bytes(key, raw):
     if key is None or not isinstance(raw, np.ndarray) or raw.dtype != np.uint8 or raw.nbytes > _KEEP_BYTES:
         return
     _freeze(raw)
+    _store(('bytes',) + key, (raw, (), raw.nbytes))
+
+
+def _touch(key):
+    """The entry kept under key, now the most recently used, or None."""
+    if key is None:
+        return None
     with _lock:
-        _kept.pop(('bytes',) + key, None)
-        while _kept and sum(e[2] for e in _kept.values()) + raw.nbytes > _KEEP_BYTES:
+        entry = _kept.pop(key, None)
+        if entry is not None:
+            _kept[key] = entry
+    return entry
+
+
+def _store(key, entry):
+    """Keep entry (value, messages, bytes) under key, dropping the least recently used entries
+    while all would exceed _KEEP_BYTES."""
+    with _lock:
+        _kept.pop(key, None)
+        while _kept and sum(e[2] for e in _kept.values()) + entry[2] > _KEEP_BYTES:
             del _kept[next(iter(_kept))]
-        _kept[('bytes',) + key] = (raw, (), raw.nbytes)
+        _kept[key] = entry
 
 
 def forget():
