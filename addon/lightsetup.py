@@ -16,6 +16,7 @@ from .lights.overlap import coplanar_overlaps
 from .lights.point import SpotLight
 from .lights.sphereinside import TriangleReach
 from .lights.linking import LightLinking
+from .lights.madelamp import taken_lamp
 from .procedural import VIEW, ProceduralTexels
 from .scenedata import NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
 from .translucency import far_side
@@ -30,7 +31,8 @@ class LightSetup:
 
     def _build_lights(self, sd: SceneData):
         self._init_linking(sd)
-        lamps = [make_lamp(light) for light in sd.lights]
+        # (the lamps the export's float32 check made, where the lights still hold their values)
+        lamps = [taken_lamp(light, make_lamp) for light in sd.lights]
         world = np.asarray(sd.world, F32)
         wv = int(sd.world_visibility)
         # Light Groups: each triangle's group as an emitter (-1: none) and the world's

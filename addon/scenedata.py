@@ -97,6 +97,9 @@ class Light:
     # POINT/SPOT/AREA: a Light Falloff feeding the emission, (output: 0 Quadratic, 1 Linear,
     # 2 Constant; Smooth), applied at each ray's length to the lamp's point (lights/base.py)
     falloff: tuple = (0, 0.0)
+    # (lamp, the values it was made from): the renderer's lamp the export's float32 check made,
+    # which the integrator's set-up takes while the fields still hold those (lights/madelamp.py)
+    made: Optional[tuple] = field(default=None, repr=False, compare=False)
 
 
 @dataclass

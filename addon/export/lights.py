@@ -198,15 +198,11 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
 
 def _fits_float32(light):
     """Whether the renderer's float32 record of light is finite (lights.make_lamp, record) and
-    its radiance within what the kernels carry (lights.base.fits_float32)."""
+    its radiance within what the kernels carry (lights.base.fits_float32); the lamp made for it
+    is kept on the light for the integrator's set-up (lights.madelamp)."""
     from ..lights import make_lamp     # (the renderer's lamp model: no Blender in it)
-    from ..lights.base import fits_float32
-    try:
-        with np.errstate(all='ignore'):
-            lamp = make_lamp(light)
-            return bool(np.isfinite(lamp.record()).all()) and fits_float32(lamp.emit)
-    except (ValueError, ZeroDivisionError, OverflowError, FloatingPointError):
-        return False
+    from ..lights.madelamp import checked_lamp
+    return checked_lamp(light, make_lamp) is not None
 
 
 class _LampTree:
