@@ -38,21 +38,36 @@ def taken_lamp(light, make):
     if made is not None:
         light.made = None
         lamp, values = made
-        if _same(values, _values(light)):
+        if all(_same(then, getattr(light, name)) for name, then in zip(_names(light), values)):
             return lamp
     return make(light)
+
+
+_NAMES = {}     # a Light class -> its field names but `made` (dataclasses.fields builds them per call)
+
+
+def _names(light):
+    names = _NAMES.get(type(light))
+    if names is None:
+        names = _NAMES[type(light)] = tuple(f.name for f in fields(light) if f.name != 'made')
+    return names
 
 
 def _values(light):
     """Every field of light but `made`, arrays copied (a later write into one is seen)."""
     return tuple(np.array(v, copy=True) if isinstance(v, np.ndarray) else v
-                 for v in (getattr(light, f.name) for f in fields(light) if f.name != 'made'))
+                 for v in (getattr(light, name) for name in _names(light)))
+
+
+_IMMUTABLE = (str, bool, int, float, type(None))
 
 
 def _same(a, b) -> bool:
-    """a and b are the same bits: arrays and numpy scalars by dtype, shape and bytes, floats
-    by value and sign (-0.0 is not 0.0, NaN not NaN), tuples item by item, strings, bools and
-    ints by value, anything else (an IES profile) by identity."""
+    """a and b are the same bits: the same immutable object, arrays and numpy scalars by dtype,
+    shape and bytes, floats by value and sign (-0.0 is not 0.0, NaN not NaN), tuples item by
+    item, strings, bools and ints by value, anything else (an IES profile) by identity."""
+    if a is b and isinstance(a, _IMMUTABLE):
+        return True
     if type(a) is not type(b):
         return False
     if isinstance(a, (np.ndarray, np.generic)):
