@@ -60,3 +60,12 @@ def test_lamps_taken_from_the_check_render_as_lamps_made_afresh(scene, monkeypat
     fresh = scenes.render_rgba(scene)
     assert taken.tobytes() == fresh.tobytes()
     assert np.isfinite(taken).all() and taken[..., :3].max() > 0
+
+
+def test_a_stereo_frames_second_view_makes_its_own_lamps(scene, lamps_made):
+    """Each view of a multiview render has its own integrator: the first takes the lamps the
+    export checked, the second makes its own (a lamp is never shared between two set-ups)."""
+    _lit_scene(scene)
+    scene.render.use_multiview, scene.render.views_format = True, 'STEREO_3D'
+    bpy.ops.render.render()
+    assert sorted(lamps_made) == sorted(["Bulb", "Spot", "Sun", "Panel"] * 2 + ["Hidden"] * 3), lamps_made
