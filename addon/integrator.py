@@ -762,7 +762,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
 
     def _skip(self, kind, prim):
         """Per-ray triangle to ignore, in the tracer scene's own numbering (prim: global index
-        of the triangle each ray leaves, or None)."""
+        of the triangle each ray leaves, or None). Every prim is -1 or a triangle the tracer or
+        a shading kernel gave, so the traces take it with skip_checked (no range pass)."""
         if prim is None:
             return None
         local = self._local[kind]
@@ -820,7 +821,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         t0 = time.perf_counter()
         with tracer_cancel():
             hits = self._scenes[kind].intersect(rays, threads=self.threads, skip=skip, visible=self._visible[kind],
-                                                cancel=self._check_break)
+                                                cancel=self._check_break, skip_checked=True)
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['camera' if kind == 'camera' else 'shadow' if kind.startswith('through') else 'bounce'] += len(rays)
@@ -854,7 +855,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         t0 = time.perf_counter()
         with tracer_cancel():
             occ = self._scenes[kind].occluded(rays, threads=self.threads, skip=skip, visible=self._visible[kind],
-                                              cancel=self._check_break)
+                                              cancel=self._check_break, skip_checked=True)
         self._trace_seconds += time.perf_counter() - t0
         self._add_phases(self._scenes[kind].last_stats)
         self._rays['shadow'] += len(rays)

@@ -65,3 +65,45 @@ def test_skip_is_validated():
         scene.intersect(rays, skip=np.zeros(3, np.int32))
     with pytest.raises(ValueError, match="skip"):
         scene.occluded(rays, skip=np.zeros(2, np.float32))
+
+
+@pytest.mark.parametrize("isa", ISAS)
+def test_skip_checked_traces_as_the_checked_call(isa, monkeypatch):
+    """skip_checked (the renderer's batches: skips from the tracer's own hits) passes an int32
+    skip without the range pass: the same answers, bit for bit, as the checked call; an entry
+    outside the triangle indices then skips nothing (the tracer only compares against it),
+    while calls without the flag, and other dtypes with it, are still refused."""
+    monkeypatch.setenv("DACRT_ISA", isa)
+    rng = np.random.default_rng(11)
+    v1, t1 = scenes.icosphere(2, 1.0)
+    v2, t2 = scenes.icosphere(2, 2.0)
+    vertices = np.concatenate([v1, v2]).astype(np.float32)
+    triangles = np.concatenate([t1, t2 + len(v1)])
+    m = len(triangles)
+    scene = dacrt.Scene(vertices, triangles)
+    org, dirs = _rays_from_inside(rng, 200)
+    plain = scene.intersect(dacrt.make_rays(org, dirs), threads=1)
+    skip = plain["prim"].astype(np.int32)
+    skip[::5] = -1
+    skip[2::5] = m - 1 - skip[2::5]
+    for query, tfar in (("intersect", None), ("occluded", 1.5)):
+        def run(s, **kw):
+            rays = dacrt.make_rays(org, dirs) if tfar is None else dacrt.make_rays(org, dirs, tfar=tfar)
+            out = getattr(scene, query)(rays, threads=2, skip=s, **kw)
+            return out, rays
+        want, want_rays = run(skip)
+        got, got_rays = run(skip, skip_checked=True)
+        assert got.tobytes() == want.tobytes() and got_rays.tobytes() == want_rays.tobytes(), query
+        # out of range with the flag: as -1 (what the check would have refused)
+        bad = skip.copy()
+        bad[1::5] = np.array([m, -2, 2**31 - 1, -2**31], np.int32)[np.arange(len(bad[1::5])) % 4]
+        none = skip.copy()
+        none[1::5] = -1
+        got, _ = run(bad, skip_checked=True)
+        assert got.tobytes() == run(none)[0].tobytes(), query
+        with pytest.raises(ValueError, match=r"skip\[1\] = .* is not a triangle index"):
+            run(bad)
+        wide = bad.astype(np.int64)
+        wide[1] = 2**32                  # int64 is still checked: its int32 cast would wrap to 0
+        with pytest.raises(ValueError, match=r"skip\[1\] = 4294967296 is not a triangle index"):
+            run(wide, skip_checked=True)

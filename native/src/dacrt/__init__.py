@@ -289,13 +289,15 @@ class Scene:
         return (_check_threads(threads), _requested_isa(), PARTITIONS.index(self._partition),
                 self._leaf_size or 0, self._leaf_rays, self._sah_ratio, self._chunk_rays)
 
-    def _skip(self, skip, n: int):
+    def _skip(self, skip, n: int, checked: bool = False):
         if skip is None:
             return None
         s = np.asarray(skip)
         if s.shape != (n,) or s.dtype.kind not in "iu":
             raise ValueError(f"skip must be an integer array of one triangle index per ray id (shape ({n},)); "
                              f"got shape {s.shape} dtype {s.dtype}")
+        if checked and s.dtype == np.int32 and s.flags.c_contiguous:
+            return s  # the caller's word: no min/max pass (the tracer only compares the entries)
         m = self._core.num_triangles
         if n and (s.min() < -1 or s.max() >= m):  # before the int32 cast, which wraps 2**32 to 0
             i = int(np.argmax((s < -1) | (s >= m)))
@@ -311,7 +313,8 @@ class Scene:
             raise ValueError("visible was given but this Scene was made without masks")
         return int(visible)
 
-    def intersect(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None, cancel=None) -> np.ndarray:
+    def intersect(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None, cancel=None, *,
+                  skip_checked: bool = False) -> np.ndarray:
         """Closest hit with t in (0, tfar] for every ray; returns HIT_DTYPE indexed by ray id
         (a miss: prim -1, t = inf, u = v = 0, whatever its tfar).
 
@@ -325,24 +328,30 @@ class Scene:
         CANCEL_POLL_SECONDS while the rays are traced (with the GIL; the trace runs without
         it); when it returns true the trace stops within a recursion step and raises Cancelled
         (the rays are left reordered, no hits are returned). Its exceptions propagate.
+        skip_checked: the caller vouches for skip's range (-1 or a triangle index, e.g. prims of
+        this scene's own hits), so a C-contiguous int32 skip is passed without the min/max pass
+        over it (a renderer's every batch: ~1% of a small scene's render); an entry outside the
+        range then skips nothing, as the tracer only compares triangles against it. Other
+        dtypes are checked as before.
         """
         _check_rays(rays)
         args = self._args(threads)
-        skip = self._skip(skip, len(rays))
+        skip = self._skip(skip, len(rays), skip_checked)
         vis = self._visible(visible)
         hits = np.empty(len(rays), HIT_DTYPE)
         self.last_stats = self._core.intersect(rays, hits, skip, *args, vis, *_cancel(cancel))
         return hits
 
-    def occluded(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None, cancel=None) -> np.ndarray:
+    def occluded(self, rays: np.ndarray, threads: int = 0, skip=None, visible=None, cancel=None, *,
+                 skip_checked: bool = False) -> np.ndarray:
         """True for every ray (by id) that hits anything with t in (0, tfar).
 
         rays is reordered in place; the tfar of occluded rays is overwritten (negative).
-        skip, visible, cancel: as for intersect().
+        skip, visible, cancel, skip_checked: as for intersect().
         """
         _check_rays(rays)
         args = self._args(threads)
-        skip = self._skip(skip, len(rays))
+        skip = self._skip(skip, len(rays), skip_checked)
         vis = self._visible(visible)
         out = np.empty(len(rays), np.uint8)
         self.last_stats = self._core.occluded(rays, out, skip, *args, vis, *_cancel(cancel))
