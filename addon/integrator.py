@@ -1019,11 +1019,14 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         need_pick = self.lights.num_entries > 1
         u_pick = u_rr = None
         early = k < ROULETTE_FROM and path.xb is not None and path.thr is not None
+        fused = self._fused(path, sinks, k)
+        if fused and not early:     # shade_bounce draws them itself, the same numbers: no arrays
+            return self._diffuse_vertex(k, path, hits, hit, sinks, draw=(need_pick, k >= ROULETTE_FROM))
         if need_pick or k >= ROULETTE_FROM or early:
             u_pick, u_rr = self.rng.uniform_pick(path.keys, dim(k, 0))
         if early:                                     # Cycles counts glass passes as bounces
             hit = self._glass_roulette(k, path, hit, u_rr)
-        if self._fused(path, sinks, k):
+        if fused:
             return self._diffuse_vertex(k, path, hits, hit, sinks, u_pick if need_pick else None,
                                         u_rr if k >= ROULETTE_FROM else None)
         # ... and, in the same pass, the survivors' hit points and the path columns they keep
@@ -1145,17 +1148,20 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                 and not sinks.groups
                 and not (self.lights.environment is not None and k > self._world_max_bounces))
 
-    def _diffuse_vertex(self, k, path, hits, hit, sinks, u_pick, u_rr):
+    def _diffuse_vertex(self, k, path, hits, hit, sinks, u_pick=None, u_rr=None, draw=None):
         """_vertex's shading of vertex k (survival, light sampling, the bounce) in one native
         pass (dacrt.shading.shade_bounce), the same numbers as its general steps; then the
-        shadow rays. Returns the paths that go on."""
+        shadow rays. draw = (pick, roulette): the pass draws those uniforms of dimension pair
+        dim(k, 0) from the keys (uniform_pick's) instead of taking u_pick and u_rr. Returns the
+        paths that go on."""
         last = k == self.max_bounces and not self.lights.seen_by_bsdf and SKIP_WORK
         t = self.tri
+        words = (*self.rng.dim_words(dim(k, 0)), *draw) if draw is not None and any(draw) else None
         black, rr, (thr, (_, _, ns, P_off), prim, pid, keys, _), nee, bsdf = dacrt.shading.shade_bounce(
             self._light_choice_at(k), hits, hit, self._tri_live if SKIP_WORK else self._tri_any, self._tri_scatter,
             path.thr, u_rr, t.geo, t.normals, path.D, path.pid, path.keys, u_pick, self.rng.dim_words(dim(k, 1)),
             _END_SHORTEN, SKIP_WORK, None if last else self.rng.dim_words(dim(k, 2)), rough=self._fused_rough(),
-            records=t.records)
+            records=t.records, draw=words)
         self._ended['black'] += black
         self._ended['roulette'] += rr
         if len(pid) == 0:

@@ -534,7 +534,8 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
                           F32Array geo, py::object normals, F32Array D, I64Array pid,
                           py::array_t<uint32_t, py::array::c_style> keys, py::object pick, uint32_t nee_ka,
                           uint32_t nee_kb, float shorten, bool skip_work, bool scatter, uint32_t ka, uint32_t kb,
-                          py::object ray_dtype, py::object rough, py::object records_of_geo, py::object runs_given) {
+                          py::object ray_dtype, py::object rough, py::object records_of_geo, py::object runs_given,
+                          py::object draw) {
     F32Array keep[3];
     std::shared_ptr<EnvironmentMap> env_keep;
     LightChoice lights =
@@ -573,8 +574,15 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     in.pid = pid.data();
     need_shape(keys, 2, n, "keys");
     in.keys = keys.data();
+    if (!draw.is_none()) {  // (ka, kb, pick, roulette): uniform_pick's uniforms drawn in the pass
+        const auto t = draw.cast<py::tuple>();
+        if (t.size() != 4) throw py::value_error("draw must be (ka, kb, pick, roulette)");
+        if (!u_rr.is_none() || !pick.is_none()) throw py::value_error("draw takes the place of u_rr and pick");
+        in.draw_ka = t[0].cast<uint32_t>(), in.draw_kb = t[1].cast<uint32_t>();
+        in.draw_pick = t[2].cast<bool>(), in.draw_rr = t[3].cast<bool>();
+    }
     py::array_t<double, py::array::c_style> pick_keep;
-    in.pick = pick_uniforms(pick, n, lights.entries, pick_keep);
+    if (!in.draw_pick) in.pick = pick_uniforms(pick, n, lights.entries, pick_keep);
     in.nee_ka = nee_ka, in.nee_kb = nee_kb, in.shorten = shorten, in.skip_work = skip_work;
     in.scatter = scatter, in.ka = ka, in.kb = kb;
     I32Array rough_mat_keep;
@@ -603,7 +611,9 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     size_t k, black, rr;
     {
         py::gil_scoped_release nogil;
-        k = survivors(in.hits, in.hit, n, in.live, in.M, in.thr, in.u_rr, idx.mutable_data(), &black, &rr);
+        k = in.draw_rr ? survivors_drawn(in.hits, in.hit, n, in.live, in.M, in.thr, in.keys, in.draw_ka, in.draw_kb,
+                                      idx.mutable_data(), &black, &rr)
+                    : survivors(in.hits, in.hit, n, in.live, in.M, in.thr, in.u_rr, idx.mutable_data(), &black, &rr);
     }
     const py::ssize_t K = py::ssize_t(k);
     F32Array thr_out({py::ssize_t(3), K}), surf({py::ssize_t(in.normals ? 12 : 9), K});
@@ -612,7 +622,7 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     py::array_t<uint32_t> keys_out({py::ssize_t(2), K});
     py::object pick_out = py::none();
     py::array_t<double> pick_arr;
-    if (in.pick) {
+    if (in.pick || in.draw_pick) {
         pick_arr = py::array_t<double>(K);
         pick_out = pick_arr;
     }
@@ -630,7 +640,7 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
     out.prim = prim.mutable_data();
     out.pid = pid_out.mutable_data();
     out.keys = keys_out.mutable_data();
-    out.pick = in.pick ? pick_arr.mutable_data() : nullptr;
+    out.pick = in.pick || in.draw_pick ? pick_arr.mutable_data() : nullptr;
     out.nee.value = value.mutable_data();
     out.nee.contrib = reinterpret_cast<uint8_t*>(contrib.mutable_data());
     out.nee.rays = static_cast<Ray*>(shadow_rays.mutable_data());
@@ -939,7 +949,8 @@ void register_lamps(py::module_& m) {
           py::arg("thr"), py::arg("u_rr"), py::arg("geo"), py::arg("normals"), py::arg("D"), py::arg("pid"),
           py::arg("keys"), py::arg("pick"), py::arg("nee_ka"), py::arg("nee_kb"), py::arg("shorten"),
           py::arg("skip_work"), py::arg("scatter"), py::arg("ka"), py::arg("kb"), py::arg("ray_dtype"),
-          py::arg("rough") = py::none(), py::arg("geo_records") = py::none(), py::arg("runs") = py::none());
+          py::arg("rough") = py::none(), py::arg("geo_records") = py::none(), py::arg("runs") = py::none(),
+          py::arg("draw") = py::none());
     m.def("accumulate_masked", &accumulate_masked_py, py::arg("L"), py::arg("pid"), py::arg("values"), py::arg("mask"),
           py::arg("clamp") = std::numeric_limits<float>::infinity());
 }

@@ -6,6 +6,7 @@
 
 #include "orennayar.h"
 #include "parallel.h"
+#include "random.h"
 #include "shading.h"
 
 namespace dacrt {
@@ -37,15 +38,20 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
     const bool areas = draws_area_lanes(lights);
     auto block = [&](size_t q, size_t* bad) {
         const size_t b = q * kEventBlock, e = std::min(k, b + kEventBlock);
-        survivor_range(in.hits, n, in.albedo, in.M, in.thr, in.u_rr != nullptr, idx, k, out.thr, in.geo, in.normals,
+        survivor_range(in.hits, n, in.albedo, in.M, in.thr, in.u_rr || in.draw_rr, idx, k, out.thr, in.geo, in.normals,
                        in.D, surf, out.prim, b, e, in.records);
         for (size_t j = b; j < e; ++j) {  // the path columns the survivors keep
             const size_t i = size_t(idx[j]);
             out.pid[j] = in.pid[i];
             out.keys[j] = in.keys[i];
             out.keys[k + j] = in.keys[n + i];
-            if (out.pick) out.pick[j] = in.pick[i];
+            if (in.pick) out.pick[j] = in.pick[i];
         }
+        if (in.draw_pick)  // uniform_pick's first uniform of the survivors' own keys
+            for_words(out.keys, k, in.draw_ka, in.draw_kb, b, e,
+                      [&](size_t j0, size_t m, const uint32_t* w, const uint32_t*) {
+                          for (size_t j = 0; j < m; ++j) out.pick[j0 + j] = double(w[j]) * (1.0 / 4294967296.0);
+                      });
         if (in.rough_mat)
             for (size_t j = b; j < e; ++j) {
                 const size_t i = size_t(idx[j]), m = size_t(in.rough_mat[out.prim[j]]), M = in.rough_M;

@@ -46,6 +46,11 @@ struct BounceIn {
     const float* rough_params = nullptr;
     const float* rough_rho = nullptr;
     size_t rough_M = 0;
+    // drawn instead of taken (u_rr, pick null): with draw_rr, roulette by uniform_pick's second
+    // uniform of pair (draw_ka, draw_kb) of the paths' keys (survivors_drawn); with draw_pick,
+    // the survivors' pick, its first
+    bool draw_rr = false, draw_pick = false;
+    uint32_t draw_ka = 0, draw_kb = 0;
 };
 
 // The survivors' columns (k each, idx from survivors()): thr (3 rows), surf (P, ng, P_off and,
@@ -65,6 +70,12 @@ struct BounceOut {
     uint8_t* ok;
     Ray* rays;
 };
+
+// survivors() with the roulette uniforms drawn from the paths' keys (2 rows, stride n): the
+// second uniform of uniform_pick(keys, ka, kb), the same bits without its array (survival.cpp).
+size_t survivors_drawn(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, size_t M,
+                       const float* thr, const uint32_t* keys, uint32_t ka, uint32_t kb, int64_t* idx,
+                       size_t* dead_black, size_t* dead_rr);
 
 // Shades the k survivors idx of in (survivors()) with light sampling from lights (no
 // terminator, light linking or bump maps); returns the shadow rays written, *skipped the

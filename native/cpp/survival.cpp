@@ -5,9 +5,11 @@
 #include <cmath>
 #include <vector>
 
+#include "bounce.h"
 #include "hitrecords.h"
 #include "parallel.h"
 #include "pathvertex.h"
+#include "random.h"
 #include "shading.h"
 #include "survivorlanes.h"
 
@@ -23,23 +25,25 @@ inline float survival(const float* thr, size_t n, size_t i) {
 
 }  // namespace
 
-size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, size_t M, const float* thr,
-                 const float* u_rr, int64_t* idx, size_t* dead_black, size_t* dead_rr) {
+// survivors() with roulette uniform u(i) (null: no roulette), for whichever source the caller has.
+template <class Uniform>
+size_t survivors_of(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, size_t M, const float* thr,
+                    bool roulette, const Uniform& u, int64_t* idx, size_t* dead_black, size_t* dead_rr) {
     std::vector<uint8_t> keep(n);
     std::atomic<size_t> black{0}, rr{0};
     parallel_for(n, [&](size_t b, size_t e) {
         size_t nb = 0, nr = 0;
-        // branch-free per path (hits, black surfaces and roulette follow no pattern); the
-        // triangle index is clamped before live[] is read
-        for (size_t i = b; i < e; ++i) {
+        u(b, e, [&](size_t i, float u_rr) {
+            // branch-free per path (hits, black surfaces and roulette follow no pattern); the
+            // triangle index is clamped before live[] is read
             const int32_t p = __atomic_load_n(&hits[i].prim, __ATOMIC_RELAXED);
             const bool on = (hit[i] != 0) & (p >= 0) & (size_t(p) < M);
             const bool alive = on & (live[on ? size_t(p) : 0] != 0);
-            const bool lucky = !u_rr || u_rr[i] < survival(thr, n, i);
+            const bool lucky = !roulette || u_rr < survival(thr, n, i);
             nb += on & !alive;
             nr += alive & !lucky;
             keep[i] = alive & lucky;
-        }
+        });
         black += nb;
         rr += nr;
     });
@@ -51,6 +55,25 @@ size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* l
         k += keep[i];
     }
     return k;
+}
+
+size_t survivors(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, size_t M, const float* thr,
+                 const float* u_rr, int64_t* idx, size_t* dead_black, size_t* dead_rr) {
+    auto given = [&](size_t b, size_t e, auto&& path) {
+        for (size_t i = b; i < e; ++i) path(i, u_rr ? u_rr[i] : 0.0f);
+    };
+    return survivors_of(hits, hit, n, live, M, thr, u_rr != nullptr, given, idx, dead_black, dead_rr);
+}
+
+size_t survivors_drawn(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t* live, size_t M,
+                       const float* thr, const uint32_t* keys, uint32_t ka, uint32_t kb, int64_t* idx,
+                       size_t* dead_black, size_t* dead_rr) {
+    auto drawn = [&](size_t b, size_t e, auto&& path) {  // uniform_pick's second uniform, a chunk at a time
+        for_words(keys, n, ka, kb, b, e, [&](size_t i0, size_t m, const uint32_t*, const uint32_t* w) {
+            for (size_t j = 0; j < m; ++j) path(i0 + j, unit24(w[j]));
+        });
+    };
+    return survivors_of(hits, hit, n, live, M, thr, true, drawn, idx, dead_black, dead_rr);
 }
 
 void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, const float* thr, bool roulette,

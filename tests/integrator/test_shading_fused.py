@@ -98,6 +98,34 @@ def test_shade_bounce_without_roulette_or_throughput(first_bounce):
     _equal(fused, _steps(one, x, (3, 4), True, (5, 6)))
 
 
+@pytest.mark.parametrize('n', [1, 600, 2 * BLOCK + 777])
+@pytest.mark.parametrize('pick,roulette', [(True, True), (True, False), (False, True)])
+def test_shade_bounce_draws_uniform_picks_uniforms(n, pick, roulette):
+    """draw=(ka, kb, pick, roulette): the pass draws the roulette uniforms (of every arriving
+    path) and the light-choice uniforms (of the survivors) from the keys, which the integrator
+    had drawn with uniform_pick and handed over as arrays: every output bit the same, in chunks
+    of words that start inside a block and across blocks."""
+    rng = np.random.default_rng(n + 3 * pick + roulette)
+    lc = _lights(rng, lamps=True, triangles=True)
+    if not pick:                  # one light: no choice to draw
+        lc = shading.LightChoice(lc.records[:1], [1.0], [1.0], [False], [True])
+    x = _bounce_inputs(rng, n, roulette=False, pick=False)
+    ka, kb = 0x9E3779B9, 77
+    u_pick, u_rr = shading.uniform_pick(x['keys'], ka, kb)
+    args = (x['hits'], x['hit'], x['live'], x['albedo'], x['thr'])
+    rest = (x['geo'], x['normals'], x['D'], x['pid'], x['keys'])
+    given = shading.shade_bounce(lc, *args, u_rr if roulette else None, *rest, u_pick if pick else None, (11, 12),
+                                 SHORTEN, True, (21, 22))
+    drawn = shading.shade_bounce(lc, *args, None, *rest, None, (11, 12), SHORTEN, True, (21, 22),
+                                 draw=(ka, kb, pick, roulette))
+    _equal(drawn, given)
+    if roulette:
+        assert 0 < given[1] and len(given[2][3]) > 0 or n == 1
+    with pytest.raises(ValueError, match='draw takes the place of u_rr and pick'):
+        shading.shade_bounce(lc, *args, u_rr, *rest, None, (11, 12), SHORTEN, True, (21, 22),
+                             draw=(ka, kb, pick, roulette))
+
+
 def test_all_paths_dead():
     """Every ray missed or ended: nothing shaded, empty outputs of the right kinds."""
     rng = np.random.default_rng(9)

@@ -393,7 +393,7 @@ def next_event(lights: LightChoice, P, P_off, ns, ng, thr, keys, ka: int, kb: in
 
 def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, normals, D, pid, keys, pick,
                  nee_words, shorten: float = 1.0, skip_work: bool = True, scatter_words=None, rough=None,
-                 records=None):
+                 records=None, draw=None):
     """A diffuse path vertex in one native pass, block by block: continue_paths(hits, hit, live,
     albedo, thr, u_rr, surface=(geo, normals, D), take=(pid, keys, pick)), then next_event at
     the survivors (lights, their P, P_off, ns, ng (None where normals is None), thr, keys,
@@ -403,6 +403,10 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
     (M,) of the triangles, params (4, m), colours (3, m)) or None: rough diffuses, as
     rough_rows' table of the survivors in next_event's rough and rough_scale after the scatter.
     records: hit_records(geo, normals) or None (as surface()).
+    draw = (ka, kb, pick, roulette) or None: the pass draws the uniforms uniform_pick(keys, ka,
+    kb) gives, instead of taking them as arrays (u_rr and pick must then be None): with
+    roulette its second as u_rr, with pick its first as the survivors' pick; the same bits,
+    without the arrays' writes and reads or a call per bounce.
 
     Returns (black, roulette, (thr, (P, ng, ns, P_off), prim, pid, keys, pick), (value, contrib,
     rays, send, skip, skipped) as next_event's, (wi, pdf, ok, rays) as cosine_scatter's or None
@@ -411,6 +415,10 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
     if hits.dtype != HIT_DTYPE:
         raise ValueError(f"hits must be a HIT_DTYPE array, got {hits.dtype}")
     ka, kb = scatter_words if scatter_words is not None else (0, 0)
+    if draw is not None:
+        if u_rr is not None or pick is not None:
+            raise ValueError("draw takes the place of u_rr and pick: give those as None")
+        draw = (int(draw[0]), int(draw[1]), bool(draw[2]), bool(draw[3]))
     black, rr, paths, nee, bsdf = _core.shade_bounce(
         lights.records, lights.cdf, lights.prob, lights.no_mis, lights.shadow, lights.tri_geo, lights.tri_area,
         lights.tri_emission, lights.environment, lights.tree, lights.tri_prim, np.ascontiguousarray(hits),
@@ -422,7 +430,7 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
         float(shorten), bool(skip_work), scatter_words is not None, int(ka), int(kb), RAY_DTYPE,
         None if rough is None else (np.ascontiguousarray(rough[0], np.int32), _rows(rough[1], 4, "rough params"),
                                     _rows(rough[2], 3, "rough colours")), _records(records),
-        None if lights.tree is None else lights.runs)
+        None if lights.tree is None else lights.runs, draw)
     thr_out, surf, prim, pid_out, keys_out, pick_out = paths
     ng = surf[3:6]
     points = (surf[0:3], ng, ng if normals is None else surf[9:12], surf[6:9])
