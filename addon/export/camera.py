@@ -105,14 +105,27 @@ def export_camera(scene, messages=None, view=None, camera=None, render=None):
         ax *= ortho_scale / (ar * 2.0)
         ay *= ortho_scale / (ar * 2.0)
         ar = ortho_scale / 2.0
-    dx, dy = 2.0 * ar * shift[0], 2.0 * ar * shift[1]
-    viewplane = (-ax + dx, ax + dx, -ay + dy, ay + dy)
+    def plane(shift):
+        if pano:    # Cycles: the panorama's viewplane is the unit square moved by the shift
+            return (shift[0], 1.0 + shift[0], shift[1], 1.0 + shift[1])
+        dx, dy = 2.0 * ar * shift[0], 2.0 * ar * shift[1]
+        return (-ax + dx, ax + dx, -ay + dy, ay + dy)
+    viewplane = plane(shift)
+    # A finite shift so large that float32 (Cycles' viewplane) rounds the frame's two edges to
+    # one value, or overflows: every camera ray then takes one direction. The render had failed
+    # ("camera.viewplane ... must be finite"); the shift is named as an infinite one is.
+    with np.errstate(over='ignore'):
+        edges = np.array(viewplane, np.float32)
+    for axis, name in enumerate(("Shift X", "Shift Y")):
+        lo, hi = edges[2 * axis], edges[2 * axis + 1]
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            broken.append(f"{name} is {shift[axis]:g} (too far for float32 to tell the frame's edges apart)")
+            shift = (0.0, shift[1]) if axis == 0 else (shift[0], 0.0)
+    viewplane = plane(shift)
     tan_half_fov = 0.5 * sensor / lens / ar
     pano_settings = {}
     if pano:
-        # Cycles: the panorama's viewplane is the unit square moved by the shift, and an
-        # equisolid fisheye's sensor is fitted to the frame like a perspective camera's
-        viewplane = (shift[0], 1.0 + shift[0], shift[1], 1.0 + shift[1])
+        # an equisolid fisheye's sensor is fitted to the frame like a perspective camera's
         sensor_mm = (sensor, sensor * yr / xr) if horizontal else (sensor * xr / yr, sensor)
         pano_settings = _panorama_settings(cam, cam_ob.name, pano, sensor_mm, len(broken) > broken_before_sensor,
                                            broken, messages)
