@@ -55,6 +55,29 @@ def test_non_finite_camera_setting_renders_the_world_with_a_warning(scene, tmp_p
     assert any(t.startswith("camera 'Camera': ") and named in t and "only the world" in t for t in said), said
 
 
+@pytest.mark.parametrize("kind, setting, value, named", [
+    ('PERSP', 'shift_x', 1e30, "Shift X is 1e+30"),
+    ('PERSP', 'shift_y', -1e30, "Shift Y is -1e+30"),
+    ('ORTHO', 'shift_x', 3e38, "Shift X is 3e+38"),            # (overflows float32)
+    ('EQUIRECTANGULAR', 'shift_y', 1e30, "Shift Y is 1e+30"),
+])
+def test_shift_too_far_for_float32_renders_the_world_with_a_warning(scene, tmp_path, said, kind, setting, value,
+                                                                      named):
+    """A finite shift so large that float32 rounds the frame's edges to one value: Cycles' rays
+    then start ~1e29 aside (or take one garbled direction) and it renders the world alone
+    (measured: 0.4998 over a 0.5 world, a cube on the shifted side too, perspective and
+    panoramic). The render had failed: "camera.viewplane (2.666666706793243e+30,
+    2.666666706793243e+30, -1.0, 1.0) must be finite (left < right, bottom < top)"."""
+    if kind in ('PERSP', 'ORTHO'):
+        cam = _lit_scene(scene, kind).data
+    else:
+        cam = _panorama(scene, kind)
+    setattr(cam, setting, value)
+    img = _image(scene, tmp_path)
+    _world_only(img)
+    assert any(t.startswith("camera 'Camera': ") and named in t and "only the world" in t for t in said), said
+
+
 @pytest.mark.parametrize("how", ['scale', 'location'])
 def test_camera_of_zero_scale_or_nan_location_renders_the_world_with_a_warning(scene, tmp_path, said, how):
     cam = _lit_scene(scene)
