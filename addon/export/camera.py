@@ -141,6 +141,18 @@ def export_camera(scene, messages=None, view=None, camera=None, render=None):
         m[:3, 3] = where
     else:
         m[:3, :3] /= lengths
+    # depth of field whose rays would have no direction breaks the camera too (Cycles' do)
+    dof_broken = []
+    spread = 0.0 if kind == 'ORTHO' else tan_half_fov * math.hypot(max(abs(viewplane[0]), abs(viewplane[1])),
+                                                                    max(abs(viewplane[2]), abs(viewplane[3])))
+    dof = _depth_of_field(cam, kind, lens, m, cam_ob.name, messages, spread, dof_broken) if cam else {}
+    if pano and (dof.get('aperture', 0.0) > 0 or dof_broken):
+        dof = {}
+        if messages is not None:
+            messages.append(('WARNING', f"camera '{cam_ob.name}': depth of field is not rendered for "
+                                        "panoramic cameras (every ray leaves the camera's position)"))
+    else:
+        broken += dof_broken
     if broken:
         if messages is not None:
             messages.append(('WARNING', f"camera '{cam_ob.name}': {'; '.join(broken)}, so only the world "
@@ -159,12 +171,6 @@ def export_camera(scene, messages=None, view=None, camera=None, render=None):
         if border[2] <= border[0] or border[3] <= border[1]:
             raise ExportError("the render border is empty (less than one pixel wide or high)")
         crop = bool(r.use_crop_to_border)
-    dof = _depth_of_field(cam, kind, lens, m, cam_ob.name, messages) if cam else {}
-    if pano and dof.get('aperture', 0.0) > 0:
-        dof = {}
-        if messages is not None:
-            messages.append(('WARNING', f"camera '{cam_ob.name}': depth of field is not rendered for "
-                                        "panoramic cameras (every ray leaves the camera's position)"))
     return sd.Camera(kind=kind, matrix=m, viewplane=viewplane, tan_half_fov=tan_half_fov,
                      clip_start=float(clip_start), clip_end=float(clip_end), width=width,
                      height=height, border=border, crop=crop, **dof, **pano_settings)
@@ -212,10 +218,12 @@ def _look_through_lens(ob):
     return lens if lens > 0.0 and math.isfinite(lens) else 50.0
 
 
-def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):
+def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages, spread, broken):
     """Cycles' thin lens (blender/camera.cpp): aperture radius lens / (2 f-stop) (lens in m;
     orthographic 1 / (2 f-stop)), focus distance from the focus object (its distance along the
-    view axis, a bone's head when a bone is named) or the focus distance."""
+    view axis, a bone's head when a bone is named) or the focus distance. spread: the largest
+    tangent of a pixel's direction off the view axis (0 orthographic). Settings that leave
+    Cycles' lens rays without a direction are added to `broken` (only the world is rendered)."""
     d = cam.dof
     if not d.use_dof:
         return {}
@@ -234,9 +242,26 @@ def _depth_of_field(cam, kind, lens, cam_matrix, cam_name, messages):
             messages.append(('WARNING', f"camera '{cam_name}': depth of field has a non-finite aperture or "
                                         "focus distance; rendered without it"))
         return {}
-    return dict(aperture=float(aperture), focal_distance=max(focus, 1e-5),
-                aperture_blades=int(d.aperture_blades) if d.aperture_blades >= 3 else 0,
-                aperture_rotation=float(d.aperture_rotation), aperture_ratio=float(d.aperture_ratio))
+    focus = max(focus, 1e-5)
+    blades = int(d.aperture_blades) if d.aperture_blades >= 3 else 0
+    rotation, ratio = float(d.aperture_rotation), float(d.aperture_ratio)
+    # A lens ray's direction is normalised in float32, as in Cycles: beyond sqrt(FLT_MAX) its
+    # squared length overflows and the direction is 0; a NaN blade rotation (read by polygon
+    # apertures only) or ratio makes it NaN. Cycles' rays then meet nothing; the render had
+    # failed ("rays[0].dir is the zero vector", "camera.aperture_rotation nan must be finite").
+    before = len(broken)
+    lens_reach = aperture * (max(1.0, 1.0 / ratio) if ratio > 0 else 1.0)     # (x is scaled by 1 / ratio)
+    if lens_reach + focus * math.sqrt(1.0 + spread * spread) >= math.sqrt(float(np.finfo(np.float32).max)):
+        broken.append(f"depth of field's focus distance {focus:g} m with aperture radius {aperture:g} m is "
+                      "beyond float32's range for its rays' directions")
+    if blades and math.isnan(rotation):
+        broken.append("Aperture Rotation is nan")
+    if math.isnan(ratio):
+        broken.append("Aperture Ratio is nan")
+    if len(broken) > before:
+        return {}
+    return dict(aperture=float(aperture), focal_distance=focus, aperture_blades=blades,
+                aperture_rotation=0.0 if math.isnan(rotation) else rotation, aperture_ratio=ratio)
 
 
 def viewport_camera(view_matrix, window_matrix, width, height, clip=None):
