@@ -204,3 +204,43 @@ def test_nan_equisolid_field_of_view_reads_as_360_degrees(scene, tmp_path, said)
     img = _image(scene, tmp_path)
     assert np.array_equal(img, ref) and (img[..., 0] > 0.5).any()
     assert any("Field of View is nan, read as 360 degrees" in t for t in said), said
+
+
+def _depth_of_field(cam, **settings):
+    d = cam.data.dof
+    d.use_dof, d.aperture_fstop, d.focus_distance = True, 0.1, 5.0
+    for name, value in settings.items():
+        setattr(d, name, value)
+
+
+@pytest.mark.parametrize("kind, settings, named", [
+    ('PERSP', dict(focus_distance=1e20), "depth of field's focus distance 1e+20 m"),
+    ('PERSP', dict(focus_distance=3e38), "depth of field's focus distance 3e+38 m"),
+    ('ORTHO', dict(focus_distance=1e20), "depth of field's focus distance 1e+20 m"),
+    ('PERSP', dict(aperture_blades=5, aperture_rotation=NAN), "Aperture Rotation is nan"),
+    ('PERSP', dict(aperture_ratio=NAN), "Aperture Ratio is nan"),
+])
+def test_depth_of_field_rays_without_a_direction_render_the_world_with_a_warning(scene, tmp_path, said, kind,
+                                                                                 settings, named):
+    """Cycles normalises a lens ray's direction in float32: past a focus distance of ~1.8e19 its
+    squared length overflows and the direction is 0, and a NaN blade rotation or ratio makes it
+    NaN; its rays then meet nothing (measured: 0.4998 over a 0.5 world, the lit floor 0.3998
+    at 1e18). DACRT's render had failed: "rays[0].dir is the zero vector", "camera.
+    aperture_rotation nan must be finite", "camera.aperture_ratio nan must be positive"."""
+    cam = _lit_scene(scene, kind)
+    _depth_of_field(cam, **settings)
+    img = _image(scene, tmp_path)
+    _world_only(img)
+    assert any(t.startswith("camera 'Camera': ") and named in t and "only the world" in t for t in said), said
+
+
+@pytest.mark.parametrize("settings", [dict(focus_distance=1.5e19), dict(aperture_blades=0, aperture_rotation=NAN)])
+def test_depth_of_field_within_float32_or_a_nan_rotation_of_a_round_aperture_renders_the_floor(scene, tmp_path,
+                                                                                              said, settings):
+    """Just inside float32's range (this frame's corner rays reach 1.7e19) the lens rays are
+    valid, and a round aperture reads no blade rotation: Cycles renders the lit floor (0.3997
+    with a NaN rotation and no blades); the NaN rotation had failed the render."""
+    cam = _lit_scene(scene)
+    _depth_of_field(cam, **settings)
+    img = _image(scene, tmp_path)
+    assert (img[..., 0] > 0.5).all() and not any("camera" in t for t in said), said
