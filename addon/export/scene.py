@@ -24,6 +24,7 @@ from .lights import export_light, light_link_receivers
 from .materials import MaterialBuilder
 from .normalmaps import below_surface, lit_from_behind
 from .meshes import mesh_arrays
+from .missinglibraries import missing_library_messages
 from .motion import MotionCheck, motion_blur_message
 from .placement import Placement
 from .aovs import shader_aovs
@@ -320,6 +321,7 @@ class Exporter:
             world_reason = '; '.join(r for r in (world_reason, *reasons) if r)
         if world_reason:
             self.messages.append(('WARNING', f"world approximated: {world_reason}"))
+        self.messages += missing_library_messages(self.depsgraph, self.world)
         # the material indices the triangles use, once for the checks and messages below (each
         # had counted them again: four passes over the triangles' materials a frame)
         self._used = used_indices(geometry.material, len(self.materials.materials))
