@@ -186,23 +186,37 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
         messages.append(('WARNING', f"light '{ob.name}' has a non-finite {', '.join(bad)}; skipped"))
         return None
     out = sd.Light(**kw)
-    if not _fits_float32(out):
+    fits = _fits_float32(out)
+    if not fits:
         # (a size of 1e20 or 1e-20, a radius of 1e-20, an angle of 1e-25, an energy near
         # float32's limit) the renderer's float32 lamp would hold an infinity: one lamp
         # skipped, not the whole render failed
         messages.append(('WARNING', f"light '{ob.name}': its size, radius, angle or strength is beyond float32's "
                                     "range (its radiance or area would be infinite or 0); skipped"))
         return None
+    if fits == 'dark':
+        # (a radius of 1e30, or an 'inf' typed, which Blender stores as float32's largest) its
+        # power spread over so large a surface that float32 rounds the radiance to 0, in Cycles
+        # too (its 1 / area is 0): the light gave nothing and had been kept without a word
+        messages.append(('WARNING', f"light '{ob.name}': its radiance (strength {float(np.max(out.strength)):g} "
+                                    "spread over its size or radius) rounds to 0 in float32; it emits nothing "
+                                    "(as in Cycles); skipped"))
+        return None
     return out
 
 
 def _fits_float32(light):
     """Whether the renderer's float32 record of light is finite (lights.make_lamp, record) and
-    its radiance within what the kernels carry (lights.base.fits_float32); the lamp made for it
-    is kept on the light for the integrator's set-up (lights.madelamp)."""
+    its radiance within what the kernels carry (lights.base.fits_float32): False, True, or
+    'dark' where a light of positive strength has a float32 radiance of 0 in every channel. The
+    lamp made for it is kept on the light for the integrator's set-up (lights.madelamp)."""
     from ..lights import make_lamp     # (the renderer's lamp model: no Blender in it)
     from ..lights.madelamp import checked_lamp
-    return checked_lamp(light, make_lamp) is not None
+    lamp = checked_lamp(light, make_lamp)
+    if lamp is None:
+        return False
+    return 'dark' if np.any(np.asarray(light.strength) > 0) and not np.any(np.asarray(lamp.emit) > 0) \
+        else True
 
 
 class _LampTree:
