@@ -5,6 +5,7 @@ world alone) against Cycles' 0.504 / 0.515 / 0.557, now 0.504 / 0.515 / 0.557.""
 import bpy
 
 import numpy as np
+import pytest
 
 from . import scenes
 
@@ -48,3 +49,21 @@ def test_area_light_with_a_nan_spread_renders_as_spread_zero(scene, tmp_path, sa
     img = _render('AREA', tmp_path, spread=NAN, size=1.0)
     assert np.array_equal(img, ref) and img[..., 0].max() > 0.1
     assert any("area light 'Area' has a Spread of nan; rendered as 0" in t for t in said), said
+
+
+@pytest.mark.parametrize("kind, radius", [('POINT', float('inf')), ('POINT', 1e30), ('SPOT', 1e25)])
+def test_lamp_whose_radiance_rounds_to_zero_is_named(scene, tmp_path, said, kind, radius):
+    """A radius so large (an 'inf' typed: Blender stores float32's largest) that the lamp's power
+    over its area rounds to 0 in float32: Cycles' 1 / area is 0 and the lamp gives nothing
+    (measured: 0.3997 over a 0.4 world-lit floor, with or without the lamp); DACRT rendered it
+    so too, without a word, while tracing a shadow ray per bounce toward it."""
+    img = _render(kind, tmp_path, shadow_soft_size=radius)
+    assert np.allclose(img[..., :3], 0.05 * 0.8, atol=1e-6), img[..., :3].mean(axis=(0, 1))
+    assert any(t.startswith(f"light '{kind.title()}': its radiance") and "rounds to 0 in float32" in t
+               and "emits nothing" in t for t in said), said
+
+
+def test_lamp_of_a_large_but_float32_radiance_is_not_named(scene, tmp_path, said):
+    """A 1e15 m sphere: its radiance ~1e-30 is tiny but held by float32."""
+    _render('POINT', tmp_path, shadow_soft_size=1e15)
+    assert not any("rounds to 0" in t for t in said), said
