@@ -43,9 +43,17 @@ def node_sky(node, reasons=None):
         return skyanalytic.Analytic.hosek_wilkie(tuple(node.sun_direction), t, float(node.ground_albedo))
     if node.sky_type not in EVALUATED:
         return None
+    sun_disc = bool(node.sun_disc)
+    if sun_disc and np.isnan(node.sun_size):
+        # (measured in a test scene: Cycles 5.65, between 2.50 without the disc and 8.51 with
+        # a default one: part of the disc's light, which no size here gives)
+        sun_disc = False
+        if reasons is not None:
+            reasons.append(f"Sky Texture '{node.name}': Sun Size is nan; its sun disc is not rendered (Cycles "
+                           "renders part of that sun's light)")
     return model.Sky.from_node_values(
         node.sky_type == 'MULTIPLE_SCATTERING', node.sun_elevation, node.sun_rotation,
-        sun_disc=bool(node.sun_disc), sun_size=float(node.sun_size), sun_intensity=float(node.sun_intensity),
+        sun_disc=sun_disc, sun_size=float(node.sun_size), sun_intensity=float(node.sun_intensity),
         altitude=float(node.altitude), air=float(node.air_density), aerosol=float(node.aerosol_density),
         ozone=float(node.ozone_density))
 
@@ -55,6 +63,19 @@ def sky_environment(node, strength, reasons, chain=None):
     `strength`, its Vector through a Mapping rotation as an Environment Texture's; None when
     its type is not evaluated (the caller reports it). chain: the colour nodes after it,
     fn((n, 4) RGBA) -> (n, 3) (nodeeval.compile_image_chain), applied to its map."""
+    # a script's or driver's NaN in a setting the scattering skies read: Cycles renders the sky
+    # black (Sun Rotation, Air, Aerosols, Ozone: 3e-7 over a lit floor) or crashes (Sun Elevation,
+    # Altitude: a segfault in 5.0.1); the export had failed ("index -9223372036854775808 is out
+    # of bounds", "environment map: pixel value nan ...", "cannot convert float NaN to integer")
+    if node.sky_type in ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING'):
+        nan = [node.bl_rna.properties[k].name for k in ('sun_rotation', 'air_density', 'aerosol_density',
+                                                         'ozone_density', 'sun_elevation', 'altitude')
+               if np.isnan(getattr(node, k))]
+        if nan:
+            reasons.append(f"Sky Texture '{node.name}': {', '.join(nan)} {'is' if len(nan) == 1 else 'are'} nan; "
+                           "the sky is rendered black (as Cycles renders a NaN Sun Rotation, Air, Aerosols or "
+                           "Ozone; a NaN Sun Elevation or Altitude crashes Cycles 5.0.1)")
+            return np.zeros(3, np.float32), None
     sky = node_sky(node, reasons)
     if sky is None:
         return None
