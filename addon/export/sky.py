@@ -32,6 +32,13 @@ ANALYTIC_WIDTH = 1024          # Preetham and Hosek-Wilkie: smooth, no disc
 HOSEK_HEIGHT = 2048
 
 
+# the settings of each sky type that a NaN in makes Cycles' sky black (or crash), measured in 5.0.1
+# (a Hosek-Wilkie sky of a NaN Sun Direction is not black there, nor a NaN Sun Intensity)
+_SCATTERING_READS = ('sun_rotation', 'air_density', 'aerosol_density', 'ozone_density', 'sun_elevation', 'altitude')
+_BLACK_WHEN_NAN = {'MULTIPLE_SCATTERING': _SCATTERING_READS, 'SINGLE_SCATTERING': _SCATTERING_READS,
+                   'PREETHAM': ('turbidity', 'sun_direction'), 'HOSEK_WILKIE': ('turbidity', 'ground_albedo')}
+
+
 def node_sky(node, reasons=None):
     """The model's settings (model.Sky, skyanalytic.Analytic) of a Sky Texture node, else None."""
     if node.sky_type == 'PREETHAM':
@@ -63,19 +70,19 @@ def sky_environment(node, strength, reasons, chain=None):
     `strength`, its Vector through a Mapping rotation as an Environment Texture's; None when
     its type is not evaluated (the caller reports it). chain: the colour nodes after it,
     fn((n, 4) RGBA) -> (n, 3) (nodeeval.compile_image_chain), applied to its map."""
-    # a script's or driver's NaN in a setting the scattering skies read: Cycles renders the sky
-    # black (Sun Rotation, Air, Aerosols, Ozone: 3e-7 over a lit floor) or crashes (Sun Elevation,
-    # Altitude: a segfault in 5.0.1); the export had failed ("index -9223372036854775808 is out
-    # of bounds", "environment map: pixel value nan ...", "cannot convert float NaN to integer")
-    if node.sky_type in ('MULTIPLE_SCATTERING', 'SINGLE_SCATTERING'):
-        nan = [node.bl_rna.properties[k].name for k in ('sun_rotation', 'air_density', 'aerosol_density',
-                                                         'ozone_density', 'sun_elevation', 'altitude')
-               if np.isnan(getattr(node, k))]
-        if nan:
-            reasons.append(f"Sky Texture '{node.name}': {', '.join(nan)} {'is' if len(nan) == 1 else 'are'} nan; "
-                           "the sky is rendered black (as Cycles renders a NaN Sun Rotation, Air, Aerosols or "
-                           "Ozone; a NaN Sun Elevation or Altitude crashes Cycles 5.0.1)")
-            return np.zeros(3, np.float32), None
+    # a script's or driver's NaN in a setting the sky reads: Cycles renders the sky black
+    # (3e-7 over a lit floor) or crashes (a scattering sky's Sun Elevation or Altitude: a
+    # segfault in 5.0.1); the export had failed ("index -9223372036854775808 is out of bounds",
+    # "environment map: pixel value nan ...", "cannot convert float NaN to integer"), and a
+    # Preetham sky of a NaN Sun Direction rendered lit (0.53)
+    nan = [node.bl_rna.properties[k].name for k in _BLACK_WHEN_NAN.get(node.sky_type, ())
+           if np.isnan(getattr(node, k)).any()]
+    if nan:
+        crashes = [n for n in nan if n in ('Sun Elevation', 'Altitude')]
+        reasons.append(f"Sky Texture '{node.name}': {', '.join(nan)} {'is' if len(nan) == 1 else 'are'} nan; "
+                       "the sky is rendered black " + (f"(Cycles 5.0.1 crashes on a NaN {' or '.join(crashes)})"
+                                                       if crashes else "(as in Cycles)"))
+        return np.zeros(3, np.float32), None
     sky = node_sky(node, reasons)
     if sky is None:
         return None
