@@ -4,7 +4,8 @@ black (3e-7 against 8.51 with the defaults), segfaults on a NaN Sun Elevation or
 with a NaN Sun Size renders part of the sun disc's light (5.65; 2.50 without the disc). DACRT's
 render had failed on all but Sun Intensity: "index -9223372036854775808 is out of bounds",
 "environment map: pixel value nan at 0 is negative or not finite", "cannot convert float NaN to
-integer". Now: black with a warning naming the setting; without the disc for the Sun Size."""
+integer". Preetham (Turbidity, Sun Direction) and Hosek-Wilkie (Turbidity, Ground Albedo) skies render black
+in Cycles too. Now: black with a warning naming the setting; without the disc for the Sun Size."""
 import bpy
 import numpy as np
 import pytest
@@ -38,6 +39,21 @@ def test_nan_scattering_sky_setting_renders_black_with_a_warning(scene, said, se
     img = scenes.render_rgba(scene)
     assert np.all(img[..., :3] == 0.0), img[..., :3].max()
     assert any(f"Sky Texture 'Sky Texture': {named}" in t and "rendered black" in t for t in said), said
+
+
+@pytest.mark.parametrize("kind, setting, value, named", [
+    ('PREETHAM', 'turbidity', NAN, "Turbidity is nan"), ('PREETHAM', 'sun_direction', (NAN, 0.0, 1.0),
+                                                          "Sun Direction is nan"),
+    ('HOSEK_WILKIE', 'turbidity', NAN, "Turbidity is nan"), ('HOSEK_WILKIE', 'ground_albedo', NAN,
+                                                              "Ground Albedo is nan"),
+])
+def test_nan_analytic_sky_setting_renders_black_as_cycles(scene, said, kind, setting, value, named):
+    """Cycles renders these black (3e-7); DACRT's render had failed, and a Preetham sky of a NaN
+    Sun Direction had rendered lit (0.53)."""
+    _sky_scene(scene, sky_type=kind, **{setting: value})
+    img = scenes.render_rgba(scene)
+    assert np.all(img[..., :3] == 0.0), img[..., :3].max()
+    assert any(f"Sky Texture 'Sky Texture': {named}" in t and "rendered black (as in Cycles)" in t for t in said), said
 
 
 def test_nan_sun_size_renders_the_sky_without_its_disc(scene, said):
