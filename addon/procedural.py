@@ -249,14 +249,24 @@ def brick(co, scale, mortar_size, mortar_smooth, bias, brick_width, row_height, 
         x = (px - bw * bricknum.astype(F32)).astype(F32)
         y = (p[:, 1] - rh * rownum.astype(F32)).astype(F32)
         key = ((rownum.astype(np.uint64) << 16) + (bricknum.astype(np.uint64) & 0xFFFF)) & 0xFFFFFFFF
-        tint = np.clip(_brick_noise(key) + arr(bias), F32(0.0), F32(1.0)).astype(F32)
-        d = np.minimum(np.minimum(x, y), np.minimum(bw - x, rh - y)).astype(F32)
+        # Cycles' saturatef and min are (a > b) ? a : b and (a < b) ? a : b: a NaN Bias gives
+        # tint 0 and a NaN x (a NaN Brick Width) drops out of the distance to the joints, where
+        # np.clip and np.minimum passed the NaN on (black, against Cycles' 0.33 and 0.23)
+        tint = (_brick_noise(key) + arr(bias)).astype(F32)
+        tint = np.where(tint > F32(0.0), tint, F32(0.0))
+        tint = np.where(tint < F32(1.0), tint, F32(1.0)).astype(F32)
+        d = _cycles_min(_cycles_min(x, y), _cycles_min(bw - x, rh - y)).astype(F32)
         ms, sm = arr(mortar_size), arr(mortar_smooth)
         t = (F32(1.0) - d / ms).astype(F32)
         s = np.clip(t / sm, F32(0.0), F32(1.0))
         smooth = np.where(t < sm, s * s * (F32(3.0) - F32(2.0) * s), F32(1.0))
         mortar = np.where(d >= ms, F32(0.0), np.where(sm == 0.0, F32(1.0), smooth)).astype(F32)
     return tint, np.broadcast_to(mortar, len(p)).astype(F32)
+
+
+def _cycles_min(a, b):
+    """Cycles' float min, (a < b) ? a : b: b where either is NaN."""
+    return np.where(a < b, a, b)
 
 
 def _rot(x, k):
