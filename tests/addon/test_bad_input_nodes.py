@@ -95,3 +95,36 @@ def test_nan_texture_inputs_cycles_clamps_render_as_zero(scene, node_type, socke
     zero, nan = _zero_and_nan(scene, node_type, socket, **settings)
     assert np.ptp(zero[..., 0]) > 0.05
     assert np.array_equal(zero, nan)
+
+
+def _bricks(**changes):
+    """procedural.brick at 4000 random points of [-2, 2]^3 with Blender's defaults but a 0.02
+    mortar and no smoothing, `changes` applied."""
+    from addon import procedural
+    co = np.random.default_rng(7).uniform(-2.0, 2.0, (4000, 3)).astype(np.float32)
+    args = dict(scale=1.0, mortar_size=0.02, mortar_smooth=0.0, bias=0.0, brick_width=0.5, row_height=0.25,
+                offset_amount=0.5, offset_frequency=2, squash_amount=1.0, squash_frequency=2)
+    args.update(changes)
+    return co, procedural.brick(co, **args)
+
+
+def test_nan_brick_bias_gives_the_first_colour_as_cycles_saturate():
+    """Cycles' saturatef is min(max(a, 0), 1) with (a > b) ? a : b: a NaN Bias gives tint 0,
+    the first colour (measured: 0.3343 both, with Bias -1 the same); np.clip had passed the
+    NaN on and the plane rendered black."""
+    _, (tint, mortar) = _bricks(bias=NAN)
+    _, (_, mortar0) = _bricks()
+    assert np.all(tint == 0.0)
+    assert np.array_equal(mortar, mortar0)
+
+
+def test_nan_brick_width_keeps_the_row_joints_as_cycles_min():
+    """A NaN Brick Width makes x NaN; Cycles' min ((a < b) ? a : b) then drops it from the
+    distance to the joints, leaving the rows' (min(y, row height - y)): measured 0.2339
+    against DACRT's 0.2351 now, 0 before (np.minimum's NaN made every point mortar)."""
+    co, (tint, mortar) = _bricks(brick_width=NAN)
+    rh = np.float32(0.25)
+    y = co[:, 1] - rh * np.floor(co[:, 1] / rh)
+    want = (np.minimum(y, rh - y) < np.float32(0.02)).astype(np.float32)
+    assert np.array_equal(mortar, want)
+    assert 0.0 < want.mean() < 0.5 and np.all((tint >= 0) & (tint <= 1))
