@@ -404,7 +404,11 @@ def gabor(co, scale, frequency, anisotropy, orientation, dims):
     def col(v):
         return np.broadcast_to(np.asarray(v, F32).reshape(-1), (n,))
     p = co * col(scale)[:, None]
-    isotropy = F32(1.0) - np.clip(col(anisotropy), F32(0.0), F32(1.0))
+    # (Cycles' clamp, min(max(a, 0), 1) with (a > b) ? a : b: a NaN Anisotropy is 0, isotropic;
+    # np.clip had passed it on: black where Cycles renders 0.25)
+    a = col(anisotropy)
+    a = np.where(a > F32(0.0), a, F32(0.0))
+    isotropy = F32(1.0) - np.where(a < F32(1.0), a, F32(1.0)).astype(F32)
     freq = np.maximum(F32(0.001), col(frequency))
     re, im = np.zeros(n, F32), np.zeros(n, F32)
     with np.errstate(all='ignore'):
@@ -432,7 +436,7 @@ def gabor(co, scale, frequency, anisotropy, orientation, dims):
                         weight = np.where(hashed(cx, cy, F32(k * 3 + 2)) < F32(0.5), F32(-1.0), F32(1.0))
                         fx, fy = freq * np.cos(angle), freq * np.sin(angle)
                         kr, ki = _gabor_kernel(d2, kx * fx + ky * fy)
-                        inside = d2 < F32(1.0)
+                        inside = ~(d2 >= F32(1.0))     # (Cycles skips d2 >= 1: a NaN d2 adds in)
                         re = np.where(inside, re + weight * kr, re)
                         im = np.where(inside, im + weight * ki, im)
             norm = F32(6.0) * np.sqrt(F32(8.0) * F32(0.5) * F32(0.25))
@@ -463,7 +467,7 @@ def gabor(co, scale, frequency, anisotropy, orientation, dims):
                                               F32(-1.0), F32(1.0))
                             fv = ori * freq[:, None]
                             kr, ki = _gabor_kernel(d2, kp[0] * fv[:, 0] + kp[1] * fv[:, 1] + kp[2] * fv[:, 2])
-                            inside = d2 < F32(1.0)
+                            inside = ~(d2 >= F32(1.0))     # (Cycles skips d2 >= 1: a NaN d2 adds in)
                             re = np.where(inside, re + weight * kr, re)
                             im = np.where(inside, im + weight * ki, im)
             norm = F32(6.0) * np.sqrt(F32(8.0) * F32(0.5) * (F32(1.0) / (F32(4.0) * F32(np.sqrt(2.0)))))
