@@ -128,3 +128,25 @@ def test_nan_brick_width_keeps_the_row_joints_as_cycles_min():
     want = (np.minimum(y, rh - y) < np.float32(0.02)).astype(np.float32)
     assert np.array_equal(mortar, want)
     assert 0.0 < want.mean() < 0.5 and np.all((tint >= 0) & (tint <= 1))
+
+
+@pytest.mark.parametrize("dims, orientation", [(2, 0.3), (3, (0.2, 0.5, 1.0))])
+def test_nan_gabor_anisotropy_is_isotropic_as_cycles_clamp(dims, orientation):
+    """Cycles clamps Anisotropy with (a > b) ? a : b, so NaN reads 0 (measured: 0.2499 against
+    DACRT's 0.2480 now, 0 before: np.clip passed the NaN into every kernel's angle)."""
+    from addon import procedural
+    co = np.random.default_rng(3).uniform(-2.0, 2.0, (500, 3)).astype(np.float32)
+    nan = procedural.gabor(co, 4.0, 2.0, NAN, orientation, dims)
+    zero = procedural.gabor(co, 4.0, 2.0, 0.0, orientation, dims)
+    for a, b in zip(nan, zero):
+        assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("dims", [2, 3])
+def test_nan_gabor_scale_is_nan_as_cycles_renders_it_black(dims):
+    """Cycles skips a kernel only where d2 >= 1, so NaN coordinates add NaN in and the texture is
+    black (measured 8e-10); `d2 < 1` had skipped them all: grey 0.5 (0.25 in the render)."""
+    from addon import procedural
+    co = np.random.default_rng(4).uniform(-2.0, 2.0, (50, 3)).astype(np.float32)
+    value, _, _ = procedural.gabor(co, NAN, 2.0, 1.0, 0.3 if dims == 2 else (0.0, 0.0, 1.0), dims)
+    assert np.all(np.isnan(value))
