@@ -215,7 +215,11 @@ def hue_saturation(c, hue, sat, val, fac):
     c = np.broadcast_to(c, np.broadcast_shapes(c.shape[:-1], np.shape(hue), np.shape(sat), np.shape(val)) + (3,))
     hsv = rgb_to_hsv(c)
     hsv[..., 0] = np.mod(hsv[..., 0] + hue + 0.5, 1.0)
-    hsv[..., 1] = np.clip(hsv[..., 1] * sat, 0.0, 1.0)
+    # (Cycles' saturatef: min(max(a, 0), 1) with (a > b) ? a : b, so a NaN Saturation is 0,
+    # grey, where np.clip had kept the NaN: red only)
+    s = hsv[..., 1] * sat
+    s = np.where(s > 0.0, s, 0.0)
+    hsv[..., 1] = np.where(s < 1.0, s, 1.0)
     hsv[..., 2] = hsv[..., 2] * val
     return np.maximum(_lerp(_real(c), hsv_to_rgb(hsv), fac), 0.0)
 

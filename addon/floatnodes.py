@@ -245,7 +245,7 @@ def _map_range(interpolation, v, f0, f1, t0, t1, st, clamp):
         fac = linear
     r = np.where(f1 != f0, t0 + fac * (t1 - t0), 0.0)
     if clamp:
-        r = clamp_range(r, t0, t1)
+        r = _clip_between(r, t0, t1)
     return r
 
 
@@ -264,19 +264,36 @@ def map_range_vector(interpolation, value, from_min, from_max, to_min, to_max, s
         fac = np.clip(fac, 0.0, 1.0)
         fac = fac * fac * fac * (fac * (fac * 6.0 - 15.0) + 10.0)
     r = t0 + fac * (t1 - t0)
-    return np.asarray(clamp_range(r, t0, t1) if clamp else r, dtype).reshape(shape)
+    return np.asarray(_clip_between(r, t0, t1) if clamp else r, dtype).reshape(shape)
 
 
-def clamp_range(v, a, b):
-    """Clamp node of type Range: between a and b whichever is larger."""
+def cycles_clamp(v, lo, hi):
+    """Cycles' clamp, min(max(v, lo), hi) with max = (a > b) ? a : b and min = (a < b) ? a : b:
+    a NaN v gives lo, a NaN bound the other operand (np.clip, np.minimum and np.maximum pass
+    NaN on: a Clamp of NaN Min rendered black where Cycles gives the value, 0.5 against 0)."""
+    m = np.where(v > lo, v, lo)
+    return np.where(m < hi, m, hi)
+
+
+def _clip_between(v, a, b):
+    """Map Range's Clamp: v between a and b whichever is larger, NaN kept (a NaN To Min renders
+    black, as measured in Cycles, where the Clamp node's Range gives the other bound)."""
     (v, a, b), shape, _ = _real(v, a, b)
     return np.clip(v, np.minimum(a, b), np.maximum(a, b)).reshape(shape)
 
 
+def clamp_range(v, a, b):
+    """Clamp node of type Range: between a and b whichever is larger (Cycles: (a > b) ?
+    clamp(v, b, a) : clamp(v, a, b))."""
+    (v, a, b), shape, _ = _real(v, a, b)
+    swap = a > b
+    return cycles_clamp(v, np.where(swap, b, a), np.where(swap, a, b)).reshape(shape)
+
+
 def clamp_min_max(v, lo, hi):
-    """Clamp node of type Min Max: min(max(v, lo), hi)."""
+    """Clamp node of type Min Max: min(max(v, lo), hi), as Cycles' clamp."""
     (v, lo, hi), shape, _ = _real(v, lo, hi)
-    return np.minimum(np.maximum(v, lo), hi).reshape(shape)
+    return cycles_clamp(v, lo, hi).reshape(shape)
 
 
 VECTOR_ROTATE_TYPES = frozenset({'AXIS_ANGLE', 'X_AXIS', 'Y_AXIS', 'Z_AXIS', 'EULER_XYZ'})
