@@ -150,3 +150,27 @@ def test_nan_gabor_scale_is_nan_as_cycles_renders_it_black(dims):
     co = np.random.default_rng(4).uniform(-2.0, 2.0, (50, 3)).astype(np.float32)
     value, _, _ = procedural.gabor(co, NAN, 2.0, 1.0, 0.3 if dims == 2 else (0.0, 0.0, 1.0), dims)
     assert np.all(np.isnan(value))
+
+
+@pytest.mark.parametrize("kind, v, lo, hi, want", [
+    ('MINMAX', 1.0, NAN, 1.0, 1.0),        # Cycles 0.4992 / 0.4999 / 0.4989 on a 0.5-lit plane (DACRT had 0)
+    ('MINMAX', NAN, 0.2, 1.0, 0.2),        # (a NaN value gives the lower bound: black at 0, as measured)
+    ('RANGE', 1.0, NAN, 1.0, 1.0),         # Cycles 0.5 (DACRT had 0)
+    ('RANGE', 0.7, 1.0, 0.2, 0.7),         # (Min above Max: swapped, as before)
+])
+def test_clamp_node_with_a_nan_bound_is_cycles_clamp(kind, v, lo, hi, want):
+    """Cycles' clamp is min(max(v, lo), hi) with (a > b) ? a : b and (a < b) ? a : b, so a NaN
+    bound gives the other operand; np.minimum / np.maximum / np.clip had made it NaN (black)."""
+    from addon import floatnodes
+    clamp = floatnodes.clamp_range if kind == 'RANGE' else floatnodes.clamp_min_max
+    got = clamp(np.float32(v), np.float32(lo), np.float32(hi))
+    assert np.allclose(got, want) and np.isfinite(got).all(), got
+
+
+def test_nan_hsv_saturation_is_grey_as_cycles_saturate():
+    """Cycles' saturatef(NaN) is 0: the colour goes grey (measured (0.2994, 0.3001, 0.2995) for
+    (0.6, 0.3, 0.2) at Value 1 on a 0.5-lit plane); np.clip had kept the NaN: (0.3, 0, 0)."""
+    from addon import colornodes
+    c = np.array([0.6, 0.3, 0.2], np.float32)
+    got = colornodes.hue_saturation(c, 0.5, NAN, 1.0, 1.0)
+    assert np.allclose(got, 0.6), got
