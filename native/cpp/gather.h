@@ -28,6 +28,7 @@ struct Gather {
     const int32_t* lamp_key;
     const float* normal;
     const uint64_t* receivers;
+    size_t t_step;  // t_surf[i * t_step]: 4 reads the t of the tracer's hit records in place
 };
 
 // Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
@@ -39,7 +40,7 @@ __attribute__((always_inline)) inline void gather_one(const Gather& g, const Lam
     const float d[3] = {g.D[i], g.D[n + i], g.D[2 * n + i]};
     float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
     const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
-                                                                  : hit_lamp(lamp, o, d, g.t_surf[i], Le, pdf_l);
+                                                                  : hit_lamp(lamp, o, d, g.t_surf[i * g.t_step], Le, pdf_l);
     // most rays see none of the lamps they are tested against (a sun's disk, a small lamp the
     // boxes or BVH list as near): they add nothing and are done, without the weight, the clamp and the
     // film's three read-modify-writes (many lights: 16.6 -> 14.9 ms of lamp_gather per render)

@@ -71,7 +71,7 @@ void gather_area_lanes(const Gather& g, const LampRecord& lamp, int32_t key, siz
         float pdf[K], tmax[K], O[3][K], D[3][K];
         int hit[K];
         for (size_t q = 0; q < K; ++q) {
-            tmax[q] = g.t_surf[i0 + q];
+            tmax[q] = g.t_surf[(i0 + q) * g.t_step];
             O[0][q] = Ox[i0 + q], O[1][q] = Oy[i0 + q], O[2][q] = Oz[i0 + q];
             D[0][q] = Dx[i0 + q], D[1][q] = Dy[i0 + q], D[2][q] = Dz[i0 + q];
         }

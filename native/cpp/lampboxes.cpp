@@ -34,7 +34,8 @@ inline int sign_clear(float x) {  // !std::signbit(x), as an int lane
 // the header's plain declaration).
 __attribute__((target_clones("avx2", "default")))
 void meets_lanes(const float* box, const int32_t* which, size_t nb, const float* O, const float* D,
-                 const float* tmax, size_t n, size_t i0, size_t count, uint64_t out[LampBoxes::kRays]) {
+                 const float* tmax, size_t t_step, size_t n, size_t i0, size_t count,
+                 uint64_t out[LampBoxes::kRays]) {
     constexpr size_t K = LampBoxes::kRays;
     constexpr float inf = std::numeric_limits<float>::infinity();
     const float c = LampBVH::kSlack;
@@ -51,7 +52,7 @@ void meets_lanes(const float* box, const int32_t* which, size_t nb, const float*
             o[a][q] = O[size_t(a) * n + i0 + q];
             d[a][q] = D[size_t(a) * n + i0 + q];
         }
-        tm[q] = tmax[i0 + q];
+        tm[q] = tmax[(i0 + q) * t_step];
     }
     for (size_t q = 0; q < K; ++q) {
         // M = std::max({|O0|, |O1|, |O2|}): the first of the largest
@@ -99,9 +100,9 @@ void meets_lanes(const float* box, const int32_t* which, size_t nb, const float*
 
 }  // namespace
 
-void LampBoxes::meets(const float* O, const float* D, const float* tmax, size_t n, size_t i0, size_t count,
-                      uint64_t out[kRays]) const {
-    meets_lanes(box_.data(), which_.data(), which_.size(), O, D, tmax, n, i0, count, out);
+void LampBoxes::meets(const float* O, const float* D, const float* tmax, size_t t_step, size_t n, size_t i0,
+                      size_t count, uint64_t out[kRays]) const {
+    meets_lanes(box_.data(), which_.data(), which_.size(), O, D, tmax, t_step, n, i0, count, out);
 }
 
 }  // namespace dacrt

@@ -26,9 +26,9 @@ public:
     // Over the lamps rec[lamps[k]], k < nl <= kMaxLamps, that have a box (LampBVH's).
     LampBoxes(const LampRecord* rec, const int32_t* lamps, size_t nl);
 
-    // out[q] for rays q < count (O, D: 3 rows of stride n from ray i0; tmax from i0): bit k
-    // where the ray may meet listed lamp k's box at 0 < t < tmax (LampBVH::visit's test).
-    void meets(const float* O, const float* D, const float* tmax, size_t n, size_t i0, size_t count,
+    // out[q] for rays q < count (O, D: 3 rows of stride n from ray i0; tmax[i * t_step] for
+    // ray i): bit k where the ray may meet listed lamp k's box at 0 < t < tmax (LampBVH::visit's test).
+    void meets(const float* O, const float* D, const float* tmax, size_t t_step, size_t n, size_t i0, size_t count,
                uint64_t out[kRays]) const;
     // No listed lamp has a box (only lamps at infinity and delta lamps): no ray meets one.
     bool empty() const { return which_.empty(); }

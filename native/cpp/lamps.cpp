@@ -99,7 +99,7 @@ void gather_range_boxes(Gather g, const LampBoxes& boxes, uint64_t infinity, siz
     for (size_t i0 = b; i0 < e; i0 += K) {
         const size_t count = std::min(K, e - i0);
         uint64_t cand[K] = {};
-        if (!boxes.empty()) boxes.meets(g.O, g.D, g.t_surf, g.n, i0, count, cand);
+        if (!boxes.empty()) boxes.meets(g.O, g.D, g.t_surf, g.t_step, g.n, i0, count, cand);
         for (size_t q = 0; q < count; ++q) {
             const size_t i = i0 + q;
             for (uint64_t c = cand[q] | (g.miss[i] ? infinity : 0); c; c &= c - 1) {
@@ -121,7 +121,7 @@ void gather_range_bvh(Gather g, const LampBVH& bvh, const std::vector<int32_t>& 
         cand.clear();
         const float o[3] = {g.O[i], g.O[g.n + i], g.O[2 * g.n + i]};
         const float d[3] = {g.D[i], g.D[g.n + i], g.D[2 * g.n + i]};
-        bvh.visit(o, d, g.t_surf[i], cand);
+        bvh.visit(o, d, g.t_surf[i * g.t_step], cand);
         if (g.miss[i]) cand.insert(cand.end(), at_infinity.begin(), at_infinity.end());
         std::sort(cand.begin(), cand.end());
         for (int32_t k : cand) {
@@ -141,9 +141,9 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
                  const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
-                 const int32_t* lamp_key, const float* normal, const uint64_t* receivers) {
+                 const int32_t* lamp_key, const float* normal, const uint64_t* receivers, size_t t_step) {
     const Gather g{rec,  lamps, nl, lamp_prob, O,     D,        t_surf, miss,   thr,      pdf_bsdf,
-                   pid,  n,     L,  N,         clamp, tree,     lamp_key, normal, receivers};
+                   pid,  n,     L,  N,         clamp, tree,     lamp_key, normal, receivers, t_step};
     if (nl < kLampBVHMin) {
         parallel_for(n, [&](size_t b, size_t e) { gather_range(g, b, e); });
         return;

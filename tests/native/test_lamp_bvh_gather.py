@@ -67,3 +67,56 @@ def test_first_and_last_bit_of_the_candidate_word():
     ref = brute_force(rec, listed, O, D, t_surf, miss, pid, L0)
     assert (ref > 0).any(axis=0).sum() > 100
     np.testing.assert_array_equal(L.view(np.uint32), ref.view(np.uint32))
+
+
+HIT = np.dtype([('t', F32), ('prim', np.int32), ('u', F32), ('v', F32)])   # the tracer's hit record
+
+
+@pytest.mark.parametrize('count', [1, 7, 150])
+@pytest.mark.parametrize('bsdf', [False, True])
+def test_lamp_gather_reads_t_surf_of_hit_records_in_place_with_the_same_bits(count, bsdf):
+    """t_surf given as the t field of hit records (a view of stride 16 bytes, as the integrator
+    passes hits['t']) is read in place (gather_one, gather_area_lanes, LampBoxes, the BVH's walk)
+    and must give what its contiguous copy gives, bit for bit; so must the views the binding
+    copies first: reversed (negative stride) and unaligned (a packed record with t at byte 1).
+    The other fields hold values that would change the sums if read as t."""
+    rng = np.random.default_rng(40 + count * 2 + bsdf)
+    lamps = many_lamps(rng, 80, spread=2.0)
+    rec = lamp_records(lamps)
+    finite = [j for j, lamp in enumerate(lamps) if hasattr(lamp, 'center') and not lamp.delta]
+    area = [j for j in finite if hasattr(lamps[j], 'normal')]
+    listed = rng.choice(finite, count).astype(np.int32)
+    listed[0] = rng.choice(area)        # a single lamp: an area lamp, drawn lane by lane
+    if count > 1:
+        listed[-1] = len(lamps) - 1     # the background
+    n, N = 5003, 7000                   # (not a multiple of the lanes: the short last group too)
+    O, D, t_surf, miss = rays_at_lamps(rng, [lamps[j] for j in listed if j in finite], n)
+    t_surf = t_surf.astype(F32)
+    hits = np.zeros(n, HIT)
+    hits['t'] = t_surf
+    hits['prim'] = rng.integers(0, 1 << 20, n)
+    hits['u'] = rng.uniform(0.0, 0.01, n)   # tiny t: a ray that read it would meet no lamp
+    hits['v'] = np.inf
+    packed = np.zeros(n, np.dtype({'names': ['x', 't'], 'formats': ['u1', F32], 'offsets': [0, 1],
+                                   'itemsize': 9}))
+    packed['t'] = t_surf
+    reversed_t = np.ascontiguousarray(t_surf[::-1])[::-1]
+    pid = rng.permutation(N)[:n]
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=rng.uniform(0.05, 1.0, len(lamps)).astype(F32), clamp=50.0)
+    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    ref = L0.copy()
+    dacrt.lamps.lamp_gather(rec, listed, O, D, np.ascontiguousarray(t_surf), miss, pid, ref, **kw)
+    assert ((ref != L0).any(axis=0)[pid] & ~miss).sum() > 40, 'too few rays meet a finite lamp'
+    for t in (hits['t'], reversed_t, packed['t']):
+        assert not t.flags.c_contiguous
+        L = L0.copy()
+        dacrt.lamps.lamp_gather(rec, listed, O, D, t, miss, pid, L, **kw)
+        np.testing.assert_array_equal(L.view(np.uint32), ref.view(np.uint32))
+    L = L0.copy()   # the binding itself, without the wrapper's conversions
+    dacrt.lamps._core.lamp_gather(rec, listed, kw.get('lamp_prob'), O.astype(F32), D.astype(F32), hits['t'], miss,
+                                  kw.get('thr'), kw.get('pdf_bsdf'), pid.astype(np.int64), L, kw.get('clamp', np.inf),
+                                  None, None, None, None)
+    np.testing.assert_array_equal(L.view(np.uint32), ref.view(np.uint32))

@@ -38,6 +38,13 @@ def _f32(a) -> np.ndarray:
     return np.ascontiguousarray(a, _F32)
 
 
+def _f32_1d(a) -> np.ndarray:
+    """a as float32 without a copy where it is one already, any stride (lamp_gather reads a
+    view of the hit records' t in place); else a contiguous float32 copy."""
+    a = np.asarray(a)
+    return a if a.dtype == _F32 and a.ndim == 1 else np.ascontiguousarray(a, _F32)
+
+
 def _records(records) -> np.ndarray:
     r = np.ascontiguousarray(records, _F32)
     if r.ndim != 2 or r.shape[1] != RECORD_WIDTH:
@@ -112,7 +119,7 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     if miss.dtype != np.bool_:
         raise ValueError(f"miss must be a bool array, got dtype {miss.dtype}")
     opt = lambda a: None if a is None else _f32(a)
-    _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32(t_surf),
+    _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32_1d(t_surf),
                       np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf), np.ascontiguousarray(pid, np.int64), L,
                       float(clamp), tree, None if lamp_key is None else np.ascontiguousarray(lamp_key, np.int32),
                       opt(N), None if receivers is None else np.ascontiguousarray(receivers, np.uint64))
