@@ -1,0 +1,59 @@
+"""The Multiple Scattering sky's ground seen steeply down from a low Altitude, as Cycles
+renders it.
+
+From 1 m (Altitude 0) the view rays to the ground are ~1 m long, and Cycles sums their 64
+steps in float32 (intern/sky get_inscattering): a step's transmittance expf(-dt x extinction)
+is 1 - k 2^-24 with k ~ 7-25, and its light (S - S x step) / extinction is S's float32 step
+times a small whole number. Each channel's ground light is then up to ~10% off the exact
+integral's (by parameters and row; 4% at 5 m, 0.05% at 30 m and 100 m), and DACRT, which summed in float64,
+rendered Cycles' ground 0.95-1.11x per channel (fuzz seed 2004: 0.987 / 1.004 / 0.999 straight
+down). DACRT now sums those rows as Cycles does (addon/sky.py _step_integral_float32).
+
+A camera at the origin looks straight down (a 100-degree view: elevations -90 to -40 degrees);
+the world is only the sky. Means of 9 x 9-pixel blocks (64 samples) per channel within 0.5% of Cycles'
+(measured within 0.03%)."""
+import math
+import os
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+
+from . import rendering
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+@pytest.mark.parametrize('altitude, air, dust, ozone, elevation', [
+    (0.0, 1.0, 1.0, 1.0, 17.0),
+    (0.0, 1.01, 4.04, 1.85, 60.7),          # fuzz seed 2004
+    (5.0, 2.0, 0.5, 1.0, 45.0),
+])
+def test_ground_seen_from_a_low_altitude_agrees_with_cycles(altitude, air, dust, ozone, elevation, tmp_path):
+    import bpy
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 36, 36, 100
+    cam = scenes.camera(location=(0, 0, 0), rotation=(0, 0, 0), lens=15.0)
+    cam.data.sensor_width = 36.0
+    w, nt, out = scenes.world_tree()
+    bg = nt.nodes.new('ShaderNodeBackground')
+    nt.links.new(bg.outputs[0], out.inputs['Surface'])
+    sky = nt.nodes.new('ShaderNodeTexSky')
+    sky.sky_type, sky.sun_disc = 'MULTIPLE_SCATTERING', False
+    sky.sun_elevation, sky.sun_rotation, sky.altitude = math.radians(elevation), 1.3, altitude
+    sky.air_density, sky.aerosol_density, sky.ozone_density = air, dust, ozone
+    nt.links.new(sky.outputs[0], bg.inputs['Color'])
+    rendering.fair_scene_settings(sc)
+    img = {}
+    for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
+        setup(sc, SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
+                                  filter_type='BOX', filter_width=1.0), 0)
+        rgb = rendering.render_combined(sc, os.path.join(tmp_path, f'{engine}.exr'))[..., :3]
+        img[engine] = rgb.astype(np.float64).reshape(4, 9, 4, 9, 3).mean(axis=(1, 3))
+    ratio = img["DACRT"] / img["CYCLES"]
+    err = np.abs(ratio - 1).max(axis=(0, 1))
+    assert err.max() < 0.005, (err.round(4).tolist(), ratio.min(axis=(0, 1)).round(4).tolist(),
+                               ratio.max(axis=(0, 1)).round(4).tolist())
