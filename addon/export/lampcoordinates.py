@@ -163,6 +163,11 @@ _ON_DISC = frozenset({'generated', 'object'})
 # bicubic lookup)
 _PROFILE_H = np.linspace(0.0, 2.0 * np.pi, 361)
 _PROFILE_V = np.linspace(0.0, np.pi, 181)
+# each node of that grid holds its texture's mean over its own degree (4 x 4 points): point
+# values of an edge put it where the grid happens to fall, which over a lamp's few edges in view
+# did not average out (fuzz 1231, a Checker of Scale 3.8 on a point lamp's Normal: 1.1% bright
+# at points, 0.4% at 0.25 degrees' points)
+_FOOTPRINT = (np.arange(4) - 1.5) / 4.0 * (np.pi / 180.0)
 
 
 def texture_profile(surface, lamp, reasons, evaluate):
@@ -195,7 +200,12 @@ def texture_profile(surface, lamp, reasons, evaluate):
     d = np.stack([np.sin(vv) * np.sin(hh - np.pi), np.sin(vv) * np.cos(hh - np.pi), -np.cos(vv)], -1).reshape(-1, 3)
     k = 1 if disc is None else len(disc[0])
     normal = np.repeat(d, k, axis=0)
-    at = np.zeros((len(d), 3))
+    if disc is None:                    # (each node: its texture's mean over its 1-degree footprint)
+        k = len(_FOOTPRINT) ** 2
+        sh, sv = (x.reshape(-1) for x in np.broadcast_arrays(hh[..., None, None] + _FOOTPRINT[:, None],
+                                                             vv[..., None, None] + _FOOTPRINT[None, :]))
+        normal = np.stack([np.sin(sv) * np.sin(sh - np.pi), np.sin(sv) * np.cos(sh - np.pi), -np.cos(sv)], -1)
+    at = np.zeros((len(normal), 3))
     if disc is not None:
         world = _on_discs(d, *disc)
         at = world @ disc[2].T
@@ -232,9 +242,65 @@ def texture_profile(surface, lamp, reasons, evaluate):
         if not (all(np.allclose(run[0], w * f1, rtol=1e-9, atol=1e-12) for run, w in zip(runs[3:], weights))
                 and abs(weights.sum() - 1.0) < 1e-9):
             return None
-    table = (values @ weights).reshape(hh.shape)
+    table = _without_clip_bias((values @ weights).reshape(hh.shape))
     return f1, IESProfile(grid_h.astype(np.float32), grid_v.astype(np.float32),
                           table.astype(np.float32)), runs[1][1] + _radius_note(disc), runs[1][2]
+
+
+# Gauss-Legendre points of a cell (2 per axis: exact for the cubic lobes) and Cycles' cubic_interp
+# weights there, for the clip-bias estimate of _without_clip_bias
+_GAUSS = 0.5 + np.array([-0.5, 0.5]) / np.sqrt(3.0)
+_CUBIC_W = np.stack([0.5 * np.array([-x + 2 * x * x - x ** 3, 2 - 5 * x * x + 3 * x ** 3,
+                                     x + 4 * x * x - 3 * x ** 3, -x * x + x ** 3]) for x in _GAUSS])
+
+
+def _without_clip_bias(table, rounds=6):
+    """(H, V) profile table whose bicubic lookup, clipped at 0 as Cycles' IES lookup clips it,
+    keeps the texture's mean cell by cell. Where a texture falls to 0 (a Checker's Fac) the
+    cubic undershoots below 0 next to its edges and the clip drops that lobe, adding light along
+    every edge: 1.9% on a point lamp with a Checker of Scale 3.8 on Normal (fuzz 1231, the lamp
+    alone; 0.9999x without the texture). Each round compares each cell's clipped mean with the
+    unclipped one of the texture's own table (at 2 x 2 Gauss points: the bicubic is separable,
+    two 4-tap filters) and takes the difference off the positive nodes of the cell's 4 x 4
+    support in proportion to their values (which also lifts the lobe: their weights there are
+    negative)."""
+    t = np.asarray(table, np.float64)
+    if not (t.min() >= 0.0 and t.max() > 0.0):
+        return table
+    target = None
+    for _ in range(rounds):
+        p = _padded(t)
+        hn, vn = t.shape[0] - 1, t.shape[1] - 1            # cells
+        rows = [sum(w[k] * p[k:k + hn] for k in range(4)) for w in _CUBIC_W]
+        at = [sum(w[k] * r[:, k:k + vn] for k in range(4)) for r in rows for w in _CUBIC_W]
+        if target is None:
+            target = sum(at) / len(at)                   # the unclipped cell means: the texture's
+        residual = sum(np.maximum(x, 0.0) for x in at) / len(at) - target
+        if np.abs(residual).max() <= 1e-5 * t.max():
+            break
+        pos = np.where(p > 0.0, p, 0.0)
+        support = _box4(pos)[:hn, :vn]
+        share = np.divide(residual, support, out=np.zeros_like(residual), where=support > 0)
+        cut = np.zeros_like(p)                          # each node: the shares of the cells it supports
+        for i in range(4):
+            for j in range(4):
+                cut[i:i + hn, j:j + vn] += share
+        t = np.maximum(t - pos[1:-2, 1:-2] * cut[1:-2, 1:-2], 0.0)
+        t[-1] = t[0]                                     # (the 2 pi column is the 0 one)
+    return t
+
+
+def _padded(t):
+    """t with the neighbours the lookup reads past its ends: h round the circle (0 and 2 pi are
+    one column), v across the pole at 0 and the last row again at pi."""
+    p = np.concatenate([t[-2:-1], t, t[1:3]], axis=0)
+    return np.concatenate([p[:, 1:2], p, p[:, -1:], p[:, -1:]], axis=1)
+
+
+def _box4(a):
+    """(n - 3, m - 3) sums of a's 4 x 4 windows."""
+    c = np.cumsum(np.cumsum(np.pad(a, ((1, 0), (1, 0))), axis=0), axis=1)
+    return c[4:, 4:] - c[:-4, 4:] - c[4:, :-4] + c[:-4, :-4]
 
 
 def _radius_note(disc):
