@@ -33,7 +33,7 @@ from .settings import clamp_direct_said, cycles_glossy_messages, export_settings
 from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, strand_kind, tessellate,
                       triangle_count)
 from .usedindices import used_indices
-from .world import effective_world, export_world, world_visibility
+from .world import effective_world, export_world, max_bounces_said, world_visibility
 
 # object types that render as geometry (curves, surfaces, text, metaballs through their mesh)
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
@@ -337,6 +337,9 @@ class Exporter:
                                  sum(1 for lt in self.lights if np.any(lt.strength > 0)),
                                  None if environment is None or self.world is None else self.world.name,
                                  sum(1 for lt in self.lights if np.any(lt.strength > 0) and lt.kind == 'SUN'))
+        if said:
+            self.messages.append(('WARNING', said))
+        said = None if self.world is None else max_bounces_said(self.world, environment, settings.max_bounces)
         if said:
             self.messages.append(('WARNING', said))
         # (only where the tree has lamps or emitters to leave out: the world is not culled so)
