@@ -186,8 +186,9 @@ def _color_light(socket, strength, what, reasons, frame, reading=WHOLE):
 
 
 # what a world's texture coordinates read in Cycles' background shader: the view direction
-# (Generated, Object, and the Geometry Position, P = D there)
-_WORLD_COORDINATES = frozenset({'generated', 'object', 'position'})
+# (Generated, Object, and the Geometry Position, P = D there), and its opposite (Normal: N = -D,
+# shader_setup_from_background, with no object to transform it)
+_WORLD_COORDINATES = frozenset({'generated', 'object', 'position', 'object_normal'})
 PROCEDURAL_WIDTH = 1024     # the baked map of a procedural world (a Gradient: smooth)
 
 
@@ -195,7 +196,8 @@ def _procedural_world(socket, strength, what, reasons):
     """(uniform radiance, Environment) of procedural textures (a Gradient, a Noise) and the
     colour nodes after them feeding a world colour, with the Vector unlinked (the Generated
     direction) or read from Texture Coordinate Generated or Object or Geometry Position, all
-    of them the view direction in Cycles' background shader (Object of an object: the
+    of them the view direction in Cycles' background shader, or Normal, its opposite (a Noise
+    on Normal had stood at the socket's own colour, said: fuzz 1400, 0.34-0.40x; Object of an object: the
     direction as a point in its space), through Mapping nodes: the chain
     compiled (procedurals.compile_socket) and evaluated at the texel centres of an
     equirectangular map, which the environment light blends and samples. None where the chain
@@ -279,6 +281,8 @@ def _baked(sockets, strength, what, reasons, sides=None):
     dirs = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)[:, None]), axis=-1)
     d = np.ascontiguousarray(dirs.reshape(-1, 3), np.float32)
     coords = {kind: d for kind in (needs - frames) | {'generated'}}
+    if 'object_normal' in coords:
+        coords['object_normal'] = -d
     for _, _, inverse in frames:    # Texture Coordinate Object of an object: D as a point in its space
         if inverse is not None:
             m = np.array(inverse, np.float64).reshape(4, 4)

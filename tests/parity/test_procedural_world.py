@@ -45,6 +45,10 @@ CASES = {
     'quadratic_sphere': (_gradient('QUADRATIC_SPHERE'), 'Fac', 'Object', (0.0, 0.2, 0.0)),
     'radial': (_gradient('RADIAL'), 'Color', 'Generated', (0.5, 0.1, 0.0)),
     'noise': (('ShaderNodeTexNoise', {}), 'Color', None, None),
+    # Normal is -D in the background shader (a Noise on it had stood at the socket's own colour,
+    # said: fuzz 1400, 0.34-0.40x Cycles)
+    'linear_normal': (_gradient('LINEAR'), 'Color', 'Normal', (0.3, 0.5, 0.1)),
+    'noise_normal': (('ShaderNodeTexNoise', {}), 'Color', 'Normal', (0.0, 0.0, 0.7)),
 }
 
 
