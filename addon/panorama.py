@@ -12,9 +12,15 @@ from __future__ import annotations
 
 import numpy as np
 
-# Cycles' panorama types DACRT renders; Equiangular Cubemap Face, Fisheye Lens Polynomial and
-# Central Cylindrical are refused by the export with their name.
-SUPPORTED = ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'MIRRORBALL')
+# Cycles' panorama types DACRT renders; Equiangular Cubemap Face and Central Cylindrical are
+# refused by the export with their name.
+SUPPORTED = ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'MIRRORBALL', 'FISHEYE_LENS_POLYNOMIAL')
+
+
+def _polynomial_angle(cam, r):
+    """Cycles' fisheye_lens_polynomial_to_direction angle at r mm: -(k0 + k1 r + .. + k4 r^4)."""
+    k0, k1, k2, k3, k4 = cam.fisheye_polynomial
+    return -(k0 + r * (k1 + r * (k2 + r * (k3 + r * k4))))
 
 
 def sees(cam, u, v):
@@ -28,6 +34,9 @@ def sees(cam, u, v):
         return np.hypot((u - 0.5) * w, (v - 0.5) * h) <= 2.0 * cam.fisheye_lens * np.sin(cam.fisheye_fov * 0.25)
     if kind == 'MIRRORBALL':
         return (2.0 * u - 1.0) ** 2 + (2.0 * v - 1.0) ** 2 <= 1.0
+    if kind == 'FISHEYE_LENS_POLYNOMIAL':
+        w, h = cam.sensor_mm
+        return np.abs(_polynomial_angle(cam, np.hypot((u - 0.5) * w, (v - 0.5) * h))) <= 0.5 * cam.fisheye_fov
     return None
 
 
@@ -58,6 +67,11 @@ def directions(cam, u, v) -> np.ndarray:
             x, y = (u - 0.5) * w, (v - 0.5) * h
             r = np.hypot(x, y)
             theta = 2.0 * np.arcsin(np.minimum(r / (2.0 * cam.fisheye_lens), 1.0))
+        elif kind == 'FISHEYE_LENS_POLYNOMIAL':
+            w, h = cam.sensor_mm
+            x, y = (u - 0.5) * w, (v - 0.5) * h
+            r = np.hypot(x, y)
+            theta = _polynomial_angle(cam, r)
         else:
             raise ValueError(f"panorama type {kind!r} is not one of {', '.join(SUPPORTED)}")
         with np.errstate(invalid='ignore', divide='ignore'):
@@ -94,6 +108,17 @@ def viewplane_of(cam, d):
     if kind == 'FISHEYE_EQUISOLID':
         w, h = cam.sensor_mm
         r = 2.0 * cam.fisheye_lens * np.sin(theta * 0.5)
+        return r * np.cos(phi) / w + 0.5, r * np.sin(phi) / h + 0.5
+    if kind == 'FISHEYE_LENS_POLYNOMIAL':      # (Newton on the polynomial, as Cycles' inverse)
+        w, h = cam.sensor_mm
+        k = np.asarray(cam.fisheye_polynomial, np.float64)
+        target = -theta
+        r = np.where(k[1] != 0.0, (target - k[0]) / k[1], 0.0)
+        for _ in range(20):
+            f = k[0] + r * (k[1] + r * (k[2] + r * (k[3] + r * k[4]))) - target
+            df = k[1] + r * (2 * k[2] + r * (3 * k[3] + r * 4 * k[4]))
+            r = r - np.divide(f, df, out=np.zeros_like(f), where=df != 0.0)
+        # (the direction's angle is theta = -(k0 + ..): phi measured as directions() lays it)
         return r * np.cos(phi) / w + 0.5, r * np.sin(phi) / h + 0.5
     raise ValueError(f"panorama type {kind!r} is not one of {', '.join(SUPPORTED)}")
 

@@ -57,12 +57,15 @@ class Camera:
     aperture_ratio: float = 1.0
     # PANO (Cycles' panorama types): 'EQUIRECTANGULAR' (longitude and latitude ranges, radians),
     # 'FISHEYE_EQUIDISTANT' (fisheye_fov), 'FISHEYE_EQUISOLID' (fisheye_lens and the sensor
-    # size in mm, fitted to the frame as Cycles does, fisheye_fov), 'MIRRORBALL'
+    # size in mm, fitted to the frame as Cycles does, fisheye_fov), 'MIRRORBALL',
+    # 'FISHEYE_LENS_POLYNOMIAL' (fisheye_polynomial k0..k4: the angle -(k0 + k1 r + .. + k4 r^4) at
+    # r mm from the sensor's centre, sensor_mm, fisheye_fov)
     panorama_type: str = ''
     longitude: tuple = (-np.pi, np.pi)
     latitude: tuple = (-np.pi / 2, np.pi / 2)
     fisheye_fov: float = np.pi
     fisheye_lens: float = 10.5
+    fisheye_polynomial: tuple = (-1.1735e-05, -0.0199887, -3.35253e-06, 3.09928e-06, -2.60646e-08)
     sensor_mm: tuple = (36.0, 24.0)
 
 

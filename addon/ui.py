@@ -284,6 +284,11 @@ class DATA_PT_dacrt_panorama(DACRTPanel, Panel):
             col.prop(cam, "fisheye_fov")
         elif kind == 'FISHEYE_EQUIDISTANT':
             col.prop(cam, "fisheye_fov")
+        elif kind == 'FISHEYE_LENS_POLYNOMIAL':
+            col.prop(cam, "fisheye_fov")
+            sub = col.column(align=True)
+            for i in range(5):
+                sub.prop(cam, f"fisheye_polynomial_k{i}", text=f"K{i}")
         elif kind != 'MIRRORBALL':
             col.label(text="Not rendered by DACRT", icon='ERROR')
 

@@ -41,8 +41,8 @@ def export_camera(scene, messages=None, view=None, camera=None, render=None):
         label = cam.bl_rna.properties['panorama_type'].enum_items[pano].name if pano else ''
         what = f"a panorama of type '{label}'" if pano else kind.lower()
         raise ExportError(f"camera '{cam_ob.name}' is {what}; DACRT renders perspective, "
-                          "orthographic and panoramic cameras (equirectangular, fisheye equidistant "
-                          "and equisolid, mirror ball)")
+                          "orthographic and panoramic cameras (equirectangular, fisheye equidistant, "
+                          "equisolid and lens polynomial, mirror ball)")
     lens = cam.lens if cam else _look_through_lens(cam_ob)
     sensor_fit = cam.sensor_fit if cam else 'AUTO'
     sensor_width = cam.sensor_width if cam else 36.0
@@ -203,8 +203,13 @@ def _panorama_settings(cam, cam_name, pano, sensor_mm, sensor_broken, broken, me
             broken.append(f"Fisheye Lens is {lens:g}")
         if lens_broken or sensor_broken:        # (world everywhere: a circle wider than the frame)
             fov, lens = 2.0 * math.pi, 1e30
+    poly = tuple(float(getattr(cam, f'fisheye_polynomial_k{i}', 0.0)) for i in range(5))
+    if pano == 'FISHEYE_LENS_POLYNOMIAL':
+        if not (math.isfinite(fov) and fov > 0.0) or not np.isfinite(poly).all():
+            broken.append(f"Field of View {fov:g} or a polynomial coefficient {poly} is not finite and positive")
+            fov, poly = math.pi, (0.0, -0.0199887, 0.0, 0.0, 0.0)
     return dict(panorama_type=pano, longitude=lon, latitude=lat, fisheye_fov=fov, fisheye_lens=lens,
-                sensor_mm=sensor_mm)
+                sensor_mm=sensor_mm, fisheye_polynomial=poly)
 
 
 def _look_through_lens(ob):

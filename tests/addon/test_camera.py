@@ -115,7 +115,6 @@ def test_bad_cameras_are_explained(scene):
     cam = scenes.camera()
     cam.data.type = 'PANO'
     for kind, label in (('EQUIANGULAR_CUBEMAP_FACE', 'Equiangular Cubemap Face'),
-                        ('FISHEYE_LENS_POLYNOMIAL', 'Fisheye Lens Polynomial'),
                         ('CENTRAL_CYLINDRICAL', 'Central Cylindrical')):
         cam.data.panorama_type = kind
         with pytest.raises(export.ExportError, match=f"is a panorama of type '{label}'; "
