@@ -122,6 +122,16 @@ def _stretched(places):
     return out
 
 
+def _degenerate_text(counts, most=5):
+    """The message for zero-area triangles dropped ({object name: count}), naming the objects
+    with the most (a user searching for them had only the total)."""
+    named = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))
+    listed = ', '.join(f"'{name}' {n}" for name, n in named[:most])
+    more = f" and {len(named) - most} more objects" if len(named) > most else ""
+    return (f"{sum(counts.values())} degenerate (zero-area) triangles skipped ({listed}{more}); "
+            "no ray meets them in Cycles either")
+
+
 def _rewind(rows):
     """Swap corners 1 and 2 of per-triangle rows (in place): a mirrored instance's triangles and
     every per-corner array read with them."""
@@ -178,7 +188,7 @@ class Assembly:
         bad = {}          # object name -> [non-finite vertices, triangles dropped]
         skipped = {}      # (non-finite transform, object name) -> placements left out (_instance_batch)
         stretched_points = {}   # object name -> axis ratio of a point cloud's non-uniform scale (_stretched)
-        degenerate = 0
+        degenerate = {}   # object name -> zero-area triangles dropped
         self._resolve_materials()
         self._several_uv_maps()
         self._object_info_albedos()
@@ -241,7 +251,8 @@ class Assembly:
                 if getattr(a, 'radial_normals', False):
                     for name, ratio in _stretched(places).items():
                         stretched_points[name] = max(ratio, stretched_points.get(name, 0.0))
-            degenerate += ndeg
+            for name, n in ndeg:
+                degenerate[name] = degenerate.get(name, 0) + n
             for name, nonfinite in nskipped:
                 skipped[nonfinite, name] = skipped.get((nonfinite, name), 0) + 1
             for name, nvb, ntb in nbad:
@@ -274,8 +285,8 @@ class Assembly:
                                               "where one emits, Cycles still lights the scene with it by light "
                                               "samples, which is not done here)"))
         if degenerate:
-            self.messages.append(('INFO', f"{degenerate} degenerate (zero-area) triangles skipped"))
-        self.counts['triangles_degenerate'] = degenerate
+            self.messages.append(('INFO', _degenerate_text(degenerate)))
+        self.counts['triangles_degenerate'] = sum(degenerate.values())
         self.counts['triangles_nonfinite'] = sum(nt for _, nt in bad.values())
         # materials hidden from some ray kinds (a Light Path ray-type mix, see _ray_type_mix);
         # those no ray sees (volume-only ones: Cycles' rays cross their faces as no surface)
@@ -361,9 +372,11 @@ class Assembly:
         ng, good = dacrt.shading.face_normals(world, tris)
         if v0:
             tris += v0
-        deg = int(np.count_nonzero(~good))
-        if deg:
+        deg = []
+        if not good.all():
             out.drop(T, good)
+            per_item = np.bincount(np.repeat(np.arange(g), nts), weights=~good, minlength=g)
+            deg = [(items[j][1].name, int(per_item[j])) for j in np.flatnonzero(per_item).tolist()]
         normals = out.normals[T]
         smooth = [j for j, (a, _) in enumerate(items) if a.normal_rows is not None]
         # the face normal on every corner of the flat meshes, in runs of consecutive ones: a
@@ -420,7 +433,7 @@ class Assembly:
     def _each_alone(self, items, out, v0, t0):
         """items written one _instance_batch each (what non-finite transforms and vertices
         need: dropped and said per object), their returns joined."""
-        bad, deg, skipped = [], 0, []
+        bad, deg, skipped = [], [], []
         for a, p in items:
             nbad, ndeg, nskipped = self._instance_batch(a, [p], out, v0, t0)
             bad += nbad
@@ -732,7 +745,8 @@ class Assembly:
 
     def _instance_batch(self, a, places, out, v0, t0):
         """Write the k instances of mesh `a` into out's vertex rows from v0 and triangle rows
-        from t0; returns ([(object name, bad vertices, bad triangles)], degenerate count,
+        from t0; returns ([(object name, bad vertices, bad triangles)], [(object name,
+        zero-area triangles dropped)],
         [(object name, non-finite transform (else singular)) per placement left out])."""
         k = len(places)
         nv, nt = len(a.positions), len(a.triangles)
@@ -792,7 +806,11 @@ class Assembly:
         ng, good = dacrt.shading.face_normals(world, tris)
         if v0:
             tris += v0
-        deg = int(np.count_nonzero(~good if keep is None else keep & ~good))
+        dropped = ~good if keep is None else keep & ~good
+        deg = []
+        if dropped.any():
+            per_place = np.count_nonzero(dropped.reshape(k, nt), axis=1)
+            deg = [(places[i].name, int(per_place[i])) for i in np.flatnonzero(per_place).tolist()]
         if keep is not None or deg:
             keep = good if keep is None else keep & good
             out.drop(T, keep)
