@@ -15,12 +15,13 @@ where their triangles' areas, projected into the plane, add up to more than the 
 rectangle bounding them there, which must cover some point twice (the smallest of the rectangles
 along the edges of one triangle; a Mirror's faces mostly fill theirs), and above _MAX_GROUP only
 their pairs whose bounding boxes meet (a Screw of a flat profile about its normal: 1440 triangles
-in one plane, pixels 2.5-3.2x Cycles). Every pair is tested exactly in the
+in one plane, pixels 2.5-3.2x Cycles); groups under the bound, in their pairs of separate pieces
+whose boxes overlap (_sparse_group: a text instanced on points in one plane, pixels 1.3-1.7x). Every pair is tested exactly in the
 first one's plane: the other's corners within _PAIR_ULPS float32 ulps of the pair's own largest
 coordinate of it (surfaces further apart are met in one order by both tracers), and separating
 axes (the six edge normals), each overlap deeper than that. So faces overlapping within a plane
-holding more than _BIG triangles (a face laid on a finely split floor) or whose other faces
-spread far around them are not found, nor a sliver thinner than the tolerance, nor a triangle
+holding more than _BIG triangles (a face laid on a finely split floor), faces of one piece
+(joined by corners) in a plane their areas do not fill, nor a sliver thinner than the tolerance, nor a triangle
 whose key falls in the bin next to its twin's: misses, never a false message. Faces facing
 each other are not said: they are objects in contact (a box resting on a floor, two boxes
 stacked), the overlap closed off between them and seen by no ray, a common sight; unless the
@@ -73,7 +74,10 @@ def overlapping(vertices, indices, geo, keys, step, candidates):
     for s in np.unique(size):
         g = start[size == s]
         if s > _SMALL:
-            g = g[_bound_exceeded(c, rows, g, s, step)]
+            bound = _bound_exceeded(c, rows, g, s, step)
+            for g0 in g[~bound]:
+                _sparse_group(c, t, geo, rows[g0:g0 + s], out)
+            g = g[bound]
         if s > _MAX_GROUP:
             for g0 in g:
                 _big_group(c, t, geo, rows[g0:g0 + s], out)
@@ -128,6 +132,52 @@ def _big_group(c, t, geo, rows, out):
     a, b = np.nonzero(np.triu(near, 1))
     rest = ~(out[rows[a]] & out[rows[b]])
     a, b = a[rest][:_BUDGET], b[rest][:_BUDGET]
+    _test(c, t, geo, rows[a], rows[b], out)
+
+
+def _sparse_group(c, t, geo, rows, out):
+    """Marks in out the triangles rows of a group under the area bound overlapping another of it
+    (copies of a sparse shape laid over each other: a text's letters instanced on points in one
+    plane leave most of the rectangle bounding them empty): the pairs whose bounding boxes come
+    within twice the group's largest pair tolerance on every axis, found by sweeping along the
+    axis the group spreads most (no pair matrix: a 4000-triangle floor's ~6 neighbours each),
+    nearest box centres first, at most _BUDGET pairs (beyond, a lower bound: still true)."""
+    # only pairs of separate pieces (joined by no corner index): a piece's own faces are its
+    # mesh's neighbours, whose folds the area bound and _folds are for; a plane of one piece (a
+    # split floor, a fan of 1500 slivers all sharing the centre: ~500K pairs) costs nothing here
+    verts, local = np.unique(t[rows], return_inverse=True)
+    local = local.reshape(-1, 3).astype(np.int32)
+    piece = dacrt.shading.island_roots(len(verts), np.r_[local[:, :2], local[:, 1:]])[local[:, 0]]
+    if (piece == piece[0]).all():
+        return
+    tri = c[rows]
+    lo, hi = tri.min(axis=1), tri.max(axis=1)
+    big = max(float(np.abs(tri).max()), 1e-30)
+    margin = 2 * _PAIR_ULPS * float(np.spacing(np.float32(big)))
+    spread = np.argsort(hi.max(axis=0) - lo.min(axis=0))[::-1]
+    ax = int(spread[0])
+    order = np.argsort(lo[:, ax], kind='stable')
+    los = lo[order, ax]
+    # for each triangle (in sweep order), the later ones whose box starts before its own ends
+    end = np.searchsorted(los, hi[order, ax] - margin, side='left')
+    count = np.maximum(end - np.arange(len(order)) - 1, 0)     # (a box thinner than the margin: none)
+    if count.sum() > 64 * _BUDGET:      # (long slivers: every box over every other)
+        count = np.minimum(count, 64 * _BUDGET // len(order))
+    a = np.repeat(np.arange(len(order)), count)
+    b = a + 1 + (np.arange(len(a)) - np.repeat(np.cumsum(count) - count, count))
+    a, b = order[a], order[b]
+    # boxes overlapping deeper than the margin along the two axes the plane spreads along
+    # (boxes only touching, as a grid's neighbours' do, leave at most an overlap too thin to
+    # z-fight visibly: left, as everywhere here, rather than tested pair by pair)
+    near = np.ones(len(a), bool)
+    for k, d in enumerate(spread.tolist()):
+        depth = np.minimum(hi[a, d], hi[b, d]) - np.maximum(lo[a, d], lo[b, d])
+        near &= depth > margin if k < 2 else depth >= -margin
+    near &= piece[a] != piece[b]
+    a, b = a[near], b[near]
+    if len(a) > _BUDGET:
+        mid = 0.5 * (lo + hi)
+        a, b = (x[np.argsort(np.square(mid[a] - mid[b]).sum(axis=1), kind='stable')[:_BUDGET]] for x in (a, b))
     _test(c, t, geo, rows[a], rows[b], out)
 
 
