@@ -161,8 +161,8 @@ def _sparse_group(c, t, geo, rows, out):
     # for each triangle (in sweep order), the later ones whose box starts before its own ends
     end = np.searchsorted(los, hi[order, ax] - margin, side='left')
     count = np.maximum(end - np.arange(len(order)) - 1, 0)     # (a box thinner than the margin: none)
-    if count.sum() > 64 * _BUDGET:      # (long slivers: every box over every other)
-        count = np.minimum(count, 64 * _BUDGET // len(order))
+    if count.sum() > 8 * _BUDGET:       # (long slivers: every box over every other; bounded memory)
+        count = np.minimum(count, 8 * _BUDGET // len(order))
     a = np.repeat(np.arange(len(order)), count)
     b = a + 1 + (np.arange(len(a)) - np.repeat(np.cumsum(count) - count, count))
     a, b = order[a], order[b]
