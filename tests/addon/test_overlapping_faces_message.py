@@ -211,3 +211,33 @@ def test_ordinary_planes_of_more_than_512_triangles_are_not_said(scene, said):
     assert sum(s > 512 for s in sizes) >= 6, sizes
     assert not _said(said), said
     assert not [t for t in said if 'coincid' in t or 'overlap' in t], said
+
+
+def test_a_text_instanced_on_points_in_one_plane_is_said(scene, said):
+    """A flat text instanced on a grid's points without rotation and realized (the fuzzer's seeds
+    2602, 2618, 2627, 2640, 2649: pixels 1.3-1.7x Cycles, unsaid): the copies of its letters lie
+    over each other in one plane, though their areas add up to less than the rectangle bounding
+    them. Said, naming the instancing object; the text alone is not."""
+    _scene().hide_render = True
+    text = bpy.data.objects.new('Word', bpy.data.curves.new('Word', 'FONT'))
+    text.data.body = "Xo8"
+    scenes.link(text)
+    text.location.z, text.hide_render = 2.0, True      # (not on the floor: laid on it, it overlaps it)
+    grid = scenes.mesh('Scatter', [(0, 0, 1.0), (0.35, 0.1, 1.0), (0.7, -0.1, 1.0)], [])
+    ng = bpy.data.node_groups.new('scatter', 'GeometryNodeTree')
+    ng.interface.new_socket('Geometry', in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gi, go = ng.nodes.new('NodeGroupInput'), ng.nodes.new('NodeGroupOutput')
+    info = ng.nodes.new('GeometryNodeObjectInfo')
+    info.inputs['Object'].default_value = text
+    iop = ng.nodes.new('GeometryNodeInstanceOnPoints')
+    real = ng.nodes.new('GeometryNodeRealizeInstances')
+    ng.links.new(gi.outputs[0], iop.inputs['Points'])
+    ng.links.new(info.outputs['Geometry'], iop.inputs['Instance'])
+    ng.links.new(iop.outputs[0], real.inputs[0])
+    ng.links.new(real.outputs[0], go.inputs[0])
+    grid.modifiers.new('scatter', 'NODES').node_group = ng
+    got = _said(said)
+    assert len(got) == 1 and "'Scatter'" in got[0], got
+    grid.hide_render, text.hide_render = True, False
+    assert not _said(said), said
