@@ -143,6 +143,7 @@ CACHES = {
     ("lights.envkeep", "_same"),                # an HDRI's native map, reused only for texels of the same bits
     ("lights.envkeep", "_asked"),               # that comparison's answer, for the Environment (a weakref) it was made for
     ("lights.envkeep", "_stats"),               # the texel check of the latest read-only texels (a weakref to them)
+    ("lights.madelamp", "_NAMES"),              # a Light dataclass's field names (fixed per class)
     ("export.readkeep", "_kept"),               # a file's float texels, keyed by its stat identity and every setting read
 }
 # what outlives one render by design: the C heap's and OpenBLAS's thread policies are the
