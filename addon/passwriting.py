@@ -25,7 +25,7 @@ class PassWriting:
     """A mixin of integrator.Integrator (see the module docstring): its methods read and set
     the Integrator's state."""
 
-    def _pass_normal(self, prim, u, v, ns, ng, I, diffuse, tau=None):
+    def _pass_normal(self, prim, u, v, ns, ng, I, diffuse, tau=None, scale=None):
         """(3, k) the normal the Normal and Denoising Normal passes take at hits (prim, u, v):
         Cycles' closures' normals averaged by weight, sum w N / sum w (surface_shader_average_normal
         normalizes it, the denoising features do not): the diffuse closures' bent normal
@@ -33,11 +33,30 @@ class PassWriting:
         BSDF's raised until its mirror reflection of I clears the surface (its
         maybe_ensure_valid_specular_reflection under Bump Map Correction: a deep bump's
         Normal.z 0.714 -> 0.777 straight on), the transparent closure's the unbent ns (weight
-        tau (3, k) or None). ns and ng face the ray, I (3, k) toward where it came from."""
+        tau (3, k) or None). ns and ng face the ray, I (3, k) toward where it came from. The
+        layers the albedo folds in (a Principled's specular layer, metal, glass and coat:
+        Materials.normal_weights) weigh their own normals, the albedo they add taken from the
+        diffuse weight: the specular layer's, metal's and glass's valid reflection normal, the
+        coat's the unbent ns (a white specular layer over a grey base had left the Normal pass
+        0.08 off Cycles' under a normal map, a metal 0.09). scale (k,) or None: what the albedo
+        diffuse was scaled by (a cut-out's opacity)."""
         nb, bump = self._bent_normals(prim, u, v, ns, ng, self._back(prim, ng, I))
         if bump is None:
             return nb
+        folded = None
+        if self.mats.any_normal_parts:
+            mat = np.take(self.tri.material, prim)
+            weights = np.take(self.mats.normal_weights, mat, axis=1)
+            folded = np.take(self.mats.normal_folded, mat, axis=1)
+            if scale is not None:
+                weights, folded = weights * scale, folded * scale
+            diffuse = np.maximum(diffuse - folded, 0.0)
         parts = [(diffuse.mean(axis=0), nb)]
+        if folded is not None:
+            if weights[0].any():
+                parts.append((weights[0], valid_reflection_normal(ng, I, nb, bump[3] != 0)))
+            if weights[1].any():
+                parts.append((weights[1], ns))
         if self._any_translucent:
             wt = self._translucency_at(prim, u, v, self._back(prim, ng, I)).mean(axis=0)
             if (wt > 0).any():
@@ -257,7 +276,7 @@ class PassWriting:
             albedo = self._pass_albedo(prim, u, v, self._back(prim, ns, I)) * weight     # (ns faces the ray)
             if bent:        # Cycles' Normal and denoising normal: the bent one, as _write_passes,
                 # averaged with the transparent closure's (the unbent N) by their weights
-                ns = self._pass_normal(prim, u, v, ns, ng, I, albedo, tau)
+                ns = self._pass_normal(prim, u, v, ns, ng, I, albedo, tau, weight)
             if self._any_translucent:
                 albedo += self._translucency_at(prim, u, v, self._back(prim, ns, I)) * weight
             if denoise is not None:

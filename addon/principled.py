@@ -297,6 +297,49 @@ def layer_steps(node, reasons) -> list:
     return [step] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse), step]
 
 
+def normal_parts(node, base) -> tuple:
+    """(reflective, unbent, folded): how Cycles' Principled BSDF (svm/closure.h) weighs its
+    closures' normals in the Normal pass (surface_shader_average_normal: each by |mean of its
+    weight|), beside the diffuse closure, which takes the bent normal N at weight base x what
+    the layers leave. reflective: the weight of the closures that take
+    maybe_ensure_valid_specular_reflection(N) (metal, Metallic x W; glass, (1 - Metallic) x
+    Transmission x W; specular layer, (1 - Metallic)(1 - Transmission) x W where its eta is not
+    1), W what the sheen and coat leave of the weight 1; unbent: the coat's (Coat Weight under
+    the sheen), whose normal is sd->N; folded (3,): what the export adds to the base's albedo
+    for all layers but the sheen (whose closure takes N, as the diffuse), so the albedo less it
+    is the diffuse closure's weight. Averaged over view cosines (weighted by cos), the metal's
+    albedo at the base colour `base` (3,); the multiscatter darkening of a closure's weight
+    (microfacet_ggx_preserve_energy, a few percent) left out."""
+    said = []
+    metal, dielectric = _metal(node, said)
+    m = 0.0 if metal is None else metal[0]
+    spec = trans = None
+    if dielectric:
+        spec, trans = _specular_mu(node, said), _transmission(node, said)
+    n = len(specular.VIEW)
+    coat, sheen_mu = _coat_mu(node, said), _sheen_mu(node, said)
+    s_dim = np.ones(n) if sheen_mu is None else sheen_mu[0]
+    c_dim, c_add = (np.ones((3, n)), np.zeros((3, n))) if coat is None else coat
+    w_below = s_dim * c_dim                     # (3, n): the weight the metal and glass get
+    t = 0.0 if trans is None else trans[0]
+    share = m + (1.0 - m) * t + ((1.0 - m) * (1.0 - t) if spec is not None else 0.0)
+    reflective = float((share * w_below.mean(axis=0)) @ specular.VIEW)
+    unbent = 0.0
+    if coat is not None:
+        found = _layer_inputs(node, 'Coat Weight', ('Coat Roughness', 'Coat IOR'), 'Coat Tint', "coat", "", [],
+                              most=np.inf)
+        unbent = float(found[0] * (s_dim @ specular.VIEW))
+    add_s = np.zeros((3, n)) if spec is None else spec[0]
+    if trans is not None:
+        add_s = (1.0 - t) * add_s + t * trans[1]
+    below = (1.0 - m) * add_s
+    if metal is not None:
+        f0 = np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, 1.0)
+        below = below + m * specular.metal_albedo_mu(metal[1], f0, metal[2], _multiscatter(node))
+    folded = ((s_dim * (c_dim * below + c_add)) @ specular.VIEW)
+    return reflective, unbent, folded
+
+
 def constant_alpha(socket, reasons) -> float:
     """A Principled BSDF's Alpha as a constant in [0, 1] (a non-finite value: 1), with a
     reason where nodes drive it (their own value used)."""

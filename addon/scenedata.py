@@ -163,6 +163,11 @@ class Material:
     pass_color: Optional[np.ndarray] = None
     pass_texture: Optional[np.ndarray] = None
     pass_texture_modes: tuple = ('Linear', 'REPEAT', None)
+    # How the Normal pass weighs the normals of the closures a diffuse renderer folds into the
+    # albedo (principled.normal_parts): (weight of those that take Cycles' valid specular
+    # reflection normal, weight of those on the unbent normal, the albedo (3,) they add, which
+    # the pass colour less it leaves to the diffuse closure on the bent normal)
+    normal_parts: tuple = (0.0, 0.0, (0.0, 0.0, 0.0))
     # A rough diffuse (Cycles' Oren-Nayar of roughness rough_sigma; 0: none) whose
     # view-dependent BSDF the integrator renders (roughdiffuse.py): the albedo is its averaged
     # albedo, the pass colour (which it needs) its colour times rough_scale (3,), its Mix weights

@@ -339,6 +339,12 @@ class Materials:
         # paths alone, so behind an emissive sheet of Alpha 0.225 the Normal pass (written by the
         # paths that pass) was 0.56x Cycles'
         self.opaque_weight = (self.base + self.translucency).mean(axis=0).astype(F32)
+        # the Normal pass's weights of the folded layers' normals (scenedata.Material.normal_parts):
+        # (2, materials) the valid-reflection and unbent closures', (3, materials) their albedo
+        parts = [getattr(m, 'normal_parts', None) or (0.0, 0.0, (0.0, 0.0, 0.0)) for m in materials]
+        self.normal_weights = np.array([[p[0] for p in parts], [p[1] for p in parts]], F32).reshape(2, -1)
+        self.normal_folded = np.ascontiguousarray(np.array([p[2] for p in parts], F32).reshape(-1, 3).T)
+        self.any_normal_parts = bool(self.normal_weights.any())
 
 
 def _rgb(mat, label, value, nonnegative=True):

@@ -137,7 +137,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._image_probe = None        # what images read instead of their texels (_product_map)
         self._uv_names = []
         self._normal_maps = []
-        self._normals, self._normal_weight = [], 1.0     # (see _normal_input)
+        self._normals, self._normal_weight, self._normal_parts = [], 1.0, []    # (see _normal_input)
         self.normal_mapped = False  # some material has a normal map: meshes need tangents
         self._on_points = False     # the material being built shades point-cloud spheres (index)
 
@@ -330,6 +330,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._bumps = []              # (Bump node keys, scenedata.Bump tuple) of its BSDFs' Bump chains
         self._normals = []            # per BSDF read: (name, Mix weight, normal map index, bump index)
         self._normal_weight = 1.0
+        self._normal_parts = []       # per Principled read: principled.normal_parts x its weight
         self._closure_folder = None   # Cycles' constant folding of this material (shaders.py)
         displaced = None
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
@@ -583,6 +584,10 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                            dark_stand_in=dark_stand_in,
                            pass_color=pass_color, pass_texture=pass_texture,
                            pass_texture_modes=tuple(pass_modes),
+                           normal_parts=(sum(e[0] for e in self._normal_parts),
+                                         sum(e[1] for e in self._normal_parts),
+                                         np.asarray(sum((e[2] for e in self._normal_parts), np.zeros(3)),
+                                                    np.float32)),
                            rough_sigma=0.0 if rough is None else float(rough[0]),
                            rough_scale=None if rough is None else np.asarray(rough[1], np.float32),
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',

@@ -253,6 +253,10 @@ class ShaderClosures:
                 if v != 0.0 or not ok:
                     reasons.append(f"Principled {what} ignored")
         self._normal_input(node, reasons)
+        # (its closures' weights in the Normal pass, under this BSDF's Mix weight and Alpha)
+        parts = principled.normal_parts(node, constant_color(node.inputs['Base Color'])[0])
+        entry = [self._normal_weight * parts[0], self._normal_weight * parts[1], self._normal_weight * parts[2]]
+        self._normal_parts.append(entry)
         coat = node.inputs.get('Coat Weight')
         coat, coat_ok = constant_value(coat) if coat is not None else (0.0, True)
         if (coat != 0.0 or not coat_ok) and bends_normal(node.inputs.get('Coat Normal')):
@@ -314,6 +318,7 @@ class ShaderClosures:
         if a < 1.0:
             c = c.scaled(a)
             c.transparent = c.transparent + (1.0 - a)
+            entry[:] = [x * a for x in entry]
         return c
 
     def _ray_type_mix(self, socket, reasons, transparent_shadow=True):
