@@ -175,7 +175,7 @@ class ShaderClosures:
         if t == 'BSDF_GLOSSY' and linked_link(node.inputs['Color']) is not None:
             gmap = glossy_map(node, reasons)        # a textured colour: its albedo per texel
             if gmap is not None:
-                return self._color_closure(node.inputs['Color'], reasons).mapped(gmap)
+                return self._reflective(node, self._color_closure(node.inputs['Color'], reasons).mapped(gmap))
         if t == 'BSDF_SHEEN':
             self._normal_input(node, reasons)
             e = sheen_albedo(node, reasons)
@@ -189,7 +189,7 @@ class ShaderClosures:
             return out
         reflector = reflector_albedo(node, reasons)
         if reflector is not None:
-            return Closure(const=reflector)
+            return self._reflective(node, Closure(const=reflector))
         if t == 'BSDF_GLASS':
             reflect, transmit = glass_albedos(node, reasons)
             return Closure(const=reflect, transparent=transmit, glass=transmit)
@@ -238,6 +238,18 @@ class ShaderClosures:
             color, _ = constant_color(sock)
             return _clamped_weight(Closure(const=color))
         return Closure(const=DEFAULT_ALBEDO)
+
+    def _reflective(self, node, closure):
+        """closure, a Glossy or Metallic BSDF's stand-in, noted for the Normal pass
+        (principled.normal_parts): Cycles gives its closure (of weight its Color, a Metallic
+        BSDF's 1) the valid specular reflection normal; its whole albedo (a texture's at its
+        mean) is folded."""
+        color = constant_color(node.inputs['Color'])[0] if node.type == 'BSDF_GLOSSY' else (1.0, 1.0, 1.0)
+        weight = float(np.clip(np.nan_to_num(np.asarray(color, np.float64)[:3]), 0.0, None).mean())
+        albedo = closure.const + (closure.tex_weight * closure.texture.mean() if closure.texture is not None
+                                  and closure.tex_weight.any() else 0.0)
+        self._normal_parts.append([self._normal_weight * weight, 0.0, self._normal_weight * albedo])
+        return closure
 
     def _principled(self, node, reasons):
         alpha = node.inputs.get('Alpha')
