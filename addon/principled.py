@@ -340,6 +340,36 @@ def normal_parts(node, base) -> tuple:
     return reflective, unbent, folded
 
 
+def pick_delta(node, base) -> np.ndarray:
+    """(len(MU),) per view cosine what Cycles' closures other than the transparent one weigh
+    when a path picks one (their sample weights: a microfacet closure's is its weight x its
+    albedo estimate at the view, bsdf_microfacet_estimate_albedo; the diffuse's its colour x
+    what the layers above leave at the view) less what the export's albedo weighs there (its
+    mean over channels, averaged over view directions), for the base colour `base` (3,): the
+    pass-or-stop pick of a surface with Alpha < 1 weighs its opaque part as Cycles at each
+    view. The specular layer and metal; zeros with a glass, coat, sheen or rough base, which
+    keep the averaged albedo."""
+    said = []
+    metal, dielectric = _metal(node, said)
+    spec = _specular_mu(node, said) if dielectric else None
+    n = len(specular.VIEW)
+    if (metal is None and spec is None) or (dielectric and _transmission(node, said) is not None) or \
+            _coat_mu(node, said) is not None or _sheen_mu(node, said) is not None or \
+            _diffuse_roughness(node, said) != 0.0:
+        return np.zeros(n)
+    m = 0.0 if metal is None else metal[0]
+    c = np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, None)
+    albedo, estimate = (np.zeros((3, n)), np.zeros((3, n))) if spec is None else spec
+    dim = np.clip(1.0 - estimate.max(axis=0), 0.0, 1.0)
+    picked = (1.0 - m) * (c.mean() * dim + estimate.mean(axis=0))
+    folded = (1.0 - m) * (c.mean() * (dim @ specular.VIEW) + (albedo @ specular.VIEW).mean())
+    if metal is not None:
+        # (its albedo for its estimate: both F82 from the base colour, within the darkening)
+        a = specular.metal_albedo_mu(metal[1], np.minimum(c, 1.0), metal[2], _multiscatter(node)).mean(axis=0)
+        picked, folded = picked + m * a, folded + m * (a @ specular.VIEW)
+    return picked - folded
+
+
 def constant_alpha(socket, reasons) -> float:
     """A Principled BSDF's Alpha as a constant in [0, 1] (a non-finite value: 1), with a
     reason where nodes drive it (their own value used)."""

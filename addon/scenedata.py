@@ -168,6 +168,10 @@ class Material:
     # reflection normal, weight of those on the unbent normal, the albedo (3,) they add, which
     # the pass colour less it leaves to the diffuse closure on the bent normal)
     normal_parts: tuple = (0.0, 0.0, (0.0, 0.0, 0.0))
+    # What the pass-or-stop pick at a surface with transparency adds to the opaque part's
+    # weight (the albedo's mean) per view cosine of specular.MU (Cycles weighs a microfacet
+    # closure by its albedo estimate at the view, principled.pick_delta); None: nothing
+    pick_delta: Optional[np.ndarray] = None
     # A rough diffuse (Cycles' Oren-Nayar of roughness rough_sigma; 0: none) whose
     # view-dependent BSDF the integrator renders (roughdiffuse.py): the albedo is its averaged
     # albedo, the pass colour (which it needs) its colour times rough_scale (3,), its Mix weights

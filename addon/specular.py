@@ -43,6 +43,15 @@ _PHI_G = (np.arange(128) + 0.5) / 128 * 2.0 * np.pi
 VIEW = 2.0 * MU * _W_MU
 
 
+def view_table(table, rows, mu) -> np.ndarray:
+    """(k,) float32: rows `rows` (k,) of a table of per-view-cosine values (m, len(MU)) read at
+    the view cosines mu (k,), linearly between MU's nodes (held beyond the first and last)."""
+    mu = np.asarray(mu, np.float64)
+    j = np.clip(np.searchsorted(MU, mu), 1, len(MU) - 1)
+    t = np.clip((mu - MU[j - 1]) / (MU[j] - MU[j - 1]), 0.0, 1.0)
+    return (table[rows, j - 1] * (1.0 - t) + table[rows, j] * t).astype(np.float32)
+
+
 def f0_from_ior(eta):
     return ((eta - 1.0) / (eta + 1.0)) ** 2
 

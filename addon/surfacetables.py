@@ -9,6 +9,7 @@ import numpy as np
 import dacrt
 
 from . import roughdiffuse
+from .specular import MU
 from .overlappingfaces import plane_step
 from .procedural import SIDED, VIEW, ProceduralTexels
 from .texture import EncodedTexels, UdimTiles, lookup_texels
@@ -345,6 +346,11 @@ class Materials:
         self.normal_weights = np.array([[p[0] for p in parts], [p[1] for p in parts]], F32).reshape(2, -1)
         self.normal_folded = np.ascontiguousarray(np.array([p[2] for p in parts], F32).reshape(-1, 3).T)
         self.any_normal_parts = bool(self.normal_weights.any())
+        # (materials, len(specular.MU)) what the pass-or-stop pick adds to opaque_weight per view
+        # cosine (scenedata.Material.pick_delta), or None where no material has any
+        deltas = [getattr(m, 'pick_delta', None) for m in materials]
+        self.pick_delta = None if all(d is None for d in deltas) else np.ascontiguousarray(
+            [np.zeros(len(MU), F32) if d is None else np.asarray(d, F32) for d in deltas], F32)
 
 
 def _rgb(mat, label, value, nonnegative=True):

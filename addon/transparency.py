@@ -12,6 +12,7 @@ import dacrt
 from .pathstate import Paths, clamp_classes, compact, diffuse_reflections
 from .sampling import DIM_GLASS, DIM_LOBE, DIM_PASSED, DIM_ROULETTE, DIM_TRANSPARENT
 from .scenedata import HOLDOUT
+from .specular import view_table
 
 F32 = np.float32
 
@@ -95,7 +96,16 @@ class Transparency:
             if self._any_emissive:
                 self._emission_before_pick(camera, k, path, hits, rows, prim, opacity, sinks)
             t_mean = tau.mean(axis=0)
-            total = t_mean + np.take(self.mats.opaque_weight, mat) * opacity
+            w_opaque = np.take(self.mats.opaque_weight, mat)
+            if self.mats.pick_delta is not None:
+                # Cycles weighs a specular layer or metal by its albedo at this view, not averaged
+                # over views (behind a sheet of Alpha 0.44 and Specular 0.5 seen straight on, 4.4%
+                # of paths had stopped at it where Cycles stops 2.8%: its Normal pass 0.98x)
+                if surface is None:
+                    surface = self._surface(h, None, D)
+                mu = np.abs(np.einsum('ij,ij->j', surface[2], D))
+                w_opaque = np.maximum(w_opaque + view_table(self.mats.pick_delta, mat, mu), 0.0)
+            total = t_mean + w_opaque * opacity
             p = np.where(total > 0, t_mean / np.where(total > 0, total, 1.0), 0.0).astype(F32)
             p[spent] = 0.0                      # stops, at its opaque part's weight
             u = self.rng.uniform2(keys, DIM_TRANSPARENT + (k << 11) + j)[0]

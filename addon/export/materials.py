@@ -588,6 +588,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                                          sum(e[1] for e in self._normal_parts),
                                          np.asarray(sum((e[2] for e in self._normal_parts), np.zeros(3)),
                                                     np.float32)),
+                           pick_delta=_pick_delta(self._normal_parts),
                            rough_sigma=0.0 if rough is None else float(rough[0]),
                            rough_scale=None if rough is None else np.asarray(rough[1], np.float32),
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
@@ -653,3 +654,10 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         w, k = c.tex_weight.astype(np.float32), c.const.astype(np.float32)
         return np.ones(3, np.float32), t.texels(t.baked(lambda rgb: rgb * w + k)), t.interpolation, t.extension, \
             t.transform
+
+
+def _pick_delta(parts):
+    """The material's scenedata.Material.pick_delta: its Principled BSDFs' (principled.pick_delta
+    x their weights) summed, None where every one is 0."""
+    total = sum((np.asarray(e[3], np.float64) for e in parts), np.zeros(len(specular.VIEW)))
+    return total.astype(np.float32) if total.any() else None

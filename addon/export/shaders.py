@@ -248,7 +248,7 @@ class ShaderClosures:
         weight = float(np.clip(np.nan_to_num(np.asarray(color, np.float64)[:3]), 0.0, None).mean())
         albedo = closure.const + (closure.tex_weight * closure.texture.mean() if closure.texture is not None
                                   and closure.tex_weight.any() else 0.0)
-        self._normal_parts.append([self._normal_weight * weight, 0.0, self._normal_weight * albedo])
+        self._normal_parts.append([self._normal_weight * weight, 0.0, self._normal_weight * albedo, 0.0])
         return closure
 
     def _principled(self, node, reasons):
@@ -266,8 +266,10 @@ class ShaderClosures:
                     reasons.append(f"Principled {what} ignored")
         self._normal_input(node, reasons)
         # (its closures' weights in the Normal pass, under this BSDF's Mix weight and Alpha)
-        parts = principled.normal_parts(node, constant_color(node.inputs['Base Color'])[0])
-        entry = [self._normal_weight * parts[0], self._normal_weight * parts[1], self._normal_weight * parts[2]]
+        base_value = constant_color(node.inputs['Base Color'])[0]
+        parts = principled.normal_parts(node, base_value)
+        entry = [self._normal_weight * parts[0], self._normal_weight * parts[1], self._normal_weight * parts[2],
+                 self._normal_weight * principled.pick_delta(node, base_value)]
         self._normal_parts.append(entry)
         coat = node.inputs.get('Coat Weight')
         coat, coat_ok = constant_value(coat) if coat is not None else (0.0, True)
