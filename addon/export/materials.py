@@ -34,7 +34,7 @@ from .reflectors import (ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds
 from .cutouts import Cutouts
 from .emission import Emission
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
-from .meshes import per_primitive
+from .meshes import STANDARD_OF, per_primitive
 from .objectinfo import OBJECT_INFO
 from . import rayvariants
 from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
@@ -138,6 +138,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._uv_names = []
         self._normal_maps = []
         self._normals, self._normal_weight, self._normal_parts = [], 1.0, []    # (see _normal_input)
+        # colour chains that read an attribute compiled per point (_build, a chain not affine in it)
+        self._attributes_per_point = False
         self.normal_mapped = False  # some material has a normal map: meshes need tangents
         self._on_points = False     # the material being built shades point-cloud spheres (index)
 
@@ -310,6 +312,11 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         # a luminance, a channel swap: interpolating commutes with it; said otherwise)
         probe = self._ATTRIBUTE_SIGNED[0, :, :3].astype(np.float64)
         affine = not reads_alpha and affine_fit(probe, probe_albedo(m), 1e-5)
+        if not affine and not per_primitive(name) and not name.startswith(STANDARD_OF):
+            # (a strand's Curves or Point Info stays at its corners, as before)
+            per_point = self._per_point_build(mat)
+            if per_point is not None:
+                return per_point
         self._attribute_pixels = None
         self._attribute_map = ('corners', name, mat)
         m.texture, m.base_color, m.color_attribute = None, np.ones(3, np.float32), name
@@ -607,6 +614,20 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                            visibility=visibility,
                            aov_textures={key: (t.texels(t.pixels), t.interpolation, t.extension, t.transform)
                                          for key, t in aov_textures.items()})
+
+    def _per_point_build(self, mat):
+        """The material with its colour chain from a mesh attribute compiled per shading point
+        (interpolated, then its nodes, as Cycles), or None where compile cannot follow it."""
+        self._attribute_pixels, self._attributes_per_point = None, True
+        try:
+            m = self._build_material(mat)
+        finally:
+            self._attributes_per_point = False
+        if not isinstance(m.texture, ProceduralTexels):
+            self._attribute_pixels = self._ATTRIBUTE_SIGNED
+            return None
+        self._attribute_map = None
+        return m
 
     def _normal_choice(self, reasons):
         """(index in _normal_maps or None, index in _bumps or None): the normal map and bump of

@@ -92,13 +92,13 @@ class _Chain:
         self.light_path, self.view, self.ray = light_path, view, ray
 
 
-def compile_color(socket, reasons, image=None):
+def compile_color(socket, reasons, image=None, attributes=False):
     """A ProceduralTexels for what feeds a colour socket, or None when the chain reads no
     procedural texture or something compile cannot follow (nodeeval then evaluates it).
     image (the export's image reader, see _Chain): Image Texture nodes are looked up per point
     too, so a chain of procedurals and images, or of two or more images (which nodeeval's
     evaluation, one image per material, reads the second of as its average), is exact."""
-    found = compile_socket(socket, True, reasons, image=image, view=True)
+    found = compile_socket(socket, True, reasons, image=image, view=True, attributes=attributes)
     if found is None:
         return None
     fn, needs, sources = found

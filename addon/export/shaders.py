@@ -387,7 +387,8 @@ class ShaderClosures:
         """A diffuse colour input: constant, an Image Texture on the UV map, or colour nodes
         and float nodes (nodeeval.py) on constants and one image, baked into a texture."""
         link = linked_link(socket)
-        found = procedurals.compile_color(socket, reasons, image=self._texture) if link is not None else None
+        found = procedurals.compile_color(socket, reasons, image=self._texture,
+                                          attributes=self._attributes_per_point) if link is not None else None
         if found is not None:       # evaluated at each shading point (procedural.py)
             return Closure(texture=Texture.procedural(found), tex_weight=(1.0, 1.0, 1.0))
         if link is not None and (link.from_node.type in nodeeval.NODE_TYPES or
