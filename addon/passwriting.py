@@ -41,7 +41,7 @@ class PassWriting:
         0.08 off Cycles' under a normal map, a metal 0.09). scale (k,) or None: what the albedo
         diffuse was scaled by (a cut-out's opacity)."""
         nb, bump = self._bent_normals(prim, u, v, ns, ng, self._back(prim, ng, I))
-        if bump is None:
+        if bump is None and not self.mats.any_normal_parts:
             return nb
         folded = None
         if self.mats.any_normal_parts:
@@ -54,10 +54,12 @@ class PassWriting:
         parts = [(diffuse.mean(axis=0), nb)]
         if folded is not None:
             if weights[0].any():
-                parts.append((weights[0], valid_reflection_normal(ng, I, nb, bump[3] != 0)))
+                # (Cycles raises a smooth normal too, not only a bent one, under the material's
+                # Bump Map Correction: a coarse smooth sphere's rim)
+                parts.append((weights[0], valid_reflection_normal(ng, I, nb, np.take(self.mats.bump_correction, mat))))
             if weights[1].any():
                 parts.append((weights[1], ns))
-        if self._any_translucent:
+        if self._any_translucent and bump is not None:
             wt = self._translucency_at(prim, u, v, self._back(prim, ng, I)).mean(axis=0)
             if (wt > 0).any():
                 parts.append((wt, valid_reflection_normal(ng, I, nb, bump[3] != 0)))

@@ -346,6 +346,8 @@ class Materials:
         self.normal_weights = np.array([[p[0] for p in parts], [p[1] for p in parts]], F32).reshape(2, -1)
         self.normal_folded = np.ascontiguousarray(np.array([p[2] for p in parts], F32).reshape(-1, 3).T)
         self.any_normal_parts = bool(self.normal_weights.any())
+        # Cycles' SD_USE_BUMP_MAP_CORRECTION per material (its reflection normals raised)
+        self.bump_correction = np.array([bool(getattr(m, 'bump_correction', True)) for m in materials])
         # (materials, len(specular.MU)) what the pass-or-stop pick adds to opaque_weight per view
         # cosine (scenedata.Material.pick_delta), or None where no material has any
         deltas = [getattr(m, 'pick_delta', None) for m in materials]
