@@ -118,12 +118,17 @@ def valid_reflection_normal(Ng, I, N, correction):
     maybe_ensure_valid_specular_reflection): a bent normal N whose mirror reflection of the
     view direction I would dip below the geometric normal Ng's plane is raised toward Ng just
     enough; all (3, k), Ng and N facing I. Float64 inside, float32 out."""
+    out = np.array(N, F32)
     Ng, I, N = (np.asarray(a, np.float64) for a in (Ng, I, N))
     dot = lambda a, b: (a * b).sum(axis=0)  # noqa: E731
     R = 2.0 * dot(N, I) * N - I
     Iz = dot(I, Ng)
     t = np.minimum(0.9 * Iz, 0.01)
-    keep = ~correction | (dot(Ng, R) >= t)
+    # (only those that dip are raised: the Normal pass calls this for every camera hit)
+    raise_at = np.flatnonzero(~(~np.broadcast_to(correction, Iz.shape) | (dot(Ng, R) >= t)))
+    if not len(raise_at):
+        return out
+    Ng, I, N, Iz, t = Ng[:, raise_at], I[:, raise_at], N[:, raise_at], Iz[raise_at], t[raise_at]
     X = N - dot(N, Ng) * Ng
     length = np.sqrt(dot(X, X))
     X = np.where(length > 0, X / np.where(length > 0, length, 1.0), N)
@@ -136,4 +141,5 @@ def valid_reflection_normal(Ng, I, N, correction):
         Nz2 = np.where(Ix < 0, 0.25 * (b + root) / a, 0.25 * (b - root) / a)
     Nz2 = np.nan_to_num(Nz2, nan=1.0)
     raised = np.sqrt(np.maximum(1.0 - Nz2, 0.0)) * X + np.sqrt(np.maximum(Nz2, 0.0)) * Ng
-    return np.where(keep, N, raised).astype(F32)
+    out[:, raise_at] = raised
+    return out
