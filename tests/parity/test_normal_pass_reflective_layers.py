@@ -9,7 +9,6 @@ Object-space one of a Noise texture. Before, the pass took the bent normal for e
 map, 0.41 under a coat. The Glossy and Metallic BSDFs' closures take the valid normal too
 (a Glossy alone 0.09 off, mixed half and half with a Diffuse 0.06). Cycles raises a smooth
 normal as well, where nothing bends it (a coarse smooth sphere's rim)."""
-import os
 
 import bpy
 import numpy as np
@@ -17,27 +16,13 @@ import pytest
 
 from tests.addon import scenes
 
+from .normalpass import normal_pass_diff, normal_pass_scene, world_normal_map
+
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
-def _scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 32, 24
-    scenes.camera(location=(0, -6, 1), rotation=(1.4, 0, 0))
-    return sc
-
-
-def _world_map(nt):
-    nmap = nt.nodes.new('ShaderNodeNormalMap')
-    nmap.space = 'WORLD'
-    nmap.inputs['Strength'].default_value = 0.8
-    nmap.inputs['Color'].default_value = (0.1, 0.2, 0.9, 1.0)
-    return nmap
-
-
 def _normal_pass(tmp_path, metallic, level, ior, kind, transmission=0.0, coat=0.0):
-    sc = _scene()
+    sc = normal_pass_scene()
     mat = scenes.principled('P', (0.5, 0.5, 0.5))
     nt = mat.node_tree
     p = nt.nodes['Principled BSDF']
@@ -50,9 +35,9 @@ def _normal_pass(tmp_path, metallic, level, ior, kind, transmission=0.0, coat=0.
     checker.inputs['Color2'].default_value = (0.6, 0.5, 0.4, 1.0)
     nt.links.new(checker.outputs['Color'], p.inputs['Base Color'])
     if kind in ('smooth', 'cube'):      # no normal map: a coarse smooth mesh's own normals
-        return _compare(tmp_path, sc, mat, subdivisions=1, cube=kind == 'cube')
+        return normal_pass_diff(tmp_path, sc, mat, subdivisions=1, cube=kind == 'cube')
     if kind == 'world':
-        nmap = _world_map(nt)
+        nmap = world_normal_map(nt)
     else:
         nmap = nt.nodes.new('ShaderNodeNormalMap')
         nmap.space = 'OBJECT'
@@ -60,28 +45,7 @@ def _normal_pass(tmp_path, metallic, level, ior, kind, transmission=0.0, coat=0.
         noise.inputs['Scale'].default_value = 2.0
         nt.links.new(noise.outputs['Color'], nmap.inputs['Color'])
     nt.links.new(nmap.outputs['Normal'], p.inputs['Normal'])
-    return _compare(tmp_path, sc, mat)
-
-
-def _compare(tmp_path, sc, mat, subdivisions=2, cube=False):
-    if cube:
-        bpy.ops.mesh.primitive_cube_add(size=2, location=(0, 0, 1), rotation=(0.3, 0.2, 0.5))
-    else:
-        bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=subdivisions, radius=1.5, location=(0, 0, 1))
-    bpy.ops.object.shade_smooth()
-    bpy.context.object.data.materials.append(mat)
-    scenes.world((0.3, 0.3, 0.3), 1.0)
-    sc.view_layers[0].use_pass_normal = True
-    sc.cycles.samples = sc.dacrt.samples = 16
-    got = {}
-    for engine in ('CYCLES', 'DACRT'):
-        sc.render.engine = engine
-        ch = scenes.read_exr(scenes.render_exr(os.path.join(tmp_path, f'{engine}.exr'), sc, multilayer=True))
-        got[engine] = np.stack([ch[f'ViewLayer.Normal.{c}'] for c in 'XYZ'], -1)
-    c, d = got['CYCLES'], got['DACRT']
-    seen = np.abs(c).sum(-1) > 0
-    assert seen.sum() > 200
-    return np.abs(c - d).max(-1)[seen]
+    return normal_pass_diff(tmp_path, sc, mat)
 
 
 @pytest.mark.parametrize('metallic, level, ior', [(0.0, 0.5, 1.5), (0.5, 0.5, 1.5), (1.0, 0.5, 1.5),
@@ -107,7 +71,7 @@ def test_coat_takes_the_unbent_normal_as_cycles(tmp_path):
 @pytest.mark.parametrize('node, fac', [('ShaderNodeBsdfGlossy', 1.0), ('ShaderNodeBsdfGlossy', 0.5),
                                        ('ShaderNodeBsdfMetallic', 0.3)])
 def test_glossy_and_metallic_bsdfs_take_the_valid_normal_as_cycles(tmp_path, node, fac):
-    sc = _scene()
+    sc = normal_pass_scene()
     mat = bpy.data.materials.new('G')
     nt = mat.node_tree
     nt.nodes.clear()
@@ -119,10 +83,10 @@ def test_glossy_and_metallic_bsdfs_take_the_valid_normal_as_cycles(tmp_path, nod
     nt.links.new(diffuse.outputs[0], mix.inputs[1])
     nt.links.new(glossy.outputs[0], mix.inputs[2])
     nt.links.new(mix.outputs[0], out.inputs['Surface'])
-    nmap = _world_map(nt)
+    nmap = world_normal_map(nt)
     nt.links.new(nmap.outputs['Normal'], glossy.inputs['Normal'])
     nt.links.new(nmap.outputs['Normal'], diffuse.inputs['Normal'])
-    diff = _compare(tmp_path, sc, mat)
+    diff = normal_pass_diff(tmp_path, sc, mat)
     assert diff.mean() < 0.03 and np.mean(diff > 0.1) < 0.03, (diff.mean(), np.mean(diff > 0.1))
 
 
