@@ -22,6 +22,17 @@ def brute_force(rec, listed, O, D, t_surf, miss, pid, L0, **kw):
     return L
 
 
+def _gather_inputs(rng, bsdf, n, N, lamps):
+    """The n rays' path ids among N paths, the BSDF-sampled rays' MIS inputs (with bsdf) and
+    the paths' radiance before the gather (3, N)."""
+    pid = rng.permutation(N)[:n]
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=rng.uniform(0.05, 1.0, lamps).astype(F32), clamp=50.0)
+    return pid, kw, rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+
+
 @pytest.mark.parametrize('count', [2, 7, 40, 64, 65, 150])
 @pytest.mark.parametrize('bsdf', [False, True])
 def test_bvh_gather_equals_brute_force(count, bsdf):
@@ -34,12 +45,7 @@ def test_bvh_gather_equals_brute_force(count, bsdf):
     listed[0] = rng.choice(finite)                                  # and a lamp rays can meet
     n, N = 6000, 9000
     O, D, t_surf, miss = rays_at_lamps(rng, [lamps[j] for j in listed if j in finite], n)
-    pid = rng.permutation(N)[:n]
-    kw = {}
-    if bsdf:
-        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
-                  lamp_prob=rng.uniform(0.05, 1.0, len(lamps)).astype(F32), clamp=50.0)
-    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    pid, kw, L0 = _gather_inputs(rng, bsdf, n, N, len(lamps))
     L = L0.copy()
     dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, L, **kw)
     ref = brute_force(rec, listed, O, D, t_surf, miss, pid, L0, **kw)
@@ -101,12 +107,7 @@ def test_lamp_gather_reads_t_surf_of_hit_records_in_place_with_the_same_bits(cou
                                    'itemsize': 9}))
     packed['t'] = t_surf
     reversed_t = np.ascontiguousarray(t_surf[::-1])[::-1]
-    pid = rng.permutation(N)[:n]
-    kw = {}
-    if bsdf:
-        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
-                  lamp_prob=rng.uniform(0.05, 1.0, len(lamps)).astype(F32), clamp=50.0)
-    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    pid, kw, L0 = _gather_inputs(rng, bsdf, n, N, len(lamps))
     ref = L0.copy()
     dacrt.lamps.lamp_gather(rec, listed, O, D, np.ascontiguousarray(t_surf), miss, pid, ref, **kw)
     assert ((ref != L0).any(axis=0)[pid] & ~miss).sum() > 40, 'too few rays meet a finite lamp'
