@@ -71,9 +71,19 @@ class ImageTextures:
             if pixels is not None and not all_finite(pixels):     # (an 8-bit image's bytes: finite)
                 # (a float image's NaN or infinity, kept: Cycles blends them in, and surfaces
                 # where the blend reaches them render black, as here)
-                bad = int((~np.isfinite(pixels).all(axis=-1)).sum())
-                notes.append(f"image '{img.name}': {bad} texel(s) NaN or infinite, read as 0 by every lookup "
-                             "that blends them in (black there, as in Cycles)")
+                ok = np.isfinite(pixels)
+                colour = ok[..., :3].any(axis=-1)       # (some colour channel finite: not black)
+                whole = int((~colour).sum())
+                partial = int((colour & ~ok.all(axis=-1)).sum())
+                if whole:
+                    notes.append(f"image '{img.name}': {whole} texel(s) NaN or infinite, read as 0 by every lookup "
+                                 "that blends them in (black there, as in Cycles)")
+                if partial:
+                    # (measured in Cycles 5.0: a point blending one in loses its light samples, 0 under
+                    # a sun, and keeps its BSDF-sampled light per channel, 0.75x under a uniform world)
+                    notes.append(f"image '{img.name}': {partial} texel(s) with some channels or the alpha NaN "
+                                 "or infinite: those channels read as 0 and the others kept here, while Cycles "
+                                 "drops the light samples of points that blend them in (darker there in Cycles)")
             if pixels is not None and img.source == 'TILED':
                 pixels = udim_tiles(img, pixels, notes, unassociate, self.image_reading)
             cached = self._images[key, unassociate, frame] = (pixels, notes)
