@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .floatnodes import cycles_clamp
+
 # Linear Rec.709 luminance: Cycles' colour -> float conversion (film rgb_to_y) in Blender's
 # default scene-linear space
 LUMINANCE = np.array([0.2126729, 0.7151522, 0.0721750])
@@ -217,9 +219,7 @@ def hue_saturation(c, hue, sat, val, fac):
     hsv[..., 0] = np.mod(hsv[..., 0] + hue + 0.5, 1.0)
     # (Cycles' saturatef: min(max(a, 0), 1) with (a > b) ? a : b, so a NaN Saturation is 0,
     # grey, where np.clip had kept the NaN: red only)
-    s = hsv[..., 1] * sat
-    s = np.where(s > 0.0, s, 0.0)
-    hsv[..., 1] = np.where(s < 1.0, s, 1.0)
+    hsv[..., 1] = cycles_clamp(hsv[..., 1] * sat, 0.0, 1.0)
     hsv[..., 2] = hsv[..., 2] * val
     return np.maximum(_lerp(_real(c), hsv_to_rgb(hsv), fac), 0.0)
 

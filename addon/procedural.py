@@ -19,6 +19,8 @@ from __future__ import annotations
 import dacrt
 import numpy as np
 
+from .floatnodes import cycles_clamp
+
 F32 = np.float32
 
 COORDINATES = ('generated', 'object', 'uv', 'position', 'normal', 'true_normal', 'object_normal')
@@ -252,9 +254,7 @@ def brick(co, scale, mortar_size, mortar_smooth, bias, brick_width, row_height, 
         # Cycles' saturatef and min are (a > b) ? a : b and (a < b) ? a : b: a NaN Bias gives
         # tint 0 and a NaN x (a NaN Brick Width) drops out of the distance to the joints, where
         # np.clip and np.minimum passed the NaN on (black, against Cycles' 0.33 and 0.23)
-        tint = (_brick_noise(key) + arr(bias)).astype(F32)
-        tint = np.where(tint > F32(0.0), tint, F32(0.0))
-        tint = np.where(tint < F32(1.0), tint, F32(1.0)).astype(F32)
+        tint = cycles_clamp((_brick_noise(key) + arr(bias)).astype(F32), F32(0.0), F32(1.0)).astype(F32)
         d = _cycles_min(_cycles_min(x, y), _cycles_min(bw - x, rh - y)).astype(F32)
         ms, sm = arr(mortar_size), arr(mortar_smooth)
         t = (F32(1.0) - d / ms).astype(F32)
@@ -406,9 +406,7 @@ def gabor(co, scale, frequency, anisotropy, orientation, dims):
     p = co * col(scale)[:, None]
     # (Cycles' clamp, min(max(a, 0), 1) with (a > b) ? a : b: a NaN Anisotropy is 0, isotropic;
     # np.clip had passed it on: black where Cycles renders 0.25)
-    a = col(anisotropy)
-    a = np.where(a > F32(0.0), a, F32(0.0))
-    isotropy = F32(1.0) - np.where(a < F32(1.0), a, F32(1.0)).astype(F32)
+    isotropy = F32(1.0) - cycles_clamp(col(anisotropy), F32(0.0), F32(1.0)).astype(F32)
     freq = np.maximum(F32(0.001), col(frequency))
     re, im = np.zeros(n, F32), np.zeros(n, F32)
     with np.errstate(all='ignore'):
