@@ -740,9 +740,9 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                         then = then if offset else None
                     elif self._fixed_paths is None:
                         # the pass's own time: its wall time, but not more than the CPU it used (the
-                        # wall time other processes held the cores is not the render's speed: under
-                        # load, Cornell 64 spp had been cut into 16K-40K-path passes, 0.58 s CPU
-                        # against 0.44-0.47 s for 320K-1.2M-path ones)
+                        # wall time other processes held the cores is not the render's speed: at
+                        # load 20-30 Cornell 64 spp came in 5-12 passes; forced 40K-path passes cost
+                        # 0.51-0.58 s CPU against 0.44-0.48 s for 320K-1.2M-path ones)
                         took = min(time.perf_counter() - t0, time.process_time() - c0)
                         rate = step / max(took, 1e-6)
                         target = int(np.clip(rate * _TARGET_PASS_SECONDS, _MIN_PATHS, min(_MAX_PATHS, 4 * step)))
