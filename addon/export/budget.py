@@ -25,6 +25,11 @@ from .. import allocator
 MESH_BYTES = 250
 STRAND_BYTES = 300
 HEADROOM = 0.9          # of the available memory, for images, rays and the rest of the frame
+# Peak bytes a film pixel costs over a frame (process growth rendering a plane at 1 sample:
+# 2000x2000 and 4000x4000 pixels 193 and 192), plus each channel of the requested passes (their
+# float64 sums and Blender's float32 result: 20 channels of passes 525 at 2000x2000)
+PIXEL_BYTES = 200
+PASS_CHANNEL_BYTES = 16
 
 
 def _cgroup_room():
@@ -78,6 +83,12 @@ def available_bytes():
     else:
         room = None
     return None if room is None else room + allocator.heap_free()
+
+
+def film_bytes(pixels, pass_channels):
+    """Bytes a film of `pixels` pixels with `pass_channels` channels of passes besides Combined
+    takes to render."""
+    return pixels * (PIXEL_BYTES + pass_channels * PASS_CHANNEL_BYTES)
 
 
 @dataclass

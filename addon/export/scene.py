@@ -14,6 +14,7 @@ from .. import hair, pointcloud
 from .. import scenedata as sd
 from ..lights import envkeep
 from ..nodeeval import nan_inputs
+from ..passes import CHANNELS as PASS_CHANNELS
 from . import budget
 from .assembly import Assembly
 from .camera import export_camera
@@ -283,6 +284,7 @@ class Exporter:
                                    viewport=self.view_camera is not None)
         self._walk_instances()
         self._tessellate_strands()
+        self._film_fits(camera, settings.passes)
         geometry = Assembly(self).geometry(uv_pass='UV' in settings.passes)
         self._see_through_strands()
         self._bumped_strands()
@@ -708,6 +710,26 @@ class Exporter:
                 del self.placements[key]
             else:
                 self.meshes[key] = arrays
+
+    def _film_fits(self, camera, passes):
+        """Refuse a film too big for the memory available, naming its size: numpy's arrays of
+        it are granted by Linux's overcommit and the kernel kills Blender when they fill (a
+        100000 x 100000 render, 65536 x 65536 as Blender holds it, had failed as 'out of memory
+        ... DACRT holds every triangle', blaming the geometry)."""
+        available = budget.available_bytes()
+        x0, y0, x1, y1 = camera.border if any(camera.border) else (0, 0, camera.width, camera.height)
+        w, h = (x1 - x0, y1 - y0) if camera.crop else (camera.width, camera.height)
+        need = budget.film_bytes(w * h, sum(PASS_CHANNELS.get(p, 0) for p in passes))
+        if available is None or need <= available:
+            return
+        r = self.render or self.scene.render
+        size = f"{w} x {h} pixels" + (", the border cropped" if camera.crop else "")
+        if self.view_camera is None:
+            size += f" (Resolution {r.resolution_x} x {r.resolution_y} at {r.resolution_percentage}%)"
+        raise ExportError(f"the image of {size} needs about {budget.gigabytes(need)} to render (about "
+                          f"{budget.PIXEL_BYTES} bytes a pixel, {budget.PASS_CHANNEL_BYTES} more for each channel "
+                          f"of the passes), more than the {budget.gigabytes(available)} of memory available; "
+                          "a smaller resolution or Resolution % lowers it")
 
     def _see_through_strands(self):
         """Say which hair, curves and point clouds have a see-through or translucent material:

@@ -131,3 +131,36 @@ def test_a_frame_of_meshes_that_cannot_fit_is_refused_with_the_numbers(scene, mo
     with pytest.raises(RuntimeError, match="the frame's meshes make 2 triangles .* about 500 bytes to render, "
                                            "more than the 400 bytes of memory available"):
         scenes.render_rgba(scene)
+
+
+def test_a_film_that_cannot_fit_is_refused_naming_its_size(scene, monkeypatch, said):
+    """A resolution whose film does not fit is refused before it is allocated, naming its size
+    (a 100000 x 100000 render had failed as 'out of memory ... DACRT holds every triangle',
+    and one whose arrays Linux grants gets the process killed); a cropped border is the film."""
+    scenes.camera((0, 0, 5))
+    scenes.plane("Floor")
+    scenes.light('SUN', 3.0)
+    need = budget.film_bytes(32 * 24, 0)
+    assert need == 32 * 24 * budget.PIXEL_BYTES
+    _room(monkeypatch, need - 1)
+    with pytest.raises(RuntimeError, match=r"the image of 32 x 24 pixels \(Resolution 32 x 24 at 100%\) needs "
+                                           r"about 150 KB to render .* more than the 150 KB of memory available"):
+        scenes.render_rgba(scene)
+    # a pass's channels count: the Normal pass (3) does not fit where Combined alone does
+    _room(monkeypatch, need)
+    assert scenes.render_rgba(scene).shape == (24, 32, 4)
+    scene.view_layers[0].use_pass_normal = True
+    with pytest.raises(RuntimeError, match="the image of 32 x 24 pixels"):
+        scenes.render_rgba(scene)
+    scene.view_layers[0].use_pass_normal = False
+    # the cropped border (8 x 6 pixels) is the film; at 50% the resolution is named as set
+    r = scene.render
+    r.use_border, r.use_crop_to_border = True, True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.25, 0.5, 0.25, 0.5
+    _room(monkeypatch, budget.film_bytes(8 * 6, 0))
+    assert scenes.render_rgba(scene).shape == (6, 8, 4)
+    r.use_border = False
+    r.resolution_percentage = 50
+    _room(monkeypatch, budget.film_bytes(16 * 12, 0) - 1)
+    with pytest.raises(RuntimeError, match=r"the image of 16 x 12 pixels \(Resolution 32 x 24 at 50%\)"):
+        scenes.render_rgba(scene)
