@@ -282,17 +282,35 @@ def _clip_between(v, a, b):
     return np.clip(v, np.minimum(a, b), np.maximum(a, b)).reshape(shape)
 
 
-def clamp_range(v, a, b):
+def _blender_clamp_f(v, lo, hi):
+    """Blender's clamp_f (BLI), v < lo ? lo : (v > hi ? hi : v): a NaN v stays NaN, a NaN bound
+    is passed over."""
+    return np.where(v < lo, lo, np.where(v > hi, hi, v))
+
+
+def clamp_range(v, a, b, folded=False):
     """Clamp node of type Range: between a and b whichever is larger (Cycles: (a > b) ?
-    clamp(v, b, a) : clamp(v, a, b))."""
+    clamp(v, b, a) : clamp(v, a, b)). folded: Blender folds the node (nodegraph.BLENDER_FOLDED),
+    with its own multi-function, (a < b) ? clamp_f(v, a, b) : clamp_f(v, b, a): a NaN bound
+    gives another value there (measured in Cycles 5.0.1: Value 0.6, From 1, To NaN gives 0.6
+    folded, 0 in the kernel)."""
     (v, a, b), shape, _ = _real(v, a, b)
+    if folded:
+        ordered = a < b
+        return _blender_clamp_f(v, np.where(ordered, a, b), np.where(ordered, b, a)).reshape(shape)
     swap = a > b
     return cycles_clamp(v, np.where(swap, b, a), np.where(swap, a, b)).reshape(shape)
 
 
-def clamp_min_max(v, lo, hi):
-    """Clamp node of type Min Max: min(max(v, lo), hi), as Cycles' clamp."""
+def clamp_min_max(v, lo, hi, folded=False):
+    """Clamp node of type Min Max: min(max(v, lo), hi), as Cycles' clamp. folded: Blender folds
+    the node, with std::min(std::max(v, lo), hi), which passes over a NaN bound and keeps a NaN
+    v (measured in Cycles 5.0.1: Value 0.6, Max NaN gives 0.6 folded, 0 in the kernel; Value NaN,
+    Min 0.2 black folded, 0.2 in the kernel)."""
     (v, lo, hi), shape, _ = _real(v, lo, hi)
+    if folded:
+        m = np.where(v < lo, lo, v)                 # std::max(v, lo): (v < lo) ? lo : v
+        return np.where(hi < m, hi, m).reshape(shape)   # std::min(m, hi): (hi < m) ? hi : m
     return cycles_clamp(v, lo, hi).reshape(shape)
 
 

@@ -379,7 +379,7 @@ def _compute32(node, out, v):
         x = v['vector'] if t == 'CURVE_VEC' else v['value']
         # (Cycles' min and max x and table are float32)
         r = cn.curves_lookup(table.astype(np.float32), np.float32(lo), np.float32(hi), x, v['fac'], extrapolate)
-        if t == 'CURVE_FLOAT' and x.ndim == 1 and v['fac'].ndim == 1 and hi != lo and _curve_folded(node):
+        if t == 'CURVE_FLOAT' and x.ndim == 1 and v['fac'].ndim == 1 and hi != lo and _folded_by_blender(node):
             # the folding of a Float Curve of constant inputs Blender folds reads a point beyond
             # the curve's x range as 0 when Extrapolated and as the end point's y otherwise,
             # where Cycles' kernel extrapolates or takes the table's end (measured in Cycles 5.0 on
@@ -423,7 +423,7 @@ def _compute32(node, out, v):
         return cn.blackbody(v['temp'])
     if t == 'CLAMP':
         clamp = fn.clamp_range if node.clamp_type == 'RANGE' else fn.clamp_min_max
-        return clamp(v['value'], v['lo'], v['hi'])
+        return clamp(v['value'], v['lo'], v['hi'], _folded_by_blender(node))
     if node.data_type == 'FLOAT_VECTOR':
         return fn.map_range_vector(node.interpolation_type, v['vvalue'], v['vf0'], v['vf1'], v['vt0'], v['vt1'],
                                    v['vsteps'], node.clamp)
@@ -478,8 +478,8 @@ def xyz_to_rgb():
     return XYZ_TO_REC709 if m is None else m
 
 
-def _curve_folded(node):
-    """Whether Blender folds a Float Curve node (a Frozen one's, found when frozen)."""
+def _folded_by_blender(node):
+    """Whether Blender folds a Float Curve or Clamp node (a Frozen one's, found when frozen)."""
     folded = getattr(node, 'blender_folded', None)
     return nodegraph.node_folded_by_blender(node) if folded is None else folded
 
@@ -513,6 +513,8 @@ class Frozen:
             if t == 'CURVE_FLOAT':
                 self.curve_ends = _curve_ends(thing)
                 self.blender_folded = nodegraph.node_folded_by_blender(thing)
+        elif t == 'CLAMP':
+            self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t == 'WAVELENGTH':
             self.xyz = xyz_to_rgb()
         elif t in ('MATH', 'VECT_MATH'):
