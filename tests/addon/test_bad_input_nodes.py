@@ -174,3 +174,58 @@ def test_nan_hsv_saturation_is_grey_as_cycles_saturate():
     c = np.array([0.6, 0.3, 0.2], np.float32)
     got = colornodes.hue_saturation(c, 0.5, NAN, 1.0, 1.0)
     assert np.allclose(got, 0.6), got
+
+
+@pytest.mark.parametrize("kind, v, lo, hi, want", [
+    ('MINMAX', 0.6, NAN, 1.0, 0.6),        # Cycles 0.3 on a 0.5-lit plane (DACRT had 1.0: 0.5)
+    ('MINMAX', 0.6, 0.0, NAN, 0.6),        # Cycles 0.3 (DACRT had NaN: black)
+    ('MINMAX', 0.6, NAN, NAN, 0.6),        # Cycles 0.3 (DACRT had black)
+    ('MINMAX', NAN, 0.2, 1.0, NAN),        # Cycles black (DACRT had 0.2: 0.1)
+    ('RANGE', 0.6, 1.0, NAN, 0.6),         # Cycles 0.3 (DACRT had black)
+    ('RANGE', 0.6, 0.0, NAN, 0.0),         # Cycles 0 (clamp_f(0.6, NaN, 0))
+    ('RANGE', 0.6, NAN, 1.0, 1.0),         # Cycles 0.5
+    ('RANGE', NAN, 0.2, 1.0, NAN),         # Cycles black (DACRT had 0.2)
+    ('RANGE', 0.7, 1.0, 0.2, 0.7),         # (Min above Max: swapped)
+])
+def test_clamp_node_of_constants_with_a_nan_is_blenders_folded_clamp(kind, v, lo, hi, want):
+    """A Clamp of constants is folded by Blender before Cycles sees it (nodegraph.BLENDER_FOLDED),
+    with std::min(std::max(v, lo), hi) (Min Max) and (a < b) ? clamp_f(v, a, b) : clamp_f(v, b, a)
+    (Range), which treat a NaN otherwise than Cycles' kernel: measured in Cycles 5.0.1, a plane
+    lit 0.5 by the world, both kinds, constant and linked Value."""
+    from addon import floatnodes
+    clamp = floatnodes.clamp_range if kind == 'RANGE' else floatnodes.clamp_min_max
+    got = clamp(np.float32(v), np.float32(lo), np.float32(hi), folded=True)
+    assert np.allclose(got, want, equal_nan=True), got
+
+
+@pytest.mark.parametrize("linked", [False, True])
+def test_clamp_node_with_a_nan_max_is_folded_only_when_constant(scene, linked):
+    """The export tells a Clamp Blender folds from one Cycles computes: Value 0.6, Max NaN is the
+    value folded (Cycles 0.3 on a 0.5-lit plane) and NaN (black) in the kernel, where the Value
+    comes through a Math node on Geometry's Backfacing (0 here); DACRT had black for both."""
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.camera((0, 0, 3))
+    scenes.world((0.5, 0.5, 0.5))
+    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    c = nt.nodes.new('ShaderNodeClamp')
+    c.inputs['Max'].default_value = NAN
+    if linked:
+        g, add = nt.nodes.new('ShaderNodeNewGeometry'), nt.nodes.new('ShaderNodeMath')
+        add.operation = 'ADD'
+        add.inputs[1].default_value = 0.6
+        nt.links.new(g.outputs['Backfacing'], add.inputs[0])
+        nt.links.new(add.outputs[0], c.inputs['Value'])
+    else:
+        c.inputs['Value'].default_value = 0.6
+    nt.links.new(c.outputs['Result'], d.inputs['Color'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    img = scenes.render_rgba(scene)[..., :3]
+    if linked:
+        assert np.all(img == 0.0)
+    else:
+        d.inputs['Color'].default_value = (0.6, 0.6, 0.6, 1.0)
+        nt.links.remove(d.inputs['Color'].links[0])
+        assert np.allclose(img, scenes.render_rgba(scene)[..., :3], rtol=1e-5) and img.min() > 0.1
