@@ -202,7 +202,8 @@ def test_clamp_node_of_constants_with_a_nan_is_blenders_folded_clamp(kind, v, lo
 def test_clamp_node_with_a_nan_max_is_folded_only_when_constant(scene, linked):
     """The export tells a Clamp Blender folds from one Cycles computes: Value 0.6, Max NaN is the
     value folded (Cycles 0.3 on a 0.5-lit plane) and NaN (black) in the kernel, where the Value
-    comes through a Math node on Geometry's Backfacing (0 here); DACRT had black for both."""
+    comes through a Math node adding 0.6 to the Object coordinates' Z (0 on the plane); DACRT had
+    black for both."""
     scene.render.resolution_x, scene.render.resolution_y = 8, 6
     scene.dacrt.samples = 2
     scenes.camera((0, 0, 3))
@@ -213,10 +214,11 @@ def test_clamp_node_with_a_nan_max_is_folded_only_when_constant(scene, linked):
     c = nt.nodes.new('ShaderNodeClamp')
     c.inputs['Max'].default_value = NAN
     if linked:
-        g, add = nt.nodes.new('ShaderNodeNewGeometry'), nt.nodes.new('ShaderNodeMath')
+        co, sep, add = (nt.nodes.new(t) for t in ('ShaderNodeTexCoord', 'ShaderNodeSeparateXYZ', 'ShaderNodeMath'))
         add.operation = 'ADD'
         add.inputs[1].default_value = 0.6
-        nt.links.new(g.outputs['Backfacing'], add.inputs[0])
+        nt.links.new(co.outputs['Object'], sep.inputs[0])
+        nt.links.new(sep.outputs['Z'], add.inputs[0])
         nt.links.new(add.outputs[0], c.inputs['Value'])
     else:
         c.inputs['Value'].default_value = 0.6
