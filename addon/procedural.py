@@ -258,8 +258,11 @@ def brick(co, scale, mortar_size, mortar_smooth, bias, brick_width, row_height, 
         d = _cycles_min(_cycles_min(x, y), _cycles_min(bw - x, rh - y)).astype(F32)
         ms, sm = arr(mortar_size), arr(mortar_smooth)
         t = (F32(1.0) - d / ms).astype(F32)
-        s = np.clip(t / sm, F32(0.0), F32(1.0))
-        smooth = np.where(t < sm, s * s * (F32(3.0) - F32(2.0) * s), F32(1.0))
+        # Cycles' smoothstepf: 0 at or below 0, 1 at or above 1, so a NaN (a NaN Scale, Mortar
+        # Size or Row Height) stays NaN and the colour is black, as Cycles renders it (the
+        # clip and `t < sm` test had made it mortar: its colour where Cycles shows black)
+        s = (t / sm).astype(F32)
+        smooth = np.where(s <= 0.0, F32(0.0), np.where(s >= 1.0, F32(1.0), s * s * (F32(3.0) - F32(2.0) * s)))
         mortar = np.where(d >= ms, F32(0.0), np.where(sm == 0.0, F32(1.0), smooth)).astype(F32)
     return tint, np.broadcast_to(mortar, len(p)).astype(F32)
 
