@@ -66,9 +66,36 @@ def _pingpong(a, b):
     return np.where(b != 0.0, np.abs(frac(_safe_divide(a - b, b * 2.0)) * b * 2.0 - b), 0.0)
 
 
-def _smooth_min(a, b, k):
-    h = _safe_divide(np.maximum(k - np.abs(a - b), 0.0), k)
-    return np.where(k != 0.0, np.minimum(a, b) - h * h * h * k * (1.0 / 6.0), np.minimum(a, b))
+def _smooth_min(a, b, k, lower=np.fmin):
+    """Cycles' smoothminf: fmaxf and fminf, which pass over a NaN (a NaN operand gives the other:
+    measured in Cycles 5.0.1; np.maximum / np.minimum had made it black). lower: the min of a
+    and b (Blender's folded min_ff keeps a NaN b)."""
+    h = _safe_divide(np.fmax(k - np.abs(a - b), 0.0), k)
+    return np.where(k != 0.0, lower(a, b) - h * h * h * k * (1.0 / 6.0), lower(a, b))
+
+
+# Math operations Blender folds (nodegraph.BLENDER_FOLDED) otherwise than Cycles' kernel computes
+# them, for a NaN: std::min / std::max ((b < a) ? b : a, (a < b) ? b : a: a NaN a stays, a NaN b
+# gives a), and smoothminf's min_ff ((a < b) ? a : b); the kernel's fminf / fmaxf give the other
+# operand (measured in Cycles 5.0.1: Minimum of NaN and 0.3 is black folded, 0.3 in the kernel)
+def _std_min(a, b):
+    return np.where(b < a, b, a)
+
+
+def _std_max(a, b):
+    return np.where(a < b, b, a)
+
+
+def _min_ff(a, b):
+    return np.where(a < b, a, b)
+
+
+_FOLDED_MATH = {
+    'MINIMUM': lambda a, b, c: _std_min(a, b),
+    'MAXIMUM': lambda a, b, c: _std_max(a, b),
+    'SMOOTH_MIN': lambda a, b, c: _smooth_min(a, b, c, _min_ff),
+    'SMOOTH_MAX': lambda a, b, c: -_smooth_min(-a, -b, c, _min_ff),
+}
 
 
 def _fmod(a, b):
@@ -128,10 +155,16 @@ MATH_OPERATIONS = frozenset(_MATH)
 
 def math(operation, a, b, c, clamp=False, folded=False):
     """Math node (Cycles' svm_math); clamp: the node's Clamp option, result in [0, 1]; folded:
-    Blender folds the node (its inputs constants), computing Power as Blender does."""
+    Blender folds the node (its inputs constants), computing Power, Minimum, Maximum, Smooth
+    Minimum and Smooth Maximum as Blender does."""
     (a, b, c), shape, dtype = _real(a, b, c)
     with np.errstate(all='ignore'):
-        r = _folded_pow(a, b) if folded and operation == 'POWER' else _MATH[operation](a, b, c)
+        if folded and operation == 'POWER':
+            r = _folded_pow(a, b)
+        elif folded and operation in _FOLDED_MATH:
+            r = _FOLDED_MATH[operation](a, b, c)
+        else:
+            r = _MATH[operation](a, b, c)
         r = np.clip(r, 0.0, 1.0) if clamp else r
     return np.asarray(r, dtype).reshape(shape)
 

@@ -485,10 +485,12 @@ def _folded_by_blender(node):
 
 
 def _blender_folds(node):
-    """Whether Blender folds a Power or Modulo node (a Frozen one's, found when frozen), where
-    its result differs from Cycles' kernel (floatnodes.vector_math); False for any other
-    operation."""
-    if getattr(node, 'operation', None) not in ('POWER', 'MODULO'):
+    """Whether Blender folds a Power or Modulo node, or a Math Minimum, Maximum, Smooth Minimum or
+    Smooth Maximum (a Frozen one's, found when frozen), where its result differs from Cycles'
+    kernel (floatnodes.math, vector_math); False for any other operation."""
+    folds_apart = ('POWER', 'MODULO') + (('MINIMUM', 'MAXIMUM', 'SMOOTH_MIN', 'SMOOTH_MAX')
+                                         if getattr(node, 'type', None) == 'MATH' else ())
+    if getattr(node, 'operation', None) not in folds_apart:
         return False
     folded = getattr(node, 'blender_folded', None)
     return nodegraph.node_folded_by_blender(node) if folded is None else folded
