@@ -274,3 +274,40 @@ def test_brick_mortar_is_cycles_smoothstep_for_finite_inputs():
         close = np.abs(d - 0.05) < 1e-5
         err = np.abs(mortar[~close] - want[~close])
         assert err.max() < 5e-3 and np.median(err) < 1e-6, (sm, err.max())
+
+
+@pytest.mark.parametrize("op, slot, folded_want, kernel_want", [
+    ('MINIMUM', 0, NAN, 0.3), ('MINIMUM', 1, 0.6, 0.6),
+    ('MAXIMUM', 0, NAN, 0.3), ('MAXIMUM', 1, 0.6, 0.6),
+    ('SMOOTH_MIN', 0, 0.3, 0.3), ('SMOOTH_MIN', 1, NAN, 0.6), ('SMOOTH_MIN', 2, NAN, NAN),
+    ('SMOOTH_MAX', 0, 0.3, 0.3), ('SMOOTH_MAX', 1, NAN, 0.6), ('SMOOTH_MAX', 2, NAN, NAN),
+])
+def test_math_min_max_with_a_nan_as_cycles_kernel_and_blenders_folding(op, slot, folded_want, kernel_want):
+    """A Math node's Minimum / Maximum / Smooth Minimum / Smooth Maximum with one NaN input (A 0.6,
+    B 0.3, Distance 0.2): Cycles' kernel uses fminf / fmaxf, which give the other operand; Blender
+    folds a node of constants first with std::min / std::max and min_ff, which keep some NaNs.
+    Every case measured in Cycles 5.0.1 (a 0.5-lit plane, constant and linked inputs, Clamp on and
+    off): DACRT had Smooth Min/Max black in both (np.maximum / np.minimum) and folded Min/Max 0.3."""
+    from addon import floatnodes
+    abc = [np.float32(0.6), np.float32(0.3), np.float32(0.2)]
+    abc[slot] = np.float32(NAN)
+    for folded, want in ((True, folded_want), (False, kernel_want)):
+        got = floatnodes.math(op, *abc, folded=folded)
+        assert np.allclose(got, want, equal_nan=True, atol=1e-6), (folded, got)
+
+
+def test_math_minimum_of_constants_with_a_nan_first_renders_black(scene):
+    """The export tells the folded Minimum (NaN, 0.3) (black in Cycles) from the kernel's (0.3)."""
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.camera((0, 0, 3))
+    scenes.world((0.5, 0.5, 0.5))
+    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'MINIMUM'
+    m.inputs[0].default_value, m.inputs[1].default_value = NAN, 0.3
+    nt.links.new(m.outputs[0], d.inputs['Color'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    assert np.all(scenes.render_rgba(scene)[..., :3] == 0.0)
