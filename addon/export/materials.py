@@ -53,6 +53,26 @@ DEFAULT_SURFACE_LAYER = specular.layer_albedo(0.5, 1.5, 0.5, (1.0, 1.0, 1.0))
 DEFAULT_SURFACE_ALBEDO = tuple(float(v) for v in 0.8 * (1.0 - DEFAULT_SURFACE_LAYER.max()) + DEFAULT_SURFACE_LAYER)
 # the output sockets the material export ignores (reported when used)
 IGNORED_OUTPUTS = ('Volume',)
+# Shader-node inputs whose NaN Cycles does not read as 0, unlike every other shader input
+# (measured in Cycles 5.0.1, each input NaN against 0 on a lit plane, 89 inputs): a Principled
+# Hair BSDF is black (0 against 0.46-0.48), a Glossy BSDF's NaN Anisotropy is not its 0 (0.278
+# against 0.533); a Layer Weight's NaN Blend is computed through the node (its Fresnel 1, as
+# in Cycles, where 0 gives 0)
+NAN_NOT_ZERO_IN_CYCLES = {'BSDF_HAIR_PRINCIPLED': (('Radial Roughness', 'Offset', 'Random Roughness'), "black"),
+                          'BSDF_GLOSSY': (('Anisotropy',), "otherwise")}
+NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
+
+
+def _nan_inputs_named(ntree, table, keep):
+    """nan_inputs of the node types and input names in table (type -> names)."""
+    return [b for t, names in table.items() for b in nan_inputs(ntree, {t}, keep)
+            if any(b.startswith(f"'{n}' of ") for n in names)]
+
+
+def _nan_unlike_cycles(ntree, keep):
+    """[(nan_inputs, what Cycles renders)] of the NAN_NOT_ZERO_IN_CYCLES inputs, per node type."""
+    found = [(_nan_inputs_named(ntree, {t: names}, keep), what) for t, (names, what) in NAN_NOT_ZERO_IN_CYCLES.items()]
+    return [(bad, what) for bad, what in found if bad]
 
 
 def _averaged_rough(m):
@@ -377,8 +397,14 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             differs = [b for b in nan_inputs(ntree, {'TEX_NOISE'}, rendered)
                        if b.startswith("'Lacunarity' of ") or b.startswith("'Distortion' of ")]
             differs += [b for b in nan_inputs(ntree, {'TEX_VORONOI'}, rendered) if b.startswith("'Scale' of ")]
-            for bad, said in ((nan_inputs(ntree, shader, rendered), "NaN read as 0 (as Cycles clamps it) for {}"),
-                              (nan_inputs(ntree, computed, rendered) + [b for b in textures if b not in differs],
+            unlike = _nan_unlike_cycles(ntree, rendered)
+            apart = [b for bad, _ in unlike for b in bad]
+            through = _nan_inputs_named(ntree, NAN_COMPUTED, rendered)
+            for bad, said in (([b for b in nan_inputs(ntree, shader, rendered) if b not in apart and b not in through],
+                               "NaN read as 0 (as Cycles clamps it) for {}"),
+                              *((bad, f"NaN read as 0 for {{}}, where Cycles renders it {what}, not as 0")
+                                for bad, what in unlike),
+                              (nan_inputs(ntree, computed, rendered) + through + [b for b in textures if b not in differs],
                                "NaN computed through the node as Cycles computes it for {}"),
                               (differs, "NaN for {}: the texture computes with it, not as Cycles' does")):
                 if bad:
