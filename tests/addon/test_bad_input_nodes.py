@@ -311,3 +311,43 @@ def test_math_minimum_of_constants_with_a_nan_first_renders_black(scene):
     nt.links.new(m.outputs[0], d.inputs['Color'])
     scenes.plane("Plane", size=10, materials=(mat,))
     assert np.all(scenes.render_rgba(scene)[..., :3] == 0.0)
+
+
+@pytest.mark.parametrize("node_type, socket, words", [
+    # measured in Cycles 5.0.1 (a lit plane, each input NaN against 0): black against 0.48
+    ('ShaderNodeBsdfHairPrincipled', 'Offset', "NaN read as 0 for 'Offset' of 'N', where Cycles renders it "
+                                               "black, not as 0"),
+    ('ShaderNodeBsdfHairPrincipled', 'Random Roughness', "where Cycles renders it black"),
+    ('ShaderNodeBsdfAnisotropic', 'Anisotropy', "NaN read as 0 for 'Anisotropy' of 'N', where Cycles renders "
+                                                "it otherwise, not as 0"),
+    # both engines 1.3213 (the Fresnel 1), where Blend 0 gives 0 in both
+    ('ShaderNodeLayerWeight', 'Blend', "NaN computed through the node as Cycles computes it for 'Blend' of 'N'"),
+    # (control: Cycles reads it as 0, measured the same as 0)
+    ('ShaderNodeBsdfDiffuse', 'Roughness', "NaN read as 0 (as Cycles clamps it) for 'Roughness' of 'N'"),
+])
+def test_shader_input_nan_message_says_what_cycles_does(scene, said, node_type, socket, words):
+    """'NaN read as 0 (as Cycles clamps it)' had been said of every shader node's NaN input; of 89
+    measured, Cycles reads all but five as 0: a Principled Hair BSDF's NaN Radial Roughness,
+    Offset or Random Roughness renders black, a Glossy BSDF's NaN Anisotropy otherwise, and a
+    Layer Weight's NaN Blend is computed (DACRT computes it too: the image matched)."""
+    scene.render.resolution_x, scene.render.resolution_y = 4, 3
+    scene.dacrt.samples = 1
+    scenes.camera((0, 0, 3))
+    scenes.world((0.5, 0.5, 0.5))
+    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
+    nt = mat.node_tree
+    out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    n = d if node_type == 'ShaderNodeBsdfDiffuse' else nt.nodes.new(node_type)
+    n.name = 'N'
+    n.inputs[socket].default_value = NAN
+    if n.outputs[0].type == 'SHADER':
+        nt.links.new(n.outputs[0], out.inputs['Surface'])
+    else:
+        nt.links.new(n.outputs[0], d.inputs['Color'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    scenes.render_rgba(scene)
+    text = " ".join(said)
+    assert words in text, text
+    if "as Cycles clamps it" not in words:
+        assert f"(as Cycles clamps it) for '{socket}' of 'N'" not in text, text
