@@ -190,7 +190,10 @@ def _reflect(a, b):
 
 
 def _refract(a, b, eta):
-    n = safe_normalize(b)
+    return _refract_unit(a, safe_normalize(b), eta)
+
+
+def _refract_unit(a, n, eta):
     d = _dot(n, a)
     k = 1.0 - eta * eta * (1.0 - d * d)
     return np.where(k < 0.0, 0.0, eta * a - (eta * d + np.sqrt(np.maximum(k, 0.0))) * n)
@@ -210,8 +213,29 @@ _VECTOR_MATH = {
     # Cycles' kernel (safe_modulo per component): 0 where b is 0, as Math's (measured in Cycles
     # 5.0.1: Generated mod (0, 0.5, 0.5), X + 0.25 is 0.25; NaN had blackened a float read of it)
     'MODULO': lambda a, b, c, s: _fmod(a, b),
-    'MINIMUM': lambda a, b, c, s: np.minimum(a, b),
-    'MAXIMUM': lambda a, b, c, s: np.maximum(a, b),
+    # Cycles' float3 min / max ((a < b) ? a : b per component, SSE's minps / maxps): a NaN a
+    # gives b, a NaN b stays (measured in Cycles 5.0.1; np.minimum had made both black)
+    'MINIMUM': lambda a, b, c, s: np.where(a < b, a, b),
+    'MAXIMUM': lambda a, b, c, s: np.where(a > b, a, b),
+}
+
+
+def _folded_normalize(a):
+    """Blender's math::normalize, which folds Vector Math of constants: 0 unless the squared
+    length is above 1e-35 (so a NaN vector is 0: Reflect on a NaN Normal leaves the vector as it
+    is, measured in Cycles 5.0.1, where the kernel's safe_normalize keeps the NaN: black)."""
+    ll = _dot(a, a)
+    return np.where(ll > 1e-35, a / np.sqrt(np.where(ll > 1e-35, ll, 1.0)), 0.0)
+
+
+# Vector Math operations Blender folds otherwise than Cycles' kernel computes them, for a NaN:
+# std::min / std::max per component ((b < a) ? b : a, (a < b) ? b : a: a NaN b gives a), and
+# Reflect / Refract on math::normalize
+_FOLDED_VECTOR_MATH = {
+    'MINIMUM': lambda a, b, c, s: np.where(b < a, b, a),
+    'MAXIMUM': lambda a, b, c, s: np.where(a < b, b, a),
+    'REFLECT': lambda a, b, c, s: a - 2.0 * _dot(_folded_normalize(b), a) * _folded_normalize(b),
+    'REFRACT': lambda a, b, c, s: _refract_unit(a, _folded_normalize(b), s),
 }
 _VECTOR_VALUE = {
     'DOT_PRODUCT': lambda a, b: _dot(a, b),
@@ -226,7 +250,7 @@ VECTOR_MATH_OPERATIONS = frozenset(_VECTOR_MATH) | frozenset(_VECTOR_VALUE) | _E
 def vector_math(operation, output, a, b, c, scale, folded=False):
     """A Vector Math node's output ('Vector': (..., 3), 'Value': (..., 1)); the output an
     operation does not write is 0, as in Cycles. folded: Blender folds the node, computing
-    Power and Modulo as Blender does."""
+    Power, Modulo, Minimum, Maximum, Reflect and Refract as Blender does."""
     (a, b, c, scale), _, dtype = _real(a, b, c, scale)
     value = operation in _VECTOR_VALUE
     if (output == 'Value') != value:
@@ -239,6 +263,8 @@ def vector_math(operation, output, a, b, c, scale, folded=False):
             r = _folded_pow(a, b)
         elif operation == 'MODULO' and folded:
             r = np.fmod(a, b)        # Blender's math::mod: NaN where b is 0 (measured: black)
+        elif folded and operation in _FOLDED_VECTOR_MATH:
+            r = _FOLDED_VECTOR_MATH[operation](a, b, c, scale)
         elif operation in _ENTRY_WISE:
             r = _MATH[operation](a, b, c)
         else:

@@ -485,11 +485,12 @@ def _folded_by_blender(node):
 
 
 def _blender_folds(node):
-    """Whether Blender folds a Power or Modulo node, or a Math Minimum, Maximum, Smooth Minimum or
-    Smooth Maximum (a Frozen one's, found when frozen), where its result differs from Cycles'
-    kernel (floatnodes.math, vector_math); False for any other operation."""
-    folds_apart = ('POWER', 'MODULO') + (('MINIMUM', 'MAXIMUM', 'SMOOTH_MIN', 'SMOOTH_MAX')
-                                         if getattr(node, 'type', None) == 'MATH' else ())
+    """Whether Blender folds a Power, Modulo, Minimum or Maximum node, a Math Smooth Minimum or
+    Smooth Maximum, or a Vector Math Reflect or Refract (a Frozen one's, found when frozen), where
+    its result differs from Cycles' kernel (floatnodes.math, vector_math); False for any other
+    operation."""
+    folds_apart = ('POWER', 'MODULO', 'MINIMUM', 'MAXIMUM') + (
+        ('SMOOTH_MIN', 'SMOOTH_MAX') if getattr(node, 'type', None) == 'MATH' else ('REFLECT', 'REFRACT'))
     if getattr(node, 'operation', None) not in folds_apart:
         return False
     folded = getattr(node, 'blender_folded', None)
