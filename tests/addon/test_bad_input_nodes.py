@@ -351,3 +351,46 @@ def test_shader_input_nan_message_says_what_cycles_does(scene, said, node_type, 
     assert words in text, text
     if "as Cycles clamps it" not in words:
         assert f"(as Cycles clamps it) for '{socket}' of 'N'" not in text, text
+
+
+_A, _B = (0.6, 0.3, 0.2), (0.3, 0.5, 0.1)
+
+
+@pytest.mark.parametrize("op, slot, folded_want, kernel_want", [
+    ('MINIMUM', 0, NAN, _B), ('MINIMUM', 1, _A, NAN),
+    ('MAXIMUM', 0, NAN, _B), ('MAXIMUM', 1, _A, NAN),
+    ('REFLECT', 1, _A, NAN), ('REFLECT', 0, NAN, NAN),
+    ('REFRACT', 1, tuple(0.7 * x for x in _A), NAN),
+])
+def test_vector_math_with_a_nan_vector_as_cycles_kernel_and_blenders_folding(op, slot, folded_want, kernel_want):
+    """Vector Math with one NaN vector (A (0.6, 0.3, 0.2), B (0.3, 0.5, 0.1), Scale 0.7): Cycles'
+    kernel min / max per component give B for a NaN A and keep a NaN B; Blender folds a node of
+    constants first with std::min / std::max (A for a NaN B) and normalizes Reflect's and Refract's
+    normal with math::normalize (0 for NaN: A, 0.7 A). Every case measured in Cycles 5.0.1 (a
+    0.5-lit plane, constant and linked vectors): DACRT had black for the four non-NaN results."""
+    from addon import floatnodes
+    ab = [np.array(_A, np.float32), np.array(_B, np.float32)]
+    ab[slot] = np.full(3, NAN, np.float32)
+    for folded, want in ((True, folded_want), (False, kernel_want)):
+        got = floatnodes.vector_math(op, 'Vector', ab[0], ab[1], np.zeros(3, np.float32), np.float32(0.7),
+                                     folded=folded)
+        assert np.allclose(got, np.broadcast_to(want, (3,)), equal_nan=True, atol=1e-6), (folded, got)
+
+
+def test_vector_math_reflect_of_constants_on_a_nan_normal_keeps_the_vector(scene):
+    """The export folds a constant Reflect as Blender does: a NaN Normal leaves the vector."""
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.camera((0, 0, 3))
+    scenes.world((0.5, 0.5, 0.5))
+    mat = scenes.diffuse("M", _A)
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    scenes.plane("Plane", size=10, materials=(mat,))
+    plain = scenes.render_rgba(scene)[..., :3]
+    r = nt.nodes.new('ShaderNodeVectorMath')
+    r.operation = 'REFLECT'
+    r.inputs[0].default_value, r.inputs[1].default_value = _A, (NAN, NAN, NAN)
+    nt.links.new(r.outputs['Vector'], d.inputs['Color'])
+    reflected = scenes.render_rgba(scene)[..., :3]
+    assert plain.min() > 0.05 and np.allclose(reflected, plain, rtol=1e-5)
