@@ -277,34 +277,46 @@ def _smoothstep(e0, e1, x):
     return np.where(x < e0, 0.0, np.where(x >= e1, 1.0, (3.0 - 2.0 * t) * t * t))
 
 
-def _smootherstep(e0, e1, x):
-    t = np.clip(_safe_divide(x - e0, e1 - e0), 0.0, 1.0)
+def _smootherstep(e0, e1, x, folded=False):
+    """Cycles' smootherstep; its clamp of t is Cycles' (a NaN t gives 0: To Min, measured in Cycles
+    5.0.1) in the kernel, Blender's clamp_f (NaN kept: black) where Blender folds the node."""
+    t = _safe_divide(x - e0, e1 - e0)
+    t = np.clip(t, 0.0, 1.0) if folded else cycles_clamp(t, 0.0, 1.0)
     return t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
 
 
-def map_range(interpolation, value, from_min, from_max, to_min, to_max, steps, clamp):
+def map_range(interpolation, value, from_min, from_max, to_min, to_max, steps, clamp, folded=False):
     """Map Range node, float data (Cycles' svm_node_map_range; the clamp, which Cycles adds as a
     Clamp node of type Range whatever the interpolation (MapRangeNode::expand; Blender hides the
     switch for the smooth ones, on by default), keeps the result between To Min and To Max: it
     shows where From Min = From Max, 0 clamped to To Min's side)."""
     (v, f0, f1, t0, t1, st), shape, dtype = _real(value, from_min, from_max, to_min, to_max, steps)
     with np.errstate(all='ignore'):
-        return np.asarray(_map_range(interpolation, v, f0, f1, t0, t1, st, clamp), dtype).reshape(shape)
+        return np.asarray(_map_range(interpolation, v, f0, f1, t0, t1, st, clamp, folded), dtype).reshape(shape)
 
 
-def _map_range(interpolation, v, f0, f1, t0, t1, st, clamp):
+def _map_range(interpolation, v, f0, f1, t0, t1, st, clamp, folded=False):
     linear = _safe_divide(v - f0, f1 - f0)
     if interpolation == 'STEPPED':
-        fac = np.where(st > 0.0, _safe_divide(np.floor(linear * (st + 1.0)), st), 0.0)
+        # (Blender's folded Steps have no `steps > 0` test: Steps -2 gives 0.45 where the kernel
+        # gives To Min, a NaN Steps black; measured in Cycles 5.0.1)
+        stepped = _safe_divide(np.floor(linear * (st + 1.0)), st)
+        fac = stepped if folded else np.where(st > 0.0, stepped, 0.0)
     elif interpolation == 'SMOOTHSTEP':
         fac = np.where(f0 > f1, 1.0 - _smoothstep(f1, f0, v), _smoothstep(f0, f1, v))
     elif interpolation == 'SMOOTHERSTEP':
-        fac = np.where(f0 > f1, 1.0 - _smootherstep(f1, f0, v), _smootherstep(f0, f1, v))
+        fac = np.where(f0 > f1, 1.0 - _smootherstep(f1, f0, v, folded), _smootherstep(f0, f1, v, folded))
     else:
         fac = linear
     r = np.where(f1 != f0, t0 + fac * (t1 - t0), 0.0)
-    if clamp:
+    if clamp and folded:
         r = _clip_between(r, t0, t1)
+    elif clamp:
+        # the Clamp node of type Range Cycles adds (MapRangeNode::expand), with Cycles' clamp:
+        # a NaN result gives the lower bound, a NaN bound the other (measured in Cycles 5.0.1:
+        # To Min 0.2 for a NaN Value, To Max for a NaN To Min; the NaN had been kept: black)
+        swap = t0 > t1
+        r = cycles_clamp(r, np.where(swap, t1, t0), np.where(swap, t0, t1))
     return r
 
 

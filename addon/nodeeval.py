@@ -349,7 +349,10 @@ def _compute32(node, out, v):
         fac = np.clip(fac, 0.0, 1.0) if node.clamp_factor else fac
         return (1.0 - fac) * v['a'] + fac * v['b']
     if t == 'MIX':
-        fac = np.clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
+        # (Cycles' saturatef gives 0 for a NaN factor: A, measured in Cycles 5.0.1; Blender's
+        # folded clamp keeps it: black)
+        clip = np.clip if _folded_by_blender(node) else fn.cycles_clamp
+        fac = clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
         r = cn.mix('MIX' if node.data_type == 'FLOAT' else node.blend_type, fac, v['a'], v['b'])
         # Cycles' float Mix has no result clamp: clamp_result (kept, hidden, after a switch from
         # Color to Float) applies to colour data only
@@ -428,7 +431,7 @@ def _compute32(node, out, v):
         return fn.map_range_vector(node.interpolation_type, v['vvalue'], v['vf0'], v['vf1'], v['vt0'], v['vt1'],
                                    v['vsteps'], node.clamp)
     return fn.map_range(node.interpolation_type, v['value'], v['f0'], v['f1'], v['t0'], v['t1'], v['steps'],
-                        node.clamp)
+                        node.clamp, _folded_by_blender(node))
 
 
 _RAMP_TABLES = {}          # a ramp's settings -> its table: 257 Python calls into Blender each
@@ -479,7 +482,8 @@ def xyz_to_rgb():
 
 
 def _folded_by_blender(node):
-    """Whether Blender folds a Float Curve or Clamp node (a Frozen one's, found when frozen)."""
+    """Whether Blender folds a Float Curve, Clamp, Map Range or Mix node (a Frozen one's, found
+    when frozen)."""
     folded = getattr(node, 'blender_folded', None)
     return nodegraph.node_folded_by_blender(node) if folded is None else folded
 
@@ -516,7 +520,7 @@ class Frozen:
             if t == 'CURVE_FLOAT':
                 self.curve_ends = _curve_ends(thing)
                 self.blender_folded = nodegraph.node_folded_by_blender(thing)
-        elif t == 'CLAMP':
+        elif t in ('CLAMP', 'MAP_RANGE', 'MIX'):
             self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t == 'WAVELENGTH':
             self.xyz = xyz_to_rgb()
