@@ -394,3 +394,60 @@ def test_vector_math_reflect_of_constants_on_a_nan_normal_keeps_the_vector(scene
     nt.links.new(r.outputs['Vector'], d.inputs['Color'])
     reflected = scenes.render_rgba(scene)[..., :3]
     assert plain.min() > 0.05 and np.allclose(reflected, plain, rtol=1e-5)
+
+
+# Value 0.4, From 0.1 .. 0.9, To 0.2 .. 0.7, Steps 4 (Cycles 5.0.1, a 0.5-lit plane, constant and
+# linked inputs: twice the value shown)
+_MAP = dict(value=0.4, from_min=0.1, from_max=0.9, to_min=0.2, to_max=0.7, steps=4.0)
+
+
+@pytest.mark.parametrize("interp, clamp, name, value, folded_want, kernel_want", [
+    ('LINEAR', True, 'value', NAN, NAN, 0.2),            # Cycles' Range clamp: NaN -> To Min
+    ('LINEAR', True, 'from_min', NAN, NAN, 0.2),
+    ('LINEAR', True, 'to_min', NAN, NAN, 0.7),           # a NaN bound: the other
+    ('SMOOTHERSTEP', True, 'value', NAN, NAN, 0.2),
+    ('SMOOTHERSTEP', False, 'value', NAN, NAN, 0.2),     # Cycles' smootherstep clamps t: 0
+    ('STEPPED', False, 'steps', NAN, NAN, 0.2),
+    ('STEPPED', False, 'steps', -2.0, 0.45, 0.2),        # folded: no `steps > 0` test
+    ('STEPPED', False, 'steps', 3.0, 0.2 + 0.5 / 3, 0.2 + 0.5 / 3),
+])
+def test_map_range_with_a_nan_as_cycles_kernel_and_blenders_folding(interp, clamp, name, value, folded_want,
+                                                                    kernel_want):
+    """Map Range's clamp is a Clamp node of type Range in Cycles' kernel (MapRangeNode::expand:
+    Cycles' clamp, NaN -> the lower bound) and Blender's clamp_f where Blender folds the node (NaN
+    kept); its Smootherstep clamps t likewise, and Blender's folded Stepped has no `steps > 0`
+    test. DACRT had kept every NaN (black) and read Steps <= 0 as 0 folded too."""
+    from addon import floatnodes
+    args = {**_MAP, name: value}
+    for folded, want in ((True, folded_want), (False, kernel_want)):
+        got = floatnodes.map_range(interp, *(np.float32(args[k]) for k in _MAP), clamp, folded=folded)
+        assert np.allclose(got, want, equal_nan=True, atol=1e-5), (folded, got)
+
+
+@pytest.mark.parametrize("data_type", ['FLOAT', 'RGBA'])
+def test_mix_clamped_nan_factor_gives_a_in_the_kernel(scene, data_type):
+    """A Mix's clamped NaN Factor is 0 in Cycles' kernel (saturatef: A, 0.6, measured 0.3 on a
+    0.5-lit plane, where the Factor comes through a Math node on the Object coordinates) and NaN
+    where Blender folds the node (black, as DACRT had it in both)."""
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.camera((0, 0, 3))
+    scenes.world((0.5, 0.5, 0.5))
+    mat = scenes.diffuse("M", (0.6, 0.6, 0.6))
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    scenes.plane("Plane", size=10, materials=(mat,))
+    plain = scenes.render_rgba(scene)[..., :3]
+    mix = nt.nodes.new('ShaderNodeMix')
+    mix.data_type, mix.clamp_factor = data_type, True
+    a, b = (0.6, 0.2) if data_type == 'FLOAT' else ((0.6, 0.6, 0.6, 1.0), (0.2, 0.2, 0.2, 1.0))
+    socks = [s for s in mix.inputs if s.enabled]
+    socks[1].default_value, socks[2].default_value = a, b
+    co, sep, add = (nt.nodes.new(t) for t in ('ShaderNodeTexCoord', 'ShaderNodeSeparateXYZ', 'ShaderNodeMath'))
+    add.operation = 'ADD'
+    add.inputs[1].default_value = NAN
+    nt.links.new(co.outputs['Object'], sep.inputs[0])
+    nt.links.new(sep.outputs['Z'], add.inputs[0])
+    nt.links.new(add.outputs[0], socks[0])
+    nt.links.new([o for o in mix.outputs if o.enabled][0], d.inputs['Color'])
+    assert np.allclose(scenes.render_rgba(scene)[..., :3], plain, rtol=1e-5) and plain.min() > 0.05
