@@ -344,21 +344,21 @@ def compute_node(node, out, v):
 
 def _compute32(node, out, v):
     t = node.type
+    # (a clamped NaN factor: Cycles' saturatef gives 0, A, in the kernel, measured in Cycles
+    # 5.0.1 for Float, Color, Vector and the legacy MixRGB; Blender's folded clamp keeps it: black)
+    clip = np.clip if t in ('MIX', 'MIX_RGB') and _folded_by_blender(node) else fn.cycles_clamp
     if t == 'MIX' and node.data_type == 'VECTOR':      # (Cycles' svm_node_mix_vector*)
         fac = v['vfac'] if 'vfac' in v else v['fac']
-        fac = np.clip(fac, 0.0, 1.0) if node.clamp_factor else fac
+        fac = clip(fac, 0.0, 1.0) if node.clamp_factor else fac
         return (1.0 - fac) * v['a'] + fac * v['b']
     if t == 'MIX':
-        # (Cycles' saturatef gives 0 for a NaN factor: A, measured in Cycles 5.0.1; Blender's
-        # folded clamp keeps it: black)
-        clip = np.clip if _folded_by_blender(node) else fn.cycles_clamp
         fac = clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
         r = cn.mix('MIX' if node.data_type == 'FLOAT' else node.blend_type, fac, v['a'], v['b'])
         # Cycles' float Mix has no result clamp: clamp_result (kept, hidden, after a switch from
         # Color to Float) applies to colour data only
         return np.clip(r, 0.0, 1.0) if node.clamp_result and node.data_type == 'RGBA' else r
     if t == 'MIX_RGB':         # Cycles' legacy MixNode: factor clamped to [0, 1] always
-        r = cn.mix(node.blend_type, np.clip(v['fac'], 0.0, 1.0), v['a'], v['b'])
+        r = cn.mix(node.blend_type, clip(v['fac'], 0.0, 1.0), v['a'], v['b'])
         return np.clip(r, 0.0, 1.0) if node.use_clamp else r
     if t == 'INVERT':
         return cn.invert(v['fac'], v['color'])
@@ -482,8 +482,8 @@ def xyz_to_rgb():
 
 
 def _folded_by_blender(node):
-    """Whether Blender folds a Float Curve, Clamp, Map Range or Mix node (a Frozen one's, found
-    when frozen)."""
+    """Whether Blender folds a Float Curve, Clamp, Map Range, Mix or MixRGB node (a Frozen one's,
+    found when frozen)."""
     folded = getattr(node, 'blender_folded', None)
     return nodegraph.node_folded_by_blender(node) if folded is None else folded
 
@@ -520,7 +520,7 @@ class Frozen:
             if t == 'CURVE_FLOAT':
                 self.curve_ends = _curve_ends(thing)
                 self.blender_folded = nodegraph.node_folded_by_blender(thing)
-        elif t in ('CLAMP', 'MAP_RANGE', 'MIX'):
+        elif t in ('CLAMP', 'MAP_RANGE', 'MIX', 'MIX_RGB'):
             self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t == 'WAVELENGTH':
             self.xyz = xyz_to_rgb()
