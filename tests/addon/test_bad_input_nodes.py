@@ -424,11 +424,12 @@ def test_map_range_with_a_nan_as_cycles_kernel_and_blenders_folding(interp, clam
         assert np.allclose(got, want, equal_nan=True, atol=1e-5), (folded, got)
 
 
-@pytest.mark.parametrize("data_type", ['FLOAT', 'RGBA'])
+@pytest.mark.parametrize("data_type", ['FLOAT', 'RGBA', 'VECTOR', 'MIXRGB'])
 def test_mix_clamped_nan_factor_gives_a_in_the_kernel(scene, data_type):
     """A Mix's clamped NaN Factor is 0 in Cycles' kernel (saturatef: A, 0.6, measured 0.3 on a
-    0.5-lit plane, where the Factor comes through a Math node on the Object coordinates) and NaN
-    where Blender folds the node (black, as DACRT had it in both)."""
+    0.5-lit plane, where the Factor comes through a Math node on the Object coordinates; the
+    legacy MixRGB clamps its factor always) and NaN where Blender folds the node (black, as DACRT
+    had it in both)."""
     scene.render.resolution_x, scene.render.resolution_y = 8, 6
     scene.dacrt.samples = 2
     scenes.camera((0, 0, 3))
@@ -438,9 +439,13 @@ def test_mix_clamped_nan_factor_gives_a_in_the_kernel(scene, data_type):
     d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
-    mix = nt.nodes.new('ShaderNodeMix')
-    mix.data_type, mix.clamp_factor = data_type, True
-    a, b = (0.6, 0.2) if data_type == 'FLOAT' else ((0.6, 0.6, 0.6, 1.0), (0.2, 0.2, 0.2, 1.0))
+    if data_type == 'MIXRGB':
+        mix = nt.nodes.new('ShaderNodeMixRGB')
+    else:
+        mix = nt.nodes.new('ShaderNodeMix')
+        mix.data_type, mix.clamp_factor = data_type, True
+    a, b = {'FLOAT': (0.6, 0.2), 'VECTOR': ((0.6, 0.6, 0.6), (0.2, 0.2, 0.2))}.get(
+        data_type, ((0.6, 0.6, 0.6, 1.0), (0.2, 0.2, 0.2, 1.0)))
     socks = [s for s in mix.inputs if s.enabled]
     socks[1].default_value, socks[2].default_value = a, b
     co, sep, add = (nt.nodes.new(t) for t in ('ShaderNodeTexCoord', 'ShaderNodeSeparateXYZ', 'ShaderNodeMath'))
