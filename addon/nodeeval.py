@@ -384,15 +384,24 @@ def _compute32(node, out, v):
         r = cn.curves_lookup(table.astype(np.float32), np.float32(lo), np.float32(hi), x, v['fac'], extrapolate)
         if t == 'CURVE_FLOAT' and x.ndim == 1 and v['fac'].ndim == 1 and hi != lo and _folded_by_blender(node):
             # the folding of a Float Curve of constant inputs Blender folds reads a point beyond
-            # the curve's x range as 0 when Extrapolated and as the end point's y otherwise,
-            # where Cycles' kernel extrapolates or takes the table's end (measured in Cycles 5.0 on
-            # a curve over [0.1, 0.9] ending at y 0.15 and 0.35 (the table's ends 0.1723 and
-            # 0.3531 when not Extrapolated): -3 to 0.09 and 0.91 to 5, factor 1 and 0.5); constants
-            # Blender leaves (an RGB node's on the way) reach the kernel (measured: -0.7 through
-            # an RGB node and a Math node extrapolated to -17.76, where the fold gives 0)
+            # the curve's x range, when Extrapolated, as the extrapolated line clipped to the
+            # mapping's Clipping y range when Use Clip is on (default [0, 1]), and as the end
+            # point's y otherwise, where Cycles' kernel extrapolates unclipped or takes the table's
+            # end (measured in Cycles 5.0.1: a curve over [0.1, 0.9] ending at y 0.15 and 0.35 at
+            # 1.5 gives 0.5, at 5 1.0 (1.375 unclipped); with a middle point at (0.45, 0.9) the
+            # end falls steeply and the clip gives 0 both sides, which had been taken for the
+            # rule: a two-point curve had rendered 0 where Cycles shows 0.5); constants Blender
+            # leaves (an RGB node's on the way) reach the kernel (measured: -0.7 through an RGB
+            # node and a Math node extrapolated to -17.76, where the fold gives 0)
             ends = node.curve_ends if isinstance(node, Frozen) else _curve_ends(node)
             rel = (x - np.float32(lo)) / (np.float32(hi) - np.float32(lo))
-            end = np.float32(0.0) if extrapolate else np.where(rel < 0.0, np.float32(ends[0]), np.float32(ends[1]))
+            if extrapolate:
+                clip_lo, clip_hi = node.curve_clip if isinstance(node, Frozen) else _curve_clip(node)
+                line = cn.curves_lookup(table.astype(np.float32), np.float32(lo), np.float32(hi), x,
+                                        np.ones_like(v['fac']), extrapolate)
+                end = np.clip(line, np.float32(clip_lo), np.float32(clip_hi))
+            else:
+                end = np.where(rel < 0.0, np.float32(ends[0]), np.float32(ends[1]))
             r = np.where((rel < 0.0) | (rel > 1.0), x + v['fac'] * (end - x), r)
         return r
     if t == 'WAVELENGTH':
@@ -458,6 +467,12 @@ def _curve_ends(node):
     return float(points[0].location[1]), float(points[len(points) - 1].location[1])
 
 
+def _curve_clip(node):
+    """The y range a Float Curve's mapping clips to (Use Clip), else (-inf, inf)."""
+    m = node.mapping
+    return (float(m.clip_min_y), float(m.clip_max_y)) if m.use_clip else (-np.inf, np.inf)
+
+
 def _curves(node):
     """(table, lo, hi, extrapolates) of an RGB Curves, Vector Curves or Float Curve node, as
     Cycles bakes it (colornodes.curves_table)."""
@@ -519,6 +534,7 @@ class Frozen:
             self.curves = _curves(thing)
             if t == 'CURVE_FLOAT':
                 self.curve_ends = _curve_ends(thing)
+                self.curve_clip = _curve_clip(thing)
                 self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t in ('CLAMP', 'MAP_RANGE', 'MIX', 'MIX_RGB'):
             self.blender_folded = nodegraph.node_folded_by_blender(thing)
