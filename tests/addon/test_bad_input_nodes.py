@@ -456,3 +456,36 @@ def test_mix_clamped_nan_factor_gives_a_in_the_kernel(scene, data_type):
     nt.links.new(add.outputs[0], socks[0])
     nt.links.new([o for o in mix.outputs if o.enabled][0], d.inputs['Color'])
     assert np.allclose(scenes.render_rgba(scene)[..., :3], plain, rtol=1e-5) and plain.min() > 0.05
+
+
+@pytest.mark.parametrize("value, use_clip, want", [
+    (1.5, True, 0.5),           # Cycles 0.5 (DACRT had 0)
+    (0.95, True, 0.3625),       # Cycles 0.3625 (DACRT had 0)
+    (5.0, True, 1.0),           # the line, 1.375, clipped to Clipping's y range [0, 1]
+    (5.0, False, 1.375),        # Use Clip off: the line
+    (-3.0, True, 0.0),          # below: the line is negative, clipped to 0
+])
+def test_float_curve_of_a_constant_beyond_its_range_is_the_clipped_line(scene, value, use_clip, want):
+    """A Float Curve of constants Blender folds, Extrapolated (the default), beyond its x range:
+    the extrapolated line clipped to the mapping's Clipping y range when Use Clip is on, measured
+    in Cycles 5.0.1 on a curve (0.1, 0.15)-(0.9, 0.35) into a Diffuse Color; DACRT had read every
+    such point as 0 (a three-point curve's steep end clips to 0 there, which had been taken for
+    the rule)."""
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.camera((0, 0, 3))
+    scenes.world((0.5, 0.5, 0.5))
+    mat = scenes.diffuse("M", (want, want, want))
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    scenes.plane("Plane", size=10, materials=(mat,))
+    plain = scenes.render_rgba(scene)[..., :3]
+    c = nt.nodes.new('ShaderNodeFloatCurve')
+    c.inputs['Value'].default_value = value
+    m = c.mapping
+    m.extend, m.use_clip = 'EXTRAPOLATED', use_clip
+    m.curves[0].points[0].location = (0.1, 0.15)
+    m.curves[0].points[1].location = (0.9, 0.35)
+    m.update()
+    nt.links.new(c.outputs['Value'], d.inputs['Color'])
+    assert np.allclose(scenes.render_rgba(scene)[..., :3], plain, rtol=2e-4, atol=1e-6)
