@@ -402,7 +402,10 @@ def _compute32(node, out, v):
                 end = np.clip(line, np.float32(clip_lo), np.float32(clip_hi))
             else:
                 end = np.where(rel < 0.0, np.float32(ends[0]), np.float32(ends[1]))
-            r = np.where((rel < 0.0) | (rel > 1.0), x + v['fac'] * (end - x), r)
+            # (mixed as Blender's interpf, fac y + (1 - fac) x: at an 'inf' typed Value (float32's
+            # largest) x + fac (y - x) cancels to 0 where Cycles shows the clipped 1)
+            fac = v['fac']
+            r = np.where((rel < 0.0) | (rel > 1.0), fac * end + (np.float32(1.0) - fac) * x, r)
         return r
     if t == 'WAVELENGTH':
         return cn.wavelength(v['wavelength'], node.xyz if isinstance(node, Frozen) else xyz_to_rgb())
