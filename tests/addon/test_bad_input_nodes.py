@@ -489,3 +489,22 @@ def test_float_curve_of_a_constant_beyond_its_range_is_the_clipped_line(scene, v
     m.update()
     nt.links.new(c.outputs['Value'], d.inputs['Color'])
     assert np.allclose(scenes.render_rgba(scene)[..., :3], plain, rtol=2e-4, atol=1e-6)
+
+
+def test_float_curve_of_an_inf_typed_constant_is_the_clipped_end(scene):
+    """'inf' typed into a Float Curve's Value (Blender stores float32's largest) folds to the
+    clipped line, 1 for the default curve (Cycles 1.32 lit, as the colour 1): x + fac (y - x) had
+    cancelled to 0 (black); Blender mixes as fac y + (1 - fac) x."""
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.camera((0, 0, 3))
+    scenes.world((0.5, 0.5, 0.5))
+    mat = scenes.diffuse("M", (1.0, 1.0, 1.0))
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    scenes.plane("Plane", size=10, materials=(mat,))
+    plain = scenes.render_rgba(scene)[..., :3]
+    c = nt.nodes.new('ShaderNodeFloatCurve')
+    c.inputs['Value'].default_value = float('inf')
+    nt.links.new(c.outputs['Value'], d.inputs['Color'])
+    assert np.allclose(scenes.render_rgba(scene)[..., :3], plain, rtol=1e-5) and plain.min() > 0.1
