@@ -263,9 +263,10 @@ class Assembly:
             t0 += nt_rows
         for name, ratio in sorted(stretched_points.items()):
             self.messages.append(('WARNING', f"'{name}': point cloud on a non-uniformly scaled object (axes "
-                                             f"{ratio:.2f}:1): its points render as ellipsoids shaded up to a few "
-                                             "percent darker than Cycles' (light at grazing angles, a bright "
-                                             "world: 2:1 measured 2-5% dark); scale the object uniformly, or "
+                                             f"{ratio:.2f}:1): its points render as ellipsoids whose shading differs "
+                                             "from Cycles' by up to a few percent, pixels darker or brighter (light "
+                                             "at grazing angles, a bright world: 2:1 measured 2-5% dark overall, "
+                                             "pixels 0.55x to 1.2x); scale the object uniformly, or "
                                              "set the points' positions in Geometry Nodes"))
         for name, (nvb, ntb) in bad.items():
             self.messages.append(('WARNING', f"object '{name}': {nvb} vertices with NaN, infinite or "
