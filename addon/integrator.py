@@ -306,18 +306,24 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         glass = self._per_triangle(refracts) & self._tri_transparent
         self._tri_transmit = ((vis & NO_TRANSMISSION) == 0) & ((vis & ~np.uint8(NO_TRANSMISSION)) != 0)
         self._any_glass = bool(glass.any())
-        # a point-cloud sphere rays can get inside (not seen by camera or bounce rays, or see-through):
-        # its shadow rays from inside pass it (_occluded_past_insides); otherwise no ray starts there
+        # shadow rays from inside a point-cloud sphere pass its walls (_occluded_past_insides): rays
+        # leave a sphere's hits about its radial normal (_radial_normals), through the facets
+        # below it, and rays get inside a sphere not seen by camera or bounce rays or see-through
         unb = self.tri.unbumped
         enterable = None if unb is None else unb & (
             ((vis & (VIS_CAMERA | VIS_DIFFUSE)) != (VIS_CAMERA | VIS_DIFFUSE)) | self._tri_transparent)
-        self._sphere_insides = enterable is not None and bool(enterable.any())
+        self._sphere_insides = unb is not None and bool(unb.any())
         # the triangles a ray can leave from inside a sphere (the others' blocked shadow rays need
-        # no second trace: 5000 hidden points over a floor had cost +30-45% render CPU); every
-        # sphere counts, as the second trace passes every sphere's walls from inside (a ray
-        # through glass can reach inside a sphere transmission rays do not see)
-        self._inside_starts = inside_starts(self.tri.vertices, self.tri.indices, unb) \
-            if self._sphere_insides else None
+        # no second trace: 5000 hidden points over a floor had cost +30-45% render CPU): the
+        # spheres' own, and where a sphere can be entered every triangle reaching into one (every
+        # sphere counts, as the second trace passes every sphere's walls from inside: a ray
+        # through glass can reach inside a sphere transmission rays do not see). (A bounce ray
+        # leaving a visible sphere through its own facets can meet a floor inside it, whose
+        # shadow rays are not traced past the sphere: flagging every triangle reaching into a
+        # sphere cost 15% render CPU for 2000 points over a floor, for paths that had all
+        # been dropped before.)
+        self._inside_starts = None if not self._sphere_insides else \
+            inside_starts(self.tri.vertices, self.tri.indices, unb) if enterable.any() else unb
         self._transmit_split = self._any_glass and bool(
             ((vis & HOLDOUT) != 0).any() or (self._tri_transmit != ((vis & VIS_CAMERA) != 0)).any()
             or (self._tri_transmit != ((vis & VIS_DIFFUSE) != 0)).any())
@@ -1051,6 +1057,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._ended['roulette'] += n_rr
         if len(idx) == 0:
             return None
+        if self.tri.unbumped is not None:
+            self._radial_normals(prim, ng, ns, np.take(path.D, idx, axis=1))
         # translucent hits (continue_paths left their throughput before any albedo): thr takes
         # the reflection's albedo R, far (sel, thr_far) the transmission's T
         far = self._translucent_hits(prim, thr) if self._any_translucent else None
@@ -1139,10 +1147,27 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                       N=ns if self.lights.tree is not None else None,
                       dark_pdf=None if nee is None else (pdf * nee).astype(F32))
 
+    def _radial_normals(self, prim, ng, ns, D):
+        """ng and ns (3, k), in place, of the hits on point-cloud spheres (tri.unbumped): Cycles'
+        point_shader_setup, Ng = N = normalize(P - centre), the interpolated radial normal here,
+        turned to face the ray as Cycles' backfacing test turns both. The facet's normal had
+        been the geometric one: light and BSDF samples about the radial normal but below the
+        facet were dropped, which on a stretched point (an ellipsoid, whose radial direction is
+        not its normal) darkened it 5-6% under a white world; such rays now pass through the
+        sphere's own facets from inside, as Cycles' rays skip the point they leave."""
+        sel = np.flatnonzero(np.take(self.tri.unbumped, prim))
+        if not len(sel) or ns is ng:
+            return
+        n = np.take(ns, sel, axis=1)
+        n *= np.where(np.einsum('ik,ik->k', n, np.take(D, sel, axis=1)) > 0.0, F32(-1.0), F32(1.0))
+        ng[:, sel] = n
+        ns[:, sel] = n
+
     def _fused(self, path, sinks, k):
         """Whether vertex k of these paths is shaded by _diffuse_vertex: lit diffuse surfaces
         with none of what only the general steps do (per scene: textures, translucency, normal
-        maps, the shadow terminator, light linking, textured emission; per bounce: light
+        maps, the shadow terminator, light linking, textured emission, point-cloud spheres
+        (_radial_normals); per bounce: light
         groups, transparent or glass surfaces passed, a share of light sampling, the world
         past its Max Bounces)."""
         if self._fused_scene is None:
@@ -1151,7 +1176,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                 FUSED_BOUNCE and self.lights and not self._albedo_varies and not self._bumped
                 and not self._any_translucent and not t.terminator and t.term_cutoff is None
                 and t.term_freq is None and self._link is None and self._shadow_link is None
-                and self._tri_emit_tex is None)
+                and self._tri_emit_tex is None and t.unbumped is None)
         return (self._fused_scene and path.tb is None and path.gb is None and path.nee is None
                 and not sinks.groups
                 and not (self.lights.environment is not None and k > self._world_max_bounces))

@@ -102,26 +102,6 @@ def _unread_rows(nt):
     return rows
 
 
-# a point cloud's object scaled with axes further apart than this is said (_stretched): Cycles
-# shades its exact ellipsoids by the radial direction, which DACRT's facets can lie above
-POINT_STRETCH = 1.5
-
-
-def _stretched(places):
-    """{object name: largest / smallest axis scale} of the placements of a point cloud whose
-    matrix stretches it beyond POINT_STRETCH. Cycles shades a point by normalize(P - centre): on
-    an ellipsoid, directions sampled about that normal can lie below DACRT's tessellated facets,
-    where its rays cannot leave (a point at scale (2, 1, 1) under a sun and a grey world: 2.6%
-    dark, pixels 0.55x; tests/parity/test_hair_fixes.py: 5% under a white world)."""
-    lin = np.array([np.asarray(p.matrix, np.float64)[:3, :3] for p in places])
-    lin[~np.isfinite(lin).all(axis=(1, 2))] = np.eye(3)     # (skipped and said elsewhere)
-    sv = np.linalg.svd(lin, compute_uv=False)                # one stacked call: scatters of 100K
-    out = {}
-    for i in np.flatnonzero((sv[:, 2] > 0) & (sv[:, 0] > POINT_STRETCH * sv[:, 2])).tolist():
-        out[places[i].name] = max(out.get(places[i].name, 0.0), float(sv[i, 0] / sv[i, 2]))
-    return out
-
-
 def _degenerate_text(counts, most=5):
     """The message for zero-area triangles dropped ({object name: count}), naming the objects
     with the most (a user searching for them had only the total)."""
@@ -187,7 +167,6 @@ class Assembly:
         arrays (sized up front; dropped triangles are removed in one pass at the end)."""
         bad = {}          # object name -> [non-finite vertices, triangles dropped]
         skipped = {}      # (non-finite transform, object name) -> placements left out (_instance_batch)
-        stretched_points = {}   # object name -> axis ratio of a point cloud's non-uniform scale (_stretched)
         degenerate = {}   # object name -> zero-area triangles dropped
         self._resolve_materials()
         self._several_uv_maps()
@@ -248,9 +227,6 @@ class Assembly:
                     out.one_sided[tubes[-1]] = True
                 nbad, ndeg, nskipped = self._instance_batch(a, places, out, v0, t0)
                 nv_rows, nt_rows = len(places) * len(a.positions), len(places) * len(a.triangles)
-                if getattr(a, 'radial_normals', False):
-                    for name, ratio in _stretched(places).items():
-                        stretched_points[name] = max(ratio, stretched_points.get(name, 0.0))
             for name, n in ndeg:
                 degenerate[name] = degenerate.get(name, 0) + n
             for name, nonfinite in nskipped:
@@ -261,13 +237,6 @@ class Assembly:
                 acc[1] += ntb
             v0 += nv_rows
             t0 += nt_rows
-        for name, ratio in sorted(stretched_points.items()):
-            self.messages.append(('WARNING', f"'{name}': point cloud on a non-uniformly scaled object (axes "
-                                             f"{ratio:.2f}:1): its points render as ellipsoids whose shading differs "
-                                             "from Cycles' by up to a few percent, pixels darker or brighter (light "
-                                             "at grazing angles, a bright world: 2:1 measured 2-5% dark overall, "
-                                             "pixels 0.55x to 1.2x); scale the object uniformly, or "
-                                             "set the points' positions in Geometry Nodes"))
         for name, (nvb, ntb) in bad.items():
             self.messages.append(('WARNING', f"object '{name}': {nvb} vertices with NaN, infinite or "
                                              f"out-of-range (beyond +-{REACH:.1e}) coordinates; {ntb} "
