@@ -21,8 +21,10 @@ first one's plane: the other's corners within _PAIR_ULPS float32 ulps of the pai
 coordinate of it (surfaces further apart are met in one order by both tracers), and separating
 axes (the six edge normals), each overlap deeper than that. So faces overlapping within a plane
 holding more than _BIG triangles (a face laid on a finely split floor), faces of one piece
-(joined by corners) in a plane their areas do not fill, nor a sliver thinner than the tolerance, nor a triangle
-whose key falls in the bin next to its twin's: misses, never a false message. Faces facing
+(joined by corners) in a plane their areas do not fill, nor a sliver thinner than the tolerance, nor twins
+whose plane offsets lie more than half a bin apart across a bin's edge (float32 normals of thin
+triangles: those within half a bin are keyed together by a second grid shifted by half a bin,
+_shifted_keys): misses, never a false message. Faces facing
 each other are not said: they are objects in contact (a box resting on a floor, two boxes
 stacked), the overlap closed off between them and seen by no ray, a common sight; unless the
 pair shares an edge by index: a face folded back over it (Triangulate's fixed split of a concave
@@ -62,14 +64,57 @@ def overlapping(vertices, indices, geo, keys, step, candidates):
         return out
     v = np.asarray(vertices, np.float32)
     t = np.asarray(indices)
+    c = _Corners(v, t)
+    _found_in_groups(c, t, geo, keys, candidates, step, out)
+    # twins whose keys fall on either side of a bin's edge (float32 rounding of thin triangles'
+    # normals moves their offsets: 14 of 288 triangles of a ring copied in a tilted plane) share
+    # a key of the grid shifted by half a bin (only its groups that join triangles of different
+    # first keys: the others were tested whole)
+    shifted = _shifted_keys(geo, candidates, step)
+    _found_in_groups(c, t, geo, shifted, candidates & (shifted != 0), step, out, first=keys)
+    return out
+
+
+def _shifted_keys(geo, candidates, step):
+    """(M,) uint64: the candidates' coplanar_key (coplanar.h) on the grid shifted by half a bin in
+    every component (the same float32 expressions, + 0.5); 0 (keyless) elsewhere."""
+    g = np.asarray(geo, np.float32)
+    idx = np.flatnonzero(candidates)
+    n = np.take(g[9:12], idx, axis=1)
+    n = n * np.where(np.float32(0.5773502) * n[0] + np.float32(0.6172134) * n[1] + np.float32(0.5345225) * n[2]
+                     < 0, np.float32(-1.0), np.float32(1.0))
+    v0 = np.take(g[0:3], idx, axis=1)
+    d = v0[0] * n[0] + v0[1] * n[1] + v0[2] * n[2]
+    vals = [n[a] * np.float32(4096.0) + np.float32(4097.0) for a in range(3)]
+    vals.append(d * (np.float32(1.0) / np.float32(step)) + np.float32(2097153.0))
+    key = np.zeros(len(idx), np.uint64)
+    ok = np.ones(len(idx), bool)
+    for x, top, width in zip(vals, (16384.0,) * 3 + (4194304.0,), (14,) * 3 + (22,)):
+        ok &= (x >= 0) & (x < top)
+        key = (key << np.uint64(width)) | np.where(ok, x, 0).astype(np.uint64)
+    keys = np.zeros(len(candidates), np.uint64)
+    keys[idx] = np.where(ok, key, np.uint64(0))
+    return keys
+
+
+def _found_in_groups(c, t, geo, keys, candidates, step, out, first=None):
+    """Marks in out the candidates overlapping another of their plane key's group (first: keys
+    of an earlier pass; only groups joining triangles of different first keys are tested)."""
     # natively, in one threaded pass: a quad's two triangles as one, the groups of repeated keys
     # (most meshes have none, or one plane too large to test)
     rows, start = dacrt.shading.coplanar_groups(keys, geo, t, candidates, _BIG)
     if not len(rows):
-        return out
+        return
     size = np.diff(start)
+    if first is not None:
+        k = np.take(first, rows)
+        mixed = np.minimum.reduceat(k, start[:-1]) != np.maximum.reduceat(k, start[:-1])
+        if not mixed.any():
+            return
+        rows = rows[np.repeat(mixed, size)]
+        size = size[mixed]
+        start = np.concatenate([[0], np.cumsum(size)])
     start = start[:-1]
-    c = _Corners(v, t)
     pi, pj = [], []
     for s in np.unique(size):
         g = start[size == s]
@@ -85,10 +130,9 @@ def overlapping(vertices, indices, geo, keys, step, candidates):
         a, b = np.triu_indices(s, 1)
         pi.append(rows[(g[:, None] + a).ravel()]), pj.append(rows[(g[:, None] + b).ravel()])
     if not pi:
-        return out
+        return
     i, j = np.concatenate(pi), np.concatenate(pj)
     _test(c, t, geo, i, j, out)
-    return out
 
 
 def _test(c, t, geo, i, j, out):
