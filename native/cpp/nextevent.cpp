@@ -27,12 +27,19 @@ namespace {
 // (draw_chunk); also with a light tree, whose walks pick_entries takes side by side. ENV: an environment map, whose points' samples are drawn first per chunk too
 // (environment_sample_lanes). Without either, the loop is that of one point at a time only: the
 // chunk's arrays and its pass picking the entries first had cost scenes without area lamps ~11%.
-template <bool AREAS, bool ENV>
+// PLAIN (plain_points): no bump, rough, terminator, light linking, entry or point output; the
+// loop without their code keeps fewer pointers live (fewer spills in the per-point loop).
+template <bool AREAS, bool ENV, bool PLAIN>
 size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_t b, size_t e, size_t* skipped) {
     float* value_out = out.value;
     uint8_t* contrib = out.contrib;
-    int32_t* entry_out = out.entry;
-    float* point_out = out.point;
+    int32_t* entry_out = PLAIN ? nullptr : out.entry;
+    float* point_out = PLAIN ? nullptr : out.point;
+    // (compile-time nulls in the PLAIN loop: their code is left out)
+    const float* const bump = PLAIN ? nullptr : p.bump;
+    const float* const rough = PLAIN ? nullptr : p.rough;
+    const Terminator* const term = PLAIN ? nullptr : p.term;
+    const uint8_t* const light_set = PLAIN ? nullptr : L.light_set;
     const size_t n = p.n, T = L.num_tris;
     size_t m = b, bad = 0;
     struct Chunk {
@@ -126,24 +133,24 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                       (lanes ? weighed : nee_scale(ns, nullptr, wi, pdf, p_sel, p.thr ? thr : nullptr, value));
             if (!(p_sel > 0.0f) || own) value[0] = value[1] = value[2] = 0.0f;  // (a tree pick below float's range)
             ok = ok && !own;
-            if (p.bump) {  // a normal-mapped point: Cycles' bump shadowing of the sample
-                const float Ns[3] = {p.bump[i], p.bump[n + i], p.bump[2 * n + i]};
-                const float g = bump_shadowing(Ns, ns, wi, p.bump[3 * n + i] != 0.0f);
+            if (bump) {  // a normal-mapped point: Cycles' bump shadowing of the sample
+                const float Ns[3] = {bump[i], bump[n + i], bump[2 * n + i]};
+                const float g = bump_shadowing(Ns, ns, wi, bump[3 * n + i] != 0.0f);
                 for (int a = 0; a < 3; ++a) value[a] *= g;
                 ok = ok && g > 0.0f;
             }
-            if (p.rough) rough_diffuse_scale(p.rough, n, i, ns, wi, value);
-            if (L.light_set && p.receivers && !((p.receivers[i] >> L.light_set[entry]) & 1u)) {
+            if (rough) rough_diffuse_scale(rough, n, i, ns, wi, value);
+            if (light_set && p.receivers && !((p.receivers[i] >> light_set[entry]) & 1u)) {
                 ok = false;  // light linking: the light does not reach this point's object
                 value[0] = value[1] = value[2] = 0.0f;
             }
             const float NL = ns[0] * wi[0] + ns[1] * wi[1] + ns[2] * wi[2];
             size_t tri = 0;
             float cutoff = 0.0f;
-            if (p.term) {
-                tri = index_at(p.prim, i, p.term->M);
-                cutoff = p.term->cutoff ? p.term->cutoff[tri] : 0.0f;
-                const float f = p.term->freq ? p.term->freq[tri] : 1.0f;
+            if (term) {
+                tri = index_at(p.prim, i, term->M);
+                cutoff = term->cutoff ? term->cutoff[tri] : 0.0f;
+                const float f = term->freq ? term->freq[tri] : 1.0f;
                 if (f > 1.0f && NL > 0) {
                     const float s = shift_cos_in(NL, f);
                     for (int a = 0; a < 3; ++a) value[a] *= s;
@@ -171,7 +178,7 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                 const float amount = cutoff > 0.0f ? terminator_amount(NL * sign, NgL, cutoff) : 0.0f;
                 if (amount > 0.0f) {
                     float lift[3];
-                    terminator_lift(p.term->geo, p.term->normals, p.term->M, tri, p.term->u[i], p.term->v[i], Ng, lift);
+                    terminator_lift(term->geo, term->normals, term->M, tri, term->u[i], term->v[i], Ng, lift);
                     for (int a = 0; a < 3; ++a) O[a] += lift[a] * amount;
                     // below the geometric normal the lifted ray is meant to meet its own triangle
                     if (NgL <= 0.0f) skip = -1;
@@ -209,13 +216,25 @@ bool draws_area_lanes(const LightChoice& lights) {
     return areas;
 }
 
+namespace {
+
+// Whether event_block<..., true> serves these points: none of the per-point features it leaves out.
+bool plain_points(const LightChoice& lights, const VertexPoints& pts, const NextEventOut& out) {
+    return !pts.bump && !pts.rough && !pts.term && !(lights.light_set && pts.receivers) && !out.entry && !out.point;
+}
+
+}  // namespace
+
 size_t event_range(const LightChoice& lights, bool areas, const VertexPoints& pts, const NextEventOut& out, size_t b,
                    size_t e, size_t* skipped) {
     const bool env = lights.env != nullptr;
     // with a light tree, the chunk's picks first (pick_entries): its walks go side by side
     const bool chunks = areas || (lights.tree && pts.pick);
-    const auto block = chunks ? (env ? event_block<true, true> : event_block<true, false>)
-                             : (env ? event_block<false, true> : event_block<false, false>);
+    const auto block = plain_points(lights, pts, out)
+                           ? (chunks ? (env ? event_block<true, true, true> : event_block<true, false, true>)
+                                     : (env ? event_block<false, true, true> : event_block<false, false, true>))
+                           : (chunks ? (env ? event_block<true, true, false> : event_block<true, false, false>)
+                                     : (env ? event_block<false, true, false> : event_block<false, false, false>));
     return block(lights, pts, out, b, e, skipped);
 }
 

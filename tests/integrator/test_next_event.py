@@ -467,3 +467,78 @@ def test_light_tree_walks_side_by_side_pick_as_tree_sample(linked, area):
     value[:, ~ok] = 0.0
     lamp = want >= A       # (the area lamp's lanes round their own way: checked by the tests above)
     assert np.array_equal(got[0][:, lamp].view(np.uint32), value[:, lamp].view(np.uint32))
+
+
+def _light_set(rng, kind):
+    """LightChoices that take each of next_event's four loops: area lamps drawn in lanes or not
+    (areas: every lamp variant; points: those that are no area lamp), with or without an
+    environment map, each with emissive triangles (some the points' own)."""
+    from ..native.test_environment_sample_lanes import _rotation
+    names = NAMES if kind.startswith('areas') else [k for k in NAMES if not k.startswith('area')]
+    recs = lamp_records([make(name) for name in names])
+    T = 40
+    geo, area = _geo(rng, T, scale=0.8)
+    geo[0:3] += np.array([0.3, -0.7, 1.2], F32)[:, None]
+    emission = rng.uniform(0.5, 20.0, (3, T)).astype(F32)
+    env = None
+    if kind.endswith('env'):
+        rgb = (rng.random((12, 24, 3)) ** 4 * 5).astype(F32)
+        env = dacrt.lamps.environment_map(rgb, _rotation(rng), 'Linear')
+    E = len(recs) + T + (env is not None)
+    p = rng.uniform(0.2, 1.0, E)
+    p /= p.sum()
+    cdf = np.cumsum(p)
+    cdf[-1] = 1.0
+    no_mis = rng.random(E) < 0.3
+    no_mis[len(recs):] = False
+    shadow = rng.random(E) < 0.8
+    shadow[len(recs):] = True
+    return shading.LightChoice(recs, cdf, p.astype(F32), no_mis, shadow, geo, area, emission, environment=env,
+                               tri_prim=rng.integers(0, 50, T).astype(np.int32))
+
+
+@pytest.mark.parametrize('kind', ['areas', 'points', 'areas_env', 'points_env'])
+@pytest.mark.parametrize('flat,thr,skip_work', [(False, True, True), (True, False, True), (False, True, False)])
+def test_plain_points_loop_gives_the_general_loops_bits(kind, flat, thr, skip_work):
+    """Points with none of bump, rough, terminator, light linking, entry or point output take
+    next_event's loop compiled without that code (event_block's PLAIN); asking for the entries
+    or the sampled points takes the general loop. Both give every output bit alike (value,
+    contrib, rays, send, skip, skipped) for each of the loops (area lanes, environment map
+    lanes, both, neither), points on their own emissive triangle, a NaN and an infinite point,
+    not-finite picks and a count no multiple of a chunk."""
+    rng = np.random.default_rng(len(kind) + 5 * flat + 3 * skip_work)
+    lc = _light_set(rng, kind)
+    n = 12_289
+    P, P_off, ns, ng, th, keys = _points(rng, n, flat=flat, thr=thr)
+    P[:, 7], P[:, 8] = np.nan, np.inf
+    pick = rng.random(n)
+    pick[[11, 12]] = np.nan, np.inf
+    prim = rng.integers(0, 50, n).astype(np.int32)
+    ka, kb = 0x7654321, 0x0FEDCBA
+    args = (lc, P, P_off, ns, ng, th, keys, ka, kb)
+    kw = dict(pick=pick, prim=prim, shorten=SHORTEN, skip_work=skip_work)
+    with np.errstate(invalid='ignore', over='ignore'):
+        plain = shading.next_event(*args, **kw)
+        entry = np.empty(n, np.int32)
+        general = shading.next_event(*args, entry=entry, **kw)
+        point = np.zeros((3, n), F32)
+        pointed = shading.next_event(*args, point=point, **kw)
+    def bits(a):
+        # a NaN's sign is the compiler's operand order (main's one loop already flips it when
+        # GCC unswitches it on the entry output): NaN is compared as NaN, the rest bit for bit
+        if a.dtype == F32:
+            a = np.where(np.isnan(a), F32(np.nan), a)
+        return a.view(np.uint8)
+
+    for name, a, b, c in zip(('value', 'contrib', 'rays', 'send', 'skip'), plain[:5], general[:5], pointed[:5]):
+        assert a.dtype == b.dtype and a.shape == b.shape, name
+        assert np.array_equal(bits(a), bits(b)), f'{name} differs from the general loop'
+        assert np.array_equal(bits(a), bits(c)), f'{name} differs with point output'
+    assert plain[5] == general[5] == pointed[5]
+    # the case mix: lamps, triangles (the points' own among them) and the map all picked, rays sent
+    R, T = len(lc.records), lc.entries - len(lc.records) - (lc.environment is not None)
+    tri = (entry >= R) & (entry < R + T)
+    assert (entry < R).any() and tri.any() and len(plain[3]) > n // 4
+    assert (lc.tri_prim[entry[tri] - R] == prim[tri]).any()
+    if lc.environment is not None:
+        assert (entry == R + T).any()
