@@ -33,13 +33,6 @@ template <bool AREAS, bool ENV, bool PLAIN>
 size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_t b, size_t e, size_t* skipped) {
     float* value_out = out.value;
     uint8_t* contrib = out.contrib;
-    int32_t* entry_out = PLAIN ? nullptr : out.entry;
-    float* point_out = PLAIN ? nullptr : out.point;
-    // (compile-time nulls in the PLAIN loop: their code is left out)
-    const float* const bump = PLAIN ? nullptr : p.bump;
-    const float* const rough = PLAIN ? nullptr : p.rough;
-    const Terminator* const term = PLAIN ? nullptr : p.term;
-    const uint8_t* const light_set = PLAIN ? nullptr : L.light_set;
     const size_t n = p.n, T = L.num_tris;
     size_t m = b, bad = 0;
     struct Chunk {
@@ -56,6 +49,14 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
     std::conditional_t<ENV, EnvChunk, None> ec;
     const size_t env_entry = L.num_lamps + T;
     for_words(p.keys, n, p.ka, p.kb, b, e, [&](size_t i0, size_t cnt, const uint32_t* wa, const uint32_t* wb) {
+        // compile-time nulls in the PLAIN loop, their code left out (set here, not captured: a
+        // captured null is not folded where for_words stays a call of its own)
+        int32_t* const entry_out = PLAIN ? nullptr : out.entry;
+        float* const point_out = PLAIN ? nullptr : out.point;
+        const float* const bump = PLAIN ? nullptr : p.bump;
+        const float* const rough = PLAIN ? nullptr : p.rough;
+        const Terminator* const term = PLAIN ? nullptr : p.term;
+        const uint8_t* const light_set = PLAIN ? nullptr : L.light_set;
         if constexpr (AREAS || ENV) pick_entries(L, p, i0, cnt, c.entries, c.sels);
         if constexpr (AREAS) draw_chunk(L, p, i0, cnt, c.entries, c.sels, wa, wb, c.drawn, c.is_drawn);
         [[maybe_unused]] size_t q = 0;  // ENV: the next of the chunk's map samples
