@@ -98,22 +98,31 @@ void draw_chunk(const LightChoice& L, const VertexPoints& p, size_t i0, size_t c
                 const float* p_sel, const uint32_t* wa, const uint32_t* wb, Drawn* out, uint8_t* drawn) {
     constexpr int kMaxLamps = 4;
     uint32_t lamps[kMaxLamps];
+    uint16_t js[kMaxLamps][kWordChunk];
+    size_t m[kMaxLamps];
     int nl = 0;
-    uint16_t js[kWordChunk];
+    // one pass, each entry looked at once per run of equal entries: most points of a chunk pick
+    // the entry the point before picked, and the lamp record test (area_lanes_apply) per point
+    // had been most of this function's time
+    uint32_t last = ~0u;
+    int slot = -1;  // the last entry's: its lamp's place in lamps, -1 where not drawn in lanes
     for (size_t j = 0; j < cnt; ++j) {
-        drawn[j] = 0;
         const uint32_t e = entry[j];
-        if (e >= L.num_lamps || !area_lanes_apply(L.lamps[e])) continue;
-        int k = 0;
-        while (k < nl && lamps[k] != e) ++k;
-        if (k == nl && nl < kMaxLamps) lamps[nl++] = e;
+        if (e != last) {
+            last = e;
+            slot = -1;
+            if (e < L.num_lamps && area_lanes_apply(L.lamps[e])) {
+                int k = 0;
+                while (k < nl && lamps[k] != e) ++k;
+                if (k == nl && nl < kMaxLamps) lamps[nl] = e, m[nl++] = 0;
+                if (k < nl) slot = k;
+            }
+        }
+        drawn[j] = slot >= 0;
+        if (slot >= 0) js[slot][m[slot]++] = uint16_t(j);
     }
-    for (int k = 0; k < nl; ++k) {
-        size_t m = 0;
-        for (size_t j = 0; j < cnt; ++j)
-            if (entry[j] == lamps[k]) js[m++] = uint16_t(j), drawn[j] = 1;
-        draw_area_lanes(L.lamps[lamps[k]], L.no_mis[lamps[k]], p_sel, p, i0, js, m, wa, wb, out);
-    }
+    for (int k = 0; k < nl; ++k)
+        draw_area_lanes(L.lamps[lamps[k]], L.no_mis[lamps[k]], p_sel, p, i0, js[k], m[k], wa, wb, out);
 }
 
 }  // namespace dacrt

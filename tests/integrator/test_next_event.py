@@ -542,3 +542,42 @@ def test_plain_points_loop_gives_the_general_loops_bits(kind, flat, thr, skip_wo
     assert (lc.tri_prim[entry[tri] - R] == prim[tri]).any()
     if lc.environment is not None:
         assert (entry == R + T).any()
+
+
+def test_area_lamps_picked_in_runs_are_drawn_as_the_composed_kernels():
+    """A chunk's points are drawn in lanes per area lamp, at most four lamps a chunk (the rest one
+    at a time), the lamp looked up once per run of points that picked the same entry: runs of
+    1..700 points over six area lamps (five drawn in lanes, one with spread), a point lamp and
+    an emissive triangle, runs crossing the 512-point chunks, the fifth area lamp first met in a
+    chunk that already drew four, a lamp coming back after another. Every output bit equals the
+    composed kernels'."""
+    rng = np.random.default_rng(41)
+    names = ['area_square', 'area_rectangle', 'area_disk', 'area_ellipse', 'area_rectangle_unnormalized',
+             'area_square_spread', 'point_sphere']
+    recs = lamp_records([make(name) for name in names])
+    geo, area = _geo(rng, 1, scale=0.8)
+    E = len(recs) + 1
+    prob = np.full(E, 1.0 / E)
+    cdf = np.cumsum(prob)
+    cdf[-1] = 1.0
+    lc = shading.LightChoice(recs, cdf, prob.astype(F32), np.zeros(E, bool), np.ones(E, bool), geo, area,
+                             np.full((3, 1), 4.0, F32))
+    runs, n = [], 0
+    while n < 9000:
+        length = int(rng.choice([1, 2, 3, 17, 90, 700]))
+        runs.append((int(rng.integers(0, E)), length))
+        n += length
+    runs[:6] = [(0, 100), (1, 100), (2, 100), (3, 100), (4, 50), (0, 62)]   # chunk 0: a fifth area lamp
+    entry = np.concatenate([np.full(k, e) for e, k in runs])
+    n = len(entry)
+    pick = ((cdf - prob)[entry] + prob[entry] * rng.uniform(0.1, 0.9, n))    # inside each entry's slot
+    P, P_off, ns, ng, th, keys = _points(rng, n, flat=False, thr=True)
+    with np.errstate(invalid='ignore', over='ignore'):
+        got = shading.next_event(lc, P, P_off, ns, ng, th, keys, 5, 6, pick=pick, shorten=SHORTEN)
+        ref = _composed(lc, P, P_off, ns, ng, th, keys, 5, 6, pick, None, True)
+    for name, a, b in zip(('value', 'contrib', 'rays', 'send'), got[:4], ref[:4]):
+        assert a.dtype == b.dtype and a.shape == b.shape, name
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), f'{name} differs'
+    assert got[5] == ref[5]
+    for e in range(E):
+        assert got[1][entry == e].any(), f'entry {e} never adds'
