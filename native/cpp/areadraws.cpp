@@ -90,6 +90,14 @@ void draw_area_lanes(const LampRecord& lamp, bool no_mis, const float* p_sel, co
 }  // namespace
 
 void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, uint32_t* entry, float* p_sel) {
+    if (!L.tree) {  // pick_entry without a tree, in this loop: no call per point
+        for (size_t j = 0; j < cnt; ++j) {
+            const size_t e = p.pick ? cdf_entry(L, p.pick[i0 + j]) : 0;
+            entry[j] = uint32_t(e);
+            p_sel[j] = L.prob[e];
+        }
+        return;
+    }
     for (size_t j = 0; j < cnt; j += LightTree::kGroup)
         pick_entry_group(L, p, i0 + j, std::min(LightTree::kGroup, cnt - j), entry + j, p_sel + j);
 }

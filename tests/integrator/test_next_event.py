@@ -546,11 +546,12 @@ def test_plain_points_loop_gives_the_general_loops_bits(kind, flat, thr, skip_wo
 
 def test_area_lamps_picked_in_runs_are_drawn_as_the_composed_kernels():
     """A chunk's points are drawn in lanes per area lamp, at most four lamps a chunk (the rest one
-    at a time), the lamp looked up once per run of points that picked the same entry: runs of
-    1..700 points over six area lamps (five drawn in lanes, one with spread), a point lamp and
-    an emissive triangle, runs crossing the 512-point chunks, the fifth area lamp first met in a
-    chunk that already drew four, a lamp coming back after another. Every output bit equals the
-    composed kernels'."""
+    at a time), the lamp looked up once per run of points that picked the same entry, the picks
+    read by the table in the chunk's own loop (no tree; NaN, infinite and edge picks among them):
+    runs of 1..700 points over six area lamps (five drawn in lanes, one with spread), a point
+    lamp and an emissive triangle, runs crossing the 512-point chunks, the fifth area lamp first
+    met in a chunk that already drew four, a lamp coming back after another. Every output bit
+    equals the composed kernels'."""
     rng = np.random.default_rng(41)
     names = ['area_square', 'area_rectangle', 'area_disk', 'area_ellipse', 'area_rectangle_unnormalized',
              'area_square_spread', 'point_sphere']
@@ -571,6 +572,7 @@ def test_area_lamps_picked_in_runs_are_drawn_as_the_composed_kernels():
     entry = np.concatenate([np.full(k, e) for e, k in runs])
     n = len(entry)
     pick = ((cdf - prob)[entry] + prob[entry] * rng.uniform(0.1, 0.9, n))    # inside each entry's slot
+    pick[[5, 600, 1300, 2000, 2001]] = np.nan, np.inf, 1.0, 0.0, -np.inf     # the table's edges
     P, P_off, ns, ng, th, keys = _points(rng, n, flat=False, thr=True)
     with np.errstate(invalid='ignore', over='ignore'):
         got = shading.next_event(lc, P, P_off, ns, ng, th, keys, 5, 6, pick=pick, shorten=SHORTEN)
