@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <numeric>
 #include <stdexcept>
 
@@ -114,30 +115,35 @@ double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
     return nd.energy * f / std::max(dd, kMinDist2);
 }
 
+// The halves of stop q's lanes that bad names (bit 0: lanes 0-3, bit 1: lanes 4-7: a distance
+// out of float's range) weighed in float64 into imp.
+void exact_halves(const LightTreeNode* nodes, const LightTree::Stop& q, int bad, const float P[3], const float* N,
+                  double imp[8]) {
+    for (int o = 0; o < 8; o += 4)
+        if (bad & (1 << (o / 4)))
+            for (int k = o; k < o + 4; ++k) imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], P, N);
+}
+
 // The eight lanes of stop q weighed at the point: side by side in float (treelanes.h), the four
 // of them a distance out of float's range takes in float64.
 void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const TreePoint& at, double imp[8]) {
     static const StopWeighFn weigh_lanes = stop_weigh_fn();
-    const int bad = weigh_lanes(q, at, imp);
-    for (int o = 0; o < 8; o += 4)
-        if (bad & (1 << (o / 4)))
-            for (int k = o; k < o + 4; ++k) imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], at.P, at.N);
+    exact_halves(nodes, q, weigh_lanes(q, at, imp), at.P, at.N, imp);
 }
 
 // The probabilities at P of a walk at stop q going on to each of its targets (see
-// LightTree::Stop): by importance, a leaf target's own weigh() or an inner one's children's
-// summed (whose tighter bounds see more than their parent's: a group of spots all aimed away
-// from P, or lights all behind its surface, is 0 even where their merged cone and sphere are
-// not); by energy where all importances are 0 (or their sum is not finite). With light linking
-// (lane_sets: the stop's lanes' light sets then its targets', null: none) what holds none of
-// the point's sets counts nothing, and such a target is never taken (unless no target holds
-// them: then the point is lit by no light below, and any way gives it nothing). Each
-// probability is its own quotient, not 1 - the others: a faint light's 1e-19 would round to 0
-// that way, and a delta light must never become impossible. At least one target gets > 0.
-void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const TreePoint& at,
-                  uint64_t receivers, double p[4]) {
-    double imp[8];
-    lane_weighs(nodes, q, at, imp);
+// LightTree::Stop), from its eight lanes' importances imp: by importance, a leaf target's own
+// weigh() or an inner one's children's summed (whose tighter bounds see more than their
+// parent's: a group of spots all aimed away from P, or lights all behind its surface, is 0 even
+// where their merged cone and sphere are not); by energy where all importances are 0 (or their
+// sum is not finite). With light linking (lane_sets: the stop's lanes' light sets then its
+// targets', null: none) what holds none of the point's sets counts nothing, and such a target is
+// never taken (unless no target holds them: then the point is lit by no light below, and any way
+// gives it nothing). Each probability is its own quotient, not 1 - the others: a faint light's
+// 1e-19 would round to 0 that way, and a delta light must never become impossible. At least one
+// target gets > 0.
+inline __attribute__((always_inline)) void probs_of(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, uint64_t receivers,
+              double imp[8], double p[4]) {
     if (lane_sets)
         for (int k = 0; k < 8; ++k) imp[k] = (lane_sets[k] & receivers) ? imp[k] : 0.0;
     bool eligible[4], any = false;
@@ -161,6 +167,14 @@ void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const ui
     for (int j = 0; j < 4; ++j) e += eligible[j] ? nodes[q.target[j]].energy : 0.0;
     const double inv = 1.0 / e;
     for (int j = 0; j < 4; ++j) p[j] = eligible[j] ? nodes[q.target[j]].energy * inv : 0.0;
+}
+
+// probs_of at P, its lanes weighed there.
+void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const TreePoint& at,
+                  uint64_t receivers, double p[4]) {
+    double imp[8];
+    lane_weighs(nodes, q, at, imp);
+    probs_of(nodes, q, lane_sets, receivers, imp, p);
 }
 
 // Conty and Kulla's orientation measure of a cone: the solid angle of its axis spread plus the
@@ -505,6 +519,10 @@ inline void LightTree::probs_at(size_t at, const TreePoint& point, uint64_t rece
 // masks, then read by index: GCC compiles a select between two doubles to a branch (the
 // earlier selects of run and pick_lo did), but picks between ints to cmov.
 inline size_t LightTree::step(size_t at, const double p[4], double u, double& lo, double& w) const {
+    return size_t(stops_[size_t(stop_of_[at])].target[pick_of(p, u, lo, w)]);
+}
+
+inline int LightTree::pick_of(const double p[4], double u, double& lo, double& w) {
     double run[5];  // run[j]: where target j's share starts (+ 0 where impossible: unchanged)
     run[0] = lo;
     for (int j = 0; j < 4; ++j) run[j + 1] = run[j] + w * p[j];
@@ -518,7 +536,7 @@ inline size_t LightTree::step(size_t at, const double p[4], double u, double& lo
     const int pick = first < 4 ? first : last;
     lo = run[pick];
     w *= p[pick];
-    return size_t(stops_[size_t(stop_of_[at])].target[pick]);
+    return pick;
 }
 
 // The walk's end at leaf `at`: a member of its group by energy, with what is left of u.
@@ -581,6 +599,178 @@ void LightTree::sample_group(size_t count, const float* const P[], const float* 
             }
     }
     for (size_t s = 0; s < count; ++s) key[s] = leaf_pick(at[s], u[s], lo[s], w[s], prob[s]);
+}
+
+// sample_rows' points, kRows at a time: each one's coordinates, normal, |normal| and max |P_k|
+// (TreePoint's fields), its walk's u, lo and w, and the order the walks are grouped in by stop
+// (ids); the rows a stop's points are copied into for its lanes (padded to 16), their weighs.
+struct LightTree::Rows {
+    static constexpr size_t kRows = 512, kPad = 16;
+    bool normal;
+    const uint64_t* receivers;  // (per point, null: every set)
+    size_t base;                // the first point's index in sample_rows' arrays
+    float pt[kRows][10];
+    double u[kRows], lo[kRows], w[kRows];
+    int32_t ids[kRows], tmp[kRows];
+    uint8_t pick[kRows];
+    double t[4][kRows];  // each target's summed importance
+    float rows[10][kRows + kPad];
+    float g[8][kRows + kPad];
+    int32_t ok[8][kRows + kPad];
+};
+
+// Point i's eight importances at stop q from its row weighs (an empty lane 0.0), and which of
+// its fours have a distance out of float's range (bit 0: lanes 0-3, bit 1: 4-7; an empty lane
+// repeats lane 0's bounds, so lane 0 decides for it: empty_hi, an empty lane among 4-7).
+inline int lane_imps(const LightTree::Stop& q, const LightTree::Rows& r, size_t i, bool empty_hi, double imp[8]) {
+    int bad = empty_hi && !r.ok[0][i] ? 2 : 0;
+    for (int k = 0; k < 8; ++k) {
+        const bool lane = q.node[k] >= 0;
+        imp[k] = lane ? q.energy[k] * double(r.g[k][i]) : 0.0;
+        if (lane && !r.ok[k][i]) bad |= k < 4 ? 1 : 2;
+    }
+    return bad;
+}
+
+// The walks of r.ids[b, e), all at stop node `at`: their lanes weighed row by row, each walk's
+// step (probs_of, step: sample()'s), then on by target, stop by stop, to their leaves.
+void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const {
+    static const LaneRowsFn weigh_rows = lane_rows_fn();
+    const size_t qi = size_t(stop_of_[at]), m = e - b;
+    const Stop& q = stops_[qi];
+    for (size_t i = 0; i < m; ++i) {
+        const float* t = r.pt[r.ids[b + i]];
+        for (int f = 0; f < 10; ++f) r.rows[f][i] = t[f];
+    }
+    const TreeRows rows{{r.rows[0], r.rows[1], r.rows[2]},
+                        {r.normal ? r.rows[3] : nullptr, r.rows[4], r.rows[5]},
+                        {r.rows[6], r.rows[7], r.rows[8]},
+                        r.rows[9]};
+    // An empty lane (no node) weighs 0 and repeats lane 0's bounds (build_stops), so its
+    // distances are in float's range where lane 0's are: only that decides for its four.
+    bool empty_hi = false;
+    for (int k = 0; k < 8; ++k) {
+        if (q.node[k] >= 0)
+            weigh_rows(q, k, rows, m, r.g[k], r.ok[k]);
+        else
+            empty_hi |= k >= 4;
+    }
+    const uint64_t* sets = stop_sets_.empty() ? nullptr : stop_sets_.data() + 12 * qi;
+    size_t count[4] = {};
+    if (sets && r.receivers) {  // light linking: a walk at a time, its lanes masked by its sets
+        for (size_t i = 0; i < m; ++i) {
+            const int32_t id = r.ids[b + i];
+            double imp[8];
+            const float* P = r.pt[id];
+            const int bad = lane_imps(q, r, i, empty_hi, imp);
+            if (bad) exact_halves(nodes_.data(), q, bad, P, r.normal ? P + 3 : nullptr, imp);
+            const uint64_t rec = r.receivers[r.base + size_t(id)];
+            double p[4];
+            probs_of(nodes_.data(), q, rec == kAllSets ? nullptr : sets, rec, imp, p);
+            const int j = pick_of(p, r.u[id], r.lo[id], r.w[id]);
+            r.pick[i] = uint8_t(j);
+            ++count[j];
+        }
+    } else {
+        // probs_of's steps pass by pass over the points (each target's summed importance, the
+        // four walks of a stop whose distances left float's range redone, then the shares and
+        // the pick), so that the walks overlap: the same operations per walk
+        for (int j = 0; j < 4; ++j) {
+            double* t = r.t[j];
+            const int a = 2 * j, c = 2 * j + 1;
+            if (q.target[j] < 0) {
+                std::fill(t, t + m, 0.0);
+                continue;
+            }
+            const double ea = q.energy[a];
+            for (size_t i = 0; i < m; ++i) t[i] = ea * double(r.g[a][i]);
+            if (q.node[c] < 0) continue;  // (+ an empty lane's 0.0: t >= +0 or NaN, the same)
+            const double ec = q.energy[c];
+            for (size_t i = 0; i < m; ++i) t[i] += ec * double(r.g[c][i]);
+        }
+        for (size_t i = 0; i < m; ++i) {
+            int bad = empty_hi && !r.ok[0][i] ? 2 : 0;
+            for (int k = 0; k < 8; ++k) bad |= q.node[k] >= 0 && !r.ok[k][i] ? (k < 4 ? 1 : 2) : 0;
+            if (!bad) continue;
+            double imp[8];
+            lane_imps(q, r, i, empty_hi, imp);
+            const float* P = r.pt[r.ids[b + i]];
+            exact_halves(nodes_.data(), q, bad, P, r.normal ? P + 3 : nullptr, imp);
+            for (int j = 0; j < 4; ++j) r.t[j][i] = q.target[j] >= 0 ? imp[2 * j] + imp[2 * j + 1] : 0.0;
+        }
+        double pe[4];  // where all importances are 0 (or their sum is not finite): by energy
+        {
+            double e = 0.0;
+            for (int j = 0; j < 4; ++j) e += q.target[j] >= 0 ? nodes_[size_t(q.target[j])].energy : 0.0;
+            const double inv = 1.0 / e;
+            for (int j = 0; j < 4; ++j) pe[j] = q.target[j] >= 0 ? nodes_[size_t(q.target[j])].energy * inv : 0.0;
+        }
+        for (size_t i = 0; i < m; ++i) {
+            const int32_t id = r.ids[b + i];
+            const double t0 = r.t[0][i], t1 = r.t[1][i], t2 = r.t[2][i], t3 = r.t[3][i];
+            double s = 0.0;
+            s += t0;
+            s += t1;
+            s += t2;
+            s += t3;
+            double p[4];
+            if (s > 0.0 && std::isfinite(s)) {
+                const double inv = 1.0 / s;
+                p[0] = t0 * inv, p[1] = t1 * inv, p[2] = t2 * inv, p[3] = t3 * inv;
+            } else {
+                p[0] = pe[0], p[1] = pe[1], p[2] = pe[2], p[3] = pe[3];
+            }
+            const int j = pick_of(p, r.u[id], r.lo[id], r.w[id]);
+            r.pick[i] = uint8_t(j);
+            ++count[j];
+        }
+    }
+    size_t start[5] = {0};
+    for (int j = 0; j < 4; ++j) start[j + 1] = start[j] + count[j];
+    size_t fill[4] = {start[0], start[1], start[2], start[3]};
+    for (size_t i = 0; i < m; ++i) r.tmp[fill[r.pick[i]]++] = r.ids[b + i];
+    std::copy(r.tmp, r.tmp + m, r.ids + b);
+    for (int j = 0; j < 4; ++j) {
+        if (!count[j]) continue;
+        const size_t t = size_t(q.target[j]), jb = b + start[j], je = b + start[j + 1];
+        if (nodes_[t].child >= 0) {
+            walk_rows(r, t, jb, je, key, prob);
+            continue;
+        }
+        for (size_t i = jb; i < je; ++i) {
+            const size_t id = size_t(r.ids[i]), o = r.base + id;
+            key[o] = leaf_pick(t, r.u[id], r.lo[id], r.w[id], prob[o]);
+        }
+    }
+}
+
+void LightTree::sample_rows(size_t count, const float* P, const float* N, size_t stride, const double u[],
+                            const uint64_t* receivers, int32_t key[], double prob[]) const {
+    std::unique_ptr<Rows> r(new Rows);
+    r->normal = N != nullptr;
+    r->receivers = receivers;
+    for (size_t b = 0; b < count; b += Rows::kRows) {
+        const size_t m = std::min(Rows::kRows, count - b);
+        r->base = b;
+        for (size_t i = 0; i < m; ++i) {
+            const float Q[3] = {P[b + i], P[stride + b + i], P[2 * stride + b + i]};
+            TreePoint t;
+            tree_point(t, Q, nullptr);
+            float* o = r->pt[i];
+            for (int a = 0; a < 3; ++a) o[a] = t.P[a], o[3 + a] = 0.0f, o[6 + a] = 0.0f;
+            if (N)
+                for (int a = 0; a < 3; ++a) o[3 + a] = N[a * stride + b + i], o[6 + a] = std::fabs(o[3 + a]);
+            o[9] = t.pm;
+            r->u[i] = u[b + i] >= 0.0 ? u[b + i] : 0.0;  // (NaN too)
+            r->lo[i] = 0.0, r->w[i] = 1.0;
+            r->ids[i] = int32_t(i);
+        }
+        if (nodes_[0].child >= 0) {
+            walk_rows(*r, 0, 0, m, key, prob);
+            continue;
+        }
+        for (size_t i = 0; i < m; ++i) key[b + i] = leaf_pick(0, r->u[i], r->lo[i], r->w[i], prob[b + i]);
+    }
 }
 
 void LightTree::stop_weighs(const float P[3], const float* N, double* lanes, double* exact) const {

@@ -101,6 +101,13 @@ public:
     static constexpr size_t kGroup = 4;
     void sample_group(size_t count, const float* const P[], const float* const N[], const double u[],
                       const uint64_t receivers[], int32_t key[], double prob[]) const;
+    // sample() at count points i (P[a * stride + i], N likewise or null: none, u[i], receivers[i]
+    // or null: every set; into key[i], prob[i]), the same bits, walked stop by stop: each stop
+    // weighs the points that reach it side by side (treelanes.h LaneRowsFn), one of its lanes at
+    // a time and only the lanes that hold a node, rather than each point's eight lanes at once.
+    void sample_rows(size_t count, const float* P, const float* N, size_t stride, const double u[],
+                     const uint64_t* receivers, int32_t key[], double prob[]) const;
+    struct Rows;  // (lighttree.cpp) sample_rows' points and scratch
     // The probability that sample() at P, N (and receivers) picks key (0 when key is not a member).
     double pdf(const float P[3], const float* N, int64_t key, uint64_t receivers = kAllSets) const;
     // For tests: every stop's eight lanes (stops() x 8, stop by stop) weighed at P (and N) as a
@@ -127,8 +134,10 @@ public:
 
 private:
     void build_stops();
+    void walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const;
     void probs_at(size_t at, const TreePoint& point, uint64_t receivers, double p[4]) const;
     size_t step(size_t at, const double p[4], double u, double& lo, double& w) const;
+    static int pick_of(const double p[4], double u, double& lo, double& w);  // step's target index
     int32_t leaf_pick(size_t at, double u, double lo, double w, double& prob) const;
 
     std::vector<LightTreeNode> nodes_;

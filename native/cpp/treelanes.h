@@ -32,4 +32,19 @@ using StopWeighFn = int (*)(const LightTree::Stop& q, const TreePoint& at, doubl
 // The widest kernel the CPU runs, or a narrower one DACRT_ISA names (portable, avx2).
 StopWeighFn stop_weigh_fn();
 
+// Points side by side, a row per coordinate (TreePoint's fields; N[0] null: no normals), each
+// row readable for a whole number of 16 past the points it holds.
+struct TreeRows {
+    const float* P[3];
+    const float* N[3];
+    const float* abs_n[3];
+    const float* pm;
+};
+// Lane k of stop q weighed at the rows' points [0, m), as StopWeighFn weighs it at each (the
+// same bits): g[i] the weigh before the lane's energy, ok[i] (-1 or 0) whether the lane's
+// distances lie in float's range at point i (else its four go to float64). g and ok are
+// written for a whole number of 16 past m.
+using LaneRowsFn = void (*)(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, int32_t* ok);
+LaneRowsFn lane_rows_fn();
+
 }  // namespace dacrt

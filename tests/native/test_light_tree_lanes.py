@@ -60,8 +60,9 @@ def walks():
         for normals in (N, None):
             key, prob = tree.sample(P, u, normals)
             gkey, gprob = tree.sample(P, u, normals, grouped=True)
+            rkey, rprob = tree.sample(P, u, normals, rows=True)
             out += [key.astype(np.float64), prob, tree.pdf(P, rng.integers(0, m, n), normals),
-                    gkey.astype(np.float64), gprob]
+                    gkey.astype(np.float64), gprob, rkey.astype(np.float64), rprob]
     return np.concatenate(out)
 
 
@@ -73,33 +74,56 @@ def test_every_instruction_set_gives_the_same_bits():
         assert v.tobytes() == first.tobytes(), isa
 
 
-@pytest.mark.parametrize("linked", [False, True])
-def test_walks_side_by_side_pick_as_one_walk(linked):
-    """Light sampling walks up to four points' trees side by side, their stops' lanes weighed in
-    one interleaved pass (LightTree::sample_group): each point gets bit for bit the key and
-    probability of its own walk (sample), in trees of 1 to 3000 lights whose walks end at
-    different depths, at scales whose distances leave float's range (a four redone in float64
-    for some walks of a group and not others), with and without normals, with NaN and negative
-    uniforms, a last group of 1-3 points and, with light linking, receiver masks."""
-    rng = np.random.default_rng(29)
-    for m, scale in ((1, 1.0), (14, 1.0), (300, 1.0), (3000, 1.0), (200, 1e17), (200, 1e-17), (60, 1e15)):
+def _walk_cases(rng, linked):
+    """(tree, P, u, N, receivers) of trees of 1 to 3000 lights whose walks end at different
+    depths, at scales whose distances leave float's range (a four redone in float64 at some
+    points and not others, also a four with an empty lane that repeats lane 0's bounds), with
+    and without normals, with NaN and negative uniforms, point counts that leave last groups
+    of 1-3 (and rows past 512 points) and, with light linking, receiver masks."""
+    for m, scale in ((1, 1.0), (2, 1.0), (3, 1.0), (14, 1.0), (300, 1.0), (3000, 1.0), (200, 1e17), (200, 1e-17),
+                     (60, 1e15), (5, 1e15)):
         lo, hi, axis, cos_o, cos_e, energy = lights(rng, m, scale=scale)
         sets = rng.integers(0, 4, m).astype(np.uint8) if linked else None
         tree = lamps.light_tree(lo, hi, axis, cos_o, cos_e, energy, np.arange(m), set=sets)
-        for n in (4001, 4002, 4003, 4004):
+        for n in (4001, 4002, 4003, 4004, 1, 513):
             P = (rng.uniform(-7, 7, (3, n)) * scale).astype(F32)
-            if scale == 1e15:      # some points of a group near (in range), some far (redone)
+            if scale == 1e15:      # some points near (in range), some far (redone)
                 P[:, rng.random(n) < 0.5] *= F32(1e-15)
             u = rng.random(n)
             u[rng.integers(0, n, 20)] = np.nan
             u[rng.integers(0, n, 20)] = -0.5
-            recv = {'receivers': rng.integers(1, 16, n).astype(np.uint64)} if linked else {}
+            recv = rng.integers(1, 16, n).astype(np.uint64) if linked else None
             for N in (unit(rng, n), None):
-                key, prob = tree.sample(P, u, N, **recv)
-                gkey, gprob = tree.sample(P, u, N, grouped=True, **recv)
-                assert np.array_equal(gkey, key)
-                assert gprob.view(np.uint64).tolist() == prob.view(np.uint64).tolist()
-                assert m == 1 or len(np.unique(key)) > 1
+                yield m, tree, P, u, N, recv
+
+
+@pytest.mark.parametrize("linked", [False, True])
+def test_walks_side_by_side_pick_as_one_walk(linked):
+    """Light sampling walks up to four points' trees side by side, their stops' lanes weighed in
+    one interleaved pass (LightTree::sample_group): each point gets bit for bit the key and
+    probability of its own walk (sample), in every case of _walk_cases."""
+    for m, tree, P, u, N, recv in _walk_cases(np.random.default_rng(29), linked):
+        key, prob = tree.sample(P, u, N, receivers=recv)
+        gkey, gprob = tree.sample(P, u, N, grouped=True, receivers=recv)
+        assert np.array_equal(gkey, key)
+        assert gprob.view(np.uint64).tolist() == prob.view(np.uint64).tolist()
+        assert m == 1 or len(key) < 10 or len(np.unique(key)) > 1
+
+
+@pytest.mark.parametrize("linked", [False, True])
+def test_walks_stop_by_stop_pick_as_one_walk(linked):
+    """Light sampling walks a chunk's points stop by stop, the points at a stop weighed side by
+    side one lane at a time, the empty lanes skipped (LightTree::sample_rows): each point gets
+    bit for bit the key and probability of its own walk (sample), in every case of
+    _walk_cases."""
+    far = 0
+    for m, tree, P, u, N, recv in _walk_cases(np.random.default_rng(31), linked):
+        key, prob = tree.sample(P, u, N, receivers=recv)
+        rkey, rprob = tree.sample(P, u, N, rows=True, receivers=recv)
+        assert np.array_equal(rkey, key)
+        assert rprob.view(np.uint64).tolist() == prob.view(np.uint64).tolist()
+        far += m > 1 and np.abs(P).max() > 1e15
+    assert far > 0
 
 
 @pytest.mark.parametrize("with_normal", [True, False])
