@@ -98,8 +98,44 @@ void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t
         }
         return;
     }
-    for (size_t j = 0; j < cnt; j += LightTree::kGroup)
-        pick_entry_group(L, p, i0 + j, std::min(LightTree::kGroup, cnt - j), entry + j, p_sel + j);
+    if (!p.pick) {
+        for (size_t j = 0; j < cnt; ++j) entry[j] = uint32_t(pick_entry(L, p, i0 + j, p_sel[j]));
+        return;
+    }
+    // the points whose pick lands on the tree walk it stop by stop (LightTree::sample_rows), the
+    // others take their entry (pick_entry_group's steps, the same bits)
+    constexpr size_t C = kWordChunk;
+    const size_t n = p.n;
+    for (size_t j0 = 0; j0 < cnt; j0 += C) {
+        const size_t c = std::min(C, cnt - j0);
+        float Q[3][C], N[3][C];
+        double u[C];
+        uint64_t receivers[C];
+        uint16_t walk[C];
+        size_t m = 0;
+        const bool linked = L.light_set && p.receivers;
+        for (size_t s = 0; s < c; ++s) {
+            const size_t k = i0 + j0 + s;
+            const size_t e = cdf_entry(L, p.pick[k]);  // (choose_light's)
+            if (!L.tree->member(int64_t(e))) {
+                entry[j0 + s] = uint32_t(e);
+                p_sel[j0 + s] = L.prob[e];
+                continue;
+            }
+            for (size_t a = 0; a < 3; ++a) Q[a][m] = p.P_off[a * n + k], N[a][m] = p.ns[a * n + k];
+            const double lo = e ? L.cdf[e - 1] : 0.0, mass = L.cdf[e] - lo;
+            u[m] = mass > 0 ? (p.pick[k] - lo) / mass : 0.0;
+            receivers[m] = linked ? p.receivers[k] : LightTree::kAllSets;
+            walk[m++] = uint16_t(s);
+        }
+        int32_t key[C];
+        double pt[C];
+        L.tree->sample_rows(m, Q[0], N[0], C, u, linked ? receivers : nullptr, key, pt);
+        for (size_t w = 0; w < m; ++w) {
+            entry[j0 + walk[w]] = uint32_t(key[w]);
+            p_sel[j0 + walk[w]] = float(double(L.prob[size_t(key[w])]) * pt[w]);
+        }
+    }
 }
 
 void draw_chunk(const LightChoice& L, const VertexPoints& p, size_t i0, size_t cnt, const uint32_t* entry,
