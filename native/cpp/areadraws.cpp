@@ -103,7 +103,7 @@ void pick_entries(const LightChoice& L, const VertexPoints& p, size_t i0, size_t
         return;
     }
     // the points whose pick lands on the tree walk it stop by stop (LightTree::sample_rows), the
-    // others take their entry (pick_entry_group's steps, the same bits)
+    // others take their entry (pick_entry's, the same bits)
     constexpr size_t C = kWordChunk;
     const size_t n = p.n;
     for (size_t j0 = 0; j0 < cnt; j0 += C) {

@@ -138,48 +138,6 @@ inline size_t pick_entry(const LightChoice& L, const VertexPoints& p, size_t i, 
     return choose_light(L, Q, N, p.pick[i], p_sel, L.light_set && p.receivers ? p.receivers[i] : LightTree::kAllSets);
 }
 
-// pick_entry at points i .. i + count - 1 (count <= LightTree::kGroup): those whose pick lands
-// on the light tree walk it side by side (LightTree::sample_group: a many-light render's light
-// choice waits on each walk's chain of stops), the others pick as pick_entry; the same bits.
-inline void pick_entry_group(const LightChoice& L, const VertexPoints& p, size_t i, size_t count, uint32_t entry[],
-                             float p_sel[]) {
-    if (!p.pick || !L.tree) {
-        for (size_t s = 0; s < count; ++s) entry[s] = uint32_t(pick_entry(L, p, i + s, p_sel[s]));
-        return;
-    }
-    constexpr size_t G = LightTree::kGroup;
-    const size_t n = p.n;
-    float Q[G][3], N[G][3];
-    const float* Ps[G];
-    const float* Ns[G];
-    double u[G];
-    uint64_t receivers[G];
-    size_t walk[G], m = 0;  // the points that go on to the tree
-    for (size_t s = 0; s < count; ++s) {
-        const size_t k = i + s;
-        float* q = Q[m];
-        float* nn = N[m];
-        for (size_t a = 0; a < 3; ++a) q[a] = p.P_off[a * n + k], nn[a] = p.ns[a * n + k];
-        const uint64_t r = L.light_set && p.receivers ? p.receivers[k] : LightTree::kAllSets;
-        const size_t e = cdf_entry(L, p.pick[k]);  // (choose_light's)
-        if (!L.tree->member(int64_t(e))) {
-            entry[s] = uint32_t(e);
-            p_sel[s] = L.prob[e];
-            continue;
-        }
-        const double lo = e ? L.cdf[e - 1] : 0.0, mass = L.cdf[e] - lo;
-        u[m] = mass > 0 ? (p.pick[k] - lo) / mass : 0.0;
-        Ps[m] = q, Ns[m] = nn, receivers[m] = r, walk[m++] = s;
-    }
-    int32_t key[G];
-    double pt[G];
-    L.tree->sample_group(m, Ps, Ns, u, receivers, key, pt);
-    for (size_t w = 0; w < m; ++w) {
-        entry[walk[w]] = uint32_t(key[w]);
-        p_sel[walk[w]] = float(double(L.prob[size_t(key[w])]) * pt[w]);
-    }
-}
-
 // value (3 rows of n): the sample's contribution, thr x radiance / pdf x cos/pi x MIS / p_sel;
 // contrib[i] = 1 where it adds to the image unless its shadow ray is occluded. The shadow rays
 // (ids 0..m-1, in path order) go to rays[0..m), their path columns to send and, with prim, the
