@@ -290,10 +290,11 @@ class Exporter:
         self._bumped_strands()
         by_ray = []
         world, environment, world_reason = export_world(self.scene, self.layer_eval, camera=False, by_ray=by_ray,
-                                                          reading=self.image_reading)
+                                                          reading=self.image_reading, view=camera)
         camera_world = None
         if by_ray:      # a Light Path's Is Camera Ray picks what the camera sees of the world
-            cw, cenv, creason = export_world(self.scene, self.layer_eval, camera=True, reading=self.image_reading)
+            cw, cenv, creason = export_world(self.scene, self.layer_eval, camera=True, reading=self.image_reading,
+                                             view=camera)
             world_reason = '; '.join(dict.fromkeys(r for r in (world_reason, creason) if r))
             cw = np.where(np.isfinite(cw), cw, 0.0).astype(np.float32)
             if not (cw >= 0).all():

@@ -10,6 +10,8 @@ import bpy
 import numpy as np
 
 from .. import nodeeval, nodegraph
+from .. import procedural as pr
+from ..camera import CameraModel
 from .. import scenedata as sd
 from ..lights import envkeep
 from ..lights.base import fits_float32
@@ -36,14 +38,16 @@ def effective_world(scene, view_layer):
     return override if override is not None else scene.world
 
 
-def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE):
+def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE, view=None):
     """(uniform background radiance (3,), scenedata.Environment or None, reason string if the
     world had to be approximated) of the world the view layer renders with (effective_world).
     An Environment Texture feeding the Background's Color is exported as an image (its Mapping
     node's rotation included); other inputs use their own value. camera True / False: the world
     as camera rays / all other rays see it, a Mix Shader whose factor is a Light Path's Is
     Camera Ray giving 1 / 0 (each such mix appends to the list by_ray); None: its own value.
-    reading: the export's images.ImageReading (its cancel check and Texture Limit)."""
+    reading: the export's images.ImageReading (its cancel check and Texture Limit). view: the
+    render's scenedata.Camera, whose frame a baked world's Texture Coordinate Camera and Window
+    read (None: such a world is not baked, and said)."""
     world = effective_world(scene, view_layer)
     none = np.zeros(3, np.float32)
     if world is None:
@@ -65,8 +69,11 @@ def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE
     volume = out.inputs.get('Volume')
     if volume is not None and linked_link(volume) is not None:
         reasons.append("world volume ignored")      # a world's fog or haze: no volumes here
+    by_ray = by_ray if by_ray is not None else []
     uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, camera,
-                                  by_ray if by_ray is not None else [], scene.frame_current, reading)
+                                  by_ray, scene.frame_current, reading, view)
+    if camera is False and by_ray:      # (camera rays see the other export's world)
+        reasons = [r for r in reasons if r != ORTHO_WINDOW_SAID]
     return uniform.astype(np.float32), env, '; '.join(dict.fromkeys(reasons))
 
 
@@ -76,7 +83,8 @@ def _is_camera_ray(socket):
     return link is not None and link.from_node.type == 'LIGHT_PATH' and link.from_socket.name == 'Is Camera Ray'
 
 
-def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=(), frame=None, reading=WHOLE):
+def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=(), frame=None, reading=WHOLE,
+                   view=None):
     """(uniform radiance, Environment or None) of what feeds a world shader socket at
     `weight`: Background and Emission (the same for the world in Cycles), Add Shader and Mix
     Shader (constant factor) of them, a colour or value (an emission of it, as Cycles converts
@@ -90,7 +98,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
         if _environments_feeding(socket):
             # a map's colour straight into the world's surface: Cycles' emission of it, which
             # for the world is a Background of that colour, strength 1
-            return _color_light(socket, np.float32(weight), "world surface", reasons, frame, reading)
+            return _color_light(socket, np.float32(weight), "world surface", reasons, frame, reading, view)
         return value_emission(link, reasons).astype(np.float32) * np.float32(weight), None
     node = link.from_node
     t = node.type
@@ -108,20 +116,20 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
             by_ray.append(node.name)
         else:
             if t == 'MIX_SHADER' and not constant_value(node.inputs['Fac'])[1]:
-                found = _procedural_mix(node, weight, reasons)
+                found = _procedural_mix(node, weight, reasons, view)
                 if found is not None:
                     return found
             fac = mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
         (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1, camera, by_ray,
-                                             frame, reading)
+                                             frame, reading, view)
                               for i, w in enumerate(weights))
         if ea is not None and eb is not None:
             reasons.append("two environment textures in the world; the second ignored")
         return ua + ub, ea if ea is not None else eb
     s, s_ok = constant_value(node.inputs['Strength'])
-    found = None if s_ok else _procedural_strength(node, weight, reasons)
+    found = None if s_ok else _procedural_strength(node, weight, reasons, view)
     if not s_ok and found is None:
         reasons.append(f"world {node.bl_label} Strength driven by nodes; its own value used")
     if found is None and s * weight == 0.0:
@@ -129,7 +137,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
         # dimmed to 0 had warned that its Noise colour was read at its own value)
         return none, None
     u, env = found or _color_light(node.inputs['Color'], np.float32(s * weight), f"world {node.bl_label} Color",
-                                   reasons, frame, reading)
+                                   reasons, frame, reading, view)
     big = u if env is None else np.append(u, env.strength)
     if np.isfinite(big).all() and not fits_float32(big):
         # finite but beyond what the renderer carries (an 'inf' typed into the Strength or
@@ -140,7 +148,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
     return u, env
 
 
-def _color_light(socket, strength, what, reasons, frame, reading=WHOLE):
+def _color_light(socket, strength, what, reasons, frame, reading=WHOLE, view=None):
     """(uniform radiance, Environment or None) of a world colour socket at `strength`: an
     Environment Texture's map or a Sky Texture's, with the colour nodes between them applied
     to its texels (a tint, a Hue/Saturation, a ramp), or a constant colour."""
@@ -170,7 +178,7 @@ def _color_light(socket, strength, what, reasons, frame, reading=WHOLE):
             if found is not None:
                 return found
         if not envs and not skies:
-            found = _procedural_world(socket, strength, what, reasons)
+            found = _procedural_world(socket, strength, what, reasons, view)
             if found is not None:
                 return found
         source = linked_node(socket)
@@ -186,27 +194,40 @@ def _color_light(socket, strength, what, reasons, frame, reading=WHOLE):
 
 
 # what a world's texture coordinates read in Cycles' background shader: the view direction
-# (Generated, Object, and the Geometry Position, P = D there), and its opposite (Normal: N = -D,
-# shader_setup_from_background, with no object to transform it)
-_WORLD_COORDINATES = frozenset({'generated', 'object', 'position', 'object_normal'})
+# (Generated, Object, and the Geometry Position, P = D there), and its opposite (Normal, the
+# Geometry Normal and True Normal, Incoming: N = Ng = wi = -D, shader_setup_from_background,
+# with no object to transform them; Reflection, svm_texco_reflection, is wi there); Camera,
+# D in the camera's frame (svm_texco_camera: worldtocamera of D + the camera's position), and
+# Window, D's place on the view (camera_world_to_ndc), both given the render's camera
+_AGAINST_VIEW = ('object_normal', 'normal', 'true_normal', 'incoming')
+_OF_CAMERA = frozenset({pr.CAMERA_COORDINATES, pr.WINDOW_COORDINATES})
+_WORLD_COORDINATES = frozenset({'generated', 'object', 'position', *_AGAINST_VIEW}) | _OF_CAMERA
+# said where an orthographic camera sees a world read on Window: Cycles' camera rays read it at
+# their origins (per pixel), and DACRT's rays here at their (common) direction
+ORTHO_WINDOW_SAID = ("Texture Coordinate Window seen by the orthographic camera: Cycles reads it at each camera "
+                     "ray's origin (it varies across the image), DACRT's camera rays read it at their direction "
+                     "(one value); other rays read it as Cycles does")
 PROCEDURAL_WIDTH = 1024     # the baked map of a procedural world (a Gradient: smooth)
 
 
-def _procedural_world(socket, strength, what, reasons):
+def _procedural_world(socket, strength, what, reasons, view=None):
     """(uniform radiance, Environment) of procedural textures (a Gradient, a Noise) and the
     colour nodes after them feeding a world colour, with the Vector unlinked (the Generated
     direction) or read from Texture Coordinate Generated or Object or Geometry Position, all
-    of them the view direction in Cycles' background shader, or Normal, its opposite (a Noise
-    on Normal had stood at the socket's own colour, said: fuzz 1400, 0.34-0.40x; Object of an object: the
-    direction as a point in its space), through Mapping nodes: the chain
+    of them the view direction in Cycles' background shader, or Normal or Reflection, its opposite
+    (a Noise on Normal had stood at the socket's own colour, said: fuzz 1400, 0.34-0.40x; Object
+    of an object: the direction as a point in its space), or Camera or Window, the direction in
+    the render camera's frame and its place on the view (_camera_coordinates; both had stood at
+    the socket's own colour, said: fuzz 1401, 1409, 1419, 1420, 1444, 1467), through Mapping
+    nodes: the chain
     compiled (procedurals.compile_socket) and evaluated at the texel centres of an
     equirectangular map, which the environment light blends and samples. None where the chain
     reads anything else. A Gradient world had stood at the socket's own colour (0.05 where
     Cycles' mean is 0.20)."""
-    return _baked([(socket, True)], np.full(3, strength, np.float32), what, reasons)
+    return _baked([(socket, True)], np.full(3, strength, np.float32), what, reasons, view=view)
 
 
-def _procedural_strength(node, weight, reasons):
+def _procedural_strength(node, weight, reasons, view=None):
     """(uniform radiance, Environment) of a Background or Emission whose Strength is computed
     from procedural textures of the view direction (a Spherical Gradient's sun spot, a Noise),
     its Color a constant or such textures too: the product baked as _procedural_world bakes a
@@ -219,10 +240,10 @@ def _procedural_strength(node, weight, reasons):
         return None
     sockets = [(node.inputs['Strength'], False)] + ([] if c_ok else [(color, True)])
     tint = np.asarray(c[:3], np.float32) * np.float32(weight) if c_ok else np.full(3, weight, np.float32)
-    return _baked(sockets, tint, f"world {node.bl_label} Strength", reasons)
+    return _baked(sockets, tint, f"world {node.bl_label} Strength", reasons, view=view)
 
 
-def _procedural_mix(node, weight, reasons):
+def _procedural_mix(node, weight, reasons, view=None):
     """(uniform radiance, Environment) of a world Mix Shader whose factor is computed from
     procedural textures of the view direction, between two Backgrounds or Emissions (or
     nothing) of constant or such procedural Color and Strength: (1 - f) A + f B with f clamped
@@ -243,10 +264,10 @@ def _procedural_mix(node, weight, reasons):
                 return None
         sides.append([(color, True), (strength, False)])
     return _baked([(node.inputs['Fac'], False)], np.full(3, weight, np.float32), "world Mix Shader factor",
-                  reasons, sides=sides)
+                  reasons, sides=sides, view=view)
 
 
-def _baked(sockets, strength, what, reasons, sides=None):
+def _baked(sockets, strength, what, reasons, sides=None, view=None):
     """(zero uniform radiance, Environment of the product of the sockets' values, times strength
     (3,)) with each socket (socket, is colour) compiled by procedurals.compile_socket and
     evaluated at the texel centres of an equirectangular map of the view directions; None
@@ -258,7 +279,8 @@ def _baked(sockets, strength, what, reasons, sides=None):
     notes = []
     chains = []
     for socket, color in sockets:
-        found = procedurals.compile_socket(socket, color, notes)
+        # (view: the Fresnel and Layer Weight nodes and Reflection compile, on N = wi = -D)
+        found = procedurals.compile_socket(socket, color, notes, view=True)
         if found is None:
             return None
         chains.append(found)
@@ -273,6 +295,14 @@ def _baked(sockets, strength, what, reasons, sides=None):
     frames = {n for n in needs if isinstance(n, tuple) and n[0] == procedurals.OBJECT_OF}
     if not (needs - frames) <= _WORLD_COORDINATES or len(frames) > 1:
         return None
+    model = None
+    if needs & _OF_CAMERA:
+        if view is None:
+            return None
+        try:
+            model = CameraModel(view)
+        except ValueError:
+            return None
     height = PROCEDURAL_WIDTH // 2
     # texel centres as skyanalytic.equirect lays them out (row 0 at the -Z pole)
     theta = (1.0 - (np.arange(height) + 0.5) / height) * np.pi
@@ -281,8 +311,13 @@ def _baked(sockets, strength, what, reasons, sides=None):
     dirs = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)[:, None]), axis=-1)
     d = np.ascontiguousarray(dirs.reshape(-1, 3), np.float32)
     coords = {kind: d for kind in (needs - frames) | {'generated'}}
-    if 'object_normal' in coords:
-        coords['object_normal'] = -d
+    for kind in _AGAINST_VIEW:
+        if kind in coords:
+            coords[kind] = -d
+    if model is not None:
+        coords.update(_camera_coordinates(model, d.astype(np.float64), needs))
+        if pr.WINDOW_COORDINATES in needs and model.kind == 'ORTHO':
+            reasons.append(ORTHO_WINDOW_SAID)
     for _, _, inverse in frames:    # Texture Coordinate Object of an object: D as a point in its space
         if inverse is not None:
             m = np.array(inverse, np.float64).reshape(4, 4)
@@ -308,6 +343,21 @@ def _baked(sockets, strength, what, reasons, sides=None):
     return np.zeros(3, np.float32), env
 
 
+def _camera_coordinates(model, d, needs):
+    """{'camera', 'window'} coordinates (those in needs) the background reads at unit directions d
+    (n, 3) given the render's camera (camera.CameraModel): Camera, d turned into the camera's frame
+    (the camera's position cancels); Window, camera_world_to_ndc of P = d, to which a perspective
+    camera adds its position (so, d's place on the view), an orthographic one not (the point d
+    near the world's origin), a panorama's the direction's place on its projection."""
+    out = {}
+    if pr.CAMERA_COORDINATES in needs:
+        out[pr.CAMERA_COORDINATES] = np.ascontiguousarray(d @ model.to_camera.T, np.float32)
+    if pr.WINDOW_COORDINATES in needs:
+        rel = d - model.pos if model.kind == 'ORTHO' else d
+        out[pr.WINDOW_COORDINATES] = np.ascontiguousarray(model.window(rel.T).T, np.float32)
+    return out
+
+
 def _side_value(side, notes):
     """(fn(coords) -> (n, 3) radiance of one side of a baked Mix Shader, its compiled chains),
     (None, []) where a socket of it cannot be compiled; a side of None (nothing linked) is 0."""
@@ -320,7 +370,7 @@ def _side_value(side, notes):
         if ok:
             parts.append(np.asarray(c[:3] if color else [c], np.float64))
             continue
-        found = procedurals.compile_socket(socket, color, notes)
+        found = procedurals.compile_socket(socket, color, notes, view=True)
         if found is None:
             return None, []
         chains.append(found)
