@@ -29,10 +29,13 @@ class CameraModel:
             numbers = {'EQUIRECTANGULAR': (*cam.longitude, *cam.latitude), 'MIRRORBALL': (),
                        'FISHEYE_EQUIDISTANT': (cam.fisheye_fov,),
                        'FISHEYE_EQUISOLID': (cam.fisheye_fov, cam.fisheye_lens, *cam.sensor_mm),
-                       'FISHEYE_LENS_POLYNOMIAL': (cam.fisheye_fov, *cam.sensor_mm)}[cam.panorama_type]
+                       'FISHEYE_LENS_POLYNOMIAL': (cam.fisheye_fov, *cam.sensor_mm),
+                       'EQUIANGULAR_CUBEMAP_FACE': (), 'CENTRAL_CYLINDRICAL': tuple(cam.cylindrical_range)
+                       }[cam.panorama_type]
             if cam.panorama_type == 'FISHEYE_LENS_POLYNOMIAL' and not np.isfinite(cam.fisheye_polynomial).all():
                 raise ValueError(f"camera fisheye_polynomial must be finite, got {cam.fisheye_polynomial}")
-            if not np.isfinite(numbers).all() or min(numbers, default=1.0) <= 0 and cam.panorama_type != 'EQUIRECTANGULAR':
+            if not np.isfinite(numbers).all() or min(numbers, default=1.0) <= 0 and \
+                    cam.panorama_type not in ('EQUIRECTANGULAR', 'CENTRAL_CYLINDRICAL'):
                 raise ValueError(f"camera panorama settings of {cam.panorama_type} must be finite (field of view, "
                                  f"lens and sensor positive), got {numbers}")
             if cam.aperture > 0:

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-# Cycles' panorama types DACRT renders; Equiangular Cubemap Face and Central Cylindrical are
-# refused by the export with their name.
-SUPPORTED = ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'MIRRORBALL', 'FISHEYE_LENS_POLYNOMIAL')
+# Cycles' panorama types DACRT renders (all of Blender 5.0's)
+SUPPORTED = ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'MIRRORBALL', 'FISHEYE_LENS_POLYNOMIAL',
+             'EQUIANGULAR_CUBEMAP_FACE', 'CENTRAL_CYLINDRICAL')
 
 
 def _polynomial_angle(cam, r):
@@ -50,6 +50,15 @@ def directions(cam, u, v) -> np.ndarray:
         phi = (lon0 - lon1) * u - lon0
         theta = (lat0 - lat1) * v - lat0 + 0.5 * np.pi
         d = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+    elif kind == 'EQUIANGULAR_CUBEMAP_FACE':
+        # equiangular_cubemap_face_to_direction: the face's two angles spread evenly, +-45 degrees
+        d = np.stack([np.ones_like(u), np.tan((0.5 - u) * 0.5 * np.pi), np.tan((v - 0.5) * 0.5 * np.pi)])
+    elif kind == 'CENTRAL_CYLINDRICAL':
+        # central_cylindrical_to_direction: the angle about the axis and the height on a cylinder
+        # of radius 1 (Cycles' range: -Longitude Min, -Longitude Max, Height Min and Max / Radius)
+        a0, a1, z0, z1 = cam.cylindrical_range
+        theta = a0 + (a1 - a0) * u
+        d = np.stack([np.cos(theta), np.sin(theta), z0 + (z1 - z0) * v])
     elif kind == 'MIRRORBALL':
         x, z = 2.0 * u - 1.0, 2.0 * v - 1.0
         y = -np.sqrt(np.maximum(1.0 - x * x - z * z, 0.0))
@@ -100,6 +109,12 @@ def viewplane_of(cam, d):
         theta = np.arccos(np.clip(p[2], -1.0, 1.0))
         phi = np.arctan2(p[1], p[0])
         return (phi + lon0) / (lon0 - lon1), (theta + lat0 - 0.5 * np.pi) / (lat0 - lat1)
+    if kind == 'EQUIANGULAR_CUBEMAP_FACE':
+        return 0.5 - np.arctan2(p[1], p[0]) * 2.0 / np.pi, np.arctan2(p[2], p[0]) * 2.0 / np.pi + 0.5
+    if kind == 'CENTRAL_CYLINDRICAL':
+        a0, a1, z0, z1 = cam.cylindrical_range
+        with np.errstate(divide='ignore', invalid='ignore'):
+            return (np.arctan2(p[1], p[0]) - a0) / (a1 - a0), (p[2] / np.hypot(p[0], p[1]) - z0) / (z1 - z0)
     theta = np.arccos(np.clip(p[0], -1.0, 1.0))
     phi = np.arctan2(p[2], -p[1])
     if kind == 'FISHEYE_EQUIDISTANT':

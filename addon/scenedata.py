@@ -59,7 +59,9 @@ class Camera:
     # 'FISHEYE_EQUIDISTANT' (fisheye_fov), 'FISHEYE_EQUISOLID' (fisheye_lens and the sensor
     # size in mm, fitted to the frame as Cycles does, fisheye_fov), 'MIRRORBALL',
     # 'FISHEYE_LENS_POLYNOMIAL' (fisheye_polynomial k0..k4: the angle -(k0 + k1 r + .. + k4 r^4) at
-    # r mm from the sensor's centre, sensor_mm, fisheye_fov)
+    # r mm from the sensor's centre, sensor_mm, fisheye_fov), 'EQUIANGULAR_CUBEMAP_FACE',
+    # 'CENTRAL_CYLINDRICAL' (cylindrical_range: Cycles' central_cylindrical_range, the angles
+    # -Longitude Min and -Longitude Max, then Height Min and Max over the cylinder's Radius)
     panorama_type: str = ''
     longitude: tuple = (-np.pi, np.pi)
     latitude: tuple = (-np.pi / 2, np.pi / 2)
@@ -67,6 +69,7 @@ class Camera:
     fisheye_lens: float = 10.5
     fisheye_polynomial: tuple = (-1.1735e-05, -0.0199887, -3.35253e-06, 3.09928e-06, -2.60646e-08)
     sensor_mm: tuple = (36.0, 24.0)
+    cylindrical_range: tuple = (np.pi, -np.pi, -1.0, 1.0)
 
 
 @dataclass

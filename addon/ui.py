@@ -289,7 +289,15 @@ class DATA_PT_dacrt_panorama(DACRTPanel, Panel):
             sub = col.column(align=True)
             for i in range(5):
                 sub.prop(cam, f"fisheye_polynomial_k{i}", text=f"K{i}")
-        elif kind != 'MIRRORBALL':
+        elif kind == 'CENTRAL_CYLINDRICAL':
+            sub = col.column(align=True)
+            sub.prop(cam, "central_cylindrical_range_v_min", text="Height Min")
+            sub.prop(cam, "central_cylindrical_range_v_max", text="Max")
+            sub = col.column(align=True)
+            sub.prop(cam, "central_cylindrical_range_u_min", text="Longitude Min")
+            sub.prop(cam, "central_cylindrical_range_u_max", text="Max")
+            col.prop(cam, "central_cylindrical_radius", text="Cylinder Radius")
+        elif kind not in ('MIRRORBALL', 'EQUIANGULAR_CUBEMAP_FACE'):
             col.label(text="Not rendered by DACRT", icon='ERROR')
 
 

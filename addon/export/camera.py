@@ -41,8 +41,8 @@ def export_camera(scene, messages=None, view=None, camera=None, render=None):
         label = cam.bl_rna.properties['panorama_type'].enum_items[pano].name if pano else ''
         what = f"a panorama of type '{label}'" if pano else kind.lower()
         raise ExportError(f"camera '{cam_ob.name}' is {what}; DACRT renders perspective, "
-                          "orthographic and panoramic cameras (equirectangular, fisheye equidistant, "
-                          "equisolid and lens polynomial, mirror ball)")
+                          "orthographic and panoramic cameras (equirectangular, equiangular cubemap face, "
+                          "mirror ball, fisheye equidistant, equisolid and lens polynomial, central cylindrical)")
     lens = cam.lens if cam else _look_through_lens(cam_ob)
     sensor_fit = cam.sensor_fit if cam else 'AUTO'
     sensor_width = cam.sensor_width if cam else 36.0
@@ -208,8 +208,19 @@ def _panorama_settings(cam, cam_name, pano, sensor_mm, sensor_broken, broken, me
         if not (math.isfinite(fov) and fov > 0.0) or not np.isfinite(poly).all():
             broken.append(f"Field of View {fov:g} or a polynomial coefficient {poly} is not finite and positive")
             fov, poly = math.pi, (0.0, -0.0199887, 0.0, 0.0, 0.0)
+    # Cycles' central_cylindrical_range: the longitudes negated, the heights over the radius (float32)
+    u_min, u_max, v_min, v_max, radius = (np.float32(getattr(cam, f'central_cylindrical_{k}', d)) for k, d in
+                                          (('range_u_min', -math.pi), ('range_u_max', math.pi),
+                                           ('range_v_min', -1.0), ('range_v_max', 1.0), ('radius', 1.0)))
+    with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
+        cylindrical = tuple(float(x) for x in (-u_min, -u_max, v_min / radius, v_max / radius))
+    if not np.isfinite(cylindrical).all() and pano == 'CENTRAL_CYLINDRICAL':
+        broken.append(f"Longitude {float(u_min):g} .. {float(u_max):g}, Height {float(v_min):g} .. {float(v_max):g} "
+                      f"or Cylinder Radius {float(radius):g} is not finite")
+    if not np.isfinite(cylindrical).all():
+        cylindrical = (math.pi, -math.pi, -1.0, 1.0)
     return dict(panorama_type=pano, longitude=lon, latitude=lat, fisheye_fov=fov, fisheye_lens=lens,
-                sensor_mm=sensor_mm, fisheye_polynomial=poly)
+                sensor_mm=sensor_mm, fisheye_polynomial=poly, cylindrical_range=cylindrical)
 
 
 def _look_through_lens(ob):

@@ -113,16 +113,31 @@ def test_bad_cameras_are_explained(scene):
     with pytest.raises(export.ExportError, match="no active camera"):
         export.export_camera(scene)
     cam = scenes.camera()
-    cam.data.type = 'PANO'
-    for kind, label in (('EQUIANGULAR_CUBEMAP_FACE', 'Equiangular Cubemap Face'),
-                        ('CENTRAL_CYLINDRICAL', 'Central Cylindrical')):
-        cam.data.panorama_type = kind
-        with pytest.raises(export.ExportError, match=f"is a panorama of type '{label}'; "
-                                                     "DACRT renders perspective, orthographic and panoramic"):
-            export.export_camera(scene)
     cam.data.type = 'CUSTOM'
     with pytest.raises(export.ExportError, match="is custom; DACRT renders"):
         export.export_camera(scene)
+
+
+def test_central_cylindrical_settings_as_cycles_reads_them(scene):
+    """A Central Cylindrical camera's range is Cycles' central_cylindrical_range: the longitudes
+    negated, the heights divided by the cylinder's radius; a NaN among them is named and stood in
+    for (only the world is rendered, as Cycles' NaN rays see nothing else). The type had been
+    refused (the render failed)."""
+    import math
+    messages = []
+    cam = scenes.camera()
+    d = cam.data
+    d.type, d.panorama_type = 'PANO', 'CENTRAL_CYLINDRICAL'
+    d.central_cylindrical_range_u_min, d.central_cylindrical_range_u_max = math.radians(-150), math.radians(120)
+    d.central_cylindrical_range_v_min, d.central_cylindrical_range_v_max = -1.2, 0.9
+    d.central_cylindrical_radius = 1.5
+    c = export.export_camera(scene, messages)
+    np.testing.assert_allclose(c.cylindrical_range, (math.radians(150), math.radians(-120), -0.8, 0.6), rtol=1e-6)
+    assert not messages
+    d.central_cylindrical_range_v_max = float('nan')
+    c = export.export_camera(scene, messages)
+    assert np.isfinite(c.cylindrical_range).all()
+    assert [t for _, t in messages if "Cylinder Radius 1.5 is not finite" in t and "only the world" in t], messages
 
 
 def test_panoramic_camera_settings_as_cycles_reads_them(scene):

@@ -244,7 +244,10 @@ def test_panels_draw_existing_properties(scene):
     cam.type = 'PANO'
     want = {'EQUIRECTANGULAR': {'latitude_min', 'latitude_max', 'longitude_min', 'longitude_max'},
             'FISHEYE_EQUISOLID': {'fisheye_lens', 'fisheye_fov'}, 'FISHEYE_EQUIDISTANT': {'fisheye_fov'},
-            'MIRRORBALL': set(), 'CENTRAL_CYLINDRICAL': {'label'}}
+            'MIRRORBALL': set(), 'EQUIANGULAR_CUBEMAP_FACE': set(),
+            'CENTRAL_CYLINDRICAL': {'central_cylindrical_range_u_min', 'central_cylindrical_range_u_max',
+                                    'central_cylindrical_range_v_min', 'central_cylindrical_range_v_max',
+                                    'central_cylindrical_radius'}}
     for kind, props in want.items():
         cam.panorama_type = kind
         assert bpy.types.DATA_PT_dacrt_panorama.poll(ctx)

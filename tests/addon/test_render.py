@@ -281,9 +281,8 @@ def test_approximated_materials_reported_once(scene, capfd):
 
 def test_failed_render_reports_the_reason(scene):
     lit_plane_scene(scene)
-    scene.camera.data.type = 'PANO'
-    scene.camera.data.panorama_type = 'CENTRAL_CYLINDRICAL'
-    with pytest.raises(RuntimeError, match="a panorama of type 'Central Cylindrical'; DACRT renders"):
+    scene.camera.data.type = 'CUSTOM'       # (a custom OSL camera: not rendered)
+    with pytest.raises(RuntimeError, match="is custom; DACRT renders"):
         bpy.ops.render.render()
 
 
@@ -312,8 +311,7 @@ def test_render_stats_hold_the_latest_frame_only(scene):
     scene.view_layers["Second"].use = False
     bpy.ops.render.render()
     assert set(addon.last_render_stats()) == {bpy.context.view_layer.name}
-    scene.camera.data.type = 'PANO'
-    scene.camera.data.panorama_type = 'CENTRAL_CYLINDRICAL'
+    scene.camera.data.type = 'CUSTOM'
     with pytest.raises(RuntimeError):
         bpy.ops.render.render()
     assert addon.last_render_stats() == {}

@@ -118,11 +118,12 @@ def test_fisheye_under_a_uniform_world_fills_its_circle_exactly():
     assert np.allclose(img[..., 3], 1.0)
 
 
-@pytest.mark.parametrize('kind', ['EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'MIRRORBALL'])
+@pytest.mark.parametrize('kind', ['EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'MIRRORBALL',
+                                  'EQUIANGULAR_CUBEMAP_FACE', 'CENTRAL_CYLINDRICAL'])
 def test_viewplane_of_inverts_the_projection(kind):
     from addon import panorama
     cam = pano(kind, longitude=(-2.5, 2.0), latitude=(-1.2, 1.0), fisheye_fov=2.8, fisheye_lens=10.5,
-               sensor_mm=(36.0, 24.0))
+               sensor_mm=(36.0, 24.0), cylindrical_range=(2.6, -2.1, -0.9, 1.4))
     rng = np.random.default_rng(3)
     u, v = rng.uniform(0.2, 0.8, 400), rng.uniform(0.2, 0.8, 400)
     seen = panorama.sees(cam, u, v)
@@ -131,6 +132,29 @@ def test_viewplane_of_inverts_the_projection(kind):
     assert seen.sum() > 100
     np.testing.assert_allclose(u2[seen], u[seen], atol=1e-9)
     np.testing.assert_allclose(v2[seen], v[seen], atol=1e-9)
+
+
+def test_cubemap_face_and_cylinder_directions_in_closed_form():
+    """An Equiangular Cubemap Face: the angles left of and above the view axis grow evenly, 45
+    degrees at the face's edges (u = 0: left, v = 1: up); a Central Cylindrical camera: the angle
+    left of the view axis, about the camera's up axis, runs linearly over Cycles' range (its
+    first two numbers, -Longitude Min to -Longitude Max) and the height on the cylinder of radius
+    1 (the direction's up over its horizontal length) over the last two (Blender's camera frame:
+    -Z forward, +Y up, +X right)."""
+    from addon import panorama
+    u, v = np.array([0.0, 0.25, 0.5, 1.0, 0.5]), np.array([0.5, 0.5, 0.5, 0.5, 1.0])
+    d = panorama.directions(pano('EQUIANGULAR_CUBEMAP_FACE'), u, v)
+    left = np.arctan2(-d[0], -d[2])        # angle to the left of -Z, about +Y
+    up = np.arctan2(d[1], -d[2])
+    np.testing.assert_allclose(left, (0.5 - u) * np.pi / 2, atol=1e-12)
+    np.testing.assert_allclose(up, (v - 0.5) * np.pi / 2, atol=1e-12)
+    a0, a1, z0, z1 = 2.6, -2.1, -0.9, 1.4
+    cyl = pano('CENTRAL_CYLINDRICAL', cylindrical_range=(a0, a1, z0, z1))
+    u, v = np.array([0.0, 0.3, 0.5, 1.0]), np.array([0.0, 0.6, 0.5, 1.0])
+    d = panorama.directions(cyl, u, v)
+    np.testing.assert_allclose(np.arctan2(-d[0], -d[2]), a0 + (a1 - a0) * u, atol=1e-12)
+    np.testing.assert_allclose(d[1] / np.hypot(d[0], d[2]), z0 + (z1 - z0) * v, atol=1e-12)
+    assert panorama.sees(cyl, u, v) is None and panorama.sees(pano('EQUIANGULAR_CUBEMAP_FACE'), u, v) is None
 
 
 def test_footprint_is_cycles_compact_ray_differential():

@@ -649,6 +649,26 @@ def build_panorama_fisheye_polynomial():
                       fisheye_polynomial_k2=-4e-4, fisheye_polynomial_k3=2e-5, fisheye_polynomial_k4=-1e-7)
 
 
+def build_panorama_cubemap():
+    """The outdoor blocks seen by an Equiangular Cubemap Face camera (the face's two angles
+    spread evenly over +-45 degrees), shifted so that the frame runs past the face's edge, where
+    the tangents grow steeply. DACRT had refused the camera (the render failed)."""
+    build_outdoor()
+    _panoramic_camera('EQUIANGULAR_CUBEMAP_FACE', (1.7, -2.3, 1.0), (0.0, 0.4, 0.5), shift_x=0.12, shift_y=-0.08)
+
+
+def build_panorama_cylindrical():
+    """The emissive room seen from inside by a Central Cylindrical camera: an uneven longitude
+    range (-150 to 120 degrees), heights -1.2 to 0.9 on a cylinder of radius 1.3, so that the
+    range, the height's division by the radius and the longitudes' sign all show. DACRT had
+    refused the camera (the render failed)."""
+    build_emissive()
+    _panoramic_camera('CENTRAL_CYLINDRICAL', (0.2, -0.6, 1.0), (0.2, 1.0, 0.9),
+                      central_cylindrical_range_u_min=math.radians(-150),
+                      central_cylindrical_range_u_max=math.radians(120), central_cylindrical_range_v_min=-1.2,
+                      central_cylindrical_range_v_max=0.9, central_cylindrical_radius=1.3)
+
+
 # ------------------------------------------------------------------------------------------
 # What the suite renders
 
@@ -704,6 +724,9 @@ SPECS = (
     ParitySpec("panorama_fisheye", build_panorama_fisheye, (64, 48), 2, 'GAUSSIAN', 1.5,
                128, 32, 128, 32),
     ParitySpec("panorama_fisheye_polynomial", build_panorama_fisheye_polynomial, (64, 48), 2, 'GAUSSIAN', 1.5,
+               128, 32, 128, 32),
+    ParitySpec("panorama_cubemap", build_panorama_cubemap, (64, 48), 2, 'GAUSSIAN', 1.5, 128, 32, 128, 32),
+    ParitySpec("panorama_cylindrical", build_panorama_cylindrical, (64, 32), 3, 'BLACKMAN_HARRIS', 1.5,
                128, 32, 128, 32),
     ParitySpec("transparency", build_transparency, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32),
     ParitySpec("terminator", build_terminator, (64, 48), 2, 'BLACKMAN_HARRIS', 1.5, 128, 32, 128, 32,
