@@ -149,15 +149,15 @@ def _one_value(node, values, centre, lamp):
 # what a point or spot lamp's texture coordinates read that varies with the direction d from
 # the lamp to the shaded point, in its object space (measured against Cycles, within 0.01-0.03
 # for a radius of 0.5 too: Cycles' light normal there is that direction, not the sphere's):
-# Normal d; a point lamp's UV ((atan2(d.y, d.x) / 2 pi + 1/4) mod 1, asin(d.z) / pi + 1/2, 0)
-# (a spot lamp's is another mapping, not matched)
+# Normal d; a point lamp's UV ((atan2(d.y, d.x) / 2 pi + 1/4) mod 1, asin(d.z) / pi + 1/2, 0),
+# a spot lamp's its projection through the cone (_spot_uv)
 # Generated and Object: the point sampled on a disc of the lamp's radius facing the shaded
 # point (measured: a Spherical Gradient on a point lamp of radius 0.6, Cycles 0.6024, the
 # facing disc's mean 0.5999, the sphere's 0.40, the ball's 0.55, the centre's 1); with Soft
 # Falloff off the point sampled on the sphere's cap facing it, and Normal and UV then read the
 # sphere's normal there (measured: Normal's mean over a pixel 0.66 d)
 _DIRECTIONAL = {'POINT': frozenset({'object_normal', 'uv', 'Texture Coordinate UV', 'generated', 'object'}),
-                'SPOT': frozenset({'object_normal', 'generated', 'object'})}
+                'SPOT': frozenset({'object_normal', 'uv', 'Texture Coordinate UV', 'generated', 'object'})}
 _ON_DISC = frozenset({'generated', 'object'})
 # the profile's grid (texture_profile): 1 degree (a Checker's edge blurs over it by the
 # bicubic lookup)
@@ -206,14 +206,16 @@ def texture_profile(surface, lamp, reasons, evaluate):
                                                              vv[..., None, None] + _FOOTPRINT[None, :]))
         normal = np.stack([np.sin(sv) * np.sin(sh - np.pi), np.sin(sv) * np.cos(sh - np.pi), -np.cos(sv)], -1)
     at = np.zeros((len(normal), 3))
+    towards = normal            # (the direction to the shaded point: a spot's UV reads it, not the cap's normal)
     if disc is not None:
         world = _on_discs(d, *disc)
         at = world @ disc[2].T
         if on_cap:                      # (Cycles' object_inverse_normal_transform: M^T n)
             normal = world @ disc[1]
             normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    uv = np.stack([np.mod(np.arctan2(normal[:, 1], normal[:, 0]) / (2.0 * np.pi) + 0.25, 1.0),
-                   np.arcsin(np.clip(normal[:, 2], -1.0, 1.0)) / np.pi + 0.5, np.zeros(len(normal))], -1)
+    uv = _spot_uv(towards, lamp.spot_size) if lamp.kind == 'SPOT' else \
+        np.stack([np.mod(np.arctan2(normal[:, 1], normal[:, 0]) / (2.0 * np.pi) + 0.25, 1.0),
+                  np.arcsin(np.clip(normal[:, 2], -1.0, 1.0)) / np.pi + 0.5, np.zeros(len(normal))], -1)
     coords = {'object_normal': normal.astype(np.float32), 'uv': uv.astype(np.float32),
               'generated': at.astype(np.float32)}
     coords[TEXCOORD_UV], coords['object'] = coords['uv'], coords['generated']
@@ -245,6 +247,18 @@ def texture_profile(surface, lamp, reasons, evaluate):
     table = _without_clip_bias((values @ weights).reshape(hh.shape))
     return f1, IESProfile(grid_h.astype(np.float32), grid_v.astype(np.float32),
                           table.astype(np.float32)), runs[1][1] + _radius_note(disc), runs[1][2]
+
+
+def _spot_uv(d, spot_size):
+    """(k, 3) a spot lamp's Texture Coordinate UV toward unit directions d (k, 3) in its object
+    space: Cycles' spot_light_uv of the local ray (x, y, -z) with factor = cot(spot size / 2) / 2
+    / (-z), read as the barycentrics (1 - u - v, u, 0): (1/2 + x f, 1/2 + y f, 0), the cone
+    projected onto the unit square. Behind the lamp (no light there) (1/2, 1/2, 0)."""
+    half_cot = np.float32(0.5) / np.tan(np.float32(0.5) * np.float32(spot_size))
+    z = -d[:, 2]
+    ahead = z > 0.0
+    f = np.where(ahead, half_cot / np.where(ahead, z, 1.0), 0.0)
+    return np.stack([0.5 + d[:, 0] * f, 0.5 + d[:, 1] * f, np.zeros(len(d))], -1)
 
 
 # Gauss-Legendre points of a cell (2 per axis: exact for the cubic lobes) and Cycles' cubic_interp

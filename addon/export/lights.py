@@ -61,6 +61,7 @@ def export_light(ob, matrix, messages, approximated=None, info=None):
     profile, falloff = [], []
     lamp = _LampTree(light.type, object_info, lambda: lamp_coordinates(light, matrix))
     lamp.disc = (float(getattr(light, 'shadow_soft_size', 0.0)), matrix, bool(getattr(light, 'use_soft_falloff', True)))
+    lamp.spot_size = float(getattr(light, 'spot_size', 0.0))
     shader, no_emission = _light_shader_factor(light, ob.name, messages, approximated, lamp, profile, falloff)
     strength *= shader
     if not np.isfinite(strength).all():
@@ -236,11 +237,12 @@ class _LampTree:
     procedural textures met that vary with the direction from a point or spot lamp
     ({(node pointer, output name): (fn, width, vector, note, needs)}:
     lampcoordinates.at_lamp_coordinates), probe: while lampcoordinates.texture_profile probes
-    the tree, ((node pointer, output name), value) the one such node stands at, and disc: the
-    lamp's (radius, matrix, Soft Falloff) for its disc.
+    the tree, ((node pointer, output name), value) the one such node stands at, disc: the
+    lamp's (radius, matrix, Soft Falloff) for its disc, and spot_size: a spot lamp's cone angle
+    (its UV's projection).
     """
     __slots__ = ('kind', 'object_info', '_where', '_coordinates', 'generated_notes', 'falloffs', 'ies_scale',
-                 'ies_met', 'directional', 'probe', 'disc')
+                 'ies_met', 'directional', 'probe', 'disc', 'spot_size')
 
     def __init__(self, kind, object_info=None, where_coordinates=None):
         self.kind, self.object_info = kind, object_info
@@ -248,7 +250,7 @@ class _LampTree:
         self.generated_notes = []
         self.falloffs = None
         self.ies_scale, self.ies_met = None, False
-        self.directional, self.probe, self.disc = {}, None, None
+        self.directional, self.probe, self.disc, self.spot_size = {}, None, None, 0.0
 
     def coordinates(self):
         """({need: (n, 3)}, centre) of lampcoordinates.lamp_coordinates, worked out once when first asked (a

@@ -8,10 +8,10 @@ They had stood at the input's own value, said: a Checker on a sun's Normal into 
 at 1 where Cycles lit nothing (fuzz 1024, 1.28x), a Noise on a point lamp's Object 1.96x (fuzz
 1078).
 
-A point lamp's Normal and UV and a spot lamp's Normal vary with the direction d from the lamp
-to the shaded point (Cycles' light normal is that direction, for a lamp of a radius too): a
-texture on them that scales the emission is applied as an IES-like profile over d
-(_texture_profile). An area light's UV and Object and a spot lamp's UV vary otherwise: said.
+A point or spot lamp's Normal and UV vary with the direction d from the lamp to the shaded
+point (Cycles' light normal is that direction, for a lamp of a radius too; a spot's UV is d
+projected through its cone): a texture on them that scales the emission is applied as an
+IES-like profile over d (_texture_profile). An area light's UV and Object vary otherwise: said.
 """
 import bpy
 import numpy as np
@@ -79,9 +79,7 @@ def test_lamp_texture_on_a_constant_coordinate_agrees_with_cycles(case, tmp_path
 
 
 STILL_SAID = {
-    # a spot lamp's UV is a mapping not matched, and a coloured texture into a point lamp's Color
-    # is no one profile
-    'spot_uv': ('SPOT', 'ShaderNodeTexChecker', 'UV', 'Color', 'Color', {'Scale': 3.0}),
+    # a coloured texture into a point lamp's Color is no one profile
     'point_coloured_normal': ('POINT', 'ShaderNodeTexChecker', 'Normal', 'Color', 'Color',
                               {'Color2': (0.3, 0.6, 0.9, 1.0)}),
 }
@@ -103,6 +101,10 @@ DIRECTIONAL = {
     'point_noise_uv': ('POINT', 'ShaderNodeTexNoise', 'UV', 'Fac', 'Strength', {'Scale': 4.0}),
     'point_gradient_normal_colour': ('POINT', 'ShaderNodeTexGradient', 'Normal', 'Color', 'Color', {}),
     'spot_noise_normal': ('SPOT', 'ShaderNodeTexNoise', 'Normal', 'Fac', 'Strength', {'Scale': 3.0}),
+    # a spot lamp's UV: Cycles' spot_light_uv, the cone projected onto the unit square (it had
+    # stood at the input's own value, said: fuzz 1473)
+    'spot_checker_uv': ('SPOT', 'ShaderNodeTexChecker', 'UV', 'Color', 'Color', {'Scale': 3.0}),
+    'spot_gradient_uv': ('SPOT', 'ShaderNodeTexGradient', 'UV', 'Fac', 'Strength', {}),
 }
 
 
