@@ -31,21 +31,22 @@ class PassWriting:
         normalizes it, the denoising features do not): the diffuse closures' bent normal
         (weight: the diffuse albedo diffuse (3, k), translucency excluded), the Translucent
         BSDF's raised until its mirror reflection of I clears the surface (its
-        maybe_ensure_valid_specular_reflection under Bump Map Correction: a deep bump's
-        Normal.z 0.714 -> 0.777 straight on), the transparent closure's the unbent ns (weight
+        maybe_ensure_valid_specular_reflection under Bump Map Correction, bent or smooth: a
+        deep bump's Normal.z 0.714 -> 0.777 straight on), the transparent closure's the unbent ns (weight
         tau (3, k) or None). ns and ng face the ray, I (3, k) toward where it came from. The
         layers the albedo folds in (a Principled's specular layer, metal, glass and coat:
         Materials.normal_weights) weigh their own normals, the albedo they add taken from the
-        diffuse weight: the specular layer's, metal's and glass's valid reflection normal, the
-        coat's the unbent ns (a white specular layer over a grey base had left the Normal pass
-        0.08 off Cycles' under a normal map, a metal 0.09). scale (k,) or None: what the albedo
+        diffuse weight: the specular layer's, metal's, glass's, refraction's and subsurface's
+        valid reflection normal, the coat's the unbent ns raised alike (a white specular layer
+        over a grey base had left the Normal pass 0.08 off Cycles' under a normal map, a metal
+        0.09). scale (k,) or None: what the albedo
         diffuse was scaled by (a cut-out's opacity)."""
         nb, bump = self._bent_normals(prim, u, v, ns, ng, self._back(prim, ng, I))
-        if bump is None and not self.mats.any_normal_parts:
+        if bump is None and not self.mats.any_normal_parts and not self._any_translucent:
             return nb
         folded = None
+        mat = np.take(self.tri.material, prim)
         if self.mats.any_normal_parts:
-            mat = np.take(self.tri.material, prim)
             weights = np.take(self.mats.normal_weights, mat, axis=1)
             folded = np.take(self.mats.normal_folded, mat, axis=1)
             if scale is not None:
@@ -58,11 +59,18 @@ class PassWriting:
                 # Bump Map Correction: a coarse smooth sphere's rim)
                 parts.append((weights[0], valid_reflection_normal(ng, I, nb, np.take(self.mats.bump_correction, mat))))
             if weights[1].any():
-                parts.append((weights[1], ns))
-        if self._any_translucent and bump is not None:
+                # the coat's unbent normal, raised as well (Cycles' Principled: coat_normal =
+                # maybe_ensure_valid_specular_reflection(sd, sd->N))
+                parts.append((weights[1], valid_reflection_normal(ng, I, ns, np.take(self.mats.bump_correction, mat))))
+        if self._any_translucent:
+            # (its smooth normal too, as the reflective closures': a smooth-shaded cube's
+            # Translucent BSDF had been 0.07 off Cycles' Normal pass per pixel, 26% of pixels
+            # more than 0.1, where a Diffuse BSDF's is 0.014)
             wt = self._translucency_at(prim, u, v, self._back(prim, ng, I)).mean(axis=0)
+            if scale is not None:
+                wt = wt * scale
             if (wt > 0).any():
-                parts.append((wt, valid_reflection_normal(ng, I, nb, bump[3] != 0)))
+                parts.append((wt, valid_reflection_normal(ng, I, nb, np.take(self.mats.bump_correction, mat))))
         if tau is not None:
             parts.append((tau.mean(axis=0), ns))
         if len(parts) == 1:

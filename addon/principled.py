@@ -33,7 +33,7 @@ HANDLED = ('Specular IOR Level', 'Coat Weight', 'Metallic', 'Diffuse Roughness',
 
 # what Cycles uses for an input a Principled BSDF of another Blender version lacks
 _DEFAULTS = {'Metallic': 0.0, 'Transmission Weight': 0.0, 'Roughness': 0.5, 'IOR': 1.5, 'Coat Roughness': 0.03,
-             'Coat IOR': 1.5, 'Diffuse Roughness': 0.0, 'Sheen Roughness': 0.5}
+             'Coat IOR': 1.5, 'Diffuse Roughness': 0.0, 'Sheen Roughness': 0.5, 'Subsurface Weight': 0.0}
 
 
 def _values(node, names):
@@ -305,11 +305,12 @@ def normal_parts(node, base) -> tuple:
     maybe_ensure_valid_specular_reflection(N) (metal, Metallic x W; glass, (1 - Metallic) x
     Transmission x W; specular layer, (1 - Metallic)(1 - Transmission) x W where its eta is not
     1), W what the sheen and coat leave of the weight 1; unbent: the coat's (Coat Weight under
-    the sheen), whose normal is sd->N; folded (3,): what the export adds to the base's albedo
+    the sheen), whose normal is sd->N (raised as well); folded (3,): what the export adds to the base's albedo
     for all layers but the sheen (whose closure takes N, as the diffuse), so the albedo less it
     is the diffuse closure's weight. Averaged over view cosines (weighted by cos), the metal's
     albedo at the base colour `base` (3,); the multiscatter darkening of a closure's weight
-    (microfacet_ggx_preserve_energy, a few percent) left out."""
+    (microfacet_ggx_preserve_energy, a few percent) left out. The subsurface share of the base
+    counts as reflective (its closure's normal is the valid one) and folded."""
     said = []
     metal, dielectric = _metal(node, said)
     m = 0.0 if metal is None else metal[0]
@@ -337,6 +338,17 @@ def normal_parts(node, base) -> tuple:
         f0 = np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, 1.0)
         below = below + m * specular.metal_albedo_mu(metal[1], f0, metal[2], _multiscatter(node))
     folded = ((s_dim * (c_dim * below + c_add)) @ specular.VIEW)
+    # the subsurface closure (a share of the base the export renders as diffuse, said) takes the
+    # valid normal too (Cycles: bssrdf->N = maybe_ensure_valid_specular_reflection(sd, N)), at
+    # weight clamped base x Subsurface Weight x what the layers above leave; the diffuse the rest
+    (ss,), _ = _values(node, ('Subsurface Weight',))
+    ss = min(max(ss, 0.0), 1.0) if np.isfinite(ss) else 0.0
+    if ss > 0.0:
+        dim_s = np.ones(n) if spec is None else np.clip(1.0 - spec[1].max(axis=0), 0.0, 1.0)
+        clamped = np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, 1.0)
+        sub = ss * (1.0 - m) * (1.0 - t) * clamped * ((w_below * dim_s) @ specular.VIEW)
+        reflective += float(sub.mean())
+        folded = folded + sub
     return reflective, unbent, folded
 
 

@@ -192,6 +192,9 @@ class ShaderClosures:
             return self._reflective(node, Closure(const=reflector))
         if t == 'BSDF_GLASS':
             reflect, transmit = glass_albedos(node, reasons)
+            # (the Normal pass: Cycles' glass closure, of weight 1 (its colour is in the Fresnel
+            # tints), takes the valid normal; the reflection is its folded albedo)
+            self._normal_parts.append([self._normal_weight, 0.0, self._normal_weight * np.asarray(reflect), 0.0])
             return Closure(const=reflect, transparent=transmit, glass=transmit)
         if t == 'BSDF_TRANSLUCENT':
             # diffuse transmission: rendered as Cycles does (the integrator's lobe choice)
@@ -210,6 +213,8 @@ class ShaderClosures:
             return Closure(translucent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
         if t == 'BSDF_REFRACTION':
             through = refraction_transmittance(node, reasons)
+            # (the Normal pass: Cycles' refraction closure, of weight its colour, the valid normal)
+            self._normal_parts.append([self._normal_weight * float(through.mean()), 0.0, np.zeros(3), 0.0])
             if bends_normal(node.inputs.get('Normal')):
                 reasons.append("Refraction BSDF Normal input ignored: its light passes unbent")
             return Closure(transparent=through, glass=through)

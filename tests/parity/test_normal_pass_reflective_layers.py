@@ -1,7 +1,7 @@
 """The Normal pass of a normal-mapped Principled BSDF with a specular layer, metal, glass or
 coat agrees with Cycles. Cycles averages its closures' normals by |mean weight|
 (surface_shader_average_normal): the metal, glass and specular closures take
-maybe_ensure_valid_specular_reflection of the bent normal, the coat the unbent sd->N, and only
+maybe_ensure_valid_specular_reflection of the bent normal, the coat that of the unbent sd->N, and only
 the diffuse closure the bent normal itself. A sphere seen from the side (grazing at its rim),
 its Base Color a Checker, bent by a World-space Normal Map of a constant colour or by an
 Object-space one of a Noise texture. Before, the pass took the bent normal for every layer:
