@@ -1074,10 +1074,15 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         # sample (next_event) and per bounce (below); None where the scene has none
         rough = self._rough_rows(prim, u, v, ng, ns, np.take(path.D, idx, axis=1)) if self.mats.any_rough else None
         ns_far = None                                 # the transmission's normal (front-facing)
-        if far is not None and bump is not None:
+        if far is not None:
+            # (raised where bent or smooth alike, under its material's Bump Map Correction: a
+            # smooth-shaded translucent cube lit from behind had been 0.956x Cycles, its edges
+            # 0.6-0.8x)
             sel = far[0]
             ns_far = valid_reflection_normal(np.take(ng, sel, axis=1), -np.take(path.D, np.take(idx, sel), axis=1),
-                                              np.take(ns, sel, axis=1), np.take(bump[3], sel) != 0)
+                                              np.take(ns, sel, axis=1),
+                                              np.take(self.mats.bump_correction, np.take(self.tri.material,
+                                                                                         np.take(prim, sel))))
         tb = None if path.tb is None else np.take(path.tb, idx)
         gb = None if path.gb is None else np.take(path.gb, idx)
         xb = None if path.xb is None else np.take(path.xb, idx)

@@ -68,6 +68,12 @@ class Translucency:
         if bump is not None:
             far_bump = np.take(bump, sel, axis=1)
             far_bump[:3] *= F32(-1.0)
+        elif ns_far is not None:
+            # a smooth normal the lobe raised (valid_reflection_normal) is one it differs from:
+            # the term applies there too (1 where it was not raised)
+            far_bump = np.empty((4, len(sel)), F32)
+            far_bump[:3] = -take(ns)
+            far_bump[3] = np.take(self.mats.bump_correction, np.take(self.tri.material, take(prim)))
         self._next_event(k, fP, fP_off, take(prim), fng, fns, np.ascontiguousarray(thr_far, F32), take(pid),
                          np.ascontiguousarray(take(keys)), take(u_pick), sinks.sampled(k), take(tb), take(u),
                          take(v), sinks.groups, far_bump, dims=dims, shading_offset=False, xb=take(xb))

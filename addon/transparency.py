@@ -13,6 +13,7 @@ from .pathstate import Paths, clamp_classes, compact, diffuse_reflections
 from .sampling import DIM_GLASS, DIM_LOBE, DIM_PASSED, DIM_ROULETTE, DIM_TRANSPARENT
 from .scenedata import HOLDOUT
 from .specular import view_table
+from .translucency import valid_reflection_normal
 
 F32 = np.float32
 
@@ -299,10 +300,16 @@ class Transparency:
             if len(sel):
                 T = np.take(self.mats.translucency, np.take(mat, sel), axis=1)
                 thr_far = T * np.take(opacity, sel) * np.take(path.thr, np.take(rows, sel), axis=1)
+                incoming = -np.take(path.D, rows, axis=1)
                 if self.mats.translucency_textures:
-                    self._translucency_maps(sel, prim, u, v, thr_far, ng, -np.take(path.D, rows, axis=1))
+                    self._translucency_maps(sel, prim, u, v, thr_far, ng, incoming)
+                # (its normal raised as at a vertex: integrator._vertex's ns_far)
+                ns_far = valid_reflection_normal(np.take(ng, sel, axis=1), np.take(incoming, sel, axis=1),
+                                                 np.take(ns, sel, axis=1),
+                                                 np.take(self.mats.bump_correction, np.take(mat, sel)))
                 self._next_event_far(k, sel, thr_far, P, ng, ns, P_off, prim, pid, keys,
-                                     u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, bump=bump, xb=xb)
+                                     u_pick, sinks, tb, u, v, DIM_LOBE + (1 << 20) + (k << 11) + j, ns_far,
+                                     bump=bump, xb=xb)
 
     def _emission_before_pick(self, camera, k, path, hits, rows, prim, opacity, sinks):
         """The emission of the transparent surfaces the rays `rows` of path meet now (hits
