@@ -32,6 +32,16 @@ class Transparency:
     """A mixin of integrator.Integrator (see the module docstring): its methods read and set
     the Integrator's state."""
 
+    def _opaque_weight_at(self, prim, u, v, mat, back):
+        """(k,) Materials.opaque_weight at hits (prim, u, v) of materials mat, with the colour
+        textures, attribute colours and translucency textures of those that have them."""
+        albedo = np.take(self.mats.base, mat, axis=1)
+        if self._albedo_varies:
+            self._albedo_maps(prim, u, v, albedo, back)
+        if self._any_translucent:
+            albedo += self._translucency_at(prim, u, v, back)
+        return albedo.mean(axis=0).astype(F32)
+
     def _through(self, k, camera, path, hits, sinks, chain=None):
         """Rays that hit a transparent surface pass it or stop there, at random by the
         transparent and the opaque weights (as Cycles picks a closure by its mean weight; the
@@ -97,7 +107,14 @@ class Transparency:
             if self._any_emissive:
                 self._emission_before_pick(camera, k, path, hits, rows, prim, opacity, sinks)
             t_mean = tau.mean(axis=0)
-            w_opaque = np.take(self.mats.opaque_weight, mat)
+            if self._albedo_varies or self.mats.translucency_textures:
+                # Cycles weighs the opaque closures by their colours at the point: a textured
+                # one's texel, not the material's constant factor (a sheet of Alpha 0.49 and a
+                # Checker base had stopped too many paths, the Normal pass behind it 0.90x)
+                w_opaque = self._opaque_weight_at(prim, u_hit, v_hit, mat,
+                                                  None if not self._sided else self._back(prim, -D, -D))
+            else:
+                w_opaque = np.take(self.mats.opaque_weight, mat)
             if self.mats.pick_delta is not None:
                 # Cycles weighs a specular layer or metal by its albedo at this view, not averaged
                 # over views (behind a sheet of Alpha 0.44 and Specular 0.5 seen straight on, 4.4%
