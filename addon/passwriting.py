@@ -62,6 +62,9 @@ class PassWriting:
                 # the coat's unbent normal, raised as well (Cycles' Principled: coat_normal =
                 # maybe_ensure_valid_specular_reflection(sd, sd->N))
                 parts.append((weights[1], valid_reflection_normal(ng, I, ns, np.take(self.mats.bump_correction, mat))))
+            if weights[2].any():
+                # a sheen under a coat: mix(N, sd->N, Coat Weight), its coated share the smooth ns
+                parts.append((weights[2], ns))
         if self._any_translucent:
             # (its smooth normal too, as the reflective closures': a smooth-shaded cube's
             # Translucent BSDF had been 0.07 off Cycles' Normal pass per pixel, 26% of pixels

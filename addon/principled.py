@@ -298,7 +298,7 @@ def layer_steps(node, reasons) -> list:
 
 
 def normal_parts(node, base) -> tuple:
-    """(reflective, unbent, folded): how Cycles' Principled BSDF (svm/closure.h) weighs its
+    """(reflective, unbent, folded, smooth): how Cycles' Principled BSDF (svm/closure.h) weighs its
     closures' normals in the Normal pass (surface_shader_average_normal: each by |mean of its
     weight|), beside the diffuse closure, which takes the bent normal N at weight base x what
     the layers leave. reflective: the weight of the closures that take
@@ -310,7 +310,8 @@ def normal_parts(node, base) -> tuple:
     is the diffuse closure's weight. Averaged over view cosines (weighted by cos), the metal's
     albedo at the base colour `base` (3,); the multiscatter darkening of a closure's weight
     (microfacet_ggx_preserve_energy, a few percent) left out. The subsurface share of the base
-    counts as reflective (its closure's normal is the valid one) and folded."""
+    counts as reflective (its closure's normal is the valid one) and folded; smooth: the share of
+    the sheen's albedo that takes the smooth normal sd->N unraised (Coat Weight's), folded too."""
     said = []
     metal, dielectric = _metal(node, said)
     m = 0.0 if metal is None else metal[0]
@@ -326,10 +327,18 @@ def normal_parts(node, base) -> tuple:
     share = m + (1.0 - m) * t + ((1.0 - m) * (1.0 - t) if spec is not None else 0.0)
     reflective = float((share * w_below.mean(axis=0)) @ specular.VIEW)
     unbent = 0.0
+    sheen_share = np.zeros(3)
     if coat is not None:
         found = _layer_inputs(node, 'Coat Weight', ('Coat Roughness', 'Coat IOR'), 'Coat Tint', "coat", "", [],
                               most=np.inf)
         unbent = float(found[0] * (s_dim @ specular.VIEW))
+        if sheen_mu is not None:
+            # the sheen's normal is mix(N, the coat's unbent normal, Coat Weight) (Cycles'
+            # Principled): its closure (whose weight bsdf_sheen_setup scales by its albedo)
+            # counts that share of its albedo at the unbent normal, out of the diffuse weight
+            # (under a coat of weight 1 and a normal map it had kept the bent normal: 0.088
+            # mean per-pixel off Cycles' Normal pass)
+            sheen_share = min(float(found[0]), 1.0) * (sheen_mu[1] @ specular.VIEW)
     add_s = np.zeros((3, n)) if spec is None else spec[0]
     if trans is not None:
         add_s = (1.0 - t) * add_s + t * trans[1]
@@ -337,7 +346,7 @@ def normal_parts(node, base) -> tuple:
     if metal is not None:
         f0 = np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, 1.0)
         below = below + m * specular.metal_albedo_mu(metal[1], f0, metal[2], _multiscatter(node))
-    folded = ((s_dim * (c_dim * below + c_add)) @ specular.VIEW)
+    folded = ((s_dim * (c_dim * below + c_add)) @ specular.VIEW) + sheen_share
     # the subsurface closure (a share of the base the export renders as diffuse, said) takes the
     # valid normal too (Cycles: bssrdf->N = maybe_ensure_valid_specular_reflection(sd, N)), at
     # weight clamped base x Subsurface Weight x what the layers above leave; the diffuse the rest
@@ -349,7 +358,7 @@ def normal_parts(node, base) -> tuple:
         sub = ss * (1.0 - m) * (1.0 - t) * clamped * ((w_below * dim_s) @ specular.VIEW)
         reflective += float(sub.mean())
         folded = folded + sub
-    return reflective, unbent, folded
+    return reflective, unbent, folded, float(sheen_share.mean())
 
 
 def pick_delta(node, base) -> np.ndarray:

@@ -169,8 +169,9 @@ class Material:
     # How the Normal pass weighs the normals of the closures a diffuse renderer folds into the
     # albedo (principled.normal_parts): (weight of those that take Cycles' valid specular
     # reflection normal, weight of those on the unbent normal, the albedo (3,) they add, which
-    # the pass colour less it leaves to the diffuse closure on the bent normal)
-    normal_parts: tuple = (0.0, 0.0, (0.0, 0.0, 0.0))
+    # the pass colour less it leaves to the diffuse closure on the bent normal, and the weight of
+    # those on the smooth normal unraised: a Principled's sheen under its coat)
+    normal_parts: tuple = (0.0, 0.0, (0.0, 0.0, 0.0), 0.0)
     # What the pass-or-stop pick at a surface with transparency adds to the opaque part's
     # weight (the albedo's mean) per view cosine of specular.MU (Cycles weighs a microfacet
     # closure by its albedo estimate at the view, principled.pick_delta); None: nothing

@@ -341,9 +341,11 @@ class Materials:
         # paths that pass) was 0.56x Cycles'
         self.opaque_weight = (self.base + self.translucency).mean(axis=0).astype(F32)
         # the Normal pass's weights of the folded layers' normals (scenedata.Material.normal_parts):
-        # (2, materials) the valid-reflection and unbent closures', (3, materials) their albedo
+        # (3, materials) the valid-reflection, raised unbent and unraised smooth closures', (3,
+        # materials) their albedo
         parts = [getattr(m, 'normal_parts', None) or (0.0, 0.0, (0.0, 0.0, 0.0)) for m in materials]
-        self.normal_weights = np.array([[p[0] for p in parts], [p[1] for p in parts]], F32).reshape(2, -1)
+        self.normal_weights = np.array([[p[0] for p in parts], [p[1] for p in parts],
+                                        [p[3] if len(p) > 3 else 0.0 for p in parts]], F32).reshape(3, -1)
         self.normal_folded = np.ascontiguousarray(np.array([p[2] for p in parts], F32).reshape(-1, 3).T)
         self.any_normal_parts = bool(self.normal_weights.any())
         # Cycles' SD_USE_BUMP_MAP_CORRECTION per material (its reflection normals raised)

@@ -274,7 +274,7 @@ class ShaderClosures:
         base_value = constant_color(node.inputs['Base Color'])[0]
         parts = principled.normal_parts(node, base_value)
         entry = [self._normal_weight * parts[0], self._normal_weight * parts[1], self._normal_weight * parts[2],
-                 self._normal_weight * principled.pick_delta(node, base_value)]
+                 self._normal_weight * principled.pick_delta(node, base_value), self._normal_weight * parts[3]]
         self._normal_parts.append(entry)
         coat = node.inputs.get('Coat Weight')
         coat, coat_ok = constant_value(coat) if coat is not None else (0.0, True)
