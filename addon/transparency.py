@@ -33,14 +33,14 @@ class Transparency:
     the Integrator's state."""
 
     def _opaque_weight_at(self, prim, u, v, mat, back):
-        """(k,) Materials.opaque_weight at hits (prim, u, v) of materials mat, with the colour
-        textures, attribute colours and translucency textures of those that have them."""
+        """((k,) Materials.opaque_weight at hits (prim, u, v) of materials mat, with the colour
+        textures, attribute colours and translucency textures of those that have them; (3, k)
+        the albedo there, which _light_passed reuses for the paths that pass)."""
         albedo = np.take(self.mats.base, mat, axis=1)
         if self._albedo_varies:
             self._albedo_maps(prim, u, v, albedo, back)
-        if self._any_translucent:
-            albedo += self._translucency_at(prim, u, v, back)
-        return albedo.mean(axis=0).astype(F32)
+        weight = albedo + self._translucency_at(prim, u, v, back) if self._any_translucent else albedo
+        return weight.mean(axis=0).astype(F32), albedo
 
     def _through(self, k, camera, path, hits, sinks, chain=None):
         """Rays that hit a transparent surface pass it or stop there, at random by the
@@ -107,14 +107,17 @@ class Transparency:
             if self._any_emissive:
                 self._emission_before_pick(camera, k, path, hits, rows, prim, opacity, sinks)
             t_mean = tau.mean(axis=0)
-            if self._albedo_varies or self.mats.translucency_textures:
+            if chain is not None and (self._albedo_varies or self.mats.translucency_textures):
                 # Cycles weighs the opaque closures by their colours at the point: a textured
                 # one's texel, not the material's constant factor (a sheet of Alpha 0.49 and a
-                # Checker base had stopped too many paths, the Normal pass behind it 0.90x)
-                w_opaque = self._opaque_weight_at(prim, u_hit, v_hit, mat,
-                                                  None if not self._sided else self._back(prim, -D, -D))
+                # Checker base had stopped too many paths, the Normal pass behind it 0.90x).
+                # Only where data passes are written along the chain: elsewhere the pick changes
+                # the noise alone, not the estimate, and the lookups cost 20-30% of a textured
+                # cut-out's render
+                w_opaque, albedo_at = self._opaque_weight_at(prim, u_hit, v_hit, mat,
+                                                             None if not self._sided else self._back(prim, -D, -D))
             else:
-                w_opaque = np.take(self.mats.opaque_weight, mat)
+                w_opaque, albedo_at = np.take(self.mats.opaque_weight, mat), None
             if self.mats.pick_delta is not None:
                 # Cycles weighs a specular layer or metal by its albedo at this view, not averaged
                 # over views (behind a sheet of Alpha 0.44 and Specular 0.5 seen straight on, 4.4%
@@ -153,7 +156,7 @@ class Transparency:
                 # only where the path stopped, a window of 80% Transparent and 20% Diffuse had
                 # 5-8x Cycles' noise.)
                 self._light_passed(k, j, path, sinks, rows, prim, u_hit[gone], v_hit[gone], lit, P, ng, ns, P_off,
-                                   keys, tb)
+                                   keys, tb, None if albedo_at is None else albedo_at[:, gone])
             if (camera and self._glass_film) or self._transmit_split:
                 self._glass_or_clear(camera, path, rows, mat, tau, opacity, p,
                                      self.rng.uniform2(keys, DIM_GLASS + (k << 11) + j)[0])
@@ -289,15 +292,19 @@ class Transparency:
                                         np.ascontiguousarray(tfar[sel]), np.take(skip, sel))
         return hits
 
-    def _light_passed(self, k, j, path, sinks, rows, prim, u, v, opacity, P, ng, ns, P_off, keys, tb):
+    def _light_passed(self, k, j, path, sinks, rows, prim, u, v, opacity, P, ng, ns, P_off, keys, tb, albedo=None):
         """Light sampling at the semi-transparent surfaces (layer j) that paths rows pass (their
         hits prim, u, v, the surface's opacity, points and normals (3, k), keys and transparent
         passes so far tb): the path's throughput so far x the opaque part's weight (opacity x
         albedo), as vertex k's sampling is (the same sinks and light choice), with random
-        dimensions of their own."""
-        thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
-        if self._albedo_varies:
-            self._albedo_maps(prim, u, v, thr, self._back(prim, ng, -np.take(path.D, rows, axis=1)))
+        dimensions of their own. albedo (3, k) or None: the albedo at the hits, with its maps,
+        where the pick computed it."""
+        if albedo is not None:
+            thr = albedo * opacity * np.take(path.thr, rows, axis=1)
+        else:
+            thr = np.take(self._tri_albedo, prim, axis=1) * opacity * np.take(path.thr, rows, axis=1)
+            if self._albedo_varies:
+                self._albedo_maps(prim, u, v, thr, self._back(prim, ng, -np.take(path.D, rows, axis=1)))
         side = self._back(prim, ng, -np.take(path.D, rows, axis=1)) if self._sided and self._bumped else None
         ns, bump = self._bent_normals(prim, u, v, ns, ng, side)
         u_pick = None
