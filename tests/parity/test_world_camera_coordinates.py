@@ -31,9 +31,7 @@ def _scene(coordinate, texture, output, camera):
         cam = scenes.camera(location=(2.0, -3.0, 1.0), rotation=(math.radians(80), 0.3, math.radians(25)),
                             lens=28.0, kind=camera, ortho_scale=7.0)
         cam.data.shift_x, cam.data.shift_y = 0.15, -0.1
-        bpy_data = old.data
         old.users_collection[0].objects.unlink(old)
-        del bpy_data
     nt = world.node_tree
     tex = nt.nodes.new(texture[0])
     for k, v in texture[1].items():
