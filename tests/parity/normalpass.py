@@ -48,3 +48,20 @@ def normal_pass_diff(tmp_path, sc, mat, subdivisions=2, cube=False, smooth=True)
     seen = np.abs(c).sum(-1) > 0
     assert seen.sum() > 200
     return np.abs(c - d).max(-1)[seen]
+
+
+def passing_share(tmp_path, sc, engine):
+    """The share of camera paths passing a sheet above a grey floor (z = -1) under a grey world,
+    read as the Normal pass's Z (written by the paths that pass the sheet, whose floor faces +Z),
+    the mean of two seeds at 64 spp."""
+    scenes.plane('Floor', size=40, location=(0, 0, -1), materials=[scenes.diffuse('D', (0.5, 0.5, 0.5))])
+    scenes.world((0.3, 0.3, 0.3), 1.0)
+    sc.view_layers[0].use_pass_normal = True
+    sc.render.engine = engine
+    sc.cycles.samples = sc.dacrt.samples = 64
+    shares = []
+    for seed in range(2):
+        sc.cycles.seed = sc.dacrt.seed = seed
+        ch = scenes.read_exr(scenes.render_exr(os.path.join(tmp_path, f'{engine}{seed}.exr'), sc, multilayer=True))
+        shares.append(float(ch['ViewLayer.Normal.Z'].mean()))
+    return np.mean(shares)

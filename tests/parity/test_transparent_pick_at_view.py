@@ -7,13 +7,12 @@ the paths that pass, so its Z is the passing share. Before, the pick weighed the
 albedo averaged over views: straight on with Specular IOR Level 0.5, 0.956 against Cycles'
 0.972."""
 import math
-import os
 
 import bpy
-import numpy as np
 import pytest
 
 from tests.addon import scenes
+from tests.parity.normalpass import passing_share
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -33,17 +32,7 @@ def _passing_share(tmp_path, engine, metallic, tilt):
     p.inputs['Roughness'].default_value = 0.3
     p.inputs['Specular IOR Level'].default_value = 0.5
     scenes.plane('Sheet', size=40, materials=[mat])
-    scenes.plane('Floor', size=40, location=(0, 0, -1), materials=[scenes.diffuse('D', (0.5, 0.5, 0.5))])
-    scenes.world((0.3, 0.3, 0.3), 1.0)
-    sc.view_layers[0].use_pass_normal = True
-    sc.render.engine = engine
-    sc.cycles.samples = sc.dacrt.samples = 64
-    shares = []
-    for seed in range(2):
-        sc.cycles.seed = sc.dacrt.seed = seed
-        ch = scenes.read_exr(scenes.render_exr(os.path.join(tmp_path, f'{engine}{seed}.exr'), sc, multilayer=True))
-        shares.append(float(ch['ViewLayer.Normal.Z'].mean()))
-    return np.mean(shares)
+    return passing_share(tmp_path, sc, engine)
 
 
 @pytest.mark.parametrize('metallic, tilt', [(0.0, 0.0), (0.0, 1.4), (0.5, 0.0)])

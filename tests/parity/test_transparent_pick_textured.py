@@ -6,13 +6,13 @@ factor (the Alpha times 1, for these dark colours 3-20x the texel's weight), so 
 paths stopped: the Normal pass (written by the paths that pass, its Z their share) 0.55 where
 Cycles gives 0.90 (Checker), 0.35 against 0.95 (attribute); fuzz 9386, a sphere of Alpha 0.49
 and a Checker base, had its Normal pass 0.97x Cycles' on channel means."""
-import os
 
 import bpy
 import numpy as np
 import pytest
 
 from tests.addon import scenes
+from tests.parity.normalpass import passing_share
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -51,17 +51,7 @@ def _passing_share(tmp_path, engine, kind):
         for i, c in enumerate([(0.02, 0.05, 0.1, 1.0), (0.3, 0.1, 0.05, 1.0), (0.05, 0.05, 0.05, 1.0),
                                (0.1, 0.2, 0.1, 1.0)]):
             attr.data[i].color = c
-    scenes.plane('Floor', size=40, location=(0, 0, -1), materials=[scenes.diffuse('D', (0.5, 0.5, 0.5))])
-    scenes.world((0.3, 0.3, 0.3), 1.0)
-    sc.view_layers[0].use_pass_normal = True
-    sc.render.engine = engine
-    sc.cycles.samples = sc.dacrt.samples = 64
-    shares = []
-    for seed in range(2):
-        sc.cycles.seed = sc.dacrt.seed = seed
-        ch = scenes.read_exr(scenes.render_exr(os.path.join(tmp_path, f'{engine}{seed}.exr'), sc, multilayer=True))
-        shares.append(float(ch['ViewLayer.Normal.Z'].mean()))
-    return np.mean(shares)
+    return passing_share(tmp_path, sc, engine)
 
 
 @pytest.mark.parametrize('kind', ['checker', 'image', 'attribute'])
