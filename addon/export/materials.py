@@ -61,6 +61,41 @@ IGNORED_OUTPUTS = ('Volume',)
 NAN_NOT_ZERO_IN_CYCLES = {'BSDF_HAIR_PRINCIPLED': (('Radial Roughness', 'Offset', 'Random Roughness'), "black"),
                           'BSDF_GLOSSY': (('Anisotropy',), "otherwise")}
 NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
+# Inputs at float32's largest magnitude (Blender stores an 'inf' typed as 3.4e38) that Cycles
+# computes in float32 into what DACRT does not reproduce (measured, Cycles 5.0.1, each input
+# alone on a lit plane, undenoised): type -> (names, signs, what Cycles renders). A colour of
+# 3.4e38 overflows Cycles' film sums (inf) where DACRT sums in float64 or drops the sample; a
+# Noise's octaves overflow to NaN (black). Signs: the values measured to differ (-3.4e38 typed
+# into a colour renders as DACRT's).
+_FILM = "inf or NaN pixels (its float32 film sums overflow)"
+HUGE_UNLIKE_CYCLES = {
+    'COMBINE_COLOR': (('Red', 'Green', 'Blue'), (1,), _FILM), 'COMBXYZ': (('X', 'Y', 'Z'), (1,), _FILM),
+    'MIX': (('A', 'B'), (1,), _FILM), 'MIX_RGB': (('Color1', 'Color2'), (1,), _FILM),
+    'TEX_BRICK': (('Color1', 'Color2'), (1,), _FILM), 'BSDF_TRANSLUCENT': (('Color',), (1,), _FILM),
+    'HUE_SAT': (('Value',), (1,), _FILM), 'BRIGHTCONTRAST': (('Contrast',), (1, -1), _FILM),
+    'INVERT': (('Fac',), (1, -1), _FILM),
+    'BSDF_GLASS': (('Color',), (1,), "black (its weights overflow)"),
+    'BSDF_REFRACTION': (('Color',), (1,), "black (its weights overflow)"),
+    'TEX_NOISE': (('Scale', 'Lacunarity', 'Distortion'), (1, -1), "black where its octaves' coordinates overflow (NaN)")}
+
+
+def _huge_unlike_cycles(ntree, keep):
+    """[(inputs, what Cycles renders)] of the unlinked HUGE_UNLIKE_CYCLES inputs that hold float32's
+    largest magnitude with a sign measured to differ, per node type."""
+    top = float(np.finfo(np.float32).max)
+    found = {}
+    for node in getattr(ntree, 'nodes', ()):
+        entry = HUGE_UNLIKE_CYCLES.get(node.type)
+        if entry is None or not keep(node):
+            continue
+        names, signs, what = entry
+        for sock in node.inputs:
+            if sock.name not in names or not sock.enabled or sock.is_linked:
+                continue
+            v = np.atleast_1d(np.asarray(getattr(sock, 'default_value', 0.0), np.float64))[:3]
+            if any(abs(x) >= top and np.sign(x) in signs for x in v):
+                found.setdefault(what, []).append(f"'{sock.name}' of '{node.name}'")
+    return [(bad, what) for what, bad in found.items()]
 
 
 def _nan_inputs_named(ntree, table, keep):
@@ -409,6 +444,9 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                               (differs, "NaN for {}: the texture computes with it, not as Cycles' does")):
                 if bad:
                     reasons.append(said.format(', '.join(bad)))
+            for bad, what in _huge_unlike_cycles(ntree, rendered):
+                reasons.append(f"{', '.join(bad)} at float32's largest (an 'inf' typed: Blender stores 3.4e38), "
+                               f"where Cycles renders {what}; DACRT does not reproduce that float32 overflow")
             # (Cycles' proxy for such an output has nothing linked: it reads 0, whatever the
             # interface's default; the input's own value had been used, silently)
             dead = dead_group_outputs(ntree)
