@@ -52,8 +52,12 @@ inline void pcg2d(const int32_t k[2], float out[2]) {
     out[1] = float(int32_t(y & 0x7FFFFFFFu)) * s;
 }
 
-// An integer cell the way Cycles' make_int3(floor(x)) converts (0 beyond int's range).
-inline int32_t cell_of(float f) { return std::fabs(f) < 2.1e9f ? int32_t(f) : 0; }
+// An integer cell the way Cycles' make_int3(floor(x)) converts on the CPU (SSE's truncating
+// conversion): beyond int's range, inf and NaN give INT_MIN, its 'integer indefinite' (a Scale
+// typed 'inf', 3.4e38, puts every point there: Cycles' distance 0.6309, 0 had given 0.3521).
+inline int32_t cell_of(float f) {
+    return f >= -2147483648.0f && f < 2147483648.0f ? int32_t(f) : INT32_MIN;
+}
 
 
 // --- the whole node (svm_node_tex_voronoi) -------------------------------------------------
@@ -220,7 +224,7 @@ struct Cell {
         for (int c = 0; c < D; ++c) {
             cellf[c] = std::floor(coord[c]);
             local[c] = coord[c] - cellf[c];
-            cell[c] = std::isfinite(cellf[c]) ? cell_of(cellf[c]) : 0;
+            cell[c] = cell_of(cellf[c]);
         }
     }
     // the jittered point of the cell at offset off, relative to this cell

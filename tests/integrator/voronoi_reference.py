@@ -48,7 +48,10 @@ def voronoi_f1(p, randomness, metric='EUCLIDEAN'):
     r = np.clip(np.broadcast_to(np.asarray(randomness, F32), (n,)), F32(0.0), F32(1.0))[:, None]
     cellf = np.floor(p)
     local = p - cellf
-    cell = cellf.astype(np.int64).astype(I32)
+    # Cycles' make_int3 on the CPU truncates with SSE: beyond int32, inf and NaN give INT_MIN
+    with np.errstate(invalid='ignore'):
+        inside = (cellf >= F32(-2147483648.0)) & (cellf < F32(2147483648.0))
+        cell = np.where(inside, np.where(inside, cellf, 0).astype(np.int64), np.iinfo(I32).min).astype(I32)
     best = np.full(n, np.finfo(F32).max, F32)
     target_off = np.zeros((n, dims), I32)
     target = np.zeros((n, dims), F32)
