@@ -427,11 +427,11 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
 
             textures = nan_inputs(ntree, PROCEDURAL_TYPES, rendered)
             # (the textures take a NaN as Cycles' kernels do: clamped where Cycles clamps it, a
-            # Noise's NaN Scale black; but a Noise's NaN Lacunarity or Distortion and a Voronoi's
-            # NaN Scale (cells hashed from NaN) do not give Cycles' result)
+            # Noise's NaN Scale black, a Voronoi's NaN Scale the cell INT_MIN as Cycles' CPU
+            # conversion gives it; but a Noise's NaN Lacunarity or Distortion does not give
+            # Cycles' result)
             differs = [b for b in nan_inputs(ntree, {'TEX_NOISE'}, rendered)
                        if b.startswith("'Lacunarity' of ") or b.startswith("'Distortion' of ")]
-            differs += [b for b in nan_inputs(ntree, {'TEX_VORONOI'}, rendered) if b.startswith("'Scale' of ")]
             unlike = _nan_unlike_cycles(ntree, rendered)
             apart = [b for bad, _ in unlike for b in bad]
             through = _nan_inputs_named(ntree, NAN_COMPUTED, rendered)
