@@ -65,3 +65,13 @@ def test_a_large_finite_or_negative_colour_is_not_said_to_overflow(scene, said, 
     """(1e30 is no overflow; -3.4e38 in a Combine Color rendered in Cycles as in DACRT on a lit diffuse plane: no message)"""
     _emitting_plane(scene, 'ShaderNodeCombineColor', {'Red': value}, 'Color')
     assert "float32's largest" not in " | ".join(said)
+
+
+def test_voronoi_of_a_nan_scale_is_cycles_cell(scene, said):
+    """A NaN Scale (a script's or driver's): the same conversion gives INT_MIN for NaN cells;
+    Cycles 5.0.1 rendered (0.3115339, 0.578935, 0.6981134) at every pixel, now DACRT's too (it
+    had been cell 0's, said to differ)."""
+    img = _emitting_plane(scene, 'ShaderNodeTexVoronoi', {'Scale': float('nan')}, 'Color')
+    np.testing.assert_allclose(img[..., :3], np.broadcast_to([0.3115339, 0.57893497, 0.69811344], img[..., :3].shape),
+                               atol=1e-5)
+    assert "NaN computed through the node as Cycles computes it for 'Scale' of 'Voronoi Texture'" in " | ".join(said)
