@@ -221,7 +221,7 @@ DACRT_LANES float wrap(float x) {
 
 // Cycles' snoise_1d to snoise_4d of every lane: the noise repeats every 100000 on each axis
 // (fmod, against float32's spacing far out; past 1e6 the point also moves half a cell), scaled,
-// 0 where not finite. Only lanes beyond wrap's range (1e14, inf, NaN) call std::fmod, after the
+// NaN where a coordinate is not finite (as Cycles 5.0). Only lanes beyond wrap's range (1e14, inf, NaN) call std::fmod, after the
 // vector pass: at Detail 15 the last octaves' coordinates are past 100000 in every lane.
 template <int D>
 DACRT_LANES void snoise_lanes(const Points& p, Lanes& out) {
@@ -251,7 +251,9 @@ DACRT_LANES void snoise_lanes(const Points& p, Lanes& out) {
             r = perlin_3d(q[0][k], q[1][k], q[2][k]);
         else
             r = perlin_4d(q[0][k], q[1][k], q[2][k], q[3][k]);
-        r = select(mask(std::fabs(r) <= 3.40282347e38f), r, 0.0f);  // (!isfinite: 0)
+        // a NaN (from a coordinate that overflowed to inf: a Scale or Lacunarity typed 'inf',
+        // Blender's 3.4e38) is passed on, as Cycles 5.0's snoise does (no ensure_finite): it
+        // renders black there; zeroed, it had rendered grey (0.5 + the other octaves)
         out[k] = kScale * r;
     }
 }

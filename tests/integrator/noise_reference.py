@@ -188,16 +188,15 @@ _PERLIN = {1: perlin_1d, 2: perlin_2d, 3: perlin_3d, 4: perlin_4d}
 
 
 def snoise(p, dtype=F32):
-    """Cycles' signed noise snoise_1d to snoise_4d (p (n, 1..4)): scaled Perlin noise, 0 where it
-    is not finite. dtype np.float64: the same formulas in double (what float32's roundings cost;
+    """Cycles' signed noise snoise_1d to snoise_4d (p (n, 1..4)): scaled Perlin noise, NaN where
+    a coordinate is not finite. dtype np.float64: the same formulas in double (what float32's roundings cost;
     exact for the hashes, whose lattice cells are the same below 2^24)."""
     d = p.shape[1]
     # Cycles repeats the noise every 100000 on each axis (fmod), and past 1e6 moves the point
     # half a cell
     with np.errstate(invalid='ignore'):
         p = (np.fmod(p, F32(100000.0)) + F32(0.5) * (np.abs(p) >= F32(1000000.0))).astype(dtype)
-    r = _PERLIN[d](p)
-    r = np.where(np.isfinite(r), r, F32(0.0))
+    r = _PERLIN[d](p)      # a NaN (a coordinate overflowed to inf) passed on, as Cycles 5.0's
     return _NOISE_SCALE[d] * r
 
 
