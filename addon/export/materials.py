@@ -64,9 +64,9 @@ NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
 # Inputs at float32's largest magnitude (Blender stores an 'inf' typed as 3.4e38) that Cycles
 # computes in float32 into what DACRT does not reproduce (measured, Cycles 5.0.1, each input
 # alone on a lit plane, undenoised): type -> (names, signs, what Cycles renders). A colour of
-# 3.4e38 overflows Cycles' film sums (inf) where DACRT sums in float64 or drops the sample; a
-# Noise's octaves overflow to NaN (black). Signs: the values measured to differ (-3.4e38 typed
-# into a colour renders as DACRT's).
+# 3.4e38 overflows Cycles' film sums (inf) where DACRT sums in float64 or drops the sample.
+# (A Noise's Scale or Lacunarity of it renders as Cycles': octaves overflow to NaN, black.)
+# Signs: the values measured to differ (-3.4e38 typed into a colour renders as DACRT's).
 _FILM = "inf or NaN pixels (its float32 film sums overflow)"
 HUGE_UNLIKE_CYCLES = {
     'COMBINE_COLOR': (('Red', 'Green', 'Blue'), (1,), _FILM), 'COMBXYZ': (('X', 'Y', 'Z'), (1,), _FILM),
@@ -76,7 +76,8 @@ HUGE_UNLIKE_CYCLES = {
     'INVERT': (('Fac',), (1, -1), _FILM),
     'BSDF_GLASS': (('Color',), (1,), "black (its weights overflow)"),
     'BSDF_REFRACTION': (('Color',), (1,), "black (its weights overflow)"),
-    'TEX_NOISE': (('Scale', 'Lacunarity', 'Distortion'), (1, -1), "black where its octaves' coordinates overflow (NaN)")}
+    'TEX_NOISE': (('Distortion',), (1, -1), "black where its octaves overflow to NaN, and elsewhere values DACRT's "
+                                             "far-out coordinates do not match (a plane: mean 0.124 against 0.142)")}
 
 
 def _huge_unlike_cycles(ntree, keep):
