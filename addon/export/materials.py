@@ -68,34 +68,35 @@ NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
 # (A Noise's Scale or Lacunarity of it renders as Cycles': octaves overflow to NaN, black.)
 # Signs: the values measured to differ (-3.4e38 typed into a colour renders as DACRT's).
 _FILM = "inf or NaN pixels (its float32 film sums overflow)"
-HUGE_UNLIKE_CYCLES = {
-    'COMBINE_COLOR': (('Red', 'Green', 'Blue'), (1,), _FILM), 'COMBXYZ': (('X', 'Y', 'Z'), (1,), _FILM),
-    'MIX': (('A', 'B'), (1,), _FILM), 'MIX_RGB': (('Color1', 'Color2'), (1,), _FILM),
-    'TEX_BRICK': (('Color1', 'Color2'), (1,), _FILM), 'BSDF_TRANSLUCENT': (('Color',), (1,), _FILM),
-    'HUE_SAT': (('Value',), (1,), _FILM), 'BRIGHTCONTRAST': (('Contrast',), (1, -1), _FILM),
-    'INVERT': (('Fac',), (1, -1), _FILM),
-    'BSDF_GLASS': (('Color',), (1,), "black (its weights overflow)"),
-    'BSDF_REFRACTION': (('Color',), (1,), "black (its weights overflow)"),
-    'TEX_NOISE': (('Distortion',), (1, -1), "black where its octaves overflow to NaN, and elsewhere values DACRT's "
-                                             "far-out coordinates do not match (a plane: mean 0.124 against 0.142)")}
+HUGE_UNLIKE_CYCLES = (
+    ('COMBINE_COLOR', ('Red', 'Green', 'Blue'), (1,), _FILM), ('COMBXYZ', ('X', 'Y', 'Z'), (1,), _FILM),
+    ('MIX', ('A', 'B'), (1,), _FILM), ('MIX_RGB', ('Color1', 'Color2'), (1,), _FILM),
+    ('TEX_BRICK', ('Color1', 'Color2'), (1,), _FILM), ('BSDF_TRANSLUCENT', ('Color',), (1,), _FILM),
+    ('HUE_SAT', ('Value',), (1,), _FILM), ('BRIGHTCONTRAST', ('Contrast',), (1, -1), _FILM),
+    ('INVERT', ('Factor',), (1, -1), _FILM),
+    ('HUE_SAT', ('Factor',), (1, -1), "other values (a lit plane: 3.3e31 against DACRT's 5.4e30; black for -3.4e38)"),
+    ('BSDF_GLASS', ('Color',), (1,), "black (its weights overflow)"),
+    ('BSDF_REFRACTION', ('Color',), (1,), "black (its weights overflow)"),
+    ('TEX_NOISE', ('Distortion',), (1, -1), "black where its octaves overflow to NaN, and elsewhere values DACRT's "
+                                            "far-out coordinates do not match (a plane: mean 0.124 against 0.142)"))
 
 
 def _huge_unlike_cycles(ntree, keep):
     """[(inputs, what Cycles renders)] of the unlinked HUGE_UNLIKE_CYCLES inputs that hold float32's
-    largest magnitude with a sign measured to differ, per node type."""
+    largest magnitude with a sign measured to differ (by the input's name as the UI shows it)."""
     top = float(np.finfo(np.float32).max)
     found = {}
     for node in getattr(ntree, 'nodes', ()):
-        entry = HUGE_UNLIKE_CYCLES.get(node.type)
-        if entry is None or not keep(node):
+        entries = [e for e in HUGE_UNLIKE_CYCLES if e[0] == node.type]
+        if not entries or not keep(node):
             continue
-        names, signs, what = entry
-        for sock in node.inputs:
-            if sock.name not in names or not sock.enabled or sock.is_linked:
-                continue
-            v = np.atleast_1d(np.asarray(getattr(sock, 'default_value', 0.0), np.float64))[:3]
-            if any(abs(x) >= top and np.sign(x) in signs for x in v):
-                found.setdefault(what, []).append(f"'{sock.name}' of '{node.name}'")
+        for _, names, signs, what in entries:
+            for sock in node.inputs:
+                if sock.name not in names or not sock.enabled or sock.is_linked:
+                    continue
+                v = np.atleast_1d(np.asarray(getattr(sock, 'default_value', 0.0), np.float64))[:3]
+                if any(abs(x) >= top and np.sign(x) in signs for x in v):
+                    found.setdefault(what, []).append(f"'{sock.name}' of '{node.name}'")
     return [(bad, what) for what, bad in found.items()]
 
 
