@@ -50,6 +50,9 @@ def test_voronoi_of_an_inf_typed_scale_is_cycles_cell(scene, said):
      "'Distortion' of 'Noise Texture' at float32's largest"),
     ('ShaderNodeBrightContrast', {'Contrast': -float('inf')}, 'Color',
      "'Contrast' of 'Brightness/Contrast' at float32's largest"),
+    ('ShaderNodeInvert', {'Factor': -float('inf')}, 'Color', "'Factor' of 'Invert Color' at float32's largest"),
+    ('ShaderNodeHueSaturation', {'Factor': float('inf')}, 'Color',
+     "'Factor' of 'Hue/Saturation/Value' at float32's largest"),
 ])
 def test_an_inf_typed_input_cycles_overflows_is_said(scene, said, node_type, settings, output, words):
     _emitting_plane(scene, node_type, settings, output)
