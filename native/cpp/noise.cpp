@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 #include "dispatch.h"
 #include "lookup3.h"
@@ -258,6 +259,10 @@ DACRT_LANES void snoise_lanes(const Points& p, Lanes& out) {
     }
 }
 
+// A NaN result as one NaN: an octave's NaN (passed on, as Cycles') reaches the sums through
+// operands whose order each ISA's code picks, and x86 keeps the first NaN operand's sign.
+inline float one_nan(float v) { return v == v ? v : std::numeric_limits<float>::quiet_NaN(); }
+
 // The per-point parameters of a block's lanes.
 struct Params {
     Lanes detail, rough, lac, offset, gain;
@@ -485,12 +490,12 @@ DACRT_LANES void noise_range(const float* p, size_t b, size_t e, const NoisePara
         const size_t m = std::min(size_t(kLanes), e - i0);
         Lanes value;
         noise_select<D>(q, nullptr, k.type, k.normalize, w, value, snoise);
-        for (size_t j = 0; j < m; ++j) fac[i0 + j] = value[j];
+        for (size_t j = 0; j < m; ++j) fac[i0 + j] = one_nan(value[j]);
         if (color) {
-            for (size_t j = 0; j < m; ++j) color[3 * (i0 + j)] = value[j];
+            for (size_t j = 0; j < m; ++j) color[3 * (i0 + j)] = one_nan(value[j]);
             for (int c = 1; c < 3; ++c) {
                 noise_select<D>(q, offsets[D + c - 1], k.type, k.normalize, w, value, snoise);
-                for (size_t j = 0; j < m; ++j) color[3 * (i0 + j) + c] = value[j];
+                for (size_t j = 0; j < m; ++j) color[3 * (i0 + j) + c] = one_nan(value[j]);
             }
         }
     }
