@@ -67,7 +67,7 @@ NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
 # 3.4e38 overflows Cycles' film sums (inf) where DACRT sums in float64 or drops the sample.
 # (A Noise's Scale or Lacunarity of it renders as Cycles': octaves overflow to NaN, black.)
 # Signs: the values measured to differ (-3.4e38 typed into a colour renders as DACRT's).
-_FILM = "inf or NaN pixels (its float32 film sums overflow)"
+_FILM = "inf or NaN pixels (its float32 arithmetic or film sums overflow)"
 HUGE_UNLIKE_CYCLES = (
     ('COMBINE_COLOR', ('Red', 'Green', 'Blue'), (1,), _FILM), ('COMBXYZ', ('X', 'Y', 'Z'), (1,), _FILM),
     ('MIX', ('A', 'B'), (1,), _FILM), ('MIX_RGB', ('Color1', 'Color2'), (1,), _FILM),
@@ -75,8 +75,8 @@ HUGE_UNLIKE_CYCLES = (
     ('HUE_SAT', ('Value',), (1,), _FILM), ('BRIGHTCONTRAST', ('Contrast',), (1, -1), _FILM),
     ('INVERT', ('Factor',), (1, -1), _FILM),
     ('HUE_SAT', ('Factor',), (1, -1), "other values (a lit plane: 3.3e31 against DACRT's 5.4e30; black for -3.4e38)"),
-    ('BSDF_GLASS', ('Color',), (1,), "black (its weights overflow)"),
-    ('BSDF_REFRACTION', ('Color',), (1,), "black (its weights overflow)"),
+    ('BSDF_GLASS', ('Color',), (1,), "black"),
+    ('BSDF_REFRACTION', ('Color',), (1,), "black"),
     ('TEX_NOISE', ('Distortion',), (1, -1), "black where its octaves overflow to NaN, and elsewhere values DACRT's "
                                             "far-out coordinates do not match (a plane: mean 0.124 against 0.142)"))
 
