@@ -144,16 +144,23 @@ class ShaderClosures:
             self._portal = True
             return Closure(transparent=np.clip(np.nan_to_num(np.array(color[:3], np.float64)), 0.0, None))
         if t == 'MIX_SHADER':
+            # the per-BSDF normal entries the sides note as each try reads them: dropped when a
+            # try is not taken, as the next reads them again (kept, a Glossy under a Checker
+            # factor beside a Holdout counted 3x in the Normal pass's weights: 1 + 0.5 for 0.5)
+            noted = len(self._normal_parts), len(self._normals)
             alpha_mix = self._alpha_mix(node, reasons, depth)
             if alpha_mix is not None:
                 return alpha_mix
+            self._forget_normals(noted)
             textured = self._textured_mix(node, reasons, depth)
             if textured is not None:
                 return textured
+            self._forget_normals(noted)
             said = []       # (why the per-point mix was not taken: said once, with the value used)
             varying = self._procedural_mix(node, reasons, depth, said)
             if varying is not None:
                 return varying
+            self._forget_normals(noted)
             fac = mix_factor(node, reasons, "Mix Shader", said=said)
             if fac in (0.0, 1.0) and nodeeval.light_path_active():
                 # built for one ray kind (rayvariants.py): the side it picks alone, as Cycles
@@ -243,6 +250,11 @@ class ShaderClosures:
             color, _ = constant_color(sock)
             return _clamped_weight(Closure(const=color))
         return Closure(const=DEFAULT_ALBEDO)
+
+    def _forget_normals(self, noted):
+        """Drop the _normal_parts and _normals entries noted after their lengths noted."""
+        del self._normal_parts[noted[0]:]
+        del self._normals[noted[1]:]
 
     def _reflective(self, node, closure):
         """closure, a Glossy or Metallic BSDF's stand-in, noted for the Normal pass
