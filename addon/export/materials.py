@@ -706,6 +706,10 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         (0.91x Cycles, silently), and a normal map from one BSDF and a bump from another
         chained for all (0.74x)."""
         entries = [e for e in self._normals if e[1] > 0.0]      # (Cycles drops a weight of 0)
+        # a Refraction BSDF's (flagged: its light passes unbent) only where no other BSDF gives
+        # the material its normal: it bends the Normal pass alone
+        passing = [e for e in entries if e[5:]]
+        entries = [e for e in entries if not e[5:]] or passing
         if not entries:
             return None, None
 
@@ -718,6 +722,10 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             weights[key(e)] = weights.get(key(e), 0.0) + e[1]
             first.setdefault(key(e), e)
         best = max(weights, key=weights.get)            # (dicts keep order: the first on a tie)
+        left = [e for e in passing if key(e) != best]
+        if left and entries is not passing:
+            reasons.append(f"Refraction BSDF '{left[0][0]}' Normal input left out of the Normal pass as well "
+                           "(the material's other BSDFs give it theirs)")
         if len(weights) > 1:
             def said(k):
                 e = first[k]

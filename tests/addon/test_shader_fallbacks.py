@@ -213,7 +213,8 @@ def test_normal_inputs_of_stand_in_shaders_are_used_or_reported(scene, exported)
     rendered 0.296 on both halves where Cycles gives 0.442 and 0 (now 0.524 and 0, as a Diffuse
     stand-in under that map). The stand-ins now shade with the map, as the Diffuse BSDF does
     (a Bump there is reported as on a Diffuse); the Refraction's light passes unbent and the
-    coat shades with the base's normal, both said."""
+    coat shades with the base's normal, both said. The Refraction's map bends the Normal pass
+    alone, unless another BSDF gives the material its normal (said: the pass had lost it silently)."""
     mats = []
     for kind in ('ShaderNodeBsdfGlossy', 'ShaderNodeBsdfMetallic', 'ShaderNodeBsdfGlass', 'ShaderNodeBsdfToon',
                  'ShaderNodeBsdfRefraction'):
@@ -227,11 +228,23 @@ def test_normal_inputs_of_stand_in_shaders_are_used_or_reported(scene, exported)
     nt.links.new(nt.nodes.new('ShaderNodeTexNoise').outputs['Fac'], bump.inputs['Height'])
     nt.links.new(bump.outputs['Normal'], glossy.inputs['Normal'])
     nt.links.new(glossy.outputs[0], out.inputs['Surface'])
-    table = _table(exported, *mats, coat, no_coat, bumped)
+    # a Refraction beside a Diffuse: the Diffuse's unbent normal for the material, the Normal pass too
+    beside, refraction = _normal_mapped("Beside", 'ShaderNodeBsdfRefraction')
+    nt = beside.node_tree
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], mix.inputs[1])
+    nt.links.new(refraction.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+    table = _table(exported, *mats, coat, no_coat, bumped, beside)
     for kind in ('ShaderNodeBsdfGlossy', 'ShaderNodeBsdfMetallic', 'ShaderNodeBsdfGlass', 'ShaderNodeBsdfToon'):
         assert table[kind].normal_texture is not None, kind
-    assert table['ShaderNodeBsdfRefraction'].normal_texture is None
+    # (the Refraction's map for the Normal pass alone: tests/parity/test_refraction_normal_pass.py)
+    assert table['ShaderNodeBsdfRefraction'].normal_texture is not None
     assert "Refraction BSDF Normal input ignored" in table['ShaderNodeBsdfRefraction'].approximated
+    assert "Normal pass" not in table['ShaderNodeBsdfRefraction'].approximated
+    assert table["Beside"].normal_texture is None
+    assert "Refraction BSDF 'Refraction BSDF' Normal input left out of the Normal pass" in \
+        table["Beside"].approximated
     assert "Principled Coat Normal ignored" in table["Coat"].approximated
     assert "Coat Normal" not in table["No coat"].approximated        # no coat: nothing dropped
     assert len(table["Bumped"].bumps) == 1 and "Normal" not in table["Bumped"].approximated   # a bump per point
