@@ -14,7 +14,7 @@ from .bump import bump_nodes, compile_bump
 from .closure import Texture
 from .images import MISSING_IMAGE, WHOLE, associates_alpha, image_pixels, udim_tiles
 from .imageuser import user_frame
-from .normalmaps import normal_map_at
+from .normalmaps import normal_map_at, normal_map_node
 from .texelbaking import channel_line, lookup_chain
 
 # the image extensions the material export implements (another is read as repeat, reported)
@@ -122,9 +122,17 @@ class ImageTextures:
             if steps:
                 bump_at = len(self._bumps)
                 self._bumps.append((tuple(output_key(b, None) for b in nodes), steps))
+        # one Normal Map node feeding several BSDFs is one map (its procedural colour, compiled
+        # again, had another key: 'BSDFs with different normal maps' was said of a shared one)
+        source = normal_map_node(socket)
+        source = None if source is None else output_key(source, None)
+        if source in self._normal_map_of:
+            self._normals.append((node.name, self._normal_weight, self._normal_map_of[source], bump_at,
+                                  nodes[0].name if nodes else ''))
+            return
         found = normal_map_at(socket, reasons, image_reader=self._texture)
         if found is not None:
-            map_at = len(self._normal_maps)
+            map_at = self._normal_map_of[source] = len(self._normal_maps)
         self._normals.append((node.name, self._normal_weight, map_at, bump_at, nodes[0].name if nodes else ''))
         if found is not None:
             image, strength, uv_map, chain, space, colour, strength_map = found

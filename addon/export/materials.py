@@ -193,7 +193,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._attribute_names = []      # the attributes a build read (_pixels_of)
         self._image_probe = None        # what images read instead of their texels (_product_map)
         self._uv_names = []
-        self._normal_maps = []
+        self._normal_maps, self._normal_map_of = [], {}
         self._normals, self._normal_weight, self._normal_parts = [], 1.0, []    # (see _normal_input)
         # colour chains that read an attribute compiled per point (_build, a chain not affine in it)
         self._attributes_per_point = False
@@ -391,6 +391,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._uv_names = []           # the UV map each image this material reads asks for
         self._uv_several = None
         self._normal_maps = []        # (Texture, strength, UV map, space, strength per point) of its BSDFs' normal maps
+        self._normal_map_of = {}      # {Normal Map node's output_key: index in _normal_maps}
         self._bumps = []              # (Bump node keys, scenedata.Bump tuple) of its BSDFs' Bump chains
         self._normals = []            # per BSDF read: (name, Mix weight, normal map index, bump index)
         self._normal_weight = 1.0

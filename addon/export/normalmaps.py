@@ -59,6 +59,13 @@ def tangent_normal_map(node, reasons):
 NON_TANGENT_SPACES = ('OBJECT', 'WORLD', 'BLENDER_OBJECT', 'BLENDER_WORLD')
 
 
+def normal_map_node(socket):
+    """The node that bends the normal socket receives (a Normal Map, or what normal_map_at
+    says it ignores), or None: unbent."""
+    link = _normal_link(socket) if socket is not None else None
+    return None if link is None else link.from_node
+
+
 def normal_map_at(socket, reasons, image_reader=None):
     """What feeds a Normal socket (or None: unbent, or not followed, said): a BSDF's, or the
     innermost Bump node's (export/bump.py). A Normal Map node: (image node or None, strength,
