@@ -707,12 +707,14 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         (0.91x Cycles, silently), and a normal map from one BSDF and a bump from another
         chained for all (0.74x)."""
         entries = [e for e in self._normals if e[1] > 0.0]      # (Cycles drops a weight of 0)
-        # a Refraction BSDF's (flagged: its light passes unbent) only where no other BSDF gives
-        # the material its normal: it bends the Normal pass alone
+        # a Refraction BSDF's (flagged with what reading it says: its light passes unbent) only
+        # where no other BSDF gives the material its normal: it bends the Normal pass alone
         passing = [e for e in entries if e[5:]]
         entries = [e for e in entries if not e[5:]] or passing
         if not entries:
             return None, None
+        if entries is passing:
+            reasons.extend(dict.fromkeys(note for e in passing for note in e[5]))
 
         def key(entry):
             m, b = entry[2], entry[3]

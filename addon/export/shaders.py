@@ -226,9 +226,11 @@ class ShaderClosures:
                 reasons.append("Refraction BSDF Normal input ignored: its light passes unbent")
                 # its normal map and bump, noted for the Normal pass alone: the material's normal
                 # where no other BSDF gives one (materials._normal_choice), as its light passes
-                # unbent whatever the normal (it had been the smooth one, 0.65 off Cycles')
-                self._normal_input(node, reasons)
-                self._normals[-1] += (True,)
+                # unbent whatever the normal (it had been the smooth one, 0.65 off Cycles'); what
+                # reading them says, said only then
+                notes = []
+                self._normal_input(node, notes)
+                self._normals[-1] += (notes,)
             return Closure(transparent=through, glass=through)
         if t in NO_SURFACE_CLOSURE:
             # (a lit diffuse of its colour before: a Volume Scatter surface 0.8 where Cycles is black)

@@ -248,3 +248,25 @@ def test_normal_inputs_of_stand_in_shaders_are_used_or_reported(scene, exported)
     assert "Principled Coat Normal ignored" in table["Coat"].approximated
     assert "Coat Normal" not in table["No coat"].approximated        # no coat: nothing dropped
     assert len(table["Bumped"].bumps) == 1 and "Normal" not in table["Bumped"].approximated   # a bump per point
+
+
+def test_refraction_normal_notes_are_said_where_its_normal_is_read(scene, exported):
+    """A Refraction BSDF's Normal input is read for the Normal pass alone, and only where no
+    other BSDF gives the material its normal: what reading it says (a Combine XYZ there is
+    ignored) is said then, not beside a Diffuse BSDF whose normal the pass takes (it had been
+    said of an input left out)."""
+    mats = {}
+    for name in ("Alone", "Beside"):
+        mat, nt, out = _material(name)
+        refraction = nt.nodes.new('ShaderNodeBsdfRefraction')
+        nt.links.new(nt.nodes.new('ShaderNodeCombineXYZ').outputs[0], refraction.inputs['Normal'])
+        shader = refraction
+        if name == "Beside":
+            shader = nt.nodes.new('ShaderNodeMixShader')
+            nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], shader.inputs[1])
+            nt.links.new(refraction.outputs[0], shader.inputs[2])
+        nt.links.new(shader.outputs[0], out.inputs['Surface'])
+        mats[name] = mat
+    table = _table(exported, *mats.values())
+    assert "Normal input ('Combine XYZ') ignored" in table["Alone"].approximated
+    assert "Combine XYZ" not in table["Beside"].approximated
