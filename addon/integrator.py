@@ -1211,15 +1211,17 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             self._ended['last_bounce'] += len(pid)
             return None                               # the last BSDF ray could only find emission
         wi, pdf, ok, rays = bsdf
+        ns = ns if self.lights.tree is not None else None
         if not ok.all():
             self._ended['below_surface'] += int(len(ok) - np.count_nonzero(ok))
-            kept = np.flatnonzero(ok)
-            P_off, wi, thr, pid, keys, pdf, prim, ns = compact(kept, P_off, wi, thr, pid, keys, pdf, prim, ns)
-            rays = None                                # repacked with the survivors' ids
+            # a few of 10^5 rays as a rule: dropped in place from the pass's own fresh arrays
+            # (the shadow rays are sent), the rays' records with them, rather than every column
+            # copied and the records packed again (6.6% of a 256-sample environment render)
+            P_off, wi, thr, pid, keys, pdf, prim, ns, rays = dacrt.shading.drop_columns(
+                ok, P_off, wi, thr, pid, keys, pdf, prim, ns, rays=rays)
         if len(pid) == 0:
             return None
-        return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays,
-                     N=ns if self.lights.tree is not None else None)
+        return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, N=ns)
 
     # points a procedural emission is measured at on its emitters, for the light choice: per
     # triangle (up to a budget per material), at least so many per material

@@ -517,6 +517,35 @@ py::list take_columns_py(I64Array idx, py::list arrays) {
     return out;
 }
 
+// drop_columns in place (shading.h): arrays C-contiguous, writeable, (n,) or (rows, n), none
+// sharing bytes with another; rays (n,) records or None. Returns m.
+size_t drop_columns_py(py::array_t<bool, py::array::c_style> keep, py::list arrays, py::object rays) {
+    if (keep.ndim() != 1) throw py::value_error("keep must be one-dimensional");
+    const size_t n = size_t(keep.shape(0));
+    std::vector<Columns> cols;
+    std::vector<std::pair<const char*, const char*>> spans;
+    for (size_t a = 0; a < arrays.size(); ++a) {
+        py::array x = arrays[a].cast<py::array>();
+        const std::string name = "arrays[" + std::to_string(a) + "]";
+        if ((x.ndim() != 1 && x.ndim() != 2) || !(x.flags() & py::array::c_style) || !x.writeable())
+            throw py::value_error(name + " must be a writeable C-contiguous (n,) or (rows, n) array");
+        const size_t itemsize = size_t(x.itemsize()), rows = x.ndim() == 2 ? size_t(x.shape(0)) : 1;
+        if (size_t(x.shape(x.ndim() - 1)) != n)
+            throw py::value_error(name + " has " + std::to_string(x.shape(x.ndim() - 1)) + " columns, keep " +
+                                  std::to_string(n));
+        cols.push_back({x.data(), x.mutable_data(), rows, n, itemsize});
+        spans.emplace_back(static_cast<const char*>(x.data()), static_cast<const char*>(x.data()) + rows * n * itemsize);
+    }
+    Ray* r = rays.is_none() ? nullptr : out_records<Ray>(rays.cast<py::array>(), n, "rays");
+    if (r) spans.emplace_back(reinterpret_cast<const char*>(r), reinterpret_cast<const char*>(r + n));
+    for (size_t a = 0; a < spans.size(); ++a)
+        for (size_t b = a + 1; b < spans.size(); ++b)
+            if (spans[a].first < spans[b].second && spans[b].first < spans[a].second)
+                throw py::value_error("the arrays must not share memory (each is compacted in place)");
+    py::gil_scoped_release nogil;
+    return drop_columns(reinterpret_cast<const uint8_t*>(keep.data()), n, cols.data(), cols.size(), r);
+}
+
 // Shapes of a mesh's (V, 3) vertices and (M, 3) triangles, every index checked: (V, M).
 std::pair<size_t, size_t> mesh_sizes(const py::array& vertices, const py::array_t<int32_t, py::array::c_style>& triangles) {
     if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw py::value_error("vertices must have shape (V, 3)");
@@ -852,6 +881,7 @@ void register_shading(py::module_& m) {
     m.def("camera_rays", &camera_rays_py, py::arg("ortho"), py::arg("frame"), py::arg("rx"), py::arg("ry"),
           py::arg("rays"), py::arg("lu") = py::none(), py::arg("lv") = py::none(), py::arg("sheared") = false);
     m.def("take_columns", &take_columns_py, py::arg("idx"), py::arg("arrays"));
+    m.def("drop_columns", &drop_columns_py, py::arg("keep"), py::arg("arrays"), py::arg("rays"));
     m.def("sample_sums", &sample_sums_py, py::arg("values"), py::arg("weights"));
     m.def("face_normals", &face_normals_py, py::arg("vertices"), py::arg("triangles"));
     m.def("transform_points", &transform_points_py, py::arg("points"), py::arg("linear"), py::arg("offset"),

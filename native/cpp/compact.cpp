@@ -1,5 +1,10 @@
 // Path compaction between bounces (see shading.h): the columns idx of several per-path arrays
-// gathered in one threaded pass, instead of one single-threaded np.take per array.
+// gathered in one threaded pass, instead of one single-threaded np.take per array; or a few
+// columns dropped in place (drop_columns).
+#include <cstring>
+#include <utility>
+#include <vector>
+
 #include "parallel.h"
 #include "shading.h"
 
@@ -32,6 +37,39 @@ void take_columns(const Columns* arrays, size_t count, const int64_t* idx, size_
             }
         }
     }, size_t(1) << 15);
+}
+
+size_t drop_columns(const uint8_t* keep, size_t n, const Columns* arrays, size_t count, Ray* rays) {
+    std::vector<std::pair<size_t, size_t>> runs;  // the kept runs (start, length) past the first drop
+    size_t first = 0;
+    while (first < n && keep[first]) ++first;
+    if (first == n) return n;
+    for (size_t j = first; j < n;) {
+        while (j < n && !keep[j]) ++j;
+        const size_t b = j;
+        while (j < n && keep[j]) ++j;
+        if (j > b) runs.emplace_back(b, j - b);
+    }
+    size_t m = first;
+    for (const auto& r : runs) m += r.second;
+    // every destination lies at or before its source and before every later source (m <= n),
+    // so rows and runs move forward in order; a run overlapping its own destination: memmove
+    auto move = [&](char* base, size_t rows, size_t size) {
+        for (size_t r = 0; r < rows; ++r) {
+            if (r) std::memmove(base + r * m * size, base + r * n * size, first * size);
+            size_t w = r * m + first;
+            for (const auto& run : runs) {
+                std::memmove(base + w * size, base + (r * n + run.first) * size, run.second * size);
+                w += run.second;
+            }
+        }
+    };
+    for (size_t a = 0; a < count; ++a) move(static_cast<char*>(arrays[a].dst), arrays[a].rows, arrays[a].itemsize);
+    if (rays) {
+        move(reinterpret_cast<char*>(rays), 1, sizeof(Ray));
+        for (size_t j = first; j < m; ++j) rays[j].id = uint32_t(j);
+    }
+    return m;
 }
 
 }  // namespace dacrt

@@ -522,6 +522,21 @@ def take_columns(idx, *arrays):
     return _refill(arrays, _core.take_columns(idx, _present(arrays)))
 
 
+def drop_columns(keep, *arrays, rays=None):
+    """In place, the columns where keep (n,) bool is false dropped from per-path arrays ((n,) or
+    (rows, n), C-contiguous, writeable, not sharing memory; None stays None) and from the
+    RAY_DTYPE records rays (None: none): the kept columns move forward in order, the moved
+    records' ids become their new positions. The same as take_columns(np.flatnonzero(keep),
+    ...) and records packed again, but only the columns past the first drop move and nothing
+    is allocated. Returns the arrays' (rows, m) views of their buffers' first m columns, and
+    rays[:m] last when rays is given."""
+    keep = np.ascontiguousarray(keep, np.bool_)
+    m = _core.drop_columns(keep, [a for a in arrays if a is not None], rays)   # (no copies: in place)
+    out = [None if a is None else a[:m] if a.ndim == 1 else a.reshape(-1)[:a.shape[0] * m].reshape(a.shape[0], m)
+           for a in arrays]
+    return out + [rays[:m]] if rays is not None else out
+
+
 def _present(arrays):
     """The arrays that are not None, C-contiguous, for a native call that takes columns."""
     return [np.ascontiguousarray(a) for a in arrays if a is not None]
