@@ -68,3 +68,31 @@ def test_smooth_normals_and_black_surfaces_are_bit_identical(monkeypatch):
     assert calls > 0
     _same(fused, general)
     assert fused.stats['skipped']['detail']['bounce_rays_black'] > 0
+
+
+@pytest.mark.parametrize('tree', [False, True])
+def test_bounces_a_coarse_smooth_sphere_sends_below_its_surface_are_dropped_bit_identically(monkeypatch, tree):
+    """A coarse sphere's interpolated normals send many bounce directions below its facets:
+    the fused pass drops them in place (shading.drop_columns, with their ray records and, with
+    a light tree, the normals the next vertex weighs lamps with), the general steps by
+    take_columns; the same bits, and the drop did happen in the fused pass."""
+    v, t = icosphere(0.4, 0, (0.0, 0.0, 0.4))
+    c = v[t] - np.array([0.0, 0.0, 0.4])
+    base = plane_scene([light('AREA', 30.0, translation(0.4, 0.0, 1.5), size_x=0.5, size_y=0.5),
+                        light('POINT', 3.0, translation(-0.5, 0.3, 0.9))], samples=8, max_bounces=3)
+    base.settings.use_light_tree = tree
+    plane = base.geometry
+    both = geometry([(plane.vertices, plane.triangles, 0, ALL_VIS), (v, t, 1, ALL_VIS)])
+    both.normals[len(plane.triangles):] = c / np.linalg.norm(c, axis=2, keepdims=True)
+    base.geometry = both
+    base.materials = [material('floor', (0.6, 0.6, 0.6)), material('ball', (0.7, 0.6, 0.5))]
+    base.camera = ortho_down(height=2.0, width=32, px=32, view=1.2)
+    drops = []
+    drop = dacrt.shading.drop_columns
+    monkeypatch.setattr(dacrt.shading, 'drop_columns',
+                        lambda keep, *a, **k: drops.append(int(len(keep) - np.count_nonzero(keep))) or drop(keep, *a, **k))
+    fused, general, calls = _both(base, monkeypatch)
+    assert calls > 0 and sum(drops) > 0
+    assert fused.stats['skipped']['detail']['bounce_rays_below_surface'] == \
+        general.stats['skipped']['detail']['bounce_rays_below_surface'] == sum(drops)
+    _same(fused, general)
