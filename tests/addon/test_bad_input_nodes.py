@@ -35,6 +35,18 @@ def _plane_fed_by(scene, node_type, socket, value):
     return n, img
 
 
+def _grey_lit_diffuse(scene, colour):
+    """An 8x6, 2-sample view from above of what the caller adds, under a grey world: a Diffuse
+    material of `colour` for it, returned with its node tree and its Diffuse node."""
+    scene.render.resolution_x, scene.render.resolution_y = 8, 6
+    scene.dacrt.samples = 2
+    scenes.camera((0, 0, 3))
+    scenes.world((0.5, 0.5, 0.5))
+    mat = scenes.diffuse("M", colour)
+    nt = mat.node_tree
+    return mat, nt, next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+
+
 def test_nan_color_ramp_factor_gives_the_last_stop(scene, said):
     _, img = _plane_fed_by(scene, 'ShaderNodeValToRGB', 'Fac', NAN)
     assert np.all(img[..., 0] == 0.0) and np.all(img[..., 2] > 0.5)     # blue, as Cycles (was red)
@@ -207,13 +219,7 @@ def test_clamp_node_with_a_nan_max_is_folded_only_when_constant(scene, linked):
     value folded (Cycles 0.3 on a 0.5-lit plane) and NaN (black) in the kernel, where the Value
     comes through a Math node adding 0.6 to the Object coordinates' Z (0 on the plane); DACRT had
     black for both."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 2
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    mat, nt, d = _grey_lit_diffuse(scene, (0.8, 0.8, 0.8))
     c = nt.nodes.new('ShaderNodeClamp')
     c.inputs['Max'].default_value = NAN
     if linked:
@@ -301,13 +307,7 @@ def test_math_min_max_with_a_nan_as_cycles_kernel_and_blenders_folding(op, slot,
 
 def test_math_minimum_of_constants_with_a_nan_first_renders_black(scene):
     """The export tells the folded Minimum (NaN, 0.3) (black in Cycles) from the kernel's (0.3)."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 2
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    mat, nt, d = _grey_lit_diffuse(scene, (0.8, 0.8, 0.8))
     m = nt.nodes.new('ShaderNodeMath')
     m.operation = 'MINIMUM'
     m.inputs[0].default_value, m.inputs[1].default_value = NAN, 0.3
@@ -382,13 +382,7 @@ def test_vector_math_with_a_nan_vector_as_cycles_kernel_and_blenders_folding(op,
 
 def test_vector_math_reflect_of_constants_on_a_nan_normal_keeps_the_vector(scene):
     """The export folds a constant Reflect as Blender does: a NaN Normal leaves the vector."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 2
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", _A)
-    nt = mat.node_tree
-    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    mat, nt, d = _grey_lit_diffuse(scene, _A)
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
     r = nt.nodes.new('ShaderNodeVectorMath')
@@ -433,13 +427,7 @@ def test_mix_clamped_nan_factor_gives_a_in_the_kernel(scene, data_type):
     0.5-lit plane, where the Factor comes through a Math node on the Object coordinates; the
     legacy MixRGB clamps its factor always) and NaN where Blender folds the node (black, as DACRT
     had it in both)."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 2
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", (0.6, 0.6, 0.6))
-    nt = mat.node_tree
-    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    mat, nt, d = _grey_lit_diffuse(scene, (0.6, 0.6, 0.6))
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
     if data_type == 'MIXRGB':
@@ -474,13 +462,7 @@ def test_float_curve_of_a_constant_beyond_its_range_is_the_clipped_line(scene, v
     in Cycles 5.0.1 on a curve (0.1, 0.15)-(0.9, 0.35) into a Diffuse Color; DACRT had read every
     such point as 0 (a three-point curve's steep end clips to 0 there, which had been taken for
     the rule)."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 2
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", (want, want, want))
-    nt = mat.node_tree
-    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    mat, nt, d = _grey_lit_diffuse(scene, (want, want, want))
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
     c = nt.nodes.new('ShaderNodeFloatCurve')
@@ -498,13 +480,7 @@ def test_float_curve_of_an_inf_typed_constant_is_the_clipped_end(scene):
     """'inf' typed into a Float Curve's Value (Blender stores float32's largest) folds to the
     clipped line, 1 for the default curve (Cycles 1.32 lit, as the colour 1): x + fac (y - x) had
     cancelled to 0 (black); Blender mixes as fac y + (1 - fac) x."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 2
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", (1.0, 1.0, 1.0))
-    nt = mat.node_tree
-    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    mat, nt, d = _grey_lit_diffuse(scene, (1.0, 1.0, 1.0))
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
     c = nt.nodes.new('ShaderNodeFloatCurve')
