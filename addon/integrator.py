@@ -758,8 +758,14 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                 self._render_seconds = time.perf_counter() - t_render
                 self.close()
                 if self.film.nan_dropped:
+                    # Cycles' ensure_finite zeroes a non-finite contribution, but values near
+                    # float32's limit that overflow only when its film adds them leave inf pixels
+                    # (a Combine Color of 3.4e38: Cycles inf, DACRT 0): say both, claim neither
                     self.messages.append(('WARNING', f"{self.film.nan_dropped} sample(s) had NaN or infinite "
-                                                     f"channels; those channels counted 0 (as Cycles' ensure_finite)"))
+                                                     f"channels; those channels counted 0 (as Cycles' ensure_finite "
+                                                     f"zeroes a NaN or infinite contribution; values near float32's "
+                                                     f"limit that overflow only in Cycles' film sums leave inf "
+                                                     f"pixels there instead)"))
 
     def _progress(self, fraction):
         elapsed = self._render_seconds
