@@ -185,7 +185,10 @@ def _project(a, b):
 
 
 def _reflect(a, b):
-    n = safe_normalize(b)
+    return _reflect_unit(a, safe_normalize(b))
+
+
+def _reflect_unit(a, n):
     return a - 2.0 * _dot(n, a) * n
 
 
@@ -232,9 +235,9 @@ def _folded_normalize(a):
 # std::min / std::max per component ((b < a) ? b : a, (a < b) ? b : a: a NaN b gives a), and
 # Reflect / Refract on math::normalize
 _FOLDED_VECTOR_MATH = {
-    'MINIMUM': lambda a, b, c, s: np.where(b < a, b, a),
-    'MAXIMUM': lambda a, b, c, s: np.where(a < b, b, a),
-    'REFLECT': lambda a, b, c, s: a - 2.0 * _dot(_folded_normalize(b), a) * _folded_normalize(b),
+    'MINIMUM': lambda a, b, c, s: _std_min(a, b),
+    'MAXIMUM': lambda a, b, c, s: _std_max(a, b),
+    'REFLECT': lambda a, b, c, s: _reflect_unit(a, _folded_normalize(b)),
     'REFRACT': lambda a, b, c, s: _refract_unit(a, _folded_normalize(b), s),
 }
 _VECTOR_VALUE = {
@@ -380,8 +383,7 @@ def clamp_min_max(v, lo, hi, folded=False):
     Min 0.2 black folded, 0.2 in the kernel)."""
     (v, lo, hi), shape, _ = _real(v, lo, hi)
     if folded:
-        m = np.where(v < lo, lo, v)                 # std::max(v, lo): (v < lo) ? lo : v
-        return np.where(hi < m, hi, m).reshape(shape)   # std::min(m, hi): (hi < m) ? hi : m
+        return _std_min(_std_max(v, lo), hi).reshape(shape)
     return cycles_clamp(v, lo, hi).reshape(shape)
 
 
