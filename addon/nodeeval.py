@@ -513,10 +513,7 @@ def _blender_folds(node):
     operation."""
     folds_apart = ('POWER', 'MODULO', 'MINIMUM', 'MAXIMUM') + (
         ('SMOOTH_MIN', 'SMOOTH_MAX') if getattr(node, 'type', None) == 'MATH' else ('REFLECT', 'REFRACT'))
-    if getattr(node, 'operation', None) not in folds_apart:
-        return False
-    folded = getattr(node, 'blender_folded', None)
-    return nodegraph.node_folded_by_blender(node) if folded is None else folded
+    return getattr(node, 'operation', None) in folds_apart and _folded_by_blender(node)
 
 
 class Frozen:

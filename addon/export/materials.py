@@ -433,8 +433,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             # Noise's NaN Scale black, a Voronoi's NaN Scale the cell INT_MIN as Cycles' CPU
             # conversion gives it; but a Noise's NaN Lacunarity or Distortion does not give
             # Cycles' result)
-            differs = [b for b in nan_inputs(ntree, {'TEX_NOISE'}, rendered)
-                       if b.startswith("'Lacunarity' of ") or b.startswith("'Distortion' of ")]
+            differs = _nan_inputs_named(ntree, {'TEX_NOISE': ('Lacunarity', 'Distortion')}, rendered)
             unlike = _nan_unlike_cycles(ntree, rendered)
             apart = [b for bad, _ in unlike for b in bad]
             through = _nan_inputs_named(ntree, NAN_COMPUTED, rendered)
