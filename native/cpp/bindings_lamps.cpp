@@ -136,18 +136,17 @@ const uint64_t* optional_receivers(const py::object& receivers, size_t n, py::ar
     return keep.data();
 }
 
-// grouped: the points' walks kGroup at a time side by side (LightTree::sample_group); rows: stop
-// by stop, the points at a stop side by side (sample_rows, as light sampling walks them); else
-// one by one (sample).
+// rows: stop by stop, the points at a stop side by side (sample_rows, as light sampling walks
+// them); else one by one (sample).
 py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py::array::c_style> u, py::object N,
-                         py::object receivers, bool grouped, bool rows) {
+                         py::object receivers, bool rows) {
     const size_t n = P.ndim() == 2 ? size_t(P.shape(1)) : 0;
     need_shape(u, 0, n, "u");
     py::array_t<uint64_t, py::array::c_style> recv_keep;
     const uint64_t* r = optional_receivers(receivers, n, recv_keep);
     py::array_t<int32_t> key(n);
     py::array_t<double> prob(n);
-    if (!grouped && !rows) {
+    if (!rows) {
         for_tree_points(P, N, [&](size_t i, const float* q, const float* m) {
             double pr;
             key.mutable_data()[i] = t.sample(q, m, u.data()[i], pr, r ? r[i] : LightTree::kAllSets);
@@ -161,26 +160,12 @@ py::tuple tree_sample_py(const LightTree& t, F32Array P, py::array_t<double, py:
         std::copy(q, q + 3, qs.begin() + long(3 * i));
         if (m) std::copy(m, m + 3, ms.begin() + long(3 * i)), normal = true;
     });
-    if (rows) {  // stop by stop (sample_rows), from rows of the points
-        std::vector<float> qr(3 * n), mr(3 * n);
-        for (size_t i = 0; i < n; ++i)
-            for (size_t a = 0; a < 3; ++a) qr[a * n + i] = qs[3 * i + a], mr[a * n + i] = ms[3 * i + a];
-        t.sample_rows(n, qr.data(), normal ? mr.data() : nullptr, n, u.data(), r, key.mutable_data(),
-                      prob.mutable_data());
-        return py::make_tuple(key, prob);
-    }
-    constexpr size_t G = LightTree::kGroup;
-    for (size_t i = 0; i < n; i += G) {
-        const size_t c = std::min(G, n - i);
-        const float* Ps[G];
-        const float* Ns[G];
-        uint64_t recv[G];
-        for (size_t s = 0; s < c; ++s) {
-            Ps[s] = qs.data() + 3 * (i + s), Ns[s] = normal ? ms.data() + 3 * (i + s) : nullptr;
-            recv[s] = r ? r[i + s] : LightTree::kAllSets;
-        }
-        t.sample_group(c, Ps, Ns, u.data() + i, recv, key.mutable_data() + i, prob.mutable_data() + i);
-    }
+    // stop by stop (sample_rows), from rows of the points
+    std::vector<float> qr(3 * n), mr(3 * n);
+    for (size_t i = 0; i < n; ++i)
+        for (size_t a = 0; a < 3; ++a) qr[a * n + i] = qs[3 * i + a], mr[a * n + i] = ms[3 * i + a];
+    t.sample_rows(n, qr.data(), normal ? mr.data() : nullptr, n, u.data(), r, key.mutable_data(),
+                  prob.mutable_data());
     return py::make_tuple(key, prob);
 }
 
@@ -924,7 +909,7 @@ void register_lamps(py::module_& m) {
         .def_property_readonly("members", &LightTree::members)
         .def_property_readonly("nodes", &LightTree::nodes)
         .def("sample", &tree_sample_py, py::arg("P"), py::arg("u"), py::arg("N") = py::none(),
-             py::arg("receivers") = py::none(), py::arg("grouped") = false, py::arg("rows") = false)
+             py::arg("receivers") = py::none(), py::arg("rows") = false)
         .def("pdf", &tree_pdf_py, py::arg("P"), py::arg("key"), py::arg("N") = py::none(),
              py::arg("receivers") = py::none())
         .def("stop_weighs", &tree_stop_weighs_py, py::arg("P"), py::arg("N") = py::none());

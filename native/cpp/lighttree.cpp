@@ -570,37 +570,6 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     return leaf_pick(at, u, lo, w, prob);
 }
 
-void LightTree::sample_group(size_t count, const float* const P[], const float* const N[], const double u_in[],
-                             const uint64_t receivers[], int32_t key[], double prob[]) const {
-    // sample() for up to kGroup points, their walks' stops taken in turn: each stop is a chain
-    // (the lanes' roots and divisions, the probabilities' division, the pick, the next stop's
-    // load) that one walk waits on, and the other walks' stops fill that wait. Each walk's own
-    // operations are sample()'s, so the same bits.
-    size_t at[kGroup] = {};
-    double lo[kGroup] = {}, w[kGroup], u[kGroup] = {};
-    TreePoint point[kGroup];
-    bool go[kGroup] = {};
-    for (size_t s = 0; s < count; ++s) {
-        w[s] = 1.0;
-        u[s] = u_in[s] >= 0.0 ? u_in[s] : 0.0;  // (NaN too)
-        tree_point(point[s], P[s], N[s]);
-        go[s] = nodes_[0].child >= 0;
-    }
-    for (bool any = count > 0 && nodes_[0].child >= 0; any;) {
-        double p[kGroup][4];
-        for (size_t s = 0; s < count; ++s)
-            if (go[s]) probs_at(at[s], point[s], receivers[s], p[s]);
-        any = false;
-        for (size_t s = 0; s < count; ++s)
-            if (go[s]) {
-                at[s] = step(at[s], p[s], u[s], lo[s], w[s]);
-                go[s] = nodes_[at[s]].child >= 0;
-                any |= go[s];
-            }
-    }
-    for (size_t s = 0; s < count; ++s) key[s] = leaf_pick(at[s], u[s], lo[s], w[s], prob[s]);
-}
-
 // sample_rows' points, kRows at a time: each one's coordinates, normal, |normal| and max |P_k|
 // (TreePoint's fields), its walk's u, lo and w, and the order the walks are grouped in by stop
 // (ids); the rows a stop's points are copied into for its lanes (padded to 16), their weighs.

@@ -96,11 +96,6 @@ public:
     // u in [0, 1), and its probability, among the lights of the sets in `receivers` (when the
     // point is lit by none of the tree's, a light of any set, which lights it nothing).
     int32_t sample(const float P[3], const float* N, double u, double& prob, uint64_t receivers = kAllSets) const;
-    // sample() at count <= kGroup points s (P[s], N[s], u[s], receivers[s]: key[s], prob[s]),
-    // the same bits, their walks side by side.
-    static constexpr size_t kGroup = 4;
-    void sample_group(size_t count, const float* const P[], const float* const N[], const double u[],
-                      const uint64_t receivers[], int32_t key[], double prob[]) const;
     // sample() at count points i (P[a * stride + i], N likewise or null: none, u[i], receivers[i]
     // or null: every set; into key[i], prob[i]), the same bits, walked stop by stop: each stop
     // weighs the points that reach it side by side (treelanes.h LaneRowsFn), one of its lanes at

@@ -415,8 +415,8 @@ def test_bump_shadowing_closed_form_and_native_agree():
 @pytest.mark.parametrize('area', [True, False])
 @pytest.mark.parametrize('linked', [False, True])
 def test_light_tree_walks_side_by_side_pick_as_tree_sample(linked, area):
-    """With a light tree the light choice runs per chunk, up to four points' tree walks side by
-    side (LightTree::sample_group): every point's entry and selection probability (in its
+    """With a light tree the light choice runs per chunk, the chunk's tree walks stop by stop
+    (LightTree::sample_rows): every point's entry and selection probability (in its
     sample's value) are bit for bit the composed choice, one walk per point by tree.sample, for
     walks of different depths (an unbalanced tree of 23 lamps), groups with picks beside the tree
     (an area lamp's), NaN picks, a chunk tail of one point and, with light linking, receiver
