@@ -1143,19 +1143,20 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             if spent.any():
                 self._ended['last_bounce'] += int(np.count_nonzero(spent & ok))
                 ok = ok & ~spent
+        ns = ns if self.lights.tree is not None else None   # (read at the next vertex only then)
         if not ok.all():
             self._ended['below_surface'] += below
-            kept = np.flatnonzero(ok)
-            P_off, wi, thr, pid, keys, pdf, prim, ns = compact(kept, P_off, wi, thr, pid, keys, pdf, prim, ns)
-            nee = None if nee is None else np.take(nee, kept)
-            tb = None if tb is None else np.take(tb, kept)
-            gb = None if gb is None else np.take(gb, kept)
-            xb = None if xb is None else np.take(xb, kept)
-            rays = None                                # repacked with the survivors' ids
+            # dropped in place, the rays' records with them (as _diffuse_vertex does): every
+            # array here is this vertex's own (the kernels' fresh outputs, np.take's copies; ns
+            # may be ng, which nothing reads after), the shadow rays already traced; np.require
+            # copies only an array drop_columns cannot move in place (strided or read-only)
+            P_off, wi, thr, pid, keys, pdf, prim, ns, nee, tb, gb, xb, rays = dacrt.shading.drop_columns(
+                ok, *(None if a is None else np.require(a, requirements=['C', 'W'])
+                      for a in (P_off, wi, thr, pid, keys, pdf, prim, ns, nee, tb, gb, xb)), rays=rays)
         if len(pid) == 0:
             return None
         return Paths(pid, keys, P_off, wi, np.full(len(pid), np.inf, F32), thr, pdf, prim, rays, tb, gb=gb, xb=xb,
-                      N=ns if self.lights.tree is not None else None,
+                      N=ns,
                       dark_pdf=None if nee is None else (pdf * nee).astype(F32))
 
     def _radial_normals(self, prim, ng, ns, D):

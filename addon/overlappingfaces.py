@@ -24,7 +24,7 @@ holding more than _BIG triangles (a face laid on a finely split floor), faces of
 (joined by corners) in a plane their areas do not fill, nor a sliver thinner than the tolerance, nor twins
 whose plane offsets lie more than half a bin apart across a bin's edge (float32 normals of thin
 triangles: those within half a bin are keyed together by a second grid shifted by half a bin,
-_shifted_keys): misses, never a false message. Faces facing
+dacrt.shading.shifted_plane_keys): misses, never a false message. Faces facing
 each other are not said: they are objects in contact (a box resting on a floor, two boxes
 stacked), the overlap closed off between them and seen by no ray, a common sight; unless the
 pair shares an edge by index: a face folded back over it (Triangulate's fixed split of a concave
@@ -69,32 +69,11 @@ def overlapping(vertices, indices, geo, keys, step, candidates):
     # twins whose keys fall on either side of a bin's edge (float32 rounding of thin triangles'
     # normals moves their offsets: 14 of 288 triangles of a ring copied in a tilted plane) share
     # a key of the grid shifted by half a bin (only its groups that join triangles of different
-    # first keys: the others were tested whole)
-    shifted = _shifted_keys(geo, candidates, step)
+    # first keys: the others were tested whole); keyed natively in one threaded pass (a numpy
+    # twin of the expressions had cost ~4 ms a dragon frame)
+    shifted = dacrt.shading.shifted_plane_keys(geo, candidates, np.float32(1.0) / np.float32(step))
     _found_in_groups(c, t, geo, shifted, candidates & (shifted != 0), step, out, first=keys)
     return out
-
-
-def _shifted_keys(geo, candidates, step):
-    """(M,) uint64: the candidates' coplanar_key (coplanar.h) on the grid shifted by half a bin in
-    every component (the same float32 expressions, + 0.5); 0 (keyless) elsewhere."""
-    g = np.asarray(geo, np.float32)
-    idx = np.flatnonzero(candidates)
-    n = np.take(g[9:12], idx, axis=1)
-    n = n * np.where(np.float32(0.5773502) * n[0] + np.float32(0.6172134) * n[1] + np.float32(0.5345225) * n[2]
-                     < 0, np.float32(-1.0), np.float32(1.0))
-    v0 = np.take(g[0:3], idx, axis=1)
-    d = v0[0] * n[0] + v0[1] * n[1] + v0[2] * n[2]
-    vals = [n[a] * np.float32(4096.0) + np.float32(4097.0) for a in range(3)]
-    vals.append(d * (np.float32(1.0) / np.float32(step)) + np.float32(2097153.0))
-    key = np.zeros(len(idx), np.uint64)
-    ok = np.ones(len(idx), bool)
-    for x, top, width in zip(vals, (16384.0,) * 3 + (4194304.0,), (14,) * 3 + (22,)):
-        ok &= (x >= 0) & (x < top)
-        key = (key << np.uint64(width)) | np.where(ok, x, 0).astype(np.uint64)
-    keys = np.zeros(len(candidates), np.uint64)
-    keys[idx] = np.where(ok, key, np.uint64(0))
-    return keys
 
 
 def _found_in_groups(c, t, geo, keys, candidates, step, out, first=None):

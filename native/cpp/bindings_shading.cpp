@@ -669,6 +669,19 @@ py::tuple coplanar_groups_py(py::array_t<uint64_t, py::array::c_style> keys, F32
     return py::make_tuple(r, s);
 }
 
+// The overlap check's second key grid (coplanar.h).
+py::array_t<uint64_t, py::array::c_style> shifted_plane_keys_py(
+    F32Array geo, py::array_t<uint8_t, py::array::c_style | py::array::forcecast> candidates, float inv_step) {
+    const size_t M = rows_of(geo, 15, "geo");
+    need_len(candidates, M, "candidates");
+    py::array_t<uint64_t, py::array::c_style> out{py::ssize_t(M)};
+    {
+        py::gil_scoped_release nogil;
+        shifted_plane_keys(geo.data(), M, candidates.data(), inv_step, out.mutable_data());
+    }
+    return out;
+}
+
 // The hit-point records of a table (hitrecords.h): (M, 32) float32, each record on its own
 // two cache lines: a view, 128-byte aligned, into a numpy array 32 floats longer (numpy aligns
 // to 16 bytes; its allocator reuses a frame's freed blocks, where an aligned_alloc of its own
@@ -848,6 +861,7 @@ void register_shading(py::module_& m) {
     m.def("repeated_keys", &repeated_keys_py, py::arg("keys"));
     m.def("coplanar_groups", &coplanar_groups_py, py::arg("keys"), py::arg("geo"), py::arg("triangles"),
           py::arg("candidates"), py::arg("max_group"));
+    m.def("shifted_plane_keys", &shifted_plane_keys_py, py::arg("geo"), py::arg("candidates"), py::arg("inv_step"));
     m.def("triangle_table", &triangle_table_py, py::arg("vertices"), py::arg("triangles"), py::arg("offset_ulps"),
           py::arg("tiny"), py::arg("full") = py::none(), py::arg("keys") = py::none(),
           py::arg("plane_keys") = py::none(), py::arg("plane_inv_step") = 0.0f);

@@ -45,4 +45,9 @@ inline uint64_t coplanar_key(const float v0[3], float x, float y, float z, float
 void coplanar_groups(const uint64_t* keys, const float* geo, size_t M, const int32_t* tri, const uint8_t* candidates,
                      size_t max_group, std::vector<int64_t>& rows, std::vector<int64_t>& start);
 
+// out[i] (M entries): for the candidates (nonzero), coplanar_key of the table's rows (geo, 15 x M)
+// on the grid shifted by half a bin in every component (the normal's bins + 0.5, the offset's +
+// 0.5), 0 where a component falls out of range or is NaN; 0 for the others (shiftedkeys.cpp).
+void shifted_plane_keys(const float* geo, size_t M, const uint8_t* candidates, float inv_step, uint64_t* out);
+
 }  // namespace dacrt

@@ -74,8 +74,8 @@ def test_smooth_normals_and_black_surfaces_are_bit_identical(monkeypatch):
 def test_bounces_a_coarse_smooth_sphere_sends_below_its_surface_are_dropped_bit_identically(monkeypatch, tree):
     """A coarse sphere's interpolated normals send many bounce directions below its facets:
     the fused pass drops them in place (shading.drop_columns, with their ray records and, with
-    a light tree, the normals the next vertex weighs lamps with), the general steps by
-    take_columns; the same bits, and the drop did happen in the fused pass."""
+    a light tree, the normals the next vertex weighs lamps with), as the general steps do from
+    their own arrays; the same bits, and the drop did happen in the fused pass."""
     v, t = icosphere(0.4, 0, (0.0, 0.0, 0.4))
     c = v[t] - np.array([0.0, 0.0, 0.4])
     base = plane_scene([light('AREA', 30.0, translation(0.4, 0.0, 1.5), size_x=0.5, size_y=0.5),
@@ -89,8 +89,11 @@ def test_bounces_a_coarse_smooth_sphere_sends_below_its_surface_are_dropped_bit_
     base.camera = ortho_down(height=2.0, width=32, px=32, view=1.2)
     drops = []
     drop = dacrt.shading.drop_columns
+    # (the fused render's drops: the general steps drop through drop_columns too,
+    # test_general_bounce_drop.py)
     monkeypatch.setattr(dacrt.shading, 'drop_columns',
-                        lambda keep, *a, **k: drops.append(int(len(keep) - np.count_nonzero(keep))) or drop(keep, *a, **k))
+                        lambda keep, *a, **k: (integrator_module.FUSED_BOUNCE and drops.append(
+                            int(len(keep) - np.count_nonzero(keep)))) or drop(keep, *a, **k))
     fused, general, calls = _both(base, monkeypatch)
     assert calls > 0 and sum(drops) > 0
     assert fused.stats['skipped']['detail']['bounce_rays_below_surface'] == \

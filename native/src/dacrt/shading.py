@@ -12,7 +12,7 @@ import numpy as np
 from . import _core
 from . import RAY_DTYPE, HIT_DTYPE
 
-__all__ = ["triangle_table", "hit_records", "repeated_keys", "coplanar_groups", "corner_rows", "pixel_samples", "block_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
+__all__ = ["triangle_table", "hit_records", "repeated_keys", "coplanar_groups", "shifted_plane_keys", "corner_rows", "pixel_samples", "block_samples", "pack_rays", "surface", "uniform2", "cosine_scatter", "sample_triangles", "uniform_pick", "continue_paths", "nee_weight", "rough_rows", "rough_scale", "shadow_rays",
            "LightChoice", "next_event", "accumulate_masked", "noise_texture",
            "voronoi_texture"]
 
@@ -97,6 +97,16 @@ def coplanar_groups(keys, geo, triangles, candidates, max_group: int):
     t = np.ascontiguousarray(triangles, np.int32)    # (indices only compared, never followed)
     return _core.coplanar_groups(np.ascontiguousarray(keys, np.uint64), geo, t,
                                  np.ascontiguousarray(candidates, np.uint8), int(max_group))
+
+
+def shifted_plane_keys(geo, candidates, inv_step: float):
+    """(M,) uint64: for candidates (M,) bool, coplanar_groups' plane key of each triangle (geo:
+    triangle_table's (15, M) rows, v0 and the unit normal read) on the grid shifted by half a bin
+    in every component (the same float32 expressions as triangle_table's plane_keys, + 0.5 in
+    each bin), 0 where a component falls out of range or is NaN and for the other triangles:
+    the overlap check's second grid, where twins on either side of a first bin's edge meet."""
+    geo = _rows(geo, 15, "geo")
+    return _core.shifted_plane_keys(geo, np.ascontiguousarray(candidates, np.uint8), float(inv_step))
 
 
 def triangle_table(vertices, triangles, offset_ulps: float, tiny: float = 2.0 ** -100, full=None, keys=None,
