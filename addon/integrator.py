@@ -1072,7 +1072,10 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             self._translucency_maps(far[0], prim, u, v, far[1], ng, -np.take(path.D, idx, axis=1))
         if tex:
             # (the albedo's maps are the reflection's)
-            self._albedo_maps(prim, u, v, thr, self._back(prim, ng, -np.take(path.D, idx, axis=1)))
+            # (the side, and the rays' directions it reads, only where some chain reads it: the
+            # gather of every survivor's direction had been made and dropped at each textured vertex)
+            self._albedo_maps(prim, u, v, thr, self._back(prim, ng, -np.take(path.D, idx, axis=1))
+                              if self._sided else None)
         # (the side only where a normal map's chain reads it: _back's rays cost a take per vertex)
         side = self._back(prim, ng, -np.take(path.D, idx, axis=1)) if self._sided and self._bumped else None
         ns, bump = self._bent_normals(prim, u, v, ns, ng, side)
