@@ -33,6 +33,7 @@ from .reflectors import (ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds
                          rendered_closures)
 from .cutouts import Cutouts
 from .emission import Emission
+from .groupinputs import grouped_inputs
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
 from .meshes import STANDARD_OF, per_primitive
 from .objectinfo import OBJECT_INFO
@@ -81,23 +82,36 @@ HUGE_UNLIKE_CYCLES = (
                                             "far-out coordinates do not match (a plane: mean 0.124 against 0.142)"))
 
 
-def _huge_unlike_cycles(ntree, keep):
+def _huge_unlike_cycles(ntree, keep, grouped=()):
     """[(inputs, what Cycles renders)] of the unlinked HUGE_UNLIKE_CYCLES inputs that hold float32's
-    largest magnitude with a sign measured to differ (by the input's name as the UI shows it)."""
-    top = float(np.finfo(np.float32).max)
+    largest magnitude with a sign measured to differ (by the input's name as the UI shows it), at
+    the top level and typed in or through its groups (grouped: groupinputs.grouped_inputs)."""
     found = {}
     for node in getattr(ntree, 'nodes', ()):
-        entries = [e for e in HUGE_UNLIKE_CYCLES if e[0] == node.type]
-        if not entries or not keep(node):
+        if not any(e[0] == node.type for e in HUGE_UNLIKE_CYCLES) or not keep(node):
             continue
-        for _, names, signs, what in entries:
-            for sock in node.inputs:
-                if sock.name not in names or not sock.enabled or sock.is_linked:
-                    continue
-                v = np.atleast_1d(np.asarray(getattr(sock, 'default_value', 0.0), np.float64))[:3]
-                if any(abs(x) >= top and np.sign(x) in signs for x in v):
-                    found.setdefault(what, []).append(f"'{sock.name}' of '{node.name}'")
+        for sock in node.inputs:
+            if not sock.enabled or sock.is_linked:
+                continue
+            what = _huge_unlike(node.type, sock.name, getattr(sock, 'default_value', 0.0))
+            if what is not None:
+                found.setdefault(what, []).append(f"'{sock.name}' of '{node.name}'")
+    for g in grouped:
+        what = _huge_unlike(g.node.type, g.name, g.value)
+        if what is not None:
+            found.setdefault(what, []).append(g.label)
     return [(bad, what) for what, bad in found.items()]
+
+
+def _huge_unlike(node_type, name, value):
+    """What Cycles renders for a node type's input of that name holding `value`, where
+    HUGE_UNLIKE_CYCLES says it differs; else None."""
+    top = float(np.finfo(np.float32).max)
+    v = np.atleast_1d(np.asarray(value, np.float64))[:3]
+    for t, names, signs, what in HUGE_UNLIKE_CYCLES:
+        if t == node_type and name in names and any(abs(x) >= top and np.sign(x) in signs for x in v):
+            return what
+    return None
 
 
 def _nan_inputs_named(ntree, table, keep):
@@ -106,10 +120,17 @@ def _nan_inputs_named(ntree, table, keep):
             if any(b.startswith(f"'{n}' of ") for n in names)]
 
 
-def _nan_unlike_cycles(ntree, keep):
-    """[(nan_inputs, what Cycles renders)] of the NAN_NOT_ZERO_IN_CYCLES inputs, per node type."""
-    found = [(_nan_inputs_named(ntree, {t: names}, keep), what) for t, (names, what) in NAN_NOT_ZERO_IN_CYCLES.items()]
+def _nan_unlike_cycles(ntree, keep, grouped=()):
+    """[(nan_inputs, what Cycles renders)] of the NAN_NOT_ZERO_IN_CYCLES inputs, per node type
+    (grouped: the NaN inputs typed in or through its groups, groupinputs.GroupedInput)."""
+    found = [(_nan_inputs_named(ntree, {t: names}, keep) + _grouped_named(grouped, {t: names}), what)
+             for t, (names, what) in NAN_NOT_ZERO_IN_CYCLES.items()]
     return [(bad, what) for bad, what in found if bad]
+
+
+def _grouped_named(grouped, table):
+    """The labels of the grouped inputs of the node types and input names in table (type -> names)."""
+    return [g.label for g in grouped if g.name in table.get(g.node.type, ())]
 
 
 def _averaged_rough(m):
@@ -428,25 +449,36 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             def rendered(n):
                 return n == active or any(used.reads(n, o.identifier) for o in n.outputs)
 
-            textures = nan_inputs(ntree, PROCEDURAL_TYPES, rendered)
+            # (inside groups too: a NaN typed in a group, or into a Group node's input read
+            # inside, is named where it is typed and sorted by the node reading it)
+            grouped = grouped_inputs(ntree, used)
+            nans = [g for g in grouped if g.is_float and np.isnan(g.value).any()]
+            textures = nan_inputs(ntree, PROCEDURAL_TYPES, rendered) + \
+                [g.label for g in nans if g.node.type in PROCEDURAL_TYPES]
             # (the textures take a NaN as Cycles' kernels do: clamped where Cycles clamps it, a
             # Noise's NaN Scale black, a Voronoi's NaN Scale the cell INT_MIN as Cycles' CPU
             # conversion gives it; but a Noise's NaN Lacunarity or Distortion does not give
             # Cycles' result)
-            differs = _nan_inputs_named(ntree, {'TEX_NOISE': ('Lacunarity', 'Distortion')}, rendered)
-            unlike = _nan_unlike_cycles(ntree, rendered)
+            noise_differs = {'TEX_NOISE': ('Lacunarity', 'Distortion')}
+            differs = _nan_inputs_named(ntree, noise_differs, rendered) + _grouped_named(nans, noise_differs)
+            unlike = _nan_unlike_cycles(ntree, rendered, nans)
             apart = [b for bad, _ in unlike for b in bad]
-            through = _nan_inputs_named(ntree, NAN_COMPUTED, rendered)
-            for bad, said in (([b for b in nan_inputs(ntree, shader, rendered) if b not in apart and b not in through],
+            through = _nan_inputs_named(ntree, NAN_COMPUTED, rendered) + _grouped_named(nans, NAN_COMPUTED)
+            in_shaders = [g.label for g in nans
+                          if nodeeval.node_inputs(g.node) is None and g.node.type not in PROCEDURAL_TYPES]
+            in_computed = [g.label for g in nans if nodeeval.node_inputs(g.node) is not None]
+            for bad, said in (([b for b in nan_inputs(ntree, shader, rendered) + in_shaders
+                                if b not in apart and b not in through],
                                "NaN read as 0 (as Cycles clamps it) for {}"),
                               *((bad, f"NaN read as 0 for {{}}, where Cycles renders it {what}, not as 0")
                                 for bad, what in unlike),
-                              (nan_inputs(ntree, computed, rendered) + through + [b for b in textures if b not in differs],
+                              (nan_inputs(ntree, computed, rendered) + in_computed + through +
+                               [b for b in textures if b not in differs],
                                "NaN computed through the node as Cycles computes it for {}"),
                               (differs, "NaN for {}: the texture computes with it, not as Cycles' does")):
                 if bad:
                     reasons.append(said.format(', '.join(bad)))
-            for bad, what in _huge_unlike_cycles(ntree, rendered):
+            for bad, what in _huge_unlike_cycles(ntree, rendered, grouped):
                 reasons.append(f"{', '.join(bad)} at float32's largest (an 'inf' typed: Blender stores 3.4e38), "
                                f"where Cycles renders {what}; DACRT does not reproduce that float32 overflow")
             # (Cycles' proxy for such an output has nothing linked: it reads 0, whatever the
