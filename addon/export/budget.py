@@ -30,6 +30,14 @@ HEADROOM = 0.9          # of the available memory, for images, rays and the rest
 # float64 sums and Blender's float32 result: 20 channels of passes 525 at 2000x2000)
 PIXEL_BYTES = 200
 PASS_CHANNEL_BYTES = 16
+# Peak bytes a texel of an image file costs from its read to the render, by the file's depth and
+# how its colour space is read (colorspaces.space_kind): process growth rendering a plane
+# textured by a 4096 x 4096 RGBA file (1 sample, less the untextured render). 8-bit: sRGB 16.5
+# (kept as its bytes), linear 40, Non-Color 36, ACEScg 122; deeper (16-bit PNG, half and float
+# EXR, read as floats): linear and Non-Color 21, sRGB 72 (16-bit PNG) and 100 (float EXR, its
+# alpha stored associated), ACEScg 106 (the decodes' float temporaries)
+TEXEL_BYTES = {(True, 'srgb'): 17, (True, 'linear'): 40, (True, 'data'): 40, (True, 'convert'): 122,
+               (False, 'srgb'): 100, (False, 'linear'): 21, (False, 'data'): 21, (False, 'convert'): 106}
 
 
 def _cgroup_room():
@@ -89,6 +97,12 @@ def film_bytes(pixels, pass_channels):
     """Bytes a film of `pixels` pixels with `pass_channels` channels of passes besides Combined
     takes to render."""
     return pixels * (PIXEL_BYTES + pass_channels * PASS_CHANNEL_BYTES)
+
+
+def texture_bytes(texels, byte, kind):
+    """Bytes an image file of `texels` texels takes to read and render: 8-bit (`byte`) or
+    deeper, its colour space read as `kind` (colorspaces: 'srgb', 'linear', 'data', 'convert')."""
+    return texels * TEXEL_BYTES[byte, kind]
 
 
 @dataclass

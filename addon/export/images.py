@@ -13,6 +13,7 @@ import dacrt
 import numpy as np
 
 from ..texture import ByteTexels, EncodedTexels, ImageTexels, UdimTiles, half_as_cycles_reads, linear_to_srgb, stored_texels
+from . import budget
 from .colorspaces import CONVERT, DATA, LINEAR, SRGB, space_kind, to_scene_linear
 from .errors import ExportCancelled
 from .imageuser import sequence_path, user_frame
@@ -74,8 +75,13 @@ def udim_tiles(img, first, reasons, unassociate, reading=WHOLE):
     unread = []
     for number in rest:
         path = _tile_path(pattern, number)
-        texels = _file_texels(path, img, reasons, unassociate, reading=reading) \
-            if '<' not in path and path != pattern else None
+        try:
+            texels = _file_texels(path, img, reasons, unassociate, reading=reading) \
+                if '<' not in path and path != pattern else None
+        except ImageTooBig as e:
+            reasons.append(str(e))
+            tiles[number] = np.array(MISSING_IMAGE + (1.0,), np.float32).reshape(1, 1, 4)
+            continue
         if texels is None:
             unread.append(number)
         else:
@@ -188,13 +194,18 @@ def _read_file_texels(path, img, reasons, unassociate, lazy, reading, key=None):
     if spec is None:
         return None
     ch = spec.nchannels
+    byte = spec.format.basetype == oiio.UINT8
+    try:
+        _check_room(img, path, spec, byte)
+    except ImageTooBig:
+        inp.close()
+        raise
     # a file stored with its alpha multiplied in (OpenEXR always; TIFFs other tools write):
     # Cycles reads its values as stored whatever the alpha mode (its loader associates only files
     # stored straight), so they are passed on as stored, marked so; dividing alpha out here had
     # left data and channel-packed images divided (a Non-Color EXR texel (0.3, 0.2, 0.1) at alpha
     # 0.5 had rendered (0.6, 0.4, 0.2)) and an 8-bit TIFF rounded twice
     stored_associated = ch == 4 and not spec.get_int_attribute('oiio:UnassociatedAlpha', 0)
-    byte = spec.format.basetype == oiio.UINT8
     # byte files as their bytes (a quarter of the floats' memory, and no conversion): what Cycles
     # reads, and what Blender's byte buffer holds; deeper ones as floats in the image's space
     raw = kept_bytes(key) if byte else None
@@ -220,6 +231,23 @@ def _read_file_texels(path, img, reasons, unassociate, lazy, reading, key=None):
         texels.stored = EncodedTexels(half_as_cycles_reads(stored.texels, flush=space_kind(img) == CONVERT),
                                       stored.srgb, stored.unassociate, stored.scale)
     return texels
+
+
+class ImageTooBig(Exception):
+    """An image file too big to read into the memory available: its message names it."""
+
+
+def _check_room(img, path, spec, byte):
+    """Raise ImageTooBig for a file whose texels need more than the memory available: Linux
+    overcommits, so the read's arrays are granted and the kernel kills Blender (the artist's
+    unsaved work) as they fill, and a file's header alone (a few hundred bytes) can claim
+    60000 x 60000 texels."""
+    available = budget.available_bytes()
+    need = budget.texture_bytes(spec.width * spec.height, byte, space_kind(img))
+    if available is not None and need > available:
+        raise ImageTooBig(f"image '{img.name}': its file {path} holds {spec.width} x {spec.height} texels, which "
+                          f"need about {budget.gigabytes(need)} to read, more than the "
+                          f"{budget.gigabytes(available)} of memory available; not read (magenta)")
 
 
 def _stacked_tiles(tiles):
@@ -372,8 +400,12 @@ def _image_pixels(img, reasons, unassociate=False, user=None, frame=None, readin
         if img.source == 'TILED' and len(img.tiles):
             path = _tile_path(path, img.tiles[0].number)
         reading.poll()
-        texels = _file_texels(path, img, reasons, unassociate, lazy=img.source != 'TILED', reading=reading) \
-            if '<' not in path else None
+        try:
+            texels = _file_texels(path, img, reasons, unassociate, lazy=img.source != 'TILED', reading=reading) \
+                if '<' not in path else None
+        except ImageTooBig as e:    # (not Blender's buffer either: it would load the same texels)
+            reasons.append(str(e))
+            return None
         if texels is not None:
             return texels
         gone = _unreadable_file(img, path)
@@ -413,7 +445,11 @@ def _sequence_frame(img, reasons, unassociate, user, scene_frame, reading=WHOLE)
     file, imageuser.user_frame / sequence_path), or None (magenta, as Cycles) if unreadable."""
     frame = user_frame(img, user, scene_frame)
     path = sequence_path(img, frame)
-    texels = _file_texels(path, img, reasons, unassociate, lazy=True, reading=reading)
+    try:
+        texels = _file_texels(path, img, reasons, unassociate, lazy=True, reading=reading)
+    except ImageTooBig as e:
+        reasons.append(str(e))
+        return None
     if texels is None:
         reasons.append(f"image sequence '{img.name}': frame {frame} could not be read from '{path}' "
                        "(magenta, as Cycles)")
