@@ -120,10 +120,21 @@ def _mix_hsv(blend, t, c1, c2):
     return np.where((h2[..., 1] != 0.0)[..., None], _lerp(c1, hsv_to_rgb(hsv), t), c1)
 
 
+def _extremes(c):
+    """(max, min) of (..., 3) RGB as Cycles' rgb_to_hsv / rgb_to_hsl take them, max(r, max(g, b))
+    with max(a, b) = (a > b) ? a : b (min alike): a NaN red or green is passed over, a NaN blue
+    taken (numpy's max passes every NaN on: a Separate Color of (NaN, 0.3, 0.2) had been black in
+    each of H, S and V / L where Cycles 5.0.1 gives S 0.333 and V 0.3, HSL S 0.2 and L 0.25, folded
+    or computed alike)."""
+    r, g, b = c[..., 0], c[..., 1], c[..., 2]
+    gb_max, gb_min = np.where(g > b, g, b), np.where(g < b, g, b)
+    return np.where(r > gb_max, r, gb_max), np.where(r < gb_min, r, gb_min)
+
+
 def rgb_to_hsv(c):
     """(..., 3) RGB -> HSV, hue in [0, 1) (Cycles' rgb_to_hsv)."""
     c = _real(c)
-    cmax, cmin = c.max(axis=-1), c.min(axis=-1)
+    cmax, cmin = _extremes(c)
     delta = cmax - cmin
     with np.errstate(divide='ignore', invalid='ignore'):
         s = np.where(cmax != 0.0, delta / np.where(cmax != 0.0, cmax, 1.0), 0.0)
@@ -154,7 +165,7 @@ def hsv_to_rgb(hsv):
 def rgb_to_hsl(c):
     """(..., 3) RGB -> HSL, hue in [0, 1) (Cycles' rgb_to_hsl; lightness at most 1)."""
     c = _real(c)
-    cmax, cmin = c.max(axis=-1), c.min(axis=-1)
+    cmax, cmin = _extremes(c)
     lum = np.minimum(1.0, (cmax + cmin) / 2.0)
     delta = cmax - cmin
     grey = delta == 0.0
@@ -171,9 +182,11 @@ def hsl_to_rgb(hsl):
     """(..., 3) HSL -> RGB (Cycles' hsl_to_rgb)."""
     hsl = _real(hsl)
     h, s, lum = hsl[..., 0], hsl[..., 1], hsl[..., 2]
-    nr = np.clip(np.abs(h * 6.0 - 3.0) - 1.0, 0.0, 1.0)
-    ng = np.clip(2.0 - np.abs(h * 6.0 - 2.0), 0.0, 1.0)
-    nb = np.clip(2.0 - np.abs(h * 6.0 - 4.0), 0.0, 1.0)
+    # (Cycles' clamp: a NaN hue gives 0 in each, a grey of the lightness: (0.25, 0.25, 0.25) for
+    # S 0.5, L 0.5 in Cycles 5.0.1, where np.clip had passed the NaN on, black)
+    nr = cycles_clamp(np.abs(h * 6.0 - 3.0) - 1.0, 0.0, 1.0)
+    ng = cycles_clamp(2.0 - np.abs(h * 6.0 - 2.0), 0.0, 1.0)
+    nb = cycles_clamp(2.0 - np.abs(h * 6.0 - 4.0), 0.0, 1.0)
     chroma = (1.0 - np.abs(2.0 * lum - 1.0)) * s
     return np.stack([(n - 0.5) * chroma + lum for n in (nr, ng, nb)], axis=-1)
 
@@ -279,12 +292,14 @@ def curves_lookup(table, lo, hi, c, fac, extrapolate):
     return _lerp(c, out, fac)
 
 
-def ramp_lookup(table, f, interpolate):
+def ramp_lookup(table, f, interpolate, folded=True):
     """RGBA of the table at positions f (clamped to [0, 1]), linear between entries unless
-    the ramp is Constant (Cycles' rgb_ramp_lookup; its clamp takes a NaN position to 1, the
-    last stop: measured in Cycles 5.0)."""
+    the ramp is Constant (Cycles' rgb_ramp_lookup). A NaN position: the last stop where Blender
+    folds the node (a constant Factor), the first where Cycles' kernel computes it (its clamp
+    gives the lower bound; measured in Cycles 5.0.1: a red-to-blue ramp blue constant, red
+    linked, where the kernel's had been blue too)."""
     n = len(table)
-    x = np.clip(np.nan_to_num(_real(f), nan=1.0), 0.0, 1.0) * (n - 1)
+    x = np.clip(np.nan_to_num(_real(f), nan=1.0 if folded else 0.0), 0.0, 1.0) * (n - 1)
     i = np.minimum(x.astype(int), n - 1)
     if not interpolate:
         return table[i]
