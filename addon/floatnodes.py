@@ -414,10 +414,13 @@ def axis_angle_matrix(axis, angle):
     return np.stack([np.stack(np.broadcast_arrays(*r), axis=-1) for r in rows], axis=-2)
 
 
-def vector_rotate_matrix(kind, invert, axis, angle, rotation):
+def vector_rotate_matrix(kind, invert, axis, angle, rotation, folded=False):
     """(R (..., 3, 3), keep (...,) bool) of a Vector Rotate node (Cycles'
     svm_node_vector_rotate): the vector maps to R (v - center) + center, except where `keep`
-    (an axis of length 0: the vector unchanged). axis, rotation (..., 3), angle (..., 1)."""
+    (an axis of length 0: the vector unchanged; `folded`, as Blender folds a node of constants:
+    an axis whose squared length is not above 1e-35, a NaN one included, as its
+    axis_angle_to_mat3 normalises it, where the kernel rotates by NaN: measured, Cycles 5.0.1
+    keeps the vector of a constant NaN axis, black linked). axis, rotation (..., 3), angle (..., 1)."""
     (axis, angle, rotation), _, dtype = _real(axis, angle, rotation)
     if kind == 'EULER_XYZ':
         R = euler_matrix(rotation)
@@ -431,7 +434,7 @@ def vector_rotate_matrix(kind, invert, axis, angle, rotation):
         length = np.ones((), dtype)
     else:
         length = np.sqrt(np.sum(axis * axis, axis=-1))
-    keep = length == 0.0
+    keep = ~(length * length > 1e-35) if folded and kind not in _AXES else length == 0.0
     with np.errstate(all='ignore'):
         unit = axis / np.where(keep, 1.0, length).astype(dtype)[..., None]
     return axis_angle_matrix(unit, angle), np.broadcast_to(keep, np.broadcast_shapes(keep.shape, angle.shape))
@@ -458,9 +461,10 @@ def mapping(kind, vector, location, rotation, scale):
     return np.asarray(r, dtype)
 
 
-def vector_rotate(kind, invert, vector, center, axis, angle, rotation):
-    """Vector Rotate node (Cycles' svm_node_vector_rotate) on (..., 3) vectors."""
-    R, keep = vector_rotate_matrix(kind, invert, axis, angle, rotation)
+def vector_rotate(kind, invert, vector, center, axis, angle, rotation, folded=False):
+    """Vector Rotate node (Cycles' svm_node_vector_rotate) on (..., 3) vectors (folded: as
+    Blender folds a node of constants, vector_rotate_matrix)."""
+    R, keep = vector_rotate_matrix(kind, invert, axis, angle, rotation, folded)
     (vector, center), _, dtype = _real(vector, center)
     with np.errstate(all='ignore'):
         p = vector - center
