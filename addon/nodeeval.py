@@ -372,7 +372,7 @@ def _compute32(node, out, v):
         return cn.gray(v['color'])
     if t == 'VALTORGB':
         table, interpolate = node.ramp if isinstance(node, Frozen) else _ramp(node)
-        rgba = cn.ramp_lookup(table, v['fac'][..., 0], interpolate)
+        rgba = cn.ramp_lookup(table, v['fac'][..., 0], interpolate, _folded_by_blender(node))
         return rgba[..., 3:4] if out.name == 'Alpha' else rgba[..., :3]
     if t == 'CURVE_RGB':
         table, lo, hi, extrapolate = node.curves if isinstance(node, Frozen) else _curves(node)
@@ -412,7 +412,7 @@ def _compute32(node, out, v):
     if t == 'VECTOR_ROTATE':
         zero = np.zeros(3, np.float32)
         return fn.vector_rotate(node.rotation_type, node.invert, v['vector'], v['vcenter'], v.get('vaxis', zero),
-                                v.get('angle', zero[:1]), v.get('vrotation', zero))
+                                v.get('angle', zero[:1]), v.get('vrotation', zero), _folded_by_blender(node))
     if t == 'MAPPING':
         if node.zero if isinstance(node, Frozen) else _mapping_folds_to_zero(node):
             return np.zeros(np.broadcast_shapes(*(x.shape for x in v.values())), np.float32)
@@ -500,8 +500,8 @@ def xyz_to_rgb():
 
 
 def _folded_by_blender(node):
-    """Whether Blender folds a Float Curve, Clamp, Map Range, Mix or MixRGB node (a Frozen one's,
-    found when frozen)."""
+    """Whether Blender folds a Float Curve, Clamp, Map Range, Mix, MixRGB, Color Ramp or Vector
+    Rotate node (a Frozen one's, found when frozen)."""
     folded = getattr(node, 'blender_folded', None)
     return nodegraph.node_folded_by_blender(node) if folded is None else folded
 
@@ -530,13 +530,14 @@ class Frozen:
         t = getattr(thing, 'type', None)
         if t == 'VALTORGB':
             self.ramp = _ramp(thing)
+            self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t in ('CURVE_RGB', 'CURVE_VEC', 'CURVE_FLOAT'):
             self.curves = _curves(thing)
             if t == 'CURVE_FLOAT':
                 self.curve_ends = _curve_ends(thing)
                 self.curve_clip = _curve_clip(thing)
                 self.blender_folded = nodegraph.node_folded_by_blender(thing)
-        elif t in ('CLAMP', 'MAP_RANGE', 'MIX', 'MIX_RGB'):
+        elif t in ('CLAMP', 'MAP_RANGE', 'MIX', 'MIX_RGB', 'VECTOR_ROTATE'):
             self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t == 'WAVELENGTH':
             self.xyz = xyz_to_rgb()
