@@ -270,10 +270,15 @@ def curves_table(evaluate, curves, combined=True):
     return table, lo, hi
 
 
-def curves_lookup(table, lo, hi, c, fac, extrapolate):
+def curves_lookup(table, lo, hi, c, fac, extrapolate, folded=False):
     """RGB Curves, Vector Curves and Float Curve (Cycles' svm_node_curves, svm_node_curve):
     each channel looked up at its position in [lo, hi] (linearly extrapolated beyond it when
-    the mapping's extension is Extrapolated, else clamped), mixed with the input by fac."""
+    the mapping's extension is Extrapolated, else clamped), mixed with the input by fac.
+    `folded`: as Blender folds a node of constants, where a NaN channel reads the table's first
+    entry (curvemap_evaluateF's int(NaN) index is below 0) and a Factor of 1 is not mixed, so
+    the NaN stays out (measured in Cycles 5.0.1, first points at y 0.3: a Float Curve 0.3, an
+    RGB Curves' red 0.51, its C curve's 0.3 through the red one; a Vector Curves' default -1;
+    DACRT had rendered each black, the kernel's NaN, which linked inputs do give)."""
     c = _real(c)
     with np.errstate(divide='ignore', invalid='ignore'):
         rel = (c - lo) / (hi - lo)
@@ -283,13 +288,15 @@ def curves_lookup(table, lo, hi, c, fac, extrapolate):
     for k in range(channels):
         f = rel[..., k]
         v = ramp_lookup(table[:, k:k + 1], f, True)[..., 0]
+        if folded:
+            v = np.where(np.isnan(f), table[0, k], v)
         if extrapolate:
             with np.errstate(invalid='ignore', over='ignore'):
                 below = table[0, k] + (table[0, k] - table[1, k]) * (-f) * (n - 1)
                 above = table[-1, k] + (table[-1, k] - table[-2, k]) * (f - 1.0) * (n - 1)
             v = np.where(f < 0.0, below, np.where(f > 1.0, above, v))
         out[..., k] = v
-    return _lerp(c, out, fac)
+    return np.where(fac == 1.0, out, _lerp(c, out, fac)) if folded else _lerp(c, out, fac)
 
 
 def ramp_lookup(table, f, interpolate, folded=True):
