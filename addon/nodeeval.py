@@ -376,12 +376,13 @@ def _compute32(node, out, v):
         return rgba[..., 3:4] if out.name == 'Alpha' else rgba[..., :3]
     if t == 'CURVE_RGB':
         table, lo, hi, extrapolate = node.curves if isinstance(node, Frozen) else _curves(node)
-        return cn.curves_lookup(table, lo, hi, v['color'], v['fac'], extrapolate)
+        return cn.curves_lookup(table, lo, hi, v['color'], v['fac'], extrapolate, _folded_by_blender(node))
     if t in ('CURVE_VEC', 'CURVE_FLOAT'):
         table, lo, hi, extrapolate = node.curves if isinstance(node, Frozen) else _curves(node)
         x = v['vector'] if t == 'CURVE_VEC' else v['value']
         # (Cycles' min and max x and table are float32)
-        r = cn.curves_lookup(table.astype(np.float32), np.float32(lo), np.float32(hi), x, v['fac'], extrapolate)
+        r = cn.curves_lookup(table.astype(np.float32), np.float32(lo), np.float32(hi), x, v['fac'], extrapolate,
+                             _folded_by_blender(node))
         if t == 'CURVE_FLOAT' and x.ndim == 1 and v['fac'].ndim == 1 and hi != lo and _folded_by_blender(node):
             # the folding of a Float Curve of constant inputs Blender folds reads a point beyond
             # the curve's x range, when Extrapolated, as the extrapolated line clipped to the
@@ -500,8 +501,8 @@ def xyz_to_rgb():
 
 
 def _folded_by_blender(node):
-    """Whether Blender folds a Float Curve, Clamp, Map Range, Mix, MixRGB, Color Ramp or Vector
-    Rotate node (a Frozen one's, found when frozen)."""
+    """Whether Blender folds a Float, RGB or Vector Curve(s), Clamp, Map Range, Mix, MixRGB, Color
+    Ramp or Vector Rotate node (a Frozen one's, found when frozen)."""
     folded = getattr(node, 'blender_folded', None)
     return nodegraph.node_folded_by_blender(node) if folded is None else folded
 
@@ -533,10 +534,10 @@ class Frozen:
             self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t in ('CURVE_RGB', 'CURVE_VEC', 'CURVE_FLOAT'):
             self.curves = _curves(thing)
+            self.blender_folded = nodegraph.node_folded_by_blender(thing)
             if t == 'CURVE_FLOAT':
                 self.curve_ends = _curve_ends(thing)
                 self.curve_clip = _curve_clip(thing)
-                self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t in ('CLAMP', 'MAP_RANGE', 'MIX', 'MIX_RGB', 'VECTOR_ROTATE'):
             self.blender_folded = nodegraph.node_folded_by_blender(thing)
         elif t == 'WAVELENGTH':
