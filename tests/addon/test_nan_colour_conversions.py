@@ -7,7 +7,9 @@ it; the expected values are those measurements):
 - Combine Color HSL clamps a NaN hue to 0 (Cycles' clamp): a grey of the lightness, 0.25, black before;
 - a Color Ramp's NaN Factor is its last stop folded, its first in the kernel (red, DACRT blue);
 - a Vector Rotate of a constant NaN axis keeps the vector (Blender's axis_angle_to_mat3: an axis
-  that does not normalise is no rotation), black where the kernel computes it (DACRT black both)."""
+  that does not normalise is no rotation), black where the kernel computes it (DACRT black both);
+- a Float / RGB / Vector Curve(s) of a constant NaN reads its table's first entry (Blender's
+  curvemap_evaluateF), unmixed at Factor 1 (DACRT black: the kernel's NaN)."""
 import numpy as np
 import pytest
 
@@ -35,10 +37,10 @@ def test_combine_hsl_of_a_nan_hue_is_the_grey_of_its_lightness():
     np.testing.assert_allclose(cn.hsl_to_rgb(np.array([0.0, 1.0, 0.5], np.float32)), [1.0, 0.0, 0.0])
 
 
-def _emit(scene, node_type, settings, nan_input, value, output, linked, props=None):
+def _emit(scene, node_type, settings, nan_input, value, output, linked, props=None, setup=None):
     """The centre pixel of a plane emitting a new node's `output` (black world), its input
     `nan_input` set to value, or fed it through a kernel addition of a linked 0 (Object Z on the
-    plane z = 0), so Blender cannot fold the node."""
+    plane z = 0), so Blender cannot fold the node; setup(node) completes the node."""
     scene.render.resolution_x, scene.render.resolution_y = 4, 3
     scene.dacrt.samples = 1
     scenes.black_world()
@@ -51,6 +53,8 @@ def _emit(scene, node_type, settings, nan_input, value, output, linked, props=No
         setattr(n, k, v)
     if node_type == 'ShaderNodeValToRGB':
         n.color_ramp.elements[0].color, n.color_ramp.elements[1].color = (1, 0, 0, 1), (0, 0, 1, 1)
+    if setup is not None:
+        setup(n)
     for name, v in settings.items():
         n.inputs[name].default_value = v
     target = n.inputs[nan_input]
@@ -105,3 +109,29 @@ def test_vector_rotate_of_a_nan_axis_keeps_the_vector_only_when_folded(scene, li
     px = _emit(scene, 'ShaderNodeVectorRotate', {'Vector': (0.5, 0.3, 0.2), 'Angle': 0.5}, 'Axis', (NAN, NAN, NAN),
                'Vector', linked, {'rotation_type': 'AXIS_ANGLE'})
     np.testing.assert_allclose(px, want, atol=1e-6)
+
+
+def _curve_first_at(node, y):
+    for c in node.mapping.curves:
+        c.points[0].location = (c.points[0].location[0], y)
+    node.mapping.update()
+
+
+@pytest.mark.parametrize("linked", [False, True], ids=['folded', 'kernel'])
+@pytest.mark.parametrize("node_type, settings, nan_input, value, output, folded_want", [
+    ('ShaderNodeFloatCurve', {}, 'Value', NAN, 'Value', (0.3, 0.3, 0.3)),
+    ('ShaderNodeRGBCurve', {}, 'Color', (NAN, 0.5, 0.5, 1.0), 'Color', (0.51, 0.755, 0.755)),
+    ('ShaderNodeVectorCurve', {}, 'Vector', (NAN, 0.5, 0.5), 'Vector', (0.3, 0.825, 0.825)),
+    # (a Factor of 0.5 mixes the NaN in, folded too: Cycles 0 / 0.6275 / 0.6275)
+    ('ShaderNodeRGBCurve', {'Fac': 0.5}, 'Color', (NAN, 0.5, 0.5, 1.0), 'Color', (0.0, 0.6275, 0.6275)),
+], ids=['float', 'rgb', 'vector', 'rgb-half'])
+def test_a_curve_of_a_nan_reads_its_first_entry_where_blender_folds_it(scene, node_type, settings, nan_input, value,
+                                                                       output, folded_want, linked):
+    """Each curve's first point at y 0.3 (Cycles 5.0.1, measured: the folded values; linked, the
+    kernel's NaN, black in that channel)."""
+    px = _emit(scene, node_type, settings, nan_input, value, output, linked,
+               setup=lambda n: _curve_first_at(n, 0.3))
+    want = np.array(folded_want)
+    if linked:
+        want = want * np.isfinite(np.array(value[:3] if isinstance(value, tuple) else (value,) * 3))
+    np.testing.assert_allclose(px, want, atol=2e-3)
