@@ -23,7 +23,7 @@ from .. import emissionsampling, nodeeval, specular
 from .. import scenedata as sd
 from ..nodeeval import nan_inputs
 from ..nodegraph import (closure_link, cycle_said, dead_group_outputs, link_cycle, linked_link, linked_node,
-                         output_node, used_outputs)
+                         output_node, source, used_outputs)
 from ..procedural import ProceduralTexels
 from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
@@ -60,7 +60,12 @@ IGNORED_OUTPUTS = ('Volume',)
 # against 0.533); a Layer Weight's NaN Blend is computed through the node (its Fresnel 1, as
 # in Cycles, where 0 gives 0)
 NAN_NOT_ZERO_IN_CYCLES = {'BSDF_HAIR_PRINCIPLED': (('Radial Roughness', 'Offset', 'Random Roughness'), "black"),
-                          'BSDF_GLOSSY': (('Anisotropy',), "otherwise")}
+                          'BSDF_GLOSSY': (('Anisotropy',), "otherwise"),
+                          'BUMP': (('Distance',), "black (the bumped normal NaN)")}
+# ... of those, where the node's NaN is read at all: a Bump's only with its Height linked (Cycles
+# drops a Bump of constant Height; measured, a Wave Texture's Fac as Height under a sun: Cycles
+# black, DACRT a flat 0.64, said "read as 0 (as Cycles clamps it)"; a constant Height: both 0.64)
+_NAN_READ_WHEN = {'BUMP': lambda node: source(node.inputs['Height'])[0] is not None}
 NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
 # Inputs at float32's largest magnitude (Blender stores an 'inf' typed as 3.4e38) that Cycles
 # computes in float32 into what DACRT does not reproduce (measured, Cycles 5.0.1, each input
@@ -123,8 +128,11 @@ def _nan_inputs_named(ntree, table, keep):
 def _nan_unlike_cycles(ntree, keep, grouped=()):
     """[(nan_inputs, what Cycles renders)] of the NAN_NOT_ZERO_IN_CYCLES inputs, per node type
     (grouped: the NaN inputs typed in or through its groups, groupinputs.GroupedInput)."""
-    found = [(_nan_inputs_named(ntree, {t: names}, keep) + _grouped_named(grouped, {t: names}), what)
-             for t, (names, what) in NAN_NOT_ZERO_IN_CYCLES.items()]
+    found = []
+    for t, (names, what) in NAN_NOT_ZERO_IN_CYCLES.items():
+        read = _NAN_READ_WHEN.get(t, lambda node: True)
+        found.append((_nan_inputs_named(ntree, {t: names}, lambda n: keep(n) and read(n)) +
+                       _grouped_named([g for g in grouped if g.node.type != t or read(g.node)], {t: names}), what))
     return [(bad, what) for bad, what in found if bad]
 
 
