@@ -487,3 +487,24 @@ def test_float_curve_of_an_inf_typed_constant_is_the_clipped_end(scene):
     c.inputs['Value'].default_value = float('inf')
     nt.links.new(c.outputs['Value'], d.inputs['Color'])
     assert np.allclose(scenes.render_rgba(scene)[..., :3], plain, rtol=1e-5) and plain.min() > 0.1
+
+
+@pytest.mark.parametrize("height_linked, words", [
+    (True, "NaN read as 0 for 'Distance' of 'Bump', where Cycles renders it black (the bumped normal NaN), not as 0"),
+    (False, "NaN read as 0 (as Cycles clamps it) for 'Distance' of 'Bump'"),
+])
+def test_bump_nan_distance_is_said_black_in_cycles_where_it_bumps(scene, said, height_linked, words):
+    """A Bump's NaN Distance with a Wave Texture as Height renders black in Cycles 5.0.1 (its
+    bumped normal NaN; measured under a sun: 0 against DACRT's flat 0.64), which had been said
+    'read as 0 (as Cycles clamps it)'; with a constant Height Cycles drops the Bump and both
+    render the flat 0.64, so that is still said."""
+    mat, nt, d = _grey_lit_diffuse(scene, (0.8, 0.8, 0.8))
+    b = nt.nodes.new('ShaderNodeBump')
+    b.inputs['Distance'].default_value = NAN
+    if height_linked:
+        nt.links.new(nt.nodes.new('ShaderNodeTexWave').outputs['Fac'], b.inputs['Height'])
+    nt.links.new(b.outputs['Normal'], d.inputs['Normal'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    scenes.render_rgba(scene)
+    text = " | ".join(said)
+    assert words in text, text
