@@ -85,10 +85,13 @@ def mix(blend, t, c1, c2):
     raise ValueError(f"unknown Mix blend type {blend!r}")
 
 
+# (Dodge and Burn divide by a NaN tmp as Cycles does, whose tests on it are all false: the NaN
+# is the result, black in that channel in Cycles 5.0.1 folded or linked, where the stand-in
+# divisor 1 had kept A's channel, 0.5)
 def _dodge(t, c1, c2):
     tmp = 1.0 - t * c2
     with np.errstate(divide='ignore', invalid='ignore'):
-        q = c1 / np.where(tmp > 0.0, tmp, 1.0)
+        q = c1 / np.where(tmp <= 0.0, 1.0, tmp)
     out = np.where(tmp <= 0.0, 1.0, np.minimum(q, 1.0))
     return np.where(c1 != 0.0, out, c1)
 
@@ -96,7 +99,7 @@ def _dodge(t, c1, c2):
 def _burn(t, c1, c2):
     tmp = (1.0 - t) + t * c2
     with np.errstate(divide='ignore', invalid='ignore'):
-        q = 1.0 - (1.0 - c1) / np.where(tmp > 0.0, tmp, 1.0)
+        q = 1.0 - (1.0 - c1) / np.where(tmp <= 0.0, 1.0, tmp)
     return np.where(tmp <= 0.0, 0.0, np.clip(q, 0.0, 1.0))
 
 
@@ -120,21 +123,27 @@ def _mix_hsv(blend, t, c1, c2):
     return np.where((h2[..., 1] != 0.0)[..., None], _lerp(c1, hsv_to_rgb(hsv), t), c1)
 
 
-def _extremes(c):
-    """(max, min) of (..., 3) RGB as Cycles' rgb_to_hsv / rgb_to_hsl take them, max(r, max(g, b))
-    with max(a, b) = (a > b) ? a : b (min alike): a NaN red or green is passed over, a NaN blue
-    taken (numpy's max passes every NaN on: a Separate Color of (NaN, 0.3, 0.2) had been black in
-    each of H, S and V / L where Cycles 5.0.1 gives S 0.333 and V 0.3, HSL S 0.2 and L 0.25, folded
-    or computed alike)."""
+def _extremes(c, fmax):
+    """(max, min) of (..., 3) RGB as Cycles' rgb_to_hsv (`fmax`) and rgb_to_hsl take them:
+    max(r, max(g, b)) with max(a, b) = (a > b) ? a : b, min alike, except that rgb_to_hsv's max is
+    fmaxf (a NaN anywhere passed over): a NaN red or green is passed over by both, a NaN blue
+    taken by the ternaries (numpy's max passes every NaN on: a Separate Color of (NaN, 0.3, 0.2)
+    had been black in each of H, S and V / L where Cycles 5.0.1 gives S 0.333 and V 0.3, HSL S 0.2
+    and L 0.25, and of (0.5, 0.3, NaN) V 0.5, folded or computed alike)."""
     r, g, b = c[..., 0], c[..., 1], c[..., 2]
-    gb_max, gb_min = np.where(g > b, g, b), np.where(g < b, g, b)
-    return np.where(r > gb_max, r, gb_max), np.where(r < gb_min, r, gb_min)
+    gb_min = np.where(g < b, g, b)
+    if fmax:
+        top = np.fmax(r, np.fmax(g, b))
+    else:
+        gb_max = np.where(g > b, g, b)
+        top = np.where(r > gb_max, r, gb_max)
+    return top, np.where(r < gb_min, r, gb_min)
 
 
 def rgb_to_hsv(c):
     """(..., 3) RGB -> HSV, hue in [0, 1) (Cycles' rgb_to_hsv)."""
     c = _real(c)
-    cmax, cmin = _extremes(c)
+    cmax, cmin = _extremes(c, fmax=True)
     delta = cmax - cmin
     with np.errstate(divide='ignore', invalid='ignore'):
         s = np.where(cmax != 0.0, delta / np.where(cmax != 0.0, cmax, 1.0), 0.0)
@@ -165,7 +174,7 @@ def hsv_to_rgb(hsv):
 def rgb_to_hsl(c):
     """(..., 3) RGB -> HSL, hue in [0, 1) (Cycles' rgb_to_hsl; lightness at most 1)."""
     c = _real(c)
-    cmax, cmin = _extremes(c)
+    cmax, cmin = _extremes(c, fmax=False)
     lum = np.minimum(1.0, (cmax + cmin) / 2.0)
     delta = cmax - cmin
     grey = delta == 0.0
