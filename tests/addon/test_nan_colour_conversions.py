@@ -1,9 +1,11 @@
 """A NaN into colour conversions and rotations, as Cycles 5.0.1 renders it (measured on an
 emitting plane, each case constant, so Blender folds it, and linked, so Cycles' kernel computes
 it; the expected values are those measurements):
-- Separate Color HSV / HSL takes max(r, max(g, b)) with max(a, b) = (a > b) ? a : b (min alike),
-  passing a NaN red or green over: (NaN, 0.3, 0.2) is S 0.333, V 0.3 (HSL S 0.2, L 0.25), where
-  DACRT had rendered each black (numpy's max passes the NaN on);
+- Separate Color HSV / HSL takes max(r, max(g, b)) with max(a, b) = (a > b) ? a : b (min alike;
+  HSV's max is fmaxf), passing a NaN red or green over: (NaN, 0.3, 0.2) is S 0.333, V 0.3 (HSL
+  S 0.2, L 0.25), (0.5, 0.3, NaN) V 0.5, where DACRT had rendered each black (numpy's max passes
+  the NaN on); a Hue/Saturation/Value node of (0.5, 0.3, NaN) is (0.5, 0.5, 0) likewise;
+- a Mix Dodge or Burn of a NaN channel is NaN there (black), where A's had been kept;
 - Combine Color HSL clamps a NaN hue to 0 (Cycles' clamp): a grey of the lightness, 0.25, black before;
 - a Color Ramp's NaN Factor is its last stop folded, its first in the kernel (red, DACRT blue);
 - a Vector Rotate of a constant NaN axis keeps the vector (Blender's axis_angle_to_mat3: an axis
@@ -23,7 +25,8 @@ NAN = float('nan')
 @pytest.mark.parametrize("rgb, hsv, hsl", [
     ((NAN, 0.3, 0.2), (NAN, 1 / 3, 0.3), (NAN, 0.2, 0.25)),
     ((0.5, NAN, 0.2), (NAN, 0.6, 0.5), (NAN, 0.3 / 0.7, 0.35)),
-    ((0.5, 0.3, NAN), (NAN, NAN, NAN), (NAN, NAN, NAN)),      # a NaN blue is taken: all NaN
+    # a NaN blue: passed over by HSV's fmaxf (V 0.5), taken by the ternary min (S, H NaN) and HSL's max
+    ((0.5, 0.3, NAN), (NAN, NAN, 0.5), (NAN, NAN, NAN)),
     ((0.5, 0.3, 0.2), (1 / 18, 0.6, 0.5), (1 / 18, 3 / 7, 0.35)),    # (finite: unchanged)
 ])
 def test_separate_hsv_and_hsl_take_cycles_max_and_min(rgb, hsv, hsl):
@@ -35,6 +38,11 @@ def test_separate_hsv_and_hsl_take_cycles_max_and_min(rgb, hsv, hsl):
 def test_combine_hsl_of_a_nan_hue_is_the_grey_of_its_lightness():
     np.testing.assert_allclose(cn.hsl_to_rgb(np.array([NAN, 0.5, 0.5], np.float32)), [0.25, 0.25, 0.25])
     np.testing.assert_allclose(cn.hsl_to_rgb(np.array([0.0, 1.0, 0.5], np.float32)), [1.0, 0.0, 0.0])
+
+
+def _socket(sockets, key):
+    """The enabled socket of that identifier or name (a Mix node has an 'A' per data type)."""
+    return next(s for s in sockets if key in (s.identifier, s.name) and s.enabled)
 
 
 def _emit(scene, node_type, settings, nan_input, value, output, linked, props=None, setup=None):
@@ -56,8 +64,8 @@ def _emit(scene, node_type, settings, nan_input, value, output, linked, props=No
     if setup is not None:
         setup(n)
     for name, v in settings.items():
-        n.inputs[name].default_value = v
-    target = n.inputs[nan_input]
+        _socket(n.inputs, name).default_value = v
+    target = _socket(n.inputs, nan_input)
     if linked:
         tc, sep = nt.nodes.new('ShaderNodeTexCoord'), nt.nodes.new('ShaderNodeSeparateXYZ')
         nt.links.new(tc.outputs['Object'], sep.inputs[0])
@@ -76,7 +84,7 @@ def _emit(scene, node_type, settings, nan_input, value, output, linked, props=No
         nt.links.new(add.outputs[0], target)
     else:
         target.default_value = value[:len(target.default_value)] if isinstance(value, tuple) else value
-    nt.links.new(n.outputs[output], em.inputs['Color'])
+    nt.links.new(_socket(n.outputs, output), em.inputs['Color'])
     nt.links.new(em.outputs[0], out.inputs['Surface'])
     scenes.plane("Plane", size=10, materials=(mat,))
     return scenes.render_rgba(scene)[1, 2, :3]
@@ -89,14 +97,30 @@ _SEP, _COMB = 'ShaderNodeSeparateColor', 'ShaderNodeCombineColor'
 @pytest.mark.parametrize("node_type, props, settings, nan_input, value, output, want", [
     (_SEP, {'mode': 'HSV'}, {}, 'Color', (NAN, 0.3, 0.2, 1.0), 'Green', 1 / 3),
     (_SEP, {'mode': 'HSV'}, {}, 'Color', (0.5, NAN, 0.2, 1.0), 'Blue', 0.5),
+    (_SEP, {'mode': 'HSV'}, {}, 'Color', (0.2, 0.3, NAN, 1.0), 'Blue', 0.3),
     (_SEP, {'mode': 'HSL'}, {}, 'Color', (0.5, NAN, 0.2, 1.0), 'Green', 0.3 / 0.7),
     (_SEP, {'mode': 'HSL'}, {}, 'Color', (NAN, 0.3, 0.2, 1.0), 'Blue', 0.25),
     (_COMB, {'mode': 'HSL'}, {'Green': 0.5, 'Blue': 0.5}, 'Red', NAN, 'Color', 0.25),
-], ids=['hsv-s', 'hsv-v', 'hsl-s', 'hsl-l', 'combine-hsl'])
+], ids=['hsv-s', 'hsv-v', 'hsv-v-nan-blue', 'hsl-s', 'hsl-l', 'combine-hsl'])
 def test_nan_colour_conversions_render_as_cycles(scene, node_type, props, settings, nan_input, value, output,
                                                  want, linked):
     px = _emit(scene, node_type, settings, nan_input, value, output, linked, props)
     np.testing.assert_allclose(px, [want] * 3, rtol=1e-4)
+
+
+@pytest.mark.parametrize("linked", [False, True], ids=['folded', 'kernel'])
+@pytest.mark.parametrize("blend, want", [('DODGE', (0.0, 0.3529, 0.2857)), ('BURN', (0.0, 0.0, 0.0))])
+def test_dodge_and_burn_of_a_nan_are_nan_in_that_channel(scene, blend, want, linked):
+    """A Mix of A (0.5, 0.3, 0.2) and B (NaN, 0.3, 0.6): Cycles 5.0.1's red 0 (NaN), DACRT had kept A's 0.5."""
+    px = _emit(scene, 'ShaderNodeMix', {'A_Color': (0.5, 0.3, 0.2, 1.0)}, 'B_Color', (NAN, 0.3, 0.6, 1.0), 'Result',
+               linked, {'data_type': 'RGBA', 'blend_type': blend})
+    np.testing.assert_allclose(px, want, atol=1e-4)
+
+
+@pytest.mark.parametrize("linked", [False, True], ids=['folded', 'kernel'])
+def test_hue_saturation_of_a_nan_blue_keeps_the_value(scene, linked):
+    px = _emit(scene, 'ShaderNodeHueSaturation', {'Hue': 0.6}, 'Color', (0.5, 0.3, NAN, 1.0), 'Color', linked)
+    np.testing.assert_allclose(px, (0.5, 0.5, 0.0), atol=1e-6)
 
 
 @pytest.mark.parametrize("linked, want", [(False, (0, 0, 1)), (True, (1, 0, 0))], ids=['folded', 'kernel'])
