@@ -44,8 +44,9 @@ def _lerp(a, b, t):
     return (1.0 - t) * a + t * b
 
 
-def mix(blend, t, c1, c2):
-    """Mix node, colour mode: blend c2 over c1 by factor t (Cycles' svm_mix)."""
+def mix(blend, t, c1, c2, folded=False):
+    """Mix node, colour mode: blend c2 over c1 by factor t (Cycles' svm_mix; `folded`: a node of
+    constants Blender folds, whose Hue, Saturation, Value and Color blends differ on a NaN)."""
     one = 1.0
     tm = 1.0 - t
     if blend == 'MIX':
@@ -81,7 +82,7 @@ def mix(blend, t, c1, c2):
     if blend == 'LINEAR_LIGHT':
         return c1 + t * (2.0 * c2 - 1.0)
     if blend in ('HUE', 'SATURATION', 'VALUE', 'COLOR'):
-        return _mix_hsv(blend, t, c1, c2)
+        return _mix_hsv(blend, t, c1, c2, folded)
     raise ValueError(f"unknown Mix blend type {blend!r}")
 
 
@@ -103,24 +104,66 @@ def _burn(t, c1, c2):
     return np.where(tmp <= 0.0, 0.0, np.clip(q, 0.0, 1.0))
 
 
-def _mix_hsv(blend, t, c1, c2):
+def _mix_hsv(blend, t, c1, c2, folded=False):
     # broadcast against the factor too: constant colours under a per-texel factor (a mask)
     t = _real(t)
     c1, c2, tb = np.broadcast_arrays(_real(c1), _real(c2),
                                      t if t.ndim else t[None])
+    out = _hsv_blend(blend, t, tb, c1, c2, rgb_to_hsv, hsv_to_rgb)
+    if not folded:
+        return out
+    # Blender folds constants with its own rgb_to_hsv and hsv_to_rgb (BLI), which take a NaN
+    # otherwise than Cycles': measured in Cycles 5.0.1, a folded Hue, Saturation, Value or Color
+    # blend with a NaN channel renders black (NaN), where Cycles' kernel (linked) gave finite
+    # values, and DACRT had given those folded too ((0.5, 0.25, 0) for Hue); finite values keep
+    # Cycles' formulas (the two agree there)
+    nan = np.isnan(c1).any(axis=-1) | np.isnan(c2).any(axis=-1)
+    if not nan.any():
+        return out
+    return np.where(nan[..., None], _hsv_blend(blend, t, tb, c1, c2, _bli_rgb_to_hsv, _bli_hsv_to_rgb), out)
+
+
+def _hsv_blend(blend, t, tb, c1, c2, to_hsv, to_rgb):
+    """The Hue, Saturation, Value and Color blends (ramp_blend's, svm_mix's) through to_hsv and
+    to_rgb."""
     tt = tb[..., 0]                        # the factor against one HSV component
-    h1, h2 = rgb_to_hsv(c1), rgb_to_hsv(c2)
+    h1, h2 = to_hsv(c1), to_hsv(c2)
     hsv = h1.copy()
     if blend == 'VALUE':
         hsv[..., 2] = (1.0 - tt) * h1[..., 2] + tt * h2[..., 2]
-        return hsv_to_rgb(hsv)
+        return to_rgb(hsv)
     if blend == 'SATURATION':
         hsv[..., 1] = (1.0 - tt) * h1[..., 1] + tt * h2[..., 1]
-        return np.where((h1[..., 1] != 0.0)[..., None], hsv_to_rgb(hsv), c1)
+        return np.where((h1[..., 1] != 0.0)[..., None], to_rgb(hsv), c1)
     hsv[..., 0] = h2[..., 0]
     if blend == 'COLOR':
         hsv[..., 1] = h2[..., 1]
-    return np.where((h2[..., 1] != 0.0)[..., None], _lerp(c1, hsv_to_rgb(hsv), t), c1)
+    return np.where((h2[..., 1] != 0.0)[..., None], _lerp(c1, to_rgb(hsv), t), c1)
+
+
+def _bli_rgb_to_hsv(c):
+    """(..., 3) RGB -> HSV as Blender's BLI rgb_to_hsv computes it (two conditional swaps, a
+    1e-20 guard): a NaN in any channel gives a NaN saturation or hue."""
+    r, g, b = c[..., 0], c[..., 1], c[..., 2]
+    swap = g < b
+    g, b, k = np.where(swap, b, g), np.where(swap, g, b), np.where(swap, -1.0, 0.0)
+    min_gb = b
+    swap = r < g
+    r, g, k = np.where(swap, g, r), np.where(swap, r, g), np.where(swap, -2.0 / 6.0 - k, k)
+    min_gb = np.where(swap, np.where(g < b, g, b), min_gb)
+    chroma = r - min_gb
+    with np.errstate(divide='ignore', invalid='ignore'):
+        return np.stack([np.abs(k + (g - b) / (6.0 * chroma + 1e-20)), chroma / (r + 1e-20), r], axis=-1)
+
+
+def _bli_hsv_to_rgb(hsv):
+    """(..., 3) HSV -> RGB as Blender's BLI hsv_to_rgb computes it (its CLAMP keeps a NaN)."""
+    h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
+
+    def clamp(x):
+        return np.where(x < 0.0, 0.0, np.where(x > 1.0, 1.0, x))
+    n = (clamp(np.abs(h * 6.0 - 3.0) - 1.0), clamp(2.0 - np.abs(h * 6.0 - 2.0)), clamp(2.0 - np.abs(h * 6.0 - 4.0)))
+    return np.stack([((x - 1.0) * s + 1.0) * v for x in n], axis=-1)
 
 
 def _extremes(c, fmax):
