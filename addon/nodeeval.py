@@ -353,12 +353,13 @@ def _compute32(node, out, v):
         return (1.0 - fac) * v['a'] + fac * v['b']
     if t == 'MIX':
         fac = clip(v['fac'], 0.0, 1.0) if node.clamp_factor else v['fac']
-        r = cn.mix('MIX' if node.data_type == 'FLOAT' else node.blend_type, fac, v['a'], v['b'])
+        r = cn.mix('MIX' if node.data_type == 'FLOAT' else node.blend_type, fac, v['a'], v['b'],
+                   _folded_by_blender(node))
         # Cycles' float Mix has no result clamp: clamp_result (kept, hidden, after a switch from
         # Color to Float) applies to colour data only
         return np.clip(r, 0.0, 1.0) if node.clamp_result and node.data_type == 'RGBA' else r
     if t == 'MIX_RGB':         # Cycles' legacy MixNode: factor clamped to [0, 1] always
-        r = cn.mix(node.blend_type, clip(v['fac'], 0.0, 1.0), v['a'], v['b'])
+        r = cn.mix(node.blend_type, clip(v['fac'], 0.0, 1.0), v['a'], v['b'], _folded_by_blender(node))
         return np.clip(r, 0.0, 1.0) if node.use_clamp else r
     if t == 'INVERT':
         return cn.invert(v['fac'], v['color'])
