@@ -5,7 +5,8 @@ it; the expected values are those measurements):
   HSV's max is fmaxf), passing a NaN red or green over: (NaN, 0.3, 0.2) is S 0.333, V 0.3 (HSL
   S 0.2, L 0.25), (0.5, 0.3, NaN) V 0.5, where DACRT had rendered each black (numpy's max passes
   the NaN on); a Hue/Saturation/Value node of (0.5, 0.3, NaN) is (0.5, 0.5, 0) likewise;
-- a Mix Dodge or Burn of a NaN channel is NaN there (black), where A's had been kept;
+- a Mix Dodge or Burn of a NaN channel is NaN there (black), where A's had been kept; a folded
+  Hue, Saturation, Value or Color blend of a NaN is black (Blender's own rgb_to_hsv);
 - Combine Color HSL clamps a NaN hue to 0 (Cycles' clamp): a grey of the lightness, 0.25, black before;
 - a Color Ramp's NaN Factor is its last stop folded, its first in the kernel (red, DACRT blue);
 - a Vector Rotate of a constant NaN axis keeps the vector (Blender's axis_angle_to_mat3: an axis
@@ -159,3 +160,19 @@ def test_a_curve_of_a_nan_reads_its_first_entry_where_blender_folds_it(scene, no
     if linked:
         want = want * np.isfinite(np.array(value[:3] if isinstance(value, tuple) else (value,) * 3))
     np.testing.assert_allclose(px, want, atol=2e-3)
+
+
+@pytest.mark.parametrize("linked", [False, True], ids=['folded', 'kernel'])
+@pytest.mark.parametrize("blend, a, b, kernel_want", [
+    ('HUE', (0.5, 0.3, 0.2, 1.0), (NAN, 0.3, 0.6, 1.0), (0.5, 0.25, 0.0)),
+    ('SATURATION', (0.5, 0.3, 0.2, 1.0), (0.2, 0.3, NAN, 1.0), (0.5, 0.0, 0.0)),
+    ('VALUE', (NAN, 0.3, 0.6, 1.0), (0.5, 0.3, 0.2, 1.0), (0.55, 0.275, 0.0)),
+    ('COLOR', (0.5, 0.3, 0.2, 1.0), (NAN, 0.3, 0.6, 1.0), (0.5, 0.275, 0.0)),
+])
+def test_hsv_blends_of_a_nan_are_black_where_blender_folds_them(scene, blend, a, b, kernel_want, linked):
+    """Blender folds a Mix of constants with its own rgb_to_hsv / hsv_to_rgb (BLI), which give NaN
+    here: Cycles 5.0.1 black folded, the kernel's values linked (DACRT had given those folded too)."""
+    nan_input, value, fixed = ('A_Color', a, {'B_Color': b}) if blend == 'VALUE' else ('B_Color', b, {'A_Color': a})
+    px = _emit(scene, 'ShaderNodeMix', fixed, nan_input, value, 'Result', linked,
+               {'data_type': 'RGBA', 'blend_type': blend})
+    np.testing.assert_allclose(px, kernel_want if linked else (0.0, 0.0, 0.0), atol=1e-4)
