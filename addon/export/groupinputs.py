@@ -71,3 +71,17 @@ def grouped_inputs(ntree, used):
             found.append(GroupedInput(node, sock.name, _label(carrier), value,
                                       getattr(unwrap(sock), 'type', None) == 'VALUE'))
     return found
+
+
+def nan_inputs_by_kind(ntree):
+    """(computed, read as 0): the 'input' of 'node' labels of ntree's NaN float inputs, its
+    groups' included (grouped_inputs), split by whether the node reading them is one the node
+    evaluation computes (nodeeval.node_inputs: a Math node's NaN is computed through it, as
+    Cycles does, not read as 0) or one whose own value is read (a NaN read as 0). For trees
+    without the material's finer families (a world's)."""
+    from .. import nodeeval
+    from ..nodegraph import used_outputs
+    computes = lambda n: nodeeval.node_inputs(n) is not None     # noqa: E731
+    nans = [g for g in grouped_inputs(ntree, used_outputs(ntree)) if g.is_float and np.isnan(g.value).any()]
+    return (nodeeval.nan_inputs(ntree, keep=computes) + [g.label for g in nans if computes(g.node)],
+            nodeeval.nan_inputs(ntree, keep=lambda n: not computes(n)) + [g.label for g in nans if not computes(g.node)])
