@@ -13,12 +13,12 @@ import numpy as np
 from .. import hair, pointcloud
 from .. import scenedata as sd
 from ..lights import envkeep
-from ..nodeeval import nan_inputs
 from ..passes import CHANNELS as PASS_CHANNELS
 from . import budget
 from .assembly import Assembly
 from .camera import export_camera
 from .errors import ExportCancelled, ExportError
+from .groupinputs import nan_inputs_by_kind
 from .images import ImageReading, texture_limit
 from .instanceattrs import InstanceAttributes
 from .lights import export_light, light_link_receivers
@@ -313,9 +313,14 @@ class Exporter:
                             "rendered black")
             world = np.zeros(3, np.float32)
         if self.world is not None and self.world.node_tree is not None:
-            bad = nan_inputs(self.world.node_tree)
-            if bad:         # (constant_value reads them as 0: a NaN Strength is a black world)
-                world_reason = '; '.join(r for r in (world_reason, f"NaN read as 0 for {', '.join(bad)}") if r)
+            # (constant_value reads a shader's NaN as 0: a NaN Strength is a black world; a Math
+            # node's is computed through it, as Cycles: Maximum(NaN, 0.3) black in both, which
+            # had been said read as 0; groups' values too, which had gone unsaid)
+            computed, bad = nan_inputs_by_kind(self.world.node_tree)
+            for found, said in ((bad, "NaN read as 0 for {}"),
+                                (computed, "NaN computed through the node as Cycles computes it for {}")):
+                if found:
+                    world_reason = '; '.join(r for r in (world_reason, said.format(', '.join(found))) if r)
         world_aovs = world_aov_counts = {}
         if settings.aovs and self.world is not None and self.world.node_tree is not None:
             reasons = []
