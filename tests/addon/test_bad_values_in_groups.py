@@ -4,6 +4,7 @@ float32-overflow table had looked only at the material tree's top level, so a gr
 rendered with no word of it (measured: a NaN Roughness of a Diffuse in a group, a NaN into a Math
 in a group, a Combine Color of 3.4e38 in a group: DACRT's and Cycles' images as at the top
 level, the report silent)."""
+import numpy as np
 import pytest
 
 from . import scenes
@@ -118,3 +119,58 @@ def test_a_nan_in_a_group_node_nothing_reads_is_not_named(scene, said):
         nt.links.new(_group_node(nt, g, 'G').outputs[0], d.inputs['Color'])
     _render(scene, build)
     assert "NaN" not in " | ".join(said)
+
+
+def _world_strength_from(scene, build):
+    """A 4x3, 1-sample render of the world alone, its Background Strength fed by build(tree) (a
+    socket), or set by build when it returns None."""
+    scene.render.resolution_x, scene.render.resolution_y = 4, 3
+    scene.dacrt.samples = 1
+    scenes.camera((0, 0, 3))
+    scenes.world((1.0, 1.0, 1.0))
+    nt = scene.world.node_tree
+    bg = next(n for n in nt.nodes if n.type == 'BACKGROUND')
+    src = build(nt, bg)
+    if src is not None:
+        nt.links.new(src, bg.inputs['Strength'])
+    return scenes.render_rgba(scene)
+
+
+def _world_maximum(nt, bg):
+    m = nt.nodes.new('ShaderNodeMath')
+    m.operation = 'MAXIMUM'
+    m.inputs[0].default_value, m.inputs[1].default_value = NAN, 0.3
+    return m.outputs[0]
+
+
+def _world_group(nt, bg):
+    g, _, go = _group('W', output='NodeSocketFloat')
+    m, tc, sep = g.nodes.new('ShaderNodeMath'), g.nodes.new('ShaderNodeTexCoord'), g.nodes.new('ShaderNodeSeparateXYZ')
+    m.operation = 'MAXIMUM'
+    m.inputs[0].default_value = NAN
+    g.links.new(tc.outputs['Generated'], sep.inputs[0])
+    g.links.new(sep.outputs['Z'], m.inputs[1])
+    g.links.new(m.outputs[0], go.inputs[0])
+    return _group_node(nt, g, 'G').outputs[0]
+
+
+def _world_nan_strength(nt, bg):
+    bg.inputs['Strength'].default_value = NAN
+
+
+@pytest.mark.parametrize("build, words, not_words", [
+    # Maximum(NaN, 0.3) renders black in both engines: computed with the NaN, not read as 0
+    # (which would give 0.3)
+    (_world_maximum, "NaN computed through the node as Cycles computes it for 'Value' of 'Math'",
+     "NaN read as 0 for 'Value' of 'Math'"),
+    (_world_group, "NaN computed through the node as Cycles computes it for 'Value' of 'Math' in 'G'", None),
+    # (control: a Background's own NaN Strength is read as 0, a black world, as in Cycles)
+    (_world_nan_strength, "NaN read as 0 for 'Strength' of 'Background'", "computed through"),
+], ids=['math', 'group', 'strength'])
+def test_a_world_nan_is_said_as_the_node_reading_it_takes_it(scene, said, build, words, not_words):
+    img = _world_strength_from(scene, build)
+    text = " | ".join(said)
+    assert words in text, text
+    assert not_words is None or not_words not in text, text
+    if build is _world_maximum:
+        assert np.allclose(img[..., :3], 0.0)
