@@ -12,6 +12,7 @@ from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DENOISE as DENOISE_PASSES
 from .passes import FIRST_SAMPLE
 from .sampling import unit_columns
+from .surfacevalues import _hits_by_material
 from .translucency import valid_reflection_normal
 
 F32 = np.float32
@@ -49,6 +50,8 @@ class PassWriting:
         if self.mats.any_normal_parts:
             weights = np.take(self.mats.normal_weights, mat, axis=1)
             folded = np.take(self.mats.normal_folded, mat, axis=1)
+            if self.mats.normal_points:
+                self._normal_points(prim, u, v, I, ng, mat, weights, folded)
             if scale is not None:
                 weights, folded = weights * scale, folded * scale
             diffuse = np.maximum(diffuse - folded, 0.0)
@@ -94,6 +97,19 @@ class PassWriting:
         total = sum(w for w, _ in parts)
         mixed = sum(w * n for w, n in parts) / np.where(total > 0, total, 1.0)
         return np.where(total > 0, mixed, nb).astype(F32)
+
+    def _normal_points(self, prim, u, v, I, ng, mat, weights, folded):
+        """Add into weights (3, k) and folded (3, k), in place, what per-point Mix factors
+        weigh the hits' folded layers by there (Materials.normal_points: each side's at the
+        factor's share, Cycles' closure weights at the point)."""
+        back = self._back(prim, ng, I)
+        for (_, w_tex, f_tex), sel in zip(self.mats.normal_points,
+                                          _hits_by_material(mat, [e[0] for e in self.mats.normal_points])):
+            if len(sel):
+                p, hu, hv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
+                b = None if back is None else np.take(back, sel)
+                weights[:, sel] += self._lookup(w_tex, 'Linear', 'REPEAT', None, p, hu, hv, b)
+                folded[:, sel] += self._lookup(f_tex, 'Linear', 'REPEAT', None, p, hu, hv, b)
 
     def _pass_albedo(self, prim, u, v, back):
         """(3, k) the colour the Diffuse Color and Denoising Albedo passes take at hits (prim,

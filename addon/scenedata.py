@@ -172,6 +172,10 @@ class Material:
     # the pass colour less it leaves to the diffuse closure on the bent normal, and the weight of
     # those on the smooth normal unraised: a Principled's sheen under its coat)
     normal_parts: tuple = (0.0, 0.0, (0.0, 0.0, 0.0), 0.0)
+    # What normal_parts adds per point under a Mix Shader of a per-point factor: (weights,
+    # folded), procedural.ProceduralTexels of the first three and of the albedo (3,) (the
+    # Normal pass's weights are normal_parts plus these at the hit); None: nothing
+    normal_points: Optional[tuple] = None
     # What the pass-or-stop pick at a surface with transparency adds to the opaque part's
     # weight (the albedo's mean) per view cosine of specular.MU (Cycles weighs a microfacet
     # closure by its albedo estimate at the view, principled.pick_delta); None: nothing

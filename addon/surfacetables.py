@@ -323,11 +323,15 @@ class Materials:
                     (i, *texture_entry(mat.name, f"AOV {name!r} {kind}", tex, interp, ext, xf)))
         # the Material Index pass's value of each material (Blender's material pass index)
         self.pass_index = np.array([float(getattr(m, 'pass_index', 0)) for m in materials], F32)
+        # the Normal pass's per-point weights under per-point Mix factors (scenedata.Material.
+        # normal_points, beside normal_parts below): (material index, weights, folded) textures
+        self.normal_points = [(i, *m.normal_points) for i, m in enumerate(materials)
+                              if getattr(m, 'normal_points', None) is not None]
         # a procedural chain reads a normal (Geometry Normal or True Normal, Texture Coordinate
         # Normal), which Cycles turns to the side the ray meets: its hits say which side that is
         entries = self.textures + self.pass_textures + self.emission_textures + self.opacity + \
             self.translucency_textures + self.normal_maps + [(e[0], e[8]) for e in self.normal_maps] + \
-            [e for found in self.aov_textures.values() for e in found]
+            [e for found in self.aov_textures.values() for e in found] + [(e[0], e[1]) for e in self.normal_points]
         self.reads_side = any(isinstance(e[1], ProceduralTexels) and e[1].needs & SIDED for e in entries) or \
             any(b.values.needs & SIDED for e in self.bumps for b in (e[1],) + e[2] if b is not None)
         # a chain reads the view (Fresnel, Layer Weight): hits carry their rays' directions
@@ -347,7 +351,7 @@ class Materials:
         self.normal_weights = np.array([[p[0] for p in parts], [p[1] for p in parts],
                                         [p[3] if len(p) > 3 else 0.0 for p in parts]], F32).reshape(3, -1)
         self.normal_folded = np.ascontiguousarray(np.array([p[2] for p in parts], F32).reshape(-1, 3).T)
-        self.any_normal_parts = bool(self.normal_weights.any())
+        self.any_normal_parts = bool(self.normal_weights.any()) or bool(self.normal_points)
         # Cycles' SD_USE_BUMP_MAP_CORRECTION per material (its reflection normals raised)
         self.bump_correction = np.array([bool(getattr(m, 'bump_correction', True)) for m in materials])
         # (materials, len(specular.MU)) what the pass-or-stop pick adds to opaque_weight per view

@@ -37,7 +37,7 @@ from .groupinputs import grouped_inputs
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
 from .meshes import STANDARD_OF, per_primitive
 from .objectinfo import OBJECT_INFO
-from . import rayvariants
+from . import pointnormals, rayvariants
 from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
 from .shaders import DEFAULT_ALBEDO, PRINCIPLED_IGNORED, ShaderClosures, glass_roughness, nonnegative
 from .texelbaking import TexelBaking, channel_line
@@ -224,6 +224,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._uv_names = []
         self._normal_maps, self._normal_map_of = [], {}
         self._normals, self._normal_weight, self._normal_parts = [], 1.0, []    # (see _normal_input)
+        self._normal_points, self._point_mix = [], None     # (pointnormals.py, shaders._per_point_normals)
         # colour chains that read an attribute compiled per point (_build, a chain not affine in it)
         self._attributes_per_point = False
         self.normal_mapped = False  # some material has a normal map: meshes need tangents
@@ -425,6 +426,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._normals = []            # per BSDF read: (name, Mix weight, normal map index, bump index)
         self._normal_weight = 1.0
         self._normal_parts = []       # per Principled read: principled.normal_parts x its weight
+        self._normal_points = []      # their parts per point under per-point Mix factors (pointnormals.py)
+        self._point_mix = None        # (the side split and factor of the per-point Mix last read)
         self._closure_folder = None   # Cycles' constant folding of this material (shaders.py)
         displaced = None
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
@@ -702,6 +705,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                                          np.asarray(sum((e[2] for e in self._normal_parts), np.zeros(3)),
                                                     np.float32),
                                          sum(e[4] for e in self._normal_parts if len(e) > 4)),
+                           normal_points=pointnormals.textures(self._normal_points),
                            pick_delta=_pick_delta(self._normal_parts),
                            rough_sigma=0.0 if rough is None else float(rough[0]),
                            rough_scale=None if rough is None else np.asarray(rough[1], np.float32),

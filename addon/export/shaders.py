@@ -13,7 +13,7 @@ from .. import nodegraph
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import input_socket, linked_link
 from ..texture import ImageTexels, LazyTexels, stored_texels
-from . import procedurals
+from . import pointnormals, procedurals
 from .closure import Closure, Texture, is_image_alpha
 from .cutouts import MISSING_ALPHA
 from .images import MISSING_IMAGE
@@ -147,19 +147,20 @@ class ShaderClosures:
             # the per-BSDF normal entries the sides note as each try reads them: dropped when a
             # try is not taken, as the next reads them again (kept, a Glossy under a Checker
             # factor beside a Holdout counted 3x in the Normal pass's weights: 1 + 0.5 for 0.5)
-            noted = len(self._normal_parts), len(self._normals)
+            noted = len(self._normal_parts), len(self._normals), len(self._normal_points)
+            self._point_mix = None
             alpha_mix = self._alpha_mix(node, reasons, depth)
             if alpha_mix is not None:
                 return alpha_mix
             self._forget_normals(noted)
             textured = self._textured_mix(node, reasons, depth)
             if textured is not None:
-                return self._per_point_normals(node, textured, noted, reasons)
+                return self._per_point_normals(textured, noted)
             self._forget_normals(noted)
             said = []       # (why the per-point mix was not taken: said once, with the value used)
             varying = self._procedural_mix(node, reasons, depth, said)
             if varying is not None:
-                return self._per_point_normals(node, varying, noted, reasons)
+                return self._per_point_normals(varying, noted)
             self._forget_normals(noted)
             fac = mix_factor(node, reasons, "Mix Shader", said=said)
             if fac in (0.0, 1.0) and nodeeval.light_path_active():
@@ -258,26 +259,33 @@ class ShaderClosures:
             return _clamped_weight(Closure(const=color))
         return Closure(const=DEFAULT_ALBEDO)
 
-    def _per_point_normals(self, node, closure, noted, reasons):
-        """closure, a Mix Shader's of a per-point factor, said where the Normal pass weighs its
-        sides' own-normal closures (the entries noted after `noted`) at the Mix's outer weight
-        each rather than by the factor per point (a Checker between a Diffuse and a Glossy: 0.043
-        mean off Cycles' Normal pass, 17% of pixels more than 0.1, against 0.010 for a constant
-        factor). Only where a side bends its normal (a normal map or Bump): unbent, those
-        closures' normals are the diffuse's but at a coarse smooth mesh's grazing rim. A cut-out
-        (an opacity per point) scales them by it in the pass: not said."""
-        bends = any(e[2] is not None or e[3] is not None for e in self._normals[noted[1]:])
-        if bends and closure.opacity is None and any(e[0] or e[1] or (len(e) > 4 and e[4])
-                                                     for e in self._normal_parts[noted[0]:]):
-            reasons.append(f"Normal pass under Mix Shader '{node.name}': the Glossy, Metallic, Glass, Refraction "
-                           "BSDFs' and Principled layers' normals weighed whole on both sides, not by its "
-                           "per-point factor")
+    def _per_point_normals(self, closure, noted):
+        """closure, a Mix Shader's of a per-point factor, whose sides' own-normal closures (the
+        entries noted after `noted`, each at the Mix's outer weight) the Normal pass weighs by
+        the factor per point (pointnormals.py): whole on both sides, a Checker between a Diffuse
+        and a Glossy had been 0.043 mean off Cycles' Normal pass, 17% of pixels more than 0.1,
+        against 0.010 for a constant factor. A cut-out (an opacity per point) scales them by it
+        in the pass instead."""
+        point_mix, self._point_mix = self._point_mix, None
+        factor = point_mix[1]() if point_mix is not None and closure.opacity is None else None
+        if factor is None:
+            return closure
+        split = point_mix[0]
+        parts = (self._normal_parts[noted[0]:split[0]], self._normal_parts[split[0]:])
+        points = (self._normal_points[noted[2]:split[1]], self._normal_points[split[1]:])
+        pick = sum((e[3] for e in parts[0] + parts[1]), 0.0)      # (the pick's, as before: both sides whole)
+        const, varying = pointnormals.mixed(parts, points, *factor)
+        del self._normal_parts[noted[0]:], self._normal_points[noted[2]:]
+        self._normal_parts.append(pointnormals.entry(const, pick))
+        self._normal_points.extend(varying)
         return closure
 
     def _forget_normals(self, noted):
         """Drop the _normal_parts and _normals entries noted after their lengths noted."""
         del self._normal_parts[noted[0]:]
         del self._normals[noted[1]:]
+        del self._normal_points[noted[2]:]
+        self._point_mix = None
 
     def _reflective(self, node, closure):
         """closure, a Glossy or Metallic BSDF's stand-in, noted for the Normal pass

@@ -11,7 +11,7 @@ from ..nodegraph import links_feeding
 from ..procedural import ProceduralTexels
 from ..texture import ImageTexels, stored_texels
 from . import procedurals
-from .closure import Closure, Texture, colour_at, cutout_sum, same_rough
+from .closure import Closure, Texture, colour_at, cutout_sum, per_point, same_rough
 
 
 def _alike(a, b):
@@ -72,6 +72,16 @@ class TexturedMixes:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
 
+    def _mix_sides(self, node, notes, depth):
+        """([closure of input 1, closure of input 2], split): the Mix Shader's two shaders read,
+        and where the first side's Normal-pass entries end (the lengths of _normal_parts and
+        _normal_points between them: shaders._per_point_normals weighs each side's by the factor)."""
+        a = self._shader(node.inputs[1], notes, depth + 1)
+        split = len(self._normal_parts), len(self._normal_points)
+        b = self._shader(node.inputs[2], notes, depth + 1)
+        self._point_mix = None      # (what a Mix inside a side left: its own is set once taken)
+        return [a, b], split
+
     def _textured_mix(self, node, reasons, depth):
         """A Mix Shader whose factor nodes compute from one image, between two shaders of
         constant albedo (no emission, transparency or holdout): the albedo per texel, a + (b -
@@ -85,13 +95,10 @@ class TexturedMixes:
         if per_texel is None:
             return None
         src, fac, notes = per_texel
-        sides = []
-        for socket in (node.inputs[1], node.inputs[2]):
-            c = self._shader(socket, notes, depth + 1)       # (said only if this mix is taken)
-            if c.texture is not None or c.emission.any() or c.emission_tex is not None or c.transparent.any() \
-                    or c.holdout or c.opacity is not None or c.translucent.any():
-                return None
-            sides.append(c)
+        sides, split = self._mix_sides(node, notes, depth)     # (said only if this mix is taken)
+        if any(c.texture is not None or c.emission.any() or c.emission_tex is not None or c.transparent.any()
+               or c.holdout or c.opacity is not None or c.translucent.any() for c in sides):
+            return None
         reasons.extend(notes)
         if _alike(*sides):      # (one rough diffuse in both inputs: itself, whatever the factor)
             return sides[0]
@@ -110,6 +117,13 @@ class TexturedMixes:
                 baked = ImageTexels(baked, after.followed_by(lambda g: lo + span * np.clip(g, 0.0, 1.0)))
             return Texture(('mix', src.key, id(baked)), baked, src.interpolation, src.extension, src.transform,
                            None, src.name)
+
+        def factor():       # (the Normal pass's weights per point; baked only where they differ)
+            looked = per_point(texture(np.zeros(3), np.ones(3)))
+            if looked is None:
+                return None
+            return (lambda coords: looked.pixels.evaluate(coords)[0].astype(np.float64)), looked.pixels.needs
+        self._point_mix = (split, factor)
         out = Closure(texture=texture(sides[0].const, sides[1].const), tex_weight=(1.0, 1.0, 1.0))
         if sides[0].passes is None and sides[1].passes is None:
             return out
@@ -136,7 +150,7 @@ class TexturedMixes:
             # bakes albedos alone): it had stood at its own value; every image is looked up per
             # point then (sides of constant colours alone: _textured_mix, per texel)
             notes = []
-            closures = [self._shader(socket, notes, depth + 1) for socket in (node.inputs[1], node.inputs[2])]
+            closures, split = self._mix_sides(node, notes, depth)
             if any(c.texture is not None or _emits(c) or _constant_part(c) or c.translucent.any() for c in closures):
                 found = procedurals.compile_floats([node.inputs['Fac']], "Mix Shader factor", fac_notes,
                                                    image=self._texture)
@@ -145,8 +159,7 @@ class TexturedMixes:
         fac_fn, needs, sources = found
         if closures is None:
             notes = []
-            closures = [self._shader(socket, notes, depth + 1)     # (said only if this mix is taken)
-                        for socket in (node.inputs[1], node.inputs[2])]
+            closures, split = self._mix_sides(node, notes, depth)     # (said only if this mix is taken)
         cutout = self._procedural_cutout(closures, fac_fn, needs, sources)
         if cutout is not None:
             reasons.extend(fac_notes + notes)
@@ -154,6 +167,7 @@ class TexturedMixes:
 
         def factor(coords):
             return np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+        self._point_mix = (split, lambda: (factor, needs))
         if any(c.transparent.any() or c.opacity is not None for c in closures):
             # a see-through side that is not a pure cut-out (a Transparent beside a Diffuse,
             # a Principled Alpha): each side whole, times its weight per point, as a cut-out
