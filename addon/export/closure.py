@@ -117,6 +117,9 @@ class Closure:
         self.rough = None
         # made by cutout_sum: albedo, emission and pass colour per point under its opacity
         self.per_point_sum = False
+        # and the share of each side's closures per point over that opacity, (coords -> [(n,),
+        # (n,)], needs): what the Normal pass weighs the sides' own normals by (pointnormals.py)
+        self.side_weights = None
 
     @property
     def sampled_emission(self):
@@ -558,6 +561,11 @@ def cutout_sum(a, b, reasons, factor=None):
         out.translucent = np.where(top > 0, np.maximum(transmitted.pixels.mean(), 1e-3 * top), 0.0)
         out.translucent_tex = (transmitted, np.ones(3))
     out.per_point_sum = True
+
+    def side_weights(coords):
+        sides, summed = opacities(coords)
+        return [np.broadcast_to(np.asarray(o, np.float64), (_count(coords),)) / summed for o in sides]
+    out.side_weights = (side_weights, needs)
     return out
 
 

@@ -38,10 +38,32 @@ def mixed(parts, points, factor, needs):
     return da, out
 
 
+def summed(parts, points, weights, needs):
+    """The per-point entries of a cut-out sum's sides (closure.cutout_sum, a Mix of a per-point
+    factor or an Add Shader with a cut-out or Alpha in it) noted `parts` and `points` (as
+    `mixed`), weights(coords) -> [(n,), (n,)] each side's share over the sum's opacity, by
+    which the pass then scales them: each side's opacity and Mix weight at the point."""
+    out = []
+    for k in range(2):
+        d = sum((vector(e) for e in parts[k]), np.zeros(6))
+        if d.any():
+            out.append((d, _side(weights, k), frozenset(needs)))
+        out.extend((d, _times(g, _side(weights, k)), n | frozenset(needs)) for d, g, n in points[k])
+    return out
+
+
+def _side(weights, k):
+    return lambda coords: weights(coords)[k]
+
+
+def _times(g, h):
+    return lambda coords: g(coords) * h(coords)
+
+
 def _weighed(g, factor, b):
     """g times the factor (b) or 1 minus it, per point."""
     if b:
-        return lambda coords: g(coords) * factor(coords)
+        return _times(g, factor)
     return lambda coords: g(coords) * (1.0 - factor(coords))
 
 

@@ -124,9 +124,11 @@ class ShaderClosures:
             # Cycles: camera rays see through it (alpha 0); other rays meet a black absorber
             return Closure(holdout=1.0)
         if t == 'ADD_SHADER':
+            noted = len(self._normal_parts), len(self._normals), len(self._normal_points)
             a = self._shader(node.inputs[0], reasons, depth + 1)
+            split = len(self._normal_parts), len(self._normal_points)
             b = self._shader(node.inputs[1], reasons, depth + 1)
-            return a.plus(b, reasons)
+            return self._summed_normals(a.plus(b, reasons), noted, split)
         if t == 'BSDF_TRANSPARENT':
             color, ok = constant_color(node.inputs['Color'])
             if not ok:
@@ -171,10 +173,11 @@ class ShaderClosures:
             weight = self._normal_weight
             self._normal_weight = weight * (1.0 - fac)
             a = self._shader(node.inputs[1], reasons, depth + 1).scaled(1.0 - fac)
+            split = len(self._normal_parts), len(self._normal_points)
             self._normal_weight = weight * fac
             b = self._shader(node.inputs[2], reasons, depth + 1).scaled(fac)
             self._normal_weight = weight
-            return a.plus(b, reasons)
+            return self._summed_normals(a.plus(b, reasons), noted, split)
         if t in ('BSDF_GLOSSY', 'BSDF_METALLIC', 'BSDF_GLASS'):
             # their diffuse stand-ins shade with the map as a Diffuse BSDF does (the Normal had
             # been dropped silently: a Glossy of roughness 1 tilted towards a low sun and away
@@ -267,7 +270,11 @@ class ShaderClosures:
         against 0.010 for a constant factor. A cut-out (an opacity per point) scales them by it
         in the pass instead."""
         point_mix, self._point_mix = self._point_mix, None
-        factor = point_mix[1]() if point_mix is not None and closure.opacity is None else None
+        if point_mix is None:
+            return closure
+        if closure.side_weights is not None:
+            return self._summed_normals(closure, noted, point_mix[0])
+        factor = point_mix[1]() if closure.opacity is None else None
         if factor is None:
             return closure
         split = point_mix[0]
@@ -277,6 +284,27 @@ class ShaderClosures:
         const, varying = pointnormals.mixed(parts, points, *factor)
         del self._normal_parts[noted[0]:], self._normal_points[noted[2]:]
         self._normal_parts.append(pointnormals.entry(const, pick))
+        self._normal_points.extend(varying)
+        return closure
+
+    def _summed_normals(self, closure, noted, split):
+        """closure, the sum of two shaders (an Add Shader's, a Mix Shader's) whose entries were
+        noted after `noted`, the first's ending at `split`: where it is a cut-out sum
+        (closure.cutout_sum: a cut-out or Alpha beside another shader), the Normal pass weighs
+        each side's own-normal closures by that side's opacity and weight per point
+        (pointnormals.summed), not both whole by the sum's opacity (a Checker between a Diffuse
+        and a metallic Principled of Alpha 0.6, normal-mapped: 0.047 off Cycles' pass, 17% of
+        pixels more than 0.1)."""
+        if closure.side_weights is None:
+            return closure
+        weights, needs = closure.side_weights
+        closure.side_weights = None
+        parts = (self._normal_parts[noted[0]:split[0]], self._normal_parts[split[0]:])
+        points = (self._normal_points[noted[2]:split[1]], self._normal_points[split[1]:])
+        pick = sum((e[3] for e in parts[0] + parts[1]), 0.0)      # (the pick's, as before: both sides whole)
+        varying = pointnormals.summed(parts, points, weights, needs)
+        del self._normal_parts[noted[0]:], self._normal_points[noted[2]:]
+        self._normal_parts.append(pointnormals.entry(np.zeros(6), pick))
         self._normal_points.extend(varying)
         return closure
 

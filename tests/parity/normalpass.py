@@ -26,7 +26,7 @@ def world_normal_map(nt):
     return nmap
 
 
-def normal_pass_diff(tmp_path, sc, mat, subdivisions=2, cube=False, smooth=True):
+def normal_pass_diff(tmp_path, sc, mat, subdivisions=2, cube=False, smooth=True, samples=16):
     """Per-pixel max-channel difference of the Normal pass, Cycles against DACRT, over the pixels
     Cycles sees a surface in: an ico sphere (or a cube) of mat at (0, 0, 1), lit by a grey world."""
     if cube:
@@ -38,7 +38,7 @@ def normal_pass_diff(tmp_path, sc, mat, subdivisions=2, cube=False, smooth=True)
     bpy.context.object.data.materials.append(mat)
     scenes.world((0.3, 0.3, 0.3), 1.0)
     sc.view_layers[0].use_pass_normal = True
-    sc.cycles.samples = sc.dacrt.samples = 16
+    sc.cycles.samples = sc.dacrt.samples = samples
     got = {}
     for engine in ('CYCLES', 'DACRT'):
         sc.render.engine = engine
