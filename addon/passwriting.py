@@ -12,7 +12,8 @@ from .passes import CHANNELS as PASS_CHANNELS
 from .passes import DENOISE as DENOISE_PASSES
 from .passes import FIRST_SAMPLE
 from .sampling import unit_columns
-from .surfacevalues import _hits_by_material
+from .specular import view_table
+from .surfacevalues import hits_by_material
 from .translucency import valid_reflection_normal
 
 F32 = np.float32
@@ -47,24 +48,40 @@ class PassWriting:
             return nb
         folded = None
         mat = np.take(self.tri.material, prim)
+        raised = {}
+
+        def raised_of(n):
+            # (Cycles' maybe_ensure_valid_specular_reflection of nb or ns, under the material's
+            # Bump Map Correction; each computed once)
+            key = id(n)
+            if key not in raised:
+                raised[key] = valid_reflection_normal(ng, I, n, np.take(self.mats.bump_correction, mat))
+            return raised[key]
         if self.mats.any_normal_parts:
             weights = np.take(self.mats.normal_weights, mat, axis=1)
             folded = np.take(self.mats.normal_folded, mat, axis=1)
             if self.mats.normal_points:
                 self._normal_points(prim, u, v, I, ng, mat, weights, folded)
+            diffuse = np.maximum(diffuse - (folded if scale is None else folded * scale), 0.0)
+            if self.mats.normal_view is not None:
+                # Cycles' weights at the view, a coat's albedo read at its own normal (ns raised):
+                # a coat's rim leans to that normal (0.013 off Cycles' pass before)
+                mu = np.abs(np.einsum('ij,ij->j', I, raised_of(ns)))
+                extra = np.stack([view_table(self.mats.normal_view[r], mat, mu) for r in range(6)])
+                weights = np.maximum(weights + extra[:3], 0.0)
+                diffuse = np.maximum(diffuse + (extra[3:] if scale is None else extra[3:] * scale), 0.0)
             if scale is not None:
                 weights, folded = weights * scale, folded * scale
-            diffuse = np.maximum(diffuse - folded, 0.0)
         parts = [(diffuse.mean(axis=0), nb)]
         if folded is not None:
             if weights[0].any():
                 # (Cycles raises a smooth normal too, not only a bent one, under the material's
                 # Bump Map Correction: a coarse smooth sphere's rim)
-                parts.append((weights[0], valid_reflection_normal(ng, I, nb, np.take(self.mats.bump_correction, mat))))
+                parts.append((weights[0], raised_of(nb)))
             if weights[1].any():
                 # the coat's unbent normal, raised as well (Cycles' Principled: coat_normal =
                 # maybe_ensure_valid_specular_reflection(sd, sd->N))
-                parts.append((weights[1], valid_reflection_normal(ng, I, ns, np.take(self.mats.bump_correction, mat))))
+                parts.append((weights[1], raised_of(ns)))
             if weights[2].any():
                 # a sheen under a coat: mix(N, sd->N, Coat Weight), its coated share the smooth ns
                 parts.append((weights[2], ns))
@@ -76,7 +93,7 @@ class PassWriting:
             if scale is not None:
                 wt = wt * scale
             if (wt > 0).any():
-                parts.append((wt, valid_reflection_normal(ng, I, nb, np.take(self.mats.bump_correction, mat))))
+                parts.append((wt, raised_of(nb)))
         if tau is not None:
             parts.append((tau.mean(axis=0), ns))
         if len(parts) == 1:
@@ -104,7 +121,7 @@ class PassWriting:
         factor's share, Cycles' closure weights at the point)."""
         back = self._back(prim, ng, I)
         for (_, w_tex, f_tex), sel in zip(self.mats.normal_points,
-                                          _hits_by_material(mat, [e[0] for e in self.mats.normal_points])):
+                                          hits_by_material(mat, [e[0] for e in self.mats.normal_points])):
             if len(sel):
                 p, hu, hv = np.take(prim, sel), np.take(u, sel), np.take(v, sel)
                 b = None if back is None else np.take(back, sel)

@@ -297,9 +297,10 @@ def layer_steps(node, reasons) -> list:
     return [step] if diffuse == 0.0 else [roughdiffuse.RoughDiffuse(diffuse), step]
 
 
-def normal_parts(node, base) -> tuple:
-    """(reflective, unbent, folded, smooth): how Cycles' Principled BSDF (svm/closure.h) weighs its
-    closures' normals in the Normal pass (surface_shader_average_normal: each by |mean of its
+def _normal_parts_mu(node, base) -> tuple:
+    """(reflective, unbent, folded, smooth, diffuse) per view cosine of specular.MU ((len(MU),),
+    (len(MU),), (3, len(MU)), (len(MU),), (3, len(MU))): how Cycles' Principled BSDF
+    (svm/closure.h) weighs its closures' normals in the Normal pass (surface_shader_average_normal: each by |mean of its
     weight|), beside the diffuse closure, which takes the bent normal N at weight base x what
     the layers leave. reflective: the weight of the closures that take
     maybe_ensure_valid_specular_reflection(N) (metal, Metallic x W; glass, (1 - Metallic) x
@@ -307,11 +308,13 @@ def normal_parts(node, base) -> tuple:
     1), W what the sheen and coat leave of the weight 1; unbent: the coat's (Coat Weight under
     the sheen), whose normal is sd->N (raised as well); folded (3,): what the export adds to the base's albedo
     for all layers but the sheen (whose closure takes N, as the diffuse), so the albedo less it
-    is the diffuse closure's weight. Averaged over view cosines (weighted by cos), the metal's
+    is the diffuse closure's weight (normal_parts averages them over views). The metal's
     albedo at the base colour `base` (3,); the multiscatter darkening of a closure's weight
     (microfacet_ggx_preserve_energy, a few percent) left out. The subsurface share of the base
     counts as reflective (its closure's normal is the valid one) and folded; smooth: the share of
-    the sheen's albedo that takes the smooth normal sd->N unraised (Coat Weight's), folded too."""
+    the sheen's albedo that takes the smooth normal sd->N unraised (Coat Weight's), folded too;
+    diffuse: the weight on the bent normal N, the base's diffuse closure's and the rest of the
+    sheen's."""
     said = []
     metal, dielectric = _metal(node, said)
     m = 0.0 if metal is None else metal[0]
@@ -325,20 +328,20 @@ def normal_parts(node, base) -> tuple:
     w_below = s_dim * c_dim                     # (3, n): the weight the metal and glass get
     t = 0.0 if trans is None else trans[0]
     share = m + (1.0 - m) * t + ((1.0 - m) * (1.0 - t) if spec is not None else 0.0)
-    reflective = float((share * w_below.mean(axis=0)) @ specular.VIEW)
-    unbent = 0.0
-    sheen_share = np.zeros(3)
+    reflective = share * w_below.mean(axis=0)
+    unbent = np.zeros(n)
+    sheen_share = np.zeros((3, n))
     if coat is not None:
         found = _layer_inputs(node, 'Coat Weight', ('Coat Roughness', 'Coat IOR'), 'Coat Tint', "coat", "", [],
                               most=np.inf)
-        unbent = float(found[0] * (s_dim @ specular.VIEW))
+        unbent = found[0] * s_dim
         if sheen_mu is not None:
             # the sheen's normal is mix(N, the coat's unbent normal, Coat Weight) (Cycles'
             # Principled): its closure (whose weight bsdf_sheen_setup scales by its albedo)
             # counts that share of its albedo at the unbent normal, out of the diffuse weight
             # (under a coat of weight 1 and a normal map it had kept the bent normal: 0.088
             # mean per-pixel off Cycles' Normal pass)
-            sheen_share = min(float(found[0]), 1.0) * (sheen_mu[1] @ specular.VIEW)
+            sheen_share = min(float(found[0]), 1.0) * sheen_mu[1]
     add_s = np.zeros((3, n)) if spec is None else spec[0]
     if trans is not None:
         add_s = (1.0 - t) * add_s + t * trans[1]
@@ -346,19 +349,48 @@ def normal_parts(node, base) -> tuple:
     if metal is not None:
         f0 = np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, 1.0)
         below = below + m * specular.metal_albedo_mu(metal[1], f0, metal[2], _multiscatter(node))
-    folded = ((s_dim * (c_dim * below + c_add)) @ specular.VIEW) + sheen_share
+    folded = s_dim * (c_dim * below + c_add) + sheen_share
     # the subsurface closure (a share of the base the export renders as diffuse, said) takes the
     # valid normal too (Cycles: bssrdf->N = maybe_ensure_valid_specular_reflection(sd, N)), at
     # weight clamped base x Subsurface Weight x what the layers above leave; the diffuse the rest
     (ss,), _ = _values(node, ('Subsurface Weight',))
     ss = min(max(ss, 0.0), 1.0) if np.isfinite(ss) else 0.0
+    dim_s = np.ones(n) if spec is None else np.clip(1.0 - spec[1].max(axis=0), 0.0, 1.0)
+    clamped = np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, 1.0)
+    # the base's diffuse closure, Cycles' weight at each view (and the sheen's share on N)
+    diffuse = (1.0 - ss) * (1.0 - m) * (1.0 - t) * clamped[:, None] * w_below * dim_s
+    if sheen_mu is not None:
+        diffuse = diffuse + sheen_mu[1] - sheen_share
     if ss > 0.0:
-        dim_s = np.ones(n) if spec is None else np.clip(1.0 - spec[1].max(axis=0), 0.0, 1.0)
-        clamped = np.clip(np.nan_to_num(np.asarray(base, np.float64)[:3]), 0.0, 1.0)
-        sub = ss * (1.0 - m) * (1.0 - t) * clamped * ((w_below * dim_s) @ specular.VIEW)
-        reflective += float(sub.mean())
+        sub = ss * (1.0 - m) * (1.0 - t) * clamped[:, None] * w_below * dim_s
+        reflective = reflective + sub.mean(axis=0)
         folded = folded + sub
-    return reflective, unbent, folded, float(sheen_share.mean())
+    return reflective, unbent, folded, sheen_share.mean(axis=0), diffuse
+
+
+def normal_parts(node, base) -> tuple:
+    """(reflective, unbent, folded (3,), smooth) of _normal_parts_mu averaged over view cosines
+    (weighted by cos)."""
+    reflective, unbent, folded, smooth, _ = _normal_parts_mu(node, base)
+    return (float(reflective @ specular.VIEW), float(unbent @ specular.VIEW), folded @ specular.VIEW,
+            float(smooth @ specular.VIEW))
+
+
+def normal_view(node, base) -> np.ndarray:
+    """(6, len(MU)) what _normal_parts_mu's (reflective, unbent, smooth, the diffuse's bent-normal
+    weight (3,)) are at each view cosine less their averages (normal_parts, the albedo), under a
+    coat; zeros without one. Cycles weighs its closures by their weights at the view: what lies
+    below a coat is dimmed by the coat's albedo at the view's cosine to the coat's normal (the
+    unbent one, raised), most at grazing views, where the pass leans to the coat's normal (by
+    the averages, a Coat Weight of 1 under a normal map was 0.013 off Cycles' pass, now 0.005).
+    Without a coat the specular layer's and sheen's dimming are left averaged: read at the bent
+    normal they came no closer to Cycles' (a sheen's 0.0046 became 0.0053-0.0060)."""
+    n = len(specular.VIEW)
+    if _coat_mu(node, []) is None:
+        return np.zeros((6, n))
+    reflective, unbent, _, smooth, diffuse = _normal_parts_mu(node, base)
+    rows = np.vstack([reflective, unbent, smooth, diffuse])
+    return rows - (rows @ specular.VIEW)[:, None]
 
 
 def pick_delta(node, base) -> np.ndarray:

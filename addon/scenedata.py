@@ -176,6 +176,11 @@ class Material:
     # folded), procedural.ProceduralTexels of the first three and of the albedo (3,) (the
     # Normal pass's weights are normal_parts plus these at the hit); None: nothing
     normal_points: Optional[tuple] = None
+    # What the first three of normal_parts and the diffuse closure's weight (3,) add at each view
+    # cosine of specular.MU to the coat's normal (the smooth one, raised), (6, len(MU))
+    # (principled.normal_view: Cycles weighs its closures at the view, a coat dimming what lies
+    # below most at grazing views); None: nothing
+    normal_view: Optional[np.ndarray] = None
     # What the pass-or-stop pick at a surface with transparency adds to the opaque part's
     # weight (the albedo's mean) per view cosine of specular.MU (Cycles weighs a microfacet
     # closure by its albedo estimate at the view, principled.pick_delta); None: nothing

@@ -352,6 +352,12 @@ class Materials:
                                         [p[3] if len(p) > 3 else 0.0 for p in parts]], F32).reshape(3, -1)
         self.normal_folded = np.ascontiguousarray(np.array([p[2] for p in parts], F32).reshape(-1, 3).T)
         self.any_normal_parts = bool(self.normal_weights.any()) or bool(self.normal_points)
+        # (6, materials, len(MU)) what they and the diffuse weight add per view cosine to the
+        # coat's normal (scenedata.Material.normal_view), or None where no material has any
+        views = [getattr(m, 'normal_view', None) for m in materials]
+        self.normal_view = None if all(v is None for v in views) else np.ascontiguousarray(np.stack(
+            [np.zeros((6, len(MU)), F32) if v is None else np.asarray(v, F32) for v in views], axis=1))
+        self.any_normal_parts = self.any_normal_parts or self.normal_view is not None
         # Cycles' SD_USE_BUMP_MAP_CORRECTION per material (its reflection normals raised)
         self.bump_correction = np.array([bool(getattr(m, 'bump_correction', True)) for m in materials])
         # (materials, len(specular.MU)) what the pass-or-stop pick adds to opaque_weight per view

@@ -66,7 +66,7 @@ class SurfaceValues:
         entries = self.mats.textures if textures is None else textures
         if self.tri.uvs is None or not len(entries):
             return
-        for (m, tex, interp, ext, xf), sel in zip(entries, _hits_by_material(np.take(self.tri.material, prim),
+        for (m, tex, interp, ext, xf), sel in zip(entries, hits_by_material(np.take(self.tri.material, prim),
                                                                              [e[0] for e in entries])):
             if len(sel):
                 # a texel may be negative (a float image's own values, or a wide-gamut space such
@@ -135,7 +135,7 @@ class SurfaceValues:
     def _bump_hits(self, entries, prim):
         """(entry, indices of the hits on prim of its material) for each of entries (mats.bumps'),
         point-cloud triangles left out: Cycles' points have no surface derivatives, so no bump."""
-        for entry, sel in zip(entries, _hits_by_material(np.take(self.tri.material, prim), [e[0] for e in entries])):
+        for entry, sel in zip(entries, hits_by_material(np.take(self.tri.material, prim), [e[0] for e in entries])):
             if len(sel) and self.tri.unbumped is not None:
                 sel = sel[~np.take(self.tri.unbumped, np.take(prim, sel))]
             yield entry, sel
@@ -237,7 +237,7 @@ class SurfaceValues:
         t, geo, normals = self.tri.tangents, self.tri.geo, self.tri.normals
         maps = self.mats.normal_maps
         for (m, tex, interp, ext, xf, strength, corrected, space, strength_map), sel in zip(
-                maps, _hits_by_material(mat, [e[0] for e in maps])):
+                maps, hits_by_material(mat, [e[0] for e in maps])):
             if not len(sel):
                 continue
             correction[sel] = float(corrected)
@@ -557,7 +557,7 @@ class SurfaceValues:
         if first >= 0 and (group == first).all():      # (a camera ray's layer: often one texture)
             found = [(groups[first][0], None)]
         else:
-            found = [(g[0], sel) for g, sel in zip(groups, _hits_by_material(group, range(len(groups)))) if len(sel)]
+            found = [(g[0], sel) for g, sel in zip(groups, hits_by_material(group, range(len(groups)))) if len(sel)]
         textured = None                                 # the hits under an opacity texture
         for (tex, interp, ext, xf), sel in found:
             p, uu, vv, bk = (prim, u, v, back) if sel is None else compact(sel, prim, u, v, back)
@@ -590,7 +590,7 @@ def _interpolated_need(name):
     return name in ('uv', 'generated') or (isinstance(name, str) and name.startswith(ATTRIBUTE_NEED))
 
 
-def _hits_by_material(mat, materials):
+def hits_by_material(mat, materials):
     """For each material of the list, the indices (ascending) of the hits mat (k,) on it: one
     sort for all where the list is long (a scan of every hit per material had made a frame of
     3000 image-textured materials spend 3.8 s in Python), one scan each where it is short."""

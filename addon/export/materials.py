@@ -707,6 +707,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                                          sum(e[4] for e in self._normal_parts if len(e) > 4)),
                            normal_points=pointnormals.textures(self._normal_points),
                            pick_delta=_pick_delta(self._normal_parts),
+                           normal_view=_normal_view(self._normal_parts),
                            rough_sigma=0.0 if rough is None else float(rough[0]),
                            rough_scale=None if rough is None else np.asarray(rough[1], np.float32),
                            emission_sampling=emissionsampling.sampling(mat) if emission.any() else 'NONE',
@@ -796,6 +797,13 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         w, k = c.tex_weight.astype(np.float32), c.const.astype(np.float32)
         return np.ones(3, np.float32), t.texels(t.baked(lambda rgb: rgb * w + k)), t.interpolation, t.extension, \
             t.transform
+
+
+def _normal_view(parts):
+    """The material's scenedata.Material.normal_view: its Principled BSDFs' (principled.normal_view
+    x their weights) summed, None where none has one (a textured base) or all are 0."""
+    total = sum((np.asarray(e[5], np.float64) for e in parts if len(e) > 5), np.zeros((6, len(specular.VIEW))))
+    return total.astype(np.float32) if total.any() else None
 
 
 def _pick_delta(parts):

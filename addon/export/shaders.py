@@ -342,10 +342,14 @@ class ShaderClosures:
                     reasons.append(f"Principled {what} ignored")
         self._normal_input(node, reasons)
         # (its closures' weights in the Normal pass, under this BSDF's Mix weight and Alpha)
-        base_value = constant_color(node.inputs['Base Color'])[0]
+        base_value, base_ok = constant_color(node.inputs['Base Color'])
         parts = principled.normal_parts(node, base_value)
         entry = [self._normal_weight * parts[0], self._normal_weight * parts[1], self._normal_weight * parts[2],
                  self._normal_weight * principled.pick_delta(node, base_value), self._normal_weight * parts[3]]
+        if base_ok:
+            # (and per view: a textured base's diffuse weight is known per point alone, so it
+            # keeps the averaged weights)
+            entry.append(self._normal_weight * principled.normal_view(node, base_value))
         self._normal_parts.append(entry)
         coat = node.inputs.get('Coat Weight')
         coat, coat_ok = constant_value(coat) if coat is not None else (0.0, True)
