@@ -23,13 +23,21 @@ def entry(d, pick):
     return [float(d[0]), float(d[1]), np.asarray(d[3:], np.float64), pick, float(d[2])]
 
 
-def mixed(parts, points, factor, needs):
+def mixed(parts, points, factor_of):
     """(constant 6-vector, per-point entries) of a Mix Shader whose sides noted `parts` (each
-    side's _normal_parts entries) and `points` (each side's per-point entries), its factor
-    factor(coords) -> (n,) in [0, 1] of coordinates `needs`: side a weighs 1 - factor, b factor,
-    so the constant part is a's and b - a goes per point; a side's own per-point entries are
-    weighed by its share per point (a per-point Mix inside another)."""
+    side's _normal_parts entries) and `points` (each side's per-point entries), factor_of() its
+    factor (factor(coords) -> (n,) in [0, 1], its coordinates' needs), asked only where the
+    sides differ (an image's is baked for it), or None where it cannot be read per point: side
+    a weighs 1 - factor, b factor, so the constant part is a's and b - a goes per point; a
+    side's own per-point entries are weighed by its share per point (a per-point Mix inside
+    another). None where the factor is needed and cannot be read."""
     da, db = (sum((vector(e) for e in side), np.zeros(6)) for side in parts)
+    if np.allclose(da, db, rtol=0.0, atol=1e-9) and not points[0] and not points[1]:
+        return da, []
+    found = factor_of()
+    if found is None:
+        return None
+    factor, needs = found
     out = []
     if not np.allclose(da, db, rtol=0.0, atol=1e-9):
         out.append((db - da, factor, frozenset(needs)))

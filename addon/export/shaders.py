@@ -274,14 +274,16 @@ class ShaderClosures:
             return closure
         if closure.side_weights is not None:
             return self._summed_normals(closure, noted, point_mix[0])
-        factor = point_mix[1]() if closure.opacity is None else None
-        if factor is None:
+        if closure.opacity is not None:
             return closure
         split = point_mix[0]
         parts = (self._normal_parts[noted[0]:split[0]], self._normal_parts[split[0]:])
         points = (self._normal_points[noted[2]:split[1]], self._normal_points[split[1]:])
         pick = sum((e[3] for e in parts[0] + parts[1]), 0.0)      # (the pick's, as before: both sides whole)
-        const, varying = pointnormals.mixed(parts, points, *factor)
+        found = pointnormals.mixed(parts, points, point_mix[1])
+        if found is None:
+            return closure
+        const, varying = found
         del self._normal_parts[noted[0]:], self._normal_points[noted[2]:]
         self._normal_parts.append(pointnormals.entry(const, pick))
         self._normal_points.extend(varying)
