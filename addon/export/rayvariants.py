@@ -110,6 +110,15 @@ def same(a, b, fields=None):
     return all(_equal(getattr(a, n), getattr(b, n)) for n in names)
 
 
+def alike(a, b):
+    """Whether two builds (material, extra) render alike: their materials (same) and what a build
+    leaves beside its material (MaterialBuilder._extra: a mesh attribute's map into the albedo,
+    varying AOVs), which the material's fields do not hold (a base colour Mix by Ray Depth between
+    a Color Attribute and a constant had been one build for all rays, the camera seeing the
+    constant, bounce rays' colour: 0.31 / 0.24 / 0.49 where Cycles shows 0.42 / 0.47 / 0.56)."""
+    return same(a[0], b[0]) and _equal(a[1][:2], b[1][:2])
+
+
 def _triangle_needs(m):
     """What a material reads per triangle beside its UVs, which the assembly fills in for the
     triangles of the material they show (a variant's copies take the original's): the
@@ -158,8 +167,8 @@ def ray_variants(build, reads, max_bounces):
         deeper = deepers[0]
         shadows_alike = all(same(build(dict(SHADOW, **{'Ray Depth': float(d + 1), 'Diffuse Depth': float(d)}))[0],
                                  shadow[0], _SHADOW_FIELDS) for d in range(1, last))
-        uniform = all(same(b[0], deeper[0]) for b in deepers[1:])
-        if not same(deeper[0], bounce[0]) or not uniform or not shadows_alike:
+        uniform = all(alike(b, deeper) for b in deepers[1:])
+        if not alike(deeper, bounce) or not uniform or not shadows_alike:
             if max_bounces >= 1 and shadows_alike and uniform and not _emits(deeper, bounce):
                 # a depth threshold at the first bounce (Ray Depth > 1): the bounce rays past
                 # it trace a copy of their own (Integrator: the 'bounce_deep' scene)
@@ -176,7 +185,7 @@ def ray_variants(build, reads, max_bounces):
                     deep = ''
     if 'Transparent Depth' in reads:
         past = build(dict(CAMERA, **{'Transparent Depth': 1.0}))
-        if not same(past[0], camera[0]):
+        if not alike(past, camera):
             notes.append("Light Path Transparent Depth read as 0 on every surface (Cycles counts the transparent "
                          "surfaces a ray has passed)")
     glossy = reads & {'Is Glossy Ray', 'Is Singular Ray', 'Glossy Depth', 'Transmission Depth'}
@@ -184,7 +193,7 @@ def ray_variants(build, reads, max_bounces):
     # diffuse reflection (those of `glossy` are said apart, always)
     kinds = {n for n in reads - glossy if any(v[n] != BOUNCE[n] for v in (_TRANSLUCENT, _GLASS))}
     bent = ''
-    if kinds and not all(same(build(v)[0], bounce[0]) for v in (_TRANSLUCENT, _GLASS)):
+    if kinds and not all(alike(build(v), bounce) for v in (_TRANSLUCENT, _GLASS)):
         # (every bounce ray here is one off a diffuse reflection: rays off a Translucent BSDF
         # and past glass trace the same scene; said where the scene has such a surface)
         bent = (f"Light Path {' / '.join(sorted(kinds))} read as after a diffuse reflection on every bounce "
@@ -199,7 +208,7 @@ def ray_variants(build, reads, max_bounces):
         notes.append(f"Light Path {' / '.join(sorted(glossy))} read as on a diffuse path (Cycles: set on rays "
                      f"off {off})")
     groups = [[bounce, sd.VIS_DIFFUSE, 1 if split else 0]]
-    if same(camera[0], bounce[0]):
+    if alike(camera, bounce):
         groups[0][1] |= sd.VIS_CAMERA
     else:
         groups.append([camera, sd.VIS_CAMERA, 0])
