@@ -10,10 +10,14 @@ each curve (projection onto each new ring plane), so a curve that bends does not
 tube; each curve's first ring is turned by its own share of one polygon sector, so that curves
 of a common direction show a view 2r on average (a polygon is wider across its corners than
 across its sides). Rings and segment steps drop as curves grow in number so the frame's
-triangle count stays bounded (LEVELS). The tube is open at its ends (Cycles' round caps are a
-radius long; hair is thin). Plain numpy; the export layer (export/strands.py) reads the Blender data.
+triangle count stays bounded (LEVELS). Poly curves end in hemispherical caps, as Cycles' round
+linear curves (Embree's cone segments with a sphere at each point) do; Catmull-Rom tubes are open
+at their ends, as Cycles' swept circles are. Plain numpy; the export layer (export/strands.py)
+reads the Blender data.
 """
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 
@@ -32,6 +36,38 @@ DEFAULT_RADIUS = 0.005     # Cycles' radius for curves without a 'radius' attrib
 # the sharpest turn one mitred ring makes (stretched 1 / cos(MAX_TURN / 2) = 1.41 at most);
 # a sharper one is split into 2 rings at the sample (_joins)
 MAX_TURN = np.pi / 2
+# a Poly curve's: Cycles rounds each point with a sphere, which mitred rings of at most 45 degrees
+# follow on the outside of a turn within 0.02 r^2 of profile area a ring (one 90-degree ring: 0.21,
+# a 90-degree zig-zag 1.1% over Cycles' coverage)
+MAX_TURN_POLY = np.pi / 4
+# rings of a Poly curve's end cap from its end ring to its pole (the pole included), at 45 and 90
+# degrees: a cap costs 3 x sides triangles, 1.5 segments' (with 1, a cone, the cap would be 1.8
+# radii long to have the hemisphere's area; with 2 it is 1.13 at 16 sides)
+CAP_RINGS = 2
+
+
+@lru_cache(maxsize=None)
+def cap_height(sides: int) -> float:
+    """The length of a cap along the tube's axis, in radii: its rings sit at latitudes k / m of
+    90 degrees, each scaled as the tube's rings (perimeter 2 pi r cos(latitude)), at H r sin(latitude)
+    past the end; H makes the cap's area the hemisphere's 2 pi r^2, so that by Cauchy's
+    formula the strand covers what Cycles' round one does on average over view directions."""
+    m = CAP_RINGS
+    scale = np.pi / (sides * np.sin(np.pi / sides))
+    lat = np.arange(m + 1) * (0.5 * np.pi / m)
+    ang = 2.0 * np.pi * np.arange(sides + 1) / sides
+
+    def area(h):
+        ring = scale * np.cos(lat)[:, None]
+        pts = np.stack(np.broadcast_arrays(ring * np.cos(ang), ring * np.sin(ang), (h * np.sin(lat))[:, None]), -1)
+        a, b, c, d = pts[:-1, :-1], pts[:-1, 1:], pts[1:, :-1], pts[1:, 1:]
+        return 0.5 * (np.linalg.norm(np.cross(b - a, c - a), axis=-1).sum()
+                      + np.linalg.norm(np.cross(d - b, c - b), axis=-1).sum())
+    lo, hi = 0.5, 2.0               # area grows with h; bisect to float64's last bits
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if area(mid) < 2.0 * np.pi else (lo, mid)
+    return 0.5 * (lo + hi)
 
 
 def level_for(points: int) -> tuple:
@@ -41,40 +77,42 @@ def level_for(points: int) -> tuple:
     return FEWEST
 
 
-def rings(positions, radii, offsets, steps: int):
+def rings(positions, radii, offsets, steps: int, linear: bool = False):
     """The samples of the curves at `steps` a segment and their mitred rings, (samples (s, 4),
     counts, key, u (as _samples with between), _joins' rings or None where no curve has 2
     points): what triangle_count and tubes both compute, made once where the export counts
     the triangles and then makes them (twice, 100K curves had spent 0.9 s in _samples and
-    _joins)."""
+    _joins). linear: Poly curves, their turns split at MAX_TURN_POLY."""
     positions = np.asarray(positions, np.float64).reshape(-1, 3)
     keys = np.concatenate([positions, np.asarray(radii, np.float64).reshape(-1, 1)], axis=1)
     samples, counts, key, u = _samples(keys, np.asarray(offsets, np.int64), steps, between=True)
-    return samples, counts, key, u, (_joins(samples[:, :3], counts) if len(counts) else None)
+    return samples, counts, key, u, (_joins(samples[:, :3], counts, _max_turn(linear)) if len(counts) else None)
 
 
 def triangle_count(offsets, level: tuple, linear: bool = False, positions=None, sampled=None) -> int:
     """The most triangles tubes() makes of curves with these offsets at `level` (fewer where a
     radius is 0): with their positions, counting the rings the sharp turns are split into;
-    without, as if every turn were (a turn is split into 2 rings at most). sampled: rings()
+    without, as if every turn were split into the most rings (at a U-turn). sampled: rings()
     of these curves at the level's steps (1 where linear), read instead of the positions (the
-    radii play no part in the samples' positions)."""
+    radii play no part in the samples' positions). Poly (linear) curves count their two end caps."""
     offsets = np.asarray(offsets, np.int64)
     n = np.diff(offsets)
     sides, steps = level
     steps = 1 if linear else steps
+    caps = 2 * (2 * CAP_RINGS - 1) * sides if linear else 0     # a cap: m - 1 bands and a fan
     if sampled is not None:
         joins = sampled[4]
-        return 0 if joins is None else int((joins[4] - 1).sum()) * sides * 2
+        return 0 if joins is None else int((joins[4] - 1).sum()) * sides * 2 + caps * len(joins[4])
     if positions is None:
         segments = (n[n >= 2] - 1) * steps
-        return int((2 * segments - 1).sum()) * sides * 2
+        most = int(np.ceil(np.pi / _max_turn(linear) - 1e-9))      # rings at a sample turning back
+        return int((most * (segments - 1) + 1).sum()) * sides * 2 + caps * int(np.count_nonzero(n >= 2))
     p = np.asarray(positions, np.float64).reshape(-1, 3)
     keys = np.concatenate([p, np.zeros((len(p), 1))], axis=1)
     samples, counts = _samples(keys, offsets, steps)
     if not len(counts):
         return 0
-    return int((_joins(samples[:, :3], counts)[4] - 1).sum()) * sides * 2
+    return int((_joins(samples[:, :3], counts, _max_turn(linear))[4] - 1).sum()) * sides * 2 + caps * len(counts)
 
 
 def _catmull_rom(p0, p1, p2, p3, u):
@@ -126,14 +164,18 @@ def _across(tv):
     return c / np.linalg.norm(c, axis=1, keepdims=True)
 
 
-def _joins(p, counts):
+def _max_turn(linear):
+    return MAX_TURN_POLY if linear else MAX_TURN
+
+
+def _joins(p, counts, max_turn=MAX_TURN):
     """The rings of the curves' samples p (each curve's counts in a row), mitred: a ring at a
     sample where the curve turns by an angle a is square to the bisector of its two segments and
     stretched by 1 / cos(a / 2) along the bend, so that each segment's tube keeps its width 2r
     up to the joint (a ring square to the mean tangent alone shows cos(a / 2) of it: a Poly 'V'
-    of 147 degrees had rendered a third thin). A turn of more than MAX_TURN is split into k
+    of 147 degrees had rendered a third thin). A turn of more than max_turn is split into k
     rings at the sample, turned a / k apart, each mitred for its a / k: a join rounded as
-    Cycles' (its segments are round at their ends), never stretched beyond 1 / cos(MAX_TURN / 2).
+    Cycles' (its segments are round at their ends), never stretched beyond 1 / cos(max_turn / 2).
     Returns (the sample of each ring (g,), its unit tangent (g, 3), its unit bend direction
     (g, 3) (0 on a straight run), its stretch along it (g,), rings a curve (c,))."""
     m = len(p)
@@ -161,7 +203,7 @@ def _joins(p, counts):
     if back.any():
         e[back] = _across(d_in[back])
     turn[straight & ~back] = 0.0
-    k = np.maximum(np.ceil(turn / MAX_TURN - 1e-9), 1).astype(np.int64)
+    k = np.maximum(np.ceil(turn / max_turn - 1e-9), 1).astype(np.int64)
     ring = np.repeat(np.arange(m), k)
     j = np.arange(len(ring)) - np.repeat(np.cumsum(k) - k, k)
     phi = (2 * j + 1) / (2 * k[ring]) * turn[ring]
@@ -209,10 +251,42 @@ def _frames(p, counts, sector=0.0, t=None):
     return t, n
 
 
+def _capped(at, p, r, key, u, t, bend, stretch, unsized, counts, sides):
+    """The rings with each curve's two end caps added (Cycles' Poly curves end in a sphere of
+    the end point's radius): CAP_RINGS rings before its first ring and after its
+    last, at latitudes k / m of 90 degrees, the last a pole of radius 0, which tubes() closes
+    as it closes a tip. Returns the rings' arrays in the same order (and their latitudes,
+    negative on the first cap: its normals tilt back along the tangent), counts per curve."""
+    m = CAP_RINGS
+    starts = np.cumsum(counts) - counts
+    ends = starts + counts - 1
+    c = len(counts)
+    # each curve's new rows: m cap rings (pole first), its own rings, m cap rings (pole last)
+    new_counts = counts + 2 * m
+    new_starts = np.cumsum(new_counts) - new_counts
+    src = np.empty(int(new_counts.sum()), np.int64)
+    lat = np.zeros(len(src))
+    body = np.repeat(new_starts + m - starts, counts) + np.arange(int(counts.sum()))
+    src[body] = np.arange(int(counts.sum()))
+    k = np.arange(1, m + 1) * (0.5 * np.pi / m)
+    head = new_starts[:, None] + (m - np.arange(1, m + 1))[None, :]          # latitude k at row m - k
+    tail = (new_starts + new_counts - m - 1)[:, None] + np.arange(1, m + 1)[None, :]
+    src[head], lat[head] = np.broadcast_to(starts[:, None], (c, m)), -np.broadcast_to(k, (c, m))
+    src[tail], lat[tail] = np.broadcast_to(ends[:, None], (c, m)), np.broadcast_to(k, (c, m))
+    r0 = r[src]
+    # along the end's tangent, H r sin(latitude) past it (cap_height: the hemisphere's area)
+    p = p[src] + (cap_height(sides) * r0 * np.sin(lat))[:, None] * t[src]
+    r = r0 * np.cos(lat)
+    r[np.abs(lat) == 0.5 * np.pi] = 0.0          # the pole exactly (cos(90 degrees) is 6e-17)
+    stretch = np.where(lat == 0, stretch[src], 1.0)
+    return at[src], p, r, key[src], u[src], t[src], bend[src], stretch, unsized[src], lat, new_counts
+
+
 def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool = False, linear: bool = False,
           vertex_keys: bool = False, sampled=None, exact: bool = False):
     """Tube meshes of the curves (offsets: c + 1 first-point indices, the last = point count),
-    Catmull-Rom, or with `linear` straight between the points (POLY curves, as Cycles draws them):
+    Catmull-Rom, or with `linear` straight between the points and capped by hemispheres at their
+    ends (POLY curves, as Cycles draws them):
     (vertices float32 (v, 3), triangles int32 (t, 3) wound outward, vertex normals float32
     (v, 3), curves rendered), and with curve_of the curve (index into offsets) each triangle
     belongs to (t,) int64. Curves of fewer than 2 points are not rendered; a sample of radius 0
@@ -223,7 +297,7 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
     offsets = np.asarray(offsets, np.int64)
     sides, steps = level_for(len(positions)) if level is None else level
     if sampled is None:         # (given: rings() of these curves at these steps)
-        sampled = rings(positions, radii, offsets, 1 if linear else steps)   # 1 step: the points
+        sampled = rings(positions, radii, offsets, 1 if linear else steps, linear)   # 1 step: the points
     samples, counts, key, u, joins = sampled
     if not len(counts):
         empty = (np.empty((0, 3), np.float32), np.empty((0, 3), np.int32), np.empty((0, 3), np.float32), 0)
@@ -235,6 +309,10 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
     # no tube there (they had made NaN vertices, reported as the positions'); the export says so
     unsized = ~np.isfinite(r)
     r = np.where(unsized, 0.0, np.maximum(r, 0.0))
+    lat = np.zeros(len(p))                   # each ring's latitude on an end cap (0: the tube's)
+    if linear:
+        at, p, r, key, u, t, bend, stretch, unsized, lat, counts = _capped(at, p, r, key, u, t, bend, stretch,
+                                                                           unsized, counts, sides)
     t, n = _frames(p, counts, 2.0 * np.pi / sides, t)
     b = np.cross(t, n)
     ang = 2.0 * np.pi * np.arange(sides) / sides
@@ -245,6 +323,8 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
     along = np.einsum('rsk,rk->rs', radial, bend)
     offset = radial + ((stretch - 1.0)[:, None] * along)[:, :, None] * bend[:, None, :]
     vertices = (p[:, None, :] + (r * scale)[:, None, None] * offset).reshape(-1, 3)
+    if linear:      # a cap ring's normals: the sphere's, tilted by its latitude towards the pole
+        radial = np.cos(lat)[:, None, None] * radial + np.sin(lat)[:, None, None] * t[:, None, :]
     # quads between ring i and i + 1 of the same curve; ring j runs anticlockwise about t,
     # so (i, j), (i, j + 1), (i + 1, j) faces outward
     starts = np.cumsum(counts) - counts
@@ -260,7 +340,7 @@ def tubes(positions, radii, offsets, level: tuple | None = None, curve_of: bool 
     sized = ~(unsized[ring] | unsized[ring + 1])
     keep = np.broadcast_to(np.stack([(r[ring] > 0) & sized, (r[ring + 1] > 0) & sized], axis=1)[:, :, None],
                            quads.shape[:3])
-    joint = np.flatnonzero(at[ring] == at[ring + 1])       # between the rings of a split turn
+    joint = np.flatnonzero((at[ring] == at[ring + 1]) & (lat[ring] == 0) & (lat[ring + 1] == 0))   # a split turn's
     if len(joint):
         # there the rings turn about the bend's axis: a point on it is in both, and its
         # triangles have no area

@@ -351,7 +351,7 @@ def _sampled(src, level):
     last steps asked: the count and the tessellation at one level share them."""
     steps = 1 if src.linear else level[1]
     if src.sampled is None or src.sampled[0] != steps:
-        src.sampled = (steps, hair.rings(src.positions, src.radii, src.offsets, steps))
+        src.sampled = (steps, hair.rings(src.positions, src.radii, src.offsets, steps, src.linear))
     return src.sampled[1]
 
 
@@ -397,8 +397,8 @@ def tessellate(src, level, notes, why=''):
                 return rows[curve]
             return rows[key] * (1.0 - u32) + rows[np.minimum(key + 1, len(rows) - 1)] * u32
         what = (f"hair {'particles' if src.kind == 'HAIR' else 'curves'} rendered as tubes of {sides} sides, "
-                + ("straight between their points (Poly)" if src.linear else f"{steps} step(s) a segment")
-                + ", open ends")
+                + ("straight between their points (Poly), round ends" if src.linear
+                   else f"{steps} step(s) a segment, open ends"))
         if kept < len(src.offsets) - 1:
             notes.ignore("curves of fewer than 2 points are not rendered", src.name)
     notes.ignore(what + why, src.name)

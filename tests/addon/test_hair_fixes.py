@@ -22,7 +22,7 @@ def _off_axis(points, direction):
 @pytest.mark.parametrize('linear', [True, False])
 def test_a_turn_keeps_the_width_of_each_segment(turn, linear):
     """Two Poly segments of length 1 meeting at the origin with a turn: the joint's rings are
-    mitred (a turn past MAX_TURN split into two), so the first lies on the incoming segment's
+    mitred (a turn past MAX_TURN_POLY split into several), so the first lies on the incoming segment's
     cylinder and the last on the outgoing one's, the tube 2r wide up to the joint, where a ring
     square to the mean tangent had shown cos(turn / 2) of it (a 150-degree turn: a quarter).
     No triangle without area (reported as degenerate geometry), and triangle_count bounds them."""
@@ -39,7 +39,7 @@ def test_a_turn_keeps_the_width_of_each_segment(turn, linear):
         return
     rings = v.astype(np.float64).reshape(-1, sides, 3)
     joint = rings[np.linalg.norm(rings.mean(axis=1), axis=1) < 1e-6]
-    assert len(joint) == (1 if turn <= 90 else 2)
+    assert len(joint) == math.ceil(turn / 45 - 1e-9)          # Poly: MAX_TURN_POLY, to round as Cycles' sphere
     scale = np.pi / (sides * np.sin(np.pi / sides))
     np.testing.assert_allclose(_off_axis(joint[0], d_in), 0.1 * scale, rtol=1e-5)
     np.testing.assert_allclose(_off_axis(joint[-1], d_out), 0.1 * scale, rtol=1e-5)

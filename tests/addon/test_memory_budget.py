@@ -53,19 +53,25 @@ def test_the_memory_available_is_read_from_the_system():
 
 def test_coarser_tessellations_have_the_spheres_and_tubes_area():
     """The octahedron and the 3-sided tube the budget may fall to keep Cauchy's scaling: the
-    sphere's area 4 pi r^2, the tube's perimeter 2 pi r."""
+    sphere's area 4 pi r^2, the tube's perimeter 2 pi r, a Poly tube's two end caps the
+    sphere's area."""
     v, t, scale = pointcloud.unit_sphere(pointcloud.LADDER[-1])
     e1, e2 = v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]
     normal = np.cross(e1, e2)
     assert len(t) == 8 and (np.einsum('ij,ij->i', normal, v[t].mean(1)) > 0).all()
     assert math.isclose(0.5 * np.linalg.norm(normal, axis=1).sum() * scale ** 2, 4 * math.pi, rel_tol=1e-9)
     offsets = np.array([0, 2])
-    v, t, n, kept = hair.tubes(np.array([[0, 0, 0], [0, 0, 1.0]]), np.full(2, 0.1), offsets, hair.LADDER[-1],
-                               linear=True)
+    ends = np.array([[0, 0, 0], [0, 0, 1.0]])
+    v, t, n, kept = hair.tubes(ends, np.full(2, 0.1), offsets, hair.LADDER[-1])
     ring = v[:3]
     perimeter = np.linalg.norm(ring - np.roll(ring, 1, axis=0), axis=1).sum()
-    assert len(t) == hair.triangle_count(offsets, hair.LADDER[-1], linear=True) == 6
+    assert len(t) == hair.triangle_count(offsets, hair.LADDER[-1]) == 6
     assert math.isclose(perimeter, 2 * math.pi * 0.1, rel_tol=1e-6)
+    v, t, n, kept = hair.tubes(ends, np.full(2, 0.1), offsets, hair.LADDER[-1], linear=True)
+    corners = v[t].astype(np.float64)
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
+    assert len(t) == hair.triangle_count(offsets, hair.LADDER[-1], linear=True) == 6 + 2 * 3 * 3
+    assert math.isclose(area, 2 * math.pi * 0.1 + 4 * math.pi * 0.1 ** 2, rel_tol=1e-6)
 
 
 def _lit_scene(scene):

@@ -48,14 +48,18 @@ def test_curves_keep_their_width_through_sharp_turns(ctype, points, tmp_path):
     """Each tube ring at a turn is mitred (stretched along the bend, a sharp turn split into two
     rings): before, a ring square to the mean tangent showed cos(turn / 2) of the width, a Poly
     zig-zag of 90-degree turns rendered 26% thin, of 150-degree turns 63%, a Catmull-Rom V 3.4%
-    (a Poly V of 147 degrees 36%; now 1.4%: Cycles' Poly curves end in round caps, DACRT's
-    tubes are open)."""
+    (a Poly V of 147 degrees 36%)."""
     sc = _small_scene(64)
     ob = scenes.hair_curves("Bent", [points], radius=0.05, material=scenes.diffuse("Blue", (0.3, 0.6, 0.9)))
     ob.data.set_types(type=ctype)
     m = _means(sc, tmp_path)
     d, c = m['DACRT'], m['CYCLES']
-    np.testing.assert_allclose(d[3], c[3], rtol=0.01, err_msg="covered area (alpha)")
+    # a single curve's rings show the view their corners here (the first curve's phase: 0.65%
+    # wide, averaged out over many curves by the golden-ratio turns); with the Poly caps and
+    # joints round as Cycles' spheres, the 90-degree zig-zag's mesh covers 0.9% more than the
+    # exact union of cylinders and spheres seen this way (Monte Carlo over its projection;
+    # 1.002-1.003 at the other phases), rendered 1.2%
+    np.testing.assert_allclose(d[3], c[3], rtol=0.015 if ctype == 'POLY' else 0.01, err_msg="covered area (alpha)")
     # the light caught: the bright blue channel 1-2% over at the Poly joints (more light
     # between the zig-zag's legs), where it had been 26-63% short
     np.testing.assert_allclose(d[:3], c[:3], rtol=0.025, err_msg="colour")
