@@ -329,7 +329,7 @@ def read_strands(ob, notes):
     offsets = np.empty(len(data.curves) + 1, np.int32)
     data.curve_offset_data.foreach_get('value', offsets)
     types = data.attributes.get('curve_type')        # absent: all Catmull-Rom
-    linear = types is not None and _all_poly(types, len(data.curves))
+    linear = types is not None and _poly(types, len(data.curves))
     src = StrandSource('CURVES', ob.name, positions, radii, offsets, linear,
                        StandardAttributes(attributes, positions, offsets, radii, ob.matrix_world), render_color)
     # Cycles' UV of curves is their 'surface_uv_coordinate' on curves (ATTR_STD_UV); a UV Map
@@ -424,8 +424,11 @@ def tessellate(src, level, notes, why=''):
                                   radial_normals=src.kind == 'POINTCLOUD')
 
 
-def _all_poly(types, curves):
-    """Whether every curve is of type Poly (1; Cycles then draws straight segments)."""
+def _poly(types, curves):
+    """Whether Cycles draws the curves straight (Poly, 1): its sync reads the first curve's type
+    for all of them (blender/curves.cpp: CURVE_THICK_LINEAR when b_types[0] is Poly), so a first
+    Poly curve makes every curve round linear and a first Catmull-Rom one every curve smooth
+    (measured: two V curves, Poly then Catmull-Rom, cover what two Poly ones do in Cycles)."""
     values = np.empty(curves, np.int8)
     types.data.foreach_get('value', values)
-    return bool(len(values)) and bool((values == 1).all())
+    return bool(len(values)) and bool(values[0] == 1)

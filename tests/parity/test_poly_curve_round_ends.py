@@ -1,5 +1,6 @@
 """Poly curves against Cycles, which renders them as round linear curves (Embree's cone segments
-with a sphere at each point, whatever the Curves shape setting): DACRT's Poly tubes end in
+with a sphere at each point, whatever the Curves shape setting, when the object's first curve
+is Poly): DACRT's Poly tubes end in
 hemispherical caps (addon/hair.py). Open, short strands had covered 15-25% less than Cycles'
 and their ends had rendered 1.3-2.9x bright (fuzz seed 2457: 84 pixels failing at 120 x 90).
 The scenes of test_points_curves: a sun and a white world, an orthographic camera."""
@@ -62,3 +63,41 @@ def test_poly_strands_and_their_shadows_match_cycles_per_pixel(said):
     result = stats.compare(cycles, dacrt)
     assert result.passed, result.summary()
     assert any("straight between their points (Poly), round ends" in t for t in said), said
+
+
+def _spline_type_modifier(ob, poly_index):
+    """Geometry Nodes' Set Spline Type making curve `poly_index` of ob Poly (the others keep
+    Catmull-Rom): the way a user mixes curve types."""
+    ng = bpy.data.node_groups.new("PolyOne", 'GeometryNodeTree')
+    ng.interface.new_socket("Geometry", in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gi, go = ng.nodes.new('NodeGroupInput'), ng.nodes.new('NodeGroupOutput')
+    st = ng.nodes.new('GeometryNodeCurveSplineType')
+    st.spline_type = 'POLY'
+    index, equal = ng.nodes.new('GeometryNodeInputIndex'), ng.nodes.new('FunctionNodeCompare')
+    equal.data_type, equal.operation = 'INT', 'EQUAL'
+    equal.inputs[3].default_value = poly_index
+    ng.links.new(index.outputs[0], equal.inputs[2])
+    ng.links.new(equal.outputs[0], st.inputs['Selection'])
+    ng.links.new(gi.outputs[0], st.inputs['Curve'])
+    ng.links.new(st.outputs[0], go.inputs[0])
+    ob.modifiers.new("PolyOne", 'NODES').node_group = ng
+
+
+@pytest.mark.parametrize('poly_index', [0, 1], ids=['first_poly', 'second_poly'])
+def test_the_first_curves_type_decides_for_all_as_in_cycles(poly_index, tmp_path):
+    """Cycles draws every curve of a Curves object as its first curve's type says (Poly: round
+    linear, capped; else Catmull-Rom, open): two short thick straight strands, one made Poly by
+    Set Spline Type, whose caps are a quarter of what they cover. With the first one Poly, DACRT
+    had drawn both open (it asked for every curve to be Poly): 20% short of Cycles."""
+    sc = _scene()
+    sc.render.resolution_x = sc.render.resolution_y = 64
+    sc.cycles.samples = sc.dacrt.samples = 16
+    sc.cycles.use_adaptive_sampling = False
+    line = np.array([[-0.2, 0, 0], [0, 0, 0], [0.2, 0, 0]], float)
+    ob = scenes.hair_curves("Pair", [line + (0, 0, 0.5), line - (0, 0, 0.5)], radius=0.1,
+                            material=scenes.diffuse("Grey", (0.8, 0.8, 0.8)))
+    _spline_type_modifier(ob, poly_index)
+    layer = sc.view_layers[0].name
+    alpha = {e: float(exr[f"{layer}.Combined.A"].mean()) for e, exr in scenes.render_engines(sc, tmp_path).items()}
+    assert alpha['DACRT'] == pytest.approx(alpha['CYCLES'], rel=0.03)
