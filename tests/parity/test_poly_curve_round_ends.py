@@ -1,7 +1,7 @@
 """Poly curves against Cycles, which renders them as round linear curves (Embree's cone segments
 with a sphere at each point, whatever the Curves shape setting, when the object's first curve
 is Poly): DACRT's Poly tubes end in
-hemispherical caps (addon/hair.py). Open, short strands had covered 15-25% less than Cycles'
+hemispherical caps (addon/hair.py). Open, short strands had covered 12-29% less than Cycles'
 and their ends had rendered 1.3-2.9x bright (fuzz seed 2457: 84 pixels failing at 120 x 90).
 The scenes of test_points_curves: a sun and a white world, an orthographic camera."""
 import bpy
