@@ -454,6 +454,9 @@ class SceneData:
     # what camera rays see of the world instead of (world, environment), when a Light Path's Is
     # Camera Ray picks it (a Mix Shader in the world): ((3,) uniform radiance, Environment or None)
     camera_world: Optional[tuple] = None
+    # what diffuse bounce rays see where they miss, when a Light Path's Is Diffuse or Is
+    # Reflection Ray picks another world (light samples see (world, environment)): the same form
+    bounce_world: Optional[tuple] = None
     # which rays see the world (colour and image): VIS_CAMERA | VIS_DIFFUSE, Cycles' World >
     # Ray Visibility; the camera bit off leaves the background black (alpha 1, as Cycles);
     # NO_TRANSMISSION: camera rays past glass (transmission rays) do not see it

@@ -34,7 +34,8 @@ from .settings import clamp_direct_said, cycles_glossy_messages, export_settings
 from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, strand_kind, tessellate,
                       triangle_count)
 from .usedindices import used_indices
-from .world import effective_world, export_world, max_bounces_said, world_visibility
+from .world import (BOUNCE_RAYS, CAMERA_RAYS, effective_world, export_world, max_bounces_said, ray_kinds_said,
+                    sampled_as_one, world_visibility)
 
 # object types that render as geometry (curves, surfaces, text, metaballs through their mesh)
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
@@ -291,15 +292,12 @@ class Exporter:
         by_ray = []
         world, environment, world_reason = export_world(self.scene, self.layer_eval, camera=False, by_ray=by_ray,
                                                           reading=self.image_reading, view=camera)
-        camera_world = None
-        if by_ray:      # a Light Path's Is Camera Ray picks what the camera sees of the world
-            cw, cenv, creason = export_world(self.scene, self.layer_eval, camera=True, reading=self.image_reading,
-                                             view=camera)
-            world_reason = '; '.join(dict.fromkeys(r for r in (world_reason, creason) if r))
-            cw = np.where(np.isfinite(cw), cw, 0.0).astype(np.float32)
-            if not (cw >= 0).all():
-                cw = np.zeros(3, np.float32)
-            camera_world = (cw, cenv)
+        # a Light Path's ray-type output picks what the camera, or a diffuse bounce, sees of it
+        camera_world = self._world_for(CAMERA_RAYS, by_ray, camera)
+        bounce_world = self._world_for(BOUNCE_RAYS, by_ray, camera)
+        world_reason = '; '.join(dict.fromkeys(r for r in (world_reason, *(w[2] for w in (camera_world, bounce_world)
+                                                                             if w is not None)) if r))
+        camera_world, bounce_world = (w[:2] if w is not None else None for w in (camera_world, bounce_world))
         if not np.isfinite(world).all():
             # a script's or driver's NaN (or an overflow): Cycles' film drops the channel that
             # is not finite and keeps the others (a NaN red: a cyan world)
@@ -321,6 +319,8 @@ class Exporter:
                                 (computed, "NaN computed through the node as Cycles computes it for {}")):
                 if found:
                     world_reason = '; '.join(r for r in (world_reason, said.format(', '.join(found))) if r)
+        if bounce_world is not None:
+            world, environment = sampled_as_one(world, environment, (camera_world, bounce_world))
         world_aovs = world_aov_counts = {}
         if settings.aovs and self.world is not None and self.world.node_tree is not None:
             reasons = []
@@ -333,6 +333,9 @@ class Exporter:
         # the material indices the triangles use, once for the checks and messages below (each
         # had counted them again: four passes over the triangles' materials a frame)
         self._used = used_indices(geometry.material, len(self.materials.materials))
+        said = ray_kinds_said(by_ray, [self.materials.materials[i] for i in set(self._used.tolist())])
+        if said:
+            self.messages.append(('WARNING', f"world approximated: {said}"))
         self._summarize(geometry, world, environment, camera_world)
         seen_env = camera_world[1] if camera_world is not None else environment
         said = ground_seen_said(seen_env, camera, settings,
@@ -372,6 +375,7 @@ class Exporter:
                             object_names=self.object_names, object_keys=self.object_keys,
                             messages=self.messages,
                             skipped=dict(self.counts), environment=environment, camera_world=camera_world,
+                            bounce_world=bounce_world,
                             world_visibility=world_visibility(self.world),
                             object_pass_index=np.array(self.object_pass_index, np.int32),
                             object_assets=self.object_assets, light_links=self.light_links,
@@ -962,6 +966,18 @@ class Exporter:
         vis = geometry.visibility[glass[geometry.material]] if len(geometry.material) else geometry.visibility
         clear = bool(np.any(((vis & sd.VIS_DIFFUSE) != 0) & ((vis & sd.VIS_SHADOW) == 0)))
         return frozenset(kinds), clear
+
+    def _world_for(self, rays, by_ray, camera):
+        """(uniform radiance, Environment or None, reason) of the world the rays whose Light Path
+        outputs `rays` read 1 see, or None where no Mix Shader of the world (by_ray: the outputs
+        its mixes read) tells them from light samples."""
+        if not rays & set(by_ray):
+            return None
+        w, env, reason = export_world(self.scene, self.layer_eval, rays=rays, reading=self.image_reading, view=camera)
+        w = np.where(np.isfinite(w), w, 0.0).astype(np.float32)
+        if not (w >= 0).all():
+            w = np.zeros(3, np.float32)
+        return w, env, reason
 
     def _summarize(self, geometry, world, environment, camera_world=None):
         for text, names in self.lights_approximated.items():

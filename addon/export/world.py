@@ -6,6 +6,8 @@ Mix Shaders of these, the camera/light split of a Light Path's Is Camera Ray, an
 visibility. Other world shaders use the world colour, reported. Part
 of the export layer."""
 
+from dataclasses import replace
+
 import bpy
 import numpy as np
 
@@ -38,13 +40,15 @@ def effective_world(scene, view_layer):
     return override if override is not None else scene.world
 
 
-def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE, view=None):
+def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE, view=None, rays=None):
     """(uniform background radiance (3,), scenedata.Environment or None, reason string if the
     world had to be approximated) of the world the view layer renders with (effective_world).
     An Environment Texture feeding the Background's Color is exported as an image (its Mapping
     node's rotation included); other inputs use their own value. camera True / False: the world
     as camera rays / all other rays see it, a Mix Shader whose factor is a Light Path's Is
-    Camera Ray giving 1 / 0 (each such mix appends to the list by_ray); None: its own value.
+    Camera Ray giving 1 / 0; None: its own value. rays: the Light Path ray-type outputs that
+    read 1 for the rays this world is exported for (RAY_OUTPUTS; camera True is CAMERA_RAYS,
+    False LIGHT_RAYS), the others 0; each mix on one appends its output's name to the list by_ray.
     reading: the export's images.ImageReading (its cancel check and Texture Limit). view: the
     render's scenedata.Camera, whose frame a baked world's Texture Coordinate Camera and Window
     read (None: such a world is not baked, and said)."""
@@ -70,20 +74,95 @@ def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE
     if volume is not None and linked_link(volume) is not None:
         reasons.append("world volume ignored")      # a world's fog or haze: no volumes here
     by_ray = by_ray if by_ray is not None else []
-    uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, camera,
+    if rays is None and camera is not None:
+        rays = CAMERA_RAYS if camera else LIGHT_RAYS
+    uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, rays,
                                   by_ray, scene.frame_current, reading, view)
-    if camera is False and by_ray:      # (camera rays see the other export's world)
+    if rays is not None and 'Is Camera Ray' not in rays and 'Is Camera Ray' in by_ray:
+        # (camera rays see the other export's world)
         reasons = [r for r in reasons if r != ORTHO_WINDOW_SAID]
     return uniform.astype(np.float32), env, '; '.join(dict.fromkeys(reasons))
 
 
-def _is_camera_ray(socket):
-    """Whether a Mix Shader's factor is a Light Path node's Is Camera Ray output."""
+# The Light Path outputs a world reads from Cycles' path flags (svm_node_light_path), and which
+# read 1 for each kind of ray the world is evaluated for. A ray that missed reads its path's
+# flags (integrator_eval_background_shader): a camera ray Is Camera Ray (through transparent
+# surfaces too); a diffuse bounce's Is Diffuse and Is Reflection Ray (path_state_next). A light
+# sample of the world, and the importance map it is drawn from, read PATH_RAY_EMISSION alone
+# (light_sample_shader_eval, kernel_background_evaluate): every output 0. No world evaluation
+# carries PATH_RAY_SHADOW: Is Shadow Ray reads 0 for all of them.
+RAY_OUTPUTS = frozenset({'Is Camera Ray', 'Is Shadow Ray', 'Is Diffuse Ray', 'Is Glossy Ray', 'Is Singular Ray',
+                         'Is Reflection Ray', 'Is Transmission Ray', 'Is Volume Scatter Ray'})
+CAMERA_RAYS = frozenset({'Is Camera Ray'})
+LIGHT_RAYS = frozenset()
+BOUNCE_RAYS = frozenset({'Is Diffuse Ray', 'Is Reflection Ray'})
+
+
+# a constant lighting world as a map: fine enough that its sampling pdf is uniform over the
+# sphere but within its pole rows (Cycles' importance map of a constant, at its resolution; a 1 x 2
+# map's pdf had ranged over 0.64-81 x 1 / 4 pi)
+_CONSTANT_MAP = (256, 512, 3)
+
+
+def sampled_as_one(world, environment, others):
+    """(uniform radiance, Environment or None) of the lighting world, where diffuse bounces see
+    another (a world Light Path mix), as Cycles samples it: one light whose importance map is the
+    whole lighting world, wherever the world shader varies over directions (an image in any of
+    its worlds: `others`, the other exports' (uniform, Environment or None), or None), since the
+    bounce world takes that light's MIS weight (emitterhits._gather_bounce_world). A uniform
+    colour becomes a constant map, light-sampled (Cycles' importance map of it; as the uniform
+    world DACRT leaves to BSDF rays, a diffuse floor under a constant lighting world and an image
+    for bounces had been 1.1x Cycles); one beside an image is added into the image's texels.
+    An sRGB-encoded image (blended before decoding) keeps the colour apart, unsampled."""
+    varies = environment is not None or any(o is not None and o[1] is not None for o in others)
+    if not varies or not world.max() > 0:
+        return world, environment
+    if environment is None:
+        return np.zeros(3, np.float32), sd.Environment(np.ones(_CONSTANT_MAP, np.float32), world.astype(np.float32))
+    if environment.encoded is not None:
+        return world, environment
+    px = np.asarray(environment.pixels, np.float32)[..., :3] * np.asarray(environment.strength, np.float32) + world
+    return np.zeros(3, np.float32), replace(environment, pixels=np.ascontiguousarray(px, np.float32),
+                                            strength=np.ones(3, np.float32), texels_key=None)
+
+
+# what bounce rays other than diffuse reflections read in Cycles (path_state_next): a glossy
+# closure's Is Glossy (and a sharp one's Is Singular) Ray, a glass pass's Is Glossy, Singular and
+# Transmission Ray, a Translucent BSDF's Is Diffuse and Is Transmission Ray
+_READ_BY = {'glossy': {'Is Diffuse Ray', 'Is Glossy Ray', 'Is Singular Ray'},
+            'glass': {'Is Diffuse Ray', 'Is Glossy Ray', 'Is Singular Ray', 'Is Reflection Ray', 'Is Transmission Ray'},
+            'translucent': {'Is Reflection Ray', 'Is Transmission Ray'}}
+
+
+def ray_kinds_said(by_ray, materials):
+    """What a world read by Light Path ray types (by_ray: the outputs its mixes read) shows
+    otherwise than Cycles, given the scene's rendered materials (scenedata.Material): DACRT's
+    bounce rays are diffuse reflections, which see the world of Is Diffuse and Is Reflection Ray
+    (its glossy stand-ins', translucent and glass bounces' too), and its camera rays past glass
+    the lighting world (every output 0). '' where no such material meets an output read."""
+    read = set(by_ray)
+    kinds = {'glossy': [m.name for m in materials if m.glossy],
+             'glass': [m.name for m in materials if m.refraction is not None and np.any(m.refraction > 0)],
+             'translucent': [m.name for m in materials if m.translucency is not None and np.any(m.translucency > 0)]}
+    found = {k: names for k, names in kinds.items() if names and read & _READ_BY[k]}
+    if not found:
+        return ''
+    outputs = sorted(read & set().union(*(_READ_BY[k] for k in found)))
+    names = ', '.join(f"{k} ({', '.join(repr(n) for n in dict.fromkeys(v))})" for k, v in found.items())
+    return (f"world Mix Shader on Light Path {', '.join(repr(o) for o in outputs)}: Cycles' rays leaving {names} "
+            "surfaces read it by their own kind; here they see the world of a diffuse reflection, and camera "
+            "rays past glass the world of light samples (every ray type 0)")
+
+
+def _ray_output(socket):
+    """The Light Path ray-type output (RAY_OUTPUTS) a Mix Shader's factor is, or None."""
     link = linked_link(socket)
-    return link is not None and link.from_node.type == 'LIGHT_PATH' and link.from_socket.name == 'Is Camera Ray'
+    if link is not None and link.from_node.type == 'LIGHT_PATH' and link.from_socket.name in RAY_OUTPUTS:
+        return link.from_socket.name
+    return None
 
 
-def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=(), frame=None, reading=WHOLE,
+def _world_surface(socket, weight, color, reasons, depth, rays=None, by_ray=(), frame=None, reading=WHOLE,
                    view=None):
     """(uniform radiance, Environment or None) of what feeds a world shader socket at
     `weight`: Background and Emission (the same for the world in Cycles), Add Shader and Mix
@@ -111,9 +190,11 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
                        "as in Cycles")
         return none, None
     if t in ('ADD_SHADER', 'MIX_SHADER'):
-        if t == 'MIX_SHADER' and camera is not None and _is_camera_ray(node.inputs['Fac']):
-            fac = 1.0 if camera else 0.0      # (the background trick: what the camera sees, and the light)
-            by_ray.append(node.name)
+        kind = _ray_output(node.inputs['Fac']) if t == 'MIX_SHADER' and rays is not None else None
+        if kind is not None:
+            # (the background trick: what the camera sees, and the light; a world for bounces)
+            fac = 1.0 if kind in rays else 0.0
+            by_ray.append(kind)
         else:
             if t == 'MIX_SHADER' and not constant_value(node.inputs['Fac'])[1]:
                 found = _procedural_mix(node, weight, reasons, view)
@@ -122,7 +203,7 @@ def _world_surface(socket, weight, color, reasons, depth, camera=None, by_ray=()
             fac = mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
         weights = (weight, weight) if t == 'ADD_SHADER' else (weight * (1.0 - fac), weight * fac)
         first = 0 if t == 'ADD_SHADER' else 1
-        (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1, camera, by_ray,
+        (ua, ea), (ub, eb) = (_world_surface(node.inputs[first + i], w, color, reasons, depth + 1, rays, by_ray,
                                              frame, reading, view)
                               for i, w in enumerate(weights))
         if ea is not None and eb is not None:
