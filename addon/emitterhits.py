@@ -97,8 +97,11 @@ class EmitterHits:
         each group's lamps (and the world) again into its own array."""
         camera, classes = k == 0, self._found_classes(k, path)
         L, L_env = sinks.found(k), sinks.world(k)
+        bounce = not camera and self._bounce_worlds is not None
+        if bounce:
+            self._gather_bounce_world(path, ~hit, sinks, k)
         if not camera:
-            env, groups = self.lights.environment, ((self._bsdf_lamps, L),)
+            env, groups = None if bounce else self.lights.environment, ((self._bsdf_lamps, L),)
         elif sinks.split:
             env = self._camera_env_pass if self._env_requested else self._camera_env
             groups = ((self._camera_emitters, L), (self._camera_world, L_env))
@@ -107,7 +110,7 @@ class EmitterHits:
         # what goes to the light groups: Combined's, and, with the Environment pass, the world
         # behind transparent film too (Cycles writes it to the world's group then, though
         # Combined leaves it out)
-        combined_env = (self.lights.environment if not camera else
+        combined_env = ((None if bounce else self.lights.environment) if not camera else
                         self._camera_env_pass if self._env_requested else self._camera_env)
         envs = [(env, L_env)] if env is not None else []
         if sinks.groups and combined_env is not None and self._world_group >= 0:
@@ -134,6 +137,30 @@ class EmitterHits:
                     dacrt.lamps.lamp_gather(self._lamp_records, lamps, path.O, path.D, t_surf,
                                             miss, path.pid, out, thr=thr, pdf_bsdf=pdf,
                                             clamp=clamp, **self._lamp_mis(camera, path))
+
+    def _gather_bounce_world(self, path, miss, sinks, k):
+        """The world diffuse bounce rays that missed see where a Light Path mix gives them their
+        own (_bounce_worlds), into Combined (or its pass) and the world's light group. As in
+        Cycles, where the world is one light whose samples (and importance map) read every ray
+        type 0 (light_sample_shader_eval: PATH_RAY_EMISSION alone), these rays' world carries
+        the MIS weight of the lighting world's map: light samples hold the rest of that world."""
+        if not self._bounce_worlds or not miss.any():
+            return
+        thr = np.ones((3, len(miss)), F32) if path.thr is None else path.thr
+        env0, prob = self.lights.environment, self.lights.env_prob
+        if env0 is not None and prob > 0:
+            # the power heuristic of these BSDF rays against sampling the lighting world's map
+            at = np.flatnonzero(miss)
+            _, pdf = env0.native.eval(np.ascontiguousarray(np.take(path.D, at, axis=1)))
+            x = (prob * np.asarray(pdf, np.float64) / np.take(path.pdf, at)) ** 2
+            thr = thr.copy()
+            thr[:, at] *= (1.0 / (1.0 + x)).astype(F32)
+        outs = [sinks.world(k)]
+        if sinks.groups and self._world_group >= 0:
+            outs.append(sinks.groups[self._world_group])
+        for world, out, (thr_c, clamp) in itertools.product(self._bounce_worlds, outs,
+                                                            self._found_classes(k, path, thr)):
+            world.native.gather(0.0, path.D, miss, thr_c, None, path.pid, out, clamp)
 
     def _mis_pdfs(self, lamps, path, k, camera):
         """(lamp records, MIS pdf of the BSDF rays) pairs to gather segment k with: path.pdf,

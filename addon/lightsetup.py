@@ -18,16 +18,35 @@ from .lights.sphereinside import TriangleReach
 from .lights.linking import LightLinking
 from .lights.madelamp import taken_lamp
 from .procedural import VIEW, ProceduralTexels
-from .scenedata import NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, SceneData
+from .scenedata import (NO_TRANSMISSION, STAND_IN_ZERO, VIS_CAMERA, VIS_DIFFUSE, VIS_SHADOW, Environment,
+                        SceneData)
 from .translucency import far_side
 from .viewside import Facing
 
 F32 = np.float32
 
 
+def _bounce_worlds(bounce_world, visibility):
+    """The maps (lights.EnvironmentLight) diffuse bounce rays that miss see where a world Light
+    Path mix gives them a world of their own (scenedata.bounce_world): its image, and its uniform
+    colour as a constant map (each gathered by emitterhits._gather_bounce_world); [] where they
+    see nothing of it (black, or hidden from diffuse rays); None without such a world."""
+    if bounce_world is None:
+        return None
+    if not visibility & VIS_DIFFUSE:
+        return []
+    uniform, env = bounce_world
+    maps = [EnvironmentLight(env)] if env is not None else []
+    if np.asarray(uniform).max() > 0:
+        maps.append(EnvironmentLight(Environment(np.ones((1, 2, 3), F32), np.asarray(uniform, F32))))
+    return [m for m in maps if not m.dark]
+
+
 class LightSetup:
     """A mixin of integrator.Integrator (see the module docstring): its methods read and set
     the Integrator's state."""
+
+    _bounce_worlds = None       # (_build_lights: the world diffuse bounces see apart, if any)
 
     def _build_lights(self, sd: SceneData):
         self._init_linking(sd)
@@ -102,10 +121,13 @@ class LightSetup:
         # through transparent film)
         # with light linking, the tree picks each point's light among the sets it is lit by
         sets = None if self._link is None else (lambda lamp: _light_set(self._link, lamp), self._tri_set)
+        # (what only diffuse bounce rays see of the world: found by them, never light-sampled)
+        self._bounce_worlds = _bounce_worlds(getattr(sd, 'bounce_world', None), wv)
         self.lights = LightSet(lamps, tris, len(self.tri), env if wv & VIS_DIFFUSE else None,
                                use_tree=bool(getattr(self.settings, 'use_light_tree', True)), light_sets=sets,
                                tri_object=ob if sd.geometry.instance is None else sd.geometry.instance,
-                               unsampled_emitters=bool((hittable & ~sampled).any()), glass=self._any_glass)
+                               unsampled_emitters=bool((hittable & ~sampled).any()) or bool(self._bounce_worlds),
+                               glass=self._any_glass)
         self._camera_env = camera_env if (camera_env is not None and wv & VIS_CAMERA and not self.transparent
                                           and not camera_env.dark) else None
         # the map camera rays past glass see: the lighting world by its Transmission visibility,
@@ -183,8 +205,10 @@ class LightSetup:
                                                and not camera_env.dark) else None
         self._glass_world_lamps = np.array([j for j, l in enumerate(every)
                                             if isinstance(l, BackgroundLight) and l.seen_by_transmission], np.int32)
-        self._bsdf_lamps = self._bsdf_every = np.array([j for j, l in enumerate(diffuse) if l.seen_by_bsdf],
-                                                       np.int32)
+        # (with a world of their own, bounce rays see it instead of the lighting world's colour)
+        self._bsdf_lamps = self._bsdf_every = np.array(
+            [j for j, l in enumerate(diffuse) if l.seen_by_bsdf
+             and not (self._bounce_worlds is not None and isinstance(l, BackgroundLight))], np.int32)
         self._bsdf_linked = np.zeros(0, np.int32)
         self._linked_tri_sets = np.zeros(0, np.int64)
         self._selection_table()
