@@ -363,18 +363,37 @@ def coordinates_approximation(tex_node):
     return '; '.join(reasons)
 
 
-def environment_rotation(node, reasons, vector=True):
+def environment_rotation(node, reasons, vector=True, to_camera=None):
     """(3, 3) orthogonal world -> map-frame matrix from the Environment Texture's Vector input:
     the view direction, optionally through a Mapping node (its rotation and the signs of its
     scale are exact for directions; non-uniform scale and location are not representable).
-    vector False: the view direction (an unavailable Vector input, which Cycles does not read)."""
+    vector False: the view direction (an unavailable Vector input, which Cycles does not read).
+    to_camera: the render camera's orthogonal world -> camera matrix, which a Texture Coordinate
+    Camera applies to the direction in a world shader (None: Camera is read as the view direction,
+    said)."""
     own = _own_direction_mapping(node, reasons)
-    return own @ _vector_direction(node, reasons) if vector else own
+    return own @ _vector_direction(node, reasons, to_camera) if vector else own
 
 
-def _vector_direction(node, reasons):
+def _direction_frame(link, to_camera):
+    """The matrix taking the ray direction D to what the output `link` reads in a world shader:
+    +-1 for D or -D (_DIRECTION_COORDINATES, _GEOMETRY_DIRECTIONS); to_camera for Texture
+    Coordinate Camera (svm_texco_camera: worldtocamera of P + the camera's position, P = D in the
+    background, so D turned into the camera's frame); None for anything else or no link."""
+    if link is None:
+        return None
+    sign = _direction_of(link)
+    if sign is not None:
+        return sign * np.eye(3)
+    if to_camera is not None and link.from_node.type == 'TEX_COORD' and link.from_socket.name == 'Camera':
+        return np.asarray(to_camera, np.float64)
+    return None
+
+
+def _vector_direction(node, reasons, to_camera=None):
     """The direction map of the chain of Mapping and Vector Rotate nodes before an Environment
-    Texture's Vector input, ending at the view direction (or its negative)."""
+    Texture's Vector input, ending at the view direction (or its negative, or its camera-frame
+    turn: _direction_frame)."""
     link = linked_link(node.inputs['Vector'])
     if link is None:
         return np.eye(3)
@@ -387,18 +406,21 @@ def _vector_direction(node, reasons):
         # -(mapping D); a Vector Rotate's Center, a translation, is reported and left out)
         M = M @ (_direction_matrix(src, reasons) if src.type == 'MAPPING' else _rotate_direction(src, reasons))
         inner = linked_link(src.inputs['Vector'])
-        if inner is None or not _is_direction(inner):
-            if inner is not None and inner.from_node.type in _AFFINE_NODES:
-                link = inner
-                continue
+        if inner is not None and not _is_direction(inner) and inner.from_node.type in _AFFINE_NODES:
+            link = inner
+            continue
+        frame = _direction_frame(inner, to_camera)
+        if frame is None:
             what = 'nothing' if inner is None else f"'{inner.from_node.bl_label}' {inner.from_socket.name}"
             reasons.append(f"{src.bl_label} node fed by {what}: read as the view direction")
-        return M * _direction_sign(inner)
-    if not _is_direction(link):
+            return M
+        return M @ frame
+    frame = _direction_frame(link, to_camera)
+    if frame is None:
         reasons.append(f"environment coordinates from '{link.from_node.bl_label}' {link.from_socket.name} read as "
                        "the view direction")
         return M
-    return M * _direction_sign(link)
+    return M @ frame
 
 
 def _rotate_direction(node, reasons):
@@ -411,13 +433,6 @@ def _rotate_direction(node, reasons):
     if np.any(t != 0):
         reasons.append(f"Vector Rotate '{node.name}' Center ignored (the map is looked up by direction)")
     return M
-
-
-def _direction_sign(link):
-    """-1 for an output that is -D in a world shader (_DIRECTION_COORDINATES,
-    _GEOMETRY_DIRECTIONS), else 1."""
-    sign = None if link is None else _direction_of(link)
-    return 1.0 if sign is None else sign
 
 
 def _own_direction_mapping(node, reasons):

@@ -235,7 +235,7 @@ def _color_light(socket, strength, what, reasons, frame, reading=WHOLE, view=Non
     to its texels (a tint, a Hue/Saturation, a ramp), or a constant colour."""
     tex = linked_node(socket)
     if tex is not None and tex.type == 'TEX_ENVIRONMENT':
-        return _environment(tex, strength, reasons, frame=frame, reading=reading)
+        return _environment(tex, strength, reasons, frame=frame, reading=reading, view=view)
     if tex is not None and tex.type == 'TEX_SKY':
         found = sky_environment(tex, strength, reasons)
         if found is not None:
@@ -252,7 +252,7 @@ def _color_light(socket, strength, what, reasons, frame, reading=WHOLE, view=Non
             except nodeeval.NotCompiled:
                 chain = None
             if chain is not None:
-                return _environment(envs[0], strength, reasons, chain, frame, reading)
+                return _environment(envs[0], strength, reasons, chain, frame, reading, view)
         skies = _environments_feeding(socket, 'TEX_SKY')
         if len(skies) == 1 and not envs:
             found = _sky_through(socket, skies[0], strength, reasons)
@@ -562,7 +562,17 @@ def _per_channel_affine(chain):
     return bool(np.isfinite(y).all()) and channel_line(_PROBE[:, :3], y, 1e-5) is not None
 
 
-def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE):
+def _camera_turn(view):
+    """The render camera's world -> camera rotation (camera.CameraModel.to_camera), which a
+    Texture Coordinate Camera reads in the background, or None without a camera or where its
+    frame is sheared (no rotation: an environment map is looked up by a turn of the direction)."""
+    if view is None:
+        return None
+    T = CameraModel(view).to_camera
+    return T if np.allclose(T.T @ T, np.eye(3), atol=1e-6) else None
+
+
+def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE, view=None):
     """(uniform radiance, scenedata.Environment or None) of an Environment Texture node; chain:
     the colour nodes after it (nodeeval.compile_image_chain), applied to its texels."""
     if not (np.isfinite(strength) and strength >= 0):
@@ -614,7 +624,7 @@ def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE)
         return mean_rgb(texels).astype(np.float32) * strength, None
     if node.interpolation in LINEAR_INTERPOLATIONS:
         reasons.append(f"{node.interpolation.lower()} environment interpolation as linear")
-    to_map = environment_rotation(node, reasons)
+    to_map = environment_rotation(node, reasons, to_camera=_camera_turn(view))
     if not np.isfinite(to_map).all():
         # a NaN or infinite Mapping (named in reasons): Cycles looks the image up at a NaN
         # direction, and its background is black
