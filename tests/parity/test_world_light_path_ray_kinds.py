@@ -83,6 +83,21 @@ def test_world_mixed_by_ray_kind_matches_cycles(case, tmp_path, said):
     assert result.passed, result.summary()
     assert not [t for t in said if "factor not computed" in t], said
     assert not [t for t in said if "read it by their own kind" in t], said
+    assert not [t for t in said if "share of the light choice" in t], said     # (the world is its only light)
+
+
+@pytest.mark.parametrize('image', ['first', None])
+def test_bounce_world_beside_other_lights_is_said(image, tmp_path, said):
+    """The bounce world takes the MIS weight of the world's light samples, so the light choice's
+    share for the world shapes it: said beside a lamp where the world is light-sampled (an image:
+    fuzz 1589 1.04-1.09x Cycles beside an emitter), not where it is not (two constant colours:
+    no light samples of the world, in Cycles either)."""
+    sc = _scene('Is Diffuse Ray', image)
+    scenes.light('POINT', 100.0, location=(2.0, -1.0, 3.0))
+    sc.dacrt.samples = 1
+    sc.render.engine = 'DACRT'
+    scenes.render_exr(tmp_path / "lit.exr", sc)
+    assert bool([t for t in said if "share of the light choice" in t]) == (image is not None), said
 
 
 @pytest.mark.parametrize('output, closure, named', [
