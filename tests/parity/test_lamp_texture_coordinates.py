@@ -200,17 +200,18 @@ def test_area_lamp_texture_is_averaged_over_its_surface(case, tmp_path, said):
     assert [t for t in said if "light 'Lamp'" in t and "averaged over the area light's surface" in t], said
 
 
-def test_wide_sun_uv_is_read_at_its_centre_and_said(tmp_path, said):
-    """A sun of angle 1.15 rad: its UV varies per sample in Cycles (a pixel's mean (0.493, 0.520)
-    at 1 rad), read at (0.5, 0.5), said: a Gradient on it within 2.5% of Cycles (fuzz 1217:
-    1.015x; standing at the input's own value it had been 1.9x)."""
+def test_wide_sun_uv_is_averaged_over_its_cone_and_said(tmp_path, said):
+    """A sun of angle 1.15 rad: its UV varies per sample in Cycles (distant_light_uv, a disc about
+    (0.5, 0.5): lampcoordinates._sun_uv), the texture's mean over its cone standing in, said: a
+    Gradient on it within 2.5% of Cycles (fuzz 1217: 1.015x; standing at the input's own value it
+    had been 1.9x; tests/parity/test_sun_uv.py for a Checker, which (0.5, 0.5) had read as 0)."""
     sc = _scene('SUN', 'ShaderNodeTexGradient', 'UV', 'Fac', 'Strength', {})
     sc.objects['Lamp'].data.angle = 1.15
     layer = sc.view_layers[0].name
     means = {e: np.array([exr[f"{layer}.Combined.{c}"].mean() for c in 'RGB'], np.float64)
              for e, exr in scenes.render_engines(sc, tmp_path).items()}
     np.testing.assert_allclose(means['DACRT'], means['CYCLES'], rtol=0.025, atol=2e-4)
-    assert [t for t in said if "light 'Lamp'" in t and "reads the sun's UV as (0.5, 0.5)" in t], said
+    assert [t for t in said if "light 'Lamp'" in t and "averaged over the sun's angle" in t], said
 
 
 @pytest.mark.parametrize('scale, radius', [(8.0, 0.0), (4.0, 1.5)])
