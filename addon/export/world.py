@@ -2,8 +2,8 @@
 Environment Texture's equirectangular image (through a Mapping node's rotation, with colour
 nodes after it applied to its texels), a Sky Texture's sky (export/sky.py, colour nodes after
 it likewise), procedural textures of the view direction baked into a map (a Gradient), Add and
-Mix Shaders of these, the camera/light split of a Light Path's Is Camera Ray, and the world's ray
-visibility. Other world shaders use the world colour, reported. Part
+Mix Shaders of these, the worlds that camera rays, diffuse bounces and light samples see where a
+Mix Shader reads a Light Path ray type (RAY_OUTPUTS), and the world's ray visibility. Other world shaders use the world colour, reported. Part
 of the export layer."""
 
 from dataclasses import replace
