@@ -320,7 +320,9 @@ class Exporter:
                 if found:
                     world_reason = '; '.join(r for r in (world_reason, said.format(', '.join(found))) if r)
         if bounce_world is not None:
-            world, environment = sampled_as_one(world, environment, (camera_world, bounce_world))
+            world, environment, apart = sampled_as_one(world, environment, (camera_world, bounce_world))
+            if apart:
+                self.messages.append(('WARNING', f"world approximated: {apart}"))
         world_aovs = world_aov_counts = {}
         if settings.aovs and self.world is not None and self.world.node_tree is not None:
             reasons = []

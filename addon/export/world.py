@@ -113,17 +113,21 @@ def sampled_as_one(world, environment, others):
     colour becomes a constant map, light-sampled (Cycles' importance map of it; as the uniform
     world DACRT leaves to BSDF rays, a diffuse floor under a constant lighting world and an image
     for bounces had been 1.1x Cycles); one beside an image is added into the image's texels.
-    An sRGB-encoded image (blended before decoding) keeps the colour apart, unsampled."""
+    An sRGB-encoded image (blended before decoding) keeps the colour apart, unsampled, said (the
+    third value: a reason, or '')."""
     varies = environment is not None or any(o is not None and o[1] is not None for o in others)
     if not varies or not world.max() > 0:
-        return world, environment
+        return world, environment, ''
     if environment is None:
-        return np.zeros(3, np.float32), sd.Environment(np.ones(_CONSTANT_MAP, np.float32), world.astype(np.float32))
+        return (np.zeros(3, np.float32), sd.Environment(np.ones(_CONSTANT_MAP, np.float32), world.astype(np.float32)),
+                '')
     if environment.encoded is not None:
-        return world, environment
+        return world, environment, ("its uniform colour beside an sRGB image is left out of the world's light "
+                                    "samples, so the world diffuse bounces see (a Light Path mix) is weighted "
+                                    "against the image's alone, where Cycles samples both as one")
     px = np.asarray(environment.pixels, np.float32)[..., :3] * np.asarray(environment.strength, np.float32) + world
     return np.zeros(3, np.float32), replace(environment, pixels=np.ascontiguousarray(px, np.float32),
-                                            strength=np.ones(3, np.float32), texels_key=None)
+                                            strength=np.ones(3, np.float32), texels_key=None), ''
 
 
 # what bounce rays other than diffuse reflections read in Cycles (path_state_next): a glossy

@@ -123,3 +123,32 @@ def test_ray_kinds_diffuse_bounces_stand_for_are_said(output, closure, named):
                 if "read it by their own kind" in m]
     assert bool(messages) == named, messages
     assert not messages or "'Odd'" in messages[0] and repr(output) in messages[0], messages
+
+
+@pytest.mark.parametrize('byte_image', [True, False])
+def test_colour_beside_an_srgb_image_left_unsampled_is_said(byte_image):
+    """A lighting world of an image plus a uniform colour, where diffuse bounces see another: the
+    colour is added into a float image's texels (one light, as Cycles samples it), but an 8-bit
+    sRGB image is blended before decoding, so the colour stays apart, unsampled: said there only."""
+    from addon import export
+    import bpy
+    sc = _scene('Is Diffuse Ray', 'first')
+    nt = sc.world.node_tree
+    mix = next(n for n in nt.nodes if n.type == 'MIX_SHADER')
+    first = mix.inputs[1].links[0].from_node
+    if byte_image:
+        img = bpy.data.images.new("Bytes", 32, 16, float_buffer=False, alpha=True)
+        px = np.full((16, 32, 4), 0.5, np.float32)
+        px[..., 0] = np.linspace(0.1, 1.0, 32)[None, :]
+        img.pixels.foreach_set(px.ravel())
+        img.pack()
+        next(n for n in nt.nodes if n.type == 'TEX_ENVIRONMENT').image = img
+    glow = nt.nodes.new('ShaderNodeBackground')
+    glow.inputs['Color'].default_value = (0.3, 0.3, 0.3, 1.0)
+    add = nt.nodes.new('ShaderNodeAddShader')
+    nt.links.new(first.outputs[0], add.inputs[0])
+    nt.links.new(glow.outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], mix.inputs[1])
+    messages = [m for _, m in export.export_scene(bpy.context.evaluated_depsgraph_get()).messages
+                if "beside an sRGB image" in m]
+    assert bool(messages) == byte_image, messages
