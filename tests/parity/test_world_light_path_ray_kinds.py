@@ -115,7 +115,7 @@ def test_ray_kinds_diffuse_bounces_stand_for_are_said(output, closure, named):
     reads one of those types; not where every such bounce reads the world as Cycles does."""
     from addon import export
     import bpy
-    sc = _scene(output, None)
+    _scene(output, None)
     mat, nt, out = scenes._material("Odd")
     nt.links.new(nt.nodes.new(closure).outputs[0], out.inputs['Surface'])
     scenes.cube("Box", size=0.6, location=(1.5, 0, 0.3), materials=[mat])
