@@ -3,6 +3,7 @@
 // two children.
 #include "lighttree.h"
 #include "treelanes.h"
+#include "dispatch.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +11,8 @@
 #include <memory>
 #include <numeric>
 #include <stdexcept>
+
+#pragma GCC diagnostic ignored "-Wpsabi"  // 32-byte vectors only ever inlined (pick_rows)
 
 namespace dacrt {
 
@@ -583,10 +586,96 @@ struct LightTree::Rows {
     int32_t ids[kRows], tmp[kRows];
     uint8_t pick[kRows];
     double t[4][kRows];  // each target's summed importance
+    double su[kRows], slo[kRows], sw[kRows];  // a stop's walks' u, lo, w by position (pick_rows)
     float rows[10][kRows + kPad];
     float g[8][kRows + kPad];
     int32_t ok[8][kRows + kPad];
 };
+
+namespace {
+
+typedef double D4 __attribute__((vector_size(32)));
+typedef int64_t L4 __attribute__((vector_size(32)));
+
+// probs_of's shares and pick_of's pick for the walks [0, m) at a stop, four side by side: each
+// walk's targets' summed importances t[j][i] (pe: the shares by energy, where their sum is 0 or
+// not finite), its u, lo and w (lo, w narrowed in place), its pick into pick[i]. Each lane meets
+// the scalar steps' IEEE operations in their order (no contraction: -ffp-contract=off), so the
+// same bits; the selects of pick_of's bit masks become lane masks. The scalar pass waited on
+// each walk's chain of sums, the division and the pick's dependent load (~1/8 of walk_rows'
+// perf samples on one load): four walks per vector overlap those chains.
+// Copies per instruction set (as treelanes.cpp), chosen by lane_copy so that DACRT_ISA can pick
+// a narrower one and the per-ISA test compares them.
+using TargetRows = const double (*)[LightTree::Rows::kRows];
+using PickRowsFn = void (*)(TargetRows t, const double pe[4], const double* u, double* lo, double* w, size_t m,
+                            uint8_t* pick);
+inline __attribute__((always_inline)) void pick_rows(TargetRows t, const double pe[4], const double* u, double* lo,
+                                                     double* w, size_t m, uint8_t* pick) {
+    size_t i = 0;
+    for (; i + 4 <= m; i += 4) {
+        D4 tj[4], uv, lov, wv;
+        for (int j = 0; j < 4; ++j) std::memcpy(&tj[j], t[j] + i, sizeof(D4));
+        std::memcpy(&uv, u + i, sizeof(D4));
+        std::memcpy(&lov, lo + i, sizeof(D4));
+        std::memcpy(&wv, w + i, sizeof(D4));
+        D4 s = D4{} + 0.0;
+        for (int j = 0; j < 4; ++j) s += tj[j];
+        const L4 ok = (s > 0.0) & (s < D4{} + INFINITY);  // s > 0 and finite
+        const D4 inv = 1.0 / s;
+        D4 p[4], run[5];
+        run[0] = lov;
+        for (int j = 0; j < 4; ++j) {
+            p[j] = ok ? tj[j] * inv : D4{} + pe[j];
+            run[j + 1] = run[j] + wv * p[j];
+        }
+        L4 last = L4{}, first = L4{} + 4;
+        for (int j = 0; j < 4; ++j) last = p[j] > 0.0 ? L4{} + j : last;
+        for (int j = 3; j >= 0; --j) first = (p[j] > 0.0) & (uv < run[j + 1]) ? L4{} + j : first;
+        const L4 k = first < 4 ? first : last;
+        D4 nlo = run[0], pk = p[0];
+        for (int j = 1; j < 4; ++j) {
+            nlo = k == j ? run[j] : nlo;
+            pk = k == j ? p[j] : pk;
+        }
+        wv *= pk;
+        std::memcpy(lo + i, &nlo, sizeof(D4));
+        std::memcpy(w + i, &wv, sizeof(D4));
+        for (int a = 0; a < 4; ++a) pick[i + size_t(a)] = uint8_t(k[a]);
+    }
+    for (; i < m; ++i) {  // the last 1-3 as probs_of and pick_of
+        double s = 0.0;
+        for (int j = 0; j < 4; ++j) s += t[j][i];
+        double p[4];
+        const bool ok = s > 0.0 && std::isfinite(s);
+        const double inv = 1.0 / s;
+        for (int j = 0; j < 4; ++j) p[j] = ok ? t[j][i] * inv : pe[j];
+        double run[5];
+        run[0] = lo[i];
+        for (int j = 0; j < 4; ++j) run[j + 1] = run[j] + w[i] * p[j];
+        unsigned possible = 0, below = 0;
+        for (int j = 0; j < 4; ++j) {
+            possible |= unsigned(p[j] > 0.0) << j;
+            below |= unsigned(u[i] < run[j + 1]) << j;
+        }
+        const int last = possible ? 31 - __builtin_clz(possible) : 0;
+        const int first = __builtin_ctz((possible & below) | 16u);
+        const int k = first < 4 ? first : last;
+        lo[i] = run[k];
+        w[i] *= p[k];
+        pick[i] = uint8_t(k);
+    }
+}
+
+#define DACRT_PICK_ISA(NAME, TARGET)                                                                       \
+    TARGET void NAME##_pick_rows(TargetRows t, const double pe[4], const double* u, double* lo, double* w, \
+                                 size_t m, uint8_t* pick) {                                                \
+        pick_rows(t, pe, u, lo, w, m, pick);                                                               \
+    }
+DACRT_PICK_ISA(portable, )
+DACRT_PICK_ISA(avx2, __attribute__((target("avx2,fma,bmi,bmi2"))))
+DACRT_PICK_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl,avx512dq,avx512bw,avx512cd"))))
+
+}  // namespace
 
 // Point i's eight importances at stop q from its row weighs (an empty lane 0.0), and which of
 // its fours have a distance out of float's range (bit 0: lanes 0-3, bit 1: 4-7; an empty lane
@@ -676,22 +765,14 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
         }
         for (size_t i = 0; i < m; ++i) {
             const int32_t id = r.ids[b + i];
-            const double t0 = r.t[0][i], t1 = r.t[1][i], t2 = r.t[2][i], t3 = r.t[3][i];
-            double s = 0.0;
-            s += t0;
-            s += t1;
-            s += t2;
-            s += t3;
-            double p[4];
-            if (s > 0.0 && std::isfinite(s)) {
-                const double inv = 1.0 / s;
-                p[0] = t0 * inv, p[1] = t1 * inv, p[2] = t2 * inv, p[3] = t3 * inv;
-            } else {
-                p[0] = pe[0], p[1] = pe[1], p[2] = pe[2], p[3] = pe[3];
-            }
-            const int j = pick_of(p, r.u[id], r.lo[id], r.w[id]);
-            r.pick[i] = uint8_t(j);
-            ++count[j];
+            r.su[i] = r.u[id], r.slo[i] = r.lo[id], r.sw[i] = r.w[id];
+        }
+        static const PickRowsFn pick = lane_copy<PickRowsFn>(portable_pick_rows, avx2_pick_rows, avx512_pick_rows);
+        pick(r.t, pe, r.su, r.slo, r.sw, m, r.pick);
+        for (size_t i = 0; i < m; ++i) {
+            const int32_t id = r.ids[b + i];
+            r.lo[id] = r.slo[i], r.w[id] = r.sw[i];
+            ++count[r.pick[i]];
         }
     }
     size_t start[5] = {0};
