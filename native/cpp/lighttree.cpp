@@ -690,11 +690,40 @@ inline int lane_imps(const LightTree::Stop& q, const LightTree::Rows& r, size_t 
     return bad;
 }
 
+// The walks of r.ids[b, e), all at stop node `at`, each on its own to its leaf as sample() walks
+// (the same bits: test_light_tree_lanes). walk_rows hands a stop's walks here when fewer than
+// kRowsFrom reach it: its rows are weighed 16 points at a time per filled lane, so a stop of 1-3
+// points weighed as many lanes as 16 (300- to 3000-light trees, whose deeper stops split a
+// chunk into such batches: tree.sample 449-514 -> 353-365 ns a point with 3000 lights).
+void LightTree::walk_each(const Rows& r, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const {
+    for (size_t i = b; i < e; ++i) {
+        const size_t id = size_t(r.ids[i]), o = r.base + id;
+        const float* t = r.pt[id];
+        TreePoint point;
+        tree_point(point, t, r.normal ? t + 3 : nullptr);
+        const uint64_t rec = r.receivers ? r.receivers[o] : kAllSets;
+        const double u = r.u[id];
+        double lo = r.lo[id], w = r.w[id];
+        size_t s = at;
+        while (nodes_[s].child >= 0) {
+            double p[4];
+            probs_at(s, point, rec, p);
+            s = step(s, p, u, lo, w);
+        }
+        key[o] = leaf_pick(s, u, lo, w, prob[o]);
+    }
+}
+
 // The walks of r.ids[b, e), all at stop node `at`: their lanes weighed row by row, each walk's
 // step (probs_of, step: sample()'s), then on by target, stop by stop, to their leaves.
 void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const {
     static const LaneRowsFn weigh_rows = lane_rows_fn();
+    constexpr size_t kRowsFrom = 4;
     const size_t qi = size_t(stop_of_[at]), m = e - b;
+    if (m < kRowsFrom) {
+        walk_each(r, at, b, e, key, prob);
+        return;
+    }
     const Stop& q = stops_[qi];
     for (size_t i = 0; i < m; ++i) {
         const float* t = r.pt[r.ids[b + i]];
