@@ -18,6 +18,8 @@ node or socket they hold.
 
 from __future__ import annotations
 
+from .linkindex import first_link, indexed_links
+
 MAX_HOPS = 256      # reroutes and group boundaries followed before a chain counts as unreadable
 FOLD_DEPTH = 150    # chained Math / Mix nodes folded back from one input (Python's stack)
 
@@ -161,7 +163,7 @@ def source(socket):
     for _ in range(MAX_HOPS):
         if not sock.is_linked:
             return None, carrier
-        link = sock.links[0]
+        link = first_link(sock)
         if link.is_muted or not link.is_valid:
             return None, carrier
         node = link.from_node
@@ -415,6 +417,11 @@ def used_outputs(ntree):
     nothing, a Mix factor of a Mix that folds to its A) counts as unlinked. Used.reads also
     answers for a node identical to a used one: Cycles merges identical nodes first, so an
     output of one is used where that of a node identical to it is."""
+    with indexed_links():
+        return _used_outputs(ntree)
+
+
+def _used_outputs(ntree):
     out = output_node(ntree)
     folder = Folder()
     used, seen = Used(), set()
@@ -938,7 +945,7 @@ def cut_off(socket):
     for _ in range(MAX_HOPS):
         if not sock.is_linked:
             return None
-        link = sock.links[0]
+        link = first_link(sock)
         if link.is_muted or not link.is_valid:
             return 'a muted link' if link.is_muted else 'an invalid link'
         node = link.from_node
