@@ -417,7 +417,10 @@ def _baked(sockets, strength, what, reasons, sides=None, view=None):
             img = img + w * side(coords)
     img = img.reshape(height, PROCEDURAL_WIDTH, 3)
     img = np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0)
-    sources = ', '.join(dict.fromkeys(str(src) for _, _, src in chains + side_chains))
+    sources = ', '.join(dict.fromkeys(str(src) for _, _, src in chains + side_chains if src))
+    if not sources:             # (a chain of coordinates alone reads no texture: name its nodes)
+        linked = [s for s, _ in sockets] + [s for side in sides or () if side for s, _ in side]
+        sources = ', '.join(dict.fromkeys(_feeding_name(s) for s in linked if _feeding_name(s)))
     if (img < 0).any():         # (no negative light: the environment adds light only)
         reasons.append(f"{what} from {sources} below 0 in places: read as 0 there")
         img = np.maximum(img, 0.0)
@@ -470,6 +473,17 @@ def _mirror_ball_map(texels, interp, width=PROCEDURAL_WIDTH):
     out = np.ones((width // 2, width, 4), np.float32)
     out[..., :3] = np.maximum(np.nan_to_num(rgb, nan=0.0, posinf=0.0, neginf=0.0), 0.0).reshape(width // 2, width, 3)
     return out
+
+
+def _feeding_name(socket):
+    """'Math' (or "'Math' in 'G'" inside groups): the node computing a socket's value, or None."""
+    link, _ = nodegraph.source(socket)
+    if link is None:
+        return None
+    node = link.from_node
+    groups = getattr(node, 'groups', ())
+    where = f" in '{' > '.join(g.name for g in groups)}'" if groups else ""
+    return f"'{node.name}'{where}"
 
 
 def _side_value(side, notes):
