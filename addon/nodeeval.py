@@ -688,17 +688,24 @@ def constant_value(socket, notes=None, why=None):
     return (0.0 if v != v else v), exact
 
 
-def nan_inputs(ntree, types=None, keep=None):
+def nan_inputs(ntree, types=None, keep=None, colors=False):
     """'input' of 'node' for each unlinked float input of ntree's nodes whose value is NaN
     (a script's or driver's), which constant_value reads as 0; types: only nodes of those
-    types (a set of node.type), or None for all; keep: only nodes it returns true for."""
+    types (a set of node.type), or None for all; keep: only nodes it returns true for;
+    colors: also colour and vector inputs with a NaN among their first three components."""
     found = []
     for node in getattr(ntree, 'nodes', ()):
         if (types is not None and node.type not in types) or (keep is not None and not keep(node)):
             continue
         for sock in node.inputs:
             v = getattr(sock, 'default_value', None)
-            if isinstance(v, float) and v != v and not sock.is_linked:
+            if isinstance(v, float):
+                bad = v != v
+            elif colors and getattr(sock, 'type', None) in ('RGBA', 'VECTOR'):
+                bad = any(x != x for x in v[:3])
+            else:
+                continue
+            if bad and not sock.is_linked:
                 found.append(f"'{sock.name}' of '{node.name}'")
     return found
 

@@ -475,10 +475,12 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             unlike = _nan_unlike_cycles(ntree, rendered, nans)
             apart = [b for bad, _ in unlike for b in bad]
             through = _nan_inputs_named(ntree, NAN_COMPUTED, rendered) + _grouped_named(nans, NAN_COMPUTED)
-            in_shaders = [g.label for g in nans
-                          if nodeeval.node_inputs(g.node) is None and g.node.type not in PROCEDURAL_TYPES]
+            # (a shader's NaN colour or vector too: Cycles 5.0.1 reads the NaN channel as 0 in a
+            # Diffuse's, Principled's or Glossy's Color, as DACRT does, where it had gone unnamed)
+            in_shaders = [g.label for g in grouped if np.isnan(g.value).any()
+                          and nodeeval.node_inputs(g.node) is None and g.node.type not in PROCEDURAL_TYPES]
             in_computed = [g.label for g in nans if nodeeval.node_inputs(g.node) is not None]
-            for bad, said in (([b for b in nan_inputs(ntree, shader, rendered) + in_shaders
+            for bad, said in (([b for b in nan_inputs(ntree, shader, rendered, colors=True) + in_shaders
                                 if b not in apart and b not in through],
                                "NaN read as 0 (as Cycles clamps it) for {}"),
                               *((bad, f"NaN read as 0 for {{}}, where Cycles renders it {what}, not as 0")
