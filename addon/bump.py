@@ -59,13 +59,22 @@ def tap_frame(ng):
     return t, np.cross(n, t, axis=0)
 
 
-def bend(N, e1, e2, dh_du, dh_dv, distance, strength, scale=None):
+# float32's largest: Cycles' len() of a vector whose squared length passes it is inf
+FLT_MAX = 3.4028234663852886e38
+
+
+def bend(N, e1, e2, dh_du, dh_dv, distance, strength, scale=None, area=None):
     """Normals (3, k) float32 bent by a height: N (3, k) unit, e1 and e2 (3, k) the surface's
     derivatives dP/du and dP/dv at the points, dh_du and dh_dv (k,) the height's; distance and
     strength (k,) the Bump's (distance negative under Invert; strength clamped at 0, as Cycles
     does); scale (k,) or None: a factor on the height (Bump.object_height's |M^T N|).
     N' = normalize(N - distance g), then normalize(strength N' + (1 - strength) N) (Cycles keeps
-    N where N' is zero)."""
+    N where N' is zero). area (k,) or None: the Filter Width times the squared pixel footprint,
+    with which Cycles' float32 vector before N' (svm_node_set_bump's BUMP_DX absdet N - scale
+    surfgrad) is |det| area (N - distance g): where its squared length overflows float32 (a
+    Distance of 1e22 or more at a pixel's footprint), its safe_normalize gives 0 and Cycles
+    keeps N (measured 0.6405 at 1e24, unbumped, where the float64 bend had rendered the bump,
+    0.09)."""
     N, e1, e2 = (np.asarray(x, np.float64) for x in (N, e1, e2))
     rx, ry = np.cross(e2, N, axis=0), np.cross(N, e1, axis=0)
     det = (e1 * rx).sum(axis=0)
@@ -75,9 +84,19 @@ def bend(N, e1, e2, dh_du, dh_dv, distance, strength, scale=None):
     g = np.where(ok & np.isfinite(g).all(axis=0), g, 0.0)
     if scale is not None:
         g = g * np.asarray(scale, np.float64)
-    out = unit(N - np.asarray(distance, np.float64) * g, N)
+    bent = N - np.asarray(distance, np.float64) * g
+    out = unit(bent, N)
+    if area is not None:
+        with np.errstate(over='ignore', invalid='ignore'):
+            a = bent * (np.abs(det) * np.asarray(area, np.float64))
+            out = np.where(((a * a).sum(axis=0) > FLT_MAX)[None], N, out)
     s = np.maximum(np.asarray(strength, np.float64), 0.0)
-    out = unit(s * out + (1.0 - s) * N, N)
+    blend = s * out + (1.0 - s) * N
+    out = unit(blend, N)
+    # (a Strength near float32's largest: Cycles' normalize of the blend divides by an inf
+    # length, a zero normal the closure replaces by N (measured 0.6405, unbumped; DACRT had
+    # normalized it in float64, black)
+    out = np.where(((blend * blend).sum(axis=0) > FLT_MAX)[None], N, out)
     return out.astype(F32)
 
 

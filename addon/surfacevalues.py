@@ -163,7 +163,9 @@ class SurfaceValues:
         share = b.filter_width
         if not share > 0:                # Cycles' taps at the point itself: no gradient
             return np.asarray(N, F32)
-        step = bumpmap.step_lengths(self._footprint(g[0:3] + e1 * u64 + e2 * v64), self._bump_extent, share)
+        footprint = self._footprint(g[0:3] + e1 * u64 + e2 * v64)
+        step = bumpmap.step_lengths(footprint, self._bump_extent, share)
+        area = share * np.asarray(footprint, np.float64) ** 2      # (Cycles' BUMP_DX |det|: bump.bend)
         # the taps along Cycles' frame of the geometric normal on the ray's side (bump.tap_frame),
         # each as the barycentric move that makes it: e1 du + e2 dv = step x T (or B)
         T, B = bumpmap.tap_frame(np.where(behind, -g[9:12], g[9:12]))
@@ -199,16 +201,16 @@ class SurfaceValues:
         if (b.object_height or b.object_space) and self.tri.tangent_xf is not None:
             M = np.take(self.tri.tangent_xf, np.take(self.tri.instance, prim), axis=0).astype(np.float64)
         if M is None:
-            return bumpmap.bend(N, e1, e2, dh_du, dh_dv, values[2], values[1])
+            return bumpmap.bend(N, e1, e2, dh_du, dh_dv, values[2], values[1], area=area)
         N64 = np.asarray(N, np.float64)
         MtN = np.einsum('kji,jk->ik', M, N64)                    # M^T N: N in object space
         # (an object-space Displacement's length along N: |M^T N| x (h - mid) x scale)
         factor = np.sqrt((MtN * MtN).sum(axis=0)) if b.object_height else None
         if not b.object_space:
-            return bumpmap.bend(N, e1, e2, dh_du, dh_dv, values[2], values[1], factor)
+            return bumpmap.bend(N, e1, e2, dh_du, dh_dv, values[2], values[1], factor, area=area)
         Minv = np.linalg.inv(M)
         bent = bumpmap.bend(bumpmap.unit(MtN), np.einsum('kij,jk->ik', Minv, e1), np.einsum('kij,jk->ik', Minv, e2),
-                            dh_du, dh_dv, values[2], values[1], factor)
+                            dh_du, dh_dv, values[2], values[1], factor, area=area)
         return bumpmap.unit(np.einsum('kji,jk->ik', Minv, bent.astype(np.float64)), N64).astype(F32)
 
     def _footprint(self, P):
