@@ -293,17 +293,22 @@ def varies_per_point(socket):
 
 
 def _reaches_procedural(socket, seen, types=PROCEDURAL_TYPES):
-    link, _ = nodegraph.source(socket)
-    if link is None:
-        return False
-    node = link.from_node
-    if node.type in types:
-        return True
-    key = nodegraph.output_key(node, None)     # (with its group path: a group used twice differs)
-    if key in seen:                  # (a node feeding several inputs is walked once)
-        return False
-    seen.add(key)
-    return any(_reaches_procedural(s, seen, types) for s in node.inputs if s.enabled)
+    # (a loop, not recursion: a chain of 800 Math nodes had passed Python's recursion limit,
+    # and the render failed)
+    todo = [socket]
+    while todo:
+        link, _ = nodegraph.source(todo.pop())
+        if link is None:
+            continue
+        node = link.from_node
+        if node.type in types:
+            return True
+        key = nodegraph.output_key(node, None)     # (with its group path: a group used twice differs)
+        if key in seen:              # (a node feeding several inputs is walked once)
+            continue
+        seen.add(key)
+        todo.extend(s for s in node.inputs if s.enabled)
+    return False
 
 
 def _socket(socket, color, chain, depth):

@@ -1,0 +1,28 @@
+"""A material whose colour comes through a very long node chain (800 Math nodes after a Checker)
+renders, saying what it does not read: the walk asking whether a procedural texture feeds an
+input recursed once per node and passed Python's recursion limit, and the render failed
+("maximum recursion depth exceeded")."""
+import numpy as np
+
+from . import scenes
+
+
+def test_an_800_node_chain_from_a_texture_renders_and_is_said(scene, said):
+    scene.render.resolution_x, scene.render.resolution_y = 4, 3
+    scene.dacrt.samples = 1
+    scenes.camera((0, 0, 3))
+    scenes.world((1.0, 1.0, 1.0))
+    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
+    nt = mat.node_tree
+    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    prev = nt.nodes.new('ShaderNodeTexChecker').outputs['Fac']
+    for _ in range(800):
+        m = nt.nodes.new('ShaderNodeMath')
+        m.operation = 'MULTIPLY_ADD'
+        nt.links.new(prev, m.inputs[0])
+        prev = m.outputs[0]
+    nt.links.new(prev, d.inputs['Color'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    img = scenes.render_rgba(scene)
+    assert np.isfinite(img).all() and img[..., :3].mean() > 0.1
+    assert "procedural texture not evaluated per point" in " | ".join(said)
