@@ -197,6 +197,10 @@ def summarise(records: list[dict], refs: dict) -> dict:
                 e_m, e_sd = errorstats.mean_sd([r["relmse"] for r in rs])
                 pt = dict(samples=spp, seeds=len(rs), seconds=t_m, seconds_sd=t_sd, relmse=e_m,
                           relmse_sd=e_sd, efficiency=errorstats.efficiency(e_m, t_m))
+                others = [r["others_cpu_seconds"] for r in rs if r.get("others_cpu_seconds") is not None]
+                if others and t_m > 0:
+                    # cores other processes held on average while this point rendered
+                    pt["others_cores"] = float(np.mean(others)) / t_m
                 if "breakdown" in rs[0]:
                     parts = [split_wall(r["breakdown"]) for r in rs]
                     pt["breakdown"] = {k: float(np.mean([p[k] for p in parts])) for k in parts[0]}

@@ -68,6 +68,41 @@ def _save_exr(scene, path):
             os.remove(f)
 
 
+def _machine_busy_seconds():
+    """CPU seconds every process on the machine has run so far (/proc/stat's first line: all
+    but idle and iowait; guest time is inside user), or None where /proc/stat is not there."""
+    try:
+        with open("/proc/stat") as f:
+            fields = f.readline().split()
+        user, nice, system, idle, iowait, irq, softirq, steal = (int(x) for x in fields[1:9])
+    except (OSError, ValueError):
+        return None
+    return (user + nice + system + irq + softirq + steal) / os.sysconf("SC_CLK_TCK")
+
+
+class Clocks:
+    """A timed render's wall seconds, this process's CPU seconds, and the CPU seconds the rest
+    of the machine used meanwhile (others_cpu_seconds, None without /proc/stat; the kernel's
+    tick, 10 ms, is its resolution). The wall time is what errortime compares; the other two
+    tell whether other processes shared the cores: a render's 2-thread tracer calls wait for a
+    thread that another process holds, so its wall time grows with no change in the render's
+    work (errortime's Cornell at 4-64 spp: 1.5x the wall time of another run of the same code,
+    its tracer's thread-seconds equal to its wall seconds where they were 1.6x elsewhere)."""
+
+    def __enter__(self):
+        self._busy0 = _machine_busy_seconds()
+        self._cpu0 = time.process_time()
+        self._t0 = time.perf_counter()
+        return self
+
+    def __exit__(self, *exc):
+        self.wall = time.perf_counter() - self._t0
+        self.cpu = time.process_time() - self._cpu0
+        busy = _machine_busy_seconds()
+        self.others = (None if busy is None or self._busy0 is None
+                       else max(0.0, busy - self._busy0 - self.cpu))
+
+
 def _spec(d: dict) -> renderscenes.RenderSpec:
     d = dict(d)
     d["resolution"] = tuple(d["resolution"])
@@ -120,15 +155,15 @@ def run(job: dict) -> None:
         with PeakMemory() as mem:
             if instrument is not None:
                 with instrument:
-                    t0 = time.perf_counter()
-                    bpy.ops.render.render()
-                    wall = time.perf_counter() - t0
+                    with Clocks() as clocks:
+                        bpy.ops.render.render()
             else:
-                t0 = time.perf_counter()
-                bpy.ops.render.render()
-                wall = time.perf_counter() - t0
+                with Clocks() as clocks:
+                    bpy.ops.render.render()
+        wall = clocks.wall
         record = dict(index=i, engine=engine, scene=spec.name, samples=int(item["samples"]),
                       seed=int(item["seed"]), frame=item.get("frame"), seconds=wall,
+                      cpu_seconds=clocks.cpu, others_cpu_seconds=clocks.others,
                       frame_change_seconds=frame_s, scene_build_seconds=build_s,
                       resolution=list(spec.resolution), memory=mem.figures(), bounces=spec.bounces,
                       filter=[spec.filter_type, spec.filter_width])

@@ -191,7 +191,29 @@ def print_errortime(doc: dict) -> None:
         print("-" * len(head))
     print("time-to-equal-error ratio < 1: DACRT reaches that error sooner. Efficiency = "
           "1/(relMSE x seconds): higher is better, flat in spp when unbiased.")
+    shared = shared_points(doc)
+    if shared:
+        print(f"note: other processes held cores while these points rendered (their wall times "
+              f"and the ratios from them are not this machine's idle speed): "
+              + ", ".join(f"{n} {_LABEL[e]} {spp} spp ({c:.2f} cores)" for n, e, spp, c in shared))
     _print_breakdown(doc)
+
+
+# a point rendered while other processes held at least this many cores on average
+SHARED_CORES = 0.25
+
+
+def shared_points(doc: dict) -> list:
+    """(scene, engine, spp, cores) of the points during which other processes held at least
+    SHARED_CORES cores on average (renderworker's others_cpu_seconds over the wall seconds): a
+    2-thread render waits at its tracer's joins for a core another process holds."""
+    out = []
+    for name, sc in doc["summary"].items():
+        for engine in ("CYCLES", "DACRT", "DACRT_ADAPTIVE"):
+            for p in sc.get(engine, {}).get("points", ()):
+                if p.get("others_cores", 0.0) >= SHARED_CORES:
+                    out.append((name, engine, p["samples"], p["others_cores"]))
+    return out
 
 
 def _print_breakdown(doc: dict) -> None:
@@ -239,7 +261,9 @@ def errortime_markdown(doc: dict) -> str:
             f"({doc['machine']['cores']} cores, load average {doc['machine']['load_avg_start']:.1f}); "
             f"relMSE against Cycles {s['ref_samples']} spp x {s['ref_seeds']} seeds, "
             f"{s['seeds']} seeds per point, wall seconds of the whole render (export included). "
-            f"`*` = extrapolated with relMSE ~ 1/t.\n\n" + table)
+            f"`*` = extrapolated with relMSE ~ 1/t." + "".join(
+                f" Other processes held {c:.2f} cores on average during {n} {_LABEL[e]} {spp} spp."
+                for n, e, spp, c in shared_points(doc)) + "\n\n" + table)
 
 
 # --------------------------------------------------------------------------- partition tuning
