@@ -1020,6 +1020,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             emit = hit
             if self._any_transparent:       # (their emission counted before the pass-or-stop pick)
                 emit = hit & ~np.take(self._tri_transparent, np.maximum(prim, 0))
+                if path.emitted is not None:    # (counted at the transparent roulette)
+                    emit &= ~path.emitted
             self._gather_emission(camera, emit, hits, path, sinks.found(k), k, sinks.groups)
         if k == K + 1:
             return None

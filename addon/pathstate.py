@@ -115,3 +115,5 @@ class Paths:
     # camera paths ended by Russian roulette at the surface they now hit, after transparent
     # passes (Transparency._transparent_roulette): neither a hit nor a miss (None: none)
     dead: np.ndarray | None = None
+    # camera paths whose current hit's emission was counted at that roulette (None: none)
+    emitted: np.ndarray | None = None

@@ -106,6 +106,8 @@ class Transparency:
                                   glass=self._glass_part(mat, tau, opacity)))
             if self._any_emissive:
                 self._emission_before_pick(camera, k, path, hits, rows, prim, opacity, sinks)
+                if path.emitted is not None:    # (counted at the roulette: once is enough)
+                    path.emitted[rows] = False
             t_mean = tau.mean(axis=0)
             if chain is not None and (self._albedo_varies or self.mats.translucency_textures):
                 # Cycles weighs the opaque closures by their colours at the point: a textured
@@ -181,38 +183,37 @@ class Transparency:
             hits[rows] = sub
             h = sub
             if camera:
-                kept = self._transparent_roulette(k, j, path, sub, rows)
+                kept = self._transparent_roulette(k, j, path, hits, sub, rows, sinks)
                 if kept is not None:
                     rows, h = rows[kept], h[kept]
                     D, keys, tmax = compact(kept, D, keys, tmax)
             j += 1
 
-    def _transparent_roulette(self, k, j, path, sub, rows):
-        """Cycles' Russian roulette at the surfaces camera paths rows now hit (sub, their hits)
-        after their j-th transparent pass (integrator_intersect_terminate): where the path has
-        passed more than min_transparent_bounces + 1 transparent surfaces, it goes on with
-        probability min(sqrt(max |throughput|), 1), its throughput divided by it, or ends there
-        unshaded: that surface and those behind write no passes (Normal, UV, AOVs, sample 0's
-        Depth: unweighted, so fewer samples write them, as in Cycles; Combined, alpha and the
-        weighted passes stay unbiased). Ended paths are marked in path.dead; returns the
+    def _transparent_roulette(self, k, j, path, hits, sub, rows, sinks):
+        """Cycles' Russian roulette at the surfaces camera paths rows now hit (sub, their hits;
+        hits: all paths') after their j-th transparent pass (integrator_intersect_terminate):
+        where the path has passed more than min_transparent_bounces + 1 transparent surfaces, it
+        goes on with probability min(sqrt(max |throughput|), 1), its throughput divided by it,
+        or ends there unshaded: that surface and those behind write no passes (Normal, UV, AOVs,
+        sample 0's Depth: unweighted, so fewer samples write them, as in Cycles; Combined, alpha
+        and the weighted passes stay unbiased). Ended paths are marked in path.dead; returns the
         positions in rows of those left (None: all of them).
-        Emissive and holdout surfaces are not rouletted (Cycles still adds such a surface's
-        emission and holdout before ending the path)."""
+        Emissive surfaces are rouletted too: Cycles shades them to add their emission at the
+        throughput before the division, then ends the path before its data passes
+        (shade_surface); here that emission is counted now (_emission_at_roulette). Holdout
+        surfaces are left to _vertex."""
         prim = sub['prim']
         sel = np.flatnonzero((np.take(path.tb, rows) > self._roulette_after) & (prim >= 0))
-        if not len(sel):
-            return None
-        p_sel = prim[sel]
-        keep = ~np.take(self.mats.emissive, np.take(self.tri.material, p_sel))
-        if self._any_holdout:
-            keep &= (np.take(self.tri.visibility, p_sel) & HOLDOUT) == 0
-        sel = sel[keep]
+        if self._any_holdout and len(sel):
+            sel = sel[(np.take(self.tri.visibility, prim[sel]) & HOLDOUT) == 0]
         if not len(sel):
             return None
         r = rows[sel]
         q = np.minimum(np.sqrt(np.abs(path.thr[:, r]).max(axis=0)), 1.0).astype(F32)
         u = self.rng.uniform2(np.take(path.keys, r, axis=1), DIM_ROULETTE + (k << 11) + j)[0]
         live = u < q
+        if self._any_emissive:
+            self._emission_at_roulette(k, path, hits, r, prim[sel], sinks)
         path.thr[:, r[live]] /= q[live]
         if live.all():
             return None
@@ -223,6 +224,28 @@ class Transparency:
         out = np.ones(len(rows), bool)
         out[sel[~live]] = False
         return np.flatnonzero(out)
+
+    def _emission_at_roulette(self, k, path, hits, rows, prim, sinks):
+        """The emission of the emissive surfaces (prim) that camera paths rows meet at the
+        transparent roulette, at the throughput before it (Cycles adds it in shade_surface
+        before ending or dividing: ended paths keep it), as the emission of a transparent surface
+        (x its opacity, _emission_before_pick) or of an opaque one (_vertex); those paths are
+        marked in path.emitted so that neither counts it again."""
+        e = np.flatnonzero(np.take(self.mats.emissive, np.take(self.tri.material, prim)))
+        if not len(e):
+            return
+        rows, prim = rows[e], prim[e]
+        opacity = np.ones(len(rows), F32)
+        t = np.flatnonzero(np.take(self._tri_transparent, prim))
+        if len(t):
+            h = hits[rows[t]]
+            D = np.take(path.D, rows[t], axis=1)
+            opacity[t] = self._transparency(prim[t], np.ascontiguousarray(h['u']), np.ascontiguousarray(h['v']),
+                                            None if not self._sided else self._back(prim[t], -D, -D))[1]
+        self._emission_before_pick(True, k, path, hits, rows, prim, opacity, sinks)
+        if path.emitted is None:
+            path.emitted = np.zeros(len(path.pid), bool)
+        path.emitted[rows] = True
 
     def _glass_roulette(self, k, path, hit, u):
         """Cycles' Russian roulette at vertex k (< ROULETTE_FROM) of the paths hit that passed
@@ -346,6 +369,8 @@ class Transparency:
         mask[rows] = True
         if camera and self._any_holdout:
             mask[rows] = (np.take(self.tri.visibility, prim) & HOLDOUT) == 0
+        if path.emitted is not None:            # (counted at the roulette)
+            mask &= ~path.emitted
         saved = path.thr
         if (opacity != 1.0).any():
             path.thr = saved.copy()
