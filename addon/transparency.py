@@ -200,12 +200,19 @@ class Transparency:
         positions in rows of those left (None: all of them).
         Emissive surfaces are rouletted too: Cycles shades them to add their emission at the
         throughput before the division, then ends the path before its data passes
-        (shade_surface); here that emission is counted now (_emission_at_roulette). Holdout
-        surfaces are left to _vertex."""
+        (shade_surface); here that emission is counted now (_emission_at_roulette).
+        So are the opaque holdout surfaces without emission that _vertex holds out: Cycles ends
+        the path there unshaded, so it writes no holdout, and a path that goes on writes it at
+        the throughput before the division, its last use (integrate_surface_holdout): the
+        transparency behind them is q of the true one, as Cycles' (alpha 0.78 where 0.64 is the
+        unrouletted one behind a Transparent sphere of 0.6). The other holdout surfaces are
+        not rouletted (Cycles writes an emissive one's holdout before it ends the path)."""
         prim = sub['prim']
         sel = np.flatnonzero((np.take(path.tb, rows) > self._roulette_after) & (prim >= 0))
+        held = None
         if self._any_holdout and len(sel):
-            sel = sel[(np.take(self.tri.visibility, prim[sel]) & HOLDOUT) == 0]
+            held, keep = self._held_at_roulette(path, rows[sel], prim[sel])
+            sel, held = sel[keep], held[keep]
         if not len(sel):
             return None
         r = rows[sel]
@@ -214,7 +221,8 @@ class Transparency:
         live = u < q
         if self._any_emissive:
             self._emission_at_roulette(k, path, hits, r, prim[sel], sinks)
-        path.thr[:, r[live]] /= q[live]
+        div = live if held is None else live & ~held
+        path.thr[:, r[div]] /= q[div]
         if live.all():
             return None
         if path.dead is None:
@@ -224,6 +232,18 @@ class Transparency:
         out = np.ones(len(rows), bool)
         out[sel[~live]] = False
         return np.flatnonzero(out)
+
+    def _held_at_roulette(self, path, rows, prim):
+        """At the hits prim of camera paths rows on the transparent roulette: (held, keep), bool
+        per hit: held, the opaque holdout surfaces without emission that _vertex will hold out
+        (not after glass nor past Transparent Max Bounces); keep, the hits rouletted (these and
+        those not on holdout surfaces)."""
+        ho = (np.take(self.tri.visibility, prim) & HOLDOUT) != 0
+        held = ho & ~np.take(self._tri_transparent, prim) & ~np.take(self.mats.emissive, np.take(self.tri.material, prim))
+        held &= np.take(path.tb, rows) < self._transparent_stop
+        if path.transmit is not None:
+            held &= ~np.take(path.transmit, rows)
+        return held, ~ho | held
 
     def _emission_at_roulette(self, k, path, hits, rows, prim, sinks):
         """The emission of the emissive surfaces (prim) that camera paths rows meet at the

@@ -1,10 +1,14 @@
-"""Cycles' transparent roulette (integrator_intersect_terminate) at emissive surfaces: a camera
+"""Cycles' transparent roulette (integrator_intersect_terminate) at emissive and holdout surfaces: a camera
 path that meets an emitter after more than min_transparent_bounces + 1 transparent passes is
 rouletted there too. shade_surface adds the emission at the throughput before the roulette, then
 ends the path before film_write_data_passes, so fewer samples write Normal there (unweighted);
 Combined stays unbiased. DACRT had skipped emissive surfaces: an emissive floor seen through a
 Transparent BSDF sphere of colour 0.6 had Normal Z 1.0 where Cycles' is 0.6 = sqrt(0.6^2), the
-continuation probability (fuzz 9481: 1.0 against 0.953)."""
+continuation probability (fuzz 9481: 1.0 against 0.953).
+A holdout surface without emission is rouletted too, and ended unshaded: it writes no holdout,
+and a path that goes on writes it at the throughput before the division (integrate_surface_holdout
+runs before integrate_surface_terminate), so Cycles' transparency behind it is q of the true one:
+alpha 0.784 = 1 - 0.6 x 0.36 where DACRT had 0.64; an emissive one is shaded either way."""
 import bpy
 import numpy as np
 import pytest
@@ -16,21 +20,25 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 GREY = 0.6            # the sphere's Transparent colour: throughput 0.36 past both its sides
 
 
-def _scene(min_transparent, emitter_fac):
+def _scene(min_transparent, emitter_fac, holdout=False):
     """An emissive floor (strength 2) under a Transparent BSDF ico sphere, seen from above
     (orthographic), black world; emitter_fac: None for a plain Emission floor, else the factor
-    of a Mix Shader of Emission and Transparent BSDF (the floor transparent itself)."""
+    of a Mix Shader of Emission and Transparent BSDF (the floor transparent itself), or 'diffuse'
+    (a grey Diffuse floor); holdout: the floor a holdout object, the film transparent."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, 0, 8), kind='ORTHO', ortho_scale=6.0)
     if emitter_fac is None:
         floor = scenes.emission('Floor', (1.0, 1.0, 1.0), 2.0)
+    elif emitter_fac == 'diffuse':
+        floor = scenes.diffuse('Floor', (0.8, 0.8, 0.8))
     else:
         floor, nt, mix, a, b = scenes.mix_shader_material('Floor', 'ShaderNodeEmission', 'ShaderNodeBsdfTransparent',
                                                           emitter_fac)
         a.inputs['Strength'].default_value = 2.0
-    scenes.plane('Floor', size=10.0, materials=[floor])
+    scenes.plane('Floor', size=10.0, materials=[floor]).is_holdout = holdout
+    sc.render.film_transparent = holdout
     mat, nt, out = scenes._material('Glassy')
     node = nt.nodes.new('ShaderNodeBsdfTransparent')
     node.inputs['Color'].default_value = (GREY, GREY, GREY, 1.0)
@@ -66,3 +74,21 @@ def test_transparent_roulette_at_emitters_matches_cycles(min_transparent, emitte
         a, b = float(c[f'{name}.{key}'][mid].mean()), float(d[f'{name}.{key}'][mid].mean())
         assert a == pytest.approx(emit, rel=0.03), (key, a)
         assert b == pytest.approx(a, rel=0.03), (key, a, b)
+
+
+@pytest.mark.parametrize('min_transparent, emitter_fac, alpha', [(0, 'diffuse', 1.0 - GREY ** 3),
+                                                                 (1, 'diffuse', 1.0 - GREY ** 2),
+                                                                 (0, None, 1.0 - GREY ** 2)])
+def test_transparent_roulette_at_holdouts_matches_cycles(min_transparent, emitter_fac, alpha, tmp_path):
+    """A holdout floor seen through the sphere, transparent film: alpha over the sphere's middle
+    near Cycles' closed form (1 - q x 0.36 with the roulette's survival q = 0.6 at a holdout
+    without emission; 1 - 0.36 without the roulette (min_transparent_bounces 1) or at an
+    emissive one) and within 0.015 of Cycles'; Combined black."""
+    sc = _scene(min_transparent, emitter_fac, holdout=True)
+    out = scenes.render_engines(sc, tmp_path)
+    name = sc.view_layers[0].name
+    mid = (slice(9, 15), slice(13, 19))
+    a = {e: float(v[f'{name}.Combined.A'][mid].mean()) for e, v in out.items()}
+    assert a['CYCLES'] == pytest.approx(alpha, abs=0.015), a
+    assert a['DACRT'] == pytest.approx(a['CYCLES'], abs=0.015), a
+    assert float(out['DACRT'][f'{name}.Combined.R'][mid].max()) == 0.0
