@@ -968,6 +968,22 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self.film.add_samples(film_pix, rgba.reshape(shape), {k: v.reshape(shape) for k, v in data.items()},
                               first_sample=s0)
 
+    def _passes_before_limit(self, path, hits, hit, data, pix, samp, chain, held):
+        """_write_passes at camera vertex 0, but not at the surfaces paths meet after Transparent
+        Max Bounces passes: Cycles marks them PATH_RAY_TERMINATE_ON_NEXT_SURFACE, and
+        shade_surface ends them before film_write_data_passes (behind a Transparent sphere at
+        Max 2 the floor's Normal had been written, 0.60 where Cycles' is 0); they are passed over
+        as the roulette's ended paths are (path.dead), neither a hit nor the background."""
+        spent = None if path.tb is None else hit & (path.tb >= self._transparent_stop)
+        if spent is None or not spent.any():
+            return self._write_passes(path, hits, hit, data, pix, samp, chain, held)
+        dead = path.dead
+        path.dead = spent if dead is None else dead | spent
+        try:
+            self._write_passes(path, hits, hit & ~spent, data, pix, samp, chain, held)
+        finally:
+            path.dead = dead
+
     def _vertex(self, k, path, sinks, alpha, data, pix, samp):
         """Trace path segment k (k = 0: camera rays), gather what it sees, shade vertex k:
         emission, Russian roulette, light sampling, BSDF sampling. Returns the paths that go on."""
@@ -1015,7 +1031,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
             if not self._all_opaque:
                 alpha[np.take(path.pid, np.flatnonzero(hit))] = 1.0
             if self._data_passes:
-                self._write_passes(path, hits, hit, data, pix, samp, chain, held)
+                self._passes_before_limit(path, hits, hit, data, pix, samp, chain, held)
         if self._any_emissive:
             emit = hit
             if self._any_transparent:       # (their emission counted before the pass-or-stop pick)

@@ -101,9 +101,16 @@ class Transparency:
             surface = None
             if chain is not None:                   # what the data passes read here, before the pick
                 surface = self._surface(h, None, D)
-                chain.append(dict(rows=rows, prim=prim, u=u_hit, v=v_hit, thr=thr[:, rows], tau=tau,
-                                  opacity=opacity, P=surface[0], ng=surface[1], ns=surface[2],
-                                  glass=self._glass_part(mat, tau, opacity)))
+                entry = dict(rows=rows, prim=prim, u=u_hit, v=v_hit, thr=thr[:, rows], tau=tau,
+                             opacity=opacity, P=surface[0], ng=surface[1], ns=surface[2],
+                             glass=self._glass_part(mat, tau, opacity))
+                # (none at a surface met after Transparent Max Bounces passes: Cycles ends the
+                # path there before its data passes, Integrator._passes_before_limit)
+                lim = tb >= self._transparent_stop
+                if lim.any():
+                    entry = {key: x[..., ~lim] for key, x in entry.items()}
+                if len(entry['rows']):
+                    chain.append(entry)
             if self._any_emissive:
                 self._emission_before_pick(camera, k, path, hits, rows, prim, opacity, sinks)
                 if path.emitted is not None:    # (counted at the roulette: once is enough)
