@@ -197,6 +197,24 @@ def diffuse(name, color, roughness=0.0):
     return mat
 
 
+def small_view(scene, size=(4, 3), samples=1, eye=(0, 0, 3), background=(1.0, 1.0, 1.0),
+               colour=(0.8, 0.8, 0.8)):
+    """A few pixels' view down onto the origin for message and bad-input tests, under a world of
+    colour `background` (None: black), with a Diffuse material "M" of `colour` for what the
+    caller adds: (material, node tree, its Diffuse node, its Material Output node)."""
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.dacrt.samples = samples
+    camera(eye)
+    if background is None:
+        black_world()
+    else:
+        world(background)
+    mat = diffuse("M", colour)
+    nt = mat.node_tree
+    return (mat, nt, next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE'),
+            next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL'))
+
+
 def as_colour(nt, socket):
     """The output socket of a Vector Math node in nt giving socket x 0.5 + 0.5 (a unit vector
     as a colour in 0..1)."""

@@ -13,6 +13,10 @@ from . import scenes
 NAN = float('nan')
 
 
+# (an 8x6, 2-sample view of what a test adds, under a grey world)
+_GREY_LIT = dict(size=(8, 6), samples=2, background=(0.5, 0.5, 0.5))
+
+
 def _plane_fed_by(scene, node_type, socket, value):
     """A sunlit plane whose Diffuse colour is a new node's Color output, its input `socket`
     set to value; returns (node, the render)."""
@@ -33,18 +37,6 @@ def _plane_fed_by(scene, node_type, socket, value):
     scenes.plane("Plane", size=10, materials=(mat,))
     img = scenes.render_rgba(scene)
     return n, img
-
-
-def _grey_lit_diffuse(scene, colour):
-    """An 8x6, 2-sample view from above of what the caller adds, under a grey world: a Diffuse
-    material of `colour` for it, returned with its node tree and its Diffuse node."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 2
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", colour)
-    nt = mat.node_tree
-    return mat, nt, next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
 
 
 def test_nan_color_ramp_factor_gives_the_last_stop(scene, said):
@@ -219,7 +211,7 @@ def test_clamp_node_with_a_nan_max_is_folded_only_when_constant(scene, linked):
     value folded (Cycles 0.3 on a 0.5-lit plane) and NaN (black) in the kernel, where the Value
     comes through a Math node adding 0.6 to the Object coordinates' Z (0 on the plane); DACRT had
     black for both."""
-    mat, nt, d = _grey_lit_diffuse(scene, (0.8, 0.8, 0.8))
+    mat, nt, d, _ = scenes.small_view(scene, **_GREY_LIT)
     c = nt.nodes.new('ShaderNodeClamp')
     c.inputs['Max'].default_value = NAN
     if linked:
@@ -307,7 +299,7 @@ def test_math_min_max_with_a_nan_as_cycles_kernel_and_blenders_folding(op, slot,
 
 def test_math_minimum_of_constants_with_a_nan_first_renders_black(scene):
     """The export tells the folded Minimum (NaN, 0.3) (black in Cycles) from the kernel's (0.3)."""
-    mat, nt, d = _grey_lit_diffuse(scene, (0.8, 0.8, 0.8))
+    mat, nt, d, _ = scenes.small_view(scene, **_GREY_LIT)
     m = nt.nodes.new('ShaderNodeMath')
     m.operation = 'MINIMUM'
     m.inputs[0].default_value, m.inputs[1].default_value = NAN, 0.3
@@ -333,14 +325,7 @@ def test_shader_input_nan_message_says_what_cycles_does(scene, said, node_type, 
     measured, Cycles reads all but five as 0: a Principled Hair BSDF's NaN Radial Roughness,
     Offset or Random Roughness renders black, a Glossy BSDF's NaN Anisotropy otherwise, and a
     Layer Weight's NaN Blend is computed (DACRT computes it too: the image matched)."""
-    scene.render.resolution_x, scene.render.resolution_y = 4, 3
-    scene.dacrt.samples = 1
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
-    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    mat, nt, d, out = scenes.small_view(scene, background=(0.5, 0.5, 0.5))
     n = d if node_type == 'ShaderNodeBsdfDiffuse' else nt.nodes.new(node_type)
     n.name = 'N'
     n.inputs[socket].default_value = NAN
@@ -382,7 +367,7 @@ def test_vector_math_with_a_nan_vector_as_cycles_kernel_and_blenders_folding(op,
 
 def test_vector_math_reflect_of_constants_on_a_nan_normal_keeps_the_vector(scene):
     """The export folds a constant Reflect as Blender does: a NaN Normal leaves the vector."""
-    mat, nt, d = _grey_lit_diffuse(scene, _A)
+    mat, nt, d, _ = scenes.small_view(scene, colour=_A, **_GREY_LIT)
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
     r = nt.nodes.new('ShaderNodeVectorMath')
@@ -427,7 +412,7 @@ def test_mix_clamped_nan_factor_gives_a_in_the_kernel(scene, data_type):
     0.5-lit plane, where the Factor comes through a Math node on the Object coordinates; the
     legacy MixRGB clamps its factor always) and NaN where Blender folds the node (black, as DACRT
     had it in both)."""
-    mat, nt, d = _grey_lit_diffuse(scene, (0.6, 0.6, 0.6))
+    mat, nt, d, _ = scenes.small_view(scene, colour=(0.6, 0.6, 0.6), **_GREY_LIT)
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
     if data_type == 'MIXRGB':
@@ -462,7 +447,7 @@ def test_float_curve_of_a_constant_beyond_its_range_is_the_clipped_line(scene, v
     in Cycles 5.0.1 on a curve (0.1, 0.15)-(0.9, 0.35) into a Diffuse Color; DACRT had read every
     such point as 0 (a three-point curve's steep end clips to 0 there, which had been taken for
     the rule)."""
-    mat, nt, d = _grey_lit_diffuse(scene, (want, want, want))
+    mat, nt, d, _ = scenes.small_view(scene, colour=(want, want, want), **_GREY_LIT)
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
     c = nt.nodes.new('ShaderNodeFloatCurve')
@@ -480,7 +465,7 @@ def test_float_curve_of_an_inf_typed_constant_is_the_clipped_end(scene):
     """'inf' typed into a Float Curve's Value (Blender stores float32's largest) folds to the
     clipped line, 1 for the default curve (Cycles 1.32 lit, as the colour 1): x + fac (y - x) had
     cancelled to 0 (black); Blender mixes as fac y + (1 - fac) x."""
-    mat, nt, d = _grey_lit_diffuse(scene, (1.0, 1.0, 1.0))
+    mat, nt, d, _ = scenes.small_view(scene, colour=(1.0, 1.0, 1.0), **_GREY_LIT)
     scenes.plane("Plane", size=10, materials=(mat,))
     plain = scenes.render_rgba(scene)[..., :3]
     c = nt.nodes.new('ShaderNodeFloatCurve')
@@ -498,7 +483,7 @@ def test_bump_nan_distance_is_said_black_in_cycles_where_it_bumps(scene, said, h
     bumped normal NaN; measured under a sun: 0 against DACRT's flat 0.64), which had been said
     'read as 0 (as Cycles clamps it)'; with a constant Height Cycles drops the Bump and both
     render the flat 0.64, so that is still said."""
-    mat, nt, d = _grey_lit_diffuse(scene, (0.8, 0.8, 0.8))
+    mat, nt, d, _ = scenes.small_view(scene, **_GREY_LIT)
     b = nt.nodes.new('ShaderNodeBump')
     b.inputs['Distance'].default_value = NAN
     if height_linked:

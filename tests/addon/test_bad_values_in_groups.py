@@ -33,14 +33,8 @@ def _group_node(nt, group, name):
 def _render(scene, build):
     """A 4x3, 1-sample view of a plane under a grey world whose Diffuse material's tree
     `build(tree, diffuse, output)` completes; the render's report texts are `said`."""
-    scene.render.resolution_x, scene.render.resolution_y = 4, 3
-    scene.dacrt.samples = 1
-    scenes.camera((0, 0, 3))
-    scenes.world((0.5, 0.5, 0.5))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    build(nt, next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE'),
-          next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL'))
+    mat, nt, d, out = scenes.small_view(scene, background=(0.5, 0.5, 0.5))
+    build(nt, d, out)
     scenes.plane("Plane", size=10, materials=(mat,))
     scenes.render_rgba(scene)
 

@@ -16,13 +16,7 @@ FLT_MAX = float(np.finfo(np.float32).max)
 def _emitting_plane(scene, node_type, settings, output):
     """A plane in a black world emitting (strength 1) a new node's `output`, its inputs set from
     settings; returns the render."""
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 2
-    scenes.black_world()
-    scenes.camera((0, 0, 5))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+    mat, nt, _, out = scenes.small_view(scene, size=(8, 6), samples=2, eye=(0, 0, 5), background=None)
     em = nt.nodes.new('ShaderNodeEmission')
     n = nt.nodes.new(node_type)
     for name, value in settings.items():

@@ -8,13 +8,7 @@ from . import scenes
 
 
 def test_an_800_node_chain_from_a_texture_renders_and_is_said(scene, said):
-    scene.render.resolution_x, scene.render.resolution_y = 4, 3
-    scene.dacrt.samples = 1
-    scenes.camera((0, 0, 3))
-    scenes.world((1.0, 1.0, 1.0))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    d = next(n for n in nt.nodes if n.type == 'BSDF_DIFFUSE')
+    mat, nt, d, _ = scenes.small_view(scene)
     prev = nt.nodes.new('ShaderNodeTexChecker').outputs['Fac']
     for _ in range(800):
         m = nt.nodes.new('ShaderNodeMath')

@@ -50,13 +50,7 @@ def _emit(scene, node_type, settings, nan_input, value, output, linked, props=No
     """The centre pixel of a plane emitting a new node's `output` (black world), its input
     `nan_input` set to value, or fed it through a kernel addition of a linked 0 (Object Z on the
     plane z = 0), so Blender cannot fold the node; setup(node) completes the node."""
-    scene.render.resolution_x, scene.render.resolution_y = 4, 3
-    scene.dacrt.samples = 1
-    scenes.black_world()
-    scenes.camera((0, 0, 5))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+    mat, nt, _, out = scenes.small_view(scene, eye=(0, 0, 5), background=None)
     em, n = nt.nodes.new('ShaderNodeEmission'), nt.nodes.new(node_type)
     for k, v in (props or {}).items():
         setattr(n, k, v)

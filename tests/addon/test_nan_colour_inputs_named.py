@@ -14,13 +14,7 @@ NAN = float('nan')
 
 
 def _render(scene, shader, name, value, grouped=False):
-    scene.render.resolution_x, scene.render.resolution_y = 4, 3
-    scene.dacrt.samples = 1
-    scenes.camera((0, 0, 3))
-    scenes.world((1.0, 1.0, 1.0))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+    mat, nt, _, out = scenes.small_view(scene)
     tree = nt
     if grouped:
         tree = bpy.data.node_groups.new('Shading', 'ShaderNodeTree')

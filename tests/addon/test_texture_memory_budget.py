@@ -17,13 +17,7 @@ def _emitting_image(scene, path):
     """An 8x6, 1-sample view of a plane emitting an Image Texture of the file at `path` (black
     world): each pixel is a texel's colour."""
     import bpy
-    scene.render.resolution_x, scene.render.resolution_y = 8, 6
-    scene.dacrt.samples = 1
-    scenes.black_world()
-    scenes.camera((0, 0, 5))
-    mat = scenes.diffuse("M", (0.8, 0.8, 0.8))
-    nt = mat.node_tree
-    out = next(n for n in nt.nodes if n.type == 'OUTPUT_MATERIAL')
+    mat, nt, _, out = scenes.small_view(scene, size=(8, 6), eye=(0, 0, 5), background=None)
     em, tex = nt.nodes.new('ShaderNodeEmission'), nt.nodes.new('ShaderNodeTexImage')
     tex.image = bpy.data.images.load(str(path))
     tex.image.name = 'Big'
