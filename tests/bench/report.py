@@ -193,8 +193,8 @@ def print_errortime(doc: dict) -> None:
           "1/(relMSE x seconds): higher is better, flat in spp when unbiased.")
     shared = shared_points(doc)
     if shared:
-        print(f"note: other processes held cores while these points rendered (their wall times "
-              f"and the ratios from them are not this machine's idle speed): "
+        print("note: other processes held cores while these points rendered (their wall times "
+              "and the ratios from them are not this machine's idle speed): "
               + ", ".join(f"{n} {_LABEL[e]} {spp} spp ({c:.2f} cores)" for n, e, spp, c in shared))
     _print_breakdown(doc)
 

@@ -4,7 +4,6 @@ float32's largest from a Distance of about 1e22-1e24 at a pixel's footprint, its
 gives 0 and Cycles keeps the normal unbent; a Strength of 3.4e38 overflows the length of the
 blend, a zero normal the closure replaces by N. DACRT bent in float64 and had rendered the bump
 (a Wave under a sun: mean 0.09 against Cycles' flat 0.64) and black for the Strength."""
-import numpy as np
 import pytest
 
 from .test_bump import _bumped, _compare, _plane_scene, _render, _wave

@@ -10,7 +10,6 @@ and a path that goes on writes it at the throughput before the division (integra
 runs before integrate_surface_terminate), so Cycles' transparency behind it is q of the true one:
 alpha 0.784 = 1 - 0.6 x 0.36 where DACRT had 0.64; an emissive one is shaded either way."""
 import bpy
-import numpy as np
 import pytest
 
 from tests.addon import scenes
