@@ -397,6 +397,10 @@ class Used(set):
         self.add(output_key(node, identifier))
         self._sources.append((node, identifier))
 
+    def nodes(self):
+        """The nodes of the used outputs, in the order they were found (once per output)."""
+        return [n for n, _ in self._sources]
+
     def reads(self, node, identifier):
         """Whether node's output is used: its own, or that of a node Cycles merges it with."""
         if output_key(node, identifier) in self:

@@ -33,7 +33,7 @@ def grouped_inputs(ntree, used):
     input of a node inside a group, or one linked (at any depth) to a Group node's unlinked
     input. Inputs whose own value is typed at the top level are left out (nodeeval.nan_inputs
     names them)."""
-    found, seen, nodes = [], set(), [n for n, _ in getattr(used, '_sources', ())]
+    found, seen, nodes = [], set(), used.nodes() if used is not None else []
     out = output_node(ntree) if ntree is not None else None
     if out is not None:
         nodes.append(out)
