@@ -135,6 +135,12 @@ def unwrap(x):
     return x
 
 
+def in_groups(groups):
+    """" in 'G > H'": where a wrapper's node sits inside (nested) groups, for messages; '' at the
+    top level."""
+    return f" in '{' > '.join(g.name for g in groups)}'" if groups else ""
+
+
 def output_node(ntree):
     """The output node Cycles renders: target CYCLES, else ALL."""
     return ntree.get_output_node('CYCLES') or ntree.get_output_node('ALL')

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..nodegraph import output_node, output_key, source, unwrap
+from ..nodegraph import in_groups, output_node, output_key, source, unwrap
 
 
 @dataclass(frozen=True)
@@ -23,8 +23,7 @@ class GroupedInput:
 
 def _label(carrier):
     sock = unwrap(carrier)
-    where = f" in '{' > '.join(g.name for g in carrier.groups)}'" if carrier.groups else ""
-    return f"'{sock.name}' of '{sock.node.name}'{where}"
+    return f"'{sock.name}' of '{sock.node.name}'{in_groups(carrier.groups)}"
 
 
 def grouped_inputs(ntree, used):

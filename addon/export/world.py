@@ -389,12 +389,7 @@ def _baked(sockets, strength, what, reasons, sides=None, view=None):
         except ValueError:
             return None
     height = PROCEDURAL_WIDTH // 2
-    # texel centres as skyanalytic.equirect lays them out (row 0 at the -Z pole)
-    theta = (1.0 - (np.arange(height) + 0.5) / height) * np.pi
-    phi = (0.5 - (np.arange(PROCEDURAL_WIDTH) + 0.5) / PROCEDURAL_WIDTH) * 2 * np.pi
-    st = np.sin(theta)[:, None]
-    dirs = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)[:, None]), axis=-1)
-    d = np.ascontiguousarray(dirs.reshape(-1, 3), np.float32)
+    d = np.ascontiguousarray(_equirect_directions().reshape(-1, 3), np.float32)
     coords = {kind: d for kind in (needs - frames) | {'generated'}}
     for kind in _AGAINST_VIEW:
         if kind in coords:
@@ -420,7 +415,7 @@ def _baked(sockets, strength, what, reasons, sides=None, view=None):
     sources = ', '.join(dict.fromkeys(str(src) for _, _, src in chains + side_chains if src))
     if not sources:             # (a chain of coordinates alone reads no texture: name its nodes)
         linked = [s for s, _ in sockets] + [s for side in sides or () if side for s, _ in side]
-        sources = ', '.join(dict.fromkeys(_feeding_name(s) for s in linked if _feeding_name(s)))
+        sources = ', '.join(dict.fromkeys(filter(None, map(_feeding_name, linked))))
     if (img < 0).any():         # (no negative light: the environment adds light only)
         reasons.append(f"{what} from {sources} below 0 in places: read as 0 there")
         img = np.maximum(img, 0.0)
@@ -481,9 +476,7 @@ def _feeding_name(socket):
     if link is None:
         return None
     node = link.from_node
-    groups = getattr(node, 'groups', ())
-    where = f" in '{' > '.join(g.name for g in groups)}'" if groups else ""
-    return f"'{node.name}'{where}"
+    return f"'{node.name}'{nodegraph.in_groups(getattr(node, 'groups', ()))}"
 
 
 def _side_value(side, notes):
