@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .floatnodes import cycles_clamp
+from .floatnodes import blender_clamp_f, cycles_clamp
 
 # Linear Rec.709 luminance: Cycles' colour -> float conversion (film rgb_to_y) in Blender's
 # default scene-linear space
@@ -159,10 +159,8 @@ def _bli_rgb_to_hsv(c):
 def _bli_hsv_to_rgb(hsv):
     """(..., 3) HSV -> RGB as Blender's BLI hsv_to_rgb computes it (its CLAMP keeps a NaN)."""
     h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
-
-    def clamp(x):
-        return np.where(x < 0.0, 0.0, np.where(x > 1.0, 1.0, x))
-    n = (clamp(np.abs(h * 6.0 - 3.0) - 1.0), clamp(2.0 - np.abs(h * 6.0 - 2.0)), clamp(2.0 - np.abs(h * 6.0 - 4.0)))
+    n = (blender_clamp_f(np.abs(h * 6.0 - 3.0) - 1.0, 0.0, 1.0), blender_clamp_f(2.0 - np.abs(h * 6.0 - 2.0), 0.0, 1.0),
+         blender_clamp_f(2.0 - np.abs(h * 6.0 - 4.0), 0.0, 1.0))
     return np.stack([((x - 1.0) * s + 1.0) * v for x in n], axis=-1)
 
 

@@ -356,7 +356,7 @@ def _clip_between(v, a, b):
     return np.clip(v, np.minimum(a, b), np.maximum(a, b)).reshape(shape)
 
 
-def _blender_clamp_f(v, lo, hi):
+def blender_clamp_f(v, lo, hi):
     """Blender's clamp_f (BLI), v < lo ? lo : (v > hi ? hi : v): a NaN v stays NaN, a NaN bound
     is passed over."""
     return np.where(v < lo, lo, np.where(v > hi, hi, v))
@@ -371,7 +371,7 @@ def clamp_range(v, a, b, folded=False):
     (v, a, b), shape, _ = _real(v, a, b)
     if folded:
         ordered = a < b
-        return _blender_clamp_f(v, np.where(ordered, a, b), np.where(ordered, b, a)).reshape(shape)
+        return blender_clamp_f(v, np.where(ordered, a, b), np.where(ordered, b, a)).reshape(shape)
     swap = a > b
     return cycles_clamp(v, np.where(swap, b, a), np.where(swap, a, b)).reshape(shape)
 
