@@ -327,15 +327,18 @@ class LightSetup:
         Cycles' (its light tree weighs the world per shading point): a Noise world beside one
         emissive cube, fuzz 1589, 1.08-1.09x Cycles in the bounce world's channels (1.04x without
         the light tree); 0.9997-0.9999x without the cube, and with the same world on both sides."""
-        lights = self.lights
-        if not self._bounce_worlds or lights.environment is None:
-            return
-        if lights.num_entries + len(lights.unseen_lamps) + len(lights.camera_lamps) < 2:
+        if not self._bounce_worlds or self.lights.environment is None or self._lights_chosen_among() < 2:
             return
         self.messages.append(('WARNING', "world approximated: diffuse bounces see another world than light samples "
                                          "(a Light Path mix), weighted against the world's light samples, whose "
                                          "share of the light choice beside the other lights is DACRT's, not "
                                          "Cycles': the world's light may differ by several percent"))
+
+    def _lights_chosen_among(self):
+        """How many light sources Cycles' light selection chooses among: DACRT's entries and the
+        lamps hidden from diffuse rays, which DACRT leaves out of its selection and Cycles keeps."""
+        lights = self.lights
+        return lights.num_entries + len(lights.unseen_lamps) + len(lights.camera_lamps)
 
     def _say_shadowless_lamps(self):
         """Lamps with Cast Shadow off that BSDF rays meet (MIS on, a radius, size or angle):
@@ -352,12 +355,12 @@ class LightSetup:
         from diffuse rays: Cycles 0.7% darker than without it, one object's pixels 1.3-1.9x in
         DACRT, unsaid: fuzz 1459)."""
         lights = self.lights
-        unseen = list(dict.fromkeys(lights.unseen_lamps + [l.name for l in lights.camera_lamps]))
-        if lights.num_entries + len(lights.unseen_lamps) + len(lights.camera_lamps) < 2:
+        if self._lights_chosen_among() < 2:
             return
         # (instances of one lamp share its name: said once)
         names = list(dict.fromkeys(l.name for l in lights.lamps if not l.cast_shadow and l.seen_by_bsdf))
         if names:
+            unseen = list(dict.fromkeys(lights.unseen_lamps + [l.name for l in lights.camera_lamps]))
             also = (f"; Cycles also chooses among lights hidden from diffuse rays ({', '.join(repr(n) for n in unseen)}"
                     "), which DACRT leaves out of its choice" if unseen else "")
             self.messages.append(('WARNING', f"light(s) {', '.join(repr(n) for n in names)} have Cast Shadow off "
