@@ -254,6 +254,13 @@ class OBJECT_PT_dacrt_visibility(DACRTPanel, Panel):
                                results_are_suggestions=True)
 
 
+def _min_max(col, cam, prop, label):
+    """A panorama's "<label> Min" / "Max" pair of rows, aligned, as Cycles' camera panel draws them."""
+    sub = col.column(align=True)
+    sub.prop(cam, f"{prop}_min", text=f"{label} Min")
+    sub.prop(cam, f"{prop}_max", text="Max")
+
+
 class DATA_PT_dacrt_panorama(DACRTPanel, Panel):
     """A panoramic camera's projection: Blender's Lens panel draws its settings for Cycles
     only."""
@@ -273,12 +280,8 @@ class DATA_PT_dacrt_panorama(DACRTPanel, Panel):
         col.prop(cam, "panorama_type")
         kind = cam.panorama_type
         if kind == 'EQUIRECTANGULAR':
-            sub = col.column(align=True)
-            sub.prop(cam, "latitude_min", text="Latitude Min")
-            sub.prop(cam, "latitude_max", text="Max")
-            sub = col.column(align=True)
-            sub.prop(cam, "longitude_min", text="Longitude Min")
-            sub.prop(cam, "longitude_max", text="Max")
+            _min_max(col, cam, "latitude", "Latitude")
+            _min_max(col, cam, "longitude", "Longitude")
         elif kind == 'FISHEYE_EQUISOLID':
             col.prop(cam, "fisheye_lens", text="Lens")
             col.prop(cam, "fisheye_fov")
@@ -290,12 +293,8 @@ class DATA_PT_dacrt_panorama(DACRTPanel, Panel):
             for i in range(5):
                 sub.prop(cam, f"fisheye_polynomial_k{i}", text=f"K{i}")
         elif kind == 'CENTRAL_CYLINDRICAL':
-            sub = col.column(align=True)
-            sub.prop(cam, "central_cylindrical_range_v_min", text="Height Min")
-            sub.prop(cam, "central_cylindrical_range_v_max", text="Max")
-            sub = col.column(align=True)
-            sub.prop(cam, "central_cylindrical_range_u_min", text="Longitude Min")
-            sub.prop(cam, "central_cylindrical_range_u_max", text="Max")
+            _min_max(col, cam, "central_cylindrical_range_v", "Height")
+            _min_max(col, cam, "central_cylindrical_range_u", "Longitude")
             col.prop(cam, "central_cylindrical_radius", text="Cylinder Radius")
         elif kind not in ('MIRRORBALL', 'EQUIANGULAR_CUBEMAP_FACE'):
             col.label(text="Not rendered by DACRT", icon='ERROR')
